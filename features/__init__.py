@@ -1,0 +1,1 @@
+"""Qualitative posture features: poses, skeletons, geometry, fluents and QMPs."""

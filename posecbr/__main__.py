@@ -1,0 +1,5 @@
+import sys
+
+from posecbr.cli import main
+
+sys.exit(main())

@@ -1,0 +1,54 @@
+"""The ``posecbr`` console command.
+
+Each subcommand lives in its own module under :mod:`posecbr.commands` and exposes
+``register(subparsers)``, which adds a parser whose ``func(args) -> int`` runs it. Adding a
+command means adding a module; nothing here changes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+from collections.abc import Sequence
+
+from posecbr import __version__, commands
+from posecbr.errors import PosecbrError
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="posecbr",
+        description="Interpretable human activity recognition: poses -> fluents and QMPs -> CBR.",
+    )
+    parser.add_argument("--version", action="version", version=f"posecbr {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
+        if info.name.startswith("_"):
+            continue
+        module = importlib.import_module(f"{commands.__name__}.{info.name}")
+        module.register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except PosecbrError as exc:
+        print(f"posecbr {args.command}: error: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"posecbr {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

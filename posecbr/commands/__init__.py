@@ -1,0 +1,1 @@
+"""One module per ``posecbr`` subcommand; each exposes ``register(subparsers)``."""

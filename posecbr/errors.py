@@ -1,0 +1,29 @@
+"""Errors a user can cause. The CLI prints them as one line and exits non-zero."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class PosecbrError(Exception):
+    """A problem with the user's input or environment, reported as one clear line.
+
+    ``source`` names the file (or database, or parameter) the problem is about.
+    """
+
+    def __init__(self, message: str, source: str | Path | None = None) -> None:
+        self.message = message
+        self.source = str(source) if source is not None else None
+        super().__init__(f"{self.source}: {message}" if self.source else message)
+
+
+class PoseFileError(PosecbrError):
+    """A pose file is missing, truncated, malformed or of an unknown skeleton."""
+
+
+class DataError(PosecbrError):
+    """Input data (a dataset folder, a labels CSV, a motion capture file) cannot be used."""
+
+
+class ConfigError(PosecbrError):
+    """A configuration or data table (thresholds, ADD) is malformed."""

@@ -1,0 +1,33 @@
+"""Progress bars for anything that takes more than a few seconds (tqdm, on stderr)."""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Iterable, Iterator
+from typing import TypeVar
+
+from tqdm import tqdm
+
+T = TypeVar("T")
+
+
+def progress_enabled() -> bool:
+    """Bars show on an interactive stderr unless POSECBR_NO_PROGRESS is set."""
+    return sys.stderr.isatty() and not os.environ.get("POSECBR_NO_PROGRESS")
+
+
+def progress(
+    items: Iterable[T], desc: str, total: int | None = None, unit: str = "it", leave: bool = True
+) -> Iterator[T]:
+    """Iterate ``items`` with a progress bar on stderr (silent when not interactive)."""
+    yield from tqdm(
+        items,
+        desc=desc,
+        total=total,
+        unit=unit,
+        leave=leave,
+        disable=not progress_enabled(),
+        file=sys.stderr,
+        dynamic_ncols=True,
+    )
