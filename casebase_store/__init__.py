@@ -1,0 +1,33 @@
+"""The case base store (SQLAlchemy; SQLite by default): the only package that speaks SQL."""
+
+from .models import SCHEMA_VERSION
+from .store import (
+    CaseArrays,
+    CaseBaseInfo,
+    CaseStore,
+    MaintenanceEntry,
+    NewCase,
+    StoreError,
+    StoreTransaction,
+    canonical_json,
+    config_hash,
+    decode_array,
+    encode_array,
+    open_store,
+)
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "CaseArrays",
+    "CaseBaseInfo",
+    "CaseStore",
+    "MaintenanceEntry",
+    "NewCase",
+    "StoreError",
+    "StoreTransaction",
+    "canonical_json",
+    "config_hash",
+    "decode_array",
+    "encode_array",
+    "open_store",
+]

@@ -1,0 +1,563 @@
+"""The case base store's repository API: the only place in posecbr that talks to a database.
+
+Open a store with :func:`open_store` (a SQLite file path, or any SQLAlchemy URL). Every user
+action is one transaction::
+
+    store = open_store("cb.sqlite")
+    with store.transaction() as tx:          # BEGIN IMMEDIATE on SQLite
+        cb = tx.create_case_base("squats", feature_config, names, words, {"name": "dtw"})
+        tx.add_cases(cb, cases)
+        tx.log(cb, "trim", reason="...")
+    arrays = store.load_cases("squats")      # ids, labels, features (N, ...) and provenance
+
+A process killed inside ``transaction()`` leaves the store as it was before (SQLite's journal
+rolls the transaction back when the file is next opened). SQLite files run in WAL mode with a
+busy timeout so several processes can write one file; write transactions start with
+``BEGIN IMMEDIATE`` so two writers queue instead of failing on a read-to-write upgrade.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import sqlite3
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from sqlalchemy import Engine, create_engine, delete, event, func, inspect, select, update
+from sqlalchemy.engine import Connection, make_url
+from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
+from sqlalchemy.orm import Session
+
+from posecbr import __version__
+from posecbr.errors import PosecbrError
+
+from .models import (
+    SCHEMA_VERSION,
+    Base,
+    CaseBaseRow,
+    CaseRow,
+    MaintenanceRow,
+    RepresentationRow,
+    SchemaVersion,
+)
+
+ORIGINS = ("trained", "retained", "revised")
+
+
+class StoreError(PosecbrError):
+    """The case base store cannot be opened, read or written (names the database)."""
+
+
+# ----------------------------------------------------------------------------- arrays
+
+
+def encode_array(array: np.ndarray) -> bytes:
+    """``.npy`` bytes of ``array`` (no pickles)."""
+    buf = io.BytesIO()
+    np.save(buf, np.ascontiguousarray(array), allow_pickle=False)
+    return buf.getvalue()
+
+
+def decode_array(data: bytes) -> np.ndarray:
+    """The array stored by :func:`encode_array`."""
+    return np.load(io.BytesIO(data), allow_pickle=False)
+
+
+def config_hash(config: Mapping[str, Any]) -> str:
+    """SHA-256 of the canonical JSON of a feature configuration."""
+    return hashlib.sha256(canonical_json(config).encode("utf-8")).hexdigest()
+
+
+def canonical_json(obj: Any) -> str:
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+
+
+# ----------------------------------------------------------------------------- records
+
+
+@dataclass(frozen=True)
+class NewCase:
+    """A case to add: problem ``features`` (any shape, same for the whole case base) + label."""
+
+    label: str
+    features: np.ndarray
+    source: str = ""
+    frame_start: int | None = None
+    frame_end: int | None = None
+    subject: str | None = None
+    skeleton: str | None = None
+    origin: str = "trained"
+
+
+@dataclass(frozen=True)
+class CaseBaseInfo:
+    """What a case base is: its configuration and size."""
+
+    id: int
+    name: str
+    feature_config: dict[str, Any]
+    feature_hash: str
+    feature_names: tuple[str, ...]
+    feature_words: tuple[str, ...]
+    similarity: dict[str, Any]
+    code_version: str
+    created_at: datetime
+    n_cases: int
+    label_counts: dict[str, int] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CaseArrays:
+    """All (active) cases of a case base as arrays; row ``i`` of each is case ``ids[i]``.
+
+    features: ``(n_cases, *problem_shape)`` float64.
+    """
+
+    ids: np.ndarray  # (n,) int64
+    labels: np.ndarray  # (n,) str (object)
+    features: np.ndarray
+    sources: tuple[str, ...]
+    subjects: tuple[str | None, ...]
+    origins: tuple[str, ...]
+    frame_ranges: tuple[tuple[int | None, int | None], ...]
+
+
+@dataclass(frozen=True)
+class MaintenanceEntry:
+    id: int
+    action: str
+    case_id: int | None
+    novelty: float | None
+    benefit: float | None
+    reason: str
+    at: datetime
+
+
+# ----------------------------------------------------------------------------- engine
+
+
+def _is_sqlite(engine: Engine) -> bool:
+    return engine.dialect.name == "sqlite"
+
+
+def _make_engine(url_or_path: str | Path, timeout_s: float) -> tuple[Engine, str]:
+    text = str(url_or_path)
+    if "://" in text:
+        try:
+            url = make_url(text)
+        except ArgumentError as exc:
+            raise StoreError(f"not a database URL ({exc})", text) from None
+        where = url.render_as_string(hide_password=True)
+        if url.get_backend_name() == "sqlite" and url.database not in (None, "", ":memory:"):
+            where = str(url.database)
+    else:
+        path = Path(text)
+        if path.is_dir():
+            raise StoreError("is a folder, not a case base file", path)
+        if not path.parent.exists():
+            raise StoreError("folder does not exist", path.parent)
+        url = make_url(f"sqlite:///{path}")
+        where = str(path)
+    kwargs: dict[str, Any] = {}
+    if url.get_backend_name() == "sqlite":
+        kwargs["connect_args"] = {"timeout": timeout_s}
+    try:
+        engine = create_engine(url, **kwargs)
+    except (ArgumentError, ImportError, SQLAlchemyError) as exc:
+        raise StoreError(f"cannot use database URL ({exc})", where) from None
+    if _is_sqlite(engine):
+        _configure_sqlite(engine, timeout_s)
+    return engine, where
+
+
+def _configure_sqlite(engine: Engine, timeout_s: float) -> None:
+    # pysqlite's own transaction handling starts transactions late and never IMMEDIATE; take
+    # it over (SQLAlchemy's documented recipe) so writers lock up front and queue politely.
+    @event.listens_for(engine, "connect")
+    def _on_connect(dbapi_conn: sqlite3.Connection, _record: object) -> None:
+        dbapi_conn.isolation_level = None
+        cur = dbapi_conn.cursor()
+        cur.execute(f"PRAGMA busy_timeout = {int(timeout_s * 1000)}")
+        cur.execute("PRAGMA foreign_keys = ON")
+        cur.execute("PRAGMA journal_mode = WAL")
+        cur.execute("PRAGMA synchronous = NORMAL")
+        cur.close()
+
+    @event.listens_for(engine, "begin")
+    def _on_begin(conn: Connection) -> None:
+        write = conn.get_execution_options().get("posecbr_write", False)
+        conn.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
+
+
+def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
+    text = str(getattr(exc, "orig", None) or exc).strip()
+    low = text.lower()
+    if "locked" in low or "busy" in low:
+        return StoreError(
+            f"database is locked by another process (gave up after {timeout_s:g} s)", where
+        )
+    if "not a database" in low or "malformed" in low or "disk image" in low:
+        return StoreError("not a readable SQLite database (corrupt or not a database)", where)
+    if "unable to open" in low or "readonly" in low or "read-only" in low:
+        return StoreError(f"cannot open or write the database ({text})", where)
+    first = text.splitlines()[0] if text else type(exc).__name__
+    return StoreError(f"database error: {first}", where)
+
+
+# ----------------------------------------------------------------------------- store
+
+
+class CaseStore:
+    """A case base store on one database. Create with :func:`open_store`."""
+
+    def __init__(self, engine: Engine, where: str, timeout_s: float) -> None:
+        self.engine = engine
+        self.where = where
+        self.timeout_s = timeout_s
+        self._write_engine = engine.execution_options(posecbr_write=True)
+
+    # -- plumbing
+
+    @contextmanager
+    def _errors(self) -> Iterator[None]:
+        try:
+            yield
+        except StoreError:
+            raise
+        except (DBAPIError, SQLAlchemyError, sqlite3.Error) as exc:
+            raise _translate(exc, self.where, self.timeout_s) from None
+
+    @contextmanager
+    def transaction(self) -> Iterator[StoreTransaction]:
+        """One write transaction: everything inside commits together or not at all."""
+        with self._errors(), Session(self._write_engine, expire_on_commit=False) as session:
+            with session.begin():
+                yield StoreTransaction(self, session)
+
+    @contextmanager
+    def _read(self) -> Iterator[Session]:
+        with self._errors(), Session(self.engine, expire_on_commit=False) as session:
+            with session.begin():
+                yield session
+
+    def _init_schema(self, create: bool) -> None:
+        with self._errors():
+            names = set(inspect(self.engine).get_table_names())
+            if SchemaVersion.__tablename__ in names:
+                with self._read() as s:
+                    row = s.get(SchemaVersion, 1)
+                if row is None or row.version != SCHEMA_VERSION:
+                    found = "none" if row is None else str(row.version)
+                    raise StoreError(
+                        f"case base store schema version {found}, this posecbr "
+                        f"{__version__} reads version {SCHEMA_VERSION}",
+                        self.where,
+                    )
+                return
+            if names:
+                raise StoreError(
+                    "not a posecbr case base store (the database holds other tables: "
+                    + ", ".join(sorted(names)[:5])
+                    + ")",
+                    self.where,
+                )
+            if not create:
+                raise StoreError("no case base store here (empty database)", self.where)
+            with self.transaction() as tx:
+                Base.metadata.create_all(tx.session.connection())
+                tx.session.add(SchemaVersion(id=1, version=SCHEMA_VERSION))
+
+    def close(self) -> None:
+        self.engine.dispose()
+
+    # -- reads
+
+    def list_case_bases(self) -> list[CaseBaseInfo]:
+        with self._read() as s:
+            rows = s.scalars(select(CaseBaseRow).order_by(CaseBaseRow.name)).all()
+            return [self._info(s, r) for r in rows]
+
+    def get_case_base(self, name: str) -> CaseBaseInfo:
+        with self._read() as s:
+            return self._info(s, self._row(s, name))
+
+    def has_case_base(self, name: str) -> bool:
+        with self._read() as s:
+            return s.scalar(select(CaseBaseRow.id).where(CaseBaseRow.name == name)) is not None
+
+    def load_cases(
+        self, name: str, *, include_inactive: bool = False, ids: Sequence[int] | None = None
+    ) -> CaseArrays:
+        """The case base's cases as arrays (features ``(n, *shape)`` float64), by id order."""
+        with self._read() as s:
+            cb = self._row(s, name)
+            q = select(
+                CaseRow.id,
+                CaseRow.label,
+                CaseRow.features,
+                CaseRow.source,
+                CaseRow.subject,
+                CaseRow.origin,
+                CaseRow.frame_start,
+                CaseRow.frame_end,
+            ).where(CaseRow.case_base_id == cb.id)
+            if not include_inactive:
+                q = q.where(CaseRow.active.is_(True))
+            if ids is not None:
+                q = q.where(CaseRow.id.in_([int(i) for i in ids]))
+            rows = s.execute(q.order_by(CaseRow.id)).all()
+        if rows:
+            features = np.stack([decode_array(r.features) for r in rows]).astype(np.float64)
+        else:
+            features = np.zeros((0,), dtype=np.float64)
+        return CaseArrays(
+            ids=np.array([r.id for r in rows], dtype=np.int64),
+            labels=np.array([r.label for r in rows], dtype=object),
+            features=features,
+            sources=tuple(r.source for r in rows),
+            subjects=tuple(r.subject for r in rows),
+            origins=tuple(r.origin for r in rows),
+            frame_ranges=tuple((r.frame_start, r.frame_end) for r in rows),
+        )
+
+    def load_representations(self, name: str, kind: str) -> dict[int, np.ndarray]:
+        """Cached per-case representations of one ``kind`` (case id -> array)."""
+        with self._read() as s:
+            cb = self._row(s, name)
+            q = (
+                select(RepresentationRow.case_id, RepresentationRow.data)
+                .join(CaseRow, CaseRow.id == RepresentationRow.case_id)
+                .where(CaseRow.case_base_id == cb.id, RepresentationRow.kind == kind)
+            )
+            return {int(cid): decode_array(data) for cid, data in s.execute(q)}
+
+    def maintenance_log(self, name: str) -> list[MaintenanceEntry]:
+        with self._read() as s:
+            cb = self._row(s, name)
+            rows = s.scalars(
+                select(MaintenanceRow)
+                .where(MaintenanceRow.case_base_id == cb.id)
+                .order_by(MaintenanceRow.id)
+            ).all()
+            return [
+                MaintenanceEntry(r.id, r.action, r.case_id, r.novelty, r.benefit, r.reason, r.at)
+                for r in rows
+            ]
+
+    def count_cases(self, name: str, *, include_inactive: bool = False) -> int:
+        with self._read() as s:
+            cb = self._row(s, name)
+            q = select(func.count(CaseRow.id)).where(CaseRow.case_base_id == cb.id)
+            if not include_inactive:
+                q = q.where(CaseRow.active.is_(True))
+            return int(s.scalar(q) or 0)
+
+    # -- convenience writes (one transaction each)
+
+    def add_cases(self, name: str, cases: Iterable[NewCase]) -> list[int]:
+        with self.transaction() as tx:
+            return tx.add_cases(tx.case_base(name), cases)
+
+    # -- helpers
+
+    def _row(self, s: Session, name: str) -> CaseBaseRow:
+        row = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
+        if row is None:
+            known = s.scalars(select(CaseBaseRow.name).order_by(CaseBaseRow.name)).all()
+            hint = f" (case bases here: {', '.join(known)})" if known else " (the store is empty)"
+            raise StoreError(f"no case base named {name!r}{hint}", self.where)
+        return row
+
+    @staticmethod
+    def _info(s: Session, r: CaseBaseRow) -> CaseBaseInfo:
+        counts = dict(
+            s.execute(
+                select(CaseRow.label, func.count(CaseRow.id))
+                .where(CaseRow.case_base_id == r.id, CaseRow.active.is_(True))
+                .group_by(CaseRow.label)
+                .order_by(CaseRow.label)
+            ).all()
+        )
+        return CaseBaseInfo(
+            id=r.id,
+            name=r.name,
+            feature_config=json.loads(r.feature_config),
+            feature_hash=r.feature_hash,
+            feature_names=tuple(json.loads(r.feature_names)),
+            feature_words=tuple(json.loads(r.feature_words)),
+            similarity=json.loads(r.similarity_config),
+            code_version=r.code_version,
+            created_at=r.created_at,
+            n_cases=int(sum(counts.values())),
+            label_counts={str(k): int(v) for k, v in counts.items()},
+        )
+
+
+class StoreTransaction:
+    """Writes inside one :meth:`CaseStore.transaction` (commit on exit, rollback on error)."""
+
+    def __init__(self, store: CaseStore, session: Session) -> None:
+        self.store = store
+        self.session = session
+
+    def case_base(self, name: str) -> CaseBaseInfo:
+        return CaseStore._info(self.session, self.store._row(self.session, name))
+
+    def create_case_base(
+        self,
+        name: str,
+        feature_config: Mapping[str, Any],
+        feature_names: Sequence[str],
+        feature_words: Sequence[str],
+        similarity: Mapping[str, Any],
+        *,
+        replace: bool = False,
+    ) -> CaseBaseInfo:
+        """A new, empty case base; ``replace`` drops an existing one of that name first."""
+        s = self.session
+        old = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
+        if old is not None:
+            if not replace:
+                raise StoreError(
+                    f"a case base named {name!r} already exists (choose another name or replace "
+                    "it)",
+                    self.store.where,
+                )
+            s.delete(old)
+            s.flush()
+        row = CaseBaseRow(
+            name=name,
+            feature_config=canonical_json(dict(feature_config)),
+            feature_hash=config_hash(feature_config),
+            feature_names=json.dumps(list(feature_names), ensure_ascii=False),
+            feature_words=json.dumps(list(feature_words), ensure_ascii=False),
+            similarity_config=canonical_json(dict(similarity)),
+            code_version=__version__,
+        )
+        s.add(row)
+        s.flush()
+        return CaseStore._info(s, row)
+
+    def add_cases(self, cb: CaseBaseInfo, cases: Iterable[NewCase]) -> list[int]:
+        """Insert cases (streamed: an iterator is consumed inside this transaction)."""
+        rows: list[CaseRow] = []
+        for c in cases:
+            if c.origin not in ORIGINS:
+                raise StoreError(f"unknown case origin {c.origin!r}", self.store.where)
+            row = CaseRow(
+                case_base_id=cb.id,
+                label=str(c.label),
+                features=encode_array(np.asarray(c.features)),
+                source=c.source,
+                frame_start=c.frame_start,
+                frame_end=c.frame_end,
+                subject=c.subject,
+                skeleton=c.skeleton,
+                origin=c.origin,
+            )
+            self.session.add(row)
+            rows.append(row)
+            if len(rows) % 500 == 0:
+                self.session.flush()
+        self.session.flush()
+        return [r.id for r in rows]
+
+    def update_case(
+        self,
+        case_id: int,
+        *,
+        features: np.ndarray | None = None,
+        label: str | None = None,
+        origin: str = "revised",
+    ) -> None:
+        row = self.session.get(CaseRow, int(case_id))
+        if row is None:
+            raise StoreError(f"no case with id {case_id}", self.store.where)
+        if features is not None:
+            row.features = encode_array(np.asarray(features))
+            # cached representations were computed from the old problem
+            self.session.execute(
+                delete(RepresentationRow).where(RepresentationRow.case_id == int(case_id))
+            )
+        if label is not None:
+            row.label = str(label)
+        row.origin = origin
+        self.session.flush()
+
+    def deactivate_cases(self, case_ids: Iterable[int]) -> int:
+        """Mark cases as trimmed (kept for the history, no longer used for retrieval)."""
+        ids = [int(i) for i in case_ids]
+        n = 0
+        for start in range(0, len(ids), 500):
+            chunk = ids[start : start + 500]
+            result = self.session.execute(
+                update(CaseRow).where(CaseRow.id.in_(chunk)).values(active=False)
+            )
+            n += int(getattr(result, "rowcount", 0) or 0)
+        return n
+
+    def put_representations(self, kind: str, reps: Mapping[int, np.ndarray]) -> None:
+        """Cache per-case representations of ``kind`` (replacing older ones)."""
+        ids = [int(i) for i in reps]
+        for start in range(0, len(ids), 500):
+            chunk = ids[start : start + 500]
+            self.session.execute(
+                delete(RepresentationRow).where(
+                    RepresentationRow.case_id.in_(chunk), RepresentationRow.kind == kind
+                )
+            )
+        self.session.add_all(
+            RepresentationRow(case_id=i, kind=kind, data=encode_array(reps[i])) for i in ids
+        )
+        self.session.flush()
+
+    def log(
+        self,
+        cb: CaseBaseInfo,
+        action: str,
+        *,
+        case_id: int | None = None,
+        novelty: float | None = None,
+        benefit: float | None = None,
+        reason: str = "",
+    ) -> None:
+        self.session.add(
+            MaintenanceRow(
+                case_base_id=cb.id,
+                case_id=case_id,
+                action=action,
+                novelty=None if novelty is None else float(novelty),
+                benefit=None if benefit is None else float(benefit),
+                reason=reason,
+            )
+        )
+
+
+def open_store(
+    url_or_path: str | Path, *, create: bool = True, timeout_s: float = 30.0
+) -> CaseStore:
+    """Open (and, if ``create``, initialise) a case base store.
+
+    ``url_or_path``: a file path (SQLite) or any SQLAlchemy URL (``postgresql://...``).
+    Raises :class:`StoreError` naming the file for a corrupt, locked, foreign or
+    other-version database.
+    """
+    if "://" not in str(url_or_path):
+        path = Path(url_or_path)
+        if not create and not path.exists():
+            raise StoreError("no such case base file", path)
+    engine, where = _make_engine(url_or_path, timeout_s)
+    store = CaseStore(engine, where, timeout_s)
+    try:
+        store._init_schema(create)
+    except BaseException:
+        engine.dispose()
+        raise
+    return store
