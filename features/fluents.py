@@ -1,0 +1,554 @@
+"""Fluents: qualitative posture states with confidences (paper §"Low level", SPEC.md).
+
+The paper's threshold table is :data:`DEFAULT_TABLE`: one :class:`FluentSpec` per fluent,
+evaluated in bulk over all frames by :func:`evaluate`. Users override any parameter from a
+JSON or TOML file (:meth:`FluentTable.from_file`), by family (``arm_bent`` sets both sides) or
+by fluent (``left_arm_bent``). Angles may be written as numbers (radians) or as ``"5pi/8"``.
+
+Instantaneous confidence (paper eqs. 2-4): a lower state s0 holds below τ (1 under τ-δ, 0
+over τ+δ, logistic with slope ln((1-ε)/ε)/δ between), an upper state is its mirror image, a
+middle state is (1-C(s0))(1-C(s2)), and a two-state fluent's confidences sum to 1.
+
+Locally temporal confidence (eqs. 5-6): Δθ compared as a two-state fluent with τ = ∓π/72,
+δ = π/72 (near: ∓0.05 hl, 0.05 hl), multiplied over a window of r = 5 with exponents
+1/(age+1); no motion is (1-C(→s0))(1-C(→sn)). The thresholds are per frame at
+``reference_fps`` (30, the rate of the smartphone video the paper used): at another frame rate
+Δθ is taken over one reference frame interval (``fps / reference_fps`` source frames, linearly
+interpolated) and the window spans ``r`` reference intervals, so a movement gets the same
+confidence whatever the camera's rate.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from posecbr.errors import ConfigError
+
+from .poses import PoseSequence
+from .signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals, near_pairs, state_signals
+
+__all__ = [
+    "DEFAULT_TABLE",
+    "FluentResult",
+    "FluentSpec",
+    "FluentTable",
+    "StateSignals",
+    "Threshold",
+    "confidence_lower",
+    "confidence_upper",
+    "evaluate",
+    "state_signals",
+]
+
+PI = math.pi
+
+
+@dataclass(frozen=True)
+class Threshold:
+    """A state boundary: τ (radians, or head-lengths for distances) and half-width δ."""
+
+    tau: float
+    delta: float
+
+
+@dataclass(frozen=True)
+class FluentSpec:
+    """One row of the paper's table.
+
+    ``states`` are the instantaneous states s0..sn in angle order (s0 holds at small values).
+    ``lower`` is the s0|s1 boundary; ``upper`` the s(n-1)|sn boundary of a three-state fluent.
+    ``motion`` words: toward s0, toward sn, no motion. ``paired_with``: the other direction of a
+    tilt; the pair shares one middle ("upright") state and one no-motion state (paper §Tilted).
+    For distance fluents ``obj`` is the second joint and a binary "touching" state is added.
+    """
+
+    name: str
+    family: str
+    subject: str
+    signal: str
+    states: tuple[str, ...]
+    lower: Threshold
+    upper: Threshold | None
+    motion: tuple[str, str, str]
+    motion_threshold: Threshold
+    kind: Literal["angle", "distance"] = "angle"
+    obj: str = ""
+    paired_with: str | None = None
+    secondary: bool = False  # the second fluent of a tilt pair: no middle / no-motion state
+
+    def phrase(self, state: str) -> str:
+        """Words for one of this fluent's states: "left knee bent", "left index near nose"."""
+        return f"{self.subject} {state} {self.obj}".strip()
+
+
+def _joint_words(joint: str) -> str:
+    """``left_foot_index`` -> ``left big toe``; ``mouth_left`` -> ``left mouth corner``."""
+    if joint.startswith("mouth_"):
+        return f"{joint.removeprefix('mouth_')} mouth corner"
+    words = joint.replace("_", " ")
+    return words.replace("foot index", "big toe").replace("index", "index finger")
+
+
+def _default_specs() -> tuple[FluentSpec, ...]:
+    q1 = Threshold(7 * PI / 16, PI / 16)  # in front / outward / tilted / twisted: s0|s1
+    q3 = Threshold(9 * PI / 16, PI / 16)  # s1|s2
+    motion = Threshold(PI / 72, PI / 72)
+    front3 = ("in front", "centered", "behind")
+    front_m = ("moving forward", "moving backward", "front-back steady")
+    out3 = ("outward", "at side", "inward")
+    out_m = ("moving outward", "moving inward", "sideways steady")
+    specs: list[FluentSpec] = []
+    Row = tuple[str, str, str, tuple[str, ...], Threshold, Threshold | None, tuple[str, str, str]]
+    # family, subject, signal, states s0..sn, lower, upper, motion words (->s0, ->sn, none)
+    sided: list[Row] = [
+        ("arm_bent", "{side} elbow", "{side}_elbow", ("bent", "straight"),
+         Threshold(5 * PI / 8, PI / 8), None, ("bending", "straightening", "bend steady")),
+        ("leg_bent", "{side} knee", "{side}_knee", ("bent", "straight"),
+         Threshold(19 * PI / 24, PI / 24), None, ("bending", "straightening", "bend steady")),
+        ("arm_in_front", "{side} arm", "{side}_upper_arm_sagittal", front3, q1, q3, front_m),
+        ("leg_in_front", "{side} leg", "{side}_upper_leg_sagittal", front3, q1, q3, front_m),
+        ("arm_raised", "{side} arm", "{side}_armpit", ("lowered", "chest-level", "raised"),
+         Threshold(3 * PI / 8, PI / 8), q3, ("lowering", "raising", "height steady")),
+        ("leg_raised", "{side} leg", "{side}_hip", ("raised", "lowered"),
+         Threshold(13 * PI / 16, PI / 16), None, ("raising", "lowering", "height steady")),
+        ("arm_outward", "{side} arm", "{side}_upper_arm_frontal", out3, q1, q3, out_m),
+        ("leg_outward", "{side} leg", "{side}_upper_leg_frontal", out3, q1, q3, out_m),
+    ]  # fmt: skip
+    for family, subject, signal, states, lower, upper, words in sided:
+        for side in ("left", "right"):
+            specs.append(
+                FluentSpec(
+                    name=f"{side}_{family}",
+                    family=family,
+                    subject=subject.format(side=side),
+                    signal=signal.format(side=side),
+                    states=states,
+                    lower=lower,
+                    upper=upper,
+                    motion=words,
+                    motion_threshold=motion,
+                )
+            )
+    for part, neck in (("head", "neck"), ("torso", "torso")):
+        for direction, plane, states, words in (
+            ("forward", "sagittal", ("tilted forward", "upright", "tilted backward"),
+             ("tilting forward", "tilting backward", "tilt steady")),
+            ("left", "frontal", ("tilted left", "upright", "tilted right"),
+             ("tilting left", "tilting right", "tilt steady")),
+        ):  # fmt: skip
+            other = "left" if direction == "forward" else "forward"
+            specs.append(
+                FluentSpec(
+                    name=f"{part}_tilted_{direction}",
+                    family=f"{part}_tilted_{direction}",
+                    subject=part,
+                    signal=f"{neck}_{plane}",
+                    states=states,
+                    lower=q1,
+                    upper=q3,
+                    motion=words,
+                    motion_threshold=motion,
+                    paired_with=f"{part}_tilted_{other}",
+                    secondary=direction == "left",
+                )
+            )
+    for part, neck in (("head", "neck"), ("torso", "torso")):
+        specs.append(
+            FluentSpec(
+                name=f"{part}_twisted",
+                family=f"{part}_twisted",
+                subject=part,
+                signal=f"{neck}_transverse",
+                states=("twisted left", "centered", "twisted right"),
+                lower=q1,
+                upper=q3,
+                motion=("twisting left", "twisting right", "twist steady"),
+                motion_threshold=motion,
+            )
+        )
+    for a, b in near_pairs():
+        specs.append(
+            FluentSpec(
+                name=f"near:{a}~{b}",
+                family="near",
+                subject=_joint_words(a),
+                signal=f"{a}~{b}",
+                states=("near", "far from"),
+                lower=Threshold(0.5, 0.25),
+                upper=None,
+                motion=("approaching", "moving away from", "keeping distance to"),
+                motion_threshold=Threshold(0.05, 0.05),
+                kind="distance",
+                obj=_joint_words(b),
+            )
+        )
+    return tuple(specs)
+
+
+_ANGLE_RE = re.compile(
+    r"^\s*(?P<num>[0-9]*\.?[0-9]*)\s*\*?\s*(?P<pi>pi|π)?\s*(?:/\s*(?P<den>[0-9]*\.?[0-9]+))?\s*$"
+)
+
+
+def parse_value(value: Any, where: str) -> float:
+    """A number, or an angle written like ``"5pi/8"``, ``"pi/72"``, ``"0.25"``."""
+    if isinstance(value, bool):
+        raise ConfigError(f"expected a number, got {value!r}", where)
+    if isinstance(value, int | float):
+        out = float(value)
+    elif isinstance(value, str):
+        m = _ANGLE_RE.match(value)
+        if not m or not (m["num"] or m["pi"]):
+            raise ConfigError(f"cannot read {value!r} as a number or a multiple of pi", where)
+        out = float(m["num"]) if m["num"] else 1.0
+        if m["pi"]:
+            out *= PI
+        if m["den"]:
+            out /= float(m["den"])
+    else:
+        raise ConfigError(f"expected a number, got {value!r}", where)
+    if not math.isfinite(out):
+        raise ConfigError(f"value must be finite, got {value!r}", where)
+    return out
+
+
+def _threshold(raw: Any, where: str) -> Threshold:
+    if not isinstance(raw, Mapping) or set(raw) - {"tau", "delta"} or not raw:
+        raise ConfigError("expected a table with keys tau and/or delta", where)
+    tau = parse_value(raw.get("tau", math.nan), f"{where}.tau") if "tau" in raw else math.nan
+    delta = parse_value(raw["delta"], f"{where}.delta") if "delta" in raw else math.nan
+    if "delta" in raw and delta <= 0:
+        raise ConfigError(f"delta must be positive, got {raw['delta']!r}", f"{where}.delta")
+    return Threshold(tau, delta)
+
+
+def _merge(old: Threshold | None, new: Threshold, where: str) -> Threshold:
+    if old is None:
+        raise ConfigError("this fluent has no such boundary", where)
+    return Threshold(
+        old.tau if math.isnan(new.tau) else new.tau,
+        old.delta if math.isnan(new.delta) else new.delta,
+    )
+
+
+@dataclass(frozen=True)
+class FluentTable:
+    """Every fluent and every parameter, one declared table (the paper's Table 1 and text)."""
+
+    specs: tuple[FluentSpec, ...] = field(default_factory=_default_specs)
+    epsilon: float = 1e-3
+    window: int = 5
+    reference_fps: float = 30.0
+    touching_m: float = 0.1
+
+    def spec(self, name: str) -> FluentSpec:
+        for s in self.specs:
+            if s.name == name:
+                return s
+        raise KeyError(name)
+
+    def with_overrides(self, raw: Mapping[str, Any], source: str = "thresholds") -> FluentTable:
+        """A copy with parameters replaced from a parsed JSON/TOML mapping (see module doc)."""
+        known = {"epsilon", "window", "reference_fps", "touching_m", "fluents"}
+        unknown = set(raw) - known
+        if unknown:
+            raise ConfigError(
+                f"unknown setting {sorted(unknown)[0]!r} (known: {', '.join(sorted(known))})",
+                source,
+            )
+        table = self
+        if "epsilon" in raw:
+            eps = parse_value(raw["epsilon"], f"{source}: epsilon")
+            if not 0 < eps < 0.5:
+                raise ConfigError(f"epsilon must be in (0, 0.5), got {eps}", source)
+            table = replace(table, epsilon=eps)
+        if "window" in raw:
+            win = raw["window"]
+            if not isinstance(win, int) or isinstance(win, bool) or win < 1:
+                raise ConfigError(f"window must be a positive integer, got {win!r}", source)
+            table = replace(table, window=win)
+        if "reference_fps" in raw:
+            fps = parse_value(raw["reference_fps"], f"{source}: reference_fps")
+            if fps <= 0:
+                raise ConfigError(f"reference_fps must be positive, got {fps}", source)
+            table = replace(table, reference_fps=fps)
+        if "touching_m" in raw:
+            touching = parse_value(raw["touching_m"], f"{source}: touching_m")
+            table = replace(table, touching_m=touching)
+        fluents = raw.get("fluents", {})
+        if not isinstance(fluents, Mapping):
+            raise ConfigError("'fluents' must be a table of fluent names", source)
+        specs = list(table.specs)
+        for key, params in fluents.items():
+            hits = [i for i, s in enumerate(specs) if key in (s.name, s.family)]
+            if not hits:
+                raise ConfigError(f"unknown fluent {key!r}", source)
+            if not isinstance(params, Mapping):
+                raise ConfigError(f"fluent {key!r}: expected a table", source)
+            bad = set(params) - {"lower", "upper", "motion"}
+            if bad:
+                raise ConfigError(
+                    f"fluent {key!r}: unknown key {sorted(bad)[0]!r} (known: lower, upper, motion)",
+                    source,
+                )
+            for i in hits:
+                s = specs[i]
+                where = f"{source}: fluents.{key}"
+                if "lower" in params:
+                    s = replace(s, lower=_merge(s.lower, _threshold(params["lower"], where), where))
+                if "upper" in params:
+                    s = replace(s, upper=_merge(s.upper, _threshold(params["upper"], where), where))
+                if "motion" in params:
+                    s = replace(
+                        s,
+                        motion_threshold=_merge(
+                            s.motion_threshold, _threshold(params["motion"], where), where
+                        ),
+                    )
+                if s.upper is not None and s.upper.tau < s.lower.tau:
+                    raise ConfigError(f"fluent {key!r}: upper tau is below lower tau", source)
+                specs[i] = s
+        return replace(table, specs=tuple(specs))
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> FluentTable:
+        """The default table with overrides from a ``.json`` or ``.toml`` file."""
+        path = Path(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            reason = exc.strerror or str(exc)
+            raise ConfigError(f"cannot read thresholds file ({reason})", path) from None
+        try:
+            raw = tomllib.loads(text) if path.suffix.lower() == ".toml" else json.loads(text)
+        except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
+            raise ConfigError(f"malformed thresholds file: {exc}", path) from None
+        if not isinstance(raw, Mapping):
+            raise ConfigError("thresholds file must hold a table/object", path)
+        return cls().with_overrides(raw, str(path))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The whole table as plain data (what a user edits to override it)."""
+        fluents: dict[str, Any] = {}
+        for s in self.specs:
+            key = s.family if s.family == "near" else s.name
+            entry: dict[str, Any] = {"signal": s.signal if s.kind == "angle" else "distance_hl",
+                                     "states": list(s.states),
+                                     "lower": asdict(s.lower),
+                                     "motion": asdict(s.motion_threshold)}  # fmt: skip
+            if s.upper is not None:
+                entry["upper"] = asdict(s.upper)
+            fluents.setdefault(key, entry)
+        return {
+            "epsilon": self.epsilon,
+            "window": self.window,
+            "reference_fps": self.reference_fps,
+            "touching_m": self.touching_m,
+            "fluents": fluents,
+        }
+
+
+DEFAULT_TABLE = FluentTable()
+
+
+def confidence_lower(x: np.ndarray, tau: np.ndarray | float, delta: np.ndarray | float,
+                     epsilon: float) -> np.ndarray:  # fmt: skip
+    """Paper eq. 2: confidence of a state that holds below τ. NaN in, NaN out."""
+    k = math.log((1.0 - epsilon) / epsilon) / np.asarray(delta, dtype=np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        c = 1.0 / (1.0 + np.exp(k * (x - tau)))
+    c = np.where(x < tau - delta, 1.0, c)
+    return np.where(x > tau + delta, 0.0, c)
+
+
+def confidence_upper(x: np.ndarray, tau: np.ndarray | float, delta: np.ndarray | float,
+                     epsilon: float) -> np.ndarray:  # fmt: skip
+    """Paper eq. 3: the mirror image, a state that holds above τ."""
+    return 1.0 - confidence_lower(x, tau, delta, epsilon)
+
+
+def _lagged_deltas(x: np.ndarray, lag: float, window: int) -> tuple[np.ndarray, np.ndarray]:
+    """Δ over one reference interval for each of the last ``window`` intervals.
+
+    x: ``(frames, n)``. Returns ``(window, frames, n)`` deltas (age 0 = the newest) and a
+    ``(window, frames)`` mask of which are defined (enough history).
+    """
+    frames = x.shape[0]
+    f = np.arange(frames, dtype=np.float64)
+    samples = []
+    valid = []
+    for m in range(window + 1):
+        pos = f - m * lag
+        ok = pos >= -1e-9
+        pos = np.clip(pos, 0.0, frames - 1)
+        lo = np.floor(pos).astype(np.intp)
+        hi = np.minimum(lo + 1, frames - 1)
+        w = (pos - lo)[:, None]
+        # Linear interpolation for a fractional lag; exact samples where the weight is 0 (so a
+        # NaN in the next frame does not leak into a defined one).
+        samples.append(np.where(w == 0.0, x[lo], x[lo] * (1.0 - w) + x[hi] * w))
+        valid.append(ok)
+    deltas = np.stack([samples[k] - samples[k + 1] for k in range(window)])
+    mask = np.stack([valid[k + 1] for k in range(window)])
+    return deltas, mask
+
+
+def _windowed_product(c: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Paper eq. 5: ∏ over ages a of C_a^(1/(a+1)); undefined ages count as 1 (no evidence).
+
+    c: ``(window, frames, n)``; mask: ``(window, frames)``. The newest age must be defined.
+    """
+    out = np.ones(c.shape[1:])
+    for age in range(c.shape[0]):
+        factor = np.where(mask[age][:, None], c[age], 1.0)
+        out *= factor if age == 0 else np.power(factor, 1.0 / (age + 1))
+    return np.where(mask[0][:, None], out, np.nan)
+
+
+@dataclass(frozen=True, eq=False)
+class FluentResult:
+    """Confidences of every state of every fluent, per frame.
+
+    confidence: ``(frames, n_states)`` in [0, 1], NaN where unavailable. ``state_names`` are
+    stable machine names (``left_leg_bent.bent``, ``left_leg_bent.bending``); ``words`` the
+    phrases people read; ``temporal[i]`` tells whether state i is locally temporal;
+    ``fluent[i]`` the index into ``table.specs``.
+    """
+
+    state_names: tuple[str, ...]
+    words: tuple[str, ...]
+    temporal: np.ndarray
+    fluent: np.ndarray
+    confidence: np.ndarray
+    fps: float
+    table: FluentTable
+
+    @property
+    def n_frames(self) -> int:
+        return int(self.confidence.shape[0])
+
+    def column(self, state_name: str) -> np.ndarray:
+        return self.confidence[:, self.state_names.index(state_name)]
+
+    def available(self) -> np.ndarray:
+        """``(n_states,)`` bool: the state is defined in at least one frame."""
+        return ~np.all(np.isnan(self.confidence), axis=0)
+
+
+def _slug(state: str) -> str:
+    return state.replace(" ", "_").replace("-", "_")
+
+
+def _layout(table: FluentTable) -> list[tuple[int, str, str, bool]]:
+    """(spec index, machine state, words, temporal) for every output column."""
+    cols: list[tuple[int, str, str, bool]] = []
+    for i, s in enumerate(table.specs):
+        states = list(s.states)
+        if s.secondary:
+            states.pop(1)
+        for st in states:
+            cols.append((i, st, s.phrase(st), False))
+        if s.kind == "distance":
+            cols.append((i, "touching", s.phrase("touching"), False))
+        motions = list(s.motion if not s.secondary else s.motion[:2])
+        for st in motions:
+            cols.append((i, st, s.phrase(st), True))
+    return cols
+
+
+def evaluate(
+    seq: PoseSequence,
+    table: FluentTable | None = None,
+    signals: StateSignals | None = None,
+) -> FluentResult:
+    """Every fluent state's confidence for every frame of ``seq`` (all frames at once)."""
+    table = table or DEFAULT_TABLE
+    sig = signals if signals is not None else state_signals(seq)
+    specs = table.specs
+    n = len(specs)
+    col = {name: i for i, name in enumerate(sig.names)}
+    try:
+        x = sig.values[:, [col[s.signal] for s in specs]]  # (frames, n)
+    except KeyError as exc:
+        raise ConfigError(f"fluent table names an unknown signal {exc.args[0]!r}") from None
+    eps = table.epsilon
+    lo_tau = np.array([s.lower.tau for s in specs])
+    lo_delta = np.array([s.lower.delta for s in specs])
+    three = np.array([s.upper is not None for s in specs])
+    up_tau = np.array([s.upper.tau if s.upper else np.inf for s in specs])
+    up_delta = np.array([s.upper.delta if s.upper else 1.0 for s in specs])
+
+    c_lo = confidence_lower(x, lo_tau, lo_delta, eps)
+    c_up = np.where(three, confidence_upper(x, up_tau, up_delta, eps), 0.0)
+    c_up = np.where(np.isnan(x), np.nan, c_up)
+    # Middle state (eq. 4); a tilt pair's upright state uses both directions (paper §Tilted).
+    index_of = {s.name: i for i, s in enumerate(specs)}
+    partner = np.array([index_of.get(s.paired_with or "", i) for i, s in enumerate(specs)])
+    not_extreme = (1.0 - c_lo) * (1.0 - c_up)
+    c_mid = np.where(partner != np.arange(n), not_extreme * not_extreme[:, partner], not_extreme)
+
+    # Locally temporal fluents (eqs. 5-6).
+    lag = seq.fps / table.reference_fps
+    deltas, mask = _lagged_deltas(x, lag, table.window)
+    m_tau = np.array([s.motion_threshold.tau for s in specs])
+    m_delta = np.array([s.motion_threshold.delta for s in specs])
+    toward_lo = _windowed_product(confidence_lower(deltas, -m_tau, m_delta, eps), mask)
+    toward_hi = _windowed_product(confidence_upper(deltas, m_tau, m_delta, eps), mask)
+    still = (1.0 - toward_lo) * (1.0 - toward_hi)
+    still = np.where(partner != np.arange(n), still * still[:, partner], still)
+
+    near_cols = np.array([s.kind == "distance" for s in specs])
+    touching = np.full(x.shape, np.nan)
+    if near_cols.any():
+        pair_index = {name: k for k, name in enumerate(NEAR_SIGNALS)}
+        d_m = sig.distances_m[:, [pair_index[s.signal] for s in specs if s.kind == "distance"]]
+        touching[:, near_cols] = np.where(np.isnan(d_m), np.nan, (d_m <= table.touching_m) * 1.0)
+
+    cols = _layout(table)
+    blocks = {
+        "lo": c_lo, "mid": c_mid, "hi": c_up, "two_hi": 1.0 - c_lo, "touch": touching,
+        "m_lo": toward_lo, "m_hi": toward_hi, "still": still,
+    }  # fmt: skip
+    keys: list[str] = []
+    for i, st, _, temporal in cols:
+        s = specs[i]
+        if temporal:
+            keys.append(("m_lo", "m_hi", "still")[s.motion.index(st)])
+        elif st == "touching":
+            keys.append("touch")
+        else:
+            pos = s.states.index(st)
+            if pos == 0:
+                keys.append("lo")
+            elif s.upper is None:
+                keys.append("two_hi")
+            else:
+                keys.append("mid" if pos == 1 else "hi")
+    fluent_idx = np.array([i for i, _, _, _ in cols])
+    out = np.empty((x.shape[0], len(cols)))
+    for key, block in blocks.items():
+        sel = np.array([k == key for k in keys])
+        if sel.any():
+            out[:, sel] = block[:, fluent_idx[sel]]
+    return FluentResult(
+        state_names=tuple(f"{specs[i].name}.{_slug(st)}" for i, st, _, _ in cols),
+        words=tuple(w for _, _, w, _ in cols),
+        temporal=np.array([t for _, _, _, t in cols]),
+        fluent=fluent_idx,
+        confidence=out,
+        fps=seq.fps,
+        table=table,
+    )
+
+
+# Guard: the table refers only to signals that exist.
+assert {s.signal for s in DEFAULT_TABLE.specs} <= set(ANGLE_SIGNALS) | set(NEAR_SIGNALS)

@@ -1,0 +1,106 @@
+"""Body frame, plane projections and law-of-cosines angles, vectorised over all frames.
+
+Conventions (canonical skeleton): metres, right-handed, y up. For a person, the unit vectors
+(forward, left, up) form a right-handed basis: ``left = up x forward``.
+
+The paper's torso normal ``⊥torso = (LS→LH) × (LS→RS)`` points out of the person's back in a
+right-handed frame; SPEC.md asks that meaning win over the literal vector, so ``forward`` is
+its negation and points the way the chest faces.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .skeleton import JOINT_INDEX
+
+# A link (or a projected link) shorter than this is degenerate: its angle is unavailable.
+MIN_LINK_M = 1e-6
+
+WORLD_UP = np.array([0.0, 1.0, 0.0])
+
+
+def _joint(positions: np.ndarray, name: str) -> np.ndarray:
+    """One canonical joint, ``(frames, 3)``, from positions ``(frames, 33, 3)``."""
+    return positions[:, JOINT_INDEX[name], :]
+
+
+def midpoint(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return 0.5 * (a + b)
+
+
+def norm(v: np.ndarray) -> np.ndarray:
+    """Euclidean length along the last axis: ``(..., 3) -> (...)``."""
+    return np.sqrt(np.einsum("...i,...i->...", v, v))
+
+
+def unit(v: np.ndarray) -> np.ndarray:
+    """``v`` scaled to unit length along the last axis; NaN where it is degenerate."""
+    n = norm(v)[..., None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n >= MIN_LINK_M, v / n, np.nan)
+
+
+def project(v: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Project vectors onto the plane with unit ``normal``: ``v - (v·n) n``; shapes ``(..., 3)``."""
+    return v - np.einsum("...i,...i->...", v, normal)[..., None] * normal
+
+
+def angle_between(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Angle in radians between vectors ``u`` and ``v`` (``(..., 3)`` each) -> ``(...)``.
+
+    This is the paper's law of cosines (eq. 1) for the triangle A B C with u = B→A and v = B→C:
+    ``|AB|² + |BC|² - |CA|² = 2 (B→A)·(B→C)``, so ``∠B = arccos(u·v / (|u||v|))``. NaN when a
+    link is degenerate (shorter than :data:`MIN_LINK_M`) or missing.
+    """
+    nu = norm(u)
+    nv = norm(v)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cos = np.einsum("...i,...i->...", u, v) / (nu * nv)
+    ok = (nu >= MIN_LINK_M) & (nv >= MIN_LINK_M)
+    return np.where(ok, np.arccos(np.clip(cos, -1.0, 1.0)), np.nan)
+
+
+def joint_angle(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Angle at joint ``b`` of the triangle a-b-c (law of cosines); points ``(..., 3)``."""
+    return angle_between(a - b, c - b)
+
+
+@dataclass(frozen=True)
+class BodyFrame:
+    """Per-frame body axes, each ``(frames, 3)`` unit vectors (NaN where undefined).
+
+    forward: where the chest faces (negated paper ⊥torso); up: mid-hip → neck; left: the
+    person's left (``up × forward``); heading: ``forward`` with the pitch removed — the
+    horizontal direction the body faces, derived from the horizontal part of ``left`` so that
+    it stays defined when the person bends over; level_left: horizontal left.
+    """
+
+    forward: np.ndarray
+    up: np.ndarray
+    left: np.ndarray
+    heading: np.ndarray
+    level_left: np.ndarray
+    neck: np.ndarray
+    mid_hip: np.ndarray
+    mid_ear: np.ndarray
+
+
+def body_frame(positions: np.ndarray) -> BodyFrame:
+    """Body axes from canonical positions ``(frames, 33, 3)``."""
+    ls = _joint(positions, "left_shoulder")
+    rs = _joint(positions, "right_shoulder")
+    lh = _joint(positions, "left_hip")
+    rh = _joint(positions, "right_hip")
+    neck = midpoint(ls, rs)
+    mid_hip = midpoint(lh, rh)
+    mid_ear = midpoint(_joint(positions, "left_ear"), _joint(positions, "right_ear"))
+    # -⊥torso = (LS→RS) × (LS→LH): the chest-facing normal in a right-handed frame.
+    forward = unit(np.cross(rs - ls, lh - ls))
+    up = unit(neck - mid_hip)
+    left = unit(np.cross(up, forward))
+    level_left = unit(project(left, WORLD_UP))
+    heading = unit(np.cross(level_left, WORLD_UP))
+    return BodyFrame(forward, up, left, heading, level_left, neck, mid_hip, mid_ear)

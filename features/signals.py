@@ -1,0 +1,185 @@
+"""State signals: every angle and distance the fluents (and QMPs) are computed from.
+
+One call computes all of them for all frames at once. Angles are radians in [0, π]; near
+distances are in head-lengths (1 hl = 2·|neck→mid-ear|). NaN means unavailable: a joint the
+skeleton lacks, a missing detection, or a degenerate (zero-length) link.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+from .geometry import angle_between, body_frame, joint_angle, norm, project
+from .poses import PoseSequence
+from .skeleton import JOINT_INDEX
+
+SIDES = ("left", "right")
+
+# Near pairs (SPEC "Near pairs"): from the index fingers and heels to that set plus the face,
+# arm, hip, knee and big-toe joints, without the same-side tautologies and reflexive pairs.
+NEAR_FROM = ("left_index", "right_index", "left_heel", "right_heel")
+NEAR_TO_EXTRA = (
+    "nose",
+    "left_eye",
+    "right_eye",
+    "left_ear",
+    "right_ear",
+    "mouth_left",
+    "mouth_right",
+    "left_shoulder",
+    "left_elbow",
+    "left_wrist",
+    "right_shoulder",
+    "right_elbow",
+    "right_wrist",
+    "left_hip",
+    "right_hip",
+    "left_knee",
+    "right_knee",
+    "left_foot_index",
+    "right_foot_index",
+)
+_OMITTED_SAME_SIDE = {
+    ("index", "wrist"),
+    ("index", "elbow"),
+    ("heel", "knee"),
+    ("heel", "foot_index"),
+}
+
+
+@cache
+def near_pairs() -> tuple[tuple[str, str], ...]:
+    """The unordered joint pairs of the near fluents, in a stable order (74 pairs)."""
+    pairs: list[tuple[str, str]] = []
+    seen: set[frozenset[str]] = set()
+    for a in NEAR_FROM:
+        side_a, _, part_a = a.partition("_")
+        for b in NEAR_FROM + NEAR_TO_EXTRA:
+            side_b, _, part_b = b.partition("_")
+            if a == b or (side_a == side_b and (part_a, part_b) in _OMITTED_SAME_SIDE):
+                continue
+            key = frozenset((a, b))
+            if key not in seen:
+                seen.add(key)
+                pairs.append((a, b))
+    return tuple(pairs)
+
+
+def near_signal_name(a: str, b: str) -> str:
+    return f"{a}~{b}"
+
+
+ANGLE_SIGNALS: tuple[str, ...] = tuple(
+    f"{side}_{part}"
+    for part in (
+        "elbow",
+        "knee",
+        "armpit",
+        "hip",
+        "upper_arm_sagittal",
+        "upper_leg_sagittal",
+        "upper_arm_frontal",
+        "upper_leg_frontal",
+    )
+    for side in SIDES
+) + (
+    "neck_sagittal",
+    "neck_frontal",
+    "torso_sagittal",
+    "torso_frontal",
+    "neck_transverse",
+    "torso_transverse",
+)
+
+
+@dataclass(frozen=True, eq=False)
+class StateSignals:
+    """Angles (rad) and near distances (head-lengths), ``values``: ``(frames, len(names))``.
+
+    ``head_length_m``: ``(frames,)`` the head-length in metres; ``distances_m``: the near
+    distances in metres ``(frames, n_pairs)`` (the touching fluent uses raw units).
+    """
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    fps: float
+    head_length_m: np.ndarray
+    distances_m: np.ndarray
+
+    @property
+    def angle_names(self) -> tuple[str, ...]:
+        return self.names[: len(ANGLE_SIGNALS)]
+
+    def column(self, name: str) -> np.ndarray:
+        return self.values[:, self.names.index(name)]
+
+
+def _angles(p: np.ndarray) -> np.ndarray:
+    """All angle signals, ``(frames, len(ANGLE_SIGNALS))``, from positions ``(frames, 33, 3)``."""
+    bf = body_frame(p)
+
+    def j(name: str) -> np.ndarray:
+        return p[:, JOINT_INDEX[name], :]
+
+    cols: dict[str, np.ndarray] = {}
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        sh, el, wr = j(f"{side}_shoulder"), j(f"{side}_elbow"), j(f"{side}_wrist")
+        hip, knee, ankle = j(f"{side}_hip"), j(f"{side}_knee"), j(f"{side}_ankle")
+        outward = sign * bf.left  # ⊥²torso of this side, pointing away from the body
+        upper_arm, upper_leg = el - sh, knee - hip
+        cols[f"{side}_elbow"] = joint_angle(sh, el, wr)
+        cols[f"{side}_knee"] = joint_angle(hip, knee, ankle)
+        cols[f"{side}_armpit"] = joint_angle(el, sh, hip)
+        cols[f"{side}_hip"] = joint_angle(knee, hip, sh)
+        cols[f"{side}_upper_arm_sagittal"] = angle_between(project(upper_arm, bf.left), bf.forward)
+        cols[f"{side}_upper_leg_sagittal"] = angle_between(project(upper_leg, bf.left), bf.forward)
+        cols[f"{side}_upper_arm_frontal"] = angle_between(project(upper_arm, bf.forward), outward)
+        cols[f"{side}_upper_leg_frontal"] = angle_between(project(upper_leg, bf.forward), outward)
+    head = bf.mid_ear - bf.neck
+    torso = bf.neck - bf.mid_hip
+    cols["neck_sagittal"] = angle_between(project(head, bf.left), bf.forward)
+    cols["neck_frontal"] = angle_between(project(head, bf.forward), bf.left)
+    # The torso normal is perpendicular to the torso by construction, so the torso's own tilt is
+    # measured against gravity: in the world's vertical plane through the heading.
+    cols["torso_sagittal"] = angle_between(project(torso, bf.level_left), bf.heading)
+    cols["torso_frontal"] = angle_between(project(torso, bf.heading), bf.level_left)
+    cols["neck_transverse"] = angle_between(
+        project(j("nose") - bf.neck, bf.up), project(j("left_shoulder") - bf.neck, bf.up)
+    )
+    # mid-hip → left hip (not the paper's left hip → mid-hip) so that shoulders turned to the
+    # person's left read "twisted left" with the chest-facing normal (SPEC: meaning wins).
+    cols["torso_transverse"] = angle_between(
+        project(j("left_hip") - bf.mid_hip, bf.up), project(bf.forward, bf.up)
+    )
+    return np.stack([cols[name] for name in ANGLE_SIGNALS], axis=1)
+
+
+_NEAR_A = np.array([JOINT_INDEX[a] for a, _ in near_pairs()])
+_NEAR_B = np.array([JOINT_INDEX[b] for _, b in near_pairs()])
+NEAR_SIGNALS: tuple[str, ...] = tuple(near_signal_name(a, b) for a, b in near_pairs())
+
+
+def state_signals(seq: PoseSequence) -> StateSignals:
+    """Every fluent's angle and distance for every frame of ``seq`` (any joint set)."""
+    p = seq.to_canonical().positions
+    angles = _angles(p)
+    mid_ear = 0.5 * (p[:, JOINT_INDEX["left_ear"]] + p[:, JOINT_INDEX["right_ear"]])
+    neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])
+    head_length = 2.0 * norm(mid_ear - neck)
+    head_length = np.where(head_length > 0, head_length, np.nan)
+    dist_m = norm(p[:, _NEAR_A, :] - p[:, _NEAR_B, :])
+    dist_hl = dist_m / head_length[:, None]
+    values = np.concatenate([angles, dist_hl], axis=1)
+    return StateSignals(ANGLE_SIGNALS + NEAR_SIGNALS, values, seq.fps, head_length, dist_m)
+
+
+__all__ = [
+    "ANGLE_SIGNALS",
+    "NEAR_SIGNALS",
+    "StateSignals",
+    "near_pairs",
+    "state_signals",
+]
