@@ -1,0 +1,77 @@
+"""Helpers shared by the readers: text reading and placing joints on the canonical skeleton."""
+
+from __future__ import annotations
+
+import gzip
+import zlib
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from posecbr.errors import DataError
+
+from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
+
+
+def read_text(path: Path) -> str:
+    """The text of ``path`` (gzip when it ends in ``.gz``), latin-1 tolerant, newlines unified.
+
+    Raises DataError naming the file when it is missing, unreadable or a truncated gzip.
+    """
+    if not path.exists():
+        raise DataError("no such file", path)
+    if path.is_dir():
+        raise DataError("is a folder, not a file", path)
+    try:
+        raw = gzip.decompress(path.read_bytes()) if path.suffix == ".gz" else path.read_bytes()
+    except (OSError, EOFError, zlib.error) as exc:
+        raise DataError(f"cannot read ({type(exc).__name__}: {exc})", path) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        # Motion capture headers (HDM05 AMC) carry latin-1 bytes; latin-1 decodes anything.
+        text = raw.decode("latin-1")
+    return text.replace("\r\n", "\n").replace("\r", "\n")
+
+
+def read_csv_matrix(path: Path, n_columns: int) -> np.ndarray:
+    """A numeric comma-separated file as ``(rows, n_columns)`` float64.
+
+    Raises DataError naming the file and line for a row of the wrong width or a non-number.
+    """
+    rows = [line for line in read_text(path).split("\n") if line.strip()]
+    if not rows:
+        raise DataError("file is empty", path)
+    out = np.empty((len(rows), n_columns))
+    for i, line in enumerate(rows):
+        parts = line.split(",")
+        if len(parts) != n_columns:
+            raise DataError(
+                f"line {i + 1}: expected {n_columns} comma-separated numbers, got {len(parts)}"
+                " (truncated or not this format?)",
+                path,
+            )
+        try:
+            out[i] = [float(p) for p in parts]
+        except ValueError:
+            raise DataError(f"line {i + 1}: not a number in {line[:60]!r}", path) from None
+    if not np.isfinite(out).all():
+        raise DataError("contains non-finite numbers", path)
+    return out
+
+
+def to_canonical(
+    points: np.ndarray, source_names: tuple[str, ...], joint_map: Mapping[str, str]
+) -> np.ndarray:
+    """Place source points on the 33 BlazePose joints.
+
+    points: ``(frames, len(source_names), 3)``; joint_map: BlazePose name -> source name.
+    Returns ``(frames, 33, 3)`` with NaN for every BlazePose joint the map does not name.
+    """
+    index = {n: i for i, n in enumerate(source_names)}
+    out = np.full((points.shape[0], len(BLAZEPOSE_33), 3), np.nan)
+    dst = [JOINT_INDEX[b] for b in joint_map]
+    src = [index[s] for s in joint_map.values()]
+    out[:, dst, :] = points[:, src, :]
+    return out
