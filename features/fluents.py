@@ -420,13 +420,15 @@ class FluentResult:
 
     confidence: ``(frames, n_states)`` in [0, 1], NaN where unavailable. ``state_names`` are
     stable machine names (``left_leg_bent.bent``, ``left_leg_bent.bending``); ``words`` the
-    phrases people read; ``temporal[i]`` tells whether state i is locally temporal;
+    phrases people read; ``temporal[i]`` tells whether state i is locally temporal and
+    ``steady[i]`` whether it is a no-motion state;
     ``fluent[i]`` the index into ``table.specs``.
     """
 
     state_names: tuple[str, ...]
     words: tuple[str, ...]
     temporal: np.ndarray
+    steady: np.ndarray
     fluent: np.ndarray
     confidence: np.ndarray
     fps: float
@@ -543,6 +545,7 @@ def evaluate(
         state_names=tuple(f"{specs[i].name}.{_slug(st)}" for i, st, _, _ in cols),
         words=tuple(w for _, _, w, _ in cols),
         temporal=np.array([t for _, _, _, t in cols]),
+        steady=np.array([k == "still" for k in keys]),
         fluent=fluent_idx,
         confidence=out,
         fps=seq.fps,

@@ -1,0 +1,108 @@
+"""``posecbr describe POSEFILE``: what the person is doing, in words, frame by frame."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from features.fluents import DEFAULT_TABLE, FluentResult, FluentTable, evaluate
+from features.poses import PoseSequence, load_pose
+from features.timeline import (
+    Run,
+    StateInRun,
+    phrase_list,
+    plot_timeline,
+    runs_to_json,
+    state_runs,
+    unavailable_fluents,
+)
+from posecbr.errors import PosecbrError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "describe",
+        help="describe a pose file's posture in words, frame by frame or in runs of frames",
+        description="Print the fluent states that hold (confidence >= --min-confidence), merged "
+        "into runs of frames with the same states, or per frame.",
+    )
+    p.add_argument("posefile", type=Path, help="pose file (.npz) or a clip the loaders read")
+    p.add_argument("--min-confidence", type=float, default=0.8, metavar="C",
+                   help="a state is shown when its confidence is at least C (default 0.8)")
+    p.add_argument("--per-frame", action="store_true", help="one line per frame, not runs")
+    p.add_argument("--min-run", type=int, default=3, metavar="N",
+                   help="absorb runs shorter than N frames into the previous run (default 3)")
+    p.add_argument("--all", action="store_true",
+                   help='also show background states: no motion ("bend steady") and "far from"')
+    p.add_argument("--thresholds", type=Path, metavar="FILE",
+                   help="JSON/TOML file overriding fluent thresholds (see `posecbr thresholds`)")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--plot", type=Path, metavar="PNG", help="write a fluent timeline picture")
+    p.set_defaults(func=run)
+
+
+def load_any(path: Path) -> PoseSequence:
+    """A pose file, or any clip the dataset loaders can read (mocap, video)."""
+    if path.suffix.lower() == ".npz":
+        return load_pose(path)
+    try:
+        from features.datasets import load_clip
+    except ImportError:
+        return load_pose(path)
+    return load_clip(path)
+
+
+def _split(run_: Run, result: FluentResult, args: argparse.Namespace) -> list[Run]:
+    """One run per frame (the per-frame view)."""
+    return [
+        Run(f, f, tuple(
+            StateInRun(s.name, s.words, float(result.column(s.name)[f])) for s in run_.states
+        ))
+        for f in range(run_.start, run_.end + 1)
+    ]  # fmt: skip
+
+
+def run(args: argparse.Namespace) -> int:
+    if not 0.0 < args.min_confidence <= 1.0:
+        raise PosecbrError(f"--min-confidence must be in (0, 1], got {args.min_confidence}")
+    table = FluentTable.from_file(args.thresholds) if args.thresholds else DEFAULT_TABLE
+    seq = load_any(args.posefile)
+    result = evaluate(seq, table)
+    min_run = 1 if args.per_frame else max(1, args.min_run)
+    runs = state_runs(result, args.min_confidence, min_run, include_background=args.all)
+    if args.per_frame:
+        runs = [r2 for r in runs for r2 in _split(r, result, args)]
+    missing = unavailable_fluents(result)
+    if args.plot:
+        plot_timeline(result, args.plot, args.min_confidence, title=f"{args.posefile.name}")
+    if args.json:
+        out = {
+            "source": str(args.posefile),
+            "fps": seq.fps,
+            "frames": seq.n_frames,
+            "min_confidence": args.min_confidence,
+            "unavailable": missing,
+            "runs": runs_to_json(runs, seq.fps),
+        }
+        if args.plot:
+            out["plot"] = str(args.plot)
+        json.dump(out, sys.stdout, indent=1)
+        print()
+        return 0
+    label = f", label {seq.label}" if seq.label else ""
+    print(f"{args.posefile}: {seq.n_frames} frames at {seq.fps:g} fps ({seq.duration_s:.1f} s)"
+          f"{label}")  # fmt: skip
+    if missing:
+        near = [m for m in missing if m.startswith("near:")]
+        other = [m.replace("_", " ") for m in missing if not m.startswith("near:")]
+        parts = other + ([f"{len(near)} near pairs"] if near else [])
+        print(f"unavailable (joints missing): {', '.join(parts)}")
+    for r in runs:
+        span = f"frame {r.start}" if r.start == r.end else f"frames {r.start}–{r.end}"
+        text = phrase_list(r.states, result) if r.states else "(no state above the threshold)"
+        print(f"{span}: {text}")
+    if args.plot:
+        print(f"timeline written to {args.plot}")
+    return 0

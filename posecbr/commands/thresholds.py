@@ -1,0 +1,27 @@
+"""``posecbr thresholds``: print the fluent parameter table, the file users edit to override."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from features.fluents import DEFAULT_TABLE, FluentTable
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "thresholds",
+        help="print the fluent thresholds table as JSON (edit it and pass --thresholds FILE)",
+    )
+    p.add_argument("--from", dest="source", type=Path, metavar="FILE",
+                   help="show the table after the overrides in FILE (validates FILE)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    table = FluentTable.from_file(args.source) if args.source else DEFAULT_TABLE
+    json.dump(table.to_dict(), sys.stdout, indent=1)
+    print()
+    return 0
