@@ -1,0 +1,173 @@
+"""Explanations in words: which features matched the retrieved cases, which did not, and what
+separates the clip from the nearest case of another activity.
+
+A feature (fluent state or QMP) is *seen* in a problem when its confidence is at least 0.5 in
+at least :data:`SEEN_FRACTION` of the (resampled) frames; for a QMP vector, when its value is
+at least 0.5. Features seen in almost every case say little, so each list is ordered by how
+distinctive the feature is in the case base (1 - the share of cases that show it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .casebase import CaseBase
+from .problem import Problem
+from .retrieve import Retrieval, nearest_of_other_label
+from .reuse import Solution
+
+SEEN_FRACTION = 0.15
+MAX_LISTED = 6
+_PREVALENCE_SAMPLE = 2000
+
+
+def presence(values: np.ndarray) -> np.ndarray:
+    """Share of frames where each feature's confidence >= 0.5.
+
+    values: ``(..., frames, n_features)`` fluent sequences -> ``(..., n_features)``, or
+    ``(..., n_features)`` QMP vectors (pass ``values[..., None, :]``).
+    """
+    return np.asarray(np.asarray(values) >= 0.5, dtype=np.float64).mean(axis=-2)
+
+
+@dataclass(frozen=True)
+class Contrast:
+    """The nearest case of another activity and what would have to change."""
+
+    label: str
+    case_id: int
+    source: str
+    distance: float
+    would_need: tuple[str, ...]
+    would_lose: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Explanation:
+    label: str
+    confidence: float
+    neighbours: tuple[dict[str, Any], ...]
+    matched: tuple[str, ...]
+    not_seen: tuple[str, ...]
+    only_here: tuple[str, ...]
+    contrast: Contrast | None
+    text: str = field(default="")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "label": self.label,
+            "confidence": self.confidence,
+            "neighbours": list(self.neighbours),
+            "matched": list(self.matched),
+            "not_seen": list(self.not_seen),
+            "only_here": list(self.only_here),
+            "contrast": None
+            if self.contrast is None
+            else {
+                "label": self.contrast.label,
+                "case_id": self.contrast.case_id,
+                "source": self.contrast.source,
+                "distance": self.contrast.distance,
+                "would_need": list(self.contrast.would_need),
+                "would_lose": list(self.contrast.would_lose),
+            },
+            "text": self.text,
+        }
+
+
+def _presence_of(cb: CaseBase, values: np.ndarray) -> np.ndarray:
+    v = np.asarray(values, dtype=np.float64)
+    if v.ndim == cb.problems.ndim - 1:  # one problem
+        v = v[None]
+    if v.ndim == 2:  # vectors (QMP): one "frame"
+        v = v[:, None, :]
+    elif v.ndim > 3:  # unknown layout: flatten per case
+        v = v.reshape(len(v), 1, -1)
+    return presence(v)
+
+
+def _ranked(mask: np.ndarray, score: np.ndarray, words: tuple[str, ...]) -> tuple[str, ...]:
+    idx = np.flatnonzero(mask)
+    idx = idx[np.argsort(-score[idx], kind="stable")][:MAX_LISTED]
+    return tuple(words[i] for i in idx)
+
+
+def _join(words: tuple[str, ...]) -> str:
+    return ", ".join(words) if words else "none"
+
+
+def explain(
+    cb: CaseBase, problem: Problem, retrieval: Retrieval, solution: Solution
+) -> Explanation:
+    """Explain one classification in words built from the feature names."""
+    words = problem.words if problem.words else cb.words
+    if len(words) != cb.problems.shape[-1]:
+        words = tuple(f"feature {i}" for i in range(cb.problems.shape[-1]))
+    q = _presence_of(cb, problem.values)[0]
+    sample = cb.problems
+    if len(sample) > _PREVALENCE_SAMPLE:
+        pick = np.random.default_rng(0).choice(len(sample), _PREVALENCE_SAMPLE, replace=False)
+        sample = sample[np.sort(pick)]
+    distinct = 1.0 - (_presence_of(cb, sample) >= SEEN_FRACTION).mean(axis=0)
+
+    win = retrieval.indices[retrieval.labels.astype(str) == solution.label]
+    if len(win) == 0:
+        win = retrieval.indices
+    r = (_presence_of(cb, cb.problems[win]) >= SEEN_FRACTION).mean(axis=0)
+    q_seen = q >= SEEN_FRACTION
+    r_seen = r >= 0.5
+    matched = _ranked(q_seen & r_seen, distinct * np.minimum(q, 1.0), words)
+    not_seen = _ranked(~q_seen & r_seen, distinct * r, words)
+    only_here = _ranked(q_seen & ~r_seen, distinct * q, words)
+
+    contrast = None
+    other = nearest_of_other_label(cb, problem, solution.label)
+    if other is not None:
+        pos, dist = other
+        o = _presence_of(cb, cb.problems[pos])[0] >= SEEN_FRACTION
+        assert cb.ids is not None
+        contrast = Contrast(
+            label=str(cb.labels[pos]),
+            case_id=int(cb.ids[pos]),
+            source=cb.sources[pos],
+            distance=float(dist),
+            would_need=_ranked(o & ~q_seen, distinct, words),
+            would_lose=_ranked(q_seen & ~o, distinct, words),
+        )
+    assert cb.ids is not None
+    neighbours = tuple(
+        {
+            "case_id": int(cb.ids[i]),
+            "label": str(cb.labels[i]),
+            "distance": float(d),
+            "source": cb.sources[i],
+        }
+        for i, d in zip(retrieval.indices, retrieval.distances, strict=True)
+    )
+    lines = [
+        f"{solution.label} (confidence {solution.confidence:.2f}) from the {len(neighbours)} "
+        f"most similar cases ({sum(n['label'] == solution.label for n in neighbours)} of them "
+        f"{solution.label}).",
+        f"Matched: {_join(matched)}.",
+        f"Seen in the similar {solution.label} cases but not in this clip: {_join(not_seen)}.",
+        f"In this clip but not in those cases: {_join(only_here)}.",
+    ]
+    if contrast is not None:
+        lines.append(
+            f"Nearest other activity: {contrast.label} (distance {contrast.distance:.3g}); to be "
+            f"that, the clip would need {_join(contrast.would_need)}, and would not show "
+            f"{_join(contrast.would_lose)}."
+        )
+    return Explanation(
+        label=solution.label,
+        confidence=solution.confidence,
+        neighbours=neighbours,
+        matched=matched,
+        not_seen=not_seen,
+        only_here=only_here,
+        contrast=contrast,
+        text="\n".join(lines),
+    )

@@ -1,0 +1,323 @@
+"""Case base maintenance: novelty/benefit trimming at build time, and the classic editors
+(CNN, RENN, ICF) for comparison. Every method reports size and accuracy before and after.
+
+Novelty/benefit trimming (per activity, so every activity keeps the same share of its cases
+and its feature distribution stays comparable):
+
+- novelty of a case = distance to its nearest case of the same activity (leave-one-out),
+  divided by that activity's median: a case with a near twin adds little;
+- benefit = coverage - liability (Smyth & Keane 1995): how many other cases have it among
+  their k nearest with the same label, minus those where it votes for a wrong label;
+- per activity, the cases with the lowest combined rank (novelty rank + benefit rank) go.
+
+Editors (Wilson & Martinez 2000, Brighton & Mellish 2002) work on the leave-one-out pairwise
+distance matrix: CNN (Hart 1968) keeps a consistent subset for 1-NN; RENN repeats Wilson's
+edited nearest neighbour (drop cases their k nearest misclassify) until nothing changes; ICF
+runs ENN, then repeatedly drops cases whose reachable set is larger than their coverage set.
+
+Accuracy before/after: on an evaluation set when given, otherwise leave-one-out over the
+original cases (each case classified by the other cases of the edited case base).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from casebase_store import CaseStore
+from posecbr.progress import progress
+
+from .casebase import CaseBase
+from .retrieve import retrieve
+from .reuse import Weights, vote_weights
+
+
+@dataclass(frozen=True)
+class MaintenanceReport:
+    """What a maintenance method did: ``kept`` positions into the original case base."""
+
+    method: str
+    size_before: int
+    size_after: int
+    accuracy_before: float
+    accuracy_after: float
+    kept: np.ndarray
+    casebase: CaseBase
+    novelty: np.ndarray | None = None  # (size_before,)
+    benefit: np.ndarray | None = None  # (size_before,)
+    distribution_shift: float | None = None  # max over activities, in pooled std units
+    original_ids: np.ndarray | None = None  # (size_before,) store ids (-1: not stored)
+
+    def summary(self) -> str:
+        return (
+            f"{self.method}: {self.size_before} -> {self.size_after} cases, accuracy "
+            f"{self.accuracy_before:.3f} -> {self.accuracy_after:.3f}"
+        )
+
+
+def pairwise_distances(cb: CaseBase, desc: str = "distances") -> np.ndarray:
+    """``(n, n)`` distances between all cases under the case base's measure."""
+    index = cb.index
+    assert cb.reps is not None
+    rows = [
+        cb.measure.distances(cb.reps[i], index)
+        for i in progress(range(len(cb)), desc=desc, total=len(cb), unit="case")
+    ]
+    return np.asarray(rows)
+
+
+def _knn_vote(
+    dist: np.ndarray, labels: np.ndarray, classes: np.ndarray, k: int, weights: Weights
+) -> np.ndarray:
+    """Predicted label per row of ``dist`` ``(m, n_cand)`` (inf = not a candidate)."""
+    k = min(k, dist.shape[1])
+    order = np.argsort(dist, axis=1, kind="stable")[:, :k]
+    d = np.take_along_axis(dist, order, axis=1)
+    pos = np.searchsorted(classes, labels[order].astype(str))
+    out = np.empty(len(dist), dtype=object)
+    for r in range(len(dist)):  # per query; k-sized work each
+        ok = np.isfinite(d[r])
+        w = vote_weights(d[r][ok], weights)
+        votes = np.bincount(pos[r][ok], weights=w, minlength=len(classes))
+        out[r] = classes[int(np.argmax(votes))] if ok.any() else classes[0]
+    return out
+
+
+def loo_accuracy(
+    dist: np.ndarray, labels: np.ndarray, kept: np.ndarray, k: int, weights: Weights = "distance"
+) -> float:
+    """Leave-one-out accuracy of every original case against the ``kept`` cases."""
+    d = np.where(kept[None, :], dist, np.inf)
+    np.fill_diagonal(d, np.inf)
+    classes = np.unique(labels.astype(str))
+    pred = _knn_vote(d, labels, classes, k, weights)
+    return float(np.mean(pred == labels.astype(str)))
+
+
+def _eval_accuracy(cb: CaseBase, X: np.ndarray, y: np.ndarray, k: int, weights: Weights) -> float:
+    from .reuse import reuse
+
+    classes = np.unique(np.concatenate([cb.labels.astype(str), np.asarray(y, dtype=str)]))
+    pred = [reuse(retrieve(cb, x, k), classes, weights).label for x in X]
+    return float(np.mean(np.asarray(pred) == np.asarray(y, dtype=str)))
+
+
+def _report(
+    method: str,
+    cb: CaseBase,
+    kept: np.ndarray,
+    dist: np.ndarray | None,
+    k: int,
+    weights: Weights,
+    eval_set: tuple[np.ndarray, np.ndarray] | None,
+    **extra: object,
+) -> MaintenanceReport:
+    after = cb.subset(kept)
+    if eval_set is not None:
+        acc_b = _eval_accuracy(cb, eval_set[0], eval_set[1], k, weights)
+        acc_a = _eval_accuracy(after, eval_set[0], eval_set[1], k, weights)
+    else:
+        if dist is None:
+            dist = pairwise_distances(cb)
+        acc_b = loo_accuracy(dist, cb.labels, np.ones(len(cb), bool), k, weights)
+        acc_a = loo_accuracy(dist, cb.labels, kept, k, weights)
+    assert cb.ids is not None
+    return MaintenanceReport(
+        method,
+        len(cb),
+        int(kept.sum()),
+        acc_b,
+        acc_a,
+        kept,
+        after,
+        original_ids=cb.ids.copy(),
+        **extra,  # type: ignore[arg-type]
+    )
+
+
+def distribution_shift(cb: CaseBase, kept: np.ndarray) -> float:
+    """Largest per-activity shift of the mean problem, in units of the pooled per-feature
+    standard deviation (RMS over features): 0 = same distribution centre."""
+    flat = cb.problems.reshape(len(cb), -1)
+    sd = flat.std(axis=0) + 1e-9
+    worst = 0.0
+    for lab in np.unique(cb.labels.astype(str)):
+        m = cb.labels == lab
+        if not (m & kept).any():
+            return float("inf")
+        shift = (flat[m].mean(axis=0) - flat[m & kept].mean(axis=0)) / sd
+        worst = max(worst, float(np.sqrt(np.mean(shift**2))))
+    return worst
+
+
+def novelty_benefit(
+    cb: CaseBase, k: int, dist: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per-case novelty and benefit, ``(n,)`` each (see the module docstring)."""
+    n = len(cb)
+    labels = cb.labels.astype(str)
+    if dist is None:
+        dist = pairwise_distances(cb, desc="novelty/benefit")
+    d = dist.copy()
+    np.fill_diagonal(d, np.inf)
+    same = labels[:, None] == labels[None, :]
+    nearest_same = np.where(same, d, np.inf).min(axis=1)
+    novelty = np.zeros(n)
+    for lab in np.unique(labels):
+        m = labels == lab
+        vals = nearest_same[m]
+        finite = vals[np.isfinite(vals)]
+        med = float(np.median(finite)) if len(finite) else 1.0
+        novelty[m] = np.where(np.isfinite(vals), vals / (med if med > 0 else 1.0), 1e6)
+    kk = min(k, n - 1)
+    nbrs = np.argsort(d, axis=1, kind="stable")[:, :kk]  # (n, kk): j's neighbours
+    helps = same[np.arange(n)[:, None], nbrs]  # neighbour shares j's label
+    coverage = np.bincount(nbrs[helps], minlength=n)
+    liability = np.bincount(nbrs[~helps], minlength=n)
+    return novelty, (coverage - liability).astype(np.float64)
+
+
+def trim_novelty_benefit(
+    cb: CaseBase,
+    keep: float,
+    k: int = 5,
+    weights: Weights = "distance",
+    eval_set: tuple[np.ndarray, np.ndarray] | None = None,
+) -> MaintenanceReport:
+    """Keep ``keep`` (a fraction) of every activity's cases, dropping the least novel and
+    least beneficial first."""
+    dist = pairwise_distances(cb, desc="trim")
+    nov, ben = novelty_benefit(cb, k, dist)
+    labels = cb.labels.astype(str)
+    kept = np.zeros(len(cb), dtype=bool)
+    for lab in np.unique(labels):
+        idx = np.flatnonzero(labels == lab)
+        n_keep = max(1, int(np.ceil(keep * len(idx))))
+        rank = np.argsort(np.argsort(nov[idx], kind="stable"), kind="stable") + np.argsort(
+            np.argsort(ben[idx], kind="stable"), kind="stable"
+        )
+        order = np.lexsort((idx, -rank))  # highest combined rank first; ties: lower index
+        kept[idx[order[:n_keep]]] = True
+    return _report(
+        "novelty-benefit",
+        cb,
+        kept,
+        dist,
+        k,
+        weights,
+        eval_set,
+        novelty=nov,
+        benefit=ben,
+        distribution_shift=distribution_shift(cb, kept),
+    )
+
+
+def cnn(
+    cb: CaseBase,
+    k: int = 1,
+    weights: Weights = "distance",
+    eval_set: tuple[np.ndarray, np.ndarray] | None = None,
+) -> MaintenanceReport:
+    """Hart's condensed nearest neighbour: a subset that classifies every case right by 1-NN."""
+    dist = pairwise_distances(cb, desc="CNN")
+    labels = cb.labels.astype(str)
+    kept = np.zeros(len(cb), dtype=bool)
+    for lab in np.unique(labels):
+        kept[np.flatnonzero(labels == lab)[0]] = True
+    changed = True
+    while changed:
+        changed = False
+        for i in range(len(cb)):  # Hart's algorithm is sequential by definition
+            if kept[i]:
+                continue
+            cand = np.where(kept, dist[i], np.inf)
+            if labels[int(np.argmin(cand))] != labels[i]:
+                kept[i] = True
+                changed = True
+    return _report("CNN", cb, kept, dist, k, weights, eval_set)
+
+
+def _enn_pass(dist: np.ndarray, labels: np.ndarray, kept: np.ndarray, k: int) -> np.ndarray:
+    d = np.where(kept[None, :], dist, np.inf)
+    np.fill_diagonal(d, np.inf)
+    classes = np.unique(labels)
+    pred = _knn_vote(d, labels, classes, k, "uniform")
+    return kept & (pred == labels)
+
+
+def renn(
+    cb: CaseBase,
+    k: int = 3,
+    weights: Weights = "distance",
+    eval_set: tuple[np.ndarray, np.ndarray] | None = None,
+) -> MaintenanceReport:
+    """Repeated edited nearest neighbour: drop cases their k nearest misclassify, until stable."""
+    dist = pairwise_distances(cb, desc="RENN")
+    labels = cb.labels.astype(str)
+    kept = np.ones(len(cb), dtype=bool)
+    while True:
+        new = _enn_pass(dist, labels, kept, k)
+        if new.sum() == kept.sum() or new.sum() == 0:
+            kept = new if new.sum() else kept
+            break
+        kept = new
+    return _report("RENN", cb, kept, dist, k, weights, eval_set)
+
+
+def icf(
+    cb: CaseBase,
+    k: int = 3,
+    weights: Weights = "distance",
+    eval_set: tuple[np.ndarray, np.ndarray] | None = None,
+) -> MaintenanceReport:
+    """Iterative case filtering (Brighton & Mellish 2002)."""
+    dist = pairwise_distances(cb, desc="ICF")
+    labels = cb.labels.astype(str)
+    kept = _enn_pass(dist, labels, np.ones(len(cb), dtype=bool), k)
+    if not kept.any():
+        kept = np.ones(len(cb), dtype=bool)
+    diff = labels[:, None] != labels[None, :]
+    while True:
+        d = np.where(kept[None, :] & kept[:, None], dist, np.inf)
+        np.fill_diagonal(d, np.inf)
+        enemy = np.where(diff, d, np.inf).min(axis=1)  # distance to nearest other-label case
+        # local set of c: same-label cases closer than c's nearest enemy
+        local = (d < enemy[:, None]) & ~diff  # local[c, j]: j in LocalSet(c)
+        coverage = local.sum(axis=0)  # coverage(j) = #cases whose local set holds j
+        reachable = local.sum(axis=1)  # reachable(c) = |LocalSet(c)|
+        drop = kept & (reachable > coverage)
+        if not drop.any():
+            break
+        kept = kept & ~drop
+    return _report("ICF", cb, kept, dist, k, weights, eval_set)
+
+
+EDITORS: dict[str, Callable[..., MaintenanceReport]] = {
+    "novelty-benefit": trim_novelty_benefit,
+    "cnn": cnn,
+    "renn": renn,
+    "icf": icf,
+}
+
+
+def record_trim(store: CaseStore, name: str, report: MaintenanceReport) -> None:
+    """Deactivate the dropped cases and log each with its novelty, benefit and reason, in one
+    transaction."""
+    full_ids = report.original_ids
+    assert full_ids is not None
+    with store.transaction() as tx:
+        info = tx.case_base(name)
+        dropped = np.flatnonzero(~report.kept)
+        tx.deactivate_cases(int(full_ids[i]) for i in dropped if full_ids[i] >= 0)
+        for i in dropped:
+            tx.log(
+                info,
+                "trim",
+                case_id=int(full_ids[i]) if full_ids[i] >= 0 else None,
+                novelty=None if report.novelty is None else float(report.novelty[i]),
+                benefit=None if report.benefit is None else float(report.benefit[i]),
+                reason=f"{report.method}: dropped",
+            )
+        tx.log(info, "trim", reason=report.summary())

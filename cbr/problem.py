@@ -1,0 +1,251 @@
+"""The problem side of a case: the feature configuration and :func:`extract_problem`.
+
+Fluent level: the per-frame confidences of the selected fluent states
+(:func:`features.fluents.evaluate`), with NaN handled consistently, resampled to ``length``
+frames: a ``(length, n_states)`` array. Euclidean compares it flattened; DTW and signatures
+compare it as a sequence. QMP level: the QMP feature vector (:func:`features.qmp.qmp_features`),
+binary by default (Euclidean then counts mismatched QMPs).
+
+Which states are used is decided once, when the case base is built (:func:`resolve_config`):
+states unavailable in too many training clips are dropped, and the explicit list is part of
+the stored configuration, so every later clip is described by the same columns.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import weakref
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from casebase_store import canonical_json, config_hash
+from features.poses import PoseSequence
+from posecbr.errors import ConfigError, DataError
+
+Level = Literal["fluents", "qmp"]
+STATE_GROUPS = ("angles", "instantaneous", "all")
+
+
+@dataclass(frozen=True)
+class FeatureConfig:
+    """How a clip becomes a problem.
+
+    level: ``"fluents"`` or ``"qmp"``.
+    length: frames the fluent confidence sequence is resampled to (fluent level).
+    states: a group (``"angles"``: angle fluents with their motion states, no near/touching
+      pairs; ``"instantaneous"``: angle fluents without motion states; ``"all"``) or an explicit
+      tuple of machine state names (``"left_leg_bent.bent"``); explicit after
+      :func:`resolve_config`.
+    min_available: at build time, keep a state when it is available (not all-NaN) in at least
+      this fraction of the training clips.
+    fill: confidence given to a selected state that is unavailable in a whole clip.
+    qmp_part: ``"binary"`` (detected / not) or ``"values"`` (scored QMPs) at the QMP level.
+    """
+
+    level: Level = "fluents"
+    length: int = 32
+    states: str | tuple[str, ...] = "angles"
+    min_available: float = 0.5
+    fill: float = 0.0
+    qmp_part: Literal["binary", "values"] = "binary"
+
+    def __post_init__(self) -> None:
+        if self.level not in ("fluents", "qmp"):
+            raise ConfigError(
+                f"features must be 'fluents' or 'qmp', got {self.level!r}", "features"
+            )
+        if int(self.length) < 2:
+            raise ConfigError(f"length must be >= 2 frames, got {self.length!r}", "length")
+        if isinstance(self.states, str):
+            if self.states not in STATE_GROUPS:
+                raise ConfigError(
+                    f"states must be one of {', '.join(STATE_GROUPS)} or a list of state names,"
+                    f" got {self.states!r}",
+                    "states",
+                )
+        else:
+            object.__setattr__(self, "states", tuple(str(s) for s in self.states))
+        if not 0.0 <= float(self.min_available) <= 1.0:
+            raise ConfigError(f"min_available must be in [0, 1], got {self.min_available!r}")
+        if self.qmp_part not in ("binary", "values"):
+            raise ConfigError(f"qmp_part must be 'binary' or 'values', got {self.qmp_part!r}")
+
+    @property
+    def resolved(self) -> bool:
+        return self.level == "qmp" or not isinstance(self.states, str)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        d["states"] = self.states if isinstance(self.states, str) else list(self.states)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> FeatureConfig:
+        known = {f.name for f in dataclasses.fields(cls)}
+        bad = sorted(set(d) - known)
+        if bad:
+            raise ConfigError(f"unknown feature configuration keys: {', '.join(bad)}", "features")
+        d = dict(d)
+        if isinstance(d.get("states"), list):
+            d["states"] = tuple(d["states"])
+        return cls(**d)
+
+    def hash(self) -> str:
+        return config_hash(self.to_dict())
+
+    def describe(self) -> str:
+        if self.level == "qmp":
+            return f"qmp ({self.qmp_part})"
+        n = self.states if isinstance(self.states, str) else f"{len(self.states)} states"
+        return f"fluents ({n}, resampled to {self.length} frames)"
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """A case's problem: ``values`` ``(length, n_features)`` (fluent sequence) or
+    ``(n_features,)`` (QMP vector); ``names`` machine names and ``words`` human words of the
+    feature columns (so explanations can cite them)."""
+
+    values: np.ndarray
+    names: tuple[str, ...]
+    words: tuple[str, ...]
+    level: Level
+
+
+# Fluent evaluation is the expensive part and does not depend on the configuration: keep one
+# result per PoseSequence object for as long as the sequence lives (cross-validation reuses it).
+_FLUENT_CACHE: weakref.WeakKeyDictionary[PoseSequence, Any] = weakref.WeakKeyDictionary()
+_QMP_CACHE: weakref.WeakKeyDictionary[PoseSequence, Any] = weakref.WeakKeyDictionary()
+
+
+def _fluents(seq: PoseSequence) -> Any:
+    res = _FLUENT_CACHE.get(seq)
+    if res is None:
+        from features.fluents import evaluate
+
+        res = evaluate(seq.to_canonical())
+        _FLUENT_CACHE[seq] = res
+    return res
+
+
+def _qmp(seq: PoseSequence) -> Any:
+    res = _QMP_CACHE.get(seq)
+    if res is None:
+        try:
+            from features.qmp import qmp_features  # type: ignore[attr-defined]
+        except ImportError:
+            raise ConfigError(
+                "the QMP feature level is not available in this build yet "
+                "(features.qmp.qmp_features is missing); use features='fluents'",
+                "features",
+            ) from None
+        res = qmp_features(seq.to_canonical())
+        _QMP_CACHE[seq] = res
+    return res
+
+
+def _group_mask(result: Any, group: str) -> np.ndarray:
+    temporal = np.asarray(result.temporal, dtype=bool)
+    is_near = np.array([n.startswith("near:") for n in result.state_names])
+    if group == "all":
+        return np.ones(len(result.state_names), dtype=bool)
+    if group == "angles":
+        return ~is_near
+    return ~is_near & ~temporal  # instantaneous
+
+
+def resolve_config(config: FeatureConfig, clips: Sequence[PoseSequence]) -> FeatureConfig:
+    """The configuration with an explicit state list, chosen from the training ``clips``."""
+    if config.resolved:
+        return config
+    if not clips:
+        raise DataError("no training clips to choose the fluent states from", "training set")
+    first = _fluents(clips[0])
+    group = _group_mask(first, str(config.states))
+    available = np.zeros(len(first.state_names))
+    for seq in clips:
+        res = _fluents(seq)
+        available += res.available()
+    keep = group & (available >= config.min_available * len(clips))
+    if not keep.any():
+        raise DataError(
+            "no fluent state is available in enough training clips (are the skeletons empty?)",
+            "training set",
+        )
+    names = tuple(n for n, k in zip(first.state_names, keep, strict=True) if k)
+    return dataclasses.replace(config, states=names)
+
+
+def fill_nan_time(x: np.ndarray, fill: float) -> np.ndarray:
+    """Fill NaN along time (axis 0) of ``(frames, n)`` by linear interpolation, holding the
+    edge values; a column NaN in every frame becomes ``fill``."""
+    x = np.array(x, dtype=np.float64, copy=True)
+    nan = np.isnan(x)
+    if not nan.any():
+        return x
+    t = np.arange(x.shape[0])
+    for j in np.flatnonzero(nan.any(axis=0)):  # loop over the few gappy columns only
+        ok = ~nan[:, j]
+        x[:, j] = np.interp(t, t[ok], x[ok, j]) if ok.any() else fill
+    return x
+
+
+def resample(x: np.ndarray, length: int) -> np.ndarray:
+    """Linear resampling of ``(frames, n)`` to ``(length, n)`` over normalised time."""
+    frames = x.shape[0]
+    if frames == 1:
+        return np.repeat(x, length, axis=0)
+    src = np.linspace(0.0, 1.0, frames)
+    dst = np.linspace(0.0, 1.0, length)
+    i = np.clip(np.searchsorted(src, dst, side="right") - 1, 0, frames - 2)
+    w = ((dst - src[i]) / (src[i + 1] - src[i]))[:, None]
+    return x[i] * (1.0 - w) + x[i + 1] * w
+
+
+def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
+    """The problem representation of one clip under a resolved ``config``.
+
+    seq: a pose sequence ``(frames, joints, 3)``. Returns a :class:`Problem` whose values are
+    ``(config.length, n_states)`` in [0, 1] (fluents) or ``(n_features,)`` (QMP).
+    """
+    if config.level == "qmp":
+        q = _qmp(seq)
+        if config.qmp_part == "binary":
+            return Problem(
+                np.asarray(q.binary, dtype=np.float64),
+                tuple(q.binary_names),
+                tuple(str(n).replace("_", " ") for n in q.binary_names),
+                "qmp",
+            )
+        return Problem(
+            np.asarray(q.values, dtype=np.float64),
+            tuple(q.names),
+            tuple(str(n).replace("_", " ") for n in q.names),
+            "qmp",
+        )
+    if not config.resolved:
+        raise ConfigError(
+            "the feature configuration has no explicit state list yet (call resolve_config "
+            "with the training clips first)",
+            "features",
+        )
+    res = _fluents(seq)
+    index = {n: i for i, n in enumerate(res.state_names)}
+    states = tuple(config.states)
+    missing = [s for s in states if s not in index]
+    if missing:
+        raise ConfigError(
+            "the fluent table no longer has states " + ", ".join(missing[:5]), "features"
+        )
+    cols = [index[s] for s in states]
+    conf = fill_nan_time(res.confidence[:, cols], config.fill)
+    values = resample(conf, int(config.length))
+    words = tuple(res.words[i] for i in cols)
+    return Problem(values, states, words, "fluents")
+
+
+def config_json(config: FeatureConfig) -> str:
+    return canonical_json(config.to_dict())
