@@ -1,0 +1,500 @@
+"""Dataset loaders: every source of labelled clips becomes a stream of :class:`Clip`.
+
+``iter_dataset(path)`` accepts, and tells apart by itself (:func:`detect_kind`):
+
+==============  =================================================================================
+kind            what ``path`` is
+==============  =================================================================================
+``uiprmd``      a UI-PRMD folder holding ``Segmented Movements/`` (or ``data/Segmented
+                Movements/``); ``sensor="kinect"`` (also reads ``Incorrect Segmented Movements``)
+                or ``"vicon"``. Label = movement slug (:data:`UIPRMD_MOVEMENTS`).
+``csv``         a labels CSV ``path,label[,subject][,start,end]`` (header row required, more
+                columns become extras), or a folder with a ``labels.csv``. Relative paths
+                resolve against the CSV's folder; ``start``/``end`` are frame indices, end
+                exclusive.
+``asf_amc``     a folder with ``.amc`` files (any depth) and the actor's ``.asf`` beside each:
+                HDM05 (label = action in the file name, subject = actor) or CMU (label =
+                the AMC's folder name).
+``class_folders`` a folder with one subfolder per class holding pose files (``.npz``), BVH
+                files or videos; label = subfolder name.
+``pose_folder`` a folder of pose files whose metadata carries the label (what ``posecbr
+                convert`` writes).
+``pose_file``   a single pose file (or BVH, video, UI-PRMD text file).
+==============  =================================================================================
+
+Each :class:`Clip` holds a canonical sequence (33 BlazePose joints) whose metadata also carries
+``label``, ``subject`` and the extras. Videos go through the pose estimator
+(:mod:`features.pose_estimation`), imported only when a video is actually read.
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+from collections.abc import Callable, Collection, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from posecbr.errors import DataError
+from posecbr.progress import progress
+
+from .poses import PoseSequence, load_pose
+from .readers.asfamc import hdm05_metadata, read_asf_amc
+from .readers.bvh import read_bvh
+from .readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon, uiprmd_metadata
+
+VIDEO_SUFFIXES = frozenset({".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v"})
+POSE_SUFFIXES = frozenset({".npz"})
+CLIP_SUFFIXES = POSE_SUFFIXES | VIDEO_SUFFIXES | {".bvh"}
+
+UIPRMD_MOVEMENTS: dict[str, str] = {
+    "m01": "deep_squat",
+    "m02": "hurdle_step",
+    "m03": "inline_lunge",
+    "m04": "side_lunge",
+    "m05": "sit_to_stand",
+    "m06": "standing_active_straight_leg_raise",
+    "m07": "standing_shoulder_abduction",
+    "m08": "standing_shoulder_extension",
+    "m09": "standing_shoulder_internal_external_rotation",
+    "m10": "standing_shoulder_scaption",
+}
+
+CSV_REQUIRED = ("path", "label")
+
+
+@dataclass(frozen=True)
+class Clip:
+    """One labelled clip: a canonical pose sequence, its label, subject and extras."""
+
+    seq: PoseSequence
+    label: str
+    subject: str | None
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class _Entry:
+    """A clip not read yet: how to read it, and what is known about it from its name."""
+
+    load: Callable[[], PoseSequence]
+    label: str | None
+    subject: str | None
+    extras: dict[str, Any]
+    name: str
+
+
+def _suffix(path: Path) -> str:
+    return path.suffix.lower()
+
+
+def load_clip(path: str | Path) -> PoseSequence:
+    """One clip file as a canonical sequence: pose file, BVH, UI-PRMD text file or video.
+
+    Raises PoseFileError/DataError naming the file when it cannot be read.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise DataError("no such file", path)
+    suffix = _suffix(path)
+    if suffix in POSE_SUFFIXES:
+        return load_pose(path).to_canonical()
+    if suffix == ".bvh":
+        return read_bvh(path)
+    if suffix in VIDEO_SUFFIXES:
+        try:
+            from features.pose_estimation import estimate_poses  # type: ignore[attr-defined]
+        except ImportError:
+            raise DataError("video input needs the pose estimator", path) from None
+        seq: PoseSequence = estimate_poses(path)
+        return seq.to_canonical()
+    if re.search(r"_positions(_inc)?\.txt(\.gz)?$", path.name):
+        if "vicon" in str(path).lower():
+            return read_uiprmd_vicon(path)
+        return read_uiprmd_kinect(path)
+    if suffix == ".amc":
+        return read_asf_amc(find_asf(path), path)
+    raise DataError(
+        "unknown clip format (expected .npz pose file, .bvh, .amc, UI-PRMD positions file or a"
+        f" video: {', '.join(sorted(VIDEO_SUFFIXES))})",
+        path,
+    )
+
+
+# ---- kinds -----------------------------------------------------------------------------
+
+
+def _uiprmd_root(path: Path) -> Path | None:
+    for root in (path, path / "data"):
+        if (root / "Segmented Movements").is_dir():
+            return root
+    return None
+
+
+def _amc_files(path: Path) -> list[Path]:
+    return sorted(p for p in path.rglob("*") if p.suffix.lower() == ".amc" and p.is_file())
+
+
+def _clip_files(folder: Path) -> list[Path]:
+    return sorted(
+        p
+        for p in folder.iterdir()
+        if p.is_file() and _suffix(p) in CLIP_SUFFIXES and not p.name.startswith(".")
+    )
+
+
+def detect_kind(path: str | Path) -> str:
+    """Which kind of dataset ``path`` is (see the module docstring); DataError if none."""
+    path = Path(path)
+    if not path.exists():
+        raise DataError("no such file or folder", path)
+    if path.is_file():
+        return "csv" if _suffix(path) == ".csv" else "pose_file"
+    if _uiprmd_root(path) is not None:
+        return "uiprmd"
+    if (path / "labels.csv").is_file():
+        return "csv"
+    if _amc_files(path):
+        return "asf_amc"
+    subdirs = sorted(p for p in path.iterdir() if p.is_dir() and not p.name.startswith("."))
+    if any(_clip_files(d) for d in subdirs):
+        return "class_folders"
+    if _clip_files(path):
+        return "pose_folder"
+    raise DataError(
+        "cannot tell what dataset this is: expected a UI-PRMD or HDM05 folder, a labels.csv,"
+        " one subfolder per class with pose files or videos, or pose files",
+        path,
+    )
+
+
+def _uiprmd_entries(path: Path, sensor: str) -> list[_Entry]:
+    root = _uiprmd_root(path)
+    assert root is not None
+    if sensor not in ("kinect", "vicon"):
+        raise DataError(f"UI-PRMD sensor must be 'kinect' or 'vicon', got {sensor!r}", path)
+    folder = "Kinect" if sensor == "kinect" else "Vicon"
+    reader = read_uiprmd_kinect if sensor == "kinect" else read_uiprmd_vicon
+    files: list[Path] = []
+    for top in ("Segmented Movements", "Incorrect Segmented Movements"):
+        d = root / top / folder / "Positions"
+        if d.is_dir():
+            files += [p for p in d.iterdir() if "_positions" in p.name]
+    if not files:
+        raise DataError(f"no {folder} positions files under Segmented Movements/{folder}", path)
+    entries = []
+    for f in files:
+        meta = uiprmd_metadata(f)
+        if not meta:
+            continue
+        movement = str(meta["movement"])
+        label = UIPRMD_MOVEMENTS.get(movement, movement)
+        extras = {
+            "movement": movement,
+            "episode": meta["episode"],
+            "correct": meta["correct"],
+            "dataset": "ui-prmd",
+            "sensor": sensor,
+        }
+        entries.append(
+            _Entry(lambda f=f: reader(f), label, str(meta["subject"]), extras, f.name)  # type: ignore[misc]
+        )
+    entries.sort(
+        key=lambda e: (
+            e.extras["movement"],
+            e.subject,
+            e.extras["episode"],
+            not e.extras["correct"],
+        )
+    )
+    return entries
+
+
+def find_asf(amc: Path) -> Path:
+    """The skeleton beside an AMC file: ``HDM_<actor>.asf`` for HDM05, else the only .asf."""
+    meta = hdm05_metadata(amc)
+    if meta:
+        for cand in amc.parent.iterdir():
+            if cand.name.lower() == f"hdm_{meta['subject']}.asf".lower():
+                return cand
+    asfs = [p for p in amc.parent.iterdir() if p.suffix.lower() == ".asf"]
+    if len(asfs) == 1:
+        return asfs[0]
+    if not asfs:
+        raise DataError("no .asf skeleton file beside it", amc)
+    raise DataError(
+        f"{len(asfs)} .asf files beside it and none named for its actor: cannot pick one", amc
+    )
+
+
+def _asf_amc_entries(path: Path) -> list[_Entry]:
+    entries = []
+    for amc in _amc_files(path):
+        meta = hdm05_metadata(amc)
+        if meta:
+            label, subject = str(meta["label"]), str(meta["subject"])
+            extras: dict[str, Any] = {"dataset": "hdm05", "take": meta["take"]}
+        else:
+            label, subject, extras = amc.parent.name, None, {}
+        entries.append(
+            _Entry(
+                lambda amc=amc: read_asf_amc(find_asf(amc), amc),  # type: ignore[misc]
+                label,
+                subject,
+                extras,
+                amc.name,
+            )
+        )
+    return entries
+
+
+def _from_metadata(seq: PoseSequence) -> tuple[str | None, str | None, dict[str, Any]]:
+    meta = dict(seq.metadata)
+    label = meta.pop("label", None)
+    subject = meta.pop("subject", None)
+    meta.pop("frame_offset", None)
+    return (
+        None if label is None else str(label),
+        None if subject is None else str(subject),
+        meta,
+    )
+
+
+def _class_folder_entries(path: Path) -> list[_Entry]:
+    entries = []
+    for d in sorted(p for p in path.iterdir() if p.is_dir() and not p.name.startswith(".")):
+        for f in _clip_files(d):
+            entries.append(_Entry(lambda f=f: load_clip(f), d.name, None, {}, f.name))  # type: ignore[misc]
+    return entries
+
+
+def _pose_folder_entries(path: Path) -> list[_Entry]:
+    return [_Entry(lambda f=f: load_clip(f), None, None, {}, f.name) for f in _clip_files(path)]  # type: ignore[misc]
+
+
+def _parse_bool(value: str) -> Any:
+    low = value.strip().lower()
+    if low in ("true", "yes"):
+        return True
+    if low in ("false", "no"):
+        return False
+    return value
+
+
+def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
+    """Rows of a labels CSV as dicts: path (resolved), label, subject, start, end, extras.
+
+    Header row required with at least ``path`` and ``label``. Raises DataError naming the
+    file and line for a malformed row or a missing clip file.
+    """
+    csv_path = Path(csv_path)
+    if not csv_path.is_file():
+        raise DataError("no such file", csv_path)
+    rows: list[list[str]] = []
+    try:
+        with csv_path.open(newline="", encoding="utf-8-sig") as fh:
+            reader = csv.reader(fh, strict=True)
+            try:
+                rows.extend(reader)
+            except csv.Error as exc:
+                # an unclosed quote runs to the end of the file: name the row it opened on
+                raise DataError(f"line {len(rows) + 1}: malformed CSV ({exc})", csv_path) from None
+    except UnicodeDecodeError as exc:
+        raise DataError(f"not UTF-8 text ({exc.reason} at byte {exc.start})", csv_path) from None
+    if not rows:
+        raise DataError(
+            "empty CSV: a header row path,label[,subject][,start,end] is required", csv_path
+        )
+    header = [h.strip().lower() for h in rows[0]]
+    missing = [c for c in CSV_REQUIRED if c not in header]
+    if missing:
+        raise DataError(
+            f"line 1: header must name columns path,label[,subject][,start,end]; missing"
+            f" {', '.join(missing)} (header row required)",
+            csv_path,
+        )
+    if len(set(header)) != len(header):
+        raise DataError("line 1: repeated column names in the header", csv_path)
+    if ("start" in header) != ("end" in header):
+        raise DataError("line 1: columns start and end go together", csv_path)
+    out = []
+    for line_no, row in enumerate(rows[1:], start=2):
+        if not row or all(not c.strip() for c in row):
+            continue
+        if len(row) != len(header):
+            raise DataError(
+                f"line {line_no}: {len(row)} fields, the header has {len(header)}", csv_path
+            )
+        rec = dict(zip(header, (c.strip() for c in row), strict=True))
+        if not rec["path"]:
+            raise DataError(f"line {line_no}: empty path", csv_path)
+        if not rec["label"]:
+            raise DataError(f"line {line_no}: empty label", csv_path)
+        clip = Path(rec["path"])
+        if not clip.is_absolute():
+            clip = csv_path.parent / clip
+        if not clip.exists():
+            raise DataError(f"line {line_no}: no such file {rec['path']}", csv_path)
+        start = end = None
+        if "start" in rec and (rec["start"] or rec["end"]):
+            try:
+                start, end = int(rec["start"]), int(rec["end"])
+            except ValueError:
+                raise DataError(
+                    f"line {line_no}: start and end must be whole frame numbers,"
+                    f" got {rec['start']!r}, {rec['end']!r}",
+                    csv_path,
+                ) from None
+            if start < 0 or end <= start:
+                raise DataError(
+                    f"line {line_no}: need 0 <= start < end (end exclusive), got {start}, {end}",
+                    csv_path,
+                )
+        extras = {
+            k: _parse_bool(v)
+            for k, v in rec.items()
+            if k not in ("path", "label", "subject", "start", "end")
+        }
+        out.append(
+            {
+                "path": clip,
+                "label": rec["label"],
+                "subject": rec.get("subject") or None,
+                "start": start,
+                "end": end,
+                "extras": extras,
+                "line": line_no,
+            }
+        )
+    return out
+
+
+def _csv_entries(csv_path: Path) -> list[_Entry]:
+    entries = []
+    for rec in read_labels_csv(csv_path):
+
+        def load(rec: dict[str, Any] = rec) -> PoseSequence:
+            seq = load_clip(rec["path"])
+            if rec["start"] is not None:
+                if rec["end"] > seq.n_frames:
+                    raise DataError(
+                        f"line {rec['line']}: end {rec['end']} is past the clip's"
+                        f" {seq.n_frames} frames",
+                        csv_path,
+                    )
+                seq = seq.slice_frames(rec["start"], rec["end"])
+            return seq
+
+        entries.append(_Entry(load, rec["label"], rec["subject"], rec["extras"], rec["path"].name))
+    return entries
+
+
+def _entries(path: Path, kind: str, sensor: str) -> list[_Entry]:
+    if kind == "uiprmd":
+        return _uiprmd_entries(path, sensor)
+    if kind == "csv":
+        return _csv_entries(path if path.is_file() else path / "labels.csv")
+    if kind == "asf_amc":
+        return _asf_amc_entries(path)
+    if kind == "class_folders":
+        return _class_folder_entries(path)
+    if kind == "pose_folder":
+        return _pose_folder_entries(path)
+    return [_Entry(lambda: load_clip(path), None, None, {}, path.name)]
+
+
+def _keep(
+    label: str | None,
+    subject: str | None,
+    extras: dict[str, Any],
+    labels: Collection[str] | None,
+    subjects: Collection[str] | None,
+    movements: Collection[str] | None,
+    episodes: Collection[int] | None,
+    correct: bool | None,
+) -> bool:
+    """Whether a clip passes the filters; unknown values (None) pass until they are known."""
+    if labels is not None and label is not None and label not in labels:
+        return False
+    if subjects is not None and subject is not None and subject not in subjects:
+        return False
+    if movements is not None and extras.get("movement") not in movements:
+        return False
+    episode = extras.get("episode", extras.get("take"))
+    if episodes is not None and episode is not None and int(episode) not in episodes:
+        return False
+    return not (correct is not None and "correct" in extras and extras["correct"] != correct)
+
+
+def iter_dataset(
+    path: str | Path,
+    *,
+    sensor: str = "kinect",
+    progress_desc: str | None = None,
+    labels: Collection[str] | None = None,
+    subjects: Collection[str] | None = None,
+    movements: Collection[str] | None = None,
+    episodes: Collection[int] | None = None,
+    correct: bool | None = None,
+    limit: int | None = None,
+) -> Iterator[Clip]:
+    """Labelled clips of the dataset at ``path`` (kind detected by :func:`detect_kind`).
+
+    Filters (None = all): ``labels``, ``subjects`` ("s01", "bd"), ``movements`` (UI-PRMD
+    "m01"), ``episodes`` (UI-PRMD episode / HDM05 take), ``correct``; ``limit`` caps the
+    number of clips. Clips are read one at a time, with a progress bar. A clip without a label
+    (a pose file whose metadata has none) raises DataError naming it.
+    """
+    path = Path(path)
+    kind = detect_kind(path)
+    entries = [
+        e
+        for e in _entries(path, kind, sensor)
+        if _keep(e.label, e.subject, e.extras, labels, subjects, movements, episodes, correct)
+    ]
+    if limit is not None and kind not in ("class_folders", "pose_folder"):
+        # Everything these filters test is known from the names; the folder kinds learn the
+        # subject only from the file, so they stop after ``limit`` clips instead.
+        entries = entries[: max(limit, 0)]
+    desc = progress_desc or f"loading {path.name}"
+    n_yielded = 0
+    for entry in progress(entries, desc, total=len(entries), unit="clip"):
+        if limit is not None and n_yielded >= limit:
+            break
+        seq = entry.load()
+        meta_label, meta_subject, meta_extras = _from_metadata(seq)
+        label = entry.label if entry.label is not None else meta_label
+        subject = entry.subject if entry.subject is not None else meta_subject
+        extras = {**meta_extras, **entry.extras}
+        if label is None:
+            if kind == "pose_file":
+                label = ""
+            else:
+                raise DataError(
+                    "no label: its metadata has none (put it in a labels CSV)", seq.source
+                )
+        if not _keep(label, subject, extras, labels, subjects, movements, episodes, correct):
+            continue
+        seq = seq.with_metadata(label=label, subject=subject, **extras)
+        n_yielded += 1
+        yield Clip(seq=seq, label=label, subject=subject, extras=extras)
+
+
+def load_dataset(path: str | Path, **kwargs: Any) -> list[Clip]:
+    """All clips of :func:`iter_dataset` as a list (same keyword arguments)."""
+    return list(iter_dataset(path, **kwargs))
+
+
+__all__ = [
+    "CLIP_SUFFIXES",
+    "Clip",
+    "UIPRMD_MOVEMENTS",
+    "VIDEO_SUFFIXES",
+    "detect_kind",
+    "find_asf",
+    "iter_dataset",
+    "load_clip",
+    "load_dataset",
+    "read_labels_csv",
+]
