@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from features.fluents import evaluate, state_signals
 from features.readers.asfamc import read_asf_amc
@@ -68,7 +67,7 @@ def test_uiprmd_shoulder_abduction_one_arm_rises_outward(shared_data: Path) -> N
             other = "left" if side == "right" else "right"
             arm = sg.column(f"{side}_armpit")
             top = int(np.nanargmax(arm))
-            assert res.column(f"{side}_arm_raised.lowered")[0] > 0.9, name
+            assert res.column(f"{side}_arm_raised.lowered")[0] > 0.5, name
             # at the top "raised" is the most likely state (Vicon's marker-derived shoulder
             # centre gives a lower arm than Kinect's: 125-160 degrees at the top)
             assert res.column(f"{side}_arm_raised.raised")[top] > 0.5, name
