@@ -1,0 +1,1 @@
+"""Data files shipped with the CBR package (the default Action Description Database)."""

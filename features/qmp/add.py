@@ -1,0 +1,509 @@
+"""The Action Description Database (ADD): QMP criteria and activities, as data.
+
+The ADD is a TOML file (default: ``cbr/data/add.toml``; schema below). Loading validates every
+entry and raises :class:`~posecbr.errors.ConfigError` naming the file, the entry and the field.
+
+Schema (``schema = 1``)::
+
+    [qmp.<name>]                 # a QMP criterion: a function of fitted QMP parameters
+    words = "knees bending and straightening in rhythm"   # required, shown to people
+    sides = "both"               # optional: "both" | "either"; signals may then use the
+                                 #   templates {side} and {other} (left/right, mirrored)
+    conditions = [               # required, >= 1; all must hold in a window
+      { signal = "{side}_knee", quantity = "amplitude", min = 0.3 },     # min and/or max
+      { signals = ["left_knee", "right_knee"], relation = "in_phase",   # pair relation:
+        max_phase_diff_rad = 0.8, max_period_ratio = 1.3, min_amplitude = 0.2 },
+    ]
+
+    [activity.<name>]
+    words = "squat"              # required
+    labels = ["squat", "squat1Reps"]   # required, >= 1: dataset labels it stands for
+    sequence = [                 # required, >= 2 steps, in the order they are performed
+      { qmp = "knee_oscillation", weight = 10 },   # weight: integer 1-10
+      ...
+    ]
+
+Quantities are those of :data:`features.qmp.fit.QUANTITIES` (amplitude and range in signal
+units: radians for angles, head-lengths for distances ``a~b``; period_s in seconds; trend per
+second). Relations: ``in_phase`` (phase difference at most ``max_phase_diff_rad``) and
+``anti_phase`` (difference from pi at most that), both requiring the two periods to agree
+within ``max_period_ratio`` and both amplitudes to reach ``min_amplitude``.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from posecbr.errors import ConfigError
+
+from .fit import NOT_ENOUGH_DATA, QUANTITIES, QMPFits, quantity_key, signal_unit
+
+def default_add_path() -> Path:
+    """The shipped ADD, ``cbr/data/add.toml`` (package data of ``cbr.data``)."""
+    from importlib.resources import files
+
+    return Path(str(files("cbr.data") / "add.toml"))
+
+
+RELATIONS: tuple[str, ...] = ("in_phase", "anti_phase")
+SIDE_MODES: tuple[str, ...] = ("both", "either")
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One test on one signal's quantity: ``min <= value <= max`` (either bound optional)."""
+
+    signal: str
+    quantity: str
+    min: float | None = None
+    max: float | None = None
+
+    @property
+    def signals(self) -> tuple[str, ...]:
+        return (self.signal,)
+
+    def describe(self) -> str:
+        unit = _unit_words(self.signal, self.quantity)
+        what = f"{_signal_words(self.signal)} {self.quantity.replace('_', ' ')}"
+        if self.min is not None and self.max is not None:
+            return f"{what} between {self.min:g} and {self.max:g}{unit}"
+        if self.min is not None:
+            return f"{what} at least {self.min:g}{unit}"
+        return f"{what} at most {self.max:g}{unit}"
+
+
+@dataclass(frozen=True)
+class Relation:
+    """Two signals oscillating together (in phase) or against each other (anti-phase)."""
+
+    signal_a: str
+    signal_b: str
+    relation: str
+    max_phase_diff_rad: float = 0.8
+    max_period_ratio: float = 1.3
+    min_amplitude: float = 0.1
+
+    @property
+    def signals(self) -> tuple[str, ...]:
+        return (self.signal_a, self.signal_b)
+
+    def describe(self) -> str:
+        how = "in phase with" if self.relation == "in_phase" else "in anti-phase with"
+        return f"{_signal_words(self.signal_a)} oscillating {how} {_signal_words(self.signal_b)}"
+
+
+Test = Condition | Relation
+
+
+@dataclass(frozen=True)
+class Criterion:
+    """A QMP criterion: every test must hold in a window. ``variants`` holds the concrete
+    tests per side ("both": all variants must hold; "either": one suffices; no sides: one
+    variant)."""
+
+    name: str
+    words: str
+    sides: str | None
+    variants: tuple[tuple[Test, ...], ...]
+
+    @property
+    def signals(self) -> tuple[str, ...]:
+        seen: dict[str, None] = {}
+        for variant in self.variants:
+            for test in variant:
+                for s in test.signals:
+                    seen[s] = None
+        return tuple(seen)
+
+
+@dataclass(frozen=True)
+class Step:
+    qmp: str
+    weight: int
+
+
+@dataclass(frozen=True)
+class Activity:
+    """An activity: an ordered sequence of weighted QMPs and the dataset labels it stands for."""
+
+    name: str
+    words: str
+    labels: tuple[str, ...]
+    sequence: tuple[Step, ...]
+
+
+@dataclass(frozen=True)
+class ADD:
+    """A loaded, validated Action Description Database."""
+
+    criteria: Mapping[str, Criterion]
+    activities: Mapping[str, Activity]
+    source: str
+
+    @property
+    def signals(self) -> tuple[str, ...]:
+        """Every state signal some criterion reads, in a stable order."""
+        seen: dict[str, None] = {}
+        for crit in self.criteria.values():
+            for s in crit.signals:
+                seen[s] = None
+        return tuple(seen)
+
+
+def _signal_words(signal: str) -> str:
+    return signal.replace("~", " to ").replace("_", " ")
+
+
+def _unit_words(signal: str, quantity: str) -> str:
+    if quantity in ("period_s",):
+        return " s"
+    if quantity in ("r2",):
+        return ""
+    unit = signal_unit(signal)
+    if quantity in ("trend", "residual_rms"):
+        return f" {unit}/s"
+    if quantity == "accel":
+        return f" {unit}/s^2"
+    return f" {unit}"
+
+
+@cache
+def known_signals() -> frozenset[str]:
+    """Names of every state signal the fluent engine computes."""
+    from features.fluents import ANGLE_SIGNALS, NEAR_SIGNALS
+
+    return frozenset(ANGLE_SIGNALS) | frozenset(NEAR_SIGNALS)
+
+
+def _canonical_signal(name: str) -> str | None:
+    """The engine's name for ``name`` (a distance may be written either way round)."""
+    known = known_signals()
+    if name in known:
+        return name
+    if "~" in name:
+        a, _, b = name.partition("~")
+        if f"{b}~{a}" in known:
+            return f"{b}~{a}"
+    return None
+
+
+def _number(raw: Any, where: str, src: str) -> float:
+    if isinstance(raw, bool) or not isinstance(raw, int | float) or not np.isfinite(raw):
+        raise ConfigError(f"{where}: expected a number, got {raw!r}", src)
+    return float(raw)
+
+
+def _table(raw: Any, where: str, src: str) -> dict[str, Any]:
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{where}: expected a table, got {type(raw).__name__}", src)
+    return raw
+
+
+def _text(raw: Mapping[str, Any], key: str, where: str, src: str) -> str:
+    if key not in raw:
+        raise ConfigError(f"{where}: missing field '{key}'", src)
+    value = raw[key]
+    if not isinstance(value, str) or not value.strip():
+        raise ConfigError(f"{where}: field '{key}' must be a non-empty string", src)
+    return value
+
+
+def _resolve(template: str, side: str | None, where: str, src: str) -> str:
+    if ("{side}" in template or "{other}" in template) and side is None:
+        raise ConfigError(f"{where}: signal {template!r} uses {{side}} but 'sides' is not set", src)
+    name = template
+    if side is not None:
+        other = "right" if side == "left" else "left"
+        name = template.replace("{side}", side).replace("{other}", other)
+    canonical = _canonical_signal(name)
+    if canonical is None:
+        raise ConfigError(f"{where}: unknown signal {name!r}", src)
+    return canonical
+
+
+_CONDITION_KEYS = {"signal", "quantity", "min", "max"}
+_RELATION_KEYS = {
+    "signals",
+    "relation",
+    "max_phase_diff_rad",
+    "max_period_ratio",
+    "min_amplitude",
+}
+
+
+def _parse_test(raw: Any, side: str | None, where: str, src: str) -> Test:
+    raw = _table(raw, where, src)
+    if "relation" in raw or "signals" in raw:
+        extra = set(raw) - _RELATION_KEYS
+        if extra:
+            raise ConfigError(f"{where}: unknown field(s) {sorted(extra)}", src)
+        rel = raw.get("relation")
+        if rel not in RELATIONS:
+            raise ConfigError(f"{where}: field 'relation' must be one of {RELATIONS}", src)
+        pair = raw.get("signals")
+        if (
+            not isinstance(pair, list)
+            or len(pair) != 2
+            or not all(isinstance(s, str) for s in pair)
+        ):
+            raise ConfigError(f"{where}: field 'signals' must be a list of two signal names", src)
+        opts = {
+            k: _number(raw[k], f"{where}: field '{k}'", src)
+            for k in ("max_phase_diff_rad", "max_period_ratio", "min_amplitude")
+            if k in raw
+        }
+        if opts.get("max_period_ratio", 1.0) < 1.0:
+            raise ConfigError(f"{where}: field 'max_period_ratio' must be >= 1", src)
+        return Relation(
+            _resolve(pair[0], side, where, src), _resolve(pair[1], side, where, src), rel, **opts
+        )
+    extra = set(raw) - _CONDITION_KEYS
+    if extra:
+        raise ConfigError(f"{where}: unknown field(s) {sorted(extra)}", src)
+    signal = _text(raw, "signal", where, src)
+    quantity = _text(raw, "quantity", where, src)
+    if quantity not in QUANTITIES:
+        raise ConfigError(
+            f"{where}: unknown quantity {quantity!r} (known: {', '.join(QUANTITIES)})", src
+        )
+    lo = _number(raw["min"], f"{where}: field 'min'", src) if "min" in raw else None
+    hi = _number(raw["max"], f"{where}: field 'max'", src) if "max" in raw else None
+    if lo is None and hi is None:
+        raise ConfigError(f"{where}: needs a field 'min' or 'max'", src)
+    if lo is not None and hi is not None and lo > hi:
+        raise ConfigError(f"{where}: 'min' ({lo}) is above 'max' ({hi})", src)
+    return Condition(_resolve(signal, side, where, src), quantity, lo, hi)
+
+
+def _parse_criterion(name: str, raw: Any, src: str) -> Criterion:
+    where = f"qmp '{name}'"
+    raw = _table(raw, where, src)
+    extra = set(raw) - {"words", "sides", "conditions"}
+    if extra:
+        raise ConfigError(f"{where}: unknown field(s) {sorted(extra)}", src)
+    words = _text(raw, "words", where, src)
+    sides = raw.get("sides")
+    if sides is not None and sides not in SIDE_MODES:
+        raise ConfigError(f"{where}: field 'sides' must be one of {SIDE_MODES}", src)
+    conds = raw.get("conditions")
+    if conds is None:
+        raise ConfigError(f"{where}: missing field 'conditions'", src)
+    if not isinstance(conds, list) or not conds:
+        raise ConfigError(f"{where}: field 'conditions' must be a non-empty list", src)
+    side_list: tuple[str | None, ...] = ("left", "right") if sides else (None,)
+    variants = tuple(
+        tuple(_parse_test(c, side, f"{where}: conditions[{i}]", src) for i, c in enumerate(conds))
+        for side in side_list
+    )
+    return Criterion(name, words, sides, variants)
+
+
+def _parse_activity(name: str, raw: Any, criteria: Mapping[str, Criterion], src: str) -> Activity:
+    where = f"activity '{name}'"
+    raw = _table(raw, where, src)
+    extra = set(raw) - {"words", "labels", "sequence"}
+    if extra:
+        raise ConfigError(f"{where}: unknown field(s) {sorted(extra)}", src)
+    words = _text(raw, "words", where, src)
+    labels = raw.get("labels")
+    if labels is None:
+        raise ConfigError(f"{where}: missing field 'labels'", src)
+    if not isinstance(labels, list) or not labels or not all(isinstance(x, str) for x in labels):
+        raise ConfigError(f"{where}: field 'labels' must be a non-empty list of strings", src)
+    seq = raw.get("sequence")
+    if seq is None:
+        raise ConfigError(f"{where}: missing field 'sequence'", src)
+    if not isinstance(seq, list) or len(seq) < 2:
+        raise ConfigError(f"{where}: field 'sequence' must list at least two QMPs", src)
+    steps = []
+    for i, item in enumerate(seq):
+        w = f"{where}: sequence[{i}]"
+        item = _table(item, w, src)
+        extra = set(item) - {"qmp", "weight"}
+        if extra:
+            raise ConfigError(f"{w}: unknown field(s) {sorted(extra)}", src)
+        qmp = _text(item, "qmp", w, src)
+        if qmp not in criteria:
+            raise ConfigError(f"{w}: unknown qmp {qmp!r}", src)
+        if "weight" not in item:
+            raise ConfigError(f"{w}: missing field 'weight'", src)
+        weight = item["weight"]
+        if isinstance(weight, bool) or not isinstance(weight, int) or not 1 <= weight <= 10:
+            raise ConfigError(f"{w}: field 'weight' must be an integer from 1 to 10", src)
+        steps.append(Step(qmp, weight))
+    return Activity(name, words, tuple(labels), tuple(steps))
+
+
+def parse_add(raw: Mapping[str, Any], source: str = "ADD") -> ADD:
+    """Validate a parsed ADD document (see the module docstring for the schema)."""
+    src = source
+    if raw.get("schema", 1) != 1:
+        raise ConfigError(f"unsupported ADD schema {raw.get('schema')!r} (expected 1)", src)
+    extra = set(raw) - {"schema", "qmp", "activity"}
+    if extra:
+        raise ConfigError(f"unknown top-level field(s) {sorted(extra)}", src)
+    qmps = _table(raw.get("qmp", {}), "qmp", src)
+    acts = _table(raw.get("activity", {}), "activity", src)
+    if not qmps:
+        raise ConfigError("no [qmp.<name>] entries", src)
+    if not acts:
+        raise ConfigError("no [activity.<name>] entries", src)
+    criteria = {name: _parse_criterion(name, v, src) for name, v in qmps.items()}
+    activities = {name: _parse_activity(name, v, criteria, src) for name, v in acts.items()}
+    return ADD(criteria, activities, src)
+
+
+def load_add(path: str | Path | None = None) -> ADD:
+    """Load and validate an ADD file (TOML); None loads the shipped default."""
+    if path is None:
+        return _default_add()
+    return _load(Path(path))
+
+
+@cache
+def _default_add() -> ADD:
+    return _load(default_add_path())
+
+
+def _load(p: Path) -> ADD:
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError("ADD file not found", p) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"cannot read ADD file: {exc}", p) from None
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"not valid TOML: {exc}", p) from None
+    return parse_add(raw, str(p))
+
+
+@dataclass(frozen=True)
+class CriteriaResult:
+    """Criteria evaluated per window.
+
+    names ``(Q,)``; met / observable ``(W, Q)`` bool; fraction ``(W, Q)`` the share of tests
+    passed by the best variant (for "why not"); failed: per (window, criterion) the tests that
+    failed in the best variant, as readable strings with the observed value.
+    """
+
+    names: tuple[str, ...]
+    met: np.ndarray
+    observable: np.ndarray
+    fraction: np.ndarray
+    failed: tuple[tuple[tuple[str, ...], ...], ...]
+
+
+def _test_values(test: Test, fits: QMPFits) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """(passed ``(W,)``, observable ``(W,)``, observed values) of one test over all windows."""
+    idx = [fits.index(s) for s in test.signals]
+    observable = (fits.status[:, idx] != NOT_ENOUGH_DATA).all(axis=1)
+    if isinstance(test, Condition):
+        v = fits.quantity(test.quantity)[:, idx[0]]
+        with np.errstate(invalid="ignore"):
+            ok = np.isfinite(v)
+            if test.min is not None:
+                ok &= v >= test.min
+            if test.max is not None:
+                ok &= v <= test.max
+        return ok, observable, [v]
+    amp = fits.quantity("amplitude")[:, idx]
+    per = fits.quantity("period_s")[:, idx]
+    pha = fits.quantity("phase_rad")[:, idx]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.maximum(per[:, 0], per[:, 1]) / np.minimum(per[:, 0], per[:, 1])
+        diff = np.abs(np.angle(np.exp(1j * (pha[:, 0] - pha[:, 1]))))  # wrapped to [0, pi]
+        if test.relation == "anti_phase":
+            diff = np.pi - diff
+        ok = (
+            (amp >= test.min_amplitude).all(axis=1)
+            & (ratio <= test.max_period_ratio)
+            & (diff <= test.max_phase_diff_rad)
+        )
+    return ok & np.isfinite(diff), observable, [diff, ratio]
+
+
+def _failure_text(test: Test, values: list[np.ndarray], w: int, fits: QMPFits) -> str:
+    if isinstance(test, Condition):
+        v = values[0][w]
+        unit = _unit_words(test.signal, test.quantity)
+        seen = "undefined" if not np.isfinite(v) else f"{v:.3g}{unit}"
+        return f"{test.describe()} (observed {seen})"
+    diff, ratio = values[0][w], values[1][w]
+    if not np.isfinite(diff):
+        return f"{test.describe()} (observed: not oscillating)"
+    return f"{test.describe()} (observed phase gap {diff:.2f} rad, period ratio {ratio:.2f})"
+
+
+def evaluate_criteria(add: ADD, fits: QMPFits) -> CriteriaResult:
+    """Evaluate every ADD criterion in every window of ``fits`` (array work per test)."""
+    names = tuple(add.criteria)
+    n_win, n_q = len(fits.windows), len(names)
+    met = np.zeros((n_win, n_q), dtype=bool)
+    observable = np.zeros((n_win, n_q), dtype=bool)
+    fraction = np.zeros((n_win, n_q))
+    failed: list[list[tuple[str, ...]]] = [[() for _ in range(n_q)] for _ in range(n_win)]
+    for q, name in enumerate(names):
+        crit = add.criteria[name]
+        v_met, v_obs, v_frac, v_tests = [], [], [], []
+        for variant in crit.variants:
+            results = [(_test_values(t, fits), t) for t in variant]
+            passed = np.stack([r[0][0] for r in results], axis=1)  # (W, tests)
+            obs = np.stack([r[0][1] for r in results], axis=1)
+            v_met.append(passed.all(axis=1) & obs.all(axis=1))
+            v_obs.append(obs.all(axis=1))
+            v_frac.append(np.where(obs.all(axis=1), passed.mean(axis=1), 0.0))
+            v_tests.append(results)
+        vm, vo, vf = np.stack(v_met, 1), np.stack(v_obs, 1), np.stack(v_frac, 1)
+        if crit.sides == "both":
+            met[:, q] = vm.all(axis=1)
+            observable[:, q] = vo.all(axis=1)
+            fraction[:, q] = vf.mean(axis=1)
+        else:
+            met[:, q] = vm.any(axis=1)
+            observable[:, q] = vo.any(axis=1)
+            fraction[:, q] = vf.max(axis=1)
+        for w in np.flatnonzero(~met[:, q] & observable[:, q]):
+            texts: list[str] = []
+            # "both": every failing side counts; "either": explain the closest side.
+            variants = range(len(crit.variants))
+            if crit.sides != "both":
+                variants = range(int(np.argmax(vf[w])), int(np.argmax(vf[w])) + 1)
+            for v in variants:
+                for (ok, _obs, values), test in v_tests[v]:
+                    if not ok[w]:
+                        texts.append(_failure_text(test, values, int(w), fits))
+            failed[w][q] = tuple(dict.fromkeys(texts))
+    return CriteriaResult(names, met, observable, fraction, tuple(tuple(row) for row in failed))
+
+
+def feature_columns(add: ADD) -> tuple[tuple[str, str], ...]:
+    """The (signal, quantity) pairs the criteria read, in a stable order."""
+    seen: dict[tuple[str, str], None] = {}
+    for crit in add.criteria.values():
+        for variant in crit.variants:
+            for test in variant:
+                if isinstance(test, Condition):
+                    seen[(test.signal, test.quantity)] = None
+                else:
+                    for s in test.signals:
+                        for qn in ("amplitude", "period_s", "phase_rad"):
+                            seen[(s, qn)] = None
+    return tuple(seen)
+
+
+def feature_name(signal: str, quantity: str) -> str:
+    """Readable, stable name of a continuous QMP feature: ``left_knee.amplitude_rad``."""
+    return f"{signal}.{quantity_key(quantity, signal_unit(signal))}"
+
+
+def criteria_words(add: ADD, names: Sequence[str]) -> tuple[str, ...]:
+    return tuple(add.criteria[n].words for n in names)
