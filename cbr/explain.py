@@ -156,10 +156,15 @@ def explain(
         f"In this clip but not in those cases: {_join(only_here)}.",
     ]
     if contrast is not None:
+        change = []
+        if contrast.would_need:
+            change.append(f"show {_join(contrast.would_need)}")
+        if contrast.would_lose:
+            change.append(f"not show {_join(contrast.would_lose)}")
+        what = " and ".join(change) if change else "differ only in degree, not in these features"
         lines.append(
-            f"Nearest other activity: {contrast.label} (distance {contrast.distance:.3g}); to be "
-            f"that, the clip would need {_join(contrast.would_need)}, and would not show "
-            f"{_join(contrast.would_lose)}."
+            f"Nearest other activity: {contrast.label} (distance {contrast.distance:.3g}); "
+            f"to be that, the clip would {what}."
         )
     return Explanation(
         label=solution.label,

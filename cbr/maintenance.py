@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from casebase_store import CaseStore
+from casebase_store import StoreTransaction
 from posecbr.progress import progress
 
 from .casebase import CaseBase
@@ -302,22 +302,23 @@ EDITORS: dict[str, Callable[..., MaintenanceReport]] = {
 }
 
 
-def record_trim(store: CaseStore, name: str, report: MaintenanceReport) -> None:
-    """Deactivate the dropped cases and log each with its novelty, benefit and reason, in one
-    transaction."""
-    full_ids = report.original_ids
+def record_trim(
+    tx: StoreTransaction, name: str, report: MaintenanceReport, ids: np.ndarray | None = None
+) -> None:
+    """Inside ``tx``: deactivate the cases ``report`` dropped (``ids``: their store ids,
+    default ``report.original_ids``) and log each with its novelty, benefit and reason."""
+    info = tx.case_base(name)
+    full_ids = ids if ids is not None else report.original_ids
     assert full_ids is not None
-    with store.transaction() as tx:
-        info = tx.case_base(name)
-        dropped = np.flatnonzero(~report.kept)
-        tx.deactivate_cases(int(full_ids[i]) for i in dropped if full_ids[i] >= 0)
-        for i in dropped:
-            tx.log(
-                info,
-                "trim",
-                case_id=int(full_ids[i]) if full_ids[i] >= 0 else None,
-                novelty=None if report.novelty is None else float(report.novelty[i]),
-                benefit=None if report.benefit is None else float(report.benefit[i]),
-                reason=f"{report.method}: dropped",
-            )
-        tx.log(info, "trim", reason=report.summary())
+    dropped = np.flatnonzero(~report.kept)
+    tx.deactivate_cases(int(full_ids[i]) for i in dropped if full_ids[i] >= 0)
+    for i in dropped:
+        tx.log(
+            info,
+            "trim",
+            case_id=int(full_ids[i]) if full_ids[i] >= 0 else None,
+            novelty=None if report.novelty is None else float(report.novelty[i]),
+            benefit=None if report.benefit is None else float(report.benefit[i]),
+            reason=f"{report.method}: dropped",
+        )
+    tx.log(info, "trim", reason=report.summary())

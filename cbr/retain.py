@@ -5,8 +5,8 @@
 - benefit = 1 - the vote share the case base gives the true label today: 0 when it is already
   classified right with full confidence, 1 when the true label gets no vote.
 
-Both must reach their thresholds. :func:`record_retention` writes the case and the log entry in
-one transaction.
+Both must reach their thresholds. :func:`record_retention` writes the case and the log
+entry inside the caller's transaction.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from casebase_store import CaseStore, NewCase
+from casebase_store import NewCase, StoreTransaction
 
 from .casebase import CaseBase
 from .problem import Problem
@@ -84,7 +84,7 @@ def retain(
 
 
 def record_retention(
-    store: CaseStore,
+    tx: StoreTransaction,
     name: str,
     decision: RetainDecision,
     problem: np.ndarray,
@@ -93,29 +93,24 @@ def record_retention(
     source: str = "",
     subject: str | None = None,
 ) -> int | None:
-    """Store the decision (and the case, if retained) in one transaction; the new case id."""
-    with store.transaction() as tx:
-        info = tx.case_base(name)
-        case_id = None
-        if decision.retained:
-            case_id = tx.add_cases(
-                info,
-                [
-                    NewCase(
-                        str(label),
-                        np.asarray(problem, dtype=np.float32),
-                        source=source,
-                        subject=subject,
-                        origin="retained",
-                    )
-                ],
-            )[0]
-        tx.log(
-            info,
-            "retain",
-            case_id=case_id,
-            novelty=decision.novelty,
-            benefit=decision.benefit,
-            reason=decision.reason,
+    """Inside ``tx``: log the decision (and add the case, if retained); the new case id."""
+    info = tx.case_base(name)
+    case_id = None
+    if decision.retained:
+        case = NewCase(
+            str(label),
+            np.asarray(problem, dtype=np.float32),
+            source=source,
+            subject=subject,
+            origin="retained",
         )
+        case_id = tx.add_cases(info, [case])[0]
+    tx.log(
+        info,
+        "retain",
+        case_id=case_id,
+        novelty=decision.novelty,
+        benefit=decision.benefit,
+        reason=decision.reason,
+    )
     return case_id

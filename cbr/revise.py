@@ -9,7 +9,8 @@ The most similar case decides what changes (an LVQ-style update, Kohonen 1990):
   was mislabelled or is ambiguous);
 - otherwise the nearest case of the true label moves toward the observation.
 
-Every revision is recorded in the store's maintenance log by :func:`record_revision`.
+Every revision is recorded in the store's maintenance log by :func:`record_revision`
+(inside the caller's transaction).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from casebase_store import CaseStore
+from casebase_store import StoreTransaction
 
 from .casebase import CaseBase
 from .problem import Problem
@@ -87,17 +88,16 @@ def revise(
     return Revision("moved", target, int(cb.ids[target]), lab, lab, d, reason)
 
 
-def record_revision(store: CaseStore, name: str, cb: CaseBase, rev: Revision) -> None:
-    """Write a revision (changed case + log entry) in one transaction."""
-    with store.transaction() as tx:
-        info = tx.case_base(name)
-        if rev.action == "moved" and rev.case_id >= 0:
-            tx.update_case(rev.case_id, features=cb.problems[rev.index].astype(np.float32))
-        elif rev.action == "relabelled" and rev.case_id >= 0:
-            tx.update_case(rev.case_id, label=rev.new_label)
-        tx.log(
-            info,
-            "revise",
-            case_id=rev.case_id if rev.case_id >= 0 else None,
-            reason=f"{rev.action}: {rev.reason}",
-        )
+def record_revision(tx: StoreTransaction, name: str, cb: CaseBase, rev: Revision) -> None:
+    """Inside ``tx``: write the revised case and its maintenance-log entry."""
+    info = tx.case_base(name)
+    if rev.action == "moved" and rev.case_id >= 0:
+        tx.update_case(rev.case_id, features=cb.problems[rev.index].astype(np.float32))
+    elif rev.action == "relabelled" and rev.case_id >= 0:
+        tx.update_case(rev.case_id, label=rev.new_label)
+    tx.log(
+        info,
+        "revise",
+        case_id=rev.case_id if rev.case_id >= 0 else None,
+        reason=f"{rev.action}: {rev.reason}",
+    )

@@ -1,0 +1,262 @@
+"""Building a stored case base from labelled clips, and classifying clips with one (the work
+behind ``posecbr train`` and ``posecbr classify``). Each user action is one store transaction.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from casebase_store import CaseStore, NewCase
+from features.poses import PoseSequence
+from posecbr.errors import ConfigError, DataError
+from posecbr.progress import progress
+
+from .casebase import CaseBase
+from .explain import Explanation, explain
+from .maintenance import EDITORS, MaintenanceReport, record_trim
+from .problem import FeatureConfig, Problem, extract_problem, resolve_config
+from .retain import RetainDecision, record_retention, retain, typical_distance
+from .retrieve import retrieve
+from .reuse import reuse
+from .revise import Revision, record_revision, revise
+from .similarity import SimilarityMeasure
+
+
+@dataclass(frozen=True)
+class BuildResult:
+    name: str
+    n_cases: int
+    n_kept: int
+    label_counts: dict[str, int]
+    config: FeatureConfig
+    trim: MaintenanceReport | None
+
+
+def check_training_set(labels: Sequence[str], where: str) -> None:
+    if len(labels) == 0:
+        raise DataError("the training set is empty (no clips found)", where)
+    classes = sorted(set(labels))
+    if len(classes) < 2:
+        raise DataError(
+            f"the training set has only one activity ({classes[0]!r}); a classifier needs at "
+            "least two",
+            where,
+        )
+
+
+def check_same_config(stored: dict[str, Any], wanted: FeatureConfig, name: str, where: str) -> None:
+    """Refuse to mix cases from another feature configuration into a case base."""
+    have = FeatureConfig.from_dict(stored)
+    for key in ("level", "length", "qmp_part"):
+        if getattr(have, key) != getattr(wanted, key):
+            raise ConfigError(
+                f"case base {name!r} was built with features {have.describe()}, not "
+                f"{wanted.describe()} ({key} differs); use another --name or --replace",
+                where,
+            )
+    if isinstance(wanted.states, tuple) and tuple(wanted.states) != tuple(have.states):
+        raise ConfigError(
+            f"case base {name!r} was built with other fluent states; use another --name or "
+            "--replace",
+            where,
+        )
+
+
+def problems_of(clips: Sequence[PoseSequence], config: FeatureConfig, desc: str) -> list[Problem]:
+    return [
+        extract_problem(s, config)
+        for s in progress(clips, desc=desc, total=len(clips), unit="clip")
+    ]
+
+
+def build_case_base(
+    store: CaseStore,
+    name: str,
+    clips: Sequence[PoseSequence],
+    labels: Sequence[str],
+    config: FeatureConfig,
+    measure: SimilarityMeasure,
+    *,
+    replace: bool = False,
+    append: bool = False,
+    editor: str | None = None,
+    keep: float = 0.7,
+    k: int = 5,
+) -> BuildResult:
+    """Extract problems, optionally trim, and store the case base in ONE transaction."""
+    labels = [str(v) for v in labels]
+    check_training_set(labels, "training set")
+    if append and store.has_case_base(name):
+        info = store.get_case_base(name)
+        check_same_config(info.feature_config, config, name, store.where)
+        config = FeatureConfig.from_dict(info.feature_config)
+    else:
+        config = resolve_config(config, clips)
+    probs = problems_of(clips, config, "features")
+    cb = CaseBase(
+        config,
+        measure,
+        np.stack([p.values for p in probs]),
+        np.array(labels, dtype=object),
+        probs[0].names,
+        probs[0].words,
+        sources=tuple(s.source for s in clips),
+        subjects=tuple(
+            None if s.metadata.get("subject") is None else str(s.metadata["subject"]) for s in clips
+        ),
+    )
+    report = None
+    if editor is not None:
+        if editor not in EDITORS:
+            raise ConfigError(f"unknown editor {editor!r} (known: {', '.join(EDITORS)})", "editor")
+        fn = EDITORS[editor]
+        report = fn(cb, keep, k) if editor == "novelty-benefit" else fn(cb)
+    kind = measure.cache_kind(tuple(cb.problems.shape[1:]))
+    reps = measure.represent(cb.problems) if kind is not None else None
+    frames = [
+        (
+            int(s.metadata.get("frame_offset", 0)),
+            int(s.metadata.get("frame_offset", 0)) + s.n_frames,
+        )
+        for s in clips
+    ]
+    with store.transaction() as tx:
+        if append and tx.store.has_case_base(name):
+            info = tx.case_base(name)
+        else:
+            info = tx.create_case_base(
+                name,
+                config.to_dict(),
+                probs[0].names,
+                probs[0].words,
+                measure.params(),
+                replace=replace,
+            )
+        new = [
+            NewCase(
+                label=labels[i],
+                features=cb.problems[i].astype(np.float32),
+                source=clips[i].source,
+                frame_start=frames[i][0],
+                frame_end=frames[i][1],
+                subject=cb.subjects[i],
+                skeleton=str(clips[i].metadata.get("source_skeleton", clips[i].skeleton)),
+                origin="trained",
+            )
+            for i in range(len(cb))
+        ]
+        ids = tx.add_cases(info, progress(new, desc="storing", total=len(new), unit="case"))
+        if kind is not None and reps is not None:
+            tx.put_representations(kind, {cid: reps[i] for i, cid in enumerate(ids)})
+        tx.log(
+            info,
+            "build",
+            reason=f"{len(ids)} cases from {len(set(labels))} activities, "
+            f"features {config.describe()}, similarity {measure.params()}",
+        )
+        if report is not None:
+            record_trim(tx, info.name, report, np.asarray(ids))
+    return BuildResult(
+        name,
+        len(cb),
+        len(cb) if report is None else report.size_after,
+        {lab: labels.count(lab) for lab in sorted(set(labels))},
+        config,
+        report,
+    )
+
+
+@dataclass(frozen=True)
+class Classification:
+    source: str
+    true_label: str | None
+    explanation: Explanation
+    revision: Revision | None = None
+    retention: RetainDecision | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"clip": self.source, **self.explanation.to_dict()}
+        if self.true_label is not None:
+            out["true_label"] = self.true_label
+            out["correct"] = self.true_label == self.explanation.label
+        if self.revision is not None:
+            r = self.revision
+            out["revision"] = {
+                "action": r.action,
+                "case_id": r.case_id,
+                "old_label": r.old_label,
+                "new_label": r.new_label,
+                "reason": r.reason,
+            }
+        if self.retention is not None:
+            d = self.retention
+            out["retention"] = {
+                "retained": d.retained,
+                "novelty": d.novelty,
+                "benefit": d.benefit,
+                "reason": d.reason,
+            }
+        return out
+
+
+def classify_clips(
+    store: CaseStore,
+    name: str,
+    clips: Sequence[PoseSequence],
+    true_labels: Sequence[str | None],
+    *,
+    k: int = 5,
+    feedback: str | None = None,
+    novelty_threshold: float = 0.5,
+    benefit_threshold: float = 0.2,
+) -> list[Classification]:
+    """Classify clips; with ``feedback`` (the true label of every clip) also revise and retain,
+    one transaction per clip."""
+    cb = CaseBase.from_store(store, name)
+    classes = np.unique(cb.labels.astype(str))
+    scale = typical_distance(cb) if feedback is not None else None
+    out = []
+    for seq, truth in progress(
+        list(zip(clips, true_labels, strict=True)),
+        desc="classifying",
+        total=len(clips),
+        unit="clip",
+    ):
+        p = extract_problem(seq, cb.config)
+        if p.values.shape != cb.problems.shape[1:]:
+            raise DataError(
+                f"problem shape {p.values.shape} differs from the case base's "
+                f"{cb.problems.shape[1:]}",
+                seq.source,
+            )
+        r = retrieve(cb, p, k)
+        sol = reuse(r, classes)
+        exp = explain(cb, p, r, sol)
+        rev = dec = None
+        if feedback is not None:
+            dec = retain(
+                cb,
+                p,
+                feedback,
+                k=k,
+                novelty_threshold=novelty_threshold,
+                benefit_threshold=benefit_threshold,
+                scale=scale,
+                source=seq.source,
+            )
+            if not dec.retained:
+                rev = revise(cb, p, feedback)
+            with store.transaction() as tx:  # one transaction per clip's feedback
+                cid = record_retention(tx, name, dec, p.values, feedback, source=seq.source)
+                if cid is not None:
+                    assert cb.ids is not None
+                    cb.ids[-1] = cid
+                if rev is not None:
+                    record_revision(tx, name, cb, rev)
+            classes = np.unique(cb.labels.astype(str))
+        out.append(Classification(seq.source, truth, exp, rev, dec))
+    return out

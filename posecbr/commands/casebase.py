@@ -1,0 +1,223 @@
+"""``posecbr casebase info|list|export|trim --db cb.sqlite``: inspect and maintain a store."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from casebase_store import CaseStore, open_store
+from cbr.casebase import CaseBase
+from cbr.maintenance import EDITORS, record_trim
+from posecbr.errors import ConfigError, DataError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "casebase",
+        help="inspect, export and trim case bases",
+        description="Inspect, export and maintain the case bases in a store.",
+    )
+    act = p.add_subparsers(dest="action", metavar="ACTION", required=True)
+
+    def common(q: argparse.ArgumentParser) -> None:
+        q.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
+        q.add_argument("--name", default=None, help="case base name (default: the only one)")
+        q.add_argument("--json", action="store_true", help="machine-readable output")
+
+    q = act.add_parser("info", help="case bases, configuration, cases per activity, history")
+    common(q)
+    q = act.add_parser("list", help="the cases of a case base")
+    common(q)
+    q.add_argument("--all", action="store_true", help="include trimmed cases")
+    q = act.add_parser("export", help="write the cases (problems, labels, provenance) to .npz")
+    common(q)
+    q.add_argument("--out", required=True, type=Path, help="output .npz file")
+    q = act.add_parser("trim", help="run a maintenance editor and deactivate dropped cases")
+    common(q)
+    q.add_argument("--editor", choices=tuple(EDITORS), default="novelty-benefit")
+    q.add_argument(
+        "--keep", type=float, default=0.7, help="novelty-benefit: fraction of each activity to keep"
+    )
+    q.add_argument("-k", "--k", type=int, default=5, help="neighbours for novelty/benefit")
+    q.add_argument("--dry-run", action="store_true", help="report only, change nothing")
+    p.set_defaults(func=run)
+
+
+def _name(store: CaseStore, name: str | None) -> str:
+    if name is not None:
+        store.get_case_base(name)  # clear error when absent
+        return name
+    names = [cb.name for cb in store.list_case_bases()]
+    if len(names) != 1:
+        raise ConfigError(
+            "the store holds "
+            + (
+                f"case bases {', '.join(names)}: choose one with --name"
+                if names
+                else "no case base"
+            ),
+            store.where,
+        )
+    return names[0]
+
+
+def _emit(doc: Any) -> None:
+    json.dump(doc, sys.stdout, indent=2, ensure_ascii=False, default=str)
+    print()
+
+
+def run(args: argparse.Namespace) -> int:
+    store = open_store(args.db, create=False)
+    try:
+        return {"info": _info, "list": _list, "export": _export, "trim": _trim}[args.action](
+            store, args
+        )
+    finally:
+        store.close()
+
+
+def _info(store: CaseStore, args: argparse.Namespace) -> int:
+    infos = store.list_case_bases() if args.name is None else [store.get_case_base(args.name)]
+    docs: list[dict[str, Any]] = []
+    for i in infos:
+        log = store.maintenance_log(i.name)
+        actions: dict[str, int] = {}
+        for e in log:
+            actions[e.action] = actions.get(e.action, 0) + 1
+        docs.append(
+            {
+                "name": i.name,
+                "cases": i.n_cases,
+                "labels": i.label_counts,
+                "features": i.feature_config,
+                "feature_hash": i.feature_hash,
+                "n_features": len(i.feature_names),
+                "similarity": i.similarity,
+                "code_version": i.code_version,
+                "created": i.created_at.isoformat(),
+                "maintenance": actions,
+            }
+        )
+    if args.json:
+        _emit({"db": store.where, "case_bases": docs})
+        return 0
+    if not docs:
+        print(f"{store.where}: no case bases")
+    for d in docs:
+        feats = d["features"]
+        states = feats.get("states")
+        n_states = len(states) if isinstance(states, list) else states
+        print(
+            f"{d['name']}: {d['cases']} cases, {len(d['labels'])} activities "
+            f"(created {d['created']}, posecbr {d['code_version']})"
+        )
+        print(
+            f"  features: {feats['level']}, {n_states} states, length {feats['length']}; "
+            f"hash {d['feature_hash'][:12]}"
+        )
+        print(f"  similarity: {d['similarity']}")
+        for lab, n in d["labels"].items():
+            print(f"  {n:6d}  {lab}")
+        if d["maintenance"]:
+            print("  history: " + ", ".join(f"{k} x{v}" for k, v in d["maintenance"].items()))
+    return 0
+
+
+def _list(store: CaseStore, args: argparse.Namespace) -> int:
+    name = _name(store, args.name)
+    a = store.load_cases(name, include_inactive=args.all)
+    rows: list[dict[str, Any]] = [
+        {
+            "case_id": int(a.ids[i]),
+            "label": str(a.labels[i]),
+            "origin": a.origins[i],
+            "subject": a.subjects[i],
+            "source": a.sources[i],
+            "frames": list(a.frame_ranges[i]),
+        }
+        for i in range(len(a.ids))
+    ]
+    if args.json:
+        _emit({"db": store.where, "case_base": name, "cases": rows})
+        return 0
+    for r in rows:
+        fr = r["frames"]
+        span = f"{fr[0]}-{fr[1]}" if fr[0] is not None else "-"
+        print(
+            f"#{r['case_id']}\t{r['label']}\t{r['origin']}\t{r['subject'] or '-'}\t"
+            f"{span}\t{r['source']}"
+        )
+    return 0
+
+
+def _export(store: CaseStore, args: argparse.Namespace) -> int:
+    name = _name(store, args.name)
+    info = store.get_case_base(name)
+    a = store.load_cases(name)
+    out: Path = args.out if args.out.suffix == ".npz" else args.out.with_suffix(".npz")
+    if not out.parent.exists():
+        raise DataError("folder does not exist", out.parent)
+    arrays: dict[str, Any] = {
+        "problems": a.features,
+        "labels": np.asarray(a.labels, dtype=str),
+        "case_ids": a.ids,
+        "sources": np.asarray(a.sources, dtype=str),
+        "subjects": np.asarray([s or "" for s in a.subjects], dtype=str),
+        "origins": np.asarray(a.origins, dtype=str),
+        "feature_names": np.asarray(info.feature_names, dtype=str),
+        "feature_words": np.asarray(info.feature_words, dtype=str),
+        "feature_config": np.asarray(json.dumps(info.feature_config)),
+        "similarity": np.asarray(json.dumps(info.similarity)),
+    }
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+        os.replace(tmp, out)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    msg = {"out": str(out), "cases": int(len(a.ids)), "problem_shape": list(a.features.shape[1:])}
+    if args.json:
+        _emit(msg)
+    else:
+        print(f"wrote {len(a.ids)} cases of {name!r} to {out}")
+    return 0
+
+
+def _trim(store: CaseStore, args: argparse.Namespace) -> int:
+    name = _name(store, args.name)
+    if not 0.0 < args.keep <= 1.0:
+        raise ConfigError(f"--keep must be in (0, 1], got {args.keep}", "--keep")
+    cb = CaseBase.from_store(store, name)
+    fn = EDITORS[args.editor]
+    report = fn(cb, args.keep, args.k) if args.editor == "novelty-benefit" else fn(cb)
+    if not args.dry_run:
+        with store.transaction() as tx:
+            record_trim(tx, name, report)
+    doc = {
+        "method": report.method,
+        "size_before": report.size_before,
+        "size_after": report.size_after,
+        "accuracy_before": report.accuracy_before,
+        "accuracy_after": report.accuracy_after,
+        "distribution_shift": report.distribution_shift,
+        "dry_run": bool(args.dry_run),
+    }
+    if args.json:
+        _emit(doc)
+    else:
+        print(report.summary() + (" (dry run: nothing changed)" if args.dry_run else ""))
+        if report.distribution_shift is not None:
+            print(
+                f"  largest per-activity mean shift: {report.distribution_shift:.3f} "
+                "pooled standard deviations"
+            )
+    return 0

@@ -1,0 +1,149 @@
+"""``posecbr train DATA --db cb.sqlite``: build a case base from labelled clips.
+
+DATA is anything :func:`features.datasets.load_dataset` reads: a folder per class, a labels
+CSV, a UI-PRMD or HDM05 folder, or a folder of labelled pose files. The whole case base is
+written in one transaction: an interrupted train leaves the store as it was.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from casebase_store import open_store
+from cbr.build import build_case_base
+from cbr.problem import FeatureConfig
+from cbr.similarity import available_measures, get_measure
+from posecbr.errors import ConfigError
+
+
+def parse_params(items: list[str] | None) -> dict[str, Any]:
+    """``key=value`` pairs; values parsed as JSON when they can be (numbers, true, null)."""
+    out: dict[str, Any] = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise ConfigError(f"expected KEY=VALUE, got {item!r}", "--param")
+        try:
+            out[key] = json.loads(value)
+        except json.JSONDecodeError:
+            out[key] = value
+    return out
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "train",
+        help="build a case base from labelled clips",
+        description="Compute qualitative features of every clip and store them as cases "
+        "(problem = features, solution = label) in a case base file.",
+    )
+    p.add_argument("data", type=Path, help="dataset folder, labels CSV or pose file folder")
+    p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
+    p.add_argument("--name", default="default", help="case base name in the store")
+    p.add_argument("--features", choices=("fluents", "qmp"), default="fluents")
+    p.add_argument(
+        "--similarity",
+        default="dtw",
+        help=f"similarity measure ({', '.join(available_measures())})",
+    )
+    p.add_argument(
+        "--param",
+        action="append",
+        metavar="KEY=VALUE",
+        help="similarity parameter, e.g. --param band=0.2 (repeatable)",
+    )
+    p.add_argument("--length", type=int, default=32, help="frames per fluent sequence")
+    p.add_argument(
+        "--states",
+        default="angles",
+        help="fluent states: angles, instantaneous, all (default angles)",
+    )
+    p.add_argument(
+        "--trim",
+        metavar="KEEP",
+        type=float,
+        help="novelty/benefit trimming: keep this fraction of each activity",
+    )
+    p.add_argument(
+        "--editor",
+        choices=("novelty-benefit", "cnn", "renn", "icf"),
+        help="maintenance editor to run at build time (default with --trim: novelty-benefit)",
+    )
+    p.add_argument("-k", "--k", type=int, default=5, help="neighbours used by trimming")
+    p.add_argument("--subjects", help="only these subjects, comma-separated (e.g. s01,s02)")
+    p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor (kinect or vicon)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--replace", action="store_true", help="replace a case base of that name")
+    g.add_argument(
+        "--append",
+        action="store_true",
+        help="add the clips to an existing case base (same feature configuration)",
+    )
+    p.add_argument("--json", action="store_true", help="machine-readable summary")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from features.datasets import load_dataset
+
+    measure = get_measure(args.similarity, **parse_params(args.param))
+    config = FeatureConfig(level=args.features, length=args.length, states=args.states)
+    if config.level == "qmp" and measure.name in ("dtw", "signature"):
+        raise ConfigError(
+            f"similarity {measure.name!r} compares sequences; QMP features are "
+            "one vector per clip (use euclidean)",
+            "--similarity",
+        )
+    editor = args.editor or ("novelty-benefit" if args.trim is not None else None)
+    if args.trim is not None and not 0.0 < args.trim <= 1.0:
+        raise ConfigError(f"--trim must be in (0, 1], got {args.trim}", "--trim")
+    subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
+    clips = load_dataset(
+        args.data, sensor=args.sensor, subjects=subjects, progress_desc="loading clips"
+    )
+    store = open_store(args.db)
+    try:
+        result = build_case_base(
+            store,
+            args.name,
+            [c.seq for c in clips],
+            [c.label for c in clips],
+            config,
+            measure,
+            replace=args.replace,
+            append=args.append,
+            editor=editor,
+            keep=args.trim if args.trim is not None else 0.7,
+            k=args.k,
+        )
+    finally:
+        store.close()
+    summary = {
+        "db": store.where,
+        "name": result.name,
+        "cases": result.n_cases,
+        "active_cases": result.n_kept,
+        "labels": result.label_counts,
+        "features": result.config.describe(),
+        "similarity": measure.params(),
+    }
+    if result.trim is not None:
+        summary["trim"] = result.trim.summary()
+    if args.json:
+        json.dump(summary, sys.stdout, indent=2, ensure_ascii=False)
+        print()
+        return 0
+    print(
+        f"case base {result.name!r} in {store.where}: {result.n_kept} cases "
+        f"({result.n_cases} trained) from {len(result.label_counts)} activities"
+    )
+    print(f"  features: {result.config.describe()}; similarity: {measure.params()}")
+    for lab, n in result.label_counts.items():
+        print(f"  {n:5d}  {lab}")
+    if result.trim is not None:
+        print(f"  {result.trim.summary()}")
+    return 0
