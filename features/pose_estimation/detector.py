@@ -1,0 +1,168 @@
+"""BlazePose person detector: input letterbox, SSD anchors, box decoding, weighted NMS.
+
+Mirrors MediaPipe 0.10.21's ``pose_detection_cpu`` graph: the whole frame is letterboxed
+(zero border) into 224 x 224 RGB scaled to [-1, 1]; the model gives 2254 anchor-relative
+boxes with 4 keypoints each (0: hip centre, 1: a point whose distance from the hip centre
+sets the body's size and whose direction sets its rotation, 2: shoulder centre, 3: upper-body
+size point) and a score logit; scores are clipped to [-100, 100] and passed through a sigmoid,
+kept from 0.5, and overlapping boxes (IoU > 0.3) merged by a score-weighted average.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+INPUT_SIZE = 224
+NUM_ANCHORS = 2254
+NUM_KEYPOINTS = 4
+MIN_SUPPRESSION_IOU = 0.3
+SCORE_CLIP = 100.0
+
+
+@dataclass(frozen=True)
+class Detection:
+    """One detected person, in image pixels.
+
+    box: ``(4,)`` xmin, ymin, xmax, ymax; keypoints: ``(4, 2)`` x, y; score in [0, 1].
+    """
+
+    box: np.ndarray
+    keypoints: np.ndarray
+    score: float
+
+
+@lru_cache(maxsize=1)
+def anchors() -> np.ndarray:
+    """SSD anchor centres ``(2254, 2)`` (x, y) in [0, 1], in the model's output order.
+
+    MediaPipe's SsdAnchorsCalculator with 5 layers, strides 8, 16, 32, 32, 32, aspect ratio 1
+    plus one interpolated anchor per scale, ``fixed_anchor_size`` (all widths/heights 1):
+    consecutive layers with the same stride share one grid, 2 anchors per cell per layer.
+    """
+    strides = [8, 16, 32, 32, 32]
+    out = []
+    layer = 0
+    while layer < len(strides):
+        last = layer
+        while last < len(strides) and strides[last] == strides[layer]:
+            last += 1
+        per_cell = 2 * (last - layer)
+        size = int(np.ceil(INPUT_SIZE / strides[layer]))
+        ys, xs = np.meshgrid(np.arange(size), np.arange(size), indexing="ij")
+        centres = np.stack([(xs + 0.5) / size, (ys + 0.5) / size], axis=-1).reshape(-1, 2)
+        out.append(np.repeat(centres, per_cell, axis=0))
+        layer = last
+    result = np.concatenate(out).astype(np.float64)
+    assert result.shape == (NUM_ANCHORS, 2)
+    return result
+
+
+def letterbox(rgb: np.ndarray) -> tuple[np.ndarray, float, float, float]:
+    """Detector input ``(1, 224, 224, 3)`` float32 in [-1, 1] from an RGB uint8 frame.
+
+    Returns the tensor and the square's side and offsets (in pixels): an image point (x, y) is
+    at ((x + off_x) / side, (y + off_y) / side) in the model's normalised coordinates.
+    The crop is an affine warp of the centred square (bilinear, zero border), the same
+    sampling as MediaPipe's ImageToTensorCalculator on CPU.
+    """
+    h, w = rgb.shape[:2]
+    side = float(max(w, h))
+    off_x, off_y = (side - w) / 2.0, (side - h) / 2.0
+    scale = INPUT_SIZE / side
+    matrix = np.array([[scale, 0.0, off_x * scale], [0.0, scale, off_y * scale]])
+    crop = cv2.warpAffine(
+        rgb,
+        matrix,
+        (INPUT_SIZE, INPUT_SIZE),
+        flags=cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=(0, 0, 0),
+    )
+    tensor = crop.astype(np.float32) * np.float32(2.0 / 255.0) - np.float32(1.0)
+    return tensor[None], side, off_x, off_y
+
+
+def _iou(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """IoU of ``box`` (4,) with ``boxes`` (n, 4), all xmin, ymin, xmax, ymax."""
+    ix = np.clip(np.minimum(box[2], boxes[:, 2]) - np.maximum(box[0], boxes[:, 0]), 0, None)
+    iy = np.clip(np.minimum(box[3], boxes[:, 3]) - np.maximum(box[1], boxes[:, 1]), 0, None)
+    inter = ix * iy
+    area = (box[2] - box[0]) * (box[3] - box[1])
+    areas = (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1])
+    union = area + areas - inter
+    return np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
+
+
+def decode(
+    regressors: np.ndarray, score_logits: np.ndarray, min_score: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Anchor-decoded candidates above ``min_score``, best first.
+
+    regressors: ``(2254, 12)``; score_logits: ``(2254,)``. Returns boxes ``(n, 4)`` and
+    keypoints ``(n, 4, 2)`` in normalised letterbox coordinates, scores ``(n,)``.
+    """
+    logits = np.clip(score_logits.astype(np.float64), -SCORE_CLIP, SCORE_CLIP)
+    scores = 1.0 / (1.0 + np.exp(-logits))
+    idx = np.flatnonzero(scores >= min_score)
+    if idx.size == 0:
+        return np.zeros((0, 4)), np.zeros((0, NUM_KEYPOINTS, 2)), np.zeros(0)
+    idx = idx[np.argsort(-scores[idx], kind="stable")]
+    raw = regressors[idx].astype(np.float64) / INPUT_SIZE
+    anc = anchors()[idx]
+    cx = raw[:, 0] + anc[:, 0]
+    cy = raw[:, 1] + anc[:, 1]
+    half_w, half_h = raw[:, 2] / 2.0, raw[:, 3] / 2.0
+    boxes = np.stack([cx - half_w, cy - half_h, cx + half_w, cy + half_h], axis=1)
+    keypoints = raw[:, 4:].reshape(-1, NUM_KEYPOINTS, 2) + anc[:, None, :]
+    return boxes, keypoints, scores[idx]
+
+
+def weighted_nms(
+    boxes: np.ndarray, keypoints: np.ndarray, scores: np.ndarray
+) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    """MediaPipe's WEIGHTED non-maximum suppression on candidates sorted best first.
+
+    The best remaining candidate absorbs every remaining one with IoU > 0.3 (itself included);
+    its box and keypoints become their score-weighted mean, its score stays its own.
+    """
+    out: list[tuple[np.ndarray, np.ndarray, float]] = []
+    remaining = np.arange(len(scores))
+    while remaining.size:
+        best = remaining[0]
+        overlap = _iou(boxes[best], boxes[remaining]) > MIN_SUPPRESSION_IOU
+        group = remaining[overlap]
+        if group.size:
+            weights = scores[group][:, None]
+            box = (boxes[group] * weights).sum(0) / weights.sum()
+            kps = (keypoints[group] * weights[:, :, None]).sum(0) / weights.sum()
+        else:  # numerically possible only for a degenerate (zero-area) box
+            box, kps = boxes[best], keypoints[best]
+        out.append((box, kps, float(scores[best])))
+        if group.size == 0:
+            break
+        remaining = remaining[~overlap]
+    return out
+
+
+def postprocess(
+    regressors: np.ndarray,
+    score_logits: np.ndarray,
+    side: float,
+    off_x: float,
+    off_y: float,
+    min_score: float = 0.5,
+) -> list[Detection]:
+    """Model outputs -> detections in image pixels, best first."""
+    boxes, kps, scores = decode(
+        regressors.reshape(NUM_ANCHORS, 12), score_logits.reshape(-1), min_score
+    )
+    offset = np.array([off_x, off_y])
+    result = []
+    for box, keypoints, score in weighted_nms(boxes, kps, scores):
+        box_px = box * side - np.concatenate([offset, offset])
+        result.append(Detection(box=box_px, keypoints=keypoints * side - offset, score=score))
+    return result

@@ -1,0 +1,196 @@
+"""Frame-by-frame BlazePose: detect, track, smooth.
+
+:class:`PoseEstimator` runs MediaPipe 0.10.21's pose pipeline on onnxruntime:
+
+1. With no track, the detector finds people; the kept detection is the one nearest the
+   person last tracked (the best-scoring one when there is none), so a second person in view
+   does not steal the track when it is re-acquired.
+2. The landmark model runs on the ROI (from the detection, or from the previous frame's
+   auxiliary landmarks when tracking). If its person probability drops below
+   ``min_tracking_confidence`` the track is dropped and the detector runs again on the SAME
+   frame (MediaPipe waits for the next frame; re-detecting at once loses fewer frames).
+3. Smoothing (``smoothing=True``): One Euro filters on image landmarks, world landmarks and
+   the ROI's auxiliary landmarks and a low-pass on visibility, with MediaPipe's parameters
+   (:mod:`features.pose_estimation.smoothing`). Filters restart after a frame with no person.
+
+World landmarks are returned in the project's canonical frame: MediaPipe's world frame is
+x right (image), y down, z away from the camera (right-handed); rotating it by 180 degrees
+about x gives x right, y up, z toward the camera: ``canonical = (x, -y, -z)``, still
+right-handed (determinant +1), origin at the hip centre, metres.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import detector as det
+from . import landmarks as lmk
+from .model import DETECTOR_PATH, LANDMARK_PATH, make_session
+from .smoothing import (
+    AUX_FILTER,
+    IMAGE_FILTER,
+    VISIBILITY_ALPHA,
+    WORLD_FILTER,
+    LowPassFilter,
+    OneEuroFilter,
+)
+
+NUM_POSE = lmk.NUM_POSE
+# MediaPipe world frame (x right, y down, z away from camera) -> canonical (x right, y up,
+# z toward camera): a 180 degree rotation about x.
+WORLD_TO_CANONICAL = np.array([1.0, -1.0, -1.0])
+
+
+@dataclass(frozen=True)
+class FramePose:
+    """BlazePose result for one frame.
+
+    image: ``(33, 5)`` x px, y px, z px (image-width scale), visibility, presence;
+    world: ``(33, 3)`` metres, canonical frame (x right, y up, z toward the camera, origin at
+    the hip centre). Both all-NaN when ``person`` is False. ``detected``: the detector ran on
+    this frame; ``score``: the landmark model's person probability (NaN if it did not run).
+    """
+
+    image: np.ndarray
+    world: np.ndarray
+    person: bool
+    detected: bool
+    score: float
+    roi: lmk.Roi | None
+
+    @staticmethod
+    def missing(detected: bool, score: float = float("nan")) -> FramePose:
+        return FramePose(
+            image=np.full((NUM_POSE, 5), np.nan),
+            world=np.full((NUM_POSE, 3), np.nan),
+            person=False,
+            detected=detected,
+            score=score,
+            roi=None,
+        )
+
+
+class PoseEstimator:
+    """Stateful BlazePose (full) estimator; feed frames in order with :meth:`process`.
+
+    tracking: reuse the previous frame's landmarks for the ROI (False: detector every frame).
+    smoothing: temporal filters (see the module docstring). threads: onnxruntime intra-op
+    threads per model (default: up to 2).
+    """
+
+    def __init__(
+        self,
+        *,
+        tracking: bool = True,
+        smoothing: bool = True,
+        min_detection_confidence: float = 0.5,
+        min_tracking_confidence: float = 0.5,
+        threads: int | None = None,
+    ) -> None:
+        self.tracking = tracking
+        self.smoothing = smoothing
+        self.min_detection_confidence = min_detection_confidence
+        self.min_tracking_confidence = min_tracking_confidence
+        self._detector = make_session(DETECTOR_PATH, threads)
+        self._landmarker = make_session(LANDMARK_PATH, threads)
+        self._det_in = self._detector.get_inputs()[0].name
+        self._det_out = [o.name for o in self._detector.get_outputs()]
+        self._lm_in = self._landmarker.get_inputs()[0].name
+        # Identity: landmarks, Identity_1: flag, Identity_3: heatmap, Identity_4: world.
+        self._lm_out = ["Identity", "Identity_1", "Identity_3", "Identity_4"]
+        self._image_filter = OneEuroFilter(IMAGE_FILTER)
+        self._world_filter = OneEuroFilter(WORLD_FILTER)
+        self._aux_filter = OneEuroFilter(AUX_FILTER)
+        self._vis_filter = LowPassFilter(VISIBILITY_ALPHA)
+        self._frame = 0
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the track and the filters (call between unrelated clips)."""
+        self._roi: lmk.Roi | None = None
+        self._last_centre: np.ndarray | None = None
+        self._reset_filters()
+
+    def _reset_filters(self) -> None:
+        for f in (self._image_filter, self._world_filter, self._aux_filter, self._vis_filter):
+            f.reset()
+
+    def detect(self, rgb: np.ndarray) -> list[det.Detection]:
+        """All people the detector finds in an RGB uint8 frame ``(h, w, 3)``, best first."""
+        tensor, side, off_x, off_y = det.letterbox(rgb)
+        outs = self._detector.run(self._det_out, {self._det_in: tensor})
+        by_name = dict(zip(self._det_out, outs, strict=True))
+        return det.postprocess(
+            by_name["Identity"],
+            by_name["Identity_1"],
+            side,
+            off_x,
+            off_y,
+            self.min_detection_confidence,
+        )
+
+    def landmarks(self, rgb: np.ndarray, roi: lmk.Roi) -> lmk.RawLandmarks:
+        """The landmark model on ``roi`` of an RGB uint8 frame (no smoothing)."""
+        tensor, _ = lmk.crop(rgb, roi)
+        outs = self._landmarker.run(self._lm_out, {self._lm_in: tensor})
+        return lmk.decode(outs[0], outs[1], outs[2], outs[3], roi)
+
+    def _pick(self, found: list[det.Detection]) -> det.Detection | None:
+        if not found:
+            return None
+        if self._last_centre is None:
+            return found[0]
+        dist = [float(np.hypot(*(d.keypoints[0] - self._last_centre))) for d in found]
+        return found[int(np.argmin(dist))]
+
+    def process(self, rgb: np.ndarray, time_s: float | None = None) -> FramePose:
+        """One RGB uint8 frame ``(h, w, 3)`` taken at ``time_s`` seconds (default: 30 fps)."""
+        if time_s is None:
+            time_s = self._frame / 30.0
+        self._frame += 1
+        raw: lmk.RawLandmarks | None = None
+        score = float("nan")
+        if self.tracking and self._roi is not None:
+            raw = self.landmarks(rgb, self._roi)
+            score = raw.flag
+            if raw.flag < self.min_tracking_confidence:
+                raw = None
+                self._reset_filters()
+        detected = False
+        if raw is None:
+            detected = True
+            best = self._pick(self.detect(rgb))
+            if best is not None:
+                raw = self.landmarks(rgb, lmk.roi_from_points(best.keypoints[0], best.keypoints[1]))
+                score = raw.flag
+                if raw.flag < self.min_tracking_confidence:
+                    raw = None
+        if raw is None:
+            self._roi = None
+            self._reset_filters()
+            return FramePose.missing(detected, score)
+
+        image = raw.image[:NUM_POSE].copy()
+        world = raw.world[:NUM_POSE].copy()
+        aux = raw.image[NUM_POSE : NUM_POSE + 2, :3].copy()
+        if self.smoothing:
+            # Speed is measured in body sizes: the object scale is the unscaled ROI side.
+            object_scale = 2.0 * float(np.hypot(*(aux[1, :2] - aux[0, :2])))
+            value_scale = 1.0 / object_scale if object_scale > 1e-6 else 1.0
+            image[:, 3] = self._vis_filter.apply(image[:, 3])
+            image[:, :3] = self._image_filter.apply(time_s, image[:, :3], value_scale)
+            world = self._world_filter.apply(time_s, world)
+            aux = self._aux_filter.apply(time_s, aux, value_scale)
+        roi = lmk.roi_from_points(aux[0, :2], aux[1, :2])
+        self._roi = roi if self.tracking else None
+        self._last_centre = aux[0, :2].copy()
+        return FramePose(
+            image=image,
+            world=world * WORLD_TO_CANONICAL,
+            person=True,
+            detected=detected,
+            score=score,
+            roi=roi,
+        )

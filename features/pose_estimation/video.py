@@ -1,0 +1,264 @@
+"""Video in, poses out: :func:`estimate_poses`, :func:`estimate_video`, :func:`stream_poses`.
+
+Frames are decoded with OpenCV (FFmpeg). A video that cannot be used raises
+:class:`posecbr.errors.DataError` naming the file and the problem: missing or unreadable path,
+not a video, no frames, no frame rate, or fewer frames decoded than the container declares
+(truncated or corrupt). Damage that the decoder conceals (a few broken macroblocks in a
+stream that still decodes every frame) cannot be seen from here and is not reported.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+# FFmpeg prints decoder complaints straight to stderr; a user should see one clear line from
+# posecbr instead. Must be set before OpenCV first opens a video.
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+
+from features.poses import PoseSequence  # noqa: E402
+from features.skeleton import BLAZEPOSE_33  # noqa: E402
+from posecbr.errors import DataError  # noqa: E402
+from posecbr.progress import progress  # noqa: E402
+
+from .model import model_version  # noqa: E402
+from .smoothing import AUX_FILTER, IMAGE_FILTER, VISIBILITY_ALPHA, WORLD_FILTER  # noqa: E402
+from .tracker import FramePose, PoseEstimator  # noqa: E402
+
+IMAGE_LANDMARK_FIELDS = ("x_px", "y_px", "z_px", "visibility", "presence")
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """What the container declares: frame count (0 if unknown), fps, width, height."""
+
+    path: Path
+    frames: int
+    fps: float
+    width: int
+    height: int
+
+
+@dataclass(frozen=True)
+class VideoPoses:
+    """Everything estimated for one video.
+
+    sequence: canonical :class:`PoseSequence` (world landmarks, metres, y up, NaN where no
+    person; confidence = visibility). image_landmarks: ``(frames, 33, 5)`` x px, y px, z px,
+    visibility, presence (NaN where no person). missing: indices of frames with no person.
+    """
+
+    sequence: PoseSequence
+    image_landmarks: np.ndarray
+    missing: tuple[int, ...]
+    info: VideoInfo
+
+
+def open_video(path: str | Path) -> tuple[cv2.VideoCapture, VideoInfo]:
+    """Open a video file, or raise :class:`DataError` with a one-line reason."""
+    path = Path(path)
+    if not path.exists():
+        raise DataError("no such file", path)
+    if path.is_dir():
+        raise DataError("is a folder, not a video", path)
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(16)
+    except OSError as exc:
+        raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
+    if not head:
+        raise DataError("empty file, not a video", path)
+    cap = cv2.VideoCapture(str(path))
+    if not cap.isOpened():
+        cap.release()
+        raise DataError(
+            "not a video OpenCV can decode (unknown format, truncated or corrupt)", path
+        )
+    frames = int(max(0.0, cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0))
+    fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+    width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
+    height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
+    if not math.isfinite(fps) or fps <= 0 or fps > 1000:
+        cap.release()
+        raise DataError("video declares no usable frame rate", path)
+    return cap, VideoInfo(path, frames, fps, width, height)
+
+
+def iter_frames(path: str | Path) -> Iterator[np.ndarray]:
+    """RGB uint8 frames ``(h, w, 3)`` of a video file; raises :class:`DataError` at the end if
+    fewer frames decoded than the container declares, or none at all."""
+    cap, info = open_video(path)
+    count = 0
+    try:
+        while True:
+            ok, bgr = cap.read()
+            if not ok or bgr is None:
+                break
+            count += 1
+            yield cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+    finally:
+        cap.release()
+    if count == 0:
+        raise DataError("video has no frames (empty, truncated or corrupt)", info.path)
+    # Containers state their frame count; allow a small slack for ones that estimate it.
+    if info.frames and count + max(2, math.ceil(0.01 * info.frames)) < info.frames:
+        raise DataError(f"truncated or corrupt: decoded {count} of {info.frames} frames", info.path)
+
+
+def outside_frame(image_landmarks: np.ndarray, width: int, height: int) -> np.ndarray:
+    """``(frames, 33)`` True where a landmark's (x, y) lies outside the ``width x height`` frame."""
+    x, y = image_landmarks[..., 0], image_landmarks[..., 1]
+    with np.errstate(invalid="ignore"):
+        return (x < 0) | (y < 0) | (x >= width) | (y >= height)
+
+
+def estimate_video(
+    video_path: str | Path,
+    *,
+    smoothing: bool = True,
+    tracking: bool = True,
+    progress_bar: bool = True,
+    estimator: PoseEstimator | None = None,
+    metadata: dict[str, object] | None = None,
+    max_frames: int | None = None,
+    keep_outside: bool = False,
+) -> VideoPoses:
+    """Run BlazePose over every frame of a video file.
+
+    Returns world landmarks as a canonical pose sequence (fps from the video) plus the image
+    landmarks; frames without a person are NaN and listed in ``missing`` (and in the
+    sequence's metadata). ``max_frames``: stop after that many frames (the truncation check is
+    then skipped). A joint the model places outside the frame (e.g. legs below the bottom
+    edge) is not seen, so its position is set missing (NaN) in the sequence unless
+    ``keep_outside``; the image landmarks keep the model's guess and its (low) visibility.
+    Raises :class:`DataError` for a video that cannot be used.
+    """
+    path = Path(video_path)
+    _, info = open_video(path)  # fail early with a clear reason
+    est = estimator or PoseEstimator(tracking=tracking, smoothing=smoothing)
+    est.reset()
+    world: list[np.ndarray] = []
+    image: list[np.ndarray] = []
+    missing: list[int] = []
+    frames = iter_frames(path)
+    total = info.frames or None
+    if max_frames is not None:
+        total = min(total or max_frames, max_frames)
+    if progress_bar:
+        frames = progress(frames, desc=path.name, total=total, unit="frame")
+    for i, rgb in enumerate(frames):
+        if max_frames is not None and i >= max_frames:
+            break
+        pose = est.process(rgb, i / info.fps)
+        world.append(pose.world)
+        image.append(pose.image)
+        if not pose.person:
+            missing.append(i)
+    image_lm = np.stack(image)
+    positions = np.stack(world)
+    outside = np.zeros(image_lm.shape[:2], dtype=bool)
+    if not keep_outside:
+        outside = outside_frame(image_lm, info.width, info.height)
+        positions[outside] = np.nan
+    meta: dict[str, object] = {
+        "source_video": str(path),
+        "video_fps": info.fps,
+        "video_size": [info.width, info.height],
+        "pose_model": model_version(),
+        "missing_frames": missing,
+        "n_missing_frames": len(missing),
+        "smoothing": _smoothing_meta() if est.smoothing else None,
+        "tracking": est.tracking,
+        "joints_outside_frame_set_missing": not keep_outside,
+        "n_joint_samples_outside_frame": int(outside.sum()),
+        "coordinates": "world landmarks, metres, x right, y up, z toward the camera, "
+        "origin at the hip centre",
+    }
+    meta.update(metadata or {})
+    seq = PoseSequence(
+        positions=positions,
+        joint_names=BLAZEPOSE_33,
+        fps=info.fps,
+        confidence=image_lm[:, :, 3],
+        source=str(path),
+        metadata=meta,
+    )
+    return VideoPoses(seq, image_lm, tuple(missing), info)
+
+
+def _smoothing_meta() -> dict[str, object]:
+    return {
+        "image": vars(IMAGE_FILTER),
+        "world": vars(WORLD_FILTER),
+        "roi": vars(AUX_FILTER),
+        "visibility_lowpass_alpha": VISIBILITY_ALPHA,
+    }
+
+
+def estimate_poses(
+    video_path: str | Path, *, smoothing: bool = True, progress: bool = True
+) -> PoseSequence:
+    """BlazePose world landmarks of a video as a canonical :class:`PoseSequence`.
+
+    positions ``(frames, 33, 3)`` metres (x right, y up, z toward the camera, hip centre at
+    the origin), confidence = visibility, NaN for frames with no person (listed in
+    ``metadata["missing_frames"]``), fps from the video, ``source`` = the path.
+    """
+    return estimate_video(video_path, smoothing=smoothing, progress_bar=progress).sequence
+
+
+@dataclass(frozen=True)
+class StreamFrame:
+    """One frame of a live stream: its index, wall-clock time (s) and the pose."""
+
+    index: int
+    time_s: float
+    pose: FramePose
+    rgb: np.ndarray
+
+
+def stream_poses(
+    source: int | str | Path,
+    *,
+    smoothing: bool = True,
+    max_frames: int | None = None,
+    estimator: PoseEstimator | None = None,
+) -> Iterator[StreamFrame]:
+    """Poses frame by frame from a webcam index, a stream URL or a video path.
+
+    Files are timed by their frame rate; live sources by the wall clock. Stops at the end of
+    the stream, after ``max_frames``, or when the consumer stops iterating.
+    """
+    fps: float | None = None
+    if isinstance(source, Path) or (
+        isinstance(source, str) and "://" not in source and not source.isdigit()
+    ):
+        cap, info = open_video(source)
+        fps = info.fps
+    else:
+        device = int(source) if isinstance(source, str) else source
+        cap = cv2.VideoCapture(device)
+        if not cap.isOpened():
+            raise DataError("cannot open camera or stream", str(source))
+    est = estimator or PoseEstimator(smoothing=smoothing)
+    est.reset()
+    start = time.perf_counter()
+    index = 0
+    try:
+        while max_frames is None or index < max_frames:
+            ok, bgr = cap.read()
+            if not ok or bgr is None:
+                break
+            t = index / fps if fps else time.perf_counter() - start
+            rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+            yield StreamFrame(index, t, est.process(rgb, t), rgb)
+            index += 1
+    finally:
+        cap.release()
