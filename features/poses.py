@@ -9,6 +9,9 @@ File format (``.npz``, written with :func:`save_pose`, read with :func:`load_pos
 - ``skeleton`` (optional): string, the source skeleton (default ``blazepose33``)
 - ``metadata`` (optional): a JSON string (object) with anything else: ``label``, ``subject``,
   ``source``, ``correct``, ...
+- ``extra_<name>`` (optional): further arrays a producer keeps beside the pose, e.g.
+  ``extra_image_landmarks`` ``(frames, 33, 5)`` from the video pose estimator; written with
+  ``save_pose(..., extra_arrays=...)``, read with :func:`load_pose_arrays`.
 """
 
 from __future__ import annotations
@@ -145,8 +148,16 @@ class PoseSequence:
         return replace(self, metadata=meta)
 
 
-def save_pose(seq: PoseSequence, path: str | Path) -> Path:
-    """Write ``seq`` as a pose file, atomically (a temporary name renamed into place)."""
+EXTRA_PREFIX = "extra_"
+
+
+def save_pose(
+    seq: PoseSequence, path: str | Path, *, extra_arrays: Mapping[str, np.ndarray] | None = None
+) -> Path:
+    """Write ``seq`` as a pose file, atomically (a temporary name renamed into place).
+
+    ``extra_arrays``: optional named arrays stored beside the pose as ``extra_<name>``.
+    """
     path = Path(path)
     if path.suffix != ".npz":
         path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
@@ -159,6 +170,8 @@ def save_pose(seq: PoseSequence, path: str | Path) -> Path:
     }
     if seq.confidence is not None:
         arrays["confidence"] = seq.confidence.astype(np.float64)
+    for name, value in (extra_arrays or {}).items():
+        arrays[EXTRA_PREFIX + name] = np.asarray(value)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
@@ -216,3 +229,17 @@ def load_pose(path: str | Path) -> PoseSequence:
         )
     except PoseFileError as exc:
         raise PoseFileError(exc.message, path) from None
+
+
+def load_pose_arrays(path: str | Path) -> dict[str, np.ndarray]:
+    """The ``extra_<name>`` arrays of a pose file, by ``name`` (empty if it has none)."""
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {
+                k[len(EXTRA_PREFIX) :]: np.asarray(data[k])
+                for k in data.files
+                if k.startswith(EXTRA_PREFIX)
+            }
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError, KeyError) as exc:
+        raise PoseFileError(f"cannot read pose file ({type(exc).__name__}: {exc})", path) from None
