@@ -5,7 +5,9 @@ The model as parts (pysindy's layout): :class:`ExplicitTimeLibrary` (the basis),
 (the period search), gathered in :class:`QMPConfig` and run in bulk by :func:`fit_signals`.
 """
 
+from .add import ADD, load_add
 from .differentiation import SavitzkyGolay
+from .features import QMPFeatures, qmp_features
 from .fit import (
     FLAT,
     NOT_ENOUGH_DATA,
@@ -28,6 +30,10 @@ from .library import COEFFICIENT_KEYS, FEATURE_NAMES, ExplicitTimeLibrary
 from .optimizer import STLSQ
 
 __all__ = [
+    "ADD",
+    "QMPFeatures",
+    "load_add",
+    "qmp_features",
     "COEFFICIENT_KEYS",
     "FEATURE_NAMES",
     "FLAT",

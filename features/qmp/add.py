@@ -45,6 +45,7 @@ from posecbr.errors import ConfigError
 
 from .fit import NOT_ENOUGH_DATA, QUANTITIES, QMPFits, quantity_key, signal_unit
 
+
 def default_add_path() -> Path:
     """The shipped ADD, ``cbr/data/add.toml`` (package data of ``cbr.data``)."""
     from importlib.resources import files

@@ -57,7 +57,11 @@ def signal_unit(name: str) -> str:
 class QMPConfig:
     """How QMPs are fitted: the model parts and the period search.
 
-    min_period_s / max_period_s: range of T searched (max None = the window length);
+    min_period_s / max_period_s: range of T searched. T is capped at half the window (None =
+    that cap) so that the half-period terms cos/sin(pi t/T) complete a cycle in the window:
+    a longer T makes them nearly collinear with 1 and t, and the fit then trades huge
+    cancelling coefficients that mean nothing. Oscillations up to the window length are still
+    found, by the half-period terms (reported period = 2T);
     n_periods: geometric grid size; refine_rounds: each halves the grid step around the best T
     (per signal); max_gap_s: NaN runs up to this long are interpolated, longer ones make the
     window "not enough data"; flat_tolerance: a window whose signal moves less than this
@@ -412,7 +416,7 @@ def fit_signals(
         cols = np.argwhere(fit_mask)  # (n, 2): window, signal
         y = xdot[idx[cols[:, 0]][:, frames_sub], cols[:, 1][:, None]].T  # (F', n)
         duration = win_frames / fps
-        max_T = min(cfg.max_period_s or duration, duration)
+        max_T = min(cfg.max_period_s or duration / 2.0, duration / 2.0)
         periods = period_grid(min(cfg.min_period_s, max_T), max_T, cfg.n_periods)
         best = search_period(
             t, y, periods, cfg.library, cfg.optimizer, cfg.refine_rounds, cfg.selection

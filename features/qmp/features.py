@@ -1,0 +1,80 @@
+"""QMP feature vectors for the case base: ADD criteria (binary) and the parameters they read."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from features.poses import PoseSequence
+
+from .add import ADD, evaluate_criteria, feature_columns, feature_name, load_add
+from .fit import NOT_ENOUGH_DATA, QMPConfig, fit_signals
+
+
+@dataclass(frozen=True)
+class QMPFeatures:
+    """A clip's QMP description.
+
+    names ``(n,)``: the binary criteria first (their ADD words, e.g. "knees bending and
+    straightening in rhythm"), then the continuous parameters as ``signal.quantity_unit``
+    (e.g. "left_knee.amplitude_rad", "left_knee.period_s"); values ``(n,)`` float64: 1.0/0.0
+    for the criteria, the fitted parameter otherwise (NaN = not observable in this clip);
+    binary ``(n_binary,)`` bool with binary_names; criteria ``(n_binary,)`` the ADD names;
+    status: "ok" or "not enough data".
+    """
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    binary: np.ndarray
+    binary_names: tuple[str, ...]
+    criteria: tuple[str, ...]
+    status: str
+
+    def as_dict(self) -> dict[str, float]:
+        return {n: float(v) for n, v in zip(self.names, self.values, strict=True)}
+
+
+def qmp_features(
+    seq: PoseSequence,
+    add: ADD | str | Path | None = None,
+    config: QMPConfig | None = None,
+    window_s: float | None = None,
+    step_s: float = 1.0,
+) -> QMPFeatures:
+    """QMP feature vector of ``seq`` (positions ``(frames, joints, 3)``).
+
+    By default the whole clip is one window (a segmented repetition). With ``window_s``, QMPs
+    are fitted over sliding windows: a criterion counts as met if it holds in any window, and
+    each parameter is the median over the windows where it is defined.
+    """
+    from features.fluents import state_signals
+
+    db = add if isinstance(add, ADD) else load_add(add)
+    signals = state_signals(seq)
+    used = db.signals
+    cols = [signals.names.index(s) for s in used]
+    fits = fit_signals(
+        signals.values[:, cols], seq.fps, used, config=config, window_s=window_s, step_s=step_s
+    )
+    crit = evaluate_criteria(db, fits)
+    binary = (crit.met & crit.observable).any(axis=0)
+    pairs = feature_columns(db)
+    cont = np.full(len(pairs), np.nan)
+    for i, (signal, quantity) in enumerate(pairs):
+        v = fits.quantity(quantity)[:, fits.index(signal)]
+        v = v[np.isfinite(v)]
+        if len(v):
+            cont[i] = float(np.median(v))
+    binary_names = tuple(db.criteria[n].words for n in crit.names)
+    names = binary_names + tuple(feature_name(s, q) for s, q in pairs)
+    status = "not enough data" if (fits.status == NOT_ENOUGH_DATA).all() else "ok"
+    return QMPFeatures(
+        names=names,
+        values=np.concatenate([binary.astype(np.float64), cont]),
+        binary=binary,
+        binary_names=binary_names,
+        criteria=crit.names,
+        status=status,
+    )
