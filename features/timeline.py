@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.ndimage import median_filter
 
 from .fluents import FluentResult
 
@@ -49,46 +50,60 @@ def holding(
     return on
 
 
+def _clean(on: np.ndarray, min_run: int) -> np.ndarray:
+    """Each state's on/off track with a running median over ``min_run`` frames (flicker at a
+    threshold shorter than about half of that is not news for a reader)."""
+    if min_run <= 1 or on.shape[0] <= 1:
+        return on
+    size = min_run if min_run % 2 else min_run + 1
+    return median_filter(on.astype(np.uint8), size=(size, 1), mode="nearest").astype(bool)
+
+
+def _mean_runs(result: FluentResult, spans: dict[tuple[int, int], list[int]]) -> list[Run]:
+    runs = []
+    for (s, e), states in sorted(spans.items()):
+        means = np.nanmean(result.confidence[s : e + 1, states], axis=0) if states else []
+        runs.append(Run(s, e, tuple(
+            StateInRun(result.state_names[i], result.words[i], float(m))
+            for i, m in zip(states, means, strict=True)
+        )))  # fmt: skip
+    return runs
+
+
 def state_runs(
     result: FluentResult,
     threshold: float = 0.8,
     min_run: int = 1,
     include_background: bool = False,
 ) -> list[Run]:
-    """Merge consecutive frames holding the same set of states into runs.
-
-    Runs shorter than ``min_run`` frames are absorbed into the run before them (flicker at a
-    threshold is not news for a reader); a merged run lists the states that hold in at least
-    half of its frames, with their mean confidence over the run.
+    """When each state holds: one entry per span of frames, listing the states that hold over
+    exactly that span ("frames 17–61: left knee bent 1.00, right knee bent 1.00"), ordered by
+    start frame. Spans shorter than ``min_run`` frames are dropped after cleaning each state's
+    track with a running median of ``min_run`` frames.
     """
-    on = holding(result, threshold, include_background)
+    on = _clean(holding(result, threshold, include_background), min_run)
     frames = on.shape[0]
-    if frames == 0:
-        return []
-    change = np.any(on[1:] != on[:-1], axis=1)
-    starts = np.concatenate([[0], np.flatnonzero(change) + 1])
-    ends = np.concatenate([starts[1:] - 1, [frames - 1]])
-    spans: list[list[int]] = []
-    for s, e in zip(starts.tolist(), ends.tolist(), strict=True):
-        if spans and (e - s + 1) < min_run:
-            spans[-1][1] = e
-        else:
-            spans.append([s, e])
-    runs = []
-    for s, e in spans:
-        active = np.flatnonzero(on[s : e + 1].mean(axis=0) >= 0.5)
-        means = np.nanmean(result.confidence[s : e + 1, active], axis=0) if active.size else []
-        runs.append(
-            Run(
-                s,
-                e,
-                tuple(
-                    StateInRun(result.state_names[i], result.words[i], float(m))
-                    for i, m in zip(active, means, strict=True)
-                ),
-            )
-        )
-    return runs
+    spans: dict[tuple[int, int], list[int]] = {}
+    padded = np.zeros((frames + 2, on.shape[1]), dtype=np.int8)
+    padded[1:-1] = on
+    edges = np.diff(padded, axis=0)
+    for state in np.flatnonzero(on.any(axis=0)):
+        starts = np.flatnonzero(edges[:, state] == 1)
+        ends = np.flatnonzero(edges[:, state] == -1) - 1
+        for s, e in zip(starts.tolist(), ends.tolist(), strict=True):
+            if e - s + 1 >= min_run or frames < min_run:
+                spans.setdefault((s, e), []).append(int(state))
+    return _mean_runs(result, spans)
+
+
+def frame_states(
+    result: FluentResult, threshold: float = 0.8, include_background: bool = False
+) -> list[Run]:
+    """The states that hold in each frame, one entry per frame."""
+    on = holding(result, threshold, include_background)
+    return _mean_runs(
+        result, {(f, f): np.flatnonzero(on[f]).tolist() for f in range(on.shape[0])}
+    )
 
 
 def phrase_list(states: tuple[StateInRun, ...], result: FluentResult) -> str:

@@ -7,11 +7,10 @@ import json
 import sys
 from pathlib import Path
 
-from features.fluents import DEFAULT_TABLE, FluentResult, FluentTable, evaluate
+from features.fluents import DEFAULT_TABLE, FluentTable, evaluate
 from features.poses import PoseSequence, load_pose
 from features.timeline import (
-    Run,
-    StateInRun,
+    frame_states,
     phrase_list,
     plot_timeline,
     runs_to_json,
@@ -24,16 +23,17 @@ from posecbr.errors import PosecbrError
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "describe",
-        help="describe a pose file's posture in words, frame by frame or in runs of frames",
-        description="Print the fluent states that hold (confidence >= --min-confidence), merged "
-        "into runs of frames with the same states, or per frame.",
+        help="describe a pose file's posture in words, in spans of frames or frame by frame",
+        description="Print when each fluent state holds (confidence >= --min-confidence): "
+        "spans of frames in order of their start, states with the same span on one line; or "
+        "frame by frame.",
     )
     p.add_argument("posefile", type=Path, help="pose file (.npz) or a clip the loaders read")
     p.add_argument("--min-confidence", type=float, default=0.8, metavar="C",
                    help="a state is shown when its confidence is at least C (default 0.8)")
-    p.add_argument("--per-frame", action="store_true", help="one line per frame, not runs")
-    p.add_argument("--min-run", type=int, default=3, metavar="N",
-                   help="absorb runs shorter than N frames into the previous run (default 3)")
+    p.add_argument("--per-frame", action="store_true", help="one line per frame, not spans")
+    p.add_argument("--min-run", type=int, default=5, metavar="N",
+                   help="ignore flicker: drop spans shorter than N frames (default 5)")
     p.add_argument("--all", action="store_true",
                    help='also show background states: no motion ("bend steady") and "far from"')
     p.add_argument("--thresholds", type=Path, metavar="FILE",
@@ -54,26 +54,16 @@ def load_any(path: Path) -> PoseSequence:
     return load_clip(path)
 
 
-def _split(run_: Run, result: FluentResult, args: argparse.Namespace) -> list[Run]:
-    """One run per frame (the per-frame view)."""
-    return [
-        Run(f, f, tuple(
-            StateInRun(s.name, s.words, float(result.column(s.name)[f])) for s in run_.states
-        ))
-        for f in range(run_.start, run_.end + 1)
-    ]  # fmt: skip
-
-
 def run(args: argparse.Namespace) -> int:
     if not 0.0 < args.min_confidence <= 1.0:
         raise PosecbrError(f"--min-confidence must be in (0, 1], got {args.min_confidence}")
     table = FluentTable.from_file(args.thresholds) if args.thresholds else DEFAULT_TABLE
     seq = load_any(args.posefile)
     result = evaluate(seq, table)
-    min_run = 1 if args.per_frame else max(1, args.min_run)
-    runs = state_runs(result, args.min_confidence, min_run, include_background=args.all)
     if args.per_frame:
-        runs = [r2 for r in runs for r2 in _split(r, result, args)]
+        runs = frame_states(result, args.min_confidence, include_background=args.all)
+    else:
+        runs = state_runs(result, args.min_confidence, max(1, args.min_run), args.all)
     missing = unavailable_fluents(result)
     if args.plot:
         plot_timeline(result, args.plot, args.min_confidence, title=f"{args.posefile.name}")
