@@ -3,6 +3,7 @@ Vicon marker order (heights and sides)."""
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -177,3 +178,23 @@ def test_vicon_joint_centres(shared_data: Path) -> None:
     hips = (p["left_hip"] + p["right_hip"]) / 2
     assert hips[0, 1] - hips[:, 1].min() > 0.3  # deep squat
     assert np.isnan(p["nose"]).all() and np.isnan(p["left_thumb"]).all()
+
+
+def test_vicon_gaps_become_nan(shared_data: Path) -> None:
+    # Find a file where a left wrist-bar marker is written as (0, 0, 0) (an occluded marker).
+    folder = shared_data / VICON
+    lwrb = VICON_MARKERS.index("LWRB")
+    for path in sorted(folder.glob("*.txt.gz")):
+        raw = np.loadtxt(path, delimiter=",").reshape(-1, len(VICON_MARKERS), 3)
+        gap = (raw[:, lwrb] == 0).all(axis=1)
+        if gap.any():
+            break
+    else:
+        pytest.skip("no Vicon file with a wrist marker gap")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        seq = read_uiprmd_vicon(path)
+    wrist = seq.positions[:, JOINT_INDEX["left_wrist"]]
+    assert np.isnan(wrist[gap]).all()
+    assert np.isfinite(wrist[~gap]).all()
+    assert np.isfinite(seq.positions[:, JOINT_INDEX["left_elbow"]]).all()

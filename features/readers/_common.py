@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gzip
+import io
 import zlib
 from collections.abc import Mapping
 from pathlib import Path
@@ -43,6 +44,16 @@ def read_csv_matrix(path: Path, n_columns: int) -> np.ndarray:
     rows = [line for line in read_text(path).split("\n") if line.strip()]
     if not rows:
         raise DataError("file is empty", path)
+    # Fast path: numpy's parser reads all rows at once; any shape or number problem falls
+    # through to the row by row pass below, which names the offending line.
+    try:
+        fast = np.loadtxt(io.StringIO("\n".join(rows)), delimiter=",", ndmin=2)
+    except ValueError:
+        fast = None
+    if fast is not None and fast.shape == (len(rows), n_columns):
+        if not np.isfinite(fast).all():
+            raise DataError("contains non-finite numbers", path)
+        return fast
     out = np.empty((len(rows), n_columns))
     for i, line in enumerate(rows):
         parts = line.split(",")

@@ -233,10 +233,58 @@ def read_asf(path: str | Path) -> Skeleton:
     return skel
 
 
+def _read_amc_fast(
+    path: Path, lines: list[str], n_dof: dict[str, int], angle_deg: bool | None
+) -> Motion | None:
+    """Every frame lists the same bones in the same order (AMC exporters write it so):
+    parse each bone's column of lines at once. None when the file does not fit that shape,
+    so the line by line parser can name the problem."""
+    if not lines or not lines[0].isdigit():
+        return None
+    k = 1
+    while k < len(lines) and not lines[k].isdigit():
+        k += 1
+    if len(lines) % k:
+        return None
+    n_frames = len(lines) // k
+    if not all(line.isdigit() for line in lines[::k]):
+        return None
+    values: dict[str, np.ndarray] = {}
+    for j in range(1, k):
+        column = lines[j::k]
+        name = column[0].split(None, 1)[0]
+        if name not in n_dof or name in values:
+            return None
+        tokens = " ".join(column).split()
+        width = n_dof[name] + 1
+        if len(tokens) != n_frames * width:
+            return None
+        table = np.array(tokens, dtype=object).reshape(n_frames, width)
+        if not (table[:, 0] == name).all():
+            return None
+        try:
+            values[name] = table[:, 1:].astype(np.float64)
+        except ValueError:
+            return None
+    if "root" not in values:
+        return None
+    return Motion(path, values, n_frames, angle_deg)
+
+
 def read_amc(path: str | Path, skeleton: Skeleton) -> Motion:
     """Parse an AMC motion file against its skeleton. Frames must be complete."""
     path = Path(path)
     lines = read_text(path).split("\n")
+    n_dof_fast = {name: len(b.dof) for name, b in skeleton.bones.items()}
+    n_dof_fast["root"] = len(skeleton.root_order)
+    body = [ln.strip() for ln in lines]
+    body = [ln for ln in body if ln and not ln.startswith("#")]
+    header = [ln[1:].upper() for ln in body if ln.startswith(":")]
+    deg = True if any(h.startswith("DEG") for h in header) else None
+    deg = False if any(h.startswith("RAD") for h in header) else deg
+    fast = _read_amc_fast(path, [ln for ln in body if not ln.startswith(":")], n_dof_fast, deg)
+    if fast is not None:
+        return fast
     n_dof = {name: len(b.dof) for name, b in skeleton.bones.items()}
     n_dof["root"] = len(skeleton.root_order)
     rows: dict[str, list[list[str]]] = {}

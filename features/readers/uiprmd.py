@@ -241,18 +241,23 @@ def read_uiprmd_kinect(
 def read_uiprmd_vicon_markers(path: str | Path) -> np.ndarray:
     """Vicon markers in the canonical frame: ``(frames, 39, 3)`` metres, y up, x to the left.
 
+    NaN where the marker was occluded.
     The files are z up, x forward, y left (mm); (y, z, x) is a cyclic permutation of the axes,
     so it is a proper rotation and keeps the frame right-handed.
     """
     path = Path(path)
     raw = read_csv_matrix(path, len(VICON_MARKERS) * 3).reshape(-1, len(VICON_MARKERS), 3)
+    # Vicon writes an occluded marker as exactly (0, 0, 0) (36 of the 790 files here have
+    # such gaps): a gap, not a point at the origin.
+    raw[(raw == 0).all(axis=2)] = np.nan
     return raw[..., [1, 2, 0]] / 1000.0
 
 
 def harrington_hip_centres(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Left and right hip joint centres, each ``(frames, 3)``, from the four pelvis markers.
 
-    markers: ``(frames, 39, 3)`` canonical metres. Harrington et al., J Biomech 40(3) 2007:
+    markers: ``(frames, 39, 3)`` canonical metres; a frame missing a pelvis marker gives NaN.
+    Harrington et al., J Biomech 40(3) 2007:
     in the pelvis frame (origin mid-ASIS, x anterior, y superior, z right), with pelvis width PW
     (ASIS to ASIS) and depth PD (mid-ASIS to mid-PSIS) in mm: x = -0.24 PD - 9.9,
     y = -0.30 PW - 10.9, z = +-(0.33 PW + 7.3).
@@ -263,11 +268,12 @@ def harrington_hip_centres(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     mid_psis = (markers[:, ix["LPSI"]] + markers[:, ix["RPSI"]]) / 2
     right = rasi - lasi
     pw = np.linalg.norm(right, axis=1, keepdims=True)
-    z = right / pw
     ant = mid_asis - mid_psis
     pd = np.linalg.norm(ant, axis=1, keepdims=True)
-    x = ant - (ant * z).sum(1, keepdims=True) * z  # anterior, made orthogonal to the lateral axis
-    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a missing marker gives NaN, no warning
+        z = right / pw
+        x = ant - (ant * z).sum(1, keepdims=True) * z  # anterior, orthogonal to the lateral axis
+        x /= np.linalg.norm(x, axis=1, keepdims=True)
     y = np.cross(z, x)  # superior: z (right) x x (anterior) = up in a right-handed frame
     pw_mm, pd_mm = pw * 1000, pd * 1000
     dx = (-0.24 * pd_mm - 9.9) / 1000
@@ -278,13 +284,17 @@ def harrington_hip_centres(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 
 
 def read_uiprmd_vicon(path: str | Path) -> PoseSequence:
-    """A UI-PRMD Vicon repetition as a canonical :class:`PoseSequence` (joint centres, metres)."""
+    """A UI-PRMD Vicon repetition as a canonical :class:`PoseSequence` (joint centres, metres).
+
+    A joint is NaN in frames where a marker it is computed from was occluded.
+    """
     path = Path(path)
     markers = read_uiprmd_vicon_markers(path)
     ix = {n: i for i, n in enumerate(VICON_MARKERS)}
     frames = markers.shape[0]
     out = np.full((frames, len(JOINT_INDEX), 3), np.nan)
     for joint, names in VICON_TO_BLAZEPOSE.items():
+        # a plain mean: a joint is NaN in a frame where any of its markers is missing
         out[:, JOINT_INDEX[joint]] = markers[:, [ix[n] for n in names]].mean(axis=1)
     left_hip, right_hip = harrington_hip_centres(markers)
     out[:, JOINT_INDEX["left_hip"]] = left_hip
