@@ -1,0 +1,141 @@
+"""posecbr train / classify / casebase from the command line, good and bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from casebase_store import open_store
+from features.poses import save_pose
+from posecbr.cli import main
+from tests.test_cbr_clips import ACTIVITIES, arm_dataset
+
+
+def _write_classes(root: Path, n_per_class: int, seed: int) -> Path:
+    X, y = arm_dataset(n_per_class, seed)
+    for i, (seq, label) in enumerate(zip(X, y, strict=True)):
+        save_pose(seq, root / str(label) / f"clip{i:02d}.npz")
+    return root
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    base = tmp_path_factory.mktemp("cli")
+    return _write_classes(base / "train", 5, 11), _write_classes(base / "test", 2, 12)
+
+
+def _cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_train_classify_feedback_export_trim(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    train, test = dataset
+    db = str(tmp_path / "cb.sqlite")
+    code, out, err = _cli(
+        capsys, "train", str(train), "--db", db, "--similarity", "dtw", "--param", "band=0.2"
+    )
+    assert code == 0, err
+    assert "15 cases" in out and "3 activities" in out
+    code, out, _ = _cli(capsys, "casebase", "info", "--db", db, "--json")
+    info = json.loads(out)["case_bases"][0]
+    assert info["labels"] == {a: 5 for a in ACTIVITIES}
+    assert info["similarity"]["band"] == 0.2
+
+    code, out, err = _cli(capsys, "classify", str(test), "--db", db)
+    assert code == 0, err
+    assert "accuracy: 1.000 (6/6 labelled clips)" in out
+    assert "Matched:" in out and "Nearest other activity:" in out
+    code, out, _ = _cli(capsys, "classify", str(test), "--db", db, "--json", "-k", "3")
+    doc = json.loads(out)
+    assert doc["accuracy"] == 1.0 and len(doc["results"]) == 6
+    first = doc["results"][0]
+    assert len(first["neighbours"]) == 3 and first["label"] in ACTIVITIES
+    assert first["text"].startswith(first["label"])
+
+    # feedback: a clip of the right-arm movement told to be the left-arm one -> revise/retain
+    clip = sorted((test / ACTIVITIES[1]).glob("*.npz"))[0]
+    code, out, err = _cli(capsys, "classify", str(clip), "--db", db, "--feedback", ACTIVITIES[0])
+    assert code == 0, err
+    assert "feedback:" in out
+    store = open_store(db)
+    log = store.maintenance_log("default")
+    assert [e.action for e in log].count("retain") == 1
+    origins = set(store.load_cases("default").origins)
+    assert origins & {"retained", "revised"}
+
+    code, out, _ = _cli(capsys, "casebase", "list", "--db", db, "--json")
+    assert len(json.loads(out)["cases"]) == store.count_cases("default")
+
+    npz = tmp_path / "cases.npz"
+    code, out, _ = _cli(capsys, "casebase", "export", "--db", db, "--out", str(npz))
+    with np.load(npz) as z:
+        assert z["problems"].shape[0] == store.count_cases("default")
+        assert z["problems"].shape[1] == 32
+        assert set(z["labels"]) == set(ACTIVITIES)
+        assert len(z["feature_words"]) == z["problems"].shape[2]
+
+    before = store.count_cases("default")
+    code, out, _ = _cli(capsys, "casebase", "trim", "--db", db, "--editor", "cnn", "--dry-run")
+    assert code == 0 and "CNN:" in out and "dry run" in out
+    assert store.count_cases("default") == before
+    code, out, _ = _cli(capsys, "casebase", "trim", "--db", db, "--keep", "0.6", "--json")
+    rep = json.loads(out)
+    assert rep["size_before"] == before and rep["size_after"] < before
+    assert store.count_cases("default") == rep["size_after"]
+
+
+def test_bad_input_one_line_errors(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    train, test = dataset
+    db = str(tmp_path / "cb.sqlite")
+    assert _cli(capsys, "train", str(train), "--db", db, "--similarity", "euclidean")[0] == 0
+
+    code, _, err = _cli(capsys, "train", str(train), "--db", db, "--append", "--length", "16")
+    assert code == 1 and "was built with features" in err and err.count("\n") == 1
+    code, _, err = _cli(capsys, "train", str(train), "--db", db)
+    assert code == 1 and "already exists" in err
+
+    junk = tmp_path / "junk.sqlite"
+    junk.write_bytes(b"\x00garbage" * 500)
+    code, _, err = _cli(capsys, "classify", str(test), "--db", str(junk))
+    assert code == 1 and str(junk) in err and "not a readable SQLite database" in err
+
+    code, _, err = _cli(capsys, "classify", str(test), "--db", str(tmp_path / "none.sqlite"))
+    assert code == 1 and "no such case base file" in err
+
+    empty = tmp_path / "empty"
+    (empty / "squat").mkdir(parents=True)
+    code, _, err = _cli(capsys, "train", str(empty), "--db", str(tmp_path / "e.sqlite"))
+    assert code == 1 and err.startswith("posecbr train: error:")
+
+    one = tmp_path / "one"
+    for f in sorted((train / ACTIVITIES[2]).glob("*.npz")):
+        (one / ACTIVITIES[2]).mkdir(parents=True, exist_ok=True)
+        (one / ACTIVITIES[2] / f.name).write_bytes(f.read_bytes())
+    code, _, err = _cli(capsys, "train", str(one), "--db", str(tmp_path / "o.sqlite"))
+    assert code == 1 and "only one activity" in err
+
+    code, _, err = _cli(
+        capsys,
+        "train",
+        str(train),
+        "--db",
+        str(tmp_path / "q.sqlite"),
+        "--features",
+        "qmp",
+        "--similarity",
+        "dtw",
+    )
+    assert code == 1 and "compares sequences" in err
+    code, _, err = _cli(
+        capsys, "train", str(train), "--db", str(tmp_path / "s.sqlite"), "--similarity", "cosine"
+    )
+    assert code == 1 and "unknown similarity 'cosine'" in err
