@@ -467,59 +467,39 @@ def _layout(table: FluentTable) -> list[tuple[int, str, str, bool]]:
     return cols
 
 
-def evaluate(
-    seq: PoseSequence,
-    table: FluentTable | None = None,
-    signals: StateSignals | None = None,
-) -> FluentResult:
-    """Every fluent state's confidence for every frame of ``seq`` (all frames at once)."""
-    table = table or DEFAULT_TABLE
-    sig = signals if signals is not None else state_signals(seq)
+Backend = Literal["auto", "numba", "numpy"]
+
+# Column codes of the fused kernel (features._fluent_kernels): which block a state comes from.
+_CODES = ("lo", "mid", "hi", "two_hi", "touch", "m_lo", "m_hi", "still")
+
+
+@dataclass(frozen=True, eq=False)
+class _Prepared:
+    """Everything :func:`evaluate` derives from a table alone (built once per table)."""
+
+    state_names: tuple[str, ...]
+    words: tuple[str, ...]
+    temporal: np.ndarray  # (n_states,) bool
+    steady: np.ndarray  # (n_states,) bool
+    fluent: np.ndarray  # (n_states,) spec index
+    code: np.ndarray  # (n_states,) index into _CODES
+    signals: tuple[str, ...]  # (n,) signal name of each fluent
+    partner: np.ndarray  # (n,) the other fluent of a tilt pair, or itself
+    inst: np.ndarray  # (n, 8) lower (τ-δ, τ+δ, τ, k), upper (τ-δ, τ+δ, τ, k)
+    motion: np.ndarray  # (n, 8) toward s0 (τ-δ, τ+δ, τ, k), toward sn (same)
+    three: np.ndarray  # (n,) bool
+
+
+_PREPARED: dict[int, tuple[FluentTable, _Prepared]] = {}
+
+
+def _prepare(table: FluentTable) -> _Prepared:
+    hit = _PREPARED.get(id(table))
+    if hit is not None and hit[0] is table:
+        return hit[1]
     specs = table.specs
     n = len(specs)
-    col = {name: i for i, name in enumerate(sig.names)}
-    try:
-        x = sig.values[:, [col[s.signal] for s in specs]]  # (frames, n)
-    except KeyError as exc:
-        raise ConfigError(f"fluent table names an unknown signal {exc.args[0]!r}") from None
-    eps = table.epsilon
-    lo_tau = np.array([s.lower.tau for s in specs])
-    lo_delta = np.array([s.lower.delta for s in specs])
-    three = np.array([s.upper is not None for s in specs])
-    up_tau = np.array([s.upper.tau if s.upper else np.inf for s in specs])
-    up_delta = np.array([s.upper.delta if s.upper else 1.0 for s in specs])
-
-    c_lo = confidence_lower(x, lo_tau, lo_delta, eps)
-    c_up = np.where(three, confidence_upper(x, up_tau, up_delta, eps), 0.0)
-    c_up = np.where(np.isnan(x), np.nan, c_up)
-    # Middle state (eq. 4); a tilt pair's upright state uses both directions (paper §Tilted).
-    index_of = {s.name: i for i, s in enumerate(specs)}
-    partner = np.array([index_of.get(s.paired_with or "", i) for i, s in enumerate(specs)])
-    not_extreme = (1.0 - c_lo) * (1.0 - c_up)
-    c_mid = np.where(partner != np.arange(n), not_extreme * not_extreme[:, partner], not_extreme)
-
-    # Locally temporal fluents (eqs. 5-6).
-    lag = seq.fps / table.reference_fps
-    deltas, mask = _lagged_deltas(x, lag, table.window)
-    m_tau = np.array([s.motion_threshold.tau for s in specs])
-    m_delta = np.array([s.motion_threshold.delta for s in specs])
-    toward_lo = _windowed_product(confidence_lower(deltas, -m_tau, m_delta, eps), mask)
-    toward_hi = _windowed_product(confidence_upper(deltas, m_tau, m_delta, eps), mask)
-    still = (1.0 - toward_lo) * (1.0 - toward_hi)
-    still = np.where(partner != np.arange(n), still * still[:, partner], still)
-
-    near_cols = np.array([s.kind == "distance" for s in specs])
-    touching = np.full(x.shape, np.nan)
-    if near_cols.any():
-        pair_index = {name: k for k, name in enumerate(NEAR_SIGNALS)}
-        d_m = sig.distances_m[:, [pair_index[s.signal] for s in specs if s.kind == "distance"]]
-        touching[:, near_cols] = np.where(np.isnan(d_m), np.nan, (d_m <= table.touching_m) * 1.0)
-
     cols = _layout(table)
-    blocks = {
-        "lo": c_lo, "mid": c_mid, "hi": c_up, "two_hi": 1.0 - c_lo, "touch": touching,
-        "m_lo": toward_lo, "m_hi": toward_hi, "still": still,
-    }  # fmt: skip
     keys: list[str] = []
     for i, st, _, temporal in cols:
         s = specs[i]
@@ -535,18 +515,154 @@ def evaluate(
                 keys.append("two_hi")
             else:
                 keys.append("mid" if pos == 1 else "hi")
-    fluent_idx = np.array([i for i, _, _, _ in cols])
-    out = np.empty((x.shape[0], len(cols)))
-    for key, block in blocks.items():
-        sel = np.array([k == key for k in keys])
-        if sel.any():
-            out[:, sel] = block[:, fluent_idx[sel]]
-    return FluentResult(
+    index_of = {s.name: i for i, s in enumerate(specs)}
+    logit = math.log((1.0 - table.epsilon) / table.epsilon)
+
+    def band(tau: float, delta: float) -> list[float]:
+        # The same float operations as confidence_lower, so both backends cut at the same x.
+        return [tau - delta, tau + delta, tau, logit / delta]
+
+    inst = np.array(
+        [band(s.lower.tau, s.lower.delta)
+         + (band(s.upper.tau, s.upper.delta) if s.upper else [np.inf, np.inf, np.inf, 0.0])
+         for s in specs]  # fmt: skip
+    ).reshape(n, 8)
+    motion = np.array(
+        [band(-s.motion_threshold.tau, s.motion_threshold.delta)
+         + band(s.motion_threshold.tau, s.motion_threshold.delta) for s in specs]  # fmt: skip
+    ).reshape(n, 8)
+    prepared = _Prepared(
         state_names=tuple(f"{specs[i].name}.{_slug(st)}" for i, st, _, _ in cols),
         words=tuple(w for _, _, w, _ in cols),
-        temporal=np.array([t for _, _, _, t in cols]),
-        steady=np.array([k == "still" for k in keys]),
-        fluent=fluent_idx,
+        temporal=np.array([t for _, _, _, t in cols], dtype=bool),
+        steady=np.array([k == "still" for k in keys], dtype=bool),
+        fluent=np.array([i for i, _, _, _ in cols], dtype=np.intp),
+        code=np.array([_CODES.index(k) for k in keys], dtype=np.intp),
+        signals=tuple(s.signal for s in specs),
+        partner=np.array([index_of.get(s.paired_with or "", i) for i, s in enumerate(specs)],
+                         dtype=np.intp),  # fmt: skip
+        inst=inst,
+        motion=motion,
+        three=np.array([s.upper is not None for s in specs], dtype=bool),
+    )
+    for arr in (prepared.temporal, prepared.steady, prepared.fluent, prepared.code):
+        arr.setflags(write=False)  # shared by every FluentResult of this table
+    if len(_PREPARED) >= 16:
+        _PREPARED.clear()
+    _PREPARED[id(table)] = (table, prepared)
+    return prepared
+
+
+def _signal_columns(sig: StateSignals, prep: _Prepared) -> tuple[np.ndarray, np.ndarray]:
+    """Column of each fluent's signal in ``sig.values`` and of its distance in
+    ``sig.distances_m`` (-1 for angle fluents), both ``(n,)``."""
+    col = {name: i for i, name in enumerate(sig.names)}
+    pair_index = {name: k for k, name in enumerate(NEAR_SIGNALS)}
+    try:
+        sig_col = np.array([col[name] for name in prep.signals], dtype=np.intp)
+    except KeyError as exc:
+        raise ConfigError(f"fluent table names an unknown signal {exc.args[0]!r}") from None
+    dist_col = np.array([pair_index.get(name, -1) for name in prep.signals], dtype=np.intp)
+    return sig_col, dist_col
+
+
+def _numba_available() -> bool:
+    try:
+        import numba  # noqa: F401
+    except ImportError:  # pragma: no cover - numba is a dependency; fall back if it is absent
+        return False
+    return True
+
+
+def _confidence_numpy(
+    x: np.ndarray, dist_m: np.ndarray, fps: float, table: FluentTable, prep: _Prepared
+) -> np.ndarray:
+    """Reference implementation: whole-array numpy. x: ``(frames, n)`` each fluent's signal;
+    dist_m: ``(frames, n)`` its distance in metres (NaN for angle fluents).
+    Returns ``(frames, n_states)``."""
+    specs = table.specs
+    n = len(specs)
+    eps = table.epsilon
+    lo_tau = np.array([s.lower.tau for s in specs])
+    lo_delta = np.array([s.lower.delta for s in specs])
+    three = prep.three
+    up_tau = np.array([s.upper.tau if s.upper else np.inf for s in specs])
+    up_delta = np.array([s.upper.delta if s.upper else 1.0 for s in specs])
+
+    c_lo = confidence_lower(x, lo_tau, lo_delta, eps)
+    c_up = np.where(three, confidence_upper(x, up_tau, up_delta, eps), 0.0)
+    c_up = np.where(np.isnan(x), np.nan, c_up)
+    # Middle state (eq. 4); a tilt pair's upright state uses both directions (paper §Tilted).
+    partner = prep.partner
+    paired = partner != np.arange(n)
+    not_extreme = (1.0 - c_lo) * (1.0 - c_up)
+    c_mid = np.where(paired, not_extreme * not_extreme[:, partner], not_extreme)
+
+    # Locally temporal fluents (eqs. 5-6).
+    lag = fps / table.reference_fps
+    deltas, mask = _lagged_deltas(x, lag, table.window)
+    m_tau = np.array([s.motion_threshold.tau for s in specs])
+    m_delta = np.array([s.motion_threshold.delta for s in specs])
+    toward_lo = _windowed_product(confidence_lower(deltas, -m_tau, m_delta, eps), mask)
+    toward_hi = _windowed_product(confidence_upper(deltas, m_tau, m_delta, eps), mask)
+    still = (1.0 - toward_lo) * (1.0 - toward_hi)
+    still = np.where(paired, still * still[:, partner], still)
+
+    touching = np.where(np.isnan(dist_m), np.nan, (dist_m <= table.touching_m) * 1.0)
+    blocks = (c_lo, c_mid, c_up, 1.0 - c_lo, touching, toward_lo, toward_hi, still)
+    out = np.empty((x.shape[0], len(prep.state_names)))
+    for code, block in enumerate(blocks):
+        sel = prep.code == code
+        if sel.any():
+            out[:, sel] = block[:, prep.fluent[sel]]
+    return out
+
+
+def evaluate(
+    seq: PoseSequence,
+    table: FluentTable | None = None,
+    signals: StateSignals | None = None,
+    backend: Backend = "auto",
+) -> FluentResult:
+    """Every fluent state's confidence for every frame of ``seq`` (all frames at once).
+
+    ``backend``: ``"numba"`` the compiled single-pass kernel (:mod:`features._fluent_kernels`),
+    ``"numpy"`` the whole-array reference it is tested against, ``"auto"`` numba when installed.
+    Both give the same confidences (to ~1e-15).
+    """
+    table = table or DEFAULT_TABLE
+    sig = signals if signals is not None else state_signals(seq)
+    prep = _prepare(table)
+    sig_col, dist_col = _signal_columns(sig, prep)
+    if backend == "auto":
+        backend = "numba" if _numba_available() else "numpy"
+    if backend == "numba":
+        from ._fluent_kernels import fluent_confidences
+
+        values = np.ascontiguousarray(sig.values, dtype=np.float64)
+        dist_m = np.ascontiguousarray(sig.distances_m, dtype=np.float64)
+        if dist_m.ndim != 2 or dist_m.shape[0] != values.shape[0]:
+            dist_m = np.full((values.shape[0], 1), np.nan)
+        out = np.empty((values.shape[0], len(prep.state_names)))
+        fluent_confidences(
+            values, dist_m, sig_col, dist_col, prep.inst, prep.motion, prep.three, prep.partner,
+            float(table.touching_m), float(seq.fps / table.reference_fps), int(table.window),
+            prep.code, prep.fluent, out,
+        )  # fmt: skip
+    elif backend == "numpy":
+        x = sig.values[:, sig_col]
+        dist_m = np.full(x.shape, np.nan)
+        near = dist_col >= 0
+        dist_m[:, near] = sig.distances_m[:, dist_col[near]]
+        out = _confidence_numpy(x, dist_m, seq.fps, table, prep)
+    else:
+        raise ConfigError(f"unknown fluent backend {backend!r} (known: auto, numba, numpy)")
+    return FluentResult(
+        state_names=prep.state_names,
+        words=prep.words,
+        temporal=prep.temporal,
+        steady=prep.steady,
+        fluent=prep.fluent,
         confidence=out,
         fps=seq.fps,
         table=table,

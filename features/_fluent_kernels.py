@@ -1,0 +1,285 @@
+"""Compiled (numba) kernels of the fluent engine: same results as the numpy reference.
+
+:func:`fluent_confidences` computes every state of every fluent for every frame in one pass
+over ``(frames, fluents)`` and writes straight into the ``(frames, n_states)`` output. It is
+the numpy reference in :mod:`features.fluents` (``evaluate(..., backend="numpy")``), fused:
+
+- the logistic (paper eqs. 2-3) calls ``exp`` only inside the band τ±δ; outside it is 0 or 1;
+- the temporal product (eq. 5) ``∏ C_a^(1/(a+1))`` is decided without any transcendental when
+  a defined factor is NaN (-> NaN) or 0 (-> 0), which is the common case for a still joint
+  (noise makes Δθ change sign); otherwise it is ``exp(Σ log C_a / (a+1))``;
+- for an integer lag (the source rate a multiple of the reference rate: 30, 60, 120 Hz) the Δ
+  of age ``a`` at frame ``f`` is the newest Δ of frame ``f - a·lag``, so ``log C`` of each Δ
+  is computed at most once and reused by the ``window`` frames that see it (a ring buffer);
+  a fractional lag interpolates like the reference and recomputes.
+
+Numerics: the reference multiplies powers, this sums logarithms; they agree to ~1e-15.
+Compiled with ``cache=True`` so only the first run on a machine pays the compile time.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# Output column codes (one per state column), shared with features.fluents.
+LO, MID, HI, TWO_HI, TOUCH, M_LO, M_HI, STILL = range(8)
+
+# Kinds of factor in the temporal product.
+_NAN, _ZERO, _ONE, _BAND = 0, 1, 2, 3
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _lower(x: float, lo_edge: float, hi_edge: float, tau: float, k: float) -> float:
+    """Paper eq. 2 for one value: 1 below the band, 0 above, logistic inside, NaN for NaN."""
+    if x < lo_edge:
+        return 1.0
+    if x > hi_edge:
+        return 0.0
+    return 1.0 / (1.0 + math.exp(k * (x - tau)))  # NaN stays NaN
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _kind_lower(d: float, lo_edge: float, hi_edge: float) -> int:
+    """What C_lower(d) is, without computing it."""
+    if d != d:
+        return _NAN
+    if d < lo_edge:
+        return _ONE
+    if d > hi_edge:
+        return _ZERO
+    return _BAND
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _log_c(d: float, q: np.ndarray, direction: int) -> float:
+    """log C of a Δ inside the band of one direction (0: toward s0, 1: toward sn)."""
+    off = 4 * direction
+    c = 1.0 / (1.0 + math.exp(q[off + 3] * (d - q[off + 2])))
+    return math.log(c if direction == 0 else 1.0 - c)
+
+
+@njit(cache=True, nogil=True)
+def _product(
+    deltas: np.ndarray, n_age: int, q: np.ndarray, direction: int, inv: np.ndarray,
+    kinds: np.ndarray,
+) -> float:  # fmt: skip
+    """Eq. 5 over the ``n_age`` defined ages of ``deltas`` (fractional-lag path)."""
+    off = 4 * direction
+    has_nan = False
+    has_zero = False
+    has_band = False
+    for a in range(n_age):
+        kd = _kind_lower(deltas[a], q[off], q[off + 1])
+        if direction == 1 and kd != _NAN and kd != _BAND:
+            kd = _ZERO if kd == _ONE else _ONE  # upper = 1 - lower
+        kinds[a] = kd
+        has_nan |= kd == _NAN
+        has_zero |= kd == _ZERO
+        has_band |= kd == _BAND
+    if has_nan:
+        return np.nan
+    if has_zero:
+        return 0.0
+    if not has_band:
+        return 1.0
+    total = 0.0
+    for a in range(n_age):
+        if kinds[a] == _BAND:
+            total += _log_c(deltas[a], q, direction) * inv[a]
+    return math.exp(total)
+
+
+@njit(cache=True, nogil=True)
+def _temporal_integer(
+    values: np.ndarray, sig_col: np.ndarray, motion: np.ndarray, f: int, step: int, slot: int,
+    ring_size: int, window: int, inv: np.ndarray, ring_d: np.ndarray, ring_lc: np.ndarray,
+    newest_ok: bool, blk: np.ndarray, slots: np.ndarray, total: np.ndarray, pending: np.ndarray,
+) -> None:  # fmt: skip
+    """Eq. 5 for every fluent at frame ``f`` with an integer lag ``step`` (ring buffer path)."""
+    n = sig_col.shape[0]
+    if not newest_ok:
+        # No Δ yet: the ring keeps 0 (= factor 1, no evidence) for this frame.
+        for i in range(n):
+            ring_d[slot, i] = 0.0
+            ring_lc[0, slot, i] = 0.0
+            ring_lc[1, slot, i] = 0.0
+            blk[M_LO, i] = np.nan
+            blk[M_HI, i] = np.nan
+        return
+    for i in range(n):
+        sc = sig_col[i]
+        d = values[f, sc] - values[f - step, sc]
+        q = motion[i]
+        ring_d[slot, i] = d
+        # toward s0 (lower state): 1 below the band, 0 above it
+        ring_lc[0, slot, i] = (
+            d if d != d else (0.0 if d < q[0] else (-np.inf if d > q[1] else 1.0))
+        )
+        # toward sn (upper state = 1 - lower): 0 below the band, 1 above it
+        ring_lc[1, slot, i] = (
+            d if d != d else (-np.inf if d < q[4] else (0.0 if d > q[5] else 1.0))
+        )
+    # Slots of the window's ages (age 0 = this frame); negative frames hold 0 (never written).
+    for a in range(window):
+        slots[a] = (f - a * step) % ring_size
+    for direction in range(2):
+        lc = ring_lc[direction]
+        total[:] = 0.0
+        pending[:] = 0.0
+        for a in range(window):
+            row = lc[slots[a]]
+            w = inv[a]
+            for i in range(n):  # branch-free: vectorises
+                v = row[i]
+                pending[i] += v > 0.0
+                total[i] += v * w
+        for i in range(n):
+            t = total[i]
+            # NaN (a NaN factor) and -inf (a zero factor) decide the product without a log.
+            if t == -np.inf:
+                r = 0.0
+            elif t != t:
+                r = np.nan
+            elif pending[i] > 0.0:
+                # Every factor is positive: compute the logs still missing, once per Δ.
+                q = motion[i]
+                t = 0.0
+                for a in range(window):
+                    v = lc[slots[a], i]
+                    if v > 0.0:
+                        v = _log_c(ring_d[slots[a], i], q, direction)
+                        lc[slots[a], i] = v
+                    t += v * inv[a]
+                r = math.exp(t)
+            elif t == 0.0:
+                r = 1.0
+            else:
+                r = math.exp(t)
+            blk[M_LO + direction, i] = r
+
+
+@njit(cache=True, nogil=True)
+def fluent_confidences(
+    values: np.ndarray,
+    dist_m: np.ndarray,
+    sig_col: np.ndarray,
+    dist_col: np.ndarray,
+    inst: np.ndarray,
+    motion: np.ndarray,
+    three: np.ndarray,
+    partner: np.ndarray,
+    touching_m: float,
+    lag: float,
+    window: int,
+    col_code: np.ndarray,
+    col_fluent: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Fill ``out`` ``(frames, n_states)`` with every state's confidence.
+
+    values: ``(frames, n_signals)`` signals; dist_m: ``(frames, n_pairs)`` near distances in
+    metres. Per fluent i (n of them): ``sig_col[i]`` its column in ``values``, ``dist_col[i]``
+    its column in ``dist_m`` (-1: not a distance fluent); ``inst[i]`` = (lower τ-δ, τ+δ, τ, k,
+    upper τ-δ, τ+δ, τ, k) and ``motion[i]`` = (toward-s0 τ-δ, τ+δ, τ, k, toward-sn τ-δ, τ+δ,
+    τ, k), k = ln((1-ε)/ε)/δ; ``three[i]``: has an upper boundary; ``partner[i]``: the other
+    fluent of a tilt pair (or i). Per output column j: ``col_code[j]`` (LO..STILL) and
+    ``col_fluent[j]``. ``lag``: source frames per reference interval; ``window``: r.
+    """
+    frames = values.shape[0]
+    n = sig_col.shape[0]
+    n_cols = col_code.shape[0]
+    blk = np.empty((8, n))
+    inv = np.empty(window)
+    for a in range(window):
+        inv[a] = 1.0 / (a + 1)
+    integer_lag = lag >= 1.0 and lag == math.floor(lag)
+    step = int(lag) if integer_lag else 0
+    # Integer lag: a ring over the last window·lag frames of each fluent's newest Δ and of
+    # log C(Δ) per direction: 0 = C is 1 (or no history: counts as 1), -inf = C is 0, NaN,
+    # or +1 = inside the band, log not computed yet (logs are <= 0, so +1 cannot be a value).
+    # A window's log-sum is then -inf (a zero: product 0) or NaN without any exp/log.
+    ring_size = window * step if integer_lag else 1
+    ring_d = np.zeros((ring_size, n))
+    ring_lc = np.zeros((2, ring_size, n))
+    # Fractional lag: interpolation positions of the window + 1 samples of one frame.
+    s_lo = np.empty(window + 1, dtype=np.intp)
+    s_hi = np.empty(window + 1, dtype=np.intp)
+    s_w = np.empty(window + 1)
+    s_ok = np.empty(window + 1, dtype=np.bool_)
+    kinds = np.empty(window, dtype=np.intp)
+    slots = np.empty(window, dtype=np.intp)
+    total = np.empty(n)
+    pending = np.empty(n)
+    deltas = np.empty(window)
+    samples = np.empty(window + 1)
+    for f in range(frames):
+        if integer_lag:
+            slot = f % ring_size
+            newest_ok = f - step >= 0
+        else:
+            for m in range(window + 1):
+                pos = f - m * lag
+                s_ok[m] = pos >= -1e-9
+                pos = min(max(pos, 0.0), frames - 1.0)
+                lo = int(math.floor(pos))
+                s_lo[m] = lo
+                s_hi[m] = min(lo + 1, frames - 1)
+                s_w[m] = pos - lo
+            newest_ok = s_ok[1]
+        for i in range(n):
+            x = values[f, sig_col[i]]
+            p = inst[i]
+            c_lo = _lower(x, p[0], p[1], p[2], p[3])
+            if three[i]:
+                c_up = 1.0 - _lower(x, p[4], p[5], p[6], p[7])
+            else:
+                c_up = np.nan if x != x else 0.0
+            blk[LO, i] = c_lo
+            blk[HI, i] = c_up
+            blk[TWO_HI, i] = 1.0 - c_lo
+            blk[MID, i] = (1.0 - c_lo) * (1.0 - c_up)
+            dc = dist_col[i]
+            if dc >= 0:
+                d = dist_m[f, dc]
+                blk[TOUCH, i] = d if d != d else (1.0 if d <= touching_m else 0.0)
+        if integer_lag:
+            _temporal_integer(values, sig_col, motion, f, step, slot, ring_size, window, inv,
+                              ring_d, ring_lc, newest_ok, blk, slots, total, pending)
+        else:
+            for i in range(n):
+                if not newest_ok:
+                    blk[M_LO, i] = np.nan
+                    blk[M_HI, i] = np.nan
+                    continue
+                sc = sig_col[i]
+                for m in range(window + 1):
+                    lo = s_lo[m]
+                    w = s_w[m]
+                    if w == 0.0:
+                        samples[m] = values[lo, sc]
+                    else:
+                        samples[m] = values[lo, sc] * (1.0 - w) + values[s_hi[m], sc] * w
+                n_age = 0
+                for a in range(window):
+                    if not s_ok[a + 1]:
+                        break
+                    deltas[a] = samples[a] - samples[a + 1]
+                    n_age += 1
+                q = motion[i]
+                for direction in range(2):
+                    blk[M_LO + direction, i] = _product(deltas, n_age, q, direction, inv, kinds)
+        for i in range(n):
+            t_lo = blk[M_LO, i]
+            t_hi = blk[M_HI, i]
+            blk[STILL, i] = (1.0 - t_lo) * (1.0 - t_hi)
+        for i in range(n):
+            j = partner[i]
+            if j != i:
+                # A tilt pair shares "upright" and "tilt steady": both directions must hold.
+                blk[MID, i] = blk[MID, i] * ((1.0 - blk[LO, j]) * (1.0 - blk[HI, j]))
+                blk[STILL, i] = blk[STILL, i] * ((1.0 - blk[M_LO, j]) * (1.0 - blk[M_HI, j]))
+        for j in range(n_cols):
+            out[f, j] = blk[col_code[j], col_fluent[j]]
