@@ -45,7 +45,8 @@ Plug-in-Gait full-body set (:data:`VICON_MARKERS`); it is an inference that
 BlazePose           markers                           why
 ==================  ================================  ==========================================
 left_hip            LASI RASI LPSI RPSI               Harrington et al. 2007 regression from
-                                                      pelvis width and depth
+                                                      pelvis width and depth (one occluded
+                                                      pelvis marker is filled rigidly)
 left_shoulder       LSHO                              acromion marker (~4 cm above the centre)
 left_elbow          LELB                              lateral epicondyle (~3 cm lateral)
 left_wrist          mean of LWRA, LWRB                the wrist bar spans the two styloids
@@ -253,6 +254,49 @@ def read_uiprmd_vicon_markers(path: str | Path) -> np.ndarray:
     return raw[..., [1, 2, 0]] / 1000.0
 
 
+PELVIS_MARKERS: tuple[str, ...] = ("LASI", "RASI", "LPSI", "RPSI")
+
+
+def fill_rigid_gaps(markers: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """Fill frames where exactly one of ``names`` (markers on one rigid segment) is missing.
+
+    markers: ``(frames, 39, 3)``, NaN = occluded; returns a copy. The standard rigid-body gap
+    fill: a template of the segment (the fully visible frame whose inter-marker distances are
+    closest to their medians) is fitted to the visible markers by least squares (Kabsch,
+    vectorised over frames), and the missing marker is taken from the fitted template. Frames
+    with two or more of them missing, or a segment never fully visible, stay NaN. Measured on
+    the pelvis by hiding a visible marker: 1-3 mm error while standing; in deep squats median
+    6-12 mm and up to 6 cm at full hip flexion, where the skin over the ASIS slides.
+    """
+    out = markers.copy()
+    ix = [VICON_MARKERS.index(n) for n in names]
+    seg = markers[:, ix]  # (frames, k, 3)
+    missing = np.isnan(seg).any(axis=2)  # (frames, k)
+    complete = np.flatnonzero(~missing.any(axis=1))
+    if complete.size == 0:
+        return out
+    dist = np.linalg.norm(seg[complete, :, None] - seg[complete, None, :], axis=3)
+    typical = complete[np.argmin(np.abs(dist - np.median(dist, axis=0)).sum(axis=(1, 2)))]
+    template = seg[typical]  # (k, 3)
+    for m in range(len(ix)):
+        gap = np.flatnonzero(missing[:, m] & (missing.sum(axis=1) == 1))
+        if gap.size == 0:
+            continue
+        keep = [j for j in range(len(ix)) if j != m]
+        src = template[keep]  # (k-1, 3)
+        dst = seg[gap][:, keep]  # (g, k-1, 3)
+        src_c = src - src.mean(axis=0)
+        dst_mean = dst.mean(axis=1, keepdims=True)
+        h = np.einsum("ki,gkj->gij", src_c, dst - dst_mean)  # (g, 3, 3) covariance
+        u, _, vt = np.linalg.svd(h)
+        d = np.sign(np.linalg.det(np.swapaxes(vt, 1, 2) @ np.swapaxes(u, 1, 2)))
+        fix = np.ones((gap.size, 3))
+        fix[:, 2] = d  # no reflections
+        rot = np.swapaxes(vt, 1, 2) @ (fix[:, :, None] * np.swapaxes(u, 1, 2))
+        out[gap, ix[m]] = dst_mean[:, 0] + rot @ (template[m] - src.mean(axis=0))
+    return out
+
+
 def harrington_hip_centres(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Left and right hip joint centres, each ``(frames, 3)``, from the four pelvis markers.
 
@@ -286,7 +330,8 @@ def harrington_hip_centres(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 def read_uiprmd_vicon(path: str | Path) -> PoseSequence:
     """A UI-PRMD Vicon repetition as a canonical :class:`PoseSequence` (joint centres, metres).
 
-    A joint is NaN in frames where a marker it is computed from was occluded.
+    A joint is NaN in frames where a marker it is computed from was occluded, except the hips:
+    a single occluded pelvis marker is filled from the other three (:func:`fill_rigid_gaps`).
     """
     path = Path(path)
     markers = read_uiprmd_vicon_markers(path)
@@ -296,7 +341,7 @@ def read_uiprmd_vicon(path: str | Path) -> PoseSequence:
     for joint, names in VICON_TO_BLAZEPOSE.items():
         # a plain mean: a joint is NaN in a frame where any of its markers is missing
         out[:, JOINT_INDEX[joint]] = markers[:, [ix[n] for n in names]].mean(axis=1)
-    left_hip, right_hip = harrington_hip_centres(markers)
+    left_hip, right_hip = harrington_hip_centres(fill_rigid_gaps(markers, PELVIS_MARKERS))
     out[:, JOINT_INDEX["left_hip"]] = left_hip
     out[:, JOINT_INDEX["right_hip"]] = right_hip
     meta: dict[str, object] = {"dataset": "ui-prmd", "sensor": "vicon", **uiprmd_metadata(path)}
