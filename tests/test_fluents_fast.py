@@ -1,0 +1,159 @@
+"""The compiled fluent kernel equals the numpy reference (backend="numba" vs "numpy").
+
+The reference (whole-array numpy, paper eqs. 2-6 written out directly) is the definition the
+other fluent tests check against hand-made geometry; here the fused single-pass kernel must
+reproduce it on signals built to hit every branch: values inside and outside each band, NaNs
+(isolated and in runs), clips shorter than the window or than one lag, integer and
+fractional lags, tilt pairs, touching, and tables with other parameters.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from features.fluents import DEFAULT_TABLE, FluentTable, evaluate, state_signals
+from features.poses import PoseSequence, load_pose
+from features.readers.asfamc import read_asf_amc
+from features.readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon
+from features.signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals
+from posecbr.errors import ConfigError
+from tests.bodies import standing, to_sequence
+
+DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+TOL = 1e-12
+
+
+def _assert_same(seq: PoseSequence, table: FluentTable = DEFAULT_TABLE,
+                 signals: StateSignals | None = None) -> np.ndarray:  # fmt: skip
+    fast = evaluate(seq, table, signals, backend="numba")
+    ref = evaluate(seq, table, signals, backend="numpy")
+    assert fast.state_names == ref.state_names
+    a, b = fast.confidence, ref.confidence
+    assert a.shape == b.shape == (seq.n_frames, len(ref.state_names))
+    np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
+    both = ~np.isnan(b)
+    if both.any():
+        assert np.max(np.abs(a[both] - b[both])) < TOL
+    return b
+
+
+def _walk_signals(frames: int, fps: float, seed: int, nan_fraction: float = 0.03) -> StateSignals:
+    """Random-walk signals around each fluent's thresholds with steps the size of the motion
+    band, so instantaneous and temporal confidences land inside and outside every band."""
+    rng = np.random.default_rng(seed)
+    n_a, n_d = len(ANGLE_SIGNALS), len(NEAR_SIGNALS)
+    start = np.concatenate([rng.uniform(0.0, np.pi, n_a), rng.uniform(0.0, 1.2, n_d)])
+    step = np.concatenate([np.full(n_a, np.pi / 72), np.full(n_d, 0.06)])
+    # Some stretches still (steps well inside the no-motion band), some moving steadily.
+    drift = rng.choice([0.0, 1.5, -1.5], size=(frames, 1)) * step
+    values = start + np.cumsum(drift + rng.normal(0.0, 1.0, (frames, n_a + n_d)) * step, axis=0)
+    values[:, :n_a] = np.clip(values[:, :n_a], 0.0, np.pi)
+    values[:, n_a:] = np.abs(values[:, n_a:])
+    values[rng.random(values.shape) < nan_fraction] = np.nan
+    if frames > 20:
+        values[10:14, 3] = np.nan  # a run of missing frames
+        values[:, 5] = np.nan  # a signal never available
+    head = np.full(frames, 0.3)
+    dist_m = values[:, n_a:] * 0.3
+    return StateSignals(ANGLE_SIGNALS + NEAR_SIGNALS, values, fps, head, dist_m)
+
+
+def _dummy_seq(frames: int, fps: float) -> PoseSequence:
+    body = standing()
+    return to_sequence(*([body] * frames), fps=fps)
+
+
+@pytest.mark.parametrize("fps", [30.0, 60.0, 120.0, 100.0, 29.97, 15.0, 25.0])
+def test_fast_equals_reference_on_random_walks(fps: float) -> None:
+    frames = 300
+    sig = _walk_signals(frames, fps, seed=int(fps * 100))
+    ref = _assert_same(_dummy_seq(frames, fps), signals=sig)
+    # the walk really exercises the temporal branches: products strictly between 0 and 1
+    # (logs computed), exactly 0, exactly 1, and NaN all occur
+    motion = ref[:, np.array(evaluate(_dummy_seq(1, fps)).temporal)]
+    assert np.any((motion > 0.01) & (motion < 0.99))
+    assert np.any(motion == 0.0) and np.any(motion == 1.0) and np.any(np.isnan(motion))
+
+
+@pytest.mark.parametrize("frames", [1, 2, 3, 5, 6, 7])
+@pytest.mark.parametrize("fps", [30.0, 120.0, 100.0, 10.0])
+def test_fast_equals_reference_on_short_clips(frames: int, fps: float) -> None:
+    sig = _walk_signals(frames, fps, seed=frames, nan_fraction=0.0)
+    ref = _assert_same(_dummy_seq(frames, fps), signals=sig)
+    temporal = evaluate(_dummy_seq(1, fps)).temporal
+    lag = fps / 30.0
+    if frames - 1 < lag - 1e-9:  # no frame has a full reference interval of history
+        assert np.all(np.isnan(ref[:, temporal]))
+
+
+def test_fast_equals_reference_with_other_parameters() -> None:
+    table = DEFAULT_TABLE.with_overrides(
+        {
+            "epsilon": 0.05,
+            "window": 3,
+            "reference_fps": 25.0,
+            "touching_m": 0.2,
+            "fluents": {"arm_bent": {"lower": {"tau": "pi/2", "delta": "pi/6"}},
+                        "near": {"motion": {"tau": 0.1, "delta": 0.02}}},
+        }
+    )  # fmt: skip
+    for fps in (25.0, 100.0, 30.0):
+        _assert_same(_dummy_seq(200, fps), table, _walk_signals(200, fps, seed=7))
+    _assert_same(_dummy_seq(50, 30.0), FluentTable(window=1), _walk_signals(50, 30.0, seed=8))
+    _assert_same(_dummy_seq(50, 30.0), FluentTable(window=9), _walk_signals(50, 30.0, seed=9))
+
+
+def test_fast_equals_reference_on_a_posed_body_with_missing_joints() -> None:
+    frames = []
+    for k in range(40):
+        body = standing()
+        a = np.radians(4.0 * k)  # the left forearm swings up, the head nods
+        body["left_wrist"] = body["left_elbow"] + 0.25 * np.array([0.0, -np.cos(a), np.sin(a)])
+        body["nose"] = body["nose"] + np.array([0.0, -0.002 * k, 0.001 * k])
+        frames.append(body)
+    seq = to_sequence(*frames, fps=30.0)
+    pos = seq.positions.copy()
+    pos[5:8, 15, :] = np.nan  # left wrist lost for a few frames
+    pos[:, 0, :] = np.nan  # no nose at all
+    _assert_same(PoseSequence(pos, seq.joint_names, 30.0))
+
+
+def test_fast_equals_reference_on_the_demo_clips() -> None:
+    files = sorted(DEMO.glob("m0[17]_s*_e01.npz"))
+    assert files
+    for path in files:
+        _assert_same(load_pose(path))
+
+
+def test_fast_equals_reference_on_real_clips(shared_data: Path) -> None:
+    seg = shared_data / "ui-prmd" / "data" / "Segmented Movements"
+    name = "m01_s02_e01_positions.txt.gz"
+    clips = [
+        read_uiprmd_kinect(seg / "Kinect" / "Positions" / name),  # 30 Hz: lag 1
+        read_uiprmd_vicon(seg / "Vicon" / "Positions" / name),  # ~100 Hz: fractional lag
+    ]
+    hdm = shared_data / "hdm05" / "train"
+    amc = sorted(hdm.glob("*/HDM_bd_squat1Reps_*_120.amc"))[0]
+    clips.append(read_asf_amc(amc.parent / "HDM_bd.asf", amc))  # 120 Hz: lag 4
+    for seq in clips:
+        ref = _assert_same(seq)
+        assert np.isfinite(ref).any()
+        # and at another rate: the same motion played at 24 Hz (lag 0.8)
+        _assert_same(PoseSequence(seq.positions, seq.joint_names, 24.0))
+
+
+def test_unknown_backend_is_a_config_error() -> None:
+    seq = _dummy_seq(3, 30.0)
+    with pytest.raises(ConfigError, match="backend"):
+        evaluate(seq, backend="fortran")  # type: ignore[arg-type]
+
+
+def test_results_share_no_writable_state() -> None:
+    seq = _dummy_seq(4, 30.0)
+    first = evaluate(seq, signals=state_signals(seq))
+    with pytest.raises(ValueError):
+        first.temporal[0] = not first.temporal[0]  # layout arrays are shared, so read-only
+    assert first.confidence.flags.writeable
