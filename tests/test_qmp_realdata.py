@@ -24,7 +24,8 @@ def uiprmd_clips(shared_data: Path) -> list[Clip]:
 def test_knee_oscillation_in_deep_squats_not_in_shoulder_exercises(
     uiprmd_clips: list[Clip],
 ) -> None:
-    squat, shoulder = [], []
+    squat: list[bool] = []
+    shoulder: list[bool] = []
     for clip in uiprmd_clips:
         f = qmp_features(clip.seq)
         met = bool(f.binary[f.criteria.index("knee_oscillation")])
