@@ -104,7 +104,7 @@ def load_clip(path: str | Path) -> PoseSequence:
         return read_bvh(path)
     if suffix in VIDEO_SUFFIXES:
         try:
-            from features.pose_estimation import estimate_poses  # type: ignore[attr-defined]
+            from features.pose_estimation import estimate_poses
         except ImportError:
             raise DataError("video input needs the pose estimator", path) from None
         seq: PoseSequence = estimate_poses(path)

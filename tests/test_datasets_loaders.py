@@ -155,7 +155,7 @@ def test_video_without_estimator_or_bad_video(tmp_path: Path) -> None:
     video = tmp_path / "clip.mp4"
     video.write_bytes(b"not really a video")
     try:
-        from features.pose_estimation import estimate_poses  # type: ignore[attr-defined]  # noqa: F401
+        from features.pose_estimation import estimate_poses  # noqa: F401
     except ImportError:
         with pytest.raises(DataError, match="video input needs the pose estimator"):
             load_clip(video)
@@ -212,3 +212,15 @@ def test_iter_dataset_is_lazy(pose_files: Path) -> None:
     with pytest.raises(PosecbrError) as info:
         next(clips)
     assert info.value.source == str(pose_files / "broken.npz")
+
+
+def test_video_class_folder(shared_data: Path) -> None:
+    # videos/<class>/<clip>.mp4 is a class-folder dataset; the video runs through BlazePose.
+    pytest.importorskip("features.pose_estimation")
+    root = shared_data / "videos"
+    assert detect_kind(root) == "class_folders"
+    (clip,) = load_dataset(root, labels={"squat"})
+    assert clip.label == "squat" and clip.seq.fps == 5.0  # the squat clip is 5 fps
+    assert clip.seq.positions.shape[1:] == (33, 3)
+    hips = clip.seq.joints(["left_hip", "right_hip"])
+    assert np.isfinite(hips).any()
