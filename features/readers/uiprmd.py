@@ -4,18 +4,26 @@ Kinect files (``m01_s01_e01_positions.txt[.gz]`` with its ``..._angles.txt[.gz]`
 22 joints x 3 comma-separated columns per row, centimetres, y up. The Waist row is absolute;
 every other row is the offset of a joint from its parent in the parent's rotated frame, and the
 angles file holds three Euler angles (degrees) per joint. The rotation order is not documented
-upstream. We tested every order (both intrinsic and extrinsic, and applying the offset in the
-parent's or the joint's own frame) on real clips; the one kept below,
+upstream. We tried all 12 Euler orders on real clips (intrinsic and extrinsic, on the
+columns as stored), and for the plausible ones also the offset rotated by the joint's own
+rotation instead of its parent's, and the inverse rotations. The one kept below,
 ``R = Rz(c3) @ Ry(c2) @ Rx(c1)`` applied as ``pos(child) = R_global(parent) @ offset + pos(parent)``
-with ``R_global(child) = R_global(parent) @ R(child)``, was the only one that passed all checks:
-in deep squats the knees move forward of the hip-ankle line (96 % of bent frames; the other
-orders 43-94 %, mostly about 50 %, i.e. knees bending sideways or backwards), the ankles stay
-still while standing in shoulder abduction (0.3 cm mean drift, the other orders 0.8-2.2 cm),
-the left joints lie on the person's left as judged from where the toes point, and the head is
-about 1.4-1.6 m above the feet when standing. Bone lengths are not a discriminator: a rotated
-offset keeps its length, and Kinect re-estimates the offsets every frame (a thigh varies by a
-standard deviation of 1-3 cm within a clip). ``tests/test_readers_uiprmd.py`` repeats these
-checks.
+with ``R_global(child) = R_global(parent) @ R(child)`` (the order the data README inferred),
+is the only one that passed every check (16 clips per movement, subjects s01-s08):
+
+- left joints on the person's left (judged from where the toes point) in every frame: five
+  orders fail this outright (left/right agreement 4-81 % of frames);
+- in deep squats the bent knees move forward of the hip-ankle line: 96 % of bent frames; the
+  other orders that keep left and right 43-94 %, mostly about 50 % (knees bending sideways or
+  backwards);
+- the ankles stay still while standing in shoulder abduction: 0.3 cm mean drift, the other
+  orders 0.8-2.2 cm;
+- rotating the offset by the joint's own rotation puts the ankles 20-40 cm below the floor in
+  squats; the head is 1.4-1.6 m above the feet when standing.
+
+Bone lengths are not a discriminator: a rotated offset keeps its length, and Kinect
+re-estimates the offsets every frame (a thigh varies by a standard deviation of 1-3 cm within
+a clip). ``tests/test_readers_uiprmd.py`` repeats these checks.
 
 Kinect -> BlazePose (a joint Kinect does not track stays NaN):
 
