@@ -11,8 +11,9 @@ rotation instead of its parent's, and the inverse rotations. The one kept below,
 with ``R_global(child) = R_global(parent) @ R(child)`` (the order the data README inferred),
 is the only one that passed every check (16 clips per movement, subjects s01-s08):
 
-- left joints on the person's left (judged from where the toes point) in every frame: five
-  orders fail this outright (left/right agreement 4-81 % of frames);
+- shoulders on the correct side (the person's left judged from where the toes point), over
+  the deep squat and shoulder abduction clips: 99.6 % of frames; five orders fall to 81-95 %
+  on average and 46-72 % on their worst clip;
 - in deep squats the bent knees move forward of the hip-ankle line: 96 % of bent frames; the
   other orders that keep left and right 43-94 %, mostly about 50 % (knees bending sideways or
   backwards);
