@@ -19,6 +19,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.utils.validation import check_is_fitted
 
 from features.fluents import state_signals
 from features.poses import PoseSequence
@@ -288,13 +290,17 @@ def detect_signals(
     return DADResult(source, "ok", "", fps, duration, spans, detected, ranked, db.source, words)
 
 
-class DADClassifier:
+class DADClassifier(ClassifierMixin, BaseEstimator):
     """DAD with the scikit-learn classifier contract (X: a sequence of PoseSequence).
 
-    ``fit`` learns nothing but ``classes_``; ``predict`` maps the top-ranked ADD activity among
-    those standing for a known class to that class (activities for other datasets' labels are
-    ignored); a clip DAD cannot judge gets the first class. ``predict_proba`` spreads each
-    class's best activity score, normalised.
+    ``fit`` learns nothing but ``classes_`` (DAD needs no training data); ``predict`` maps the
+    top-ranked ADD activity among those standing for a known class to that class (activities
+    for other datasets' labels are ignored); a clip DAD cannot judge ("not enough data") gets
+    the first class. ``decision_function`` gives each class its best activity's score;
+    ``predict_proba`` normalises those scores.
+
+    add: an :class:`ADD`, a path to an ADD file, or None for the shipped one; window_s and
+    step_s: the sliding windows (see :class:`DADConfig`).
     """
 
     def __init__(
@@ -304,56 +310,41 @@ class DADClassifier:
         self.window_s = window_s
         self.step_s = step_s
 
-    def get_params(self, deep: bool = True) -> dict[str, Any]:
-        return {"add": self.add, "window_s": self.window_s, "step_s": self.step_s}
-
-    def set_params(self, **params: Any) -> DADClassifier:
-        for k, v in params.items():
-            if k not in self.get_params():
-                raise ValueError(f"invalid parameter {k!r} for DADClassifier")
-            setattr(self, k, v)
-        return self
-
     def fit(self, X: Sequence[PoseSequence], y: Sequence[Any]) -> DADClassifier:
         labels = np.asarray(list(y))
         if len(labels) != len(X):
             raise ValueError(f"X has {len(X)} clips but y has {len(labels)} labels")
         self.classes_ = np.unique(labels)
-        db = self.add if isinstance(self.add, ADD) else load_add(self.add)
-        self.add_ = db
+        self.add_ = self.add if isinstance(self.add, ADD) else load_add(self.add)
+        self.config_ = DADConfig(window_s=self.window_s, step_s=self.step_s)
         return self
 
     def _class_scores(self, seq: PoseSequence) -> np.ndarray:
-        result = detect(seq, self.add_, DADConfig(window_s=self.window_s, step_s=self.step_s))
+        result = detect(seq, self.add_, self.config_)
         classes = [str(c) for c in self.classes_]
         scores = np.full(len(classes), -1.0)
         for rank, act in enumerate(result.activities):
-            value = act.score if np.isfinite(act.score) else -1.0
+            if not np.isfinite(act.score):
+                continue
+            # The rank breaks ties between equal ratios (more matched weight ranks first).
+            key = act.score - 1e-6 * rank
             for label in act.labels:
                 if label in classes:
                     i = classes.index(label)
-                    # Rank order breaks ties between equal ratios (more matched weight first).
-                    key = value - 1e-6 * rank
                     scores[i] = max(scores[i], key)
         return scores
 
     def decision_function(self, X: Sequence[PoseSequence]) -> np.ndarray:
-        """Best activity score per class, ``(n_clips, n_classes)`` (-1 when no activity)."""
-        if not hasattr(self, "classes_"):
-            raise AttributeError("DADClassifier is not fitted; call fit(X, y) first")
-        return (
-            np.stack([self._class_scores(seq) for seq in X])
-            if len(X)
-            else np.zeros((0, len(self.classes_)))
-        )
+        """Best activity score per class, ``(n_clips, n_classes)``; -1 where no activity."""
+        check_is_fitted(self, "classes_")
+        if len(X) == 0:
+            return np.zeros((0, len(self.classes_)))
+        return np.stack([self._class_scores(seq) for seq in X])
 
     def predict(self, X: Sequence[PoseSequence]) -> np.ndarray:
-        scores = self.decision_function(X)
+        scores = self.decision_function(X)  # checks fitted before classes_ is read
         return self.classes_[np.argmax(scores, axis=1)]
 
     def predict_proba(self, X: Sequence[PoseSequence]) -> np.ndarray:
         scores = np.clip(self.decision_function(X), 0.0, None) + 1e-9
         return scores / scores.sum(axis=1, keepdims=True)
-
-    def score(self, X: Sequence[PoseSequence], y: Sequence[Any]) -> float:
-        return float(np.mean(self.predict(X) == np.asarray(list(y))))

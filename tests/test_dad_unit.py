@@ -72,3 +72,18 @@ def test_malformed_add_is_a_config_error(tmp_path: Path) -> None:
     )
     with pytest.raises(ConfigError, match="unknown signal 'left_wing'"):
         detect(_still(2.0), add=path)
+
+
+def test_classifier_follows_the_sklearn_contract() -> None:
+    from sklearn.base import clone
+
+    clf = clone(DADClassifier(window_s=3.0))
+    assert clf.get_params() == {"add": None, "window_s": 3.0, "step_s": 1.0}
+    with pytest.raises(AttributeError, match="not fitted"):
+        clf.predict([_still(2.0)])
+    X, y = [_still(2.0), _still(2.5)], ["standing_shoulder_abduction", "squat"]
+    clf.fit(X, y)
+    assert list(clf.classes_) == ["squat", "standing_shoulder_abduction"]
+    pred = clf.predict(X)
+    assert set(pred) <= set(clf.classes_)
+    assert clf.score(X, y) == np.mean(pred == np.asarray(y))
