@@ -283,3 +283,124 @@ def fluent_confidences(
                 blk[STILL, i] = blk[STILL, i] * ((1.0 - blk[M_LO, j]) * (1.0 - blk[M_HI, j]))
         for j in range(n_cols):
             out[f, j] = blk[col_code[j], col_fluent[j]]
+
+
+# ---------------------------------------------------------------------------------------------
+# State signals (features.signals): the body frame, 22 angles and the near distances per frame.
+# Each helper repeats the float operations of features.geometry in the same order (cross
+# product terms, a·b summed left to right), so the two backends agree to the last bit or two.
+
+Vec = tuple[float, float, float]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _get(p: np.ndarray, f: int, j: int) -> Vec:
+    return (p[f, j, 0], p[f, j, 1], p[f, j, 2])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _sub(a: Vec, b: Vec) -> Vec:
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _mid(a: Vec, b: Vec) -> Vec:
+    return (0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _dot(a: Vec, b: Vec) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _cross(a: Vec, b: Vec) -> Vec:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _unit(v: Vec, min_len: float) -> Vec:
+    n = math.sqrt(_dot(v, v))
+    if n >= min_len:
+        return (v[0] / n, v[1] / n, v[2] / n)
+    return (np.nan, np.nan, np.nan)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _project(v: Vec, n: Vec) -> Vec:
+    d = _dot(v, n)
+    return (v[0] - d * n[0], v[1] - d * n[1], v[2] - d * n[2])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _angle(u: Vec, v: Vec, min_len: float) -> float:
+    nu = math.sqrt(_dot(u, u))
+    nv = math.sqrt(_dot(v, v))
+    if nu >= min_len and nv >= min_len:
+        return math.acos(min(max(_dot(u, v) / (nu * nv), -1.0), 1.0))
+    return np.nan
+
+
+@njit(cache=True, nogil=True)
+def state_signal_values(
+    p: np.ndarray, joints: np.ndarray, near_a: np.ndarray, near_b: np.ndarray,
+    min_len: float, values: np.ndarray, head_length: np.ndarray, dist_m: np.ndarray,
+) -> None:  # fmt: skip
+    """Fill the signals of :func:`features.signals.state_signals` from canonical positions.
+
+    p: ``(frames, 33, 3)``; joints: canonical indices of (nose, left/right ear, shoulder,
+    elbow, wrist, hip, knee, ankle) in that order; near_a/near_b: ``(n_pairs,)`` joint indices.
+    Writes values ``(frames, 22 + n_pairs)`` (angles in ANGLE_SIGNALS order, then distances in
+    head-lengths), head_length ``(frames,)`` metres and dist_m ``(frames, n_pairs)`` metres.
+    """
+    up_w = (0.0, 1.0, 0.0)
+    n_pairs = near_a.shape[0]
+    for f in range(p.shape[0]):
+        nose = _get(p, f, joints[0])
+        ls, rs = _get(p, f, joints[3]), _get(p, f, joints[4])
+        lh, rh = _get(p, f, joints[9]), _get(p, f, joints[10])
+        neck = _mid(ls, rs)
+        mid_hip = _mid(lh, rh)
+        mid_ear = _mid(_get(p, f, joints[1]), _get(p, f, joints[2]))
+        forward = _unit(_cross(_sub(rs, ls), _sub(lh, ls)), min_len)
+        up = _unit(_sub(neck, mid_hip), min_len)
+        left = _unit(_cross(up, forward), min_len)
+        level_left = _unit(_project(left, up_w), min_len)
+        heading = _unit(_cross(level_left, up_w), min_len)
+        for side in range(2):
+            sh, el = _get(p, f, joints[3 + side]), _get(p, f, joints[5 + side])
+            wr, hip = _get(p, f, joints[7 + side]), _get(p, f, joints[9 + side])
+            kn, an = _get(p, f, joints[11 + side]), _get(p, f, joints[13 + side])
+            s = 1.0 if side == 0 else -1.0
+            outward = (s * left[0], s * left[1], s * left[2])
+            arm, leg = _sub(el, sh), _sub(kn, hip)
+            values[f, 0 + side] = _angle(_sub(sh, el), _sub(wr, el), min_len)
+            values[f, 2 + side] = _angle(_sub(hip, kn), _sub(an, kn), min_len)
+            values[f, 4 + side] = _angle(_sub(el, sh), _sub(hip, sh), min_len)
+            values[f, 6 + side] = _angle(_sub(kn, hip), _sub(sh, hip), min_len)
+            values[f, 8 + side] = _angle(_project(arm, left), forward, min_len)
+            values[f, 10 + side] = _angle(_project(leg, left), forward, min_len)
+            values[f, 12 + side] = _angle(_project(arm, forward), outward, min_len)
+            values[f, 14 + side] = _angle(_project(leg, forward), outward, min_len)
+        head = _sub(mid_ear, neck)
+        torso = _sub(neck, mid_hip)
+        values[f, 16] = _angle(_project(head, left), forward, min_len)
+        values[f, 17] = _angle(_project(head, forward), left, min_len)
+        values[f, 18] = _angle(_project(torso, level_left), heading, min_len)
+        values[f, 19] = _angle(_project(torso, heading), level_left, min_len)
+        values[f, 20] = _angle(
+            _project(_sub(nose, neck), up), _project(_sub(ls, neck), up), min_len
+        )
+        values[f, 21] = _angle(
+            _project(_sub(lh, mid_hip), up), _project(forward, up), min_len
+        )
+        e = _sub(mid_ear, neck)
+        hl = 2.0 * math.sqrt(_dot(e, e))
+        if not hl > 0.0:
+            hl = np.nan
+        head_length[f] = hl
+        for k in range(n_pairs):
+            d = _sub(_get(p, f, near_a[k]), _get(p, f, near_b[k]))
+            dm = math.sqrt(_dot(d, d))
+            dist_m[f, k] = dm
+            values[f, 22 + k] = dm / hl

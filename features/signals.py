@@ -9,10 +9,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache
+from typing import Literal
 
 import numpy as np
 
-from .geometry import angle_between, body_frame, joint_angle, norm, project
+from posecbr.errors import ConfigError
+
+from .geometry import MIN_LINK_M, angle_between, body_frame, joint_angle, norm, project
 from .poses import PoseSequence
 from .skeleton import JOINT_INDEX
 
@@ -162,9 +165,48 @@ _NEAR_B = np.array([JOINT_INDEX[b] for _, b in near_pairs()])
 NEAR_SIGNALS: tuple[str, ...] = tuple(near_signal_name(a, b) for a, b in near_pairs())
 
 
-def state_signals(seq: PoseSequence) -> StateSignals:
-    """Every fluent's angle and distance for every frame of ``seq`` (any joint set)."""
+_KERNEL_JOINTS = np.array(
+    [JOINT_INDEX[name] for name in ("nose", "left_ear", "right_ear")]
+    + [JOINT_INDEX[f"{side}_{part}"]
+       for part in ("shoulder", "elbow", "wrist", "hip", "knee", "ankle") for side in SIDES],
+    dtype=np.intp,
+)  # fmt: skip
+
+
+def _numba_available() -> bool:
+    try:
+        import numba  # noqa: F401
+    except ImportError:  # pragma: no cover - numba is a dependency; fall back if it is absent
+        return False
+    return True
+
+
+def state_signals(
+    seq: PoseSequence, backend: Literal["auto", "numba", "numpy"] = "auto"
+) -> StateSignals:
+    """Every fluent's angle and distance for every frame of ``seq`` (any joint set).
+
+    ``backend``: ``"numba"`` one compiled pass over the frames
+    (:func:`features._fluent_kernels.state_signal_values`), ``"numpy"`` the whole-array
+    reference built from :mod:`features.geometry`; ``"auto"`` numba when installed.
+    """
     p = seq.to_canonical().positions
+    if backend == "auto":
+        backend = "numba" if _numba_available() else "numpy"
+    if backend == "numba":
+        from ._fluent_kernels import state_signal_values
+
+        p = np.ascontiguousarray(p, dtype=np.float64)
+        frames = p.shape[0]
+        values = np.empty((frames, len(ANGLE_SIGNALS) + len(NEAR_SIGNALS)))
+        head_length = np.empty(frames)
+        dist_m = np.empty((frames, len(NEAR_SIGNALS)))
+        state_signal_values(
+            p, _KERNEL_JOINTS, _NEAR_A, _NEAR_B, MIN_LINK_M, values, head_length, dist_m
+        )
+        return StateSignals(ANGLE_SIGNALS + NEAR_SIGNALS, values, seq.fps, head_length, dist_m)
+    if backend != "numpy":
+        raise ConfigError(f"unknown signal backend {backend!r} (known: auto, numba, numpy)")
     angles = _angles(p)
     mid_ear = 0.5 * (p[:, JOINT_INDEX["left_ear"]] + p[:, JOINT_INDEX["right_ear"]])
     neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])

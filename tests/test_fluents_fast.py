@@ -157,3 +157,48 @@ def test_results_share_no_writable_state() -> None:
     with pytest.raises(ValueError):
         first.temporal[0] = not first.temporal[0]  # layout arrays are shared, so read-only
     assert first.confidence.flags.writeable
+
+
+def _assert_same_signals(seq: PoseSequence) -> None:
+    fast = state_signals(seq, backend="numba")
+    ref = state_signals(seq, backend="numpy")
+    assert fast.names == ref.names
+    for a, b in ((fast.values, ref.values), (fast.head_length_m, ref.head_length_m),
+                 (fast.distances_m, ref.distances_m)):  # fmt: skip
+        np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
+    ok = ~np.isnan(ref.values)
+    n_angles = len(ANGLE_SIGNALS)
+    # Distances: the same sums of squares, to a couple of ulps.
+    np.testing.assert_allclose(fast.distances_m, ref.distances_m, rtol=1e-15, atol=0)
+    np.testing.assert_allclose(fast.values[:, n_angles:], ref.values[:, n_angles:], rtol=1e-15)
+    # Angles: arccos magnifies a last-bit difference in cos by 1/sin θ (and to √(2·ulp) ≈
+    # 1.5e-8 at θ = 0 or π exactly), so the bound follows the conditioning.
+    a, b = fast.values[:, :n_angles], ref.values[:, :n_angles]
+    sin = np.sin(np.where(ok[:, :n_angles], b, 1.0))
+    bound = np.where(sin > 1e-3, 1e-12, 2e-8)
+    assert np.all(np.abs(a - b)[ok[:, :n_angles]] <= bound[ok[:, :n_angles]])
+
+
+def test_fast_signals_equal_reference_on_synthetic_bodies() -> None:
+    rng = np.random.default_rng(3)
+    base = to_sequence(*([standing()] * 60), fps=30.0)
+    pos = base.positions + np.cumsum(rng.normal(0.0, 0.01, base.positions.shape), axis=0)
+    pos[7, 11, :] = np.nan  # a lost shoulder: the body frame is unavailable in that frame
+    pos[9, 13, :] = pos[9, 11, :]  # a zero-length upper arm
+    pos[:, 30, :] = np.nan  # a joint the skeleton lacks
+    _assert_same_signals(PoseSequence(pos, base.joint_names, 30.0))
+    _assert_same_signals(to_sequence(standing(), fps=30.0))  # exactly straight limbs (θ = π)
+
+
+def test_fast_signals_equal_reference_on_real_clips(shared_data: Path) -> None:
+    seg = shared_data / "ui-prmd" / "data" / "Segmented Movements"
+    name = "m07_s01_e01_positions.txt.gz"
+    _assert_same_signals(read_uiprmd_kinect(seg / "Kinect" / "Positions" / name))
+    _assert_same_signals(read_uiprmd_vicon(seg / "Vicon" / "Positions" / name))
+    amc = sorted((shared_data / "hdm05" / "train").glob("*/HDM_bd_squat1Reps_*_120.amc"))[0]
+    _assert_same_signals(read_asf_amc(amc.parent / "HDM_bd.asf", amc))
+
+
+def test_unknown_signal_backend_is_a_config_error() -> None:
+    with pytest.raises(ConfigError, match="backend"):
+        state_signals(_dummy_seq(2, 30.0), backend="gpu")  # type: ignore[arg-type]
