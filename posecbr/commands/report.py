@@ -1,0 +1,34 @@
+"""``posecbr report RESULTS --out report.html``: one self-contained HTML page of a comparison."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "report",
+        help="turn `posecbr compare` results into one self-contained HTML page",
+        description="Render the results of `posecbr compare` (its --out folder or --json file) "
+        "as one HTML page with the table, the pictures inlined and explanations of "
+        "misclassified clips. Pictures missing from a --json-only run are drawn from the "
+        "results (accuracy, confusion matrices).",
+    )
+    p.add_argument("results", type=Path, help="compare --out folder or results JSON file")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=Path("report.html"),
+        metavar="HTML",
+        help="where to write the page (default report.html)",
+    )
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from cbr.report import write_report
+
+    dest = write_report(args.results, args.out)
+    print(f"report written to {dest}")
+    return 0
