@@ -124,17 +124,29 @@ def test_euclidean_on_binary_vectors_counts_mismatches() -> None:
 def test_signature_matches_iisignature_on_hand_augmented_path() -> None:
     rng = np.random.default_rng(3)
     x = rng.normal(size=(2, 7, 2))
-    m = Signature(depth=3, time=True, lead_lag=False)
-    t = np.linspace(0, 1, 7)
-    want = np.stack([iisignature.sig(np.column_stack([t, xi]), 3) for xi in x])
+    m = Signature(depth=3, time=True, lead_lag=False, basepoint=True)
+    t = np.linspace(0, 1, 8)  # basepoint: the origin first, then the 7 samples
+    want = np.stack(
+        [iisignature.sig(np.column_stack([t, np.vstack([[0.0, 0.0], xi])]), 3) for xi in x]
+    )
     np.testing.assert_allclose(m.represent(x), want, rtol=1e-12)
+    plain = Signature(depth=2, time=False, basepoint=False).represent(x)
+    np.testing.assert_allclose(plain, np.stack([iisignature.sig(xi, 2) for xi in x]), rtol=1e-12)
+
+
+def test_basepoint_makes_held_levels_visible() -> None:
+    # level 1 of a signature is the total increment: without a basepoint a state held at 0.9
+    # all clip long looks like one never seen; with it, level 1 is the final value
+    held = np.full((1, 10, 1), 0.9)
+    assert Signature(depth=1, time=False, basepoint=False).represent(held)[0, 0] == 0.0
+    assert Signature(depth=1, time=False, basepoint=True).represent(held)[0, 0] == 0.9
 
 
 def test_lead_lag_signature_area_is_quadratic_variation() -> None:
     # For the lead-lag path of x, the level-2 terms satisfy S(lead,lag) - S(lag,lead) =
     # sum of squared increments (the quadratic variation), a classical identity.
     x = np.array([[1.0], [2.0], [4.0], [3.0]])
-    sig = Signature(depth=2, time=False, lead_lag=True).represent(x[None])[0]
+    sig = Signature(depth=2, time=False, lead_lag=True, basepoint=False).represent(x[None])[0]
     # channels (lead, lag): level 2 terms follow the 2 level-1 terms, order 11, 12, 21, 22
     s12, s21 = sig[2 + 1], sig[2 + 2]
     assert s12 - s21 == pytest.approx(1 + 4 + 1)

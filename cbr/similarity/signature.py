@@ -1,7 +1,9 @@
 """Path signatures (iisignature) compared by Euclidean distance.
 
 A problem sequence ``(frames, channels)`` becomes a path; optional augmentations:
-``time`` adds a channel running 0 -> 1 (makes the signature see speed/parametrisation),
+``basepoint`` prepends the origin (signatures are translation invariant; without it a state
+held the whole clip, e.g. an arm raised throughout, would be invisible), ``time`` adds a
+channel running 0 -> 1 (makes the signature see speed/parametrisation),
 ``lead_lag`` doubles the channels with the lead-lag transform (level 2 then carries the
 quadratic variation). The truncated signature up to ``depth`` has
 ``sum_{m=1..depth} d^m`` terms for ``d`` path channels; signatures are cached per case in the
@@ -30,9 +32,13 @@ def lead_lag(paths: np.ndarray) -> np.ndarray:
     return np.concatenate([lead, lag], axis=2)
 
 
-def augment(paths: np.ndarray, *, time: bool, lead_lag_: bool) -> np.ndarray:
-    """Apply lead-lag then time augmentation to ``(n, L, d)`` paths."""
+def augment(
+    paths: np.ndarray, *, time: bool, lead_lag_: bool, basepoint: bool = False
+) -> np.ndarray:
+    """Apply basepoint, lead-lag then time augmentation to ``(n, L, d)`` paths."""
     p = np.asarray(paths, dtype=np.float64)
+    if basepoint:  # start every path at the origin: the signature then sees absolute levels
+        p = np.concatenate([np.zeros_like(p[:, :1]), p], axis=1)
     if lead_lag_:
         p = lead_lag(p)
     if time:
@@ -49,6 +55,7 @@ class Signature(SimilarityMeasure):
     depth: int = 2
     time: bool = True
     lead_lag: bool = False
+    basepoint: bool = True
 
     def __post_init__(self) -> None:
         if not 1 <= int(self.depth) <= 6:
@@ -57,7 +64,7 @@ class Signature(SimilarityMeasure):
     def cache_kind(self, problem_shape: tuple[int, ...]) -> str | None:
         return (
             f"signature:depth={int(self.depth)},time={int(bool(self.time))},"
-            f"lead_lag={int(bool(self.lead_lag))}"
+            f"lead_lag={int(bool(self.lead_lag))},basepoint={int(bool(self.basepoint))}"
         )
 
     def represent(self, problems: np.ndarray) -> np.ndarray:
@@ -70,7 +77,9 @@ class Signature(SimilarityMeasure):
                 f"signature compares sequences (n, frames, channels), got {p.shape}",
                 "similarity signature",
             )
-        path = np.ascontiguousarray(augment(p, time=self.time, lead_lag_=self.lead_lag))
+        path = np.ascontiguousarray(
+            augment(p, time=self.time, lead_lag_=self.lead_lag, basepoint=self.basepoint)
+        )
         if len(path) == 0:
             return np.zeros((0, iisignature.siglength(path.shape[2], int(self.depth))))
         return np.asarray(iisignature.sig(path, int(self.depth)), dtype=np.float64)
