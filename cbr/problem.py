@@ -135,7 +135,7 @@ def _qmp(seq: PoseSequence) -> Any:
     res = _QMP_CACHE.get(seq)
     if res is None:
         try:
-            from features.qmp import qmp_features  # type: ignore[attr-defined]
+            from features.qmp import qmp_features
         except ImportError:
             raise ConfigError(
                 "the QMP feature level is not available in this build yet "
@@ -220,8 +220,10 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
                 tuple(str(n).replace("_", " ") for n in q.binary_names),
                 "qmp",
             )
+        # parameters not observable in this clip (NaN) get the configured fill value
+        vals = np.nan_to_num(np.asarray(q.values, dtype=np.float64), nan=float(config.fill))
         return Problem(
-            np.asarray(q.values, dtype=np.float64),
+            vals,
             tuple(q.names),
             tuple(str(n).replace("_", " ") for n in q.names),
             "qmp",
