@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.ndimage import binary_erosion
 
 from posecbr.errors import ConfigError
 
@@ -384,25 +385,27 @@ def fit_signals(
 
     filled = fill_short_gaps(values, int(round(cfg.max_gap_s * fps)))
     finite = np.isfinite(filled)
-    # Differentiate the whole clip once (NaN spreads only to its neighbourhood).
+    # Differentiate the whole clip once. Frames within half a smoothing window of a remaining
+    # gap would see the placeholder zeros, so they count as missing too.
     safe = np.where(finite, filled, 0.0)
     xdot = cfg.differentiation(safe, fps)
     smooth = cfg.differentiation.smooth(safe, fps)
+    reach = np.ones((cfg.differentiation.window_frames(fps), 1), dtype=bool)
+    valid = binary_erosion(finite, structure=reach, border_value=1)
     # Windows are equally long: stack (window, signal) into columns sharing one basis.
     idx = windows[:, :1] + np.arange(win_frames)[None, :]  # (W, F)
-    ok_data = finite[idx].all(axis=1)  # (W, S)
-    seg = smooth[idx]  # (W, F, S)
-    seg_raw = filled[idx]
-    ptp = np.where(ok_data, np.ptp(np.where(finite[idx], seg_raw, 0.0), axis=1), np.nan)
-    flat = ok_data & (ptp < cfg.flat_tolerance)
+    ok_data = valid[idx].all(axis=1)  # (W, S)
+    seg = np.where(ok_data[:, None, :], smooth[idx], 0.0)  # (W, F, S), smoothed
+    raw_ptp = np.ptp(np.where(ok_data[:, None, :], filled[idx], 0.0), axis=1)
+    flat = ok_data & (raw_ptp < cfg.flat_tolerance)
     fit_mask = ok_data & ~flat
 
-    with np.errstate(invalid="ignore"):
-        q["mean"][ok_data] = seg_raw.mean(axis=1)[ok_data]
-        q["min"][ok_data] = seg_raw.min(axis=1)[ok_data]
-        q["max"][ok_data] = seg_raw.max(axis=1)[ok_data]
-        q["range"][ok_data] = ptp[ok_data]
-        q["net_change"][ok_data] = (seg[:, -1] - seg[:, 0])[ok_data]
+    # Levels come from the smoothed signal: single-frame tracking spikes would set min/max.
+    q["mean"][ok_data] = seg.mean(axis=1)[ok_data]
+    q["min"][ok_data] = seg.min(axis=1)[ok_data]
+    q["max"][ok_data] = seg.max(axis=1)[ok_data]
+    q["range"][ok_data] = np.ptp(seg, axis=1)[ok_data]
+    q["net_change"][ok_data] = (seg[:, -1] - seg[:, 0])[ok_data]
     status[ok_data] = OK
     status[flat] = FLAT
     for name in ("amplitude", "trend", "accel"):
