@@ -68,6 +68,9 @@ def run(args: argparse.Namespace) -> int:
 
     if args.top < 0:
         raise PosecbrError(f"--top must be >= 0, got {args.top}")
+    for flag, value in (("--window", args.window), ("--step", args.step)):
+        if not value > 0:
+            raise PosecbrError(f"{flag} must be > 0 seconds, got {value}")
     add = load_add(args.add)
     config = DADConfig(window_s=args.window, step_s=args.step)
     seq = _load(args.posefile)
