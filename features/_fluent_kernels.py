@@ -41,7 +41,7 @@ def _lower(x: float, lo_edge: float, hi_edge: float, tau: float, k: float) -> fl
     return 1.0 / (1.0 + math.exp(k * (x - tau)))  # NaN stays NaN
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _kind_lower(d: float, lo_edge: float, hi_edge: float) -> int:
     """What C_lower(d) is, without computing it."""
     if d != d:
@@ -53,7 +53,7 @@ def _kind_lower(d: float, lo_edge: float, hi_edge: float) -> int:
     return _BAND
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _log_c(d: float, q: np.ndarray, direction: int) -> float:
     """log C of a Δ inside the band of one direction (0: toward s0, 1: toward sn)."""
     off = 4 * direction
@@ -293,32 +293,32 @@ def fluent_confidences(
 Vec = tuple[float, float, float]
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _get(p: np.ndarray, f: int, j: int) -> Vec:
     return (p[f, j, 0], p[f, j, 1], p[f, j, 2])
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _sub(a: Vec, b: Vec) -> Vec:
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _mid(a: Vec, b: Vec) -> Vec:
     return (0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]))
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _dot(a: Vec, b: Vec) -> float:
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _cross(a: Vec, b: Vec) -> Vec:
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _unit(v: Vec, min_len: float) -> Vec:
     n = math.sqrt(_dot(v, v))
     if n >= min_len:
@@ -326,13 +326,13 @@ def _unit(v: Vec, min_len: float) -> Vec:
     return (np.nan, np.nan, np.nan)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _project(v: Vec, n: Vec) -> Vec:
     d = _dot(v, n)
     return (v[0] - d * n[0], v[1] - d * n[1], v[2] - d * n[2])
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _angle(u: Vec, v: Vec, min_len: float) -> float:
     nu = math.sqrt(_dot(u, u))
     nv = math.sqrt(_dot(v, v))
