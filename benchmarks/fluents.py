@@ -271,8 +271,8 @@ def _compile_seconds() -> dict[str, float]:
             res = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT,
                                  capture_output=True, text=True, check=True)  # fmt: skip
             out[key] = float(res.stdout.strip().splitlines()[-1])
-    code_np = code.replace("evaluate(PoseSequence(p, BLAZEPOSE_33, 30.0))",
-                           "evaluate(PoseSequence(p, BLAZEPOSE_33, 30.0), backend='numpy')")  # fmt: skip
+    call = "evaluate(PoseSequence(p, BLAZEPOSE_33, 30.0)"
+    code_np = code.replace(call + ")", call + ", backend='numpy')")
     res = subprocess.run([sys.executable, "-c", code_np], cwd=ROOT,
                          capture_output=True, text=True, check=True)  # fmt: skip
     out["numpy_backend_s"] = float(res.stdout.strip().splitlines()[-1])
@@ -375,7 +375,8 @@ def _print_table(rows: list[dict[str, Any]]) -> None:
             fps = r[f"{stage}_fps"]
             print(f"{r['sequence']:<34}{r['frames']:>8}  {stage:<9}{fps['numba']:>12,.0f}"
                   f"{fps['numpy']:>12,.0f}{fps['naive']:>10,.0f}"
-                  f"{fps['numba'] / fps['numpy']:>12.1f}x{fps['numba'] / fps['naive']:>12.0f}x")  # fmt: skip
+                  f"{fps['numba'] / fps['numpy']:>12.1f}x"
+                  f"{fps['numba'] / fps['naive']:>12.0f}x")  # fmt: skip
         print(f"{'':<34}{'':>8}  {'both':<9}{r['end_to_end_fps_numba']:>12,.0f}"
               f"   (max |numba-numpy| {r['max_abs_diff_numba_vs_numpy']:.1e},"
               f" |naive-numpy| {r['max_abs_diff_naive_vs_numpy']:.1e})")  # fmt: skip

@@ -27,10 +27,6 @@ from numba import njit
 # Output column codes (one per state column), shared with features.fluents.
 LO, MID, HI, TWO_HI, TOUCH, M_LO, M_HI, STILL = range(8)
 
-# Kinds of factor in the temporal product.
-_NAN, _ZERO, _ONE, _BAND = 0, 1, 2, 3
-
-
 @njit(cache=True, nogil=True, inline="always")
 def _lower(x: float, lo_edge: float, hi_edge: float, tau: float, k: float) -> float:
     """Paper eq. 2 for one value: 1 below the band, 0 above, logistic inside, NaN for NaN."""
@@ -39,18 +35,6 @@ def _lower(x: float, lo_edge: float, hi_edge: float, tau: float, k: float) -> fl
     if x > hi_edge:
         return 0.0
     return 1.0 / (1.0 + math.exp(k * (x - tau)))  # NaN stays NaN
-
-
-@njit(cache=True, nogil=True)
-def _kind_lower(d: float, lo_edge: float, hi_edge: float) -> int:
-    """What C_lower(d) is, without computing it."""
-    if d != d:
-        return _NAN
-    if d < lo_edge:
-        return _ONE
-    if d > hi_edge:
-        return _ZERO
-    return _BAND
 
 
 @njit(cache=True, nogil=True)
@@ -63,32 +47,34 @@ def _log_c(d: float, q: np.ndarray, direction: int) -> float:
 
 @njit(cache=True, nogil=True)
 def _product(
-    deltas: np.ndarray, n_age: int, q: np.ndarray, direction: int, inv: np.ndarray,
-    kinds: np.ndarray,
-) -> float:  # fmt: skip
-    """Eq. 5 over the ``n_age`` defined ages of ``deltas`` (fractional-lag path)."""
+    deltas: np.ndarray, n_age: int, motion: np.ndarray, i: int, direction: int, inv: np.ndarray
+) -> float:
+    """Eq. 5 over the ``n_age`` defined ages of ``deltas`` (fractional-lag path), fluent i."""
     off = 4 * direction
-    has_nan = False
-    has_zero = False
-    has_band = False
+    e0, e1 = motion[i, off], motion[i, off + 1]
+    total = 0.0
+    pending = 0
     for a in range(n_age):
-        kd = _kind_lower(deltas[a], q[off], q[off + 1])
-        if direction == 1 and kd != _NAN and kd != _BAND:
-            kd = _ZERO if kd == _ONE else _ONE  # upper = 1 - lower
-        kinds[a] = kd
-        has_nan |= kd == _NAN
-        has_zero |= kd == _ZERO
-        has_band |= kd == _BAND
-    if has_nan:
-        return np.nan
-    if has_zero:
+        d = deltas[a]
+        # log C, or +1 = inside the band (log still to compute); see _temporal_integer
+        if direction == 0:
+            v = d if d != d else (0.0 if d < e0 else (-np.inf if d > e1 else 1.0))
+        else:
+            v = d if d != d else (-np.inf if d < e0 else (0.0 if d > e1 else 1.0))
+        pending += v > 0.0
+        total += v * inv[a]
+    if total == -np.inf:
         return 0.0
-    if not has_band:
-        return 1.0
+    if total != total:
+        return np.nan
+    if pending == 0:
+        return 1.0 if total == 0.0 else math.exp(total)
     total = 0.0
     for a in range(n_age):
-        if kinds[a] == _BAND:
-            total += _log_c(deltas[a], q, direction) * inv[a]
+        d = deltas[a]
+        if d < e0 or d > e1:
+            continue  # a factor of 1 (a zero would have returned above)
+        total += _log_c(d, motion[i], direction) * inv[a]
     return math.exp(total)
 
 
@@ -209,7 +195,6 @@ def fluent_confidences(
     s_hi = np.empty(window + 1, dtype=np.intp)
     s_w = np.empty(window + 1)
     s_ok = np.empty(window + 1, dtype=np.bool_)
-    kinds = np.empty(window, dtype=np.intp)
     slots = np.empty(window, dtype=np.intp)
     total = np.empty(n)
     pending = np.empty(n)
@@ -268,9 +253,8 @@ def fluent_confidences(
                         break
                     deltas[a] = samples[a] - samples[a + 1]
                     n_age += 1
-                q = motion[i]
                 for direction in range(2):
-                    blk[M_LO + direction, i] = _product(deltas, n_age, q, direction, inv, kinds)
+                    blk[M_LO + direction, i] = _product(deltas, n_age, motion, i, direction, inv)
         for i in range(n):
             t_lo = blk[M_LO, i]
             t_hi = blk[M_HI, i]
