@@ -168,6 +168,9 @@ def make_pictures(results: dict[str, Any], out_dir: str | Path) -> dict[str, Any
         return pics
     pics["accuracy"] = plot_accuracy(results, out / "accuracy.png").name
     chosen: list[str] = []
+    cbr = [m for m in results["methods"] if m["status"] == "ok" and m["kind"] == "cbr"]
+    if cbr:  # the best case-base configuration, whatever beats it
+        chosen.append(max(cbr, key=lambda m: (m["accuracy"], m["macro_f1"]))["name"])
     for key in ("best_interpretable", "best"):
         if results.get(key) and results[key] not in chosen:
             chosen.append(results[key])

@@ -1,0 +1,80 @@
+"""Statistics of `posecbr compare` against published and hand-computed values, and against
+scikit-learn."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sklearn.metrics import f1_score
+
+from cbr.compare import bootstrap_macro_f1, macro_f1, mcnemar_exact, wilson_interval
+
+
+@pytest.mark.parametrize(
+    ("k", "n", "lo", "hi"),
+    [
+        # Newcombe (1998), "Two-sided confidence intervals for the single proportion",
+        # Stat. Med. 17:857-872, table I, method 3 (Wilson score, no continuity correction).
+        (81, 263, 0.2553, 0.3662),
+        (15, 148, 0.0624, 0.1605),
+        (0, 20, 0.0, 0.1611),
+        (1, 29, 0.0061, 0.1718),
+        # By hand, z = 1.95996: centre (0.8 + z^2/20) / (1 + z^2/10) = 0.71674, half-width
+        # z / (1 + z^2/10) * sqrt(0.016 + z^2/400) = 0.22658.
+        (8, 10, 0.4902, 0.9433),
+    ],
+)
+def test_wilson_interval_matches_published_values(k: int, n: int, lo: float, hi: float) -> None:
+    got = wilson_interval(k, n)
+    assert got == pytest.approx((lo, hi), abs=1e-4)
+
+
+def test_wilson_interval_empty_sample_is_undefined() -> None:
+    assert all(np.isnan(wilson_interval(0, 0)))
+
+
+@pytest.mark.parametrize(
+    ("b", "c", "p"),
+    [
+        (1, 9, 22 / 1024),  # 2 * (C(10,0) + C(10,1)) / 2^10
+        (9, 1, 22 / 1024),  # symmetric
+        (0, 5, 2 / 32),  # 2 * 0.5^5
+        (3, 3, 1.0),  # no evidence either way
+        (0, 0, 1.0),  # no discordant pair
+        (2, 12, 2 * (1 + 14 + 91) / 2**14),  # 2 * sum_{i<=2} C(14, i) / 2^14
+    ],
+)
+def test_mcnemar_exact_against_hand_computed_binomial_tails(b: int, c: int, p: float) -> None:
+    assert mcnemar_exact(b, c) == pytest.approx(p, rel=1e-12)
+
+
+def test_macro_f1_equals_scikit_learn() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        t = rng.integers(0, 5, 60)
+        p = np.where(rng.random(60) < 0.7, t, rng.integers(0, 6, 60))  # class 5: never true
+        want = f1_score(t, p, average="macro", labels=np.union1d(t, p), zero_division=0)
+        assert macro_f1(t, p, 6) == pytest.approx(want, abs=1e-12)
+
+
+def test_bootstrap_interval_equals_a_loop_over_scikit_learn_on_the_same_resamples() -> None:
+    rng = np.random.default_rng(7)
+    t = rng.integers(0, 4, 80)
+    p = np.where(rng.random(80) < 0.75, t, rng.integers(0, 4, 80))
+    n_boot = 300
+    # The same resamples the function draws (documented: default_rng(seed).integers(0, n, (B, n))).
+    idx = np.random.default_rng(11).integers(0, len(t), size=(n_boot, len(t)))
+    scores = [
+        f1_score(t[i], p[i], average="macro", labels=np.union1d(t[i], p[i]), zero_division=0)
+        for i in idx
+    ]
+    want = np.quantile(scores, [0.025, 0.975])
+    got = bootstrap_macro_f1(t, p, 4, n_boot=n_boot, seed=11)
+    assert got == pytest.approx(tuple(want), abs=1e-12)
+    point = f1_score(t, p, average="macro")
+    assert got[0] <= point <= got[1]
+
+
+def test_bootstrap_of_perfect_predictions_is_a_point() -> None:
+    t = np.array([0, 1, 2, 0, 1, 2, 2])
+    assert bootstrap_macro_f1(t, t.copy(), 3, n_boot=200) == (1.0, 1.0)
