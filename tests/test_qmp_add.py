@@ -161,3 +161,14 @@ def test_criteria_on_synthetic_knees_in_and_out_of_phase() -> None:
     assert apart["knee_oscillation"] and not apart["knees_in_phase"]
     one = met(knee, np.full(len(t), 3.0))
     assert not one["knee_oscillation"] and one["one_knee_oscillation"]
+
+
+def test_phase_gap_of_a_quarter_cycle() -> None:
+    from features.qmp.add import phase_gap
+
+    t = np.arange(150) / 30.0
+    a = 2.0 + 0.5 * np.cos(2 * np.pi * t / 1.25)
+    b = 2.0 + 0.5 * np.cos(2 * np.pi * t / 1.25 - np.pi / 2)  # a quarter cycle later
+    fits = fit_signals(np.stack([a, b, a], 1), 30.0, ["a", "b", "c"])
+    assert phase_gap(fits, 0, 1)[0] == pytest.approx(np.pi / 2, abs=0.1)
+    assert phase_gap(fits, 0, 2)[0] == pytest.approx(0.0, abs=0.05)

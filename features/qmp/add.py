@@ -27,7 +27,8 @@ Quantities are those of :data:`features.qmp.fit.QUANTITIES` (amplitude and range
 units: radians for angles, head-lengths for distances ``a~b``; period_s in seconds; trend per
 second). Relations: ``in_phase`` (phase difference at most ``max_phase_diff_rad``) and
 ``anti_phase`` (difference from pi at most that), both requiring the two periods to agree
-within ``max_period_ratio`` and both amplitudes to reach ``min_amplitude``.
+within ``max_period_ratio`` and both amplitudes to reach ``min_amplitude``. The phase gap is
+measured between the two fitted oscillations over the window (see :func:`phase_gap`).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ import numpy as np
 from posecbr.errors import ConfigError
 
 from .fit import NOT_ENOUGH_DATA, QUANTITIES, QMPFits, quantity_key, signal_unit
+from .library import ExplicitTimeLibrary
 
 
 def default_add_path() -> Path:
@@ -418,10 +420,9 @@ def _test_values(test: Test, fits: QMPFits) -> tuple[np.ndarray, np.ndarray, lis
         return ok, observable, [v]
     amp = fits.quantity("amplitude")[:, idx]
     per = fits.quantity("period_s")[:, idx]
-    pha = fits.quantity("phase_rad")[:, idx]
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.maximum(per[:, 0], per[:, 1]) / np.minimum(per[:, 0], per[:, 1])
-        diff = np.abs(np.angle(np.exp(1j * (pha[:, 0] - pha[:, 1]))))  # wrapped to [0, pi]
+        diff = phase_gap(fits, idx[0], idx[1])
         if test.relation == "anti_phase":
             diff = np.pi - diff
         ok = (
@@ -430,6 +431,32 @@ def _test_values(test: Test, fits: QMPFits) -> tuple[np.ndarray, np.ndarray, lis
             & (diff <= test.max_phase_diff_rad)
         )
     return ok & np.isfinite(diff), observable, [diff, ratio]
+
+
+def phase_gap(fits: QMPFits, a: int, b: int, samples: int = 64) -> np.ndarray:
+    """Phase gap in [0, pi] between the fitted oscillations of signals a and b, per window.
+
+    Each signal's oscillation is rebuilt from its fitted sinusoidal terms over the window (the
+    derivative's cos/sin parts at its own T) and the gap is ``arccos`` of their correlation:
+    0 = in phase, pi = in anti-phase. Comparing the rebuilt curves rather than the two phase
+    numbers stays right when the two fits chose different T (one whole-period, one
+    half-period) for the same motion. NaN where either signal has no oscillation.
+    """
+    lib = ExplicitTimeLibrary()
+    # Windows of one fit all have the same length, so one time grid serves them all.
+    t = np.linspace(0.0, (fits.windows[0, 1] - fits.windows[0, 0]) / fits.fps, samples)
+    curves = []
+    for s in (a, b):
+        T = fits.period_T_s[:, s]
+        theta = lib.matrices(t, np.where(np.isfinite(T), T, 1.0))  # (W, samples, 6)
+        osc = np.einsum("wfk,wk->wf", theta[..., 2:], fits.coefficients[:, s, 2:])
+        osc = np.where(np.isfinite(T)[:, None], osc, 0.0)  # no sinusoid: no oscillation
+        curves.append(osc - osc.mean(axis=1, keepdims=True))
+    num = (curves[0] * curves[1]).sum(axis=1)
+    den = np.sqrt((curves[0] ** 2).sum(axis=1) * (curves[1] ** 2).sum(axis=1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = np.where(den > 0, num / den, np.nan)
+    return np.arccos(np.clip(corr, -1.0, 1.0))
 
 
 def _failure_text(test: Test, values: list[np.ndarray], w: int, fits: QMPFits) -> str:
