@@ -98,15 +98,14 @@ def _temporal_integer(
     for i in range(n):
         sc = sig_col[i]
         d = values[f, sc] - values[f - step, sc]
-        q = motion[i]
         ring_d[slot, i] = d
         # toward s0 (lower state): 1 below the band, 0 above it
         ring_lc[0, slot, i] = (
-            d if d != d else (0.0 if d < q[0] else (-np.inf if d > q[1] else 1.0))
+            d if d != d else (0.0 if d < motion[i, 0] else (-np.inf if d > motion[i, 1] else 1.0))
         )
         # toward sn (upper state = 1 - lower): 0 below the band, 1 above it
         ring_lc[1, slot, i] = (
-            d if d != d else (-np.inf if d < q[4] else (0.0 if d > q[5] else 1.0))
+            d if d != d else (-np.inf if d < motion[i, 4] else (0.0 if d > motion[i, 5] else 1.0))
         )
     # Slots of the window's ages (age 0 = this frame); negative frames hold 0 (never written).
     for a in range(window):
@@ -216,10 +215,9 @@ def fluent_confidences(
             newest_ok = s_ok[1]
         for i in range(n):
             x = values[f, sig_col[i]]
-            p = inst[i]
-            c_lo = _lower(x, p[0], p[1], p[2], p[3])
+            c_lo = _lower(x, inst[i, 0], inst[i, 1], inst[i, 2], inst[i, 3])
             if three[i]:
-                c_up = 1.0 - _lower(x, p[4], p[5], p[6], p[7])
+                c_up = 1.0 - _lower(x, inst[i, 4], inst[i, 5], inst[i, 6], inst[i, 7])
             else:
                 c_up = np.nan if x != x else 0.0
             blk[LO, i] = c_lo

@@ -553,9 +553,17 @@ def _prepare(table: FluentTable) -> _Prepared:
     return prepared
 
 
+_COLUMNS: dict[tuple[int, tuple[str, ...]], tuple[_Prepared, np.ndarray, np.ndarray]] = {}
+
+
 def _signal_columns(sig: StateSignals, prep: _Prepared) -> tuple[np.ndarray, np.ndarray]:
     """Column of each fluent's signal in ``sig.values`` and of its distance in
-    ``sig.distances_m`` (-1 for angle fluents), both ``(n,)``."""
+    ``sig.distances_m`` (-1 for angle fluents), both ``(n,)`` (cached: a short clip would
+    otherwise spend more time here than in the kernel)."""
+    key = (id(prep), sig.names)
+    hit = _COLUMNS.get(key)
+    if hit is not None and hit[0] is prep:
+        return hit[1], hit[2]
     col = {name: i for i, name in enumerate(sig.names)}
     pair_index = {name: k for k, name in enumerate(NEAR_SIGNALS)}
     try:
@@ -563,6 +571,9 @@ def _signal_columns(sig: StateSignals, prep: _Prepared) -> tuple[np.ndarray, np.
     except KeyError as exc:
         raise ConfigError(f"fluent table names an unknown signal {exc.args[0]!r}") from None
     dist_col = np.array([pair_index.get(name, -1) for name in prep.signals], dtype=np.intp)
+    if len(_COLUMNS) >= 16:
+        _COLUMNS.clear()
+    _COLUMNS[key] = (prep, sig_col, dist_col)
     return sig_col, dist_col
 
 
