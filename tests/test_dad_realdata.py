@@ -82,3 +82,16 @@ def test_incorrect_deep_squats_list_criteria_not_met(deep_squats: list[Clip]) ->
     # Each unmet QMP says why, with the value observed.
     listed = next(u for u in wrong if u)
     assert all(q.reasons and "observed" in q.reasons[0] for q in listed if q.status == "not met")
+
+
+def test_dad_classifies_hdm05_actions_of_an_actor_left_out_of_tuning(shared_data: Path) -> None:
+    # The HDM05 entries of the ADD were set looking at actors bd and bk only.
+    clips = list(iter_dataset(shared_data / "hdm05", subjects={"dg"}))
+    X, y = [c.seq for c in clips], [c.label for c in clips]
+    assert set(y) == HDM05
+    clf = DADClassifier().fit(X, y)
+    assert clf.score(X, y) >= 0.5  # eleven classes: chance is about 0.09
+    squat = np.asarray(y) == "squat1Reps"
+    assert (
+        np.mean(clf.predict([x for x, s in zip(X, squat, strict=True) if s]) == "squat1Reps") >= 0.9
+    )
