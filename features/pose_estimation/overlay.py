@@ -1,0 +1,127 @@
+"""Draw the estimated stick figure (and, when given, fluent words) onto a video for a person
+to check. Written to a temporary name and renamed, so no half-written file is left."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from posecbr.errors import DataError
+
+from .video import iter_frames
+
+# BlazePose topology (MediaPipe's POSE_CONNECTIONS), by landmark index.
+POSE_CONNECTIONS: tuple[tuple[int, int], ...] = (
+    (0, 1), (1, 2), (2, 3), (3, 7), (0, 4), (4, 5), (5, 6), (6, 8), (9, 10),
+    (11, 12), (11, 13), (13, 15), (15, 17), (15, 19), (15, 21), (17, 19),
+    (12, 14), (14, 16), (16, 18), (16, 20), (16, 22), (18, 20),
+    (11, 23), (12, 24), (23, 24), (23, 25), (24, 26), (25, 27), (26, 28),
+    (27, 29), (28, 30), (29, 31), (30, 32), (27, 31), (28, 32),
+)  # fmt: skip
+# The person's left side drawn orange, right side blue, centre white (BGR).
+_LEFT = {1, 2, 3, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31}
+_RIGHT = {4, 5, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30, 32}
+_COLOURS = {"left": (0, 140, 255), "right": (255, 128, 0), "centre": (255, 255, 255)}
+
+
+def _colour(i: int, j: int) -> tuple[int, int, int]:
+    if i in _LEFT and j in _LEFT:
+        return _COLOURS["left"]
+    if i in _RIGHT and j in _RIGHT:
+        return _COLOURS["right"]
+    return _COLOURS["centre"]
+
+
+def draw_pose(
+    bgr: np.ndarray,
+    image_landmarks: np.ndarray,
+    words: Sequence[str] = (),
+    min_visibility: float = 0.5,
+) -> np.ndarray:
+    """Draw one frame's landmarks ``(33, 5)`` (x px, y px, z, visibility, presence) in place.
+
+    Bones with an end below ``min_visibility`` are drawn thin and grey (guessed, not seen);
+    ``words`` are written in the top-left corner.
+    """
+    h, w = bgr.shape[:2]
+    thick = max(2, round(min(h, w) / 240))
+    if not np.isnan(image_landmarks[:, :2]).all():
+        xy = np.round(image_landmarks[:, :2]).astype(np.int64)
+        vis = image_landmarks[:, 3]
+        for i, j in POSE_CONNECTIONS:
+            seen = vis[i] >= min_visibility and vis[j] >= min_visibility
+            colour = _colour(i, j) if seen else (128, 128, 128)
+            cv2.line(
+                bgr, tuple(map(int, xy[i])), tuple(map(int, xy[j])), colour,
+                thick if seen else 1, cv2.LINE_AA,
+            )  # fmt: skip
+        for k in range(xy.shape[0]):
+            if vis[k] >= min_visibility:
+                cv2.circle(bgr, tuple(map(int, xy[k])), thick + 1, (0, 0, 255), -1, cv2.LINE_AA)
+    else:
+        words = ["no person", *words]
+    scale = max(0.6, min(h, w) / 600)
+    for n, text in enumerate(words):
+        org = (12, int((n + 1) * 30 * scale))
+        for colour, width in (((0, 0, 0), 4), ((255, 255, 255), 1)):  # outlined text
+            cv2.putText(
+                bgr, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.7 * scale, colour, width, cv2.LINE_AA
+            )
+    return bgr
+
+
+def write_overlay(
+    video_path: str | Path,
+    image_landmarks: np.ndarray,
+    out_path: str | Path,
+    fps: float,
+    words: Sequence[Sequence[str]] | None = None,
+    frame_offset: int = 0,
+) -> Path:
+    """Write ``video_path`` with the stick figure drawn as an MP4 (``mp4v``) at ``out_path``.
+
+    image_landmarks: ``(frames, 33, 5)``; frame ``frame_offset + i`` of the video gets row i.
+    words: per row, phrases to print (e.g. the fluents that hold).
+    """
+    out = Path(out_path)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{out.stem}.", suffix=".mp4", dir=out.parent)
+        os.close(fd)
+    except OSError as exc:
+        raise DataError(f"cannot write overlay ({exc.strerror or exc})", out) from None
+    tmp = Path(tmp_name)
+    writer: cv2.VideoWriter | None = None
+    try:
+        for k, rgb in enumerate(iter_frames(video_path)):
+            i = k - frame_offset
+            if i < 0:
+                continue
+            if i >= image_landmarks.shape[0]:
+                break
+            bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
+            if writer is None:
+                h, w = bgr.shape[:2]
+                writer = cv2.VideoWriter(str(tmp), cv2.VideoWriter.fourcc(*"mp4v"), fps, (w, h))
+                if not writer.isOpened():
+                    raise DataError("cannot encode an MP4 overlay here", out)
+            draw_pose(bgr, image_landmarks[i], words[i] if words is not None else ())
+            writer.write(bgr)
+        if writer is None:
+            raise DataError("no frames to draw", video_path)
+        writer.release()
+        writer = None
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp made it private; give it the usual mode
+        os.replace(tmp, out)
+    finally:
+        if writer is not None:
+            writer.release()
+        tmp.unlink(missing_ok=True)
+    return out

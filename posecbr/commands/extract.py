@@ -1,0 +1,374 @@
+"""``posecbr extract VIDEO|FOLDER|LABELS.csv --out DIR``: videos -> pose files (BlazePose).
+
+One pose file per clip (``DIR/<stem>.npz``, or ``DIR/<label>/<stem>.npz`` for labelled
+datasets) holding the world landmarks (canonical frame, fps from the video), visibility as
+confidence, the image landmarks (``extra_image_landmarks``), the label/subject and the
+frames with no person. Outputs whose video content (sha256), model version and options are
+unchanged are skipped. Every file is written under a temporary name and renamed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures as cf
+import hashlib
+import json
+import multiprocessing
+import os
+import sys
+import tempfile
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from posecbr.errors import DataError, PosecbrError
+from posecbr.progress import progress
+
+# FFmpeg prints decoder complaints straight to stderr; the user should get posecbr's one line.
+# OpenCV reads this once, when it first opens a video, so it is set as early as possible.
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+
+VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One clip to extract: the video, where its pose file (and overlay) go, its labels."""
+
+    video: Path
+    out: Path
+    label: str | None = None
+    subject: str | None = None
+    start: int | None = None
+    end: int | None = None
+    extras: dict[str, Any] = field(default_factory=dict)
+    overlay: Path | None = None
+
+
+@dataclass(frozen=True)
+class Options:
+    smoothing: bool = True
+    tracking: bool = True
+    keep_outside: bool = False
+    force: bool = False
+    fluents: bool = True
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "extract",
+        help="estimate 3D poses from videos (BlazePose on onnxruntime) and write pose files",
+        description="Run BlazePose (full) on every frame and write one pose file per clip. "
+        "INPUT is a video, a folder of videos, a folder with one subfolder per class (label = "
+        "subfolder name), or a labels CSV path,label[,subject][,start,end] (start/end: frame "
+        "indices, end exclusive). Up-to-date outputs are skipped.",
+    )
+    p.add_argument("input", type=Path, metavar="INPUT", help="video, folder or labels CSV")
+    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
+    p.add_argument("--workers", type=int, default=1, metavar="N",
+                   help="clips processed in parallel (default 1; each uses cores/N threads)")
+    p.add_argument("--overlay", type=Path, metavar="OUT.mp4",
+                   help="also write the video with the stick figure (and the fluents that hold) "
+                   "drawn on it; for several clips, a folder for one MP4 each")
+    p.add_argument("--no-smoothing", action="store_true",
+                   help="no temporal filtering (raw per-frame landmarks)")
+    p.add_argument("--detect-every-frame", action="store_true",
+                   help="run the person detector on every frame instead of tracking")
+    p.add_argument("--keep-outside", action="store_true",
+                   help="keep joints the model places outside the frame (default: missing)")
+    p.add_argument("--force", action="store_true", help="re-extract even if up to date")
+    p.set_defaults(func=run)  # fmt: skip
+
+
+# ---- finding clips ------------------------------------------------------------------------
+
+
+def _videos_in(folder: Path) -> list[Path]:
+    return sorted(
+        p for p in folder.iterdir()
+        if p.is_file() and p.suffix.lower() in VIDEO_SUFFIXES and not p.name.startswith(".")
+    )  # fmt: skip
+
+
+def _csv_jobs(csv_path: Path, out: Path) -> list[Job]:
+    from features.datasets import read_labels_csv
+
+    jobs = []
+    for rec in read_labels_csv(csv_path):
+        video: Path = rec["path"]
+        stem = video.stem
+        if rec["start"] is not None:
+            stem += f"_{rec['start']}-{rec['end']}"
+        jobs.append(
+            Job(
+                video=video,
+                out=out / _safe(rec["label"]) / f"{stem}.npz",
+                label=rec["label"],
+                subject=rec["subject"],
+                start=rec["start"],
+                end=rec["end"],
+                extras=dict(rec["extras"]),
+            )
+        )
+    return jobs
+
+
+def _safe(name: str) -> str:
+    """A label as a folder name (path separators replaced)."""
+    cleaned = name.replace("/", "_").replace("\\", "_").strip()
+    return cleaned if cleaned not in ("", ".", "..") else "_"
+
+
+def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
+    """The clips ``source`` names, with their output paths (see the command's help)."""
+    if not source.exists():
+        raise DataError("no such file or folder", source)
+    jobs: list[Job]
+    if source.is_file():
+        if source.suffix.lower() == ".csv":
+            jobs = _csv_jobs(source, out)
+        else:
+            return [Job(video=source, out=out / f"{source.stem}.npz", overlay=overlay)]
+    elif (source / "labels.csv").is_file():
+        jobs = _csv_jobs(source / "labels.csv", out)
+    else:
+        try:
+            subdirs = sorted(
+                d for d in source.iterdir() if d.is_dir() and not d.name.startswith(".")
+            )
+        except OSError as exc:
+            raise DataError(f"cannot list folder ({exc.strerror or exc})", source) from None
+        jobs = [
+            Job(video=v, out=out / _safe(d.name) / f"{v.stem}.npz", label=d.name)
+            for d in subdirs
+            for v in _videos_in(d)
+        ]
+        jobs += [Job(video=v, out=out / f"{v.stem}.npz") for v in _videos_in(source)]
+        if not jobs:
+            raise DataError(
+                f"no videos found ({', '.join(VIDEO_SUFFIXES)}), directly or one subfolder "
+                "per class",
+                source,
+            )
+    seen: dict[Path, Path] = {}
+    for job in jobs:
+        if job.out in seen and seen[job.out] != job.video:
+            raise DataError(
+                f"{seen[job.out]} and {job.video} would both be written to {job.out}", source
+            )
+        seen[job.out] = job.video
+    if overlay is not None:
+        jobs = [
+            Job(**{**vars(j), "overlay": overlay / j.out.relative_to(out).with_suffix(".mp4")})
+            for j in jobs
+        ]
+    return jobs
+
+
+# ---- one clip -----------------------------------------------------------------------------
+
+
+def sha256_file(path: Path) -> str:
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                h.update(block)
+    except OSError as exc:
+        raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
+    return h.hexdigest()
+
+
+def extract_key(job: Job, options: Options, video_sha256: str) -> dict[str, Any]:
+    """What an output depends on; an existing output with the same key is up to date."""
+    from features.pose_estimation import model_version
+
+    return {
+        "video_sha256": video_sha256,
+        "pose_model": model_version(),
+        "smoothing": options.smoothing,
+        "tracking": options.tracking,
+        "keep_outside": options.keep_outside,
+        "start": job.start,
+        "end": job.end,
+        "label": job.label,
+        "subject": job.subject,
+    }
+
+
+def stored_key(path: Path) -> dict[str, Any] | None:
+    """The ``extract_key`` of an existing pose file, or None (absent or unreadable)."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["metadata"]))
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError):
+        return None
+    key = meta.get("extract_key") if isinstance(meta, dict) else None
+    return key if isinstance(key, dict) else None
+
+
+_THREADS: int | None = None  # onnxruntime threads per model in this process (None: default)
+_ESTIMATOR: Any = None  # one PoseEstimator per process, made on first use (after any fork)
+
+
+def _init_worker(threads: int) -> None:
+    global _THREADS
+    _THREADS = threads
+    # Per-clip bars from several processes would garble the terminal; the overall bar stays.
+    os.environ["POSECBR_NO_PROGRESS"] = "1"
+
+
+def _estimator(options: Options) -> Any:
+    global _ESTIMATOR
+    from features.pose_estimation import PoseEstimator
+
+    if _ESTIMATOR is None or (
+        _ESTIMATOR.smoothing != options.smoothing or _ESTIMATOR.tracking != options.tracking
+    ):
+        _ESTIMATOR = PoseEstimator(
+            smoothing=options.smoothing, tracking=options.tracking, threads=_THREADS
+        )
+    return _ESTIMATOR
+
+
+def _fluent_words(seq: Any, top: int = 4) -> list[list[str]] | None:
+    """Per frame, up to ``top`` fluent phrases that hold (confidence >= 0.8), motion first."""
+    try:
+        from features.fluents import evaluate
+        from features.timeline import background
+    except ImportError:
+        return None
+    result = evaluate(seq)
+    conf = np.nan_to_num(result.confidence, nan=0.0)
+    conf[:, background(result)] = 0.0
+    # Motion states first among equally confident ones: they are what changes on screen.
+    order_key = np.round(conf, 1) + 0.05 * np.asarray(result.temporal, dtype=float)
+    words = []
+    for f in range(conf.shape[0]):
+        idx = [i for i in np.argsort(-order_key[f], kind="stable")[:top] if conf[f, i] >= 0.8]
+        words.append([result.words[i] for i in idx])
+    return words
+
+
+def process(job: Job, options: Options) -> tuple[str, Path, str]:
+    """Extract one clip. Returns (status, path, detail); status "done", "skipped" or "failed"."""
+    from features.pose_estimation import estimate_video
+    from features.pose_estimation.overlay import write_overlay
+    from features.poses import load_pose, load_pose_arrays, save_pose
+
+    try:
+        digest = sha256_file(job.video)
+        key = extract_key(job, options, digest)
+        up_to_date = not options.force and job.out.is_file() and stored_key(job.out) == key
+        if up_to_date and (job.overlay is None or job.overlay.is_file()):
+            return "skipped", job.out, "up to date"
+        if up_to_date:
+            seq = load_pose(job.out)
+            image_lm = load_pose_arrays(job.out)["image_landmarks"]
+        else:
+            meta: dict[str, Any] = {**job.extras, "extract_key": key, "video_sha256": digest}
+            if job.label is not None:
+                meta["label"] = job.label
+            if job.subject is not None:
+                meta["subject"] = job.subject
+            vp = estimate_video(
+                job.video,
+                smoothing=options.smoothing,
+                tracking=options.tracking,
+                keep_outside=options.keep_outside,
+                progress_bar=True,
+                estimator=_estimator(options),
+                metadata=meta,
+            )
+            seq, image_lm = vp.sequence, vp.image_landmarks
+            if job.start is not None and job.end is not None:
+                if job.end > seq.n_frames:
+                    raise DataError(
+                        f"end frame {job.end} is past the video's {seq.n_frames} frames",
+                        job.video,
+                    )
+                seq = seq.slice_frames(job.start, job.end)
+                image_lm = image_lm[job.start : job.end]
+            try:
+                save_pose(seq, job.out, extra_arrays={"image_landmarks": image_lm})
+            except OSError as exc:
+                raise DataError(f"cannot write ({exc.strerror or exc})", job.out) from None
+        if job.overlay is not None:
+            words = _fluent_words(seq) if options.fluents else None
+            write_overlay(
+                job.video, image_lm, job.overlay, seq.fps, words, frame_offset=job.start or 0
+            )
+        n_missing = int(np.isnan(seq.positions).all(axis=(1, 2)).sum())
+        return "done", job.out, f"{seq.n_frames} frames, {n_missing} without a person"
+    except PosecbrError as exc:
+        return "failed", job.out, str(exc)
+
+
+# ---- the command --------------------------------------------------------------------------
+
+
+def _check_out_dir(out: Path) -> None:
+    if out.exists() and not out.is_dir():
+        raise DataError("output is not a folder", out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        raise DataError(f"cannot write to the output folder ({exc.strerror or exc})", out) from None
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.workers < 1:
+        raise PosecbrError(f"--workers must be at least 1, got {args.workers}")
+    source: Path = args.input
+    options = Options(
+        smoothing=not args.no_smoothing,
+        tracking=not args.detect_every_frame,
+        keep_outside=args.keep_outside,
+        force=args.force,
+    )
+    jobs = find_jobs(source, args.out, args.overlay)
+    if args.overlay is not None and len(jobs) == 1 and source.is_file():
+        if args.overlay.suffix.lower() != ".mp4":
+            raise DataError("overlay must be an .mp4 file name", args.overlay)
+    _check_out_dir(args.out)
+    single = len(jobs) == 1 and source.is_file() and source.suffix.lower() != ".csv"
+    if single:
+        # A single video: its problem is THE error (one line from the CLI, exit 1).
+        status, path, detail = process(jobs[0], options)
+        if status == "failed":
+            raise PosecbrError(detail)
+        print(f"{status}: {path} ({detail})")
+        return 0
+    results: list[tuple[str, Path, str]] = []
+    workers = min(args.workers, len(jobs))
+    if workers == 1:
+        for job in progress(jobs, desc="extract", unit="clip"):
+            results.append(process(job, options))
+    else:
+        threads = max(1, (os.cpu_count() or 1) // workers)
+        # spawn, not fork: a forked child would inherit onnxruntime's thread pools (and any
+        # session already made here) in a state it cannot use, and hang.
+        with cf.ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_init_worker,
+            initargs=(threads,),
+        ) as pool:
+            futures = [pool.submit(process, job, options) for job in jobs]
+            for fut in progress(cf.as_completed(futures), "extract", len(futures), "clip"):
+                results.append(fut.result())
+    failed = [r for r in results if r[0] == "failed"]
+    for _, _, detail in failed:
+        print(f"posecbr extract: error: {detail}", file=sys.stderr)
+    done = sum(r[0] == "done" for r in results)
+    skipped = sum(r[0] == "skipped" for r in results)
+    print(
+        f"{done} extracted, {skipped} up to date, {len(failed)} failed -> {args.out}",
+        file=sys.stderr if failed else sys.stdout,
+    )
+    return 1 if failed else 0

@@ -1,0 +1,206 @@
+"""``posecbr extract``: pose files from videos, labels carried, skips, bad input.
+
+Short clips are cut at test time from the real squat video in ../shared/data/videos (first
+frames, re-encoded smaller) so every case runs in about a second.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+# Imported before any video is opened here: it silences FFmpeg's own stderr messages, which
+# OpenCV configures once per process on first use.
+import features.pose_estimation  # noqa: F401
+from features.poses import load_pose, load_pose_arrays
+from posecbr.cli import main
+
+SQUAT = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+
+
+def _cut(src: Path, dst: Path, frames: int, start: int = 0) -> Path:
+    """Re-encode frames [start, start + frames) of ``src`` at half size as MP4."""
+    cap = cv2.VideoCapture(str(src))
+    fps = cap.get(cv2.CAP_PROP_FPS)
+    writer = None
+    k = 0
+    while k < start + frames:
+        ok, bgr = cap.read()
+        assert ok
+        if k >= start:
+            bgr = cv2.resize(bgr, (bgr.shape[1] // 2, bgr.shape[0] // 2))
+            if writer is None:
+                fourcc = cv2.VideoWriter.fourcc(*"mp4v")
+                writer = cv2.VideoWriter(str(dst), fourcc, fps, (bgr.shape[1], bgr.shape[0]))
+            writer.write(bgr)
+        k += 1
+    assert writer is not None
+    writer.release()
+    cap.release()
+    return dst
+
+
+@pytest.fixture(scope="module")
+def clip(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return _cut(shared_data / SQUAT, tmp_path_factory.mktemp("clips") / "squat8.mp4", 8)
+
+
+def _only_line(text: str) -> str:
+    lines = [ln for ln in text.splitlines() if ln.strip()]
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
+def test_single_video_writes_pose_file_then_skips(
+    clip: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "poses"
+    assert main(["extract", str(clip), "--out", str(out)]) == 0
+    pose_file = out / "squat8.npz"
+    seq = load_pose(pose_file)
+    assert seq.n_frames == 8 and seq.fps == 5.0  # the squat video's rate
+    assert seq.positions.shape == (8, 33, 3)
+    assert not np.isnan(seq.positions[:, :25]).any()  # head, arms, hips seen in every frame
+    extras = load_pose_arrays(pose_file)
+    assert extras["image_landmarks"].shape == (8, 33, 5)
+    # Image landmarks lie in the 360 x 640 frame, on the person (hips near mid-width).
+    hips = extras["image_landmarks"][:, 23:25, :2]
+    assert np.all((hips[..., 0] > 90) & (hips[..., 0] < 270))
+    assert seq.metadata["video_sha256"] and seq.metadata["missing_frames"] == []
+    mtime = pose_file.stat().st_mtime_ns
+    capsys.readouterr()
+    assert main(["extract", str(clip), "--out", str(out)]) == 0
+    assert "up to date" in capsys.readouterr().out
+    assert pose_file.stat().st_mtime_ns == mtime
+    # A different option is a different output: re-extracted.
+    assert main(["extract", str(clip), "--out", str(out), "--no-smoothing"]) == 0
+    assert pose_file.stat().st_mtime_ns != mtime
+
+
+def test_class_folders_and_csv_carry_labels(clip: Path, tmp_path: Path, shared_data: Path) -> None:
+    data = tmp_path / "data"
+    (data / "squat").mkdir(parents=True)
+    (data / "other").mkdir()
+    os.symlink(clip, data / "squat" / "a.mp4")
+    _cut(shared_data / SQUAT, data / "other" / "b.mp4", 6, start=20)
+    out = tmp_path / "out"
+    assert main(["extract", str(data), "--out", str(out), "--workers", "2"]) == 0
+    assert load_pose(out / "squat" / "a.npz").label == "squat"
+    other = load_pose(out / "other" / "b.npz")
+    assert other.label == "other" and other.n_frames == 6
+
+    csv_path = tmp_path / "labels.csv"
+    csv_path.write_text(
+        f"path,label,subject,start,end\n{clip},deep_squat,s01,2,7\n{clip},squat_all,s02,,\n"
+    )
+    out2 = tmp_path / "out2"
+    assert main(["extract", str(csv_path), "--out", str(out2)]) == 0
+    part = load_pose(out2 / "deep_squat" / "squat8_2-7.npz")
+    assert (part.label, part.metadata["subject"], part.n_frames) == ("deep_squat", "s01", 5)
+    whole = load_pose(out2 / "squat_all" / "squat8.npz")
+    assert whole.n_frames == 8 and whole.metadata["subject"] == "s02"
+    # The slice is the same frames as the whole clip's frames 2..6.
+    np.testing.assert_allclose(part.positions, whole.positions[2:7])
+
+
+def test_overlay_has_every_frame(clip: Path, tmp_path: Path) -> None:
+    overlay = tmp_path / "check.mp4"
+    assert (
+        main(["extract", str(clip), "--out", str(tmp_path / "o"), "--overlay", str(overlay)]) == 0
+    )
+    cap = cv2.VideoCapture(str(overlay))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 8
+    ok, frame = cap.read()
+    assert ok and frame.shape[:2] == (640, 360)
+    cap.release()
+
+
+def _bad_inputs(tmp: Path, shared_data: Path) -> dict[str, Path]:
+    good = (shared_data / SQUAT).read_bytes()
+    avi = (shared_data / "media" / "vtest.avi").read_bytes()
+    files = {
+        "truncated_mp4": (tmp / "trunc.mp4", good[: len(good) // 2]),
+        "truncated_avi": (tmp / "trunc.avi", avi[: len(avi) // 3]),
+        "corrupt_header": (tmp / "corrupt.mp4", b"\0" * 4096 + good[4096:]),
+        "not_a_video": (tmp / "notes.mp4", b"these are my notes, not a video\n"),
+        "text_file": (tmp / "readme.txt", b"hello\n"),
+        "empty_file": (tmp / "empty.mp4", b""),
+    }
+    out = {}
+    for name, (path, data) in files.items():
+        path.write_bytes(data)
+        out[name] = path
+    zero = tmp / "zero.avi"
+    cv2.VideoWriter(str(zero), cv2.VideoWriter.fourcc(*"MJPG"), 25, (64, 64)).release()
+    out["zero_frames"] = zero
+    out["missing_path"] = tmp / "does_not_exist.mp4"
+    return out
+
+
+def test_bad_input_one_line_exit_1_no_file(
+    tmp_path: Path, shared_data: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    bad = _bad_inputs(tmp_path, shared_data)
+    for name, path in bad.items():
+        out = tmp_path / f"out_{name}"
+        capfd.readouterr()
+        assert main(["extract", str(path), "--out", str(out)]) == 1, name
+        captured = capfd.readouterr()
+        line = _only_line(captured.err)
+        assert line.startswith("posecbr extract: error: ") and path.name in line, line
+        assert captured.out == ""
+        assert not out.exists() or not any(out.iterdir()), f"{name}: files left in {out}"
+
+
+def test_unwritable_output_is_one_line(
+    clip: Path, tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    not_a_dir = tmp_path / "file.txt"
+    not_a_dir.write_text("x")
+    assert main(["extract", str(clip), "--out", str(not_a_dir)]) == 1
+    assert "output is not a folder" in _only_line(capfd.readouterr().err)
+    assert main(["extract", str(clip), "--out", str(not_a_dir / "sub")]) == 1
+    assert "cannot write" in _only_line(capfd.readouterr().err)
+    assert not_a_dir.read_text() == "x"
+
+
+def test_cli_process_prints_only_one_line_for_a_corrupt_video(
+    tmp_path: Path, shared_data: Path
+) -> None:
+    # A real process, so FFmpeg's own stderr output (C level) would show if not silenced.
+    avi = (shared_data / "media" / "vtest.avi").read_bytes()
+    bad = tmp_path / "damaged.avi"
+    bad.write_bytes(avi[: len(avi) // 4])  # cut mid-frame: FFmpeg complains while decoding
+    out = tmp_path / "out"
+    proc = subprocess.run(
+        [sys.executable, "-m", "posecbr", "extract", str(bad), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 1
+    assert "truncated or corrupt" in _only_line(proc.stderr)
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_dataset_with_one_bad_clip_reports_it_and_keeps_the_rest(
+    clip: Path, tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    data = tmp_path / "data" / "squat"
+    data.mkdir(parents=True)
+    os.symlink(clip, data / "good.mp4")
+    (data / "bad.mp4").write_bytes(b"not a video")
+    out = tmp_path / "out"
+    capfd.readouterr()
+    assert main(["extract", str(tmp_path / "data"), "--out", str(out)]) == 1
+    err = capfd.readouterr().err
+    assert err.count("posecbr extract: error:") == 1 and "bad.mp4" in err
+    assert (out / "squat" / "good.npz").is_file()
+    assert not (out / "squat" / "bad.npz").exists()
+    assert [p.name for p in (out / "squat").iterdir()] == ["good.npz"]  # no temp files left
