@@ -194,6 +194,36 @@ def bench_dad(repeats: int) -> dict[str, Any]:
     return out
 
 
+def bench_accuracy() -> dict[str, Any]:
+    """DAD accuracy on clips the ADD thresholds were not set on: UI-PRMD episodes 4-10 (the
+    ADD was tuned on episodes 1-3) and HDM05 actor dg (tuned on bd and bk)."""
+    from collections import Counter
+
+    from cbr.dad import DADClassifier
+    from features.datasets import iter_dataset
+
+    out: dict[str, Any] = {}
+    uiprmd = list(iter_dataset(DATA / "ui-prmd", episodes=set(range(4, 11))))
+    hdm05 = list(iter_dataset(DATA / "hdm05", subjects={"dg"}))
+    for name, clips in (("uiprmd_kinect_episodes_4_10", uiprmd), ("hdm05_actor_dg", hdm05)):
+        X, y = [c.seq for c in clips], np.array([c.label for c in clips])
+        pred = DADClassifier().fit(X, y).predict(X)
+        ok = pred == y
+        correct = np.array([c.extras.get("correct", True) for c in clips])
+        per_class = Counter(y.tolist())
+        out[name] = {
+            "clips": len(clips),
+            "classes": len(per_class),
+            "accuracy": float(ok.mean()),
+            "accuracy_correct_executions": float(ok[correct].mean()),
+            "accuracy_incorrect_executions": float(ok[~correct].mean())
+            if (~correct).any()
+            else None,
+            "per_class": {k: float(ok[y == k].mean()) for k in sorted(per_class)},
+        }
+    return out
+
+
 def _versions() -> dict[str, str]:
     import pysindy
     import scipy
@@ -210,6 +240,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=15, help="timings per measure (median)")
     parser.add_argument("--quick", action="store_true", help="fewer repeats (smoke run)")
+    parser.add_argument(
+        "--accuracy", action="store_true", help="also DAD accuracy on held-out real clips (~1 min)"
+    )
     args = parser.parse_args(argv)
     repeats = 3 if args.quick else max(3, args.repeats)
 
@@ -250,6 +283,20 @@ def main(argv: list[str] | None = None) -> int:
     else:
         print(f"\n(no real data at {DATA}: DAD timing skipped)")
 
+    accuracy: dict[str, Any] = {}
+    if args.accuracy and DATA.is_dir():
+        accuracy = bench_accuracy()
+        print("\nDAD accuracy (no training; ADD thresholds not set on these clips):")
+        for name, r in accuracy.items():
+            inc = r["accuracy_incorrect_executions"]
+            inc_text = f", incorrect executions {inc:.1%}" if inc is not None else ""
+            print(
+                f"  {name:30s} {r['clips']} clips, {r['classes']} classes: {r['accuracy']:.1%}"
+                f" (correct executions {r['accuracy_correct_executions']:.1%}{inc_text})"
+            )
+            for label, acc in r["per_class"].items():
+                print(f"      {label:46s} {acc:6.1%}")
+
     result = {
         "benchmark": "qmp",
         "machine": {
@@ -262,6 +309,7 @@ def main(argv: list[str] | None = None) -> int:
         "repeats": repeats,
         "fits": fits,
         "dad": dad,
+        "accuracy": accuracy,
     }
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.NamedTemporaryFile("w", dir=RESULTS.parent, delete=False, suffix=".tmp") as f:
