@@ -310,7 +310,7 @@ class DADClassifier(ClassifierMixin, BaseEstimator):
         self.window_s = window_s
         self.step_s = step_s
 
-    def fit(self, X: Sequence[PoseSequence], y: Sequence[Any]) -> DADClassifier:
+    def fit(self, X: Sequence[PoseSequence], y: Sequence[Any] | np.ndarray) -> DADClassifier:
         labels = np.asarray(list(y))
         if len(labels) != len(X):
             raise ValueError(f"X has {len(X)} clips but y has {len(labels)} labels")
