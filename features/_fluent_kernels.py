@@ -38,112 +38,10 @@ def _lower(x: float, lo_edge: float, hi_edge: float, tau: float, k: float) -> fl
 
 
 @njit(cache=True, nogil=True)
-def _log_c(d: float, q: np.ndarray, direction: int) -> float:
+def _log_c(d: float, tau: float, k: float, direction: int) -> float:
     """log C of a Δ inside the band of one direction (0: toward s0, 1: toward sn)."""
-    off = 4 * direction
-    c = 1.0 / (1.0 + math.exp(q[off + 3] * (d - q[off + 2])))
+    c = 1.0 / (1.0 + math.exp(k * (d - tau)))
     return math.log(c if direction == 0 else 1.0 - c)
-
-
-@njit(cache=True, nogil=True)
-def _product(
-    deltas: np.ndarray, n_age: int, motion: np.ndarray, i: int, direction: int, inv: np.ndarray
-) -> float:
-    """Eq. 5 over the ``n_age`` defined ages of ``deltas`` (fractional-lag path), fluent i."""
-    off = 4 * direction
-    e0, e1 = motion[i, off], motion[i, off + 1]
-    total = 0.0
-    pending = 0
-    for a in range(n_age):
-        d = deltas[a]
-        # log C, or +1 = inside the band (log still to compute); see _temporal_integer
-        if direction == 0:
-            v = d if d != d else (0.0 if d < e0 else (-np.inf if d > e1 else 1.0))
-        else:
-            v = d if d != d else (-np.inf if d < e0 else (0.0 if d > e1 else 1.0))
-        pending += v > 0.0
-        total += v * inv[a]
-    if total == -np.inf:
-        return 0.0
-    if total != total:
-        return np.nan
-    if pending == 0:
-        return 1.0 if total == 0.0 else math.exp(total)
-    total = 0.0
-    for a in range(n_age):
-        d = deltas[a]
-        if d < e0 or d > e1:
-            continue  # a factor of 1 (a zero would have returned above)
-        total += _log_c(d, motion[i], direction) * inv[a]
-    return math.exp(total)
-
-
-@njit(cache=True, nogil=True)
-def _temporal_integer(
-    values: np.ndarray, sig_col: np.ndarray, motion: np.ndarray, f: int, step: int, slot: int,
-    ring_size: int, window: int, inv: np.ndarray, ring_d: np.ndarray, ring_lc: np.ndarray,
-    newest_ok: bool, blk: np.ndarray, slots: np.ndarray, total: np.ndarray, pending: np.ndarray,
-) -> None:  # fmt: skip
-    """Eq. 5 for every fluent at frame ``f`` with an integer lag ``step`` (ring buffer path)."""
-    n = sig_col.shape[0]
-    if not newest_ok:
-        # No Δ yet: the ring keeps 0 (= factor 1, no evidence) for this frame.
-        for i in range(n):
-            ring_d[slot, i] = 0.0
-            ring_lc[0, slot, i] = 0.0
-            ring_lc[1, slot, i] = 0.0
-            blk[M_LO, i] = np.nan
-            blk[M_HI, i] = np.nan
-        return
-    for i in range(n):
-        sc = sig_col[i]
-        d = values[f, sc] - values[f - step, sc]
-        ring_d[slot, i] = d
-        # toward s0 (lower state): 1 below the band, 0 above it
-        ring_lc[0, slot, i] = (
-            d if d != d else (0.0 if d < motion[i, 0] else (-np.inf if d > motion[i, 1] else 1.0))
-        )
-        # toward sn (upper state = 1 - lower): 0 below the band, 1 above it
-        ring_lc[1, slot, i] = (
-            d if d != d else (-np.inf if d < motion[i, 4] else (0.0 if d > motion[i, 5] else 1.0))
-        )
-    # Slots of the window's ages (age 0 = this frame); negative frames hold 0 (never written).
-    for a in range(window):
-        slots[a] = (f - a * step) % ring_size
-    for direction in range(2):
-        lc = ring_lc[direction]
-        total[:] = 0.0
-        pending[:] = 0.0
-        for a in range(window):
-            row = lc[slots[a]]
-            w = inv[a]
-            for i in range(n):  # branch-free: vectorises
-                v = row[i]
-                pending[i] += v > 0.0
-                total[i] += v * w
-        for i in range(n):
-            t = total[i]
-            # NaN (a NaN factor) and -inf (a zero factor) decide the product without a log.
-            if t == -np.inf:
-                r = 0.0
-            elif t != t:
-                r = np.nan
-            elif pending[i] > 0.0:
-                # Every factor is positive: compute the logs still missing, once per Δ.
-                q = motion[i]
-                t = 0.0
-                for a in range(window):
-                    v = lc[slots[a], i]
-                    if v > 0.0:
-                        v = _log_c(ring_d[slots[a], i], q, direction)
-                        lc[slots[a], i] = v
-                    t += v * inv[a]
-                r = math.exp(t)
-            elif t == 0.0:
-                r = 1.0
-            else:
-                r = math.exp(t)
-            blk[M_LO + direction, i] = r
 
 
 @njit(cache=True, nogil=True)
@@ -195,8 +93,8 @@ def fluent_confidences(
     s_w = np.empty(window + 1)
     s_ok = np.empty(window + 1, dtype=np.bool_)
     slots = np.empty(window, dtype=np.intp)
-    total = np.empty(n)
-    pending = np.empty(n)
+    totals = np.empty(n)
+    pendings = np.empty(n)
     deltas = np.empty(window)
     samples = np.empty(window + 1)
     for f in range(frames):
@@ -228,9 +126,65 @@ def fluent_confidences(
             if dc >= 0:
                 d = dist_m[f, dc]
                 blk[TOUCH, i] = d if d != d else (1.0 if d <= touching_m else 0.0)
-        if integer_lag:
-            _temporal_integer(values, sig_col, motion, f, step, slot, ring_size, window, inv,
-                              ring_d, ring_lc, newest_ok, blk, slots, total, pending)
+        if integer_lag and not newest_ok:
+            # No Δ yet: the ring keeps 0 (= factor 1, no evidence) for this frame.
+            for i in range(n):
+                ring_d[slot, i] = 0.0
+                ring_lc[0, slot, i] = 0.0
+                ring_lc[1, slot, i] = 0.0
+                blk[M_LO, i] = np.nan
+                blk[M_HI, i] = np.nan
+        elif integer_lag:
+            # Eq. 5 with an integer lag: the Δ of age a is the newest Δ of frame f - a·lag.
+            # (Inline, not a helper: a call passing arrays costs atomic refcounts per call.)
+            for i in range(n):
+                sc = sig_col[i]
+                d = values[f, sc] - values[f - step, sc]
+                ring_d[slot, i] = d
+                # toward s0 (lower state): 1 below the band, 0 above it
+                ring_lc[0, slot, i] = d if d != d else (
+                    0.0 if d < motion[i, 0] else (-np.inf if d > motion[i, 1] else 1.0))
+                # toward sn (upper state = 1 - lower): 0 below the band, 1 above it
+                ring_lc[1, slot, i] = d if d != d else (
+                    -np.inf if d < motion[i, 4] else (0.0 if d > motion[i, 5] else 1.0))
+            # Slots of the window's ages (age 0 = this frame); frames before 0 hold 0.
+            for a in range(window):
+                slots[a] = (f - a * step) % ring_size
+            for direction in range(2):
+                totals[:] = 0.0
+                pendings[:] = 0.0
+                for a in range(window):
+                    sa = slots[a]
+                    w = inv[a]
+                    for i in range(n):  # branch-free: vectorises
+                        v = ring_lc[direction, sa, i]
+                        pendings[i] += v > 0.0
+                        totals[i] += v * w
+                for i in range(n):
+                    t = totals[i]
+                    # NaN (a NaN factor) and -inf (a zero factor) decide without a log.
+                    if t == -np.inf:
+                        r = 0.0
+                    elif t != t:
+                        r = np.nan
+                    elif pendings[i] > 0.0:
+                        # Every factor is positive: compute the missing logs, once per Δ.
+                        q_tau = motion[i, 4 * direction + 2]
+                        q_k = motion[i, 4 * direction + 3]
+                        t = 0.0
+                        for a in range(window):
+                            sa = slots[a]
+                            v = ring_lc[direction, sa, i]
+                            if v > 0.0:
+                                v = _log_c(ring_d[sa, i], q_tau, q_k, direction)
+                                ring_lc[direction, sa, i] = v
+                            t += v * inv[a]
+                        r = math.exp(t)
+                    elif t == 0.0:
+                        r = 1.0
+                    else:
+                        r = math.exp(t)
+                    blk[M_LO + direction, i] = r
         else:
             for i in range(n):
                 if not newest_ok:
@@ -252,7 +206,34 @@ def fluent_confidences(
                     deltas[a] = samples[a] - samples[a + 1]
                     n_age += 1
                 for direction in range(2):
-                    blk[M_LO + direction, i] = _product(deltas, n_age, motion, i, direction, inv)
+                    # eq. 5 from log codes as in _temporal_integer, without the cache
+                    off = 4 * direction
+                    e0, e1 = motion[i, off], motion[i, off + 1]
+                    total = 0.0
+                    pending = 0
+                    for a in range(n_age):
+                        d = deltas[a]
+                        if direction == 0:
+                            v = d if d != d else (0.0 if d < e0 else (-np.inf if d > e1 else 1.0))
+                        else:
+                            v = d if d != d else (-np.inf if d < e0 else (0.0 if d > e1 else 1.0))
+                        pending += v > 0.0
+                        total += v * inv[a]
+                    if total == -np.inf:
+                        r = 0.0
+                    elif total != total:
+                        r = np.nan
+                    elif pending == 0:
+                        r = 1.0 if total == 0.0 else math.exp(total)
+                    else:
+                        total = 0.0
+                        for a in range(n_age):
+                            d = deltas[a]
+                            if e0 <= d <= e1:  # inside the band (zeros returned above)
+                                total += _log_c(d, motion[i, off + 2], motion[i, off + 3],
+                                                direction) * inv[a]  # fmt: skip
+                        r = math.exp(total)
+                    blk[M_LO + direction, i] = r
         for i in range(n):
             t_lo = blk[M_LO, i]
             t_hi = blk[M_HI, i]
