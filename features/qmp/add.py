@@ -463,7 +463,10 @@ def _failure_text(test: Test, values: list[np.ndarray], w: int, fits: QMPFits) -
     if isinstance(test, Condition):
         v = values[0][w]
         unit = _unit_words(test.signal, test.quantity)
-        seen = "undefined" if not np.isfinite(v) else f"{v:.3g}{unit}"
+        if np.isfinite(v):
+            seen = f"{v:.3g}{unit}"
+        else:
+            seen = "no oscillation" if test.quantity in ("period_s", "phase_rad") else "undefined"
         return f"{test.describe()} (observed {seen})"
     diff, ratio = values[0][w], values[1][w]
     if not np.isfinite(diff):

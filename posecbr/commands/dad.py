@@ -103,5 +103,6 @@ def run(args: argparse.Namespace) -> int:
             when = f" (at {q.window_s[0]:.1f}-{q.window_s[1]:.1f} s)" if q.window_s else ""
             out.write(f"  {mark[q.status]} {q.words} [w {q.weight}]: {q.status}{when}\n")
             for reason in q.reasons:
-                out.write(f"      needs {reason}\n")
+                lead = "needs " if q.status == "not met" else ""
+                out.write(f"      {lead}{reason}\n")
     return 0
