@@ -350,6 +350,10 @@ def sliding_windows(n_frames: int, fps: float, window_s: float | None, step_s: f
     return np.array([[a, a + win] for a in starts])
 
 
+_BLOCK = 512  # columns (window x signal) per period search call
+_SEARCH_FIELDS = ("coefficients", "support", "period_T_s", "rss")
+
+
 def fit_signals(
     values: np.ndarray,
     fps: float,
@@ -421,8 +425,16 @@ def fit_signals(
         duration = win_frames / fps
         max_T = min(cfg.max_period_s or duration / 2.0, duration / 2.0)
         periods = period_grid(min(cfg.min_period_s, max_T), max_T, cfg.n_periods)
-        best = search_period(
-            t, y, periods, cfg.library, cfg.optimizer, cfg.refine_rounds, cfg.selection
+        # Columns go in blocks so that a long clip's many windows do not build one huge array.
+        parts = [
+            search_period(
+                t, y[:, a : a + _BLOCK], periods, cfg.library, cfg.optimizer,
+                cfg.refine_rounds, cfg.selection,
+            )
+            for a in range(0, y.shape[1], _BLOCK)
+        ]  # fmt: skip
+        best = PeriodSearch(
+            *(np.concatenate([getattr(p, f) for p in parts]) for f in _SEARCH_FIELDS)
         )
         w_i, s_i = cols[:, 0], cols[:, 1]
         coef[w_i, s_i] = best.coefficients
