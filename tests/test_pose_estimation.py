@@ -80,8 +80,8 @@ def test_crop_maps_roi_corners_and_replicates_border() -> None:
     roi = lmk.Roi(cx=100.0, cy=50.0, size=80.0, rotation=0.0)
     tensor, matrix = lmk.crop(img, roi)
     # The ROI's top-left corner (60, 10) lands on (0, 0), its bottom-right (140, 90) on (256, 256).
-    np.testing.assert_allclose(matrix @ [60, 10, 1], [0, 0], atol=1e-4)
-    np.testing.assert_allclose(matrix @ [140, 90, 1], [256, 256], atol=1e-4)
+    np.testing.assert_allclose(matrix @ [60, 10, 1], [0, 0, 1], atol=1e-4)
+    np.testing.assert_allclose(matrix @ [140, 90, 1], [256, 256, 1], atol=1e-4)
     assert tensor.shape == (1, 256, 256, 3)
     assert tensor[0, 128, 10, 0] == 0.0 and tensor[0, 128, 245, 0] == pytest.approx(200 / 255)
     # A ROI reaching past the image's right edge repeats the edge pixels (not black).
@@ -127,11 +127,15 @@ def test_image_landmarks_match_mediapipe(
     assert pose.person
     expected = np.array(ref["image_landmarks_px"])
     diff = np.linalg.norm(pose.image[:, :2] - expected[:, :2], axis=1)
-    assert diff.mean() <= 2.0, f"mean landmark difference {diff.mean():.2f} px"
-    assert np.abs(pose.image[:, 3] - expected[:, 3]).max() < 0.1  # visibility
+    # The issue asks for a mean difference <= 2 px; the pipeline reproduces MediaPipe's
+    # sampling and refinement, so it is held to far less (measured ~0.01 px).
+    assert diff.mean() <= 0.25, f"mean landmark difference {diff.mean():.3f} px"
+    assert diff.max() <= 1.0, f"max landmark difference {diff.max():.3f} px"
+    assert np.abs(pose.image[:, 2] - expected[:, 2]).mean() < 1.0  # depth, px
+    assert np.abs(pose.image[:, 3] - expected[:, 3]).max() < 0.01  # visibility
     # World landmarks: MediaPipe's frame (x right, y down, z away) -> canonical (x, -y, -z).
     world_mp = np.array(ref["world_landmarks_m"])
-    np.testing.assert_allclose(pose.world, world_mp * [1, -1, -1], atol=0.05)
+    np.testing.assert_allclose(pose.world, world_mp * [1, -1, -1], atol=0.01)
 
 
 def test_basketball1_person_on_the_left_faces_camera(

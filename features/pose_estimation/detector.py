@@ -66,22 +66,16 @@ def letterbox(rgb: np.ndarray) -> tuple[np.ndarray, float, float, float]:
 
     Returns the tensor and the square's side and offsets (in pixels): an image point (x, y) is
     at ((x + off_x) / side, (y + off_y) / side) in the model's normalised coordinates.
-    The crop is an affine warp of the centred square (bilinear, zero border), the same
-    sampling as MediaPipe's ImageToTensorCalculator on CPU.
+    The centred square is sampled with MediaPipe's own bilinear sampling (zero border), see
+    :func:`features.pose_estimation.landmarks.warp_rect`.
     """
+    from .landmarks import warp_rect
+
     h, w = rgb.shape[:2]
     side = float(max(w, h))
     off_x, off_y = (side - w) / 2.0, (side - h) / 2.0
-    scale = INPUT_SIZE / side
-    matrix = np.array([[scale, 0.0, off_x * scale], [0.0, scale, off_y * scale]])
-    crop = cv2.warpAffine(
-        rgb,
-        matrix,
-        (INPUT_SIZE, INPUT_SIZE),
-        flags=cv2.INTER_LINEAR,
-        borderMode=cv2.BORDER_CONSTANT,
-        borderValue=(0, 0, 0),
-    )
+    box = cv2.boxPoints(((w / 2.0, h / 2.0), (side, side), 0.0))
+    crop, _ = warp_rect(rgb, box, INPUT_SIZE, cv2.BORDER_CONSTANT)
     tensor = crop.astype(np.float32) * np.float32(2.0 / 255.0) - np.float32(1.0)
     return tensor[None], side, off_x, off_y
 
