@@ -184,12 +184,9 @@ def _score_activity(
                 )
             )
         else:
-            # Explain with the window where the QMP came closest.
-            q = cols[j]
-            frac = np.where(crit.observable[:, q], crit.fraction[:, q], -1.0)
-            closest = int(np.argmax(frac))
+            # The reasons come from the window where the QMP came closest.
             outcomes.append(
-                QMPOutcome(step.qmp, words, step.weight, "not met", reasons=crit.failed[closest][q])
+                QMPOutcome(step.qmp, words, step.weight, "not met", reasons=crit.failed[cols[j]])
             )
     obs_weight = int(weights[observable].sum())
     score = matched / obs_weight if obs_weight > 0 else float("nan")

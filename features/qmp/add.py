@@ -394,15 +394,17 @@ class CriteriaResult:
     """Criteria evaluated per window.
 
     names ``(Q,)``; met / observable ``(W, Q)`` bool; fraction ``(W, Q)`` the share of tests
-    passed by the best variant (for "why not"); failed: per (window, criterion) the tests that
-    failed in the best variant, as readable strings with the observed value.
+    passed by the best variant; closest ``(Q,)`` the observable window where a criterion that
+    was missed came closest (-1: never missed or never observable); failed ``(Q,)`` the tests
+    that failed there, as readable strings with the observed values.
     """
 
     names: tuple[str, ...]
     met: np.ndarray
     observable: np.ndarray
     fraction: np.ndarray
-    failed: tuple[tuple[tuple[str, ...], ...], ...]
+    closest: np.ndarray
+    failed: tuple[tuple[str, ...], ...]
 
 
 def _test_values(test: Test, fits: QMPFits) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
@@ -481,7 +483,8 @@ def evaluate_criteria(add: ADD, fits: QMPFits) -> CriteriaResult:
     met = np.zeros((n_win, n_q), dtype=bool)
     observable = np.zeros((n_win, n_q), dtype=bool)
     fraction = np.zeros((n_win, n_q))
-    failed: list[list[tuple[str, ...]]] = [[() for _ in range(n_q)] for _ in range(n_win)]
+    closest = np.full(n_q, -1, dtype=np.int64)
+    failed: list[tuple[str, ...]] = [() for _ in range(n_q)]
     for q, name in enumerate(names):
         crit = add.criteria[name]
         v_met, v_obs, v_frac, v_tests = [], [], [], []
@@ -502,7 +505,11 @@ def evaluate_criteria(add: ADD, fits: QMPFits) -> CriteriaResult:
             met[:, q] = vm.any(axis=1)
             observable[:, q] = vo.any(axis=1)
             fraction[:, q] = vf.max(axis=1)
-        for w in np.flatnonzero(~met[:, q] & observable[:, q]):
+        # Explain a miss once, in the observable window where the criterion came closest.
+        missed = ~met[:, q] & observable[:, q]
+        if missed.any():
+            w = int(np.argmax(np.where(missed, fraction[:, q], -1.0)))
+            closest[q] = w
             texts: list[str] = []
             # "both": every failing side counts; "either": explain the closest side.
             variants = range(len(crit.variants))
@@ -511,9 +518,9 @@ def evaluate_criteria(add: ADD, fits: QMPFits) -> CriteriaResult:
             for v in variants:
                 for (ok, _obs, values), test in v_tests[v]:
                     if not ok[w]:
-                        texts.append(_failure_text(test, values, int(w), fits))
-            failed[w][q] = tuple(dict.fromkeys(texts))
-    return CriteriaResult(names, met, observable, fraction, tuple(tuple(row) for row in failed))
+                        texts.append(_failure_text(test, values, w, fits))
+            failed[q] = tuple(dict.fromkeys(texts))
+    return CriteriaResult(names, met, observable, fraction, closest, tuple(failed))
 
 
 def feature_columns(add: ADD) -> tuple[tuple[str, str], ...]:
