@@ -304,6 +304,8 @@ def main(argv: list[str] | None = None) -> int:
             "processor": platform.processor() or platform.machine(),
             "cpu_count": os.cpu_count(),
             "threads": 1,
+            # Other work on the machine slows every timing; the load says how busy it was.
+            "load_average_1_5_15min_at_end": list(os.getloadavg()),
         },
         "versions": _versions(),
         "repeats": repeats,
