@@ -150,8 +150,10 @@ class CompareSettings:
     target: ``"label"`` or a metadata column; within: train one model per value of this column
     (``"label"`` by default when the target is not the label; ``None``: one model for all).
     k: neighbours of the case-base classifiers; trim: fraction of cases kept by novelty/benefit
-    trimming (None: keep all); peer_length: frames the peers' angle series are resampled to;
-    bootstrap: resamples for the F1 interval; explain: misclassified clips to explain.
+    trimming (None: keep all); cbr_params: further ``CaseBaseClassifier`` parameters given to
+    every case-base configuration (e.g. ``{"states": "all", "length": 48}``); peer_length:
+    frames the peers' angle series are resampled to; bootstrap: resamples for the F1
+    interval; explain: misclassified clips to explain.
     """
 
     target: str = "label"
@@ -163,6 +165,7 @@ class CompareSettings:
     peers: tuple[str, ...] = PEERS
     k: int = 5
     trim: float | None = None
+    cbr_params: dict[str, Any] = field(default_factory=dict)
     within: str | None = "auto"
     peer_length: int = 64
     jobs: int = 1
@@ -194,6 +197,16 @@ class CompareSettings:
             raise ConfigError(f"k must be a positive integer, got {self.k}", "--k")
         if self.trim is not None and not 0.0 < float(self.trim) <= 1.0:
             raise ConfigError(f"trim must be in (0, 1], got {self.trim}", "--trim")
+        from .estimator import CaseBaseClassifier
+
+        known = set(CaseBaseClassifier().get_params()) - {"features", "similarity", "k", "trim"}
+        bad = sorted(set(self.cbr_params) - known)
+        if bad:
+            raise ConfigError(
+                f"unknown case-base parameter(s) {', '.join(bad)} "
+                f"(known: {', '.join(sorted(known))})",
+                "--param",
+            )
         if int(self.jobs) < 1:
             raise ConfigError(f"jobs must be at least 1, got {self.jobs}", "--jobs")
         if int(self.peer_length) < 9:
@@ -228,7 +241,13 @@ def methods_for(settings: CompareSettings) -> list[Method]:
             f"cbr {level}/{sim}",
             "cbr",
             True,
-            {"features": level, "similarity": sim, "k": int(settings.k), "trim": settings.trim},
+            {
+                "features": level,
+                "similarity": sim,
+                "k": int(settings.k),
+                "trim": settings.trim,
+                **settings.cbr_params,
+            },
         )
         for level in settings.features
         for sim in settings.similarities

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from posecbr.errors import DataError
+from posecbr.errors import ConfigError, DataError
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -82,6 +82,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="keep fraction F of each activity's cases (novelty/benefit trimming) in "
         "every fold (default: keep all)",
     )
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a further CaseBaseClassifier parameter for every case-base configuration "
+        "(repeatable; VALUE is JSON or a plain string), e.g. --param states=all --param length=48",
+    )
     p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor: kinect or vicon")
     p.add_argument("--labels", default=None, metavar="LIST", help="only these activity labels")
     p.add_argument("--subjects", default=None, metavar="LIST", help="only these subjects")
@@ -127,6 +135,20 @@ def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
         w.writeheader()
         w.writerows(rows)
     os.replace(tmp, path)
+
+
+def parse_params(items: list[str]) -> dict[str, Any]:
+    """``KEY=VALUE`` pairs; VALUE read as JSON when it parses (numbers, lists), else a string."""
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, raw = item.partition("=")
+        if not sep or not key.strip():
+            raise ConfigError(f"expected KEY=VALUE, got {item!r}", "--param")
+        try:
+            out[key.strip()] = json.loads(raw)
+        except json.JSONDecodeError:
+            out[key.strip()] = raw
+    return out
 
 
 def _load(args: argparse.Namespace) -> list[Any]:
@@ -186,6 +208,7 @@ def run(args: argparse.Namespace) -> int:
         peers=peers,
         k=args.k,
         trim=args.trim,
+        cbr_params=parse_params(args.param),
         within=within,
         jobs=args.jobs,
         seed=args.seed,
