@@ -66,7 +66,17 @@ def test_pruned_dtw_returns_exactly_brute_force_neighbours(k: int) -> None:
         np.testing.assert_array_equal(idx, want)
         np.testing.assert_allclose(dist, brute[want], rtol=1e-12)
         _, _, n_dtw = knn_dtw(
-            qr[0], qr[1], qr[2], index.cases, index.upper, index.lower, index.radius, k
+            qr[0],
+            qr[1],
+            qr[2],
+            index.cases,
+            index.upper,
+            index.lower,
+            index.radius,
+            k,
+            index.seg_len,
+            index.seg_up,
+            index.seg_lo,
         )
         computed.append(n_dtw)
     # the cascade must skip most full DTW computations on clustered data
@@ -152,3 +162,43 @@ def test_lead_lag_signature_area_is_quadratic_variation() -> None:
     assert s12 - s21 == pytest.approx(1 + 4 + 1)
     # and the first level is the total increment of both channels
     np.testing.assert_allclose(sig[:2], [2.0, 2.0])
+
+
+def test_lower_bounds_never_exceed_dtw() -> None:
+    from cbr.similarity.dtw import _lb_keogh_rows, _lb_paa, envelope, segment_envelopes
+
+    rng = np.random.default_rng(11)
+    cases = _walks(rng, 200, 30, 3)
+    q = _walks(rng, 1, 30, 3)[0]
+    up, lo = envelope(cases, 3)
+    seg_len, seg_up, seg_lo = segment_envelopes(up, lo, 4)
+    assert list(seg_len) == [4] * 7 + [2]
+    qm = np.stack(
+        [
+            q[a : a + n].mean(axis=0)
+            for a, n in zip(np.cumsum([0, *seg_len[:-1]]), seg_len, strict=True)
+        ]
+    )
+    exact = dtw_all(q, cases, 3)
+    rows = np.empty(30)
+    for c in range(200):
+        keogh = _lb_keogh_rows(q, up[c], lo[c], rows)
+        paa = _lb_paa(qm, seg_len, seg_up[c], seg_lo[c])
+        assert paa <= keogh * (1 + 1e-12) + 1e-12
+        assert keogh <= exact[c] * (1 + 1e-12) + 1e-12
+
+
+def test_pruned_euclidean_returns_exactly_brute_force_neighbours() -> None:
+    rng = np.random.default_rng(2)
+    basis = rng.normal(size=(8, 300))
+    cases = rng.normal(size=(3000, 8)) @ basis + rng.normal(scale=0.5, size=(3000, 300))
+    m = Euclidean(prune_min_cases=1000, prune_dims=16)
+    index = m.build_index(m.represent(cases))
+    assert index.basis is not None  # the bound is in use
+    for _ in range(20):
+        q = rng.normal(size=8) @ basis + rng.normal(scale=0.5, size=300)
+        true = np.sqrt(((cases - q) ** 2).sum(axis=1))  # float64, independent of the index
+        want = np.argsort(true, kind="stable")[:7]
+        idx, dist = m.nearest(m.represent_query(q), index, 7)
+        np.testing.assert_array_equal(idx, want)
+        np.testing.assert_allclose(dist, true[want], rtol=1e-4)

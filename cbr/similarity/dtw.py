@@ -7,10 +7,11 @@ sequences ``(frames, channels)``.
 k-nearest search (the UCR-suite recipe, Rakthanmanon et al. 2012) returns exactly the brute
 force neighbours (ties -> lower case index):
 
-1. LB_Kim: first and last frames must be matched -> cost(q0, c0) + cost(q_end, c_end);
-2. LB_Keogh both ways: each query frame i is matched to some case frame in [i-r, i+r], so
+1. for every case: LB_Kim (first and last frames must be matched: cost(q0, c0) +
+   cost(q_end, c_end)) and a segment-averaged LB_Keogh (a few frames per segment, 4x cheaper);
+2. candidates in increasing order of that bound; stop when it exceeds the k-th best;
+3. LB_Keogh both ways: each query frame i is matched to some case frame in [i-r, i+r], so
    its cost is at least its squared distance to the case's envelope (and vice versa);
-3. candidates in increasing lower-bound order; stop when the bound exceeds the k-th best;
 4. early-abandoning DTW: stop a row-by-row DTW once the row minimum plus the LB_Keogh of the
    remaining rows exceeds the k-th best.
 
@@ -32,7 +33,7 @@ from posecbr.errors import ConfigError
 from .base import SimilarityMeasure, register_measure
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, fastmath=True)
 def _frame_cost(a: np.ndarray, i: int, b: np.ndarray, j: int) -> float:
     s = 0.0
     for c in range(a.shape[1]):
@@ -41,7 +42,7 @@ def _frame_cost(a: np.ndarray, i: int, b: np.ndarray, j: int) -> float:
     return s
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, fastmath=True)
 def dtw_sq(a: np.ndarray, b: np.ndarray, radius: int, best: float, tail: np.ndarray) -> float:
     """Squared DTW cost of ``a`` ``(n, d)`` vs ``b`` ``(n, d)`` within ``radius``.
 
@@ -78,25 +79,39 @@ def dtw_sq(a: np.ndarray, b: np.ndarray, radius: int, best: float, tail: np.ndar
     return float(prev[m])
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, fastmath=True)
 def _lb_keogh_rows(q: np.ndarray, upper: np.ndarray, lower: np.ndarray, out: np.ndarray) -> float:
+    """LB_Keogh of ``q`` against one envelope, per row into ``out`` ``(L,)``; the total."""
     total = 0.0
     for i in range(q.shape[0]):
         s = 0.0
-        for c in range(q.shape[1]):
+        for c in range(q.shape[1]):  # branch-free so the channel loop vectorises
             x = q[i, c]
-            if x > upper[i, c]:
-                t = x - upper[i, c]
-                s += t * t
-            elif x < lower[i, c]:
-                t = lower[i, c] - x
-                s += t * t
+            t = max(x - upper[i, c], 0.0) + max(lower[i, c] - x, 0.0)
+            s += t * t
         out[i] = s
         total += s
     return total
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _lb_paa(qm: np.ndarray, seg_len: np.ndarray, seg_up: np.ndarray, seg_lo: np.ndarray) -> float:
+    """LB_Keogh on segments: ``sum_s |s| * dist(mean of q over s, [min lower, max upper])^2``.
+
+    A lower bound of LB_Keogh: widening each row's interval to the segment's only shrinks the
+    distance, and the squared distance to an interval is convex (Jensen)."""
+    total = 0.0
+    for g in range(qm.shape[0]):
+        s = 0.0
+        for c in range(qm.shape[1]):
+            x = qm[g, c]
+            t = max(x - seg_up[g, c], 0.0) + max(seg_lo[g, c] - x, 0.0)
+            s += t * t
+        total += seg_len[g] * s
+    return total
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
 def knn_dtw(
     q: np.ndarray,
     q_upper: np.ndarray,
@@ -106,60 +121,90 @@ def knn_dtw(
     lower: np.ndarray,
     radius: int,
     k: int,
+    seg_len: np.ndarray,
+    seg_up: np.ndarray,
+    seg_lo: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """Exact k nearest of ``q`` ``(L, d)`` among ``cases`` ``(n, L, d)``.
 
-    Returns (indices ``(k,)``, squared costs ``(k,)``, number of full DTW computations).
+    ``seg_len`` ``(S,)`` frames per segment; ``seg_up``/``seg_lo`` ``(n, S, d)``: the cases'
+    envelopes over each segment (see :func:`segment_envelopes`). Returns (indices ``(k,)``,
+    squared costs ``(k,)``, number of full DTW computations).
     """
     n = cases.shape[0]
     L = q.shape[0]
+    d = q.shape[1]
+    n_seg = seg_len.shape[0]
+    qm = np.zeros((n_seg, d))  # the query's segment means
+    start = 0
+    for g in range(n_seg):
+        for i in range(start, start + seg_len[g]):
+            for c in range(d):
+                qm[g, c] += q[i, c]
+        for c in range(d):
+            qm[g, c] /= seg_len[g]
+        start += seg_len[g]
+    # stage 1 for every case (cheap): LB_Kim and the segment bound
     lb = np.empty(n)
-    rows = np.empty(L)
     for c in range(n):
         kim = _frame_cost(q, 0, cases[c], 0)
         if L > 1:
             kim += _frame_cost(q, L - 1, cases[c], L - 1)
-        keq = _lb_keogh_rows(q, upper[c], lower[c], rows)
-        kec = _lb_keogh_rows(cases[c], q_upper, q_lower, rows)
-        v = kim
-        if keq > v:
-            v = keq
-        if kec > v:
-            v = kec
-        lb[c] = v
+        paa = _lb_paa(qm, seg_len, seg_up[c], seg_lo[c])
+        lb[c] = kim if kim > paa else paa
     order = np.argsort(lb, kind="mergesort")
     best_d = np.full(k, np.inf)
     best_i = np.full(k, n, dtype=np.int64)  # n = "no case yet" (larger than every index)
     tail = np.zeros(L + 1)
+    rows = np.empty(L)
+    scratch = np.empty(L)
     computed = 0
-    slack = 1e-9
+    slack = 1e-6  # rounding (float32 cases): never prune on a bound merely equal to the best
     for t in range(n):
         c = order[t]
-        kth = best_d[k - 1]
-        if lb[c] > kth * (1.0 + slack) + 1e-300:
+        limit = best_d[k - 1] * (1.0 + slack) + 1e-300
+        if lb[c] > limit:
             break  # sorted: no later candidate can beat the k-th best
-        _lb_keogh_rows(q, upper[c], lower[c], rows)
+        # stage 2: full LB_Keogh both ways, only for the survivors
+        if _lb_keogh_rows(q, upper[c], lower[c], rows) > limit:
+            continue
+        if best_d[k - 1] < np.inf:
+            if _lb_keogh_rows(cases[c], q_upper, q_lower, scratch) > limit:
+                continue
         acc = 0.0
         for i in range(L - 1, -1, -1):
             tail[i + 1] = acc * (1.0 - slack)
             acc += rows[i]
-        tail[0] = acc
-        d = dtw_sq(q, cases[c], radius, kth * (1.0 + slack) + 1e-300, tail)
+        # stage 3: early-abandoning DTW (row minimum + LB_Keogh of the remaining rows)
+        dist = dtw_sq(q, cases[c], radius, limit, tail)
         computed += 1
-        if d < kth or (d == kth and c < best_i[k - 1]):
+        if dist < best_d[k - 1] or (dist == best_d[k - 1] and c < best_i[k - 1]):
             pos = k - 1
             while pos > 0 and (
-                d < best_d[pos - 1] or (d == best_d[pos - 1] and c < best_i[pos - 1])
+                dist < best_d[pos - 1] or (dist == best_d[pos - 1] and c < best_i[pos - 1])
             ):
                 best_d[pos] = best_d[pos - 1]
                 best_i[pos] = best_i[pos - 1]
                 pos -= 1
-            best_d[pos] = d
+            best_d[pos] = dist
             best_i[pos] = c
     return best_i, best_d, computed
 
 
-@numba.njit(cache=True, nogil=True)
+def segment_envelopes(
+    upper: np.ndarray, lower: np.ndarray, segment: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Frames per segment ``(S,)`` and the max of ``upper`` / min of ``lower`` over each
+    segment of ``segment`` frames, ``(n, S, d)`` each (the last segment may be shorter)."""
+    L = upper.shape[1]
+    bounds = np.arange(0, L, segment)
+    seg_len = np.diff(np.append(bounds, L)).astype(np.int64)
+    seg_up = np.maximum.reduceat(upper, bounds, axis=1)
+    seg_lo = np.minimum.reduceat(lower, bounds, axis=1)
+    return seg_len, np.ascontiguousarray(seg_up), np.ascontiguousarray(seg_lo)
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
 def dtw_all(q: np.ndarray, cases: np.ndarray, radius: int) -> np.ndarray:
     """Squared DTW cost from ``q`` ``(L, d)`` to every case ``(n, L, d)`` (brute force)."""
     n = cases.shape[0]
@@ -184,6 +229,9 @@ class _DTWIndex:
     upper: np.ndarray
     lower: np.ndarray
     radius: int
+    seg_len: np.ndarray  # (S,)
+    seg_up: np.ndarray  # (n, S, d)
+    seg_lo: np.ndarray
 
 
 @register_measure("dtw")
@@ -193,12 +241,14 @@ class DTW(SimilarityMeasure):
 
     ``radius``: band half-width in frames; when None, ``band`` x sequence length (rounded,
     at least 1). ``band=1.0`` is unconstrained DTW. ``prune``: use the lower-bound cascade
-    (exact either way; off = brute force).
+    (exact either way; off = brute force). ``segment``: frames per segment of the first,
+    cheapest bound (segment-averaged LB_Keogh).
     """
 
     radius: int | None = None
     band: float = 0.1
     prune: bool = True
+    segment: int = 4
 
     def __post_init__(self) -> None:
         if self.radius is not None and int(self.radius) < 0:
@@ -221,13 +271,29 @@ class DTW(SimilarityMeasure):
         return np.stack([p, up, lo], axis=1)
 
     def build_index(self, reps: np.ndarray) -> Any:
-        reps = np.asarray(reps, dtype=np.float64)
+        reps = _float(reps)  # float32 stays float32 (large case bases), costs sum in float64
+        upper = np.ascontiguousarray(reps[:, 1])
+        lower = np.ascontiguousarray(reps[:, 2])
+        seg = segment_envelopes(upper, lower, max(1, int(self.segment)))
         return _DTWIndex(
             np.ascontiguousarray(reps[:, 0]),
-            np.ascontiguousarray(reps[:, 1]),
-            np.ascontiguousarray(reps[:, 2]),
+            upper,
+            lower,
             self.radius_for(reps.shape[2]),
+            *seg,
         )
+
+    def index_for(self, problems: np.ndarray, chunk: int = 5000) -> Any:
+        """The search index straight from problems ``(n, L, d)`` (envelopes computed in
+        chunks, no stacked copy): for large case bases that are not cached in a store."""
+        cases = np.ascontiguousarray(_as_sequences(problems))
+        radius = self.radius_for(cases.shape[1])
+        upper = np.empty_like(cases)
+        lower = np.empty_like(cases)
+        for a in range(0, len(cases), chunk):
+            upper[a : a + chunk], lower[a : a + chunk] = envelope(cases[a : a + chunk], radius)
+        seg = segment_envelopes(upper, lower, max(1, int(self.segment)))
+        return _DTWIndex(cases, upper, lower, radius, *seg)
 
     def _check(self, query_rep: np.ndarray, index: _DTWIndex) -> np.ndarray:
         q = np.ascontiguousarray(query_rep[0], dtype=np.float64)
@@ -260,12 +326,20 @@ class DTW(SimilarityMeasure):
             index.lower,
             index.radius,
             k,
+            index.seg_len,
+            index.seg_up,
+            index.seg_lo,
         )
         return idx, np.sqrt(sq)
 
 
+def _float(a: np.ndarray) -> np.ndarray:
+    a = np.asarray(a)
+    return a if a.dtype == np.float32 else a.astype(np.float64)
+
+
 def _as_sequences(problems: np.ndarray) -> np.ndarray:
-    p = np.asarray(problems, dtype=np.float64)
+    p = _float(problems)
     if p.ndim == 2:  # (n, L): univariate sequences
         p = p[:, :, None]
     if p.ndim != 3:
