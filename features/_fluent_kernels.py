@@ -14,7 +14,13 @@ the numpy reference in :mod:`features.fluents` (``evaluate(..., backend="numpy")
   a fractional lag interpolates like the reference and recomputes.
 
 Numerics: the reference multiplies powers, this sums logarithms; they agree to ~1e-15.
-Compiled with ``cache=True`` so only the first run on a machine pays the compile time.
+
+:func:`state_signal_values` is :func:`features.signals.state_signals` in one pass over the
+frames (body frame, 22 angles, near distances), repeating the reference's float operations.
+
+Compiled with ``cache=True`` so only the first run on a machine pays the compile time. Hot
+loops are written inline rather than as helpers taking arrays: every such call costs atomic
+reference-count updates, which made the per-fluent helpers the bottleneck.
 """
 
 from __future__ import annotations
@@ -26,6 +32,7 @@ from numba import njit
 
 # Output column codes (one per state column), shared with features.fluents.
 LO, MID, HI, TWO_HI, TOUCH, M_LO, M_HI, STILL = range(8)
+
 
 @njit(cache=True, nogil=True, inline="always")
 def _lower(x: float, lo_edge: float, hi_edge: float, tau: float, k: float) -> float:
