@@ -60,12 +60,33 @@ def squat(t: float) -> Body:
     return out
 
 
+def push_up(t: float) -> Body:
+    """Plank facing down with straight arms under the shoulders; the body lowers 25 cm while
+    the hands stay put and the elbows bend out to the sides, 2 s per rep."""
+    b = standing()
+    for side in ("left", "right"):
+        b = rotate(b, _arm(side), rot_x(-90), b[f"{side}_shoulder"])  # arms straight ahead
+    b = rotate(b, tuple(b), rot_x(90), np.array([0.0, 0.1, 0.0]))  # tip over: face down
+    hands = {f"{s}_{j}" for s in ("left", "right") for j in ("wrist", "pinky", "index", "thumb")}
+    drop = np.array([0.0, 0.25 * _phase(t, 2.0), 0.0])
+    out = {j: (p if j in hands else p - drop) for j, p in b.items()}
+    upper, fore = 0.30, 0.25  # the standing body's arm links
+    for side, out_x in (("left", 1.0), ("right", -1.0)):
+        sh, wr = out[f"{side}_shoulder"], out[f"{side}_wrist"]
+        dist = float(np.linalg.norm(wr - sh))
+        along = (upper**2 - fore**2 + dist**2) / (2 * dist)  # elbow: two-link triangle
+        aside = np.sqrt(max(upper**2 - along**2, 0.0))
+        out[f"{side}_elbow"] = sh + along * (wr - sh) / dist + aside * np.array([out_x, 0, 0])
+    return out
+
+
 @pytest.mark.parametrize(
     ("pose", "seconds", "activity"),
     [
         (jumping_jack, 4.0, "jumping_jack"),
         (single_leg_rdl, 6.0, "single_leg_romanian_deadlift"),
         (squat, 7.5, "squat"),
+        (push_up, 6.0, "push_up"),
     ],
 )
 def test_synthetic_activity_is_ranked_first_with_every_qmp_met(
