@@ -1,0 +1,234 @@
+"""Pose estimation speed and agreement: posecbr's BlazePose on onnxruntime vs MediaPipe 0.10.21.
+
+Run: ``python -m benchmarks.pose_estimation [--mediapipe-python PATH] [--frames N]
+[--repeats N]``. Writes ``benchmarks/results/pose_estimation.json``.
+
+Input: real video (the reverse-lunge clip in ``../shared/data/videos``, centre-cropped to 4:3
+and resized to 640 x 480), decoded once into memory so only pose estimation is timed. Both
+pipelines run the same frames in the same run, in two modes:
+
+- ``tracking``: the landmark model follows the previous frame's landmarks (the detector only
+  when the track is lost), smoothing on; MediaPipe ``static_image_mode=False``.
+  Timestamps are 1/30 s apart in both, as MediaPipe's Python solution always assumes.
+- ``detect_every_frame``: the detector on every frame, no smoothing; MediaPipe
+  ``static_image_mode=True``.
+
+MediaPipe (``solutions.pose``, ``model_complexity=1`` = the full model, the one converted)
+runs in its own environment (``pip install --no-deps mediapipe==0.10.21`` plus absl-py attrs
+flatbuffers 'protobuf<5' matplotlib numpy opencv-python-headless), in a subprocess started
+with ``--mediapipe-python`` (default: ``$POSECBR_MEDIAPIPE_PYTHON`` or
+``/work/mp-venv/bin/python`` when present); without it only posecbr is measured.
+
+Reported per mode: frames/s (median of repeats, after one warm-up pass), the ratio
+posecbr / MediaPipe, and the mean image-landmark difference in pixels (33 landmarks, frames
+where both found the person).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.metadata
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
+CLIP = DATA / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
+RESULTS = ROOT / "benchmarks" / "results" / "pose_estimation.json"
+DEFAULT_MP_PYTHON = Path("/work/mp-venv/bin/python")
+MODES = ("tracking", "detect_every_frame")
+
+# Runs inside the MediaPipe environment: frames from an .npy file, landmarks and timings out.
+MP_RUNNER = r"""
+import json, sys, time
+import numpy as np
+import mediapipe as mp
+frames = np.load(sys.argv[1])
+repeats = int(sys.argv[2])
+out = {"mediapipe": mp.__version__, "modes": {}}
+h, w = frames.shape[1:3]
+for mode, static in (("tracking", False), ("detect_every_frame", True)):
+    times, lms = [], None
+    for r in range(repeats + 1):  # first pass = warm-up
+        pose = mp.solutions.pose.Pose(static_image_mode=static, model_complexity=1,
+                                      smooth_landmarks=True, enable_segmentation=False)
+        got = []
+        t0 = time.perf_counter()
+        for f in frames:
+            res = pose.process(f)
+            got.append(None if res.pose_landmarks is None else
+                       [[p.x * w, p.y * h] for p in res.pose_landmarks.landmark])
+        dt = time.perf_counter() - t0
+        pose.close()
+        if r > 0:
+            times.append(dt)
+        lms = got
+    out["modes"][mode] = {"seconds": times, "landmarks": lms}
+json.dump(out, sys.stdout)
+"""
+
+
+def load_frames(n: int) -> np.ndarray:
+    """``(n, 480, 640, 3)`` RGB uint8: centre 4:3 crop of the clip, resized to 640 x 480."""
+    cap = cv2.VideoCapture(str(CLIP))
+    frames = []
+    while len(frames) < n:
+        ok, bgr = cap.read()
+        if not ok:
+            break
+        h, w = bgr.shape[:2]
+        cw = min(w, h * 4 // 3)
+        x0 = (w - cw) // 2
+        crop = cv2.resize(bgr[:, x0 : x0 + cw], (640, 480), interpolation=cv2.INTER_AREA)
+        frames.append(cv2.cvtColor(crop, cv2.COLOR_BGR2RGB))
+    cap.release()
+    if not frames:
+        raise SystemExit(f"cannot read {CLIP}")
+    return np.stack(frames)
+
+
+def run_posecbr(frames: np.ndarray, repeats: int) -> dict[str, Any]:
+    from features.pose_estimation import PoseEstimator
+
+    out: dict[str, Any] = {}
+    for mode in MODES:
+        tracking = mode == "tracking"
+        est = PoseEstimator(tracking=tracking, smoothing=tracking)
+        times: list[float] = []
+        lms: list[np.ndarray | None] = []
+        for r in range(repeats + 1):
+            est.reset()
+            got: list[np.ndarray | None] = []
+            t0 = time.perf_counter()
+            for i, f in enumerate(frames):
+                pose = est.process(f, i / 30.0)
+                got.append(pose.image[:, :2] if pose.person else None)
+            dt = time.perf_counter() - t0
+            if r > 0:
+                times.append(dt)
+            lms = got
+        out[mode] = {"seconds": times, "landmarks": lms}
+    return out
+
+
+def run_mediapipe(python: Path, frames: np.ndarray, repeats: int) -> dict[str, Any] | None:
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "frames.npy"
+        np.save(path, frames)
+        proc = subprocess.run(
+            [str(python), "-c", MP_RUNNER, str(path), str(repeats)],
+            capture_output=True,
+            text=True,
+            timeout=3600,
+        )
+    if proc.returncode != 0:
+        print(f"MediaPipe run failed:\n{proc.stderr[-2000:]}", file=sys.stderr)
+        return None
+    result: dict[str, Any] = json.loads(proc.stdout)
+    return result
+
+
+def mean_difference(ours: list[Any], theirs: list[Any]) -> tuple[float, int]:
+    """Mean px distance over the 33 landmarks and the frames where both found a person."""
+    diffs = [
+        np.linalg.norm(np.asarray(a) - np.asarray(b), axis=1).mean()
+        for a, b in zip(ours, theirs, strict=True)
+        if a is not None and b is not None
+    ]
+    return (float(np.mean(diffs)) if diffs else float("nan")), len(diffs)
+
+
+def machine() -> dict[str, Any]:
+    versions = {}
+    for pkg in ("posecbr", "numpy", "onnxruntime", "opencv-python-headless"):
+        try:
+            versions[pkg] = importlib.metadata.version(pkg)
+        except importlib.metadata.PackageNotFoundError:
+            versions[pkg] = None
+    return {
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpu_count": os.cpu_count(),
+        "versions": versions,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    env_python = os.environ.get("POSECBR_MEDIAPIPE_PYTHON")
+    default_python = Path(env_python) if env_python else DEFAULT_MP_PYTHON
+    parser.add_argument("--mediapipe-python", type=Path, default=default_python)
+    parser.add_argument("--frames", type=int, default=250)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args(argv)
+    from features.pose_estimation import model_version
+
+    frames = load_frames(args.frames)
+    ours = run_posecbr(frames, args.repeats)
+    theirs = None
+    if args.mediapipe_python.is_file():
+        theirs = run_mediapipe(args.mediapipe_python, frames, args.repeats)
+    else:
+        print(f"no MediaPipe environment at {args.mediapipe_python}: posecbr only")
+    n = len(frames)
+    rows = {}
+    print(f"{n} frames 640x480 from {CLIP.name}, median of {args.repeats} repeats")
+    print(
+        f"{'mode':<20} {'posecbr fps':>12} {'MediaPipe fps':>14} {'ratio':>7} {'mean diff px':>13}"
+    )
+    for mode in MODES:
+        fps = n / statistics.median(ours[mode]["seconds"])
+        row: dict[str, Any] = {
+            "posecbr_fps": fps,
+            "posecbr_seconds": ours[mode]["seconds"],
+            "posecbr_frames_with_person": sum(x is not None for x in ours[mode]["landmarks"]),
+        }
+        if theirs is not None:
+            mp_mode = theirs["modes"][mode]
+            mp_fps = n / statistics.median(mp_mode["seconds"])
+            diff, both = mean_difference(ours[mode]["landmarks"], mp_mode["landmarks"])
+            row.update(
+                mediapipe_fps=mp_fps,
+                mediapipe_seconds=mp_mode["seconds"],
+                mediapipe_frames_with_person=sum(x is not None for x in mp_mode["landmarks"]),
+                ratio=fps / mp_fps,
+                mean_landmark_difference_px=diff,
+                frames_compared=both,
+            )
+            print(f"{mode:<20} {fps:>12.1f} {mp_fps:>14.1f} {fps / mp_fps:>7.2f} {diff:>13.2f}")
+        else:
+            print(f"{mode:<20} {fps:>12.1f} {'-':>14} {'-':>7} {'-':>13}")
+        rows[mode] = row
+    result = {
+        "benchmark": "pose_estimation",
+        "input": {"clip": str(CLIP.relative_to(DATA)), "frames": n, "size": [640, 480]},
+        "repeats": args.repeats,
+        "pose_model": model_version(),
+        "mediapipe": None if theirs is None else theirs["mediapipe"],
+        "goal": {"fps_ratio": 1.2, "mean_difference_px": 1.0},
+        "modes": rows,
+        "machine": machine(),
+        "command": "python -m benchmarks.pose_estimation",
+    }
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    tmp = RESULTS.with_name(f".{RESULTS.name}.tmp")
+    tmp.write_text(json.dumps(result, indent=1) + "\n")
+    os.replace(tmp, RESULTS)
+    print(f"wrote {RESULTS.relative_to(ROOT)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
