@@ -15,11 +15,18 @@ import cv2
 import numpy as np
 import pytest
 
-from features.pose_estimation import PoseEstimator, estimate_poses, estimate_video
+from features.pose_estimation import (
+    PoseEstimator,
+    estimate_poses,
+    estimate_video,
+    iter_frames,
+    stream_poses,
+)
 from features.pose_estimation import detector as det
 from features.pose_estimation import landmarks as lmk
 from features.pose_estimation.smoothing import OneEuroFilter, OneEuroParams
 from features.skeleton import JOINT_INDEX
+from posecbr.errors import DataError
 
 FIXTURES = Path(__file__).parent / "fixtures"
 REFERENCE = json.loads((FIXTURES / "mediapipe_pose_reference.json").read_text())
@@ -250,3 +257,38 @@ def test_legs_out_of_frame_are_missing_or_low_visibility(shared_data: Path) -> N
     assert not np.isnan(vp.sequence.positions[:, shoulders]).any()
     assert vp.sequence.confidence is not None
     assert vp.sequence.confidence[:, shoulders].min() > 0.9
+
+
+def test_crop_following_a_walker_in_vtest_gives_a_walking_pose(shared_data: Path) -> None:
+    # By eye: in the first frames a man in dark clothes walks left across the road at about
+    # (660, 285), some 8-9 px per frame (10 fps). A 200 x 200 window moved with him.
+    est = PoseEstimator(tracking=True, smoothing=True)
+    hips, gait, upright, knees = [], [], [], []
+    for i, rgb in enumerate(iter_frames(shared_data / "media" / "vtest.avi")):
+        if i == 20:
+            break
+        x0 = 560 - round(8.5 * i)
+        pose = est.process(np.ascontiguousarray(rgb[190:390, x0 : x0 + 200]), i / 10.0)
+        assert pose.person, f"frame {i}: walker not found"
+        im = pose.image
+        y = {n: im[JOINT_INDEX[n], 1] for n in ("nose", "left_shoulder", "left_hip", "left_ankle")}
+        upright.append(y["nose"] < y["left_shoulder"] < y["left_hip"] < y["left_ankle"])
+        hips.append(x0 + (im[JOINT_INDEX["left_hip"], 0] + im[JOINT_INDEX["right_hip"], 0]) / 2)
+        gait.append(im[JOINT_INDEX["left_ankle"], 0] - im[JOINT_INDEX["right_ankle"], 0])
+        knees.append(_knee_angles(pose.world[None])[0])
+    assert all(upright)
+    assert hips[0] - hips[-1] > 100  # he walks left by ~170 px in 2 s
+    # Steps: which ankle is ahead flips again and again.
+    assert np.count_nonzero(np.diff(np.sign(gait)) != 0) >= 3
+    assert min(knees) > 110  # walking, not crouching
+
+
+def test_stream_poses_from_a_file_and_a_missing_camera(shared_data: Path) -> None:
+    clip = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    got = list(stream_poses(clip, max_frames=4))
+    assert [f.index for f in got] == [0, 1, 2, 3]
+    assert [f.time_s for f in got] == [0.0, 0.2, 0.4, 0.6]  # 5 fps file: timed by its rate
+    assert all(f.pose.person for f in got)
+    assert got[0].rgb.shape == (1280, 720, 3)
+    with pytest.raises(DataError, match="cannot open camera or stream"):
+        next(iter(stream_poses(99)))

@@ -224,6 +224,19 @@ class StreamFrame:
     rgb: np.ndarray
 
 
+def _open_quietly(device: int | str) -> cv2.VideoCapture:
+    """Open a camera or stream without OpenCV's own warnings on stderr (posecbr reports)."""
+    logging = getattr(getattr(cv2, "utils", None), "logging", None)
+    if logging is None:
+        return cv2.VideoCapture(device)
+    level = logging.getLogLevel()
+    logging.setLogLevel(logging.LOG_LEVEL_ERROR)
+    try:
+        return cv2.VideoCapture(device)
+    finally:
+        logging.setLogLevel(level)
+
+
 def stream_poses(
     source: int | str | Path,
     *,
@@ -244,7 +257,7 @@ def stream_poses(
         fps = info.fps
     else:
         device = int(source) if isinstance(source, str) else source
-        cap = cv2.VideoCapture(device)
+        cap = _open_quietly(device)
         if not cap.isOpened():
             raise DataError("cannot open camera or stream", str(source))
     est = estimator or PoseEstimator(smoothing=smoothing)
