@@ -1034,7 +1034,8 @@ def format_table(results: dict[str, Any]) -> str:
             f"{100 * m['macro_f1_ci'][1]:5.1f}]"
         )
         cases = "" if m["case_base_size"] is None else f"{m['case_base_size']:.0f}"
-        pv = "best" if m["name"] == results["best"] else f"{m['mcnemar_p']:.3g}"
+        p = m["mcnemar_p"]
+        pv = "best" if m["name"] == results["best"] else ("<1e-300" if p < 1e-300 else f"{p:.3g}")
         mark = " *" if m["name"] == results["best_interpretable"] else ""
         lines.append(
             f"{m['name'] + mark:<22} {acc:<22} {f1:<22} {m['fit_s']:8.2f} "

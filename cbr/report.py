@@ -203,6 +203,7 @@ th{background:#f2f2f2}td.l,th.l{text-align:left}
 tr.best td{font-weight:bold;background:#eef5ff}
 figure{margin:1em 0}img{max-width:100%;height:auto;border:1px solid #eee}
 figcaption{font-size:.85em;color:#555}.note{color:#7a4b00}.small{font-size:.85em;color:#555}
+.wide{overflow-x:auto}
 .expl{border-left:3px solid #3b6fb6;padding:.3em .8em;margin:.8em 0;background:#fafcff}
 """
 
@@ -214,6 +215,11 @@ def _img(path: Path, alt: str) -> str:
 
 def _pct(x: float) -> str:
     return "" if x is None or not np.isfinite(x) else f"{100 * x:.1f}"
+
+
+def _p_value(p: float) -> str:
+    # Exact binomial tails underflow to 0 for large samples: say how small, not "0".
+    return "< 1e-300" if p < 1e-300 else f"{p:.3g}"
 
 
 def _table(results: dict[str, Any]) -> str:
@@ -232,7 +238,7 @@ def _table(results: dict[str, Any]) -> str:
             continue
         cls = " class='best'" if m["name"] == results.get("best_interpretable") else ""
         cb = "" if m.get("case_base_size") is None else f"{m['case_base_size']:.0f}"
-        p = "best" if m["name"] == results.get("best") else f"{m['mcnemar_p']:.3g}"
+        p = "best" if m["name"] == results.get("best") else _p_value(m["mcnemar_p"])
         tag = "" if m["interpretable"] else " <span class='small'>(peer)</span>"
         rows.append(
             f"<tr{cls}><td class='l'>{e(m['name'])}{tag}</td><td>{_pct(m['accuracy'])}</td>"
@@ -243,7 +249,7 @@ def _table(results: dict[str, Any]) -> str:
             f"<td>{p}</td></tr>"
         )
     rows.append("</tbody></table>")
-    return "\n".join(rows)
+    return "<div class='wide'>" + "\n".join(rows) + "</div>"
 
 
 def _recall_table(results: dict[str, Any]) -> str:
@@ -262,7 +268,7 @@ def _recall_table(results: dict[str, Any]) -> str:
         )
         rows.append(f"<tr><td class='l'>{e(c)} ({n})</td>{cells}</tr>")
     rows.append("</tbody></table>")
-    return "\n".join(rows)
+    return "<div class='wide'>" + "\n".join(rows) + "</div>"
 
 
 def _explanations(results: dict[str, Any]) -> str:
