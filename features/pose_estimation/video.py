@@ -75,7 +75,10 @@ def open_video(path: str | Path) -> tuple[cv2.VideoCapture, VideoInfo]:
         raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
     if not head:
         raise DataError("empty file, not a video", path)
-    cap = cv2.VideoCapture(str(path))
+    try:
+        cap = cv2.VideoCapture(str(path))
+    except cv2.error as exc:
+        raise DataError(f"cannot open as a video ({exc.msg or exc})", path) from None
     if not cap.isOpened():
         cap.release()
         raise DataError(
@@ -98,11 +101,17 @@ def iter_frames(path: str | Path) -> Iterator[np.ndarray]:
     count = 0
     try:
         while True:
-            ok, bgr = cap.read()
-            if not ok or bgr is None:
-                break
+            try:
+                ok, bgr = cap.read()
+                if not ok or bgr is None:
+                    break
+                rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+            except cv2.error as exc:
+                raise DataError(
+                    f"cannot decode frame {count} ({exc.msg or exc})", info.path
+                ) from None
             count += 1
-            yield cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+            yield rgb
     finally:
         cap.release()
     if count == 0:
