@@ -24,6 +24,7 @@ Protocol
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import importlib
 import importlib.metadata
@@ -628,8 +629,10 @@ def _run_task(task: tuple[int, int]) -> FoldResult:
 
 
 def warm_features(data: Prepared, methods: list[Method], settings: CompareSettings) -> list[str]:
-    """Compute every clip's features once (fluents, QMPs, peer angle series); returns the
-    names of feature levels that could not be computed, each with its reason."""
+    """Compute every clip's features once (fluents, QMPs, peer angle series) so that no fold
+    recomputes them; returns the feature levels that cannot be computed at all in this build,
+    each with its reason ("qmp: ..."). A single clip that fails is left to the folds, which
+    report the method as failed with the clip's error."""
     from .problem import FeatureConfig, extract_problem, resolve_config
 
     failed: list[str] = []
@@ -639,15 +642,19 @@ def warm_features(data: Prepared, methods: list[Method], settings: CompareSettin
     qmp_config = FeatureConfig(level="qmp")
     for seq in progress(data.seqs, "features", total=len(data.seqs), unit="clip"):
         if need_fluents:
-            resolve_config(FeatureConfig(level="fluents"), [seq])  # fills the fluent cache
+            with contextlib.suppress(PosecbrError):
+                resolve_config(FeatureConfig(level="fluents"), [seq])  # fills the fluent cache
         if need_qmp:
             try:
                 extract_problem(seq, qmp_config)  # fills the QMP cache
-            except ConfigError as exc:
+            except ConfigError as exc:  # the level is missing from this build
                 failed.append(f"qmp: {exc.message}")
                 need_qmp = False
+            except PosecbrError:
+                pass
         if need_angles:
-            angle_series(seq, int(settings.peer_length))
+            with contextlib.suppress(PosecbrError):
+                angle_series(seq, int(settings.peer_length))
     return failed
 
 
