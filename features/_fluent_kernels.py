@@ -169,11 +169,12 @@ def fluent_confidences(
                         totals[i] += v * w
                 for i in range(n):
                     t = totals[i]
-                    # NaN (a NaN factor) and -inf (a zero factor) decide without a log.
-                    if t == -np.inf:
-                        r = 0.0
-                    elif t != t:
-                        r = np.nan
+                    # NaN (a NaN factor), -inf (a zero factor) and 0 (all ones) decide the
+                    # product without exp or log; only a product strictly between 0 and 1 (a
+                    # few % of them) takes the branch, so it is well predicted.
+                    slow = (t > -np.inf) & ((t != 0.0) | (pendings[i] > 0.0))
+                    if not slow:
+                        r = 0.0 if t == -np.inf else (t if t != t else 1.0)
                     elif pendings[i] > 0.0:
                         # Every factor is positive: compute the missing logs, once per Δ.
                         q_tau = motion[i, 4 * direction + 2]
@@ -187,8 +188,6 @@ def fluent_confidences(
                                 ring_lc[direction, sa, i] = v
                             t += v * inv[a]
                         r = math.exp(t)
-                    elif t == 0.0:
-                        r = 1.0
                     else:
                         r = math.exp(t)
                     blk[M_LO + direction, i] = r
