@@ -195,8 +195,9 @@ def bench_dad(repeats: int) -> dict[str, Any]:
 
 
 def bench_accuracy() -> dict[str, Any]:
-    """DAD accuracy on clips the ADD thresholds were not set on: UI-PRMD episodes 4-10 (the
-    ADD was tuned on episodes 1-3) and HDM05 actor dg (tuned on bd and bk)."""
+    """DAD accuracy on clips the ADD thresholds were not set on: UI-PRMD Kinect episodes 4-10
+    (the ADD was tuned on Kinect episodes 1-3), UI-PRMD Vicon episodes 4-10 (correct
+    repetitions only exist), and HDM05 actor dg (tuned on bd and bk)."""
     from collections import Counter
 
     from cbr.dad import DADClassifier
@@ -204,8 +205,13 @@ def bench_accuracy() -> dict[str, Any]:
 
     out: dict[str, Any] = {}
     uiprmd = list(iter_dataset(DATA / "ui-prmd", episodes=set(range(4, 11))))
+    vicon = list(iter_dataset(DATA / "ui-prmd", sensor="vicon", episodes=set(range(4, 11))))
     hdm05 = list(iter_dataset(DATA / "hdm05", subjects={"dg"}))
-    for name, clips in (("uiprmd_kinect_episodes_4_10", uiprmd), ("hdm05_actor_dg", hdm05)):
+    for name, clips in (
+        ("uiprmd_kinect_episodes_4_10", uiprmd),
+        ("uiprmd_vicon_episodes_4_10", vicon),
+        ("hdm05_actor_dg", hdm05),
+    ):
         X, y = [c.seq for c in clips], np.array([c.label for c in clips])
         pred = DADClassifier().fit(X, y).predict(X)
         ok = pred == y
