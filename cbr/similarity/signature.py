@@ -50,12 +50,18 @@ def augment(
 @register_measure("signature")
 @dataclass(frozen=True)
 class Signature(SimilarityMeasure):
-    """Euclidean distance between truncated path signatures of the problem sequences."""
+    """Euclidean distance between truncated path signatures of the problem sequences.
+
+    ``prune_dims``: rank of the exact PCA lower-bound filter used on large case bases (see
+    :mod:`cbr.similarity.euclidean`); signatures spread over more directions than raw
+    sequences, so the filter needs more of them to be selective.
+    """
 
     depth: int = 2
     time: bool = True
     lead_lag: bool = False
     basepoint: bool = True
+    prune_dims: int = 128
 
     def __post_init__(self) -> None:
         if not 1 <= int(self.depth) <= 6:
@@ -84,8 +90,14 @@ class Signature(SimilarityMeasure):
             return np.zeros((0, iisignature.siglength(path.shape[2], int(self.depth))))
         return np.asarray(iisignature.sig(path, int(self.depth)), dtype=np.float64)
 
+    def _euclidean(self) -> Euclidean:
+        return Euclidean(prune_dims=int(self.prune_dims))
+
     def build_index(self, reps: np.ndarray) -> Any:
-        return Euclidean().build_index(reps)
+        return self._euclidean().build_index(reps)
 
     def distances(self, query_rep: np.ndarray, index: Any) -> np.ndarray:
-        return Euclidean().distances(query_rep, index)
+        return self._euclidean().distances(query_rep, index)
+
+    def nearest(self, query_rep: np.ndarray, index: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
+        return self._euclidean().nearest(query_rep, index, k)
