@@ -795,6 +795,16 @@ def run_compare(
         why = _method_unavailable(m, data, settings)
         if why:
             status[mi] = ("skipped", why)
+        elif m.kind == "dad":
+            from features.qmp.add import load_add
+
+            known = {lab for act in load_add().activities.values() for lab in act.labels}
+            uncovered = [c for c in data.classes if c not in known]
+            if uncovered:
+                notes.append(
+                    f"the ADD has no activity for {', '.join(uncovered)}: DAD cannot recognise "
+                    "those clips (it answers the best-scoring described activity instead)"
+                )
     failed = warm_features(data, [m for i, m in enumerate(methods) if i not in status], settings)
     for msg in failed:
         level = msg.split(":", 1)[0]
