@@ -66,6 +66,8 @@ def fluent_confidences(
     window: int,
     col_code: np.ndarray,
     col_fluent: np.ndarray,
+    col_out: np.ndarray,
+    nan_cols: np.ndarray,
     out: np.ndarray,
 ) -> None:
     """Fill ``out`` ``(frames, n_states)`` with every state's confidence.
@@ -75,8 +77,10 @@ def fluent_confidences(
     its column in ``dist_m`` (-1: not a distance fluent); ``inst[i]`` = (lower τ-δ, τ+δ, τ, k,
     upper τ-δ, τ+δ, τ, k) and ``motion[i]`` = (toward-s0 τ-δ, τ+δ, τ, k, toward-sn τ-δ, τ+δ,
     τ, k), k = ln((1-ε)/ε)/δ; ``three[i]``: has an upper boundary; ``partner[i]``: the other
-    fluent of a tilt pair (or i). Per output column j: ``col_code[j]`` (LO..STILL) and
-    ``col_fluent[j]``. ``lag``: source frames per reference interval; ``window``: r.
+    fluent of a tilt pair (or i). Per computed column j: ``col_code[j]`` (LO..STILL),
+    ``col_fluent[j]`` and ``col_out[j]`` its column in ``out``; ``nan_cols``: columns of
+    ``out`` to fill with NaN (fluents the caller left out because their signal is missing in
+    every frame). ``lag``: source frames per reference interval; ``window``: r.
     """
     frames = values.shape[0]
     n = sig_col.shape[0]
@@ -251,7 +255,9 @@ def fluent_confidences(
                 blk[MID, i] = blk[MID, i] * ((1.0 - blk[LO, j]) * (1.0 - blk[HI, j]))
                 blk[STILL, i] = blk[STILL, i] * ((1.0 - blk[M_LO, j]) * (1.0 - blk[M_HI, j]))
         for j in range(n_cols):
-            out[f, j] = blk[col_code[j], col_fluent[j]]
+            out[f, col_out[j]] = blk[col_code[j], col_fluent[j]]
+        for j in range(nan_cols.shape[0]):
+            out[f, nan_cols[j]] = np.nan
 
 
 # ---------------------------------------------------------------------------------------------

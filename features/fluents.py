@@ -31,7 +31,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from posecbr.errors import ConfigError
+from posecbr.errors import ConfigError, DataError
 
 from .poses import PoseSequence
 from .signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals, near_pairs, state_signals
@@ -644,6 +644,15 @@ def evaluate(
     table = table or DEFAULT_TABLE
     sig = signals if signals is not None else state_signals(seq)
     prep = _prepare(table)
+    frames = sig.values.shape[0] if sig.values.ndim == 2 else -1
+    if sig.values.shape != (frames, len(sig.names)) or sig.distances_m.shape != (
+        frames, len(NEAR_SIGNALS)
+    ):
+        raise DataError(
+            f"state signals have shapes {sig.values.shape} and {sig.distances_m.shape}, expected "
+            f"(frames, {len(sig.names)}) and (frames, {len(NEAR_SIGNALS)})",
+            seq.source or None,
+        )
     sig_col, dist_col = _signal_columns(sig, prep)
     if backend == "auto":
         backend = "numba" if _numba_available() else "numpy"
@@ -652,13 +661,24 @@ def evaluate(
 
         values = np.ascontiguousarray(sig.values, dtype=np.float64)
         dist_m = np.ascontiguousarray(sig.distances_m, dtype=np.float64)
-        if dist_m.ndim != 2 or dist_m.shape[0] != values.shape[0]:
-            dist_m = np.full((values.shape[0], 1), np.nan)
         out = np.empty((values.shape[0], len(prep.state_names)))
+        # A fluent whose signal (and, for near, distance in metres) is missing in every frame
+        # is NaN throughout: leave it out of the kernel (e.g. no face on Kinect or mocap).
+        missing: np.ndarray = np.all(np.isnan(values), axis=0)
+        missing_m: np.ndarray = np.all(np.isnan(dist_m), axis=0)
+        skip = missing[sig_col]
+        near = dist_col >= 0
+        skip[near] &= missing_m[dist_col[near]]
+        skip &= skip[prep.partner]  # a tilt pair is kept whole
+        keep = np.flatnonzero(~skip)
+        new_index = np.cumsum(~skip) - 1
+        kept_cols = ~skip[prep.fluent]
         fluent_confidences(
-            values, dist_m, sig_col, dist_col, prep.inst, prep.motion, prep.three, prep.partner,
+            values, dist_m, sig_col[keep], dist_col[keep], prep.inst[keep], prep.motion[keep],
+            prep.three[keep], new_index[prep.partner[keep]],
             float(table.touching_m), float(seq.fps / table.reference_fps), int(table.window),
-            prep.code, prep.fluent, out,
+            prep.code[kept_cols], new_index[prep.fluent[kept_cols]], np.flatnonzero(kept_cols),
+            np.flatnonzero(~kept_cols), out,
         )  # fmt: skip
     elif backend == "numpy":
         x = sig.values[:, sig_col]

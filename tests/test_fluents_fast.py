@@ -19,7 +19,7 @@ from features.poses import PoseSequence, load_pose
 from features.readers.asfamc import read_asf_amc
 from features.readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon
 from features.signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals
-from posecbr.errors import ConfigError
+from posecbr.errors import ConfigError, DataError
 from tests.bodies import standing, to_sequence
 
 DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
@@ -61,6 +61,22 @@ def _walk_signals(frames: int, fps: float, seed: int, nan_fraction: float = 0.03
     return StateSignals(ANGLE_SIGNALS + NEAR_SIGNALS, values, fps, head, dist_m)
 
 
+def _with_missing_signals(sig: StateSignals) -> StateSignals:
+    """The same signals with some missing in every frame (the kernel leaves those fluents
+    out): one direction of the head tilt pair, an elbow, and near distances in head-lengths
+    whose metres stay known (so "touching" stays defined, as without ears on Vicon)."""
+    values = sig.values.copy()
+    names = list(sig.names)
+    for name in ("neck_frontal", "left_elbow"):
+        values[:, names.index(name)] = np.nan
+    n_a = len(ANGLE_SIGNALS)
+    values[:, n_a : n_a + 10] = np.nan
+    dist_m = sig.distances_m.copy()
+    dist_m[:, 5] = np.nan  # and one pair missing in both units
+    values[:, n_a + 5] = np.nan
+    return StateSignals(sig.names, values, sig.fps, sig.head_length_m, dist_m)
+
+
 def _dummy_seq(frames: int, fps: float) -> PoseSequence:
     body = standing()
     return to_sequence(*([body] * frames), fps=fps)
@@ -87,6 +103,35 @@ def test_fast_equals_reference_on_short_clips(frames: int, fps: float) -> None:
     lag = fps / 30.0
     if frames - 1 < lag - 1e-9:  # no frame has a full reference interval of history
         assert np.all(np.isnan(ref[:, temporal]))
+
+
+@pytest.mark.parametrize("fps", [30.0, 100.0])
+def test_fast_equals_reference_with_signals_missing_throughout(fps: float) -> None:
+    sig = _with_missing_signals(_walk_signals(120, fps, seed=11))
+    ref = _assert_same(_dummy_seq(120, fps), signals=sig)
+    names = evaluate(_dummy_seq(1, fps)).state_names
+    # what the kernel skipped is NaN, what it kept is not (touching on metres, the partner)
+    assert np.all(np.isnan(ref[:, names.index("left_arm_bent.bent")]))
+    near = [f"near:{a}~{b}" for a, b in (n.split("~") for n in NEAR_SIGNALS[:10])]
+    assert np.all(np.isnan(ref[:, names.index(f"{near[0]}.near")]))
+    assert not np.all(np.isnan(ref[:, names.index(f"{near[0]}.touching")]))
+    assert np.all(np.isnan(ref[:, names.index(f"{near[5]}.touching")]))
+    assert not np.all(np.isnan(ref[:, names.index("head_tilted_forward.tilted_forward")]))
+    assert np.all(np.isnan(ref[:, names.index("head_tilted_forward.upright")]))
+
+
+def test_all_joints_missing_gives_nan_everywhere() -> None:
+    seq = PoseSequence(np.full((8, 33, 3), np.nan), _dummy_seq(1, 30.0).joint_names, 30.0)
+    for backend in ("numba", "numpy"):
+        assert np.all(np.isnan(evaluate(seq, backend=backend).confidence))
+
+
+def test_signals_of_the_wrong_shape_are_a_data_error() -> None:
+    seq = _dummy_seq(5, 30.0)
+    sig = state_signals(seq)
+    bad = StateSignals(sig.names, sig.values, sig.fps, sig.head_length_m, sig.distances_m[:, :3])
+    with pytest.raises(DataError, match="shapes"):
+        evaluate(seq, signals=bad)
 
 
 def test_fast_equals_reference_with_other_parameters() -> None:
