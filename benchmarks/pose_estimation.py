@@ -61,22 +61,23 @@ repeats = int(sys.argv[2])
 out = {"mediapipe": mp.__version__, "modes": {}}
 h, w = frames.shape[1:3]
 for mode, static in (("tracking", False), ("detect_every_frame", True)):
-    times, lms = [], None
+    times, cpu, lms = [], [], None
     for r in range(repeats + 1):  # first pass = warm-up
         pose = mp.solutions.pose.Pose(static_image_mode=static, model_complexity=1,
                                       smooth_landmarks=True, enable_segmentation=False)
         got = []
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         for f in frames:
             res = pose.process(f)
             got.append(None if res.pose_landmarks is None else
                        [[p.x * w, p.y * h] for p in res.pose_landmarks.landmark])
-        dt = time.perf_counter() - t0
+        dt, dc = time.perf_counter() - t0, time.process_time() - c0
         pose.close()
         if r > 0:
             times.append(dt)
+            cpu.append(dc)
         lms = got
-    out["modes"][mode] = {"seconds": times, "landmarks": lms}
+    out["modes"][mode] = {"seconds": times, "cpu_seconds": cpu, "landmarks": lms}
 json.dump(out, sys.stdout)
 """
 
@@ -107,11 +108,15 @@ def run_posecbr(frames: np.ndarray, estimators: dict[str, Any]) -> dict[str, Any
         est = estimators[mode]
         est.reset()
         got: list[np.ndarray | None] = []
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         for i, f in enumerate(frames):
             pose = est.process(f, i / 30.0)
             got.append(pose.image[:, :2] if pose.person else None)
-        out[mode] = {"seconds": time.perf_counter() - t0, "landmarks": got}
+        out[mode] = {
+            "seconds": time.perf_counter() - t0,
+            "cpu_seconds": time.process_time() - c0,
+            "landmarks": got,
+        }
     return out
 
 
@@ -177,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     run_posecbr(frames, estimators)  # warm-up
     # Rounds alternate the two pipelines so that load from other processes on a shared
     # machine falls on both alike; the medians over rounds are reported.
-    ours: dict[str, Any] = {m: {"seconds": [], "landmarks": None} for m in MODES}
+    ours: dict[str, Any] = {m: {"seconds": [], "cpu_seconds": []} for m in MODES}
     theirs: dict[str, Any] | None = None
     with tempfile.TemporaryDirectory() as tmp:
         frames_path = Path(tmp) / "frames.npy"
@@ -186,6 +191,7 @@ def main(argv: list[str] | None = None) -> int:
             got = run_posecbr(frames, estimators)
             for m in MODES:
                 ours[m]["seconds"].append(got[m]["seconds"])
+                ours[m]["cpu_seconds"].append(got[m]["cpu_seconds"])
                 ours[m]["landmarks"] = got[m]["landmarks"]
             if use_mp:
                 mp_round = run_mediapipe(args.mediapipe_python, frames_path)
@@ -195,21 +201,22 @@ def main(argv: list[str] | None = None) -> int:
                 if theirs is None:
                     theirs = {"mediapipe": mp_round["mediapipe"], "modes": {}}
                     for m in MODES:
-                        theirs["modes"][m] = {"seconds": [], "landmarks": None}
+                        theirs["modes"][m] = {"seconds": [], "cpu_seconds": []}
                 for m in MODES:
                     theirs["modes"][m]["seconds"] += mp_round["modes"][m]["seconds"]
+                    theirs["modes"][m]["cpu_seconds"] += mp_round["modes"][m]["cpu_seconds"]
                     theirs["modes"][m]["landmarks"] = mp_round["modes"][m]["landmarks"]
     n = len(frames)
     rows = {}
     print(f"{n} frames 640x480 from {CLIP.name}, median of {args.repeats} alternating rounds")
-    print(
-        f"{'mode':<20} {'posecbr fps':>12} {'MediaPipe fps':>14} {'ratio':>7} {'mean diff px':>13}"
-    )
+    head = ("mode", "posecbr fps", "MediaPipe fps", "ratio", "CPU ms/frame", "CPU ratio", "diff px")
+    print("{:<20} {:>12} {:>14} {:>7} {:>14} {:>10} {:>8}".format(*head))
     for mode in MODES:
         fps = n / statistics.median(ours[mode]["seconds"])
         row: dict[str, Any] = {
             "posecbr_fps": fps,
             "posecbr_seconds": ours[mode]["seconds"],
+            "posecbr_cpu_ms_per_frame": 1000 * statistics.median(ours[mode]["cpu_seconds"]) / n,
             "posecbr_frames_with_person": sum(x is not None for x in ours[mode]["landmarks"]),
         }
         if theirs is not None:
@@ -217,9 +224,7 @@ def main(argv: list[str] | None = None) -> int:
             mp_fps = n / statistics.median(mp_mode["seconds"])
             diff, both = mean_difference(ours[mode]["landmarks"], mp_mode["landmarks"])
             # Each round's own ratio: the two ran back to back, under the same load.
-            paired = [
-                m / o for o, m in zip(ours[mode]["seconds"], mp_mode["seconds"], strict=True)
-            ]
+            paired = [m / o for o, m in zip(ours[mode]["seconds"], mp_mode["seconds"], strict=True)]
             row.update(
                 mediapipe_fps=mp_fps,
                 mediapipe_seconds=mp_mode["seconds"],
@@ -227,13 +232,21 @@ def main(argv: list[str] | None = None) -> int:
                 ratio_of_medians=fps / mp_fps,
                 ratio=statistics.median(paired),
                 ratio_per_round=paired,
+                mediapipe_cpu_ms_per_frame=1000 * statistics.median(mp_mode["cpu_seconds"]) / n,
+                # CPU time per frame depends far less on other processes than wall time does.
+                cpu_ratio=statistics.median(mp_mode["cpu_seconds"])
+                / statistics.median(ours[mode]["cpu_seconds"]),
                 mean_landmark_difference_px=diff,
                 frames_compared=both,
             )
-            ratio = row["ratio"]
-            print(f"{mode:<20} {fps:>12.1f} {mp_fps:>14.1f} {ratio:>7.2f} {diff:>13.2f}")
+            cpu = f"{row['posecbr_cpu_ms_per_frame']:.1f}/{row['mediapipe_cpu_ms_per_frame']:.1f}"
+            print(
+                f"{mode:<20} {fps:>12.1f} {mp_fps:>14.1f} {row['ratio']:>7.2f} {cpu:>14}"
+                f" {row['cpu_ratio']:>10.2f} {diff:>8.2f}"
+            )
         else:
-            print(f"{mode:<20} {fps:>12.1f} {'-':>14} {'-':>7} {'-':>13}")
+            cpu = f"{row['posecbr_cpu_ms_per_frame']:.1f}"
+            print(f"{mode:<20} {fps:>12.1f} {'-':>14} {'-':>7} {cpu:>14} {'-':>10} {'-':>8}")
         rows[mode] = row
     result = {
         "benchmark": "pose_estimation",

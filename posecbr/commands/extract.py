@@ -246,11 +246,12 @@ def _fluent_words(seq: Any, top: int = 4) -> list[list[str]] | None:
     conf[:, background(result)] = 0.0
     # Motion states first among equally confident ones: they are what changes on screen.
     order_key = np.round(conf, 1) + 0.05 * np.asarray(result.temporal, dtype=float)
-    words = []
-    for f in range(conf.shape[0]):
-        idx = [i for i in np.argsort(-order_key[f], kind="stable")[:top] if conf[f, i] >= 0.8]
-        words.append([result.words[i] for i in idx])
-    return words
+    best = np.argsort(-order_key, axis=1, kind="stable")[:, :top]  # (frames, top)
+    holds = np.take_along_axis(conf, best, axis=1) >= 0.8
+    return [
+        [result.words[i] for i, ok in zip(row, row_ok, strict=True) if ok]
+        for row, row_ok in zip(best, holds, strict=True)
+    ]
 
 
 def process(job: Job, options: Options) -> tuple[str, Path, str]:
