@@ -86,6 +86,7 @@ def fluent_confidences(
     n = sig_col.shape[0]
     n_cols = col_code.shape[0]
     blk = np.empty((8, n))
+    blk[TOUCH, :] = np.nan  # only near fluents have a touching state
     inv = np.empty(window)
     for a in range(window):
         inv[a] = 1.0 / (a + 1)

@@ -484,6 +484,7 @@ class _Prepared:
     fluent: np.ndarray  # (n_states,) spec index
     code: np.ndarray  # (n_states,) index into _CODES
     signals: tuple[str, ...]  # (n,) signal name of each fluent
+    distance: np.ndarray  # (n,) bool: a near fluent (its signal is a joint pair)
     partner: np.ndarray  # (n,) the other fluent of a tilt pair, or itself
     inst: np.ndarray  # (n, 8) lower (τ-δ, τ+δ, τ, k), upper (τ-δ, τ+δ, τ, k)
     motion: np.ndarray  # (n, 8) toward s0 (τ-δ, τ+δ, τ, k), toward sn (same)
@@ -539,6 +540,7 @@ def _prepare(table: FluentTable) -> _Prepared:
         fluent=np.array([i for i, _, _, _ in cols], dtype=np.intp),
         code=np.array([_CODES.index(k) for k in keys], dtype=np.intp),
         signals=tuple(s.signal for s in specs),
+        distance=np.array([s.kind == "distance" for s in specs], dtype=bool),
         partner=np.array([index_of.get(s.paired_with or "", i) for i, s in enumerate(specs)],
                          dtype=np.intp),  # fmt: skip
         inst=inst,
@@ -571,6 +573,10 @@ def _signal_columns(sig: StateSignals, prep: _Prepared) -> tuple[np.ndarray, np.
     except KeyError as exc:
         raise ConfigError(f"fluent table names an unknown signal {exc.args[0]!r}") from None
     dist_col = np.array([pair_index.get(name, -1) for name in prep.signals], dtype=np.intp)
+    if np.any(prep.distance & (dist_col < 0)):
+        bad = prep.signals[int(np.flatnonzero(prep.distance & (dist_col < 0))[0])]
+        raise ConfigError(f"distance fluent on {bad!r}, which is not a near joint pair")
+    dist_col[~prep.distance] = -1
     if len(_COLUMNS) >= 16:
         _COLUMNS.clear()
     _COLUMNS[key] = (prep, sig_col, dist_col)

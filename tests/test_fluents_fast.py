@@ -247,3 +247,14 @@ def test_fast_signals_equal_reference_on_real_clips(shared_data: Path) -> None:
 def test_unknown_signal_backend_is_a_config_error() -> None:
     with pytest.raises(ConfigError, match="backend"):
         state_signals(_dummy_seq(2, 30.0), backend="gpu")  # type: ignore[arg-type]
+
+
+def test_a_distance_fluent_needs_a_joint_pair_signal() -> None:
+    from dataclasses import replace
+
+    specs = list(DEFAULT_TABLE.specs)
+    specs[0] = replace(specs[0], kind="distance")  # left elbow angle as a "distance"
+    table = replace(DEFAULT_TABLE, specs=tuple(specs))
+    for backend in ("numba", "numpy"):
+        with pytest.raises(ConfigError, match="not a near joint pair"):
+            evaluate(_dummy_seq(3, 30.0), table, backend=backend)  # type: ignore[arg-type]
