@@ -257,4 +257,4 @@ def test_a_distance_fluent_needs_a_joint_pair_signal() -> None:
     table = replace(DEFAULT_TABLE, specs=tuple(specs))
     for backend in ("numba", "numpy"):
         with pytest.raises(ConfigError, match="not a near joint pair"):
-            evaluate(_dummy_seq(3, 30.0), table, backend=backend)  # type: ignore[arg-type]
+            evaluate(_dummy_seq(3, 30.0), table, backend=backend)
