@@ -177,9 +177,12 @@ class Classification:
     explanation: Explanation
     revision: Revision | None = None
     retention: RetainDecision | None = None
+    novelty: float | None = None  # nearest-case distance / the case base's usual one
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"clip": self.source, **self.explanation.to_dict()}
+        if self.novelty is not None:
+            out["novelty"] = self.novelty
         if self.true_label is not None:
             out["true_label"] = self.true_label
             out["correct"] = self.true_label == self.explanation.label
@@ -218,7 +221,7 @@ def classify_clips(
     one transaction per clip."""
     cb = CaseBase.from_store(store, name)
     classes = np.unique(cb.labels.astype(str))
-    scale = typical_distance(cb) if feedback is not None else None
+    scale = typical_distance(cb)
     out = []
     for seq, truth in progress(
         list(zip(clips, true_labels, strict=True)),
@@ -258,5 +261,6 @@ def classify_clips(
                 if rev is not None:
                     record_revision(tx, name, cb, rev)
             classes = np.unique(cb.labels.astype(str))
-        out.append(Classification(seq.source, truth, exp, rev, dec))
+        nov = float(r.distances[0]) / scale if len(r.distances) and scale > 0 else None
+        out.append(Classification(seq.source, truth, exp, rev, dec, nov))
     return out

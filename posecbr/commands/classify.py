@@ -15,6 +15,11 @@ from cbr.build import classify_clips
 from features.poses import PoseSequence
 from posecbr.errors import ConfigError, DataError
 
+#: nearest-case distance, in units of the case base's usual nearest-neighbour distance, above
+#: which a clip is flagged as unlike anything stored. On UI-PRMD (train s01-s05, fluents,
+#: euclidean) 99 % of the held-out subjects' clips lay below 2.7, whole exercise videos at 3.3+.
+UNUSUAL = 3.0
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -121,6 +126,11 @@ def run(args: argparse.Namespace) -> int:
         if r.true_label is not None:
             head += "  [right]" if r.true_label == e.label else f"  [wrong: {r.true_label}]"
         print(head)
+        if r.novelty is not None and r.novelty > UNUSUAL:
+            print(
+                f"  note: this clip is unlike the stored cases (nearest case at {r.novelty:.1f}x "
+                "the usual distance between neighbouring cases): treat the label with caution"
+            )
         for n in e.neighbours[: args.top]:
             print(
                 f"  case #{n['case_id']} {n['label']}  distance {n['distance']:.4g}  {n['source']}"
