@@ -658,6 +658,26 @@ def warm_features(data: Prepared, methods: list[Method], settings: CompareSettin
     return failed
 
 
+def warm_compilers(data: Prepared, methods: list[Method]) -> None:
+    """Fit and predict every method once on two clips of different classes, untimed, so that
+    just-in-time compilation (numba in tslearn, sktime and the DTW measure: up to tens of
+    seconds) is not billed to the first fold's training or prediction time. Best effort: any
+    error here is left for the folds to report."""
+    first: dict[str, int] = {}
+    for i, v in enumerate(data.y):
+        first.setdefault(str(v), i)
+        if len(first) == 2:
+            break
+    if len(first) < 2:
+        return
+    idx = list(first.values())
+    X = [data.seqs[i] for i in idx]
+    y = data.y[idx]
+    for m in progress(methods, "compiling", total=len(methods), unit="method"):
+        with contextlib.suppress(Exception):
+            make_estimator(m).fit(X, y).predict(X[:1])
+
+
 def _method_unavailable(method: Method, data: Prepared, settings: CompareSettings) -> str | None:
     """Why ``method`` cannot run on this comparison (None if it can)."""
     if method.kind == "dad":
@@ -811,6 +831,7 @@ def run_compare(
         for mi, m in enumerate(methods):
             if m.kind == "cbr" and m.params["features"] == level and mi not in status:
                 status[mi] = ("skipped", msg.split(":", 1)[1].strip())
+    warm_compilers(data, [m for i, m in enumerate(methods) if i not in status])
     tasks = [(mi, f) for mi in range(len(methods)) if mi not in status for f in fold_ids]
     _RUN.update(data=data, methods=methods, folds=folds)
     fold_results: list[FoldResult] = []
