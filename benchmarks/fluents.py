@@ -15,7 +15,8 @@ Compared in the same run, on the same signals:
 Sequences: UI-PRMD Kinect clips from ``../shared/data`` concatenated (30 Hz, 16 BlazePose joints
 mapped, so face and hand fluents are unavailable = NaN paths), a full 33-joint BlazePose-shaped
 sequence (a synthetic person raising the arms, squatting and nodding with 5 mm jitter, so every
-fluent is defined), and HDM05 squats (120 Hz: integer lag 4) — plus the per-clip cost as a
+fluent is defined), HDM05 squats (120 Hz: integer lag 4) and UI-PRMD Vicon clips (~100 Hz: a
+fractional lag, interpolated, the slower temporal path) — plus the per-clip cost as a
 pipeline pays it (one ``evaluate`` call per UI-PRMD clip, Python overhead included).
 """
 
@@ -87,6 +88,18 @@ def _kinect_clips(n_clips: int) -> list[PoseSequence]:
 def _concat(clips: list[PoseSequence], fps: float) -> PoseSequence:
     pos = np.concatenate([c.positions for c in clips])
     return PoseSequence(pos, BLAZEPOSE_33, fps, source="concatenated clips")
+
+
+def _vicon_clips(n_clips: int) -> PoseSequence | None:
+    """UI-PRMD Vicon clips concatenated: ~100 Hz, a fractional lag (10/3 frames)."""
+    from features.readers.uiprmd import read_uiprmd_vicon
+
+    files = sorted((KINECT.parent.parent / "Vicon" / "Positions").glob("*_positions.txt.gz"))
+    if not files:
+        return None
+    pick = [files[i] for i in np.linspace(0, len(files) - 1, min(n_clips, len(files))).astype(int)]
+    clips = [read_uiprmd_vicon(p).to_canonical() for p in progress(pick, "reading Vicon")]
+    return _concat(clips, clips[0].fps)
 
 
 def _hdm05_squats() -> PoseSequence | None:
@@ -417,6 +430,9 @@ def main(argv: list[str] | None = None) -> int:
     hdm = _hdm05_squats()
     if hdm is not None:
         sequences.append(("HDM05 squats (120 Hz, lag 4)", hdm))
+    vicon = _vicon_clips(max(2, args.clips // 10))
+    if vicon is not None:
+        sequences.append((f"UI-PRMD Vicon ({vicon.fps:g} Hz, lag {vicon.fps / 30:.2f})", vicon))
     rows = [bench_sequence(name, seq, args.repeats, args.naive_frames)
             for name, seq in progress(sequences, "benchmarking")]  # fmt: skip
     per_clip = bench_per_clip(clips, args.repeats)
