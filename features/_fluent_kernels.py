@@ -86,6 +86,8 @@ def fluent_confidences(
     n = sig_col.shape[0]
     n_cols = col_code.shape[0]
     blk = np.empty((8, n))
+    m_e0, m_e1 = motion[:, 0].copy(), motion[:, 1].copy()  # contiguous band edges
+    m_e4, m_e5 = motion[:, 4].copy(), motion[:, 5].copy()
     blk[TOUCH, :] = np.nan  # only near fluents have a touching state
     inv = np.empty(window)
     for a in range(window):
@@ -151,14 +153,19 @@ def fluent_confidences(
             # (Inline, not a helper: a call passing arrays costs atomic refcounts per call.)
             for i in range(n):
                 sc = sig_col[i]
-                d = values[f, sc] - values[f - step, sc]
-                ring_d[slot, i] = d
+                ring_d[slot, i] = values[f, sc] - values[f - step, sc]
+            for i in range(n):  # selects only: vectorises
+                d = ring_d[slot, i]
                 # toward s0 (lower state): 1 below the band, 0 above it
-                ring_lc[0, slot, i] = d if d != d else (
-                    0.0 if d < motion[i, 0] else (-np.inf if d > motion[i, 1] else 1.0))
+                v = 1.0
+                v = 0.0 if d < m_e0[i] else v
+                v = -np.inf if d > m_e1[i] else v
+                ring_lc[0, slot, i] = d if d != d else v
                 # toward sn (upper state = 1 - lower): 0 below the band, 1 above it
-                ring_lc[1, slot, i] = d if d != d else (
-                    -np.inf if d < motion[i, 4] else (0.0 if d > motion[i, 5] else 1.0))
+                v = 1.0
+                v = -np.inf if d < m_e4[i] else v
+                v = 0.0 if d > m_e5[i] else v
+                ring_lc[1, slot, i] = d if d != d else v
             # Slots of the window's ages (age 0 = this frame); frames before 0 hold 0.
             for a in range(window):
                 slots[a] = (f - a * step) % ring_size
@@ -224,18 +231,18 @@ def fluent_confidences(
                     pending = 0
                     for a in range(n_age):
                         d = deltas[a]
-                        if direction == 0:
-                            v = d if d != d else (0.0 if d < e0 else (-np.inf if d > e1 else 1.0))
-                        else:
-                            v = d if d != d else (-np.inf if d < e0 else (0.0 if d > e1 else 1.0))
+                        # selects, not branches: the side of the band flips with noise
+                        v = 1.0
+                        v = (0.0 if direction == 0 else -np.inf) if d < e0 else v
+                        v = (-np.inf if direction == 0 else 0.0) if d > e1 else v
+                        v = d if d != d else v
                         pending += v > 0.0
                         total += v * inv[a]
-                    if total == -np.inf:
-                        r = 0.0
-                    elif total != total:
-                        r = np.nan
+                    slow = (total > -np.inf) & ((total != 0.0) | (pending > 0))
+                    if not slow:  # NaN, a zero factor, or all ones
+                        r = 0.0 if total == -np.inf else (total if total != total else 1.0)
                     elif pending == 0:
-                        r = 1.0 if total == 0.0 else math.exp(total)
+                        r = math.exp(total)
                     else:
                         total = 0.0
                         for a in range(n_age):
