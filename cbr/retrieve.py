@@ -41,11 +41,19 @@ def retrieve(
 def nearest_of_other_label(
     casebase: CaseBase, problem: Problem | np.ndarray, label: str
 ) -> tuple[int, float] | None:
-    """Position and distance of the nearest case whose label is not ``label`` (or None)."""
-    other = np.flatnonzero(casebase.labels != label)
-    if len(other) == 0:
+    """Position and distance of the nearest case whose label is not ``label`` (or None).
+
+    Widens an exact k-nearest search on the whole case base (8, 32, 128, ... cases) until a
+    case of another label shows up, so the search index is reused, never rebuilt."""
+    other = casebase.labels != label
+    if not other.any():
         return None
     values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
-    sub = casebase.subset(other)
-    idx, dist = sub.measure.nearest(sub.measure.represent_query(values), sub.index, 1)
-    return int(other[idx[0]]), float(dist[0])
+    query = casebase.measure.represent_query(values)
+    k = 8
+    while True:
+        idx, dist = casebase.measure.nearest(query, casebase.index, min(k, len(casebase)))
+        hit = np.flatnonzero(other[idx])
+        if len(hit):
+            return int(idx[hit[0]]), float(dist[hit[0]])
+        k *= 4
