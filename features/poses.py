@@ -152,24 +152,31 @@ EXTRA_PREFIX = "extra_"
 
 
 def save_pose(
-    seq: PoseSequence, path: str | Path, *, extra_arrays: Mapping[str, np.ndarray] | None = None
+    seq: PoseSequence,
+    path: str | Path,
+    *,
+    extra_arrays: Mapping[str, np.ndarray] | None = None,
+    float32: bool = False,
 ) -> Path:
     """Write ``seq`` as a pose file, atomically (a temporary name renamed into place).
 
     ``extra_arrays``: optional named arrays stored beside the pose as ``extra_<name>``.
+    ``float32``: store positions and confidence in single precision (half the size; readers
+    cast back to float64).
     """
+    dtype = np.float32 if float32 else np.float64
     path = Path(path)
     if path.suffix != ".npz":
         path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
     arrays: dict[str, Any] = {
-        "positions": seq.positions.astype(np.float64),
+        "positions": seq.positions.astype(dtype),
         "joint_names": np.array(seq.joint_names, dtype=str),
         "fps": np.float64(seq.fps),
         "skeleton": np.array(seq.skeleton),
         "metadata": np.array(json.dumps({"source": seq.source, **dict(seq.metadata)})),
     }
     if seq.confidence is not None:
-        arrays["confidence"] = seq.confidence.astype(np.float64)
+        arrays["confidence"] = seq.confidence.astype(dtype)
     for name, value in (extra_arrays or {}).items():
         arrays[EXTRA_PREFIX + name] = np.asarray(value)
     try:

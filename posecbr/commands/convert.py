@@ -12,17 +12,14 @@ from __future__ import annotations
 import argparse
 import csv
 import io
-import json
 import os
 import tempfile
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from features.datasets import Clip, detect_kind, find_asf, iter_dataset
-from features.poses import PoseSequence, save_pose
+from features.poses import save_pose
 from features.readers.asfamc import read_asf_amc
 from features.readers.bvh import read_bvh
 from posecbr.errors import DataError
@@ -97,34 +94,6 @@ def _clip_name(clip: Clip, fallback: str) -> str:
     return fallback
 
 
-def write_pose(seq: PoseSequence, path: Path, float32: bool) -> Path:
-    """Write a pose file; with ``float32`` the positions are stored in single precision.
-
-    Same format as :func:`features.poses.save_pose` (which always writes float64); written to
-    a temporary name and renamed, so no half-written file is left behind.
-    """
-    if not float32:
-        return save_pose(seq, path)
-    arrays: dict[str, Any] = {
-        "positions": seq.positions.astype(np.float32),
-        "joint_names": np.array(seq.joint_names, dtype=str),
-        "fps": np.float64(seq.fps),
-        "skeleton": np.array(seq.skeleton),
-        "metadata": np.array(json.dumps({"source": seq.source, **dict(seq.metadata)})),
-    }
-    if seq.confidence is not None:
-        arrays["confidence"] = seq.confidence.astype(np.float32)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
 def _write_text_atomic(path: Path, text: str) -> None:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
@@ -189,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
             except ValueError:
                 origin = Path(origin).name
         seq = replace(seq, source="").with_metadata(origin=origin)
-        path = write_pose(seq, out / f"{name}.npz", args.float32)
+        path = save_pose(seq, out / f"{name}.npz", float32=args.float32)
         written.append(
             {"path": path.name, "label": clip.label, "subject": clip.subject or "", **clip.extras}
         )
@@ -237,4 +206,4 @@ def _csv_value(value: Any) -> str:
     return "" if value is None else str(value)
 
 
-__all__ = ["parse_ranges", "register", "run", "write_pose"]
+__all__ = ["parse_ranges", "register", "run"]

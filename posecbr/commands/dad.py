@@ -12,7 +12,7 @@ import json
 import sys
 from pathlib import Path
 
-from features.poses import PoseSequence, load_pose
+from features.datasets import load_clip
 from posecbr.errors import PosecbrError
 
 
@@ -52,16 +52,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _load(path: Path) -> PoseSequence:
-    if path.suffix.lower() == ".npz":
-        return load_pose(path)
-    try:
-        from features.datasets import load_clip
-    except ImportError:
-        return load_pose(path)
-    return load_clip(path)
-
-
 def run(args: argparse.Namespace) -> int:
     from cbr.dad import DADConfig, detect
     from features.qmp.add import load_add
@@ -73,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
             raise PosecbrError(f"{flag} must be > 0 seconds, got {value}")
     add = load_add(args.add)
     config = DADConfig(window_s=args.window, step_s=args.step)
-    seq = _load(args.posefile)
+    seq = load_clip(args.posefile)
     result = detect(seq, add, config)
     out = sys.stdout
     if args.json:

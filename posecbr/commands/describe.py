@@ -7,8 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+from features.datasets import load_clip
 from features.fluents import DEFAULT_TABLE, FluentTable, evaluate
-from features.poses import PoseSequence, load_pose
 from features.timeline import (
     frame_states,
     phrase_list,
@@ -43,22 +43,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def load_any(path: Path) -> PoseSequence:
-    """A pose file, or any clip the dataset loaders can read (mocap, video)."""
-    if path.suffix.lower() == ".npz":
-        return load_pose(path)
-    try:
-        from features.datasets import load_clip
-    except ImportError:
-        return load_pose(path)
-    return load_clip(path)
-
-
 def run(args: argparse.Namespace) -> int:
     if not 0.0 < args.min_confidence <= 1.0:
         raise PosecbrError(f"--min-confidence must be in (0, 1], got {args.min_confidence}")
     table = FluentTable.from_file(args.thresholds) if args.thresholds else DEFAULT_TABLE
-    seq = load_any(args.posefile)
+    seq = load_clip(args.posefile)
     result = evaluate(seq, table)
     if args.per_frame:
         runs = frame_states(result, args.min_confidence, include_background=args.all)
