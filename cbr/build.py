@@ -217,8 +217,9 @@ def classify_clips(
     novelty_threshold: float = 0.5,
     benefit_threshold: float = 0.2,
 ) -> list[Classification]:
-    """Classify clips; with ``feedback`` (the true label of every clip) also revise and retain,
-    one transaction per clip."""
+    """Classify clips. With ``feedback`` (the true label of every clip): a clip whose novelty
+    and benefit pass the thresholds is retained as a new case; otherwise the most similar case
+    is revised toward it (:func:`cbr.revise.revise`); one transaction per clip."""
     cb = CaseBase.from_store(store, name)
     classes = np.unique(cb.labels.astype(str))
     scale = typical_distance(cb)
