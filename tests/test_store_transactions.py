@@ -208,3 +208,12 @@ def test_failed_action_rolls_back_everything(tmp_path: Path) -> None:
     with pytest.raises(StoreError, match="already exists"), store.transaction() as tx:
         tx.create_case_base("x", {"level": "qmp"}, ["a"], ["a"], {"name": "dtw"})
     assert store.get_case_base("x").feature_config == {"level": "fluents"}
+
+
+def test_sqlalchemy_url_opens_the_same_store(tmp_path: Path) -> None:
+    db = tmp_path / "cb.sqlite"
+    _new_base(db, "x", 5)
+    store = open_store(f"sqlite:///{db}")
+    assert store.where == str(db) and store.count_cases("x") == 5
+    with pytest.raises(StoreError, match="not a database URL|cannot use database URL"):
+        open_store("nosuchdialect://user@host/db")
