@@ -4,7 +4,8 @@ Run it in its own virtual environment, never in the project's (TensorFlow is not
 dependency)::
 
     python3.11 -m venv /work/convert-venv
-    /work/convert-venv/bin/pip install 'tensorflow-cpu==2.21.*' 'tf2onnx==1.17.*' onnxruntime
+    /work/convert-venv/bin/pip install 'tensorflow-cpu==2.21.*' 'tf2onnx==1.17.*' onnxruntime \
+        opencv-python-headless
     /work/convert-venv/bin/python tools/convert_blazepose.py [--wheel mediapipe-0.10.21-....whl]
 
 Without ``--wheel`` the script runs ``pip download mediapipe==0.10.21 --no-deps`` (the only
@@ -143,17 +144,91 @@ def convert(tflite: Path, onnx_path: Path, outputs: list[str] | None) -> None:
         inits = [t for t in model_proto.graph.initializer if t.name in used]
         del model_proto.graph.initializer[:]
         model_proto.graph.initializer.extend(inits)
+    canonical_order(model_proto)
     canonicalize_names(model_proto)
     model_proto.producer_name = "posecbr tools/convert_blazepose.py (tf2onnx)"
     onnx.checker.check_model(model_proto)
     onnx.save(model_proto, str(onnx_path))
 
 
+def canonical_order(model_proto: object) -> None:
+    """Sort the nodes topologically in an order that depends only on the graph itself.
+
+    tf2onnx emits a valid topological order, but which one varies from run to run (it walks
+    sets). Each value gets a structural hash (a graph input: its name; an initializer: its
+    dtype, shape and bytes; a node output: the node's op, attributes and its inputs' hashes),
+    and Kahn's algorithm always takes the ready node with the smallest hash.
+    """
+    import heapq
+
+    from onnx import numpy_helper
+
+    graph = model_proto.graph  # type: ignore[attr-defined]
+    value_hash: dict[str, str] = {"": "none"}
+    for v in graph.input:
+        value_hash[v.name] = hashlib.sha256(b"input:" + v.name.encode()).hexdigest()
+    for init in graph.initializer:
+        arr = numpy_helper.to_array(init)
+        h = hashlib.sha256(f"init:{arr.dtype}:{arr.shape}:".encode() + arr.tobytes())
+        value_hash[init.name] = h.hexdigest()
+    nodes = list(graph.node)
+    producer = {out: i for i, n in enumerate(nodes) for out in n.output if out}
+    node_hash: dict[int, str] = {}
+
+    def hash_node(i: int) -> str:
+        if i in node_hash:
+            return node_hash[i]
+        node = nodes[i]
+        h = hashlib.sha256(f"{node.domain}:{node.op_type}:".encode())
+        for attr in sorted(node.attribute, key=lambda a: a.name):
+            h.update(attr.SerializeToString(deterministic=True))
+        for name in node.input:
+            h.update(value_of(name).encode())
+        node_hash[i] = h.hexdigest()
+        for k, out in enumerate(node.output):
+            value_hash[out] = hashlib.sha256(f"{node_hash[i]}:{k}".encode()).hexdigest()
+        return node_hash[i]
+
+    def value_of(name: str) -> str:
+        if name not in value_hash:
+            hash_node(producer[name])
+        return value_hash[name]
+
+    import sys as _sys
+
+    _sys.setrecursionlimit(max(10000, _sys.getrecursionlimit()))
+    for i in range(len(nodes)):
+        hash_node(i)
+    deps = {i: {producer[x] for x in n.input if x in producer} for i, n in enumerate(nodes)}
+    users: dict[int, list[int]] = {i: [] for i in range(len(nodes))}
+    for i, d in deps.items():
+        for j in d:
+            users[j].append(i)
+    waiting = {i: len(d) for i, d in deps.items()}
+    ready = [(node_hash[i], i) for i, w in waiting.items() if w == 0]
+    heapq.heapify(ready)
+    order = []
+    while ready:
+        _, i = heapq.heappop(ready)
+        order.append(nodes[i])
+        for j in users[i]:
+            waiting[j] -= 1
+            if waiting[j] == 0:
+                heapq.heappush(ready, (node_hash[j], j))
+    if len(order) != len(nodes):
+        raise SystemExit("graph has a cycle")
+    copies = [type(n)() for n in order]
+    for dst, src in zip(copies, order, strict=True):
+        dst.CopyFrom(src)
+    del graph.node[:]
+    graph.node.extend(copies)
+
+
 def canonicalize_names(model_proto: object) -> None:
     """Rename nodes and internal tensors by position, so that reruns give identical bytes.
 
     tf2onnx numbers the names it makes from a process-wide counter whose values vary between
-    runs; the graph itself does not.
+    runs; with :func:`canonical_order` first, the graph itself does not.
     """
     graph = model_proto.graph  # type: ignore[attr-defined]
     keep = {v.name for v in graph.input} | {v.name for v in graph.output}
@@ -211,21 +286,23 @@ def compare(tflite: Path, onnx_path: Path, inputs: list[np.ndarray]) -> dict[str
     return worst
 
 
+REAL_PHOTOS = ("basketball1.png", "messi5.jpg")
+
+
 def real_inputs(size: int, lo: float, hi: float) -> list[np.ndarray]:
-    """Real photos from ../shared/data/media resized to the model input (if present)."""
+    """Real photos from ../shared/data/media resized to the model input."""
+    import cv2
+
     images = []
     media = ROOT.parent / "shared" / "data" / "media"
-    try:
-        import cv2
-    except ImportError:
-        return images
-    for name in ("basketball1.png", "messi5.jpg"):
+    for name in REAL_PHOTOS:
         path = media / name
-        if path.exists():
-            img = cv2.cvtColor(cv2.imread(str(path)), cv2.COLOR_BGR2RGB)
-            img = cv2.resize(img, (size, size), interpolation=cv2.INTER_AREA)
-            x = img.astype(np.float32) / 255.0 * (hi - lo) + lo
-            images.append(x[None])
+        if not path.exists():
+            raise SystemExit(f"{path} is missing: the check needs the real photos")
+        img = cv2.cvtColor(cv2.imread(str(path)), cv2.COLOR_BGR2RGB)
+        img = cv2.resize(img, (size, size), interpolation=cv2.INTER_AREA)
+        x = img.astype(np.float32) / 255.0 * (hi - lo) + lo
+        images.append(x[None])
     return images
 
 
@@ -280,7 +357,8 @@ def main() -> int:
             "landmark_outputs_kept": LANDMARK_OUTPUTS,
             "opset": OPSET,
             "max_abs_diff_onnx_vs_tflite": {
-                "inputs": "1 uniform random + real photos (basketball1.png, messi5.jpg) resized",
+                "inputs": f"1 uniform random tensor + {len(REAL_PHOTOS)} real photos "
+                f"({', '.join(REAL_PHOTOS)}) resized to the model input",
                 DETECTOR_ONNX: det_diff,
                 LANDMARK_ONNX: lm_diff,
             },
