@@ -982,6 +982,66 @@ def explain_errors(results: dict[str, Any], n: int) -> list[dict[str, Any]]:
     return out
 
 
+def _dad_words(act: Any) -> str:
+    """One activity's DAD outcome in words: score, QMPs met and not met (with the reason)."""
+    score = "no observable QMP" if not np.isfinite(act.score) else f"score {act.score:.2f}"
+    met = ", ".join(q.words for q in act.met) or "none"
+    missed = "; ".join(
+        q.words + (f" ({q.status}: {q.reasons[0]})" if q.reasons else f" ({q.status})")
+        for q in act.not_met
+    )
+    return f"{act.words} ({score}); met: {met}" + (f"; not met: {missed}" if missed else "")
+
+
+def explain_dad_errors(results: dict[str, Any], n: int) -> list[dict[str, Any]]:
+    """For up to ``n`` clips DAD got wrong (one per true class first): what DAD saw for the
+    activity it chose and for the true one, QMP by QMP, from :func:`cbr.dad.detect`."""
+    m = next((x for x in results["methods"] if x["kind"] == "dad" and x["status"] == "ok"), None)
+    if m is None or n <= 0:
+        return []
+    from features.qmp.add import load_add
+
+    from .dad import detect
+
+    data: Prepared = results["_data"]
+    wrong = [i for i, ok in enumerate(m["correct"]) if not ok]
+    picked: list[int] = []
+    seen: set[str] = set()
+    for i in wrong:
+        if str(data.y[i]) not in seen:
+            picked.append(i)
+            seen.add(str(data.y[i]))
+    picked = (picked + [i for i in wrong if i not in picked])[:n]
+    add = load_add()
+    out = []
+    for i in progress(picked, "DAD explanations", total=len(picked), unit="clip"):
+        res = detect(data.seqs[i], add)
+        true, pred = str(data.y[i]), str(m["predictions"][i])
+        chosen = next((a for a in res.activities if pred in a.labels), None)
+        wanted = next((a for a in res.activities if true in a.labels), None)
+        if res.status != "ok":
+            text = f"DAD could not judge the clip: {res.message}"
+        else:
+            text = "DAD chose " + (_dad_words(chosen) if chosen else pred) + "."
+            text += (
+                f"\nThe true activity: {_dad_words(wanted)}."
+                if wanted
+                else f"\nThe ADD has no activity for {true}."
+            )
+        out.append(
+            {
+                "clip": data.ids[i],
+                "subject": data.subjects[i],
+                "activity": str(data.labels[i]),
+                "true": true,
+                "predicted": pred,
+                "method": "dad",
+                "text": text,
+            }
+        )
+    return out
+
+
 def prevalence(
     results: dict[str, Any], trim: float = 0.5, max_features: int = 40
 ) -> dict[str, Any] | None:
@@ -1128,6 +1188,7 @@ __all__ = [
     "bootstrap_macro_f1",
     "csv_rows",
     "example_clips",
+    "explain_dad_errors",
     "explain_errors",
     "format_table",
     "machine_info",

@@ -107,10 +107,19 @@ def test_compare_writes_csv_pictures_and_explanations(run_slice: tuple[Path, str
     assert prev["cases_trimmed"] == [9, 9, 9]  # trimming keeps half of every activity
     best_cbr = max(res["methods"][:2], key=lambda m: (m["accuracy"], m["macro_f1"]))
     n_wrong = sum(not ok for ok in best_cbr["correct"])
-    assert len(res["explanations"]) == min(2, n_wrong) > 0
-    for e in res["explanations"]:
+    cbr_expl = [e for e in res["explanations"] if e["method"] != "dad"]
+    assert len(cbr_expl) == min(2, n_wrong) > 0
+    for e in cbr_expl:
         assert e["method"] == best_cbr["name"]
         assert e["true"] != e["predicted"] and e["predicted"] in e["text"]
+    dad = next(m for m in res["methods"] if m["name"] == "dad")
+    dad_expl = [e for e in res["explanations"] if e["method"] == "dad"]
+    assert len(dad_expl) == min(2, sum(not ok for ok in dad["correct"])) > 0
+    for e in dad_expl:
+        # What DAD saw for its choice and for the true activity, QMP by QMP.
+        assert e["true"] != e["predicted"]
+        assert e["text"].startswith("DAD chose ") and "The true activity: " in e["text"]
+        assert "met: " in e["text"]
 
 
 def test_target_correct_trains_one_model_per_movement(

@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="cross-validate similarity measures x feature levels, DAD and peers on a dataset",
         description="Cross-validation by subject (leave-one-subject-out by default) of every "
         "case-base configuration (similarity x feature level), the DAD expert system and "
-        "peer classifiers on the same folds. Prints accuracy and macro-F1 with 95 %% "
+        "peer classifiers on the same folds. Prints accuracy and macro-F1 with 95 % "
         "intervals, times, case-base sizes and McNemar's exact test against the best method. "
         "With --target other than label (e.g. correct), one model is trained per activity.",
     )
@@ -193,7 +193,14 @@ def pictures_with_data(results: dict[str, Any], out: Path, trim: float | None) -
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.compare import CompareSettings, csv_rows, explain_errors, format_table, public
+    from cbr.compare import (
+        CompareSettings,
+        csv_rows,
+        explain_dad_errors,
+        explain_errors,
+        format_table,
+        public,
+    )
     from cbr.compare import run_compare as run_engine
 
     peers = () if args.peers.strip().lower() == "none" else _names(args.peers)
@@ -217,6 +224,7 @@ def run(args: argparse.Namespace) -> int:
     clips = _load(args)
     results = run_engine(clips, settings, source=str(args.data))
     results["explanations"] = explain_errors(results, settings.explain)
+    results["explanations"] += explain_dad_errors(results, min(settings.explain, 3))
     for note in results["notes"]:
         print(f"note: {note}", file=sys.stderr)
     print(format_table(results))
