@@ -151,6 +151,12 @@ class PoseSequence:
 EXTRA_PREFIX = "extra_"
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def save_pose(
     seq: PoseSequence,
     path: str | Path,
@@ -187,6 +193,7 @@ def save_pose(
     try:
         with os.fdopen(fd, "wb") as fh:
             np.savez_compressed(fh, **arrays)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a pose file is an ordinary file
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -173,3 +173,15 @@ def test_thresholds_round_trip(tmp_path: Path, capsys: pytest.CaptureFixture[str
     assert main(["describe", str(path), "--json", "--thresholds", str(custom)]) == 0
     mine = {s["name"] for s in json.loads(capsys.readouterr().out)["runs"][0]["states"]}
     assert "left_leg_bent.bent" in mine
+
+
+def test_pose_files_are_written_with_ordinary_permissions(tmp_path: Path) -> None:
+    import os
+
+    mask = os.umask(0o022)
+    try:
+        path = save_pose(to_sequence(standing()), tmp_path / "p.npz")
+    finally:
+        os.umask(mask)
+    assert oct(path.stat().st_mode & 0o777) == "0o644"
+    assert not list(tmp_path.glob(".*.tmp"))  # no temporary file left behind
