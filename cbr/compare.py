@@ -1086,6 +1086,8 @@ def prevalence(
     spread = np.nanmax(init, axis=0) - np.nanmin(init, axis=0)
     cols = np.sort(np.argsort(-spread, kind="stable")[:max_features])
     words = list(full.case_base_.words)
+    if len(words) != init.shape[1]:  # extra columns (e.g. a mirror-image flag) have no words
+        words = [words[i] if i < len(words) else f"feature {i}" for i in range(init.shape[1])]
     return {
         "method": m["name"],
         "trim": float(trim),
