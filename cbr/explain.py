@@ -5,6 +5,12 @@ A feature (fluent state or QMP) is *seen* in a problem when its confidence is at
 at least :data:`SEEN_FRACTION` of the (resampled) frames; for a QMP vector, when its value is
 at least 0.5. Features seen in almost every case say little, so each list is ordered by how
 distinctive the feature is in the case base (1 - the share of cases that show it).
+
+Clip summaries (``FeatureConfig.summary``): a fluent state is seen when its mean confidence
+over the clip (about the share of frames it holds) is at least :data:`SEEN_FRACTION`; the
+lists use the plain state words. With learned feature weights (:mod:`cbr.weights`) the
+explanation also names the features the case base weights most and the ones that, weighted,
+set the clip apart from the nearest case of another activity.
 """
 
 from __future__ import annotations
@@ -15,9 +21,10 @@ from typing import Any
 import numpy as np
 
 from .casebase import CaseBase
-from .problem import Problem
+from .problem import ANGLE_PREFIX, Problem
 from .retrieve import Retrieval, nearest_of_other_label
 from .reuse import Solution
+from .weights import MIRROR_FLAG
 
 SEEN_FRACTION = 0.15
 MAX_LISTED = 6
@@ -55,6 +62,8 @@ class Explanation:
     only_here: tuple[str, ...]
     contrast: Contrast | None
     text: str = field(default="")
+    weighted_most: tuple[str, ...] = ()
+    differs_most: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -75,6 +84,8 @@ class Explanation:
                 "would_lose": list(self.contrast.would_lose),
             },
             "text": self.text,
+            "weighted_most": list(self.weighted_most),
+            "differs_most": list(self.differs_most),
         }
 
 
@@ -87,6 +98,31 @@ def _presence_of(cb: CaseBase, values: np.ndarray) -> np.ndarray:
     elif v.ndim > 3:  # unknown layout: flatten per case
         v = v.reshape(len(v), 1, -1)
     return presence(v)
+
+
+def _state_columns(names: tuple[str, ...]) -> tuple[np.ndarray, bool] | None:
+    """The columns "seen" is judged on, and whether they are clip-summary means: the fluent
+    states (not joint angles, which are no yes/no features); None when that is every column."""
+    summary = any("@" in n for n in names)
+    keep = [
+        i
+        for i, n in enumerate(names)
+        if not n.startswith(ANGLE_PREFIX)
+        and n != MIRROR_FLAG
+        and (not summary or n.endswith("@mean"))
+    ]
+    if not summary and len(keep) == len(names):
+        return None
+    return np.array(keep, dtype=np.int64), summary
+
+
+def _weighted_terms(cb: CaseBase, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """Per-column weighted squared differences of two vector problems (None: no weights)."""
+    mult = getattr(cb.measure, "multiplier", None)
+    if mult is None or a.ndim != 1:
+        return None
+    m = np.asarray(mult, dtype=np.float64)
+    return np.asarray(((a - b) * m) ** 2, dtype=np.float64)
 
 
 def _ranked(mask: np.ndarray, score: np.ndarray, words: tuple[str, ...]) -> tuple[str, ...]:
@@ -103,20 +139,40 @@ def explain(
     cb: CaseBase, problem: Problem, retrieval: Retrieval, solution: Solution
 ) -> Explanation:
     """Explain one classification in words built from the feature names."""
-    words = problem.words if problem.words else cb.words
-    if len(words) != cb.problems.shape[-1]:
-        words = tuple(f"feature {i}" for i in range(cb.problems.shape[-1]))
-    q = _presence_of(cb, problem.values)[0]
+    all_words = problem.words if problem.words else cb.words
+    if len(all_words) != cb.problems.shape[-1]:
+        all_words = tuple(f"feature {i}" for i in range(cb.problems.shape[-1]))
+    picked = _state_columns(cb.names)
+    if picked is not None and picked[1]:
+        cols = picked[0]
+        words = tuple(all_words[i] for i in cols)
+
+        def seen(v: np.ndarray) -> np.ndarray:
+            # mean confidence ~ share of frames: compared with SEEN_FRACTION like a presence
+            return np.atleast_2d(np.asarray(v, dtype=np.float64))[:, cols]
+    elif picked is not None:
+        cols = picked[0]
+        words = tuple(all_words[i] for i in cols)
+
+        def seen(v: np.ndarray) -> np.ndarray:
+            return _presence_of(cb, v)[:, cols]
+    else:
+        words = all_words
+
+        def seen(v: np.ndarray) -> np.ndarray:
+            return _presence_of(cb, v)
+
+    q = seen(problem.values)[0]
     sample = cb.problems
     if len(sample) > _PREVALENCE_SAMPLE:
         pick = np.random.default_rng(0).choice(len(sample), _PREVALENCE_SAMPLE, replace=False)
         sample = sample[np.sort(pick)]
-    distinct = 1.0 - (_presence_of(cb, sample) >= SEEN_FRACTION).mean(axis=0)
+    distinct = 1.0 - (seen(sample) >= SEEN_FRACTION).mean(axis=0)
 
     win = retrieval.indices[retrieval.labels.astype(str) == solution.label]
     if len(win) == 0:
         win = retrieval.indices
-    r = (_presence_of(cb, cb.problems[win]) >= SEEN_FRACTION).mean(axis=0)
+    r = (seen(cb.problems[win]) >= SEEN_FRACTION).mean(axis=0)
     q_seen = q >= SEEN_FRACTION
     r_seen = r >= 0.5
     matched = _ranked(q_seen & r_seen, distinct * np.minimum(q, 1.0), words)
@@ -124,10 +180,22 @@ def explain(
     only_here = _ranked(q_seen & ~r_seen, distinct * q, words)
 
     contrast = None
+    differs: tuple[str, ...] = ()
+    weighted_most: tuple[str, ...] = ()
+    mult = getattr(cb.measure, "multiplier", None)
+    if mult is not None and len(mult) == len(all_words):
+        # |multiplier| x spread = sqrt(learned weight); the mirror flag is a penalty, not a weight
+        score = np.abs(np.asarray(mult)) * np.asarray(cb.problems).std(axis=0)
+        score[[i for i, n in enumerate(cb.names) if n == MIRROR_FLAG]] = 0.0
+        weighted_most = tuple(all_words[i] for i in np.argsort(-score)[:MAX_LISTED] if score[i] > 0)
     other = nearest_of_other_label(cb, problem, solution.label)
     if other is not None:
         pos, dist = other
-        o = _presence_of(cb, cb.problems[pos])[0] >= SEEN_FRACTION
+        o = seen(cb.problems[pos])[0] >= SEEN_FRACTION
+        terms = _weighted_terms(cb, np.asarray(problem.values), cb.problems[pos])
+        if terms is not None and len(terms) == len(all_words):
+            terms[[i for i, n in enumerate(cb.names) if n == MIRROR_FLAG]] = 0.0
+            differs = tuple(all_words[i] for i in np.argsort(-terms)[:MAX_LISTED] if terms[i] > 0)
         assert cb.ids is not None
         contrast = Contrast(
             label=str(cb.labels[pos]),
@@ -166,6 +234,10 @@ def explain(
             f"Nearest other activity: {contrast.label} (distance {contrast.distance:.3g}); "
             f"to be that, the clip would {what}."
         )
+        if differs:
+            lines.append(f"Weighted, it differs from that case most in: {_join(differs)}.")
+    if weighted_most:
+        lines.append(f"Weighted most by this case base: {_join(weighted_most)}.")
     return Explanation(
         label=solution.label,
         confidence=solution.confidence,
@@ -175,4 +247,6 @@ def explain(
         only_here=only_here,
         contrast=contrast,
         text="\n".join(lines),
+        weighted_most=weighted_most,
+        differs_most=differs,
     )

@@ -6,6 +6,14 @@ frames: a ``(length, n_states)`` array. Euclidean compares it flattened; DTW and
 compare it as a sequence. QMP level: the QMP feature vector (:func:`features.qmp.qmp_features`),
 binary by default (Euclidean then counts mismatched QMPs).
 
+Options of the fluent level: ``angles`` adds the named joint angles of the state signals
+(:func:`features.fluents.state_signals`, "left knee angle", divided by pi so they lie in [0, 1]
+like the confidences) as further columns ``"angle:left_knee"``; ``summary`` describes the clip by
+per-column statistics instead of the sequence: the mean (for a fluent state, about the share of
+the clip it holds), the lowest and highest value and the standard deviation, a
+``(4 * n_columns,)`` vector (statistic-major) for vector measures such as euclidean.
+:func:`mirrored` gives the left-right mirror image of a clip (for mirror-augmented case bases).
+
 Which states are used is decided once, when the case base is built (:func:`resolve_config`):
 states unavailable in too many training clips are dropped, and the explicit list is part of
 the stored configuration, so every later clip is described by the same columns.
@@ -27,6 +35,12 @@ from posecbr.errors import ConfigError, DataError
 
 Level = Literal["fluents", "qmp"]
 STATE_GROUPS = ("angles", "instantaneous", "all")
+ANGLE_PREFIX = "angle:"
+SUMMARY_STATS = ("mean", "min", "max", "std")
+_STAT_WORDS = {"mean": "", "min": " (lowest)", "max": " (highest)", "std": " (variation)"}
+# options added after the first stored case bases: left out of to_dict() while off, so the
+# configuration hash of every existing case base stays the same
+_LATER_OPTIONS = {"angles": False, "summary": False}
 
 
 @dataclass(frozen=True)
@@ -43,6 +57,8 @@ class FeatureConfig:
       this fraction of the training clips.
     fill: confidence given to a selected state that is unavailable in a whole clip.
     qmp_part: ``"binary"`` (detected / not) or ``"values"`` (scored QMPs) at the QMP level.
+    angles: also use the named joint angles (``"angle:left_knee"`` columns, radians / pi).
+    summary: per-column statistics (mean, lowest, highest, variation) instead of the sequence.
     """
 
     level: Level = "fluents"
@@ -51,6 +67,8 @@ class FeatureConfig:
     min_available: float = 0.5
     fill: float = 0.0
     qmp_part: Literal["binary", "values"] = "binary"
+    angles: bool = False
+    summary: bool = False
 
     def __post_init__(self) -> None:
         if self.level not in ("fluents", "qmp"):
@@ -80,6 +98,9 @@ class FeatureConfig:
     def to_dict(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
         d["states"] = self.states if isinstance(self.states, str) else list(self.states)
+        for key, off in _LATER_OPTIONS.items():
+            if d[key] == off:
+                del d[key]
         return d
 
     @classmethod
@@ -100,7 +121,10 @@ class FeatureConfig:
         if self.level == "qmp":
             return f"qmp ({self.qmp_part})"
         n = self.states if isinstance(self.states, str) else f"{len(self.states)} states"
-        return f"fluents ({n}, resampled to {self.length} frames)"
+        extra = " with joint angles" if self.angles else ""
+        if self.summary:
+            return f"fluents ({n}{extra}, summarised over {self.length} frames)"
+        return f"fluents ({n}{extra}, resampled to {self.length} frames)"
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,6 +143,42 @@ class Problem:
 # result per PoseSequence object for as long as the sequence lives (cross-validation reuses it).
 _FLUENT_CACHE: weakref.WeakKeyDictionary[PoseSequence, Any] = weakref.WeakKeyDictionary()
 _QMP_CACHE: weakref.WeakKeyDictionary[PoseSequence, Any] = weakref.WeakKeyDictionary()
+_SIGNAL_CACHE: weakref.WeakKeyDictionary[PoseSequence, Any] = weakref.WeakKeyDictionary()
+_MIRROR_CACHE: weakref.WeakKeyDictionary[PoseSequence, PoseSequence] = weakref.WeakKeyDictionary()
+
+
+def _swap_side(name: str) -> str:
+    return name.replace("left", "\0").replace("right", "left").replace("\0", "right")
+
+
+def mirrored(seq: PoseSequence) -> PoseSequence:
+    """The left-right mirror image of ``seq``: x negated (a reflection, y stays up) and every
+    left joint swapped with its right twin, so the left arm's movement becomes the right arm's.
+    Canonical joints; cached per sequence object."""
+    out = _MIRROR_CACHE.get(seq)
+    if out is None:
+        from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
+
+        c = seq.to_canonical()
+        swap = np.array([JOINT_INDEX[_swap_side(n)] for n in BLAZEPOSE_33])
+        pos = c.positions[:, swap, :].copy()
+        pos[..., 0] *= -1.0
+        conf = None if c.confidence is None else c.confidence[:, swap]
+        out = dataclasses.replace(
+            c, positions=pos, confidence=conf, source=f"{c.source} (mirrored)"
+        )
+        _MIRROR_CACHE[seq] = out
+    return out
+
+
+def _signals(seq: PoseSequence) -> Any:
+    res = _SIGNAL_CACHE.get(seq)
+    if res is None:
+        from features.fluents import state_signals
+
+        res = state_signals(seq.to_canonical())
+        _SIGNAL_CACHE[seq] = res
+    return res
 
 
 def _fluents(seq: PoseSequence) -> Any:
@@ -176,6 +236,14 @@ def resolve_config(config: FeatureConfig, clips: Sequence[PoseSequence]) -> Feat
             "training set",
         )
     names = tuple(n for n, k in zip(first.state_names, keep, strict=True) if k)
+    if config.angles:
+        sig = _signals(clips[0])
+        n_angles = len(sig.angle_names)
+        seen = np.zeros(n_angles)
+        for seq in clips:
+            seen += ~np.all(np.isnan(_signals(seq).values[:, :n_angles]), axis=0)
+        ok = seen >= config.min_available * len(clips)
+        names += tuple(ANGLE_PREFIX + a for a, k in zip(sig.angle_names, ok, strict=True) if k)
     return dataclasses.replace(config, states=names)
 
 
@@ -237,16 +305,45 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
     res = _fluents(seq)
     index = {n: i for i, n in enumerate(res.state_names)}
     states = tuple(config.states)
-    missing = [s for s in states if s not in index]
+    fluent_states = [s for s in states if not s.startswith(ANGLE_PREFIX)]
+    angle_states = [s[len(ANGLE_PREFIX) :] for s in states if s.startswith(ANGLE_PREFIX)]
+    missing = [s for s in fluent_states if s not in index]
     if missing:
         raise ConfigError(
             "the fluent table no longer has states " + ", ".join(missing[:5]), "features"
         )
-    cols = [index[s] for s in states]
+    cols = [index[s] for s in fluent_states]
     conf = fill_nan_time(res.confidence[:, cols], config.fill)
+    words = [res.words[i] for i in cols]
+    if angle_states:
+        sig = _signals(seq)
+        sig_index = {n: i for i, n in enumerate(sig.names)}
+        unknown = [a for a in angle_states if a not in sig_index]
+        if unknown:
+            raise ConfigError("no state signal " + ", ".join(unknown[:5]), "features")
+        # radians / pi: in [0, 1] like the confidences; a wholly missing angle reads 90 degrees
+        ang = sig.values[:, [sig_index[a] for a in angle_states]] / np.pi
+        conf = np.concatenate([conf, fill_nan_time(ang, 0.5)], axis=1)
+        words += [a.replace("_", " ") + " angle" for a in angle_states]
+    if not states:
+        raise ConfigError("the feature configuration selects no columns", "features")
     values = resample(conf, int(config.length))
-    words = tuple(res.words[i] for i in cols)
-    return Problem(values, states, words, "fluents")
+    if config.summary:
+        return summarise(values, states, tuple(words))
+    return Problem(values, states, tuple(words), "fluents")
+
+
+def summarise(values: np.ndarray, names: tuple[str, ...], words: tuple[str, ...]) -> Problem:
+    """Per-column statistics of a ``(frames, n)`` sequence: a ``(4 * n,)`` vector, statistic-
+    major (all means, then lowest, highest, standard deviation). Column names get ``@mean``,
+    ``@min``, ...; the words of the means are the plain feature words (for a fluent state the
+    mean confidence is about the share of the clip it holds)."""
+    stats = np.concatenate(
+        [values.mean(axis=0), values.min(axis=0), values.max(axis=0), values.std(axis=0)]
+    )
+    out_names = tuple(f"{n}@{st}" for st in SUMMARY_STATS for n in names)
+    out_words = tuple(f"{w}{_STAT_WORDS[st]}" for st in SUMMARY_STATS for w in words)
+    return Problem(stats, out_names, out_words, "fluents")
 
 
 def config_json(config: FeatureConfig) -> str:

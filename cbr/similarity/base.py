@@ -83,6 +83,36 @@ class SimilarityMeasure:
         return {"name": self.name, **dataclasses.asdict(self)}
 
 
+def check_weighting(
+    centre: tuple[float, ...] | None, multiplier: tuple[float, ...] | None, measure: str
+) -> None:
+    """Validate a measure's learned feature weighting (both or neither, same length)."""
+    if (centre is None) != (multiplier is None):
+        raise ConfigError("centre and multiplier go together", f"similarity {measure}")
+    if centre is not None and multiplier is not None and len(centre) != len(multiplier):
+        raise ConfigError(
+            f"centre has {len(centre)} values but multiplier {len(multiplier)}",
+            f"similarity {measure}",
+        )
+
+
+def weighted(
+    x: np.ndarray,
+    centre: tuple[float, ...] | None,
+    multiplier: tuple[float, ...] | None,
+    measure: str,
+) -> np.ndarray:
+    """``(x - centre) * multiplier`` over the last axis of ``x`` ``(..., D)`` (float64)."""
+    c = np.asarray(centre, dtype=np.float64)
+    m = np.asarray(multiplier, dtype=np.float64)
+    if x.shape[-1] != len(m):
+        raise ConfigError(
+            f"the weighting has {len(m)} columns but the problems have {x.shape[-1]}",
+            f"similarity {measure}",
+        )
+    return (np.asarray(x, dtype=np.float64) - c) * m
+
+
 def smallest_k(d: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     """Indices and values of the ``k`` smallest of ``d``; ties go to the lower index."""
     k = min(int(k), len(d))

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .base import SimilarityMeasure, register_measure, smallest_k
+from .base import SimilarityMeasure, check_weighting, register_measure, smallest_k, weighted
 
 
 def _matvec(a: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -50,17 +50,27 @@ class Euclidean(SimilarityMeasure):
     ``exact``: compute in float64 by differences instead of the float32 dot-product identity
     (slower; for tiny case bases or bit-exact comparisons).
     ``prune_min_cases`` / ``prune_dims``: when to use the PCA lower-bound filter, and its rank.
+    ``centre`` / ``multiplier``: learned feature weighting (:mod:`cbr.weights`), one value per
+    flattened column: the measure compares ``(x - centre) * multiplier``; None: raw values.
     """
 
     exact: bool = False
     prune_min_cases: int = 5000
     prune_dims: int = 32
+    centre: tuple[float, ...] | None = None
+    multiplier: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        check_weighting(self.centre, self.multiplier, "euclidean")
 
     def represent(self, problems: np.ndarray) -> np.ndarray:
         p = np.asarray(problems)
         if p.dtype != np.float32:
             p = p.astype(np.float64)
-        return p.reshape(len(p), -1)
+        p = p.reshape(len(p), -1)
+        if self.multiplier is not None:
+            return weighted(p, self.centre, self.multiplier, "euclidean")
+        return p
 
     def build_index(self, reps: np.ndarray) -> Any:
         dtype = np.float64 if self.exact else np.float32
