@@ -152,8 +152,9 @@ def confusing_mirrors(
     labels; fw: weights over the D columns. Two rules, both from the training data:
 
     - side twins: when most mirror images of activity A are nearest (weighted distance) to real
-      clips of one other activity B and most of B's images to A's clips, A and B differ by side
-      (a left-arm raise mirrored is a right-arm raise): all their images are confusing;
+      clips of one other activity B, within twice ``penalty`` (median), and the same holds for
+      B's images and A, then A and B differ by side (a left-arm raise mirrored is a right-arm
+      raise): all their images are confusing;
     - single images whose nearest real clip is of another activity and closer than
       ``penalty`` are confusing too.
     """
@@ -161,6 +162,7 @@ def confusing_mirrors(
     sq_a = np.einsum("ij,ij->i", a, a)
     lab = np.asarray(y).astype(str)
     nearest_label = np.empty(len(b), dtype=object)
+    nearest_dist = np.empty(len(b))
     out = np.zeros(len(b), dtype=bool)
     for s in range(0, len(b), 1000):  # chunks keep the distance block small at any size
         blk = b[s : s + 1000]
@@ -168,12 +170,14 @@ def confusing_mirrors(
         j = np.argmin(d2, axis=1)
         near = np.sqrt(np.maximum(d2[np.arange(len(blk)), j], 0.0))
         nearest_label[s : s + len(blk)] = lab[j]
+        nearest_dist[s : s + len(blk)] = near
         out[s : s + len(blk)] = (lab[j] != lab[s : s + len(blk)]) & (near < penalty)
     twin: dict[str, str] = {}
     for c in np.unique(lab):
         got, count = np.unique(nearest_label[lab == c].astype(str), return_counts=True)
         top = int(np.argmax(count))
-        if got[top] != c and count[top] > 0.5 * count.sum():
+        close = np.median(nearest_dist[lab == c]) < 2.0 * penalty
+        if got[top] != c and count[top] > 0.5 * count.sum() and close:
             twin[str(c)] = str(got[top])
     for c, t in twin.items():
         if twin.get(t) == c:
