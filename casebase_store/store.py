@@ -11,9 +11,16 @@ action is one transaction::
     arrays = store.load_cases("squats")      # ids, labels, features (N, ...) and provenance
 
 A process killed inside ``transaction()`` leaves the store as it was before (SQLite's journal
-rolls the transaction back when the file is next opened). SQLite files run in WAL mode with a
-busy timeout so several processes can write one file; write transactions start with
-``BEGIN IMMEDIATE`` so two writers queue instead of failing on a read-to-write upgrade.
+rolls the transaction back when the file is next opened; a PostgreSQL server rolls back the
+transaction of a client whose connection dies). SQLite files run in WAL mode with a busy
+timeout so several processes can write one file; write transactions start with
+``BEGIN IMMEDIATE`` so two writers queue instead of failing on a read-to-write upgrade. On
+PostgreSQL the same timeout is the connect timeout and the ``lock_timeout`` of every session,
+so a write blocked by another client's lock fails with the same "locked" error.
+
+The same code runs on every backend; what differs is kept to :func:`_make_engine` and the
+per-dialect connect hooks. Values a stricter server would refuse (over-long names, NUL
+characters in text) are refused here first, with the same error on every backend.
 """
 
 from __future__ import annotations
@@ -25,7 +32,7 @@ import sqlite3
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from datetime import datetime
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +56,10 @@ from .models import (
 )
 
 ORIGINS = ("trained", "retained", "revised")
+
+#: Serialises creating the tables when several clients open an empty PostgreSQL database at
+#: once (``pg_advisory_xact_lock`` key; any constant unlikely to collide with other apps).
+_PG_INIT_LOCK = 0x706F736563627231  # "posecbr1"
 
 
 class StoreError(PosecbrError):
@@ -77,6 +88,25 @@ def config_hash(config: Mapping[str, Any]) -> str:
 
 def canonical_json(obj: Any) -> str:
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+
+
+def _utc(value: datetime) -> datetime:
+    """Timezone-aware UTC: SQLite hands stored times back naive (they were written in UTC),
+    PostgreSQL aware in the session's zone; callers get the same value from both."""
+    return value.replace(tzinfo=UTC) if value.tzinfo is None else value.astimezone(UTC)
+
+
+def _check_text(value: str, what: str, where: str, max_len: int | None = None) -> str:
+    # PostgreSQL refuses NUL in text and enforces VARCHAR lengths, SQLite stores both; refuse
+    # them on every backend so a store behaves the same wherever it lives
+    if "\x00" in value:
+        raise StoreError(f"{what} {value!r} contains a NUL character", where)
+    if max_len is not None and len(value) > max_len:
+        raise StoreError(
+            f"{what} is {len(value)} characters long (at most {max_len}): {value[:40]!r}...",
+            where,
+        )
+    return value
 
 
 # ----------------------------------------------------------------------------- records
@@ -166,14 +196,25 @@ def _make_engine(url_or_path: str | Path, timeout_s: float) -> tuple[Engine, str
         url = make_url(f"sqlite:///{path}")
         where = str(path)
     kwargs: dict[str, Any] = {}
-    if url.get_backend_name() == "sqlite":
+    backend = url.get_backend_name()
+    if backend == "sqlite":
         kwargs["connect_args"] = {"timeout": timeout_s}
+    elif backend == "postgresql" and "connect_timeout" not in url.query:
+        # libpq waits for an unreachable server as long as the OS does (minutes)
+        kwargs["connect_args"] = {"connect_timeout": max(1, int(round(timeout_s)))}
     try:
         engine = create_engine(url, **kwargs)
-    except (ArgumentError, ImportError, SQLAlchemyError) as exc:
+    except ImportError as exc:
+        hint = " (pip install 'posecbr[postgres]')" if backend == "postgresql" else ""
+        raise StoreError(
+            f"the database driver for {url.drivername} is not installed: {exc}{hint}", where
+        ) from None
+    except (ArgumentError, SQLAlchemyError) as exc:
         raise StoreError(f"cannot use database URL ({exc})", where) from None
     if _is_sqlite(engine):
         _configure_sqlite(engine, timeout_s)
+    elif engine.dialect.name == "postgresql":
+        _configure_postgresql(engine, timeout_s)
     return engine, where
 
 
@@ -196,10 +237,21 @@ def _configure_sqlite(engine: Engine, timeout_s: float) -> None:
         conn.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
 
 
+def _configure_postgresql(engine: Engine, timeout_s: float) -> None:
+    # the counterpart of SQLite's busy timeout: a statement waiting for another session's lock
+    # gives up after timeout_s (PostgreSQL's default is to wait forever)
+    @event.listens_for(engine, "connect")
+    def _on_connect(dbapi_conn: Any, _record: object) -> None:
+        cur = dbapi_conn.cursor()
+        cur.execute(f"SET lock_timeout = {int(timeout_s * 1000)}")
+        cur.close()
+        dbapi_conn.commit()  # SET ran in the driver's implicit transaction
+
+
 def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
     text = str(getattr(exc, "orig", None) or exc).strip()
     low = text.lower()
-    if "locked" in low or "busy" in low:
+    if "locked" in low or "busy" in low or "lock timeout" in low:
         return StoreError(
             f"database is locked by another process (gave up after {timeout_s:g} s)", where
         )
@@ -207,6 +259,9 @@ def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
         return StoreError("not a readable SQLite database (corrupt or not a database)", where)
     if "unable to open" in low or "readonly" in low or "read-only" in low:
         return StoreError(f"cannot open or write the database ({text})", where)
+    if "connection failed" in low or "could not connect" in low or "connection refused" in low:
+        first = " ".join(text.split())
+        return StoreError(f"cannot connect to the database server ({first})", where)
     first = text.splitlines()[0] if text else type(exc).__name__
     return StoreError(f"database error: {first}", where)
 
@@ -271,7 +326,13 @@ class CaseStore:
             if not create:
                 raise StoreError("no case base store here (empty database)", self.where)
             with self.transaction() as tx:
-                Base.metadata.create_all(tx.session.connection())
+                conn = tx.session.connection()
+                if self.engine.dialect.name == "postgresql":
+                    # two clients creating the tables at once: the second waits, then finds them
+                    conn.exec_driver_sql(f"SELECT pg_advisory_xact_lock({_PG_INIT_LOCK})")
+                if SchemaVersion.__tablename__ in inspect(conn).get_table_names():
+                    return  # another client created it meanwhile (BEGIN IMMEDIATE on SQLite)
+                Base.metadata.create_all(conn)
                 tx.session.add(SchemaVersion(id=1, version=SCHEMA_VERSION))
 
     def close(self) -> None:
@@ -347,7 +408,9 @@ class CaseStore:
                 .order_by(MaintenanceRow.id)
             ).all()
             return [
-                MaintenanceEntry(r.id, r.action, r.case_id, r.novelty, r.benefit, r.reason, r.at)
+                MaintenanceEntry(
+                    r.id, r.action, r.case_id, r.novelty, r.benefit, r.reason, _utc(r.at)
+                )
                 for r in rows
             ]
 
@@ -394,7 +457,7 @@ class CaseStore:
             feature_words=tuple(json.loads(r.feature_words)),
             similarity=json.loads(r.similarity_config),
             code_version=r.code_version,
-            created_at=r.created_at,
+            created_at=_utc(r.created_at),
             n_cases=int(sum(counts.values())),
             label_counts={str(k): int(v) for k, v in counts.items()},
         )
@@ -410,6 +473,11 @@ class StoreTransaction:
     def case_base(self, name: str) -> CaseBaseInfo:
         return CaseStore._info(self.session, self.store._row(self.session, name))
 
+    def has_case_base(self, name: str) -> bool:
+        """Whether ``name`` exists, as this transaction sees it."""
+        q = select(CaseBaseRow.id).where(CaseBaseRow.name == name)
+        return self.session.scalar(q) is not None
+
     def create_case_base(
         self,
         name: str,
@@ -422,6 +490,7 @@ class StoreTransaction:
     ) -> CaseBaseInfo:
         """A new, empty case base; ``replace`` drops an existing one of that name first."""
         s = self.session
+        _check_text(name, "case base name", self.store.where, max_len=200)
         old = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
         if old is not None:
             if not replace:
@@ -451,9 +520,15 @@ class StoreTransaction:
         for c in cases:
             if c.origin not in ORIGINS:
                 raise StoreError(f"unknown case origin {c.origin!r}", self.store.where)
+            where = self.store.where
+            if c.skeleton is not None:
+                _check_text(c.skeleton, "skeleton name", where, max_len=64)
+            _check_text(c.source, "source", where)
+            if c.subject is not None:
+                _check_text(c.subject, "subject", where)
             row = CaseRow(
                 case_base_id=cb.id,
-                label=str(c.label),
+                label=_check_text(str(c.label), "label", where),
                 features=encode_array(np.asarray(c.features)),
                 source=c.source,
                 frame_start=c.frame_start,
@@ -487,7 +562,7 @@ class StoreTransaction:
                 delete(RepresentationRow).where(RepresentationRow.case_id == int(case_id))
             )
         if label is not None:
-            row.label = str(label)
+            row.label = _check_text(str(label), "label", self.store.where)
         row.origin = origin
         self.session.flush()
 

@@ -125,7 +125,7 @@ def build_case_base(
         for s in clips
     ]
     with store.transaction() as tx:
-        if append and tx.store.has_case_base(name):
+        if append and tx.has_case_base(name):  # as this transaction sees it
             info = tx.case_base(name)
         else:
             info = tx.create_case_base(
