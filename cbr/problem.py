@@ -342,7 +342,14 @@ def summarise(values: np.ndarray, names: tuple[str, ...], words: tuple[str, ...]
         [values.mean(axis=0), values.min(axis=0), values.max(axis=0), values.std(axis=0)]
     )
     out_names = tuple(f"{n}@{st}" for st in SUMMARY_STATS for n in names)
-    out_words = tuple(f"{w}{_STAT_WORDS[st]}" for st in SUMMARY_STATS for w in words)
+    # a fluent's lowest/highest value is a confidence; an angle's is the angle itself
+    out_words = tuple(
+        f"{w}{_STAT_WORDS[st]}"
+        if st in ("mean", "std") or n.startswith(ANGLE_PREFIX)
+        else f"{w}{_STAT_WORDS[st][:-1]} confidence)"
+        for st in SUMMARY_STATS
+        for n, w in zip(names, words, strict=True)
+    )
     return Problem(stats, out_names, out_words, "fluents")
 
 

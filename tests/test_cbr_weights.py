@@ -124,7 +124,8 @@ def test_summary_statistics_by_hand() -> None:
     p = summarise(values, ("a.x", "angle:b"), ("a x", "b angle"))
     np.testing.assert_allclose(p.values, [0.5, 1.0, 0.0, 1.0, 1.0, 1.0, np.sqrt(0.125), 0.0])
     assert p.names[:3] == ("a.x@mean", "angle:b@mean", "a.x@min")
-    assert p.words[0] == "a x" and p.words[2] == "a x (lowest)"
+    assert p.words[0] == "a x" and p.words[2] == "a x (lowest confidence)"
+    assert p.words[3] == "b angle (lowest)" and p.words[7] == "b angle (variation)"
 
 
 def test_new_options_keep_old_configuration_hashes() -> None:
