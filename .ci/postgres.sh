@@ -40,12 +40,12 @@ _posecbr_postgres_start() {
   fi
   bin=$(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -n 1)
   [ -x "$bin/initdb" ] && [ -x "$bin/pg_ctl" ] || { _posecbr_pg_err="no initdb/pg_ctl in $bin"; return 1; }
-  dir=$(mktemp -d "${TMPDIR:-/tmp}/posecbr-pg.XXXXXX") || { _posecbr_pg_err="mktemp failed"; return 1; }
-  chmod 755 "$dir"
+  dir=$(mktemp -d "${TMPDIR:-/tmp}/posecbr-pg.XXXXXX" 2>/dev/null) || { _posecbr_pg_err="mktemp failed"; return 1; }
+  chmod 755 "$dir" 2>/dev/null
   if [ "$(id -u)" = 0 ]; then
     # initdb refuses to run as root
     id postgres >/dev/null 2>&1 || { _posecbr_pg_err="no postgres user to run the server as"; rm -rf "$dir"; return 1; }
-    chown postgres "$dir"
+    chown postgres "$dir" 2>/dev/null || { _posecbr_pg_err="cannot hand $dir to the postgres user"; return 1; }
     as="runuser -u postgres --"
   fi
   export POSECBR_PG_DIR="$dir" POSECBR_PG_BIN="$bin" POSECBR_PG_AS="$as"
