@@ -171,6 +171,37 @@ def mirrored(seq: PoseSequence) -> PoseSequence:
     return out
 
 
+# Extra named angles not among the state signals: the plane of elevation of each upper arm
+# (its direction in the horizontal plane: 0 = forward, pi/2 = straight out to the side, pi =
+# backward), defined while the arm is raised at least 45 degrees from the trunk (elsewhere the
+# horizontal projection is too short to have a direction). It tells shoulder abduction (pi/2)
+# from scaption (between forward and sideways), which the sagittal / frontal angles blur.
+ARM_PLANE_SIGNALS = ("left_upper_arm_plane", "right_upper_arm_plane")
+_ARM_PLANE_MIN_ELEVATION = np.radians(45.0)
+_PLANE_CACHE: weakref.WeakKeyDictionary[PoseSequence, np.ndarray] = weakref.WeakKeyDictionary()
+
+
+def arm_planes(seq: PoseSequence) -> np.ndarray:
+    """Plane-of-elevation angles (radians) of the left and right upper arm, ``(frames, 2)``;
+    NaN where the arm is raised less than 45 degrees or joints are missing."""
+    out = _PLANE_CACHE.get(seq)
+    if out is None:
+        from features.geometry import angle_between, body_frame, joint_angle, project
+        from features.skeleton import JOINT_INDEX
+
+        p = seq.to_canonical().positions
+        bf = body_frame(p)
+        cols = []
+        for side in ("left", "right"):
+            sh, el, hip = (p[:, JOINT_INDEX[f"{side}_{j}"]] for j in ("shoulder", "elbow", "hip"))
+            plane = angle_between(project(el - sh, bf.up), bf.forward)
+            raised = joint_angle(el, sh, hip) >= _ARM_PLANE_MIN_ELEVATION
+            cols.append(np.where(raised, plane, np.nan))
+        out = np.stack(cols, axis=1)
+        _PLANE_CACHE[seq] = out
+    return out
+
+
 def _signals(seq: PoseSequence) -> Any:
     res = _SIGNAL_CACHE.get(seq)
     if res is None:
@@ -244,6 +275,10 @@ def resolve_config(config: FeatureConfig, clips: Sequence[PoseSequence]) -> Feat
             seen += ~np.all(np.isnan(_signals(seq).values[:, :n_angles]), axis=0)
         ok = seen >= config.min_available * len(clips)
         names += tuple(ANGLE_PREFIX + a for a, k in zip(sig.angle_names, ok, strict=True) if k)
+        # arm planes exist only while an arm is raised: kept when the joints are there at all
+        joints_ok = sum(bool(np.isfinite(_signals(seq).values[:, :4]).any()) for seq in clips)
+        if joints_ok >= config.min_available * len(clips):
+            names += tuple(ANGLE_PREFIX + a for a in ARM_PLANE_SIGNALS)
     return dataclasses.replace(config, states=names)
 
 
@@ -318,11 +353,18 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
     if angle_states:
         sig = _signals(seq)
         sig_index = {n: i for i, n in enumerate(sig.names)}
-        unknown = [a for a in angle_states if a not in sig_index]
+        unknown = [a for a in angle_states if a not in sig_index and a not in ARM_PLANE_SIGNALS]
         if unknown:
             raise ConfigError("no state signal " + ", ".join(unknown[:5]), "features")
+        planes = arm_planes(seq) if any(a in ARM_PLANE_SIGNALS for a in angle_states) else None
+        ang_cols = [
+            planes[:, ARM_PLANE_SIGNALS.index(a)]
+            if planes is not None and a in ARM_PLANE_SIGNALS
+            else sig.values[:, sig_index[a]]
+            for a in angle_states
+        ]
         # radians / pi: in [0, 1] like the confidences; a wholly missing angle reads 90 degrees
-        ang = sig.values[:, [sig_index[a] for a in angle_states]] / np.pi
+        ang = np.stack(ang_cols, axis=1) / np.pi
         conf = np.concatenate([conf, fill_nan_time(ang, 0.5)], axis=1)
         words += [a.replace("_", " ") + " angle" for a in angle_states]
     if not states:

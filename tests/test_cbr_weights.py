@@ -8,12 +8,19 @@ import pytest
 
 from casebase_store import config_hash
 from cbr.estimator import CaseBaseClassifier
-from cbr.problem import FeatureConfig, extract_problem, mirrored, resolve_config, summarise
+from cbr.problem import (
+    FeatureConfig,
+    arm_planes,
+    extract_problem,
+    mirrored,
+    resolve_config,
+    summarise,
+)
 from cbr.similarity import Euclidean, get_measure
 from cbr.weights import confusing_mirrors, fisher_ratio, learn_weights, mirror_penalty
 from features.poses import PoseSequence
 from posecbr.errors import ConfigError
-from tests.bodies import rot_x, rot_z, rotate, standing, to_sequence
+from tests.bodies import rot_x, rot_y, rot_z, rotate, standing, to_sequence
 from tests.test_cbr_clips import ARM
 
 # ---------------------------------------------------------------- weights (hand-worked)
@@ -117,6 +124,22 @@ def test_angle_columns_are_the_joint_angles_over_pi() -> None:
     np.testing.assert_allclose(p.values[:, col], 0.5, atol=1e-9)
     np.testing.assert_allclose(p.values[:, p.names.index("angle:right_elbow")], 1.0, atol=1e-9)
     assert p.words[col] == "left elbow angle"
+
+
+def test_arm_plane_reads_forward_sideways_and_undefined_when_hanging() -> None:
+    body = standing()
+    left = tuple(f"left_{j}" for j in ARM)
+    right = tuple(f"right_{j}" for j in ARM)
+    # left arm straight out to the side (abduction 90 deg), right arm straight forward
+    b = rotate(body, left, rot_z(-90.0), body["left_shoulder"])
+    b = rotate(b, right, rot_x(-90.0), body["right_shoulder"])
+    planes = arm_planes(to_sequence(b, body))
+    np.testing.assert_allclose(planes[0], [np.pi / 2, 0.0], atol=1e-9)
+    assert np.isnan(planes[1]).all()  # hanging arms have no plane of elevation
+    # 45 deg between forward and sideways: scaption-like
+    c = rotate(body, left, rot_z(-90.0), body["left_shoulder"])
+    c = rotate(c, left, rot_y(-45.0), body["left_shoulder"])
+    assert arm_planes(to_sequence(c))[0, 0] == pytest.approx(np.pi / 4)
 
 
 def test_summary_statistics_by_hand() -> None:
