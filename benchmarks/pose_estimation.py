@@ -29,10 +29,8 @@ difference in pixels (33 landmarks, frames where both found the person).
 from __future__ import annotations
 
 import argparse
-import importlib.metadata
 import json
 import os
-import platform
 import statistics
 import subprocess
 import sys
@@ -146,19 +144,9 @@ def mean_difference(ours: list[Any], theirs: list[Any]) -> tuple[float, int]:
 
 
 def machine() -> dict[str, Any]:
-    versions: dict[str, str | None] = {}
-    for pkg in ("posecbr", "numpy", "onnxruntime", "opencv-python-headless"):
-        try:
-            versions[pkg] = importlib.metadata.version(pkg)
-        except importlib.metadata.PackageNotFoundError:
-            versions[pkg] = None
-    return {
-        "python": platform.python_version(),
-        "platform": platform.platform(),
-        "processor": platform.processor() or platform.machine(),
-        "cpu_count": os.cpu_count(),
-        "versions": versions,
-    }
+    from cbr.compare import machine_info
+
+    return machine_info(("onnxruntime", "opencv-python-headless"))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -749,10 +749,10 @@ def _per_method(
     }
 
 
-def machine_info() -> dict[str, Any]:
-    """Machine and library versions, recorded with every result."""
+def machine_info(extra_packages: tuple[str, ...] = ()) -> dict[str, Any]:
+    """Machine and library versions, recorded with every result (and every benchmark)."""
     versions: dict[str, str | None] = {}
-    for pkg in (
+    for pkg in extra_packages + (
         "posecbr",
         "numpy",
         "scipy",
