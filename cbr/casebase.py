@@ -12,7 +12,7 @@ import numpy as np
 from casebase_store import CaseStore, NewCase
 from posecbr.errors import DataError
 
-from .problem import FeatureConfig
+from .problem import FeatureConfig, Problem, extract_problem
 from .similarity import SimilarityMeasure, get_measure
 
 
@@ -64,6 +64,16 @@ class CaseBase:
                 self.reps = self.measure.represent(self.problems)
             self._index = self.measure.build_index(self.reps)
         return self._index
+
+    def problem_of(self, seq: Any) -> Problem:
+        """The problem of a new clip ``seq`` (a PoseSequence) in this case base's columns: the
+        configured features, plus a 0 in the mirror-image column when the case base has one."""
+        from .weights import MIRROR_FLAG, with_mirror_flag
+
+        p = extract_problem(seq, self.config)
+        if self.names and self.names[-1] == MIRROR_FLAG:
+            p = with_mirror_flag(p, 0.0)
+        return p
 
     def invalidate(self) -> None:
         self.reps = None

@@ -7,22 +7,21 @@ builds (and optionally trims) the case base; learned state ends with ``_``.
 Learned at fit time from the training clips only (so cross-validation stays honest):
 
 - which fluent states and joint angles describe the clips (available in enough of them);
-- mirror images: with ``mirror`` on, the left-right mirror image of every training clip is a
-  further case, so a subject who does a movement with the left arm finds the right-arm cases.
-  A mirror image costs a distance penalty (:func:`cbr.weights.mirror_penalty`: the median
-  distance between a training clip and its nearest clip of the same activity), so it wins
-  only when no real case is about as close: activities that differ by side ("kick with the
-  left leg") keep their real cases first;
-- ``feature_weights``: z-normalisation and Fisher-ratio weights of the summary features
+- the side handling (``mirror``, :mod:`cbr.fitting`): clips as recorded, left-side clips
+  described by their mirror image (``"canonical"``), or the mirror image of every training clip
+  as a further, penalised case (``"augment"``), so a subject who does a movement with the left
+  arm finds the right-arm cases;
+- ``feature_weights``: z-normalisation and Fisher-ratio weights of the features
   (:mod:`cbr.weights`), used by the euclidean measure and cited by explanations.
 
-The defaults (joint angles on, clip summaries with Fisher weights for euclidean, automatic
-mirroring) were the best interpretable configuration in leave-one-subject-out comparisons on
-UI-PRMD and HDM05 (``python -m benchmarks.compare``).
+With vector problems under euclidean (clip summaries, QMPs), ``"auto"`` chooses the side
+handling and the weighting by leave-one-subject-out accuracy inside the training clips; a fold of
+an outer cross-validation never sees its test clips. Fixed values skip the search.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from typing import Any
 
@@ -35,17 +34,19 @@ from posecbr.errors import ConfigError, DataError
 
 from .casebase import CaseBase
 from .explain import Explanation, explain
-from .problem import FeatureConfig, Problem, extract_problem, mirrored, resolve_config
+from .fitting import SIDES, assemble_cases, inner_loso_accuracy, side_name
+from .problem import (
+    FeatureConfig,
+    Problem,
+    extract_problem,
+    mirrored,
+    moves_left_more,
+    resolve_config,
+)
 from .retrieve import Retrieval, retrieve
 from .reuse import Solution, reuse
 from .similarity import get_measure
-from .weights import (
-    WEIGHTINGS,
-    confusing_mirrors,
-    learn_weights,
-    mirror_penalty,
-    with_mirror_flag,
-)
+from .weights import MIRROR_FLAG, WEIGHTINGS
 
 
 def as_sequences(X: Any, where: str = "X") -> list[PoseSequence]:
@@ -73,17 +74,19 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     angles: add the named joint angles ("left knee angle") to the fluent confidences.
     summary: describe a clip by per-feature statistics (mean, lowest, highest, variation)
       instead of its sequence; ``"auto"``: for the euclidean measure at the fluent level.
-    mirror: add the mirror image of every training clip as a case (True/False), or
-      ``"auto"``: for clip summaries under euclidean when the training clips name at least two
-      subjects (people differ in the side they favour).
+    mirror: side handling: ``"off"`` (False), ``"augment"`` (True: mirror images of the
+      training clips as further cases), ``"canonical"`` (left-side clips mirrored), or
+      ``"auto"``: chosen by inner leave-one-subject-out for vector problems under euclidean
+      when the training clips name two or more subjects ("off" otherwise).
     feature_weights: ``"fisher"`` (z-normalised, weighted by between/within-activity variance,
-      learned in fit), ``"none"``, or ``"auto"`` (fisher for clip summaries, none otherwise).
+      learned in fit), ``"none"`` (raw values), or ``"auto"``: chosen like ``mirror``
+      (without subjects: fisher for clip summaries, none otherwise).
     """
 
     def __init__(
         self,
         features: str = "fluents",
-        similarity: str = "dtw",
+        similarity: str = "euclidean",
         k: int = 5,
         weights: str = "distance",
         length: int = 32,
@@ -126,11 +129,6 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             summary=self._summary() if summary is None else summary,
         )
 
-    def _weighting(self, vectors: bool) -> str:
-        if self.feature_weights == "auto":
-            return "fisher" if vectors and self._summary() else "none"
-        return str(self.feature_weights)
-
     def _check_params(self) -> None:
         if not isinstance(self.k, int | np.integer) or int(self.k) < 1:
             raise ConfigError(f"k must be a positive integer, got {self.k!r}", "k")
@@ -140,35 +138,61 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             )
         if self.trim is not None and not 0.0 < float(self.trim) <= 1.0:
             raise ConfigError(f"trim must be in (0, 1], got {self.trim!r}", "trim")
-        for name in ("summary", "mirror"):
-            value = getattr(self, name)
-            if value != "auto" and not isinstance(value, bool | np.bool_):
-                raise ConfigError(f"{name} must be True, False or 'auto', got {value!r}", name)
+        if self.summary != "auto" and not isinstance(self.summary, bool | np.bool_):
+            raise ConfigError(
+                f"summary must be True, False or 'auto', got {self.summary!r}", "summary"
+            )
+        if not isinstance(self.mirror, bool | np.bool_) and self.mirror not in ("auto", *SIDES):
+            raise ConfigError(
+                f"mirror must be True, False, 'auto', {', '.join(repr(s) for s in SIDES)}; "
+                f"got {self.mirror!r}",
+                "mirror",
+            )
         if self.feature_weights not in ("auto", *WEIGHTINGS):
             raise ConfigError(
                 f"feature_weights must be 'auto', 'fisher' or 'none', got {self.feature_weights!r}",
                 "feature_weights",
             )
 
-    def _use_mirror(self, seqs: list[PoseSequence]) -> bool:
+    def _selectable(self, vectors: bool, measure: Any) -> bool:
+        """Whether the side handling and weighting can be chosen by inner cross-validation:
+        vector problems under a measure that takes learned weights (euclidean)."""
+        return vectors and hasattr(measure, "multiplier")
+
+    def wanted_config(self) -> FeatureConfig:
+        """The feature configuration these parameters ask for, before fit resolves it."""
+        return self._feature_config()
+
+    def _candidates(self, vectors: bool, measure: Any) -> tuple[list[str], list[str]]:
+        """The side handlings and weightings fit chooses between."""
+        selectable = self._selectable(vectors, measure)
         if self.mirror == "auto":
-            # mirror images answer people who favour the other side, so they are added when the
-            # training clips name two or more subjects; the penalty column needs clip summaries
-            # under the euclidean measure
-            subjects = {s.metadata.get("subject") for s in seqs} - {None}
-            return self._summary() and self.similarity == "euclidean" and len(subjects) >= 2
-        return bool(self.mirror)
+            sides = list(SIDES) if selectable else ["off"]
+        else:
+            sides = [side_name(self.mirror)]
+        if self.feature_weights == "auto":
+            weightings = ["none", "fisher"] if selectable else ["none"]
+        else:
+            weightings = [str(self.feature_weights)]
+        if "augment" in sides and not vectors:
+            sides = ["augment"]  # sequence problems: plain augmentation, nothing to choose
+        return sides, weightings
 
     def problems(self, X: Any) -> list[Problem]:
         """The problem of every clip in ``X`` under the fitted configuration."""
         check_is_fitted(self, "case_base_")
-        probs = [extract_problem(s, self.feature_config_) for s in as_sequences(X)]
-        return [with_mirror_flag(p, 0.0) for p in probs] if self.mirror_flag_ else probs
+        return [self.case_base_.problem_of(s) for s in as_sequences(X)]
 
     # -- sklearn API
 
     def fit(self, X: Any, y: Any) -> CaseBaseClassifier:
-        """Build the case base from clips ``X`` and labels ``y``."""
+        """Build the case base from clips ``X`` and labels ``y``.
+
+        With ``mirror="auto"`` / ``feature_weights="auto"`` on vector problems, the side
+        handling and the weighting are chosen by leave-one-subject-out cross-validation inside
+        the training clips (``selection_`` holds the scores); the test clips of an outer
+        cross-validation never take part.
+        """
         self._check_params()
         seqs = as_sequences(X)
         y_arr = np.asarray(y)
@@ -185,69 +209,89 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             )
         measure = get_measure(self.similarity, **(self.similarity_params or {}))
         config = resolve_config(self._feature_config(), seqs)
-        use_mirror = self._use_mirror(seqs)
-        case_seqs = seqs + [mirrored(s) for s in seqs] if use_mirror else seqs
-        case_y = np.concatenate([y_arr, y_arr]) if use_mirror else y_arr
-        probs = [extract_problem(s, config) for s in case_seqs]
-        flag = use_mirror and probs[0].values.ndim == 1
-        if flag:  # vector problems: mark the mirror images (a penalised column, see below)
-            probs = [with_mirror_flag(p, float(i >= len(seqs))) for i, p in enumerate(probs)]
-        values = np.stack([p.values for p in probs])
-        weighting = self._weighting(values.ndim == 2)
-        self.feature_weights_ = None
-        if weighting != "none" and (values.ndim != 2 or not hasattr(measure, "multiplier")):
+        real = [extract_problem(s, config) for s in seqs]
+        vectors = real[0].values.ndim == 1
+        if self.feature_weights not in ("auto", "none") and not self._selectable(vectors, measure):
             raise ConfigError(
                 "learned feature weights need vector problems and a measure that takes them "
                 "(summary=True or QMP features, with similarity='euclidean')",
                 "feature_weights",
             )
-        if weighting != "none":
-            if flag:
-                # weights from the real clips only: with the mirror images in, features that
-                # tell a left-side activity from its right-side twin would look uninformative
-                real = values[: len(seqs), :-1]
-                base = learn_weights(real, y_arr, weighting)
-                fw = mirror_penalty(base, real, y_arr)
-                bad = confusing_mirrors(
-                    base, real, values[len(seqs) :, :-1], y_arr, float(np.sqrt(fw.weight[-1]))
-                )
-                if bad.any():  # side-specific activities: drop the images that mimic another
-                    keep = np.concatenate([np.ones(len(seqs), dtype=bool), ~bad])
-                    values, case_y = values[keep], case_y[keep]
-                    case_seqs = [s for s, k in zip(case_seqs, keep, strict=True) if k]
-            else:
-                fw = learn_weights(values, case_y, weighting)
+        sides, weightings = self._candidates(vectors, measure)
+        labels = np.array([str(v) for v in y_arr], dtype=object)
+        subjects = np.array(
+            ["" if s.metadata.get("subject") is None else str(s.metadata["subject"]) for s in seqs],
+            dtype=object,
+        )
+        need_mirror = "augment" in sides or "canonical" in sides
+        mirror_probs = [extract_problem(mirrored(s), config) for s in seqs] if need_mirror else []
+        R = np.stack([p.values for p in real])
+        M = np.stack([p.values for p in mirror_probs]) if need_mirror else None
+        left = np.array([moves_left_more(s) for s in seqs]) if "canonical" in sides else None
+        self.selection_ = {}
+        side, weighting = sides[0], weightings[0]
+        n_subjects = len(set(subjects) - {""})
+        if len(sides) * len(weightings) > 1:
+            if n_subjects >= 2 and "" not in set(subjects):
+                scores = {
+                    (sd, wt): inner_loso_accuracy(
+                        R, M, left, labels, subjects, sd, wt, int(self.k), self.weights
+                    )
+                    for sd in sides
+                    for wt in weightings
+                }
+                side, weighting = max(scores, key=lambda c: scores[c])  # first best wins ties
+                self.selection_ = {f"{sd}/{wt}": a for (sd, wt), a in scores.items()}
+            else:  # no subjects to hold out: the fixed choice
+                side = "off"
+                weighting = "fisher" if "fisher" in weightings and self._summary() else "none"
+        if side == "canonical":
+            config = dataclasses.replace(config, side="canonical")
+        cases = assemble_cases(R, M, left, labels, side, weighting, vectors)
+        if cases.weights is not None:
             measure = get_measure(
                 measure,
-                centre=tuple(float(v) for v in fw.centre),
-                multiplier=tuple(float(v) for v in fw.multiplier()),
+                centre=tuple(float(v) for v in cases.weights.centre),
+                multiplier=tuple(float(v) for v in cases.weights.multiplier()),
             )
-            self.feature_weights_ = fw
+        n = len(seqs)
+        case_seqs = [(mirrored(seqs[i - n]) if i >= n else seqs[i]) for i in cases.origin.tolist()]
+        if side == "canonical" and left is not None:
+            case_seqs = [mirrored(s) if lm else s for s, lm in zip(case_seqs, left, strict=True)]
+        names, words = real[0].names, real[0].words
+        if cases.flag:
+            names, words = (*names, MIRROR_FLAG), (*words, "mirror image of a training clip")
         cb = CaseBase(
             config,
             measure,
-            values,
-            np.array([str(v) for v in case_y], dtype=object),
-            probs[0].names,
-            probs[0].words,
+            cases.values,
+            cases.labels,
+            names,
+            words,
             sources=tuple(s.source for s in case_seqs),
             subjects=tuple(
                 None if s.metadata.get("subject") is None else str(s.metadata["subject"])
                 for s in case_seqs
             ),
         )
+        origin = cases.origin
         if self.trim is not None and float(self.trim) < 1.0:
             from .maintenance import trim_novelty_benefit
 
-            cb = trim_novelty_benefit(cb, keep=float(self.trim), k=int(self.k)).casebase
+            report = trim_novelty_benefit(cb, keep=float(self.trim), k=int(self.k))
+            cb, origin = report.casebase, origin[report.kept]
+        self.case_origin_ = origin
         self.classes_ = classes
         self.feature_config_ = config
         self.measure_ = measure
         self.case_base_ = cb
-        self.feature_names_ = probs[0].names
-        self.mirror_ = use_mirror
-        self.mirror_flag_ = flag
-        self.mirror_cases_ = len(case_seqs) - len(seqs)
+        self.feature_names_ = names
+        self.feature_weights_ = cases.weights
+        self.side_ = side
+        self.weighting_ = weighting
+        self.mirror_ = side == "augment"
+        self.mirror_flag_ = cases.flag
+        self.mirror_cases_ = int((cases.origin >= n).sum())
         return self
 
     def _class_labels(self) -> np.ndarray:

@@ -22,6 +22,7 @@ the stored configuration, so every later clip is described by the same columns.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -40,7 +41,8 @@ SUMMARY_STATS = ("mean", "min", "max", "std")
 _STAT_WORDS = {"mean": "", "min": " (lowest)", "max": " (highest)", "std": " (variation)"}
 # options added after the first stored case bases: left out of to_dict() while off, so the
 # configuration hash of every existing case base stays the same
-_LATER_OPTIONS = {"angles": False, "summary": False}
+_LATER_OPTIONS = {"angles": False, "summary": False, "side": "as_recorded"}
+SIDE_MODES = ("as_recorded", "canonical")
 
 
 @dataclass(frozen=True)
@@ -59,6 +61,9 @@ class FeatureConfig:
     qmp_part: ``"binary"`` (detected / not) or ``"values"`` (scored QMPs) at the QMP level.
     angles: also use the named joint angles (``"angle:left_knee"`` columns, radians / pi).
     summary: per-column statistics (mean, lowest, highest, variation) instead of the sequence.
+    side: ``"as_recorded"``, or ``"canonical"``: a clip that moves its left limbs more than its
+      right ones is described by its mirror image (:func:`mirrored`), so a movement done with
+      the left arm is compared with the right-arm cases (:func:`moves_left_more`).
     """
 
     level: Level = "fluents"
@@ -69,6 +74,7 @@ class FeatureConfig:
     qmp_part: Literal["binary", "values"] = "binary"
     angles: bool = False
     summary: bool = False
+    side: str = "as_recorded"
 
     def __post_init__(self) -> None:
         if self.level not in ("fluents", "qmp"):
@@ -90,6 +96,10 @@ class FeatureConfig:
             raise ConfigError(f"min_available must be in [0, 1], got {self.min_available!r}")
         if self.qmp_part not in ("binary", "values"):
             raise ConfigError(f"qmp_part must be 'binary' or 'values', got {self.qmp_part!r}")
+        if self.side not in SIDE_MODES:
+            raise ConfigError(
+                f"side must be one of {', '.join(SIDE_MODES)}, got {self.side!r}", "side"
+            )
 
     @property
     def resolved(self) -> bool:
@@ -118,10 +128,11 @@ class FeatureConfig:
         return config_hash(self.to_dict())
 
     def describe(self) -> str:
+        side = ", left-side clips mirrored" if self.side == "canonical" else ""
         if self.level == "qmp":
-            return f"qmp ({self.qmp_part})"
+            return f"qmp ({self.qmp_part}{side})"
         n = self.states if isinstance(self.states, str) else f"{len(self.states)} states"
-        extra = " with joint angles" if self.angles else ""
+        extra = (" with joint angles" if self.angles else "") + side
         if self.summary:
             return f"fluents ({n}{extra}, summarised over {self.length} frames)"
         return f"fluents ({n}{extra}, resampled to {self.length} frames)"
@@ -137,6 +148,7 @@ class Problem:
     names: tuple[str, ...]
     words: tuple[str, ...]
     level: Level
+    mirrored: bool = False
 
 
 # Fluent evaluation is the expensive part and does not depend on the configuration: keep one
@@ -199,6 +211,28 @@ def arm_planes(seq: PoseSequence) -> np.ndarray:
             cols.append(np.where(raised, plane, np.nan))
         out = np.stack(cols, axis=1)
         _PLANE_CACHE[seq] = out
+    return out
+
+
+_SIDE_CACHE: weakref.WeakKeyDictionary[PoseSequence, bool] = weakref.WeakKeyDictionary()
+
+
+def moves_left_more(seq: PoseSequence) -> bool:
+    """Whether the clip's left limbs move more than its right ones: the summed standard
+    deviation over time of the left elbow, knee, armpit, hip and upper-limb angles against
+    that of their right twins (NaN frames ignored; a missing side counts as still)."""
+    out = _SIDE_CACHE.get(seq)
+    if out is None:
+        sig = _signals(seq)
+        names = sig.angle_names
+        vals = sig.values[:, : len(names)]
+        left = [i for i, n in enumerate(names) if n.startswith("left_")]
+        right = [names.index("right_" + names[i][len("left_") :]) for i in left]
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns
+            spread = np.nan_to_num(np.nanstd(vals, axis=0), nan=0.0)
+        out = bool(spread[left].sum() > spread[right].sum())
+        _SIDE_CACHE[seq] = out
     return out
 
 
@@ -312,8 +346,13 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
     """The problem representation of one clip under a resolved ``config``.
 
     seq: a pose sequence ``(frames, joints, 3)``. Returns a :class:`Problem` whose values are
-    ``(config.length, n_states)`` in [0, 1] (fluents) or ``(n_features,)`` (QMP).
+    ``(config.length, n_states)`` in [0, 1] (fluents) or ``(n_features,)`` (QMP). With
+    ``config.side == "canonical"`` a clip that moves its left side more is described by its
+    mirror image (``Problem.mirrored`` is then True).
     """
+    if config.side == "canonical" and moves_left_more(seq):
+        plain = dataclasses.replace(config, side="as_recorded")
+        return dataclasses.replace(extract_problem(mirrored(seq), plain), mirrored=True)
     if config.level == "qmp":
         q = _qmp(seq)
         if config.qmp_part == "binary":

@@ -202,7 +202,7 @@ def test_mirror_images_recognise_the_other_side_and_weights_come_from_training_o
                 y.append(label)
     # a new person raises the LEFT arm sideways: the same activity on the other side
     Xt = [_arm_clip("left", "sideways", "s9", rng) for _ in range(4)]
-    clf = CaseBaseClassifier(similarity="euclidean", k=1).fit(X, y)
+    clf = CaseBaseClassifier(similarity="euclidean", k=1, mirror="augment").fit(X, y)
     assert clf.mirror_ and clf.mirror_cases_ == len(X)  # no side twins here: all images kept
     assert list(clf.predict(Xt)) == ["one arm sideways"] * 4
     exp = clf.explain(Xt[:1])[0]

@@ -1,0 +1,165 @@
+"""The learned parts of a vector case base, as pure functions of the training matrices.
+
+:func:`assemble_cases` turns the training clips' problem vectors into the case matrix for one
+side handling and one feature weighting; :func:`inner_loso_accuracy` scores such a choice by
+leave-one-subject-out inside the training clips, so :class:`cbr.estimator.CaseBaseClassifier`
+can choose without looking at its test clips.
+
+Side handlings (people favour one side: a subject who raises the left arm should find the
+right-arm cases):
+
+- ``"off"``: clips as recorded;
+- ``"canonical"``: a clip that moves its left side more is described by its mirror image,
+  cases and queries alike (:func:`cbr.problem.moves_left_more`);
+- ``"augment"``: the mirror image of every training clip is a further case, at a distance
+  penalty (a flagged column, :func:`cbr.weights.mirror_penalty`), with the images that mimic
+  another activity (side twins such as "kick left" / "kick right") left out
+  (:func:`cbr.weights.confusing_mirrors`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .weights import FeatureWeights, confusing_mirrors, learn_weights, mirror_penalty
+
+# in order of preference when inner cross-validation ties: training subjects who all favour
+# the same side cannot show that a new person may use the other one, so the side-invariant
+# handlings come first
+SIDES = ("canonical", "augment", "off")
+
+
+def side_name(value: object) -> str:
+    """The side handling named by a ``mirror`` parameter value (True/False or a name)."""
+    if value is True or value == "augment":
+        return "augment"
+    if value is False or value == "off":
+        return "off"
+    return str(value)
+
+
+@dataclass(frozen=True)
+class Cases:
+    """values ``(m, D)`` (``D + 1`` with the mirror flag column), labels ``(m,)``, origin
+    ``(m,)`` (``i`` = training clip i, ``n + i`` = its mirror image), the learned weights
+    (None: raw values) and whether the last column is the mirror flag."""
+
+    values: np.ndarray
+    labels: np.ndarray
+    origin: np.ndarray
+    weights: FeatureWeights | None
+    flag: bool
+
+
+def canonical(R: np.ndarray, M: np.ndarray | None, left: np.ndarray | None) -> np.ndarray:
+    """Rows of ``R`` with the left-moving clips replaced by their mirror images (``M``)."""
+    if M is None or left is None:
+        raise ValueError("the canonical side needs the mirror images and the side of each clip")
+    shape = (-1,) + (1,) * (R.ndim - 1)
+    return np.where(left.reshape(shape), M, R)
+
+
+def assemble_cases(
+    R: np.ndarray,
+    M: np.ndarray | None,
+    left: np.ndarray | None,
+    y: np.ndarray,
+    side: str,
+    weighting: str,
+    vectors: bool = True,
+) -> Cases:
+    """The case matrix of training clips ``R`` ``(n, ...)`` with mirror images ``M``.
+
+    left: ``(n,)`` which clips move their left side more (``"canonical"``); y: ``(n,)`` labels.
+    Weights (``weighting="fisher"`` or ``"none"`` z-normalisation) are learned from the real
+    clips only; with ``"augment"`` on vectors the images get the penalised flag column.
+    """
+    n = len(R)
+    y = np.asarray(y, dtype=object)
+    real = canonical(R, M, left) if side == "canonical" else R
+    if side != "augment":
+        fw = learn_weights(real, y, weighting) if vectors and weighting != "none" else None
+        return Cases(real, y, np.arange(n), fw, False)
+    if M is None:
+        raise ValueError("mirror augmentation needs the mirror images")
+    values = np.concatenate([R, M])
+    labels = np.concatenate([y, y])
+    origin = np.arange(2 * n)
+    if not vectors:
+        return Cases(values, labels, origin, None, False)
+    # weights from the real clips only: with the images in, features that tell a left-side
+    # activity from its right-side twin would look uninformative
+    base = learn_weights(R, y, weighting)
+    fw = mirror_penalty(base, R, y)
+    bad = confusing_mirrors(base, R, M, y, float(np.sqrt(fw.weight[-1])))
+    flags = np.concatenate([np.zeros(n), np.ones(n)])[:, None]
+    keep = np.concatenate([np.ones(n, dtype=bool), ~bad])
+    values = np.concatenate([values, flags], axis=1)
+    return Cases(values[keep], labels[keep], origin[keep], fw, True)
+
+
+def knn_predict(cases: Cases, queries: np.ndarray, k: int, weights: str = "distance") -> np.ndarray:
+    """Labels of ``queries`` ``(q, D)`` by the k nearest cases (weighted euclidean), voting as
+    :func:`cbr.reuse.reuse` does (1/distance; exact matches decide alone; ties to the first
+    class in sorted order)."""
+    Q = np.asarray(queries, dtype=np.float64)
+    if cases.flag:
+        Q = np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)
+    A = np.asarray(cases.values, dtype=np.float64)
+    if cases.weights is not None:
+        A, Q = cases.weights.apply(A), cases.weights.apply(Q)
+    d2 = np.einsum("ij,ij->i", Q, Q)[:, None] + np.einsum("ij,ij->i", A, A)[None] - 2.0 * Q @ A.T
+    d = np.sqrt(np.maximum(d2, 0.0))
+    k = min(int(k), len(A))
+    idx = (
+        np.argpartition(d, k - 1, axis=1)[:, :k]
+        if k < len(A)
+        else np.tile(np.arange(len(A)), (len(Q), 1))
+    )
+    dk = np.take_along_axis(d, idx, axis=1)
+    if weights == "uniform":
+        w = np.ones_like(dk)
+    else:
+        zero = dk <= 1e-12
+        w = np.where(
+            zero.any(axis=1, keepdims=True), zero.astype(np.float64), 1.0 / np.maximum(dk, 1e-300)
+        )
+    classes, codes = np.unique(cases.labels.astype(str), return_inverse=True)
+    votes = np.zeros((len(Q), len(classes)))
+    np.add.at(votes, (np.repeat(np.arange(len(Q)), k), codes[idx].ravel()), w.ravel())
+    return classes[np.argmax(votes, axis=1)]
+
+
+def inner_loso_accuracy(
+    R: np.ndarray,
+    M: np.ndarray | None,
+    left: np.ndarray | None,
+    y: np.ndarray,
+    subjects: np.ndarray,
+    side: str,
+    weighting: str,
+    k: int,
+    weights: str = "distance",
+) -> float:
+    """Leave-one-subject-out accuracy of one side handling and weighting within the training
+    clips ``R`` ``(n, D)`` (mirror images ``M``, sides ``left``, labels ``y``, ``subjects``)."""
+    y = np.asarray(y).astype(str)
+    queries = canonical(R, M, left) if side == "canonical" else R
+    hits = 0
+    for s in np.unique(subjects):
+        test = subjects == s
+        train = ~test
+        if len(np.unique(y[train])) < 2:
+            continue
+        cases = assemble_cases(
+            R[train],
+            None if M is None else M[train],
+            None if left is None else left[train],
+            y[train],
+            side,
+            weighting,
+        )
+        hits += int((knn_predict(cases, queries[test], k, weights) == y[test]).sum())
+    return hits / len(y)

@@ -1,0 +1,171 @@
+"""Side handling and its choice inside fit (cbr.fitting), and `posecbr train` = fit.
+
+Hand-built arm movements (tests.test_cbr_weights._arm_clip): which side moves is known by
+construction, so the side a clip is filed under, and what a new person's other-side clip must
+be recognised as, are known without running the code under test.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cbr.estimator import CaseBaseClassifier
+from cbr.fitting import inner_loso_accuracy
+from cbr.problem import (
+    FeatureConfig,
+    extract_problem,
+    mirrored,
+    moves_left_more,
+    resolve_config,
+)
+from features.poses import save_pose
+from posecbr.cli import main
+from tests.test_cbr_weights import _arm_clip
+
+KINDS = {
+    "one arm sideways": ("right", "sideways"),
+    "both arms forward": ("both", "forward"),
+    "left arm forward": ("left", "forward"),
+}
+
+
+def _data(subjects: dict[str, str], per: int, seed: int) -> tuple[list, list]:
+    """Clips of KINDS; ``subjects`` maps a subject to the arm it uses for "one arm sideways"."""
+    rng = np.random.default_rng(seed)
+    X, y = [], []
+    for subject, arm in subjects.items():
+        for label, (a, motion) in KINDS.items():
+            for _ in range(per):
+                X.append(_arm_clip(arm if label == "one arm sideways" else a, motion, subject, rng))
+                y.append(label)
+    return X, y
+
+
+def test_moves_left_more_follows_the_moving_arm() -> None:
+    rng = np.random.default_rng(1)
+    left = _arm_clip("left", "sideways", "s1", rng)
+    right = _arm_clip("right", "forward", "s1", rng)
+    assert moves_left_more(left) and not moves_left_more(right)
+    assert not moves_left_more(mirrored(left)) and moves_left_more(mirrored(right))
+
+
+def test_canonical_side_describes_a_left_arm_clip_as_its_mirror_image() -> None:
+    rng = np.random.default_rng(2)
+    left = _arm_clip("left", "sideways", "s1", rng)
+    right = _arm_clip("right", "sideways", "s1", rng)
+    base = resolve_config(FeatureConfig(length=8, angles=True, summary=True), [left, right])
+    canon = FeatureConfig.from_dict({**base.to_dict(), "side": "canonical"})
+    p = extract_problem(left, canon)
+    assert p.mirrored
+    # the left arm's armpit angle opens to the peak: as the mirror image it is the right one
+    mean = {n: v for n, v in zip(p.names, p.values, strict=True)}
+    assert mean["angle:right_armpit@max"] > 0.55 > mean["angle:left_armpit@max"]
+    assert not extract_problem(right, canon).mirrored
+    # the option is part of the stored configuration (and absent, hash unchanged, when off)
+    assert "side" not in base.to_dict() and canon.to_dict()["side"] == "canonical"
+
+
+def test_auto_picks_a_side_invariant_handling_and_recognises_the_other_arm() -> None:
+    # the training subjects all use the right arm; a new person uses the left
+    X, y = _data({"s1": "right", "s2": "right", "s3": "right"}, 3, 3)
+    rng = np.random.default_rng(4)
+    Xt = [_arm_clip("left", "sideways", "s9", rng) for _ in range(3)]
+    clf = CaseBaseClassifier(k=1).fit(X, y)
+    assert clf.side_ in ("canonical", "augment")
+    assert set(clf.selection_) == {
+        f"{s}/{w}" for s in ("canonical", "augment", "off") for w in ("none", "fisher")
+    }
+    assert list(clf.predict(Xt)) == ["one arm sideways"] * 3
+    if clf.side_ == "canonical":
+        exp = clf.explain(Xt[:1])[0]
+        assert "compared as its mirror image" in exp.text
+
+
+def test_auto_keeps_side_twins_apart() -> None:
+    rng = np.random.default_rng(6)
+    X, y = [], []
+    for subject in ("s1", "s2", "s3"):
+        for arm in ("left", "right", "both"):
+            for _ in range(3):
+                X.append(_arm_clip(arm, "sideways", subject, rng))
+                y.append(f"{arm} sideways")
+    Xt = [_arm_clip(arm, "sideways", "s9", rng) for arm in ("left", "right", "both")]
+    clf = CaseBaseClassifier(k=3).fit(X, y)
+    # filing left-arm clips under the right arm would merge the two activities: inner
+    # cross-validation sees that
+    assert clf.side_ != "canonical"
+    assert clf.selection_[f"canonical/{clf.weighting_}"] < clf.selection_[
+        f"{clf.side_}/{clf.weighting_}"
+    ]
+    assert list(clf.predict(Xt)) == ["left sideways", "right sideways", "both sideways"]
+
+
+@pytest.mark.parametrize("side", ["off", "canonical", "augment"])
+@pytest.mark.parametrize("weighting", ["none", "fisher"])
+def test_inner_score_equals_refitting_the_classifier_per_held_out_subject(
+    side: str, weighting: str
+) -> None:
+    X, y = _data({"s1": "right", "s2": "left", "s3": "right"}, 2, 7)
+    subjects = np.array([s.metadata["subject"] for s in X], dtype=object)
+    labels = np.array(y, dtype=object)
+    hits = 0
+    for s in ("s1", "s2", "s3"):
+        tr = [i for i in range(len(X)) if subjects[i] != s]
+        te = [i for i in range(len(X)) if subjects[i] == s]
+        clf = CaseBaseClassifier(k=3, mirror=side, feature_weights=weighting)
+        clf.fit([X[i] for i in tr], labels[tr])
+        hits += int((clf.predict([X[i] for i in te]) == labels[te]).sum())
+    # the vectorised inner score on the matrices fit builds
+    cfg = resolve_config(CaseBaseClassifier().wanted_config(), X)
+    R = np.stack([extract_problem(s, cfg).values for s in X])
+    M = np.stack([extract_problem(mirrored(s), cfg).values for s in X])
+    left = np.array([moves_left_more(s) for s in X])
+    # fit resolves the states on the training subjects of each fold; with these clean clips
+    # every state is available everywhere, so one resolution serves all folds
+    got = inner_loso_accuracy(R, M, left, labels, subjects, side, weighting, 3)
+    assert got == pytest.approx(hits / len(X))
+
+
+def test_posecbr_train_stores_what_fit_learns(tmp_path: Path) -> None:
+    X, y = _data({"s1": "right", "s2": "left", "s3": "right"}, 2, 8)
+    for i, (seq, label) in enumerate(zip(X, y, strict=True)):
+        save_pose(seq.with_metadata(label=label), tmp_path / "train" / f"clip{i:02d}.npz")
+    db = str(tmp_path / "cb.sqlite")
+    assert main(["train", str(tmp_path / "train"), "--db", db, "-k", "3", "--json"]) == 0
+    clf = CaseBaseClassifier(k=3).fit(X, y)
+    from casebase_store import open_store
+
+    store = open_store(db)
+    try:
+        arrays = store.load_cases("default")
+        info = store.get_case_base("default")
+    finally:
+        store.close()
+    assert len(arrays.ids) == len(clf.case_base_)
+    assert tuple(info.feature_names) == clf.case_base_.names
+    np.testing.assert_allclose(arrays.features, clf.case_base_.problems, atol=1e-6)
+
+
+def test_posecbr_train_predicts_like_fit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    X, y = _data({"s1": "right", "s2": "left", "s3": "right"}, 2, 10)
+    for i, (seq, label) in enumerate(zip(X, y, strict=True)):
+        save_pose(seq.with_metadata(label=label), tmp_path / "train" / f"clip{i:02d}.npz")
+    rng = np.random.default_rng(11)
+    Xt = [_arm_clip(a, m, "s9", rng) for a, m in (("left", "sideways"), ("both", "forward"))]
+    for i, seq in enumerate(Xt):
+        save_pose(seq, tmp_path / "test" / f"q{i}.npz")
+    db = str(tmp_path / "cb.sqlite")
+    assert main(["train", str(tmp_path / "train"), "--db", db, "-k", "3"]) == 0
+    capsys.readouterr()
+    assert main(["classify", str(tmp_path / "test"), "--db", db, "-k", "3", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    clf = CaseBaseClassifier(k=3).fit(X, y)
+    got = [r["label"] for r in doc["results"]]  # the folder's files in name order
+    assert got == ["one arm sideways", "both arms forward"]
+    assert list(clf.predict(Xt)) == got
