@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from sklearn.base import clone
 
 from casebase_store import CaseStore, NewCase
 from features.poses import PoseSequence
@@ -16,14 +17,14 @@ from posecbr.errors import ConfigError, DataError
 from posecbr.progress import progress
 
 from .casebase import CaseBase
+from .estimator import CaseBaseClassifier
 from .explain import Explanation, explain
 from .maintenance import EDITORS, MaintenanceReport, record_trim
-from .problem import FeatureConfig, Problem, extract_problem, resolve_config
+from .problem import FeatureConfig
 from .retain import RetainDecision, record_retention, retain, typical_distance
 from .retrieve import retrieve
 from .reuse import reuse
 from .revise import Revision, record_revision, revise
-from .similarity import SimilarityMeasure
 
 
 @dataclass(frozen=True)
@@ -34,6 +35,7 @@ class BuildResult:
     label_counts: dict[str, int]
     config: FeatureConfig
     trim: MaintenanceReport | None
+    learned: dict[str, Any]
 
 
 def check_training_set(labels: Sequence[str], where: str) -> None:
@@ -66,49 +68,64 @@ def check_same_config(stored: dict[str, Any], wanted: FeatureConfig, name: str, 
         )
 
 
-def problems_of(clips: Sequence[PoseSequence], config: FeatureConfig, desc: str) -> list[Problem]:
-    return [
-        extract_problem(s, config)
-        for s in progress(clips, desc=desc, total=len(clips), unit="clip")
-    ]
-
-
 def build_case_base(
     store: CaseStore,
     name: str,
     clips: Sequence[PoseSequence],
     labels: Sequence[str],
-    config: FeatureConfig,
-    measure: SimilarityMeasure,
+    estimator: CaseBaseClassifier,
     *,
     replace: bool = False,
     append: bool = False,
     editor: str | None = None,
     keep: float = 0.7,
-    k: int = 5,
 ) -> BuildResult:
-    """Extract problems, optionally trim, and store the case base in ONE transaction."""
+    """Learn the case base as ``estimator.fit`` does (states, side handling, feature weights,
+    mirror cases), optionally trim it, and store it in ONE transaction.
+
+    With ``append`` onto an existing case base the stored configuration, measure and weights
+    are kept and the clips are added as further cases (nothing is re-learned).
+    """
     labels = [str(v) for v in labels]
     check_training_set(labels, "training set")
+    k = int(estimator.k)
     if append and store.has_case_base(name):
         info = store.get_case_base(name)
-        check_same_config(info.feature_config, config, name, store.where)
-        config = FeatureConfig.from_dict(info.feature_config)
+        check_same_config(info.feature_config, estimator.wanted_config(), name, store.where)
+        old = CaseBase.from_store(store, name)
+        config, measure = old.config, old.measure
+        probs = [
+            old.problem_of(s)
+            for s in progress(clips, desc="features", total=len(clips), unit="clip")
+        ]
+        cb = CaseBase(
+            config,
+            measure,
+            np.stack([p.values for p in probs]),
+            np.array(labels, dtype=object),
+            old.names,
+            old.words,
+            sources=tuple(s.source for s in clips),
+            subjects=tuple(
+                None if s.metadata.get("subject") is None else str(s.metadata["subject"])
+                for s in clips
+            ),
+        )
+        origin = np.arange(len(clips))
+        extra = None
+        learned: dict[str, Any] = {}
     else:
-        config = resolve_config(config, clips)
-    probs = problems_of(clips, config, "features")
-    cb = CaseBase(
-        config,
-        measure,
-        np.stack([p.values for p in probs]),
-        np.array(labels, dtype=object),
-        probs[0].names,
-        probs[0].words,
-        sources=tuple(s.source for s in clips),
-        subjects=tuple(
-            None if s.metadata.get("subject") is None else str(s.metadata["subject"]) for s in clips
-        ),
-    )
+        fitted = clone(estimator).set_params(trim=None)
+        fitted.fit(list(clips), labels)
+        cb, config, measure = fitted.case_base_, fitted.feature_config_, fitted.measure_
+        origin = fitted.case_origin_
+        extra = f"side handling {fitted.side_}, feature weights {fitted.weighting_}"
+        learned = {
+            "side": fitted.side_,
+            "feature_weights": fitted.weighting_,
+            "mirror_cases": fitted.mirror_cases_,
+            "inner_loso_accuracy": dict(fitted.selection_),
+        }
     report = None
     if editor is not None:
         if editor not in EDITORS:
@@ -117,12 +134,13 @@ def build_case_base(
         report = fn(cb, keep, k) if editor == "novelty-benefit" else fn(cb)
     kind = measure.cache_kind(tuple(cb.problems.shape[1:]))
     reps = measure.represent(cb.problems) if kind is not None else None
+    case_clips = [clips[int(i) % len(clips)] for i in origin]  # a mirror image: its clip
     frames = [
         (
             int(s.metadata.get("frame_offset", 0)),
             int(s.metadata.get("frame_offset", 0)) + s.n_frames,
         )
-        for s in clips
+        for s in case_clips
     ]
     with store.transaction() as tx:
         if append and tx.has_case_base(name):  # as this transaction sees it
@@ -131,8 +149,8 @@ def build_case_base(
             info = tx.create_case_base(
                 name,
                 config.to_dict(),
-                probs[0].names,
-                probs[0].words,
+                cb.names,
+                cb.words,
                 measure.params(),
                 replace=replace,
             )
@@ -140,11 +158,11 @@ def build_case_base(
             NewCase(
                 label=labels[i],
                 features=cb.problems[i].astype(np.float32),
-                source=clips[i].source,
+                source=cb.sources[i],
                 frame_start=frames[i][0],
                 frame_end=frames[i][1],
                 subject=cb.subjects[i],
-                skeleton=str(clips[i].metadata.get("source_skeleton", clips[i].skeleton)),
+                skeleton=str(case_clips[i].metadata.get("source_skeleton", case_clips[i].skeleton)),
                 origin="trained",
             )
             for i in range(len(cb))
@@ -155,8 +173,9 @@ def build_case_base(
         tx.log(
             info,
             "build",
-            reason=f"{len(ids)} cases from {len(set(labels))} activities, "
-            f"features {config.describe()}, similarity {measure.params()}",
+            reason=f"{len(ids)} cases from {len(clips)} clips of {len(set(labels))} "
+            f"activities, features {config.describe()}, similarity {measure.name}"
+            + ("" if extra is None else f", {extra}"),
         )
         if report is not None:
             record_trim(tx, info.name, report, np.asarray(ids))
@@ -167,6 +186,7 @@ def build_case_base(
         {lab: labels.count(lab) for lab in sorted(set(labels))},
         config,
         report,
+        learned,
     )
 
 
@@ -230,7 +250,7 @@ def classify_clips(
         total=len(clips),
         unit="clip",
     ):
-        p = extract_problem(seq, cb.config)
+        p = cb.problem_of(seq)
         if p.values.shape != cb.problems.shape[1:]:
             raise DataError(
                 f"problem shape {p.values.shape} differs from the case base's "

@@ -15,7 +15,6 @@ from typing import Any
 
 from casebase_store import open_store
 from cbr.build import build_case_base
-from cbr.problem import FeatureConfig
 from cbr.similarity import available_measures, get_measure
 from posecbr.errors import ConfigError
 
@@ -47,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--features", choices=("fluents", "qmp"), default="fluents")
     p.add_argument(
         "--similarity",
-        default="dtw",
+        default="euclidean",
         help=f"similarity measure ({', '.join(available_measures())})",
     )
     p.add_argument(
@@ -73,7 +72,27 @@ def register(sub: argparse._SubParsersAction) -> None:
         choices=("novelty-benefit", "cnn", "renn", "icf"),
         help="maintenance editor to run at build time (default with --trim: novelty-benefit)",
     )
-    p.add_argument("-k", "--k", type=int, default=5, help="neighbours used by trimming")
+    p.add_argument(
+        "--mirror",
+        choices=("auto", "off", "canonical", "augment"),
+        default="auto",
+        help="side handling: clips as recorded (off), left-side clips mirrored (canonical), "
+        "mirror images as further cases (augment); auto: chosen by leave-one-subject-out "
+        "inside the training clips (euclidean on clip summaries or QMPs)",
+    )
+    p.add_argument(
+        "--feature-weights",
+        choices=("auto", "fisher", "none"),
+        default="auto",
+        help="learned feature weights (fisher: between/within-activity variance), chosen like "
+        "--mirror when auto",
+    )
+    p.add_argument(
+        "--no-summary",
+        action="store_true",
+        help="euclidean on the resampled fluent sequence instead of per-feature clip summaries",
+    )
+    p.add_argument("-k", "--k", type=int, default=5, help="neighbours (trimming, inner choice)")
     p.add_argument("--subjects", help="only these subjects, comma-separated (e.g. s01,s02)")
     p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor (kinect or vicon)")
     g = p.add_mutually_exclusive_group()
@@ -88,11 +107,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from cbr.estimator import CaseBaseClassifier
     from features.datasets import load_dataset
 
     measure = get_measure(args.similarity, **parse_params(args.param))
-    config = FeatureConfig(level=args.features, length=args.length, states=args.states)
-    if config.level == "qmp" and measure.name in ("dtw", "signature"):
+    if args.features == "qmp" and measure.name in ("dtw", "signature"):
         raise ConfigError(
             f"similarity {measure.name!r} compares sequences; QMP features are "
             "one vector per clip (use euclidean)",
@@ -101,6 +120,18 @@ def run(args: argparse.Namespace) -> int:
     editor = args.editor or ("novelty-benefit" if args.trim is not None else None)
     if args.trim is not None and not 0.0 < args.trim <= 1.0:
         raise ConfigError(f"--trim must be in (0, 1], got {args.trim}", "--trim")
+    estimator = CaseBaseClassifier(
+        features=args.features,
+        similarity=args.similarity,
+        similarity_params=parse_params(args.param) or None,
+        k=args.k,
+        length=args.length,
+        states=args.states,
+        summary=False if args.no_summary else "auto",
+        mirror=args.mirror,
+        feature_weights=args.feature_weights,
+    )
+    estimator.wanted_config()  # bad --states / --length: one line before any clip is read
     subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
     clips = load_dataset(
         args.data, sensor=args.sensor, subjects=subjects, progress_desc="loading clips"
@@ -112,13 +143,11 @@ def run(args: argparse.Namespace) -> int:
             args.name,
             [c.seq for c in clips],
             [c.label for c in clips],
-            config,
-            measure,
+            estimator,
             replace=args.replace,
             append=args.append,
             editor=editor,
             keep=args.trim if args.trim is not None else 0.7,
-            k=args.k,
         )
     finally:
         store.close()
@@ -129,7 +158,8 @@ def run(args: argparse.Namespace) -> int:
         "active_cases": result.n_kept,
         "labels": result.label_counts,
         "features": result.config.describe(),
-        "similarity": measure.params(),
+        "similarity": measure.name,
+        "learned": result.learned,
     }
     if result.trim is not None:
         summary["trim"] = result.trim.summary()
@@ -141,7 +171,13 @@ def run(args: argparse.Namespace) -> int:
         f"case base {result.name!r} in {store.where}: {result.n_kept} cases "
         f"({result.n_cases} trained) from {len(result.label_counts)} activities"
     )
-    print(f"  features: {result.config.describe()}; similarity: {measure.params()}")
+    print(f"  features: {result.config.describe()}; similarity: {measure.name}")
+    if result.learned:
+        chosen = f"  side handling: {result.learned['side']}; feature weights: "
+        chosen += str(result.learned["feature_weights"])
+        if result.learned["mirror_cases"]:
+            chosen += f"; {result.learned['mirror_cases']} mirror-image cases"
+        print(chosen)
     for lab, n in result.label_counts.items():
         print(f"  {n:5d}  {lab}")
     if result.trim is not None:
