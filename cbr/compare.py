@@ -51,6 +51,7 @@ from posecbr.errors import ConfigError, DataError, PosecbrError
 from posecbr.progress import progress
 
 SIMILARITIES = ("euclidean", "dtw", "signature")
+SEQUENCE_MEASURES = ("dtw", "signature")
 FEATURE_LEVELS = ("fluents", "qmp")
 PEERS = ("dtw-knn", "minirocket")
 CV_SCHEMES = ("loso", "kfold")
@@ -252,6 +253,8 @@ def methods_for(settings: CompareSettings) -> list[Method]:
         )
         for level in settings.features
         for sim in settings.similarities
+        # a QMP description is one vector per clip: sequence measures have nothing to align
+        if level != "qmp" or sim not in SEQUENCE_MEASURES
     ]
     if settings.dad:
         out.append(Method("dad", "dad", True, {}))
@@ -810,6 +813,11 @@ def run_compare(
                     "predicted when that subject is held out"
                 )
     methods = methods_for(settings)
+    if "qmp" in settings.features and set(settings.similarities) & set(SEQUENCE_MEASURES):
+        notes.append(
+            "qmp features are one vector per clip: compared by euclidean only (dtw and "
+            "signature compare sequences)"
+        )
     status: dict[int, tuple[str, str]] = {}
     for mi, m in enumerate(methods):
         why = _method_unavailable(m, data, settings)

@@ -1,0 +1,42 @@
+"""The dtw-knn peer of `posecbr compare`: tslearn's DTW 1-NN on eight limb angles, checked
+against hand-known angles and an independent dynamic-programming DTW written here."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cbr.compare import LIMB_ANGLES, DTWKNNPeer, angle_series
+from tests.test_cbr_weights import _arm_clip, _elbow_clip
+
+
+def _dtw(a: np.ndarray, b: np.ndarray) -> float:
+    """Textbook DTW: sqrt of the least sum of squared frame distances over warping paths."""
+    n, m = len(a), len(b)
+    cost = np.full((n + 1, m + 1), np.inf)
+    cost[0, 0] = 0.0
+    for i in range(1, n + 1):
+        for j in range(1, m + 1):
+            d = float(((a[i - 1] - b[j - 1]) ** 2).sum())
+            cost[i, j] = d + min(cost[i - 1, j], cost[i, j - 1], cost[i - 1, j - 1])
+    return float(np.sqrt(cost[n, m]))
+
+
+def test_angle_series_reads_the_known_elbow_angle() -> None:
+    s = angle_series(_elbow_clip(90.0, frames=6), 10)
+    assert s.shape == (10, 8)
+    np.testing.assert_allclose(s[:, LIMB_ANGLES.index("left_elbow")], np.pi / 2, atol=1e-9)
+    np.testing.assert_allclose(s[:, LIMB_ANGLES.index("right_elbow")], np.pi, atol=1e-9)
+
+
+def test_dtw_knn_peer_is_the_nearest_clip_under_textbook_dtw() -> None:
+    rng = np.random.default_rng(3)
+    kinds = [("left", "sideways"), ("right", "sideways"), ("both", "forward")]
+    X = [_arm_clip(a, m, "s1", rng) for a, m in kinds for _ in range(3)]
+    y = np.array([f"{a} {m}" for a, m in kinds for _ in range(3)])
+    Xt = [_arm_clip(a, m, "s2", rng) for a, m in kinds for _ in range(2)]
+    peer = DTWKNNPeer(length=16).fit(X, y)
+    got = peer.predict(Xt)
+    train = [angle_series(s, 16) for s in X]
+    want = [y[int(np.argmin([_dtw(angle_series(q, 16), t) for t in train]))] for q in Xt]
+    assert list(got) == want
+    assert list(got) == [f"{a} {m}" for a, m in kinds for _ in range(2)]
