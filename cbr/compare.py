@@ -781,6 +781,36 @@ def machine_info(extra_packages: tuple[str, ...] = ()) -> dict[str, Any]:
     }
 
 
+def _run_tasks(
+    data: Prepared,
+    methods: list[Method],
+    folds: np.ndarray,
+    tasks: list[tuple[int, int]],
+    status: dict[int, tuple[str, str]],
+    jobs: int,
+) -> list[FoldResult]:
+    """Every (method, fold) task, in ``jobs`` forked workers that inherit the warm caches.
+
+    With workers, each one warms the compilers itself before its first task: the parent must
+    not, because GNU OpenMP (scikit-learn's neighbour search under the tslearn peer) aborts a
+    forked child once the parent has started its thread team.
+    """
+    active = [m for i, m in enumerate(methods) if i not in status]
+    _RUN.update(data=data, methods=methods, folds=folds)
+    try:
+        if jobs > 1:
+            ctx = multiprocessing.get_context("fork")
+            with ctx.Pool(jobs, initializer=warm_compilers, initargs=(data, active)) as pool:
+                it = pool.imap_unordered(_run_task, tasks)
+                return list(progress(it, "folds", total=len(tasks), unit="fold"))
+        warm_compilers(data, active)
+        return [
+            run_fold(mi, f) for mi, f in progress(tasks, "folds", total=len(tasks), unit="fold")
+        ]
+    finally:
+        _RUN.clear()
+
+
 def run_compare(
     clips: Sequence[Any],
     settings: CompareSettings,
@@ -839,23 +869,10 @@ def run_compare(
         for mi, m in enumerate(methods):
             if m.kind == "cbr" and m.params["features"] == level and mi not in status:
                 status[mi] = ("skipped", msg.split(":", 1)[1].strip())
-    warm_compilers(data, [m for i, m in enumerate(methods) if i not in status])
     tasks = [(mi, f) for mi in range(len(methods)) if mi not in status for f in fold_ids]
-    _RUN.update(data=data, methods=methods, folds=folds)
-    fold_results: list[FoldResult] = []
-    try:
-        jobs = min(int(settings.jobs), max(1, len(tasks)))
-        if jobs > 1:
-            ctx = multiprocessing.get_context("fork")
-            with ctx.Pool(jobs) as pool:
-                it = pool.imap_unordered(_run_task, tasks)
-                fold_results = list(progress(it, "folds", total=len(tasks), unit="fold"))
-        else:
-            fold_results = [
-                run_fold(mi, f) for mi, f in progress(tasks, "folds", total=len(tasks), unit="fold")
-            ]
-    finally:
-        _RUN.clear()
+    jobs = min(int(settings.jobs), max(1, len(tasks)))
+    fold_results = _run_tasks(data, methods, folds, tasks, status, jobs)
+
 
     out_methods: list[dict[str, Any]] = []
     for mi, m in enumerate(methods):

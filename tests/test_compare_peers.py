@@ -3,6 +3,8 @@ against hand-known angles and an independent dynamic-programming DTW written her
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from cbr.compare import LIMB_ANGLES, DTWKNNPeer, angle_series
@@ -40,3 +42,30 @@ def test_dtw_knn_peer_is_the_nearest_clip_under_textbook_dtw() -> None:
     want = [y[int(np.argmin([_dtw(angle_series(q, 16), t) for t in train]))] for q in Xt]
     assert list(got) == want
     assert list(got) == [f"{a} {m}" for a, m in kinds for _ in range(2)]
+
+
+def test_parallel_folds_with_the_tslearn_peer_finish(tmp_path: Path) -> None:
+    """Forked fold workers and scikit-learn's GNU OpenMP: the peer's neighbour search must not
+    abort the workers (a hang before the fix), and the predictions equal a serial run."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    demo = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+    runs = {}
+    for jobs in ("1", "2"):
+        out = tmp_path / f"j{jobs}.json"
+        cmd = [
+            sys.executable, "-m", "posecbr", "compare", str(demo),
+            "--labels", "deep_squat,standing_shoulder_abduction", "--similarities", "euclidean",
+            "--features", "fluents", "--no-dad", "--peers", "dtw-knn", "--explain", "0",
+            "--jobs", jobs, "--json", str(out),
+        ]  # fmt: skip
+        env = {**os.environ, "POSECBR_NO_PROGRESS": "1"}
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, env=env)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        runs[jobs] = {m["name"]: m for m in json.loads(out.read_text())["methods"]}
+    for name in ("cbr fluents/euclidean", "dtw-knn"):
+        assert runs["2"][name]["status"] == "ok"
+        assert runs["2"][name]["predictions"] == runs["1"][name]["predictions"]
