@@ -156,7 +156,7 @@ def build_case_base(
             )
         new = [
             NewCase(
-                label=labels[i],
+                label=str(cb.labels[i]),
                 features=cb.problems[i].astype(np.float32),
                 source=cb.sources[i],
                 frame_start=frames[i][0],

@@ -169,3 +169,35 @@ def test_posecbr_train_predicts_like_fit(
     got = [r["label"] for r in doc["results"]]  # the folder's files in name order
     assert got == ["one arm sideways", "both arms forward"]
     assert list(clf.predict(Xt)) == got
+
+
+def test_append_to_a_mirror_augmented_case_base_keeps_its_columns(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    X, y = _data({"s1": "right", "s2": "right"}, 2, 12)
+    for i, (seq, label) in enumerate(zip(X, y, strict=True)):
+        folder = "a" if i % 2 == 0 else "b"
+        save_pose(seq.with_metadata(label=label), tmp_path / folder / f"clip{i:02d}.npz")
+    db = str(tmp_path / "cb.sqlite")
+    assert main(["train", str(tmp_path / "a"), "--db", db, "--mirror", "augment"]) == 0
+    assert main(["train", str(tmp_path / "b"), "--db", db, "--append", "--json"]) == 0
+    out = capsys.readouterr().out
+    doc = json.loads(out[out.index("{") :])
+    # 6 real clips + 6 mirror images first, then 6 appended real clips (no images: the
+    # stored weights and columns are kept, nothing is re-learned)
+    assert doc["cases"] == 6
+    from casebase_store import open_store
+
+    store = open_store(db)
+    try:
+        arrays = store.load_cases("default")
+        names = store.get_case_base("default").feature_names
+    finally:
+        store.close()
+    assert names[-1] == "mirror_image" and len(arrays.ids) == 18
+    np.testing.assert_array_equal(arrays.features[:, -1], [0.0] * 6 + [1.0] * 6 + [0.0] * 6)
+    rng = np.random.default_rng(13)
+    save_pose(_arm_clip("left", "sideways", "s9", rng), tmp_path / "q" / "q.npz")
+    assert main(["classify", str(tmp_path / "q"), "--db", db, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)["results"][0]
+    assert res["label"] == "one arm sideways"
