@@ -696,7 +696,10 @@ def _method_unavailable(method: Method, data: Prepared, settings: CompareSetting
         if not covered:
             return "the ADD describes none of this dataset's activities"
     if method.name == "minirocket" and minirocket_backend() is None:
-        return "MiniRocket needs sktime or aeon, neither is installed (pip install sktime)"
+        return (
+            "MiniRocket needs sktime or aeon, neither is installed "
+            "(pip install -e '.[compare]' installs sktime)"
+        )
     return None
 
 
