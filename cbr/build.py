@@ -20,7 +20,7 @@ from .casebase import CaseBase
 from .estimator import CaseBaseClassifier
 from .explain import Explanation, explain
 from .maintenance import EDITORS, MaintenanceReport, record_trim
-from .problem import FeatureConfig
+from .problem import FeatureConfig, warm
 from .retain import RetainDecision, record_retention, retain, typical_distance
 from .retrieve import retrieve
 from .reuse import reuse
@@ -116,6 +116,9 @@ def build_case_base(
         learned: dict[str, Any] = {}
     else:
         fitted = clone(estimator).set_params(trim=None)
+        level = estimator.wanted_config().level
+        for seq in progress(clips, desc="features", total=len(clips), unit="clip"):
+            warm(seq, level, mirror=estimator.mirror != "off" and estimator.mirror is not False)
         fitted.fit(list(clips), labels)
         cb, config, measure = fitted.case_base_, fitted.feature_config_, fitted.measure_
         origin = fitted.case_origin_

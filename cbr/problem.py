@@ -272,6 +272,19 @@ def _qmp(seq: PoseSequence) -> Any:
     return res
 
 
+def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> None:
+    """Compute and cache what :func:`extract_problem` needs for ``seq`` (and, with ``mirror``,
+    for its mirror image), so a caller can show progress over the expensive part."""
+    for s in (seq, mirrored(seq)) if mirror else (seq,):
+        if level == "qmp":
+            _qmp(s)
+        else:
+            _fluents(s)
+            _signals(s)
+            arm_planes(s)
+            moves_left_more(s)
+
+
 def _group_mask(result: Any, group: str) -> np.ndarray:
     temporal = np.asarray(result.temporal, dtype=bool)
     is_near = np.array([n.startswith("near:") for n in result.state_names])
