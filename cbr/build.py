@@ -122,10 +122,14 @@ def build_case_base(
         fitted.fit(list(clips), labels)
         cb, config, measure = fitted.case_base_, fitted.feature_config_, fitted.measure_
         origin = fitted.case_origin_
-        extra = f"side handling {fitted.side_}, feature weights {fitted.weighting_}"
+        extra = (
+            f"side handling {fitted.side_}, feature weights {fitted.weighting_}, "
+            f"{fitted.phases_} phases"
+        )
         learned = {
             "side": fitted.side_,
             "feature_weights": fitted.weighting_,
+            "phases": fitted.phases_,
             "mirror_cases": fitted.mirror_cases_,
             "inner_loso_accuracy": dict(fitted.selection_),
         }

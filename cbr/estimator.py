@@ -15,8 +15,9 @@ Learned at fit time from the training clips only (so cross-validation stays hone
   (:mod:`cbr.weights`), used by the euclidean measure and cited by explanations.
 
 With vector problems under euclidean (clip summaries, QMPs), ``"auto"`` chooses the side
-handling and the weighting by leave-one-subject-out accuracy inside the training clips; a fold of
-an outer cross-validation never sees its test clips. Fixed values skip the search.
+handling, the weighting and (clip summaries) the phase means by leave-one-subject-out accuracy
+inside the training clips; a fold of an outer cross-validation never sees its test clips. Fixed
+values skip the search.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from posecbr.errors import ConfigError, DataError
 
 from .casebase import CaseBase
 from .explain import Explanation, explain
-from .fitting import SIDES, assemble_cases, inner_loso_accuracy, side_name
+from .fitting import AUTO_PHASES, SIDES, assemble_cases, inner_loso_accuracy, side_name
 from .problem import (
     FeatureConfig,
     Problem,
@@ -81,6 +82,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     feature_weights: ``"fisher"`` (z-normalised, weighted by between/within-activity variance,
       learned in fit), ``"none"`` (raw values), or ``"auto"``: chosen like ``mirror``
       (without subjects: fisher for clip summaries, none otherwise).
+    phases: with clip summaries, also the mean of every feature over each of this many equal
+      stretches of the clip ("left knee angle (middle third)"); ``"auto"``: three or none,
+      chosen like ``mirror``.
     """
 
     def __init__(
@@ -97,6 +101,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         summary: bool | str = "auto",
         mirror: bool | str = "auto",
         feature_weights: str = "auto",
+        phases: int | str = "auto",
     ) -> None:
         self.features = features
         self.similarity = similarity
@@ -110,6 +115,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.summary = summary
         self.mirror = mirror
         self.feature_weights = feature_weights
+        self.phases = phases
 
     # -- helpers
 
@@ -127,6 +133,10 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             states=states,
             angles=bool(self.angles) and fluents,
             summary=self._summary() if summary is None else summary,
+            # "auto": computed with the phases, which fit may then drop
+            phases=(AUTO_PHASES if self.phases == "auto" else int(self.phases))
+            if self._summary()
+            else 0,
         )
 
     def _check_params(self) -> None:
@@ -147,6 +157,12 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
                 f"mirror must be True, False, 'auto', {', '.join(repr(s) for s in SIDES)}; "
                 f"got {self.mirror!r}",
                 "mirror",
+            )
+        if self.phases != "auto" and (
+            not isinstance(self.phases, int | np.integer) or int(self.phases) < 0
+        ):
+            raise ConfigError(
+                f"phases must be 'auto' or a whole number >= 0, got {self.phases!r}", "phases"
             )
         if self.feature_weights not in ("auto", *WEIGHTINGS):
             raise ConfigError(
@@ -228,25 +244,48 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         R = np.stack([p.values for p in real])
         M = np.stack([p.values for p in mirror_probs]) if need_mirror else None
         left = np.array([moves_left_more(s) for s in seqs]) if "canonical" in sides else None
+        # phase columns come last: without them, the problem is the first `base` columns
+        phase_options = [int(config.phases)]
+        if self.phases == "auto" and config.phases and self._selectable(vectors, measure):
+            phase_options = [0, int(config.phases)]
+        base = R.shape[1] - len(config.states) * int(config.phases) if config.summary else None
+
+        def cols(A: np.ndarray | None, phases: int) -> np.ndarray | None:
+            return A if A is None or phases or base is None else A[:, :base]
+
         self.selection_ = {}
-        side, weighting = sides[0], weightings[0]
+        side, weighting, phases = sides[0], weightings[0], phase_options[-1]
         n_subjects = len(set(subjects) - {""})
-        if len(sides) * len(weightings) > 1:
+        if len(sides) * len(weightings) * len(phase_options) > 1:
             if n_subjects >= 2 and "" not in set(subjects):
                 scores = {
-                    (sd, wt): inner_loso_accuracy(
-                        R, M, left, labels, subjects, sd, wt, int(self.k), self.weights
+                    (sd, wt, ph): inner_loso_accuracy(
+                        cols(R, ph),  # type: ignore[arg-type]
+                        cols(M, ph),
+                        left,
+                        labels,
+                        subjects,
+                        sd,
+                        wt,
+                        int(self.k),
+                        self.weights,
                     )
+                    for ph in phase_options
                     for sd in sides
                     for wt in weightings
                 }
-                side, weighting = max(scores, key=lambda c: scores[c])  # first best wins ties
-                self.selection_ = {f"{sd}/{wt}": a for (sd, wt), a in scores.items()}
+                side, weighting, phases = max(scores, key=lambda c: scores[c])  # first best wins
+                self.selection_ = {
+                    f"{sd}/{wt}/{ph} phases": a for (sd, wt, ph), a in scores.items()
+                }
             else:  # no subjects to hold out: the fixed choice
                 side = "off"
                 weighting = "fisher" if "fisher" in weightings and self._summary() else "none"
         if side == "canonical":
             config = dataclasses.replace(config, side="canonical")
+        if phases != config.phases:
+            config = dataclasses.replace(config, phases=phases)
+            R, M = cols(R, phases), cols(M, phases)  # type: ignore[assignment]
         cases = assemble_cases(R, M, left, labels, side, weighting, vectors)
         if cases.weights is not None:
             measure = get_measure(
@@ -258,7 +297,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         case_seqs = [(mirrored(seqs[i - n]) if i >= n else seqs[i]) for i in cases.origin.tolist()]
         if side == "canonical" and left is not None:
             case_seqs = [mirrored(s) if lm else s for s, lm in zip(case_seqs, left, strict=True)]
-        names, words = real[0].names, real[0].words
+        names, words = real[0].names[: R.shape[-1]], real[0].words[: R.shape[-1]]
         if cases.flag:
             names, words = (*names, MIRROR_FLAG), (*words, "mirror image of a training clip")
         cb = CaseBase(
@@ -289,6 +328,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.feature_weights_ = cases.weights
         self.side_ = side
         self.weighting_ = weighting
+        self.phases_ = int(config.phases)
         self.mirror_ = side == "augment"
         self.mirror_flag_ = cases.flag
         self.mirror_cases_ = int((cases.origin >= n).sum())

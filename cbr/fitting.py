@@ -29,6 +29,9 @@ from .weights import FeatureWeights, confusing_mirrors, learn_weights, mirror_pe
 # the same side cannot show that a new person may use the other one, so the side-invariant
 # handlings come first
 SIDES = ("canonical", "augment", "off")
+# clip summaries may add the mean over each third of the clip (start, middle, end): the
+# phases "auto" tries, against none
+AUTO_PHASES = 3
 
 
 def side_name(value: object) -> str:

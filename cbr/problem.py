@@ -41,7 +41,7 @@ SUMMARY_STATS = ("mean", "min", "max", "std")
 _STAT_WORDS = {"mean": "", "min": " (lowest)", "max": " (highest)", "std": " (variation)"}
 # options added after the first stored case bases: left out of to_dict() while off, so the
 # configuration hash of every existing case base stays the same
-_LATER_OPTIONS = {"angles": False, "summary": False, "side": "as_recorded"}
+_LATER_OPTIONS = {"angles": False, "summary": False, "side": "as_recorded", "phases": 0}
 SIDE_MODES = ("as_recorded", "canonical")
 
 
@@ -61,6 +61,8 @@ class FeatureConfig:
     qmp_part: ``"binary"`` (detected / not) or ``"values"`` (scored QMPs) at the QMP level.
     angles: also use the named joint angles (``"angle:left_knee"`` columns, radians / pi).
     summary: per-column statistics (mean, lowest, highest, variation) instead of the sequence.
+    phases: with ``summary``, also the mean of every column over each of this many equal
+      stretches of the clip ("left knee angle (middle third)"); 0: none.
     side: ``"as_recorded"``, or ``"canonical"``: a clip that moves its left limbs more than its
       right ones is described by its mirror image (:func:`mirrored`), so a movement done with
       the left arm is compared with the right-arm cases (:func:`moves_left_more`).
@@ -75,6 +77,7 @@ class FeatureConfig:
     angles: bool = False
     summary: bool = False
     side: str = "as_recorded"
+    phases: int = 0
 
     def __post_init__(self) -> None:
         if self.level not in ("fluents", "qmp"):
@@ -96,6 +99,14 @@ class FeatureConfig:
             raise ConfigError(f"min_available must be in [0, 1], got {self.min_available!r}")
         if self.qmp_part not in ("binary", "values"):
             raise ConfigError(f"qmp_part must be 'binary' or 'values', got {self.qmp_part!r}")
+        if not isinstance(self.phases, int | np.integer) or not 0 <= int(self.phases) <= int(
+            self.length
+        ):
+            raise ConfigError(
+                f"phases must be a whole number from 0 to length ({self.length}), got "
+                f"{self.phases!r}",
+                "phases",
+            )
         if self.side not in SIDE_MODES:
             raise ConfigError(
                 f"side must be one of {', '.join(SIDE_MODES)}, got {self.side!r}", "side"
@@ -134,7 +145,8 @@ class FeatureConfig:
         n = self.states if isinstance(self.states, str) else f"{len(self.states)} states"
         extra = (" with joint angles" if self.angles else "") + side
         if self.summary:
-            return f"fluents ({n}{extra}, summarised over {self.length} frames)"
+            ph = f" and {self.phases} phases" if self.phases else ""
+            return f"fluents ({n}{extra}, summarised over {self.length} frames{ph})"
         return f"fluents ({n}{extra}, resampled to {self.length} frames)"
 
 
@@ -423,28 +435,46 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
         raise ConfigError("the feature configuration selects no columns", "features")
     values = resample(conf, int(config.length))
     if config.summary:
-        return summarise(values, states, tuple(words))
+        return summarise(values, states, tuple(words), int(config.phases))
     return Problem(values, states, tuple(words), "fluents")
 
 
-def summarise(values: np.ndarray, names: tuple[str, ...], words: tuple[str, ...]) -> Problem:
+def phase_words(phases: int) -> tuple[str, ...]:
+    """How the ``phases`` stretches of a clip are named in explanations."""
+    if phases == 3:
+        return ("first third", "middle third", "last third")
+    if phases == 2:
+        return ("first half", "second half")
+    return tuple(f"phase {i + 1} of {phases}" for i in range(phases))
+
+
+def summarise(
+    values: np.ndarray, names: tuple[str, ...], words: tuple[str, ...], phases: int = 0
+) -> Problem:
     """Per-column statistics of a ``(frames, n)`` sequence: a ``(4 * n,)`` vector, statistic-
-    major (all means, then lowest, highest, standard deviation). Column names get ``@mean``,
-    ``@min``, ...; the words of the means are the plain feature words (for a fluent state the
-    mean confidence is about the share of the clip it holds)."""
-    stats = np.concatenate(
-        [values.mean(axis=0), values.min(axis=0), values.max(axis=0), values.std(axis=0)]
-    )
-    out_names = tuple(f"{n}@{st}" for st in SUMMARY_STATS for n in names)
+    major (all means, then lowest, highest, standard deviation), then with ``phases`` > 0 the
+    mean over each of that many equal stretches of the frames (``phases * n`` more). Column
+    names get ``@mean``, ``@min``, ..., ``@phase1``...; the words of the means are the plain
+    feature words (for a fluent state the mean confidence is about the share of the clip it
+    holds)."""
+    stats = [values.mean(axis=0), values.min(axis=0), values.max(axis=0), values.std(axis=0)]
+    out_names = [f"{n}@{st}" for st in SUMMARY_STATS for n in names]
     # a fluent's lowest/highest value is a confidence; an angle's is the angle itself
-    out_words = tuple(
+    out_words = [
         f"{w}{_STAT_WORDS[st]}"
         if st in ("mean", "std") or n.startswith(ANGLE_PREFIX)
         else f"{w}{_STAT_WORDS[st][:-1]} confidence)"
         for st in SUMMARY_STATS
         for n, w in zip(names, words, strict=True)
-    )
-    return Problem(stats, out_names, out_words, "fluents")
+    ]
+    if phases:
+        for i, (part, said) in enumerate(
+            zip(np.array_split(values, phases, axis=0), phase_words(phases), strict=True)
+        ):
+            stats.append(part.mean(axis=0))
+            out_names += [f"{n}@phase{i + 1}" for n in names]
+            out_words += [f"{w} ({said})" for w in words]
+    return Problem(np.concatenate(stats), tuple(out_names), tuple(out_words), "fluents")
 
 
 def config_json(config: FeatureConfig) -> str:

@@ -21,6 +21,7 @@ from cbr.problem import (
     mirrored,
     moves_left_more,
     resolve_config,
+    summarise,
 )
 from features.poses import save_pose
 from posecbr.cli import main
@@ -69,6 +70,19 @@ def test_canonical_side_describes_a_left_arm_clip_as_its_mirror_image() -> None:
     assert "side" not in base.to_dict() and canon.to_dict()["side"] == "canonical"
 
 
+def test_phase_means_are_the_means_of_each_third() -> None:
+    # a column rising 0, 1, ..., 8 over nine frames: thirds 0-2, 3-5, 6-8
+    values = np.arange(9.0)[:, None]
+    p = summarise(values, ("angle:left_knee",), ("left knee angle",), phases=3)
+    np.testing.assert_allclose(p.values, [4.0, 0.0, 8.0, np.std(np.arange(9.0)), 1.0, 4.0, 7.0])
+    assert p.words[-3:] == (
+        "left knee angle (first third)",
+        "left knee angle (middle third)",
+        "left knee angle (last third)",
+    )
+    assert p.names[-1] == "angle:left_knee@phase3"
+
+
 def test_auto_picks_a_side_invariant_handling_and_recognises_the_other_arm() -> None:
     # the training subjects all use the right arm; a new person uses the left
     X, y = _data({"s1": "right", "s2": "right", "s3": "right"}, 3, 3)
@@ -77,7 +91,10 @@ def test_auto_picks_a_side_invariant_handling_and_recognises_the_other_arm() -> 
     clf = CaseBaseClassifier(k=1).fit(X, y)
     assert clf.side_ in ("canonical", "augment")
     assert set(clf.selection_) == {
-        f"{s}/{w}" for s in ("canonical", "augment", "off") for w in ("none", "fisher")
+        f"{s}/{w}/{p} phases"
+        for s in ("canonical", "augment", "off")
+        for w in ("none", "fisher")
+        for p in (0, 3)
     }
     assert list(clf.predict(Xt)) == ["one arm sideways"] * 3
     if clf.side_ == "canonical":
@@ -98,9 +115,8 @@ def test_auto_keeps_side_twins_apart() -> None:
     # filing left-arm clips under the right arm would merge the two activities: inner
     # cross-validation sees that
     assert clf.side_ != "canonical"
-    assert clf.selection_[f"canonical/{clf.weighting_}"] < clf.selection_[
-        f"{clf.side_}/{clf.weighting_}"
-    ]
+    chosen = f"{clf.weighting_}/{clf.phases_} phases"
+    assert clf.selection_[f"canonical/{chosen}"] < clf.selection_[f"{clf.side_}/{chosen}"]
     assert list(clf.predict(Xt)) == ["left sideways", "right sideways", "both sideways"]
 
 
@@ -116,11 +132,11 @@ def test_inner_score_equals_refitting_the_classifier_per_held_out_subject(
     for s in ("s1", "s2", "s3"):
         tr = [i for i in range(len(X)) if subjects[i] != s]
         te = [i for i in range(len(X)) if subjects[i] == s]
-        clf = CaseBaseClassifier(k=3, mirror=side, feature_weights=weighting)
+        clf = CaseBaseClassifier(k=3, mirror=side, feature_weights=weighting, phases=3)
         clf.fit([X[i] for i in tr], labels[tr])
         hits += int((clf.predict([X[i] for i in te]) == labels[te]).sum())
     # the vectorised inner score on the matrices fit builds
-    cfg = resolve_config(CaseBaseClassifier().wanted_config(), X)
+    cfg = resolve_config(CaseBaseClassifier(phases=3).wanted_config(), X)
     R = np.stack([extract_problem(s, cfg).values for s in X])
     M = np.stack([extract_problem(mirrored(s), cfg).values for s in X])
     left = np.array([moves_left_more(s) for s in X])

@@ -33,6 +33,16 @@ def parse_params(items: list[str] | None) -> dict[str, Any]:
     return out
 
 
+def _phases(value: str) -> int | str:
+    if value == "auto":
+        return value
+    try:
+        return int(value)
+    except ValueError:
+        msg = f"--phases must be auto or a whole number, got {value!r}"
+        raise ConfigError(msg, "--phases") from None
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "train",
@@ -88,6 +98,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--mirror when auto",
     )
     p.add_argument(
+        "--phases",
+        default="auto",
+        help="clip summaries: also the mean of every feature over this many equal stretches of "
+        "the clip (0: none); auto: 3 or none, chosen like --mirror",
+    )
+    p.add_argument(
         "--no-summary",
         action="store_true",
         help="euclidean on the resampled fluent sequence instead of per-feature clip summaries",
@@ -130,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
         summary=False if args.no_summary else "auto",
         mirror=args.mirror,
         feature_weights=args.feature_weights,
+        phases=_phases(args.phases),
     )
     estimator.wanted_config()  # bad --states / --length: one line before any clip is read
     subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
@@ -175,6 +192,8 @@ def run(args: argparse.Namespace) -> int:
     if result.learned:
         chosen = f"  side handling: {result.learned['side']}; feature weights: "
         chosen += str(result.learned["feature_weights"])
+        if result.learned["phases"]:
+            chosen += f"; means over {result.learned['phases']} phases"
         if result.learned["mirror_cases"]:
             chosen += f"; {result.learned['mirror_cases']} mirror-image cases"
         print(chosen)
