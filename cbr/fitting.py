@@ -32,6 +32,7 @@ SIDES = ("canonical", "augment", "off")
 # clip summaries may add the mean over each third of the clip (start, middle, end): the
 # phases "auto" tries, against none
 AUTO_PHASES = 3
+_QUERY_CHUNK = 512
 
 
 def side_name(value: object) -> str:
@@ -113,25 +114,26 @@ def knn_predict(cases: Cases, queries: np.ndarray, k: int, weights: str = "dista
     A = np.asarray(cases.values, dtype=np.float64)
     if cases.weights is not None:
         A, Q = cases.weights.apply(A), cases.weights.apply(Q)
-    d2 = np.einsum("ij,ij->i", Q, Q)[:, None] + np.einsum("ij,ij->i", A, A)[None] - 2.0 * Q @ A.T
-    d = np.sqrt(np.maximum(d2, 0.0))
-    k = min(int(k), len(A))
-    idx = (
-        np.argpartition(d, k - 1, axis=1)[:, :k]
-        if k < len(A)
-        else np.tile(np.arange(len(A)), (len(Q), 1))
-    )
-    dk = np.take_along_axis(d, idx, axis=1)
-    if weights == "uniform":
-        w = np.ones_like(dk)
-    else:
-        zero = dk <= 1e-12
-        w = np.where(
-            zero.any(axis=1, keepdims=True), zero.astype(np.float64), 1.0 / np.maximum(dk, 1e-300)
-        )
     classes, codes = np.unique(cases.labels.astype(str), return_inverse=True)
     votes = np.zeros((len(Q), len(classes)))
-    np.add.at(votes, (np.repeat(np.arange(len(Q)), k), codes[idx].ravel()), w.ravel())
+    k = min(int(k), len(A))
+    sq_a = np.einsum("ij,ij->i", A, A)
+    for s in range(0, len(Q), _QUERY_CHUNK):  # bounded memory: (chunk, n cases) distances
+        q = Q[s : s + _QUERY_CHUNK]
+        d = np.sqrt(np.maximum(np.einsum("ij,ij->i", q, q)[:, None] + sq_a - 2.0 * q @ A.T, 0.0))
+        if k < len(A):
+            idx = np.argpartition(d, k - 1, axis=1)[:, :k]
+        else:
+            idx = np.tile(np.arange(len(A)), (len(q), 1))
+        dk = np.take_along_axis(d, idx, axis=1)
+        if weights == "uniform":
+            w = np.ones_like(dk)
+        else:
+            zero = dk <= 1e-12
+            inverse = 1.0 / np.maximum(dk, 1e-300)
+            w = np.where(zero.any(axis=1, keepdims=True), zero.astype(np.float64), inverse)
+        rows = np.repeat(np.arange(s, s + len(q)), k)
+        np.add.at(votes, (rows, codes[idx].ravel()), w.ravel())
     return classes[np.argmax(votes, axis=1)]
 
 
