@@ -35,7 +35,14 @@ from posecbr.errors import ConfigError, DataError
 
 from .casebase import CaseBase
 from .explain import Explanation, explain
-from .fitting import AUTO_PHASES, SIDES, assemble_cases, inner_loso_accuracy, side_name
+from .fitting import (
+    AUTO_PHASES,
+    MIN_SUBJECTS_TO_JUDGE_WEIGHTS,
+    SIDES,
+    assemble_cases,
+    inner_loso_accuracy,
+    side_name,
+)
 from .problem import (
     FeatureConfig,
     Problem,
@@ -80,8 +87,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
       ``"auto"``: chosen by inner leave-one-subject-out for vector problems under euclidean
       when the training clips name two or more subjects ("off" otherwise).
     feature_weights: ``"fisher"`` (z-normalised, weighted by between/within-activity variance,
-      learned in fit), ``"none"`` (raw values), or ``"auto"``: chosen like ``mirror``
-      (without subjects: fisher for clip summaries, none otherwise).
+      learned in fit), ``"none"`` (raw values), or ``"auto"``: chosen like ``mirror`` when the
+      training clips name three or more subjects; fisher with fewer (an inner fold would learn
+      the weights from one person) and for clip summaries without subjects; none otherwise.
     phases: with clip summaries, also the mean of every feature over each of this many equal
       stretches of the clip ("left knee angle (middle third)"); ``"auto"``: three or none,
       chosen like ``mirror``.
@@ -254,8 +262,12 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             return A if A is None or phases or base is None else A[:, :base]
 
         self.selection_ = {}
-        side, weighting, phases = sides[0], weightings[0], phase_options[-1]
         n_subjects = len(set(subjects) - {""})
+        if len(weightings) > 1 and n_subjects < MIN_SUBJECTS_TO_JUDGE_WEIGHTS:
+            # an inner fold would learn the weights from one subject, whose within-activity
+            # spread leaves out how people differ: the judgement would be biased against them
+            weightings = ["fisher"]
+        side, weighting, phases = sides[0], weightings[0], phase_options[-1]
         if len(sides) * len(weightings) * len(phase_options) > 1:
             if n_subjects >= 2 and "" not in set(subjects):
                 scores = {

@@ -33,6 +33,9 @@ SIDES = ("canonical", "augment", "off")
 # phases "auto" tries, against none
 AUTO_PHASES = 3
 _QUERY_CHUNK = 512
+# learned weights are judged by inner leave-one-subject-out only when every inner training fold
+# still has two or more people in it
+MIN_SUBJECTS_TO_JUDGE_WEIGHTS = 3
 
 
 def side_name(value: object) -> str:

@@ -195,7 +195,9 @@ def test_append_to_a_mirror_augmented_case_base_keeps_its_columns(
         folder = "a" if i % 2 == 0 else "b"
         save_pose(seq.with_metadata(label=label), tmp_path / folder / f"clip{i:02d}.npz")
     db = str(tmp_path / "cb.sqlite")
-    assert main(["train", str(tmp_path / "a"), "--db", db, "--mirror", "augment"]) == 0
+    # unweighted: Fisher weights from six clips would be mostly noise
+    train = ["train", str(tmp_path / "a"), "--db", db, "--mirror", "augment"]
+    assert main([*train, "--feature-weights", "none"]) == 0
     assert main(["train", str(tmp_path / "b"), "--db", db, "--append", "--json"]) == 0
     out = capsys.readouterr().out
     doc = json.loads(out[out.index("{") :])
@@ -217,3 +219,14 @@ def test_append_to_a_mirror_augmented_case_base_keeps_its_columns(
     assert main(["classify", str(tmp_path / "q"), "--db", db, "--json"]) == 0
     res = json.loads(capsys.readouterr().out)["results"][0]
     assert res["label"] == "one arm sideways"
+
+
+def test_weights_are_judged_only_with_three_or_more_subjects() -> None:
+    # with two people an inner fold would learn the weights from one person: fisher is kept
+    X, y = _data({"s1": "right", "s2": "right"}, 2, 14)
+    clf = CaseBaseClassifier(k=1).fit(X, y)
+    assert clf.weighting_ == "fisher"
+    assert {key.split("/")[1] for key in clf.selection_} == {"fisher"}
+    X3, y3 = _data({"s1": "right", "s2": "right", "s3": "right"}, 2, 15)
+    clf3 = CaseBaseClassifier(k=1).fit(X3, y3)
+    assert {key.split("/")[1] for key in clf3.selection_} == {"none", "fisher"}
