@@ -16,7 +16,7 @@ from features.poses import PoseSequence
 from posecbr.errors import ConfigError, DataError
 from posecbr.progress import progress
 
-from .casebase import CaseBase
+from .casebase import CaseBase, subject_of
 from .estimator import CaseBaseClassifier
 from .explain import Explanation, explain
 from .maintenance import EDITORS, MaintenanceReport, record_trim
@@ -106,19 +106,16 @@ def build_case_base(
             old.names,
             old.words,
             sources=tuple(s.source for s in clips),
-            subjects=tuple(
-                None if s.metadata.get("subject") is None else str(s.metadata["subject"])
-                for s in clips
-            ),
+            subjects=tuple(subject_of(s) for s in clips),
         )
         origin = np.arange(len(clips))
         extra = None
         learned: dict[str, Any] = {}
     else:
         fitted = clone(estimator).set_params(trim=None)
-        level = estimator.wanted_config().level
+        level, mirror = estimator.wanted_config().level, estimator.needs_mirror_images()
         for seq in progress(clips, desc="features", total=len(clips), unit="clip"):
-            warm(seq, level, mirror=estimator.mirror != "off" and estimator.mirror is not False)
+            warm(seq, level, mirror=mirror)
         fitted.fit(list(clips), labels)
         cb, config, measure = fitted.case_base_, fitted.feature_config_, fitted.measure_
         origin = fitted.case_origin_

@@ -16,6 +16,12 @@ from .problem import FeatureConfig, Problem, extract_problem
 from .similarity import SimilarityMeasure, get_measure
 
 
+def subject_of(seq: Any) -> str | None:
+    """The subject a clip's metadata names, as text (None when it names none)."""
+    subject = seq.metadata.get("subject")
+    return None if subject is None else str(subject)
+
+
 @dataclass(eq=False)
 class CaseBase:
     """Cases as arrays: ``problems`` ``(n, *problem_shape)``, ``labels`` ``(n,)``.

@@ -50,8 +50,9 @@ from features.poses import PoseSequence
 from posecbr.errors import ConfigError, DataError, PosecbrError
 from posecbr.progress import progress
 
+from .similarity import get_measure
+
 SIMILARITIES = ("euclidean", "dtw", "signature")
-SEQUENCE_MEASURES = ("dtw", "signature")
 FEATURE_LEVELS = ("fluents", "qmp")
 PEERS = ("dtw-knn", "minirocket")
 CV_SCHEMES = ("loso", "kfold")
@@ -254,7 +255,7 @@ def methods_for(settings: CompareSettings) -> list[Method]:
         for level in settings.features
         for sim in settings.similarities
         # a QMP description is one vector per clip: sequence measures have nothing to align
-        if level != "qmp" or sim not in SEQUENCE_MEASURES
+        if level != "qmp" or not get_measure(sim).compares_sequences
     ]
     if settings.dad:
         out.append(Method("dad", "dad", True, {}))
@@ -846,7 +847,9 @@ def run_compare(
                     "predicted when that subject is held out"
                 )
     methods = methods_for(settings)
-    if "qmp" in settings.features and set(settings.similarities) & set(SEQUENCE_MEASURES):
+    if "qmp" in settings.features and any(
+        get_measure(s).compares_sequences for s in settings.similarities
+    ):
         notes.append(
             "qmp features are one vector per clip: compared by euclidean only (dtw and "
             "signature compare sequences)"

@@ -33,7 +33,7 @@ from sklearn.utils.validation import check_is_fitted
 from features.poses import PoseSequence
 from posecbr.errors import ConfigError, DataError
 
-from .casebase import CaseBase
+from .casebase import CaseBase, subject_of
 from .explain import Explanation, explain
 from .fitting import (
     AUTO_PHASES,
@@ -202,6 +202,14 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             sides = ["augment"]  # sequence problems: plain augmentation, nothing to choose
         return sides, weightings
 
+    def needs_mirror_images(self) -> bool:
+        """Whether fit will describe the mirror image of every training clip (some side
+        handling it may use needs them)."""
+        measure = get_measure(self.similarity, **(self.similarity_params or {}))
+        vectors = self.features == "qmp" or self._summary()
+        sides, _ = self._candidates(vectors, measure)
+        return "augment" in sides or "canonical" in sides
+
     def problems(self, X: Any) -> list[Problem]:
         """The problem of every clip in ``X`` under the fitted configuration."""
         check_is_fitted(self, "case_base_")
@@ -244,7 +252,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         sides, weightings = self._candidates(vectors, measure)
         labels = np.array([str(v) for v in y_arr], dtype=object)
         subjects = np.array(
-            ["" if s.metadata.get("subject") is None else str(s.metadata["subject"]) for s in seqs],
+            [subject_of(s) or "" for s in seqs],
             dtype=object,
         )
         need_mirror = "augment" in sides or "canonical" in sides
@@ -320,10 +328,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             names,
             words,
             sources=tuple(s.source for s in case_seqs),
-            subjects=tuple(
-                None if s.metadata.get("subject") is None else str(s.metadata["subject"])
-                for s in case_seqs
-            ),
+            subjects=tuple(subject_of(s) for s in case_seqs),
         )
         origin = cases.origin
         if self.trim is not None and float(self.trim) < 1.0:

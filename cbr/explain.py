@@ -223,7 +223,7 @@ def explain(
         f"Seen in the similar {solution.label} cases but not in this clip: {_join(not_seen)}.",
         f"In this clip but not in those cases: {_join(only_here)}.",
     ]
-    if getattr(problem, "mirrored", False):
+    if problem.mirrored:
         lines.insert(
             1,
             "The clip moves its left side more, so it is compared as its mirror image: "

@@ -287,6 +287,8 @@ def _qmp(seq: PoseSequence) -> Any:
 def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> None:
     """Compute and cache what :func:`extract_problem` needs for ``seq`` (and, with ``mirror``,
     for its mirror image), so a caller can show progress over the expensive part."""
+    if mirror:
+        moves_left_more(seq)
     for s in (seq, mirrored(seq)) if mirror else (seq,):
         if level == "qmp":
             _qmp(s)
@@ -294,7 +296,6 @@ def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> No
             _fluents(s)
             _signals(s)
             arm_planes(s)
-            moves_left_more(s)
 
 
 def _group_mask(result: Any, group: str) -> np.ndarray:

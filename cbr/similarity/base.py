@@ -52,6 +52,8 @@ class SimilarityMeasure:
     """Base class of similarity measures (distances: smaller = more similar)."""
 
     name: ClassVar[str] = ""
+    # True for measures that align sequences (a QMP vector, one per clip, has nothing to align)
+    compares_sequences: ClassVar[bool] = False
 
     def cache_kind(self, problem_shape: tuple[int, ...]) -> str | None:
         """Key under which per-case representations are cached in the store (None: don't)."""

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numba
 import numpy as np
@@ -251,6 +251,8 @@ class DTW(SimilarityMeasure):
     (exact either way; off = brute force). ``segment``: frames per segment of the first,
     cheapest bound (segment-averaged LB_Keogh).
     """
+
+    compares_sequences: ClassVar[bool] = True
 
     radius: int | None = None
     band: float = 0.1

@@ -13,7 +13,7 @@ store (kind ``signature:depth=..,time=..,lead_lag=..``).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import iisignature
 import numpy as np
@@ -56,6 +56,8 @@ class Signature(SimilarityMeasure):
     :mod:`cbr.similarity.euclidean`); signatures spread over more directions than raw
     sequences, so the filter needs more of them to be selective.
     """
+
+    compares_sequences: ClassVar[bool] = True
 
     depth: int = 2
     time: bool = True

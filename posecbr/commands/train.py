@@ -126,8 +126,9 @@ def run(args: argparse.Namespace) -> int:
     from cbr.estimator import CaseBaseClassifier
     from features.datasets import load_dataset
 
-    measure = get_measure(args.similarity, **parse_params(args.param))
-    if args.features == "qmp" and measure.name in ("dtw", "signature"):
+    params = parse_params(args.param)
+    measure = get_measure(args.similarity, **params)
+    if args.features == "qmp" and measure.compares_sequences:
         raise ConfigError(
             f"similarity {measure.name!r} compares sequences; QMP features are "
             "one vector per clip (use euclidean)",
@@ -139,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
     estimator = CaseBaseClassifier(
         features=args.features,
         similarity=args.similarity,
-        similarity_params=parse_params(args.param) or None,
+        similarity_params=params or None,
         k=args.k,
         length=args.length,
         states=args.states,
