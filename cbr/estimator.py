@@ -80,6 +80,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     similarity_params: parameters of the measure (e.g. ``{"band": 0.1}`` for dtw).
     trim: fraction of cases kept by novelty/benefit trimming at fit time (None: keep all).
     angles: add the named joint angles ("left knee angle") to the fluent confidences.
+    positions: add the limb joints' positions in the person's own frame at the start of the
+      clip ("left wrist height", in torso lengths; :func:`cbr.problem.body_positions`).
     summary: describe a clip by per-feature statistics (mean, lowest, highest, variation)
       instead of its sequence; ``"auto"``: for the euclidean measure at the fluent level.
     mirror: side handling: ``"off"`` (False), ``"augment"`` (True: mirror images of the
@@ -110,6 +112,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         mirror: bool | str = "auto",
         feature_weights: str = "auto",
         phases: int | str = "auto",
+        positions: bool = True,
     ) -> None:
         self.features = features
         self.similarity = similarity
@@ -124,6 +127,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.mirror = mirror
         self.feature_weights = feature_weights
         self.phases = phases
+        self.positions = positions
 
     # -- helpers
 
@@ -140,6 +144,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             length=self.length,
             states=states,
             angles=bool(self.angles) and fluents,
+            positions=bool(self.positions) and fluents,
             summary=self._summary() if summary is None else summary,
             # "auto": computed with the phases, which fit may then drop
             phases=(AUTO_PHASES if self.phases == "auto" else int(self.phases))

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from .casebase import CaseBase
-from .problem import ANGLE_PREFIX, Problem
+from .problem import ANGLE_PREFIX, POSITION_PREFIX, Problem
 from .retrieve import Retrieval, nearest_of_other_label
 from .reuse import Solution
 from .weights import MIRROR_FLAG
@@ -102,12 +102,13 @@ def _presence_of(cb: CaseBase, values: np.ndarray) -> np.ndarray:
 
 def _state_columns(names: tuple[str, ...]) -> tuple[np.ndarray, bool] | None:
     """The columns "seen" is judged on, and whether they are clip-summary means: the fluent
-    states (not joint angles, which are no yes/no features); None when that is every column."""
+    states (not joint angles or positions, which are no yes/no features); None when that is
+    every column."""
     summary = any("@" in n for n in names)
     keep = [
         i
         for i, n in enumerate(names)
-        if not n.startswith(ANGLE_PREFIX)
+        if not n.startswith((ANGLE_PREFIX, POSITION_PREFIX))
         and n != MIRROR_FLAG
         and (not summary or n.endswith("@mean"))
     ]

@@ -41,7 +41,37 @@ SUMMARY_STATS = ("mean", "min", "max", "std")
 _STAT_WORDS = {"mean": "", "min": " (lowest)", "max": " (highest)", "std": " (variation)"}
 # options added after the first stored case bases: left out of to_dict() while off, so the
 # configuration hash of every existing case base stays the same
-_LATER_OPTIONS = {"angles": False, "summary": False, "side": "as_recorded", "phases": 0}
+_LATER_OPTIONS = {
+    "angles": False,
+    "summary": False,
+    "side": "as_recorded",
+    "phases": 0,
+    "positions": False,
+}
+POSITION_PREFIX = "pos:"
+# Joints whose body-frame positions the ``positions`` option adds (three columns each).
+POSITION_JOINTS = (
+    "nose",
+    "left_shoulder",
+    "right_shoulder",
+    "left_elbow",
+    "right_elbow",
+    "left_wrist",
+    "right_wrist",
+    "left_index",
+    "right_index",
+    "left_hip",
+    "right_hip",
+    "left_knee",
+    "right_knee",
+    "left_ankle",
+    "right_ankle",
+    "left_heel",
+    "right_heel",
+    "left_foot_index",
+    "right_foot_index",
+)
+POSITION_AXES = ("left", "height", "forward")
 SIDE_MODES = ("as_recorded", "canonical")
 
 
@@ -63,6 +93,8 @@ class FeatureConfig:
     summary: per-column statistics (mean, lowest, highest, variation) instead of the sequence.
     phases: with ``summary``, also the mean of every column over each of this many equal
       stretches of the clip ("left knee angle (middle third)"); 0: none.
+    positions: also use the positions of the limb joints in the person's own frame at the
+      start of the clip (:func:`body_positions`: "left wrist height", in torso lengths).
     side: ``"as_recorded"``, or ``"canonical"``: a clip that moves its left limbs more than its
       right ones is described by its mirror image (:func:`mirrored`), so a movement done with
       the left arm is compared with the right-arm cases (:func:`moves_left_more`).
@@ -78,6 +110,7 @@ class FeatureConfig:
     summary: bool = False
     side: str = "as_recorded"
     phases: int = 0
+    positions: bool = False
 
     def __post_init__(self) -> None:
         if self.level not in ("fluents", "qmp"):
@@ -143,7 +176,11 @@ class FeatureConfig:
         if self.level == "qmp":
             return f"qmp ({self.qmp_part}{side})"
         n = self.states if isinstance(self.states, str) else f"{len(self.states)} states"
-        extra = (" with joint angles" if self.angles else "") + side
+        extra = (
+            (" with joint angles" if self.angles else "")
+            + (" and positions" if self.positions else "")
+            + side
+        )
         if self.summary:
             ph = f" and {self.phases} phases" if self.phases else ""
             return f"fluents ({n}{extra}, summarised over {self.length} frames{ph})"
@@ -226,6 +263,56 @@ def arm_planes(seq: PoseSequence) -> np.ndarray:
     return out
 
 
+_POSITION_CACHE: weakref.WeakKeyDictionary[PoseSequence, np.ndarray] = weakref.WeakKeyDictionary()
+
+
+def body_positions(seq: PoseSequence) -> np.ndarray:
+    """Positions of :data:`POSITION_JOINTS` in the person's frame at the start of the clip,
+    ``(frames, 3 * len(POSITION_JOINTS))``, joint-major, axes :data:`POSITION_AXES`.
+
+    Origin: the mid-hip over the first tenth of the clip (at least 3 frames); axes: "left"
+    along the level left-right line of the body there, "height" straight up, "forward"
+    completing a right-handed frame (the way the chest faces); unit: the person's torso length
+    (median neck to mid-hip), so people of different sizes compare. How far the hips drop in a
+    squat, how high and how far forward a wrist goes, a knee drifting inwards: the range and
+    path of a movement, which joint angles alone do not give. NaN where joints are missing."""
+    out = _POSITION_CACHE.get(seq)
+    if out is None:
+        from features.geometry import WORLD_UP, body_frame, norm, unit
+        from features.skeleton import JOINT_INDEX
+
+        p = seq.to_canonical().positions
+        bf = body_frame(p)
+        start = slice(0, max(3, p.shape[0] // 10))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN stretches
+            origin = np.nanmean(bf.mid_hip[start], axis=0)
+            left = np.nanmean(bf.level_left[start], axis=0)
+            if not np.isfinite(left).all():
+                left = np.nanmean(bf.level_left, axis=0)
+            torso = float(np.nanmedian(norm(bf.neck - bf.mid_hip)))
+        up = np.asarray(WORLD_UP, dtype=np.float64)
+        left = unit(left - np.dot(left, up) * up)
+        axes = np.stack([left, up, np.cross(left, up)])  # rows: left, height, forward
+        if not (np.isfinite(axes).all() and np.isfinite(origin).all() and torso > 0):
+            out = np.full((p.shape[0], 3 * len(POSITION_JOINTS)), np.nan)
+        else:
+            joints = p[:, [JOINT_INDEX[j] for j in POSITION_JOINTS], :] - origin
+            out = (joints @ axes.T / torso).reshape(p.shape[0], -1)
+        _POSITION_CACHE[seq] = out
+    return out
+
+
+def position_names() -> tuple[str, ...]:
+    """Column names of :func:`body_positions`: ``"left_wrist.height"``, ..."""
+    return tuple(f"{j}.{a}" for j in POSITION_JOINTS for a in POSITION_AXES)
+
+
+def _position_word(name: str) -> str:
+    joint, axis = name.split(".")
+    return f"{joint.replace('_', ' ')} {'to the left' if axis == 'left' else axis}"
+
+
 _SIDE_CACHE: weakref.WeakKeyDictionary[PoseSequence, bool] = weakref.WeakKeyDictionary()
 
 
@@ -296,6 +383,7 @@ def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> No
             _fluents(s)
             _signals(s)
             arm_planes(s)
+            body_positions(s)
 
 
 def _group_mask(result: Any, group: str) -> np.ndarray:
@@ -339,6 +427,12 @@ def resolve_config(config: FeatureConfig, clips: Sequence[PoseSequence]) -> Feat
         joints_ok = sum(bool(np.isfinite(_signals(seq).values[:, :4]).any()) for seq in clips)
         if joints_ok >= config.min_available * len(clips):
             names += tuple(ANGLE_PREFIX + a for a in ARM_PLANE_SIGNALS)
+    if config.positions:
+        seen = np.zeros(len(POSITION_JOINTS) * 3)
+        for seq in clips:
+            seen += ~np.all(np.isnan(body_positions(seq)), axis=0)
+        ok = seen >= config.min_available * len(clips)
+        names += tuple(POSITION_PREFIX + n for n, k in zip(position_names(), ok, strict=True) if k)
     return dataclasses.replace(config, states=names)
 
 
@@ -405,8 +499,9 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
     res = _fluents(seq)
     index = {n: i for i, n in enumerate(res.state_names)}
     states = tuple(config.states)
-    fluent_states = [s for s in states if not s.startswith(ANGLE_PREFIX)]
+    fluent_states = [s for s in states if not s.startswith((ANGLE_PREFIX, POSITION_PREFIX))]
     angle_states = [s[len(ANGLE_PREFIX) :] for s in states if s.startswith(ANGLE_PREFIX)]
+    position_states = [s[len(POSITION_PREFIX) :] for s in states if s.startswith(POSITION_PREFIX)]
     missing = [s for s in fluent_states if s not in index]
     if missing:
         raise ConfigError(
@@ -432,6 +527,14 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
         ang = np.stack(ang_cols, axis=1) / np.pi
         conf = np.concatenate([conf, fill_nan_time(ang, 0.5)], axis=1)
         words += [a.replace("_", " ") + " angle" for a in angle_states]
+    if position_states:
+        pos_index = {n: i for i, n in enumerate(position_names())}
+        unknown = [n for n in position_states if n not in pos_index]
+        if unknown:
+            raise ConfigError("no joint position " + ", ".join(unknown[:5]), "features")
+        pos = body_positions(seq)[:, [pos_index[n] for n in position_states]]
+        conf = np.concatenate([conf, fill_nan_time(pos, 0.0)], axis=1)
+        words += [_position_word(n) for n in position_states]
     if not states:
         raise ConfigError("the feature configuration selects no columns", "features")
     values = resample(conf, int(config.length))
@@ -460,10 +563,10 @@ def summarise(
     holds)."""
     stats = [values.mean(axis=0), values.min(axis=0), values.max(axis=0), values.std(axis=0)]
     out_names = [f"{n}@{st}" for st in SUMMARY_STATS for n in names]
-    # a fluent's lowest/highest value is a confidence; an angle's is the angle itself
+    # a fluent's lowest/highest value is a confidence; an angle's (position's) is the value itself
     out_words = [
         f"{w}{_STAT_WORDS[st]}"
-        if st in ("mean", "std") or n.startswith(ANGLE_PREFIX)
+        if st in ("mean", "std") or n.startswith((ANGLE_PREFIX, POSITION_PREFIX))
         else f"{w}{_STAT_WORDS[st][:-1]} confidence)"
         for st in SUMMARY_STATS
         for n, w in zip(names, words, strict=True)

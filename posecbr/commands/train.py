@@ -104,6 +104,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         "the clip (0: none); auto: 3 or none, chosen like --mirror",
     )
     p.add_argument(
+        "--no-positions",
+        action="store_true",
+        help="leave out the joint positions in the person's own frame (angles and fluents only)",
+    )
+    p.add_argument(
         "--no-summary",
         action="store_true",
         help="euclidean on the resampled fluent sequence instead of per-feature clip summaries",
@@ -148,6 +153,7 @@ def run(args: argparse.Namespace) -> int:
         mirror=args.mirror,
         feature_weights=args.feature_weights,
         phases=_phases(args.phases),
+        positions=not args.no_positions,
     )
     estimator.wanted_config()  # bad --states / --length: one line before any clip is read
     subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None

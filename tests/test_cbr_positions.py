@@ -1,0 +1,124 @@
+"""Joint positions in the person's own frame (cbr.problem.body_positions) and their columns.
+
+The synthetic person of tests.bodies stands facing +z with the left side at +x: torso length
+(neck to mid-hip) 0.50 m, mid-hip at (0, 1.00, 0). Expected values are worked out by hand from
+those coordinates, in torso lengths.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cbr.problem import (
+    POSITION_PREFIX,
+    FeatureConfig,
+    body_positions,
+    extract_problem,
+    mirrored,
+    position_names,
+    resolve_config,
+)
+from tests.bodies import rot_x, rot_y, rotate, standing, to_sequence
+
+TORSO = 0.50
+
+
+def _column(seq, name: str) -> np.ndarray:  # type: ignore[no-untyped-def]
+    return body_positions(seq)[:, position_names().index(name)]
+
+
+def _raise_left_arm(body: dict[str, np.ndarray], deg: float) -> dict[str, np.ndarray]:
+    """The left arm swung sideways (abduction) by ``deg`` about the shoulder."""
+    arm = ("left_elbow", "left_wrist", "left_pinky", "left_index", "left_thumb")
+    # rotation about the forward axis at the shoulder: positive raises the left arm outwards
+    a = np.radians(deg)
+    r = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+    return rotate(body, arm, r, body["left_shoulder"])
+
+
+def test_standing_person_in_torso_lengths() -> None:
+    seq = to_sequence(*[standing()] * 5)
+    # left wrist (0.20, 0.95, 0): 0.40 to the left, 0.10 below the mid-hip, not forward
+    assert _column(seq, "left_wrist.left") == pytest.approx(np.full(5, 0.20 / TORSO))
+    assert _column(seq, "left_wrist.height") == pytest.approx(np.full(5, -0.05 / TORSO))
+    assert _column(seq, "left_wrist.forward") == pytest.approx(np.zeros(5), abs=1e-12)
+    # right toes (-0.15, 0.02, 0.15): to the right, near the floor, ahead of the hips
+    assert _column(seq, "right_foot_index.left")[0] == pytest.approx(-0.15 / TORSO)
+    assert _column(seq, "right_foot_index.height")[0] == pytest.approx(-0.98 / TORSO)
+    assert _column(seq, "right_foot_index.forward")[0] == pytest.approx(0.15 / TORSO)
+
+
+def test_raised_arm_height_follows_the_abduction_angle() -> None:
+    frames = [_raise_left_arm(standing(), d) for d in (0.0, 0.0, 0.0, 45.0, 90.0, 135.0)]
+    seq = to_sequence(*frames)
+    # the wrist hangs 0.55 m below the shoulder (1.50 m): raised by d, it is at
+    # 1.50 - 0.55 cos(d), i.e. (0.50 - 0.55 cos d) / 0.50 torso lengths above the mid-hip
+    d = np.radians([0.0, 0.0, 0.0, 45.0, 90.0, 135.0])
+    assert _column(seq, "left_wrist.height") == pytest.approx((0.50 - 0.55 * np.cos(d)) / TORSO)
+    assert _column(seq, "left_wrist.left") == pytest.approx((0.20 + 0.55 * np.sin(d)) / TORSO)
+
+
+def test_independent_of_where_the_person_stands_and_faces() -> None:
+    frames = [_raise_left_arm(standing(), d) for d in (0.0, 0.0, 0.0, 30.0, 60.0, 90.0)]
+    plain = body_positions(to_sequence(*frames))
+    turn, shift = rot_y(70.0), np.array([2.0, 0.3, -1.5])
+    moved = [{k: turn @ v + shift for k, v in f.items()} for f in frames]
+    assert body_positions(to_sequence(*moved)) == pytest.approx(plain, abs=1e-9)
+    # twice the size: the same values in torso lengths
+    big = [{k: 2.0 * v for k, v in f.items()} for f in frames]
+    assert body_positions(to_sequence(*big)) == pytest.approx(plain, abs=1e-9)
+
+
+def test_frame_is_fixed_at_the_start_so_a_squat_drops_the_hips() -> None:
+    down = standing()
+    for k in down:  # the whole body 0.40 m lower (a squat, legs aside), and leaning forward
+        down[k] = down[k] - np.array([0.0, 0.40, 0.0])
+    down = rotate(down, tuple(down), rot_x(20.0), down["left_hip"] * [0, 1, 0])
+    seq = to_sequence(*([standing()] * 9 + [down]))
+    hips = _column(seq, "left_hip.height")
+    assert hips[:9] == pytest.approx(np.zeros(9), abs=1e-12)
+    assert hips[9] == pytest.approx(-0.40 / TORSO)
+    # leaning forward moves the nose ahead of the start frame's hips: 0.63 m above the hip
+    # line, tilted 20 degrees
+    nose = _column(seq, "nose.forward")
+    tilt = np.radians(20.0)
+    assert nose[9] == pytest.approx((0.10 * np.cos(tilt) + 0.63 * np.sin(tilt)) / TORSO)
+
+
+def test_mirror_image_swaps_the_sides() -> None:
+    frames = [_raise_left_arm(standing(), d) for d in (0.0, 0.0, 0.0, 90.0)]
+    seq = to_sequence(*frames)
+    mirror = mirrored(seq)
+    assert _column(mirror, "right_wrist.height") == pytest.approx(_column(seq, "left_wrist.height"))
+    assert _column(mirror, "right_wrist.left") == pytest.approx(-_column(seq, "left_wrist.left"))
+    assert _column(mirror, "right_wrist.forward") == pytest.approx(
+        _column(seq, "left_wrist.forward"), abs=1e-12
+    )
+
+
+def test_missing_joints_are_nan_and_dropped_from_the_columns() -> None:
+    frames = [standing() for _ in range(4)]
+    for f in frames:
+        f["nose"] = np.full(3, np.nan)
+    seq = to_sequence(*frames)
+    assert np.isnan(_column(seq, "nose.height")).all()
+    config = resolve_config(FeatureConfig(angles=True, positions=True, summary=True), [seq])
+    pos = [s for s in config.states if s.startswith(POSITION_PREFIX)]
+    assert POSITION_PREFIX + "nose.height" not in pos
+    assert POSITION_PREFIX + "left_wrist.height" in pos
+    problem = extract_problem(seq, config)
+    i = problem.names.index(POSITION_PREFIX + "left_wrist.height@max")
+    assert problem.values[i] == pytest.approx(-0.05 / TORSO)
+    assert problem.words[i] == "left wrist height (highest)"
+    assert np.isfinite(problem.values).all()
+
+
+def test_a_person_without_hips_gets_no_position_columns() -> None:
+    frames = [standing() for _ in range(4)]
+    for f in frames:
+        f["left_hip"] = f["right_hip"] = np.full(3, np.nan)
+    seq = to_sequence(*frames)
+    assert np.isnan(body_positions(seq)).all()
+    config = resolve_config(FeatureConfig(angles=True, positions=True, summary=True), [seq])
+    assert not [s for s in config.states if s.startswith(POSITION_PREFIX)]
