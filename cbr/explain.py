@@ -64,6 +64,8 @@ class Explanation:
     text: str = field(default="")
     weighted_most: tuple[str, ...] = ()
     differs_most: tuple[str, ...] = ()
+    # for each of differs_most: {"feature", "here", "there", "unit"} in the feature's own units
+    differences: tuple[dict[str, Any], ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -86,6 +88,7 @@ class Explanation:
             "text": self.text,
             "weighted_most": list(self.weighted_most),
             "differs_most": list(self.differs_most),
+            "differences": list(self.differences),
         }
 
 
@@ -130,6 +133,25 @@ def _ranked(mask: np.ndarray, score: np.ndarray, words: tuple[str, ...]) -> tupl
     idx = np.flatnonzero(mask)
     idx = idx[np.argsort(-score[idx], kind="stable")][:MAX_LISTED]
     return tuple(words[i] for i in idx)
+
+
+def quantity(name: str, value: float) -> tuple[float, str]:
+    """A problem column's value in its own unit: joint angles in degrees (stored as radians /
+    pi), positions in torso lengths, fluent confidences (or their share of the clip) as is."""
+    base = name.split("@", 1)[0]
+    if base.startswith(ANGLE_PREFIX):
+        return float(value) * 180.0, "degrees"
+    if base.startswith(POSITION_PREFIX):
+        return float(value), "torso lengths"
+    return float(value), ""
+
+
+def _said(value: float, unit: str) -> str:
+    if unit == "degrees":
+        return f"{value:.0f}°"
+    if unit:
+        return f"{value:.2f} {unit}"
+    return f"{value:.2f}"
 
 
 def _join(words: tuple[str, ...]) -> str:
@@ -182,6 +204,7 @@ def explain(
 
     contrast = None
     differs: tuple[str, ...] = ()
+    differences: list[dict[str, Any]] = []
     weighted_most: tuple[str, ...] = ()
     mult = getattr(cb.measure, "multiplier", None)
     if mult is not None and len(mult) == len(all_words):
@@ -196,7 +219,15 @@ def explain(
         terms = _weighted_terms(cb, np.asarray(problem.values), cb.problems[pos])
         if terms is not None and len(terms) == len(all_words):
             terms[[i for i, n in enumerate(cb.names) if n == MIRROR_FLAG]] = 0.0
-            differs = tuple(all_words[i] for i in np.argsort(-terms)[:MAX_LISTED] if terms[i] > 0)
+            top = [i for i in np.argsort(-terms)[:MAX_LISTED] if terms[i] > 0]
+            differs = tuple(all_words[i] for i in top)
+            names = cb.names if len(cb.names) == len(all_words) else problem.names
+            for i in top:
+                here, unit = quantity(names[i], float(np.asarray(problem.values)[i]))
+                there, _ = quantity(names[i], float(cb.problems[pos][i]))
+                differences.append(
+                    {"feature": all_words[i], "here": here, "there": there, "unit": unit}
+                )
         assert cb.ids is not None
         contrast = Contrast(
             label=str(cb.labels[pos]),
@@ -241,8 +272,13 @@ def explain(
             f"Nearest other activity: {contrast.label} (distance {contrast.distance:.3g}); "
             f"to be that, the clip would {what}."
         )
-        if differs:
-            lines.append(f"Weighted, it differs from that case most in: {_join(differs)}.")
+        if differences:
+            said = "; ".join(
+                f"{d['feature']}: {_said(d['here'], d['unit'])} here, "
+                f"{_said(d['there'], d['unit'])} there"
+                for d in differences
+            )
+            lines.append(f"Weighted, it differs from that case most in: {said}.")
     if weighted_most:
         lines.append(f"Weighted most by this case base: {_join(weighted_most)}.")
     return Explanation(
@@ -256,4 +292,5 @@ def explain(
         text="\n".join(lines),
         weighted_most=weighted_most,
         differs_most=differs,
+        differences=tuple(differences),
     )

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from cbr.estimator import CaseBaseClassifier
 from cbr.problem import (
     POSITION_PREFIX,
     FeatureConfig,
@@ -19,7 +20,8 @@ from cbr.problem import (
     position_names,
     resolve_config,
 )
-from tests.bodies import rot_x, rot_y, rotate, standing, to_sequence
+from features.poses import PoseSequence
+from tests.bodies import rot_x, rot_y, rot_z, rotate, standing, to_sequence
 
 TORSO = 0.50
 
@@ -122,3 +124,42 @@ def test_a_person_without_hips_gets_no_position_columns() -> None:
     assert np.isnan(body_positions(seq)).all()
     config = resolve_config(FeatureConfig(angles=True, positions=True, summary=True), [seq])
     assert not [s for s in config.states if s.startswith(POSITION_PREFIX)]
+
+
+def _right_arm_sideways(peak: float, subject: str) -> PoseSequence:
+    """The right arm swung out sideways to ``peak`` degrees and back over 32 frames."""
+    arm = tuple(f"right_{j}" for j in ("elbow", "wrist", "pinky", "index", "thumb"))
+    body = standing()
+    frames = [
+        rotate(body, arm, rot_z(a), body["right_shoulder"])
+        for a in peak * np.sin(np.linspace(0.0, np.pi, 32))
+    ]
+    return to_sequence(*frames).with_metadata(subject=subject)
+
+
+def _highest_wrist(peak: float) -> float:
+    # the wrist hangs 0.55 m below the shoulder (0.50 m above the mid-hip): raised sideways by
+    # a it is 0.50 - 0.55 cos(a) above the mid-hip; the highest of the 32 sampled frames
+    a = np.radians(peak * np.sin(np.linspace(0.0, np.pi, 32)))
+    return float(np.max(0.50 - 0.55 * np.cos(a)) / TORSO)
+
+
+def test_explanation_gives_what_was_done_differently_in_units() -> None:
+    peaks = {"s1": (150.0, 90.0), "s2": (145.0, 85.0), "s3": (155.0, 95.0)}
+    X, y = [], []
+    for subject, (high, low) in peaks.items():
+        for extra in (0.0, 4.0, 8.0):
+            X += [_right_arm_sideways(high + extra, subject)]
+            X += [_right_arm_sideways(low + extra, subject)]
+            y += ["overhead", "shoulder height"]
+    clf = CaseBaseClassifier(k=1, mirror="off", feature_weights="fisher", phases=0).fit(X, y)
+    exp = clf.explain([_right_arm_sideways(88.0, "s9")])[0]
+    assert exp.label == "shoulder height"
+    assert exp.contrast is not None and exp.contrast.label == "overhead"
+    wrist = [d for d in exp.differences if d["feature"] == "right wrist height (highest)"]
+    assert len(wrist) == 1 and wrist[0]["unit"] == "torso lengths"
+    assert wrist[0]["here"] == pytest.approx(_highest_wrist(88.0), abs=1e-9)
+    overhead = [_highest_wrist(h + e) for h, _ in peaks.values() for e in (0.0, 4.0, 8.0)]
+    assert min(abs(wrist[0]["there"] - v) for v in overhead) < 1e-9
+    said = f"right wrist height (highest): {_highest_wrist(88.0):.2f} torso lengths here"
+    assert said in exp.text
