@@ -46,6 +46,7 @@ import numpy as np
 from scipy.stats import binomtest, norm
 from sklearn.base import BaseEstimator, ClassifierMixin
 
+from features.datasets import clip_column, target_value
 from features.poses import PoseSequence
 from posecbr.errors import ConfigError, DataError, PosecbrError
 from posecbr.progress import progress
@@ -413,23 +414,6 @@ class Prepared:
     notes: list[str] = field(default_factory=list)
 
 
-def _target_value(value: Any) -> str:
-    if isinstance(value, bool | np.bool_):
-        return "correct" if bool(value) else "incorrect"
-    return str(value)
-
-
-def clip_column(clip: Any, column: str) -> Any:
-    """A clip's value of ``column``: label, subject, or a metadata extra (None if absent)."""
-    if column == "label":
-        return clip.label
-    if column == "subject":
-        return clip.subject
-    if column in clip.extras:
-        return clip.extras[column]
-    return clip.seq.metadata.get(column)
-
-
 def prepare(clips: Sequence[Any], settings: CompareSettings, source: str = "dataset") -> Prepared:
     """Targets, subjects and groups of ``clips`` (``features.datasets.Clip``); classes with a
     single clip are dropped with a note."""
@@ -446,7 +430,7 @@ def prepare(clips: Sequence[Any], settings: CompareSettings, source: str = "data
             f"columns available: {', '.join(cols)}",
             source,
         )
-    y = np.array([_target_value(v) for v in values], dtype=object)
+    y = np.array([target_value(v) for v in values], dtype=object)
     within_col = settings.within_column
     within = None
     if within_col is not None:

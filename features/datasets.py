@@ -36,6 +36,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from posecbr.errors import DataError
 from posecbr.progress import progress
 
@@ -481,6 +483,25 @@ def iter_dataset(
         yield Clip(seq=seq, label=label, subject=subject, extras=extras)
 
 
+def clip_column(clip: Clip, column: str) -> Any:
+    """A clip's value of ``column``: label, subject, or a metadata extra (None if absent)."""
+    if column == "label":
+        return clip.label
+    if column == "subject":
+        return clip.subject
+    if column in clip.extras:
+        return clip.extras[column]
+    return clip.seq.metadata.get(column)
+
+
+def target_value(value: Any) -> str:
+    """A column value as a class name: booleans (UI-PRMD's ``correct``) read "correct" /
+    "incorrect"."""
+    if isinstance(value, bool | np.bool_):
+        return "correct" if bool(value) else "incorrect"
+    return str(value)
+
+
 def load_dataset(path: str | Path, **kwargs: Any) -> list[Clip]:
     """All clips of :func:`iter_dataset` as a list (same keyword arguments)."""
     return list(iter_dataset(path, **kwargs))
@@ -489,6 +510,8 @@ def load_dataset(path: str | Path, **kwargs: Any) -> list[Clip]:
 __all__ = [
     "CLIP_SUFFIXES",
     "Clip",
+    "clip_column",
+    "target_value",
     "UIPRMD_MOVEMENTS",
     "VIDEO_SUFFIXES",
     "detect_kind",

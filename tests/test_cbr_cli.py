@@ -192,3 +192,49 @@ def test_posecbr_train_killed_while_writing_leaves_nothing_or_everything(
         == 0
     )
     assert store.count_cases("again") == 120
+
+
+DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+
+
+def test_train_on_another_column_and_classify_against_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # one case base per movement for correct vs incorrect (the labels CSV's `correct` column)
+    db = str(tmp_path / "abduction.sqlite")
+    code, out, err = _cli(
+        capsys, "train", str(DEMO), "--db", db, "--labels", "standing_shoulder_abduction",
+        "--target", "correct", "--subjects", "s01,s02", "--json",
+    )  # fmt: skip
+    assert code == 0, err
+    # two people x three episodes, each done correctly and incorrectly (file names: _inc)
+    assert json.loads(out)["labels"] == {"correct": 6, "incorrect": 6}
+    clips = sorted(str(p) for p in DEMO.glob("m07_s03_*.npz"))
+    assert len(clips) == 6
+    code, out, err = _cli(capsys, "classify", *clips, "--db", db, "--target", "correct", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    truth = {r["clip"]: "incorrect" if r["clip"].endswith("_inc.npz") else "correct"
+             for r in doc["results"]}  # fmt: skip
+    assert {r["true_label"] for r in doc["results"]} == {"correct", "incorrect"}
+    assert all(r["true_label"] == truth[r["clip"]] for r in doc["results"])
+    right = sum(r["label"] == truth[r["clip"]] for r in doc["results"])
+    assert doc["accuracy"] == pytest.approx(right / 6)
+    # without --target the clips are checked against their activity, which is not a verdict
+    code, out, err = _cli(capsys, "classify", *clips, "--db", db, "--json")
+    assert code == 0, err
+    assert json.loads(out)["accuracy"] == 0.0
+
+
+def test_train_target_column_missing_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "cb.sqlite"
+    code, out, err = _cli(
+        capsys, "train", str(DEMO), "--db", str(db), "--labels", "deep_squat", "--target",
+        "effort",
+    )  # fmt: skip
+    assert code != 0 and out == ""
+    assert len(err.strip().splitlines()) == 1
+    assert "no value for --target 'effort'" in err and "correct" in err and ".npz" in err
+    assert not db.exists() or not open_store(str(db)).list_case_bases()

@@ -42,32 +42,55 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor (kinect or vicon)")
     p.add_argument("--subjects", help="datasets: only these subjects, comma-separated")
+    p.add_argument(
+        "--target",
+        default="label",
+        help="the column labelled clips are checked against: label (default) or the column "
+        "the case base was trained on (posecbr train --target), e.g. correct",
+    )
     p.set_defaults(func=run)
 
 
 def load_inputs(
-    paths: list[Path], sensor: str, subjects: list[str] | None = None
+    paths: list[Path], sensor: str, subjects: list[str] | None = None, target: str = "label"
 ) -> list[tuple[PoseSequence, str | None]]:
-    """Every clip named by ``paths`` with its label when the input carries one."""
-    from features.datasets import CLIP_SUFFIXES, detect_kind, iter_dataset, load_clip
+    """Every clip named by ``paths`` with its value of ``target`` (the label, or another
+    column such as ``correct``) when the input carries one."""
+    from features.datasets import (
+        CLIP_SUFFIXES,
+        Clip,
+        clip_column,
+        detect_kind,
+        iter_dataset,
+        load_clip,
+        target_value,
+    )
+
+    def truth(clip: Clip) -> str | None:
+        value = clip_column(clip, target)
+        return None if value is None or value == "" else target_value(value)
+
+    def of_file(seq: PoseSequence) -> Clip:
+        subject = seq.metadata.get("subject")
+        return Clip(seq=seq, label=seq.label or "", subject=subject, extras={})
 
     out: list[tuple[PoseSequence, str | None]] = []
     for path in paths:
         kind = detect_kind(path)
         if kind == "pose_file":
             seq = load_clip(path)
-            out.append((seq, seq.label or None))
+            out.append((seq, truth(of_file(seq))))
         elif kind == "pose_folder":
             # may hold unlabelled clips: read them one by one
             for f in sorted(q for q in path.iterdir() if q.suffix.lower() in CLIP_SUFFIXES):
                 seq = load_clip(f)
-                out.append((seq, seq.label or None))
+                out.append((seq, truth(of_file(seq))))
         else:
             clips = iter_dataset(
                 path, sensor=sensor, subjects=subjects, progress_desc=f"loading {path.name}"
             )
             for clip in clips:
-                out.append((clip.seq, clip.label or None))
+                out.append((clip.seq, truth(clip)))
     if not out:
         raise DataError("no clips found", " ".join(str(p) for p in paths))
     return out
@@ -93,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
                 )
             name = names[0]
         subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
-        inputs = load_inputs(args.clips, args.sensor, subjects)
+        inputs = load_inputs(args.clips, args.sensor, subjects, args.target)
         results = classify_clips(
             store,
             name,

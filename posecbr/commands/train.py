@@ -16,7 +16,7 @@ from typing import Any
 from casebase_store import open_store
 from cbr.build import build_case_base
 from cbr.similarity import available_measures, get_measure
-from posecbr.errors import ConfigError
+from posecbr.errors import ConfigError, DataError
 
 
 def parse_params(items: list[str] | None) -> dict[str, Any]:
@@ -115,6 +115,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("-k", "--k", type=int, default=5, help="neighbours (trimming, inner choice)")
     p.add_argument("--subjects", help="only these subjects, comma-separated (e.g. s01,s02)")
+    p.add_argument(
+        "--labels", help="only these activities, comma-separated (e.g. deep_squat)"
+    )
+    p.add_argument(
+        "--target",
+        default="label",
+        help="what the cases' solution is: the activity label (default) or another column of "
+        "the labels, e.g. correct (UI-PRMD: correct / incorrect repetition); train one case "
+        "base per activity with --labels",
+    )
     p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor (kinect or vicon)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--replace", action="store_true", help="replace a case base of that name")
@@ -129,7 +139,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from cbr.estimator import CaseBaseClassifier
-    from features.datasets import load_dataset
+    from features.datasets import clip_column, load_dataset, target_value
 
     params = parse_params(args.param)
     measure = get_measure(args.similarity, **params)
@@ -157,16 +167,34 @@ def run(args: argparse.Namespace) -> int:
     )
     estimator.wanted_config()  # bad --states / --length: one line before any clip is read
     subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
+    activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
     clips = load_dataset(
-        args.data, sensor=args.sensor, subjects=subjects, progress_desc="loading clips"
+        args.data,
+        sensor=args.sensor,
+        subjects=subjects,
+        labels=activities,
+        progress_desc="loading clips",
     )
+    if not clips:
+        raise DataError("no clips found (check --labels and --subjects)", str(args.data))
+    solutions = []
+    for clip in clips:
+        value = clip_column(clip, args.target)
+        if value is None or value == "":
+            raise DataError(
+                f"no value for --target {args.target!r} (columns: label, subject"
+                + "".join(f", {k}" for k in sorted(clip.extras))
+                + ")",
+                clip.seq.source,
+            )
+        solutions.append(target_value(value))
     store = open_store(args.db)
     try:
         result = build_case_base(
             store,
             args.name,
             [c.seq for c in clips],
-            [c.label for c in clips],
+            solutions,
             estimator,
             replace=args.replace,
             append=args.append,
