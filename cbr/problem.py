@@ -50,26 +50,9 @@ _LATER_OPTIONS = {
 }
 POSITION_PREFIX = "pos:"
 # Joints whose body-frame positions the ``positions`` option adds (three columns each).
-POSITION_JOINTS = (
-    "nose",
-    "left_shoulder",
-    "right_shoulder",
-    "left_elbow",
-    "right_elbow",
-    "left_wrist",
-    "right_wrist",
-    "left_index",
-    "right_index",
-    "left_hip",
-    "right_hip",
-    "left_knee",
-    "right_knee",
-    "left_ankle",
-    "right_ankle",
-    "left_heel",
-    "right_heel",
-    "left_foot_index",
-    "right_foot_index",
+_POSITION_PARTS = ("shoulder", "elbow", "wrist", "index", "hip", "knee", "ankle", "heel")
+POSITION_JOINTS = ("nose",) + tuple(
+    f"{side}_{part}" for part in (*_POSITION_PARTS, "foot_index") for side in ("left", "right")
 )
 POSITION_AXES = ("left", "height", "forward")
 SIDE_MODES = ("as_recorded", "canonical")
