@@ -137,21 +137,29 @@ def _ranked(mask: np.ndarray, score: np.ndarray, words: tuple[str, ...]) -> tupl
 
 def quantity(name: str, value: float) -> tuple[float, str]:
     """A problem column's value in its own unit: joint angles in degrees (stored as radians /
-    pi), positions in torso lengths, fluent confidences (or their share of the clip) as is."""
-    base = name.split("@", 1)[0]
+    pi), positions in torso lengths; a fluent state's mean (over the clip or a phase of it) is
+    about the share of the frames it holds ("share"), its lowest and highest values are
+    confidences, its variation a plain number."""
+    base, _, stat = name.partition("@")
     if base.startswith(ANGLE_PREFIX):
         return float(value) * 180.0, "degrees"
     if base.startswith(POSITION_PREFIX):
         return float(value), "torso lengths"
-    return float(value), ""
+    if stat == "mean" or stat.startswith("phase"):
+        return float(value), "share"
+    if stat == "std":
+        return float(value), ""  # the spread of a confidence
+    return float(value), "confidence"
 
 
 def _said(value: float, unit: str) -> str:
     if unit == "degrees":
         return f"{value:.0f}°"
-    if unit:
-        return f"{value:.2f} {unit}"
-    return f"{value:.2f}"
+    if unit == "share":
+        return f"{100.0 * value:.0f} % of the time"
+    if unit == "confidence":
+        return f"confidence {value:.2f}"
+    return f"{value:.2f} {unit}".rstrip()
 
 
 def _join(words: tuple[str, ...]) -> str:

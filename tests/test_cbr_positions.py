@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from cbr.estimator import CaseBaseClassifier
+from cbr.explain import quantity
 from cbr.problem import (
     POSITION_PREFIX,
     FeatureConfig,
@@ -163,3 +164,22 @@ def test_explanation_gives_what_was_done_differently_in_units() -> None:
     assert min(abs(wrist[0]["there"] - v) for v in overhead) < 1e-9
     said = f"right wrist height (highest): {_highest_wrist(88.0):.2f} torso lengths here"
     assert said in exp.text
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "expected"),
+    [
+        ("angle:left_knee@min", 0.5, (90.0, "degrees")),
+        ("angle:left_upper_arm_plane@phase2", 0.25, (45.0, "degrees")),
+        ("pos:left_wrist.height@max", 1.2, (1.2, "torso lengths")),
+        ("left_leg_bent.bent@mean", 0.3, (0.3, "share")),
+        ("left_leg_bent.bent@phase1", 0.3, (0.3, "share")),
+        ("left_leg_bent.bent@max", 0.9, (0.9, "confidence")),
+        ("left_leg_bent.bent@std", 0.2, (0.2, "")),
+        ("left_leg_bent.bent", 0.7, (0.7, "confidence")),
+    ],
+)
+def test_feature_units(name: str, value: float, expected: tuple[float, str]) -> None:
+    # angles are stored as radians / pi: 0.5 is a right angle
+    got = quantity(name, value)
+    assert got[0] == pytest.approx(expected[0]) and got[1] == expected[1]
