@@ -1073,7 +1073,7 @@ def prevalence(
     if m is None:
         return None
     from .estimator import CaseBaseClassifier
-    from .explain import presence
+    from .explain import presence, state_columns
 
     data: Prepared = results["_data"]
     params = dict(m["params"])
@@ -1099,6 +1099,14 @@ def prevalence(
     init, n_init = table(full.case_base_)
     trim_t, n_trim = table(trimmed.case_base_)
     spread = np.nanmax(init, axis=0) - np.nanmin(init, axis=0)
+    # the fluent states only (for clip summaries: their means): a joint angle or position
+    # above 0.5 is no feature being present
+    picked = state_columns(tuple(full.case_base_.names))
+    if picked is not None:
+        keep = np.zeros(len(spread), dtype=bool)
+        keep[picked[0]] = True
+        spread = np.where(keep, spread, -np.inf)
+        max_features = min(max_features, int(keep.sum()))
     cols = np.sort(np.argsort(-spread, kind="stable")[:max_features])
     words = list(full.case_base_.words)
     if len(words) != init.shape[1]:  # extra columns (e.g. a mirror-image flag) have no words

@@ -103,7 +103,7 @@ def _presence_of(cb: CaseBase, values: np.ndarray) -> np.ndarray:
     return presence(v)
 
 
-def _state_columns(names: tuple[str, ...]) -> tuple[np.ndarray, bool] | None:
+def state_columns(names: tuple[str, ...]) -> tuple[np.ndarray, bool] | None:
     """The columns "seen" is judged on, and whether they are clip-summary means: the fluent
     states (not joint angles or positions, which are no yes/no features); None when that is
     every column."""
@@ -173,7 +173,7 @@ def explain(
     all_words = problem.words if problem.words else cb.words
     if len(all_words) != cb.problems.shape[-1]:
         all_words = tuple(f"feature {i}" for i in range(cb.problems.shape[-1]))
-    picked = _state_columns(cb.names)
+    picked = state_columns(cb.names)
     if picked is not None and picked[1]:
         cols = picked[0]
         words = tuple(all_words[i] for i in cols)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from cbr.compare import wilson_interval
+from cbr.problem import POSITION_JOINTS
 from posecbr.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -106,6 +107,12 @@ def test_compare_writes_csv_pictures_and_explanations(run_slice: tuple[Path, str
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000
     prev = res["prevalence"]
     assert all(18 <= n <= 36 for n in prev["cases_initial"])  # 18 clips (+ mirror images)
+    # the paper's figure shows fluent states, not joint angles or positions
+    axes = ("to the left", "height", "forward")
+    positions = {f"{j.replace('_', ' ')} {a}" for j in POSITION_JOINTS for a in axes}
+    assert prev["features"] and not any(
+        w.endswith(" angle") or w in positions for w in prev["features"]
+    )
     # trimming keeps half of every activity's cases
     assert prev["cases_trimmed"] == [math.ceil(n / 2) for n in prev["cases_initial"]]
     best_cbr = max(res["methods"][:2], key=lambda m: (m["accuracy"], m["macro_f1"]))
