@@ -49,8 +49,9 @@ def summarise(results: dict[str, Any], seconds: float) -> dict[str, Any]:
         "predict_ms_per_clip",
         "case_base_size",
         "mcnemar_p",
+        "per_group",
     )
-    methods = [{k: m[k] for k in keep if k in m} for m in results["methods"]]
+    methods = [{k: m[k] for k in keep if k in m and m[k] != {}} for m in results["methods"]]
     by_name = {m["name"]: m for m in results["methods"]}
     versus = []
     bi = by_name.get(results["best_interpretable"] or "")

@@ -713,6 +713,16 @@ def _per_method(
             "recall": k / max(1, int(m.sum())),
             "ci": list(wilson_interval(k, int(m.sum()))),
         }
+    per_group: dict[str, Any] = {}
+    if data.within is not None:  # one model per group (e.g. per movement): how each fares
+        for g in sorted(set(data.within.tolist())):
+            m = data.within == g
+            k = int(correct[m].sum())
+            per_group[str(g)] = {
+                "n": int(m.sum()),
+                "accuracy": k / int(m.sum()),
+                "ci": list(wilson_interval(k, int(m.sum()))),
+            }
     confusion = np.zeros((n_cls, n_cls + 1), dtype=np.int64)
     np.add.at(confusion, (t, p), 1)
     sizes = [r.case_base_size for r in results if r.case_base_size is not None]
@@ -727,6 +737,7 @@ def _per_method(
             bootstrap_macro_f1(t, p, n_cls + 1, int(settings.bootstrap), seed=int(settings.seed))
         ),
         "per_class": per_class,
+        "per_group": per_group,
         "confusion": confusion[:, :n_cls].tolist(),
         "unassigned": confusion[:, n_cls].tolist(),
         "fit_s": fit_s,
@@ -1164,7 +1175,30 @@ def format_table(results: dict[str, Any]) -> str:
             f"{m['name'] + mark:<22} {acc:<22} {f1:<22} {m['fit_s']:8.2f} "
             f"{m['predict_ms_per_clip']:8.2f} {cases:>7} {pv:>10}"
         )
+    lines += _group_table(results)
     return "\n".join(lines)
+
+
+def _group_table(results: dict[str, Any]) -> list[str]:
+    """Accuracy (%) of every method per model group (e.g. per movement), when there are
+    groups: which activities the target is hard to tell in."""
+    ok = [m for m in results["methods"] if m["status"] == "ok" and m.get("per_group")]
+    if not ok:
+        return []
+    groups = list(ok[0]["per_group"])
+    width = max(len(g) for g in groups) + 2
+    within = results["settings"].get("within") or "group"
+    names = [m["name"] for m in ok]
+    lines = ["", f"accuracy % per {within} (one model each):"]
+    cols = [len(n) + 2 for n in names]
+    head = "".join(f"{n:>{w}}" for n, w in zip(names, cols, strict=True))
+    lines.append(f"{within:<{width}}{head}")
+    for g in groups:
+        row = "".join(
+            f"{100 * m['per_group'][g]['accuracy']:>{w}.1f}" for m, w in zip(ok, cols, strict=True)
+        )
+        lines.append(f"{g:<{width}}{row}")
+    return lines
 
 
 def csv_rows(results: dict[str, Any]) -> list[dict[str, Any]]:

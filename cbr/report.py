@@ -271,6 +271,30 @@ def _recall_table(results: dict[str, Any]) -> str:
     return "<div class='wide'>" + "\n".join(rows) + "</div>"
 
 
+def _group_table(results: dict[str, Any]) -> str:
+    """Accuracy per model group (one model per movement, say), when there are groups."""
+    e = html.escape
+    ok = [m for m in results["methods"] if m["status"] == "ok" and m.get("per_group")]
+    if not ok:
+        return ""
+    within = e(str(results["settings"].get("within") or "group"))
+    head = "".join(f"<th>{e(m['name'])}</th>" for m in ok)
+    rows = [
+        f"<h2>Accuracy per {within} (%)</h2><div class='wide'><table id='groups'><thead><tr>"
+        f"<th class='l'>{within} (n)</th>{head}</tr></thead><tbody>"
+    ]
+    for g in ok[0]["per_group"]:
+        n = ok[0]["per_group"][g]["n"]
+        cells = "".join(
+            f"<td title='95 % CI {_pct(m['per_group'][g]['ci'][0])}–"
+            f"{_pct(m['per_group'][g]['ci'][1])}'>{_pct(m['per_group'][g]['accuracy'])}</td>"
+            for m in ok
+        )
+        rows.append(f"<tr><td class='l'>{e(g)} ({n})</td>{cells}</tr>")
+    rows.append("</tbody></table></div>")
+    return "\n".join(rows)
+
+
 def _explanations(results: dict[str, Any]) -> str:
     e = html.escape
     items = results.get("explanations") or []
@@ -331,6 +355,7 @@ def render_html(results: dict[str, Any], base_dir: str | Path) -> str:
             "</figcaption></figure>"
         )
     parts += ["<h2>Recall per class (%)</h2>", _recall_table(results)]
+    parts.append(_group_table(results))
     if pics.get("confusion"):
         parts.append("<h2>Confusion matrices</h2>")
         for c in pics["confusion"]:

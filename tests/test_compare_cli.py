@@ -141,7 +141,7 @@ def test_target_correct_trains_one_model_per_movement(
         "--peers", "none", "--explain", "0", "--json", str(tmp_path / "c.json"),
     ])  # fmt: skip
     assert rc == 0
-    err = capsys.readouterr().err
+    out, err = capsys.readouterr()
     assert "dad skipped" in err and "does not predict 'correct'" in err
     res = json.loads((tmp_path / "c.json").read_text())
     assert res["dataset"]["classes"] == ["correct", "incorrect"]
@@ -154,6 +154,16 @@ def test_target_correct_trains_one_model_per_movement(
     # A per-movement model trains on one movement's clips of the other subjects (2 x 6 = 12);
     # the two movements' case bases are summed (each clip a case, maybe with its mirror image).
     assert m["training_size"] == 24 and 24 <= m["case_base_size"] <= 48
+    # accuracy per movement, from the predictions and the clips' movements
+    movement = np.array([truth[c["id"]]["label"] for c in res["clips"]])
+    hit = np.array(m["predictions"]) == np.array([c["target"] for c in res["clips"]])
+    assert set(m["per_group"]) == {"deep_squat", "standing_shoulder_abduction"}
+    for g, v in m["per_group"].items():
+        assert v["n"] == 18 and v["accuracy"] == pytest.approx(hit[movement == g].mean())
+        assert v["ci"] == pytest.approx(list(wilson_interval(int(hit[movement == g].sum()), 18)))
+        row = next(line for line in out.splitlines() if line.startswith(g + " "))
+        assert row.split()[-1] == f"{100 * v['accuracy']:.1f}"
+    assert "accuracy % per label (one model each):" in out
 
 
 def test_one_subject_falls_back_to_stratified_kfold_and_says_so(
