@@ -299,7 +299,20 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
                     for sd in sides
                     for wt in weightings
                 }
-                side, weighting, phases = max(scores, key=lambda c: scores[c])  # first best wins
+                best = max(scores, key=lambda c: scores[c])  # first best wins
+                # one-standard-error rule: the plain choice (the side-invariant handling, the
+                # learned weights, no phase means) stays unless another beats it by more than
+                # the standard error of the best inner accuracy; inner scores are noisy, and
+                # chasing their small differences lost accuracy on held-out subjects
+                plain = (
+                    sides[0],
+                    "fisher" if "fisher" in weightings else weightings[0],
+                    phase_options[0],
+                )
+                se = float(np.sqrt(scores[best] * (1.0 - scores[best]) / len(labels)))
+                if plain in scores and scores[best] - scores[plain] <= se:
+                    best = plain
+                side, weighting, phases = best
                 self.selection_ = {
                     f"{sd}/{wt}/{ph} phases": a for (sd, wt, ph), a in scores.items()
                 }

@@ -230,3 +230,34 @@ def test_weights_are_judged_only_with_three_or_more_subjects() -> None:
     X3, y3 = _data({"s1": "right", "s2": "right", "s3": "right"}, 2, 15)
     clf3 = CaseBaseClassifier(k=1).fit(X3, y3)
     assert {key.split("/")[1] for key in clf3.selection_} == {"none", "fisher"}
+
+
+@pytest.mark.parametrize("seed", [21, 22])
+def test_plain_choice_stays_unless_another_is_better_by_a_standard_error(seed: int) -> None:
+    # Breiman's one-standard-error rule over the inner leave-one-subject-out scores: the plain
+    # choice (canonical side, fisher weights, no phase means) unless the best beats it by more
+    # than sqrt(p (1 - p) / n) of the best inner accuracy p over the n training clips
+    X, y = _data({"s1": "right", "s2": "left", "s3": "right", "s4": "right"}, 2, seed)
+    clf = CaseBaseClassifier(k=3).fit(X, y)
+    scores = clf.selection_
+    best = max(scores.values())
+    plain = scores["canonical/fisher/0 phases"]
+    chosen = scores[f"{clf.side_}/{clf.weighting_}/{clf.phases_} phases"]
+    if best - plain <= np.sqrt(best * (1 - best) / len(X)):
+        assert (clf.side_, clf.weighting_, clf.phases_) == ("canonical", "fisher", 0)
+    else:
+        assert chosen == best
+
+
+def test_side_twins_beat_the_plain_choice_by_more_than_a_standard_error() -> None:
+    rng = np.random.default_rng(31)
+    X, y = [], []
+    for subject in ("s1", "s2", "s3"):
+        for arm in ("left", "right"):
+            for _ in range(3):
+                X.append(_arm_clip(arm, "sideways", subject, rng))
+                y.append(f"{arm} sideways")
+    clf = CaseBaseClassifier(k=3).fit(X, y)
+    # filing the left-arm clips under the right arm leaves nothing to tell the two apart
+    assert clf.selection_["canonical/fisher/0 phases"] <= 0.75
+    assert clf.side_ != "canonical"
