@@ -16,8 +16,9 @@ Learned at fit time from the training clips only (so cross-validation stays hone
 
 With vector problems under euclidean (clip summaries, QMPs), ``"auto"`` chooses the side
 handling, the weighting and (clip summaries) the phase means by leave-one-subject-out accuracy
-inside the training clips; a fold of an outer cross-validation never sees its test clips. Fixed
-values skip the search.
+inside the training clips (one-standard-error rule: canonical side, fisher weights and no
+phase means unless another choice is better by more than a standard error); a fold of an outer
+cross-validation never sees its test clips. Fixed values skip the search.
 """
 
 from __future__ import annotations
