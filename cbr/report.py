@@ -252,47 +252,43 @@ def _table(results: dict[str, Any]) -> str:
     return "<div class='wide'>" + "\n".join(rows) + "</div>"
 
 
-def _recall_table(results: dict[str, Any]) -> str:
+def _rate_table(
+    ok: list[dict[str, Any]], field: str, value: str, keys: list[str], table_id: str, what: str
+) -> str:
+    """Methods as columns, ``keys`` as rows: ``m[field][key][value]`` in %, its 95 % interval
+    as the cell's tooltip."""
     e = html.escape
-    ok = [m for m in results["methods"] if m["status"] == "ok"]
-    if not ok:
-        return ""
     head = "".join(f"<th>{e(m['name'])}</th>" for m in ok)
-    rows = [f"<table id='recall'><thead><tr><th class='l'>class (n)</th>{head}</tr></thead><tbody>"]
-    for c in results["dataset"]["classes"]:
-        n = ok[0]["per_class"][c]["n"]
+    rows = [
+        f"<table id='{table_id}'><thead><tr><th class='l'>{e(what)} (n)</th>{head}</tr></thead>"
+        "<tbody>"
+    ]
+    for key in keys:
         cells = "".join(
-            f"<td title='95 % CI {_pct(m['per_class'][c]['ci'][0])}–"
-            f"{_pct(m['per_class'][c]['ci'][1])}'>{_pct(m['per_class'][c]['recall'])}</td>"
+            f"<td title='95 % CI {_pct(m[field][key]['ci'][0])}–"
+            f"{_pct(m[field][key]['ci'][1])}'>{_pct(m[field][key][value])}</td>"
             for m in ok
         )
-        rows.append(f"<tr><td class='l'>{e(c)} ({n})</td>{cells}</tr>")
+        rows.append(f"<tr><td class='l'>{e(key)} ({ok[0][field][key]['n']})</td>{cells}</tr>")
     rows.append("</tbody></table>")
     return "<div class='wide'>" + "\n".join(rows) + "</div>"
 
 
+def _recall_table(results: dict[str, Any]) -> str:
+    ok = [m for m in results["methods"] if m["status"] == "ok"]
+    if not ok:
+        return ""
+    return _rate_table(ok, "per_class", "recall", results["dataset"]["classes"], "recall", "class")
+
+
 def _group_table(results: dict[str, Any]) -> str:
     """Accuracy per model group (one model per movement, say), when there are groups."""
-    e = html.escape
     ok = [m for m in results["methods"] if m["status"] == "ok" and m.get("per_group")]
     if not ok:
         return ""
-    within = e(str(results["settings"].get("within") or "group"))
-    head = "".join(f"<th>{e(m['name'])}</th>" for m in ok)
-    rows = [
-        f"<h2>Accuracy per {within} (%)</h2><div class='wide'><table id='groups'><thead><tr>"
-        f"<th class='l'>{within} (n)</th>{head}</tr></thead><tbody>"
-    ]
-    for g in ok[0]["per_group"]:
-        n = ok[0]["per_group"][g]["n"]
-        cells = "".join(
-            f"<td title='95 % CI {_pct(m['per_group'][g]['ci'][0])}–"
-            f"{_pct(m['per_group'][g]['ci'][1])}'>{_pct(m['per_group'][g]['accuracy'])}</td>"
-            for m in ok
-        )
-        rows.append(f"<tr><td class='l'>{e(g)} ({n})</td>{cells}</tr>")
-    rows.append("</tbody></table></div>")
-    return "\n".join(rows)
+    within = str(results["settings"].get("within") or "group")
+    table = _rate_table(ok, "per_group", "accuracy", list(ok[0]["per_group"]), "groups", within)
+    return f"<h2>Accuracy per {html.escape(within)} (%)</h2>{table}"
 
 
 def _explanations(results: dict[str, Any]) -> str:
