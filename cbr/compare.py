@@ -46,7 +46,7 @@ import numpy as np
 from scipy.stats import binomtest, norm
 from sklearn.base import BaseEstimator, ClassifierMixin
 
-from features.datasets import clip_column, target_value
+from features.datasets import clip_column, clip_target
 from features.poses import PoseSequence
 from posecbr.errors import ConfigError, DataError, PosecbrError
 from posecbr.progress import progress
@@ -420,8 +420,8 @@ def prepare(clips: Sequence[Any], settings: CompareSettings, source: str = "data
     if not clips:
         raise DataError("no clips found", source)
     notes: list[str] = []
-    values = [clip_column(c, settings.target) for c in clips]
-    missing = [i for i, v in enumerate(values) if v is None or v == ""]
+    values = [clip_target(c, settings.target) for c in clips]
+    missing = [i for i, v in enumerate(values) if v is None]
     if missing:
         cols = sorted({"label", "subject"} | {k for c in clips for k in c.extras})
         raise DataError(
@@ -430,7 +430,7 @@ def prepare(clips: Sequence[Any], settings: CompareSettings, source: str = "data
             f"columns available: {', '.join(cols)}",
             source,
         )
-    y = np.array([target_value(v) for v in values], dtype=object)
+    y = np.array(values, dtype=object)
     within_col = settings.within_column
     within = None
     if within_col is not None:

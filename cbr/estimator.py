@@ -311,7 +311,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
                     phase_options[0],
                 )
                 se = float(np.sqrt(scores[best] * (1.0 - scores[best]) / len(labels)))
-                if plain in scores and scores[best] - scores[plain] <= se:
+                if scores[best] - scores[plain] <= se:
                     best = plain
                 side, weighting, phases = best
                 self.selection_ = {

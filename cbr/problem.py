@@ -26,6 +26,7 @@ import warnings
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cache
 from typing import Any, Literal
 
 import numpy as np
@@ -274,9 +275,8 @@ def body_positions(seq: PoseSequence) -> np.ndarray:
             if not np.isfinite(left).all():
                 left = np.nanmean(bf.level_left, axis=0)
             torso = float(np.nanmedian(norm(bf.neck - bf.mid_hip)))
-        up = np.asarray(WORLD_UP, dtype=np.float64)
-        left = unit(left - np.dot(left, up) * up)
-        axes = np.stack([left, up, np.cross(left, up)])  # rows: left, height, forward
+        left = unit(left)  # a mean of level directions: level already
+        axes = np.stack([left, WORLD_UP, np.cross(left, WORLD_UP)])  # rows: left, height, forward
         if not (np.isfinite(axes).all() and np.isfinite(origin).all() and torso > 0):
             out = np.full((p.shape[0], 3 * len(POSITION_JOINTS)), np.nan)
         else:
@@ -286,6 +286,7 @@ def body_positions(seq: PoseSequence) -> np.ndarray:
     return out
 
 
+@cache
 def position_names() -> tuple[str, ...]:
     """Column names of :func:`body_positions`: ``"left_wrist.height"``, ..."""
     return tuple(f"{j}.{a}" for j in POSITION_JOINTS for a in POSITION_AXES)

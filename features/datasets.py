@@ -494,6 +494,13 @@ def clip_column(clip: Clip, column: str) -> Any:
     return clip.seq.metadata.get(column)
 
 
+def clip_target(clip: Clip, column: str) -> str | None:
+    """A clip's value of ``column`` as a class name (:func:`target_value`); None when the clip
+    has none (absent or empty)."""
+    value = clip_column(clip, column)
+    return None if value is None or value == "" else target_value(value)
+
+
 def target_value(value: Any) -> str:
     """A column value as a class name: booleans (UI-PRMD's ``correct``) read "correct" /
     "incorrect"."""
@@ -511,6 +518,7 @@ __all__ = [
     "CLIP_SUFFIXES",
     "Clip",
     "clip_column",
+    "clip_target",
     "target_value",
     "UIPRMD_MOVEMENTS",
     "VIDEO_SUFFIXES",

@@ -59,16 +59,11 @@ def load_inputs(
     from features.datasets import (
         CLIP_SUFFIXES,
         Clip,
-        clip_column,
+        clip_target,
         detect_kind,
         iter_dataset,
         load_clip,
-        target_value,
     )
-
-    def truth(clip: Clip) -> str | None:
-        value = clip_column(clip, target)
-        return None if value is None or value == "" else target_value(value)
 
     def of_file(seq: PoseSequence) -> Clip:
         subject = seq.metadata.get("subject")
@@ -79,18 +74,18 @@ def load_inputs(
         kind = detect_kind(path)
         if kind == "pose_file":
             seq = load_clip(path)
-            out.append((seq, truth(of_file(seq))))
+            out.append((seq, clip_target(of_file(seq), target)))
         elif kind == "pose_folder":
             # may hold unlabelled clips: read them one by one
             for f in sorted(q for q in path.iterdir() if q.suffix.lower() in CLIP_SUFFIXES):
                 seq = load_clip(f)
-                out.append((seq, truth(of_file(seq))))
+                out.append((seq, clip_target(of_file(seq), target)))
         else:
             clips = iter_dataset(
                 path, sensor=sensor, subjects=subjects, progress_desc=f"loading {path.name}"
             )
             for clip in clips:
-                out.append((clip.seq, truth(clip)))
+                out.append((clip.seq, clip_target(clip, target)))
     if not out:
         raise DataError("no clips found", " ".join(str(p) for p in paths))
     return out

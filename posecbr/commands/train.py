@@ -139,7 +139,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from cbr.estimator import CaseBaseClassifier
-    from features.datasets import clip_column, load_dataset, target_value
+    from features.datasets import clip_target, load_dataset
 
     params = parse_params(args.param)
     measure = get_measure(args.similarity, **params)
@@ -179,15 +179,15 @@ def run(args: argparse.Namespace) -> int:
         raise DataError("no clips found (check --labels and --subjects)", str(args.data))
     solutions = []
     for clip in clips:
-        value = clip_column(clip, args.target)
-        if value is None or value == "":
+        value = clip_target(clip, args.target)
+        if value is None:
             raise DataError(
                 f"no value for --target {args.target!r} (columns: label, subject"
                 + "".join(f", {k}" for k in sorted(clip.extras))
                 + ")",
                 clip.seq.source,
             )
-        solutions.append(target_value(value))
+        solutions.append(value)
     store = open_store(args.db)
     try:
         result = build_case_base(
