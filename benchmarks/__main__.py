@@ -16,13 +16,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import time
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
+
+from benchmarks import write_json
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
@@ -40,13 +41,6 @@ def machine() -> dict[str, Any]:
     return machine_info()
 
 
-def _write_json(obj: Any, path: Path) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(obj, indent=1, allow_nan=True) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
-
-
 def _ensure_machine(path: Path, info: dict[str, Any]) -> None:
     """Add the machine record to a benchmark's JSON results when it has none."""
     try:
@@ -55,7 +49,7 @@ def _ensure_machine(path: Path, info: dict[str, Any]) -> None:
         return
     if isinstance(data, dict) and "machine" not in data:
         data["machine"] = info
-        _write_json(data, path)
+        write_json(data, path)
 
 
 def run_one(name: str, timeout_s: float | None) -> dict[str, Any]:
@@ -130,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
     previous.update(
         {r["name"]: {**r, "run_utc": datetime.now(UTC).isoformat(timespec="seconds")} for r in ran}
     )
-    _write_json(
+    write_json(
         {"machine": info, "benchmarks": [previous[k] for k in sorted(previous)]}, index_path
     )
     print("\nbenchmark          status      seconds  results")

@@ -39,6 +39,8 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks import write_json
+
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
 RESULTS = Path(__file__).resolve().parent / "results" / "ceiling.json"
@@ -224,10 +226,7 @@ def main() -> int:
         "case_base": case_base,
         "machine": machine_info(("scikit-learn",)),
     }
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    tmp = RESULTS.with_name(f".{RESULTS.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
-    os.replace(tmp, RESULTS)
+    write_json(out, RESULTS)
     print(f"written {RESULTS.relative_to(ROOT)}")
     return 0
 

@@ -14,12 +14,13 @@ McNemar p) and its prediction-time ratio to them, plus machine and versions.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
 from pathlib import Path
 from typing import Any
+
+from benchmarks import write_json
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
@@ -116,10 +117,7 @@ def main(argv: list[str] | None = None) -> int:
         for note in results["notes"]:
             print(f"note: {note}")
         out["tasks"][name] = summarise(results, seconds)
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    tmp = RESULTS.with_name(f".{RESULTS.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
-    os.replace(tmp, RESULTS)
+    write_json(out, RESULTS)
     print(f"\nwritten {RESULTS.relative_to(ROOT)}")
     return 0
 

@@ -28,7 +28,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
-import json  # noqa: E402
 import math  # noqa: E402
 import platform  # noqa: E402
 import statistics  # noqa: E402
@@ -42,6 +41,7 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from benchmarks import write_json  # noqa: E402
 from features.fluents import DEFAULT_TABLE, FluentTable, evaluate, state_signals  # noqa: E402
 from features.poses import PoseSequence  # noqa: E402
 from features.signals import StateSignals  # noqa: E402
@@ -472,10 +472,7 @@ def main(argv: list[str] | None = None) -> int:
         "versions": _versions(),
         "date_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    tmp = RESULTS.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
-    tmp.replace(RESULTS)
+    write_json(result, RESULTS)
     print(f"wrote {RESULTS.relative_to(ROOT)}")
     return 0
 

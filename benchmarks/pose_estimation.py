@@ -42,6 +42,8 @@ from typing import Any
 import cv2
 import numpy as np
 
+from benchmarks import write_json
+
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
 CLIP = DATA / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
@@ -247,10 +249,7 @@ def main(argv: list[str] | None = None) -> int:
         "machine": machine(),
         "command": "python -m benchmarks.pose_estimation",
     }
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    tmp_json = RESULTS.with_name(f".{RESULTS.name}.tmp")
-    tmp_json.write_text(json.dumps(result, indent=1) + "\n")
-    os.replace(tmp_json, RESULTS)
+    write_json(result, RESULTS)
     print(f"wrote {RESULTS.relative_to(ROOT)}")
     return 0
 

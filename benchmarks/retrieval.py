@@ -19,17 +19,16 @@ from __future__ import annotations
 
 import argparse
 import gc
-import json
 import os
 import platform
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from benchmarks import write_json
 from cbr.problem import FeatureConfig, extract_problem, resolve_config
 from cbr.retrieve import Retrieval
 from cbr.reuse import reuse
@@ -163,16 +162,6 @@ def machine() -> dict[str, Any]:
     except OSError:
         pass
     return {"platform": platform.platform(), "cpu": cpu, "cpus": os.cpu_count()}
-
-
-def write_json(doc: dict[str, Any], path: Path) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    os.chmod(tmp, 0o644)
-    with os.fdopen(fd, "w") as fh:
-        json.dump(doc, fh, indent=2)
-        fh.write("\n")
-    os.replace(tmp, path)
 
 
 def main(argv: list[str] | None = None) -> int:
