@@ -23,7 +23,7 @@ a new person's first clips):
 Prints the accuracy (Wilson 95 % interval) and per movement for each, and writes
 ``benchmarks/results/ceiling.json`` with machine and versions.
 
-    python -m benchmarks.ceiling        # ~3 min on 2 cores
+    python -m benchmarks.ceiling        # ~40 s on 2 cores
 """
 
 from __future__ import annotations
@@ -48,23 +48,19 @@ COMPARE = RESULTS.with_name("compare.json")
 
 
 class FisherNN:
-    """1-NN on standardised features weighted by the square root of their Fisher ratio."""
+    """1-NN under the case base's feature weights (:func:`cbr.weights.learn_weights`, fisher)."""
 
     def fit(self, X: np.ndarray, y: np.ndarray) -> FisherNN:
         from sklearn.neighbors import KNeighborsClassifier
-        from sklearn.preprocessing import StandardScaler
 
-        from cbr.weights import fisher_ratio
+        from cbr.weights import learn_weights
 
-        self.scaler = StandardScaler().fit(X)
-        Z = self.scaler.transform(X)
-        w = fisher_ratio(Z, y)
-        self.w = np.sqrt(w / max(w.mean(), 1e-12))
-        self.knn = KNeighborsClassifier(1).fit(Z * self.w, y)
+        self.weights = learn_weights(X, y)
+        self.knn = KNeighborsClassifier(1).fit(self.weights.apply(X), y)
         return self
 
     def predict(self, X: np.ndarray) -> np.ndarray:
-        return self.knn.predict(self.scaler.transform(X) * self.w)
+        return self.knn.predict(self.weights.apply(X))
 
 
 def classifiers() -> dict[str, Callable[[], Any]]:
@@ -172,10 +168,11 @@ def main() -> int:
     subject = np.array([str(c.subject) for c in clips])
     label_of = {str(c.extras["movement"]): str(c.label) for c in clips}
 
+    makers = classifiers()
     rows: list[tuple[str, str, np.ndarray]] = []
-    for name, make in classifiers().items():
+    for name, make in makers.items():
         rows.append((name, "leave one subject out", loso(X, y, movement, subject, make)))
-    logistic = classifiers()["logistic"]
+    logistic = makers["logistic"]
     rows.append(("logistic", "within-subject", within_subject(X, y, movement, subject, logistic)))
     centred = person_centred(X, movement, subject)
     rows.append(
