@@ -124,9 +124,7 @@ def main(argv: list[str] | None = None) -> int:
     previous.update(
         {r["name"]: {**r, "run_utc": datetime.now(UTC).isoformat(timespec="seconds")} for r in ran}
     )
-    write_json(
-        {"machine": info, "benchmarks": [previous[k] for k in sorted(previous)]}, index_path
-    )
+    write_json({"machine": info, "benchmarks": [previous[k] for k in sorted(previous)]}, index_path)
     print("\nbenchmark          status      seconds  results")
     for r in ran:
         print(f"{r['name']:<18} {r['status']:<10} {r['seconds']:8.1f}  {r['results'] or '-'}")

@@ -86,9 +86,7 @@ def features(clips: list[Any]) -> tuple[np.ndarray, list[str]]:
     """The case base's clip summaries (no phase means), every clip, as one matrix."""
     from cbr.problem import FeatureConfig, extract_problem, resolve_config
 
-    config = FeatureConfig(
-        angles=True, positions=True, summary=True, phases=0, side="canonical"
-    )
+    config = FeatureConfig(angles=True, positions=True, summary=True, phases=0, side="canonical")
     config = resolve_config(config, [c.seq for c in clips])
     rows = [extract_problem(c.seq, config) for c in clips]
     X = np.stack([r.values for r in rows]).astype(np.float64)
@@ -201,18 +199,26 @@ def main() -> int:
 
     movements = sorted(label_of)
     short = [label_of[m].replace("standing_", "").replace("shoulder_", "")[:10] for m in movements]
-    print(f"UI-PRMD correct vs incorrect, {len(clips)} clips, {len(names)} features "
-          f"({t_features:.0f} s to load and describe)")
-    print(f"{'classifier':12s} {'protocol':31s} {'acc %':>6s} {'95 % CI':>12s}  " + " ".join(
-        f"{s:>10s}" for s in short))
+    print(
+        f"UI-PRMD correct vs incorrect, {len(clips)} clips, {len(names)} features "
+        f"({t_features:.0f} s to load and describe)"
+    )
+    print(
+        f"{'classifier':12s} {'protocol':31s} {'acc %':>6s} {'95 % CI':>12s}  "
+        + " ".join(f"{s:>10s}" for s in short)
+    )
     for r in results:
         lo, hi = r["accuracy_ci"]
         per = " ".join(f"{100 * r['per_movement'][label_of[m]]:10.1f}" for m in movements)
-        print(f"{r['classifier']:12s} {r['protocol']:31s} {100 * r['accuracy']:6.1f} "
-              f"[{100 * lo:4.1f},{100 * hi:5.1f}]  {per}")
+        print(
+            f"{r['classifier']:12s} {r['protocol']:31s} {100 * r['accuracy']:6.1f} "
+            f"[{100 * lo:4.1f},{100 * hi:5.1f}]  {per}"
+        )
     if case_base:
-        print(f"case base ({case_base['method']}, posecbr compare): "
-              f"{100 * case_base['accuracy']:.1f} %")
+        print(
+            f"case base ({case_base['method']}, posecbr compare): "
+            f"{100 * case_base['accuracy']:.1f} %"
+        )
     out = {
         "benchmark": "ceiling",
         "task": "ui-prmd correct vs incorrect, one model per movement",

@@ -182,7 +182,7 @@ def naive_evaluate(sig: StateSignals, fps: float, table: FluentTable, frames: in
     logit = math.log((1 - eps) / eps)
     specs = table.specs
     col = {name: i for i, name in enumerate(sig.names)}
-    dist_col = {name: i for i, name in enumerate(sig.names[len(sig.angle_names):])}
+    dist_col = {name: i for i, name in enumerate(sig.names[len(sig.angle_names) :])}
     index_of = {s.name: i for i, s in enumerate(specs)}
     lag = fps / table.reference_fps
     values = sig.values
@@ -359,6 +359,7 @@ def bench_per_clip(clips: list[PoseSequence], repeats: int) -> dict[str, Any]:
 def bench_output_write(frames: int, n_states: int, repeats: int) -> dict[str, float]:
     """The floor under evaluate: allocating and filling a fresh ``(frames, n_states)`` float64
     array (page faults included), and refilling one already mapped."""
+
     def fresh() -> None:
         a = np.empty((frames, n_states))
         a.fill(1.0)
@@ -443,14 +444,20 @@ def main(argv: list[str] | None = None) -> int:
           f"{per_clip['ms_per_clip']['numba']:.2f} ms/clip ({per_clip['fps']['numba']:,.0f} "
           f"frames/s), numpy {per_clip['ms_per_clip']['numpy']:.2f} ms/clip "
           f"({per_clip['fps']['numpy']:,.0f} frames/s)")  # fmt: skip
-    print(f"output floor ({rows[0]['n_states']} float64 per frame): fresh array "
-          f"{floor['fresh_array_fps']:,.0f} frames/s, refill {floor['refill_fps']:,.0f} frames/s")
-    print(f"start-up (import + first evaluate, fresh process, wall / CPU s): empty numba cache "
-          f"{compile_s['cold_cache_s']:.1f} / {compile_s['cold_cache_cpu_s']:.1f}, warm cache "
-          f"{compile_s['warm_cache_s']:.1f} / {compile_s['warm_cache_cpu_s']:.1f}, numpy backend "
-          f"{compile_s['numpy_backend_s']:.1f} / {compile_s['numpy_backend_cpu_s']:.1f}")
-    print(f"times: median of {args.repeats}, {args.clock} clock, one thread; load average "
-          f"{load_before[0]:.1f} on {os.cpu_count()} cores")
+    print(
+        f"output floor ({rows[0]['n_states']} float64 per frame): fresh array "
+        f"{floor['fresh_array_fps']:,.0f} frames/s, refill {floor['refill_fps']:,.0f} frames/s"
+    )
+    print(
+        f"start-up (import + first evaluate, fresh process, wall / CPU s): empty numba cache "
+        f"{compile_s['cold_cache_s']:.1f} / {compile_s['cold_cache_cpu_s']:.1f}, warm cache "
+        f"{compile_s['warm_cache_s']:.1f} / {compile_s['warm_cache_cpu_s']:.1f}, numpy backend "
+        f"{compile_s['numpy_backend_s']:.1f} / {compile_s['numpy_backend_cpu_s']:.1f}"
+    )
+    print(
+        f"times: median of {args.repeats}, {args.clock} clock, one thread; load average "
+        f"{load_before[0]:.1f} on {os.cpu_count()} cores"
+    )
     result = {
         "benchmark": "fluents",
         "command": "python -m benchmarks.fluents " + " ".join(argv or sys.argv[1:]),

@@ -874,7 +874,6 @@ def run_compare(
     jobs = min(int(settings.jobs), max(1, len(tasks)))
     fold_results = _run_tasks(data, methods, folds, tasks, status, jobs)
 
-
     out_methods: list[dict[str, Any]] = []
     for mi, m in enumerate(methods):
         entry: dict[str, Any] = {

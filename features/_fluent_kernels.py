@@ -374,9 +374,7 @@ def state_signal_values(
         values[f, 20] = _angle(
             _project(_sub(nose, neck), up), _project(_sub(ls, neck), up), min_len
         )
-        values[f, 21] = _angle(
-            _project(_sub(lh, mid_hip), up), _project(forward, up), min_len
-        )
+        values[f, 21] = _angle(_project(_sub(lh, mid_hip), up), _project(forward, up), min_len)
         e = _sub(mid_ear, neck)
         hl = 2.0 * math.sqrt(_dot(e, e))
         if not hl > 0.0:

@@ -524,13 +524,18 @@ def _prepare(table: FluentTable) -> _Prepared:
         return [tau - delta, tau + delta, tau, logit / delta]
 
     inst = np.array(
-        [band(s.lower.tau, s.lower.delta)
-         + (band(s.upper.tau, s.upper.delta) if s.upper else [np.inf, np.inf, np.inf, 0.0])
-         for s in specs]  # fmt: skip
+        [
+            band(s.lower.tau, s.lower.delta)
+            + (band(s.upper.tau, s.upper.delta) if s.upper else [np.inf, np.inf, np.inf, 0.0])
+            for s in specs
+        ]  # fmt: skip
     ).reshape(n, 8)
     motion = np.array(
-        [band(-s.motion_threshold.tau, s.motion_threshold.delta)
-         + band(s.motion_threshold.tau, s.motion_threshold.delta) for s in specs]  # fmt: skip
+        [
+            band(-s.motion_threshold.tau, s.motion_threshold.delta)
+            + band(s.motion_threshold.tau, s.motion_threshold.delta)
+            for s in specs
+        ]  # fmt: skip
     ).reshape(n, 8)
     prepared = _Prepared(
         state_names=tuple(f"{specs[i].name}.{_slug(st)}" for i, st, _, _ in cols),
@@ -541,8 +546,9 @@ def _prepare(table: FluentTable) -> _Prepared:
         code=np.array([_CODES.index(k) for k in keys], dtype=np.intp),
         signals=tuple(s.signal for s in specs),
         distance=np.array([s.kind == "distance" for s in specs], dtype=bool),
-        partner=np.array([index_of.get(s.paired_with or "", i) for i, s in enumerate(specs)],
-                         dtype=np.intp),  # fmt: skip
+        partner=np.array(
+            [index_of.get(s.paired_with or "", i) for i, s in enumerate(specs)], dtype=np.intp
+        ),  # fmt: skip
         inst=inst,
         motion=motion,
         three=np.array([s.upper is not None for s in specs], dtype=bool),
@@ -652,7 +658,8 @@ def evaluate(
     prep = _prepare(table)
     frames = sig.values.shape[0] if sig.values.ndim == 2 else -1
     if sig.values.shape != (frames, len(sig.names)) or sig.distances_m.shape != (
-        frames, len(NEAR_SIGNALS)
+        frames,
+        len(NEAR_SIGNALS),
     ):
         raise DataError(
             f"state signals have shapes {sig.values.shape} and {sig.distances_m.shape}, expected "

@@ -213,9 +213,7 @@ def load_pose(path: str | Path) -> PoseSequence:
             names = set(data.files)
             missing = {"positions", "joint_names", "fps"} - names
             if missing:
-                raise PoseFileError(
-                    "not a pose file: missing " + ", ".join(sorted(missing)), path
-                )
+                raise PoseFileError("not a pose file: missing " + ", ".join(sorted(missing)), path)
             positions = np.asarray(data["positions"], dtype=np.float64)
             joint_names = tuple(str(j) for j in np.atleast_1d(data["joint_names"]))
             fps = float(np.asarray(data["fps"]).reshape(-1)[0])

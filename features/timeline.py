@@ -101,13 +101,11 @@ def frame_states(
 ) -> list[Run]:
     """The states that hold in each frame, one entry per frame."""
     on = holding(result, threshold, include_background)
-    return _mean_runs(
-        result, {(f, f): np.flatnonzero(on[f]).tolist() for f in range(on.shape[0])}
-    )
+    return _mean_runs(result, {(f, f): np.flatnonzero(on[f]).tolist() for f in range(on.shape[0])})
 
 
 def phrase_list(states: tuple[StateInRun, ...], result: FluentResult) -> str:
-    """"left knee bent 0.97, bending 0.88, right knee bent 0.95": the subject said once."""
+    """ "left knee bent 0.97, bending 0.88, right knee bent 0.95": the subject said once."""
     parts: list[str] = []
     last_subject = None
     specs = result.table.specs

@@ -26,11 +26,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--data", type=Path, default=DEMO_DATA, help="labels CSV folder of the demo")
     p.add_argument("--out", type=Path, default=Path("demo-output"), help="output folder")
-    p.add_argument("--features", default="qmp", choices=["fluents", "qmp"],
-                   help="feature level of the demo case base (default qmp)")
+    p.add_argument(
+        "--features",
+        default="qmp",
+        choices=["fluents", "qmp"],
+        help="feature level of the demo case base (default qmp)",
+    )
     p.add_argument("--similarity", default="euclidean", help="similarity of the demo case base")
-    p.add_argument("--quick", action="store_true",
-                   help="compare only a few configurations (faster)")
+    p.add_argument(
+        "--quick", action="store_true", help="compare only a few configurations (faster)"
+    )
     p.set_defaults(func=run)
 
 

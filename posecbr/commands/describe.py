@@ -29,15 +29,32 @@ def register(sub: argparse._SubParsersAction) -> None:
         "frame by frame.",
     )
     p.add_argument("posefile", type=Path, help="pose file (.npz) or a clip the loaders read")
-    p.add_argument("--min-confidence", type=float, default=0.8, metavar="C",
-                   help="a state is shown when its confidence is at least C (default 0.8)")
+    p.add_argument(
+        "--min-confidence",
+        type=float,
+        default=0.8,
+        metavar="C",
+        help="a state is shown when its confidence is at least C (default 0.8)",
+    )
     p.add_argument("--per-frame", action="store_true", help="one line per frame, not spans")
-    p.add_argument("--min-run", type=int, default=5, metavar="N",
-                   help="ignore flicker: drop spans shorter than N frames (default 5)")
-    p.add_argument("--all", action="store_true",
-                   help='also show background states: no motion ("bend steady") and "far from"')
-    p.add_argument("--thresholds", type=Path, metavar="FILE",
-                   help="JSON/TOML file overriding fluent thresholds (see `posecbr thresholds`)")
+    p.add_argument(
+        "--min-run",
+        type=int,
+        default=5,
+        metavar="N",
+        help="ignore flicker: drop spans shorter than N frames (default 5)",
+    )
+    p.add_argument(
+        "--all",
+        action="store_true",
+        help='also show background states: no motion ("bend steady") and "far from"',
+    )
+    p.add_argument(
+        "--thresholds",
+        type=Path,
+        metavar="FILE",
+        help="JSON/TOML file overriding fluent thresholds (see `posecbr thresholds`)",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--plot", type=Path, metavar="PNG", help="write a fluent timeline picture")
     p.set_defaults(func=run)

@@ -68,17 +68,35 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("input", type=Path, metavar="INPUT", help="video, folder or labels CSV")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
-    p.add_argument("--workers", type=int, default=1, metavar="N",
-                   help="clips processed in parallel (default 1; each uses cores/N threads)")
-    p.add_argument("--overlay", type=Path, metavar="OUT.mp4",
-                   help="also write the video with the stick figure (and the fluents that hold) "
-                   "drawn on it; for several clips, a folder for one MP4 each")
-    p.add_argument("--no-smoothing", action="store_true",
-                   help="no temporal filtering (raw per-frame landmarks)")
-    p.add_argument("--detect-every-frame", action="store_true",
-                   help="run the person detector on every frame instead of tracking")
-    p.add_argument("--keep-outside", action="store_true",
-                   help="keep joints the model places outside the frame (default: missing)")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=1,
+        metavar="N",
+        help="clips processed in parallel (default 1; each uses cores/N threads)",
+    )
+    p.add_argument(
+        "--overlay",
+        type=Path,
+        metavar="OUT.mp4",
+        help="also write the video with the stick figure (and the fluents that hold) "
+        "drawn on it; for several clips, a folder for one MP4 each",
+    )
+    p.add_argument(
+        "--no-smoothing",
+        action="store_true",
+        help="no temporal filtering (raw per-frame landmarks)",
+    )
+    p.add_argument(
+        "--detect-every-frame",
+        action="store_true",
+        help="run the person detector on every frame instead of tracking",
+    )
+    p.add_argument(
+        "--keep-outside",
+        action="store_true",
+        help="keep joints the model places outside the frame (default: missing)",
+    )
     p.add_argument("--force", action="store_true", help="re-extract even if up to date")
     p.set_defaults(func=run)  # fmt: skip
 

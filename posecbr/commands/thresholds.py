@@ -15,8 +15,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "thresholds",
         help="print the fluent thresholds table as JSON (edit it and pass --thresholds FILE)",
     )
-    p.add_argument("--from", dest="source", type=Path, metavar="FILE",
-                   help="show the table after the overrides in FILE (validates FILE)")
+    p.add_argument(
+        "--from",
+        dest="source",
+        type=Path,
+        metavar="FILE",
+        help="show the table after the overrides in FILE (validates FILE)",
+    )
     p.set_defaults(func=run)
 
 

@@ -115,9 +115,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("-k", "--k", type=int, default=5, help="neighbours (trimming, inner choice)")
     p.add_argument("--subjects", help="only these subjects, comma-separated (e.g. s01,s02)")
-    p.add_argument(
-        "--labels", help="only these activities, comma-separated (e.g. deep_squat)"
-    )
+    p.add_argument("--labels", help="only these activities, comma-separated (e.g. deep_squat)")
     p.add_argument(
         "--target",
         default="label",
