@@ -44,9 +44,9 @@ import numpy as np  # noqa: E402
 from benchmarks import write_json  # noqa: E402
 from features.fluents import DEFAULT_TABLE, FluentTable, evaluate, state_signals  # noqa: E402
 from features.poses import PoseSequence  # noqa: E402
+from features.progress import progress  # noqa: E402
 from features.signals import StateSignals  # noqa: E402
 from features.skeleton import BLAZEPOSE_33, JOINT_INDEX  # noqa: E402
-from posecbr.progress import progress  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))

@@ -42,8 +42,8 @@ from sqlalchemy.engine import Connection, make_url
 from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
-from posecbr import __version__
-from posecbr.errors import PosecbrError
+from features.errors import PosecbrError
+from features.version import __version__
 
 from .models import (
     SCHEMA_VERSION,

@@ -12,9 +12,9 @@ import numpy as np
 from sklearn.base import clone
 
 from casebase_store import CaseStore, NewCase
+from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
-from posecbr.errors import ConfigError, DataError
-from posecbr.progress import progress
+from features.progress import progress
 
 from .casebase import CaseBase, subject_of
 from .estimator import CaseBaseClassifier

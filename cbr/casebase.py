@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from casebase_store import CaseStore, NewCase
-from posecbr.errors import DataError
+from features.errors import DataError
 
 from .problem import FeatureConfig, Problem, extract_problem
 from .similarity import SimilarityMeasure, get_measure

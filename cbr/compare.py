@@ -47,9 +47,9 @@ from scipy.stats import binomtest, norm
 from sklearn.base import BaseEstimator, ClassifierMixin
 
 from features.datasets import clip_column, clip_target
+from features.errors import ConfigError, DataError, PosecbrError
 from features.poses import PoseSequence
-from posecbr.errors import ConfigError, DataError, PosecbrError
-from posecbr.progress import progress
+from features.progress import progress
 
 from .similarity import get_measure
 

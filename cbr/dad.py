@@ -22,11 +22,11 @@ import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted
 
+from features.errors import ConfigError
 from features.fluents import state_signals
 from features.poses import PoseSequence
 from features.qmp import QMPConfig, fit_signals
 from features.qmp.add import ADD, Activity, CriteriaResult, evaluate_criteria, load_add
-from posecbr.errors import ConfigError
 
 NOT_ENOUGH_DATA = "not enough data"
 

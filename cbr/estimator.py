@@ -31,8 +31,9 @@ import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted
 
+from features.body import mirrored, moves_left_more
+from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
-from posecbr.errors import ConfigError, DataError
 
 from .casebase import CaseBase, subject_of
 from .explain import Explanation, explain
@@ -44,14 +45,7 @@ from .fitting import (
     inner_loso_accuracy,
     side_name,
 )
-from .problem import (
-    FeatureConfig,
-    Problem,
-    extract_problem,
-    mirrored,
-    moves_left_more,
-    resolve_config,
-)
+from .problem import FeatureConfig, Problem, extract_problem, resolve_config
 from .retrieve import Retrieval, retrieve
 from .reuse import Solution, reuse
 from .similarity import get_measure
@@ -82,7 +76,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     trim: fraction of cases kept by novelty/benefit trimming at fit time (None: keep all).
     angles: add the named joint angles ("left knee angle") to the fluent confidences.
     positions: add the limb joints' positions in the person's own frame at the start of the
-      clip ("left wrist height", in torso lengths; :func:`cbr.problem.body_positions`).
+      clip ("left wrist height", in torso lengths; :func:`features.body.body_positions`).
     summary: describe a clip by per-feature statistics (mean, lowest, highest, variation)
       instead of its sequence; ``"auto"``: for the euclidean measure at the fluent level.
     mirror: side handling: ``"off"`` (False), ``"augment"`` (True: mirror images of the

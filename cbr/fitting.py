@@ -10,7 +10,7 @@ right-arm cases):
 
 - ``"off"``: clips as recorded;
 - ``"canonical"``: a clip that moves its left side more is described by its mirror image,
-  cases and queries alike (:func:`cbr.problem.moves_left_more`);
+  cases and queries alike (:func:`features.body.moves_left_more`);
 - ``"augment"``: the mirror image of every training clip is a further case, at a distance
   penalty (a flagged column, :func:`cbr.weights.mirror_penalty`), with the images that mimic
   another activity (side twins such as "kick left" / "kick right") left out

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from casebase_store import StoreTransaction
-from posecbr.progress import progress
+from features.progress import progress
 
 from .casebase import CaseBase
 from .retrieve import retrieve

@@ -22,18 +22,25 @@ the stored configuration, so every later clip is described by the same columns.
 from __future__ import annotations
 
 import dataclasses
-import warnings
-import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import cache
 from typing import Any, Literal
 
 import numpy as np
 
-from casebase_store import canonical_json, config_hash
+from features.body import (
+    ARM_PLANE_SIGNALS,
+    POSITION_JOINTS,
+    arm_planes,
+    body_positions,
+    mirrored,
+    moves_left_more,
+    position_names,
+    position_word,
+)
+from features.derived import fluents_of, qmp_of, signals_of
+from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
-from posecbr.errors import ConfigError, DataError
 
 Level = Literal["fluents", "qmp"]
 STATE_GROUPS = ("angles", "instantaneous", "all")
@@ -50,12 +57,6 @@ _LATER_OPTIONS = {
     "positions": False,
 }
 POSITION_PREFIX = "pos:"
-# Joints whose body-frame positions the ``positions`` option adds (three columns each).
-_POSITION_PARTS = ("shoulder", "elbow", "wrist", "index", "hip", "knee", "ankle", "heel")
-POSITION_JOINTS = ("nose",) + tuple(
-    f"{side}_{part}" for part in (*_POSITION_PARTS, "foot_index") for side in ("left", "right")
-)
-POSITION_AXES = ("left", "height", "forward")
 SIDE_MODES = ("as_recorded", "canonical")
 
 
@@ -152,9 +153,6 @@ class FeatureConfig:
             d["states"] = tuple(d["states"])
         return cls(**d)
 
-    def hash(self) -> str:
-        return config_hash(self.to_dict())
-
     def describe(self) -> str:
         side = ", left-side clips mirrored" if self.side == "canonical" else ""
         if self.level == "qmp":
@@ -184,177 +182,6 @@ class Problem:
     mirrored: bool = False
 
 
-# Fluent evaluation is the expensive part and does not depend on the configuration: keep one
-# result per PoseSequence object for as long as the sequence lives (cross-validation reuses it).
-_FLUENT_CACHE: weakref.WeakKeyDictionary[PoseSequence, Any] = weakref.WeakKeyDictionary()
-_QMP_CACHE: weakref.WeakKeyDictionary[PoseSequence, Any] = weakref.WeakKeyDictionary()
-_SIGNAL_CACHE: weakref.WeakKeyDictionary[PoseSequence, Any] = weakref.WeakKeyDictionary()
-_MIRROR_CACHE: weakref.WeakKeyDictionary[PoseSequence, PoseSequence] = weakref.WeakKeyDictionary()
-
-
-def _swap_side(name: str) -> str:
-    return name.replace("left", "\0").replace("right", "left").replace("\0", "right")
-
-
-def mirrored(seq: PoseSequence) -> PoseSequence:
-    """The left-right mirror image of ``seq``: x negated (a reflection, y stays up) and every
-    left joint swapped with its right twin, so the left arm's movement becomes the right arm's.
-    Canonical joints; cached per sequence object."""
-    out = _MIRROR_CACHE.get(seq)
-    if out is None:
-        from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
-
-        c = seq.to_canonical()
-        swap = np.array([JOINT_INDEX[_swap_side(n)] for n in BLAZEPOSE_33])
-        pos = c.positions[:, swap, :].copy()
-        pos[..., 0] *= -1.0
-        conf = None if c.confidence is None else c.confidence[:, swap]
-        out = dataclasses.replace(
-            c, positions=pos, confidence=conf, source=f"{c.source} (mirrored)"
-        )
-        _MIRROR_CACHE[seq] = out
-    return out
-
-
-# Extra named angles not among the state signals: the plane of elevation of each upper arm
-# (its direction in the horizontal plane: 0 = forward, pi/2 = straight out to the side, pi =
-# backward), defined while the arm is raised at least 45 degrees from the trunk (elsewhere the
-# horizontal projection is too short to have a direction). It tells shoulder abduction (pi/2)
-# from scaption (between forward and sideways), which the sagittal / frontal angles blur.
-ARM_PLANE_SIGNALS = ("left_upper_arm_plane", "right_upper_arm_plane")
-_ARM_PLANE_MIN_ELEVATION = np.radians(45.0)
-_PLANE_CACHE: weakref.WeakKeyDictionary[PoseSequence, np.ndarray] = weakref.WeakKeyDictionary()
-
-
-def arm_planes(seq: PoseSequence) -> np.ndarray:
-    """Plane-of-elevation angles (radians) of the left and right upper arm, ``(frames, 2)``;
-    NaN where the arm is raised less than 45 degrees or joints are missing."""
-    out = _PLANE_CACHE.get(seq)
-    if out is None:
-        from features.geometry import angle_between, body_frame, joint_angle, project
-        from features.skeleton import JOINT_INDEX
-
-        p = seq.to_canonical().positions
-        bf = body_frame(p)
-        cols = []
-        for side in ("left", "right"):
-            sh, el, hip = (p[:, JOINT_INDEX[f"{side}_{j}"]] for j in ("shoulder", "elbow", "hip"))
-            plane = angle_between(project(el - sh, bf.up), bf.forward)
-            raised = joint_angle(el, sh, hip) >= _ARM_PLANE_MIN_ELEVATION
-            cols.append(np.where(raised, plane, np.nan))
-        out = np.stack(cols, axis=1)
-        _PLANE_CACHE[seq] = out
-    return out
-
-
-_POSITION_CACHE: weakref.WeakKeyDictionary[PoseSequence, np.ndarray] = weakref.WeakKeyDictionary()
-
-
-def body_positions(seq: PoseSequence) -> np.ndarray:
-    """Positions of :data:`POSITION_JOINTS` in the person's frame at the start of the clip,
-    ``(frames, 3 * len(POSITION_JOINTS))``, joint-major, axes :data:`POSITION_AXES`.
-
-    Origin: the mid-hip over the first tenth of the clip (at least 3 frames); axes: "left"
-    along the level left-right line of the body there, "height" straight up, "forward"
-    completing a right-handed frame (the way the chest faces); unit: the person's torso length
-    (median neck to mid-hip), so people of different sizes compare. How far the hips drop in a
-    squat, how high and how far forward a wrist goes, a knee drifting inwards: the range and
-    path of a movement, which joint angles alone do not give. NaN where joints are missing."""
-    out = _POSITION_CACHE.get(seq)
-    if out is None:
-        from features.geometry import WORLD_UP, body_frame, norm, unit
-        from features.skeleton import JOINT_INDEX
-
-        p = seq.to_canonical().positions
-        bf = body_frame(p)
-        start = slice(0, max(3, p.shape[0] // 10))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN stretches
-            origin = np.nanmean(bf.mid_hip[start], axis=0)
-            left = np.nanmean(bf.level_left[start], axis=0)
-            if not np.isfinite(left).all():
-                left = np.nanmean(bf.level_left, axis=0)
-            torso = float(np.nanmedian(norm(bf.neck - bf.mid_hip)))
-        left = unit(left)  # a mean of level directions: level already
-        axes = np.stack([left, WORLD_UP, np.cross(left, WORLD_UP)])  # rows: left, height, forward
-        if not (np.isfinite(axes).all() and np.isfinite(origin).all() and torso > 0):
-            out = np.full((p.shape[0], 3 * len(POSITION_JOINTS)), np.nan)
-        else:
-            joints = p[:, [JOINT_INDEX[j] for j in POSITION_JOINTS], :] - origin
-            out = (joints @ axes.T / torso).reshape(p.shape[0], -1)
-        _POSITION_CACHE[seq] = out
-    return out
-
-
-@cache
-def position_names() -> tuple[str, ...]:
-    """Column names of :func:`body_positions`: ``"left_wrist.height"``, ..."""
-    return tuple(f"{j}.{a}" for j in POSITION_JOINTS for a in POSITION_AXES)
-
-
-def _position_word(name: str) -> str:
-    joint, axis = name.split(".")
-    return f"{joint.replace('_', ' ')} {'to the left' if axis == 'left' else axis}"
-
-
-_SIDE_CACHE: weakref.WeakKeyDictionary[PoseSequence, bool] = weakref.WeakKeyDictionary()
-
-
-def moves_left_more(seq: PoseSequence) -> bool:
-    """Whether the clip's left limbs move more than its right ones: the summed standard
-    deviation over time of the left elbow, knee, armpit, hip and upper-limb angles against
-    that of their right twins (NaN frames ignored; a missing side counts as still)."""
-    out = _SIDE_CACHE.get(seq)
-    if out is None:
-        sig = _signals(seq)
-        names = sig.angle_names
-        vals = sig.values[:, : len(names)]
-        left = [i for i, n in enumerate(names) if n.startswith("left_")]
-        right = [names.index("right_" + names[i][len("left_") :]) for i in left]
-        with np.errstate(invalid="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns
-            spread = np.nan_to_num(np.nanstd(vals, axis=0), nan=0.0)
-        out = bool(spread[left].sum() > spread[right].sum())
-        _SIDE_CACHE[seq] = out
-    return out
-
-
-def _signals(seq: PoseSequence) -> Any:
-    res = _SIGNAL_CACHE.get(seq)
-    if res is None:
-        from features.fluents import state_signals
-
-        res = state_signals(seq.to_canonical())
-        _SIGNAL_CACHE[seq] = res
-    return res
-
-
-def _fluents(seq: PoseSequence) -> Any:
-    res = _FLUENT_CACHE.get(seq)
-    if res is None:
-        from features.fluents import evaluate
-
-        res = evaluate(seq.to_canonical())
-        _FLUENT_CACHE[seq] = res
-    return res
-
-
-def _qmp(seq: PoseSequence) -> Any:
-    res = _QMP_CACHE.get(seq)
-    if res is None:
-        try:
-            from features.qmp import qmp_features
-        except ImportError:
-            raise ConfigError(
-                "the QMP feature level is not available in this build yet "
-                "(features.qmp.qmp_features is missing); use features='fluents'",
-                "features",
-            ) from None
-        res = qmp_features(seq.to_canonical())
-        _QMP_CACHE[seq] = res
-    return res
-
-
 def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> None:
     """Compute and cache what :func:`extract_problem` needs for ``seq`` (and, with ``mirror``,
     for its mirror image), so a caller can show progress over the expensive part."""
@@ -362,10 +189,10 @@ def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> No
         moves_left_more(seq)
     for s in (seq, mirrored(seq)) if mirror else (seq,):
         if level == "qmp":
-            _qmp(s)
+            qmp_of(s)
         else:
-            _fluents(s)
-            _signals(s)
+            fluents_of(s)
+            signals_of(s)
             arm_planes(s)
             body_positions(s)
 
@@ -386,11 +213,11 @@ def resolve_config(config: FeatureConfig, clips: Sequence[PoseSequence]) -> Feat
         return config
     if not clips:
         raise DataError("no training clips to choose the fluent states from", "training set")
-    first = _fluents(clips[0])
+    first = fluents_of(clips[0])
     group = _group_mask(first, str(config.states))
     available = np.zeros(len(first.state_names))
     for seq in clips:
-        res = _fluents(seq)
+        res = fluents_of(seq)
         available += res.available()
     keep = group & (available >= config.min_available * len(clips))
     if not keep.any():
@@ -400,15 +227,15 @@ def resolve_config(config: FeatureConfig, clips: Sequence[PoseSequence]) -> Feat
         )
     names = tuple(n for n, k in zip(first.state_names, keep, strict=True) if k)
     if config.angles:
-        sig = _signals(clips[0])
+        sig = signals_of(clips[0])
         n_angles = len(sig.angle_names)
         seen = np.zeros(n_angles)
         for seq in clips:
-            seen += ~np.all(np.isnan(_signals(seq).values[:, :n_angles]), axis=0)
+            seen += ~np.all(np.isnan(signals_of(seq).values[:, :n_angles]), axis=0)
         ok = seen >= config.min_available * len(clips)
         names += tuple(ANGLE_PREFIX + a for a, k in zip(sig.angle_names, ok, strict=True) if k)
         # arm planes exist only while an arm is raised: kept when the joints are there at all
-        joints_ok = sum(bool(np.isfinite(_signals(seq).values[:, :4]).any()) for seq in clips)
+        joints_ok = sum(bool(np.isfinite(signals_of(seq).values[:, :4]).any()) for seq in clips)
         if joints_ok >= config.min_available * len(clips):
             names += tuple(ANGLE_PREFIX + a for a in ARM_PLANE_SIGNALS)
     if config.positions:
@@ -458,7 +285,7 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
         plain = dataclasses.replace(config, side="as_recorded")
         return dataclasses.replace(extract_problem(mirrored(seq), plain), mirrored=True)
     if config.level == "qmp":
-        q = _qmp(seq)
+        q = qmp_of(seq)
         if config.qmp_part == "binary":
             return Problem(
                 np.asarray(q.binary, dtype=np.float64),
@@ -480,7 +307,7 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
             "with the training clips first)",
             "features",
         )
-    res = _fluents(seq)
+    res = fluents_of(seq)
     index = {n: i for i, n in enumerate(res.state_names)}
     states = tuple(config.states)
     fluent_states = [s for s in states if not s.startswith((ANGLE_PREFIX, POSITION_PREFIX))]
@@ -495,7 +322,7 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
     conf = fill_nan_time(res.confidence[:, cols], config.fill)
     words = [res.words[i] for i in cols]
     if angle_states:
-        sig = _signals(seq)
+        sig = signals_of(seq)
         sig_index = {n: i for i, n in enumerate(sig.names)}
         unknown = [a for a in angle_states if a not in sig_index and a not in ARM_PLANE_SIGNALS]
         if unknown:
@@ -518,7 +345,7 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
             raise ConfigError("no joint position " + ", ".join(unknown[:5]), "features")
         pos = body_positions(seq)[:, [pos_index[n] for n in position_states]]
         conf = np.concatenate([conf, fill_nan_time(pos, 0.0)], axis=1)
-        words += [_position_word(n) for n in position_states]
+        words += [position_word(n) for n in position_states]
     if not states:
         raise ConfigError("the feature configuration selects no columns", "features")
     values = resample(conf, int(config.length))
@@ -563,7 +390,3 @@ def summarise(
             out_names += [f"{n}@phase{i + 1}" for n in names]
             out_words += [f"{w} ({said})" for w in words]
     return Problem(np.concatenate(stats), tuple(out_names), tuple(out_words), "fluents")
-
-
-def config_json(config: FeatureConfig) -> str:
-    return canonical_json(config.to_dict())

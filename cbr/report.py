@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from posecbr.errors import DataError
+from features.errors import DataError
 
 
 def _pyplot() -> Any:

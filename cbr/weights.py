@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from posecbr.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError
 
 MIRROR_FLAG = "mirror_image"
 _PENALTY_SAMPLE = 2000

@@ -38,8 +38,8 @@ from typing import Any
 
 import numpy as np
 
-from posecbr.errors import DataError
-from posecbr.progress import progress
+from features.errors import DataError
+from features.progress import progress
 
 from .poses import PoseSequence, load_pose
 from .readers.asfamc import hdm05_metadata, read_asf_amc

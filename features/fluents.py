@@ -31,7 +31,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from posecbr.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError
 
 from .poses import PoseSequence
 from .signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals, near_pairs, state_signals

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from posecbr.errors import PoseFileError
+from features.errors import PoseFileError
 
 from .skeleton import BLAZEPOSE_33, CANONICAL_SKELETON, KNOWN_SKELETONS
 

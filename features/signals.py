@@ -13,7 +13,7 @@ from typing import Literal
 
 import numpy as np
 
-from posecbr.errors import ConfigError
+from features.errors import ConfigError
 
 from .geometry import MIN_LINK_M, angle_between, body_frame, joint_angle, norm, project
 from .poses import PoseSequence

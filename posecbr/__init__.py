@@ -1,3 +1,5 @@
 """posecbr: interpretable human activity recognition with qualitative posture features and CBR."""
 
-__version__ = "0.1.0"
+from features.version import __version__
+
+__all__ = ["__version__"]

@@ -13,8 +13,8 @@ import pkgutil
 import sys
 from collections.abc import Sequence
 
+from features.errors import PosecbrError
 from posecbr import __version__, commands
-from posecbr.errors import PosecbrError
 
 
 def build_parser() -> argparse.ArgumentParser:

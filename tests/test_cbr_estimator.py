@@ -9,8 +9,8 @@ from sklearn.model_selection import cross_val_score
 from tslearn.neighbors import KNeighborsTimeSeriesClassifier
 
 from cbr.estimator import CaseBaseClassifier
+from features.errors import ConfigError, DataError
 from features.fluents import evaluate
-from posecbr.errors import ConfigError, DataError
 from tests.test_cbr_clips import ACTIVITIES, arm_dataset
 
 

@@ -1,4 +1,4 @@
-"""Joint positions in the person's own frame (cbr.problem.body_positions) and their columns.
+"""Joint positions in the person's own frame (features.body.body_positions) and their columns.
 
 The synthetic person of tests.bodies stands facing +z with the left side at +x: torso length
 (neck to mid-hip) 0.50 m, mid-hip at (0, 1.00, 0). Expected values are worked out by hand from
@@ -12,15 +12,8 @@ import pytest
 
 from cbr.estimator import CaseBaseClassifier
 from cbr.explain import quantity
-from cbr.problem import (
-    POSITION_PREFIX,
-    FeatureConfig,
-    body_positions,
-    extract_problem,
-    mirrored,
-    position_names,
-    resolve_config,
-)
+from cbr.problem import POSITION_PREFIX, FeatureConfig, extract_problem, resolve_config
+from features.body import body_positions, mirrored, position_names
 from features.poses import PoseSequence
 from tests.bodies import rot_x, rot_y, rot_z, rotate, standing, to_sequence
 

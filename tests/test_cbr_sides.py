@@ -15,14 +15,8 @@ import pytest
 
 from cbr.estimator import CaseBaseClassifier
 from cbr.fitting import inner_loso_accuracy
-from cbr.problem import (
-    FeatureConfig,
-    extract_problem,
-    mirrored,
-    moves_left_more,
-    resolve_config,
-    summarise,
-)
+from cbr.problem import FeatureConfig, extract_problem, resolve_config, summarise
+from features.body import mirrored, moves_left_more
 from features.poses import save_pose
 from posecbr.cli import main
 from tests.test_cbr_weights import _arm_clip

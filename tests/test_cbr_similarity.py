@@ -14,7 +14,7 @@ from cbr.retrieve import retrieve
 from cbr.reuse import reuse
 from cbr.similarity import DTW, Euclidean, Signature, available_measures, get_measure
 from cbr.similarity.dtw import dtw_all, knn_dtw
-from posecbr.errors import ConfigError
+from features.errors import ConfigError
 
 
 def _walks(rng: np.random.Generator, n: int, length: int, d: int) -> np.ndarray:

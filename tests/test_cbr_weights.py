@@ -8,18 +8,12 @@ import pytest
 
 from casebase_store import config_hash
 from cbr.estimator import CaseBaseClassifier
-from cbr.problem import (
-    FeatureConfig,
-    arm_planes,
-    extract_problem,
-    mirrored,
-    resolve_config,
-    summarise,
-)
+from cbr.problem import FeatureConfig, extract_problem, resolve_config, summarise
 from cbr.similarity import Euclidean, get_measure
 from cbr.weights import confusing_mirrors, fisher_ratio, learn_weights, mirror_penalty
+from features.body import arm_planes, mirrored
+from features.errors import ConfigError
 from features.poses import PoseSequence
-from posecbr.errors import ConfigError
 from tests.bodies import rot_x, rot_y, rot_z, rotate, standing, to_sequence
 from tests.test_cbr_clips import ARM
 
@@ -154,9 +148,9 @@ def test_summary_statistics_by_hand() -> None:
 def test_new_options_keep_old_configuration_hashes() -> None:
     old = {"level": "fluents", "length": 32, "states": "angles", "min_available": 0.5,
            "fill": 0.0, "qmp_part": "binary"}  # fmt: skip
-    assert FeatureConfig().hash() == config_hash(old)
+    assert config_hash(FeatureConfig().to_dict()) == config_hash(old)
     assert FeatureConfig.from_dict(old) == FeatureConfig()
-    assert FeatureConfig(summary=True).hash() != config_hash(old)
+    assert config_hash(FeatureConfig(summary=True).to_dict()) != config_hash(old)
 
 
 def test_mirrored_clip_swaps_sides_and_negates_x() -> None:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from cbr.compare import wilson_interval
-from cbr.problem import POSITION_JOINTS
+from features.body import POSITION_JOINTS
 from posecbr.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from cbr.dad import NOT_ENOUGH_DATA, DADClassifier, DADConfig, detect, ordered_match
+from features.errors import ConfigError
 from features.poses import PoseSequence
-from posecbr.errors import ConfigError
 from tests.bodies import standing, to_sequence
 
 

@@ -8,8 +8,8 @@ import pytest
 
 from cbr.dad import detect
 from features.datasets import load_clip
+from features.errors import DataError
 from features.poses import PoseSequence
-from posecbr.errors import DataError
 
 
 def _clip(path: Path) -> PoseSequence:

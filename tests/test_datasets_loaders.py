@@ -14,9 +14,9 @@ from features.datasets import (
     load_dataset,
     read_labels_csv,
 )
+from features.errors import DataError, PosecbrError
 from features.poses import PoseSequence, save_pose
 from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
-from posecbr.errors import DataError, PosecbrError
 
 
 def _seq(frames: int = 6, offset: float = 0.0, **meta: object) -> PoseSequence:

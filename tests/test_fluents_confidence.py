@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from features.errors import ConfigError
 from features.fluents import (
     DEFAULT_TABLE,
     FluentTable,
@@ -16,7 +17,6 @@ from features.fluents import (
     evaluate,
     parse_value,
 )
-from posecbr.errors import ConfigError
 from tests.bodies import standing, to_sequence
 
 PI = math.pi

@@ -14,12 +14,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from features.errors import ConfigError, DataError
 from features.fluents import DEFAULT_TABLE, FluentTable, evaluate, state_signals
 from features.poses import PoseSequence, load_pose
 from features.readers.asfamc import read_asf_amc
 from features.readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon
 from features.signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals
-from posecbr.errors import ConfigError, DataError
 from tests.bodies import standing, to_sequence
 
 DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"

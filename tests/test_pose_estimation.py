@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 import pytest
 
+from features.errors import DataError
 from features.pose_estimation import (
     PoseEstimator,
     estimate_poses,
@@ -26,7 +27,6 @@ from features.pose_estimation import detector as det
 from features.pose_estimation import landmarks as lmk
 from features.pose_estimation.smoothing import OneEuroFilter, OneEuroParams
 from features.skeleton import JOINT_INDEX
-from posecbr.errors import DataError
 
 FIXTURES = Path(__file__).parent / "fixtures"
 REFERENCE = json.loads((FIXTURES / "mediapipe_pose_reference.json").read_text())

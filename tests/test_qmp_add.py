@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from features.errors import ConfigError
 from features.qmp import fit_signals
 from features.qmp.add import default_add_path, evaluate_criteria, load_add, parse_add
-from posecbr.errors import ConfigError
 
 UIPRMD_LABELS = {
     "deep_squat",

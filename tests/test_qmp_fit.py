@@ -7,6 +7,7 @@ import warnings
 import numpy as np
 import pytest
 
+from features.errors import ConfigError
 from features.qmp import (
     FLAT,
     NOT_ENOUGH_DATA,
@@ -22,7 +23,6 @@ from features.qmp import (
     sliding_windows,
 )
 from features.qmp.fit import fit_shared_periods
-from posecbr.errors import ConfigError
 
 FPS = 30.0
 

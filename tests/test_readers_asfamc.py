@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from features.errors import DataError
 from features.readers.asfamc import read_asf, read_asf_amc
 from features.skeleton import JOINT_INDEX
-from posecbr.errors import DataError
 
 INCH = 0.0254
 

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from features.errors import DataError
 from features.readers.bvh import read_bvh
 from features.skeleton import JOINT_INDEX
-from posecbr.errors import DataError
 
 
 def bvh_text(leg_channels: str, frames: list[str], thigh: float = 40.0) -> str:

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from features.errors import DataError
 from features.readers.uiprmd import (
     KINECT_JOINTS,
     VICON_MARKERS,
@@ -18,7 +19,6 @@ from features.readers.uiprmd import (
     read_uiprmd_vicon_markers,
 )
 from features.skeleton import JOINT_INDEX
-from posecbr.errors import DataError
 
 KINECT = "ui-prmd/data/Segmented Movements/Kinect/Positions"
 VICON = "ui-prmd/data/Segmented Movements/Vicon/Positions"

@@ -40,7 +40,7 @@ from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 
-from posecbr.errors import ConfigError
+from features.errors import ConfigError
 
 _REGISTRY: dict[str, type[SimilarityMeasure]] = {}
 _ENTRY_POINTS_LOADED = False

@@ -28,7 +28,7 @@ import numba
 import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
-from posecbr.errors import ConfigError
+from features.errors import ConfigError
 
 from .base import SimilarityMeasure, register_measure
 

@@ -18,7 +18,7 @@ from typing import Any, ClassVar
 import iisignature
 import numpy as np
 
-from posecbr.errors import ConfigError
+from features.errors import ConfigError
 
 from .base import SimilarityMeasure, register_measure
 from .euclidean import Euclidean

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import onnxruntime as ort
 
-from posecbr.errors import ConfigError
+from features.errors import ConfigError
 
 MODEL_DIR = Path(__file__).resolve().parent / "models"
 DETECTOR_PATH = MODEL_DIR / "pose_detection.onnx"

@@ -11,7 +11,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from posecbr.errors import DataError
+from features.errors import DataError
 
 from .video import iter_frames
 

@@ -1,7 +1,7 @@
 """Video in, poses out: :func:`estimate_poses`, :func:`estimate_video`, :func:`stream_poses`.
 
 Frames are decoded with OpenCV (FFmpeg). A video that cannot be used raises
-:class:`posecbr.errors.DataError` naming the file and the problem: missing or unreadable path,
+:class:`features.errors.DataError` naming the file and the problem: missing or unreadable path,
 not a video, no frames, no frame rate, or fewer frames decoded than the container declares
 (truncated or corrupt). Damage that the decoder conceals (a few broken macroblocks in a
 stream that still decodes every frame) cannot be seen from here and is not reported.
@@ -23,10 +23,10 @@ os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
+from features.errors import DataError  # noqa: E402
 from features.poses import PoseSequence  # noqa: E402
+from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
-from posecbr.errors import DataError  # noqa: E402
-from posecbr.progress import progress  # noqa: E402
 
 from .model import model_version  # noqa: E402
 from .smoothing import AUX_FILTER, IMAGE_FILTER, VISIBILITY_ALPHA, WORLD_FILTER  # noqa: E402

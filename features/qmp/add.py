@@ -1,7 +1,7 @@
 """The Action Description Database (ADD): QMP criteria and activities, as data.
 
-The ADD is a TOML file (default: ``cbr/data/add.toml``; schema below). Loading validates every
-entry and raises :class:`~posecbr.errors.ConfigError` naming the file, the entry and the field.
+The ADD is a TOML file (default: ``features/qmp/add.toml``; schema below). Loading validates every
+entry and raises :class:`~features.errors.ConfigError` naming the file, the entry and the field.
 
 Schema (``schema = 1``)::
 
@@ -42,17 +42,17 @@ from typing import Any
 
 import numpy as np
 
-from posecbr.errors import ConfigError
+from features.errors import ConfigError
 
 from .fit import NOT_ENOUGH_DATA, QUANTITIES, QMPFits, quantity_key, signal_unit
 from .library import ExplicitTimeLibrary
 
 
 def default_add_path() -> Path:
-    """The shipped ADD, ``cbr/data/add.toml`` (package data of ``cbr.data``)."""
+    """The shipped ADD, ``features/qmp/add.toml`` (package data of ``features.qmp``)."""
     from importlib.resources import files
 
-    return Path(str(files("cbr.data") / "add.toml"))
+    return Path(str(files("features.qmp") / "add.toml"))
 
 
 RELATIONS: tuple[str, ...] = ("in_phase", "anti_phase")

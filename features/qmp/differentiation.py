@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import savgol_filter
 
-from posecbr.errors import ConfigError
+from features.errors import ConfigError
 
 
 @dataclass(frozen=True)

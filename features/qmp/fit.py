@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import binary_erosion
 
-from posecbr.errors import ConfigError
+from features.errors import ConfigError
 
 from .differentiation import SavitzkyGolay
 from .library import COEFFICIENT_KEYS, ExplicitTimeLibrary

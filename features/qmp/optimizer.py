@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from posecbr.errors import ConfigError
+from features.errors import ConfigError
 
 
 @dataclass(frozen=True)

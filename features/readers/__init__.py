@@ -2,7 +2,7 @@
 
 Every reader returns a :class:`features.poses.PoseSequence` on the 33 BlazePose joints
 (metres, right-handed, y up, NaN where the source has no such joint) and raises
-:class:`posecbr.errors.DataError` naming the file for malformed or truncated input.
+:class:`features.errors.DataError` naming the file for malformed or truncated input.
 
 - :mod:`features.readers.uiprmd`: UI-PRMD Kinect (forward kinematics) and Vicon (markers)
 - :mod:`features.readers.asfamc`: Acclaim ASF/AMC (HDM05, CMU)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from posecbr.errors import DataError
+from features.errors import DataError
 
 from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
 

@@ -46,7 +46,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from posecbr.errors import DataError
+from features.errors import DataError
 
 from ..poses import PoseSequence
 from ..skeleton import BLAZEPOSE_33

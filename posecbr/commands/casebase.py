@@ -15,7 +15,7 @@ import numpy as np
 from casebase_store import CaseStore, open_store
 from cbr.casebase import CaseBase
 from cbr.maintenance import EDITORS, record_trim
-from posecbr.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError
 
 
 def register(sub: argparse._SubParsersAction) -> None:

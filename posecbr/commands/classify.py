@@ -12,8 +12,8 @@ from pathlib import Path
 
 from casebase_store import open_store
 from cbr.build import classify_clips
+from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
-from posecbr.errors import ConfigError, DataError
 
 #: nearest-case distance, in units of the case base's usual nearest-neighbour distance, above
 #: which a clip is flagged as unlike anything stored. On UI-PRMD (train s01-s05, fluents,

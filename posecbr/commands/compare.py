@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from posecbr.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -170,8 +170,8 @@ def pictures_with_data(results: dict[str, Any], out: Path, trim: float | None) -
     from cbr.compare import example_clips, prevalence
     from cbr.report import plot_prevalence
     from features.fluents import evaluate
+    from features.progress import progress
     from features.timeline import plot_timeline
-    from posecbr.progress import progress
 
     pics: dict[str, Any] = {}
     prev = prevalence(results, trim=trim if trim is not None and trim < 1.0 else 0.5)

@@ -19,11 +19,11 @@ from pathlib import Path
 from typing import Any
 
 from features.datasets import Clip, detect_kind, find_asf, iter_dataset
+from features.errors import DataError
 from features.poses import save_pose
+from features.progress import progress
 from features.readers.asfamc import read_asf_amc
 from features.readers.bvh import read_bvh
-from posecbr.errors import DataError
-from posecbr.progress import progress
 
 
 def register(subparsers: Any) -> None:

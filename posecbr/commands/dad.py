@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from features.datasets import load_clip
-from posecbr.errors import PosecbrError
+from features.errors import PosecbrError
 
 
 def register(sub: argparse._SubParsersAction) -> None:

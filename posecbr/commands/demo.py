@@ -12,7 +12,7 @@ import shutil
 import time
 from pathlib import Path
 
-from posecbr.errors import PosecbrError
+from features.errors import PosecbrError
 
 DEMO_DATA = Path(__file__).resolve().parents[2] / "data" / "demo" / "uiprmd"
 

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from features.datasets import load_clip
+from features.errors import PosecbrError
 from features.fluents import DEFAULT_TABLE, FluentTable, evaluate
 from features.timeline import (
     frame_states,
@@ -17,7 +18,6 @@ from features.timeline import (
     state_runs,
     unavailable_fluents,
 )
-from posecbr.errors import PosecbrError
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from posecbr.errors import DataError, PosecbrError
-from posecbr.progress import progress
+from features.errors import DataError, PosecbrError
+from features.progress import progress
 
 # FFmpeg prints decoder complaints straight to stderr; the user should get posecbr's one line.
 # OpenCV reads this once, when it first opens a video, so it is set as early as possible.

@@ -16,7 +16,7 @@ from typing import Any
 from casebase_store import open_store
 from cbr.build import build_case_base
 from cbr.similarity import available_measures, get_measure
-from posecbr.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError
 
 
 def parse_params(items: list[str] | None) -> dict[str, Any]:

@@ -7,8 +7,6 @@ import sys
 from collections.abc import Iterable, Iterator
 from typing import TypeVar
 
-from tqdm import tqdm
-
 T = TypeVar("T")
 
 
@@ -21,13 +19,17 @@ def progress(
     items: Iterable[T], desc: str, total: int | None = None, unit: str = "it", leave: bool = True
 ) -> Iterator[T]:
     """Iterate ``items`` with a progress bar on stderr (silent when not interactive)."""
+    if not progress_enabled():
+        yield from items
+        return
+    from tqdm import tqdm  # imported only when a bar is shown
+
     yield from tqdm(
         items,
         desc=desc,
         total=total,
         unit=unit,
         leave=leave,
-        disable=not progress_enabled(),
         file=sys.stderr,
         dynamic_ncols=True,
     )

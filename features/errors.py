@@ -1,4 +1,5 @@
-"""Errors a user can cause. The CLI prints them as one line and exits non-zero."""
+"""Errors a user can cause: every layer raises them, the `posecbr` command prints them as one
+line naming the file and exits non-zero."""
 
 from __future__ import annotations
 

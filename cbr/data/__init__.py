@@ -1,1 +1,0 @@
-"""Data files shipped with the CBR package (the default Action Description Database)."""

@@ -1,0 +1,138 @@
+"""Pose geometry in the person's own terms, per clip: the left-right mirror image, the plane in
+which each upper arm is raised, the limb joints' positions in the body frame at the start of
+the clip, and which side moves more. Each is computed once per sequence object
+(:mod:`features.derived`).
+
+positions are ``(frames, joints, 3)`` metres, y up, on the canonical skeleton.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from functools import cache
+
+import numpy as np
+
+from .derived import derived, signals_of
+from .geometry import WORLD_UP, angle_between, body_frame, joint_angle, norm, project, unit
+from .poses import PoseSequence
+from .skeleton import BLAZEPOSE_33, JOINT_INDEX
+
+# Joints whose body-frame positions :func:`body_positions` gives (three columns each).
+_POSITION_PARTS = ("shoulder", "elbow", "wrist", "index", "hip", "knee", "ankle", "heel")
+POSITION_JOINTS = ("nose",) + tuple(
+    f"{side}_{part}" for part in (*_POSITION_PARTS, "foot_index") for side in ("left", "right")
+)
+POSITION_AXES = ("left", "height", "forward")
+
+# Extra named angles not among the state signals: the plane of elevation of each upper arm
+# (its direction in the horizontal plane: 0 = forward, pi/2 = straight out to the side, pi =
+# backward), defined while the arm is raised at least 45 degrees from the trunk (elsewhere the
+# horizontal projection is too short to have a direction). It tells shoulder abduction (pi/2)
+# from scaption (between forward and sideways), which the sagittal / frontal angles blur.
+ARM_PLANE_SIGNALS = ("left_upper_arm_plane", "right_upper_arm_plane")
+_ARM_PLANE_MIN_ELEVATION = np.radians(45.0)
+
+
+def swap_side(name: str) -> str:
+    """``name`` with left and right exchanged (``"left_knee"`` -> ``"right_knee"``)."""
+    return name.replace("left", "\0").replace("right", "left").replace("\0", "right")
+
+
+def mirrored(seq: PoseSequence) -> PoseSequence:
+    """The left-right mirror image of ``seq``: x negated (a reflection, y stays up) and every
+    left joint swapped with its right twin, so the left arm's movement becomes the right arm's.
+    Canonical joints; cached per sequence object."""
+
+    def compute(s: PoseSequence) -> PoseSequence:
+        c = s.to_canonical()
+        swap = np.array([JOINT_INDEX[swap_side(n)] for n in BLAZEPOSE_33])
+        pos = c.positions[:, swap, :].copy()
+        pos[..., 0] *= -1.0
+        conf = None if c.confidence is None else c.confidence[:, swap]
+        return dataclasses.replace(
+            c, positions=pos, confidence=conf, source=f"{c.source} (mirrored)"
+        )
+
+    return derived(seq, "mirror", compute)
+
+
+def arm_planes(seq: PoseSequence) -> np.ndarray:
+    """Plane-of-elevation angles (radians) of the left and right upper arm, ``(frames, 2)``;
+    NaN where the arm is raised less than 45 degrees or joints are missing."""
+
+    def compute(s: PoseSequence) -> np.ndarray:
+        p = s.to_canonical().positions
+        bf = body_frame(p)
+        cols = []
+        for side in ("left", "right"):
+            sh, el, hip = (p[:, JOINT_INDEX[f"{side}_{j}"]] for j in ("shoulder", "elbow", "hip"))
+            plane = angle_between(project(el - sh, bf.up), bf.forward)
+            raised = joint_angle(el, sh, hip) >= _ARM_PLANE_MIN_ELEVATION
+            cols.append(np.where(raised, plane, np.nan))
+        return np.stack(cols, axis=1)
+
+    return derived(seq, "arm_planes", compute)
+
+
+def body_positions(seq: PoseSequence) -> np.ndarray:
+    """Positions of :data:`POSITION_JOINTS` in the person's frame at the start of the clip,
+    ``(frames, 3 * len(POSITION_JOINTS))``, joint-major, axes :data:`POSITION_AXES`.
+
+    Origin: the mid-hip over the first tenth of the clip (at least 3 frames); axes: "left"
+    along the level left-right line of the body there, "height" straight up, "forward"
+    completing a right-handed frame (the way the chest faces); unit: the person's torso length
+    (median neck to mid-hip), so people of different sizes compare. How far the hips drop in a
+    squat, how high and how far forward a wrist goes, a knee drifting inwards: the range and
+    path of a movement, which joint angles alone do not give. NaN where joints are missing."""
+    return derived(seq, "body_positions", lambda s: _body_positions(s.to_canonical().positions))
+
+
+def _body_positions(p: np.ndarray) -> np.ndarray:
+    bf = body_frame(p)
+    start = slice(0, max(3, p.shape[0] // 10))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN stretches
+        origin = np.nanmean(bf.mid_hip[start], axis=0)
+        left = np.nanmean(bf.level_left[start], axis=0)
+        if not np.isfinite(left).all():
+            left = np.nanmean(bf.level_left, axis=0)
+        torso = float(np.nanmedian(norm(bf.neck - bf.mid_hip)))
+    left = unit(left)  # a mean of level directions: level already
+    axes = np.stack([left, WORLD_UP, np.cross(left, WORLD_UP)])  # rows: left, height, forward
+    if not (np.isfinite(axes).all() and np.isfinite(origin).all() and torso > 0):
+        return np.full((p.shape[0], 3 * len(POSITION_JOINTS)), np.nan)
+    joints = p[:, [JOINT_INDEX[j] for j in POSITION_JOINTS], :] - origin
+    return np.asarray((joints @ axes.T / torso).reshape(p.shape[0], -1))
+
+
+@cache
+def position_names() -> tuple[str, ...]:
+    """Column names of :func:`body_positions`: ``"left_wrist.height"``, ..."""
+    return tuple(f"{j}.{a}" for j in POSITION_JOINTS for a in POSITION_AXES)
+
+
+def position_word(name: str) -> str:
+    """A :func:`position_names` column in words: ``"left wrist height"``."""
+    joint, axis = name.split(".")
+    return f"{joint.replace('_', ' ')} {'to the left' if axis == 'left' else axis}"
+
+
+def moves_left_more(seq: PoseSequence) -> bool:
+    """Whether the clip's left limbs move more than its right ones: the summed standard
+    deviation over time of the left elbow, knee, armpit, hip and upper-limb angles against
+    that of their right twins (NaN frames ignored; a missing side counts as still)."""
+
+    def compute(s: PoseSequence) -> bool:
+        sig = signals_of(s)
+        names = sig.angle_names
+        vals = sig.values[:, : len(names)]
+        left = [i for i, n in enumerate(names) if n.startswith("left_")]
+        right = [names.index("right_" + names[i][len("left_") :]) for i in left]
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns
+            spread = np.nan_to_num(np.nanstd(vals, axis=0), nan=0.0)
+        return bool(spread[left].sum() > spread[right].sum())
+
+    return derived(seq, "left_side", compute)
