@@ -7,6 +7,8 @@ from .store import (
     CaseStore,
     MaintenanceEntry,
     NewCase,
+    StaleCaseError,
+    StoredCase,
     StoreError,
     StoreTransaction,
     canonical_json,
@@ -14,7 +16,9 @@ from .store import (
     decode_array,
     encode_array,
     open_store,
+    sqlite_file,
 )
+from .upgrade import upgrade_store
 
 __all__ = [
     "SCHEMA_VERSION",
@@ -23,11 +27,15 @@ __all__ = [
     "CaseStore",
     "MaintenanceEntry",
     "NewCase",
+    "StaleCaseError",
     "StoreError",
     "StoreTransaction",
+    "StoredCase",
     "canonical_json",
     "config_hash",
     "decode_array",
     "encode_array",
     "open_store",
+    "sqlite_file",
+    "upgrade_store",
 ]

@@ -1,9 +1,13 @@
 """SQLAlchemy 2.0 typed models of the case base store.
 
-Tables: ``schema_version`` (one row), ``case_bases``, ``cases``, ``case_representations``
-(per-case cached representations such as path signatures and DTW envelopes) and
-``maintenance_log`` (every trim, retain, revise and edit, with novelty, benefit and reason).
-Arrays are stored as ``.npy`` bytes (see :mod:`casebase_store.arrays`).
+Tables: ``schema_version`` (one row), ``case_bases`` (configuration, the fitted model, an
+identity that changes when a case base is replaced and a version that grows with every change
+to its cases), ``cases``, ``case_representations`` (per-case cached representations such as path
+signatures and DTW envelopes) and ``maintenance_log`` (every trim, retain, revise and edit, with
+novelty, benefit and reason). Arrays are stored as ``.npy`` bytes.
+
+Case ids are never reused (``AUTOINCREMENT`` on SQLite; sequences on PostgreSQL): a process
+holding the id of a case that was deleted can never write into a case that took its place.
 """
 
 from __future__ import annotations
@@ -22,8 +26,9 @@ from sqlalchemy import (
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
-#: Bump when the tables change; a store written with another version is refused clearly.
-SCHEMA_VERSION = 1
+#: Bump when the tables change; a store written with another version is refused clearly
+#: (version 1 stores are converted by ``upgrade_store``).
+SCHEMA_VERSION = 2
 
 
 def utcnow() -> datetime:
@@ -42,17 +47,23 @@ class SchemaVersion(Base):
 
 
 class CaseBaseRow(Base):
-    """A named case base: its feature configuration (JSON + hash) and similarity measure."""
+    """A named case base: its feature configuration (JSON + hash), similarity measure and fitted
+    model; ``uid`` names this case base for ever (a replaced one gets a new uid), ``version``
+    grows by one with every committed change to its cases."""
 
     __tablename__ = "case_bases"
+    __table_args__ = {"sqlite_autoincrement": True}
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    uid: Mapped[str] = mapped_column(String(32), unique=True)
+    version: Mapped[int] = mapped_column(Integer, default=1)
     name: Mapped[str] = mapped_column(String(200), unique=True)
     feature_config: Mapped[str] = mapped_column(Text)  # canonical JSON
     feature_hash: Mapped[str] = mapped_column(String(64), index=True)
     feature_names: Mapped[str] = mapped_column(Text)  # JSON list of machine names
     feature_words: Mapped[str] = mapped_column(Text)  # JSON list of human words
     similarity_config: Mapped[str] = mapped_column(Text)  # JSON {"name": ..., params...}
+    model: Mapped[str] = mapped_column(Text, default="{}")  # JSON: what fit learned, k, ...
     code_version: Mapped[str] = mapped_column(String(40))
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utcnow)
 
@@ -65,6 +76,7 @@ class CaseRow(Base):
     """One case: problem (features) + solution (label) + provenance."""
 
     __tablename__ = "cases"
+    __table_args__ = {"sqlite_autoincrement": True}
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     case_base_id: Mapped[int] = mapped_column(
@@ -103,6 +115,7 @@ class MaintenanceRow(Base):
     """One maintenance step: ``trim``, ``retain``, ``revise``, ``edit`` (CNN/RENN/ICF), ..."""
 
     __tablename__ = "maintenance_log"
+    __table_args__ = {"sqlite_autoincrement": True}
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     case_base_id: Mapped[int] = mapped_column(

@@ -28,13 +28,16 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import os
 import sqlite3
+import uuid
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote
 
 import numpy as np
 from sqlalchemy import Engine, create_engine, delete, event, func, inspect, select, update
@@ -66,6 +69,11 @@ class StoreError(PosecbrError):
     """The case base store cannot be opened, read or written (names the database)."""
 
 
+class StaleCaseError(StoreError):
+    """A case read earlier is no longer as it was (deleted, moved to another case base, or
+    trimmed by another process): nothing was written; reload and decide again."""
+
+
 # ----------------------------------------------------------------------------- arrays
 
 
@@ -76,9 +84,20 @@ def encode_array(array: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
-def decode_array(data: bytes) -> np.ndarray:
-    """The array stored by :func:`encode_array`."""
-    return np.load(io.BytesIO(data), allow_pickle=False)
+def decode_array(data: bytes, what: str = "array", where: str = "") -> np.ndarray:
+    """The array stored by :func:`encode_array`; a damaged blob is a :class:`StoreError`
+    naming ``what`` (e.g. ``"features of case 12"``)."""
+    try:
+        return np.load(io.BytesIO(data), allow_pickle=False)
+    except (ValueError, OSError, EOFError, TypeError) as exc:
+        raise StoreError(f"the {what} is damaged ({exc})", where or None) from None
+
+
+def _json(text: str, what: str, where: str) -> Any:
+    try:
+        return json.loads(text)
+    except (TypeError, ValueError) as exc:
+        raise StoreError(f"the {what} is not valid JSON ({exc})", where) from None
 
 
 def config_hash(config: Mapping[str, Any]) -> str:
@@ -128,7 +147,11 @@ class NewCase:
 
 @dataclass(frozen=True)
 class CaseBaseInfo:
-    """What a case base is: its configuration and size."""
+    """What a case base is: its configuration, fitted model and size.
+
+    uid: the case base's identity (a replaced case base of the same name gets a new one);
+    version: grows by one with every committed change to its cases.
+    """
 
     id: int
     name: str
@@ -141,6 +164,19 @@ class CaseBaseInfo:
     created_at: datetime
     n_cases: int
     label_counts: dict[str, int] = field(default_factory=dict)
+    uid: str = ""
+    version: int = 1
+    model: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class StoredCase:
+    """One case as a transaction reads it (to change it)."""
+
+    id: int
+    label: str
+    features: np.ndarray
+    active: bool
 
 
 @dataclass(frozen=True)
@@ -177,24 +213,47 @@ def _is_sqlite(engine: Engine) -> bool:
     return engine.dialect.name == "sqlite"
 
 
-def _make_engine(url_or_path: str | Path, timeout_s: float) -> tuple[Engine, str]:
+def sqlite_file(url_or_path: str | Path) -> Path | None:
+    """The file of a SQLite path or ``sqlite:///`` URL (None: another backend or in memory)."""
     text = str(url_or_path)
-    if "://" in text:
+    if "://" not in text:
+        return Path(text)
+    try:
+        url = make_url(text)
+    except ArgumentError:
+        return None
+    if url.get_backend_name() != "sqlite" or url.database in (None, "", ":memory:"):
+        return None
+    db = str(url.database)
+    return Path(db[len("file:") :].split("?")[0]) if db.startswith("file:") else Path(db)
+
+
+def _sqlite_readonly_url(path: Path) -> str:
+    """A read-only SQLite URL for ``path``. A WAL database needs its ``-shm`` file: where this
+    process cannot create it (a read-only folder) the file is opened ``immutable``."""
+    params = "mode=ro"
+    shm = path.with_name(path.name + "-shm")
+    if not os.access(path.parent, os.W_OK) and not shm.exists():
+        params += "&immutable=1"
+    return f"sqlite:///file:{quote(str(path.resolve()))}?{params}&uri=true"
+
+
+def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> tuple[Engine, str]:
+    text = str(url_or_path)
+    file = sqlite_file(url_or_path)
+    if file is not None:
+        if file.is_dir():
+            raise StoreError("is a folder, not a case base file", file)
+        if not file.parent.exists():
+            raise StoreError("folder does not exist", file.parent)
+        url = make_url(_sqlite_readonly_url(file) if readonly else f"sqlite:///{file}")
+        where = str(file)
+    else:
         try:
             url = make_url(text)
         except ArgumentError as exc:
             raise StoreError(f"not a database URL ({exc})", text) from None
         where = url.render_as_string(hide_password=True)
-        if url.get_backend_name() == "sqlite" and url.database not in (None, "", ":memory:"):
-            where = str(url.database)
-    else:
-        path = Path(text)
-        if path.is_dir():
-            raise StoreError("is a folder, not a case base file", path)
-        if not path.parent.exists():
-            raise StoreError("folder does not exist", path.parent)
-        url = make_url(f"sqlite:///{path}")
-        where = str(path)
     kwargs: dict[str, Any] = {}
     backend = url.get_backend_name()
     if backend == "sqlite":
@@ -212,13 +271,13 @@ def _make_engine(url_or_path: str | Path, timeout_s: float) -> tuple[Engine, str
     except (ArgumentError, SQLAlchemyError) as exc:
         raise StoreError(f"cannot use database URL ({exc})", where) from None
     if _is_sqlite(engine):
-        _configure_sqlite(engine, timeout_s)
+        _configure_sqlite(engine, timeout_s, readonly)
     elif engine.dialect.name == "postgresql":
-        _configure_postgresql(engine, timeout_s)
+        _configure_postgresql(engine, timeout_s, readonly)
     return engine, where
 
 
-def _configure_sqlite(engine: Engine, timeout_s: float) -> None:
+def _configure_sqlite(engine: Engine, timeout_s: float, readonly: bool) -> None:
     # pysqlite's own transaction handling starts transactions late and never IMMEDIATE; take
     # it over (SQLAlchemy's documented recipe) so writers lock up front and queue politely.
     @event.listens_for(engine, "connect")
@@ -227,8 +286,9 @@ def _configure_sqlite(engine: Engine, timeout_s: float) -> None:
         cur = dbapi_conn.cursor()
         cur.execute(f"PRAGMA busy_timeout = {int(timeout_s * 1000)}")
         cur.execute("PRAGMA foreign_keys = ON")
-        cur.execute("PRAGMA journal_mode = WAL")
-        cur.execute("PRAGMA synchronous = NORMAL")
+        if not readonly:  # WAL is a property of the file: a reader must not try to set it
+            cur.execute("PRAGMA journal_mode = WAL")
+            cur.execute("PRAGMA synchronous = NORMAL")
         cur.close()
 
     @event.listens_for(engine, "begin")
@@ -237,13 +297,15 @@ def _configure_sqlite(engine: Engine, timeout_s: float) -> None:
         conn.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
 
 
-def _configure_postgresql(engine: Engine, timeout_s: float) -> None:
+def _configure_postgresql(engine: Engine, timeout_s: float, readonly: bool) -> None:
     # the counterpart of SQLite's busy timeout: a statement waiting for another session's lock
     # gives up after timeout_s (PostgreSQL's default is to wait forever)
     @event.listens_for(engine, "connect")
     def _on_connect(dbapi_conn: Any, _record: object) -> None:
         cur = dbapi_conn.cursor()
         cur.execute(f"SET lock_timeout = {int(timeout_s * 1000)}")
+        if readonly:
+            cur.execute("SET default_transaction_read_only = on")
         cur.close()
         dbapi_conn.commit()  # SET ran in the driver's implicit transaction
 
@@ -272,10 +334,11 @@ def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
 class CaseStore:
     """A case base store on one database. Create with :func:`open_store`."""
 
-    def __init__(self, engine: Engine, where: str, timeout_s: float) -> None:
+    def __init__(self, engine: Engine, where: str, timeout_s: float, readonly: bool) -> None:
         self.engine = engine
         self.where = where
         self.timeout_s = timeout_s
+        self.readonly = readonly
         self._write_engine = engine.execution_options(posecbr_write=True)
 
     # -- plumbing
@@ -291,15 +354,24 @@ class CaseStore:
 
     @contextmanager
     def transaction(self) -> Iterator[StoreTransaction]:
-        """One write transaction: everything inside commits together or not at all."""
+        """One write transaction: everything inside commits together or not at all. Every case
+        base whose cases it changed gets its version raised by one, in the same commit."""
+        if self.readonly:
+            raise StoreError("opened read-only: this command does not write", self.where)
         with self._errors(), Session(self._write_engine, expire_on_commit=False) as session:
             with session.begin():
-                yield StoreTransaction(self, session)
+                tx = StoreTransaction(self, session)
+                yield tx
+                tx._bump_versions()
 
     @contextmanager
     def _read(self) -> Iterator[Session]:
+        """A read transaction that sees one snapshot of the store (SQLite's WAL readers always
+        do; PostgreSQL needs REPEATABLE READ for several statements to agree)."""
         with self._errors(), Session(self.engine, expire_on_commit=False) as session:
             with session.begin():
+                if self.engine.dialect.name == "postgresql":
+                    session.connection(execution_options={"isolation_level": "REPEATABLE READ"})
                 yield session
 
     def _init_schema(self, create: bool) -> None:
@@ -310,9 +382,14 @@ class CaseStore:
                     row = s.get(SchemaVersion, 1)
                 if row is None or row.version != SCHEMA_VERSION:
                     found = "none" if row is None else str(row.version)
+                    hint = (
+                        " (convert it with `posecbr casebase upgrade --db FILE`)"
+                        if row is not None and row.version < SCHEMA_VERSION
+                        else ""
+                    )
                     raise StoreError(
                         f"case base store schema version {found}, this posecbr "
-                        f"{__version__} reads version {SCHEMA_VERSION}",
+                        f"{__version__} reads version {SCHEMA_VERSION}{hint}",
                         self.where,
                     )
                 return
@@ -353,29 +430,58 @@ class CaseStore:
         with self._read() as s:
             return s.scalar(select(CaseBaseRow.id).where(CaseBaseRow.name == name)) is not None
 
+    def load_case_base(
+        self, name: str, *, include_inactive: bool = False
+    ) -> tuple[CaseBaseInfo, CaseArrays]:
+        """The case base's description and its cases, read from one snapshot (the version in
+        the description is the version of exactly these cases)."""
+        with self._read() as s:
+            row = self._row(s, name)
+            return self._info(s, row), self._cases(s, row, include_inactive, None)
+
     def load_cases(
         self, name: str, *, include_inactive: bool = False, ids: Sequence[int] | None = None
     ) -> CaseArrays:
         """The case base's cases as arrays (features ``(n, *shape)`` float64), by id order."""
         with self._read() as s:
-            cb = self._row(s, name)
-            q = select(
-                CaseRow.id,
-                CaseRow.label,
-                CaseRow.features,
-                CaseRow.source,
-                CaseRow.subject,
-                CaseRow.origin,
-                CaseRow.frame_start,
-                CaseRow.frame_end,
-            ).where(CaseRow.case_base_id == cb.id)
-            if not include_inactive:
-                q = q.where(CaseRow.active.is_(True))
-            if ids is not None:
-                q = q.where(CaseRow.id.in_([int(i) for i in ids]))
-            rows = s.execute(q.order_by(CaseRow.id)).all()
+            return self._cases(s, self._row(s, name), include_inactive, ids)
+
+    def _cases(
+        self,
+        s: Session,
+        cb: CaseBaseRow,
+        include_inactive: bool,
+        ids: Sequence[int] | None,
+    ) -> CaseArrays:
+        q = select(
+            CaseRow.id,
+            CaseRow.label,
+            CaseRow.features,
+            CaseRow.source,
+            CaseRow.subject,
+            CaseRow.origin,
+            CaseRow.frame_start,
+            CaseRow.frame_end,
+        ).where(CaseRow.case_base_id == cb.id)
+        if not include_inactive:
+            q = q.where(CaseRow.active.is_(True))
+        if ids is not None:
+            q = q.where(CaseRow.id.in_([int(i) for i in ids]))
+        rows = s.execute(q.order_by(CaseRow.id)).all()
+        arrays = [decode_array(r.features, f"features of case {r.id}", self.where) for r in rows]
         if rows:
-            features = np.stack([decode_array(r.features) for r in rows]).astype(np.float64)
+            shapes = {a.shape for a in arrays}
+            if len(shapes) > 1:
+                raise StoreError(
+                    f"case base {cb.name!r} is damaged: its cases have features of different "
+                    f"shapes ({', '.join(str(sh) for sh in sorted(shapes)[:3])})",
+                    self.where,
+                )
+            if not all(np.issubdtype(a.dtype, np.floating) for a in arrays):
+                raise StoreError(
+                    f"case base {cb.name!r} is damaged: non-numeric features", self.where
+                )
+            features = np.stack(arrays).astype(np.float64)
         else:
             features = np.zeros((0,), dtype=np.float64)
         return CaseArrays(
@@ -397,7 +503,10 @@ class CaseStore:
                 .join(CaseRow, CaseRow.id == RepresentationRow.case_id)
                 .where(CaseRow.case_base_id == cb.id, RepresentationRow.kind == kind)
             )
-            return {int(cid): decode_array(data) for cid, data in s.execute(q)}
+            return {
+                int(cid): decode_array(data, f"cached {kind} of case {cid}", self.where)
+                for cid, data in s.execute(q)
+            }
 
     def maintenance_log(self, name: str) -> list[MaintenanceEntry]:
         with self._read() as s:
@@ -438,8 +547,7 @@ class CaseStore:
             raise StoreError(f"no case base named {name!r}{hint}", self.where)
         return row
 
-    @staticmethod
-    def _info(s: Session, r: CaseBaseRow) -> CaseBaseInfo:
+    def _info(self, s: Session, r: CaseBaseRow) -> CaseBaseInfo:
         counts = dict(
             s.execute(
                 select(CaseRow.label, func.count(CaseRow.id))
@@ -448,35 +556,76 @@ class CaseStore:
                 .order_by(CaseRow.label)
             ).all()
         )
-        return CaseBaseInfo(
+        what = f"configuration of case base {r.name!r}"
+        info = CaseBaseInfo(
             id=r.id,
             name=r.name,
-            feature_config=json.loads(r.feature_config),
+            feature_config=_json(r.feature_config, f"feature {what}", self.where),
             feature_hash=r.feature_hash,
-            feature_names=tuple(json.loads(r.feature_names)),
-            feature_words=tuple(json.loads(r.feature_words)),
-            similarity=json.loads(r.similarity_config),
+            feature_names=tuple(_json(r.feature_names, f"feature names of {r.name!r}", self.where)),
+            feature_words=tuple(_json(r.feature_words, f"feature words of {r.name!r}", self.where)),
+            similarity=_json(r.similarity_config, f"similarity {what}", self.where),
             code_version=r.code_version,
             created_at=_utc(r.created_at),
             n_cases=int(sum(counts.values())),
             label_counts={str(k): int(v) for k, v in counts.items()},
+            uid=r.uid,
+            version=int(r.version),
+            model=_json(r.model, f"model of case base {r.name!r}", self.where),
         )
+        for key, kind in (("feature_config", dict), ("similarity", dict), ("model", dict)):
+            if not isinstance(getattr(info, key), kind):
+                raise StoreError(f"the {key} of case base {r.name!r} is not an object", self.where)
+        return info
 
 
 class StoreTransaction:
-    """Writes inside one :meth:`CaseStore.transaction` (commit on exit, rollback on error)."""
+    """Writes inside one :meth:`CaseStore.transaction` (commit on exit, rollback on error).
+
+    Changes to cases name the case base they belong to (a :class:`CaseBaseInfo` read in this
+    transaction); a case of another case base, or one no longer there, is refused.
+    """
 
     def __init__(self, store: CaseStore, session: Session) -> None:
         self.store = store
         self.session = session
+        self._changed: set[int] = set()
+
+    def _bump_versions(self) -> None:
+        if self._changed:
+            self.session.execute(
+                update(CaseBaseRow)
+                .where(CaseBaseRow.id.in_(sorted(self._changed)))
+                .values(version=CaseBaseRow.version + 1)
+            )
+            self._changed.clear()
 
     def case_base(self, name: str) -> CaseBaseInfo:
-        return CaseStore._info(self.session, self.store._row(self.session, name))
+        return self.store._info(self.session, self.store._row(self.session, name))
 
     def has_case_base(self, name: str) -> bool:
         """Whether ``name`` exists, as this transaction sees it."""
         q = select(CaseBaseRow.id).where(CaseBaseRow.name == name)
         return self.session.scalar(q) is not None
+
+    def expect(self, name: str, uid: str) -> CaseBaseInfo:
+        """The case base ``name``, checked to be the very one read earlier (same ``uid``):
+        a case base replaced or deleted by another process since is refused, so nothing read
+        from the old one is ever written into the new one."""
+        if not self.has_case_base(name):
+            raise StoreError(
+                f"case base {name!r} was deleted by another process since it was read; "
+                "nothing was written",
+                self.store.where,
+            )
+        info = self.case_base(name)
+        if info.uid != uid:
+            raise StoreError(
+                f"case base {name!r} was replaced by another process since it was read; "
+                "nothing was written (run the command again)",
+                self.store.where,
+            )
+        return info
 
     def create_case_base(
         self,
@@ -486,11 +635,15 @@ class StoreTransaction:
         feature_words: Sequence[str],
         similarity: Mapping[str, Any],
         *,
+        model: Mapping[str, Any] | None = None,
         replace: bool = False,
     ) -> CaseBaseInfo:
-        """A new, empty case base; ``replace`` drops an existing one of that name first."""
+        """A new, empty case base with a new identity; ``replace`` drops an existing one of
+        that name first (its cases and history go with it)."""
         s = self.session
         _check_text(name, "case base name", self.store.where, max_len=200)
+        if not name.strip():
+            raise StoreError("the case base name is empty", self.store.where)
         old = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
         if old is not None:
             if not replace:
@@ -502,17 +655,29 @@ class StoreTransaction:
             s.delete(old)
             s.flush()
         row = CaseBaseRow(
+            uid=uuid.uuid4().hex,
+            version=1,
             name=name,
             feature_config=canonical_json(dict(feature_config)),
             feature_hash=config_hash(feature_config),
             feature_names=json.dumps(list(feature_names), ensure_ascii=False),
             feature_words=json.dumps(list(feature_words), ensure_ascii=False),
             similarity_config=canonical_json(dict(similarity)),
+            model=canonical_json(dict(model or {})),
             code_version=__version__,
         )
         s.add(row)
         s.flush()
-        return CaseStore._info(s, row)
+        return self.store._info(s, row)
+
+    def set_model(self, cb: CaseBaseInfo, model: Mapping[str, Any]) -> None:
+        """Replace the fitted model of ``cb`` (what fit learned besides the cases)."""
+        self.session.execute(
+            update(CaseBaseRow)
+            .where(CaseBaseRow.id == cb.id)
+            .values(model=canonical_json(dict(model)), code_version=__version__)
+        )
+        self._changed.add(cb.id)
 
     def add_cases(self, cb: CaseBaseInfo, cases: Iterable[NewCase]) -> list[int]:
         """Insert cases (streamed: an iterator is consumed inside this transaction)."""
@@ -542,19 +707,46 @@ class StoreTransaction:
             if len(rows) % 500 == 0:
                 self.session.flush()
         self.session.flush()
+        if rows:
+            self._changed.add(cb.id)
         return [r.id for r in rows]
+
+    def _case_row(self, cb: CaseBaseInfo, case_id: int, lock: bool) -> CaseRow:
+        q = select(CaseRow).where(CaseRow.id == int(case_id))
+        if lock:
+            q = q.with_for_update()  # PostgreSQL: the row is ours until commit
+        row = self.session.scalar(q)
+        if row is None or row.case_base_id != cb.id:
+            raise StaleCaseError(
+                f"case {case_id} is no longer in case base {cb.name!r} (changed by another "
+                "process since it was read); nothing was written",
+                self.store.where,
+            )
+        return row
+
+    def read_case(self, cb: CaseBaseInfo, case_id: int) -> StoredCase:
+        """Case ``case_id`` of ``cb`` as it is now, locked against other writers until this
+        transaction ends (read, change and write a case in one transaction)."""
+        row = self._case_row(cb, case_id, lock=True)
+        what = f"features of case {case_id}"
+        return StoredCase(
+            int(row.id),
+            row.label,
+            decode_array(row.features, what, self.store.where).astype(np.float64),
+            bool(row.active),
+        )
 
     def update_case(
         self,
+        cb: CaseBaseInfo,
         case_id: int,
         *,
         features: np.ndarray | None = None,
         label: str | None = None,
         origin: str = "revised",
     ) -> None:
-        row = self.session.get(CaseRow, int(case_id))
-        if row is None:
-            raise StoreError(f"no case with id {case_id}", self.store.where)
+        """Change case ``case_id`` of ``cb`` (its cached representations are dropped)."""
+        row = self._case_row(cb, case_id, lock=True)
         if features is not None:
             row.features = encode_array(np.asarray(features))
             # cached representations were computed from the old problem
@@ -565,17 +757,27 @@ class StoreTransaction:
             row.label = _check_text(str(label), "label", self.store.where)
         row.origin = origin
         self.session.flush()
+        self._changed.add(cb.id)
 
-    def deactivate_cases(self, case_ids: Iterable[int]) -> int:
-        """Mark cases as trimmed (kept for the history, no longer used for retrieval)."""
+    def deactivate_cases(self, cb: CaseBaseInfo, case_ids: Iterable[int]) -> int:
+        """Mark cases of ``cb`` as trimmed (kept for the history, no longer used for
+        retrieval); the number of cases that changed."""
         ids = [int(i) for i in case_ids]
         n = 0
         for start in range(0, len(ids), 500):
             chunk = ids[start : start + 500]
             result = self.session.execute(
-                update(CaseRow).where(CaseRow.id.in_(chunk)).values(active=False)
+                update(CaseRow)
+                .where(
+                    CaseRow.id.in_(chunk),
+                    CaseRow.case_base_id == cb.id,
+                    CaseRow.active.is_(True),
+                )
+                .values(active=False)
             )
             n += int(getattr(result, "rowcount", 0) or 0)
+        if n:
+            self._changed.add(cb.id)
         return n
 
     def put_representations(self, kind: str, reps: Mapping[int, np.ndarray]) -> None:
@@ -616,22 +818,27 @@ class StoreTransaction:
 
 
 def open_store(
-    url_or_path: str | Path, *, create: bool = True, timeout_s: float = 30.0
+    url_or_path: str | Path,
+    *,
+    create: bool = True,
+    readonly: bool = False,
+    timeout_s: float = 30.0,
 ) -> CaseStore:
     """Open (and, if ``create``, initialise) a case base store.
 
     ``url_or_path``: a file path (SQLite) or any SQLAlchemy URL (``postgresql://...``).
-    Raises :class:`StoreError` naming the file for a corrupt, locked, foreign or
-    other-version database.
+    ``create=False``: the store must exist (a missing SQLite file is an error, never created).
+    ``readonly``: for commands that only read: nothing is written, and a case base file in a
+    read-only folder can be read. Raises :class:`StoreError` naming the file for a corrupt,
+    locked, foreign or other-version database.
     """
-    if "://" not in str(url_or_path):
-        path = Path(url_or_path)
-        if not create and not path.exists():
-            raise StoreError("no such case base file", path)
-    engine, where = _make_engine(url_or_path, timeout_s)
-    store = CaseStore(engine, where, timeout_s)
+    file = sqlite_file(url_or_path)
+    if file is not None and (readonly or not create) and not file.exists():
+        raise StoreError("no such case base file", file)
+    engine, where = _make_engine(url_or_path, timeout_s, readonly)
+    store = CaseStore(engine, where, timeout_s, readonly)
     try:
-        store._init_schema(create)
+        store._init_schema(create and not readonly)
     except BaseException:
         engine.dispose()
         raise

@@ -1,5 +1,6 @@
 """The in-memory case base: problems, solutions and provenance as arrays, plus the measure's
-per-case representations and search index (built once, reused by every query)."""
+per-case representations and search index (built once, reused by every query). Loading one
+from the store is :mod:`cbr.stored`."""
 
 from __future__ import annotations
 
@@ -9,11 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from casebase_store import CaseStore, NewCase
 from features.errors import DataError
 
 from .problem import FeatureConfig, Problem, extract_problem
-from .similarity import SimilarityMeasure, get_measure
+from .similarity import SimilarityMeasure
 
 
 def subject_of(seq: Any) -> str | None:
@@ -22,12 +22,24 @@ def subject_of(seq: Any) -> str | None:
     return None if subject is None else str(subject)
 
 
+def frames_of(seq: Any) -> tuple[int, int]:
+    """The clip's frames in its source recording: ``(start, end)``, end exclusive."""
+    start = int(seq.metadata.get("frame_offset", 0))
+    return start, start + int(seq.n_frames)
+
+
+def skeleton_of(seq: Any) -> str:
+    """The skeleton the clip was recorded with (before conversion to the canonical one)."""
+    return str(seq.metadata.get("source_skeleton", seq.skeleton))
+
+
 @dataclass(eq=False)
 class CaseBase:
     """Cases as arrays: ``problems`` ``(n, *problem_shape)``, ``labels`` ``(n,)``.
 
-    ``ids``: store ids (``-1`` for cases not stored); ``sources``/``subjects``/``origins``:
-    provenance per case; ``names``/``words``: the problem's feature columns.
+    ``ids``: store ids (``-1`` for cases not stored); provenance per case: ``sources`` (the
+    clip), ``subjects``, ``origins`` (trained, retained, revised), ``frames`` (start, end) in
+    the source recording, ``skeletons``; ``names``/``words``: the problem's feature columns.
     """
 
     config: FeatureConfig
@@ -40,6 +52,8 @@ class CaseBase:
     sources: tuple[str, ...] = ()
     subjects: tuple[str | None, ...] = ()
     origins: tuple[str, ...] = ()
+    frames: tuple[tuple[int | None, int | None], ...] = ()
+    skeletons: tuple[str | None, ...] = ()
     reps: np.ndarray | None = None
     _index: Any = field(default=None, repr=False)
 
@@ -54,6 +68,8 @@ class CaseBase:
         self.sources = tuple(self.sources) or ("",) * n
         self.subjects = tuple(self.subjects) or (None,) * n
         self.origins = tuple(self.origins) or ("trained",) * n
+        self.frames = tuple(self.frames) or ((None, None),) * n
+        self.skeletons = tuple(self.skeletons) or (None,) * n
 
     def __len__(self) -> int:
         return len(self.labels)
@@ -85,6 +101,18 @@ class CaseBase:
         self.reps = None
         self._index = None
 
+    def set_problem(self, i: int, values: np.ndarray) -> None:
+        """Replace the problem of case ``i`` (its representation follows; the search index is
+        rebuilt on next use)."""
+        self.problems[i] = np.asarray(values, dtype=np.float64).reshape(self.problems.shape[1:])
+        if self.reps is not None:
+            self.reps[i] = self.measure.represent(self.problems[i][None])[0]
+        self._index = None
+
+    def set_label(self, i: int, label: str) -> None:
+        """Replace the solution of case ``i``."""
+        self.labels[i] = str(label)
+
     def subset(self, keep: np.ndarray | Sequence[int]) -> CaseBase:
         """The case base restricted to ``keep`` (bool mask or indices), reps reused."""
         idx = np.flatnonzero(keep) if np.asarray(keep).dtype == bool else np.asarray(keep, int)
@@ -96,11 +124,13 @@ class CaseBase:
             self.labels[idx],
             self.names,
             self.words,
-            self.ids[idx],
-            tuple(self.sources[i] for i in idx),
-            tuple(self.subjects[i] for i in idx),
-            tuple(self.origins[i] for i in idx),
-            None if self.reps is None else self.reps[idx],
+            ids=self.ids[idx],
+            sources=tuple(self.sources[i] for i in idx),
+            subjects=tuple(self.subjects[i] for i in idx),
+            origins=tuple(self.origins[i] for i in idx),
+            frames=tuple(self.frames[i] for i in idx),
+            skeletons=tuple(self.skeletons[i] for i in idx),
+            reps=None if self.reps is None else self.reps[idx],
         )
 
     def add(
@@ -112,6 +142,8 @@ class CaseBase:
         source: str = "",
         subject: str | None = None,
         origin: str = "retained",
+        frames: tuple[int | None, int | None] = (None, None),
+        skeleton: str | None = None,
     ) -> None:
         """Append one case (the search index is rebuilt on next use)."""
         assert self.ids is not None
@@ -121,58 +153,8 @@ class CaseBase:
         self.sources += (source,)
         self.subjects += (subject,)
         self.origins += (origin,)
+        self.frames += (frames,)
+        self.skeletons += (skeleton,)
         if self.reps is not None:
-            self.reps = np.concatenate([self.reps, self.measure.represent(problem[None])])
+            self.reps = np.concatenate([self.reps, self.measure.represent(self.problems[-1:])])
         self._index = None
-
-    def new_cases(self, origin: str = "trained") -> list[NewCase]:
-        """The cases as store records (provenance kept)."""
-        return [
-            NewCase(
-                label=str(self.labels[i]),
-                features=self.problems[i].astype(np.float32),
-                source=self.sources[i],
-                subject=self.subjects[i],
-                origin=origin,
-            )
-            for i in range(len(self))
-        ]
-
-    @classmethod
-    def from_store(
-        cls, store: CaseStore, name: str, measure: SimilarityMeasure | None = None
-    ) -> CaseBase:
-        """Load a stored case base; per-case representations come from the store's cache
-        (missing ones are computed and cached in one transaction)."""
-        info = store.get_case_base(name)
-        config = FeatureConfig.from_dict(info.feature_config)
-        measure = measure or get_measure(info.similarity)
-        arrays = store.load_cases(name)
-        if len(arrays.ids) == 0:
-            raise DataError(f"case base {name!r} has no cases", store.where)
-        cb = cls(
-            config,
-            measure,
-            arrays.features,
-            arrays.labels,
-            info.feature_names,
-            info.feature_words,
-            arrays.ids,
-            arrays.sources,
-            arrays.subjects,
-            arrays.origins,
-        )
-        kind = measure.cache_kind(tuple(arrays.features.shape[1:]))
-        if kind is not None:
-            cached = store.load_representations(name, kind)
-            missing = [i for i, cid in enumerate(arrays.ids) if int(cid) not in cached]
-            if missing:
-                new = measure.represent(arrays.features[missing])
-                with store.transaction() as tx:
-                    tx.put_representations(
-                        kind, {int(arrays.ids[i]): new[j] for j, i in enumerate(missing)}
-                    )
-                for j, i in enumerate(missing):
-                    cached[int(arrays.ids[i])] = new[j]
-            cb.reps = np.stack([cached[int(cid)] for cid in arrays.ids]).astype(np.float64)
-        return cb

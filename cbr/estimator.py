@@ -12,43 +12,53 @@ Learned at fit time from the training clips only (so cross-validation stays hone
   as a further, penalised case (``"augment"``), so a subject who does a movement with the left
   arm finds the right-arm cases;
 - ``feature_weights``: z-normalisation and Fisher-ratio weights of the features
-  (:mod:`cbr.weights`), used by the euclidean measure and cited by explanations.
+  (:mod:`cbr.weights`), used by the euclidean measure and cited by explanations;
+- how far from the cases a held-out clip usually lies (:mod:`cbr.novelty`), so a clip unlike
+  every stored case is flagged, whatever the configuration.
 
 With vector problems under euclidean (clip summaries, QMPs), ``"auto"`` chooses the side
 handling, the weighting and (clip summaries) the phase means by leave-one-subject-out accuracy
 inside the training clips (one-standard-error rule: canonical side, fisher weights and no
 phase means unless another choice is better by more than a standard error); a fold of an outer
 cross-validation never sees its test clips. Fixed values skip the search.
+
+Every classification, in Python and from the command line, goes through :meth:`solve`; a
+fitted classifier is stored with its case base and loaded back whole by :mod:`cbr.stored`.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted
 
-from features.body import mirrored, moves_left_more
+from features.body import mirrored, moves_left_more, torso_share
 from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
 
-from .casebase import CaseBase, subject_of
+from .casebase import CaseBase, frames_of, skeleton_of, subject_of
 from .explain import Explanation, explain
 from .fitting import (
     AUTO_PHASES,
     MIN_SUBJECTS_TO_JUDGE_WEIGHTS,
     SIDES,
+    Cases,
     assemble_cases,
     inner_loso_accuracy,
     side_name,
 )
-from .problem import FeatureConfig, Problem, extract_problem, resolve_config
+from .maintenance import EDITORS, MaintenanceReport
+from .novelty import NoveltyCalibration, calibrate
+from .problem import MAX_LENGTH, FeatureConfig, Problem, extract_problem, resolve_config
 from .retrieve import Retrieval, retrieve
+from .reuse import WEIGHTINGS as VOTE_WEIGHTINGS
 from .reuse import Solution, reuse
-from .similarity import get_measure
+from .similarity import SimilarityMeasure, get_measure
 from .weights import MIRROR_FLAG, WEIGHTINGS
 
 
@@ -56,11 +66,74 @@ def as_sequences(X: Any, where: str = "X") -> list[PoseSequence]:
     """``X`` as a list of PoseSequence (a list, tuple or 1-D object array)."""
     if isinstance(X, PoseSequence):
         raise DataError("X must be a sequence of PoseSequence, got a single PoseSequence", where)
+    if isinstance(X, str | bytes) or not hasattr(X, "__iter__"):
+        raise DataError(f"X must be a sequence of PoseSequence, got {type(X).__name__}", where)
     items = list(np.asarray(X, dtype=object).reshape(-1)) if isinstance(X, np.ndarray) else list(X)
     for i, s in enumerate(items):
         if not isinstance(s, PoseSequence):
             raise DataError(f"X[{i}] is a {type(s).__name__}, not a PoseSequence", where)
     return items
+
+
+def check_labels(y: Any, n: int) -> np.ndarray:
+    """``y`` as ``(n,)`` labels (str); None, NaN and empty labels are refused."""
+    y_arr = np.asarray(y, dtype=object)
+    if y_arr.ndim != 1 or len(y_arr) != n:
+        raise DataError(f"{n} clips but y has shape {y_arr.shape}", "y")
+    for i, v in enumerate(y_arr):
+        if v is None or (isinstance(v, float) and np.isnan(v)) or str(v).strip() == "":
+            raise DataError(f"y[{i}] is {v!r}: every clip needs a label", "y")
+    return np.array([str(v) for v in y_arr], dtype=object)
+
+
+def unusable(seqs: Sequence[PoseSequence]) -> list[int]:
+    """Positions of the clips in which no frame shows the person's torso: nothing can be
+    computed from them (all joints missing, a black video, no person found)."""
+    return [i for i, s in enumerate(seqs) if torso_share(s) == 0.0]
+
+
+@dataclass(frozen=True)
+class Solved:
+    """One clip through the cycle: its problem, the retrieved cases, the reused solution, how
+    far it lies from the cases (``novelty``: nearest-case distance over the case base's usual
+    held-out one) and whether that makes it unlike the stored cases (calibrated per case base);
+    ``torso_share``: the share of its frames that show the person."""
+
+    problem: Problem
+    retrieval: Retrieval
+    solution: Solution
+    novelty: float
+    unlike_cases: bool
+    torso_share: float
+
+
+@dataclass(frozen=True)
+class _Described:
+    """The training clips as problems: ``config`` (resolved), ``R`` ``(n, ...)`` as recorded,
+    ``M`` their mirror images (None when no side handling needs them), ``left`` which clips
+    move their left side more (None: not needed), ``vectors`` (one vector per clip), ``base``
+    the number of columns without phase means (clip summaries), names and words."""
+
+    config: FeatureConfig
+    R: np.ndarray
+    M: np.ndarray | None
+    left: np.ndarray | None
+    vectors: bool
+    base: int | None
+    names: tuple[str, ...]
+    words: tuple[str, ...]
+
+    def columns(self, A: np.ndarray | None, phases: int) -> np.ndarray | None:
+        """``A`` without the phase-mean columns when ``phases`` is 0."""
+        return A if A is None or phases or self.base is None else A[:, : self.base]
+
+
+@dataclass(frozen=True)
+class _Choice:
+    side: str
+    weighting: str
+    phases: int
+    scores: dict[str, float]
 
 
 class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
@@ -73,7 +146,12 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     length: frames a fluent sequence is resampled to.
     states: fluent states (group name or list of machine names), see ``FeatureConfig``.
     similarity_params: parameters of the measure (e.g. ``{"band": 0.1}`` for dtw).
-    trim: fraction of cases kept by novelty/benefit trimming at fit time (None: keep all).
+    trim: fraction of each activity's cases kept by novelty/benefit trimming at fit time (None:
+      keep all).
+    editor: the maintenance editor run at fit time (:mod:`cbr.maintenance`):
+      ``"novelty-benefit"`` (keeps ``trim`` of each activity, 0.7 when ``trim`` is None),
+      ``"cnn"``, ``"renn"``, ``"icf"``; None: novelty-benefit when ``trim`` is set, else none.
+      ``maintenance_`` holds its report.
     angles: add the named joint angles ("left knee angle") to the fluent confidences.
     positions: add the limb joints' positions in the person's own frame at the start of the
       clip ("left wrist height", in torso lengths; :func:`features.body.body_positions`).
@@ -108,6 +186,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         feature_weights: str = "auto",
         phases: int | str = "auto",
         positions: bool = True,
+        editor: str | None = None,
     ) -> None:
         self.features = features
         self.similarity = similarity
@@ -123,15 +202,16 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.feature_weights = feature_weights
         self.phases = phases
         self.positions = positions
+        self.editor = editor
 
-    # -- helpers
+    # -- parameters
 
     def _summary(self) -> bool:
         if self.summary == "auto":
             return self.features == "fluents" and self.similarity == "euclidean"
         return bool(self.summary) and self.features == "fluents"
 
-    def _feature_config(self, summary: bool | None = None) -> FeatureConfig:
+    def _feature_config(self) -> FeatureConfig:
         states = self.states if isinstance(self.states, str) else tuple(self.states)
         fluents = self.features == "fluents"
         return FeatureConfig(
@@ -140,7 +220,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             states=states,
             angles=bool(self.angles) and fluents,
             positions=bool(self.positions) and fluents,
-            summary=self._summary() if summary is None else summary,
+            summary=self._summary(),
             # "auto": computed with the phases, which fit may then drop
             phases=(AUTO_PHASES if self.phases == "auto" else int(self.phases))
             if self._summary()
@@ -148,14 +228,26 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         )
 
     def _check_params(self) -> None:
-        if not isinstance(self.k, int | np.integer) or int(self.k) < 1:
+        if isinstance(self.k, bool) or not isinstance(self.k, int | np.integer) or self.k < 1:
             raise ConfigError(f"k must be a positive integer, got {self.k!r}", "k")
-        if self.weights not in ("distance", "uniform"):
+        if self.weights not in VOTE_WEIGHTINGS:
             raise ConfigError(
                 f"weights must be 'distance' or 'uniform', got {self.weights!r}", "weights"
             )
-        if self.trim is not None and not 0.0 < float(self.trim) <= 1.0:
-            raise ConfigError(f"trim must be in (0, 1], got {self.trim!r}", "trim")
+        if isinstance(self.length, bool) or not isinstance(self.length, int | np.integer):
+            raise ConfigError(f"length must be a whole number, got {self.length!r}", "length")
+        if not 2 <= int(self.length) <= MAX_LENGTH:
+            raise ConfigError(
+                f"length must be from 2 to {MAX_LENGTH} frames, got {self.length!r}", "length"
+            )
+        trim = self.trim
+        if trim is not None and not (isinstance(trim, int | float) and 0.0 < float(trim) <= 1.0):
+            raise ConfigError(f"trim must be in (0, 1], got {trim!r}", "trim")
+        if self.editor is not None and self.editor not in EDITORS:
+            raise ConfigError(
+                f"editor must be None or one of {', '.join(EDITORS)}, got {self.editor!r}",
+                "editor",
+            )
         if self.summary != "auto" and not isinstance(self.summary, bool | np.bool_):
             raise ConfigError(
                 f"summary must be True, False or 'auto', got {self.summary!r}", "summary"
@@ -167,7 +259,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
                 "mirror",
             )
         if self.phases != "auto" and (
-            not isinstance(self.phases, int | np.integer) or int(self.phases) < 0
+            isinstance(self.phases, bool)
+            or not isinstance(self.phases, int | np.integer)
+            or int(self.phases) < 0
         ):
             raise ConfigError(
                 f"phases must be 'auto' or a whole number >= 0, got {self.phases!r}", "phases"
@@ -178,16 +272,21 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
                 "feature_weights",
             )
 
-    def _selectable(self, vectors: bool, measure: Any) -> bool:
+    def _measure(self) -> SimilarityMeasure:
+        return get_measure(self.similarity, **(self.similarity_params or {}))
+
+    @staticmethod
+    def _selectable(vectors: bool, measure: SimilarityMeasure) -> bool:
         """Whether the side handling and weighting can be chosen by inner cross-validation:
         vector problems under a measure that takes learned weights (euclidean)."""
         return vectors and hasattr(measure, "multiplier")
 
     def wanted_config(self) -> FeatureConfig:
         """The feature configuration these parameters ask for, before fit resolves it."""
+        self._check_params()
         return self._feature_config()
 
-    def _candidates(self, vectors: bool, measure: Any) -> tuple[list[str], list[str]]:
+    def _candidates(self, vectors: bool, measure: SimilarityMeasure) -> tuple[list[str], list[str]]:
         """The side handlings and weightings fit chooses between."""
         selectable = self._selectable(vectors, measure)
         if self.mirror == "auto":
@@ -205,17 +304,11 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     def needs_mirror_images(self) -> bool:
         """Whether fit will describe the mirror image of every training clip (some side
         handling it may use needs them)."""
-        measure = get_measure(self.similarity, **(self.similarity_params or {}))
         vectors = self.features == "qmp" or self._summary()
-        sides, _ = self._candidates(vectors, measure)
+        sides, _ = self._candidates(vectors, self._measure())
         return "augment" in sides or "canonical" in sides
 
-    def problems(self, X: Any) -> list[Problem]:
-        """The problem of every clip in ``X`` under the fitted configuration."""
-        check_is_fitted(self, "case_base_")
-        return [self.case_base_.problem_of(s) for s in as_sequences(X)]
-
-    # -- sklearn API
+    # -- fit, step by step
 
     def fit(self, X: Any, y: Any) -> CaseBaseClassifier:
         """Build the case base from clips ``X`` and labels ``y``.
@@ -227,19 +320,70 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         """
         self._check_params()
         seqs = as_sequences(X)
-        y_arr = np.asarray(y)
+        labels, classes = self._check_training_set(seqs, y)
+        measure = self._measure()
+        subjects = np.array([subject_of(s) or "" for s in seqs], dtype=object)
+        described = self._describe(seqs, measure)
+        choice = self._choose(described, labels, subjects, measure)
+        config = described.config
+        if choice.side == "canonical":
+            config = dataclasses.replace(config, side="canonical")
+        if choice.phases != config.phases:
+            config = dataclasses.replace(config, phases=choice.phases)
+        R = described.columns(described.R, choice.phases)
+        M = described.columns(described.M, choice.phases)
+        assert R is not None
+        cases = assemble_cases(
+            R, M, described.left, labels, choice.side, choice.weighting, described.vectors
+        )
+        measure = self._weighted(measure, cases)
+        cb = self._case_base(seqs, described, config, measure, cases, choice.side)
+        origin = cases.origin
+        self.maintenance_ = self._edit(cb)
+        if self.maintenance_ is not None:
+            cb, origin = self.maintenance_.casebase, origin[self.maintenance_.kept]
+        self.novelty_ = self._calibrate(cb, cases, origin, subjects)
+        self.classes_ = classes
+        self.case_origin_ = origin
+        self.feature_config_ = config
+        self.measure_ = measure
+        self.case_base_ = cb
+        self.feature_names_ = cb.names
+        self.feature_weights_ = cases.weights
+        self.side_ = choice.side
+        self.weighting_ = choice.weighting
+        self.phases_ = int(config.phases)
+        self.mirror_ = choice.side == "augment"
+        self.mirror_flag_ = cases.flag
+        self.mirror_cases_ = int((cases.origin >= len(seqs)).sum())
+        self.selection_ = choice.scores
+        return self
+
+    @staticmethod
+    def _check_training_set(seqs: list[PoseSequence], y: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The labels as text ``(n,)`` and the classes in the caller's type (sorted)."""
         if len(seqs) == 0:
             raise DataError("the training set is empty", "X")
-        if y_arr.ndim != 1 or len(y_arr) != len(seqs):
-            raise DataError(f"{len(seqs)} clips but y has shape {y_arr.shape}", "y")
-        classes = np.unique(y_arr)
-        if len(classes) < 2:
+        labels = check_labels(y, len(seqs))
+        bad = unusable(seqs)
+        if bad:
+            names = ", ".join(seqs[i].source or f"X[{i}]" for i in bad[:5])
             raise DataError(
-                f"the training set has only one activity ({classes[0]!r}); a classifier needs "
+                f"{len(bad)} training clip(s) show no person (no frame with a torso): {names}"
+                f"{' ...' if len(bad) > 5 else ''}",
+                "X",
+            )
+        classes = np.unique(np.asarray(y))
+        if len(np.unique(labels)) < 2:
+            raise DataError(
+                f"the training set has only one activity ({labels[0]!r}); a classifier needs "
                 "at least two",
                 "y",
             )
-        measure = get_measure(self.similarity, **(self.similarity_params or {}))
+        return labels, classes
+
+    def _describe(self, seqs: list[PoseSequence], measure: SimilarityMeasure) -> _Described:
+        """Every training clip as a problem (and as its mirror image, when needed)."""
         config = resolve_config(self._feature_config(), seqs)
         real = [extract_problem(s, config) for s in seqs]
         vectors = real[0].values.ndim == 1
@@ -249,91 +393,103 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
                 "(summary=True or QMP features, with similarity='euclidean')",
                 "feature_weights",
             )
-        sides, weightings = self._candidates(vectors, measure)
-        labels = np.array([str(v) for v in y_arr], dtype=object)
-        subjects = np.array(
-            [subject_of(s) or "" for s in seqs],
-            dtype=object,
-        )
+        sides, _ = self._candidates(vectors, measure)
         need_mirror = "augment" in sides or "canonical" in sides
-        mirror_probs = [extract_problem(mirrored(s), config) for s in seqs] if need_mirror else []
-        R = np.stack([p.values for p in real])
-        M = np.stack([p.values for p in mirror_probs]) if need_mirror else None
+        M = (
+            np.stack([extract_problem(mirrored(s), config).values for s in seqs])
+            if need_mirror
+            else None
+        )
         left = np.array([moves_left_more(s) for s in seqs]) if "canonical" in sides else None
+        R = np.stack([p.values for p in real])
         # phase columns come last: without them, the problem is the first `base` columns
-        phase_options = [int(config.phases)]
-        if self.phases == "auto" and config.phases and self._selectable(vectors, measure):
-            phase_options = [0, int(config.phases)]
         base = R.shape[1] - len(config.states) * int(config.phases) if config.summary else None
+        return _Described(config, R, M, left, vectors, base, real[0].names, real[0].words)
 
-        def cols(A: np.ndarray | None, phases: int) -> np.ndarray | None:
-            return A if A is None or phases or base is None else A[:, :base]
-
-        self.selection_ = {}
-        n_subjects = len(set(subjects) - {""})
+    def _choose(
+        self,
+        d: _Described,
+        labels: np.ndarray,
+        subjects: np.ndarray,
+        measure: SimilarityMeasure,
+    ) -> _Choice:
+        """The side handling, weighting and phase means, by inner leave-one-subject-out
+        accuracy with the one-standard-error rule (fixed parameters: no search)."""
+        sides, weightings = self._candidates(d.vectors, measure)
+        phase_options = [int(d.config.phases)]
+        if self.phases == "auto" and d.config.phases and self._selectable(d.vectors, measure):
+            phase_options = [0, int(d.config.phases)]
+        n_subjects = len(set(subjects.tolist()) - {""})
         if len(weightings) > 1 and n_subjects < MIN_SUBJECTS_TO_JUDGE_WEIGHTS:
             # an inner fold would learn the weights from one subject, whose within-activity
             # spread leaves out how people differ: the judgement would be biased against them
             weightings = ["fisher"]
-        side, weighting, phases = sides[0], weightings[0], phase_options[-1]
-        if len(sides) * len(weightings) * len(phase_options) > 1:
-            if n_subjects >= 2 and "" not in set(subjects):
-                scores = {
-                    (sd, wt, ph): inner_loso_accuracy(
-                        cols(R, ph),  # type: ignore[arg-type]
-                        cols(M, ph),
-                        left,
-                        labels,
-                        subjects,
-                        sd,
-                        wt,
-                        int(self.k),
-                        self.weights,
-                    )
-                    for ph in phase_options
-                    for sd in sides
-                    for wt in weightings
-                }
-                best = max(scores, key=lambda c: scores[c])  # first best wins
-                # one-standard-error rule: the plain choice (the side-invariant handling, the
-                # learned weights, no phase means) stays unless another beats it by more than
-                # the standard error of the best inner accuracy; inner scores are noisy, and
-                # chasing their small differences lost accuracy on held-out subjects
-                plain = (
-                    sides[0],
-                    "fisher" if "fisher" in weightings else weightings[0],
-                    phase_options[0],
-                )
-                se = float(np.sqrt(scores[best] * (1.0 - scores[best]) / len(labels)))
-                if scores[best] - scores[plain] <= se:
-                    best = plain
-                side, weighting, phases = best
-                self.selection_ = {
-                    f"{sd}/{wt}/{ph} phases": a for (sd, wt, ph), a in scores.items()
-                }
-            else:  # no subjects to hold out: the fixed choice
-                side = "off"
-                weighting = "fisher" if "fisher" in weightings and self._summary() else "none"
-        if side == "canonical":
-            config = dataclasses.replace(config, side="canonical")
-        if phases != config.phases:
-            config = dataclasses.replace(config, phases=phases)
-            R, M = cols(R, phases), cols(M, phases)  # type: ignore[assignment]
-        cases = assemble_cases(R, M, left, labels, side, weighting, vectors)
-        if cases.weights is not None:
-            measure = get_measure(
-                measure,
-                centre=tuple(float(v) for v in cases.weights.centre),
-                multiplier=tuple(float(v) for v in cases.weights.multiplier()),
+        if len(sides) * len(weightings) * len(phase_options) == 1:
+            return _Choice(sides[0], weightings[0], phase_options[-1], {})
+        if n_subjects < 2 or "" in set(subjects.tolist()):  # no subjects to hold out
+            weighting = "fisher" if "fisher" in weightings and self._summary() else "none"
+            return _Choice("off", weighting, phase_options[-1], {})
+        scores = {
+            (sd, wt, ph): inner_loso_accuracy(
+                d.columns(d.R, ph),  # type: ignore[arg-type]
+                d.columns(d.M, ph),
+                d.left,
+                labels,
+                subjects,
+                sd,
+                wt,
+                int(self.k),
+                self.weights,  # type: ignore[arg-type]
             )
+            for ph in phase_options
+            for sd in sides
+            for wt in weightings
+        }
+        best = max(scores, key=lambda c: scores[c])  # first best wins
+        # one-standard-error rule: the plain choice (the side-invariant handling, the learned
+        # weights, no phase means) stays unless another beats it by more than the standard
+        # error of the best inner accuracy; inner scores are noisy, and chasing their small
+        # differences lost accuracy on held-out subjects
+        plain = (sides[0], "fisher" if "fisher" in weightings else weightings[0], phase_options[0])
+        se = float(np.sqrt(scores[best] * (1.0 - scores[best]) / len(labels)))
+        if scores[best] - scores[plain] <= se:
+            best = plain
+        named = {f"{sd}/{wt}/{ph} phases": a for (sd, wt, ph), a in scores.items()}
+        return _Choice(best[0], best[1], best[2], named)
+
+    @staticmethod
+    def _weighted(measure: SimilarityMeasure, cases: Cases) -> SimilarityMeasure:
+        """The measure with the learned feature weights in it (when any were learned)."""
+        if cases.weights is None:
+            return measure
+        return get_measure(
+            measure,
+            centre=tuple(float(v) for v in cases.weights.centre),
+            multiplier=tuple(float(v) for v in cases.weights.multiplier()),
+        )
+
+    @staticmethod
+    def _case_base(
+        seqs: list[PoseSequence],
+        d: _Described,
+        config: FeatureConfig,
+        measure: SimilarityMeasure,
+        cases: Cases,
+        side: str,
+    ) -> CaseBase:
+        """The case base of ``cases``, with each case's clip as provenance."""
         n = len(seqs)
         case_seqs = [(mirrored(seqs[i - n]) if i >= n else seqs[i]) for i in cases.origin.tolist()]
-        if side == "canonical" and left is not None:
-            case_seqs = [mirrored(s) if lm else s for s, lm in zip(case_seqs, left, strict=True)]
-        names, words = real[0].names[: R.shape[-1]], real[0].words[: R.shape[-1]]
+        if side == "canonical" and d.left is not None:
+            case_seqs = [
+                mirrored(s) if d.left[i % n] else s
+                for s, i in zip(case_seqs, cases.origin.tolist(), strict=True)
+            ]
+        width = cases.values.shape[-1] - int(cases.flag)
+        names, words = d.names[:width], d.words[:width]
         if cases.flag:
             names, words = (*names, MIRROR_FLAG), (*words, "mirror image of a training clip")
-        cb = CaseBase(
+        return CaseBase(
             config,
             measure,
             cases.values,
@@ -342,56 +498,111 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             words,
             sources=tuple(s.source for s in case_seqs),
             subjects=tuple(subject_of(s) for s in case_seqs),
+            frames=tuple(frames_of(s) for s in case_seqs),
+            skeletons=tuple(skeleton_of(s) for s in case_seqs),
         )
-        origin = cases.origin
-        if self.trim is not None and float(self.trim) < 1.0:
-            from .maintenance import trim_novelty_benefit
 
-            report = trim_novelty_benefit(cb, keep=float(self.trim), k=int(self.k))
-            cb, origin = report.casebase, origin[report.kept]
-        self.case_origin_ = origin
-        self.classes_ = classes
-        self.feature_config_ = config
-        self.measure_ = measure
-        self.case_base_ = cb
-        self.feature_names_ = names
-        self.feature_weights_ = cases.weights
-        self.side_ = side
-        self.weighting_ = weighting
-        self.phases_ = int(config.phases)
-        self.mirror_ = side == "augment"
-        self.mirror_flag_ = cases.flag
-        self.mirror_cases_ = int((cases.origin >= n).sum())
-        return self
+    @staticmethod
+    def _calibrate(
+        cb: CaseBase, cases: Cases, origin: np.ndarray, subjects: np.ndarray
+    ) -> NoveltyCalibration:
+        """How far from the cases a held-out training clip lies: held out by subject when the
+        clips name two or more subjects, else by clip (a clip's mirror image is its own)."""
+        n = len(subjects)
+        queries = cases.values[cases.origin < n]  # the training clips as queries see them
+        clip = origin % n
+        if "" not in set(subjects.tolist()) and len(set(subjects.tolist())) >= 2:
+            return calibrate(cb, queries, subjects, subjects[clip], "leave-one-subject-out")
+        return calibrate(cb, queries, np.arange(n), clip, "leave-one-out")
+
+    def _edit(self, cb: CaseBase) -> MaintenanceReport | None:
+        """Run the maintenance editor these parameters ask for (None: no editing)."""
+        trims = self.trim is not None and float(self.trim) < 1.0
+        editor = self.editor or ("novelty-benefit" if trims else None)
+        if editor is None:
+            return None
+        if editor == "novelty-benefit":
+            keep = 0.7 if self.trim is None else float(self.trim)
+            return EDITORS[editor](cb, keep, int(self.k), self.weights)
+        return EDITORS[editor](cb, weights=self.weights)
+
+    # -- the cycle
+
+    def problems(self, X: Any) -> list[Problem]:
+        """The problem of every clip in ``X`` under the fitted configuration."""
+        check_is_fitted(self, "case_base_")
+        return [self.case_base_.problem_of(s) for s in as_sequences(X)]
 
     def _class_labels(self) -> np.ndarray:
         return np.array([str(c) for c in self.classes_], dtype=object)
 
-    def solve(self, X: Any) -> list[tuple[Problem, Retrieval, Solution]]:
-        """Problem, retrieved cases and reused solution for every clip in ``X``."""
+    def solve(self, X: Any) -> list[Solved]:
+        """Every clip of ``X`` through retrieve and reuse: problem, retrieved cases, solution
+        and how unlike the stored cases it is. A clip that shows no person is refused
+        (:class:`features.errors.DataError` naming it): nothing can be said about it."""
         check_is_fitted(self, "case_base_")
-        out = []
+        seqs = as_sequences(X)
+        if not seqs:
+            raise DataError("no clips to classify", "X")
+        bad = unusable(seqs)
+        if bad:
+            raise DataError(
+                "shows no person (no frame with a torso): nothing to classify",
+                seqs[bad[0]].source or f"X[{bad[0]}]",
+            )
         labels = self._class_labels()
-        for p in self.problems(X):
+        out = []
+        for seq in seqs:
+            p = self.case_base_.problem_of(seq)
             r = retrieve(self.case_base_, p, int(self.k))
-            out.append((p, r, reuse(r, labels, self.weights)))  # type: ignore[arg-type]
+            s = reuse(r, labels, self.weights)  # type: ignore[arg-type]
+            nearest = float(r.distances[0]) if len(r.distances) else float("inf")
+            out.append(
+                Solved(
+                    p,
+                    r,
+                    s,
+                    self.novelty_.ratio(nearest),
+                    self.novelty_.unlike(nearest),
+                    torso_share(seq),
+                )
+            )
         return out
 
     def predict_proba(self, X: Any) -> np.ndarray:
         """``(n_clips, n_classes)`` vote shares, columns in ``classes_`` order."""
-        return np.stack([s.proba for _, _, s in self.solve(X)])
+        return np.stack([s.solution.proba for s in self.solve(X)])
 
     def predict(self, X: Any) -> np.ndarray:
         """``(n_clips,)`` predicted labels (values of ``classes_``)."""
         proba = self.predict_proba(X)
-        return self.classes_[np.argmax(proba, axis=1)]
+        return np.asarray(self.classes_[np.argmax(proba, axis=1)])
 
     def explain(self, X: Any) -> list[Explanation]:
         """An explanation in words for every clip in ``X``."""
-        return [explain(self.case_base_, p, r, s) for p, r, s in self.solve(X)]
+        return [self.explain_solved(s) for s in self.solve(X)]
+
+    def explain_solved(self, solved: Solved) -> Explanation:
+        """The explanation of one :meth:`solve` result."""
+        return explain(self.case_base_, solved.problem, solved.retrieval, solved.solution)
+
+    def refresh(self) -> None:
+        """Follow changes to ``case_base_`` (revised or retained cases): the classes are the
+        labels the cases have now."""
+        self.classes_ = np.unique(self.case_base_.labels.astype(str))
 
     def __sklearn_tags__(self) -> Any:
         tags = super().__sklearn_tags__()
         tags.input_tags.two_d_array = False
         tags.non_deterministic = False
         return tags
+
+
+__all__ = [
+    "CaseBaseClassifier",
+    "NoveltyCalibration",
+    "Solved",
+    "as_sequences",
+    "check_labels",
+    "unusable",
+]

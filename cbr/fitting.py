@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .reuse import Weights, decide, vote
 from .weights import FeatureWeights, confusing_mirrors, learn_weights, mirror_penalty
 
 # in order of preference when inner cross-validation ties: training subjects who all favour
@@ -107,10 +108,11 @@ def assemble_cases(
     return Cases(values[keep], labels[keep], origin[keep], fw, True)
 
 
-def knn_predict(cases: Cases, queries: np.ndarray, k: int, weights: str = "distance") -> np.ndarray:
-    """Labels of ``queries`` ``(q, D)`` by the k nearest cases (weighted euclidean), voting as
-    :func:`cbr.reuse.reuse` does (1/distance; exact matches decide alone; ties to the first
-    class in sorted order)."""
+def knn_predict(
+    cases: Cases, queries: np.ndarray, k: int, weights: Weights = "distance"
+) -> np.ndarray:
+    """Labels of ``queries`` ``(q, D)`` by the k nearest cases under the weighted euclidean
+    distance, voting as the classifier does (:func:`cbr.reuse.vote`)."""
     Q = np.asarray(queries, dtype=np.float64)
     if cases.flag:
         Q = np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)
@@ -118,26 +120,16 @@ def knn_predict(cases: Cases, queries: np.ndarray, k: int, weights: str = "dista
     if cases.weights is not None:
         A, Q = cases.weights.apply(A), cases.weights.apply(Q)
     classes, codes = np.unique(cases.labels.astype(str), return_inverse=True)
-    votes = np.zeros((len(Q), len(classes)))
     k = min(int(k), len(A))
     sq_a = np.einsum("ij,ij->i", A, A)
+    out = np.empty(len(Q), dtype=np.int64)
     for s in range(0, len(Q), _QUERY_CHUNK):  # bounded memory: (chunk, n cases) distances
         q = Q[s : s + _QUERY_CHUNK]
         d = np.sqrt(np.maximum(np.einsum("ij,ij->i", q, q)[:, None] + sq_a - 2.0 * q @ A.T, 0.0))
-        if k < len(A):
-            idx = np.argpartition(d, k - 1, axis=1)[:, :k]
-        else:
-            idx = np.tile(np.arange(len(A)), (len(q), 1))
+        idx = np.argpartition(d, k - 1, axis=1)[:, :k] if k < len(A) else np.argsort(d, axis=1)
         dk = np.take_along_axis(d, idx, axis=1)
-        if weights == "uniform":
-            w = np.ones_like(dk)
-        else:
-            zero = dk <= 1e-12
-            inverse = 1.0 / np.maximum(dk, 1e-300)
-            w = np.where(zero.any(axis=1, keepdims=True), zero.astype(np.float64), inverse)
-        rows = np.repeat(np.arange(s, s + len(q)), k)
-        np.add.at(votes, (rows, codes[idx].ravel()), w.ravel())
-    return classes[np.argmax(votes, axis=1)]
+        out[s : s + len(q)] = decide(vote(dk, codes[idx], len(classes), weights))
+    return np.asarray(classes[out])
 
 
 def inner_loso_accuracy(
@@ -149,7 +141,7 @@ def inner_loso_accuracy(
     side: str,
     weighting: str,
     k: int,
-    weights: str = "distance",
+    weights: Weights = "distance",
 ) -> float:
     """Leave-one-subject-out accuracy of one side handling and weighting within the training
     clips ``R`` ``(n, D)`` (mirror images ``M``, sides ``left``, labels ``y``, ``subjects``)."""

@@ -26,12 +26,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from casebase_store import StoreTransaction
+from casebase_store import CaseBaseInfo, StoreTransaction
 from features.progress import progress
 
 from .casebase import CaseBase
 from .retrieve import retrieve
-from .reuse import Weights, vote_weights
+from .reuse import Weights, decide, vote
 
 
 @dataclass(frozen=True)
@@ -49,6 +49,7 @@ class MaintenanceReport:
     benefit: np.ndarray | None = None  # (size_before,)
     distribution_shift: float | None = None  # max over activities, in pooled std units
     original_ids: np.ndarray | None = None  # (size_before,) store ids (-1: not stored)
+    before: CaseBase | None = None  # the case base that was edited
 
     def summary(self) -> str:
         return (
@@ -71,18 +72,13 @@ def pairwise_distances(cb: CaseBase, desc: str = "distances") -> np.ndarray:
 def _knn_vote(
     dist: np.ndarray, labels: np.ndarray, classes: np.ndarray, k: int, weights: Weights
 ) -> np.ndarray:
-    """Predicted label per row of ``dist`` ``(m, n_cand)`` (inf = not a candidate)."""
+    """Predicted label per row of ``dist`` ``(m, n_cand)`` (inf = not a candidate), by the
+    classifier's vote (:func:`cbr.reuse.vote`)."""
     k = min(k, dist.shape[1])
     order = np.argsort(dist, axis=1, kind="stable")[:, :k]
     d = np.take_along_axis(dist, order, axis=1)
-    pos = np.searchsorted(classes, labels[order].astype(str))
-    out = np.empty(len(dist), dtype=object)
-    for r in range(len(dist)):  # per query; k-sized work each
-        ok = np.isfinite(d[r])
-        w = vote_weights(d[r][ok], weights)
-        votes = np.bincount(pos[r][ok], weights=w, minlength=len(classes))
-        out[r] = classes[int(np.argmax(votes))] if ok.any() else classes[0]
-    return out
+    codes = np.searchsorted(classes, labels[order].astype(str))
+    return np.asarray(classes[decide(vote(d, codes, len(classes), weights))], dtype=object)
 
 
 def loo_accuracy(
@@ -133,6 +129,7 @@ def _report(
         kept,
         after,
         original_ids=cb.ids.copy(),
+        before=cb,
         **extra,  # type: ignore[arg-type]
     )
 
@@ -303,15 +300,17 @@ EDITORS: dict[str, Callable[..., MaintenanceReport]] = {
 
 
 def record_trim(
-    tx: StoreTransaction, name: str, report: MaintenanceReport, ids: np.ndarray | None = None
+    tx: StoreTransaction,
+    info: CaseBaseInfo,
+    report: MaintenanceReport,
+    ids: np.ndarray | None = None,
 ) -> None:
     """Inside ``tx``: deactivate the cases ``report`` dropped (``ids``: their store ids,
     default ``report.original_ids``) and log each with its novelty, benefit and reason."""
-    info = tx.case_base(name)
     full_ids = ids if ids is not None else report.original_ids
     assert full_ids is not None
     dropped = np.flatnonzero(~report.kept)
-    tx.deactivate_cases(int(full_ids[i]) for i in dropped if full_ids[i] >= 0)
+    tx.deactivate_cases(info, (int(full_ids[i]) for i in dropped if full_ids[i] >= 0))
     for i in dropped:
         tx.log(
             info,

@@ -58,6 +58,8 @@ _LATER_OPTIONS = {
 }
 POSITION_PREFIX = "pos:"
 SIDE_MODES = ("as_recorded", "canonical")
+#: the longest resampled sequence (frames): far beyond any useful length, short of memory trouble
+MAX_LENGTH = 4096
 
 
 @dataclass(frozen=True)
@@ -102,8 +104,16 @@ class FeatureConfig:
             raise ConfigError(
                 f"features must be 'fluents' or 'qmp', got {self.level!r}", "features"
             )
-        if int(self.length) < 2:
-            raise ConfigError(f"length must be >= 2 frames, got {self.length!r}", "length")
+        if (
+            isinstance(self.length, bool)
+            or not isinstance(self.length, int | np.integer)
+            or not 2 <= int(self.length) <= MAX_LENGTH
+        ):
+            raise ConfigError(
+                f"length must be a whole number of frames from 2 to {MAX_LENGTH}, got "
+                f"{self.length!r}",
+                "length",
+            )
         if isinstance(self.states, str):
             if self.states not in STATE_GROUPS:
                 raise ConfigError(

@@ -1,7 +1,7 @@
 """Retain: add an observation as a new case when it is novel and beneficial.
 
-- novelty = distance to the nearest case / the case base's typical nearest-neighbour distance
-  (median over a sample of cases, leave-one-out): > 1 means farther than usual;
+- novelty = distance to the nearest case / the case base's usual held-out nearest-case
+  distance (its calibrated ``scale``, :mod:`cbr.novelty`): > 1 means farther than usual;
 - benefit = 1 - the vote share the case base gives the true label today: 0 when it is already
   classified right with full confidence, 1 when the true label gets no vote.
 
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from casebase_store import NewCase, StoreTransaction
+from casebase_store import CaseBaseInfo, NewCase, StoreTransaction
 
 from .casebase import CaseBase
 from .problem import Problem
@@ -31,21 +31,11 @@ class RetainDecision:
     reason: str
 
 
-def typical_distance(cb: CaseBase, sample: int = 64, seed: int = 0) -> float:
-    """Median leave-one-out nearest-neighbour distance over up to ``sample`` cases."""
-    n = len(cb)
-    if n < 2:
-        return 1.0
-    pick = np.random.default_rng(seed).choice(n, min(sample, n), replace=False)
-    d = [float(retrieve(cb, cb.problems[i], 1, exclude=int(i)).distances[0]) for i in pick]
-    med = float(np.median(d))
-    return med if med > 0 else (float(np.mean(d)) or 1.0)
-
-
-def novelty(cb: CaseBase, problem: Problem | np.ndarray, scale: float | None = None) -> float:
+def novelty(cb: CaseBase, problem: Problem | np.ndarray, scale: float) -> float:
+    """Distance to the nearest case over ``scale`` (the case base's usual held-out nearest-case
+    distance, :class:`cbr.novelty.NoveltyCalibration`)."""
     values = problem.values if isinstance(problem, Problem) else problem
-    d = float(retrieve(cb, values, 1).distances[0])
-    return d / (scale if scale is not None else typical_distance(cb))
+    return float(retrieve(cb, values, 1).distances[0]) / scale
 
 
 def benefit(
@@ -57,51 +47,83 @@ def benefit(
     return float(1.0 - sol.proba[list(classes).index(str(label))])
 
 
-def retain(
+def decide_retention(
     cb: CaseBase,
     problem: Problem | np.ndarray,
     label: str,
     *,
+    scale: float,
     k: int = 5,
     novelty_threshold: float = 0.5,
     benefit_threshold: float = 0.2,
-    scale: float | None = None,
-    source: str = "",
-    subject: str | None = None,
+    weights: Weights = "distance",
 ) -> RetainDecision:
-    """Decide whether to retain, and if so append the case to ``cb`` (in memory)."""
+    """Whether the observation ``problem`` labelled ``label`` should become a case (nothing is
+    changed: :func:`retain` or :func:`record_retention` carry it out)."""
     values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
     nov = novelty(cb, values, scale)
-    ben = benefit(cb, values, label, k)
+    ben = benefit(cb, values, label, k, weights)
     ok = nov >= novelty_threshold and ben >= benefit_threshold
     why = (
         f"novelty {nov:.3g} {'>=' if nov >= novelty_threshold else '<'} {novelty_threshold:g}, "
         f"benefit {ben:.3g} {'>=' if ben >= benefit_threshold else '<'} {benefit_threshold:g}"
     )
-    if ok:
-        cb.add(values, label, source=source, subject=subject, origin="retained")
     return RetainDecision(ok, nov, ben, ("retained: " if ok else "not retained: ") + why)
+
+
+def retain(
+    cb: CaseBase,
+    problem: Problem | np.ndarray,
+    label: str,
+    *,
+    scale: float,
+    k: int = 5,
+    novelty_threshold: float = 0.5,
+    benefit_threshold: float = 0.2,
+    weights: Weights = "distance",
+    source: str = "",
+    subject: str | None = None,
+) -> RetainDecision:
+    """Decide whether to retain, and if so append the case to ``cb`` (in memory)."""
+    values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
+    dec = decide_retention(
+        cb,
+        values,
+        label,
+        scale=scale,
+        k=k,
+        novelty_threshold=novelty_threshold,
+        benefit_threshold=benefit_threshold,
+        weights=weights,
+    )
+    if dec.retained:
+        cb.add(values, label, source=source, subject=subject, origin="retained")
+    return dec
 
 
 def record_retention(
     tx: StoreTransaction,
-    name: str,
+    info: CaseBaseInfo,
     decision: RetainDecision,
     problem: np.ndarray,
     label: str,
     *,
     source: str = "",
     subject: str | None = None,
+    frames: tuple[int | None, int | None] = (None, None),
+    skeleton: str | None = None,
 ) -> int | None:
     """Inside ``tx``: log the decision (and add the case, if retained); the new case id."""
-    info = tx.case_base(name)
     case_id = None
     if decision.retained:
         case = NewCase(
             str(label),
-            np.asarray(problem, dtype=np.float32),
+            np.asarray(problem, dtype=np.float64),
             source=source,
+            frame_start=frames[0],
+            frame_end=frames[1],
             subject=subject,
+            skeleton=skeleton,
             origin="retained",
         )
         case_id = tx.add_cases(info, [case])[0]

@@ -1,4 +1,13 @@
-"""Reuse: the solution from the retrieved cases by a similarity-weighted vote."""
+"""Reuse: the solution from the retrieved cases by a similarity-weighted vote.
+
+:func:`vote` is THE vote of posecbr: the classifier's reuse step, the inner cross-validation
+of fit and the maintenance editors all call it, so they agree on weights and ties.
+
+- ``"distance"``: each retrieved case votes 1 / distance; a case at distance 0 (an exact match)
+  decides alone, as in scikit-learn's ``KNeighborsClassifier``;
+- ``"uniform"``: each retrieved case votes 1;
+- ties go to the first class in the caller's order (classes are kept sorted).
+"""
 
 from __future__ import annotations
 
@@ -10,6 +19,9 @@ import numpy as np
 from .retrieve import Retrieval
 
 Weights = Literal["distance", "uniform"]
+WEIGHTINGS: tuple[str, ...] = ("distance", "uniform")
+#: distances at or below this count as exact matches
+EXACT = 1e-12
 
 
 @dataclass(frozen=True)
@@ -21,25 +33,43 @@ class Solution:
     proba: np.ndarray
 
 
-def vote_weights(distances: np.ndarray, weights: Weights) -> np.ndarray:
-    """Vote weight per retrieved case: 1 (uniform) or 1 / distance (exact matches dominate)."""
-    if weights == "uniform":
-        return np.ones_like(distances, dtype=np.float64)
+def vote(
+    distances: np.ndarray, codes: np.ndarray, n_classes: int, weights: Weights = "distance"
+) -> np.ndarray:
+    """Vote shares of ``q`` queries over ``n_classes`` classes, ``(q, n_classes)``.
+
+    distances: ``(q, k)`` distances to the retrieved cases (``inf``: no case in that slot);
+    codes: ``(q, k)`` the class index (0 .. n_classes - 1) of each retrieved case. A row with
+    no case gets equal shares.
+    """
     d = np.asarray(distances, dtype=np.float64)
-    zero = d <= 1e-12
-    if zero.any():  # identical cases decide alone, as in scikit-learn's KNeighborsClassifier
-        return zero.astype(np.float64)
-    return 1.0 / d
+    c = np.asarray(codes, dtype=np.int64)
+    if d.shape != c.shape or d.ndim != 2:
+        raise ValueError(f"distances {d.shape} and class codes {c.shape} must be (q, k) alike")
+    present = np.isfinite(d)
+    if weights == "uniform":
+        w = present.astype(np.float64)
+    else:
+        exact = present & (d <= EXACT)
+        inverse = np.where(present, 1.0 / np.maximum(d, EXACT), 0.0)
+        w = np.where(exact.any(axis=1, keepdims=True), exact.astype(np.float64), inverse)
+    rows = np.repeat(np.arange(len(d)), d.shape[1])
+    proba = np.zeros((len(d), n_classes))
+    np.add.at(proba, (rows, np.where(present, c, 0).ravel()), w.ravel())
+    total = proba.sum(axis=1, keepdims=True)
+    return np.where(total > 0, proba / np.where(total > 0, total, 1.0), 1.0 / n_classes)
+
+
+def decide(proba: np.ndarray) -> np.ndarray:
+    """The winning class index of every row of ``proba`` ``(q, n_classes)``: the largest
+    share, ties to the first class."""
+    return np.asarray(np.argmax(proba, axis=1), dtype=np.int64)
 
 
 def reuse(retrieval: Retrieval, classes: np.ndarray, weights: Weights = "distance") -> Solution:
-    """Weighted vote over ``classes`` (labels as str, in the caller's order); ties go to the
-    first class in that order."""
-    w = vote_weights(retrieval.distances, weights)
+    """The solution voted by the retrieved cases over ``classes`` (labels as str, sorted)."""
     where = {str(c): i for i, c in enumerate(classes)}
-    pos = np.array([where[str(lab)] for lab in retrieval.labels], dtype=np.int64)
-    proba = np.bincount(pos, weights=w, minlength=len(classes)).astype(np.float64)
-    total = proba.sum()
-    proba = proba / total if total > 0 else np.full(len(classes), 1.0 / len(classes))
-    best = int(np.argmax(proba))
+    codes = np.array([where[str(lab)] for lab in retrieval.labels], dtype=np.int64)
+    proba = vote(retrieval.distances[None, :], codes[None, :], len(classes), weights)[0]
+    best = int(decide(proba[None])[0])
     return Solution(str(classes[best]), float(proba[best]), proba)

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from casebase_store import StoreTransaction
+from casebase_store import CaseBaseInfo, StaleCaseError, StoreTransaction
 
 from .casebase import CaseBase
 from .problem import Problem
@@ -28,13 +28,78 @@ from .retrieve import retrieve
 
 @dataclass(frozen=True)
 class Revision:
-    action: str  # "moved" | "relabelled" | "none"
-    index: int  # position in the case base (-1: none)
+    """What revising does: ``action`` "moved" (the case's problem moves toward the observation
+    by ``rate``) or "relabelled"; ``index`` its position in the case base, ``case_id`` its store
+    id (-1: not stored)."""
+
+    action: str
+    index: int
     case_id: int
     old_label: str
     new_label: str
     distance: float
     reason: str
+    rate: float = 0.25
+
+
+def plan_revision(
+    cb: CaseBase,
+    problem: Problem | np.ndarray,
+    true_label: str,
+    *,
+    rate: float = 0.25,
+    relabel_margin: float = 0.5,
+) -> Revision:
+    """The revision the observation ``problem`` labelled ``true_label`` calls for (nothing is
+    changed yet: :func:`apply_revision` or :func:`record_revision` carry it out)."""
+    values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
+    true_label = str(true_label)
+    assert cb.ids is not None
+    r = retrieve(cb, values, 1)
+    i, d = int(r.indices[0]), float(r.distances[0])
+    if cb.labels[i] == true_label:
+        why = f"nearest case has the true label {true_label!r}; moved toward the observation "
+        return Revision(
+            "moved", i, int(cb.ids[i]), true_label, true_label, d, why + f"by {rate:g}", rate
+        )
+    same = np.flatnonzero(cb.labels == true_label)
+    j, dj = -1, np.inf
+    if len(same):
+        near = retrieve(cb.subset(same), values, 1)
+        j, dj = int(same[near.indices[0]]), float(near.distances[0])
+    old = str(cb.labels[i])
+    if d < relabel_margin * dj:
+        return Revision(
+            "relabelled",
+            i,
+            int(cb.ids[i]),
+            old,
+            true_label,
+            d,
+            f"observation labelled {true_label!r} lies at {d:.3g} from this {old!r} case, "
+            f"less than {relabel_margin:g} x the nearest {true_label!r} case ({dj:.3g})",
+            rate,
+        )
+    return Revision(
+        "moved",
+        j,
+        int(cb.ids[j]),
+        true_label,
+        true_label,
+        dj,
+        f"nearest case was {old!r} (distance {d:.3g}); moved the nearest {true_label!r} case "
+        f"toward the observation by {rate:g}",
+        rate,
+    )
+
+
+def apply_revision(cb: CaseBase, rev: Revision, observation: np.ndarray) -> None:
+    """Carry out ``rev`` on the in-memory case base (``observation``: the problem values)."""
+    if rev.action == "relabelled":
+        cb.set_label(rev.index, rev.new_label)
+    elif rev.action == "moved":
+        p = cb.problems[rev.index]
+        cb.set_problem(rev.index, p + rev.rate * (np.asarray(observation) - p))
 
 
 def revise(
@@ -47,57 +112,38 @@ def revise(
 ) -> Revision:
     """Adjust ``cb`` in place toward the observation ``problem`` labelled ``true_label``."""
     values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
-    true_label = str(true_label)
-    assert cb.ids is not None
-    r = retrieve(cb, values, 1)
-    i, d = int(r.indices[0]), float(r.distances[0])
-    if cb.labels[i] == true_label:
-        target, reason = i, f"nearest case has the true label {true_label!r}; moved toward the "
-        reason += f"observation by {rate:g}"
-    else:
-        same = np.flatnonzero(cb.labels == true_label)
-        if len(same):
-            near = retrieve(cb.subset(same), values, 1)
-            j, dj = int(same[near.indices[0]]), float(near.distances[0])
-        else:
-            j, dj = -1, np.inf
-        if d < relabel_margin * dj:
-            old = str(cb.labels[i])
-            cb.labels[i] = true_label
-            return Revision(
-                "relabelled",
-                i,
-                int(cb.ids[i]),
-                old,
-                true_label,
-                d,
-                f"observation labelled {true_label!r} lies at {d:.3g} from this {old!r} case, "
-                f"less than {relabel_margin:g} x the nearest {true_label!r} case ({dj:.3g})",
-            )
-        target = j
-        d = dj
-        reason = (
-            f"nearest case was {str(cb.labels[i])!r} (distance {float(r.distances[0]):.3g}); "
-            f"moved the nearest {true_label!r} case toward the observation by {rate:g}"
-        )
-    cb.problems[target] = cb.problems[target] + rate * (values - cb.problems[target])
-    if cb.reps is not None:
-        cb.reps[target] = cb.measure.represent(cb.problems[target][None])[0]
-    cb._index = None
-    lab = str(cb.labels[target])
-    return Revision("moved", target, int(cb.ids[target]), lab, lab, d, reason)
+    rev = plan_revision(cb, values, true_label, rate=rate, relabel_margin=relabel_margin)
+    apply_revision(cb, rev, values)
+    return rev
 
 
-def record_revision(tx: StoreTransaction, name: str, cb: CaseBase, rev: Revision) -> None:
-    """Inside ``tx``: write the revised case and its maintenance-log entry."""
-    info = tx.case_base(name)
+def record_revision(
+    tx: StoreTransaction, info: CaseBaseInfo, rev: Revision, observation: np.ndarray
+) -> np.ndarray | None:
+    """Inside ``tx``: write the revision and its maintenance-log entry.
+
+    A move is applied to the case as it is in the store NOW (read and locked in this
+    transaction), not to this process's copy: ``p <- p + rate (q - p)`` on the stored ``p``, so
+    concurrent revisions of one case all take effect. Returns the case's new problem (None when
+    no problem changed)."""
+    new = None
     if rev.action == "moved" and rev.case_id >= 0:
-        tx.update_case(rev.case_id, features=cb.problems[rev.index].astype(np.float32))
+        current = tx.read_case(info, rev.case_id)
+        if not current.active:
+            raise StaleCaseError(
+                f"case {rev.case_id} was trimmed by another process since it was read; "
+                "nothing was written",
+                tx.store.where,
+            )
+        obs = np.asarray(observation, dtype=np.float64).reshape(current.features.shape)
+        new = current.features + rev.rate * (obs - current.features)
+        tx.update_case(info, rev.case_id, features=new)
     elif rev.action == "relabelled" and rev.case_id >= 0:
-        tx.update_case(rev.case_id, label=rev.new_label)
+        tx.update_case(info, rev.case_id, label=rev.new_label)
     tx.log(
         info,
         "revise",
         case_id=rev.case_id if rev.case_id >= 0 else None,
         reason=f"{rev.action}: {rev.reason}",
     )
+    return new

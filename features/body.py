@@ -136,3 +136,21 @@ def moves_left_more(seq: PoseSequence) -> bool:
         return bool(spread[left].sum() > spread[right].sum())
 
     return derived(seq, "left_side", compute)
+
+
+TORSO_JOINTS = ("left_shoulder", "right_shoulder", "left_hip", "right_hip")
+
+
+def torso_share(seq: PoseSequence) -> float:
+    """Share of the frames in which the torso (both shoulders and both hips) is seen, with
+    distinct shoulders and hips: without a torso there is no body frame, so no fluent, angle or
+    position of that frame can be computed. 0 for a clip with no person in it."""
+
+    def compute(s: PoseSequence) -> float:
+        p = s.joints(TORSO_JOINTS)  # (frames, 4, 3)
+        seen = np.isfinite(p).all(axis=(1, 2))
+        shoulders = norm(p[:, 0] - p[:, 1]) > 0
+        hips = norm(p[:, 2] - p[:, 3]) > 0
+        return float(np.mean(seen & shoulders & hips))
+
+    return derived(seq, "torso_share", compute)

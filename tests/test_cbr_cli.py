@@ -99,7 +99,7 @@ def test_bad_input_one_line_errors(
     assert _cli(capsys, "train", str(train), "--db", db, "--similarity", "euclidean")[0] == 0
 
     code, _, err = _cli(capsys, "train", str(train), "--db", db, "--append", "--length", "16")
-    assert code == 1 and "was built with features" in err and err.count("\n") == 1
+    assert code == 1 and "does not take --length" in err and err.count("\n") == 1
     code, _, err = _cli(capsys, "train", str(train), "--db", db)
     assert code == 1 and "already exists" in err
 
@@ -220,10 +220,14 @@ def test_train_on_another_column_and_classify_against_it(
     assert all(r["true_label"] == truth[r["clip"]] for r in doc["results"])
     right = sum(r["label"] == truth[r["clip"]] for r in doc["results"])
     assert doc["accuracy"] == pytest.approx(right / 6)
-    # without --target the clips are checked against their activity, which is not a verdict
+    # without --target the clips are checked against what the case base predicts
     code, out, err = _cli(capsys, "classify", *clips, "--db", db, "--json")
     assert code == 0, err
-    assert json.loads(out)["accuracy"] == 0.0
+    assert json.loads(out)["accuracy"] == pytest.approx(right / 6)
+    # checking a verdict case base against the activity is refused, not scored 0
+    code, out, err = _cli(capsys, "classify", *clips, "--db", db, "--target", "label")
+    assert code == 1 and out == "" and err.count("\n") == 1
+    assert "predicts 'correct'" in err and "--target label" in err
 
 
 def test_train_target_column_missing_is_one_line(

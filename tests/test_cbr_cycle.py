@@ -16,6 +16,7 @@ from cbr.retrieve import nearest_of_other_label, retrieve
 from cbr.reuse import reuse
 from cbr.revise import record_revision, revise
 from cbr.similarity import Euclidean
+from cbr.stored import case_records
 
 
 def _line(xs: list[float], labels: list[str]) -> CaseBase:
@@ -112,14 +113,15 @@ def test_revision_and_retention_are_logged_in_one_transaction(tmp_path: Path) ->
         info = tx.create_case_base(
             "x", {"level": "fluents"}, ["x", "y"], ["x", "y"], {"name": "euclidean"}
         )
-        ids = tx.add_cases(info, cb.new_cases())
+        ids = tx.add_cases(info, case_records(cb))
     cb.ids = np.array(ids)
     rev = revise(cb, np.array([2.0, 0.0]), "a", rate=0.25)
     q = np.array([7.0, 0.0])
     dec = retain(cb, q, "a", k=1, novelty_threshold=0.0, benefit_threshold=0.0, scale=1.0)
     with store.transaction() as tx:
-        record_revision(tx, "x", cb, rev)
-        new_id = record_retention(tx, "x", dec, q, "a")
+        info = tx.case_base("x")
+        record_revision(tx, info, rev, np.array([2.0, 0.0]))
+        new_id = record_retention(tx, info, dec, q, "a")
     stored = store.load_cases("x")
     np.testing.assert_allclose(stored.features[0], [0.5, 0.0])
     assert stored.origins == ("revised", "trained", "trained", "retained")

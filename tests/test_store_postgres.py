@@ -26,11 +26,13 @@ import pytest
 from sqlalchemy import create_engine, event, text
 from sqlalchemy.engine import make_url
 
-from casebase_store import NewCase, StoreError, open_store
+from casebase_store import SCHEMA_VERSION, NewCase, StoreError, open_store
 from casebase_store.models import Base
 from cbr.casebase import CaseBase
+from cbr.problem import FeatureConfig
 from cbr.retain import record_retention, retain
 from cbr.revise import record_revision, revise
+from cbr.similarity import get_measure
 from posecbr.cli import main
 from tests.test_cbr_cli import _cli, _write_classes
 from tests.test_cbr_cli import dataset as dataset  # noqa: F401  (module-scoped fixture)
@@ -216,7 +218,7 @@ def test_schema_version_mismatch_is_refused(db: str) -> None:
     # the SQLite tests' helper: it hands its argument to open_store (a path or a URL)
     _new_base(db, "x", 2)  # type: ignore[arg-type]
     _sql(db, "UPDATE posecbr_schema_version SET version = 99")
-    with pytest.raises(StoreError, match="schema version 99.*reads version 1"):
+    with pytest.raises(StoreError, match="schema version 99.*reads version 2"):
         open_store(db)
 
 
@@ -263,7 +265,7 @@ def test_two_clients_creating_the_tables_at_once(pg_url: str) -> None:
     finally:
         event.remove(Base.metadata, "after_create", pause_a)
     assert errors == {}
-    assert _sql(pg_url, "SELECT version FROM posecbr_schema_version") == [(1,)]
+    assert _sql(pg_url, "SELECT version FROM posecbr_schema_version") == [(SCHEMA_VERSION,)]
 
 
 def test_unreachable_server_is_one_clear_error(
@@ -313,25 +315,28 @@ def test_revise_retain_and_the_maintenance_log(db: str) -> None:
                 cb, [NewCase("a", np.zeros((4, 2))), NewCase("b", np.full((4, 2), 10.0))]
             )
             tx.log(cb, "build", reason="2 cases ✓")
-        mem = CaseBase.from_store(store, "m")
+        a = store.load_cases("m")
+        mem = CaseBase(
+            FeatureConfig(), get_measure("euclidean"), a.features, a.labels, (), (), a.ids
+        )
 
         # nearest case (a, at 0) has the true label: it moves 0.25 of the way to 2 -> 0.5
         rev = revise(mem, np.full((4, 2), 2.0), "a")
         assert rev.action == "moved" and rev.case_id == ids[0]
         with store.transaction() as tx:
-            record_revision(tx, "m", mem, rev)
+            record_revision(tx, tx.case_base("m"), rev, np.full((4, 2), 2.0))
         # an 'a' observation at 9.5: 'b' at 10 is sqrt(8 x 0.25) = 1.41 away, the nearest 'a'
         # (0.5) sqrt(8 x 81) = 25.5: 1.41 < 0.5 x 25.5, so the 'b' case is relabelled 'a'
         rev2 = revise(mem, np.full((4, 2), 9.5), "a")
         assert rev2.action == "relabelled" and rev2.case_id == ids[1]
         with store.transaction() as tx:
-            record_revision(tx, "m", mem, rev2)
+            record_revision(tx, tx.case_base("m"), rev2, np.full((4, 2), 9.5))
         # a far observation with a new label and zero thresholds is retained
         far = np.full((4, 2), 50.0)
         dec = retain(mem, far, "c", k=1, novelty_threshold=0.0, benefit_threshold=0.0, scale=1.0)
         assert dec.retained
         with store.transaction() as tx:
-            new_id = record_retention(tx, "m", dec, far, "c", source="far ✓")
+            new_id = record_retention(tx, tx.case_base("m"), dec, far, "c", source="far ✓")
 
         got = store.load_cases("m")
         assert list(got.ids) == [ids[0], ids[1], new_id]
@@ -380,7 +385,16 @@ def test_cli_gives_the_same_answers_on_postgres_as_on_sqlite(
             ["train", str(train), "--db", db, "--similarity", "dtw", "--param", "band=0.2"],
             ["casebase", "info", "--db", db, "--json"],
             ["classify", str(test), "--db", db, "--json", "-k", "3"],
-            ["classify", str(clip), "--db", db, "--feedback", 'left ✓ "arm"', "--json"],
+            [
+                "classify",
+                str(clip),
+                "--db",
+                db,
+                "--feedback",
+                'left ✓ "arm"',
+                "--new-label",
+                "--json",
+            ],
             ["casebase", "trim", "--db", db, "--keep", "0.6", "--json"],
             ["casebase", "list", "--db", db, "--json"],
         ]

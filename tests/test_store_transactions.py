@@ -95,10 +95,13 @@ import sys, time
 import numpy as np
 from casebase_store import open_store
 from cbr.casebase import CaseBase
+from cbr.problem import FeatureConfig
 from cbr.retain import record_retention, retain
+from cbr.similarity import get_measure
 db, tag, go = sys.argv[1], sys.argv[2], sys.argv[3]
 store = open_store(db)
-cb = CaseBase.from_store(store, "shared")
+a = store.load_cases("shared")
+cb = CaseBase(FeatureConfig(), get_measure("euclidean"), a.features, a.labels, (), (), a.ids)
 rng = np.random.default_rng(int(tag))
 while not __import__("os").path.exists(go):
     time.sleep(0.01)
@@ -107,7 +110,7 @@ for i in range(500):
     d = retain(cb, p, f"p{tag}", k=3, novelty_threshold=0.0, benefit_threshold=0.0, scale=1.0)
     assert d.retained
     with store.transaction() as tx:
-        record_retention(tx, "shared", d, p, f"p{tag}", source=f"{tag}-{i}")
+        record_retention(tx, tx.case_base("shared"), d, p, f"p{tag}", source=f"{tag}-{i}")
 print("OK", flush=True)
 """
 
@@ -164,7 +167,7 @@ def test_schema_version_mismatch_is_refused(tmp_path: Path) -> None:
     con.execute("UPDATE posecbr_schema_version SET version = 99")
     con.commit()
     con.close()
-    with pytest.raises(StoreError, match="schema version 99.*reads version 1"):
+    with pytest.raises(StoreError, match="schema version 99.*reads version 2"):
         open_store(db)
 
 

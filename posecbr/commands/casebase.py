@@ -13,8 +13,6 @@ from typing import Any
 import numpy as np
 
 from casebase_store import CaseStore, open_store
-from cbr.casebase import CaseBase
-from cbr.maintenance import EDITORS, record_trim
 from features.errors import ConfigError, DataError
 
 
@@ -41,12 +39,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     q.add_argument("--out", required=True, type=Path, help="output .npz file")
     q = act.add_parser("trim", help="run a maintenance editor and deactivate dropped cases")
     common(q)
-    q.add_argument("--editor", choices=tuple(EDITORS), default="novelty-benefit")
+    q.add_argument(
+        "--editor", choices=("novelty-benefit", "cnn", "renn", "icf"), default="novelty-benefit"
+    )
     q.add_argument(
         "--keep", type=float, default=0.7, help="novelty-benefit: fraction of each activity to keep"
     )
-    q.add_argument("-k", "--k", type=int, default=5, help="neighbours for novelty/benefit")
+    q.add_argument(
+        "-k", "--k", type=int, default=None, help="neighbours for novelty/benefit (as trained)"
+    )
     q.add_argument("--dry-run", action="store_true", help="report only, change nothing")
+    q = act.add_parser(
+        "upgrade", help="convert a case base file written by an older posecbr, in place"
+    )
+    q.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.set_defaults(func=run)
 
 
@@ -74,13 +80,27 @@ def _emit(doc: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    store = open_store(args.db, create=False)
+    if args.action == "upgrade":
+        return _upgrade(args)
+    readonly = args.action != "trim" or args.dry_run
+    store = open_store(args.db, create=False, readonly=readonly)
     try:
         return {"info": _info, "list": _list, "export": _export, "trim": _trim}[args.action](
             store, args
         )
     finally:
         store.close()
+
+
+def _upgrade(args: argparse.Namespace) -> int:
+    from casebase_store import SCHEMA_VERSION, upgrade_store
+
+    found = upgrade_store(args.db)
+    if found == SCHEMA_VERSION:
+        print(f"{args.db}: already schema version {SCHEMA_VERSION}, nothing to do")
+    else:
+        print(f"{args.db}: converted from schema version {found} to {SCHEMA_VERSION}")
+    return 0
 
 
 def _info(store: CaseStore, args: argparse.Namespace) -> int:
@@ -102,6 +122,8 @@ def _info(store: CaseStore, args: argparse.Namespace) -> int:
                 "similarity": i.similarity,
                 "code_version": i.code_version,
                 "created": i.created_at.isoformat(),
+                "version": i.version,
+                "model": _model_summary(i.model, i.feature_words),
                 "maintenance": actions,
             }
         )
@@ -123,11 +145,46 @@ def _info(store: CaseStore, args: argparse.Namespace) -> int:
             f"hash {d['feature_hash'][:12]}"
         )
         print(f"  similarity: {d['similarity']}")
+        m = d["model"]
+        if m.get("k") is not None:
+            print(
+                f"  model: predicts {m['target']}; k = {m['k']}, {m['vote']} vote; side handling "
+                f"{m['side']}; feature weights {m['feature_weights']}"
+            )
+        if m.get("weighted_most"):
+            print(f"  weighted most: {', '.join(m['weighted_most'])}")
+        if m.get("unlike_cases"):
+            u = m["unlike_cases"]
+            print(
+                f"  unlike the stored cases beyond {u['unlike_ratio']:.2f}x the usual held-out "
+                f"distance ({u['quantile']:.0%} of {u['basis']} training clips lie within)"
+            )
         for lab, n in d["labels"].items():
             print(f"  {n:6d}  {lab}")
         if d["maintenance"]:
             print("  history: " + ", ".join(f"{k} x{v}" for k, v in d["maintenance"].items()))
     return 0
+
+
+def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, Any]:
+    """What fit learned, for people: k, vote, target, side handling, weighting, the heaviest
+    feature weights and the novelty calibration."""
+    params = model.get("params") or {}
+    out: dict[str, Any] = {
+        "k": params.get("k"),
+        "vote": params.get("weights"),
+        "target": model.get("target", "label"),
+        "side": model.get("side"),
+        "feature_weights": model.get("weighting"),
+        "phases": params.get("phases"),
+        "unlike_cases": model.get("novelty"),
+    }
+    fw = model.get("feature_weights")
+    if fw and len(fw.get("weight", ())) == len(words):
+        w = np.asarray(fw["weight"], dtype=float)
+        order = np.argsort(-w, kind="stable")[:5]
+        out["weighted_most"] = [words[j] for j in order if w[j] > 0]
+    return out
 
 
 def _list(store: CaseStore, args: argparse.Namespace) -> int:
@@ -193,15 +250,26 @@ def _export(store: CaseStore, args: argparse.Namespace) -> int:
 
 
 def _trim(store: CaseStore, args: argparse.Namespace) -> int:
+    from cbr.maintenance import EDITORS, record_trim
+    from cbr.stored import load_classifier
+
     name = _name(store, args.name)
     if not 0.0 < args.keep <= 1.0:
         raise ConfigError(f"--keep must be in (0, 1], got {args.keep}", "--keep")
-    cb = CaseBase.from_store(store, name)
+    if args.k is not None and args.k < 1:
+        raise ConfigError(f"-k must be >= 1, got {args.k}", "-k")
+    stored = load_classifier(store, name)
+    clf = stored.classifier
+    k = int(clf.k) if args.k is None else args.k
+    cb = clf.case_base_
     fn = EDITORS[args.editor]
-    report = fn(cb, args.keep, args.k) if args.editor == "novelty-benefit" else fn(cb)
+    if args.editor == "novelty-benefit":
+        report = fn(cb, args.keep, k, clf.weights)
+    else:
+        report = fn(cb, weights=clf.weights)
     if not args.dry_run:
         with store.transaction() as tx:
-            record_trim(tx, name, report)
+            record_trim(tx, tx.expect(name, stored.uid), report)
     doc = {
         "method": report.method,
         "size_before": report.size_before,

@@ -9,16 +9,10 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
-from casebase_store import open_store
-from cbr.build import classify_clips
 from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
-
-#: nearest-case distance, in units of the case base's usual nearest-neighbour distance, above
-#: which a clip is flagged as unlike anything stored. On UI-PRMD (train s01-s05, fluents,
-#: euclidean) 99 % of the held-out subjects' clips lay below 2.7, whole exercise videos at 3.3+.
-UNUSUAL = 3.0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -30,12 +24,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("clips", nargs="+", type=Path, help="pose files, videos, folders or labels CSVs")
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.add_argument("--name", default=None, help="case base name (default: the only one)")
-    p.add_argument("-k", "--k", type=int, default=5, help="number of retrieved cases")
+    p.add_argument(
+        "-k", "--k", type=int, default=None, help="retrieved cases (default: as trained)"
+    )
     p.add_argument("--top", type=int, default=3, help="similar cases to print per clip")
     p.add_argument(
         "--feedback",
         metavar="LABEL",
         help="the true label of the clips: revise the case base and retain novel, beneficial cases",
+    )
+    p.add_argument(
+        "--new-label",
+        action="store_true",
+        help="with --feedback: the label may be a new activity (otherwise it must be one of the "
+        "case base's)",
     )
     p.add_argument("--novelty", type=float, default=0.5, help="retain novelty threshold")
     p.add_argument("--benefit", type=float, default=0.2, help="retain benefit threshold")
@@ -44,9 +46,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--subjects", help="datasets: only these subjects, comma-separated")
     p.add_argument(
         "--target",
-        default="label",
-        help="the column labelled clips are checked against: label (default) or the column "
-        "the case base was trained on (posecbr train --target), e.g. correct",
+        default=None,
+        help="the column labelled clips are checked against (default: the one the case base "
+        "was trained on, posecbr train --target)",
     )
     p.set_defaults(func=run)
 
@@ -91,78 +93,118 @@ def load_inputs(
     return out
 
 
-def run(args: argparse.Namespace) -> int:
-    if args.k < 1:
-        raise ConfigError(f"-k must be >= 1, got {args.k}", "-k")
-    store = open_store(args.db, create=False)
-    try:
-        name = args.name
-        if name is None:
-            names = [cb.name for cb in store.list_case_bases()]
-            if len(names) != 1:
-                raise ConfigError(
-                    "the store holds "
-                    + (
-                        f"case bases {', '.join(names)}: choose one with --name"
-                        if names
-                        else "no case base (run posecbr train)"
-                    ),
-                    store.where,
-                )
-            name = names[0]
-        subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
-        inputs = load_inputs(args.clips, args.sensor, subjects, args.target)
-        results = classify_clips(
-            store,
-            name,
-            [s for s, _ in inputs],
-            [t for _, t in inputs],
-            k=args.k,
-            feedback=args.feedback,
-            novelty_threshold=args.novelty,
-            benefit_threshold=args.benefit,
+def _case_base_name(store: Any, name: str | None) -> str:
+    if name is not None:
+        return name
+    names = [cb.name for cb in store.list_case_bases()]
+    if len(names) != 1:
+        raise ConfigError(
+            "the store holds "
+            + (
+                f"case bases {', '.join(names)}: choose one with --name"
+                if names
+                else "no case base (run posecbr train)"
+            ),
+            store.where,
         )
+    return str(names[0])
+
+
+def _check_args(args: argparse.Namespace) -> None:
+    if args.k is not None and args.k < 1:
+        raise ConfigError(f"-k must be >= 1, got {args.k}", "-k")
+    if args.top < 0:
+        raise ConfigError(f"--top must be >= 0, got {args.top}", "--top")
+    if args.new_label and args.feedback is None:
+        raise ConfigError("--new-label goes with --feedback LABEL", "--new-label")
+
+
+def run(args: argparse.Namespace) -> int:
+    from casebase_store import open_store
+    from cbr.classification import (
+        FeedbackSettings,
+        check_feedback_label,
+        classify_clips,
+        classify_with_feedback,
+    )
+    from cbr.stored import load_classifier
+
+    _check_args(args)
+    settings = FeedbackSettings(args.novelty, args.benefit)
+    store = open_store(args.db, create=False, readonly=args.feedback is None)
+    try:
+        name = _case_base_name(store, args.name)
+        stored = load_classifier(store, name)
+        if args.k is not None:
+            stored.classifier.set_params(k=args.k)
+        target = stored.target if args.target is None else args.target
+        if target != stored.target:
+            raise ConfigError(
+                f"case base {name!r} predicts {stored.target!r}; to check clips against "
+                f"{target!r}, train a case base with --target {target}",
+                "--target",
+            )
+        subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
+        inputs = load_inputs(args.clips, args.sensor, subjects, target)
+        clips, truths = [s for s, _ in inputs], [t for _, t in inputs]
+        if args.feedback is None:
+            results = classify_clips(stored, clips, truths)
+        else:
+            known = sorted(set(stored.classifier.case_base_.labels.tolist()))
+            label = check_feedback_label(args.feedback, known, args.new_label)
+            results = classify_with_feedback(store, stored, clips, truths, label, settings)
     finally:
         store.close()
+    _print(args, store.where, name, results)
+    return 0
+
+
+def _print(args: argparse.Namespace, where: str, name: str, results: list[Any]) -> None:
     labelled = [r for r in results if r.true_label is not None]
-    accuracy = (
-        sum(r.true_label == r.explanation.label for r in labelled) / len(labelled)
-        if labelled
-        else None
-    )
+    right = sum(r.true_label == r.label for r in labelled)
+    accuracy = right / len(labelled) if labelled else None
     if args.json:
-        doc = {"db": store.where, "case_base": name, "results": [r.to_dict() for r in results]}
+        doc: dict[str, Any] = {
+            "db": where,
+            "case_base": name,
+            "results": [r.to_dict() for r in results],
+        }
         if accuracy is not None:
             doc["accuracy"] = accuracy
             doc["n_labelled"] = len(labelled)
         json.dump(doc, sys.stdout, indent=2, ensure_ascii=False)
         print()
-        return 0
+        return
     for r in results:
-        e = r.explanation
-        head = f"{r.source}: {e.label} (confidence {e.confidence:.2f})"
-        if r.true_label is not None:
-            head += "  [right]" if r.true_label == e.label else f"  [wrong: {r.true_label}]"
-        print(head)
-        if r.novelty is not None and r.novelty > UNUSUAL:
-            print(
-                f"  note: this clip is unlike the stored cases (nearest case at {r.novelty:.1f}x "
-                "the usual distance between neighbouring cases): treat the label with caution"
-            )
-        for n in e.neighbours[: args.top]:
-            print(
-                f"  case #{n['case_id']} {n['label']}  distance {n['distance']:.4g}  {n['source']}"
-            )
-        for line in e.text.splitlines()[1:]:
-            print(f"  {line}")
-        if r.retention is not None:
-            print(f"  feedback: {r.retention.reason}")
-        if r.revision is not None:
-            print(
-                f"  feedback: revised case #{r.revision.case_id} ({r.revision.action}): "
-                f"{r.revision.reason}"
-            )
+        _print_one(r, args.top)
     if accuracy is not None:
-        right = sum(r.true_label == r.explanation.label for r in labelled)
         print(f"accuracy: {accuracy:.3f} ({right}/{len(labelled)} labelled clips)")
-    return 0
+
+
+def _print_one(r: Any, top: int) -> None:
+    if r.solved is None:
+        print(f"{r.source}: unclassifiable ({r.unclassifiable})")
+        return
+    e, solved = r.explanation, r.solved
+    head = f"{r.source}: {e.label} (confidence {e.confidence:.2f})"
+    if r.true_label is not None:
+        head += "  [right]" if r.true_label == e.label else f"  [wrong: {r.true_label}]"
+    print(head)
+    if solved.unlike_cases:
+        print(
+            f"  note: this clip is unlike the stored cases (nearest case at {solved.novelty:.1f}x "
+            "the usual held-out distance): treat the label with caution"
+        )
+    if solved.torso_share < 0.5:
+        print(f"  note: the person is seen in only {100 * solved.torso_share:.0f} % of the frames")
+    for n in e.neighbours[:top]:
+        print(f"  case #{n['case_id']} {n['label']}  distance {n['distance']:.4g}  {n['source']}")
+    for line in e.text.splitlines()[1:]:
+        print(f"  {line}")
+    if r.retention is not None:
+        print(f"  feedback: {r.retention.reason}")
+    if r.revision is not None:
+        print(
+            f"  feedback: revised case #{r.revision.case_id} ({r.revision.action}): "
+            f"{r.revision.reason}"
+        )

@@ -13,8 +13,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from casebase_store import open_store
-from cbr.build import build_case_base
 from cbr.similarity import available_measures, get_measure
 from features.errors import ConfigError, DataError
 
@@ -53,10 +51,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("data", type=Path, help="dataset folder, labels CSV or pose file folder")
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.add_argument("--name", default="default", help="case base name in the store")
-    p.add_argument("--features", choices=("fluents", "qmp"), default="fluents")
+    p.add_argument(
+        "--features", choices=("fluents", "qmp"), default=None, help="feature level (fluents)"
+    )
     p.add_argument(
         "--similarity",
-        default="euclidean",
+        default=None,
         help=f"similarity measure ({', '.join(available_measures())})",
     )
     p.add_argument(
@@ -65,10 +65,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="KEY=VALUE",
         help="similarity parameter, e.g. --param band=0.2 (repeatable)",
     )
-    p.add_argument("--length", type=int, default=32, help="frames per fluent sequence")
+    p.add_argument("--length", type=int, default=None, help="frames per fluent sequence (32)")
     p.add_argument(
         "--states",
-        default="angles",
+        default=None,
         help="fluent states: angles, instantaneous, all (default angles)",
     )
     p.add_argument(
@@ -85,7 +85,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--mirror",
         choices=("auto", "off", "canonical", "augment"),
-        default="auto",
+        default=None,
         help="side handling: clips as recorded (off), left-side clips mirrored (canonical), "
         "mirror images as further cases (augment); auto: chosen by leave-one-subject-out "
         "inside the training clips (euclidean on clip summaries or QMPs)",
@@ -93,13 +93,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--feature-weights",
         choices=("auto", "fisher", "none"),
-        default="auto",
+        default=None,
         help="learned feature weights (fisher: between/within-activity variance), chosen like "
         "--mirror when auto",
     )
     p.add_argument(
         "--phases",
-        default="auto",
+        default=None,
         help="clip summaries: also the mean of every feature over this many equal stretches of "
         "the clip (0: none); auto: 3 or none, chosen like --mirror",
     )
@@ -113,7 +113,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="euclidean on the resampled fluent sequence instead of per-feature clip summaries",
     )
-    p.add_argument("-k", "--k", type=int, default=5, help="neighbours (trimming, inner choice)")
+    p.add_argument("-k", "--k", type=int, default=None, help="retrieved cases (5)")
     p.add_argument("--subjects", help="only these subjects, comma-separated (e.g. s01,s02)")
     p.add_argument("--labels", help="only these activities, comma-separated (e.g. deep_squat)")
     p.add_argument(
@@ -135,35 +135,80 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    from cbr.estimator import CaseBaseClassifier
-    from features.datasets import clip_target, load_dataset
+#: the options that define what is learned; `--append` keeps the stored model, so refuses them
+MODEL_OPTIONS = {
+    "features": "--features",
+    "similarity": "--similarity",
+    "param": "--param",
+    "length": "--length",
+    "states": "--states",
+    "trim": "--trim",
+    "editor": "--editor",
+    "mirror": "--mirror",
+    "feature_weights": "--feature-weights",
+    "phases": "--phases",
+    "no_positions": "--no-positions",
+    "no_summary": "--no-summary",
+    "k": "-k",
+}
+DEFAULTS: dict[str, Any] = {
+    "features": "fluents",
+    "similarity": "euclidean",
+    "length": 32,
+    "states": "angles",
+    "mirror": "auto",
+    "feature_weights": "auto",
+    "phases": "auto",
+    "k": 5,
+}
 
+
+def _estimator(args: argparse.Namespace) -> Any:
+    from cbr.estimator import CaseBaseClassifier
+
+    o = {k: (DEFAULTS[k] if getattr(args, k) is None else getattr(args, k)) for k in DEFAULTS}
     params = parse_params(args.param)
-    measure = get_measure(args.similarity, **params)
-    if args.features == "qmp" and measure.compares_sequences:
+    measure = get_measure(o["similarity"], **params)
+    if o["features"] == "qmp" and measure.compares_sequences:
         raise ConfigError(
             f"similarity {measure.name!r} compares sequences; QMP features are "
             "one vector per clip (use euclidean)",
             "--similarity",
         )
-    editor = args.editor or ("novelty-benefit" if args.trim is not None else None)
     if args.trim is not None and not 0.0 < args.trim <= 1.0:
         raise ConfigError(f"--trim must be in (0, 1], got {args.trim}", "--trim")
     estimator = CaseBaseClassifier(
-        features=args.features,
-        similarity=args.similarity,
+        features=o["features"],
+        similarity=o["similarity"],
         similarity_params=params or None,
-        k=args.k,
-        length=args.length,
-        states=args.states,
+        k=o["k"],
+        length=o["length"],
+        states=o["states"],
         summary=False if args.no_summary else "auto",
-        mirror=args.mirror,
-        feature_weights=args.feature_weights,
-        phases=_phases(args.phases),
+        mirror=o["mirror"],
+        feature_weights=o["feature_weights"],
+        phases=_phases(str(o["phases"])),
         positions=not args.no_positions,
+        trim=args.trim,
+        editor=args.editor,
     )
-    estimator.wanted_config()  # bad --states / --length: one line before any clip is read
+    estimator.wanted_config()  # bad --states / --length / -k: one line before any clip is read
+    return estimator
+
+
+def _check_append(args: argparse.Namespace) -> None:
+    given = [flag for key, flag in MODEL_OPTIONS.items() if getattr(args, key) not in (None, False)]
+    if given:
+        raise ConfigError(
+            f"--append adds cases to the stored model as it is; it does not take "
+            f"{', '.join(given)} (use --replace to train anew)",
+            given[0],
+        )
+
+
+def _clips(args: argparse.Namespace) -> tuple[list[Any], list[str]]:
+    from features.datasets import clip_target, load_dataset
+
     subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
     activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
     clips = load_dataset(
@@ -186,52 +231,67 @@ def run(args: argparse.Namespace) -> int:
                 clip.seq.source,
             )
         solutions.append(value)
-    store = open_store(args.db)
-    try:
-        result = build_case_base(
-            store,
-            args.name,
-            [c.seq for c in clips],
-            solutions,
-            estimator,
-            replace=args.replace,
-            append=args.append,
-            editor=editor,
-            keep=args.trim if args.trim is not None else 0.7,
+    return [c.seq for c in clips], solutions
+
+
+def run(args: argparse.Namespace) -> int:
+    from cbr.training import append, train
+
+    if not args.name.strip():
+        raise ConfigError("the case base name is empty", "--name")
+    if args.append:
+        _check_append(args)
+        estimator = None
+    else:
+        estimator = _estimator(args)
+    seqs, solutions = _clips(args)
+    if estimator is None:
+        result = append(args.db, args.name, seqs, solutions, target=args.target)
+    else:
+        result = train(
+            args.db, args.name, seqs, solutions, estimator, target=args.target, replace=args.replace
         )
-    finally:
-        store.close()
-    summary = {
-        "db": store.where,
+    _report(args, result)
+    return 0
+
+
+def _report(args: argparse.Namespace, result: Any) -> None:
+    summary: dict[str, Any] = {
+        "db": str(args.db),
         "name": result.name,
         "cases": result.n_cases,
-        "active_cases": result.n_kept,
+        "active_cases": result.n_active,
         "labels": result.label_counts,
         "features": result.config.describe(),
-        "similarity": measure.name,
+        "similarity": result.similarity,
         "learned": result.learned,
+        "skipped": result.skipped,
     }
-    if result.trim is not None:
-        summary["trim"] = result.trim.summary()
+    if result.maintenance is not None:
+        summary["trim"] = result.maintenance.summary()
     if args.json:
         json.dump(summary, sys.stdout, indent=2, ensure_ascii=False)
         print()
-        return 0
+        return
+    if result.skipped:
+        shown = ", ".join(result.skipped[:5]) + (" ..." if len(result.skipped) > 5 else "")
+        print(f"skipped {len(result.skipped)} clip(s) that show no person: {shown}")
+    verb = "added" if args.append else "trained"
     print(
-        f"case base {result.name!r} in {store.where}: {result.n_kept} cases "
-        f"({result.n_cases} trained) from {len(result.label_counts)} activities"
+        f"case base {result.name!r} in {args.db}: {result.n_active} cases "
+        f"({result.n_cases} {verb}) from {len(result.label_counts)} activities"
     )
-    print(f"  features: {result.config.describe()}; similarity: {measure.name}")
-    if result.learned:
-        chosen = f"  side handling: {result.learned['side']}; feature weights: "
-        chosen += str(result.learned["feature_weights"])
-        if result.learned["phases"]:
-            chosen += f"; means over {result.learned['phases']} phases"
-        if result.learned["mirror_cases"]:
-            chosen += f"; {result.learned['mirror_cases']} mirror-image cases"
+    print(f"  features: {result.config.describe()}; similarity: {result.similarity}")
+    learned = result.learned
+    if learned:
+        chosen = f"  side handling: {learned['side']}; feature weights: "
+        chosen += str(learned["feature_weights"])
+        if learned["phases"]:
+            chosen += f"; means over {learned['phases']} phases"
+        if learned["mirror_cases"]:
+            chosen += f"; {learned['mirror_cases']} mirror-image cases"
         print(chosen)
     for lab, n in result.label_counts.items():
         print(f"  {n:5d}  {lab}")
-    if result.trim is not None:
-        print(f"  {result.trim.summary()}")
-    return 0
+    if result.maintenance is not None:
+        print(f"  {result.maintenance.summary()}")

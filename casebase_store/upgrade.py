@@ -1,0 +1,97 @@
+"""Converting a store written by an older posecbr to the current schema, in one transaction.
+
+Schema 1 -> 2: case bases get an identity (``uid``), a version and an (empty) fitted model;
+ids are never reused from now on (SQLite ``AUTOINCREMENT``). Every row keeps its id, so
+maintenance-log entries still name their cases. A case base from schema 1 has no stored model:
+it is classified with the defaults its configuration implies (see ``cbr.stored``).
+"""
+
+from __future__ import annotations
+
+import uuid
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy import MetaData, inspect, text
+
+from .models import (
+    SCHEMA_VERSION,
+    CaseBaseRow,
+    CaseRow,
+    MaintenanceRow,
+    RepresentationRow,
+    SchemaVersion,
+)
+from .store import StoreError, _make_engine, _translate, sqlite_file
+
+_TABLES = (CaseBaseRow, CaseRow, RepresentationRow, MaintenanceRow)
+
+
+def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
+    """Bring the store to :data:`SCHEMA_VERSION`; returns the version it had (the current one
+    when nothing was to do). Everything happens in one transaction: an interrupted upgrade
+    leaves the store as it was."""
+    file = sqlite_file(url_or_path)
+    if file is not None and not file.exists():
+        raise StoreError("no such case base file", file)
+    engine, where = _make_engine(url_or_path, timeout_s, readonly=False)
+    try:
+        with engine.execution_options(posecbr_write=True).begin() as conn:
+            found = _schema_version(conn, where)
+            if found == SCHEMA_VERSION:
+                return found
+            if found != 1:
+                raise StoreError(f"cannot upgrade a store of schema version {found}", where)
+            _from_1(conn)
+            return found
+    except StoreError:
+        raise
+    except Exception as exc:  # a driver error of any backend: one line naming the store
+        raise _translate(exc, where, timeout_s) from None
+    finally:
+        engine.dispose()
+
+
+def _schema_version(conn: Any, where: str) -> int:
+    if SchemaVersion.__tablename__ not in inspect(conn).get_table_names():
+        raise StoreError("not a posecbr case base store", where)
+    version = conn.execute(
+        text(f"SELECT version FROM {SchemaVersion.__tablename__} WHERE id = 1")
+    ).scalar()
+    if version is None:
+        raise StoreError("the store has no schema version", where)
+    return int(version)
+
+
+def _from_1(conn: Any) -> None:
+    old = MetaData()
+    old.reflect(conn, only=[t.__tablename__ for t in _TABLES])
+    rows = {
+        t.__tablename__: conn.execute(old.tables[t.__tablename__].select()).mappings().all()
+        for t in _TABLES
+    }
+    old.drop_all(conn)
+    for table in (t.__table__ for t in _TABLES):
+        table.create(conn)  # type: ignore[attr-defined]
+    bases = [
+        {**dict(r), "uid": uuid.uuid4().hex, "version": 1, "model": "{}"}
+        for r in rows[CaseBaseRow.__tablename__]
+    ]
+    for model, data in ((CaseBaseRow, bases),) + tuple(
+        (t, [dict(r) for r in rows[t.__tablename__]]) for t in _TABLES[1:]
+    ):
+        if data:
+            conn.execute(model.__table__.insert(), data)  # type: ignore[attr-defined]
+    if conn.dialect.name == "postgresql":  # explicit ids do not move the sequences
+        for t in _TABLES:
+            conn.execute(
+                text(
+                    f"SELECT setval(pg_get_serial_sequence('{t.__tablename__}', 'id'), "
+                    f"COALESCE((SELECT MAX(id) FROM {t.__tablename__}), 0) + 1, false)"
+                )
+            )
+    conn.execute(
+        SchemaVersion.__table__.update()  # type: ignore[attr-defined]
+        .where(SchemaVersion.id == 1)
+        .values(version=SCHEMA_VERSION)
+    )

@@ -1,0 +1,251 @@
+"""Classifying clips with a stored case base (the work behind ``posecbr classify``), and
+learning from feedback: the stored classifier's :meth:`~cbr.estimator.CaseBaseClassifier.solve`
+for every clip, an explanation, and with the true label a retain or revise step.
+
+Each clip's feedback is ONE transaction, checked against the case base that was read: a case
+base replaced meanwhile is refused (nothing written), a revised case is changed as it is in the
+store at that moment (so concurrent revisions all take effect), and when another process
+changed the case base meanwhile it is read again before the next clip. A clip that shows no
+person is reported as unclassifiable and never stored.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from casebase_store import CaseStore, StaleCaseError, StoreError
+from features.errors import ConfigError, DataError
+from features.poses import PoseSequence
+from features.progress import progress
+
+from .casebase import frames_of, skeleton_of, subject_of
+from .estimator import Solved
+from .explain import Explanation
+from .retain import RetainDecision, decide_retention, record_retention
+from .revise import Revision, plan_revision, record_revision
+from .stored import StoredClassifier, load_classifier
+
+
+@dataclass(frozen=True)
+class Classification:
+    """One clip's answer: ``solved`` and ``explanation`` (None when the clip could not be
+    classified: ``unclassifiable`` says why), and what feedback changed."""
+
+    source: str
+    true_label: str | None
+    solved: Solved | None
+    explanation: Explanation | None
+    unclassifiable: str | None = None
+    revision: Revision | None = None
+    retention: RetainDecision | None = None
+
+    @property
+    def label(self) -> str | None:
+        return None if self.solved is None else self.solved.solution.label
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"clip": self.source}
+        if self.explanation is not None and self.solved is not None:
+            out.update(self.explanation.to_dict())
+            out["novelty"] = self.solved.novelty
+            out["unlike_cases"] = self.solved.unlike_cases
+            out["torso_share"] = self.solved.torso_share
+        else:
+            out.update(label=None, unclassifiable=self.unclassifiable)
+        if self.true_label is not None:
+            out["true_label"] = self.true_label
+            out["correct"] = self.true_label == self.label
+        if self.revision is not None:
+            r = self.revision
+            out["revision"] = {
+                "action": r.action,
+                "case_id": r.case_id,
+                "old_label": r.old_label,
+                "new_label": r.new_label,
+                "reason": r.reason,
+            }
+        if self.retention is not None:
+            d = self.retention
+            out["retention"] = {
+                "retained": d.retained,
+                "novelty": d.novelty,
+                "benefit": d.benefit,
+                "reason": d.reason,
+            }
+        return out
+
+
+def _solve(stored: StoredClassifier, clip: PoseSequence, truth: str | None) -> Classification:
+    clf = stored.classifier
+    try:
+        solved = clf.solve([clip])[0]
+    except DataError as exc:
+        return Classification(clip.source, truth, None, None, unclassifiable=exc.message)
+    return Classification(clip.source, truth, solved, clf.explain_solved(solved))
+
+
+def classify_clips(
+    stored: StoredClassifier,
+    clips: Sequence[PoseSequence],
+    truths: Sequence[str | None],
+) -> list[Classification]:
+    """Classify and explain every clip (nothing is written)."""
+    pairs = list(zip(clips, truths, strict=True))
+    return [
+        _solve(stored, clip, truth)
+        for clip, truth in progress(pairs, desc="classifying", total=len(pairs), unit="clip")
+    ]
+
+
+def check_feedback_label(label: str, known: Sequence[str], new_label: bool) -> str:
+    """The feedback label, refused when empty, or (without ``new_label``) when it is no
+    activity of the case base: a typo must not relabel a trained case or start a class."""
+    text = str(label).strip()
+    if not text:
+        raise ConfigError("the feedback label is empty", "--feedback")
+    if text not in known and not new_label:
+        close = difflib.get_close_matches(text, list(known), n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        raise ConfigError(
+            f"{text!r} is not an activity of this case base (known: {', '.join(known)}){hint} "
+            "To add a new activity, pass --new-label as well",
+            "--feedback",
+        )
+    return text
+
+
+@dataclass(frozen=True)
+class FeedbackSettings:
+    """Retain thresholds (novelty in units of the case base's usual held-out distance,
+    benefit in [0, 1]) and the revision step."""
+
+    novelty_threshold: float = 0.5
+    benefit_threshold: float = 0.2
+    rate: float = 0.25
+    relabel_margin: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.novelty_threshold) and self.novelty_threshold >= 0):
+            raise ConfigError(
+                f"the novelty threshold must be a number >= 0, got {self.novelty_threshold!r}",
+                "--novelty",
+            )
+        if not (np.isfinite(self.benefit_threshold) and 0 <= self.benefit_threshold <= 1):
+            raise ConfigError(
+                f"the benefit threshold must be in [0, 1], got {self.benefit_threshold!r}",
+                "--benefit",
+            )
+
+
+def classify_with_feedback(
+    store: CaseStore,
+    stored: StoredClassifier,
+    clips: Sequence[PoseSequence],
+    truths: Sequence[str | None],
+    label: str,
+    settings: FeedbackSettings = FeedbackSettings(),
+) -> list[Classification]:
+    """Classify every clip, then learn from its true ``label`` (checked by
+    :func:`check_feedback_label` first): retain it as a new case when it is novel and
+    beneficial (always, for the first clip of a new activity), otherwise revise the case base
+    toward it. One transaction per clip."""
+    out = []
+    pairs = list(zip(clips, truths, strict=True))
+    for clip, truth in progress(pairs, desc="classifying", total=len(pairs), unit="clip"):
+        c = _solve(stored, clip, truth)
+        if c.solved is not None:
+            try:
+                dec, rev = _learn(store, stored, clip, c.solved, label, settings)
+            except StaleCaseError:  # a case changed under us: read again, decide again
+                stored = _reload(store, stored)
+                c = _solve(stored, clip, truth)
+                assert c.solved is not None
+                dec, rev = _learn(store, stored, clip, c.solved, label, settings)
+            c = Classification(c.source, truth, c.solved, c.explanation, None, rev, dec)
+        out.append(c)
+    return out
+
+
+def _reload(store: CaseStore, stored: StoredClassifier) -> StoredClassifier:
+    """The stored classifier read again (in place, so callers holding it see the new one)."""
+    fresh = load_classifier(store, stored.name)
+    if fresh.uid != stored.uid:
+        raise StoreError(
+            f"case base {stored.name!r} was replaced by another process while classifying; "
+            "nothing more was written",
+            store.where,
+        )
+    stored.classifier, stored.version, stored.info = fresh.classifier, fresh.version, fresh.info
+    return stored
+
+
+def _learn(
+    store: CaseStore,
+    stored: StoredClassifier,
+    clip: PoseSequence,
+    solved: Solved,
+    label: str,
+    settings: FeedbackSettings,
+) -> tuple[RetainDecision, Revision | None]:
+    """Decide on the in-memory case base, write in one checked transaction, then follow the
+    committed change in memory."""
+    clf = stored.classifier
+    cb = clf.case_base_
+    values = np.asarray(solved.problem.values)
+    new_class = label not in set(cb.labels.tolist())
+    dec = decide_retention(
+        cb,
+        values,
+        label,
+        scale=clf.novelty_.scale,
+        k=int(clf.k),
+        novelty_threshold=settings.novelty_threshold,
+        benefit_threshold=settings.benefit_threshold,
+        weights=clf.weights,  # type: ignore[arg-type]
+    )
+    if new_class and not dec.retained:  # a new activity's first clip: nothing else to revise
+        dec = RetainDecision(True, dec.novelty, dec.benefit, f"retained: first case of {label!r}")
+    rev = None
+    if not dec.retained:
+        rev = plan_revision(
+            cb, values, label, rate=settings.rate, relabel_margin=settings.relabel_margin
+        )
+    with store.transaction() as tx:
+        info = tx.expect(stored.name, stored.uid)
+        case_id = record_retention(
+            tx,
+            info,
+            dec,
+            values,
+            label,
+            source=clip.source,
+            subject=subject_of(clip),
+            frames=frames_of(clip),
+            skeleton=skeleton_of(clip),
+        )
+        new = record_revision(tx, info, rev, values) if rev is not None else None
+    if case_id is not None:
+        cb.add(
+            values,
+            label,
+            case_id=case_id,
+            source=clip.source,
+            subject=subject_of(clip),
+            frames=frames_of(clip),
+            skeleton=skeleton_of(clip),
+        )
+    if rev is not None and rev.action == "relabelled":
+        cb.set_label(rev.index, rev.new_label)
+    elif rev is not None and new is not None:
+        cb.set_problem(rev.index, new)
+    clf.refresh()
+    if info.version != stored.version:  # another process changed the cases meanwhile
+        _reload(store, stored)
+    else:
+        stored.version = info.version + 1
+    return dec, rev
