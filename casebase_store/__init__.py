@@ -17,6 +17,7 @@ from .store import (
     encode_array,
     open_store,
     sqlite_file,
+    write_store,
 )
 from .upgrade import upgrade_store
 
@@ -37,5 +38,6 @@ __all__ = [
     "encode_array",
     "open_store",
     "sqlite_file",
+    "write_store",
     "upgrade_store",
 ]

@@ -12,9 +12,11 @@ action is one transaction::
 
 A process killed inside ``transaction()`` leaves the store as it was before (SQLite's journal
 rolls the transaction back when the file is next opened; a PostgreSQL server rolls back the
-transaction of a client whose connection dies). SQLite files run in WAL mode with a busy
+transaction of a client whose connection dies). SQLite files use a rollback journal and a busy
 timeout so several processes can write one file; write transactions start with
-``BEGIN IMMEDIATE`` so two writers queue instead of failing on a read-to-write upgrade. On
+``BEGIN IMMEDIATE`` so two writers queue instead of failing on a read-to-write upgrade.
+Commands that only read open the store read-only (``open_store(..., readonly=True)``): they
+create no file, not even a journal, and work on a case base in a read-only folder. On
 PostgreSQL the same timeout is the connect timeout and the ``lock_timeout`` of every session,
 so a write blocked by another client's lock fails with the same "locked" error.
 
@@ -31,12 +33,12 @@ import json
 import os
 import sqlite3
 import uuid
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 from urllib.parse import quote
 
 import numpy as np
@@ -229,8 +231,9 @@ def sqlite_file(url_or_path: str | Path) -> Path | None:
 
 
 def _sqlite_readonly_url(path: Path) -> str:
-    """A read-only SQLite URL for ``path``. A WAL database needs its ``-shm`` file: where this
-    process cannot create it (a read-only folder) the file is opened ``immutable``."""
+    """A read-only SQLite URL for ``path``. A database still in WAL mode (written by posecbr
+    0.1) needs its ``-shm`` file: where this process cannot create it (a read-only folder) the
+    file is opened ``immutable``."""
     params = "mode=ro"
     shm = path.with_name(path.name + "-shm")
     if not os.access(path.parent, os.W_OK) and not shm.exists():
@@ -286,9 +289,12 @@ def _configure_sqlite(engine: Engine, timeout_s: float, readonly: bool) -> None:
         cur = dbapi_conn.cursor()
         cur.execute(f"PRAGMA busy_timeout = {int(timeout_s * 1000)}")
         cur.execute("PRAGMA foreign_keys = ON")
-        if not readonly:  # WAL is a property of the file: a reader must not try to set it
-            cur.execute("PRAGMA journal_mode = WAL")
-            cur.execute("PRAGMA synchronous = NORMAL")
+        if not readonly:  # the journal mode is a property of the file: readers leave it
+            # a rollback journal, not WAL: a reader then needs no side files, so reading
+            # creates nothing and works in a read-only folder (stores written in WAL mode by
+            # posecbr 0.1 are converted by their first writer)
+            cur.execute("PRAGMA journal_mode = DELETE")
+            cur.execute("PRAGMA synchronous = FULL")
         cur.close()
 
     @event.listens_for(engine, "begin")
@@ -843,3 +849,47 @@ def open_store(
         engine.dispose()
         raise
     return store
+
+
+T = TypeVar("T")
+
+
+def write_store(
+    url_or_path: str | Path,
+    action: Callable[[StoreTransaction], T],
+    *,
+    timeout_s: float = 30.0,
+) -> T:
+    """``action(tx)`` in one write transaction on the store at ``url_or_path``, creating the
+    store when there is none.
+
+    A SQLite file that does not exist yet is built under a temporary name beside it and appears
+    under its own name only when complete: a failed or killed first write leaves no file. If
+    another process created the file meanwhile, ``action`` runs again, on that store.
+    """
+    file = sqlite_file(url_or_path)
+    if file is None or file.exists():
+        store = open_store(url_or_path, timeout_s=timeout_s)
+        try:
+            with store.transaction() as tx:
+                return action(tx)
+        finally:
+            store.close()
+    tmp = file.with_name(f".{file.name}.{uuid.uuid4().hex[:8]}.new")
+    try:
+        store = open_store(tmp, timeout_s=timeout_s)
+        try:
+            with store.transaction() as tx:
+                result = action(tx)
+        finally:
+            store.close()
+        try:
+            os.link(tmp, file)  # appears whole, and never over a store made meanwhile
+        except FileExistsError:
+            return write_store(url_or_path, action, timeout_s=timeout_s)
+        except OSError as exc:
+            raise StoreError(f"cannot create the case base file ({exc.strerror})", file) from None
+        return result
+    finally:
+        for suffix in ("", "-journal", "-wal", "-shm"):
+            Path(f"{tmp}{suffix}").unlink(missing_ok=True)

@@ -2,14 +2,14 @@
 
 The classifier is fitted exactly as ``CaseBaseClassifier.fit`` fits it in Python (it is the same
 call), then stored whole (:mod:`cbr.stored`) in ONE transaction: an interrupted or failed train
-leaves the store as it was, and a store file that did not exist before is not left behind.
+leaves the store as it was, and a store file that did not exist before appears only complete
+(:func:`casebase_store.write_store`).
 Appending adds cases to a stored case base without learning anything anew.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from sklearn.base import clone
 
-from casebase_store import CaseStore, open_store, sqlite_file
+from casebase_store import StoreTransaction, open_store, write_store
 from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
 from features.progress import progress
@@ -103,7 +103,8 @@ def train(
         raise DataError("no clip shows a person: nothing to learn from", "training set")
     fitted = fit_case_base(clips, text, estimator)
     cb = to_store(fitted)
-    with _store_for_writing(db) as store, store.transaction() as tx:
+
+    def write(tx: StoreTransaction) -> None:
         info = tx.create_case_base(
             name,
             fitted.feature_config_.to_dict(),
@@ -119,6 +120,8 @@ def train(
         tx.log(info, "build", reason=_build_reason(fitted, len(clips), text))
         if fitted.maintenance_ is not None:
             record_trim(tx, info, fitted.maintenance_, ids)
+
+    write_store(db, write)
     return TrainResult(
         name,
         len(cb),
@@ -132,7 +135,9 @@ def train(
     )
 
 
-def _cache_representations(tx: Any, clf: CaseBaseClassifier, cb: CaseBase, ids: np.ndarray) -> None:
+def _cache_representations(
+    tx: StoreTransaction, clf: CaseBaseClassifier, cb: CaseBase, ids: np.ndarray
+) -> None:
     kind = clf.measure_.cache_kind(tuple(cb.problems.shape[1:]))
     if kind is not None:
         reps = clf.measure_.represent(cb.problems)
@@ -209,26 +214,3 @@ def _new_cases(
         frames=tuple(frames_of(s) for s in clips),
         skeletons=tuple(skeleton_of(s) for s in clips),
     )
-
-
-@contextmanager
-def _store_for_writing(db: str | Path) -> Iterator[CaseStore]:
-    """The store, opened (created) for one write; a SQLite file this created is removed again
-    when the write fails, so a failed train leaves no empty case base file behind."""
-    file = sqlite_file(db)
-    existed = file is None or file.exists()
-    store = None
-    try:
-        store = open_store(db)
-        yield store
-    except BaseException:
-        if store is not None:
-            store.close()
-            store = None
-        if not existed and file is not None:
-            for suffix in ("", "-wal", "-shm", "-journal"):
-                Path(f"{file}{suffix}").unlink(missing_ok=True)
-        raise
-    finally:
-        if store is not None:
-            store.close()
