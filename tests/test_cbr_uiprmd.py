@@ -49,11 +49,12 @@ def test_held_out_subjects_accuracy(features: str, similarity: str, uiprmd: tupl
 def test_real_explanation_names_fluents(uiprmd: tuple) -> None:
     Xtr, ytr, Xte, yte = uiprmd
     clf = CaseBaseClassifier(similarity="euclidean", k=5).fit(Xtr, ytr)
-    squat = next(i for i, v in enumerate(yte) if v == "deep_squat")
-    exp = clf.explain([Xte[squat]])[0]
+    squats = [x for x, v in zip(Xte, yte, strict=True) if v == "deep_squat"]
+    exps = [e for e in clf.explain(squats) if e.label == "deep_squat"]
+    assert len(exps) >= len(squats) // 2  # most held-out squats are recognised
     words = set(clf.case_base_.words)
-    assert exp.matched and set(exp.matched) <= words
     # a deep squat bends both knees far below the 19pi/24 knee threshold
     knees = {"left knee bent", "right knee bent", "left knee bending", "right knee bending"}
-    if exp.label == "deep_squat":
-        assert knees & (set(exp.matched) | set(exp.not_seen))
+    exp = exps[0]  # the first held-out squat recognised as one
+    assert exp.matched and set(exp.matched) <= words
+    assert knees & (set(exp.matched) | set(exp.not_seen))

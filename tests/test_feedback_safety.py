@@ -10,7 +10,6 @@ import os
 import sqlite3
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +19,7 @@ from casebase_store import open_store
 from cbr.stored import load_classifier
 from features.poses import PoseSequence, load_pose, save_pose
 from posecbr.cli import main
+from tests.processes import posecbr_process as _posecbr
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "data" / "demo" / "uiprmd"
@@ -29,52 +29,6 @@ PG_URL = os.environ.get("POSECBR_TEST_POSTGRES_URL")
 
 def _sha(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _posecbr(
-    *argv: str, pause_after: str | None = None, gate: Path | None = None
-) -> subprocess.Popen[str]:
-    """`posecbr ARGV` in its own process. With ``pause_after`` it prints PAUSED and sleeps right
-    after the store logs that action inside its transaction (for a test to kill it there); with
-    ``gate`` it prints PAUSED after the first clip's feedback committed and waits, outside any
-    transaction, until the file ``gate`` exists."""
-    code = textwrap.dedent(
-        """
-        import os, sys, time
-        from casebase_store import store as st
-        import cbr.classification as cl
-        pause, gate = sys.argv[1], sys.argv[2]
-        if pause:
-            log = st.StoreTransaction.log
-            def paused(self, info, action, **kw):
-                log(self, info, action, **kw)
-                if action == pause:
-                    print("PAUSED", flush=True)
-                    time.sleep(120)
-            st.StoreTransaction.log = paused
-        if gate:
-            learn, calls = cl._learn, []
-            def gated(*a, **kw):
-                out = learn(*a, **kw)
-                calls.append(1)
-                if len(calls) == 1:
-                    print("PAUSED", flush=True)
-                    while not os.path.exists(gate):
-                        time.sleep(0.01)
-                return out
-            cl._learn = gated
-        from posecbr.cli import main
-        sys.exit(main(sys.argv[3:]))
-        """
-    )
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
-    return subprocess.Popen(
-        [sys.executable, "-c", code, pause_after or "", str(gate or ""), *argv],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
 
 
 @pytest.fixture(scope="module")
@@ -433,3 +387,69 @@ def test_a_killed_train_into_an_existing_file_leaves_it_as_it_was(
     info = store.get_case_base("default")
     assert info.n_cases == 120 and set(store.load_cases("default").subjects) == {"s01", "s02"}
     store.close()
+
+
+def _state(db: Path) -> tuple[object, ...]:
+    """Everything a case base file holds that a command may change (read-only)."""
+    store = open_store(db, create=False)  # a writer first: rolls a hot journal back
+    store.close()
+    store = open_store(db, readonly=True)
+    try:
+        info, cases = store.load_case_base("default", include_inactive=True)
+        active = store.load_cases("default").ids.tolist()
+        log = [(e.action, e.case_id, e.reason) for e in store.maintenance_log("default")]
+        return (info.version, info.model, cases.ids.tolist(), active, cases.labels.tolist(),
+                _sha_array(cases.features), log)  # fmt: skip
+    finally:
+        store.close()
+
+
+def _sha_array(a: np.ndarray) -> str:
+    return hashlib.sha256(np.ascontiguousarray(a).tobytes()).hexdigest()
+
+
+@pytest.mark.parametrize(
+    ("argv", "pause"),
+    [
+        (["casebase", "trim", "--keep", "0.5"], "trim"),
+        (
+            [
+                "classify",
+                str(DEMO / "m01_s03_e01.npz"),
+                "--feedback",
+                "deep_squat",
+                "--novelty",
+                "0",
+                "--benefit",
+                "0",
+            ],
+            "retain",
+        ),  # fmt: skip
+        (
+            [
+                "classify",
+                str(DEMO / "m01_s03_e01.npz"),
+                "--feedback",
+                "deep_squat",
+                "--novelty",
+                "1e9",
+            ],
+            "revise",
+        ),  # fmt: skip
+    ],
+    ids=["trim", "retain", "revise"],
+)
+def test_killed_inside_its_transaction_a_command_changes_nothing(
+    trained: Path, tmp_path: Path, argv: list[str], pause: str
+) -> None:
+    db = _copy(trained, tmp_path / "cb.sqlite")
+    before = _state(db)
+    proc = _posecbr(*argv, "--db", str(db), pause_after=pause)
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "PAUSED"
+    assert (tmp_path / "cb.sqlite-journal").exists()  # the transaction has written
+    proc.kill()
+    proc.wait(timeout=30)
+    assert _state(db) == before
+    con = sqlite3.connect(db)
+    assert con.execute("PRAGMA integrity_check").fetchone() == ("ok",)
+    con.close()

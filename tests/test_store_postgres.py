@@ -12,8 +12,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
-import sys
 import threading
 import time
 import uuid
@@ -34,6 +32,7 @@ from cbr.retain import record_retention, retain
 from cbr.revise import record_revision, revise
 from cbr.similarity import get_measure
 from posecbr.cli import main
+from tests.processes import posecbr_process
 from tests.test_cbr_cli import _cli, _write_classes
 from tests.test_cbr_cli import dataset as dataset  # noqa: F401  (module-scoped fixture)
 from tests.test_store_transactions import CONCURRENT_RETAIN, KILLED_TRAIN, _new_base, _run_py
@@ -484,54 +483,26 @@ def test_killed_train_leaves_the_database_as_before(pg_url: str) -> None:
     store.close()
 
 
-def test_posecbr_train_killed_while_writing_leaves_nothing_or_everything(
+def test_posecbr_train_killed_inside_its_transaction_leaves_nothing(
     pg_url: str, tmp_path: Path
 ) -> None:
-    data = _write_classes(tmp_path / "data", 40, 21)  # 120 clips
+    data = _write_classes(tmp_path / "data", 10, 21)  # 30 clips
     app = f"posecbr_train_{uuid.uuid4().hex[:8]}"
-    # lead-lag signatures make the stored representations large, so the one write
-    # transaction lasts long enough to be interrupted
-    cmd = [sys.executable, "-m", "posecbr", "train", str(data), "--db"]
-    cmd += [f"{pg_url}?application_name={app}", "--similarity", "signature"]
-    cmd += ["--param", "lead_lag=true"]
-    env = {**os.environ, "POSECBR_NO_PROGRESS": "1"}
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
-    admin = create_engine(pg_url)
-    killed = False
-    deadline = time.monotonic() + 120
-    try:
-        with admin.connect() as conn:
-            while proc.poll() is None and time.monotonic() < deadline:
-                wrote = conn.execute(
-                    text(
-                        "SELECT backend_xid IS NOT NULL FROM pg_stat_activity "
-                        "WHERE application_name = :app"
-                    ),
-                    {"app": app},
-                ).scalar()
-                conn.rollback()  # a fresh snapshot of the activity view next time
-                if wrote:  # inside the train transaction, rows already sent
-                    proc.send_signal(signal.SIGKILL)
-                    killed = True
-                    break
-                time.sleep(0.002)
-    finally:
-        admin.dispose()
+    proc = posecbr_process(
+        "train", str(data), "--db", f"{pg_url}?application_name={app}", pause_after="build"
+    )
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "PAUSED"
+    # inside the one train transaction, every case already sent to the server
+    assert _backend_of(pg_url, app) == ("idle in transaction", True)
+    proc.kill()
     proc.wait(timeout=30)
-    if killed:
-        _wait_gone(pg_url, app)
+    _wait_gone(pg_url, app)
     store = open_store(pg_url)
-    bases = store.list_case_bases()
-    if killed:
-        assert bases == []  # nothing new: the whole build was one transaction
-        assert _sql(pg_url, "SELECT count(*) FROM cases") == [(0,)]
-        assert _sql(pg_url, "SELECT count(*) FROM case_representations") == [(0,)]
-    else:  # the run finished before the poll saw it writing: then everything is there
-        assert proc.returncode == 0, proc.stderr.read() if proc.stderr else ""
-        assert len(bases) == 1 and bases[0].n_cases == 120
-    assert killed, "the poll never saw the train transaction (the test proved nothing)"
+    assert store.list_case_bases() == []
+    assert _sql(pg_url, "SELECT count(*) FROM cases") == [(0,)]
+    assert _sql(pg_url, "SELECT count(*) FROM case_representations") == [(0,)]
     # the store works afterwards
     argv = ["train", str(data), "--db", pg_url, "--similarity", "euclidean", "--name", "again"]
     assert main(argv) == 0
-    assert store.count_cases("again") == 120
+    assert store.count_cases("again") == 30
     store.close()

@@ -1,0 +1,276 @@
+"""Fault injection: ``kill -9`` at random moments of ``train``, ``classify --feedback``,
+``casebase trim`` and ``convert``; after every kill the store (or the output folder) must be in
+a state the command passes through between transactions: before it, after it, or (feedback,
+one transaction per clip) after some whole number of clips. Never between.
+
+    python -m benchmarks.faults                  # 50 kills per command
+    python -m benchmarks.faults --runs 10 --commands train,trim
+
+A state is compared by its fingerprint: every case base (name, configuration, model), case
+(id, label, features, provenance, active) and maintenance-log entry (action, case, reason),
+without what differs between two identical runs (identities, timestamps). Each kill also gets
+SQLite's ``PRAGMA integrity_check`` after the next writer has rolled the journal back. The
+kill moment is uniform over the command's uninterrupted run time (measured first), so kills
+land in start-up, feature computation and the write alike; the table says how many landed
+while a transaction was open (journal present). Results: benchmarks/results/faults.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import os
+import random
+import shutil
+import signal
+import sqlite3
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from benchmarks import write_json
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results" / "faults.json"
+
+
+def _demo() -> Path:
+    """The bundled UI-PRMD subset (a labels CSV and its pose files)."""
+    for candidate in (ROOT / "posecbr" / "demo_data" / "uiprmd", ROOT / "data" / "demo" / "uiprmd"):
+        if (candidate / "labels.csv").is_file():
+            return candidate
+    raise SystemExit("the bundled demo data is missing")
+
+
+def store_fingerprint(db: Path) -> str:
+    """What a case base file holds, without identities and timestamps (SQLite, read-only)."""
+    if not db.exists():
+        return "no file"
+    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+    try:
+        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        if "case_bases" not in tables:
+            return "no case base"
+        h = hashlib.sha256()
+        for row in con.execute(
+            "SELECT name, feature_config, feature_names, similarity_config, model, version "
+            "FROM case_bases ORDER BY name"
+        ):
+            h.update(repr(row).encode())
+        for row in con.execute(
+            "SELECT c.id, b.name, c.label, c.features, c.source, c.frame_start, c.frame_end, "
+            "c.subject, c.origin, c.active FROM cases c JOIN case_bases b "
+            "ON c.case_base_id = b.id ORDER BY c.id"
+        ):
+            h.update(repr(row).encode())
+        for row in con.execute(
+            "SELECT action, case_id, novelty, benefit, reason FROM maintenance_log ORDER BY id"
+        ):
+            h.update(repr(row).encode())
+        return h.hexdigest()
+    finally:
+        con.close()
+
+
+def folder_fingerprint(folder: Path) -> dict[str, str]:
+    """Every visible file of ``folder`` and its hash (hidden temporary files left by a killed
+    writer are counted separately: they never stand in for an output)."""
+    if not folder.exists():
+        return {}
+    return {
+        p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.iterdir())
+        if p.is_file() and not p.name.startswith(".")
+    }
+
+
+def _posecbr(argv: list[str]) -> subprocess.Popen[bytes]:
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
+    return subprocess.Popen(
+        [sys.executable, "-m", "posecbr", *argv],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=env,
+    )
+
+
+def _run(argv: list[str]) -> None:
+    proc = _posecbr(argv)
+    if proc.wait(timeout=600) != 0:
+        raise SystemExit(f"posecbr {' '.join(argv)} failed")
+
+
+def _integrity(db: Path) -> bool:
+    """Open as a writer (which rolls a hot journal back), then SQLite's own check."""
+    if not db.exists():
+        return True
+    from casebase_store import StoreError, open_store
+
+    try:
+        open_store(db, create=False).close()
+    except StoreError:
+        pass  # an empty store (a kill before the first commit) has no schema yet
+    con = sqlite3.connect(db)
+    try:
+        return con.execute("PRAGMA integrity_check").fetchone() == ("ok",)
+    finally:
+        con.close()
+
+
+@dataclass
+class Scenario:
+    """One command under fire: ``prepare(work)`` makes a fresh working copy in folder
+    ``work`` and returns the argv; ``states(work)`` the fingerprint of what is there."""
+
+    name: str
+    prepare: Callable[[Path], list[str]]
+    state: Callable[[Path], Any]
+
+
+def _scenarios(template: Path, demo: Path) -> dict[str, Scenario]:
+    labels = demo / "labels.csv"
+    clips = [str(p) for p in sorted(demo.glob("m01_s03_*.npz"))[:4]]
+
+    def fresh_db(work: Path) -> Path:
+        db = work / "cb.sqlite"
+        shutil.copyfile(template, db)
+        return db
+
+    def train(work: Path) -> list[str]:
+        db = fresh_db(work)
+        return ["train", str(labels), "--db", str(db), "--subjects", "s03", "--name", "second"]
+
+    def feedback(work: Path) -> list[str]:
+        db = fresh_db(work)
+        return ["classify", *clips, "--db", str(db), "--feedback", "deep_squat",
+                "--novelty", "0", "--benefit", "0"]  # fmt: skip
+
+    def trim(work: Path) -> list[str]:
+        db = fresh_db(work)
+        return ["casebase", "trim", "--db", str(db), "--keep", "0.5"]
+
+    def convert(work: Path) -> list[str]:
+        return ["convert", str(labels), "--out", str(work / "out"), "--subjects", "s01"]
+
+    def db_state(work: Path) -> str:
+        return store_fingerprint(work / "cb.sqlite")
+
+    def out_state(work: Path) -> tuple[tuple[str, str], ...]:
+        return tuple(sorted(folder_fingerprint(work / "out").items()))
+
+    return {
+        "train": Scenario("train", train, db_state),
+        "feedback": Scenario("feedback", feedback, db_state),
+        "trim": Scenario("trim", trim, db_state),
+        "convert": Scenario("convert", convert, out_state),
+    }
+
+
+def _allowed(sc: Scenario, base: Path) -> tuple[set[Any], float]:
+    """The states a kill may leave, and the uninterrupted run time. For feedback: the state
+    after each whole number of clips (one transaction each); for convert: every subset of the
+    complete outputs (each file is written atomically, then labels.csv last)."""
+    work = Path(tempfile.mkdtemp(dir=base))
+    argv = sc.prepare(work)
+    allowed = {sc.state(work)}
+    t0 = time.perf_counter()
+    _run(argv)
+    elapsed = time.perf_counter() - t0
+    allowed.add(sc.state(work))
+    if sc.name == "feedback":
+        first = argv.index("--db")
+        for k in range(1, first - 1):
+            w = Path(tempfile.mkdtemp(dir=base))
+            a = sc.prepare(w)
+            _run([a[0], *a[1 : 1 + k], *a[first:]])
+            allowed.add(sc.state(w))
+    return allowed, elapsed
+
+
+def _acceptable(sc: Scenario, state: Any, allowed: set[Any]) -> bool:
+    if sc.name != "convert":
+        return state in allowed
+    full = dict(max(allowed, key=len))
+    files = dict(state)
+    whole = all(full.get(name) == digest for name, digest in files.items())
+    # the index of the outputs is written last: present only when every output is there
+    return whole and ("labels.csv" not in files or files == full)
+
+
+def fire(sc: Scenario, runs: int, base: Path, rng: random.Random) -> dict[str, Any]:
+    allowed, elapsed = _allowed(sc, base)
+    bad: list[str] = []
+    in_transaction = stray = 0
+    for _ in range(runs):
+        work = Path(tempfile.mkdtemp(dir=base))
+        argv = sc.prepare(work)
+        proc = _posecbr(argv)
+        deadline = time.perf_counter() + rng.uniform(0.0, elapsed)
+        while time.perf_counter() < deadline and proc.poll() is None:
+            time.sleep(0.001)
+        journal = (work / "cb.sqlite-journal").exists() or any(
+            p.name.endswith(".new") for p in work.iterdir()
+        )
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=60)
+        in_transaction += journal
+        if not _integrity(work / "cb.sqlite"):
+            bad.append(f"integrity check failed ({work})")
+        state = sc.state(work)
+        if not _acceptable(sc, state, allowed):
+            bad.append(f"state between transactions after a kill ({work})")
+        stray += sum(p.name.startswith(".") for p in work.rglob("*") if p.is_file())
+        if not bad:
+            shutil.rmtree(work, ignore_errors=True)
+    return {
+        "command": sc.name,
+        "runs": runs,
+        "uninterrupted_s": elapsed,
+        "killed_with_a_transaction_open": in_transaction,
+        "violations": bad,
+        "hidden_temporary_files_left": stray,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=50)
+    parser.add_argument("--commands", default="train,feedback,trim,convert")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+    demo = _demo()
+    rng = random.Random(args.seed)
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="posecbr-faults-") as tmp:
+        base = Path(tmp)
+        template = base / "template.sqlite"
+        _run(["train", str(demo / "labels.csv"), "--db", str(template), "--subjects", "s01,s02"])
+        scenarios = _scenarios(template, demo)
+        for name in args.commands.split(","):
+            row = fire(scenarios[name.strip()], args.runs, base, rng)
+            rows.append(row)
+            print(
+                f"{row['command']:<9} {row['runs']:>4} kills  {row['uninterrupted_s']:6.1f} s run  "
+                f"{row['killed_with_a_transaction_open']:>3} inside a transaction  "
+                f"{len(row['violations'])} violations  "
+                f"{row['hidden_temporary_files_left']} hidden temporary files left"
+            )
+            for v in row["violations"]:
+                print(f"    {v}")
+    from benchmarks.__main__ import machine
+
+    write_json(
+        {"kind": "posecbr-faults", "machine": machine(), "load": os.getloadavg(), "rows": rows},
+        RESULTS,
+    )
+    return 1 if any(r["violations"] for r in rows) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
