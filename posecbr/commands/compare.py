@@ -93,7 +93,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor: kinect or vicon")
     p.add_argument("--labels", default=None, metavar="LIST", help="only these activity labels")
     p.add_argument("--subjects", default=None, metavar="LIST", help="only these subjects")
-    p.add_argument("--jobs", type=int, default=1, metavar="N", help="folds run in parallel (1)")
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        metavar="N",
+        help="worker processes for the folds (1: all in this process)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed for k-fold, bootstrap, MiniRocket")
     p.add_argument(
         "--explain",
