@@ -36,7 +36,7 @@ def discover() -> list[str]:
 
 def machine() -> dict[str, Any]:
     """Machine and library versions (the same record ``posecbr compare`` writes)."""
-    from cbr.compare import machine_info
+    from cbr.evaluation.machine import machine_info
 
     return machine_info()
 

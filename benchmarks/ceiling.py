@@ -135,7 +135,7 @@ def person_centred(X: np.ndarray, movement: np.ndarray, subject: np.ndarray) -> 
 
 
 def summary(correct: np.ndarray, movement: np.ndarray, names: dict[str, str]) -> dict[str, Any]:
-    from cbr.compare import wilson_interval
+    from cbr.evaluation.stats import wilson_interval
 
     n, k = len(correct), int(correct.sum())
     return {
@@ -150,7 +150,7 @@ def summary(correct: np.ndarray, movement: np.ndarray, names: dict[str, str]) ->
 def main() -> int:
     os.environ.setdefault("POSECBR_NO_PROGRESS", "1")
     warnings.filterwarnings("ignore", category=RuntimeWarning)
-    from cbr.compare import machine_info
+    from cbr.evaluation.machine import machine_info
     from features.datasets import load_dataset
 
     path = SHARED / "ui-prmd"

@@ -59,7 +59,7 @@ def summarise(results: dict[str, Any], seconds: float) -> dict[str, Any]:
     if bi is not None:
         import numpy as np
 
-        from cbr.compare import mcnemar_exact
+        from cbr.evaluation.stats import mcnemar_exact
 
         for m in results["methods"]:
             if m["kind"] != "peer" or m["status"] != "ok":
@@ -97,7 +97,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv if argv is not None else sys.argv[1:])
     os.environ.setdefault("POSECBR_NO_PROGRESS", "1")
 
-    from cbr.compare import CompareSettings, format_table, machine_info, run_compare
+    from cbr.evaluation.compare import run_compare
+    from cbr.evaluation.machine import machine_info
+    from cbr.evaluation.settings import CompareSettings
+    from cbr.evaluation.tables import format_table
     from features.datasets import load_dataset
 
     tasks = QUICK if args.quick else TASKS
@@ -110,13 +113,13 @@ def main(argv: list[str] | None = None) -> int:
         t0 = time.perf_counter()
         clips = load_dataset(path)
         settings = CompareSettings(target=target, jobs=args.jobs, explain=0)
-        results = run_compare(clips, settings, source=str(path))
+        results = run_compare(clips, settings, source=str(path)).results
         seconds = time.perf_counter() - t0
         print(f"\n{name} ({len(clips)} clips, {seconds:.0f} s)")
         print(format_table(results))
-        for note in results["notes"]:
+        for note in results.notes:
             print(f"note: {note}")
-        out["tasks"][name] = summarise(results, seconds)
+        out["tasks"][name] = summarise(results.to_dict(), seconds)
     write_json(out, RESULTS)
     print(f"\nwritten {RESULTS.relative_to(ROOT)}")
     return 0

@@ -146,7 +146,7 @@ def mean_difference(ours: list[Any], theirs: list[Any]) -> tuple[float, int]:
 
 
 def machine() -> dict[str, Any]:
-    from cbr.compare import machine_info
+    from cbr.evaluation.machine import machine_info
 
     return machine_info(("onnxruntime", "opencv-python-headless"))
 

@@ -11,6 +11,10 @@ One module per phase of the 4R cycle, so the cycle can be read from the file nam
 - :mod:`cbr.explain`: explanations in words;
 - :mod:`cbr.estimator`: ``CaseBaseClassifier`` (scikit-learn contract);
 - :mod:`cbr.build`: building and classifying with a stored case base (``posecbr train`` /
-  ``classify``); the store itself is :mod:`casebase_store`;
-- :mod:`cbr.dad`: the DAD expert-system baseline.
+  ``classify``); the store itself is :mod:`casebase_store`.
+
+Beside the core, in their own subpackages (the core imports neither):
+
+- :mod:`cbr.dad`: the DAD expert-system baseline;
+- :mod:`cbr.evaluation`: the comparison harness, its statistics, pictures and HTML report.
 """

@@ -28,3 +28,8 @@ class DataError(PosecbrError):
 
 class ConfigError(PosecbrError):
     """A configuration or data table (thresholds, ADD) is malformed."""
+
+
+class InputError(DataError, ValueError):
+    """Arguments of a Python call (an estimator's ``X`` or ``y``) of the wrong kind: a
+    :class:`DataError` for the command line, and the ``ValueError`` scikit-learn users catch."""

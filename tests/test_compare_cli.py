@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cbr.compare import wilson_interval
+from cbr.evaluation.stats import wilson_interval
 from features.body import POSITION_JOINTS
 from posecbr.cli import main
 
@@ -249,23 +249,6 @@ def test_report_rejects_a_file_that_is_not_compare_results(
     assert main(["report", str(tmp_path / "x.json")]) == 1
     err = capsys.readouterr().err
     assert "not a `posecbr compare` results file" in err and "x.json" in err
-
-
-def test_parallel_folds_give_the_same_predictions(
-    run_slice: tuple[Path, str], tmp_path: Path
-) -> None:
-    out, _ = run_slice
-    rc = main([
-        "compare", str(DEMO), "--labels", SLICE, "--similarities", "euclidean",
-        "--features", "fluents", "--no-dad", "--peers", "none", "--explain", "0",
-        "--jobs", "2", "--json", str(tmp_path / "p.json"),
-    ])  # fmt: skip
-    assert rc == 0
-    serial = json.loads((out / "r.json").read_text())["methods"][0]
-    parallel = json.loads((tmp_path / "p.json").read_text())["methods"][0]
-    assert parallel["name"] == serial["name"] == "cbr fluents/euclidean"
-    assert parallel["predictions"] == serial["predictions"]
-    assert parallel["case_base_size"] == serial["case_base_size"]
 
 
 def test_unknown_case_base_parameter_is_named(capsys: pytest.CaptureFixture[str]) -> None:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cbr.compare import LIMB_ANGLES, DTWKNNPeer, angle_series
+from cbr.evaluation.peers import LIMB_ANGLES, DTWKNNPeer, angle_series
 from tests.test_cbr_weights import _arm_clip, _elbow_clip
 
 
@@ -44,28 +44,40 @@ def test_dtw_knn_peer_is_the_nearest_clip_under_textbook_dtw() -> None:
     assert list(got) == [f"{a} {m}" for a, m in kinds for _ in range(2)]
 
 
-def test_parallel_folds_with_the_tslearn_peer_finish(tmp_path: Path) -> None:
-    """Forked fold workers and scikit-learn's GNU OpenMP: the peer's neighbour search must not
-    abort the workers (a hang before the fix), and the predictions equal a serial run."""
+def test_spawned_fold_workers_give_the_tslearn_peer_the_serial_predictions(
+    tmp_path: Path,
+) -> None:
+    """Fold workers are spawned, never forked (GNU OpenMP under the peer's neighbour search
+    aborted forked children, a hang): with two workers the run finishes and the tslearn peer
+    and the case base predict what a serial run in this process predicts."""
     import json
     import os
     import subprocess
     import sys
 
+    from cbr.evaluation.compare import run_compare
+    from cbr.evaluation.settings import CompareSettings
+    from features.datasets import load_dataset
+
     demo = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
-    runs = {}
-    for jobs in ("1", "2"):
-        out = tmp_path / f"j{jobs}.json"
-        cmd = [
-            sys.executable, "-m", "posecbr", "compare", str(demo),
-            "--labels", "deep_squat,standing_shoulder_abduction", "--similarities", "euclidean",
-            "--features", "fluents", "--no-dad", "--peers", "dtw-knn", "--explain", "0",
-            "--jobs", jobs, "--json", str(out),
-        ]  # fmt: skip
-        env = {**os.environ, "POSECBR_NO_PROGRESS": "1"}
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, env=env)
-        assert proc.returncode == 0, proc.stderr[-2000:]
-        runs[jobs] = {m["name"]: m for m in json.loads(out.read_text())["methods"]}
-    for name in ("cbr fluents/euclidean", "dtw-knn"):
-        assert runs["2"][name]["status"] == "ok"
-        assert runs["2"][name]["predictions"] == runs["1"][name]["predictions"]
+    labels = "deep_squat,standing_shoulder_abduction"
+    out = tmp_path / "j2.json"
+    cmd = [
+        sys.executable, "-m", "posecbr", "compare", str(demo), "--labels", labels,
+        "--similarities", "euclidean", "--features", "fluents", "--no-dad",
+        "--peers", "dtw-knn", "--explain", "0", "--jobs", "2", "--json", str(out),
+    ]  # fmt: skip
+    env = {**os.environ, "POSECBR_NO_PROGRESS": "1"}
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, env=env)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    parallel = {m["name"]: m for m in json.loads(out.read_text())["methods"]}
+    settings = CompareSettings(
+        similarities=("euclidean",), features=("fluents",), dad=False, peers=("dtw-knn",),
+        explain=0, jobs=1,
+    )  # fmt: skip
+    clips = load_dataset(demo, labels=set(labels.split(",")))
+    serial = run_compare(clips, settings, source=str(demo)).results
+    assert [m.name for m in serial.methods] == ["cbr fluents/euclidean", "dtw-knn"]
+    for m in serial.methods:
+        assert m.scores is not None and parallel[m.name]["status"] == "ok"
+        assert parallel[m.name]["predictions"] == m.scores.predictions

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from sklearn.metrics import f1_score
 
-from cbr.compare import bootstrap_macro_f1, macro_f1, mcnemar_exact, wilson_interval
+from cbr.evaluation.stats import bootstrap_macro_f1, macro_f1, mcnemar_exact, wilson_interval
 
 
 @pytest.mark.parametrize(
@@ -48,13 +48,31 @@ def test_mcnemar_exact_against_hand_computed_binomial_tails(b: int, c: int, p: f
     assert mcnemar_exact(b, c) == pytest.approx(p, rel=1e-12)
 
 
-def test_macro_f1_equals_scikit_learn() -> None:
-    rng = np.random.default_rng(3)
-    for _ in range(20):
-        t = rng.integers(0, 5, 60)
-        p = np.where(rng.random(60) < 0.7, t, rng.integers(0, 6, 60))  # class 5: never true
-        want = f1_score(t, p, average="macro", labels=np.union1d(t, p), zero_division=0)
-        assert macro_f1(t, p, 6) == pytest.approx(want, abs=1e-12)
+@pytest.mark.parametrize(
+    ("t", "p", "want"),
+    [
+        # By hand. class 0: tp 1, fp 1, fn 1 -> F1 2/4; class 1: tp 2, fp 1, fn 0 -> 4/5;
+        # class 2: tp 0, fn 1 -> 0. Mean 0.4333...
+        ([0, 0, 1, 1, 2], [0, 1, 1, 1, 0], (0.5 + 0.8 + 0.0) / 3),
+        # Class 2 is only predicted, never true: it counts (F1 0). class 0: tp 1, fn 1 -> 2/3.
+        ([0, 0, 1], [0, 2, 1], (2 / 3 + 1.0 + 0.0) / 3),
+        (["a", "b", "b"], ["a", "b", "b"], 1.0),
+    ],
+)
+def test_macro_f1_against_hand_computed_values(t: list, p: list, want: float) -> None:
+    assert macro_f1(np.array(t), np.array(p)) == pytest.approx(want, abs=1e-12)
+
+
+def test_wilson_interval_holds_the_proportion_at_zero_and_one_hundred_percent() -> None:
+    # The hand-written formula gave an upper bound of 0.9999999999999999 for 10 of 10 (and a
+    # lower bound a hair above 0 for 0 of 3), which matplotlib drew as a negative error bar.
+    for n in range(1, 301):
+        lo, hi = wilson_interval(n, n)
+        assert hi == 1.0 and 0.0 <= lo < 1.0
+        lo, hi = wilson_interval(0, n)
+        assert lo == 0.0 and 0.0 < hi <= 1.0
+    # Newcombe (1998) table I again: 0 of 20 -> [0, 0.1611]; by symmetry 20 of 20.
+    assert wilson_interval(20, 20) == pytest.approx((1 - 0.1611, 1.0), abs=1e-4)
 
 
 def test_bootstrap_interval_equals_a_loop_over_scikit_learn_on_the_same_resamples() -> None:

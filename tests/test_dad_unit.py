@@ -76,10 +76,11 @@ def test_malformed_add_is_a_config_error(tmp_path: Path) -> None:
 
 def test_classifier_follows_the_sklearn_contract() -> None:
     from sklearn.base import clone
+    from sklearn.exceptions import NotFittedError
 
     clf = clone(DADClassifier(window_s=3.0))
     assert clf.get_params() == {"add": None, "window_s": 3.0, "step_s": 1.0}
-    with pytest.raises(AttributeError, match="not fitted"):
+    with pytest.raises(NotFittedError, match="not fitted"):
         clf.predict([_still(2.0)])
     X, y = [_still(2.0), _still(2.5)], ["standing_shoulder_abduction", "squat"]
     clf.fit(X, y)

@@ -4,14 +4,14 @@ classifiers on a labelled dataset and print the table (JSON, CSV and pictures on
 from __future__ import annotations
 
 import argparse
-import csv
 import json
-import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from features.errors import ConfigError, DataError
+from features.fileio import check_output, write_json_atomic
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -93,7 +93,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor: kinect or vicon")
     p.add_argument("--labels", default=None, metavar="LIST", help="only these activity labels")
     p.add_argument("--subjects", default=None, metavar="LIST", help="only these subjects")
-    p.add_argument("--jobs", type=int, default=1, metavar="N", help="folds run in parallel (1)")
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        metavar="N",
+        help="worker processes for the folds (1: all in this process)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed for k-fold, bootstrap, MiniRocket")
     p.add_argument(
         "--explain",
@@ -112,29 +118,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         "(then `posecbr report DIR --out report.html`)",
     )
     p.set_defaults(func=run)
-
-
-def write_json(obj: Any, path: Path) -> None:
-    """JSON to ``path`` atomically (temp file in the same folder, then rename)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8") as fh:
-        json.dump(obj, fh, indent=1, allow_nan=True)
-    os.replace(tmp, path)
-
-
-def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
-    """CSV rows to ``path`` atomically (columns: union of the rows' keys, first seen first)."""
-    cols: list[str] = []
-    for r in rows:
-        cols += [k for k in r if k not in cols]
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=cols)
-        w.writeheader()
-        w.writerows(rows)
-    os.replace(tmp, path)
 
 
 def parse_params(items: list[str]) -> dict[str, Any]:
@@ -164,89 +147,118 @@ def _load(args: argparse.Namespace) -> list[Any]:
     return load_dataset(args.data, **kw)
 
 
-def pictures_with_data(results: dict[str, Any], out: Path, trim: float | None) -> dict[str, Any]:
-    """Pictures that need the clips and an estimator: feature prevalence (initial vs trimmed
-    case base) and one fluent timeline per activity."""
-    from cbr.compare import example_clips, prevalence
-    from cbr.report import plot_prevalence
-    from features.fluents import evaluate
-    from features.progress import progress
-    from features.timeline import plot_timeline
+def _settings(args: argparse.Namespace) -> Any:
+    from cbr.evaluation.settings import CompareSettings
 
-    pics: dict[str, Any] = {}
-    prev = prevalence(results, trim=trim if trim is not None and trim < 1.0 else 0.5)
-    if prev is not None:
-        plot_prevalence(prev, out / "prevalence.png")
-        pics["prevalence"] = "prevalence.png"
-        results["prevalence"] = prev
-    timelines = []
-    examples = example_clips(results)
-    for i, (act, seq) in enumerate(
-        progress(examples.items(), "timelines", total=len(examples), unit="clip")
-    ):
-        name = f"timeline_{i:02d}.png"
-        clip = Path(seq.source).name if seq.source else act
-        plot_timeline(evaluate(seq.to_canonical()), out / name, title=f"{act}: {clip}")
-        timelines.append({"activity": act, "clip": clip, "file": name})
-    pics["timelines"] = timelines
-    return pics
-
-
-def run(args: argparse.Namespace) -> int:
-    from cbr.compare import (
-        CompareSettings,
-        csv_rows,
-        explain_dad_errors,
-        explain_errors,
-        format_table,
-        public,
-    )
-    from cbr.compare import run_compare as run_engine
-
-    peers = () if args.peers.strip().lower() == "none" else _names(args.peers)
-    within = None if args.within.lower() == "none" else args.within
-    settings = CompareSettings(
+    return CompareSettings(
         target=args.target,
         cv=args.cv,
         folds=args.folds,
         similarities=_names(args.similarities),
         features=_names(args.features),
         dad=not args.no_dad,
-        peers=peers,
+        peers=() if args.peers.strip().lower() == "none" else _names(args.peers),
         k=args.k,
         trim=args.trim,
         cbr_params=parse_params(args.param),
-        within=within,
+        within=None if args.within.lower() == "none" else args.within,
         jobs=args.jobs,
         seed=args.seed,
         explain=args.explain,
     )
+
+
+@dataclass(frozen=True)
+class Output:
+    """A file the run writes: what it is (for messages), where, and as "json" or "csv";
+    ``in_out_folder``: one of the files of ``--out`` (whose folder may not exist yet)."""
+
+    what: str
+    path: Path
+    format: str
+    in_out_folder: bool = False
+
+
+def _outputs(args: argparse.Namespace) -> list[Output]:
+    """Every file the run will write; ``--out`` is checked to be a folder, or a new one in a
+    folder that exists."""
+    out = []
+    if args.json:
+        out.append(Output("JSON output", args.json, "json"))
+    if args.csv:
+        out.append(Output("CSV output", args.csv, "csv"))
+    if args.out:
+        if args.out.exists() and not args.out.is_dir():
+            raise DataError("--out must be a folder, and this is a file", args.out)
+        if not args.out.parent.is_dir():
+            raise DataError("the folder for --out does not exist", args.out.parent)
+        out.append(Output("results file", args.out / "results.json", "json", True))
+        out.append(Output("results table", args.out / "results.csv", "csv", True))
+    return out
+
+
+def check_outputs(outputs: list[Output], inputs: list[str | Path]) -> None:
+    """Refuse, before any work, an output that is a folder, lies in a missing folder or would
+    overwrite an input (the files of a new ``--out`` folder cannot, so are not checked)."""
+    for o in outputs:
+        if not (o.in_out_folder and not o.path.parent.exists()):
+            check_output(o.path, inputs=inputs, what=o.what)
+
+
+def _write_results(results: Any, outputs: list[Output]) -> None:
+    """The results as JSON and CSV to every output asked for (each written atomically)."""
+    from cbr.evaluation.tables import csv_rows, write_csv
+
+    for o in outputs:
+        if o.format == "json":
+            write_json_atomic(o.path, results.to_dict())
+        else:
+            write_csv(csv_rows(results), o.path)
+
+
+def _draw_pictures(run_: Any, out: Path, trim: float | None) -> None:
+    """Every picture into ``out``, one at a time; one that fails is a note and a line on
+    stderr, never the end of the run."""
+    from cbr.evaluation.pictures import Drawing, data_pictures, result_pictures
+
+    drawing = Drawing()
+    pics = result_pictures(run_.results, out, drawing)
+    more = data_pictures(run_, out, trim, drawing)
+    pics.prevalence, pics.timelines = more.prevalence, more.timelines
+    run_.results.pictures = pics
+    for line in drawing.failures:
+        print(line, file=sys.stderr)
+    run_.results.notes += drawing.failures
+
+
+def run(args: argparse.Namespace) -> int:
+    from cbr.evaluation.compare import run_compare
+    from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
+    from cbr.evaluation.tables import format_table
+
+    settings = _settings(args)
+    outputs = _outputs(args)
+    check_outputs(outputs, [args.data])
     clips = _load(args)
-    results = run_engine(clips, settings, source=str(args.data))
-    results["explanations"] = explain_errors(results, settings.explain)
-    results["explanations"] += explain_dad_errors(results, min(settings.explain, 3))
-    for note in results["notes"]:
+    check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
+    run_ = run_compare(clips, settings, source=str(args.data))
+    results = run_.results
+    results.explanations = explain_errors(run_, settings.explain)
+    results.explanations += explain_dad_errors(run_, min(settings.explain, 3))
+    for note in results.notes:
         print(f"note: {note}", file=sys.stderr)
     print(format_table(results))
-    if results["best"]:
-        print(f"best: {results['best']}; best interpretable (*): {results['best_interpretable']}")
+    if results.best:
+        print(f"best: {results.best}; best interpretable (*): {results.best_interpretable}")
     if args.out:
-        from cbr.report import make_pictures
-
-        args.out.mkdir(parents=True, exist_ok=True)
-        pics = make_pictures(results, args.out)
-        pics.update(pictures_with_data(results, args.out, args.trim))
-        results["pictures"] = pics
-    data = public(results)
+        args.out.mkdir(exist_ok=True)
+    _write_results(results, outputs)  # the results are safe before any picture is drawn
     if args.out:
-        write_json(data, args.out / "results.json")
-        write_csv(csv_rows(data), args.out / "results.csv")
+        _draw_pictures(run_, args.out, args.trim)
+        # the JSON again, now naming the pictures (the CSV holds no pictures)
+        _write_results(results, [o for o in outputs if o.format == "json"])
         print(
             f"results and pictures in {args.out}; report: posecbr report {args.out} "
             f"--out {args.out / 'report.html'}"
         )
-    if args.json:
-        write_json(data, args.json)
-    if args.csv:
-        write_csv(csv_rows(data), args.csv)
     return 0

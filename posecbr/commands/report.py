@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -27,8 +28,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.report import write_report
+    from cbr.evaluation.report import write_report
 
-    dest = write_report(args.results, args.out)
+    dest, failures = write_report(args.results, args.out)
+    for line in failures:
+        print(line, file=sys.stderr)
     print(f"report written to {dest}")
     return 0

@@ -1,0 +1,148 @@
+"""``DADClassifier``: DAD behind the scikit-learn classifier contract, its input checked as
+scikit-learn estimators check theirs."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from numbers import Number
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted
+
+from features.errors import InputError
+from features.poses import PoseSequence
+from features.qmp.add import ADD, load_add
+
+from .detection import DADConfig, detect
+
+_NEEDS = "X must be a sequence (list, tuple or 1-D object array) of PoseSequence"
+
+
+def pose_sequences(X: Any) -> list[PoseSequence]:
+    """``X`` as a non-empty list of PoseSequence; anything else is an :class:`InputError`
+    naming what was given (a numeric array, a single clip, an item of another type)."""
+    if isinstance(X, PoseSequence):
+        raise InputError(f"{_NEEDS}, got a single PoseSequence (wrap it in a list)", "X")
+    if isinstance(X, np.ndarray) and (X.dtype != object or X.ndim != 1):
+        raise InputError(f"{_NEEDS}, got a {X.dtype} array of shape {X.shape}", "X")
+    if X is None or isinstance(X, str | bytes) or not hasattr(X, "__iter__"):
+        raise InputError(f"{_NEEDS}, got {type(X).__name__}", "X")
+    items = list(X)
+    for i, s in enumerate(items):
+        if not isinstance(s, PoseSequence):
+            raise InputError(f"X[{i}] is of type {type(s).__name__}, not a PoseSequence", "X")
+    if not items:
+        raise InputError("X is empty: at least one clip is needed", "X")
+    return items
+
+
+def _missing(v: Any) -> bool:
+    return v is None or (isinstance(v, float | np.floating) and bool(np.isnan(v)))
+
+
+def class_labels(y: Any, n_clips: int) -> np.ndarray:
+    """``y`` as a 1-D array of ``n_clips`` class labels: not None, no missing (None/NaN)
+    label, not a continuous target."""
+    if y is None:
+        raise InputError("y is None: one label per clip is needed", "y")
+    # object dtype first: numpy would turn a NaN among strings into the string "nan"
+    values = y if isinstance(y, np.ndarray) else np.asarray(_as_list(y), dtype=object)
+    if values.ndim != 1:
+        raise InputError(f"y must be 1-D (one label per clip), got shape {values.shape}", "y")
+    if len(values) != n_clips:
+        raise InputError(f"X has {n_clips} clips but y has {len(values)} labels", "y")
+    items = values.tolist()
+    bad = next((i for i, v in enumerate(items) if _missing(v)), None)
+    if bad is not None:
+        raise InputError(f"y[{bad}] is {items[bad]!r}: every clip needs a label", "y")
+    kinds = sorted({_kind(v) for v in items})
+    if values.dtype == object and len(kinds) > 1:
+        raise InputError(f"y mixes label types ({', '.join(kinds)}); use one type", "y")
+    try:
+        check_classification_targets(values)
+    except ValueError as exc:  # a continuous or multi-output target
+        raise InputError(str(exc).splitlines()[0], "y") from None
+    return values if values.dtype != object else np.asarray(values.tolist())
+
+
+def _kind(v: Any) -> str:
+    return (
+        "string" if isinstance(v, str) else "number" if isinstance(v, Number) else type(v).__name__
+    )
+
+
+def _as_list(y: Any) -> Any:
+    return list(y) if hasattr(y, "__iter__") and not isinstance(y, str | bytes) else y
+
+
+class DADClassifier(ClassifierMixin, BaseEstimator):
+    """DAD with the scikit-learn classifier contract (X: a sequence of PoseSequence).
+
+    ``fit`` learns nothing but ``classes_`` (DAD needs no training data); ``predict`` maps the
+    top-ranked ADD activity among those standing for a known class to that class (activities
+    for other datasets' labels are ignored); a clip DAD cannot judge ("not enough data") gets
+    the first class. ``decision_function`` gives each class its best activity's score;
+    ``predict_proba`` normalises those scores.
+
+    Input is checked as scikit-learn checks it, with :class:`features.errors.InputError` (a
+    ``ValueError``): X a non-empty sequence of PoseSequence (``predict([])`` is refused, as
+    scikit-learn refuses zero samples), y 1-D with one label per clip and none missing;
+    ``predict`` before ``fit`` raises ``sklearn.exceptions.NotFittedError``.
+
+    add: an :class:`ADD`, a path to an ADD file, or None for the shipped one; window_s and
+    step_s: the sliding windows (see :class:`~cbr.dad.detection.DADConfig`).
+    """
+
+    def __init__(
+        self, add: ADD | str | Path | None = None, window_s: float = 4.0, step_s: float = 1.0
+    ) -> None:
+        self.add = add
+        self.window_s = window_s
+        self.step_s = step_s
+
+    def __sklearn_tags__(self) -> Any:
+        tags = super().__sklearn_tags__()
+        tags.input_tags.two_d_array = False  # X holds pose sequences, not a numeric table
+        return tags
+
+    def fit(self, X: Sequence[PoseSequence], y: Sequence[Any] | np.ndarray) -> DADClassifier:
+        """Record the classes of ``y`` and load the ADD; X: ``(n_clips,)`` PoseSequence."""
+        labels = class_labels(y, len(pose_sequences(X)))
+        self.config_ = DADConfig(window_s=self.window_s, step_s=self.step_s)
+        self.add_ = self.add if isinstance(self.add, ADD) else load_add(self.add)
+        self.classes_ = np.unique(labels)
+        return self
+
+    def _class_scores(self, seq: PoseSequence) -> np.ndarray:
+        result = detect(seq, self.add_, self.config_)
+        classes = [str(c) for c in self.classes_]
+        scores = np.full(len(classes), -1.0)
+        for rank, act in enumerate(result.activities):
+            if not np.isfinite(act.score):
+                continue
+            # The rank breaks ties between equal ratios (more matched weight ranks first).
+            key = act.score - 1e-6 * rank
+            for label in act.labels:
+                if label in classes:
+                    i = classes.index(label)
+                    scores[i] = max(scores[i], key)
+        return scores
+
+    def decision_function(self, X: Sequence[PoseSequence]) -> np.ndarray:
+        """Best activity score per class, ``(n_clips, n_classes)``; -1 where no activity."""
+        check_is_fitted(self, "classes_")
+        return np.stack([self._class_scores(seq) for seq in pose_sequences(X)])
+
+    def predict(self, X: Sequence[PoseSequence]) -> np.ndarray:
+        """The class of each clip, ``(n_clips,)``."""
+        scores = self.decision_function(X)  # checks fitted before classes_ is read
+        return np.asarray(self.classes_[np.argmax(scores, axis=1)])
+
+    def predict_proba(self, X: Sequence[PoseSequence]) -> np.ndarray:
+        """The class scores normalised to sum to one, ``(n_clips, n_classes)``."""
+        scores = np.clip(self.decision_function(X), 0.0, None) + 1e-9
+        return np.asarray(scores / scores.sum(axis=1, keepdims=True))

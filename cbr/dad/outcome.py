@@ -1,0 +1,96 @@
+"""What DAD answers for one clip: every ADD activity's score and, QMP by QMP, what was and was
+not executed as expected."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+NOT_ENOUGH_DATA = "not enough data"
+
+
+@dataclass(frozen=True)
+class QMPOutcome:
+    """One step of an activity: met in order, seen but out of order, not met, or not
+    observable. ``window_s``: [start, end] seconds of the window that satisfied it (met)."""
+
+    qmp: str
+    words: str
+    weight: int
+    status: str  # "met" | "out of order" | "not met" | "not observable"
+    window_s: tuple[float, float] | None = None
+    reasons: tuple[str, ...] = ()
+
+    @property
+    def met(self) -> bool:
+        return self.status == "met"
+
+
+@dataclass(frozen=True)
+class ActivityScore:
+    """An activity's score (weighted ratio of its QMPs met in order; NaN if none observable)."""
+
+    activity: str
+    words: str
+    labels: tuple[str, ...]
+    score: float
+    met_weight: int
+    observable_weight: int
+    qmps: tuple[QMPOutcome, ...]
+
+    @property
+    def met(self) -> tuple[QMPOutcome, ...]:
+        return tuple(q for q in self.qmps if q.met)
+
+    @property
+    def not_met(self) -> tuple[QMPOutcome, ...]:
+        return tuple(q for q in self.qmps if q.status in ("not met", "out of order"))
+
+    def in_words(self) -> str:
+        """Score, QMPs met and not met (with the first reason) in one line."""
+        score = "no observable QMP" if not np.isfinite(self.score) else f"score {self.score:.2f}"
+        met = ", ".join(q.words for q in self.met) or "none"
+        missed = "; ".join(
+            q.words + (f" ({q.status}: {q.reasons[0]})" if q.reasons else f" ({q.status})")
+            for q in self.not_met
+        )
+        return f"{self.words} ({score}); met: {met}" + (f"; not met: {missed}" if missed else "")
+
+
+@dataclass(frozen=True)
+class DADResult:
+    """DAD's answer for one clip.
+
+    status: "ok" or "not enough data" (then ``activities`` is empty and ``message`` says why);
+    windows_s ``(W, 2)`` seconds; detected: per window, the QMP names that held; activities:
+    ranked best first.
+    """
+
+    source: str
+    status: str
+    message: str
+    fps: float
+    duration_s: float
+    windows_s: tuple[tuple[float, float], ...]
+    detected: tuple[tuple[str, ...], ...]
+    activities: tuple[ActivityScore, ...]
+    add_source: str = ""
+    qmp_words: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def best(self) -> ActivityScore | None:
+        return self.activities[0] if self.activities else None
+
+    def activity_for(self, label: str) -> ActivityScore | None:
+        """The best-ranked activity that stands for ``label`` (None if the ADD has none)."""
+        return next((a for a in self.activities if label in a.labels), None)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (NaN scores become None)."""
+        out = asdict(self)
+        for act in out["activities"]:
+            if not np.isfinite(act["score"]):
+                act["score"] = None
+        return out

@@ -1,0 +1,198 @@
+"""``run_compare``: every similarity x feature level, DAD and peer classifiers cross-validated
+on the same folds of a labelled dataset, with confidence intervals and a paired test.
+
+Protocol
+--------
+- Folds: leave-one-subject-out (``cv="loso"``, default) or stratified k-fold over clips
+  (``cv="kfold"``). LOSO needs a subject for every clip and at least two subjects; otherwise the
+  run falls back to stratified k-fold and says so in ``notes`` (scores are then optimistic,
+  because the same person is in training and test).
+- Classes with a single clip are left out (a held-out single clip can never be predicted right,
+  and stratification is impossible); the note names them.
+- Target: the activity label (default) or any column of the clip metadata (``correct``,
+  ``sensor``, ...). For a target other than the label, one model per activity is trained
+  (``within="label"``): e.g. ``target="correct"`` on UI-PRMD predicts correct/incorrect within
+  each movement from that movement's training clips, so chance is ~50 % and the movement itself
+  is never confused with correctness.
+- The work unit is one (method, fold) task (:mod:`cbr.evaluation.tasks`), run by a
+  :mod:`cbr.evaluation.runner`: in this process for ``jobs=1``, else in spawned workers that
+  each receive the clips once and compute their features once, before their first task.
+- Statistics (:mod:`cbr.evaluation.stats`): accuracy with a Wilson 95 % interval; macro-F1 with
+  a percentile bootstrap over clips; per-class recall with Wilson intervals; McNemar's exact
+  (binomial) test of every method against the best one on the same clips.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+
+import numpy as np
+
+from features.datasets import Clip
+
+from ..similarity import get_measure
+from .data import Prepared, prepare
+from .folds import make_folds, unseen_class_notes
+from .machine import machine_info
+from .methods import Method, add_labels, methods_for, why_unavailable
+from .results import ClipInfo, CompareResults, CVSummary, DatasetSummary, MethodResult
+from .runner import make_runner
+from .scoring import best_methods, score, with_mcnemar
+from .settings import CompareSettings
+from .tasks import FoldResult, FoldTask, RunContext, missing_levels, prepare_worker, run_fold
+
+
+@dataclass
+class CompareRun:
+    """A finished comparison: its results, and the clips and folds (``(n,)``) they came from,
+    which explanations and pictures need."""
+
+    results: CompareResults
+    data: Prepared
+    folds: np.ndarray
+
+
+def _folds(
+    data: Prepared, settings: CompareSettings, given: np.ndarray | None
+) -> tuple[str, np.ndarray, list[str]]:
+    """Scheme, fold of every clip ``(n,)`` and notes (``given`` overrides the scheme)."""
+    if given is not None:
+        return "given", np.asarray(given, dtype=np.int64), []
+    scheme, folds, notes = make_folds(data, settings)
+    if scheme == "loso":
+        notes += unseen_class_notes(data, folds)
+    return scheme, folds, notes
+
+
+def _qmp_note(settings: CompareSettings) -> list[str]:
+    if "qmp" in settings.features and any(
+        get_measure(s).compares_sequences for s in settings.similarities
+    ):
+        return [
+            "qmp features are one vector per clip: compared by euclidean only (dtw and "
+            "signature compare sequences)"
+        ]
+    return []
+
+
+def _dad_note(data: Prepared) -> list[str]:
+    uncovered = [c for c in data.classes if c not in add_labels()]
+    if not uncovered:
+        return []
+    return [
+        f"the ADD has no activity for {', '.join(uncovered)}: DAD cannot recognise those clips "
+        "(it answers the best-scoring described activity instead)"
+    ]
+
+
+def _skipped(
+    methods: list[Method], data: Prepared, settings: CompareSettings
+) -> tuple[dict[int, str], list[str]]:
+    """Methods that cannot run here, by index, with the reason; and notes on those that can."""
+    skipped: dict[int, str] = {}
+    notes: list[str] = []
+    for mi, m in enumerate(methods):
+        why = why_unavailable(m, data.classes, settings.target)
+        if why:
+            skipped[mi] = why
+        elif m.kind == "dad":
+            notes += _dad_note(data)
+    runnable = [m for mi, m in enumerate(methods) if mi not in skipped]
+    for level, why in missing_levels(data, runnable).items():
+        for mi, m in enumerate(methods):
+            if m.kind == "cbr" and m.params["features"] == level and mi not in skipped:
+                skipped[mi] = why
+    return skipped, notes
+
+
+def _run_tasks(ctx: RunContext, jobs: int) -> list[FoldResult]:
+    """Every (method, fold) task of the methods that can run (``ctx.active``)."""
+    folds = sorted(set(ctx.folds.tolist()))
+    tasks = [FoldTask(mi, f) for mi in ctx.active for f in folds]
+    runner = make_runner(ctx, prepare_worker, min(jobs, max(1, len(tasks))))
+    return list(runner.map(run_fold, tasks, "folds", "fold"))
+
+
+def _method_result(
+    mi: int,
+    m: Method,
+    data: Prepared,
+    skipped: dict[int, str],
+    fold_results: list[FoldResult],
+    settings: CompareSettings,
+) -> MethodResult:
+    """Method ``mi``'s row: skipped, failed (the first fold's error), or scored."""
+    head = (m.name, m.kind, m.interpretable, dict(m.params))
+    if mi in skipped:
+        return MethodResult(*head, "skipped", skipped[mi])
+    mine = [r for r in fold_results if r.method == mi]
+    errors = [r.error for r in mine if r.error]
+    if errors:
+        return MethodResult(*head, "failed", errors[0])
+    pred = np.empty(len(data.y), dtype=object)
+    for r in mine:
+        pred[r.test] = r.pred
+    return MethodResult(*head, "ok", "", score(data, pred, mine, settings))
+
+
+def _status_notes(rows: list[MethodResult]) -> list[str]:
+    return [f"{m.name} {m.status}: {m.message}" for m in rows if m.status in ("skipped", "failed")]
+
+
+def _dataset(data: Prepared, source: str) -> DatasetSummary:
+    return DatasetSummary(
+        source=source,
+        n_clips=len(data.y),
+        subjects=sorted({s for s in data.subjects if s is not None}),
+        classes=list(data.classes),
+        class_counts={c: int((data.y == c).sum()) for c in data.classes},
+        activities=sorted(set(data.labels.tolist())),
+    )
+
+
+def _clips(data: Prepared) -> list[ClipInfo]:
+    return [
+        ClipInfo(data.ids[i], str(data.labels[i]), data.subjects[i], str(data.y[i]))
+        for i in range(len(data.y))
+    ]
+
+
+def run_compare(
+    clips: Sequence[Clip],
+    settings: CompareSettings,
+    source: str = "dataset",
+    fold_indices: np.ndarray | None = None,
+) -> CompareRun:
+    """Cross-validate every configuration of ``settings`` on ``clips``.
+
+    Returns the results (dataset summary, settings, notes, folds, per-method metrics and
+    predictions, the best method and McNemar p-values against it; explanations and pictures
+    are added afterwards) with the clips and folds they came from. ``fold_indices``
+    ``(n_clips,)`` overrides the fold assignment (tests, fixed splits).
+    """
+    data = prepare(clips, settings, source)
+    scheme, folds, fold_notes = _folds(data, settings, fold_indices)
+    methods = methods_for(settings)
+    skipped, method_notes = _skipped(methods, data, settings)
+    active = tuple(mi for mi in range(len(methods)) if mi not in skipped)
+    ctx = RunContext(data, tuple(methods), folds, active, int(settings.peer_length))
+    fold_results = _run_tasks(ctx, int(settings.jobs))
+    rows = [
+        _method_result(mi, m, data, skipped, fold_results, settings) for mi, m in enumerate(methods)
+    ]
+    best, best_interpretable = best_methods(rows)
+    results = CompareResults(
+        created_utc=datetime.now(UTC).isoformat(timespec="seconds"),
+        machine=machine_info(),
+        dataset=_dataset(data, source),
+        settings=settings.to_dict(),
+        cv=CVSummary(scheme, len(set(folds.tolist())), folds.tolist()),
+        notes=data.notes + fold_notes + _qmp_note(settings) + method_notes + _status_notes(rows),
+        clips=_clips(data),
+        methods=with_mcnemar(rows, best),
+        best=best,
+        best_interpretable=best_interpretable,
+    )
+    return CompareRun(results, data, folds)

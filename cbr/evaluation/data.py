@@ -1,0 +1,113 @@
+"""The clips of a comparison (``Prepared``): their targets, subjects and model groups, classes
+with a single clip left out."""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from features.datasets import Clip, clip_column, clip_target
+from features.errors import DataError
+from features.poses import PoseSequence
+
+from .settings import CompareSettings
+
+
+@dataclass
+class Prepared:
+    """The clips of one comparison and what is predicted for each.
+
+    seqs ``(n,)`` pose sequences; ids ``(n,)`` clip names; y ``(n,)`` target values (str);
+    subjects ``(n,)`` (None when unknown); labels ``(n,)`` activity labels; within ``(n,)``
+    the per-model group (or None); classes: sorted target values.
+    """
+
+    seqs: list[PoseSequence]
+    ids: list[str]
+    y: np.ndarray
+    subjects: list[str | None]
+    labels: np.ndarray
+    within: np.ndarray | None
+    classes: list[str]
+    notes: list[str] = field(default_factory=list)
+
+
+def clip_id(clip: Clip, i: int) -> str:
+    """A clip's name for people: its file name, else its position."""
+    src = clip.seq.source or clip.extras.get("origin") or ""
+    return Path(str(src)).name if src else f"clip {i}"
+
+
+def _targets(clips: Sequence[Clip], target: str, source: str) -> np.ndarray:
+    """Every clip's target value ``(n,)``; a clip without one is an error naming it."""
+    values = [clip_target(c, target) for c in clips]
+    missing = [i for i, v in enumerate(values) if v is None]
+    if missing:
+        cols = sorted({"label", "subject"} | {k for c in clips for k in c.extras})
+        raise DataError(
+            f"{len(missing)} of {len(clips)} clips have no value for target "
+            f"{target!r} (e.g. {clip_id(clips[missing[0]], missing[0])}); "
+            f"columns available: {', '.join(cols)}",
+            source,
+        )
+    return np.array(values, dtype=object)
+
+
+def _groups(clips: Sequence[Clip], column: str | None, source: str) -> np.ndarray | None:
+    """Every clip's model group ``(n,)`` (None when one model serves all clips)."""
+    if column is None:
+        return None
+    values = [clip_column(c, column) for c in clips]
+    if any(v is None for v in values):
+        raise DataError(f"some clips have no {column!r} to group the models by", source)
+    return np.array([str(v) for v in values], dtype=object)
+
+
+def _single_clip_note(single: list[str]) -> str:
+    many = len(single) > 1
+    return (
+        f"class{'es' if many else ''} {', '.join(single)} ha{'ve' if many else 's'} a single "
+        "clip and cannot be cross-validated (a held-out single clip is never in training); "
+        "left out of the comparison"
+    )
+
+
+def prepare(clips: Sequence[Clip], settings: CompareSettings, source: str = "dataset") -> Prepared:
+    """Targets, subjects and groups of ``clips``; classes with a single clip are dropped with
+    a note."""
+    if not clips:
+        raise DataError("no clips found", source)
+    y = _targets(clips, settings.target, source)
+    within = _groups(clips, settings.within_column, source)
+    counts = Counter(y)
+    single = sorted(c for c, n in counts.items() if n < 2)
+    idx = [i for i, v in enumerate(y) if counts[v] >= 2]
+    classes = sorted({str(v) for v in y[idx]})
+    if len(classes) < 2:
+        raise DataError(
+            f"need at least two classes of {settings.target!r} with two or more clips each; "
+            f"found {dict(counts)}",
+            source,
+        )
+    return Prepared(
+        seqs=[clips[i].seq for i in idx],
+        ids=[clip_id(clips[i], i) for i in idx],
+        y=y[idx],
+        subjects=[clips[i].subject for i in idx],
+        labels=np.array([str(clips[i].label) for i in idx], dtype=object),
+        within=None if within is None else within[idx],
+        classes=classes,
+        notes=[_single_clip_note(single)] if single else [],
+    )
+
+
+def example_clips(data: Prepared) -> dict[str, PoseSequence]:
+    """One example clip per activity (the first in dataset order), by activity name."""
+    out: dict[str, PoseSequence] = {}
+    for i, lab in enumerate(data.labels):
+        out.setdefault(str(lab), data.seqs[i])
+    return dict(sorted(out.items()))

@@ -1,0 +1,99 @@
+"""Cross-validation folds of a comparison: leave one subject out, or stratified k-fold when
+asked for or when subjects cannot be left out."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import numpy as np
+
+from features.errors import DataError
+
+from .data import Prepared
+from .settings import CompareSettings
+
+_OPTIMISTIC = "(optimistic: {} in training and test)"
+
+
+def _loso_fallback(subjects: list[str | None], k: int) -> str | None:
+    """Why leave-one-subject-out is impossible for these clips (None if it is possible)."""
+    unknown = sum(s is None for s in subjects)
+    distinct = sorted({s for s in subjects if s is not None})
+    fallback = f"falling back to stratified {k}-fold cross-validation over clips "
+    if unknown:
+        return (
+            f"{unknown} clip(s) have no subject, so leave-one-subject-out is impossible; "
+            + fallback
+            + _OPTIMISTIC.format("a person can be")
+        )
+    if len(distinct) < 2:
+        return (
+            f"only one subject ({distinct[0]}), so leave-one-subject-out is impossible; "
+            + fallback
+            + _OPTIMISTIC.format("the same person is")
+        )
+    return None
+
+
+def _by_subject(subjects: list[str | None]) -> np.ndarray:
+    """Fold of every clip ``(n,)``: the index of its subject in sorted order."""
+    index = {s: i for i, s in enumerate(sorted({str(s) for s in subjects}))}
+    return np.array([index[str(s)] for s in subjects], dtype=np.int64)
+
+
+def _stratified(data: Prepared, k: int, seed: int) -> tuple[np.ndarray, list[str]]:
+    """Fold of every clip ``(n,)`` by shuffled stratified k-fold (strata: target within
+    group), with fewer folds, and a note, when the smallest stratum is smaller than ``k``."""
+    from sklearn.model_selection import StratifiedKFold
+
+    strat = (
+        data.y
+        if data.within is None
+        else np.array([f"{w}|{v}" for w, v in zip(data.within, data.y, strict=True)])
+    )
+    smallest = min(Counter(strat).values())
+    notes = []
+    if smallest < k:
+        if smallest < 2:
+            raise DataError(
+                "a class has a single clip in some group; stratified k-fold is impossible",
+                "--cv kfold",
+            )
+        notes.append(f"the smallest class has {smallest} clips: using {smallest} folds, not {k}")
+        k = smallest
+    fold = np.zeros(len(data.y), dtype=np.int64)
+    skf = StratifiedKFold(n_splits=k, shuffle=True, random_state=seed)
+    for i, (_, test) in enumerate(skf.split(np.zeros((len(strat), 1)), strat)):
+        fold[test] = i
+    return fold, notes
+
+
+def make_folds(data: Prepared, settings: CompareSettings) -> tuple[str, np.ndarray, list[str]]:
+    """The scheme actually used, the fold number of every clip ``(n,)``, and notes.
+
+    LOSO: one fold per subject. Stratified k-fold (shuffled, seeded) is used when asked for, or
+    as the fallback when LOSO is impossible (a clip without subject, or a single subject).
+    """
+    notes: list[str] = []
+    if settings.cv == "loso":
+        why = _loso_fallback(data.subjects, int(settings.folds))
+        if why is None:
+            return "loso", _by_subject(data.subjects), notes
+        notes.append(why)
+    fold, k_notes = _stratified(data, int(settings.folds), int(settings.seed))
+    return "kfold", fold, notes + k_notes
+
+
+def unseen_class_notes(data: Prepared, folds: np.ndarray) -> list[str]:
+    """For leave-one-subject-out: the classes only the held-out subject has, per fold."""
+    notes = []
+    for f in sorted(set(folds.tolist())):
+        test = folds == f
+        unseen = sorted(set(data.y[test]) - set(data.y[~test]))
+        if unseen:
+            notes.append(
+                f"subject {data.subjects[int(np.flatnonzero(test)[0])]}: class(es) "
+                f"{', '.join(unseen)} occur in no other subject, so they cannot be "
+                "predicted when that subject is held out"
+            )
+    return notes

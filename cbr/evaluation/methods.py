@@ -1,0 +1,103 @@
+"""The rows of a comparison: which methods the settings ask for, why one cannot run here, and
+a fresh estimator for each."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from features.errors import ConfigError
+
+from ..similarity import get_measure
+from .peers import DTWKNNPeer, MiniRocketPeer, minirocket_backend
+from .settings import CompareSettings
+
+
+@dataclass(frozen=True)
+class Method:
+    """One row of the comparison: ``kind`` is "cbr", "dad" or "peer"; ``params`` are the
+    estimator's parameters."""
+
+    name: str
+    kind: str
+    interpretable: bool
+    params: dict[str, Any] = field(default_factory=dict)
+
+
+def _cbr_methods(settings: CompareSettings) -> list[Method]:
+    return [
+        Method(
+            f"cbr {level}/{sim}",
+            "cbr",
+            True,
+            {
+                "features": level,
+                "similarity": sim,
+                "k": int(settings.k),
+                "trim": settings.trim,
+                **settings.cbr_params,
+            },
+        )
+        for level in settings.features
+        for sim in settings.similarities
+        # a QMP description is one vector per clip: sequence measures have nothing to align
+        if level != "qmp" or not get_measure(sim).compares_sequences
+    ]
+
+
+def _peer_method(peer: str, settings: CompareSettings) -> Method:
+    params: dict[str, Any] = {"length": int(settings.peer_length)}
+    if peer == "dtw-knn":
+        params["n_neighbors"] = 1
+    else:
+        params["random_state"] = int(settings.seed)
+    return Method(peer, "peer", False, params)
+
+
+def methods_for(settings: CompareSettings) -> list[Method]:
+    """Every configuration ``settings`` asks for, interpretable ones first."""
+    out = _cbr_methods(settings)
+    if settings.dad:
+        out.append(Method("dad", "dad", True, {}))
+    out += [_peer_method(p, settings) for p in settings.peers]
+    return out
+
+
+def make_estimator(method: Method) -> Any:
+    """A fresh, unfitted estimator for ``method`` (all share fit(X, y)/predict(X))."""
+    if method.kind == "cbr":
+        from ..estimator import CaseBaseClassifier
+
+        return CaseBaseClassifier(**method.params)
+    if method.kind == "dad":
+        from ..dad import DADClassifier
+
+        return DADClassifier()
+    if method.name == "dtw-knn":
+        return DTWKNNPeer(**method.params)
+    if method.name == "minirocket":
+        return MiniRocketPeer(**method.params)
+    raise ConfigError(f"unknown method {method.name!r}", "compare")
+
+
+def add_labels() -> set[str]:
+    """Every dataset label the shipped ADD has an activity for."""
+    from features.qmp.add import load_add
+
+    return {lab for act in load_add().activities.values() for lab in act.labels}
+
+
+def why_unavailable(method: Method, classes: list[str], target: str) -> str | None:
+    """Why ``method`` cannot run on a comparison of ``classes`` of ``target`` (None if it
+    can)."""
+    if method.kind == "dad":
+        if target != "label":
+            return f"DAD recognises activities from its ADD rules; it does not predict {target!r}"
+        if not set(classes) & add_labels():
+            return "the ADD describes none of this dataset's activities"
+    if method.name == "minirocket" and minirocket_backend() is None:
+        return (
+            "MiniRocket needs sktime or aeon, neither is installed "
+            "(pip install -e '.[compare]' installs sktime)"
+        )
+    return None

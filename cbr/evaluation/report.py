@@ -1,0 +1,304 @@
+"""The self-contained HTML report of a comparison: the results file read and checked, every
+value escaped, pictures inlined only from inside the results folder.
+
+The page inlines every picture as a base64 data URI and loads nothing else, so one file can be
+mailed or opened offline. Nothing in the results file is trusted: it is read by
+:meth:`CompareResults.from_dict` (one line naming the file and the key for a missing key or a
+wrong type), every inserted value goes through ``html.escape``, and a picture must be a PNG
+file inside the results folder.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from features.errors import DataError
+from features.fileio import check_output, write_text_atomic
+
+from .pictures import Drawing, result_pictures
+from .results import CompareResults, MethodResult, Rate, Scores
+from .tables import p_value
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+_CSS = """
+body{font-family:system-ui,-apple-system,"Segoe UI",sans-serif;margin:2em auto;max-width:1200px;
+color:#222;line-height:1.4;padding:0 1em}
+h1{font-size:1.6em}h2{font-size:1.25em;margin-top:1.8em;border-bottom:1px solid #ddd}
+table{border-collapse:collapse;font-size:.9em;margin:.5em 0}
+th,td{border:1px solid #ccc;padding:.25em .55em;text-align:right}
+th{background:#f2f2f2}td.l,th.l{text-align:left}
+tr.best td{font-weight:bold;background:#eef5ff}
+figure{margin:1em 0}img{max-width:100%;height:auto;border:1px solid #eee}
+figcaption{font-size:.85em;color:#555}.note{color:#7a4b00}.small{font-size:.85em;color:#555}
+.wide{overflow-x:auto}
+.expl{border-left:3px solid #3b6fb6;padding:.3em .8em;margin:.8em 0;background:#fafcff}
+"""
+
+
+def e(value: Any) -> str:
+    """Any value as HTML text (quotes escaped too: safe inside attributes)."""
+    return html.escape(str(value), quote=True)
+
+
+def _pct(x: float | None) -> str:
+    return "" if x is None or not np.isfinite(x) else e(f"{100 * x:.1f}")
+
+
+# ---------------------------------------------------------------------------- reading
+
+
+def load_results(path: str | Path) -> tuple[CompareResults, Path]:
+    """A compare results file (or a folder holding ``results.json``), checked, and its path."""
+    p = Path(path)
+    if p.is_dir():
+        p = p / "results.json"
+    if not p.is_file():
+        raise DataError("no such results file (run `posecbr compare DATA --out DIR` first)", p)
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise DataError(f"not a JSON results file ({exc})", p) from None
+    return CompareResults.from_dict(doc, str(p)), p
+
+
+def picture_files(results: CompareResults, results_file: Path) -> dict[str, Path]:
+    """The pictures named in ``results`` that exist, by name; each must resolve (links
+    followed) to a PNG file inside the results folder, or it is an error naming it."""
+    base = results_file.parent.resolve()
+    found: dict[str, Path] = {}
+    for name in results.pictures.files():
+        path = (base / name).resolve()
+        if not path.is_relative_to(base):
+            raise DataError(f"picture {name!r} lies outside the results folder", results_file)
+        if not path.is_file():
+            continue  # drawn again from the results, or left out
+        with open(path, "rb") as fh:
+            if fh.read(len(PNG_MAGIC)) != PNG_MAGIC:
+                raise DataError(f"picture {name!r} is not a PNG image", results_file)
+        found[name] = path
+    return found
+
+
+# ---------------------------------------------------------------------------- HTML parts
+
+
+def _img(images: Mapping[str, Path], name: str | None, alt: str) -> str:
+    path = images.get(name or "")
+    if path is None:
+        return ""
+    data = base64.b64encode(path.read_bytes()).decode("ascii")
+    return f'<img src="data:image/png;base64,{data}" alt="{e(alt)}">'
+
+
+def _figure(images: Mapping[str, Path], name: str | None, alt: str, caption: str) -> str:
+    img = _img(images, name, alt)
+    return f"<figure>{img}<figcaption>{e(caption)}</figcaption></figure>" if img else ""
+
+
+def _method_row(results: CompareResults, m: MethodResult, s: Scores) -> str:
+    cls = " class='best'" if m.name == results.best_interpretable else ""
+    cb = "" if s.case_base_size is None else e(f"{s.case_base_size:.0f}")
+    p = "best" if m.name == results.best else p_value(s.mcnemar.p if s.mcnemar else float("nan"))
+    tag = "" if m.interpretable else " <span class='small'>(peer)</span>"
+    return (
+        f"<tr{cls}><td class='l'>{e(m.name)}{tag}</td><td>{_pct(s.accuracy)}</td>"
+        f"<td>{_pct(s.accuracy_ci[0])}–{_pct(s.accuracy_ci[1])}</td>"
+        f"<td>{_pct(s.macro_f1)}</td>"
+        f"<td>{_pct(s.macro_f1_ci[0])}–{_pct(s.macro_f1_ci[1])}</td>"
+        f"<td>{e(f'{s.fit_s:.2f}')}</td><td>{e(f'{s.predict_ms_per_clip:.2f}')}</td>"
+        f"<td>{cb}</td><td>{e(p)}</td></tr>"
+    )
+
+
+def _table(results: CompareResults) -> str:
+    rows = [
+        "<table id='results'><thead><tr><th class='l'>method</th><th>accuracy %</th>"
+        "<th>95 % CI</th><th>macro-F1 %</th><th>95 % CI</th><th>fit s</th>"
+        "<th>ms / clip</th><th>case base</th><th>McNemar p vs best</th></tr></thead><tbody>"
+    ]
+    for m in results.methods:
+        if m.scores is None:
+            rows.append(
+                f"<tr><td class='l'>{e(m.name)}</td><td class='l' colspan='8'>"
+                f"{e(m.status)}: {e(m.message)}</td></tr>"
+            )
+        else:
+            rows.append(_method_row(results, m, m.scores))
+    rows.append("</tbody></table>")
+    return "<div class='wide'>" + "\n".join(rows) + "</div>"
+
+
+def _rate_table(
+    ok: list[tuple[str, dict[str, Rate]]], keys: list[str], table_id: str, what: str
+) -> str:
+    """Methods as columns, ``keys`` as rows: each method's rate per key in %, its 95 %
+    interval as the cell's tooltip."""
+    head = "".join(f"<th>{e(name)}</th>" for name, _ in ok)
+    rows = [
+        f"<table id='{e(table_id)}'><thead><tr><th class='l'>{e(what)} (n)</th>{head}</tr>"
+        "</thead><tbody>"
+    ]
+    for key in keys:
+        cells = "".join(
+            f"<td title='95 % CI {_pct(rates[key].ci[0])}–{_pct(rates[key].ci[1])}'>"
+            f"{_pct(rates[key].value)}</td>"
+            if key in rates
+            else "<td></td>"
+            for _, rates in ok
+        )
+        n = next((rates[key].n for _, rates in ok if key in rates), 0)
+        rows.append(f"<tr><td class='l'>{e(key)} ({e(n)})</td>{cells}</tr>")
+    rows.append("</tbody></table>")
+    return "<div class='wide'>" + "\n".join(rows) + "</div>"
+
+
+def _recall_table(results: CompareResults) -> str:
+    ok = [(m.name, s.per_class) for m, s in results.scored()]
+    if not ok:
+        return ""
+    return _rate_table(ok, results.dataset.classes, "recall", "class")
+
+
+def _group_table(results: CompareResults) -> str:
+    """Accuracy per model group (one model per movement, say), when there are groups."""
+    ok = [(m.name, s.per_group) for m, s in results.scored() if s.per_group]
+    if not ok:
+        return ""
+    within = str(results.settings.get("within") or "group")
+    table = _rate_table(ok, list(ok[0][1]), "groups", within)
+    return f"<h2>Accuracy per {e(within)} (%)</h2>{table}"
+
+
+def _explanations(results: CompareResults) -> str:
+    if not results.explanations:
+        return "<p>No misclassified clip to explain (or no case-base configuration ran).</p>"
+    return "\n".join(
+        f"<div class='expl'><b>{e(x.clip)}</b> (subject {e(x.subject)}): "
+        f"true <b>{e(x.true)}</b>, predicted <b>{e(x.predicted)}</b> by "
+        f"{e(x.method)}<br>{e(x.text).replace(chr(10), '<br>')}</div>"
+        for x in results.explanations
+    )
+
+
+def _head(results: CompareResults) -> list[str]:
+    ds, st, cv, machine = results.dataset, results.settings, results.cv, results.machine
+    name = e(Path(ds.source).name)
+    within = f" (one model per {e(st['within'])})" if st.get("within") else ""
+    return [
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
+        "<meta name='viewport' content='width=device-width, initial-scale=1'>",
+        # A data: favicon stops the browser from requesting /favicon.ico (a console error).
+        "<link rel='icon' href='data:,'>",
+        f"<title>posecbr compare: {name}</title>",
+        f"<style>{_CSS}</style></head><body>",
+        f"<h1>Activity recognition comparison: {name}</h1>",
+        f"<p>{e(ds.n_clips)} clips, {e(len(ds.classes))} classes of <b>{e(st['target'])}</b>"
+        f"{within}, {e(len(ds.subjects))} subjects; cross-validation <b>{e(cv.scheme)}</b> with "
+        f"{e(cv.n_folds)} folds. Best: <b>{e(results.best)}</b>; best interpretable: "
+        f"<b>{e(results.best_interpretable)}</b> (bold row).</p>",
+        f"<p class='small'>Made {e(results.created_utc)} on {e(machine['platform'])}, "
+        f"{e(machine.get('cpu_count'))} CPUs, Python {e(machine['python'])}. "
+        f"Source: {e(ds.source)}.</p>",
+    ]
+
+
+def _notes(results: CompareResults) -> list[str]:
+    if not results.notes:
+        return []
+    return [
+        "<h2>Notes</h2><ul>",
+        *(f"<li class='note'>{e(n)}</li>" for n in results.notes),
+        "</ul>",
+    ]
+
+
+def _figures(results: CompareResults, images: Mapping[str, Path]) -> dict[str, str]:
+    """The HTML of every picture group (empty where there is no picture)."""
+    pics = results.pictures
+    confusion = "".join(
+        _figure(images, c.file, f"confusion {c.method}", c.method) for c in pics.confusion
+    )
+    timelines = "".join(
+        _figure(images, t.file, f"timeline {t.activity}", f"{t.activity}: {t.clip}")
+        for t in pics.timelines
+    )
+    prevalence = _figure(
+        images,
+        pics.prevalence,
+        "feature prevalence",
+        "Share of each feature per activity in the initial and the trimmed case base "
+        "(paper fig. 4).",
+    )
+    return {
+        "accuracy": _figure(
+            images,
+            pics.accuracy,
+            "accuracy by configuration",
+            "Accuracy by configuration (blue: interpretable, grey: peers).",
+        ),
+        "confusion": "<h2>Confusion matrices</h2>" + confusion if confusion else "",
+        "prevalence": "<h2>Case-base feature prevalence per activity</h2>" + prevalence
+        if prevalence
+        else "",
+        "timelines": "<h2>Fluent timeline of an example clip per activity</h2>" + timelines
+        if timelines
+        else "",
+    }
+
+
+def render_html(results: CompareResults, images: Mapping[str, Path]) -> str:
+    """The report page for ``results``; ``images`` maps a picture's name in
+    ``results.pictures`` to the PNG file to inline (a picture without one is left out)."""
+    fig = _figures(results, images)
+    parts = _head(results) + _notes(results)
+    parts += [
+        "<h2>Results</h2>",
+        "<p class='small'>Accuracy with Wilson 95 % interval; macro-F1 with bootstrap 95 % "
+        "interval over clips; fit and predict times summed over folds; case base = cases kept "
+        "after trimming (mean over folds); McNemar exact test against the best method on the "
+        "same clips.</p>",
+        _table(results),
+        fig["accuracy"],
+        "<h2>Recall per class (%)</h2>",
+        _recall_table(results),
+        _group_table(results),
+        fig["confusion"],
+        fig["prevalence"],
+        "<h2>Explanations of misclassified clips</h2>",
+        _explanations(results),
+        fig["timelines"],
+        "</body></html>",
+    ]
+    return "\n".join(p for p in parts if p)
+
+
+# ---------------------------------------------------------------------------- writing
+
+
+def write_report(results_path: str | Path, out: str | Path) -> tuple[Path, list[str]]:
+    """Render the report for a results file to ``out`` (atomically); returns it and the
+    pictures that could not be drawn. The results-only pictures (accuracy, confusion
+    matrices) missing from the folder (a ``--json``-only run) are drawn into a temporary
+    folder."""
+    results, source = load_results(results_path)
+    images = picture_files(results, source)
+    dest = check_output(out, inputs=[source, *images.values()], what="report")
+    drawing = Drawing()
+    with tempfile.TemporaryDirectory() as tmp:
+        if results.pictures.accuracy not in images:
+            drawn = result_pictures(results, tmp, drawing)
+            results.pictures.accuracy = drawn.accuracy
+            results.pictures.confusion = drawn.confusion
+            images.update({name: Path(tmp) / name for name in drawn.files()})
+        page = render_html(results, images)
+    write_text_atomic(dest, page)
+    return dest, drawing.failures

@@ -1,0 +1,607 @@
+"""The results of a comparison as typed records: ``to_dict()`` gives the JSON that
+``compare --json/--out`` writes, ``from_dict()`` reads it back, checking every key and type.
+
+A results file is input to ``posecbr report``; the reader trusts nothing in it: a missing key
+or a value of the wrong type is one :class:`~features.errors.DataError` naming the file and the
+key (``methods[2].accuracy``), and a picture must be a file name inside the results folder.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import PurePosixPath, PureWindowsPath
+from typing import Any, NoReturn, TypeVar
+
+from features.errors import DataError
+
+KIND = "posecbr-compare"
+T = TypeVar("T")
+
+
+# ---------------------------------------------------------------------------- reading JSON
+
+
+def _describe(value: Any) -> str:
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true/false"
+    if isinstance(value, int | float):
+        return "a number"
+    if isinstance(value, str):
+        return "a string"
+    return "a list" if isinstance(value, list) else "an object"
+
+
+_KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
+    "str": ("a string", lambda v: isinstance(v, str)),
+    "num": ("a number", lambda v: isinstance(v, int | float) and not isinstance(v, bool)),
+    "int": ("a whole number", lambda v: isinstance(v, int) and not isinstance(v, bool)),
+    "bool": ("true or false", lambda v: isinstance(v, bool)),
+    "list": ("a list", lambda v: isinstance(v, list)),
+    "dict": ("an object", lambda v: isinstance(v, dict)),
+}
+
+
+class Reader:
+    """Typed access to a JSON document; every problem is one DataError naming ``source`` and
+    the key path."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def fail(self, where: str, problem: str) -> NoReturn:
+        raise DataError(f"key '{where}' {problem}", self.source)
+
+    def value(self, v: Any, where: str, kind: str, optional: bool = False) -> Any:
+        """``v`` checked to be of ``kind`` (``str``, ``num``, ``int``, ``bool``, ``list``,
+        ``dict``), or None when ``optional``."""
+        if v is None and optional:
+            return None
+        name, ok = _KINDS[kind]
+        if not ok(v):
+            self.fail(where, f"must be {name}{' or null' if optional else ''}, got {_describe(v)}")
+        return float(v) if kind == "num" else v
+
+    def get(
+        self, obj: dict[str, Any], key: str, where: str, kind: str, optional: bool = False
+    ) -> Any:
+        """``obj[key]`` checked to be of ``kind``; a missing key is an error unless
+        ``optional`` (then None)."""
+        path = f"{where}.{key}" if where else key
+        if key not in obj:
+            if optional:
+                return None
+            raise DataError(f"missing key '{path}'", self.source)
+        return self.value(obj[key], path, kind, optional)
+
+    def items(self, obj: dict[str, Any], key: str, where: str, kind: str) -> list[Any]:
+        """``obj[key]``: a list whose every item is of ``kind``."""
+        path = f"{where}.{key}" if where else key
+        return [
+            self.value(v, f"{path}[{i}]", kind)
+            for i, v in enumerate(self.get(obj, key, where, "list"))
+        ]
+
+    def records(
+        self,
+        obj: dict[str, Any],
+        key: str,
+        where: str,
+        read: Callable[[Reader, dict[str, Any], str], T],
+    ) -> list[T]:
+        """``obj[key]``: a list of objects, each read by ``read(reader, item, path)``."""
+        path = f"{where}.{key}" if where else key
+        return [
+            read(self, item, f"{path}[{i}]")
+            for i, item in enumerate(self.items(obj, key, where, "dict"))
+        ]
+
+    def pair(self, obj: dict[str, Any], key: str, where: str) -> tuple[float, float]:
+        """``obj[key]``: two numbers (an interval)."""
+        vals = self.items(obj, key, where, "num")
+        if len(vals) != 2:
+            self.fail(f"{where}.{key}", f"must hold two numbers, got {len(vals)}")
+        return (vals[0], vals[1])
+
+    def picture(self, obj: dict[str, Any], key: str, where: str) -> str:
+        """``obj[key]``: a picture's file name, relative and inside the results folder."""
+        name = self.get(obj, key, where, "str")
+        path = f"{where}.{key}" if where else key
+        if not is_inside_name(name):
+            self.fail(path, f"is {name!r}, not a file inside the results folder")
+        return str(name)
+
+
+def is_inside_name(name: str) -> bool:
+    """A relative file name that cannot leave its folder (no absolute path, drive or '..')."""
+    if not name or "\x00" in name:
+        return False
+    for flavour in (PurePosixPath(name), PureWindowsPath(name)):
+        if flavour.is_absolute() or flavour.anchor or ".." in flavour.parts:
+            return False
+    return True
+
+
+# ---------------------------------------------------------------------------- records
+
+
+@dataclass(frozen=True)
+class Rate:
+    """A share with its Wilson 95 % interval over ``n`` clips: a class's recall or a model
+    group's accuracy."""
+
+    n: int
+    value: float
+    ci: tuple[float, float]
+
+    def to_dict(self, key: str) -> dict[str, Any]:
+        return {"n": self.n, key: self.value, "ci": list(self.ci)}
+
+    @staticmethod
+    def read(r: Reader, d: dict[str, Any], where: str, key: str) -> Rate:
+        return Rate(
+            r.get(d, "n", where, "int"), r.get(d, key, where, "num"), r.pair(d, "ci", where)
+        )
+
+
+def _rates(r: Reader, d: dict[str, Any], name: str, where: str, key: str) -> dict[str, Rate]:
+    table = r.get(d, name, where, "dict")
+    return {
+        str(k): Rate.read(r, r.value(v, f"{where}.{name}.{k}", "dict"), f"{where}.{name}.{k}", key)
+        for k, v in table.items()
+    }
+
+
+@dataclass(frozen=True)
+class McNemar:
+    """Exact McNemar test against ``versus`` on the same clips: ``b`` clips only it got
+    right, ``c`` only this method, two-sided p-value ``p``."""
+
+    versus: str
+    b: int
+    c: int
+    p: float
+
+
+@dataclass(frozen=True)
+class Scores:
+    """How a method that ran did: figures over all clips, per class, per model group, the
+    confusion matrix ``(classes, classes)`` (``unassigned``: predictions outside the classes,
+    per true class), costs summed over folds, and every clip's prediction."""
+
+    accuracy: float
+    accuracy_ci: tuple[float, float]
+    macro_f1: float
+    macro_f1_ci: tuple[float, float]
+    per_class: dict[str, Rate]
+    per_group: dict[str, Rate]
+    confusion: list[list[int]]
+    unassigned: list[int]
+    fit_s: float
+    predict_s: float
+    predict_ms_per_clip: float
+    case_base_size: float | None
+    training_size: float
+    predictions: list[str]
+    correct: list[bool]
+    fold_notes: list[str]
+    mcnemar: McNemar | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "accuracy": self.accuracy,
+            "accuracy_ci": list(self.accuracy_ci),
+            "macro_f1": self.macro_f1,
+            "macro_f1_ci": list(self.macro_f1_ci),
+            "per_class": {c: v.to_dict("recall") for c, v in self.per_class.items()},
+            "per_group": {g: v.to_dict("accuracy") for g, v in self.per_group.items()},
+            "confusion": [list(row) for row in self.confusion],
+            "unassigned": list(self.unassigned),
+            "fit_s": self.fit_s,
+            "predict_s": self.predict_s,
+            "predict_ms_per_clip": self.predict_ms_per_clip,
+            "case_base_size": self.case_base_size,
+            "training_size": self.training_size,
+            "predictions": list(self.predictions),
+            "correct": list(self.correct),
+            "fold_notes": list(self.fold_notes),
+        }
+        if self.mcnemar is not None:
+            m = self.mcnemar
+            out.update(mcnemar_vs=m.versus, mcnemar_b=m.b, mcnemar_c=m.c, mcnemar_p=m.p)
+        return out
+
+    @staticmethod
+    def read(r: Reader, d: dict[str, Any], where: str) -> Scores:
+        mcnemar = None
+        if "mcnemar_vs" in d:
+            mcnemar = McNemar(
+                r.get(d, "mcnemar_vs", where, "str"),
+                r.get(d, "mcnemar_b", where, "int"),
+                r.get(d, "mcnemar_c", where, "int"),
+                r.get(d, "mcnemar_p", where, "num"),
+            )
+        confusion = [
+            [r.value(x, f"{where}.confusion[{i}][{j}]", "int") for j, x in enumerate(row)]
+            for i, row in enumerate(r.items(d, "confusion", where, "list"))
+        ]
+        return Scores(
+            accuracy=r.get(d, "accuracy", where, "num"),
+            accuracy_ci=r.pair(d, "accuracy_ci", where),
+            macro_f1=r.get(d, "macro_f1", where, "num"),
+            macro_f1_ci=r.pair(d, "macro_f1_ci", where),
+            per_class=_rates(r, d, "per_class", where, "recall"),
+            per_group=_rates(r, d, "per_group", where, "accuracy"),
+            confusion=confusion,
+            unassigned=r.items(d, "unassigned", where, "int"),
+            fit_s=r.get(d, "fit_s", where, "num"),
+            predict_s=r.get(d, "predict_s", where, "num"),
+            predict_ms_per_clip=r.get(d, "predict_ms_per_clip", where, "num"),
+            case_base_size=r.get(d, "case_base_size", where, "num", optional=True),
+            training_size=r.get(d, "training_size", where, "num"),
+            predictions=r.items(d, "predictions", where, "str"),
+            correct=r.items(d, "correct", where, "bool"),
+            fold_notes=r.items(d, "fold_notes", where, "str"),
+            mcnemar=mcnemar,
+        )
+
+
+@dataclass(frozen=True)
+class MethodResult:
+    """One row of the comparison: the method, whether it ran (``status`` "ok", "skipped" or
+    "failed", with ``message``), and its scores when it did."""
+
+    name: str
+    kind: str
+    interpretable: bool
+    params: dict[str, Any]
+    status: str
+    message: str = ""
+    scores: Scores | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "name": self.name,
+            "kind": self.kind,
+            "interpretable": self.interpretable,
+            "params": dict(self.params),
+            "status": self.status,
+            "message": self.message,
+        }
+        if self.scores is not None:
+            out.update(self.scores.to_dict())
+        return out
+
+    @staticmethod
+    def read(r: Reader, d: dict[str, Any], where: str) -> MethodResult:
+        status = r.get(d, "status", where, "str")
+        if status not in ("ok", "skipped", "failed"):
+            r.fail(f"{where}.status", f"must be ok, skipped or failed, got {status!r}")
+        return MethodResult(
+            name=r.get(d, "name", where, "str"),
+            kind=r.get(d, "kind", where, "str"),
+            interpretable=r.get(d, "interpretable", where, "bool"),
+            params=r.get(d, "params", where, "dict"),
+            status=status,
+            message=r.get(d, "message", where, "str"),
+            scores=Scores.read(r, d, where) if status == "ok" else None,
+        )
+
+
+@dataclass(frozen=True)
+class DatasetSummary:
+    """The clips compared: where from, how many, whose, and of which classes."""
+
+    source: str
+    n_clips: int
+    subjects: list[str]
+    classes: list[str]
+    class_counts: dict[str, int]
+    activities: list[str]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "source": self.source,
+            "n_clips": self.n_clips,
+            "subjects": list(self.subjects),
+            "classes": list(self.classes),
+            "class_counts": dict(self.class_counts),
+            "activities": list(self.activities),
+        }
+
+    @staticmethod
+    def read(r: Reader, d: dict[str, Any], where: str) -> DatasetSummary:
+        counts = r.get(d, "class_counts", where, "dict")
+        return DatasetSummary(
+            source=r.get(d, "source", where, "str"),
+            n_clips=r.get(d, "n_clips", where, "int"),
+            subjects=r.items(d, "subjects", where, "str"),
+            classes=r.items(d, "classes", where, "str"),
+            class_counts={
+                str(k): r.value(v, f"{where}.class_counts.{k}", "int") for k, v in counts.items()
+            },
+            activities=r.items(d, "activities", where, "str"),
+        )
+
+
+@dataclass(frozen=True)
+class CVSummary:
+    """The cross-validation used: scheme ("loso", "kfold" or "given"), folds, and the fold of
+    every clip ``(n_clips,)``."""
+
+    scheme: str
+    n_folds: int
+    fold_of_clip: list[int]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"scheme": self.scheme, "n_folds": self.n_folds, "fold_of_clip": self.fold_of_clip}
+
+    @staticmethod
+    def read(r: Reader, d: dict[str, Any], where: str) -> CVSummary:
+        return CVSummary(
+            r.get(d, "scheme", where, "str"),
+            r.get(d, "n_folds", where, "int"),
+            r.items(d, "fold_of_clip", where, "int"),
+        )
+
+
+@dataclass(frozen=True)
+class ClipInfo:
+    """One clip compared: its name, activity, subject and target value."""
+
+    id: str
+    label: str
+    subject: str | None
+    target: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"id": self.id, "label": self.label, "subject": self.subject, "target": self.target}
+
+    @staticmethod
+    def read(r: Reader, d: dict[str, Any], where: str) -> ClipInfo:
+        return ClipInfo(
+            r.get(d, "id", where, "str"),
+            r.get(d, "label", where, "str"),
+            r.get(d, "subject", where, "str", optional=True),
+            r.get(d, "target", where, "str"),
+        )
+
+
+@dataclass(frozen=True)
+class ExplainedClip:
+    """Why a method got one clip wrong, in words (``explanation``: the case-base
+    explanation's own record, None for DAD)."""
+
+    clip: str
+    subject: str | None
+    activity: str
+    true: str
+    predicted: str
+    method: str
+    text: str
+    explanation: dict[str, Any] | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "clip": self.clip,
+            "subject": self.subject,
+            "activity": self.activity,
+            "true": self.true,
+            "predicted": self.predicted,
+            "method": self.method,
+            "text": self.text,
+        }
+        if self.explanation is not None:
+            out["explanation"] = self.explanation
+        return out
+
+    @staticmethod
+    def read(r: Reader, d: dict[str, Any], where: str) -> ExplainedClip:
+        return ExplainedClip(
+            r.get(d, "clip", where, "str"),
+            r.get(d, "subject", where, "str", optional=True),
+            r.get(d, "activity", where, "str"),
+            r.get(d, "true", where, "str"),
+            r.get(d, "predicted", where, "str"),
+            r.get(d, "method", where, "str"),
+            r.get(d, "text", where, "str"),
+            r.get(d, "explanation", where, "dict", optional=True),
+        )
+
+
+@dataclass(frozen=True)
+class Prevalence:
+    """Feature prevalence per activity in the initial and the trimmed case base (paper fig.
+    4): ``initial`` and ``trimmed`` are ``(activities, features)``."""
+
+    method: str
+    trim: float
+    activities: list[str]
+    features: list[str]
+    initial: list[list[float]]
+    trimmed: list[list[float]]
+    cases_initial: list[int]
+    cases_trimmed: list[int]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "method": self.method,
+            "trim": self.trim,
+            "activities": list(self.activities),
+            "features": list(self.features),
+            "initial": [list(r) for r in self.initial],
+            "trimmed": [list(r) for r in self.trimmed],
+            "cases_initial": list(self.cases_initial),
+            "cases_trimmed": list(self.cases_trimmed),
+        }
+
+    @staticmethod
+    def read(r: Reader, d: dict[str, Any], where: str) -> Prevalence:
+        def table(key: str) -> list[list[float]]:
+            rows = r.items(d, key, where, "list")
+            return [
+                [r.value(x, f"{where}.{key}[{i}][{j}]", "num") for j, x in enumerate(row)]
+                for i, row in enumerate(rows)
+            ]
+
+        return Prevalence(
+            method=r.get(d, "method", where, "str"),
+            trim=r.get(d, "trim", where, "num"),
+            activities=r.items(d, "activities", where, "str"),
+            features=r.items(d, "features", where, "str"),
+            initial=table("initial"),
+            trimmed=table("trimmed"),
+            cases_initial=r.items(d, "cases_initial", where, "int"),
+            cases_trimmed=r.items(d, "cases_trimmed", where, "int"),
+        )
+
+
+@dataclass(frozen=True)
+class ConfusionPicture:
+    method: str
+    file: str
+
+
+@dataclass(frozen=True)
+class TimelinePicture:
+    activity: str
+    clip: str
+    file: str
+
+
+@dataclass
+class Pictures:
+    """The pictures of a comparison, as file names relative to the results folder."""
+
+    accuracy: str | None = None
+    confusion: list[ConfusionPicture] = field(default_factory=list)
+    prevalence: str | None = None
+    timelines: list[TimelinePicture] = field(default_factory=list)
+
+    def files(self) -> list[str]:
+        """Every picture's file name."""
+        out = [self.accuracy, self.prevalence] + [c.file for c in self.confusion]
+        return [f for f in out + [t.file for t in self.timelines] if f is not None]
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        if self.accuracy is not None:
+            out["accuracy"] = self.accuracy
+        if self.confusion:
+            out["confusion"] = [{"method": c.method, "file": c.file} for c in self.confusion]
+        if self.prevalence is not None:
+            out["prevalence"] = self.prevalence
+        if self.timelines:
+            out["timelines"] = [
+                {"activity": t.activity, "clip": t.clip, "file": t.file} for t in self.timelines
+            ]
+        return out
+
+    @staticmethod
+    def read(r: Reader, d: dict[str, Any], where: str) -> Pictures:
+        def confusion(r: Reader, c: dict[str, Any], w: str) -> ConfusionPicture:
+            return ConfusionPicture(r.get(c, "method", w, "str"), r.picture(c, "file", w))
+
+        def timeline(r: Reader, t: dict[str, Any], w: str) -> TimelinePicture:
+            return TimelinePicture(
+                r.get(t, "activity", w, "str"), r.get(t, "clip", w, "str"), r.picture(t, "file", w)
+            )
+
+        return Pictures(
+            accuracy=r.picture(d, "accuracy", where) if "accuracy" in d else None,
+            confusion=r.records(d, "confusion", where, confusion) if "confusion" in d else [],
+            prevalence=r.picture(d, "prevalence", where) if "prevalence" in d else None,
+            timelines=r.records(d, "timelines", where, timeline) if "timelines" in d else [],
+        )
+
+
+# ---------------------------------------------------------------------------- the whole
+
+
+@dataclass
+class CompareResults:
+    """Everything a comparison found, as written to ``results.json``.
+
+    ``machine``: :func:`cbr.evaluation.machine.machine_info`; ``settings``:
+    :meth:`CompareSettings.to_dict`; ``explanations``, ``pictures`` and ``prevalence`` are
+    filled in after the folds ran.
+    """
+
+    created_utc: str
+    machine: dict[str, Any]
+    dataset: DatasetSummary
+    settings: dict[str, Any]
+    cv: CVSummary
+    notes: list[str]
+    clips: list[ClipInfo]
+    methods: list[MethodResult]
+    best: str | None
+    best_interpretable: str | None
+    explanations: list[ExplainedClip] = field(default_factory=list)
+    pictures: Pictures = field(default_factory=Pictures)
+    prevalence: Prevalence | None = None
+
+    def scored(self) -> list[tuple[MethodResult, Scores]]:
+        """The methods that ran, with their scores."""
+        return [(m, m.scores) for m in self.methods if m.scores is not None]
+
+    def method(self, name: str) -> MethodResult | None:
+        return next((m for m in self.methods if m.name == name), None)
+
+    def best_cbr(self) -> tuple[MethodResult, Scores] | None:
+        """The most accurate case-base configuration that ran (ties: higher macro-F1)."""
+        cbr = [(m, s) for m, s in self.scored() if m.kind == "cbr"]
+        return max(cbr, key=lambda ms: (ms[1].accuracy, ms[1].macro_f1)) if cbr else None
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "kind": KIND,
+            "created_utc": self.created_utc,
+            "machine": self.machine,
+            "dataset": self.dataset.to_dict(),
+            "settings": self.settings,
+            "cv": self.cv.to_dict(),
+            "notes": list(self.notes),
+            "clips": [c.to_dict() for c in self.clips],
+            "methods": [m.to_dict() for m in self.methods],
+            "best": self.best,
+            "best_interpretable": self.best_interpretable,
+            "explanations": [e.to_dict() for e in self.explanations],
+            "pictures": self.pictures.to_dict(),
+        }
+        if self.prevalence is not None:
+            out["prevalence"] = self.prevalence.to_dict()
+        return out
+
+    @staticmethod
+    def from_dict(doc: Any, source: str = "results") -> CompareResults:
+        """Read a results document (as ``json.load`` gives it), checking every key and type;
+        raises :class:`~features.errors.DataError` naming ``source`` and the key."""
+        if not isinstance(doc, dict) or doc.get("kind") != KIND:
+            raise DataError("not a `posecbr compare` results file", source)
+        r = Reader(source)
+        machine = r.get(doc, "machine", "", "dict")
+        for key, kind in (("python", "str"), ("platform", "str")):
+            r.get(machine, key, "machine", kind)
+        r.get(machine, "cpu_count", "machine", "int", optional=True)
+        settings = r.get(doc, "settings", "", "dict")
+        r.get(settings, "target", "settings", "str")
+        r.get(settings, "within", "settings", "str", optional=True)
+        prevalence = r.get(doc, "prevalence", "", "dict", optional=True)
+        return CompareResults(
+            created_utc=r.get(doc, "created_utc", "", "str"),
+            machine=machine,
+            dataset=DatasetSummary.read(r, r.get(doc, "dataset", "", "dict"), "dataset"),
+            settings=settings,
+            cv=CVSummary.read(r, r.get(doc, "cv", "", "dict"), "cv"),
+            notes=r.items(doc, "notes", "", "str"),
+            clips=r.records(doc, "clips", "", ClipInfo.read),
+            methods=r.records(doc, "methods", "", MethodResult.read),
+            best=r.get(doc, "best", "", "str", optional=True),
+            best_interpretable=r.get(doc, "best_interpretable", "", "str", optional=True),
+            explanations=r.records(doc, "explanations", "", ExplainedClip.read),
+            pictures=Pictures.read(r, r.get(doc, "pictures", "", "dict"), "pictures"),
+            prevalence=None if prevalence is None else Prevalence.read(r, prevalence, "prevalence"),
+        )

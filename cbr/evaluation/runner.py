@@ -1,0 +1,112 @@
+"""Where the tasks of a comparison run: serially in this process, or in worker processes
+started with *spawn* that each receive the shared data once.
+
+A runner is made with a ``context`` (the data every task reads) and a ``setup`` run once per
+worker before its first task (warming caches and compilers); ``map(fn, tasks)`` then yields
+``fn(context, task)`` for every task, in the order they finish, with a progress bar. ``fn`` and
+``setup`` must be module-level functions and the context picklable, so that another backend
+(e.g. dask.distributed: scatter the context, map the tasks) fits the same interface.
+
+Spawn, not fork: a forked child inherits the parent's threads' locks (GNU OpenMP under
+scikit-learn's neighbour search aborts such children), and fork does not exist on Windows and
+is unsafe on macOS.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from typing import Any, Generic, TypeVar
+
+from features.errors import PosecbrError
+from features.progress import progress
+
+C = TypeVar("C")
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+class Runner(ABC, Generic[C]):
+    """Runs ``fn(context, task)`` for every task; ``setup(context)`` once per worker first."""
+
+    def __init__(self, context: C, setup: Callable[[C], None] | None = None) -> None:
+        self.context = context
+        self.setup = setup
+
+    @abstractmethod
+    def map(
+        self, fn: Callable[[C, T], R], tasks: Sequence[T], desc: str = "tasks", unit: str = "task"
+    ) -> Iterator[R]:
+        """``fn(context, task)`` for every task, in the order they finish."""
+
+
+class SerialRunner(Runner[C]):
+    """Every task in this process, one after the other (``setup`` once, on the first map)."""
+
+    _ready = False
+
+    def map(
+        self, fn: Callable[[C, T], R], tasks: Sequence[T], desc: str = "tasks", unit: str = "task"
+    ) -> Iterator[R]:
+        if not self._ready and self.setup is not None:
+            self.setup(self.context)
+        self._ready = True
+        for task in progress(tasks, desc, total=len(tasks), unit=unit):
+            yield fn(self.context, task)
+
+
+# The context of this worker process, set once by its initializer (never used in the parent).
+_WORKER_CONTEXT: list[Any] = []
+
+
+def _start_worker(context: Any, setup: Callable[[Any], None] | None) -> None:
+    os.environ["POSECBR_NO_PROGRESS"] = "1"  # only the parent draws a bar
+    _WORKER_CONTEXT[:] = [context]
+    if setup is not None:
+        setup(context)
+
+
+def _call(fn: Callable[[Any, T], R], task: T) -> R:
+    return fn(_WORKER_CONTEXT[0], task)
+
+
+class ProcessRunner(Runner[C]):
+    """Tasks spread over ``jobs`` spawned worker processes (``concurrent.futures``); each
+    worker unpickles the context once and runs ``setup`` before its first task."""
+
+    def __init__(self, context: C, setup: Callable[[C], None] | None = None, jobs: int = 2) -> None:
+        super().__init__(context, setup)
+        self.jobs = int(jobs)
+
+    def map(
+        self, fn: Callable[[C, T], R], tasks: Sequence[T], desc: str = "tasks", unit: str = "task"
+    ) -> Iterator[R]:
+        pool = ProcessPoolExecutor(
+            max_workers=self.jobs,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_start_worker,
+            initargs=(self.context, self.setup),
+        )
+        with pool:
+            futures: list[Future[R]] = [pool.submit(_call, fn, t) for t in tasks]
+            try:
+                for fut in progress(as_completed(futures), desc, total=len(futures), unit=unit):
+                    yield fut.result()
+            except BrokenProcessPool:
+                raise PosecbrError(
+                    "a worker process died (out of memory?); try fewer --jobs", "--jobs"
+                ) from None
+            finally:
+                for fut in futures:
+                    fut.cancel()
+
+
+def make_runner(context: C, setup: Callable[[C], None] | None = None, jobs: int = 1) -> Runner[C]:
+    """A serial runner for ``jobs == 1``, else ``jobs`` spawned worker processes."""
+    if jobs <= 1:
+        return SerialRunner(context, setup)
+    return ProcessRunner(context, setup, jobs)

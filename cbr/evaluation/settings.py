@@ -1,0 +1,107 @@
+"""What a comparison runs: ``CompareSettings``, checked when made, with the names it accepts."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+from features.errors import ConfigError
+
+SIMILARITIES = ("euclidean", "dtw", "signature")
+FEATURE_LEVELS = ("fluents", "qmp")
+PEERS = ("dtw-knn", "minirocket")
+CV_SCHEMES = ("loso", "kfold")
+# Set by the comparison itself for every case-base configuration, so not a --param.
+_SET_PER_METHOD = {"features", "similarity", "k", "trim"}
+
+
+@dataclass(frozen=True)
+class CompareSettings:
+    """What ``compare`` runs.
+
+    target: ``"label"`` or a metadata column; within: train one model per value of this column
+    (``"label"`` by default when the target is not the label; ``None``: one model for all).
+    k: neighbours of the case-base classifiers; trim: fraction of cases kept by novelty/benefit
+    trimming (None: keep all); cbr_params: further ``CaseBaseClassifier`` parameters given to
+    every case-base configuration (e.g. ``{"states": "all", "length": 48}``); peer_length:
+    frames the peers' angle series are resampled to; jobs: worker processes for the folds;
+    bootstrap: resamples for the F1 interval; explain: misclassified clips to explain.
+    """
+
+    target: str = "label"
+    cv: str = "loso"
+    folds: int = 5
+    similarities: tuple[str, ...] = SIMILARITIES
+    features: tuple[str, ...] = FEATURE_LEVELS
+    dad: bool = True
+    peers: tuple[str, ...] = PEERS
+    k: int = 5
+    trim: float | None = None
+    cbr_params: dict[str, Any] = field(default_factory=dict)
+    within: str | None = "auto"
+    peer_length: int = 64
+    jobs: int = 1
+    seed: int = 0
+    bootstrap: int = 1000
+    explain: int = 5
+
+    def __post_init__(self) -> None:
+        self._check_choices()
+        self._check_numbers()
+        self._check_cbr_params()
+
+    def _check_choices(self) -> None:
+        if self.cv not in CV_SCHEMES:
+            raise ConfigError(f"cv must be one of {', '.join(CV_SCHEMES)}, got {self.cv!r}", "--cv")
+        for flag, given, known, what in (
+            ("--similarities", self.similarities, SIMILARITIES, "similarity"),
+            ("--features", self.features, FEATURE_LEVELS, "feature level"),
+            ("--peers", self.peers, PEERS, "peer"),
+        ):
+            for name in given:
+                if name not in known:
+                    raise ConfigError(
+                        f"unknown {what} {name!r} (choose from {', '.join(known)})", flag
+                    )
+
+    def _check_numbers(self) -> None:
+        if int(self.folds) < 2:
+            raise ConfigError(f"folds must be at least 2, got {self.folds}", "--folds")
+        if int(self.k) < 1:
+            raise ConfigError(f"k must be a positive integer, got {self.k}", "--k")
+        if self.trim is not None and not 0.0 < float(self.trim) <= 1.0:
+            raise ConfigError(f"trim must be in (0, 1], got {self.trim}", "--trim")
+        if int(self.jobs) < 1:
+            raise ConfigError(f"jobs must be at least 1, got {self.jobs}", "--jobs")
+        if int(self.peer_length) < 9:
+            raise ConfigError("peer_length must be at least 9 frames", "peer_length")
+        if int(self.bootstrap) < 1:
+            raise ConfigError(f"bootstrap must be at least 1, got {self.bootstrap}", "bootstrap")
+        if int(self.explain) < 0:
+            raise ConfigError(f"explain must be 0 or more, got {self.explain}", "--explain")
+
+    def _check_cbr_params(self) -> None:
+        from cbr.estimator import CaseBaseClassifier
+
+        known = set(CaseBaseClassifier().get_params()) - _SET_PER_METHOD
+        bad = sorted(set(self.cbr_params) - known)
+        if bad:
+            raise ConfigError(
+                f"unknown case-base parameter(s) {', '.join(bad)} "
+                f"(known: {', '.join(sorted(known))})",
+                "--param",
+            )
+
+    @property
+    def within_column(self) -> str | None:
+        """The column one model is trained per value of (None: one model for all clips)."""
+        if self.within == "auto":
+            return None if self.target == "label" else "label"
+        return self.within or None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready settings, ``within`` resolved."""
+        d = dataclasses.asdict(self)
+        d["within"] = self.within_column
+        return d

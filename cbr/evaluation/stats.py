@@ -1,0 +1,83 @@
+"""The statistics of a comparison: Wilson interval and McNemar's exact test from scipy,
+macro-F1 from scikit-learn, and a percentile bootstrap of macro-F1 over clips."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.stats import binomtest
+from sklearn.metrics import f1_score
+
+
+def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
+    """Wilson score interval for ``successes / n`` (``(nan, nan)`` if ``n == 0``).
+
+    From ``scipy.stats.binomtest(...).proportion_ci(method="wilson")``, clipped to [0, 1] and
+    made to hold the proportion itself: rounding can put a bound a hair past it (an upper bound
+    of 0.9999999999999999 at 100 %), which plots as a negative error bar.
+    """
+    if n <= 0:
+        return (math.nan, math.nan)
+    ci = binomtest(int(successes), int(n)).proportion_ci(
+        confidence_level=confidence, method="wilson"
+    )
+    p = successes / n
+    return (min(max(float(ci.low), 0.0), p), max(min(float(ci.high), 1.0), p))
+
+
+def mcnemar_exact(b: int, c: int) -> float:
+    """Two-sided exact McNemar p-value from the discordant counts ``b`` (only the first method
+    right) and ``c`` (only the second right): binomial test of min(b, c) in b + c at 1/2."""
+    if b + c == 0:
+        return 1.0
+    return float(binomtest(min(b, c), b + c, 0.5).pvalue)
+
+
+def macro_f1(y_true: np.ndarray, y_pred: np.ndarray) -> float:
+    """Macro-F1 of labels ``(n,)`` over the classes present in truth or prediction
+    (``sklearn.metrics.f1_score(average="macro")``)."""
+    return float(f1_score(y_true, y_pred, average="macro", zero_division=0))
+
+
+def _f1_from_counts(tp: np.ndarray, fp: np.ndarray, fn: np.ndarray) -> np.ndarray:
+    """Macro-F1 over the last axis; classes never seen in truth or prediction are left out."""
+    denom = 2 * tp + fp + fn
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f1 = np.where(denom > 0, 2 * tp / np.where(denom > 0, denom, 1), np.nan)
+    return np.asarray(np.nanmean(f1, axis=-1))
+
+
+def bootstrap_macro_f1(
+    y_true: np.ndarray,
+    y_pred: np.ndarray,
+    n_classes: int,
+    n_boot: int = 1000,
+    confidence: float = 0.95,
+    seed: int = 0,
+) -> tuple[float, float]:
+    """Percentile bootstrap interval of macro-F1, resampling clips with replacement.
+
+    y_true, y_pred: ``(n,)`` integer class codes below ``n_classes``. The resamples are
+    ``default_rng(seed).integers(0, n, (n_boot, n))``, all counted at once as
+    ``(n_boot, n_classes)`` true-positive, false-positive and false-negative tables: the same
+    figures as ``f1_score`` per resample (tested), in a tenth of the time or less: 1000
+    ``f1_score`` calls on 1600 clips take about 3 s, for every method of a comparison.
+    """
+    n = len(y_true)
+    if n == 0:
+        return (math.nan, math.nan)
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, n, size=(n_boot, n))
+    t = y_true[idx]
+    p = y_pred[idx]
+    offs = (np.arange(n_boot) * n_classes)[:, None]
+    size = n_boot * n_classes
+    hit = (t == p).ravel()
+    tp = np.bincount((t + offs).ravel()[hit], minlength=size).reshape(n_boot, n_classes)
+    n_pred = np.bincount((p + offs).ravel(), minlength=size).reshape(n_boot, n_classes)
+    n_true = np.bincount((t + offs).ravel(), minlength=size).reshape(n_boot, n_classes)
+    f1 = _f1_from_counts(tp.astype(float), (n_pred - tp).astype(float), (n_true - tp).astype(float))
+    alpha = (1.0 - confidence) / 2.0
+    lo, hi = np.quantile(f1, [alpha, 1.0 - alpha])
+    return (float(lo), float(hi))

@@ -1,0 +1,115 @@
+"""A comparison as tables for people (plain text) and for spreadsheets (CSV rows)."""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+from typing import Any
+
+from features.fileio import write_text_atomic
+
+from .results import CompareResults, MethodResult, Scores
+
+
+def p_value(p: float) -> str:
+    """A p-value as people read it; exact binomial tails underflow to 0 for large samples, so
+    say how small rather than "0"."""
+    return "<1e-300" if p < 1e-300 else f"{p:.3g}"
+
+
+def _row(results: CompareResults, m: MethodResult, s: Scores) -> str:
+    acc = f"{100 * s.accuracy:5.1f} [{100 * s.accuracy_ci[0]:4.1f}, {100 * s.accuracy_ci[1]:5.1f}]"
+    f1 = f"{100 * s.macro_f1:5.1f} [{100 * s.macro_f1_ci[0]:4.1f}, {100 * s.macro_f1_ci[1]:5.1f}]"
+    cases = "" if s.case_base_size is None else f"{s.case_base_size:.0f}"
+    p = s.mcnemar.p if s.mcnemar is not None else float("nan")
+    pv = "best" if m.name == results.best else p_value(p)
+    mark = " *" if m.name == results.best_interpretable else ""
+    return (
+        f"{m.name + mark:<22} {acc:<22} {f1:<22} {s.fit_s:8.2f} "
+        f"{s.predict_ms_per_clip:8.2f} {cases:>7} {pv:>10}"
+    )
+
+
+def format_table(results: CompareResults) -> str:
+    """The comparison as a plain-text table in method order (``*``: best interpretable), then
+    the accuracy per model group when there are groups."""
+    head = (
+        f"{'method':<22} {'accuracy [95% CI]':<22} {'macro-F1 [95% CI]':<22} "
+        f"{'fit s':>8} {'ms/clip':>8} {'cases':>7} {'McNemar p':>10}"
+    )
+    lines = [head, "-" * len(head)]
+    for m in results.methods:
+        if m.scores is None:
+            lines.append(f"{m.name:<22} {m.status}: {m.message}")
+        else:
+            lines.append(_row(results, m, m.scores))
+    return "\n".join(lines + group_table(results))
+
+
+def group_table(results: CompareResults) -> list[str]:
+    """Accuracy (%) of every method per model group (e.g. per movement), when there are
+    groups: which activities the target is hard to tell in."""
+    ok = [(m, s) for m, s in results.scored() if s.per_group]
+    if not ok:
+        return []
+    groups = list(ok[0][1].per_group)
+    width = max(len(g) for g in groups) + 2
+    within = results.settings.get("within") or "group"
+    cols = [len(m.name) + 2 for m, _ in ok]
+    head = "".join(f"{m.name:>{w}}" for (m, _), w in zip(ok, cols, strict=True))
+    lines = ["", f"accuracy % per {within} (one model each):", f"{within:<{width}}{head}"]
+    for g in groups:
+        row = "".join(
+            f"{100 * s.per_group[g].value:>{w}.1f}" for (_, s), w in zip(ok, cols, strict=True)
+        )
+        lines.append(f"{g:<{width}}{row}")
+    return lines
+
+
+def _figures(s: Scores, classes: list[str]) -> dict[str, Any]:
+    row: dict[str, Any] = {
+        "accuracy": round(s.accuracy, 6),
+        "accuracy_lo": round(s.accuracy_ci[0], 6),
+        "accuracy_hi": round(s.accuracy_ci[1], 6),
+        "macro_f1": round(s.macro_f1, 6),
+        "macro_f1_lo": round(s.macro_f1_ci[0], 6),
+        "macro_f1_hi": round(s.macro_f1_ci[1], 6),
+        "fit_s": round(s.fit_s, 4),
+        "predict_s": round(s.predict_s, 4),
+        "case_base_size": s.case_base_size,
+        "mcnemar_p": None if s.mcnemar is None else s.mcnemar.p,
+    }
+    row.update({f"recall:{c}": round(s.per_class[c].value, 6) for c in classes})
+    return row
+
+
+def csv_rows(results: CompareResults) -> list[dict[str, Any]]:
+    """One row per method: the table's figures plus per-class recall (``message`` for one
+    that did not run)."""
+    rows = []
+    for m in results.methods:
+        row: dict[str, Any] = {
+            "method": m.name,
+            "kind": m.kind,
+            "interpretable": m.interpretable,
+            "status": m.status,
+        }
+        if m.scores is not None:
+            row.update(_figures(m.scores, results.dataset.classes))
+        else:
+            row["message"] = m.message
+        rows.append(row)
+    return rows
+
+
+def write_csv(rows: list[dict[str, Any]], path: str | Path) -> Path:
+    """CSV rows to ``path`` atomically (columns: union of the rows' keys, first seen first)."""
+    cols: list[str] = []
+    for r in rows:
+        cols += [k for k in r if k not in cols]
+    buf = io.StringIO(newline="")
+    writer = csv.DictWriter(buf, fieldnames=cols)
+    writer.writeheader()
+    writer.writerows(rows)
+    return write_text_atomic(path, buf.getvalue())
