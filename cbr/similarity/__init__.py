@@ -2,7 +2,11 @@
 
 Built in: ``euclidean`` (feature vectors; mismatch count on binary QMP vectors), ``dtw``
 (sequences, Sakoe–Chiba band, exact lower-bound cascade), ``signature`` (iisignature).
+``DTW`` and ``Signature`` are imported on first use (numba and scipy, iisignature), as
+:func:`get_measure` imports a built-in measure's module when it is first asked for.
 """
+
+from typing import TYPE_CHECKING, Any
 
 from .base import (
     SimilarityMeasure,
@@ -11,9 +15,11 @@ from .base import (
     register_measure,
     smallest_k,
 )
-from .dtw import DTW
 from .euclidean import Euclidean
-from .signature import Signature
+
+if TYPE_CHECKING:
+    from .dtw import DTW
+    from .signature import Signature
 
 __all__ = [
     "DTW",
@@ -25,3 +31,15 @@ __all__ = [
     "register_measure",
     "smallest_k",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name == "DTW":
+        from .dtw import DTW
+
+        return DTW
+    if name == "Signature":
+        from .signature import Signature
+
+        return Signature
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -33,6 +33,7 @@ Import the module before use (or expose it as an entry point in the group
 from __future__ import annotations
 
 import dataclasses
+import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.metadata import entry_points
@@ -43,6 +44,14 @@ import numpy as np
 from features.errors import ConfigError
 
 _REGISTRY: dict[str, type[SimilarityMeasure]] = {}
+# The built-in measures' modules, imported when a measure is first asked for by name: dtw
+# brings numba and scipy, signature iisignature, and listing the names (``posecbr --help``)
+# should cost nothing.
+_BUILTIN = {
+    "dtw": "cbr.similarity.dtw",
+    "euclidean": "cbr.similarity.euclidean",
+    "signature": "cbr.similarity.signature",
+}
 _ENTRY_POINTS_LOADED = False
 M = TypeVar("M", bound="type[SimilarityMeasure]")
 
@@ -151,8 +160,9 @@ def _load_entry_points() -> None:
 
 
 def available_measures() -> tuple[str, ...]:
+    """Names of every measure: built in, registered or published as an entry point."""
     _load_entry_points()
-    return tuple(sorted(_REGISTRY))
+    return tuple(sorted(set(_REGISTRY) | set(_BUILTIN)))
 
 
 def get_measure(spec: str | SimilarityMeasure | dict[str, Any], **params: Any) -> SimilarityMeasure:
@@ -163,6 +173,8 @@ def get_measure(spec: str | SimilarityMeasure | dict[str, Any], **params: Any) -
         params = {**{k: v for k, v in spec.items() if k != "name"}, **params}
         spec = str(spec.get("name", ""))
     _load_entry_points()
+    if str(spec) in _BUILTIN and str(spec) not in _REGISTRY:
+        importlib.import_module(_BUILTIN[str(spec)])
     cls = _REGISTRY.get(str(spec))
     if cls is None:
         raise ConfigError(

@@ -7,17 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from features.datasets import load_clip
 from features.errors import PosecbrError
-from features.fluents import DEFAULT_TABLE, FluentTable, evaluate
-from features.timeline import (
-    frame_states,
-    phrase_list,
-    plot_timeline,
-    runs_to_json,
-    state_runs,
-    unavailable_fluents,
-)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -61,6 +51,17 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from features.datasets import load_clip
+    from features.fluents import DEFAULT_TABLE, FluentTable, evaluate
+    from features.timeline import (
+        frame_states,
+        phrase_list,
+        plot_timeline,
+        runs_to_json,
+        state_runs,
+        unavailable_fluents,
+    )
+
     if not 0.0 < args.min_confidence <= 1.0:
         raise PosecbrError(f"--min-confidence must be in (0, 1], got {args.min_confidence}")
     table = FluentTable.from_file(args.thresholds) if args.thresholds else DEFAULT_TABLE

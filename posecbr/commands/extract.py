@@ -22,8 +22,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from features.errors import DataError, PosecbrError
 from features.progress import progress
 
@@ -219,6 +217,8 @@ def extract_key(job: Job, options: Options, video_sha256: str) -> dict[str, Any]
 
 def stored_key(path: Path) -> dict[str, Any] | None:
     """The ``extract_key`` of an existing pose file, or None (absent or unreadable)."""
+    import numpy as np
+
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["metadata"]))
@@ -254,6 +254,8 @@ def _estimator(options: Options) -> Any:
 
 def _fluent_words(seq: Any, top: int = 4) -> list[list[str]] | None:
     """Per frame, up to ``top`` fluent phrases that hold (confidence >= 0.8), motion first."""
+    import numpy as np
+
     try:
         from features.fluents import evaluate
         from features.timeline import background
@@ -274,6 +276,8 @@ def _fluent_words(seq: Any, top: int = 4) -> list[list[str]] | None:
 
 def process(job: Job, options: Options) -> tuple[str, Path, str]:
     """Extract one clip. Returns (status, path, detail); status "done", "skipped" or "failed"."""
+    import numpy as np
+
     from features.pose_estimation import estimate_video
     from features.pose_estimation.overlay import write_overlay
     from features.poses import load_pose, load_pose_arrays, save_pose
