@@ -7,6 +7,7 @@ reports which of the heavy libraries are in ``sys.modules`` afterwards. Behaviou
 
 from __future__ import annotations
 
+import argparse
 import json
 import subprocess
 import sys
@@ -94,3 +95,21 @@ def test_describe_loads_only_what_it_uses(tmp_path: Path) -> None:
     # base, no estimator, no plot, no video
     assert loaded <= {"numba", "scipy"}
     assert "numba" in loaded
+
+
+def _subcommand(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentParser:
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    found: argparse.ArgumentParser = sub.choices[name]
+    return found
+
+
+def test_editor_choices_written_out_are_the_maintenance_editors() -> None:
+    from cbr.maintenance import EDITORS
+    from posecbr.cli import build_parser
+
+    parser = build_parser()
+    trim = _subcommand(_subcommand(parser, "casebase"), "trim")
+    train = _subcommand(parser, "train")
+    for p in (trim, train):
+        (editor,) = [a for a in p._actions if "--editor" in a.option_strings]
+        assert editor.choices is not None and sorted(editor.choices) == sorted(EDITORS)

@@ -10,10 +10,8 @@ unchanged are skipped. Every file is written under a temporary name and renamed.
 from __future__ import annotations
 
 import argparse
-import concurrent.futures as cf
 import hashlib
 import json
-import multiprocessing
 import os
 import sys
 import tempfile
@@ -345,6 +343,9 @@ def _check_out_dir(out: Path) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import concurrent.futures as cf
+    import multiprocessing
+
     if args.workers < 1:
         raise PosecbrError(f"--workers must be at least 1, got {args.workers}")
     source: Path = args.input
