@@ -642,11 +642,11 @@ def evaluate(
     """Every fluent state's confidence for every frame of ``seq`` (all frames at once).
 
     ``backend``: ``"numba"`` the compiled single-pass kernel (:mod:`features._fluent_kernels`),
-    ``"numpy"`` the whole-array reference it is tested against. Both give the same confidences
-    (to ~1e-15).
+    ``"numpy"`` the whole-array reference it is tested against (for the state signals too,
+    unless ``signals`` are given). Both give the same confidences (to ~1e-15).
     """
     table = table or DEFAULT_TABLE
-    sig = signals if signals is not None else state_signals(seq)
+    sig = signals if signals is not None else state_signals(seq, backend)
     prep = _prepare(table)
     frames = sig.values.shape[0] if sig.values.ndim == 2 else -1
     if sig.values.shape != (frames, len(sig.names)) or sig.distances_m.shape != (

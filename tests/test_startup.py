@@ -12,6 +12,9 @@ import json
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from features.version import __version__
 
@@ -85,17 +88,39 @@ def test_help_of_every_command_loads_no_heavy_library(tmp_path: Path) -> None:
     assert loaded == set()
 
 
-def test_describe_loads_only_what_it_uses(tmp_path: Path) -> None:
+def _describe(clip: Path, tmp_path: Path) -> tuple[dict[str, Any], set[str]]:
     out, loaded = _run(
-        f"from posecbr.cli import main\nassert main(['describe', {str(CLIP)!r}, '--json']) == 0",
+        f"from posecbr.cli import main\nassert main(['describe', {str(clip)!r}, '--json']) == 0",
         tmp_path,
     )
-    doc = json.loads(out)
-    assert doc["frames"] > 0 and doc["runs"]
-    # fluents are compiled kernels (numba) and the spans are median-cleaned (scipy); no case
-    # base, no estimator, no plot, no video
-    assert loaded <= {"numba", "scipy", "numpy"}
-    assert "numba" in loaded
+    doc: dict[str, Any] = json.loads(out)
+    return doc, loaded
+
+
+def test_describe_of_a_short_clip_loads_only_numpy_and_scipy(tmp_path: Path) -> None:
+    doc, loaded = _describe(CLIP, tmp_path)
+    assert doc["frames"] == 73 and doc["runs"]
+    # one short clip: the numpy reference (numba would take longer to load its kernels than
+    # they save); the spans are median-cleaned (scipy); no case base, estimator, plot or video
+    assert loaded == {"numpy", "scipy"}
+
+
+def test_describe_of_a_long_clip_uses_the_compiled_kernels(tmp_path: Path) -> None:
+    from features.datasets import load_clip
+    from features.fluents import evaluate
+    from features.poses import PoseSequence, save_pose
+    from features.timeline import runs_to_json, state_runs
+
+    squat = load_clip(CLIP)
+    reps = 5000 // squat.n_frames + 1  # the deep squat 69 times over: 5037 frames
+    seq = PoseSequence(np.concatenate([squat.positions] * reps), squat.joint_names, squat.fps)
+    save_pose(seq, tmp_path / "long.npz")
+    doc, loaded = _describe(tmp_path / "long.npz", tmp_path)
+    assert doc["frames"] == 73 * reps
+    assert "numba" in loaded and loaded <= {"numpy", "scipy", "numba"}
+    # the same spans as the numpy reference gives
+    reference = evaluate(seq, backend="numpy")
+    assert doc["runs"] == runs_to_json(state_runs(reference, 0.8, 5, False), seq.fps)
 
 
 def _subcommand(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentParser:
