@@ -103,6 +103,7 @@ def _run(args: argparse.Namespace, data: Path) -> int:
     results = out / "compare"
     compare = ["compare", str(labels)]
     if args.quick:
+        results.mkdir()  # compare --json writes into an existing folder only
         results = results / "results.json"
         compare += [*QUICK_COMPARE, "--json", str(results)]
     else:
