@@ -31,7 +31,7 @@ TASKS = (
     ("ui-prmd correct", SHARED / "ui-prmd", "correct"),
     ("hdm05 action", SHARED / "hdm05", "label"),
 )
-QUICK = (("demo ui-prmd movement", ROOT / "data" / "demo" / "uiprmd", "label"),)
+QUICK = (("demo ui-prmd movement", ROOT / "posecbr" / "demo_data" / "uiprmd", "label"),)
 
 
 def summarise(results: dict[str, Any], seconds: float) -> dict[str, Any]:

@@ -41,10 +41,10 @@ RESULTS = ROOT / "benchmarks" / "results" / "faults.json"
 
 def _demo() -> Path:
     """The bundled UI-PRMD subset (a labels CSV and its pose files)."""
-    for candidate in (ROOT / "posecbr" / "demo_data" / "uiprmd", ROOT / "data" / "demo" / "uiprmd"):
-        if (candidate / "labels.csv").is_file():
-            return candidate
-    raise SystemExit("the bundled demo data is missing")
+    demo = ROOT / "posecbr" / "demo_data" / "uiprmd"
+    if not (demo / "labels.csv").is_file():
+        raise SystemExit("the bundled demo data is missing")
+    return demo
 
 
 def store_fingerprint(db: Path) -> str:

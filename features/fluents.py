@@ -467,7 +467,7 @@ def _layout(table: FluentTable) -> list[tuple[int, str, str, bool]]:
     return cols
 
 
-Backend = Literal["auto", "numba", "numpy"]
+Backend = Literal["numba", "numpy"]
 
 # Column codes of the fused kernel (features._fluent_kernels): which block a state comes from.
 _CODES = ("lo", "mid", "hi", "two_hi", "touch", "m_lo", "m_hi", "still")
@@ -589,14 +589,6 @@ def _signal_columns(sig: StateSignals, prep: _Prepared) -> tuple[np.ndarray, np.
     return sig_col, dist_col
 
 
-def _numba_available() -> bool:
-    try:
-        import numba  # noqa: F401
-    except ImportError:  # pragma: no cover - numba is a dependency; fall back if it is absent
-        return False
-    return True
-
-
 def _confidence_numpy(
     x: np.ndarray, dist_m: np.ndarray, fps: float, table: FluentTable, prep: _Prepared
 ) -> np.ndarray:
@@ -645,16 +637,16 @@ def evaluate(
     seq: PoseSequence,
     table: FluentTable | None = None,
     signals: StateSignals | None = None,
-    backend: Backend = "auto",
+    backend: Backend = "numba",
 ) -> FluentResult:
     """Every fluent state's confidence for every frame of ``seq`` (all frames at once).
 
     ``backend``: ``"numba"`` the compiled single-pass kernel (:mod:`features._fluent_kernels`),
-    ``"numpy"`` the whole-array reference it is tested against, ``"auto"`` numba when installed.
-    Both give the same confidences (to ~1e-15).
+    ``"numpy"`` the whole-array reference it is tested against (for the state signals too,
+    unless ``signals`` are given). Both give the same confidences (to ~1e-15).
     """
     table = table or DEFAULT_TABLE
-    sig = signals if signals is not None else state_signals(seq)
+    sig = signals if signals is not None else state_signals(seq, backend)
     prep = _prepare(table)
     frames = sig.values.shape[0] if sig.values.ndim == 2 else -1
     if sig.values.shape != (frames, len(sig.names)) or sig.distances_m.shape != (
@@ -667,8 +659,6 @@ def evaluate(
             seq.source or None,
         )
     sig_col, dist_col = _signal_columns(sig, prep)
-    if backend == "auto":
-        backend = "numba" if _numba_available() else "numpy"
     if backend == "numba":
         from ._fluent_kernels import fluent_confidences
 
@@ -700,7 +690,7 @@ def evaluate(
         dist_m[:, near] = sig.distances_m[:, dist_col[near]]
         out = _confidence_numpy(x, dist_m, seq.fps, table, prep)
     else:
-        raise ConfigError(f"unknown fluent backend {backend!r} (known: auto, numba, numpy)")
+        raise ConfigError(f"unknown fluent backend {backend!r} (known: numba, numpy)")
     return FluentResult(
         state_names=prep.state_names,
         words=prep.words,

@@ -173,26 +173,14 @@ _KERNEL_JOINTS = np.array(
 )  # fmt: skip
 
 
-def _numba_available() -> bool:
-    try:
-        import numba  # noqa: F401
-    except ImportError:  # pragma: no cover - numba is a dependency; fall back if it is absent
-        return False
-    return True
-
-
-def state_signals(
-    seq: PoseSequence, backend: Literal["auto", "numba", "numpy"] = "auto"
-) -> StateSignals:
+def state_signals(seq: PoseSequence, backend: Literal["numba", "numpy"] = "numba") -> StateSignals:
     """Every fluent's angle and distance for every frame of ``seq`` (any joint set).
 
     ``backend``: ``"numba"`` one compiled pass over the frames
     (:func:`features._fluent_kernels.state_signal_values`), ``"numpy"`` the whole-array
-    reference built from :mod:`features.geometry`; ``"auto"`` numba when installed.
+    reference built from :mod:`features.geometry`.
     """
     p = seq.to_canonical().positions
-    if backend == "auto":
-        backend = "numba" if _numba_available() else "numpy"
     if backend == "numba":
         from ._fluent_kernels import state_signal_values
 
@@ -206,7 +194,7 @@ def state_signals(
         )
         return StateSignals(ANGLE_SIGNALS + NEAR_SIGNALS, values, seq.fps, head_length, dist_m)
     if backend != "numpy":
-        raise ConfigError(f"unknown signal backend {backend!r} (known: auto, numba, numpy)")
+        raise ConfigError(f"unknown signal backend {backend!r} (known: numba, numpy)")
     angles = _angles(p)
     mid_ear = 0.5 * (p[:, JOINT_INDEX["left_ear"]] + p[:, JOINT_INDEX["right_ear"]])
     neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])

@@ -8,7 +8,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.ndimage import median_filter
 
 from .fluents import FluentResult
 
@@ -55,6 +54,8 @@ def _clean(on: np.ndarray, min_run: int) -> np.ndarray:
     threshold shorter than about half of that is not news for a reader)."""
     if min_run <= 1 or on.shape[0] <= 1:
         return on
+    from scipy.ndimage import median_filter  # scipy loads only when there is flicker to clean
+
     size = min_run if min_run % 2 else min_run + 1
     return median_filter(on.astype(np.uint8), size=(size, 1), mode="nearest").astype(bool)
 

@@ -141,7 +141,7 @@ def test_bad_input_one_line_errors(
     assert code == 1 and "unknown similarity 'cosine'" in err
 
 
-DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 
 def test_train_on_another_column_and_classify_against_it(

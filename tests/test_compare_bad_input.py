@@ -23,7 +23,7 @@ import pytest
 
 from posecbr.cli import main
 
-DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 SWAPPED = {"m01": "standing_shoulder_abduction", "m07": "deep_squat"}
 EPISODES = {"s01": (1, 2), "s02": (1, 2), "s03": (1,)}
 FAST = ["--similarities", "euclidean", "--features", "fluents", "--peers", "none"]

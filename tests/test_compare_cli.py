@@ -16,7 +16,7 @@ from features.body import POSITION_JOINTS
 from posecbr.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-DEMO = ROOT / "data" / "demo" / "uiprmd"
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 # Three movements: two that look alike (deep squat and sit-to-stand both bend the knees and
 # hips; the case base confuses some, so there are errors to explain) and shoulder abduction.
 SLICE = "deep_squat,sit_to_stand,standing_shoulder_abduction"

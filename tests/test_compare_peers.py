@@ -59,7 +59,7 @@ def test_spawned_fold_workers_give_the_tslearn_peer_the_serial_predictions(
     from cbr.evaluation.settings import CompareSettings
     from features.datasets import load_dataset
 
-    demo = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+    demo = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
     labels = "deep_squat,standing_shoulder_abduction"
     out = tmp_path / "j2.json"
     cmd = [

@@ -1,4 +1,4 @@
-"""The demo subset in data/demo/uiprmd loads (no ../shared needed) with the right labels."""
+"""The demo subset in posecbr/demo_data/uiprmd loads (no ../shared needed) with the right labels."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 
 from features.datasets import detect_kind, load_clip, load_dataset
 
-DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 # The label table of the project's conventions (briefs/labels.md), written out independently.
 SLUGS = {

@@ -22,7 +22,7 @@ from features.readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon
 from features.signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals
 from tests.bodies import standing, to_sequence
 
-DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 TOL = 1e-12
 
 

@@ -15,7 +15,7 @@ import pytest
 from posecbr.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-DEMO = ROOT / "data" / "demo" / "uiprmd"
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 ARTIFACTS = ROOT / "tests" / "artifacts"
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 FLAGS = [

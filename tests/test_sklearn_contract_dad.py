@@ -28,7 +28,7 @@ from features.datasets import load_dataset
 from features.errors import ConfigError, DataError, InputError
 from features.poses import PoseSequence
 
-DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 # Checks about the estimator object itself: they never look at what X holds.
 APPLICABLE = (

@@ -15,7 +15,7 @@ from features.datasets import load_dataset
 from posecbr.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-DEMO = ROOT / "data" / "demo" / "uiprmd" / "labels.csv"
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd" / "labels.csv"
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""The similarity-measure plug-in interface and its registry.
+"""The similarity-measure plug-in interface (its registry: :mod:`cbr.similarity.registry`).
 
 A measure is a small frozen dataclass: configuration in fields, computation in methods that
 compare ONE query against the WHOLE case base as array work. The life cycle:
@@ -33,18 +33,26 @@ Import the module before use (or expose it as an entry point in the group
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
 from dataclasses import dataclass
-from importlib.metadata import entry_points
-from typing import Any, ClassVar, TypeVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from features.errors import ConfigError
 
-_REGISTRY: dict[str, type[SimilarityMeasure]] = {}
-_ENTRY_POINTS_LOADED = False
-M = TypeVar("M", bound="type[SimilarityMeasure]")
+# The registry lives in its own module (no numpy) so naming the measures costs nothing; these
+# names stay importable from here.
+from .registry import available_measures, get_measure, register_measure
+
+__all__ = [
+    "SimilarityMeasure",
+    "available_measures",
+    "check_weighting",
+    "get_measure",
+    "register_measure",
+    "smallest_k",
+    "weighted",
+]
 
 
 @dataclass(frozen=True)
@@ -128,56 +136,3 @@ def smallest_k(d: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     order = np.lexsort((cand, d[cand]))[:k]
     idx = cand[order].astype(np.int64)
     return idx, d[idx]
-
-
-def register_measure(name: str) -> Callable[[M], M]:
-    """Class decorator registering a :class:`SimilarityMeasure` under ``name``."""
-
-    def deco(cls: M) -> M:
-        cls.name = name
-        _REGISTRY[name] = cls
-        return cls
-
-    return deco
-
-
-def _load_entry_points() -> None:
-    global _ENTRY_POINTS_LOADED
-    if _ENTRY_POINTS_LOADED:
-        return
-    _ENTRY_POINTS_LOADED = True
-    for ep in entry_points(group="posecbr.similarity"):
-        ep.load()
-
-
-def available_measures() -> tuple[str, ...]:
-    _load_entry_points()
-    return tuple(sorted(_REGISTRY))
-
-
-def get_measure(spec: str | SimilarityMeasure | dict[str, Any], **params: Any) -> SimilarityMeasure:
-    """A measure from its name (+ params), a ``params()`` dict, or a measure instance."""
-    if isinstance(spec, SimilarityMeasure):
-        return dataclasses.replace(spec, **params) if params else spec
-    if isinstance(spec, dict):
-        params = {**{k: v for k, v in spec.items() if k != "name"}, **params}
-        spec = str(spec.get("name", ""))
-    _load_entry_points()
-    cls = _REGISTRY.get(str(spec))
-    if cls is None:
-        raise ConfigError(
-            f"unknown similarity {spec!r} (known: {', '.join(available_measures())})",
-            "similarity",
-        )
-    fields = {f.name for f in dataclasses.fields(cls)}
-    bad = sorted(set(params) - fields)
-    if bad:
-        raise ConfigError(
-            f"similarity {spec!r} has no parameter {', '.join(bad)} "
-            f"(parameters: {', '.join(sorted(fields)) or 'none'})",
-            "similarity",
-        )
-    try:
-        return cls(**params)
-    except (TypeError, ValueError) as exc:
-        raise ConfigError(f"bad parameters for similarity {spec!r}: {exc}", "similarity") from None

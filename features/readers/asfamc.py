@@ -44,7 +44,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from features.errors import DataError
 
@@ -348,6 +347,8 @@ def read_amc(path: str | Path, skeleton: Skeleton) -> Motion:
 
 def _euler(letters: str, angles: np.ndarray, degrees: bool) -> np.ndarray:
     """Rotation matrices ``(frames, 3, 3)`` applying the axes in the order written."""
+    from scipy.spatial.transform import Rotation  # scipy loads when a file is read
+
     return Rotation.from_euler(letters.lower(), angles, degrees=degrees).as_matrix()
 
 

@@ -28,7 +28,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from features.errors import DataError
 
@@ -157,6 +156,8 @@ def _parse_hierarchy(tokens: list[str], path: Path) -> tuple[list[BvhJoint], int
 
 def _forward(joints: list[BvhJoint], motion: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Joint origins ``(frames, joints, 3)`` and End Site points (NaN where none), file units."""
+    from scipy.spatial.transform import Rotation  # scipy loads when a file is read
+
     frames = motion.shape[0]
     pos = np.empty((frames, len(joints), 3))
     ends = np.full((frames, len(joints), 3), np.nan)

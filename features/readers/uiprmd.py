@@ -76,7 +76,6 @@ import re
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from features.errors import DataError
 
@@ -169,6 +168,8 @@ def kinect_forward_kinematics(offsets: np.ndarray, angles_deg: np.ndarray) -> np
     angles_deg: ``(frames, 22, 3)``. Returns ``(frames, 22, 3)`` in the input's units.
     Vectorised over frames; the loop runs over the 22 joints in parent-first order.
     """
+    from scipy.spatial.transform import Rotation  # scipy loads when a file is read
+
     frames = offsets.shape[0]
     local = (
         Rotation.from_euler(KINECT_EULER_ORDER, angles_deg.reshape(-1, 3), degrees=True)

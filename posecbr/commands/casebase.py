@@ -8,12 +8,12 @@ import os
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from casebase_store import CaseStore, open_store
 from features.errors import ConfigError, DataError
+
+if TYPE_CHECKING:
+    from casebase_store import CaseStore
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -80,6 +80,8 @@ def _emit(doc: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from casebase_store import open_store
+
     if args.action == "upgrade":
         return _upgrade(args)
     readonly = args.action != "trim" or args.dry_run
@@ -169,6 +171,8 @@ def _info(store: CaseStore, args: argparse.Namespace) -> int:
 def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, Any]:
     """What fit learned, for people: k, vote, target, side handling, weighting, the heaviest
     feature weights and the novelty calibration."""
+    import numpy as np
+
     params = model.get("params") or {}
     out: dict[str, Any] = {
         "k": params.get("k"),
@@ -215,6 +219,8 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
 
 
 def _export(store: CaseStore, args: argparse.Namespace) -> int:
+    import numpy as np
+
     name = _name(store, args.name)
     info = store.get_case_base(name)
     a = store.load_cases(name)

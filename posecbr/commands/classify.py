@@ -9,10 +9,12 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
-from features.poses import PoseSequence
+
+if TYPE_CHECKING:
+    from features.poses import PoseSequence
 
 
 def register(sub: argparse._SubParsersAction) -> None:

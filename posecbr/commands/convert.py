@@ -16,14 +16,12 @@ import os
 import tempfile
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from features.datasets import Clip, detect_kind, find_asf, iter_dataset
 from features.errors import DataError
-from features.poses import save_pose
-from features.progress import progress
-from features.readers.asfamc import read_asf_amc
-from features.readers.bvh import read_bvh
+
+if TYPE_CHECKING:
+    from features.datasets import Clip
 
 
 def register(subparsers: Any) -> None:
@@ -106,6 +104,10 @@ def _write_text_atomic(path: Path, text: str) -> None:
 
 
 def _single_clips(args: argparse.Namespace) -> list[tuple[Clip, str]]:
+    from features.datasets import Clip, find_asf
+    from features.readers.asfamc import read_asf_amc
+    from features.readers.bvh import read_bvh
+
     src: Path = args.source
     suffix = src.suffix.lower()
     if suffix == ".bvh":
@@ -126,6 +128,10 @@ def _single_clips(args: argparse.Namespace) -> list[tuple[Clip, str]]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from features.datasets import detect_kind, iter_dataset
+    from features.poses import save_pose
+    from features.progress import progress
+
     src: Path = args.source
     if not src.exists():
         raise DataError("no such file or folder", src)

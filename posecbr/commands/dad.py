@@ -12,7 +12,6 @@ import json
 import sys
 from pathlib import Path
 
-from features.datasets import load_clip
 from features.errors import PosecbrError
 
 
@@ -54,6 +53,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from cbr.dad import DADConfig, detect
+    from features.datasets import load_clip
     from features.qmp.add import load_add
 
     if args.top < 0:

@@ -3,6 +3,9 @@
 describe one clip -> train a case base on two subjects -> classify the third subject's clips
 with explanations -> compare similarity measures, feature levels and DAD by leave-one-subject-
 out cross-validation -> write the HTML report. Every step is the same command a user runs.
+
+The data ships inside the package (``posecbr/demo_data/uiprmd``, found with
+:mod:`importlib.resources`), so the demo runs wherever posecbr is installed.
 """
 
 from __future__ import annotations
@@ -10,11 +13,15 @@ from __future__ import annotations
 import argparse
 import shutil
 import time
+from importlib import resources
 from pathlib import Path
 
 from features.errors import PosecbrError
 
-DEMO_DATA = Path(__file__).resolve().parents[2] / "data" / "demo" / "uiprmd"
+# --quick: one configuration, no DAD or peers, one explanation and no pictures that need the
+# clips again (the report draws the accuracy and confusion pictures from the results).
+QUICK_COMPARE = ("--similarities", "euclidean", "--features", "fluents", "--no-dad",
+                 "--peers", "none", "--explain", "1")  # fmt: skip
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,7 +31,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Runs describe -> train -> classify -> compare -> report on the bundled "
         "UI-PRMD subset (3 subjects x 10 movements x 6 repetitions) and says where the report is.",
     )
-    p.add_argument("--data", type=Path, default=DEMO_DATA, help="labels CSV folder of the demo")
+    p.add_argument(
+        "--data",
+        type=Path,
+        default=None,
+        help="folder with the demo's labels.csv (default: the subset bundled with posecbr)",
+    )
     p.add_argument("--out", type=Path, default=Path("demo-output"), help="output folder")
     p.add_argument(
         "--features",
@@ -34,7 +46,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--similarity", default="euclidean", help="similarity of the demo case base")
     p.add_argument(
-        "--quick", action="store_true", help="compare only a few configurations (faster)"
+        "--quick",
+        action="store_true",
+        help="compare one configuration (fluents/euclidean) without DAD, peers or the "
+        "per-activity pictures: seconds instead of about a minute",
     )
     p.set_defaults(func=run)
 
@@ -45,11 +60,18 @@ def _step(title: str) -> float:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.data is not None:
+        return _run(args, args.data)
+    with resources.as_file(resources.files("posecbr") / "demo_data" / "uiprmd") as bundled:
+        return _run(args, bundled)
+
+
+def _run(args: argparse.Namespace, data: Path) -> int:
     from posecbr.cli import main
 
-    labels = args.data / "labels.csv"
+    labels = data / "labels.csv"
     if not labels.is_file():
-        raise PosecbrError("demo data not found (expected labels.csv)", args.data)
+        raise PosecbrError("demo data not found (expected labels.csv)", data)
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     db = out / "casebase.sqlite"
@@ -58,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     shutil.rmtree(out / "compare", ignore_errors=True)
 
     t = _step("1. describe: a deep squat in words (posecbr describe)")
-    clip = args.data / "m01_s01_e01.npz"
+    clip = data / "m01_s01_e01.npz"
     code = main(["describe", str(clip), "--plot", str(out / "timeline_deep_squat.png")])
     if code:
         return code
@@ -77,10 +99,15 @@ def run(args: argparse.Namespace) -> int:
         return code
     print(f"({time.perf_counter() - t:.1f} s)")
 
-    t = _step("4. compare: leave-one-subject-out over every configuration (posecbr compare)")
-    compare = ["compare", str(labels), "--out", str(out / "compare")]
+    t = _step("4. compare: leave-one-subject-out cross-validation (posecbr compare)")
+    results = out / "compare"
+    compare = ["compare", str(labels)]
     if args.quick:
-        compare += ["--similarities", "euclidean,dtw", "--features", "fluents,qmp"]
+        results.mkdir()  # compare --json writes into an existing folder only
+        results = results / "results.json"
+        compare += [*QUICK_COMPARE, "--json", str(results)]
+    else:
+        compare += ["--out", str(results)]
     code = main(compare)
     if code:
         return code
@@ -88,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
 
     t = _step("5. report (posecbr report)")
     report = out / "report.html"
-    code = main(["report", str(out / "compare"), "--out", str(report)])
+    code = main(["report", str(results), "--out", str(report)])
     if code:
         return code
     print(f"({time.perf_counter() - t:.1f} s)")

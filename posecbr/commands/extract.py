@@ -10,10 +10,8 @@ unchanged are skipped. Every file is written under a temporary name and renamed.
 from __future__ import annotations
 
 import argparse
-import concurrent.futures as cf
 import hashlib
 import json
-import multiprocessing
 import os
 import sys
 import tempfile
@@ -21,8 +19,6 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from features.errors import DataError, PosecbrError
 from features.progress import progress
@@ -219,6 +215,8 @@ def extract_key(job: Job, options: Options, video_sha256: str) -> dict[str, Any]
 
 def stored_key(path: Path) -> dict[str, Any] | None:
     """The ``extract_key`` of an existing pose file, or None (absent or unreadable)."""
+    import numpy as np
+
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["metadata"]))
@@ -254,6 +252,8 @@ def _estimator(options: Options) -> Any:
 
 def _fluent_words(seq: Any, top: int = 4) -> list[list[str]] | None:
     """Per frame, up to ``top`` fluent phrases that hold (confidence >= 0.8), motion first."""
+    import numpy as np
+
     try:
         from features.fluents import evaluate
         from features.timeline import background
@@ -274,6 +274,8 @@ def _fluent_words(seq: Any, top: int = 4) -> list[list[str]] | None:
 
 def process(job: Job, options: Options) -> tuple[str, Path, str]:
     """Extract one clip. Returns (status, path, detail); status "done", "skipped" or "failed"."""
+    import numpy as np
+
     from features.pose_estimation import estimate_video
     from features.pose_estimation.overlay import write_overlay
     from features.poses import load_pose, load_pose_arrays, save_pose
@@ -341,6 +343,9 @@ def _check_out_dir(out: Path) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import concurrent.futures as cf
+    import multiprocessing
+
     if args.workers < 1:
         raise PosecbrError(f"--workers must be at least 1, got {args.workers}")
     source: Path = args.input

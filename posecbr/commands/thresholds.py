@@ -7,8 +7,6 @@ import json
 import sys
 from pathlib import Path
 
-from features.fluents import DEFAULT_TABLE, FluentTable
-
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -26,6 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from features.fluents import DEFAULT_TABLE, FluentTable
+
     table = FluentTable.from_file(args.source) if args.source else DEFAULT_TABLE
     json.dump(table.to_dict(), sys.stdout, indent=1)
     print()

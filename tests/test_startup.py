@@ -1,0 +1,141 @@
+"""Fast start: the command line loads a heavy library only where a command uses it.
+
+Each probe runs in a fresh interpreter (this test process has everything loaded already) and
+reports which of the heavy libraries are in ``sys.modules`` afterwards. Behaviour, not timing:
+``python -m benchmarks.startup`` measures the times.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from features.version import __version__
+
+ROOT = Path(__file__).resolve().parents[1]
+CLIP = ROOT / "posecbr" / "demo_data" / "uiprmd" / "m01_s01_e01.npz"
+# numpy too: the parser needs none of them (about 0.1 s of the 0.3 s aimed at for --help)
+HEAVY = ("sklearn", "scipy", "numba", "sqlalchemy", "matplotlib", "cv2", "onnxruntime", "numpy")
+MARK = "loaded-modules:"
+# The names of the registered commands, from the parser itself (argparse keeps them in the
+# subparsers action's choices).
+COMMANDS = (
+    "import argparse\n"
+    "from posecbr.cli import build_parser\n"
+    "parser = build_parser()\n"
+    "sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))\n"
+    "names = sorted(sub.choices)"
+)
+
+
+def _run(code: str, tmp_path: Path) -> tuple[str, set[str]]:
+    """Run ``code`` in a new interpreter; its output and the heavy libraries it loaded."""
+    probe = (
+        "import sys\n"
+        f"{code}\n"
+        f"heavy = sorted(m for m in {HEAVY!r} if m in sys.modules)\n"
+        f"print({MARK!r} + ','.join(heavy))\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", probe],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    out, _, loaded = proc.stdout.rpartition(MARK)
+    return out, {m for m in loaded.strip().split(",") if m}
+
+
+def test_version_loads_no_heavy_library(tmp_path: Path) -> None:
+    out, loaded = _run(
+        "from posecbr.cli import main\ntry:\n    main(['--version'])\nexcept SystemExit:\n    pass",
+        tmp_path,
+    )
+    assert out.strip() == f"posecbr {__version__}"
+    assert loaded == set()
+
+
+def test_building_the_parser_loads_no_heavy_library(tmp_path: Path) -> None:
+    out, loaded = _run(
+        f"import json\n{COMMANDS}\nprint(json.dumps(names))",
+        tmp_path,
+    )
+    # every command registered (so nothing was left out to look fast)
+    commands = {p.stem for p in (ROOT / "posecbr" / "commands").glob("*.py")} - {"__init__"}
+    assert set(json.loads(out)) == commands
+    assert loaded == set()
+
+
+def test_help_of_every_command_loads_no_heavy_library(tmp_path: Path) -> None:
+    out, loaded = _run(
+        f"import contextlib, io\n{COMMANDS}\n"
+        "for name in names:\n"
+        "    with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
+        "        build_parser().parse_args([name, '--help'])\n"
+        "print(len(names))",
+        tmp_path,
+    )
+    assert int(out.strip()) >= 11
+    assert loaded == set()
+
+
+def _describe(clip: Path, tmp_path: Path) -> tuple[dict[str, Any], set[str]]:
+    out, loaded = _run(
+        f"from posecbr.cli import main\nassert main(['describe', {str(clip)!r}, '--json']) == 0",
+        tmp_path,
+    )
+    doc: dict[str, Any] = json.loads(out)
+    return doc, loaded
+
+
+def test_describe_of_a_short_clip_loads_only_numpy_and_scipy(tmp_path: Path) -> None:
+    doc, loaded = _describe(CLIP, tmp_path)
+    assert doc["frames"] == 73 and doc["runs"]
+    # one short clip: the numpy reference (numba would take longer to load its kernels than
+    # they save); the spans are median-cleaned (scipy); no case base, estimator, plot or video
+    assert loaded == {"numpy", "scipy"}
+
+
+def test_describe_of_a_long_clip_uses_the_compiled_kernels(tmp_path: Path) -> None:
+    from features.datasets import load_clip
+    from features.fluents import evaluate
+    from features.poses import PoseSequence, save_pose
+    from features.timeline import runs_to_json, state_runs
+
+    squat = load_clip(CLIP)
+    reps = 5000 // squat.n_frames + 1  # the deep squat 69 times over: 5037 frames
+    seq = PoseSequence(np.concatenate([squat.positions] * reps), squat.joint_names, squat.fps)
+    save_pose(seq, tmp_path / "long.npz")
+    doc, loaded = _describe(tmp_path / "long.npz", tmp_path)
+    assert doc["frames"] == 73 * reps
+    assert "numba" in loaded and loaded <= {"numpy", "scipy", "numba"}
+    # the same spans as the numpy reference gives
+    reference = evaluate(seq, backend="numpy")
+    assert doc["runs"] == runs_to_json(state_runs(reference, 0.8, 5, False), seq.fps)
+
+
+def _subcommand(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentParser:
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    found: argparse.ArgumentParser = sub.choices[name]
+    return found
+
+
+def test_editor_choices_written_out_are_the_maintenance_editors() -> None:
+    from cbr.maintenance import EDITORS
+    from posecbr.cli import build_parser
+
+    parser = build_parser()
+    trim = _subcommand(_subcommand(parser, "casebase"), "trim")
+    train = _subcommand(parser, "train")
+    for p in (trim, train):
+        (editor,) = [a for a in p._actions if "--editor" in a.option_strings]
+        assert editor.choices is not None and sorted(editor.choices) == sorted(EDITORS)
