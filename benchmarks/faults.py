@@ -9,10 +9,11 @@ one transaction per clip) after some whole number of clips. Never between.
 A state is compared by its fingerprint: every case base (name, configuration, model), case
 (id, label, features, provenance, active) and maintenance-log entry (action, case, reason),
 without what differs between two identical runs (identities, timestamps). Each kill also gets
-SQLite's ``PRAGMA integrity_check`` after the next writer has rolled the journal back. The
-kill moment is uniform over the command's uninterrupted run time (measured first), so kills
-land in start-up, feature computation and the write alike; the table says how many landed
-while a transaction was open (journal present). Results: benchmarks/results/faults.json.
+SQLite's ``PRAGMA integrity_check`` after the next writer has rolled the journal back. Half the
+kill moments are uniform over the command's uninterrupted run time (measured first), so kills
+land in start-up, feature computation and the write alike; the other half over its last third,
+where the writes are; the table says how many landed while a transaction was open (a journal
+or a half-built new file present). Results: benchmarks/results/faults.json.
 """
 
 from __future__ import annotations
@@ -206,11 +207,13 @@ def fire(sc: Scenario, runs: int, base: Path, rng: random.Random) -> dict[str, A
     allowed, elapsed = _allowed(sc, base)
     bad: list[str] = []
     in_transaction = stray = 0
-    for _ in range(runs):
+    for run in range(runs):
         work = Path(tempfile.mkdtemp(dir=base))
         argv = sc.prepare(work)
         proc = _posecbr(argv)
-        deadline = time.perf_counter() + rng.uniform(0.0, elapsed)
+        # half the kills anywhere in the run, half in its last third, where the writes are
+        start = 0.0 if run % 2 == 0 else elapsed * 2 / 3
+        deadline = time.perf_counter() + rng.uniform(start, elapsed)
         while time.perf_counter() < deadline and proc.poll() is None:
             time.sleep(0.001)
         journal = (work / "cb.sqlite-journal").exists() or any(
