@@ -54,7 +54,7 @@ from .fitting import (
 )
 from .maintenance import EDITORS, MaintenanceReport
 from .novelty import NoveltyCalibration, calibrate
-from .problem import MAX_LENGTH, FeatureConfig, Problem, extract_problem, resolve_config
+from .problem import FeatureConfig, Problem, extract_problem, resolve_config
 from .retrieve import Retrieval, retrieve
 from .reuse import WEIGHTINGS as VOTE_WEIGHTINGS
 from .reuse import Solution, reuse
@@ -234,12 +234,6 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             raise ConfigError(
                 f"weights must be 'distance' or 'uniform', got {self.weights!r}", "weights"
             )
-        if isinstance(self.length, bool) or not isinstance(self.length, int | np.integer):
-            raise ConfigError(f"length must be a whole number, got {self.length!r}", "length")
-        if not 2 <= int(self.length) <= MAX_LENGTH:
-            raise ConfigError(
-                f"length must be from 2 to {MAX_LENGTH} frames, got {self.length!r}", "length"
-            )
         trim = self.trim
         if trim is not None and not (isinstance(trim, int | float) and 0.0 < float(trim) <= 1.0):
             raise ConfigError(f"trim must be in (0, 1], got {trim!r}", "trim")
@@ -271,6 +265,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
                 f"feature_weights must be 'auto', 'fisher' or 'none', got {self.feature_weights!r}",
                 "feature_weights",
             )
+        self._feature_config()  # length, states, phases: FeatureConfig's own checks
 
     def _measure(self) -> SimilarityMeasure:
         return get_measure(self.similarity, **(self.similarity_params or {}))

@@ -1,0 +1,197 @@
+"""Bad case base files and bad options of train, classify and casebase: one line naming the file
+or option, exit 1, and every file involved unchanged (issue 15)."""
+
+from __future__ import annotations
+
+import hashlib
+import sqlite3
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from casebase_store import encode_array, open_store
+from posecbr.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
+LABELS = DEMO / "labels.csv"
+CLIP = DEMO / "m01_s03_e01.npz"
+V1_SQL = Path(__file__).with_name("fixtures") / "store_v1.sql"
+
+
+def _sha(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _one_line_error(capsys: pytest.CaptureFixture[str], argv: list[str]) -> str:
+    code = main(argv)
+    out, err = capsys.readouterr()
+    assert code == 1, (argv, out, err)
+    assert out == "" and err.count("\n") == 1 and "Traceback" not in err, err
+    assert err.startswith(f"posecbr {argv[0]}: error: ")
+    return err
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    db = tmp_path_factory.mktemp("cb") / "cb.sqlite"
+    argv = ["train", str(LABELS), "--db", str(db), "--subjects", "s01",
+            "--labels", "deep_squat,standing_shoulder_abduction"]  # fmt: skip
+    assert main(argv) == 0
+    return db
+
+
+def _copy(src: Path, dst: Path) -> Path:
+    dst.write_bytes(src.read_bytes())
+    return dst
+
+
+def _tamper(db: Path, sql: str, *params: object) -> None:
+    con = sqlite3.connect(db)
+    con.execute(sql, params)
+    con.commit()
+    con.close()
+
+
+@pytest.mark.parametrize(
+    ("sql", "params", "message"),
+    [
+        (
+            "UPDATE cases SET features = ? WHERE id = 3",
+            (b"not an array",),
+            "features of case 3 is damaged",
+        ),  # fmt: skip
+        (
+            "UPDATE cases SET features = ? WHERE id = 3",
+            (encode_array(np.zeros(7)),),
+            "features of different shapes",
+        ),  # fmt: skip
+        (
+            "UPDATE cases SET features = ? WHERE id = 3",
+            (encode_array(np.array(["a", "b"])),),
+            "features of different shapes",
+        ),  # fmt: skip
+        (
+            "UPDATE case_bases SET feature_config = '{level: fluents'",
+            (),
+            "feature configuration of case base 'default' is not valid JSON",
+        ),  # fmt: skip
+        ("UPDATE case_bases SET feature_config = '[1, 2]'", (), "is not an object"),
+        (
+            'UPDATE case_bases SET feature_config = \'{"level": "video"}\'',
+            (),
+            "unreadable feature configuration",
+        ),  # fmt: skip
+        (
+            'UPDATE case_bases SET similarity_config = \'{"name": "cosine"}\'',
+            (),
+            "unknown similarity 'cosine'",
+        ),  # fmt: skip
+        (
+            "UPDATE case_bases SET model = 'null'",
+            (),
+            "model of case base 'default' is not an object",
+        ),  # fmt: skip
+        ('UPDATE case_bases SET model = \'{"params": {"k": -3}}\'', (), "bad model"),
+        (
+            'UPDATE case_bases SET feature_names = \'["a", "b"]\'',
+            (),
+            "feature columns but the case base names 2",
+        ),  # fmt: skip
+        ("DELETE FROM cases", (), "has no cases"),
+    ],
+)
+def test_a_damaged_case_base_is_one_line_and_stays_as_it_is(
+    trained: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    sql: str,
+    params: tuple[object, ...],
+    message: str,
+) -> None:
+    db = _copy(trained, tmp_path / "cb.sqlite")
+    _tamper(db, sql, *params)
+    before = _sha(db)
+    err = _one_line_error(capsys, ["classify", str(CLIP), "--db", str(db)])
+    assert str(db) in err and message in err
+    assert _sha(db) == before
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["classify", str(CLIP), "--novelty", "nan", "--feedback", "deep_squat"],
+            "novelty threshold must be a number >= 0",
+        ),  # fmt: skip
+        (
+            ["classify", str(CLIP), "--benefit", "-1", "--feedback", "deep_squat"],
+            "benefit threshold must be in [0, 1]",
+        ),  # fmt: skip
+        (["classify", str(CLIP), "--top", "-1"], "--top must be >= 0"),
+        (["classify", str(CLIP), "-k", "0"], "-k must be >= 1"),
+        (["classify", str(CLIP), "--new-label"], "--new-label goes with --feedback"),
+        (["casebase", "trim", "-k", "0"], "-k must be >= 1"),
+        (["casebase", "trim", "--keep", "0"], "--keep must be in (0, 1]"),
+        (["train", str(LABELS), "--name", ""], "the case base name is empty"),
+        (
+            ["train", str(LABELS), "--name", "x", "--length", "100000000"],
+            "length must be a whole number of frames from 2 to 4096",
+        ),  # fmt: skip
+        (
+            ["train", str(LABELS), "--append", "--similarity", "dtw"],
+            "--append adds cases to the stored model as it is; it does not take --similarity",
+        ),  # fmt: skip
+        (["train", str(LABELS), "--name", "x", "-k", "0"], "k must be a positive integer"),
+        (["train", str(LABELS), "--name", "x", "--trim", "1.5"], "--trim must be in (0, 1]"),
+    ],
+)
+def test_bad_options_are_refused_before_anything_is_written(
+    trained: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    argv: list[str],
+    message: str,
+) -> None:
+    db = _copy(trained, tmp_path / "cb.sqlite")
+    before = _sha(db)
+    err = _one_line_error(capsys, [*argv, "--db", str(db)])
+    assert message in err
+    assert _sha(db) == before and sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite"]
+
+
+def test_a_store_of_schema_1_is_refused_then_upgraded_in_place(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A real case base written by posecbr 0.1 (tests/fixtures/store_v1.sql: `posecbr train` on
+    eight demo clips and one `classify --feedback`, dumped by sqlite3)."""
+    db = tmp_path / "old.sqlite"
+    con = sqlite3.connect(db)
+    con.executescript(V1_SQL.read_text(encoding="utf-8"))
+    con.close()
+    before = _sha(db)
+    err = _one_line_error(capsys, ["classify", str(CLIP), "--db", str(db)])
+    assert "schema version 1" in err and "posecbr casebase upgrade --db FILE" in err
+    assert _sha(db) == before
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    assert "converted from schema version 1 to 2" in capsys.readouterr().out
+    store = open_store(db, readonly=True)
+    cases = store.load_cases("squats ✓")
+    assert cases.ids.tolist() == list(range(1, 9))  # every case keeps its id
+    log = store.maintenance_log("squats ✓")
+    assert [(e.action, e.case_id) for e in log] == [("build", None), ("retain", None),
+                                                    ("revise", 6)]  # fmt: skip
+    info = store.get_case_base("squats ✓")
+    assert len(info.uid) == 32 and info.version == 1
+    store.close()
+    assert main(["classify", str(CLIP), "--db", str(db), "--json"]) == 0
+    assert '"label": "deep_squat"' in capsys.readouterr().out
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    assert "already schema version 2" in capsys.readouterr().out
+    # new cases never take an old id
+    assert main(["classify", str(CLIP), "--db", str(db), "--feedback", "deep_squat",
+                 "--novelty", "0", "--benefit", "0"]) == 0  # fmt: skip
+    store = open_store(db, readonly=True)
+    assert max(store.load_cases("squats ✓").ids) == 9
+    store.close()
