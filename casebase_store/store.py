@@ -436,6 +436,22 @@ class CaseStore:
         with self._read() as s:
             return s.scalar(select(CaseBaseRow.id).where(CaseBaseRow.name == name)) is not None
 
+    def choose(self, name: str | None) -> str:
+        """``name`` when the store holds it; without a name, the store's only case base (a store
+        of several, or of none, is refused naming them)."""
+        if name is not None:
+            self.get_case_base(name)  # names the case bases there when absent
+            return name
+        names = [cb.name for cb in self.list_case_bases()]
+        if len(names) == 1:
+            return names[0]
+        if names:
+            raise StoreError(
+                f"the store holds case bases {', '.join(names)}: choose one with --name",
+                self.where,
+            )
+        raise StoreError("the store holds no case base (run posecbr train)", self.where)
+
     def load_case_base(
         self, name: str, *, include_inactive: bool = False
     ) -> tuple[CaseBaseInfo, CaseArrays]:

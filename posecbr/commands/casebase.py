@@ -56,24 +56,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _name(store: CaseStore, name: str | None) -> str:
-    if name is not None:
-        store.get_case_base(name)  # clear error when absent
-        return name
-    names = [cb.name for cb in store.list_case_bases()]
-    if len(names) != 1:
-        raise ConfigError(
-            "the store holds "
-            + (
-                f"case bases {', '.join(names)}: choose one with --name"
-                if names
-                else "no case base"
-            ),
-            store.where,
-        )
-    return names[0]
-
-
 def _emit(doc: Any) -> None:
     json.dump(doc, sys.stdout, indent=2, ensure_ascii=False, default=str)
     print()
@@ -192,7 +174,7 @@ def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, A
 
 
 def _list(store: CaseStore, args: argparse.Namespace) -> int:
-    name = _name(store, args.name)
+    name = store.choose(args.name)
     a = store.load_cases(name, include_inactive=args.all)
     rows: list[dict[str, Any]] = [
         {
@@ -221,7 +203,7 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
 def _export(store: CaseStore, args: argparse.Namespace) -> int:
     import numpy as np
 
-    name = _name(store, args.name)
+    name = store.choose(args.name)
     info = store.get_case_base(name)
     a = store.load_cases(name)
     out: Path = args.out if args.out.suffix == ".npz" else args.out.with_suffix(".npz")
@@ -259,7 +241,7 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     from cbr.maintenance import EDITORS, record_trim
     from cbr.stored import load_classifier
 
-    name = _name(store, args.name)
+    name = store.choose(args.name)
     if not 0.0 < args.keep <= 1.0:
         raise ConfigError(f"--keep must be in (0, 1], got {args.keep}", "--keep")
     if args.k is not None and args.k < 1:

@@ -95,23 +95,6 @@ def load_inputs(
     return out
 
 
-def _case_base_name(store: Any, name: str | None) -> str:
-    if name is not None:
-        return name
-    names = [cb.name for cb in store.list_case_bases()]
-    if len(names) != 1:
-        raise ConfigError(
-            "the store holds "
-            + (
-                f"case bases {', '.join(names)}: choose one with --name"
-                if names
-                else "no case base (run posecbr train)"
-            ),
-            store.where,
-        )
-    return str(names[0])
-
-
 def _check_args(args: argparse.Namespace) -> None:
     if args.k is not None and args.k < 1:
         raise ConfigError(f"-k must be >= 1, got {args.k}", "-k")
@@ -135,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     settings = FeedbackSettings(args.novelty, args.benefit)
     store = open_store(args.db, create=False, readonly=args.feedback is None)
     try:
-        name = _case_base_name(store, args.name)
+        name = store.choose(args.name)
         stored = load_classifier(store, name)
         if args.k is not None:
             stored.classifier.set_params(k=args.k)
