@@ -37,6 +37,8 @@ window length, and the tests check that both agree.
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -45,7 +47,8 @@ from scipy.fft import next_fast_len
 from scipy.ndimage import gaussian_filter1d, median_filter, uniform_filter1d
 from scipy.signal import find_peaks
 
-from .derived import signals_of
+from .datasets import Clip
+from .derived import signals_of, stretch
 from .errors import DataError
 from .geometry import WORLD_UP, angle_between
 from .poses import PoseSequence
@@ -484,6 +487,8 @@ __all__ = [
     "MovementSignals",
     "Repetition",
     "RepetitionCount",
+    "Split",
+    "split_repetitions",
     "mirror_matrix",
     "movement_direction",
     "side_parts",
@@ -495,3 +500,34 @@ __all__ = [
     "mirror_angles",
     "movement_signals",
 ]
+
+
+@dataclass(frozen=True)
+class Split:
+    """Clips cut into their repetitions: the new clips, and how many of the originals had no
+    repetition (or were too short for one) and stayed whole."""
+
+    clips: list[Clip]
+    kept_whole: int
+
+
+def split_repetitions(clips: Sequence[Clip]) -> Split:
+    """Every clip cut into its repetitions (:func:`count_repetitions`), each a clip of its own
+    with the clip's label, subject and extras (plus ``repetition``: 1, 2, ...); the frames and
+    what was computed for them are shared with the clip (:func:`features.derived.stretch`).
+    A clip without a repetition stays whole."""
+    out: list[Clip] = []
+    whole = 0
+    for clip in clips:
+        try:
+            reps = count_repetitions(clip.seq).repetitions
+        except DataError:
+            reps = ()
+        if not reps:
+            out.append(clip)
+            whole += 1
+            continue
+        for k, r in enumerate(reps, start=1):
+            part = stretch(clip.seq, r.start_frame, r.end_frame).with_metadata(repetition=k)
+            out.append(dataclasses.replace(clip, seq=part, extras={**clip.extras, "repetition": k}))
+    return Split(out, whole)
