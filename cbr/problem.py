@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any, Literal
 
 import numpy as np
@@ -373,6 +374,27 @@ def phase_words(phases: int) -> tuple[str, ...]:
     return tuple(f"phase {i + 1} of {phases}" for i in range(phases))
 
 
+@lru_cache(maxsize=64)
+def summary_columns(
+    names: tuple[str, ...], words: tuple[str, ...], phases: int = 0
+) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Names and words of the columns :func:`summarise` gives (the same for every clip of a
+    case base, so built once)."""
+    out_names = [f"{n}@{st}" for st in SUMMARY_STATS for n in names]
+    # a fluent's lowest/highest value is a confidence; an angle's (position's) is the value itself
+    out_words = [
+        f"{w}{_STAT_WORDS[st]}"
+        if st in ("mean", "std") or n.startswith((ANGLE_PREFIX, POSITION_PREFIX))
+        else f"{w}{_STAT_WORDS[st][:-1]} confidence)"
+        for st in SUMMARY_STATS
+        for n, w in zip(names, words, strict=True)
+    ]
+    for i, said in enumerate(phase_words(phases) if phases else ()):
+        out_names += [f"{n}@phase{i + 1}" for n in names]
+        out_words += [f"{w} ({said})" for w in words]
+    return tuple(out_names), tuple(out_words)
+
+
 def summarise(
     values: np.ndarray, names: tuple[str, ...], words: tuple[str, ...], phases: int = 0
 ) -> Problem:
@@ -383,20 +405,8 @@ def summarise(
     feature words (for a fluent state the mean confidence is about the share of the clip it
     holds)."""
     stats = [values.mean(axis=0), values.min(axis=0), values.max(axis=0), values.std(axis=0)]
-    out_names = [f"{n}@{st}" for st in SUMMARY_STATS for n in names]
-    # a fluent's lowest/highest value is a confidence; an angle's (position's) is the value itself
-    out_words = [
-        f"{w}{_STAT_WORDS[st]}"
-        if st in ("mean", "std") or n.startswith((ANGLE_PREFIX, POSITION_PREFIX))
-        else f"{w}{_STAT_WORDS[st][:-1]} confidence)"
-        for st in SUMMARY_STATS
-        for n, w in zip(names, words, strict=True)
-    ]
-    if phases:
-        for i, (part, said) in enumerate(
-            zip(np.array_split(values, phases, axis=0), phase_words(phases), strict=True)
-        ):
-            stats.append(part.mean(axis=0))
-            out_names += [f"{n}@phase{i + 1}" for n in names]
-            out_words += [f"{w} ({said})" for w in words]
-    return Problem(np.concatenate(stats), tuple(out_names), tuple(out_words), "fluents")
+    stats += (
+        [part.mean(axis=0) for part in np.array_split(values, phases, axis=0)] if phases else []
+    )
+    out_names, out_words = summary_columns(names, words, phases)
+    return Problem(np.concatenate(stats), out_names, out_words, "fluents")
