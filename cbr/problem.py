@@ -284,6 +284,58 @@ def resample(x: np.ndarray, length: int) -> np.ndarray:
     return x[i] * (1.0 - w) + x[i + 1] * w
 
 
+@dataclass(frozen=True)
+class _ColumnPlan:
+    """Where a configuration's columns come from (the same for every clip, so worked out
+    once): fluent state columns, the angle and position columns, the words of them all."""
+
+    fluent_cols: np.ndarray
+    angle_states: tuple[str, ...]
+    arm_planes: bool
+    position_cols: np.ndarray
+    words: tuple[str, ...]
+
+
+@lru_cache(maxsize=32)
+def _column_plan(
+    states: tuple[str, ...], state_names: tuple[str, ...], state_words: tuple[str, ...]
+) -> _ColumnPlan:
+    index = {n: i for i, n in enumerate(state_names)}
+    fluent_states = [s for s in states if not s.startswith((ANGLE_PREFIX, POSITION_PREFIX))]
+    angle_states = tuple(s[len(ANGLE_PREFIX) :] for s in states if s.startswith(ANGLE_PREFIX))
+    position_states = [s[len(POSITION_PREFIX) :] for s in states if s.startswith(POSITION_PREFIX)]
+    missing = [s for s in fluent_states if s not in index]
+    if missing:
+        raise ConfigError(
+            "the fluent table no longer has states " + ", ".join(missing[:5]), "features"
+        )
+    pos_index = {n: i for i, n in enumerate(position_names())}
+    unknown = [n for n in position_states if n not in pos_index]
+    if unknown:
+        raise ConfigError("no joint position " + ", ".join(unknown[:5]), "features")
+    cols = np.array([index[s] for s in fluent_states], dtype=np.int64)
+    words = [state_words[i] for i in cols]
+    words += [a.replace("_", " ") + " angle" for a in angle_states]
+    words += [position_word(n) for n in position_states]
+    return _ColumnPlan(
+        cols,
+        angle_states,
+        any(a in ARM_PLANE_SIGNALS for a in angle_states),
+        np.array([pos_index[n] for n in position_states], dtype=np.int64),
+        tuple(words),
+    )
+
+
+@lru_cache(maxsize=32)
+def _signal_cols(angle_states: tuple[str, ...], signal_names: tuple[str, ...]) -> tuple[int, ...]:
+    """Column of every angle in the state signals (-1 for the arm planes, kept elsewhere)."""
+    sig_index = {n: i for i, n in enumerate(signal_names)}
+    unknown = [a for a in angle_states if a not in sig_index and a not in ARM_PLANE_SIGNALS]
+    if unknown:
+        raise ConfigError("no state signal " + ", ".join(unknown[:5]), "features")
+    return tuple(sig_index.get(a, -1) for a in angle_states)
+
+
 def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
     """The problem representation of one clip under a resolved ``config``.
 
@@ -319,44 +371,27 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
             "features",
         )
     res = fluents_of(seq)
-    index = {n: i for i, n in enumerate(res.state_names)}
     states = tuple(config.states)
-    fluent_states = [s for s in states if not s.startswith((ANGLE_PREFIX, POSITION_PREFIX))]
-    angle_states = [s[len(ANGLE_PREFIX) :] for s in states if s.startswith(ANGLE_PREFIX)]
-    position_states = [s[len(POSITION_PREFIX) :] for s in states if s.startswith(POSITION_PREFIX)]
-    missing = [s for s in fluent_states if s not in index]
-    if missing:
-        raise ConfigError(
-            "the fluent table no longer has states " + ", ".join(missing[:5]), "features"
-        )
-    cols = [index[s] for s in fluent_states]
-    conf = fill_nan_time(res.confidence[:, cols], config.fill)
-    words = [res.words[i] for i in cols]
-    if angle_states:
+    plan = _column_plan(states, tuple(res.state_names), tuple(res.words))
+    conf = fill_nan_time(res.confidence[:, plan.fluent_cols], config.fill)
+    words = list(plan.words)
+    if plan.angle_states:
         sig = signals_of(seq)
-        sig_index = {n: i for i, n in enumerate(sig.names)}
-        unknown = [a for a in angle_states if a not in sig_index and a not in ARM_PLANE_SIGNALS]
-        if unknown:
-            raise ConfigError("no state signal " + ", ".join(unknown[:5]), "features")
-        planes = arm_planes(seq) if any(a in ARM_PLANE_SIGNALS for a in angle_states) else None
+        planes = arm_planes(seq) if plan.arm_planes else None
         ang_cols = [
             planes[:, ARM_PLANE_SIGNALS.index(a)]
             if planes is not None and a in ARM_PLANE_SIGNALS
-            else sig.values[:, sig_index[a]]
-            for a in angle_states
+            else sig.values[:, i]
+            for a, i in zip(
+                plan.angle_states, _signal_cols(plan.angle_states, sig.names), strict=True
+            )
         ]
         # radians / pi: in [0, 1] like the confidences; a wholly missing angle reads 90 degrees
         ang = np.stack(ang_cols, axis=1) / np.pi
         conf = np.concatenate([conf, fill_nan_time(ang, 0.5)], axis=1)
-        words += [a.replace("_", " ") + " angle" for a in angle_states]
-    if position_states:
-        pos_index = {n: i for i, n in enumerate(position_names())}
-        unknown = [n for n in position_states if n not in pos_index]
-        if unknown:
-            raise ConfigError("no joint position " + ", ".join(unknown[:5]), "features")
-        pos = body_positions(seq)[:, [pos_index[n] for n in position_states]]
+    if len(plan.position_cols):
+        pos = body_positions(seq)[:, plan.position_cols]
         conf = np.concatenate([conf, fill_nan_time(pos, 0.0)], axis=1)
-        words += [position_word(n) for n in position_states]
     if not states:
         raise ConfigError("the feature configuration selects no columns", "features")
     values = resample(conf, int(config.length))
