@@ -180,6 +180,7 @@ def _plot(rec: Any, result: Any, path: Path, name: str) -> None:
         title=f"{name}: activities and repetition counts over the fluent timeline",
         bands=_bands(result),
         band_title="activity",
+        max_rows=30,
     )
 
 
