@@ -16,8 +16,7 @@ import sys
 from pathlib import Path
 
 from features.fileio import check_output
-
-from ._recording import add_recording_options, load_recording
+from posecbr.recordings import add_recording_options, load_recording
 
 
 def register(sub: argparse._SubParsersAction) -> None:

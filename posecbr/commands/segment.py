@@ -23,8 +23,7 @@ from typing import Any
 
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
-
-from ._recording import add_recording_options, check_fps, load_recording
+from posecbr.recordings import add_recording_options, check_fps, load_recording
 
 JUDGES = ("held-out", "activities")
 
