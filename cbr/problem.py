@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any, Literal
 
 import numpy as np
@@ -283,6 +284,58 @@ def resample(x: np.ndarray, length: int) -> np.ndarray:
     return x[i] * (1.0 - w) + x[i + 1] * w
 
 
+@dataclass(frozen=True)
+class _ColumnPlan:
+    """Where a configuration's columns come from (the same for every clip, so worked out
+    once): fluent state columns, the angle and position columns, the words of them all."""
+
+    fluent_cols: np.ndarray
+    angle_states: tuple[str, ...]
+    arm_planes: bool
+    position_cols: np.ndarray
+    words: tuple[str, ...]
+
+
+@lru_cache(maxsize=32)
+def _column_plan(
+    states: tuple[str, ...], state_names: tuple[str, ...], state_words: tuple[str, ...]
+) -> _ColumnPlan:
+    index = {n: i for i, n in enumerate(state_names)}
+    fluent_states = [s for s in states if not s.startswith((ANGLE_PREFIX, POSITION_PREFIX))]
+    angle_states = tuple(s[len(ANGLE_PREFIX) :] for s in states if s.startswith(ANGLE_PREFIX))
+    position_states = [s[len(POSITION_PREFIX) :] for s in states if s.startswith(POSITION_PREFIX)]
+    missing = [s for s in fluent_states if s not in index]
+    if missing:
+        raise ConfigError(
+            "the fluent table no longer has states " + ", ".join(missing[:5]), "features"
+        )
+    pos_index = {n: i for i, n in enumerate(position_names())}
+    unknown = [n for n in position_states if n not in pos_index]
+    if unknown:
+        raise ConfigError("no joint position " + ", ".join(unknown[:5]), "features")
+    cols = np.array([index[s] for s in fluent_states], dtype=np.int64)
+    words = [state_words[i] for i in cols]
+    words += [a.replace("_", " ") + " angle" for a in angle_states]
+    words += [position_word(n) for n in position_states]
+    return _ColumnPlan(
+        cols,
+        angle_states,
+        any(a in ARM_PLANE_SIGNALS for a in angle_states),
+        np.array([pos_index[n] for n in position_states], dtype=np.int64),
+        tuple(words),
+    )
+
+
+@lru_cache(maxsize=32)
+def _signal_cols(angle_states: tuple[str, ...], signal_names: tuple[str, ...]) -> tuple[int, ...]:
+    """Column of every angle in the state signals (-1 for the arm planes, kept elsewhere)."""
+    sig_index = {n: i for i, n in enumerate(signal_names)}
+    unknown = [a for a in angle_states if a not in sig_index and a not in ARM_PLANE_SIGNALS]
+    if unknown:
+        raise ConfigError("no state signal " + ", ".join(unknown[:5]), "features")
+    return tuple(sig_index.get(a, -1) for a in angle_states)
+
+
 def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
     """The problem representation of one clip under a resolved ``config``.
 
@@ -318,44 +371,27 @@ def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
             "features",
         )
     res = fluents_of(seq)
-    index = {n: i for i, n in enumerate(res.state_names)}
     states = tuple(config.states)
-    fluent_states = [s for s in states if not s.startswith((ANGLE_PREFIX, POSITION_PREFIX))]
-    angle_states = [s[len(ANGLE_PREFIX) :] for s in states if s.startswith(ANGLE_PREFIX)]
-    position_states = [s[len(POSITION_PREFIX) :] for s in states if s.startswith(POSITION_PREFIX)]
-    missing = [s for s in fluent_states if s not in index]
-    if missing:
-        raise ConfigError(
-            "the fluent table no longer has states " + ", ".join(missing[:5]), "features"
-        )
-    cols = [index[s] for s in fluent_states]
-    conf = fill_nan_time(res.confidence[:, cols], config.fill)
-    words = [res.words[i] for i in cols]
-    if angle_states:
+    plan = _column_plan(states, tuple(res.state_names), tuple(res.words))
+    conf = fill_nan_time(res.confidence[:, plan.fluent_cols], config.fill)
+    words = list(plan.words)
+    if plan.angle_states:
         sig = signals_of(seq)
-        sig_index = {n: i for i, n in enumerate(sig.names)}
-        unknown = [a for a in angle_states if a not in sig_index and a not in ARM_PLANE_SIGNALS]
-        if unknown:
-            raise ConfigError("no state signal " + ", ".join(unknown[:5]), "features")
-        planes = arm_planes(seq) if any(a in ARM_PLANE_SIGNALS for a in angle_states) else None
+        planes = arm_planes(seq) if plan.arm_planes else None
         ang_cols = [
             planes[:, ARM_PLANE_SIGNALS.index(a)]
             if planes is not None and a in ARM_PLANE_SIGNALS
-            else sig.values[:, sig_index[a]]
-            for a in angle_states
+            else sig.values[:, i]
+            for a, i in zip(
+                plan.angle_states, _signal_cols(plan.angle_states, sig.names), strict=True
+            )
         ]
         # radians / pi: in [0, 1] like the confidences; a wholly missing angle reads 90 degrees
         ang = np.stack(ang_cols, axis=1) / np.pi
         conf = np.concatenate([conf, fill_nan_time(ang, 0.5)], axis=1)
-        words += [a.replace("_", " ") + " angle" for a in angle_states]
-    if position_states:
-        pos_index = {n: i for i, n in enumerate(position_names())}
-        unknown = [n for n in position_states if n not in pos_index]
-        if unknown:
-            raise ConfigError("no joint position " + ", ".join(unknown[:5]), "features")
-        pos = body_positions(seq)[:, [pos_index[n] for n in position_states]]
+    if len(plan.position_cols):
+        pos = body_positions(seq)[:, plan.position_cols]
         conf = np.concatenate([conf, fill_nan_time(pos, 0.0)], axis=1)
-        words += [position_word(n) for n in position_states]
     if not states:
         raise ConfigError("the feature configuration selects no columns", "features")
     values = resample(conf, int(config.length))
@@ -373,6 +409,27 @@ def phase_words(phases: int) -> tuple[str, ...]:
     return tuple(f"phase {i + 1} of {phases}" for i in range(phases))
 
 
+@lru_cache(maxsize=64)
+def summary_columns(
+    names: tuple[str, ...], words: tuple[str, ...], phases: int = 0
+) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Names and words of the columns :func:`summarise` gives (the same for every clip of a
+    case base, so built once)."""
+    out_names = [f"{n}@{st}" for st in SUMMARY_STATS for n in names]
+    # a fluent's lowest/highest value is a confidence; an angle's (position's) is the value itself
+    out_words = [
+        f"{w}{_STAT_WORDS[st]}"
+        if st in ("mean", "std") or n.startswith((ANGLE_PREFIX, POSITION_PREFIX))
+        else f"{w}{_STAT_WORDS[st][:-1]} confidence)"
+        for st in SUMMARY_STATS
+        for n, w in zip(names, words, strict=True)
+    ]
+    for i, said in enumerate(phase_words(phases) if phases else ()):
+        out_names += [f"{n}@phase{i + 1}" for n in names]
+        out_words += [f"{w} ({said})" for w in words]
+    return tuple(out_names), tuple(out_words)
+
+
 def summarise(
     values: np.ndarray, names: tuple[str, ...], words: tuple[str, ...], phases: int = 0
 ) -> Problem:
@@ -383,20 +440,8 @@ def summarise(
     feature words (for a fluent state the mean confidence is about the share of the clip it
     holds)."""
     stats = [values.mean(axis=0), values.min(axis=0), values.max(axis=0), values.std(axis=0)]
-    out_names = [f"{n}@{st}" for st in SUMMARY_STATS for n in names]
-    # a fluent's lowest/highest value is a confidence; an angle's (position's) is the value itself
-    out_words = [
-        f"{w}{_STAT_WORDS[st]}"
-        if st in ("mean", "std") or n.startswith((ANGLE_PREFIX, POSITION_PREFIX))
-        else f"{w}{_STAT_WORDS[st][:-1]} confidence)"
-        for st in SUMMARY_STATS
-        for n, w in zip(names, words, strict=True)
-    ]
-    if phases:
-        for i, (part, said) in enumerate(
-            zip(np.array_split(values, phases, axis=0), phase_words(phases), strict=True)
-        ):
-            stats.append(part.mean(axis=0))
-            out_names += [f"{n}@phase{i + 1}" for n in names]
-            out_words += [f"{w} ({said})" for w in words]
-    return Problem(np.concatenate(stats), tuple(out_names), tuple(out_words), "fluents")
+    stats += (
+        [part.mean(axis=0) for part in np.array_split(values, phases, axis=0)] if phases else []
+    )
+    out_names, out_words = summary_columns(names, words, phases)
+    return Problem(np.concatenate(stats), out_names, out_words, "fluents")

@@ -90,15 +90,17 @@ def body_positions(seq: PoseSequence) -> np.ndarray:
 
 
 def _body_positions(p: np.ndarray) -> np.ndarray:
-    bf = body_frame(p)
     start = slice(0, max(3, p.shape[0] // 10))
+    bf = body_frame(p[start])  # the frame is set at the start; later frames need no axes
+    neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])
+    mid_hip = 0.5 * (p[:, JOINT_INDEX["left_hip"]] + p[:, JOINT_INDEX["right_hip"]])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN stretches
-        origin = np.nanmean(bf.mid_hip[start], axis=0)
-        left = np.nanmean(bf.level_left[start], axis=0)
+        origin = np.nanmean(bf.mid_hip, axis=0)
+        left = np.nanmean(bf.level_left, axis=0)
         if not np.isfinite(left).all():
-            left = np.nanmean(bf.level_left, axis=0)
-        torso = float(np.nanmedian(norm(bf.neck - bf.mid_hip)))
+            left = np.nanmean(body_frame(p).level_left, axis=0)
+        torso = float(np.nanmedian(norm(neck - mid_hip)))
     left = unit(left)  # a mean of level directions: level already
     axes = np.stack([left, WORLD_UP, np.cross(left, WORLD_UP)])  # rows: left, height, forward
     if not (np.isfinite(axes).all() and np.isfinite(origin).all() and torso > 0):

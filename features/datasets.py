@@ -11,7 +11,10 @@ kind            what ``path`` is
 ``csv``         a labels CSV ``path,label[,subject][,start,end]`` (header row required, more
                 columns become extras), or a folder with a ``labels.csv``. Relative paths
                 resolve against the CSV's folder; ``start``/``end`` are frame indices, end
-                exclusive.
+                exclusive. A long recording labelled over time has a ``label_file`` instead of
+                a ``label`` (:func:`read_label_track`: one label per frame, or per
+                ``label_block_s`` seconds; codes named by a ``label_names`` file) and becomes
+                one clip per labelled stretch.
 ``asf_amc``     a folder with ``.amc`` files (any depth) and the actor's ``.asf`` beside each:
                 HDM05 (label = action in the file name, subject = actor) or CMU (label =
                 the AMC's folder name).
@@ -85,6 +88,8 @@ class _Entry:
     subject: str | None
     extras: dict[str, Any]
     name: str
+    # a recording labelled over time: its labelled stretches, each with its label
+    pieces: Callable[[PoseSequence], list[tuple[PoseSequence, str]]] | None = None
 
 
 def _suffix(path: Path) -> str:
@@ -310,6 +315,8 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
         )
     header = [h.strip().lower() for h in rows[0]]
     missing = [c for c in CSV_REQUIRED if c not in header]
+    if missing == ["label"] and "label_file" in header:
+        missing = []  # recordings labelled over time
     if missing:
         raise DataError(
             f"line 1: header must name columns path,label[,subject][,start,end]; missing"
@@ -331,7 +338,8 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
         rec = dict(zip(header, (c.strip() for c in row), strict=True))
         if not rec["path"]:
             raise DataError(f"line {line_no}: empty path", csv_path)
-        if not rec["label"]:
+        track = _track_columns(rec, csv_path, line_no)
+        if not rec.get("label") and track is None:
             raise DataError(f"line {line_no}: empty label", csv_path)
         clip = Path(rec["path"])
         if not clip.is_absolute():
@@ -356,17 +364,18 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
         extras = {
             k: _parse_bool(v)
             for k, v in rec.items()
-            if k not in ("path", "label", "subject", "start", "end")
+            if k not in ("path", "label", "subject", "start", "end", *_TRACK_COLUMNS)
         }
         out.append(
             {
                 "path": clip,
-                "label": rec["label"],
+                "label": rec.get("label", ""),
                 "subject": rec.get("subject") or None,
                 "start": start,
                 "end": end,
                 "extras": extras,
                 "line": line_no,
+                "track": track,
             }
         )
     return out
@@ -375,6 +384,9 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
 def _csv_entries(csv_path: Path) -> list[_Entry]:
     entries = []
     for rec in read_labels_csv(csv_path):
+        if rec["track"] is not None:
+            entries.append(_track_entry(rec))
+            continue
 
         def load(rec: dict[str, Any] = rec) -> PoseSequence:
             seq = load_clip(rec["path"])
@@ -390,6 +402,169 @@ def _csv_entries(csv_path: Path) -> list[_Entry]:
 
         entries.append(_Entry(load, rec["label"], rec["subject"], rec["extras"], rec["path"].name))
     return entries
+
+
+# ---- recordings labelled over time ---------------------------------------------------------
+
+_TRACK_COLUMNS = ("label_file", "label_block_s", "label_names")
+
+
+@dataclass(frozen=True)
+class LabelTrack:
+    """How a recording is labelled over time: the label file, the seconds each label covers
+    (None: one label per frame) and an optional file naming the codes."""
+
+    path: Path
+    block_s: float | None = None
+    names: Path | None = None
+
+    def __post_init__(self) -> None:
+        if self.block_s is not None and not (np.isfinite(self.block_s) and self.block_s > 0):
+            raise DataError(f"the label block must be seconds > 0, got {self.block_s!r}", self.path)
+
+
+def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTrack | None:
+    """The label track a labels CSV row names (``label_file``, ``label_block_s``,
+    ``label_names``), or None."""
+    if not rec.get("label_file"):
+        return None
+    if rec.get("label"):
+        raise DataError(f"line {line_no}: give a label or a label_file, not both", csv_path)
+
+    def resolve(value: str) -> Path:
+        f = Path(value)
+        f = f if f.is_absolute() else csv_path.parent / f
+        if not f.is_file():
+            raise DataError(f"line {line_no}: no such file {value}", csv_path)
+        return f
+
+    block: float | None = None
+    if rec.get("label_block_s"):
+        try:
+            block = float(rec["label_block_s"])
+        except ValueError:
+            block = float("nan")
+        if not (np.isfinite(block) and block > 0):
+            raise DataError(
+                f"line {line_no}: label_block_s must be seconds > 0, got {rec['label_block_s']!r}",
+                csv_path,
+            )
+    names = resolve(rec["label_names"]) if rec.get("label_names") else None
+    return LabelTrack(resolve(rec["label_file"]), block, names)
+
+
+def read_label_names(path: str | Path) -> dict[str, str]:
+    """Names of label codes: one ``code name`` pair per line (space, tab or comma between;
+    ``#`` starts a comment). Raises DataError naming the file and line."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DataError(f"cannot read label names ({exc})", path) from None
+    names: dict[str, str] = {}
+    for line_no, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        parts = re.split(r"[\s,]+", line, maxsplit=1)
+        if len(parts) != 2 or not parts[1].strip():
+            raise DataError(f"line {line_no}: expected 'code name', got {raw.strip()!r}", path)
+        if parts[0] in names:
+            raise DataError(f"line {line_no}: code {parts[0]!r} named twice", path)
+        names[parts[0]] = parts[1].strip()
+    if not names:
+        raise DataError("no label names in it", path)
+    return names
+
+
+def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> list[str]:
+    """The labels of a label file in order: tokens separated by spaces, tabs, commas or line
+    ends (as in cmu-mocap6/truelabels), each mapped through ``names`` when given. Raises
+    DataError for an empty or unreadable file or a code ``names`` does not name."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DataError(f"cannot read the label file ({exc})", path) from None
+    tokens = [t for t in re.split(r"[\s,]+", text) if t]
+    if not tokens:
+        raise DataError("the label file holds no labels", path)
+    if names is None:
+        return tokens
+    unknown = sorted({t for t in tokens if t not in names})
+    if unknown:
+        raise DataError(f"label code(s) {', '.join(unknown[:5])} not in the label names", path)
+    return [names[t] for t in tokens]
+
+
+def frame_labels(
+    labels: list[str], n_frames: int, fps: float, block_s: float | None, where: str | Path
+) -> np.ndarray:
+    """The label of every frame, ``(n_frames,)`` objects, from one label per frame
+    (``block_s`` None) or one per ``block_s`` seconds (label t covers [t, t+1) x block_s).
+
+    The count must fit the recording: one label per block, the last block possibly partial;
+    one more label is accepted when the frames fill the last block exactly (the cmu-mocap6
+    label files were made that way). Otherwise DataError naming the file: a different count
+    means another frame rate or block length, and labels would land on the wrong frames."""
+    per_block = 1.0 if block_s is None else block_s * fps
+    if block_s is None:
+        low = high = n_frames
+    else:
+        low = int(np.ceil(n_frames / per_block - 1e-9))
+        high = int(np.floor(n_frames / per_block + 1e-9)) + 1
+    if not low <= len(labels) <= high:
+        unit = "frame" if block_s is None else f"{block_s:g} s"
+        need = str(low) if low == high else f"{low} or {high}"
+        raise DataError(
+            f"{len(labels)} labels (one per {unit}) do not fit the recording: {n_frames} frames"
+            f" at {fps:g} fps need {need} (another frame rate or label block?)",
+            where,
+        )
+    block = np.floor(np.arange(n_frames) / per_block + 1e-9).astype(np.int64)
+    return np.asarray(labels, dtype=object)[np.minimum(block, len(labels) - 1)]
+
+
+def labelled_stretches(frame_label: np.ndarray) -> list[tuple[int, int, str]]:
+    """Runs of one label: ``(start, end, label)`` frames, end exclusive, in order."""
+    n = len(frame_label)
+    change = np.flatnonzero(frame_label[1:] != frame_label[:-1]) + 1
+    starts = np.r_[0, change]
+    ends = np.r_[change, n]
+    return [(int(a), int(b), str(frame_label[a])) for a, b in zip(starts, ends, strict=True)]
+
+
+def split_by_track(seq: PoseSequence, track: LabelTrack) -> list[tuple[PoseSequence, str]]:
+    """One clip per labelled stretch of the recording ``seq``, with its label (frames shared
+    with the recording, :func:`features.derived.stretch`)."""
+    from .derived import stretch
+
+    names = read_label_names(track.names) if track.names is not None else None
+    labels = read_label_track(track.path, names)
+    per_frame = frame_labels(labels, seq.n_frames, seq.fps, track.block_s, track.path)
+    return [(stretch(seq, a, b), lab) for a, b, lab in labelled_stretches(per_frame)]
+
+
+def _track_entry(rec: dict[str, Any]) -> _Entry:
+    track: LabelTrack = rec["track"]
+    return _Entry(
+        lambda: load_clip(rec["path"]),
+        None,
+        rec["subject"],
+        rec["extras"],
+        rec["path"].name,
+        pieces=lambda seq: split_by_track(seq, track),
+    )
+
+
+def iter_recording(
+    path: str | Path, track: LabelTrack, subject: str | None = None
+) -> Iterator[Clip]:
+    """The labelled stretches of one recording (anything :func:`load_clip` reads) as clips."""
+    seq = load_clip(path)
+    for part, label in split_by_track(seq, track):
+        part = part.with_metadata(label=label, subject=subject)
+        yield Clip(seq=part, label=label, subject=subject, extras={})
 
 
 def _entries(path: Path, kind: str, sensor: str) -> list[_Entry]:
@@ -464,23 +639,27 @@ def iter_dataset(
     for entry in progress(entries, desc, total=len(entries), unit="clip"):
         if limit is not None and n_yielded >= limit:
             break
-        seq = entry.load()
-        meta_label, meta_subject, meta_extras = _from_metadata(seq)
-        label = entry.label if entry.label is not None else meta_label
-        subject = entry.subject if entry.subject is not None else meta_subject
-        extras = {**meta_extras, **entry.extras}
-        if label is None:
-            if kind == "pose_file":
-                label = ""
-            else:
-                raise DataError(
-                    "no label: its metadata has none (put it in a labels CSV)", seq.source
-                )
-        if not _keep(label, subject, extras, labels, subjects, movements, episodes, correct):
-            continue
-        seq = seq.with_metadata(label=label, subject=subject, **extras)
-        n_yielded += 1
-        yield Clip(seq=seq, label=label, subject=subject, extras=extras)
+        whole = entry.load()
+        pieces = entry.pieces(whole) if entry.pieces is not None else [(whole, entry.label)]
+        for seq, piece_label in pieces:
+            if limit is not None and n_yielded >= limit:
+                break
+            meta_label, meta_subject, meta_extras = _from_metadata(seq)
+            label = piece_label if piece_label is not None else meta_label
+            subject = entry.subject if entry.subject is not None else meta_subject
+            extras = {**meta_extras, **entry.extras}
+            if label is None:
+                if kind == "pose_file":
+                    label = ""
+                else:
+                    raise DataError(
+                        "no label: its metadata has none (put it in a labels CSV)", seq.source
+                    )
+            if not _keep(label, subject, extras, labels, subjects, movements, episodes, correct):
+                continue
+            seq = seq.with_metadata(label=label, subject=subject, **extras)
+            n_yielded += 1
+            yield Clip(seq=seq, label=label, subject=subject, extras=extras)
 
 
 def clip_column(clip: Clip, column: str) -> Any:
@@ -517,6 +696,13 @@ def load_dataset(path: str | Path, **kwargs: Any) -> list[Clip]:
 __all__ = [
     "CLIP_SUFFIXES",
     "Clip",
+    "LabelTrack",
+    "frame_labels",
+    "iter_recording",
+    "labelled_stretches",
+    "read_label_names",
+    "read_label_track",
+    "split_by_track",
     "clip_column",
     "clip_target",
     "target_value",

@@ -5,10 +5,13 @@ for as long as that object lives: its fluents, state signals and QMPs (and, thro
 Fluent evaluation is the expensive part and does not depend on any case-base configuration,
 so cross-validation folds, mirror handling and explanations share one computation per clip.
 :func:`forget` drops a clip's entries early (bounded memory when streaming a corpus).
+:func:`stretch` cuts frames out of a clip sharing what was computed per frame for the whole
+clip (segmenting a long recording classifies many overlapping stretches of it).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import weakref
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -70,3 +73,38 @@ def qmp_of(seq: PoseSequence) -> QMPFeatures:
         return qmp_features(s.to_canonical())
 
     return derived(seq, "qmp", compute)
+
+
+def _cut_rows(value: Any, start: int, stop: int) -> Any:
+    """The frames ``start:stop`` of a per-frame result (fluents, state signals, an array)."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        arrays = {
+            f.name: getattr(value, f.name)[start:stop]
+            for f in dataclasses.fields(value)
+            if f.name in ("confidence", "values", "head_length_m", "distances_m")
+        }
+        return dataclasses.replace(value, **arrays)
+    return value[start:stop]
+
+
+# results with one row per frame: a stretch's rows are the clip's rows
+_PER_FRAME = ("fluents", "signals", "arm_planes")
+
+
+def stretch(seq: PoseSequence, start: int, stop: int) -> PoseSequence:
+    """Frames ``start`` (inclusive) to ``stop`` (exclusive) of ``seq`` as a new clip that shares
+    the per-frame results already computed for ``seq``: its fluents, state signals and arm
+    planes, and those of its mirror image. Motion states near the cut then keep the frames
+    around it as context, as they had in the whole clip. Per-clip results (body-frame
+    positions, which side moves more, QMPs) are computed for the stretch itself."""
+    part = seq.slice_frames(start, stop)
+    for kind in _PER_FRAME:
+        cache = _CACHES.get(kind)
+        value = None if cache is None else cache.get(seq)
+        if cache is not None and value is not None:
+            cache[part] = _cut_rows(value, start, stop)
+    mirrors = _CACHES.get("mirror")
+    mirror = None if mirrors is None else mirrors.get(seq)
+    if mirrors is not None and mirror is not None:
+        mirrors[part] = stretch(mirror, start, stop)
+    return part

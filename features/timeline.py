@@ -3,12 +3,14 @@ fluent timeline picture."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .fileio import atomic_path
 from .fluents import FluentResult
 
 
@@ -149,14 +151,28 @@ def runs_to_json(runs: list[Run], fps: float) -> list[dict[str, Any]]:
     ]
 
 
+@dataclass(frozen=True)
+class Band:
+    """A stretch of time drawn above a timeline: seconds ``start_s`` to ``end_s``, its text and
+    a colour key (bands with the same key share a colour; None: grey, for "unknown")."""
+
+    start_s: float
+    end_s: float
+    text: str
+    key: str | None = None
+
+
 def plot_timeline(
     result: FluentResult,
     path: str | Path,
     threshold: float = 0.8,
     title: str = "",
     max_rows: int = 60,
+    bands: Sequence[Band] = (),
+    band_title: str = "",
 ) -> Path:
-    """A fluent timeline: one row per state that holds at some time, shaded by confidence."""
+    """A fluent timeline: one row per state that holds at some time, shaded by confidence;
+    with ``bands``, a strip above it marks stretches of time (activities, repetitions)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -169,8 +185,15 @@ def plot_timeline(
         rows = np.sort(rows[np.argsort(-share[rows], kind="stable")[:max_rows]])
     conf = np.nan_to_num(result.confidence[:, rows], nan=0.0).T
     frames = result.confidence.shape[0]
-    height = max(2.5, 0.22 * max(len(rows), 1) + 1.2)
-    fig, ax = plt.subplots(figsize=(11, height), dpi=110)
+    height = max(2.5, 0.22 * max(len(rows), 1) + 1.2) + (0.8 if bands else 0.0)
+    if bands:
+        fig, (top, ax) = plt.subplots(
+            2, 1, figsize=(11, height), dpi=110, sharex=True,
+            gridspec_kw={"height_ratios": [0.8, height - 0.8]},
+        )  # fmt: skip
+        _draw_bands(top, bands, band_title)
+    else:
+        fig, ax = plt.subplots(figsize=(11, height), dpi=110)
     if len(rows):
         ax.imshow(
             conf,
@@ -190,15 +213,32 @@ def plot_timeline(
         ax.text(0.5, 0.5, f"no state holds with confidence >= {threshold}", ha="center",
                 transform=ax.transAxes)  # fmt: skip
         ax.set_yticks([])
+    ax.set_xlim(0, frames / result.fps)
     ax.set_xlabel("time (s)")
-    ax.set_title(title or "fluent timeline (shade = confidence; orange labels = motion)",
-                 fontsize=10)  # fmt: skip
+    (top if bands else ax).set_title(
+        title or "fluent timeline (shade = confidence; orange labels = motion)", fontsize=10
+    )
     ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()
     out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.name}.tmp.png")
-    fig.savefig(tmp)
+    with atomic_path(out) as tmp:
+        fig.savefig(tmp, format=out.suffix.lstrip(".").lower() or "png")
     plt.close(fig)
-    tmp.replace(out)
     return out
+
+
+def _draw_bands(ax: Any, bands: Sequence[Band], title: str) -> None:
+    """Coloured spans with their text on an axis of their own."""
+    import matplotlib.pyplot as plt
+
+    keys = sorted({b.key for b in bands if b.key is not None})
+    palette = plt.get_cmap("tab10")
+    colour = {k: palette(i % 10) for i, k in enumerate(keys)}
+    for b in bands:
+        c = colour.get(b.key, (0.75, 0.75, 0.75, 1.0)) if b.key is not None else "0.8"
+        ax.axvspan(b.start_s, b.end_s, ymin=0.05, ymax=0.95, color=c, alpha=0.8, lw=0.5,
+                   ec="white")  # fmt: skip
+        ax.text(0.5 * (b.start_s + b.end_s), 0.5, b.text, ha="center", va="center",
+                fontsize=7, clip_on=True)  # fmt: skip
+    ax.set_yticks([])
+    ax.set_ylabel(title, fontsize=8, rotation=0, ha="right", va="center")

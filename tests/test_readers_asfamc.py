@@ -116,7 +116,7 @@ def test_two_bone_chain_end_points(tmp_path: Path) -> None:
     # Ry(90) maps +x to -z, for lfemur and the ltibia below it.
     np.testing.assert_allclose(knee[2], [L, 0, -L], atol=1e-12)
     np.testing.assert_allclose(ankle[2], [L, 0, -2 * L], atol=1e-12)
-    assert seq.fps == 60.0  # from the "_60" name suffix
+    assert seq.fps == 120.0  # "_60" in a name that is not HDM05's is no frame rate
     assert np.isnan(seq.positions[:, JOINT_INDEX["nose"]]).all()
     assert np.isnan(seq.positions[:, JOINT_INDEX["right_knee"]]).all()
 

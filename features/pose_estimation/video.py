@@ -225,12 +225,15 @@ def estimate_poses(
 
 @dataclass(frozen=True)
 class StreamFrame:
-    """One frame of a live stream: its index, wall-clock time (s) and the pose."""
+    """One frame of a live stream: its index, time (s: the frame rate's for a file, the wall
+    clock's for a live source), the pose, and when it was read from the source
+    (``time.perf_counter()``, before the pose was estimated: latency is measured from it)."""
 
     index: int
     time_s: float
     pose: FramePose
     rgb: np.ndarray
+    read_at: float = float("nan")
 
 
 def _open_quietly(device: int | str) -> cv2.VideoCapture:
@@ -276,11 +279,12 @@ def stream_poses(
     try:
         while max_frames is None or index < max_frames:
             ok, bgr = cap.read()
+            read_at = time.perf_counter()
             if not ok or bgr is None:
                 break
-            t = index / fps if fps else time.perf_counter() - start
+            t = index / fps if fps else read_at - start
             rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
-            yield StreamFrame(index, t, est.process(rgb, t), rgb)
+            yield StreamFrame(index, t, est.process(rgb, t), rgb, read_at)
             index += 1
     finally:
         cap.release()

@@ -393,10 +393,21 @@ def forward_kinematics(skel: Skeleton, motion: Motion) -> tuple[tuple[str, ...],
     return names, out
 
 
-def amc_fps_from_name(path: Path, default: float = 120.0) -> float:
-    """Frame rate from a ``..._120.amc`` name suffix (HDM05), else ``default`` (CMU: 120 Hz)."""
-    m = re.search(r"_(\d+)$", path.stem)
-    return float(m.group(1)) if m and 10 <= int(m.group(1)) <= 1000 else default
+#: AMC files carry no frame rate; the CMU database and HDM05 record at 120 Hz.
+ACCLAIM_FPS = 120.0
+
+
+def amc_frame_rate(path: Path) -> tuple[float, str]:
+    """The frame rate of an AMC file and where it comes from.
+
+    Only a full HDM05 name states a rate (``HDM_<actor>_<action>_<take>_<fps>``); any other
+    number in a name is not one (a CMU name ``13_29`` is subject 13, trial 29), so the rate is
+    then the CMU/HDM05 capture rate, :data:`ACCLAIM_FPS`.
+    """
+    m = re.match(r"^HDM_[a-z]+_.+_\d+_(\d+)$", path.stem, flags=re.IGNORECASE)
+    if m and 10 <= int(m.group(1)) <= 1000:
+        return float(m.group(1)), f"from the HDM05 file name (..._{m.group(1)})"
+    return ACCLAIM_FPS, f"assumed: AMC files carry no rate, CMU and HDM05 record at {ACCLAIM_FPS:g}"
 
 
 def hdm05_metadata(path: Path) -> dict[str, object]:
@@ -413,7 +424,8 @@ def read_asf_amc(
 ) -> PoseSequence:
     """An ASF/AMC pair as a canonical :class:`PoseSequence` (metres, y up).
 
-    ``fps`` defaults to the ``_<fps>`` suffix of the AMC name, else 120 Hz (CMU, HDM05).
+    ``fps``: the frame rate; None takes it from an HDM05 name, else 120 Hz
+    (:func:`amc_frame_rate`). Where the rate came from is in the metadata (``fps_source``).
     HDM05 names also fill label, subject and take in the metadata.
     """
     amc = Path(amc_path)
@@ -421,11 +433,12 @@ def read_asf_amc(
     motion = read_amc(amc, skel)
     names, ends = forward_kinematics(skel, motion)
     joint_map = {k: v for k, v in ASF_TO_BLAZEPOSE.items() if v in skel.bones}
+    rate, rate_source = (float(fps), "given") if fps is not None else amc_frame_rate(amc)
     return PoseSequence(
         positions=to_canonical(ends, names, joint_map),
         joint_names=BLAZEPOSE_33,
-        fps=fps if fps is not None else amc_fps_from_name(amc),
+        fps=rate,
         skeleton="asf_amc",
         source=str(amc),
-        metadata={"asf": str(asf_path), **hdm05_metadata(amc)},
+        metadata={"asf": str(asf_path), "fps_source": rate_source, **hdm05_metadata(amc)},
     )

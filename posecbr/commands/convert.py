@@ -5,6 +5,10 @@ beside it or given with ``--asf``), a ``.bvh`` file, or any other dataset ``iter
 reads (labels CSV, class folders). Each clip is written to DIR as ``<name>.npz`` with its
 label, subject and extras in the metadata, and DIR/labels.csv (``path,label,subject,...``)
 lists them, so DIR is itself a dataset for every command.
+
+The frame rate each clip is written with, and where it came from, is printed: AMC files carry
+none (120 Hz, the CMU and HDM05 rate, is assumed unless an HDM05 name states one; a CMU name
+such as ``13_29.amc`` is subject and trial, not a rate); ``--fps`` sets it for every clip.
 """
 
 from __future__ import annotations
@@ -42,6 +46,12 @@ def register(subparsers: Any) -> None:
     p.add_argument("--correct", action="store_true", help="only correct repetitions (UI-PRMD)")
     p.add_argument("--incorrect", action="store_true", help="only incorrect repetitions (UI-PRMD)")
     p.add_argument("--limit", type=int, help="at most this many clips")
+    p.add_argument(
+        "--fps",
+        type=float,
+        help="frame rate of the source (frames per second), for every clip; default: from the"
+        " files (AMC files carry none: 120, the CMU and HDM05 rate)",
+    )
     p.add_argument(
         "--float32",
         action="store_true",
@@ -119,12 +129,20 @@ def _single_clips(args: argparse.Namespace) -> list[tuple[Clip, str]]:
         seq = read_bvh(src, unit=unit)
     else:
         asf = args.asf if args.asf is not None else find_asf(src)
-        seq = read_asf_amc(asf, src)
+        seq = read_asf_amc(asf, src, fps=args.fps)
     label = str(seq.metadata.get("label", src.stem))
     subject = seq.metadata.get("subject")
     extras = {k: v for k, v in seq.metadata.items() if k not in ("label", "subject")}
     seq = seq.with_metadata(label=label, subject=subject)
     return [(Clip(seq, label, None if subject is None else str(subject), extras), src.stem)]
+
+
+def _rate_summary(rates: dict[tuple[float, str], int]) -> list[str]:
+    """One line per frame rate written and where it came from."""
+    return [
+        f"frame rate {fps:g} fps for {n} clip{'s' if n > 1 else ''} ({why})"
+        for (fps, why), n in sorted(rates.items())
+    ]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -135,6 +153,8 @@ def run(args: argparse.Namespace) -> int:
     src: Path = args.source
     if not src.exists():
         raise DataError("no such file or folder", src)
+    if args.fps is not None and not (0.0 < args.fps <= 10000.0):
+        raise DataError(f"--fps must be a frame rate in (0, 10000], got {args.fps:g}", "--fps")
     if args.correct and args.incorrect:
         raise DataError("choose --correct or --incorrect, not both", "--correct")
     out: Path = args.out
@@ -147,6 +167,7 @@ def run(args: argparse.Namespace) -> int:
 
     written: list[dict[str, Any]] = []
     names: set[str] = set()
+    rates: dict[tuple[float, str], int] = {}
 
     def emit(clip: Clip, fallback: str) -> None:
         name = _clip_name(clip, fallback)
@@ -164,6 +185,10 @@ def run(args: argparse.Namespace) -> int:
             except ValueError:
                 origin = Path(origin).name
         seq = replace(seq, source="").with_metadata(origin=origin)
+        if args.fps is not None:
+            seq = replace(seq, fps=float(args.fps)).with_metadata(fps_source="--fps")
+        why = str(seq.metadata.get("fps_source", "from the file"))
+        rates[(seq.fps, why)] = rates.get((seq.fps, why), 0) + 1
         path = save_pose(seq, out / f"{name}.npz", float32=args.float32)
         written.append(
             {"path": path.name, "label": clip.label, "subject": clip.subject or "", **clip.extras}
@@ -195,7 +220,11 @@ def run(args: argparse.Namespace) -> int:
     # labels.csv: path,label,subject then every extra column any clip has, in first-seen order
     columns = ["path", "label", "subject"]
     for row in written:
-        columns += [c for c in row if c not in columns and c not in ("source", "asf", "origin")]
+        columns += [
+            c
+            for c in row
+            if c not in columns and c not in ("source", "asf", "origin", "fps_source")
+        ]
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=columns, extrasaction="ignore", lineterminator="\n")
     writer.writeheader()
@@ -203,6 +232,8 @@ def run(args: argparse.Namespace) -> int:
         writer.writerow({c: _csv_value(row.get(c, "")) for c in columns})
     _write_text_atomic(out / "labels.csv", buf.getvalue())
     print(f"wrote {len(written)} pose files and labels.csv to {out}")
+    for line in _rate_summary(rates):
+        print(f"  {line}")
     return 0
 
 

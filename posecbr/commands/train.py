@@ -124,6 +124,23 @@ def register(sub: argparse._SubParsersAction) -> None:
         "base per activity with --labels",
     )
     p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor (kinect or vicon)")
+    p.add_argument(
+        "--split",
+        choices=("clips", "repetitions"),
+        default="clips",
+        help="repetitions: cut every clip into its repetitions, each a case (a video of ten "
+        "squats gives ten cases); default: one case per clip",
+    )
+    p.add_argument(
+        "--frame-labels",
+        type=Path,
+        metavar="FILE",
+        help="DATA is one recording labelled over time: one label per frame, or per "
+        "--label-block seconds; each labelled stretch becomes a clip (several recordings: a "
+        "labels CSV with a label_file column)",
+    )
+    p.add_argument("--label-block", type=float, metavar="SECONDS", help="seconds per label")
+    p.add_argument("--label-names", type=Path, metavar="FILE", help="'code name' per line")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--replace", action="store_true", help="replace a case base of that name")
     g.add_argument(
@@ -206,18 +223,43 @@ def _check_append(args: argparse.Namespace) -> None:
         )
 
 
+def _recording_clips(args: argparse.Namespace, activities: list[str] | None) -> list[Any]:
+    """The labelled stretches of one recording (``--frame-labels``)."""
+    from features.datasets import LabelTrack, iter_recording
+
+    track = LabelTrack(args.frame_labels, args.label_block, args.label_names)
+    return [c for c in iter_recording(args.data, track) if not activities or c.label in activities]
+
+
+def _repetitions(clips: list[Any]) -> list[Any]:
+    """``--split repetitions``: every clip cut into its repetitions (said on stderr)."""
+    from features.repetitions import split_repetitions
+
+    split = split_repetitions(clips)
+    whole = f" ({split.kept_whole} without a repetition kept whole)" if split.kept_whole else ""
+    n_reps = len(split.clips) - split.kept_whole
+    print(f"cut {len(clips)} clips into {n_reps} repetitions{whole}", file=sys.stderr)
+    return split.clips
+
+
 def _clips(args: argparse.Namespace) -> tuple[list[Any], list[str]]:
     from features.datasets import clip_target, load_dataset
 
     subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
     activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
-    clips = load_dataset(
-        args.data,
-        sensor=args.sensor,
-        subjects=subjects,
-        labels=activities,
-        progress_desc="loading clips",
+    clips = (
+        _recording_clips(args, activities)
+        if args.frame_labels
+        else load_dataset(
+            args.data,
+            sensor=args.sensor,
+            subjects=subjects,
+            labels=activities,
+            progress_desc="loading clips",
+        )
     )
+    if args.split == "repetitions" and clips:
+        clips = _repetitions(clips)
     if not clips:
         raise DataError("no clips found (check --labels and --subjects)", str(args.data))
     solutions = []

@@ -1,0 +1,428 @@
+"""Segmenting long recordings, against a 1-NN DTW window classifier in the same run.
+
+Run: ``python -m benchmarks.segment [--no-videos] [--repeats N]`` (about 2-3 minutes; one
+core: BLAS, OpenMP and numba threads pinned to 1). Writes ``benchmarks/results/segment.json``.
+
+Data: the three CMU recordings of subject 13 in ``cmu-mocap6`` (120 fps, per-0.1-s labels),
+leave one recording out: a case base of the repetitions of the labelled stretches of two
+recordings (``train --split repetitions``, default classifier), the third segmented. ALL THREE
+RECORDINGS ARE ONE PERSON: the figures overstate what other people get.
+
+Measured, per test recording and overall:
+- block accuracy: share of 0.1-s blocks given their labelled exercise (every exercise of a test
+  recording is in the other two, so all are "seen"; a block called unknown counts as wrong);
+- unknown: each exercise of the test recording in turn is left out of the case base; the share
+  of its blocks labelled unknown (1-NN DTW has no unknown: 0 by construction);
+- boundaries: for every labelled change of exercise, the distance to the nearest segment
+  boundary (seconds), median;
+- repetitions: counts of :func:`features.repetitions.count_repetitions` against the hand
+  counts of ``tests/fixtures/repetition_counts.json`` (mocap stretches cut at the labels, and
+  the videos through BlazePose): mean absolute error and off-by-one accuracy;
+- speed: segmentation after feature extraction (fluents and signals of the recording computed
+  first and timed apart), in times real time on one core, median of repeats, by the process's
+  CPU time (what one core spends, whatever else the shared machine runs) and by the wall
+  clock; the baseline's classification time likewise (its angles are computed beforehand).
+
+Baseline: tslearn's DTW 1-NN on 2-s windows of the eight limb joint angles (elbows, knees,
+armpits, hips) at 30 Hz; training windows every 0.5 s of the training recordings labelled by
+the block at their centre; a test window centred on every block.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import importlib.metadata  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from dataclasses import dataclass  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from benchmarks import write_json  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
+RESULTS = ROOT / "benchmarks" / "results" / "segment.json"
+FIXTURE = ROOT / "tests" / "fixtures" / "repetition_counts.json"
+RECORDINGS = ("13_29", "13_30", "13_31")
+# the label codes as the dataset's README lists them
+CODES = dict(enumerate(("JumpJack Jog Squat KneeRaise ArmCircle Twist SideReach Box UpDown "
+                        "ToeTouchOneHand SideBend ToeTouchTwoHands").split(), start=1))  # fmt: skip
+LIMB_ANGLES = tuple(
+    f"{s}_{j}" for j in ("elbow", "knee", "armpit", "hip") for s in ("left", "right")
+)
+DTW_FPS, DTW_WINDOW_S, DTW_TRAIN_HOP_S = 30.0, 2.0, 0.5
+
+
+@dataclass
+class Recording:
+    name: str
+    seq: Any  # PoseSequence
+    blocks: np.ndarray  # (n_blocks,) exercise names, one per 0.1 s
+
+
+def load_recordings() -> dict[str, Recording]:
+    from features.datasets import frame_labels, read_label_track
+    from features.readers.asfamc import read_asf_amc
+
+    names = {str(k): v for k, v in CODES.items()}
+    asf = DATA / "hdm05" / "train" / "3" / "HDM_bd.asf"
+    out = {}
+    for name in RECORDINGS:
+        seq = read_asf_amc(asf, DATA / "cmu-mocap6" / "amc" / f"{name}.amc")
+        labels = read_label_track(DATA / "cmu-mocap6" / "truelabels" / f"{name}.txt", names)
+        per_frame = frame_labels(labels, seq.n_frames, seq.fps, 0.1, name)
+        block = int(round(0.1 * seq.fps))
+        out[name] = Recording(name, seq, per_frame[::block])
+    return out
+
+
+def training_clips(recs: list[Recording], leave_out: str | None = None) -> list[Any]:
+    """The repetitions of the labelled stretches of ``recs`` (``train --split repetitions``)."""
+    from features.datasets import Clip, labelled_stretches
+    from features.derived import stretch
+    from features.repetitions import split_repetitions
+
+    clips = []
+    for r in recs:
+        per_frame = np.repeat(r.blocks, int(round(0.1 * r.seq.fps)))[: r.seq.n_frames]
+        for a, b, label in labelled_stretches(per_frame):
+            if label != leave_out:
+                part = stretch(r.seq, a, b).with_metadata(label=label, subject="13")
+                clips.append(Clip(part, label, "13", {}))
+    return split_repetitions(clips).clips
+
+
+def fit(clips: list[Any]) -> Any:
+    from cbr.estimator import CaseBaseClassifier
+
+    return CaseBaseClassifier().fit([c.seq for c in clips], [c.label for c in clips])
+
+
+def _median_time(fn: Any, repeats: int) -> tuple[float, float]:
+    """Median wall-clock and CPU seconds of ``fn()`` over ``repeats`` calls. The CPU time of
+    this one-threaded process is what one core spends, whatever else the machine runs."""
+    wall, cpu = [], []
+    for _ in range(repeats):
+        t0, c0 = time.perf_counter(), time.process_time()
+        fn()
+        wall.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+    return statistics.median(wall), statistics.median(cpu)
+
+
+JUDGES = ("activities", "held_out")
+"""How "unknown" is judged: Familiarity (a stretch as far from its nearest cases as the case
+base's activities lie from each other) or the classifier's stored calibration (the 99th
+percentile of held-out training clips' nearest-case distances, cbr.novelty)."""
+
+
+def _judge(clf: Any, name: str) -> Any:
+    from cbr.segmentation import Familiarity
+
+    return Familiarity.of(clf.case_base_) if name == "activities" else clf.novelty_
+
+
+def bench_ours(recs: dict[str, Recording], test: str, repeats: int) -> dict[str, Any]:
+    from cbr.problem import warm
+    from cbr.segmentation import segment
+
+    train = [recs[n] for n in RECORDINGS if n != test]
+    rec = recs[test]
+    clf = fit(training_clips(train))
+    t0 = time.perf_counter()
+    warm(rec.seq, clf.feature_config_.level, mirror=clf.feature_config_.side == "canonical")
+    extraction_s = time.perf_counter() - t0
+    out: dict[str, Any] = {"cases": len(clf.case_base_), "feature_extraction_s": extraction_s}
+    for name in JUDGES:
+        judge = _judge(clf, name)
+        result = segment(clf, rec.seq, judge)
+        pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
+        truth = rec.blocks[: len(pred)]
+        fps = rec.seq.fps
+        found = np.array([s.start_frame / fps for s in result.segments[1:]])
+        true_b = (np.flatnonzero(truth[1:] != truth[:-1]) + 1) * 0.1
+        errors = [float(np.min(np.abs(found - b))) if len(found) else float("inf") for b in true_b]
+        out[name] = {
+            "blocks": len(truth),
+            "block_accuracy": float(np.mean(pred == truth)),
+            "blocks_called_unknown": float(np.mean([p is None for p in pred])),
+            "boundary_errors_s": errors,
+            "segments": [s.to_dict(fps) for s in result.segments],
+            "windows": result.windows,
+        }
+    judge = _judge(clf, JUDGES[0])
+    seconds, cpu = _median_time(lambda: segment(clf, rec.seq, judge), repeats)
+    out.update(
+        blocks=len(rec.blocks),
+        segmentation_s=seconds,
+        segmentation_cpu_s=cpu,
+        x_real_time=rec.seq.duration_s / seconds,
+        x_real_time_cpu=rec.seq.duration_s / cpu,
+    )
+    return out
+
+
+def bench_unknown(recs: dict[str, Recording], test: str) -> dict[str, dict[str, float]]:
+    """Each exercise of ``test`` left out of the case base in turn: share of its blocks called
+    unknown, per judge."""
+    from cbr.segmentation import segment
+
+    train = [recs[n] for n in RECORDINGS if n != test]
+    rec = recs[test]
+    out: dict[str, dict[str, float]] = {name: {} for name in JUDGES}
+    for exercise in sorted(set(rec.blocks)):
+        clf = fit(training_clips(train, leave_out=exercise))
+        for name in JUDGES:
+            result = segment(clf, rec.seq, _judge(clf, name))
+            pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
+            mine = rec.blocks[: len(pred)] == exercise
+            out[name][str(exercise)] = float(np.mean([p is None for p in pred[mine]]))
+    return out
+
+
+def _angles(seq: Any) -> np.ndarray:
+    """The eight limb angles at about DTW_FPS, gaps interpolated: ``(n, 8)``."""
+    from cbr.problem import fill_nan_time
+    from features.derived import signals_of
+
+    sig = signals_of(seq)
+    step = max(1, int(round(seq.fps / DTW_FPS)))
+    values = sig.values[:, [sig.names.index(n) for n in LIMB_ANGLES]]
+    return np.asarray(fill_nan_time(values, 0.0)[::step])
+
+
+def _windows(angles: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    width = int(DTW_WINDOW_S * DTW_FPS)
+    starts = np.clip((centres - width // 2).astype(int), 0, len(angles) - width)
+    return np.stack([angles[s : s + width] for s in starts])
+
+
+def bench_dtw(recs: dict[str, Recording], test: str, repeats: int) -> dict[str, Any]:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # tslearn warns that optional h5py is missing
+        from tslearn.metrics import cdist_dtw
+
+    X, y = [], []
+    for name in RECORDINGS:
+        if name == test:
+            continue
+        r = recs[name]
+        a = _angles(r.seq)
+        centres_s = np.arange(
+            DTW_WINDOW_S / 2, r.seq.duration_s - DTW_WINDOW_S / 2, DTW_TRAIN_HOP_S
+        )
+        X.append(_windows(a, centres_s * DTW_FPS))
+        y.append(r.blocks[np.minimum((centres_s / 0.1).astype(int), len(r.blocks) - 1)])
+    X_train, y_train = np.concatenate(X), np.concatenate(y)
+    rec = recs[test]
+    angles = _angles(rec.seq)
+    centres = (np.arange(len(rec.blocks)) + 0.5) * 0.1 * DTW_FPS
+
+    def classify() -> np.ndarray:
+        d = cdist_dtw(_windows(angles, centres), X_train)
+        return np.asarray(y_train[np.argmin(d, axis=1)])
+
+    pred = classify()
+    seconds, cpu = _median_time(classify, repeats)
+    return {
+        "training_windows": len(X_train),
+        "block_accuracy": float(np.mean(pred == rec.blocks)),
+        "classification_s": seconds,
+        "classification_cpu_s": cpu,
+        "x_real_time": rec.seq.duration_s / seconds,
+        "x_real_time_cpu": rec.seq.duration_s / cpu,
+    }
+
+
+def bench_repetitions(with_videos: bool) -> dict[str, Any]:
+    from features.datasets import load_clip
+    from features.readers.asfamc import read_asf_amc
+    from features.repetitions import count_repetitions
+
+    clips = json.loads(FIXTURE.read_text(encoding="utf-8"))["clips"]
+    cache: dict[str, Any] = {}
+    rows = []
+    for c in clips:
+        video = not c["source"].endswith(".amc")
+        if video and not with_videos:
+            continue
+        if c["source"] not in cache:
+            path = DATA / c["source"]
+            cache[c["source"]] = load_clip(path) if video else read_asf_amc(DATA / c["asf"], path)
+        seq = cache[c["source"]]
+        if not video:
+            seq = seq.slice_frames(c["start_frame"], c["end_frame"])
+        got = count_repetitions(seq).count
+        rows.append({"source": c["source"], "activity": c.get("activity"), "hand": c["count"],
+                     "counted": got, "video": video})  # fmt: skip
+    out: dict[str, Any] = {"clips": rows}
+    for part, keep in (("mocap", False), ("videos", True), ("all", None)):
+        err = np.array(
+            [abs(r["counted"] - r["hand"]) for r in rows if keep is None or r["video"] == keep]
+        )
+        if len(err):
+            out[part] = {
+                "clips": len(err),
+                "mae": float(err.mean()),
+                "obo": float((err <= 1).mean()),
+                "exact": float((err == 0).mean()),
+            }
+    return out
+
+
+def _versions() -> dict[str, str | None]:
+    out: dict[str, str | None] = {}
+    for pkg in (
+        "posecbr",
+        "numpy",
+        "scipy",
+        "scikit-learn",
+        "tslearn",
+        "numba",
+        "opencv-python-headless",
+    ):
+        try:
+            out[pkg] = importlib.metadata.version(pkg)
+        except importlib.metadata.PackageNotFoundError:
+            out[pkg] = None
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.segment", description=__doc__)
+    parser.add_argument("--repeats", type=int, default=3, help="timing repeats (median)")
+    parser.add_argument("--no-videos", action="store_true", help="skip the videos (BlazePose)")
+    args = parser.parse_args(argv)
+    if not (DATA / "cmu-mocap6").is_dir():
+        print(f"no cmu-mocap6 data under {DATA}: nothing to measure")
+        return 1
+    import numba
+
+    numba.set_num_threads(1)
+    recs = load_recordings()
+    folds: dict[str, Any] = {}
+    for test in RECORDINGS:
+        ours = bench_ours(recs, test, args.repeats)
+        dtw = bench_dtw(recs, test, args.repeats)
+        unknown = bench_unknown(recs, test)
+        folds[test] = {"ours": ours, "dtw": dtw, "unknown_share_when_left_out": unknown}
+        for name in JUDGES:
+            o = ours[name]
+            print(
+                f"test {test}, unknown by {name}: ours {o['block_accuracy']:.1%} "
+                f"(unknown {o['blocks_called_unknown']:.1%}), DTW {dtw['block_accuracy']:.1%};"
+                " left out and called unknown: "
+                + ", ".join(f"{k} {v:.0%}" for k, v in unknown[name].items()),
+                flush=True,
+            )
+    reps = bench_repetitions(not args.no_videos)
+    summary = _summary(folds, recs)
+    _print_table(summary, reps)
+    result = {
+        "benchmark": "segment",
+        "note": "all three recordings are one person (CMU subject 13): the figures overstate "
+        "what other people get",
+        "machine": {
+            "platform": platform.platform(),
+            "processor": platform.processor() or platform.machine(),
+            "cpu_count": os.cpu_count(),
+            "threads": 1,
+            "load_average_1_5_15min_at_end": list(os.getloadavg()),
+        },
+        "versions": _versions(),
+        "repeats": args.repeats,
+        "summary": summary,
+        "folds": folds,
+        "repetitions": reps,
+    }
+    write_json(result, RESULTS)
+    print(f"\nwrote {RESULTS.relative_to(ROOT)}")
+    return 0
+
+
+def _summary(folds: dict[str, Any], recs: dict[str, Recording]) -> dict[str, Any]:
+    n_blocks = sum(f["ours"]["blocks"] for f in folds.values())
+
+    def pooled(values: list[tuple[float, int]]) -> float:
+        return sum(v * n for v, n in values) / sum(n for _, n in values)
+
+    out: dict[str, Any] = {
+        "dtw_1nn": {
+            "block_accuracy": sum(
+                f["dtw"]["block_accuracy"] * f["ours"]["blocks"] for f in folds.values()
+            )
+            / n_blocks,  # fmt: skip
+            "x_real_time_median": statistics.median(
+                f["dtw"]["x_real_time"] for f in folds.values()
+            ),
+            "x_real_time_cpu_median": statistics.median(
+                f["dtw"]["x_real_time_cpu"] for f in folds.values()
+            ),
+        },
+        "x_real_time_median": statistics.median(f["ours"]["x_real_time"] for f in folds.values()),
+        "x_real_time_cpu_median": statistics.median(
+            f["ours"]["x_real_time_cpu"] for f in folds.values()
+        ),
+    }
+    for name in JUDGES:
+        left_out = [
+            (share, int(np.sum(recs[test].blocks == exercise)))
+            for test, f in folds.items()
+            for exercise, share in f["unknown_share_when_left_out"][name].items()
+        ]
+        errors = [e for f in folds.values() for e in f["ours"][name]["boundary_errors_s"]]
+        out[name] = {
+            "block_accuracy": pooled(
+                [(f["ours"][name]["block_accuracy"], f["ours"]["blocks"]) for f in folds.values()]
+            ),
+            "blocks_called_unknown_when_exercise_left_out": pooled(left_out),
+            "median_boundary_error_s": float(np.median(errors)),
+        }
+    return out
+
+
+def _print_table(summary: dict[str, Any], reps: dict[str, Any]) -> None:
+    s = summary
+    print("\nSegmenting CMU subject 13, leave one recording out (ONE PERSON: optimistic)")
+    head = "".join(f"{'ours, ' + n:>22s}" for n in JUDGES)
+    print(f"  {'':48s}{head}{'DTW 1-NN':>10s}")
+    rows = (
+        ("block accuracy, exercises in the case base", "block_accuracy", "{:22.1%}"),
+        ("left-out exercise's blocks called unknown",
+         "blocks_called_unknown_when_exercise_left_out", "{:22.1%}"),
+        ("median boundary error (s)", "median_boundary_error_s", "{:22.2f}"),
+    )  # fmt: skip
+    for text, key, fmt in rows:
+        cells = "".join(fmt.format(s[n][key]) for n in JUDGES)
+        dtw = (
+            f"{s['dtw_1nn']['block_accuracy']:10.1%}"
+            if key == "block_accuracy"
+            else (f"{0.0:10.1%}" if "unknown" in key else "")
+        )
+        print(f"  {text:48s}{cells}{dtw}")
+    print(f"  {'x real time by CPU time, one core, after features':48s}"
+          f"{s['x_real_time_cpu_median']:22.0f}{'':22s}"
+          f"{s['dtw_1nn']['x_real_time_cpu_median']:10.0f}")  # fmt: skip
+    print(f"  {'x real time by wall clock (load: see the JSON)':48s}"
+          f"{s['x_real_time_median']:22.0f}{'':22s}"
+          f"{s['dtw_1nn']['x_real_time_median']:10.0f}")  # fmt: skip
+    for part in ("mocap", "videos", "all"):
+        if part in reps:
+            r = reps[part]
+            print(f"  repetitions, {part:6s} ({r['clips']} clips): MAE {r['mae']:.2f}, "
+                  f"off-by-one {r['obo']:.0%}, exact {r['exact']:.0%}")  # fmt: skip
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,533 @@
+"""Repetitions: how many times a movement is repeated in a clip, and where each one starts and
+ends, from the joint angles (:func:`features.derived.signals_of`).
+
+What counts as one repetition (the way people count exercises):
+
+- one excursion from the rest posture to the far point of the movement and back (a squat:
+  standing, down, standing); a repetition cut off by the clip's start or end counts when its
+  far point is in the clip and reaches (nearly) as far as the others;
+- a movement that alternates sides (left knee up, then right knee up; twist right, then left;
+  jogging steps) has one repetition per side.
+
+How (all channels at once, no per-frame loops):
+
+1. the angles of :data:`COUNTED_ANGLES`, missing where the camera does not see their joints,
+   gaps interpolated, cleaned of tracking glitches (running median, :data:`MEDIAN_S`),
+   smoothed (Gaussian, :data:`SMOOTHING_S`) and analysed at about :data:`ANALYSIS_FPS`;
+2. the period T (:func:`find_period`): the first strong peak of the summed autocorrelation of
+   the angle velocities (velocities, so that a one-off change of posture does not hide the
+   repetitions); a left-right alternation repeats after a full cycle, so T is the full cycle;
+3. alternation (:func:`side_parts`): the deviations from the left-right symmetric mean
+   posture split into what both sides do alike and what one side does against the other
+   (:func:`mirror_angles`); the movement alternates when the second spans at least half as
+   much as the first and the body goes out to both sides about equally far;
+4. the movement as one number per sample: the posture projected on the direction it moves
+   back and forth along most (:func:`movement_direction`), signed so that it rises away from
+   rest (the end nearer standing at ease, :data:`AT_EASE`) and, for a clearly periodic
+   movement, taken about its running mean over one period; for an alternating movement, the
+   side-against-side part, whose peaks are one side's repetitions and troughs the other's;
+5. repetitions are the peaks that stand out by at least half the typical repetition and by
+   :data:`MIN_EXCURSION_RAD` (more than pose-estimation jitter), at least half a repetition
+   period apart; each runs from the rest point before its peak to the rest point after it.
+
+The period also comes out of the QMP fits (:mod:`features.qmp`: SINDy with a period per state
+signal); the autocorrelation is used here because it reads all angles together and needs no
+window length, and the tests check that both agree.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.fft import next_fast_len
+from scipy.ndimage import gaussian_filter1d, median_filter, uniform_filter1d
+from scipy.signal import find_peaks
+
+from .datasets import Clip
+from .derived import signals_of, stretch
+from .errors import DataError
+from .geometry import WORLD_UP, angle_between
+from .poses import PoseSequence
+from .signals import ANGLE_SIGNALS
+from .skeleton import JOINT_INDEX
+
+ANALYSIS_FPS = 30.0
+"""Signals are analysed at about this rate: repetitions last 0.3 s or more."""
+SMOOTHING_S = 0.08
+"""Gaussian smoothing (sigma, seconds): removes tracking jitter, keeps movements of 0.3 s+."""
+MIN_PERIOD_S = 0.4
+"""No exercise repeats faster than this (jogging steps take about 0.3-0.4 s per side)."""
+MIN_EXCURSION_RAD = float(np.radians(15.0))
+"""A repetition moves the body at least this far in joint-angle space (radians); pose
+estimation from video jitters single joints by a few degrees, postural sway by less."""
+MIN_VALID_SHARE = 0.5
+"""An angle missing in more than half of the frames does not take part."""
+ALTERNATION_MIN = 0.5
+"""A movement alternates sides (one repetition per side) when its direction and that of its
+mirror image are opposed by more than this cosine (:func:`alternation`)."""
+
+_LATERAL = {"neck_frontal", "torso_frontal", "neck_transverse", "torso_transverse"}
+
+COUNTED_ANGLES: tuple[str, ...] = tuple(
+    f"{side}_{joint}" for joint in ("elbow", "knee", "armpit", "hip") for side in ("left", "right")
+) + ("trunk_inclination", "torso_sagittal", "torso_frontal", "torso_transverse")
+"""The angles repetitions are read from: the eight limb joint angles (defined in every
+posture), the trunk's inclination from the vertical, and its bend, side bend and twist. The
+limb plane angles are left out: a limb's projection on a plane it is nearly perpendicular to
+has no stable direction."""
+CLEAR_PERIODICITY = 0.5
+"""A movement repeats clearly when the autocorrelation of its velocities at the period is at
+least this: most of the movement recurs."""
+TRUNK_LEVEL_RAD = float(np.radians(60.0))
+"""The trunk's bend, side bend and twist are measured in the body's heading against gravity;
+when the trunk lies more than this far from the vertical (lying down, a deep bend) they have no
+stable value and count as missing (its inclination still counts)."""
+MEDIAN_S = 0.2
+"""Running median (seconds) before smoothing: drops tracking glitches shorter than 0.1 s."""
+
+AT_EASE: dict[str, float] = {
+    **{f"{s}_{j}": np.pi for s in ("left", "right") for j in ("elbow", "knee", "hip")},
+    **{f"{s}_armpit": 0.0 for s in ("left", "right")},
+    "trunk_inclination": 0.0,
+    **{name: np.pi / 2 for name in ANGLE_SIGNALS if "sagittal" in name or "frontal" in name},
+    **{name: np.pi / 2 for name in ANGLE_SIGNALS if "transverse" in name},
+}
+"""Joint angles (radians) of a person standing at ease: elbows, knees and hips straight, arms
+down, head and trunk upright and facing forward. The rest end of a movement is the one nearer
+this posture."""
+
+
+@dataclass(frozen=True)
+class Repetition:
+    """One repetition: frames ``start_frame`` to ``end_frame`` (exclusive), its far point at
+    ``peak_frame``; ``side`` ("left"/"right") for a movement that alternates sides."""
+
+    start_frame: int
+    end_frame: int
+    peak_frame: int
+    side: str | None = None
+
+    def to_dict(self, fps: float) -> dict[str, Any]:
+        return {
+            "start_frame": self.start_frame,
+            "end_frame": self.end_frame,
+            "start_s": round(self.start_frame / fps, 3),
+            "end_s": round(self.end_frame / fps, 3),
+            "peak_frame": self.peak_frame,
+            "side": self.side,
+        }
+
+
+@dataclass(frozen=True)
+class RepetitionCount:
+    """The repetitions of a clip.
+
+    period_s: the movement's full cycle (None when it does not repeat); periodicity: the
+    autocorrelation at that period (1 = exact repetition); alternating: one repetition per
+    side; moving: the joint angles that carry the movement, most first.
+    """
+
+    repetitions: tuple[Repetition, ...]
+    fps: float
+    n_frames: int
+    period_s: float | None
+    periodicity: float
+    alternating: bool
+    moving: tuple[str, ...]
+
+    @property
+    def count(self) -> int:
+        return len(self.repetitions)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "count": self.count,
+            "repetitions": [r.to_dict(self.fps) for r in self.repetitions],
+            "period_s": None if self.period_s is None else round(self.period_s, 3),
+            "periodicity": round(self.periodicity, 3),
+            "alternating": self.alternating,
+            "moving": list(self.moving),
+        }
+
+
+def mirror_angles(values: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """The angles of the left-right mirror image of a posture, ``(frames, len(names))``: every
+    left angle takes its right twin's value, and the sideways tilts and turns of head and
+    trunk (90 degrees = straight) are reflected about 90 degrees."""
+    index = {n: i for i, n in enumerate(names)}
+    twin = [index.get(_swap(n), i) for i, n in enumerate(names)]
+    out = values[:, twin].copy()
+    lateral = [i for i, n in enumerate(names) if n in _LATERAL]
+    out[:, lateral] = np.pi - out[:, lateral]
+    return out
+
+
+def _swap(name: str) -> str:
+    if name.startswith("left_"):
+        return "right_" + name[5:]
+    if name.startswith("right_"):
+        return "left_" + name[6:]
+    return name
+
+
+@dataclass(frozen=True)
+class MovementSignals:
+    """Smoothed joint angles at the analysis rate: values ``(n, channels)`` radians, channel
+    names, the analysis rate and the source frames per analysis sample (``step``)."""
+
+    values: np.ndarray
+    names: tuple[str, ...]
+    fps: float
+    step: int
+
+
+def counted_angles(seq: PoseSequence) -> np.ndarray:
+    """The :data:`COUNTED_ANGLES` of ``seq`` (positions ``(frames, joints, 3)``), radians,
+    ``(frames, len(COUNTED_ANGLES))``; NaN where undefined: the trunk's bend, side bend and
+    twist while it lies far from the vertical, and angles on joints the camera does not see."""
+    sig = signals_of(seq)
+    canonical = seq.to_canonical()
+    p = canonical.positions
+    neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])
+    mid_hip = 0.5 * (p[:, JOINT_INDEX["left_hip"]] + p[:, JOINT_INDEX["right_hip"]])
+    trunk = neck - mid_hip
+    inclination = angle_between(trunk, np.broadcast_to(WORLD_UP, trunk.shape))
+    raw = np.stack(
+        [inclination if n == "trunk_inclination" else sig.column(n) for n in COUNTED_ANGLES],
+        axis=1,
+    )
+    with np.errstate(invalid="ignore"):
+        lying = ~(inclination <= TRUNK_LEVEL_RAD)
+    torso = np.array([n.startswith("torso_") for n in COUNTED_ANGLES])
+    raw[lying[:, None] & torso[None, :]] = np.nan
+    if canonical.confidence is not None:
+        raw[_unseen(canonical.confidence)] = np.nan
+    return raw
+
+
+def movement_signals(seq: PoseSequence) -> MovementSignals:
+    """The counted angles of ``seq`` (positions ``(frames, joints, 3)``) ready for counting.
+
+    Raises DataError when no angle is available in enough frames (no person in view)."""
+    raw = counted_angles(seq)
+    keep = np.isfinite(raw).mean(axis=0) >= MIN_VALID_SHARE
+    if not keep.any():
+        raise DataError(
+            "no person in view in enough frames to follow a movement (joint angles missing)",
+            seq.source or None,
+        )
+    names = tuple(n for n, k in zip(COUNTED_ANGLES, keep, strict=True) if k)
+    x = _interpolate(raw[:, keep])
+    width = max(1, int(round(MEDIAN_S * seq.fps)) | 1)
+    x = median_filter(x, size=(width, 1), mode="nearest")
+    step = max(1, int(round(seq.fps / ANALYSIS_FPS)))
+    x = gaussian_filter1d(x, SMOOTHING_S * seq.fps, axis=0, mode="nearest")[::step]
+    return MovementSignals(x, names, seq.fps / step, step)
+
+
+_TRUNK = ("left_shoulder", "right_shoulder", "left_hip", "right_hip")
+_ANGLE_JOINTS: dict[str, tuple[str, ...]] = {
+    **{f"{s}_elbow": (f"{s}_shoulder", f"{s}_elbow", f"{s}_wrist") for s in ("left", "right")},
+    **{f"{s}_knee": (f"{s}_hip", f"{s}_knee", f"{s}_ankle") for s in ("left", "right")},
+    **{f"{s}_armpit": (f"{s}_elbow", f"{s}_shoulder", f"{s}_hip") for s in ("left", "right")},
+    **{f"{s}_hip": (f"{s}_knee", f"{s}_hip", f"{s}_shoulder") for s in ("left", "right")},
+    **{n: _TRUNK for n in COUNTED_ANGLES if n.startswith(("trunk_", "torso_"))},
+}
+
+
+def _unseen(confidence: np.ndarray | None) -> np.ndarray:
+    """``(frames, len(COUNTED_ANGLES))`` True where an angle rests on a joint the camera does
+    not see (visibility below 0.5): the pose model guesses such joints, it does not measure
+    them. ``confidence``: ``(frames, 33)`` on the canonical skeleton."""
+    assert confidence is not None
+    seen = confidence >= 0.5
+    cols = [
+        np.all(seen[:, [JOINT_INDEX[j] for j in _ANGLE_JOINTS[n]]], axis=1) for n in COUNTED_ANGLES
+    ]
+    return np.asarray(~np.stack(cols, axis=1))
+
+
+def _interpolate(x: np.ndarray) -> np.ndarray:
+    """NaN along time filled linearly (edges hold the nearest value); ``(frames, n)``."""
+    nan = np.isnan(x)
+    if not nan.any():
+        return x
+    out = x.copy()
+    t = np.arange(len(x))
+    for j in np.flatnonzero(nan.any(axis=0)):  # over the few gappy channels only
+        ok = ~nan[:, j]
+        out[:, j] = np.interp(t, t[ok], x[ok, j])
+    return out
+
+
+def autocorrelation(x: np.ndarray) -> np.ndarray:
+    """Summed autocorrelation of the centred channels of ``x`` ``(n, channels)``, each lag
+    averaged over the frames it overlaps and divided by lag 0: ``(n,)``."""
+    n = len(x)
+    xc = x - x.mean(axis=0)
+    size = next_fast_len(2 * n)
+    spec = np.fft.rfft(xc, size, axis=0)
+    acf = np.fft.irfft((spec * spec.conj()).real, size, axis=0)[:n].sum(axis=1)
+    acf = acf / (n - np.arange(n))
+    return acf / acf[0] if acf[0] > 0 else np.zeros(n)
+
+
+def find_period(x: np.ndarray, fps: float) -> tuple[float | None, float]:
+    """The period (seconds) of ``x`` ``(n, channels)`` and its autocorrelation there.
+
+    Lags from :data:`MIN_PERIOD_S` to 60 % of the clip (a lag needs a good share of the clip
+    to overlap); the shortest local maximum within 85 % of the highest one, so that a
+    multiple of the period does not win by noise. (None, 0.0) when nothing repeats."""
+    n = len(x)
+    lo, hi = int(np.ceil(MIN_PERIOD_S * fps)), int(0.6 * n)
+    if hi <= lo + 2:
+        return None, 0.0
+    acf = autocorrelation(x)
+    peaks, _ = find_peaks(acf[: hi + 1])
+    peaks = peaks[(peaks >= lo) & (acf[peaks] > 0)]
+    if not len(peaks):
+        return None, 0.0
+    best = peaks[acf[peaks] >= 0.85 * acf[peaks].max()][0]
+    return float(best / fps), float(acf[best])
+
+
+def mirror_matrix(names: tuple[str, ...]) -> np.ndarray:
+    """``(C, C)`` linear map of angle deviations to those of the left-right mirror image:
+    left and right twins swap, sideways tilts and turns of the trunk change sign."""
+    index = {n: i for i, n in enumerate(names)}
+    m = np.zeros((len(names), len(names)))
+    for i, n in enumerate(names):
+        m[index.get(_swap(n), i), i] = -1.0 if n in _LATERAL else 1.0
+    return m
+
+
+def movement_direction(x: np.ndarray) -> np.ndarray:
+    """The unit direction ``(C,)`` in joint-angle space along which ``x`` ``(n, C)`` moves back
+    and forth most: the first principal direction of its velocities (a one-off change of
+    posture, such as stepping into the exercise, moves once; repetitions move many times)."""
+    v = np.diff(x, axis=0)
+    if not len(v) or not np.any(v):
+        return np.eye(x.shape[1])[0]
+    _, _, vt = np.linalg.svd(v - v.mean(axis=0), full_matrices=False)
+    return np.asarray(vt[0])
+
+
+def side_parts(x: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The deviations of ``x`` ``(n, C)`` from the left-right symmetric mean posture, split
+    into what both sides do alike (``sym``) and what one side does against the other
+    (``anti``; 0 = a symmetric posture): two ``(n, C)`` arrays summing to the deviations."""
+    m = mirror_matrix(names)
+    mean = x.mean(axis=0)
+    centre = 0.5 * (mean + mirror_angles(mean[None], names)[0])
+    d = x - centre
+    md = d @ m.T
+    return 0.5 * (d + md), 0.5 * (d - md)
+
+
+def _movement_line(x: np.ndarray, names: tuple[str, ...], direction: np.ndarray) -> np.ndarray:
+    """The movement as one number per sample: the posture projected on the movement
+    direction, signed so that it rises away from rest (the end nearer :data:`AT_EASE`)."""
+    line = (x - x.mean(axis=0)) @ direction
+    ease = np.array([AT_EASE.get(n, np.pi / 2) for n in names])
+    lo, hi = np.percentile(line, [10, 90])
+    low_posture = x[line <= lo].mean(axis=0)
+    high_posture = x[line >= hi].mean(axis=0)
+    if np.linalg.norm(high_posture - ease) < np.linalg.norm(low_posture - ease):
+        line = -line
+    return np.asarray(line)
+
+
+def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
+    """Samples where ``line`` reaches a far point: peaks that stand out by at least half the
+    typical repetition (the median prominence of the candidates) and by
+    :data:`MIN_EXCURSION_RAD`, at least ``distance`` samples apart. The clip is padded with
+    the rest level, so a repetition cut off at either end counts when it got (nearly) as far
+    as the others: three quarters of their median height above rest."""
+    padded = np.concatenate([[rest], line, [rest]])
+    cand, props = find_peaks(padded, prominence=MIN_EXCURSION_RAD, distance=max(1, distance))
+    if not len(cand):
+        return np.array([], dtype=np.int64)
+    prom = props["prominences"]
+    keep = prom >= 0.5 * float(np.median(prom))
+    cand = cand[keep] - 1
+    inner = cand[(cand > 0) & (cand < len(line) - 1)]
+    if len(inner):
+        reach = 0.75 * float(np.median(line[inner] - rest))
+        at_edge = (cand == 0) | (cand == len(line) - 1)
+        cand = cand[~at_edge | (line[cand] - rest >= reach)]
+    return cand
+
+
+def _span(line: np.ndarray) -> float:
+    """The robust range of a line: 5th to 95th percentile."""
+    lo, hi = np.percentile(line, [5, 95])
+    return float(hi - lo)
+
+
+def _bounds(line: np.ndarray, peaks: np.ndarray, reach: int) -> list[tuple[int, int]]:
+    """Each peak's repetition as samples [start, end): from the lowest point of ``line`` since
+    the previous peak (at most ``reach`` samples before the first) to the lowest point before
+    the next one, where the next repetition starts."""
+    n = len(line)
+    cuts = [int(a + np.argmin(line[a : b + 1])) for a, b in zip(peaks[:-1], peaks[1:], strict=True)]
+    first_lo = max(0, int(peaks[0]) - reach)
+    first = first_lo + int(np.argmin(line[first_lo : peaks[0] + 1]))
+    last_hi = min(n, int(peaks[-1]) + reach + 1)
+    last = int(peaks[-1]) + int(np.argmin(line[peaks[-1] : last_hi]))
+    starts = [first, *cuts]
+    ends = [*cuts, last + 1]
+    return [(s, max(e, s + 1)) for s, e in zip(starts, ends, strict=True)]
+
+
+def _side(x: np.ndarray, names: tuple[str, ...], a: int, b: int) -> str:
+    """The side whose angles move more over samples ``a..b``."""
+    part = x[a : b + 1]
+    spread = part.std(axis=0) if len(part) > 1 else np.zeros(part.shape[1])
+    left = sum(spread[i] for i, n in enumerate(names) if n.startswith("left_"))
+    right = sum(spread[i] for i, n in enumerate(names) if n.startswith("right_"))
+    return "left" if left >= right else "right"
+
+
+def count_repetitions(seq: PoseSequence) -> RepetitionCount:
+    """The repetitions in ``seq`` (positions ``(frames, joints, 3)``): see the module docstring.
+
+    Raises DataError when the clip is shorter than one repetition could be
+    (:data:`MIN_PERIOD_S`) or shows no person."""
+    if seq.duration_s < MIN_PERIOD_S:
+        raise DataError(
+            f"the clip lasts {seq.duration_s:.2f} s, shorter than one repetition can be"
+            f" ({MIN_PERIOD_S:g} s)",
+            seq.source or None,
+        )
+    sig = movement_signals(seq)
+    return count_in_signals(sig, seq.n_frames, seq.fps)
+
+
+def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> RepetitionCount:
+    """:func:`count_repetitions` on already prepared signals (of a clip of ``n_frames``)."""
+    x = sig.values
+    spans, far, direction, alternating = _alternating_repetitions(x, sig.names, sig.fps)
+    period, strength = find_period(np.diff(x, axis=0), sig.fps)
+    if not alternating:
+        direction = movement_direction(x)
+        line = _movement_line(x, sig.names, direction)
+        if period is not None and strength >= CLEAR_PERIODICITY:
+            # a slow change of posture (stepping into place, drifting) is no repetition: the
+            # line of a clearly repeating movement is taken about its running mean over one
+            # period
+            line = line - uniform_filter1d(line, max(1, int(period * sig.fps)), mode="nearest")
+        distance = int(0.5 * (period or MIN_PERIOD_S) * sig.fps)
+        reach = int(period * sig.fps) if period else len(line)
+        far = _far_points(line, float(np.percentile(line, 5)), distance)
+        spans = _bounds(line, far, reach) if len(far) else []
+    reps = [
+        Repetition(
+            start_frame=int(a * sig.step),
+            end_frame=int(min(n_frames, b * sig.step)),
+            peak_frame=int(min(n_frames - 1, p * sig.step)),
+            side=_side(x, sig.names, a, b) if alternating else None,
+        )
+        for (a, b), p in zip(spans, far, strict=True)
+    ]
+    weights = np.abs(direction)
+    order = np.argsort(-weights, kind="stable")
+    moving = tuple(sig.names[i] for i in order[:4] if weights[i] > 0.2 * weights.max())
+    return RepetitionCount(tuple(reps), fps, n_frames, period, strength, bool(alternating), moving)
+
+
+def _alternating_repetitions(
+    x: np.ndarray, names: tuple[str, ...], fps: float
+) -> tuple[list[tuple[int, int]], np.ndarray, np.ndarray, bool]:
+    """Repetitions of a movement that alternates sides: what one side does against the other
+    spans at least half as much as what both do alike (a knee raise: as much), and the body
+    goes out to both sides about equally far. Returns spans,
+    far points, the movement direction and whether the movement alternates (when it does not,
+    the rest is empty)."""
+    sym, anti = side_parts(x, names)
+    none: tuple[list[tuple[int, int]], np.ndarray, np.ndarray, bool] = (
+        [],
+        np.array([], dtype=np.int64),
+        np.zeros(x.shape[1]),
+        False,
+    )
+    direction = movement_direction(anti)
+    line = anti @ direction  # 0 = a symmetric posture
+    alike = sym @ movement_direction(sym)
+    if _span(line) < 0.5 * _span(alike):
+        return none  # mostly both sides alike (a squat, a jumping jack)
+    period, _ = find_period(np.diff(line)[:, None], fps)
+    # a full period holds one repetition per side
+    distance = int(0.25 * (period or 2 * MIN_PERIOD_S) * fps)
+    # far points on each side of the symmetric posture; a posture held off to one side (a
+    # lunge's split stance, lying on one side) does not alternate
+    one = _far_points(line, 0.0, distance)
+    one = one[line[one] > 0]
+    other = _far_points(-line, 0.0, distance)
+    other = other[line[other] < 0]
+    if not len(one) or not len(other):
+        return none  # one side only: counted as a plain movement
+    reach_one = float(np.median(line[one]))
+    reach_other = float(np.median(-line[other]))
+    if min(reach_one, reach_other) < 0.5 * max(reach_one, reach_other):
+        return none  # one side goes out far, the other barely: not alternating
+    far = np.sort(np.concatenate([one, other]))
+    reach = int(0.5 * period * fps) if period else len(line)
+    return _bounds(np.abs(line), far, reach), far, direction, True
+
+
+__all__ = [
+    "ALTERNATION_MIN",
+    "AT_EASE",
+    "MIN_EXCURSION_RAD",
+    "MIN_PERIOD_S",
+    "MovementSignals",
+    "Repetition",
+    "RepetitionCount",
+    "Split",
+    "split_repetitions",
+    "mirror_matrix",
+    "movement_direction",
+    "side_parts",
+    "autocorrelation",
+    "count_in_signals",
+    "count_repetitions",
+    "counted_angles",
+    "find_period",
+    "mirror_angles",
+    "movement_signals",
+]
+
+
+@dataclass(frozen=True)
+class Split:
+    """Clips cut into their repetitions: the new clips, and how many of the originals had no
+    repetition (or were too short for one) and stayed whole."""
+
+    clips: list[Clip]
+    kept_whole: int
+
+
+def split_repetitions(clips: Sequence[Clip]) -> Split:
+    """Every clip cut into its repetitions (:func:`count_repetitions`), each a clip of its own
+    with the clip's label, subject and extras (plus ``repetition``: 1, 2, ...); the frames and
+    what was computed for them are shared with the clip (:func:`features.derived.stretch`).
+    A clip without a repetition stays whole."""
+    out: list[Clip] = []
+    whole = 0
+    for clip in clips:
+        try:
+            reps = count_repetitions(clip.seq).repetitions
+        except DataError:
+            reps = ()
+        if not reps:
+            out.append(clip)
+            whole += 1
+            continue
+        for k, r in enumerate(reps, start=1):
+            part = stretch(clip.seq, r.start_frame, r.end_frame).with_metadata(repetition=k)
+            out.append(dataclasses.replace(clip, seq=part, extras={**clip.extras, "repetition": k}))
+    return Split(out, whole)

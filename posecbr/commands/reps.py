@@ -1,0 +1,99 @@
+"""``posecbr reps CLIP``: how many times the movement in a clip is repeated, and where each
+repetition starts and ends (:mod:`features.repetitions`).
+
+A repetition is one excursion from the rest posture to the far point of the movement and back
+(a squat: down and up); a movement that alternates sides (knee raises, twists, jogging steps)
+has one repetition per side. ``--json`` gives ``{"clip", "fps", "count", "repetitions":
+[{"start_frame", "end_frame", "start_s", "end_s", "peak_frame", "side"}], ...}`` (end frames
+exclusive); ``--plot`` draws the repetitions over the clip's fluent timeline.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from features.fileio import check_output
+from posecbr.recordings import add_recording_options, load_recording
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "reps",
+        help="count the repetitions in a clip, with each one's start and end",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("clip", type=Path, help="pose file, video, BVH, .amc or UI-PRMD file")
+    add_recording_options(p)
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--plot", type=Path, metavar="PNG", help="repetitions over the fluent timeline")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from features.repetitions import count_repetitions
+
+    if args.plot is not None:
+        check_output(args.plot, inputs=[args.clip], what="picture")
+    seq = load_recording(args.clip, args.asf, args.fps)
+    result = count_repetitions(seq)
+    if args.plot is not None:
+        _plot(seq, result, args.plot, args.clip.name)
+    if args.json:
+        doc = {"clip": str(args.clip), "fps": seq.fps, "frames": seq.n_frames, **result.to_dict()}
+        if args.plot is not None:
+            doc["plot"] = str(args.plot)
+        json.dump(doc, sys.stdout, indent=1)
+        print()
+        return 0
+    _print(args.clip, seq.fps, result)
+    if args.plot is not None:
+        print(f"picture written to {args.plot}")
+    return 0
+
+
+def _print(clip: Path, fps: float, result: object) -> None:
+    from features.repetitions import RepetitionCount
+
+    assert isinstance(result, RepetitionCount)
+    how = []
+    if result.alternating:
+        how.append("alternating sides")
+    if result.period_s is not None:
+        how.append(f"period {result.period_s:.2f} s")
+    if result.moving:
+        how.append("moving " + ", ".join(m.replace("_", " ") for m in result.moving))
+    plural = "" if result.count == 1 else "s"
+    print(f"{clip}: {result.count} repetition{plural}" + (f" ({'; '.join(how)})" if how else ""))
+    if not result.repetitions:
+        return
+    print(f"  {'#':>3}  {'start s':>8}  {'end s':>7}  {'frames':>13}  {'far point s':>11}  side")
+    for i, r in enumerate(result.repetitions, start=1):
+        frames = f"{r.start_frame}-{r.end_frame - 1}"
+        print(
+            f"  {i:>3}  {r.start_frame / fps:8.2f}  {r.end_frame / fps:7.2f}  {frames:>13}"
+            f"  {r.peak_frame / fps:11.2f}  {r.side or ''}"
+        )
+
+
+def _plot(seq: object, result: object, path: Path, name: str) -> None:
+    from features.derived import fluents_of
+    from features.repetitions import RepetitionCount
+    from features.timeline import Band, plot_timeline
+
+    assert isinstance(result, RepetitionCount)
+    fps = result.fps
+    bands = [
+        Band(r.start_frame / fps, r.end_frame / fps, str(i), r.side or ("odd" if i % 2 else "even"))
+        for i, r in enumerate(result.repetitions, start=1)
+    ]
+    plot_timeline(
+        fluents_of(seq),  # type: ignore[arg-type]
+        path,
+        title=f"{name}: {result.count} repetitions over the fluent timeline",
+        bands=bands,
+        band_title="repetitions",
+    )

@@ -1,0 +1,227 @@
+"""``posecbr segment RECORDING... --db CB``: what was done when in a long recording, and how
+many times (:mod:`cbr.segmentation`, with the classifier ``posecbr train`` stored).
+
+Every stretch of the recording gets an activity of the case base or "unknown" (unlike every
+stored case, judged by the case base's own calibration), with its start and end in seconds
+and frames, a confidence, the number of repetitions and a short explanation. A case base of
+repetitions (``posecbr train ... --split repetitions``) matches how windows are cut.
+
+``--json`` prints ``{"recording", "fps", "segments": [{"start_s", "end_s", "start_frame",
+"end_frame", "label" (null when unknown), "confidence", "repetitions", "explanation"}]}``
+(a list of those for several recordings; end frames exclusive); ``--plot`` draws the segments
+over the fluent timeline; ``--overlay`` writes a video recording with the stick figure, the
+current activity and its repetition count on every frame (as ``extract --overlay`` does).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from features.errors import ConfigError, DataError
+from features.fileio import check_output
+from posecbr.recordings import add_recording_options, check_fps, load_recording
+
+JUDGES = ("held-out", "activities")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "segment",
+        help="label every stretch of long recordings with an activity or unknown, and count",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument(
+        "recordings", nargs="+", type=Path, metavar="RECORDING", help="pose file, video, BVH, .amc"
+    )
+    p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
+    p.add_argument("--name", default=None, help="case base name (default: the only one)")
+    add_recording_options(p)
+    p.add_argument(
+        "-k", "--k", type=int, default=1, help="each window votes with its k nearest cases"
+    )
+    p.add_argument(
+        "--unknown",
+        choices=JUDGES,
+        default="held-out",
+        help="what makes a stretch unknown: farther from its nearest cases than held-out "
+        "training clips lie (held-out, the case base's stored calibration, as classify), or "
+        "as far as the case base's activities lie from each other (activities)",
+    )
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument(
+        "--plot",
+        type=Path,
+        metavar="PNG",
+        help="segments over the fluent timeline (several recordings: a folder)",
+    )
+    p.add_argument(
+        "--overlay",
+        type=Path,
+        metavar="OUT.mp4",
+        help="a video recording with the stick figure, activity and count drawn",
+    )
+    p.set_defaults(func=run)
+
+
+def _outputs(args: argparse.Namespace) -> None:
+    """Refuse bad output paths before any work."""
+    check_fps(args.fps)
+    if args.k < 1:
+        raise ConfigError(f"-k must be >= 1, got {args.k}", "-k")
+    if args.plot is not None:
+        if len(args.recordings) > 1:
+            if not args.plot.is_dir():
+                raise DataError("with several recordings --plot names a folder", args.plot)
+        else:
+            check_output(args.plot, inputs=args.recordings, what="picture")
+    if args.overlay is not None:
+        if len(args.recordings) > 1:
+            raise DataError("--overlay takes one recording", args.overlay)
+        if args.overlay.suffix.lower() != ".mp4":
+            raise DataError("the overlay must be an .mp4 file name", args.overlay)
+        check_output(args.overlay, inputs=args.recordings, what="overlay")
+
+
+def run(args: argparse.Namespace) -> int:
+    from cbr.segmentation import Familiarity, segment
+
+    _outputs(args)
+    clf = load_stored(args.db, args.name)
+    judge = Familiarity.of(clf.case_base_) if args.unknown == "activities" else clf.novelty_
+    docs = []
+    for path in args.recordings:
+        rec, video = _read(path, args)
+        result = segment(clf, rec, judge, k=args.k)
+        result = _named(result, path)
+        if args.plot is not None:
+            target = args.plot / f"{path.stem}.png" if args.plot.is_dir() else args.plot
+            _plot(rec, result, target, path.name)
+        if args.overlay is not None:
+            _overlay(path, video, result, args.overlay)
+        docs.append(result)
+    if args.json:
+        out = [r.to_dict() for r in docs]
+        json.dump(out[0] if len(out) == 1 else out, sys.stdout, indent=1, ensure_ascii=False)
+        print()
+        return 0
+    for result in docs:
+        _print(result)
+    return 0
+
+
+def _read(path: Path, args: argparse.Namespace) -> tuple[Any, Any]:
+    """The recording (canonical) and, for a video with ``--overlay``, its image landmarks."""
+    from features.datasets import VIDEO_SUFFIXES
+
+    if args.overlay is not None:
+        if path.suffix.lower() not in VIDEO_SUFFIXES:
+            raise DataError("--overlay needs a video recording", path)
+        from features.pose_estimation import estimate_video
+
+        found = estimate_video(path)
+        return found.sequence.to_canonical(), found
+    return load_recording(path, args.asf, args.fps), None
+
+
+def _named(result: Any, path: Path) -> Any:
+    import dataclasses
+
+    return dataclasses.replace(result, recording=str(path))
+
+
+def _print(result: Any) -> None:
+    fps = result.fps
+    print(
+        f"{result.recording}: {result.n_frames} frames at {fps:g} fps "
+        f"({result.n_frames / fps:.1f} s), {len(result.segments)} segments"
+    )
+    print(
+        f"  {'start s':>8}  {'end s':>7}  {'frames':>12}  {'activity':<20} {'conf':>5}  {'reps':>4}"
+    )
+    for s in result.segments:
+        frames = f"{s.start_frame}-{s.end_frame - 1}"
+        label = s.label if s.label is not None else "(unknown)"
+        print(
+            f"  {s.start_frame / fps:8.2f}  {s.end_frame / fps:7.2f}  {frames:>12}  "
+            f"{label:<20} {s.confidence:5.2f}  {len(s.repetitions):>4}"
+        )
+        if s.explanation:
+            print(f"  {'':8}  {'':7}  {'':12}  {s.explanation}")
+
+
+def _bands(result: Any) -> list[Any]:
+    from features.timeline import Band
+
+    fps = result.fps
+    return [
+        Band(
+            s.start_frame / fps,
+            s.end_frame / fps,
+            f"{s.label or 'unknown'} x{len(s.repetitions)}",
+            s.label,
+        )
+        for s in result.segments
+    ]
+
+
+def _plot(rec: Any, result: Any, path: Path, name: str) -> None:
+    from features.derived import fluents_of
+    from features.timeline import plot_timeline
+
+    plot_timeline(
+        fluents_of(rec),
+        path,
+        title=f"{name}: activities and repetition counts over the fluent timeline",
+        bands=_bands(result),
+        band_title="activity",
+        max_rows=30,
+    )
+
+
+def frame_words(result: Any) -> list[list[str]]:
+    """Per frame: the current activity (or unknown) and how many of its repetitions are done."""
+    import numpy as np
+
+    words: list[list[str]] = [[] for _ in range(result.n_frames)]
+    for s in result.segments:
+        label = s.label if s.label is not None else "unknown"
+        ends = np.sort([r.end_frame for r in s.repetitions]).astype(np.int64)
+        frames = np.arange(s.start_frame, s.end_frame)
+        done = np.searchsorted(ends, frames, side="right")
+        for f, n in zip(frames.tolist(), done.tolist(), strict=True):
+            words[f] = [label, f"repetitions: {n}"]
+    return words
+
+
+def load_stored(db: str, name: str | None) -> Any:
+    """The classifier stored as case base ``name`` in ``db`` (the only one when None)."""
+    from casebase_store import open_store
+    from cbr.stored import load_classifier
+
+    store = open_store(db, create=False, readonly=True)
+    try:
+        if name is None:
+            names = [cb.name for cb in store.list_case_bases()]
+            if len(names) != 1:
+                held = (
+                    f"case bases {', '.join(names)}: choose one with --name"
+                    if names
+                    else ("no case base (run posecbr train)")
+                )
+                raise ConfigError(f"the store holds {held}", store.where)
+            name = names[0]
+        return load_classifier(store, name).classifier
+    finally:
+        store.close()
+
+
+def _overlay(path: Path, video: Any, result: Any, out: Path) -> None:
+    from features.pose_estimation.overlay import write_overlay
+
+    write_overlay(path, video.image_landmarks, out, result.fps, frame_words(result))
+    print(f"overlay written to {out}", file=sys.stderr)

@@ -1,0 +1,296 @@
+"""``posecbr watch SOURCE --db CB``: segment a live stream as it comes (:mod:`cbr.live`).
+
+SOURCE is a webcam index (``0``), a stream URL (``rtsp://...``) or a video file, which is
+played at its own frame rate (``--speed 2`` twice as fast, ``--speed 0`` as fast as it
+decodes). Poses come from BlazePose frame by frame; the rolling activity label, the
+repetitions counted so far and the fluents that hold now are drawn on the frames
+(``--out video.mp4`` writes them, headless; ``--show`` opens a window where OpenCV has one).
+One JSON line per finished segment goes to stdout (``start_s``, ``end_s``, ``start_frame``,
+``end_frame``, ``label``, null when unknown, ``confidence``, ``repetitions``). At the end the
+latency from reading a frame to having its label is printed (median, 95th percentile, worst).
+
+A stream that stalls (no frame for ``--stall`` seconds) or a camera or URL that stops sending
+is reported in one line, with a non-zero exit; the ``--out`` video is then not written (no
+half-written file).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import queue
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from features.errors import ConfigError, DataError, PosecbrError
+from features.fileio import check_output
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "watch",
+        help="label a live stream (webcam, URL, video file) as it comes, counting repetitions",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("source", help="webcam index (0), stream URL or video file")
+    p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
+    p.add_argument("--name", default=None, help="case base name (default: the only one)")
+    p.add_argument("--out", type=Path, metavar="VIDEO.mp4", help="write the annotated frames")
+    p.add_argument("--show", action="store_true", help="show the annotated frames in a window")
+    p.add_argument(
+        "--speed",
+        type=float,
+        default=1.0,
+        help="a video file plays at this multiple of its frame rate (0: as fast as possible)",
+    )
+    p.add_argument(
+        "--stall", type=float, default=5.0, help="seconds without a frame before giving up"
+    )
+    p.add_argument("--max-frames", type=int, help="stop after this many frames")
+    p.add_argument(
+        "--unknown",
+        choices=("held-out", "activities"),
+        default="held-out",
+        help="what makes a stretch unknown (as in posecbr segment)",
+    )
+    p.set_defaults(func=run)
+
+
+def _is_file(source: str) -> bool:
+    return "://" not in source and not source.isdigit()
+
+
+def _check(args: argparse.Namespace) -> None:
+    if args.speed < 0:
+        raise ConfigError(f"--speed must be >= 0, got {args.speed:g}", "--speed")
+    if not args.stall > 0:
+        raise ConfigError(f"--stall must be > 0 seconds, got {args.stall:g}", "--stall")
+    if args.max_frames is not None and args.max_frames < 1:
+        raise ConfigError(f"--max-frames must be >= 1, got {args.max_frames}", "--max-frames")
+    if args.out is not None:
+        if args.out.suffix.lower() != ".mp4":
+            raise DataError("the output video must be an .mp4 file name", args.out)
+        inputs = [args.source] if _is_file(args.source) else []
+        check_output(args.out, inputs=inputs, what="output video")
+    if _is_file(args.source) and not Path(args.source).is_file():
+        raise DataError("no such video file", args.source)
+
+
+def frames_in_background(
+    frames: Iterator[Any], stall_s: float, rate: float | None = None
+) -> Iterator[Any]:
+    """The stream's frames, read in a thread; with ``rate`` (frames per second) no faster
+    than that (a file played at its own rate, as a camera delivers). Raises DataError when no
+    frame arrives for ``stall_s`` seconds."""
+    box: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=8)
+    stop = threading.Event()
+
+    def read() -> None:
+        try:
+            started = time.perf_counter()
+            for i, f in enumerate(frames):
+                box.put(("frame", f))
+                if stop.is_set():
+                    return
+                if rate:  # the next frame is due at (i + 1) / rate
+                    time.sleep(max(0.0, started + (i + 1) / rate - time.perf_counter()))
+            box.put(("end", None))
+        except BaseException as exc:  # delivered to the main thread
+            box.put(("error", exc))
+
+    reader = threading.Thread(target=read, name="posecbr-watch-reader", daemon=True)
+    reader.start()
+    try:
+        while True:
+            try:
+                kind, item = box.get(timeout=stall_s)
+            except queue.Empty:
+                raise DataError(
+                    f"the stream stalled: no frame for {stall_s:g} s", "stream"
+                ) from None
+            if kind == "end":
+                return
+            if kind == "error":
+                raise item
+            yield item
+    finally:
+        stop.set()
+
+
+def run(args: argparse.Namespace) -> int:
+    from cbr.segmentation import Familiarity
+    from features.pose_estimation import open_video, stream_poses
+
+    from .segment import load_stored
+
+    _check(args)
+    clf = load_stored(args.db, args.name)
+    judge = Familiarity.of(clf.case_base_) if args.unknown == "activities" else clf.novelty_
+    is_file = _is_file(args.source)
+    fps = open_video(args.source)[1].fps if is_file else None
+    source: Any = int(args.source) if args.source.isdigit() else args.source
+    rate = fps * args.speed if fps and args.speed > 0 else None
+    frames = frames_in_background(
+        stream_poses(source, max_frames=args.max_frames), args.stall, rate
+    )
+    watcher = Watcher(clf, judge, args, fps)
+    try:
+        watcher.follow(frames, is_file)
+    except KeyboardInterrupt:
+        pass  # the user stopped watching: finish what was seen
+    except BaseException:
+        watcher.discard()
+        raise
+    watcher.close()
+    return 0
+
+
+class Watcher:
+    """Feeds frames to the live segmenter, draws, writes, prints and times them."""
+
+    def __init__(self, clf: Any, judge: Any, args: argparse.Namespace, fps: float | None) -> None:
+        self.clf, self.judge, self.args = clf, judge, args
+        self.fps = fps
+        self.live: Any = None
+        self.writer: Any = None
+        self.tmp: Path | None = None
+        self.latency: list[float] = []
+        self.n = 0
+        self.started = time.perf_counter()
+
+    def follow(self, frames: Iterator[Any], is_file: bool) -> None:
+        from cbr.live import LiveSegmenter
+
+        waiting: list[Any] = []  # a live source's first second: to measure its frame rate
+        for frame in frames:
+            if self.live is None:
+                if self.fps is None:
+                    waiting.append(frame)
+                    self.fps = _frame_rate(waiting)
+                    if self.fps is None:
+                        continue
+                self.live = LiveSegmenter(self.clf, self.fps, self.judge)
+                for early in waiting[:-1]:
+                    self._take(early)
+            self._take(frame)
+        if self.n == 0:
+            raise DataError("the stream gave no frame", self.args.source)
+        if not is_file and self.args.max_frames is None:
+            raise DataError(
+                f"the stream ended after {self.n} frames (camera or connection lost?)",
+                self.args.source,
+            )
+
+    def _take(self, frame: Any) -> None:
+        finished = self.live.push(frame.pose.world)
+        if frame.read_at == frame.read_at:  # not NaN: the source said when it read the frame
+            self.latency.append(time.perf_counter() - frame.read_at)
+        self.n += 1
+        if finished is not None:
+            self._emit(finished)
+        self._draw(frame)
+
+    def _emit(self, segment: Any) -> None:
+        print(json.dumps(segment.to_dict(self.fps)), flush=True)
+
+    def _draw(self, frame: Any) -> None:
+        if self.args.out is None and not self.args.show:
+            return
+        import cv2
+
+        from features.pose_estimation.overlay import draw_pose
+
+        bgr = cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR)
+        current = self.live.current()
+        label = self.live.label or ("unknown" if current is not None else "...")
+        words = [label, f"repetitions: {current.repetitions if current else 0}"]
+        draw_pose(bgr, frame.pose.image, words + self._fluents())
+        if self.args.out is not None:
+            self._write(bgr)
+        if self.args.show:
+            self._show(bgr)
+
+    def _fluents(self, top: int = 3) -> list[str]:
+        """The fluent states that hold in the latest frame (most confident first)."""
+        import numpy as np
+
+        from features.fluents import evaluate
+        from features.timeline import background
+
+        recent = self.live.recent(10)
+        result = evaluate(recent)
+        conf = np.nan_to_num(result.confidence[-1], nan=0.0)
+        conf[background(result)] = 0.0
+        best = np.argsort(-conf, kind="stable")[:top]
+        return [result.words[i] for i in best if conf[i] >= 0.8]
+
+    def _write(self, bgr: Any) -> None:
+        import os
+        import tempfile
+
+        import cv2
+
+        if self.writer is None:
+            out = self.args.out
+            fd, name = tempfile.mkstemp(prefix=f".{out.stem}.", suffix=".mp4", dir=out.parent)
+            os.close(fd)
+            self.tmp = Path(name)
+            h, w = bgr.shape[:2]
+            fourcc = cv2.VideoWriter.fourcc(*"mp4v")
+            self.writer = cv2.VideoWriter(str(self.tmp), fourcc, float(self.fps or 30.0), (w, h))
+            if not self.writer.isOpened():
+                raise DataError("cannot encode an MP4 video here", out)
+        self.writer.write(bgr)
+
+    def _show(self, bgr: Any) -> None:
+        import cv2
+
+        try:
+            cv2.imshow("posecbr watch", bgr)
+            cv2.waitKey(1)
+        except cv2.error:
+            raise PosecbrError("this OpenCV has no window support: use --out video.mp4") from None
+
+    def discard(self) -> None:
+        """An error: no half-written video."""
+        if self.writer is not None:
+            self.writer.release()
+        if self.tmp is not None:
+            self.tmp.unlink(missing_ok=True)
+
+    def close(self) -> None:
+        """The end of the stream: the last segment, the video renamed into place, latency."""
+        import os
+
+        import numpy as np
+
+        last = self.live.finish() if self.live is not None else None
+        if last is not None:
+            self._emit(last)
+        if self.writer is not None and self.tmp is not None:
+            self.writer.release()
+            mask = os.umask(0)
+            os.umask(mask)
+            os.chmod(self.tmp, 0o666 & ~mask)
+            os.replace(self.tmp, self.args.out)
+        if self.latency:
+            ms = np.asarray(self.latency) * 1000.0
+            wall = time.perf_counter() - self.started
+            print(
+                f"watched {self.n} frames in {wall:.1f} s ({self.n / wall:.1f} frames/s); "
+                f"latency frame to label: median {np.median(ms):.1f} ms, "
+                f"95th percentile {np.percentile(ms, 95):.1f} ms, worst {ms.max():.1f} ms",
+                file=sys.stderr,
+            )
+
+
+def _frame_rate(frames: list[Any]) -> float | None:
+    """A live source's frame rate from its first second of frames (None: not yet known)."""
+    if len(frames) < 2 or frames[-1].time_s - frames[0].time_s < 1.0:
+        return None
+    return (len(frames) - 1) / (frames[-1].time_s - frames[0].time_s)

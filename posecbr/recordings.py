@@ -1,0 +1,46 @@
+"""Reading one recording for ``reps``, ``segment`` and ``watch``: any clip the loaders read
+(pose file, video, BVH, UI-PRMD file) or an AMC file with its skeleton; the frame rate may be
+given (an AMC file carries none)."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+from features.errors import DataError
+
+
+def add_recording_options(p: argparse.ArgumentParser) -> None:
+    """``--asf`` and ``--fps`` for recordings that need them."""
+    p.add_argument("--asf", type=Path, help="skeleton of an .amc recording (default: beside it)")
+    p.add_argument(
+        "--fps",
+        type=float,
+        help="frame rate of the recording (default: from the file; AMC files carry none: 120)",
+    )
+
+
+def check_fps(fps: float | None) -> None:
+    if fps is not None and not (0.0 < fps <= 10000.0):
+        raise DataError(f"--fps must be a frame rate in (0, 10000], got {fps:g}", "--fps")
+
+
+def load_recording(path: Path, asf: Path | None = None, fps: float | None = None) -> Any:
+    """The recording at ``path`` as a canonical PoseSequence (frame rate ``fps`` if given)."""
+    from features.datasets import load_clip
+    from features.readers.asfamc import read_asf_amc
+
+    check_fps(fps)
+    if not path.exists():
+        raise DataError("no such file", path)
+    if path.suffix.lower() == ".amc" and asf is not None:
+        seq = read_asf_amc(asf, path, fps=fps)
+    else:
+        seq = load_clip(path)
+    # messages name the file the user gave (a pose file remembers the clip it came from)
+    seq = dataclasses.replace(seq, source=str(path))
+    if fps is not None:
+        seq = dataclasses.replace(seq, fps=float(fps))
+    return seq.to_canonical()

@@ -1,0 +1,71 @@
+"""Frame rate from the data, not the name: CMU recordings (``13_29.amc``) are 120 fps, an HDM05
+name states its rate, ``convert --fps`` sets it, and the rate assumed is printed."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import pytest
+
+from features.poses import load_pose
+from features.readers.asfamc import amc_frame_rate, read_asf_amc
+from posecbr.cli import main
+
+
+def _cmu(shared_data: Path) -> tuple[Path, Path]:
+    return (
+        shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
+        shared_data / "cmu-mocap6" / "amc" / "13_30.amc",
+    )
+
+
+def test_cmu_name_is_not_a_frame_rate(shared_data: Path) -> None:
+    asf, amc = _cmu(shared_data)
+    seq = read_asf_amc(asf, amc)
+    # CMU captures at 120 Hz; "30" in 13_30 is the trial number
+    assert seq.fps == 120.0
+    assert "assumed" in seq.metadata["fps_source"]
+    # the recording's per-0.1-s labels need 12 frames per label at 120 fps: 206 labels for
+    # 2465 frames (a 29- or 30-fps reading would need about four times as many labels)
+    labels = (shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt").read_text().split()
+    assert len(labels) == 206 and seq.n_frames // 12 + 1 == 206
+
+
+def test_hdm05_name_states_its_rate() -> None:
+    assert amc_frame_rate(Path("HDM_bd_squat1Reps_001_120.amc"))[0] == 120.0
+    assert amc_frame_rate(Path("HDM_bd_squat1Reps_001_60.amc"))[0] == 60.0
+    assert amc_frame_rate(Path("13_29.amc"))[0] == 120.0
+    assert amc_frame_rate(Path("walk_25.amc"))[0] == 120.0
+
+
+def test_convert_prints_the_rate_and_takes_fps(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    asf, amc = _cmu(shared_data)
+    out = tmp_path / "a"
+    assert main(["convert", str(amc), "--asf", str(asf), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "frame rate 120 fps for 1 clip (assumed" in printed
+    assert load_pose(out / "13_30.npz").fps == 120.0
+    out2 = tmp_path / "b"
+    assert main(["convert", str(amc), "--asf", str(asf), "--out", str(out2), "--fps", "60"]) == 0
+    assert "frame rate 60 fps for 1 clip (--fps)" in capsys.readouterr().out
+    seq = load_pose(out2 / "13_30.npz")
+    assert seq.fps == 60.0 and seq.metadata["fps_source"] == "--fps"
+    # labels.csv does not grow a column for the note
+    assert "fps_source" not in (out2 / "labels.csv").read_text()
+
+
+@pytest.mark.parametrize("bad", ["0", "-5", "nan", "1e9"])
+def test_convert_refuses_a_bad_fps(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], bad: str
+) -> None:
+    asf, amc = _cmu(shared_data)
+    before = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (asf, amc)}
+    out = tmp_path / "out"
+    assert main(["convert", str(amc), "--asf", str(asf), "--out", str(out), "--fps", bad]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--fps" in err and "Traceback" not in err
+    assert not out.exists()
+    assert before == {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (asf, amc)}

@@ -1,0 +1,189 @@
+"""Training from long recordings: per-frame or per-block label files (cmu-mocap6/truelabels),
+one clip per labelled stretch, ``train --split repetitions``, and label files that do not fit."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from features.datasets import (
+    LabelTrack,
+    frame_labels,
+    iter_recording,
+    labelled_stretches,
+    load_dataset,
+    read_label_names,
+    read_label_track,
+)
+from features.errors import DataError
+from features.poses import PoseSequence, save_pose
+from features.readers.asfamc import read_asf_amc
+from features.repetitions import count_repetitions, split_repetitions
+from posecbr.cli import main
+
+NAMES = (
+    "1 JumpJack\n2 Jog\n3 Squat\n4 KneeRaise\n5 ArmCircle\n6 Twist\n7 SideReach\n8 Box\n"
+    "9 UpDown\n10 ToeTouchOneHand\n11 SideBend\n12 ToeTouchTwoHands\n"
+)
+
+
+def test_block_labels_land_on_their_frames() -> None:
+    # 120 fps, 0.1-s blocks: label t covers frames 12t..12t+11
+    labels = ["a", "b", "c"]
+    got = frame_labels(labels, 30, 120.0, 0.1, "x")  # 2.5 blocks: the last partial
+    assert list(got) == ["a"] * 12 + ["b"] * 12 + ["c"] * 6
+    assert labelled_stretches(got) == [(0, 12, "a"), (12, 24, "b"), (24, 30, "c")]
+    # frames that fill the last block exactly: one more label is accepted (the cmu-mocap6
+    # files were made so) and lands on no frame
+    assert list(frame_labels(["a", "b", "c"], 24, 120.0, 0.1, "x")) == ["a"] * 12 + ["b"] * 12
+    # one label per frame
+    assert list(frame_labels(["a", "a", "b"], 3, 30.0, None, "x")) == ["a", "a", "b"]
+
+
+@pytest.mark.parametrize(
+    ("n_labels", "frames", "block"), [(4, 24, 0.1), (1, 24, 0.1), (2, 3, None), (10, 24, 0.1)]
+)
+def test_a_label_count_that_does_not_fit_is_refused(
+    n_labels: int, frames: int, block: float | None
+) -> None:
+    with pytest.raises(DataError, match="do not fit the recording") as info:
+        frame_labels(["a"] * n_labels, frames, 120.0, block, "labels.txt")
+    assert info.value.source == "labels.txt"
+
+
+def _names(tmp_path: Path) -> Path:
+    path = tmp_path / "names.txt"
+    path.write_text(NAMES, encoding="utf-8")
+    return path
+
+
+def test_label_names_and_tracks_read_errors(tmp_path: Path) -> None:
+    assert read_label_names(_names(tmp_path))["10"] == "ToeTouchOneHand"
+    bad = tmp_path / "bad.txt"
+    bad.write_text("1 JumpJack\n2\n", encoding="utf-8")
+    with pytest.raises(DataError, match="line 2"):
+        read_label_names(bad)
+    track = tmp_path / "t.txt"
+    track.write_text("1 1 13\n", encoding="utf-8")
+    with pytest.raises(DataError, match="13"):
+        read_label_track(track, read_label_names(_names(tmp_path)))
+    empty = tmp_path / "empty.txt"
+    empty.write_text("\n", encoding="utf-8")
+    with pytest.raises(DataError, match="no labels"):
+        read_label_track(empty)
+    with pytest.raises(DataError, match="seconds > 0"):
+        LabelTrack(track, -0.1)
+
+
+@pytest.fixture(scope="module")
+def recording(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """CMU 13_30 (JumpJack, Twist, KneeRaise, Squat, Jog) as a pose file."""
+    seq = read_asf_amc(
+        shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
+        shared_data / "cmu-mocap6" / "amc" / "13_30.amc",
+    )
+    return save_pose(seq, tmp_path_factory.mktemp("rec") / "13_30.npz")
+
+
+def _truth(shared_data: Path) -> tuple[list[str], list[int]]:
+    """The stretches of 13_30 worked out from its label file by hand: codes and change
+    positions (label index x 12 frames)."""
+    codes = (shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt").read_text().split()
+    changes = [i for i in range(1, len(codes)) if codes[i] != codes[i - 1]]
+    return [codes[0]] + [codes[i] for i in changes], [12 * i for i in changes]
+
+
+def test_a_recording_becomes_one_clip_per_stretch(
+    shared_data: Path, recording: Path, tmp_path: Path
+) -> None:
+    codes, changes = _truth(shared_data)
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    clips = list(iter_recording(recording, LabelTrack(labels, 0.1, _names(tmp_path))))
+    names = read_label_names(_names(tmp_path))
+    assert [c.label for c in clips] == [names[c] for c in codes]
+    assert [c.label for c in clips] == ["JumpJack", "Twist", "KneeRaise", "Squat", "Jog"]
+    offsets = [int(c.seq.metadata["frame_offset"]) for c in clips]
+    assert offsets == [0, *changes]
+    assert sum(c.seq.n_frames for c in clips) == 2465
+    # the same through a labels CSV with a label_file column (what train and compare read)
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(
+        "path,label_file,label_block_s,label_names,subject\n"
+        f"{recording},{labels},0.1,names.txt,13\n",
+        encoding="utf-8",
+    )
+    from_csv = load_dataset(csv)
+    assert [c.label for c in from_csv] == [c.label for c in clips]
+    assert {c.subject for c in from_csv} == {"13"}
+    assert [c.seq.n_frames for c in from_csv] == [c.seq.n_frames for c in clips]
+
+
+def test_split_repetitions_gives_each_repetition_as_a_clip(
+    shared_data: Path, recording: Path, tmp_path: Path
+) -> None:
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    clips = list(iter_recording(recording, LabelTrack(labels, 0.1, _names(tmp_path))))
+    split = split_repetitions(clips)
+    expected = [count_repetitions(c.seq).count for c in clips]
+    assert split.kept_whole == 0
+    assert len(split.clips) == sum(expected)
+    squats = [c for c in split.clips if c.label == "Squat"]
+    assert len(squats) == 2  # two squats by hand (tests/fixtures/repetition_counts.json)
+    assert [c.extras["repetition"] for c in squats] == [1, 2]
+    squat_stretch = next(c for c in clips if c.label == "Squat")
+    start = int(squat_stretch.seq.metadata["frame_offset"])
+    first, second = (int(c.seq.metadata["frame_offset"]) for c in squats)
+    assert start <= first < second < start + squat_stretch.seq.n_frames
+
+
+def _sha(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_train_from_one_recording_with_split_repetitions(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    db = tmp_path / "cb.sqlite"
+    names = str(_names(tmp_path))
+    argv = ["train", str(recording), "--frame-labels", str(labels), "--label-block", "0.1",
+            "--label-names", names, "--split", "repetitions", "--db", str(db)]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr()
+    assert "cut 5 clips into" in out.err
+    assert "5 activities" in out.out and db.is_file()
+
+
+def test_train_refuses_a_label_file_that_does_not_fit(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    wrong = shared_data / "cmu-mocap6" / "truelabels" / "13_29.txt"  # 383 labels, 2465 frames
+    db = tmp_path / "cb.sqlite"
+    before = {p: _sha(p) for p in (recording, wrong)}
+    argv = ["train", str(recording), "--frame-labels", str(wrong), "--label-block", "0.1",
+            "--db", str(db)]  # fmt: skip
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert "383 labels (one per 0.1 s) do not fit the recording: 2465 frames at 120 fps" in err
+    assert str(wrong) in err
+    assert not db.exists()
+    assert before == {p: _sha(p) for p in (recording, wrong)}
+
+
+def test_a_wrong_frame_rate_shows_as_a_label_count_that_does_not_fit(
+    recording: Path, shared_data: Path
+) -> None:
+    """A CMU recording read at 30 fps (the trial number taken for a rate) has a quarter of
+    the frames per 0.1 s: its labels no longer fit."""
+    from features.poses import load_pose
+
+    seq = load_pose(recording)
+    slow = PoseSequence(seq.positions, seq.joint_names, 30.0, source=str(recording))
+    labels = read_label_track(shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt")
+    with pytest.raises(DataError, match="at 30 fps need 822 "):
+        frame_labels(labels, slow.n_frames, slow.fps, 0.1, "13_30.txt")
+    assert np.ceil(2465 / 3) == 822

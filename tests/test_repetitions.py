@@ -1,0 +1,255 @@
+"""Repetition counting: hand-built movements with known repetitions, the QMP period as an
+independent check of the period, and real mocap stretches against counts made by hand
+(tests/fixtures/repetition_counts.json)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from features.derived import signals_of
+from features.errors import DataError
+from features.poses import PoseSequence, save_pose
+from features.qmp import fit_signals
+from features.readers.asfamc import read_asf_amc
+from features.repetitions import count_repetitions, mirror_angles
+from posecbr.cli import main
+from tests.bodies import rot_z, rotate, standing, to_sequence
+
+FIXTURE = Path(__file__).parent / "fixtures" / "repetition_counts.json"
+ARM = ("elbow", "wrist", "pinky", "index", "thumb")
+FPS = 30.0
+
+
+def _raise_arms(body: dict[str, np.ndarray], left_deg: float, right_deg: float) -> dict:
+    """Arms lifted sideways (abduction) by the given angles about the shoulders."""
+    out = rotate(body, tuple(f"left_{j}" for j in ARM), rot_z(-left_deg), body["left_shoulder"])
+    return rotate(out, tuple(f"right_{j}" for j in ARM), rot_z(right_deg), body["right_shoulder"])
+
+
+def _bump(n: int) -> np.ndarray:
+    """One excursion out and back over ``n`` frames: 0 -> 1 -> 0 (sin squared)."""
+    return np.sin(np.pi * np.arange(n) / (n - 1)) ** 2
+
+
+def _movement(pattern: list[str], rise_s: float = 1.2, rest_s: float = 0.6) -> PoseSequence:
+    """Arm raises of 90 degrees, each ``rise_s`` long, with ``rest_s`` of standing before,
+    between and after; pattern entries "both", "left" or "right"."""
+    rest, rise = int(rest_s * FPS), int(rise_s * FPS)
+    left = [np.zeros(rest)]
+    right = [np.zeros(rest)]
+    for arm in pattern:
+        bump = 90.0 * _bump(rise)
+        left += [bump if arm in ("both", "left") else np.zeros(rise), np.zeros(rest)]
+        right += [bump if arm in ("both", "right") else np.zeros(rise), np.zeros(rest)]
+    body = standing()
+    frames = [
+        _raise_arms(body, a, b)
+        for a, b in zip(np.concatenate(left), np.concatenate(right), strict=True)
+    ]
+    return to_sequence(*frames, fps=FPS)
+
+
+def _designed_peaks(n: int, rise_s: float = 1.2, rest_s: float = 0.6) -> np.ndarray:
+    rest, rise = int(rest_s * FPS), int(rise_s * FPS)
+    return rest + np.arange(n) * (rise + rest) + (rise - 1) / 2
+
+
+def test_both_arms_raised_five_times() -> None:
+    result = count_repetitions(_movement(["both"] * 5))
+    assert result.count == 5
+    assert not result.alternating
+    peaks = np.array([r.peak_frame for r in result.repetitions])
+    np.testing.assert_allclose(peaks, _designed_peaks(5), atol=2)
+    # the period is one raise plus one rest: 1.8 s
+    assert result.period_s == pytest.approx(1.8, abs=0.1)
+    # repetitions follow one another, each containing its far point, the cut inside the rests
+    rest, rise = 18, 36
+    for k, (a, b) in enumerate(zip(result.repetitions[:-1], result.repetitions[1:], strict=True)):
+        assert a.end_frame == b.start_frame
+        rest_start = rest + (k + 1) * (rise + rest) - rest
+        assert rest_start - 2 <= a.end_frame <= rest_start + rest + 2
+    assert set(result.moving) & {"left_armpit", "right_armpit"}
+
+
+def test_alternating_arms_count_one_per_side() -> None:
+    result = count_repetitions(_movement(["left", "right"] * 3))
+    assert result.alternating
+    assert result.count == 6
+    assert [r.side for r in result.repetitions] == ["left", "right"] * 3
+
+
+def test_one_arm_only_is_not_alternating() -> None:
+    result = count_repetitions(_movement(["left"] * 4))
+    assert not result.alternating
+    assert result.count == 4
+
+
+def test_standing_still_with_jitter_has_no_repetition() -> None:
+    seq = _movement([])  # 0.6 s of rest only: too short, so build a longer hold
+    body = standing()
+    rng = np.random.default_rng(0)
+    frames = [
+        {k: v + rng.normal(0.0, 0.005, 3) for k, v in body.items()} for _ in range(int(4 * FPS))
+    ]
+    seq = to_sequence(*frames, fps=FPS)
+    assert count_repetitions(seq).count == 0
+
+
+def test_mirror_angles_swaps_sides_and_reflects_lateral_tilts() -> None:
+    names = ("left_knee", "right_knee", "torso_frontal", "torso_sagittal")
+    values = np.array([[1.0, 2.0, np.pi / 2 + 0.3, 1.2]])
+    np.testing.assert_allclose(mirror_angles(values, names), [[2.0, 1.0, np.pi / 2 - 0.3, 1.2]])
+
+
+def test_too_short_and_no_person_are_refused() -> None:
+    with pytest.raises(DataError, match="shorter than one repetition"):
+        count_repetitions(to_sequence(*[standing()] * 5, fps=FPS))
+    nobody = PoseSequence(np.full((90, 33, 3), np.nan), _movement([]).joint_names, FPS, source="x")
+    with pytest.raises(DataError, match="no person"):
+        count_repetitions(nobody)
+
+
+# ---- real mocap against hand counts -------------------------------------------------------
+
+
+def _fixture() -> dict:
+    return json.loads(FIXTURE.read_text(encoding="utf-8"))
+
+
+@pytest.fixture(scope="module")
+def recordings(shared_data: Path) -> dict[str, PoseSequence]:
+    out = {}
+    for clip in _fixture()["clips"]:
+        if clip["source"].endswith(".amc") and clip["source"] not in out:
+            out[clip["source"]] = read_asf_amc(
+                shared_data / clip["asf"], shared_data / clip["source"]
+            )
+    return out
+
+
+def test_mocap_counts_against_hand_counts(recordings: dict[str, PoseSequence]) -> None:
+    errors = []
+    for clip in _fixture()["clips"]:
+        if not clip["source"].endswith(".amc"):
+            continue
+        seq = recordings[clip["source"]].slice_frames(clip["start_frame"], clip["end_frame"])
+        errors.append(count_repetitions(seq).count - clip["count"])
+    err = np.abs(errors)
+    assert len(err) == 18
+    # the literature's measures: off-by-one accuracy and mean absolute error
+    assert (err <= 1).mean() >= 0.8
+    assert err.mean() <= 1.0
+    assert (err == 0).mean() >= 0.6
+
+
+@pytest.mark.parametrize("activity", ["Squat", "JumpJack", "KneeRaise"])
+def test_mocap_plain_exercises_counted_exactly(
+    recordings: dict[str, PoseSequence], activity: str
+) -> None:
+    clips = [c for c in _fixture()["clips"] if c.get("activity") == activity]
+    assert clips
+    for clip in clips:
+        seq = recordings[clip["source"]].slice_frames(clip["start_frame"], clip["end_frame"])
+        result = count_repetitions(seq)
+        assert result.count == clip["count"], clip["how"]
+        assert result.alternating == (activity == "KneeRaise")
+
+
+@pytest.mark.parametrize("activity", ["Squat", "JumpJack"])
+def test_period_agrees_with_the_qmp_fit(recordings: dict[str, PoseSequence], activity: str) -> None:
+    """The autocorrelation period against SINDy's fitted period (features.qmp) of the angles
+    that move most, fitted over the whole stretch: two independent estimates."""
+    clip = next(c for c in _fixture()["clips"] if c.get("activity") == activity)
+    seq = recordings[clip["source"]].slice_frames(clip["start_frame"], clip["end_frame"])
+    result = count_repetitions(seq)
+    sig = signals_of(seq)
+    names = [m for m in result.moving if m in sig.names][:2]
+    fits = fit_signals(sig.values[:, [sig.names.index(n) for n in names]], seq.fps, names)
+    qmp_period = np.nanmedian(fits.quantity("period_s")[0])
+    assert result.period_s == pytest.approx(qmp_period, rel=0.05)
+
+
+# ---- the command ---------------------------------------------------------------------------
+
+
+def _squats_file(recordings: dict[str, PoseSequence], tmp_path: Path) -> Path:
+    clip = next(c for c in _fixture()["clips"] if c.get("activity") == "Squat")
+    seq = recordings[clip["source"]].slice_frames(clip["start_frame"], clip["end_frame"])
+    return save_pose(seq, tmp_path / "squats.npz")
+
+
+def test_reps_command_json_and_plot(
+    recordings: dict[str, PoseSequence], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _squats_file(recordings, tmp_path)
+    plot = tmp_path / "reps.png"
+    assert main(["reps", str(path), "--json", "--plot", str(plot)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["clip"] == str(path) and doc["count"] == 2 and doc["fps"] == 120.0
+    reps = doc["repetitions"]
+    assert len(reps) == 2
+    assert all(r["start_frame"] < r["peak_frame"] < r["end_frame"] for r in reps)
+    assert reps[0]["end_frame"] == reps[1]["start_frame"]
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["reps", str(path)]) == 0
+    assert "2 repetitions" in capsys.readouterr().out
+
+
+def _sha(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_reps_command_refuses_a_clip_shorter_than_a_repetition(
+    recordings: dict[str, PoseSequence], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    seq = next(iter(recordings.values())).slice_frames(0, 24)  # 0.2 s at 120 fps
+    path = save_pose(seq, tmp_path / "short.npz")
+    before = _sha(path)
+    plot = tmp_path / "out.png"
+    assert main(["reps", str(path), "--plot", str(plot)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "shorter than one repetition" in err and str(path) in err
+    assert _sha(path) == before and not plot.exists()
+    assert not list(tmp_path.glob(".*"))  # no stray temporary file
+
+
+def test_reps_command_refuses_a_recording_with_no_person(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    seq = PoseSequence(np.full((90, 33, 3), np.nan), _movement([]).joint_names, FPS)
+    path = save_pose(seq, tmp_path / "empty.npz")
+    before = _sha(path)
+    assert main(["reps", str(path), "--json"]) == 1
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.count("\n") == 1 and "no person" in captured.err
+    assert "Traceback" not in captured.err and _sha(path) == before
+
+
+def test_reps_command_refuses_a_plot_over_its_input(
+    recordings: dict[str, PoseSequence], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _squats_file(recordings, tmp_path)
+    before = _sha(path)
+    assert main(["reps", str(path), "--plot", str(path)]) == 1
+    assert "would overwrite an input" in capsys.readouterr().err
+    assert _sha(path) == before
+
+
+def test_reps_command_on_a_real_squat_video(
+    shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The 5-fps squat video end to end (BlazePose, then counting): three squats by hand."""
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    hand = next(c for c in _fixture()["clips"] if c["source"].endswith(video.name))
+    assert main(["reps", str(video), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["count"] == hand["count"] == 3
+    # far points at the bottoms seen by hand: 2.0 s, 6.8 s, and 12.0-12.8 s
+    bottoms = [r["peak_frame"] / doc["fps"] for r in doc["repetitions"]]
+    np.testing.assert_allclose(bottoms, [2.0, 6.8, 12.0], atol=0.7)

@@ -1,0 +1,272 @@
+"""Segmentation of long recordings (cbr.segmentation, posecbr segment) on CMU subject 13:
+stretches cut at known frames and joined, the labelled recordings, exercises left out of the
+case base, the decoder on hand-worked votes, and bad input."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cbr.estimator import CaseBaseClassifier
+from cbr.segmentation import BLOCK_S, MIN_SEGMENT_S, SWITCH_ODDS, Familiarity, decode, segment
+from features.datasets import (
+    Clip,
+    LabelTrack,
+    frame_labels,
+    read_label_names,
+    read_label_track,
+)
+from features.derived import stretch
+from features.poses import PoseSequence, save_pose
+from features.readers.asfamc import read_asf_amc
+from features.repetitions import split_repetitions
+from posecbr.cli import main
+
+NAMES = "1 JumpJack\n2 Jog\n3 Squat\n4 KneeRaise\n5 ArmCircle\n6 Twist\n10 ToeTouchOneHand\n"
+
+
+def test_decode_ignores_a_short_blip_and_follows_a_long_change() -> None:
+    """Two states; a change costs MIN_SEGMENT_S / BLOCK_S blocks x ln(SWITCH_ODDS) = 10 ln 2
+    = 6.93. Three blocks at 0.9 vs 0.1 gain 3 ln 9 = 6.59 < 2 x 6.93 (out and back): no change.
+    Twenty such blocks gain 43.9: the path changes there and back."""
+    assert (MIN_SEGMENT_S / BLOCK_S) * math.log(SWITCH_ODDS) == pytest.approx(10 * math.log(2))
+    votes = np.tile([0.9, 0.1], (60, 1))
+    votes[10:13] = [0.1, 0.9]
+    assert (decode(votes) == 0).all()
+    votes[30:50] = [0.1, 0.9]
+    path = decode(votes)
+    assert (path[30:50] == 1).all() and (path[:30] == 0).all() and (path[50:] == 0).all()
+
+
+@pytest.fixture(scope="module")
+def recordings(shared_data: Path) -> dict[str, PoseSequence]:
+    asf = shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf"
+    return {
+        t: read_asf_amc(asf, shared_data / "cmu-mocap6" / "amc" / f"{t}.amc")
+        for t in ("13_29", "13_30", "13_31")
+    }
+
+
+@pytest.fixture(scope="module")
+def names(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("names") / "names.txt"
+    path.write_text(NAMES, encoding="utf-8")
+    return path
+
+
+def _stretches(
+    recordings: dict[str, PoseSequence], shared_data: Path, names: Path, which: tuple[str, ...]
+) -> list[Clip]:
+    out = []
+    for t in which:
+        labels = shared_data / "cmu-mocap6" / "truelabels" / f"{t}.txt"
+        seq = recordings[t]
+        # the stretches of the recording as clips: the same path iter_recording takes
+        from features.datasets import split_by_track
+
+        for part, label in split_by_track(seq, LabelTrack(labels, 0.1, names)):
+            out.append(Clip(part.with_metadata(label=label, subject="13"), label, "13", {}))
+    return out
+
+
+def _fit(clips: list[Clip]) -> CaseBaseClassifier:
+    reps = split_repetitions(clips).clips
+    return CaseBaseClassifier().fit([c.seq for c in reps], [c.label for c in reps])
+
+
+@pytest.fixture(scope="module")
+def classifier(
+    recordings: dict[str, PoseSequence], shared_data: Path, names: Path
+) -> CaseBaseClassifier:
+    """Repetitions of 13_29 and 13_31 (every exercise of 13_30 is among them)."""
+    return _fit(_stretches(recordings, shared_data, names, ("13_29", "13_31")))
+
+
+def test_two_exercises_joined_at_a_known_frame(
+    recordings: dict[str, PoseSequence], classifier: CaseBaseClassifier
+) -> None:
+    """13_30's squats (labelled 11.8-16.1 s) followed by its knee raises (6.7-11.8 s): one
+    recording whose change of exercise lies at a frame known by construction."""
+    rec = recordings["13_30"]
+    squat = rec.positions[int(11.8 * 120) : int(16.1 * 120)]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)]
+    joined = PoseSequence(np.concatenate([squat, knee]), rec.joint_names, 120.0, source="joined")
+    cut_s = len(squat) / 120.0
+    result = segment(classifier, joined, Familiarity.of(classifier.case_base_))
+    labels = [s.label for s in result.segments]
+    assert labels == ["Squat", "KneeRaise"], labels
+    assert abs(result.segments[1].start_frame / 120.0 - cut_s) <= 0.5
+    # the segments cover every frame once, in order
+    assert result.segments[0].start_frame == 0
+    assert result.segments[-1].end_frame == joined.n_frames
+    for a, b in zip(result.segments[:-1], result.segments[1:], strict=True):
+        assert a.end_frame == b.start_frame
+    # two squats and four knee raises by hand (tests/fixtures/repetition_counts.json)
+    assert [len(s.repetitions) for s in result.segments] == [2, 4]
+    assert all(0.0 <= s.confidence <= 1.0 for s in result.segments)
+    assert "Squat" in result.segments[0].explanation
+
+
+def test_a_labelled_recording(
+    recordings: dict[str, PoseSequence],
+    classifier: CaseBaseClassifier,
+    shared_data: Path,
+    names: Path,
+) -> None:
+    rec = recordings["13_30"]
+    truth = frame_labels(
+        read_label_track(
+            shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt", read_label_names(names)
+        ),
+        rec.n_frames,
+        rec.fps,
+        0.1,
+        "13_30",
+    )[::12]
+    result = segment(classifier, rec, Familiarity.of(classifier.case_base_))
+    pred = np.array(result.blocks, dtype=object)
+    assert len(pred) == len(truth)
+    # same person, another recording: most blocks right (the benchmark gives the figures)
+    assert np.mean(pred == truth) >= 0.8
+    doc = result.to_dict()
+    assert set(doc) >= {"recording", "fps", "segments"}
+    for s in doc["segments"]:
+        assert set(s) >= {"start_s", "end_s", "start_frame", "end_frame", "label",
+                          "confidence", "repetitions", "explanation"}  # fmt: skip
+        assert s["start_s"] == pytest.approx(s["start_frame"] / 120.0, abs=1e-3)
+
+
+def test_an_exercise_left_out_of_the_case_base_is_unknown(
+    recordings: dict[str, PoseSequence], shared_data: Path, names: Path
+) -> None:
+    """Squats removed from the case base: 13_30's squats (11.8-16.1 s) are no known activity."""
+    clips = [
+        c
+        for c in _stretches(recordings, shared_data, names, ("13_29", "13_31"))
+        if c.label != "Squat"
+    ]
+    clf = _fit(clips)
+    rec = recordings["13_30"]
+    part = stretch(rec, int(11.8 * 120), int(16.1 * 120))
+    for judge in (clf.novelty_, Familiarity.of(clf.case_base_)):
+        result = segment(clf, part, judge)
+        unknown = np.mean([b is None for b in result.blocks])
+        assert unknown >= 0.5, (judge, [s.label for s in result.segments])
+        assert all(s.label != "Squat" for s in result.segments)
+
+
+# ---- the command ---------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def case_base(
+    recordings: dict[str, PoseSequence],
+    shared_data: Path,
+    names: Path,
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Path:
+    """``posecbr train recordings.csv --split repetitions`` on 13_29 and 13_31."""
+    folder = tmp_path_factory.mktemp("cb")
+    rows = ["path,label_file,label_block_s,label_names,subject"]
+    for t in ("13_29", "13_31"):
+        pose = save_pose(recordings[t], folder / f"{t}.npz")
+        labels = shared_data / "cmu-mocap6" / "truelabels" / f"{t}.txt"
+        rows.append(f"{pose},{labels},0.1,{names},13")
+    (folder / "recordings.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    db = folder / "cb.sqlite"
+    argv = ["train", str(folder / "recordings.csv"), "--db", str(db), "--split", "repetitions"]
+    assert main(argv) == 0
+    return db
+
+
+def _sha(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_segment_command_json_text_and_plot(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    rec = save_pose(recordings["13_30"], tmp_path / "13_30.npz")
+    capsys.readouterr()
+    plot = tmp_path / "timeline.png"
+    assert main(["segment", str(rec), "--db", str(case_base), "--json", "--plot", str(plot)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["recording"] == str(rec) and doc["fps"] == 120.0
+    segs = doc["segments"]
+    assert segs[0]["start_frame"] == 0 and segs[-1]["end_frame"] == 2465
+    known = {"JumpJack", "Jog", "Squat", "KneeRaise", "ArmCircle", "Twist", "ToeTouchOneHand"}
+    assert all(s["label"] is None or s["label"] in known for s in segs)
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["segment", str(rec), "--db", str(case_base)]) == 0
+    text = capsys.readouterr().out
+    assert "2465 frames at 120 fps" in text and "activity" in text
+
+
+def test_segment_command_refuses_a_recording_shorter_than_a_window(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    short = save_pose(recordings["13_30"].slice_frames(0, 60), tmp_path / "short.npz")
+    before = _sha(short), _sha(case_base)
+    plot = tmp_path / "p.png"
+    assert main(["segment", str(short), "--db", str(case_base), "--plot", str(plot)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "shorter than" in err and str(short) in err
+    assert (_sha(short), _sha(case_base)) == before and not plot.exists()
+
+
+def test_segment_command_refuses_a_recording_with_no_person(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from features.skeleton import BLAZEPOSE_33
+
+    empty = PoseSequence(np.full((240, 33, 3), np.nan), BLAZEPOSE_33, 120.0)
+    path = save_pose(empty, tmp_path / "empty.npz")
+    before = _sha(path)
+    assert main(["segment", str(path), "--db", str(case_base), "--json"]) == 1
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1
+    assert "no person" in captured.err and "Traceback" not in captured.err
+    assert _sha(path) == before
+
+
+def test_segment_command_refuses_outputs_over_inputs(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    rec = save_pose(recordings["13_30"].slice_frames(0, 600), tmp_path / "r.npz")
+    before = _sha(rec)
+    assert main(["segment", str(rec), "--db", str(case_base), "--plot", str(rec)]) == 1
+    assert "would overwrite an input" in capsys.readouterr().err
+    assert main(["segment", str(rec), "--db", str(tmp_path / "none.sqlite")]) == 1
+    assert capsys.readouterr().err.count("\n") == 1
+    assert _sha(rec) == before and not (tmp_path / "none.sqlite").exists()
+
+
+def test_segment_overlay_on_a_real_video(
+    case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The squat video (5 fps, 65 frames) segmented with the mocap case base, the segments
+    drawn on every frame of the overlay."""
+    import cv2
+
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    out = tmp_path / "overlay.mp4"
+    assert main(["segment", str(video), "--db", str(case_base), "--overlay", str(out)]) == 0
+    cap = cv2.VideoCapture(str(out))
+    frames = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+    cap.release()
+    assert frames == 65
+    assert "segments" in capsys.readouterr().out

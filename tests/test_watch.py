@@ -1,0 +1,140 @@
+"""``posecbr watch``: a real video played through BlazePose, and streams that stall or end
+(a stand-in for a camera: real CMU mocap poses delivered frame by frame)."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import features.pose_estimation as pose_estimation
+from features.pose_estimation import StreamFrame
+from features.pose_estimation.tracker import FramePose
+from features.readers.asfamc import read_asf_amc
+from posecbr.cli import main
+
+
+@pytest.fixture(scope="module")
+def case_base(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Repetitions of CMU 13_29 (six exercises), trained by the command."""
+    folder = tmp_path_factory.mktemp("cb")
+    names = folder / "names.txt"
+    names.write_text("1 JumpJack\n3 Squat\n4 KneeRaise\n5 ArmCircle\n6 Twist\n10 ToeTouch\n")
+    from features.poses import save_pose
+
+    seq = read_asf_amc(
+        shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
+        shared_data / "cmu-mocap6" / "amc" / "13_29.amc",
+    )
+    pose = save_pose(seq, folder / "13_29.npz")
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_29.txt"
+    db = folder / "cb.sqlite"
+    argv = ["train", str(pose), "--frame-labels", str(labels), "--label-block", "0.1",
+            "--label-names", str(names), "--split", "repetitions", "--db", str(db)]  # fmt: skip
+    assert main(argv) == 0
+    return db
+
+
+def test_watch_a_real_video(
+    case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import cv2
+
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    out = tmp_path / "watched.mp4"
+    capsys.readouterr()
+    assert main(["watch", str(video), "--db", str(case_base), "--out", str(out),
+                 "--speed", "0"]) == 0  # fmt: skip
+    captured = capsys.readouterr()
+    lines = [json.loads(line) for line in captured.out.splitlines()]
+    assert lines, "one JSON line per finished segment"
+    assert lines[0]["start_frame"] == 0 and lines[-1]["end_frame"] == 65
+    for a, b in zip(lines[:-1], lines[1:], strict=True):
+        assert a["end_frame"] == b["start_frame"]
+    # three squats by hand (tests/fixtures/repetition_counts.json)
+    assert sum(line["repetitions"] for line in lines) == 3
+    assert "latency frame to label: median" in captured.err
+    cap = cv2.VideoCapture(str(out))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 65
+    cap.release()
+
+
+def _mocap_stream(shared_data: Path, n: int, then: str, fps: float = 30.0) -> Any:
+    """A stand-in for ``stream_poses``: real poses (13_30 at 120 fps, every 4th frame) as a
+    camera would deliver them; after ``n`` frames it stalls ("stall") or stops ("end")."""
+    seq = read_asf_amc(
+        shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
+        shared_data / "cmu-mocap6" / "amc" / "13_30.amc",
+    )
+    world = seq.positions[::4]
+
+    def stream(source: Any, **kwargs: Any) -> Iterator[StreamFrame]:
+        for i in range(n):
+            pose = FramePose(np.full((33, 5), np.nan), world[i], True, False, 1.0, None)
+            rgb = np.zeros((48, 64, 3), dtype=np.uint8)
+            yield StreamFrame(i, i / fps, pose, rgb, time.perf_counter())
+        if then == "stall":
+            time.sleep(30)
+
+    return stream
+
+
+def test_watch_refuses_a_stream_that_stalls(
+    case_base: Path,
+    shared_data: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    monkeypatch.setattr(pose_estimation, "stream_poses", _mocap_stream(shared_data, 90, "stall"))
+    out = tmp_path / "out.mp4"
+    capsys.readouterr()
+    assert main(["watch", "0", "--db", str(case_base), "--stall", "0.5", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "stalled: no frame for 0.5 s" in err
+    assert "Traceback" not in err
+    assert not out.exists() and list(tmp_path.iterdir()) == []  # nothing half-written
+
+
+def test_watch_reports_a_camera_that_stops_sending(
+    case_base: Path,
+    shared_data: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    monkeypatch.setattr(pose_estimation, "stream_poses", _mocap_stream(shared_data, 120, "end"))
+    capsys.readouterr()
+    assert main(["watch", "0", "--db", str(case_base)]) == 1
+    captured = capsys.readouterr()
+    assert "the stream ended after 120 frames" in captured.err
+    assert captured.err.count("\n") == 1
+
+
+def test_watch_a_stream_to_its_end_with_max_frames(
+    case_base: Path,
+    shared_data: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Asked for 120 frames of a camera: the finished segments cover them, with labels of the
+    case base (or unknown), and the latency is reported."""
+    monkeypatch.setattr(pose_estimation, "stream_poses", _mocap_stream(shared_data, 120, "end"))
+    capsys.readouterr()
+    assert main(["watch", "0", "--db", str(case_base), "--max-frames", "120"]) == 0
+    captured = capsys.readouterr()
+    lines = [json.loads(line) for line in captured.out.splitlines()]
+    assert lines[-1]["end_frame"] == 120
+    known = {"JumpJack", "Squat", "KneeRaise", "ArmCircle", "Twist", "ToeTouch", None}
+    assert {line["label"] for line in lines} <= known
+    assert "latency frame to label" in captured.err
+
+
+def test_watch_refuses_a_missing_file(case_base: Path, tmp_path: Path, capsys: Any) -> None:
+    assert main(["watch", str(tmp_path / "none.mp4"), "--db", str(case_base)]) == 1
+    assert "no such video file" in capsys.readouterr().err
