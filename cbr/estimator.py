@@ -337,7 +337,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.maintenance_ = self._edit(cb)
         if self.maintenance_ is not None:
             cb, origin = self.maintenance_.casebase, origin[self.maintenance_.kept]
-        self.novelty_ = self._calibrate(cb, cases, origin, subjects)
+        sources = np.array([s.source or f"clip {i}" for i, s in enumerate(seqs)], dtype=object)
+        self.novelty_ = self._calibrate(cb, cases, origin, subjects, sources)
         self.classes_ = classes
         self.case_origin_ = origin
         self.feature_config_ = config
@@ -499,15 +500,24 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
 
     @staticmethod
     def _calibrate(
-        cb: CaseBase, cases: Cases, origin: np.ndarray, subjects: np.ndarray
+        cb: CaseBase,
+        cases: Cases,
+        origin: np.ndarray,
+        subjects: np.ndarray,
+        sources: np.ndarray,
     ) -> NoveltyCalibration:
-        """How far from the cases a held-out training clip lies: held out by subject when the
-        clips name two or more subjects, else by clip (a clip's mirror image is its own)."""
+        """How far from the cases a held-out training clip lies, held out as a new clip will
+        be: by subject when the clips name two or more subjects; else by source recording
+        when there are two or more (the repetitions cut from one recording are near copies of
+        each other, not what a new recording is); else by clip. A clip's mirror image goes
+        with it."""
         n = len(subjects)
         queries = cases.values[cases.origin < n]  # the training clips as queries see them
         clip = origin % n
         if "" not in set(subjects.tolist()) and len(set(subjects.tolist())) >= 2:
             return calibrate(cb, queries, subjects, subjects[clip], "leave-one-subject-out")
+        if len(set(sources.tolist())) >= 2:
+            return calibrate(cb, queries, sources, sources[clip], "leave-one-recording-out")
         return calibrate(cb, queries, np.arange(n), clip, "leave-one-out")
 
     def _edit(self, cb: CaseBase) -> MaintenanceReport | None:
