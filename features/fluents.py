@@ -23,7 +23,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -37,6 +37,7 @@ from .poses import MAX_FPS, MIN_FPS, PoseSequence
 from .signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals, near_pairs, state_signals
 
 __all__ = [
+    "CHUNK_FRAMES",
     "DEFAULT_TABLE",
     "FluentResult",
     "FluentSpec",
@@ -46,6 +47,8 @@ __all__ = [
     "confidence_lower",
     "confidence_upper",
     "evaluate",
+    "evaluate_chunks",
+    "history_frames",
     "state_signals",
 ]
 
@@ -759,6 +762,46 @@ def evaluate(
         fps=seq.fps,
         table=table,
     )
+
+
+# Frames evaluated at once by evaluate_chunks: every state's confidence is 566 x 8 bytes per
+# frame, 4.5 GB for a million frames, so long clips go through in pieces of about 90 MB.
+CHUNK_FRAMES = 20_000
+
+
+def history_frames(table: FluentTable, fps: float) -> int:
+    """Frames before a frame that its temporal states read (``window`` reference intervals of
+    ``fps / reference_fps`` frames, and one more for the interpolation)."""
+    return int(math.ceil(table.window * fps / table.reference_fps)) + 1
+
+
+def evaluate_chunks(
+    seq: PoseSequence,
+    table: FluentTable | None = None,
+    chunk_frames: int = CHUNK_FRAMES,
+    margin: int = 0,
+    backend: Backend = "numba",
+) -> Iterator[tuple[int, int, int, FluentResult]]:
+    """:func:`evaluate` in consecutive pieces, for clips too long to hold at once.
+
+    Yields ``(start, stop, first, result)`` for ``start``, ``stop`` = 0..chunk_frames,
+    chunk_frames..2*chunk_frames, ...: ``result`` covers frames ``first`` .. (``stop`` +
+    ``margin``, clipped to the clip), with ``first = max(0, start - margin)``. Each piece is
+    evaluated with the history its temporal states need, so the confidences are those of
+    ``evaluate(seq, table, backend=backend)`` for the same frames.
+    """
+    table = table or DEFAULT_TABLE
+    if chunk_frames < 1 or margin < 0:
+        raise ValueError("chunk_frames must be >= 1 and margin >= 0")
+    n = seq.n_frames
+    history = history_frames(table, seq.fps)
+    for start in range(0, n, chunk_frames):
+        stop = min(n, start + chunk_frames)
+        first, last = max(0, start - margin), min(n, stop + margin)
+        read_from = max(0, first - history)
+        result = evaluate(seq.slice_frames(read_from, last), table, backend=backend)
+        kept = result.confidence[first - read_from :]
+        yield start, stop, first, replace(result, confidence=kept)
 
 
 # Guard: the table refers only to signals that exist.
