@@ -141,6 +141,8 @@ def read_asf(path: str | Path) -> Skeleton:
             continue
         tokens = line.split()
         head = tokens[0].lower()
+        if len(tokens) < 2 and head in ("name", "axis", "order", "direction", "length"):
+            raise DataError(f"line {i}: {head!r} without a value", path)
         if head.startswith(":"):
             section = head[1:]
             if section in ("name", "version", "documentation"):

@@ -111,6 +111,8 @@ def _parse_hierarchy(tokens: list[str], path: Path) -> tuple[list[BvhJoint], int
             stack.append(len(joints) - 1)
             i += 1
         elif up == "END":
+            if not stack or pending_end:
+                raise DataError("End Site outside a joint", path)
             i += 2  # "End Site"
             if need(1)[0] != "{":
                 raise DataError("expected '{' after End Site", path)
