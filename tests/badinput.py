@@ -9,6 +9,7 @@ import json
 import os
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -84,8 +85,9 @@ def refused_in_process(
 
 
 def standing_clip(frames: int = 8) -> PoseSequence:
-    """A person standing still, every BlazePose joint present."""
-    return to_sequence(*[standing()] * frames)
+    """A person standing still, every BlazePose joint present (no source: a file written
+    from it names itself)."""
+    return replace(to_sequence(*[standing()] * frames), source="")
 
 
 def good_arrays(frames: int = 8) -> dict[str, object]:
@@ -108,6 +110,7 @@ def pose_file(path: Path, **changes: object) -> Path:
     return path
 
 
-def good_pose_file(path: Path, frames: int = 8, **metadata: object) -> Path:
+def good_pose_file(dest: Path, /, frames: int = 8, **metadata: object) -> Path:
+    """A valid pose file of a person standing, with ``metadata``."""
     seq = standing_clip(frames).with_metadata(**metadata)
-    return save_pose(seq, path)
+    return save_pose(seq, dest)
