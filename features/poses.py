@@ -78,7 +78,7 @@ def _check_fps(fps: Any, where: str | None) -> float:
     except (TypeError, ValueError):
         raise PoseFileError(f"fps must be a number, got {fps!r}", where) from None
     if not (np.isfinite(value) and value > 0):
-        raise PoseFileError(f"fps must be a positive number, got {fps!r}", where)
+        raise PoseFileError(f"fps must be a positive number, got {value:g}", where)
     if not MIN_FPS <= value <= MAX_FPS:
         raise PoseFileError(
             f"fps must be between {MIN_FPS:g} and {MAX_FPS:g} frames per second, got {value:g}",
