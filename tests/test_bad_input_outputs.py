@@ -182,3 +182,17 @@ def test_convert_prints_a_hostile_folder_name_escaped(
     printed = capsys.readouterr().out
     assert "\x1b" not in printed and "out\\x1b]0;pwned" in printed
     assert json.loads(json.dumps(sorted(p.name for p in out.iterdir()))) == ["a.npz", "labels.csv"]
+
+
+def test_demo_output_folder_that_cannot_be(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = tmp_path / "data"
+    good_pose_file(data / "m01_s01_e01.npz", label="deep_squat")
+    (data / "labels.csv").write_text("path,label\nm01_s01_e01.npz,deep_squat\n")
+    (tmp_path / "afile").write_text("x")
+    demo = ["demo", "--data", str(data), "--quick", "--out"]
+    refused([*demo, str(tmp_path / "afile")], tmp_path, capsys, "exists and is not a folder")
+    # the demo clears its earlier outputs in --out: never in the data it reads
+    refused([*demo, str(data)], tmp_path, capsys, "is the demo data folder or inside it")
+    refused([*demo, str(data / "out")], tmp_path, capsys, "is the demo data folder or inside it")
