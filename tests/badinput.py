@@ -57,8 +57,16 @@ def refused(
     for needle in needles:
         assert needle in lines[0], (needle, lines[0])
     assert captured.out == ""
-    assert snapshot(root) == before
+    assert_unchanged(root, before)
     return lines[0]
+
+
+def assert_unchanged(root: Path, before: dict[str, str]) -> None:
+    """Every file and folder under ``root`` as in ``before``; names what differs."""
+    after = snapshot(root)
+    changed = sorted(k for k in before.keys() & after.keys() if before[k] != after[k])
+    added, removed = sorted(after.keys() - before.keys()), sorted(before.keys() - after.keys())
+    assert after == before, f"changed {changed}, added {added}, removed {removed}"
 
 
 def refused_in_process(
@@ -80,7 +88,7 @@ def refused_in_process(
     assert len(lines) == 1, proc.stderr[-2000:]
     for needle in needles:
         assert needle in lines[0], (needle, lines[0])
-    assert snapshot(root) == before
+    assert_unchanged(root, before)
     return lines[0]
 
 
