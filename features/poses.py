@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import ConfigError, PoseFileError
+from features.text import size_words
 
 from .skeleton import BLAZEPOSE_33, CANONICAL_SKELETON, KNOWN_SKELETONS
 
@@ -384,8 +385,8 @@ def check_archive(path: Path, keys: Sequence[str] | None = None) -> None:
             total = sum(i.file_size for i in infos)
             if total > max_bytes:
                 raise PoseFileError(
-                    f"expands to {total / 1e9:.2f} GB, over the limit of {max_bytes / 1e9:.2f}"
-                    f" GB (raise it with {MAX_BYTES_ENV}=BYTES)",
+                    f"expands to {size_words(total)}, over the limit of {size_words(max_bytes)}"
+                    f" (raise it with {MAX_BYTES_ENV}=BYTES)",
                     path,
                 )
             for info in infos:

@@ -42,4 +42,13 @@ def shown(value: object) -> str:
     return "".join(_escape(ch) if _unsafe(ch) else ch for ch in text)
 
 
-__all__ = ["shown"]
+def size_words(n_bytes: float) -> str:
+    """A number of bytes as people read it: ``"9.50 GB"``, ``"15.8 MB"``, ``"512 bytes"``."""
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n_bytes >= scale:
+            value = n_bytes / scale
+            return f"{value:.2f} {unit}" if value < 10 else f"{value:.1f} {unit}"
+    return f"{int(n_bytes)} bytes"
+
+
+__all__ = ["shown", "size_words"]

@@ -322,3 +322,18 @@ def test_episodes_as_wide_ranges_cost_nothing(tmp_path: Path) -> None:
 
     wide = parse_ranges("1-1000000000,5")
     assert wide is not None and 999_999_999 in wide and 0 not in wide and 1_000_000_001 not in wide
+
+
+def test_a_gzip_that_expands_past_the_limit_is_refused_without_expanding_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A UI-PRMD file of 2 MB of text in a gzip of a few kilobytes, over a 1 MB limit."""
+    clip = _uiprmd(tmp_path / "mocap", ROW * 6000, ROW * 6000, gz=True)
+    assert clip.stat().st_size < 50_000
+    monkeypatch.setenv("POSECBR_MAX_POSE_BYTES", "1000000")
+    refused(["describe", str(clip)], tmp_path, capsys,
+            "holds more than 1.00 MB of text",
+            "(raise the limit with POSECBR_MAX_POSE_BYTES=BYTES)")  # fmt: skip
+    monkeypatch.setenv("POSECBR_MAX_POSE_BYTES", "3000000")
+    assert main(["describe", str(clip), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["frames"] == 6000

@@ -252,7 +252,7 @@ def test_size_limit_refuses_a_file_that_expands_too_far(
     assert path.stat().st_size < 100_000
     monkeypatch.setenv("POSECBR_MAX_POSE_BYTES", "10000000")
     refused(["describe", str(path)], tmp_path, capsys,
-            "expands to 0.02 GB, over the limit of 0.01 GB",
+            "expands to 15.8 MB, over the limit of 10.0 MB",
             "(raise it with POSECBR_MAX_POSE_BYTES=BYTES)")  # fmt: skip
     monkeypatch.setenv("POSECBR_MAX_POSE_BYTES", "abc")
     refused(["describe", str(path)], tmp_path, capsys,
