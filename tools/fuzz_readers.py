@@ -627,6 +627,21 @@ def _table(results: dict[str, dict[str, Any]]) -> str:
     return "\n".join(rows)
 
 
+def _write(path: Path, started: float, seconds: float, results: dict[str, Any]) -> None:
+    import platform
+
+    from benchmarks import write_json
+
+    doc = {
+        "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(started)),
+        "seconds_per_reader": seconds,
+        "load_average": os.getloadavg(),
+        "machine": {"python": platform.python_version(), "cpus": os.cpu_count()},
+        "readers": results,
+    }
+    write_json(doc, path)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("targets", nargs="*", metavar="READER", help=", ".join(TARGETS))
@@ -651,20 +666,9 @@ def main(argv: list[str] | None = None) -> int:
         )
         for key, hit in stats.tracebacks.items():
             print(f"  {key} (x{hit['count']}): {hit['message'][:200]}", file=sys.stderr)
+        if args.json:  # after every reader: a long run stopped early keeps what it found
+            _write(args.json, started, args.seconds, results)
     print(_table(results))
-    if args.json:
-        import platform
-
-        from benchmarks import write_json
-
-        doc = {
-            "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(started)),
-            "seconds_per_reader": args.seconds,
-            "load_average": os.getloadavg(),
-            "machine": {"python": platform.python_version(), "cpus": os.cpu_count()},
-            "readers": results,
-        }
-        write_json(doc, args.json)
     total = sum(r["tracebacks"] for r in results.values())
     return 1 if total else 0
 
