@@ -13,7 +13,7 @@ import pytest
 
 from features.datasets import read_labels_csv
 from posecbr.cli import main
-from tests.badinput import good_pose_file, pose_file, refused, snapshot
+from tests.badinput import good_pose_file, pose_file, refused, refused_in_process, snapshot
 
 BVH = """HIERARCHY
 ROOT Hips
@@ -337,3 +337,29 @@ def test_a_gzip_that_expands_past_the_limit_is_refused_without_expanding_it(
     monkeypatch.setenv("POSECBR_MAX_POSE_BYTES", "3000000")
     assert main(["describe", str(clip), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["frames"] == 6000
+
+
+def test_data_loss_refusal_in_a_real_process(tmp_path: Path) -> None:
+    data = tmp_path / "data"
+    _labels(data, "path,label\na.npz,squat\nsub/b.npz,lunge\n")
+    refused_in_process(["convert", str(data / "labels.csv"), "--out", str(data)], tmp_path,
+                       "the output folder holds inputs of this conversion")  # fmt: skip
+
+
+@pytest.mark.parametrize(("source", "name"), [("..", "clip.npz"), ("../../x/.hidden", "clip.npz"),
+                                              ("a\x1b[2Jb", "a_[2Jb.npz")])  # fmt: skip
+def test_clip_names_from_metadata_stay_inside_the_output_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], source: str, name: str
+) -> None:
+    """A pose file's metadata ``source`` names its converted file: never a path out of the
+    output folder, a hidden file or a name with control characters."""
+    data = tmp_path / "data"
+    clip = good_pose_file(data / "a.npz", label="x")
+    arrays = dict(np.load(clip))
+    arrays["metadata"] = np.array(json.dumps({"label": "x", "source": source}))
+    np.savez(clip, **arrays)
+    out = tmp_path / "out"
+    assert main(["convert", str(data), "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert sorted(p.name for p in out.iterdir()) == sorted([name, "labels.csv"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["data", "out"]

@@ -196,3 +196,17 @@ def test_demo_output_folder_that_cannot_be(
     # the demo clears its earlier outputs in --out: never in the data it reads
     refused([*demo, str(data)], tmp_path, capsys, "is the demo data folder or inside it")
     refused([*demo, str(data / "out")], tmp_path, capsys, "is the demo data folder or inside it")
+
+
+def test_extract_reads_the_key_of_a_damaged_output_as_out_of_date(tmp_path: Path) -> None:
+    """An existing output that is not a pose file (a renamed .npy, a bomb) is re-extracted,
+    not read: its stored key is None."""
+    import numpy as np
+
+    from posecbr.commands.extract import stored_key
+
+    np.save(tmp_path / "p.npy", np.zeros((3, 33, 3)))
+    (tmp_path / "p.npy").rename(tmp_path / "p.npz")
+    assert stored_key(tmp_path / "p.npz") is None
+    (tmp_path / "t.npz").write_text("text")
+    assert stored_key(tmp_path / "t.npz") is None
