@@ -325,9 +325,9 @@ _READ_ERRORS = (
 )
 
 
-def _member(zf: zipfile.ZipFile, key: str) -> zipfile.ZipInfo | None:
-    """The archive member ``np.load`` reads for ``key`` (``key`` itself or ``key.npy``)."""
-    names = set(zf.namelist())
+def _member(zf: zipfile.ZipFile, names: set[str], key: str) -> zipfile.ZipInfo | None:
+    """The archive member ``np.load`` reads for ``key`` (``key`` itself or ``key.npy``);
+    ``names``: the archive's member names."""
     for name in (key, key + ".npy"):
         if name in names:
             return zf.getinfo(name)
@@ -380,8 +380,9 @@ def check_archive(path: Path, keys: Sequence[str] | None = None) -> None:
                 "cannot read pose file: not an .npz archive (truncated, or another format?)", path
             )
         with zipfile.ZipFile(path) as zf:
-            names = [n.removesuffix(".npy") for n in zf.namelist()] if keys is None else keys
-            infos = [i for i in (_member(zf, k) for k in names) if i is not None]
+            members = set(zf.namelist())
+            wanted = [n.removesuffix(".npy") for n in members] if keys is None else keys
+            infos = [i for i in (_member(zf, members, k) for k in wanted) if i is not None]
             total = sum(i.file_size for i in infos)
             if total > max_bytes:
                 raise PoseFileError(
