@@ -20,6 +20,7 @@ import json
 import math
 import os
 import tempfile
+import tokenize
 import zipfile
 import zlib
 from collections.abc import Mapping, Sequence
@@ -320,6 +321,7 @@ _READ_ERRORS = (
     RuntimeError,  # an encrypted member
     NotImplementedError,  # an unknown compression method
     OverflowError,
+    tokenize.TokenError,  # numpy re-reads a malformed array header with the tokenizer
     zipfile.BadZipFile,
     zlib.error,
 )

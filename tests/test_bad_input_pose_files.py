@@ -35,6 +35,12 @@ def _npy_member(shape: tuple[int, ...], payload: bytes) -> bytes:
     return buf.getvalue() + payload
 
 
+def _npy_with_header(text: str) -> bytes:
+    """An .npy member (format 1.0) whose header is ``text``, padded as numpy pads it."""
+    header = text + " " * ((64 - (len(text) + 11) % 64) % 64) + "\n"
+    return b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode("latin-1")
+
+
 def _zip_with(path: Path, members: dict[str, bytes], compress: bool = False) -> Path:
     method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
     with zipfile.ZipFile(path, "w", method) as zf:
@@ -194,6 +200,13 @@ CASES: list[tuple[str, Callable[[Path], Path], str]] = [
          _arrays_as_members(positions=_npy_member((10**9, 33, 3), b"\0" * 64)),
      ),
      "positions declares shape (1000000000, 33, 3) but holds only"),
+    ("an array header cut short (the tokenizer's error)",
+     lambda d: _zip_with(d / "h.npz", _arrays_as_members(
+         positions=_npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (8, 33,"))),
+     "cannot read pose file (TokenError"),
+    ("an array header that is not a dictionary",
+     lambda d: _zip_with(d / "h.npz", _arrays_as_members(positions=_npy_with_header("[1, 2]"))),
+     "cannot read pose file (ValueError: Header is not a dictionary"),
     ("a member that is not an array",
      lambda d: _zip_with(d / "r.npz", _arrays_as_members(positions=b"just some bytes")),
      "positions is not a NumPy array"),
