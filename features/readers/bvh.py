@@ -90,11 +90,14 @@ def _parse_hierarchy(tokens: list[str], path: Path) -> tuple[list[BvhJoint], int
         return tokens[i : i + n]
 
     def floats(words: list[str]) -> np.ndarray:
+        got = " ".join(words)[:60]
         try:
-            return np.array([float(w) for w in words])
+            out = np.array([float(w) for w in words])
         except ValueError:
-            got = " ".join(words)
             raise DataError(f"expected numbers after OFFSET, got {got!r}", path) from None
+        if not np.isfinite(out).all():
+            raise DataError(f"expected finite numbers after OFFSET, got {got!r}", path)
+        return out
 
     while i < len(tokens):
         t = tokens[i]
@@ -234,6 +237,9 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
         motion = np.array(data, dtype=float).reshape(n_frames, n_chan)
     except ValueError:
         raise DataError("a motion value is not a number", path) from None
+    if not np.isfinite(motion).all():
+        frame = int(np.flatnonzero(~np.isfinite(motion).all(axis=1))[0]) + 1
+        raise DataError(f"a motion value in frame {frame} is not a finite number", path)
     pos, ends = _forward(joints, motion)
     rest, rest_ends = _forward(joints, np.zeros((1, n_chan)))
     if up == "z":
