@@ -139,6 +139,9 @@ def _parse_hierarchy(tokens: list[str], path: Path) -> tuple[list[BvhJoint], int
                 if c not in ("xposition", "yposition", "zposition",
                              "xrotation", "yrotation", "zrotation"):  # fmt: skip
                     raise DataError(f"unknown channel {c!r}", path)
+            if len(set(chans)) != len(chans):
+                # each channel at most once: a rotation is three distinct axes in turn
+                raise DataError(f"a channel listed twice in CHANNELS {' '.join(chans)}", path)
             if stack:
                 joints[stack[-1]].channels = chans
             i += 2 + n
