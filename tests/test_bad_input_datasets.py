@@ -222,8 +222,9 @@ READER_CASES: list[tuple[str, Callable[[Path], Path], str]] = [
      lambda d: _bvh(d, BVH.replace("ROOT Hips", "End Site { OFFSET 0 0 0 }\nROOT Hips")),
      "End Site outside a joint"),
     ("BVH a rotation axis twice in a row (a fuzz finding)",
-     lambda d: _bvh(d, BVH.replace("Zrotation Xrotation Yrotation", "Zrotation Yrotation Yrotation", 1)),
-     "a channel listed twice in CHANNELS zrotation yrotation yrotation"),
+     lambda d: _bvh(d, BVH.replace("Zrotation Xrotation", "Zrotation Yrotation", 1)),
+     "a channel listed twice in CHANNELS xposition yposition zposition zrotation yrotation"
+     " yrotation"),
     ("BVH unknown channel", lambda d: _bvh(d, BVH.replace("Zrotation", "Wrotation", 1)),
      "unknown channel 'wrotation'"),
     ("BVH positions of a kilometre in metres",
