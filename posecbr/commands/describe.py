@@ -15,7 +15,7 @@ from features.fileio import check_output
 from features.text import shown
 
 if TYPE_CHECKING:
-    from features.fluents import FluentResult
+    from features.fluents import Backend, FluentResult
     from features.poses import PoseSequence
     from features.timeline import Run, Timeline
 
@@ -132,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
     _check_args(args)
     table = FluentTable.from_file(args.thresholds) if args.thresholds else DEFAULT_TABLE
     seq = load_clip(args.posefile)
-    backend = "numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba"
+    backend: Backend = "numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba"
     spool = None
     if args.per_frame:  # the state names and words, from the first frame
         first = evaluate(seq.slice_frames(0, 1), table, backend="numpy")
