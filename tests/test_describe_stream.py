@@ -17,7 +17,7 @@ from features.readers.uiprmd import read_uiprmd_vicon
 from features.timeline import Run, describe_clip
 from tests.bodies import standing, to_sequence
 
-DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 
 def _pieces(seq: PoseSequence, chunk: int, margin: int = 0) -> np.ndarray:
