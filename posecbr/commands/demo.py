@@ -86,7 +86,7 @@ def _run(args: argparse.Namespace, data: Path) -> int:
     if not labels.is_file():
         raise PosecbrError("demo data not found (expected labels.csv)", data)
     out: Path = args.out
-    _check_out(out, args.data)
+    _check_out(out, data)
     db = out / "casebase.sqlite"
     for stale in (db, db.with_name(db.name + "-wal"), db.with_name(db.name + "-shm")):
         stale.unlink(missing_ok=True)
