@@ -88,6 +88,7 @@ class _Entry:
     subject: str | None
     extras: dict[str, Any]
     name: str
+    path: Path  # the file it is read from
     # a recording labelled over time: its labelled stretches, each with its label
     pieces: Callable[[PoseSequence], list[tuple[PoseSequence, str]]] | None = None
 
@@ -96,13 +97,23 @@ def _suffix(path: Path) -> str:
     return path.suffix.lower()
 
 
+def _exists(path: Path, lead: str = "", where: Path | None = None) -> bool:
+    """Whether ``path`` exists; a path the system cannot even look up (too long, a NUL
+    character) is a DataError naming ``where`` (default: the path)."""
+    try:
+        return path.exists()
+    except (OSError, ValueError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise DataError(f"{lead}cannot use the path ({reason})", where or path) from None
+
+
 def load_clip(path: str | Path) -> PoseSequence:
     """One clip file as a canonical sequence: pose file, BVH, UI-PRMD text file or video.
 
     Raises PoseFileError/DataError naming the file when it cannot be read.
     """
     path = Path(path)
-    if not path.exists():
+    if not _exists(path):
         raise DataError("no such file", path)
     suffix = _suffix(path)
     if suffix in POSE_SUFFIXES:
@@ -154,7 +165,7 @@ def _clip_files(folder: Path) -> list[Path]:
 def detect_kind(path: str | Path) -> str:
     """Which kind of dataset ``path`` is (see the module docstring); DataError if none."""
     path = Path(path)
-    if not path.exists():
+    if not _exists(path):
         raise DataError("no such file or folder", path)
     if path.is_file():
         return "csv" if _suffix(path) == ".csv" else "pose_file"
@@ -205,7 +216,7 @@ def _uiprmd_entries(path: Path, sensor: str) -> list[_Entry]:
             "sensor": sensor,
         }
         entries.append(
-            _Entry(lambda f=f: reader(f), label, str(meta["subject"]), extras, f.name)  # type: ignore[misc]
+            _Entry(lambda f=f: reader(f), label, str(meta["subject"]), extras, f.name, f)  # type: ignore[misc]
         )
     entries.sort(
         key=lambda e: (
@@ -251,6 +262,7 @@ def _asf_amc_entries(path: Path) -> list[_Entry]:
                 subject,
                 extras,
                 amc.name,
+                amc,
             )
         )
     return entries
@@ -272,12 +284,15 @@ def _class_folder_entries(path: Path) -> list[_Entry]:
     entries = []
     for d in sorted(p for p in path.iterdir() if p.is_dir() and not p.name.startswith(".")):
         for f in _clip_files(d):
-            entries.append(_Entry(lambda f=f: load_clip(f), d.name, None, {}, f.name))  # type: ignore[misc]
+            entries.append(_Entry(lambda f=f: load_clip(f), d.name, None, {}, f.name, f))  # type: ignore[misc]
     return entries
 
 
 def _pose_folder_entries(path: Path) -> list[_Entry]:
-    return [_Entry(lambda f=f: load_clip(f), None, None, {}, f.name) for f in _clip_files(path)]  # type: ignore[misc]
+    return [
+        _Entry(lambda f=f: load_clip(f), None, None, {}, f.name, f)  # type: ignore[misc]
+        for f in _clip_files(path)
+    ]
 
 
 def _parse_bool(value: str) -> Any:
@@ -344,8 +359,8 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
         clip = Path(rec["path"])
         if not clip.is_absolute():
             clip = csv_path.parent / clip
-        if not clip.exists():
-            raise DataError(f"line {line_no}: no such file {rec['path']}", csv_path)
+        if not _exists(clip, f"line {line_no}: ", csv_path):
+            raise DataError(f"line {line_no}: no such file {rec['path'][:200]}", csv_path)
         start = end = None
         if "start" in rec and (rec["start"] or rec["end"]):
             try:
@@ -400,7 +415,9 @@ def _csv_entries(csv_path: Path) -> list[_Entry]:
                 seq = seq.slice_frames(rec["start"], rec["end"])
             return seq
 
-        entries.append(_Entry(load, rec["label"], rec["subject"], rec["extras"], rec["path"].name))
+        entries.append(
+            _Entry(load, rec["label"], rec["subject"], rec["extras"], rec["path"].name, rec["path"])
+        )
     return entries
 
 
@@ -553,6 +570,7 @@ def _track_entry(rec: dict[str, Any]) -> _Entry:
         rec["subject"],
         rec["extras"],
         rec["path"].name,
+        rec["path"],
         pieces=lambda seq: split_by_track(seq, track),
     )
 
@@ -578,7 +596,24 @@ def _entries(path: Path, kind: str, sensor: str) -> list[_Entry]:
         return _class_folder_entries(path)
     if kind == "pose_folder":
         return _pose_folder_entries(path)
-    return [_Entry(lambda: load_clip(path), None, None, {}, path.name)]
+    return [_Entry(lambda: load_clip(path), None, None, {}, path.name, path)]
+
+
+def dataset_files(path: str | Path, *, sensor: str = "kinect") -> list[Path]:
+    """Every file reading the dataset at ``path`` would open: the labels CSV (if any), each
+    clip's file and the label files of recordings labelled over time, found from names and
+    listings alone (no clip is read)."""
+    path = Path(path)
+    kind = detect_kind(path)
+    files = [e.path for e in _entries(path, kind, sensor)]
+    if kind == "csv":
+        csv_path = path if path.is_file() else path / "labels.csv"
+        files.insert(0, csv_path)
+        for rec in read_labels_csv(csv_path):
+            track: LabelTrack | None = rec["track"]
+            if track is not None:
+                files += [p for p in (track.path, track.names) if p is not None]
+    return files
 
 
 def _keep(
@@ -705,6 +740,7 @@ __all__ = [
     "split_by_track",
     "clip_column",
     "clip_target",
+    "dataset_files",
     "target_value",
     "UIPRMD_MOVEMENTS",
     "VIDEO_SUFFIXES",

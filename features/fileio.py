@@ -89,17 +89,23 @@ def check_output(
     inputs: Iterable[str | Path] = (),
     what: str = "output",
     must_not_exist: bool = False,
+    make_parents: bool = False,
 ) -> Path:
     """Check an output path before any work starts; returns it as a Path.
 
     Refused, with one line naming the path: a folder; a file inside a folder that does not
-    exist; one of ``inputs`` (an output never overwrites an input); an existing file when
+    exist (unless ``make_parents``: the writer creates it, so only a file in its way is
+    refused); one of ``inputs`` (an output never overwrites an input); an existing file when
     ``must_not_exist``.
     """
     out = Path(path)
     if out.is_dir():
         raise DataError(f"the {what} is a folder, not a file", out)
-    if not out.parent.is_dir():
+    if make_parents:
+        parent = next((p for p in out.parents if p.exists()), None)
+        if parent is not None and not parent.is_dir():
+            raise DataError(f"cannot write the {what}: {parent} is a file, not a folder", out)
+    elif not out.parent.is_dir():
         raise DataError(f"the folder of the {what} does not exist", out.parent)
     for src in inputs:
         if _same_file(out, Path(src)):

@@ -23,8 +23,7 @@ from __future__ import annotations
 import json
 import math
 import re
-import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -33,10 +32,12 @@ import numpy as np
 
 from features.errors import ConfigError, DataError
 
-from .poses import PoseSequence
+from .config import read_config
+from .poses import MAX_FPS, MIN_FPS, PoseSequence
 from .signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals, near_pairs, state_signals
 
 __all__ = [
+    "CHUNK_FRAMES",
     "DEFAULT_TABLE",
     "FluentResult",
     "FluentSpec",
@@ -46,6 +47,8 @@ __all__ = [
     "confidence_lower",
     "confidence_upper",
     "evaluate",
+    "evaluate_chunks",
+    "history_frames",
     "state_signals",
 ]
 
@@ -199,23 +202,34 @@ _ANGLE_RE = re.compile(
 )
 
 
+_MAX_VALUE_TEXT = 64  # longer text is no number; and the regular expression stays fast
+
+
 def parse_value(value: Any, where: str) -> float:
     """A number, or an angle written like ``"5pi/8"``, ``"pi/72"``, ``"0.25"``."""
     if isinstance(value, bool):
         raise ConfigError(f"expected a number, got {value!r}", where)
     if isinstance(value, int | float):
-        out = float(value)
+        try:
+            out = float(value)
+        except OverflowError:
+            raise ConfigError("value is too large", where) from None
     elif isinstance(value, str):
-        m = _ANGLE_RE.match(value)
-        if not m or not (m["num"] or m["pi"]):
-            raise ConfigError(f"cannot read {value!r} as a number or a multiple of pi", where)
+        m = _ANGLE_RE.match(value) if len(value) <= _MAX_VALUE_TEXT else None
+        if not m or m["num"] == "." or not (m["num"] or m["pi"]):
+            raise ConfigError(
+                f"cannot read {value[:_MAX_VALUE_TEXT]!r} as a number or a multiple of pi", where
+            )
         out = float(m["num"]) if m["num"] else 1.0
         if m["pi"]:
             out *= PI
         if m["den"]:
-            out /= float(m["den"])
+            den = float(m["den"])
+            if den == 0:
+                raise ConfigError(f"division by zero in {value!r}", where)
+            out /= den
     else:
-        raise ConfigError(f"expected a number, got {value!r}", where)
+        raise ConfigError(f"expected a number, got {str(value)[:40]}", where)
     if not math.isfinite(out):
         raise ConfigError(f"value must be finite, got {value!r}", where)
     return out
@@ -224,7 +238,7 @@ def parse_value(value: Any, where: str) -> float:
 def _threshold(raw: Any, where: str) -> Threshold:
     if not isinstance(raw, Mapping) or set(raw) - {"tau", "delta"} or not raw:
         raise ConfigError("expected a table with keys tau and/or delta", where)
-    tau = parse_value(raw.get("tau", math.nan), f"{where}.tau") if "tau" in raw else math.nan
+    tau = parse_value(raw["tau"], f"{where}.tau") if "tau" in raw else math.nan
     delta = parse_value(raw["delta"], f"{where}.delta") if "delta" in raw else math.nan
     if "delta" in raw and delta <= 0:
         raise ConfigError(f"delta must be positive, got {raw['delta']!r}", f"{where}.delta")
@@ -238,6 +252,40 @@ def _merge(old: Threshold | None, new: Threshold, where: str) -> Threshold:
         old.tau if math.isnan(new.tau) else new.tau,
         old.delta if math.isnan(new.delta) else new.delta,
     )
+
+
+MAX_WINDOW = 100  # reference frames of the temporal window (the paper's r = 5)
+MAX_TOUCHING_M = 10.0
+
+# Keys `posecbr thresholds` prints for reading, not for changing: accepted back as printed.
+_DESCRIPTIVE_KEYS = ("signal", "states")
+
+
+def _descriptive(s: FluentSpec) -> dict[str, Any]:
+    """What :meth:`FluentTable.to_dict` prints about a fluent besides its thresholds."""
+    return {"signal": s.signal if s.kind == "angle" else "distance_hl", "states": list(s.states)}
+
+
+def _check_descriptive(s: FluentSpec, params: Mapping[str, Any], where: str) -> None:
+    """``signal`` and ``states`` may come back as printed (a round trip) but not changed."""
+    fixed = _descriptive(s)
+    for key in _DESCRIPTIVE_KEYS:
+        if key in params and params[key] != fixed[key]:
+            raise ConfigError(
+                f"{key} is fixed by the fluent ({json.dumps(fixed[key])}) and cannot be changed",
+                where,
+            )
+
+
+def _check_ranges(s: FluentSpec, where: str) -> None:
+    """Thresholds where the signal can reach them: angles in [0, pi], distances >= 0, and a
+    motion threshold >= 0 (it is compared as -tau and +tau)."""
+    top = PI if s.kind == "angle" else math.inf
+    unit = "radians in [0, pi]" if s.kind == "angle" else "head-lengths >= 0"
+    bounds = (("lower", s.lower), ("upper", s.upper), ("motion", s.motion_threshold))
+    for name, th in bounds:
+        if th is not None and not 0.0 <= th.tau <= top:
+            raise ConfigError(f"{name} tau must be {unit}, got {th.tau:g}", where)
 
 
 @dataclass(frozen=True)
@@ -273,16 +321,27 @@ class FluentTable:
             table = replace(table, epsilon=eps)
         if "window" in raw:
             win = raw["window"]
-            if not isinstance(win, int) or isinstance(win, bool) or win < 1:
-                raise ConfigError(f"window must be a positive integer, got {win!r}", source)
+            if not isinstance(win, int) or isinstance(win, bool) or not 1 <= win <= MAX_WINDOW:
+                raise ConfigError(
+                    f"window must be a whole number from 1 to {MAX_WINDOW}, got {win!r}", source
+                )
             table = replace(table, window=win)
         if "reference_fps" in raw:
             fps = parse_value(raw["reference_fps"], f"{source}: reference_fps")
-            if fps <= 0:
-                raise ConfigError(f"reference_fps must be positive, got {fps}", source)
+            if not MIN_FPS <= fps <= MAX_FPS:
+                raise ConfigError(
+                    f"reference_fps must be between {MIN_FPS:g} and {MAX_FPS:g}, got {fps:g}",
+                    source,
+                )
             table = replace(table, reference_fps=fps)
         if "touching_m" in raw:
             touching = parse_value(raw["touching_m"], f"{source}: touching_m")
+            if not 0 < touching <= MAX_TOUCHING_M:
+                raise ConfigError(
+                    f"touching_m must be a distance in metres in (0, {MAX_TOUCHING_M:g}],"
+                    f" got {touching:g}",
+                    source,
+                )
             table = replace(table, touching_m=touching)
         fluents = raw.get("fluents", {})
         if not isinstance(fluents, Mapping):
@@ -294,28 +353,39 @@ class FluentTable:
                 raise ConfigError(f"unknown fluent {key!r}", source)
             if not isinstance(params, Mapping):
                 raise ConfigError(f"fluent {key!r}: expected a table", source)
-            bad = set(params) - {"lower", "upper", "motion"}
+            bad = set(params) - {"lower", "upper", "motion"} - set(_DESCRIPTIVE_KEYS)
             if bad:
                 raise ConfigError(
-                    f"fluent {key!r}: unknown key {sorted(bad)[0]!r} (known: lower, upper, motion)",
+                    f"fluent {key!r}: unknown key {sorted(bad)[0]!r} (known: lower, upper,"
+                    " motion; signal and states as `posecbr thresholds` prints them)",
                     source,
                 )
             for i in hits:
                 s = specs[i]
                 where = f"{source}: fluents.{key}"
+                _check_descriptive(s, params, where)
                 if "lower" in params:
-                    s = replace(s, lower=_merge(s.lower, _threshold(params["lower"], where), where))
+                    s = replace(
+                        s,
+                        lower=_merge(s.lower, _threshold(params["lower"], f"{where}.lower"), where),
+                    )
                 if "upper" in params:
-                    s = replace(s, upper=_merge(s.upper, _threshold(params["upper"], where), where))
+                    s = replace(
+                        s,
+                        upper=_merge(s.upper, _threshold(params["upper"], f"{where}.upper"), where),
+                    )
                 if "motion" in params:
                     s = replace(
                         s,
                         motion_threshold=_merge(
-                            s.motion_threshold, _threshold(params["motion"], where), where
+                            s.motion_threshold,
+                            _threshold(params["motion"], f"{where}.motion"),
+                            where,
                         ),
                     )
                 if s.upper is not None and s.upper.tau < s.lower.tau:
                     raise ConfigError(f"fluent {key!r}: upper tau is below lower tau", source)
+                _check_ranges(s, where)
                 specs[i] = s
         return replace(table, specs=tuple(specs))
 
@@ -323,17 +393,7 @@ class FluentTable:
     def from_file(cls, path: str | Path) -> FluentTable:
         """The default table with overrides from a ``.json`` or ``.toml`` file."""
         path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            reason = exc.strerror or str(exc)
-            raise ConfigError(f"cannot read thresholds file ({reason})", path) from None
-        try:
-            raw = tomllib.loads(text) if path.suffix.lower() == ".toml" else json.loads(text)
-        except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
-            raise ConfigError(f"malformed thresholds file: {exc}", path) from None
-        if not isinstance(raw, Mapping):
-            raise ConfigError("thresholds file must hold a table/object", path)
+        raw = read_config(path, "thresholds file")
         return cls().with_overrides(raw, str(path))
 
     def to_dict(self) -> dict[str, Any]:
@@ -341,10 +401,11 @@ class FluentTable:
         fluents: dict[str, Any] = {}
         for s in self.specs:
             key = s.family if s.family == "near" else s.name
-            entry: dict[str, Any] = {"signal": s.signal if s.kind == "angle" else "distance_hl",
-                                     "states": list(s.states),
-                                     "lower": asdict(s.lower),
-                                     "motion": asdict(s.motion_threshold)}  # fmt: skip
+            entry: dict[str, Any] = {
+                **_descriptive(s),
+                "lower": asdict(s.lower),
+                "motion": asdict(s.motion_threshold),
+            }
             if s.upper is not None:
                 entry["upper"] = asdict(s.upper)
             fluents.setdefault(key, entry)
@@ -701,6 +762,46 @@ def evaluate(
         fps=seq.fps,
         table=table,
     )
+
+
+# Frames evaluated at once by evaluate_chunks: every state's confidence is 566 x 8 bytes per
+# frame, 4.5 GB for a million frames, so long clips go through in pieces of about 90 MB.
+CHUNK_FRAMES = 20_000
+
+
+def history_frames(table: FluentTable, fps: float) -> int:
+    """Frames before a frame that its temporal states read (``window`` reference intervals of
+    ``fps / reference_fps`` frames, and one more for the interpolation)."""
+    return int(math.ceil(table.window * fps / table.reference_fps)) + 1
+
+
+def evaluate_chunks(
+    seq: PoseSequence,
+    table: FluentTable | None = None,
+    chunk_frames: int = CHUNK_FRAMES,
+    margin: int = 0,
+    backend: Backend = "numba",
+) -> Iterator[tuple[int, int, int, FluentResult]]:
+    """:func:`evaluate` in consecutive pieces, for clips too long to hold at once.
+
+    Yields ``(start, stop, first, result)`` for ``start``, ``stop`` = 0..chunk_frames,
+    chunk_frames..2*chunk_frames, ...: ``result`` covers frames ``first`` .. (``stop`` +
+    ``margin``, clipped to the clip), with ``first = max(0, start - margin)``. Each piece is
+    evaluated with the history its temporal states need, so the confidences are those of
+    ``evaluate(seq, table, backend=backend)`` for the same frames.
+    """
+    table = table or DEFAULT_TABLE
+    if chunk_frames < 1 or margin < 0:
+        raise ValueError("chunk_frames must be >= 1 and margin >= 0")
+    n = seq.n_frames
+    history = history_frames(table, seq.fps)
+    for start in range(0, n, chunk_frames):
+        stop = min(n, start + chunk_frames)
+        first, last = max(0, start - margin), min(n, stop + margin)
+        read_from = max(0, first - history)
+        result = evaluate(seq.slice_frames(read_from, last), table, backend=backend)
+        kept = result.confidence[first - read_from :]
+        yield start, stop, first, replace(result, confidence=kept)
 
 
 # Guard: the table refers only to signals that exist.

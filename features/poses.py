@@ -17,9 +17,12 @@ File format (``.npz``, written with :func:`save_pose`, read with :func:`load_pos
 from __future__ import annotations
 
 import json
+import math
 import os
 import tempfile
+import tokenize
 import zipfile
+import zlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -27,9 +30,94 @@ from typing import Any
 
 import numpy as np
 
-from features.errors import PoseFileError
+from features.errors import ConfigError, PoseFileError
+from features.text import size_words
 
 from .skeleton import BLAZEPOSE_33, CANONICAL_SKELETON, KNOWN_SKELETONS
+
+# What a pose can physically be. A coordinate beyond MAX_COORDINATE_M (10 km) is no person's
+# joint in metres but a wrong unit or garbage, and would overflow the geometry into a confident
+# but meaningless answer; frame rates outside [MIN_FPS, MAX_FPS] are no camera's or
+# motion capture system's.
+MAX_COORDINATE_M = 1e4
+MIN_FPS = 0.01
+MAX_FPS = 10_000.0
+
+# Reading limits, checked from the archive's directory and the arrays' headers before anything
+# is decompressed (a small compressed file can expand to gigabytes). Raise them with the
+# environment variables for a genuinely long recording.
+MAX_FRAMES_ENV = "POSECBR_MAX_FRAMES"
+MAX_BYTES_ENV = "POSECBR_MAX_POSE_BYTES"
+DEFAULT_MAX_FRAMES = 1_000_000  # 9.3 h at 30 fps
+DEFAULT_MAX_BYTES = 2 * 1024**3  # uncompressed bytes of the arrays one read decompresses
+
+_KIND_WORDS = {
+    "b": "true/false values",
+    "c": "complex numbers",
+    "O": "Python objects",
+    "S": "bytes",
+    "U": "text",
+    "M": "dates",
+    "m": "time spans",
+    "V": "raw records",
+}
+
+
+def _real_array(value: Any, what: str, where: str | None) -> np.ndarray:
+    """``value`` as a float64 array; PoseFileError unless it holds real numbers."""
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "fiu":
+        got = _KIND_WORDS.get(arr.dtype.kind, str(arr.dtype))
+        raise PoseFileError(f"{what} must be real numbers, got {got}", where)
+    return arr.astype(np.float64, copy=False)
+
+
+def _check_fps(fps: Any, where: str | None) -> float:
+    if isinstance(fps, bool | np.bool_):
+        raise PoseFileError(f"fps must be a number, got {fps!r}", where)
+    try:
+        value = float(fps)
+    except (TypeError, ValueError):
+        raise PoseFileError(f"fps must be a number, got {fps!r}", where) from None
+    if not (np.isfinite(value) and value > 0):
+        raise PoseFileError(f"fps must be a positive number, got {value:g}", where)
+    if not MIN_FPS <= value <= MAX_FPS:
+        raise PoseFileError(
+            f"fps must be between {MIN_FPS:g} and {MAX_FPS:g} frames per second, got {value:g}",
+            where,
+        )
+    return value
+
+
+def _check_magnitude(pos: np.ndarray, where: str | None) -> None:
+    """Refuse infinite or non-physical coordinates (NaN, missing, is fine).
+
+    fmax/fmin reductions skip NaN and allocate nothing the size of ``pos``.
+    """
+    if pos.size == 0:
+        return
+    hi = float(np.fmax.reduce(pos, axis=None))
+    lo = float(np.fmin.reduce(pos, axis=None))
+    if np.isinf(hi) or np.isinf(lo):
+        raise PoseFileError("positions contain infinite values (use NaN for missing)", where)
+    biggest = max(abs(hi), abs(lo))
+    if biggest > MAX_COORDINATE_M:
+        raise PoseFileError(
+            f"positions reach {biggest:.3g}: not metres of a person's pose (limit "
+            f"{MAX_COORDINATE_M:g} m; wrong unit or corrupt data?)",
+            where,
+        )
+
+
+def _check_confidence(conf: np.ndarray, where: str | None) -> None:
+    """Confidences lie in [0, 1]; NaN (unknown) is allowed."""
+    if conf.size == 0:
+        return
+    hi = float(np.fmax.reduce(conf, axis=None))
+    lo = float(np.fmin.reduce(conf, axis=None))
+    if lo < 0.0 or hi > 1.0:
+        bad = lo if lo < 0.0 else hi
+        raise PoseFileError(f"confidence must lie in [0, 1], found {bad:g}", where)
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,10 +137,10 @@ class PoseSequence:
     metadata: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        pos = np.asarray(self.positions, dtype=np.float64)
+        where = self.source or None
+        pos = _real_array(self.positions, "positions", where)
         object.__setattr__(self, "positions", pos)
         object.__setattr__(self, "joint_names", tuple(str(j) for j in self.joint_names))
-        where = self.source or None
         if pos.ndim != 3 or pos.shape[2] != 3:
             raise PoseFileError(
                 f"positions must have shape (frames, joints, 3), got {pos.shape}", where
@@ -66,16 +154,15 @@ class PoseSequence:
             )
         if len(set(self.joint_names)) != len(self.joint_names):
             raise PoseFileError("joint names are not unique", where)
-        if not np.isfinite(self.fps) or self.fps <= 0:
-            raise PoseFileError(f"fps must be a positive number, got {self.fps!r}", where)
-        if np.isinf(pos).any():
-            raise PoseFileError("positions contain infinite values (use NaN for missing)", where)
+        object.__setattr__(self, "fps", _check_fps(self.fps, where))
+        _check_magnitude(pos, where)
         if self.confidence is not None:
-            conf = np.asarray(self.confidence, dtype=np.float64)
+            conf = _real_array(self.confidence, "confidence", where)
             if conf.shape != pos.shape[:2]:
                 raise PoseFileError(
                     f"confidence must have shape {pos.shape[:2]}, got {conf.shape}", where
                 )
+            _check_confidence(conf, where)
             object.__setattr__(self, "confidence", conf)
         if self.skeleton not in KNOWN_SKELETONS:
             raise PoseFileError(
@@ -83,6 +170,11 @@ class PoseSequence:
                 where,
             )
         object.__setattr__(self, "metadata", dict(self.metadata))
+        offset = self.metadata.get("frame_offset", 0)
+        if isinstance(offset, bool) or not isinstance(offset, int) or offset < 0:
+            raise PoseFileError(
+                f"metadata frame_offset must be a whole number >= 0, got {offset!r}", where
+            )
 
     @property
     def n_frames(self) -> int:
@@ -201,40 +293,211 @@ def save_pose(
     return path
 
 
+def read_limits() -> tuple[int, int]:
+    """(max frames, max uncompressed bytes) for reading a pose file, from the environment
+    (:data:`MAX_FRAMES_ENV`, :data:`MAX_BYTES_ENV`) or the defaults."""
+    out = []
+    for env, default in ((MAX_FRAMES_ENV, DEFAULT_MAX_FRAMES), (MAX_BYTES_ENV, DEFAULT_MAX_BYTES)):
+        text = os.environ.get(env, "").strip()
+        if not text:
+            out.append(default)
+            continue
+        try:
+            value = int(text)
+        except ValueError:
+            value = 0
+        if value < 1:
+            raise ConfigError(f"must be a whole number >= 1, got {text!r}", env)
+        out.append(value)
+    return out[0], out[1]
+
+
+_NPY_MAGIC = b"\x93NUMPY"
+_READ_ERRORS = (
+    OSError,
+    ValueError,
+    EOFError,
+    KeyError,
+    RuntimeError,  # an encrypted member
+    NotImplementedError,  # an unknown compression method
+    OverflowError,
+    tokenize.TokenError,  # numpy re-reads a malformed array header with the tokenizer
+    zipfile.BadZipFile,
+    zlib.error,
+)
+
+
+def _member(zf: zipfile.ZipFile, names: set[str], key: str) -> zipfile.ZipInfo | None:
+    """The archive member ``np.load`` reads for ``key`` (``key`` itself or ``key.npy``);
+    ``names``: the archive's member names."""
+    for name in (key, key + ".npy"):
+        if name in names:
+            return zf.getinfo(name)
+    return None
+
+
+def _npy_header(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> tuple[Any, ...]:
+    """Shape of one ``.npy`` member, read from its header alone; refused when the header
+    promises more data than the member holds (numpy would allocate the promised size)."""
+    key = info.filename.removesuffix(".npy")
+    with zf.open(info) as fh:
+        if fh.read(len(_NPY_MAGIC)) != _NPY_MAGIC:
+            raise PoseFileError(f"{key} is not a NumPy array", path)
+        fh.seek(0)
+        version = np.lib.format.read_magic(fh)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+        elif version == (2, 0):
+            shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+        else:
+            raise PoseFileError(f"{key}: unsupported .npy format version {version}", path)
+        header = fh.tell()
+    if dtype.hasobject:
+        raise PoseFileError(f"{key} holds Python objects (not read, for safety)", path)
+    need = math.prod(shape) * dtype.itemsize
+    if header + need > info.file_size:
+        raise PoseFileError(
+            f"{key} declares shape {shape} but holds only {info.file_size} bytes (corrupt?)",
+            path,
+        )
+    return tuple(shape)
+
+
+def check_archive(path: Path, keys: Sequence[str] | None = None) -> None:
+    """Check a pose file before decompressing anything: a zip archive (not a renamed
+    ``.npy``), whose arrays ``keys`` (None: all) are well-formed ``.npy`` members within the
+    frame and size limits (:func:`read_limits`). Raises PoseFileError naming the file."""
+    max_frames, max_bytes = read_limits()
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(len(_NPY_MAGIC))
+        if head == _NPY_MAGIC:
+            raise PoseFileError(
+                "is a single NumPy array (.npy), not a pose file (an .npz archive of"
+                " positions, joint_names, fps)",
+                path,
+            )
+        if not zipfile.is_zipfile(path):
+            raise PoseFileError(
+                "cannot read pose file: not an .npz archive (truncated, or another format?)", path
+            )
+        with zipfile.ZipFile(path) as zf:
+            members = set(zf.namelist())
+            wanted = [n.removesuffix(".npy") for n in members] if keys is None else keys
+            infos = [i for i in (_member(zf, members, k) for k in wanted) if i is not None]
+            total = sum(i.file_size for i in infos)
+            if total > max_bytes:
+                raise PoseFileError(
+                    f"expands to {size_words(total)}, over the limit of {size_words(max_bytes)}"
+                    f" (raise it with {MAX_BYTES_ENV}=BYTES)",
+                    path,
+                )
+            for info in infos:
+                shape = _npy_header(zf, info, path)
+                if info.filename.removesuffix(".npy") == "positions" and shape:
+                    if shape[0] > max_frames:
+                        raise PoseFileError(
+                            f"{shape[0]} frames, over the limit of {max_frames}"
+                            f" (raise it with {MAX_FRAMES_ENV}=N)",
+                            path,
+                        )
+    except PoseFileError:
+        raise
+    except _READ_ERRORS as exc:
+        raise PoseFileError(f"cannot read pose file ({type(exc).__name__}: {exc})", path) from None
+
+
+_POSE_KEYS = ("positions", "joint_names", "fps", "confidence", "skeleton", "metadata")
+
+
+def _text_array(value: np.ndarray, what: str, path: Path) -> np.ndarray:
+    """A text array (``str``, or UTF-8 ``bytes``) as ``str``."""
+    if value.dtype.kind == "S":
+        try:
+            return np.char.decode(value, "utf-8")
+        except UnicodeDecodeError:
+            raise PoseFileError(f"{what} is not UTF-8 text", path) from None
+    if value.dtype.kind != "U":
+        got = _KIND_WORDS.get(value.dtype.kind, "numbers")
+        raise PoseFileError(f"{what} must be text, got {got}", path)
+    return value
+
+
+def _one_text(value: np.ndarray, what: str, path: Path) -> str:
+    text = _text_array(value, what, path)
+    if text.size != 1:
+        raise PoseFileError(f"{what} must be one string, got {text.size}", path)
+    return str(text.reshape(-1)[0])
+
+
+def _one_fps(value: np.ndarray, path: Path) -> float:
+    if value.size != 1:
+        got = "an empty array" if value.size == 0 else f"{value.size} values"
+        raise PoseFileError(f"fps must be one number, got {got}", path)
+    if value.dtype.kind not in "fiu":
+        got = _KIND_WORDS.get(value.dtype.kind, str(value.dtype))
+        raise PoseFileError(f"fps must be a number, got {got}", path)
+    return _check_fps(value.reshape(-1)[0], str(path))
+
+
+def _metadata(value: np.ndarray, path: Path) -> dict[str, Any]:
+    text = _one_text(value, "metadata", path)
+    try:
+        meta = json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        reason = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+        raise PoseFileError(f"metadata is not JSON ({reason})", path) from None
+    if not isinstance(meta, dict):
+        raise PoseFileError("metadata must be a JSON object", path)
+    for key in ("label", "subject", "source"):
+        v = meta.get(key)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, str | int | float)):
+            raise PoseFileError(f"metadata {key} must be text, got {json.dumps(v)[:40]}", path)
+    return meta
+
+
+def _read_arrays(path: Path) -> dict[str, np.ndarray]:
+    check_archive(path, _POSE_KEYS)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            missing = {"positions", "joint_names", "fps"} - set(data.files)
+            if missing:
+                raise PoseFileError("not a pose file: missing " + ", ".join(sorted(missing)), path)
+            return {k: np.asarray(data[k]) for k in _POSE_KEYS if k in data.files}
+    except PoseFileError:
+        raise
+    except _READ_ERRORS as exc:
+        raise PoseFileError(f"cannot read pose file ({type(exc).__name__}: {exc})", path) from None
+
+
 def load_pose(path: str | Path) -> PoseSequence:
-    """Read a pose file written by :func:`save_pose` (or by another tool in that format)."""
+    """Read a pose file written by :func:`save_pose` (or by another tool in that format).
+
+    Every problem (not an archive, a renamed ``.npy``, arrays of the wrong kind or shape,
+    an fps that is not one number, non-physical positions, malformed metadata, a file that
+    would expand past the limits of :func:`read_limits`) raises PoseFileError naming the file.
+    """
     path = Path(path)
     if not path.exists():
         raise PoseFileError("no such file", path)
     if path.is_dir():
         raise PoseFileError("is a folder, not a pose file", path)
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            names = set(data.files)
-            missing = {"positions", "joint_names", "fps"} - names
-            if missing:
-                raise PoseFileError("not a pose file: missing " + ", ".join(sorted(missing)), path)
-            positions = np.asarray(data["positions"], dtype=np.float64)
-            joint_names = tuple(str(j) for j in np.atleast_1d(data["joint_names"]))
-            fps = float(np.asarray(data["fps"]).reshape(-1)[0])
-            confidence = data["confidence"] if "confidence" in names else None
-            skeleton = str(data["skeleton"]) if "skeleton" in names else CANONICAL_SKELETON
-            metadata: dict[str, Any] = {}
-            if "metadata" in names:
-                metadata = json.loads(str(data["metadata"]))
-                if not isinstance(metadata, dict):
-                    raise PoseFileError("metadata must be a JSON object", path)
-    except PoseFileError:
-        raise
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError, KeyError) as exc:
-        raise PoseFileError(f"cannot read pose file ({type(exc).__name__}: {exc})", path) from None
+    arrays = _read_arrays(path)
+    names = _text_array(arrays["joint_names"], "joint_names", path)
+    if names.ndim != 1:
+        raise PoseFileError(f"joint_names must be a list of names, got shape {names.shape}", path)
+    fps = _one_fps(arrays["fps"], path)
+    skeleton = CANONICAL_SKELETON
+    if "skeleton" in arrays:
+        skeleton = _one_text(arrays["skeleton"], "skeleton", path)
+    metadata = _metadata(arrays["metadata"], path) if "metadata" in arrays else {}
     source = str(metadata.pop("source", "") or path)
     try:
         return PoseSequence(
-            positions=positions,
-            joint_names=joint_names,
+            positions=arrays["positions"],
+            joint_names=tuple(str(j) for j in names),
             fps=fps,
-            confidence=confidence,
+            confidence=arrays.get("confidence"),
             skeleton=skeleton,
             source=source,
             metadata=metadata,
@@ -246,6 +509,9 @@ def load_pose(path: str | Path) -> PoseSequence:
 def load_pose_arrays(path: str | Path) -> dict[str, np.ndarray]:
     """The ``extra_<name>`` arrays of a pose file, by ``name`` (empty if it has none)."""
     path = Path(path)
+    if not path.is_file():
+        raise PoseFileError("no such file", path)
+    check_archive(path)
     try:
         with np.load(path, allow_pickle=False) as data:
             return {
@@ -253,5 +519,5 @@ def load_pose_arrays(path: str | Path) -> dict[str, np.ndarray]:
                 for k in data.files
                 if k.startswith(EXTRA_PREFIX)
             }
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError, KeyError) as exc:
+    except _READ_ERRORS as exc:
         raise PoseFileError(f"cannot read pose file ({type(exc).__name__}: {exc})", path) from None

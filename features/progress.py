@@ -7,6 +7,8 @@ import sys
 from collections.abc import Iterable, Iterator
 from typing import TypeVar
 
+from .text import shown
+
 T = TypeVar("T")
 
 
@@ -26,7 +28,7 @@ def progress(
 
     yield from tqdm(
         items,
-        desc=desc,
+        desc=shown(desc),  # descriptions name the user's files
         total=total,
         unit=unit,
         leave=leave,

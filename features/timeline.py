@@ -1,17 +1,27 @@
 """What a person is doing, in words, over time: runs of frames with the same states, and a
-fluent timeline picture."""
+fluent timeline picture.
+
+:func:`describe_clip` evaluates a clip's fluents a piece at a time
+(:func:`features.fluents.evaluate_chunks`) and keeps only the runs, which fluents are
+available and a picture's worth of columns, so a clip of a million frames needs about the
+memory of its poses; :func:`state_runs` and :func:`frame_states` do the same for a result in
+memory.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .fileio import atomic_path
-from .fluents import FluentResult
+from .fluents import CHUNK_FRAMES, Backend, FluentResult, FluentTable, evaluate_chunks
+from .poses import PoseSequence
+
+PLOT_COLUMNS = 2_000  # a picture is about a thousand pixels wide
 
 
 @dataclass(frozen=True)
@@ -51,6 +61,10 @@ def holding(
     return on
 
 
+def _median_size(min_run: int) -> int:
+    return min_run if min_run % 2 else min_run + 1
+
+
 def _clean(on: np.ndarray, min_run: int) -> np.ndarray:
     """Each state's on/off track with a running median over ``min_run`` frames (flicker at a
     threshold shorter than about half of that is not news for a reader)."""
@@ -58,19 +72,185 @@ def _clean(on: np.ndarray, min_run: int) -> np.ndarray:
         return on
     from scipy.ndimage import median_filter  # scipy loads only when there is flicker to clean
 
-    size = min_run if min_run % 2 else min_run + 1
-    return median_filter(on.astype(np.uint8), size=(size, 1), mode="nearest").astype(bool)
+    size = (_median_size(min_run), 1)
+    return median_filter(on.astype(np.uint8), size=size, mode="nearest").astype(bool)
 
 
-def _mean_runs(result: FluentResult, spans: dict[tuple[int, int], list[int]]) -> list[Run]:
-    runs = []
-    for (s, e), states in sorted(spans.items()):
-        means = np.nanmean(result.confidence[s : e + 1, states], axis=0) if states else []
-        runs.append(Run(s, e, tuple(
-            StateInRun(result.state_names[i], result.words[i], float(m))
-            for i, m in zip(states, means, strict=True)
-        )))  # fmt: skip
-    return runs
+@dataclass
+class Timeline:
+    """What :func:`describe_clip` finds in a clip.
+
+    ``runs``: spans of frames with the states holding over exactly that span (empty when the
+    runs went to a per-frame callback); ``available`` ``(n_states,)``: the state is defined in
+    some frame; ``share`` ``(n_states,)``: the fraction of frames in which it holds
+    (background states left out); ``columns`` ``(bins, n_states)``: the mean confidence (NaN
+    as 0) over each of up to :data:`PLOT_COLUMNS` equal stretches of the clip, for the
+    picture; ``layout``: the states' names and words (a result with no frames).
+    """
+
+    n_frames: int
+    fps: float
+    layout: FluentResult
+    runs: list[Run]
+    available: np.ndarray
+    share: np.ndarray
+    columns: np.ndarray
+
+    def unavailable(self) -> list[str]:
+        """Names of fluents with no defined value in any frame (their joints are missing)."""
+        return [
+            spec.name
+            for i, spec in enumerate(self.layout.table.specs)
+            if not self.available[self.layout.fluent == i].any()
+        ]
+
+
+class _RunTracker:
+    """Runs of each state's cleaned on/off track, fed in consecutive pieces.
+
+    An open run carries its start and the sum and count of its defined confidences, so a run
+    over many pieces is averaged as if the track were whole.
+    """
+
+    def __init__(self, n_states: int, n_frames: int, min_run: int) -> None:
+        self.start = np.full(n_states, -1)
+        self.total = np.zeros(n_states)
+        self.count = np.zeros(n_states)
+        self.n_frames = n_frames
+        self.min_run = min_run
+        self.spans: dict[tuple[int, int], list[tuple[int, float]]] = {}
+
+    def add(self, first: int, on: np.ndarray, conf: np.ndarray) -> None:
+        """Frames ``first``.. of the tracks: ``on`` and ``conf`` ``(frames, n_states)``."""
+        frames = on.shape[0]
+        defined = ~np.isnan(conf)
+        csum = np.zeros((frames + 1, on.shape[1]))
+        np.cumsum(np.where(defined, conf, 0.0), axis=0, out=csum[1:])
+        ccount = np.zeros((frames + 1, on.shape[1]))
+        np.cumsum(defined, axis=0, out=ccount[1:])
+        was_open = self.start >= 0
+        track = np.concatenate([was_open[None].astype(np.int8), on.astype(np.int8)])
+        edges = np.diff(track, axis=0)  # +1: a run starts at that frame; -1: ended before it
+        for state in np.flatnonzero(on.any(axis=0) | was_open):
+            starts = np.flatnonzero(edges[:, state] == 1).tolist()
+            ends = (np.flatnonzero(edges[:, state] == -1) - 1).tolist()
+            if was_open[state]:
+                starts.insert(0, -1)  # goes on from the last piece
+            if len(ends) < len(starts):
+                ends.append(frames - 1)  # goes on into the next piece, or ends the clip
+            for s, e in zip(starts, ends, strict=True):
+                total = csum[e + 1, state] - csum[max(s, 0), state]
+                count = ccount[e + 1, state] - ccount[max(s, 0), state]
+                begin = first + s
+                if s < 0:
+                    total += self.total[state]
+                    count += self.count[state]
+                    begin = int(self.start[state])
+                if e == frames - 1 and on[-1, state]:
+                    self.start[state] = begin
+                    self.total[state], self.count[state] = total, count
+                else:
+                    self.start[state] = -1
+                    self._close(int(state), begin, first + e, total, count)
+
+    def finish(self) -> None:
+        """Close the runs still open at the end of the clip."""
+        for state in np.flatnonzero(self.start >= 0):
+            s = int(self.start[state])
+            self._close(int(state), s, self.n_frames - 1, self.total[state], self.count[state])
+            self.start[state] = -1
+
+    def _close(self, state: int, s: int, e: int, total: float, count: float) -> None:
+        if e - s + 1 >= self.min_run or self.n_frames < self.min_run:
+            mean = float(total / count) if count else float("nan")
+            self.spans.setdefault((s, e), []).append((state, mean))
+
+    def runs(self, layout: FluentResult) -> list[Run]:
+        """Every run, by span; within a span, states in table order."""
+        out = []
+        for (s, e), states in sorted(self.spans.items()):
+            out.append(Run(s, e, tuple(
+                StateInRun(layout.state_names[i], layout.words[i], m) for i, m in sorted(states)
+            )))  # fmt: skip
+        return out
+
+
+def _frame_runs(
+    first: int, on: np.ndarray, conf: np.ndarray, layout: FluentResult
+) -> Iterator[Run]:
+    for k in range(on.shape[0]):
+        yield Run(first + k, first + k, tuple(
+            StateInRun(layout.state_names[i], layout.words[i], float(conf[k, i]))
+            for i in np.flatnonzero(on[k])
+        ))  # fmt: skip
+
+
+def _pieces(
+    clip: PoseSequence | FluentResult,
+    table: FluentTable | None,
+    margin: int,
+    chunk_frames: int,
+    backend: Backend,
+) -> Iterator[tuple[int, int, int, FluentResult]]:
+    """Pieces of the fluents of a clip, or an evaluated result as one piece."""
+    if isinstance(clip, FluentResult):
+        yield 0, clip.n_frames, 0, clip
+    else:
+        yield from evaluate_chunks(clip, table, chunk_frames, margin, backend)
+
+
+def describe_clip(
+    clip: PoseSequence | FluentResult,
+    table: FluentTable | None = None,
+    threshold: float = 0.8,
+    min_run: int = 1,
+    include_background: bool = False,
+    per_frame: Callable[[Run], None] | None = None,
+    chunk_frames: int = CHUNK_FRAMES,
+    backend: Backend = "numba",
+) -> Timeline:
+    """When each fluent state of ``clip`` holds, ``chunk_frames`` frames at a time.
+
+    The runs are those of :func:`state_runs`; with ``per_frame``, each frame's states go to
+    it in order instead (as :func:`frame_states` lists them) and ``runs`` stays empty.
+    ``backend``: of :func:`features.fluents.evaluate`.
+    """
+    n = clip.n_frames
+    margin = 0 if per_frame is not None or min_run <= 1 else _median_size(min_run) // 2
+    bins = max(1, min(n, PLOT_COLUMNS))
+    tracker: _RunTracker | None = None
+    for start, stop, first, result in _pieces(clip, table, margin, chunk_frames, backend):
+        if tracker is None:
+            layout = replace(result, confidence=result.confidence[:0])
+            n_states = len(result.state_names)
+            tracker = _RunTracker(n_states, n, min_run)
+            available = np.zeros(n_states, dtype=bool)
+            held = np.zeros(n_states)
+            sums, counts = np.zeros((bins, n_states)), np.zeros(bins)
+        own = slice(start - first, stop - first)
+        conf = result.confidence[own]
+        on = holding(result, threshold, include_background)
+        available |= ~np.all(np.isnan(conf), axis=0)
+        held += holding(result, threshold)[own].sum(axis=0)
+        column = np.arange(start, stop) * bins // n
+        np.add.at(sums, column, np.nan_to_num(conf, nan=0.0))
+        np.add.at(counts, column, 1.0)
+        if per_frame is not None:
+            for run in _frame_runs(start, on[own], conf, layout):
+                per_frame(run)
+        else:
+            tracker.add(start, _clean(on, min_run)[own], conf)
+    assert tracker is not None  # a clip has at least one frame
+    tracker.finish()
+    return Timeline(
+        n_frames=n,
+        fps=layout.fps,
+        layout=layout,
+        runs=[] if per_frame is not None else tracker.runs(layout),
+        available=available,
+        share=held / n,
+        columns=sums / np.maximum(counts, 1.0)[:, None],
+    )
 
 
 def state_runs(
@@ -84,27 +264,16 @@ def state_runs(
     start frame. Spans shorter than ``min_run`` frames are dropped after cleaning each state's
     track with a running median of ``min_run`` frames.
     """
-    on = _clean(holding(result, threshold, include_background), min_run)
-    frames = on.shape[0]
-    spans: dict[tuple[int, int], list[int]] = {}
-    padded = np.zeros((frames + 2, on.shape[1]), dtype=np.int8)
-    padded[1:-1] = on
-    edges = np.diff(padded, axis=0)
-    for state in np.flatnonzero(on.any(axis=0)):
-        starts = np.flatnonzero(edges[:, state] == 1)
-        ends = np.flatnonzero(edges[:, state] == -1) - 1
-        for s, e in zip(starts.tolist(), ends.tolist(), strict=True):
-            if e - s + 1 >= min_run or frames < min_run:
-                spans.setdefault((s, e), []).append(int(state))
-    return _mean_runs(result, spans)
+    return describe_clip(result, None, threshold, min_run, include_background).runs
 
 
 def frame_states(
     result: FluentResult, threshold: float = 0.8, include_background: bool = False
 ) -> list[Run]:
     """The states that hold in each frame, one entry per frame."""
-    on = holding(result, threshold, include_background)
-    return _mean_runs(result, {(f, f): np.flatnonzero(on[f]).tolist() for f in range(on.shape[0])})
+    runs: list[Run] = []
+    describe_clip(result, None, threshold, 1, include_background, per_frame=runs.append)
+    return runs
 
 
 def phrase_list(states: tuple[StateInRun, ...], result: FluentResult) -> str:
@@ -163,7 +332,7 @@ class Band:
 
 
 def plot_timeline(
-    result: FluentResult,
+    result: FluentResult | Timeline,
     path: str | Path,
     threshold: float = 0.8,
     title: str = "",
@@ -171,20 +340,20 @@ def plot_timeline(
     bands: Sequence[Band] = (),
     band_title: str = "",
 ) -> Path:
-    """A fluent timeline: one row per state that holds at some time, shaded by confidence;
-    with ``bands``, a strip above it marks stretches of time (activities, repetitions)."""
+    """A fluent timeline: one row per state that holds at some time, shaded by confidence (a
+    long clip's frames averaged into up to :data:`PLOT_COLUMNS` columns); with ``bands``, a
+    strip above it marks stretches of time (activities, repetitions). Written atomically, in
+    the format of the file's suffix (PNG for a suffix matplotlib does not know)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    on = holding(result, threshold)
-    share = on.mean(axis=0)
-    rows = np.flatnonzero(share > 0)
+    tl = result if isinstance(result, Timeline) else describe_clip(result, threshold=threshold)
+    rows = np.flatnonzero(tl.share > 0)
     if rows.size > max_rows:
-        rows = np.sort(rows[np.argsort(-share[rows], kind="stable")[:max_rows]])
-    conf = np.nan_to_num(result.confidence[:, rows], nan=0.0).T
-    frames = result.confidence.shape[0]
+        rows = np.sort(rows[np.argsort(-tl.share[rows], kind="stable")[:max_rows]])
+    conf = tl.columns[:, rows].T
     height = max(2.5, 0.22 * max(len(rows), 1) + 1.2) + (0.8 if bands else 0.0)
     if bands:
         fig, (top, ax) = plt.subplots(
@@ -202,18 +371,18 @@ def plot_timeline(
             cmap="Blues",
             vmin=0,
             vmax=1,
-            extent=(0, frames / result.fps, len(rows) - 0.5, -0.5),
+            extent=(0, tl.n_frames / tl.fps, len(rows) - 0.5, -0.5),
         )
         ax.set_yticks(range(len(rows)))
-        ax.set_yticklabels([result.words[i] for i in rows], fontsize=8)
+        ax.set_yticklabels([tl.layout.words[i] for i in rows], fontsize=8)
         for k, i in enumerate(rows):  # mark temporal states so they read apart from postures
-            if result.temporal[i]:
+            if tl.layout.temporal[i]:
                 ax.get_yticklabels()[k].set_color("#b35900")
     else:
         ax.text(0.5, 0.5, f"no state holds with confidence >= {threshold}", ha="center",
                 transform=ax.transAxes)  # fmt: skip
         ax.set_yticks([])
-    ax.set_xlim(0, frames / result.fps)
+    ax.set_xlim(0, tl.n_frames / tl.fps)
     ax.set_xlabel("time (s)")
     (top if bands else ax).set_title(
         title or "fluent timeline (shade = confidence; orange labels = motion)", fontsize=10
@@ -221,9 +390,14 @@ def plot_timeline(
     ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()
     out = Path(path)
-    with atomic_path(out) as tmp:
-        fig.savefig(tmp, format=out.suffix.lstrip(".").lower() or "png")
-    plt.close(fig)
+    fmt = out.suffix.lower().lstrip(".")
+    if fmt not in fig.canvas.get_supported_filetypes():
+        fmt = "png"
+    try:
+        with atomic_path(out) as tmp:
+            fig.savefig(tmp, format=fmt)
+    finally:
+        plt.close(fig)
     return out
 
 

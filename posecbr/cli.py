@@ -14,6 +14,7 @@ import sys
 from collections.abc import Sequence
 
 from features.errors import PosecbrError
+from features.text import shown
 from posecbr import __version__, commands
 
 
@@ -41,7 +42,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except PosecbrError as exc:
-        print(f"posecbr {args.command}: error: {exc}", file=sys.stderr)
+        # The message quotes the user's files and labels: escaped, it cannot drive the terminal.
+        print(f"posecbr {args.command}: error: {shown(exc)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print(f"posecbr {args.command}: interrupted", file=sys.stderr)

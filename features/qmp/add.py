@@ -33,7 +33,6 @@ measured between the two fitted oscillations over the window (see :func:`phase_g
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -42,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from features.config import read_config
 from features.errors import ConfigError
 
 from .fit import NOT_ENOUGH_DATA, QUANTITIES, QMPFits, quantity_key, signal_unit
@@ -376,17 +376,7 @@ def _default_add() -> ADD:
 
 
 def _load(p: Path) -> ADD:
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ConfigError("ADD file not found", p) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"cannot read ADD file: {exc}", p) from None
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"not valid TOML: {exc}", p) from None
-    return parse_add(raw, str(p))
+    return parse_add(read_config(p, "ADD file", "toml"), str(p))
 
 
 @dataclass(frozen=True)

@@ -11,23 +11,40 @@ from pathlib import Path
 import numpy as np
 
 from features.errors import DataError
+from features.text import size_words
 
+from ..poses import MAX_BYTES_ENV, read_limits
 from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
 
 
 def read_text(path: Path) -> str:
     """The text of ``path`` (gzip when it ends in ``.gz``), latin-1 tolerant, newlines unified.
 
-    Raises DataError naming the file when it is missing, unreadable or a truncated gzip.
+    Raises DataError naming the file when it is missing, unreadable, a truncated gzip, or
+    larger (decompressed) than the reading limit of :func:`features.poses.read_limits`.
     """
     if not path.exists():
         raise DataError("no such file", path)
     if path.is_dir():
         raise DataError("is a folder, not a file", path)
+    _, limit = read_limits()
+    too_big = DataError(
+        f"holds more than {size_words(limit)} of text (raise the limit with {MAX_BYTES_ENV}=BYTES)",
+        path,
+    )
     try:
-        raw = gzip.decompress(path.read_bytes()) if path.suffix == ".gz" else path.read_bytes()
+        if path.suffix == ".gz":
+            # at most one byte past the limit is decompressed: a small gzip can expand to GBs
+            with gzip.open(path, "rb") as fh:
+                raw = fh.read(limit + 1)
+        elif path.stat().st_size > limit:
+            raise too_big
+        else:
+            raw = path.read_bytes()
     except (OSError, EOFError, zlib.error) as exc:
         raise DataError(f"cannot read ({type(exc).__name__}: {exc})", path) from None
+    if len(raw) > limit:
+        raise too_big
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:

@@ -123,7 +123,31 @@ def _floats(tokens: list[str], path: Path, line_no: int, n: int | None = None) -
         raise DataError(f"line {line_no}: expected numbers, got {got!r}", path) from None
     if n is not None and out.size != n:
         raise DataError(f"line {line_no}: expected {n} numbers, got {out.size}", path)
+    if not np.isfinite(out).all():
+        raise DataError(f"line {line_no}: expected finite numbers, got {' '.join(tokens)!r}", path)
     return out
+
+
+_AXIS_ORDER = re.compile(r"[XYZ]{3}")
+_ROOT_CHANNELS = frozenset({"TX", "TY", "TZ", "RX", "RY", "RZ"})
+
+
+def _axis_order(token: str, path: Path, line_no: int) -> str:
+    """A rotation order such as ``XYZ``: three of X, Y, Z, no two in a row the same."""
+    order = token.upper()
+    if not _AXIS_ORDER.fullmatch(order) or order[0] == order[1] or order[1] == order[2]:
+        raise DataError(f"line {line_no}: {token[:20]!r} is not a rotation order like XYZ", path)
+    return order
+
+
+def _root_order(tokens: list[str], path: Path, line_no: int) -> tuple[str, ...]:
+    """The root's channels: each of TX TY TZ RX RY RZ at most once."""
+    order = tuple(t.upper() for t in tokens)
+    bad = [t for t in order if t not in _ROOT_CHANNELS]
+    if bad or len(set(order)) != len(order):
+        what = f"unknown channel {bad[0][:20]!r}" if bad else "a channel repeated"
+        raise DataError(f"line {line_no}: root order has {what} (TX TY TZ RX RY RZ)", path)
+    return order
 
 
 def read_asf(path: str | Path) -> Skeleton:
@@ -141,6 +165,8 @@ def read_asf(path: str | Path) -> Skeleton:
             continue
         tokens = line.split()
         head = tokens[0].lower()
+        if len(tokens) < 2 and head in ("name", "axis", "order", "direction", "length"):
+            raise DataError(f"line {i}: {head!r} without a value", path)
         if head.startswith(":"):
             section = head[1:]
             if section in ("name", "version", "documentation"):
@@ -153,9 +179,9 @@ def read_asf(path: str | Path) -> Skeleton:
                 skel.angle_deg = tokens[1].lower().startswith("deg")
         elif section == "root":
             if head == "order":
-                skel.root_order = tuple(t.upper() for t in tokens[1:])
+                skel.root_order = _root_order(tokens[1:], path, i)
             elif head == "axis":
-                skel.root_axis = tokens[1].upper()
+                skel.root_axis = _axis_order(tokens[1], path, i)
             elif head == "orientation":
                 skel.root_orientation_deg = _floats(tokens[1:4], path, i, 3)
         elif section == "bonedata":
@@ -175,7 +201,7 @@ def read_asf(path: str | Path) -> Skeleton:
                     bone["length"] = float(_floats(tokens[1:2], path, i, 1)[0])
                 elif head == "axis":
                     bone["axis"] = _floats(tokens[1:4], path, i, 3)
-                    bone["order"] = tokens[4].upper() if len(tokens) > 4 else "XYZ"
+                    bone["order"] = _axis_order(tokens[4], path, i) if len(tokens) > 4 else "XYZ"
                 elif head == "dof":
                     bone["dof"] = tuple(t.lower() for t in tokens[1:])
         elif section == "hierarchy":
@@ -283,7 +309,7 @@ def read_amc(path: str | Path, skeleton: Skeleton) -> Motion:
     deg = False if any(h.startswith("RAD") for h in header) else deg
     fast = _read_amc_fast(path, [ln for ln in body if not ln.startswith(":")], n_dof_fast, deg)
     if fast is not None:
-        return fast
+        return _finite(fast)
     n_dof = {name: len(b.dof) for name, b in skeleton.bones.items()}
     n_dof["root"] = len(skeleton.root_order)
     rows: dict[str, list[list[str]]] = {}
@@ -342,7 +368,16 @@ def read_amc(path: str | Path, skeleton: Skeleton) -> Motion:
             values[name] = np.array(r, dtype=float)
         except ValueError:
             raise DataError(f"bone {name!r}: a value is not a number", path) from None
-    return Motion(path, values, n_frames, angle_deg)
+    return _finite(Motion(path, values, n_frames, angle_deg))
+
+
+def _finite(motion: Motion) -> Motion:
+    """AMC has no missing values: nan or inf is a damaged file."""
+    for name, values in motion.values.items():
+        if not np.isfinite(values).all():
+            frame = int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0]) + 1
+            raise DataError(f"bone {name!r}: not a finite number in frame {frame}", motion.path)
+    return motion
 
 
 def _euler(letters: str, angles: np.ndarray, degrees: bool) -> np.ndarray:

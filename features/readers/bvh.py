@@ -90,11 +90,14 @@ def _parse_hierarchy(tokens: list[str], path: Path) -> tuple[list[BvhJoint], int
         return tokens[i : i + n]
 
     def floats(words: list[str]) -> np.ndarray:
+        got = " ".join(words)[:60]
         try:
-            return np.array([float(w) for w in words])
+            out = np.array([float(w) for w in words])
         except ValueError:
-            got = " ".join(words)
             raise DataError(f"expected numbers after OFFSET, got {got!r}", path) from None
+        if not np.isfinite(out).all():
+            raise DataError(f"expected finite numbers after OFFSET, got {got!r}", path)
+        return out
 
     while i < len(tokens):
         t = tokens[i]
@@ -111,6 +114,8 @@ def _parse_hierarchy(tokens: list[str], path: Path) -> tuple[list[BvhJoint], int
             stack.append(len(joints) - 1)
             i += 1
         elif up == "END":
+            if not stack or pending_end:
+                raise DataError("End Site outside a joint", path)
             i += 2  # "End Site"
             if need(1)[0] != "{":
                 raise DataError("expected '{' after End Site", path)
@@ -134,6 +139,9 @@ def _parse_hierarchy(tokens: list[str], path: Path) -> tuple[list[BvhJoint], int
                 if c not in ("xposition", "yposition", "zposition",
                              "xrotation", "yrotation", "zrotation"):  # fmt: skip
                     raise DataError(f"unknown channel {c!r}", path)
+            if len(set(chans)) != len(chans):
+                # each channel at most once: a rotation is three distinct axes in turn
+                raise DataError(f"a channel listed twice in CHANNELS {' '.join(chans)}", path)
             if stack:
                 joints[stack[-1]].channels = chans
             i += 2 + n
@@ -232,6 +240,9 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
         motion = np.array(data, dtype=float).reshape(n_frames, n_chan)
     except ValueError:
         raise DataError("a motion value is not a number", path) from None
+    if not np.isfinite(motion).all():
+        frame = int(np.flatnonzero(~np.isfinite(motion).all(axis=1))[0]) + 1
+        raise DataError(f"a motion value in frame {frame} is not a finite number", path)
     pos, ends = _forward(joints, motion)
     rest, rest_ends = _forward(joints, np.zeros((1, n_chan)))
     if up == "z":

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError
+from features.fileio import atomic_path, check_output
+from features.text import shown
 
 if TYPE_CHECKING:
     from casebase_store import CaseStore
@@ -66,6 +66,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.action == "upgrade":
         return _upgrade(args)
+    if args.action == "export":
+        _check_export(args)  # before the store is opened: a refusal touches nothing
     readonly = args.action != "trim" or args.dry_run
     store = open_store(args.db, create=False, readonly=readonly)
     try:
@@ -200,15 +202,28 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
     return 0
 
 
+def _export_path(args: argparse.Namespace) -> Path:
+    return args.out if args.out.suffix == ".npz" else args.out.with_suffix(".npz")
+
+
+def _check_export(args: argparse.Namespace) -> None:
+    """The export file is not a folder and never the store's files (the database, its
+    journals): ``--db X.npz --out X.npz`` would replace the case base by its export."""
+    from casebase_store import sqlite_file
+
+    db = sqlite_file(args.db)
+    journals = ("", "-wal", "-shm", "-journal")
+    store_files = [] if db is None else [db.with_name(db.name + j) for j in journals]
+    check_output(_export_path(args), inputs=store_files, what="export file")
+
+
 def _export(store: CaseStore, args: argparse.Namespace) -> int:
     import numpy as np
 
+    out = _export_path(args)
     name = store.choose(args.name)
     info = store.get_case_base(name)
     a = store.load_cases(name)
-    out: Path = args.out if args.out.suffix == ".npz" else args.out.with_suffix(".npz")
-    if not out.parent.exists():
-        raise DataError("folder does not exist", out.parent)
     arrays: dict[str, Any] = {
         "problems": a.features,
         "labels": np.asarray(a.labels, dtype=str),
@@ -221,19 +236,13 @@ def _export(store: CaseStore, args: argparse.Namespace) -> int:
         "feature_config": np.asarray(json.dumps(info.feature_config)),
         "similarity": np.asarray(json.dumps(info.similarity)),
     }
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
-        os.replace(tmp, out)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(out) as tmp, open(tmp, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
     msg = {"out": str(out), "cases": int(len(a.ids)), "problem_shape": list(a.features.shape[1:])}
     if args.json:
         _emit(msg)
     else:
-        print(f"wrote {len(a.ids)} cases of {name!r} to {out}")
+        print(f"wrote {len(a.ids)} cases of {shown(repr(name))} to {shown(out)}")
     return 0
 
 

@@ -16,13 +16,19 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import math
 import os
+import shutil
 import tempfile
+from collections.abc import Iterable, Iterator
+from collections.abc import Set as AbstractSet
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from features.errors import DataError
+from features.fileio import check_output, write_text_atomic
+from features.text import shown
 
 if TYPE_CHECKING:
     from features.datasets import Clip
@@ -72,11 +78,33 @@ def _csv_list(value: str | None) -> set[str] | None:
     return items or None
 
 
-def parse_ranges(value: str | None) -> set[int] | None:
-    """``"1-3,5"`` -> {1, 2, 3, 5}. Raises DataError for anything else."""
+class Ranges(AbstractSet[int]):
+    """Whole numbers given as ranges (``"1-3,5"``); membership without listing them, so
+    ``1-1000000000`` costs nothing."""
+
+    def __init__(self, ranges: Iterable[range]) -> None:
+        self.ranges = tuple(ranges)
+
+    def __contains__(self, value: object) -> bool:
+        return any(value in r for r in self.ranges)
+
+    def __iter__(self) -> Iterator[int]:
+        seen: set[int] = set()
+        for r in self.ranges:
+            for v in r:
+                if v not in seen:
+                    seen.add(v)
+                    yield v
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+
+def parse_ranges(value: str | None) -> Ranges | None:
+    """``"1-3,5"`` -> the numbers 1, 2, 3, 5. Raises DataError for anything else."""
     if value is None:
         return None
-    out: set[int] = set()
+    out: list[range] = []
     for part in value.split(","):
         part = part.strip()
         if not part:
@@ -86,31 +114,30 @@ def parse_ranges(value: str | None) -> set[int] | None:
                 a, b = (int(x) for x in part.split("-", 1))
                 if b < a:
                     raise ValueError
-                out.update(range(a, b + 1))
+                out.append(range(a, b + 1))
             else:
-                out.add(int(part))
+                out.append(range(int(part), int(part) + 1))
         except ValueError:
-            raise DataError(f"not a number or range a-b: {part!r}", "--episodes") from None
-    return out
+            raise DataError(f"not a number or range a-b: {part[:40]!r}", "--episodes") from None
+    return Ranges(out)
+
+
+_RESERVED_COLUMNS = ("path", "label", "subject", "start", "end")
+
+
+def _safe_name(name: str) -> str:
+    """A clip name as a file name: no separators, controls or leading dots."""
+    cleaned = "".join("_" if (c in "/\\" or not c.isprintable()) else c for c in name)
+    cleaned = cleaned.strip().lstrip(".")
+    return cleaned[:200] or "clip"
 
 
 def _clip_name(clip: Clip, fallback: str) -> str:
     ex = clip.extras
     if ex.get("dataset") == "ui-prmd":
         inc = "" if ex.get("correct", True) else "_inc"
-        return f"{ex['movement']}_{clip.subject}_e{int(ex['episode']):02d}{inc}"
-    return fallback
-
-
-def _write_text_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        return _safe_name(f"{ex['movement']}_{clip.subject}_e{int(ex['episode']):02d}{inc}")
+    return _safe_name(fallback)
 
 
 def _single_clips(args: argparse.Namespace) -> list[tuple[Clip, str]]:
@@ -121,12 +148,7 @@ def _single_clips(args: argparse.Namespace) -> list[tuple[Clip, str]]:
     src: Path = args.source
     suffix = src.suffix.lower()
     if suffix == ".bvh":
-        unit: str | float = args.bvh_unit
-        try:
-            unit = float(unit)
-        except ValueError:
-            pass
-        seq = read_bvh(src, unit=unit)
+        seq = read_bvh(src, unit=_bvh_unit(args.bvh_unit))
     else:
         asf = args.asf if args.asf is not None else find_asf(src)
         seq = read_asf_amc(asf, src, fps=args.fps)
@@ -137,6 +159,137 @@ def _single_clips(args: argparse.Namespace) -> list[tuple[Clip, str]]:
     return [(Clip(seq, label, None if subject is None else str(subject), extras), src.stem)]
 
 
+def _bvh_unit(text: str) -> str | float:
+    """``--bvh-unit``: a unit name, ``auto``, or metres per file unit (a positive number)."""
+    try:
+        unit = float(text)
+    except ValueError:
+        return text
+    if not (math.isfinite(unit) and unit > 0):
+        raise DataError(f"must be a unit name or a positive number, got {text!r}", "--bvh-unit")
+    return unit
+
+
+def _inputs(args: argparse.Namespace) -> list[Path]:
+    """Every file the conversion reads (from names and listings; nothing is read yet)."""
+    from features.datasets import dataset_files, find_asf
+
+    src: Path = args.source
+    if src.is_file() and src.suffix.lower() == ".bvh":
+        return [src]
+    if src.is_file() and src.suffix.lower() == ".amc":
+        return [src, args.asf if args.asf is not None else find_asf(src)]
+    return dataset_files(src, sensor=args.sensor)
+
+
+def _check_no_overwrite(out: Path, inputs: list[Path]) -> None:
+    """Refuse an output folder that holds inputs the conversion would write over: pose files
+    (``<name>.npz``) and labels.csv go into it, names decided only as clips are read."""
+    here = out.resolve()
+    clash = [
+        f
+        for f in inputs
+        if f.resolve().parent == here and (f.suffix.lower() == ".npz" or f.name == "labels.csv")
+    ]
+    if clash:
+        raise DataError(
+            f"the output folder holds inputs of this conversion ({clash[0].name}"
+            f"{f' and {len(clash) - 1} more' if len(clash) > 1 else ''}): writing pose files"
+            " and labels.csv there would overwrite them; choose another --out",
+            out,
+        )
+
+
+def _check_args(args: argparse.Namespace) -> None:
+    src: Path = args.source
+    if not src.exists():
+        raise DataError("no such file or folder", src)
+    if args.fps is not None and not (0.0 < args.fps <= 10000.0):
+        raise DataError(f"--fps must be a frame rate in (0, 10000], got {args.fps:g}", "--fps")
+    if args.correct and args.incorrect:
+        raise DataError("choose --correct or --incorrect, not both", "--correct")
+    if args.limit is not None and args.limit < 1:
+        raise DataError(f"must be at least 1, got {args.limit}", "--limit")
+    if args.out.exists() and not args.out.is_dir():
+        raise DataError("exists and is not a folder", args.out)
+    _bvh_unit(args.bvh_unit)
+    parse_ranges(args.episodes)
+
+
+def _clips(args: argparse.Namespace) -> Iterator[tuple[Clip, str]]:
+    from features.datasets import detect_kind, iter_dataset
+
+    src: Path = args.source
+    if src.is_file() and src.suffix.lower() in (".bvh", ".amc"):
+        yield from _single_clips(args)
+        return
+    correct = True if args.correct else (False if args.incorrect else None)
+    kind = detect_kind(src)
+    clips = iter_dataset(
+        src,
+        sensor=args.sensor,
+        progress_desc=f"converting {src.name}",
+        labels=_csv_list(args.labels),
+        subjects=_csv_list(args.subjects),
+        movements=_csv_list(args.movements),
+        episodes=parse_ranges(args.episodes),
+        correct=correct,
+        limit=args.limit,
+    )
+    for clip in clips:
+        stem = Path(clip.seq.source).name.split(".")[0] if clip.seq.source else kind
+        yield clip, stem
+
+
+def _origin(seq_source: str, src: Path) -> str:
+    """Where a clip came from relative to SOURCE (no machine-specific absolute path)."""
+    if not seq_source:
+        return seq_source
+    try:
+        return str(Path(seq_source).resolve().relative_to(src.resolve().parent))
+    except (ValueError, OSError):
+        return Path(seq_source).name
+
+
+Rates = dict[tuple[float, str], int]  # clips written per (frame rate, where it came from)
+
+
+def _write_clips(
+    args: argparse.Namespace, stage: Path, inputs: list[Path]
+) -> tuple[list[dict[str, Any]], Rates]:
+    """Each clip as a pose file in ``stage``; the rows of labels.csv and the frame rates."""
+    from features.poses import save_pose
+
+    written: list[dict[str, Any]] = []
+    names: set[str] = set()
+    rates: Rates = {}
+    for clip, fallback in _clips(args):
+        name = _clip_name(clip, fallback)
+        base, k = name, 2
+        while name.lower() in names:  # two sources with one stem: keep both
+            name, k = f"{base}_{k}", k + 1
+        names.add(name.lower())
+        check_output(args.out / f"{name}.npz", inputs=inputs, what="pose file")
+        # ``source`` left empty so a reader names the pose file itself.
+        seq = replace(clip.seq, source="").with_metadata(
+            origin=_origin(clip.seq.source, args.source)
+        )
+        if args.fps is not None:
+            seq = replace(seq, fps=float(args.fps)).with_metadata(fps_source="--fps")
+        why = str(seq.metadata.get("fps_source", "from the file"))
+        rates[(seq.fps, why)] = rates.get((seq.fps, why), 0) + 1
+        path = save_pose(seq, stage / f"{name}.npz", float32=args.float32)
+        extras = {
+            k: v for k, v in clip.extras.items() if k.strip().lower() not in _RESERVED_COLUMNS
+        }
+        written.append(
+            {**extras, "path": path.name, "label": clip.label, "subject": clip.subject or ""}
+        )
+    if not written:
+        raise DataError("no clips matched (check the filters)", args.source)
+    return written, rates
+
+
 def _rate_summary(rates: dict[tuple[float, str], int]) -> list[str]:
     """One line per frame rate written and where it came from."""
     return [
@@ -145,93 +298,54 @@ def _rate_summary(rates: dict[tuple[float, str], int]) -> list[str]:
     ]
 
 
-def run(args: argparse.Namespace) -> int:
-    from features.datasets import detect_kind, iter_dataset
-    from features.poses import save_pose
+def _labels_csv(written: list[dict[str, Any]]) -> str:
+    """labels.csv: path,label,subject then every extra column any clip has, in first-seen
+    order (one column per name as a reader sees it: case and spaces do not make another)."""
     from features.progress import progress
 
-    src: Path = args.source
-    if not src.exists():
-        raise DataError("no such file or folder", src)
-    if args.fps is not None and not (0.0 < args.fps <= 10000.0):
-        raise DataError(f"--fps must be a frame rate in (0, 10000], got {args.fps:g}", "--fps")
-    if args.correct and args.incorrect:
-        raise DataError("choose --correct or --incorrect, not both", "--correct")
-    out: Path = args.out
-    if out.exists() and not out.is_dir():
-        raise DataError("exists and is not a folder", out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise DataError(f"cannot create: {exc.strerror or exc}", out) from None
-
-    written: list[dict[str, Any]] = []
-    names: set[str] = set()
-    rates: dict[tuple[float, str], int] = {}
-
-    def emit(clip: Clip, fallback: str) -> None:
-        name = _clip_name(clip, fallback)
-        base, k = name, 2
-        while name in names:  # two sources with one stem: keep both
-            name, k = f"{base}_{k}", k + 1
-        names.add(name)
-        # Record where the clip came from relative to SOURCE (no machine-specific absolute
-        # path), and leave ``source`` empty so a reader names the pose file itself.
-        seq = clip.seq
-        origin = seq.source
-        if origin:
-            try:
-                origin = str(Path(origin).resolve().relative_to(src.resolve().parent))
-            except ValueError:
-                origin = Path(origin).name
-        seq = replace(seq, source="").with_metadata(origin=origin)
-        if args.fps is not None:
-            seq = replace(seq, fps=float(args.fps)).with_metadata(fps_source="--fps")
-        why = str(seq.metadata.get("fps_source", "from the file"))
-        rates[(seq.fps, why)] = rates.get((seq.fps, why), 0) + 1
-        path = save_pose(seq, out / f"{name}.npz", float32=args.float32)
-        written.append(
-            {"path": path.name, "label": clip.label, "subject": clip.subject or "", **clip.extras}
-        )
-
-    if src.is_file() and src.suffix.lower() in (".bvh", ".amc"):
-        for clip, stem in _single_clips(args):
-            emit(clip, stem)
-    else:
-        correct = True if args.correct else (False if args.incorrect else None)
-        kind = detect_kind(src)
-        clips = iter_dataset(
-            src,
-            sensor=args.sensor,
-            progress_desc=f"converting {src.name}",
-            labels=_csv_list(args.labels),
-            subjects=_csv_list(args.subjects),
-            movements=_csv_list(args.movements),
-            episodes=parse_ranges(args.episodes),
-            correct=correct,
-            limit=args.limit,
-        )
-        for clip in clips:
-            stem = Path(clip.seq.source).name.split(".")[0] if clip.seq.source else kind
-            emit(clip, stem)
-    if not written:
-        raise DataError("no clips matched (check the filters)", src)
-
-    # labels.csv: path,label,subject then every extra column any clip has, in first-seen order
     columns = ["path", "label", "subject"]
+    seen = set(columns)
     for row in written:
-        columns += [
-            c
-            for c in row
-            if c not in columns and c not in ("source", "asf", "origin", "fps_source")
-        ]
+        for c in row:
+            key = c.strip().lower()
+            if key not in seen and c not in ("source", "asf", "origin", "fps_source"):
+                seen.add(key)
+                columns.append(c)
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=columns, extrasaction="ignore", lineterminator="\n")
     writer.writeheader()
     for row in progress(written, "labels.csv", unit="row"):
         writer.writerow({c: _csv_value(row.get(c, "")) for c in columns})
-    _write_text_atomic(out / "labels.csv", buf.getvalue())
-    print(f"wrote {len(written)} pose files and labels.csv to {out}")
+    return buf.getvalue()
+
+
+def run(args: argparse.Namespace) -> int:
+    _check_args(args)
+    out: Path = args.out
+    inputs = _inputs(args)
+    _check_no_overwrite(out, inputs)
+    if out.is_dir():
+        check_output(out / "labels.csv", inputs=inputs, what="labels file")
+    created = not out.exists()
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        stage = Path(tempfile.mkdtemp(prefix=".posecbr-convert-", dir=out))
+    except OSError as exc:
+        raise DataError(f"cannot create: {exc.strerror or exc}", out) from None
+    # Clips go to a staging folder first: a bad clip halfway leaves the output folder as it was.
+    try:
+        written, rates = _write_clips(args, stage, inputs)
+        text = _labels_csv(written)
+        for row in written:
+            os.replace(stage / row["path"], out / row["path"])
+        write_text_atomic(out / "labels.csv", text)
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        if created:
+            shutil.rmtree(out, ignore_errors=True)
+        raise
+    stage.rmdir()
+    print(f"wrote {len(written)} pose files and labels.csv to {shown(out)}")
     for line in _rate_summary(rates):
         print(f"  {line}")
     return 0

@@ -9,10 +9,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 from features.errors import PosecbrError
+from features.text import shown
+
+MAX_SECONDS = 3600.0  # a window of an hour is no single movement
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -59,40 +65,47 @@ def run(args: argparse.Namespace) -> int:
     if args.top < 0:
         raise PosecbrError(f"--top must be >= 0, got {args.top}")
     for flag, value in (("--window", args.window), ("--step", args.step)):
-        if not value > 0:
-            raise PosecbrError(f"{flag} must be > 0 seconds, got {value}")
+        if not (math.isfinite(value) and 0 < value <= MAX_SECONDS):
+            raise PosecbrError(f"{flag} must be in (0, {MAX_SECONDS:g}] seconds, got {value}")
     add = load_add(args.add)
     config = DADConfig(window_s=args.window, step_s=args.step)
     seq = load_clip(args.posefile)
     result = detect(seq, add, config)
-    out = sys.stdout
     if args.json:
-        json.dump(result.to_dict(), out, indent=2)
-        out.write("\n")
+        json.dump(result.to_dict(), sys.stdout, indent=2)
+        sys.stdout.write("\n")
         return 0
+    # Every line quotes the clip's name and the ADD's words: printed escaped.
+    for line in _text_lines(args, result, config):
+        print(shown(line))
+    return 0
+
+
+def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[str]:
     name = args.posefile.name
     if result.status != "ok":
-        out.write(f"{name}: {result.status}: {result.message}\n")
-        return 0
-    out.write(
+        yield f"{name}: {result.status}: {result.message}"
+        return
+    yield (
         f"{name}: {result.duration_s:.1f} s, {len(result.windows_s)} window(s) of up to "
-        f"{config.window_s:g} s\n"
+        f"{config.window_s:g} s"
     )
     best = result.best
     if best is not None:
-        out.write(f"best match: {best.words} ({best.score:.0%} of its QMPs in order)\n")
-    out.write("\nranking:\n")
+        yield f"best match: {best.words} ({best.score:.0%} of its QMPs in order)"
+    yield ""
+    yield "ranking:"
     for i, act in enumerate(result.activities, 1):
         score = f"{act.score:4.0%}" if act.score == act.score else "  - "
-        out.write(f"  {i:2d}. {score}  {act.words}  [{', '.join(act.labels)}]\n")
+        yield f"  {i:2d}. {score}  {act.words}  [{', '.join(act.labels)}]"
     detail = result.activities if args.top == 0 else result.activities[: args.top]
+    mark = {"met": "+", "not met": "-", "out of order": "~", "not observable": "?"}
     for act in detail:
-        out.write(f"\n{act.words}: {act.met_weight}/{act.observable_weight} weight in order\n")
+        yield ""
+        yield f"{act.words}: {act.met_weight}/{act.observable_weight} weight in order"
         for q in act.qmps:
-            mark = {"met": "+", "not met": "-", "out of order": "~", "not observable": "?"}
             when = f" (at {q.window_s[0]:.1f}-{q.window_s[1]:.1f} s)" if q.window_s else ""
-            out.write(f"  {mark[q.status]} {q.words} [w {q.weight}]: {q.status}{when}\n")
+            yield f"  {mark[q.status]} {q.words} [w {q.weight}]: {q.status}{when}"
             for reason in q.reasons:
                 lead = "needs " if q.status == "not met" else ""
-                out.write(f"      {lead}{reason}\n")
-    return 0
+                yield f"      {lead}{reason}"

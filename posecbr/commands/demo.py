@@ -16,7 +16,7 @@ import time
 from importlib import resources
 from pathlib import Path
 
-from features.errors import PosecbrError
+from features.errors import DataError, PosecbrError
 
 # --quick: one configuration, no DAD or peers, one explanation and no pictures that need the
 # clips again (the report draws the accuracy and confusion pictures from the results).
@@ -59,6 +59,19 @@ def _step(title: str) -> float:
     return time.perf_counter()
 
 
+def _check_out(out: Path, data: Path) -> None:
+    """The output folder: created if needed, never a file, never the demo data (the demo
+    clears its own earlier outputs there)."""
+    if out.exists() and not out.is_dir():
+        raise DataError("exists and is not a folder", out)
+    if out.resolve() == data.resolve() or data.resolve() in out.resolve().parents:
+        raise DataError("is the demo data folder or inside it: choose another --out", out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise DataError(f"cannot create: {exc.strerror or exc}", out) from None
+
+
 def run(args: argparse.Namespace) -> int:
     if args.data is not None:
         return _run(args, args.data)
@@ -73,7 +86,7 @@ def _run(args: argparse.Namespace, data: Path) -> int:
     if not labels.is_file():
         raise PosecbrError("demo data not found (expected labels.csv)", data)
     out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    _check_out(out, data)
     db = out / "casebase.sqlite"
     for stale in (db, db.with_name(db.name + "-wal"), db.with_name(db.name + "-shm")):
         stale.unlink(missing_ok=True)

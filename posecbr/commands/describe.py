@@ -4,10 +4,20 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import sys
+import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING, TextIO
 
 from features.errors import PosecbrError
+from features.fileio import check_output
+from features.text import shown
+
+if TYPE_CHECKING:
+    from features.fluents import Backend, FluentResult
+    from features.poses import PoseSequence
+    from features.timeline import Run, Timeline
 
 # describe evaluates one clip in a new process: below this many frames the numpy reference
 # computes the fluents sooner than numba loads its compiled kernels (measured for the whole
@@ -56,56 +66,119 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def _check_args(args: argparse.Namespace) -> None:
+    """Everything about the arguments that can be refused before any work."""
+    if not 0.0 < args.min_confidence <= 1.0:
+        raise PosecbrError(f"--min-confidence must be in (0, 1], got {args.min_confidence}")
+    if args.min_run < 1:
+        raise PosecbrError(f"--min-run must be at least 1 frame, got {args.min_run}")
+    if args.plot is not None:
+        inputs = [args.posefile] + ([args.thresholds] if args.thresholds else [])
+        check_output(args.plot, inputs=inputs, what="picture")
+
+
+def _run_line(r: Run, layout: FluentResult) -> str:
+    from features.timeline import phrase_list
+
+    span = f"frame {r.start}" if r.start == r.end else f"frames {r.start}–{r.end}"
+    text = phrase_list(r.states, layout) if r.states else "(no state above the threshold)"
+    return f"{span}: {text}"
+
+
+def _header(args: argparse.Namespace, seq: PoseSequence) -> None:
+    label = f", label {shown(seq.label)}" if seq.label else ""
+    print(f"{shown(args.posefile)}: {seq.n_frames} frames at {seq.fps:g} fps"
+          f" ({seq.duration_s:.1f} s){label}")  # fmt: skip
+
+
+def _unavailable_line(missing: list[str]) -> str:
+    near = [m for m in missing if m.startswith("near:")]
+    other = [m.replace("_", " ") for m in missing if not m.startswith("near:")]
+    parts = other + ([f"{len(near)} near pairs"] if near else [])
+    return f"unavailable (joints missing): {', '.join(parts)}"
+
+
+class _Spool:
+    """Per-frame output kept on disk (past 32 MB) until the header is known: a long clip's
+    frames are never all held in memory."""
+
+    def __init__(self, as_json: bool, layout: FluentResult, fps: float) -> None:
+        self.as_json, self.layout, self.fps = as_json, layout, fps
+        self.file = tempfile.SpooledTemporaryFile(max_size=32 * 1024**2, mode="w+")
+        self.empty = True
+
+    def __call__(self, run: Run) -> None:
+        from features.timeline import runs_to_json
+
+        if self.as_json:
+            item = json.dumps(runs_to_json([run], self.fps)[0])
+            self.file.write(item if self.empty else ",\n" + item)
+        else:
+            self.file.write(_run_line(run, self.layout) + "\n")
+        self.empty = False
+
+    def copy_to(self, out: TextIO) -> None:
+        out.flush()
+        self.file.seek(0)
+        shutil.copyfileobj(self.file, out)
+        self.file.close()
+
+
 def run(args: argparse.Namespace) -> int:
     from features.datasets import load_clip
     from features.fluents import DEFAULT_TABLE, FluentTable, evaluate
-    from features.timeline import (
-        frame_states,
-        phrase_list,
-        plot_timeline,
-        runs_to_json,
-        state_runs,
-        unavailable_fluents,
-    )
+    from features.timeline import describe_clip, plot_timeline
 
-    if not 0.0 < args.min_confidence <= 1.0:
-        raise PosecbrError(f"--min-confidence must be in (0, 1], got {args.min_confidence}")
+    _check_args(args)
     table = FluentTable.from_file(args.thresholds) if args.thresholds else DEFAULT_TABLE
     seq = load_clip(args.posefile)
-    result = evaluate(seq, table, backend="numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba")
-    if args.per_frame:
-        runs = frame_states(result, args.min_confidence, include_background=args.all)
-    else:
-        runs = state_runs(result, args.min_confidence, max(1, args.min_run), args.all)
-    missing = unavailable_fluents(result)
+    backend: Backend = "numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba"
+    spool = None
+    if args.per_frame:  # the state names and words, from the first frame
+        first = evaluate(seq.slice_frames(0, 1), table, backend="numpy")
+        spool = _Spool(args.json, first, seq.fps)
+    min_run = 1 if args.per_frame else args.min_run
+    tl = describe_clip(
+        seq, table, args.min_confidence, min_run, args.all, per_frame=spool, backend=backend
+    )
     if args.plot:
-        plot_timeline(result, args.plot, args.min_confidence, title=f"{args.posefile.name}")
+        plot_timeline(tl, args.plot, args.min_confidence, title=args.posefile.name)
     if args.json:
-        out = {
-            "source": str(args.posefile),
-            "fps": seq.fps,
-            "frames": seq.n_frames,
-            "min_confidence": args.min_confidence,
-            "unavailable": missing,
-            "runs": runs_to_json(runs, seq.fps),
-        }
-        if args.plot:
-            out["plot"] = str(args.plot)
+        _print_json(args, seq, tl, spool)
+        return 0
+    _header(args, seq)
+    if tl.unavailable():
+        print(_unavailable_line(tl.unavailable()))
+    if spool is not None:
+        spool.copy_to(sys.stdout)
+    for r in tl.runs:
+        print(_run_line(r, tl.layout))
+    if args.plot:
+        print(f"timeline written to {shown(args.plot)}")
+    return 0
+
+
+def _print_json(
+    args: argparse.Namespace, seq: PoseSequence, tl: Timeline, spool: _Spool | None
+) -> None:
+    from features.timeline import runs_to_json
+
+    out: dict[str, object] = {
+        "source": str(args.posefile),
+        "fps": seq.fps,
+        "frames": seq.n_frames,
+        "min_confidence": args.min_confidence,
+        "unavailable": tl.unavailable(),
+        "runs": runs_to_json(tl.runs, seq.fps),
+    }
+    if args.plot:
+        out["plot"] = str(args.plot)
+    if spool is None:
         json.dump(out, sys.stdout, indent=1)
         print()
-        return 0
-    label = f", label {seq.label}" if seq.label else ""
-    print(f"{args.posefile}: {seq.n_frames} frames at {seq.fps:g} fps ({seq.duration_s:.1f} s)"
-          f"{label}")  # fmt: skip
-    if missing:
-        near = [m for m in missing if m.startswith("near:")]
-        other = [m.replace("_", " ") for m in missing if not m.startswith("near:")]
-        parts = other + ([f"{len(near)} near pairs"] if near else [])
-        print(f"unavailable (joints missing): {', '.join(parts)}")
-    for r in runs:
-        span = f"frame {r.start}" if r.start == r.end else f"frames {r.start}–{r.end}"
-        text = phrase_list(r.states, result) if r.states else "(no state above the threshold)"
-        print(f"{span}: {text}")
-    if args.plot:
-        print(f"timeline written to {args.plot}")
-    return 0
+        return
+    # The runs, one per frame, come from the spool into the same document.
+    head = json.dumps({k: v for k, v in out.items() if k != "runs"}, indent=1)
+    sys.stdout.write(head[:-2] + ',\n "runs": [\n')
+    spool.copy_to(sys.stdout)
+    sys.stdout.write("\n ]\n}\n")

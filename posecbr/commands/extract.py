@@ -21,7 +21,9 @@ from pathlib import Path
 from typing import Any
 
 from features.errors import DataError, PosecbrError
+from features.fileio import check_output
 from features.progress import progress
+from features.text import shown
 
 # FFmpeg prints decoder complaints straight to stderr; the user should get posecbr's one line.
 # OpenCV reads this once, when it first opens a video, so it is set as early as possible.
@@ -217,10 +219,13 @@ def stored_key(path: Path) -> dict[str, Any] | None:
     """The ``extract_key`` of an existing pose file, or None (absent or unreadable)."""
     import numpy as np
 
+    from features.poses import check_archive
+
     try:
+        check_archive(path, ["metadata"])
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["metadata"]))
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError):
+    except (PosecbrError, OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError):
         return None
     key = meta.get("extract_key") if isinstance(meta, dict) else None
     return key if isinstance(key, dict) else None
@@ -342,6 +347,15 @@ def _check_out_dir(out: Path) -> None:
         raise DataError(f"cannot write to the output folder ({exc.strerror or exc})", out) from None
 
 
+def _check_outputs(jobs: list[Job]) -> None:
+    """No pose file or overlay may be one of the videos (or a folder): refused before any work."""
+    videos = [job.video for job in jobs]
+    for job in jobs:
+        check_output(job.out, inputs=videos, what="pose file", make_parents=True)
+        if job.overlay is not None:
+            check_output(job.overlay, inputs=videos, what="overlay", make_parents=True)
+
+
 def run(args: argparse.Namespace) -> int:
     import concurrent.futures as cf
     import multiprocessing
@@ -359,6 +373,9 @@ def run(args: argparse.Namespace) -> int:
     if args.overlay is not None and len(jobs) == 1 and source.is_file():
         if args.overlay.suffix.lower() != ".mp4":
             raise DataError("overlay must be an .mp4 file name", args.overlay)
+    if args.out.exists() and not args.out.is_dir():
+        raise DataError("output is not a folder", args.out)
+    _check_outputs(jobs)
     _check_out_dir(args.out)
     single = len(jobs) == 1 and source.is_file() and source.suffix.lower() != ".csv"
     if single:
@@ -366,7 +383,7 @@ def run(args: argparse.Namespace) -> int:
         status, path, detail = process(jobs[0], options)
         if status == "failed":
             raise PosecbrError(detail)
-        print(f"{status}: {path} ({detail})")
+        print(f"{status}: {shown(path)} ({shown(detail)})")
         return 0
     results: list[tuple[str, Path, str]] = []
     workers = min(args.workers, len(jobs))
@@ -388,11 +405,11 @@ def run(args: argparse.Namespace) -> int:
                 results.append(fut.result())
     failed = [r for r in results if r[0] == "failed"]
     for _, _, detail in failed:
-        print(f"posecbr extract: error: {detail}", file=sys.stderr)
+        print(f"posecbr extract: error: {shown(detail)}", file=sys.stderr)
     done = sum(r[0] == "done" for r in results)
     skipped = sum(r[0] == "skipped" for r in results)
     print(
-        f"{done} extracted, {skipped} up to date, {len(failed)} failed -> {args.out}",
+        f"{done} extracted, {skipped} up to date, {len(failed)} failed -> {shown(args.out)}",
         file=sys.stderr if failed else sys.stdout,
     )
     return 1 if failed else 0

@@ -1,0 +1,59 @@
+"""Reading the user's configuration files (fluent thresholds, the ADD): JSON or TOML, checked
+so that any problem is one ConfigError naming the file."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, Literal
+
+from features.errors import ConfigError
+
+# A configuration file is a few kilobytes; anything far larger is the wrong file.
+MAX_CONFIG_BYTES = 10 * 1024**2
+
+
+def _read_text(path: Path, what: str) -> str:
+    if path.is_dir():
+        raise ConfigError(f"the {what} is a folder, not a file", path)
+    try:
+        size = path.stat().st_size
+        if size > MAX_CONFIG_BYTES:
+            raise ConfigError(
+                f"the {what} is {size / 1e6:.0f} MB: too large for a configuration file", path
+            )
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise ConfigError(f"{what} not found", path) from None
+    except OSError as exc:
+        raise ConfigError(f"cannot read the {what} ({exc.strerror or exc})", path) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            f"the {what} is not UTF-8 text ({exc.reason} at byte {exc.start}; a binary file?)",
+            path,
+        ) from None
+
+
+def read_config(
+    path: str | Path, what: str, fmt: Literal["json", "toml"] | None = None
+) -> Mapping[str, Any]:
+    """The table in a JSON or TOML file (``fmt``; None: TOML for ``.toml``, else JSON)."""
+    path = Path(path)
+    text = _read_text(path, what)
+    fmt = fmt or ("toml" if path.suffix.lower() == ".toml" else "json")
+    try:
+        raw = tomllib.loads(text) if fmt == "toml" else json.loads(text)
+    except RecursionError:
+        raise ConfigError(f"the {what} is nested too deeply", path) from None
+    except ValueError as exc:  # JSONDecodeError, TOMLDecodeError, over-long integers
+        raise ConfigError(f"not valid {fmt.upper()} ({exc})", path) from None
+    if not isinstance(raw, Mapping):
+        raise ConfigError(f"the {what} must hold a table/object at the top level", path)
+    return raw
+
+
+__all__ = ["MAX_CONFIG_BYTES", "read_config"]

@@ -1,0 +1,54 @@
+"""User data shown on a terminal: labels, names, paths and messages printed safely.
+
+A label or file name comes from the user's files, and a terminal obeys the control characters
+in what it prints: an ANSI/OSC escape in a label can set the window title, recolour or clear
+the screen, and a bidirectional override can make a line read differently from what it holds.
+:func:`shown` makes such characters visible instead (``\\x1b``, ``\\u202e``), so every command
+prints user data through it.
+"""
+
+from __future__ import annotations
+
+import re
+import unicodedata
+
+# C0 and C1 controls and DEL, the Unicode line/paragraph separators, and every format
+# character (bidirectional overrides and isolates, zero-width joiners, the BOM, ...).
+_UNSAFE = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def _escape(ch: str) -> str:
+    code = ord(ch)
+    if code <= 0xFF:
+        return f"\\x{code:02x}"
+    if code <= 0xFFFF:
+        return f"\\u{code:04x}"
+    return f"\\U{code:08x}"
+
+
+def _unsafe(ch: str) -> bool:
+    return bool(_UNSAFE.match(ch)) or unicodedata.category(ch) in ("Cf", "Cs", "Co", "Cn")
+
+
+def shown(value: object) -> str:
+    """``str(value)`` with every control, format or unassigned character escaped.
+
+    Printable text, including non-ASCII letters, is kept as it is: ``shown("squat é")`` is
+    ``"squat é"``; ``shown("a\\x1b]0;pwned\\x07")`` is ``"a\\\\x1b]0;pwned\\\\x07"``.
+    """
+    text = str(value)
+    if text.isascii() and text.isprintable():
+        return text  # the common case, without a per-character pass
+    return "".join(_escape(ch) if _unsafe(ch) else ch for ch in text)
+
+
+def size_words(n_bytes: float) -> str:
+    """A number of bytes as people read it: ``"9.50 GB"``, ``"15.8 MB"``, ``"512 bytes"``."""
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n_bytes >= scale:
+            value = n_bytes / scale
+            return f"{value:.2f} {unit}" if value < 10 else f"{value:.1f} {unit}"
+    return f"{int(n_bytes)} bytes"
+
+
+__all__ = ["shown", "size_words"]

@@ -1,0 +1,124 @@
+"""Helpers for the bad-input suites (``tests/test_bad_input_*.py``): run a command on a
+folder of files and check that it refused with one clear line and left every file as it was.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from features.poses import PoseSequence, save_pose
+from features.skeleton import BLAZEPOSE_33
+from posecbr.cli import main
+from tests.bodies import standing, to_sequence
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def snapshot(root: Path) -> dict[str, str]:
+    """Every file under ``root`` with its sha256, and every folder: what "unchanged" means."""
+    out: dict[str, str] = {}
+    for p in sorted(root.rglob("*")):
+        key = str(p.relative_to(root))
+        if p.is_symlink():
+            out[key] = "link -> " + os.readlink(p)
+        elif p.is_dir():
+            out[key] = "folder"
+        else:
+            out[key] = hashlib.sha256(p.read_bytes()).hexdigest()
+    return out
+
+
+def refused(
+    argv: list[str],
+    root: Path,
+    capsys: pytest.CaptureFixture[str],
+    *needles: str,
+) -> str:
+    """Run ``posecbr argv`` in-process: it must exit 1 with one line on stderr holding every
+    needle, print nothing on stdout, and leave every file and folder under ``root`` as it
+    was (no output, no temporary file). Returns the line."""
+    before = snapshot(root)
+    code = main(argv)
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert code == 1, (code, captured.err)
+    assert len(lines) == 1, captured.err
+    assert "Traceback" not in captured.err
+    assert lines[0].startswith(f"posecbr {argv[0]}: error: "), lines[0]
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])
+    assert captured.out == ""
+    assert_unchanged(root, before)
+    return lines[0]
+
+
+def assert_unchanged(root: Path, before: dict[str, str]) -> None:
+    """Every file and folder under ``root`` as in ``before``; names what differs."""
+    after = snapshot(root)
+    changed = sorted(k for k in before.keys() & after.keys() if before[k] != after[k])
+    added, removed = sorted(after.keys() - before.keys()), sorted(before.keys() - after.keys())
+    assert after == before, f"changed {changed}, added {added}, removed {removed}"
+
+
+def refused_in_process(
+    argv: list[str], root: Path, *needles: str, env: dict[str, str] | None = None
+) -> str:
+    """As :func:`refused`, in a real ``python -m posecbr`` process (the exit status and the
+    absence of a crash are the point)."""
+    before = snapshot(root)
+    proc = subprocess.run(
+        [sys.executable, "-m", "posecbr", *argv],
+        cwd=ROOT,
+        env={**os.environ, "POSECBR_NO_PROGRESS": "1", **(env or {})},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 1, (proc.returncode, proc.stderr[-2000:])
+    assert len(lines) == 1, proc.stderr[-2000:]
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])
+    assert_unchanged(root, before)
+    return lines[0]
+
+
+def standing_clip(frames: int = 8) -> PoseSequence:
+    """A person standing still, every BlazePose joint present (no source: a file written
+    from it names itself)."""
+    return replace(to_sequence(*[standing()] * frames), source="")
+
+
+def good_arrays(frames: int = 8) -> dict[str, object]:
+    """The arrays of a valid pose file, to spoil one at a time."""
+    seq = standing_clip(frames)
+    return {
+        "positions": seq.positions,
+        "joint_names": np.array(BLAZEPOSE_33),
+        "fps": 30.0,
+        "confidence": np.full(seq.positions.shape[:2], 0.9),
+        "metadata": json.dumps({"label": "squat", "subject": "s01"}),
+    }
+
+
+def pose_file(path: Path, **changes: object) -> Path:
+    """A pose file written with ``np.savez`` from :func:`good_arrays` with ``changes``
+    (a value of None drops the key)."""
+    arrays = {**good_arrays(), **changes}
+    np.savez(path, **{k: v for k, v in arrays.items() if v is not None})
+    return path
+
+
+def good_pose_file(dest: Path, /, frames: int = 8, **metadata: object) -> Path:
+    """A valid pose file of a person standing, with ``metadata``."""
+    seq = standing_clip(frames).with_metadata(**metadata)
+    return save_pose(seq, dest)
