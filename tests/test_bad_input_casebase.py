@@ -195,3 +195,21 @@ def test_a_store_of_schema_1_is_refused_then_upgraded_in_place(
     store = open_store(db, readonly=True)
     assert max(store.load_cases("squats ✓").ids) == 9
     store.close()
+
+
+def test_train_and_casebase_print_hostile_labels_escaped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    hostile = "squat\x1b]0;pwned\x07\u202e"
+    data = tmp_path / "data"
+    for label, pattern in ((hostile, "m01_s01_*.npz"), ("abduction", "m07_s01_*.npz")):
+        (data / label).mkdir(parents=True)
+        for f in sorted(DEMO.glob(pattern)):
+            (data / label / f.name).write_bytes(f.read_bytes())
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(data), "--db", str(db)]) == 0
+    for argv in (["casebase", "info", "--db", str(db)], ["casebase", "list", "--db", str(db)]):
+        assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "\x07" not in out and "\u202e" not in out
+    assert "squat\\x1b]0;pwned\\x07\\u202e" in out

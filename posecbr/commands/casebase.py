@@ -117,13 +117,13 @@ def _info(store: CaseStore, args: argparse.Namespace) -> int:
         _emit({"db": store.where, "case_bases": docs})
         return 0
     if not docs:
-        print(f"{store.where}: no case bases")
+        print(f"{shown(store.where)}: no case bases")
     for d in docs:
         feats = d["features"]
         states = feats.get("states")
         n_states = len(states) if isinstance(states, list) else states
         print(
-            f"{d['name']}: {d['cases']} cases, {len(d['labels'])} activities "
+            f"{shown(d['name'])}: {d['cases']} cases, {len(d['labels'])} activities "
             f"(created {d['created']}, posecbr {d['code_version']})"
         )
         print(
@@ -138,7 +138,7 @@ def _info(store: CaseStore, args: argparse.Namespace) -> int:
                 f"{m['side']}; feature weights {m['feature_weights']}"
             )
         if m.get("weighted_most"):
-            print(f"  weighted most: {', '.join(m['weighted_most'])}")
+            print(f"  weighted most: {shown(', '.join(m['weighted_most']))}")
         if m.get("unlike_cases"):
             u = m["unlike_cases"]
             print(
@@ -146,7 +146,7 @@ def _info(store: CaseStore, args: argparse.Namespace) -> int:
                 f"distance ({u['quantile']:.0%} of {u['basis']} training clips lie within)"
             )
         for lab, n in d["labels"].items():
-            print(f"  {n:6d}  {lab}")
+            print(f"  {n:6d}  {shown(lab)}")
         if d["maintenance"]:
             print("  history: " + ", ".join(f"{k} x{v}" for k, v in d["maintenance"].items()))
     return 0
@@ -196,8 +196,8 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
         fr = r["frames"]
         span = f"{fr[0]}-{fr[1]}" if fr[0] is not None else "-"
         print(
-            f"#{r['case_id']}\t{r['label']}\t{r['origin']}\t{r['subject'] or '-'}\t"
-            f"{span}\t{r['source']}"
+            f"#{r['case_id']}\t{shown(r['label'])}\t{r['origin']}\t{shown(r['subject'] or '-')}\t"
+            f"{span}\t{shown(r['source'])}"
         )
     return 0
 

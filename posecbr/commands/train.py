@@ -315,12 +315,15 @@ def _report(args: argparse.Namespace, result: Any) -> None:
         json.dump(summary, sys.stdout, indent=2, ensure_ascii=False)
         print()
         return
+    from features.text import shown
+
     if result.skipped:
-        shown = ", ".join(result.skipped[:5]) + (" ..." if len(result.skipped) > 5 else "")
-        print(f"skipped {len(result.skipped)} clip(s) that show no person: {shown}")
+        names = ", ".join(shown(s) for s in result.skipped[:5])
+        more = " ..." if len(result.skipped) > 5 else ""
+        print(f"skipped {len(result.skipped)} clip(s) that show no person: {names}{more}")
     verb = "added" if args.append else "trained"
     print(
-        f"case base {result.name!r} in {args.db}: {result.n_active} cases "
+        f"case base {shown(repr(result.name))} in {shown(args.db)}: {result.n_active} cases "
         f"({result.n_cases} {verb}) from {len(result.label_counts)} activities"
     )
     print(f"  features: {result.config.describe()}; similarity: {result.similarity}")
@@ -334,6 +337,6 @@ def _report(args: argparse.Namespace, result: Any) -> None:
             chosen += f"; {learned['mirror_cases']} mirror-image cases"
         print(chosen)
     for lab, n in result.label_counts.items():
-        print(f"  {n:5d}  {lab}")
+        print(f"  {n:5d}  {shown(lab)}")
     if result.maintenance is not None:
         print(f"  {result.maintenance.summary()}")
