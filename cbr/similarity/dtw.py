@@ -338,7 +338,7 @@ def knn_dtw(
     max_full = 0.5 if jobs > 1 else 0.85
     pos, computed, status = _cascade(
         q, q_upper, q_lower, cases, upper, lower, radius, order, lb, best_i, best_d,
-        max(64, 4 * k), max_full,
+        max(64, 4 * k, min(n // 8, 1024)), max_full,
     )  # fmt: skip
     if status == EXHAUSTED and later.any():
         rest = np.flatnonzero(later & (lb <= _limit(best_d)))
@@ -475,8 +475,21 @@ class DTW(SimilarityMeasure):
         lower = np.empty_like(cases)
         for a in range(0, len(cases), chunk):
             upper[a : a + chunk], lower[a : a + chunk] = envelope(cases[a : a + chunk], radius)
-        seg = segment_envelopes(upper, lower, max(1, int(self.segment)))
-        return _DTWIndex(cases, upper, lower, radius, *seg)
+        return self.index_from(cases, upper, lower)
+
+    def index_from(self, cases: np.ndarray, upper: np.ndarray, lower: np.ndarray) -> Any:
+        """The search index from sequences and their envelopes, each ``(n, L, d)``: float32
+        or float64 C-contiguous arrays (read-only memory-mapped case matrices included) are
+        used in place; only the segment envelopes ``(n, L / segment, d)`` are new."""
+        arrays = [np.ascontiguousarray(_float(a)) for a in (cases, upper, lower)]
+        if not arrays[0].shape == arrays[1].shape == arrays[2].shape or arrays[0].ndim != 3:
+            raise ConfigError(
+                f"sequences and envelopes must share one shape (n, frames, channels), got "
+                f"{arrays[0].shape}, {arrays[1].shape} and {arrays[2].shape}",
+                "similarity dtw",
+            )
+        seg = segment_envelopes(arrays[1], arrays[2], max(1, int(self.segment)))
+        return _DTWIndex(*arrays, self.radius_for(arrays[0].shape[1]), *seg)
 
     def _check(self, query_rep: np.ndarray, index: _DTWIndex) -> np.ndarray:
         q = np.ascontiguousarray(query_rep[0], dtype=np.float64)
