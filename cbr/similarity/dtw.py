@@ -481,15 +481,15 @@ class DTW(SimilarityMeasure):
         """The search index from sequences and their envelopes, each ``(n, L, d)``: float32
         or float64 C-contiguous arrays (read-only memory-mapped case matrices included) are
         used in place; only the segment envelopes ``(n, L / segment, d)`` are new."""
-        arrays = [np.ascontiguousarray(_float(a)) for a in (cases, upper, lower)]
-        if not arrays[0].shape == arrays[1].shape == arrays[2].shape or arrays[0].ndim != 3:
+        seqs, up, lo = (np.ascontiguousarray(_float(a)) for a in (cases, upper, lower))
+        if not seqs.shape == up.shape == lo.shape or seqs.ndim != 3:
             raise ConfigError(
                 f"sequences and envelopes must share one shape (n, frames, channels), got "
-                f"{arrays[0].shape}, {arrays[1].shape} and {arrays[2].shape}",
+                f"{seqs.shape}, {up.shape} and {lo.shape}",
                 "similarity dtw",
             )
-        seg = segment_envelopes(arrays[1], arrays[2], max(1, int(self.segment)))
-        return _DTWIndex(*arrays, self.radius_for(arrays[0].shape[1]), *seg)
+        seg = segment_envelopes(up, lo, max(1, int(self.segment)))
+        return _DTWIndex(seqs, up, lo, self.radius_for(seqs.shape[1]), *seg)
 
     def _check(self, query_rep: np.ndarray, index: _DTWIndex) -> np.ndarray:
         q = np.ascontiguousarray(query_rep[0], dtype=np.float64)
