@@ -33,15 +33,19 @@ def _clustered(rng: np.random.Generator, n: int, dims: int) -> tuple[np.ndarray,
 def euclidean_case(request: pytest.FixtureRequest) -> tuple[str, np.ndarray, np.ndarray]:
     rng = np.random.default_rng(3)
     make = _unstructured if request.param == "unstructured" else _clustered
-    cases, queries = make(rng, 6000, 200)  # 6000 x 200 >= 2^20: the BLAS pass is in use
+    cases, queries = make(rng, 6000, 200)
     cases[4001] = cases[17]  # a duplicate: the tie goes to the lower index
     queries = np.vstack([queries, cases[17].astype(np.float64)])
     return request.param, cases, queries
 
 
+@pytest.mark.parametrize("blas_min", [0, 1 << 40])  # the plain pass by BLAS, or by the kernel
 def test_euclidean_every_path_equals_brute_force(
     euclidean_case: tuple[str, np.ndarray, np.ndarray],
+    blas_min: int,
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
+    monkeypatch.setattr("cbr.similarity.euclidean._BLAS_MIN", blas_min)
     kind, cases, queries = euclidean_case
     m = Euclidean(prune_min_cases=1000)
     pruned = m.build_index(cases)

@@ -97,42 +97,72 @@ def _knn_scan(
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
-def _bounds(
-    proj: np.ndarray, resid: np.ndarray, qp: np.ndarray, q_res: float, n_seed: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """Squared lower bounds ``(n,)`` float32 of every row's distance, and the ``n_seed`` rows
-    with the smallest bounds (unordered): proj ``(n, m)`` float32 projections, resid ``(n,)``,
-    qp ``(m,)`` float64."""
+def _pruned_knn(
+    rows: np.ndarray,
+    sq: np.ndarray,
+    proj: np.ndarray,
+    resid: np.ndarray,
+    basis: np.ndarray,
+    mean: np.ndarray,
+    q: np.ndarray,
+    q_sq: float,
+    k: int,
+    rounding: float,
+    top_norm: float,
+    max_count: int,
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Exact k nearest of ``q`` ``(D,)`` float32 with the PCA bound, in one compiled call.
+
+    proj ``(n, m)`` float32 projections of the centred rows on ``basis`` ``(D, m)``, resid
+    ``(n,)`` their residual norms; ``rounding``: what a row kernel's squared distance may lack
+    of the true one. Returns (indices ``(k,)``, distances ``(k,)``, cases whose bound survived),
+    or a survivor count of -1 once more than ``max_count`` survive (the caller then runs the
+    plain pass instead).
+    """
     n, m = proj.shape
+    dims = rows.shape[1]
+    qp = np.zeros(m)
+    qc_sq = 0.0
+    for j in range(dims):
+        c = np.float64(q[j]) - mean[j]
+        qc_sq += c * c
+        for t in range(m):
+            qp[t] += c * basis[j, t]
+    qp_sq = 0.0
+    for t in range(m):
+        qp_sq += qp[t] * qp[t]
+    q_res = math.sqrt(max(qc_sq - qp_sq, 0.0))
+    # squared bounds |P'(x - q)|^2 + (r_x - r_q)^2 of every row; the best-bounded rows seed
+    n_seed = min(n, max(4 * k, 32))
     lb = np.empty(n, dtype=np.float32)
     seed_i = np.full(n_seed, -1, dtype=np.int64)
     seed_d = np.full(n_seed, np.inf)
     for i in range(n):
         s = 0.0
-        for j in range(m):
-            t = np.float64(proj[i, j]) - qp[j]
-            s += t * t
+        for t in range(m):
+            d = np.float64(proj[i, t]) - qp[t]
+            s += d * d
         r = resid[i] - q_res
         b = s + r * r
         lb[i] = b
         if b < seed_d[n_seed - 1]:
             _insert(seed_i, seed_d, i, b)
-    return lb, seed_i
-
-
-@numba.njit(cache=True, nogil=True)
-def _survivors(lb: np.ndarray, limit: float, max_count: int) -> np.ndarray:
-    """Rows whose bound is ``<= limit`` (increasing), or an empty array once more than
-    ``max_count`` survive (the caller then runs the plain pass)."""
-    out = np.empty(max_count + 1, dtype=np.int64)
-    c = 0
-    for i in range(lb.shape[0]):
+    _, best_d = _knn_scan(rows, sq, q, q_sq, np.sort(seed_i), k)
+    # A neighbour's kernel distance is <= the seeds' k-th; its true squared distance exceeds
+    # that by at most ``rounding``, and its computed bound its true one by float32 storage
+    # and basis rounding (~1e-7 relative to the norms; allowed 100x).
+    kth_sq = best_d[k - 1] ** 2 + rounding
+    limit = kth_sq * (1.0 + 1e-5) + 1e-5 * (top_norm + math.sqrt(qc_sq)) ** 2
+    cand = np.empty(max_count, dtype=np.int64)
+    count = 0
+    for i in range(n):
         if lb[i] <= limit:
-            if c == max_count:
-                return out[:0]
-            out[c] = i
-            c += 1
-    return out[:c]
+            if count == max_count:
+                return best_d.astype(np.int64), best_d, -1
+            cand[count] = i
+            count += 1
+    best_i, best_d = _knn_scan(rows, sq, q, q_sq, cand[:count], k)
+    return best_i, best_d, count
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
@@ -307,7 +337,7 @@ class Euclidean(SimilarityMeasure):
 
 
 _ALL = np.zeros(0, dtype=np.int64)
-_BLAS_MIN = 1 << 20  # rows x dims from which BLAS's matrix-vector product beats the row kernel
+_BLAS_MIN = 1 << 22  # rows x dims from which BLAS's matrix-vector product beats the row kernel
 _BLAS: Any = None  # threadpoolctl controller, made on first use
 
 
@@ -403,23 +433,15 @@ def _pruned_search(
     assert index.basis is not None and index.mean is not None
     assert index.proj is not None and index.resid is not None
     n, dims = index.rows.shape
-    qc = q32.astype(np.float64) - index.mean
-    qp = qc @ index.basis
-    qc_sq = float(qc @ qc)
-    q_res = math.sqrt(max(qc_sq - float(qp @ qp), 0.0))
-    n_seed = min(n, max(4 * k, 32))
-    lb, seeds = _bounds(index.proj, index.resid, qp, q_res, n_seed)
-    _, seed_d = _knn_scan(index.rows, index.sq_norms, q32, q_sq, np.sort(seeds), k)
-    # A neighbour's kernel distance is <= the seeds' k-th; its true squared distance exceeds
-    # that by at most the float32 dot product's error (Higham: gamma_D |c| |q|, twice), and
-    # its computed bound its true one by float32 storage and basis rounding (~1e-7 relative
-    # to the norms; allowed 100x).
     gamma = dims * _U32 / (1.0 - dims * _U32)
-    kth_sq = seed_d[k - 1] ** 2 + 2.02 * gamma * index.max_norm * math.sqrt(q_sq)
-    limit = kth_sq * (1.0 + 1e-5) + 1e-5 * (index.top_norm + math.sqrt(qc_sq)) ** 2
-    cand = _survivors(lb, limit, int(FALLBACK * n))
-    if len(cand) == 0:  # too many survivors: the plain pass is cheaper than gathering them
+    # the float32 dot product's error (Higham: gamma_D |c| |q|, on both sides of the identity)
+    rounding = 2.02 * gamma * index.max_norm * math.sqrt(q_sq)
+    idx, dist, survived = _pruned_knn(
+        index.rows, index.sq_norms, index.proj, index.resid, index.basis, index.mean, q32,
+        q_sq, k, rounding, index.top_norm, max(k, int(FALLBACK * n)),
+    )  # fmt: skip
+    if survived < 0:  # too many survivors: the plain pass is cheaper than gathering them
         index.record(1.0)
         return _plain_search(index, q32, q_sq, k)
-    index.record(len(cand) / n)
-    return _knn_scan(index.rows, index.sq_norms, q32, q_sq, cand, k)
+    index.record(survived / n)
+    return idx, dist
