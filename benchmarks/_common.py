@@ -1,5 +1,5 @@
 """Helpers shared by the search benchmarks: one thread for every library, timings taken side by
-side (each query runs every method in turn, so all see the same machine load), the load
+side (rounds over every method in rotated order, so all see the same machine load), the load
 average, and the real UI-PRMD features.
 
 Import this module before numpy: it pins the thread pools of BLAS/OpenMP/numba to one thread
@@ -62,25 +62,30 @@ def versions(*packages: str) -> dict[str, str | None]:
 
 
 def side_by_side(
-    methods: dict[str, Callable[[int], Any]], n_queries: int
+    methods: dict[str, Callable[[int], Any]], n_queries: int, rounds: int = 3
 ) -> tuple[dict[str, float], dict[str, list[Any]]]:
-    """Median ms per query of each method, and each method's answers (query order).
+    """Median ms per query of each method over ``rounds`` x ``n_queries`` timings, and each
+    method's answers (query order, from the first round).
 
-    Query j runs every method once, in an order rotated by j, so that a burst of load on the
-    shared machine hits all methods alike; a method's first call is a warm-up, not timed.
+    Each round runs every method over all the queries, methods in an order rotated by the
+    round, so a burst of load on the shared machine hits all alike while each method runs in
+    its steady state (a method timed right after another that swept 1 GB through the caches
+    measured up to 5x slower than alone); a method's first call is a warm-up, not timed.
     """
     names = list(methods)
     for name in names:
         methods[name](0)
     times: dict[str, list[float]] = {n: [] for n in names}
     answers: dict[str, list[Any]] = {n: [] for n in names}
-    for j in range(n_queries):
-        for r in range(len(names)):
-            name = names[(j + r) % len(names)]
-            t0 = time.perf_counter()
-            got = methods[name](j)
-            times[name].append(time.perf_counter() - t0)
-            answers[name].append(got)
+    for r in range(rounds):
+        for s in range(len(names)):
+            name = names[(r + s) % len(names)]
+            for j in range(n_queries):
+                t0 = time.perf_counter()
+                got = methods[name](j)
+                times[name].append(time.perf_counter() - t0)
+                if r == 0:
+                    answers[name].append(got)
     return {n: 1000 * statistics.median(times[n]) for n in names}, answers
 
 

@@ -16,10 +16,11 @@ Data kinds (float32 case matrices; queries are new points, never copies of cases
   the case base's clip summaries); at 3400 dims: the resampled fluent sequence (32 frames x
   106 states = 3392 values, what DTW and signatures compare).
 
-Methods, one thread each (threadpoolctl, FAISS ``omp_set_num_threads(1)``), per query in
-rotating order: posecbr ``Euclidean.nearest`` (pruned search with its fallback), posecbr
-plain (the same measure without the bound), scikit-learn ``NearestNeighbors(algorithm=
-"brute")``, FAISS ``IndexFlatL2``; and for the whole query batch at once posecbr
+Methods, one thread each (threadpoolctl, FAISS ``omp_set_num_threads(1)``), in rounds over
+all queries with the methods' order rotated (``benchmarks._common.side_by_side``): posecbr
+``Euclidean.nearest`` (pruned search with its fallback), posecbr plain (the same measure
+without the bound), scikit-learn ``NearestNeighbors(algorithm="brute")``, FAISS
+``IndexFlatL2``; and for the whole query batch at once posecbr
 ``nearest_many`` and FAISS ``search`` on all queries. Every method's neighbours are checked
 against posecbr plain. Writes ``benchmarks/results/retrieval.json`` with the load average.
 """
@@ -111,7 +112,8 @@ def run_one(kind: str, cases: np.ndarray, queries: np.ndarray, storage: str) -> 
         "sklearn_brute": lambda j: peer_sk.kneighbors(q32[j : j + 1], return_distance=False)[0],
         "faiss_flat": lambda j: peer_fa.search(q32[j : j + 1], K)[1][0],
     }
-    ms, answers = C.side_by_side(methods, len(queries))
+    rounds = 3 if n * dims <= 10**8 else 1  # 10^5 x 3400: scikit-learn takes ~1 s a query
+    ms, answers = C.side_by_side(methods, len(queries), rounds)
     batch_reps = np.stack(reps)
     ms["posecbr_batch"] = C.median_ms(lambda: m.nearest_many(batch_reps, pruned, K), 3) / len(
         queries

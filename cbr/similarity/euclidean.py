@@ -337,8 +337,8 @@ class Euclidean(SimilarityMeasure):
 
 
 _ALL = np.zeros(0, dtype=np.int64)
-_BLAS_MIN = 1 << 22  # rows x dims from which BLAS's matrix-vector product beats the row kernel
-_BLAS: Any = None  # threadpoolctl controller, made on first use
+_BLAS_MIN = 1 << 20  # rows x dims from which BLAS's matrix-vector product beats the row kernel
+_BLAS: list[Any] | None = None  # threadpoolctl's BLAS handles, found on first use
 
 
 def _error(gamma: float, q_sq: float) -> float:
@@ -347,21 +347,34 @@ def _error(gamma: float, q_sq: float) -> float:
     return 4.0 * gamma * math.sqrt(q_sq) * 1.01 + 1e-9
 
 
-def _matvec_one_thread(rows: np.ndarray, q32: np.ndarray) -> np.ndarray:
-    """``rows @ q32`` by BLAS on one thread: a query is memory-bound, and BLAS threads on a
-    busy machine were measured 40-300x slower (thread hand-off)."""
+def _blas_pools() -> list[Any]:
+    """threadpoolctl's handles of the loaded BLAS libraries (found once; none without it)."""
     global _BLAS
     if _BLAS is None:
         try:  # installed with scikit-learn
             from threadpoolctl import ThreadpoolController
 
-            _BLAS = ThreadpoolController()
+            _BLAS = [c for c in ThreadpoolController().lib_controllers if c.user_api == "blas"]
         except ImportError:  # pragma: no cover
-            _BLAS = False
-    if not _BLAS:  # pragma: no cover
+            _BLAS = []
+    return list(_BLAS)
+
+
+def _matvec_one_thread(rows: np.ndarray, q32: np.ndarray) -> np.ndarray:
+    """``rows @ q32`` by BLAS on one thread: a query is memory-bound, and BLAS threads on a
+    busy machine were measured 40-300x slower (thread hand-off). The library's own thread
+    setters (a microsecond each), not ``threadpool_limits`` (~0.1 ms a call, measured)."""
+    pools = _blas_pools()
+    before = [p.get_num_threads() for p in pools]
+    for p, t in zip(pools, before, strict=True):
+        if t != 1:
+            p.set_num_threads(1)
+    try:
         return rows @ q32
-    with _BLAS.limit(limits=1, user_api="blas"):
-        return rows @ q32
+    finally:
+        for p, t in zip(pools, before, strict=True):
+            if t != 1:
+                p.set_num_threads(t)
 
 
 def _plain_search(
