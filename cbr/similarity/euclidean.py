@@ -5,13 +5,15 @@ nearest cases are the ones with the most matched features.
 
 Every search returns exactly what :meth:`Euclidean.distances` and :func:`smallest_k` give (ties
 -> lower case index): one compiled row kernel (:func:`_row_sq`, float32 rows, the identity
-``|c|^2 - 2 c.q + |q|^2``) computes every distance on every path, and the paths differ only in
-which rows they skip, never in how a row's distance is computed.
+``|c|^2 - 2 c.q + |q|^2``) computes every distance a search returns; the paths differ only in
+which rows they hand it, never in how a row's distance is computed.
 
-- **Plain pass** (:func:`_knn_scan`): every row once, streaming, with the k best kept on the
-  fly (no ``(n,)`` distance array, no partition).
-- **Pruned search** for large case bases (``n >= prune_min_cases``, more than ``2 x
-  prune_dims`` dimensions): with an orthonormal PCA basis ``B`` (``m`` columns, fitted on a
+- **Plain pass**: small case bases stream every row through the kernel with the k best kept
+  on the fly (:func:`_knn_scan`); from ``2^20`` values, one BLAS matrix-vector product on one
+  thread, and only the rows within its rounding error bound (Higham) of the k-th best go to
+  the kernel (:func:`_select_from_products`).
+- **Pruned search** for large case bases (``n >= prune_min_cases``, at least 40 dimensions):
+  with an orthonormal PCA basis ``B`` (``m`` columns, fitted on a
   sample) and residual norms ``r``, ``|x - q| >= sqrt(|B'(x - q)|^2 + (r_x - r_q)^2)``
   (Pythagoras plus the reverse triangle inequality). The bound for all cases costs ``n x m``;
   exact distances only for cases whose bound is below the k-th best of the cases with the
