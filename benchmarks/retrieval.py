@@ -112,8 +112,7 @@ def run_one(kind: str, cases: np.ndarray, queries: np.ndarray, storage: str) -> 
         "sklearn_brute": lambda j: peer_sk.kneighbors(q32[j : j + 1], return_distance=False)[0],
         "faiss_flat": lambda j: peer_fa.search(q32[j : j + 1], K)[1][0],
     }
-    rounds = 3 if n * dims <= 10**8 else 1  # 10^5 x 3400: scikit-learn takes ~1 s a query
-    ms, answers = C.side_by_side(methods, len(queries), rounds)
+    ms, answers = C.side_by_side(methods, len(queries), rounds=3)
     batch_reps = np.stack(reps)
     ms["posecbr_batch"] = C.median_ms(lambda: m.nearest_many(batch_reps, pruned, K), 3) / len(
         queries
