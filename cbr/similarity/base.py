@@ -8,7 +8,8 @@ compare ONE query against the WHOLE case base as array work. The life cycle:
 2. ``build_index(reps)``: in-memory acceleration structures (norms, envelopes); default: reps;
 3. ``represent_query(problem)`` then ``distances(query_rep, index)`` -> ``(n_cases,)`` and
    ``nearest(query_rep, index, k)`` -> the k nearest (indices, distances), ties broken by the
-   lower case index so every measure's neighbours are deterministic.
+   lower case index so every measure's neighbours are deterministic; ``nearest_many`` the
+   same for a batch of queries (default: a loop; a measure may batch the work).
 
 Adding a measure (nothing else changes)::
 
@@ -87,6 +88,17 @@ class SimilarityMeasure:
         """The ``k`` nearest cases: (indices ``(k,)``, distances ``(k,)``), nearest first."""
         d = self.distances(query_rep, index)
         return smallest_k(d, k)
+
+    def nearest_many(
+        self, query_reps: np.ndarray, index: Any, k: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`nearest` for each of ``m`` queries (rows of ``represent``): indices and
+        distances ``(m, k)``. Measures override it when a batch is cheaper than a loop."""
+        found = [self.nearest(q, index, k) for q in query_reps]
+        kk = min(int(k), len(found[0][0])) if found else 0
+        idx = np.array([f[0] for f in found], dtype=np.int64).reshape(len(found), kk)
+        dist = np.array([f[1] for f in found], dtype=np.float64).reshape(len(found), kk)
+        return idx, dist
 
     def params(self) -> dict[str, Any]:
         """The measure as data: ``{"name": ..., field: value, ...}`` (JSON-able)."""

@@ -3,43 +3,231 @@
 On binary QMP vectors the squared distance is the number of mismatched features, so the
 nearest cases are the ones with the most matched features.
 
-Large case bases (``n >= prune_min_cases``, more than ``prune_dims`` dimensions) get an exact
-lower-bound filter: with an orthonormal PCA basis ``B`` (``prune_dims`` columns, fitted on a
-sample) and residual norms ``r``, ``|x - q|^2 >= |B'(x - q)|^2 + (r_x - r_q)^2`` (Pythagoras
-plus the reverse triangle inequality). The bound for all cases costs ``n x prune_dims``; exact
-distances are computed only for cases whose bound is below the k-th best candidate distance,
-so the neighbours are exactly the brute-force ones.
+Every search returns exactly what :meth:`Euclidean.distances` and :func:`smallest_k` give (ties
+-> lower case index): one compiled row kernel (:func:`_row_sq`, float32 rows, the identity
+``|c|^2 - 2 c.q + |q|^2``) computes every distance a search returns; the paths differ only in
+which rows they hand it, never in how a row's distance is computed.
+
+- **Plain pass**: small case bases stream every row through the kernel with the k best kept
+  on the fly (:func:`_knn_scan`); from ``2^20`` values, one BLAS matrix-vector product on one
+  thread, and only the rows within its rounding error bound (Higham) of the k-th best go to
+  the kernel (:func:`_select_from_products`).
+- **Pruned search** for large case bases (``n >= prune_min_cases``, at least 40 dimensions):
+  with an orthonormal PCA basis ``B`` (``m`` columns, fitted on a
+  sample) and residual norms ``r``, ``|x - q| >= sqrt(|B'(x - q)|^2 + (r_x - r_q)^2)``
+  (Pythagoras plus the reverse triangle inequality). The bound for all cases costs ``n x m``;
+  exact distances only for cases whose bound is below the k-th best of the cases with the
+  best bounds. The search measures its own pruning power: when more than ``FALLBACK`` of the
+  cases survive (unstructured data, where no low-rank bound prunes), the rest of the query
+  is the plain pass, and later queries skip the bound (re-probing every ``PROBE_EVERY``), so
+  an unprunable case base costs one plain pass per query.
+- **Many queries** (:meth:`Euclidean.nearest_many`): one matrix product per block of queries
+  (BLAS), then per query the cases whose product-based distance is within its rounding error
+  bound of the k-th best are re-checked with the row kernel.
+
+Rows are read where they lie: a read-only memory-mapped case matrix
+(:mod:`casebase_store.case_matrix`) is used without a copy.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from typing import Any
 
+import numba
 import numpy as np
 
-from .base import SimilarityMeasure, check_weighting, register_measure, smallest_k, weighted
+from .base import SimilarityMeasure, check_weighting, register_measure, weighted
+
+FALLBACK = 0.5  # candidate share above which the pruned search turns into the plain pass
+PROBE_EVERY = 16  # an index that stopped pruning tries the bound again every this many queries
+_U32 = 2.0**-24  # unit roundoff of float32
 
 
-def _matvec(a: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """``a @ x`` without BLAS threads: a query is a matrix-vector product, memory-bound, and
-    multi-threaded BLAS on a busy machine was measured 40-300x slower (thread hand-off)."""
-    return np.einsum("ij,j->i", a, x)
+@numba.njit(cache=True, nogil=True, fastmath=True, inline="always")
+def _row_sq(rows: np.ndarray, sq: np.ndarray, i: int, q: np.ndarray, q_sq: float) -> float:
+    """Distance of row ``i`` to ``q`` (float32 dot product), clamped at 0 and square-rooted."""
+    s = np.float32(0.0)
+    for j in range(rows.shape[1]):
+        s += rows[i, j] * q[j]
+    d2 = sq[i] - 2.0 * np.float64(s) + q_sq
+    return math.sqrt(d2) if d2 > 0.0 else 0.0
 
 
-def _sqnorm(x: np.ndarray) -> float:
-    return float(np.einsum("i,i->", x, x))
+@numba.njit(cache=True, nogil=True, inline="always")
+def _insert(best_i: np.ndarray, best_d: np.ndarray, i: int, d: float) -> None:
+    """Insert (i, d) into the sorted k best; rows arrive in increasing index order, so an equal
+    distance never displaces an earlier (lower) index."""
+    k = best_d.shape[0]
+    if not d < best_d[k - 1]:
+        return
+    pos = k - 1
+    while pos > 0 and d < best_d[pos - 1]:
+        best_d[pos] = best_d[pos - 1]
+        best_i[pos] = best_i[pos - 1]
+        pos -= 1
+    best_d[pos] = d
+    best_i[pos] = i
 
 
-@dataclass(frozen=True)
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _all_distances(rows: np.ndarray, sq: np.ndarray, q: np.ndarray, q_sq: float) -> np.ndarray:
+    """Distances from ``q`` ``(D,)`` float32 to every row of ``rows`` ``(n, D)`` float32."""
+    out = np.empty(rows.shape[0])
+    for i in range(rows.shape[0]):
+        out[i] = _row_sq(rows, sq, i, q, q_sq)
+    return out
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _knn_scan(
+    rows: np.ndarray, sq: np.ndarray, q: np.ndarray, q_sq: float, idx: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The k nearest among the rows listed in ``idx`` (increasing), or all rows when ``idx``
+    is empty: (indices ``(k,)``, distances ``(k,)``)."""
+    best_i = np.full(k, rows.shape[0], dtype=np.int64)
+    best_d = np.full(k, np.inf)
+    if idx.shape[0] == 0:
+        for i in range(rows.shape[0]):
+            _insert(best_i, best_d, i, _row_sq(rows, sq, i, q, q_sq))
+    else:
+        for t in range(idx.shape[0]):
+            i = idx[t]
+            _insert(best_i, best_d, i, _row_sq(rows, sq, i, q, q_sq))
+    return best_i, best_d
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _pruned_knn(
+    rows: np.ndarray,
+    sq: np.ndarray,
+    proj: np.ndarray,
+    resid: np.ndarray,
+    basis: np.ndarray,
+    mean: np.ndarray,
+    q: np.ndarray,
+    q_sq: float,
+    k: int,
+    rounding: float,
+    top_norm: float,
+    max_count: int,
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Exact k nearest of ``q`` ``(D,)`` float32 with the PCA bound, in one compiled call.
+
+    proj ``(n, m)`` float32 projections of the centred rows on ``basis`` ``(D, m)``, resid
+    ``(n,)`` their residual norms; ``rounding``: what a row kernel's squared distance may lack
+    of the true one. Returns (indices ``(k,)``, distances ``(k,)``, cases whose bound survived),
+    or a survivor count of -1 once more than ``max_count`` survive (the caller then runs the
+    plain pass instead).
+    """
+    n, m = proj.shape
+    dims = rows.shape[1]
+    qp = np.zeros(m)
+    qc_sq = 0.0
+    for j in range(dims):
+        c = np.float64(q[j]) - mean[j]
+        qc_sq += c * c
+        for t in range(m):
+            qp[t] += c * basis[j, t]
+    qp_sq = 0.0
+    for t in range(m):
+        qp_sq += qp[t] * qp[t]
+    q_res = math.sqrt(max(qc_sq - qp_sq, 0.0))
+    # squared bounds |P'(x - q)|^2 + (r_x - r_q)^2 of every row; the best-bounded rows seed
+    n_seed = min(n, max(4 * k, 32))
+    lb = np.empty(n, dtype=np.float32)
+    seed_i = np.full(n_seed, -1, dtype=np.int64)
+    seed_d = np.full(n_seed, np.inf)
+    for i in range(n):
+        s = 0.0
+        for t in range(m):
+            d = np.float64(proj[i, t]) - qp[t]
+            s += d * d
+        r = resid[i] - q_res
+        b = s + r * r
+        lb[i] = b
+        if b < seed_d[n_seed - 1]:
+            _insert(seed_i, seed_d, i, b)
+    _, best_d = _knn_scan(rows, sq, q, q_sq, np.sort(seed_i), k)
+    # A neighbour's kernel distance is <= the seeds' k-th; its true squared distance exceeds
+    # that by at most ``rounding``, and its computed bound its true one by float32 storage
+    # and basis rounding (~1e-7 relative to the norms; allowed 100x).
+    kth_sq = best_d[k - 1] ** 2 + rounding
+    limit = kth_sq * (1.0 + 1e-5) + 1e-5 * (top_norm + math.sqrt(qc_sq)) ** 2
+    cand = np.empty(max_count, dtype=np.int64)
+    count = 0
+    for i in range(n):
+        if lb[i] <= limit:
+            if count == max_count:
+                return best_d.astype(np.int64), best_d, -1
+            cand[count] = i
+            count += 1
+    best_i, best_d = _knn_scan(rows, sq, q, q_sq, cand[:count], k)
+    return best_i, best_d, count
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _select_from_products(
+    prods: np.ndarray,
+    rows: np.ndarray,
+    sq: np.ndarray,
+    norms: np.ndarray,
+    q: np.ndarray,
+    q_sq: float,
+    err: float,
+    k: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The k nearest of one query from its BLAS products ``prods`` ``(n,)`` float32.
+
+    ``err * norms[i]`` bounds how far the product-based squared distance of row i may be from
+    the row kernel's; the k-th smallest upper bound is a threshold every true neighbour's lower
+    bound is under, and only those rows are re-computed with :func:`_row_sq`."""
+    n = prods.shape[0]
+    ub_i = np.full(k, -1, dtype=np.int64)
+    ub_d = np.full(k, np.inf)
+    for i in range(n):
+        d2 = sq[i] - 2.0 * np.float64(prods[i]) + q_sq
+        d2 += err * norms[i] + 1e-12 * (sq[i] + q_sq)
+        if d2 < ub_d[k - 1]:
+            _insert(ub_i, ub_d, i, d2)
+    limit = max(ub_d[k - 1], 0.0)
+    best_i = np.full(k, n, dtype=np.int64)
+    best_d = np.full(k, np.inf)
+    for i in range(n):
+        d2 = sq[i] - 2.0 * np.float64(prods[i]) + q_sq
+        if d2 - err * norms[i] - 1e-12 * (sq[i] + q_sq) <= limit:
+            _insert(best_i, best_d, i, _row_sq(rows, sq, i, q, q_sq))
+    return best_i, best_d
+
+
+@dataclass(frozen=True, eq=False)
 class _EuclideanIndex:
-    rows: np.ndarray  # (n, D) float32 (float64 when exact=True)
+    rows: np.ndarray  # (n, D) float32 (float64 when exact=True); may be a read-only memmap
     sq_norms: np.ndarray  # (n,) float64
-    basis: np.ndarray | None = None  # (D, m) orthonormal, or None (no pruning)
+    norms: np.ndarray  # (n,) float64
+    basis: np.ndarray | None = None  # (D, m) float64 orthonormal to float32 rounding, or None
     mean: np.ndarray | None = None  # (D,)
     proj: np.ndarray | None = None  # (n, m) float32
-    proj_sq: np.ndarray | None = None  # (n,) float64
     resid: np.ndarray | None = None  # (n,) float64, norm of the part outside the basis
+    top_norm: float = 0.0  # largest |row - mean|
+    max_norm: float = 0.0  # largest |row|
+    # [running share of cases that survive the bound, queries seen]: a heuristic shared by
+    # the queries of this index (races between threads only change a speed decision)
+    pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
+
+    def worth_pruning(self) -> bool:
+        """Whether the next query should compute the bound (see the module docstring)."""
+        share, seen = self.pruning
+        return bool(seen == 0 or share <= FALLBACK or seen % PROBE_EVERY == 0)
+
+    def record(self, survived_share: float) -> None:
+        share, seen = self.pruning
+        self.pruning[0] = survived_share if seen == 0 else 0.7 * share + 0.3 * survived_share
+        self.pruning[1] = seen + 1
+
+    def skip(self) -> None:
+        self.pruning[1] += 1
 
 
 @register_measure("euclidean")
@@ -49,14 +237,16 @@ class Euclidean(SimilarityMeasure):
 
     ``exact``: compute in float64 by differences instead of the float32 dot-product identity
     (slower; for tiny case bases or bit-exact comparisons).
-    ``prune_min_cases`` / ``prune_dims``: when to use the PCA lower-bound filter, and its rank.
+    ``prune_min_cases`` / ``prune_dims``: when to use the PCA lower-bound filter, and its rank
+    (0: a tenth of the dimensions, 8 to 128, so the bound costs a tenth of a plain pass or
+    less).
     ``centre`` / ``multiplier``: learned feature weighting (:mod:`cbr.weights`), one value per
     flattened column: the measure compares ``(x - centre) * multiplier``; None: raw values.
     """
 
     exact: bool = False
     prune_min_cases: int = 5000
-    prune_dims: int = 32
+    prune_dims: int = 0
     centre: tuple[float, ...] | None = None
     multiplier: tuple[float, ...] | None = None
 
@@ -73,71 +263,200 @@ class Euclidean(SimilarityMeasure):
         return p
 
     def build_index(self, reps: np.ndarray) -> Any:
+        """Index over ``reps`` ``(n, D)``; float32 rows (a memmap included) are used in place."""
         dtype = np.float64 if self.exact else np.float32
-        rows: np.ndarray = np.ascontiguousarray(reps, dtype=dtype)
-        sq = np.einsum("ij,ij->i", rows, rows, dtype=np.float64)
+        rows: np.ndarray = np.asarray(reps)
+        if rows.dtype != dtype or not rows.flags.c_contiguous:
+            rows = np.ascontiguousarray(rows, dtype=dtype)
+        sq = _row_norms_sq(rows)
         n, dims = rows.shape
-        if self.exact or n < self.prune_min_cases or dims <= 2 * self.prune_dims:
-            return _EuclideanIndex(rows, sq)
-        sample = rows[np.random.default_rng(0).choice(n, min(n, 1000), replace=False)]
-        mean = sample.mean(axis=0, dtype=np.float64)
-        centred = sample - mean
-        # principal directions from the small Gram matrix (sample x sample), then QR so the
-        # basis is orthonormal to rounding: the bound needs orthonormality, not optimality
-        _, vecs = np.linalg.eigh(centred @ centred.T)
-        top = centred.T @ vecs[:, ::-1][:, : self.prune_dims]  # (D, m)
-        basis = np.ascontiguousarray(np.linalg.qr(top)[0], dtype=np.float32)
-        proj = np.empty((n, basis.shape[1]), dtype=np.float32)
-        resid = np.empty(n)
-        m32 = mean.astype(np.float32)
-        for a in range(0, n, 20000):  # chunks keep the centred copy small
-            c = rows[a : a + 20000] - m32
-            proj[a : a + 20000] = c @ basis
-            tot = np.einsum("ij,ij->i", c, c, dtype=np.float64)
-            inside = np.einsum(
-                "ij,ij->i", proj[a : a + 20000], proj[a : a + 20000], dtype=np.float64
-            )
-            resid[a : a + 20000] = np.sqrt(np.maximum(tot - inside, 0.0))
-        proj_sq = np.einsum("ij,ij->i", proj, proj, dtype=np.float64)
-        return _EuclideanIndex(rows, sq, basis, mean, proj, proj_sq, resid)
+        m = self.prune_dims or min(max(dims // 10, 8), 128)
+        m = min(m, dims // 4)
+        if self.exact or n < self.prune_min_cases or m < 4:
+            return _EuclideanIndex(rows, sq, np.sqrt(sq))
+        return _pruning_index(rows, sq, m)
 
-    def _exact_rows(self, q: np.ndarray, index: _EuclideanIndex, idx: np.ndarray) -> np.ndarray:
-        rows = index.rows[idx]
-        if self.exact:
-            return np.sqrt(((rows - q) ** 2).sum(axis=1))
-        dots = _matvec(rows, q.astype(rows.dtype))
-        sq = index.sq_norms[idx] - 2.0 * dots.astype(np.float64) + _sqnorm(q)
-        return np.sqrt(np.maximum(sq, 0.0))
+    def _query(self, query_rep: np.ndarray) -> tuple[np.ndarray, float]:
+        q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
+        q32 = q.astype(np.float32)
+        # |q|^2 of the float32 query the kernel multiplies with, in float64
+        return q32, float(np.dot(q32.astype(np.float64), q32.astype(np.float64)))
 
     def distances(self, query_rep: np.ndarray, index: Any) -> np.ndarray:
         if not isinstance(index, _EuclideanIndex):
             index = self.build_index(np.asarray(index, dtype=np.float64))
-        q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
         if self.exact:
+            q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
             return np.sqrt(((index.rows - q) ** 2).sum(axis=1))
-        # |c|^2 - 2 c.q + |q|^2: one matrix-vector product over the whole case base
-        dots = _matvec(index.rows, q.astype(index.rows.dtype))
-        sq = index.sq_norms - 2.0 * dots.astype(np.float64) + _sqnorm(q)
-        return np.sqrt(np.maximum(sq, 0.0))
+        q32, q_sq = self._query(query_rep)
+        return _all_distances(index.rows, index.sq_norms, q32, q_sq)
 
     def nearest(self, query_rep: np.ndarray, index: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
-        if not isinstance(index, _EuclideanIndex) or index.basis is None:
+        if not isinstance(index, _EuclideanIndex) or self.exact:
             return super().nearest(query_rep, index, k)
-        assert index.mean is not None and index.proj is not None
-        assert index.proj_sq is not None and index.resid is not None
-        n = len(index.rows)
+        k = min(int(k), len(index.rows))
+        if k <= 0:
+            return np.zeros(0, dtype=np.int64), np.zeros(0)
+        q32, q_sq = self._query(query_rep)
+        if index.basis is not None and index.worth_pruning():
+            return _pruned_search(index, q32, q_sq, k)
+        if index.basis is not None:
+            index.skip()
+        return _plain_search(index, q32, q_sq, k)
+
+    def nearest_many(
+        self, query_reps: np.ndarray, index: Any, k: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The k nearest of each query ``(m, D)``: indices and distances ``(m, k)``.
+
+        One matrix product per block of queries (BLAS, all its threads) unless the index
+        prunes well (then query by query), with the rounding error of the product bounded so
+        the neighbours are exactly :meth:`nearest`'s."""
+        queries = np.asarray(query_reps, dtype=np.float64).reshape(len(query_reps), -1)
+        if not isinstance(index, _EuclideanIndex) or self.exact or len(queries) < 2:
+            return super().nearest_many(queries, index, k)
+        n, dims = index.rows.shape
         k = min(int(k), n)
-        q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
-        qc = q - index.mean
-        qp = _matvec(index.basis.T, qc.astype(np.float32))
-        qp_sq = _sqnorm(qp.astype(np.float64))
-        q_res = np.sqrt(max(_sqnorm(qc) - qp_sq, 0.0))
-        inside = index.proj_sq - 2.0 * _matvec(index.proj, qp).astype(np.float64) + qp_sq
-        lb = np.sqrt(np.maximum(inside, 0.0) + (index.resid - q_res) ** 2)
-        # start from the best bounds, then take every case whose bound can still beat them
-        first = np.argpartition(lb, min(n - 1, max(4 * k, 64)))[: max(4 * k, 64)]
-        kth = np.sort(self._exact_rows(q, index, first))[k - 1]
-        slack = 1e-3 * kth + 1e-6  # float32 rounding in the bound
-        cand = np.union1d(first, np.flatnonzero(lb <= kth + slack))
-        idx, dist = smallest_k(self._exact_rows(q, index, cand), k)
-        return cand[idx], dist
+        first = self.nearest(queries[0], index, k)
+        if index.basis is not None and index.pruning[0] <= 0.25:
+            rest = super().nearest_many(queries[1:], index, k)
+            return np.vstack([first[0], rest[0]]), np.vstack([first[1], rest[1]])
+        out_i = np.empty((len(queries), k), dtype=np.int64)
+        out_d = np.empty((len(queries), k))
+        out_i[0], out_d[0] = first
+        norms = index.norms
+        gamma = dims * _U32 / (1.0 - dims * _U32)  # Higham's bound of a float32 dot product
+        block = max(1, min(256, (1 << 26) // (4 * n)))  # <= 64 MB of products at a time
+        q32s = queries.astype(np.float32)
+        for a in range(1, len(queries), block):
+            prods = q32s[a : a + block] @ index.rows.T  # (block, n)
+            for j in range(len(prods)):
+                q32, q_sq = self._query(queries[a + j])
+                out_i[a + j], out_d[a + j] = _select_from_products(
+                    prods[j], index.rows, index.sq_norms, norms, q32, q_sq, _error(gamma, q_sq), k
+                )
+        return out_i, out_d
+
+
+_ALL = np.zeros(0, dtype=np.int64)
+_BLAS_MIN = 1 << 20  # rows x dims from which BLAS's matrix-vector product beats the row kernel
+_BLAS: list[Any] | None = None  # threadpoolctl's BLAS handles, found on first use
+
+
+def _error(gamma: float, q_sq: float) -> float:
+    """Coefficient ``e`` with ``|product-based d^2 - row-kernel d^2| <= e |c|`` for a float32
+    dot product of D terms (``gamma = D u / (1 - D u)``, Higham's bound on both sides)."""
+    return 4.0 * gamma * math.sqrt(q_sq) * 1.01 + 1e-9
+
+
+def _blas_pools() -> list[Any]:
+    """threadpoolctl's handles of the loaded BLAS libraries (found once; none without it)."""
+    global _BLAS
+    if _BLAS is None:
+        try:  # installed with scikit-learn
+            from threadpoolctl import ThreadpoolController
+
+            _BLAS = [c for c in ThreadpoolController().lib_controllers if c.user_api == "blas"]
+        except ImportError:  # pragma: no cover
+            _BLAS = []
+    return list(_BLAS)
+
+
+def _matvec_one_thread(rows: np.ndarray, q32: np.ndarray) -> np.ndarray:
+    """``rows @ q32`` by BLAS on one thread: a query is memory-bound, and BLAS threads on a
+    busy machine were measured 40-300x slower (thread hand-off). The library's own thread
+    setters (a microsecond each), not ``threadpool_limits`` (~0.1 ms a call, measured)."""
+    pools = _blas_pools()
+    before = [p.get_num_threads() for p in pools]
+    for p, t in zip(pools, before, strict=True):
+        if t != 1:
+            p.set_num_threads(1)
+    try:
+        return rows @ q32
+    finally:
+        for p, t in zip(pools, before, strict=True):
+            if t != 1:
+                p.set_num_threads(t)
+
+
+def _plain_search(
+    index: _EuclideanIndex, q32: np.ndarray, q_sq: float, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Exact k nearest by one pass over every row: the row kernel for small case bases, one
+    BLAS matrix-vector product (re-checked within its error bound) for large ones."""
+    rows = index.rows
+    if rows.size < _BLAS_MIN:
+        return _knn_scan(rows, index.sq_norms, q32, q_sq, _ALL, k)
+    n, dims = rows.shape
+    gamma = dims * _U32 / (1.0 - dims * _U32)
+    prods = _matvec_one_thread(rows, q32)
+    return _select_from_products(
+        prods, rows, index.sq_norms, index.norms, q32, q_sq, _error(gamma, q_sq), k
+    )
+
+
+def _row_norms_sq(rows: np.ndarray) -> np.ndarray:
+    """``(n,)`` float64 squared norms of ``rows`` ``(n, D)``, in chunks (a memmap is read once
+    without a float64 copy of it)."""
+    out = np.empty(len(rows))
+    for a in range(0, len(rows), 65536):
+        part = rows[a : a + 65536]
+        out[a : a + 65536] = np.einsum("ij,ij->i", part, part, dtype=np.float64)
+    return out
+
+
+def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
+    """The PCA bound's basis ``(D, m)``, projections ``(n, m)`` and residual norms ``(n,)``."""
+    n, dims = rows.shape
+    sample = np.asarray(rows[np.sort(np.random.default_rng(0).choice(n, 1000, replace=False))])
+    mean = sample.mean(axis=0, dtype=np.float64)
+    centred = sample - mean
+    # principal directions from the small Gram matrix (sample x sample), then QR so the
+    # basis is orthonormal to rounding: the bound needs orthonormality, not optimality
+    _, vecs = np.linalg.eigh(centred @ centred.T)
+    top = centred.T @ vecs[:, ::-1][:, :m]  # (D, m)
+    # float32-representable values, so the build and every query project on the same basis
+    basis = np.linalg.qr(top)[0].astype(np.float32).astype(np.float64)
+    proj = np.empty((n, m), dtype=np.float32)
+    resid = np.empty(n)
+    top_sq = 0.0
+    step = max(256, (1 << 23) // dims)  # float64 chunks of <= 64 MB
+    for a in range(0, n, step):
+        c = rows[a : a + step] - mean  # float64: the residual needs it (cancellation)
+        p = c @ basis
+        proj[a : a + step] = p
+        tot = np.einsum("ij,ij->i", c, c)
+        resid[a : a + step] = np.sqrt(np.maximum(tot - np.einsum("ij,ij->i", p, p), 0.0))
+        top_sq = max(top_sq, float(tot.max()))
+    return _EuclideanIndex(
+        rows,
+        sq,
+        np.sqrt(sq),
+        basis,
+        mean,
+        proj,
+        resid,
+        math.sqrt(top_sq),
+        math.sqrt(float(sq.max())),
+    )
+
+
+def _pruned_search(
+    index: _EuclideanIndex, q32: np.ndarray, q_sq: float, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Exact k nearest with the PCA bound, or the plain pass when the bound prunes too little."""
+    assert index.basis is not None and index.mean is not None
+    assert index.proj is not None and index.resid is not None
+    n, dims = index.rows.shape
+    gamma = dims * _U32 / (1.0 - dims * _U32)
+    # the float32 dot product's error (Higham: gamma_D |c| |q|, on both sides of the identity)
+    rounding = 2.02 * gamma * index.max_norm * math.sqrt(q_sq)
+    idx, dist, survived = _pruned_knn(
+        index.rows, index.sq_norms, index.proj, index.resid, index.basis, index.mean, q32,
+        q_sq, k, rounding, index.top_norm, max(k, int(FALLBACK * n)),
+    )  # fmt: skip
+    if survived < 0:  # too many survivors: the plain pass is cheaper than gathering them
+        index.record(1.0)
+        return _plain_search(index, q32, q_sq, k)
+    index.record(survived / n)
+    return idx, dist

@@ -62,11 +62,13 @@ class ExplicitTimeLibrary:
         """Theta for one period: ``(frames, 6)``."""
         return self.matrices(t, np.array([period]))[0]
 
-    def to_pysindy(self, period: float) -> Any:
+    def to_pysindy(self, period: float, n_states: int = 1) -> Any:
         """The same basis as a pysindy library acting on a control input ``u = t``.
 
         Used as the reference implementation: ``ps.SINDy(feature_library=lib).fit(x, t=t,
-        x_dot=xdot, u=t)`` fits the same model one signal at a time.
+        x_dot=xdot, u=t)`` fits the same model, one signal at a time (``x`` ``(samples, 1)``)
+        or ``n_states`` signals in one call (``x`` ``(samples, n_states)``, the control after
+        them).
         """
         import pysindy as ps
 
@@ -88,5 +90,6 @@ class ExplicitTimeLibrary:
         custom = ps.CustomLibrary(
             library_functions=functions, function_names=names, include_bias=True
         )
-        # Column 0 is the state, column 1 the control (time): the basis sees only time.
-        return ps.GeneralizedLibrary([custom], inputs_per_library=[[1]])
+        # Columns 0..n_states-1 are the states, then the control (time): the basis sees only
+        # time.
+        return ps.GeneralizedLibrary([custom], inputs_per_library=[[n_states]])

@@ -1,0 +1,179 @@
+"""The fast search paths return exactly the brute-force neighbours on hard data as well as easy.
+
+Euclidean: the plain pass, the pruned search (and its fall-back to the plain pass when the
+bound prunes nothing) and the batched matrix product must give what ``distances`` +
+``smallest_k`` give (ties -> lower index), and the neighbours a peer finds (scikit-learn's
+brute force in float64, FAISS IndexFlatL2). DTW: the cascade, its fall-back scan on threads
+and the threaded brute force must agree with the single-threaded brute force to the bit, and
+with dtaidistance's distances.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cbr.similarity import DTW, Euclidean
+from cbr.similarity.base import smallest_k
+from cbr.similarity.dtw import dtw_all, knn_dtw
+
+
+def _unstructured(rng: np.random.Generator, n: int, dims: int) -> tuple[np.ndarray, np.ndarray]:
+    return rng.random((n, dims), dtype=np.float32), rng.random((8, dims))
+
+
+def _clustered(rng: np.random.Generator, n: int, dims: int) -> tuple[np.ndarray, np.ndarray]:
+    centres = rng.random((10, dims)) * 4.0
+    cases = centres[rng.integers(0, 10, n)] + rng.normal(scale=0.1, size=(n, dims))
+    queries = centres[rng.integers(0, 10, 8)] + rng.normal(scale=0.1, size=(8, dims))
+    return cases.astype(np.float32), queries
+
+
+@pytest.fixture(scope="module", params=["unstructured", "clustered"])
+def euclidean_case(request: pytest.FixtureRequest) -> tuple[str, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(3)
+    make = _unstructured if request.param == "unstructured" else _clustered
+    cases, queries = make(rng, 6000, 200)
+    cases[4001] = cases[17]  # a duplicate: the tie goes to the lower index
+    queries = np.vstack([queries, cases[17].astype(np.float64)])
+    return request.param, cases, queries
+
+
+@pytest.mark.parametrize("blas_min", [0, 1 << 40])  # the plain pass by BLAS, or by the kernel
+def test_euclidean_every_path_equals_brute_force(
+    euclidean_case: tuple[str, np.ndarray, np.ndarray],
+    blas_min: int,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr("cbr.similarity.euclidean._BLAS_MIN", blas_min)
+    kind, cases, queries = euclidean_case
+    m = Euclidean(prune_min_cases=1000)
+    pruned = m.build_index(cases)
+    plain = Euclidean(prune_min_cases=10**9).build_index(cases)
+    assert pruned.basis is not None and plain.basis is None
+    for q in queries:
+        qr = m.represent_query(q)
+        want_i, want_d = smallest_k(m.distances(qr, plain), 6)
+        for index in (pruned, plain):
+            got_i, got_d = m.nearest(qr, index, 6)
+            np.testing.assert_array_equal(got_i, want_i)
+            np.testing.assert_array_equal(got_d, want_d)
+    assert list(smallest_k(m.distances(m.represent_query(queries[-1]), plain), 2)[0]) == [17, 4001]
+    share = pruned.pruning[0]
+    if kind == "clustered":  # the bound prunes: the search stayed pruned
+        assert share < 0.2
+    else:  # nothing pruned: it fell back to the plain pass and stopped trying
+        assert share == 1.0
+
+
+def test_euclidean_batch_equals_single_queries(
+    euclidean_case: tuple[str, np.ndarray, np.ndarray],
+) -> None:
+    _, cases, queries = euclidean_case
+    m = Euclidean(prune_min_cases=1000)
+    for index in (m.build_index(cases), Euclidean(prune_min_cases=10**9).build_index(cases)):
+        many_i, many_d = m.nearest_many(queries, index, 5)
+        assert many_i.shape == many_d.shape == (len(queries), 5)
+        for j, q in enumerate(queries):
+            one_i, one_d = m.nearest(m.represent_query(q), index, 5)
+            np.testing.assert_array_equal(many_i[j], one_i)
+            np.testing.assert_array_equal(many_d[j], one_d)
+
+
+def test_euclidean_neighbours_equal_scikit_learn_brute_force(
+    euclidean_case: tuple[str, np.ndarray, np.ndarray],
+) -> None:
+    from sklearn.neighbors import NearestNeighbors
+
+    _, cases, queries = euclidean_case
+    queries = queries[:-1]  # the duplicate has a tie that sklearn may order either way
+    q32 = queries.astype(np.float32).astype(np.float64)  # the measure compares float32 values
+    peer = NearestNeighbors(n_neighbors=5, algorithm="brute").fit(cases.astype(np.float64))
+    want_d, want_i = peer.kneighbors(q32)
+    m = Euclidean(prune_min_cases=1000)
+    got_i, got_d = m.nearest_many(queries, m.build_index(cases), 5)
+    np.testing.assert_array_equal(got_i, want_i)
+    # float32 dot products: |error of d^2| <= 2 gamma_D |c| |q| (Higham), gamma_D ~ D 2^-24
+    bound = 2 * 200 * 2.0**-24 * np.linalg.norm(cases, axis=1).max() * np.linalg.norm(q32, axis=1)
+    assert np.all(np.abs(got_d**2 - want_d**2) <= bound[:, None])
+
+
+def test_euclidean_neighbours_equal_faiss_flat_index(
+    euclidean_case: tuple[str, np.ndarray, np.ndarray],
+) -> None:
+    faiss = pytest.importorskip("faiss", reason="FAISS (faiss-cpu, extra 'bench') not installed")
+    _, cases, queries = euclidean_case
+    queries = queries[:-1]
+    peer = faiss.IndexFlatL2(cases.shape[1])
+    peer.add(cases)
+    want_d, want_i = peer.search(queries.astype(np.float32), 5)
+    m = Euclidean(prune_min_cases=1000)
+    index = m.build_index(cases)
+    for j, q in enumerate(queries):
+        got_i, got_d = m.nearest(m.represent_query(q), index, 5)
+        np.testing.assert_array_equal(got_i, want_i[j])
+        bound = 2 * 200 * 2.0**-24 * np.linalg.norm(cases, axis=1).max() * np.linalg.norm(q)
+        assert np.all(np.abs(got_d**2 - want_d[j]) <= 2 * bound)  # both sides in float32
+
+
+def _dtw_data(kind: str, rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+    shape = (n + 6, 32, 4)
+    if kind == "noise":  # no bound is tight: the cascade falls back to the threaded scan
+        x = rng.normal(size=shape)
+    elif kind == "walks":
+        x = np.cumsum(rng.normal(size=shape), axis=1)
+    else:
+        protos = np.cumsum(rng.normal(size=(5, 32, 4)), axis=1)
+        x = protos[rng.integers(0, 5, n + 6)] + rng.normal(scale=0.5, size=shape)
+    x[9] = x[2]  # a duplicate: the tie goes to the lower index
+    return x[:n], np.vstack([x[n:], x[2:3]])
+
+
+@pytest.mark.parametrize("kind", ["noise", "walks", "clustered"])
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_dtw_every_path_equals_single_threaded_brute_force(kind: str, jobs: int) -> None:
+    rng = np.random.default_rng(11)
+    cases, queries = _dtw_data(kind, rng, 1500)
+    m = DTW(radius=3, jobs=jobs)
+    index = m.build_index(m.represent(cases))
+    for q in queries:
+        qr = m.represent_query(q)
+        brute = np.sqrt(dtw_all(qr[0], index.cases, 3, jobs=1))
+        np.testing.assert_array_equal(m.distances(qr, index), brute)  # threaded brute force
+        want_i, want_d = smallest_k(brute, 7)
+        got_i, got_d = m.nearest(qr, index, 7)
+        np.testing.assert_array_equal(got_i, want_i)
+        np.testing.assert_array_equal(got_d, want_d)
+    assert list(m.nearest(m.represent_query(queries[-1]), index, 2)[0]) == [2, 9]
+
+
+def test_dtw_falls_back_on_noise_and_prunes_on_walks() -> None:
+    rng = np.random.default_rng(12)
+    computed = {}
+    for kind in ("noise", "walks"):
+        cases, queries = _dtw_data(kind, rng, 1500)
+        m = DTW(radius=3)
+        index = m.build_index(m.represent(cases))
+        qr = m.represent_query(queries[0])
+        args = (qr[0], qr[1], qr[2], index.cases, index.upper, index.lower, 3, 5)
+        segs = (index.seg_len, index.seg_up, index.seg_lo)
+        computed[kind] = knn_dtw(*args, *segs, jobs=2)[2]
+    assert computed["walks"] < 0.2 * 1500  # the bounds prune random walks
+    assert computed["noise"] > 0.5 * 1500  # noise: nearly every case needs its DTW
+
+
+def test_dtw_distances_equal_dtaidistance() -> None:
+    dtw_ndim = pytest.importorskip(
+        "dtaidistance.dtw_ndim", reason="dtaidistance (extra 'bench') not installed"
+    )
+    rng = np.random.default_rng(13)
+    cases, queries = _dtw_data("noise", rng, 200)
+    m = DTW(radius=3, jobs=2)
+    index = m.build_index(m.represent(cases))
+    for q in queries[:3]:
+        series = np.concatenate([q[None], cases])
+        # dtaidistance's window w allows |i - j| < w: the band radius + 1
+        peer = dtw_ndim.distance_matrix_fast(
+            series, window=4, block=((0, 1), (1, len(series))), compact=True, parallel=False
+        )
+        np.testing.assert_allclose(m.distances(m.represent_query(q), index), peer, rtol=1e-10)
