@@ -453,13 +453,15 @@ class CaseStore:
         raise StoreError("the store holds no case base (run posecbr train)", self.where)
 
     def load_case_base(
-        self, name: str, *, include_inactive: bool = False
+        self, name: str, *, include_inactive: bool = False, features: bool = True
     ) -> tuple[CaseBaseInfo, CaseArrays]:
         """The case base's description and its cases, read from one snapshot (the version in
-        the description is the version of exactly these cases)."""
+        the description is the version of exactly these cases). ``features=False``: every
+        column but the problems (``features`` is then empty), for a caller that has them
+        elsewhere (a memory-mapped case matrix of this version)."""
         with self._read() as s:
             row = self._row(s, name)
-            return self._info(s, row), self._cases(s, row, include_inactive, None)
+            return self._info(s, row), self._cases(s, row, include_inactive, None, features)
 
     def load_cases(
         self, name: str, *, include_inactive: bool = False, ids: Sequence[int] | None = None
@@ -474,38 +476,26 @@ class CaseStore:
         cb: CaseBaseRow,
         include_inactive: bool,
         ids: Sequence[int] | None,
+        with_features: bool = True,
     ) -> CaseArrays:
-        q = select(
+        columns = [
             CaseRow.id,
             CaseRow.label,
-            CaseRow.features,
             CaseRow.source,
             CaseRow.subject,
             CaseRow.origin,
             CaseRow.frame_start,
             CaseRow.frame_end,
-        ).where(CaseRow.case_base_id == cb.id)
+        ]
+        q = select(*columns, *([CaseRow.features] if with_features else [])).where(
+            CaseRow.case_base_id == cb.id
+        )
         if not include_inactive:
             q = q.where(CaseRow.active.is_(True))
         if ids is not None:
             q = q.where(CaseRow.id.in_([int(i) for i in ids]))
         rows = s.execute(q.order_by(CaseRow.id)).all()
-        arrays = [decode_array(r.features, f"features of case {r.id}", self.where) for r in rows]
-        if rows:
-            shapes = {a.shape for a in arrays}
-            if len(shapes) > 1:
-                raise StoreError(
-                    f"case base {cb.name!r} is damaged: its cases have features of different "
-                    f"shapes ({', '.join(str(sh) for sh in sorted(shapes)[:3])})",
-                    self.where,
-                )
-            if not all(np.issubdtype(a.dtype, np.floating) for a in arrays):
-                raise StoreError(
-                    f"case base {cb.name!r} is damaged: non-numeric features", self.where
-                )
-            features = np.stack(arrays).astype(np.float64)
-        else:
-            features = np.zeros((0,), dtype=np.float64)
+        features = self._stack_features(cb, rows) if with_features else np.zeros((0,))
         return CaseArrays(
             ids=np.array([r.id for r in rows], dtype=np.int64),
             labels=np.array([r.label for r in rows], dtype=object),
@@ -515,6 +505,23 @@ class CaseStore:
             origins=tuple(r.origin for r in rows),
             frame_ranges=tuple((r.frame_start, r.frame_end) for r in rows),
         )
+
+    def _stack_features(self, cb: CaseBaseRow, rows: Sequence[Any]) -> np.ndarray:
+        """The problems of ``rows`` as one float64 array ``(n, *shape)``; damaged or mixed
+        blobs are a StoreError naming the case base."""
+        arrays = [decode_array(r.features, f"features of case {r.id}", self.where) for r in rows]
+        if not arrays:
+            return np.zeros((0,), dtype=np.float64)
+        shapes = {a.shape for a in arrays}
+        if len(shapes) > 1:
+            raise StoreError(
+                f"case base {cb.name!r} is damaged: its cases have features of different "
+                f"shapes ({', '.join(str(sh) for sh in sorted(shapes)[:3])})",
+                self.where,
+            )
+        if not all(np.issubdtype(a.dtype, np.floating) for a in arrays):
+            raise StoreError(f"case base {cb.name!r} is damaged: non-numeric features", self.where)
+        return np.stack(arrays).astype(np.float64, copy=False)
 
     def load_representations(self, name: str, kind: str) -> dict[int, np.ndarray]:
         """Cached per-case representations of one ``kind`` (case id -> array)."""
@@ -612,15 +619,18 @@ class StoreTransaction:
         self.store = store
         self.session = session
         self._changed: set[int] = set()
+        self._created: set[int] = set()
 
     def _bump_versions(self) -> None:
-        if self._changed:
+        # a case base created in this transaction starts at version 1, whatever it holds
+        changed = sorted(self._changed - self._created)
+        if changed:
             self.session.execute(
                 update(CaseBaseRow)
-                .where(CaseBaseRow.id.in_(sorted(self._changed)))
+                .where(CaseBaseRow.id.in_(changed))
                 .values(version=CaseBaseRow.version + 1)
             )
-            self._changed.clear()
+        self._changed.clear()
 
     def case_base(self, name: str) -> CaseBaseInfo:
         return self.store._info(self.session, self.store._row(self.session, name))
@@ -690,6 +700,7 @@ class StoreTransaction:
         )
         s.add(row)
         s.flush()
+        self._created.add(row.id)
         return self.store._info(s, row)
 
     def set_model(self, cb: CaseBaseInfo, model: Mapping[str, Any]) -> None:

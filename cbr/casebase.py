@@ -58,6 +58,7 @@ class CaseBase:
     _index: Any = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
+        # float64 problems (a read-only memory-mapped matrix among them) are used in place
         self.problems = np.asarray(self.problems, dtype=np.float64)
         self.labels = np.asarray([str(v) for v in self.labels], dtype=object)
         n = len(self.labels)
@@ -104,8 +105,12 @@ class CaseBase:
     def set_problem(self, i: int, values: np.ndarray) -> None:
         """Replace the problem of case ``i`` (its representation follows; the search index is
         rebuilt on next use)."""
+        if not self.problems.flags.writeable:  # a mapped matrix: change a copy of it
+            self.problems = np.array(self.problems)
         self.problems[i] = np.asarray(values, dtype=np.float64).reshape(self.problems.shape[1:])
         if self.reps is not None:
+            if not self.reps.flags.writeable:
+                self.reps = np.array(self.reps)
             self.reps[i] = self.measure.represent(self.problems[i][None])[0]
         self._index = None
 

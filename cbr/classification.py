@@ -28,7 +28,7 @@ from .estimator import Solved
 from .explain import Explanation
 from .retain import RetainDecision, decide_retention, record_retention
 from .revise import Revision, plan_revision, record_revision
-from .stored import StoredClassifier, load_classifier
+from .stored import StoredClassifier, load_classifier, write_matrices
 
 
 @dataclass(frozen=True)
@@ -168,6 +168,7 @@ def classify_with_feedback(
                 dec, rev = _learn(store, stored, clip, c.solved, label, settings)
             c = Classification(c.source, truth, c.solved, c.explanation, None, rev, dec)
         out.append(c)
+    write_matrices(store, stored.name)  # a large case base: its matrices follow the change
     return out
 
 

@@ -10,13 +10,15 @@ fitted in memory.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from casebase_store import CaseArrays, CaseBaseInfo, CaseStore, NewCase, StoreError
-from features.errors import ConfigError
+from casebase_store import CaseArrays, CaseBaseInfo, CaseStore, NewCase, StoreError, sqlite_file
+from casebase_store.case_matrix import cached_case_matrix, matrix_path, open_case_matrix
+from features.errors import ConfigError, DataError
 
 from .casebase import CaseBase
 from .estimator import CaseBaseClassifier
@@ -140,22 +142,97 @@ def _representations(
     return np.stack([cached[int(cid)] for cid in arrays.ids]).astype(np.float64)
 
 
+#: a case base at least this large (in cases) stored in a SQLite file keeps its problems and
+#: representations as memory-mapped matrices beside the file: every process maps one copy
+#: (the page cache's) instead of decoding and stacking its own from SQL
+MAPPED_MIN_CASES = 20_000
+_MATRICES = ("problems", "representations")
+
+
+def _matrix_key(info: CaseBaseInfo) -> str:
+    """The matrices of one state of one case base: identity and version."""
+    return f"{info.uid}-{info.version}"
+
+
+def write_matrices(store: CaseStore, name: str, min_cases: int | None = None) -> bool:
+    """Write the memory-mapped matrices of case base ``name`` as it is now (a large case base
+    in a SQLite file; the commands that change a case base call this after their change).
+    Returns whether it wrote them; read-only commands only ever read them."""
+    db = sqlite_file(store.where)
+    least = MAPPED_MIN_CASES if min_cases is None else min_cases
+    if db is None or store.readonly or store.count_cases(name) < least:
+        return False
+    info, arrays = store.load_case_base(name)
+    measure = _measure(info, store.where)
+    chunk = 8192
+
+    def problems() -> Iterator[np.ndarray]:
+        for a in range(0, len(arrays.ids), chunk):
+            yield arrays.features[a : a + chunk]
+
+    def representations() -> Iterator[np.ndarray]:
+        for a in range(0, len(arrays.ids), chunk):
+            yield measure.represent(arrays.features[a : a + chunk])
+
+    rep_shape = measure.represent(arrays.features[:1]).shape[1:]
+    key = _matrix_key(info)
+    cached_case_matrix(db, name, "problems", key, arrays.features.shape, problems, np.float64)
+    cached_case_matrix(
+        db, name, "representations", key, (len(arrays.ids), *rep_shape), representations
+    )
+    return True
+
+
+def _mapped(store: CaseStore, info: CaseBaseInfo, n: int) -> tuple[np.ndarray, ...] | None:
+    """The problems and representations of exactly this version, memory-mapped, when a writer
+    left them beside the database (None: read from SQL)."""
+    db = sqlite_file(store.where)
+    if db is None or n < 1:
+        return None
+    paths = [matrix_path(db, info.name, kind, _matrix_key(info)) for kind in _MATRICES]
+    if not all(p.exists() for p in paths):
+        return None
+    try:
+        out = tuple(open_case_matrix(p) for p in paths)
+    except DataError:
+        return None  # damaged or half-removed: the SQL store is the truth
+    return out if all(len(m) == n for m in out) else None
+
+
+def _read(
+    store: CaseStore, name: str
+) -> tuple[CaseBaseInfo, CaseArrays, tuple[np.ndarray, ...] | None]:
+    """The case base's description and cases, with its mapped matrices when a writer left
+    them for exactly this version; otherwise one read of everything, problems included."""
+    info, arrays = store.load_case_base(name, features=False)
+    mapped = _mapped(store, info, len(arrays.ids))
+    if mapped is None:
+        info, arrays = store.load_case_base(name)
+    return info, arrays, mapped
+
+
 def _case_base(
-    store: CaseStore, info: CaseBaseInfo, arrays: CaseArrays, config: FeatureConfig
+    store: CaseStore,
+    info: CaseBaseInfo,
+    arrays: CaseArrays,
+    config: FeatureConfig,
+    mapped: tuple[np.ndarray, ...] | None,
 ) -> CaseBase:
     measure = _measure(info, store.where)
     if len(arrays.ids) == 0:
         raise StoreError(f"case base {info.name!r} has no cases", store.where)
-    if len(info.feature_names) and arrays.features.shape[-1] != len(info.feature_names):
+    width = (arrays.features if mapped is None else mapped[0]).shape[-1]
+    if len(info.feature_names) and width != len(info.feature_names):
         raise StoreError(
-            f"case base {info.name!r} is damaged: its cases have {arrays.features.shape[-1]} "
+            f"case base {info.name!r} is damaged: its cases have {width} "
             f"feature columns but the case base names {len(info.feature_names)}",
             store.where,
         )
+    problems = arrays.features if mapped is None else mapped[0]
     cb = CaseBase(
         config,
         measure,
-        arrays.features,
+        problems,
         arrays.labels,
         info.feature_names,
         info.feature_words,
@@ -165,7 +242,7 @@ def _case_base(
         origins=arrays.origins,
         frames=arrays.frame_ranges,
     )
-    cb.reps = _representations(store, info, arrays, measure)
+    cb.reps = _representations(store, info, arrays, measure) if mapped is None else mapped[1]
     return cb
 
 
@@ -189,10 +266,11 @@ def _params(
 
 
 def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
-    """The fitted classifier stored as case base ``name`` (its active cases)."""
-    info, arrays = store.load_case_base(name)
+    """The fitted classifier stored as case base ``name`` (its active cases); a large case base
+    maps its matrices from beside the database when they are there (:func:`write_matrices`)."""
+    info, arrays, mapped = _read(store, name)
     config = _config(info, store.where)
-    cb = _case_base(store, info, arrays, config)
+    cb = _case_base(store, info, arrays, config, mapped)
     model = info.model
     clf = CaseBaseClassifier(**_params(model, config, cb.measure))
     try:

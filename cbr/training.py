@@ -26,7 +26,13 @@ from .casebase import CaseBase, frames_of, skeleton_of, subject_of
 from .estimator import CaseBaseClassifier, check_labels, unusable
 from .maintenance import MaintenanceReport, record_trim
 from .problem import FeatureConfig, warm
-from .stored import StoredClassifier, case_records, load_classifier, model_document
+from .stored import (
+    StoredClassifier,
+    case_records,
+    load_classifier,
+    model_document,
+    write_matrices,
+)
 from .stored import stored_case_base as to_store
 
 
@@ -122,6 +128,7 @@ def train(
             record_trim(tx, info, fitted.maintenance_, ids)
 
     write_store(db, write)
+    _refresh_matrices(db, name)
     return TrainResult(
         name,
         len(cb),
@@ -183,6 +190,7 @@ def append(
             ids = np.asarray(tx.add_cases(info, case_records(cb)))
             _cache_representations(tx, stored.classifier, cb, ids)
             tx.log(info, "append", reason=f"{len(cb)} cases from {len(clips)} clips")
+        write_matrices(store, name)
         total = store.count_cases(name)
     finally:
         store.close()
@@ -191,6 +199,15 @@ def append(
         name, len(cb), total, _counts(text), clf.feature_config_, clf.measure_.name, None, {},
         skipped,
     )  # fmt: skip
+
+
+def _refresh_matrices(db: str | Path, name: str) -> None:
+    """A large case base's memory-mapped matrices, written for the state just stored."""
+    store = open_store(db, create=False)
+    try:
+        write_matrices(store, name)
+    finally:
+        store.close()
 
 
 def _new_cases(

@@ -248,7 +248,7 @@ def _export(store: CaseStore, args: argparse.Namespace) -> int:
 
 def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     from cbr.maintenance import EDITORS, record_trim
-    from cbr.stored import load_classifier
+    from cbr.stored import load_classifier, write_matrices
 
     name = store.choose(args.name)
     if not 0.0 < args.keep <= 1.0:
@@ -267,6 +267,7 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     if not args.dry_run:
         with store.transaction() as tx:
             record_trim(tx, tx.expect(name, stored.uid), report)
+        write_matrices(store, name)
     doc = {
         "method": report.method,
         "size_before": report.size_before,
