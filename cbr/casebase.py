@@ -56,6 +56,8 @@ class CaseBase:
     skeletons: tuple[str | None, ...] = ()
     reps: np.ndarray | None = None
     _index: Any = field(default=None, repr=False)
+    #: what explanations derive from the cases (label profiles, ...): emptied when they change
+    cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         # float64 problems (a read-only memory-mapped matrix among them) are used in place
@@ -101,6 +103,7 @@ class CaseBase:
     def invalidate(self) -> None:
         self.reps = None
         self._index = None
+        self.cache.clear()
 
     def set_problem(self, i: int, values: np.ndarray) -> None:
         """Replace the problem of case ``i`` (its representation follows; the search index is
@@ -113,10 +116,12 @@ class CaseBase:
                 self.reps = np.array(self.reps)
             self.reps[i] = self.measure.represent(self.problems[i][None])[0]
         self._index = None
+        self.cache.clear()
 
     def set_label(self, i: int, label: str) -> None:
         """Replace the solution of case ``i``."""
         self.labels[i] = str(label)
+        self.cache.clear()
 
     def subset(self, keep: np.ndarray | Sequence[int]) -> CaseBase:
         """The case base restricted to ``keep`` (bool mask or indices), reps reused."""
@@ -163,3 +168,4 @@ class CaseBase:
         if self.reps is not None:
             self.reps = np.concatenate([self.reps, self.measure.represent(self.problems[-1:])])
         self._index = None
+        self.cache.clear()

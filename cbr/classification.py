@@ -34,7 +34,8 @@ from .stored import StoredClassifier, load_classifier, write_matrices
 @dataclass(frozen=True)
 class Classification:
     """One clip's answer: ``solved`` and ``explanation`` (None when the clip could not be
-    classified: ``unclassifiable`` says why), and what feedback changed."""
+    classified: ``unclassifiable`` says why), and what feedback changed; ``source`` the file
+    passed and ``made_from`` what that pose file was made from (a video), if anything."""
 
     source: str
     true_label: str | None
@@ -43,6 +44,7 @@ class Classification:
     unclassifiable: str | None = None
     revision: Revision | None = None
     retention: RetainDecision | None = None
+    made_from: str | None = None
 
     @property
     def label(self) -> str | None:
@@ -50,10 +52,14 @@ class Classification:
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"clip": self.source}
+        if self.made_from:
+            out["made_from"] = self.made_from
         if self.explanation is not None and self.solved is not None:
             out.update(self.explanation.to_dict())
+            # nearest-case distance over the usual held-out one, and the calibrated flag
             out["novelty"] = self.solved.novelty
             out["unlike_cases"] = self.solved.unlike_cases
+            out["unlike_reason"] = self.solved.unlike_reason or None
             out["torso_share"] = self.solved.torso_share
         else:
             out.update(label=None, unclassifiable=self.unclassifiable)
@@ -80,26 +86,68 @@ class Classification:
         return out
 
 
-def _solve(stored: StoredClassifier, clip: PoseSequence, truth: str | None) -> Classification:
+def _solve(
+    stored: StoredClassifier, clip: PoseSequence, truth: str | None, target: str
+) -> Classification:
     clf = stored.classifier
+    made_from = clip.metadata.get("made_from")
+    made = None if made_from is None else str(made_from)
     try:
         solved = clf.solve([clip])[0]
     except DataError as exc:
-        return Classification(clip.source, truth, None, None, unclassifiable=exc.message)
-    return Classification(clip.source, truth, solved, clf.explain_solved(solved))
+        return Classification(
+            clip.source, truth, None, None, unclassifiable=exc.message, made_from=made
+        )
+    exp = clf.explain_solved(solved, target)
+    return Classification(clip.source, truth, solved, exp, made_from=made)
 
 
 def classify_clips(
     stored: StoredClassifier,
     clips: Sequence[PoseSequence],
     truths: Sequence[str | None],
+    target: str = "label",
 ) -> list[Classification]:
-    """Classify and explain every clip (nothing is written)."""
+    """Classify and explain every clip (nothing is written); ``target`` the column the
+    labels come from (``"correct"``: read as correct / incorrect repetitions)."""
     pairs = list(zip(clips, truths, strict=True))
     return [
-        _solve(stored, clip, truth)
+        _solve(stored, clip, truth, target)
         for clip, truth in progress(pairs, desc="classifying", total=len(pairs), unit="clip")
     ]
+
+
+def summarise(results: Sequence[Classification], target: str = "label") -> dict[str, Any]:
+    """What a run of :func:`classify_clips` comes to: clips, classified, the clips unlike the
+    stored cases and the unclassifiable ones; with true labels, the accuracy, the recall per
+    class (``{label: {"right", "clips", "recall"}}``), the mean confidence (what the
+    accuracy should be if the confidences are probabilities) and the wrong clips."""
+    done = [r for r in results if r.solved is not None]
+    labelled = [r for r in done if r.true_label is not None]
+    right = [r for r in labelled if r.true_label == r.label]
+    recall: dict[str, dict[str, Any]] = {}
+    for lab in sorted({str(r.true_label) for r in labelled}):
+        mine = [r for r in labelled if r.true_label == lab]
+        hits = sum(r.label == lab for r in mine)
+        recall[lab] = {"right": hits, "clips": len(mine), "recall": hits / len(mine)}
+    conf = [r.solved.solution.confidence for r in labelled if r.solved is not None]
+    return {
+        "target": target,
+        "clips": len(results),
+        "classified": len(done),
+        "labelled": len(labelled),
+        "right": len(right),
+        "accuracy": len(right) / len(labelled) if labelled else None,
+        "expected_accuracy": float(np.mean(conf)) if conf else None,
+        "recall": recall,
+        "wrong": [
+            {"clip": r.source, "label": r.label, "true_label": r.true_label}
+            for r in labelled
+            if r.true_label != r.label
+        ],
+        "unlike_cases": [r.source for r in done if r.solved is not None and r.solved.unlike_cases],
+        "unclassifiable": [r.source for r in results if r.solved is None],
+    }
 
 
 def check_feedback_label(label: str, known: Sequence[str], new_label: bool) -> str:
@@ -149,6 +197,7 @@ def classify_with_feedback(
     truths: Sequence[str | None],
     label: str,
     settings: FeedbackSettings = FeedbackSettings(),
+    target: str = "label",
 ) -> list[Classification]:
     """Classify every clip, then learn from its true ``label`` (checked by
     :func:`check_feedback_label` first): retain it as a new case when it is novel and
@@ -157,16 +206,18 @@ def classify_with_feedback(
     out = []
     pairs = list(zip(clips, truths, strict=True))
     for clip, truth in progress(pairs, desc="classifying", total=len(pairs), unit="clip"):
-        c = _solve(stored, clip, truth)
+        c = _solve(stored, clip, truth, target)
         if c.solved is not None:
             try:
                 dec, rev = _learn(store, stored, clip, c.solved, label, settings)
             except StaleCaseError:  # a case changed under us: read again, decide again
                 stored = _reload(store, stored)
-                c = _solve(stored, clip, truth)
+                c = _solve(stored, clip, truth, target)
                 assert c.solved is not None
                 dec, rev = _learn(store, stored, clip, c.solved, label, settings)
-            c = Classification(c.source, truth, c.solved, c.explanation, None, rev, dec)
+            c = Classification(
+                c.source, truth, c.solved, c.explanation, None, rev, dec, c.made_from
+            )
         out.append(c)
     write_matrices(store, stored.name)  # a large case base: its matrices follow the change
     return out

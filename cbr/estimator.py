@@ -14,7 +14,8 @@ Learned at fit time from the training clips only (so cross-validation stays hone
 - ``feature_weights``: z-normalisation and Fisher-ratio weights of the features
   (:mod:`cbr.weights`), used by the euclidean measure and cited by explanations;
 - how far from the cases a held-out clip usually lies (:mod:`cbr.novelty`), so a clip unlike
-  every stored case is flagged, whatever the configuration.
+  every stored case is flagged, whatever the configuration; and how often a held-out clip's
+  vote share was right (:mod:`cbr.calibration`), so the confidence is a probability.
 
 With vector problems under euclidean (clip summaries, QMPs), ``"auto"`` chooses the side
 handling, the weighting and (clip summaries) the phase means by leave-one-subject-out accuracy
@@ -41,6 +42,7 @@ from features.body import mirrored, moves_left_more, torso_share
 from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
 
+from .calibration import ConfidenceCalibration, calibrate_confidence, held_out
 from .casebase import CaseBase, frames_of, skeleton_of, subject_of
 from .explain import Explanation, explain
 from .fitting import (
@@ -53,7 +55,7 @@ from .fitting import (
     side_name,
 )
 from .maintenance import EDITORS, MaintenanceReport
-from .novelty import NoveltyCalibration, calibrate
+from .novelty import CALIBRATION_SAMPLE, NoveltyCalibration, from_distances, sample
 from .problem import FeatureConfig, Problem, extract_problem, resolve_config
 from .retrieve import Retrieval, retrieve
 from .reuse import WEIGHTINGS as VOTE_WEIGHTINGS
@@ -94,10 +96,11 @@ def unusable(seqs: Sequence[PoseSequence]) -> list[int]:
 
 @dataclass(frozen=True)
 class Solved:
-    """One clip through the cycle: its problem, the retrieved cases, the reused solution, how
-    far it lies from the cases (``novelty``: nearest-case distance over the case base's usual
-    held-out one) and whether that makes it unlike the stored cases (calibrated per case base);
-    ``torso_share``: the share of its frames that show the person."""
+    """One clip through the cycle: its problem, the retrieved cases, the reused solution (its
+    ``confidence`` calibrated), how far it lies from the cases (``novelty``: nearest-case
+    distance over the case base's usual held-out one) and whether it is unlike the stored
+    cases (calibrated per case base; ``unlike_reason`` "distance" or "sensor", see
+    :mod:`cbr.novelty`); ``torso_share``: the share of its frames that show the person."""
 
     problem: Problem
     retrieval: Retrieval
@@ -105,6 +108,7 @@ class Solved:
     novelty: float
     unlike_cases: bool
     torso_share: float
+    unlike_reason: str = ""
 
 
 @dataclass(frozen=True)
@@ -134,6 +138,10 @@ class _Choice:
     weighting: str
     phases: int
     scores: dict[str, float]
+
+
+#: training clips classified held out to calibrate (vector problems: a full scan costs little)
+MAX_CALIBRATION_VECTORS = 2000
 
 
 class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
@@ -338,7 +346,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         if self.maintenance_ is not None:
             cb, origin = self.maintenance_.casebase, origin[self.maintenance_.kept]
         sources = np.array([s.source or f"clip {i}" for i, s in enumerate(seqs)], dtype=object)
-        self.novelty_ = self._calibrate(cb, cases, origin, subjects, sources)
+        self.novelty_, self.confidence_ = self._calibrate(
+            seqs, cb, cases, origin, subjects, sources
+        )
         self.classes_ = classes
         self.case_origin_ = origin
         self.feature_config_ = config
@@ -498,27 +508,49 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             skeletons=tuple(skeleton_of(s) for s in case_seqs),
         )
 
-    @staticmethod
     def _calibrate(
+        self,
+        seqs: list[PoseSequence],
         cb: CaseBase,
         cases: Cases,
         origin: np.ndarray,
         subjects: np.ndarray,
         sources: np.ndarray,
-    ) -> NoveltyCalibration:
-        """How far from the cases a held-out training clip lies, held out as a new clip will
-        be: by subject when the clips name two or more subjects; else by source recording
-        when there are two or more (the repetitions cut from one recording are near copies of
-        each other, not what a new recording is); else by clip. A clip's mirror image goes
-        with it."""
+    ) -> tuple[NoveltyCalibration, ConfidenceCalibration]:
+        """The training clips classified held out as a new clip will be: by subject when the
+        clips name two or more subjects; else by source recording when there are two or more
+        (the repetitions cut from one recording are near copies of each other, not what a new
+        recording is); else by clip (a clip's mirror image goes with it). From them, how far
+        from the cases a held-out clip usually lies (the "unlike the stored cases" flag) and how
+        often each vote share was right (the confidence)."""
         n = len(subjects)
-        queries = cases.values[cases.origin < n]  # the training clips as queries see them
+        real = cases.origin < n
+        queries = cases.values[real]  # the training clips as queries see them
+        labels = cases.labels[real]
         clip = origin % n
         if "" not in set(subjects.tolist()) and len(set(subjects.tolist())) >= 2:
-            return calibrate(cb, queries, subjects, subjects[clip], "leave-one-subject-out")
-        if len(set(sources.tolist())) >= 2:
-            return calibrate(cb, queries, sources, sources[clip], "leave-one-recording-out")
-        return calibrate(cb, queries, np.arange(n), clip, "leave-one-out")
+            groups, case_groups, basis = subjects, subjects[clip], "leave-one-subject-out"
+        elif len(set(sources.tolist())) >= 2:
+            groups, case_groups, basis = sources, sources[clip], "leave-one-recording-out"
+        else:
+            groups, case_groups, basis = np.arange(n), clip, "leave-one-out"
+        # a full scan per clip: every clip of vector problems, a sample of sequences
+        size = MAX_CALIBRATION_VECTORS if queries.ndim == 2 else CALIBRATION_SAMPLE
+        pick = sample(len(queries), size)
+        h = held_out(
+            cb,
+            queries[pick],
+            labels[pick],
+            np.asarray(groups, dtype=object)[pick],
+            np.asarray(case_groups, dtype=object),
+            int(self.k),
+            self.weights,  # type: ignore[arg-type]
+        )
+        skeletons = tuple(sorted({skeleton_of(s) for s in seqs}))
+        return (
+            from_distances(h.nearest, basis, skeletons=skeletons),
+            calibrate_confidence(h.share, h.right, basis),
+        )
 
     def _edit(self, cb: CaseBase) -> MaintenanceReport | None:
         """Run the maintenance editor these parameters ask for (None: no editing)."""
@@ -561,21 +593,16 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             p = self.case_base_.problem_of(seq)
             r = retrieve(self.case_base_, p, int(self.k))
             s = reuse(r, labels, self.weights)  # type: ignore[arg-type]
+            s = dataclasses.replace(s, confidence=self.confidence_(s.vote_share))
             nearest = float(r.distances[0]) if len(r.distances) else float("inf")
-            out.append(
-                Solved(
-                    p,
-                    r,
-                    s,
-                    self.novelty_.ratio(nearest),
-                    self.novelty_.unlike(nearest),
-                    torso_share(seq),
-                )
-            )
+            reason = self.novelty_.reason(nearest, skeleton_of(seq))
+            ratio = self.novelty_.ratio(nearest)
+            out.append(Solved(p, r, s, ratio, bool(reason), torso_share(seq), reason))
         return out
 
     def predict_proba(self, X: Any) -> np.ndarray:
-        """``(n_clips, n_classes)`` vote shares, columns in ``classes_`` order."""
+        """``(n_clips, n_classes)`` vote shares, columns in ``classes_`` order (the calibrated
+        probability of the winner is ``solve(X)[i].solution.confidence``)."""
         return np.stack([s.solution.proba for s in self.solve(X)])
 
     def predict(self, X: Any) -> np.ndarray:
@@ -583,13 +610,29 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         proba = self.predict_proba(X)
         return np.asarray(self.classes_[np.argmax(proba, axis=1)])
 
-    def explain(self, X: Any) -> list[Explanation]:
-        """An explanation in words for every clip in ``X``."""
-        return [self.explain_solved(s) for s in self.solve(X)]
+    def explain(self, X: Any, target: str | None = None) -> list[Explanation]:
+        """An explanation in words for every clip in ``X`` (``target``: the column the labels
+        come from; ``"correct"`` reads them as correct / incorrect repetitions)."""
+        return [self.explain_solved(s, target) for s in self.solve(X)]
 
-    def explain_solved(self, solved: Solved) -> Explanation:
+    def explain_solved(self, solved: Solved, target: str | None = None) -> Explanation:
         """The explanation of one :meth:`solve` result."""
-        return explain(self.case_base_, solved.problem, solved.retrieval, solved.solution)
+        return explain(
+            self.case_base_,
+            solved,
+            self.answer,
+            target=target,
+            unlike_ratio=self.novelty_.unlike_ratio,
+            k=int(self.k),
+            weights=self.weights,  # type: ignore[arg-type]
+        )
+
+    def answer(self, values: np.ndarray) -> str:
+        """The label the classifier gives a problem ``values`` (retrieve and reuse, as
+        :meth:`solve` does): how counterfactuals are checked."""
+        check_is_fitted(self, "case_base_")
+        r = retrieve(self.case_base_, np.asarray(values), int(self.k))
+        return reuse(r, self._class_labels(), self.weights).label  # type: ignore[arg-type]
 
     def refresh(self) -> None:
         """Follow changes to ``case_base_`` (revised or retained cases): the classes are the

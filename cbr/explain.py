@@ -1,34 +1,63 @@
-"""Explanations in words: which features matched the retrieved cases, which did not, and what
-separates the clip from the nearest case of another activity.
+"""Explanations in words a person can check.
 
-A feature (fluent state or QMP) is *seen* in a problem when its confidence is at least 0.5 in
-at least :data:`SEEN_FRACTION` of the (resampled) frames; for a QMP vector, when its value is
-at least 0.5. Features seen in almost every case say little, so each list is ordered by how
-distinctive the feature is in the case base (1 - the share of cases that show it).
+The default text (:attr:`Explanation.text`) is at most four lines:
 
-Clip summaries (``FeatureConfig.summary``): a fluent state is seen when its mean confidence
-over the clip (about the share of frames it holds) is at least :data:`SEEN_FRACTION`; the
-lists use the plain state words. With learned feature weights (:mod:`cbr.weights`) the
-explanation also names the features the case base weights most and the ones that, weighted,
-set the clip apart from the nearest case of another activity.
+1. the answer and its confidence (a probability, calibrated in fit), and whether the clip is
+   unlike the stored cases;
+2. why: the few features whose value in the clip is typical of that answer's cases and
+   unlike the other activities' (per-feature evidence: how much likelier the clip's value is
+   among the answer's cases than among the others'), in units, with the answer's usual range;
+   for a repetition check (a case base of correct and incorrect repetitions), what the clip
+   did outside the range of the correct repetitions;
+3. the nearest case of the answer and the nearest case of another label (a clip's mirror
+   image is the same clip, not a second neighbour);
+4. the fewest changes, in units, that make the classifier answer that other label, computed
+   and checked (:mod:`cbr.counterfactual`).
+
+:attr:`Explanation.verbose` adds the vote, every retrieved case, what the clip shares with
+the similar cases and what not (a fluent state held less than half of the time is said to
+hold "at times"; a difference smaller than the state's spread among cases of one activity is
+not reported as presence against absence), the differences from the nearest case of the other
+label and the counterfactual's checks. Every statement is also kept as a :class:`Claim`, so
+:mod:`cbr.consistency` can check it against the data.
+
+When the clip moves its left side more and is compared as its mirror image
+(``Problem.mirrored``), the words name the clip's sides as recorded.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from features.body import swap_side
+from features.datasets import truth_value
+
 from .casebase import CaseBase
+from .counterfactual import MAX_CHANGES, Counterfactual, counterfactual
 from .problem import ANGLE_PREFIX, POSITION_PREFIX, Problem
+from .profiles import Profiles, View, profiles_of, view_of
 from .retrieve import Retrieval, nearest_of_other_label
-from .reuse import Solution
+from .reuse import Weights
 from .weights import MIRROR_FLAG
 
+if TYPE_CHECKING:
+    from .estimator import Solved
+
 SEEN_FRACTION = 0.15
+#: a fluent state held at least this share of the clip is a steady property of it
+STEADY_FRACTION = 0.5
 MAX_LISTED = 6
-_PREVALENCE_SAMPLE = 2000
+MAX_TEXT = 400
+#: the likelihood ratio a feature's value must reach to be said to decide the answer
+MIN_EVIDENCE = float(np.log(4.0))
+#: features named on the "why" line and changes shown on the counterfactual line at most
+SHORT_ITEMS = 3
+MIRRORED = " (mirrored)"
 
 
 def presence(values: np.ndarray) -> np.ndarray:
@@ -38,69 +67,6 @@ def presence(values: np.ndarray) -> np.ndarray:
     ``(..., n_features)`` QMP vectors (pass ``values[..., None, :]``).
     """
     return np.asarray(np.asarray(values) >= 0.5, dtype=np.float64).mean(axis=-2)
-
-
-@dataclass(frozen=True)
-class Contrast:
-    """The nearest case of another activity and what would have to change."""
-
-    label: str
-    case_id: int
-    source: str
-    distance: float
-    would_need: tuple[str, ...]
-    would_lose: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class Explanation:
-    label: str
-    confidence: float
-    neighbours: tuple[dict[str, Any], ...]
-    matched: tuple[str, ...]
-    not_seen: tuple[str, ...]
-    only_here: tuple[str, ...]
-    contrast: Contrast | None
-    text: str = field(default="")
-    weighted_most: tuple[str, ...] = ()
-    differs_most: tuple[str, ...] = ()
-    # for each of differs_most: {"feature", "here", "there", "unit"} in the feature's own units
-    differences: tuple[dict[str, Any], ...] = ()
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "label": self.label,
-            "confidence": self.confidence,
-            "neighbours": list(self.neighbours),
-            "matched": list(self.matched),
-            "not_seen": list(self.not_seen),
-            "only_here": list(self.only_here),
-            "contrast": None
-            if self.contrast is None
-            else {
-                "label": self.contrast.label,
-                "case_id": self.contrast.case_id,
-                "source": self.contrast.source,
-                "distance": self.contrast.distance,
-                "would_need": list(self.contrast.would_need),
-                "would_lose": list(self.contrast.would_lose),
-            },
-            "text": self.text,
-            "weighted_most": list(self.weighted_most),
-            "differs_most": list(self.differs_most),
-            "differences": list(self.differences),
-        }
-
-
-def _presence_of(cb: CaseBase, values: np.ndarray) -> np.ndarray:
-    v = np.asarray(values, dtype=np.float64)
-    if v.ndim == cb.problems.ndim - 1:  # one problem
-        v = v[None]
-    if v.ndim == 2:  # vectors (QMP): one "frame"
-        v = v[:, None, :]
-    elif v.ndim > 3:  # unknown layout: flatten per case
-        v = v.reshape(len(v), 1, -1)
-    return presence(v)
 
 
 def state_columns(names: tuple[str, ...]) -> tuple[np.ndarray, bool] | None:
@@ -120,21 +86,6 @@ def state_columns(names: tuple[str, ...]) -> tuple[np.ndarray, bool] | None:
     return np.array(keep, dtype=np.int64), summary
 
 
-def _weighted_terms(cb: CaseBase, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
-    """Per-column weighted squared differences of two vector problems (None: no weights)."""
-    mult = getattr(cb.measure, "multiplier", None)
-    if mult is None or a.ndim != 1:
-        return None
-    m = np.asarray(mult, dtype=np.float64)
-    return np.asarray(((a - b) * m) ** 2, dtype=np.float64)
-
-
-def _ranked(mask: np.ndarray, score: np.ndarray, words: tuple[str, ...]) -> tuple[str, ...]:
-    idx = np.flatnonzero(mask)
-    idx = idx[np.argsort(-score[idx], kind="stable")][:MAX_LISTED]
-    return tuple(words[i] for i in idx)
-
-
 def quantity(name: str, value: float) -> tuple[float, str]:
     """A problem column's value in its own unit: joint angles in degrees (stored as radians /
     pi), positions in torso lengths; a fluent state's mean (over the clip or a phase of it) is
@@ -152,153 +103,742 @@ def quantity(name: str, value: float) -> tuple[float, str]:
     return float(value), "confidence"
 
 
-def _said(value: float, unit: str) -> str:
+def said(value: float, unit: str) -> str:
+    """A value in its unit as people write it: 62°, 40 % of the time, 0.36 torso lengths."""
     if unit == "degrees":
         return f"{value:.0f}°"
     if unit == "share":
         return f"{100.0 * value:.0f} % of the time"
     if unit == "confidence":
         return f"confidence {value:.2f}"
+    if unit == "detected":
+        return "shown" if value >= 0.5 else "not shown"
     return f"{value:.2f} {unit}".rstrip()
 
 
-def _join(words: tuple[str, ...]) -> str:
-    return ", ".join(words) if words else "none"
+def _span(low: float, high: float, unit: str) -> str:
+    """A range in a unit: 45–80°, 20–60 %, 0.90–1.10 torso lengths."""
+    if unit == "degrees":
+        return f"{low:.0f}–{high:.0f}°"
+    if unit == "share":
+        return f"{100 * low:.0f}–{100 * high:.0f} %"
+    if unit == "torso lengths":
+        return f"{low:.2f}–{high:.2f} torso lengths"
+    return f"{low:.2f}–{high:.2f}"
+
+
+def label_words(label: str, target: str | None = None) -> str:
+    """A solution as people say it: for a repetition check (``target`` "correct", or labels
+    "correct" / "incorrect") a correct / an incorrect repetition; else the label itself."""
+    if target == "correct" or label in ("correct", "incorrect"):
+        truth = truth_value(label)
+        if truth is not None:
+            return "a correct repetition" if truth else "an incorrect repetition"
+    return label
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One statement about one readable column (:mod:`cbr.profiles`): ``part`` the list it
+    belongs to ("why", "outside", "change", "matched", "not_seen", "only_here",
+    "difference"), ``column`` its machine name and ``feature`` its feature's, the clip's value
+    ``here`` and what it is compared with: ``there`` (a case's value or a label's mean), the
+    ``low``-``high`` usual range of ``label``'s cases; ``steady``: said to hold for most of the
+    clip (fluent states in the presence lists)."""
+
+    part: str
+    column: str
+    feature: str
+    words: str
+    here: float
+    unit: str
+    there: float | None = None
+    low: float | None = None
+    high: float | None = None
+    label: str | None = None
+    steady: bool = False
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+@dataclass(frozen=True)
+class Contrast:
+    """The nearest case of another label (``position`` in the case base, store ``case_id``),
+    and the counterfactual toward that label: ``changes`` (claims, one per changed feature,
+    the guide's value as ``there``), whether it holds (``valid``: the classifier answers
+    ``label`` for the changed clip; ``answer`` what it answers), the case whose values were
+    copied (``guide`` its position, ``guide_case_id``) and ``plausibility`` (see
+    :mod:`cbr.counterfactual`)."""
+
+    label: str
+    case_id: int
+    source: str
+    distance: float
+    changes: tuple[Claim, ...] = ()
+    valid: bool = False
+    answer: str = ""
+    guide_case_id: int | None = None
+    plausibility: float = float("nan")
+    position: int = -1
+    guide: int | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "label": self.label,
+            "case_id": self.case_id,
+            "source": self.source,
+            "distance": self.distance,
+            "changes": [c.to_dict() for c in self.changes],
+            "valid": self.valid,
+            "answer": self.answer,
+            "guide_case_id": self.guide_case_id,
+            "plausibility": self.plausibility,
+        }
+
+
+@dataclass(frozen=True)
+class Explanation:
+    label: str
+    confidence: float
+    neighbours: tuple[dict[str, Any], ...]
+    matched: tuple[str, ...]
+    not_seen: tuple[str, ...]
+    only_here: tuple[str, ...]
+    contrast: Contrast | None
+    text: str = field(default="")
+    verbose: str = field(default="")
+    claims: tuple[Claim, ...] = ()
+    vote_share: float = float("nan")
+    mirrored: bool = False
+    # for the few features that set the clip apart from the nearest case of the other label:
+    # {"feature", "here", "there", "unit"} in the feature's own units
+    differences: tuple[dict[str, Any], ...] = ()
+
+    @property
+    def why(self) -> tuple[Claim, ...]:
+        return tuple(c for c in self.claims if c.part in ("why", "outside"))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "label": self.label,
+            "confidence": self.confidence,
+            "vote_share": self.vote_share,
+            "neighbours": list(self.neighbours),
+            "matched": list(self.matched),
+            "not_seen": list(self.not_seen),
+            "only_here": list(self.only_here),
+            "contrast": None if self.contrast is None else self.contrast.to_dict(),
+            "text": self.text,
+            "verbose": self.verbose,
+            "claims": [c.to_dict() for c in self.claims],
+            "mirrored": self.mirrored,
+            "differences": list(self.differences),
+        }
+
+
+# -------------------------------------------------------------------------- reading columns
+
+
+@dataclass(frozen=True)
+class _Reading:
+    """One clip read against a case base: its view values ``x``, the view, the profiles, the
+    learned importance of each view column (``importance``, 0 where the measure ignores it)
+    and whether words must name the other side (the clip was mirrored)."""
+
+    cb: CaseBase
+    view: View
+    prof: Profiles
+    x: np.ndarray
+    importance: np.ndarray
+    mirrored: bool
+    readable: np.ndarray  # (m,) bool: in degrees, torso lengths, a share of the time, or a QMP
+    states: np.ndarray  # (m,) bool: the share of the time a fluent state holds
+
+    def words(self, j: int) -> str:
+        w = self.view.words[j]
+        return swap_side(w) if self.mirrored else w
+
+    def unit(self, j: int) -> tuple[float, str]:
+        if self.view.binary[j] and "@" not in self.view.names[j]:
+            return float(self.x[j]), "detected"
+        return quantity(self.view.names[j], float(self.x[j]))
+
+    def value(self, j: int, v: float) -> float:
+        return float(v) if self.view.binary[j] and "@" not in self.view.names[j] else (
+            quantity(self.view.names[j], float(v))[0]
+        )  # fmt: skip
+
+    def claim(
+        self,
+        part: str,
+        j: int,
+        *,
+        there: float | None = None,
+        low: float | None = None,
+        high: float | None = None,
+        label: str | None = None,
+        steady: bool = False,
+    ) -> Claim:
+        """A claim about view column ``j``, the compared values in the column's unit."""
+        here, unit = self.unit(j)
+
+        def conv(v: float | None) -> float | None:
+            return None if v is None else self.value(j, v)
+
+        feature = self.view.features[self.view.feature[j]]
+        return Claim(part, self.view.names[j], feature, self.words(j), here, unit,
+                     conv(there), conv(low), conv(high), label, steady)  # fmt: skip
+
+
+def _importance(cb: CaseBase, view: View) -> np.ndarray:
+    """How much each view column counts in the measure: its learned weight (z-normalised
+    multiplier times spread, squared) where the measure has weights, else 1."""
+    mult = getattr(cb.measure, "multiplier", None)
+    if mult is None or view.sequence or len(mult) != cb.problems.shape[-1]:
+        return np.ones(len(view.names))
+    m = np.asarray(mult, dtype=np.float64)[view.columns]
+    spread = cb.problems[:, view.columns].std(axis=0)
+    w = (m * spread) ** 2
+    return np.asarray(w / w.mean() if w.mean() > 0 else w, dtype=np.float64)
+
+
+def read(cb: CaseBase, problem: Problem) -> _Reading:
+    """The clip's problem read through the case base's view."""
+    view = view_of(cb)
+    x = view.of(np.asarray(problem.values, dtype=np.float64)[None])[0]
+    if "importance" not in cb.cache:
+        cb.cache["importance"] = _importance(cb, view)
+        units = [quantity(n, 0.0)[1] for n in view.names]
+        cb.cache["readable"] = np.array(
+            [(view.binary[j] and "@" not in n) or (units[j] in READABLE and "@std" not in n)
+             for j, n in enumerate(view.names)]
+        )  # fmt: skip
+        cb.cache["states"] = np.array([u == "share" for u in units])
+    return _Reading(
+        cb, view, profiles_of(cb), x, cb.cache["importance"], bool(problem.mirrored),
+        cb.cache["readable"], cb.cache["states"],
+    )  # fmt: skip
+
+
+#: units people read without a legend (a confidence's extremes and any variation are left to
+#: --verbose)
+READABLE = ("degrees", "torso lengths", "share")
+
+
+# -------------------------------------------------------------------------- the "why" line
+
+
+def _rest(prof: Profiles, row: int) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and standard deviation of every column over the cases of all labels but
+    ``row``'s."""
+    others = [i for i in range(len(prof.labels)) if i != row]
+    n = prof.count[others][:, None]
+    mean = (n * prof.mean[others]).sum(axis=0) / n.sum()
+    var = (n * (prof.sd[others] ** 2 + (prof.mean[others] - mean) ** 2)).sum(axis=0) / n.sum()
+    return mean, np.sqrt(var)
+
+
+def evidence(r: _Reading, label: str) -> np.ndarray:
+    """Per view column, the log likelihood ratio of the clip's value among ``label``'s cases
+    against the other labels' cases (normal densities, spreads no narrower than half the
+    spread within one label; binary columns: smoothed shares, and only for a QMP the clip
+    shows); -inf where the value is not typical of ``label`` (outside the usual range of its
+    cases, :data:`cbr.profiles.TYPICAL`), the measure ignores the column or people cannot
+    read it."""
+    prof = r.prof
+    row = prof.row(label)
+    mean_r, sd_r = _rest(prof, row)
+    floor = np.maximum(np.maximum(0.5 * prof.within, 0.05 * prof.overall), 1e-6)
+    sd_l = np.maximum(prof.sd[row], floor)
+    sd_o = np.maximum(sd_r, floor)
+    x = r.x
+    cont = (
+        -np.log(sd_l) - 0.5 * ((x - prof.mean[row]) / sd_l) ** 2
+        + np.log(sd_o) + 0.5 * ((x - mean_r) / sd_o) ** 2
+    )  # fmt: skip
+    n_l, n_o = prof.count[row], prof.count.sum() - prof.count[row]
+    p_l = (np.clip(prof.mean[row], 0.0, 1.0) * n_l + 1.0) / (n_l + 2.0)
+    p_o = (np.clip(mean_r, 0.0, 1.0) * n_o + 1.0) / (n_o + 2.0)
+    binary = np.where(x >= 0.5, np.log(p_l / p_o), -np.inf)
+    e = np.where(r.view.binary, binary, cont)
+    typical = r.view.binary | ((x >= prof.low[row]) & (x <= prof.high[row]))
+    # a fluent state the clip holds (almost) never is no feature of the clip
+    shown = ~r.states | (x >= SEEN_FRACTION)
+    return np.where(typical & shown & (r.importance > 0) & r.readable, e, -np.inf)
+
+
+def margin(r: _Reading, own: np.ndarray, other: np.ndarray) -> np.ndarray | None:
+    """Per view column, how much it brings the clip nearer to case ``own`` than to case
+    ``other`` under the measure (weighted squared differences; they add up to the difference
+    of the squared distances); None for sequence problems, whose distance does not split."""
+    if r.view.sequence:
+        return None
+    cols = r.view.columns
+    q, a, b = r.x, np.asarray(own)[cols], np.asarray(other)[cols]
+    mult = getattr(r.cb.measure, "multiplier", None)
+    w = np.ones(len(cols)) if mult is None else np.asarray(mult, dtype=np.float64)[cols] ** 2
+    return np.asarray(w * ((q - b) ** 2 - (q - a) ** 2), dtype=np.float64)
+
+
+def _best_per_feature(r: _Reading, score: np.ndarray, n: int, minimum: float) -> list[int]:
+    """The best-scoring column of each of the ``n`` best features (score >= ``minimum``)."""
+    out: list[int] = []
+    taken: set[int] = set()
+    for j in np.argsort(-score, kind="stable"):
+        if not score[j] >= minimum or len(out) == n:
+            break
+        f = int(r.view.feature[j])
+        if f not in taken:
+            taken.add(f)
+            out.append(int(j))
+    return out
+
+
+def why_claims(
+    r: _Reading, label: str, near: tuple[int, int] | None, n: int = SHORT_ITEMS
+) -> list[Claim]:
+    """The features that decided ``label``: characteristic of its cases, shown here
+    (:func:`evidence`) and, for vector problems, bringing the clip nearer to the nearest case
+    of ``label`` than to the nearest case of another label (``near``: their positions)."""
+    e = evidence(r, label)
+    if near is not None:
+        m = margin(r, r.cb.problems[near[0]], r.cb.problems[near[1]])
+        if m is not None:
+            e = np.where(m > 0, e, -np.inf)
+    row = r.prof.row(label)
+    # ranked by evidence times the column's weight in the measure: what decided it
+    score = np.where(e >= MIN_EVIDENCE, e * np.sqrt(r.importance), -np.inf)
+    return [
+        r.claim(
+            "why",
+            j,
+            low=r.prof.low[row, j],
+            high=r.prof.high[row, j],
+            label=label,
+            there=r.prof.mean[row, j],
+        )  # fmt: skip
+        for j in _best_per_feature(r, score, n, 0.0)
+    ]
+
+
+def outside_claims(r: _Reading, reference: str, n: int = SHORT_ITEMS) -> list[Claim]:
+    """Where the clip lies outside the usual range of ``reference``'s cases (the correct
+    repetitions) by more than the spread within one label, the most important first."""
+    prof = r.prof
+    row = prof.row(reference)
+    spread = np.maximum(prof.within, np.maximum(0.05 * prof.overall, 1e-6))
+    beyond = np.maximum(prof.low[row] - r.x, r.x - prof.high[row])
+    score = np.where(r.view.binary, 0.0, beyond / spread) * np.sqrt(r.importance)
+    score = np.where((beyond / spread >= 1.0) & r.readable, score, -np.inf)
+    return [
+        r.claim(
+            "outside",
+            j,
+            low=prof.low[row, j],
+            high=prof.high[row, j],
+            label=reference,
+            there=prof.mean[row, j],
+        )  # fmt: skip
+        for j in _best_per_feature(r, score, n, 0.0)
+    ]
+
+
+# -------------------------------------------------------------------------- presence lists
+
+
+def presence_claims(
+    r: _Reading, label: str, similar: np.ndarray
+) -> tuple[list[Claim], list[Claim], list[Claim]]:
+    """What the clip shares with its similar cases of ``label`` (``similar``: positions) and
+    what not: fluent states (clip-summary means; for sequences, the mean over the clip) the
+    clip holds at least :data:`SEEN_FRACTION` of the time against the similar cases' mean.
+    A state is in one list only, and a difference within the spread of the state among cases
+    of one label is no presence against absence."""
+    cols = [
+        j
+        for j, nm in enumerate(r.view.names)
+        if nm.endswith("@mean") and not nm.startswith((ANGLE_PREFIX, POSITION_PREFIX))
+    ]
+    if not cols:
+        return [], [], []
+    cols_a = np.array(cols)
+    cases = r.view.of(r.cb.problems[similar])[:, cols_a].mean(axis=0)
+    here = r.x[cols_a]
+    spread = r.prof.within[cols_a]
+    distinct = 1.0 - (r.view.of(r.cb.problems)[:, cols_a] >= SEEN_FRACTION).mean(axis=0)
+    apart = np.abs(here - cases) > spread
+    q_seen, c_seen = here >= SEEN_FRACTION, cases >= SEEN_FRACTION
+    lists: list[list[Claim]] = []
+    for mask, score in (
+        (q_seen & c_seen, distinct * here),
+        (~q_seen & c_seen & apart, distinct * cases),
+        (q_seen & ~c_seen & apart, distinct * here),
+    ):
+        idx = np.flatnonzero(mask)
+        idx = idx[np.argsort(-score[idx], kind="stable")][:MAX_LISTED]
+        lists.append(
+            [
+                r.claim(
+                    "",
+                    int(cols_a[i]),
+                    there=float(cases[i]),
+                    label=label,
+                    steady=bool(here[i] >= STEADY_FRACTION),
+                )  # fmt: skip
+                for i in idx
+            ]
+        )
+    parts = ("matched", "not_seen", "only_here")
+    matched, not_seen, only_here = (
+        [
+            Claim(
+                p,
+                c.column,
+                c.feature,
+                c.words,
+                c.here,
+                c.unit,
+                c.there,
+                c.low,
+                c.high,
+                c.label,
+                c.steady if p != "not_seen" else False,
+            )
+            for c in lst
+        ]  # fmt: skip
+        for p, lst in zip(parts, lists, strict=True)
+    )
+    return matched, not_seen, only_here
+
+
+def _held(c: Claim) -> str:
+    """A fluent state in a presence list: "left knee bent" or "left knee bent (at times)"."""
+    return c.words if c.steady or c.part == "not_seen" else f"{c.words} (at times)"
+
+
+# -------------------------------------------------------------------------- counterfactual
+
+
+def change_claims(r: _Reading, cf: Counterfactual, guide: np.ndarray) -> list[Claim]:
+    """One claim per changed feature: the column of it that differs most (weighted) between
+    the clip and the guide case, with the guide's value."""
+    g = r.view.of(np.asarray(guide)[None])[0]
+    out = []
+    for f in cf.features:
+        cols = np.flatnonzero(r.view.feature == f)
+        if r.readable[cols].any():
+            cols = cols[r.readable[cols]]
+        spread = np.maximum(r.prof.within[cols], 1e-9)
+        gap = np.abs(r.x[cols] - g[cols]) / spread * np.sqrt(np.maximum(r.importance[cols], 1e-12))
+        j = int(cols[int(np.argmax(gap))])
+        out.append(r.claim("change", j, there=float(g[j]), label=cf.label))
+    return out
+
+
+def _change_text(c: Claim) -> str:
+    if c.unit == "detected":
+        return f"{c.words} {'not ' if c.there is not None and c.there < 0.5 else ''}shown"
+    there = c.there if c.there is not None else float("nan")
+    return f"{c.words} {said(c.here, c.unit)} → {said(there, c.unit)}"
+
+
+def _claim_text(c: Claim, whose: str) -> str:
+    """``left knee angle (lowest) 62° (its cases: 45–80°)``: ``whose`` names the cases the
+    range is of."""
+    if c.unit == "detected":
+        share = "" if c.there is None else f" (in {100 * c.there:.0f} % of {whose})"
+        return f"{c.words}{share}"
+    rng = ""
+    if c.low is not None and c.high is not None and whose:
+        rng = f" ({whose}: {_span(c.low, c.high, c.unit)})"
+    return f"{c.words} {said(c.here, c.unit)}{rng}"
+
+
+# -------------------------------------------------------------------------- neighbours
+
+
+def clip_of(source: str) -> str:
+    """The clip a case comes from: its source without the mirror-image mark."""
+    return source.removesuffix(MIRRORED)
+
+
+def distinct_neighbours(cb: CaseBase, retrieval: Retrieval) -> list[int]:
+    """Positions in ``retrieval`` of its cases, one per clip: a clip's mirror image (a case
+    whose source ends with " (mirrored)") is the same clip, not a second neighbour."""
+    seen: set[str] = set()
+    keep = []
+    for pos, i in enumerate(retrieval.indices.tolist()):
+        clip = clip_of(cb.sources[i])
+        if clip and clip in seen:
+            continue
+        seen.add(clip)
+        keep.append(pos)
+    return keep
+
+
+def _short_source(source: str) -> str:
+    mirrored = source.endswith(MIRRORED)
+    name = Path(clip_of(source)).name or "?"
+    return name + (MIRRORED if mirrored else "")
+
+
+def _line_items(head: str, items: Sequence[str], budget: int) -> str:
+    """``head`` and as many ``items`` (at least one) as fit in ``budget`` characters."""
+    out = head + items[0]
+    for it in items[1:]:
+        if len(out) + 2 + len(it) > budget:
+            break
+        out += "; " + it
+    return out
+
+
+def _reference(labels: Sequence[str], target: str | None) -> str | None:
+    """In a repetition check (two labels read as correct / incorrect: ``target`` "correct",
+    or labels "correct" and "incorrect"), the label of the correct repetitions."""
+    if len(labels) != 2 or not (target == "correct" or set(labels) == {"correct", "incorrect"}):
+        return None
+    return next((lab for lab in labels if truth_value(lab) is True), None)
+
+
+def _cf_line(contrast: Contrast, name: str, shown: int) -> str:
+    """The counterfactual in words, with at most ``shown`` of its changes."""
+    changes = contrast.changes
+    if not contrast.valid or not changes:
+        return f"No change of up to {MAX_CHANGES} features makes it {name}."
+    said_ = "; ".join(_change_text(c) for c in changes[:shown])
+    if len(changes) <= shown:
+        return f"To be {name}: {said_}."
+    return f"To be {name}, {len(changes)} changes, e.g. {said_}."
 
 
 def explain(
-    cb: CaseBase, problem: Problem, retrieval: Retrieval, solution: Solution
+    cb: CaseBase,
+    solved: Solved,
+    answer: Callable[[np.ndarray], str],
+    *,
+    target: str | None = None,
+    unlike_ratio: float | None = None,
+    k: int = 5,
+    weights: Weights = "distance",
 ) -> Explanation:
-    """Explain one classification in words built from the feature names."""
-    all_words = problem.words if problem.words else cb.words
-    if len(all_words) != cb.problems.shape[-1]:
-        all_words = tuple(f"feature {i}" for i in range(cb.problems.shape[-1]))
-    picked = state_columns(cb.names)
-    if picked is not None and picked[1]:
-        cols = picked[0]
-        words = tuple(all_words[i] for i in cols)
-
-        def seen(v: np.ndarray) -> np.ndarray:
-            # mean confidence ~ share of frames: compared with SEEN_FRACTION like a presence
-            return np.atleast_2d(np.asarray(v, dtype=np.float64))[:, cols]
-    elif picked is not None:
-        cols = picked[0]
-        words = tuple(all_words[i] for i in cols)
-
-        def seen(v: np.ndarray) -> np.ndarray:
-            return _presence_of(cb, v)[:, cols]
-    else:
-        words = all_words
-
-        def seen(v: np.ndarray) -> np.ndarray:
-            return _presence_of(cb, v)
-
-    q = seen(problem.values)[0]
-    sample = cb.problems
-    if len(sample) > _PREVALENCE_SAMPLE:
-        pick = np.random.default_rng(0).choice(len(sample), _PREVALENCE_SAMPLE, replace=False)
-        sample = sample[np.sort(pick)]
-    distinct = 1.0 - (seen(sample) >= SEEN_FRACTION).mean(axis=0)
-
-    win = retrieval.indices[retrieval.labels.astype(str) == solution.label]
-    if len(win) == 0:
-        win = retrieval.indices
-    r = (seen(cb.problems[win]) >= SEEN_FRACTION).mean(axis=0)
-    q_seen = q >= SEEN_FRACTION
-    r_seen = r >= 0.5
-    matched = _ranked(q_seen & r_seen, distinct * np.minimum(q, 1.0), words)
-    not_seen = _ranked(~q_seen & r_seen, distinct * r, words)
-    only_here = _ranked(q_seen & ~r_seen, distinct * q, words)
-
-    contrast = None
-    differs: tuple[str, ...] = ()
-    differences: list[dict[str, Any]] = []
-    weighted_most: tuple[str, ...] = ()
-    mult = getattr(cb.measure, "multiplier", None)
-    if mult is not None and len(mult) == len(all_words):
-        # |multiplier| x spread = sqrt(learned weight); the mirror flag is a penalty, not a weight
-        score = np.abs(np.asarray(mult)) * np.asarray(cb.problems).std(axis=0)
-        score[[i for i, n in enumerate(cb.names) if n == MIRROR_FLAG]] = 0.0
-        weighted_most = tuple(all_words[i] for i in np.argsort(-score)[:MAX_LISTED] if score[i] > 0)
-    other = nearest_of_other_label(cb, problem, solution.label)
-    if other is not None:
-        pos, dist = other
-        o = seen(cb.problems[pos])[0] >= SEEN_FRACTION
-        terms = _weighted_terms(cb, np.asarray(problem.values), cb.problems[pos])
-        if terms is not None and len(terms) == len(all_words):
-            terms[[i for i, n in enumerate(cb.names) if n == MIRROR_FLAG]] = 0.0
-            top = [i for i in np.argsort(-terms)[:MAX_LISTED] if terms[i] > 0]
-            differs = tuple(all_words[i] for i in top)
-            names = cb.names if len(cb.names) == len(all_words) else problem.names
-            for i in top:
-                here, unit = quantity(names[i], float(np.asarray(problem.values)[i]))
-                there, _ = quantity(names[i], float(cb.problems[pos][i]))
-                differences.append(
-                    {"feature": all_words[i], "here": here, "there": there, "unit": unit}
-                )
-        assert cb.ids is not None
-        contrast = Contrast(
-            label=str(cb.labels[pos]),
-            case_id=int(cb.ids[pos]),
-            source=cb.sources[pos],
-            distance=float(dist),
-            would_need=_ranked(o & ~q_seen, distinct, words),
-            would_lose=_ranked(q_seen & ~o, distinct, words),
-        )
+    """Explain one classification (:meth:`cbr.estimator.CaseBaseClassifier.solve`);
+    ``answer`` classifies a problem the way the classifier does (to check counterfactuals);
+    ``target`` the column the labels come from ("correct": repetition words); ``k`` and
+    ``weights`` the classifier's vote (the counterfactual search follows it)."""
+    problem, retrieval, solution = solved.problem, solved.retrieval, solved.solution
+    label = solution.label
+    r = read(cb, problem)
     assert cb.ids is not None
+    reference = _reference(r.prof.labels, target)
+    outside = outside_claims(r, reference) if reference is not None else []
+    keep = distinct_neighbours(cb, retrieval)
+    own = next((int(retrieval.indices[p]) for p in keep if retrieval.labels[p] == label), None)
+    other = nearest_of_other_label(cb, problem, label)
+    near = None if own is None or other is None else (own, other[0])
+    why = why_claims(r, label, near) if label in r.prof.labels else []
     neighbours = tuple(
         {
-            "case_id": int(cb.ids[i]),
-            "label": str(cb.labels[i]),
-            "distance": float(d),
-            "source": cb.sources[i],
+            "case_id": int(retrieval.case_ids[p]),
+            "label": str(retrieval.labels[p]),
+            "distance": float(retrieval.distances[p]),
+            "source": cb.sources[int(retrieval.indices[p])],
         }
-        for i, d in zip(retrieval.indices, retrieval.distances, strict=True)
+        for p in keep
     )
-    lines = [
-        f"{solution.label} (confidence {solution.confidence:.2f}) from the {len(neighbours)} "
-        f"most similar cases ({sum(n['label'] == solution.label for n in neighbours)} of them "
-        f"{solution.label}).",
-        f"Matched: {_join(matched)}.",
-        f"Seen in the similar {solution.label} cases but not in this clip: {_join(not_seen)}.",
-        f"In this clip but not in those cases: {_join(only_here)}.",
-    ]
-    if problem.mirrored:
-        lines.insert(
-            1,
-            "The clip moves its left side more, so it is compared as its mirror image: "
-            "read 'left' for 'right' and 'right' for 'left' below.",
-        )
-    if contrast is not None:
-        change = []
-        if contrast.would_need:
-            change.append(f"show {_join(contrast.would_need)}")
-        if contrast.would_lose:
-            change.append(f"not show {_join(contrast.would_lose)}")
-        what = " and ".join(change) if change else "differ only in degree, not in these features"
-        lines.append(
-            f"Nearest other activity: {contrast.label} (distance {contrast.distance:.3g}); "
-            f"to be that, the clip would {what}."
-        )
-        if differences:
-            said = "; ".join(
-                f"{d['feature']}: {_said(d['here'], d['unit'])} here, "
-                f"{_said(d['there'], d['unit'])} there"
-                for d in differences
-            )
-            lines.append(f"Weighted, it differs from that case most in: {said}.")
-    if weighted_most:
-        lines.append(f"Weighted most by this case base: {_join(weighted_most)}.")
+    contrast = None if other is None else _contrast(cb, r, problem, other, answer, k, weights)
+    lines = _short(cb, solved, target, outside, why, own, contrast)
+    win = retrieval.indices[retrieval.labels.astype(str) == label]
+    matched, not_seen, only_here = presence_claims(r, label, win if len(win) else retrieval.indices)
+    differences = _differences(r, contrast, cb)
+    verbose = _verbose(
+        lines, solved, neighbours, matched, not_seen, only_here, contrast, differences,
+        unlike_ratio,
+    )  # fmt: skip
+    claims = (*outside, *why, *(contrast.changes if contrast else ()), *matched, *not_seen,
+              *only_here)  # fmt: skip
     return Explanation(
-        label=solution.label,
+        label=label,
         confidence=solution.confidence,
         neighbours=neighbours,
-        matched=matched,
-        not_seen=not_seen,
-        only_here=only_here,
+        matched=tuple(_held(c) for c in matched),
+        not_seen=tuple(_held(c) for c in not_seen),
+        only_here=tuple(_held(c) for c in only_here),
         contrast=contrast,
         text="\n".join(lines),
-        weighted_most=weighted_most,
-        differs_most=differs,
+        verbose=verbose,
+        claims=claims,
+        vote_share=float(solution.vote_share),
+        mirrored=bool(problem.mirrored),
         differences=tuple(differences),
     )
+
+
+def _contrast(
+    cb: CaseBase,
+    r: _Reading,
+    problem: Problem,
+    other: tuple[int, float],
+    answer: Callable[[np.ndarray], str],
+    k: int,
+    weights: Weights,
+) -> Contrast:
+    """The nearest case of another label (``other``: position, distance) and the checked
+    counterfactual toward its label."""
+    assert cb.ids is not None
+    pos, dist = other
+    other_label = str(cb.labels[pos])
+    cf = counterfactual(cb, np.asarray(problem.values), other_label, answer, k, weights)
+    changes = [] if cf.guide is None else change_claims(r, cf, cb.problems[cf.guide])
+    return Contrast(
+        other_label, int(cb.ids[pos]), cb.sources[pos], float(dist), tuple(changes), cf.valid,
+        cf.answer, None if cf.guide is None else int(cb.ids[cf.guide]), cf.plausibility, pos,
+        cf.guide,
+    )  # fmt: skip
+
+
+def _short(
+    cb: CaseBase,
+    solved: Solved,
+    target: str | None,
+    outside: list[Claim],
+    why: list[Claim],
+    own: int | None,
+    contrast: Contrast | None,
+) -> list[str]:
+    """The default text's lines, shortened (fewer items, no file names) until they fit
+    :data:`MAX_TEXT` characters."""
+    label = solved.solution.label
+    name = label_words(label, target)
+    head = f"{name}, confidence {solved.solution.confidence:.2f}"
+    head += unlike_words(solved)
+    if solved.torso_share < 0.5:
+        head += f"; person seen in {100 * solved.torso_share:.0f} % of the frames"
+    # fewer items, then no file names, then no case names or ranges at all
+    for items, names in ((SHORT_ITEMS, 2), (2, 2), (2, 1), (1, 1), (1, 0)):
+        if outside:
+            said_ = [_claim_text(c, "correct ones" if names else "") for c in outside[:items]]
+            why_line = _line_items("Done differently from correct repetitions: ", said_, 400)
+        elif why:
+            said_ = [_claim_text(c, "its cases" if names else "") for c in why[:items]]
+            why_line = _line_items("Why: ", said_, 400)
+        else:
+            why_line = f"Why: nearest to the {name} cases overall; no one feature sets it apart."
+        near = []
+        if own is not None:
+            near.append(_nearest_words(cb, own, "nearest " + name, names))
+        if contrast is not None:
+            other = label_words(contrast.label, target)
+            near.append(_nearest_words(cb, contrast.position, "nearest other: " + other, names))
+        lines = [head, why_line]
+        if near:
+            lines.append(_capital("; ".join(near) + "."))
+        if contrast is not None:
+            lines.append(_cf_line(contrast, label_words(contrast.label, target), items))
+        if len("\n".join(lines)) <= MAX_TEXT:
+            break
+    return lines
+
+
+def unlike_words(solved: Solved) -> str:
+    """ "; unlike the stored cases (...)" when the clip is, else nothing."""
+    if not solved.unlike_cases:
+        return ""
+    if solved.unlike_reason == "sensor":
+        return "; unlike the stored cases (recorded with a skeleton none of them has)"
+    return f"; unlike the stored cases (nearest at {solved.novelty:.1f}x the usual distance)"
+
+
+def _capital(text: str) -> str:
+    return text[:1].upper() + text[1:]
+
+
+def _nearest_words(cb: CaseBase, i: int, what: str, names: int) -> str:
+    """``nearest deep_squat case #5 (m01_s01_e03.npz)`` (``names`` 2), without the file (1;
+    a case not stored, without an id, keeps its file) or without either (0)."""
+    assert cb.ids is not None
+    if names == 0:
+        return what
+    if int(cb.ids[i]) < 0:
+        return f"{what}: {_short_source(cb.sources[i])}"
+    where = f" ({_short_source(cb.sources[i])})" if names == 2 else ""
+    return f"{what} case #{int(cb.ids[i])}{where}"
+
+
+def _differences(r: _Reading, contrast: Contrast | None, cb: CaseBase) -> list[dict[str, Any]]:
+    """The few columns (one per feature) that, weighted, differ most between the clip and the
+    nearest case of the other label, in their units."""
+    if contrast is None:
+        return []
+    o = r.view.of(cb.problems[contrast.position][None])[0]
+    spread = np.maximum(r.prof.within, 1e-9)
+    gap = (np.abs(r.x - o) / spread) ** 2 * r.importance
+    out = []
+    for j in _best_per_feature(r, gap, SHORT_ITEMS, 1e-12):
+        here, unit = r.unit(j)
+        out.append({"feature": r.words(j), "here": here, "there": r.value(j, o[j]), "unit": unit})
+    return out
+
+
+def _verbose(
+    lines: list[str],
+    solved: Solved,
+    neighbours: tuple[dict[str, Any], ...],
+    matched: list[Claim],
+    not_seen: list[Claim],
+    only_here: list[Claim],
+    contrast: Contrast | None,
+    differences: list[dict[str, Any]],
+    unlike_ratio: float | None,
+) -> str:
+    label = solved.solution.label
+    share = float(solved.solution.vote_share)
+    out = list(lines)
+    n_label = sum(n["label"] == label for n in neighbours)
+    out.append(
+        f"Vote: {n_label} of the {len(neighbours)} most similar clips are {label} (vote share "
+        f"{share:.2f}; the confidence is that share calibrated on the training clips)."
+    )
+    flag = "" if unlike_ratio is None else f"; flagged beyond {unlike_ratio:.2f}x"
+    out.append(f"Nearest case at {solved.novelty:.2f}x the usual held-out distance{flag}.")
+    for n in neighbours:
+        out.append(
+            f"  case #{n['case_id']} {n['label']}  distance {n['distance']:.4g}  {n['source']}"
+        )
+    if solved.problem.mirrored:
+        out.append("The clip moves its left side more: it was compared as its mirror image "
+                   "(sides above are the clip's own).")  # fmt: skip
+    out.append(
+        "Shown here and in the similar cases: "
+        + (", ".join(_held(c) for c in matched) or "none")
+        + "."
+    )
+    out.append(
+        "In the similar cases, not here: " + (", ".join(_held(c) for c in not_seen) or "none") + "."
+    )
+    out.append(
+        "Here, not in the similar cases: "
+        + (", ".join(_held(c) for c in only_here) or "none")
+        + "."
+    )
+    if contrast is not None:
+        out.append(
+            f"Nearest other label: {contrast.label} case #{contrast.case_id} (distance "
+            f"{contrast.distance:.3g}) {contrast.source}."
+        )
+        if differences:
+            said_ = [f"{d['feature']} {said(d['here'], d['unit'])} here, "
+                     f"{said(d['there'], d['unit'])} there" for d in differences]  # fmt: skip
+            out.append("Differs from it most in: " + "; ".join(said_) + ".")
+        if contrast.changes:
+            status = (
+                "checked: the classifier then answers " if contrast.valid
+                else "not enough: the classifier still answers "
+            ) + contrast.answer  # fmt: skip
+            out.append(
+                f"Counterfactual ({len(contrast.changes)} features, values of case "
+                f"#{contrast.guide_case_id}; {status}; plausibility "
+                f"{contrast.plausibility:.2f}x the usual distance between {contrast.label} "
+                "cases): " + "; ".join(_change_text(c) for c in contrast.changes) + "."
+            )
+    return "\n".join(out)

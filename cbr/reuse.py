@@ -26,11 +26,14 @@ EXACT = 1e-12
 
 @dataclass(frozen=True)
 class Solution:
-    """label, confidence in [0, 1] (the winner's share of the vote), proba ``(n_classes,)``."""
+    """label, proba ``(n_classes,)`` the vote shares, ``vote_share`` the winner's share and
+    ``confidence`` in [0, 1]: the winner's share as voted, or, from a fitted classifier, that
+    share calibrated into the probability that the label is right (:mod:`cbr.calibration`)."""
 
     label: str
     confidence: float
     proba: np.ndarray
+    vote_share: float = float("nan")
 
 
 def vote(
@@ -72,4 +75,4 @@ def reuse(retrieval: Retrieval, classes: np.ndarray, weights: Weights = "distanc
     codes = np.array([where[str(lab)] for lab in retrieval.labels], dtype=np.int64)
     proba = vote(retrieval.distances[None, :], codes[None, :], len(classes), weights)[0]
     best = int(decide(proba[None])[0])
-    return Solution(str(classes[best]), float(proba[best]), proba)
+    return Solution(str(classes[best]), float(proba[best]), proba, float(proba[best]))

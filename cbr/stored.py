@@ -1,8 +1,8 @@
 """A fitted :class:`~cbr.estimator.CaseBaseClassifier` stored with its case base, and loaded
 back whole: the cases, the feature configuration, the measure with its learned weights, and the
-model document (the estimator's parameters, what fit chose, the novelty calibration and the
-column the solutions come from). ``posecbr classify``, ``segment`` and the Python API then
-classify with exactly the classifier ``posecbr train`` fitted.
+model document (the estimator's parameters, what fit chose, the novelty and confidence
+calibrations and the column the solutions come from). ``posecbr classify``, ``segment`` and
+the Python API then classify with exactly the classifier ``posecbr train`` fitted.
 
 Problems are stored as float64, so a stored and reloaded classifier answers exactly as the one
 fitted in memory.
@@ -20,6 +20,7 @@ from casebase_store import CaseArrays, CaseBaseInfo, CaseStore, NewCase, StoreEr
 from casebase_store.case_matrix import cached_case_matrix, matrix_path, open_case_matrix
 from features.errors import ConfigError, DataError
 
+from .calibration import UNCALIBRATED, ConfidenceCalibration
 from .casebase import CaseBase
 from .estimator import CaseBaseClassifier
 from .novelty import NoveltyCalibration, calibrate
@@ -74,6 +75,7 @@ def model_document(clf: CaseBaseClassifier, target: str = "label") -> dict[str, 
         if fw is None
         else {k: getattr(fw, k).tolist() for k in ("centre", "scale", "weight")},
         "novelty": clf.novelty_.to_dict(),
+        "confidence": clf.confidence_.to_dict(),
     }
 
 
@@ -298,9 +300,19 @@ def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
     clf.case_origin_ = np.arange(len(cb))
     clf.maintenance_ = None
     clf.novelty_ = _novelty(model, cb)
+    clf.confidence_ = _confidence(model)
     clf.refresh()
     target = str(model.get("target", "label"))
     return StoredClassifier(name, info.uid, info.version, target, clf, info)
+
+
+def _confidence(model: dict[str, Any]) -> ConfidenceCalibration:
+    """The stored confidence calibration; a case base stored without one (before posecbr
+    0.3) answers with the plain vote share."""
+    try:
+        return ConfidenceCalibration.from_dict(model["confidence"])
+    except (KeyError, TypeError, ValueError):
+        return UNCALIBRATED
 
 
 def _novelty(model: dict[str, Any], cb: CaseBase) -> NoveltyCalibration:

@@ -723,6 +723,17 @@ def target_value(value: Any) -> str:
     return str(value)
 
 
+_TRUE = frozenset({"true", "1", "yes", "y", "t", "correct"})
+_FALSE = frozenset({"false", "0", "no", "n", "f", "incorrect"})
+
+
+def truth_value(value: Any) -> bool | None:
+    """A class name read as yes or no (``"true"``, ``"1"``, ``"correct"``, ... / ``"false"``,
+    ``"0"``, ``"incorrect"``, ...; any case); None when it reads as neither."""
+    text = str(value).strip().lower()
+    return True if text in _TRUE else False if text in _FALSE else None
+
+
 def load_dataset(path: str | Path, **kwargs: Any) -> list[Clip]:
     """All clips of :func:`iter_dataset` as a list (same keyword arguments)."""
     return list(iter_dataset(path, **kwargs))
@@ -742,6 +753,7 @@ __all__ = [
     "clip_target",
     "dataset_files",
     "target_value",
+    "truth_value",
     "UIPRMD_MOVEMENTS",
     "VIDEO_SUFFIXES",
     "detect_kind",

@@ -8,7 +8,9 @@ File format (``.npz``, written with :func:`save_pose`, read with :func:`load_pos
 - ``confidence`` (optional): float array ``(frames, joints)`` in [0, 1]
 - ``skeleton`` (optional): string, the source skeleton (default ``blazepose33``)
 - ``metadata`` (optional): a JSON string (object) with anything else: ``label``, ``subject``,
-  ``source``, ``correct``, ...
+  ``source`` (what the file was made from, e.g. the video), ``correct``, ... A loaded
+  sequence's ``source`` is the file's path; a different ``source`` in the file becomes
+  ``metadata["made_from"]``.
 - ``extra_<name>`` (optional): further arrays a producer keeps beside the pose, e.g.
   ``extra_image_landmarks`` ``(frames, 33, 5)`` from the video pose estimator; written with
   ``save_pose(..., extra_arrays=...)``, read with :func:`load_pose_arrays`.
@@ -491,7 +493,11 @@ def load_pose(path: str | Path) -> PoseSequence:
     if "skeleton" in arrays:
         skeleton = _one_text(arrays["skeleton"], "skeleton", path)
     metadata = _metadata(arrays["metadata"], path) if "metadata" in arrays else {}
-    source = str(metadata.pop("source", "") or path)
+    # the file is the clip's name; what it was made from (a video) is its provenance
+    made_from = str(metadata.pop("source", "") or "")
+    if made_from and made_from != str(path) and "made_from" not in metadata:
+        metadata["made_from"] = made_from
+    source = str(path)
     try:
         return PoseSequence(
             positions=arrays["positions"],

@@ -1,7 +1,8 @@
-"""``posecbr classify CLIP... --db cb.sqlite``: label, confidence, most similar cases and an
-explanation for each clip; with labelled input (a labels CSV, a class folder, labelled pose
-files) also the accuracy. ``--feedback LABEL`` revises and retains (one transaction per
-clip)."""
+"""``posecbr classify CLIP... --db cb.sqlite``: for each clip, four lines (the answer and its
+confidence, why, the nearest cases, what would make it the nearest other label;
+``--verbose``: everything), then a summary (clips, flagged clips, and with labelled input
+the accuracy, recall per class and the wrong clips; ``--quiet``: the summary alone).
+``--feedback LABEL`` revises and retains (one transaction per clip)."""
 
 from __future__ import annotations
 
@@ -29,7 +30,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "-k", "--k", type=int, default=None, help="retrieved cases (default: as trained)"
     )
-    p.add_argument("--top", type=int, default=3, help="similar cases to print per clip")
+    p.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        help="everything the explanation holds: the vote, every similar case, what the clip "
+        "shares with them and what not, the counterfactual's checks",
+    )
+    p.add_argument(
+        "-q", "--quiet", action="store_true", help="the closing summary alone, no clip by clip"
+    )
+    p.add_argument(
+        "--top", type=int, default=None, help="with --verbose: similar cases to list (default all)"
+    )
     p.add_argument(
         "--feedback",
         metavar="LABEL",
@@ -98,10 +111,12 @@ def load_inputs(
 def _check_args(args: argparse.Namespace) -> None:
     if args.k is not None and args.k < 1:
         raise ConfigError(f"-k must be >= 1, got {args.k}", "-k")
-    if args.top < 0:
+    if args.top is not None and args.top < 0:
         raise ConfigError(f"--top must be >= 0, got {args.top}", "--top")
     if args.new_label and args.feedback is None:
         raise ConfigError("--new-label goes with --feedback LABEL", "--new-label")
+    if args.quiet and args.verbose:
+        raise ConfigError("--quiet and --verbose exclude each other", "--quiet")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -133,58 +148,62 @@ def run(args: argparse.Namespace) -> int:
         inputs = load_inputs(args.clips, args.sensor, subjects, target)
         clips, truths = [s for s, _ in inputs], [t for _, t in inputs]
         if args.feedback is None:
-            results = classify_clips(stored, clips, truths)
+            results = classify_clips(stored, clips, truths, target)
         else:
             known = sorted(set(stored.classifier.case_base_.labels.tolist()))
             label = check_feedback_label(args.feedback, known, args.new_label)
-            results = classify_with_feedback(store, stored, clips, truths, label, settings)
+            results = classify_with_feedback(store, stored, clips, truths, label, settings, target)
     finally:
         store.close()
-    _print(args, store.where, name, results)
+    _print(args, store.where, name, target, results)
     return 0
 
 
-def _print(args: argparse.Namespace, where: str, name: str, results: list[Any]) -> None:
-    labelled = [r for r in results if r.true_label is not None]
-    right = sum(r.true_label == r.label for r in labelled)
-    accuracy = right / len(labelled) if labelled else None
+def _print(
+    args: argparse.Namespace, where: str, name: str, target: str, results: list[Any]
+) -> None:
+    from cbr.classification import summarise
+
+    summary = summarise(results, target)
     if args.json:
         doc: dict[str, Any] = {
             "db": where,
             "case_base": name,
+            "target": target,
             "results": [r.to_dict() for r in results],
+            "summary": summary,
         }
-        if accuracy is not None:
-            doc["accuracy"] = accuracy
-            doc["n_labelled"] = len(labelled)
+        if summary.get("accuracy") is not None:  # the names of posecbr 0.2
+            doc["accuracy"] = summary["accuracy"]
+            doc["n_labelled"] = summary["labelled"]
         json.dump(doc, sys.stdout, indent=2, ensure_ascii=False)
         print()
         return
-    for r in results:
-        _print_one(r, args.top)
-    if accuracy is not None:
-        print(f"accuracy: {accuracy:.3f} ({right}/{len(labelled)} labelled clips)")
+    if not args.quiet:
+        for r in results:
+            _print_one(r, args, target)
+    _print_summary(summary, target)
 
 
-def _print_one(r: Any, top: int) -> None:
+def _print_one(r: Any, args: argparse.Namespace, target: str) -> None:
+    """One clip: four lines by default (--verbose: everything the explanation holds)."""
+    from cbr.explain import label_words
+
+    made = f" (from {r.made_from})" if r.made_from else ""
     if r.solved is None:
-        print(f"{r.source}: unclassifiable ({r.unclassifiable})")
+        print(f"{r.source}{made}: unclassifiable ({r.unclassifiable})")
         return
-    e, solved = r.explanation, r.solved
-    head = f"{r.source}: {e.label} (confidence {e.confidence:.2f})"
+    e = r.explanation
+    lines = (e.verbose if args.verbose else e.text).splitlines()
+    if args.verbose and args.top is not None:  # the similar cases are the "  case #" lines
+        cases = [i for i, line in enumerate(lines) if line.startswith("  case #")]
+        lines = [line for i, line in enumerate(lines) if i not in cases[args.top :]]
+    head = f"{r.source}{made}: {lines[0]}"
     if r.true_label is not None:
-        head += "  [right]" if r.true_label == e.label else f"  [wrong: {r.true_label}]"
+        right = r.true_label == e.label
+        head += "  [right]" if right else f"  [wrong: {label_words(r.true_label, target)}]"
     print(head)
-    if solved.unlike_cases:
-        print(
-            f"  note: this clip is unlike the stored cases (nearest case at {solved.novelty:.1f}x "
-            "the usual held-out distance): treat the label with caution"
-        )
-    if solved.torso_share < 0.5:
-        print(f"  note: the person is seen in only {100 * solved.torso_share:.0f} % of the frames")
-    for n in e.neighbours[:top]:
-        print(f"  case #{n['case_id']} {n['label']}  distance {n['distance']:.4g}  {n['source']}")
-    for line in e.text.splitlines()[1:]:
+    for line in lines[1:]:
         print(f"  {line}")
     if r.retention is not None:
         print(f"  feedback: {r.retention.reason}")
@@ -193,3 +212,31 @@ def _print_one(r: Any, top: int) -> None:
             f"  feedback: revised case #{r.revision.case_id} ({r.revision.action}): "
             f"{r.revision.reason}"
         )
+
+
+def _print_summary(s: dict[str, Any], target: str) -> None:
+    """The closing summary: clips, accuracy and recall per class, flagged and wrong clips."""
+    from cbr.explain import label_words
+
+    print(f"\n{s['clips']} clips: {s['classified']} classified", end="")
+    if s["unclassifiable"]:
+        print(f", {len(s['unclassifiable'])} unclassifiable", end="")
+    print(f"; {len(s['unlike_cases'])} unlike the stored cases.")
+    if s.get("accuracy") is not None:
+        print(f"accuracy: {s['accuracy']:.3f} ({s['right']}/{s['labelled']} labelled clips)")
+        recall = "; ".join(
+            f"{label_words(lab, target)} {v['right']}/{v['clips']}"
+            for lab, v in s["recall"].items()
+        )
+        print(f"recall per class: {recall}")
+        if s["expected_accuracy"] is not None:
+            print(f"mean confidence: {s['expected_accuracy']:.3f}")
+    for w in s["wrong"]:
+        print(
+            f"wrong: {w['clip']}: {label_words(w['label'], target)}, true "
+            f"{label_words(w['true_label'], target)}"
+        )
+    for clip in s["unlike_cases"]:
+        print(f"unlike the stored cases: {clip}")
+    for clip in s["unclassifiable"]:
+        print(f"unclassifiable: {clip}")

@@ -1,0 +1,210 @@
+"""What the cases of each label look like, column by column: the statistics explanations and
+counterfactuals read values against.
+
+A case base's problems are read through a *view*: readable columns, each with its machine
+name, its words and the *feature* it belongs to.
+
+- vector problems (clip summaries, QMP vectors): the problem's own columns without the
+  mirror-image flag, grouped into features by the signal they are computed from
+  (:func:`signal_of`: every statistic of the left knee angle and of the fluent states read
+  from it, "left knee bent", "left knee bending", ..., is one feature);
+- sequence problems ``(length, channels)`` (DTW, signatures): the mean, lowest and highest
+  value of every channel over the clip; a feature is one channel over time.
+
+:class:`Profiles` holds, per label, the mean, spread and the 10th-90th percentile range of
+every view column, and per column the spread *within* labels (pooled), which is the yardstick
+below which two values do not differ. Binary columns (QMPs detected or not) keep the share of
+cases that show them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+from features.fluents import DEFAULT_TABLE
+from features.signals import ANGLE_SIGNALS
+
+from .casebase import CaseBase
+from .problem import ANGLE_PREFIX, POSITION_PREFIX
+from .weights import MIRROR_FLAG
+
+#: the share of a label's cases inside its typical range
+TYPICAL = (0.1, 0.9)
+_SEQUENCE_STATS = (("mean", ""), ("min", " (lowest)"), ("max", " (highest)"))
+
+
+@dataclass(frozen=True)
+class View:
+    """Readable columns of a case base's problems.
+
+    names / words ``(m,)``: each column's machine name (``"angle:left_knee@min"``) and words;
+    feature ``(m,)``: index of the column's feature in ``features``; features / feature_words:
+    the features (groups of columns that change together in a counterfactual); sequence:
+    whether the problems are ``(length, channels)`` sequences (a feature is one channel);
+    binary ``(m,)``: 0/1 columns (QMPs).
+    """
+
+    names: tuple[str, ...]
+    words: tuple[str, ...]
+    feature: np.ndarray
+    features: tuple[str, ...]
+    feature_words: tuple[str, ...]
+    sequence: bool
+    columns: np.ndarray  # vector problems: the problem column of each view column
+    binary: np.ndarray
+
+    def of(self, problems: np.ndarray) -> np.ndarray:
+        """``(n, *problem_shape)`` -> ``(n, m)`` view columns."""
+        p = np.asarray(problems, dtype=np.float64)
+        if self.sequence:
+            return np.concatenate([p.mean(axis=1), p.min(axis=1), p.max(axis=1)], axis=1)
+        return p[:, self.columns]
+
+    def feature_mask(self, problem_shape: tuple[int, ...], feature: int) -> np.ndarray:
+        """Which entries of a problem ``problem_shape`` belong to ``feature`` (bool)."""
+        mask = np.zeros(problem_shape, dtype=bool)
+        if self.sequence:
+            mask[:, feature] = True
+        else:
+            mask[self.columns[self.feature == feature]] = True
+        return mask
+
+
+@cache
+def _fluent_signals() -> dict[str, tuple[str, str]]:
+    """Each fluent of the default table: the signal it is computed from and its subject."""
+    return {spec.name: (spec.signal, spec.subject) for spec in DEFAULT_TABLE.specs}
+
+
+def signal_of(base: str, words: str) -> tuple[str, str]:
+    """The feature a column belongs to, and its words: one measured signal with everything
+    computed from it (a joint angle and the fluent states read from that angle, "left knee";
+    a joint's position, "left knee position"), so a counterfactual that changes one changes
+    the others with it; any other column is its own feature."""
+    if base.startswith(ANGLE_PREFIX):
+        signal = base[len(ANGLE_PREFIX) :]
+        return f"signal:{signal}", signal.replace("_", " ")
+    if base.startswith(POSITION_PREFIX):
+        joint = base[len(POSITION_PREFIX) :].partition(".")[0]
+        return f"{POSITION_PREFIX}{joint}", joint.replace("_", " ") + " position"
+    fluent = base.partition(".")[0]
+    hit = _fluent_signals().get(fluent)
+    if hit is None:
+        return base, words
+    signal, subject = hit
+    if signal in ANGLE_SIGNALS:
+        return f"signal:{signal}", signal.replace("_", " ")
+    return f"signal:{signal}", subject
+
+
+def _feature_words(word: str, name: str) -> str:
+    """The words of a feature from one of its columns' words (statistic removed)."""
+    stat = name.partition("@")[2]
+    for suffix in (" (lowest confidence)", " (highest confidence)", " (lowest)", " (highest)",
+                   " (variation)"):  # fmt: skip
+        if word.endswith(suffix):
+            return word[: -len(suffix)]
+    if stat.startswith("phase") and word.endswith(")"):
+        return word[: word.rfind(" (")]
+    return word
+
+
+def view_of(cb: CaseBase) -> View:
+    """The readable columns of ``cb``'s problems (cached on the case base)."""
+    key = ("view", cb.problems.shape[1:], cb.names)
+    hit = cb.cache.get("view")
+    if hit is not None and hit[0] == key:
+        return hit[1]
+    names, words = cb.names, cb.words
+    width = cb.problems.shape[-1]
+    if len(names) != width:
+        names = tuple(f"feature {i}" for i in range(width))
+    if len(words) != width:
+        words = names
+    if cb.problems.ndim == 3:
+        view_names = tuple(f"{n}@{st}" for st, _ in _SEQUENCE_STATS for n in names)
+        view_words = tuple(
+            _stat_words(n, w, st, said)
+            for st, said in _SEQUENCE_STATS
+            for n, w in zip(names, words, strict=True)
+        )
+        feature = np.tile(np.arange(width), len(_SEQUENCE_STATS))
+        features, feature_words = tuple(names), tuple(words)
+        columns = np.arange(len(view_names))
+        sequence = True
+    else:
+        columns = np.array([i for i, n in enumerate(names) if n != MIRROR_FLAG], dtype=np.int64)
+        view_names = tuple(names[i] for i in columns)
+        view_words = tuple(words[i] for i in columns)
+        bases: dict[str, int] = {}
+        base_words: list[str] = []
+        feat = []
+        for n, w in zip(view_names, view_words, strict=True):
+            base, said = signal_of(n.partition("@")[0], _feature_words(w, n))
+            if base not in bases:
+                bases[base] = len(bases)
+                base_words.append(said)
+            feat.append(bases[base])
+        feature = np.array(feat, dtype=np.int64)
+        features, feature_words = tuple(bases), tuple(base_words)
+        sequence = False
+    values = View(view_names, view_words, feature, features, feature_words, sequence, columns,
+                  np.zeros(len(view_names), dtype=bool)).of(cb.problems)  # fmt: skip
+    binary = np.all((values == 0.0) | (values == 1.0), axis=0)
+    view = View(view_names, view_words, feature, features, feature_words, sequence, columns,
+                binary)  # fmt: skip
+    cb.cache["view"] = (key, view)
+    return view
+
+
+def _stat_words(name: str, word: str, stat: str, said: str) -> str:
+    """Words of one statistic of a channel, as :func:`cbr.problem.summarise` words them."""
+    if stat == "mean" or name.startswith((ANGLE_PREFIX, POSITION_PREFIX)):
+        return f"{word}{said}"
+    return f"{word}{said[:-1]} confidence)"
+
+
+@dataclass(frozen=True)
+class Profiles:
+    """Per label (``labels``, sorted) and view column: ``mean``, ``sd``, ``low`` / ``high``
+    (the :data:`TYPICAL` percentiles) and ``share`` (binary columns: share of the label's cases
+    that show it), each ``(n_labels, m)``; ``count`` ``(n_labels,)``; ``within`` ``(m,)`` the
+    pooled within-label standard deviation; ``overall`` ``(m,)`` the standard deviation over
+    all cases."""
+
+    labels: tuple[str, ...]
+    count: np.ndarray
+    mean: np.ndarray
+    sd: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+    within: np.ndarray
+    overall: np.ndarray
+
+    def row(self, label: str) -> int:
+        return self.labels.index(label)
+
+
+def profiles_of(cb: CaseBase) -> Profiles:
+    """The label profiles of ``cb`` (cached on the case base until its cases change)."""
+    hit = cb.cache.get("profiles")
+    if hit is not None:
+        return hit
+    view = view_of(cb)
+    X = view.of(cb.problems)
+    labels = cb.labels.astype(str)
+    names = tuple(sorted(set(labels.tolist())))
+    rows = [X[labels == lab] for lab in names]
+    mean = np.stack([r.mean(axis=0) for r in rows])
+    sd = np.stack([r.std(axis=0) for r in rows])
+    low = np.stack([np.quantile(r, TYPICAL[0], axis=0) for r in rows])
+    high = np.stack([np.quantile(r, TYPICAL[1], axis=0) for r in rows])
+    count = np.array([len(r) for r in rows], dtype=np.float64)
+    resid = sum(((r - m) ** 2).sum(axis=0) for r, m in zip(rows, mean, strict=True))
+    within = np.sqrt(np.asarray(resid) / max(len(X) - len(rows), 1))
+    out = Profiles(names, count, mean, sd, low, high, within, X.std(axis=0))
+    cb.cache["profiles"] = out
+    return out
