@@ -68,10 +68,10 @@ def _squared(cb: CaseBase, diff: np.ndarray) -> np.ndarray:
 
 def _per_feature(view: View, sq: np.ndarray) -> np.ndarray:
     """Entries of one problem's ``sq`` summed per feature ``(n_features,)``."""
-    if view.sequence:
-        return np.asarray(sq.sum(axis=0), dtype=np.float64)
+    per_column = sq.sum(axis=0) if view.sequence else sq
     out = np.zeros(len(view.features))
-    np.add.at(out, view.feature, sq[view.columns])
+    ok = view.channel_feature >= 0
+    np.add.at(out, view.channel_feature[ok], per_column[ok])
     return out
 
 

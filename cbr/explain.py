@@ -117,23 +117,23 @@ def said(value: float, unit: str) -> str:
 
 
 def _span(low: float, high: float, unit: str) -> str:
-    """A range in a unit: 45–80°, 20–60 %, 0.90–1.10 torso lengths."""
+    """A range in a unit: 45–80°, 20–60 %, 0.90–1.10 (torso lengths, said with the value)."""
     if unit == "degrees":
         return f"{low:.0f}–{high:.0f}°"
     if unit == "share":
         return f"{100 * low:.0f}–{100 * high:.0f} %"
-    if unit == "torso lengths":
-        return f"{low:.2f}–{high:.2f} torso lengths"
     return f"{low:.2f}–{high:.2f}"
 
 
-def label_words(label: str, target: str | None = None) -> str:
+def label_words(label: str, target: str | None = None, article: bool = True) -> str:
     """A solution as people say it: for a repetition check (``target`` "correct", or labels
-    "correct" / "incorrect") a correct / an incorrect repetition; else the label itself."""
+    "correct" / "incorrect") a correct / an incorrect repetition (``article`` False: correct
+    repetition); else the label itself."""
     if target == "correct" or label in ("correct", "incorrect"):
         truth = truth_value(label)
         if truth is not None:
-            return "a correct repetition" if truth else "an incorrect repetition"
+            words = "correct repetition" if truth else "incorrect repetition"
+            return (("a " if truth else "an ") + words) if article else words
     return label
 
 
@@ -253,7 +253,13 @@ class _Reading:
     importance: np.ndarray
     mirrored: bool
     readable: np.ndarray  # (m,) bool: in degrees, torso lengths, a share of the time, or a QMP
+    angles: np.ndarray  # (m,) bool: joint angles (degrees)
     states: np.ndarray  # (m,) bool: the share of the time a fluent state holds
+
+    def prefer_angles(self, score: np.ndarray) -> np.ndarray:
+        """``score`` with joint angles ahead of near-equal others: people check an angle most
+        easily (with a goniometer, by eye), a position or a share of the time less so."""
+        return np.where(self.angles & (score > 0), score * ANGLE_PREFERENCE, score)
 
     def words(self, j: int) -> str:
         w = self.view.words[j]
@@ -310,6 +316,7 @@ def read(cb: CaseBase, problem: Problem) -> _Reading:
     if "importance" not in cb.cache:
         cb.cache["importance"] = _importance(cb, view)
         units = [quantity(n, 0.0)[1] for n in view.names]
+        cb.cache["angles"] = np.array([u == "degrees" for u in units])
         cb.cache["readable"] = np.array(
             [(view.binary[j] and "@" not in n) or (units[j] in READABLE and "@std" not in n)
              for j, n in enumerate(view.names)]
@@ -317,10 +324,12 @@ def read(cb: CaseBase, problem: Problem) -> _Reading:
         cb.cache["states"] = np.array([u == "share" for u in units])
     return _Reading(
         cb, view, profiles_of(cb), x, cb.cache["importance"], bool(problem.mirrored),
-        cb.cache["readable"], cb.cache["states"],
+        cb.cache["readable"], cb.cache["angles"], cb.cache["states"],
     )  # fmt: skip
 
 
+#: how much more an angle counts than another feature when choosing what to say
+ANGLE_PREFERENCE = 1.25
 #: units people read without a legend (a confidence's extremes and any variation are left to
 #: --verbose)
 READABLE = ("degrees", "torso lengths", "share")
@@ -408,7 +417,10 @@ def why_claims(
             e = np.where(m > 0, e, -np.inf)
     row = r.prof.row(label)
     # ranked by evidence times the column's weight in the measure: what decided it
-    score = np.where(e >= MIN_EVIDENCE, e * np.sqrt(r.importance), -np.inf)
+    score = np.full(len(e), -np.inf)
+    ok = e >= MIN_EVIDENCE
+    score[ok] = e[ok] * np.sqrt(r.importance[ok])
+    score = r.prefer_angles(score)
     return [
         r.claim(
             "why",
@@ -429,8 +441,9 @@ def outside_claims(r: _Reading, reference: str, n: int = SHORT_ITEMS) -> list[Cl
     row = prof.row(reference)
     spread = np.maximum(prof.within, np.maximum(0.05 * prof.overall, 1e-6))
     beyond = np.maximum(prof.low[row] - r.x, r.x - prof.high[row])
-    score = np.where(r.view.binary, 0.0, beyond / spread) * np.sqrt(r.importance)
-    score = np.where((beyond / spread >= 1.0) & r.readable, score, -np.inf)
+    # how far outside, in spreads; features the measure weighs below average count for less
+    score = np.where(r.view.binary, 0.0, beyond / spread) * np.sqrt(np.minimum(r.importance, 1))
+    score = np.where((beyond / spread >= 1.0) & r.readable, r.prefer_angles(score), -np.inf)
     return [
         r.claim(
             "outside",
@@ -565,14 +578,18 @@ def clip_of(source: str) -> str:
 
 def distinct_neighbours(cb: CaseBase, retrieval: Retrieval) -> list[int]:
     """Positions in ``retrieval`` of its cases, one per clip: a clip's mirror image (a case
-    whose source ends with " (mirrored)") is the same clip, not a second neighbour."""
-    seen: set[str] = set()
+    whose source is the clip's source and " (mirrored)") is the same clip, not a second
+    neighbour."""
+    plain: set[str] = set()
+    images: set[str] = set()
     keep = []
     for pos, i in enumerate(retrieval.indices.tolist()):
-        clip = clip_of(cb.sources[i])
-        if clip and clip in seen:
+        source = cb.sources[i]
+        clip = clip_of(source)
+        image = source.endswith(MIRRORED)
+        if clip and clip in (plain if image else images):
             continue
-        seen.add(clip)
+        (images if image else plain).add(clip)
         keep.append(pos)
     return keep
 
@@ -714,8 +731,9 @@ def _short(
     head += unlike_words(solved)
     if solved.torso_share < 0.5:
         head += f"; person seen in {100 * solved.torso_share:.0f} % of the frames"
-    # fewer items, then no file names, then no case names or ranges at all
-    for items, names in ((SHORT_ITEMS, 2), (2, 2), (2, 1), (1, 1), (1, 0)):
+    # fewer changes shown, fewer reasons, no file names, then no case names or ranges at all
+    levels = ((3, 3, 2), (3, 1, 2), (2, 1, 2), (2, 1, 1), (1, 1, 1), (1, 1, 0))
+    for items, shown, names in levels:
         if outside:
             said_ = [_claim_text(c, "correct ones" if names else "") for c in outside[:items]]
             why_line = _line_items("Done differently from correct repetitions: ", said_, 400)
@@ -726,15 +744,16 @@ def _short(
             why_line = f"Why: nearest to the {name} cases overall; no one feature sets it apart."
         near = []
         if own is not None:
-            near.append(_nearest_words(cb, own, "nearest " + name, names))
+            bare = label_words(label, target, article=False)
+            near.append(_nearest_words(cb, own, "nearest " + bare, names))
         if contrast is not None:
-            other = label_words(contrast.label, target)
+            other = label_words(contrast.label, target, article=False)
             near.append(_nearest_words(cb, contrast.position, "nearest other: " + other, names))
         lines = [head, why_line]
         if near:
             lines.append(_capital("; ".join(near) + "."))
         if contrast is not None:
-            lines.append(_cf_line(contrast, label_words(contrast.label, target), items))
+            lines.append(_cf_line(contrast, label_words(contrast.label, target), shown))
         if len("\n".join(lines)) <= MAX_TEXT:
             break
     return lines
@@ -772,7 +791,7 @@ def _differences(r: _Reading, contrast: Contrast | None, cb: CaseBase) -> list[d
         return []
     o = r.view.of(cb.problems[contrast.position][None])[0]
     spread = np.maximum(r.prof.within, 1e-9)
-    gap = (np.abs(r.x - o) / spread) ** 2 * r.importance
+    gap = np.where(r.readable, (np.abs(r.x - o) / spread) ** 2 * r.importance, 0.0)
     out = []
     for j in _best_per_feature(r, gap, SHORT_ITEMS, 1e-12):
         here, unit = r.unit(j)

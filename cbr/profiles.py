@@ -9,7 +9,7 @@ name, its words and the *feature* it belongs to.
   (:func:`signal_of`: every statistic of the left knee angle and of the fluent states read
   from it, "left knee bent", "left knee bending", ..., is one feature);
 - sequence problems ``(length, channels)`` (DTW, signatures): the mean, lowest and highest
-  value of every channel over the clip; a feature is one channel over time.
+  value of every channel over the clip; a feature is the channels of one signal over time.
 
 :class:`Profiles` holds, per label, the mean, spread and the 10th-90th percentile range of
 every view column, and per column the spread *within* labels (pooled), which is the yardstick
@@ -43,8 +43,9 @@ class View:
     names / words ``(m,)``: each column's machine name (``"angle:left_knee@min"``) and words;
     feature ``(m,)``: index of the column's feature in ``features``; features / feature_words:
     the features (groups of columns that change together in a counterfactual); sequence:
-    whether the problems are ``(length, channels)`` sequences (a feature is one channel);
-    binary ``(m,)``: 0/1 columns (QMPs).
+    whether the problems are ``(length, channels)`` sequences (a feature is then its channels
+    over time); binary ``(m,)``: 0/1 columns (QMPs); channel_feature ``(width,)``: the feature
+    of each column of a problem's last axis (-1: none, the mirror-image flag).
     """
 
     names: tuple[str, ...]
@@ -55,6 +56,7 @@ class View:
     sequence: bool
     columns: np.ndarray  # vector problems: the problem column of each view column
     binary: np.ndarray
+    channel_feature: np.ndarray
 
     def of(self, problems: np.ndarray) -> np.ndarray:
         """``(n, *problem_shape)`` -> ``(n, m)`` view columns."""
@@ -66,10 +68,7 @@ class View:
     def feature_mask(self, problem_shape: tuple[int, ...], feature: int) -> np.ndarray:
         """Which entries of a problem ``problem_shape`` belong to ``feature`` (bool)."""
         mask = np.zeros(problem_shape, dtype=bool)
-        if self.sequence:
-            mask[:, feature] = True
-        else:
-            mask[self.columns[self.feature == feature]] = True
+        mask[..., self.channel_feature == feature] = True
         return mask
 
 
@@ -124,6 +123,17 @@ def view_of(cb: CaseBase) -> View:
         names = tuple(f"feature {i}" for i in range(width))
     if len(words) != width:
         words = names
+    keep = [i for i, n in enumerate(names) if n != MIRROR_FLAG]
+    bases: dict[str, int] = {}
+    base_words: list[str] = []
+    channel_feature = np.full(width, -1, dtype=np.int64)
+    for i in keep:
+        base, said = signal_of(names[i].partition("@")[0], _feature_words(words[i], names[i]))
+        if base not in bases:
+            bases[base] = len(bases)
+            base_words.append(said)
+        channel_feature[i] = bases[base]
+    features, feature_words = tuple(bases), tuple(base_words)
     if cb.problems.ndim == 3:
         view_names = tuple(f"{n}@{st}" for st, _ in _SEQUENCE_STATS for n in names)
         view_words = tuple(
@@ -131,31 +141,21 @@ def view_of(cb: CaseBase) -> View:
             for st, said in _SEQUENCE_STATS
             for n, w in zip(names, words, strict=True)
         )
-        feature = np.tile(np.arange(width), len(_SEQUENCE_STATS))
-        features, feature_words = tuple(names), tuple(words)
+        feature = np.tile(channel_feature, len(_SEQUENCE_STATS))
         columns = np.arange(len(view_names))
         sequence = True
     else:
-        columns = np.array([i for i, n in enumerate(names) if n != MIRROR_FLAG], dtype=np.int64)
+        columns = np.array(keep, dtype=np.int64)
         view_names = tuple(names[i] for i in columns)
         view_words = tuple(words[i] for i in columns)
-        bases: dict[str, int] = {}
-        base_words: list[str] = []
-        feat = []
-        for n, w in zip(view_names, view_words, strict=True):
-            base, said = signal_of(n.partition("@")[0], _feature_words(w, n))
-            if base not in bases:
-                bases[base] = len(bases)
-                base_words.append(said)
-            feat.append(bases[base])
-        feature = np.array(feat, dtype=np.int64)
-        features, feature_words = tuple(bases), tuple(base_words)
+        feature = channel_feature[columns]
         sequence = False
+    blank = np.zeros(len(view_names), dtype=bool)
     values = View(view_names, view_words, feature, features, feature_words, sequence, columns,
-                  np.zeros(len(view_names), dtype=bool)).of(cb.problems)  # fmt: skip
+                  blank, channel_feature).of(cb.problems)  # fmt: skip
     binary = np.all((values == 0.0) | (values == 1.0), axis=0)
     view = View(view_names, view_words, feature, features, feature_words, sequence, columns,
-                binary)  # fmt: skip
+                binary, channel_feature)  # fmt: skip
     cb.cache["view"] = (key, view)
     return view
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from dataclasses import replace
+
 from features.poses import PoseSequence
 from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
 
@@ -94,3 +96,44 @@ def to_sequence(*frames: dict[str, np.ndarray], fps: float = 30.0) -> PoseSequen
         for name, xyz in body.items():
             pos[f, JOINT_INDEX[name]] = xyz
     return PoseSequence(pos, BLAZEPOSE_33, fps, source="synthetic")
+
+
+def squat_pose(
+    depth: float, lean_deg: float = 40.0, arms_deg: float = 0.0
+) -> dict[str, np.ndarray]:
+    """A squat at ``depth`` in [0, 1] of the way down: feet planted, the shins tip 35 degrees
+    forward and the thighs reach 95 degrees from vertical at depth 1, the torso leans
+    ``lean_deg`` forward over the hips; ``arms_deg`` raises both straight arms forward.
+
+    The knee angle is the angle between the thigh and the shin at the knee: standing, 180
+    degrees; at depth ``a`` it is ``180 - 35 a - 95 a`` degrees (shin forward, thigh back)."""
+    b = standing()
+    out = dict(b)
+    shin, thigh = np.radians(35 * depth), np.radians(95 * depth)
+    for side in ("left", "right"):
+        knee = b[f"{side}_ankle"] + 0.45 * np.array([0.0, np.cos(shin), np.sin(shin)])
+        out[f"{side}_knee"] = knee
+        out[f"{side}_hip"] = knee + 0.45 * np.array([0.0, np.cos(thigh), -np.sin(thigh)])
+    arms = tuple(f"{s}_{j}" for s in ("left", "right")
+                 for j in ("elbow", "wrist", "pinky", "index", "thumb"))  # fmt: skip
+    for side in ("left", "right"):
+        out = rotate(out, tuple(a for a in arms if a.startswith(side)), rot_x(-arms_deg),
+                     b[f"{side}_shoulder"])  # fmt: skip
+    mid_old = 0.5 * (b["left_hip"] + b["right_hip"])
+    mid_new = 0.5 * (out["left_hip"] + out["right_hip"])
+    upper = UPPER_BODY
+    return {j: (rot_x(lean_deg * depth) @ (out[j] - mid_old) + mid_new if j in upper else p)
+            for j, p in out.items()}  # fmt: skip
+
+
+def squat_clip(
+    depth: float,
+    frames: int = 45,
+    lean_deg: float = 40.0,
+    arms_deg: float = 0.0,
+    source: str = "synthetic squat",
+) -> PoseSequence:
+    """One squat repetition down to ``depth`` and back up over ``frames`` frames (30 fps)."""
+    phase = 0.5 * (1.0 - np.cos(np.linspace(0.0, 2.0 * np.pi, frames)))
+    seq = to_sequence(*[squat_pose(depth * a, lean_deg, arms_deg) for a in phase])
+    return replace(seq, source=source)

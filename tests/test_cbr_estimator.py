@@ -84,15 +84,17 @@ def test_explanations_cite_real_fluent_names(data: tuple) -> None:
     assert exp.label == ACTIVITIES[0]
     # the left arm swings out sideways above the 9pi/16 armpit threshold ("raised") and away
     # from the body in the frontal plane ("outward"); the right arm hangs still
-    assert {"left arm raised", "left arm outward"} & set(exp.matched)
-    assert "right arm raised" not in exp.matched
+    matched = [m.removesuffix(" (at times)") for m in exp.matched]
+    assert {"left arm raised", "left arm outward"} & set(matched)
+    assert "right arm raised" not in matched
     assert "left arm raised" not in exp.not_seen
     words = set(evaluate(Xt[left]).words)
-    assert set(exp.matched) <= words and set(exp.only_here) <= words
-    assert ACTIVITIES[0] in exp.text and exp.matched[0] in exp.text
+    only_here = [m.removesuffix(" (at times)") for m in exp.only_here]
+    assert set(matched) <= words and set(only_here) <= words
+    assert exp.text.startswith(ACTIVITIES[0]) and exp.matched[0] in exp.verbose
     assert exp.contrast is not None and exp.contrast.label != ACTIVITIES[0]
-    if exp.contrast.label == ACTIVITIES[1]:  # the right-arm movement would need the right arm up
-        assert "right arm raised" in exp.contrast.would_need
+    # under DTW a feature is a signal's channels over time; the counterfactual holds
+    assert exp.contrast.valid and exp.contrast.answer == exp.contrast.label
     assert all(n["label"] in ACTIVITIES for n in exp.neighbours)
 
 

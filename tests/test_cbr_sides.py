@@ -16,7 +16,7 @@ import pytest
 from cbr.estimator import CaseBaseClassifier
 from cbr.fitting import inner_loso_accuracy
 from cbr.problem import FeatureConfig, extract_problem, resolve_config, summarise
-from features.body import mirrored, moves_left_more
+from features.body import mirrored, moves_left_more, swap_side
 from features.poses import save_pose
 from posecbr.cli import main
 from tests.test_cbr_weights import _arm_clip
@@ -91,9 +91,23 @@ def test_auto_picks_a_side_invariant_handling_and_recognises_the_other_arm() -> 
         for p in (0, 3)
     }
     assert list(clf.predict(Xt)) == ["one arm sideways"] * 3
-    if clf.side_ == "canonical":
-        exp = clf.explain(Xt[:1])[0]
-        assert "compared as its mirror image" in exp.text
+
+
+def test_a_clip_compared_as_its_mirror_image_is_explained_with_its_own_sides() -> None:
+    X, y = _data({"s1": "right", "s2": "right", "s3": "right"}, 3, 3)
+    clip = _arm_clip("left", "sideways", "s9", np.random.default_rng(4))
+    clf = CaseBaseClassifier(k=1, mirror="canonical").fit(X, y)
+    solved = clf.solve([clip])[0]
+    assert solved.problem.mirrored  # the left arm moves: compared as the right-arm cases
+    exp = clf.explain_solved(solved)
+    assert exp.mirrored and "compared as its mirror image" in exp.verbose
+    words = dict(zip(clf.case_base_.names, clf.case_base_.words, strict=True))
+    for c in exp.claims:  # every claim names the clip's own side: the case base's, swapped
+        assert c.words == swap_side(words[c.column])
+    # what decided it is the arm the clip moves: its left arm
+    why = [c for c in exp.claims if c.part == "why"]
+    assert why and all("right" not in c.words for c in why)
+    assert any("left" in c.words for c in why)
 
 
 def test_auto_keeps_side_twins_apart() -> None:

@@ -201,8 +201,7 @@ def test_mirror_images_recognise_the_other_side_and_weights_come_from_training_o
     assert list(clf.predict(Xt)) == ["one arm sideways"] * 4
     exp = clf.explain(Xt[:1])[0]
     assert exp.neighbours[0]["source"].endswith("(mirrored)")
-    assert exp.weighted_most and set(exp.weighted_most) <= set(clf.case_base_.words)
-    assert "Weighted most by this case base" in exp.text
+    # the case base's heaviest weights are said once, by casebase info, not in every clip
     # the weights are those of the training clips alone, and predicting does not move them
     real = np.stack([extract_problem(s, clf.feature_config_).values for s in X])
     fw = learn_weights(real, np.array(y))

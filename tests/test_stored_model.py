@@ -58,12 +58,18 @@ def test_train_and_python_fit_give_identical_answers(
     assert len(stored.case_base_) == len(fitted.case_base_)
     np.testing.assert_array_equal(stored.case_base_.problems, fitted.case_base_.problems)
     assert stored.novelty_ == fitted.novelty_
+    assert stored.confidence_ == fitted.confidence_
     np.testing.assert_array_equal(stored.predict(X_test), fitted.predict(X_test))
     np.testing.assert_array_equal(stored.predict_proba(X_test), fitted.predict_proba(X_test))
     a, b = stored.solve(X_test[:3]), fitted.solve(X_test[:3])
     for s, f in zip(a, b, strict=True):
         assert s.novelty == f.novelty and s.unlike_cases == f.unlike_cases
+        assert s.solution.confidence == f.solution.confidence
         np.testing.assert_array_equal(s.retrieval.distances, f.retrieval.distances)
+        # the same explanation, counterfactual included (case ids aside: only stored cases
+        # have them)
+        es, ef = stored.explain_solved(s), fitted.explain_solved(f)
+        assert [c.to_dict() for c in es.claims] == [c.to_dict() for c in ef.claims]
 
 
 def test_a_stored_classifier_keeps_its_k_and_vote(tmp_path: Path) -> None:
@@ -80,4 +86,6 @@ def test_a_stored_classifier_keeps_its_k_and_vote(tmp_path: Path) -> None:
     X = [c.seq for c in load_dataset(DEMO, subjects={"s03"}, labels={"deep_squat"})]
     for s in clf.solve(X):
         assert len(s.retrieval.indices) == 1
-        assert s.solution.label == s.retrieval.labels[0] and s.solution.confidence == 1.0
+        assert s.solution.label == s.retrieval.labels[0] and s.solution.vote_share == 1.0
+        # the confidence is that share calibrated on the held-out training clips
+        assert s.solution.confidence == clf.confidence_(1.0)
