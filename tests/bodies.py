@@ -7,9 +7,9 @@ ears ±0.08 at 1.65 (mid-ear 0.15 above the neck: one head-length = 0.30 m).
 
 from __future__ import annotations
 
-import numpy as np
-
 from dataclasses import replace
+
+import numpy as np
 
 from features.poses import PoseSequence
 from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
