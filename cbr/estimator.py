@@ -615,8 +615,11 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         come from; ``"correct"`` reads them as correct / incorrect repetitions)."""
         return [self.explain_solved(s, target) for s in self.solve(X)]
 
-    def explain_solved(self, solved: Solved, target: str | None = None) -> Explanation:
-        """The explanation of one :meth:`solve` result."""
+    def explain_solved(
+        self, solved: Solved, target: str | None = None, counterfactual: bool = True
+    ) -> Explanation:
+        """The explanation of one :meth:`solve` result (``counterfactual`` False: without the
+        counterfactual search, for callers that need the neighbours only)."""
         return explain(
             self.case_base_,
             solved,
@@ -625,6 +628,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             unlike_ratio=self.novelty_.unlike_ratio,
             k=int(self.k),
             weights=self.weights,  # type: ignore[arg-type]
+            counterfactual_search=counterfactual,
         )
 
     def answer(self, values: np.ndarray) -> str:

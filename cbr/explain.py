@@ -621,6 +621,8 @@ def _reference(labels: Sequence[str], target: str | None) -> str | None:
 def _cf_line(contrast: Contrast, name: str, shown: int) -> str:
     """The counterfactual in words, with at most ``shown`` of its changes."""
     changes = contrast.changes
+    if not contrast.answer:  # not searched
+        return f"Nearest other label: {name}."
     if not contrast.valid or not changes:
         return f"No change of up to {MAX_CHANGES} features makes it {name}."
     said_ = "; ".join(_change_text(c) for c in changes[:shown])
@@ -638,11 +640,14 @@ def explain(
     unlike_ratio: float | None = None,
     k: int = 5,
     weights: Weights = "distance",
+    counterfactual_search: bool = True,
 ) -> Explanation:
     """Explain one classification (:meth:`cbr.estimator.CaseBaseClassifier.solve`);
     ``answer`` classifies a problem the way the classifier does (to check counterfactuals);
     ``target`` the column the labels come from ("correct": repetition words); ``k`` and
-    ``weights`` the classifier's vote (the counterfactual search follows it)."""
+    ``weights`` the classifier's vote (the counterfactual search follows it);
+    ``counterfactual_search`` False leaves the counterfactual out (callers that need the
+    neighbours only: it costs a few retrievals per feature changed)."""
     problem, retrieval, solution = solved.problem, solved.retrieval, solved.solution
     label = solution.label
     r = read(cb, problem)
@@ -663,7 +668,11 @@ def explain(
         }
         for p in keep
     )
-    contrast = None if other is None else _contrast(cb, r, problem, other, answer, k, weights)
+    contrast = (
+        None
+        if other is None
+        else _contrast(cb, r, problem, other, answer, k, weights, counterfactual_search)
+    )
     lines = _short(cb, solved, target, outside, why, own, contrast)
     win = retrieval.indices[retrieval.labels.astype(str) == label]
     matched, not_seen, only_here = presence_claims(r, label, win if len(win) else retrieval.indices)
@@ -699,12 +708,15 @@ def _contrast(
     answer: Callable[[np.ndarray], str],
     k: int,
     weights: Weights,
+    search: bool = True,
 ) -> Contrast:
     """The nearest case of another label (``other``: position, distance) and the checked
-    counterfactual toward its label."""
+    counterfactual toward its label (``search`` False: none)."""
     assert cb.ids is not None
     pos, dist = other
     other_label = str(cb.labels[pos])
+    if not search:
+        return Contrast(other_label, int(cb.ids[pos]), cb.sources[pos], float(dist), position=pos)
     cf = counterfactual(cb, np.asarray(problem.values), other_label, answer, k, weights)
     changes = [] if cf.guide is None else change_claims(r, cf, cb.problems[cf.guide])
     return Contrast(

@@ -369,7 +369,7 @@ def _explain_segment(
             ratio,
         )
     w = max(inside, key=lambda s: s.vote[state])
-    e: Explanation = clf.explain_solved(w.solved)
+    e: Explanation = clf.explain_solved(w.solved, counterfactual=False)
     label = str(clf.classes_[state])
     agree = sum(str(n["label"]) == label for n in e.neighbours)
     text = f"{agree} of the {len(e.neighbours)} most similar cases are {label}"
