@@ -130,7 +130,7 @@ def _info(store: CaseStore, args: argparse.Namespace) -> int:
             f"  features: {feats['level']}, {n_states} states, length {feats['length']}; "
             f"hash {d['feature_hash'][:12]}"
         )
-        print(f"  similarity: {d['similarity']}")
+        print(f"  similarity: {_measure_words(d['similarity'])}")
         m = d["model"]
         if m.get("k") is not None:
             print(
@@ -141,15 +141,36 @@ def _info(store: CaseStore, args: argparse.Namespace) -> int:
             print(f"  weighted most: {shown(', '.join(m['weighted_most']))}")
         if m.get("unlike_cases"):
             u = m["unlike_cases"]
+            sensors = u.get("skeletons") or []
             print(
                 f"  unlike the stored cases beyond {u['unlike_ratio']:.2f}x the usual held-out "
                 f"distance ({u['quantile']:.0%} of {u['basis']} training clips lie within)"
+                + (
+                    f", or recorded with a skeleton other than {', '.join(sensors)}"
+                    if sensors
+                    else ""
+                )  # fmt: skip
+            )
+        if m.get("confidence"):
+            c = m["confidence"]
+            print(
+                f"  confidence: the vote share calibrated on {c['n']} {c['basis']} training "
+                f"clips (their accuracy {c['accuracy']:.3f})"
             )
         for lab, n in d["labels"].items():
             print(f"  {n:6d}  {shown(lab)}")
         if d["maintenance"]:
             print("  history: " + ", ".join(f"{k} x{v}" for k, v in d["maintenance"].items()))
     return 0
+
+
+def _measure_words(similarity: dict[str, Any]) -> str:
+    """The measure and its settings; its learned weights (one per column) are summed up by
+    "weighted most" instead of printed."""
+    rest = {k: v for k, v in similarity.items() if k not in ("name", "centre", "multiplier")}
+    learned = " with learned feature weights" if similarity.get("multiplier") else ""
+    settings = ", ".join(f"{k}={v}" for k, v in sorted(rest.items()))
+    return f"{similarity.get('name', '?')}{learned}" + (f" ({settings})" if settings else "")
 
 
 def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, Any]:
@@ -166,6 +187,7 @@ def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, A
         "feature_weights": model.get("weighting"),
         "phases": params.get("phases"),
         "unlike_cases": model.get("novelty"),
+        "confidence": model.get("confidence"),
     }
     fw = model.get("feature_weights")
     if fw and len(fw.get("weight", ())) == len(words):
