@@ -17,6 +17,7 @@ the installed kernels afresh):
 
 from __future__ import annotations
 
+import html
 import json
 import os
 import re
@@ -199,3 +200,10 @@ def test_installed_demo_runs_from_an_empty_folder(installed: Installed, tmp_path
     assert [m["name"] for m in results["methods"]] == ["cbr fluents/euclidean"]
     page = (demo / "report.html").read_text()
     assert page.lstrip().lower().startswith("<!doctype html") and "cbr fluents/euclidean" in page
+    # every step prints the command it runs, and the one report holds them all with their
+    # output and the timeline picture
+    for command in ("describe", "train", "classify", "compare"):
+        said = re.search(rf"^\$ posecbr {command} .+$", out, re.M)
+        assert said, f"the demo does not print its {command} command"
+        assert html.escape(said.group(0)) in page
+    assert "accuracy: " in page and "data:image/png;base64," in page

@@ -1,8 +1,11 @@
-"""``posecbr demo``: the main job on the bundled UI-PRMD subset, end to end.
+"""``posecbr demo``: the main job on the bundled UI-PRMD subset, end to end, as a user runs it.
 
-describe one clip -> train a case base on two subjects -> classify the third subject's clips
-with explanations -> compare similarity measures, feature levels and DAD by leave-one-subject-
-out cross-validation -> write the HTML report. Every step is the same command a user runs.
+describe one clip -> train a case base on two subjects (the configuration the README
+recommends: ``posecbr train``'s defaults) -> classify the third subject's clips with
+explanations -> compare similarity measures, feature levels and DAD by leave-one-subject-out
+cross-validation -> one report. Each step prints the command it runs, so a user can repeat it,
+and its output; ``report.html`` holds them all: the commands, what they printed, the fluent
+timeline and the comparison.
 
 The data ships inside the package (``posecbr/demo_data/uiprmd``, found with
 :mod:`importlib.resources`), so the demo runs wherever posecbr is installed.
@@ -11,10 +14,19 @@ The data ships inside the package (``posecbr/demo_data/uiprmd``, found with
 from __future__ import annotations
 
 import argparse
+import base64
+import contextlib
+import html
+import io
+import shlex
 import shutil
+import sys
+import tempfile
 import time
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import TextIO
 
 from features.errors import DataError, PosecbrError
 
@@ -27,9 +39,10 @@ QUICK_COMPARE = ("--similarities", "euclidean", "--features", "fluents", "--no-d
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "demo",
-        help="train, classify, compare and report on the bundled UI-PRMD subset",
-        description="Runs describe -> train -> classify -> compare -> report on the bundled "
-        "UI-PRMD subset (3 subjects x 10 movements x 6 repetitions) and says where the report is.",
+        help="describe, train, classify, compare and report on the bundled UI-PRMD subset",
+        description="Runs describe -> train -> classify -> compare on the bundled UI-PRMD "
+        "subset (3 subjects x 10 movements x 6 repetitions), printing each command so you can "
+        "repeat it, and writes one report with all of them.",
     )
     p.add_argument(
         "--data",
@@ -39,13 +52,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--out", type=Path, default=Path("demo-output"), help="output folder")
     p.add_argument(
-        "--features",
-        default="qmp",
-        choices=["fluents", "qmp"],
-        help="feature level of the demo case base (default qmp)",
-    )
-    p.add_argument("--similarity", default="euclidean", help="similarity of the demo case base")
-    p.add_argument(
         "--quick",
         action="store_true",
         help="compare one configuration (fluents/euclidean) without DAD, peers or the "
@@ -54,9 +60,48 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _step(title: str) -> float:
-    print(f"\n== {title} ==", flush=True)
-    return time.perf_counter()
+@dataclass
+class Step:
+    """One step of the demo: its title, the command (argv after ``posecbr``), what it
+    printed and how long it took."""
+
+    title: str
+    argv: list[str]
+    output: str = ""
+    seconds: float = 0.0
+
+    @property
+    def command(self) -> str:
+        return "posecbr " + " ".join(shlex.quote(a) for a in self.argv)
+
+
+class _Tee(io.TextIOBase):
+    """Writes to the terminal and keeps a copy (a step's output for the report)."""
+
+    def __init__(self, out: TextIO) -> None:
+        self.out, self.kept = out, io.StringIO()
+
+    def write(self, text: str) -> int:
+        self.out.write(text)
+        self.kept.write(text)
+        return len(text)
+
+    def flush(self) -> None:
+        self.out.flush()
+
+
+def _run_step(step: Step) -> int:
+    from posecbr.cli import main
+
+    print(f"\n== {step.title} ==\n$ {step.command}", flush=True)
+    tee = _Tee(sys.stdout)
+    t = time.perf_counter()
+    with contextlib.redirect_stdout(tee):
+        code = main(step.argv)
+    step.seconds = time.perf_counter() - t
+    step.output = tee.kept.getvalue()
+    print(f"({step.seconds:.1f} s)", flush=True)
+    return code
 
 
 def _check_out(out: Path, data: Path) -> None:
@@ -79,11 +124,32 @@ def run(args: argparse.Namespace) -> int:
         return _run(args, bundled)
 
 
-def _run(args: argparse.Namespace, data: Path) -> int:
-    from posecbr.cli import main
-
+def _steps(data: Path, out: Path, quick: bool) -> list[Step]:
     labels = data / "labels.csv"
-    if not labels.is_file():
+    db = out / "casebase.sqlite"
+    compare = ["compare", str(labels)]
+    if quick:
+        compare += [*QUICK_COMPARE, "--json", str(out / "compare" / "results.json")]
+    else:
+        compare += ["--out", str(out / "compare")]
+    return [
+        Step("1. describe: a deep squat in words",
+             ["describe", str(data / "m01_s01_e01.npz"), "--plot",
+              str(out / "timeline_deep_squat.png")]),
+        # the configuration the README recommends is train's default: fluent clip summaries
+        # under weighted euclidean, side handling and weights chosen inside the training clips
+        Step("2. train: a case base from subjects s01 and s02 (the recommended configuration: "
+             "train's defaults)",
+             ["train", str(labels), "--db", str(db), "--subjects", "s01,s02"]),
+        Step("3. classify: subject s03, unseen in training",
+             ["classify", str(labels), "--db", str(db), "--subjects", "s03"]),
+        Step("4. compare: leave-one-subject-out cross-validation of the configurations",
+             compare),
+    ]  # fmt: skip
+
+
+def _run(args: argparse.Namespace, data: Path) -> int:
+    if not (data / "labels.csv").is_file():
         raise PosecbrError("demo data not found (expected labels.csv)", data)
     out: Path = args.out
     _check_out(out, data)
@@ -91,46 +157,52 @@ def _run(args: argparse.Namespace, data: Path) -> int:
     for stale in (db, db.with_name(db.name + "-wal"), db.with_name(db.name + "-shm")):
         stale.unlink(missing_ok=True)
     shutil.rmtree(out / "compare", ignore_errors=True)
-
-    t = _step("1. describe: a deep squat in words (posecbr describe)")
-    clip = data / "m01_s01_e01.npz"
-    code = main(["describe", str(clip), "--plot", str(out / "timeline_deep_squat.png")])
-    if code:
-        return code
-    print(f"({time.perf_counter() - t:.1f} s)")
-
-    t = _step("2. train: case base from subjects s01 and s02 (posecbr train)")
-    code = main(["train", str(labels), "--db", str(db), "--subjects", "s01,s02",
-                 "--features", args.features, "--similarity", args.similarity])  # fmt: skip
-    if code:
-        return code
-    print(f"({time.perf_counter() - t:.1f} s)")
-
-    t = _step("3. classify: subject s03, unseen in training (posecbr classify)")
-    code = main(["classify", str(labels), "--db", str(db), "--subjects", "s03", "--top", "2"])
-    if code:
-        return code
-    print(f"({time.perf_counter() - t:.1f} s)")
-
-    t = _step("4. compare: leave-one-subject-out cross-validation (posecbr compare)")
-    results = out / "compare"
-    compare = ["compare", str(labels)]
     if args.quick:
-        results.mkdir()  # compare --json writes into an existing folder only
-        results = results / "results.json"
-        compare += [*QUICK_COMPARE, "--json", str(results)]
-    else:
-        compare += ["--out", str(results)]
-    code = main(compare)
-    if code:
-        return code
-    print(f"({time.perf_counter() - t:.1f} s)")
-
-    t = _step("5. report (posecbr report)")
+        (out / "compare").mkdir()  # compare --json writes into an existing folder only
+    steps = _steps(data, out, args.quick)
+    for step in steps:
+        code = _run_step(step)
+        if code:
+            return code
     report = out / "report.html"
-    code = main(["report", str(results), "--out", str(report)])
-    if code:
-        return code
-    print(f"({time.perf_counter() - t:.1f} s)")
-    print(f"\nDone. Case base: {db}\nReport: {report.resolve()}")
+    results = steps[-1].argv[steps[-1].argv.index("--json" if args.quick else "--out") + 1]
+    print("\n== 5. report: every step on one page ==", flush=True)
+    _write_report(steps, Path(results), out / "timeline_deep_squat.png", report)
+    total = sum(s.seconds for s in steps)
+    print(f"\nDone in {total:.0f} s. Case base: {db}\nReport: {report.resolve()}")
     return 0
+
+
+def _write_report(steps: list[Step], results: Path, timeline: Path, report: Path) -> None:
+    """One page: the comparison's report (``posecbr report``) with the steps before it, each
+    with its command and output, and the fluent timeline inlined."""
+    from features.fileio import check_output, write_text_atomic
+    from posecbr.cli import main
+
+    dest = check_output(report, inputs=[results, timeline], what="report")
+    with tempfile.TemporaryDirectory() as tmp:
+        page_path = Path(tmp) / "compare.html"
+        with contextlib.redirect_stdout(io.StringIO()):
+            if main(["report", str(results), "--out", str(page_path)]):
+                raise PosecbrError("the comparison's report could not be written", results)
+        page = page_path.read_text(encoding="utf-8")
+    sections = ["<h2>The demo, step by step</h2>",
+                "<p>Each command below is what the demo ran; run it yourself to repeat the "
+                "step.</p>"]  # fmt: skip
+    for step in steps:
+        sections += [
+            f"<h3>{html.escape(step.title)} ({step.seconds:.1f} s)</h3>",
+            f"<pre><code>$ {html.escape(step.command)}</code></pre>",
+            f"<pre>{html.escape(step.output.strip())}</pre>",
+        ]
+        if step.argv[0] == "describe" and timeline.is_file():
+            data = base64.b64encode(timeline.read_bytes()).decode("ascii")
+            sections.append(
+                f"<figure><img src='data:image/png;base64,{data}' alt='fluent timeline'>"
+                "<figcaption>The deep squat's fluents over time (describe --plot)"
+                "</figcaption></figure>"
+            )
+    sections.append("<h2>5. The comparison (posecbr compare, posecbr report)</h2>")
+    at = page.find("<h2>")
+    page = page[:at] + "\n".join(sections) + "\n" + page[at:] if at >= 0 else page
+    write_text_atomic(dest, page)
