@@ -653,7 +653,9 @@ def explain(
     r = read(cb, problem)
     assert cb.ids is not None
     reference = _reference(r.prof.labels, target)
-    outside = outside_claims(r, reference) if reference is not None else []
+    # a repetition judged incorrect leads with what lies outside the correct repetitions
+    judged_off = reference is not None and label != reference
+    outside = outside_claims(r, reference) if judged_off and reference is not None else []
     keep = distinct_neighbours(cb, retrieval)
     own = next((int(retrieval.indices[p]) for p in keep if retrieval.labels[p] == label), None)
     other = nearest_of_other_label(cb, problem, label)
@@ -735,8 +737,8 @@ def _short(
     own: int | None,
     contrast: Contrast | None,
 ) -> list[str]:
-    """The default text's lines, shortened (fewer items, no file names) until they fit
-    :data:`MAX_TEXT` characters."""
+    """The default text's lines, shortened (fewer changes shown, fewer reasons, no file
+    names, no nearest cases or ranges) until they fit :data:`MAX_TEXT` characters."""
     label = solved.solution.label
     name = label_words(label, target)
     head = f"{name}, confidence {solved.solution.confidence:.2f}"
@@ -755,15 +757,13 @@ def _short(
         else:
             why_line = f"Why: nearest to the {name} cases overall; no one feature sets it apart."
         near = []
-        if own is not None:
-            bare = label_words(label, target, article=False)
-            near.append(_nearest_words(cb, own, "nearest " + bare, names))
-        if contrast is not None:
-            other = label_words(contrast.label, target, article=False)
-            near.append(_nearest_words(cb, contrast.position, "nearest other: " + other, names))
+        if own is not None and names:
+            near.append("Nearest case " + _case_ref(cb, own, names))
+        if contrast is not None and names:
+            near.append("of another label " + _case_ref(cb, contrast.position, names))
         lines = [head, why_line]
         if near:
-            lines.append(_capital("; ".join(near) + "."))
+            lines.append("; ".join(near) + ".")
         if contrast is not None:
             lines.append(_cf_line(contrast, label_words(contrast.label, target), shown))
         if len("\n".join(lines)) <= MAX_TEXT:
@@ -780,20 +780,14 @@ def unlike_words(solved: Solved) -> str:
     return f"; unlike the stored cases (nearest at {solved.novelty:.1f}x the usual distance)"
 
 
-def _capital(text: str) -> str:
-    return text[:1].upper() + text[1:]
-
-
-def _nearest_words(cb: CaseBase, i: int, what: str, names: int) -> str:
-    """``nearest deep_squat case #5 (m01_s01_e03.npz)`` (``names`` 2), without the file (1;
-    a case not stored, without an id, keeps its file) or without either (0)."""
+def _case_ref(cb: CaseBase, i: int, names: int) -> str:
+    """``#5 (m01_s01_e03.npz)`` (``names`` 2) or ``#5`` (1); a case not stored (no id) is
+    named by its clip."""
     assert cb.ids is not None
-    if names == 0:
-        return what
     if int(cb.ids[i]) < 0:
-        return f"{what}: {_short_source(cb.sources[i])}"
+        return _short_source(cb.sources[i])
     where = f" ({_short_source(cb.sources[i])})" if names == 2 else ""
-    return f"{what} case #{int(cb.ids[i])}{where}"
+    return f"#{int(cb.ids[i])}{where}"
 
 
 def _differences(r: _Reading, contrast: Contrast | None, cb: CaseBase) -> list[dict[str, Any]]:
