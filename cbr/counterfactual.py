@@ -31,6 +31,8 @@ from .weights import MIRROR_FLAG
 
 #: nearest cases of the wanted label tried as guides
 GUIDES = 8
+#: guides tried for sequence problems, whose search runs the classifier for every step
+SEQUENCE_GUIDES = 3
 #: nearest cases of other labels the guide must beat
 RIVALS = 5
 #: the most features one counterfactual may change before the search gives up on a guide
@@ -128,8 +130,10 @@ def plausibility(cb: CaseBase, values: np.ndarray, label: str) -> float:
     return float(d.min()) / _label_scale(cb, label)
 
 
-def _nearest(cb: CaseBase, values: np.ndarray, label: str) -> tuple[list[int], np.ndarray]:
-    """Positions of the :data:`GUIDES` nearest real cases of ``label`` (mirror images of
+def _nearest(
+    cb: CaseBase, values: np.ndarray, label: str, n_guides: int = GUIDES
+) -> tuple[list[int], np.ndarray]:
+    """Positions of the ``n_guides`` nearest real cases of ``label`` (mirror images of
     training clips, flagged in the last column, are no real case) and of the :data:`RIVALS`
     nearest cases of other labels."""
     measure = cb.measure
@@ -139,7 +143,7 @@ def _nearest(cb: CaseBase, values: np.ndarray, label: str) -> tuple[list[int], n
     if cb.names and cb.names[-1] == MIRROR_FLAG and cb.problems.ndim == 2:
         real = cb.problems[:, -1] == 0.0
     mine = np.where(is_label & real, d, np.inf)
-    order = np.argsort(mine, kind="stable")[:GUIDES]
+    order = np.argsort(mine, kind="stable")[:n_guides]
     rivals = np.argsort(np.where(is_label, np.inf, d), kind="stable")[:RIVALS]
     return [int(i) for i in order if np.isfinite(mine[i])], rivals[np.isfinite(d[rivals])]
 
@@ -261,9 +265,10 @@ def counterfactual(
     weights: Weights = "distance",
 ) -> Counterfactual:
     """The sparsest valid counterfactual of problem ``values`` toward ``label`` over the
-    :data:`GUIDES` nearest real cases of ``label``. ``answer`` classifies a problem as the
-    classifier does (its retrieve and reuse: the final check); ``k`` and ``weights`` are its
-    vote, which the search of vector problems under euclidean distance follows exactly."""
+    :data:`GUIDES` (sequences: :data:`SEQUENCE_GUIDES`) nearest real cases of ``label``.
+    ``answer`` classifies a problem as the classifier does (its retrieve and reuse: the final
+    check); ``k`` and ``weights`` are its vote, which the search of vector problems under
+    euclidean distance follows exactly."""
     view = view_of(cb)
     q = np.asarray(values, dtype=np.float64)
     exact = (
@@ -272,7 +277,7 @@ def counterfactual(
         else None
     )
     best: tuple[int, float, int, list[int], np.ndarray] | None = None
-    guides, rivals = _nearest(cb, q, label)
+    guides, rivals = _nearest(cb, q, label, GUIDES if exact is not None else SEQUENCE_GUIDES)
     for g in guides:
         if exact is not None:
             found = exact.search(g, label)
