@@ -199,6 +199,13 @@ class Contrast:
 
 @dataclass(frozen=True)
 class Explanation:
+    """One clip's explanation: the answer (``label``, calibrated ``confidence``,
+    ``vote_share``), the retrieved cases one per clip (``neighbours``), the fluent states shared
+    with the similar cases and not (``matched``, ``not_seen``, ``only_here``; "(at times)"
+    when held under half the clip), the nearest case of another label with the checked
+    counterfactual (``contrast``), the four-line ``text``, the ``verbose`` text, every
+    statement as a :class:`Claim` and whether the clip was compared as its mirror image."""
+
     label: str
     confidence: float
     neighbours: tuple[dict[str, Any], ...]
@@ -214,10 +221,6 @@ class Explanation:
     # for the few features that set the clip apart from the nearest case of the other label:
     # {"feature", "here", "there", "unit"} in the feature's own units
     differences: tuple[dict[str, Any], ...] = ()
-
-    @property
-    def why(self) -> tuple[Claim, ...]:
-        return tuple(c for c in self.claims if c.part in ("why", "outside"))
 
     def to_dict(self) -> dict[str, Any]:
         return {
