@@ -554,7 +554,7 @@ def change_claims(r: _Reading, cf: Counterfactual, guide: np.ndarray) -> list[Cl
 
 def _change_text(c: Claim) -> str:
     if c.unit == "detected":
-        return f"{c.words} {'not ' if c.there is not None and c.there < 0.5 else ''}shown"
+        return f"{'not ' if c.there is not None and c.there < 0.5 else ''}show {c.words}"
     there = c.there if c.there is not None else float("nan")
     return f"{c.words} {said(c.here, c.unit)} → {said(there, c.unit)}"
 
