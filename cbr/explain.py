@@ -631,7 +631,7 @@ def _cf_line(contrast: Contrast, name: str, shown: int) -> str:
     said_ = "; ".join(_change_text(c) for c in changes[:shown])
     if len(changes) <= shown:
         return f"To be {name}: {said_}."
-    return f"To be {name}, {len(changes)} changes, e.g. {said_}."
+    return f"To be {name}, {_count(len(changes), 'change')}, e.g. {said_}."
 
 
 def explain(
@@ -761,7 +761,7 @@ def _short(
             why_line = f"Why: nearest to the {name} cases overall; no one feature sets it apart."
         near = []
         if own is not None and names:
-            near.append("Nearest case " + _case_ref(cb, own, names))
+            near.append("Nearest case of this label " + _case_ref(cb, own, names))
         if contrast is not None and names:
             near.append("of another label " + _case_ref(cb, contrast.position, names))
         lines = [head, why_line]
@@ -781,6 +781,10 @@ def unlike_words(solved: Solved) -> str:
     if solved.unlike_reason == "sensor":
         return "; unlike the stored cases (recorded with a skeleton none of them has)"
     return f"; unlike the stored cases (nearest at {solved.novelty:.1f}x the usual distance)"
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 def _case_ref(cb: CaseBase, i: int, names: int) -> str:
@@ -864,7 +868,7 @@ def _verbose(
                 else "not enough: the classifier still answers "
             ) + contrast.answer  # fmt: skip
             out.append(
-                f"Counterfactual ({len(contrast.changes)} features, values of case "
+                f"Counterfactual ({_count(len(contrast.changes), 'feature')}, values of case "
                 f"#{contrast.guide_case_id}; {status}; plausibility "
                 f"{contrast.plausibility:.2f}x the usual distance between {contrast.label} "
                 "cases): " + "; ".join(_change_text(c) for c in contrast.changes) + "."
