@@ -35,6 +35,8 @@ GUIDES = 8
 SEQUENCE_GUIDES = 3
 #: nearest cases of other labels the guide must beat
 RIVALS = 5
+#: sets of features the search of vector problems keeps at each size
+BEAM = 6
 #: the most features one counterfactual may change before the search gives up on a guide
 MAX_CHANGES = 6
 
@@ -222,28 +224,37 @@ class _Vectors:
         return np.asarray(proba[:, target] - others, dtype=np.float64)
 
     def search(self, guide: int, label: str) -> list[int] | None:
-        """Greedy: copy, one at a time, the feature of case ``guide`` whose copy helps the
-        target label's vote most (while the vote does not move, the one that brings the guide
-        nearest relative to the nearest cases of other labels), until the label wins (ties go
-        to the first class, as in the vote); then undo every change it does not need."""
+        """Beam search (:data:`BEAM` sets of features kept at each size): extend every kept
+        set by each feature of case ``guide`` not in it; keep the extensions that help the
+        target label's vote most (while the vote does not move, those that bring the guide
+        nearest relative to the nearest cases of other labels); stop at the first size at
+        which the label wins (ties go to the first class, as in the vote). Then undo every
+        change the winner does not need."""
         target = int(np.searchsorted(self.classes, label))
         other = self.codes != target
         delta = self.deltas(guide)
-        d2 = self.d2
-        chosen: list[int] = []
+        beam: list[tuple[tuple[int, ...], np.ndarray]] = [((), self.d2)]
         for _ in range(MAX_CHANGES):
-            cand = d2[:, None] + delta
-            m = self.margins(cand, target)
-            m[chosen] = -np.inf
-            rivals = np.sort(cand[other], axis=0)[: self.k].mean(axis=0)
-            gap = cand[guide] - rivals
-            f = int(np.lexsort((gap, -m))[0])
-            chosen.append(f)
-            d2 = cand[:, f]
-            if self._wins(d2, target):
-                break
-        else:
-            return None
+            scored: dict[frozenset[int], tuple[float, float, tuple[int, ...], np.ndarray]] = {}
+            for chosen, d2 in beam:
+                cand = d2[:, None] + delta
+                m = self.margins(cand, target)
+                rivals = np.sort(cand[other], axis=0)[: self.k].mean(axis=0)
+                gap = cand[guide] - rivals
+                for f in np.argsort(-m, kind="stable")[: 4 * BEAM].tolist():
+                    key = frozenset((*chosen, f))
+                    if f in chosen or key in scored:
+                        continue
+                    scored[key] = (float(m[f]), float(gap[f]), (*chosen, f), cand[:, f])
+            ranked = sorted(scored.values(), key=lambda t: (-t[0], t[1]))[:BEAM]
+            beam = [(c, d2) for _, _, c, d2 in ranked]
+            winner = next(((c, d2) for c, d2 in beam if self._wins(d2, target)), None)
+            if winner is not None:
+                return self._undo(list(winner[0]), winner[1], delta, target)
+        return None
+
+    def _undo(self, chosen: list[int], d2: np.ndarray, delta: np.ndarray, target: int) -> list[int]:
+        """``chosen`` without the changes the label wins without (least helpful first)."""
         for f in list(reversed(chosen)):
             rest = [c for c in chosen if c != f]
             if rest and self._wins(d2 - delta[:, f], target):

@@ -52,6 +52,7 @@ from .fitting import (
     Cases,
     assemble_cases,
     inner_loso_accuracy,
+    inner_loso_votes,
     side_name,
 )
 from .maintenance import EDITORS, MaintenanceReport
@@ -349,6 +350,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.novelty_, self.confidence_ = self._calibrate(
             seqs, cb, cases, origin, subjects, sources
         )
+        votes = self._nested_votes(described, choice, labels, subjects, measure)
+        if votes is not None:
+            self.confidence_ = calibrate_confidence(*votes, "nested leave-one-subject-out")
         self.classes_ = classes
         self.case_origin_ = origin
         self.feature_config_ = config
@@ -551,6 +555,33 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             from_distances(h.nearest, basis, skeletons=skeletons),
             calibrate_confidence(h.share, h.right, basis),
         )
+
+    def _nested_votes(
+        self,
+        d: _Described,
+        choice: _Choice,
+        labels: np.ndarray,
+        subjects: np.ndarray,
+        measure: SimilarityMeasure,
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """Vote shares and hits of the training clips, each classified by a case base whose
+        weights were learned without its subject (None: no learned weights, or no subjects to
+        hold out). Weights learned with a clip's own subject make its held-out votes look
+        surer than a new person's will be: the confidence would promise too much."""
+        named = set(subjects.tolist())
+        if not self._selectable(d.vectors, measure) or "" in named or len(named) < 2:
+            return None
+        if choice.weighting == "none":
+            return None
+        R = d.columns(d.R, choice.phases)
+        M = d.columns(d.M, choice.phases)
+        assert R is not None
+        share, right = inner_loso_votes(
+            R, M, d.left, labels, subjects, choice.side, choice.weighting, int(self.k),
+            self.weights,  # type: ignore[arg-type]
+        )  # fmt: skip
+        ok = np.isfinite(share)
+        return (share[ok], right[ok]) if ok.any() else None
 
     def _edit(self, cb: CaseBase) -> MaintenanceReport | None:
         """Run the maintenance editor these parameters ask for (None: no editing)."""

@@ -182,6 +182,7 @@ class Contrast:
     plausibility: float = float("nan")
     position: int = -1
     guide: int | None = None
+    guide_source: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -193,6 +194,7 @@ class Contrast:
             "valid": self.valid,
             "answer": self.answer,
             "guide_case_id": self.guide_case_id,
+            "guide_source": self.guide_source,
             "plausibility": self.plausibility,
         }
 
@@ -537,8 +539,9 @@ def _held(c: Claim) -> str:
 
 
 def change_claims(r: _Reading, cf: Counterfactual, guide: np.ndarray) -> list[Claim]:
-    """One claim per changed feature: the column of it that differs most (weighted) between
-    the clip and the guide case, with the guide's value."""
+    """One claim per changed feature (a joint: every column measured at it takes the guide
+    case's value): the column of it that differs most (weighted, angles first when near) between
+    the clip and the guide, with the guide's value."""
     g = r.view.of(np.asarray(guide)[None])[0]
     out = []
     for f in cf.features:
@@ -547,7 +550,7 @@ def change_claims(r: _Reading, cf: Counterfactual, guide: np.ndarray) -> list[Cl
             cols = cols[r.readable[cols]]
         spread = np.maximum(r.prof.within[cols], 1e-9)
         gap = np.abs(r.x[cols] - g[cols]) / spread * np.sqrt(np.maximum(r.importance[cols], 1e-12))
-        j = int(cols[int(np.argmax(gap))])
+        j = int(cols[int(np.argmax(np.where(r.angles[cols], gap * ANGLE_PREFERENCE, gap)))])
         out.append(r.claim("change", j, there=float(g[j]), label=cf.label))
     return out
 
@@ -727,7 +730,7 @@ def _contrast(
     return Contrast(
         other_label, int(cb.ids[pos]), cb.sources[pos], float(dist), tuple(changes), cf.valid,
         cf.answer, None if cf.guide is None else int(cb.ids[cf.guide]), cf.plausibility, pos,
-        cf.guide,
+        cf.guide, "" if cf.guide is None else cb.sources[cf.guide],
     )  # fmt: skip
 
 
@@ -833,10 +836,9 @@ def _verbose(
     )
     flag = "" if unlike_ratio is None else f"; flagged beyond {unlike_ratio:.2f}x"
     out.append(f"Nearest case at {solved.novelty:.2f}x the usual held-out distance{flag}.")
-    for n in neighbours:
-        out.append(
-            f"  case #{n['case_id']} {n['label']}  distance {n['distance']:.4g}  {n['source']}"
-        )
+    for n in neighbours:  # a case not stored has no id
+        case = f"case #{n['case_id']} " if n["case_id"] >= 0 else "case "
+        out.append(f"  {case}{n['label']}  distance {n['distance']:.4g}  {n['source']}")
     if solved.problem.mirrored:
         out.append("The clip moves its left side more: it was compared as its mirror image "
                    "(sides above are the clip's own).")  # fmt: skip
@@ -855,8 +857,9 @@ def _verbose(
     )
     if contrast is not None:
         out.append(
-            f"Nearest other label: {contrast.label} case #{contrast.case_id} (distance "
-            f"{contrast.distance:.3g}) {contrast.source}."
+            f"Nearest other label: {contrast.label}"
+            + (f" case #{contrast.case_id}" if contrast.case_id >= 0 else "")
+            + f" (distance {contrast.distance:.3g}) {contrast.source}."
         )
         if differences:
             said_ = [f"{d['feature']} {said(d['here'], d['unit'])} here, "
@@ -868,8 +871,15 @@ def _verbose(
                 else "not enough: the classifier still answers "
             ) + contrast.answer  # fmt: skip
             out.append(
-                f"Counterfactual ({_count(len(contrast.changes), 'feature')}, values of case "
-                f"#{contrast.guide_case_id}; {status}; plausibility "
+                f"Counterfactual ({_count(len(contrast.changes), 'feature')}: "
+                + ", ".join(c.feature.removeprefix("joint:") for c in contrast.changes)
+                + ", every value measured there as in "
+                + (
+                    f"case #{contrast.guide_case_id}"
+                    if (contrast.guide_case_id or -1) >= 0
+                    else _short_source(contrast.guide_source)
+                )
+                + f"; {status}; plausibility "
                 f"{contrast.plausibility:.2f}x the usual distance between {contrast.label} "
                 "cases): " + "; ".join(_change_text(c) for c in contrast.changes) + "."
             )

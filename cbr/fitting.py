@@ -113,6 +113,16 @@ def knn_predict(
 ) -> np.ndarray:
     """Labels of ``queries`` ``(q, D)`` by the k nearest cases under the weighted euclidean
     distance, voting as the classifier does (:func:`cbr.reuse.vote`)."""
+    classes, proba = knn_proba(cases, queries, k, weights)
+    return np.asarray(classes[decide(proba)])
+
+
+def knn_proba(
+    cases: Cases, queries: np.ndarray, k: int, weights: Weights = "distance"
+) -> tuple[np.ndarray, np.ndarray]:
+    """The cases' classes ``(C,)`` (sorted) and the vote shares of ``queries`` ``(q, D)``
+    over them ``(q, C)``: the k nearest cases under the weighted euclidean distance voting as
+    the classifier does (:func:`cbr.reuse.vote`)."""
     Q = np.asarray(queries, dtype=np.float64)
     if cases.flag:
         Q = np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)
@@ -122,14 +132,53 @@ def knn_predict(
     classes, codes = np.unique(cases.labels.astype(str), return_inverse=True)
     k = min(int(k), len(A))
     sq_a = np.einsum("ij,ij->i", A, A)
-    out = np.empty(len(Q), dtype=np.int64)
+    out = np.empty((len(Q), len(classes)))
     for s in range(0, len(Q), _QUERY_CHUNK):  # bounded memory: (chunk, n cases) distances
         q = Q[s : s + _QUERY_CHUNK]
         d = np.sqrt(np.maximum(np.einsum("ij,ij->i", q, q)[:, None] + sq_a - 2.0 * q @ A.T, 0.0))
         idx = np.argpartition(d, k - 1, axis=1)[:, :k] if k < len(A) else np.argsort(d, axis=1)
         dk = np.take_along_axis(d, idx, axis=1)
-        out[s : s + len(q)] = decide(vote(dk, codes[idx], len(classes), weights))
-    return np.asarray(classes[out])
+        out[s : s + len(q)] = vote(dk, codes[idx], len(classes), weights)
+    return classes, out
+
+
+def inner_loso_votes(
+    R: np.ndarray,
+    M: np.ndarray | None,
+    left: np.ndarray | None,
+    y: np.ndarray,
+    subjects: np.ndarray,
+    side: str,
+    weighting: str,
+    k: int,
+    weights: Weights = "distance",
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each training clip classified by a case base built, weights and all, from the OTHER
+    subjects' clips (as :func:`inner_loso_accuracy` does): its winning vote share ``(n,)``
+    and whether the winner was its label ``(n,)``. A subject whose fold lacks a second
+    activity is left out (share NaN)."""
+    y = np.asarray(y).astype(str)
+    queries = canonical(R, M, left) if side == "canonical" else R
+    share = np.full(len(y), np.nan)
+    right = np.zeros(len(y), dtype=bool)
+    for s in np.unique(subjects):
+        test = subjects == s
+        train = ~test
+        if len(np.unique(y[train])) < 2:
+            continue
+        cases = assemble_cases(
+            R[train],
+            None if M is None else M[train],
+            None if left is None else left[train],
+            y[train],
+            side,
+            weighting,
+        )
+        classes, proba = knn_proba(cases, queries[test], k, weights)
+        win = decide(proba)
+        share[test] = proba[np.arange(len(win)), win]
+        right[test] = classes[win] == y[test]
+    return share, right
 
 
 def inner_loso_accuracy(

@@ -78,25 +78,46 @@ def _fluent_signals() -> dict[str, tuple[str, str]]:
     return {spec.name: (spec.signal, spec.subject) for spec in DEFAULT_TABLE.specs}
 
 
+#: the joint each angle signal and joint position belongs to: what the joint does is one
+#: feature (the hip: the hip angle and the thigh's direction, and the hip's position)
+_JOINT_OF = {
+    "elbow": "elbow", "knee": "knee", "armpit": "shoulder", "upper_arm_sagittal": "shoulder",
+    "upper_arm_frontal": "shoulder", "upper_arm_plane": "shoulder", "hip": "hip",
+    "upper_leg_sagittal": "hip", "upper_leg_frontal": "hip", "shoulder": "shoulder",
+    "wrist": "hand", "index": "hand", "ankle": "foot", "heel": "foot", "foot_index": "foot",
+}  # fmt: skip
+
+
+def _joint(name: str) -> str:
+    """``left_upper_leg_sagittal`` -> ``left hip``; ``torso_frontal`` -> ``torso``; ``nose``
+    and the neck's angles -> ``head``."""
+    if name.startswith(("torso", "neck", "nose", "head")):
+        return "torso" if name.startswith("torso") else "head"
+    side, _, part = name.partition("_")
+    if side in ("left", "right") and part in _JOINT_OF:
+        return f"{side} {_JOINT_OF[part]}"
+    return name.replace("_", " ")
+
+
 def signal_of(base: str, words: str) -> tuple[str, str]:
-    """The feature a column belongs to, and its words: one measured signal with everything
-    computed from it (a joint angle and the fluent states read from that angle, "left knee";
-    a joint's position, "left knee position"), so a counterfactual that changes one changes
-    the others with it; any other column is its own feature."""
+    """The feature a column belongs to, and its words: one joint with everything measured at
+    it (the angles at the joint, the fluent states read from them, the joint's position: "left
+    knee" is the knee angle, "left knee bent", "left knee bending", ..., and where the knee
+    is), so a counterfactual that changes one of them changes the others with it, as moving
+    the joint does; any other column (a QMP, a near pair) is its own feature."""
     if base.startswith(ANGLE_PREFIX):
-        signal = base[len(ANGLE_PREFIX) :]
-        return f"signal:{signal}", signal.replace("_", " ")
+        return _feature(_joint(base[len(ANGLE_PREFIX) :]))
     if base.startswith(POSITION_PREFIX):
-        joint = base[len(POSITION_PREFIX) :].partition(".")[0]
-        return f"{POSITION_PREFIX}{joint}", joint.replace("_", " ") + " position"
+        return _feature(_joint(base[len(POSITION_PREFIX) :].partition(".")[0]))
     fluent = base.partition(".")[0]
     hit = _fluent_signals().get(fluent)
-    if hit is None:
+    if hit is None or hit[0] not in ANGLE_SIGNALS:
         return base, words
-    signal, subject = hit
-    if signal in ANGLE_SIGNALS:
-        return f"signal:{signal}", signal.replace("_", " ")
-    return f"signal:{signal}", subject
+    return _feature(_joint(hit[0]))
+
+
+def _feature(joint: str) -> tuple[str, str]:
+    return f"joint:{joint}", joint
 
 
 def _feature_words(word: str, name: str) -> str:

@@ -22,12 +22,11 @@ from features.poses import PoseSequence
 from tests.bodies import squat_clip
 
 DEPTHS = {"deep": (0.9, 1.0), "shallow": (0.45, 0.55)}
-#: the features depth moves: the knees and hips (angles, fluents read from them, positions)
+#: the joints depth moves: the knees and hips, and the torso, whose lean grows with depth;
+#: not the arms (shoulders, elbows, hands), whose raise is random in both kinds
 DEPTH_FEATURES = {
-    f"{kind}:{side}_{joint}"
-    for kind in ("signal", "pos")
-    for side in ("left", "right")
-    for joint in ("knee", "hip", "upper_leg_sagittal", "ankle", "foot_index")
+    "joint:torso",
+    *(f"joint:{side} {joint}" for side in ("left", "right") for joint in ("knee", "hip", "foot")),
 }
 
 

@@ -195,8 +195,8 @@ def _print_one(r: Any, args: argparse.Namespace, target: str) -> None:
         return
     e = r.explanation
     lines = (e.verbose if args.verbose else e.text).splitlines()
-    if args.verbose and args.top is not None:  # the similar cases are the "  case #" lines
-        cases = [i for i, line in enumerate(lines) if line.startswith("  case #")]
+    if args.verbose and args.top is not None:  # the similar cases are the "  case " lines
+        cases = [i for i, line in enumerate(lines) if line.startswith("  case ")]
         lines = [line for i, line in enumerate(lines) if i not in cases[args.top :]]
     head = f"{r.source}{made}: {lines[0]}"
     if r.true_label is not None:
