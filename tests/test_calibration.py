@@ -1,8 +1,8 @@
 """A confidence that is a probability and a flag calibrated per case base.
 
-Expected values are worked out by hand (ECE bins, isotonic fits of step data, quantiles), or
-are the issue's own observations on the bundled demo (the QMP case base flagged 38 of 60
-ordinary clips)."""
+Expected values are worked out by hand (ECE bins, quantiles), come from a peer library
+(scikit-learn's Platt scaling), or are the issue's own observations on the bundled demo (the
+QMP case base flagged 38 of 60 ordinary clips)."""
 
 from __future__ import annotations
 
@@ -16,6 +16,8 @@ from cbr.calibration import (
     ConfidenceCalibration,
     calibrate_confidence,
     expected_calibration_error,
+    log_odds,
+    platt,
 )
 from cbr.estimator import CaseBaseClassifier
 from cbr.novelty import NoveltyCalibration, from_distances
@@ -38,19 +40,28 @@ def test_expected_calibration_error_by_hand() -> None:
     assert expected_calibration_error(np.array([1.0, 1.0, 0.5, 0.5]), np.array([1, 1, 1, 0])) == 0
 
 
-def test_isotonic_calibration_maps_vote_shares_to_how_often_they_were_right() -> None:
-    # held-out votes: at share 0.4 half of the answers were right, at 0.6 three in four, at 1.0
-    # all of them
-    share = np.array([0.4] * 4 + [0.6] * 4 + [1.0] * 8)
-    right = np.array([1, 0, 1, 0] + [1, 1, 1, 0] + [1] * 8)
+def test_platt_scaling_agrees_with_scikit_learn() -> None:
+    from sklearn.calibration import _sigmoid_calibration  # the peer: Platt's method
+
+    rng = np.random.default_rng(3)
+    share = rng.uniform(0.2, 1.0, 300)
+    right = rng.uniform(size=300) < share**2  # right more often at higher shares
+    a, b = platt(log_odds(share), right)
+    A, B = _sigmoid_calibration(log_odds(share), right.astype(float))
+    # scikit-learn writes P = 1 / (1 + exp(A f + B)): A = -a, B = -b
+    assert a == pytest.approx(-A, abs=1e-3) and b == pytest.approx(-B, abs=1e-3)
     cal = calibrate_confidence(share, right, "leave-one-subject-out")
-    assert cal(0.4) == pytest.approx(0.5) and cal(0.6) == pytest.approx(0.75)
-    assert cal(1.0) == pytest.approx(1.0) and cal(0.5) == pytest.approx(0.625)  # linear between
-    assert cal.n == 16 and cal.accuracy == pytest.approx(13 / 16)  # 2 + 3 + 8 right
+    expected = 1.0 / (1.0 + np.exp(-(a * log_odds(np.array([0.5, 0.9])) + b)))
+    assert [cal(0.5), cal(0.9)] == pytest.approx(expected.tolist(), abs=1e-9)
+    assert np.all(np.diff(cal.y) >= 0) and 0.0 < cal.y[0] and cal.y[-1] < 1.0
+    assert cal.n == 300 and cal.accuracy == pytest.approx(right.mean())
     assert ConfidenceCalibration.from_dict(cal.to_dict()) == cal
-    # shares right less often at a higher share are pooled: the map never falls
-    cal = calibrate_confidence(np.array([0.3, 0.5, 0.7]), np.array([1, 0, 1]), "x")
-    assert cal(0.3) <= cal(0.5) <= cal(0.7)
+
+
+def test_a_case_base_right_every_time_held_out_is_not_certain() -> None:
+    # 18 held-out clips all right: Laplace's rule of succession, (18 + 1) / (18 + 2)
+    cal = calibrate_confidence(np.full(18, 1.0), np.ones(18, dtype=bool), "x")
+    assert cal(1.0) == pytest.approx(19 / 20) and cal(0.4) == pytest.approx(19 / 20)
 
 
 def test_a_case_base_stored_without_calibration_answers_with_the_vote_share() -> None:
