@@ -156,3 +156,14 @@ def test_a_pose_file_made_from_a_video_is_named_as_passed(
     assert main(["classify", str(made), "--db", stores["label"], "--json"]) == 0
     r = json.loads(capsys.readouterr().out)["results"][0]
     assert r["clip"] == str(made) and r["made_from"] == "videos/squat.mp4"
+
+
+def test_words_from_the_users_files_are_printed_escaped(
+    stores: dict[str, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    made = tmp_path / "clip.npz"
+    save_pose(squat_clip(0.95, 50, 40.0, 10.0, source="x\x1b]0;pwned\x07.mp4"), made)
+    assert main(["classify", str(made), "--db", stores["label"]]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "\x07" not in out
+    assert f"{made} (from x\\x1b]0;pwned\\x07.mp4): " in out

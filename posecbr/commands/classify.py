@@ -186,37 +186,43 @@ def _print(
 
 
 def _print_one(r: Any, args: argparse.Namespace, target: str) -> None:
-    """One clip: four lines by default (--verbose: everything the explanation holds)."""
+    """One clip: four lines by default (--verbose: everything the explanation holds). Labels,
+    file names and words from the user's files are printed through ``shown``."""
     from cbr.explain import label_words
+    from features.text import shown
 
-    made = f" (from {r.made_from})" if r.made_from else ""
+    made = f" (from {shown(r.made_from)})" if r.made_from else ""
     if r.solved is None:
-        print(f"{r.source}{made}: unclassifiable ({r.unclassifiable})")
+        print(f"{shown(r.source)}{made}: unclassifiable ({shown(r.unclassifiable)})")
         return
     e = r.explanation
     lines = (e.verbose if args.verbose else e.text).splitlines()
     if args.verbose and args.top is not None:  # the similar cases are the "  case " lines
         cases = [i for i, line in enumerate(lines) if line.startswith("  case ")]
         lines = [line for i, line in enumerate(lines) if i not in cases[args.top :]]
-    head = f"{r.source}{made}: {lines[0]}"
+    head = f"{shown(r.source)}{made}: {shown(lines[0])}"
     if r.true_label is not None:
         right = r.true_label == e.label
-        head += "  [right]" if right else f"  [wrong: {label_words(r.true_label, target)}]"
+        head += "  [right]" if right else f"  [wrong: {shown(label_words(r.true_label, target))}]"
     print(head)
     for line in lines[1:]:
-        print(f"  {line}")
+        print(f"  {shown(line)}")
     if r.retention is not None:
-        print(f"  feedback: {r.retention.reason}")
+        print(f"  feedback: {shown(r.retention.reason)}")
     if r.revision is not None:
         print(
             f"  feedback: revised case #{r.revision.case_id} ({r.revision.action}): "
-            f"{r.revision.reason}"
+            f"{shown(r.revision.reason)}"
         )
 
 
 def _print_summary(s: dict[str, Any], target: str) -> None:
     """The closing summary: clips, accuracy and recall per class, flagged and wrong clips."""
     from cbr.explain import label_words
+    from features.text import shown
+
+    def said(label: str) -> str:
+        return shown(label_words(label, target))
 
     print(f"\n{s['clips']} clips: {s['classified']} classified", end="")
     if s["unclassifiable"]:
@@ -225,18 +231,14 @@ def _print_summary(s: dict[str, Any], target: str) -> None:
     if s.get("accuracy") is not None:
         print(f"accuracy: {s['accuracy']:.3f} ({s['right']}/{s['labelled']} labelled clips)")
         recall = "; ".join(
-            f"{label_words(lab, target)} {v['right']}/{v['clips']}"
-            for lab, v in s["recall"].items()
+            f"{said(lab)} {v['right']}/{v['clips']}" for lab, v in s["recall"].items()
         )
         print(f"recall per class: {recall}")
         if s["expected_accuracy"] is not None:
             print(f"mean confidence: {s['expected_accuracy']:.3f}")
     for w in s["wrong"]:
-        print(
-            f"wrong: {w['clip']}: {label_words(w['label'], target)}, true "
-            f"{label_words(w['true_label'], target)}"
-        )
+        print(f"wrong: {shown(w['clip'])}: {said(w['label'])}, true {said(w['true_label'])}")
     for clip in s["unlike_cases"]:
-        print(f"unlike the stored cases: {clip}")
+        print(f"unlike the stored cases: {shown(clip)}")
     for clip in s["unclassifiable"]:
-        print(f"unclassifiable: {clip}")
+        print(f"unclassifiable: {shown(clip)}")
