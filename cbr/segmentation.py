@@ -14,10 +14,12 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
 4. each :data:`BLOCK_S` block gets the mean vote of the windows over it, and the labels are
    decoded over all blocks at once (Viterbi): a change of activity must be supported by at
    least :data:`MIN_SEGMENT_S` of evidence at odds of :data:`SWITCH_ODDS` to 1;
-   stretches whose repetitions lie as far from their nearest cases as the case base's
-   activities lie from each other (:class:`Familiarity`, calibrated on the case base) are
-   decoded the same way and become unknown (:func:`unknown_blocks`);
-5. each segment is counted (:func:`features.repetitions.count_repetitions`) and explained by
+5. stretches unlike every activity of the case base become unknown (:func:`unknown_blocks`):
+   every window is judged (:mod:`cbr.unknown`; by default the margin between its two nearest
+   activities, calibrated on the case base), and known/unknown is decoded the same way from
+   the windows that lie within one decoded activity (a window across a change of activity
+   is like neither side, whether both are known or not);
+6. each segment is counted (:func:`features.repetitions.count_repetitions`) and explained by
    its most confident window.
 """
 
@@ -27,7 +29,7 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
@@ -38,96 +40,37 @@ from features.poses import PoseSequence
 from features.progress import progress
 from features.repetitions import (
     MIN_PERIOD_S,
+    WINDOW_HOP_S,
+    WINDOW_S,
     MovementSignals,
     Repetition,
     count_in_signals,
     movement_signals,
 )
 
-from .casebase import CaseBase
 from .explain import Explanation
 from .problem import warm
 from .retrieve import Retrieval
 from .reuse import reuse
+from .unknown import Familiarity, HeldOut, Judge, Margin, activity_codes, per_activity
 
 BLOCK_S = 0.1
 """Labels are given per block of this many seconds (the resolution of the label files)."""
-HOP_S = 0.5
-"""Where nothing repeats, a default window starts every this many seconds."""
+HOP_S = WINDOW_HOP_S
+"""A default window starts every this many seconds (as ``train --split windows`` cuts)."""
 SPAN_HOP_S = 1.0
 """Repetitions are looked for in spans starting every this many seconds (spans overlap by
 all but this, so every repetition up to MAX_WINDOW_S lies whole in one)."""
 MIN_WINDOW_S = 1.0
 MAX_WINDOW_S = 5.0
-DEFAULT_WINDOW_S = 2.0
-"""Windows span one local period within these bounds; the default where nothing repeats."""
+DEFAULT_WINDOW_S = WINDOW_S
+"""Repetition windows span one local period within these bounds; the default windows last
+DEFAULT_WINDOW_S (as ``train --split windows`` cuts them)."""
 PERIOD_SPAN_S = 6.0
 """The local period is read from this many seconds around a window (periods up to 60 %)."""
 MIN_SEGMENT_S = 1.0
 SWITCH_ODDS = 2.0
 """A change of activity needs MIN_SEGMENT_S of blocks voting SWITCH_ODDS to 1 for it."""
-
-
-class Judge(Protocol):
-    """What says how unlike the case base a clip is, from its nearest-case distance: the
-    classifier's own stored calibration (:class:`cbr.novelty.NoveltyCalibration`, held-out
-    nearest-case distances) or :class:`Familiarity` (how far the activities lie apart)."""
-
-    def ratio(self, distance: float) -> float: ...
-
-    def unlike(self, distance: float) -> bool: ...
-
-
-@dataclass(frozen=True)
-class Familiarity:
-    """When a clip is unlike every activity of the case base, calibrated on the case base
-    itself: a clip whose nearest case lies as far as different activities of the case base
-    lie from each other is no more that case's activity than the others are.
-
-    ``threshold``: the median, over the cases, of the distance to the nearest case of another
-    activity; ``reference`` (the unit of the novelty ratio): the median distance from a case
-    to its nearest case of the same activity from another source (another recording or video:
-    what a new recording of a known activity is to the case base; cases cut from one
-    recording are near copies), or, where no activity has two sources, to its nearest other
-    case."""
-
-    reference: float
-    threshold: float
-
-    @classmethod
-    def of(cls, cb: CaseBase) -> Familiarity:
-        if len(cb.classes) < 2:
-            raise DataError("a case base of one activity cannot say what is unlike it", "case base")
-        within, between = _neighbour_distances(cb)
-        reference = float(np.median(within)) or float(np.mean(within)) or 1.0
-        return cls(reference, float(np.median(between)))
-
-    def ratio(self, distance: float) -> float:
-        """Nearest-case distance in units of the case base's usual neighbour distance."""
-        return distance / self.reference
-
-    def unlike(self, distance: float) -> bool:
-        return distance > self.threshold
-
-
-def _neighbour_distances(cb: CaseBase) -> tuple[np.ndarray, np.ndarray]:
-    """Per case: the distance to its nearest same-activity case from another source (``within``;
-    every case's nearest other case when no activity has two sources) and to its nearest case
-    of another activity (``between``)."""
-    sources = np.array(cb.sources, dtype=object)
-    labels = cb.labels
-    index = cb.index
-    assert cb.reps is not None
-    within, nearest, between = [], [], []
-    for i in range(len(cb)):  # one query against the whole case base per case
-        d = cb.measure.distances(cb.reps[i], index)
-        same = labels == labels[i]
-        between.append(float(d[~same].min()))
-        nearest.append(float(np.delete(d, i).min()))
-        peers = same & (sources != sources[i])
-        if peers.any():
-            within.append(float(d[peers].min()))
-    return np.asarray(within or nearest), np.asarray(between)
 
 
 @dataclass(frozen=True)
@@ -183,13 +126,14 @@ class Segmentation:
 
 @dataclass(frozen=True)
 class _Solved:
-    """One window: frames [start, stop), its vote over the classes, its nearest-case distance
-    and what solve gave (problem, retrieval, solution)."""
+    """One window: frames [start, stop), its vote over the classes, its distance to the
+    nearest case of every activity ``(n_classes,)`` and what solve gave (problem, retrieval,
+    solution)."""
 
     start: int
     stop: int
     vote: np.ndarray
-    distance: float
+    nearest: np.ndarray
     solved: Any  # the classifier's Solved: problem, retrieval, solution, novelty, ...
     repetition: bool = False
 
@@ -254,10 +198,23 @@ def _nearest_vote(retrieval: Retrieval, classes: np.ndarray, k: int) -> np.ndarr
     return reuse(top, classes, "distance").proba
 
 
+def activity_distances(clf: Any, solved: Any, codes: np.ndarray | None = None) -> np.ndarray:
+    """The distance from a clip solved by ``clf`` (its ``Solved``) to the nearest case of
+    every activity of ``clf.classes_``, ``(n_classes,)`` (one scan of the case base: the
+    nearest case of the second activity need not be among the retrieved ones). ``codes``:
+    :func:`cbr.unknown.activity_codes` of the case base, when already at hand."""
+    cb = clf.case_base_
+    if codes is None:
+        codes = activity_codes(cb.labels, clf.classes_)
+    d = cb.measure.distances(cb.measure.represent_query(solved.problem.values), cb.index)
+    return per_activity(d, codes, len(clf.classes_))
+
+
 def _solve_windows(clf: Any, rec: PoseSequence, windows: list[Window], k: int) -> list[_Solved]:
     """Each window solved by the classifier; its vote is that of its ``k`` nearest cases.
     Windows in which no frame shows the person are left out (nothing to solve)."""
     classes = np.array([str(c) for c in clf.classes_], dtype=object)
+    codes = activity_codes(clf.case_base_.labels, classes)
     out = []
     for w in progress(windows, "classifying windows", unit="window"):
         part = stretch(rec, w.start, w.stop)
@@ -265,8 +222,8 @@ def _solve_windows(clf: Any, rec: PoseSequence, windows: list[Window], k: int) -
             continue
         solved = clf.solve([part])[0]
         vote = _nearest_vote(solved.retrieval, classes, k)
-        distance = float(solved.retrieval.distances[0])
-        out.append(_Solved(w.start, w.stop, vote, distance, solved, w.repetition))
+        nearest = activity_distances(clf, solved, codes)
+        out.append(_Solved(w.start, w.stop, vote, nearest, solved, w.repetition))
     return out
 
 
@@ -314,60 +271,43 @@ def _runs(path: np.ndarray) -> list[tuple[int, int, int]]:
 
 
 def unknown_blocks(
-    solved: Sequence[_Solved], n_frames: int, fps: float, familiar: Judge
+    solved: Sequence[_Solved], n_frames: int, fps: float, judge: Judge, path: np.ndarray
 ) -> np.ndarray:
-    """``(n_blocks,)`` bool: blocks unlike the case base. A block's evidence is the share of
-    the repetition windows over it whose nearest case lies beyond
-    :attr:`Familiarity.threshold` (repetitions are cut the way the cases of a case base of
-    repetitions are; a fixed window cut at another phase lies farther from every case for that
-    alone), of all windows over it where no repetition was found; known/unknown is decoded like
-    the activities (a change needs :data:`MIN_SEGMENT_S`)."""
+    """``(n_blocks,)`` bool: blocks unlike every activity of the case base.
 
-    def flags(ws: Sequence[_Solved]) -> tuple[np.ndarray, np.ndarray]:
-        marked = [
-            dataclasses.replace(
-                w, vote=np.array([0.0, 1.0] if familiar.unlike(w.distance) else [1.0, 0.0])
-            )
-            for w in ws
-        ]
-        if not marked:
-            return np.zeros((n_blocks, 2)), np.zeros(n_blocks, dtype=bool)
-        return block_votes(marked, n_frames, fps), _covered(marked, n_frames, fps)
-
-    n_blocks = int(math.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
-    every, _ = flags(solved)
-    reps, has_rep = flags([w for w in solved if w.repetition])
-    return decode(np.where(has_rep[:, None], reps, every)) == 1
-
-
-def _covered(solved: Sequence[_Solved], n_frames: int, fps: float) -> np.ndarray:
-    """``(n_blocks,)`` bool: some window lies over the block's centre."""
-    n_blocks = int(math.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
-    centres = (np.arange(n_blocks) + 0.5) * BLOCK_S * fps
-    starts = np.array([w.start for w in solved])
-    stops = np.array([w.stop for w in solved])
-    return np.asarray(
-        ((starts[None, :] <= centres[:, None]) & (centres[:, None] < stops[None, :])).any(axis=1)
-    )
+    The windows that lie within one run of the decoded activity ``path`` ``(n_blocks,)`` are
+    judged (:class:`cbr.unknown.Judge`); a block's evidence is the share of those over it
+    judged unlike (none over it: no evidence either way), and known/unknown is decoded like
+    the activities (a change needs :data:`MIN_SEGMENT_S`). A window across a change of
+    activity is left out: half one movement and half another, it is like neither, whether
+    both are known or not."""
+    run = np.r_[0, np.cumsum(path[1:] != path[:-1])]
+    per_block, last = fps * BLOCK_S, len(path) - 1
+    marked = []
+    for w in solved:
+        first = min(last, int(w.start // per_block))
+        end = min(last, max(first, int(math.ceil(w.stop / per_block - 1e-9)) - 1))
+        if run[first] == run[end]:
+            flag = judge.unlike(w.nearest)
+            marked.append(dataclasses.replace(w, vote=np.array([float(not flag), float(flag)])))
+    if not marked:
+        return np.zeros(len(path), dtype=bool)
+    return np.asarray(decode(block_votes(marked, n_frames, fps)) == 1)
 
 
 def _explain_segment(
-    clf: Any, inside: list[_Solved], state: int, familiar: Judge
+    clf: Any, inside: list[_Solved], state: int, judge: Judge
 ) -> tuple[str, float]:
     """A short explanation from the segment's most telling window, and the segment's novelty
-    ratio (the median over its windows)."""
+    (the judge's ratio, median over its windows)."""
     n_classes = len(clf.classes_)
     if not inside:
         return "", float("nan")
-    ratio = familiar.ratio(float(np.median([w.distance for w in inside])))
-    if state == n_classes:  # unknown
-        w = min(inside, key=lambda s: s.distance)
-        nearest = str(w.solved.retrieval.labels[0])
-        return (
-            f"unlike every stored case: even the nearest ({nearest}) lies {ratio:.1f}x the case"
-            " base's usual nearest-case distance away",
-            ratio,
-        )
+    ratios = [judge.ratio(w.nearest) for w in inside]
+    ratio = float(np.median(ratios))
+    if state == n_classes:  # unknown: told by its median window
+        w = inside[int(np.argsort(ratios, kind="stable")[len(ratios) // 2])]
+        return judge.describe(w.nearest, [str(c) for c in clf.classes_]), ratio
     w = max(inside, key=lambda s: s.vote[state])
     e: Explanation = clf.explain_solved(w.solved)
     label = str(clf.classes_[state])
@@ -400,7 +340,7 @@ def _segment_of(
     run: tuple[int, int, int],
     solved: Sequence[_Solved],
     votes: np.ndarray,
-    familiar: Judge,
+    judge: Judge,
 ) -> Segment:
     """One decoded run as a segment: frames, label, confidence, repetitions, explanation."""
     a, b, state = run
@@ -410,10 +350,10 @@ def _segment_of(
     end = min(rec.n_frames, int(round(b * frames_per_block)))
     inside = [w for w in solved if start <= w.centre < end]
     reps = _repetitions(sig, start, end)
-    text, ratio = _explain_segment(clf, inside, state, familiar)
+    text, ratio = _explain_segment(clf, inside, state, judge)
     label: str | None = None
-    if state == n_classes:  # confidence: the share of its windows unlike every case
-        share = [1.0 if familiar.unlike(w.distance) else 0.0 for w in inside]
+    if state == n_classes:  # confidence: the share of its windows unlike every activity
+        share = [1.0 if judge.unlike(w.nearest) else 0.0 for w in inside]
         confidence = float(np.mean(share)) if share else 1.0
     else:
         label, confidence = str(clf.classes_[state]), float(votes[a:b, state].mean())
@@ -421,19 +361,18 @@ def _segment_of(
 
 
 def segment(
-    clf: Any, recording: PoseSequence, familiar: Judge | None = None, k: int = 1
+    clf: Any, recording: PoseSequence, judge: Judge | None = None, k: int = 1
 ) -> Segmentation:
     """Segment ``recording`` (positions ``(frames, joints, 3)``) with the fitted classifier
     ``clf`` (a :class:`~cbr.estimator.CaseBaseClassifier`); see the module docstring.
 
-    ``familiar``: what judges a stretch unlike the case base: :class:`Familiarity` of
-    ``clf.case_base_`` when None (how far its activities lie apart), or the classifier's own
-    calibration ``clf.novelty_`` (how far held-out training clips lie from the cases);
-    ``k``: a window votes with its k nearest cases (1: its nearest; the votes of successive
-    windows are pooled over time). Raises DataError for a recording shorter than one window
-    or without a person."""
+    ``judge``: what makes a stretch unknown (:mod:`cbr.unknown`): the margin between the two
+    nearest activities, calibrated on ``clf.case_base_``, when None; ``k``: a window votes
+    with its k nearest cases (1: its nearest; the votes of successive windows are pooled over
+    time). Raises DataError for a recording shorter than one window or without a person, and
+    for a case base the judge cannot be calibrated on."""
     rec = recording.to_canonical()
-    familiar = familiar or Familiarity.of(clf.case_base_)
+    judge = judge or Margin.of(clf.case_base_)
     sig = movement_signals(rec)
     windows = windows_of(sig, rec.n_frames, rec.fps, rec.source)
     config = clf.feature_config_
@@ -442,9 +381,9 @@ def segment(
     votes = block_votes(solved, rec.n_frames, rec.fps)
     n_classes = len(clf.classes_)
     path = decode(votes)
-    path[unknown_blocks(solved, rec.n_frames, rec.fps, familiar)] = n_classes
+    path[unknown_blocks(solved, rec.n_frames, rec.fps, judge, path)] = n_classes
     runs = _runs(path)
-    segments = tuple(_segment_of(clf, rec, sig, run, solved, votes, familiar) for run in runs)
+    segments = tuple(_segment_of(clf, rec, sig, run, solved, votes, judge) for run in runs)
     blocks: list[str | None] = []
     for a, b, state in runs:
         blocks += [None if state == n_classes else str(clf.classes_[state])] * (b - a)
@@ -454,6 +393,10 @@ def segment(
 __all__ = [
     "BLOCK_S",
     "Familiarity",
+    "HeldOut",
+    "Judge",
+    "Margin",
+    "activity_distances",
     "Segment",
     "Segmentation",
     "Window",

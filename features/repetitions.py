@@ -33,6 +33,9 @@ How (all channels at once, no per-frame loops):
 The period also comes out of the QMP fits (:mod:`features.qmp`: SINDy with a period per state
 signal); the autocorrelation is used here because it reads all angles together and needs no
 window length, and the tests check that both agree.
+
+Cases for a case base: :func:`split_repetitions` cuts clips into their repetitions,
+:func:`split_windows` into the fixed windows ``posecbr segment`` classifies.
 """
 
 from __future__ import annotations
@@ -488,7 +491,10 @@ __all__ = [
     "Repetition",
     "RepetitionCount",
     "Split",
+    "WINDOW_HOP_S",
+    "WINDOW_S",
     "split_repetitions",
+    "split_windows",
     "mirror_matrix",
     "movement_direction",
     "side_parts",
@@ -504,8 +510,8 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Split:
-    """Clips cut into their repetitions: the new clips, and how many of the originals had no
-    repetition (or were too short for one) and stayed whole."""
+    """Clips cut into their repetitions (or windows): the new clips, and how many of the
+    originals had no repetition (or were too short for one) and stayed whole."""
 
     clips: list[Clip]
     kept_whole: int
@@ -530,4 +536,37 @@ def split_repetitions(clips: Sequence[Clip]) -> Split:
         for k, r in enumerate(reps, start=1):
             part = stretch(clip.seq, r.start_frame, r.end_frame).with_metadata(repetition=k)
             out.append(dataclasses.replace(clip, seq=part, extras={**clip.extras, "repetition": k}))
+    return Split(out, whole)
+
+
+WINDOW_S = 2.0
+"""The length of the windows :func:`split_windows` cuts, the windows ``posecbr segment``
+classifies (cases and queries cut alike lie at comparable distances)."""
+WINDOW_HOP_S = 0.5
+"""A window starts every this many seconds."""
+
+
+def split_windows(
+    clips: Sequence[Clip], length_s: float = WINDOW_S, hop_s: float = WINDOW_HOP_S
+) -> Split:
+    """Every clip cut into windows of ``length_s`` seconds starting every ``hop_s`` seconds
+    (as many as fit whole), each a clip of its own with the clip's label, subject and extras
+    (plus ``window``: 1, 2, ...); frames and per-frame results are shared with the clip
+    (:func:`features.derived.stretch`). A clip shorter than one window stays whole.
+
+    A case base of windows is what segmenting a long recording matches its windows against:
+    every phase of a repeated movement is among the cases, as it is among the queries."""
+    out: list[Clip] = []
+    whole = 0
+    for clip in clips:
+        fps = clip.seq.fps
+        length, hop = int(round(length_s * fps)), max(1, int(round(hop_s * fps)))
+        starts = range(0, clip.seq.n_frames - length + 1, hop)
+        if length < 2 or not len(starts):
+            out.append(clip)
+            whole += 1
+            continue
+        for k, a in enumerate(starts, start=1):
+            part = stretch(clip.seq, a, a + length).with_metadata(window=k)
+            out.append(dataclasses.replace(clip, seq=part, extras={**clip.extras, "window": k}))
     return Split(out, whole)
