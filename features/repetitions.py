@@ -20,7 +20,9 @@ How (all channels at once, no per-frame loops):
 3. alternation (:func:`side_parts`): the deviations from the left-right symmetric mean
    posture split into what both sides do alike and what one side does against the other
    (:func:`mirror_angles`); the movement alternates when the second spans at least half as
-   much as the first and the body goes out to both sides about equally far;
+   much as the first and the body goes out to both sides about equally far (both taken
+   about their running mean over one period when the side-against-side movement repeats
+   clearly: bending the arms once to start jogging is not what repeats);
 4. the movement as one number per sample: the posture projected on the direction it moves
    back and forth along most (:func:`movement_direction`), signed so that it rises away from
    rest (the end nearer standing at ease, :data:`AT_EASE`) and, for a clearly periodic
@@ -418,11 +420,8 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
     if not alternating:
         direction = movement_direction(x)
         line = _movement_line(x, sig.names, direction)
-        if period is not None and strength >= CLEAR_PERIODICITY:
-            # a slow change of posture (stepping into place, drifting) is no repetition: the
-            # line of a clearly repeating movement is taken about its running mean over one
-            # period
-            line = line - uniform_filter1d(line, max(1, int(period * sig.fps)), mode="nearest")
+        # a slow change of posture (stepping into place, drifting) is no repetition
+        line = _steady(line, period, strength, sig.fps)
         distance = int(0.5 * (period or MIN_PERIOD_S) * sig.fps)
         reach = int(period * sig.fps) if period else len(line)
         far = _far_points(line, float(np.percentile(line, 5)), distance)
@@ -440,6 +439,15 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
     order = np.argsort(-weights, kind="stable")
     moving = tuple(sig.names[i] for i in order[:4] if weights[i] > 0.2 * weights.max())
     return RepetitionCount(tuple(reps), fps, n_frames, period, strength, bool(alternating), moving)
+
+
+def _steady(line: np.ndarray, period: float | None, strength: float, fps: float) -> np.ndarray:
+    """``line`` about its running mean over one ``period`` when the movement repeats clearly
+    (autocorrelation ``strength`` >= :data:`CLEAR_PERIODICITY`): a one-off change of posture
+    (bending the arms to start jogging) is no part of what repeats. As it is otherwise."""
+    if period is None or strength < CLEAR_PERIODICITY:
+        return line
+    return np.asarray(line - uniform_filter1d(line, max(1, int(period * fps)), mode="nearest"))
 
 
 def _alternating_repetitions(
@@ -460,9 +468,11 @@ def _alternating_repetitions(
     direction = movement_direction(anti)
     line = anti @ direction  # 0 = a symmetric posture
     alike = sym @ movement_direction(sym)
-    if _span(line) < 0.5 * _span(alike):
+    period, strength = find_period(np.diff(line)[:, None], fps)
+    if _span(_steady(line, period, strength, fps)) < 0.5 * _span(
+        _steady(alike, period, strength, fps)
+    ):
         return none  # mostly both sides alike (a squat, a jumping jack)
-    period, _ = find_period(np.diff(line)[:, None], fps)
     # a full period holds one repetition per side
     distance = int(0.25 * (period or 2 * MIN_PERIOD_S) * fps)
     # far points on each side of the symmetric posture; a posture held off to one side (a
