@@ -270,26 +270,34 @@ def _runs(path: np.ndarray) -> list[tuple[int, int, int]]:
     return [(int(a), int(b), int(path[a])) for a, b in zip(starts, ends, strict=True)]
 
 
+def within_runs(solved: Sequence[_Solved], fps: float, path: np.ndarray) -> np.ndarray:
+    """``(n_windows,)`` bool: the windows that lie within one run of the decoded activity
+    ``path`` ``(n_blocks,)``; one across a change of activity is half one movement and half
+    another, like neither, whether both are known or not."""
+    run = np.r_[0, np.cumsum(path[1:] != path[:-1])]
+    per_block, last = fps * BLOCK_S, len(path) - 1
+    first = np.array([min(last, int(w.start // per_block)) for w in solved], dtype=np.int64)
+    end = np.array(
+        [min(last, int(math.ceil(w.stop / per_block - 1e-9)) - 1) for w in solved], dtype=np.int64
+    )
+    return np.asarray(run[first] == run[np.maximum(first, end)])
+
+
 def unknown_blocks(
     solved: Sequence[_Solved], n_frames: int, fps: float, judge: Judge, path: np.ndarray
 ) -> np.ndarray:
     """``(n_blocks,)`` bool: blocks unlike every activity of the case base.
 
-    The windows that lie within one run of the decoded activity ``path`` ``(n_blocks,)`` are
-    judged (:class:`cbr.unknown.Judge`); a block's evidence is the share of those over it
-    judged unlike (none over it: no evidence either way), and known/unknown is decoded like
-    the activities (a change needs :data:`MIN_SEGMENT_S`). A window across a change of
-    activity is left out: half one movement and half another, it is like neither, whether
-    both are known or not."""
-    run = np.r_[0, np.cumsum(path[1:] != path[:-1])]
-    per_block, last = fps * BLOCK_S, len(path) - 1
-    marked = []
-    for w in solved:
-        first = min(last, int(w.start // per_block))
-        end = min(last, max(first, int(math.ceil(w.stop / per_block - 1e-9)) - 1))
-        if run[first] == run[end]:
-            flag = judge.unlike(w.nearest)
-            marked.append(dataclasses.replace(w, vote=np.array([float(not flag), float(flag)])))
+    The windows within one run of the decoded activity ``path`` ``(n_blocks,)``
+    (:func:`within_runs`) are judged (:class:`cbr.unknown.Judge`); a block's evidence is the
+    share of those over it judged unlike (none over it: no evidence either way), and
+    known/unknown is decoded like the activities (a change needs :data:`MIN_SEGMENT_S`)."""
+    inside = within_runs(solved, fps, path)
+    marked = [
+        dataclasses.replace(w, vote=np.array([0.0, 1.0] if judge.unlike(w.nearest) else [1.0, 0.0]))
+        for w, keep in zip(solved, inside.tolist(), strict=True)
+        if keep
+    ]
     if not marked:
         return np.zeros(len(path), dtype=bool)
     return np.asarray(decode(block_votes(marked, n_frames, fps)) == 1)
@@ -341,6 +349,7 @@ def _segment_of(
     solved: Sequence[_Solved],
     votes: np.ndarray,
     judge: Judge,
+    evidence: Sequence[bool],
 ) -> Segment:
     """One decoded run as a segment: frames, label, confidence, repetitions, explanation."""
     a, b, state = run
@@ -348,7 +357,9 @@ def _segment_of(
     frames_per_block = rec.fps * BLOCK_S
     start = int(round(a * frames_per_block))
     end = min(rec.n_frames, int(round(b * frames_per_block)))
-    inside = [w for w in solved if start <= w.centre < end]
+    # told by the windows centred in it that were evidence (none across a change of activity)
+    centred = [(w, e) for w, e in zip(solved, evidence, strict=True) if start <= w.centre < end]
+    inside = [w for w, e in centred if e] or [w for w, _ in centred]
     reps = _repetitions(sig, start, end)
     text, ratio = _explain_segment(clf, inside, state, judge)
     label: str | None = None
@@ -381,9 +392,12 @@ def segment(
     votes = block_votes(solved, rec.n_frames, rec.fps)
     n_classes = len(clf.classes_)
     path = decode(votes)
+    evidence = within_runs(solved, rec.fps, path).tolist()
     path[unknown_blocks(solved, rec.n_frames, rec.fps, judge, path)] = n_classes
     runs = _runs(path)
-    segments = tuple(_segment_of(clf, rec, sig, run, solved, votes, judge) for run in runs)
+    segments = tuple(
+        _segment_of(clf, rec, sig, run, solved, votes, judge, evidence) for run in runs
+    )
     blocks: list[str | None] = []
     for a, b, state in runs:
         blocks += [None if state == n_classes else str(clf.classes_[state])] * (b - a)
@@ -402,6 +416,7 @@ __all__ = [
     "Window",
     "block_votes",
     "unknown_blocks",
+    "within_runs",
     "windows_of",
     "decode",
     "segment",
