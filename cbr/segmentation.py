@@ -7,9 +7,10 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
 1. what every frame yields (fluents, state signals, mirror image) is computed once for the
    whole recording; windows share it (:func:`features.derived.stretch`);
 2. the windows (:func:`windows_of`): one of :data:`DEFAULT_WINDOW_S` every :data:`HOP_S`
-   seconds, and every repetition found in the spans of :data:`PERIOD_SPAN_S` seconds around
-   (:func:`features.repetitions.count_in_signals`, cut as ``train --split repetitions`` cuts
-   cases);
+   seconds (cut as ``train --split windows`` cuts cases), and every period of the movement
+   found in the spans of :data:`PERIOD_SPAN_S` seconds around
+   (:func:`features.repetitions.count_in_signals`: a repetition, or two neighbouring ones of
+   a movement that alternates sides);
 3. every window is a clip to solve and votes for the activity of its nearest case;
 4. each :data:`BLOCK_S` block gets the mean vote of the windows over it, and the labels are
    decoded over all blocks at once (Viterbi): a change of activity must be supported by at
@@ -44,6 +45,7 @@ from features.repetitions import (
     WINDOW_S,
     MovementSignals,
     Repetition,
+    RepetitionCount,
     count_in_signals,
     movement_signals,
 )
@@ -144,8 +146,8 @@ class _Solved:
 
 @dataclass(frozen=True)
 class Window:
-    """Frames [start, stop) of the recording to classify; ``repetition``: one repetition, cut
-    the way ``train --split repetitions`` cuts cases (else a fixed-length window)."""
+    """Frames [start, stop) of the recording to classify; ``repetition``: one period of the
+    movement (else a fixed-length window)."""
 
     start: int
     stop: int
@@ -154,8 +156,8 @@ class Window:
 
 def windows_of(sig: MovementSignals, n_frames: int, fps: float, where: str = "") -> list[Window]:
     """The windows to classify: one of :data:`DEFAULT_WINDOW_S` every :data:`HOP_S` seconds
-    (whatever is done there, repeated or not), and every repetition found whole in spans of
-    :data:`PERIOD_SPAN_S` seconds starting every :data:`SPAN_HOP_S` seconds."""
+    (whatever is done there, repeated or not), and every period of the movement found whole
+    in spans of :data:`PERIOD_SPAN_S` seconds starting every :data:`SPAN_HOP_S` seconds."""
     duration = n_frames / fps
     if duration < MIN_WINDOW_S:
         raise DataError(
@@ -172,7 +174,8 @@ def windows_of(sig: MovementSignals, n_frames: int, fps: float, where: str = "")
 
 
 def _repetition_bounds(sig: MovementSignals, n_frames: int, fps: float) -> list[tuple[int, int]]:
-    """Frame ranges of the repetitions found whole in the spans, each once."""
+    """Frame ranges of the periods found whole in the spans, each once: a repetition, or for a
+    movement that alternates sides two neighbouring ones (a step with each leg)."""
     span = int(PERIOD_SPAN_S * sig.fps)
     hop = max(1, int(SPAN_HOP_S * sig.fps))
     found: set[tuple[int, int]] = set()
@@ -181,13 +184,22 @@ def _repetition_bounds(sig: MovementSignals, n_frames: int, fps: float) -> list[
         if len(part.values) < 4:
             continue
         span_frames = len(part.values) * sig.step
-        for r in count_in_signals(part, span_frames, fps).repetitions:
-            if r.start_frame == 0 or r.end_frame >= span_frames - sig.step:
+        for first, last in _periods(count_in_signals(part, span_frames, fps)):
+            if first == 0 or last >= span_frames - sig.step:
                 continue  # cut by the span's edge: whole in a neighbouring span
-            start, stop = a * sig.step + r.start_frame, a * sig.step + r.end_frame
+            start, stop = a * sig.step + first, a * sig.step + last
             if MIN_WINDOW_S * fps / 2 <= stop - start <= MAX_WINDOW_S * fps:
                 found.add((start, min(n_frames, stop)))
     return sorted(found)
+
+
+def _periods(count: RepetitionCount) -> list[tuple[int, int]]:
+    """Frames [start, end) of every full period of the movement: each repetition, or for an
+    alternating movement each two neighbouring repetitions (one per side)."""
+    reps = count.repetitions
+    if not count.alternating:
+        return [(r.start_frame, r.end_frame) for r in reps]
+    return [(a.start_frame, b.end_frame) for a, b in zip(reps[:-1], reps[1:], strict=True)]
 
 
 def _nearest_vote(retrieval: Retrieval, classes: np.ndarray, k: int) -> np.ndarray:
