@@ -359,3 +359,29 @@ def test_segment_command_refuses_a_margin_it_cannot_calibrate(
     assert "fewer than three activities" in captured.err and "--unknown held-out" in captured.err
     assert (_sha(rec), _sha(db)) == before and not plot.exists()
     assert main(["segment", str(rec), "--db", str(db), "--unknown", "held-out"]) == 0
+
+
+def test_segment_command_refuses_a_margin_with_no_activity_seen_twice(
+    recordings: dict[str, PoseSequence], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One 2-s clip per exercise, each its own file: no activity has two cases apart (from two
+    recordings, or apart in time), so nothing tells how far a new performance of a known one
+    lies: refused in one line, with the other judges named."""
+    rec = recordings["13_29"]
+    rows = ["path,label"]
+    for label, start_s in (("JumpJack", 1.0), ("Twist", 5.0), ("Squat", 33.0)):
+        a = int(start_s * 120)
+        path = save_pose(rec.slice_frames(a, a + 240), tmp_path / f"{label}.npz")
+        rows.append(f"{path},{label}")
+    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    db = tmp_path / "one_each.sqlite"
+    assert main(["train", str(tmp_path / "labels.csv"), "--db", str(db), "--split", "windows"]) == 0
+    test = save_pose(recordings["13_30"].slice_frames(0, 600), tmp_path / "r.npz")
+    before = _sha(test), _sha(db)
+    capsys.readouterr()
+    assert main(["segment", str(test), "--db", str(db), "--json"]) == 1
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1
+    assert "no activity of the case base has cases apart" in captured.err
+    assert "--unknown held-out" in captured.err and "Traceback" not in captured.err
+    assert (_sha(test), _sha(db)) == before
