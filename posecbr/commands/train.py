@@ -126,10 +126,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor (kinect or vicon)")
     p.add_argument(
         "--split",
-        choices=("clips", "repetitions"),
+        choices=("clips", "repetitions", "windows"),
         default="clips",
         help="repetitions: cut every clip into its repetitions, each a case (a video of ten "
-        "squats gives ten cases); default: one case per clip",
+        "squats gives ten cases); windows: into the 2-s windows every 0.5 s that posecbr "
+        "segment classifies (the case base for segmenting long recordings; feature weights "
+        "none unless --feature-weights says otherwise); default: one case per clip",
     )
     p.add_argument(
         "--frame-labels",
@@ -184,6 +186,10 @@ def _estimator(args: argparse.Namespace) -> Any:
     from cbr.estimator import CaseBaseClassifier
 
     o = {k: (DEFAULTS[k] if getattr(args, k) is None else getattr(args, k)) for k in DEFAULTS}
+    if args.split == "windows" and args.feature_weights is None:
+        # overlapping windows of one stretch are near copies: the within-activity spread that
+        # Fisher weights divide by would be that of one performance, not of the activity
+        o["feature_weights"] = "none"
     params = parse_params(args.param)
     measure = get_measure(o["similarity"], **params)
     if o["features"] == "qmp" and measure.compares_sequences:
@@ -242,6 +248,21 @@ def _repetitions(clips: list[Any]) -> list[Any]:
     return split.clips
 
 
+def _windows(clips: list[Any]) -> list[Any]:
+    """``--split windows``: every clip cut into the windows segment classifies (on stderr)."""
+    from features.repetitions import WINDOW_HOP_S, WINDOW_S, split_windows
+
+    split = split_windows(clips)
+    whole = f" ({split.kept_whole} shorter than a window kept whole)" if split.kept_whole else ""
+    n_windows = len(split.clips) - split.kept_whole
+    print(
+        f"cut {len(clips)} clips into {n_windows} windows of {WINDOW_S:g} s every "
+        f"{WINDOW_HOP_S:g} s{whole}",
+        file=sys.stderr,
+    )
+    return split.clips
+
+
 def _clips(args: argparse.Namespace) -> tuple[list[Any], list[str]]:
     from features.datasets import clip_target, load_dataset
 
@@ -260,6 +281,8 @@ def _clips(args: argparse.Namespace) -> tuple[list[Any], list[str]]:
     )
     if args.split == "repetitions" and clips:
         clips = _repetitions(clips)
+    elif args.split == "windows" and clips:
+        clips = _windows(clips)
     if not clips:
         raise DataError("no clips found (check --labels and --subjects)", str(args.data))
     solutions = []

@@ -29,6 +29,8 @@ from typing import Any
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_output
 
+from .segment import JUDGES
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -54,8 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-frames", type=int, help="stop after this many frames")
     p.add_argument(
         "--unknown",
-        choices=("held-out", "activities"),
-        default="held-out",
+        choices=JUDGES,
+        default=JUDGES[0],
         help="what makes a stretch unknown (as in posecbr segment)",
     )
     p.set_defaults(func=run)
@@ -123,14 +125,14 @@ def frames_in_background(
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.segmentation import Familiarity
+    from cbr.unknown import judge_of
     from features.pose_estimation import open_video, stream_poses
 
     from .segment import load_stored
 
     _check(args)
     clf = load_stored(args.db, args.name)
-    judge = Familiarity.of(clf.case_base_) if args.unknown == "activities" else clf.novelty_
+    judge = judge_of(clf, args.unknown)
     is_file = _is_file(args.source)
     fps = open_video(args.source)[1].fps if is_file else None
     source: Any = int(args.source) if args.source.isdigit() else args.source
