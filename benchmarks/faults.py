@@ -11,9 +11,9 @@ A state is compared by its fingerprint: every case base (name, configuration, mo
 without what differs between two identical runs (identities, timestamps). Each kill also gets
 SQLite's ``PRAGMA integrity_check`` after the next writer has rolled the journal back. Half the
 kill moments are uniform over the command's uninterrupted run time (measured first), so kills
-land in start-up, feature computation and the write alike; the other half over the span in
-which that uninterrupted run was seen writing (a journal, or a hidden file being built); the
-table says how many landed while a write was under way. Results: benchmarks/results/faults.json.
+land in start-up, feature computation and the write alike; the other half come once a write
+shows (a journal, or a hidden file being built), uniformly within as long as the uninterrupted
+run was seen writing; the table says how many landed while a write was under way. Results: benchmarks/results/faults.json.
 """
 
 from __future__ import annotations
@@ -231,11 +231,14 @@ def fire(sc: Scenario, runs: int, base: Path, rng: random.Random) -> dict[str, A
         work = Path(tempfile.mkdtemp(dir=base))
         argv = sc.prepare(work)
         proc = _posecbr(argv)
-        # half the kills anywhere in the run, half while the uninterrupted run was writing
-        lo, hi = (0.0, elapsed) if run % 2 == 0 or writes is None else writes
-        deadline = time.perf_counter() + rng.uniform(max(0.0, lo - 0.05), hi + 0.05)
+        if run % 2 == 0 or writes is None:  # anywhere in the run
+            deadline = time.perf_counter() + rng.uniform(0.0, elapsed)
+        else:  # while writing: once a write shows, within as long as the reference wrote
+            while not _writing(work) and proc.poll() is None:
+                time.sleep(0.0005)
+            deadline = time.perf_counter() + rng.uniform(0.0, writes[1] - writes[0])
         while time.perf_counter() < deadline and proc.poll() is None:
-            time.sleep(0.001)
+            time.sleep(0.0005)
         journal = _writing(work)
         if proc.poll() is None:
             proc.send_signal(signal.SIGKILL)
