@@ -13,7 +13,8 @@ SQLite's ``PRAGMA integrity_check`` after the next writer has rolled the journal
 kill moments are uniform over the command's uninterrupted run time (measured first), so kills
 land in start-up, feature computation and the write alike; the other half come once a write
 shows (a journal, or a hidden file being built), uniformly within as long as the uninterrupted
-run was seen writing; the table says how many landed while a write was under way. Results: benchmarks/results/faults.json.
+run was seen writing; the table says how many landed while a write was under way.
+Results: benchmarks/results/faults.json.
 """
 
 from __future__ import annotations
