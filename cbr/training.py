@@ -202,6 +202,21 @@ def train_described(
     if not clips:
         raise DataError("no clip shows a person: nothing to learn from", "training set")
     fitted: CaseBaseClassifier = clone(estimator).fit_described(clips, text)
+    return store_fitted(db, name, fitted, text, target=target, replace=replace, skipped=skipped)
+
+
+def store_fitted(
+    db: str | Path,
+    name: str,
+    fitted: CaseBaseClassifier,
+    labels: Sequence[str],
+    *,
+    target: str = "label",
+    replace: bool = False,
+    skipped: Sequence[str] = (),
+) -> TrainResult:
+    """Store the fitted classifier as case base ``name`` in ``db`` in one transaction
+    (``labels``: its training clips' solutions, for the summary)."""
     cb = to_store(fitted)
 
     def write(tx: StoreTransaction) -> None:
@@ -217,7 +232,7 @@ def train_described(
         records = progress(case_records(cb), desc="storing", total=len(cb), unit="case")
         ids = np.asarray(tx.add_cases(info, records))
         _cache_representations(tx, fitted, cb, ids)
-        tx.log(info, "build", reason=_build_reason(fitted, len(clips), text))
+        tx.log(info, "build", reason=_build_reason(fitted, len(labels), labels))
         if fitted.maintenance_ is not None:
             record_trim(tx, info, fitted.maintenance_, ids)
 
@@ -227,12 +242,12 @@ def train_described(
         name,
         len(cb),
         len(fitted.case_base_),
-        _counts(text),
+        _counts(labels),
         fitted.feature_config_,
         fitted.measure_.name,
         fitted.maintenance_,
         _learned(fitted),
-        skipped,
+        list(skipped),
     )
 
 

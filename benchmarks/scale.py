@@ -1,0 +1,342 @@
+"""Cost growth: every stage's throughput on 1 and 2 Dask workers, and training at scale.
+
+Run: ``python -m benchmarks.scale`` (corpora of 1,000 and 2,000 clips, about 10 min) or
+``python -m benchmarks.scale --big`` (adds 10,000 and 50,000 clips, about an hour more);
+``--skip-video`` leaves out decode + pose. Writes ``benchmarks/results/scale.json``.
+
+The corpus is synthetic, built from real clips: the 180 UI-PRMD Kinect repetitions bundled in
+``data/demo/uiprmd`` (3 subjects, 10 movements), each copy turned about the vertical axis
+(up to 20 degrees), played faster or slower (0.8-1.25x), given another body size per
+synthetic person (0.9-1.1x) and 3 mm of noise. Copy ``k`` of a subject's clips is a new
+person (``s01~k``), so a corpus of 50,000 clips has about 830 people.
+
+Stages (each unit builds its synthetic clip first; the same code in every worker count):
+
+- ``decode + pose``: ``posecbr extract --force`` on 40-frame cuts of the real exercise videos
+  in ``../shared/data/videos`` (960 x 540), frames/s;
+- ``fluents`` (:func:`features.fluents.evaluate`), ``QMPs`` (:func:`features.qmp.qmp_features`),
+  ``feature extraction`` (the train work unit, :func:`cbr.training.describe`: problem, mirror
+  image, availability), ``classify`` (:meth:`CaseBaseClassifier.solve` against a case base of
+  1,000 clips): clips/s on a ``LocalCluster`` of 1 and of 2 single-threaded workers, measured
+  in the same run, with each worker's peak memory (``ru_maxrss``);
+- training at scale, each size in a process of its own (peak memory = that process's
+  ``ru_maxrss``): feature extraction in that process, ``fit`` (fit_described), ``store write``
+  (SQLite, one transaction) and ``classify`` (200 new clips), seconds per clip.
+
+The machine is shared: the load average is recorded before and after every figure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from benchmarks import write_json
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "data" / "demo" / "uiprmd"
+DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
+RESULTS = ROOT / "benchmarks" / "results" / "scale.json"
+VIDEOS = ("glute_bridge", "lunge", "side_lying_leg_raise", "side_plank")
+STAGE_UNITS = {"fluents": 400, "qmp": 120, "features": 400, "classify": 400}
+
+
+# ---- the synthetic corpus -----------------------------------------------------------------
+
+
+def base_clips() -> list[Any]:
+    """The real clips the corpus is built from (canonical sequences)."""
+    from features.poses import load_pose
+
+    return [load_pose(p).to_canonical() for p in sorted(DEMO.glob("*.npz"))]
+
+
+def synthetic(base: list[Any], i: int) -> Any:
+    """Clip ``i`` of the corpus: a changed copy of ``base[i % len(base)]`` (see the module)."""
+    from features.poses import PoseSequence
+
+    b = base[i % len(base)]
+    copy = i // len(base)
+    subject = f"{b.metadata.get('subject')}~{copy}"
+    person = np.random.default_rng([copy, sum(map(ord, subject))])
+    rng = np.random.default_rng(i)
+    p = b.positions
+    frames = max(8, int(round(len(p) * rng.uniform(0.8, 1.25))))
+    t = np.linspace(0.0, len(p) - 1.0, frames)
+    lo = np.clip(np.floor(t).astype(int), 0, len(p) - 2)
+    w = (t - lo)[:, None, None]
+    q = p[lo] * (1.0 - w) + p[lo + 1] * w  # played faster or slower
+    angle = np.deg2rad(rng.uniform(-20.0, 20.0))
+    c, s = np.cos(angle), np.sin(angle)
+    turn = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    q = (q @ turn.T) * person.uniform(0.9, 1.1) + rng.normal(0.0, 0.003, q.shape)
+    meta = {**b.metadata, "subject": subject}
+    return PoseSequence(q, b.joint_names, b.fps, source=f"synthetic/{i:06d}", metadata=meta)
+
+
+# ---- stages on 1 and 2 workers ------------------------------------------------------------
+
+
+def _peak_rss() -> int:
+    return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
+
+
+def stage_unit(i: int, base: list[Any], stage: str, model: Any) -> int:
+    """One clip through one stage (on a worker); returns the clip's frames."""
+    seq = synthetic(base, i)
+    if stage == "fluents":
+        from features.fluents import evaluate
+
+        evaluate(seq)
+    elif stage == "qmp":
+        from features.qmp import qmp_features
+
+        qmp_features(seq)
+    elif stage == "features":
+        from cbr.training import describe
+
+        describe(seq, model)
+    elif stage == "classify":
+        model.solve([seq])
+    return int(seq.n_frames)
+
+
+def _load() -> list[float]:
+    return [round(v, 2) for v in os.getloadavg()]
+
+
+def _stages(base: list[Any], workers: int, plan: Any, clf: Any) -> dict[str, Any]:
+    from features.cluster import connect, gather, map_outcomes
+
+    out: dict[str, Any] = {}
+    with connect(f"local:{workers}") as client:
+        client.wait_for_workers(workers, timeout=300)
+        for stage, n in STAGE_UNITS.items():
+            model = plan if stage == "features" else clf
+            warm = list(range(10**6, 10**6 + 2 * workers))  # compile and import, untimed
+            gather(map_outcomes(client, stage_unit, warm, [str(i) for i in warm], base, stage,
+                                model), len(warm))  # fmt: skip
+            items = list(range(n))
+            before = _load()
+            t0 = time.perf_counter()
+            frames, failed = gather(
+                map_outcomes(client, stage_unit, items, [str(i) for i in items], base, stage,
+                             model), n)  # fmt: skip
+            seconds = time.perf_counter() - t0
+            if failed:
+                raise RuntimeError(f"{stage}: {failed[0].name}: {failed[0].error}")
+            out[stage] = {
+                "clips": n,
+                "seconds": round(seconds, 3),
+                "clips_per_s": round(n / seconds, 2),
+                "frames_per_s": round(sum(f or 0 for f in frames) / seconds, 1),
+                "load_before": before,
+                "load_after": _load(),
+            }
+            print(f"  {workers} worker(s)  {stage:<10} {n / seconds:8.1f} clips/s  "
+                  f"load {before[0]:.1f}", flush=True)  # fmt: skip
+        out["worker_peak_rss_bytes"] = sorted(client.run(_peak_rss).values())
+    return out
+
+
+def _video_corpus(folder: Path, frames: int = 40) -> int:
+    """40-frame cuts of the real exercise videos, at their size, as ``folder/<class>/*.mp4``."""
+    import cv2
+
+    n = 0
+    for name in VIDEOS:
+        src = next((DATA / "videos" / name).glob("*.mp4"))
+        cap = cv2.VideoCapture(str(src))
+        fps = cap.get(cv2.CAP_PROP_FPS)
+        (folder / name).mkdir(parents=True, exist_ok=True)
+        part, writer = 0, None
+        while True:
+            ok, bgr = cap.read()
+            if not ok:
+                break
+            if writer is None:
+                out = folder / name / f"{src.stem}_{part:02d}.mp4"
+                size = (bgr.shape[1], bgr.shape[0])
+                writer = cv2.VideoWriter(str(out), cv2.VideoWriter.fourcc(*"mp4v"), fps, size)
+                count = 0
+            writer.write(bgr)
+            count += 1
+            if count == frames:
+                writer.release()
+                writer, part, n = None, part + 1, n + 1
+        if writer is not None:
+            writer.release()
+            n += 1
+        cap.release()
+    return n
+
+
+def _extract(workers: int, videos: Path, out: Path, n_clips: int) -> dict[str, Any]:
+    """``posecbr extract --force`` on a cluster of ``workers``: warm-up, then timed."""
+    from features.cluster import connect
+    from posecbr.cli import main
+
+    with connect(f"local:{workers}") as client:
+        client.wait_for_workers(workers, timeout=300)
+        address = client.scheduler.address
+        warm = next(videos.iterdir())  # loads the models in every worker
+        main(["extract", str(warm), "--out", str(out / "warm"), "--scheduler", address])
+        before = _load()
+        t0 = time.perf_counter()
+        code = main(["extract", str(videos), "--out", str(out / f"w{workers}"), "--force",
+                     "--scheduler", address])  # fmt: skip
+        seconds = time.perf_counter() - t0
+        rss = sorted(client.run(_peak_rss).values())
+    from features.poses import load_pose
+
+    frames = sum(load_pose(p).n_frames for p in (out / f"w{workers}").rglob("*.npz"))
+    print(f"  {workers} worker(s)  decode+pose {frames / seconds:6.1f} frames/s  "
+          f"load {before[0]:.1f}", flush=True)  # fmt: skip
+    return {
+        "exit_code": code,
+        "clips": n_clips,
+        "frames": frames,
+        "seconds": round(seconds, 2),
+        "frames_per_s": round(frames / seconds, 2),
+        "clips_per_s": round(n_clips / seconds, 3),
+        "worker_peak_rss_bytes": rss,
+        "load_before": before,
+        "load_after": _load(),
+    }
+
+
+# ---- training at scale (one process per size) -----------------------------------------------
+
+
+def train_one(n: int) -> dict[str, Any]:
+    """Train on ``n`` synthetic clips in this process (see the module): seconds per stage."""
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import describe, fit_plan, store_fitted
+
+    os.environ["POSECBR_NO_PROGRESS"] = "1"
+    base = base_clips()
+    estimator = CaseBaseClassifier()
+    plan = fit_plan(estimator)
+    load0 = _load()
+    t0 = time.perf_counter()
+    described = [describe(synthetic(base, i), plan) for i in range(n)]
+    labels = [str(base[i % len(base)].metadata["label"]) for i in range(n)]
+    t1 = time.perf_counter()
+    fitted = CaseBaseClassifier().fit_described(described, labels)
+    t2 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        store_fitted(Path(tmp) / "cb.sqlite", "default", fitted, labels)
+        db_bytes = (Path(tmp) / "cb.sqlite").stat().st_size
+    t3 = time.perf_counter()
+    queries = [synthetic(base, 10**7 + i) for i in range(200)]
+    t4 = time.perf_counter()
+    fitted.solve(queries)
+    t5 = time.perf_counter()
+    return {
+        "clips": n,
+        "features_s": round(t1 - t0, 2),
+        "fit_s": round(t2 - t1, 2),
+        "store_write_s": round(t3 - t2, 2),
+        "train_s": round(t3 - t0, 2),
+        "train_ms_per_clip": round(1000 * (t3 - t0) / n, 3),
+        "classify_ms_per_clip": round(1000 * (t5 - t4) / len(queries), 3),
+        "cases": len(fitted.case_base_),
+        "case_base_bytes_in_memory": int(fitted.case_base_.problems.nbytes),
+        "store_bytes": db_bytes,
+        "peak_rss_bytes": _peak_rss(),
+        "chosen": {
+            "side": fitted.side_,
+            "weighting": fitted.weighting_,
+            "phases": fitted.phases_,
+        },  # fmt: skip
+        "subjects": len({d.subject for d in described}),
+        "load_before": load0,
+        "load_after": _load(),
+    }
+
+
+def _train_in_child(n: int) -> dict[str, Any]:
+    cmd = [sys.executable, "-m", "benchmarks.scale", "--train-one", str(n)]
+    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"training on {n} clips failed: {done.stderr.strip()[-2000:]}")
+    result: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
+    print(f"  train {n:6d} clips: {result['train_ms_per_clip']:.2f} ms/clip "
+          f"(features {result['features_s']} s, fit {result['fit_s']} s, store "
+          f"{result['store_write_s']} s), peak {result['peak_rss_bytes'] / 2**30:.2f} GiB, "
+          f"load {result['load_before'][0]:.1f}", flush=True)  # fmt: skip
+    return result
+
+
+# ---- the table -----------------------------------------------------------------------------
+
+
+def _ratio(two: dict[str, Any], one: dict[str, Any], key: str) -> float:
+    return round(float(two[key]) / float(one[key]), 3)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.scale", description=__doc__)
+    parser.add_argument("--big", action="store_true", help="also 10,000 and 50,000 clips")
+    parser.add_argument("--sizes", help="training sizes, comma-separated (overrides --big)")
+    parser.add_argument("--skip-video", action="store_true", help="no decode + pose stage")
+    parser.add_argument("--skip-stages", action="store_true", help="training at scale only")
+    parser.add_argument("--train-one", type=int, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.train_one:
+        print(json.dumps(train_one(args.train_one)))
+        return 0
+    sizes = [1000, 2000] + ([10000, 50000] if args.big else [])
+    if args.sizes:
+        sizes = [int(s) for s in args.sizes.split(",")]
+    doc: dict[str, Any] = {"corpus": "synthetic copies of data/demo/uiprmd (see docstring)"}
+    if not args.skip_stages:
+        doc["stages"] = _run_stages(args.skip_video)
+    doc["training"] = [_train_in_child(n) for n in sizes]
+    first = doc["training"][0]
+    for t in doc["training"]:
+        t["time_per_clip_vs_first"] = round(t["train_ms_per_clip"] / first["train_ms_per_clip"], 3)
+    write_json(doc, RESULTS)
+    print(f"wrote {RESULTS.relative_to(ROOT)}")
+    return 0
+
+
+def _run_stages(skip_video: bool) -> dict[str, Any]:
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import fit_plan
+
+    base = base_clips()
+    plan = fit_plan(CaseBaseClassifier())
+    train = [synthetic(base, i) for i in range(1000)]
+    clf = CaseBaseClassifier().fit(train, [str(s.metadata["label"]) for s in train])
+    stages: dict[str, Any] = {}
+    if not skip_video:
+        with tempfile.TemporaryDirectory() as tmp:
+            videos = Path(tmp) / "videos"
+            n = _video_corpus(videos)
+            stages["decode_pose"] = {
+                str(w): _extract(w, videos, Path(tmp) / "out", n) for w in (1, 2)
+            }
+        one, two = stages["decode_pose"]["1"], stages["decode_pose"]["2"]
+        stages["decode_pose"]["speedup_1_to_2"] = _ratio(two, one, "frames_per_s")
+    for w in (1, 2):
+        stages[str(w)] = _stages(base, w, plan, clf)
+    stages["speedup_1_to_2"] = {
+        s: _ratio(stages["2"][s], stages["1"][s], "clips_per_s") for s in STAGE_UNITS
+    }
+    print("speed-up from 1 to 2 workers:", stages["speedup_1_to_2"])
+    return stages
+
+
+if __name__ == "__main__":
+    sys.exit(main())
