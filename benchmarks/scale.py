@@ -91,6 +91,17 @@ def _peak_rss() -> int:
     return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
 
 
+def _cpu_s() -> float:
+    """CPU seconds this process has used: unlike wall time, not stretched by other
+    processes' load on a shared machine."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return float(r.ru_utime + r.ru_stime)
+
+
+def _worker_cpu(client: Any) -> float:
+    return float(sum(client.run(_cpu_s).values()))
+
+
 def stage_unit(i: int, base: list[Any], stage: str, model: Any) -> int:
     """One clip through one stage (on a worker); returns the clip's frames."""
     seq = synthetic(base, i)
@@ -127,12 +138,13 @@ def _stages(base: list[Any], workers: int, plan: Any, clf: Any) -> dict[str, Any
             gather(map_outcomes(client, stage_unit, warm, [str(i) for i in warm], base, stage,
                                 model), len(warm))  # fmt: skip
             items = list(range(n))
-            before = _load()
+            before, cpu0 = _load(), _worker_cpu(client)
             t0 = time.perf_counter()
             frames, failed = gather(
                 map_outcomes(client, stage_unit, items, [str(i) for i in items], base, stage,
                              model), n)  # fmt: skip
             seconds = time.perf_counter() - t0
+            cpu = _worker_cpu(client) - cpu0
             if failed:
                 raise RuntimeError(f"{stage}: {failed[0].name}: {failed[0].error}")
             out[stage] = {
@@ -140,6 +152,9 @@ def _stages(base: list[Any], workers: int, plan: Any, clf: Any) -> dict[str, Any
                 "seconds": round(seconds, 3),
                 "clips_per_s": round(n / seconds, 2),
                 "frames_per_s": round(sum(f or 0 for f in frames) / seconds, 1),
+                "worker_cpu_s": round(cpu, 3),
+                "clips_per_worker_cpu_s": round(n / cpu, 2),
+                "cpu_share_per_worker": round(cpu / (seconds * workers), 3),
                 "load_before": before,
                 "load_after": _load(),
             }
@@ -191,11 +206,12 @@ def _extract(workers: int, videos: Path, out: Path, n_clips: int) -> dict[str, A
         address = client.scheduler.address
         warm = next(videos.iterdir())  # loads the models in every worker
         main(["extract", str(warm), "--out", str(out / "warm"), "--scheduler", address])
-        before = _load()
+        before, cpu0 = _load(), _worker_cpu(client)
         t0 = time.perf_counter()
         code = main(["extract", str(videos), "--out", str(out / f"w{workers}"), "--force",
                      "--scheduler", address])  # fmt: skip
         seconds = time.perf_counter() - t0
+        cpu = _worker_cpu(client) - cpu0
         rss = sorted(client.run(_peak_rss).values())
     from features.poses import load_pose
 
@@ -209,6 +225,9 @@ def _extract(workers: int, videos: Path, out: Path, n_clips: int) -> dict[str, A
         "seconds": round(seconds, 2),
         "frames_per_s": round(frames / seconds, 2),
         "clips_per_s": round(n_clips / seconds, 3),
+        "worker_cpu_s": round(cpu, 2),
+        "frames_per_worker_cpu_s": round(frames / cpu, 2),
+        "cpu_share_per_worker": round(cpu / (seconds * workers), 3),
         "worker_peak_rss_bytes": rss,
         "load_before": before,
         "load_after": _load(),
@@ -227,7 +246,7 @@ def train_one(n: int) -> dict[str, Any]:
     base = base_clips()
     estimator = CaseBaseClassifier()
     plan = fit_plan(estimator)
-    load0 = _load()
+    load0, cpu0 = _load(), _cpu_s()
     t0 = time.perf_counter()
     described = [describe(synthetic(base, i), plan) for i in range(n)]
     labels = [str(base[i % len(base)].metadata["label"]) for i in range(n)]
@@ -237,7 +256,7 @@ def train_one(n: int) -> dict[str, Any]:
     with tempfile.TemporaryDirectory() as tmp:
         store_fitted(Path(tmp) / "cb.sqlite", "default", fitted, labels)
         db_bytes = (Path(tmp) / "cb.sqlite").stat().st_size
-    t3 = time.perf_counter()
+    t3, cpu3 = time.perf_counter(), _cpu_s()
     queries = [synthetic(base, 10**7 + i) for i in range(200)]
     t4 = time.perf_counter()
     fitted.solve(queries)
@@ -249,6 +268,8 @@ def train_one(n: int) -> dict[str, Any]:
         "store_write_s": round(t3 - t2, 2),
         "train_s": round(t3 - t0, 2),
         "train_ms_per_clip": round(1000 * (t3 - t0) / n, 3),
+        "train_cpu_s": round(cpu3 - cpu0, 2),
+        "train_cpu_ms_per_clip": round(1000 * (cpu3 - cpu0) / n, 3),
         "classify_ms_per_clip": round(1000 * (t5 - t4) / len(queries), 3),
         "cases": len(fitted.case_base_),
         "case_base_bytes_in_memory": int(fitted.case_base_.problems.nbytes),
@@ -291,6 +312,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sizes", help="training sizes, comma-separated (overrides --big)")
     parser.add_argument("--skip-video", action="store_true", help="no decode + pose stage")
     parser.add_argument("--skip-stages", action="store_true", help="training at scale only")
+    parser.add_argument("--skip-training", action="store_true", help="the stages only")
     parser.add_argument("--train-one", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.train_one:
@@ -299,16 +321,41 @@ def main(argv: list[str] | None = None) -> int:
     sizes = [1000, 2000] + ([10000, 50000] if args.big else [])
     if args.sizes:
         sizes = [int(s) for s in args.sizes.split(",")]
-    doc: dict[str, Any] = {"corpus": "synthetic copies of data/demo/uiprmd (see docstring)"}
+    doc = _previous()  # a partial run keeps the other figures
+    doc["corpus"] = "synthetic copies of data/demo/uiprmd (see docstring)"
     if not args.skip_stages:
         doc["stages"] = _run_stages(args.skip_video)
-    doc["training"] = [_train_in_child(n) for n in sizes]
-    first = doc["training"][0]
-    for t in doc["training"]:
-        t["time_per_clip_vs_first"] = round(t["train_ms_per_clip"] / first["train_ms_per_clip"], 3)
+        write_json(doc, RESULTS)
+    if not args.skip_training:
+        by_size = {t["clips"]: t for t in doc.get("training", [])}
+        for n in sizes:
+            by_size[n] = _train_in_child(n)
+            doc["training"] = [by_size[k] for k in sorted(by_size)]
+            write_json(doc, RESULTS)
+        _relative(doc["training"])
     write_json(doc, RESULTS)
     print(f"wrote {RESULTS.relative_to(ROOT)}")
     return 0
+
+
+def _previous() -> dict[str, Any]:
+    try:
+        doc = json.loads(RESULTS.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError):
+        return {}
+    return doc if isinstance(doc, dict) else {}
+
+
+def _relative(training: list[dict[str, Any]]) -> None:
+    """Time per clip of every size over that of the smallest (wall and CPU)."""
+    first = training[0]
+    for t in training:
+        t["time_per_clip_vs_smallest"] = round(t["train_ms_per_clip"] / first["train_ms_per_clip"],
+                                               3)  # fmt: skip
+        if "train_cpu_ms_per_clip" in t and "train_cpu_ms_per_clip" in first:
+            t["cpu_per_clip_vs_smallest"] = round(
+                t["train_cpu_ms_per_clip"] / first["train_cpu_ms_per_clip"], 3
+            )
 
 
 def _run_stages(skip_video: bool) -> dict[str, Any]:

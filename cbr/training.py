@@ -4,7 +4,13 @@ The classifier is fitted exactly as ``CaseBaseClassifier.fit`` fits it in Python
 call), then stored whole (:mod:`cbr.stored`) in ONE transaction: an interrupted or failed train
 leaves the store as it was, and a store file that did not exist before appears only complete
 (:func:`casebase_store.write_store`).
-Appending adds cases to a stored case base without learning anything anew.
+Appending adds cases to a stored case base without learning anything anew; several processes
+may append to one case base at once.
+
+Each clip is reduced to what the fit needs as it is read (:mod:`cbr.described`), one clip in
+memory at a time: :func:`describe_entries` reads the clips of a dataset in this process or,
+with a ``scheduler``, on a Dask cluster (one task per clip), and the same records reach the
+same fit either way.
 """
 
 from __future__ import annotations

@@ -1,11 +1,12 @@
-"""Where the tasks of a comparison run: serially in this process, or in worker processes
-started with *spawn* that each receive the shared data once.
+"""Where the tasks of a comparison run: serially in this process, in worker processes
+started with *spawn* that each receive the shared data once, or on a Dask cluster.
 
 A runner is made with a ``context`` (the data every task reads) and a ``setup`` run once per
 worker before its first task (warming caches and compilers); ``map(fn, tasks)`` then yields
 ``fn(context, task)`` for every task, in the order they finish, with a progress bar. ``fn`` and
-``setup`` must be module-level functions and the context picklable, so that another backend
-(e.g. dask.distributed: scatter the context, map the tasks) fits the same interface.
+``setup`` must be module-level functions and the context picklable: :class:`DaskRunner` runs
+the same tasks on a Dask cluster (``--scheduler``; the context scattered to every worker once,
+the tasks mapped).
 
 Spawn, not fork: a forked child inherits the parent's threads' locks (GNU OpenMP under
 scikit-learn's neighbour search aborts such children), and fork does not exist on Windows and
