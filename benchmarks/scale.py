@@ -5,7 +5,7 @@ Run: ``python -m benchmarks.scale`` (corpora of 1,000 and 2,000 clips, about 10 
 ``--skip-video`` leaves out decode + pose. Writes ``benchmarks/results/scale.json``.
 
 The corpus is synthetic, built from real clips: the 180 UI-PRMD Kinect repetitions bundled in
-``data/demo/uiprmd`` (3 subjects, 10 movements), each copy turned about the vertical axis
+``posecbr/demo_data/uiprmd`` (3 subjects, 10 movements), each copy turned about the vertical axis
 (up to 20 degrees), played faster or slower (0.8-1.25x), given another body size per
 synthetic person (0.9-1.1x) and 3 mm of noise. Copy ``k`` of a subject's clips is a new
 person (``s01~k``), so a corpus of 50,000 clips has about 830 people.
@@ -44,7 +44,7 @@ import numpy as np
 from benchmarks import write_json
 
 ROOT = Path(__file__).resolve().parents[1]
-DEMO = ROOT / "data" / "demo" / "uiprmd"
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
 RESULTS = ROOT / "benchmarks" / "results" / "scale.json"
 VIDEOS = ("glute_bridge", "lunge", "side_lying_leg_raise", "side_plank")
@@ -322,7 +322,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.sizes:
         sizes = [int(s) for s in args.sizes.split(",")]
     doc = _previous()  # a partial run keeps the other figures
-    doc["corpus"] = "synthetic copies of data/demo/uiprmd (see docstring)"
+    doc["corpus"] = "synthetic copies of posecbr/demo_data/uiprmd (see docstring)"
     if not args.skip_stages:
         doc["stages"] = _run_stages(args.skip_video)
         write_json(doc, RESULTS)

@@ -28,7 +28,7 @@ from tests.test_pose_extract import SQUAT, _cut
 pytest.importorskip("dask.distributed", reason="dask is in the test extra: pip install -e .[test]")
 
 ROOT = Path(__file__).resolve().parents[1]
-DEMO = ROOT / "data" / "demo" / "uiprmd"
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 LABELS = DEMO / "labels.csv"
 TWO = "deep_squat,standing_shoulder_abduction"
 

@@ -15,7 +15,7 @@ from cbr.fitting import inner_sample, subject_folds
 from features.derived import fluents_of, is_cached
 from features.poses import PoseSequence, load_pose
 
-DEMO = Path(__file__).resolve().parents[1] / "data" / "demo" / "uiprmd"
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 
 def _clips(pattern: str) -> list[PoseSequence]:

@@ -16,7 +16,7 @@ from posecbr.cli import main
 from tests.processes import posecbr_process
 
 ROOT = Path(__file__).resolve().parents[1]
-DEMO = ROOT / "data" / "demo" / "uiprmd"
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 LABELS = DEMO / "labels.csv"
 PG_URL = os.environ.get("POSECBR_TEST_POSTGRES_URL")
 # the appending writers each add subject s03's clips of their own movement
