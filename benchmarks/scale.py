@@ -18,7 +18,7 @@ Stages (each unit builds its synthetic clip first; the same code in every worker
   ``feature extraction`` (the train work unit, :func:`cbr.training.describe`: problem, mirror
   image, availability), ``classify`` (:meth:`CaseBaseClassifier.solve` against a case base of
   1,000 clips): clips/s on a ``LocalCluster`` of 1 and of 2 single-threaded workers, measured
-  in the same run, with each worker's peak memory (``ru_maxrss``);
+  in the same run, with each worker's peak memory (VmHWM) and CPU seconds;
 - training at scale, each size in a process of its own (peak memory = that process's
   ``ru_maxrss``): feature extraction in that process, ``fit`` (fit_described), ``store write``
   (SQLite, one transaction) and ``classify`` (200 new clips), seconds per clip.
@@ -88,6 +88,16 @@ def synthetic(base: list[Any], i: int) -> Any:
 
 
 def _peak_rss() -> int:
+    """This process's peak resident memory in bytes. Linux's VmHWM: ``ru_maxrss`` of a process
+    started by fork and exec begins at its parent's size (the kernel carries the old image's
+    peak over), which would bill a worker or a training child for the benchmark's own memory."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
     return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
 
 
