@@ -19,11 +19,13 @@ Stages (each unit builds its synthetic clip first; the same code in every worker
   image, availability), ``classify`` (:meth:`CaseBaseClassifier.solve` against a case base of
   1,000 clips): clips/s on a ``LocalCluster`` of 1 and of 2 single-threaded workers, measured
   in the same run, with each worker's peak memory (VmHWM) and CPU seconds;
-- training at scale, each size in a process of its own (peak memory = that process's
-  ``ru_maxrss``): feature extraction in that process, ``fit`` (fit_described), ``store write``
-  (SQLite, one transaction) and ``classify`` (200 new clips), seconds per clip.
+- training at scale, each size in a process of its own (peak memory = that process's VmHWM):
+  feature extraction in that process, ``fit`` (fit_described), ``store write`` (SQLite, one
+  transaction) and ``classify`` (200 new clips), seconds per clip, wall and CPU.
 
-The machine is shared: the load average is recorded before and after every figure.
+The machine is shared: the load average is recorded before and after every figure, and CPU
+seconds beside wall seconds (other processes' load stretches wall time, not CPU time; the
+worker-count speed-up a machine can give is ``workers x cpu_share_per_worker``).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ import argparse
 import json
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -136,44 +139,6 @@ def _load() -> list[float]:
     return [round(v, 2) for v in os.getloadavg()]
 
 
-def _stages(base: list[Any], workers: int, plan: Any, clf: Any) -> dict[str, Any]:
-    from features.cluster import connect, gather, map_outcomes
-
-    out: dict[str, Any] = {}
-    with connect(f"local:{workers}") as client:
-        client.wait_for_workers(workers, timeout=300)
-        for stage, n in STAGE_UNITS.items():
-            model = plan if stage == "features" else clf
-            warm = list(range(10**6, 10**6 + 2 * workers))  # compile and import, untimed
-            gather(map_outcomes(client, stage_unit, warm, [str(i) for i in warm], base, stage,
-                                model), len(warm))  # fmt: skip
-            items = list(range(n))
-            before, cpu0 = _load(), _worker_cpu(client)
-            t0 = time.perf_counter()
-            frames, failed = gather(
-                map_outcomes(client, stage_unit, items, [str(i) for i in items], base, stage,
-                             model), n)  # fmt: skip
-            seconds = time.perf_counter() - t0
-            cpu = _worker_cpu(client) - cpu0
-            if failed:
-                raise RuntimeError(f"{stage}: {failed[0].name}: {failed[0].error}")
-            out[stage] = {
-                "clips": n,
-                "seconds": round(seconds, 3),
-                "clips_per_s": round(n / seconds, 2),
-                "frames_per_s": round(sum(f or 0 for f in frames) / seconds, 1),
-                "worker_cpu_s": round(cpu, 3),
-                "clips_per_worker_cpu_s": round(n / cpu, 2),
-                "cpu_share_per_worker": round(cpu / (seconds * workers), 3),
-                "load_before": before,
-                "load_after": _load(),
-            }
-            print(f"  {workers} worker(s)  {stage:<10} {n / seconds:8.1f} clips/s  "
-                  f"load {before[0]:.1f}", flush=True)  # fmt: skip
-        out["worker_peak_rss_bytes"] = sorted(client.run(_peak_rss).values())
-    return out
-
-
 def _video_corpus(folder: Path, frames: int = 40) -> int:
     """40-frame cuts of the real exercise videos, at their size, as ``folder/<class>/*.mp4``."""
     import cv2
@@ -206,42 +171,137 @@ def _video_corpus(folder: Path, frames: int = 40) -> int:
     return n
 
 
-def _extract(workers: int, videos: Path, out: Path, n_clips: int) -> dict[str, Any]:
-    """``posecbr extract --force`` on a cluster of ``workers``: warm-up, then timed."""
-    from features.cluster import connect
+def _timed(client: Any, workers: int, run: Any) -> dict[str, Any]:
+    """``run()`` (returns the frames done) timed on ``client``: wall and worker CPU seconds."""
+    before, cpu0 = _load(), _worker_cpu(client)
+    t0 = time.perf_counter()
+    frames = run()
+    seconds = time.perf_counter() - t0
+    cpu = _worker_cpu(client) - cpu0
+    return {
+        "seconds": round(seconds, 3),
+        "frames": frames,
+        "worker_cpu_s": round(cpu, 3),
+        "cpu_share_per_worker": round(cpu / (seconds * workers), 3),
+        "load_before": before,
+    }
+
+
+def _stage_run(client: Any, base: list[Any], stage: str, model: Any, n: int) -> Any:
+    from features.cluster import gather, map_outcomes
+
+    def run() -> int:
+        items = list(range(n))
+        frames, failed = gather(map_outcomes(client, stage_unit, items, [str(i) for i in items],
+                                             base, stage, model), n)  # fmt: skip
+        if failed:
+            raise RuntimeError(f"{stage}: {failed[0].name}: {failed[0].error}")
+        return sum(f or 0 for f in frames)
+
+    return run
+
+
+def _extract_run(client: Any, videos: Path, out: Path) -> Any:
     from posecbr.cli import main
 
-    with connect(f"local:{workers}") as client:
-        client.wait_for_workers(workers, timeout=300)
-        address = client.scheduler.address
-        warm = next(videos.iterdir())  # loads the models in every worker
-        main(["extract", str(warm), "--out", str(out / "warm"), "--scheduler", address])
-        before, cpu0 = _load(), _worker_cpu(client)
-        t0 = time.perf_counter()
-        code = main(["extract", str(videos), "--out", str(out / f"w{workers}"), "--force",
-                     "--scheduler", address])  # fmt: skip
-        seconds = time.perf_counter() - t0
-        cpu = _worker_cpu(client) - cpu0
-        rss = sorted(client.run(_peak_rss).values())
-    from features.poses import load_pose
+    def run() -> int:
+        from features.poses import load_pose
 
-    frames = sum(load_pose(p).n_frames for p in (out / f"w{workers}").rglob("*.npz"))
-    print(f"  {workers} worker(s)  decode+pose {frames / seconds:6.1f} frames/s  "
-          f"load {before[0]:.1f}", flush=True)  # fmt: skip
+        code = main(["extract", str(videos), "--out", str(out), "--force", "--scheduler",
+                     client.scheduler.address])  # fmt: skip
+        if code != 0:
+            raise RuntimeError("extract failed")
+        return sum(load_pose(p).n_frames for p in out.rglob("*.npz"))
+
+    return run
+
+
+def _summary(runs: list[dict[str, Any]], units: int) -> dict[str, Any]:
+    """The median round of one stage on one cluster, with every round kept."""
+    mid = sorted(runs, key=lambda r: r["seconds"])[len(runs) // 2]
     return {
-        "exit_code": code,
-        "clips": n_clips,
-        "frames": frames,
-        "seconds": round(seconds, 2),
-        "frames_per_s": round(frames / seconds, 2),
-        "clips_per_s": round(n_clips / seconds, 3),
-        "worker_cpu_s": round(cpu, 2),
-        "frames_per_worker_cpu_s": round(frames / cpu, 2),
-        "cpu_share_per_worker": round(cpu / (seconds * workers), 3),
-        "worker_peak_rss_bytes": rss,
-        "load_before": before,
-        "load_after": _load(),
+        "units": units,
+        "frames": mid["frames"],
+        "seconds": mid["seconds"],
+        "units_per_s": round(units / mid["seconds"], 3),
+        "frames_per_s": round(mid["frames"] / mid["seconds"], 2),
+        "frames_per_worker_cpu_s": round(
+            statistics.median(r["frames"] / r["worker_cpu_s"] for r in runs), 2
+        ),
+        "cpu_share_per_worker": mid["cpu_share_per_worker"],
+        "rounds": runs,
     }
+
+
+def _per_cpu(runs: list[dict[str, Any]]) -> float:
+    return float(statistics.median(r["frames"] / r["worker_cpu_s"] for r in runs))
+
+
+def _run_stages(skip_video: bool, rounds: int = 3) -> dict[str, Any]:
+    """Every stage on a 1-worker and a 2-worker cluster, alternating, ``rounds`` times: the
+    speed-up is the median of the rounds' ratios (each round runs both back to back, so load
+    from other processes cancels better than across a run)."""
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import fit_plan
+    from features.cluster import connect, gather, map_outcomes
+
+    base = base_clips()
+    plan = fit_plan(CaseBaseClassifier())
+    train = [synthetic(base, i) for i in range(1000)]
+    clf = CaseBaseClassifier().fit(train, [str(s.metadata["label"]) for s in train])
+    del train
+    stages: dict[str, Any] = {}
+    with tempfile.TemporaryDirectory() as tmp, connect("local:1") as c1, connect("local:2") as c2:
+        clients = {1: c1, 2: c2}
+        runs: dict[str, Any] = {}
+        videos, n_videos = Path(tmp) / "videos", 0
+        if not skip_video:
+            n_videos = _video_corpus(videos)
+            runs["decode_pose"] = {
+                w: _extract_run(c, videos, Path(tmp) / f"out{w}") for w, c in clients.items()
+            }
+        for stage, n in STAGE_UNITS.items():
+            model = plan if stage == "features" else clf
+            runs[stage] = {w: _stage_run(c, base, stage, model, n) for w, c in clients.items()}
+        for w, c in clients.items():  # load models, compile kernels: untimed
+            c.wait_for_workers(w, timeout=300)
+            warm = list(range(10**6, 10**6 + 2 * w))
+            for stage in STAGE_UNITS:
+                model = plan if stage == "features" else clf
+                gather(map_outcomes(c, stage_unit, warm, [str(i) for i in warm], base, stage,
+                                    model), len(warm))  # fmt: skip
+            if not skip_video:  # the pose models loaded in every worker
+                from posecbr.cli import main as posecbr
+
+                warm_in = Path(tmp) / f"warm{w}"
+                warm_in.mkdir()
+                for v in sorted(videos.rglob("*.mp4"))[: 2 * w]:  # a folder: runs on the cluster
+                    (warm_in / v.name).symlink_to(v)
+                posecbr(["extract", str(warm_in), "--out", str(Path(tmp) / "warm"), "--force",
+                         "--scheduler", c.scheduler.address])  # fmt: skip
+        for stage, by_workers in runs.items():
+            units = n_videos if stage == "decode_pose" else STAGE_UNITS[stage]
+            timed: dict[int, list[dict[str, Any]]] = {1: [], 2: []}
+            for _ in range(rounds):
+                for w in (1, 2):
+                    timed[w].append(_timed(clients[w], w, by_workers[w]))
+            ratios = [timed[1][r]["seconds"] / timed[2][r]["seconds"] for r in range(rounds)]
+            stages[stage] = {
+                "1": _summary(timed[1], units),
+                "2": _summary(timed[2], units),
+                "speedup_1_to_2": round(statistics.median(ratios), 3),
+                "cpu_efficiency_2_vs_1": round(_per_cpu(timed[2]) / _per_cpu(timed[1]), 3),
+            }
+            s = stages[stage]
+            print(f"  {stage:<12} 1 worker {s['1']['frames_per_s']:8.1f} frames/s, 2 workers "
+                  f"{s['2']['frames_per_s']:8.1f}: x{s['speedup_1_to_2']:.2f} (CPU share per "
+                  f"worker {s['1']['cpu_share_per_worker']:.2f} / "
+                  f"{s['2']['cpu_share_per_worker']:.2f}; frames per CPU-second with 2 workers "
+                  f"x{s['cpu_efficiency_2_vs_1']:.2f} of 1)", flush=True)  # fmt: skip
+        stages["worker_peak_rss_bytes"] = {
+            str(w): sorted(c.run(_peak_rss).values()) for w, c in clients.items()
+        }
+    return stages
 
 
 # ---- training at scale (one process per size) -----------------------------------------------
@@ -312,10 +372,6 @@ def _train_in_child(n: int) -> dict[str, Any]:
 # ---- the table -----------------------------------------------------------------------------
 
 
-def _ratio(two: dict[str, Any], one: dict[str, Any], key: str) -> float:
-    return round(float(two[key]) / float(one[key]), 3)
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.scale", description=__doc__)
     parser.add_argument("--big", action="store_true", help="also 10,000 and 50,000 clips")
@@ -366,33 +422,6 @@ def _relative(training: list[dict[str, Any]]) -> None:
             t["cpu_per_clip_vs_smallest"] = round(
                 t["train_cpu_ms_per_clip"] / first["train_cpu_ms_per_clip"], 3
             )
-
-
-def _run_stages(skip_video: bool) -> dict[str, Any]:
-    from cbr.estimator import CaseBaseClassifier
-    from cbr.training import fit_plan
-
-    base = base_clips()
-    plan = fit_plan(CaseBaseClassifier())
-    train = [synthetic(base, i) for i in range(1000)]
-    clf = CaseBaseClassifier().fit(train, [str(s.metadata["label"]) for s in train])
-    stages: dict[str, Any] = {}
-    if not skip_video:
-        with tempfile.TemporaryDirectory() as tmp:
-            videos = Path(tmp) / "videos"
-            n = _video_corpus(videos)
-            stages["decode_pose"] = {
-                str(w): _extract(w, videos, Path(tmp) / "out", n) for w in (1, 2)
-            }
-        one, two = stages["decode_pose"]["1"], stages["decode_pose"]["2"]
-        stages["decode_pose"]["speedup_1_to_2"] = _ratio(two, one, "frames_per_s")
-    for w in (1, 2):
-        stages[str(w)] = _stages(base, w, plan, clf)
-    stages["speedup_1_to_2"] = {
-        s: _ratio(stages["2"][s], stages["1"][s], "clips_per_s") for s in STAGE_UNITS
-    }
-    print("speed-up from 1 to 2 workers:", stages["speedup_1_to_2"])
-    return stages
 
 
 if __name__ == "__main__":
