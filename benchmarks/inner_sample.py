@@ -72,7 +72,11 @@ def main() -> int:
     full, sampled = runs
     same = sum(a == b for a, b in zip(full["loso_predictions"], sampled["loso_predictions"],
                                       strict=True))  # fmt: skip
+    from cbr.evaluation.machine import machine_info
+
     doc = {
+        "benchmark": "inner_sample",
+        "machine": machine_info(),
         "runs": [{k: v for k, v in r.items() if k != "loso_predictions"} for r in runs],
         "same_choice": full["chosen"] == sampled["chosen"],
         "same_predictions": same,

@@ -387,7 +387,10 @@ def main(argv: list[str] | None = None) -> int:
     sizes = [1000, 2000] + ([10000, 50000] if args.big else [])
     if args.sizes:
         sizes = [int(s) for s in args.sizes.split(",")]
+    from cbr.evaluation.machine import machine_info
+
     doc = _previous()  # a partial run keeps the other figures
+    doc["benchmark"], doc["machine"] = "scale", machine_info()
     doc["corpus"] = "synthetic copies of posecbr/demo_data/uiprmd (see docstring)"
     if not args.skip_stages:
         doc["stages"] = _run_stages(args.skip_video)

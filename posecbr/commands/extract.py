@@ -336,13 +336,16 @@ def process(job: Job, options: Options) -> tuple[str, Path, str]:
 
 
 def process_on_worker(job: Job, options: Options) -> tuple[str, Path, str]:
-    """:func:`process` on a Dask worker: onnxruntime gets the worker's threads (one per worker
-    with ``local:N``), so N workers share the cores instead of fighting over them."""
+    """:func:`process` on a Dask worker: onnxruntime and OpenCV's decoder get the worker's
+    threads (one per worker with ``local:N``), so N workers share the cores instead of fighting
+    over them."""
     global _THREADS
     if _THREADS is None:
+        import cv2
         from dask.distributed import get_worker
 
         _THREADS = max(1, int(get_worker().state.nthreads))
+        cv2.setNumThreads(_THREADS)  # the decoder too: N workers, N cores, no oversubscription
     return process(job, options)
 
 
