@@ -17,6 +17,7 @@ the clip is read: in this process, clip after clip, or on the workers of a Dask 
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
@@ -100,8 +101,6 @@ def _interned(names: tuple[str, ...]) -> tuple[str, ...]:
 
 
 def _as_recorded(config: FeatureConfig) -> FeatureConfig:
-    import dataclasses
-
     return dataclasses.replace(config, side="as_recorded")
 
 

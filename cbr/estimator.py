@@ -316,13 +316,6 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             sides = ["augment"]  # sequence problems: plain augmentation, nothing to choose
         return sides, weightings
 
-    def needs_mirror_images(self) -> bool:
-        """Whether fit will describe the mirror image of every training clip (some side
-        handling it may use needs them)."""
-        vectors = self.features == "qmp" or self._summary()
-        sides, _ = self._candidates(vectors, self._measure())
-        return "augment" in sides or "canonical" in sides
-
     # -- fit, step by step
 
     def describe_plan(self) -> tuple[FeatureConfig, bool, bool]:

@@ -153,15 +153,6 @@ def _learned(clf: CaseBaseClassifier) -> dict[str, Any]:
     }
 
 
-def fit_case_base(
-    clips: Sequence[PoseSequence], labels: Sequence[Any], estimator: CaseBaseClassifier
-) -> CaseBaseClassifier:
-    """``estimator`` cloned and fitted on ``clips`` (each reduced to what the fit needs as it
-    is read, with a progress bar)."""
-    fitted: CaseBaseClassifier = clone(estimator)
-    return fitted.fit(list(clips), list(labels))
-
-
 def _counts(labels: Sequence[str]) -> dict[str, int]:
     values, counts = np.unique(np.asarray(labels, dtype=str), return_counts=True)
     return {str(v): int(c) for v, c in zip(values, counts, strict=True)}
