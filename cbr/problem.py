@@ -194,6 +194,21 @@ class Problem:
     mirrored: bool = False
 
 
+def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> None:
+    """Compute and cache what :func:`extract_problem` needs for ``seq`` (and, with ``mirror``,
+    for its mirror image), so a caller can show progress over the expensive part."""
+    if mirror:
+        moves_left_more(seq)
+    for s in (seq, mirrored(seq)) if mirror else (seq,):
+        if level == "qmp":
+            qmp_of(s)
+        else:
+            fluents_of(s)
+            signals_of(s)
+            arm_planes(s)
+            body_positions(s)
+
+
 def _group_mask(state_names: Sequence[str], temporal: np.ndarray, group: str) -> np.ndarray:
     is_near = np.array([n.startswith("near:") for n in state_names])
     if group == "all":
