@@ -639,6 +639,74 @@ def _keep(
     return not (correct is not None and "correct" in extras and extras["correct"] != correct)
 
 
+@dataclass(frozen=True)
+class DatasetEntry:
+    """One file of a dataset, not read yet: ``read()`` reads it (on this machine or on a
+    cluster's worker, which must reach the same path) and gives its labelled clips (one, or
+    one per labelled stretch of a recording), without those that what only the file tells
+    (its subject, say) puts outside the filters."""
+
+    entry: _Entry
+    kind: str
+    labels: Collection[str] | None = None
+    subjects: Collection[str] | None = None
+    movements: Collection[str] | None = None
+    episodes: Collection[int] | None = None
+    correct: bool | None = None
+
+    @property
+    def name(self) -> str:
+        return self.entry.name
+
+    def _keep(self, label: str | None, subject: str | None, extras: dict[str, Any]) -> bool:
+        return _keep(label, subject, extras, self.labels, self.subjects, self.movements,
+                     self.episodes, self.correct)  # fmt: skip
+
+    def read(self) -> list[Clip]:
+        """The clips it holds (decoded, labelled: one, or one per labelled stretch of a
+        recording labelled over time), without those that fail the filters."""
+        e = self.entry
+        whole = e.load()
+        pieces = e.pieces(whole) if e.pieces is not None else [(whole, e.label)]
+        out = []
+        for seq, piece_label in pieces:
+            meta_label, meta_subject, meta_extras = _from_metadata(seq)
+            label = piece_label if piece_label is not None else meta_label
+            subject = e.subject if e.subject is not None else meta_subject
+            extras = {**meta_extras, **e.extras}
+            if label is None:
+                if self.kind != "pose_file":
+                    raise DataError(
+                        "no label: its metadata has none (put it in a labels CSV)", seq.source
+                    )
+                label = ""
+            if self._keep(label, subject, extras):
+                seq = seq.with_metadata(label=label, subject=subject, **extras)
+                out.append(Clip(seq=seq, label=label, subject=subject, extras=extras))
+        return out
+
+
+def dataset_entries(
+    path: str | Path,
+    *,
+    sensor: str = "kinect",
+    labels: Collection[str] | None = None,
+    subjects: Collection[str] | None = None,
+    movements: Collection[str] | None = None,
+    episodes: Collection[int] | None = None,
+    correct: bool | None = None,
+) -> list[DatasetEntry]:
+    """The clips of the dataset at ``path`` that may pass the filters (those of
+    :func:`iter_dataset`), found from names alone: nothing is decoded yet."""
+    path = Path(path)
+    kind = detect_kind(path)
+    return [
+        DatasetEntry(e, kind, labels, subjects, movements, episodes, correct)
+        for e in _entries(path, kind, sensor)
+        if _keep(e.label, e.subject, e.extras, labels, subjects, movements, episodes, correct)
+    ]
+
+
 def iter_dataset(
     path: str | Path,
     *,
@@ -659,13 +727,9 @@ def iter_dataset(
     (a pose file whose metadata has none) raises DataError naming it.
     """
     path = Path(path)
-    kind = detect_kind(path)
-    entries = [
-        e
-        for e in _entries(path, kind, sensor)
-        if _keep(e.label, e.subject, e.extras, labels, subjects, movements, episodes, correct)
-    ]
-    if limit is not None and kind not in ("class_folders", "pose_folder"):
+    entries = dataset_entries(path, sensor=sensor, labels=labels, subjects=subjects,
+                              movements=movements, episodes=episodes, correct=correct)  # fmt: skip
+    if limit is not None and entries and entries[0].kind not in ("class_folders", "pose_folder"):
         # Everything these filters test is known from the names; the folder kinds learn the
         # subject only from the file, so they stop after ``limit`` clips instead.
         entries = entries[: max(limit, 0)]
@@ -674,27 +738,11 @@ def iter_dataset(
     for entry in progress(entries, desc, total=len(entries), unit="clip"):
         if limit is not None and n_yielded >= limit:
             break
-        whole = entry.load()
-        pieces = entry.pieces(whole) if entry.pieces is not None else [(whole, entry.label)]
-        for seq, piece_label in pieces:
+        for clip in entry.read():
             if limit is not None and n_yielded >= limit:
                 break
-            meta_label, meta_subject, meta_extras = _from_metadata(seq)
-            label = piece_label if piece_label is not None else meta_label
-            subject = entry.subject if entry.subject is not None else meta_subject
-            extras = {**meta_extras, **entry.extras}
-            if label is None:
-                if kind == "pose_file":
-                    label = ""
-                else:
-                    raise DataError(
-                        "no label: its metadata has none (put it in a labels CSV)", seq.source
-                    )
-            if not _keep(label, subject, extras, labels, subjects, movements, episodes, correct):
-                continue
-            seq = seq.with_metadata(label=label, subject=subject, **extras)
             n_yielded += 1
-            yield Clip(seq=seq, label=label, subject=subject, extras=extras)
+            yield clip
 
 
 def clip_column(clip: Clip, column: str) -> Any:
@@ -738,12 +786,14 @@ __all__ = [
     "read_label_names",
     "read_label_track",
     "split_by_track",
+    "DatasetEntry",
     "clip_column",
     "clip_target",
     "dataset_files",
     "target_value",
     "UIPRMD_MOVEMENTS",
     "VIDEO_SUFFIXES",
+    "dataset_entries",
     "detect_kind",
     "find_asf",
     "iter_dataset",

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from cbr.similarity import available_measures, get_measure
+from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 
 
@@ -150,6 +151,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="add the clips to an existing case base (same feature configuration)",
     )
+    p.add_argument("--scheduler", metavar="ADDRESS|local:N", help=SCHEDULER_HELP)
     p.add_argument("--json", action="store_true", help="machine-readable summary")
     p.set_defaults(func=run)
 
@@ -263,8 +265,15 @@ def _windows(clips: list[Any]) -> list[Any]:
     return split.clips
 
 
-def _clips(args: argparse.Namespace) -> tuple[list[Any], list[str]]:
-    from features.datasets import clip_target, load_dataset
+def _in_memory(args: argparse.Namespace) -> bool:
+    """Whether DATA is read here as a whole: one recording cut by its frame labels, or clips cut
+    into repetitions or windows (each needs the clips before it knows the cases)."""
+    return bool(args.frame_labels) or args.split in ("repetitions", "windows")
+
+
+def _clips(args: argparse.Namespace) -> list[Any]:
+    """The clips of ``--frame-labels`` / ``--split``, read in this process."""
+    from features.datasets import load_dataset
 
     subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
     activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
@@ -285,6 +294,15 @@ def _clips(args: argparse.Namespace) -> tuple[list[Any], list[str]]:
         clips = _windows(clips)
     if not clips:
         raise DataError("no clips found (check --labels and --subjects)", str(args.data))
+    return clips
+
+
+def _described_in_memory(args: argparse.Namespace, plan: Any) -> tuple[list[Any], list[str]]:
+    from cbr.training import describe
+    from features.datasets import clip_target
+    from features.progress import progress
+
+    clips = _clips(args)
     solutions = []
     for clip in clips:
         value = clip_target(clip, args.target)
@@ -296,26 +314,64 @@ def _clips(args: argparse.Namespace) -> tuple[list[Any], list[str]]:
                 clip.seq.source,
             )
         solutions.append(value)
-    return [c.seq for c in clips], solutions
+    seqs = progress([c.seq for c in clips], desc="features", total=len(clips), unit="clip")
+    return [describe(s, plan) for s in seqs], solutions
+
+
+def _entries(args: argparse.Namespace) -> list[Any]:
+    """The clips DATA names (not read yet), filtered by --subjects and --labels."""
+    from features.datasets import dataset_entries
+
+    subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
+    activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
+    entries = dataset_entries(args.data, sensor=args.sensor, subjects=subjects, labels=activities)
+    if not entries:
+        raise DataError("no clips found (check --labels and --subjects)", str(args.data))
+    return entries
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.training import append, train
+    from cbr.training import (
+        ClipsFailed,
+        append_described,
+        append_plan,
+        describe_entries,
+        fit_plan,
+        train_described,
+    )
 
     if not args.name.strip():
         raise ConfigError("the case base name is empty", "--name")
+    check_scheduler(args.scheduler)  # a bad spec: one line before any clip is read
+    if args.scheduler is not None and _in_memory(args):
+        raise ConfigError(
+            "--frame-labels and --split read DATA in this process; leave out --scheduler "
+            "(or extract and cut the clips first)",
+            "--scheduler",
+        )
     if args.append:
         _check_append(args)
-        estimator = None
+        plan, uid = append_plan(args.db, args.name, args.target)
     else:
         estimator = _estimator(args)
-    seqs, solutions = _clips(args)
-    if estimator is None:
-        result = append(args.db, args.name, seqs, solutions, target=args.target)
-    else:
-        result = train(
-            args.db, args.name, seqs, solutions, estimator, target=args.target, replace=args.replace
+        plan = fit_plan(estimator)
+    try:
+        clips, solutions = (
+            _described_in_memory(args, plan)
+            if _in_memory(args)
+            else describe_entries(_entries(args), plan, args.target, args.scheduler)
         )
+    except ClipsFailed as exc:
+        for line in exc.lines:
+            print(f"posecbr train: error: {line}", file=sys.stderr)
+        raise
+    if not clips:
+        raise DataError("no clips found (check --labels and --subjects)", str(args.data))
+    if args.append:
+        result = append_described(args.db, args.name, clips, solutions, plan, uid)
+    else:
+        result = train_described(args.db, args.name, clips, solutions, estimator,
+                                 target=args.target, replace=args.replace)  # fmt: skip
     _report(args, result)
     return 0
 
