@@ -90,7 +90,8 @@ def decode_array(data: bytes, what: str = "array", where: str = "") -> np.ndarra
     """The array stored by :func:`encode_array`; a damaged blob is a :class:`StoreError`
     naming ``what`` (e.g. ``"features of case 12"``)."""
     try:
-        return np.load(io.BytesIO(data), allow_pickle=False)
+        array: np.ndarray = np.load(io.BytesIO(data), allow_pickle=False)
+        return array
     except (ValueError, OSError, EOFError, TypeError) as exc:
         raise StoreError(f"the {what} is damaged ({exc})", where or None) from None
 

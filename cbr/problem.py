@@ -215,7 +215,8 @@ def _group_mask(result: Any, group: str) -> np.ndarray:
         return np.ones(len(result.state_names), dtype=bool)
     if group == "angles":
         return ~is_near
-    return ~is_near & ~temporal  # instantaneous
+    instantaneous: np.ndarray = ~is_near & ~temporal
+    return instantaneous
 
 
 def resolve_config(config: FeatureConfig, clips: Sequence[PoseSequence]) -> FeatureConfig:

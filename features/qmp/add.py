@@ -180,7 +180,7 @@ def _unit_words(signal: str, quantity: str) -> str:
 @cache
 def known_signals() -> frozenset[str]:
     """Names of every state signal the fluent engine computes."""
-    from features.fluents import ANGLE_SIGNALS, NEAR_SIGNALS
+    from features.signals import ANGLE_SIGNALS, NEAR_SIGNALS
 
     return frozenset(ANGLE_SIGNALS) | frozenset(NEAR_SIGNALS)
 
@@ -448,7 +448,8 @@ def phase_gap(fits: QMPFits, a: int, b: int, samples: int = 64) -> np.ndarray:
     den = np.sqrt((curves[0] ** 2).sum(axis=1) * (curves[1] ** 2).sum(axis=1))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = np.where(den > 0, num / den, np.nan)
-    return np.arccos(np.clip(corr, -1.0, 1.0))
+    gap: np.ndarray = np.arccos(np.clip(corr, -1.0, 1.0))
+    return gap
 
 
 def _failure_text(test: Test, values: list[np.ndarray], w: int, fits: QMPFits) -> str:

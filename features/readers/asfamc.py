@@ -384,7 +384,8 @@ def _euler(letters: str, angles: np.ndarray, degrees: bool) -> np.ndarray:
     """Rotation matrices ``(frames, 3, 3)`` applying the axes in the order written."""
     from scipy.spatial.transform import Rotation  # scipy loads when a file is read
 
-    return Rotation.from_euler(letters.lower(), angles, degrees=degrees).as_matrix()
+    matrices: np.ndarray = Rotation.from_euler(letters.lower(), angles, degrees=degrees).as_matrix()
+    return matrices
 
 
 def forward_kinematics(skel: Skeleton, motion: Motion) -> tuple[tuple[str, ...], np.ndarray]:

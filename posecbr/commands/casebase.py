@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from casebase_store import CaseStore
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "casebase",
         help="inspect, export and trim case bases",
@@ -203,7 +203,8 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
 
 
 def _export_path(args: argparse.Namespace) -> Path:
-    return args.out if args.out.suffix == ".npz" else args.out.with_suffix(".npz")
+    out = Path(args.out)
+    return out if out.suffix == ".npz" else out.with_suffix(".npz")
 
 
 def _check_export(args: argparse.Namespace) -> None:
