@@ -52,7 +52,7 @@ class TrainResult:
     skipped: list[str] = field(default_factory=list)
 
 
-def usable(clips: Sequence[PoseSequence], labels: Sequence[Any]) -> tuple[list[int], list[str]]:
+def usable(clips: Sequence[PoseSequence]) -> tuple[list[int], list[str]]:
     """Positions of the clips that can be learned from, and the names of those that cannot
     (no frame shows the person's torso)."""
     bad = set(unusable(clips))
@@ -103,7 +103,7 @@ def train(
     if not name.strip():
         raise ConfigError("the case base name is empty", "--name")
     text = [str(v) for v in check_labels(labels, len(clips))]
-    keep, skipped = usable(clips, text)
+    keep, skipped = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise DataError("no clip shows a person: nothing to learn from", "training set")
@@ -171,7 +171,7 @@ def append(
     stored configuration (nothing is learned anew), in one transaction checked against the
     case base that was read."""
     text = [str(v) for v in check_labels(labels, len(clips))]
-    keep, skipped = usable(clips, text)
+    keep, skipped = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise DataError("no clip shows a person: nothing to add", "training set")

@@ -398,7 +398,9 @@ class CriteriaResult:
 
 
 def _test_values(test: Test, fits: QMPFits) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """(passed ``(W,)``, observable ``(W,)``, observed values) of one test over all windows."""
+    """(passed ``(W,)``, observable ``(W,)``, observed values) of one test over all windows.
+    The observed values, each ``(W,)``: a condition's quantity; a relation's phase gap (from
+    anti-phase for ``anti_phase``), period ratio and smaller amplitude."""
     idx = [fits.index(s) for s in test.signals]
     observable = (fits.status[:, idx] != NOT_ENOUGH_DATA).all(axis=1)
     if isinstance(test, Condition):
@@ -422,7 +424,7 @@ def _test_values(test: Test, fits: QMPFits) -> tuple[np.ndarray, np.ndarray, lis
             & (ratio <= test.max_period_ratio)
             & (diff <= test.max_phase_diff_rad)
         )
-    return ok & np.isfinite(diff), observable, [diff, ratio]
+    return ok & np.isfinite(diff), observable, [diff, ratio, amp.min(axis=1)]
 
 
 def phase_gap(fits: QMPFits, a: int, b: int, samples: int = 64) -> np.ndarray:
@@ -452,7 +454,9 @@ def phase_gap(fits: QMPFits, a: int, b: int, samples: int = 64) -> np.ndarray:
     return gap
 
 
-def _failure_text(test: Test, values: list[np.ndarray], w: int, fits: QMPFits) -> str:
+def _failure_text(test: Test, values: list[np.ndarray], w: int) -> str:
+    """Why ``test`` failed in window ``w``: what it asks and what :func:`_test_values`
+    observed there (a relation: every part it checks, the amplitude included)."""
     if isinstance(test, Condition):
         v = values[0][w]
         unit = _unit_words(test.signal, test.quantity)
@@ -461,10 +465,14 @@ def _failure_text(test: Test, values: list[np.ndarray], w: int, fits: QMPFits) -
         else:
             seen = "no oscillation" if test.quantity in ("period_s", "phase_rad") else "undefined"
         return f"{test.describe()} (observed {seen})"
-    diff, ratio = values[0][w], values[1][w]
+    diff, ratio, amp = values[0][w], values[1][w], values[2][w]
     if not np.isfinite(diff):
         return f"{test.describe()} (observed: not oscillating)"
-    return f"{test.describe()} (observed phase gap {diff:.2f} rad, period ratio {ratio:.2f})"
+    unit = _unit_words(test.signal_a, "amplitude")
+    return (
+        f"{test.describe()} (observed phase gap {diff:.2f} rad, period ratio {ratio:.2f}, "
+        f"smaller amplitude {amp:.3g}{unit})"
+    )
 
 
 def evaluate_criteria(add: ADD, fits: QMPFits) -> CriteriaResult:
@@ -509,7 +517,7 @@ def evaluate_criteria(add: ADD, fits: QMPFits) -> CriteriaResult:
             for v in variants:
                 for (ok, _obs, values), test in v_tests[v]:
                     if not ok[w]:
-                        texts.append(_failure_text(test, values, w, fits))
+                        texts.append(_failure_text(test, values, w))
             failed[q] = tuple(dict.fromkeys(texts))
     return CriteriaResult(names, met, observable, fraction, closest, tuple(failed))
 
