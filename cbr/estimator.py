@@ -358,7 +358,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         labels, classes = self._check_training_set(clips, y)
         measure = self._measure()
         subjects = np.array([c.subject or "" for c in clips], dtype=object)
-        described = self._describe(clips, measure)
+        described = self._describe(clips)
         choice = self._choose(described, labels, subjects, measure)
         config = described.config
         if choice.side == "canonical":
@@ -420,7 +420,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             )
         return labels, classes
 
-    def _describe(self, clips: Sequence[DescribedClip], measure: SimilarityMeasure) -> _Described:
+    def _describe(self, clips: Sequence[DescribedClip]) -> _Described:
         """The training clips' problems under the configuration their columns resolve to (and
         their mirror images', when described)."""
         wanted = self._feature_config()

@@ -215,7 +215,8 @@ def _group_mask(state_names: Sequence[str], temporal: np.ndarray, group: str) ->
         return np.ones(len(state_names), dtype=bool)
     if group == "angles":
         return ~is_near
-    return ~is_near & ~np.asarray(temporal, dtype=bool)  # instantaneous
+    instantaneous: np.ndarray = ~is_near & ~np.asarray(temporal, dtype=bool)
+    return instantaneous
 
 
 def candidate_config(config: FeatureConfig) -> FeatureConfig:

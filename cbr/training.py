@@ -134,7 +134,7 @@ class ClipsFailed(DataError):
         super().__init__(f"{len(lines)} clip(s) failed (listed above); nothing was written")
 
 
-def usable(clips: Sequence[DescribedClip], labels: Sequence[Any]) -> tuple[list[int], list[str]]:
+def usable(clips: Sequence[DescribedClip]) -> tuple[list[int], list[str]]:
     """Positions of the clips that can be learned from, and the names of those that cannot
     (no frame shows the person's torso)."""
     bad = [i for i, c in enumerate(clips) if c.torso_share == 0.0]
@@ -194,7 +194,7 @@ def train_described(
     if not name.strip():
         raise ConfigError("the case base name is empty", "--name")
     text = [str(v) for v in check_labels(labels, len(clips))]
-    keep, skipped = usable(clips, text)
+    keep, skipped = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise DataError("no clip shows a person: nothing to learn from", "training set")
@@ -315,7 +315,7 @@ def append_described(
     processes may append to one case base at once: each commits its cases in one transaction
     (ids from the database, never reused), so none is lost or duplicated."""
     text = [str(v) for v in check_labels(labels, len(clips))]
-    keep, skipped = usable(clips, text)
+    keep, skipped = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise DataError("no clip shows a person: nothing to add", "training set")

@@ -117,7 +117,8 @@ def _left_out(cb: CaseBase, basis: str, groups: np.ndarray, i: int) -> np.ndarra
     frames = np.array([(-1, -1) if a is None or b is None else (a, b) for a, b in cb.frames])
     a, b = frames[i]
     overlap = (frames[:, 0] < b) & (a < frames[:, 1]) & (frames[:, 0] >= 0)
-    return np.asarray(same & overlap) | (np.arange(len(cb)) == i)
+    left_out: np.ndarray = np.asarray(same & overlap) | (np.arange(len(cb)) == i)
+    return left_out
 
 
 def calibration_margins(

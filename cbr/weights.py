@@ -66,7 +66,8 @@ class FeatureWeights:
 
     def apply(self, X: np.ndarray) -> np.ndarray:
         """``(..., D)`` -> ``(..., D)`` weighted, z-normalised columns."""
-        return (np.asarray(X, dtype=np.float64) - self.centre) * self.multiplier()
+        out: np.ndarray = (np.asarray(X, dtype=np.float64) - self.centre) * self.multiplier()
+        return out
 
     def top(self, names: tuple[str, ...], n: int = 5) -> tuple[str, ...]:
         """The ``n`` names with the largest weights, largest first."""

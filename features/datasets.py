@@ -311,6 +311,19 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
     file and line for a malformed row or a missing clip file.
     """
     csv_path = Path(csv_path)
+    rows = _csv_rows(csv_path)
+    header = _csv_header(rows[0], csv_path)
+    records = (
+        _csv_record(header, row, line_no, csv_path)
+        for line_no, row in enumerate(rows[1:], start=2)
+        if row and any(c.strip() for c in row)  # blank rows are skipped
+    )
+    return list(records)
+
+
+def _csv_rows(csv_path: Path) -> list[list[str]]:
+    """Every row of the CSV file (at least one); one clear error for a missing, non-UTF-8,
+    malformed or empty file."""
     if not csv_path.is_file():
         raise DataError("no such file", csv_path)
     rows: list[list[str]] = []
@@ -328,7 +341,13 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
         raise DataError(
             "empty CSV: a header row path,label[,subject][,start,end] is required", csv_path
         )
-    header = [h.strip().lower() for h in rows[0]]
+    return rows
+
+
+def _csv_header(row: list[str], csv_path: Path) -> list[str]:
+    """The column names in lower case: ``path`` and ``label`` (or ``label_file``) present,
+    none repeated, ``start`` and ``end`` both or neither."""
+    header = [h.strip().lower() for h in row]
     missing = [c for c in CSV_REQUIRED if c not in header]
     if missing == ["label"] and "label_file" in header:
         missing = []  # recordings labelled over time
@@ -342,58 +361,70 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
         raise DataError("line 1: repeated column names in the header", csv_path)
     if ("start" in header) != ("end" in header):
         raise DataError("line 1: columns start and end go together", csv_path)
-    out = []
-    for line_no, row in enumerate(rows[1:], start=2):
-        if not row or all(not c.strip() for c in row):
-            continue
-        if len(row) != len(header):
-            raise DataError(
-                f"line {line_no}: {len(row)} fields, the header has {len(header)}", csv_path
-            )
-        rec = dict(zip(header, (c.strip() for c in row), strict=True))
-        if not rec["path"]:
-            raise DataError(f"line {line_no}: empty path", csv_path)
-        track = _track_columns(rec, csv_path, line_no)
-        if not rec.get("label") and track is None:
-            raise DataError(f"line {line_no}: empty label", csv_path)
-        clip = Path(rec["path"])
-        if not clip.is_absolute():
-            clip = csv_path.parent / clip
-        if not _exists(clip, f"line {line_no}: ", csv_path):
-            raise DataError(f"line {line_no}: no such file {rec['path'][:200]}", csv_path)
-        start = end = None
-        if "start" in rec and (rec["start"] or rec["end"]):
-            try:
-                start, end = int(rec["start"]), int(rec["end"])
-            except ValueError:
-                raise DataError(
-                    f"line {line_no}: start and end must be whole frame numbers,"
-                    f" got {rec['start']!r}, {rec['end']!r}",
-                    csv_path,
-                ) from None
-            if start < 0 or end <= start:
-                raise DataError(
-                    f"line {line_no}: need 0 <= start < end (end exclusive), got {start}, {end}",
-                    csv_path,
-                )
-        extras = {
-            k: _parse_bool(v)
-            for k, v in rec.items()
-            if k not in ("path", "label", "subject", "start", "end", *_TRACK_COLUMNS)
-        }
-        out.append(
-            {
-                "path": clip,
-                "label": rec.get("label", ""),
-                "subject": rec.get("subject") or None,
-                "start": start,
-                "end": end,
-                "extras": extras,
-                "line": line_no,
-                "track": track,
-            }
+    return header
+
+
+def _csv_record(header: list[str], row: list[str], line_no: int, csv_path: Path) -> dict[str, Any]:
+    """One data row as the record :func:`read_labels_csv` returns."""
+    if len(row) != len(header):
+        raise DataError(
+            f"line {line_no}: {len(row)} fields, the header has {len(header)}", csv_path
         )
-    return out
+    rec = dict(zip(header, (c.strip() for c in row), strict=True))
+    if not rec["path"]:
+        raise DataError(f"line {line_no}: empty path", csv_path)
+    track = _track_columns(rec, csv_path, line_no)
+    if not rec.get("label") and track is None:
+        raise DataError(f"line {line_no}: empty label", csv_path)
+    clip = _clip_path(rec["path"], line_no, csv_path)
+    start, end = _frame_range(rec, line_no, csv_path)
+    extras = {
+        k: _parse_bool(v)
+        for k, v in rec.items()
+        if k not in ("path", "label", "subject", "start", "end", *_TRACK_COLUMNS)
+    }
+    return {
+        "path": clip,
+        "label": rec.get("label", ""),
+        "subject": rec.get("subject") or None,
+        "start": start,
+        "end": end,
+        "extras": extras,
+        "line": line_no,
+        "track": track,
+    }
+
+
+def _clip_path(path: str, line_no: int, csv_path: Path) -> Path:
+    """The clip a row names (relative to the CSV's folder), which must exist."""
+    clip = Path(path)
+    if not clip.is_absolute():
+        clip = csv_path.parent / clip
+    if not _exists(clip, f"line {line_no}: ", csv_path):
+        raise DataError(f"line {line_no}: no such file {path[:200]}", csv_path)
+    return clip
+
+
+def _frame_range(
+    rec: dict[str, str], line_no: int, csv_path: Path
+) -> tuple[int | None, int | None]:
+    """A row's ``start`` and ``end`` frames (end exclusive); (None, None) without them."""
+    if "start" not in rec or not (rec["start"] or rec["end"]):
+        return None, None
+    try:
+        start, end = int(rec["start"]), int(rec["end"])
+    except ValueError:
+        raise DataError(
+            f"line {line_no}: start and end must be whole frame numbers,"
+            f" got {rec['start']!r}, {rec['end']!r}",
+            csv_path,
+        ) from None
+    if start < 0 or end <= start:
+        raise DataError(
+            f"line {line_no}: need 0 <= start < end (end exclusive), got {start}, {end}",
+            csv_path,
+        )
+    return start, end
 
 
 def _csv_entries(csv_path: Path) -> list[_Entry]:

@@ -316,7 +316,7 @@ def movement_direction(x: np.ndarray) -> np.ndarray:
     posture, such as stepping into the exercise, moves once; repetitions move many times)."""
     v = np.diff(x, axis=0)
     if not len(v) or not np.any(v):
-        return np.eye(x.shape[1])[0]
+        return np.asarray(np.eye(x.shape[1])[0])
     _, _, vt = np.linalg.svd(v - v.mean(axis=0), full_matrices=False)
     return np.asarray(vt[0])
 
@@ -364,7 +364,7 @@ def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
         reach = 0.75 * float(np.median(line[inner] - rest))
         at_edge = (cand == 0) | (cand == len(line) - 1)
         cand = cand[~at_edge | (line[cand] - rest >= reach)]
-    return cand
+    return np.asarray(cand)
 
 
 def _span(line: np.ndarray) -> float:

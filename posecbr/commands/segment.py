@@ -29,7 +29,7 @@ JUDGES = ("margin", "held-out", "activities")
 """cbr.unknown.JUDGES, the default first (not imported: the command line starts light)."""
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "segment",
         help="label every stretch of long recordings with an activity or unknown, and count",

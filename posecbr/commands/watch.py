@@ -32,7 +32,7 @@ from features.fileio import check_output
 from .segment import JUDGES
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "watch",
         help="label a live stream (webcam, URL, video file) as it comes, counting repetitions",
@@ -295,4 +295,4 @@ def _frame_rate(frames: list[Any]) -> float | None:
     """A live source's frame rate from its first second of frames (None: not yet known)."""
     if len(frames) < 2 or frames[-1].time_s - frames[0].time_s < 1.0:
         return None
-    return (len(frames) - 1) / (frames[-1].time_s - frames[0].time_s)
+    return float((len(frames) - 1) / (frames[-1].time_s - frames[0].time_s))
