@@ -255,6 +255,57 @@ def _header() -> None:
     )
 
 
+def _run_split(args: argparse.Namespace) -> dict[str, Any]:
+    """One training/test split (--quick or --train): explanations and, with --other, flags."""
+    datasets: dict[str, Any] = {}
+    if args.quick:
+        with resources.as_file(resources.files("posecbr") / "demo_data" / "uiprmd") as d:
+            data = d / "labels.csv"
+            train = _clips(data, ("s01", "s02"))
+            test = _clips(data, ("s03",))
+    else:
+        split = lambda v: [s.strip() for s in v.split(",")] if v else None  # noqa: E731
+        train = _clips(args.train, split(args.train_subjects))
+        test = _clips(args.test or args.train, split(args.test_subjects))
+    fold = explain_fold(train, test)
+    s = summarise_rows(fold["rows"], fold["features"])
+    datasets["split"] = {"explanations": s}
+    if args.other is not None and not args.no_flags:
+        other = _sample(_clips(args.other), OTHER_SAMPLE)
+        flags = {}
+        for feats, sim in FLAG_CONFIGS:
+            r = flag_fold(feats, sim, train, test, other)
+            flags[f"{feats}/{sim}"] = {
+                "false_alarm": _rate(r["false_alarm"]),
+                "false_alarm_distance": _rate(r["false_alarm_distance"]),
+                "detection": _rate(r["detected"]),
+                "detection_distance": _rate(r["detected_distance"]),
+                "accuracy": _rate(r["right"]),
+                "ece": float("nan"),
+            }
+        datasets["split"]["flags"] = flags
+    return datasets
+
+
+def _run_shared(args: argparse.Namespace) -> dict[str, Any]:
+    """Both shared datasets held out by subject, and UI-PRMD's repetition check."""
+    datasets: dict[str, Any] = {}
+    for name, (path, folds) in DATASETS.items():
+        if not path.exists():
+            print(f"{name}: skipped, {path} is not on this machine")
+            continue
+        other_name = "hdm05" if name == "ui-prmd" else "ui-prmd"
+        other_path = DATASETS[other_name][0]
+        other = _clips(other_path) if other_path.exists() and not args.no_flags else []
+        print(f"{name}:", flush=True)
+        datasets[name] = run_dataset(name, path, folds, other, bool(other))
+    path, folds = DATASETS["ui-prmd"]
+    if path.exists():
+        print("ui-prmd correct vs incorrect:", flush=True)
+        datasets["ui-prmd correct vs incorrect"] = {"explanations": run_repetitions(path, folds)}
+    return datasets
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m benchmarks.explanations")
     p.add_argument("--train", type=Path, help="training data (default: both shared datasets)")
@@ -271,49 +322,8 @@ def main(argv: list[str] | None = None) -> int:
     t_start = time.perf_counter()
     out: dict[str, Any] = {"benchmark": "explanations", "machine": machine_info(),
                            "load_average_start": os.getloadavg(), "datasets": {}}  # fmt: skip
-    if args.quick or args.train is not None:
-        if args.quick:
-            with resources.as_file(resources.files("posecbr") / "demo_data" / "uiprmd") as d:
-                data = d / "labels.csv"
-                train = _clips(data, ("s01", "s02"))
-                test = _clips(data, ("s03",))
-        else:
-            split = lambda v: [s.strip() for s in v.split(",")] if v else None  # noqa: E731
-            train = _clips(args.train, split(args.train_subjects))
-            test = _clips(args.test or args.train, split(args.test_subjects))
-        fold = explain_fold(train, test)
-        s = summarise_rows(fold["rows"], fold["features"])
-        out["datasets"]["split"] = {"explanations": s}
-        if args.other is not None and not args.no_flags:
-            other = _sample(_clips(args.other), OTHER_SAMPLE)
-            flags = {}
-            for feats, sim in FLAG_CONFIGS:
-                r = flag_fold(feats, sim, train, test, other)
-                flags[f"{feats}/{sim}"] = {
-                    "false_alarm": _rate(r["false_alarm"]),
-                    "false_alarm_distance": _rate(r["false_alarm_distance"]),
-                    "detection": _rate(r["detected"]),
-                    "detection_distance": _rate(r["detected_distance"]),
-                    "accuracy": _rate(r["right"]),
-                    "ece": float("nan"),
-                }
-            out["datasets"]["split"]["flags"] = flags
-    else:
-        for name, (path, folds) in DATASETS.items():
-            if not path.exists():
-                print(f"{name}: skipped, {path} is not on this machine")
-                continue
-            other_name = "hdm05" if name == "ui-prmd" else "ui-prmd"
-            other_path = DATASETS[other_name][0]
-            other = _clips(other_path) if other_path.exists() and not args.no_flags else []
-            print(f"{name}:", flush=True)
-            out["datasets"][name] = run_dataset(name, path, folds, other, bool(other))
-        path, folds = DATASETS["ui-prmd"]
-        if path.exists():
-            print("ui-prmd correct vs incorrect:", flush=True)
-            out["datasets"]["ui-prmd correct vs incorrect"] = {
-                "explanations": run_repetitions(path, folds)
-            }
+    run = _run_split if args.quick or args.train is not None else _run_shared
+    out["datasets"] = run(args)
     _header()
     for name, d in out["datasets"].items():
         _print_explanations(name, d["explanations"])

@@ -11,9 +11,10 @@ A state is compared by its fingerprint: every case base (name, configuration, mo
 without what differs between two identical runs (identities, timestamps). Each kill also gets
 SQLite's ``PRAGMA integrity_check`` after the next writer has rolled the journal back. Half the
 kill moments are uniform over the command's uninterrupted run time (measured first), so kills
-land in start-up, feature computation and the write alike; the other half over its last third,
-where the writes are; the table says how many landed while a transaction was open (a journal
-or a half-built new file present). Results: benchmarks/results/faults.json.
+land in start-up, feature computation and the write alike; the other half come once a write
+shows (a journal, or a hidden file being built), uniformly within as long as the uninterrupted
+run was seen writing; the table says how many landed while a write was under way.
+Results: benchmarks/results/faults.json.
 """
 
 from __future__ import annotations
@@ -172,16 +173,36 @@ def _scenarios(template: Path, demo: Path) -> dict[str, Scenario]:
     }
 
 
-def _allowed(sc: Scenario, base: Path) -> tuple[set[Any], float]:
-    """The states a kill may leave, and the uninterrupted run time. For feedback: the state
-    after each whole number of clips (one transaction each); for convert: every subset of the
-    complete outputs (each file is written atomically, then labels.csv last)."""
+def _writing(work: Path) -> bool:
+    """Whether a write is under way in ``work``: a rollback journal, or a hidden file or
+    folder (a store file being built, an output being written, a staging folder)."""
+    if (work / "cb.sqlite-journal").exists():
+        return True
+    return any(p.name.startswith(".") for p in work.rglob("*"))
+
+
+def _timed_run(argv: list[str], work: Path) -> tuple[float, tuple[float, float] | None]:
+    """Run to the end; the run time and the span (from the start) in which writes were seen."""
+    t0 = time.perf_counter()
+    proc = _posecbr(argv)
+    seen: list[float] = []
+    while proc.poll() is None:
+        if _writing(work):
+            seen.append(time.perf_counter() - t0)
+        time.sleep(0.001)
+    if proc.returncode != 0:
+        raise SystemExit(f"posecbr {' '.join(argv)} failed")
+    return time.perf_counter() - t0, (min(seen), max(seen)) if seen else None
+
+
+def _allowed(sc: Scenario, base: Path) -> tuple[set[Any], float, tuple[float, float] | None]:
+    """The states a kill may leave, the uninterrupted run time and when it writes. For
+    feedback: the state after each whole number of clips (one transaction each); for convert:
+    every subset of the complete outputs (each file is written atomically, labels.csv last)."""
     work = Path(tempfile.mkdtemp(dir=base))
     argv = sc.prepare(work)
     allowed = {sc.state(work)}
-    t0 = time.perf_counter()
-    _run(argv)
-    elapsed = time.perf_counter() - t0
+    elapsed, writes = _timed_run(argv, work)
     allowed.add(sc.state(work))
     if sc.name == "feedback":
         first = argv.index("--db")
@@ -190,7 +211,7 @@ def _allowed(sc: Scenario, base: Path) -> tuple[set[Any], float]:
             a = sc.prepare(w)
             _run([a[0], *a[1 : 1 + k], *a[first:]])
             allowed.add(sc.state(w))
-    return allowed, elapsed
+    return allowed, elapsed, writes
 
 
 def _acceptable(sc: Scenario, state: Any, allowed: set[Any]) -> bool:
@@ -204,21 +225,22 @@ def _acceptable(sc: Scenario, state: Any, allowed: set[Any]) -> bool:
 
 
 def fire(sc: Scenario, runs: int, base: Path, rng: random.Random) -> dict[str, Any]:
-    allowed, elapsed = _allowed(sc, base)
+    allowed, elapsed, writes = _allowed(sc, base)
     bad: list[str] = []
     in_transaction = stray = 0
     for run in range(runs):
         work = Path(tempfile.mkdtemp(dir=base))
         argv = sc.prepare(work)
         proc = _posecbr(argv)
-        # half the kills anywhere in the run, half in its last third, where the writes are
-        start = 0.0 if run % 2 == 0 else elapsed * 2 / 3
-        deadline = time.perf_counter() + rng.uniform(start, elapsed)
+        if run % 2 == 0 or writes is None:  # anywhere in the run
+            deadline = time.perf_counter() + rng.uniform(0.0, elapsed)
+        else:  # while writing: once a write shows, within as long as the reference wrote
+            while not _writing(work) and proc.poll() is None:
+                time.sleep(0.0005)
+            deadline = time.perf_counter() + rng.uniform(0.0, writes[1] - writes[0])
         while time.perf_counter() < deadline and proc.poll() is None:
-            time.sleep(0.001)
-        journal = (work / "cb.sqlite-journal").exists() or any(
-            p.name.endswith(".new") for p in work.iterdir()
-        )
+            time.sleep(0.0005)
+        journal = _writing(work)
         if proc.poll() is None:
             proc.send_signal(signal.SIGKILL)
         proc.wait(timeout=60)
@@ -235,7 +257,8 @@ def fire(sc: Scenario, runs: int, base: Path, rng: random.Random) -> dict[str, A
         "command": sc.name,
         "runs": runs,
         "uninterrupted_s": elapsed,
-        "killed_with_a_transaction_open": in_transaction,
+        "killed_while_writing": in_transaction,
+        "write_span_s": writes,
         "violations": bad,
         "hidden_temporary_files_left": stray,
     }
@@ -260,7 +283,7 @@ def main(argv: list[str] | None = None) -> int:
             rows.append(row)
             print(
                 f"{row['command']:<9} {row['runs']:>4} kills  {row['uninterrupted_s']:6.1f} s run  "
-                f"{row['killed_with_a_transaction_open']:>3} inside a transaction  "
+                f"{row['killed_while_writing']:>3} while writing  "
                 f"{len(row['violations'])} violations  "
                 f"{row['hidden_temporary_files_left']} hidden temporary files left"
             )

@@ -152,13 +152,7 @@ def machine() -> dict[str, Any]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    env_python = os.environ.get("POSECBR_MEDIAPIPE_PYTHON")
-    default_python = Path(env_python) if env_python else DEFAULT_MP_PYTHON
-    parser.add_argument("--mediapipe-python", type=Path, default=default_python)
-    parser.add_argument("--frames", type=int, default=250)
-    parser.add_argument("--repeats", type=int, default=3)
-    args = parser.parse_args(argv)
+    args = _parse_args(argv)
     from features.pose_estimation import PoseEstimator, model_version
 
     frames = load_frames(args.frames)
@@ -166,78 +160,20 @@ def main(argv: list[str] | None = None) -> int:
         mode: PoseEstimator(tracking=mode == "tracking", smoothing=mode == "tracking")
         for mode in MODES
     }
-    use_mp = args.mediapipe_python.is_file()
-    if not use_mp:
+    mp_python: Path | None = args.mediapipe_python
+    if not args.mediapipe_python.is_file():
         print(f"no MediaPipe environment at {args.mediapipe_python}: posecbr only")
+        mp_python = None
     run_posecbr(frames, estimators)  # warm-up
-    # Rounds alternate the two pipelines so that load from other processes on a shared
-    # machine falls on both alike; the medians over rounds are reported.
-    ours: dict[str, Any] = {m: {"seconds": [], "cpu_seconds": []} for m in MODES}
-    theirs: dict[str, Any] | None = None
-    with tempfile.TemporaryDirectory() as tmp:
-        frames_path = Path(tmp) / "frames.npy"
-        np.save(frames_path, frames)
-        for _ in range(args.repeats):
-            got = run_posecbr(frames, estimators)
-            for m in MODES:
-                ours[m]["seconds"].append(got[m]["seconds"])
-                ours[m]["cpu_seconds"].append(got[m]["cpu_seconds"])
-                ours[m]["landmarks"] = got[m]["landmarks"]
-            if use_mp:
-                mp_round = run_mediapipe(args.mediapipe_python, frames_path)
-                if mp_round is None:
-                    use_mp, theirs = False, None
-                    continue
-                if theirs is None:
-                    theirs = {"mediapipe": mp_round["mediapipe"], "modes": {}}
-                    for m in MODES:
-                        theirs["modes"][m] = {"seconds": [], "cpu_seconds": []}
-                for m in MODES:
-                    theirs["modes"][m]["seconds"] += mp_round["modes"][m]["seconds"]
-                    theirs["modes"][m]["cpu_seconds"] += mp_round["modes"][m]["cpu_seconds"]
-                    theirs["modes"][m]["landmarks"] = mp_round["modes"][m]["landmarks"]
+    ours, theirs = run_rounds(frames, estimators, args.repeats, mp_python)
     n = len(frames)
-    rows = {}
     print(f"{n} frames 640x480 from {CLIP.name}, median of {args.repeats} alternating rounds")
     head = ("mode", "posecbr fps", "MediaPipe fps", "ratio", "CPU ms/frame", "CPU ratio", "diff px")
     print("{:<20} {:>12} {:>14} {:>7} {:>14} {:>10} {:>8}".format(*head))
+    rows = {}
     for mode in MODES:
-        fps = n / statistics.median(ours[mode]["seconds"])
-        row: dict[str, Any] = {
-            "posecbr_fps": fps,
-            "posecbr_seconds": ours[mode]["seconds"],
-            "posecbr_cpu_ms_per_frame": 1000 * statistics.median(ours[mode]["cpu_seconds"]) / n,
-            "posecbr_frames_with_person": sum(x is not None for x in ours[mode]["landmarks"]),
-        }
-        if theirs is not None:
-            mp_mode = theirs["modes"][mode]
-            mp_fps = n / statistics.median(mp_mode["seconds"])
-            diff, both = mean_difference(ours[mode]["landmarks"], mp_mode["landmarks"])
-            # Each round's own ratio: the two ran back to back, under the same load.
-            paired = [m / o for o, m in zip(ours[mode]["seconds"], mp_mode["seconds"], strict=True)]
-            row.update(
-                mediapipe_fps=mp_fps,
-                mediapipe_seconds=mp_mode["seconds"],
-                mediapipe_frames_with_person=sum(x is not None for x in mp_mode["landmarks"]),
-                ratio_of_medians=fps / mp_fps,
-                ratio=statistics.median(paired),
-                ratio_per_round=paired,
-                mediapipe_cpu_ms_per_frame=1000 * statistics.median(mp_mode["cpu_seconds"]) / n,
-                # CPU time per frame depends far less on other processes than wall time does.
-                cpu_ratio=statistics.median(mp_mode["cpu_seconds"])
-                / statistics.median(ours[mode]["cpu_seconds"]),
-                mean_landmark_difference_px=diff,
-                frames_compared=both,
-            )
-            cpu = f"{row['posecbr_cpu_ms_per_frame']:.1f}/{row['mediapipe_cpu_ms_per_frame']:.1f}"
-            print(
-                f"{mode:<20} {fps:>12.1f} {mp_fps:>14.1f} {row['ratio']:>7.2f} {cpu:>14}"
-                f" {row['cpu_ratio']:>10.2f} {diff:>8.2f}"
-            )
-        else:
-            cpu = f"{row['posecbr_cpu_ms_per_frame']:.1f}"
-            print(f"{mode:<20} {fps:>12.1f} {'-':>14} {'-':>7} {cpu:>14} {'-':>10} {'-':>8}")
-        rows[mode] = row
+        rows[mode] = mode_row(n, ours[mode], None if theirs is None else theirs["modes"][mode])
+        print_row(mode, rows[mode])
     result = {
         "benchmark": "pose_estimation",
         "input": {"clip": str(CLIP.relative_to(DATA)), "frames": n, "size": [640, 480]},
@@ -252,6 +188,107 @@ def main(argv: list[str] | None = None) -> int:
     write_json(result, RESULTS)
     print(f"wrote {RESULTS.relative_to(ROOT)}")
     return 0
+
+
+def _parse_args(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    env_python = os.environ.get("POSECBR_MEDIAPIPE_PYTHON")
+    default_python = Path(env_python) if env_python else DEFAULT_MP_PYTHON
+    parser.add_argument("--mediapipe-python", type=Path, default=default_python)
+    parser.add_argument("--frames", type=int, default=250)
+    parser.add_argument("--repeats", type=int, default=3)
+    return parser.parse_args(argv)
+
+
+def run_rounds(
+    frames: np.ndarray, estimators: dict[str, Any], repeats: int, mp_python: Path | None
+) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """``repeats`` rounds of posecbr then MediaPipe (when ``mp_python`` is given and its
+    runs succeed): per pipeline and mode the seconds and CPU seconds of every round and the
+    last round's landmarks. Rounds alternate the two pipelines so that load from other
+    processes on a shared machine falls on both alike."""
+    ours: dict[str, Any] = {m: {"seconds": [], "cpu_seconds": []} for m in MODES}
+    theirs: dict[str, Any] | None = None
+    with tempfile.TemporaryDirectory() as tmp:
+        frames_path = Path(tmp) / "frames.npy"
+        np.save(frames_path, frames)
+        for _ in range(repeats):
+            got = run_posecbr(frames, estimators)
+            for m in MODES:
+                ours[m]["seconds"].append(got[m]["seconds"])
+                ours[m]["cpu_seconds"].append(got[m]["cpu_seconds"])
+                ours[m]["landmarks"] = got[m]["landmarks"]
+            if mp_python is None:
+                continue
+            mp_round = run_mediapipe(mp_python, frames_path)
+            if mp_round is None:  # a failed MediaPipe run: posecbr only from here on
+                mp_python, theirs = None, None
+                continue
+            theirs = _with_mediapipe_round(theirs, mp_round)
+    return ours, theirs
+
+
+def _with_mediapipe_round(
+    theirs: dict[str, Any] | None, mp_round: dict[str, Any]
+) -> dict[str, Any]:
+    """The MediaPipe rounds so far with one more (its timings added, its landmarks kept)."""
+    if theirs is None:
+        theirs = {
+            "mediapipe": mp_round["mediapipe"],
+            "modes": {m: {"seconds": [], "cpu_seconds": []} for m in MODES},
+        }
+    for m in MODES:
+        theirs["modes"][m]["seconds"] += mp_round["modes"][m]["seconds"]
+        theirs["modes"][m]["cpu_seconds"] += mp_round["modes"][m]["cpu_seconds"]
+        theirs["modes"][m]["landmarks"] = mp_round["modes"][m]["landmarks"]
+    return theirs
+
+
+def mode_row(n: int, ours: dict[str, Any], mp_mode: dict[str, Any] | None) -> dict[str, Any]:
+    """The figures of one mode over ``n`` frames: posecbr's, and with MediaPipe's rounds
+    (``mp_mode``) its figures, the speed ratios and the landmark difference."""
+    fps = n / statistics.median(ours["seconds"])
+    row: dict[str, Any] = {
+        "posecbr_fps": fps,
+        "posecbr_seconds": ours["seconds"],
+        "posecbr_cpu_ms_per_frame": 1000 * statistics.median(ours["cpu_seconds"]) / n,
+        "posecbr_frames_with_person": sum(x is not None for x in ours["landmarks"]),
+    }
+    if mp_mode is None:
+        return row
+    mp_fps = n / statistics.median(mp_mode["seconds"])
+    diff, both = mean_difference(ours["landmarks"], mp_mode["landmarks"])
+    # Each round's own ratio: the two ran back to back, under the same load.
+    paired = [m / o for o, m in zip(ours["seconds"], mp_mode["seconds"], strict=True)]
+    row.update(
+        mediapipe_fps=mp_fps,
+        mediapipe_seconds=mp_mode["seconds"],
+        mediapipe_frames_with_person=sum(x is not None for x in mp_mode["landmarks"]),
+        ratio_of_medians=fps / mp_fps,
+        ratio=statistics.median(paired),
+        ratio_per_round=paired,
+        mediapipe_cpu_ms_per_frame=1000 * statistics.median(mp_mode["cpu_seconds"]) / n,
+        # CPU time per frame depends far less on other processes than wall time does.
+        cpu_ratio=statistics.median(mp_mode["cpu_seconds"])
+        / statistics.median(ours["cpu_seconds"]),
+        mean_landmark_difference_px=diff,
+        frames_compared=both,
+    )
+    return row
+
+
+def print_row(mode: str, row: dict[str, Any]) -> None:
+    """One line of the table: posecbr's figures, MediaPipe's beside them when it ran."""
+    fps = row["posecbr_fps"]
+    if "mediapipe_fps" not in row:
+        cpu = f"{row['posecbr_cpu_ms_per_frame']:.1f}"
+        print(f"{mode:<20} {fps:>12.1f} {'-':>14} {'-':>7} {cpu:>14} {'-':>10} {'-':>8}")
+        return
+    cpu = f"{row['posecbr_cpu_ms_per_frame']:.1f}/{row['mediapipe_cpu_ms_per_frame']:.1f}"
+    print(
+        f"{mode:<20} {fps:>12.1f} {row['mediapipe_fps']:>14.1f} {row['ratio']:>7.2f} {cpu:>14}"
+        f" {row['cpu_ratio']:>10.2f} {row['mean_landmark_difference_px']:>8.2f}"
+    )
 
 
 if __name__ == "__main__":

@@ -1,18 +1,24 @@
 """Segmenting long recordings, against a 1-NN DTW window classifier in the same run.
 
-Run: ``python -m benchmarks.segment [--no-videos] [--repeats N]`` (about 2-3 minutes; one
-core: BLAS, OpenMP and numba threads pinned to 1). Writes ``benchmarks/results/segment.json``.
+Run: ``python -m benchmarks.segment [--no-videos] [--repeats N] [--cases windows|repetitions]``
+(about 2-3 minutes; one core: BLAS, OpenMP and numba threads pinned to 1). Writes
+``benchmarks/results/segment.json`` (``segment-repetitions.json`` with ``--cases
+repetitions``).
 
 Data: the three CMU recordings of subject 13 in ``cmu-mocap6`` (120 fps, per-0.1-s labels),
-leave one recording out: a case base of the repetitions of the labelled stretches of two
-recordings (``train --split repetitions``, default classifier), the third segmented. ALL THREE
-RECORDINGS ARE ONE PERSON: the figures overstate what other people get.
+leave one recording out: a case base of the labelled stretches of two recordings cut into
+windows (``train --split windows``: 2-s windows every 0.5 s, feature weights none) or into
+their repetitions (``--cases repetitions``: ``train --split repetitions``, default
+classifier), the third segmented. ALL THREE RECORDINGS ARE ONE PERSON: the figures overstate
+what other people get. Every threshold is learned from the case base (the two training
+recordings), never from the recording segmented.
 
 Measured, per test recording and overall:
 - block accuracy: share of 0.1-s blocks given their labelled exercise (every exercise of a test
   recording is in the other two, so all are "seen"; a block called unknown counts as wrong);
 - unknown: each exercise of the test recording in turn is left out of the case base; the share
-  of its blocks labelled unknown (1-NN DTW has no unknown: 0 by construction);
+  of its blocks labelled unknown (1-NN DTW has no unknown: 0 by construction), for each way
+  of judging unknown (:data:`cbr.unknown.JUDGES`: margin, held-out, activities);
 - boundaries: for every labelled change of exercise, the distance to the nearest segment
   boundary (seconds), median;
 - repetitions: counts of :func:`features.repetitions.count_repetitions` against the hand
@@ -53,6 +59,7 @@ from benchmarks import write_json  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
 RESULTS = ROOT / "benchmarks" / "results" / "segment.json"
+CASES = ("windows", "repetitions")
 FIXTURE = ROOT / "tests" / "fixtures" / "repetition_counts.json"
 RECORDINGS = ("13_29", "13_30", "13_31")
 # the label codes as the dataset's README lists them
@@ -87,11 +94,13 @@ def load_recordings() -> dict[str, Recording]:
     return out
 
 
-def training_clips(recs: list[Recording], leave_out: str | None = None) -> list[Any]:
-    """The repetitions of the labelled stretches of ``recs`` (``train --split repetitions``)."""
+def training_clips(
+    recs: list[Recording], leave_out: str | None = None, cases: str = CASES[0]
+) -> list[Any]:
+    """The labelled stretches of ``recs`` cut into windows or repetitions (``train --split``)."""
     from features.datasets import Clip, labelled_stretches
     from features.derived import stretch
-    from features.repetitions import split_repetitions
+    from features.repetitions import split_repetitions, split_windows
 
     clips = []
     for r in recs:
@@ -100,13 +109,16 @@ def training_clips(recs: list[Recording], leave_out: str | None = None) -> list[
             if label != leave_out:
                 part = stretch(r.seq, a, b).with_metadata(label=label, subject="13")
                 clips.append(Clip(part, label, "13", {}))
-    return split_repetitions(clips).clips
+    split = split_windows if cases == "windows" else split_repetitions
+    return split(clips).clips
 
 
-def fit(clips: list[Any]) -> Any:
+def fit(clips: list[Any], cases: str = CASES[0]) -> Any:
+    """The classifier ``posecbr train --split CASES`` makes (windows: feature weights none)."""
     from cbr.estimator import CaseBaseClassifier
 
-    return CaseBaseClassifier().fit([c.seq for c in clips], [c.label for c in clips])
+    params = {"feature_weights": "none"} if cases == "windows" else {}
+    return CaseBaseClassifier(**params).fit([c.seq for c in clips], [c.label for c in clips])
 
 
 def _median_time(fn: Any, repeats: int) -> tuple[float, float]:
@@ -121,25 +133,26 @@ def _median_time(fn: Any, repeats: int) -> tuple[float, float]:
     return statistics.median(wall), statistics.median(cpu)
 
 
-JUDGES = ("activities", "held_out")
-"""How "unknown" is judged: Familiarity (a stretch as far from its nearest cases as the case
-base's activities lie from each other) or the classifier's stored calibration (the 99th
-percentile of held-out training clips' nearest-case distances, cbr.novelty)."""
+JUDGES = ("margin", "held-out", "activities")
+"""How "unknown" is judged (cbr.unknown.JUDGES): the margin between the two nearest activities
+(calibrated on the case base), the classifier's stored calibration (the 99th percentile of
+held-out training clips' nearest-case distances, cbr.novelty), or Familiarity (a stretch as
+far from its nearest cases as the case base's activities lie from each other)."""
 
 
 def _judge(clf: Any, name: str) -> Any:
-    from cbr.segmentation import Familiarity
+    from cbr.unknown import judge_of
 
-    return Familiarity.of(clf.case_base_) if name == "activities" else clf.novelty_
+    return judge_of(clf, name)
 
 
-def bench_ours(recs: dict[str, Recording], test: str, repeats: int) -> dict[str, Any]:
+def bench_ours(recs: dict[str, Recording], test: str, repeats: int, cases: str) -> dict[str, Any]:
     from cbr.problem import warm
     from cbr.segmentation import segment
 
     train = [recs[n] for n in RECORDINGS if n != test]
     rec = recs[test]
-    clf = fit(training_clips(train))
+    clf = fit(training_clips(train, cases=cases), cases)
     t0 = time.perf_counter()
     warm(rec.seq, clf.feature_config_.level, mirror=clf.feature_config_.side == "canonical")
     extraction_s = time.perf_counter() - t0
@@ -161,7 +174,7 @@ def bench_ours(recs: dict[str, Recording], test: str, repeats: int) -> dict[str,
             "segments": [s.to_dict(fps) for s in result.segments],
             "windows": result.windows,
         }
-    judge = _judge(clf, JUDGES[0])
+    judge = _judge(clf, JUDGES[0])  # calibrated once per case base, not per recording
     seconds, cpu = _median_time(lambda: segment(clf, rec.seq, judge), repeats)
     out.update(
         blocks=len(rec.blocks),
@@ -173,7 +186,7 @@ def bench_ours(recs: dict[str, Recording], test: str, repeats: int) -> dict[str,
     return out
 
 
-def bench_unknown(recs: dict[str, Recording], test: str) -> dict[str, dict[str, float]]:
+def bench_unknown(recs: dict[str, Recording], test: str, cases: str) -> dict[str, dict[str, float]]:
     """Each exercise of ``test`` left out of the case base in turn: share of its blocks called
     unknown, per judge."""
     from cbr.segmentation import segment
@@ -182,7 +195,7 @@ def bench_unknown(recs: dict[str, Recording], test: str) -> dict[str, dict[str, 
     rec = recs[test]
     out: dict[str, dict[str, float]] = {name: {} for name in JUDGES}
     for exercise in sorted(set(rec.blocks)):
-        clf = fit(training_clips(train, leave_out=exercise))
+        clf = fit(training_clips(train, leave_out=exercise, cases=cases), cases)
         for name in JUDGES:
             result = segment(clf, rec.seq, _judge(clf, name))
             pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
@@ -303,7 +316,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.segment", description=__doc__)
     parser.add_argument("--repeats", type=int, default=3, help="timing repeats (median)")
     parser.add_argument("--no-videos", action="store_true", help="skip the videos (BlazePose)")
+    parser.add_argument(
+        "--cases", choices=CASES, default=CASES[0], help="how the training stretches are cut"
+    )
     args = parser.parse_args(argv)
+    results = RESULTS if args.cases == CASES[0] else RESULTS.with_name(f"segment-{args.cases}.json")
     if not (DATA / "cmu-mocap6").is_dir():
         print(f"no cmu-mocap6 data under {DATA}: nothing to measure")
         return 1
@@ -313,9 +330,9 @@ def main(argv: list[str] | None = None) -> int:
     recs = load_recordings()
     folds: dict[str, Any] = {}
     for test in RECORDINGS:
-        ours = bench_ours(recs, test, args.repeats)
+        ours = bench_ours(recs, test, args.repeats, args.cases)
         dtw = bench_dtw(recs, test, args.repeats)
-        unknown = bench_unknown(recs, test)
+        unknown = bench_unknown(recs, test, args.cases)
         folds[test] = {"ours": ours, "dtw": dtw, "unknown_share_when_left_out": unknown}
         for name in JUDGES:
             o = ours[name]
@@ -328,11 +345,12 @@ def main(argv: list[str] | None = None) -> int:
             )
     reps = bench_repetitions(not args.no_videos)
     summary = _summary(folds, recs)
-    _print_table(summary, reps)
+    _print_table(summary, reps, args.cases)
     result = {
         "benchmark": "segment",
         "note": "all three recordings are one person (CMU subject 13): the figures overstate "
         "what other people get",
+        "cases": args.cases,
         "machine": {
             "platform": platform.platform(),
             "processor": platform.processor() or platform.machine(),
@@ -346,8 +364,8 @@ def main(argv: list[str] | None = None) -> int:
         "folds": folds,
         "repetitions": reps,
     }
-    write_json(result, RESULTS)
-    print(f"\nwrote {RESULTS.relative_to(ROOT)}")
+    write_json(result, results)
+    print(f"\nwrote {results.relative_to(ROOT)}")
     return 0
 
 
@@ -392,10 +410,13 @@ def _summary(folds: dict[str, Any], recs: dict[str, Recording]) -> dict[str, Any
     return out
 
 
-def _print_table(summary: dict[str, Any], reps: dict[str, Any]) -> None:
+def _print_table(summary: dict[str, Any], reps: dict[str, Any], cases: str) -> None:
     s = summary
-    print("\nSegmenting CMU subject 13, leave one recording out (ONE PERSON: optimistic)")
-    head = "".join(f"{'ours, ' + n:>22s}" for n in JUDGES)
+    print(
+        f"\nSegmenting CMU subject 13, leave one recording out, a case base of {cases}"
+        " (ONE PERSON: optimistic)"
+    )
+    head = "".join(f"{'unknown by ' + n:>22s}" for n in JUDGES)
     print(f"  {'':48s}{head}{'DTW 1-NN':>10s}")
     rows = (
         ("block accuracy, exercises in the case base", "block_accuracy", "{:22.1%}"),
@@ -411,11 +432,12 @@ def _print_table(summary: dict[str, Any], reps: dict[str, Any]) -> None:
             else (f"{0.0:10.1%}" if "unknown" in key else "")
         )
         print(f"  {text:48s}{cells}{dtw}")
+    gap = " " * 22 * (len(JUDGES) - 1)
     print(f"  {'x real time by CPU time, one core, after features':48s}"
-          f"{s['x_real_time_cpu_median']:22.0f}{'':22s}"
+          f"{s['x_real_time_cpu_median']:22.0f}{gap}"
           f"{s['dtw_1nn']['x_real_time_cpu_median']:10.0f}")  # fmt: skip
     print(f"  {'x real time by wall clock (load: see the JSON)':48s}"
-          f"{s['x_real_time_median']:22.0f}{'':22s}"
+          f"{s['x_real_time_median']:22.0f}{gap}"
           f"{s['dtw_1nn']['x_real_time_median']:10.0f}")  # fmt: skip
     for part in ("mocap", "videos", "all"):
         if part in reps:

@@ -43,7 +43,7 @@ from urllib.parse import quote
 
 import numpy as np
 from sqlalchemy import Engine, create_engine, delete, event, func, inspect, select, update
-from sqlalchemy.engine import Connection, make_url
+from sqlalchemy.engine import URL, Connection, make_url
 from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
@@ -90,7 +90,8 @@ def decode_array(data: bytes, what: str = "array", where: str = "") -> np.ndarra
     """The array stored by :func:`encode_array`; a damaged blob is a :class:`StoreError`
     naming ``what`` (e.g. ``"features of case 12"``)."""
     try:
-        return np.load(io.BytesIO(data), allow_pickle=False)
+        array: np.ndarray = np.load(io.BytesIO(data), allow_pickle=False)
+        return array
     except (ValueError, OSError, EOFError, TypeError) as exc:
         raise StoreError(f"the {what} is damaged ({exc})", where or None) from None
 
@@ -242,30 +243,12 @@ def _sqlite_readonly_url(path: Path) -> str:
 
 
 def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> tuple[Engine, str]:
-    text = str(url_or_path)
-    file = sqlite_file(url_or_path)
-    if file is not None:
-        if file.is_dir():
-            raise StoreError("is a folder, not a case base file", file)
-        if not file.parent.exists():
-            raise StoreError("folder does not exist", file.parent)
-        url = make_url(_sqlite_readonly_url(file) if readonly else f"sqlite:///{file}")
-        where = str(file)
-    else:
-        try:
-            url = make_url(text)
-        except ArgumentError as exc:
-            raise StoreError(f"not a database URL ({exc})", text) from None
-        where = url.render_as_string(hide_password=True)
-    kwargs: dict[str, Any] = {}
+    """The engine for a case base file or database URL, configured for ``timeout_s`` and
+    ``readonly``, and the name to show for it (a URL without its password)."""
+    url, where = _engine_url(url_or_path, readonly)
     backend = url.get_backend_name()
-    if backend == "sqlite":
-        kwargs["connect_args"] = {"timeout": timeout_s}
-    elif backend == "postgresql" and "connect_timeout" not in url.query:
-        # libpq waits for an unreachable server as long as the OS does (minutes)
-        kwargs["connect_args"] = {"connect_timeout": max(1, int(round(timeout_s)))}
     try:
-        engine = create_engine(url, **kwargs)
+        engine = create_engine(url, **_connect_args(url, timeout_s))
     except ImportError as exc:
         hint = " (pip install 'posecbr[postgres]')" if backend == "postgresql" else ""
         raise StoreError(
@@ -278,6 +261,35 @@ def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> t
     elif engine.dialect.name == "postgresql":
         _configure_postgresql(engine, timeout_s, readonly)
     return engine, where
+
+
+def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:
+    """The database URL of a case base file (read-only when asked; its folder must exist) or
+    of a URL, and the name to show for it."""
+    file = sqlite_file(url_or_path)
+    if file is None:
+        text = str(url_or_path)
+        try:
+            url = make_url(text)
+        except ArgumentError as exc:
+            raise StoreError(f"not a database URL ({exc})", text) from None
+        return url, url.render_as_string(hide_password=True)
+    if file.is_dir():
+        raise StoreError("is a folder, not a case base file", file)
+    if not file.parent.exists():
+        raise StoreError("folder does not exist", file.parent)
+    return make_url(_sqlite_readonly_url(file) if readonly else f"sqlite:///{file}"), str(file)
+
+
+def _connect_args(url: URL, timeout_s: float) -> dict[str, Any]:
+    """``create_engine`` keywords that bound how long connecting may wait."""
+    backend = url.get_backend_name()
+    if backend == "sqlite":
+        return {"connect_args": {"timeout": timeout_s}}
+    if backend == "postgresql" and "connect_timeout" not in url.query:
+        # libpq waits for an unreachable server as long as the OS does (minutes)
+        return {"connect_args": {"connect_timeout": max(1, int(round(timeout_s)))}}
+    return {}
 
 
 def _configure_sqlite(engine: Engine, timeout_s: float, readonly: bool) -> None:

@@ -38,12 +38,14 @@ import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted
 
-from features.body import mirrored, moves_left_more, torso_share
+from features.body import torso_share
 from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
+from features.progress import progress
 
 from .calibration import ConfidenceCalibration, calibrate_confidence, held_out
-from .casebase import CaseBase, frames_of, skeleton_of, subject_of
+from .casebase import CaseBase, skeleton_of
+from .described import DescribedClip, describe_clips
 from .explain import Explanation, explain
 from .fitting import (
     AUTO_PHASES,
@@ -53,11 +55,19 @@ from .fitting import (
     assemble_cases,
     inner_loso_accuracy,
     inner_loso_votes,
+    inner_sample,
     side_name,
 )
 from .maintenance import EDITORS, MaintenanceReport
 from .novelty import CALIBRATION_SAMPLE, NoveltyCalibration, from_distances, sample
-from .problem import FeatureConfig, Problem, extract_problem, resolve_config
+from .problem import (
+    FeatureConfig,
+    Problem,
+    candidate_config,
+    column_index,
+    problem_columns,
+    resolve_counts,
+)
 from .retrieve import Retrieval, retrieve
 from .reuse import WEIGHTINGS as VOTE_WEIGHTINGS
 from .reuse import Solution, reuse
@@ -87,6 +97,16 @@ def check_labels(y: Any, n: int) -> np.ndarray:
         if v is None or (isinstance(v, float) and np.isnan(v)) or str(v).strip() == "":
             raise DataError(f"y[{i}] is {v!r}: every clip needs a label", "y")
     return np.array([str(v) for v in y_arr], dtype=object)
+
+
+def _stack(values: Sequence[np.ndarray], cols: np.ndarray | None) -> np.ndarray:
+    """``(n, ...)`` of the clips' problems, each cut to the columns ``cols`` (last axis; None:
+    all), filled row by row: no second copy of the candidate columns."""
+    first = values[0] if cols is None else values[0][..., cols]
+    out = np.empty((len(values), *first.shape), dtype=np.float64)
+    for i, v in enumerate(values):
+        out[i] = v if cols is None else v[..., cols]
+    return out
 
 
 def unusable(seqs: Sequence[PoseSequence]) -> list[int]:
@@ -305,14 +325,24 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             sides = ["augment"]  # sequence problems: plain augmentation, nothing to choose
         return sides, weightings
 
-    def needs_mirror_images(self) -> bool:
-        """Whether fit will describe the mirror image of every training clip (some side
-        handling it may use needs them)."""
-        vectors = self.features == "qmp" or self._summary()
-        sides, _ = self._candidates(vectors, self._measure())
-        return "augment" in sides or "canonical" in sides
-
     # -- fit, step by step
+
+    def describe_plan(self) -> tuple[FeatureConfig, bool, bool]:
+        """How :meth:`fit` describes each training clip (:func:`cbr.described.describe_clip`):
+        the candidate columns, whether the mirror images are needed, whether the favoured
+        side is. Refuses parameters that cannot work together before any clip is read."""
+        self._check_params()
+        measure = self._measure()
+        vectors = self.features == "qmp" or self._summary()
+        if self.feature_weights not in ("auto", "none") and not self._selectable(vectors, measure):
+            raise ConfigError(
+                "learned feature weights need vector problems and a measure that takes them "
+                "(summary=True or QMP features, with similarity='euclidean')",
+                "feature_weights",
+            )
+        sides, _ = self._candidates(vectors, measure)
+        mirror = "augment" in sides or "canonical" in sides
+        return candidate_config(self._feature_config()), mirror, "canonical" in sides
 
     def fit(self, X: Any, y: Any) -> CaseBaseClassifier:
         """Build the case base from clips ``X`` and labels ``y``.
@@ -320,14 +350,24 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         With ``mirror="auto"`` / ``feature_weights="auto"`` on vector problems, the side
         handling and the weighting are chosen by leave-one-subject-out cross-validation inside
         the training clips (``selection_`` holds the scores); the test clips of an outer
-        cross-validation never take part.
+        cross-validation never take part. Each clip is reduced to what the fit needs of it as
+        it is read (:mod:`cbr.described`): memory grows by kilobytes per clip.
         """
-        self._check_params()
+        candidates, mirror, sides = self.describe_plan()
         seqs = as_sequences(X)
-        labels, classes = self._check_training_set(seqs, y)
+        if len(seqs) == 0:
+            raise DataError("the training set is empty", "X")
+        clips = progress(seqs, desc="features", total=len(seqs), unit="clip")
+        return self.fit_described(list(describe_clips(clips, candidates, mirror, sides)), y)
+
+    def fit_described(self, clips: Sequence[DescribedClip], y: Any) -> CaseBaseClassifier:
+        """:meth:`fit` on clips already described by :func:`cbr.described.describe_clip` with
+        :meth:`describe_plan` (in this process or on a cluster's workers): the same model."""
+        self._check_params()
+        labels, classes = self._check_training_set(clips, y)
         measure = self._measure()
-        subjects = np.array([subject_of(s) or "" for s in seqs], dtype=object)
-        described = self._describe(seqs, measure)
+        subjects = np.array([c.subject or "" for c in clips], dtype=object)
+        described = self._describe(clips)
         choice = self._choose(described, labels, subjects, measure)
         config = described.config
         if choice.side == "canonical":
@@ -341,14 +381,14 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             R, M, described.left, labels, choice.side, choice.weighting, described.vectors
         )
         measure = self._weighted(measure, cases)
-        cb = self._case_base(seqs, described, config, measure, cases, choice.side)
+        cb = self._case_base(clips, described, config, measure, cases, choice.side)
         origin = cases.origin
         self.maintenance_ = self._edit(cb)
         if self.maintenance_ is not None:
             cb, origin = self.maintenance_.casebase, origin[self.maintenance_.kept]
-        sources = np.array([s.source or f"clip {i}" for i, s in enumerate(seqs)], dtype=object)
+        sources = np.array([c.source or f"clip {i}" for i, c in enumerate(clips)], dtype=object)
         self.novelty_, self.confidence_ = self._calibrate(
-            seqs, cb, cases, origin, subjects, sources
+            clips, cb, cases, origin, subjects, sources
         )
         votes = self._nested_votes(described, choice, labels, subjects, measure)
         if votes is not None:
@@ -365,19 +405,21 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.phases_ = int(config.phases)
         self.mirror_ = choice.side == "augment"
         self.mirror_flag_ = cases.flag
-        self.mirror_cases_ = int((cases.origin >= len(seqs)).sum())
+        self.mirror_cases_ = int((cases.origin >= len(clips)).sum())
         self.selection_ = choice.scores
         return self
 
     @staticmethod
-    def _check_training_set(seqs: list[PoseSequence], y: Any) -> tuple[np.ndarray, np.ndarray]:
+    def _check_training_set(
+        clips: Sequence[DescribedClip], y: Any
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The labels as text ``(n,)`` and the classes in the caller's type (sorted)."""
-        if len(seqs) == 0:
+        if len(clips) == 0:
             raise DataError("the training set is empty", "X")
-        labels = check_labels(y, len(seqs))
-        bad = unusable(seqs)
+        labels = check_labels(y, len(clips))
+        bad = [i for i, c in enumerate(clips) if c.torso_share == 0.0]
         if bad:
-            names = ", ".join(seqs[i].source or f"X[{i}]" for i in bad[:5])
+            names = ", ".join(clips[i].source or f"X[{i}]" for i in bad[:5])
             raise DataError(
                 f"{len(bad)} training clip(s) show no person (no frame with a torso): {names}"
                 f"{' ...' if len(bad) > 5 else ''}",
@@ -392,29 +434,31 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             )
         return labels, classes
 
-    def _describe(self, seqs: list[PoseSequence], measure: SimilarityMeasure) -> _Described:
-        """Every training clip as a problem (and as its mirror image, when needed)."""
-        config = resolve_config(self._feature_config(), seqs)
-        real = [extract_problem(s, config) for s in seqs]
-        vectors = real[0].values.ndim == 1
-        if self.feature_weights not in ("auto", "none") and not self._selectable(vectors, measure):
-            raise ConfigError(
-                "learned feature weights need vector problems and a measure that takes them "
-                "(summary=True or QMP features, with similarity='euclidean')",
-                "feature_weights",
-            )
-        sides, _ = self._candidates(vectors, measure)
-        need_mirror = "augment" in sides or "canonical" in sides
-        M = (
-            np.stack([extract_problem(mirrored(s), config).values for s in seqs])
-            if need_mirror
-            else None
-        )
-        left = np.array([moves_left_more(s) for s in seqs]) if "canonical" in sides else None
-        R = np.stack([p.values for p in real])
+    def _describe(self, clips: Sequence[DescribedClip]) -> _Described:
+        """The training clips' problems under the configuration their columns resolve to (and
+        their mirror images', when described)."""
+        wanted = self._feature_config()
+        candidates = candidate_config(wanted)
+        if wanted.resolved:
+            config, cols = wanted, None
+        else:
+            counts = np.zeros(len(candidates.states), dtype=np.int64)
+            for c in clips:
+                counts += c.available
+            config = resolve_counts(wanted, counts, len(clips))
+            cols = column_index(config, candidates)
+        R = _stack([c.values for c in clips], cols)
+        vectors = R.ndim == 2
+        has_mirror = clips[0].mirror is not None
+        M = _stack([c.mirror for c in clips], cols) if has_mirror else None  # type: ignore[misc]
+        left = None if clips[0].left is None else np.array([bool(c.left) for c in clips])
+        if config.level == "qmp":
+            names, words = clips[0].names or (), clips[0].words or ()
+        else:
+            names, words = problem_columns(config)
         # phase columns come last: without them, the problem is the first `base` columns
         base = R.shape[1] - len(config.states) * int(config.phases) if config.summary else None
-        return _Described(config, R, M, left, vectors, base, real[0].names, real[0].words)
+        return _Described(config, R, M, left, vectors, base, names, words)
 
     def _choose(
         self,
@@ -439,11 +483,18 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         if n_subjects < 2 or "" in set(subjects.tolist()):  # no subjects to hold out
             weighting = "fisher" if "fisher" in weightings and self._summary() else "none"
             return _Choice("off", weighting, phase_options[-1], {})
+        # a capped, stratified sample: the inner scores cost the square of the clips
+        R, M, left = d.R, d.M, d.left
+        pick = inner_sample(labels, subjects)
+        if len(pick) < len(labels):
+            R, M = R[pick], None if M is None else M[pick]
+            left = None if left is None else left[pick]
+            labels, subjects = labels[pick], subjects[pick]
         scores = {
             (sd, wt, ph): inner_loso_accuracy(
-                d.columns(d.R, ph),  # type: ignore[arg-type]
-                d.columns(d.M, ph),
-                d.left,
+                d.columns(R, ph),  # type: ignore[arg-type]
+                d.columns(M, ph),
+                left,
                 labels,
                 subjects,
                 sd,
@@ -480,7 +531,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
 
     @staticmethod
     def _case_base(
-        seqs: list[PoseSequence],
+        clips: Sequence[DescribedClip],
         d: _Described,
         config: FeatureConfig,
         measure: SimilarityMeasure,
@@ -488,17 +539,19 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         side: str,
     ) -> CaseBase:
         """The case base of ``cases``, with each case's clip as provenance."""
-        n = len(seqs)
-        case_seqs = [(mirrored(seqs[i - n]) if i >= n else seqs[i]) for i in cases.origin.tolist()]
-        if side == "canonical" and d.left is not None:
-            case_seqs = [
-                mirrored(s) if d.left[i % n] else s
-                for s, i in zip(case_seqs, cases.origin.tolist(), strict=True)
-            ]
+        n = len(clips)
+        origin = cases.origin.tolist()
+        # a case is the clip's mirror image when it is an augmenting image (origin >= n) or,
+        # under the canonical side, the clip of one that moves its left side more
+        image = [
+            i >= n or (side == "canonical" and d.left is not None and bool(d.left[i % n]))
+            for i in origin
+        ]
         width = cases.values.shape[-1] - int(cases.flag)
         names, words = d.names[:width], d.words[:width]
         if cases.flag:
             names, words = (*names, MIRROR_FLAG), (*words, "mirror image of a training clip")
+        of = [clips[i % n] for i in origin]
         return CaseBase(
             config,
             measure,
@@ -506,15 +559,16 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             cases.labels,
             names,
             words,
-            sources=tuple(s.source for s in case_seqs),
-            subjects=tuple(subject_of(s) for s in case_seqs),
-            frames=tuple(frames_of(s) for s in case_seqs),
-            skeletons=tuple(skeleton_of(s) for s in case_seqs),
-        )
+            sources=tuple(c.mirror_source if m else c.source for c, m in zip(of, image,
+                                                                              strict=True)),
+            subjects=tuple(c.subject for c in of),
+            frames=tuple(c.frames for c in of),
+            skeletons=tuple(c.skeleton for c in of),
+        )  # fmt: skip
 
     def _calibrate(
         self,
-        seqs: list[PoseSequence],
+        clips: Sequence[DescribedClip],
         cb: CaseBase,
         cases: Cases,
         origin: np.ndarray,
@@ -550,7 +604,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             int(self.k),
             self.weights,  # type: ignore[arg-type]
         )
-        skeletons = tuple(sorted({skeleton_of(s) for s in seqs}))
+        skeletons = tuple(sorted({c.skeleton for c in clips}))
         return (
             from_distances(h.nearest, basis, skeletons=skeletons),
             calibrate_confidence(h.share, h.right, basis),
@@ -573,11 +627,14 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             return None
         if choice.weighting == "none":
             return None
-        R = d.columns(d.R, choice.phases)
-        M = d.columns(d.M, choice.phases)
+        # the same capped sample as the inner selection: the votes cost the square of the clips
+        pick = inner_sample(labels, subjects)
+        R = d.columns(d.R[pick], choice.phases)
+        M = None if d.M is None else d.columns(d.M[pick], choice.phases)
+        left = None if d.left is None else d.left[pick]
         assert R is not None
         share, right = inner_loso_votes(
-            R, M, d.left, labels, subjects, choice.side, choice.weighting, int(self.k),
+            R, M, left, labels[pick], subjects[pick], choice.side, choice.weighting, int(self.k),
             self.weights,  # type: ignore[arg-type]
         )  # fmt: skip
         ok = np.isfinite(share)

@@ -37,6 +37,48 @@ _QUERY_CHUNK = 512
 # learned weights are judged by inner leave-one-subject-out only when every inner training fold
 # still has two or more people in it
 MIN_SUBJECTS_TO_JUDGE_WEIGHTS = 3
+#: the inner selection scores its choices on at most this many training clips (a seeded sample,
+#: every activity and subject in proportion): its all-pairs distances cost the square of the
+#: clips, and beyond a few thousand clips the choice it makes no longer moves
+INNER_SAMPLE = 2000
+#: with more subjects than this, the inner selection holds out groups of subjects (this many
+#: folds, subjects dealt round-robin in sorted order) rather than one subject at a time
+INNER_FOLDS = 10
+
+
+def subject_folds(subjects: np.ndarray, folds: int = INNER_FOLDS) -> np.ndarray:
+    """The inner fold of every clip ``(n,)``: its subject, or with more than ``folds``
+    subjects, one of ``folds`` groups of them."""
+    names, inverse = np.unique(np.asarray(subjects).astype(str), return_inverse=True)
+    if len(names) <= folds:
+        return np.asarray(subjects)
+    return np.asarray(inverse % folds)
+
+
+def inner_sample(labels: np.ndarray, subjects: np.ndarray, cap: int = INNER_SAMPLE,
+                 seed: int = 0) -> np.ndarray:  # fmt: skip
+    """Positions of at most ``cap`` clips ``(m,)`` (sorted) drawn evenly from every
+    (activity, subject) group of ``labels`` and ``subjects`` ``(n,)``; all of them when
+    ``n <= cap``."""
+    n = len(labels)
+    if n <= cap:
+        return np.arange(n)
+    groups = np.unique(
+        np.char.add(np.asarray(labels).astype(str), np.char.add("\0", subjects.astype(str))),
+        return_inverse=True,
+    )[1]
+    counts = np.bincount(groups)
+    # a random order, in which each group's members are spread evenly over (0, 1): the first
+    # `cap` by that spread keep every group's share
+    order = np.random.default_rng(seed).permutation(n)
+    g = groups[order]
+    by_group = np.argsort(g, kind="stable")
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    within = np.arange(n) - starts[g[by_group]]
+    spread = np.empty(n)
+    spread[order[by_group]] = (within + 0.5) / counts[g[by_group]]
+    rank = spread
+    return np.sort(np.argsort(rank, kind="stable")[:cap])
 
 
 def side_name(value: object) -> str:
@@ -156,13 +198,15 @@ def inner_loso_votes(
     """Each training clip classified by a case base built, weights and all, from the OTHER
     subjects' clips (as :func:`inner_loso_accuracy` does): its winning vote share ``(n,)``
     and whether the winner was its label ``(n,)``. A subject whose fold lacks a second
-    activity is left out (share NaN)."""
+    activity is left out (share NaN). With many subjects, leave-subjects-out over
+    :func:`subject_folds`."""
     y = np.asarray(y).astype(str)
     queries = canonical(R, M, left) if side == "canonical" else R
     share = np.full(len(y), np.nan)
     right = np.zeros(len(y), dtype=bool)
-    for s in np.unique(subjects):
-        test = subjects == s
+    folds = subject_folds(subjects)
+    for s in np.unique(folds):
+        test = folds == s
         train = ~test
         if len(np.unique(y[train])) < 2:
             continue
@@ -193,12 +237,14 @@ def inner_loso_accuracy(
     weights: Weights = "distance",
 ) -> float:
     """Leave-one-subject-out accuracy of one side handling and weighting within the training
-    clips ``R`` ``(n, D)`` (mirror images ``M``, sides ``left``, labels ``y``, ``subjects``)."""
+    clips ``R`` ``(n, D)`` (mirror images ``M``, sides ``left``, labels ``y``, ``subjects``);
+    with many subjects, leave-subjects-out over :func:`subject_folds`."""
     y = np.asarray(y).astype(str)
     queries = canonical(R, M, left) if side == "canonical" else R
+    folds = subject_folds(subjects)
     hits = 0
-    for s in np.unique(subjects):
-        test = subjects == s
+    for s in np.unique(folds):
+        test = folds == s
         train = ~test
         if len(np.unique(y[train])) < 2:
             continue

@@ -24,7 +24,8 @@ from features.poses import PoseSequence
 from features.repetitions import count_repetitions
 from features.skeleton import BLAZEPOSE_33
 
-from .segmentation import DEFAULT_WINDOW_S, MIN_SEGMENT_S, SWITCH_ODDS, Judge
+from .segmentation import DEFAULT_WINDOW_S, MIN_SEGMENT_S, SWITCH_ODDS, activity_distances
+from .unknown import Judge, Margin, activity_codes
 
 HOP_S = 0.5
 """The rolling label is decided every this many seconds of stream."""
@@ -97,7 +98,8 @@ class LiveSegmenter:
     """Push frames, read the rolling label; finished segments come out of :meth:`push`.
 
     ``clf``: a fitted :class:`~cbr.estimator.CaseBaseClassifier`; ``fps``: the stream's frame
-    rate; ``judge``: what says a window is unlike the case base (``clf.novelty_`` when None).
+    rate; ``judge``: what says a window is unlike the case base (:mod:`cbr.unknown`; the margin
+    between the two nearest activities, calibrated on the case base, when None).
     """
 
     def __init__(self, clf: Any, fps: float, judge: Judge | None = None) -> None:
@@ -105,8 +107,9 @@ class LiveSegmenter:
             raise DataError(f"the stream needs a frame rate > 0, got {fps!r}", "stream")
         self.clf = clf
         self.fps = float(fps)
-        self.judge = judge if judge is not None else clf.novelty_
+        self.judge = judge if judge is not None else Margin.of(clf.case_base_)
         self.classes = [str(c) for c in clf.classes_]
+        self.codes = activity_codes(clf.case_base_.labels, self.classes)
         self.unknown = len(self.classes)
         self.hop = max(1, int(round(HOP_S * fps)))
         self.window = max(2, int(round(DEFAULT_WINDOW_S * fps)))
@@ -180,8 +183,7 @@ class LiveSegmenter:
             vote[:] = 1.0 / len(vote)  # no person: no evidence either way
             return vote
         solved = self.clf.solve([window])[0]
-        nearest = float(solved.retrieval.distances[0])
-        if self.judge.unlike(nearest):
+        if self.judge.unlike(activity_distances(self.clf, solved, self.codes)):
             vote[-1] = 1.0
         else:
             vote[self.classes.index(str(solved.retrieval.labels[0]))] = 1.0

@@ -241,7 +241,8 @@ def _enn_pass(dist: np.ndarray, labels: np.ndarray, kept: np.ndarray, k: int) ->
     np.fill_diagonal(d, np.inf)
     classes = np.unique(labels)
     pred = _knn_vote(d, labels, classes, k, "uniform")
-    return kept & (pred == labels)
+    still: np.ndarray = kept & (pred == labels)
+    return still
 
 
 def renn(

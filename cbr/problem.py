@@ -31,7 +31,6 @@ import numpy as np
 
 from features.body import (
     ARM_PLANE_SIGNALS,
-    POSITION_JOINTS,
     arm_planes,
     body_positions,
     mirrored,
@@ -41,7 +40,9 @@ from features.body import (
 )
 from features.derived import fluents_of, qmp_of, signals_of
 from features.errors import ConfigError, DataError
+from features.fluents import state_columns
 from features.poses import PoseSequence
+from features.signals import ANGLE_SIGNALS
 
 Level = Literal["fluents", "qmp"]
 STATE_GROUPS = ("angles", "instantaneous", "all")
@@ -208,54 +209,104 @@ def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> No
             body_positions(s)
 
 
-def _group_mask(result: Any, group: str) -> np.ndarray:
-    temporal = np.asarray(result.temporal, dtype=bool)
-    is_near = np.array([n.startswith("near:") for n in result.state_names])
+def _group_mask(state_names: Sequence[str], temporal: np.ndarray, group: str) -> np.ndarray:
+    is_near = np.array([n.startswith("near:") for n in state_names])
     if group == "all":
-        return np.ones(len(result.state_names), dtype=bool)
+        return np.ones(len(state_names), dtype=bool)
     if group == "angles":
         return ~is_near
-    return ~is_near & ~temporal  # instantaneous
+    instantaneous: np.ndarray = ~is_near & ~np.asarray(temporal, dtype=bool)
+    return instantaneous
+
+
+def candidate_config(config: FeatureConfig) -> FeatureConfig:
+    """``config`` with every column it may use: the fluent states of its group, the joint
+    angles and arm planes (``angles``) and the positions (``positions``), before
+    :func:`resolve_config` drops those unavailable in too many training clips. A resolved
+    configuration is its own candidate set."""
+    if config.resolved:
+        return config
+    state_names, _, temporal = state_columns()
+    keep = _group_mask(state_names, temporal, str(config.states))
+    names = tuple(n for n, k in zip(state_names, keep, strict=True) if k)
+    if config.angles:
+        names += tuple(ANGLE_PREFIX + a for a in ANGLE_SIGNALS)
+        names += tuple(ANGLE_PREFIX + a for a in ARM_PLANE_SIGNALS)
+    if config.positions:
+        names += tuple(POSITION_PREFIX + n for n in position_names())
+    return dataclasses.replace(config, states=names)
+
+
+def availability(seq: PoseSequence, candidates: FeatureConfig) -> np.ndarray:
+    """``(n_columns,)`` bool: which columns of ``candidates`` (:func:`candidate_config`) the
+    clip ``seq`` ``(frames, joints, 3)`` has (a fluent state or angle defined in some frame; the
+    arm planes whenever the arm joints are there at all)."""
+    states = tuple(candidates.states)
+    out = np.zeros(len(states), dtype=bool)
+    fluent = [i for i, n in enumerate(states) if not n.startswith((ANGLE_PREFIX, POSITION_PREFIX))]
+    if fluent:
+        res = fluents_of(seq)
+        index = {n: i for i, n in enumerate(res.state_names)}
+        out[fluent] = res.available()[[index[states[i]] for i in fluent]]
+    angles = [i for i, n in enumerate(states) if n.startswith(ANGLE_PREFIX)]
+    if angles:
+        sig = signals_of(seq)
+        seen = dict(zip(sig.angle_names, ~np.all(np.isnan(sig.values[:, : len(sig.angle_names)]),
+                                                 axis=0), strict=True))  # fmt: skip
+        arms = bool(np.isfinite(sig.values[:, :4]).any())
+        for i in angles:
+            a = states[i][len(ANGLE_PREFIX) :]
+            out[i] = arms if a in ARM_PLANE_SIGNALS else bool(seen.get(a, False))
+    positions = [i for i, n in enumerate(states) if n.startswith(POSITION_PREFIX)]
+    if positions:
+        seen_pos = dict(zip(position_names(), ~np.all(np.isnan(body_positions(seq)), axis=0),
+                            strict=True))  # fmt: skip
+        out[positions] = [bool(seen_pos[states[i][len(POSITION_PREFIX) :]]) for i in positions]
+    return out
+
+
+def resolve_counts(config: FeatureConfig, available: np.ndarray, n_clips: int) -> FeatureConfig:
+    """The resolved configuration from ``available`` ``(n_columns,)``: in how many of the
+    ``n_clips`` training clips each column of :func:`candidate_config` is available."""
+    if config.resolved:
+        return config
+    if n_clips == 0:
+        raise DataError("no training clips to choose the fluent states from", "training set")
+    candidates = tuple(candidate_config(config).states)
+    keep = np.asarray(available) >= config.min_available * n_clips
+    fluent = np.array([not n.startswith((ANGLE_PREFIX, POSITION_PREFIX)) for n in candidates])
+    if not (keep & fluent).any():
+        raise DataError(
+            "no fluent state is available in enough training clips (are the skeletons empty?)",
+            "training set",
+        )
+    return dataclasses.replace(
+        config, states=tuple(n for n, k in zip(candidates, keep, strict=True) if k)
+    )
 
 
 def resolve_config(config: FeatureConfig, clips: Sequence[PoseSequence]) -> FeatureConfig:
     """The configuration with an explicit state list, chosen from the training ``clips``."""
     if config.resolved:
         return config
-    if not clips:
-        raise DataError("no training clips to choose the fluent states from", "training set")
-    first = fluents_of(clips[0])
-    group = _group_mask(first, str(config.states))
-    available = np.zeros(len(first.state_names))
+    candidates = candidate_config(config)
+    counts = np.zeros(len(candidates.states), dtype=np.int64)
     for seq in clips:
-        res = fluents_of(seq)
-        available += res.available()
-    keep = group & (available >= config.min_available * len(clips))
-    if not keep.any():
-        raise DataError(
-            "no fluent state is available in enough training clips (are the skeletons empty?)",
-            "training set",
-        )
-    names = tuple(n for n, k in zip(first.state_names, keep, strict=True) if k)
-    if config.angles:
-        sig = signals_of(clips[0])
-        n_angles = len(sig.angle_names)
-        seen = np.zeros(n_angles)
-        for seq in clips:
-            seen += ~np.all(np.isnan(signals_of(seq).values[:, :n_angles]), axis=0)
-        ok = seen >= config.min_available * len(clips)
-        names += tuple(ANGLE_PREFIX + a for a, k in zip(sig.angle_names, ok, strict=True) if k)
-        # arm planes exist only while an arm is raised: kept when the joints are there at all
-        joints_ok = sum(bool(np.isfinite(signals_of(seq).values[:, :4]).any()) for seq in clips)
-        if joints_ok >= config.min_available * len(clips):
-            names += tuple(ANGLE_PREFIX + a for a in ARM_PLANE_SIGNALS)
-    if config.positions:
-        seen = np.zeros(len(POSITION_JOINTS) * 3)
-        for seq in clips:
-            seen += ~np.all(np.isnan(body_positions(seq)), axis=0)
-        ok = seen >= config.min_available * len(clips)
-        names += tuple(POSITION_PREFIX + n for n, k in zip(position_names(), ok, strict=True) if k)
-    return dataclasses.replace(config, states=names)
+        counts += availability(seq, candidates)
+    return resolve_counts(config, counts, len(clips))
+
+
+def column_index(config: FeatureConfig, candidates: FeatureConfig) -> np.ndarray:
+    """Where the problem values of resolved ``config`` lie in those of ``candidates`` (its
+    :func:`candidate_config`), along the last axis: a clip described once over the candidate
+    columns gives its problem under ``config`` as ``values[..., column_index(...)]``."""
+    position = {n: i for i, n in enumerate(candidates.states)}
+    cols = np.array([position[n] for n in config.states], dtype=np.intp)
+    if not config.summary:
+        return cols
+    n = len(candidates.states)
+    blocks = len(SUMMARY_STATS) + int(config.phases)
+    return np.concatenate([b * n + cols for b in range(blocks)])
 
 
 def fill_nan_time(x: np.ndarray, fill: float) -> np.ndarray:
@@ -445,3 +496,16 @@ def summarise(
     )
     out_names, out_words = summary_columns(names, words, phases)
     return Problem(np.concatenate(stats), out_names, out_words, "fluents")
+
+
+def problem_columns(config: FeatureConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Names and words of the columns :func:`extract_problem` gives under a resolved
+    fluent-level ``config`` (known without a clip)."""
+    if not config.resolved or config.level != "fluents":
+        raise ConfigError("problem columns need a resolved fluent-level configuration", "features")
+    states = tuple(config.states)
+    names, words, _ = state_columns()
+    plan_words = _column_plan(states, tuple(names), tuple(words)).words
+    if config.summary:
+        return summary_columns(states, plan_words, int(config.phases))
+    return states, plan_words

@@ -137,7 +137,8 @@ def view_of(cb: CaseBase) -> View:
     key = ("view", cb.problems.shape[1:], cb.names)
     hit = cb.cache.get("view")
     if hit is not None and hit[0] == key:
-        return hit[1]
+        cached: View = hit[1]
+        return cached
     names, words = cb.names, cb.words
     width = cb.problems.shape[-1]
     if len(names) != width:
@@ -211,7 +212,7 @@ class Profiles:
 
 def profiles_of(cb: CaseBase) -> Profiles:
     """The label profiles of ``cb`` (cached on the case base until its cases change)."""
-    hit = cb.cache.get("profiles")
+    hit: Profiles | None = cb.cache.get("profiles")
     if hit is not None:
         return hit
     view = view_of(cb)

@@ -7,17 +7,20 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
 1. what every frame yields (fluents, state signals, mirror image) is computed once for the
    whole recording; windows share it (:func:`features.derived.stretch`);
 2. the windows (:func:`windows_of`): one of :data:`DEFAULT_WINDOW_S` every :data:`HOP_S`
-   seconds, and every repetition found in the spans of :data:`PERIOD_SPAN_S` seconds around
-   (:func:`features.repetitions.count_in_signals`, cut as ``train --split repetitions`` cuts
-   cases);
+   seconds (cut as ``train --split windows`` cuts cases), and every period of the movement
+   found in the spans of :data:`PERIOD_SPAN_S` seconds around
+   (:func:`features.repetitions.count_in_signals`: a repetition, or two neighbouring ones of
+   a movement that alternates sides);
 3. every window is a clip to solve and votes for the activity of its nearest case;
 4. each :data:`BLOCK_S` block gets the mean vote of the windows over it, and the labels are
    decoded over all blocks at once (Viterbi): a change of activity must be supported by at
    least :data:`MIN_SEGMENT_S` of evidence at odds of :data:`SWITCH_ODDS` to 1;
-   stretches whose repetitions lie as far from their nearest cases as the case base's
-   activities lie from each other (:class:`Familiarity`, calibrated on the case base) are
-   decoded the same way and become unknown (:func:`unknown_blocks`);
-5. each segment is counted (:func:`features.repetitions.count_repetitions`) and explained by
+5. stretches unlike every activity of the case base become unknown (:func:`unknown_blocks`):
+   every window is judged (:mod:`cbr.unknown`; by default the margin between its two nearest
+   activities, calibrated on the case base), and known/unknown is decoded the same way from
+   the windows that lie within one decoded activity (a window across a change of activity
+   is like neither side, whether both are known or not);
+6. each segment is counted (:func:`features.repetitions.count_repetitions`) and explained by
    its most confident window.
 """
 
@@ -27,7 +30,7 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
@@ -38,96 +41,38 @@ from features.poses import PoseSequence
 from features.progress import progress
 from features.repetitions import (
     MIN_PERIOD_S,
+    WINDOW_HOP_S,
+    WINDOW_S,
     MovementSignals,
     Repetition,
+    RepetitionCount,
     count_in_signals,
     movement_signals,
 )
 
-from .casebase import CaseBase
 from .explain import Explanation
 from .problem import warm
 from .retrieve import Retrieval
 from .reuse import reuse
+from .unknown import Familiarity, HeldOut, Judge, Margin, activity_codes, per_activity
 
 BLOCK_S = 0.1
 """Labels are given per block of this many seconds (the resolution of the label files)."""
-HOP_S = 0.5
-"""Where nothing repeats, a default window starts every this many seconds."""
+HOP_S = WINDOW_HOP_S
+"""A default window starts every this many seconds (as ``train --split windows`` cuts)."""
 SPAN_HOP_S = 1.0
 """Repetitions are looked for in spans starting every this many seconds (spans overlap by
 all but this, so every repetition up to MAX_WINDOW_S lies whole in one)."""
 MIN_WINDOW_S = 1.0
 MAX_WINDOW_S = 5.0
-DEFAULT_WINDOW_S = 2.0
-"""Windows span one local period within these bounds; the default where nothing repeats."""
+DEFAULT_WINDOW_S = WINDOW_S
+"""Repetition windows span one local period within these bounds; the default windows last
+DEFAULT_WINDOW_S (as ``train --split windows`` cuts them)."""
 PERIOD_SPAN_S = 6.0
 """The local period is read from this many seconds around a window (periods up to 60 %)."""
 MIN_SEGMENT_S = 1.0
 SWITCH_ODDS = 2.0
 """A change of activity needs MIN_SEGMENT_S of blocks voting SWITCH_ODDS to 1 for it."""
-
-
-class Judge(Protocol):
-    """What says how unlike the case base a clip is, from its nearest-case distance: the
-    classifier's own stored calibration (:class:`cbr.novelty.NoveltyCalibration`, held-out
-    nearest-case distances) or :class:`Familiarity` (how far the activities lie apart)."""
-
-    def ratio(self, distance: float) -> float: ...
-
-    def unlike(self, distance: float) -> bool: ...
-
-
-@dataclass(frozen=True)
-class Familiarity:
-    """When a clip is unlike every activity of the case base, calibrated on the case base
-    itself: a clip whose nearest case lies as far as different activities of the case base
-    lie from each other is no more that case's activity than the others are.
-
-    ``threshold``: the median, over the cases, of the distance to the nearest case of another
-    activity; ``reference`` (the unit of the novelty ratio): the median distance from a case
-    to its nearest case of the same activity from another source (another recording or video:
-    what a new recording of a known activity is to the case base; cases cut from one
-    recording are near copies), or, where no activity has two sources, to its nearest other
-    case."""
-
-    reference: float
-    threshold: float
-
-    @classmethod
-    def of(cls, cb: CaseBase) -> Familiarity:
-        if len(cb.classes) < 2:
-            raise DataError("a case base of one activity cannot say what is unlike it", "case base")
-        within, between = _neighbour_distances(cb)
-        reference = float(np.median(within)) or float(np.mean(within)) or 1.0
-        return cls(reference, float(np.median(between)))
-
-    def ratio(self, distance: float) -> float:
-        """Nearest-case distance in units of the case base's usual neighbour distance."""
-        return distance / self.reference
-
-    def unlike(self, distance: float) -> bool:
-        return distance > self.threshold
-
-
-def _neighbour_distances(cb: CaseBase) -> tuple[np.ndarray, np.ndarray]:
-    """Per case: the distance to its nearest same-activity case from another source (``within``;
-    every case's nearest other case when no activity has two sources) and to its nearest case
-    of another activity (``between``)."""
-    sources = np.array(cb.sources, dtype=object)
-    labels = cb.labels
-    index = cb.index
-    assert cb.reps is not None
-    within, nearest, between = [], [], []
-    for i in range(len(cb)):  # one query against the whole case base per case
-        d = cb.measure.distances(cb.reps[i], index)
-        same = labels == labels[i]
-        between.append(float(d[~same].min()))
-        nearest.append(float(np.delete(d, i).min()))
-        peers = same & (sources != sources[i])
-        if peers.any():
-            within.append(float(d[peers].min()))
-    return np.asarray(within or nearest), np.asarray(between)
 
 
 @dataclass(frozen=True)
@@ -183,13 +128,14 @@ class Segmentation:
 
 @dataclass(frozen=True)
 class _Solved:
-    """One window: frames [start, stop), its vote over the classes, its nearest-case distance
-    and what solve gave (problem, retrieval, solution)."""
+    """One window: frames [start, stop), its vote over the classes, its distance to the
+    nearest case of every activity ``(n_classes,)`` and what solve gave (problem, retrieval,
+    solution)."""
 
     start: int
     stop: int
     vote: np.ndarray
-    distance: float
+    nearest: np.ndarray
     solved: Any  # the classifier's Solved: problem, retrieval, solution, novelty, ...
     repetition: bool = False
 
@@ -200,8 +146,8 @@ class _Solved:
 
 @dataclass(frozen=True)
 class Window:
-    """Frames [start, stop) of the recording to classify; ``repetition``: one repetition, cut
-    the way ``train --split repetitions`` cuts cases (else a fixed-length window)."""
+    """Frames [start, stop) of the recording to classify; ``repetition``: one period of the
+    movement (else a fixed-length window)."""
 
     start: int
     stop: int
@@ -210,8 +156,8 @@ class Window:
 
 def windows_of(sig: MovementSignals, n_frames: int, fps: float, where: str = "") -> list[Window]:
     """The windows to classify: one of :data:`DEFAULT_WINDOW_S` every :data:`HOP_S` seconds
-    (whatever is done there, repeated or not), and every repetition found whole in spans of
-    :data:`PERIOD_SPAN_S` seconds starting every :data:`SPAN_HOP_S` seconds."""
+    (whatever is done there, repeated or not), and every period of the movement found whole
+    in spans of :data:`PERIOD_SPAN_S` seconds starting every :data:`SPAN_HOP_S` seconds."""
     duration = n_frames / fps
     if duration < MIN_WINDOW_S:
         raise DataError(
@@ -228,7 +174,8 @@ def windows_of(sig: MovementSignals, n_frames: int, fps: float, where: str = "")
 
 
 def _repetition_bounds(sig: MovementSignals, n_frames: int, fps: float) -> list[tuple[int, int]]:
-    """Frame ranges of the repetitions found whole in the spans, each once."""
+    """Frame ranges of the periods found whole in the spans, each once: a repetition, or for a
+    movement that alternates sides two neighbouring ones (a step with each leg)."""
     span = int(PERIOD_SPAN_S * sig.fps)
     hop = max(1, int(SPAN_HOP_S * sig.fps))
     found: set[tuple[int, int]] = set()
@@ -237,13 +184,22 @@ def _repetition_bounds(sig: MovementSignals, n_frames: int, fps: float) -> list[
         if len(part.values) < 4:
             continue
         span_frames = len(part.values) * sig.step
-        for r in count_in_signals(part, span_frames, fps).repetitions:
-            if r.start_frame == 0 or r.end_frame >= span_frames - sig.step:
+        for first, last in _periods(count_in_signals(part, span_frames, fps)):
+            if first == 0 or last >= span_frames - sig.step:
                 continue  # cut by the span's edge: whole in a neighbouring span
-            start, stop = a * sig.step + r.start_frame, a * sig.step + r.end_frame
+            start, stop = a * sig.step + first, a * sig.step + last
             if MIN_WINDOW_S * fps / 2 <= stop - start <= MAX_WINDOW_S * fps:
                 found.add((start, min(n_frames, stop)))
     return sorted(found)
+
+
+def _periods(count: RepetitionCount) -> list[tuple[int, int]]:
+    """Frames [start, end) of every full period of the movement: each repetition, or for an
+    alternating movement each two neighbouring repetitions (one per side)."""
+    reps = count.repetitions
+    if not count.alternating:
+        return [(r.start_frame, r.end_frame) for r in reps]
+    return [(a.start_frame, b.end_frame) for a, b in zip(reps[:-1], reps[1:], strict=True)]
 
 
 def _nearest_vote(retrieval: Retrieval, classes: np.ndarray, k: int) -> np.ndarray:
@@ -254,10 +210,23 @@ def _nearest_vote(retrieval: Retrieval, classes: np.ndarray, k: int) -> np.ndarr
     return reuse(top, classes, "distance").proba
 
 
+def activity_distances(clf: Any, solved: Any, codes: np.ndarray | None = None) -> np.ndarray:
+    """The distance from a clip solved by ``clf`` (its ``Solved``) to the nearest case of
+    every activity of ``clf.classes_``, ``(n_classes,)`` (one scan of the case base: the
+    nearest case of the second activity need not be among the retrieved ones). ``codes``:
+    :func:`cbr.unknown.activity_codes` of the case base, when already at hand."""
+    cb = clf.case_base_
+    if codes is None:
+        codes = activity_codes(cb.labels, clf.classes_)
+    d = cb.measure.distances(cb.measure.represent_query(solved.problem.values), cb.index)
+    return per_activity(d, codes, len(clf.classes_))
+
+
 def _solve_windows(clf: Any, rec: PoseSequence, windows: list[Window], k: int) -> list[_Solved]:
     """Each window solved by the classifier; its vote is that of its ``k`` nearest cases.
     Windows in which no frame shows the person are left out (nothing to solve)."""
     classes = np.array([str(c) for c in clf.classes_], dtype=object)
+    codes = activity_codes(clf.case_base_.labels, classes)
     out = []
     for w in progress(windows, "classifying windows", unit="window"):
         part = stretch(rec, w.start, w.stop)
@@ -265,8 +234,8 @@ def _solve_windows(clf: Any, rec: PoseSequence, windows: list[Window], k: int) -
             continue
         solved = clf.solve([part])[0]
         vote = _nearest_vote(solved.retrieval, classes, k)
-        distance = float(solved.retrieval.distances[0])
-        out.append(_Solved(w.start, w.stop, vote, distance, solved, w.repetition))
+        nearest = activity_distances(clf, solved, codes)
+        out.append(_Solved(w.start, w.stop, vote, nearest, solved, w.repetition))
     return out
 
 
@@ -313,61 +282,52 @@ def _runs(path: np.ndarray) -> list[tuple[int, int, int]]:
     return [(int(a), int(b), int(path[a])) for a, b in zip(starts, ends, strict=True)]
 
 
-def unknown_blocks(
-    solved: Sequence[_Solved], n_frames: int, fps: float, familiar: Judge
-) -> np.ndarray:
-    """``(n_blocks,)`` bool: blocks unlike the case base. A block's evidence is the share of
-    the repetition windows over it whose nearest case lies beyond
-    :attr:`Familiarity.threshold` (repetitions are cut the way the cases of a case base of
-    repetitions are; a fixed window cut at another phase lies farther from every case for that
-    alone), of all windows over it where no repetition was found; known/unknown is decoded like
-    the activities (a change needs :data:`MIN_SEGMENT_S`)."""
-
-    def flags(ws: Sequence[_Solved]) -> tuple[np.ndarray, np.ndarray]:
-        marked = [
-            dataclasses.replace(
-                w, vote=np.array([0.0, 1.0] if familiar.unlike(w.distance) else [1.0, 0.0])
-            )
-            for w in ws
-        ]
-        if not marked:
-            return np.zeros((n_blocks, 2)), np.zeros(n_blocks, dtype=bool)
-        return block_votes(marked, n_frames, fps), _covered(marked, n_frames, fps)
-
-    n_blocks = int(math.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
-    every, _ = flags(solved)
-    reps, has_rep = flags([w for w in solved if w.repetition])
-    return decode(np.where(has_rep[:, None], reps, every)) == 1
-
-
-def _covered(solved: Sequence[_Solved], n_frames: int, fps: float) -> np.ndarray:
-    """``(n_blocks,)`` bool: some window lies over the block's centre."""
-    n_blocks = int(math.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
-    centres = (np.arange(n_blocks) + 0.5) * BLOCK_S * fps
-    starts = np.array([w.start for w in solved])
-    stops = np.array([w.stop for w in solved])
-    return np.asarray(
-        ((starts[None, :] <= centres[:, None]) & (centres[:, None] < stops[None, :])).any(axis=1)
+def within_runs(solved: Sequence[_Solved], fps: float, path: np.ndarray) -> np.ndarray:
+    """``(n_windows,)`` bool: the windows that lie within one run of the decoded activity
+    ``path`` ``(n_blocks,)``; one across a change of activity is half one movement and half
+    another, like neither, whether both are known or not."""
+    run = np.r_[0, np.cumsum(path[1:] != path[:-1])]
+    per_block, last = fps * BLOCK_S, len(path) - 1
+    first = np.array([min(last, int(w.start // per_block)) for w in solved], dtype=np.int64)
+    end = np.array(
+        [min(last, int(math.ceil(w.stop / per_block - 1e-9)) - 1) for w in solved], dtype=np.int64
     )
+    return np.asarray(run[first] == run[np.maximum(first, end)])
+
+
+def unknown_blocks(
+    solved: Sequence[_Solved], n_frames: int, fps: float, judge: Judge, path: np.ndarray
+) -> np.ndarray:
+    """``(n_blocks,)`` bool: blocks unlike every activity of the case base.
+
+    The windows within one run of the decoded activity ``path`` ``(n_blocks,)``
+    (:func:`within_runs`) are judged (:class:`cbr.unknown.Judge`); a block's evidence is the
+    share of those over it judged unlike (none over it: no evidence either way), and
+    known/unknown is decoded like the activities (a change needs :data:`MIN_SEGMENT_S`)."""
+    inside = within_runs(solved, fps, path)
+    marked = [
+        dataclasses.replace(w, vote=np.array([0.0, 1.0] if judge.unlike(w.nearest) else [1.0, 0.0]))
+        for w, keep in zip(solved, inside.tolist(), strict=True)
+        if keep
+    ]
+    if not marked:
+        return np.zeros(len(path), dtype=bool)
+    return np.asarray(decode(block_votes(marked, n_frames, fps)) == 1)
 
 
 def _explain_segment(
-    clf: Any, inside: list[_Solved], state: int, familiar: Judge
+    clf: Any, inside: list[_Solved], state: int, judge: Judge
 ) -> tuple[str, float]:
     """A short explanation from the segment's most telling window, and the segment's novelty
-    ratio (the median over its windows)."""
+    (the judge's ratio, median over its windows)."""
     n_classes = len(clf.classes_)
     if not inside:
         return "", float("nan")
-    ratio = familiar.ratio(float(np.median([w.distance for w in inside])))
-    if state == n_classes:  # unknown
-        w = min(inside, key=lambda s: s.distance)
-        nearest = str(w.solved.retrieval.labels[0])
-        return (
-            f"unlike every stored case: even the nearest ({nearest}) lies {ratio:.1f}x the case"
-            " base's usual nearest-case distance away",
-            ratio,
-        )
+    ratios = [judge.ratio(w.nearest) for w in inside]
+    ratio = float(np.median(ratios))
+    if state == n_classes:  # unknown: told by its median window
+        w = inside[int(np.argsort(ratios, kind="stable")[len(ratios) // 2])]
+        return judge.describe(w.nearest, [str(c) for c in clf.classes_]), ratio
     w = max(inside, key=lambda s: s.vote[state])
     e: Explanation = clf.explain_solved(w.solved, counterfactual=False)
     label = str(clf.classes_[state])
@@ -400,7 +360,8 @@ def _segment_of(
     run: tuple[int, int, int],
     solved: Sequence[_Solved],
     votes: np.ndarray,
-    familiar: Judge,
+    judge: Judge,
+    evidence: Sequence[bool],
 ) -> Segment:
     """One decoded run as a segment: frames, label, confidence, repetitions, explanation."""
     a, b, state = run
@@ -408,12 +369,14 @@ def _segment_of(
     frames_per_block = rec.fps * BLOCK_S
     start = int(round(a * frames_per_block))
     end = min(rec.n_frames, int(round(b * frames_per_block)))
-    inside = [w for w in solved if start <= w.centre < end]
+    # told by the windows centred in it that were evidence (none across a change of activity)
+    centred = [(w, e) for w, e in zip(solved, evidence, strict=True) if start <= w.centre < end]
+    inside = [w for w, e in centred if e] or [w for w, _ in centred]
     reps = _repetitions(sig, start, end)
-    text, ratio = _explain_segment(clf, inside, state, familiar)
+    text, ratio = _explain_segment(clf, inside, state, judge)
     label: str | None = None
-    if state == n_classes:  # confidence: the share of its windows unlike every case
-        share = [1.0 if familiar.unlike(w.distance) else 0.0 for w in inside]
+    if state == n_classes:  # confidence: the share of its windows unlike every activity
+        share = [1.0 if judge.unlike(w.nearest) else 0.0 for w in inside]
         confidence = float(np.mean(share)) if share else 1.0
     else:
         label, confidence = str(clf.classes_[state]), float(votes[a:b, state].mean())
@@ -421,19 +384,18 @@ def _segment_of(
 
 
 def segment(
-    clf: Any, recording: PoseSequence, familiar: Judge | None = None, k: int = 1
+    clf: Any, recording: PoseSequence, judge: Judge | None = None, k: int = 1
 ) -> Segmentation:
     """Segment ``recording`` (positions ``(frames, joints, 3)``) with the fitted classifier
     ``clf`` (a :class:`~cbr.estimator.CaseBaseClassifier`); see the module docstring.
 
-    ``familiar``: what judges a stretch unlike the case base: :class:`Familiarity` of
-    ``clf.case_base_`` when None (how far its activities lie apart), or the classifier's own
-    calibration ``clf.novelty_`` (how far held-out training clips lie from the cases);
-    ``k``: a window votes with its k nearest cases (1: its nearest; the votes of successive
-    windows are pooled over time). Raises DataError for a recording shorter than one window
-    or without a person."""
+    ``judge``: what makes a stretch unknown (:mod:`cbr.unknown`): the margin between the two
+    nearest activities, calibrated on ``clf.case_base_``, when None; ``k``: a window votes
+    with its k nearest cases (1: its nearest; the votes of successive windows are pooled over
+    time). Raises DataError for a recording shorter than one window or without a person, and
+    for a case base the judge cannot be calibrated on."""
     rec = recording.to_canonical()
-    familiar = familiar or Familiarity.of(clf.case_base_)
+    judge = judge or Margin.of(clf.case_base_)
     sig = movement_signals(rec)
     windows = windows_of(sig, rec.n_frames, rec.fps, rec.source)
     config = clf.feature_config_
@@ -442,9 +404,12 @@ def segment(
     votes = block_votes(solved, rec.n_frames, rec.fps)
     n_classes = len(clf.classes_)
     path = decode(votes)
-    path[unknown_blocks(solved, rec.n_frames, rec.fps, familiar)] = n_classes
+    evidence = within_runs(solved, rec.fps, path).tolist()
+    path[unknown_blocks(solved, rec.n_frames, rec.fps, judge, path)] = n_classes
     runs = _runs(path)
-    segments = tuple(_segment_of(clf, rec, sig, run, solved, votes, familiar) for run in runs)
+    segments = tuple(
+        _segment_of(clf, rec, sig, run, solved, votes, judge, evidence) for run in runs
+    )
     blocks: list[str | None] = []
     for a, b, state in runs:
         blocks += [None if state == n_classes else str(clf.classes_[state])] * (b - a)
@@ -454,11 +419,16 @@ def segment(
 __all__ = [
     "BLOCK_S",
     "Familiarity",
+    "HeldOut",
+    "Judge",
+    "Margin",
+    "activity_distances",
     "Segment",
     "Segmentation",
     "Window",
     "block_votes",
     "unknown_blocks",
+    "within_runs",
     "windows_of",
     "decode",
     "segment",

@@ -79,12 +79,13 @@ def model_document(clf: CaseBaseClassifier, target: str = "label") -> dict[str, 
     }
 
 
-def case_records(cb: CaseBase) -> list[NewCase]:
-    """The cases of ``cb`` as store records, with their provenance."""
-    return [
-        NewCase(
+def case_records(cb: CaseBase) -> Iterator[NewCase]:
+    """The cases of ``cb`` as store records, with their provenance, one at a time (the store
+    consumes them inside its transaction: no second copy of the case base)."""
+    for i in range(len(cb)):
+        yield NewCase(
             label=str(cb.labels[i]),
-            features=cb.problems[i].astype(np.float64),
+            features=np.asarray(cb.problems[i], dtype=np.float64),
             source=cb.sources[i],
             frame_start=cb.frames[i][0],
             frame_end=cb.frames[i][1],
@@ -92,8 +93,6 @@ def case_records(cb: CaseBase) -> list[NewCase]:
             skeleton=cb.skeletons[i],
             origin=cb.origins[i],
         )
-        for i in range(len(cb))
-    ]
 
 
 def stored_case_base(clf: CaseBaseClassifier) -> CaseBase:

@@ -4,7 +4,13 @@ The classifier is fitted exactly as ``CaseBaseClassifier.fit`` fits it in Python
 call), then stored whole (:mod:`cbr.stored`) in ONE transaction: an interrupted or failed train
 leaves the store as it was, and a store file that did not exist before appears only complete
 (:func:`casebase_store.write_store`).
-Appending adds cases to a stored case base without learning anything anew.
+Appending adds cases to a stored case base without learning anything anew; several processes
+may append to one case base at once.
+
+Each clip is reduced to what the fit needs as it is read (:mod:`cbr.described`), one clip in
+memory at a time: :func:`describe_entries` reads the clips of a dataset in this process or,
+with a ``scheduler``, on a Dask cluster (one task per clip), and the same records reach the
+same fit either way.
 """
 
 from __future__ import annotations
@@ -18,21 +24,18 @@ import numpy as np
 from sklearn.base import clone
 
 from casebase_store import StoreTransaction, open_store, write_store
+from features.cluster import connect, gather, map_outcomes
+from features.datasets import DatasetEntry, clip_target
 from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
 from features.progress import progress
 
-from .casebase import CaseBase, frames_of, skeleton_of, subject_of
-from .estimator import CaseBaseClassifier, check_labels, unusable
+from .casebase import CaseBase
+from .described import DescribedClip, describe_case, describe_clip
+from .estimator import CaseBaseClassifier, check_labels
 from .maintenance import MaintenanceReport, record_trim
-from .problem import FeatureConfig, warm
-from .stored import (
-    StoredClassifier,
-    case_records,
-    load_classifier,
-    model_document,
-    write_matrices,
-)
+from .problem import FeatureConfig
+from .stored import case_records, load_classifier, model_document, write_matrices
 from .stored import stored_case_base as to_store
 
 
@@ -52,12 +55,91 @@ class TrainResult:
     skipped: list[str] = field(default_factory=list)
 
 
-def usable(clips: Sequence[PoseSequence], labels: Sequence[Any]) -> tuple[list[int], list[str]]:
+@dataclass(frozen=True)
+class Plan:
+    """What each training clip is reduced to: for a new fit, the estimator's
+    :meth:`~cbr.estimator.CaseBaseClassifier.describe_plan` (``candidates``, ``mirror``,
+    ``sides``); for ``--append``, the stored case base's columns (``casebase``, no cases)."""
+
+    candidates: FeatureConfig | None = None
+    mirror: bool = False
+    sides: bool = False
+    casebase: CaseBase | None = None
+
+
+def fit_plan(estimator: CaseBaseClassifier) -> Plan:
+    """The plan of a new fit with ``estimator`` (bad parameters refused before any clip)."""
+    candidates, mirror, sides = estimator.describe_plan()
+    return Plan(candidates, mirror, sides)
+
+
+def describe(seq: PoseSequence, plan: Plan) -> DescribedClip:
+    """One clip reduced by ``plan`` (:func:`cbr.described.describe_clip` or
+    :func:`cbr.described.describe_case`)."""
+    if plan.casebase is not None:
+        return describe_case(seq, plan.casebase)
+    assert plan.candidates is not None
+    return describe_clip(seq, plan.candidates, plan.mirror, plan.sides)
+
+
+def describe_entry(entry: DatasetEntry, plan: Plan, target: str) -> list[tuple[DescribedClip, str]]:
+    """The work unit of ``train``: read one file of a dataset (decode, and pose estimation for
+    a video), reduce each of its clips by ``plan`` (usually one; one per labelled stretch of a
+    recording labelled over time; none when the filters leave it out), each with its value of
+    ``target``. Runs in this process or on a cluster's worker."""
+    out = []
+    for clip in entry.read():
+        value = clip_target(clip, target)
+        if value is None:
+            raise DataError(
+                f"no value for --target {target!r} (columns: label, subject"
+                + "".join(f", {k}" for k in sorted(clip.extras))
+                + ")",
+                clip.seq.source,
+            )
+        out.append((describe(clip.seq, plan), value))
+    return out
+
+
+def describe_entries(
+    entries: Sequence[DatasetEntry], plan: Plan, target: str, scheduler: str | None = None
+) -> tuple[list[DescribedClip], list[str]]:
+    """Every entry through :func:`describe_entry`, in entry order: clip after clip in this
+    process (one clip in memory at a time; the first bad clip stops it), or on the Dask
+    cluster ``scheduler`` names (:mod:`features.cluster`: every clip runs, and the failed ones
+    are reported together, each by name). Either way the same records, in the same order."""
+    if scheduler is None:
+        units = (
+            describe_entry(e, plan, target)
+            for e in progress(entries, desc="features", total=len(entries), unit="clip")
+        )
+        kept = [d for unit in units for d in unit]
+    else:
+        with connect(scheduler) as client:
+            outcomes = map_outcomes(client, describe_entry, entries, [e.name for e in entries],
+                                    plan, target, desc="features", unit="clip")  # fmt: skip
+            values, failed = gather(outcomes, len(entries))
+        if failed:
+            raise ClipsFailed([f"{o.name}: {o.error}" for o in failed])
+        kept = [d for unit in values for d in unit or []]
+    return [d for d, _ in kept], [t for _, t in kept]
+
+
+class ClipsFailed(DataError):
+    """Clips that could not be read or described on a cluster: one line each in ``lines``;
+    nothing was written."""
+
+    def __init__(self, lines: list[str]) -> None:
+        self.lines = lines
+        super().__init__(f"{len(lines)} clip(s) failed (listed above); nothing was written")
+
+
+def usable(clips: Sequence[DescribedClip]) -> tuple[list[int], list[str]]:
     """Positions of the clips that can be learned from, and the names of those that cannot
     (no frame shows the person's torso)."""
-    bad = set(unusable(clips))
-    names = [clips[i].source or f"clip {i}" for i in sorted(bad)]
-    return [i for i in range(len(clips)) if i not in bad], names
+    bad = [i for i, c in enumerate(clips) if c.torso_share == 0.0]
+    names = [clips[i].source or f"clip {i}" for i in bad]
+    return [i for i in range(len(clips)) if i not in set(bad)], names
 
 
 def _learned(clf: CaseBaseClassifier) -> dict[str, Any]:
@@ -69,18 +151,6 @@ def _learned(clf: CaseBaseClassifier) -> dict[str, Any]:
         "inner_loso_accuracy": dict(clf.selection_),
         "unlike_cases": clf.novelty_.to_dict(),
     }
-
-
-def fit_case_base(
-    clips: Sequence[PoseSequence], labels: Sequence[Any], estimator: CaseBaseClassifier
-) -> CaseBaseClassifier:
-    """``estimator`` cloned and fitted on ``clips``; the expensive features are computed first,
-    clip by clip, with a progress bar."""
-    level, mirror = estimator.wanted_config().level, estimator.needs_mirror_images()
-    for seq in progress(clips, desc="features", total=len(clips), unit="clip"):
-        warm(seq, level, mirror=mirror)
-    fitted: CaseBaseClassifier = clone(estimator)
-    return fitted.fit(list(clips), list(labels))
 
 
 def _counts(labels: Sequence[str]) -> dict[str, int]:
@@ -103,11 +173,47 @@ def train(
     if not name.strip():
         raise ConfigError("the case base name is empty", "--name")
     text = [str(v) for v in check_labels(labels, len(clips))]
-    keep, skipped = usable(clips, text)
+    plan = fit_plan(estimator)
+    described = [
+        describe(s, plan) for s in progress(clips, desc="features", total=len(clips), unit="clip")
+    ]
+    return train_described(db, name, described, text, estimator, target=target, replace=replace)
+
+
+def train_described(
+    db: str | Path,
+    name: str,
+    clips: Sequence[DescribedClip],
+    labels: Sequence[Any],
+    estimator: CaseBaseClassifier,
+    *,
+    target: str = "label",
+    replace: bool = False,
+) -> TrainResult:
+    """:func:`train` on clips already reduced by :func:`fit_plan` (:func:`describe_entries`)."""
+    if not name.strip():
+        raise ConfigError("the case base name is empty", "--name")
+    text = [str(v) for v in check_labels(labels, len(clips))]
+    keep, skipped = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise DataError("no clip shows a person: nothing to learn from", "training set")
-    fitted = fit_case_base(clips, text, estimator)
+    fitted: CaseBaseClassifier = clone(estimator).fit_described(clips, text)
+    return store_fitted(db, name, fitted, text, target=target, replace=replace, skipped=skipped)
+
+
+def store_fitted(
+    db: str | Path,
+    name: str,
+    fitted: CaseBaseClassifier,
+    labels: Sequence[str],
+    *,
+    target: str = "label",
+    replace: bool = False,
+    skipped: Sequence[str] = (),
+) -> TrainResult:
+    """Store the fitted classifier as case base ``name`` in ``db`` in one transaction
+    (``labels``: its training clips' solutions, for the summary)."""
     cb = to_store(fitted)
 
     def write(tx: StoreTransaction) -> None:
@@ -123,7 +229,7 @@ def train(
         records = progress(case_records(cb), desc="storing", total=len(cb), unit="case")
         ids = np.asarray(tx.add_cases(info, records))
         _cache_representations(tx, fitted, cb, ids)
-        tx.log(info, "build", reason=_build_reason(fitted, len(clips), text))
+        tx.log(info, "build", reason=_build_reason(fitted, len(labels), labels))
         if fitted.maintenance_ is not None:
             record_trim(tx, info, fitted.maintenance_, ids)
 
@@ -133,12 +239,12 @@ def train(
         name,
         len(cb),
         len(fitted.case_base_),
-        _counts(text),
+        _counts(labels),
         fitted.feature_config_,
         fitted.measure_.name,
         fitted.maintenance_,
         _learned(fitted),
-        skipped,
+        list(skipped),
     )
 
 
@@ -159,6 +265,25 @@ def _build_reason(clf: CaseBaseClassifier, n_clips: int, labels: Sequence[str]) 
     )
 
 
+def append_plan(db: str | Path, name: str, target: str = "label") -> tuple[Plan, str]:
+    """The plan of ``--append`` to case base ``name`` (its columns) and its identity
+    (``uid``): the append is refused if the case base is replaced meanwhile."""
+    store = open_store(db, create=False, readonly=True)
+    try:
+        stored = load_classifier(store, name)
+    finally:
+        store.close()
+    if stored.target != target:
+        raise ConfigError(
+            f"case base {name!r} predicts {stored.target!r}, not {target!r}: its cases "
+            f"cannot take --target {target}",
+            "--target",
+        )
+    cb = stored.classifier.case_base_
+    columns = CaseBase(cb.config, cb.measure, cb.problems[:0], cb.labels[:0], cb.names, cb.words)
+    return Plan(casebase=columns), stored.uid
+
+
 def append(
     db: str | Path,
     name: str,
@@ -171,33 +296,59 @@ def append(
     stored configuration (nothing is learned anew), in one transaction checked against the
     case base that was read."""
     text = [str(v) for v in check_labels(labels, len(clips))]
-    keep, skipped = usable(clips, text)
+    plan, uid = append_plan(db, name, target)
+    described = [
+        describe(s, plan) for s in progress(clips, desc="features", total=len(clips), unit="clip")
+    ]
+    return append_described(db, name, described, text, plan, uid)
+
+
+def append_described(
+    db: str | Path,
+    name: str,
+    clips: Sequence[DescribedClip],
+    labels: Sequence[Any],
+    plan: Plan,
+    uid: str,
+) -> TrainResult:
+    """:func:`append` on clips already reduced by :func:`append_plan`'s plan. Several
+    processes may append to one case base at once: each commits its cases in one transaction
+    (ids from the database, never reused), so none is lost or duplicated."""
+    text = [str(v) for v in check_labels(labels, len(clips))]
+    keep, skipped = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise DataError("no clip shows a person: nothing to add", "training set")
+    columns = plan.casebase
+    assert columns is not None
+    cb = CaseBase(
+        columns.config,
+        columns.measure,
+        np.stack([c.values for c in clips]),
+        np.array(text, dtype=object),
+        columns.names,
+        columns.words,
+        sources=tuple(c.source for c in clips),
+        subjects=tuple(c.subject for c in clips),
+        frames=tuple(c.frames for c in clips),
+        skeletons=tuple(c.skeleton for c in clips),
+    )
     store = open_store(db, create=False)
     try:
-        stored = load_classifier(store, name)
-        if stored.target != target:
-            raise ConfigError(
-                f"case base {name!r} predicts {stored.target!r}, not {target!r}: its cases "
-                f"cannot take --target {target}",
-                "--target",
-            )
-        cb = _new_cases(stored, clips, text)
         with store.transaction() as tx:
-            info = tx.expect(name, stored.uid)
+            info = tx.expect(name, uid)
             ids = np.asarray(tx.add_cases(info, case_records(cb)))
-            _cache_representations(tx, stored.classifier, cb, ids)
+            kind = cb.measure.cache_kind(tuple(cb.problems.shape[1:]))
+            if kind is not None:
+                reps = cb.measure.represent(cb.problems)
+                tx.put_representations(kind, {int(c): reps[i] for i, c in enumerate(ids)})
             tx.log(info, "append", reason=f"{len(cb)} cases from {len(clips)} clips")
         write_matrices(store, name)
         total = store.count_cases(name)
     finally:
         store.close()
-    clf = stored.classifier
     return TrainResult(
-        name, len(cb), total, _counts(text), clf.feature_config_, clf.measure_.name, None, {},
-        skipped,
+        name, len(cb), total, _counts(text), cb.config, cb.measure.name, None, {}, skipped,
     )  # fmt: skip
 
 
@@ -208,26 +359,3 @@ def _refresh_matrices(db: str | Path, name: str) -> None:
         write_matrices(store, name)
     finally:
         store.close()
-
-
-def _new_cases(
-    stored: StoredClassifier, clips: Sequence[PoseSequence], labels: list[str]
-) -> CaseBase:
-    """The clips as cases in the stored case base's columns."""
-    clf = stored.classifier
-    problems = [
-        clf.case_base_.problem_of(s)
-        for s in progress(clips, desc="features", total=len(clips), unit="clip")
-    ]
-    return CaseBase(
-        clf.feature_config_,
-        clf.measure_,
-        np.stack([p.values for p in problems]),
-        np.array(labels, dtype=object),
-        clf.case_base_.names,
-        clf.case_base_.words,
-        sources=tuple(s.source for s in clips),
-        subjects=tuple(subject_of(s) for s in clips),
-        frames=tuple(frames_of(s) for s in clips),
-        skeletons=tuple(skeleton_of(s) for s in clips),
-    )

@@ -24,6 +24,7 @@ from features.errors import ConfigError, DataError
 
 MIRROR_FLAG = "mirror_image"
 _PENALTY_SAMPLE = 2000
+_MIRROR_REFERENCE = 2000
 
 WEIGHTINGS = ("fisher", "none")
 
@@ -65,7 +66,8 @@ class FeatureWeights:
 
     def apply(self, X: np.ndarray) -> np.ndarray:
         """``(..., D)`` -> ``(..., D)`` weighted, z-normalised columns."""
-        return (np.asarray(X, dtype=np.float64) - self.centre) * self.multiplier()
+        out: np.ndarray = (np.asarray(X, dtype=np.float64) - self.centre) * self.multiplier()
+        return out
 
     def top(self, names: tuple[str, ...], n: int = 5) -> tuple[str, ...]:
         """The ``n`` names with the largest weights, largest first."""
@@ -157,21 +159,29 @@ def confusing_mirrors(
       raise): all their images are confusing;
     - single images whose nearest real clip is of another activity and closer than
       ``penalty`` are confusing too.
+
+    Nearest real clips are sought among at most 2000 of them (a seeded sample), so the cost
+    grows linearly with the clips.
     """
-    a, b = fw.apply(real), fw.apply(mirror)
-    sq_a = np.einsum("ij,ij->i", a, a)
     lab = np.asarray(y).astype(str)
-    nearest_label = np.empty(len(b), dtype=object)
-    nearest_dist = np.empty(len(b))
-    out = np.zeros(len(b), dtype=bool)
-    for s in range(0, len(b), 1000):  # chunks keep the distance block small at any size
-        blk = b[s : s + 1000]
+    # each image's nearest real clip among at most _MIRROR_REFERENCE of them (a seeded sample):
+    # all pairs would cost the square of the clips
+    ref = np.arange(len(real))
+    if len(real) > _MIRROR_REFERENCE:
+        ref = np.sort(np.random.default_rng(0).choice(len(real), _MIRROR_REFERENCE, replace=False))
+    a, ref_lab = fw.apply(real[ref]), lab[ref]
+    sq_a = np.einsum("ij,ij->i", a, a)
+    nearest_label = np.empty(len(mirror), dtype=object)
+    nearest_dist = np.empty(len(mirror))
+    out = np.zeros(len(mirror), dtype=bool)
+    for s in range(0, len(mirror), 1000):  # chunks keep the distance block small at any size
+        blk = fw.apply(mirror[s : s + 1000])
         d2 = np.einsum("ij,ij->i", blk, blk)[:, None] + sq_a[None, :] - 2.0 * (blk @ a.T)
         j = np.argmin(d2, axis=1)
         near = np.sqrt(np.maximum(d2[np.arange(len(blk)), j], 0.0))
-        nearest_label[s : s + len(blk)] = lab[j]
+        nearest_label[s : s + len(blk)] = ref_lab[j]
         nearest_dist[s : s + len(blk)] = near
-        out[s : s + len(blk)] = (lab[j] != lab[s : s + len(blk)]) & (near < penalty)
+        out[s : s + len(blk)] = (ref_lab[j] != lab[s : s + len(blk)]) & (near < penalty)
     twin: dict[str, str] = {}
     for c in np.unique(lab):
         got, count = np.unique(nearest_label[lab == c].astype(str), return_counts=True)

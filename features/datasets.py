@@ -311,6 +311,19 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
     file and line for a malformed row or a missing clip file.
     """
     csv_path = Path(csv_path)
+    rows = _csv_rows(csv_path)
+    header = _csv_header(rows[0], csv_path)
+    records = (
+        _csv_record(header, row, line_no, csv_path)
+        for line_no, row in enumerate(rows[1:], start=2)
+        if row and any(c.strip() for c in row)  # blank rows are skipped
+    )
+    return list(records)
+
+
+def _csv_rows(csv_path: Path) -> list[list[str]]:
+    """Every row of the CSV file (at least one); one clear error for a missing, non-UTF-8,
+    malformed or empty file."""
     if not csv_path.is_file():
         raise DataError("no such file", csv_path)
     rows: list[list[str]] = []
@@ -328,7 +341,13 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
         raise DataError(
             "empty CSV: a header row path,label[,subject][,start,end] is required", csv_path
         )
-    header = [h.strip().lower() for h in rows[0]]
+    return rows
+
+
+def _csv_header(row: list[str], csv_path: Path) -> list[str]:
+    """The column names in lower case: ``path`` and ``label`` (or ``label_file``) present,
+    none repeated, ``start`` and ``end`` both or neither."""
+    header = [h.strip().lower() for h in row]
     missing = [c for c in CSV_REQUIRED if c not in header]
     if missing == ["label"] and "label_file" in header:
         missing = []  # recordings labelled over time
@@ -342,58 +361,70 @@ def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
         raise DataError("line 1: repeated column names in the header", csv_path)
     if ("start" in header) != ("end" in header):
         raise DataError("line 1: columns start and end go together", csv_path)
-    out = []
-    for line_no, row in enumerate(rows[1:], start=2):
-        if not row or all(not c.strip() for c in row):
-            continue
-        if len(row) != len(header):
-            raise DataError(
-                f"line {line_no}: {len(row)} fields, the header has {len(header)}", csv_path
-            )
-        rec = dict(zip(header, (c.strip() for c in row), strict=True))
-        if not rec["path"]:
-            raise DataError(f"line {line_no}: empty path", csv_path)
-        track = _track_columns(rec, csv_path, line_no)
-        if not rec.get("label") and track is None:
-            raise DataError(f"line {line_no}: empty label", csv_path)
-        clip = Path(rec["path"])
-        if not clip.is_absolute():
-            clip = csv_path.parent / clip
-        if not _exists(clip, f"line {line_no}: ", csv_path):
-            raise DataError(f"line {line_no}: no such file {rec['path'][:200]}", csv_path)
-        start = end = None
-        if "start" in rec and (rec["start"] or rec["end"]):
-            try:
-                start, end = int(rec["start"]), int(rec["end"])
-            except ValueError:
-                raise DataError(
-                    f"line {line_no}: start and end must be whole frame numbers,"
-                    f" got {rec['start']!r}, {rec['end']!r}",
-                    csv_path,
-                ) from None
-            if start < 0 or end <= start:
-                raise DataError(
-                    f"line {line_no}: need 0 <= start < end (end exclusive), got {start}, {end}",
-                    csv_path,
-                )
-        extras = {
-            k: _parse_bool(v)
-            for k, v in rec.items()
-            if k not in ("path", "label", "subject", "start", "end", *_TRACK_COLUMNS)
-        }
-        out.append(
-            {
-                "path": clip,
-                "label": rec.get("label", ""),
-                "subject": rec.get("subject") or None,
-                "start": start,
-                "end": end,
-                "extras": extras,
-                "line": line_no,
-                "track": track,
-            }
+    return header
+
+
+def _csv_record(header: list[str], row: list[str], line_no: int, csv_path: Path) -> dict[str, Any]:
+    """One data row as the record :func:`read_labels_csv` returns."""
+    if len(row) != len(header):
+        raise DataError(
+            f"line {line_no}: {len(row)} fields, the header has {len(header)}", csv_path
         )
-    return out
+    rec = dict(zip(header, (c.strip() for c in row), strict=True))
+    if not rec["path"]:
+        raise DataError(f"line {line_no}: empty path", csv_path)
+    track = _track_columns(rec, csv_path, line_no)
+    if not rec.get("label") and track is None:
+        raise DataError(f"line {line_no}: empty label", csv_path)
+    clip = _clip_path(rec["path"], line_no, csv_path)
+    start, end = _frame_range(rec, line_no, csv_path)
+    extras = {
+        k: _parse_bool(v)
+        for k, v in rec.items()
+        if k not in ("path", "label", "subject", "start", "end", *_TRACK_COLUMNS)
+    }
+    return {
+        "path": clip,
+        "label": rec.get("label", ""),
+        "subject": rec.get("subject") or None,
+        "start": start,
+        "end": end,
+        "extras": extras,
+        "line": line_no,
+        "track": track,
+    }
+
+
+def _clip_path(path: str, line_no: int, csv_path: Path) -> Path:
+    """The clip a row names (relative to the CSV's folder), which must exist."""
+    clip = Path(path)
+    if not clip.is_absolute():
+        clip = csv_path.parent / clip
+    if not _exists(clip, f"line {line_no}: ", csv_path):
+        raise DataError(f"line {line_no}: no such file {path[:200]}", csv_path)
+    return clip
+
+
+def _frame_range(
+    rec: dict[str, str], line_no: int, csv_path: Path
+) -> tuple[int | None, int | None]:
+    """A row's ``start`` and ``end`` frames (end exclusive); (None, None) without them."""
+    if "start" not in rec or not (rec["start"] or rec["end"]):
+        return None, None
+    try:
+        start, end = int(rec["start"]), int(rec["end"])
+    except ValueError:
+        raise DataError(
+            f"line {line_no}: start and end must be whole frame numbers,"
+            f" got {rec['start']!r}, {rec['end']!r}",
+            csv_path,
+        ) from None
+    if start < 0 or end <= start:
+        raise DataError(
+            f"line {line_no}: need 0 <= start < end (end exclusive), got {start}, {end}",
+            csv_path,
+        )
+    return start, end
 
 
 def _csv_entries(csv_path: Path) -> list[_Entry]:
@@ -639,6 +670,74 @@ def _keep(
     return not (correct is not None and "correct" in extras and extras["correct"] != correct)
 
 
+@dataclass(frozen=True)
+class DatasetEntry:
+    """One file of a dataset, not read yet: ``read()`` reads it (on this machine or on a
+    cluster's worker, which must reach the same path) and gives its labelled clips (one, or
+    one per labelled stretch of a recording), without those that what only the file tells
+    (its subject, say) puts outside the filters."""
+
+    entry: _Entry
+    kind: str
+    labels: Collection[str] | None = None
+    subjects: Collection[str] | None = None
+    movements: Collection[str] | None = None
+    episodes: Collection[int] | None = None
+    correct: bool | None = None
+
+    @property
+    def name(self) -> str:
+        return self.entry.name
+
+    def _keep(self, label: str | None, subject: str | None, extras: dict[str, Any]) -> bool:
+        return _keep(label, subject, extras, self.labels, self.subjects, self.movements,
+                     self.episodes, self.correct)  # fmt: skip
+
+    def read(self) -> list[Clip]:
+        """The clips it holds (decoded, labelled: one, or one per labelled stretch of a
+        recording labelled over time), without those that fail the filters."""
+        e = self.entry
+        whole = e.load()
+        pieces = e.pieces(whole) if e.pieces is not None else [(whole, e.label)]
+        out = []
+        for seq, piece_label in pieces:
+            meta_label, meta_subject, meta_extras = _from_metadata(seq)
+            label = piece_label if piece_label is not None else meta_label
+            subject = e.subject if e.subject is not None else meta_subject
+            extras = {**meta_extras, **e.extras}
+            if label is None:
+                if self.kind != "pose_file":
+                    raise DataError(
+                        "no label: its metadata has none (put it in a labels CSV)", seq.source
+                    )
+                label = ""
+            if self._keep(label, subject, extras):
+                seq = seq.with_metadata(label=label, subject=subject, **extras)
+                out.append(Clip(seq=seq, label=label, subject=subject, extras=extras))
+        return out
+
+
+def dataset_entries(
+    path: str | Path,
+    *,
+    sensor: str = "kinect",
+    labels: Collection[str] | None = None,
+    subjects: Collection[str] | None = None,
+    movements: Collection[str] | None = None,
+    episodes: Collection[int] | None = None,
+    correct: bool | None = None,
+) -> list[DatasetEntry]:
+    """The clips of the dataset at ``path`` that may pass the filters (those of
+    :func:`iter_dataset`), found from names alone: nothing is decoded yet."""
+    path = Path(path)
+    kind = detect_kind(path)
+    return [
+        DatasetEntry(e, kind, labels, subjects, movements, episodes, correct)
+        for e in _entries(path, kind, sensor)
+        if _keep(e.label, e.subject, e.extras, labels, subjects, movements, episodes, correct)
+    ]
+
+
 def iter_dataset(
     path: str | Path,
     *,
@@ -659,13 +758,9 @@ def iter_dataset(
     (a pose file whose metadata has none) raises DataError naming it.
     """
     path = Path(path)
-    kind = detect_kind(path)
-    entries = [
-        e
-        for e in _entries(path, kind, sensor)
-        if _keep(e.label, e.subject, e.extras, labels, subjects, movements, episodes, correct)
-    ]
-    if limit is not None and kind not in ("class_folders", "pose_folder"):
+    entries = dataset_entries(path, sensor=sensor, labels=labels, subjects=subjects,
+                              movements=movements, episodes=episodes, correct=correct)  # fmt: skip
+    if limit is not None and entries and entries[0].kind not in ("class_folders", "pose_folder"):
         # Everything these filters test is known from the names; the folder kinds learn the
         # subject only from the file, so they stop after ``limit`` clips instead.
         entries = entries[: max(limit, 0)]
@@ -674,27 +769,11 @@ def iter_dataset(
     for entry in progress(entries, desc, total=len(entries), unit="clip"):
         if limit is not None and n_yielded >= limit:
             break
-        whole = entry.load()
-        pieces = entry.pieces(whole) if entry.pieces is not None else [(whole, entry.label)]
-        for seq, piece_label in pieces:
+        for clip in entry.read():
             if limit is not None and n_yielded >= limit:
                 break
-            meta_label, meta_subject, meta_extras = _from_metadata(seq)
-            label = piece_label if piece_label is not None else meta_label
-            subject = entry.subject if entry.subject is not None else meta_subject
-            extras = {**meta_extras, **entry.extras}
-            if label is None:
-                if kind == "pose_file":
-                    label = ""
-                else:
-                    raise DataError(
-                        "no label: its metadata has none (put it in a labels CSV)", seq.source
-                    )
-            if not _keep(label, subject, extras, labels, subjects, movements, episodes, correct):
-                continue
-            seq = seq.with_metadata(label=label, subject=subject, **extras)
             n_yielded += 1
-            yield Clip(seq=seq, label=label, subject=subject, extras=extras)
+            yield clip
 
 
 def clip_column(clip: Clip, column: str) -> Any:
@@ -749,6 +828,7 @@ __all__ = [
     "read_label_names",
     "read_label_track",
     "split_by_track",
+    "DatasetEntry",
     "clip_column",
     "clip_target",
     "dataset_files",
@@ -756,6 +836,7 @@ __all__ = [
     "truth_value",
     "UIPRMD_MOVEMENTS",
     "VIDEO_SUFFIXES",
+    "dataset_entries",
     "detect_kind",
     "find_asf",
     "iter_dataset",

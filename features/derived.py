@@ -36,6 +36,12 @@ def derived(seq: PoseSequence, kind: str, compute: Callable[[PoseSequence], T]) 
     return out
 
 
+def is_cached(seq: PoseSequence, kind: str) -> bool:
+    """Whether ``kind`` is already computed for ``seq`` (a caller warmed it and keeps it)."""
+    cache = _CACHES.get(kind)
+    return cache is not None and seq in cache
+
+
 def forget(seq: PoseSequence) -> None:
     """Drop everything cached for ``seq``."""
     for cache in _CACHES.values():

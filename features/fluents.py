@@ -49,6 +49,7 @@ __all__ = [
     "evaluate",
     "evaluate_chunks",
     "history_frames",
+    "state_columns",
     "state_signals",
 ]
 
@@ -692,6 +693,15 @@ def _confidence_numpy(
         if sel.any():
             out[:, sel] = block[:, prep.fluent[sel]]
     return out
+
+
+def state_columns(
+    table: FluentTable | None = None,
+) -> tuple[tuple[str, ...], tuple[str, ...], np.ndarray]:
+    """The columns :func:`evaluate` gives for ``table`` (default: the paper's), without a clip:
+    machine state names, words and ``(n_states,)`` whether each is locally temporal."""
+    prep = _prepare(table or DEFAULT_TABLE)
+    return prep.state_names, prep.words, prep.temporal
 
 
 def evaluate(

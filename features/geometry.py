@@ -24,16 +24,19 @@ WORLD_UP = np.array([0.0, 1.0, 0.0])
 
 def _joint(positions: np.ndarray, name: str) -> np.ndarray:
     """One canonical joint, ``(frames, 3)``, from positions ``(frames, 33, 3)``."""
-    return positions[:, JOINT_INDEX[name], :]
+    joint: np.ndarray = positions[:, JOINT_INDEX[name], :]
+    return joint
 
 
 def midpoint(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return 0.5 * (a + b)
+    mid: np.ndarray = 0.5 * (a + b)
+    return mid
 
 
 def norm(v: np.ndarray) -> np.ndarray:
     """Euclidean length along the last axis: ``(..., 3) -> (...)``."""
-    return np.sqrt(np.einsum("...i,...i->...", v, v))
+    length: np.ndarray = np.sqrt(np.einsum("...i,...i->...", v, v))
+    return length
 
 
 def unit(v: np.ndarray) -> np.ndarray:
@@ -45,7 +48,8 @@ def unit(v: np.ndarray) -> np.ndarray:
 
 def project(v: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """Project vectors onto the plane with unit ``normal``: ``v - (v·n) n``; shapes ``(..., 3)``."""
-    return v - np.einsum("...i,...i->...", v, normal)[..., None] * normal
+    projected: np.ndarray = v - np.einsum("...i,...i->...", v, normal)[..., None] * normal
+    return projected
 
 
 def angle_between(u: np.ndarray, v: np.ndarray) -> np.ndarray:

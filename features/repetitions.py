@@ -20,7 +20,9 @@ How (all channels at once, no per-frame loops):
 3. alternation (:func:`side_parts`): the deviations from the left-right symmetric mean
    posture split into what both sides do alike and what one side does against the other
    (:func:`mirror_angles`); the movement alternates when the second spans at least half as
-   much as the first and the body goes out to both sides about equally far;
+   much as the first and the body goes out to both sides about equally far (both taken
+   about their running mean over one period when the side-against-side movement repeats
+   clearly: bending the arms once to start jogging is not what repeats);
 4. the movement as one number per sample: the posture projected on the direction it moves
    back and forth along most (:func:`movement_direction`), signed so that it rises away from
    rest (the end nearer standing at ease, :data:`AT_EASE`) and, for a clearly periodic
@@ -33,6 +35,9 @@ How (all channels at once, no per-frame loops):
 The period also comes out of the QMP fits (:mod:`features.qmp`: SINDy with a period per state
 signal); the autocorrelation is used here because it reads all angles together and needs no
 window length, and the tests check that both agree.
+
+Cases for a case base: :func:`split_repetitions` cuts clips into their repetitions,
+:func:`split_windows` into the fixed windows ``posecbr segment`` classifies.
 """
 
 from __future__ import annotations
@@ -311,7 +316,7 @@ def movement_direction(x: np.ndarray) -> np.ndarray:
     posture, such as stepping into the exercise, moves once; repetitions move many times)."""
     v = np.diff(x, axis=0)
     if not len(v) or not np.any(v):
-        return np.eye(x.shape[1])[0]
+        return np.asarray(np.eye(x.shape[1])[0])
     _, _, vt = np.linalg.svd(v - v.mean(axis=0), full_matrices=False)
     return np.asarray(vt[0])
 
@@ -359,7 +364,7 @@ def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
         reach = 0.75 * float(np.median(line[inner] - rest))
         at_edge = (cand == 0) | (cand == len(line) - 1)
         cand = cand[~at_edge | (line[cand] - rest >= reach)]
-    return cand
+    return np.asarray(cand)
 
 
 def _span(line: np.ndarray) -> float:
@@ -415,11 +420,8 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
     if not alternating:
         direction = movement_direction(x)
         line = _movement_line(x, sig.names, direction)
-        if period is not None and strength >= CLEAR_PERIODICITY:
-            # a slow change of posture (stepping into place, drifting) is no repetition: the
-            # line of a clearly repeating movement is taken about its running mean over one
-            # period
-            line = line - uniform_filter1d(line, max(1, int(period * sig.fps)), mode="nearest")
+        # a slow change of posture (stepping into place, drifting) is no repetition
+        line = _steady(line, period, strength, sig.fps)
         distance = int(0.5 * (period or MIN_PERIOD_S) * sig.fps)
         reach = int(period * sig.fps) if period else len(line)
         far = _far_points(line, float(np.percentile(line, 5)), distance)
@@ -437,6 +439,15 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
     order = np.argsort(-weights, kind="stable")
     moving = tuple(sig.names[i] for i in order[:4] if weights[i] > 0.2 * weights.max())
     return RepetitionCount(tuple(reps), fps, n_frames, period, strength, bool(alternating), moving)
+
+
+def _steady(line: np.ndarray, period: float | None, strength: float, fps: float) -> np.ndarray:
+    """``line`` about its running mean over one ``period`` when the movement repeats clearly
+    (autocorrelation ``strength`` >= :data:`CLEAR_PERIODICITY`): a one-off change of posture
+    (bending the arms to start jogging) is no part of what repeats. As it is otherwise."""
+    if period is None or strength < CLEAR_PERIODICITY:
+        return line
+    return np.asarray(line - uniform_filter1d(line, max(1, int(period * fps)), mode="nearest"))
 
 
 def _alternating_repetitions(
@@ -457,9 +468,11 @@ def _alternating_repetitions(
     direction = movement_direction(anti)
     line = anti @ direction  # 0 = a symmetric posture
     alike = sym @ movement_direction(sym)
-    if _span(line) < 0.5 * _span(alike):
+    period, strength = find_period(np.diff(line)[:, None], fps)
+    if _span(_steady(line, period, strength, fps)) < 0.5 * _span(
+        _steady(alike, period, strength, fps)
+    ):
         return none  # mostly both sides alike (a squat, a jumping jack)
-    period, _ = find_period(np.diff(line)[:, None], fps)
     # a full period holds one repetition per side
     distance = int(0.25 * (period or 2 * MIN_PERIOD_S) * fps)
     # far points on each side of the symmetric posture; a posture held off to one side (a
@@ -488,7 +501,10 @@ __all__ = [
     "Repetition",
     "RepetitionCount",
     "Split",
+    "WINDOW_HOP_S",
+    "WINDOW_S",
     "split_repetitions",
+    "split_windows",
     "mirror_matrix",
     "movement_direction",
     "side_parts",
@@ -504,8 +520,8 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Split:
-    """Clips cut into their repetitions: the new clips, and how many of the originals had no
-    repetition (or were too short for one) and stayed whole."""
+    """Clips cut into their repetitions (or windows): the new clips, and how many of the
+    originals had no repetition (or were too short for one) and stayed whole."""
 
     clips: list[Clip]
     kept_whole: int
@@ -530,4 +546,37 @@ def split_repetitions(clips: Sequence[Clip]) -> Split:
         for k, r in enumerate(reps, start=1):
             part = stretch(clip.seq, r.start_frame, r.end_frame).with_metadata(repetition=k)
             out.append(dataclasses.replace(clip, seq=part, extras={**clip.extras, "repetition": k}))
+    return Split(out, whole)
+
+
+WINDOW_S = 2.0
+"""The length of the windows :func:`split_windows` cuts, the windows ``posecbr segment``
+classifies (cases and queries cut alike lie at comparable distances)."""
+WINDOW_HOP_S = 0.5
+"""A window starts every this many seconds."""
+
+
+def split_windows(
+    clips: Sequence[Clip], length_s: float = WINDOW_S, hop_s: float = WINDOW_HOP_S
+) -> Split:
+    """Every clip cut into windows of ``length_s`` seconds starting every ``hop_s`` seconds
+    (as many as fit whole), each a clip of its own with the clip's label, subject and extras
+    (plus ``window``: 1, 2, ...); frames and per-frame results are shared with the clip
+    (:func:`features.derived.stretch`). A clip shorter than one window stays whole.
+
+    A case base of windows is what segmenting a long recording matches its windows against:
+    every phase of a repeated movement is among the cases, as it is among the queries."""
+    out: list[Clip] = []
+    whole = 0
+    for clip in clips:
+        fps = clip.seq.fps
+        length, hop = int(round(length_s * fps)), max(1, int(round(hop_s * fps)))
+        starts = range(0, clip.seq.n_frames - length + 1, hop)
+        if length < 2 or not len(starts):
+            out.append(clip)
+            whole += 1
+            continue
+        for k, a in enumerate(starts, start=1):
+            part = stretch(clip.seq, a, a + length).with_metadata(window=k)
+            out.append(dataclasses.replace(clip, seq=part, extras={**clip.extras, "window": k}))
     return Split(out, whole)

@@ -44,7 +44,8 @@ def background(result: FluentResult) -> np.ndarray:
     """``(n_states,)`` bool: states that hold most of the time and say little on their own —
     no motion ("bend steady") and two joints "far from" each other."""
     far = np.array([n.endswith(".far_from") for n in result.state_names])
-    return result.steady | far
+    quiet: np.ndarray = result.steady | far
+    return quiet
 
 
 def holding(
@@ -73,7 +74,8 @@ def _clean(on: np.ndarray, min_run: int) -> np.ndarray:
     from scipy.ndimage import median_filter  # scipy loads only when there is flicker to clean
 
     size = (_median_size(min_run), 1)
-    return median_filter(on.astype(np.uint8), size=size, mode="nearest").astype(bool)
+    cleaned: np.ndarray = median_filter(on.astype(np.uint8), size=size, mode="nearest")
+    return cleaned.astype(bool)
 
 
 @dataclass

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import tomllib
 from pathlib import Path
 
@@ -172,3 +173,24 @@ def test_phase_gap_of_a_quarter_cycle() -> None:
     fits = fit_signals(np.stack([a, b, a], 1), 30.0, ["a", "b", "c"])
     assert phase_gap(fits, 0, 1)[0] == pytest.approx(np.pi / 2, abs=0.1)
     assert phase_gap(fits, 0, 2)[0] == pytest.approx(0.0, abs=0.05)
+
+
+def test_a_relation_missed_for_its_amplitude_says_so() -> None:
+    # both knees bend together (phase gap 0, same period) but only 0.1 rad out and back:
+    # knees_in_phase asks at least 0.2 rad of each, so the amplitude is what fails and the
+    # explanation must show it, not only the phase gap and period ratio that pass
+    add = load_add()
+    t = np.arange(120) / 30.0
+    knee = 2.2 + 0.1 * np.cos(2 * np.pi * t / 2.0)
+    names = add.signals
+    values = np.full((len(t), len(names)), 1.5) + 1e-4 * np.arange(len(names))
+    values[:, names.index("left_knee")] = knee
+    values[:, names.index("right_knee")] = knee
+    res = evaluate_criteria(add, fit_signals(values, 30.0, names))
+    q = res.names.index("knees_in_phase")
+    assert not res.met[0, q] and res.observable[0, q]
+    (text,) = res.failed[q]
+    assert text.startswith("left knee oscillating in phase with right knee (observed phase gap")
+    seen = re.search(r"smaller amplitude ([0-9.e-]+) rad\)$", text)
+    assert seen is not None, text
+    assert float(seen.group(1)) == pytest.approx(0.1, abs=0.005)

@@ -163,6 +163,73 @@ def test_malformed_asf_names_file(tmp_path: Path) -> None:
         read_asf_amc(tmp_path / "missing.asf", amcp)
 
 
+def _bone_blocks(asf: str) -> tuple[str, list[str], str]:
+    """The ASF text before the first bone, its bone blocks (each ``begin`` ... ``end``), and the
+    text from ``:hierarchy`` on."""
+    head, rest = asf.split("  begin\n", 1)
+    bones, tail = ("  begin\n" + rest).split(":hierarchy", 1)
+    blocks = ["  begin\n" + b for b in bones.split("  begin\n") if b]
+    return head, blocks, ":hierarchy" + tail
+
+
+def test_bones_listed_children_first_are_ordered_parents_first(tmp_path: Path) -> None:
+    head, blocks, tail = _bone_blocks(ASF)
+    asf, amc = _write(tmp_path, asf=head + "".join(reversed(blocks)) + tail)
+    skel = read_asf(asf)
+    assert list(skel.bones) == ["lhipjoint", "lfemur", "ltibia"]
+    assert [b.parent for b in skel.bones.values()] == ["root", "lhipjoint", "lfemur"]
+    # the same end points as the file in parents-first order (checked by hand above)
+    (tmp_path / "ordered").mkdir()
+    listed_in_order = read_asf_amc(*_write(tmp_path / "ordered")).positions
+    np.testing.assert_array_equal(read_asf_amc(asf, amc).positions, listed_in_order)
+
+
+@pytest.mark.parametrize(
+    ("asf", "message"),
+    [
+        (
+            ASF.replace("  begin\n     id 2", "  end\n  begin\n     id 2"),
+            "line 25: 'end' without 'begin'",
+        ),
+        (ASF.split(":hierarchy")[0] + "  begin\n     name x\n", "not closed with 'end'"),
+        (
+            ASF.replace(
+                "     direction 1 0 0\n     length 10\n     axis 0 0 90", "     axis 0 0 90"
+            ),
+            "line 25: bone lacks direction, length",
+        ),
+        (ASF.replace("dof rx", "dof rx rw"), "line 25: unknown dof 'rw'"),
+        (
+            ASF.replace("lhipjoint lfemur", "ltibia lfemur"),
+            "a cycle or unknown parent near 'lfemur'",
+        ),
+        (
+            ASF.replace("lfemur ltibia", "lfemur ltibia lknee"),
+            "line 46: hierarchy names unknown bone 'lknee'",
+        ),
+        (
+            ASF.replace(":bonedata", ":bonedata\n  name strayed outside a block\n").split(
+                "  begin"
+            )[0],
+            "no :bonedata bones",
+        ),
+    ],
+)
+def test_malformed_bone_blocks_and_hierarchy_name_the_line(
+    tmp_path: Path, asf: str, message: str
+) -> None:
+    path, _ = _write(tmp_path, asf=asf)
+    with pytest.raises(DataError) as info:
+        read_asf(path)
+    assert message in str(info.value) and info.value.source == str(path)
+
+
+def test_amc_values_before_the_first_frame_number(tmp_path: Path) -> None:
+    asf, amc = _write(tmp_path, amc=AMC.replace(":DEGREES\n1\n", ":DEGREES\n"))
+    with pytest.raises(DataError, match="line 4: data before the first frame number"):
+        read_asf_amc(asf, amc)
+
+
 # ---- real HDM05 clips -------------------------------------------------------------------
 
 

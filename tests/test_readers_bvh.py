@@ -102,6 +102,22 @@ def test_auto_unit(tmp_path: Path) -> None:
                                atol=1e-12)  # fmt: skip
 
 
+def test_z_up_file_is_turned_to_y_up(tmp_path: Path) -> None:
+    # read as z up, a file point (x, y, z) is at (y, z, x): the rest knee, (10, 50, 0) cm in
+    # the file, at (50, 0, 10) cm; the toe tip (10, 10, 15) at (10, 15, 10)
+    f = tmp_path / "a.bvh"
+    f.write_text(bvh_text("Zrotation Xrotation Yrotation", [ZERO.format(a=0, b=0)]))
+    seq = read_bvh(f, unit="cm", up="z")
+    np.testing.assert_allclose(
+        seq.positions[0, JOINT_INDEX["left_knee"]], [0.5, 0, 0.1], atol=1e-12
+    )
+    np.testing.assert_allclose(
+        seq.positions[0, JOINT_INDEX["left_foot_index"]], [0.1, 0.15, 0.1], atol=1e-12
+    )
+    with pytest.raises(DataError, match="up must be 'y' or 'z', got 'x'"):
+        read_bvh(f, unit="cm", up="x")
+
+
 @pytest.mark.parametrize(
     ("mutate", "message"),
     [

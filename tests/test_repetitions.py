@@ -142,9 +142,22 @@ def test_mocap_counts_against_hand_counts(recordings: dict[str, PoseSequence]) -
     err = np.abs(errors)
     assert len(err) == 18
     # the literature's measures: off-by-one accuracy and mean absolute error
-    assert (err <= 1).mean() >= 0.8
-    assert err.mean() <= 1.0
-    assert (err == 0).mean() >= 0.6
+    assert (err <= 1).all()
+    assert err.mean() <= 0.3
+    assert (err == 0).mean() >= 0.7
+
+
+def test_jogging_counts_one_repetition_per_step(recordings: dict[str, PoseSequence]) -> None:
+    """Jogging alternates legs; bending the arms into the jogging posture at the start is a
+    one-off change as large as the steps, not what repeats: one repetition per step, within
+    one of the hand counts (9 and 7 steps; the ends fade into standing and bouncing)."""
+    clips = [c for c in _fixture()["clips"] if c.get("activity") == "Jog"]
+    assert len(clips) == 2
+    for clip in clips:
+        seq = recordings[clip["source"]].slice_frames(clip["start_frame"], clip["end_frame"])
+        result = count_repetitions(seq)
+        assert result.alternating, clip["how"]
+        assert abs(result.count - clip["count"]) <= 1, (result.count, clip["how"])
 
 
 @pytest.mark.parametrize("activity", ["Squat", "JumpJack", "KneeRaise"])

@@ -139,3 +139,18 @@ def test_editor_choices_written_out_are_the_maintenance_editors() -> None:
     for p in (trim, train):
         (editor,) = [a for a in p._actions if "--editor" in a.option_strings]
         assert editor.choices is not None and sorted(editor.choices) == sorted(EDITORS)
+
+
+def test_unknown_choices_written_out_are_the_judges() -> None:
+    """segment and watch write the judges out (building the parser loads no numpy); the
+    default is the first, as in cbr.unknown."""
+    from cbr.unknown import JUDGES
+    from posecbr.cli import build_parser
+
+    parser = build_parser()
+    for name in ("segment", "watch"):
+        (unknown,) = [
+            a for a in _subcommand(parser, name)._actions if "--unknown" in a.option_strings
+        ]
+        assert unknown.choices is not None and tuple(unknown.choices) == JUDGES
+        assert unknown.default == JUDGES[0]

@@ -21,7 +21,7 @@ from posecbr.cli import main
 
 @pytest.fixture(scope="module")
 def case_base(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Repetitions of CMU 13_29 (six exercises), trained by the command."""
+    """Windows of CMU 13_29 (six exercises), trained by the command."""
     folder = tmp_path_factory.mktemp("cb")
     names = folder / "names.txt"
     names.write_text("1 JumpJack\n3 Squat\n4 KneeRaise\n5 ArmCircle\n6 Twist\n10 ToeTouch\n")
@@ -35,7 +35,7 @@ def case_base(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Pa
     labels = shared_data / "cmu-mocap6" / "truelabels" / "13_29.txt"
     db = folder / "cb.sqlite"
     argv = ["train", str(pose), "--frame-labels", str(labels), "--label-block", "0.1",
-            "--label-names", str(names), "--split", "repetitions", "--db", str(db)]  # fmt: skip
+            "--label-names", str(names), "--split", "windows", "--db", str(db)]  # fmt: skip
     assert main(argv) == 0
     return db
 

@@ -34,6 +34,7 @@ import sys
 import tempfile
 import zipfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -159,46 +160,67 @@ def canonical_order(model_proto: object) -> None:
     dtype, shape and bytes; a node output: the node's op, attributes and its inputs' hashes),
     and Kahn's algorithm always takes the ready node with the smallest hash.
     """
-    import heapq
-
-    from onnx import numpy_helper
-
     graph = model_proto.graph  # type: ignore[attr-defined]
-    value_hash: dict[str, str] = {"": "none"}
-    for v in graph.input:
-        value_hash[v.name] = hashlib.sha256(b"input:" + v.name.encode()).hexdigest()
-    for init in graph.initializer:
-        arr = numpy_helper.to_array(init)
-        h = hashlib.sha256(f"init:{arr.dtype}:{arr.shape}:".encode() + arr.tobytes())
-        value_hash[init.name] = h.hexdigest()
     nodes = list(graph.node)
-    producer = {out: i for i, n in enumerate(nodes) for out in n.output if out}
-    node_hash: dict[int, str] = {}
+    hashes = _StructuralHashes(graph, nodes)
+    order = _smallest_hash_first(nodes, hashes.producer, hashes.all_nodes())
+    copies = [type(n)() for n in order]
+    for dst, src in zip(copies, order, strict=True):
+        dst.CopyFrom(src)
+    del graph.node[:]
+    graph.node.extend(copies)
 
-    def hash_node(i: int) -> str:
-        if i in node_hash:
-            return node_hash[i]
-        node = nodes[i]
+
+class _StructuralHashes:
+    """Hashes of the values and nodes of an ONNX graph that depend only on its structure."""
+
+    def __init__(self, graph: Any, nodes: list[Any]) -> None:
+        from onnx import numpy_helper
+
+        self.nodes = nodes
+        self.value_hash: dict[str, str] = {"": "none"}
+        for v in graph.input:
+            self.value_hash[v.name] = hashlib.sha256(b"input:" + v.name.encode()).hexdigest()
+        for init in graph.initializer:
+            arr = numpy_helper.to_array(init)
+            h = hashlib.sha256(f"init:{arr.dtype}:{arr.shape}:".encode() + arr.tobytes())
+            self.value_hash[init.name] = h.hexdigest()
+        self.producer = {out: i for i, n in enumerate(nodes) for out in n.output if out}
+        self.node_hash: dict[int, str] = {}
+
+    def all_nodes(self) -> list[str]:
+        """Every node's hash, by position."""
+        # a node's hash recurses through its inputs' producers: as deep as the graph
+        sys.setrecursionlimit(max(10000, sys.getrecursionlimit()))
+        return [self.node(i) for i in range(len(self.nodes))]
+
+    def node(self, i: int) -> str:
+        """Node ``i``'s hash (op, attributes, inputs' hashes); its outputs' hashes with it."""
+        if i in self.node_hash:
+            return self.node_hash[i]
+        node = self.nodes[i]
         h = hashlib.sha256(f"{node.domain}:{node.op_type}:".encode())
         for attr in sorted(node.attribute, key=lambda a: a.name):
             h.update(attr.SerializeToString(deterministic=True))
         for name in node.input:
-            h.update(value_of(name).encode())
-        node_hash[i] = h.hexdigest()
+            h.update(self.value(name).encode())
+        self.node_hash[i] = h.hexdigest()
         for k, out in enumerate(node.output):
-            value_hash[out] = hashlib.sha256(f"{node_hash[i]}:{k}".encode()).hexdigest()
-        return node_hash[i]
+            self.value_hash[out] = hashlib.sha256(f"{self.node_hash[i]}:{k}".encode()).hexdigest()
+        return self.node_hash[i]
 
-    def value_of(name: str) -> str:
-        if name not in value_hash:
-            hash_node(producer[name])
-        return value_hash[name]
+    def value(self, name: str) -> str:
+        if name not in self.value_hash:
+            self.node(self.producer[name])
+        return self.value_hash[name]
 
-    import sys as _sys
 
-    _sys.setrecursionlimit(max(10000, _sys.getrecursionlimit()))
-    for i in range(len(nodes)):
-        hash_node(i)
+def _smallest_hash_first(
+    nodes: list[Any], producer: dict[str, int], node_hash: list[str]
+) -> list[Any]:
+    """Kahn's algorithm over ``nodes``, always taking the ready node with the smallest hash."""
+    import heapq
+
     deps = {i: {producer[x] for x in n.input if x in producer} for i, n in enumerate(nodes)}
     users: dict[int, list[int]] = {i: [] for i in range(len(nodes))}
     for i, d in deps.items():
@@ -217,11 +239,7 @@ def canonical_order(model_proto: object) -> None:
                 heapq.heappush(ready, (node_hash[j], j))
     if len(order) != len(nodes):
         raise SystemExit("graph has a cycle")
-    copies = [type(n)() for n in order]
-    for dst, src in zip(copies, order, strict=True):
-        dst.CopyFrom(src)
-    del graph.node[:]
-    graph.node.extend(copies)
+    return order
 
 
 def canonicalize_names(model_proto: object) -> None:

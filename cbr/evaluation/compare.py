@@ -107,11 +107,11 @@ def _skipped(
     return skipped, notes
 
 
-def _run_tasks(ctx: RunContext, jobs: int) -> list[FoldResult]:
+def _run_tasks(ctx: RunContext, jobs: int, scheduler: str | None = None) -> list[FoldResult]:
     """Every (method, fold) task of the methods that can run (``ctx.active``)."""
     folds = sorted(set(ctx.folds.tolist()))
     tasks = [FoldTask(mi, f) for mi in ctx.active for f in folds]
-    runner = make_runner(ctx, prepare_worker, min(jobs, max(1, len(tasks))))
+    runner = make_runner(ctx, prepare_worker, min(jobs, max(1, len(tasks))), scheduler)
     return list(runner.map(run_fold, tasks, "folds", "fold"))
 
 
@@ -178,7 +178,7 @@ def run_compare(
     skipped, method_notes = _skipped(methods, data, settings)
     active = tuple(mi for mi in range(len(methods)) if mi not in skipped)
     ctx = RunContext(data, tuple(methods), folds, active, int(settings.peer_length))
-    fold_results = _run_tasks(ctx, int(settings.jobs))
+    fold_results = _run_tasks(ctx, int(settings.jobs), settings.scheduler)
     rows = [
         _method_result(mi, m, data, skipped, fold_results, settings) for mi, m in enumerate(methods)
     ]

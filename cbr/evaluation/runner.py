@@ -1,11 +1,12 @@
-"""Where the tasks of a comparison run: serially in this process, or in worker processes
-started with *spawn* that each receive the shared data once.
+"""Where the tasks of a comparison run: serially in this process, in worker processes
+started with *spawn* that each receive the shared data once, or on a Dask cluster.
 
 A runner is made with a ``context`` (the data every task reads) and a ``setup`` run once per
 worker before its first task (warming caches and compilers); ``map(fn, tasks)`` then yields
 ``fn(context, task)`` for every task, in the order they finish, with a progress bar. ``fn`` and
-``setup`` must be module-level functions and the context picklable, so that another backend
-(e.g. dask.distributed: scatter the context, map the tasks) fits the same interface.
+``setup`` must be module-level functions and the context picklable: :class:`DaskRunner` runs
+the same tasks on a Dask cluster (``--scheduler``; the context scattered to every worker once,
+the tasks mapped).
 
 Spawn, not fork: a forked child inherits the parent's threads' locks (GNU OpenMP under
 scikit-learn's neighbour search aborts such children), and fork does not exist on Windows and
@@ -105,8 +106,54 @@ class ProcessRunner(Runner[C]):
                     fut.cancel()
 
 
-def make_runner(context: C, setup: Callable[[C], None] | None = None, jobs: int = 1) -> Runner[C]:
-    """A serial runner for ``jobs == 1``, else ``jobs`` spawned worker processes."""
+# The contexts this Dask worker process has run ``setup`` for (kept alive: identity, not id()).
+_DASK_READY: list[Any] = []
+
+
+def _dask_call(task: T, fn: Callable[[Any, T], R], context: Any, setup: Any) -> R:
+    """One task on a Dask worker: the scattered ``context`` is one object per worker, so the
+    caches ``setup`` warms serve every later task there."""
+    if setup is not None and not any(c is context for c in _DASK_READY):
+        setup(context)
+        _DASK_READY.append(context)
+    return fn(context, task)
+
+
+class DaskRunner(Runner[C]):
+    """Tasks on a Dask cluster (:mod:`features.cluster`: ``local:N`` or a scheduler address);
+    the context is sent to every worker once, and each worker runs ``setup`` before its first
+    task. A worker that dies has its tasks run again elsewhere; a task that fails stops the
+    map with its error."""
+
+    def __init__(self, context: C, setup: Callable[[C], None] | None, scheduler: str) -> None:
+        super().__init__(context, setup)
+        self.scheduler = scheduler
+
+    def map(
+        self, fn: Callable[[C, T], R], tasks: Sequence[T], desc: str = "tasks", unit: str = "task"
+    ) -> Iterator[R]:
+        from features.cluster import connect, map_outcomes
+
+        names = [str(t) for t in tasks]
+        with connect(self.scheduler) as client:
+            outcomes = map_outcomes(client, _dask_call, tasks, names, fn, self.context,
+                                    self.setup, desc=desc, unit=unit)  # fmt: skip
+            for o in outcomes:
+                if not o.ok:
+                    raise PosecbrError(f"task {o.name} failed: {o.error}", "--scheduler")
+                yield o.value  # type: ignore[misc]
+
+
+def make_runner(
+    context: C,
+    setup: Callable[[C], None] | None = None,
+    jobs: int = 1,
+    scheduler: str | None = None,
+) -> Runner[C]:
+    """A Dask runner when ``scheduler`` is given, else a serial runner for ``jobs == 1`` and
+    ``jobs`` spawned worker processes otherwise."""
+    if scheduler is not None:
+        return DaskRunner(context, setup, scheduler)
     if jobs <= 1:
         return SerialRunner(context, setup)
     return ProcessRunner(context, setup, jobs)

@@ -26,6 +26,7 @@ class CompareSettings:
     trimming (None: keep all); cbr_params: further ``CaseBaseClassifier`` parameters given to
     every case-base configuration (e.g. ``{"states": "all", "length": 48}``); peer_length:
     frames the peers' angle series are resampled to; jobs: worker processes for the folds;
+    scheduler: run the folds on a Dask cluster instead (``local:N`` or a scheduler address);
     bootstrap: resamples for the F1 interval; explain: misclassified clips to explain.
     """
 
@@ -42,6 +43,7 @@ class CompareSettings:
     within: str | None = "auto"
     peer_length: int = 64
     jobs: int = 1
+    scheduler: str | None = None
     seed: int = 0
     bootstrap: int = 1000
     explain: int = 5

@@ -66,6 +66,7 @@ class SimilarityMeasure:
 
     def cache_kind(self, problem_shape: tuple[int, ...]) -> str | None:
         """Key under which per-case representations are cached in the store (None: don't)."""
+        del problem_shape  # part of the plug-in interface: DTW's key depends on the length
         return None
 
     def represent(self, problems: np.ndarray) -> np.ndarray:

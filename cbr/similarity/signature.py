@@ -70,6 +70,7 @@ class Signature(SimilarityMeasure):
             raise ConfigError(f"depth must be 1..6, got {self.depth!r}", "similarity signature")
 
     def cache_kind(self, problem_shape: tuple[int, ...]) -> str | None:
+        del problem_shape  # a signature's settings alone fix its representation
         return (
             f"signature:depth={int(self.depth)},time={int(bool(self.time))},"
             f"lead_lag={int(bool(self.lead_lag))},basepoint={int(bool(self.basepoint))}"

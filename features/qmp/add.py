@@ -34,6 +34,7 @@ measured between the two fitted oscillations over the window (see :func:`phase_g
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -180,7 +181,7 @@ def _unit_words(signal: str, quantity: str) -> str:
 @cache
 def known_signals() -> frozenset[str]:
     """Names of every state signal the fluent engine computes."""
-    from features.fluents import ANGLE_SIGNALS, NEAR_SIGNALS
+    from features.signals import ANGLE_SIGNALS, NEAR_SIGNALS
 
     return frozenset(ANGLE_SIGNALS) | frozenset(NEAR_SIGNALS)
 
@@ -207,6 +208,12 @@ def _table(raw: Any, where: str, src: str) -> dict[str, Any]:
     if not isinstance(raw, dict):
         raise ConfigError(f"{where}: expected a table, got {type(raw).__name__}", src)
     return raw
+
+
+def _known_fields(raw: Mapping[str, Any], known: AbstractSet[str], where: str, src: str) -> None:
+    extra = set(raw) - known
+    if extra:
+        raise ConfigError(f"{where}: unknown field(s) {sorted(extra)}", src)
 
 
 def _text(raw: Mapping[str, Any], key: str, where: str, src: str) -> str:
@@ -244,9 +251,7 @@ _RELATION_KEYS = {
 def _parse_test(raw: Any, side: str | None, where: str, src: str) -> Test:
     raw = _table(raw, where, src)
     if "relation" in raw or "signals" in raw:
-        extra = set(raw) - _RELATION_KEYS
-        if extra:
-            raise ConfigError(f"{where}: unknown field(s) {sorted(extra)}", src)
+        _known_fields(raw, _RELATION_KEYS, where, src)
         rel = raw.get("relation")
         if rel not in RELATIONS:
             raise ConfigError(f"{where}: field 'relation' must be one of {RELATIONS}", src)
@@ -267,9 +272,7 @@ def _parse_test(raw: Any, side: str | None, where: str, src: str) -> Test:
         return Relation(
             _resolve(pair[0], side, where, src), _resolve(pair[1], side, where, src), rel, **opts
         )
-    extra = set(raw) - _CONDITION_KEYS
-    if extra:
-        raise ConfigError(f"{where}: unknown field(s) {sorted(extra)}", src)
+    _known_fields(raw, _CONDITION_KEYS, where, src)
     signal = _text(raw, "signal", where, src)
     quantity = _text(raw, "quantity", where, src)
     if quantity not in QUANTITIES:
@@ -288,9 +291,7 @@ def _parse_test(raw: Any, side: str | None, where: str, src: str) -> Test:
 def _parse_criterion(name: str, raw: Any, src: str) -> Criterion:
     where = f"qmp '{name}'"
     raw = _table(raw, where, src)
-    extra = set(raw) - {"words", "sides", "conditions"}
-    if extra:
-        raise ConfigError(f"{where}: unknown field(s) {sorted(extra)}", src)
+    _known_fields(raw, {"words", "sides", "conditions"}, where, src)
     words = _text(raw, "words", where, src)
     sides = raw.get("sides")
     if sides is not None and sides not in SIDE_MODES:
@@ -311,9 +312,7 @@ def _parse_criterion(name: str, raw: Any, src: str) -> Criterion:
 def _parse_activity(name: str, raw: Any, criteria: Mapping[str, Criterion], src: str) -> Activity:
     where = f"activity '{name}'"
     raw = _table(raw, where, src)
-    extra = set(raw) - {"words", "labels", "sequence"}
-    if extra:
-        raise ConfigError(f"{where}: unknown field(s) {sorted(extra)}", src)
+    _known_fields(raw, {"words", "labels", "sequence"}, where, src)
     words = _text(raw, "words", where, src)
     labels = raw.get("labels")
     if labels is None:
@@ -325,23 +324,26 @@ def _parse_activity(name: str, raw: Any, criteria: Mapping[str, Criterion], src:
         raise ConfigError(f"{where}: missing field 'sequence'", src)
     if not isinstance(seq, list) or len(seq) < 2:
         raise ConfigError(f"{where}: field 'sequence' must list at least two QMPs", src)
-    steps = []
-    for i, item in enumerate(seq):
-        w = f"{where}: sequence[{i}]"
-        item = _table(item, w, src)
-        extra = set(item) - {"qmp", "weight"}
-        if extra:
-            raise ConfigError(f"{w}: unknown field(s) {sorted(extra)}", src)
-        qmp = _text(item, "qmp", w, src)
-        if qmp not in criteria:
-            raise ConfigError(f"{w}: unknown qmp {qmp!r}", src)
-        if "weight" not in item:
-            raise ConfigError(f"{w}: missing field 'weight'", src)
-        weight = item["weight"]
-        if isinstance(weight, bool) or not isinstance(weight, int) or not 1 <= weight <= 10:
-            raise ConfigError(f"{w}: field 'weight' must be an integer from 1 to 10", src)
-        steps.append(Step(qmp, weight))
-    return Activity(name, words, tuple(labels), tuple(steps))
+    steps = tuple(
+        _parse_step(item, criteria, f"{where}: sequence[{i}]", src) for i, item in enumerate(seq)
+    )
+    return Activity(name, words, tuple(labels), steps)
+
+
+def _parse_step(raw: Any, criteria: Mapping[str, Criterion], where: str, src: str) -> Step:
+    """One ``{ qmp = ..., weight = ... }`` of an activity's sequence: a known QMP, a weight
+    from 1 to 10."""
+    item = _table(raw, where, src)
+    _known_fields(item, {"qmp", "weight"}, where, src)
+    qmp = _text(item, "qmp", where, src)
+    if qmp not in criteria:
+        raise ConfigError(f"{where}: unknown qmp {qmp!r}", src)
+    if "weight" not in item:
+        raise ConfigError(f"{where}: missing field 'weight'", src)
+    weight = item["weight"]
+    if isinstance(weight, bool) or not isinstance(weight, int) or not 1 <= weight <= 10:
+        raise ConfigError(f"{where}: field 'weight' must be an integer from 1 to 10", src)
+    return Step(qmp, weight)
 
 
 def parse_add(raw: Mapping[str, Any], source: str = "ADD") -> ADD:
@@ -398,7 +400,9 @@ class CriteriaResult:
 
 
 def _test_values(test: Test, fits: QMPFits) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """(passed ``(W,)``, observable ``(W,)``, observed values) of one test over all windows."""
+    """(passed ``(W,)``, observable ``(W,)``, observed values) of one test over all windows.
+    The observed values, each ``(W,)``: a condition's quantity; a relation's phase gap (from
+    anti-phase for ``anti_phase``), period ratio and smaller amplitude."""
     idx = [fits.index(s) for s in test.signals]
     observable = (fits.status[:, idx] != NOT_ENOUGH_DATA).all(axis=1)
     if isinstance(test, Condition):
@@ -422,7 +426,7 @@ def _test_values(test: Test, fits: QMPFits) -> tuple[np.ndarray, np.ndarray, lis
             & (ratio <= test.max_period_ratio)
             & (diff <= test.max_phase_diff_rad)
         )
-    return ok & np.isfinite(diff), observable, [diff, ratio]
+    return ok & np.isfinite(diff), observable, [diff, ratio, amp.min(axis=1)]
 
 
 def phase_gap(fits: QMPFits, a: int, b: int, samples: int = 64) -> np.ndarray:
@@ -448,10 +452,13 @@ def phase_gap(fits: QMPFits, a: int, b: int, samples: int = 64) -> np.ndarray:
     den = np.sqrt((curves[0] ** 2).sum(axis=1) * (curves[1] ** 2).sum(axis=1))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = np.where(den > 0, num / den, np.nan)
-    return np.arccos(np.clip(corr, -1.0, 1.0))
+    gap: np.ndarray = np.arccos(np.clip(corr, -1.0, 1.0))
+    return gap
 
 
-def _failure_text(test: Test, values: list[np.ndarray], w: int, fits: QMPFits) -> str:
+def _failure_text(test: Test, values: list[np.ndarray], w: int) -> str:
+    """Why ``test`` failed in window ``w``: what it asks and what :func:`_test_values`
+    observed there (a relation: every part it checks, the amplitude included)."""
     if isinstance(test, Condition):
         v = values[0][w]
         unit = _unit_words(test.signal, test.quantity)
@@ -460,10 +467,14 @@ def _failure_text(test: Test, values: list[np.ndarray], w: int, fits: QMPFits) -
         else:
             seen = "no oscillation" if test.quantity in ("period_s", "phase_rad") else "undefined"
         return f"{test.describe()} (observed {seen})"
-    diff, ratio = values[0][w], values[1][w]
+    diff, ratio, amp = values[0][w], values[1][w], values[2][w]
     if not np.isfinite(diff):
         return f"{test.describe()} (observed: not oscillating)"
-    return f"{test.describe()} (observed phase gap {diff:.2f} rad, period ratio {ratio:.2f})"
+    unit = _unit_words(test.signal_a, "amplitude")
+    return (
+        f"{test.describe()} (observed phase gap {diff:.2f} rad, period ratio {ratio:.2f}, "
+        f"smaller amplitude {amp:.3g}{unit})"
+    )
 
 
 def evaluate_criteria(add: ADD, fits: QMPFits) -> CriteriaResult:
@@ -508,7 +519,7 @@ def evaluate_criteria(add: ADD, fits: QMPFits) -> CriteriaResult:
             for v in variants:
                 for (ok, _obs, values), test in v_tests[v]:
                     if not ok[w]:
-                        texts.append(_failure_text(test, values, w, fits))
+                        texts.append(_failure_text(test, values, w))
             failed[q] = tuple(dict.fromkeys(texts))
     return CriteriaResult(names, met, observable, fraction, closest, tuple(failed))
 

@@ -44,9 +44,13 @@ class SavitzkyGolay:
         n = self.window_frames(fps)
         if x.shape[0] < n:
             raise ValueError(f"need at least {n} frames for the derivative, got {x.shape[0]}")
-        return savgol_filter(x, n, self.polyorder, deriv=1, delta=1.0 / fps, axis=0, mode="interp")
+        dx: np.ndarray = savgol_filter(
+            x, n, self.polyorder, deriv=1, delta=1.0 / fps, axis=0, mode="interp"
+        )
+        return dx
 
     def smooth(self, x: np.ndarray, fps: float) -> np.ndarray:
         """The smoothed signal itself (same window), ``(frames, ...)``."""
         n = self.window_frames(fps)
-        return savgol_filter(x, n, self.polyorder, deriv=0, axis=0, mode="interp")
+        smooth: np.ndarray = savgol_filter(x, n, self.polyorder, deriv=0, axis=0, mode="interp")
+        return smooth

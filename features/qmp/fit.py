@@ -162,7 +162,8 @@ def _rss(xdot: np.ndarray, coef: np.ndarray, gram: np.ndarray, rhs: np.ndarray) 
     """||y - Theta w||^2 from the normal equations: y.y - 2 w.b + w.G.w (clipped at 0)."""
     yy = np.einsum("fs,fs->s", xdot, xdot)
     quad = np.einsum("...i,...ij,...j->...", coef, gram, coef)
-    return np.maximum(yy - 2.0 * np.einsum("...i,...i->...", coef, rhs) + quad, 0.0)
+    rss: np.ndarray = np.maximum(yy - 2.0 * np.einsum("...i,...i->...", coef, rhs) + quad, 0.0)
+    return rss
 
 
 def selection_score(
@@ -180,7 +181,9 @@ def selection_score(
     if selection != "bic":
         raise ConfigError(f"selection must be one of {SELECTIONS}, got {selection!r}", "QMPConfig")
     floor = 1e-12 * energy + 1e-300  # a noise-free fit must not score -inf
-    return n_samples * np.log(np.maximum(rss, floor) / n_samples) + n_terms * np.log(n_samples)
+    penalty = n_terms * np.log(n_samples)
+    bic: np.ndarray = n_samples * np.log(np.maximum(rss, floor) / n_samples) + penalty
+    return bic
 
 
 def search_period(

@@ -60,7 +60,8 @@ class ExplicitTimeLibrary:
 
     def matrix(self, t: np.ndarray, period: float) -> np.ndarray:
         """Theta for one period: ``(frames, 6)``."""
-        return self.matrices(t, np.array([period]))[0]
+        theta: np.ndarray = self.matrices(t, np.array([period]))[0]
+        return theta
 
     def to_pysindy(self, period: float, n_states: int = 1) -> Any:
         """The same basis as a pysindy library acting on a control input ``u = t``.

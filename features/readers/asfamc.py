@@ -40,6 +40,7 @@ thumb                                BlazePose's thumb knuckle)
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -153,109 +154,180 @@ def _root_order(tokens: list[str], path: Path, line_no: int) -> tuple[str, ...]:
 def read_asf(path: str | Path) -> Skeleton:
     """Parse an ASF skeleton file. Raises DataError naming the file and line if malformed."""
     path = Path(path)
-    lines = read_text(path).split("\n")
     skel = Skeleton(path, 1.0, True, ("TX", "TY", "TZ", "RX", "RY", "RZ"), "XYZ", np.zeros(3))
-    section = ""
-    bone: dict[str, object] | None = None
-    parsed: list[dict[str, object]] = []
+    blocks = _BoneBlocks(path)
     hierarchy: list[tuple[int, list[str]]] = []
-    for i, raw in enumerate(lines, start=1):
-        line = raw.split("#", 1)[0].strip()
-        if not line:
+    for section, line_no, tokens in _asf_sections(read_text(path).split("\n"), path):
+        if section == "units":
+            _units_line(skel, tokens, line_no)
+        elif section == "root":
+            _root_line(skel, tokens, line_no)
+        elif section == "bonedata":
+            blocks.line(tokens, line_no)
+        elif section == "hierarchy" and tokens[0].lower() not in ("begin", "end"):
+            hierarchy.append((line_no, tokens))
+    defined = {bone.name: bone for bone in blocks.bones()}
+    skel.bones = _parents_first(defined, _parent_of(hierarchy, defined, path), path)
+    return skel
+
+
+_NEEDS_VALUE = frozenset({"name", "axis", "order", "direction", "length"})
+
+
+def _asf_sections(lines: list[str], path: Path) -> Iterator[tuple[str, int, list[str]]]:
+    """Each statement of an ASF file as (section, line number, tokens): comments and blank
+    lines dropped, the ``:section`` lines consumed (``units``, ``root``, ``bonedata``, ...)."""
+    section = ""
+    for line_no, raw in enumerate(lines, start=1):
+        tokens = raw.split("#", 1)[0].split()
+        if not tokens:
             continue
-        tokens = line.split()
         head = tokens[0].lower()
-        if len(tokens) < 2 and head in ("name", "axis", "order", "direction", "length"):
-            raise DataError(f"line {i}: {head!r} without a value", path)
+        if len(tokens) < 2 and head in _NEEDS_VALUE:
+            raise DataError(f"line {line_no}: {head!r} without a value", path)
         if head.startswith(":"):
             section = head[1:]
-            if section in ("name", "version", "documentation"):
-                section = "skip:" + section
             continue
-        if section == "units" and len(tokens) >= 2:
-            if head == "length":
-                skel.length_scale = float(_floats(tokens[1:2], path, i)[0])
-            elif head == "angle":
-                skel.angle_deg = tokens[1].lower().startswith("deg")
-        elif section == "root":
-            if head == "order":
-                skel.root_order = _root_order(tokens[1:], path, i)
-            elif head == "axis":
-                skel.root_axis = _axis_order(tokens[1], path, i)
-            elif head == "orientation":
-                skel.root_orientation_deg = _floats(tokens[1:4], path, i, 3)
-        elif section == "bonedata":
-            if head == "begin":
-                bone = {"line": i}
-            elif head == "end":
-                if bone is None:
-                    raise DataError(f"line {i}: 'end' without 'begin'", path)
-                parsed.append(bone)
-                bone = None
-            elif bone is not None:
-                if head == "name":
-                    bone["name"] = tokens[1]
-                elif head == "direction":
-                    bone["direction"] = _floats(tokens[1:4], path, i, 3)
-                elif head == "length":
-                    bone["length"] = float(_floats(tokens[1:2], path, i, 1)[0])
-                elif head == "axis":
-                    bone["axis"] = _floats(tokens[1:4], path, i, 3)
-                    bone["order"] = _axis_order(tokens[4], path, i) if len(tokens) > 4 else "XYZ"
-                elif head == "dof":
-                    bone["dof"] = tuple(t.lower() for t in tokens[1:])
-        elif section == "hierarchy":
-            if head not in ("begin", "end"):
-                hierarchy.append((i, tokens))
-    if bone is not None:
-        raise DataError("bone definition not closed with 'end' (truncated?)", path)
-    if not parsed:
-        raise DataError("no :bonedata bones (not an ASF file?)", path)
-    defined: dict[str, Bone] = {}
-    for b in parsed:
-        missing = [k for k in ("name", "direction", "length") if k not in b]
-        if missing:
-            raise DataError(f"line {b['line']}: bone lacks {', '.join(missing)}", path)
-        dof: tuple[str, ...] = tuple(b.get("dof", ()))  # type: ignore[arg-type]
-        bad = [d for d in dof if d not in _DOF_AXES]
-        if bad:
-            raise DataError(f"line {b['line']}: unknown dof {bad[0]!r}", path)
-        name = str(b["name"])
-        direction = np.asarray(b["direction"], dtype=float)
-        norm = np.linalg.norm(direction)
-        defined[name] = Bone(
-            name=name,
-            direction=direction / norm if norm > 0 else direction,
-            length=float(b["length"]),  # type: ignore[arg-type]
-            axis_deg=np.asarray(b.get("axis", np.zeros(3)), dtype=float),
-            axis_order=str(b.get("order", "XYZ")),
-            dof=dof,
-        )
+        yield section, line_no, tokens
+
+
+def _units_line(skel: Skeleton, tokens: list[str], line_no: int) -> None:
+    """A ``:units`` statement: the length scale or the angle unit (others, like mass, unused)."""
+    if len(tokens) < 2:
+        return
+    head = tokens[0].lower()
+    if head == "length":
+        skel.length_scale = float(_floats(tokens[1:2], skel.path, line_no)[0])
+    elif head == "angle":
+        skel.angle_deg = tokens[1].lower().startswith("deg")
+
+
+def _root_line(skel: Skeleton, tokens: list[str], line_no: int) -> None:
+    """A ``:root`` statement: channel order, axis order or orientation (position unused)."""
+    head = tokens[0].lower()
+    if head == "order":
+        skel.root_order = _root_order(tokens[1:], skel.path, line_no)
+    elif head == "axis":
+        skel.root_axis = _axis_order(tokens[1], skel.path, line_no)
+    elif head == "orientation":
+        skel.root_orientation_deg = _floats(tokens[1:4], skel.path, line_no, 3)
+
+
+@dataclass
+class _BoneDraft:
+    """One ``begin`` ... ``end`` block of ``:bonedata`` as read, before it is checked."""
+
+    line: int
+    name: str | None = None
+    direction: np.ndarray | None = None
+    length: float | None = None
+    axis: np.ndarray | None = None
+    order: str = "XYZ"
+    dof: tuple[str, ...] = ()
+
+
+class _BoneBlocks:
+    """The ``:bonedata`` section, statement by statement: ``begin`` opens a bone, ``end``
+    closes it; statements outside a block are ignored."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.open: _BoneDraft | None = None
+        self.closed: list[_BoneDraft] = []
+
+    def line(self, tokens: list[str], line_no: int) -> None:
+        head = tokens[0].lower()
+        if head == "begin":
+            self.open = _BoneDraft(line_no)
+        elif head == "end":
+            if self.open is None:
+                raise DataError(f"line {line_no}: 'end' without 'begin'", self.path)
+            self.closed.append(self.open)
+            self.open = None
+        elif self.open is not None:
+            _bone_field(self.open, tokens, self.path, line_no)
+
+    def bones(self) -> list[Bone]:
+        """The bones read, checked (every block closed, name, direction and length given,
+        known dofs), in file order."""
+        if self.open is not None:
+            raise DataError("bone definition not closed with 'end' (truncated?)", self.path)
+        if not self.closed:
+            raise DataError("no :bonedata bones (not an ASF file?)", self.path)
+        return [_bone(draft, self.path) for draft in self.closed]
+
+
+def _bone_field(draft: _BoneDraft, tokens: list[str], path: Path, line_no: int) -> None:
+    """One statement inside a bone block (``id`` and ``limits`` are not needed)."""
+    head = tokens[0].lower()
+    if head == "name":
+        draft.name = tokens[1]
+    elif head == "direction":
+        draft.direction = _floats(tokens[1:4], path, line_no, 3)
+    elif head == "length":
+        draft.length = float(_floats(tokens[1:2], path, line_no, 1)[0])
+    elif head == "axis":
+        draft.axis = _floats(tokens[1:4], path, line_no, 3)
+        draft.order = _axis_order(tokens[4], path, line_no) if len(tokens) > 4 else "XYZ"
+    elif head == "dof":
+        draft.dof = tuple(t.lower() for t in tokens[1:])
+
+
+def _bone(draft: _BoneDraft, path: Path) -> Bone:
+    """A checked :class:`Bone` from its block; its direction scaled to unit length."""
+    missing = [k for k in ("name", "direction", "length") if getattr(draft, k) is None]
+    if missing:
+        raise DataError(f"line {draft.line}: bone lacks {', '.join(missing)}", path)
+    assert draft.name is not None and draft.direction is not None and draft.length is not None
+    bad = [d for d in draft.dof if d not in _DOF_AXES]
+    if bad:
+        raise DataError(f"line {draft.line}: unknown dof {bad[0]!r}", path)
+    norm = np.linalg.norm(draft.direction)
+    return Bone(
+        name=draft.name,
+        direction=draft.direction / norm if norm > 0 else draft.direction,
+        length=draft.length,
+        axis_deg=draft.axis if draft.axis is not None else np.zeros(3),
+        axis_order=draft.order,
+        dof=draft.dof,
+    )
+
+
+def _parent_of(
+    hierarchy: list[tuple[int, list[str]]], defined: Mapping[str, Bone], path: Path
+) -> dict[str, str]:
+    """Each bone's parent from the ``:hierarchy`` lines ``parent child child ...``."""
     parent_of: dict[str, str] = {}
     for line_no, tokens in hierarchy:
         for child in tokens[1:]:
             if child not in defined:
                 raise DataError(f"line {line_no}: hierarchy names unknown bone {child!r}", path)
             parent_of[child] = tokens[0]
-    # Order bones parents first so forward kinematics can run in one pass.
-    ordered: dict[str, Bone] = {}
-    pending = [n for n in defined if n in parent_of]
+    return parent_of
+
+
+def _parents_first(
+    defined: dict[str, Bone], parent_of: Mapping[str, str], path: Path
+) -> dict[str, Bone]:
+    """The bones ordered parents first (so forward kinematics runs in one pass), each with
+    its parent set; every bone must hang from the root."""
     orphans = [n for n in defined if n not in parent_of]
     if orphans:
         raise DataError(f"bone {orphans[0]!r} is not in the :hierarchy", path)
+    ordered: dict[str, Bone] = {}
+    pending = list(defined)
     while pending:
-        progressed = False
-        for n in list(pending):
-            p = parent_of[n]
-            if p == "root" or p in ordered:
-                defined[n].parent = p
+        waiting = []
+        for n in pending:  # in file order; a child may follow its parent in the same pass
+            if parent_of[n] == "root" or parent_of[n] in ordered:
+                defined[n].parent = parent_of[n]
                 ordered[n] = defined[n]
-                pending.remove(n)
-                progressed = True
-        if not progressed:
+            else:
+                waiting.append(n)
+        if len(waiting) == len(pending):
             raise DataError(f"hierarchy has a cycle or unknown parent near {pending[0]!r}", path)
-    skel.bones = ordered
-    return skel
+        pending = waiting
+    return ordered
 
 
 def _read_amc_fast(
@@ -264,111 +336,157 @@ def _read_amc_fast(
     """Every frame lists the same bones in the same order (AMC exporters write it so):
     parse each bone's column of lines at once. None when the file does not fit that shape,
     so the line by line parser can name the problem."""
+    k = _frame_stride(lines)
+    if k is None:
+        return None
+    n_frames = len(lines) // k
+    values: dict[str, np.ndarray] = {}
+    for j in range(1, k):
+        column = _bone_column(lines[j::k], n_dof, n_frames)
+        if column is None or column[0] in values:
+            return None
+        values[column[0]] = column[1]
+    if "root" not in values:
+        return None
+    return Motion(path, values, n_frames, angle_deg)
+
+
+def _frame_stride(lines: list[str]) -> int | None:
+    """Lines per frame (its number and its bones) when every frame has as many lines, each
+    starting with its frame number; None otherwise."""
     if not lines or not lines[0].isdigit():
         return None
     k = 1
     while k < len(lines) and not lines[k].isdigit():
         k += 1
-    if len(lines) % k:
+    if len(lines) % k or not all(line.isdigit() for line in lines[::k]):
         return None
-    n_frames = len(lines) // k
-    if not all(line.isdigit() for line in lines[::k]):
+    return k
+
+
+def _bone_column(
+    column: list[str], n_dof: Mapping[str, int], n_frames: int
+) -> tuple[str, np.ndarray] | None:
+    """One bone's line in every frame as (bone, values ``(frames, n_dof)``); None when the
+    lines name different or unknown bones or hold the wrong count of numbers."""
+    name = column[0].split(None, 1)[0]
+    if name not in n_dof:
         return None
-    values: dict[str, np.ndarray] = {}
-    for j in range(1, k):
-        column = lines[j::k]
-        name = column[0].split(None, 1)[0]
-        if name not in n_dof or name in values:
-            return None
-        tokens = " ".join(column).split()
-        width = n_dof[name] + 1
-        if len(tokens) != n_frames * width:
-            return None
-        table = np.array(tokens, dtype=object).reshape(n_frames, width)
-        if not (table[:, 0] == name).all():
-            return None
-        try:
-            values[name] = table[:, 1:].astype(np.float64)
-        except ValueError:
-            return None
-    if "root" not in values:
+    tokens = " ".join(column).split()
+    width = n_dof[name] + 1
+    if len(tokens) != n_frames * width:
         return None
-    return Motion(path, values, n_frames, angle_deg)
+    table = np.array(tokens, dtype=object).reshape(n_frames, width)
+    if not (table[:, 0] == name).all():
+        return None
+    try:
+        return name, table[:, 1:].astype(np.float64)
+    except ValueError:
+        return None
 
 
 def read_amc(path: str | Path, skeleton: Skeleton) -> Motion:
     """Parse an AMC motion file against its skeleton. Frames must be complete."""
     path = Path(path)
     lines = read_text(path).split("\n")
-    n_dof_fast = {name: len(b.dof) for name, b in skeleton.bones.items()}
-    n_dof_fast["root"] = len(skeleton.root_order)
-    body = [ln.strip() for ln in lines]
-    body = [ln for ln in body if ln and not ln.startswith("#")]
-    header = [ln[1:].upper() for ln in body if ln.startswith(":")]
-    deg = True if any(h.startswith("DEG") for h in header) else None
-    deg = False if any(h.startswith("RAD") for h in header) else deg
-    fast = _read_amc_fast(path, [ln for ln in body if not ln.startswith(":")], n_dof_fast, deg)
-    if fast is not None:
-        return _finite(fast)
     n_dof = {name: len(b.dof) for name, b in skeleton.bones.items()}
     n_dof["root"] = len(skeleton.root_order)
-    rows: dict[str, list[list[str]]] = {}
-    angle_deg: bool | None = None
-    n_frames = 0
-    seen_in_frame: set[str] = set()
-    first_frame_bones: set[str] | None = None
-    for i, raw in enumerate(lines, start=1):
+    body = [ln.strip() for ln in lines]
+    body = [ln for ln in body if ln and not ln.startswith("#")]
+    deg = _amc_angle_unit(ln for ln in body if ln.startswith(":"))
+    fast = _read_amc_fast(path, [ln for ln in body if not ln.startswith(":")], n_dof, deg)
+    if fast is not None:
+        return _finite(fast)
+    return _finite(_read_amc_by_line(path, lines, skeleton, n_dof, deg))
+
+
+def _amc_angle_unit(headers: Iterable[str]) -> bool | None:
+    """True for ``:DEGREES``, False for ``:RADIANS`` (which wins if both appear), None when
+    the header says neither (the skeleton's unit then holds)."""
+    keys = [h[1:].upper() for h in headers]
+    if any(k.startswith("RAD") for k in keys):
+        return False
+    return True if any(k.startswith("DEG") for k in keys) else None
+
+
+def _read_amc_by_line(
+    path: Path, lines: list[str], skeleton: Skeleton, n_dof: Mapping[str, int], deg: bool | None
+) -> Motion:
+    """The AMC file line by line, naming the first line that does not fit ``skeleton``."""
+    frames = _AmcFrames(path)
+    for line_no, raw in enumerate(lines, start=1):
         line = raw.strip()
-        if not line or line.startswith("#"):
-            continue
-        if line.startswith(":"):
-            key = line[1:].upper()
-            if key.startswith("DEG"):
-                angle_deg = True
-            elif key.startswith("RAD"):
-                angle_deg = False
+        if not line or line.startswith(("#", ":")):
             continue
         tokens = line.split()
         if len(tokens) == 1 and tokens[0].isdigit():
-            if n_frames == 1:
-                first_frame_bones = set(seen_in_frame)
-            elif first_frame_bones is not None and seen_in_frame != first_frame_bones:
-                raise DataError(f"line {i}: frame {n_frames} is incomplete", path)
-            n_frames += 1
-            seen_in_frame = set()
-            continue
-        if n_frames == 0:
-            raise DataError(f"line {i}: data before the first frame number", path)
+            frames.next_frame(line_no)
+        else:
+            frames.add(tokens, line_no, n_dof, skeleton.path.name)
+    return Motion(path, frames.values(), frames.n_frames, deg)
+
+
+class _AmcFrames:
+    """The bones' rows of an AMC file as they are read, frame after frame; every frame must
+    list the bones the first one lists."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.rows: dict[str, list[list[str]]] = {}
+        self.n_frames = 0
+        self.seen: set[str] = set()
+        self.first: set[str] | None = None
+
+    def next_frame(self, line_no: int) -> None:
+        """A frame number: the frame before it must be complete."""
+        if self.n_frames == 1:
+            self.first = set(self.seen)
+        elif self.first is not None and self.seen != self.first:
+            raise DataError(f"line {line_no}: frame {self.n_frames} is incomplete", self.path)
+        self.n_frames += 1
+        self.seen = set()
+
+    def add(
+        self, tokens: list[str], line_no: int, n_dof: Mapping[str, int], skeleton_name: str
+    ) -> None:
+        """One bone's line ``name value ...`` of the current frame."""
+        if self.n_frames == 0:
+            raise DataError(f"line {line_no}: data before the first frame number", self.path)
         name = tokens[0]
         if name not in n_dof:
             raise DataError(
-                f"line {i}: bone {name!r} is not in the skeleton {skeleton.path.name}", path
+                f"line {line_no}: bone {name!r} is not in the skeleton {skeleton_name}", self.path
             )
         if len(tokens) - 1 != n_dof[name]:
             raise DataError(
-                f"line {i}: bone {name!r} has {len(tokens) - 1} values, the skeleton says"
+                f"line {line_no}: bone {name!r} has {len(tokens) - 1} values, the skeleton says"
                 f" {n_dof[name]}",
-                path,
+                self.path,
             )
-        rows.setdefault(name, []).append(tokens[1:])
-        seen_in_frame.add(name)
-    if n_frames == 0:
-        raise DataError("no frames (not an AMC file?)", path)
-    if first_frame_bones is None:
-        first_frame_bones = set(seen_in_frame)
-    if seen_in_frame != first_frame_bones:
-        raise DataError(f"last frame {n_frames} is incomplete (truncated file?)", path)
-    if "root" not in rows:
-        raise DataError("no root values", path)
-    values: dict[str, np.ndarray] = {}
-    for name, r in rows.items():
-        if len(r) != n_frames:
-            raise DataError(f"bone {name!r} appears in {len(r)} of {n_frames} frames", path)
+        self.rows.setdefault(name, []).append(tokens[1:])
+        self.seen.add(name)
+
+    def values(self) -> dict[str, np.ndarray]:
+        """Per bone its values ``(frames, n_dof)``, once every frame is checked complete."""
+        if self.n_frames == 0:
+            raise DataError("no frames (not an AMC file?)", self.path)
+        if self.first is not None and self.seen != self.first:
+            raise DataError(
+                f"last frame {self.n_frames} is incomplete (truncated file?)", self.path
+            )
+        if "root" not in self.rows:
+            raise DataError("no root values", self.path)
+        return {name: self._array(name, rows) for name, rows in self.rows.items()}
+
+    def _array(self, name: str, rows: list[list[str]]) -> np.ndarray:
+        if len(rows) != self.n_frames:
+            raise DataError(
+                f"bone {name!r} appears in {len(rows)} of {self.n_frames} frames", self.path
+            )
         try:
-            values[name] = np.array(r, dtype=float)
+            return np.array(rows, dtype=float)
         except ValueError:
-            raise DataError(f"bone {name!r}: a value is not a number", path) from None
-    return _finite(Motion(path, values, n_frames, angle_deg))
+            raise DataError(f"bone {name!r}: a value is not a number", self.path) from None
 
 
 def _finite(motion: Motion) -> Motion:
@@ -384,7 +502,8 @@ def _euler(letters: str, angles: np.ndarray, degrees: bool) -> np.ndarray:
     """Rotation matrices ``(frames, 3, 3)`` applying the axes in the order written."""
     from scipy.spatial.transform import Rotation  # scipy loads when a file is read
 
-    return Rotation.from_euler(letters.lower(), angles, degrees=degrees).as_matrix()
+    matrices: np.ndarray = Rotation.from_euler(letters.lower(), angles, degrees=degrees).as_matrix()
+    return matrices
 
 
 def forward_kinematics(skel: Skeleton, motion: Motion) -> tuple[tuple[str, ...], np.ndarray]:

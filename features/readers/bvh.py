@@ -76,90 +76,127 @@ class BvhJoint:
 
 def _parse_hierarchy(tokens: list[str], path: Path) -> tuple[list[BvhJoint], int]:
     """Joints parents first, and the index of the token after the hierarchy (``MOTION``)."""
-    joints: list[BvhJoint] = []
-    stack: list[int] = []
-    i = 0
     if not tokens or tokens[0].upper() != "HIERARCHY":
         raise DataError("does not start with HIERARCHY (not a BVH file?)", path)
-    i = 1
-    pending_end = False
+    return _Hierarchy(tokens, path).parse()
 
-    def need(n: int) -> list[str]:
-        if i + n > len(tokens):
-            raise DataError("hierarchy ends early (truncated file?)", path)
-        return tokens[i : i + n]
 
-    def floats(words: list[str]) -> np.ndarray:
+_CHANNELS = frozenset(
+    {"xposition", "yposition", "zposition", "xrotation", "yrotation", "zrotation"}
+)
+
+
+class _Hierarchy:
+    """The ``HIERARCHY`` section read token by token from ``tokens[1]``: joints as they
+    open (``ROOT``/``JOINT`` name ``{``), their ``OFFSET`` and ``CHANNELS``, ``End Site``
+    blocks, and ``}`` closing the innermost open block."""
+
+    def __init__(self, tokens: list[str], path: Path) -> None:
+        self.tokens = tokens
+        self.path = path
+        self.i = 1
+        self.joints: list[BvhJoint] = []
+        self.stack: list[int] = []  # the open joints, innermost last
+        self.in_end_site = False
+
+    def parse(self) -> tuple[list[BvhJoint], int]:
+        while self.i < len(self.tokens):
+            word = self.tokens[self.i]
+            up = word.upper()
+            if up == "MOTION":
+                if self.stack:
+                    raise DataError("hierarchy not closed before MOTION (truncated?)", self.path)
+                return self.joints, self.i + 1
+            if up in ("ROOT", "JOINT"):
+                self._joint(up)
+            elif up == "END":
+                self._end_site()
+            elif up == "OFFSET":
+                self._offset()
+            elif up == "CHANNELS":
+                self._channels()
+            elif word == "}":
+                self._close()
+            else:
+                raise DataError(f"unexpected word {word!r} in the hierarchy", self.path)
+        raise DataError("no MOTION section (truncated file?)", self.path)
+
+    def _need(self, n: int) -> list[str]:
+        """The next ``n`` tokens from the current one (a truncated file has fewer)."""
+        if self.i + n > len(self.tokens):
+            raise DataError("hierarchy ends early (truncated file?)", self.path)
+        return self.tokens[self.i : self.i + n]
+
+    def _open_brace(self, after: str) -> None:
+        if self._need(1)[0] != "{":
+            raise DataError(f"expected '{{' after {after}", self.path)
+        self.i += 1
+
+    def _joint(self, up: str) -> None:
+        """``ROOT name {`` or ``JOINT name {``: a joint under the innermost open one."""
+        name = self._need(2)[1]
+        if up == "ROOT" and self.joints:
+            raise DataError("more than one ROOT is not supported", self.path)
+        parent = self.stack[-1] if self.stack else -1
+        self.joints.append(BvhJoint(name, parent, np.zeros(3), ()))
+        self.i += 2
+        self._open_brace(f"{up} {name}")
+        self.stack.append(len(self.joints) - 1)
+
+    def _end_site(self) -> None:
+        """``End Site {``: the open joint's end point follows."""
+        if not self.stack or self.in_end_site:
+            raise DataError("End Site outside a joint", self.path)
+        self.i += 2  # "End Site"
+        self._open_brace("End Site")
+        self.in_end_site = True
+
+    def _offset(self) -> None:
+        """``OFFSET x y z`` of the open joint or of its End Site."""
+        offset = self._floats(self._need(4)[1:])
+        self.i += 4
+        if self.in_end_site:
+            self.joints[self.stack[-1]].end_offset = offset
+        elif self.stack:
+            self.joints[self.stack[-1]].offset = offset
+
+    def _floats(self, words: list[str]) -> np.ndarray:
         got = " ".join(words)[:60]
         try:
             out = np.array([float(w) for w in words])
         except ValueError:
-            raise DataError(f"expected numbers after OFFSET, got {got!r}", path) from None
+            raise DataError(f"expected numbers after OFFSET, got {got!r}", self.path) from None
         if not np.isfinite(out).all():
-            raise DataError(f"expected finite numbers after OFFSET, got {got!r}", path)
+            raise DataError(f"expected finite numbers after OFFSET, got {got!r}", self.path)
         return out
 
-    while i < len(tokens):
-        t = tokens[i]
-        up = t.upper()
-        if up in ("ROOT", "JOINT"):
-            name = need(2)[1]
-            parent = stack[-1] if stack else -1
-            if up == "ROOT" and joints:
-                raise DataError("more than one ROOT is not supported", path)
-            joints.append(BvhJoint(name, parent, np.zeros(3), ()))
-            i += 2
-            if need(1)[0] != "{":
-                raise DataError(f"expected '{{' after {up} {name}", path)
-            stack.append(len(joints) - 1)
-            i += 1
-        elif up == "END":
-            if not stack or pending_end:
-                raise DataError("End Site outside a joint", path)
-            i += 2  # "End Site"
-            if need(1)[0] != "{":
-                raise DataError("expected '{' after End Site", path)
-            i += 1
-            pending_end = True
-        elif up == "OFFSET":
-            off = floats(need(4)[1:])
-            i += 4
-            if pending_end:
-                joints[stack[-1]].end_offset = off
-            elif stack:
-                joints[stack[-1]].offset = off
-        elif up == "CHANNELS":
-            try:
-                n = int(need(2)[1])
-            except ValueError:
-                bad = tokens[i + 1]
-                raise DataError(f"CHANNELS count is not a number: {bad!r}", path) from None
-            chans = tuple(w.lower() for w in need(2 + n)[2:])
-            for c in chans:
-                if c not in ("xposition", "yposition", "zposition",
-                             "xrotation", "yrotation", "zrotation"):  # fmt: skip
-                    raise DataError(f"unknown channel {c!r}", path)
-            if len(set(chans)) != len(chans):
-                # each channel at most once: a rotation is three distinct axes in turn
-                raise DataError(f"a channel listed twice in CHANNELS {' '.join(chans)}", path)
-            if stack:
-                joints[stack[-1]].channels = chans
-            i += 2 + n
-        elif t == "}":
-            if pending_end:
-                pending_end = False
-            elif stack:
-                stack.pop()
-            else:
-                raise DataError("unbalanced '}' in the hierarchy", path)
-            i += 1
-        elif up == "MOTION":
-            if stack:
-                raise DataError("hierarchy not closed before MOTION (truncated?)", path)
-            return joints, i + 1
+    def _channels(self) -> None:
+        """``CHANNELS n name ...`` of the open joint: known channels, each at most once."""
+        try:
+            n = int(self._need(2)[1])
+        except ValueError:
+            bad = self.tokens[self.i + 1]
+            raise DataError(f"CHANNELS count is not a number: {bad!r}", self.path) from None
+        channels = tuple(w.lower() for w in self._need(2 + n)[2:])
+        unknown = [c for c in channels if c not in _CHANNELS]
+        if unknown:
+            raise DataError(f"unknown channel {unknown[0]!r}", self.path)
+        if len(set(channels)) != len(channels):
+            # each channel at most once: a rotation is three distinct axes in turn
+            raise DataError(f"a channel listed twice in CHANNELS {' '.join(channels)}", self.path)
+        if self.stack:
+            self.joints[self.stack[-1]].channels = channels
+        self.i += 2 + n
+
+    def _close(self) -> None:
+        """``}``: closes the End Site block, else the innermost open joint."""
+        if self.in_end_site:
+            self.in_end_site = False
+        elif self.stack:
+            self.stack.pop()
         else:
-            raise DataError(f"unexpected word {t!r} in the hierarchy", path)
-    raise DataError("no MOTION section (truncated file?)", path)
+            raise DataError("unbalanced '}' in the hierarchy", self.path)
+        self.i += 1
 
 
 def _forward(joints: list[BvhJoint], motion: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -213,6 +250,25 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
     joints, i = _parse_hierarchy(tokens, path)
     if not joints:
         raise DataError("no joints in the hierarchy", path)
+    n_frames, frame_time = _motion_header(tokens, i, path)
+    n_chan = sum(len(j.channels) for j in joints)
+    motion = _motion(tokens[i + 5 :], n_frames, n_chan, path)
+    pos, ends = _forward(joints, motion)
+    rest, rest_ends = _forward(joints, np.zeros((1, n_chan)))
+    pos, ends, rest, rest_ends = _y_up((pos, ends, rest, rest_ends), up, path)
+    unit_name, scale = _unit(unit, rest[0], rest_ends[0], path)
+    return PoseSequence(
+        positions=_to_blazepose(joints, pos, ends) * scale,
+        joint_names=BLAZEPOSE_33,
+        fps=1.0 / frame_time,
+        skeleton="bvh",
+        source=str(path),
+        metadata={"bvh_unit": unit_name},
+    )
+
+
+def _motion_header(tokens: list[str], i: int, path: Path) -> tuple[int, float]:
+    """``Frames: N`` and ``Frame Time: T`` from ``tokens[i]`` on: (N, T seconds)."""
     try:
         if (
             tokens[i].lower() != "frames:"
@@ -226,8 +282,12 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
         raise DataError("MOTION header is malformed or truncated", path) from None
     if frame_time <= 0:
         raise DataError(f"Frame Time must be positive, got {frame_time}", path)
-    n_chan = sum(len(j.channels) for j in joints)
-    data = tokens[i + 5 :]
+    return n_frames, frame_time
+
+
+def _motion(data: list[str], n_frames: int, n_chan: int, path: Path) -> np.ndarray:
+    """The channel values ``(frames, channels)``: exactly as many finite numbers as the
+    header and the hierarchy promise."""
     if len(data) != n_frames * n_chan:
         raise DataError(
             f"{len(data)} numbers after the header, expected {n_frames} frames x {n_chan}"
@@ -243,40 +303,49 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
     if not np.isfinite(motion).all():
         frame = int(np.flatnonzero(~np.isfinite(motion).all(axis=1))[0]) + 1
         raise DataError(f"a motion value in frame {frame} is not a finite number", path)
-    pos, ends = _forward(joints, motion)
-    rest, rest_ends = _forward(joints, np.zeros((1, n_chan)))
+    return motion
+
+
+def _y_up(points: tuple[np.ndarray, ...], up: str, path: Path) -> tuple[np.ndarray, ...]:
+    """Points ``(..., 3)`` of a file whose ``up`` axis is y or z, in the y-up frame (z up:
+    the cyclic permutation (x, y, z) -> (y, z, x), a proper rotation)."""
     if up == "z":
-        pos, ends = pos[..., [1, 2, 0]], ends[..., [1, 2, 0]]
-        rest, rest_ends = rest[..., [1, 2, 0]], rest_ends[..., [1, 2, 0]]
-    elif up != "y":
+        return tuple(p[..., [1, 2, 0]] for p in points)
+    if up != "y":
         raise DataError(f"up must be 'y' or 'z', got {up!r}", path)
+    return points
+
+
+def _unit(
+    unit: str | float, rest: np.ndarray, rest_ends: np.ndarray, path: Path
+) -> tuple[str, float]:
+    """(name, metres per file unit) of ``unit``; for ``"auto"``, the unit of :data:`UNITS`
+    that makes the rest pose (joints ``(joints, 3)`` and End Sites, NaN where none, y up)
+    closest to 1.7 m tall."""
     if unit == "auto":
-        pts = np.concatenate([rest[0], rest_ends[0][~np.isnan(rest_ends[0][:, 0])]])
+        pts = np.concatenate([rest, rest_ends[~np.isnan(rest_ends[:, 0])]])
         height = float(np.ptp(pts[:, 1]))
         if height <= 0:
             raise DataError("rest pose has no height: cannot guess the unit", path)
-        unit_name = min(UNITS, key=lambda u: abs(np.log(height * UNITS[u] / 1.7)))
-        scale = UNITS[unit_name]
-    elif isinstance(unit, str):
+        name = min(UNITS, key=lambda u: abs(np.log(height * UNITS[u] / 1.7)))
+        return name, UNITS[name]
+    if isinstance(unit, str):
         if unit not in UNITS:
             raise DataError(f"unknown unit {unit!r} (known: {', '.join(UNITS)})", path)
-        unit_name, scale = unit, UNITS[unit]
-    else:
-        unit_name, scale = f"{unit} m", float(unit)
+        return unit, UNITS[unit]
+    return f"{unit} m", float(unit)
+
+
+def _to_blazepose(joints: list[BvhJoint], pos: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """Joint origins and End Sites ``(frames, joints, 3)`` on the canonical skeleton
+    ``(frames, 33, 3)`` by :data:`BVH_TO_BLAZEPOSE` (the first name found); NaN elsewhere."""
     index = {_normalise(j.name): k for k, j in enumerate(joints)}
-    out = np.full((n_frames, len(BLAZEPOSE_33), 3), np.nan)
+    out = np.full((pos.shape[0], len(BLAZEPOSE_33), 3), np.nan)
     for target, candidates in BVH_TO_BLAZEPOSE.items():
         for name, where in candidates:
             k = index.get(name)
             if k is None or (where == "end" and joints[k].end_offset is None):
                 continue
-            out[:, JOINT_INDEX[target]] = (pos if where == "joint" else ends)[:, k] * scale
+            out[:, JOINT_INDEX[target]] = (pos if where == "joint" else ends)[:, k]
             break
-    return PoseSequence(
-        positions=out,
-        joint_names=BLAZEPOSE_33,
-        fps=1.0 / frame_time,
-        skeleton="bvh",
-        source=str(path),
-        metadata={"bvh_unit": unit_name},
-    )
+    return out

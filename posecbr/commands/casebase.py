@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -13,10 +14,10 @@ from features.fileio import atomic_path, check_output
 from features.text import shown
 
 if TYPE_CHECKING:
-    from casebase_store import CaseStore
+    from casebase_store import CaseBaseInfo, CaseStore
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "casebase",
         help="inspect, export and trim case bases",
@@ -91,77 +92,80 @@ def _upgrade(args: argparse.Namespace) -> int:
 
 def _info(store: CaseStore, args: argparse.Namespace) -> int:
     infos = store.list_case_bases() if args.name is None else [store.get_case_base(args.name)]
-    docs: list[dict[str, Any]] = []
-    for i in infos:
-        log = store.maintenance_log(i.name)
-        actions: dict[str, int] = {}
-        for e in log:
-            actions[e.action] = actions.get(e.action, 0) + 1
-        docs.append(
-            {
-                "name": i.name,
-                "cases": i.n_cases,
-                "labels": i.label_counts,
-                "features": i.feature_config,
-                "feature_hash": i.feature_hash,
-                "n_features": len(i.feature_names),
-                "similarity": i.similarity,
-                "code_version": i.code_version,
-                "created": i.created_at.isoformat(),
-                "version": i.version,
-                "model": _model_summary(i.model, i.feature_words),
-                "maintenance": actions,
-            }
-        )
+    docs = [_info_document(store, i) for i in infos]
     if args.json:
         _emit({"db": store.where, "case_bases": docs})
         return 0
     if not docs:
         print(f"{shown(store.where)}: no case bases")
     for d in docs:
-        feats = d["features"]
-        states = feats.get("states")
-        n_states = len(states) if isinstance(states, list) else states
-        print(
-            f"{shown(d['name'])}: {d['cases']} cases, {len(d['labels'])} activities "
-            f"(created {d['created']}, posecbr {d['code_version']})"
-        )
-        print(
-            f"  features: {feats['level']}, {n_states} states, length {feats['length']}; "
-            f"hash {d['feature_hash'][:12]}"
-        )
-        print(f"  similarity: {_measure_words(d['similarity'])}")
-        m = d["model"]
-        if m.get("k") is not None:
-            print(
-                f"  model: predicts {m['target']}; k = {m['k']}, {m['vote']} vote; side handling "
-                f"{m['side']}; feature weights {m['feature_weights']}"
-            )
-        if m.get("weighted_most"):
-            print(f"  weighted most: {shown(', '.join(m['weighted_most']))}")
-        if m.get("unlike_cases"):
-            u = m["unlike_cases"]
-            sensors = u.get("skeletons") or []
-            print(
-                f"  unlike the stored cases beyond {u['unlike_ratio']:.2f}x the usual held-out "
-                f"distance ({u['quantile']:.0%} of {u['basis']} training clips lie within)"
-                + (
-                    f", or recorded with a skeleton other than {', '.join(sensors)}"
-                    if sensors
-                    else ""
-                )  # fmt: skip
-            )
-        if m.get("confidence"):
-            c = m["confidence"]
-            print(
-                f"  confidence: the vote share calibrated on {c['n']} {c['basis']} training "
-                f"clips (their accuracy {c['accuracy']:.3f})"
-            )
-        for lab, n in d["labels"].items():
-            print(f"  {n:6d}  {shown(lab)}")
-        if d["maintenance"]:
-            print("  history: " + ", ".join(f"{k} x{v}" for k, v in d["maintenance"].items()))
+        _print_info(d)
     return 0
+
+
+def _info_document(store: CaseStore, i: CaseBaseInfo) -> dict[str, Any]:
+    """What ``casebase info --json`` says about one case base."""
+    return {
+        "name": i.name,
+        "cases": i.n_cases,
+        "labels": i.label_counts,
+        "features": i.feature_config,
+        "feature_hash": i.feature_hash,
+        "n_features": len(i.feature_names),
+        "similarity": i.similarity,
+        "code_version": i.code_version,
+        "created": i.created_at.isoformat(),
+        "version": i.version,
+        "model": _model_summary(i.model, i.feature_words),
+        # how often each maintenance action ran, in the order they first ran
+        "maintenance": dict(Counter(e.action for e in store.maintenance_log(i.name))),
+    }
+
+
+def _print_info(d: dict[str, Any]) -> None:
+    """One case base's :func:`_info_document` for people."""
+    feats = d["features"]
+    states = feats.get("states")
+    n_states = len(states) if isinstance(states, list) else states
+    print(
+        f"{shown(d['name'])}: {d['cases']} cases, {len(d['labels'])} activities "
+        f"(created {d['created']}, posecbr {d['code_version']})"
+    )
+    print(
+        f"  features: {feats['level']}, {n_states} states, length {feats['length']}; "
+        f"hash {d['feature_hash'][:12]}"
+    )
+    print(f"  similarity: {_measure_words(d['similarity'])}")
+    _print_model(d["model"])
+    for lab, n in d["labels"].items():
+        print(f"  {n:6d}  {shown(lab)}")
+    if d["maintenance"]:
+        print("  history: " + ", ".join(f"{k} x{v}" for k, v in d["maintenance"].items()))
+
+
+def _print_model(m: dict[str, Any]) -> None:
+    """What fit learned (:func:`_model_summary`), the lines that apply."""
+    if m.get("k") is not None:
+        print(
+            f"  model: predicts {m['target']}; k = {m['k']}, {m['vote']} vote; side handling "
+            f"{m['side']}; feature weights {m['feature_weights']}"
+        )
+    if m.get("weighted_most"):
+        print(f"  weighted most: {shown(', '.join(m['weighted_most']))}")
+    if m.get("unlike_cases"):
+        u = m["unlike_cases"]
+        sensors = u.get("skeletons") or []
+        rule = f", or recorded with a skeleton other than {', '.join(sensors)}" if sensors else ""
+        print(
+            f"  unlike the stored cases beyond {u['unlike_ratio']:.2f}x the usual held-out "
+            f"distance ({u['quantile']:.0%} of {u['basis']} training clips lie within){rule}"
+        )
+    if m.get("confidence"):
+        c = m["confidence"]
+        print(
+            f"  confidence: the vote share calibrated on {c['n']} {c['basis']} training "
+            f"clips (their accuracy {c['accuracy']:.3f})"
+        )
 
 
 def _measure_words(similarity: dict[str, Any]) -> str:
@@ -225,7 +229,8 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
 
 
 def _export_path(args: argparse.Namespace) -> Path:
-    return args.out if args.out.suffix == ".npz" else args.out.with_suffix(".npz")
+    out = Path(args.out)
+    return out if out.suffix == ".npz" else out.with_suffix(".npz")
 
 
 def _check_export(args: argparse.Namespace) -> None:

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, write_json_atomic
 
@@ -18,7 +19,7 @@ def _names(text: str) -> tuple[str, ...]:
     return tuple(s.strip() for s in text.split(",") if s.strip())
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "compare",
         help="cross-validate similarity measures x feature levels, DAD and peers on a dataset",
@@ -100,6 +101,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="N",
         help="worker processes for the folds (1: all in this process)",
     )
+    p.add_argument("--scheduler", metavar="ADDRESS|local:N", help=SCHEDULER_HELP)
     p.add_argument("--seed", type=int, default=0, help="seed for k-fold, bootstrap, MiniRocket")
     p.add_argument(
         "--explain",
@@ -163,6 +165,7 @@ def _settings(args: argparse.Namespace) -> Any:
         cbr_params=parse_params(args.param),
         within=None if args.within.lower() == "none" else args.within,
         jobs=args.jobs,
+        scheduler=args.scheduler,
         seed=args.seed,
         explain=args.explain,
     )
@@ -236,6 +239,7 @@ def run(args: argparse.Namespace) -> int:
     from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
     from cbr.evaluation.tables import format_table
 
+    check_scheduler(args.scheduler)
     settings = _settings(args)
     outputs = _outputs(args)
     check_outputs(outputs, [args.data])

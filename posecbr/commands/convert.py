@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from features.datasets import Clip
 
 
-def register(subparsers: Any) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = subparsers.add_parser(
         "convert",
         help="convert UI-PRMD, HDM05/ASF-AMC or BVH data into pose files",

@@ -21,7 +21,7 @@ from features.text import shown
 MAX_SECONDS = 3600.0  # a window of an hour is no single movement
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "dad",
         help="recognise the activity in a pose file with the expert rules of the ADD (DAD)",

@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 NUMPY_BELOW_FRAMES = 5000
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "describe",
         help="describe a pose file's posture in words, in spans of frames or frame by frame",

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import DataError, PosecbrError
 from features.fileio import check_output
 from features.progress import progress
@@ -95,6 +96,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="keep joints the model places outside the frame (default: missing)",
     )
+    p.add_argument("--scheduler", metavar="ADDRESS|local:N", help=SCHEDULER_HELP)
     p.add_argument("--force", action="store_true", help="re-extract even if up to date")
     p.set_defaults(func=run)  # fmt: skip
 
@@ -333,6 +335,37 @@ def process(job: Job, options: Options) -> tuple[str, Path, str]:
         return "failed", job.out, str(exc)
 
 
+def process_on_worker(job: Job, options: Options) -> tuple[str, Path, str]:
+    """:func:`process` on a Dask worker: onnxruntime and OpenCV's decoder get the worker's
+    threads (one per worker with ``local:N``), so N workers share the cores instead of fighting
+    over them."""
+    global _THREADS
+    if _THREADS is None:
+        import cv2
+        from dask.distributed import get_worker
+
+        _THREADS = max(1, int(get_worker().state.nthreads))
+        cv2.setNumThreads(_THREADS)  # the decoder too: N workers, N cores, no oversubscription
+    return process(job, options)
+
+
+def _on_cluster(scheduler: str, jobs: list[Job], options: Options) -> list[tuple[str, Path, str]]:
+    """Every job on the Dask cluster; a job whose worker failed it is reported like a failed
+    clip (by its video), the others finish."""
+    from features.cluster import connect, map_outcomes
+
+    results = []
+    with connect(scheduler) as client:
+        names = [str(j.video) for j in jobs]
+        for o in map_outcomes(client, process_on_worker, jobs, names, options,
+                              desc="extract", unit="clip"):  # fmt: skip
+            if o.ok and o.value is not None:
+                results.append(o.value)
+            else:
+                results.append(("failed", jobs[o.index].out, f"{o.name}: {o.error}"))
+    return results
+
+
 # ---- the command --------------------------------------------------------------------------
 
 
@@ -362,6 +395,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.workers < 1:
         raise PosecbrError(f"--workers must be at least 1, got {args.workers}")
+    check_scheduler(args.scheduler)
     source: Path = args.input
     options = Options(
         smoothing=not args.no_smoothing,
@@ -387,7 +421,9 @@ def run(args: argparse.Namespace) -> int:
         return 0
     results: list[tuple[str, Path, str]] = []
     workers = min(args.workers, len(jobs))
-    if workers == 1:
+    if args.scheduler is not None:
+        results = _on_cluster(args.scheduler, jobs, options)
+    elif workers == 1:
         for job in progress(jobs, desc="extract", unit="clip"):
             results.append(process(job, options))
     else:

@@ -19,7 +19,7 @@ from features.fileio import check_output
 from posecbr.recordings import add_recording_options, load_recording
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "reps",
         help="count the repetitions in a clip, with each one's start and end",

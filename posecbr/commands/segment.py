@@ -1,10 +1,10 @@
 """``posecbr segment RECORDING... --db CB``: what was done when in a long recording, and how
 many times (:mod:`cbr.segmentation`, with the classifier ``posecbr train`` stored).
 
-Every stretch of the recording gets an activity of the case base or "unknown" (unlike every
-stored case, judged by the case base's own calibration), with its start and end in seconds
+Every stretch of the recording gets an activity of the case base or "unknown" (like none of
+its activities, judged by the case base's own calibration), with its start and end in seconds
 and frames, a confidence, the number of repetitions and a short explanation. A case base of
-repetitions (``posecbr train ... --split repetitions``) matches how windows are cut.
+windows (``posecbr train ... --split windows``) matches how the recording's windows are cut.
 
 ``--json`` prints ``{"recording", "fps", "segments": [{"start_s", "end_s", "start_frame",
 "end_frame", "label" (null when unknown), "confidence", "repetitions", "explanation"}]}``
@@ -25,10 +25,11 @@ from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from posecbr.recordings import add_recording_options, check_fps, load_recording
 
-JUDGES = ("held-out", "activities")
+JUDGES = ("margin", "held-out", "activities")
+"""cbr.unknown.JUDGES, the default first (not imported: the command line starts light)."""
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "segment",
         help="label every stretch of long recordings with an activity or unknown, and count",
@@ -47,10 +48,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--unknown",
         choices=JUDGES,
-        default="held-out",
-        help="what makes a stretch unknown: farther from its nearest cases than held-out "
-        "training clips lie (held-out, the case base's stored calibration, as classify), or "
-        "as far as the case base's activities lie from each other (activities)",
+        default=JUDGES[0],
+        help="what makes a stretch unknown: its nearest activity is hardly nearer than the "
+        "next (margin, calibrated on the case base: training cases held out of their own "
+        "recording, with and without their activity), farther from its nearest case than "
+        "held-out training clips lie (held-out, the flag classify gives), or as far as the "
+        "case base's activities lie from each other (activities)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
@@ -88,11 +91,12 @@ def _outputs(args: argparse.Namespace) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.segmentation import Familiarity, segment
+    from cbr.segmentation import segment
+    from cbr.unknown import judge_of
 
     _outputs(args)
     clf = load_stored(args.db, args.name)
-    judge = Familiarity.of(clf.case_base_) if args.unknown == "activities" else clf.novelty_
+    judge = judge_of(clf, args.unknown)
     docs = []
     for path in args.recordings:
         rec, video = _read(path, args)

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from cbr.similarity import available_measures, get_measure
+from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 
 
@@ -126,10 +127,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor (kinect or vicon)")
     p.add_argument(
         "--split",
-        choices=("clips", "repetitions"),
+        choices=("clips", "repetitions", "windows"),
         default="clips",
         help="repetitions: cut every clip into its repetitions, each a case (a video of ten "
-        "squats gives ten cases); default: one case per clip",
+        "squats gives ten cases); windows: into the 2-s windows every 0.5 s that posecbr "
+        "segment classifies (the case base for segmenting long recordings; feature weights "
+        "none unless --feature-weights says otherwise); default: one case per clip",
     )
     p.add_argument(
         "--frame-labels",
@@ -148,6 +151,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="add the clips to an existing case base (same feature configuration)",
     )
+    p.add_argument("--scheduler", metavar="ADDRESS|local:N", help=SCHEDULER_HELP)
     p.add_argument("--json", action="store_true", help="machine-readable summary")
     p.set_defaults(func=run)
 
@@ -184,6 +188,10 @@ def _estimator(args: argparse.Namespace) -> Any:
     from cbr.estimator import CaseBaseClassifier
 
     o = {k: (DEFAULTS[k] if getattr(args, k) is None else getattr(args, k)) for k in DEFAULTS}
+    if args.split == "windows" and args.feature_weights is None:
+        # overlapping windows of one stretch are near copies: the within-activity spread that
+        # Fisher weights divide by would be that of one performance, not of the activity
+        o["feature_weights"] = "none"
     params = parse_params(args.param)
     measure = get_measure(o["similarity"], **params)
     if o["features"] == "qmp" and measure.compares_sequences:
@@ -242,8 +250,30 @@ def _repetitions(clips: list[Any]) -> list[Any]:
     return split.clips
 
 
-def _clips(args: argparse.Namespace) -> tuple[list[Any], list[str]]:
-    from features.datasets import clip_target, load_dataset
+def _windows(clips: list[Any]) -> list[Any]:
+    """``--split windows``: every clip cut into the windows segment classifies (on stderr)."""
+    from features.repetitions import WINDOW_HOP_S, WINDOW_S, split_windows
+
+    split = split_windows(clips)
+    whole = f" ({split.kept_whole} shorter than a window kept whole)" if split.kept_whole else ""
+    n_windows = len(split.clips) - split.kept_whole
+    print(
+        f"cut {len(clips)} clips into {n_windows} windows of {WINDOW_S:g} s every "
+        f"{WINDOW_HOP_S:g} s{whole}",
+        file=sys.stderr,
+    )
+    return split.clips
+
+
+def _in_memory(args: argparse.Namespace) -> bool:
+    """Whether DATA is read here as a whole: one recording cut by its frame labels, or clips cut
+    into repetitions or windows (each needs the clips before it knows the cases)."""
+    return bool(args.frame_labels) or args.split in ("repetitions", "windows")
+
+
+def _clips(args: argparse.Namespace) -> list[Any]:
+    """The clips of ``--frame-labels`` / ``--split``, read in this process."""
+    from features.datasets import load_dataset
 
     subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
     activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
@@ -260,8 +290,19 @@ def _clips(args: argparse.Namespace) -> tuple[list[Any], list[str]]:
     )
     if args.split == "repetitions" and clips:
         clips = _repetitions(clips)
+    elif args.split == "windows" and clips:
+        clips = _windows(clips)
     if not clips:
         raise DataError("no clips found (check --labels and --subjects)", str(args.data))
+    return clips
+
+
+def _described_in_memory(args: argparse.Namespace, plan: Any) -> tuple[list[Any], list[str]]:
+    from cbr.training import describe
+    from features.datasets import clip_target
+    from features.progress import progress
+
+    clips = _clips(args)
     solutions = []
     for clip in clips:
         value = clip_target(clip, args.target)
@@ -273,26 +314,64 @@ def _clips(args: argparse.Namespace) -> tuple[list[Any], list[str]]:
                 clip.seq.source,
             )
         solutions.append(value)
-    return [c.seq for c in clips], solutions
+    seqs = progress([c.seq for c in clips], desc="features", total=len(clips), unit="clip")
+    return [describe(s, plan) for s in seqs], solutions
+
+
+def _entries(args: argparse.Namespace) -> list[Any]:
+    """The clips DATA names (not read yet), filtered by --subjects and --labels."""
+    from features.datasets import dataset_entries
+
+    subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
+    activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
+    entries = dataset_entries(args.data, sensor=args.sensor, subjects=subjects, labels=activities)
+    if not entries:
+        raise DataError("no clips found (check --labels and --subjects)", str(args.data))
+    return entries
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.training import append, train
+    from cbr.training import (
+        ClipsFailed,
+        append_described,
+        append_plan,
+        describe_entries,
+        fit_plan,
+        train_described,
+    )
 
     if not args.name.strip():
         raise ConfigError("the case base name is empty", "--name")
+    check_scheduler(args.scheduler)  # a bad spec: one line before any clip is read
+    if args.scheduler is not None and _in_memory(args):
+        raise ConfigError(
+            "--frame-labels and --split read DATA in this process; leave out --scheduler "
+            "(or extract and cut the clips first)",
+            "--scheduler",
+        )
     if args.append:
         _check_append(args)
-        estimator = None
+        plan, uid = append_plan(args.db, args.name, args.target)
     else:
         estimator = _estimator(args)
-    seqs, solutions = _clips(args)
-    if estimator is None:
-        result = append(args.db, args.name, seqs, solutions, target=args.target)
-    else:
-        result = train(
-            args.db, args.name, seqs, solutions, estimator, target=args.target, replace=args.replace
+        plan = fit_plan(estimator)
+    try:
+        clips, solutions = (
+            _described_in_memory(args, plan)
+            if _in_memory(args)
+            else describe_entries(_entries(args), plan, args.target, args.scheduler)
         )
+    except ClipsFailed as exc:
+        for line in exc.lines:
+            print(f"posecbr train: error: {line}", file=sys.stderr)
+        raise
+    if not clips:
+        raise DataError("no clips found (check --labels and --subjects)", str(args.data))
+    if args.append:
+        result = append_described(args.db, args.name, clips, solutions, plan, uid)
+    else:
+        result = train_described(args.db, args.name, clips, solutions, estimator,
+                                 target=args.target, replace=args.replace)  # fmt: skip
     _report(args, result)
     return 0
 

@@ -29,8 +29,10 @@ from typing import Any
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_output
 
+from .segment import JUDGES
 
-def register(sub: argparse._SubParsersAction) -> None:
+
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "watch",
         help="label a live stream (webcam, URL, video file) as it comes, counting repetitions",
@@ -54,8 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-frames", type=int, help="stop after this many frames")
     p.add_argument(
         "--unknown",
-        choices=("held-out", "activities"),
-        default="held-out",
+        choices=JUDGES,
+        default=JUDGES[0],
         help="what makes a stretch unknown (as in posecbr segment)",
     )
     p.set_defaults(func=run)
@@ -123,14 +125,14 @@ def frames_in_background(
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.segmentation import Familiarity
+    from cbr.unknown import judge_of
     from features.pose_estimation import open_video, stream_poses
 
     from .segment import load_stored
 
     _check(args)
     clf = load_stored(args.db, args.name)
-    judge = Familiarity.of(clf.case_base_) if args.unknown == "activities" else clf.novelty_
+    judge = judge_of(clf, args.unknown)
     is_file = _is_file(args.source)
     fps = open_video(args.source)[1].fps if is_file else None
     source: Any = int(args.source) if args.source.isdigit() else args.source
@@ -293,4 +295,4 @@ def _frame_rate(frames: list[Any]) -> float | None:
     """A live source's frame rate from its first second of frames (None: not yet known)."""
     if len(frames) < 2 or frames[-1].time_s - frames[0].time_s < 1.0:
         return None
-    return (len(frames) - 1) / (frames[-1].time_s - frames[0].time_s)
+    return float((len(frames) - 1) / (frames[-1].time_s - frames[0].time_s))

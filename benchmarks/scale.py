@@ -1,0 +1,431 @@
+"""Cost growth: every stage's throughput on 1 and 2 Dask workers, and training at scale.
+
+Run: ``python -m benchmarks.scale`` (corpora of 1,000 and 2,000 clips, about 10 min) or
+``python -m benchmarks.scale --big`` (adds 10,000 and 50,000 clips, about an hour more);
+``--skip-video`` leaves out decode + pose. Writes ``benchmarks/results/scale.json``.
+
+The corpus is synthetic, built from real clips: the 180 UI-PRMD Kinect repetitions bundled in
+``posecbr/demo_data/uiprmd`` (3 subjects, 10 movements), each copy turned about the vertical axis
+(up to 20 degrees), played faster or slower (0.8-1.25x), given another body size per
+synthetic person (0.9-1.1x) and 3 mm of noise. Copy ``k`` of a subject's clips is a new
+person (``s01~k``), so a corpus of 50,000 clips has about 830 people.
+
+Stages (each unit builds its synthetic clip first; the same code in every worker count):
+
+- ``decode + pose``: ``posecbr extract --force`` on 40-frame cuts of the real exercise videos
+  in ``../shared/data/videos`` (960 x 540), frames/s;
+- ``fluents`` (:func:`features.fluents.evaluate`), ``QMPs`` (:func:`features.qmp.qmp_features`),
+  ``feature extraction`` (the train work unit, :func:`cbr.training.describe`: problem, mirror
+  image, availability), ``classify`` (:meth:`CaseBaseClassifier.solve` against a case base of
+  1,000 clips): clips/s on a ``LocalCluster`` of 1 and of 2 single-threaded workers, measured
+  in the same run, with each worker's peak memory (VmHWM) and CPU seconds;
+- training at scale, each size in a process of its own (peak memory = that process's VmHWM):
+  feature extraction in that process, ``fit`` (fit_described), ``store write`` (SQLite, one
+  transaction) and ``classify`` (200 new clips), seconds per clip, wall and CPU.
+
+The machine is shared: the load average is recorded before and after every figure, and CPU
+seconds beside wall seconds (other processes' load stretches wall time, not CPU time; the
+worker-count speed-up a machine can give is ``workers x cpu_share_per_worker``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from benchmarks import write_json
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
+DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
+RESULTS = ROOT / "benchmarks" / "results" / "scale.json"
+VIDEOS = ("glute_bridge", "lunge", "side_lying_leg_raise", "side_plank")
+STAGE_UNITS = {"fluents": 400, "qmp": 120, "features": 400, "classify": 400}
+
+
+# ---- the synthetic corpus -----------------------------------------------------------------
+
+
+def base_clips() -> list[Any]:
+    """The real clips the corpus is built from (canonical sequences)."""
+    from features.poses import load_pose
+
+    return [load_pose(p).to_canonical() for p in sorted(DEMO.glob("*.npz"))]
+
+
+def synthetic(base: list[Any], i: int) -> Any:
+    """Clip ``i`` of the corpus: a changed copy of ``base[i % len(base)]`` (see the module)."""
+    from features.poses import PoseSequence
+
+    b = base[i % len(base)]
+    copy = i // len(base)
+    subject = f"{b.metadata.get('subject')}~{copy}"
+    person = np.random.default_rng([copy, sum(map(ord, subject))])
+    rng = np.random.default_rng(i)
+    p = b.positions
+    frames = max(8, int(round(len(p) * rng.uniform(0.8, 1.25))))
+    t = np.linspace(0.0, len(p) - 1.0, frames)
+    lo = np.clip(np.floor(t).astype(int), 0, len(p) - 2)
+    w = (t - lo)[:, None, None]
+    q = p[lo] * (1.0 - w) + p[lo + 1] * w  # played faster or slower
+    angle = np.deg2rad(rng.uniform(-20.0, 20.0))
+    c, s = np.cos(angle), np.sin(angle)
+    turn = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    q = (q @ turn.T) * person.uniform(0.9, 1.1) + rng.normal(0.0, 0.003, q.shape)
+    meta = {**b.metadata, "subject": subject}
+    return PoseSequence(q, b.joint_names, b.fps, source=f"synthetic/{i:06d}", metadata=meta)
+
+
+# ---- stages on 1 and 2 workers ------------------------------------------------------------
+
+
+def _peak_rss() -> int:
+    """This process's peak resident memory in bytes. Linux's VmHWM: ``ru_maxrss`` of a process
+    started by fork and exec begins at its parent's size (the kernel carries the old image's
+    peak over), which would bill a worker or a training child for the benchmark's own memory."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
+
+
+def _cpu_s() -> float:
+    """CPU seconds this process has used: unlike wall time, not stretched by other
+    processes' load on a shared machine."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return float(r.ru_utime + r.ru_stime)
+
+
+def _worker_cpu(client: Any) -> float:
+    return float(sum(client.run(_cpu_s).values()))
+
+
+def stage_unit(i: int, base: list[Any], stage: str, model: Any) -> int:
+    """One clip through one stage (on a worker); returns the clip's frames."""
+    seq = synthetic(base, i)
+    if stage == "fluents":
+        from features.fluents import evaluate
+
+        evaluate(seq)
+    elif stage == "qmp":
+        from features.qmp import qmp_features
+
+        qmp_features(seq)
+    elif stage == "features":
+        from cbr.training import describe
+
+        describe(seq, model)
+    elif stage == "classify":
+        model.solve([seq])
+    return int(seq.n_frames)
+
+
+def _load() -> list[float]:
+    return [round(v, 2) for v in os.getloadavg()]
+
+
+def _video_corpus(folder: Path, frames: int = 40) -> int:
+    """40-frame cuts of the real exercise videos, at their size, as ``folder/<class>/*.mp4``."""
+    import cv2
+
+    n = 0
+    for name in VIDEOS:
+        src = next((DATA / "videos" / name).glob("*.mp4"))
+        cap = cv2.VideoCapture(str(src))
+        fps = cap.get(cv2.CAP_PROP_FPS)
+        (folder / name).mkdir(parents=True, exist_ok=True)
+        part, writer = 0, None
+        while True:
+            ok, bgr = cap.read()
+            if not ok:
+                break
+            if writer is None:
+                out = folder / name / f"{src.stem}_{part:02d}.mp4"
+                size = (bgr.shape[1], bgr.shape[0])
+                writer = cv2.VideoWriter(str(out), cv2.VideoWriter.fourcc(*"mp4v"), fps, size)
+                count = 0
+            writer.write(bgr)
+            count += 1
+            if count == frames:
+                writer.release()
+                writer, part, n = None, part + 1, n + 1
+        if writer is not None:
+            writer.release()
+            n += 1
+        cap.release()
+    return n
+
+
+def _timed(client: Any, workers: int, run: Any) -> dict[str, Any]:
+    """``run()`` (returns the frames done) timed on ``client``: wall and worker CPU seconds."""
+    before, cpu0 = _load(), _worker_cpu(client)
+    t0 = time.perf_counter()
+    frames = run()
+    seconds = time.perf_counter() - t0
+    cpu = _worker_cpu(client) - cpu0
+    return {
+        "seconds": round(seconds, 3),
+        "frames": frames,
+        "worker_cpu_s": round(cpu, 3),
+        "cpu_share_per_worker": round(cpu / (seconds * workers), 3),
+        "load_before": before,
+    }
+
+
+def _stage_run(client: Any, base: list[Any], stage: str, model: Any, n: int) -> Any:
+    from features.cluster import gather, map_outcomes
+
+    def run() -> int:
+        items = list(range(n))
+        frames, failed = gather(map_outcomes(client, stage_unit, items, [str(i) for i in items],
+                                             base, stage, model), n)  # fmt: skip
+        if failed:
+            raise RuntimeError(f"{stage}: {failed[0].name}: {failed[0].error}")
+        return sum(f or 0 for f in frames)
+
+    return run
+
+
+def _extract_run(client: Any, videos: Path, out: Path) -> Any:
+    from posecbr.cli import main
+
+    def run() -> int:
+        from features.poses import load_pose
+
+        code = main(["extract", str(videos), "--out", str(out), "--force", "--scheduler",
+                     client.scheduler.address])  # fmt: skip
+        if code != 0:
+            raise RuntimeError("extract failed")
+        return sum(load_pose(p).n_frames for p in out.rglob("*.npz"))
+
+    return run
+
+
+def _summary(runs: list[dict[str, Any]], units: int) -> dict[str, Any]:
+    """The median round of one stage on one cluster, with every round kept."""
+    mid = sorted(runs, key=lambda r: r["seconds"])[len(runs) // 2]
+    return {
+        "units": units,
+        "frames": mid["frames"],
+        "seconds": mid["seconds"],
+        "units_per_s": round(units / mid["seconds"], 3),
+        "frames_per_s": round(mid["frames"] / mid["seconds"], 2),
+        "frames_per_worker_cpu_s": round(
+            statistics.median(r["frames"] / r["worker_cpu_s"] for r in runs), 2
+        ),
+        "cpu_share_per_worker": mid["cpu_share_per_worker"],
+        "rounds": runs,
+    }
+
+
+def _per_cpu(runs: list[dict[str, Any]]) -> float:
+    return float(statistics.median(r["frames"] / r["worker_cpu_s"] for r in runs))
+
+
+def _run_stages(skip_video: bool, rounds: int = 3) -> dict[str, Any]:
+    """Every stage on a 1-worker and a 2-worker cluster, alternating, ``rounds`` times: the
+    speed-up is the median of the rounds' ratios (each round runs both back to back, so load
+    from other processes cancels better than across a run)."""
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import fit_plan
+    from features.cluster import connect, gather, map_outcomes
+
+    base = base_clips()
+    plan = fit_plan(CaseBaseClassifier())
+    train = [synthetic(base, i) for i in range(1000)]
+    clf = CaseBaseClassifier().fit(train, [str(s.metadata["label"]) for s in train])
+    del train
+    stages: dict[str, Any] = {}
+    with tempfile.TemporaryDirectory() as tmp, connect("local:1") as c1, connect("local:2") as c2:
+        clients = {1: c1, 2: c2}
+        runs: dict[str, Any] = {}
+        videos, n_videos = Path(tmp) / "videos", 0
+        if not skip_video:
+            n_videos = _video_corpus(videos)
+            runs["decode_pose"] = {
+                w: _extract_run(c, videos, Path(tmp) / f"out{w}") for w, c in clients.items()
+            }
+        for stage, n in STAGE_UNITS.items():
+            model = plan if stage == "features" else clf
+            runs[stage] = {w: _stage_run(c, base, stage, model, n) for w, c in clients.items()}
+        for w, c in clients.items():  # load models, compile kernels: untimed
+            c.wait_for_workers(w, timeout=300)
+            warm = list(range(10**6, 10**6 + 2 * w))
+            for stage in STAGE_UNITS:
+                model = plan if stage == "features" else clf
+                gather(map_outcomes(c, stage_unit, warm, [str(i) for i in warm], base, stage,
+                                    model), len(warm))  # fmt: skip
+            if not skip_video:  # the pose models loaded in every worker
+                from posecbr.cli import main as posecbr
+
+                warm_in = Path(tmp) / f"warm{w}"
+                warm_in.mkdir()
+                for v in sorted(videos.rglob("*.mp4"))[: 2 * w]:  # a folder: runs on the cluster
+                    (warm_in / v.name).symlink_to(v)
+                posecbr(["extract", str(warm_in), "--out", str(Path(tmp) / "warm"), "--force",
+                         "--scheduler", c.scheduler.address])  # fmt: skip
+        for stage, by_workers in runs.items():
+            units = n_videos if stage == "decode_pose" else STAGE_UNITS[stage]
+            timed: dict[int, list[dict[str, Any]]] = {1: [], 2: []}
+            for _ in range(rounds):
+                for w in (1, 2):
+                    timed[w].append(_timed(clients[w], w, by_workers[w]))
+            ratios = [timed[1][r]["seconds"] / timed[2][r]["seconds"] for r in range(rounds)]
+            stages[stage] = {
+                "1": _summary(timed[1], units),
+                "2": _summary(timed[2], units),
+                "speedup_1_to_2": round(statistics.median(ratios), 3),
+                "cpu_efficiency_2_vs_1": round(_per_cpu(timed[2]) / _per_cpu(timed[1]), 3),
+            }
+            s = stages[stage]
+            print(f"  {stage:<12} 1 worker {s['1']['frames_per_s']:8.1f} frames/s, 2 workers "
+                  f"{s['2']['frames_per_s']:8.1f}: x{s['speedup_1_to_2']:.2f} (CPU share per "
+                  f"worker {s['1']['cpu_share_per_worker']:.2f} / "
+                  f"{s['2']['cpu_share_per_worker']:.2f}; frames per CPU-second with 2 workers "
+                  f"x{s['cpu_efficiency_2_vs_1']:.2f} of 1)", flush=True)  # fmt: skip
+        stages["worker_peak_rss_bytes"] = {
+            str(w): sorted(c.run(_peak_rss).values()) for w, c in clients.items()
+        }
+    return stages
+
+
+# ---- training at scale (one process per size) -----------------------------------------------
+
+
+def train_one(n: int) -> dict[str, Any]:
+    """Train on ``n`` synthetic clips in this process (see the module): seconds per stage."""
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import describe, fit_plan, store_fitted
+
+    os.environ["POSECBR_NO_PROGRESS"] = "1"
+    base = base_clips()
+    estimator = CaseBaseClassifier()
+    plan = fit_plan(estimator)
+    load0, cpu0 = _load(), _cpu_s()
+    t0 = time.perf_counter()
+    described = [describe(synthetic(base, i), plan) for i in range(n)]
+    labels = [str(base[i % len(base)].metadata["label"]) for i in range(n)]
+    t1 = time.perf_counter()
+    fitted = CaseBaseClassifier().fit_described(described, labels)
+    t2 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        store_fitted(Path(tmp) / "cb.sqlite", "default", fitted, labels)
+        db_bytes = (Path(tmp) / "cb.sqlite").stat().st_size
+    t3, cpu3 = time.perf_counter(), _cpu_s()
+    queries = [synthetic(base, 10**7 + i) for i in range(200)]
+    t4 = time.perf_counter()
+    fitted.solve(queries)
+    t5 = time.perf_counter()
+    return {
+        "clips": n,
+        "features_s": round(t1 - t0, 2),
+        "fit_s": round(t2 - t1, 2),
+        "store_write_s": round(t3 - t2, 2),
+        "train_s": round(t3 - t0, 2),
+        "train_ms_per_clip": round(1000 * (t3 - t0) / n, 3),
+        "train_cpu_s": round(cpu3 - cpu0, 2),
+        "train_cpu_ms_per_clip": round(1000 * (cpu3 - cpu0) / n, 3),
+        "classify_ms_per_clip": round(1000 * (t5 - t4) / len(queries), 3),
+        "cases": len(fitted.case_base_),
+        "case_base_bytes_in_memory": int(fitted.case_base_.problems.nbytes),
+        "store_bytes": db_bytes,
+        "peak_rss_bytes": _peak_rss(),
+        "chosen": {
+            "side": fitted.side_,
+            "weighting": fitted.weighting_,
+            "phases": fitted.phases_,
+        },  # fmt: skip
+        "subjects": len({d.subject for d in described}),
+        "load_before": load0,
+        "load_after": _load(),
+    }
+
+
+def _train_in_child(n: int) -> dict[str, Any]:
+    cmd = [sys.executable, "-m", "benchmarks.scale", "--train-one", str(n)]
+    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"training on {n} clips failed: {done.stderr.strip()[-2000:]}")
+    result: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
+    print(f"  train {n:6d} clips: {result['train_ms_per_clip']:.2f} ms/clip "
+          f"(features {result['features_s']} s, fit {result['fit_s']} s, store "
+          f"{result['store_write_s']} s), peak {result['peak_rss_bytes'] / 2**30:.2f} GiB, "
+          f"load {result['load_before'][0]:.1f}", flush=True)  # fmt: skip
+    return result
+
+
+# ---- the table -----------------------------------------------------------------------------
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.scale", description=__doc__)
+    parser.add_argument("--big", action="store_true", help="also 10,000 and 50,000 clips")
+    parser.add_argument("--sizes", help="training sizes, comma-separated (overrides --big)")
+    parser.add_argument("--skip-video", action="store_true", help="no decode + pose stage")
+    parser.add_argument("--skip-stages", action="store_true", help="training at scale only")
+    parser.add_argument("--skip-training", action="store_true", help="the stages only")
+    parser.add_argument("--train-one", type=int, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.train_one:
+        print(json.dumps(train_one(args.train_one)))
+        return 0
+    sizes = [1000, 2000] + ([10000, 50000] if args.big else [])
+    if args.sizes:
+        sizes = [int(s) for s in args.sizes.split(",")]
+    from cbr.evaluation.machine import machine_info
+
+    doc = _previous()  # a partial run keeps the other figures
+    doc["benchmark"], doc["machine"] = "scale", machine_info()
+    doc["corpus"] = "synthetic copies of posecbr/demo_data/uiprmd (see docstring)"
+    if not args.skip_stages:
+        doc["stages"] = _run_stages(args.skip_video)
+        write_json(doc, RESULTS)
+    if not args.skip_training:
+        by_size = {t["clips"]: t for t in doc.get("training", [])}
+        for n in sizes:
+            by_size[n] = _train_in_child(n)
+            doc["training"] = [by_size[k] for k in sorted(by_size)]
+            write_json(doc, RESULTS)
+        _relative(doc["training"])
+    write_json(doc, RESULTS)
+    print(f"wrote {RESULTS.relative_to(ROOT)}")
+    return 0
+
+
+def _previous() -> dict[str, Any]:
+    try:
+        doc = json.loads(RESULTS.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError):
+        return {}
+    return doc if isinstance(doc, dict) else {}
+
+
+def _relative(training: list[dict[str, Any]]) -> None:
+    """Time per clip of every size over that of the smallest (wall and CPU)."""
+    first = training[0]
+    for t in training:
+        t["time_per_clip_vs_smallest"] = round(t["train_ms_per_clip"] / first["train_ms_per_clip"],
+                                               3)  # fmt: skip
+        if "train_cpu_ms_per_clip" in t and "train_cpu_ms_per_clip" in first:
+            t["cpu_per_clip_vs_smallest"] = round(
+                t["train_cpu_ms_per_clip"] / first["train_cpu_ms_per_clip"], 3
+            )
+
+
+if __name__ == "__main__":
+    sys.exit(main())

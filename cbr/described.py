@@ -1,0 +1,131 @@
+"""A training clip reduced to what fitting a case base needs of it, computed in one pass.
+
+Fitting used to keep every clip's per-frame fluents (566 states, and those of its mirror image)
+in the per-clip caches for the whole fit: about 1.7 MB a clip. :func:`describe_clip` computes a
+clip's problem over every candidate column (:func:`cbr.problem.candidate_config`), its mirror
+image's, which columns it has, and its provenance, then drops what it computed for the clip
+(unless the caller had warmed it and keeps it, as the ``compare`` workers do). What is left is
+a :class:`DescribedClip` of a few kilobytes. The fit then chooses the columns from the
+availability counts and slices them out (:func:`cbr.problem.column_index`): the same values
+:func:`cbr.problem.extract_problem` gives under the resolved configuration, since every step
+from confidences to summaries works column by column.
+
+:func:`describe_clip` is a plain function of a clip and a configuration, so it can run where
+the clip is read: in this process, clip after clip, or on the workers of a Dask cluster
+(``posecbr train --scheduler``); the fit gets the same records either way.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from features.body import mirrored, moves_left_more, torso_share
+from features.derived import forget, is_cached
+from features.poses import PoseSequence
+
+from .casebase import CaseBase, frames_of, skeleton_of, subject_of
+from .problem import FeatureConfig, availability, extract_problem
+
+
+@dataclass(frozen=True)
+class DescribedClip:
+    """One clip as the fit sees it.
+
+    values: its problem over the candidate columns (``(n,)`` vector or ``(length, n)``
+    sequence); mirror: its mirror image's (None when no side handling needs it); left: whether
+    it moves its left side more (None when not needed); available: ``(n_candidates,)`` which
+    candidate columns it has (fluent level; empty for QMPs); torso_share: the share of its
+    frames that show the person (0: nothing can be learned from it); provenance: ``source``,
+    ``subject``, ``frames`` (start, end) and ``skeleton``.
+    """
+
+    values: np.ndarray
+    mirror: np.ndarray | None
+    left: bool | None
+    available: np.ndarray
+    torso_share: float
+    source: str
+    subject: str | None
+    frames: tuple[int, int]
+    skeleton: str
+    names: tuple[str, ...] | None = None
+    words: tuple[str, ...] | None = None
+
+    @property
+    def mirror_source(self) -> str:
+        """The provenance of the clip's mirror image (as :func:`features.body.mirrored` names
+        it)."""
+        return f"{self.source} (mirrored)"
+
+
+def describe_clip(
+    seq: PoseSequence, candidates: FeatureConfig, mirror: bool, sides: bool
+) -> DescribedClip:
+    """``seq`` ``(frames, joints, 3)`` described over ``candidates`` (a
+    :func:`cbr.problem.candidate_config`), with its mirror image's problem when ``mirror`` and
+    its favoured side when ``sides``. Per-clip caches the caller had not filled are dropped."""
+    keep = is_cached(seq, "fluents") or is_cached(seq, "qmp")
+    share = torso_share(seq)
+    try:
+        if share == 0.0:  # no person: nothing to compute, the fit refuses or skips it
+            empty = np.zeros(0)
+            return DescribedClip(empty, None, None, empty.astype(bool), share,
+                                 *_provenance(seq))  # fmt: skip
+        plain = candidates if candidates.side == "as_recorded" else _as_recorded(candidates)
+        problem = extract_problem(seq, plain)
+        image = extract_problem(mirrored(seq), plain).values if mirror else None
+        left = moves_left_more(seq) if sides else None
+        if plain.level == "fluents":  # columns known from the configuration alone
+            has, names, words = availability(seq, plain), None, None
+        else:  # QMP columns come from the action database: a few, shared by every clip
+            has = np.zeros(0, dtype=bool)
+            names, words = _interned(problem.names), _interned(problem.words)
+        return DescribedClip(
+            problem.values, image, left, has, share, *_provenance(seq), names, words
+        )
+    finally:
+        if not keep:
+            forget(seq)
+
+
+_INTERNED: dict[tuple[str, ...], tuple[str, ...]] = {}
+
+
+def _interned(names: tuple[str, ...]) -> tuple[str, ...]:
+    """One tuple object per distinct column list, however many clips name it."""
+    return _INTERNED.setdefault(names, names)
+
+
+def _as_recorded(config: FeatureConfig) -> FeatureConfig:
+    return dataclasses.replace(config, side="as_recorded")
+
+
+def _provenance(seq: PoseSequence) -> tuple[str, str | None, tuple[int, int], str]:
+    return str(seq.source), subject_of(seq), frames_of(seq), skeleton_of(seq)
+
+
+def describe_clips(
+    seqs: Iterable[PoseSequence], candidates: FeatureConfig, mirror: bool, sides: bool
+) -> Iterator[DescribedClip]:
+    """:func:`describe_clip` of every clip, one at a time (a stream stays a stream)."""
+    for seq in seqs:
+        yield describe_clip(seq, candidates, mirror, sides)
+
+
+def describe_case(seq: PoseSequence, casebase: CaseBase) -> DescribedClip:
+    """``seq`` ``(frames, joints, 3)`` described as a new case of ``casebase`` (its stored
+    columns, nothing chosen anew: ``train --append``); caches the caller had not filled are
+    dropped."""
+    keep = is_cached(seq, "fluents") or is_cached(seq, "qmp")
+    share = torso_share(seq)
+    try:
+        values = casebase.problem_of(seq).values if share > 0.0 else np.zeros(0)
+        return DescribedClip(values, None, None, np.zeros(0, dtype=bool), share,
+                             *_provenance(seq))  # fmt: skip
+    finally:
+        if not keep:
+            forget(seq)

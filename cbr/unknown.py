@@ -1,0 +1,306 @@
+"""When a stretch of a recording is none of the case base's activities ("unknown"), judged from
+a window's distances to the nearest case of every activity, ``(n_classes,)``.
+
+Three judges, each calibrated on the case base itself, never on what is being segmented:
+
+- :class:`Margin` (the default of ``posecbr segment`` and ``watch``): the nearest activity is
+  hardly nearer than the next one. A window of a known activity lies much nearer to that
+  activity's cases than to any other's; a window of an activity the case base lacks lies
+  about as far from the two activities it resembles most. The margin ``d1 / d2`` (nearest
+  activity over next nearest) is compared with a threshold learned by simulating both on the
+  training cases: each case held out from its own recording (or subject) gives a *known*
+  margin, held out from its own recording and its own activity a *novel* one; the threshold
+  is where the two error rates are equal (:func:`equal_error_threshold`). A ratio of
+  distances needs no common unit, so a new person who lies farther from every case is not
+  called unknown for that alone.
+- :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the flag
+  ``classify`` gives): the nearest case lies farther than held-out training clips nearly
+  ever do.
+- :class:`Familiarity`: the nearest case lies as far as the case base's activities lie from
+  each other.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from features.errors import ConfigError, DataError
+
+from .casebase import CaseBase
+from .novelty import CALIBRATION_SAMPLE, NoveltyCalibration
+from .weights import MIRROR_FLAG
+
+JUDGES = ("margin", "held-out", "activities")
+"""The judges by name, the default first."""
+
+
+class Judge(Protocol):
+    """What says a window is unlike every activity of the case base, from its distances to the
+    nearest case of each activity ``(n_classes,)`` (inf for an activity without cases)."""
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        """How unlike the case base the window is, in the judge's own unit."""
+        ...
+
+    def unlike(self, nearest: np.ndarray) -> bool: ...
+
+    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
+        """Why a window with these distances is unknown, in words."""
+        ...
+
+
+def margin_of(nearest: np.ndarray) -> float:
+    """``d1 / d2``: the distance to the nearest activity over that to the next nearest, from
+    the distances to each activity's nearest case ``(n_classes,)``; 1 when the two are equally
+    near (or no second activity is there to compare with), 0 when the window is a case."""
+    finite = np.sort(np.asarray(nearest, dtype=np.float64)[np.isfinite(nearest)])
+    if len(finite) < 2 or finite[1] <= 0.0:
+        return 1.0
+    return float(finite[0] / finite[1])
+
+
+def equal_error_threshold(known: np.ndarray, novel: np.ndarray) -> float:
+    """The threshold ``t`` at which as large a share of ``known`` values lies above ``t`` as
+    of ``novel`` values at or below it (the equal error rate; the first such value of the
+    samples when they allow no exact equality). Both ``(n,)``, non-empty."""
+    k, n = np.sort(known), np.sort(novel)
+    candidates = np.unique(np.r_[k, n])
+    known_above = 1.0 - np.searchsorted(k, candidates, side="right") / len(k)
+    novel_below = np.searchsorted(n, candidates, side="right") / len(n)
+    return float(candidates[int(np.argmin(np.abs(known_above - novel_below)))])
+
+
+def activity_codes(labels: Any, classes: Any) -> np.ndarray:
+    """Each case's index among ``classes`` ``(n,)`` (compared as text; -1 for a label not
+    among them). Both are sequences or 1-D arrays."""
+    where = {str(c): i for i, c in enumerate(classes)}
+    return np.array([where.get(str(v), -1) for v in labels], dtype=np.int64)
+
+
+def per_activity(d: np.ndarray, codes: np.ndarray, n_classes: int) -> np.ndarray:
+    """``(n_classes,)``: the smallest of the distances ``d`` ``(n_cases,)`` per activity
+    (``codes``: each case's activity index); inf where an activity has no finite distance."""
+    out = np.full(n_classes, np.inf)
+    known = codes >= 0
+    np.minimum.at(out, codes[known], np.asarray(d, dtype=np.float64)[known])
+    return out
+
+
+def held_out_basis(cb: CaseBase) -> tuple[str, np.ndarray]:
+    """How a training case is held out as a new recording will be, and the group of every
+    case ``(n,)``: by subject when all cases name one and two or more are named (with an
+    activity done by two of them); else by source recording when an activity comes from two
+    or more recordings; else by time (the cases of its own recording that overlap it are left
+    out: repeated movements of one recording, the best the case base can do)."""
+    labels = np.asarray(cb.labels).astype(str)
+    subjects = [s or "" for s in cb.subjects]
+    sources = [s or "" for s in cb.sources]
+    for basis, groups in (("subject", subjects), ("recording", sources)):
+        g = np.array(groups, dtype=object)
+        if basis == "subject" and "" in set(groups):
+            continue
+        if any(len(set(g[labels == a].tolist())) >= 2 for a in set(labels.tolist())):
+            return basis, g
+    return "time", np.array(sources, dtype=object)
+
+
+def _left_out(cb: CaseBase, basis: str, groups: np.ndarray, i: int) -> np.ndarray:
+    """``(n,)`` bool: the cases not seen when case ``i`` is held out."""
+    same = groups == groups[i]
+    if basis != "time":
+        return np.asarray(same)
+    # a case whose frames are not known overlaps nothing but itself
+    frames = np.array([(-1, -1) if a is None or b is None else (a, b) for a, b in cb.frames])
+    a, b = frames[i]
+    overlap = (frames[:, 0] < b) & (a < frames[:, 1]) & (frames[:, 0] >= 0)
+    left_out: np.ndarray = np.asarray(same & overlap) | (np.arange(len(cb)) == i)
+    return left_out
+
+
+def calibration_margins(
+    cb: CaseBase, sample: int = CALIBRATION_SAMPLE, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray, str]:
+    """The margins of training cases held out (:func:`held_out_basis`) with their activity in
+    the case base (``known``) and without it (``novel``), and the basis. A seeded sample of at
+    most ``sample`` real cases (not mirror images) is held out, each against all cases."""
+    classes = sorted(set(np.asarray(cb.labels).astype(str).tolist()))
+    codes = activity_codes(cb.labels, classes)
+    basis, groups = held_out_basis(cb)
+    index = cb.index  # builds the representations
+    reps = cb.reps
+    assert reps is not None
+    real = np.arange(len(cb))
+    if cb.names and cb.names[-1] == MIRROR_FLAG:
+        real = real[np.asarray(cb.problems)[:, -1] == 0]
+    if len(real) > sample:
+        real = np.sort(np.random.default_rng(seed).choice(real, sample, replace=False))
+    known, novel = [], []
+    for i in real.tolist():  # one scan of the case base per held-out case
+        d = cb.measure.distances(reps[i], index)
+        out = _left_out(cb, basis, groups, i)
+        seen = per_activity(np.where(out, np.inf, d), codes, len(classes))
+        if np.isfinite(seen[codes[i]]) and np.isfinite(seen).sum() >= 2:
+            known.append(margin_of(seen))
+        seen[codes[i]] = np.inf  # the same, without the case's own activity
+        if np.isfinite(seen).sum() >= 2:
+            novel.append(margin_of(seen))
+    return np.asarray(known), np.asarray(novel), basis
+
+
+@dataclass(frozen=True)
+class Margin:
+    """Unknown when the nearest activity is hardly nearer than the next: margin ``d1 / d2``
+    above ``threshold``, the equal-error point of the case base's own known and novel margins
+    (module docstring); ``basis``: how training cases were held out; ``known``/``novel``: how
+    many margins of each kind the threshold was learned from."""
+
+    threshold: float
+    basis: str
+    known: int
+    novel: int
+
+    @classmethod
+    def of(cls, cb: CaseBase) -> Margin:
+        """Calibrated on ``cb``. DataError when it cannot be: fewer than three activities (a
+        held-out activity leaves one to compare with), or no activity whose cases can be held
+        out from each other."""
+        if len(set(np.asarray(cb.labels).astype(str).tolist())) < 3:
+            raise DataError(
+                "a case base of fewer than three activities cannot calibrate the margin between"
+                " the two nearest (use --unknown held-out)",
+                "case base",
+            )
+        known, novel, basis = calibration_margins(cb)
+        if not len(known) or not len(novel):
+            raise DataError(
+                "no activity of the case base has cases apart from each other to calibrate "
+                "the margin on (use --unknown held-out)",
+                "case base",
+            )
+        return cls(equal_error_threshold(known, novel), basis, len(known), len(novel))
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        return margin_of(nearest)
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        return margin_of(nearest) > self.threshold
+
+    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
+        order = np.argsort(nearest, kind="stable")
+        first = classes[int(order[0])]
+        second = classes[int(order[1])] if len(order) > 1 else first
+        return (
+            f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
+            f" as the next ({second}); a known activity comes nearer than {self.threshold:.2f}"
+        )
+
+
+@dataclass(frozen=True)
+class HeldOut:
+    """The classifier's stored calibration (:class:`cbr.novelty.NoveltyCalibration`): unknown
+    when the nearest case lies farther than held-out training clips nearly ever do."""
+
+    calibration: NoveltyCalibration
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        return self.calibration.ratio(float(np.min(nearest)))
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        return self.calibration.unlike(float(np.min(nearest)))
+
+    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
+        first = classes[int(np.argmin(nearest))]
+        return (
+            f"unlike every stored case: even the nearest ({first}) lies "
+            f"{self.ratio(nearest):.1f}x the case base's usual nearest-case distance away"
+        )
+
+
+@dataclass(frozen=True)
+class Familiarity:
+    """Unknown when the nearest case lies as far as different activities of the case base
+    lie from each other (then it is no more that case's activity than the others are).
+
+    ``threshold``: the median, over the cases, of the distance to the nearest case of another
+    activity; ``reference`` (the unit of the ratio): the median distance from a case to its
+    nearest case of the same activity from another source (another recording or video:
+    what a new recording of a known activity is to the case base; cases cut from one
+    recording are near copies), or, where no activity has two sources, to its nearest other
+    case."""
+
+    reference: float
+    threshold: float
+
+    @classmethod
+    def of(cls, cb: CaseBase) -> Familiarity:
+        if len(cb.classes) < 2:
+            raise DataError("a case base of one activity cannot say what is unlike it", "case base")
+        within, between = _neighbour_distances(cb)
+        reference = float(np.median(within)) or float(np.mean(within)) or 1.0
+        return cls(reference, float(np.median(between)))
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        """Nearest-case distance in units of the case base's usual neighbour distance."""
+        return float(np.min(nearest)) / self.reference
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        return float(np.min(nearest)) > self.threshold
+
+    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
+        first = classes[int(np.argmin(nearest))]
+        return (
+            f"unlike every stored case: even the nearest ({first}) lies as far as the case "
+            f"base's activities lie from each other ({self.ratio(nearest):.1f}x its usual "
+            "nearest-case distance)"
+        )
+
+
+def _neighbour_distances(cb: CaseBase) -> tuple[np.ndarray, np.ndarray]:
+    """Per case: the distance to its nearest same-activity case from another source (``within``;
+    every case's nearest other case when no activity has two sources) and to its nearest case
+    of another activity (``between``)."""
+    sources = np.array(cb.sources, dtype=object)
+    labels = cb.labels
+    index = cb.index
+    assert cb.reps is not None
+    within, nearest, between = [], [], []
+    for i in range(len(cb)):  # one query against the whole case base per case
+        d = cb.measure.distances(cb.reps[i], index)
+        same = labels == labels[i]
+        between.append(float(d[~same].min()))
+        nearest.append(float(np.delete(d, i).min()))
+        peers = same & (sources != sources[i])
+        if peers.any():
+            within.append(float(d[peers].min()))
+    return np.asarray(within or nearest), np.asarray(between)
+
+
+def judge_of(clf: Any, name: str) -> Judge:
+    """The judge called ``name`` (:data:`JUDGES`) for the fitted classifier ``clf``."""
+    if name == "margin":
+        return Margin.of(clf.case_base_)
+    if name == "held-out":
+        return HeldOut(clf.novelty_)
+    if name == "activities":
+        return Familiarity.of(clf.case_base_)
+    raise ConfigError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "--unknown")
+
+
+__all__ = [
+    "JUDGES",
+    "Familiarity",
+    "HeldOut",
+    "Judge",
+    "Margin",
+    "activity_codes",
+    "calibration_margins",
+    "equal_error_threshold",
+    "held_out_basis",
+    "judge_of",
+    "margin_of",
+    "per_activity",
+]

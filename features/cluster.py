@@ -1,0 +1,182 @@
+"""Corpus work on a Dask cluster (``dask.distributed``): the ``--scheduler`` of ``posecbr
+extract``, ``train`` and ``compare``.
+
+``--scheduler ADDRESS`` connects to a running scheduler (``tcp://host:8786``, started with
+``dask scheduler`` and ``dask worker ADDRESS`` on each machine); ``--scheduler local:N``
+starts a ``LocalCluster`` of N single-threaded worker processes on this machine for the
+command's duration. :func:`map_outcomes` runs one function per work unit (a clip, a fold) and
+yields each unit's result or its error as the units finish, with a progress bar: a unit that
+fails is reported by name and the others finish; a unit whose worker dies is run again on
+another worker by the scheduler (up to ``distributed.scheduler.allowed-failures`` times, then
+it is reported as failed). Functions and their arguments travel by pickle (cloudpickle), so
+they must be importable on the workers and the inputs they name reachable there.
+
+dask is an optional dependency (``pip install 'posecbr[cluster]'``): without it,
+``--scheduler`` is refused with one line.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Any, Generic, TypeVar
+
+from .errors import ConfigError, PosecbrError
+from .progress import progress
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+LOCAL_PREFIX = "local:"
+#: seconds to wait for a scheduler named by address
+CONNECT_TIMEOUT_S = 20
+SCHEDULER_HELP = (
+    "run the work on a Dask cluster: a scheduler ADDRESS (tcp://host:8786) or local:N "
+    "(N worker processes on this machine); needs posecbr[cluster]"
+)
+
+
+@dataclass(frozen=True)
+class Outcome(Generic[R]):
+    """One work unit's end: ``value`` when it succeeded, else ``error`` (one line)."""
+
+    index: int
+    name: str
+    value: R | None = None
+    error: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+def _dask() -> Any:
+    try:
+        import dask.distributed as dd
+    except ImportError:
+        raise ConfigError(
+            "needs dask.distributed, which is not installed (pip install 'posecbr[cluster]')",
+            "--scheduler",
+        ) from None
+    return dd
+
+
+def local_workers(spec: str) -> int | None:
+    """N of ``local:N``; None for a scheduler address. A bad spec is refused."""
+    if not spec.startswith(LOCAL_PREFIX):
+        if not spec.strip():
+            raise ConfigError("the scheduler address is empty", "--scheduler")
+        return None
+    text = spec[len(LOCAL_PREFIX) :]
+    if not text.isdigit() or int(text) < 1:
+        raise ConfigError(
+            f"local:N needs a whole number of workers >= 1, got {spec!r}", "--scheduler"
+        )
+    return int(text)
+
+
+def check_scheduler(spec: str | None) -> None:
+    """Refuse a bad ``--scheduler`` (malformed, or dask not installed) before any work."""
+    if spec is not None:
+        local_workers(spec)
+        _dask()
+
+
+@contextmanager
+def connect(spec: str) -> Iterator[Any]:
+    """A ``dask.distributed.Client`` for ``spec`` (see the module), closed on exit (with the
+    local cluster it started, if any)."""
+    n = local_workers(spec)
+    dd = _dask()
+    if n is not None:
+        cluster = dd.LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+        client = dd.Client(cluster)
+        try:
+            yield client
+        finally:
+            client.close()
+            cluster.close()
+        return
+    try:
+        client = dd.Client(spec, timeout=CONNECT_TIMEOUT_S)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ConfigError(
+            f"cannot reach the Dask scheduler at {spec} ({exc})", "--scheduler"
+        ) from None
+    try:
+        yield client
+    finally:
+        client.close()
+
+
+def _quiet_worker() -> None:
+    # one progress bar, the client's: per-unit bars from the workers would garble it
+    os.environ["POSECBR_NO_PROGRESS"] = "1"
+
+
+def _run(fn: Callable[..., R], item: Any, *args: Any) -> R:
+    _quiet_worker()
+    return fn(item, *args)
+
+
+def _message(exc: BaseException) -> str:
+    if isinstance(exc, PosecbrError):
+        return str(exc)
+    if type(exc).__name__ == "KilledWorker":
+        return "its worker died every time it ran it (out of memory?)"
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
+
+
+def map_outcomes(
+    client: Any,
+    fn: Callable[..., R],
+    items: Sequence[T],
+    names: Sequence[str],
+    *args: Any,
+    desc: str = "tasks",
+    unit: str = "task",
+) -> Iterator[Outcome[R]]:
+    """``fn(item, *args)`` for every item on the cluster, as each finishes (not in order).
+
+    ``names`` name the items in error messages; ``args`` are sent to the workers once
+    (scattered) and shared by every call. Exceptions become the unit's ``error``.
+    """
+    dd = _dask()
+    # each argument scattered as one object (a list would be scattered element by element)
+    shared = [client.scatter([a], broadcast=True, hash=False)[0] for a in args]
+    futures = client.map(_run, [fn] * len(items), list(items), *[[s] * len(items) for s in shared],
+                         pure=False)  # fmt: skip
+    index = {f.key: i for i, f in enumerate(futures)}
+    done = dd.as_completed(futures)
+    try:
+        for fut in progress(done, desc, total=len(futures), unit=unit):
+            i = index[fut.key]
+            if fut.status == "error":
+                yield Outcome(i, names[i], error=_message(fut.exception()))
+            else:
+                yield Outcome(i, names[i], value=fut.result())
+            fut.release()
+    finally:
+        client.cancel(futures)
+
+
+def gather(outcomes: Iterator[Outcome[R]], n: int) -> tuple[list[R | None], list[Outcome[R]]]:
+    """The values of ``n`` outcomes in item order, and the failed outcomes (in item order)."""
+    values: list[R | None] = [None] * n
+    failed: list[Outcome[R]] = []
+    for o in outcomes:
+        if o.ok:
+            values[o.index] = o.value
+        else:
+            failed.append(o)
+    return values, sorted(failed, key=lambda o: o.index)

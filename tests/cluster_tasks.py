@@ -1,0 +1,24 @@
+"""Work units for tests/test_cluster.py, importable by the Dask workers (which unpickle
+functions by module and name)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+
+def square_or_die_once(x: int, marker_dir: str) -> int:
+    """``x * x``; for ``x == 3`` the worker process running it dies first, once (the marker
+    file remembers it died), as a worker killed by the machine would."""
+    marker = Path(marker_dir) / "died"
+    if x == 3 and not marker.exists():
+        marker.touch()
+        os._exit(1)
+    return x * x
+
+
+def fail_on_even(x: int) -> int:
+    """``x``, or a ValueError for even numbers (a unit that fails on its own input)."""
+    if x % 2 == 0:
+        raise ValueError(f"{x} is even")
+    return x

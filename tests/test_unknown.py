@@ -1,0 +1,147 @@
+"""What makes a stretch unknown (cbr.unknown), on hand-made case bases whose margins and
+thresholds are worked out by hand, and windows cut the way segment cuts them."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from cbr.casebase import CaseBase
+from cbr.problem import FeatureConfig
+from cbr.similarity import Euclidean
+from cbr.unknown import (
+    Margin,
+    calibration_margins,
+    equal_error_threshold,
+    held_out_basis,
+    margin_of,
+)
+from features.datasets import Clip
+from features.errors import DataError
+from features.poses import PoseSequence
+from features.repetitions import WINDOW_HOP_S, WINDOW_S, split_windows
+from features.skeleton import BLAZEPOSE_33
+
+
+def _line(
+    xs: list[float],
+    labels: list[str],
+    sources: list[str],
+    subjects: list[str | None] | None = None,
+    frames: list[tuple[int, int]] | None = None,
+) -> CaseBase:
+    """Cases on a line: problem = (x, 0), so every distance is |x_i - x_j|."""
+    p = np.array([[x, 0.0] for x in xs])
+    return CaseBase(
+        FeatureConfig(),
+        Euclidean(exact=True),
+        p,
+        labels,
+        ("x", "y"),
+        ("x", "y"),
+        sources=tuple(sources),
+        subjects=tuple(subjects or [None] * len(xs)),
+        frames=tuple(frames or []),
+    )
+
+
+def test_margin_of_by_hand() -> None:
+    assert margin_of(np.array([3.0, 1.0, 4.0])) == pytest.approx(1 / 3)
+    assert margin_of(np.array([2.0, math.inf, 5.0])) == pytest.approx(0.4)
+    assert margin_of(np.array([0.0, 5.0])) == 0.0  # the window is a case
+    assert margin_of(np.array([2.0, math.inf])) == 1.0  # nothing to compare with
+    assert margin_of(np.array([0.0, 0.0])) == 1.0  # as near to both
+
+
+def test_equal_error_threshold_by_hand() -> None:
+    # at 0.35 one known value of four lies above (0.4) and one novel of four at or below
+    # (0.35): 1/4 = 1/4; at 0.3, 1/4 vs 0; at 0.4, 0 vs 1/4
+    known = np.array([0.1, 0.2, 0.3, 0.4])
+    novel = np.array([0.35, 0.5, 0.6, 0.7])
+    assert equal_error_threshold(known, novel) == pytest.approx(0.35)
+    # apart: the first value with no error either side is the largest known one
+    assert equal_error_threshold(np.array([0.1, 0.2]), np.array([0.5, 0.6])) == 0.2
+
+
+def _two_recordings() -> CaseBase:
+    """Recording r1: a at 0, b at 10, c at 20; recording r2: a at 1, b at 12, c at 23."""
+    return _line(
+        [0.0, 10.0, 20.0, 1.0, 12.0, 23.0],
+        ["a", "b", "c", "a", "b", "c"],
+        ["r1", "r1", "r1", "r2", "r2", "r2"],
+    )
+
+
+def test_margin_is_calibrated_by_holding_out_recordings_and_activities() -> None:
+    """Each case against the other recording's cases. Known margins (its own activity there):
+    a@0: 1/12, b@10: 2/9, c@20: 3/8, a@1: 1/9, b@12: 2/8, c@23: 3/13. Novel margins (its
+    activity gone too): a@0: 12/23, b@10: 9/13, c@20: 8/19, a@1: 9/19, b@12: 8/12, c@23:
+    13/23. They do not overlap: the threshold is the largest known margin, 3/8."""
+    cb = _two_recordings()
+    known, novel, basis = calibration_margins(cb)
+    assert basis == "recording"
+    np.testing.assert_allclose(known, [1 / 12, 2 / 9, 3 / 8, 1 / 9, 2 / 8, 3 / 13])
+    np.testing.assert_allclose(novel, [12 / 23, 9 / 13, 8 / 19, 9 / 19, 8 / 12, 13 / 23])
+    judge = Margin.of(cb)
+    assert judge.threshold == pytest.approx(3 / 8)
+    assert (judge.known, judge.novel, judge.basis) == (6, 6, "recording")
+    # a window at 5: a at 4, b at 5, c at 15 -> 4/5 = 0.8: between a and b, like neither
+    assert judge.unlike(np.array([4.0, 5.0, 15.0]))
+    assert "the nearest (a) is 0.80 as far as the next (b)" in judge.describe(
+        np.array([4.0, 5.0, 15.0]), ["a", "b", "c"]
+    )
+    # a window at 11: a at 10, b at 1, c at 9 -> 1/9: b
+    assert not judge.unlike(np.array([10.0, 1.0, 9.0]))
+
+
+def test_a_new_person_farther_from_everything_keeps_the_margin() -> None:
+    """Scaling every distance changes no margin: what makes a window unknown is how its two
+    nearest activities compare, not how far the person lies from the stored ones."""
+    judge = Margin.of(_two_recordings())
+    near = np.array([10.0, 1.0, 9.0])
+    assert judge.ratio(near) == judge.ratio(5.0 * near) and not judge.unlike(5.0 * near)
+
+
+def test_held_out_by_subject_then_recording_then_time() -> None:
+    by_subject = _line([0, 1, 10, 11, 20, 21], list("aabbcc"), ["v"] * 6, list("pqpqpq"))
+    assert held_out_basis(by_subject)[0] == "subject"
+    # one subject: recordings
+    one_person = _line([0, 1, 10, 11, 20, 21], list("aabbcc"), list("rsrsrs"), ["p"] * 6)
+    assert held_out_basis(one_person)[0] == "recording"
+    # one recording: the cases overlapping in time are left out
+    frames = [(0, 240), (120, 360), (480, 720), (800, 1040), (1100, 1340), (1400, 1640),
+              (1700, 1940)]  # fmt: skip
+    one = _line([0, 0.5, 2, 10, 11, 20, 22], list("aaabbcc"), ["rec"] * 7, frames=frames)
+    known, novel, basis = calibration_margins(one)
+    assert basis == "time"
+    # a@0 held out without itself and a@0.5 (frames overlap): a@2 at 2, b@10 at 10 -> 2/10
+    assert known[0] == pytest.approx(0.2)
+    # and without any a: b@10 at 10, c@20 at 20 -> 1/2
+    assert novel[0] == pytest.approx(0.5)
+
+
+def test_margin_needs_three_activities() -> None:
+    two = _line([0, 1, 10, 11], list("aabb"), ["r", "s", "r", "s"])
+    with pytest.raises(DataError, match="fewer than three activities"):
+        Margin.of(two)
+
+
+def _clip(n_frames: int, fps: float) -> Clip:
+    rng = np.random.default_rng(0)
+    seq = PoseSequence(rng.normal(size=(n_frames, 33, 3)), BLAZEPOSE_33, fps, source="c.npz")
+    return Clip(seq, "squat", "s1", {})
+
+
+def test_split_windows_cuts_as_segment_does() -> None:
+    """A 5.3-s clip at 30 fps (159 frames): windows of 60 frames starting every 15 frames,
+    as many as fit whole: starts 0, 15, ..., 90 (7 windows); a 1.5-s clip stays whole."""
+    assert (WINDOW_S, WINDOW_HOP_S) == (2.0, 0.5)
+    split = split_windows([_clip(159, 30.0), _clip(45, 30.0)])
+    assert split.kept_whole == 1 and len(split.clips) == 8
+    windows = split.clips[:7]
+    assert [w.seq.metadata["frame_offset"] for w in windows] == list(range(0, 91, 15))
+    assert all(w.seq.n_frames == 60 and w.label == "squat" for w in windows)
+    assert [w.extras["window"] for w in windows] == list(range(1, 8))
+    assert split.clips[7].seq.n_frames == 45
