@@ -20,6 +20,7 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import CancelledError
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
@@ -152,22 +153,66 @@ def map_outcomes(
     (scattered) and shared by every call. Exceptions become the unit's ``error``.
     """
     dd = _dask()
-    # each argument scattered as one object (a list would be scattered element by element)
-    shared = [client.scatter([a], broadcast=True, hash=False)[0] for a in args]
-    futures = client.map(_run, [fn] * len(items), list(items), *[[s] * len(items) for s in shared],
-                         pure=False)  # fmt: skip
-    index = {f.key: i for i, f in enumerate(futures)}
-    done = dd.as_completed(futures)
+    batch = _Batch(client, fn, items, args)
+    done = dd.as_completed(batch.futures)
     try:
-        for fut in progress(done, desc, total=len(futures), unit=unit):
-            i = index[fut.key]
-            if fut.status == "error":
-                yield Outcome(i, names[i], error=_message(fut.exception()))
-            else:
-                yield Outcome(i, names[i], value=fut.result())
-            fut.release()
+        yield from progress(batch.finished(done, names), desc, total=len(items), unit=unit)
     finally:
-        client.cancel(futures)
+        client.cancel(batch.futures)
+
+
+#: times an item is sent again after its shared arguments were lost with a worker
+RESUBMITS = 3
+
+
+class _Batch:
+    """The futures of one :func:`map_outcomes` call. Its shared arguments are scattered to
+    the workers; scattered data lives only on the workers that hold it, so a worker that dies
+    holding the only copy takes it along and Dask cancels the calls that needed it. Those are
+    sent again with the arguments scattered anew (at most :data:`RESUBMITS` times each)."""
+
+    def __init__(self, client: Any, fn: Callable[..., Any], items: Sequence[Any],
+                 args: tuple[Any, ...]) -> None:  # fmt: skip
+        self.client, self.fn, self.items, self.args = client, fn, items, args
+        self.generation = 0
+        self.shared = self._scatter()
+        self.futures = client.map(_run, [fn] * len(items), list(items),
+                                  *[[a] * len(items) for a in self.shared], pure=False)  # fmt: skip
+        self.index = {f.key: (i, 0) for i, f in enumerate(self.futures)}
+        self.sent = [0] * len(items)
+
+    def _scatter(self) -> list[Any]:
+        # each argument scattered as one object (a list would be scattered element by element)
+        return [self.client.scatter([a], broadcast=True, hash=False)[0] for a in self.args]
+
+    def _again(self, i: int, generation: int) -> Any:
+        """Item ``i`` sent again; the arguments scattered anew unless that was done since the
+        call that was lost was sent."""
+        if generation == self.generation:
+            self.shared, self.generation = self._scatter(), self.generation + 1
+        self.sent[i] += 1
+        fut = self.client.submit(_run, self.fn, self.items[i], *self.shared, pure=False)
+        self.index[fut.key] = (i, self.generation)
+        self.futures.append(fut)
+        return fut
+
+    def finished(self, done: Any, names: Sequence[str]) -> Iterator[Outcome[Any]]:
+        """Every item's outcome, as each finishes."""
+        for fut in done:
+            i, generation = self.index[fut.key]
+            outcome: Outcome[Any]
+            if fut.status == "error":
+                outcome = Outcome(i, names[i], error=_message(fut.exception()))
+            else:
+                try:
+                    outcome = Outcome(i, names[i], value=fut.result())
+                except CancelledError:  # its shared input was lost (the status may lag)
+                    if self.sent[i] < RESUBMITS:
+                        done.add(self._again(i, generation))
+                        continue
+                    outcome = Outcome(i, names[i], error="its input was lost with its worker")
+            fut.release()
+            yield outcome
 
 
 def gather(outcomes: Iterator[Outcome[R]], n: int) -> tuple[list[R | None], list[Outcome[R]]]:

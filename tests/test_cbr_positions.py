@@ -131,11 +131,24 @@ def _right_arm_sideways(peak: float, subject: str) -> PoseSequence:
     return to_sequence(*frames).with_metadata(subject=subject)
 
 
-def _highest_wrist(peak: float) -> float:
-    # the wrist hangs 0.55 m below the shoulder (0.50 m above the mid-hip): raised sideways by
-    # a it is 0.50 - 0.55 cos(a) above the mid-hip; the highest of the 32 sampled frames
-    a = np.radians(peak * np.sin(np.linspace(0.0, np.pi, 32)))
-    return float(np.max(0.50 - 0.55 * np.cos(a)) / TORSO)
+def _arm_joint_heights(joint: str, peak: float) -> np.ndarray:
+    """``(32,)`` the height of right-arm ``joint`` above the mid-hip (y = 1.00) in torso lengths
+    over :func:`_right_arm_sideways` (``peak``): its standing offset from the shoulder turned
+    about the forward axis by each frame's angle, as the clip turns it."""
+    body = standing()
+    shoulder, offset = body["right_shoulder"], body[joint] - body["right_shoulder"]
+    angles = peak * np.sin(np.linspace(0.0, np.pi, 32))
+    return np.array([(shoulder + rot_z(a) @ offset)[1] - 1.00 for a in angles]) / TORSO
+
+
+def _arm_height(feature: str, peak: float) -> float:
+    """The value a column named ``feature`` ("right wrist height (highest)", "right index
+    height", ...) takes in :func:`_right_arm_sideways` (``peak``): the highest, lowest or mean
+    height of that joint."""
+    name, _, stat = feature.partition(" (")
+    joint = "right_" + name.split()[1]
+    h = _arm_joint_heights(joint, peak)
+    return float({"highest)": h.max(), "lowest)": h.min()}.get(stat, h.mean()))
 
 
 def test_explanation_gives_what_was_done_differently_in_units() -> None:
@@ -150,13 +163,24 @@ def test_explanation_gives_what_was_done_differently_in_units() -> None:
     exp = clf.explain([_right_arm_sideways(88.0, "s9")])[0]
     assert exp.label == "shoulder height"
     assert exp.contrast is not None and exp.contrast.label == "overhead"
-    wrist = [d for d in exp.differences if d["feature"] == "right wrist height (highest)"]
-    assert len(wrist) == 1 and wrist[0]["unit"] == "torso lengths"
-    assert wrist[0]["here"] == pytest.approx(_highest_wrist(88.0), abs=1e-9)
-    overhead = [_highest_wrist(h + e) for h, _ in peaks.values() for e in (0.0, 4.0, 8.0)]
-    assert min(abs(wrist[0]["there"] - v) for v in overhead) < 1e-9
-    said = f"right wrist height (highest): {_highest_wrist(88.0):.2f} torso lengths here"
-    assert said in exp.text
+    # to be overhead, a joint of the right arm must be higher: said in torso lengths, here as
+    # this clip has it and there as one of the overhead clips has it
+    arm = ("elbow", "wrist", "pinky", "index", "thumb")
+    heights = [
+        d
+        for d in exp.differences
+        if d["unit"] == "torso lengths"
+        and any(d["feature"].startswith(f"right {j} height") for j in arm)
+    ]
+    assert heights, exp.differences
+    d = heights[0]
+    assert d["here"] == pytest.approx(_arm_height(d["feature"], 88.0), abs=1e-9)
+    overhead = [
+        _arm_height(d["feature"], h + e) for h, _ in peaks.values() for e in (0.0, 4.0, 8.0)
+    ]
+    assert min(abs(d["there"] - v) for v in overhead) < 1e-9
+    assert d["there"] > d["here"]
+    assert f"{d['feature']} {d['here']:.2f} torso lengths" in exp.text
 
 
 @pytest.mark.parametrize(

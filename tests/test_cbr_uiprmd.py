@@ -56,5 +56,7 @@ def test_real_explanation_names_fluents(uiprmd: tuple) -> None:
     # a deep squat bends both knees far below the 19pi/24 knee threshold
     knees = {"left knee bent", "right knee bent", "left knee bending", "right knee bending"}
     exp = exps[0]  # the first held-out squat recognised as one
-    assert exp.matched and set(exp.matched) <= words
-    assert knees & (set(exp.matched) | set(exp.not_seen))
+    # a state held only part of the time is said with "(at times)" after its words
+    matched = {m.removesuffix(" (at times)") for m in exp.matched}
+    assert matched and matched <= words
+    assert knees & (matched | set(exp.not_seen))

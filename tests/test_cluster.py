@@ -140,6 +140,22 @@ def test_a_worker_that_dies_has_its_task_run_again(client: Any, tmp_path: Path) 
     client.wait_for_workers(2, timeout=300)  # the nanny restarted it (slow on a loaded machine)
 
 
+def test_a_worker_that_dies_with_the_only_copy_of_the_shared_input_is_survived(
+    tmp_path: Path,
+) -> None:
+    # one worker: the scattered argument lives only there, so its death loses it and Dask
+    # cancels the calls that needed it; they must be sent again, not reported as failed
+    with connect("local:1") as one:
+        one.wait_for_workers(1, timeout=120)
+        items = list(range(6))
+        values, failed = gather(
+            map_outcomes(one, square_or_die_once, items, [str(i) for i in items], str(tmp_path)),
+            len(items),
+        )
+    assert (tmp_path / "died").exists()
+    assert [(o.name, o.error) for o in failed] == [] and values == [0, 1, 4, 9, 16, 25]
+
+
 def test_compare_on_the_cluster_predicts_as_one_process(address: str, tmp_path: Path) -> None:
     argv = ["compare", str(DEMO), "--labels", TWO,
             "--subjects", "s01,s02,s03", "--similarities", "euclidean", "--features",

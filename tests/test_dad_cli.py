@@ -30,7 +30,7 @@ def test_text_output_ranks_and_lists_met_and_unmet(
     assert main(["dad", str(squat_file), "--top", "0"]) == 0
     out = capsys.readouterr().out
     assert "ranking:" in out and "best match:" in out
-    assert "deep squat (arms overhead)" in out
+    assert "deep squat (arms raised high)" in out
     assert "knees bending and straightening in rhythm" in out
     assert "+ " in out and ("- " in out or "? " in out)
 
