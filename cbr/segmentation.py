@@ -20,8 +20,7 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    each before it are charged the log distance to the activity before, those after it the
    log distance to the one after; the change goes where the charge is least. The votes say
    which activities follow one another; a window's distances say how much of it is which
-   (its vote is all or nothing, and a 2-s window over a change is mostly the side it lies
-   more in, whatever its centre says);
+   (a vote is all or nothing: a window over a change votes for one side whole);
 6. stretches unlike every activity of the case base become unknown (:func:`unknown_blocks`):
    every window is judged (:mod:`cbr.unknown`; by default the margin between its two nearest
    activities, calibrated on the case base), and known/unknown is decoded the same way from
