@@ -15,12 +15,18 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
 4. each :data:`BLOCK_S` block gets the mean vote of the windows over it, and the labels are
    decoded over all blocks at once (Viterbi): a change of activity must be supported by at
    least :data:`MIN_SEGMENT_S` of evidence at odds of :data:`SWITCH_ODDS` to 1;
-5. stretches unlike every activity of the case base become unknown (:func:`unknown_blocks`):
+5. each change of activity is then moved to where the two activities' distances cross
+   (:func:`place_changes`): the windows around it are split at the change, and the frames of
+   each before it are charged the log distance to the activity before, those after it the
+   log distance to the one after; the change goes where the charge is least. The votes say
+   which activities follow one another; a window's distances say how much of it is which
+   (a vote is all or nothing: a window over a change votes for one side whole);
+6. stretches unlike every activity of the case base become unknown (:func:`unknown_blocks`):
    every window is judged (:mod:`cbr.unknown`; by default the margin between its two nearest
    activities, calibrated on the case base), and known/unknown is decoded the same way from
    the windows that lie within one decoded activity (a window across a change of activity
    is like neither side, whether both are known or not);
-6. each segment is counted (:func:`features.repetitions.count_repetitions`) and explained by
+7. each segment is counted (:func:`features.repetitions.count_repetitions`) and explained by
    its most confident window.
 """
 
@@ -274,6 +280,58 @@ def decode(votes: np.ndarray) -> np.ndarray:
     return path
 
 
+def _log_distances(solved: Sequence[_Solved]) -> np.ndarray:
+    """``(n_windows, n_classes)``: the log distance from every window to the nearest case of
+    every activity (0 and inf clipped to the finite range: a window that is a case, or an
+    activity out of reach)."""
+    d = np.stack([w.nearest for w in solved]).astype(np.float64)
+    return np.log(np.clip(d, np.finfo(np.float64).tiny, np.finfo(np.float64).max))
+
+
+def _change_cost(
+    bounds: np.ndarray, spans: np.ndarray, before: np.ndarray, after: np.ndarray
+) -> np.ndarray:
+    """``(n_candidates,)``: the charge of a change at each frame of ``bounds`` ``(n,)``: each
+    window (``spans`` ``(n_windows, 2)`` frames [start, stop)) pays its log distance to the
+    activity before (``before`` ``(n_windows,)``) for its share of frames before the change
+    and that to the activity after (``after``) for the rest."""
+    length = (spans[:, 1] - spans[:, 0]).astype(np.float64)
+    share = np.clip((bounds[:, None] - spans[None, :, 0]) / length[None, :], 0.0, 1.0)
+    cost: np.ndarray = share @ before + (1.0 - share) @ after
+    return cost
+
+
+def place_changes(solved: Sequence[_Solved], fps: float, path: np.ndarray) -> np.ndarray:
+    """``path`` ``(n_blocks,)`` with each change of state moved, within the two runs it
+    separates (each keeps a block), to the block boundary of least :func:`_change_cost` over
+    the windows that overlap those runs: where the two activities' distances cross, read
+    from how much of each window lies on either side. States past the case base's activities
+    (unknown) are left where they are."""
+    if not solved:
+        return path
+    out = path.copy()
+    logs = _log_distances(solved)
+    n_classes = logs.shape[1]
+    spans = np.array([(w.start, w.stop) for w in solved], dtype=np.float64)
+    per_block = fps * BLOCK_S
+    runs = _runs(path)
+    floor = 0  # the previous change as placed: a run keeps at least one block
+    for (a0, a1, before), (_, b1, after) in zip(runs[:-1], runs[1:], strict=True):
+        lo, hi = max(a0, floor) + 1, b1 - 1
+        if before >= n_classes or after >= n_classes or hi < lo:
+            floor = a1
+            continue
+        near = (spans[:, 1] > lo * per_block - per_block) & (spans[:, 0] < hi * per_block)
+        candidates = np.arange(lo, hi + 1)
+        cost = _change_cost(
+            candidates * per_block, spans[near], logs[near, before], logs[near, after]
+        )
+        floor = int(candidates[int(np.argmin(cost))])
+        out[lo - 1 : floor] = before
+        out[floor:b1] = after
+    return out
+
+
 def _runs(path: np.ndarray) -> list[tuple[int, int, int]]:
     """Runs of one state: (first block, end block exclusive, state)."""
     change = np.flatnonzero(path[1:] != path[:-1]) + 1
@@ -403,7 +461,7 @@ def segment(
     solved = _solve_windows(clf, rec, windows, k)
     votes = block_votes(solved, rec.n_frames, rec.fps)
     n_classes = len(clf.classes_)
-    path = decode(votes)
+    path = place_changes(solved, rec.fps, decode(votes))
     evidence = within_runs(solved, rec.fps, path).tolist()
     path[unknown_blocks(solved, rec.n_frames, rec.fps, judge, path)] = n_classes
     runs = _runs(path)
@@ -431,5 +489,6 @@ __all__ = [
     "within_runs",
     "windows_of",
     "decode",
+    "place_changes",
     "segment",
 ]

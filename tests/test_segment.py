@@ -20,6 +20,7 @@ from cbr.segmentation import (
     SWITCH_ODDS,
     _Solved,
     decode,
+    place_changes,
     segment,
     unknown_blocks,
 )
@@ -36,6 +37,8 @@ from features.poses import PoseSequence, save_pose
 from features.readers.asfamc import read_asf_amc
 from features.repetitions import split_windows
 from posecbr.cli import main
+from tests.bodies import to_sequence
+from tests.moves import MOVES, clip
 
 NAMES = "1 JumpJack\n2 Jog\n3 Squat\n4 KneeRaise\n5 ArmCircle\n6 Twist\n10 ToeTouchOneHand\n"
 
@@ -51,6 +54,65 @@ def test_decode_ignores_a_short_blip_and_follows_a_long_change() -> None:
     votes[30:50] = [0.1, 0.9]
     path = decode(votes)
     assert (path[30:50] == 1).all() and (path[:30] == 0).all() and (path[50:] == 0).all()
+
+
+def _crossing_windows() -> list[_Solved]:
+    """10 fps (one frame per block), windows of 20 frames starting every 5 (0, 5, ..., 40);
+    those with at least half their frames before frame 40 (starts up to 30) lie at distance 1
+    from activity 0 and 2 from activity 1, the others (35, 40) at 3 and 1."""
+    return [
+        _Solved(a, a + 20, np.ones(2) / 2, np.array([1.0, 2.0] if a <= 30 else [3.0, 1.0]), None)
+        for a in range(0, 41, 5)
+    ]
+
+
+@pytest.mark.parametrize("decoded_at", [30, 50])
+def test_a_change_is_moved_to_where_the_distances_cross(decoded_at: int) -> None:
+    """Worked by hand for _crossing_windows: moving the change from t to t+1 charges every
+    window over frame t (start < t < start + 20) 1/20 of (ln d0 - ln d1): -ln 2 for an early
+    window, +ln 3 for a late one. From 35 to 40 three early windows (20, 25, 30) and one late
+    (35) lie over it: -3 ln 2 + ln 3 < 0, the charge falls; from 40 to 45 two and two:
+    -2 ln 2 + 2 ln 3 > 0, it rises; before 35 early windows only, after 45 more late ones
+    than early. The least charge is at frame 40, from a change decoded before or after it."""
+    path = np.r_[np.zeros(decoded_at, dtype=np.int64), np.ones(60 - decoded_at, dtype=np.int64)]
+    placed = place_changes(_crossing_windows(), 10.0, path)
+    assert (placed[:40] == 0).all() and (placed[40:] == 1).all()
+
+
+def test_a_change_to_unknown_stays_where_it_was_decoded() -> None:
+    """A run of the state past the activities (2: unknown) is not moved: the distances say
+    nothing of where an unknown stretch begins."""
+    path = np.r_[np.zeros(30, dtype=np.int64), np.full(30, 2, dtype=np.int64)]
+    assert (place_changes(_crossing_windows(), 10.0, path) == path).all()
+
+
+class _NeverUnknown:
+    """A judge that calls no window unknown: the test below is about the activities' changes."""
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        return False
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        return 0.0
+
+    def describe(self, nearest: np.ndarray, classes: object) -> str:
+        return ""
+
+
+def test_synthetic_recording_changes_within_a_quarter_second() -> None:
+    """Squats for 5 s (cut at the deepest point, 1.25 s into a 2.5-s repetition), jumping
+    jacks for 4 s, knee lifts for 6 s, built from tests/moves.py at 30 fps: the changes lie at
+    5.0 and 9.0 s by construction. The case base holds 2-s windows of 7.5-s clips of those
+    and of arm abductions. Each change found lies within 0.25 s of the true one."""
+    names = ("squat", "jumping_jack", "knee_lift", "arm_abduction")
+    train = [Clip(clip(n).with_metadata(label=n, subject="s"), n, "s", {}) for n in names]
+    clf = _fit(train)
+    fps, parts = 30.0, (("squat", 5.0, 1.25), ("jumping_jack", 4.0, 0.5), ("knee_lift", 6.0, 0.0))
+    frames = [MOVES[n](offset + i / fps) for n, s, offset in parts for i in range(int(s * fps))]
+    result = segment(clf, to_sequence(*frames, fps=fps), _NeverUnknown())
+    assert [s.label for s in result.segments] == ["squat", "jumping_jack", "knee_lift"]
+    found = [s.start_frame / fps for s in result.segments[1:]]
+    assert found == pytest.approx([5.0, 9.0], abs=0.25), found
 
 
 @pytest.fixture(scope="module")
