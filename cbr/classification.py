@@ -12,7 +12,7 @@ person is reported as unclassifiable and never stored.
 from __future__ import annotations
 
 import difflib
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -24,11 +24,13 @@ from features.poses import PoseSequence
 from features.progress import progress
 
 from .casebase import frames_of, skeleton_of, subject_of
-from .estimator import Solved
+from .estimator import CaseBaseClassifier, Solved, unusable
 from .explain import Explanation
 from .retain import RetainDecision, decide_retention, record_retention
 from .revise import Revision, plan_revision, record_revision
 from .stored import StoredClassifier, load_classifier, write_matrices
+
+SOLVE_CHUNK = 256  # clips per batched solve (one block of queries of the matrix product)
 
 
 @dataclass(frozen=True)
@@ -86,20 +88,23 @@ class Classification:
         return out
 
 
-def _solve(
-    stored: StoredClassifier, clip: PoseSequence, truth: str | None, target: str
-) -> Classification:
-    clf = stored.classifier
-    made_from = clip.metadata.get("made_from")
-    made = None if made_from is None else str(made_from)
+def _solve_all(clf: CaseBaseClassifier, clips: Sequence[PoseSequence]) -> list[Solved | str]:
+    """Every clip through :meth:`~cbr.estimator.CaseBaseClassifier.solve`, the usable ones in
+    one call (one batched retrieval); a clip that cannot be classified gets the reason."""
+    bad = set(unusable(clips))
+    good = [c for i, c in enumerate(clips) if i not in bad]
     try:
-        solved = clf.solve([clip])[0]
+        solved = iter(clf.solve(good) if good else [])
+    except DataError:  # a clip the batch cannot take: one call per clip, so only it is refused
+        return [_solve_one(clf, c) for c in clips]
+    return [_solve_one(clf, c) if i in bad else next(solved) for i, c in enumerate(clips)]
+
+
+def _solve_one(clf: CaseBaseClassifier, clip: PoseSequence) -> Solved | str:
+    try:
+        return clf.solve([clip])[0]
     except DataError as exc:
-        return Classification(
-            clip.source, truth, None, None, unclassifiable=exc.message, made_from=made
-        )
-    exp = clf.explain_solved(solved, target)
-    return Classification(clip.source, truth, solved, exp, made_from=made)
+        return exc.message
 
 
 def classify_clips(
@@ -110,11 +115,43 @@ def classify_clips(
 ) -> list[Classification]:
     """Classify and explain every clip (nothing is written); ``target`` the column the
     labels come from (``"correct"``: read as correct / incorrect repetitions)."""
-    pairs = list(zip(clips, truths, strict=True))
+    clf = stored.classifier
+    triples = zip(clips, truths, _solved_in_chunks(clf, clips), strict=True)
     return [
-        _solve(stored, clip, truth, target)
-        for clip, truth in progress(pairs, desc="classifying", total=len(pairs), unit="clip")
+        _classification(clf, clip, truth, s, target)
+        for clip, truth, s in progress(triples, desc="classifying", total=len(clips), unit="clip")
     ]
+
+
+def _solved_in_chunks(
+    clf: CaseBaseClassifier, clips: Sequence[PoseSequence]
+) -> Iterator[Solved | str]:
+    """:func:`_solve_all` over chunks of :data:`SOLVE_CHUNK` clips, so progress shows."""
+    for a in range(0, len(clips), SOLVE_CHUNK):
+        yield from _solve_all(clf, clips[a : a + SOLVE_CHUNK])
+
+
+def _classification(
+    clf: CaseBaseClassifier,
+    clip: PoseSequence,
+    truth: str | None,
+    solved: Solved | str,
+    target: str,
+) -> Classification:
+    """One clip's answer from its :meth:`solve` result (or the reason it has none), explained."""
+    made_from = clip.metadata.get("made_from")
+    made = None if made_from is None else str(made_from)
+    if isinstance(solved, str):
+        return Classification(clip.source, truth, None, None, unclassifiable=solved, made_from=made)
+    exp = clf.explain_solved(solved, target)
+    return Classification(clip.source, truth, solved, exp, made_from=made)
+
+
+def _solve(
+    stored: StoredClassifier, clip: PoseSequence, truth: str | None, target: str
+) -> Classification:
+    clf = stored.classifier
+    return _classification(clf, clip, truth, _solve_one(clf, clip), target)
 
 
 def summarise(results: Sequence[Classification], target: str = "label") -> dict[str, Any]:

@@ -68,7 +68,7 @@ from .problem import (
     problem_columns,
     resolve_counts,
 )
-from .retrieve import Retrieval, retrieve
+from .retrieve import Retrieval, retrieve, retrieve_many
 from .reuse import WEIGHTINGS as VOTE_WEIGHTINGS
 from .reuse import Solution, reuse
 from .similarity import SimilarityMeasure, get_measure
@@ -677,9 +677,10 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             )
         labels = self._class_labels()
         out = []
-        for seq in seqs:
-            p = self.case_base_.problem_of(seq)
-            r = retrieve(self.case_base_, p, int(self.k))
+        problems = [self.case_base_.problem_of(seq) for seq in seqs]
+        # every clip's neighbours in one batched search (the same as one retrieve per clip)
+        found = retrieve_many(self.case_base_, problems, int(self.k))
+        for seq, p, r in zip(seqs, problems, found, strict=True):
             s = reuse(r, labels, self.weights)  # type: ignore[arg-type]
             s = dataclasses.replace(s, confidence=self.confidence_(s.vote_share))
             nearest = float(r.distances[0]) if len(r.distances) else float("inf")

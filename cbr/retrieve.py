@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,6 +37,28 @@ def retrieve(
         idx, dist = idx[keep][: int(k)], dist[keep][: int(k)]
     assert casebase.ids is not None
     return Retrieval(idx, dist, casebase.labels[idx], casebase.ids[idx])
+
+
+def retrieve_many(
+    casebase: CaseBase, problems: Sequence[Problem | np.ndarray], k: int
+) -> list[Retrieval]:
+    """:func:`retrieve` for every problem at once: one ``nearest_many`` call, which a measure
+    may batch (Euclidean: one matrix product per block of queries), with the same neighbours,
+    in the same order, as one :func:`retrieve` per problem."""
+    if not problems:
+        return []
+    measure = casebase.measure
+    queries = np.stack(
+        [
+            measure.represent_query(p.values if isinstance(p, Problem) else np.asarray(p))
+            for p in problems
+        ]
+    )
+    idx, dist = measure.nearest_many(queries, casebase.index, int(k))
+    assert casebase.ids is not None
+    return [
+        Retrieval(i, d, casebase.labels[i], casebase.ids[i]) for i, d in zip(idx, dist, strict=True)
+    ]
 
 
 def nearest_of_other_label(

@@ -408,7 +408,8 @@ def _row_norms_sq(rows: np.ndarray) -> np.ndarray:
 def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
     """The PCA bound's basis ``(D, m)``, projections ``(n, m)`` and residual norms ``(n,)``."""
     n, dims = rows.shape
-    sample = np.asarray(rows[np.sort(np.random.default_rng(0).choice(n, 1000, replace=False))])
+    pick = np.random.default_rng(0).choice(n, min(n, 1000), replace=False)
+    sample = np.asarray(rows[np.sort(pick)])
     mean = sample.mean(axis=0, dtype=np.float64)
     centred = sample - mean
     # principal directions from the small Gram matrix (sample x sample), then QR so the
