@@ -16,6 +16,7 @@ import pytest
 from cbr.similarity import DTW, Euclidean
 from cbr.similarity.base import smallest_k
 from cbr.similarity.dtw import dtw_all, knn_dtw
+from cbr.similarity.euclidean import FALLBACK
 
 
 def _unstructured(rng: np.random.Generator, n: int, dims: int) -> tuple[np.ndarray, np.ndarray]:
@@ -64,6 +65,28 @@ def test_euclidean_every_path_equals_brute_force(
         assert share < 0.2
     else:  # nothing pruned: it fell back to the plain pass and stopped trying
         assert share == 1.0
+
+
+def test_euclidean_pruned_bound_in_float32_is_exact_when_the_bound_is_tight() -> None:
+    # cases and queries in a 6-dimensional subspace (away from the origin): the PCA bound
+    # equals the distance up to rounding, so a bound computed in float32 without its rounding
+    # allowance prunes true neighbours (32 of these 40 queries wrong, tried); the pruned
+    # search must equal the brute force
+    rng = np.random.default_rng(11)
+    span = np.linalg.qr(rng.normal(size=(120, 6)))[0]
+    cases = (50.0 + rng.normal(size=(8000, 6)) @ span.T).astype(np.float32)
+    queries = 50.0 + rng.normal(size=(40, 6)) @ span.T
+    m = Euclidean(prune_min_cases=1000)
+    pruned = m.build_index(cases)
+    plain = Euclidean(prune_min_cases=10**9).build_index(cases)
+    assert pruned.basis is not None
+    for q in queries:
+        qr = m.represent_query(q)
+        want_i, want_d = smallest_k(m.distances(qr, plain), 5)
+        got_i, got_d = m.nearest(qr, pruned, 5)
+        np.testing.assert_array_equal(got_i, want_i)
+        np.testing.assert_array_equal(got_d, want_d)
+    assert pruned.pruning[0] < FALLBACK  # the bound was computed for every query and pruned
 
 
 def test_euclidean_batch_equals_single_queries(

