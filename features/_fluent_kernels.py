@@ -1,26 +1,34 @@
-"""Compiled (numba) kernels of the fluent engine: same results as the numpy reference.
+"""Compiled (numba) kernels of the fluent engine: the numpy reference's results, fast.
 
-:func:`fluent_confidences` computes every state of every fluent for every frame in one pass
-over ``(frames, fluents)`` and writes straight into the ``(frames, n_states)`` output. It is
-the numpy reference in :mod:`features.fluents` (``evaluate(..., backend="numpy")``), fused:
+:func:`fluent_columns` computes every state of every fluent for every frame and writes the
+``(n_states, frames)`` transpose of the result (float32; ``features.fluents.evaluate`` returns
+its ``.T``, a column-major ``(frames, n_states)``). It is the numpy reference in
+:mod:`features.fluents` (``evaluate(..., backend="numpy")``) reorganised so that the loops
+vectorise:
 
-- the logistic (paper eqs. 2-3) calls ``exp`` only inside the band τ±δ; outside it is 0 or 1;
-- the temporal product (eq. 5) ``∏ C_a^(1/(a+1))`` is decided without any transcendental when
-  a defined factor is NaN (-> NaN) or 0 (-> 0), which is the common case for a still joint
-  (noise makes Δθ change sign); otherwise it is ``exp(Σ log C_a / (a+1))``;
-- for an integer lag (the source rate a multiple of the reference rate: 30, 60, 120 Hz) the Δ
+- the loops run over the frames of a block (512) for one fluent at a time: contiguous
+  signals in, each state's series written contiguously out, every buffer in L1;
+- branch-free: a value outside its band gets the logistic argument -inf or +inf (confidence
+  exactly 1 or 0), so one formula serves every frame; the band decisions and the differences
+  beside a threshold (x - τ, Δθ) stay float64, as in the reference, the rest is float32;
+- ``exp`` and ``log1p`` are polynomials written here (no library call, which would keep a
+  loop scalar); relative error < 1e-7;
+- eq. 5 is a weighted sum of logs: ``∏ C_a^(1/(a+1)) = exp(Σ log C_a / (a+1))``. For an
+  integer lag (a source rate that is a multiple of the reference rate: 30, 60, 120 Hz) the Δ
   of age ``a`` at frame ``f`` is the newest Δ of frame ``f - a·lag``, so ``log C`` of each Δ
-  is computed at most once and reused by the ``window`` frames that see it (a ring buffer);
-  a fractional lag interpolates like the reference and recomputes.
+  is computed once and the window is a sum of shifted series; a fractional lag interpolates
+  like the reference and computes each Δ of each frame;
+- with the default motion band (τ >= δ: the two directions' bands meet at most at Δ = 0) one
+  logistic and one exp serve both directions of motion.
 
-Numerics: the reference multiplies powers, this sums logarithms; they agree to ~1e-15.
+Numerics: the confidences agree with the float64 reference to ~3e-7 (tested at 1e-6), with
+the same NaN, the same exact 0 and the same exact 1.
 
 :func:`state_signal_values` is :func:`features.signals.state_signals` in one pass over the
 frames (body frame, 22 angles, near distances), repeating the reference's float operations.
 
-Compiled with ``cache=True`` so only the first run on a machine pays the compile time. Hot
-loops are written inline rather than as helpers taking arrays: every such call costs atomic
-reference-count updates, which made the per-fluent helpers the bottleneck.
+Compiled with ``cache=True`` so only the first run on a machine pays the compile time. The
+helpers are inlined into the kernel (numba IR inlining: no call, no reference counting).
 """
 
 from __future__ import annotations
@@ -28,35 +36,364 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
 
-# Output column codes (one per state column), shared with features.fluents.
+# Output column codes (the blocks a state column comes from), shared with features.fluents.
 LO, MID, HI, TWO_HI, TOUCH, M_LO, M_HI, STILL = range(8)
 
+# Frames per block: every per-fluent buffer of a block (a few kB each) stays in L1.
+BLOCK = 512
 
-@njit(cache=True, nogil=True, inline="always")
-def _lower(x: float, lo_edge: float, hi_edge: float, tau: float, k: float) -> float:
-    """Paper eq. 2 for one value: 1 below the band, 0 above, logistic inside, NaN for NaN."""
-    if x < lo_edge:
-        return 1.0
-    if x > hi_edge:
-        return 0.0
-    return 1.0 / (1.0 + math.exp(k * (x - tau)))  # NaN stays NaN
+# Only the float contractions (FMA) of fastmath: NaN and ±inf keep their IEEE meaning, which
+# the confidences rely on (NaN = unavailable, log 0 = -inf).
+_FM = {"contract"}
+
+_F = np.float32
+_LOG2E = _F(1.4426950408889634)
+_SHIFT = _F(12582912.0)  # 1.5 * 2^23: adding it rounds to an integer kept in the low bits
+_LN2_HI = _F(0.693359375)  # ln 2 split so that n * _LN2_HI is exact (Cody-Waite)
+_LN2_LO = _F(-2.12194440e-4)
+_EXP_MIN = _F(-87.0)  # below: 0 (e^-87 is the smallest normal float32's order)
+_EXP_MAX = _F(88.0)
+_ONE = _F(1.0)
+_TWO = _F(2.0)
+_ZERO = _F(0.0)
+_NAN32 = _F(np.nan)
+_NEG_INF32 = _F(-np.inf)
+_INF32 = _F(np.inf)
+_I127 = np.int32(127)
+_I23 = np.int32(23)
+# Taylor coefficients 1/k! of e^r for |r| <= ln2/2 (relative error < 1e-7 after r^7)
+_E2, _E3, _E4, _E5, _E6, _E7 = (_F(1 / 2), _F(1 / 6), _F(1 / 24), _F(1 / 120), _F(1 / 720),
+                                _F(1 / 5040))  # fmt: skip
+# 1/(2k+1) of atanh's series: log1p(u) = 2 atanh(s), s = u/(2+u) <= 1/3 (error < 1e-8)
+_A3, _A5, _A7, _A9, _A11, _A13 = (_F(1 / 3), _F(1 / 5), _F(1 / 7), _F(1 / 9), _F(1 / 11),
+                                  _F(1 / 13))  # fmt: skip
+
+
+@intrinsic
+def _f32_from_bits(typingctx, bits):
+    """The float32 whose bit pattern is the int32 ``bits`` (vectorises: a register move)."""
+    sig = types.float32(types.int32)
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.FloatType())
+
+    return sig, codegen
+
+
+@intrinsic
+def _bits_of_f32(typingctx, x):
+    """The int32 bit pattern of the float32 ``x``."""
+    sig = types.int32(types.float32)
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.IntType(32))
+
+    return sig, codegen
+
+
+# Helpers inlined into the kernel (numba IR inlining: no call, no reference counting), with
+# the kernel's float semantics.
+_inline = njit(cache=True, nogil=True, inline="always", fastmath=_FM, error_model="numpy")
+
+
+@_inline
+def _exp32(x: np.float32) -> np.float32:
+    """e^x in float32 without a library call, so loops over frames vectorise: relative error
+    < 1e-7; exactly 0 below -87 (and for -inf), +inf above 88, 1 at 0, NaN for NaN."""
+    y = min(max(x, _EXP_MIN), _EXP_MAX)
+    t = y * _LOG2E + _SHIFT
+    n = t - _SHIFT  # round(y / ln 2)
+    r = y - n * _LN2_HI - n * _LN2_LO
+    p = _E7 * r + _E6
+    p = p * r + _E5
+    p = p * r + _E4
+    p = p * r + _E3
+    p = p * r + _E2
+    p = p * r + _ONE
+    p = p * r + _ONE
+    e = p * _f32_from_bits((_bits_of_f32(t) + _I127) << _I23)  # p * 2^n
+    e = _ZERO if x < _EXP_MIN else e
+    e = _INF32 if x > _EXP_MAX else e
+    return x if x != x else e
+
+
+@_inline
+def _logistic32(z: np.float32) -> np.float32:
+    """1 / (1 + e^z): 1 at z = -inf, 0 at +inf, NaN for NaN (paper eq. 2's curve)."""
+    return _ONE / (_ONE + _exp32(z))
+
+
+@_inline
+def _softplus32(z: np.float32) -> np.float32:
+    """log(1 + e^z) = -log of the logistic 1/(1 + e^z), absolute error < 2e-7 for any z:
+    0 at -inf, +inf at +inf, NaN for NaN."""
+    u = _exp32(-abs(z))  # in [0, 1]
+    s = u / (_TWO + u)  # log1p(u) = 2 atanh(s), s <= 1/3
+    s2 = s * s
+    p = _A13 * s2 + _A11
+    p = p * s2 + _A9
+    p = p * s2 + _A7
+    p = p * s2 + _A5
+    p = p * s2 + _A3
+    p = p * s2 + _ONE
+    return max(z, _ZERO) + _TWO * s * p
+
+
+@_inline
+def _argument(v: float, edge0: float, edge1: float, z: float, below: np.float32,
+              above: np.float32) -> np.float32:  # fmt: skip
+    """The argument of the logistic 1/(1 + e^z) for a value v against its band
+    [edge0, edge1]: z inside (float64 in, so the band is decided and v - τ taken exactly as
+    the reference does), ``below``/``above`` (±inf: a confidence of exactly 1 or 0) outside,
+    NaN for NaN."""
+    a = _F(z)
+    a = below if v < edge0 else a
+    return above if v > edge1 else a
+
+
+@_inline
+def _copy_window(row: np.ndarray, g0: int, count: int, xb: np.ndarray) -> None:
+    """xb[j] = row[g0 + j] for j < count; NaN outside the clip. (Offsets go into slices
+    taken before each loop: an index that might be negative is wrapped around per element,
+    which turns a loop's loads into gathers.)"""
+    frames = row.shape[0]
+    lead = min(count, max(0, -g0))
+    top = max(lead, min(count, frames - g0))
+    for j in range(lead):
+        xb[j] = np.nan
+    src, dst = row[g0 + lead :], xb[lead:]
+    for j in range(top - lead):
+        dst[j] = src[j]
+    for j in range(top, count):
+        xb[j] = np.nan
+
+
+@_inline
+def _instant(x: np.ndarray, band: np.ndarray, three: bool, z: np.ndarray, clo: np.ndarray,
+             cup: np.ndarray, nb: int) -> None:  # fmt: skip
+    """Eqs. 2-3 over a block: clo = C(s0), cup = C(sn) of a three-state fluent (else 0);
+    NaN for NaN. Two passes: the band decisions in float64 (4 lanes), then the logistic in
+    float32 (8 lanes)."""
+    e0, e1, tau, k = band[0], band[1], band[2], band[3]
+    for j in range(nb):
+        z[j] = _argument(x[j], e0, e1, (x[j] - tau) * k, _NEG_INF32, _INF32)
+    for j in range(nb):
+        clo[j] = _logistic32(z[j])
+    if three:
+        e0, e1, tau, k = band[4], band[5], band[6], band[7]
+        for j in range(nb):
+            z[j] = _argument(x[j], e0, e1, (x[j] - tau) * k, _NEG_INF32, _INF32)
+        for j in range(nb):
+            cup[j] = _ONE - _logistic32(z[j])
+    else:
+        for j in range(nb):
+            cup[j] = clo[j] if clo[j] != clo[j] else _ZERO
+
+
+@_inline
+def _log_c(d: np.ndarray, mo: np.ndarray, one_logistic: bool, z0: np.ndarray,
+           z1: np.ndarray, lc0: np.ndarray, lc1: np.ndarray, count: int) -> None:  # fmt: skip
+    """lc0/lc1[j] = log C of the Δ d[j] toward s0 / sn (eq. 5's factors; mo: the fluent's
+    motion row): 0 for a factor 1, -inf for a factor 0, NaN for NaN.
+
+    ``one_logistic``: the two bands touch at most at Δ = 0 (τ >= δ, as by default), where
+    both logistics have the same argument k(τ - |Δ|); every Δ then has at most one finite
+    argument besides ±inf, so one softplus serves both directions."""
+    e0, e1, tau0, k0, e4, e5, tau1, k1 = mo[0], mo[1], mo[2], mo[3], mo[4], mo[5], mo[6], mo[7]
+    for j in range(count):
+        v = d[j]
+        z_lo = (tau1 - abs(v)) * k1 if one_logistic else (v - tau0) * k0
+        z_hi = (tau1 - abs(v)) * k1 if one_logistic else (tau1 - v) * k1
+        # toward s0: factor 1 below its band, 0 above; toward sn: 0 below, 1 above
+        z0[j] = _argument(v, e0, e1, z_lo, _NEG_INF32, _INF32)
+        z1[j] = _argument(v, e4, e5, z_hi, _INF32, _NEG_INF32)
+    if one_logistic:
+        for j in range(count):
+            a, b = z0[j], z1[j]
+            sp = _softplus32(a if a < b else b)  # the finite one (or NaN, or -inf)
+            lc0[j] = _NEG_INF32 if a == _INF32 else -sp
+            lc1[j] = _NEG_INF32 if b == _INF32 else -sp
+    else:
+        for j in range(count):
+            lc0[j] = -_softplus32(z0[j])
+            lc1[j] = -_softplus32(z1[j])
+
+
+@_inline
+def _window_sums(lc0: np.ndarray, lc1: np.ndarray, newest: int, step: int, window: int,
+                 weight: np.ndarray, m0: np.ndarray, m1: np.ndarray, nb: int) -> None:  # fmt: skip
+    """m[j] = Σ_a weight[a] · lc[newest + j - a·step]: eq. 5's log-sum over the window."""
+    src0, src1 = lc0[newest:], lc1[newest:]
+    for j in range(nb):
+        m0[j] = src0[j]
+        m1[j] = src1[j]
+    for a in range(1, window):
+        w = weight[a]
+        src0, src1 = lc0[newest - a * step :], lc1[newest - a * step :]
+        for j in range(nb):
+            m0[j] += w * src0[j]
+            m1[j] += w * src1[j]
+
+
+@_inline
+def _window_exp(m0: np.ndarray, m1: np.ndarray, one_logistic: bool, nb: int) -> None:
+    """The products of eq. 5 from their log-sums: exp, with -inf -> 0 and NaN kept. With one
+    logistic, the two sums are equal or one is -inf (a Δ on the wrong side of 0), so one exp
+    serves both."""
+    if one_logistic:
+        for j in range(nb):
+            a, b = m0[j], m1[j]
+            e = _exp32(a if a > b else b)
+            m0[j] = _ZERO if a == _NEG_INF32 else e
+            m1[j] = _ZERO if b == _NEG_INF32 else e
+    else:
+        for j in range(nb):
+            m0[j] = _exp32(m0[j])
+            m1[j] = _exp32(m1[j])
+
+
+@_inline
+def _temporal_integer(xb: np.ndarray, f0: int, nb: int, step: int, window: int,
+                      mo: np.ndarray, one_logistic: bool, weight: np.ndarray, d: np.ndarray,
+                      z0: np.ndarray, z1: np.ndarray, lc0: np.ndarray, lc1: np.ndarray,
+                      m0: np.ndarray, m1: np.ndarray) -> None:  # fmt: skip
+    """Eq. 5 for an integer lag over frames f0 .. f0+nb-1: the Δ of age a at frame f is the
+    newest Δ of frame f - a·step, so log C of each Δ is computed once (over the block and the
+    (window-1)·step frames before it) and the window is a weighted sum of logs.
+
+    xb: the signal from frame f0 - window·step on. Writes m0/m1 (toward s0 / sn): NaN where
+    the frame has no Δ yet; a Δ the clip has no history for counts as a factor 1.
+    """
+    span = (window - 1) * step + nb
+    g_first = f0 - (window - 1) * step  # frame of d[0]; xb[j + step] is that frame
+    later = xb[step:]
+    for j in range(span):
+        d[j] = later[j] - xb[j]
+    _log_c(d, mo, one_logistic, z0, z1, lc0, lc1, span)
+    for j in range(min(span, max(0, step - g_first))):  # frames before the first Δ
+        lc0[j] = _ZERO
+        lc1[j] = _ZERO
+    _window_sums(lc0, lc1, (window - 1) * step, step, window, weight, m0, m1, nb)
+    _window_exp(m0, m1, one_logistic, nb)
+    for j in range(min(nb, max(0, step - f0))):
+        m0[j] = _NAN32
+        m1[j] = _NAN32
+
+
+@_inline
+def _temporal_fractional(xb: np.ndarray, base: int, frames: int, f0: int, nb: int, lag: float,
+                         window: int, mo: np.ndarray, one_logistic: bool, weight: np.ndarray,
+                         samples: np.ndarray, ok: np.ndarray, d: np.ndarray, z0: np.ndarray,
+                         z1: np.ndarray, lc0: np.ndarray, lc1: np.ndarray, m0: np.ndarray,
+                         m1: np.ndarray) -> None:  # fmt: skip
+    """Eq. 5 for a fractional lag: the window+1 samples of each frame interpolated like the
+    reference (position f - m·lag clipped to the clip; the frame itself where the weight is
+    0), and each Δ's log C computed for its own frame. xb[j] is frame base + j."""
+    for m in range(window + 1):
+        q = m * lag
+        for j in range(nb):
+            pos = (f0 + j) - q
+            ok[m, j] = pos >= -1e-9
+            pos = min(max(pos, 0.0), frames - 1.0)
+            lo = int(math.floor(pos))
+            hi = min(lo + 1, frames - 1)
+            w = pos - lo
+            a = xb[lo - base]
+            samples[m, j] = a if w == 0.0 else a * (1.0 - w) + xb[hi - base] * w
+    for j in range(nb):
+        m0[j] = _ZERO
+        m1[j] = _ZERO
+    for a in range(window):
+        w32 = weight[a]
+        for j in range(nb):
+            d[j] = samples[a, j] - samples[a + 1, j]
+        _log_c(d, mo, one_logistic, z0, z1, lc0, lc1, nb)
+        for j in range(nb):
+            defined = ok[a + 1, j]  # no history: a factor 1
+            m0[j] += w32 * (lc0[j] if defined else _ZERO)
+            m1[j] += w32 * (lc1[j] if defined else _ZERO)
+    _window_exp(m0, m1, one_logistic, nb)
+    for j in range(nb):
+        m0[j] = m0[j] if ok[1, j] else _NAN32
+        m1[j] = m1[j] if ok[1, j] else _NAN32
+
+
+@_inline
+def _write(out: np.ndarray, col: int, c: np.ndarray, f0: int, nb: int) -> None:
+    dst = out[col, f0:]
+    for j in range(nb):
+        dst[j] = c[j]
+
+
+@_inline
+def _write_complement(out: np.ndarray, col: int, c: np.ndarray, f0: int, nb: int) -> None:
+    """out[col, f0 + j] = 1 - c[j]: the upper state of a two-state fluent (eq. 3)."""
+    dst = out[col, f0:]
+    for j in range(nb):
+        dst[j] = _ONE - c[j]
+
+
+@_inline
+def _write_neither(out: np.ndarray, col: int, c0: np.ndarray, c1: np.ndarray, f0: int,
+                   nb: int) -> None:  # fmt: skip
+    """out[col, f0 + j] = (1 - c0[j]) (1 - c1[j]): a middle or no-motion state (eqs. 4, 6)."""
+    dst = out[col, f0:]
+    for j in range(nb):
+        dst[j] = (_ONE - c0[j]) * (_ONE - c1[j])
+
+
+@_inline
+def _write_states(out: np.ndarray, cols: np.ndarray, paired: bool, clo: np.ndarray,
+                  cup: np.ndarray, m0: np.ndarray, m1: np.ndarray, f0: int,
+                  nb: int) -> None:  # fmt: skip
+    """A fluent's columns for one block (a tilt pair's middle and no-motion come later)."""
+    if cols[LO] >= 0:
+        _write(out, cols[LO], clo, f0, nb)
+    if cols[HI] >= 0:
+        _write(out, cols[HI], cup, f0, nb)
+    if cols[TWO_HI] >= 0:
+        _write_complement(out, cols[TWO_HI], clo, f0, nb)
+    if cols[MID] >= 0 and not paired:
+        _write_neither(out, cols[MID], clo, cup, f0, nb)
+    if cols[M_LO] >= 0:
+        _write(out, cols[M_LO], m0, f0, nb)
+    if cols[M_HI] >= 0:
+        _write(out, cols[M_HI], m1, f0, nb)
+    if cols[STILL] >= 0 and not paired:
+        _write_neither(out, cols[STILL], m0, m1, f0, nb)
+
+
+@_inline
+def _write_touching(out: np.ndarray, col: int, dist_m: np.ndarray, touching_m: float, f0: int,
+                    nb: int) -> None:  # fmt: skip
+    """Touching: 1 within touching_m metres (dist_m: a distance's series), else 0; NaN for an
+    unknown distance."""
+    src, dst = dist_m[f0:], out[col, f0:]
+    for j in range(nb):
+        dm = src[j]
+        dst[j] = _NAN32 if dm != dm else (_ONE if dm <= touching_m else _ZERO)
 
 
 @njit(cache=True, nogil=True)
-def _log_c(d: float, tau: float, k: float, direction: int) -> float:
-    """log C of a Δ inside the band of one direction (0: toward s0, 1: toward sn)."""
-    c = 1.0 / (1.0 + math.exp(k * (d - tau)))
-    return math.log(c if direction == 0 else 1.0 - c)
+def _pitch(count: int, itemsize: int) -> int:
+    """A row length of at least ``count`` items whose byte size is an odd multiple of 64 (a
+    cache line): consecutive rows start in different L1 sets and never 4 kB apart, where
+    loads and stores would falsely alias."""
+    lines = (count * itemsize + 63) // 64
+    lines += 1 - lines % 2
+    return lines * 64 // itemsize
 
 
-@njit(cache=True, nogil=True)
-def fluent_confidences(
-    values: np.ndarray,
-    dist_m: np.ndarray,
-    sig_col: np.ndarray,
-    dist_col: np.ndarray,
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def fluent_columns(
+    signals: np.ndarray,
+    distances_m: np.ndarray,
+    sig_row: np.ndarray,
+    dist_row: np.ndarray,
     inst: np.ndarray,
     motion: np.ndarray,
     three: np.ndarray,
@@ -64,208 +401,102 @@ def fluent_confidences(
     touching_m: float,
     lag: float,
     window: int,
-    col_code: np.ndarray,
-    col_fluent: np.ndarray,
-    col_out: np.ndarray,
-    nan_cols: np.ndarray,
+    out_col: np.ndarray,
     out: np.ndarray,
 ) -> None:
-    """Fill ``out`` ``(frames, n_states)`` with every state's confidence.
+    """Fill ``out`` ``(n_states, frames)`` float32, every state's confidence over time (the
+    transpose of the result: each state's series is written contiguously).
 
-    values: ``(frames, n_signals)`` signals; dist_m: ``(frames, n_pairs)`` near distances in
-    metres. Per fluent i (n of them): ``sig_col[i]`` its column in ``values``, ``dist_col[i]``
-    its column in ``dist_m`` (-1: not a distance fluent); ``inst[i]`` = (lower τ-δ, τ+δ, τ, k,
-    upper τ-δ, τ+δ, τ, k) and ``motion[i]`` = (toward-s0 τ-δ, τ+δ, τ, k, toward-sn τ-δ, τ+δ,
-    τ, k), k = ln((1-ε)/ε)/δ; ``three[i]``: has an upper boundary; ``partner[i]``: the other
-    fluent of a tilt pair (or i). Per computed column j: ``col_code[j]`` (LO..STILL),
-    ``col_fluent[j]`` and ``col_out[j]`` its column in ``out``; ``nan_cols``: columns of
-    ``out`` to fill with NaN (fluents the caller left out because their signal is missing in
-    every frame). ``lag``: source frames per reference interval; ``window``: r.
+    signals: ``(n_signals, frames)`` each signal's series; distances_m: ``(n_pairs, frames)``
+    each near distance's series in metres. Per fluent i (n of them): ``sig_row[i]`` its
+    signal's row, ``dist_row[i]`` its distance's row (-1: not a distance fluent);
+    ``inst[i]`` = (lower τ-δ, τ+δ, τ, k, upper τ-δ, τ+δ, τ, k) and ``motion[i]`` = (toward-s0
+    τ-δ, τ+δ, τ, k, toward-sn τ-δ, τ+δ, τ, k), k = ln((1-ε)/ε)/δ; ``three[i]``: has an upper
+    boundary; ``partner[i]``: the other fluent of a tilt pair (or i); ``out_col[i, code]``:
+    the row of ``out`` of each state code (LO..STILL), -1 where the fluent has none. Rows of
+    ``out`` that no fluent names are left as they are. ``lag``: source frames per reference
+    interval; ``window``: r.
     """
-    frames = values.shape[0]
-    n = sig_col.shape[0]
-    n_cols = col_code.shape[0]
-    blk = np.empty((8, n))
-    m_e0, m_e1 = motion[:, 0].copy(), motion[:, 1].copy()  # contiguous band edges
-    m_e4, m_e5 = motion[:, 4].copy(), motion[:, 5].copy()
-    blk[TOUCH, :] = np.nan  # only near fluents have a touching state
-    inv = np.empty(window)
-    for a in range(window):
-        inv[a] = 1.0 / (a + 1)
+    frames = signals.shape[1]
+    n = sig_row.shape[0]
     integer_lag = lag >= 1.0 and lag == math.floor(lag)
     step = int(lag) if integer_lag else 0
-    # Integer lag: a ring over the last window·lag frames of each fluent's newest Δ and of
-    # log C(Δ) per direction: 0 = C is 1 (or no history: counts as 1), -inf = C is 0, NaN,
-    # or +1 = inside the band, log not computed yet (logs are <= 0, so +1 cannot be a value).
-    # A window's log-sum is then -inf (a zero: product 0) or NaN without any exp/log.
-    ring_size = window * step if integer_lag else 1
-    ring_d = np.zeros((ring_size, n))
-    ring_lc = np.zeros((2, ring_size, n))
-    # Fractional lag: interpolation positions of the window + 1 samples of one frame.
-    s_lo = np.empty(window + 1, dtype=np.intp)
-    s_hi = np.empty(window + 1, dtype=np.intp)
-    s_w = np.empty(window + 1)
-    s_ok = np.empty(window + 1, dtype=np.bool_)
-    slots = np.empty(window, dtype=np.intp)
-    totals = np.empty(n)
-    pendings = np.empty(n)
-    deltas = np.empty(window)
-    samples = np.empty(window + 1)
-    for f in range(frames):
-        if integer_lag:
-            slot = f % ring_size
-            newest_ok = f - step >= 0
-        else:
-            for m in range(window + 1):
-                pos = f - m * lag
-                s_ok[m] = pos >= -1e-9
-                pos = min(max(pos, 0.0), frames - 1.0)
-                lo = int(math.floor(pos))
-                s_lo[m] = lo
-                s_hi[m] = min(lo + 1, frames - 1)
-                s_w[m] = pos - lo
-            newest_ok = s_ok[1]
+    hist = window * step if integer_lag else int(math.ceil(window * lag)) + 1
+    size = hist + BLOCK
+    # Scratch rows, their starts staggered (see _pitch); a block's buffers stay in L1.
+    xb = np.empty(size + 1)  # one signal over the block and its history
+    d = np.empty(size)
+    scratch = np.empty((8, _pitch(size, 4)), np.float32)
+    z0, z1, lc0, lc1 = scratch[0], scratch[1], scratch[2], scratch[3]
+    clo, cup, m0, m1 = scratch[4], scratch[5], scratch[6], scratch[7]
+    samples = np.empty((window + 1, BLOCK))
+    ok = np.empty((window + 1, BLOCK), np.bool_)
+    weight = np.empty(window, np.float32)
+    for a in range(window):
+        weight[a] = 1.0 / (a + 1)
+    one_logistic = np.empty(n, np.bool_)
+    for i in range(n):
+        mo = motion[i]
+        one_logistic[i] = (mo[1] <= mo[4]) & (mo[2] == -mo[6]) & (mo[3] == mo[7])
+    # a tilt pair's middle and no-motion states need both fluents: kept per block
+    not_extreme = np.empty((n, _pitch(BLOCK, 4)), np.float32)
+    not_moving = np.empty((n, _pitch(BLOCK, 4)), np.float32)
+    for f0 in range(0, frames, BLOCK):
+        nb = min(BLOCK, frames - f0)
         for i in range(n):
-            x = values[f, sig_col[i]]
-            c_lo = _lower(x, inst[i, 0], inst[i, 1], inst[i, 2], inst[i, 3])
-            if three[i]:
-                c_up = 1.0 - _lower(x, inst[i, 4], inst[i, 5], inst[i, 6], inst[i, 7])
+            _copy_window(signals[sig_row[i]], f0 - hist, hist + nb + 1, xb)
+            _instant(xb[hist:], inst[i], three[i], z0, clo, cup, nb)
+            if integer_lag:
+                _temporal_integer(xb, f0, nb, step, window, motion[i], one_logistic[i],
+                                  weight, d, z0, z1, lc0, lc1, m0, m1)  # fmt: skip
             else:
-                c_up = np.nan if x != x else 0.0
-            blk[LO, i] = c_lo
-            blk[HI, i] = c_up
-            blk[TWO_HI, i] = 1.0 - c_lo
-            blk[MID, i] = (1.0 - c_lo) * (1.0 - c_up)
-            dc = dist_col[i]
-            if dc >= 0:
-                d = dist_m[f, dc]
-                blk[TOUCH, i] = d if d != d else (1.0 if d <= touching_m else 0.0)
-        if integer_lag and not newest_ok:
-            # No Δ yet: the ring keeps 0 (= factor 1, no evidence) for this frame.
-            for i in range(n):
-                ring_d[slot, i] = 0.0
-                ring_lc[0, slot, i] = 0.0
-                ring_lc[1, slot, i] = 0.0
-                blk[M_LO, i] = np.nan
-                blk[M_HI, i] = np.nan
-        elif integer_lag:
-            # Eq. 5 with an integer lag: the Δ of age a is the newest Δ of frame f - a·lag.
-            # (Inline, not a helper: a call passing arrays costs atomic refcounts per call.)
-            for i in range(n):
-                sc = sig_col[i]
-                ring_d[slot, i] = values[f, sc] - values[f - step, sc]
-            for i in range(n):  # selects only: vectorises
-                d = ring_d[slot, i]
-                # toward s0 (lower state): 1 below the band, 0 above it
-                v = 1.0
-                v = 0.0 if d < m_e0[i] else v
-                v = -np.inf if d > m_e1[i] else v
-                ring_lc[0, slot, i] = d if d != d else v
-                # toward sn (upper state = 1 - lower): 0 below the band, 1 above it
-                v = 1.0
-                v = -np.inf if d < m_e4[i] else v
-                v = 0.0 if d > m_e5[i] else v
-                ring_lc[1, slot, i] = d if d != d else v
-            # Slots of the window's ages (age 0 = this frame); frames before 0 hold 0.
-            for a in range(window):
-                slots[a] = (f - a * step) % ring_size
-            for direction in range(2):
-                totals[:] = 0.0
-                pendings[:] = 0.0
-                for a in range(window):
-                    sa = slots[a]
-                    w = inv[a]
-                    for i in range(n):  # branch-free: vectorises
-                        v = ring_lc[direction, sa, i]
-                        pendings[i] += v > 0.0
-                        totals[i] += v * w
-                for i in range(n):
-                    t = totals[i]
-                    # NaN (a NaN factor), -inf (a zero factor) and 0 (all ones) decide the
-                    # product without exp or log; only a product strictly between 0 and 1 (a
-                    # few % of them) takes the branch, so it is well predicted.
-                    slow = (t > -np.inf) & ((t != 0.0) | (pendings[i] > 0.0))
-                    if not slow:
-                        r = 0.0 if t == -np.inf else (t if t != t else 1.0)
-                    elif pendings[i] > 0.0:
-                        # Every factor is positive: compute the missing logs, once per Δ.
-                        q_tau = motion[i, 4 * direction + 2]
-                        q_k = motion[i, 4 * direction + 3]
-                        t = 0.0
-                        for a in range(window):
-                            sa = slots[a]
-                            v = ring_lc[direction, sa, i]
-                            if v > 0.0:
-                                v = _log_c(ring_d[sa, i], q_tau, q_k, direction)
-                                ring_lc[direction, sa, i] = v
-                            t += v * inv[a]
-                        r = math.exp(t)
-                    else:
-                        r = math.exp(t)
-                    blk[M_LO + direction, i] = r
-        else:
-            for i in range(n):
-                if not newest_ok:
-                    blk[M_LO, i] = np.nan
-                    blk[M_HI, i] = np.nan
-                    continue
-                sc = sig_col[i]
-                for m in range(window + 1):
-                    lo = s_lo[m]
-                    w = s_w[m]
-                    if w == 0.0:
-                        samples[m] = values[lo, sc]
-                    else:
-                        samples[m] = values[lo, sc] * (1.0 - w) + values[s_hi[m], sc] * w
-                n_age = 0
-                for a in range(window):
-                    if not s_ok[a + 1]:
-                        break
-                    deltas[a] = samples[a] - samples[a + 1]
-                    n_age += 1
-                for direction in range(2):
-                    # eq. 5 from log codes as in _temporal_integer, without the cache
-                    off = 4 * direction
-                    e0, e1 = motion[i, off], motion[i, off + 1]
-                    total = 0.0
-                    pending = 0
-                    for a in range(n_age):
-                        d = deltas[a]
-                        # selects, not branches: the side of the band flips with noise
-                        v = 1.0
-                        v = (0.0 if direction == 0 else -np.inf) if d < e0 else v
-                        v = (-np.inf if direction == 0 else 0.0) if d > e1 else v
-                        v = d if d != d else v
-                        pending += v > 0.0
-                        total += v * inv[a]
-                    slow = (total > -np.inf) & ((total != 0.0) | (pending > 0))
-                    if not slow:  # NaN, a zero factor, or all ones
-                        r = 0.0 if total == -np.inf else (total if total != total else 1.0)
-                    elif pending == 0:
-                        r = math.exp(total)
-                    else:
-                        total = 0.0
-                        for a in range(n_age):
-                            d = deltas[a]
-                            if e0 <= d <= e1:  # inside the band (zeros returned above)
-                                total += _log_c(d, motion[i, off + 2], motion[i, off + 3],
-                                                direction) * inv[a]  # fmt: skip
-                        r = math.exp(total)
-                    blk[M_LO + direction, i] = r
+                _temporal_fractional(xb, f0 - hist, frames, f0, nb, lag, window, motion[i],
+                                     one_logistic[i], weight, samples, ok, d, z0, z1, lc0,
+                                     lc1, m0, m1)  # fmt: skip
+            paired = partner[i] != i
+            _write_states(out, out_col[i], paired, clo, cup, m0, m1, f0, nb)
+            if out_col[i, TOUCH] >= 0 and dist_row[i] >= 0:
+                _write_touching(out, out_col[i, TOUCH], distances_m[dist_row[i]], touching_m,
+                                f0, nb)  # fmt: skip
+            if paired:
+                ne, nm = not_extreme[i], not_moving[i]
+                for j in range(nb):
+                    ne[j] = (_ONE - clo[j]) * (_ONE - cup[j])
+                    nm[j] = (_ONE - m0[j]) * (_ONE - m1[j])
         for i in range(n):
-            t_lo = blk[M_LO, i]
-            t_hi = blk[M_HI, i]
-            blk[STILL, i] = (1.0 - t_lo) * (1.0 - t_hi)
-        for i in range(n):
-            j = partner[i]
-            if j != i:
-                # A tilt pair shares "upright" and "tilt steady": both directions must hold.
-                blk[MID, i] = blk[MID, i] * ((1.0 - blk[LO, j]) * (1.0 - blk[HI, j]))
-                blk[STILL, i] = blk[STILL, i] * ((1.0 - blk[M_LO, j]) * (1.0 - blk[M_HI, j]))
-        for j in range(n_cols):
-            out[f, col_out[j]] = blk[col_code[j], col_fluent[j]]
-        for j in range(nan_cols.shape[0]):
-            out[f, nan_cols[j]] = np.nan
+            p = partner[i]
+            if p == i:
+                continue
+            # A tilt pair shares "upright" and "tilt steady": both directions must hold.
+            for col, both in ((out_col[i, MID], not_extreme), (out_col[i, STILL], not_moving)):
+                if col >= 0:
+                    a, b, dst = both[i], both[p], out[col, f0:]
+                    for j in range(nb):
+                        dst[j] = a[j] * b[j]
+
+
+@njit(cache=True, nogil=True)
+def series_rows(a: np.ndarray, out: np.ndarray) -> None:
+    """out ``(cols, rows)`` = the transpose of a ``(rows, cols)``, in tiles of 32 x 32 so that
+    both sides stay in cache (numpy's strided copy of ``a.T`` is several times slower)."""
+    rows, cols = a.shape
+    for r0 in range(0, rows, 32):
+        for c0 in range(0, cols, 32):
+            for r in range(r0, min(r0 + 32, rows)):
+                for c in range(c0, min(c0 + 32, cols)):
+                    out[c, r] = a[r, c]
+
+
+@njit(cache=True, nogil=True)
+def all_nan_rows(a: np.ndarray) -> np.ndarray:
+    """``(rows,)`` bool: every value of the row is NaN (stops at a row's first number)."""
+    out = np.ones(a.shape[0], np.bool_)
+    for r in range(a.shape[0]):
+        for v in a[r]:
+            if v == v:
+                out[r] = False
+                break
+    return out
 
 
 # ---------------------------------------------------------------------------------------------

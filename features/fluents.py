@@ -704,6 +704,57 @@ def state_columns(
     return prep.state_names, prep.words, prep.temporal
 
 
+def _series(a: np.ndarray) -> np.ndarray:
+    """``(frames, n)`` -> ``(n, frames)`` C-contiguous float64: each column's series (free for
+    a column-major array, as state_signals returns)."""
+    from ._fluent_kernels import series_rows
+
+    t = a.T
+    if t.flags.c_contiguous and t.dtype == np.float64:
+        return t
+    out = np.empty(t.shape)
+    series_rows(np.asarray(a, dtype=np.float64), out)
+    return out
+
+
+def _confidence_numba(
+    sig: StateSignals,
+    sig_col: np.ndarray,
+    dist_col: np.ndarray,
+    fps: float,
+    table: FluentTable,
+    prep: _Prepared,
+) -> np.ndarray:
+    """The compiled kernel (:func:`features._fluent_kernels.fluent_columns`): every state's
+    confidence ``(frames, n_states)`` as float32, column-major (each state's series
+    contiguous), within 1e-6 of the float64 reference."""
+    from ._fluent_kernels import all_nan_rows, fluent_columns
+
+    signals = _series(sig.values)
+    distances = _series(sig.distances_m)
+    # A fluent whose signal (and, for near, distance in metres) is missing in every frame is
+    # NaN throughout: leave it out of the kernel (e.g. no face on Kinect or mocap).
+    skip = all_nan_rows(signals)[sig_col]
+    near = dist_col >= 0
+    skip[near] &= all_nan_rows(distances)[dist_col[near]]
+    skip &= skip[prep.partner]  # a tilt pair is kept whole
+    keep = np.flatnonzero(~skip)
+    new_index = np.cumsum(~skip) - 1
+    kept_cols = ~skip[prep.fluent]
+    cols = np.flatnonzero(kept_cols)
+    out_col = np.full((len(keep), len(_CODES)), -1, dtype=np.intp)
+    out_col[new_index[prep.fluent[cols]], prep.code[cols]] = cols
+    out = np.empty((len(prep.state_names), signals.shape[1]), dtype=np.float32)
+    fluent_columns(
+        signals, distances, sig_col[keep], dist_col[keep], prep.inst[keep], prep.motion[keep],
+        prep.three[keep], new_index[prep.partner[keep]], float(table.touching_m),
+        float(fps / table.reference_fps), int(table.window), out_col, out,
+    )  # fmt: skip
+    if not kept_cols.all():
+        out[~kept_cols] = np.nan
+    return out.T
+
+
 def evaluate(
     seq: PoseSequence,
     table: FluentTable | None = None,
@@ -731,29 +782,7 @@ def evaluate(
         )
     sig_col, dist_col = _signal_columns(sig, prep)
     if backend == "numba":
-        from ._fluent_kernels import fluent_confidences
-
-        values = np.ascontiguousarray(sig.values, dtype=np.float64)
-        dist_m = np.ascontiguousarray(sig.distances_m, dtype=np.float64)
-        out = np.empty((values.shape[0], len(prep.state_names)))
-        # A fluent whose signal (and, for near, distance in metres) is missing in every frame
-        # is NaN throughout: leave it out of the kernel (e.g. no face on Kinect or mocap).
-        missing: np.ndarray = np.all(np.isnan(values), axis=0)
-        missing_m: np.ndarray = np.all(np.isnan(dist_m), axis=0)
-        skip = missing[sig_col]
-        near = dist_col >= 0
-        skip[near] &= missing_m[dist_col[near]]
-        skip &= skip[prep.partner]  # a tilt pair is kept whole
-        keep = np.flatnonzero(~skip)
-        new_index = np.cumsum(~skip) - 1
-        kept_cols = ~skip[prep.fluent]
-        fluent_confidences(
-            values, dist_m, sig_col[keep], dist_col[keep], prep.inst[keep], prep.motion[keep],
-            prep.three[keep], new_index[prep.partner[keep]],
-            float(table.touching_m), float(seq.fps / table.reference_fps), int(table.window),
-            prep.code[kept_cols], new_index[prep.fluent[kept_cols]], np.flatnonzero(kept_cols),
-            np.flatnonzero(~kept_cols), out,
-        )  # fmt: skip
+        out = _confidence_numba(sig, sig_col, dist_col, seq.fps, table, prep)
     elif backend == "numpy":
         x = sig.values[:, sig_col]
         dist_m = np.full(x.shape, np.nan)
