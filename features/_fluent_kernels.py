@@ -6,8 +6,10 @@ its ``.T``, a column-major ``(frames, n_states)``). It is the numpy reference in
 :mod:`features.fluents` (``evaluate(..., backend="numpy")``) reorganised so that the loops
 vectorise:
 
-- the loops run over the frames of a block (512) for one fluent at a time: contiguous
-  signals in, each state's series written contiguously out, every buffer in L1;
+- the loops run over the frames of a block (512) for one fluent at a time: each block's
+  signals are first copied into per-fluent series (from ``(frames, n)`` arrays of either
+  layout, read along their contiguous axis), each state's series is written contiguously
+  out, every buffer in L1;
 - branch-free: a value outside its band gets the logistic argument -inf or +inf (confidence
   exactly 1 or 0), so one formula serves every frame; the band decisions and the differences
   beside a threshold (x - τ, Δθ) stay float64, as in the reference, the rest is float32;
@@ -156,20 +158,30 @@ def _argument(v: float, edge0: float, edge1: float, z: float, below: np.float32,
 
 
 @_inline
-def _copy_window(row: np.ndarray, g0: int, count: int, xb: np.ndarray) -> None:
-    """xb[j] = row[g0 + j] for j < count; NaN outside the clip. (Offsets go into slices
-    taken before each loop: an index that might be negative is wrapped around per element,
-    which turns a loop's loads into gathers.)"""
-    frames = row.shape[0]
+def _load_block(a: np.ndarray, cols: np.ndarray, g0: int, count: int, buf: np.ndarray) -> None:
+    """buf[i, j] = a[g0 + j, cols[i]] for j < count, NaN outside the clip: a block of
+    frames transposed so that each column's series is contiguous (the rows cols lists, all
+    >= 0). Reads along a's contiguous axis, whichever it is; unsigned indices, because a
+    signed one is checked for wrap-around on every access."""
+    frames = a.shape[0]
     lead = min(count, max(0, -g0))
     top = max(lead, min(count, frames - g0))
-    for j in range(lead):
-        xb[j] = np.nan
-    src, dst = row[g0 + lead :], xb[lead:]
-    for j in range(top - lead):
-        dst[j] = src[j]
-    for j in range(top, count):
-        xb[j] = np.nan
+    n = cols.shape[0]
+    for i in range(n):
+        for j in range(lead):
+            buf[i, j] = np.nan
+        for j in range(top, count):
+            buf[i, j] = np.nan
+    if a.strides[0] >= a.strides[1]:  # row-major: a frame's values are contiguous
+        for j in range(lead, top):
+            g = np.uintp(g0 + j)
+            for i in range(n):
+                buf[i, j] = a[g, cols[i]]
+    else:
+        for i in range(n):
+            c = cols[i]
+            for j in range(lead, top):
+                buf[i, j] = a[np.uintp(g0 + j), c]
 
 
 @_inline
@@ -390,10 +402,10 @@ def _pitch(count: int, itemsize: int) -> int:
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def fluent_columns(
-    signals: np.ndarray,
+    values: np.ndarray,
     distances_m: np.ndarray,
-    sig_row: np.ndarray,
-    dist_row: np.ndarray,
+    sig_col: np.ndarray,
+    dist_col: np.ndarray,
     inst: np.ndarray,
     motion: np.ndarray,
     three: np.ndarray,
@@ -407,9 +419,10 @@ def fluent_columns(
     """Fill ``out`` ``(n_states, frames)`` float32, every state's confidence over time (the
     transpose of the result: each state's series is written contiguously).
 
-    signals: ``(n_signals, frames)`` each signal's series; distances_m: ``(n_pairs, frames)``
-    each near distance's series in metres. Per fluent i (n of them): ``sig_row[i]`` its
-    signal's row, ``dist_row[i]`` its distance's row (-1: not a distance fluent);
+    values: ``(frames, n_signals)`` signals; distances_m: ``(frames, n_pairs)`` near distances
+    in metres (either layout). Per fluent i (n of them): ``sig_col[i]`` its column in
+    ``values``; ``dist_col`` the columns of ``distances_m`` of the fluents that have a
+    touching state, in fluent order;
     ``inst[i]`` = (lower τ-δ, τ+δ, τ, k, upper τ-δ, τ+δ, τ, k) and ``motion[i]`` = (toward-s0
     τ-δ, τ+δ, τ, k, toward-sn τ-δ, τ+δ, τ, k), k = ln((1-ε)/ε)/δ; ``three[i]``: has an upper
     boundary; ``partner[i]``: the other fluent of a tilt pair (or i); ``out_col[i, code]``:
@@ -417,14 +430,15 @@ def fluent_columns(
     ``out`` that no fluent names are left as they are. ``lag``: source frames per reference
     interval; ``window``: r.
     """
-    frames = signals.shape[1]
-    n = sig_row.shape[0]
+    frames = values.shape[0]
+    n = sig_col.shape[0]
     integer_lag = lag >= 1.0 and lag == math.floor(lag)
     step = int(lag) if integer_lag else 0
     hist = window * step if integer_lag else int(math.ceil(window * lag)) + 1
     size = hist + BLOCK
     # Scratch rows, their starts staggered (see _pitch); a block's buffers stay in L1.
-    xb = np.empty(size + 1)  # one signal over the block and its history
+    xb = np.empty((n, _pitch(size + 1, 8)))  # each signal over the block and its history
+    db = np.empty((dist_col.shape[0], _pitch(BLOCK, 8)))  # the touching fluents' distances
     d = np.empty(size)
     scratch = np.empty((8, _pitch(size, 4)), np.float32)
     z0, z1, lc0, lc1 = scratch[0], scratch[1], scratch[2], scratch[3]
@@ -443,21 +457,24 @@ def fluent_columns(
     not_moving = np.empty((n, _pitch(BLOCK, 4)), np.float32)
     for f0 in range(0, frames, BLOCK):
         nb = min(BLOCK, frames - f0)
+        _load_block(values, sig_col, f0 - hist, hist + nb + 1, xb)
+        _load_block(distances_m, dist_col, f0, nb, db)
+        touching = 0
         for i in range(n):
-            _copy_window(signals[sig_row[i]], f0 - hist, hist + nb + 1, xb)
-            _instant(xb[hist:], inst[i], three[i], z0, clo, cup, nb)
+            x = xb[i]
+            _instant(x[hist:], inst[i], three[i], z0, clo, cup, nb)
             if integer_lag:
-                _temporal_integer(xb, f0, nb, step, window, motion[i], one_logistic[i],
+                _temporal_integer(x, f0, nb, step, window, motion[i], one_logistic[i],
                                   weight, d, z0, z1, lc0, lc1, m0, m1)  # fmt: skip
             else:
-                _temporal_fractional(xb, f0 - hist, frames, f0, nb, lag, window, motion[i],
+                _temporal_fractional(x, f0 - hist, frames, f0, nb, lag, window, motion[i],
                                      one_logistic[i], weight, samples, ok, d, z0, z1, lc0,
                                      lc1, m0, m1)  # fmt: skip
             paired = partner[i] != i
             _write_states(out, out_col[i], paired, clo, cup, m0, m1, f0, nb)
-            if out_col[i, TOUCH] >= 0 and dist_row[i] >= 0:
-                _write_touching(out, out_col[i, TOUCH], distances_m[dist_row[i]], touching_m,
-                                f0, nb)  # fmt: skip
+            if out_col[i, TOUCH] >= 0:
+                _write_touching(out, out_col[i, TOUCH], db[touching], touching_m, f0, nb)
+                touching += 1
             if paired:
                 ne, nm = not_extreme[i], not_moving[i]
                 for j in range(nb):
@@ -476,25 +493,14 @@ def fluent_columns(
 
 
 @njit(cache=True, nogil=True)
-def series_rows(a: np.ndarray, out: np.ndarray) -> None:
-    """out ``(cols, rows)`` = the transpose of a ``(rows, cols)``, in tiles of 32 x 32 so that
-    both sides stay in cache (numpy's strided copy of ``a.T`` is several times slower)."""
-    rows, cols = a.shape
-    for r0 in range(0, rows, 32):
-        for c0 in range(0, cols, 32):
-            for r in range(r0, min(r0 + 32, rows)):
-                for c in range(c0, min(c0 + 32, cols)):
-                    out[c, r] = a[r, c]
-
-
-@njit(cache=True, nogil=True)
-def all_nan_rows(a: np.ndarray) -> np.ndarray:
-    """``(rows,)`` bool: every value of the row is NaN (stops at a row's first number)."""
-    out = np.ones(a.shape[0], np.bool_)
-    for r in range(a.shape[0]):
-        for v in a[r]:
-            if v == v:
-                out[r] = False
+def all_nan_columns(a: np.ndarray) -> np.ndarray:
+    """``(cols,)`` bool: every value of the column of a ``(rows, cols)`` is NaN (a column
+    stops at its first number, so a signal that exists costs next to nothing)."""
+    out = np.ones(a.shape[1], np.bool_)
+    for c in range(a.shape[1]):
+        for r in range(a.shape[0]):
+            if a[r, c] == a[r, c]:
+                out[c] = False
                 break
     return out
 

@@ -704,19 +704,6 @@ def state_columns(
     return prep.state_names, prep.words, prep.temporal
 
 
-def _series(a: np.ndarray) -> np.ndarray:
-    """``(frames, n)`` -> ``(n, frames)`` C-contiguous float64: each column's series (free for
-    a column-major array, as state_signals returns)."""
-    from ._fluent_kernels import series_rows
-
-    t = a.T
-    if t.flags.c_contiguous and t.dtype == np.float64:
-        return t
-    out = np.empty(t.shape)
-    series_rows(np.asarray(a, dtype=np.float64), out)
-    return out
-
-
 def _confidence_numba(
     sig: StateSignals,
     sig_col: np.ndarray,
@@ -728,15 +715,16 @@ def _confidence_numba(
     """The compiled kernel (:func:`features._fluent_kernels.fluent_columns`): every state's
     confidence ``(frames, n_states)`` as float32, column-major (each state's series
     contiguous), within 1e-6 of the float64 reference."""
-    from ._fluent_kernels import all_nan_rows, fluent_columns
+    from ._fluent_kernels import all_nan_columns, fluent_columns
 
-    signals = _series(sig.values)
-    distances = _series(sig.distances_m)
+    values, distances = sig.values, sig.distances_m
+    if values.dtype != np.float64 or distances.dtype != np.float64:
+        values, distances = values.astype(np.float64), distances.astype(np.float64)
     # A fluent whose signal (and, for near, distance in metres) is missing in every frame is
     # NaN throughout: leave it out of the kernel (e.g. no face on Kinect or mocap).
-    skip = all_nan_rows(signals)[sig_col]
+    skip = all_nan_columns(values)[sig_col]
     near = dist_col >= 0
-    skip[near] &= all_nan_rows(distances)[dist_col[near]]
+    skip[near] &= all_nan_columns(distances)[dist_col[near]]
     skip &= skip[prep.partner]  # a tilt pair is kept whole
     keep = np.flatnonzero(~skip)
     new_index = np.cumsum(~skip) - 1
@@ -744,9 +732,11 @@ def _confidence_numba(
     cols = np.flatnonzero(kept_cols)
     out_col = np.full((len(keep), len(_CODES)), -1, dtype=np.intp)
     out_col[new_index[prep.fluent[cols]], prep.code[cols]] = cols
-    out = np.empty((len(prep.state_names), signals.shape[1]), dtype=np.float32)
+    touching = keep[out_col[:, _CODES.index("touch")] >= 0]
+    out = np.empty((len(prep.state_names), values.shape[0]), dtype=np.float32)
     fluent_columns(
-        signals, distances, sig_col[keep], dist_col[keep], prep.inst[keep], prep.motion[keep],
+        values, distances, sig_col[keep].astype(np.uintp), dist_col[touching].astype(np.uintp),
+        prep.inst[keep], prep.motion[keep],
         prep.three[keep], new_index[prep.partner[keep]], float(table.touching_m),
         float(fps / table.reference_fps), int(table.window), out_col, out,
     )  # fmt: skip

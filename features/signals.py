@@ -186,10 +186,9 @@ def state_signals(seq: PoseSequence, backend: Literal["numba", "numpy"] = "numba
 
         p = np.ascontiguousarray(p, dtype=np.float64)
         frames = p.shape[0]
-        # column-major: each signal's series is contiguous, as the fluent kernel reads them
-        values = np.empty((len(ANGLE_SIGNALS) + len(NEAR_SIGNALS), frames)).T
+        values = np.empty((frames, len(ANGLE_SIGNALS) + len(NEAR_SIGNALS)))
         head_length = np.empty(frames)
-        dist_m = np.empty((len(NEAR_SIGNALS), frames)).T
+        dist_m = np.empty((frames, len(NEAR_SIGNALS)))
         state_signal_values(
             p, _KERNEL_JOINTS, _NEAR_A, _NEAR_B, MIN_LINK_M, values, head_length, dist_m
         )

@@ -264,3 +264,26 @@ def test_a_distance_fluent_needs_a_joint_pair_signal() -> None:
     for backend in ("numba", "numpy"):
         with pytest.raises(ConfigError, match="not a near joint pair"):
             evaluate(_dummy_seq(3, 30.0), table, backend=backend)
+
+
+@pytest.mark.parametrize("layout", ["C", "F", "strided", "float32"])
+def test_fast_equals_reference_in_every_signal_layout(layout: str) -> None:
+    # The kernel reads signals in blocks along whichever axis is contiguous: frames-major
+    # (state_signals), signal-major, a view with gaps between columns, or float32 values.
+    for fps in (30.0, 100.0):
+        sig = _walk_signals(150, fps, seed=21)
+        values, dist_m = sig.values, sig.distances_m
+        if layout == "F":
+            values, dist_m = np.asfortranarray(values), np.asfortranarray(dist_m)
+        elif layout == "strided":
+            wide = np.full((values.shape[0], 2 * values.shape[1]), -7.0)
+            wide[:, ::2] = values
+            values = wide[:, ::2]
+            dist_m = np.repeat(dist_m, 3, axis=0)[::3]
+        elif layout == "float32":
+            values, dist_m = values.astype(np.float32), dist_m.astype(np.float32)
+        assert values.flags.c_contiguous == (layout in ("C", "float32"))
+        _assert_same(
+            _dummy_seq(150, fps),
+            signals=StateSignals(sig.names, values, fps, sig.head_length_m, dist_m),
+        )
