@@ -23,7 +23,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -289,6 +289,85 @@ def _check_ranges(s: FluentSpec, where: str) -> None:
             raise ConfigError(f"{name} tau must be {unit}, got {th.tau:g}", where)
 
 
+def _parse_epsilon(value: Any, source: str) -> float:
+    eps = parse_value(value, f"{source}: epsilon")
+    if not 0 < eps < 0.5:
+        raise ConfigError(f"epsilon must be in (0, 0.5), got {eps}", source)
+    return eps
+
+
+def _parse_window(value: Any, source: str) -> int:
+    if not isinstance(value, int) or isinstance(value, bool) or not 1 <= value <= MAX_WINDOW:
+        raise ConfigError(
+            f"window must be a whole number from 1 to {MAX_WINDOW}, got {value!r}", source
+        )
+    return value
+
+
+def _parse_reference_fps(value: Any, source: str) -> float:
+    fps = parse_value(value, f"{source}: reference_fps")
+    if not MIN_FPS <= fps <= MAX_FPS:
+        raise ConfigError(
+            f"reference_fps must be between {MIN_FPS:g} and {MAX_FPS:g}, got {fps:g}", source
+        )
+    return fps
+
+
+def _parse_touching_m(value: Any, source: str) -> float:
+    touching = parse_value(value, f"{source}: touching_m")
+    if not 0 < touching <= MAX_TOUCHING_M:
+        raise ConfigError(
+            f"touching_m must be a distance in metres in (0, {MAX_TOUCHING_M:g}], got {touching:g}",
+            source,
+        )
+    return touching
+
+
+# The table-wide settings of an overrides file, each read and checked in this order.
+_SETTINGS: dict[str, Callable[[Any, str], float | int]] = {
+    "epsilon": _parse_epsilon,
+    "window": _parse_window,
+    "reference_fps": _parse_reference_fps,
+    "touching_m": _parse_touching_m,
+}
+
+
+def _fluents_named(specs: list[FluentSpec], key: str, params: Any, source: str) -> list[int]:
+    """Indices of the fluents an overrides entry names (by fluent or by family), once its
+    parameters are known to be a table of known keys."""
+    hits = [i for i, s in enumerate(specs) if key in (s.name, s.family)]
+    if not hits:
+        raise ConfigError(f"unknown fluent {key!r}", source)
+    if not isinstance(params, Mapping):
+        raise ConfigError(f"fluent {key!r}: expected a table", source)
+    bad = set(params) - {"lower", "upper", "motion"} - set(_DESCRIPTIVE_KEYS)
+    if bad:
+        raise ConfigError(
+            f"fluent {key!r}: unknown key {sorted(bad)[0]!r} (known: lower, upper,"
+            " motion; signal and states as `posecbr thresholds` prints them)",
+            source,
+        )
+    return hits
+
+
+def _overridden(s: FluentSpec, key: str, params: Mapping[str, Any], source: str) -> FluentSpec:
+    """``s`` with the boundaries ``params`` gives (lower, upper, motion; an omitted tau or
+    delta kept), checked."""
+    where = f"{source}: fluents.{key}"
+    _check_descriptive(s, params, where)
+    if "lower" in params:
+        s = replace(s, lower=_merge(s.lower, _threshold(params["lower"], f"{where}.lower"), where))
+    if "upper" in params:
+        s = replace(s, upper=_merge(s.upper, _threshold(params["upper"], f"{where}.upper"), where))
+    if "motion" in params:
+        motion = _threshold(params["motion"], f"{where}.motion")
+        s = replace(s, motion_threshold=_merge(s.motion_threshold, motion, where))
+    if s.upper is not None and s.upper.tau < s.lower.tau:
+        raise ConfigError(f"fluent {key!r}: upper tau is below lower tau", source)
+    _check_ranges(s, where)
+    return s
+
+
 @dataclass(frozen=True)
 class FluentTable:
     """Every fluent and every parameter, one declared table (the paper's Table 1 and text)."""
@@ -307,87 +386,25 @@ class FluentTable:
 
     def with_overrides(self, raw: Mapping[str, Any], source: str = "thresholds") -> FluentTable:
         """A copy with parameters replaced from a parsed JSON/TOML mapping (see module doc)."""
-        known = {"epsilon", "window", "reference_fps", "touching_m", "fluents"}
+        known = {*_SETTINGS, "fluents"}
         unknown = set(raw) - known
         if unknown:
             raise ConfigError(
                 f"unknown setting {sorted(unknown)[0]!r} (known: {', '.join(sorted(known))})",
                 source,
             )
-        table = self
-        if "epsilon" in raw:
-            eps = parse_value(raw["epsilon"], f"{source}: epsilon")
-            if not 0 < eps < 0.5:
-                raise ConfigError(f"epsilon must be in (0, 0.5), got {eps}", source)
-            table = replace(table, epsilon=eps)
-        if "window" in raw:
-            win = raw["window"]
-            if not isinstance(win, int) or isinstance(win, bool) or not 1 <= win <= MAX_WINDOW:
-                raise ConfigError(
-                    f"window must be a whole number from 1 to {MAX_WINDOW}, got {win!r}", source
-                )
-            table = replace(table, window=win)
-        if "reference_fps" in raw:
-            fps = parse_value(raw["reference_fps"], f"{source}: reference_fps")
-            if not MIN_FPS <= fps <= MAX_FPS:
-                raise ConfigError(
-                    f"reference_fps must be between {MIN_FPS:g} and {MAX_FPS:g}, got {fps:g}",
-                    source,
-                )
-            table = replace(table, reference_fps=fps)
-        if "touching_m" in raw:
-            touching = parse_value(raw["touching_m"], f"{source}: touching_m")
-            if not 0 < touching <= MAX_TOUCHING_M:
-                raise ConfigError(
-                    f"touching_m must be a distance in metres in (0, {MAX_TOUCHING_M:g}],"
-                    f" got {touching:g}",
-                    source,
-                )
-            table = replace(table, touching_m=touching)
+        # each setting's own type (the window a whole number, the rest floats), checked
+        settings: dict[str, Any] = {
+            name: parse(raw[name], source) for name, parse in _SETTINGS.items() if name in raw
+        }
+        table = replace(self, **settings)
         fluents = raw.get("fluents", {})
         if not isinstance(fluents, Mapping):
             raise ConfigError("'fluents' must be a table of fluent names", source)
         specs = list(table.specs)
         for key, params in fluents.items():
-            hits = [i for i, s in enumerate(specs) if key in (s.name, s.family)]
-            if not hits:
-                raise ConfigError(f"unknown fluent {key!r}", source)
-            if not isinstance(params, Mapping):
-                raise ConfigError(f"fluent {key!r}: expected a table", source)
-            bad = set(params) - {"lower", "upper", "motion"} - set(_DESCRIPTIVE_KEYS)
-            if bad:
-                raise ConfigError(
-                    f"fluent {key!r}: unknown key {sorted(bad)[0]!r} (known: lower, upper,"
-                    " motion; signal and states as `posecbr thresholds` prints them)",
-                    source,
-                )
-            for i in hits:
-                s = specs[i]
-                where = f"{source}: fluents.{key}"
-                _check_descriptive(s, params, where)
-                if "lower" in params:
-                    s = replace(
-                        s,
-                        lower=_merge(s.lower, _threshold(params["lower"], f"{where}.lower"), where),
-                    )
-                if "upper" in params:
-                    s = replace(
-                        s,
-                        upper=_merge(s.upper, _threshold(params["upper"], f"{where}.upper"), where),
-                    )
-                if "motion" in params:
-                    s = replace(
-                        s,
-                        motion_threshold=_merge(
-                            s.motion_threshold,
-                            _threshold(params["motion"], f"{where}.motion"),
-                            where,
-                        ),
-                    )
-                if s.upper is not None and s.upper.tau < s.lower.tau:
-                    raise ConfigError(f"fluent {key!r}: upper tau is below lower tau", source)
-                _check_ranges(s, where)
-                specs[i] = s
+            for i in _fluents_named(specs, key, params, source):
+                specs[i] = _overridden(specs[i], key, params, source)
         return replace(table, specs=tuple(specs))
 
     @classmethod
@@ -505,7 +522,8 @@ class FluentResult:
 
     def available(self) -> np.ndarray:
         """``(n_states,)`` bool: the state is defined in at least one frame."""
-        return ~np.all(np.isnan(self.confidence), axis=0)
+        missing: np.ndarray = np.all(np.isnan(self.confidence), axis=0)
+        return ~missing
 
 
 def _slug(state: str) -> str:
