@@ -36,11 +36,35 @@ helpers are inlined into the kernel (numba IR inlining: no call, no reference co
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import numpy as np
 from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
+
+_Fn = TypeVar("_Fn", bound=Callable[..., Any])
+
+
+def _compiled(**options: Any) -> Callable[[_Fn], _Fn]:
+    """``numba.njit(**options)``, typed: numba's decorators carry no type hints, and the
+    compiled function takes and returns what the Python function declares."""
+    jit: Any = njit
+    decorator: Callable[[_Fn], _Fn] = jit(**options)
+    return decorator
+
+
+_Codegen = Callable[[Any, Any, Any, Any], Any]
+
+
+def _intrinsic(fn: Callable[..., tuple[Any, _Codegen]]) -> Callable[..., Any]:
+    """``numba.extending.intrinsic``, typed: compiled code calls the result with the
+    arguments that follow the typing context."""
+    wrap: Any = intrinsic
+    compiled: Callable[..., Any] = wrap(fn)
+    return compiled
+
 
 # Output column codes (the blocks a state column comes from), shared with features.fluents.
 LO, MID, HI, TWO_HI, TOUCH, M_LO, M_HI, STILL = range(8)
@@ -75,23 +99,25 @@ _A3, _A5, _A7, _A9, _A11, _A13 = (_F(1 / 3), _F(1 / 5), _F(1 / 7), _F(1 / 9), _F
                                   _F(1 / 13))  # fmt: skip
 
 
-@intrinsic
-def _f32_from_bits(typingctx, bits):
+# numba calls an intrinsic with the typing context and the arguments' types, and its codegen
+# with the target context, the IR builder, the signature and the arguments' values.
+@_intrinsic
+def _f32_from_bits(_typingctx: Any, _bits: Any) -> tuple[Any, _Codegen]:
     """The float32 whose bit pattern is the int32 ``bits`` (vectorises: a register move)."""
     sig = types.float32(types.int32)
 
-    def codegen(context, builder, signature, args):
+    def codegen(_context: Any, builder: Any, _signature: Any, args: Any) -> Any:
         return builder.bitcast(args[0], ir.FloatType())
 
     return sig, codegen
 
 
-@intrinsic
-def _bits_of_f32(typingctx, x):
+@_intrinsic
+def _bits_of_f32(_typingctx: Any, _x: Any) -> tuple[Any, _Codegen]:
     """The int32 bit pattern of the float32 ``x``."""
     sig = types.int32(types.float32)
 
-    def codegen(context, builder, signature, args):
+    def codegen(_context: Any, builder: Any, _signature: Any, args: Any) -> Any:
         return builder.bitcast(args[0], ir.IntType(32))
 
     return sig, codegen
@@ -99,7 +125,7 @@ def _bits_of_f32(typingctx, x):
 
 # Helpers inlined into the kernel (numba IR inlining: no call, no reference counting), with
 # the kernel's float semantics.
-_inline = njit(cache=True, nogil=True, inline="always", fastmath=_FM, error_model="numpy")
+_inline = _compiled(cache=True, nogil=True, inline="always", fastmath=_FM, error_model="numpy")
 
 
 @_inline
@@ -390,7 +416,7 @@ def _write_touching(out: np.ndarray, col: int, dist_m: np.ndarray, touching_m: f
         dst[j] = _NAN32 if dm != dm else (_ONE if dm <= touching_m else _ZERO)
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def _pitch(count: int, itemsize: int) -> int:
     """A row length of at least ``count`` items whose byte size is an odd multiple of 64 (a
     cache line): consecutive rows start in different L1 sets and never 4 kB apart, where
@@ -400,7 +426,7 @@ def _pitch(count: int, itemsize: int) -> int:
     return lines * 64 // itemsize
 
 
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+@_compiled(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def fluent_columns(
     values: np.ndarray,
     distances_m: np.ndarray,
@@ -492,7 +518,7 @@ def fluent_columns(
                         dst[j] = a[j] * b[j]
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def all_nan_columns(a: np.ndarray) -> np.ndarray:
     """``(cols,)`` bool: every value of the column of a ``(rows, cols)`` is NaN (a column
     stops at its first number, so a signal that exists costs next to nothing)."""
@@ -513,32 +539,32 @@ def all_nan_columns(a: np.ndarray) -> np.ndarray:
 Vec = tuple[float, float, float]
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def _get(p: np.ndarray, f: int, j: int) -> Vec:
     return (p[f, j, 0], p[f, j, 1], p[f, j, 2])
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def _sub(a: Vec, b: Vec) -> Vec:
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def _mid(a: Vec, b: Vec) -> Vec:
     return (0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]))
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def _dot(a: Vec, b: Vec) -> float:
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def _cross(a: Vec, b: Vec) -> Vec:
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def _unit(v: Vec, min_len: float) -> Vec:
     n = math.sqrt(_dot(v, v))
     if n >= min_len:
@@ -546,13 +572,13 @@ def _unit(v: Vec, min_len: float) -> Vec:
     return (np.nan, np.nan, np.nan)
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def _project(v: Vec, n: Vec) -> Vec:
     d = _dot(v, n)
     return (v[0] - d * n[0], v[1] - d * n[1], v[2] - d * n[2])
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def _angle(u: Vec, v: Vec, min_len: float) -> float:
     nu = math.sqrt(_dot(u, u))
     nv = math.sqrt(_dot(v, v))
@@ -561,7 +587,7 @@ def _angle(u: Vec, v: Vec, min_len: float) -> float:
     return np.nan
 
 
-@njit(cache=True, nogil=True)
+@_compiled(cache=True, nogil=True)
 def state_signal_values(
     p: np.ndarray, joints: np.ndarray, near_a: np.ndarray, near_b: np.ndarray,
     min_len: float, values: np.ndarray, head_length: np.ndarray, dist_m: np.ndarray,
