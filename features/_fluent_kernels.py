@@ -416,6 +416,43 @@ def _write_touching(out: np.ndarray, col: int, dist_m: np.ndarray, touching_m: f
         dst[j] = _NAN32 if dm != dm else (_ONE if dm <= touching_m else _ZERO)
 
 
+@_inline
+def _write_pairs(out: np.ndarray, out_col: np.ndarray, partner: np.ndarray,
+                 not_extreme: np.ndarray, not_moving: np.ndarray, f0: int,
+                 nb: int) -> None:  # fmt: skip
+    """A tilt pair shares "upright" and "tilt steady": both directions must hold. Each
+    fluent's row of not_extreme / not_moving holds its own (1 - C)(1 - C) for the block."""
+    for i in range(partner.shape[0]):
+        p = partner[i]
+        if p == i:
+            continue
+        for col, both in ((out_col[i, MID], not_extreme), (out_col[i, STILL], not_moving)):
+            if col >= 0:
+                a, b, dst = both[i], both[p], out[col, f0:]
+                for j in range(nb):
+                    dst[j] = a[j] * b[j]
+
+
+@_compiled(cache=True, nogil=True)
+def _age_weights(window: int) -> np.ndarray:
+    """``(window,)`` float32: eq. 5's exponent 1/(a+1) of the Δ of age a."""
+    weight = np.empty(window, np.float32)
+    for a in range(window):
+        weight[a] = 1.0 / (a + 1)
+    return weight
+
+
+@_compiled(cache=True, nogil=True)
+def _one_logistic(motion: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: the fluent's two motion bands touch at most at Δ = 0 with the same
+    slope (τ >= δ, the default), so one logistic serves both directions (see _log_c)."""
+    out = np.empty(motion.shape[0], np.bool_)
+    for i in range(motion.shape[0]):
+        mo = motion[i]
+        out[i] = (mo[1] <= mo[4]) & (mo[2] == -mo[6]) & (mo[3] == mo[7])
+    return out
+
+
 @_compiled(cache=True, nogil=True)
 def _pitch(count: int, itemsize: int) -> int:
     """A row length of at least ``count`` items whose byte size is an odd multiple of 64 (a
@@ -471,13 +508,8 @@ def fluent_columns(
     clo, cup, m0, m1 = scratch[4], scratch[5], scratch[6], scratch[7]
     samples = np.empty((window + 1, BLOCK))
     ok = np.empty((window + 1, BLOCK), np.bool_)
-    weight = np.empty(window, np.float32)
-    for a in range(window):
-        weight[a] = 1.0 / (a + 1)
-    one_logistic = np.empty(n, np.bool_)
-    for i in range(n):
-        mo = motion[i]
-        one_logistic[i] = (mo[1] <= mo[4]) & (mo[2] == -mo[6]) & (mo[3] == mo[7])
+    weight = _age_weights(window)
+    one_logistic = _one_logistic(motion)
     # a tilt pair's middle and no-motion states need both fluents: kept per block
     not_extreme = np.empty((n, _pitch(BLOCK, 4)), np.float32)
     not_moving = np.empty((n, _pitch(BLOCK, 4)), np.float32)
@@ -502,20 +534,9 @@ def fluent_columns(
                 _write_touching(out, out_col[i, TOUCH], db[touching], touching_m, f0, nb)
                 touching += 1
             if paired:
-                ne, nm = not_extreme[i], not_moving[i]
-                for j in range(nb):
-                    ne[j] = (_ONE - clo[j]) * (_ONE - cup[j])
-                    nm[j] = (_ONE - m0[j]) * (_ONE - m1[j])
-        for i in range(n):
-            p = partner[i]
-            if p == i:
-                continue
-            # A tilt pair shares "upright" and "tilt steady": both directions must hold.
-            for col, both in ((out_col[i, MID], not_extreme), (out_col[i, STILL], not_moving)):
-                if col >= 0:
-                    a, b, dst = both[i], both[p], out[col, f0:]
-                    for j in range(nb):
-                        dst[j] = a[j] * b[j]
+                _write_neither(not_extreme, i, clo, cup, 0, nb)
+                _write_neither(not_moving, i, m0, m1, 0, nb)
+        _write_pairs(out, out_col, partner, not_extreme, not_moving, f0, nb)
 
 
 @_compiled(cache=True, nogil=True)
