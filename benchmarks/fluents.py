@@ -45,7 +45,13 @@ from typing import Any  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks import write_json  # noqa: E402
-from features.fluents import DEFAULT_TABLE, FluentTable, evaluate, state_signals  # noqa: E402
+from features.fluents import (  # noqa: E402
+    DEFAULT_TABLE,
+    FluentSpec,
+    FluentTable,
+    evaluate,
+    state_signals,
+)
 from features.poses import PoseSequence  # noqa: E402
 from features.progress import progress  # noqa: E402
 from features.signals import StateSignals  # noqa: E402
@@ -199,90 +205,100 @@ def _synthetic_blazepose(frames: int, fps: float = 30.0, seed: int = 0) -> PoseS
 # --- the naive per-frame peer -----------------------------------------------------------------
 
 
-def naive_evaluate(sig: StateSignals, fps: float, table: FluentTable, frames: int) -> np.ndarray:
-    """The first ``frames`` rows of every state's confidence, one frame and one fluent at a
-    time, straight from the paper's equations (2)-(6). Returns ``(frames, n_states)``."""
-    eps = table.epsilon
-    logit = math.log((1 - eps) / eps)
-    specs = table.specs
-    col = {name: i for i, name in enumerate(sig.names)}
-    dist_col = {name: i for i, name in enumerate(sig.names[len(sig.angle_names) :])}
-    index_of = {s.name: i for i, s in enumerate(specs)}
-    lag = fps / table.reference_fps
-    values = sig.values
-    n_total = values.shape[0]
+class _NaivePeer:
+    """The paper's equations (2)-(6) for one frame and one fluent at a time, in plain Python
+    (``math.exp``, ``**``): the naive peer."""
 
-    def lower(x: float, tau: float, delta: float) -> float:
+    def __init__(self, sig: StateSignals, fps: float, table: FluentTable) -> None:
+        self.sig, self.table = sig, table
+        self.logit = math.log((1 - table.epsilon) / table.epsilon)
+        self.col = {name: i for i, name in enumerate(sig.names)}
+        self.dist_col = {name: i for i, name in enumerate(sig.names[len(sig.angle_names) :])}
+        self.index_of = {s.name: i for i, s in enumerate(table.specs)}
+        self.lag = fps / table.reference_fps
+
+    def lower(self, x: float, tau: float, delta: float) -> float:
+        """Eq. 2: a state that holds below τ."""
         if math.isnan(x):
             return math.nan
         if x < tau - delta:
             return 1.0
         if x > tau + delta:
             return 0.0
-        return 1.0 / (1.0 + math.exp(logit / delta * (x - tau)))
+        return 1.0 / (1.0 + math.exp(self.logit / delta * (x - tau)))
 
-    def sample(f: int, j: int, m: int) -> tuple[float, bool]:
-        pos = f - m * lag
+    def sample(self, f: int, j: int, m: int) -> tuple[float, bool]:
+        """Signal j ``m`` reference intervals before frame f (interpolated), and whether the
+        clip reaches back that far."""
+        values = self.sig.values
+        pos = f - m * self.lag
         ok = pos >= -1e-9
-        pos = min(max(pos, 0.0), n_total - 1.0)
+        pos = min(max(pos, 0.0), values.shape[0] - 1.0)
         lo = math.floor(pos)
         w = pos - lo
         if w == 0.0:
             return float(values[lo, j]), ok
-        hi = min(lo + 1, n_total - 1)
+        hi = min(lo + 1, values.shape[0] - 1)
         return float(values[lo, j] * (1 - w) + values[hi, j] * w), ok
 
-    def motion(f: int, j: int, tau: float, delta: float) -> tuple[float, float]:
-        s = [sample(f, j, m) for m in range(table.window + 1)]
+    def motion(self, f: int, j: int, tau: float, delta: float) -> tuple[float, float]:
+        """Eq. 5 toward s0 and toward sn at frame f: the product over the window."""
+        s = [self.sample(f, j, m) for m in range(self.table.window + 1)]
         if not s[1][1]:
             return math.nan, math.nan
         to_lo = to_hi = 1.0
-        for a in range(table.window):
+        for a in range(self.table.window):
             if not s[a + 1][1]:
                 continue  # no history: counts as 1
             d = s[a][0] - s[a + 1][0]
-            c_lo = lower(d, -tau, delta)
-            c_hi = 1.0 - lower(d, tau, delta)
-            to_lo *= c_lo ** (1.0 / (a + 1))
-            to_hi *= c_hi ** (1.0 / (a + 1))
+            to_lo *= self.lower(d, -tau, delta) ** (1.0 / (a + 1))
+            to_hi *= (1.0 - self.lower(d, tau, delta)) ** (1.0 / (a + 1))
         return to_lo, to_hi
 
-    rows = []
-    for f in range(frames):
-        per: dict[int, dict[str, float]] = {}
-        for i, s in enumerate(specs):
-            x = float(values[f, col[s.signal]])
-            c0 = lower(x, s.lower.tau, s.lower.delta)
-            c2 = (1.0 - lower(x, s.upper.tau, s.upper.delta)) if s.upper else 0.0 * x
-            m_lo, m_hi = motion(f, col[s.signal], s.motion_threshold.tau,
-                                s.motion_threshold.delta)  # fmt: skip
-            st = {"lo": c0, "hi": c2, "two_hi": 1.0 - c0, "mid": (1 - c0) * (1 - c2),
-                  "m_lo": m_lo, "m_hi": m_hi, "still": (1 - m_lo) * (1 - m_hi)}  # fmt: skip
-            if s.kind == "distance":
-                d = float(sig.distances_m[f, dist_col[s.signal]])
-                st["touch"] = math.nan if math.isnan(d) else float(d <= table.touching_m)
-            per[i] = st
+    def states(self, f: int, s: FluentSpec) -> dict[str, float]:
+        """Every state of fluent ``s`` at frame f, by column code (a tilt pair's shared
+        states still for this direction alone)."""
+        j = self.col[s.signal]
+        x = float(self.sig.values[f, j])
+        c0 = self.lower(x, s.lower.tau, s.lower.delta)
+        c2 = (1.0 - self.lower(x, s.upper.tau, s.upper.delta)) if s.upper else 0.0 * x
+        m_lo, m_hi = self.motion(f, j, s.motion_threshold.tau, s.motion_threshold.delta)
+        st = {"lo": c0, "hi": c2, "two_hi": 1.0 - c0, "mid": (1 - c0) * (1 - c2),
+              "m_lo": m_lo, "m_hi": m_hi, "still": (1 - m_lo) * (1 - m_hi)}  # fmt: skip
+        if s.kind == "distance":
+            d = float(self.sig.distances_m[f, self.dist_col[s.signal]])
+            st["touch"] = math.nan if math.isnan(d) else float(d <= self.table.touching_m)
+        return st
+
+    def row(self, per: list[dict[str, float]]) -> list[float]:
+        """One frame's confidences in evaluate's column order, from every fluent's states."""
         row: list[float] = []
-        for i, s in enumerate(specs):
-            st = per[i]
+        for s, st in zip(self.table.specs, per, strict=True):
+            mid, still = st["mid"], st["still"]
             if s.paired_with is not None:  # tilt pair: upright / tilt steady need both
-                other = per[index_of[s.paired_with]]
-                mid = st["mid"] * other["mid"]
-                still = st["still"] * other["still"]
-            else:
-                mid, still = st["mid"], st["still"]
-            if s.upper is None:
-                row += [st["lo"], st["two_hi"]]
-            elif s.secondary:
-                row += [st["lo"], st["hi"]]
-            else:
-                row += [st["lo"], mid, st["hi"]]
+                other = per[self.index_of[s.paired_with]]
+                mid, still = mid * other["mid"], still * other["still"]
+            row += _instant_columns(s, st, mid)
             if s.kind == "distance":
                 row.append(st["touch"])
-            row += [st["m_lo"], st["m_hi"]]
-            if not s.secondary:
-                row.append(still)
-        rows.append(row)
+            row += [st["m_lo"], st["m_hi"]] + ([] if s.secondary else [still])
+        return row
+
+
+def _instant_columns(s: FluentSpec, st: dict[str, float], mid: float) -> list[float]:
+    """The instantaneous states of fluent ``s`` in evaluate's column order."""
+    if s.upper is None:
+        return [st["lo"], st["two_hi"]]
+    if s.secondary:
+        return [st["lo"], st["hi"]]
+    return [st["lo"], mid, st["hi"]]
+
+
+def naive_evaluate(sig: StateSignals, fps: float, table: FluentTable, frames: int) -> np.ndarray:
+    """The first ``frames`` rows of every state's confidence, one frame and one fluent at a
+    time, straight from the paper's equations (2)-(6). Returns ``(frames, n_states)``."""
+    peer = _NaivePeer(sig, fps, table)
+    rows = [peer.row([peer.states(f, s) for s in table.specs]) for f in range(frames)]
     return np.array(rows)
 
 
