@@ -408,11 +408,11 @@ def _write_states(out: np.ndarray, cols: np.ndarray, paired: bool, clo: np.ndarr
 @_inline
 def _write_touching(out: np.ndarray, col: int, dist_m: np.ndarray, touching_m: float, f0: int,
                     nb: int) -> None:  # fmt: skip
-    """Touching: 1 within touching_m metres (dist_m: a distance's series), else 0; NaN for an
-    unknown distance."""
-    src, dst = dist_m[f0:], out[col, f0:]
+    """Touching at frames f0 .. f0+nb-1: 1 within touching_m metres, else 0; NaN for an
+    unknown distance. dist_m: the distance over the block (its frame f0 at index 0)."""
+    dst = out[col, f0:]
     for j in range(nb):
-        dm = src[j]
+        dm = dist_m[j]
         dst[j] = _NAN32 if dm != dm else (_ONE if dm <= touching_m else _ZERO)
 
 

@@ -100,6 +100,20 @@ def test_fast_equals_reference_on_random_walks(fps: float) -> None:
     assert np.any(motion == 0.0) and np.any(motion == 1.0) and np.any(np.isnan(motion))
 
 
+@pytest.mark.parametrize("fps", [30.0, 100.0])
+def test_fast_equals_reference_over_several_blocks(fps: float) -> None:
+    # The kernel works in blocks of 512 frames: a clip of three blocks and a part, with
+    # distances that cross the touching threshold, so every block's touching states vary.
+    frames = 3 * 512 + 77
+    sig = _walk_signals(frames, fps, seed=5)
+    ref = _assert_same(_dummy_seq(frames, fps), signals=sig)
+    names = evaluate(_dummy_seq(1, fps)).state_names
+    touching = ref[:, [i for i, name in enumerate(names) if name.endswith(".touching")]]
+    for f0 in range(0, frames, 512):
+        block = touching[f0 : f0 + 512]
+        assert np.any(block == 1.0) and np.any(block == 0.0)
+
+
 @pytest.mark.parametrize("frames", [1, 2, 3, 5, 6, 7])
 @pytest.mark.parametrize("fps", [30.0, 120.0, 100.0, 10.0])
 def test_fast_equals_reference_on_short_clips(frames: int, fps: float) -> None:
@@ -269,9 +283,10 @@ def test_a_distance_fluent_needs_a_joint_pair_signal() -> None:
 @pytest.mark.parametrize("layout", ["C", "F", "strided", "float32"])
 def test_fast_equals_reference_in_every_signal_layout(layout: str) -> None:
     # The kernel reads signals in blocks along whichever axis is contiguous: frames-major
-    # (state_signals), signal-major, a view with gaps between columns, or float32 values.
+    # (state_signals), signal-major, a view with gaps between columns, or float32 values;
+    # over two blocks of 512 frames.
     for fps in (30.0, 100.0):
-        sig = _walk_signals(150, fps, seed=21)
+        sig = _walk_signals(600, fps, seed=21)
         values, dist_m = sig.values, sig.distances_m
         if layout == "F":
             values, dist_m = np.asfortranarray(values), np.asfortranarray(dist_m)
@@ -284,6 +299,6 @@ def test_fast_equals_reference_in_every_signal_layout(layout: str) -> None:
             values, dist_m = values.astype(np.float32), dist_m.astype(np.float32)
         assert values.flags.c_contiguous == (layout in ("C", "float32"))
         _assert_same(
-            _dummy_seq(150, fps),
+            _dummy_seq(600, fps),
             signals=StateSignals(sig.names, values, fps, sig.head_length_m, dist_m),
         )
