@@ -4,7 +4,8 @@ One pose file per clip (``DIR/<stem>.npz``, or ``DIR/<label>/<stem>.npz`` for la
 datasets) holding the world landmarks (canonical frame, fps from the video), visibility as
 confidence, the image landmarks (``extra_image_landmarks``), the label/subject and the
 frames with no person. Outputs whose video content (sha256), model version and options are
-unchanged are skipped. Every file is written under a temporary name and renamed.
+unchanged are skipped. Every file is written under a temporary name and renamed
+(features.fileio).
 """
 
 from __future__ import annotations
@@ -56,7 +57,10 @@ class Options:
     fluents: bool = True
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+Outcome = tuple[str, Path, str]  # (status "done", "skipped" or "failed", pose file, detail)
+
+
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "extract",
         help="estimate 3D poses from videos (BlazePose on onnxruntime) and write pose files",
@@ -279,7 +283,7 @@ def _fluent_words(seq: Any, top: int = 4) -> list[list[str]] | None:
     ]
 
 
-def process(job: Job, options: Options) -> tuple[str, Path, str]:
+def process(job: Job, options: Options) -> Outcome:
     """Extract one clip. Returns (status, path, detail); status "done", "skipped" or "failed"."""
     import numpy as np
 
@@ -320,10 +324,7 @@ def process(job: Job, options: Options) -> tuple[str, Path, str]:
                     )
                 seq = seq.slice_frames(job.start, job.end)
                 image_lm = image_lm[job.start : job.end]
-            try:
-                save_pose(seq, job.out, extra_arrays={"image_landmarks": image_lm})
-            except OSError as exc:
-                raise DataError(f"cannot write ({exc.strerror or exc})", job.out) from None
+            save_pose(seq, job.out, extra_arrays={"image_landmarks": image_lm})
         if job.overlay is not None:
             words = _fluent_words(seq) if options.fluents else None
             write_overlay(
@@ -335,7 +336,7 @@ def process(job: Job, options: Options) -> tuple[str, Path, str]:
         return "failed", job.out, str(exc)
 
 
-def process_on_worker(job: Job, options: Options) -> tuple[str, Path, str]:
+def process_on_worker(job: Job, options: Options) -> Outcome:
     """:func:`process` on a Dask worker: onnxruntime and OpenCV's decoder get the worker's
     threads (one per worker with ``local:N``), so N workers share the cores instead of fighting
     over them."""
@@ -349,7 +350,7 @@ def process_on_worker(job: Job, options: Options) -> tuple[str, Path, str]:
     return process(job, options)
 
 
-def _on_cluster(scheduler: str, jobs: list[Job], options: Options) -> list[tuple[str, Path, str]]:
+def _on_cluster(scheduler: str, jobs: list[Job], options: Options) -> list[Outcome]:
     """Every job on the Dask cluster; a job whose worker failed it is reported like a failed
     clip (by its video), the others finish."""
     from features.cluster import connect, map_outcomes
@@ -389,63 +390,87 @@ def _check_outputs(jobs: list[Job]) -> None:
             check_output(job.overlay, inputs=videos, what="overlay", make_parents=True)
 
 
-def run(args: argparse.Namespace) -> int:
-    import concurrent.futures as cf
-    import multiprocessing
-
+def _options(args: argparse.Namespace) -> Options:
+    """The extraction options the arguments ask for (after checking --workers, --scheduler)."""
     if args.workers < 1:
         raise PosecbrError(f"--workers must be at least 1, got {args.workers}")
     check_scheduler(args.scheduler)
-    source: Path = args.input
-    options = Options(
+    return Options(
         smoothing=not args.no_smoothing,
         tracking=not args.detect_every_frame,
         keep_outside=args.keep_outside,
         force=args.force,
     )
-    jobs = find_jobs(source, args.out, args.overlay)
-    if args.overlay is not None and len(jobs) == 1 and source.is_file():
+
+
+def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
+    """Every output path refused or prepared before the first clip is read."""
+    if args.overlay is not None and len(jobs) == 1 and args.input.is_file():
         if args.overlay.suffix.lower() != ".mp4":
             raise DataError("overlay must be an .mp4 file name", args.overlay)
     if args.out.exists() and not args.out.is_dir():
         raise DataError("output is not a folder", args.out)
     _check_outputs(jobs)
     _check_out_dir(args.out)
-    single = len(jobs) == 1 and source.is_file() and source.suffix.lower() != ".csv"
-    if single:
-        # A single video: its problem is THE error (one line from the CLI, exit 1).
-        status, path, detail = process(jobs[0], options)
-        if status == "failed":
-            raise PosecbrError(detail)
-        print(f"{status}: {shown(path)} ({shown(detail)})")
-        return 0
-    results: list[tuple[str, Path, str]] = []
+
+
+def _run_single(job: Job, options: Options) -> int:
+    """A single video: its problem is THE error (one line from the CLI, exit 1)."""
+    status, path, detail = process(job, options)
+    if status == "failed":
+        raise PosecbrError(detail)
+    print(f"{status}: {shown(path)} ({shown(detail)})")
+    return 0
+
+
+def _in_processes(jobs: list[Job], options: Options, workers: int) -> list[Outcome]:
+    """Every job on a pool of ``workers`` local processes, each with its share of the cores."""
+    import concurrent.futures as cf
+    import multiprocessing
+
+    threads = max(1, (os.cpu_count() or 1) // workers)
+    # spawn, not fork: a forked child would inherit onnxruntime's thread pools (and any
+    # session already made here) in a state it cannot use, and hang.
+    with cf.ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_init_worker,
+        initargs=(threads,),
+    ) as pool:
+        futures = [pool.submit(process, job, options) for job in jobs]
+        return [fut.result() for fut in progress(cf.as_completed(futures), "extract",
+                                                 len(futures), "clip")]  # fmt: skip
+
+
+def _run_all(jobs: list[Job], options: Options, args: argparse.Namespace) -> list[Outcome]:
+    """Every job on the cluster, in this process, or on a pool of local processes."""
     workers = min(args.workers, len(jobs))
     if args.scheduler is not None:
-        results = _on_cluster(args.scheduler, jobs, options)
-    elif workers == 1:
-        for job in progress(jobs, desc="extract", unit="clip"):
-            results.append(process(job, options))
-    else:
-        threads = max(1, (os.cpu_count() or 1) // workers)
-        # spawn, not fork: a forked child would inherit onnxruntime's thread pools (and any
-        # session already made here) in a state it cannot use, and hang.
-        with cf.ProcessPoolExecutor(
-            max_workers=workers,
-            mp_context=multiprocessing.get_context("spawn"),
-            initializer=_init_worker,
-            initargs=(threads,),
-        ) as pool:
-            futures = [pool.submit(process, job, options) for job in jobs]
-            for fut in progress(cf.as_completed(futures), "extract", len(futures), "clip"):
-                results.append(fut.result())
+        return _on_cluster(args.scheduler, jobs, options)
+    if workers == 1:
+        return [process(job, options) for job in progress(jobs, desc="extract", unit="clip")]
+    return _in_processes(jobs, options, workers)
+
+
+def _summary(results: list[Outcome], out: Path) -> int:
+    """One line per failed clip and the counts; the exit status (1 if any clip failed)."""
     failed = [r for r in results if r[0] == "failed"]
     for _, _, detail in failed:
         print(f"posecbr extract: error: {shown(detail)}", file=sys.stderr)
     done = sum(r[0] == "done" for r in results)
     skipped = sum(r[0] == "skipped" for r in results)
     print(
-        f"{done} extracted, {skipped} up to date, {len(failed)} failed -> {shown(args.out)}",
+        f"{done} extracted, {skipped} up to date, {len(failed)} failed -> {shown(out)}",
         file=sys.stderr if failed else sys.stdout,
     )
     return 1 if failed else 0
+
+
+def run(args: argparse.Namespace) -> int:
+    options = _options(args)
+    source: Path = args.input
+    jobs = find_jobs(source, args.out, args.overlay)
+    _check_before_work(args, jobs)
+    if len(jobs) == 1 and source.is_file() and source.suffix.lower() != ".csv":
+        return _run_single(jobs[0], options)
+    return _summary(_run_all(jobs, options, args), args.out)

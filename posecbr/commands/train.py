@@ -42,7 +42,7 @@ def _phases(value: str) -> int | str:
         raise ConfigError(msg, "--phases") from None
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "train",
         help="build a case base from labelled clips",
