@@ -6,6 +6,8 @@ replaces one of the inputs it was made from.
   temporary file once the ``with`` block is left);
 - :func:`write_text_atomic`, :func:`write_bytes_atomic`, :func:`write_json_atomic`: the usual
   cases of that;
+- :func:`staged_folder`: several files into one folder as one write (all of them, or the
+  folder as it was);
 - :func:`check_output`: before any work starts, refuse an output path that is a folder, lies in
   a folder that does not exist, or is one of the inputs.
 """
@@ -14,8 +16,9 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import tempfile
-from collections.abc import Iterable, Iterator
+from collections.abc import Collection, Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -30,17 +33,20 @@ def _umask() -> int:
 
 
 @contextmanager
-def atomic_path(path: str | Path, *, make_parents: bool = True) -> Iterator[Path]:
+def atomic_path(
+    path: str | Path, *, make_parents: bool = True, suffix: str = ".tmp"
+) -> Iterator[Path]:
     """A temporary path beside ``path``; renamed to ``path`` when the block ends normally.
 
     The temporary file has the permissions of an ordinary new file (umask applied). On an error
-    inside the block it is removed and ``path`` is left as it was.
+    inside the block it is removed and ``path`` is left as it was. ``suffix``: the temporary
+    name's ending, for writers that choose the format by it (OpenCV's video writer).
     """
     dest = Path(path)
     try:
         if make_parents:
             dest.parent.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=dest.parent)
+        fd, name = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=suffix, dir=dest.parent)
         os.close(fd)
     except OSError as exc:
         raise DataError(f"cannot write: {exc.strerror or exc}", dest) from None
@@ -74,6 +80,35 @@ def write_json_atomic(path: str | Path, obj: Any, *, indent: int | None = 1) -> 
     """Write ``obj`` as JSON (UTF-8, non-ASCII kept, NaN allowed) to ``path`` atomically."""
     text = json.dumps(obj, indent=indent, ensure_ascii=False, allow_nan=True)
     return write_text_atomic(path, text + "\n")
+
+
+@contextmanager
+def staged_folder(folder: str | Path, *, last: Collection[str] = ()) -> Iterator[Path]:
+    """A hidden staging folder inside ``folder`` (made if need be) to write several files as one.
+
+    When the block ends normally each file written in the staging folder (flat, no subfolders)
+    is moved into ``folder`` under its name, those named in ``last`` after the others (an index
+    that names the rest). On an error the staging folder is removed, and ``folder`` too if the
+    block made it: ``folder`` is left as it was.
+    """
+    out = Path(folder)
+    created = not out.exists()
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        stage = Path(tempfile.mkdtemp(prefix=".posecbr-stage-", dir=out))
+    except OSError as exc:
+        raise DataError(f"cannot create: {exc.strerror or exc}", out) from None
+    try:
+        yield stage
+        staged = sorted(stage.iterdir(), key=lambda p: (p.name in last, p.name))
+        for path in staged:
+            os.replace(path, out / path.name)
+        stage.rmdir()
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        if created:
+            shutil.rmtree(out, ignore_errors=True)
+        raise
 
 
 def _same_file(a: Path, b: Path) -> bool:

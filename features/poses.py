@@ -21,7 +21,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 import tokenize
 import zipfile
 import zlib
@@ -33,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import ConfigError, PoseFileError
+from features.fileio import atomic_path
 from features.text import size_words
 
 from .skeleton import BLAZEPOSE_33, CANONICAL_SKELETON, KNOWN_SKELETONS
@@ -245,12 +245,6 @@ class PoseSequence:
 EXTRA_PREFIX = "extra_"
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
 def save_pose(
     seq: PoseSequence,
     path: str | Path,
@@ -279,19 +273,8 @@ def save_pose(
         arrays["confidence"] = seq.confidence.astype(dtype)
     for name, value in (extra_arrays or {}).items():
         arrays[EXTRA_PREFIX + name] = np.asarray(value)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    except OSError as exc:
-        raise PoseFileError(f"cannot write: {exc.strerror or exc}", path) from None
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a pose file is an ordinary file
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
     return path
 
 

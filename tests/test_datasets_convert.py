@@ -113,3 +113,25 @@ def test_convert_truncated_bvh_one_line(tmp_path: Path, capsys: pytest.CaptureFi
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"posecbr convert: error: {f}:") and "truncated" in err
     assert not list((tmp_path / "o").glob("*.npz"))
+
+
+def test_convert_with_a_bad_clip_leaves_the_earlier_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A clip that fails halfway through the folder: the output folder of the earlier run is
+    left byte for byte (its labels.csv and clips), with no staging folder or temporary."""
+    src, out = tmp_path / "src", tmp_path / "out"
+    src.mkdir()
+    (src / "a.bvh").write_text(BVH)
+    (src / "labels.csv").write_text("path,label\na.bvh,walk\n")
+    assert main(["convert", str(src), "--out", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert sorted(before) == ["a.npz", "labels.csv"]
+    (src / "b.bvh").write_text(BVH)
+    (src / "c.bvh").write_text(BVH[:-20])  # truncated: read after a.bvh and b.bvh
+    (src / "labels.csv").write_text("path,label\na.bvh,walk\nb.bvh,walk\nc.bvh,walk\n")
+    capsys.readouterr()
+    assert main(["convert", str(src), "--out", str(out)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"posecbr convert: error: {src / 'c.bvh'}:") and "truncated" in err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before

@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import cv2
@@ -204,3 +205,48 @@ def test_dataset_with_one_bad_clip_reports_it_and_keeps_the_rest(
     assert (out / "squat" / "good.npz").is_file()
     assert not (out / "squat" / "bad.npz").exists()
     assert [p.name for p in (out / "squat").iterdir()] == ["good.npz"]  # no temp files left
+
+
+def _members(path: Path) -> dict[str, np.ndarray]:
+    """Every array of a pose file (the archive's bytes hold the time it was written)."""
+    with np.load(path, allow_pickle=False) as data:
+        return {k: data[k] for k in data.files}
+
+
+def test_outputs_that_cannot_be_written_leave_the_old_ones(
+    clip: Path,
+    tmp_path: Path,
+    capfd: pytest.CaptureFixture[str],
+    file_size_limit: Callable[[int], None],
+) -> None:
+    """A full disk while writing the overlay or the pose file (a file size limit here): one
+    line, exit 1, the output that failed as the earlier run left it, no temporary file."""
+    out, overlay = tmp_path / "o", tmp_path / "check.mp4"
+    argv = ["extract", str(clip), "--out", str(out), "--overlay", str(overlay), "--force"]
+    assert main(argv) == 0
+    pose_file = out / "squat8.npz"
+    pose, video = _members(pose_file), overlay.read_bytes()
+    capfd.readouterr()
+
+    def refused(what: Path) -> None:
+        assert main(argv) == 1
+        line = _only_line(capfd.readouterr().err)
+        assert line.startswith(f"posecbr extract: error: {what}: cannot write"), line
+        assert overlay.read_bytes() == video
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["check.mp4", "o"]
+        assert [p.name for p in out.iterdir()] == ["squat8.npz"]
+
+    # The pose file fits under the limit (it is written again, with the same poses), the
+    # overlay does not.
+    assert len(video) > pose_file.stat().st_size + 1024
+    file_size_limit(pose_file.stat().st_size + 1024)
+    refused(overlay)
+    again = _members(pose_file)
+    assert again.keys() == pose.keys()
+    for name, array in pose.items():
+        np.testing.assert_array_equal(again[name], array, err_msg=name)
+    # Neither fits: the pose file is the one refused, and left byte for byte.
+    before = pose_file.read_bytes()
+    file_size_limit(len(before) // 2)
+    refused(pose_file)
+    assert pose_file.read_bytes() == before

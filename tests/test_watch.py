@@ -138,3 +138,20 @@ def test_watch_a_stream_to_its_end_with_max_frames(
 def test_watch_refuses_a_missing_file(case_base: Path, tmp_path: Path, capsys: Any) -> None:
     assert main(["watch", str(tmp_path / "none.mp4"), "--db", str(case_base)]) == 1
     assert "no such video file" in capsys.readouterr().err
+
+
+def test_watch_that_stalls_leaves_the_earlier_video(
+    case_base: Path,
+    shared_data: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The --out video of an earlier watch stays as it was when this one fails."""
+    monkeypatch.setattr(pose_estimation, "stream_poses", _mocap_stream(shared_data, 30, "stall"))
+    out = tmp_path / "out.mp4"
+    out.write_bytes(b"the earlier video")
+    assert main(["watch", "0", "--db", str(case_base), "--stall", "0.5", "--out", str(out)]) == 1
+    assert "stalled: no frame for 0.5 s" in capsys.readouterr().err
+    assert out.read_bytes() == b"the earlier video"
+    assert list(tmp_path.iterdir()) == [out]  # no temporary left

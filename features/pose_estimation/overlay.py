@@ -3,8 +3,6 @@ to check. Written to a temporary name and renamed, so no half-written file is le
 
 from __future__ import annotations
 
-import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -12,6 +10,7 @@ import cv2
 import numpy as np
 
 from features.errors import DataError
+from features.fileio import atomic_path
 
 from .video import iter_frames
 
@@ -89,14 +88,25 @@ def write_overlay(
     words: per row, phrases to print (e.g. the fluents that hold).
     """
     out = Path(out_path)
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{out.stem}.", suffix=".mp4", dir=out.parent)
-        os.close(fd)
-    except OSError as exc:
-        raise DataError(f"cannot write overlay ({exc.strerror or exc})", out) from None
-    tmp = Path(tmp_name)
+    # The temporary name ends in .mp4: OpenCV picks the container by the file name.
+    with atomic_path(out, suffix=".mp4") as tmp:
+        _encode(video_path, image_landmarks, tmp, out, fps, words, frame_offset)
+    return out
+
+
+def _encode(
+    video_path: str | Path,
+    image_landmarks: np.ndarray,
+    tmp: Path,
+    out: Path,
+    fps: float,
+    words: Sequence[Sequence[str]] | None,
+    frame_offset: int,
+) -> None:
+    """The frames of ``video_path`` with the stick figure drawn, encoded into ``tmp``
+    (``out`` names the overlay in messages); see :func:`write_overlay`."""
     writer: cv2.VideoWriter | None = None
+    written = 0
     try:
         for k, rgb in enumerate(iter_frames(video_path)):
             i = k - frame_offset
@@ -112,16 +122,23 @@ def write_overlay(
                     raise DataError("cannot encode an MP4 overlay here", out)
             draw_pose(bgr, image_landmarks[i], words[i] if words is not None else ())
             writer.write(bgr)
+            written += 1
         if writer is None:
             raise DataError("no frames to draw", video_path)
-        writer.release()
-        writer = None
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp made it private; give it the usual mode
-        os.replace(tmp, out)
     finally:
         if writer is not None:
             writer.release()
-        tmp.unlink(missing_ok=True)
-    return out
+    check_encoded(tmp, written, out)
+
+
+def check_encoded(path: Path, frames: int, out: Path) -> None:
+    """Refuse a video file that does not read back with ``frames`` frames: OpenCV's writer only
+    warns when a write fails (a full disk, a file size limit), so the file is checked before it
+    is renamed into place. ``out`` names the output in the message."""
+    cap = cv2.VideoCapture(str(path))
+    try:
+        found = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
+    finally:
+        cap.release()
+    if found != frames:
+        raise DataError(f"cannot write: {frames} frames encoded but {found} read back", out)

@@ -17,9 +17,6 @@ import argparse
 import csv
 import io
 import math
-import os
-import shutil
-import tempfile
 from collections.abc import Iterable, Iterator
 from collections.abc import Set as AbstractSet
 from dataclasses import replace
@@ -27,7 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from features.errors import DataError
-from features.fileio import check_output, write_text_atomic
+from features.fileio import check_output, staged_folder, write_text_atomic
 from features.text import shown
 
 if TYPE_CHECKING:
@@ -326,25 +323,11 @@ def run(args: argparse.Namespace) -> int:
     _check_no_overwrite(out, inputs)
     if out.is_dir():
         check_output(out / "labels.csv", inputs=inputs, what="labels file")
-    created = not out.exists()
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        stage = Path(tempfile.mkdtemp(prefix=".posecbr-convert-", dir=out))
-    except OSError as exc:
-        raise DataError(f"cannot create: {exc.strerror or exc}", out) from None
-    # Clips go to a staging folder first: a bad clip halfway leaves the output folder as it was.
-    try:
+    # Clips and labels.csv are staged first: a bad clip halfway leaves the output folder as it
+    # was; labels.csv, which names the clips, is moved in last.
+    with staged_folder(out, last={"labels.csv"}) as stage:
         written, rates = _write_clips(args, stage, inputs)
-        text = _labels_csv(written)
-        for row in written:
-            os.replace(stage / row["path"], out / row["path"])
-        write_text_atomic(out / "labels.csv", text)
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        if created:
-            shutil.rmtree(out, ignore_errors=True)
-        raise
-    stage.rmdir()
+        write_text_atomic(stage / "labels.csv", _labels_csv(written))
     print(f"wrote {len(written)} pose files and labels.csv to {shown(out)}")
     for line in _rate_summary(rates):
         print(f"  {line}")

@@ -23,11 +23,12 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import check_output
+from features.fileio import atomic_path, check_output
 
 from .segment import JUDGES
 
@@ -127,6 +128,7 @@ def frames_in_background(
 def run(args: argparse.Namespace) -> int:
     from cbr.unknown import judge_of
     from features.pose_estimation import open_video, stream_poses
+    from features.pose_estimation.overlay import check_encoded
 
     from .segment import load_stored
 
@@ -142,14 +144,32 @@ def run(args: argparse.Namespace) -> int:
     )
     watcher = Watcher(clf, judge, args, fps)
     try:
-        watcher.follow(frames, is_file)
-    except KeyboardInterrupt:
-        pass  # the user stopped watching: finish what was seen
-    except BaseException:
-        watcher.discard()
-        raise
-    watcher.close()
+        with _video_output(args.out) as video:
+            watcher.video = video
+            watcher.watch(frames, is_file)
+            if video is not None and watcher.writer is None:
+                raise _NoFrameDrawn
+            if video is not None:
+                check_encoded(video, watcher.drawn, args.out)
+            watcher.close()
+    except _NoFrameDrawn:
+        pass  # stopped before the first frame: no video, not an empty one
     return 0
+
+
+class _NoFrameDrawn(Exception):
+    """Leaves the ``--out`` video unwritten (the user stopped before the first frame)."""
+
+
+@contextmanager
+def _video_output(out: Path | None) -> Iterator[Path | None]:
+    """A temporary file for the ``--out`` video, renamed to ``out`` when the watch ends well
+    (features.fileio; ending in .mp4: OpenCV picks the container by the file name)."""
+    if out is None:
+        yield None
+        return
+    with atomic_path(out, make_parents=False, suffix=".mp4") as tmp:
+        yield tmp
 
 
 class Watcher:
@@ -160,10 +180,22 @@ class Watcher:
         self.fps = fps
         self.live: Any = None
         self.writer: Any = None
-        self.tmp: Path | None = None
+        self.video: Path | None = None  # where the drawn frames go (a temporary file)
+        self.drawn = 0  # frames written to it
         self.latency: list[float] = []
         self.n = 0
         self.started = time.perf_counter()
+
+    def watch(self, frames: Iterator[Any], is_file: bool) -> None:
+        """:meth:`follow` until the stream ends or the user stops it (Ctrl-C); the video writer
+        is released either way."""
+        try:
+            self.follow(frames, is_file)
+        except KeyboardInterrupt:
+            pass  # the user stopped watching: finish what was seen
+        finally:
+            if self.writer is not None:
+                self.writer.release()
 
     def follow(self, frames: Iterator[Any], is_file: bool) -> None:
         from cbr.live import LiveSegmenter
@@ -232,22 +264,16 @@ class Watcher:
         return [result.words[i] for i in best if conf[i] >= 0.8]
 
     def _write(self, bgr: Any) -> None:
-        import os
-        import tempfile
-
         import cv2
 
         if self.writer is None:
-            out = self.args.out
-            fd, name = tempfile.mkstemp(prefix=f".{out.stem}.", suffix=".mp4", dir=out.parent)
-            os.close(fd)
-            self.tmp = Path(name)
             h, w = bgr.shape[:2]
             fourcc = cv2.VideoWriter.fourcc(*"mp4v")
-            self.writer = cv2.VideoWriter(str(self.tmp), fourcc, float(self.fps or 30.0), (w, h))
+            self.writer = cv2.VideoWriter(str(self.video), fourcc, float(self.fps or 30.0), (w, h))
             if not self.writer.isOpened():
-                raise DataError("cannot encode an MP4 video here", out)
+                raise DataError("cannot encode an MP4 video here", self.args.out)
         self.writer.write(bgr)
+        self.drawn += 1
 
     def _show(self, bgr: Any) -> None:
         import cv2
@@ -258,28 +284,13 @@ class Watcher:
         except cv2.error:
             raise PosecbrError("this OpenCV has no window support: use --out video.mp4") from None
 
-    def discard(self) -> None:
-        """An error: no half-written video."""
-        if self.writer is not None:
-            self.writer.release()
-        if self.tmp is not None:
-            self.tmp.unlink(missing_ok=True)
-
     def close(self) -> None:
-        """The end of the stream: the last segment, the video renamed into place, latency."""
-        import os
-
+        """The end of the stream: the last segment and the latency."""
         import numpy as np
 
         last = self.live.finish() if self.live is not None else None
         if last is not None:
             self._emit(last)
-        if self.writer is not None and self.tmp is not None:
-            self.writer.release()
-            mask = os.umask(0)
-            os.umask(mask)
-            os.chmod(self.tmp, 0o666 & ~mask)
-            os.replace(self.tmp, self.args.out)
         if self.latency:
             ms = np.asarray(self.latency) * 1000.0
             wall = time.perf_counter() - self.started
