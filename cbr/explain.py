@@ -66,7 +66,8 @@ def presence(values: np.ndarray) -> np.ndarray:
     values: ``(..., frames, n_features)`` fluent sequences -> ``(..., n_features)``, or
     ``(..., n_features)`` QMP vectors (pass ``values[..., None, :]``).
     """
-    return np.asarray(np.asarray(values) >= 0.5, dtype=np.float64).mean(axis=-2)
+    shares: np.ndarray = np.asarray(np.asarray(values) >= 0.5, dtype=np.float64).mean(axis=-2)
+    return shares
 
 
 def state_columns(names: tuple[str, ...]) -> tuple[np.ndarray, bool] | None:
@@ -654,19 +655,48 @@ def explain(
     ``weights`` the classifier's vote (the counterfactual search follows it);
     ``counterfactual_search`` False leaves the counterfactual out (callers that need the
     neighbours only: it costs a few retrievals per feature changed)."""
-    problem, retrieval, solution = solved.problem, solved.retrieval, solved.solution
-    label = solution.label
+    problem, label = solved.problem, solved.solution.label
     r = read(cb, problem)
-    assert cb.ids is not None
-    reference = _reference(r.prof.labels, target)
-    # a repetition judged incorrect leads with what lies outside the correct repetitions
-    judged_off = reference is not None and label != reference
-    outside = outside_claims(r, reference) if judged_off and reference is not None else []
+    near = _nearest(cb, solved)
+    outside, why = _reasons(r, label, target, near)
+    contrast = (
+        None
+        if near.other is None
+        else _contrast(cb, r, problem, near.other, answer, k, weights, counterfactual_search)
+    )
+    lines = _short(cb, solved, target, outside, why, near.own, contrast)
+    retrieval = solved.retrieval
+    win = retrieval.indices[retrieval.labels.astype(str) == label]
+    presence_ = presence_claims(r, label, win if len(win) else retrieval.indices)
+    differences = _differences(r, contrast, cb)
+    verbose = _verbose(lines, solved, near.neighbours, *presence_, contrast, differences,
+                       unlike_ratio)  # fmt: skip
+    return _explanation(
+        solved, near, (*outside, *why), presence_, contrast, lines, verbose, differences
+    )
+
+
+@dataclass(frozen=True)
+class _Nearest:
+    """The retrieved cases one per clip (``neighbours``, the records an explanation lists),
+    the nearest of them with the answer's label (``own``: its position in the case base) and
+    the nearest case of another label (``other``: position and distance)."""
+
+    neighbours: tuple[dict[str, Any], ...]
+    own: int | None
+    other: tuple[int, float] | None
+
+    @property
+    def pair(self) -> tuple[int, int] | None:
+        """The positions of ``own`` and ``other`` when there are both."""
+        return None if self.own is None or self.other is None else (self.own, self.other[0])
+
+
+def _nearest(cb: CaseBase, solved: Solved) -> _Nearest:
+    """The clip's neighbours, a clip's mirror image not counted as a second one."""
+    retrieval, label = solved.retrieval, solved.solution.label
     keep = distinct_neighbours(cb, retrieval)
     own = next((int(retrieval.indices[p]) for p in keep if retrieval.labels[p] == label), None)
-    other = nearest_of_other_label(cb, problem, label)
-    near = None if own is None or other is None else (own, other[0])
-    why = why_claims(r, label, near) if label in r.prof.labels else []
     neighbours = tuple(
         {
             "case_id": int(retrieval.case_ids[p]),
@@ -676,34 +706,48 @@ def explain(
         }
         for p in keep
     )
-    contrast = (
-        None
-        if other is None
-        else _contrast(cb, r, problem, other, answer, k, weights, counterfactual_search)
-    )
-    lines = _short(cb, solved, target, outside, why, own, contrast)
-    win = retrieval.indices[retrieval.labels.astype(str) == label]
-    matched, not_seen, only_here = presence_claims(r, label, win if len(win) else retrieval.indices)
-    differences = _differences(r, contrast, cb)
-    verbose = _verbose(
-        lines, solved, neighbours, matched, not_seen, only_here, contrast, differences,
-        unlike_ratio,
-    )  # fmt: skip
-    claims = (*outside, *why, *(contrast.changes if contrast else ()), *matched, *not_seen,
-              *only_here)  # fmt: skip
+    return _Nearest(neighbours, own, nearest_of_other_label(cb, solved.problem, label))
+
+
+def _reasons(
+    r: _Reading, label: str, target: str | None, near: _Nearest
+) -> tuple[list[Claim], list[Claim]]:
+    """What the clip did outside the correct repetitions (a repetition judged incorrect:
+    it leads), and the features that decided ``label``."""
+    reference = _reference(r.prof.labels, target)
+    judged_off = reference is not None and label != reference
+    outside = outside_claims(r, reference) if judged_off and reference is not None else []
+    why = why_claims(r, label, near.pair) if label in r.prof.labels else []
+    return outside, why
+
+
+def _explanation(
+    solved: Solved,
+    near: _Nearest,
+    reasons: tuple[Claim, ...],
+    presence_: tuple[list[Claim], list[Claim], list[Claim]],
+    contrast: Contrast | None,
+    lines: list[str],
+    verbose: str,
+    differences: list[dict[str, Any]],
+) -> Explanation:
+    """The explanation's record: every statement also kept as a claim (``reasons``: the
+    "outside" and "why" claims)."""
+    matched, not_seen, only_here = presence_
+    changes = contrast.changes if contrast else ()
     return Explanation(
-        label=label,
-        confidence=solution.confidence,
-        neighbours=neighbours,
+        label=solved.solution.label,
+        confidence=solved.solution.confidence,
+        neighbours=near.neighbours,
         matched=tuple(_held(c) for c in matched),
         not_seen=tuple(_held(c) for c in not_seen),
         only_here=tuple(_held(c) for c in only_here),
         contrast=contrast,
         text="\n".join(lines),
         verbose=verbose,
-        claims=claims,
-        vote_share=float(solution.vote_share),
-        mirrored=bool(problem.mirrored),
+        claims=(*reasons, *changes, *matched, *not_seen, *only_here),
+        vote_share=float(solved.solution.vote_share),
+        mirrored=bool(solved.problem.mirrored),
         differences=tuple(differences),
     )
 
@@ -856,31 +900,39 @@ def _verbose(
         + "."
     )
     if contrast is not None:
-        out.append(
-            f"Nearest other label: {contrast.label}"
-            + (f" case #{contrast.case_id}" if contrast.case_id >= 0 else "")
-            + f" (distance {contrast.distance:.3g}) {contrast.source}."
-        )
-        if differences:
-            said_ = [f"{d['feature']} {said(d['here'], d['unit'])} here, "
-                     f"{said(d['there'], d['unit'])} there" for d in differences]  # fmt: skip
-            out.append("Differs from it most in: " + "; ".join(said_) + ".")
-        if contrast.changes:
-            status = (
-                "checked: the classifier then answers " if contrast.valid
-                else "not enough: the classifier still answers "
-            ) + contrast.answer  # fmt: skip
-            out.append(
-                f"Counterfactual ({_count(len(contrast.changes), 'feature')}: "
-                + ", ".join(c.feature.removeprefix("joint:") for c in contrast.changes)
-                + ", every value measured there as in "
-                + (
-                    f"case #{contrast.guide_case_id}"
-                    if (contrast.guide_case_id or -1) >= 0
-                    else _short_source(contrast.guide_source)
-                )
-                + f"; {status}; plausibility "
-                f"{contrast.plausibility:.2f}x the usual distance between {contrast.label} "
-                "cases): " + "; ".join(_change_text(c) for c in contrast.changes) + "."
-            )
+        out += _verbose_contrast(contrast, differences)
     return "\n".join(out)
+
+
+def _verbose_contrast(contrast: Contrast, differences: list[dict[str, Any]]) -> list[str]:
+    """The verbose lines on the nearest case of the other label and the counterfactual's
+    checks."""
+    out: list[str] = []
+    out.append(
+        f"Nearest other label: {contrast.label}"
+        + (f" case #{contrast.case_id}" if contrast.case_id >= 0 else "")
+        + f" (distance {contrast.distance:.3g}) {contrast.source}."
+    )
+    if differences:
+        said_ = [f"{d['feature']} {said(d['here'], d['unit'])} here, "
+                 f"{said(d['there'], d['unit'])} there" for d in differences]  # fmt: skip
+        out.append("Differs from it most in: " + "; ".join(said_) + ".")
+    if contrast.changes:
+        status = (
+            "checked: the classifier then answers " if contrast.valid
+            else "not enough: the classifier still answers "
+        ) + contrast.answer  # fmt: skip
+        out.append(
+            f"Counterfactual ({_count(len(contrast.changes), 'feature')}: "
+            + ", ".join(c.feature.removeprefix("joint:") for c in contrast.changes)
+            + ", every value measured there as in "
+            + (
+                f"case #{contrast.guide_case_id}"
+                if (contrast.guide_case_id or -1) >= 0
+                else _short_source(contrast.guide_source)
+            )
+            + f"; {status}; plausibility "
+            f"{contrast.plausibility:.2f}x the usual distance between {contrast.label} "
+            "cases): " + "; ".join(_change_text(c) for c in contrast.changes) + "."
+        )
+    return out

@@ -50,7 +50,8 @@ def explain_errors(run: CompareRun, n: int) -> list[ExplainedClip]:
         if len(set(data.y[train])) < 2:
             continue
         est = make_estimator(method).fit([data.seqs[j] for j in train], data.y[train])
-        exp = est.explain([data.seqs[i]])[0]
+        # the target names the labels' words (a correct / an incorrect repetition)
+        exp = est.explain([data.seqs[i]], str(run.results.settings["target"]))[0]
         out.append(_entry(run, i, scores, m.name, exp.text, exp.to_dict()))
     return out
 

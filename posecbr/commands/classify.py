@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from features.poses import PoseSequence
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "classify",
         help="classify clips with a case base, with explanations",

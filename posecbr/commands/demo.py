@@ -36,7 +36,7 @@ QUICK_COMPARE = ("--similarities", "euclidean", "--features", "fluents", "--no-d
                  "--peers", "none", "--explain", "1")  # fmt: skip
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "demo",
         help="describe, train, classify, compare and report on the bundled UI-PRMD subset",
