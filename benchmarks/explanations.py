@@ -22,6 +22,10 @@ per dataset:
     python -m benchmarks.explanations --train DATA --test DATA [--train-subjects s01,s02]
         [--test-subjects s03] [--other DATA]      # one split of your own
     python -m benchmarks.explanations --quick     # the bundled demo subset (~1 min)
+    python -m benchmarks.explanations --datasets hdm05,repetitions --out FILE  # some of them
+
+The figures of each fold are printed as it finishes, and the JSON is written after each
+dataset (``"partial": true`` until the run ends).
 
 Writes ``benchmarks/results/explanations.json`` with the machine, the versions and the load
 average.
@@ -33,7 +37,7 @@ import argparse
 import os
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -58,6 +62,8 @@ FLAG_CONFIGS = (
 )
 #: clips of the other dataset each fold's flag is tried on (a seeded sample)
 OTHER_SAMPLE = 200
+#: UI-PRMD's repetition check (correct vs incorrect) in --datasets
+REPETITIONS = "repetitions"
 
 
 def _clips(path: Path, subjects: Sequence[str] | None = None) -> list[Any]:
@@ -182,6 +188,7 @@ def run_dataset(
         features = fold["features"]
         print(f"  {name} held out {','.join(held)}: {len(test)} clips explained "
               f"({time.perf_counter() - t0:.0f} s)", flush=True)  # fmt: skip
+        _print_fold(summarise_rows(fold["rows"], features))
         if not flags:
             continue
         for feats, sim in FLAG_CONFIGS:
@@ -190,7 +197,10 @@ def run_dataset(
             acc = flag_rows.setdefault(f"{feats}/{sim}", {})
             for k, v in got.items():
                 acc.setdefault(k, []).extend(v)
-            print(f"    flag {feats}/{sim}: {time.perf_counter() - t0:.0f} s", flush=True)
+            print(f"    flag {feats}/{sim}: {time.perf_counter() - t0:.0f} s; false alarms "
+                  f"{100 * _rate(got['false_alarm']):.1f} %, detection "
+                  f"{100 * _rate(got['detected']):.1f} % (by distance "
+                  f"{100 * _rate(got['detected_distance']):.1f} %)", flush=True)  # fmt: skip
     out: dict[str, Any] = {"explanations": summarise_rows(rows, features)}
     if flags:
         out["flags"] = {
@@ -223,10 +233,21 @@ def run_repetitions(path: Path, folds: Sequence[Sequence[str]]) -> dict[str, Any
             train = [c for c in mine if c.subject not in held]
             test = [c for c in mine if c.subject in held]
             fold = explain_fold(train, test, target="correct")
+            for r in fold["rows"]:
+                r["movement"] = movement
             rows += fold["rows"]
             features = fold["features"]
         print(f"  correct vs incorrect, {movement}: done", flush=True)
+        _print_fold(summarise_rows([r for r in rows if r["movement"] == movement], features))
     return summarise_rows(rows, features)
+
+
+def _print_fold(s: dict[str, Any]) -> None:
+    """One fold's figures as it finishes (a long run shows its progress in figures)."""
+    print(f"    validity {100 * s['validity']:.1f} % with {s['mean_changes']:.2f} changes, "
+          f"{s['contradictions']} contradictions, at most {s['max_lines']} lines and "
+          f"{s['max_chars']} chars, accuracy {100 * s['accuracy']:.1f} %, ECE {s['ece']:.3f}",
+          flush=True)  # fmt: skip
 
 
 def _print_explanations(name: str, s: dict[str, Any]) -> None:
@@ -287,10 +308,13 @@ def _run_split(args: argparse.Namespace) -> dict[str, Any]:
     return datasets
 
 
-def _run_shared(args: argparse.Namespace) -> dict[str, Any]:
-    """Both shared datasets held out by subject, and UI-PRMD's repetition check."""
+def _run_shared(args: argparse.Namespace, done: Callable[[dict[str, Any]], None]) -> dict[str, Any]:
+    """Both shared datasets held out by subject, and UI-PRMD's repetition check (those of
+    ``args.datasets``); ``done`` is given the figures so far after each."""
     datasets: dict[str, Any] = {}
     for name, (path, folds) in DATASETS.items():
+        if name not in args.datasets:
+            continue
         if not path.exists():
             print(f"{name}: skipped, {path} is not on this machine")
             continue
@@ -299,8 +323,9 @@ def _run_shared(args: argparse.Namespace) -> dict[str, Any]:
         other = _clips(other_path) if other_path.exists() and not args.no_flags else []
         print(f"{name}:", flush=True)
         datasets[name] = run_dataset(name, path, folds, other, bool(other))
+        done(datasets)
     path, folds = DATASETS["ui-prmd"]
-    if path.exists():
+    if path.exists() and REPETITIONS in args.datasets:
         print("ui-prmd correct vs incorrect:", flush=True)
         datasets["ui-prmd correct vs incorrect"] = {"explanations": run_repetitions(path, folds)}
     return datasets
@@ -315,6 +340,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--other", type=Path, help="another dataset's clips for the flag")
     p.add_argument("--quick", action="store_true", help="the bundled demo subset only")
     p.add_argument("--no-flags", action="store_true", help="explanations only")
+    p.add_argument(
+        "--datasets",
+        default=",".join((*DATASETS, REPETITIONS)),
+        help=f"of the shared data, these only (default: {','.join((*DATASETS, REPETITIONS))})",
+    )
+    p.add_argument("--out", type=Path, default=RESULTS, help=f"results JSON (default {RESULTS})")
     args = p.parse_args(argv if argv is not None else sys.argv[1:])
     os.environ.setdefault("POSECBR_NO_PROGRESS", "1")
     from cbr.evaluation.machine import machine_info
@@ -322,8 +353,15 @@ def main(argv: list[str] | None = None) -> int:
     t_start = time.perf_counter()
     out: dict[str, Any] = {"benchmark": "explanations", "machine": machine_info(),
                            "load_average_start": os.getloadavg(), "datasets": {}}  # fmt: skip
-    run = _run_split if args.quick or args.train is not None else _run_shared
-    out["datasets"] = run(args)
+    args.datasets = {d.strip() for d in args.datasets.split(",")}
+
+    def done(datasets: dict[str, Any]) -> None:  # partial figures survive an interrupted run
+        write_json({**out, "datasets": datasets, "partial": True}, args.out)
+
+    if args.quick or args.train is not None:
+        out["datasets"] = _run_split(args)
+    else:
+        out["datasets"] = _run_shared(args, done)
     _header()
     for name, d in out["datasets"].items():
         _print_explanations(name, d["explanations"])
@@ -337,8 +375,8 @@ def main(argv: list[str] | None = None) -> int:
                 _print_flags(name, d["flags"])
     out["seconds"] = round(time.perf_counter() - t_start, 1)
     out["load_average_end"] = os.getloadavg()
-    write_json(out, RESULTS)
-    print(f"\nwritten {RESULTS.relative_to(ROOT)} ({out['seconds']:.0f} s)")
+    write_json(out, args.out)
+    print(f"\nwritten {args.out} ({out['seconds']:.0f} s)")
     return 0
 
 

@@ -4,6 +4,7 @@ with known labels), its fallbacks and its errors."""
 from __future__ import annotations
 
 import csv
+import html
 import json
 import math
 from pathlib import Path
@@ -138,7 +139,7 @@ def test_target_correct_trains_one_model_per_movement(
     rc = main([
         "compare", str(DEMO), "--labels", "deep_squat,standing_shoulder_abduction",
         "--target", "correct", "--similarities", "euclidean", "--features", "fluents",
-        "--peers", "none", "--explain", "0", "--json", str(tmp_path / "c.json"),
+        "--peers", "none", "--explain", "1", "--json", str(tmp_path / "c.json"),
     ])  # fmt: skip
     assert rc == 0
     out, err = capsys.readouterr()
@@ -164,6 +165,16 @@ def test_target_correct_trains_one_model_per_movement(
         row = next(line for line in out.splitlines() if line.startswith(g + " "))
         assert row.split()[-1] == f"{100 * v['accuracy']:.1f}"
     assert "accuracy % per label (one model each):" in out
+    # the wrong clip explained reads its answer as a repetition, and one judged incorrect
+    # leads with what it did outside the correct repetitions' range
+    assert not all(hit)  # correct vs incorrect is hard: 36 clips are not all right
+    (x,) = [e for e in res["explanations"] if e["method"] != "dad"]
+    first, second = x["text"].splitlines()[:2]
+    if x["predicted"] == "incorrect":
+        assert first.startswith("an incorrect repetition, confidence ")
+        assert second.startswith("Done differently from correct repetitions: ")
+    else:
+        assert first.startswith("a correct repetition, confidence ")
 
 
 def test_one_subject_falls_back_to_stratified_kfold_and_says_so(
@@ -240,6 +251,37 @@ def test_report_from_json_only_draws_its_pictures(
     # accuracy + confusion matrices (best, DAD), no data-dependent pictures
     assert page.count('src="data:image/png;base64,') == 1 + 2
     assert "cbr fluents/euclidean" in page
+
+
+def test_report_explains_with_the_short_text_and_a_checked_counterfactual(
+    run_slice: tuple[Path, str], tmp_path: Path
+) -> None:
+    """The report's explanations are the short default text (at most four lines and 400
+    characters): the answer, why, the nearest cases and the computed counterfactual toward
+    the nearest other label, as `classify` prints them; `posecbr report` shows them whole."""
+    out, _ = run_slice
+    res = json.loads((out / "r.json").read_text())
+    cbr_expl = [e for e in res["explanations"] if e["method"] != "dad"]
+    assert cbr_expl
+    assert main(["report", str(out / "r.json"), "--out", str(tmp_path / "r.html")]) == 0
+    page = (tmp_path / "r.html").read_text()
+    for e in cbr_expl:
+        lines = e["text"].splitlines()
+        assert len(lines) <= 4 and len(e["text"]) <= 400
+        assert lines[0].startswith(f"{e['predicted']}, confidence ")
+        assert lines[1].startswith("Why: ")
+        contrast = e["explanation"]["contrast"]
+        # the nearest other label of a wrong answer among three movements is one of the two
+        # others, and the search was run (an answer was checked), not skipped
+        assert contrast["label"] in SLICE.split(",") and contrast["label"] != e["predicted"]
+        assert contrast["answer"] in SLICE.split(",")
+        if contrast["valid"]:
+            assert lines[-1].startswith(f"To be {contrast['label']}")
+            assert contrast["answer"] == contrast["label"] and 1 <= len(contrast["changes"]) <= 6
+        else:
+            assert lines[-1].startswith("No change of up to ")
+        for line in lines:
+            assert html.escape(line) in page
 
 
 def test_report_rejects_a_file_that_is_not_compare_results(
