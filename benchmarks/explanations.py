@@ -160,9 +160,17 @@ def flag_fold(
             clf.novelty_.ratio(float(s.retrieval.distances[0])) > clf.novelty_.unlike_ratio
             for s in away
         ],  # fmt: skip
+        "other_label": [c.label for c in other],
         "right": [s.solution.label == c.label for s, c in zip(held, test, strict=True)],
         "confidence": [s.solution.confidence for s in held],
     }
+
+
+def _by_activity(labels: list[str], hit: list[bool]) -> dict[str, float]:
+    """The share of ``hit`` among the other dataset's clips of each activity: which of its
+    movements the distance alone tells apart from the stored cases."""
+    return {lab: _rate([h for la, h in zip(labels, hit, strict=True) if la == lab])
+            for lab in sorted(set(labels))}  # fmt: skip
 
 
 def _rate(values: list[bool]) -> float:
@@ -215,6 +223,9 @@ def run_dataset(
                 ),  # fmt: skip
                 "held_out_clips": len(r["false_alarm"]),
                 "other_clips": len(r["detected"]),
+                "detection_distance_by_activity": _by_activity(
+                    r["other_label"], r["detected_distance"]
+                ),
             }
             for cfg, r in flag_rows.items()
         }
@@ -278,6 +289,8 @@ def _header() -> None:
 
 def _run_split(args: argparse.Namespace) -> dict[str, Any]:
     """One training/test split (--quick or --train): explanations and, with --other, flags."""
+    from cbr.calibration import expected_calibration_error
+
     datasets: dict[str, Any] = {}
     if args.quick:
         with resources.as_file(resources.files("posecbr") / "demo_data" / "uiprmd") as d:
@@ -302,7 +315,12 @@ def _run_split(args: argparse.Namespace) -> dict[str, Any]:
                 "detection": _rate(r["detected"]),
                 "detection_distance": _rate(r["detected_distance"]),
                 "accuracy": _rate(r["right"]),
-                "ece": float("nan"),
+                "ece": expected_calibration_error(
+                    np.array(r["confidence"]), np.array(r["right"], dtype=bool)
+                ),
+                "detection_distance_by_activity": _by_activity(
+                    r["other_label"], r["detected_distance"]
+                ),
             }
         datasets["split"]["flags"] = flags
     return datasets
