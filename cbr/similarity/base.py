@@ -79,7 +79,8 @@ class SimilarityMeasure:
 
     def represent_query(self, problem: np.ndarray) -> np.ndarray:
         """Representation of one query problem ``problem_shape`` -> one row of ``represent``."""
-        return self.represent(np.asarray(problem, dtype=np.float64)[None])[0]
+        row: np.ndarray = self.represent(np.asarray(problem, dtype=np.float64)[None])[0]
+        return row
 
     def distances(self, query_rep: np.ndarray, index: Any) -> np.ndarray:
         """Distances from the query to every case, ``(n_cases,)``."""

@@ -502,7 +502,8 @@ class DTW(SimilarityMeasure):
 
     def distances(self, query_rep: np.ndarray, index: Any) -> np.ndarray:
         q = self._check(query_rep, index)
-        return np.sqrt(dtw_all(q, index.cases, index.radius, self.threads()))
+        out: np.ndarray = np.sqrt(dtw_all(q, index.cases, index.radius, self.threads()))
+        return out
 
     def nearest(self, query_rep: np.ndarray, index: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
         q = self._check(query_rep, index)

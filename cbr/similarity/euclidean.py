@@ -292,7 +292,8 @@ class Euclidean(SimilarityMeasure):
             index = self.build_index(np.asarray(index, dtype=np.float64))
         if self.exact:
             q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
-            return np.sqrt(((index.rows - q) ** 2).sum(axis=1))
+            exact: np.ndarray = np.sqrt(((index.rows - q) ** 2).sum(axis=1))
+            return exact
         q32, q_sq = self._query(query_rep)
         return _all_distances(index.rows, index.sq_norms, q32, q_sq)
 
@@ -377,7 +378,8 @@ def _matvec_one_thread(rows: np.ndarray, q32: np.ndarray) -> np.ndarray:
         if t != 1:
             p.set_num_threads(1)
     try:
-        return rows @ q32
+        product: np.ndarray = rows @ q32
+        return product
     finally:
         for p, t in zip(pools, before, strict=True):
             if t != 1:
