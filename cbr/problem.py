@@ -44,6 +44,8 @@ from features.fluents import state_columns
 from features.poses import PoseSequence
 from features.signals import ANGLE_SIGNALS
 
+from . import long_clip
+
 Level = Literal["fluents", "qmp"]
 STATE_GROUPS = ("angles", "instantaneous", "all")
 ANGLE_PREFIX = "angle:"
@@ -309,17 +311,19 @@ def column_index(config: FeatureConfig, candidates: FeatureConfig) -> np.ndarray
     return np.concatenate([b * n + cols for b in range(blocks)])
 
 
-def fill_nan_time(x: np.ndarray, fill: float) -> np.ndarray:
+def fill_nan_time(x: np.ndarray, fill: float | np.ndarray) -> np.ndarray:
     """Fill NaN along time (axis 0) of ``(frames, n)`` by linear interpolation, holding the
-    edge values; a column NaN in every frame becomes ``fill``."""
+    edge values; a column NaN in every frame becomes ``fill`` (one value, or ``(n,)``: one a
+    column)."""
     x = np.array(x, dtype=np.float64, copy=True)
     nan = np.isnan(x)
     if not nan.any():
         return x
+    fills = np.broadcast_to(np.asarray(fill, dtype=np.float64), (x.shape[1],))
     t = np.arange(x.shape[0])
     for j in np.flatnonzero(nan.any(axis=0)):  # loop over the few gappy columns only
         ok = ~nan[:, j]
-        x[:, j] = np.interp(t, t[ok], x[ok, j]) if ok.any() else fill
+        x[:, j] = np.interp(t, t[ok], x[ok, j]) if ok.any() else fills[j]
     return x
 
 
@@ -328,11 +332,19 @@ def resample(x: np.ndarray, length: int) -> np.ndarray:
     frames = x.shape[0]
     if frames == 1:
         return np.repeat(x, length, axis=0)
+    i, w = resample_points(frames, length)
+    return x[i] * (1.0 - w) + x[i + 1] * w
+
+
+def resample_points(frames: int, length: int) -> tuple[np.ndarray, np.ndarray]:
+    """Where :func:`resample` reads a clip of ``frames`` (at least 2) frames: output row ``r``
+    is ``x[i[r]] * (1 - w[r]) + x[i[r] + 1] * w[r]``; ``i`` ``(length,)``, ``w``
+    ``(length, 1)``."""
     src = np.linspace(0.0, 1.0, frames)
     dst = np.linspace(0.0, 1.0, length)
     i = np.clip(np.searchsorted(src, dst, side="right") - 1, 0, frames - 2)
     w = ((dst - src[i]) / (src[i + 1] - src[i]))[:, None]
-    return x[i] * (1.0 - w) + x[i + 1] * w
+    return i, w
 
 
 @dataclass(frozen=True)
@@ -387,68 +399,121 @@ def _signal_cols(angle_states: tuple[str, ...], signal_names: tuple[str, ...]) -
     return tuple(sig_index.get(a, -1) for a in angle_states)
 
 
-def extract_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
+def extract_problem(
+    seq: PoseSequence, config: FeatureConfig, chunk_frames: int | None = None
+) -> Problem:
     """The problem representation of one clip under a resolved ``config``.
 
     seq: a pose sequence ``(frames, joints, 3)``. Returns a :class:`Problem` whose values are
     ``(config.length, n_states)`` in [0, 1] (fluents) or ``(n_features,)`` (QMP). With
     ``config.side == "canonical"`` a clip that moves its left side more is described by its
-    mirror image (``Problem.mirrored`` is then True).
+    mirror image (``Problem.mirrored`` is then True). ``chunk_frames``: compute the fluent
+    columns that many frames at a time (:mod:`cbr.long_clip`; the same values in bounded
+    memory), 0 the whole clip at once; None: pieces for a clip longer than
+    :data:`cbr.long_clip.CHUNK_FRAMES` whose fluents are not computed yet.
     """
-    if config.side == "canonical" and moves_left_more(seq):
-        plain = dataclasses.replace(config, side="as_recorded")
-        return dataclasses.replace(extract_problem(mirrored(seq), plain), mirrored=True)
+    chunk = long_clip.chunk_for(seq, chunk_frames)
+    mirror = config.side == "canonical" and (
+        long_clip.moves_left_more(seq, chunk) if chunk else moves_left_more(seq)
+    )
     if config.level == "qmp":
-        q = qmp_of(seq)
-        if config.qmp_part == "binary":
-            return Problem(
-                np.asarray(q.binary, dtype=np.float64),
-                tuple(q.binary_names),
-                tuple(str(n).replace("_", " ") for n in q.binary_names),
-                "qmp",
-            )
-        # parameters not observable in this clip (NaN) get the configured fill value
-        vals = np.nan_to_num(np.asarray(q.values, dtype=np.float64), nan=float(config.fill))
+        problem = _qmp_problem(mirrored(seq) if mirror else seq, config)
+    elif chunk:
+        problem = _fluent_problem(seq, config, chunk, mirror)
+    else:
+        problem = _fluent_problem(mirrored(seq) if mirror else seq, config, 0, False)
+    return dataclasses.replace(problem, mirrored=True) if mirror else problem
+
+
+def _qmp_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
+    q = qmp_of(seq)
+    if config.qmp_part == "binary":
         return Problem(
-            vals,
-            tuple(q.names),
-            tuple(str(n).replace("_", " ") for n in q.names),
+            np.asarray(q.binary, dtype=np.float64),
+            tuple(q.binary_names),
+            tuple(str(n).replace("_", " ") for n in q.binary_names),
             "qmp",
         )
+    # parameters not observable in this clip (NaN) get the configured fill value
+    vals = np.nan_to_num(np.asarray(q.values, dtype=np.float64), nan=float(config.fill))
+    return Problem(vals, tuple(q.names), tuple(str(n).replace("_", " ") for n in q.names), "qmp")
+
+
+def _fluent_problem(seq: PoseSequence, config: FeatureConfig, chunk: int, mirror: bool) -> Problem:
+    """The fluent-level problem of ``seq`` (of its mirror image with ``mirror``, which only
+    the piecewise path takes: the whole-clip path is given the mirrored clip), computed
+    ``chunk`` frames at a time (0: at once)."""
     if not config.resolved:
         raise ConfigError(
             "the feature configuration has no explicit state list yet (call resolve_config "
             "with the training clips first)",
             "features",
         )
-    res = fluents_of(seq)
     states = tuple(config.states)
-    plan = _column_plan(states, tuple(res.state_names), tuple(res.words))
-    conf = fill_nan_time(res.confidence[:, plan.fluent_cols], config.fill)
-    words = list(plan.words)
-    if plan.angle_states:
-        sig = signals_of(seq)
+    if not states:
+        raise ConfigError("the feature configuration selects no columns", "features")
+    names, words, _ = state_columns()
+    plan = _column_plan(states, names, words)
+    fills = _column_fills(plan, float(config.fill))
+    if chunk:
+        values = long_clip.resampled_columns(seq, plan, fills, int(config.length), chunk, mirror)
+    else:
         planes = arm_planes(seq) if plan.arm_planes else None
+        positions = body_positions(seq) if len(plan.position_cols) else None
+        sig = signals_of(seq) if plan.angle_states else None
+        columns = raw_columns(
+            plan,
+            fluents_of(seq).confidence,
+            sig.names if sig is not None else (),
+            sig.values if sig is not None else None,
+            planes,
+            positions,
+        )
+        values = resample(fill_nan_time(columns, fills), int(config.length))
+    if config.summary:
+        return summarise(values, states, plan.words, int(config.phases))
+    return Problem(values, states, plan.words, "fluents")
+
+
+def _column_fills(plan: _ColumnPlan, fill: float) -> np.ndarray:
+    """``(n_columns,)`` the value of each column in a clip that never has it: ``fill`` for a
+    fluent state, 90 degrees (0.5) for an angle, 0 for a position."""
+    return np.concatenate([
+        np.full(len(plan.fluent_cols), fill),
+        np.full(len(plan.angle_states), 0.5),
+        np.zeros(len(plan.position_cols)),
+    ])  # fmt: skip
+
+
+def raw_columns(
+    plan: _ColumnPlan,
+    confidence: np.ndarray,
+    signal_names: tuple[str, ...],
+    signals: np.ndarray | None,
+    planes: np.ndarray | None,
+    positions: np.ndarray | None,
+) -> np.ndarray:
+    """The columns of ``plan`` ``(frames, n_columns)``, gaps not filled yet, from a clip's (or
+    a piece's) fluent ``confidence`` ``(frames, n_states)``, state ``signals``
+    ``(frames, n_signals)`` named ``signal_names``, arm ``planes`` ``(frames, 2)`` and body
+    ``positions`` ``(frames, 3 * n_joints)`` (each None when the plan uses none of it)."""
+    blocks = [confidence[:, plan.fluent_cols]]
+    if plan.angle_states:
+        assert signals is not None
         ang_cols = [
             planes[:, ARM_PLANE_SIGNALS.index(a)]
             if planes is not None and a in ARM_PLANE_SIGNALS
-            else sig.values[:, i]
+            else signals[:, i]
             for a, i in zip(
-                plan.angle_states, _signal_cols(plan.angle_states, sig.names), strict=True
+                plan.angle_states, _signal_cols(plan.angle_states, signal_names), strict=True
             )
         ]
-        # radians / pi: in [0, 1] like the confidences; a wholly missing angle reads 90 degrees
-        ang = np.stack(ang_cols, axis=1) / np.pi
-        conf = np.concatenate([conf, fill_nan_time(ang, 0.5)], axis=1)
+        # radians / pi: in [0, 1] like the confidences
+        blocks.append(np.stack(ang_cols, axis=1) / np.pi)
     if len(plan.position_cols):
-        pos = body_positions(seq)[:, plan.position_cols]
-        conf = np.concatenate([conf, fill_nan_time(pos, 0.0)], axis=1)
-    if not states:
-        raise ConfigError("the feature configuration selects no columns", "features")
-    values = resample(conf, int(config.length))
-    if config.summary:
-        return summarise(values, states, tuple(words), int(config.phases))
-    return Problem(values, states, tuple(words), "fluents")
+        assert positions is not None
+        blocks.append(positions[:, plan.position_cols])
+    return np.concatenate(blocks, axis=1) if len(blocks) > 1 else blocks[0]
 
 
 def phase_words(phases: int) -> tuple[str, ...]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from collections.abc import Callable
 from functools import cache
 
 import numpy as np
@@ -90,21 +91,56 @@ def body_positions(seq: PoseSequence) -> np.ndarray:
 
 
 def _body_positions(p: np.ndarray) -> np.ndarray:
-    start = slice(0, max(3, p.shape[0] // 10))
-    bf = body_frame(p[start])  # the frame is set at the start; later frames need no axes
+    frame = position_frame(p[: start_frames(p.shape[0])], neck_to_hip(p),
+                           lambda: body_frame(p).level_left)  # fmt: skip
+    return positions_in_frame(p, frame)
+
+
+def start_frames(frames: int) -> int:
+    """How many frames at the start of a clip set its body frame: a tenth, at least 3."""
+    return max(3, frames // 10)
+
+
+def neck_to_hip(p: np.ndarray) -> np.ndarray:
+    """``(frames,)`` neck to mid-hip length of canonical positions ``(frames, 33, 3)``."""
     neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])
     mid_hip = 0.5 * (p[:, JOINT_INDEX["left_hip"]] + p[:, JOINT_INDEX["right_hip"]])
+    return np.asarray(norm(neck - mid_hip))
+
+
+def position_frame(
+    start: np.ndarray, torso_lengths: np.ndarray, level_left: Callable[[], np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """The frame :func:`body_positions` measures in: origin ``(3,)``, axes ``(3, 3)`` (rows:
+    left, height, forward) and unit (the torso length), or None where the clip has none.
+
+    start: the first :func:`start_frames` frames ``(k, 33, 3)``; torso_lengths: every frame's
+    :func:`neck_to_hip` ``(frames,)``; level_left: the whole clip's level left directions
+    ``(frames, 3)``, asked for only when the start has none (so a long clip can give them a
+    piece at a time)."""
+    bf = body_frame(start)  # the frame is set at the start; later frames need no axes
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN stretches
         origin = np.nanmean(bf.mid_hip, axis=0)
         left = np.nanmean(bf.level_left, axis=0)
         if not np.isfinite(left).all():
-            left = np.nanmean(body_frame(p).level_left, axis=0)
-        torso = float(np.nanmedian(norm(neck - mid_hip)))
+            left = np.nanmean(level_left(), axis=0)
+        torso = float(np.nanmedian(torso_lengths))
     left = unit(left)  # a mean of level directions: level already
     axes = np.stack([left, WORLD_UP, np.cross(left, WORLD_UP)])  # rows: left, height, forward
     if not (np.isfinite(axes).all() and np.isfinite(origin).all() and torso > 0):
+        return None
+    return origin, axes, torso
+
+
+def positions_in_frame(
+    p: np.ndarray, frame: tuple[np.ndarray, np.ndarray, float] | None
+) -> np.ndarray:
+    """:func:`body_positions` of canonical positions ``(frames, 33, 3)`` in ``frame`` (a
+    :func:`position_frame`; None: all NaN), ``(frames, 3 * len(POSITION_JOINTS))``."""
+    if frame is None:
         return np.full((p.shape[0], 3 * len(POSITION_JOINTS)), np.nan)
+    origin, axes, torso = frame
     joints = p[:, [JOINT_INDEX[j] for j in POSITION_JOINTS], :] - origin
     return np.asarray((joints @ axes.T / torso).reshape(p.shape[0], -1))
 
@@ -128,16 +164,19 @@ def moves_left_more(seq: PoseSequence) -> bool:
 
     def compute(s: PoseSequence) -> bool:
         sig = signals_of(s)
-        names = sig.angle_names
-        vals = sig.values[:, : len(names)]
-        left = [i for i, n in enumerate(names) if n.startswith("left_")]
-        right = [names.index("right_" + names[i][len("left_") :]) for i in left]
-        with np.errstate(invalid="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns
-            spread = np.nan_to_num(np.nanstd(vals, axis=0), nan=0.0)
-        return bool(spread[left].sum() > spread[right].sum())
+        return left_moves_more(sig.values[:, : len(sig.angle_names)], sig.angle_names)
 
     return derived(seq, "left_side", compute)
+
+
+def left_moves_more(angles: np.ndarray, names: tuple[str, ...]) -> bool:
+    """:func:`moves_left_more` from the angle signals ``(frames, len(names))``."""
+    left = [i for i, n in enumerate(names) if n.startswith("left_")]
+    right = [names.index("right_" + names[i][len("left_") :]) for i in left]
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns
+        spread = np.nan_to_num(np.nanstd(angles, axis=0), nan=0.0)
+    return bool(spread[left].sum() > spread[right].sum())
 
 
 TORSO_JOINTS = ("left_shoulder", "right_shoulder", "left_hip", "right_hip")
