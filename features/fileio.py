@@ -9,14 +9,21 @@ replaces one of the inputs it was made from.
 - :func:`staged_folder`: several files into one folder as one write (all of them, or the
   folder as it was);
 - :func:`check_output`: before any work starts, refuse an output path that is a folder, lies in
-  a folder that does not exist, or is one of the inputs.
+  a folder that does not exist, or is one of the inputs;
+- :func:`temporary_file`, :func:`staging_folder`: the hidden temporaries those writers use,
+  named after their process (``.NAME.pid1234@host.x8k2.tmp``), so that a writer killed
+  before it could clean up (``kill -9``, power loss) does not leave them forever: the next
+  writer of the same output removes those of processes of this machine that are gone
+  (:func:`remove_stale_temporaries`).
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
+import socket
 import tempfile
 from collections.abc import Collection, Iterable, Iterator
 from contextlib import contextmanager
@@ -46,11 +53,9 @@ def atomic_path(
     try:
         if make_parents:
             dest.parent.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=suffix, dir=dest.parent)
-        os.close(fd)
+        tmp = temporary_file(dest, suffix)
     except OSError as exc:
         raise DataError(f"cannot write: {exc.strerror or exc}", dest) from None
-    tmp = Path(name)
     try:
         yield tmp
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; outputs are ordinary files
@@ -59,6 +64,70 @@ def atomic_path(
         raise DataError(f"cannot write: {exc.strerror or exc}", dest) from None
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def _host() -> str:
+    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname()) or "host"
+
+
+def temporary_prefix(name: str) -> str:
+    """The start of this process's hidden temporaries for an output called ``name``:
+    ``.NAME.pidPID@HOST.``."""
+    return f".{name}.pid{os.getpid()}@{_host()}."
+
+
+def temporary_file(dest: str | Path, suffix: str = ".tmp") -> Path:
+    """A new empty hidden file beside ``dest`` to write it in (then renamed over it), after
+    removing the stale ones a dead writer of ``dest`` left (:func:`remove_stale_temporaries`).
+    Raises OSError."""
+    dest = Path(dest)
+    remove_stale_temporaries(dest.parent, dest.name)
+    fd, name = tempfile.mkstemp(prefix=temporary_prefix(dest.name), suffix=suffix, dir=dest.parent)
+    os.close(fd)
+    return Path(name)
+
+
+def staging_folder(folder: str | Path, name: str) -> Path:
+    """A new hidden folder in ``folder`` to build outputs in (``name`` says whose, e.g.
+    ``posecbr-convert``), after removing the stale ones of dead writers. Raises OSError."""
+    remove_stale_temporaries(folder, name)
+    return Path(tempfile.mkdtemp(prefix=temporary_prefix(name), dir=folder))
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder: str | Path, name: str) -> int:
+    """Remove the hidden temporaries (files or staging folders) for output ``name`` in
+    ``folder`` whose writer, a process of this machine, is gone; returns how many. Those of
+    live processes (a writer at work) and of other machines (a shared folder: their processes
+    cannot be asked) are kept; so are temporaries named otherwise."""
+    pattern = re.compile(rf"^\.{re.escape(name)}\.pid(\d+)@([A-Za-z0-9-]*)\.")
+    host, removed = _host(), 0
+    try:
+        entries = list(Path(folder).iterdir())
+    except OSError:
+        return 0
+    for entry in entries:
+        m = pattern.match(entry.name)
+        if m is None or m.group(2) != host or _alive(int(m.group(1))):
+            continue
+        try:
+            if entry.is_dir() and not entry.is_symlink():
+                shutil.rmtree(entry)
+            else:
+                entry.unlink()
+            removed += 1
+        except OSError:  # another writer removed it first, or it is not ours to remove
+            pass
+    return removed
 
 
 def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
@@ -95,7 +164,7 @@ def staged_folder(folder: str | Path, *, last: Collection[str] = ()) -> Iterator
     created = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
-        stage = Path(tempfile.mkdtemp(prefix=".posecbr-stage-", dir=out))
+        stage = staging_folder(out, "posecbr-stage")
     except OSError as exc:
         raise DataError(f"cannot create: {exc.strerror or exc}", out) from None
     try:

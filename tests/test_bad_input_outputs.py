@@ -210,3 +210,20 @@ def test_extract_reads_the_key_of_a_damaged_output_as_out_of_date(tmp_path: Path
     assert stored_key(tmp_path / "p.npz") is None
     (tmp_path / "t.npz").write_text("text")
     assert stored_key(tmp_path / "t.npz") is None
+
+
+def test_convert_removes_the_staging_folder_a_killed_convert_left(tmp_path: Path) -> None:
+    import socket
+    import subprocess
+    import sys
+
+    data = tmp_path / "data"
+    good_pose_file(data / "a.npz", label="x")
+    out = tmp_path / "out"
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    stale = out / f".posecbr-stage.pid{gone.pid}@{socket.gethostname()}.q1w2"
+    stale.mkdir(parents=True)
+    (stale / ".a.npz.pid1@x.tmp").write_bytes(b"half a pose file")
+    assert main(["convert", str(data), "--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["a.npz", "labels.csv"]

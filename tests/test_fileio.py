@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import json
 import os
+import socket
+import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -13,7 +17,9 @@ from features.errors import DataError
 from features.fileio import (
     atomic_path,
     check_output,
+    remove_stale_temporaries,
     staged_folder,
+    staging_folder,
     write_json_atomic,
     write_text_atomic,
 )
@@ -96,3 +102,57 @@ def test_a_staged_folder_is_all_or_nothing(tmp_path: Path) -> None:
         (stage / "a.npz").write_bytes(b"new a")
     assert sorted(p.name for p in out.iterdir()) == ["a.npz", "labels.csv"]
     assert (out / "labels.csv").read_text() == "a.npz"
+
+
+def _dead_pid() -> int:
+    """The id of a process that has finished (and been reaped)."""
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def test_the_next_writer_removes_temporaries_of_dead_writers_only(tmp_path: Path) -> None:
+    host = socket.gethostname()
+    dead, live = _dead_pid(), os.getppid()
+    out = tmp_path / "r.json"
+    stale = tmp_path / f".r.json.pid{dead}@{host}.k2x9.tmp"
+    working = tmp_path / f".r.json.pid{live}@{host}.a7q1.tmp"
+    elsewhere = tmp_path / f".r.json.pid{dead}@another-machine.b3z0.tmp"
+    other_output = tmp_path / f".s.json.pid{dead}@{host}.c4y8.tmp"
+    for p in (stale, working, elsewhere, other_output):
+        p.write_text("half")
+    write_json_atomic(out, {"x": 1})
+    assert json.loads(out.read_text()) == {"x": 1}
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == sorted([out.name, working.name, elsewhere.name, other_output.name])
+
+
+def test_a_killed_writer_s_temporary_goes_with_the_next_write(tmp_path: Path) -> None:
+    """A real kill -9 in the middle of a write, then the next write of the same file."""
+    out = tmp_path / "r.txt"
+    code = (
+        "import sys, time; from features.fileio import atomic_path\n"
+        "with atomic_path(sys.argv[1]) as tmp:\n"
+        "    tmp.write_text('half'); print('WRITING', flush=True); time.sleep(60)\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    proc = subprocess.Popen([sys.executable, "-c", code, str(out)], stdout=subprocess.PIPE,
+                            text=True, env=env)  # fmt: skip
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "WRITING"
+    proc.kill()
+    proc.wait()
+    left = [p.name for p in tmp_path.iterdir()]
+    assert len(left) == 1 and left[0].startswith(f".r.txt.pid{proc.pid}@")
+    write_text_atomic(out, "whole")
+    assert [p.name for p in tmp_path.iterdir()] == ["r.txt"]
+    assert out.read_text() == "whole"
+
+
+def test_a_stale_staging_folder_is_removed_by_the_next_one(tmp_path: Path) -> None:
+    dead = _dead_pid()
+    stale = tmp_path / f".posecbr-convert.pid{dead}@{socket.gethostname()}.x1"
+    stale.mkdir()
+    (stale / ".clip.npz.tmp").write_text("half")
+    stage = staging_folder(tmp_path, "posecbr-convert")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [stage.name]
+    assert remove_stale_temporaries(tmp_path, "posecbr-convert") == 0  # its writer: alive
