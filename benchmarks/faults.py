@@ -11,9 +11,14 @@ A state is compared by its fingerprint: every case base (name, configuration, mo
 without what differs between two identical runs (identities, timestamps). Each kill also gets
 SQLite's ``PRAGMA integrity_check`` after the next writer has rolled the journal back. Half the
 kill moments are uniform over the command's uninterrupted run time (measured first), so kills
-land in start-up, feature computation and the write alike; the other half come once a write
-shows (a journal, or a hidden file being built), uniformly within as long as the uninterrupted
-run was seen writing; the table says how many landed while a write was under way.
+land in start-up, feature computation and the write alike; the other half are aimed at one of
+the writes the uninterrupted run was seen making (a rollback journal, or a hidden file being
+built), chosen at random: once that write shows (the n-th time a write begins), uniformly
+within as long as it lasted. A command writing in several short transactions (feedback: one a
+clip, 5-70 ms each, seconds apart) is hit inside them, not in the gaps between, which aiming at
+the span from the first write to the last did. The table says how many kills landed while a
+write was under way. After a kill that left hidden temporaries the same command is run again:
+the next writer of an output removes those of dead writers (features.fileio).
 Results: benchmarks/results/faults.json.
 """
 
@@ -181,21 +186,48 @@ def _writing(work: Path) -> bool:
     return any(p.name.startswith(".") for p in work.rglob("*"))
 
 
-def _timed_run(argv: list[str], work: Path) -> tuple[float, tuple[float, float] | None]:
-    """Run to the end; the run time and the span (from the start) in which writes were seen."""
+Windows = list[tuple[float, float]]
+
+
+def _timed_run(argv: list[str], work: Path) -> tuple[float, Windows]:
+    """Run to the end; the run time and every stretch (from, to: seconds from the start) in
+    which a write was seen, in order."""
     t0 = time.perf_counter()
     proc = _posecbr(argv)
-    seen: list[float] = []
+    windows: Windows = []
     while proc.poll() is None:
         if _writing(work):
-            seen.append(time.perf_counter() - t0)
-        time.sleep(0.001)
+            t = time.perf_counter() - t0
+            if windows and windows[-1][1] < 0:  # still in the open window
+                continue
+            windows.append((t, -1.0))
+        elif windows and windows[-1][1] < 0:
+            windows[-1] = (windows[-1][0], time.perf_counter() - t0)
+        time.sleep(0.0005)
     if proc.returncode != 0:
         raise SystemExit(f"posecbr {' '.join(argv)} failed")
-    return time.perf_counter() - t0, (min(seen), max(seen)) if seen else None
+    elapsed = time.perf_counter() - t0
+    return elapsed, [(a, b if b >= 0 else elapsed) for a, b in windows]
 
 
-def _allowed(sc: Scenario, base: Path) -> tuple[set[Any], float, tuple[float, float] | None]:
+def _strike_in_write(
+    proc: subprocess.Popen[bytes], work: Path, nth: int, span: float, rng: random.Random
+) -> float:
+    """The moment to kill: once the ``nth`` write (counted from 0) shows, within ``span``
+    seconds (as long as the uninterrupted run's ``nth`` write lasted)."""  # fmt: skip
+    onsets, was = -1, False
+    while proc.poll() is None:
+        now = _writing(work)
+        if now and not was:
+            onsets += 1
+            if onsets == nth:
+                break
+        was = now
+        time.sleep(0.0002)
+    return time.perf_counter() + rng.uniform(0.0, span)
+
+
+def _allowed(sc: Scenario, base: Path) -> tuple[set[Any], float, Windows]:
     """The states a kill may leave, the uninterrupted run time and when it writes. For
     feedback: the state after each whole number of clips (one transaction each); for convert:
     every subset of the complete outputs (each file is written atomically, labels.csv last)."""
@@ -224,43 +256,56 @@ def _acceptable(sc: Scenario, state: Any, allowed: set[Any]) -> bool:
     return whole and ("labels.csv" not in files or files == full)
 
 
+def _hidden(work: Path) -> int:
+    """Hidden files and folders under ``work`` (temporaries and staging folders)."""
+    return sum(p.name.startswith(".") for p in work.rglob("*"))
+
+
 def fire(sc: Scenario, runs: int, base: Path, rng: random.Random) -> dict[str, Any]:
     allowed, elapsed, writes = _allowed(sc, base)
     bad: list[str] = []
-    in_transaction = stray = 0
+    in_write = aimed = aimed_in_write = stray = stray_after = 0
     for run in range(runs):
         work = Path(tempfile.mkdtemp(dir=base))
         argv = sc.prepare(work)
         proc = _posecbr(argv)
-        if run % 2 == 0 or writes is None:  # anywhere in the run
+        if run % 2 == 0 or not writes:  # anywhere in the run
             deadline = time.perf_counter() + rng.uniform(0.0, elapsed)
-        else:  # while writing: once a write shows, within as long as the reference wrote
-            while not _writing(work) and proc.poll() is None:
-                time.sleep(0.0005)
-            deadline = time.perf_counter() + rng.uniform(0.0, writes[1] - writes[0])
+        else:  # in one of the writes, chosen at random
+            aimed += 1
+            nth = rng.randrange(len(writes))
+            deadline = _strike_in_write(proc, work, nth, writes[nth][1] - writes[nth][0], rng)
         while time.perf_counter() < deadline and proc.poll() is None:
-            time.sleep(0.0005)
-        journal = _writing(work)
+            time.sleep(0.0002)
+        writing = _writing(work)
         if proc.poll() is None:
             proc.send_signal(signal.SIGKILL)
         proc.wait(timeout=60)
-        in_transaction += journal
+        in_write += writing
+        aimed_in_write += writing and run % 2 == 1
         if not _integrity(work / "cb.sqlite"):
             bad.append(f"integrity check failed ({work})")
         state = sc.state(work)
         if not _acceptable(sc, state, allowed):
             bad.append(f"state between transactions after a kill ({work})")
-        stray += sum(p.name.startswith(".") for p in work.rglob("*") if p.is_file())
+        left = _hidden(work)
+        stray += left
+        if left:  # the next writer of the same output removes what the killed one left
+            _run(argv)
+            stray_after += _hidden(work)
         if not bad:
             shutil.rmtree(work, ignore_errors=True)
     return {
         "command": sc.name,
         "runs": runs,
         "uninterrupted_s": elapsed,
-        "killed_while_writing": in_transaction,
-        "write_span_s": writes,
+        "killed_while_writing": in_write,
+        "aimed_at_a_write": aimed,
+        "aimed_and_landed_in_a_write": aimed_in_write,
+        "write_windows_s": writes,
         "violations": bad,
-        "hidden_temporary_files_left": stray,
+        "hidden_temporaries_left_by_kills": stray,
+        "hidden_temporaries_left_after_the_next_writer": stray_after,
     }
 
 
@@ -269,6 +314,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=int, default=50)
     parser.add_argument("--commands", default="train,feedback,trim,convert")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", type=Path, default=RESULTS, help="results JSON")
     args = parser.parse_args(argv)
     demo = _demo()
     rng = random.Random(args.seed)
@@ -280,22 +326,36 @@ def main(argv: list[str] | None = None) -> int:
         scenarios = _scenarios(template, demo)
         for name in args.commands.split(","):
             row = fire(scenarios[name.strip()], args.runs, base, rng)
-            rows.append(row)
-            print(
-                f"{row['command']:<9} {row['runs']:>4} kills  {row['uninterrupted_s']:6.1f} s run  "
-                f"{row['killed_while_writing']:>3} while writing  "
-                f"{len(row['violations'])} violations  "
-                f"{row['hidden_temporary_files_left']} hidden temporary files left"
-            )
-            for v in row["violations"]:
-                print(f"    {v}")
+            rows.append({**row, "load": [round(v, 2) for v in os.getloadavg()]})
+            _print_row(row)
+            _write(rows, args)  # after every command: a long run interrupted keeps its rows
+    return 1 if any(r["violations"] for r in rows) else 0
+
+
+def _print_row(row: dict[str, Any]) -> None:
+    print(
+        f"{row['command']:<9} {row['runs']:>4} kills  {row['uninterrupted_s']:6.1f} s run  "
+        f"{row['killed_while_writing']:>3} while writing ({row['aimed_and_landed_in_a_write']} "
+        f"of {row['aimed_at_a_write']} aimed)  {len(row['violations'])} violations  "
+        f"hidden temporaries: {row['hidden_temporaries_left_by_kills']} left by kills, "
+        f"{row['hidden_temporaries_left_after_the_next_writer']} after the next writer",
+        flush=True,
+    )
+    for v in row["violations"]:
+        print(f"    {v}")
+
+
+def _write(rows: list[dict[str, Any]], args: argparse.Namespace) -> None:
     from benchmarks.__main__ import machine
 
-    write_json(
-        {"kind": "posecbr-faults", "machine": machine(), "load": os.getloadavg(), "rows": rows},
-        RESULTS,
-    )
-    return 1 if any(r["violations"] for r in rows) else 0
+    doc = {
+        "kind": "posecbr-faults",
+        "command": f"python -m benchmarks.faults --runs {args.runs} --commands {args.commands}",
+        "machine": machine(),
+        "load": [round(v, 2) for v in os.getloadavg()],
+        "rows": rows,
+    }
+    write_json(doc, args.out)
 
 
 if __name__ == "__main__":

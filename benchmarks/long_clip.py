@@ -112,19 +112,32 @@ def measure(mode: str, db: Path, clip: Path, work: Path) -> dict[str, Any]:
         [sys.executable, "-c", code, "classify", str(clip), "--db", str(db), "--json"],
         env=_env(), capture_output=True, text=True, cwd=ROOT,
     )  # fmt: skip
-    if done.returncode != 0:
-        raise SystemExit(f"classify ({mode}) failed:\n{done.stderr[-2000:]}")
-    row: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
+    row: dict[str, Any] = {"mode": mode, "load_before": load}
+    if done.returncode != 0:  # -9: killed, on this shared machine most likely out of memory
+        print(done.stderr[-2000:], file=sys.stderr)
+        return {**row, "exit": done.returncode, "peak_bytes": None, "wall_s": None,
+                "cpu_s": None, "label": None, "nearest_distance": None}  # fmt: skip
+    row.update(json.loads(done.stdout.strip().splitlines()[-1]))
     result = json.loads(out.read_text(encoding="utf-8"))["results"][0]
     row.update(
-        mode=mode,
-        load_before=load,
         load_after=[round(v, 2) for v in os.getloadavg()],
         label=result.get("label"),
         confidence=result.get("confidence"),
         nearest_distance=(result.get("neighbours") or [{}])[0].get("distance"),
     )
     return row
+
+
+def _print_row(row: dict[str, Any]) -> None:
+    name, mode, load = row["case_base"], row["mode"], row["load_before"][0]
+    if row["peak_bytes"] is None:
+        print(f"{name:<32} {mode:<8} failed (exit {row['exit']}; -9: killed), load {load}")
+        return
+    print(
+        f"{name:<32} {mode:<8} {row['peak_bytes'] / 1e9:>8.2f} {row['wall_s']:>8.1f} "
+        f"{row['cpu_s']:>8.1f}  {row['label']} (nearest {row['nearest_distance']}, load {load})",
+        flush=True,
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -146,11 +159,7 @@ def main(argv: list[str] | None = None) -> int:
             for mode in ("chunked",) if args.skip_whole else ("chunked", "whole"):
                 row = {"case_base": name, "train_args": extra, **measure(mode, db, clip, work)}
                 rows.append(row)
-                print(
-                    f"{name:<32} {mode:<8} {row['peak_bytes'] / 1e9:>8.2f} "
-                    f"{row['wall_s']:>8.1f} {row['cpu_s']:>8.1f}  {row['label']} "
-                    f"(nearest {row['nearest_distance']}, load {row['load_before'][0]})"
-                )
+                _print_row(row)
     from benchmarks.__main__ import machine
 
     doc = {

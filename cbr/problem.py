@@ -333,7 +333,8 @@ def resample(x: np.ndarray, length: int) -> np.ndarray:
     if frames == 1:
         return np.repeat(x, length, axis=0)
     i, w = resample_points(frames, length)
-    return x[i] * (1.0 - w) + x[i + 1] * w
+    out: np.ndarray = x[i] * (1.0 - w) + x[i + 1] * w
+    return out
 
 
 def resample_points(frames: int, length: int) -> tuple[np.ndarray, np.ndarray]:
