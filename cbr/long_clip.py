@@ -49,7 +49,9 @@ PositionFrame = tuple[np.ndarray, np.ndarray, float] | None
 def chunk_for(seq: PoseSequence, chunk_frames: int | None) -> int:
     """The piece size for ``seq``: ``chunk_frames`` when given (0: the whole clip at once),
     else :data:`CHUNK_FRAMES` for a clip longer than that whose fluents are not computed yet,
-    0 otherwise."""
+    0 otherwise (and for a clip of one frame)."""
+    if seq.n_frames < 2:  # nothing to resample between
+        return 0
     if chunk_frames is not None:
         return max(0, int(chunk_frames))
     if seq.n_frames > CHUNK_FRAMES and not is_cached(seq, "fluents"):
