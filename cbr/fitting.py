@@ -239,22 +239,5 @@ def inner_loso_accuracy(
     """Leave-one-subject-out accuracy of one side handling and weighting within the training
     clips ``R`` ``(n, D)`` (mirror images ``M``, sides ``left``, labels ``y``, ``subjects``);
     with many subjects, leave-subjects-out over :func:`subject_folds`."""
-    y = np.asarray(y).astype(str)
-    queries = canonical(R, M, left) if side == "canonical" else R
-    folds = subject_folds(subjects)
-    hits = 0
-    for s in np.unique(folds):
-        test = folds == s
-        train = ~test
-        if len(np.unique(y[train])) < 2:
-            continue
-        cases = assemble_cases(
-            R[train],
-            None if M is None else M[train],
-            None if left is None else left[train],
-            y[train],
-            side,
-            weighting,
-        )
-        hits += int((knn_predict(cases, queries[test], k, weights) == y[test]).sum())
-    return hits / len(y)
+    _, right = inner_loso_votes(R, M, left, y, subjects, side, weighting, k, weights)
+    return float(right.sum()) / len(right)
