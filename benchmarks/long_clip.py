@@ -77,12 +77,20 @@ def make_clip(work: Path, frames: int) -> Path:
     return save_pose(long, work / "long.npz", float32=True)
 
 
+#: address space of the whole-clip peer (it needs 8-12 GB resident for 10^6 frames)
+WHOLE_LIMIT_BYTES = 16 * 2**30
+
+
 def _child(argv: list[str]) -> int:
     """In the measured process: ``classify`` with its JSON to a file, then this process's
     peak memory (VmHWM: unlike ru_maxrss it does not start at the parent's size)."""
     mode, out, *cli = argv
     if mode == "whole":  # the peer: every clip computed at once, as before cbr.long_clip
         import cbr.long_clip
+
+        # its address space capped, so that on a shared machine it fails with MemoryError
+        # (recorded as a failed run) instead of waking the kernel's OOM killer
+        resource.setrlimit(resource.RLIMIT_AS, (WHOLE_LIMIT_BYTES, WHOLE_LIMIT_BYTES))
 
         cbr.long_clip.CHUNK_FRAMES = 10**12
     from posecbr.cli import main
@@ -113,7 +121,7 @@ def measure(mode: str, db: Path, clip: Path, work: Path) -> dict[str, Any]:
         env=_env(), capture_output=True, text=True, cwd=ROOT,
     )  # fmt: skip
     row: dict[str, Any] = {"mode": mode, "load_before": load}
-    if done.returncode != 0:  # -9: killed, on this shared machine most likely out of memory
+    if done.returncode != 0:  # out of memory: MemoryError under the cap, or killed (-9)
         print(done.stderr[-2000:], file=sys.stderr)
         return {**row, "exit": done.returncode, "peak_bytes": None, "wall_s": None,
                 "cpu_s": None, "label": None, "nearest_distance": None}  # fmt: skip
