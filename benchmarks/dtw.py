@@ -54,7 +54,7 @@ PEER_MAX = {"tslearn": 1600, "aeon": 1600, "dtaidistance": 10000}  # slow peers:
 
 def real_series() -> tuple[np.ndarray, np.ndarray]:
     """Eight limb angles ``(clips, 64, 8)`` of s01-s06 (cases) and s07-s08 (queries)."""
-    from cbr.compare import angle_series
+    from cbr.evaluation.peers import angle_series
 
     clips = C.uiprmd_clips()
     ang = np.stack([angle_series(c.seq, FRAMES) for c in clips])
