@@ -10,35 +10,27 @@ import pytest
 
 from cbr.dad import detect
 from tests.bodies import UPPER_BODY, rot_x, rot_z, rotate, standing, to_sequence
+from tests.moves import arm, phase, push_up
 
 Body = dict[str, np.ndarray]
-
-
-def _arm(side: str) -> tuple[str, ...]:
-    return tuple(f"{side}_{j}" for j in ("elbow", "wrist", "pinky", "index", "thumb"))
 
 
 def _leg(side: str) -> tuple[str, ...]:
     return tuple(f"{side}_{j}" for j in ("knee", "ankle", "heel", "foot_index"))
 
 
-def _phase(t: float, period: float) -> float:
-    """0 at rest, 1 at the far point of the movement, smoothly (one repetition per period)."""
-    return 0.5 * (1.0 - np.cos(2.0 * np.pi * t / period))
-
-
 def jumping_jack(t: float) -> Body:
     """Arms swing up sideways to 150 degrees while the legs open 20 degrees, 1 rep/s."""
-    b, a = standing(), _phase(t, 1.0)
-    b = rotate(b, _arm("left"), rot_z(-150 * a), b["left_shoulder"])
-    b = rotate(b, _arm("right"), rot_z(150 * a), b["right_shoulder"])
+    b, a = standing(), phase(t, 1.0)
+    b = rotate(b, arm("left"), rot_z(-150 * a), b["left_shoulder"])
+    b = rotate(b, arm("right"), rot_z(150 * a), b["right_shoulder"])
     b = rotate(b, _leg("left"), rot_z(-20 * a), b["left_hip"])
     return rotate(b, _leg("right"), rot_z(20 * a), b["right_hip"])
 
 
 def single_leg_rdl(t: float) -> Body:
     """Hinge 80 degrees at the right hip; torso and left leg tip as one line, 3 s per rep."""
-    b, a = standing(), _phase(t, 3.0)
+    b, a = standing(), phase(t, 3.0)
     moving = UPPER_BODY + ("left_hip",) + _leg("left")
     return rotate(b, moving, rot_x(80 * a), b["right_hip"])
 
@@ -46,7 +38,7 @@ def single_leg_rdl(t: float) -> Body:
 def squat(t: float) -> Body:
     """Feet planted; shins tip 35 degrees forward, thighs reach 95 degrees from vertical, the
     torso leans 40 degrees forward over the hips, 2.5 s per rep."""
-    b, a = standing(), _phase(t, 2.5)
+    b, a = standing(), phase(t, 2.5)
     out = dict(b)
     shin, thigh = np.radians(35 * a), np.radians(95 * a)
     for side in ("left", "right"):
@@ -57,26 +49,6 @@ def squat(t: float) -> Body:
     mid_new = 0.5 * (out["left_hip"] + out["right_hip"])
     for j in UPPER_BODY:
         out[j] = rot_x(40 * a) @ (b[j] - mid_old) + mid_new
-    return out
-
-
-def push_up(t: float) -> Body:
-    """Plank facing down with straight arms under the shoulders; the body lowers 25 cm while
-    the hands stay put and the elbows bend out to the sides, 2 s per rep."""
-    b = standing()
-    for side in ("left", "right"):
-        b = rotate(b, _arm(side), rot_x(-90), b[f"{side}_shoulder"])  # arms straight ahead
-    b = rotate(b, tuple(b), rot_x(90), np.array([0.0, 0.1, 0.0]))  # tip over: face down
-    hands = {f"{s}_{j}" for s in ("left", "right") for j in ("wrist", "pinky", "index", "thumb")}
-    drop = np.array([0.0, 0.25 * _phase(t, 2.0), 0.0])
-    out = {j: (p if j in hands else p - drop) for j, p in b.items()}
-    upper, fore = 0.30, 0.25  # the standing body's arm links
-    for side, out_x in (("left", 1.0), ("right", -1.0)):
-        sh, wr = out[f"{side}_shoulder"], out[f"{side}_wrist"]
-        dist = float(np.linalg.norm(wr - sh))
-        along = (upper**2 - fore**2 + dist**2) / (2 * dist)  # elbow: two-link triangle
-        aside = np.sqrt(max(upper**2 - along**2, 0.0))
-        out[f"{side}_elbow"] = sh + along * (wr - sh) / dist + aside * np.array([out_x, 0, 0])
     return out
 
 
