@@ -24,7 +24,13 @@ from features.poses import PoseSequence
 from features.repetitions import count_repetitions
 from features.skeleton import BLAZEPOSE_33
 
-from .segmentation import DEFAULT_WINDOW_S, MIN_SEGMENT_S, SWITCH_ODDS, activity_distances
+from .segmentation import (
+    DEFAULT_WINDOW_S,
+    MIN_SEGMENT_S,
+    SWITCH_ODDS,
+    activity_distances,
+    span_fields,
+)
 from .unknown import Judge, Margin, activity_codes
 
 HOP_S = 0.5
@@ -45,15 +51,8 @@ class LiveSegment:
     repetitions: int
 
     def to_dict(self, fps: float) -> dict[str, Any]:
-        return {
-            "start_s": round(self.start_frame / fps, 3),
-            "end_s": round(self.end_frame / fps, 3),
-            "start_frame": self.start_frame,
-            "end_frame": self.end_frame,
-            "label": self.label,
-            "confidence": round(self.confidence, 3),
-            "repetitions": self.repetitions,
-        }
+        fields = span_fields(self.start_frame, self.end_frame, self.label, self.confidence, fps)
+        return {**fields, "repetitions": self.repetitions}
 
 
 @dataclass

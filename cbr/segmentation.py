@@ -81,6 +81,20 @@ SWITCH_ODDS = 2.0
 """A change of activity needs MIN_SEGMENT_S of blocks voting SWITCH_ODDS to 1 for it."""
 
 
+def span_fields(start_frame: int, end_frame: int, label: str | None, confidence: float,
+                fps: float) -> dict[str, Any]:  # fmt: skip
+    """The JSON fields every labelled stretch has (``segment --json``, ``watch``'s lines):
+    start and end in seconds and frames, the label (None: unknown) and its confidence."""
+    return {
+        "start_s": round(start_frame / fps, 3),
+        "end_s": round(end_frame / fps, 3),
+        "start_frame": start_frame,
+        "end_frame": end_frame,
+        "label": label,
+        "confidence": round(confidence, 3),
+    }
+
+
 @dataclass(frozen=True)
 class Segment:
     """Frames ``start_frame`` to ``end_frame`` (exclusive) labelled ``label`` (None: unlike
@@ -97,12 +111,7 @@ class Segment:
 
     def to_dict(self, fps: float) -> dict[str, Any]:
         return {
-            "start_s": round(self.start_frame / fps, 3),
-            "end_s": round(self.end_frame / fps, 3),
-            "start_frame": self.start_frame,
-            "end_frame": self.end_frame,
-            "label": self.label,
-            "confidence": round(self.confidence, 3),
+            **span_fields(self.start_frame, self.end_frame, self.label, self.confidence, fps),
             "repetitions": len(self.repetitions),
             "explanation": self.explanation,
             "novelty": round(self.novelty, 3),
