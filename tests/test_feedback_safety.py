@@ -19,12 +19,12 @@ from casebase_store import open_store
 from cbr.stored import load_classifier
 from features.poses import PoseSequence, load_pose, save_pose
 from posecbr.cli import main
+from tests.postgres import empty_postgres
 from tests.processes import posecbr_process as _posecbr
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 LABELS = DEMO / "labels.csv"
-PG_URL = os.environ.get("POSECBR_TEST_POSTGRES_URL")
 
 
 def _sha(path: Path) -> str:
@@ -48,18 +48,9 @@ def _copy(src: Path, dst: Path) -> Path:
 def db_url(request: pytest.FixtureRequest, trained: Path, tmp_path: Path) -> str:
     if request.param == "sqlite":
         return str(_copy(trained, tmp_path / "cb.sqlite"))
-    if not PG_URL:
-        pytest.skip("no PostgreSQL server (set POSECBR_TEST_POSTGRES_URL; CI starts one)")
-    from sqlalchemy import create_engine, text
-
-    engine = create_engine(PG_URL)
-    with engine.begin() as conn:
-        for table in ("case_representations", "maintenance_log", "cases", "case_bases",
-                      "posecbr_schema_version"):  # fmt: skip
-            conn.execute(text(f"DROP TABLE IF EXISTS {table} CASCADE"))
-    engine.dispose()
-    assert main(["train", str(LABELS), "--db", PG_URL, "--subjects", "s01,s02"]) == 0
-    return PG_URL
+    url = empty_postgres()
+    assert main(["train", str(LABELS), "--db", url, "--subjects", "s01,s02"]) == 0
+    return url
 
 
 def test_four_writers_revising_one_case_all_take_effect(db_url: str) -> None:

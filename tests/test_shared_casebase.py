@@ -5,7 +5,6 @@ PostgreSQL server (CI starts one with .ci/postgres.sh), and no case is lost or d
 from __future__ import annotations
 
 import csv
-import os
 from collections import Counter
 from pathlib import Path
 
@@ -13,12 +12,12 @@ import pytest
 
 from casebase_store import open_store
 from posecbr.cli import main
+from tests.postgres import empty_postgres
 from tests.processes import posecbr_process
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 LABELS = DEMO / "labels.csv"
-PG_URL = os.environ.get("POSECBR_TEST_POSTGRES_URL")
 # the appending writers each add subject s03's clips of their own movement
 SHARES = ("deep_squat", "side_lunge")
 
@@ -36,17 +35,7 @@ def db_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
     if request.param == "sqlite":
         url = str(tmp_path / "cb.sqlite")
     else:
-        if not PG_URL:
-            pytest.skip("no PostgreSQL server (set POSECBR_TEST_POSTGRES_URL; CI starts one)")
-        from sqlalchemy import create_engine, text
-
-        engine = create_engine(PG_URL)
-        with engine.begin() as conn:
-            for table in ("case_representations", "maintenance_log", "cases", "case_bases",
-                          "posecbr_schema_version"):  # fmt: skip
-                conn.execute(text(f"DROP TABLE IF EXISTS {table} CASCADE"))
-        engine.dispose()
-        url = PG_URL
+        url = empty_postgres()
     assert main(["train", str(LABELS), "--db", url, "--subjects", "s01,s02"]) == 0
     return url
 
