@@ -181,7 +181,6 @@ def run_dataset(
     name: str, path: Path, folds: Sequence[Sequence[str]], other: list[Any], flags: bool
 ) -> dict[str, Any]:
     """Every clip of one dataset explained held out; the flags of every configuration."""
-    from cbr.calibration import expected_calibration_error
 
     clips = _clips(path)
     rows: list[dict[str, Any]] = []
@@ -211,24 +210,7 @@ def run_dataset(
                   f"{100 * _rate(got['detected_distance']):.1f} %)", flush=True)  # fmt: skip
     out: dict[str, Any] = {"explanations": summarise_rows(rows, features)}
     if flags:
-        out["flags"] = {
-            cfg: {
-                "false_alarm": _rate(r["false_alarm"]),
-                "false_alarm_distance": _rate(r["false_alarm_distance"]),
-                "detection": _rate(r["detected"]),
-                "detection_distance": _rate(r["detected_distance"]),
-                "accuracy": _rate(r["right"]),
-                "ece": expected_calibration_error(
-                    np.array(r["confidence"]), np.array(r["right"], dtype=bool)
-                ),  # fmt: skip
-                "held_out_clips": len(r["false_alarm"]),
-                "other_clips": len(r["detected"]),
-                "detection_distance_by_activity": _by_activity(
-                    r["other_label"], r["detected_distance"]
-                ),
-            }
-            for cfg, r in flag_rows.items()
-        }
+        out["flags"] = {cfg: _flag_summary(r) for cfg, r in flag_rows.items()}
     return out
 
 
@@ -287,9 +269,27 @@ def _header() -> None:
     )
 
 
+def _flag_summary(r: dict[str, Any]) -> dict[str, Any]:
+    """One flag configuration's figures from its per-clip outcomes ``r`` (:func:`flag_fold`)."""
+    from cbr.calibration import expected_calibration_error
+
+    return {
+        "false_alarm": _rate(r["false_alarm"]),
+        "false_alarm_distance": _rate(r["false_alarm_distance"]),
+        "detection": _rate(r["detected"]),
+        "detection_distance": _rate(r["detected_distance"]),
+        "accuracy": _rate(r["right"]),
+        "ece": expected_calibration_error(
+            np.array(r["confidence"]), np.array(r["right"], dtype=bool)
+        ),
+        "held_out_clips": len(r["false_alarm"]),
+        "other_clips": len(r["detected"]),
+        "detection_distance_by_activity": _by_activity(r["other_label"], r["detected_distance"]),
+    }
+
+
 def _run_split(args: argparse.Namespace) -> dict[str, Any]:
     """One training/test split (--quick or --train): explanations and, with --other, flags."""
-    from cbr.calibration import expected_calibration_error
 
     datasets: dict[str, Any] = {}
     if args.quick:
@@ -309,19 +309,7 @@ def _run_split(args: argparse.Namespace) -> dict[str, Any]:
         flags = {}
         for feats, sim in FLAG_CONFIGS:
             r = flag_fold(feats, sim, train, test, other)
-            flags[f"{feats}/{sim}"] = {
-                "false_alarm": _rate(r["false_alarm"]),
-                "false_alarm_distance": _rate(r["false_alarm_distance"]),
-                "detection": _rate(r["detected"]),
-                "detection_distance": _rate(r["detected_distance"]),
-                "accuracy": _rate(r["right"]),
-                "ece": expected_calibration_error(
-                    np.array(r["confidence"]), np.array(r["right"], dtype=bool)
-                ),
-                "detection_distance_by_activity": _by_activity(
-                    r["other_label"], r["detected_distance"]
-                ),
-            }
+            flags[f"{feats}/{sim}"] = _flag_summary(r)
         datasets["split"]["flags"] = flags
     return datasets
 
