@@ -1,0 +1,108 @@
+"""Joining single repetitions into one multi-repetition recording whose count is known exactly.
+
+Datasets of segmented repetitions (UI-PRMD: one file per repetition; HDM05: one-repetition
+clips) give an exact ground truth for repetition counting when K repetitions of one person
+and one movement are played one after the other. Each repetition starts and ends near rest,
+but the person stood elsewhere in the room and faced another way in each take, and the rest
+postures differ a little: every repetition is turned about the vertical and shifted along
+the floor so that its first frame stands where and faces as the previous one's last frame
+did (the joint angles are untouched), and the remaining jump between the two postures is
+bridged by :data:`BLEND_S` of linear blending (frames added, nothing of a repetition lost).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .errors import DataError
+from .poses import PoseSequence
+from .skeleton import JOINT_INDEX
+
+BLEND_S = 0.1
+"""Seconds of linear blending inserted between two repetitions (3 frames at 30 fps)."""
+
+
+@dataclass(frozen=True)
+class Joined:
+    """The joined recording, the frame where each repetition starts in it ``(K,)`` (the
+    blends lie before them, from the second on), and the largest joint jump (metres) that
+    the blends bridged between consecutive repetitions ``(K - 1,)``."""
+
+    seq: PoseSequence
+    starts: np.ndarray
+    jumps_m: np.ndarray
+
+
+def _heading(frame: np.ndarray) -> float:
+    """The angle about the vertical (y) of the left-to-right hip line of one canonical frame
+    ``(33, 3)`` (radians)."""
+    d = frame[JOINT_INDEX["right_hip"]] - frame[JOINT_INDEX["left_hip"]]
+    return float(np.arctan2(d[2], d[0]))
+
+
+def _mid_hip(frame: np.ndarray) -> np.ndarray:
+    return np.asarray(0.5 * (frame[JOINT_INDEX["left_hip"]] + frame[JOINT_INDEX["right_hip"]]))
+
+
+def _rest_frame(p: np.ndarray, last: bool) -> np.ndarray:
+    """The first (or last) frame of ``p`` ``(frames, 33, 3)`` whose hips are both known."""
+    hips = p[:, [JOINT_INDEX["left_hip"], JOINT_INDEX["right_hip"]]]
+    ok = np.flatnonzero(np.isfinite(hips).all(axis=(1, 2)))
+    if not len(ok):
+        raise DataError("no frame shows both hips: cannot place the repetition")
+    return p[ok[-1] if last else ok[0]]
+
+
+def _placed(p: np.ndarray, after: np.ndarray) -> np.ndarray:
+    """``p`` ``(frames, 33, 3)`` turned about the vertical and shifted along the floor so that
+    its first frame faces and stands as the frame ``after`` ``(33, 3)`` does."""
+    first = _rest_frame(p, last=False)
+    turn = _heading(after) - _heading(first)
+    c, s = np.cos(turn), np.sin(turn)
+    # rotation about y taking heading h to h + turn (x, z plane; y stays)
+    rot = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+    pivot = _mid_hip(first)
+    out = (p - pivot) @ rot.T + pivot
+    shift = _mid_hip(after) - pivot
+    shift[1] = 0.0  # along the floor only: the height of the hips is the posture's own
+    return np.asarray(out + shift)
+
+
+def join_repetitions(reps: Sequence[PoseSequence], blend_s: float = BLEND_S) -> Joined:
+    """``reps`` (canonical :class:`PoseSequence` s of one frame rate, positions
+    ``(frames, 33, 3)``) played one after the other (see the module docstring).
+
+    Raises DataError for no repetitions or differing frame rates."""
+    if not reps:
+        raise DataError("no repetitions to join")
+    fps = reps[0].fps
+    if any(abs(r.fps - fps) > 1e-6 for r in reps):
+        raise DataError("repetitions to join differ in frame rate")
+    n_blend = max(1, int(round(blend_s * fps)))
+    weights = (np.arange(1, n_blend + 1) / (n_blend + 1))[:, None, None]
+    parts = [reps[0].to_canonical().positions]
+    starts, jumps = [0], []
+    length = len(parts[0])
+    for rep in reps[1:]:
+        prev = _rest_frame(parts[-1], last=True)
+        p = _placed(rep.to_canonical().positions, prev)
+        first = p[0]
+        jumps.append(float(np.nanmax(np.linalg.norm(first - parts[-1][-1], axis=1))))
+        blend = (1.0 - weights) * parts[-1][-1] + weights * first
+        parts += [blend, p]
+        length += n_blend
+        starts.append(length)
+        length += len(p)
+    seq = replace(
+        reps[0].to_canonical(),
+        positions=np.concatenate(parts),
+        confidence=None,
+        metadata={**reps[0].metadata, "joined_repetitions": len(reps)},
+    )
+    return Joined(seq, np.asarray(starts), np.asarray(jumps))
+
+
+__all__ = ["BLEND_S", "Joined", "join_repetitions"]
