@@ -291,7 +291,7 @@ def find_period(x: np.ndarray, fps: float) -> tuple[float | None, float]:
     lo, hi = int(np.ceil(MIN_PERIOD_S * fps)), int(0.6 * n)
     if hi <= lo + 2:
         return None, 0.0
-    acf = autocorrelation(x)
+    acf = autocorrelation(x) * (1.0 - np.arange(n) / n)
     peaks, _ = find_peaks(acf[: hi + 1])
     peaks = peaks[(peaks >= lo) & (acf[peaks] > 0)]
     if not len(peaks):
