@@ -422,7 +422,8 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
         line = _movement_line(x, sig.names, direction)
         # a slow change of posture (stepping into place, drifting) is no repetition
         line = _steady(line, period, strength, sig.fps)
-        distance = int(0.5 * (period or MIN_PERIOD_S) * sig.fps)
+        clear = period if strength >= CLEAR_PERIODICITY else None
+        distance = int(0.5 * (clear or MIN_PERIOD_S) * sig.fps)
         reach = int(period * sig.fps) if period else len(line)
         far = _far_points(line, float(np.percentile(line, 5)), distance)
         spans = _bounds(line, far, reach) if len(far) else []
