@@ -92,6 +92,7 @@ TRUNK_LEVEL_RAD = float(np.radians(60.0))
 when the trunk lies more than this far from the vertical (lying down, a deep bend) they have no
 stable value and count as missing (its inclination still counts)."""
 MEDIAN_S = 0.2
+SUBSTANTIAL = 0.4
 """Running median (seconds) before smoothing: drops tracking glitches shorter than 0.1 s."""
 
 AT_EASE: dict[str, float] = {
@@ -357,7 +358,7 @@ def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
     if not len(cand):
         return np.array([], dtype=np.int64)
     prom = props["prominences"]
-    keep = prom >= 0.5 * float(np.median(prom))
+    keep = prom >= SUBSTANTIAL * float(np.median(prom))
     cand = cand[keep] - 1
     inner = cand[(cand > 0) & (cand < len(line) - 1)]
     if len(inner):
@@ -451,6 +452,16 @@ def _steady(line: np.ndarray, period: float | None, strength: float, fps: float)
     return np.asarray(line - uniform_filter1d(line, max(1, int(period * fps)), mode="nearest"))
 
 
+def _both_sides_move(x: np.ndarray, names: tuple[str, ...]) -> bool:
+    """Whether the left and the right limbs of ``x`` ``(n, C)`` move about equally (within a
+    factor of two, as for the reach of the two sides): the summed robust spans of the left
+    angles against those of the right. The trunk's angles belong to both sides."""
+    spans = np.percentile(x, 95, axis=0) - np.percentile(x, 5, axis=0)
+    left = sum(s for s, n in zip(spans, names, strict=True) if not n.startswith("right_"))
+    right = sum(s for s, n in zip(spans, names, strict=True) if not n.startswith("left_"))
+    return bool(min(left, right) >= 0.5 * max(left, right))
+
+
 def _alternating_repetitions(
     x: np.ndarray, names: tuple[str, ...], fps: float
 ) -> tuple[list[tuple[int, int]], np.ndarray, np.ndarray, bool]:
@@ -474,6 +485,8 @@ def _alternating_repetitions(
         _steady(alike, period, strength, fps)
     ):
         return none  # mostly both sides alike (a squat, a jumping jack)
+    if not _both_sides_move(x, names):
+        return none  # one limb moves, the other stands by (a kick, a one-arm raise)
     # a full period holds one repetition per side
     distance = int(0.25 * (period or 2 * MIN_PERIOD_S) * fps)
     # far points on each side of the symmetric posture; a posture held off to one side (a
