@@ -121,6 +121,7 @@ class Joined:
     k: int
     seq: Any  # PoseSequence
     max_jump_m: float
+    files: tuple[str, ...]
 
 
 def joined_sequences(groups: list[Group], per_group: int, seed: int) -> Iterator[Joined]:
@@ -135,15 +136,16 @@ def joined_sequences(groups: list[Group], per_group: int, seed: int) -> Iterator
             k = int(rng.integers(K_RANGE[0], K_RANGE[1] + 1))
             k = min(k, len(group.files))
             picks = rng.choice(len(group.files), size=k, replace=False)
-            reps = []
+            reps, names = [], []
             for i in picks:
                 path = group.files[int(i)]
                 if path not in cache:
                     cache[path] = read_one(group, path)
                 reps.append(cache[path])
+                names.append(path.name)
             joined = join_repetitions(reps)
             jump = float(joined.jumps_m.max()) if len(joined.jumps_m) else 0.0
-            yield Joined(group, k, joined.seq, jump)
+            yield Joined(group, k, joined.seq, jump, tuple(names))
 
 
 def period_baseline(seq: Any) -> int:
@@ -192,6 +194,7 @@ def run_joined(per_group: int, seed: int) -> tuple[list[dict[str, Any]], dict[st
             "k": item.k,
             "frames": item.seq.n_frames,
             "max_jump_m": round(item.max_jump_m, 4),
+            "files": list(item.files),
         }
         for name, method in METHODS.items():
             t0 = time.process_time()

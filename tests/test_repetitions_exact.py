@@ -1,0 +1,164 @@
+"""Repetition counts whose truth is known by construction: signals built with n cycles, and
+real single repetitions of UI-PRMD and HDM05 joined one after the other
+(:mod:`features.joining`), whose count is the number joined."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from features.errors import DataError
+from features.geometry import joint_angle
+from features.joining import join_repetitions
+from features.readers.asfamc import read_asf_amc
+from features.readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon
+from features.repetitions import MovementSignals, count_in_signals, count_repetitions
+from features.skeleton import JOINT_INDEX
+from tests.bodies import standing, to_sequence
+
+FPS = 30.0
+KNEES = ("left_knee", "right_knee")
+
+
+def _signals(values: np.ndarray, names: tuple[str, ...]) -> MovementSignals:
+    return MovementSignals(values, names, FPS, 1)
+
+
+def _bend(cycles: np.ndarray) -> np.ndarray:
+    """Knee angles (radians) of squats: straight (pi) at rest, down by up to 1.2 rad, one
+    cosine cycle per entry of ``cycles`` (its length in samples)."""
+    return np.concatenate([np.pi - 0.6 * (1 - np.cos(2 * np.pi * np.arange(n) / n)) for n in cycles])
+
+
+def test_cycles_with_a_small_extra_bump_count_the_cycles() -> None:
+    """Six squats of 2 s and, in the rest between the third and fourth, a dip of a tenth of
+    their depth: six."""
+    knee = _bend(np.full(6, 60))
+    rest = np.full(30, np.pi)
+    dip = np.pi - 0.06 * (1 - np.cos(2 * np.pi * np.arange(20) / 20))
+    rest[5:25] = dip
+    knee = np.concatenate([knee[:180], rest, knee[180:]])
+    result = count_in_signals(_signals(np.stack([knee, knee], axis=1), KNEES), len(knee), FPS)
+    assert result.count == 6
+    assert not result.alternating
+
+
+def test_uneven_cycles_of_several_people_count_exactly() -> None:
+    """Ten squats of unequal length (1.3-2.7 s) and depth (0.8-1.2 of the mean), with
+    sensor noise: a lag of the autocorrelation near the whole clip, estimated from few
+    samples, must not pass for the period. Ten."""
+    rng = np.random.default_rng(1)
+    lengths = rng.integers(40, 81, size=10)
+    depth = np.repeat(rng.uniform(0.8, 1.2, size=10), lengths)
+    knee = np.pi - depth * (np.pi - _bend(lengths)) + rng.normal(0, 0.02, lengths.sum())
+    result = count_in_signals(_signals(np.stack([knee, knee], axis=1), KNEES), len(knee), FPS)
+    assert result.count == 10
+
+
+def test_one_leg_moving_on_and_on_is_not_one_repetition_per_side() -> None:
+    """The left knee bends five times with no rest between; the right stands by (a little
+    sway): five, not ten."""
+    rng = np.random.default_rng(1)
+    left = _bend(np.full(5, 45))
+    right = np.pi - 0.05 * (1 - np.cos(2 * np.pi * np.arange(len(left)) / 90))
+    right = right + rng.normal(0, 0.01, len(left))
+    result = count_in_signals(_signals(np.stack([left, right], axis=1), KNEES), len(left), FPS)
+    assert not result.alternating
+    assert result.count == 5
+
+
+def test_legs_taking_turns_count_one_per_side() -> None:
+    """Left, right, left, right, left, right knee bends: six, sides alternating."""
+    one = _bend(np.full(1, 40))
+    still = np.full(40, np.pi)
+    left = np.concatenate([one, still] * 3)
+    right = np.concatenate([still, one] * 3)
+    result = count_in_signals(_signals(np.stack([left, right], axis=1), KNEES), len(left), FPS)
+    assert result.alternating
+    assert result.count == 6
+    assert [r.side for r in result.repetitions] == ["left", "right"] * 3
+
+
+# ---- joining single repetitions ------------------------------------------------------------
+
+
+def _turned(seq, degrees: float, shift: np.ndarray):  # type: ignore[no-untyped-def]
+    """``seq`` turned about the vertical by ``degrees`` and moved by ``shift`` (metres)."""
+    a = np.radians(degrees)
+    rot = np.array([[np.cos(a), 0, -np.sin(a)], [0, 1, 0], [np.sin(a), 0, np.cos(a)]])
+    return seq.__class__(seq.positions @ rot.T + shift, seq.joint_names, seq.fps)
+
+
+def _knee_angle(p: np.ndarray) -> np.ndarray:
+    j = JOINT_INDEX
+    return joint_angle(p[:, j["left_hip"]], p[:, j["left_knee"]], p[:, j["left_ankle"]])
+
+
+def test_joining_places_each_repetition_where_the_previous_ended() -> None:
+    """A second take turned by 90 degrees and 3 m away is put back: the seam has no jump
+    (both takes stand the same), frames are kept whole, the blend lies between them, and
+    the joint angles are those of the takes."""
+    body = standing()
+    bent = dict(body, left_knee=body["left_knee"] + np.array([0.0, 0.0, 0.15]))
+    take = to_sequence(*([body] * 10 + [bent] * 10 + [body] * 10), fps=FPS)
+    other = _turned(take, 90.0, np.array([3.0, 0.0, -2.0]))
+    joined = join_repetitions([take, other])
+    assert joined.seq.n_frames == 30 + 3 + 30  # 0.1 s of blending at 30 fps
+    np.testing.assert_array_equal(joined.starts, [0, 33])
+    assert joined.jumps_m[0] == pytest.approx(0.0, abs=1e-9)
+    np.testing.assert_allclose(joined.seq.positions[33:], take.positions, atol=1e-9)
+    np.testing.assert_allclose(
+        _knee_angle(joined.seq.positions[33:]), _knee_angle(other.positions), atol=1e-9
+    )
+
+
+def test_joining_refuses_nothing_and_mixed_frame_rates() -> None:
+    take = to_sequence(*[standing()] * 5, fps=FPS)
+    with pytest.raises(DataError, match="no repetitions to join"):
+        join_repetitions([])
+    with pytest.raises(DataError, match="differ in frame rate"):
+        join_repetitions([take, to_sequence(*[standing()] * 5, fps=60.0)])
+
+
+UIPRMD = Path("ui-prmd") / "data" / "Segmented Movements"
+
+
+@pytest.mark.parametrize(
+    ("sensor", "movement", "subject", "episodes"),
+    [
+        ("Kinect", "m01", "s06", (3, 1, 7, 9, 2)),  # deep squat
+        ("Kinect", "m07", "s08", (2, 4, 6, 8, 10, 1, 5)),  # shoulder abduction
+        ("Vicon", "m05", "s07", (10, 2, 4, 6)),  # sit to stand
+        ("Vicon", "m02", "s05", (1, 3, 5, 7, 9, 2, 4, 6, 8)),  # hurdle step, one leg
+    ],
+)
+def test_joined_uiprmd_repetitions_count_exactly(
+    shared_data: Path, sensor: str, movement: str, subject: str, episodes: tuple[int, ...]
+) -> None:
+    """Held-out subjects' single repetitions, one file each, played one after the other."""
+    folder = shared_data / UIPRMD / sensor / "Positions"
+    read = read_uiprmd_kinect if sensor == "Kinect" else read_uiprmd_vicon
+    reps = [read(folder / f"{movement}_{subject}_e{e:02d}_positions.txt.gz") for e in episodes]
+    result = count_repetitions(join_repetitions(reps).seq)
+    assert result.count == len(episodes)
+    assert not result.alternating
+
+
+@pytest.mark.parametrize(
+    ("action", "folder", "actor", "takes"),
+    [
+        ("squat1Reps", "10", "bk", (17, 19, 21, 18, 13)),
+        ("rotateArmsBothBackward1Reps", "8", "bd", (1, 2, 3)),
+        ("elbowToKnee1RepsLelbowStart", "2", "dg", (13, 14, 15, 16, 17, 18)),
+    ],
+)
+def test_joined_hdm05_repetitions_count_exactly(
+    shared_data: Path, action: str, folder: str, actor: str, takes: tuple[int, ...]
+) -> None:
+    """HDM05 one-repetition takes of one actor, joined."""
+    base = shared_data / "hdm05" / "train" / folder
+    asf = base / f"HDM_{actor}.asf"
+    reps = [read_asf_amc(asf, base / f"HDM_{actor}_{action}_{t:03d}_120.amc") for t in takes]
+    assert count_repetitions(join_repetitions(reps).seq).count == len(takes)
