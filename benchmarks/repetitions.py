@@ -246,8 +246,10 @@ def _print_table(summary: dict[str, Any], hand: dict[str, Any]) -> None:
     for part in ("mocap", "videos", "all"):
         if part in hand:
             h = hand[part]
+            b = h["period_baseline"]
             print(f"{'hand counts, ' + part:<34} {h['clips']:>4}  {h['mae']:>5.2f} "
-                  f"{h['obo']:>6.1%} {h['exact']:>6.1%}")  # fmt: skip
+                  f"{h['obo']:>6.1%} {h['exact']:>6.1%}  | {b['mae']:>5.2f} {b['obo']:>6.1%} "
+                  f"{b['exact']:>6.1%}")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -263,7 +265,7 @@ def main(argv: list[str] | None = None) -> int:
 
     rows, seconds = run_joined(args.per_group, args.seed)
     summary = summarise(rows)
-    hand = bench_repetitions(not args.no_videos)
+    hand = bench_repetitions(not args.no_videos, {"period_baseline": period_baseline})
     _print_table(summary, hand)
     result = {
         "benchmark": "repetitions",

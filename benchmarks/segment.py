@@ -48,6 +48,7 @@ import platform  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
+from collections.abc import Callable  # noqa: E402
 from dataclasses import dataclass  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
@@ -258,11 +259,21 @@ def bench_dtw(recs: dict[str, Recording], test: str, repeats: int) -> dict[str, 
     }
 
 
-def bench_repetitions(with_videos: bool) -> dict[str, Any]:
+def bench_repetitions(
+    with_videos: bool, others: dict[str, Callable[[Any], int]] | None = None
+) -> dict[str, Any]:
+    """:func:`features.repetitions.count_repetitions` (``counted``) and any ``others``
+    (name: count of a PoseSequence) against the hand counts of FIXTURE: every clip's counts,
+    and MAE, off-by-one accuracy and exact share for mocap, videos and all (of ``others``
+    under their names)."""
     from features.datasets import load_clip
     from features.readers.asfamc import read_asf_amc
     from features.repetitions import count_repetitions
 
+    methods: dict[str, Callable[[Any], int]] = {
+        "counted": lambda seq: count_repetitions(seq).count,
+        **(others or {}),
+    }
     clips = json.loads(FIXTURE.read_text(encoding="utf-8"))["clips"]
     cache: dict[str, Any] = {}
     rows = []
@@ -276,22 +287,25 @@ def bench_repetitions(with_videos: bool) -> dict[str, Any]:
         seq = cache[c["source"]]
         if not video:
             seq = seq.slice_frames(c["start_frame"], c["end_frame"])
-        got = count_repetitions(seq).count
-        rows.append({"source": c["source"], "activity": c.get("activity"), "hand": c["count"],
-                     "counted": got, "video": video})  # fmt: skip
+        row = {"source": c["source"], "activity": c.get("activity"), "hand": c["count"]}
+        rows.append({**row, **{k: m(seq) for k, m in methods.items()}, "video": video})
     out: dict[str, Any] = {"clips": rows}
     for part, keep in (("mocap", False), ("videos", True), ("all", None)):
-        err = np.array(
-            [abs(r["counted"] - r["hand"]) for r in rows if keep is None or r["video"] == keep]
-        )
-        if len(err):
-            out[part] = {
-                "clips": len(err),
-                "mae": float(err.mean()),
-                "obo": float((err <= 1).mean()),
-                "exact": float((err == 0).mean()),
-            }
+        mine = [r for r in rows if keep is None or r["video"] == keep]
+        if mine:
+            out[part] = _count_scores(mine, "counted")
+            out[part].update({k: _count_scores(mine, k) for k in others or {}})
     return out
+
+
+def _count_scores(rows: list[dict[str, Any]], key: str) -> dict[str, Any]:
+    err = np.array([abs(r[key] - r["hand"]) for r in rows])
+    return {
+        "clips": len(err),
+        "mae": float(err.mean()),
+        "obo": float((err <= 1).mean()),
+        "exact": float((err == 0).mean()),
+    }
 
 
 def _versions() -> dict[str, str | None]:

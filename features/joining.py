@@ -47,13 +47,16 @@ def _mid_hip(frame: np.ndarray) -> np.ndarray:
     return np.asarray(0.5 * (frame[JOINT_INDEX["left_hip"]] + frame[JOINT_INDEX["right_hip"]]))
 
 
+def _hips_known(p: np.ndarray) -> np.ndarray:
+    """The frames of ``p`` ``(frames, 33, 3)`` whose hips are both known, ``(k,)``."""
+    hips = p[:, [JOINT_INDEX["left_hip"], JOINT_INDEX["right_hip"]]]
+    return np.flatnonzero(np.isfinite(hips).all(axis=(1, 2)))
+
+
 def _rest_frame(p: np.ndarray, last: bool) -> np.ndarray:
     """The first (or last) frame of ``p`` ``(frames, 33, 3)`` whose hips are both known."""
-    hips = p[:, [JOINT_INDEX["left_hip"], JOINT_INDEX["right_hip"]]]
-    ok = np.flatnonzero(np.isfinite(hips).all(axis=(1, 2)))
-    if not len(ok):
-        raise DataError("no frame shows both hips: cannot place the repetition")
-    return p[ok[-1] if last else ok[0]]
+    ok = _hips_known(p)
+    return np.asarray(p[ok[-1] if last else ok[0]])
 
 
 def _placed(p: np.ndarray, after: np.ndarray) -> np.ndarray:
@@ -75,12 +78,18 @@ def join_repetitions(reps: Sequence[PoseSequence], blend_s: float = BLEND_S) -> 
     """``reps`` (canonical :class:`PoseSequence` s of one frame rate, positions
     ``(frames, 33, 3)``) played one after the other (see the module docstring).
 
-    Raises DataError for no repetitions or differing frame rates."""
+    Raises DataError for no repetitions, differing frame rates or a repetition without a
+    frame that shows both hips."""
     if not reps:
         raise DataError("no repetitions to join")
     fps = reps[0].fps
     if any(abs(r.fps - fps) > 1e-6 for r in reps):
         raise DataError("repetitions to join differ in frame rate")
+    for rep in reps:
+        if not len(_hips_known(rep.to_canonical().positions)):
+            raise DataError(
+                "no frame shows both hips: cannot place the repetition", rep.source or None
+            )
     n_blend = max(1, int(round(blend_s * fps)))
     weights = (np.arange(1, n_blend + 1) / (n_blend + 1))[:, None, None]
     parts = [reps[0].to_canonical().positions]

@@ -12,6 +12,7 @@ import pytest
 from features.errors import DataError
 from features.geometry import joint_angle
 from features.joining import join_repetitions
+from features.poses import PoseSequence
 from features.readers.asfamc import read_asf_amc
 from features.readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon
 from features.repetitions import MovementSignals, count_in_signals, count_repetitions
@@ -29,7 +30,9 @@ def _signals(values: np.ndarray, names: tuple[str, ...]) -> MovementSignals:
 def _bend(cycles: np.ndarray) -> np.ndarray:
     """Knee angles (radians) of squats: straight (pi) at rest, down by up to 1.2 rad, one
     cosine cycle per entry of ``cycles`` (its length in samples)."""
-    return np.concatenate([np.pi - 0.6 * (1 - np.cos(2 * np.pi * np.arange(n) / n)) for n in cycles])
+    return np.concatenate(
+        [np.pi - 0.6 * (1 - np.cos(2 * np.pi * np.arange(n) / n)) for n in cycles]
+    )
 
 
 def test_cycles_with_a_small_extra_bump_count_the_cycles() -> None:
@@ -120,6 +123,11 @@ def test_joining_refuses_nothing_and_mixed_frame_rates() -> None:
         join_repetitions([])
     with pytest.raises(DataError, match="differ in frame rate"):
         join_repetitions([take, to_sequence(*[standing()] * 5, fps=60.0)])
+    hipless = take.positions.copy()
+    hipless[:, JOINT_INDEX["left_hip"]] = np.nan
+    nobody = PoseSequence(hipless, take.joint_names, FPS, source="rep2.npz")
+    with pytest.raises(DataError, match=r"rep2\.npz.*no frame shows both hips"):
+        join_repetitions([take, nobody])
 
 
 UIPRMD = Path("ui-prmd") / "data" / "Segmented Movements"
