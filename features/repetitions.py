@@ -16,11 +16,16 @@ How (all channels at once, no per-frame loops):
    smoothed (Gaussian, :data:`SMOOTHING_S`) and analysed at about :data:`ANALYSIS_FPS`;
 2. the period T (:func:`find_period`): the first strong peak of the summed autocorrelation of
    the angle velocities (velocities, so that a one-off change of posture does not hide the
-   repetitions); a left-right alternation repeats after a full cycle, so T is the full cycle;
+   repetitions), each lag's estimate weighted by its overlap with the clip (the biased
+   estimator: a lag near the clip's length rests on few samples and must not pass for the
+   period by noise); a left-right alternation repeats after a full cycle, so T is the full
+   cycle;
 3. alternation (:func:`side_parts`): the deviations from the left-right symmetric mean
    posture split into what both sides do alike and what one side does against the other
    (:func:`mirror_angles`); the movement alternates when the second spans at least half as
-   much as the first and the body goes out to both sides about equally far (both taken
+   much as the first, the left and the right limbs move about equally (within a factor of
+   two: a one-legged kick does not alternate) and the body goes out to both sides about
+   equally far (both taken
    about their running mean over one period when the side-against-side movement repeats
    clearly: bending the arms once to start jogging is not what repeats);
 4. the movement as one number per sample: the posture projected on the direction it moves
@@ -28,9 +33,12 @@ How (all channels at once, no per-frame loops):
    rest (the end nearer standing at ease, :data:`AT_EASE`) and, for a clearly periodic
    movement, taken about its running mean over one period; for an alternating movement, the
    side-against-side part, whose peaks are one side's repetitions and troughs the other's;
-5. repetitions are the peaks that stand out by at least half the typical repetition and by
-   :data:`MIN_EXCURSION_RAD` (more than pose-estimation jitter), at least half a repetition
-   period apart; each runs from the rest point before its peak to the rest point after it.
+5. repetitions are the peaks that stand out by at least :data:`SUBSTANTIAL` of the typical
+   repetition and by :data:`MIN_EXCURSION_RAD` (more than pose-estimation jitter), at least
+   half a period apart when the movement repeats clearly (:data:`CLEAR_PERIODICITY`; a
+   period read from a weak autocorrelation is often a multiple of the true one, and would
+   merge repetitions); each runs from the rest point before its peak to the rest point
+   after it.
 
 The period also comes out of the QMP fits (:mod:`features.qmp`: SINDy with a period per state
 signal); the autocorrelation is used here because it reads all angles together and needs no
@@ -93,6 +101,10 @@ when the trunk lies more than this far from the vertical (lying down, a deep ben
 stable value and count as missing (its inclination still counts)."""
 MEDIAN_S = 0.2
 SUBSTANTIAL = 0.4
+"""A far point counts when it stands out by at least this share of the median prominence of
+the candidates: chosen on joined single repetitions of UI-PRMD's training subjects s01-s04
+only (``python -m benchmarks.repetitions``; 1/3, 0.4 and 1/2 tie on their MAE, 0.4 counts the
+most exactly), never on the held-out subjects, HDM05 or the hand counts."""
 """Running median (seconds) before smoothing: drops tracking glitches shorter than 0.1 s."""
 
 AT_EASE: dict[str, float] = {
@@ -286,8 +298,10 @@ def find_period(x: np.ndarray, fps: float) -> tuple[float | None, float]:
     """The period (seconds) of ``x`` ``(n, channels)`` and its autocorrelation there.
 
     Lags from :data:`MIN_PERIOD_S` to 60 % of the clip (a lag needs a good share of the clip
-    to overlap); the shortest local maximum within 85 % of the highest one, so that a
-    multiple of the period does not win by noise. (None, 0.0) when nothing repeats."""
+    to overlap), each weighted by its overlap (1 - lag / n: the biased estimator, whose
+    variance at long lags stays small); the shortest local maximum within 85 % of the highest
+    one, so that a multiple of the period does not win by noise. (None, 0.0) when nothing
+    repeats."""
     n = len(x)
     lo, hi = int(np.ceil(MIN_PERIOD_S * fps)), int(0.6 * n)
     if hi <= lo + 2:
@@ -348,8 +362,8 @@ def _movement_line(x: np.ndarray, names: tuple[str, ...], direction: np.ndarray)
 
 
 def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
-    """Samples where ``line`` reaches a far point: peaks that stand out by at least half the
-    typical repetition (the median prominence of the candidates) and by
+    """Samples where ``line`` reaches a far point: peaks that stand out by at least
+    :data:`SUBSTANTIAL` of the typical repetition (the median prominence of the candidates) and by
     :data:`MIN_EXCURSION_RAD`, at least ``distance`` samples apart. The clip is padded with
     the rest level, so a repetition cut off at either end counts when it got (nearly) as far
     as the others: three quarters of their median height above rest."""
@@ -511,6 +525,7 @@ __all__ = [
     "AT_EASE",
     "MIN_EXCURSION_RAD",
     "MIN_PERIOD_S",
+    "SUBSTANTIAL",
     "MovementSignals",
     "Repetition",
     "RepetitionCount",
