@@ -115,6 +115,15 @@ def read_one(group: Group, path: Path) -> Any:
     return read_uiprmd_kinect(path)
 
 
+def take_name(path: Path) -> str:
+    """The part of a repetition's file name that tells it from the person's others: the
+    episode of UI-PRMD (``e03``, ``e03_inc`` for an incorrect one), the take of HDM05."""
+    parts = path.name.split(".")[0].split("_")
+    if path.name.startswith("HDM_"):
+        return parts[-2]
+    return parts[2] + ("_inc" if parts[-1] == "inc" else "")
+
+
 @dataclass(frozen=True)
 class Joined:
     group: Group
@@ -142,7 +151,7 @@ def joined_sequences(groups: list[Group], per_group: int, seed: int) -> Iterator
                 if path not in cache:
                     cache[path] = read_one(group, path)
                 reps.append(cache[path])
-                names.append(path.name)
+                names.append(take_name(path))
             joined = join_repetitions(reps)
             jump = float(joined.jumps_m.max()) if len(joined.jumps_m) else 0.0
             yield Joined(group, k, joined.seq, jump, tuple(names))
@@ -194,7 +203,7 @@ def run_joined(per_group: int, seed: int) -> tuple[list[dict[str, Any]], dict[st
             "k": item.k,
             "frames": item.seq.n_frames,
             "max_jump_m": round(item.max_jump_m, 4),
-            "files": list(item.files),
+            "takes": list(item.files),
         }
         for name, method in METHODS.items():
             t0 = time.process_time()
