@@ -11,21 +11,29 @@ per dataset:
   nearest-case distance; Native Guide, Delaney et al. 2021);
 - the default text's **length** (lines and characters per clip);
 - **contradictions** found by :func:`cbr.consistency.contradictions` over every clip;
-- accuracy and the **expected calibration error** (ECE, 10 bins) of the confidences;
+- accuracy and the **expected calibration error** (ECE, 10 bins) of the confidences, with its
+  bootstrap 95 % interval (clips resampled: what of it is noise at a few hundred clips);
 - the "unlike the stored cases" flag: **false alarms** on the held-out clips (trained
   activities, new people) and **detection** of clips from the other dataset, by the distance
   alone and with the sensor rule (a skeleton no training clip was recorded with), for
   fluents/euclidean, fluents/dtw, fluents/signature and qmp/euclidean;
-- the ECE of the repetition check (UI-PRMD correct vs incorrect, one case base per movement).
+- the ECE of the repetition check (UI-PRMD correct vs incorrect, one case base per movement),
+  overall and per movement.
 
-    python -m benchmarks.explanations             # both datasets from ../shared/data (~1 h)
+    python -m benchmarks.explanations [--jobs 2]  # both datasets from ../shared/data
     python -m benchmarks.explanations --train DATA --test DATA [--train-subjects s01,s02]
         [--test-subjects s03] [--other DATA]      # one split of your own
     python -m benchmarks.explanations --quick     # the bundled demo subset (~1 min)
     python -m benchmarks.explanations --datasets hdm05,repetitions --out FILE  # some of them
 
-The figures of each fold are printed as it finishes, and the JSON is written after each
-dataset (``"partial": true`` until the run ends).
+The shared run is a list of tasks (a fold of a dataset with its four flag configurations, or one
+movement's repetition check) run ``--jobs`` at a time in worker processes that each read the
+datasets once; the figures do not depend on ``--jobs`` (each task is a function of its clips
+alone, gathered in task order). Within a fold the flag reuses the explanations' default case
+base (fluents/euclidean is that configuration) and describes the training clips once for dtw
+and signature (the same problems). The figures of each task are printed as it finishes, and the
+JSON is written after each dataset (``"partial": true`` until the run ends), with each task's
+seconds.
 
 Writes ``benchmarks/results/explanations.json`` with the machine, the versions and the load
 average.
@@ -79,21 +87,43 @@ def _sample(items: list[Any], n: int, seed: int = 0) -> list[Any]:
     return [items[i] for i in pick]
 
 
-def explain_fold(train: list[Any], test: list[Any], target: str = "label") -> dict[str, Any]:
-    """Fit the default case base on ``train`` and explain every clip of ``test``: per clip, the
-    counterfactual's validity, size and plausibility, the text's length, the contradictions,
-    whether the answer was right and its confidence."""
-    from cbr.consistency import contradictions
+def fit_classifier(
+    train: list[Any],
+    target: str = "label",
+    described: dict[Any, list[Any]] | None = None,
+    **params: Any,
+) -> Any:
+    """A :class:`cbr.estimator.CaseBaseClassifier` with ``params`` fitted on ``train``.
+    ``described``: the training clips already described, by describe plan (filled here), so
+    configurations that describe clips alike (dtw and signature) read each clip once; the
+    same model as ``fit``, which is these two steps."""
+    from cbr.described import describe_clips
     from cbr.estimator import CaseBaseClassifier
     from features.datasets import clip_target
 
+    clf = CaseBaseClassifier(**params)
     y = [clip_target(c, target) for c in train]
-    clf = CaseBaseClassifier().fit([c.seq for c in train], y)
+    if described is None:
+        return clf.fit([c.seq for c in train], y)
+    plan = clf.describe_plan()
+    if plan not in described:
+        described[plan] = list(describe_clips([c.seq for c in train], *plan))
+    return clf.fit_described(described[plan], y)
+
+
+def explain_rows(clf: Any, test: list[Any], solved: list[Any], target: str) -> dict[str, Any]:
+    """Every clip of ``test`` (``solved`` by ``clf``) explained: per clip, the
+    counterfactual's validity, size and plausibility, the text's length, the contradictions,
+    whether the answer was right and its confidence."""
+    from cbr.consistency import contradictions
+    from cbr.profiles import view_of
+    from features.datasets import clip_target
+
     rows = []
-    for clip, solved in zip(test, clf.solve([c.seq for c in test]), strict=True):
-        exp = clf.explain_solved(solved, target)
+    for clip, one in zip(test, solved, strict=True):
+        exp = clf.explain_solved(one, target)
         c = exp.contrast
-        found = contradictions(exp, clf.case_base_, solved.problem)
+        found = contradictions(exp, clf.case_base_, one.problem)
         rows.append(
             {
                 "valid": bool(c is not None and c.valid),
@@ -102,18 +132,23 @@ def explain_fold(train: list[Any], test: list[Any], target: str = "label") -> di
                 "chars": len(exp.text),
                 "lines": len(exp.text.splitlines()),
                 "contradictions": found,
-                "right": solved.solution.label == clip_target(clip, target),
-                "confidence": solved.solution.confidence,
-                "vote_share": solved.solution.vote_share,
+                "right": one.solution.label == clip_target(clip, target),
+                "confidence": one.solution.confidence,
+                "vote_share": one.solution.vote_share,
             }
         )
-    from cbr.profiles import view_of
-
     return {"rows": rows, "features": len(view_of(clf.case_base_).features)}
 
 
+def explain_fold(train: list[Any], test: list[Any], target: str = "label") -> dict[str, Any]:
+    """Fit the default case base on ``train`` and explain every clip of ``test``
+    (:func:`explain_rows`)."""
+    clf = fit_classifier(train, target)
+    return explain_rows(clf, test, clf.solve([c.seq for c in test]), target)
+
+
 def summarise_rows(rows: list[dict[str, Any]], features: int) -> dict[str, Any]:
-    from cbr.calibration import expected_calibration_error
+    from cbr.calibration import ece_interval, expected_calibration_error
 
     valid = [r for r in rows if r["valid"]]
     changes = [r["changes"] for r in valid]
@@ -137,20 +172,31 @@ def summarise_rows(rows: list[dict[str, Any]], features: int) -> dict[str, Any]:
         "contradiction_examples": found[:5],
         "accuracy": float(right.mean()),
         "ece": expected_calibration_error(conf, right),
+        "ece_interval": ece_interval(conf, right),
         "ece_vote_share": expected_calibration_error(share, right),
         "mean_confidence": float(conf.mean()),
     }
 
 
 def flag_fold(
-    features: str, similarity: str, train: list[Any], test: list[Any], other: list[Any]
+    features: str,
+    similarity: str,
+    train: list[Any],
+    test: list[Any],
+    other: list[Any],
+    fitted: tuple[Any, list[Any]] | None = None,
+    described: dict[Any, list[Any]] | None = None,
 ) -> dict[str, Any]:
-    """False alarms on the held-out clips and detection of the other dataset's clips."""
-    from cbr.estimator import CaseBaseClassifier
-
-    clf = CaseBaseClassifier(features=features, similarity=similarity)
-    clf.fit([c.seq for c in train], [c.label for c in train])
-    held = clf.solve([c.seq for c in test])
+    """False alarms on the held-out clips and detection of the other dataset's clips.
+    ``fitted``: this configuration's classifier already fitted on ``train`` and its solutions
+    of ``test`` (the explanations' default case base); ``described``: see
+    :func:`fit_classifier`."""
+    if fitted is None:
+        clf = fit_classifier(train, described=described, features=features,
+                             similarity=similarity)  # fmt: skip
+        held = clf.solve([c.seq for c in test])
+    else:
+        clf, held = fitted
     away = clf.solve([c.seq for c in other])
     return {
         "false_alarm": [s.unlike_cases for s in held],
@@ -177,114 +223,186 @@ def _rate(values: list[bool]) -> float:
     return float(np.mean(values)) if values else float("nan")
 
 
-def run_dataset(
-    name: str, path: Path, folds: Sequence[Sequence[str]], other: list[Any], flags: bool
-) -> dict[str, Any]:
-    """Every clip of one dataset explained held out; the flags of every configuration."""
+#: the shared datasets' clips in this process, read once per worker by :func:`_load`
+_LOADED: dict[str, list[Any]] = {}
+#: the dataset whose clips each dataset's flag is tried on
+_OTHER = {"ui-prmd": "hdm05", "hdm05": "ui-prmd"}
+#: the explanations' case base (the classifier's defaults), whose fit the flag reuses
+DEFAULT_CONFIG = ("fluents", "euclidean")
 
-    clips = _clips(path)
-    rows: list[dict[str, Any]] = []
-    features = 0
-    flag_rows: dict[str, dict[str, list[Any]]] = {}
-    for held in folds:
-        train = [c for c in clips if c.subject not in held]
-        test = [c for c in clips if c.subject in held]
-        t0 = time.perf_counter()
-        fold = explain_fold(train, test)
-        rows += fold["rows"]
-        features = fold["features"]
-        print(f"  {name} held out {','.join(held)}: {len(test)} clips explained "
-              f"({time.perf_counter() - t0:.0f} s)", flush=True)  # fmt: skip
-        _print_fold(summarise_rows(fold["rows"], features))
-        if not flags:
-            continue
+
+def _load(paths: dict[str, Path]) -> None:
+    """Every worker's set-up: read the datasets the tasks need, once."""
+    for name, path in paths.items():
+        if name not in _LOADED:
+            _LOADED[name] = _clips(path)
+
+
+def _task(paths: dict[str, Path], task: tuple[Any, ...]) -> dict[str, Any]:
+    """One unit of the shared run (in this process or a worker): ``("fold", dataset,
+    held-out subjects, flags)`` or ``("movement", movement)``; its rows, figures and the
+    lines to print, with the task itself."""
+    _load(paths)
+    out = _fold(*task[1:]) if task[0] == "fold" else _movement(task[1])
+    return {**out, "task": task}
+
+
+def _fold(name: str, held: tuple[str, ...], flags: bool) -> dict[str, Any]:
+    """One fold of a dataset: the held-out subjects' clips explained by the default case base
+    of the others, and (``flags``) every flag configuration fitted on the same clips: the
+    default one reused, dtw and signature from one description of the clips."""
+    clips = _LOADED[name]
+    train = [c for c in clips if c.subject not in held]
+    test = [c for c in clips if c.subject in held]
+    t0 = time.perf_counter()
+    clf = fit_classifier(train)
+    solved = clf.solve([c.seq for c in test])
+    fold = explain_rows(clf, test, solved, "label")
+    seconds: dict[str, Any] = {"held_out": list(held), "explain": round(time.perf_counter() - t0)}
+    lines = [
+        f"  {name} held out {','.join(held)}: {len(test)} clips explained ({seconds['explain']} s)",
+        _fold_line(summarise_rows(fold["rows"], fold["features"])),
+    ]
+    fold["flags"] = {}
+    if flags:
+        other = _sample(_LOADED[_OTHER[name]], OTHER_SAMPLE)
+        described: dict[Any, list[Any]] = {}
         for feats, sim in FLAG_CONFIGS:
             t0 = time.perf_counter()
-            got = flag_fold(feats, sim, train, test, _sample(other, OTHER_SAMPLE))
-            acc = flag_rows.setdefault(f"{feats}/{sim}", {})
+            fitted = (clf, solved) if (feats, sim) == DEFAULT_CONFIG else None
+            got = flag_fold(feats, sim, train, test, other, fitted, described)
+            fold["flags"][f"{feats}/{sim}"] = got
+            seconds[f"{feats}/{sim}"] = round(time.perf_counter() - t0)
+            lines.append(f"    flag {feats}/{sim}: {seconds[f'{feats}/{sim}']} s; false alarms "
+                         f"{100 * _rate(got['false_alarm']):.1f} %, detection "
+                         f"{100 * _rate(got['detected']):.1f} % (by distance "
+                         f"{100 * _rate(got['detected_distance']):.1f} %)")  # fmt: skip
+    return {**fold, "lines": lines, "seconds": seconds}
+
+
+def _movement(movement: str) -> dict[str, Any]:
+    """UI-PRMD correct vs incorrect for one movement: its own case base per fold, each of its
+    clips held out once."""
+    mine = [c for c in _LOADED["ui-prmd"] if c.label == movement]
+    rows: list[dict[str, Any]] = []
+    features = 0
+    t0 = time.perf_counter()
+    for held in DATASETS["ui-prmd"][1]:
+        train = [c for c in mine if c.subject not in held]
+        test = [c for c in mine if c.subject in held]
+        fold = explain_fold(train, test, target="correct")
+        for r in fold["rows"]:
+            r["movement"] = movement
+        rows += fold["rows"]
+        features = fold["features"]
+    seconds = round(time.perf_counter() - t0)
+    lines = [f"  correct vs incorrect, {movement}: done ({seconds} s)",
+             _fold_line(summarise_rows(rows, features))]  # fmt: skip
+    return {"rows": rows, "features": features, "lines": lines,
+            "seconds": {"movement": movement, "explain": seconds}}  # fmt: skip
+
+
+def _dataset(folds: list[dict[str, Any]]) -> dict[str, Any]:
+    """A dataset's figures from its folds' outcomes (in fold order)."""
+    rows = [r for f in folds for r in f["rows"]]
+    out: dict[str, Any] = {"explanations": summarise_rows(rows, folds[-1]["features"])}
+    merged: dict[str, dict[str, list[Any]]] = {}
+    for f in folds:
+        for cfg, got in f.get("flags", {}).items():
+            acc = merged.setdefault(cfg, {})
             for k, v in got.items():
                 acc.setdefault(k, []).extend(v)
-            print(f"    flag {feats}/{sim}: {time.perf_counter() - t0:.0f} s; false alarms "
-                  f"{100 * _rate(got['false_alarm']):.1f} %, detection "
-                  f"{100 * _rate(got['detected']):.1f} % (by distance "
-                  f"{100 * _rate(got['detected_distance']):.1f} %)", flush=True)  # fmt: skip
-    out: dict[str, Any] = {"explanations": summarise_rows(rows, features)}
-    if flags:
-        out["flags"] = {cfg: _flag_summary(r) for cfg, r in flag_rows.items()}
+    if merged:
+        out["flags"] = {cfg: _flag_summary(r) for cfg, r in merged.items()}
+    out["seconds"] = [f["seconds"] for f in folds]
     return out
 
 
-def run_repetitions(path: Path, folds: Sequence[Sequence[str]]) -> dict[str, Any]:
-    """UI-PRMD correct vs incorrect: one case base per movement, each clip held out once; the
-    ECE of the confidences and the explanations' figures."""
-    clips = _clips(path)
-    rows: list[dict[str, Any]] = []
-    features = 0
-    for movement in sorted({c.label for c in clips}):
-        mine = [c for c in clips if c.label == movement]
-        for held in folds:
-            train = [c for c in mine if c.subject not in held]
-            test = [c for c in mine if c.subject in held]
-            fold = explain_fold(train, test, target="correct")
-            for r in fold["rows"]:
-                r["movement"] = movement
-            rows += fold["rows"]
-            features = fold["features"]
-        print(f"  correct vs incorrect, {movement}: done", flush=True)
-        _print_fold(summarise_rows([r for r in rows if r["movement"] == movement], features))
-    return summarise_rows(rows, features)
+def _repetitions(folds: list[dict[str, Any]]) -> dict[str, Any]:
+    """The repetition check's figures, overall and per movement (the ECE with its interval)."""
+    out = _dataset(folds)
+    out["per_movement"] = {f["seconds"]["movement"]: _calibration(f["rows"]) for f in folds}
+    return out
 
 
-def _print_fold(s: dict[str, Any]) -> None:
+def _fold_line(s: dict[str, Any]) -> str:
     """One fold's figures as it finishes (a long run shows its progress in figures)."""
-    print(f"    validity {100 * s['validity']:.1f} % with {s['mean_changes']:.2f} changes, "
-          f"{s['contradictions']} contradictions, at most {s['max_lines']} lines and "
-          f"{s['max_chars']} chars, accuracy {100 * s['accuracy']:.1f} %, ECE {s['ece']:.3f}",
-          flush=True)  # fmt: skip
+    lo, hi = s["ece_interval"]
+    return (f"    validity {100 * s['validity']:.1f} % with {s['mean_changes']:.2f} changes, "
+            f"{s['contradictions']} contradictions, at most {s['max_lines']} lines and "
+            f"{s['max_chars']} chars, accuracy {100 * s['accuracy']:.1f} %, ECE {s['ece']:.3f} "
+            f"[{lo:.3f}, {hi:.3f}]")  # fmt: skip
 
 
 def _print_explanations(name: str, s: dict[str, Any]) -> None:
+    lo, hi = s["ece_interval"]
     print(
         f"{name:<28} {s['clips']:>5} {100 * s['validity']:8.1f} % {s['mean_changes']:8.2f} "
         f"{s['plausibility_median']:8.2f} {s['max_lines']:6d} {s['max_chars']:6d} "
         f"{s['mean_chars']:6.0f} {s['contradictions']:6d} {100 * s['accuracy']:6.1f} % "
-        f"{s['ece']:6.3f}"
+        f"{s['ece']:6.3f} [{lo:.3f}, {hi:.3f}]"
     )
 
 
 def _print_flags(name: str, flags: dict[str, Any]) -> None:
     for cfg, f in flags.items():
+        lo, hi = f["ece_interval"]
         print(
             f"{name + ' ' + cfg:<36} {100 * f['false_alarm']:6.1f} % "
             f"{100 * f['false_alarm_distance']:6.1f} % {100 * f['detection']:6.1f} % "
             f"{100 * f['detection_distance']:6.1f} % {100 * f['accuracy']:6.1f} % "
-            f"{f['ece']:6.3f}"
+            f"{f['ece']:6.3f} [{lo:.3f}, {hi:.3f}]"
         )
+
+
+def _print_movements(per_movement: dict[str, Any]) -> None:
+    print(f"\n{'correct vs incorrect: movement':<36} {'clips':>5} {'acc':>8} {'ECE':>6} "
+          f"{'95 % interval':>16}")  # fmt: skip
+    for movement, m in per_movement.items():
+        lo, hi = m["ece_interval"]
+        print(f"{movement:<36} {m['clips']:>5} {100 * m['accuracy']:6.1f} % {m['ece']:6.3f} "
+              f"[{lo:.3f}, {hi:.3f}]")  # fmt: skip
 
 
 def _header() -> None:
     print(
         f"\n{'dataset':<28} {'clips':>5} {'validity':>10} {'changes':>8} {'plausib.':>8} "
-        f"{'lines':>6} {'chars':>6} {'mean':>6} {'contra':>6} {'acc':>8} {'ECE':>6}"
+        f"{'lines':>6} {'chars':>6} {'mean':>6} {'contra':>6} {'acc':>8} {'ECE':>6} "
+        f"{'(95 % interval)':>16}"
     )
 
 
 def _flag_summary(r: dict[str, Any]) -> dict[str, Any]:
     """One flag configuration's figures from its per-clip outcomes ``r`` (:func:`flag_fold`)."""
-    from cbr.calibration import expected_calibration_error
-
     return {
         "false_alarm": _rate(r["false_alarm"]),
         "false_alarm_distance": _rate(r["false_alarm_distance"]),
         "detection": _rate(r["detected"]),
         "detection_distance": _rate(r["detected_distance"]),
-        "accuracy": _rate(r["right"]),
-        "ece": expected_calibration_error(
-            np.array(r["confidence"]), np.array(r["right"], dtype=bool)
-        ),
+        **_calibration(
+            [
+                {"right": h, "confidence": c}
+                for h, c in zip(r["right"], r["confidence"], strict=True)
+            ]
+        ),  # fmt: skip
         "held_out_clips": len(r["false_alarm"]),
         "other_clips": len(r["detected"]),
         "detection_distance_by_activity": _by_activity(r["other_label"], r["detected_distance"]),
+    }
+
+
+def _calibration(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Accuracy and ECE of clips' ``right`` and ``confidence``, with the ECE's bootstrap 95 %
+    interval (clips resampled): what is noise at a few hundred clips."""
+    from cbr.calibration import ece_interval, expected_calibration_error
+
+    right = np.array([r["right"] for r in rows], dtype=bool)
+    conf = np.array([r["confidence"] for r in rows], dtype=np.float64)
+    return {
+        "clips": len(rows),
+        "accuracy": _rate(right.tolist()),
+        "ece": expected_calibration_error(conf, right),
+        "ece_interval": ece_interval(conf, right),
     }
 
 
@@ -314,27 +432,73 @@ def _run_split(args: argparse.Namespace) -> dict[str, Any]:
     return datasets
 
 
-def _run_shared(args: argparse.Namespace, done: Callable[[dict[str, Any]], None]) -> dict[str, Any]:
-    """Both shared datasets held out by subject, and UI-PRMD's repetition check (those of
-    ``args.datasets``); ``done`` is given the figures so far after each."""
-    datasets: dict[str, Any] = {}
+def _tasks(args: argparse.Namespace) -> tuple[dict[str, Path], list[tuple[Any, ...]]]:
+    """The datasets the shared run reads and its tasks, the longest first: the folds of both
+    datasets (with the flags when the other dataset is here too), then UI-PRMD's movements."""
+    paths: dict[str, Path] = {}
+    tasks: list[tuple[Any, ...]] = []
     for name, (path, folds) in DATASETS.items():
         if name not in args.datasets:
             continue
         if not path.exists():
             print(f"{name}: skipped, {path} is not on this machine")
             continue
-        other_name = "hdm05" if name == "ui-prmd" else "ui-prmd"
-        other_path = DATASETS[other_name][0]
-        other = _clips(other_path) if other_path.exists() and not args.no_flags else []
-        print(f"{name}:", flush=True)
-        datasets[name] = run_dataset(name, path, folds, other, bool(other))
-        done(datasets)
-    path, folds = DATASETS["ui-prmd"]
+        other = DATASETS[_OTHER[name]][0]
+        flags = other.exists() and not args.no_flags
+        paths[name] = path
+        if flags:
+            paths[_OTHER[name]] = other
+        tasks += [("fold", name, tuple(held), flags) for held in folds]
+    path = DATASETS["ui-prmd"][0]
     if path.exists() and REPETITIONS in args.datasets:
-        print("ui-prmd correct vs incorrect:", flush=True)
-        datasets["ui-prmd correct vs incorrect"] = {"explanations": run_repetitions(path, folds)}
+        paths["ui-prmd"] = path
+        _load({"ui-prmd": path})
+        tasks += [("movement", m) for m in sorted({c.label for c in _LOADED["ui-prmd"]})]
+    return paths, tasks
+
+
+def _run_shared(args: argparse.Namespace, done: Callable[[dict[str, Any]], None]) -> dict[str, Any]:
+    """Both shared datasets held out by subject, and UI-PRMD's repetition check (those of
+    ``args.datasets``), ``args.jobs`` tasks at a time; ``done`` is given the figures of the
+    datasets finished so far after each task."""
+    from cbr.evaluation.runner import ProcessRunner, Runner, SerialRunner
+
+    paths, tasks = _tasks(args)
+    runner: Runner[dict[str, Path]] = (
+        ProcessRunner(paths, _load, args.jobs) if args.jobs > 1 else SerialRunner(paths, _load)
+    )
+    finished: dict[tuple[Any, ...], dict[str, Any]] = {}
+    datasets: dict[str, Any] = {}
+    for result in runner.map(_task, tasks, desc="folds", unit="fold"):
+        print("\n".join(result["lines"]), flush=True)
+        finished[result["task"]] = result
+        if _gather(tasks, finished, datasets):
+            done(datasets)
     return datasets
+
+
+def _gather(
+    tasks: list[tuple[Any, ...]],
+    finished: dict[tuple[Any, ...], dict[str, Any]],
+    datasets: dict[str, Any],
+) -> bool:
+    """Put the figures of every dataset whose tasks have all ``finished`` in ``datasets`` (in
+    the order of ``DATASETS``, the repetition check last); whether one was added."""
+    added = False
+    for name in (*DATASETS, REPETITIONS):
+        rep = name == REPETITIONS
+        mine = [t for t in tasks if (t[0] == "movement" if rep else t[:2] == ("fold", name))]
+        key = "ui-prmd correct vs incorrect" if rep else name
+        if key in datasets or not mine or any(t not in finished for t in mine):
+            continue
+        outcomes = [finished[t] for t in mine]  # in task order: the same figures as serial
+        datasets[key] = _repetitions(outcomes) if rep else _dataset(outcomes)
+        added = True
+    order = [*DATASETS, "ui-prmd correct vs incorrect"]
+    ordered = {k: datasets[k] for k in order if k in datasets}
+    datasets.clear()
+    datasets.update(ordered)
+    return added
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -352,13 +516,17 @@ def main(argv: list[str] | None = None) -> int:
         help=f"of the shared data, these only (default: {','.join((*DATASETS, REPETITIONS))})",
     )
     p.add_argument("--out", type=Path, default=RESULTS, help=f"results JSON (default {RESULTS})")
+    p.add_argument(
+        "--jobs", type=int, default=1, help="tasks of the shared run in parallel processes"
+    )
     args = p.parse_args(argv if argv is not None else sys.argv[1:])
     os.environ.setdefault("POSECBR_NO_PROGRESS", "1")
     from cbr.evaluation.machine import machine_info
 
     t_start = time.perf_counter()
     out: dict[str, Any] = {"benchmark": "explanations", "machine": machine_info(),
-                           "load_average_start": os.getloadavg(), "datasets": {}}  # fmt: skip
+                           "load_average_start": os.getloadavg(), "jobs": args.jobs,
+                           "datasets": {}}  # fmt: skip
     args.datasets = {d.strip() for d in args.datasets.split(",")}
 
     def done(datasets: dict[str, Any]) -> None:  # partial figures survive an interrupted run
@@ -374,11 +542,14 @@ def main(argv: list[str] | None = None) -> int:
     if any("flags" in d for d in out["datasets"].values()):
         print(
             f"\n{'flag: dataset configuration':<36} {'f.alarm':>8} {'(dist.)':>8} "
-            f"{'detect':>8} {'(dist.)':>8} {'acc':>8} {'ECE':>6}"
+            f"{'detect':>8} {'(dist.)':>8} {'acc':>8} {'ECE':>6} {'(95 % interval)':>16}"
         )
         for name, d in out["datasets"].items():
             if "flags" in d:
                 _print_flags(name, d["flags"])
+    for d in out["datasets"].values():
+        if "per_movement" in d:
+            _print_movements(d["per_movement"])
     out["seconds"] = round(time.perf_counter() - t_start, 1)
     out["load_average_end"] = os.getloadavg()
     write_json(out, args.out)

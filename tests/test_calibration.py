@@ -15,6 +15,7 @@ from cbr.calibration import (
     UNCALIBRATED,
     ConfidenceCalibration,
     calibrate_confidence,
+    ece_interval,
     expected_calibration_error,
     log_odds,
     platt,
@@ -38,6 +39,22 @@ def test_expected_calibration_error_by_hand() -> None:
     assert expected_calibration_error(conf, right) == pytest.approx(0.5 * 0.05 + 0.5 * 0.15)
     # a perfectly calibrated set scores 0
     assert expected_calibration_error(np.array([1.0, 1.0, 0.5, 0.5]), np.array([1, 1, 1, 0])) == 0
+
+
+def test_ece_interval_is_the_binomial_spread_of_one_bin() -> None:
+    # 100 clips at 0.5, 50 right: one bin, so a resample's ECE is |B / 100 - 0.5| with B the
+    # right clips drawn, B ~ Binomial(100, 0.5); P(|B - 50| <= 9) = 0.944 and
+    # P(|B - 50| <= 10) = 0.965 (binomial tables), so the 97.5th percentile is 0.10 or 0.11,
+    # the lower end 0.00 (|B - 50| = 0 has probability 0.080)
+    lo, hi = ece_interval(np.full(100, 0.5), np.array([1, 0] * 50))
+    assert lo == pytest.approx(0.0) and hi in (pytest.approx(0.10), pytest.approx(0.11))
+    # every clip right at confidence 1: every resample scores 0
+    assert ece_interval(np.ones(20), np.ones(20, dtype=bool)) == (0.0, 0.0)
+    # the interval holds the ECE of the clips themselves
+    conf = np.array([0.55] * 5 + [0.85] * 5)
+    right = np.array([1, 1, 1, 0, 0] + [1] * 5)
+    lo, hi = ece_interval(conf, right)
+    assert lo <= expected_calibration_error(conf, right) <= hi
 
 
 def test_platt_scaling_agrees_with_scikit_learn() -> None:
