@@ -111,16 +111,23 @@ def fit_classifier(
     return clf.fit_described(described[plan], y)
 
 
-def explain_rows(clf: Any, test: list[Any], solved: list[Any], target: str) -> dict[str, Any]:
+def explain_rows(
+    clf: Any, test: list[Any], solved: list[Any], target: str, explain: bool = True
+) -> dict[str, Any]:
     """Every clip of ``test`` (``solved`` by ``clf``) explained: per clip, the
     counterfactual's validity, size and plausibility, the text's length, the contradictions,
-    whether the answer was right and its confidence."""
+    whether the answer was right and its confidence (``explain`` False: the last two only)."""
     from cbr.consistency import contradictions
     from cbr.profiles import view_of
     from features.datasets import clip_target
 
     rows = []
     for clip, one in zip(test, solved, strict=True):
+        if not explain:
+            rows.append({"right": one.solution.label == clip_target(clip, target),
+                         "confidence": one.solution.confidence,
+                         "vote_share": one.solution.vote_share})  # fmt: skip
+            continue
         exp = clf.explain_solved(one, target)
         c = exp.contrast
         found = contradictions(exp, clf.case_base_, one.problem)
@@ -140,16 +147,20 @@ def explain_rows(clf: Any, test: list[Any], solved: list[Any], target: str) -> d
     return {"rows": rows, "features": len(view_of(clf.case_base_).features)}
 
 
-def explain_fold(train: list[Any], test: list[Any], target: str = "label") -> dict[str, Any]:
+def explain_fold(
+    train: list[Any], test: list[Any], target: str = "label", explain: bool = True
+) -> dict[str, Any]:
     """Fit the default case base on ``train`` and explain every clip of ``test``
     (:func:`explain_rows`)."""
     clf = fit_classifier(train, target)
-    return explain_rows(clf, test, clf.solve([c.seq for c in test]), target)
+    return explain_rows(clf, test, clf.solve([c.seq for c in test]), target, explain)
 
 
 def summarise_rows(rows: list[dict[str, Any]], features: int) -> dict[str, Any]:
     from cbr.calibration import ece_interval, expected_calibration_error
 
+    if rows and "valid" not in rows[0]:  # not explained (--no-explain): the confidences only
+        return {**_calibration(rows), "explained": False}
     valid = [r for r in rows if r["valid"]]
     changes = [r["changes"] for r in valid]
     plaus = [r["plausibility"] for r in valid]
@@ -240,14 +251,14 @@ def _load(paths: dict[str, Path]) -> None:
 
 def _task(paths: dict[str, Path], task: tuple[Any, ...]) -> dict[str, Any]:
     """One unit of the shared run (in this process or a worker): ``("fold", dataset,
-    held-out subjects, flags)`` or ``("movement", movement)``; its rows, figures and the
-    lines to print, with the task itself."""
+    held-out subjects, flags, explain)`` or ``("movement", movement, explain)``; its rows,
+    figures and the lines to print, with the task itself."""
     _load(paths)
-    out = _fold(*task[1:]) if task[0] == "fold" else _movement(task[1])
+    out = _fold(*task[1:]) if task[0] == "fold" else _movement(*task[1:])
     return {**out, "task": task}
 
 
-def _fold(name: str, held: tuple[str, ...], flags: bool) -> dict[str, Any]:
+def _fold(name: str, held: tuple[str, ...], flags: bool, explain: bool) -> dict[str, Any]:
     """One fold of a dataset: the held-out subjects' clips explained by the default case base
     of the others, and (``flags``) every flag configuration fitted on the same clips: the
     default one reused, dtw and signature from one description of the clips."""
@@ -257,7 +268,7 @@ def _fold(name: str, held: tuple[str, ...], flags: bool) -> dict[str, Any]:
     t0 = time.perf_counter()
     clf = fit_classifier(train)
     solved = clf.solve([c.seq for c in test])
-    fold = explain_rows(clf, test, solved, "label")
+    fold = explain_rows(clf, test, solved, "label", explain)
     seconds: dict[str, Any] = {"held_out": list(held), "explain": round(time.perf_counter() - t0)}
     lines = [
         f"  {name} held out {','.join(held)}: {len(test)} clips explained ({seconds['explain']} s)",
@@ -280,7 +291,7 @@ def _fold(name: str, held: tuple[str, ...], flags: bool) -> dict[str, Any]:
     return {**fold, "lines": lines, "seconds": seconds}
 
 
-def _movement(movement: str) -> dict[str, Any]:
+def _movement(movement: str, explain: bool) -> dict[str, Any]:
     """UI-PRMD correct vs incorrect for one movement: its own case base per fold, each of its
     clips held out once."""
     mine = [c for c in _LOADED["ui-prmd"] if c.label == movement]
@@ -290,7 +301,7 @@ def _movement(movement: str) -> dict[str, Any]:
     for held in DATASETS["ui-prmd"][1]:
         train = [c for c in mine if c.subject not in held]
         test = [c for c in mine if c.subject in held]
-        fold = explain_fold(train, test, target="correct")
+        fold = explain_fold(train, test, target="correct", explain=explain)
         for r in fold["rows"]:
             r["movement"] = movement
         rows += fold["rows"]
@@ -328,6 +339,8 @@ def _repetitions(folds: list[dict[str, Any]]) -> dict[str, Any]:
 def _fold_line(s: dict[str, Any]) -> str:
     """One fold's figures as it finishes (a long run shows its progress in figures)."""
     lo, hi = s["ece_interval"]
+    if s.get("explained") is False:
+        return f"    accuracy {100 * s['accuracy']:.1f} %, ECE {s['ece']:.3f} [{lo:.3f}, {hi:.3f}]"
     return (f"    validity {100 * s['validity']:.1f} % with {s['mean_changes']:.2f} changes, "
             f"{s['contradictions']} contradictions, at most {s['max_lines']} lines and "
             f"{s['max_chars']} chars, accuracy {100 * s['accuracy']:.1f} %, ECE {s['ece']:.3f} "
@@ -336,6 +349,10 @@ def _fold_line(s: dict[str, Any]) -> str:
 
 def _print_explanations(name: str, s: dict[str, Any]) -> None:
     lo, hi = s["ece_interval"]
+    if s.get("explained") is False:
+        print(f"{name:<28} {s['clips']:>5} {'(not explained)':>70} {100 * s['accuracy']:6.1f} % "
+              f"{s['ece']:6.3f} [{lo:.3f}, {hi:.3f}]")  # fmt: skip
+        return
     print(
         f"{name:<28} {s['clips']:>5} {100 * s['validity']:8.1f} % {s['mean_changes']:8.2f} "
         f"{s['plausibility_median']:8.2f} {s['max_lines']:6d} {s['max_chars']:6d} "
@@ -448,12 +465,13 @@ def _tasks(args: argparse.Namespace) -> tuple[dict[str, Path], list[tuple[Any, .
         paths[name] = path
         if flags:
             paths[_OTHER[name]] = other
-        tasks += [("fold", name, tuple(held), flags) for held in folds]
+        tasks += [("fold", name, tuple(held), flags, not args.no_explain) for held in folds]
     path = DATASETS["ui-prmd"][0]
     if path.exists() and REPETITIONS in args.datasets:
         paths["ui-prmd"] = path
         _load({"ui-prmd": path})
-        tasks += [("movement", m) for m in sorted({c.label for c in _LOADED["ui-prmd"]})]
+        movements = sorted({c.label for c in _LOADED["ui-prmd"]})
+        tasks += [("movement", m, not args.no_explain) for m in movements]
     return paths, tasks
 
 
@@ -510,6 +528,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--other", type=Path, help="another dataset's clips for the flag")
     p.add_argument("--quick", action="store_true", help="the bundled demo subset only")
     p.add_argument("--no-flags", action="store_true", help="explanations only")
+    p.add_argument(
+        "--no-explain",
+        action="store_true",
+        help="the shared run's accuracy, ECE and flags only (no explanations: minutes, not hours)",
+    )
     p.add_argument(
         "--datasets",
         default=",".join((*DATASETS, REPETITIONS)),
