@@ -373,12 +373,12 @@ def _print_flags(name: str, flags: dict[str, Any]) -> None:
 
 
 def _print_movements(per_movement: dict[str, Any]) -> None:
-    print(f"\n{'correct vs incorrect: movement':<36} {'clips':>5} {'acc':>8} {'ECE':>6} "
-          f"{'95 % interval':>16}")  # fmt: skip
+    print(f"\n{'correct vs incorrect: movement':<46} {'clips':>5} {'acc':>8} {'conf.':>6} "
+          f"{'ECE':>6} {'95 % interval':>16}")  # fmt: skip
     for movement, m in per_movement.items():
         lo, hi = m["ece_interval"]
-        print(f"{movement:<36} {m['clips']:>5} {100 * m['accuracy']:6.1f} % {m['ece']:6.3f} "
-              f"[{lo:.3f}, {hi:.3f}]")  # fmt: skip
+        print(f"{movement:<46} {m['clips']:>5} {100 * m['accuracy']:6.1f} % "
+              f"{m['mean_confidence']:6.3f} {m['ece']:6.3f} [{lo:.3f}, {hi:.3f}]")  # fmt: skip
 
 
 def _header() -> None:
@@ -418,6 +418,7 @@ def _calibration(rows: list[dict[str, Any]]) -> dict[str, Any]:
     return {
         "clips": len(rows),
         "accuracy": _rate(right.tolist()),
+        "mean_confidence": float(conf.mean()) if len(conf) else float("nan"),
         "ece": expected_calibration_error(conf, right),
         "ece_interval": ece_interval(conf, right),
     }
