@@ -284,10 +284,19 @@ def _fold(name: str, held: tuple[str, ...], flags: bool, explain: bool) -> dict[
             got = flag_fold(feats, sim, train, test, other, fitted, described)
             fold["flags"][f"{feats}/{sim}"] = got
             seconds[f"{feats}/{sim}"] = round(time.perf_counter() - t0)
+            cal = _calibration(
+                [
+                    {"right": h, "confidence": c}
+                    for h, c in zip(got["right"], got["confidence"], strict=True)
+                ]
+            )
+            lo, hi = cal["ece_interval"]
             lines.append(f"    flag {feats}/{sim}: {seconds[f'{feats}/{sim}']} s; false alarms "
                          f"{100 * _rate(got['false_alarm']):.1f} %, detection "
                          f"{100 * _rate(got['detected']):.1f} % (by distance "
-                         f"{100 * _rate(got['detected_distance']):.1f} %)")  # fmt: skip
+                         f"{100 * _rate(got['detected_distance']):.1f} %); accuracy "
+                         f"{100 * cal['accuracy']:.1f} %, ECE {cal['ece']:.3f} "
+                         f"[{lo:.3f}, {hi:.3f}]")  # fmt: skip
     return {**fold, "lines": lines, "seconds": seconds}
 
 
@@ -491,19 +500,40 @@ def _run_shared(args: argparse.Namespace, done: Callable[[dict[str, Any]], None]
     for result in runner.map(_task, tasks, desc="folds", unit="fold"):
         print("\n".join(result["lines"]), flush=True)
         finished[result["task"]] = result
-        if _gather(tasks, finished, datasets):
-            done(datasets)
+        _gather(tasks, finished, datasets)
+        done({**datasets, **_so_far(tasks, finished, datasets)})
     return datasets
+
+
+def _so_far(
+    tasks: list[tuple[Any, ...]],
+    finished: dict[tuple[Any, ...], dict[str, Any]],
+    datasets: dict[str, Any],
+) -> dict[str, Any]:
+    """The figures of the datasets not finished yet over the tasks that are (a run stopped
+    early keeps them), each with ``"partial"``: the tasks they cover."""
+    out: dict[str, Any] = {}
+    for name in DATASETS:
+        mine = [t for t in tasks if t[:2] == ("fold", name) and t in finished]
+        if name not in datasets and mine:
+            out[name] = {**_dataset([finished[t] for t in mine]),
+                         "partial": [list(t[2]) for t in mine]}  # fmt: skip
+    moves = [t for t in tasks if t[0] == "movement" and t in finished]
+    if "ui-prmd correct vs incorrect" not in datasets and moves:
+        out["ui-prmd correct vs incorrect"] = {
+            **_repetitions([finished[t] for t in moves]),
+            "partial": [t[1] for t in moves],
+        }
+    return out
 
 
 def _gather(
     tasks: list[tuple[Any, ...]],
     finished: dict[tuple[Any, ...], dict[str, Any]],
     datasets: dict[str, Any],
-) -> bool:
+) -> None:
     """Put the figures of every dataset whose tasks have all ``finished`` in ``datasets`` (in
-    the order of ``DATASETS``, the repetition check last); whether one was added."""
-    added = False
+    the order of ``DATASETS``, the repetition check last)."""
     for name in (*DATASETS, REPETITIONS):
         rep = name == REPETITIONS
         mine = [t for t in tasks if (t[0] == "movement" if rep else t[:2] == ("fold", name))]
@@ -512,12 +542,10 @@ def _gather(
             continue
         outcomes = [finished[t] for t in mine]  # in task order: the same figures as serial
         datasets[key] = _repetitions(outcomes) if rep else _dataset(outcomes)
-        added = True
     order = [*DATASETS, "ui-prmd correct vs incorrect"]
     ordered = {k: datasets[k] for k in order if k in datasets}
     datasets.clear()
     datasets.update(ordered)
-    return added
 
 
 def main(argv: list[str] | None = None) -> int:
