@@ -32,6 +32,7 @@ from features.body import (
 from features.derived import is_cached
 from features.fluents import DEFAULT_TABLE, evaluate, history_frames
 from features.geometry import body_frame
+from features.qmp import QMPFeatures, load_add, qmp_from_signals
 from features.signals import state_signals
 
 if TYPE_CHECKING:
@@ -46,15 +47,15 @@ CHUNK_FRAMES = 20_000
 PositionFrame = tuple[np.ndarray, np.ndarray, float] | None
 
 
-def chunk_for(seq: PoseSequence, chunk_frames: int | None) -> int:
+def chunk_for(seq: PoseSequence, chunk_frames: int | None, kind: str = "fluents") -> int:
     """The piece size for ``seq``: ``chunk_frames`` when given (0: the whole clip at once),
-    else :data:`CHUNK_FRAMES` for a clip longer than that whose fluents are not computed yet,
-    0 otherwise (and for a clip of one frame)."""
+    else :data:`CHUNK_FRAMES` for a clip longer than that whose ``kind`` (``"fluents"``,
+    ``"qmp"``) is not computed yet, 0 otherwise (and for a clip of one frame)."""
     if seq.n_frames < 2:  # nothing to resample between
         return 0
     if chunk_frames is not None:
         return max(0, int(chunk_frames))
-    if seq.n_frames > CHUNK_FRAMES and not is_cached(seq, "fluents"):
+    if seq.n_frames > CHUNK_FRAMES and not is_cached(seq, kind):
         return CHUNK_FRAMES
     return 0
 
@@ -81,6 +82,26 @@ def moves_left_more(seq: PoseSequence, chunk: int) -> bool:
         angles[start : start + sig.values.shape[0]] = sig.values[:, : len(names)]
     assert angles is not None  # a clip has frames
     return left_moves_more(angles, names)
+
+
+def qmp_features(seq: PoseSequence, chunk: int, mirror: bool = False) -> QMPFeatures:
+    """:func:`features.qmp.qmp_features` of ``seq`` ``(frames, joints, 3)`` (of its mirror
+    image with ``mirror``), its state signals computed ``chunk`` frames at a time and its fit's
+    normal equations summed ``chunk`` frames at a time. The QMP fit is defined over every frame
+    of the clip, so the signals the ADD reads are kept whole, ``(frames, 16)``; the other 80
+    state signals and the fit's basis never are."""
+    add = load_add()
+    values = np.empty((seq.n_frames, len(add.signals)))
+    for start in range(0, seq.n_frames, chunk):
+        piece = seq.slice_frames(start, start + chunk).to_canonical()
+        sig = state_signals(mirrored(piece) if mirror else piece)
+        values[start : start + piece.n_frames] = sig.values[:, _columns(sig.names, add.signals)]
+    return qmp_from_signals(values, seq.fps, add, frame_block=chunk)
+
+
+def _columns(names: tuple[str, ...], wanted: tuple[str, ...]) -> list[int]:
+    index = {n: i for i, n in enumerate(names)}
+    return [index[n] for n in wanted]
 
 
 def _position_frame(seq: PoseSequence, chunk: int, mirror: bool) -> PositionFrame:

@@ -42,6 +42,7 @@ from features.derived import fluents_of, qmp_of, signals_of
 from features.errors import ConfigError, DataError
 from features.fluents import state_columns
 from features.poses import PoseSequence
+from features.qmp import QMPFeatures
 from features.signals import ANGLE_SIGNALS
 
 from . import long_clip
@@ -409,16 +410,21 @@ def extract_problem(
     ``(config.length, n_states)`` in [0, 1] (fluents) or ``(n_features,)`` (QMP). With
     ``config.side == "canonical"`` a clip that moves its left side more is described by its
     mirror image (``Problem.mirrored`` is then True). ``chunk_frames``: compute the fluent
-    columns that many frames at a time (:mod:`cbr.long_clip`; the same values in bounded
-    memory), 0 the whole clip at once; None: pieces for a clip longer than
-    :data:`cbr.long_clip.CHUNK_FRAMES` whose fluents are not computed yet.
+    columns (the QMP state signals and fit) that many frames at a time (:mod:`cbr.long_clip`;
+    the same values in bounded memory), 0 the whole clip at once; None: pieces for a clip
+    longer than :data:`cbr.long_clip.CHUNK_FRAMES` whose fluents (QMPs) are not computed yet.
     """
-    chunk = long_clip.chunk_for(seq, chunk_frames)
+    chunk = long_clip.chunk_for(seq, chunk_frames, "qmp" if config.level == "qmp" else "fluents")
     mirror = config.side == "canonical" and (
         long_clip.moves_left_more(seq, chunk) if chunk else moves_left_more(seq)
     )
     if config.level == "qmp":
-        problem = _qmp_problem(mirrored(seq) if mirror else seq, config)
+        q = (
+            long_clip.qmp_features(seq, chunk, mirror)
+            if chunk
+            else qmp_of(mirrored(seq) if mirror else seq)
+        )
+        problem = _qmp_problem(q, config)
     elif chunk:
         problem = _fluent_problem(seq, config, chunk, mirror)
     else:
@@ -426,8 +432,8 @@ def extract_problem(
     return dataclasses.replace(problem, mirrored=True) if mirror else problem
 
 
-def _qmp_problem(seq: PoseSequence, config: FeatureConfig) -> Problem:
-    q = qmp_of(seq)
+def _qmp_problem(q: QMPFeatures, config: FeatureConfig) -> Problem:
+    """The QMP-level problem from a clip's QMP features ``q``."""
     if config.qmp_part == "binary":
         return Problem(
             np.asarray(q.binary, dtype=np.float64),

@@ -67,6 +67,30 @@ def test_pieces_equal_whole_clip(name: str) -> None:
     np.testing.assert_allclose(pieces.values, whole.values, rtol=0, atol=1e-12)
 
 
+QMP_CONFIGS = {
+    "qmp values": FeatureConfig(level="qmp", qmp_part="values"),
+    "qmp binary, canonical side, left clip": FeatureConfig(level="qmp", side="canonical"),
+}
+
+
+@pytest.mark.parametrize("name", list(QMP_CONFIGS))
+def test_qmp_in_pieces_equals_whole_clip(name: str) -> None:
+    # the QMP fit is one SINDy fit over every frame: in pieces its normal equations are sums
+    # over the pieces, so the fitted parameters agree to rounding (a few ulp of the Gram
+    # matrix, times its condition number), the criteria exactly
+    seq = _long_clip()
+    if "left" in name and not moves_left_more(seq):
+        seq = mirrored(seq)
+    whole = extract_problem(_copy(seq), QMP_CONFIGS[name], chunk_frames=0)
+    pieces = extract_problem(_copy(seq), QMP_CONFIGS[name], chunk_frames=CHUNK)
+    assert pieces.names == whole.names and pieces.words == whole.words
+    assert pieces.mirrored == whole.mirrored == ("left" in name)
+    binary = [i for i, n in enumerate(whole.names) if "." not in n]
+    assert np.array_equal(pieces.values[binary], whole.values[binary])
+    assert 0 < whole.values[binary].sum() < len(binary)  # some criteria met, some not
+    np.testing.assert_allclose(pieces.values, whole.values, rtol=1e-9, atol=1e-12)
+
+
 def test_never_seen_joint_reads_its_fill_in_pieces() -> None:
     config = candidate_config(CONFIGS["summary with phases, angles, positions"])
     p = extract_problem(_long_clip(), config, chunk_frames=CHUNK)

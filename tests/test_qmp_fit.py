@@ -22,7 +22,7 @@ from features.qmp import (
     search_period,
     sliding_windows,
 )
-from features.qmp.fit import fit_shared_periods
+from features.qmp.fit import fit_each_period, fit_shared_periods
 
 FPS = 30.0
 
@@ -102,10 +102,14 @@ def _reference_signals() -> tuple[np.ndarray, np.ndarray]:
 
 
 @pytest.mark.parametrize("opt", [STLSQ(), STLSQ(threshold=0.2, alpha=0.5), STLSQ(alpha=0.0)])
-def test_bulk_fit_gives_pysindy_coefficients(opt: STLSQ) -> None:
+@pytest.mark.parametrize("frame_block", [None, 13])
+def test_bulk_fit_gives_pysindy_coefficients(opt: STLSQ, frame_block: int | None) -> None:
+    # frame_block 13: the normal equations summed over blocks of 13 frames (a long clip's way)
     t, xdot = _reference_signals()
     periods = period_grid(0.6, 2.0, 7)
-    coef, _support, _rss = fit_shared_periods(t, xdot, periods, ExplicitTimeLibrary(), opt)
+    coef, _support, _rss = fit_shared_periods(
+        t, xdot, periods, ExplicitTimeLibrary(), opt, frame_block
+    )
     n_zeroed = 0
     for p, period in enumerate(periods):
         for s in range(xdot.shape[1]):
@@ -113,6 +117,22 @@ def test_bulk_fit_gives_pysindy_coefficients(opt: STLSQ) -> None:
             np.testing.assert_allclose(coef[p, s], ref, rtol=1e-6, atol=1e-8)
             n_zeroed += int((ref == 0).sum())
     assert n_zeroed > 0  # thresholding did act, so the sparse path is what was compared
+
+
+def test_fit_at_each_columns_period_in_blocks_of_frames_gives_pysindy_coefficients() -> None:
+    # the refinement rounds' fit (one period per signal), normal equations summed 17 frames
+    # at a time
+    t, xdot = _reference_signals()
+    periods = np.array([[0.7, 1.3, 2.1, 1.0], [1.7, 0.9, 2.5, 1.9]])
+    opt = STLSQ()
+    coef, _support, _rss = fit_each_period(
+        t, xdot, periods, ExplicitTimeLibrary(), opt, frame_block=17
+    )
+    assert len(t) > 6 * 17
+    for k in range(periods.shape[0]):
+        for s in range(xdot.shape[1]):
+            ref = _pysindy_fit(t, xdot[:, s], periods[k, s], opt)
+            np.testing.assert_allclose(coef[k, s], ref, rtol=1e-6, atol=1e-8)
 
 
 def test_pysindy_fitting_all_signals_in_one_call_gives_the_same_coefficients() -> None:

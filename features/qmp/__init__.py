@@ -7,7 +7,7 @@ The model as parts (pysindy's layout): :class:`ExplicitTimeLibrary` (the basis),
 
 from .add import ADD, load_add
 from .differentiation import SavitzkyGolay
-from .features import QMPFeatures, qmp_features
+from .features import QMPFeatures, qmp_features, qmp_from_signals
 from .fit import (
     FLAT,
     NOT_ENOUGH_DATA,
@@ -34,6 +34,7 @@ __all__ = [
     "QMPFeatures",
     "load_add",
     "qmp_features",
+    "qmp_from_signals",
     "COEFFICIENT_KEYS",
     "FEATURE_NAMES",
     "FLAT",

@@ -53,21 +53,36 @@ def qmp_features(
 
     db = add if isinstance(add, ADD) else load_add(add)
     signals = state_signals(seq)
-    used = db.signals
-    cols = [signals.names.index(s) for s in used]
+    values = signals.values[:, [signals.names.index(s) for s in db.signals]]
+    return qmp_from_signals(values, seq.fps, db, config, window_s, step_s)
+
+
+def qmp_from_signals(
+    values: np.ndarray,
+    fps: float,
+    add: ADD,
+    config: QMPConfig | None = None,
+    window_s: float | None = None,
+    step_s: float = 1.0,
+    frame_block: int | None = None,
+) -> QMPFeatures:
+    """:func:`qmp_features` from the state signals the ADD reads, ``values``
+    ``(frames, len(add.signals))`` (a long clip's computed a piece at a time); frame_block:
+    frames of the fit's basis evaluated at once (:func:`features.qmp.fit.frame_blocks`)."""
+    used = add.signals
     fits = fit_signals(
-        signals.values[:, cols], seq.fps, used, config=config, window_s=window_s, step_s=step_s
+        values, fps, used, config=config, window_s=window_s, step_s=step_s, frame_block=frame_block
     )
-    crit = evaluate_criteria(db, fits)
+    crit = evaluate_criteria(add, fits)
     binary = (crit.met & crit.observable).any(axis=0)
-    pairs = feature_columns(db)
+    pairs = feature_columns(add)
     cont = np.full(len(pairs), np.nan)
     for i, (signal, quantity) in enumerate(pairs):
         v = fits.quantity(quantity)[:, fits.index(signal)]
         v = v[np.isfinite(v)]
         if len(v):
             cont[i] = float(np.median(v))
-    binary_names = tuple(db.criteria[n].words for n in crit.names)
+    binary_names = tuple(add.criteria[n].words for n in crit.names)
     names = binary_names + tuple(feature_name(s, q) for s, q in pairs)
     status = "not enough data" if (fits.status == NOT_ENOUGH_DATA).all() else "ok"
     return QMPFeatures(

@@ -15,7 +15,7 @@ phase)``, t from the window start). ``trend`` is c0 (units per second), ``accel`
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -119,21 +119,44 @@ class PeriodSearch:
     rss: np.ndarray
 
 
+#: basis rows (frames x periods) evaluated at once: the normal equations of a long window are
+#: summed over blocks of frames, so that its basis is never held whole (10^6 frames at 32
+#: periods would take 1.5 GB; a block takes about 50 MB)
+THETA_ROWS = 1 << 20
+
+
+def frame_blocks(frames: int, bases: int, frame_block: int | None = None) -> Iterator[slice]:
+    """The blocks of ``frames`` frames the normal equations are summed over: ``frame_block``
+    frames each, or (None) as many as keep ``bases`` basis matrices within
+    :data:`THETA_ROWS` rows."""
+    block = int(frame_block) if frame_block else max(1, THETA_ROWS // max(1, bases))
+    for a in range(0, frames, max(1, block)):
+        yield slice(a, a + block)
+
+
 def fit_shared_periods(
     t: np.ndarray,
     xdot: np.ndarray,
     periods: np.ndarray,
     library: ExplicitTimeLibrary,
     optimizer: STLSQ,
+    frame_block: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Fit every column of ``xdot`` (``(frames, S)``) at every period (``(P,)``).
 
     Returns coefficients ``(P, S, 6)``, support ``(P, S, 6)``, residual sum of squares
-    ``(P, S)``. One Gram matrix per period serves all columns.
+    ``(P, S)``. One Gram matrix per period serves all columns. The normal equations
+    (Theta^T Theta, Theta^T xdot) are summed over blocks of frames (:func:`frame_blocks`):
+    the same numbers as one block, up to rounding.
     """
-    theta = library.matrices(t, periods)  # (P, F, 6)
-    gram = np.einsum("pfk,pfl->pkl", theta, theta)
-    rhs = np.matmul(theta.transpose(0, 2, 1), xdot).transpose(0, 2, 1)  # BLAS; (P, S, 6)
+    n = library.n_features
+    gram = np.zeros((len(periods), n, n))
+    rhs_t = np.zeros((len(periods), n, xdot.shape[1]))  # (P, 6, S): BLAS's layout
+    for part in frame_blocks(len(t), len(periods), frame_block):
+        theta = library.matrices(t[part], periods)  # (P, block, 6)
+        gram += np.einsum("pfk,pfl->pkl", theta, theta)
+        rhs_t += np.matmul(theta.transpose(0, 2, 1), xdot[part])
+    rhs = rhs_t.transpose(0, 2, 1)  # (P, S, 6)
     coef, support = optimizer.fit_normal(gram[:, None], rhs)
     rss = _rss(xdot, coef, gram[:, None], rhs)
     return coef, support, rss
@@ -145,15 +168,21 @@ def fit_each_period(
     periods: np.ndarray,
     library: ExplicitTimeLibrary,
     optimizer: STLSQ,
+    frame_block: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Fit column s of ``xdot`` (``(frames, S)``) at periods ``periods[:, s]`` (``(K, S)``).
+    """Fit column s of ``xdot`` (``(frames, S)``) at periods ``periods[:, s]`` (``(K, S)``),
+    the normal equations summed over blocks of frames as in :func:`fit_shared_periods`.
 
     Returns coefficients ``(K, S, 6)``, support ``(K, S, 6)``, rss ``(K, S)``.
     """
     k, s = periods.shape
-    theta = library.matrices(t, periods.reshape(-1)).reshape(k, s, len(t), -1)  # (K,S,F,6)
-    gram = np.einsum("ksfi,ksfj->ksij", theta, theta)
-    rhs = np.einsum("ksfi,fs->ksi", theta, xdot)
+    n = library.n_features
+    gram = np.zeros((k, s, n, n))
+    rhs = np.zeros((k, s, n))
+    for part in frame_blocks(len(t), k * s, frame_block):
+        theta = library.matrices(t[part], periods.reshape(-1)).reshape(k, s, -1, n)  # (K,S,f,6)
+        gram += np.einsum("ksfi,ksfj->ksij", theta, theta)
+        rhs += np.einsum("ksfi,fs->ksi", theta, xdot[part])
     coef, support = optimizer.fit_normal(gram, rhs)
     return coef, support, _rss(xdot, coef, gram, rhs)
 
@@ -194,6 +223,7 @@ def search_period(
     optimizer: STLSQ,
     refine_rounds: int = 0,
     selection: str = "bic",
+    frame_block: int | None = None,
 ) -> PeriodSearch:
     """The paper's period search: fit at every candidate T, keep the best-scoring one.
 
@@ -201,11 +231,12 @@ def search_period(
     ``(P,)`` candidate T (ascending; geometric). Each refinement round then tries the best T
     times ``r**-0.5`` and ``r**0.5`` (r = current grid ratio) per column and halves the step,
     so after n rounds the period is known to about ``r**(2**-n)``. selection: see
-    :func:`selection_score`.
+    :func:`selection_score`. frame_block: frames of the basis evaluated at once
+    (:func:`frame_blocks`).
     """
     n = len(t)
     energy = np.einsum("fs,fs->s", xdot, xdot)
-    coef, support, rss = fit_shared_periods(t, xdot, periods, library, optimizer)
+    coef, support, rss = fit_shared_periods(t, xdot, periods, library, optimizer, frame_block)
     score = selection_score(rss, support.sum(axis=-1), n, selection, energy)
     best = np.argmin(score, axis=0)  # (S,); ties -> the shorter period
     cols = np.arange(xdot.shape[1])
@@ -217,7 +248,7 @@ def search_period(
     for _ in range(refine_rounds if ratio > 1.0 else 0):
         step = np.sqrt(ratio)
         cand = np.clip(np.stack([best_T / step, best_T * step]), lo, hi)  # (2, S)
-        c2, s2, r2 = fit_each_period(t, xdot, cand, library, optimizer)
+        c2, s2, r2 = fit_each_period(t, xdot, cand, library, optimizer, frame_block)
         sc2 = selection_score(r2, s2.sum(axis=-1), n, selection, energy)
         for k in range(2):
             better = sc2[k] < best_score
@@ -365,13 +396,16 @@ def fit_signals(
     config: QMPConfig | None = None,
     window_s: float | None = None,
     step_s: float = 1.0,
+    frame_block: int | None = None,
 ) -> QMPFits:
     """Characterise QMPs of every signal over sliding windows.
 
     values: ``(frames, S)`` state signals (NaN = unavailable); fps: frame rate; names:
     ``(S,)`` signal names. window_s None fits one window over the whole clip. Windows with too
     few frames, or with NaN gaps longer than ``config.max_gap_s``, are "not enough data";
-    motionless ones are "flat" (amplitude 0, trend 0, period undefined).
+    motionless ones are "flat" (amplitude 0, trend 0, period undefined). frame_block: frames
+    of the fit's basis evaluated at once (:func:`frame_blocks`; None: bounded by
+    :data:`THETA_ROWS`).
     """
     cfg = config or QMPConfig()
     values = np.asarray(values, dtype=np.float64)
@@ -391,68 +425,111 @@ def fit_signals(
         return result
 
     filled = fill_short_gaps(values, int(round(cfg.max_gap_s * fps)))
-    finite = np.isfinite(filled)
-    # Differentiate the whole clip once. Frames within half a smoothing window of a remaining
-    # gap would see the placeholder zeros, so they count as missing too.
-    safe = np.where(finite, filled, 0.0)
-    xdot = cfg.differentiation(safe, fps)
-    smooth = cfg.differentiation.smooth(safe, fps)
-    reach = np.ones((cfg.differentiation.window_frames(fps), 1), dtype=bool)
-    valid = binary_erosion(finite, structure=reach, border_value=1)
     # Windows are equally long: stack (window, signal) into columns sharing one basis.
     idx = windows[:, :1] + np.arange(win_frames)[None, :]  # (W, F)
-    ok_data = valid[idx].all(axis=1)  # (W, S)
-    seg = np.where(ok_data[:, None, :], smooth[idx], 0.0)  # (W, F, S), smoothed
-    raw_ptp = np.ptp(np.where(ok_data[:, None, :], filled[idx], 0.0), axis=1)
-    flat = ok_data & (raw_ptp < cfg.flat_tolerance)
+    ok_data, flat = _usable(filled, idx, fps, cfg)
+    # the gaps left become placeholder zeros (``filled`` is ours: changed in place rather
+    # than copied, a long clip's signals being large); the frames they reach are not ok_data
+    filled[~np.isfinite(filled)] = 0.0
+    _levels(cfg.differentiation.smooth(filled, fps), idx, ok_data, q)
+    status[ok_data] = OK
+    status[flat] = FLAT
+    for name in ("amplitude", "trend", "accel"):
+        q[name][flat] = 0.0
     fit_mask = ok_data & ~flat
+    if fit_mask.any():
+        cols = np.argwhere(fit_mask)  # (n, 2): window, signal
+        xdot = cfg.differentiation(filled, fps)
+        del filled  # the long-clip peak is the signals' few copies: one less
+        y, t = _fit_columns(xdot, idx, cols, fps, cfg)
+        del xdot
+        _fit_windows(y, t, cols, idx.shape[1] / fps, cfg, frame_block, result)
+    return result
 
-    # Levels come from the smoothed signal: single-frame tracking spikes would set min/max.
+
+def _usable(
+    filled: np.ndarray, idx: np.ndarray, fps: float, cfg: QMPConfig
+) -> tuple[np.ndarray, np.ndarray]:
+    """Which windows of each signal have data enough (``ok_data``) and which of those are
+    motionless (``flat``), ``(W, S)`` each. filled: ``(frames, S)`` signals after short gaps
+    are filled; idx: ``(W, F)`` the frames of every window."""
+    finite = np.isfinite(filled)
+    # The whole clip is differentiated once. Frames within half a smoothing window of a
+    # remaining gap would see the placeholder zeros, so they count as missing too.
+    reach = np.ones((cfg.differentiation.window_frames(fps), 1), dtype=bool)
+    valid = binary_erosion(finite, structure=reach, border_value=1)
+    ok_data: np.ndarray = valid[idx].all(axis=1)  # (W, S)
+    raw = filled[idx]  # (W, F, S)
+    np.copyto(raw, 0.0, where=~ok_data[:, None, :])
+    flat: np.ndarray = ok_data & (np.ptp(raw, axis=1) < cfg.flat_tolerance)
+    return ok_data, flat
+
+
+def _levels(
+    smooth: np.ndarray, idx: np.ndarray, ok_data: np.ndarray, q: dict[str, np.ndarray]
+) -> None:
+    """The level quantities (mean, min, max, range, net change) of the windows ``idx``
+    ``(W, F)`` with ``ok_data`` ``(W, S)``, into ``q``. They come from the smoothed signal
+    ``smooth`` ``(frames, S)``: single-frame tracking spikes would set min/max."""
+    seg = smooth[idx]  # (W, F, S)
+    del smooth
+    np.copyto(seg, 0.0, where=~ok_data[:, None, :])
     q["mean"][ok_data] = seg.mean(axis=1)[ok_data]
     q["min"][ok_data] = seg.min(axis=1)[ok_data]
     q["max"][ok_data] = seg.max(axis=1)[ok_data]
     q["range"][ok_data] = np.ptp(seg, axis=1)[ok_data]
     q["net_change"][ok_data] = (seg[:, -1] - seg[:, 0])[ok_data]
-    status[ok_data] = OK
-    status[flat] = FLAT
-    for name in ("amplitude", "trend", "accel"):
-        q[name][flat] = 0.0
 
-    if fit_mask.any():
-        # Subsample high-rate input after differentiation: the basis is smooth over seconds.
-        sub = max(1, int(fps // cfg.fit_fps)) if cfg.fit_fps else 1
-        frames_sub = np.arange(0, win_frames, sub)
-        t = frames_sub / fps
-        cols = np.argwhere(fit_mask)  # (n, 2): window, signal
-        y = xdot[idx[cols[:, 0]][:, frames_sub], cols[:, 1][:, None]].T  # (F', n)
-        duration = win_frames / fps
-        max_T = min(cfg.max_period_s or duration / 2.0, duration / 2.0)
-        periods = period_grid(min(cfg.min_period_s, max_T), max_T, cfg.n_periods)
-        # Columns go in blocks so that a long clip's many windows do not build one huge array.
-        parts = [
-            search_period(
-                t, y[:, a : a + _BLOCK], periods, cfg.library, cfg.optimizer,
-                cfg.refine_rounds, cfg.selection,
-            )
-            for a in range(0, y.shape[1], _BLOCK)
-        ]  # fmt: skip
-        best = PeriodSearch(
-            *(np.concatenate([getattr(p, f) for p in parts]) for f in _SEARCH_FIELDS)
+
+def _fit_columns(
+    xdot: np.ndarray, idx: np.ndarray, cols: np.ndarray, fps: float, cfg: QMPConfig
+) -> tuple[np.ndarray, np.ndarray]:
+    """The derivatives the fits of ``cols`` ``(n, 2)`` (window, signal) are made on,
+    ``(F', n)``, at times ``(F',)`` seconds from the window start, from ``xdot``
+    ``(frames, S)`` and the frames ``idx`` ``(W, F)`` of every window."""
+    # Subsample high-rate input after differentiation: the basis is smooth over seconds.
+    sub = max(1, int(fps // cfg.fit_fps)) if cfg.fit_fps else 1
+    frames_sub = np.arange(0, idx.shape[1], sub)
+    y: np.ndarray = xdot[idx[cols[:, 0]][:, frames_sub], cols[:, 1][:, None]].T
+    return y, frames_sub / fps
+
+
+def _fit_windows(
+    y: np.ndarray,
+    t: np.ndarray,
+    cols: np.ndarray,
+    duration: float,
+    cfg: QMPConfig,
+    frame_block: int | None,
+    result: QMPFits,
+) -> None:
+    """The period search of every (window, signal) of ``cols`` ``(n, 2)`` on its derivative,
+    column of ``y`` ``(F', n)`` at times ``t`` ``(F',)`` in windows of ``duration`` seconds:
+    the coefficients and quantities into ``result``."""
+    max_T = min(cfg.max_period_s or duration / 2.0, duration / 2.0)
+    periods = period_grid(min(cfg.min_period_s, max_T), max_T, cfg.n_periods)
+    # Columns go in blocks so that a long clip's many windows do not build one huge array.
+    parts = [
+        search_period(
+            t, y[:, a : a + _BLOCK], periods, cfg.library, cfg.optimizer,
+            cfg.refine_rounds, cfg.selection, frame_block,
         )
-        w_i, s_i = cols[:, 0], cols[:, 1]
-        coef[w_i, s_i] = best.coefficients
-        # T means nothing for a fit without a sinusoidal term: report it as undefined.
-        has_wave = best.support[:, 2:].any(axis=1)
-        period_T[w_i, s_i] = np.where(has_wave, best.period_T_s, np.nan)
-        derived = derived_quantities(best.coefficients, best.period_T_s)
-        for name, v in derived.items():
-            q[name][w_i, s_i] = v
-        # Fraction of the derivative's energy explained (uncentred: a steady ramp has a
-        # constant derivative, which the constant term explains fully).
-        energy = (y**2).sum(axis=0)
-        q["r2"][w_i, s_i] = 1.0 - best.rss / np.maximum(energy, 1e-300)
-        q["residual_rms"][w_i, s_i] = np.sqrt(best.rss / len(t))
-    return result
+        for a in range(0, y.shape[1], _BLOCK)
+    ]  # fmt: skip
+    best = PeriodSearch(*(np.concatenate([getattr(p, f) for p in parts]) for f in _SEARCH_FIELDS))
+    w_i, s_i = cols[:, 0], cols[:, 1]
+    result.coefficients[w_i, s_i] = best.coefficients
+    # T means nothing for a fit without a sinusoidal term: report it as undefined.
+    has_wave = best.support[:, 2:].any(axis=1)
+    result.period_T_s[w_i, s_i] = np.where(has_wave, best.period_T_s, np.nan)
+    q = result.quantities
+    for name, v in derived_quantities(best.coefficients, best.period_T_s).items():
+        q[name][w_i, s_i] = v
+    # Fraction of the derivative's energy explained (uncentred: a steady ramp has a
+    # constant derivative, which the constant term explains fully).
+    energy = (y**2).sum(axis=0)
+    q["r2"][w_i, s_i] = 1.0 - best.rss / np.maximum(energy, 1e-300)
+    q["residual_rms"][w_i, s_i] = np.sqrt(best.rss / len(t))
 
 
 def derived_quantities(coefficients: np.ndarray, period_T_s: np.ndarray) -> dict[str, np.ndarray]:
