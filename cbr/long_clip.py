@@ -15,6 +15,7 @@ as the whole-clip computation, in the memory of the poses plus one piece.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
@@ -29,11 +30,13 @@ from features.body import (
     positions_in_frame,
     start_frames,
 )
-from features.derived import is_cached
+from features.derived import derived, is_cached
 from features.fluents import DEFAULT_TABLE, evaluate, history_frames
 from features.geometry import body_frame
 from features.qmp import QMPFeatures, load_add, qmp_from_signals
-from features.signals import state_signals
+from features.repetitions import MovementSignals
+from features.repetitions import movement_signals as count_signals
+from features.signals import ANGLE_SIGNALS, StateSignals, state_signals
 
 if TYPE_CHECKING:
     from features.poses import PoseSequence
@@ -97,6 +100,25 @@ def qmp_features(seq: PoseSequence, chunk: int, mirror: bool = False) -> QMPFeat
         sig = state_signals(mirrored(piece) if mirror else piece)
         values[start : start + piece.n_frames] = sig.values[:, _columns(sig.names, add.signals)]
     return qmp_from_signals(values, seq.fps, add, frame_block=chunk)
+
+
+def movement_signals(seq: PoseSequence, chunk: int) -> MovementSignals:
+    """:func:`features.repetitions.movement_signals` of ``seq`` ``(frames, joints, 3)`` with
+    its state signals computed ``chunk`` frames at a time (they are per frame): only the
+    joint angles ``(frames, 22)`` are kept whole, which is all the counted angles read, not
+    the near distances ``(frames, 148)``. They are handed over as the signals of a
+    stand-in for ``seq`` (a new object: what is cached for it goes with it)."""
+    n = seq.n_frames
+    angles = np.empty((n, len(ANGLE_SIGNALS)))
+    head = np.empty(n)
+    for start in range(0, n, chunk):
+        sig = state_signals(seq.slice_frames(start, start + chunk))
+        angles[start : start + len(sig.values)] = sig.values[:, : len(ANGLE_SIGNALS)]
+        head[start : start + len(sig.values)] = sig.head_length_m
+    angle_signals = StateSignals(ANGLE_SIGNALS, angles, seq.fps, head, np.empty((n, 0)))
+    stand_in = dataclasses.replace(seq)
+    derived(stand_in, "signals", lambda _: angle_signals)
+    return count_signals(stand_in)
 
 
 def _columns(names: tuple[str, ...], wanted: tuple[str, ...]) -> list[int]:

@@ -5,7 +5,9 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
 ``solve``, exactly as ``classify`` does):
 
 1. what every frame yields (fluents, state signals, mirror image) is computed once for the
-   whole recording; windows share it (:func:`features.derived.stretch`);
+   whole recording, or for a recording longer than :data:`cbr.long_clip.CHUNK_FRAMES` once
+   per piece of it (each with the history its motion states read); windows share it
+   (:func:`features.derived.stretch`);
 2. the windows (:func:`windows_of`): one of :data:`DEFAULT_WINDOW_S` every :data:`HOP_S`
    seconds (cut as ``train --split windows`` cuts cases), and every period of the movement
    found in the spans of :data:`PERIOD_SPAN_S` seconds around
@@ -34,15 +36,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from features.body import torso_share
-from features.derived import stretch
+from features.derived import forget, stretch
 from features.errors import DataError
+from features.fluents import DEFAULT_TABLE, history_frames
 from features.poses import PoseSequence
 from features.progress import progress
 from features.repetitions import (
@@ -56,8 +59,9 @@ from features.repetitions import (
     movement_signals,
 )
 
+from . import long_clip
 from .explain import Explanation
-from .problem import warm
+from .problem import FeatureConfig, warm
 from .retrieve import Retrieval
 from .reuse import reuse
 from .unknown import Familiarity, HeldOut, Judge, Margin, activity_codes, per_activity
@@ -153,6 +157,7 @@ class _Solved:
     nearest: np.ndarray
     solved: Any  # the classifier's Solved: problem, retrieval, solution, novelty, ...
     repetition: bool = False
+    piece: tuple[int, int] | None = None  # in pieces: solved is None, solved again from these
 
     @property
     def centre(self) -> float:
@@ -237,21 +242,69 @@ def activity_distances(clf: Any, solved: Any, codes: np.ndarray | None = None) -
     return per_activity(d, codes, len(clf.classes_))
 
 
-def _solve_windows(clf: Any, rec: PoseSequence, windows: list[Window], k: int) -> list[_Solved]:
+def _solve_windows(
+    clf: Any, rec: PoseSequence, windows: list[Window], k: int, chunk: int = 0
+) -> list[_Solved]:
     """Each window solved by the classifier; its vote is that of its ``k`` nearest cases.
-    Windows in which no frame shows the person are left out (nothing to solve)."""
+    Windows in which no frame shows the person are left out (nothing to solve). With
+    ``chunk``, the windows are cut from pieces of the recording (:func:`_cut_in_pieces`) and
+    keep only their votes and distances (their ``solved`` is None)."""
     classes = np.array([str(c) for c in clf.classes_], dtype=object)
     codes = activity_codes(clf.case_base_.labels, classes)
-    out = []
-    for w in progress(windows, "classifying windows", unit="window"):
-        part = stretch(rec, w.start, w.stop)
+    cuts = _cut_in_pieces(rec, windows, chunk, clf.feature_config_) if chunk else (
+        (i, stretch(rec, w.start, w.stop), None) for i, w in enumerate(windows)
+    )  # fmt: skip
+    found: dict[int, _Solved] = {}
+    for i, part, piece in progress(cuts, "classifying windows", len(windows), "window"):
         if torso_share(part) == 0.0:
             continue
+        w = windows[i]
         solved = clf.solve([part])[0]
         vote = _nearest_vote(solved.retrieval, classes, k)
         nearest = activity_distances(clf, solved, codes)
-        out.append(_Solved(w.start, w.stop, vote, nearest, solved, w.repetition))
-    return out
+        found[i] = _Solved(w.start, w.stop, vote, nearest, None if chunk else solved,
+                           w.repetition, piece)  # fmt: skip
+    return [found[i] for i in sorted(found)]
+
+
+def _cut_in_pieces(
+    rec: PoseSequence, windows: list[Window], chunk: int, config: FeatureConfig
+) -> Iterator[tuple[int, PoseSequence, tuple[int, int]]]:
+    """``(i, window i as a clip, its piece)`` for the ``windows``, grouped by the piece of
+    ``chunk`` frames their start lies in: each piece (frames ``lo`` to ``hi``, from the
+    history its motion states look back on to the end of its last window) has what every
+    frame yields computed once and shared by its windows (:func:`features.derived.stretch`),
+    as the whole recording's would be; then it is dropped."""
+    groups: dict[int, list[int]] = {}
+    for i, w in enumerate(windows):
+        groups.setdefault(w.start // chunk, []).append(i)
+    history = history_frames(DEFAULT_TABLE, rec.fps)
+    for p in sorted(groups):
+        lo = max(0, p * chunk - history)
+        bounds = (lo, max(windows[i].stop for i in groups[p]))
+        piece = _piece(rec, bounds, config)
+        for i in groups[p]:
+            yield i, stretch(piece, windows[i].start - lo, windows[i].stop - lo), bounds
+        forget(piece)
+
+
+def _piece(rec: PoseSequence, bounds: tuple[int, int], config: FeatureConfig) -> PoseSequence:
+    """Frames ``bounds`` of the recording with what its windows share computed (nothing for
+    QMPs: a window's QMPs are fitted on it alone)."""
+    piece = rec.slice_frames(*bounds)
+    if config.level == "fluents":
+        warm(piece, config.level, mirror=config.side == "canonical")
+    return piece
+
+
+def _solved(clf: Any, rec: PoseSequence, w: _Solved) -> Any:
+    """What solve gave for window ``w``: kept, or (cut from a piece) solved again from the
+    same piece, so with the same numbers."""
+    if w.solved is not None or w.piece is None:
+        return w.solved
+    lo = w.piece[0]
+    piece = _piece(rec, w.piece, clf.feature_config_)
+    return clf.solve([stretch(piece, w.start - lo, w.stop - lo)])[0]
 
 
 def block_votes(solved: Sequence[_Solved], n_frames: int, fps: float) -> np.ndarray:
@@ -383,7 +436,7 @@ def unknown_blocks(
 
 
 def _explain_segment(
-    clf: Any, inside: list[_Solved], state: int, judge: Judge
+    clf: Any, rec: PoseSequence, inside: list[_Solved], state: int, judge: Judge
 ) -> tuple[str, float]:
     """A short explanation from the segment's most telling window, and the segment's novelty
     (the judge's ratio, median over its windows)."""
@@ -396,7 +449,7 @@ def _explain_segment(
         w = inside[int(np.argsort(ratios, kind="stable")[len(ratios) // 2])]
         return judge.describe(w.nearest, [str(c) for c in clf.classes_]), ratio
     w = max(inside, key=lambda s: s.vote[state])
-    e: Explanation = clf.explain_solved(w.solved, counterfactual=False)
+    e: Explanation = clf.explain_solved(_solved(clf, rec, w), counterfactual=False)
     label = str(clf.classes_[state])
     agree = sum(str(n["label"]) == label for n in e.neighbours)
     text = f"{agree} of the {len(e.neighbours)} most similar cases are {label}"
@@ -440,7 +493,7 @@ def _segment_of(
     centred = [(w, e) for w, e in zip(solved, evidence, strict=True) if start <= w.centre < end]
     inside = [w for w, e in centred if e] or [w for w, _ in centred]
     reps = _repetitions(sig, start, end)
-    text, ratio = _explain_segment(clf, inside, state, judge)
+    text, ratio = _explain_segment(clf, rec, inside, state, judge)
     label: str | None = None
     if state == n_classes:  # confidence: the share of its windows unlike every activity
         share = [1.0 if judge.unlike(w.nearest) else 0.0 for w in inside]
@@ -451,7 +504,11 @@ def _segment_of(
 
 
 def segment(
-    clf: Any, recording: PoseSequence, judge: Judge | None = None, k: int = 1
+    clf: Any,
+    recording: PoseSequence,
+    judge: Judge | None = None,
+    k: int = 1,
+    chunk_frames: int | None = None,
 ) -> Segmentation:
     """Segment ``recording`` (positions ``(frames, joints, 3)``) with the fitted classifier
     ``clf`` (a :class:`~cbr.estimator.CaseBaseClassifier`); see the module docstring.
@@ -459,15 +516,20 @@ def segment(
     ``judge``: what makes a stretch unknown (:mod:`cbr.unknown`): the margin between the two
     nearest activities, calibrated on ``clf.case_base_``, when None; ``k``: a window votes
     with its k nearest cases (1: its nearest; the votes of successive windows are pooled over
-    time). Raises DataError for a recording shorter than one window or without a person, and
-    for a case base the judge cannot be calibrated on."""
+    time); ``chunk_frames``: what the frames yield is computed that many frames at a time
+    (:func:`_cut_in_pieces`; the same segments in bounded memory), 0: for the whole recording
+    at once; None: in pieces of :data:`cbr.long_clip.CHUNK_FRAMES` for a longer recording.
+    Raises DataError for a recording shorter than one window or without a person, and for a
+    case base the judge cannot be calibrated on."""
     rec = recording.to_canonical()
     judge = judge or Margin.of(clf.case_base_)
-    sig = movement_signals(rec)
+    chunk = long_clip.chunk_for(rec, chunk_frames)
+    sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals(rec)
     windows = windows_of(sig, rec.n_frames, rec.fps, rec.source)
     config = clf.feature_config_
-    warm(rec, config.level, mirror=config.side == "canonical")
-    solved = _solve_windows(clf, rec, windows, k)
+    if not chunk:
+        warm(rec, config.level, mirror=config.side == "canonical")
+    solved = _solve_windows(clf, rec, windows, k, chunk)
     votes = block_votes(solved, rec.n_frames, rec.fps)
     n_classes = len(clf.classes_)
     path = place_changes(solved, rec.fps, decode(votes))

@@ -18,6 +18,7 @@ from cbr.segmentation import (
     BLOCK_S,
     MIN_SEGMENT_S,
     SWITCH_ODDS,
+    Segmentation,
     _Solved,
     decode,
     place_changes,
@@ -25,6 +26,7 @@ from cbr.segmentation import (
     unknown_blocks,
 )
 from cbr.unknown import Margin
+from features.body import mirrored, moves_left_more
 from features.datasets import (
     Clip,
     LabelTrack,
@@ -214,6 +216,52 @@ def test_a_labelled_recording(
         assert set(s) >= {"start_s", "end_s", "start_frame", "end_frame", "label",
                           "confidence", "repetitions", "explanation"}  # fmt: skip
         assert s["start_s"] == pytest.approx(s["start_frame"] / 120.0, abs=1e-3)
+
+
+def _same_segments(pieces: Segmentation, whole: Segmentation) -> None:
+    assert pieces.blocks == whole.blocks and pieces.windows == whole.windows
+    assert len(pieces.segments) == len(whole.segments)
+    for a, b in zip(pieces.segments, whole.segments, strict=True):
+        assert (a.start_frame, a.end_frame, a.label) == (b.start_frame, b.end_frame, b.label)
+        assert a.repetitions == b.repetitions and a.explanation == b.explanation
+        # a piece's fluents are evaluated from its own first frame: the same float32
+        # confidences as the whole recording's to within one ulp
+        assert a.confidence == pytest.approx(b.confidence, abs=1e-6)
+        assert a.novelty == pytest.approx(b.novelty, rel=1e-6)
+
+
+def test_a_recording_segmented_a_piece_at_a_time_gives_the_same_segments(
+    recordings: dict[str, PoseSequence], classifier: CaseBaseClassifier
+) -> None:
+    """13_30 in pieces of 500 frames (its windows cut from them, each piece evaluated from
+    the history its motion states read) and whole: the same segments, repetitions and
+    explanations (the explained window is solved again from its piece)."""
+    rec = recordings["13_30"]
+    assert rec.n_frames > 4 * 500
+    whole = segment(classifier, rec, chunk_frames=0)
+    pieces = segment(classifier, rec, chunk_frames=500)
+    assert len({s.label for s in whole.segments}) >= 3  # a recording with changes to place
+    _same_segments(pieces, whole)
+
+
+def test_a_canonical_side_case_base_segments_the_same_in_pieces() -> None:
+    """Mirror images of the pieces (side canonical): the synthetic recording of
+    test_synthetic_recording_changes_within_a_quarter_second, mirrored, in pieces of 97
+    frames."""
+    names = ("squat", "jumping_jack", "knee_lift", "arm_abduction")
+    train = [Clip(clip(n).with_metadata(label=n, subject="s"), n, "s", {}) for n in names]
+    windows = split_windows(train).clips
+    clf = CaseBaseClassifier(feature_weights="none", mirror="canonical", phases=3).fit(
+        [c.seq for c in windows], [c.label for c in windows]
+    )
+    fps, parts = 30.0, (("squat", 5.0, 1.25), ("jumping_jack", 4.0, 0.5), ("knee_lift", 6.0, 0.0))
+    frames = [MOVES[n](offset + i / fps) for n, s, offset in parts for i in range(int(s * fps))]
+    rec = mirrored(to_sequence(*frames, fps=fps))  # the knee lifts with the left leg
+    assert clf.feature_config_.side == "canonical"
+    assert moves_left_more(rec.slice_frames(330, 390))  # so their windows are mirrored
+    whole = segment(clf, rec, _NeverUnknown(), chunk_frames=0)
+    _same_segments(segment(clf, rec, _NeverUnknown(), chunk_frames=97), whole)
+    assert [s.label for s in whole.segments] == ["squat", "jumping_jack", "knee_lift"]
 
 
 def test_an_exercise_left_out_of_the_case_base_is_unknown(
