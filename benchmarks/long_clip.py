@@ -1,4 +1,5 @@
-"""Peak memory of ``posecbr classify`` on one very long pose file, read in pieces or whole.
+"""Peak memory of ``posecbr classify`` and ``posecbr segment`` on one very long pose file,
+read in pieces or whole.
 
     python -m benchmarks.long_clip                    # 10^6 frames, the three case bases
     python -m benchmarks.long_clip --frames 200000 --skip-whole
@@ -12,9 +13,12 @@ and saved as float32. Three case bases are trained on the bundled UI-PRMD demo d
 as shipped (a long clip's fluents, signals and positions computed ``CHUNK_FRAMES`` frames at a
 time, :mod:`cbr.long_clip`) and, as the peer, with the whole clip at once (the path every clip
 took before; ``--skip-whole`` leaves it out: it needs 8-11 GB). Both must give the same answer
-and the same distance to the nearest case. The load average is recorded with every figure (the
-machine is shared: wall seconds stretch under load, peak memory does not).
-Results: ``benchmarks/results/long_clip.json``.
+and the same distance to the nearest case. ``posecbr segment CLIP --db CB --json`` (the
+defaults case base; ``--segment-frames`` of the clip, ``--skip-segment`` leaves it out) runs the
+same two ways: its windows cut from pieces of the recording or from the whole one (as before);
+both must give the same segments. The load average is recorded with every figure (the machine
+is shared: wall seconds stretch under load, peak memory does not); the JSON is written after
+every row. Results: ``benchmarks/results/long_clip.json``.
 """
 
 from __future__ import annotations
@@ -38,9 +42,9 @@ DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data
 VIDEO = DATA / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
 RESULTS = ROOT / "benchmarks" / "results" / "long_clip.json"
 CASE_BASES = {
+    "qmp": ["--features", "qmp"],
     "summary, euclidean (defaults)": [],
     "fluents, dtw": ["--features", "fluents", "--similarity", "dtw"],
-    "qmp": ["--features", "qmp"],
 }
 
 
@@ -87,12 +91,14 @@ def _child(argv: list[str]) -> int:
     mode, out, *cli = argv
     if mode == "whole":  # the peer: every clip computed at once, as before cbr.long_clip
         import cbr.long_clip
+        import features.qmp.fit
 
         # its address space capped, so that on a shared machine it fails with MemoryError
         # (recorded as a failed run) instead of waking the kernel's OOM killer
         resource.setrlimit(resource.RLIMIT_AS, (WHOLE_LIMIT_BYTES, WHOLE_LIMIT_BYTES))
 
         cbr.long_clip.CHUNK_FRAMES = 10**12
+        features.qmp.fit.THETA_ROWS = 10**15  # the QMP fit's basis over all frames at once
     from posecbr.cli import main
 
     t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_SELF)
@@ -111,13 +117,16 @@ def _child(argv: list[str]) -> int:
     return 0
 
 
-def measure(mode: str, db: Path, clip: Path, work: Path) -> dict[str, Any]:
-    """One ``classify`` in a process of its own: peak memory, times, the answer."""
-    out = work / f"classify-{mode}-{db.stem}.json"
+def measure(
+    mode: str, db: Path, clip: Path, work: Path, command: str = "classify"
+) -> dict[str, Any]:
+    """One ``classify`` (``segment``) in a process of its own: peak memory, times, the
+    answer."""
+    out = work / f"{command}-{mode}-{db.stem}-{clip.stem}.json"
     load = [round(v, 2) for v in os.getloadavg()]
     code = f"import sys, benchmarks.long_clip as b; sys.exit(b._child({[mode, str(out)]!r} + sys.argv[1:]))"  # noqa: E501
     done = subprocess.run(
-        [sys.executable, "-c", code, "classify", str(clip), "--db", str(db), "--json"],
+        [sys.executable, "-c", code, command, str(clip), "--db", str(db), "--json"],
         env=_env(), capture_output=True, text=True, cwd=ROOT,
     )  # fmt: skip
     row: dict[str, Any] = {"mode": mode, "load_before": load}
@@ -126,6 +135,13 @@ def measure(mode: str, db: Path, clip: Path, work: Path) -> dict[str, Any]:
         return {**row, "exit": done.returncode, "peak_bytes": None, "wall_s": None,
                 "cpu_s": None, "label": None, "nearest_distance": None}  # fmt: skip
     row.update(json.loads(done.stdout.strip().splitlines()[-1]))
+    if command == "segment":
+        doc = json.loads(out.read_text(encoding="utf-8"))
+        segments = doc["segments"]
+        return {**row, "load_after": [round(v, 2) for v in os.getloadavg()],
+                "frames": doc["frames"], "segments": len(segments),
+                "label": ", ".join(sorted({str(s["label"]) for s in segments})),
+                "nearest_distance": None, "segments_json": segments}  # fmt: skip
     result = json.loads(out.read_text(encoding="utf-8"))["results"][0]
     row.update(
         load_after=[round(v, 2) for v in os.getloadavg()],
@@ -152,27 +168,70 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=1_000_000)
     parser.add_argument("--skip-whole", action="store_true", help="only the chunked path")
+    parser.add_argument(
+        "--segment-frames", type=int, default=None, help="frames segment reads (default --frames)"
+    )
+    parser.add_argument("--skip-segment", action="store_true", help="no posecbr segment rows")
+    parser.add_argument(
+        "--segment-modes", nargs="+", choices=("chunked", "whole"), default=["chunked", "whole"]
+    )
     args = parser.parse_args(argv)
-    from cbr.long_clip import CHUNK_FRAMES
-
-    rows = []
+    rows: list[dict[str, Any]] = []
     with tempfile.TemporaryDirectory(prefix="posecbr-long-") as tmp:
         work = Path(tmp)
         clip = make_clip(work, args.frames)
         print(f"clip: {args.frames} frames, {clip.stat().st_size / 1e6:.0f} MB on disk")
         print(f"{'case base':<32} {'mode':<8} {'peak GB':>8} {'wall s':>8} {'cpu s':>8}  answer")
+        modes = ("chunked",) if args.skip_whole else ("chunked", "whole")
         for name, extra in CASE_BASES.items():
             db = work / f"{len(rows)}.sqlite"
             _posecbr("train", str(DEMO), "--db", str(db), *extra)
-            for mode in ("chunked",) if args.skip_whole else ("chunked", "whole"):
+            for mode in modes:
                 row = {"case_base": name, "train_args": extra, **measure(mode, db, clip, work)}
                 rows.append(row)
                 _print_row(row)
+                _write(args, rows)
+            if extra == [] and not args.skip_segment:
+                _segment_rows(args, db, clip, work, rows)
+    return 0
+
+
+def _segment_rows(
+    args: argparse.Namespace, db: Path, clip: Path, work: Path, rows: list[dict[str, Any]]
+) -> None:
+    """``posecbr segment`` of the long recording in pieces and whole (as before), on the
+    defaults case base ``db``; both must give the same segments."""
+    frames = args.segment_frames or args.frames
+    recording = clip if frames == args.frames else _cut(clip, work, frames)
+    found = []
+    for mode in args.segment_modes:
+        row = {"case_base": "segment, defaults", "command": "posecbr segment LONG.npz --db CB "
+               "--json", **measure(mode, db, recording, work, "segment")}  # fmt: skip
+        found.append(row.pop("segments_json", None))
+        rows.append(row)
+        _print_row(row)
+        _write(args, rows)
+    if len(found) == 2 and all(f is not None for f in found):
+        rows[-1]["same_segments_as_chunked"] = found[0] == found[1]
+        _write(args, rows)
+
+
+def _cut(clip: Path, work: Path, frames: int) -> Path:
+    """The first ``frames`` frames of the long clip as a pose file of their own."""
+    from features.poses import load_pose, save_pose
+
+    return save_pose(load_pose(clip).slice_frames(0, frames), work / f"long-{frames}.npz",
+                     float32=True)  # fmt: skip
+
+
+def _write(args: argparse.Namespace, rows: list[dict[str, Any]]) -> None:
     from benchmarks.__main__ import machine
+    from cbr.long_clip import CHUNK_FRAMES
 
     doc = {
         "kind": "posecbr-long-clip",
         "frames": args.frames,
+        "segment_frames": args.segment_frames or args.frames,
         "chunk_frames": CHUNK_FRAMES,
         "command": "posecbr classify LONG.npz --db CB --json",
         "machine": machine(),
@@ -180,7 +239,6 @@ def main(argv: list[str] | None = None) -> int:
         "rows": rows,
     }
     write_json(doc, RESULTS)
-    return 0
 
 
 if __name__ == "__main__":
