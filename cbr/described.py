@@ -23,12 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from features.body import mirrored, moves_left_more, torso_share
+from features.body import moves_left_more, torso_share
 from features.derived import forget, is_cached
 from features.poses import PoseSequence
 
+from . import long_clip
 from .casebase import CaseBase, frames_of, skeleton_of, subject_of
-from .problem import FeatureConfig, availability, extract_problem
+from .problem import FeatureConfig, availability, extract_problem, mirror_problem
 
 
 @dataclass(frozen=True)
@@ -76,11 +77,16 @@ def describe_clip(
             return DescribedClip(empty, None, None, empty.astype(bool), share,
                                  *_provenance(seq))  # fmt: skip
         plain = candidates if candidates.side == "as_recorded" else _as_recorded(candidates)
-        problem = extract_problem(seq, plain)
-        image = extract_problem(mirrored(seq), plain).values if mirror else None
-        left = moves_left_more(seq) if sides else None
+        # a long clip is described a piece at a time (cbr.long_clip): problem, mirror image,
+        # favoured side and available columns, none of them over the whole clip at once
+        chunk = long_clip.chunk_for(seq, None, plain.level)
+        problem = extract_problem(seq, plain, chunk)
+        image = mirror_problem(seq, plain, chunk).values if mirror else None
+        left = None
+        if sides:
+            left = long_clip.moves_left_more(seq, chunk) if chunk else moves_left_more(seq)
         if plain.level == "fluents":  # columns known from the configuration alone
-            has, names, words = availability(seq, plain), None, None
+            has, names, words = availability(seq, plain, chunk), None, None
         else:  # QMP columns come from the action database: a few, shared by every clip
             has = np.zeros(0, dtype=bool)
             names, words = _interned(problem.names), _interned(problem.words)

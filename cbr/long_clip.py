@@ -121,6 +121,28 @@ def movement_signals(seq: PoseSequence, chunk: int) -> MovementSignals:
     return count_signals(stand_in)
 
 
+def availability(seq: PoseSequence, states: tuple[str, ...], chunk: int) -> np.ndarray:
+    """:func:`cbr.problem.availability` of ``seq`` over the columns ``states``, ``chunk``
+    frames at a time: a column is there when some piece has it ``(n_columns,)``."""
+    from .problem import column_kinds, defined_columns
+
+    fluent, angles, positions = (bool(k.any()) for k in column_kinds(states))
+    frame = _position_frame(seq, chunk, False) if positions else None
+    history = history_frames(DEFAULT_TABLE, seq.fps) if fluent else 0
+    out = np.zeros(len(states), dtype=bool)
+    for skip, piece in _pieces(seq, chunk, history):
+        sig = state_signals(piece)
+        res = evaluate(piece, signals=sig) if fluent else None
+        core = piece.slice_frames(skip, piece.n_frames)
+        out |= defined_columns(
+            states,
+            (res.confidence[skip:], res.state_names) if res is not None else None,
+            (sig.values[skip:, : len(sig.angle_names)], sig.angle_names) if angles else None,
+            positions_in_frame(core.positions, frame) if positions else None,
+        )
+    return out
+
+
 def _columns(names: tuple[str, ...], wanted: tuple[str, ...]) -> list[int]:
     index = {n: i for i, n in enumerate(names)}
     return [index[n] for n in wanted]

@@ -240,31 +240,65 @@ def candidate_config(config: FeatureConfig) -> FeatureConfig:
     return dataclasses.replace(config, states=names)
 
 
-def availability(seq: PoseSequence, candidates: FeatureConfig) -> np.ndarray:
+def availability(
+    seq: PoseSequence, candidates: FeatureConfig, chunk_frames: int | None = None
+) -> np.ndarray:
     """``(n_columns,)`` bool: which columns of ``candidates`` (:func:`candidate_config`) the
     clip ``seq`` ``(frames, joints, 3)`` has (a fluent state or angle defined in some frame; the
-    arm planes whenever the arm joints are there at all)."""
+    arm planes whenever the arm joints are there at all). ``chunk_frames`` as for
+    :func:`extract_problem`: a long clip is looked at a piece at a time."""
     states = tuple(candidates.states)
+    chunk = long_clip.chunk_for(seq, chunk_frames)
+    if chunk:
+        return long_clip.availability(seq, states, chunk)
+    fluent, angles, positions = column_kinds(states)
+    res = fluents_of(seq) if fluent.any() else None
+    sig = signals_of(seq) if angles.any() else None
+    return defined_columns(
+        states,
+        (res.confidence, res.state_names) if res is not None else None,
+        (sig.values[:, : len(sig.angle_names)], sig.angle_names) if sig is not None else None,
+        body_positions(seq) if positions.any() else None,
+    )
+
+
+def column_kinds(states: Sequence[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which of the columns ``states`` are fluent states, joint angles and positions, ``(n,)``
+    bool each."""
+    angles = np.array([n.startswith(ANGLE_PREFIX) for n in states], dtype=bool)
+    positions = np.array([n.startswith(POSITION_PREFIX) for n in states], dtype=bool)
+    return ~angles & ~positions, angles, positions
+
+
+def defined_columns(
+    states: Sequence[str],
+    fluents: tuple[np.ndarray, Sequence[str]] | None,
+    angles: tuple[np.ndarray, Sequence[str]] | None,
+    positions: np.ndarray | None,
+) -> np.ndarray:
+    """``(n_columns,)`` bool: which columns ``states`` are defined in some frame of the fluent
+    confidences ``(frames, n_states)`` with their state names, the joint angles
+    ``(frames, n_angles)`` with their names and the body positions ``(frames, n_position
+    columns)`` of a clip (or of a piece of it: a clip has a column when a piece has it). Each
+    is None when no column needs it."""
     out = np.zeros(len(states), dtype=bool)
-    fluent = [i for i, n in enumerate(states) if not n.startswith((ANGLE_PREFIX, POSITION_PREFIX))]
-    if fluent:
-        res = fluents_of(seq)
-        index = {n: i for i, n in enumerate(res.state_names)}
-        out[fluent] = res.available()[[index[states[i]] for i in fluent]]
-    angles = [i for i, n in enumerate(states) if n.startswith(ANGLE_PREFIX)]
-    if angles:
-        sig = signals_of(seq)
-        seen = dict(zip(sig.angle_names, ~np.all(np.isnan(sig.values[:, : len(sig.angle_names)]),
-                                                 axis=0), strict=True))  # fmt: skip
-        arms = bool(np.isfinite(sig.values[:, :4]).any())
-        for i in angles:
+    kinds = column_kinds(states)
+    fluent, ang, pos = (np.flatnonzero(k).tolist() for k in kinds)
+    if len(fluent) and fluents is not None:
+        index = {n: i for i, n in enumerate(fluents[1])}
+        defined = ~np.all(np.isnan(fluents[0]), axis=0)
+        out[fluent] = defined[[index[states[i]] for i in fluent]]
+    if len(ang) and angles is not None:
+        values, names = angles
+        seen = dict(zip(names, ~np.all(np.isnan(values), axis=0), strict=True))
+        arms = bool(np.isfinite(values[:, :4]).any())
+        for i in ang:
             a = states[i][len(ANGLE_PREFIX) :]
             out[i] = arms if a in ARM_PLANE_SIGNALS else bool(seen.get(a, False))
-    positions = [i for i, n in enumerate(states) if n.startswith(POSITION_PREFIX)]
-    if positions:
-        seen_pos = dict(zip(position_names(), ~np.all(np.isnan(body_positions(seq)), axis=0),
+    if len(pos) and positions is not None:
+        seen_pos = dict(zip(position_names(), ~np.all(np.isnan(positions), axis=0),
                             strict=True))  # fmt: skip
-        out[positions] = [bool(seen_pos[states[i][len(POSITION_PREFIX) :]]) for i in positions]
+        out[pos] = [bool(seen_pos[states[i][len(POSITION_PREFIX) :]]) for i in pos]
     return out
 
 
@@ -430,6 +464,22 @@ def extract_problem(
     else:
         problem = _fluent_problem(mirrored(seq) if mirror else seq, config, 0, False)
     return dataclasses.replace(problem, mirrored=True) if mirror else problem
+
+
+def mirror_problem(
+    seq: PoseSequence, config: FeatureConfig, chunk_frames: int | None = None
+) -> Problem:
+    """``extract_problem(mirrored(seq), config)`` under an as-recorded ``config``: the problem
+    of the clip's mirror image, for a long clip computed a piece at a time from mirrored
+    pieces (the mirror image of the whole clip is never held)."""
+    if config.side != "as_recorded":
+        raise ConfigError("the mirror image's problem is taken as recorded", "side")
+    chunk = long_clip.chunk_for(seq, chunk_frames, "qmp" if config.level == "qmp" else "fluents")
+    if not chunk:
+        return extract_problem(mirrored(seq), config, 0)
+    if config.level == "qmp":
+        return _qmp_problem(long_clip.qmp_features(seq, chunk, True), config)
+    return _fluent_problem(seq, config, chunk, True)
 
 
 def _qmp_problem(q: QMPFeatures, config: FeatureConfig) -> Problem:

@@ -13,8 +13,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import cbr.problem as cbr_problem
+import features.body as features_body
+from cbr import long_clip
 from cbr.long_clip import SampledColumns, chunk_for
-from cbr.problem import FeatureConfig, candidate_config, extract_problem, fill_nan_time
+from cbr.problem import (
+    FeatureConfig,
+    availability,
+    candidate_config,
+    extract_problem,
+    fill_nan_time,
+    mirror_problem,
+)
 from features.body import mirrored, moves_left_more
 from features.derived import fluents_of
 from features.poses import PoseSequence, load_pose
@@ -89,6 +99,79 @@ def test_qmp_in_pieces_equals_whole_clip(name: str) -> None:
     assert np.array_equal(pieces.values[binary], whole.values[binary])
     assert 0 < whole.values[binary].sum() < len(binary)  # some criteria met, some not
     np.testing.assert_allclose(pieces.values, whole.values, rtol=1e-9, atol=1e-12)
+
+
+def test_available_columns_in_pieces_equal_whole_clip() -> None:
+    seq = _long_clip()
+    config = candidate_config(CONFIGS["summary with phases, angles, positions"])
+    whole = availability(_copy(seq), config, chunk_frames=0)
+    pieces = availability(_copy(seq), config, chunk_frames=CHUNK)
+    np.testing.assert_array_equal(pieces, whole)
+    states = list(config.states)
+    # the right ankle is never seen: its knee angle and positions are not there; the left
+    # ankle (missing at the end only) is
+    assert not pieces[states.index("angle:right_knee")]
+    assert not pieces[states.index("pos:right_ankle.height")]
+    assert pieces[states.index("pos:left_ankle.height")] and pieces[states.index("angle:left_knee")]
+
+
+@pytest.mark.parametrize("config", [CONFIGS["sequence of 64 frames"], QMP_CONFIGS["qmp values"]])
+def test_mirror_image_problem_in_pieces_equals_whole_mirror_image(config: FeatureConfig) -> None:
+    seq = _long_clip()
+    whole = extract_problem(mirrored(_copy(seq)), candidate_config(config), chunk_frames=0)
+    pieces = mirror_problem(_copy(seq), candidate_config(config), chunk_frames=CHUNK)
+    assert pieces.names == whole.names
+    np.testing.assert_allclose(pieces.values, whole.values, rtol=1e-9, atol=1e-12)
+
+
+def _labelled_long_clips() -> tuple[list[PoseSequence], list[str]]:
+    """Two subjects' deep squats and hurdle steps, each subject's six repetitions of a
+    movement (three done well, three not) joined into one clip."""
+    seqs, labels = [], []
+    for movement, label in (("m01", "deep_squat"), ("m02", "hurdle_step")):
+        for subject in ("s01", "s02"):
+            parts = [load_pose(DEMO / f"{movement}_{subject}_e{e:02d}{inc}.npz")
+                     for e in (1, 2, 3) for inc in ("", "_inc")]  # fmt: skip
+            pos = np.concatenate([p.positions for p in parts])
+            seqs.append(PoseSequence(pos, parts[0].joint_names, parts[0].fps,
+                                     source=f"{movement} {subject}",
+                                     metadata={"subject": subject}))  # fmt: skip
+            labels.append(label)
+    return seqs, labels
+
+
+def test_training_on_long_clips_goes_in_pieces_and_equals_whole_clips(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Clips longer than CHUNK_FRAMES (made 53 here) are described a piece at a time: no
+    fluents or state signals of a whole clip are computed, and the case base (mirror images
+    and favoured sides included) is the one the whole clips give."""
+    from cbr.estimator import CaseBaseClassifier
+
+    seqs, labels = _labelled_long_clips()
+    assert min(s.n_frames for s in seqs) > 6 * 53
+
+    def fit() -> CaseBaseClassifier:
+        clf = CaseBaseClassifier(mirror="canonical", feature_weights="none", phases=3)
+        return clf.fit([_copy(s) for s in seqs], labels)
+
+    whole = fit()
+    monkeypatch.setattr(long_clip, "CHUNK_FRAMES", 53)
+
+    def refuse(seq: PoseSequence) -> None:
+        raise AssertionError(f"computed over a whole clip of {seq.n_frames} frames")
+
+    for module in (cbr_problem, features_body):
+        for name in ("fluents_of", "signals_of"):
+            if hasattr(module, name):
+                monkeypatch.setattr(module, name, refuse)
+    pieces = fit()
+    assert pieces.feature_config_ == whole.feature_config_
+    assert pieces.feature_config_.side == "canonical"
+    assert list(pieces.case_base_.labels) == list(whole.case_base_.labels)
+    np.testing.assert_allclose(
+        pieces.case_base_.problems, whole.case_base_.problems, rtol=0, atol=1e-12
+    )
 
 
 def test_never_seen_joint_reads_its_fill_in_pieces() -> None:
