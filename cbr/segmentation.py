@@ -311,12 +311,16 @@ def block_votes(solved: Sequence[_Solved], n_frames: int, fps: float) -> np.ndar
     """``(n_blocks, n_classes)``: the mean vote of the windows over each block's centre."""
     n_blocks = int(math.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
     centres = (np.arange(n_blocks) + 0.5) * BLOCK_S * fps  # in frames
-    starts = np.array([w.start for w in solved])
-    stops = np.array([w.stop for w in solved])
-    cover = (starts[None, :] <= centres[:, None]) & (centres[:, None] < stops[None, :])
-    votes = cover.astype(np.float64) @ np.stack([w.vote for w in solved])
-    counts = cover.sum(axis=1)
-    n_states = votes.shape[1]
+    # the blocks whose centre a window covers, [first, end): a run of blocks per window (a
+    # blocks x windows matrix would take 64 GB for a recording of 10^6 frames)
+    first = np.searchsorted(centres, [w.start for w in solved], side="left")
+    end = np.searchsorted(centres, [w.stop for w in solved], side="left")
+    n_states = len(solved[0].vote)
+    votes = np.zeros((n_blocks, n_states))
+    counts = np.zeros(n_blocks, dtype=np.int64)
+    for w, a, b in zip(solved, first.tolist(), end.tolist(), strict=True):  # over windows
+        votes[a:b] += w.vote
+        counts[a:b] += 1
     uniform = np.full(n_states, 1.0 / n_states)
     return np.where(counts[:, None] > 0, votes / np.maximum(counts, 1)[:, None], uniform)
 
