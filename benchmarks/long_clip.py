@@ -172,6 +172,8 @@ def main(argv: list[str] | None = None) -> int:
         "--segment-frames", type=int, default=None, help="frames segment reads (default --frames)"
     )
     parser.add_argument("--skip-segment", action="store_true", help="no posecbr segment rows")
+    parser.add_argument("--skip-classify", action="store_true", help="only the segment rows")
+    parser.add_argument("--out", type=Path, default=RESULTS, help="the results JSON")
     parser.add_argument(
         "--segment-modes", nargs="+", choices=("chunked", "whole"), default=["chunked", "whole"]
     )
@@ -184,9 +186,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{'case base':<32} {'mode':<8} {'peak GB':>8} {'wall s':>8} {'cpu s':>8}  answer")
         modes = ("chunked",) if args.skip_whole else ("chunked", "whole")
         for name, extra in CASE_BASES.items():
-            db = work / f"{len(rows)}.sqlite"
+            if args.skip_classify and extra:
+                continue
+            db = work / f"{len(rows)}-{len(extra)}.sqlite"
             _posecbr("train", str(DEMO), "--db", str(db), *extra)
-            for mode in modes:
+            for mode in () if args.skip_classify else modes:
                 row = {"case_base": name, "train_args": extra, **measure(mode, db, clip, work)}
                 rows.append(row)
                 _print_row(row)
@@ -234,11 +238,12 @@ def _write(args: argparse.Namespace, rows: list[dict[str, Any]]) -> None:
         "segment_frames": args.segment_frames or args.frames,
         "chunk_frames": CHUNK_FRAMES,
         "command": "posecbr classify LONG.npz --db CB --json",
+        "argv": sys.argv[1:],
         "machine": machine(),
         "load": [round(v, 2) for v in os.getloadavg()],
         "rows": rows,
     }
-    write_json(doc, RESULTS)
+    write_json(doc, args.out)
 
 
 if __name__ == "__main__":
