@@ -192,6 +192,7 @@ def _code_distances_sq(codes: np.ndarray, qc: np.ndarray, a: int, out: np.ndarra
 def _quantized_knn(
     codes: np.ndarray,
     errs: np.ndarray,
+    unbounded: np.ndarray,
     err_max: float,
     step: float,
     qc: np.ndarray,
@@ -206,8 +207,9 @@ def _quantized_knn(
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """Exact k nearest of ``q`` ``(D,)`` float32 with the quantized bound, in one compiled call.
 
-    codes ``(n, D)`` uint8 and errs ``(n,)`` (inf: a row with a NaN or inf, which the row
-    kernel never returns) as :func:`_quantize` gives them, qc ``(D,)`` uint8 and ``e_q`` the
+    codes ``(n, D)`` uint8 and errs ``(n,)`` as :func:`_quantize` gives them; ``unbounded``
+    ``(b,)`` the rows with a NaN or inf, which no bound covers: they always go to the row
+    kernel, which decides about them as in the plain pass; qc ``(D,)`` uint8 and ``e_q`` the
     query's; ``allowance``: how far a row kernel's squared distance may be from the true one.
     Returns (indices ``(k,)``, distances ``(k,)``, cases re-ranked), or a count of -1 once
     more than ``max_count`` cases are candidates (the caller then runs the plain pass).
@@ -263,14 +265,22 @@ def _quantized_knn(
                 cand[count] = i
                 cand_lb[count] = lb2
                 count += 1
-    limit = ub_d[k - 1] * (1.0 + 1e-12)
+    kept = _still_below(cand[:count], cand_lb[:count], ub_d[k - 1] * (1.0 + 1e-12))
+    if unbounded.shape[0]:
+        kept = np.sort(np.concatenate((kept, unbounded)))
+    best_i, best_d = _knn_scan(rows, sq, q, q_sq, kept, k)
+    return best_i, best_d, len(kept)
+
+
+@numba.njit(cache=True, nogil=True)
+def _still_below(cand: np.ndarray, cand_lb: np.ndarray, limit: float) -> np.ndarray:
+    """The candidates ``(c,)`` whose lower bound ``(c,)`` is at most the final ``limit``."""
     kept = 0
-    for t in range(count):
+    for t in range(cand.shape[0]):
         if cand_lb[t] <= limit:
             cand[kept] = cand[t]
             kept += 1
-    best_i, best_d = _knn_scan(rows, sq, q, q_sq, cand[:kept], k)
-    return best_i, best_d, kept
+    return cand[:kept]
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
@@ -344,6 +354,7 @@ class _Codes:
 
     codes: np.ndarray  # (n, D) uint8
     errs: np.ndarray  # (n,) float64 |x - x_hat|, rounded up; inf for a row with NaN or inf
+    unbounded: np.ndarray  # (b,) int64 increasing: the rows with NaN or inf (no bound)
     base: np.ndarray  # (D,) float64
     step: float
     err_max: float  # largest finite err
@@ -407,7 +418,7 @@ class Euclidean(SimilarityMeasure):
         m = min(m, dims // 4)
         if self.exact or n < self.prune_min_cases or m < 4:
             return _EuclideanIndex(rows, sq, np.sqrt(sq))
-        return _pruning_index(rows, sq, m, _quantized(rows, sq))
+        return _pruning_index(rows, sq, m, _quantized(rows))
 
     def _query(self, query_rep: np.ndarray) -> tuple[np.ndarray, float]:
         q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
@@ -538,7 +549,7 @@ def _allowance(index: _EuclideanIndex, q_sq: float) -> float:
     gamma = dims * _U32 / (1.0 - dims * _U32)
     q_norm = math.sqrt(q_sq)
     dot = gamma * index.max_norm * q_norm + 2.0 * dims * 2.0**-149
-    return 2.02 * dot + 1e-15 * (index.max_norm + q_norm) ** 2
+    return float(2.02 * dot + 1e-15 * (index.max_norm + q_norm) ** 2)
 
 
 def _finite_max_norm(sq: np.ndarray) -> float:
@@ -555,7 +566,7 @@ def _quantize(x: np.ndarray, base: np.ndarray, step: float) -> tuple[np.ndarray,
     per value of the exact one, the sum of squares and root within ``(D + 2) u64`` relative:
     the error norm is raised by both (generously) so it never falls below the exact one."""
     x64 = np.asarray(x, dtype=np.float64)
-    finite = np.isfinite(x64).all(axis=1)
+    finite = np.asarray(np.isfinite(x64).all(axis=1))
     with np.errstate(invalid="ignore", over="ignore"):
         c = np.clip(np.rint((x64 - base) / step), 0.0, 255.0)
     c[~np.isfinite(c)] = 0.0
@@ -572,7 +583,7 @@ def _quantize(x: np.ndarray, base: np.ndarray, step: float) -> tuple[np.ndarray,
     return c.astype(np.uint8), err
 
 
-def _quantized(rows: np.ndarray, sq: np.ndarray) -> _Codes | None:
+def _quantized(rows: np.ndarray) -> _Codes | None:
     """The uint8 grid of ``rows`` ``(n, D)``: offset per dimension at the smallest finite value,
     one step (the widest range / 255) for all; None when the integer distance could overflow
     int32 or there is no finite range."""
@@ -599,7 +610,8 @@ def _quantized(rows: np.ndarray, sq: np.ndarray) -> _Codes | None:
             rows[a : a + step_rows], lo, step
         )
     finite = errs[np.isfinite(errs)]
-    return _Codes(codes, errs, lo, step, float(finite.max()) if len(finite) else 0.0)
+    unbounded = np.flatnonzero(~np.isfinite(errs)).astype(np.int64)
+    return _Codes(codes, errs, unbounded, lo, step, float(finite.max()) if len(finite) else 0.0)
 
 
 def _quantized_search(
@@ -616,7 +628,7 @@ def _quantized_search(
     n = len(index.rows)
     qc, e_q = _quantize(q32[None, :], codes.base, codes.step)
     idx, dist, count = _quantized_knn(
-        codes.codes, codes.errs, codes.err_max, codes.step, qc[0],
+        codes.codes, codes.errs, codes.unbounded, codes.err_max, codes.step, qc[0],
         float(e_q[0]), index.rows, index.sq_norms, q32, q_sq, k, _allowance(index, q_sq),
         max(k, int(FALLBACK * n)),
     )  # fmt: skip
