@@ -297,3 +297,34 @@ def test_quantization_error_norm_is_never_below_the_exact_one() -> None:
     assert np.all(err >= exact)
     assert np.all(err <= exact * (1 + 1e-9) + 1e-6)  # raised by rounding, not by much
     assert np.all(np.abs(x.astype(np.float64) - grid.astype(np.float64)) <= step / 2 * (1 + 1e-9))
+
+
+def test_euclidean_pca_survivors_filtered_by_the_quantized_bound_equal_brute_force(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import cbr.similarity.euclidean as euclidean
+
+    calls = []
+    run = euclidean._run_quantized
+
+    def counted(*args: object) -> tuple[np.ndarray, np.ndarray, int]:
+        calls.append(len(args[-1]))  # type: ignore[arg-type]
+        return run(*args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(euclidean, "CASCADE_MIN", 0)  # every PCA survivor set goes through it
+    monkeypatch.setattr(euclidean, "_run_quantized", counted)
+    rng = np.random.default_rng(4)
+    cases, queries = _clustered(rng, 8000, 160)
+    cases[6001] = cases[33]
+    queries = np.vstack([queries, cases[33].astype(np.float64)])
+    m = Euclidean(prune_min_cases=1000)
+    index = m.build_index(cases)
+    plain = Euclidean(prune_min_cases=10**9).build_index(cases)
+    for q in queries:
+        qr = m.represent_query(q)
+        want_i, want_d = smallest_k(m.distances(qr, plain), 5)
+        got_i, got_d = m.nearest(qr, index, 5)
+        np.testing.assert_array_equal(got_i, want_i)
+        np.testing.assert_array_equal(got_d, want_d)
+    # every query went through the PCA bound, then the quantized bound on its survivors only
+    assert len(calls) == len(queries) and 0 < max(calls) < len(cases) // 2
