@@ -311,7 +311,7 @@ def test_euclidean_pca_survivors_filtered_by_the_quantized_bound_equal_brute_for
         calls.append(len(args[-1]))  # type: ignore[arg-type]
         return run(*args)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(euclidean, "CASCADE_MIN", 0)  # every PCA survivor set goes through it
+    monkeypatch.setattr(euclidean, "CASCADE_SHARE", 10**9)  # every survivor set goes through it
     monkeypatch.setattr(euclidean, "_run_quantized", counted)
     rng = np.random.default_rng(4)
     cases, queries = _clustered(rng, 8000, 160)
