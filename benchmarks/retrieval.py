@@ -18,7 +18,9 @@ Data kinds (float32 case matrices; queries are new points, never copies of cases
 
 Methods, one thread each (threadpoolctl, FAISS ``omp_set_num_threads(1)``), in rounds over
 all queries with the methods' order rotated (``benchmarks._common.side_by_side``): posecbr
-``Euclidean.nearest`` (pruned search with its fallback), posecbr plain (the same measure
+``Euclidean.nearest`` (the PCA bound, the quantized pass where it prunes nothing, the plain
+pass where neither prunes; ``surv`` / ``q-surv``: the running share of cases that survive
+each bound, 1.0 when a bound stopped being tried, nan: never ran), posecbr plain (the same measure
 without the bound), scikit-learn ``NearestNeighbors(algorithm="brute")``, FAISS
 ``IndexFlatL2``; and for the whole query batch at once posecbr
 ``nearest_many`` and FAISS ``search`` on all queries. Every method's neighbours are checked
@@ -136,6 +138,11 @@ def run_one(kind: str, cases: np.ndarray, queries: np.ndarray, storage: str) -> 
         "build_s": round(build_s, 3),
         "bound_rank": None if pruned.basis is None else int(pruned.basis.shape[1]),
         "surviving_share": round(float(pruned.pruning[0]), 4),
+        "quantized_surviving_share": (  # None: the quantized pass never ran (PCA pruned)
+            None
+            if pruned.codes is None or pruned.codes.pruning[1] == 0
+            else round(float(pruned.codes.pruning[0]), 6)
+        ),
         "ms_per_query": {k: round(v, 3) for k, v in ms.items()},
         "queries_with_identical_neighbours": identical,
         "load_avg": [load_before, C.load()],
@@ -145,12 +152,13 @@ def run_one(kind: str, cases: np.ndarray, queries: np.ndarray, storage: str) -> 
 
 def print_row(r: dict[str, Any]) -> None:
     ms = r["ms_per_query"]
+    qs = r["quantized_surviving_share"]
     print(
         f"{r['kind']:<13} {r['cases']:>8} {r['dims']:>5} {r['storage']:<7} "
         f"{ms['posecbr']:>8.2f} {ms['posecbr_plain']:>8.2f} {ms['sklearn_brute']:>8.2f} "
         f"{ms['faiss_flat']:>8.2f} {ms['posecbr_batch']:>8.2f} {ms['faiss_flat_batch']:>8.2f} "
         f"{ms['faiss_flat'] / ms['posecbr']:>6.1f}x  {r['surviving_share']:>5.3f} "
-        f"{r['load_avg'][0]:>5.2f}",
+        f"{qs if qs is not None else float('nan'):>7.5f} {r['load_avg'][0]:>5.2f}",
         flush=True,
     )
 
@@ -177,7 +185,7 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"{'data':<13} {'cases':>8} {'dims':>5} {'storage':<7} {'posecbr':>8} {'plain':>8} "
         f"{'sklearn':>8} {'faiss':>8} {'batch':>8} {'faiss-b':>8} {'vs faiss':>7} "
-        f"{'surv':>5} {'load':>5}   (ms per query, k={K}, one thread)"
+        f"{'surv':>5} {'q-surv':>7} {'load':>5}   (ms per query, k={K}, one thread)"
     )
     rows = []
     started = time.perf_counter()

@@ -200,3 +200,131 @@ def test_dtw_distances_equal_dtaidistance() -> None:
             series, window=4, block=((0, 1), (1, len(series))), compact=True, parallel=False
         )
         np.testing.assert_allclose(m.distances(m.represent_query(q), index), peer, rtol=1e-10)
+
+
+def _quantized_answer(index: object, query: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The quantized-bound search itself (``nearest`` reaches it only once the PCA bound has
+    stopped pruning), on the float32 query the measure compares."""
+    from cbr.similarity.euclidean import _quantized_search
+
+    q32 = np.asarray(query, dtype=np.float32)
+    return _quantized_search(index, q32, float(np.dot(q32.astype(np.float64), q32)), k)  # type: ignore[arg-type]
+
+
+def _adversarial(kind: str, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """(cases ``(6000, 64)`` float32, queries ``(12, 64)``) the quantized bound must survive."""
+    n, dims = 6000, 64
+    if kind == "duplicates":  # 40 distinct rows, each ~150 times: ties everywhere
+        distinct = rng.random((40, dims))
+        cases = distinct[rng.integers(0, 40, n)]
+        queries = np.vstack([distinct[:6], rng.random((6, dims))])
+    elif kind == "huge-offset":  # values near 1e6 differing by ~1: float32 rounding dominates
+        cases = 1e6 + rng.random((n, dims))
+        queries = 1e6 + rng.random((12, dims))
+    elif kind == "tiny":  # values ~1e-30: float32 products underflow
+        cases = 1e-30 * rng.random((n, dims))
+        queries = 1e-30 * rng.random((12, dims))
+    elif kind == "one-wide-dimension":  # one dimension 10^4 wide sets a coarse grid for all
+        cases = rng.random((n, dims))
+        cases[:, 5] *= 1e4
+        queries = rng.random((12, dims))
+        queries[:, 5] *= 1e4
+    elif kind == "outside":  # queries far outside every case's range: clipped codes
+        cases = rng.random((n, dims))
+        queries = np.vstack([rng.random((6, dims)) * 3.0 - 1.0, rng.random((6, dims)) + 5.0])
+    else:  # "nan-rows": rows with a NaN or inf are never neighbours, as in the plain pass
+        cases = rng.random((n, dims))
+        cases[rng.choice(n, 300, replace=False), rng.integers(0, dims, 300)] = np.nan
+        cases[rng.choice(n, 30, replace=False), 3] = np.inf
+        queries = rng.random((12, dims))
+    return cases.astype(np.float32), queries
+
+
+@pytest.mark.parametrize(
+    "kind",
+    ["duplicates", "huge-offset", "tiny", "one-wide-dimension", "outside", "nan-rows"],
+)
+def test_euclidean_quantized_bound_equals_brute_force_on_adversarial_data(kind: str) -> None:
+    cases, queries = _adversarial(kind, np.random.default_rng(5))
+    m = Euclidean(prune_min_cases=1000)
+    index = m.build_index(cases)
+    plain = Euclidean(prune_min_cases=10**9).build_index(cases)
+    assert index.codes is not None
+    for q in queries:
+        qr = m.represent_query(q)
+        want_i, want_d = smallest_k(m.distances(qr, plain), 7)
+        got_i, got_d = _quantized_answer(index, qr, 7)
+        np.testing.assert_array_equal(got_i, want_i)
+        np.testing.assert_array_equal(got_d, want_d)
+        np.testing.assert_array_equal(m.nearest(qr, index, 7)[0], want_i)
+    assert index.codes.pruning[1] >= len(queries)  # the bound ran for every query
+
+
+@pytest.mark.parametrize("kind", ["unstructured", "clustered"])
+def test_euclidean_quantized_bound_prunes_and_equals_brute_force(kind: str) -> None:
+    rng = np.random.default_rng(9)
+    make = _unstructured if kind == "unstructured" else _clustered
+    cases, queries = make(rng, 20000, 120)
+    cases[15000] = cases[77]  # a duplicate: the tie goes to the lower index
+    queries = np.vstack([queries, cases[77].astype(np.float64)])
+    m = Euclidean(prune_min_cases=1000)
+    index = m.build_index(cases)
+    plain = Euclidean(prune_min_cases=10**9).build_index(cases)
+    for q in queries:
+        qr = m.represent_query(q)
+        want_i, want_d = smallest_k(m.distances(qr, plain), 5)
+        got_i, got_d = _quantized_answer(index, qr, 5)
+        np.testing.assert_array_equal(got_i, want_i)
+        np.testing.assert_array_equal(got_d, want_d)
+    assert list(_quantized_answer(index, m.represent_query(queries[-1]), 2)[0]) == [77, 15000]
+    # uniform data: the 5th neighbour lies far below the bulk, nearly every case is pruned;
+    # clustered: the nine clusters the query is not in (nine tenths of the cases) are pruned
+    assert index.codes is not None
+    assert index.codes.pruning[0] < (0.01 if kind == "unstructured" else 0.1)
+
+
+def test_quantization_error_norm_is_never_below_the_exact_one() -> None:
+    from cbr.similarity.euclidean import _quantize
+
+    rng = np.random.default_rng(2)
+    x = (1e6 + rng.random((500, 50)) * 1e3).astype(np.float32)
+    base = x.astype(np.float64).min(axis=0)
+    step = float((x.astype(np.float64).max(axis=0) - base).max()) / 255.0
+    codes, err = _quantize(x, base, step)
+    # the grid points and their distances in extended precision, from the codes alone
+    grid = base.astype(np.longdouble) + np.longdouble(step) * codes.astype(np.longdouble)
+    exact = np.sqrt(((x.astype(np.longdouble) - grid) ** 2).sum(axis=1))
+    assert np.all(err >= exact)
+    assert np.all(err <= exact * (1 + 1e-9) + 1e-6)  # raised by rounding, not by much
+    assert np.all(np.abs(x.astype(np.float64) - grid.astype(np.float64)) <= step / 2 * (1 + 1e-9))
+
+
+def test_euclidean_pca_survivors_filtered_by_the_quantized_bound_equal_brute_force(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import cbr.similarity.euclidean as euclidean
+
+    calls = []
+    run = euclidean._run_quantized
+
+    def counted(*args: object) -> tuple[np.ndarray, np.ndarray, int]:
+        calls.append(len(args[-1]))  # type: ignore[arg-type]
+        return run(*args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(euclidean, "CASCADE_SHARE", 10**9)  # every survivor set goes through it
+    monkeypatch.setattr(euclidean, "_run_quantized", counted)
+    rng = np.random.default_rng(4)
+    cases, queries = _clustered(rng, 8000, 160)
+    cases[6001] = cases[33]
+    queries = np.vstack([queries, cases[33].astype(np.float64)])
+    m = Euclidean(prune_min_cases=1000)
+    index = m.build_index(cases)
+    plain = Euclidean(prune_min_cases=10**9).build_index(cases)
+    for q in queries:
+        qr = m.represent_query(q)
+        want_i, want_d = smallest_k(m.distances(qr, plain), 5)
+        got_i, got_d = m.nearest(qr, index, 5)
+        np.testing.assert_array_equal(got_i, want_i)
+        np.testing.assert_array_equal(got_d, want_d)
+    # every query went through the PCA bound, then the quantized bound on its survivors only
+    assert len(calls) == len(queries) and 0 < max(calls) < len(cases) // 2

@@ -19,8 +19,20 @@ which rows they hand it, never in how a row's distance is computed.
   exact distances only for cases whose bound is below the k-th best of the cases with the
   best bounds. The search measures its own pruning power: when more than ``FALLBACK`` of the
   cases survive (unstructured data, where no low-rank bound prunes), the rest of the query
-  is the plain pass, and later queries skip the bound (re-probing every ``PROBE_EVERY``), so
-  an unprunable case base costs one plain pass per query.
+  is the quantized pass below, and later queries skip the PCA bound (re-probing every
+  ``PROBE_EVERY``). When many cases survive (``CASCADE_SHARE``), the quantized bound filters
+  them before their float rows are read.
+- **Quantized pass** (VA-file style, :func:`_quantized_knn`): every row is also stored as
+  uint8 codes on one grid (``x_hat = base + step * code``) with its exact quantization error
+  ``e_x = |x - x_hat|``; with the query's codes and error ``e_q``,
+  ``|q_hat - x_hat| - e_q - e_x <= |q - x| <= |q_hat - x_hat| + e_q + e_x``, and
+  ``|q_hat - x_hat|^2`` is ``step^2`` times an exact integer sum over a quarter of the float
+  rows' bytes. Rows whose lower bound is above the k-th smallest upper bound are pruned; the
+  rest get their float distance. On unstructured data the k-th neighbour lies far below the
+  bulk and the grid error is small against that gap: all but ~0.01 % of the cases are
+  pruned. When more than ``FALLBACK`` survive, the query is the plain pass (and later queries
+  skip the quantized pass too, re-probing every ``PROBE_EVERY``): an unprunable case base
+  costs one plain pass per query.
 - **Many queries** (:meth:`Euclidean.nearest_many`): one matrix product per block of queries
   (BLAS), then per query the cases whose product-based distance is within its rounding error
   bound of the k-th best are re-checked with the row kernel.
@@ -42,6 +54,8 @@ from .base import SimilarityMeasure, check_weighting, register_measure, weighted
 
 FALLBACK = 0.5  # candidate share above which the pruned search turns into the plain pass
 PROBE_EVERY = 16  # an index that stopped pruning tries the bound again every this many queries
+CASCADE_SHARE = 8  # from 1/8 of the cases surviving the PCA bound, the quantized bound filters
+# them before their rows are read (at 2 % survivors, real features at 10^6, it did not pay)
 _U32 = 2.0**-24  # unit roundoff of float32
 
 
@@ -99,7 +113,7 @@ def _knn_scan(
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
-def _pruned_knn(
+def _pruned_candidates(
     rows: np.ndarray,
     sq: np.ndarray,
     proj: np.ndarray,
@@ -112,14 +126,15 @@ def _pruned_knn(
     rounding: float,
     top_norm: float,
     max_count: int,
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """Exact k nearest of ``q`` ``(D,)`` float32 with the PCA bound, in one compiled call.
+) -> tuple[np.ndarray, bool]:
+    """The cases ``q`` ``(D,)`` float32's k nearest are among by the PCA bound, in one compiled
+    call.
 
     proj ``(n, m)`` float32 projections of the centred rows on ``basis`` ``(D, m)``, resid
     ``(n,)`` float32 their residual norms; ``rounding``: what a row kernel's squared distance
-    may lack of the true one. Returns (indices ``(k,)``, distances ``(k,)``, cases whose
-    bound survived), or a survivor count of -1 once more than ``max_count`` survive (the
-    caller then runs the plain pass instead).
+    may lack of the true one. Returns (the cases whose bound survived ``(c,)`` increasing,
+    True), or (nothing, False) once more than ``max_count`` survive (the caller then runs a
+    full pass instead).
     """
     n, m = proj.shape
     dims = rows.shape[1]
@@ -165,11 +180,132 @@ def _pruned_knn(
     for i in range(n):
         if lb[i] <= limit:
             if count == max_count:
-                return best_d.astype(np.int64), best_d, -1
+                return cand[:0], False
             cand[count] = i
             count += 1
-    best_i, best_d = _knn_scan(rows, sq, q, q_sq, cand[:count], k)
-    return best_i, best_d, count
+    return cand[:count], True
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _code_dots(
+    codes: np.ndarray, qc: np.ndarray, which: np.ndarray, a: int, out: np.ndarray
+) -> None:
+    """``out[t]`` = the integer ``c_x.c_q`` of row ``a + t`` of ``codes`` ``(n, D)`` uint8 (of
+    row ``which[a + t]`` when ``which`` is not empty) and the query's codes ``qc`` ``(D,)``
+    int16 (exact in int32: ``D 255^2 < 2^31``). A block at a time and with nothing else in
+    the loop, so LLVM vectorises it: the uint8 x int16 products become vpmaddwd (16 pairs an
+    instruction), the sum kept in int32 because only its int32 value is stored (using the
+    sum in int64 arithmetic in the loop made it vpmuldq on int64, measured 3x slower; summing
+    squared differences needs a subtraction and a second widening per value)."""
+    dims = codes.shape[1]
+    for t in range(out.shape[0]):
+        i = a + t if which.shape[0] == 0 else which[a + t]
+        s = np.int32(0)
+        for j in range(dims):
+            s += np.int32(codes[i, j]) * np.int32(qc[j])
+        out[t] = s
+
+
+@numba.njit(cache=True, nogil=True)
+def _quantized_knn(
+    codes: np.ndarray,
+    code_sq: np.ndarray,
+    errs: np.ndarray,
+    unbounded: np.ndarray,
+    err_max: float,
+    step: float,
+    qc: np.ndarray,
+    qc_sq: int,
+    e_q: float,
+    rows: np.ndarray,
+    sq: np.ndarray,
+    q: np.ndarray,
+    q_sq: float,
+    k: int,
+    allowance: float,
+    max_count: int,
+    subset: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Exact k nearest of ``q`` ``(D,)`` float32 with the quantized bound, in one compiled call,
+    among the rows listed in ``subset`` (increasing; empty: all rows).
+
+    codes ``(n, D)`` uint8 (``code_sq`` ``(n,)`` int32 their squared norms) and errs ``(n,)``
+    as :func:`_quantize` gives them; ``unbounded`` ``(b,)`` the rows with a NaN or inf, which
+    no bound covers: they always go to the row kernel, which decides about them as in the
+    plain pass; qc ``(D,)`` int16, ``qc_sq`` and ``e_q`` the query's codes, their squared norm
+    and its error; ``allowance``: how far a row kernel's squared distance may be from the
+    true one.
+    Returns (indices ``(k,)``, distances ``(k,)``, cases re-ranked), or a count of -1 once
+    more than ``max_count`` cases are candidates (the caller then runs the plain pass).
+
+    Why no neighbour is lost (``g = step |c_q - c_x|``, the distance of the two grid points,
+    ``e`` their distances to ``q`` and ``x``): by the triangle inequality
+    ``g - e_q - e_x <= |q - x| <= g + e_q + e_x``. ``|c_q - c_x|^2`` is an exact integer and
+    ``g`` its float64 root times ``step`` (two roundings: within ``4 u64`` relative, allowed as
+    ``lo``/``hi``); ``errs`` and ``e_q`` are rounded up by :func:`_quantize`. A row kernel's
+    squared distance is within ``allowance`` of ``|q - x|^2``. So ``ub = (g hi + e_q + e_x)^2
+    + allowance`` bounds a row's kernel value from above and ``lb = max(g lo - e_q - e_x, 0)^2
+    - allowance`` from below; the k-th smallest ``ub`` seen, ``T``, is at least the k-th
+    smallest kernel value, and a row with ``lb > T (1 + 1e-12)`` cannot be among the k
+    nearest (the ``1e-12`` covers the float64 rounding of these few operations and of the
+    kernel's root, which only shrinks what it is applied to). ``T`` only falls as rows are
+    seen, so a row pruned early stays prunable; candidates kept early are filtered again
+    with the final ``T``. The integer pre-test ``|c_q - c_x|^2 > lim`` is the same test with
+    ``e_max`` for ``e_x`` (looser), so it prunes nothing the exact test keeps.
+    """
+    n = codes.shape[0] if subset.shape[0] == 0 else subset.shape[0]
+    lo = 1.0 - 4.0 * 2.0**-53
+    hi = 1.0 + 4.0 * 2.0**-53
+    ub_i = np.full(k, -1, dtype=np.int64)
+    ub_d = np.full(k, np.inf)
+    cand = np.empty(max_count, dtype=np.int64)
+    cand_lb = np.empty(max_count)
+    count = 0
+    lim = np.inf  # rows with an integer distance above it cannot be candidates
+    block = 256
+    s_block = np.empty(block, dtype=np.int32)
+    for a in range(0, n, block):
+        m = min(block, n - a)
+        _code_dots(codes, qc, subset, a, s_block[:m])
+        for t in range(m):
+            i = a + t if subset.shape[0] == 0 else subset[a + t]
+            s2 = code_sq[i] + qc_sq - 2 * np.int64(s_block[t])  # |c_q - c_x|^2, exact
+            if s2 > lim:
+                continue
+            if not errs[i] < np.inf:
+                continue
+            g = step * math.sqrt(np.float64(s2))
+            ub = g * hi + e_q + errs[i]
+            ub2 = ub * ub + allowance
+            if ub2 < ub_d[k - 1]:
+                _insert(ub_i, ub_d, i, ub2)
+                if ub_d[k - 1] < np.inf:
+                    reach = math.sqrt(ub_d[k - 1] * (1.0 + 1e-12) + allowance) + e_q + err_max
+                    lim = (reach / (step * lo)) ** 2 * (1.0 + 1e-9) + 1.0
+            lb = max(g * lo - e_q - errs[i], 0.0)
+            lb2 = lb * lb - allowance
+            if lb2 <= ub_d[k - 1] * (1.0 + 1e-12):
+                if count == max_count:
+                    return ub_i, ub_d, -1
+                cand[count] = i
+                cand_lb[count] = lb2
+                count += 1
+    kept = _still_below(cand[:count], cand_lb[:count], ub_d[k - 1] * (1.0 + 1e-12))
+    if unbounded.shape[0]:
+        kept = np.sort(np.concatenate((kept, unbounded)))
+    best_i, best_d = _knn_scan(rows, sq, q, q_sq, kept, k)
+    return best_i, best_d, len(kept)
+
+
+@numba.njit(cache=True, nogil=True)
+def _still_below(cand: np.ndarray, cand_lb: np.ndarray, limit: float) -> np.ndarray:
+    """The candidates ``(c,)`` whose lower bound ``(c,)`` is at most the final ``limit``."""
+    kept = 0
+    for t in range(cand.shape[0]):
+        if cand_lb[t] <= limit:
+            cand[kept] = cand[t]
+            kept += 1
+    return cand[:kept]
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
@@ -216,7 +352,8 @@ class _EuclideanIndex:
     proj: np.ndarray | None = None  # (n, m) float32
     resid: np.ndarray | None = None  # (n,) float32, norm of the part outside the basis
     top_norm: float = 0.0  # largest |row - mean|
-    max_norm: float = 0.0  # largest |row|
+    max_norm: float = 0.0  # largest |row| (over rows without NaN or inf)
+    codes: _Codes | None = None  # the rows quantized to uint8, for the quantized bound
     # [running share of cases that survive the bound, queries seen]: a heuristic shared by
     # the queries of this index (races between threads only change a speed decision)
     pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
@@ -229,6 +366,34 @@ class _EuclideanIndex:
     def record(self, survived_share: float) -> None:
         share, seen = self.pruning
         self.pruning[0] = survived_share if seen == 0 else 0.7 * share + 0.3 * survived_share
+        self.pruning[1] = seen + 1
+
+    def skip(self) -> None:
+        self.pruning[1] += 1
+
+
+@dataclass(frozen=True, eq=False)
+class _Codes:
+    """Every row quantized on one grid: ``x_hat = base + step * codes`` (per-dimension offset,
+    one step for all dimensions, so ``|x_hat - q_hat|^2`` is ``step^2`` times an integer)."""
+
+    codes: np.ndarray  # (n, D) uint8
+    code_sq: np.ndarray  # (n,) int32 squared norms of the codes
+    errs: np.ndarray  # (n,) float64 |x - x_hat|, rounded up; inf for a row with NaN or inf
+    unbounded: np.ndarray  # (b,) int64 increasing: the rows with NaN or inf (no bound)
+    base: np.ndarray  # (D,) float64
+    step: float
+    err_max: float  # largest finite err
+    # [running share of cases re-ranked, queries seen], as ``_EuclideanIndex.pruning``
+    pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
+
+    def worth_it(self) -> bool:
+        share, seen = self.pruning
+        return bool(seen == 0 or share <= FALLBACK or seen % PROBE_EVERY == 0)
+
+    def record(self, share: float) -> None:
+        old, seen = self.pruning
+        self.pruning[0] = share if seen == 0 else 0.7 * old + 0.3 * share
         self.pruning[1] = seen + 1
 
     def skip(self) -> None:
@@ -279,7 +444,7 @@ class Euclidean(SimilarityMeasure):
         m = min(m, dims // 4)
         if self.exact or n < self.prune_min_cases or m < 4:
             return _EuclideanIndex(rows, sq, np.sqrt(sq))
-        return _pruning_index(rows, sq, m)
+        return _pruning_index(rows, sq, m, _quantized(rows))
 
     def _query(self, query_rep: np.ndarray) -> tuple[np.ndarray, float]:
         q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
@@ -308,7 +473,7 @@ class Euclidean(SimilarityMeasure):
             return _pruned_search(index, q32, q_sq, k)
         if index.basis is not None:
             index.skip()
-        return _plain_search(index, q32, q_sq, k)
+        return _quantized_search(index, q32, q_sq, k)
 
     def nearest_many(
         self, query_reps: np.ndarray, index: Any, k: int
@@ -402,6 +567,119 @@ def _plain_search(
     )
 
 
+def _allowance(index: _EuclideanIndex, q_sq: float) -> float:
+    """How far a row kernel's squared distance may be from the true one: twice the float32 dot
+    product's error (Higham: ``gamma_D |c| |q|``, plus ``D 2^-149`` per side for products that
+    underflow), plus the float64 rounding of ``|c|^2 - 2 c.q + |q|^2``."""
+    dims = index.rows.shape[1]
+    gamma = dims * _U32 / (1.0 - dims * _U32)
+    q_norm = math.sqrt(q_sq)
+    dot = gamma * index.max_norm * q_norm + 2.0 * dims * 2.0**-149
+    return float(2.02 * dot + 1e-15 * (index.max_norm + q_norm) ** 2)
+
+
+def _finite_max_norm(sq: np.ndarray) -> float:
+    """Largest row norm over the rows whose squared norm is finite (0 when there is none)."""
+    finite = sq[np.isfinite(sq)]
+    return math.sqrt(float(finite.max())) if len(finite) else 0.0
+
+
+def _quantize(x: np.ndarray, base: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Codes ``(m, D)`` uint8 of ``x`` ``(m, D)`` on the grid ``base + step * code`` (clipped to
+    0..255) and ``|x - x_hat|`` ``(m,)`` float64 rounded up (inf for a row with NaN or inf).
+
+    The float64 difference ``x - (base + step c)`` is within ``3 u64 (|x| + |base| + |step c|)``
+    per value of the exact one, the sum of squares and root within ``(D + 2) u64`` relative:
+    the error norm is raised by both (generously) so it never falls below the exact one."""
+    x64 = np.asarray(x, dtype=np.float64)
+    finite = np.asarray(np.isfinite(x64).all(axis=1))
+    with np.errstate(invalid="ignore", over="ignore"):
+        c = np.clip(np.rint((x64 - base) / step), 0.0, 255.0)
+    c[~np.isfinite(c)] = 0.0
+    sc = step * c
+    diff = x64 - (base + sc)
+    err = np.sqrt(np.einsum("ij,ij->i", diff, diff))
+    u = 2.0**-53
+    dims = x64.shape[1]
+    xs = np.where(finite[:, None], x64, 0.0)
+    spread = np.sqrt(np.einsum("ij,ij->i", xs, xs)) + np.sqrt(np.einsum("ij,ij->i", sc, sc))
+    spread += float(np.linalg.norm(base))
+    err = err * (1.0 + 4.0 * (dims + 4) * u) + 4.0 * u * spread
+    err[~finite] = np.inf
+    return c.astype(np.uint8), err
+
+
+def _quantized(rows: np.ndarray) -> _Codes | None:
+    """The uint8 grid of ``rows`` ``(n, D)``: offset per dimension at the smallest finite value,
+    one step (the widest range / 255) for all; None when the integer distance could overflow
+    int32 or there is no finite range."""
+    n, dims = rows.shape
+    if dims * 255**2 >= 2**31:
+        return None
+    step_rows = max(256, (1 << 23) // dims)
+    lo = np.full(dims, np.inf)
+    hi = np.full(dims, -np.inf)
+    for a in range(0, n, step_rows):
+        part = np.asarray(rows[a : a + step_rows], dtype=np.float64)
+        part = np.where(np.isfinite(part), part, np.nan)
+        with np.errstate(invalid="ignore"):
+            lo = np.fmin(lo, np.nanmin(part, axis=0, initial=np.inf))
+            hi = np.fmax(hi, np.nanmax(part, axis=0, initial=-np.inf))
+    widest = float(np.max(hi - lo)) if np.isfinite(lo).all() else float("nan")
+    if not (math.isfinite(widest) and widest > 0.0):
+        return None
+    step = widest / 255.0
+    codes = np.empty((n, dims), dtype=np.uint8)
+    errs = np.empty(n)
+    for a in range(0, n, step_rows):
+        codes[a : a + step_rows], errs[a : a + step_rows] = _quantize(
+            rows[a : a + step_rows], lo, step
+        )
+    finite = errs[np.isfinite(errs)]
+    unbounded = np.flatnonzero(~np.isfinite(errs)).astype(np.int64)
+    code_sq = np.empty(n, dtype=np.int32)
+    for a in range(0, n, step_rows):
+        part = codes[a : a + step_rows].astype(np.int32)
+        code_sq[a : a + step_rows] = np.einsum("ij,ij->i", part, part)
+    err_max = float(finite.max()) if len(finite) else 0.0
+    return _Codes(codes, code_sq, errs, unbounded, lo, step, err_max)
+
+
+def _quantized_search(
+    index: _EuclideanIndex, q32: np.ndarray, q_sq: float, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Exact k nearest with the quantized bound, or the plain pass when it prunes too little
+    (or the index has no codes, or the query has a NaN or inf)."""
+    codes = index.codes
+    if codes is None or not math.isfinite(q_sq):
+        return _plain_search(index, q32, q_sq, k)
+    if not codes.worth_it():
+        codes.skip()
+        return _plain_search(index, q32, q_sq, k)
+    n = len(index.rows)
+    idx, dist, count = _run_quantized(index, codes, q32, q_sq, k, _ALL)
+    if count < 0:
+        codes.record(1.0)
+        return _plain_search(index, q32, q_sq, k)
+    codes.record(count / n)
+    return idx, dist
+
+
+def _run_quantized(
+    index: _EuclideanIndex, codes: _Codes, q32: np.ndarray, q_sq: float, k: int, subset: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`_quantized_knn` for ``q32`` ``(D,)`` among ``subset`` (empty: every row)."""
+    qc, e_q = _quantize(q32[None, :], codes.base, codes.step)
+    n = len(subset) if len(subset) else len(index.rows)
+    out: tuple[np.ndarray, np.ndarray, int] = _quantized_knn(
+        codes.codes, codes.code_sq, codes.errs, codes.unbounded, codes.err_max, codes.step,
+        qc[0].astype(np.int16), int(np.dot(qc[0].astype(np.int64), qc[0])),
+        float(e_q[0]), index.rows, index.sq_norms, q32, q_sq, k, _allowance(index, q_sq),
+        max(k, int(FALLBACK * n)) if len(subset) == 0 else n, subset,
+    )  # fmt: skip
+    return out
+
+
 def _row_norms_sq(rows: np.ndarray) -> np.ndarray:
     """``(n,)`` float64 squared norms of ``rows`` ``(n, D)``, in chunks (a memmap is read once
     without a float64 copy of it)."""
@@ -412,7 +690,9 @@ def _row_norms_sq(rows: np.ndarray) -> np.ndarray:
     return out
 
 
-def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
+def _pruning_index(
+    rows: np.ndarray, sq: np.ndarray, m: int, codes: _Codes | None
+) -> _EuclideanIndex:
     """The PCA bound's basis ``(D, m)``, projections ``(n, m)`` and residual norms ``(n,)``."""
     n, dims = rows.shape
     pick = np.random.default_rng(0).choice(n, min(n, 1000), replace=False)
@@ -445,7 +725,8 @@ def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
         proj,
         resid,
         math.sqrt(top_sq),
-        math.sqrt(float(sq.max())),
+        _finite_max_norm(sq),
+        codes,
     )
 
 
@@ -459,12 +740,16 @@ def _pruned_search(
     gamma = dims * _U32 / (1.0 - dims * _U32)
     # the float32 dot product's error (Higham: gamma_D |c| |q|, on both sides of the identity)
     rounding = 2.02 * gamma * index.max_norm * math.sqrt(q_sq)
-    idx, dist, survived = _pruned_knn(
+    cand, pruned = _pruned_candidates(
         index.rows, index.sq_norms, index.proj, index.resid, index.basis, index.mean, q32,
         q_sq, k, rounding, index.top_norm, max(k, int(FALLBACK * n)),
     )  # fmt: skip
-    if survived < 0:  # too many survivors: the plain pass is cheaper than gathering them
+    if not pruned:  # too many survivors: a full pass is cheaper than gathering them
         index.record(1.0)
-        return _plain_search(index, q32, q_sq, k)
-    index.record(survived / n)
+        return _quantized_search(index, q32, q_sq, k)
+    index.record(len(cand) / n)
+    if index.codes is None or len(cand) * CASCADE_SHARE < n:
+        return _knn_scan(index.rows, index.sq_norms, q32, q_sq, cand, k)
+    # many survivors: the quantized bound reads a quarter of their bytes and leaves few rows
+    idx, dist, _ = _run_quantized(index, index.codes, q32, q_sq, k, cand)
     return idx, dist
