@@ -4,7 +4,8 @@ extract``, ``train`` and ``compare``.
 ``--scheduler ADDRESS`` connects to a running scheduler (``tcp://host:8786``, started with
 ``dask scheduler`` and ``dask worker ADDRESS`` on each machine); ``--scheduler local:N``
 starts a ``LocalCluster`` of N single-threaded worker processes on this machine for the
-command's duration. :func:`map_outcomes` runs one function per work unit (a clip, a fold) and
+command's duration, with Dask's bookkeeping cut to what a batch job needs
+(:data:`LEAN_CONFIG`). :func:`map_outcomes` runs one function per work unit (a clip, a fold) and
 yields each unit's result or its error as the units finish, with a progress bar: a unit that
 fails is reported by name and the others finish; a unit whose worker dies is run again on
 another worker by the scheduler (up to ``distributed.scheduler.allowed-failures`` times, then
@@ -38,6 +39,18 @@ SCHEDULER_HELP = (
     "run the work on a Dask cluster: a scheduler ADDRESS (tcp://host:8786) or local:N "
     "(N worker processes on this machine); needs posecbr[cluster]"
 )
+#: Dask settings for the scheduler, nannies and workers of ``local:N``: what they do besides
+#: the tasks, cut to what a batch job needs (the dashboard, which these feed, is off; the
+#: CPU they save is booked in ``python -m benchmarks.scale``'s decode + pose accounting).
+LEAN_CONFIG: dict[str, Any] = {
+    # the statistical profiler samples the stack of every running task every 10 ms, on the
+    # worker's event loop, which takes the GIL from the task each time: the largest cost
+    "distributed.worker.profile.enabled": False,
+    # every server checks every 20 ms whether its event loop was blocked (a warning only)
+    "distributed.admin.tick.interval": "1s",
+    # host CPU, memory and network samples for the dashboard's plots, every 0.5 s per server
+    "distributed.admin.system-monitor.interval": "5s",
+}
 
 
 @dataclass(frozen=True)
@@ -93,13 +106,16 @@ def connect(spec: str) -> Iterator[Any]:
     n = local_workers(spec)
     dd = _dask()
     if n is not None:
-        cluster = dd.LocalCluster(
-            n_workers=n,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            silence_logs=logging.ERROR,
-        )
+        import dask
+
+        with dask.config.set(LEAN_CONFIG):  # the workers get the config they start with
+            cluster = dd.LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+            )
         client = dd.Client(cluster)
         try:
             yield client

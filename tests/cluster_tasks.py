@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 
 def square_or_die_once(x: int, marker_dir: str) -> int:
@@ -22,3 +23,8 @@ def fail_on_even(x: int) -> int:
     if x % 2 == 0:
         raise ValueError(f"{x} is even")
     return x
+
+
+def bookkeeping(dask_worker: Any) -> dict[str, float]:
+    """The worker's periodic callbacks and their periods in ms (run on each worker)."""
+    return {name: float(pc.callback_time) for name, pc in dask_worker.periodic_callbacks.items()}

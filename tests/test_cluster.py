@@ -22,7 +22,7 @@ from casebase_store import open_store
 from features.cluster import connect, gather, map_outcomes
 from features.poses import load_pose, load_pose_arrays
 from posecbr.cli import main
-from tests.cluster_tasks import fail_on_even, square_or_die_once
+from tests.cluster_tasks import bookkeeping, fail_on_even, square_or_die_once
 from tests.test_pose_extract import SQUAT, _cut
 
 pytest.importorskip("dask.distributed", reason="dask is in the test extra: pip install -e .[test]")
@@ -127,6 +127,18 @@ def test_a_unit_that_fails_is_reported_by_name_and_the_others_finish(client: Any
         ("item 2", "ValueError: 2 is even"),
         ("item 4", "ValueError: 4 is even"),
     ]
+
+
+def test_local_workers_keep_only_the_bookkeeping_a_batch_job_needs(client: Any) -> None:
+    # Dask's defaults: a stack sample of the running task every 10 ms (the profiler), an
+    # event-loop check every 20 ms, a host monitor every 500 ms; local:N turns the first off
+    # and samples the others every 1 s and 5 s. Heartbeats and the memory monitor stay.
+    periods = list(client.run(bookkeeping).values())
+    assert len(periods) == 2
+    for p in periods:
+        assert "profile" not in p and "profile-cycle" not in p
+        assert p["tick"] == 1000.0 and p["monitor"] == 5000.0
+        assert "heartbeat" in p and p["memory_monitor"] == 100.0
 
 
 def test_a_worker_that_dies_has_its_task_run_again(client: Any, tmp_path: Path) -> None:
