@@ -6,6 +6,7 @@ frames, re-encoded smaller) so every case runs in about a second.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import subprocess
 import sys
@@ -19,8 +20,11 @@ import pytest
 # Imported before any video is opened here: it silences FFmpeg's own stderr messages, which
 # OpenCV configures once per process on first use.
 import features.pose_estimation  # noqa: F401
+from features.errors import DataError
+from features.pose_estimation import iter_frames
 from features.poses import load_pose, load_pose_arrays
 from posecbr.cli import main
+from posecbr.commands.extract import Job, longest_first
 
 SQUAT = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
 
@@ -250,3 +254,44 @@ def test_outputs_that_cannot_be_written_leave_the_old_ones(
     file_size_limit(len(before) // 2)
     refused(pose_file)
     assert pose_file.read_bytes() == before
+
+
+def test_the_longest_clips_are_sent_first(tmp_path: Path) -> None:
+    # costs by hand: a 300 bytes, c 200, the cuts of c by their share of its largest end
+    # frame (200): [50, 200) 150, [0, 50) 50; b 100; a missing video 0 (its worker reports it)
+    for name, size in (("a", 300), ("b", 100), ("c", 200)):
+        (tmp_path / f"{name}.mp4").write_bytes(b"x" * size)
+    out = tmp_path / "out"
+
+    def job(name: str, start: int | None = None, end: int | None = None) -> Job:
+        return Job(tmp_path / f"{name}.mp4", out / f"{name}{start}.npz", start=start, end=end)
+
+    jobs = [job("b"), job("c", 0, 50), job("gone"), job("a"), job("c", 50, 200), job("c")]
+    order = [(j.video.stem, j.start) for j in longest_first(jobs)]
+    assert order == [("a", None), ("c", None), ("c", 50), ("b", None), ("c", 0), ("gone", None)]
+
+
+def _decoded(path: Path, threads: int | None) -> tuple[str, object]:
+    """("frames", sha256 of every frame) or ("error", the one-line message)."""
+    try:
+        digest = hashlib.sha256()
+        for rgb in iter_frames(path, threads):
+            digest.update(rgb.tobytes())
+        return "frames", digest.hexdigest()
+    except DataError as exc:
+        return "error", str(exc)
+
+
+def test_decoding_on_one_thread_gives_the_same_frames_and_the_same_errors(
+    tmp_path: Path, shared_data: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    # FFmpeg's frame threads change when a frame is decoded, never what: a worker decoding
+    # on its one thread reads the same pixels, and refuses a bad file with the same line
+    videos = [shared_data / SQUAT, shared_data / "media" / "vtest.avi"]
+    bad = _bad_inputs(tmp_path, shared_data)
+    capfd.readouterr()
+    for path in [*videos, *bad.values()]:
+        assert _decoded(path, 1) == _decoded(path, None), path.name
+    assert [_decoded(v, 1)[0] for v in videos] == ["frames", "frames"]
+    assert all(_decoded(p, 1)[0] == "error" for p in bad.values())
+    assert capfd.readouterr().err == ""  # OpenCV's own warnings stay off stderr

@@ -13,6 +13,7 @@ import math
 import os
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -61,8 +62,25 @@ class VideoPoses:
     info: VideoInfo
 
 
-def open_video(path: str | Path) -> tuple[cv2.VideoCapture, VideoInfo]:
-    """Open a video file, or raise :class:`DataError` with a one-line reason."""
+def _capture(name: str, threads: int | None) -> cv2.VideoCapture:
+    """``cv2.VideoCapture(name)``; with ``threads``, FFmpeg decodes on that many threads
+    (its default is one per core, whatever else runs on them: a worker given one core should
+    decode on one), falling back to OpenCV's other backends if FFmpeg cannot open it."""
+    if threads is None:
+        return cv2.VideoCapture(name)
+    with _quiet_opencv():  # FFmpeg refusing a file is no news: the fallback reports
+        cap = cv2.VideoCapture(name, cv2.CAP_FFMPEG, [cv2.CAP_PROP_N_THREADS, threads])
+    if cap.isOpened():
+        return cap
+    cap.release()
+    return cv2.VideoCapture(name)
+
+
+def open_video(
+    path: str | Path, decode_threads: int | None = None
+) -> tuple[cv2.VideoCapture, VideoInfo]:
+    """Open a video file, or raise :class:`DataError` with a one-line reason.
+    ``decode_threads``: FFmpeg's decoding threads (None: FFmpeg's default, one per core)."""
     path = Path(path)
     if not path.exists():
         raise DataError("no such file", path)
@@ -76,7 +94,7 @@ def open_video(path: str | Path) -> tuple[cv2.VideoCapture, VideoInfo]:
     if not head:
         raise DataError("empty file, not a video", path)
     try:
-        cap = cv2.VideoCapture(str(path))
+        cap = _capture(str(path), decode_threads)
     except cv2.error as exc:
         raise DataError(f"cannot open as a video ({exc.msg or exc})", path) from None
     if not cap.isOpened():
@@ -94,10 +112,11 @@ def open_video(path: str | Path) -> tuple[cv2.VideoCapture, VideoInfo]:
     return cap, VideoInfo(path, frames, fps, width, height)
 
 
-def iter_frames(path: str | Path) -> Iterator[np.ndarray]:
+def iter_frames(path: str | Path, decode_threads: int | None = None) -> Iterator[np.ndarray]:
     """RGB uint8 frames ``(h, w, 3)`` of a video file; raises :class:`DataError` at the end if
-    fewer frames decoded than the container declares, or none at all."""
-    cap, info = open_video(path)
+    fewer frames decoded than the container declares, or none at all. ``decode_threads``: see
+    :func:`open_video`."""
+    cap, info = open_video(path, decode_threads)
     count = 0
     try:
         while True:
@@ -138,6 +157,7 @@ def estimate_video(
     metadata: dict[str, object] | None = None,
     max_frames: int | None = None,
     keep_outside: bool = False,
+    decode_threads: int | None = None,
 ) -> VideoPoses:
     """Run BlazePose over every frame of a video file.
 
@@ -147,16 +167,18 @@ def estimate_video(
     then skipped). A joint the model places outside the frame (e.g. legs below the bottom
     edge) is not seen, so its position is set missing (NaN) in the sequence unless
     ``keep_outside``; the image landmarks keep the model's guess and its (low) visibility.
+    ``decode_threads``: FFmpeg's decoding threads (None: one per core; see :func:`open_video`).
     Raises :class:`DataError` for a video that cannot be used.
     """
     path = Path(video_path)
-    _, info = open_video(path)  # fail early with a clear reason
+    cap, info = open_video(path, decode_threads)  # fail early with a clear reason
+    cap.release()
     est = estimator or PoseEstimator(tracking=tracking, smoothing=smoothing)
     est.reset()
     world: list[np.ndarray] = []
     image: list[np.ndarray] = []
     missing: list[int] = []
-    frames = iter_frames(path)
+    frames = iter_frames(path, decode_threads)
     total = info.frames or None
     if max_frames is not None:
         total = min(total or max_frames, max_frames)
@@ -236,17 +258,25 @@ class StreamFrame:
     read_at: float = float("nan")
 
 
-def _open_quietly(device: int | str) -> cv2.VideoCapture:
-    """Open a camera or stream without OpenCV's own warnings on stderr (posecbr reports)."""
+@contextmanager
+def _quiet_opencv() -> Iterator[None]:
+    """OpenCV's own warnings kept off stderr meanwhile (posecbr reports what matters)."""
     logging = getattr(getattr(cv2, "utils", None), "logging", None)
     if logging is None:
-        return cv2.VideoCapture(device)
+        yield
+        return
     level = logging.getLogLevel()
     logging.setLogLevel(logging.LOG_LEVEL_ERROR)
     try:
-        return cv2.VideoCapture(device)
+        yield
     finally:
         logging.setLogLevel(level)
+
+
+def _open_quietly(device: int | str) -> cv2.VideoCapture:
+    """Open a camera or stream without OpenCV's own warnings on stderr (posecbr reports)."""
+    with _quiet_opencv():
+        return cv2.VideoCapture(device)
 
 
 def stream_poses(

@@ -190,6 +190,31 @@ def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
     return jobs
 
 
+def longest_first(jobs: list[Job]) -> list[Job]:
+    """``jobs`` by decreasing estimated cost, for workers that take the next job as they free
+    up: the short jobs come last and the workers finish together instead of one running the
+    last long clip alone. The cost is the video's size in bytes, times the cut's share of the
+    video for a cut (its frames over the largest end frame asked of that video). Equal costs
+    keep their order; an unreadable video counts 0 (its worker reports it)."""
+    ends: dict[Path, int] = {}
+    for job in jobs:
+        if job.end is not None:
+            ends[job.video] = max(ends.get(job.video, 0), job.end)
+    sizes: dict[Path, int] = {}
+    for video in {job.video for job in jobs}:
+        try:
+            sizes[video] = video.stat().st_size
+        except OSError:
+            sizes[video] = 0
+
+    def cost(job: Job) -> float:
+        if job.start is None or job.end is None or ends[job.video] <= 0:
+            return float(sizes[job.video])
+        return sizes[job.video] * (job.end - job.start) / ends[job.video]
+
+    return sorted(jobs, key=cost, reverse=True)
+
+
 # ---- one clip -----------------------------------------------------------------------------
 
 
@@ -237,7 +262,8 @@ def stored_key(path: Path) -> dict[str, Any] | None:
     return key if isinstance(key, dict) else None
 
 
-_THREADS: int | None = None  # onnxruntime threads per model in this process (None: default)
+# onnxruntime threads per model and FFmpeg decoding threads in this process (None: default)
+_THREADS: int | None = None
 _ESTIMATOR: Any = None  # one PoseEstimator per process, made on first use (after any fork)
 
 
@@ -314,6 +340,7 @@ def process(job: Job, options: Options) -> Outcome:
                 progress_bar=True,
                 estimator=_estimator(options),
                 metadata=meta,
+                decode_threads=_THREADS,
             )
             seq, image_lm = vp.sequence, vp.image_landmarks
             if job.start is not None and job.end is not None:
@@ -337,16 +364,16 @@ def process(job: Job, options: Options) -> Outcome:
 
 
 def process_on_worker(job: Job, options: Options) -> Outcome:
-    """:func:`process` on a Dask worker: onnxruntime and OpenCV's decoder get the worker's
-    threads (one per worker with ``local:N``), so N workers share the cores instead of fighting
-    over them."""
+    """:func:`process` on a Dask worker: onnxruntime, OpenCV and FFmpeg's decoder get the
+    worker's threads (one per worker with ``local:N``), so N workers share the cores instead of
+    fighting over them."""
     global _THREADS
     if _THREADS is None:
         import cv2
         from dask.distributed import get_worker
 
         _THREADS = max(1, int(get_worker().state.nthreads))
-        cv2.setNumThreads(_THREADS)  # the decoder too: N workers, N cores, no oversubscription
+        cv2.setNumThreads(_THREADS)  # OpenCV's own pool (colour conversion, resizing)
     return process(job, options)
 
 
@@ -355,6 +382,7 @@ def _on_cluster(scheduler: str, jobs: list[Job], options: Options) -> list[Outco
     clip (by its video), the others finish."""
     from features.cluster import connect, map_outcomes
 
+    jobs = longest_first(jobs)  # Dask starts them in the order they are sent
     results = []
     with connect(scheduler) as client:
         names = [str(j.video) for j in jobs]
@@ -437,7 +465,7 @@ def _in_processes(jobs: list[Job], options: Options, workers: int) -> list[Outco
         initializer=_init_worker,
         initargs=(threads,),
     ) as pool:
-        futures = [pool.submit(process, job, options) for job in jobs]
+        futures = [pool.submit(process, job, options) for job in longest_first(jobs)]
         return [fut.result() for fut in progress(cf.as_completed(futures), "extract",
                                                  len(futures), "clip")]  # fmt: skip
 
