@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import os
 import resource
 import statistics
@@ -39,6 +40,8 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -115,6 +118,87 @@ def _worker_cpu(client: Any) -> float:
     return float(sum(client.run(_cpu_s).values()))
 
 
+# ---- where the CPU goes (per process and thread) -------------------------------------------
+
+#: the roles CPU seconds are booked to during a run on a local cluster
+ROLES = (
+    "command",  # this process's main thread: the posecbr command (jobs, client, progress)
+    "scheduler_nannies_client",  # this process's other threads: the event loop they share
+    "worker_tasks",  # the workers' task threads: decode + pose, the work itself
+    "worker_event_loops",  # the workers' main threads: comms, heartbeats, monitors, profiler
+    "worker_other_threads",  # onnxruntime, OpenCV and BLAS pools, ended threads
+    "other_children",  # any other process started from here (multiprocessing's tracker)
+)
+
+
+def _thread_names() -> tuple[int, dict[int, str]]:
+    """This process's id and its Python threads' names by native thread id (on a worker)."""
+    import threading
+
+    return os.getpid(), {int(t.native_id or 0): t.name for t in threading.enumerate()}
+
+
+def _machine_busy_s() -> float:
+    """CPU seconds the whole machine has been busy since boot (/proc/stat, all CPUs: every
+    state but idle and iowait), to tell this run's CPU from other processes'."""
+    with open("/proc/stat", encoding="ascii") as fh:
+        ticks = [int(v) for v in fh.readline().split()[1:9]]
+    return (sum(ticks) - ticks[3] - ticks[4]) / os.sysconf("SC_CLK_TCK")
+
+
+def _thread_role(name: str, worker: bool) -> str:
+    if not worker:
+        return "command" if name == "MainThread" else "scheduler_nannies_client"
+    if "Dask-Default-Threads" in name:
+        return "worker_tasks"
+    return "worker_event_loops" if name == "MainThread" else "worker_other_threads"
+
+
+def _cpu_by_role(client: Any) -> dict[str, float]:
+    """CPU seconds so far of this process and every process it started, by :data:`ROLES`
+    (threads by their Python names; a process's ended threads go to its catch-all role), and
+    the machine's busy seconds."""
+    import psutil
+
+    me = psutil.Process()
+    workers = dict(client.run(_thread_names).values())
+    names = {me.pid: _thread_names()[1], **workers}
+    roles = dict.fromkeys(ROLES, 0.0)
+    for proc in [me, *me.children(recursive=True)]:
+        try:
+            threads, total = proc.threads(), sum(proc.cpu_times()[:2])
+        except psutil.Error:  # ended meanwhile
+            continue
+        if proc.pid not in names:
+            roles["other_children"] += total
+            continue
+        worker = proc.pid in workers
+        for t in threads:
+            role = _thread_role(names[proc.pid].get(t.id, ""), worker)
+            roles[role] += t.user_time + t.system_time
+        rest = total - sum(t.user_time + t.system_time for t in threads)
+        roles["worker_other_threads" if worker else "scheduler_nannies_client"] += rest
+    roles["machine_busy"] = _machine_busy_s()
+    return roles
+
+
+def _accounting(before: dict[str, float], after: dict[str, float], seconds: float,
+                frames: int) -> dict[str, Any]:  # fmt: skip
+    """CPU seconds of one run by role, cores (seconds / wall), other processes' share and
+    the overhead: everything of ours that is not a task, over the tasks' CPU."""
+    used = {k: after[k] - before[k] for k in ROLES}
+    busy = after["machine_busy"] - before["machine_busy"]
+    others = busy - sum(used.values())
+    overhead = sum(v for k, v in used.items() if k != "worker_tasks")
+    return {
+        "cpu_s": {k: round(v, 3) for k, v in used.items()},
+        "cores": {k: round(v / seconds, 3) for k, v in used.items()},
+        "other_processes_cores": round(others / seconds, 3),
+        "overhead_vs_tasks": round(overhead / used["worker_tasks"], 4),
+        "task_cpu_ms_per_frame": round(1000 * used["worker_tasks"] / frames, 3),
+    }
+
+
 def stage_unit(i: int, base: list[Any], stage: str, model: Any) -> int:
     """One clip through one stage (on a worker); returns the clip's frames."""
     seq = synthetic(base, i)
@@ -172,11 +256,14 @@ def _video_corpus(folder: Path, frames: int = 40) -> int:
 
 
 def _timed(client: Any, workers: int, run: Any) -> dict[str, Any]:
-    """``run()`` (returns the frames done) timed on ``client``: wall and worker CPU seconds."""
+    """``run()`` timed on ``client``: wall and worker CPU seconds. ``run`` returns the frames
+    done, or a function that counts them, called once the clock has stopped."""
     before, cpu0 = _load(), _worker_cpu(client)
     t0 = time.perf_counter()
     frames = run()
     seconds = time.perf_counter() - t0
+    if callable(frames):
+        frames = frames()
     cpu = _worker_cpu(client) - cpu0
     return {
         "seconds": round(seconds, 3),
@@ -204,14 +291,17 @@ def _stage_run(client: Any, base: list[Any], stage: str, model: Any, n: int) -> 
 def _extract_run(client: Any, videos: Path, out: Path) -> Any:
     from posecbr.cli import main
 
-    def run() -> int:
+    def frames() -> int:
         from features.poses import load_pose
 
+        return sum(load_pose(p).n_frames for p in out.rglob("*.npz"))
+
+    def run() -> Any:
         code = main(["extract", str(videos), "--out", str(out), "--force", "--scheduler",
                      client.scheduler.address])  # fmt: skip
         if code != 0:
             raise RuntimeError("extract failed")
-        return sum(load_pose(p).n_frames for p in out.rglob("*.npz"))
+        return frames  # counted off the clock: reading the pose files is not extraction
 
     return run
 
@@ -237,10 +327,30 @@ def _per_cpu(runs: list[dict[str, Any]]) -> float:
     return float(statistics.median(r["frames"] / r["worker_cpu_s"] for r in runs))
 
 
-def _run_stages(skip_video: bool, rounds: int = 3) -> dict[str, Any]:
-    """Every stage on a 1-worker and a 2-worker cluster, alternating, ``rounds`` times: the
-    speed-up is the median of the rounds' ratios (each round runs both back to back, so load
-    from other processes cancels better than across a run)."""
+def _print_stage(stage: str, s: dict[str, Any]) -> None:
+    print(f"  {stage:<12} 1 worker {s['1']['frames_per_s']:8.1f} frames/s, 2 workers "
+          f"{s['2']['frames_per_s']:8.1f}: x{s['speedup_1_to_2']:.2f} (CPU share per "
+          f"worker {s['1']['cpu_share_per_worker']:.2f} / "
+          f"{s['2']['cpu_share_per_worker']:.2f}; frames per CPU-second with 2 workers "
+          f"x{s['cpu_efficiency_2_vs_1']:.2f} of 1)", flush=True)  # fmt: skip
+
+
+def _compare_rounds(timed: dict[int, list[dict[str, Any]]], units: int) -> dict[str, Any]:
+    """One stage's figures from its rounds on 1 and 2 workers (round r of each back to back)."""
+    rounds = len(timed[1])
+    ratios = [timed[1][r]["seconds"] / timed[2][r]["seconds"] for r in range(rounds)]
+    return {
+        "1": _summary(timed[1], units),
+        "2": _summary(timed[2], units),
+        "speedup_1_to_2": round(statistics.median(ratios), 3),
+        "cpu_efficiency_2_vs_1": round(_per_cpu(timed[2]) / _per_cpu(timed[1]), 3),
+    }
+
+
+def _run_stages(rounds: int = 3) -> dict[str, Any]:
+    """Every stage but decode + pose on a 1-worker and a 2-worker cluster, alternating,
+    ``rounds`` times: the speed-up is the median of the rounds' ratios (each round runs both
+    back to back, so load from other processes cancels better than across a run)."""
     from cbr.estimator import CaseBaseClassifier
     from cbr.training import fit_plan
     from features.cluster import connect, gather, map_outcomes
@@ -251,15 +361,9 @@ def _run_stages(skip_video: bool, rounds: int = 3) -> dict[str, Any]:
     clf = CaseBaseClassifier().fit(train, [str(s.metadata["label"]) for s in train])
     del train
     stages: dict[str, Any] = {}
-    with tempfile.TemporaryDirectory() as tmp, connect("local:1") as c1, connect("local:2") as c2:
+    with connect("local:1") as c1, connect("local:2") as c2:
         clients = {1: c1, 2: c2}
         runs: dict[str, Any] = {}
-        videos, n_videos = Path(tmp) / "videos", 0
-        if not skip_video:
-            n_videos = _video_corpus(videos)
-            runs["decode_pose"] = {
-                w: _extract_run(c, videos, Path(tmp) / f"out{w}") for w, c in clients.items()
-            }
         for stage, n in STAGE_UNITS.items():
             model = plan if stage == "features" else clf
             runs[stage] = {w: _stage_run(c, base, stage, model, n) for w, c in clients.items()}
@@ -270,38 +374,122 @@ def _run_stages(skip_video: bool, rounds: int = 3) -> dict[str, Any]:
                 model = plan if stage == "features" else clf
                 gather(map_outcomes(c, stage_unit, warm, [str(i) for i in warm], base, stage,
                                     model), len(warm))  # fmt: skip
-            if not skip_video:  # the pose models loaded in every worker
-                from posecbr.cli import main as posecbr
-
-                warm_in = Path(tmp) / f"warm{w}"
-                warm_in.mkdir()
-                for v in sorted(videos.rglob("*.mp4"))[: 2 * w]:  # a folder: runs on the cluster
-                    (warm_in / v.name).symlink_to(v)
-                posecbr(["extract", str(warm_in), "--out", str(Path(tmp) / "warm"), "--force",
-                         "--scheduler", c.scheduler.address])  # fmt: skip
         for stage, by_workers in runs.items():
-            units = n_videos if stage == "decode_pose" else STAGE_UNITS[stage]
             timed: dict[int, list[dict[str, Any]]] = {1: [], 2: []}
             for _ in range(rounds):
                 for w in (1, 2):
                     timed[w].append(_timed(clients[w], w, by_workers[w]))
-            ratios = [timed[1][r]["seconds"] / timed[2][r]["seconds"] for r in range(rounds)]
-            stages[stage] = {
-                "1": _summary(timed[1], units),
-                "2": _summary(timed[2], units),
-                "speedup_1_to_2": round(statistics.median(ratios), 3),
-                "cpu_efficiency_2_vs_1": round(_per_cpu(timed[2]) / _per_cpu(timed[1]), 3),
-            }
-            s = stages[stage]
-            print(f"  {stage:<12} 1 worker {s['1']['frames_per_s']:8.1f} frames/s, 2 workers "
-                  f"{s['2']['frames_per_s']:8.1f}: x{s['speedup_1_to_2']:.2f} (CPU share per "
-                  f"worker {s['1']['cpu_share_per_worker']:.2f} / "
-                  f"{s['2']['cpu_share_per_worker']:.2f}; frames per CPU-second with 2 workers "
-                  f"x{s['cpu_efficiency_2_vs_1']:.2f} of 1)", flush=True)  # fmt: skip
+            stages[stage] = _compare_rounds(timed, STAGE_UNITS[stage])
+            _print_stage(stage, stages[stage])
         stages["worker_peak_rss_bytes"] = {
             str(w): sorted(c.run(_peak_rss).values()) for w, c in clients.items()
         }
     return stages
+
+
+# ---- decode + pose: posecbr's cluster settings against Dask's defaults ---------------------
+
+
+@contextmanager
+def _dask_defaults(n: int) -> Iterator[Any]:
+    """A client of a ``LocalCluster`` made as ``local:N`` makes it, but with Dask's default
+    settings (no :data:`features.cluster.LEAN_CONFIG`): the before of the CPU accounting."""
+    import dask.distributed
+
+    dd: Any = dask.distributed  # untyped
+    cluster = dd.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                              dashboard_address=None, silence_logs=logging.ERROR)  # fmt: skip
+    client = dd.Client(cluster)
+    try:
+        yield client
+    finally:
+        client.close()
+        cluster.close()
+
+
+def _warm_extract(client: Any, workers: int, videos: Path, tmp: Path) -> None:
+    """Every worker loads the pose models (untimed): a folder of 2 clips per worker."""
+    from posecbr.cli import main as posecbr
+
+    client.wait_for_workers(workers, timeout=300)
+    warm_in = Path(tempfile.mkdtemp(dir=tmp))
+    for v in sorted(videos.rglob("*.mp4"))[: 2 * workers]:  # a folder: runs on the cluster
+        (warm_in / v.name).symlink_to(v)
+    posecbr(["extract", str(warm_in), "--out", str(tmp / "warm"), "--force", "--scheduler",
+             client.scheduler.address])  # fmt: skip
+
+
+def _timed_extract(client: Any, workers: int, run: Any) -> dict[str, Any]:
+    """:func:`_timed` with the run's CPU accounting and the workers' idle seconds (wall x
+    workers minus the task stream's compute time: start-up, scheduling and the tail)."""
+    from dask.distributed import get_task_stream
+
+    before = _cpu_by_role(client)
+    with get_task_stream(client) as stream:
+        timed = _timed(client, workers, run)
+    acc = _accounting(before, _cpu_by_role(client), timed["seconds"], timed["frames"])
+    computing = sum(ss["stop"] - ss["start"] for task in stream.data
+                    for ss in task["startstops"] if ss["action"] == "compute")  # fmt: skip
+    acc["worker_idle_s"] = round(workers * timed["seconds"] - computing, 3)
+    return {**timed, "cpu_accounting": acc}
+
+
+def _median_accounting(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """Every accounting figure's median over the rounds."""
+    accs = [r["cpu_accounting"] for r in runs]
+    med = statistics.median
+    return {
+        "cores": {k: round(med(a["cores"][k] for a in accs), 3) for k in ROLES},
+        **{k: round(med(a[k] for a in accs), 4) for k in accs[0] if k not in ("cores", "cpu_s")},
+    }
+
+
+def _one_video_run(config: str, workers: int, tmp: Path) -> dict[str, Any]:
+    """One timed ``extract`` of the corpus in ``tmp/videos`` on a cluster of its own (warmed
+    up first; no other cluster idles beside it, so all CPU booked is this run's)."""
+    from features.cluster import connect
+
+    cluster = connect(f"local:{workers}") if config == "posecbr" else _dask_defaults(workers)
+    with cluster as client:
+        _warm_extract(client, workers, tmp / "videos", tmp)
+        run = _extract_run(client, tmp / "videos", tmp / f"out-{config}-{workers}")
+        timed = _timed_extract(client, workers, run)
+        timed["worker_peak_rss_bytes"] = sorted(client.run(_peak_rss).values())
+    return timed
+
+
+def _run_video(rounds: int = 3) -> dict[str, Any]:
+    """Decode + pose (``posecbr extract`` of 40-frame cuts) on 1 and 2 workers, on clusters
+    with posecbr's settings (``local:N``) and with Dask's defaults, every round running all
+    four back to back; each run's CPU is booked by role (:func:`_cpu_by_role`)."""
+    configs = ("posecbr", "dask_defaults")
+    timed: dict[tuple[str, int], list[dict[str, Any]]] = {}
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
+        n_videos = _video_corpus(tmp / "videos")
+        for _ in range(rounds):
+            for c in configs:
+                for w in (1, 2):
+                    timed.setdefault((c, w), []).append(_one_video_run(c, w, tmp))
+    result: dict[str, Any] = {}
+    for c in configs:
+        stage = _compare_rounds({w: timed[c, w] for w in (1, 2)}, n_videos)
+        for n in ("1", "2"):
+            stage[n]["cpu_accounting"] = _median_accounting(stage[n]["rounds"])
+        _print_stage(f"decode_pose ({c})", stage)
+        _print_accounting(stage)
+        result[c] = stage
+    return {**result.pop("posecbr"), "dask_defaults": result["dask_defaults"]}
+
+
+def _print_accounting(stage: dict[str, Any]) -> None:
+    for w in ("1", "2"):
+        acc = stage[w]["cpu_accounting"]
+        cores = ", ".join(f"{k} {v:.3f}" for k, v in acc["cores"].items())
+        print(f"    {w} worker(s), cores: {cores}; other processes "
+              f"{acc['other_processes_cores']:.2f}; overhead / tasks "
+              f"{acc['overhead_vs_tasks']:.3f}; task CPU {acc['task_cpu_ms_per_frame']:.2f} "
+              f"ms/frame; workers idle {acc['worker_idle_s']:.2f} s", flush=True)  # fmt: skip
 
 
 # ---- training at scale (one process per size) -----------------------------------------------
@@ -378,6 +566,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sizes", help="training sizes, comma-separated (overrides --big)")
     parser.add_argument("--skip-video", action="store_true", help="no decode + pose stage")
     parser.add_argument("--skip-stages", action="store_true", help="training at scale only")
+    parser.add_argument(
+        "--only-video",
+        action="store_true",
+        help="of the stages, decode + pose only (the others' figures kept)",
+    )
     parser.add_argument("--skip-training", action="store_true", help="the stages only")
     parser.add_argument("--train-one", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -393,7 +586,10 @@ def main(argv: list[str] | None = None) -> int:
     doc["benchmark"], doc["machine"] = "scale", machine_info()
     doc["corpus"] = "synthetic copies of posecbr/demo_data/uiprmd (see docstring)"
     if not args.skip_stages:
-        doc["stages"] = _run_stages(args.skip_video)
+        stages = doc.get("stages", {}) if args.only_video else _run_stages()
+        if not args.skip_video:
+            stages["decode_pose"] = _run_video()
+        doc["stages"] = stages
         write_json(doc, RESULTS)
     if not args.skip_training:
         by_size = {t["clips"]: t for t in doc.get("training", [])}
