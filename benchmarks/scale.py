@@ -13,7 +13,12 @@ person (``s01~k``), so a corpus of 50,000 clips has about 830 people.
 Stages (each unit builds its synthetic clip first; the same code in every worker count):
 
 - ``decode + pose``: ``posecbr extract --force`` on 40-frame cuts of the real exercise videos
-  in ``../shared/data/videos`` (960 x 540), frames/s;
+  in ``../shared/data/videos`` (960 x 540), frames/s, each run on a fresh cluster of its own
+  (``local:N``, and for comparison a ``LocalCluster`` with Dask's default settings), with the
+  run's CPU seconds booked per process and thread (:data:`ROLES`: the command, the scheduler,
+  nannies and client, the workers' task threads, their event loops, their other threads) and
+  the machine's busy seconds, so what is not the work shows even on a loaded machine
+  (``--only-video`` runs this stage alone and keeps the other figures);
 - ``fluents`` (:func:`features.fluents.evaluate`), ``QMPs`` (:func:`features.qmp.qmp_features`),
   ``feature extraction`` (the train work unit, :func:`cbr.training.describe`: problem, mirror
   image, availability), ``classify`` (:meth:`CaseBaseClassifier.solve` against a case base of

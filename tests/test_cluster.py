@@ -131,14 +131,14 @@ def test_a_unit_that_fails_is_reported_by_name_and_the_others_finish(client: Any
 
 def test_local_workers_keep_only_the_bookkeeping_a_batch_job_needs(client: Any) -> None:
     # Dask's defaults: a stack sample of the running task every 10 ms (the profiler), an
-    # event-loop check every 20 ms, a host monitor every 500 ms; local:N turns the first off
-    # and samples the others every 1 s and 5 s. Heartbeats and the memory monitor stay.
+    # event-loop check every 20 ms, a host monitor every 500 ms, a memory check every 100 ms;
+    # local:N turns the first off and runs the others every 1 s, 5 s and 500 ms
     periods = list(client.run(bookkeeping).values())
     assert len(periods) == 2
     for p in periods:
         assert "profile" not in p and "profile-cycle" not in p
         assert p["tick"] == 1000.0 and p["monitor"] == 5000.0
-        assert "heartbeat" in p and p["memory_monitor"] == 100.0
+        assert p["memory_monitor"] == 500.0 and "heartbeat" in p
 
 
 def test_a_worker_that_dies_has_its_task_run_again(client: Any, tmp_path: Path) -> None:
