@@ -439,12 +439,21 @@ def _timed_extract(client: Any, workers: int, run: Any) -> dict[str, Any]:
     return {**timed, "cpu_accounting": acc}
 
 
+def _idle_cores(client: Any, seconds: float = 5.0) -> dict[str, float]:
+    """Cores the cluster uses by role while it has nothing to do (its bookkeeping alone)."""
+    before = _cpu_by_role(client)
+    time.sleep(seconds)
+    after = _cpu_by_role(client)
+    return {k: round((after[k] - before[k]) / seconds, 4) for k in ROLES}
+
+
 def _median_accounting(runs: list[dict[str, Any]]) -> dict[str, Any]:
     """Every accounting figure's median over the rounds."""
     accs = [r["cpu_accounting"] for r in runs]
     med = statistics.median
     return {
         "cores": {k: round(med(a["cores"][k] for a in accs), 3) for k in ROLES},
+        "idle_cores": {k: round(med(r["idle_cores"][k] for r in runs), 4) for k in ROLES},
         **{k: round(med(a[k] for a in accs), 4) for k in accs[0] if k not in ("cores", "cpu_s")},
     }
 
@@ -459,6 +468,7 @@ def _one_video_run(config: str, workers: int, tmp: Path) -> dict[str, Any]:
         _warm_extract(client, workers, tmp / "videos", tmp)
         run = _extract_run(client, tmp / "videos", tmp / f"out-{config}-{workers}")
         timed = _timed_extract(client, workers, run)
+        timed["idle_cores"] = _idle_cores(client)
         timed["worker_peak_rss_bytes"] = sorted(client.run(_peak_rss).values())
     return timed
 
@@ -494,7 +504,8 @@ def _print_accounting(stage: dict[str, Any]) -> None:
         print(f"    {w} worker(s), cores: {cores}; other processes "
               f"{acc['other_processes_cores']:.2f}; overhead / tasks "
               f"{acc['overhead_vs_tasks']:.3f}; task CPU {acc['task_cpu_ms_per_frame']:.2f} "
-              f"ms/frame; workers idle {acc['worker_idle_s']:.2f} s", flush=True)  # fmt: skip
+              f"ms/frame; workers idle {acc['worker_idle_s']:.2f} s; the cluster idle "
+              f"{sum(acc['idle_cores'].values()):.3f} cores", flush=True)  # fmt: skip
 
 
 # ---- training at scale (one process per size) -----------------------------------------------
