@@ -262,7 +262,9 @@ def stored_key(path: Path) -> dict[str, Any] | None:
     return key if isinstance(key, dict) else None
 
 
-# onnxruntime threads per model and FFmpeg decoding threads in this process (None: default)
+# onnxruntime threads per model in this process (None: default). FFmpeg keeps its own
+# decoding threads: pinned to the worker's one thread, 2 workers on 2 cores went from 103.5 to
+# 94.3 frames/s (python -m benchmarks.scale --only-video --skip-training, quiet machine)
 _THREADS: int | None = None
 _ESTIMATOR: Any = None  # one PoseEstimator per process, made on first use (after any fork)
 
@@ -340,7 +342,6 @@ def process(job: Job, options: Options) -> Outcome:
                 progress_bar=True,
                 estimator=_estimator(options),
                 metadata=meta,
-                decode_threads=_THREADS,
             )
             seq, image_lm = vp.sequence, vp.image_landmarks
             if job.start is not None and job.end is not None:
@@ -364,9 +365,8 @@ def process(job: Job, options: Options) -> Outcome:
 
 
 def process_on_worker(job: Job, options: Options) -> Outcome:
-    """:func:`process` on a Dask worker: onnxruntime, OpenCV and FFmpeg's decoder get the
-    worker's threads (one per worker with ``local:N``), so N workers share the cores instead of
-    fighting over them."""
+    """:func:`process` on a Dask worker: onnxruntime and OpenCV get the worker's threads (one
+    per worker with ``local:N``), so N workers share the cores instead of fighting over them."""
     global _THREADS
     if _THREADS is None:
         import cv2
