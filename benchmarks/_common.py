@@ -9,6 +9,7 @@ through the environment (threadpoolctl and faiss are pinned again at run time).
 from __future__ import annotations
 
 import os
+import platform
 
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
     os.environ[_var] = "1"
@@ -64,6 +65,17 @@ def versions(*packages: str) -> dict[str, str | None]:
         except importlib.metadata.PackageNotFoundError:
             out[pkg] = None
     return out
+
+
+def one_thread_machine() -> dict[str, Any]:
+    """The machine facts of a benchmark run on one thread, with the load average at its end."""
+    return {
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpu_count": os.cpu_count(),
+        "threads": 1,
+        "load_average_1_5_15min_at_end": list(os.getloadavg()),
+    }
 
 
 def side_by_side(

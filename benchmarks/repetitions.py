@@ -34,8 +34,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
-import importlib.metadata  # noqa: E402
-import platform  # noqa: E402
 import re  # noqa: E402
 import time  # noqa: E402
 from collections import defaultdict  # noqa: E402
@@ -47,6 +45,7 @@ from typing import Any  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks import write_json  # noqa: E402
+from benchmarks._common import one_thread_machine, versions  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
@@ -233,16 +232,6 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def _versions() -> dict[str, str | None]:
-    out: dict[str, str | None] = {}
-    for pkg in ("posecbr", "numpy", "scipy"):
-        try:
-            out[pkg] = importlib.metadata.version(pkg)
-        except importlib.metadata.PackageNotFoundError:
-            out[pkg] = None
-    return out
-
-
 def _print_table(summary: dict[str, Any], hand: dict[str, Any]) -> None:
     print(f"\n{'data (joined, count known)':<34} {'n':>4}  {'MAE':>5} {'OBO':>6} {'exact':>6}"
           f"  | period baseline MAE OBO exact")  # fmt: skip
@@ -283,14 +272,8 @@ def main(argv: list[str] | None = None) -> int:
         + f" --per-group {args.per_group} --seed {args.seed}",
         "train_subjects": list(TRAIN_SUBJECTS),
         "k_range": list(K_RANGE),
-        "machine": {
-            "platform": platform.platform(),
-            "processor": platform.processor() or platform.machine(),
-            "cpu_count": os.cpu_count(),
-            "threads": 1,
-            "load_average_1_5_15min_at_end": list(os.getloadavg()),
-        },
-        "versions": _versions(),
+        "machine": one_thread_machine(),
+        "versions": versions("posecbr", "numpy", "scipy"),
         "cpu_seconds": seconds,
         "summary": summary,
         "hand_counts": hand,

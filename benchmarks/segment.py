@@ -42,9 +42,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
-import importlib.metadata  # noqa: E402
 import json  # noqa: E402
-import platform  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
@@ -56,6 +54,7 @@ from typing import Any  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks import write_json  # noqa: E402
+from benchmarks._common import one_thread_machine, versions  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
@@ -308,24 +307,6 @@ def _count_scores(rows: list[dict[str, Any]], key: str) -> dict[str, Any]:
     }
 
 
-def _versions() -> dict[str, str | None]:
-    out: dict[str, str | None] = {}
-    for pkg in (
-        "posecbr",
-        "numpy",
-        "scipy",
-        "scikit-learn",
-        "tslearn",
-        "numba",
-        "opencv-python-headless",
-    ):
-        try:
-            out[pkg] = importlib.metadata.version(pkg)
-        except importlib.metadata.PackageNotFoundError:
-            out[pkg] = None
-    return out
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.segment", description=__doc__)
     parser.add_argument("--repeats", type=int, default=3, help="timing repeats (median)")
@@ -365,14 +346,16 @@ def main(argv: list[str] | None = None) -> int:
         "note": "all three recordings are one person (CMU subject 13): the figures overstate "
         "what other people get",
         "cases": args.cases,
-        "machine": {
-            "platform": platform.platform(),
-            "processor": platform.processor() or platform.machine(),
-            "cpu_count": os.cpu_count(),
-            "threads": 1,
-            "load_average_1_5_15min_at_end": list(os.getloadavg()),
-        },
-        "versions": _versions(),
+        "machine": one_thread_machine(),
+        "versions": versions(
+            "posecbr",
+            "numpy",
+            "scipy",
+            "scikit-learn",
+            "tslearn",
+            "numba",
+            "opencv-python-headless",
+        ),
         "repeats": args.repeats,
         "summary": summary,
         "folds": folds,
