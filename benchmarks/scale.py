@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import logging
 import os
 import resource
 import statistics
@@ -45,8 +44,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager
 from pathlib import Path
 from typing import Any
 
@@ -395,21 +393,12 @@ def _run_stages(rounds: int = 3) -> dict[str, Any]:
 # ---- decode + pose: posecbr's cluster settings against Dask's defaults ---------------------
 
 
-@contextmanager
-def _dask_defaults(n: int) -> Iterator[Any]:
+def _dask_defaults(n: int) -> AbstractContextManager[Any]:
     """A client of a ``LocalCluster`` made as ``local:N`` makes it, but with Dask's default
     settings (no :data:`features.cluster.LEAN_CONFIG`): the before of the CPU accounting."""
-    import dask.distributed
+    from features.cluster import connect
 
-    dd: Any = dask.distributed  # untyped
-    cluster = dd.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                              dashboard_address=None, silence_logs=logging.ERROR)  # fmt: skip
-    client = dd.Client(cluster)
-    try:
-        yield client
-    finally:
-        client.close()
-        cluster.close()
+    return connect(f"local:{n}", lean=False)
 
 
 def _warm_extract(client: Any, workers: int, videos: Path, tmp: Path) -> None:

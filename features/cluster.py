@@ -104,15 +104,17 @@ def check_scheduler(spec: str | None) -> None:
 
 
 @contextmanager
-def connect(spec: str) -> Iterator[Any]:
+def connect(spec: str, lean: bool = True) -> Iterator[Any]:
     """A ``dask.distributed.Client`` for ``spec`` (see the module), closed on exit (with the
-    local cluster it started, if any)."""
+    local cluster it started, if any). ``lean``: a local cluster's workers start with
+    :data:`LEAN_CONFIG` (False: Dask's defaults, the benchmark's point of comparison)."""
     n = local_workers(spec)
     dd = _dask()
     if n is not None:
         import dask
 
-        with dask.config.set(LEAN_CONFIG):  # the workers get the config they start with
+        # the workers get the config they start with
+        with dask.config.set(LEAN_CONFIG if lean else {}):
             cluster = dd.LocalCluster(
                 n_workers=n,
                 threads_per_worker=1,
