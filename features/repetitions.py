@@ -11,7 +11,9 @@ What counts as one repetition (the way people count exercises):
 
 How (all channels at once, no per-frame loops):
 
-1. the angles of :data:`COUNTED_ANGLES`, missing where the camera does not see their joints,
+1. the angles of :data:`COUNTED_ANGLES` (with the forearms' direction across the upper arms,
+   :func:`forearm_out`, for a turn of the upper arm about its own axis), missing where the
+   camera does not see their joints,
    gaps interpolated, cleaned of tracking glitches (running median, :data:`MEDIAN_S`),
    smoothed (Gaussian, :data:`SMOOTHING_S`) and analysed at about :data:`ANALYSIS_FPS`;
 2. the period T (:func:`find_period`): the first strong peak of the summed autocorrelation of
@@ -29,8 +31,11 @@ How (all channels at once, no per-frame loops):
    about their running mean over one period when the side-against-side movement repeats
    clearly: bending the arms once to start jogging is not what repeats);
 4. the movement as one number per sample: the posture projected on the direction it moves
-   back and forth along most (:func:`movement_direction`), signed so that it rises away from
-   rest (the end nearer standing at ease, :data:`AT_EASE`) and, for a clearly periodic
+   back and forth along most (:func:`movement_direction`; each angle weighted by its
+   periodic energy, :func:`periodic_share`, so that jitter and one-off changes do not pull
+   it, and the period read again so weighted), signed so that it rises away from rest (the
+   end nearer standing at ease, :data:`AT_EASE`; where the two ends lie about equally far
+   from it, the end the clip starts and ends at) and, for a clearly periodic
    movement, taken about its running mean over one period; for an alternating movement, the
    side-against-side part, whose peaks are one side's repetitions and troughs the other's;
 5. repetitions are the peaks that stand out by at least :data:`SUBSTANTIAL` of the typical
@@ -63,7 +68,7 @@ from scipy.signal import find_peaks
 from .datasets import Clip
 from .derived import signals_of, stretch
 from .errors import DataError
-from .geometry import WORLD_UP, angle_between
+from .geometry import WORLD_UP, angle_between, body_frame, unit
 from .poses import PoseSequence
 from .signals import ANGLE_SIGNALS
 from .skeleton import JOINT_INDEX
@@ -85,13 +90,29 @@ mirror image are opposed by more than this cosine (:func:`alternation`)."""
 
 _LATERAL = {"neck_frontal", "torso_frontal", "neck_transverse", "torso_transverse"}
 
-COUNTED_ANGLES: tuple[str, ...] = tuple(
-    f"{side}_{joint}" for joint in ("elbow", "knee", "armpit", "hip") for side in ("left", "right")
-) + ("trunk_inclination", "torso_sagittal", "torso_frontal", "torso_transverse")
+TWIST_NAMES: tuple[str, ...] = ("left_forearm_out", "right_forearm_out")
+"""The forearms' sideways direction across the upper arms (:func:`forearm_out`): how far the
+upper arm has turned about its own axis with the elbow bent."""
+COUNTED_ANGLES: tuple[str, ...] = (
+    tuple(
+        f"{side}_{joint}"
+        for joint in ("elbow", "knee", "armpit", "hip")
+        for side in ("left", "right")
+    )
+    + ("trunk_inclination", "torso_sagittal", "torso_frontal", "torso_transverse")
+    + TWIST_NAMES
+)
 """The angles repetitions are read from: the eight limb joint angles (defined in every
-posture), the trunk's inclination from the vertical, and its bend, side bend and twist. The
-limb plane angles are left out: a limb's projection on a plane it is nearly perpendicular to
-has no stable direction."""
+posture), the trunk's inclination from the vertical, and its bend, side bend and twist, and
+the forearms' sideways direction across the upper arms (:func:`forearm_out`: the turn of the
+upper arm about its own axis, shoulder internal and external rotation, which no joint angle
+sees). The limb plane angles are left out: a limb's projection on a plane it is nearly
+perpendicular to has no stable direction. The shank across the thigh (the thigh's turn) was
+tried and left out: on UI-PRMD's training subjects it made the side lunge alternate."""
+TWIST_SINGULAR_COS = float(np.cos(np.radians(30.0)))
+"""The frame attached to a proximal limb is swung there from hanging straight down along the
+trunk; it has no stable orientation when the limb points within 30 degrees of straight up
+along the trunk (the swing's singular direction), where the components count as missing."""
 CLEAR_PERIODICITY = 0.5
 """A movement repeats clearly when the autocorrelation of its velocities at the period is at
 least this: most of the movement recurs."""
@@ -113,6 +134,7 @@ AT_EASE: dict[str, float] = {
     "trunk_inclination": 0.0,
     **{name: np.pi / 2 for name in ANGLE_SIGNALS if "sagittal" in name or "frontal" in name},
     **{name: np.pi / 2 for name in ANGLE_SIGNALS if "transverse" in name},
+    **{name: 0.0 for name in TWIST_NAMES},
 }
 """Joint angles (radians) of a person standing at ease: elbows, knees and hips straight, arms
 down, head and trunk upright and facing forward. The rest end of a movement is the one nearer
@@ -214,8 +236,12 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
     mid_hip = 0.5 * (p[:, JOINT_INDEX["left_hip"]] + p[:, JOINT_INDEX["right_hip"]])
     trunk = neck - mid_hip
     inclination = angle_between(trunk, np.broadcast_to(WORLD_UP, trunk.shape))
+    twists = dict(zip(TWIST_NAMES, forearm_out(p).T, strict=True))
     raw = np.stack(
-        [inclination if n == "trunk_inclination" else sig.column(n) for n in COUNTED_ANGLES],
+        [
+            inclination if n == "trunk_inclination" else twists[n] if n in twists else sig.column(n)
+            for n in COUNTED_ANGLES
+        ],
         axis=1,
     )
     with np.errstate(invalid="ignore"):
@@ -225,6 +251,43 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
     if canonical.confidence is not None:
         raw[_unseen(canonical.confidence)] = np.nan
     return raw
+
+
+def _swing(frm: np.ndarray, to: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``v`` turned by the shortest rotation taking unit ``frm`` to unit ``to`` (Rodrigues
+    with axis ``frm x to``; all ``(frames, 3)``); NaN near the singular ``to = -frm``."""
+    c = np.einsum("ij,ij->i", frm, to)[:, None]
+    w = np.cross(frm, to)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = v * c + np.cross(w, v) + w * np.einsum("ij,ij->i", w, v)[:, None] / (1.0 + c)
+    with np.errstate(invalid="ignore"):
+        far = ~(c[:, 0] >= -TWIST_SINGULAR_COS)
+    out[far] = np.nan
+    return np.asarray(out)
+
+
+def forearm_out(p: np.ndarray) -> np.ndarray:
+    """The forearms' direction away from the body's midline in a frame attached to the upper
+    arms, ``(frames, 2)`` (left, right) from canonical positions ``(frames, 33, 3)``.
+
+    The upper arm's frame is the trunk's (forward; down along the trunk) swung by the
+    shortest rotation that takes "down along the trunk" to the upper arm; the forearm's unit
+    direction along that frame's outward axis is the sine of the elbow bend times the sine
+    of the upper arm's turn about its own axis (0 with the forearm ahead; mirror twins agree).
+    An upper arm turning in and out with the elbow bent (shoulder internal and external
+    rotation) moves it as far as the forearm swings, in radians for small turns; with the
+    elbow straight it stays near 0. NaN where a joint is missing or the upper arm points up
+    along the trunk (:data:`TWIST_SINGULAR_COS`)."""
+    bf = body_frame(p)
+    cols = []
+    for side, outward in (("left", -1.0), ("right", 1.0)):
+        shoulder, elbow, wrist = (p[:, JOINT_INDEX[f"{side}_{j}"]] for j in _ARM)
+        axis = unit(elbow - shoulder)
+        ahead = _swing(-bf.up, axis, bf.forward)
+        # axis x ahead points to the person's right: away from the midline for the right arm
+        out = outward * np.cross(axis, ahead)
+        cols.append(np.einsum("ij,ij->i", unit(wrist - elbow), out))
+    return np.stack(cols, axis=1)
 
 
 def movement_signals(seq: PoseSequence) -> MovementSignals:
@@ -248,12 +311,14 @@ def movement_signals(seq: PoseSequence) -> MovementSignals:
 
 
 _TRUNK = ("left_shoulder", "right_shoulder", "left_hip", "right_hip")
+_ARM = ("shoulder", "elbow", "wrist")
 _ANGLE_JOINTS: dict[str, tuple[str, ...]] = {
     **{f"{s}_elbow": (f"{s}_shoulder", f"{s}_elbow", f"{s}_wrist") for s in ("left", "right")},
     **{f"{s}_knee": (f"{s}_hip", f"{s}_knee", f"{s}_ankle") for s in ("left", "right")},
     **{f"{s}_armpit": (f"{s}_elbow", f"{s}_shoulder", f"{s}_hip") for s in ("left", "right")},
     **{f"{s}_hip": (f"{s}_knee", f"{s}_hip", f"{s}_shoulder") for s in ("left", "right")},
     **{n: _TRUNK for n in COUNTED_ANGLES if n.startswith(("trunk_", "torso_"))},
+    **{f"{s}_forearm_out": (*(f"{s}_{j}" for j in _ARM), *_TRUNK) for s in ("left", "right")},
 }
 
 
@@ -282,16 +347,37 @@ def _interpolate(x: np.ndarray) -> np.ndarray:
     return out
 
 
-def autocorrelation(x: np.ndarray) -> np.ndarray:
-    """Summed autocorrelation of the centred channels of ``x`` ``(n, channels)``, each lag
-    averaged over the frames it overlaps and divided by lag 0: ``(n,)``."""
+def _lagged_products(x: np.ndarray) -> np.ndarray:
+    """Per channel, the products of the centred ``x`` ``(n, channels)`` with itself at every
+    lag, averaged over the frames each lag overlaps: ``(n, channels)``."""
     n = len(x)
     xc = x - x.mean(axis=0)
     size = next_fast_len(2 * n)
     spec = np.fft.rfft(xc, size, axis=0)
-    acf = np.fft.irfft((spec * spec.conj()).real, size, axis=0)[:n].sum(axis=1)
-    acf = acf / (n - np.arange(n))
-    return acf / acf[0] if acf[0] > 0 else np.zeros(n)
+    acov = np.fft.irfft((spec * spec.conj()).real, size, axis=0)[:n]
+    return np.asarray(acov / (n - np.arange(n))[:, None])
+
+
+def autocorrelation(x: np.ndarray) -> np.ndarray:
+    """Summed autocorrelation of the centred channels of ``x`` ``(n, channels)``, each lag
+    averaged over the frames it overlaps and divided by lag 0: ``(n,)``."""
+    acf = _lagged_products(x).sum(axis=1)
+    return acf / acf[0] if acf[0] > 0 else np.zeros(len(x))
+
+
+def periodic_share(x: np.ndarray, period: float | None, fps: float) -> np.ndarray:
+    """Per channel of ``x`` ``(n, channels)``, the share of its variance that recurs one
+    ``period`` later: its autocorrelation at that lag over lag 0, weighted by the lag's
+    overlap as :func:`find_period` weighs it, clipped to [0, 1] (1 = exact repetition, 0 =
+    noise or a one-off change) ``(channels,)``; all 1 without a period."""
+    if period is None:
+        return np.ones(x.shape[1])
+    n = len(x)
+    lag = min(n - 1, int(round(period * fps)))
+    acov = _lagged_products(x)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = acov[lag] / acov[0] * (1.0 - lag / n)
+    return np.asarray(np.clip(np.nan_to_num(share), 0.0, 1.0))
 
 
 def find_period(x: np.ndarray, fps: float) -> tuple[float | None, float]:
@@ -356,7 +442,19 @@ def _movement_line(x: np.ndarray, names: tuple[str, ...], direction: np.ndarray)
     lo, hi = np.percentile(line, [10, 90])
     low_posture = x[line <= lo].mean(axis=0)
     high_posture = x[line >= hi].mean(axis=0)
-    if np.linalg.norm(high_posture - ease) < np.linalg.norm(low_posture - ease):
+    # an upper arm turned in or out is no further from ease one way than the other
+    twist = np.array([n in TWIST_NAMES for n in names])
+    high_posture[twist] = low_posture[twist] = 0.0
+    high_far = float(np.linalg.norm(high_posture - ease))
+    low_far = float(np.linalg.norm(low_posture - ease))
+    if abs(high_far - low_far) >= MIN_EXCURSION_RAD:
+        rest_high = high_far < low_far
+    else:
+        # ease cannot tell the ends apart: the clip starts and ends at rest
+        k = max(1, len(line) // 20)
+        ends = float(np.concatenate([line[:k], line[-k:]]).mean())
+        rest_high = abs(ends - hi) < abs(ends - lo)
+    if rest_high:
         line = -line
     return np.asarray(line)
 
@@ -433,7 +531,7 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
     spans, far, direction, alternating = _alternating_repetitions(x, sig.names, sig.fps)
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
     if not alternating:
-        direction = movement_direction(x)
+        period, strength, direction = _periodic_direction(x, period, sig.fps)
         line = _movement_line(x, sig.names, direction)
         # a slow change of posture (stepping into place, drifting) is no repetition
         line = _steady(line, period, strength, sig.fps)
@@ -455,6 +553,23 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
     order = np.argsort(-weights, kind="stable")
     moving = tuple(sig.names[i] for i in order[:4] if weights[i] > 0.2 * weights.max())
     return RepetitionCount(tuple(reps), fps, n_frames, period, strength, bool(alternating), moving)
+
+
+def _periodic_direction(
+    x: np.ndarray, period: float | None, fps: float
+) -> tuple[float | None, float, np.ndarray]:
+    """The period, its autocorrelation and the movement direction ``(C,)`` of ``x`` ``(n, C)``
+    with every angle weighted by its periodic energy rather than its variance: its deviations
+    scaled by the square root of :func:`periodic_share` at the ``period`` first found, so
+    that an angle that jitters (a Kinect joint barely moving) or changes once does not pull
+    the period or the direction. The direction is mapped back to the angles unweighted, so
+    that the movement keeps its size in radians."""
+    w = np.sqrt(periodic_share(np.diff(x, axis=0), period, fps))
+    weighted = x.mean(axis=0) + (x - x.mean(axis=0)) * w
+    period, strength = find_period(np.diff(weighted, axis=0), fps)
+    d = movement_direction(weighted) * w
+    norm = float(np.linalg.norm(d))
+    return period, strength, d / norm if norm > 0 else movement_direction(x)
 
 
 def _steady(line: np.ndarray, period: float | None, strength: float, fps: float) -> np.ndarray:
@@ -534,6 +649,9 @@ __all__ = [
     "WINDOW_S",
     "split_repetitions",
     "split_windows",
+    "TWIST_NAMES",
+    "forearm_out",
+    "periodic_share",
     "mirror_matrix",
     "movement_direction",
     "side_parts",
