@@ -15,9 +15,15 @@ from features.joining import join_repetitions
 from features.poses import PoseSequence
 from features.readers.asfamc import read_asf_amc
 from features.readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon
-from features.repetitions import MovementSignals, count_in_signals, count_repetitions
+from features.repetitions import (
+    MovementSignals,
+    count_in_signals,
+    count_repetitions,
+    forearm_out,
+    periodic_share,
+)
 from features.skeleton import JOINT_INDEX
-from tests.bodies import standing, to_sequence
+from tests.bodies import rot_x, rot_y, rotate, standing, to_sequence
 
 FPS = 30.0
 KNEES = ("left_knee", "right_knee")
@@ -170,3 +176,97 @@ def test_joined_hdm05_repetitions_count_exactly(
     asf = base / f"HDM_{actor}.asf"
     reps = [read_asf_amc(asf, base / f"HDM_{actor}_{action}_{t:03d}_120.amc") for t in takes]
     assert count_repetitions(join_repetitions(reps).seq).count == len(takes)
+
+
+# ---- a turn of the upper arm about its own axis ---------------------------------------------
+
+
+def _elbow_bent(turn_deg: float, side: str = "right") -> dict[str, np.ndarray]:
+    """Standing, the ``side`` upper arm hanging, the elbow bent 90 degrees with the forearm
+    ahead (+z), then the upper arm turned out by ``turn_deg`` about its own (vertical) axis:
+    the wrist 0.25 m from the elbow toward the side by sin(turn), ahead by cos(turn)."""
+    body = standing()
+    out = 1.0 if side == "left" else -1.0  # the person's left is +x
+    a = np.radians(turn_deg)
+    body[f"{side}_wrist"] = body[f"{side}_elbow"] + 0.25 * np.array(
+        [out * np.sin(a), 0.0, np.cos(a)]
+    )
+    return body
+
+
+def test_forearm_out_is_the_sine_of_the_upper_arms_turn() -> None:
+    """Elbow bent 90 degrees: sin(turn) for either arm turned outward (mirror twins agree),
+    negative turned in; 0 with the forearm ahead and with the arm hanging straight; the
+    same for the whole body turned to face another way or leaning forward."""
+    frames = [_elbow_bent(t) for t in (0.0, 30.0, 60.0, -45.0)]
+    frames += [_elbow_bent(30.0, "left"), standing()]
+    seq = to_sequence(*frames)
+    got = forearm_out(seq.positions)
+    right = np.sin(np.radians([0.0, 30.0, 60.0, -45.0, 0.0, 0.0]))
+    np.testing.assert_allclose(got[:, 1], right, atol=1e-9)
+    np.testing.assert_allclose(got[4, 0], 0.5, atol=1e-9)
+    turned = to_sequence(
+        *[rotate(f, tuple(f), rot_y(70.0) @ rot_x(20.0), np.zeros(3)) for f in frames]
+    )
+    np.testing.assert_allclose(forearm_out(turned.positions), got, atol=1e-9)
+
+
+def test_forearm_out_is_missing_with_the_upper_arm_up_along_the_trunk() -> None:
+    """An arm raised straight overhead has no frame swung from hanging: NaN, not a number."""
+    body = standing()
+    body["right_elbow"] = body["right_shoulder"] + np.array([0.0, 0.30, 0.0])
+    body["right_wrist"] = body["right_elbow"] + np.array([0.0, 0.0, 0.25])
+    got = forearm_out(to_sequence(body).positions)
+    assert np.isnan(got[0, 1])
+    assert np.isfinite(got[0, 0])
+
+
+def test_shoulder_turns_with_the_elbow_bent_count() -> None:
+    """Seven turns of the right upper arm out by 70 degrees and back (1.5 s each, a little
+    rest), elbow bent 90 degrees: no joint angle changes, seven repetitions."""
+    cycle = [70.0 * 0.5 * (1 - np.cos(2 * np.pi * i / 45)) for i in range(45)] + [0.0] * 10
+    seq = to_sequence(*[_elbow_bent(t) for t in cycle * 7], fps=FPS)
+    result = count_repetitions(seq)
+    assert result.count == 7
+    assert result.moving[0] == "right_forearm_out"
+
+
+def test_periodic_share_is_the_autocorrelation_at_the_period() -> None:
+    """A sine over whole periods recurs exactly one period later: its lagged products there
+    average its variance, so the share is the lag's overlap weight 1 - T/n; white noise
+    shares nothing (|share| within a few standard errors of 0, 1/sqrt(n))."""
+    n, period = 600, 60
+    t = np.arange(n)
+    rng = np.random.default_rng(3)
+    x = np.stack([np.sin(2 * np.pi * t / period), rng.normal(0, 1, n)], axis=1)
+    share = periodic_share(x, period / FPS, FPS)
+    assert share[0] == pytest.approx(1 - period / n, abs=1e-9)
+    assert share[1] <= 4 / np.sqrt(n)
+    np.testing.assert_array_equal(periodic_share(x, None, FPS), [1.0, 1.0])
+
+
+def test_a_small_periodic_movement_is_counted_against_larger_jitter() -> None:
+    """Eight leg raises moving the right hip by 0.35 rad, beside four angles that jitter
+    (random walks of about the same range, as Kinect's joints do at rest): eight."""
+    rng = np.random.default_rng(5)
+    hip = np.pi - 0.175 * (1 - np.cos(2 * np.pi * np.arange(8 * 60) / 60))
+    walks = np.cumsum(rng.normal(0, 0.02, (len(hip), 4)), axis=0)
+    names = ("right_hip", "left_elbow", "right_elbow", "left_armpit", "right_armpit")
+    values = np.column_stack([hip, np.pi + walks[:, :2], walks[:, 2:]])
+    result = count_in_signals(_signals(values, names), len(hip), FPS)
+    assert result.count == 8
+
+
+@pytest.mark.parametrize(
+    ("sensor", "subject", "episodes"),
+    [("Kinect", "s06", (1, 3, 5, 7, 9, 2)), ("Vicon", "s07", (2, 4, 6, 8, 10))],
+)
+def test_joined_shoulder_rotations_count_exactly(
+    shared_data: Path, sensor: str, subject: str, episodes: tuple[int, ...]
+) -> None:
+    """UI-PRMD m09 (shoulder internal and external rotation), held-out subjects: the upper
+    arm turns about its own axis with the elbow bent."""
+    folder = shared_data / UIPRMD / sensor / "Positions"
+    read = read_uiprmd_kinect if sensor == "Kinect" else read_uiprmd_vicon
+    reps = [read(folder / f"m09_{subject}_e{e:02d}_positions.txt.gz") for e in episodes]
+    assert count_repetitions(join_repetitions(reps).seq).count == len(episodes)
