@@ -12,7 +12,7 @@ What counts as one repetition (the way people count exercises):
 How (all channels at once, no per-frame loops):
 
 1. the angles of :data:`COUNTED_ANGLES` (with the forearms' direction across the upper arms,
-   :func:`forearm_out`, for a turn of the upper arm about its own axis), missing where the
+   :func:`upper_arm_turn`, for a turn of the upper arm about its own axis), missing where the
    camera does not see their joints,
    gaps interpolated, cleaned of tracking glitches (running median, :data:`MEDIAN_S`),
    smoothed (Gaussian, :data:`SMOOTHING_S`) and analysed at about :data:`ANALYSIS_FPS`;
@@ -90,8 +90,8 @@ mirror image are opposed by more than this cosine (:func:`alternation`)."""
 
 _LATERAL = {"neck_frontal", "torso_frontal", "neck_transverse", "torso_transverse"}
 
-TWIST_NAMES: tuple[str, ...] = ("left_forearm_out", "right_forearm_out")
-"""The forearms' sideways direction across the upper arms (:func:`forearm_out`): how far the
+TWIST_NAMES: tuple[str, ...] = ("left_upper_arm_turn", "right_upper_arm_turn")
+"""The forearms' sideways direction across the upper arms (:func:`upper_arm_turn`): how far the
 upper arm has turned about its own axis with the elbow bent."""
 COUNTED_ANGLES: tuple[str, ...] = (
     tuple(
@@ -104,15 +104,15 @@ COUNTED_ANGLES: tuple[str, ...] = (
 )
 """The angles repetitions are read from: the eight limb joint angles (defined in every
 posture), the trunk's inclination from the vertical, and its bend, side bend and twist, and
-the forearms' sideways direction across the upper arms (:func:`forearm_out`: the turn of the
+the forearms' sideways direction across the upper arms (:func:`upper_arm_turn`: the turn of the
 upper arm about its own axis, shoulder internal and external rotation, which no joint angle
 sees). The limb plane angles are left out: a limb's projection on a plane it is nearly
 perpendicular to has no stable direction. The shank across the thigh (the thigh's turn) was
-tried and left out: on UI-PRMD's training subjects it made the side lunge alternate."""
+tried and left out: it did no better on UI-PRMD's training subjects."""
 TWIST_SINGULAR_COS = float(np.cos(np.radians(30.0)))
-"""The frame attached to a proximal limb is swung there from hanging straight down along the
-trunk; it has no stable orientation when the limb points within 30 degrees of straight up
-along the trunk (the swing's singular direction), where the components count as missing."""
+"""The frame attached to the upper arm is swung there from hanging straight down along the
+trunk; it has no stable orientation when the arm points within 30 degrees of straight up
+along the trunk (the swing's singular direction), where :func:`upper_arm_turn` is missing."""
 CLEAR_PERIODICITY = 0.5
 """A movement repeats clearly when the autocorrelation of its velocities at the period is at
 least this: most of the movement recurs."""
@@ -236,7 +236,7 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
     mid_hip = 0.5 * (p[:, JOINT_INDEX["left_hip"]] + p[:, JOINT_INDEX["right_hip"]])
     trunk = neck - mid_hip
     inclination = angle_between(trunk, np.broadcast_to(WORLD_UP, trunk.shape))
-    twists = dict(zip(TWIST_NAMES, forearm_out(p).T, strict=True))
+    twists = dict(zip(TWIST_NAMES, upper_arm_turn(p).T, strict=True))
     raw = np.stack(
         [
             inclination if n == "trunk_inclination" else twists[n] if n in twists else sig.column(n)
@@ -266,7 +266,7 @@ def _swing(frm: np.ndarray, to: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.asarray(out)
 
 
-def forearm_out(p: np.ndarray) -> np.ndarray:
+def upper_arm_turn(p: np.ndarray) -> np.ndarray:
     """The forearms' direction away from the body's midline in a frame attached to the upper
     arms, ``(frames, 2)`` (left, right) from canonical positions ``(frames, 33, 3)``.
 
@@ -318,7 +318,7 @@ _ANGLE_JOINTS: dict[str, tuple[str, ...]] = {
     **{f"{s}_armpit": (f"{s}_elbow", f"{s}_shoulder", f"{s}_hip") for s in ("left", "right")},
     **{f"{s}_hip": (f"{s}_knee", f"{s}_hip", f"{s}_shoulder") for s in ("left", "right")},
     **{n: _TRUNK for n in COUNTED_ANGLES if n.startswith(("trunk_", "torso_"))},
-    **{f"{s}_forearm_out": (*(f"{s}_{j}" for j in _ARM), *_TRUNK) for s in ("left", "right")},
+    **{f"{s}_upper_arm_turn": (*(f"{s}_{j}" for j in _ARM), *_TRUNK) for s in ("left", "right")},
 }
 
 
@@ -650,7 +650,7 @@ __all__ = [
     "split_repetitions",
     "split_windows",
     "TWIST_NAMES",
-    "forearm_out",
+    "upper_arm_turn",
     "periodic_share",
     "mirror_matrix",
     "movement_direction",

@@ -19,8 +19,8 @@ from features.repetitions import (
     MovementSignals,
     count_in_signals,
     count_repetitions,
-    forearm_out,
     periodic_share,
+    upper_arm_turn,
 )
 from features.skeleton import JOINT_INDEX
 from tests.bodies import rot_x, rot_y, rotate, standing, to_sequence
@@ -194,29 +194,29 @@ def _elbow_bent(turn_deg: float, side: str = "right") -> dict[str, np.ndarray]:
     return body
 
 
-def test_forearm_out_is_the_sine_of_the_upper_arms_turn() -> None:
+def test_upper_arm_turn_is_the_sine_of_the_upper_arms_turn() -> None:
     """Elbow bent 90 degrees: sin(turn) for either arm turned outward (mirror twins agree),
     negative turned in; 0 with the forearm ahead and with the arm hanging straight; the
     same for the whole body turned to face another way or leaning forward."""
     frames = [_elbow_bent(t) for t in (0.0, 30.0, 60.0, -45.0)]
     frames += [_elbow_bent(30.0, "left"), standing()]
     seq = to_sequence(*frames)
-    got = forearm_out(seq.positions)
+    got = upper_arm_turn(seq.positions)
     right = np.sin(np.radians([0.0, 30.0, 60.0, -45.0, 0.0, 0.0]))
     np.testing.assert_allclose(got[:, 1], right, atol=1e-9)
     np.testing.assert_allclose(got[4, 0], 0.5, atol=1e-9)
     turned = to_sequence(
         *[rotate(f, tuple(f), rot_y(70.0) @ rot_x(20.0), np.zeros(3)) for f in frames]
     )
-    np.testing.assert_allclose(forearm_out(turned.positions), got, atol=1e-9)
+    np.testing.assert_allclose(upper_arm_turn(turned.positions), got, atol=1e-9)
 
 
-def test_forearm_out_is_missing_with_the_upper_arm_up_along_the_trunk() -> None:
+def test_upper_arm_turn_is_missing_with_the_upper_arm_up_along_the_trunk() -> None:
     """An arm raised straight overhead has no frame swung from hanging: NaN, not a number."""
     body = standing()
     body["right_elbow"] = body["right_shoulder"] + np.array([0.0, 0.30, 0.0])
     body["right_wrist"] = body["right_elbow"] + np.array([0.0, 0.0, 0.25])
-    got = forearm_out(to_sequence(body).positions)
+    got = upper_arm_turn(to_sequence(body).positions)
     assert np.isnan(got[0, 1])
     assert np.isfinite(got[0, 0])
 
@@ -228,7 +228,7 @@ def test_shoulder_turns_with_the_elbow_bent_count() -> None:
     seq = to_sequence(*[_elbow_bent(t) for t in cycle * 7], fps=FPS)
     result = count_repetitions(seq)
     assert result.count == 7
-    assert result.moving[0] == "right_forearm_out"
+    assert result.moving[0] == "right_upper_arm_turn"
 
 
 def test_periodic_share_is_the_autocorrelation_at_the_period() -> None:
