@@ -436,7 +436,10 @@ def side_parts(x: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.nd
 
 def _movement_line(x: np.ndarray, names: tuple[str, ...], direction: np.ndarray) -> np.ndarray:
     """The movement as one number per sample: the posture projected on the movement
-    direction, signed so that it rises away from rest (the end nearer :data:`AT_EASE`)."""
+    direction, signed so that it rises away from rest: the end nearer :data:`AT_EASE` (the
+    upper arm's turn has no side nearer ease and takes no part), or, when the two ends lie
+    within :data:`MIN_EXCURSION_RAD` of equally far from it, the end the clip's first and last
+    5 % lie nearer (an exercise starts and ends at rest)."""
     line = (x - x.mean(axis=0)) @ direction
     ease = np.array([AT_EASE.get(n, np.pi / 2) for n in names])
     lo, hi = np.percentile(line, [10, 90])
