@@ -12,7 +12,9 @@ What counts as one repetition (the way people count exercises):
 How (all channels at once, no per-frame loops):
 
 1. the angles of :data:`COUNTED_ANGLES` (with the forearms' direction across the upper arms,
-   :func:`upper_arm_turn`, for a turn of the upper arm about its own axis), missing where the
+   :func:`upper_arm_turn`, for a turn of the upper arm about its own axis, and the hips' height
+   above the floor in trunk lengths, :func:`pelvis_height`, for the whole body going up and
+   down), missing where the
    camera does not see their joints,
    gaps interpolated, cleaned of tracking glitches (running median, :data:`MEDIAN_S`),
    smoothed (Gaussian, :data:`SMOOTHING_S`) and analysed at about :data:`ANALYSIS_FPS`;
@@ -56,6 +58,7 @@ Cases for a case base: :func:`split_repetitions` cuts clips into their repetitio
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -90,6 +93,8 @@ mirror image are opposed by more than this cosine (:func:`alternation`)."""
 
 _LATERAL = {"neck_frontal", "torso_frontal", "neck_transverse", "torso_transverse"}
 
+PELVIS_HEIGHT = "pelvis_height"
+"""The hip centre's height above the floor, in trunk lengths (:func:`pelvis_height`)."""
 TWIST_NAMES: tuple[str, ...] = ("left_upper_arm_turn", "right_upper_arm_turn")
 """The forearms' sideways direction across the upper arms (:func:`upper_arm_turn`): how far the
 upper arm has turned about its own axis with the elbow bent."""
@@ -101,12 +106,15 @@ COUNTED_ANGLES: tuple[str, ...] = (
     )
     + ("trunk_inclination", "torso_sagittal", "torso_frontal", "torso_transverse")
     + TWIST_NAMES
+    + (PELVIS_HEIGHT,)
 )
 """The angles repetitions are read from: the eight limb joint angles (defined in every
 posture), the trunk's inclination from the vertical, and its bend, side bend and twist, and
 the forearms' sideways direction across the upper arms (:func:`upper_arm_turn`: the turn of the
 upper arm about its own axis, shoulder internal and external rotation, which no joint angle
-sees). The limb plane angles are left out: a limb's projection on a plane it is nearly
+sees), and the hips' height above the floor in trunk lengths (:func:`pelvis_height`: the
+whole body going up and down, a hop with still arms and straight legs). The limb plane angles
+are left out: a limb's projection on a plane it is nearly
 perpendicular to has no stable direction. The shank across the thigh (the thigh's turn) was
 tried and left out: it did no better on UI-PRMD's training subjects."""
 TWIST_SINGULAR_COS = float(np.cos(np.radians(30.0)))
@@ -236,14 +244,12 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
     mid_hip = 0.5 * (p[:, JOINT_INDEX["left_hip"]] + p[:, JOINT_INDEX["right_hip"]])
     trunk = neck - mid_hip
     inclination = angle_between(trunk, np.broadcast_to(WORLD_UP, trunk.shape))
-    twists = dict(zip(TWIST_NAMES, upper_arm_turn(p).T, strict=True))
-    raw = np.stack(
-        [
-            inclination if n == "trunk_inclination" else twists[n] if n in twists else sig.column(n)
-            for n in COUNTED_ANGLES
-        ],
-        axis=1,
-    )
+    extra = {
+        **dict(zip(TWIST_NAMES, upper_arm_turn(p).T, strict=True)),
+        "trunk_inclination": inclination,
+        PELVIS_HEIGHT: pelvis_height(p),
+    }
+    raw = np.stack([extra[n] if n in extra else sig.column(n) for n in COUNTED_ANGLES], axis=1)
     with np.errstate(invalid="ignore"):
         lying = ~(inclination <= TRUNK_LEVEL_RAD)
     torso = np.array([n.startswith("torso_") for n in COUNTED_ANGLES])
@@ -290,6 +296,24 @@ def upper_arm_turn(p: np.ndarray) -> np.ndarray:
     return np.stack(cols, axis=1)
 
 
+def pelvis_height(p: np.ndarray) -> np.ndarray:
+    """The hip centre's height above the floor, ``(frames,)``, in the clip's median trunk
+    length (mid-hip to mid-shoulder; scale-free), from canonical positions ``(frames, 33, 3)``.
+    The floor is where the lower ankle is in the clip's lowest 5 % (one number per clip: a
+    hop lifts both feet, and a per-frame floor under the lower foot would rise with them).
+    The whole body going up and down (a hop, a squat, sitting down), which no joint angle
+    sees when the legs stay straight. Poses from video are measured from the hip centre,
+    where this is constant and takes no part. NaN where a joint is missing."""
+    mid_hip = 0.5 * (p[:, JOINT_INDEX["left_hip"]] + p[:, JOINT_INDEX["right_hip"]])
+    neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])
+    ankles = p[:, [JOINT_INDEX["left_ankle"], JOINT_INDEX["right_ankle"]]] @ WORLD_UP
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: no person, NaN out
+        floor = np.nanpercentile(np.nanmin(ankles, axis=1), 5)
+        trunk = np.nanmedian(np.linalg.norm(neck - mid_hip, axis=1))
+        return np.asarray((mid_hip @ WORLD_UP - floor) / trunk)
+
+
 def movement_signals(seq: PoseSequence) -> MovementSignals:
     """The counted angles of ``seq`` (positions ``(frames, joints, 3)``) ready for counting.
 
@@ -319,6 +343,7 @@ _ANGLE_JOINTS: dict[str, tuple[str, ...]] = {
     **{f"{s}_hip": (f"{s}_knee", f"{s}_hip", f"{s}_shoulder") for s in ("left", "right")},
     **{n: _TRUNK for n in COUNTED_ANGLES if n.startswith(("trunk_", "torso_"))},
     **{f"{s}_upper_arm_turn": (*(f"{s}_{j}" for j in _ARM), *_TRUNK) for s in ("left", "right")},
+    PELVIS_HEIGHT: (*_TRUNK, "left_ankle", "right_ankle"),
 }
 
 
@@ -437,7 +462,8 @@ def side_parts(x: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.nd
 def _movement_line(x: np.ndarray, names: tuple[str, ...], direction: np.ndarray) -> np.ndarray:
     """The movement as one number per sample: the posture projected on the movement
     direction, signed so that it rises away from rest: the end nearer :data:`AT_EASE` (the
-    upper arm's turn has no side nearer ease and takes no part), or, when the two ends lie
+    upper arm's turn has no side nearer ease, the hips' height no value at ease common to all
+    bodies: neither takes part), or, when the two ends lie
     within :data:`MIN_EXCURSION_RAD` of equally far from it, the end the clip's first and last
     5 % lie nearer (an exercise starts and ends at rest)."""
     line = (x - x.mean(axis=0)) @ direction
@@ -445,9 +471,10 @@ def _movement_line(x: np.ndarray, names: tuple[str, ...], direction: np.ndarray)
     lo, hi = np.percentile(line, [10, 90])
     low_posture = x[line <= lo].mean(axis=0)
     high_posture = x[line >= hi].mean(axis=0)
-    # an upper arm turned in or out is no further from ease one way than the other
-    twist = np.array([n in TWIST_NAMES for n in names])
-    high_posture[twist] = low_posture[twist] = 0.0
+    # an upper arm turned in or out is no further from ease one way than the other; the
+    # hips' height above the floor has no value at ease that holds for every body
+    free = np.array([n in TWIST_NAMES or n == PELVIS_HEIGHT for n in names])
+    high_posture[free] = low_posture[free] = ease[free]
     high_far = float(np.linalg.norm(high_posture - ease))
     low_far = float(np.linalg.norm(low_posture - ease))
     if abs(high_far - low_far) >= MIN_EXCURSION_RAD:
@@ -654,6 +681,8 @@ __all__ = [
     "split_windows",
     "TWIST_NAMES",
     "upper_arm_turn",
+    "PELVIS_HEIGHT",
+    "pelvis_height",
     "periodic_share",
     "mirror_matrix",
     "movement_direction",

@@ -16,7 +16,7 @@ from features.errors import DataError
 from features.poses import PoseSequence, save_pose
 from features.qmp import fit_signals
 from features.readers.asfamc import read_asf_amc
-from features.repetitions import count_repetitions, mirror_angles
+from features.repetitions import count_repetitions, mirror_angles, pelvis_height
 from posecbr.cli import main
 from tests.bodies import rot_z, rotate, standing, to_sequence
 
@@ -87,6 +87,35 @@ def test_one_arm_only_is_not_alternating() -> None:
     result = count_repetitions(_movement(["left"] * 4))
     assert not result.alternating
     assert result.count == 4
+
+
+def _hops(n: int, rise_m: float = 0.2, hop_s: float = 0.5, rest_s: float = 0.5) -> PoseSequence:
+    """``n`` stiff-legged hops: the whole body lifted ``rise_m`` off the floor and back over
+    ``hop_s`` each, with ``rest_s`` of standing before, between and after; the arms hang
+    still and no joint angle changes."""
+    rest, hop = int(rest_s * FPS), int(hop_s * FPS)
+    lift = np.concatenate([np.zeros(rest)] + [rise_m * _bump(hop), np.zeros(rest)] * n)
+    body = standing()
+    return to_sequence(*({k: v + [0.0, h, 0.0] for k, v in body.items()} for h in lift), fps=FPS)
+
+
+def test_pelvis_height_in_trunk_lengths() -> None:
+    # standing(): hip centre 1.00 m, ankles 0.10 m, shoulders' centre 1.50 m: trunk 0.50 m
+    seq = _hops(1)
+    height = pelvis_height(seq.to_canonical().positions)
+    assert height[0] == pytest.approx(0.90 / 0.50)
+    # at the top of the hop (0.2 m up) the hips are 1.10 m above the floor the feet left
+    assert height.max() == pytest.approx(1.10 / 0.50, abs=0.01)
+
+
+@pytest.mark.parametrize("n", [3, 5])
+def test_hops_with_still_arms_counted(n: int) -> None:
+    result = count_repetitions(_hops(n))
+    assert result.count == n
+    peaks = np.array([r.peak_frame for r in result.repetitions])
+    # the top of hop k: 15 frames of rest, then k hops of 15 + 15 frames, then 7 of the hop
+    np.testing.assert_allclose(peaks, 15 + 30 * np.arange(n) + 7, atol=2)
+    assert result.moving[0] == "pelvis_height"
 
 
 def test_standing_still_with_jitter_has_no_repetition() -> None:
