@@ -176,7 +176,7 @@ class RepetitionCount:
 
     period_s: the movement's full cycle (None when it does not repeat); periodicity: the
     autocorrelation at that period (1 = exact repetition); alternating: one repetition per
-    side; moving: the joint angles that carry the movement, most first.
+    side; moving: the joint angles (or the hips' height) that carry the movement, most first.
     """
 
     repetitions: tuple[Repetition, ...]
