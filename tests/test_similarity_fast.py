@@ -299,32 +299,69 @@ def test_quantization_error_norm_is_never_below_the_exact_one() -> None:
     assert np.all(np.abs(x.astype(np.float64) - grid.astype(np.float64)) <= step / 2 * (1 + 1e-9))
 
 
-def test_euclidean_pca_survivors_filtered_by_the_quantized_bound_equal_brute_force(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+def _pca_answer(index: object, query: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The PCA-codes search itself on the float32 query the measure compares, never handing
+    over to another pass (every row may get its distance), so its bound decides alone."""
     import cbr.similarity.euclidean as euclidean
 
-    calls = []
-    run = euclidean._run_quantized
+    pca = index.pca  # type: ignore[attr-defined]
+    q32 = np.asarray(query, dtype=np.float32)
+    q_sq = float(np.dot(q32.astype(np.float64), q32))
+    qp, r_q, q_norm = euclidean._project_query(q32, pca.mean, pca.basis)
+    qc, qc_sq, e_q = euclidean._grid_codes(qp, pca.base, pca.steps, pca.weights)
+    idx, dist, count = euclidean._pca_knn(
+        (pca.codes, pca.code_sq, pca.errs, pca.resid, pca.step), (qc, qc_sq, e_q, r_q),
+        index.rows, index.sq_norms, q32, q_sq, k,  # type: ignore[attr-defined]
+        euclidean._allowance(index, q_sq), (pca.top_norm + q_norm) ** 2, len(index.rows),  # type: ignore[arg-type]
+    )  # fmt: skip
+    assert count >= k
+    return idx, dist
 
-    def counted(*args: object) -> tuple[np.ndarray, np.ndarray, int]:
-        calls.append(len(args[-1]))  # type: ignore[arg-type]
-        return run(*args)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(euclidean, "CASCADE_SHARE", 10**9)  # every survivor set goes through it
-    monkeypatch.setattr(euclidean, "_run_quantized", counted)
-    rng = np.random.default_rng(4)
-    cases, queries = _clustered(rng, 8000, 160)
-    cases[6001] = cases[33]
-    queries = np.vstack([queries, cases[33].astype(np.float64)])
+@pytest.mark.parametrize(
+    "kind",
+    ["duplicates", "huge-offset", "tiny", "one-wide-dimension", "outside", "nan-rows"],
+)
+def test_euclidean_pca_codes_bound_equals_brute_force_on_adversarial_data(kind: str) -> None:
+    cases, queries = _adversarial(kind, np.random.default_rng(6))
     m = Euclidean(prune_min_cases=1000)
     index = m.build_index(cases)
     plain = Euclidean(prune_min_cases=10**9).build_index(cases)
+    assert index.pca is not None
     for q in queries:
         qr = m.represent_query(q)
-        want_i, want_d = smallest_k(m.distances(qr, plain), 5)
-        got_i, got_d = m.nearest(qr, index, 5)
+        want_i, want_d = smallest_k(m.distances(qr, plain), 7)
+        got_i, got_d = _pca_answer(index, qr, 7)
         np.testing.assert_array_equal(got_i, want_i)
         np.testing.assert_array_equal(got_d, want_d)
-    # every query went through the PCA bound, then the quantized bound on its survivors only
-    assert len(calls) == len(queries) and 0 < max(calls) < len(cases) // 2
+
+
+def test_euclidean_pca_codes_bound_never_exceeds_the_distance() -> None:
+    # random walks: leading components hundreds of times wider than the last ones, so the
+    # grid gives the narrow dimensions finer steps (several weights); the squared bound of
+    # every row against a query, from the kernel, against the distance in extended precision
+    import cbr.similarity.euclidean as euclidean
+
+    rng = np.random.default_rng(8)
+    cases = np.cumsum(rng.normal(size=(3000, 90)), axis=1).astype(np.float32)
+    query = np.cumsum(rng.normal(size=90)).astype(np.float32)
+    index = Euclidean(prune_min_cases=1000).build_index(cases)
+    pca = index.pca
+    assert pca is not None and len(set(pca.weights.tolist())) > 1
+    qp, r_q, q_norm = euclidean._project_query(query, pca.mean, pca.basis)
+    qc, qc_sq, e_q = euclidean._grid_codes(qp, pca.base, pca.steps, pca.weights)
+    dots = np.empty(euclidean._BLOCK, dtype=np.int32)
+    lb = np.empty(euclidean._BLOCK, dtype=np.float32)
+    bounds = []
+    query32 = (qc_sq, e_q, r_q, pca.step * (1 - 1e-15))
+    for b in range(pca.codes.shape[0]):
+        euclidean._block_dots(pca.codes, b, qc, dots)
+        euclidean._block_bounds(
+            dots, pca.code_sq, pca.errs, pca.resid, b * euclidean._BLOCK, query32, lb
+        )
+        bounds.append(lb.astype(np.float64))
+    bound = np.concatenate(bounds)[: len(cases)]
+    exact = ((cases.astype(np.longdouble) - query.astype(np.longdouble)) ** 2).sum(axis=1)
+    scale = (pca.top_norm + q_norm) ** 2
+    assert np.all(bound <= exact.astype(np.float64) + 1e-6 * scale)  # the docstring's claim
+    assert np.median(bound / exact.astype(np.float64)) > 0.5  # and a bound that prunes

@@ -12,16 +12,21 @@ which rows they hand it, never in how a row's distance is computed.
   on the fly (:func:`_knn_scan`); from ``2^20`` values, one BLAS matrix-vector product on one
   thread, and only the rows within its rounding error bound (Higham) of the k-th best go to
   the kernel (:func:`_select_from_products`).
-- **Pruned search** for large case bases (``n >= prune_min_cases``, at least 40 dimensions):
-  with an orthonormal PCA basis ``B`` (``m`` columns, fitted on a
-  sample) and residual norms ``r``, ``|x - q| >= sqrt(|B'(x - q)|^2 + (r_x - r_q)^2)``
-  (Pythagoras plus the reverse triangle inequality). The bound for all cases costs ``n x m``;
-  exact distances only for cases whose bound is below the k-th best of the cases with the
-  best bounds. The search measures its own pruning power: when more than ``FALLBACK`` of the
-  cases survive (unstructured data, where no low-rank bound prunes), the rest of the query
-  is the quantized pass below, and later queries skip the PCA bound (re-probing every
-  ``PROBE_EVERY``). When many cases survive (``CASCADE_SHARE``), the quantized bound filters
-  them before their float rows are read.
+- **Pruned search** for large case bases (``n >= prune_min_cases``, at least 40 dimensions;
+  :func:`_pca_knn`): with an orthonormal PCA basis ``B`` (``m`` columns, a sixth of the
+  dimensions, 8 to 128, fitted on a sample), every row's coordinates ``B'(x - mean)`` are
+  stored as uint8 codes with each row's exact grid error ``e_x`` and the norm ``r_x`` of its
+  part outside the basis, and ``|x - q|^2 >= max(|p_hat_q - p_hat_x| - e_q - e_x, 0)^2 +
+  (r_x - r_q)^2``. The codes are bits allocated by variance: one grid whose step per
+  dimension shrinks by a power of two (up to 8) where the dimension's range is narrower,
+  so ``|p_hat_q - p_hat_x|^2`` is a fixed step squared times an exact integer sum, and they
+  are stored dimension-major in blocks of ``_BLOCK`` rows so the integer kernel vectorises
+  across rows: ``m`` bytes a case (a sixth of a float row's bytes at most). One pass over
+  them; a case whose bound is below the running k-th distance gets its exact distance at
+  once. The search measures its own pruning power: when more than ``FALLBACK`` of the
+  cases pass the bound (unstructured data, where no low-rank bound prunes), the query is
+  the quantized pass below, and later queries skip the PCA bound (re-probing every
+  ``PROBE_EVERY``).
 - **Quantized pass** (VA-file style, :func:`_quantized_knn`): every row is also stored as
   uint8 codes on one grid (``x_hat = base + step * code``) with its exact quantization error
   ``e_x = |x - x_hat|``; with the query's codes and error ``e_q``,
@@ -54,8 +59,6 @@ from .base import SimilarityMeasure, check_weighting, register_measure, weighted
 
 FALLBACK = 0.5  # candidate share above which the pruned search turns into the plain pass
 PROBE_EVERY = 16  # an index that stopped pruning tries the bound again every this many queries
-CASCADE_SHARE = 8  # from 1/8 of the cases surviving the PCA bound, the quantized bound filters
-# them before their rows are read (at 2 % survivors, real features at 10^6, it did not pay)
 _U32 = 2.0**-24  # unit roundoff of float32
 
 
@@ -67,6 +70,13 @@ def _row_sq(rows: np.ndarray, sq: np.ndarray, i: int, q: np.ndarray, q_sq: float
         s += rows[i, j] * q[j]
     d2 = sq[i] - 2.0 * np.float64(s) + q_sq
     return math.sqrt(d2) if d2 > 0.0 else 0.0
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _row_distance(rows: np.ndarray, sq: np.ndarray, i: int, q: np.ndarray, q_sq: float) -> float:
+    """:func:`_row_sq` as a function of its own, for callers compiled without fastmath (the
+    flags of the code it is inlined into decide its summation order, so its value)."""
+    return _row_sq(rows, sq, i, q, q_sq)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -112,78 +122,190 @@ def _knn_scan(
     return best_i, best_d
 
 
+_BLOCK = 256  # rows per block of the PCA codes (stored dimension-major within a block)
+
+
+@numba.njit(cache=True, nogil=True)
+def _grid_codes(
+    v: np.ndarray, base: np.ndarray, steps: np.ndarray, weights: np.ndarray
+) -> tuple[np.ndarray, int, float]:
+    """``v`` ``(m,)`` float64 on the grid ``base + steps * code`` (codes clipped to 0..255):
+    (``weights * code`` ``(m,)`` int32, ``sum(weights code^2)``, ``|v - v_hat|`` rounded up
+    as :func:`_quantize` does it; inf when ``v`` has a NaN or inf)."""
+    m = v.shape[0]
+    codes = np.zeros(m, dtype=np.int32)
+    code_sq = 0
+    err = 0.0
+    v_sq = 0.0
+    sc_sq = 0.0
+    base_sq = 0.0
+    for t in range(m):
+        if not math.isfinite(v[t]):
+            return codes, 0, np.inf
+        c = min(max(round((v[t] - base[t]) / steps[t]), 0.0), 255.0)
+        codes[t] = np.int32(c) * weights[t]
+        code_sq += int(c) * int(c) * int(weights[t])
+        sc = steps[t] * c
+        diff = v[t] - (base[t] + sc)
+        err += diff * diff
+        v_sq += v[t] * v[t]
+        sc_sq += sc * sc
+        base_sq += base[t] * base[t]
+    u = 2.0**-53
+    spread = math.sqrt(v_sq) + math.sqrt(sc_sq) + math.sqrt(base_sq)
+    return codes, code_sq, math.sqrt(err) * (1.0 + 4.0 * (m + 4) * u) + 4.0 * u * spread
+
+
+@numba.njit(cache=True, nogil=True)
+def _project_query(
+    q: np.ndarray, mean: np.ndarray, basis: np.ndarray
+) -> tuple[np.ndarray, float, float]:
+    """``q`` ``(D,)`` float32 on the basis ``(D, m)``: (coordinates ``B'(q - mean)`` ``(m,)``,
+    the norm of the part outside the basis, ``|q - mean|``)."""
+    dims, m = basis.shape
+    qp = np.zeros(m)
+    tot = 0.0
+    for j in range(dims):
+        c = np.float64(q[j]) - mean[j]
+        tot += c * c
+        for t in range(m):
+            qp[t] += c * basis[j, t]
+    p_sq = 0.0
+    for t in range(m):
+        p_sq += qp[t] * qp[t]
+    return qp, math.sqrt(max(tot - p_sq, 0.0)), math.sqrt(tot)
+
+
 @numba.njit(cache=True, nogil=True, fastmath=True)
-def _pruned_candidates(
+def _block_dots(codes: np.ndarray, b: int, qc: np.ndarray, dots: np.ndarray) -> None:
+    """``dots[t]`` = the integer ``c_x.c_q`` of row ``t`` of block ``b`` of ``codes``
+    ``(blocks, m, _BLOCK)`` uint8 and the query's weighted codes ``qc`` ``(m,)`` int32
+    (exact: ``64 m 255^2 < 2^31``). Dimension-major within the block: the loop over rows vectorises
+    with no horizontal sum per row."""
+    for t in range(_BLOCK):
+        dots[t] = 0
+    for j in range(codes.shape[1]):
+        qj = np.int32(qc[j])
+        for t in range(_BLOCK):
+            dots[t] += np.int32(codes[b, j, t]) * qj
+
+
+@numba.njit(cache=True, nogil=True)
+def _up32(x: float) -> float:
+    """The smallest float32 value at least ``x``, as a float."""
+    y = np.float32(x)
+    return float(y) if float(y) >= x else float(np.nextafter(y, np.float32(np.inf)))
+
+
+@numba.njit(cache=True, nogil=True)
+def _down32(x: float) -> float:
+    """The largest float32 value at most ``x``, as a float."""
+    y = np.float32(x)
+    return float(y) if float(y) <= x else float(np.nextafter(y, np.float32(-np.inf)))
+
+
+@numba.njit(cache=True, nogil=True)
+def _block_bounds(
+    dots: np.ndarray,
+    code_sq: np.ndarray,
+    errs: np.ndarray,
+    resid: np.ndarray,
+    a: int,
+    query: tuple[int, float, float, float],
+    out: np.ndarray,
+) -> None:
+    """``out[t]`` ``(_BLOCK,)`` float32: the squared first bound of row ``a + t`` (see
+    :func:`_pca_knn`) from the block's integer dot products ``dots``; ``query`` = (the
+    query codes' squared norm, ``e_q`` and ``r_q`` as float32 rounded up, ``step`` as
+    float32 rounded down). In float32, so the loop vectorises 16 rows wide: every term is
+    below ``~1.1 sqrt(scale)`` and each of the few operations errs by ``2^-24`` of its
+    result, so the computed bound exceeds the exact one by less than ``1e-6 scale``."""
+    qc_sq, e_q, r_q, step = query
+    e32 = np.float32(e_q)
+    r32 = np.float32(r_q)
+    step32 = np.float32(step)
+    c32 = np.int32(qc_sq)
+    for t in range(_BLOCK):
+        s2 = code_sq[a + t] + c32 - 2 * dots[t]  # exact in int32: below 4 64 m 255^2
+        p = step32 * np.float32(math.sqrt(np.float32(s2))) - e32 - errs[a + t]
+        p = p if p > np.float32(0.0) else np.float32(0.0)
+        r = resid[a + t] - r32
+        out[t] = p * p + r * r
+
+
+@numba.njit(cache=True, nogil=True)
+def _pca_knn(
+    pca: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float],
+    query_pca: tuple[np.ndarray, int, float, float],
     rows: np.ndarray,
     sq: np.ndarray,
-    proj: np.ndarray,
-    resid: np.ndarray,
-    basis: np.ndarray,
-    mean: np.ndarray,
     q: np.ndarray,
     q_sq: float,
     k: int,
     rounding: float,
-    top_norm: float,
+    scale: float,
     max_count: int,
-) -> tuple[np.ndarray, bool]:
-    """The cases ``q`` ``(D,)`` float32's k nearest are among by the PCA bound, in one compiled
-    call.
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Exact k nearest of ``q`` ``(D,)`` float32 with the bound of the PCA codes, in one
+    pass over them: (indices ``(k,)``, distances ``(k,)``, rows whose kernel distance was
+    computed), or a count of -1 once more than ``max_count`` were (the caller then runs a
+    pass that prunes better, or the plain pass).
 
-    proj ``(n, m)`` float32 projections of the centred rows on ``basis`` ``(D, m)``, resid
-    ``(n,)`` float32 their residual norms; ``rounding``: what a row kernel's squared distance
-    may lack of the true one. Returns (the cases whose bound survived ``(c,)`` increasing,
-    True), or (nothing, False) once more than ``max_count`` survive (the caller then runs a
-    full pass instead).
+    ``pca`` = (codes ``(blocks, m, _BLOCK)`` uint8, code_sq int32, errs float32, resid
+    float32 ``(blocks _BLOCK,)``, step): each row's coordinates ``p_x = B'(x - mean)`` on the
+    orthonormal basis ``B`` ``(D, m)`` on the grid ``base + step * code``, ``e_x = |p_x -
+    p_hat|`` rounded up and the residual norm ``r_x = |x - mean - B p_x|`` (both inf for a
+    row with NaN or inf, which has no bound and always goes to the row kernel, as in the
+    plain pass, and for the padding of the last block, never visited); ``query_pca`` =
+    (``w c_q`` ``(m,)`` int32, ``sum(w c_q^2)``, ``e_q``, ``r_q``) the same for the query
+    (``w`` the dimensions' weights, :class:`_PcaCodes`). ``rounding``: what a row kernel's
+    squared distance may lack of the true one; ``scale``: ``(top_norm + |q - mean|)^2``.
+
+    Why no neighbour is lost. Pythagoras on the basis and its complement, the reverse
+    triangle inequality on the complement and the triangle inequality on the grid:
+    ``|q - x|^2 = |p_q - p_x|^2 + |(I - BB')(q - x)|^2 >= max(g - e_q - e_x, 0)^2
+    + (r_x - r_q)^2`` with ``g^2 = step^2 sum(w (c_q - c_x)^2)`` (an exact integer sum;
+    dimension ``j``'s grid step is ``step sqrt(w_j)``).
+    The computed bound exceeds this by the float64 projection (``~D u64`` of the norms), the
+    basis' orthonormality (``~1e-15``), the root of the residual's ``|x - mean|^2 -
+    |p_x|^2`` (at most ``sqrt(2 D u64)`` of ``|x - mean|``, ~3e-7), ``resid``'s float32
+    storage (6e-8 relative) and the float32 evaluation (:func:`_block_bounds`, < 1e-6
+    scale): all far inside the ``1e-5 scale`` the limit allows. A row is pruned when its
+    bound exceeds ``limit = (d_k^2 + rounding)(1 + 1e-5) + 1e-5 scale`` with ``d_k`` the
+    running k-th smallest kernel distance: its true squared distance then exceeds ``d_k^2 +
+    rounding``, so its kernel distance exceeds ``d_k``. Rows are visited in increasing index
+    order and a row within the limit gets its kernel distance at once (ties keep the lower
+    index, as in the plain pass); ``d_k`` only falls, so a row pruned early would be pruned
+    by the final ``d_k`` too.
     """
-    n, m = proj.shape
-    dims = rows.shape[1]
-    qp = np.zeros(m)
-    qc_sq = 0.0
-    for j in range(dims):
-        c = np.float64(q[j]) - mean[j]
-        qc_sq += c * c
-        for t in range(m):
-            qp[t] += c * basis[j, t]
-    qp_sq = 0.0
-    for t in range(m):
-        qp_sq += qp[t] * qp[t]
-    q_res = math.sqrt(max(qc_sq - qp_sq, 0.0))
-    # squared bounds |P'(x - q)|^2 + (r_x - r_q)^2 of every row; the best-bounded rows seed
-    n_seed = min(n, max(4 * k, 32))
-    lb = np.empty(n, dtype=np.float32)
-    qp32 = qp.astype(np.float32)
-    seed_i = np.full(n_seed, -1, dtype=np.int64)
-    seed_d = np.full(n_seed, np.inf)
-    r_q = np.float32(q_res)
-    for i in range(n):
-        b = np.float32(0.0)  # float32 arithmetic: the loop vectorises (1.6x faster measured)
-        for t in range(m):
-            d = proj[i, t] - qp32[t]
-            b += d * d
-        r = resid[i] - r_q
-        b += r * r
-        lb[i] = b
-        if b < seed_d[n_seed - 1]:
-            _insert(seed_i, seed_d, i, b)
-    _, best_d = _knn_scan(rows, sq, q, q_sq, np.sort(seed_i), k)
-    # A neighbour's kernel distance is <= the seeds' k-th; its true squared distance exceeds
-    # that by at most ``rounding``. Its computed bound may exceed its true one by float32
-    # storage and basis rounding (~1e-7 relative to the norms; allowed 100x) and by the
-    # float32 arithmetic of the bound: m + 1 squared differences of terms below
-    # top_norm + |q - mean| (each difference within 2u of them, the sum within (m + 1) u).
-    scale = (top_norm + math.sqrt(qc_sq)) ** 2
-    kth_sq = best_d[k - 1] ** 2 + rounding
-    limit = kth_sq * (1.0 + 1e-5) + (1e-5 + 2.0 * (m + 8) * _U32) * scale
-    cand = np.empty(max_count, dtype=np.int64)
+    codes, code_sq, errs, resid, step = pca
+    qc, qc_sq, e_q, r_q = query_pca
+    lo = 1.0 - 4.0 * 2.0**-53
+    n = len(rows)
+    best_i = np.full(k, n, dtype=np.int64)
+    best_d = np.full(k, np.inf)
+    dots = np.empty(_BLOCK, dtype=np.int32)
+    lb = np.empty(_BLOCK, dtype=np.float32)
+    query32 = (qc_sq, _up32(e_q), _up32(r_q), _down32(step * lo))
+    limit = np.inf
     count = 0
-    for i in range(n):
-        if lb[i] <= limit:
-            if count == max_count:
-                return cand[:0], False
-            cand[count] = i
+    for b in range(codes.shape[0]):
+        a = b * _BLOCK
+        _block_dots(codes, b, qc, dots)
+        _block_bounds(dots, code_sq, errs, resid, a, query32, lb)
+        for t in range(min(_BLOCK, n - a)):
+            if not lb[t] <= limit and errs[a + t] < np.inf:
+                continue  # (a row with NaN or inf has no bound: the kernel decides)
+            i = a + t
             count += 1
-    return cand[:count], True
+            if count > max_count:
+                return best_i, best_d, -1
+            d = _row_distance(rows, sq, i, q, q_sq)
+            if d < best_d[k - 1]:
+                _insert(best_i, best_d, i, d)
+                if best_d[k - 1] < np.inf:
+                    limit = (best_d[k - 1] ** 2 + rounding) * (1.0 + 1e-5) + 1e-5 * scale
+    return best_i, best_d, count
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
@@ -347,16 +469,17 @@ class _EuclideanIndex:
     rows: np.ndarray  # (n, D) float32 (float64 when exact=True); may be a read-only memmap
     sq_norms: np.ndarray  # (n,) float64
     norms: np.ndarray  # (n,) float64
-    basis: np.ndarray | None = None  # (D, m) float64 orthonormal to float32 rounding, or None
-    mean: np.ndarray | None = None  # (D,)
-    proj: np.ndarray | None = None  # (n, m) float32
-    resid: np.ndarray | None = None  # (n,) float32, norm of the part outside the basis
-    top_norm: float = 0.0  # largest |row - mean|
+    pca: _PcaCodes | None = None  # the rows' PCA codes, for the PCA bound
     max_norm: float = 0.0  # largest |row| (over rows without NaN or inf)
     codes: _Codes | None = None  # the rows quantized to uint8, for the quantized bound
     # [running share of cases that survive the bound, queries seen]: a heuristic shared by
     # the queries of this index (races between threads only change a speed decision)
     pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
+
+    @property
+    def basis(self) -> np.ndarray | None:
+        """The PCA bound's basis ``(D, m)``, or None when the index has no PCA bound."""
+        return None if self.pca is None else self.pca.basis
 
     def worth_pruning(self) -> bool:
         """Whether the next query should compute the bound (see the module docstring)."""
@@ -370,6 +493,99 @@ class _EuclideanIndex:
 
     def skip(self) -> None:
         self.pruning[1] += 1
+
+
+@dataclass(frozen=True, eq=False)
+class _PcaCodes:
+    """Every row's coordinates on the leading PCA directions as uint8 codes on one grid
+    (``p_hat = base + step * code``), stored in blocks of ``_BLOCK`` rows, dimension-major
+    within a block; with the exact remainder: the residual norm outside the basis."""
+
+    basis: np.ndarray  # (D, m) float64 orthonormal columns
+    mean: np.ndarray  # (D,) float64
+    codes: np.ndarray  # (blocks, m, _BLOCK) uint8
+    code_sq: np.ndarray  # (blocks * _BLOCK,) int32 squared norms of the codes
+    errs: np.ndarray  # (blocks * _BLOCK,) float32 |p_x - p_hat| rounded up; inf: NaN/padding
+    resid: np.ndarray  # (blocks * _BLOCK,) float32 residual norms; inf: NaN/padding
+    base: np.ndarray  # (m,) float64
+    step: float  # the finest step
+    steps: np.ndarray  # (m,) float64 each dimension's step, step sqrt(weights)
+    weights: np.ndarray  # (m,) int32 in 1, 4, 16, 64
+    top_norm: float  # largest |row - mean| over rows without NaN or inf
+
+
+def _pca_basis(rows: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """The mean ``(D,)`` and the leading ``m`` principal directions ``(D, m)`` (orthonormal
+    to float64 rounding) of a sample of 1000 rows of ``rows`` ``(n, D)``."""
+    n = len(rows)
+    pick = np.random.default_rng(0).choice(n, min(n, 1000), replace=False)
+    sample = np.asarray(rows[np.sort(pick)], dtype=np.float64)
+    sample = sample[np.isfinite(sample).all(axis=1)]
+    mean = sample.mean(axis=0) if len(sample) else np.zeros(rows.shape[1])
+    centred = sample - mean
+    # principal directions from the small Gram matrix (sample x sample), then QR so the
+    # basis is orthonormal to rounding: the bound needs orthonormality, not optimality
+    _, vecs = np.linalg.eigh(centred @ centred.T)
+    top = centred.T @ vecs[:, ::-1][:, :m]  # (D, m)
+    return mean, np.linalg.qr(top)[0]
+
+
+def _project(part: np.ndarray, mean: np.ndarray, basis: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Coordinates ``(c, m)`` on ``basis`` of the rows ``part`` ``(c, D)`` less ``mean``, the
+    squared norms ``(c,)`` of the centred rows and a mask of the rows without NaN or inf."""
+    c = np.asarray(part, dtype=np.float64) - mean  # float64: the residual needs it
+    finite = np.isfinite(c).all(axis=1)
+    c[~finite] = 0.0
+    return c @ basis, np.einsum("ij,ij->i", c, c), finite
+
+
+def _pca_codes(rows: np.ndarray, m: int) -> _PcaCodes | None:
+    """The PCA codes of ``rows`` ``(n, D)``: two passes in chunks (the grid's range, then the
+    codes), so a memmap is read without a float64 copy of it; None without a finite range."""
+    n, dims = rows.shape
+    mean, basis = _pca_basis(rows, m)
+    chunk = max(_BLOCK, ((1 << 22) // dims) // _BLOCK * _BLOCK)  # float64 chunks of ~32 MB
+    lo, hi = np.full(m, np.inf), np.full(m, -np.inf)
+    top_sq = 0.0
+    for a in range(0, n, chunk):
+        p, tot, finite = _project(rows[a : a + chunk], mean, basis)
+        if finite.any():
+            lo = np.minimum(lo, p[finite].min(axis=0))
+            hi = np.maximum(hi, p[finite].max(axis=0))
+            top_sq = max(top_sq, float(tot[finite].max()))
+    widest = float(np.max(hi - lo))
+    if not (math.isfinite(widest) and widest > 0.0):
+        return None
+    # bits by variance: dimension j's step is the widest range's / 255 divided by the power
+    # of two (up to 8) its own range allows, so narrow dimensions get a finer grid; with
+    # ``step`` the finest step, dimension j's is ``step sqrt(w_j)``, ``w_j`` in 1, 4, 16, 64,
+    # and ``|p_hat_q - p_hat_x|^2 = step^2 sum(w (c_q - c_x)^2)`` stays an exact integer sum
+    width = np.maximum(hi - lo, widest / 256.0)
+    shrink = np.minimum(np.floor(np.log2(widest / width)), 3.0)
+    weights = (4.0 ** (3.0 - shrink)).astype(np.int32)
+    step = widest / 255.0 / 8.0
+    steps = step * np.sqrt(weights.astype(np.float64))
+    blocks = -(-n // _BLOCK)
+    codes = np.zeros((blocks, m, _BLOCK), dtype=np.uint8)
+    code_sq = np.zeros(blocks * _BLOCK, dtype=np.int32)
+    errs = np.full(blocks * _BLOCK, np.inf, dtype=np.float32)
+    resid = np.full(blocks * _BLOCK, np.inf, dtype=np.float32)
+    for a in range(0, n, chunk):
+        p, tot, finite = _project(rows[a : a + chunk], mean, basis)
+        c, e = _quantize(p, lo, steps)
+        e[~finite] = np.inf
+        r = np.sqrt(np.maximum(tot - np.einsum("ij,ij->i", p, p), 0.0))
+        r[~finite] = np.inf
+        end = a + len(p)
+        full = np.zeros((-(-len(p) // _BLOCK) * _BLOCK, m), dtype=np.uint8)
+        full[: len(p)] = c
+        codes[a // _BLOCK : -(-end // _BLOCK)] = full.reshape(-1, _BLOCK, m).transpose(0, 2, 1)
+        code_sq[a:end] = np.einsum("ij,ij,j->i", c.astype(np.int32), c.astype(np.int32), weights)
+        errs[a:end] = np.nextafter(e.astype(np.float32), np.float32(np.inf))  # rounded up
+        resid[a:end] = r
+    return _PcaCodes(
+        basis, mean, codes, code_sq, errs, resid, lo, step, steps, weights, math.sqrt(top_sq)
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -408,8 +624,8 @@ class Euclidean(SimilarityMeasure):
     ``exact``: compute in float64 by differences instead of the float32 dot-product identity
     (slower; for tiny case bases or bit-exact comparisons).
     ``prune_min_cases`` / ``prune_dims``: when to use the PCA lower-bound filter, and its rank
-    (0: a tenth of the dimensions, 8 to 128, so the bound costs a tenth of a plain pass or
-    less).
+    (0: a sixth of the dimensions, 8 to 128 and at most a quarter; its uint8 codes cost a
+    twenty-fourth of a plain pass's bytes or less).
     ``centre`` / ``multiplier``: learned feature weighting (:mod:`cbr.weights`), one value per
     flattened column: the measure compares ``(x - centre) * multiplier``; None: raw values.
     """
@@ -440,7 +656,7 @@ class Euclidean(SimilarityMeasure):
             rows = np.ascontiguousarray(rows, dtype=dtype)
         sq = _row_norms_sq(rows)
         n, dims = rows.shape
-        m = self.prune_dims or min(max(dims // 10, 8), 128)
+        m = self.prune_dims or min(max(dims // 6, 8), 128)
         m = min(m, dims // 4)
         if self.exact or n < self.prune_min_cases or m < 4:
             return _EuclideanIndex(rows, sq, np.sqrt(sq))
@@ -584,7 +800,9 @@ def _finite_max_norm(sq: np.ndarray) -> float:
     return math.sqrt(float(finite.max())) if len(finite) else 0.0
 
 
-def _quantize(x: np.ndarray, base: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
+def _quantize(
+    x: np.ndarray, base: np.ndarray, step: float | np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Codes ``(m, D)`` uint8 of ``x`` ``(m, D)`` on the grid ``base + step * code`` (clipped to
     0..255) and ``|x - x_hat|`` ``(m,)`` float64 rounded up (inf for a row with NaN or inf).
 
@@ -693,63 +911,31 @@ def _row_norms_sq(rows: np.ndarray) -> np.ndarray:
 def _pruning_index(
     rows: np.ndarray, sq: np.ndarray, m: int, codes: _Codes | None
 ) -> _EuclideanIndex:
-    """The PCA bound's basis ``(D, m)``, projections ``(n, m)`` and residual norms ``(n,)``."""
-    n, dims = rows.shape
-    pick = np.random.default_rng(0).choice(n, min(n, 1000), replace=False)
-    sample = np.asarray(rows[np.sort(pick)])
-    mean = sample.mean(axis=0, dtype=np.float64)
-    centred = sample - mean
-    # principal directions from the small Gram matrix (sample x sample), then QR so the
-    # basis is orthonormal to rounding: the bound needs orthonormality, not optimality
-    _, vecs = np.linalg.eigh(centred @ centred.T)
-    top = centred.T @ vecs[:, ::-1][:, :m]  # (D, m)
-    # float32-representable values, so the build and every query project on the same basis
-    basis = np.linalg.qr(top)[0].astype(np.float32).astype(np.float64)
-    proj = np.empty((n, m), dtype=np.float32)
-    resid = np.empty(n, dtype=np.float32)
-    top_sq = 0.0
-    step = max(256, (1 << 23) // dims)  # float64 chunks of <= 64 MB
-    for a in range(0, n, step):
-        c = rows[a : a + step] - mean  # float64: the residual needs it (cancellation)
-        p = c @ basis
-        proj[a : a + step] = p
-        tot = np.einsum("ij,ij->i", c, c)
-        resid[a : a + step] = np.sqrt(np.maximum(tot - np.einsum("ij,ij->i", p, p), 0.0))
-        top_sq = max(top_sq, float(tot.max()))
-    return _EuclideanIndex(
-        rows,
-        sq,
-        np.sqrt(sq),
-        basis,
-        mean,
-        proj,
-        resid,
-        math.sqrt(top_sq),
-        _finite_max_norm(sq),
-        codes,
-    )
+    """The index with the PCA codes of rank ``m`` (without them when the rows have no finite
+    range) and the quantized codes ``codes``."""
+    pca = _pca_codes(rows, m)
+    return _EuclideanIndex(rows, sq, np.sqrt(sq), pca, _finite_max_norm(sq), codes)
 
 
 def _pruned_search(
     index: _EuclideanIndex, q32: np.ndarray, q_sq: float, k: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Exact k nearest with the PCA bound, or the plain pass when the bound prunes too little."""
-    assert index.basis is not None and index.mean is not None
-    assert index.proj is not None and index.resid is not None
-    n, dims = index.rows.shape
-    gamma = dims * _U32 / (1.0 - dims * _U32)
-    # the float32 dot product's error (Higham: gamma_D |c| |q|, on both sides of the identity)
-    rounding = 2.02 * gamma * index.max_norm * math.sqrt(q_sq)
-    cand, pruned = _pruned_candidates(
-        index.rows, index.sq_norms, index.proj, index.resid, index.basis, index.mean, q32,
-        q_sq, k, rounding, index.top_norm, max(k, int(FALLBACK * n)),
+    """Exact k nearest with the PCA bound, or the quantized pass (which may turn into the
+    plain pass) when the bound prunes too little or the query has a NaN or inf."""
+    pca = index.pca
+    assert pca is not None
+    if not math.isfinite(q_sq):
+        return _quantized_search(index, q32, q_sq, k)
+    n = len(index.rows)
+    qp, r_q, q_norm = _project_query(q32, pca.mean, pca.basis)
+    qc, qc_sq, e_q = _grid_codes(qp, pca.base, pca.steps, pca.weights)
+    idx, dist, count = _pca_knn(
+        (pca.codes, pca.code_sq, pca.errs, pca.resid, pca.step), (qc, qc_sq, e_q, r_q),
+        index.rows, index.sq_norms, q32, q_sq, k, _allowance(index, q_sq),
+        (pca.top_norm + q_norm) ** 2, max(k, int(FALLBACK * n)),
     )  # fmt: skip
-    if not pruned:  # too many survivors: a full pass is cheaper than gathering them
+    if count < 0:  # too many rows needed their distance: a pass that prunes better
         index.record(1.0)
         return _quantized_search(index, q32, q_sq, k)
-    index.record(len(cand) / n)
-    if index.codes is None or len(cand) * CASCADE_SHARE < n:
-        return _knn_scan(index.rows, index.sq_norms, q32, q_sq, cand, k)
-    # many survivors: the quantized bound reads a quarter of their bytes and leaves few rows
-    idx, dist, _ = _run_quantized(index, index.codes, q32, q_sq, k, cand)
+    index.record(count / n)
     return idx, dist
