@@ -27,17 +27,14 @@ which rows they hand it, never in how a row's distance is computed.
   cases pass the bound (unstructured data, where no low-rank bound prunes), the query is
   the quantized pass below, and later queries skip the PCA bound (re-probing every
   ``PROBE_EVERY``).
-- **Quantized pass** (VA-file style, :func:`_quantized_knn`): every row is also stored as
-  uint8 codes on one grid (``x_hat = base + step * code``) with its exact quantization error
-  ``e_x = |x - x_hat|``; with the query's codes and error ``e_q``,
-  ``|q_hat - x_hat| - e_q - e_x <= |q - x| <= |q_hat - x_hat| + e_q + e_x``, and
-  ``|q_hat - x_hat|^2`` is ``step^2`` times an exact integer sum over a quarter of the float
-  rows' bytes. Rows whose lower bound is above the k-th smallest upper bound are pruned; the
-  rest get their float distance. On unstructured data the k-th neighbour lies far below the
-  bulk and the grid error is small against that gap: all but ~0.01 % of the cases are
-  pruned. When more than ``FALLBACK`` survive, the query is the plain pass (and later queries
-  skip the quantized pass too, re-probing every ``PROBE_EVERY``): an unprunable case base
-  costs one plain pass per query.
+- **Quantized pass** (VA-file style): the same codes, kernel and pass on the identity basis:
+  every whole row as uint8 codes (``x_hat = base + steps * code``, steps by range as above)
+  with its exact grid error ``e_x``, so ``|q - x| >= |q_hat - x_hat| - e_q - e_x`` over a
+  quarter of the float rows' bytes. On unstructured data the k-th neighbour lies far below
+  the bulk and the grid error is small against that gap: all but ~0.01 % of the cases are
+  pruned. When more than ``FALLBACK`` need their distance, the query is the plain pass (and
+  later queries skip the quantized pass too, re-probing every ``PROBE_EVERY``): an
+  unprunable case base costs one plain pass per query.
 - **Many queries** (:meth:`Euclidean.nearest_many`): one matrix product per block of queries
   (BLAS), then per query the cases whose product-based distance is within its rounding error
   bound of the k-th best are re-checked with the row kernel.
@@ -180,8 +177,8 @@ def _project_query(
 def _block_dots(codes: np.ndarray, b: int, qc: np.ndarray, dots: np.ndarray) -> None:
     """``dots[t]`` = the integer ``c_x.c_q`` of row ``t`` of block ``b`` of ``codes``
     ``(blocks, m, _BLOCK)`` uint8 and the query's weighted codes ``qc`` ``(m,)`` int32
-    (exact: ``64 m 255^2 < 2^31``). Dimension-major within the block: the loop over rows vectorises
-    with no horizontal sum per row."""
+    (exact: ``max(w) m 255^2 < 2^31``). Dimension-major within the block: the loop over
+    rows vectorises with no horizontal sum per row."""
     for t in range(_BLOCK):
         dots[t] = 0
     for j in range(codes.shape[1]):
@@ -214,7 +211,7 @@ def _block_bounds(
     query: tuple[int, float, float, float],
     out: np.ndarray,
 ) -> None:
-    """``out[t]`` ``(_BLOCK,)`` float32: the squared first bound of row ``a + t`` (see
+    """``out[t]`` ``(_BLOCK,)`` float32: the squared bound of row ``a + t`` (see
     :func:`_pca_knn`) from the block's integer dot products ``dots``; ``query`` = (the
     query codes' squared norm, ``e_q`` and ``r_q`` as float32 rounded up, ``step`` as
     float32 rounded down). In float32, so the loop vectorises 16 rows wide: every term is
@@ -224,9 +221,9 @@ def _block_bounds(
     e32 = np.float32(e_q)
     r32 = np.float32(r_q)
     step32 = np.float32(step)
-    c32 = np.int32(qc_sq)
+    c64 = np.int64(qc_sq)
     for t in range(_BLOCK):
-        s2 = code_sq[a + t] + c32 - 2 * dots[t]  # exact in int32: below 4 64 m 255^2
+        s2 = np.int64(code_sq[a + t]) + c64 - 2 * np.int64(dots[t])  # exact in int64
         p = step32 * np.float32(math.sqrt(np.float32(s2))) - e32 - errs[a + t]
         p = p if p > np.float32(0.0) else np.float32(0.0)
         r = resid[a + t] - r32
@@ -309,128 +306,6 @@ def _pca_knn(
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
-def _code_dots(
-    codes: np.ndarray, qc: np.ndarray, which: np.ndarray, a: int, out: np.ndarray
-) -> None:
-    """``out[t]`` = the integer ``c_x.c_q`` of row ``a + t`` of ``codes`` ``(n, D)`` uint8 (of
-    row ``which[a + t]`` when ``which`` is not empty) and the query's codes ``qc`` ``(D,)``
-    int16 (exact in int32: ``D 255^2 < 2^31``). A block at a time and with nothing else in
-    the loop, so LLVM vectorises it: the uint8 x int16 products become vpmaddwd (16 pairs an
-    instruction), the sum kept in int32 because only its int32 value is stored (using the
-    sum in int64 arithmetic in the loop made it vpmuldq on int64, measured 3x slower; summing
-    squared differences needs a subtraction and a second widening per value)."""
-    dims = codes.shape[1]
-    for t in range(out.shape[0]):
-        i = a + t if which.shape[0] == 0 else which[a + t]
-        s = np.int32(0)
-        for j in range(dims):
-            s += np.int32(codes[i, j]) * np.int32(qc[j])
-        out[t] = s
-
-
-@numba.njit(cache=True, nogil=True)
-def _quantized_knn(
-    codes: np.ndarray,
-    code_sq: np.ndarray,
-    errs: np.ndarray,
-    unbounded: np.ndarray,
-    err_max: float,
-    step: float,
-    qc: np.ndarray,
-    qc_sq: int,
-    e_q: float,
-    rows: np.ndarray,
-    sq: np.ndarray,
-    q: np.ndarray,
-    q_sq: float,
-    k: int,
-    allowance: float,
-    max_count: int,
-    subset: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """Exact k nearest of ``q`` ``(D,)`` float32 with the quantized bound, in one compiled call,
-    among the rows listed in ``subset`` (increasing; empty: all rows).
-
-    codes ``(n, D)`` uint8 (``code_sq`` ``(n,)`` int32 their squared norms) and errs ``(n,)``
-    as :func:`_quantize` gives them; ``unbounded`` ``(b,)`` the rows with a NaN or inf, which
-    no bound covers: they always go to the row kernel, which decides about them as in the
-    plain pass; qc ``(D,)`` int16, ``qc_sq`` and ``e_q`` the query's codes, their squared norm
-    and its error; ``allowance``: how far a row kernel's squared distance may be from the
-    true one.
-    Returns (indices ``(k,)``, distances ``(k,)``, cases re-ranked), or a count of -1 once
-    more than ``max_count`` cases are candidates (the caller then runs the plain pass).
-
-    Why no neighbour is lost (``g = step |c_q - c_x|``, the distance of the two grid points,
-    ``e`` their distances to ``q`` and ``x``): by the triangle inequality
-    ``g - e_q - e_x <= |q - x| <= g + e_q + e_x``. ``|c_q - c_x|^2`` is an exact integer and
-    ``g`` its float64 root times ``step`` (two roundings: within ``4 u64`` relative, allowed as
-    ``lo``/``hi``); ``errs`` and ``e_q`` are rounded up by :func:`_quantize`. A row kernel's
-    squared distance is within ``allowance`` of ``|q - x|^2``. So ``ub = (g hi + e_q + e_x)^2
-    + allowance`` bounds a row's kernel value from above and ``lb = max(g lo - e_q - e_x, 0)^2
-    - allowance`` from below; the k-th smallest ``ub`` seen, ``T``, is at least the k-th
-    smallest kernel value, and a row with ``lb > T (1 + 1e-12)`` cannot be among the k
-    nearest (the ``1e-12`` covers the float64 rounding of these few operations and of the
-    kernel's root, which only shrinks what it is applied to). ``T`` only falls as rows are
-    seen, so a row pruned early stays prunable; candidates kept early are filtered again
-    with the final ``T``. The integer pre-test ``|c_q - c_x|^2 > lim`` is the same test with
-    ``e_max`` for ``e_x`` (looser), so it prunes nothing the exact test keeps.
-    """
-    n = codes.shape[0] if subset.shape[0] == 0 else subset.shape[0]
-    lo = 1.0 - 4.0 * 2.0**-53
-    hi = 1.0 + 4.0 * 2.0**-53
-    ub_i = np.full(k, -1, dtype=np.int64)
-    ub_d = np.full(k, np.inf)
-    cand = np.empty(max_count, dtype=np.int64)
-    cand_lb = np.empty(max_count)
-    count = 0
-    lim = np.inf  # rows with an integer distance above it cannot be candidates
-    block = 256
-    s_block = np.empty(block, dtype=np.int32)
-    for a in range(0, n, block):
-        m = min(block, n - a)
-        _code_dots(codes, qc, subset, a, s_block[:m])
-        for t in range(m):
-            i = a + t if subset.shape[0] == 0 else subset[a + t]
-            s2 = code_sq[i] + qc_sq - 2 * np.int64(s_block[t])  # |c_q - c_x|^2, exact
-            if s2 > lim:
-                continue
-            if not errs[i] < np.inf:
-                continue
-            g = step * math.sqrt(np.float64(s2))
-            ub = g * hi + e_q + errs[i]
-            ub2 = ub * ub + allowance
-            if ub2 < ub_d[k - 1]:
-                _insert(ub_i, ub_d, i, ub2)
-                if ub_d[k - 1] < np.inf:
-                    reach = math.sqrt(ub_d[k - 1] * (1.0 + 1e-12) + allowance) + e_q + err_max
-                    lim = (reach / (step * lo)) ** 2 * (1.0 + 1e-9) + 1.0
-            lb = max(g * lo - e_q - errs[i], 0.0)
-            lb2 = lb * lb - allowance
-            if lb2 <= ub_d[k - 1] * (1.0 + 1e-12):
-                if count == max_count:
-                    return ub_i, ub_d, -1
-                cand[count] = i
-                cand_lb[count] = lb2
-                count += 1
-    kept = _still_below(cand[:count], cand_lb[:count], ub_d[k - 1] * (1.0 + 1e-12))
-    if unbounded.shape[0]:
-        kept = np.sort(np.concatenate((kept, unbounded)))
-    best_i, best_d = _knn_scan(rows, sq, q, q_sq, kept, k)
-    return best_i, best_d, len(kept)
-
-
-@numba.njit(cache=True, nogil=True)
-def _still_below(cand: np.ndarray, cand_lb: np.ndarray, limit: float) -> np.ndarray:
-    """The candidates ``(c,)`` whose lower bound ``(c,)`` is at most the final ``limit``."""
-    kept = 0
-    for t in range(cand.shape[0]):
-        if cand_lb[t] <= limit:
-            cand[kept] = cand[t]
-            kept += 1
-    return cand[:kept]
-
-
-@numba.njit(cache=True, nogil=True, fastmath=True)
 def _select_from_products(
     prods: np.ndarray,
     rows: np.ndarray,
@@ -471,7 +346,7 @@ class _EuclideanIndex:
     norms: np.ndarray  # (n,) float64
     pca: _PcaCodes | None = None  # the rows' PCA codes, for the PCA bound
     max_norm: float = 0.0  # largest |row| (over rows without NaN or inf)
-    codes: _Codes | None = None  # the rows quantized to uint8, for the quantized bound
+    codes: _PcaCodes | None = None  # the whole rows' codes (identity basis): quantized pass
     # [running share of cases that survive the bound, queries seen]: a heuristic shared by
     # the queries of this index (races between threads only change a speed decision)
     pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
@@ -497,12 +372,13 @@ class _EuclideanIndex:
 
 @dataclass(frozen=True, eq=False)
 class _PcaCodes:
-    """Every row's coordinates on the leading PCA directions as uint8 codes on one grid
-    (``p_hat = base + step * code``), stored in blocks of ``_BLOCK`` rows, dimension-major
-    within a block; with the exact remainder: the residual norm outside the basis."""
+    """Every row's coordinates on an orthonormal basis (the leading PCA directions, or the
+    identity: the whole row) as uint8 codes on one grid (``p_hat = base + steps * code``),
+    stored in blocks of ``_BLOCK`` rows, dimension-major within a block; with the exact
+    remainder: the residual norm outside the basis."""
 
-    basis: np.ndarray  # (D, m) float64 orthonormal columns
-    mean: np.ndarray  # (D,) float64
+    basis: np.ndarray | None  # (D, m) float64 orthonormal columns; None: the identity
+    mean: np.ndarray  # (D,) float64 (zeros for the identity)
     codes: np.ndarray  # (blocks, m, _BLOCK) uint8
     code_sq: np.ndarray  # (blocks * _BLOCK,) int32 squared norms of the codes
     errs: np.ndarray  # (blocks * _BLOCK,) float32 |p_x - p_hat| rounded up; inf: NaN/padding
@@ -510,8 +386,23 @@ class _PcaCodes:
     base: np.ndarray  # (m,) float64
     step: float  # the finest step
     steps: np.ndarray  # (m,) float64 each dimension's step, step sqrt(weights)
-    weights: np.ndarray  # (m,) int32 in 1, 4, 16, 64
+    weights: np.ndarray  # (m,) int32 powers of 4 up to 64 (max(w) m 255^2 < 2^31)
     top_norm: float  # largest |row - mean| over rows without NaN or inf
+    # [running share of cases given their distance, queries seen], as
+    # ``_EuclideanIndex.pruning`` (used for the whole rows' codes)
+    pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
+
+    def worth_it(self) -> bool:
+        share, seen = self.pruning
+        return bool(seen == 0 or share <= FALLBACK or seen % PROBE_EVERY == 0)
+
+    def record(self, share: float) -> None:
+        old, seen = self.pruning
+        self.pruning[0] = share if seen == 0 else 0.7 * old + 0.3 * share
+        self.pruning[1] = seen + 1
+
+    def skip(self) -> None:
+        self.pruning[1] += 1
 
 
 def _pca_basis(rows: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
@@ -530,20 +421,25 @@ def _pca_basis(rows: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
     return mean, np.linalg.qr(top)[0]
 
 
-def _project(part: np.ndarray, mean: np.ndarray, basis: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Coordinates ``(c, m)`` on ``basis`` of the rows ``part`` ``(c, D)`` less ``mean``, the
-    squared norms ``(c,)`` of the centred rows and a mask of the rows without NaN or inf."""
+def _project(
+    part: np.ndarray, mean: np.ndarray, basis: np.ndarray | None
+) -> tuple[np.ndarray, ...]:
+    """Coordinates ``(c, m)`` on ``basis`` (None: the identity) of the rows ``part`` ``(c, D)``
+    less ``mean``, the squared norms ``(c,)`` of the centred rows and a mask of the rows
+    without NaN or inf."""
     c = np.asarray(part, dtype=np.float64) - mean  # float64: the residual needs it
     finite = np.isfinite(c).all(axis=1)
     c[~finite] = 0.0
-    return c @ basis, np.einsum("ij,ij->i", c, c), finite
+    return c if basis is None else c @ basis, np.einsum("ij,ij->i", c, c), finite
 
 
-def _pca_codes(rows: np.ndarray, m: int) -> _PcaCodes | None:
-    """The PCA codes of ``rows`` ``(n, D)``: two passes in chunks (the grid's range, then the
+def _pca_codes(rows: np.ndarray, fitted: tuple[np.ndarray, np.ndarray] | None) -> _PcaCodes | None:
+    """The codes of ``rows`` ``(n, D)`` on the basis ``fitted`` = (mean, basis ``(D, m)``)
+    or, for None, of the whole rows: two passes in chunks (the grid's range, then the
     codes), so a memmap is read without a float64 copy of it; None without a finite range."""
     n, dims = rows.shape
-    mean, basis = _pca_basis(rows, m)
+    mean, basis = (np.zeros(dims), None) if fitted is None else fitted
+    m = dims if basis is None else basis.shape[1]
     chunk = max(_BLOCK, ((1 << 22) // dims) // _BLOCK * _BLOCK)  # float64 chunks of ~32 MB
     lo, hi = np.full(m, np.inf), np.full(m, -np.inf)
     top_sq = 0.0
@@ -560,10 +456,12 @@ def _pca_codes(rows: np.ndarray, m: int) -> _PcaCodes | None:
     # of two (up to 8) its own range allows, so narrow dimensions get a finer grid; with
     # ``step`` the finest step, dimension j's is ``step sqrt(w_j)``, ``w_j`` in 1, 4, 16, 64,
     # and ``|p_hat_q - p_hat_x|^2 = step^2 sum(w (c_q - c_x)^2)`` stays an exact integer sum
+    # (the finest level kept so every integer sum stays in int32: weights * m * 255^2 < 2^31)
+    levels = float(min(3, math.floor(math.log(2**31 / (m * 255**2), 4))))
     width = np.maximum(hi - lo, widest / 256.0)
-    shrink = np.minimum(np.floor(np.log2(widest / width)), 3.0)
-    weights = (4.0 ** (3.0 - shrink)).astype(np.int32)
-    step = widest / 255.0 / 8.0
+    shrink = np.minimum(np.floor(np.log2(widest / width)), levels)
+    weights = (4.0 ** (levels - shrink)).astype(np.int32)
+    step = widest / 255.0 / 2.0**levels
     steps = step * np.sqrt(weights.astype(np.float64))
     blocks = -(-n // _BLOCK)
     codes = np.zeros((blocks, m, _BLOCK), dtype=np.uint8)
@@ -586,34 +484,6 @@ def _pca_codes(rows: np.ndarray, m: int) -> _PcaCodes | None:
     return _PcaCodes(
         basis, mean, codes, code_sq, errs, resid, lo, step, steps, weights, math.sqrt(top_sq)
     )
-
-
-@dataclass(frozen=True, eq=False)
-class _Codes:
-    """Every row quantized on one grid: ``x_hat = base + step * codes`` (per-dimension offset,
-    one step for all dimensions, so ``|x_hat - q_hat|^2`` is ``step^2`` times an integer)."""
-
-    codes: np.ndarray  # (n, D) uint8
-    code_sq: np.ndarray  # (n,) int32 squared norms of the codes
-    errs: np.ndarray  # (n,) float64 |x - x_hat|, rounded up; inf for a row with NaN or inf
-    unbounded: np.ndarray  # (b,) int64 increasing: the rows with NaN or inf (no bound)
-    base: np.ndarray  # (D,) float64
-    step: float
-    err_max: float  # largest finite err
-    # [running share of cases re-ranked, queries seen], as ``_EuclideanIndex.pruning``
-    pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
-
-    def worth_it(self) -> bool:
-        share, seen = self.pruning
-        return bool(seen == 0 or share <= FALLBACK or seen % PROBE_EVERY == 0)
-
-    def record(self, share: float) -> None:
-        old, seen = self.pruning
-        self.pruning[0] = share if seen == 0 else 0.7 * old + 0.3 * share
-        self.pruning[1] = seen + 1
-
-    def skip(self) -> None:
-        self.pruning[1] += 1
 
 
 @register_measure("euclidean")
@@ -660,7 +530,7 @@ class Euclidean(SimilarityMeasure):
         m = min(m, dims // 4)
         if self.exact or n < self.prune_min_cases or m < 4:
             return _EuclideanIndex(rows, sq, np.sqrt(sq))
-        return _pruning_index(rows, sq, m, _quantized(rows))
+        return _pruning_index(rows, sq, m)
 
     def _query(self, query_rep: np.ndarray) -> tuple[np.ndarray, float]:
         q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
@@ -827,47 +697,11 @@ def _quantize(
     return c.astype(np.uint8), err
 
 
-def _quantized(rows: np.ndarray) -> _Codes | None:
-    """The uint8 grid of ``rows`` ``(n, D)``: offset per dimension at the smallest finite value,
-    one step (the widest range / 255) for all; None when the integer distance could overflow
-    int32 or there is no finite range."""
-    n, dims = rows.shape
-    if dims * 255**2 >= 2**31:
-        return None
-    step_rows = max(256, (1 << 23) // dims)
-    lo = np.full(dims, np.inf)
-    hi = np.full(dims, -np.inf)
-    for a in range(0, n, step_rows):
-        part = np.asarray(rows[a : a + step_rows], dtype=np.float64)
-        part = np.where(np.isfinite(part), part, np.nan)
-        with np.errstate(invalid="ignore"):
-            lo = np.fmin(lo, np.nanmin(part, axis=0, initial=np.inf))
-            hi = np.fmax(hi, np.nanmax(part, axis=0, initial=-np.inf))
-    widest = float(np.max(hi - lo)) if np.isfinite(lo).all() else float("nan")
-    if not (math.isfinite(widest) and widest > 0.0):
-        return None
-    step = widest / 255.0
-    codes = np.empty((n, dims), dtype=np.uint8)
-    errs = np.empty(n)
-    for a in range(0, n, step_rows):
-        codes[a : a + step_rows], errs[a : a + step_rows] = _quantize(
-            rows[a : a + step_rows], lo, step
-        )
-    finite = errs[np.isfinite(errs)]
-    unbounded = np.flatnonzero(~np.isfinite(errs)).astype(np.int64)
-    code_sq = np.empty(n, dtype=np.int32)
-    for a in range(0, n, step_rows):
-        part = codes[a : a + step_rows].astype(np.int32)
-        code_sq[a : a + step_rows] = np.einsum("ij,ij->i", part, part)
-    err_max = float(finite.max()) if len(finite) else 0.0
-    return _Codes(codes, code_sq, errs, unbounded, lo, step, err_max)
-
-
 def _quantized_search(
     index: _EuclideanIndex, q32: np.ndarray, q_sq: float, k: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Exact k nearest with the quantized bound, or the plain pass when it prunes too little
-    (or the index has no codes, or the query has a NaN or inf)."""
+    """Exact k nearest with the bound of the whole rows' codes, or the plain pass when it
+    prunes too little (or the index has no codes, or the query has a NaN or inf)."""
     codes = index.codes
     if codes is None or not math.isfinite(q_sq):
         return _plain_search(index, q32, q_sq, k)
@@ -875,7 +709,7 @@ def _quantized_search(
         codes.skip()
         return _plain_search(index, q32, q_sq, k)
     n = len(index.rows)
-    idx, dist, count = _run_quantized(index, codes, q32, q_sq, k, _ALL)
+    idx, dist, count = _codes_search(index, codes, q32, q_sq, k)
     if count < 0:
         codes.record(1.0)
         return _plain_search(index, q32, q_sq, k)
@@ -883,17 +717,21 @@ def _quantized_search(
     return idx, dist
 
 
-def _run_quantized(
-    index: _EuclideanIndex, codes: _Codes, q32: np.ndarray, q_sq: float, k: int, subset: np.ndarray
+def _codes_search(
+    index: _EuclideanIndex, codes: _PcaCodes, q32: np.ndarray, q_sq: float, k: int
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """:func:`_quantized_knn` for ``q32`` ``(D,)`` among ``subset`` (empty: every row)."""
-    qc, e_q = _quantize(q32[None, :], codes.base, codes.step)
-    n = len(subset) if len(subset) else len(index.rows)
-    out: tuple[np.ndarray, np.ndarray, int] = _quantized_knn(
-        codes.codes, codes.code_sq, codes.errs, codes.unbounded, codes.err_max, codes.step,
-        qc[0].astype(np.int16), int(np.dot(qc[0].astype(np.int64), qc[0])),
-        float(e_q[0]), index.rows, index.sq_norms, q32, q_sq, k, _allowance(index, q_sq),
-        max(k, int(FALLBACK * n)) if len(subset) == 0 else n, subset,
+    """:func:`_pca_knn` for ``q32`` ``(D,)`` with ``codes`` (the PCA codes or the whole
+    rows'), handing over once more than ``FALLBACK`` of the rows need their distance."""
+    if codes.basis is None:  # the whole rows: no projection, nothing outside the grid
+        qp = q32.astype(np.float64)
+        r_q, q_norm = 0.0, math.sqrt(q_sq)
+    else:
+        qp, r_q, q_norm = _project_query(q32, codes.mean, codes.basis)
+    qc, qc_sq, e_q = _grid_codes(qp, codes.base, codes.steps, codes.weights)
+    out: tuple[np.ndarray, np.ndarray, int] = _pca_knn(
+        (codes.codes, codes.code_sq, codes.errs, codes.resid, codes.step), (qc, qc_sq, e_q, r_q),
+        index.rows, index.sq_norms, q32, q_sq, k, _allowance(index, q_sq),
+        (codes.top_norm + q_norm) ** 2, max(k, int(FALLBACK * len(index.rows))),
     )  # fmt: skip
     return out
 
@@ -908,34 +746,26 @@ def _row_norms_sq(rows: np.ndarray) -> np.ndarray:
     return out
 
 
-def _pruning_index(
-    rows: np.ndarray, sq: np.ndarray, m: int, codes: _Codes | None
-) -> _EuclideanIndex:
-    """The index with the PCA codes of rank ``m`` (without them when the rows have no finite
-    range) and the quantized codes ``codes``."""
-    pca = _pca_codes(rows, m)
+def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
+    """The index with the PCA codes of rank ``m`` and the whole rows' codes (either left out
+    when the rows have no finite range)."""
+    pca = _pca_codes(rows, _pca_basis(rows, m))
+    codes = _pca_codes(rows, None) if rows.shape[1] * 255**2 < 2**31 else None
     return _EuclideanIndex(rows, sq, np.sqrt(sq), pca, _finite_max_norm(sq), codes)
 
 
 def _pruned_search(
     index: _EuclideanIndex, q32: np.ndarray, q_sq: float, k: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Exact k nearest with the PCA bound, or the quantized pass (which may turn into the
+    """Exact k nearest with the PCA bound, or the whole rows' codes (which may turn into the
     plain pass) when the bound prunes too little or the query has a NaN or inf."""
     pca = index.pca
     assert pca is not None
     if not math.isfinite(q_sq):
         return _quantized_search(index, q32, q_sq, k)
-    n = len(index.rows)
-    qp, r_q, q_norm = _project_query(q32, pca.mean, pca.basis)
-    qc, qc_sq, e_q = _grid_codes(qp, pca.base, pca.steps, pca.weights)
-    idx, dist, count = _pca_knn(
-        (pca.codes, pca.code_sq, pca.errs, pca.resid, pca.step), (qc, qc_sq, e_q, r_q),
-        index.rows, index.sq_norms, q32, q_sq, k, _allowance(index, q_sq),
-        (pca.top_norm + q_norm) ** 2, max(k, int(FALLBACK * n)),
-    )  # fmt: skip
+    idx, dist, count = _codes_search(index, pca, q32, q_sq, k)
     if count < 0:  # too many rows needed their distance: a pass that prunes better
         index.record(1.0)
         return _quantized_search(index, q32, q_sq, k)
-    index.record(count / n)
+    index.record(count / len(index.rows))
     return idx, dist
