@@ -21,10 +21,11 @@ all queries with the methods' order rotated (``benchmarks._common.side_by_side``
 ``Euclidean.nearest`` (the PCA bound, the quantized pass where it prunes nothing, the plain
 pass where neither prunes; ``surv`` / ``q-surv``: the running share of cases that passed
 each bound and got their float distance, 1.0 when a bound stopped being tried, nan: never
-ran), posecbr plain (the same measure without the bound), scikit-learn ``NearestNeighbors(algorithm="brute")``, FAISS
-``IndexFlatL2``; and for the whole query batch at once posecbr
-``nearest_many`` and FAISS ``search`` on all queries. Every method's neighbours are checked
-against posecbr plain. Writes ``benchmarks/results/retrieval.json`` with the load average.
+ran), posecbr plain (the same measure without the bound), scikit-learn
+``NearestNeighbors(algorithm="brute")``, FAISS ``IndexFlatL2``; and for the whole query
+batch at once posecbr ``nearest_many`` and FAISS ``search`` on all queries. Every method's
+neighbours are checked against posecbr plain. Writes ``benchmarks/results/retrieval.json``
+with the load average.
 """
 
 from __future__ import annotations
