@@ -52,6 +52,8 @@ from typing import Any
 import numba
 import numpy as np
 
+from features.errors import InputError
+
 from .base import SimilarityMeasure, check_weighting, register_measure, weighted
 
 FALLBACK = 0.5  # candidate share above which the pruned search turns into the plain pass
@@ -486,6 +488,18 @@ def _pca_codes(rows: np.ndarray, fitted: tuple[np.ndarray, np.ndarray] | None) -
     )
 
 
+def _check_finite(sq: np.ndarray, what: str) -> None:
+    """Refuse rows whose squared norms ``sq`` ``(n,)`` are not finite: a NaN or inf value has
+    no distance, and a missing value must not become a neighbour at distance 0 (problems fill
+    their missing values before they are compared)."""
+    bad = np.flatnonzero(~np.isfinite(sq))
+    if len(bad):
+        raise InputError(
+            f"euclidean: {what} {', '.join(map(str, bad[:5]))}{' ...' if len(bad) > 5 else ''} "
+            "hold NaN or inf (or overflow float32): fill missing values before comparing"
+        )
+
+
 @register_measure("euclidean")
 @dataclass(frozen=True)
 class Euclidean(SimilarityMeasure):
@@ -525,6 +539,7 @@ class Euclidean(SimilarityMeasure):
         if rows.dtype != dtype or not rows.flags.c_contiguous:
             rows = np.ascontiguousarray(rows, dtype=dtype)
         sq = _row_norms_sq(rows)
+        _check_finite(sq, "case rows")
         n, dims = rows.shape
         m = self.prune_dims or min(max(dims // 6, 8), 128)
         m = min(m, dims // 4)
@@ -536,7 +551,10 @@ class Euclidean(SimilarityMeasure):
         q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
         q32 = q.astype(np.float32)
         # |q|^2 of the float32 query the kernel multiplies with, in float64
-        return q32, float(np.dot(q32.astype(np.float64), q32.astype(np.float64)))
+        q_sq = float(np.dot(q32.astype(np.float64), q32.astype(np.float64)))
+        if not math.isfinite(q_sq):
+            raise InputError("euclidean: the query holds NaN or inf (or overflows float32)")
+        return q32, q_sq
 
     def distances(self, query_rep: np.ndarray, index: Any) -> np.ndarray:
         if not isinstance(index, _EuclideanIndex):
@@ -570,6 +588,7 @@ class Euclidean(SimilarityMeasure):
         prunes well (then query by query), with the rounding error of the product bounded so
         the neighbours are exactly :meth:`nearest`'s."""
         queries = np.asarray(query_reps, dtype=np.float64).reshape(len(query_reps), -1)
+        _check_finite(np.einsum("ij,ij->i", queries, queries), "queries")
         if not isinstance(index, _EuclideanIndex) or self.exact or len(queries) < 2:
             return super().nearest_many(queries, index, k)
         n, dims = index.rows.shape
