@@ -12,7 +12,9 @@ per dataset:
 - the default text's **length** (lines and characters per clip);
 - **contradictions** found by :func:`cbr.consistency.contradictions` over every clip;
 - accuracy and the **expected calibration error** (ECE, 10 bins) of the confidences, with its
-  bootstrap 95 % interval (clips resampled: what of it is noise at a few hundred clips);
+  bootstrap 95 % interval (clips resampled: what of it is noise at a few hundred clips) and
+  what a perfectly calibrated confidence would score at the same confidences ("if
+  calibrated": median and 95th percentile, answers drawn right with their confidence);
 - the "unlike the stored cases" flag: **false alarms** on the held-out clips (trained
   activities, new people) and **detection** of clips from the other dataset, by the distance
   alone and with the sensor rule (a skeleton no training clip was recorded with), for
@@ -157,7 +159,7 @@ def explain_fold(
 
 
 def summarise_rows(rows: list[dict[str, Any]], features: int) -> dict[str, Any]:
-    from cbr.calibration import ece_interval, expected_calibration_error
+    from cbr.calibration import ece_if_calibrated, ece_interval, expected_calibration_error
 
     if rows and "valid" not in rows[0]:  # not explained (--no-explain): the confidences only
         return {**_calibration(rows), "explained": False}
@@ -184,6 +186,7 @@ def summarise_rows(rows: list[dict[str, Any]], features: int) -> dict[str, Any]:
         "accuracy": float(right.mean()),
         "ece": expected_calibration_error(conf, right),
         "ece_interval": ece_interval(conf, right),
+        "ece_if_calibrated": ece_if_calibrated(conf),
         "ece_vote_share": expected_calibration_error(share, right),
         "mean_confidence": float(conf.mean()),
     }
@@ -296,7 +299,7 @@ def _fold(name: str, held: tuple[str, ...], flags: bool, explain: bool) -> dict[
                          f"{100 * _rate(got['detected']):.1f} % (by distance "
                          f"{100 * _rate(got['detected_distance']):.1f} %); accuracy "
                          f"{100 * cal['accuracy']:.1f} %, ECE {cal['ece']:.3f} "
-                         f"[{lo:.3f}, {hi:.3f}]")  # fmt: skip
+                         f"[{lo:.3f}, {hi:.3f}], if calibrated {_if_calibrated(cal)}")  # fmt: skip
     return {**fold, "lines": lines, "seconds": seconds}
 
 
@@ -360,13 +363,13 @@ def _print_explanations(name: str, s: dict[str, Any]) -> None:
     lo, hi = s["ece_interval"]
     if s.get("explained") is False:
         print(f"{name:<28} {s['clips']:>5} {'(not explained)':>70} {100 * s['accuracy']:6.1f} % "
-              f"{s['ece']:6.3f} [{lo:.3f}, {hi:.3f}]")  # fmt: skip
+              f"{s['ece']:6.3f} [{lo:.3f}, {hi:.3f}] {_if_calibrated(s)}")  # fmt: skip
         return
     print(
         f"{name:<28} {s['clips']:>5} {100 * s['validity']:8.1f} % {s['mean_changes']:8.2f} "
         f"{s['plausibility_median']:8.2f} {s['max_lines']:6d} {s['max_chars']:6d} "
         f"{s['mean_chars']:6.0f} {s['contradictions']:6d} {100 * s['accuracy']:6.1f} % "
-        f"{s['ece']:6.3f} [{lo:.3f}, {hi:.3f}]"
+        f"{s['ece']:6.3f} [{lo:.3f}, {hi:.3f}] {_if_calibrated(s)}"
     )
 
 
@@ -377,24 +380,32 @@ def _print_flags(name: str, flags: dict[str, Any]) -> None:
             f"{name + ' ' + cfg:<36} {100 * f['false_alarm']:6.1f} % "
             f"{100 * f['false_alarm_distance']:6.1f} % {100 * f['detection']:6.1f} % "
             f"{100 * f['detection_distance']:6.1f} % {100 * f['accuracy']:6.1f} % "
-            f"{f['ece']:6.3f} [{lo:.3f}, {hi:.3f}]"
+            f"{f['ece']:6.3f} [{lo:.3f}, {hi:.3f}] {_if_calibrated(f)}"
         )
+
+
+def _if_calibrated(s: dict[str, Any]) -> str:
+    """What a perfectly calibrated confidence scores at these confidences: median (95th
+    percentile), :func:`cbr.calibration.ece_if_calibrated`."""
+    mid, high = s["ece_if_calibrated"]
+    return f"{mid:.3f} ({high:.3f})"
 
 
 def _print_movements(per_movement: dict[str, Any]) -> None:
     print(f"\n{'correct vs incorrect: movement':<46} {'clips':>5} {'acc':>8} {'conf.':>6} "
-          f"{'ECE':>6} {'95 % interval':>16}")  # fmt: skip
+          f"{'ECE':>6} {'95 % interval':>16} {'if calibrated':>15}")  # fmt: skip
     for movement, m in per_movement.items():
         lo, hi = m["ece_interval"]
         print(f"{movement:<46} {m['clips']:>5} {100 * m['accuracy']:6.1f} % "
-              f"{m['mean_confidence']:6.3f} {m['ece']:6.3f} [{lo:.3f}, {hi:.3f}]")  # fmt: skip
+              f"{m['mean_confidence']:6.3f} {m['ece']:6.3f} [{lo:.3f}, {hi:.3f}] "
+              f"{_if_calibrated(m)}")  # fmt: skip
 
 
 def _header() -> None:
     print(
         f"\n{'dataset':<28} {'clips':>5} {'validity':>10} {'changes':>8} {'plausib.':>8} "
         f"{'lines':>6} {'chars':>6} {'mean':>6} {'contra':>6} {'acc':>8} {'ECE':>6} "
-        f"{'(95 % interval)':>16}"
+        f"{'(95 % interval)':>16} {'if calibrated':>15}"
     )
 
 
@@ -420,7 +431,7 @@ def _flag_summary(r: dict[str, Any]) -> dict[str, Any]:
 def _calibration(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Accuracy and ECE of clips' ``right`` and ``confidence``, with the ECE's bootstrap 95 %
     interval (clips resampled): what is noise at a few hundred clips."""
-    from cbr.calibration import ece_interval, expected_calibration_error
+    from cbr.calibration import ece_if_calibrated, ece_interval, expected_calibration_error
 
     right = np.array([r["right"] for r in rows], dtype=bool)
     conf = np.array([r["confidence"] for r in rows], dtype=np.float64)
@@ -430,6 +441,7 @@ def _calibration(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "mean_confidence": float(conf.mean()) if len(conf) else float("nan"),
         "ece": expected_calibration_error(conf, right),
         "ece_interval": ece_interval(conf, right),
+        "ece_if_calibrated": ece_if_calibrated(conf),
     }
 
 
@@ -594,7 +606,8 @@ def main(argv: list[str] | None = None) -> int:
     if any("flags" in d for d in out["datasets"].values()):
         print(
             f"\n{'flag: dataset configuration':<36} {'f.alarm':>8} {'(dist.)':>8} "
-            f"{'detect':>8} {'(dist.)':>8} {'acc':>8} {'ECE':>6} {'(95 % interval)':>16}"
+            f"{'detect':>8} {'(dist.)':>8} {'acc':>8} {'ECE':>6} {'(95 % interval)':>16} "
+            f"{'if calibrated':>15}"
         )
         for name, d in out["datasets"].items():
             if "flags" in d:

@@ -198,3 +198,30 @@ def ece_interval(
     ece = np.abs(gap.reshape(resamples, bins)).sum(axis=1) / q
     lo, hi = np.percentile(ece, [2.5, 97.5])
     return float(lo), float(hi)
+
+
+def ece_if_calibrated(
+    confidence: np.ndarray,
+    bins: int = ECE_BINS,
+    resamples: int = 2000,
+    seed: int = 0,
+) -> tuple[float, float]:
+    """What a perfectly calibrated confidence scores at these confidences ``(q,)``: the
+    median and 95th percentile of the ECE when each clip's answer is right with exactly its
+    confidence (consistency resampling, Bröcker and Smith 2007: clips resampled with
+    replacement, then right or wrong drawn with their confidence). An ECE above the 95th
+    percentile is a miscalibration; below it, at this many clips, the ECE cannot tell."""
+    c = np.asarray(confidence, dtype=np.float64)
+    q = len(c)
+    if q == 0:
+        return float("nan"), float("nan")
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    which = np.clip(np.digitize(c, edges[1:-1], right=True), 0, bins - 1)
+    rng = np.random.default_rng(seed)
+    pick = rng.integers(0, q, (resamples, q))
+    drawn = rng.uniform(size=(resamples, q)) < c[pick]
+    slot = (which[pick] + bins * np.arange(resamples)[:, None]).ravel()
+    gap = np.bincount(slot, weights=(drawn - c[pick]).ravel(), minlength=resamples * bins)
+    ece = np.abs(gap.reshape(resamples, bins)).sum(axis=1) / q
+    mid, high = np.percentile(ece, [50, 95])
+    return float(mid), float(high)

@@ -15,6 +15,7 @@ from cbr.calibration import (
     UNCALIBRATED,
     ConfidenceCalibration,
     calibrate_confidence,
+    ece_if_calibrated,
     ece_interval,
     expected_calibration_error,
     log_odds,
@@ -115,3 +116,28 @@ def test_the_demo_qmp_case_base_flags_few_ordinary_clips() -> None:
     flagged = sum(s.unlike_cases for s in clf.solve([c.seq for c in test]))
     # the issue saw 38 of 60 flagged: the unit was the float32 rounding of exact matches
     assert flagged <= 6, f"{flagged} of 60 ordinary clips flagged"
+
+
+def test_a_perfect_confidence_scores_the_binomial_noise() -> None:
+    # every clip at 0.5: one bin, and a resample's ECE is |B / 100 - 0.5|, B ~ Binomial(100,
+    # 0.5); P(|B - 50| <= 3) = 0.516 and <= 2 is 0.383, so the median is 0.03; P(|B - 50| <= 9)
+    # = 0.943 and <= 10 is 0.965 (binomial tables): the 95th percentile is 0.10 (0.09 to 0.10
+    # from 2,000 draws)
+    mid, high = ece_if_calibrated(np.full(100, 0.5))
+    assert mid == pytest.approx(0.03) and 0.09 - 1e-9 <= high <= 0.10 + 1e-9
+    assert ece_if_calibrated(np.ones(30)) == (0.0, 0.0)  # certain and right: no noise
+
+
+def test_a_calibrated_confidence_scores_within_the_noise_of_one() -> None:
+    # answers right with exactly their confidence (drawn with known probabilities): their ECE
+    # lies below the 95th percentile of what a perfectly calibrated confidence scores in 19 of
+    # 20 draws; answers right 15 points less often than their confidence lie above it
+    rng = np.random.default_rng(5)
+    conf = rng.uniform(0.5, 1.0, (20, 300))
+    right = rng.uniform(size=(20, 300)) < conf
+    worse = rng.uniform(size=(20, 300)) < conf - 0.15
+    below = [expected_calibration_error(c, r) <= ece_if_calibrated(c)[1] for c, r in
+             zip(conf, right, strict=True)]  # fmt: skip
+    above = [expected_calibration_error(c, r) > ece_if_calibrated(c)[1] for c, r in
+             zip(conf, worse, strict=True)]  # fmt: skip
+    assert sum(below) >= 17 and all(above)
