@@ -8,7 +8,9 @@ features or retrieval shows, not run-to-run noise.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -35,20 +37,51 @@ def uiprmd(shared_data: Path) -> tuple[list, list, list, list]:
     return [c.seq for c in tr], [c.label for c in tr], [c.seq for c in te], [c.label for c in te]
 
 
-@pytest.mark.parametrize(("features", "similarity"), list(FLOORS))
-def test_held_out_subjects_accuracy(features: str, similarity: str, uiprmd: tuple) -> None:
-    Xtr, ytr, Xte, yte = uiprmd
-    clf = CaseBaseClassifier(features=features, similarity=similarity, k=5).fit(Xtr, ytr)
-    pred = clf.predict(Xte)
+@pytest.fixture(scope="module")
+def fitted(uiprmd: tuple) -> Callable[[str, str], CaseBaseClassifier]:
+    """The classifier of a configuration fitted on the training subjects, fitted once for the
+    module: the explanation test reads the fluents/euclidean one the accuracy test measures
+    (the tests only predict and explain with it, which changes nothing in it)."""
+    Xtr, ytr, _, _ = uiprmd
+    models: dict[tuple[str, str], CaseBaseClassifier] = {}
+
+    def get(features: str, similarity: str) -> CaseBaseClassifier:
+        if (features, similarity) not in models:
+            clf = CaseBaseClassifier(features=features, similarity=similarity, k=5)
+            models[features, similarity] = clf.fit(Xtr, ytr)
+        return models[features, similarity]
+
+    return get
+
+
+# The fluents/euclidean model is shared with the explanation test: under pytest-xdist both run
+# on one worker, so it is fitted once.
+CONFIGS = [
+    pytest.param(*key, marks=pytest.mark.xdist_group("uiprmd-euclidean"))
+    if key == ("fluents", "euclidean")
+    else key
+    for key in FLOORS
+]
+
+
+@pytest.mark.parametrize(("features", "similarity"), CONFIGS)
+def test_held_out_subjects_accuracy(
+    features: str, similarity: str, uiprmd: tuple, fitted: Callable[[str, str], Any]
+) -> None:
+    _, _, Xte, yte = uiprmd
+    pred = fitted(features, similarity).predict(Xte)
     acc = float(np.mean(pred == np.asarray(yte)))
     assert acc >= FLOORS[features, similarity], f"{features}/{similarity}: accuracy {acc:.3f}"
     # every movement is recognised at least sometimes (no activity collapses)
     assert set(pred) == set(yte)
 
 
-def test_real_explanation_names_fluents(uiprmd: tuple) -> None:
-    Xtr, ytr, Xte, yte = uiprmd
-    clf = CaseBaseClassifier(similarity="euclidean", k=5).fit(Xtr, ytr)
+@pytest.mark.xdist_group("uiprmd-euclidean")
+def test_real_explanation_names_fluents(
+    uiprmd: tuple, fitted: Callable[[str, str], CaseBaseClassifier]
+) -> None:
+    _, _, Xte, yte = uiprmd
+    clf = fitted("fluents", "euclidean")
     squats = [x for x, v in zip(Xte, yte, strict=True) if v == "deep_squat"]
     exps = [e for e in clf.explain(squats) if e.label == "deep_squat"]
     assert len(exps) >= len(squats) // 2  # most held-out squats are recognised
