@@ -20,6 +20,9 @@ from cbr.classification import classify_clips
 from cbr.estimator import CaseBaseClassifier
 from features.datasets import load_dataset
 
+# under pytest-xdist the module's tests run on one worker: each fitted case base is fitted once
+pytestmark = pytest.mark.xdist_group("batched-solve")
+
 K = 5
 
 

@@ -25,6 +25,9 @@ from posecbr.cli import main
 from tests.cluster_tasks import bookkeeping, fail_on_even, square_or_die_once
 from tests.test_pose_extract import SQUAT, _cut
 
+# under pytest-xdist the module's tests run on one worker: one LocalCluster for the module
+pytestmark = pytest.mark.xdist_group("cluster")
+
 pytest.importorskip("dask.distributed", reason="dask is in the test extra: pip install -e .[test]")
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -16,6 +16,9 @@ from cbr.evaluation.stats import wilson_interval
 from features.body import POSITION_JOINTS
 from posecbr.cli import main
 
+# under pytest-xdist the module's tests run on one worker: the module's compare run is done once
+pytestmark = pytest.mark.xdist_group("compare-cli")
+
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 # Three movements: two that look alike (deep squat and sit-to-stand both bend the knees and

@@ -40,10 +40,14 @@ window.addEventListener("load", () => {
 });
 </script></body>"""
 
-pytestmark = pytest.mark.skipif(
-    CHROMIUM is None,
-    reason="chromium is not installed (apt-get install -y chromium; .ci/run installs it)",
-)
+pytestmark = [
+    pytest.mark.skipif(
+        CHROMIUM is None,
+        reason="chromium is not installed (apt-get install -y chromium; .ci/run installs it)",
+    ),
+    # under pytest-xdist the module's tests run on one worker: the report is made once
+    pytest.mark.xdist_group("report-chromium"),
+]
 
 
 def _chromium(tmp: Path, *args: str) -> subprocess.CompletedProcess[str]:

@@ -34,6 +34,9 @@ import pytest
 
 from features.version import __version__
 
+# under pytest-xdist the module's tests run on one worker: the wheel is built and installed once
+pytestmark = pytest.mark.xdist_group("wheel")
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("posecbr", "features", "cbr", "casebase_store")
 TOP_FILES = ("pyproject.toml", "README.md", "LICENSE", "CHANGELOG.md")
