@@ -190,12 +190,8 @@ def ece_interval(
     q = len(c)
     if q == 0:
         return float("nan"), float("nan")
-    edges = np.linspace(0.0, 1.0, bins + 1)
-    which = np.clip(np.digitize(c, edges[1:-1], right=True), 0, bins - 1)
     pick = np.random.default_rng(seed).integers(0, q, (resamples, q))
-    slot = (which[pick] + bins * np.arange(resamples)[:, None]).ravel()
-    gap = np.bincount(slot, weights=(r - c)[pick].ravel(), minlength=resamples * bins)
-    ece = np.abs(gap.reshape(resamples, bins)).sum(axis=1) / q
+    ece = _resampled_eces(_bin_of(c, bins), pick, (r - c)[pick], bins)
     lo, hi = np.percentile(ece, [2.5, 97.5])
     return float(lo), float(hi)
 
@@ -215,13 +211,26 @@ def ece_if_calibrated(
     q = len(c)
     if q == 0:
         return float("nan"), float("nan")
-    edges = np.linspace(0.0, 1.0, bins + 1)
-    which = np.clip(np.digitize(c, edges[1:-1], right=True), 0, bins - 1)
     rng = np.random.default_rng(seed)
     pick = rng.integers(0, q, (resamples, q))
     drawn = rng.uniform(size=(resamples, q)) < c[pick]
-    slot = (which[pick] + bins * np.arange(resamples)[:, None]).ravel()
-    gap = np.bincount(slot, weights=(drawn - c[pick]).ravel(), minlength=resamples * bins)
-    ece = np.abs(gap.reshape(resamples, bins)).sum(axis=1) / q
+    ece = _resampled_eces(_bin_of(c, bins), pick, drawn - c[pick], bins)
     mid, high = np.percentile(ece, [50, 95])
     return float(mid), float(high)
+
+
+def _bin_of(confidence: np.ndarray, bins: int) -> np.ndarray:
+    """The equal-width bin ``(q,)`` of each confidence ``(q,)``, as :func:`ece` bins them."""
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    which: np.ndarray = np.clip(np.digitize(confidence, edges[1:-1], right=True), 0, bins - 1)
+    return which
+
+
+def _resampled_eces(which: np.ndarray, pick: np.ndarray, gaps: np.ndarray, bins: int) -> np.ndarray:
+    """The ECE of every resample ``(resamples,)``: ``pick`` ``(resamples, q)`` the clips drawn,
+    ``gaps`` ``(resamples, q)`` their right (1/0) minus confidence, ``which`` ``(q,)`` each
+    clip's bin; all resamples at once, a bin's term ``|sum of gaps| / q``."""
+    resamples, q = pick.shape
+    slot = (which[pick] + bins * np.arange(resamples)[:, None]).ravel()
+    gap = np.bincount(slot, weights=gaps.ravel(), minlength=resamples * bins)
+    return np.asarray(np.abs(gap.reshape(resamples, bins)).sum(axis=1) / q)
