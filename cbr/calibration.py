@@ -164,8 +164,7 @@ def expected_calibration_error(
     r = np.asarray(right, dtype=np.float64)
     if len(c) == 0:
         return float("nan")
-    edges = np.linspace(0.0, 1.0, bins + 1)
-    which = np.clip(np.digitize(c, edges[1:-1], right=True), 0, bins - 1)
+    which = _bin_of(c, bins)
     total = 0.0
     for b in range(bins):
         sel = which == b
@@ -220,7 +219,7 @@ def ece_if_calibrated(
 
 
 def _bin_of(confidence: np.ndarray, bins: int) -> np.ndarray:
-    """The equal-width bin ``(q,)`` of each confidence ``(q,)``, as :func:`ece` bins them."""
+    """The equal-width bin ``(q,)`` of each confidence ``(q,)`` (the ECE's bins)."""
     edges = np.linspace(0.0, 1.0, bins + 1)
     which: np.ndarray = np.clip(np.digitize(confidence, edges[1:-1], right=True), 0, bins - 1)
     return which
