@@ -236,26 +236,6 @@ def _adversarial(kind: str, rng: np.random.Generator) -> tuple[np.ndarray, np.nd
     return cases.astype(np.float32), queries
 
 
-@pytest.mark.parametrize(
-    "kind",
-    ["duplicates", "huge-offset", "tiny", "one-wide-dimension", "outside"],
-)
-def test_euclidean_quantized_bound_equals_brute_force_on_adversarial_data(kind: str) -> None:
-    cases, queries = _adversarial(kind, np.random.default_rng(5))
-    m = Euclidean(prune_min_cases=1000)
-    index = m.build_index(cases)
-    plain = Euclidean(prune_min_cases=10**9).build_index(cases)
-    assert index.codes is not None
-    for q in queries:
-        qr = m.represent_query(q)
-        want_i, want_d = smallest_k(m.distances(qr, plain), 7)
-        got_i, got_d = _quantized_answer(index, qr, 7)
-        np.testing.assert_array_equal(got_i, want_i)
-        np.testing.assert_array_equal(got_d, want_d)
-        np.testing.assert_array_equal(m.nearest(qr, index, 7)[0], want_i)
-    assert index.codes.pruning[1] >= len(queries)  # the bound ran for every query
-
-
 @pytest.mark.parametrize("kind", ["unstructured", "clustered"])
 def test_euclidean_quantized_bound_prunes_and_equals_brute_force(kind: str) -> None:
     rng = np.random.default_rng(9)
@@ -314,22 +294,30 @@ def _pca_answer(index: object, query: np.ndarray, k: int) -> tuple[np.ndarray, n
     return idx, dist
 
 
+@pytest.mark.parametrize("bound", ["quantized", "pca"])
 @pytest.mark.parametrize(
     "kind",
     ["duplicates", "huge-offset", "tiny", "one-wide-dimension", "outside"],
 )
-def test_euclidean_pca_codes_bound_equals_brute_force_on_adversarial_data(kind: str) -> None:
-    cases, queries = _adversarial(kind, np.random.default_rng(6))
+def test_euclidean_bound_equals_brute_force_on_adversarial_data(kind: str, bound: str) -> None:
+    # the whole rows' codes (quantized pass) and the PCA codes, each deciding alone
+    quantized = bound == "quantized"
+    cases, queries = _adversarial(kind, np.random.default_rng(5 if quantized else 6))
     m = Euclidean(prune_min_cases=1000)
     index = m.build_index(cases)
     plain = Euclidean(prune_min_cases=10**9).build_index(cases)
-    assert index.pca is not None
+    assert (index.codes if quantized else index.pca) is not None
+    answer = _quantized_answer if quantized else _pca_answer
     for q in queries:
         qr = m.represent_query(q)
         want_i, want_d = smallest_k(m.distances(qr, plain), 7)
-        got_i, got_d = _pca_answer(index, qr, 7)
+        got_i, got_d = answer(index, qr, 7)
         np.testing.assert_array_equal(got_i, want_i)
         np.testing.assert_array_equal(got_d, want_d)
+        if quantized:
+            np.testing.assert_array_equal(m.nearest(qr, index, 7)[0], want_i)
+    if quantized:
+        assert index.codes.pruning[1] >= len(queries)  # the bound ran for every query
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf])

@@ -341,31 +341,21 @@ def _select_from_products(
     return best_i, best_d
 
 
-@dataclass(frozen=True, eq=False)
-class _EuclideanIndex:
-    rows: np.ndarray  # (n, D) float32 (float64 when exact=True); may be a read-only memmap
-    sq_norms: np.ndarray  # (n,) float64
-    norms: np.ndarray  # (n,) float64
-    pca: _PcaCodes | None = None  # the rows' PCA codes, for the PCA bound
-    max_norm: float = 0.0  # largest |row| (over rows without NaN or inf)
-    codes: _PcaCodes | None = None  # the whole rows' codes (identity basis): quantized pass
-    # [running share of cases that survive the bound, queries seen]: a heuristic shared by
-    # the queries of this index (races between threads only change a speed decision)
-    pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
+class _PruningRecord:
+    """How well a bound has been pruning: ``pruning`` = [running share of the cases it let
+    through, queries seen], a heuristic shared by the queries of one index (races between
+    threads only change a speed decision)."""
 
-    @property
-    def basis(self) -> np.ndarray | None:
-        """The PCA bound's basis ``(D, m)``, or None when the index has no PCA bound."""
-        return None if self.pca is None else self.pca.basis
+    pruning: np.ndarray
 
-    def worth_pruning(self) -> bool:
+    def worth_it(self) -> bool:
         """Whether the next query should compute the bound (see the module docstring)."""
         share, seen = self.pruning
         return bool(seen == 0 or share <= FALLBACK or seen % PROBE_EVERY == 0)
 
-    def record(self, survived_share: float) -> None:
-        share, seen = self.pruning
-        self.pruning[0] = survived_share if seen == 0 else 0.7 * share + 0.3 * survived_share
+    def record(self, share: float) -> None:
+        old, seen = self.pruning
+        self.pruning[0] = share if seen == 0 else 0.7 * old + 0.3 * share
         self.pruning[1] = seen + 1
 
     def skip(self) -> None:
@@ -373,7 +363,24 @@ class _EuclideanIndex:
 
 
 @dataclass(frozen=True, eq=False)
-class _PcaCodes:
+class _EuclideanIndex(_PruningRecord):
+    rows: np.ndarray  # (n, D) float32 (float64 when exact=True); may be a read-only memmap
+    sq_norms: np.ndarray  # (n,) float64
+    norms: np.ndarray  # (n,) float64
+    pca: _PcaCodes | None = None  # the rows' PCA codes, for the PCA bound
+    max_norm: float = 0.0  # largest |row| (over rows without NaN or inf)
+    codes: _PcaCodes | None = None  # the whole rows' codes (identity basis): quantized pass
+    # [running share of cases that survive the PCA bound, queries seen] (_PruningRecord)
+    pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
+
+    @property
+    def basis(self) -> np.ndarray | None:
+        """The PCA bound's basis ``(D, m)``, or None when the index has no PCA bound."""
+        return None if self.pca is None else self.pca.basis
+
+
+@dataclass(frozen=True, eq=False)
+class _PcaCodes(_PruningRecord):
     """Every row's coordinates on an orthonormal basis (the leading PCA directions, or the
     identity: the whole row) as uint8 codes on one grid (``p_hat = base + steps * code``),
     stored in blocks of ``_BLOCK`` rows, dimension-major within a block; with the exact
@@ -390,21 +397,9 @@ class _PcaCodes:
     steps: np.ndarray  # (m,) float64 each dimension's step, step sqrt(weights)
     weights: np.ndarray  # (m,) int32 powers of 4 up to 64 (max(w) m 255^2 < 2^31)
     top_norm: float  # largest |row - mean| over rows without NaN or inf
-    # [running share of cases given their distance, queries seen], as
-    # ``_EuclideanIndex.pruning`` (used for the whole rows' codes)
+    # [running share of cases given their distance, queries seen] (_PruningRecord; used for
+    # the whole rows' codes)
     pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
-
-    def worth_it(self) -> bool:
-        share, seen = self.pruning
-        return bool(seen == 0 or share <= FALLBACK or seen % PROBE_EVERY == 0)
-
-    def record(self, share: float) -> None:
-        old, seen = self.pruning
-        self.pruning[0] = share if seen == 0 else 0.7 * old + 0.3 * share
-        self.pruning[1] = seen + 1
-
-    def skip(self) -> None:
-        self.pruning[1] += 1
 
 
 def _pca_basis(rows: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
@@ -573,7 +568,7 @@ class Euclidean(SimilarityMeasure):
         if k <= 0:
             return np.zeros(0, dtype=np.int64), np.zeros(0)
         q32, q_sq = self._query(query_rep)
-        if index.basis is not None and index.worth_pruning():
+        if index.basis is not None and index.worth_it():
             return _pruned_search(index, q32, q_sq, k)
         if index.basis is not None:
             index.skip()
