@@ -212,18 +212,36 @@ def flag_fold(
     else:
         clf, held = fitted
     away = clf.solve([c.seq for c in other])
+    held_scores, away_scores = _scores(clf, held), _scores(clf, away)
     return {
         "false_alarm": [s.unlike_cases for s in held],
-        "false_alarm_distance": [s.unlike_reason == "distance" for s in held],
+        "false_alarm_measured": [bool(d or f) for d, f in held_scores],
+        "false_alarm_distance": [d for d, _ in held_scores],
+        "false_alarm_features": [f for _, f in held_scores],
         "detected": [s.unlike_cases for s in away],
-        "detected_distance": [
-            clf.novelty_.ratio(float(s.retrieval.distances[0])) > clf.novelty_.unlike_ratio
-            for s in away
-        ],  # fmt: skip
+        "detected_measured": [bool(d or f) for d, f in away_scores],
+        "detected_distance": [d for d, _ in away_scores],
+        "detected_features": [f for _, f in away_scores],
         "other_label": [c.label for c in other],
         "right": [s.solution.label == c.label for s, c in zip(held, test, strict=True)],
         "confidence": [s.solution.confidence for s in held],
     }
+
+
+def _scores(clf: Any, solved: list[Any]) -> list[tuple[bool, bool]]:
+    """Per clip, the sensor rule aside: whether the nearest-case distance flags it and whether
+    the summary features do (:mod:`cbr.novelty`)."""
+    from cbr.novelty import summary
+
+    nov = clf.novelty_
+    out = []
+    for s in solved:
+        d = float(s.retrieval.distances[0])
+        feats = nov.features is not None and nov.features.unlike(
+            summary(s.problem.values), s.solution.label
+        )
+        out.append((nov.ratio(d) > nov.unlike_ratio, bool(feats)))
+    return out
 
 
 def _by_activity(labels: list[str], hit: list[bool]) -> dict[str, float]:
@@ -296,8 +314,12 @@ def _fold(name: str, held: tuple[str, ...], flags: bool, explain: bool) -> dict[
             lo, hi = cal["ece_interval"]
             lines.append(f"    flag {feats}/{sim}: {seconds[f'{feats}/{sim}']} s; false alarms "
                          f"{100 * _rate(got['false_alarm']):.1f} %, detection "
-                         f"{100 * _rate(got['detected']):.1f} % (by distance "
-                         f"{100 * _rate(got['detected_distance']):.1f} %); accuracy "
+                         f"{100 * _rate(got['detected']):.1f} % (without the sensor rule "
+                         f"{100 * _rate(got['detected_measured']):.1f} %: distance "
+                         f"{100 * _rate(got['detected_distance']):.1f} %, features "
+                         f"{100 * _rate(got['detected_features']):.1f} %; false alarms "
+                         f"{100 * _rate(got['false_alarm_distance']):.1f} %, "
+                         f"{100 * _rate(got['false_alarm_features']):.1f} %); accuracy "
                          f"{100 * cal['accuracy']:.1f} %, ECE {cal['ece']:.3f} "
                          f"[{lo:.3f}, {hi:.3f}], if calibrated {_if_calibrated(cal)}")  # fmt: skip
     return {**fold, "lines": lines, "seconds": seconds}
@@ -378,8 +400,10 @@ def _print_flags(name: str, flags: dict[str, Any]) -> None:
         lo, hi = f["ece_interval"]
         print(
             f"{name + ' ' + cfg:<36} {100 * f['false_alarm']:6.1f} % "
-            f"{100 * f['false_alarm_distance']:6.1f} % {100 * f['detection']:6.1f} % "
-            f"{100 * f['detection_distance']:6.1f} % {100 * f['accuracy']:6.1f} % "
+            f"{100 * f['false_alarm_distance']:6.1f} % {100 * f['false_alarm_features']:6.1f} % "
+            f"{100 * f['detection']:6.1f} % {100 * f['detection_measured']:6.1f} % "
+            f"{100 * f['detection_distance']:6.1f} % {100 * f['detection_features']:6.1f} % "
+            f"{100 * f['accuracy']:6.1f} % "
             f"{f['ece']:6.3f} [{lo:.3f}, {hi:.3f}] {_if_calibrated(f)}"
         )
 
@@ -413,9 +437,13 @@ def _flag_summary(r: dict[str, Any]) -> dict[str, Any]:
     """One flag configuration's figures from its per-clip outcomes ``r`` (:func:`flag_fold`)."""
     return {
         "false_alarm": _rate(r["false_alarm"]),
+        "false_alarm_measured": _rate(r["false_alarm_measured"]),
         "false_alarm_distance": _rate(r["false_alarm_distance"]),
+        "false_alarm_features": _rate(r["false_alarm_features"]),
         "detection": _rate(r["detected"]),
+        "detection_measured": _rate(r["detected_measured"]),
         "detection_distance": _rate(r["detected_distance"]),
+        "detection_features": _rate(r["detected_features"]),
         **_calibration(
             [
                 {"right": h, "confidence": c}
@@ -424,7 +452,9 @@ def _flag_summary(r: dict[str, Any]) -> dict[str, Any]:
         ),  # fmt: skip
         "held_out_clips": len(r["false_alarm"]),
         "other_clips": len(r["detected"]),
+        "detection_measured_by_activity": _by_activity(r["other_label"], r["detected_measured"]),
         "detection_distance_by_activity": _by_activity(r["other_label"], r["detected_distance"]),
+        "detection_features_by_activity": _by_activity(r["other_label"], r["detected_features"]),
     }
 
 
@@ -605,8 +635,9 @@ def main(argv: list[str] | None = None) -> int:
         _print_explanations(name, d["explanations"])
     if any("flags" in d for d in out["datasets"].values()):
         print(
-            f"\n{'flag: dataset configuration':<36} {'f.alarm':>8} {'(dist.)':>8} "
-            f"{'detect':>8} {'(dist.)':>8} {'acc':>8} {'ECE':>6} {'(95 % interval)':>16} "
+            f"\n{'flag: dataset configuration':<36} {'f.alarm':>8} {'(dist.)':>8} {'(feat.)':>8} "
+            f"{'detect':>8} {'(no sensor)':>8} {'(dist.)':>8} {'(feat.)':>8} {'acc':>8} {'ECE':>6} "
+            f"{'(95 % interval)':>16} "
             f"{'if calibrated':>15}"
         )
         for name, d in out["datasets"].items():

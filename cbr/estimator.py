@@ -59,7 +59,16 @@ from .fitting import (
     side_name,
 )
 from .maintenance import EDITORS, MaintenanceReport
-from .novelty import CALIBRATION_SAMPLE, NoveltyCalibration, from_distances, sample
+from .novelty import (
+    CALIBRATION_SAMPLE,
+    SHARED_QUANTILE,
+    UNLIKE_QUANTILE,
+    NoveltyCalibration,
+    fit_ranges,
+    from_distances,
+    sample,
+    summaries,
+)
 from .problem import (
     FeatureConfig,
     Problem,
@@ -120,7 +129,7 @@ class Solved:
     """One clip through the cycle: its problem, the retrieved cases, the reused solution (its
     ``confidence`` calibrated), how far it lies from the cases (``novelty``: nearest-case
     distance over the case base's usual held-out one) and whether it is unlike the stored
-    cases (calibrated per case base; ``unlike_reason`` "distance" or "sensor", see
+    cases (calibrated per case base; ``unlike_reason`` "distance", "features" or "sensor", see
     :mod:`cbr.novelty`); ``torso_share``: the share of its frames that show the person."""
 
     problem: Problem
@@ -605,8 +614,19 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             self.weights,  # type: ignore[arg-type]
         )
         skeletons = tuple(sorted({c.skeleton for c in clips}))
+        # every training clip's summary against the feature ranges of the others (cheap: no
+        # scan); the distance and the features then share the false-alarm budget
+        ranges = fit_ranges(
+            summaries(cb.problems),
+            np.asarray(case_groups, dtype=object),
+            summaries(queries),
+            np.asarray(groups, dtype=object)[cases.origin[real]],
+            labels,
+        )
+        quantile = UNLIKE_QUANTILE if ranges is None else SHARED_QUANTILE
+        novelty = from_distances(h.nearest, basis, quantile, skeletons)
         return (
-            from_distances(h.nearest, basis, skeletons=skeletons),
+            dataclasses.replace(novelty, features=ranges),
             calibrate_confidence(h.share, h.right, basis),
         )
 
@@ -684,7 +704,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             s = reuse(r, labels, self.weights)  # type: ignore[arg-type]
             s = dataclasses.replace(s, confidence=self.confidence_(s.vote_share))
             nearest = float(r.distances[0]) if len(r.distances) else float("inf")
-            reason = self.novelty_.reason(nearest, skeleton_of(seq))
+            reason = self.novelty_.reason(nearest, skeleton_of(seq), p.values, s.label)
             ratio = self.novelty_.ratio(nearest)
             out.append(Solved(p, r, s, ratio, bool(reason), torso_share(seq), reason))
         return out

@@ -827,6 +827,8 @@ def unlike_words(solved: Solved) -> str:
         return ""
     if solved.unlike_reason == "sensor":
         return "; unlike the stored cases (recorded with a skeleton none of them has)"
+    if solved.unlike_reason == "features":
+        return "; unlike the stored cases (features outside the range of the cases)"
     return f"; unlike the stored cases (nearest at {solved.novelty:.1f}x the usual distance)"
 
 

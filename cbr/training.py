@@ -149,7 +149,7 @@ def _learned(clf: CaseBaseClassifier) -> dict[str, Any]:
         "phases": clf.phases_,
         "mirror_cases": clf.mirror_cases_,
         "inner_loso_accuracy": dict(clf.selection_),
-        "unlike_cases": clf.novelty_.to_dict(),
+        "unlike_cases": clf.novelty_.describe(),
     }
 
 

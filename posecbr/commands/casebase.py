@@ -156,9 +156,17 @@ def _print_model(m: dict[str, Any]) -> None:
         u = m["unlike_cases"]
         sensors = u.get("skeletons") or []
         rule = f", or recorded with a skeleton other than {', '.join(sensors)}" if sensors else ""
+        f = u.get("features")
+        feats = (
+            f", or its summary features outside the cases' ranges beyond {f['unlike_ratio']:.2f}x"
+            " what held-out clips of its answer show"
+            if f
+            else ""
+        )
         print(
             f"  unlike the stored cases beyond {u['unlike_ratio']:.2f}x the usual held-out "
-            f"distance ({u['quantile']:.0%} of {u['basis']} training clips lie within){rule}"
+            f"distance ({u['quantile']:.1%} of {u['basis']} training clips lie within){feats}"
+            f"{rule}"
         )
     if m.get("confidence"):
         c = m["confidence"]
@@ -177,6 +185,19 @@ def _measure_words(similarity: dict[str, Any]) -> str:
     return f"{similarity.get('name', '?')}{learned}" + (f" ({settings})" if settings else "")
 
 
+def _novelty_summary(stored: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The stored novelty calibration without its feature ranges' arrays (what a person
+    reads; :meth:`cbr.novelty.NoveltyCalibration.describe`)."""
+    from cbr.novelty import NoveltyCalibration
+
+    if not stored:
+        return stored
+    try:
+        return NoveltyCalibration.from_dict(stored).describe()
+    except (KeyError, TypeError, ValueError):
+        return {k: v for k, v in stored.items() if k != "features"}
+
+
 def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, Any]:
     """What fit learned, for people: k, vote, target, side handling, weighting, the heaviest
     feature weights and the novelty calibration."""
@@ -190,7 +211,7 @@ def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, A
         "side": model.get("side"),
         "feature_weights": model.get("weighting"),
         "phases": params.get("phases"),
-        "unlike_cases": model.get("novelty"),
+        "unlike_cases": _novelty_summary(model.get("novelty")),
         "confidence": model.get("confidence"),
     }
     fw = model.get("feature_weights")

@@ -1,0 +1,136 @@
+"""The "unlike the stored cases" flag's feature score (cbr.novelty): summary features outside
+the ranges the cases span, calibrated on held-out training clips, per answered label. Synthetic
+case bases whose answer is known by construction; each test well under a second."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from cbr.novelty import (
+    RANGE_FOLDS,
+    FeatureRanges,
+    NoveltyCalibration,
+    fit_ranges,
+    fold_of,
+    outside_share,
+    summary,
+)
+
+
+def test_a_sequence_is_summarised_by_its_columns_over_time() -> None:
+    seq = np.array([[1.0, 10.0], [3.0, np.nan], [5.0, 30.0]])
+    # by hand: means 3 and 20, minima 1 and 10, maxima 5 and 30, standard deviations
+    # sqrt(8/3) and 10 (the missing value left out)
+    want = [3.0, 20.0, 1.0, 10.0, 5.0, 30.0, np.sqrt(8.0 / 3.0), 10.0]
+    assert summary(seq) == pytest.approx(want)
+    vec = np.array([0.5, -2.0])
+    assert summary(vec) is not None and np.array_equal(summary(vec), vec)
+
+
+def test_the_outside_share_counts_features_beyond_either_end() -> None:
+    lo, hi = np.zeros(4), np.ones(4)
+    s = np.array([[0.5, -0.1, 1.2, np.nan], [0.0, 1.0, 0.3, 0.7]])
+    # first row: one feature below, one above, one missing (not outside) of four
+    assert outside_share(s, lo, hi) == pytest.approx([0.5, 0.0])
+
+
+def test_each_group_lands_in_one_of_at_most_the_folds() -> None:
+    groups = np.array([f"s{i % 12}" for i in range(60)], dtype=object)
+    fold = fold_of(groups)
+    assert len(set(fold.tolist())) == RANGE_FOLDS
+    for g in set(groups.tolist()):
+        assert len(set(fold[groups == g].tolist())) == 1
+    assert sorted(set(fold_of(np.array(["a", "b", "a"], dtype=object)).tolist())) == [0, 1]
+
+
+def _case_base(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Six subjects, twenty clips each of "A" and "B", 60 summary features. A is done alike
+    by everyone (the same spread); B each subject does its own way (subject j far off in
+    features 5j to 5j + 4), so a held-out B clip leaves the other subjects' ranges in those
+    five features: held out, B clips are five features outside, A clips none or one."""
+    rows, groups, labels = [], [], []
+    for j in range(6):
+        for label in ("A", "B"):
+            x = rng.normal(0.0, 1.0, (20, 60))
+            if label == "B":
+                x[:, 5 * j : 5 * j + 5] += 10.0  # subject j's way of doing B
+            rows.append(x)
+            groups += [f"s{j}"] * 20
+            labels += [label] * 20
+    return np.concatenate(rows), np.array(groups, dtype=object), np.array(labels, dtype=object)
+
+
+def test_clips_like_the_cases_pass_and_clips_beyond_their_range_are_flagged() -> None:
+    rng = np.random.default_rng(1)
+    cases, groups, labels = _case_base(rng)
+    ranges = fit_ranges(cases, groups, cases, groups, labels)
+    assert ranges is not None and ranges.lo.shape == (6, 60)
+    # new A clips drawn as A's cases were: few flagged (the quantile is 0.995)
+    like = rng.normal(0.0, 1.0, (300, 60))
+    assert np.mean([ranges.unlike(x, "A") for x in like]) <= 0.05
+    # the same clips with 20 features far beyond every case: every one flagged, answered A
+    # or B (held-out B clips lie five features outside, not twenty)
+    away = like.copy()
+    away[:, 30:50] += 20.0
+    assert all(ranges.unlike(x, "A") for x in away)
+    assert all(ranges.unlike(x, "B") for x in away)
+
+
+def test_the_answer_sets_how_far_outside_is_usual() -> None:
+    """A clip as far outside the ranges as held-out B clips are is ordinary for B, unlike the
+    cases when answered A: A's held-out clips stay inside."""
+    rng = np.random.default_rng(2)
+    cases, groups, labels = _case_base(rng)
+    ranges = fit_ranges(cases, groups, cases, groups, labels)
+    assert ranges is not None
+    assert ranges.scale("B") > 4 * ranges.scale("A")
+    # a new person's B: the usual spread and a way of its own, in five features of no subject's
+    new_b = rng.normal(0.0, 1.0, (100, 60))
+    new_b[:, 50:55] += 10.0
+    flagged_as_b = np.mean([ranges.unlike(x, "B") for x in new_b])
+    flagged_as_a = np.mean([ranges.unlike(x, "A") for x in new_b])
+    assert flagged_as_b <= 0.1 and flagged_as_a >= 0.9
+    # a label the ranges never saw takes the scale of all clips
+    assert ranges.scale("C") == ranges.default
+
+
+def test_one_group_cannot_be_held_out() -> None:
+    x = np.zeros((5, 3))
+    one = np.array(["s1"] * 5, dtype=object)
+    assert fit_ranges(x, one, x, one, ["A"] * 5) is None
+
+
+def test_the_calibration_names_the_score_that_flags() -> None:
+    rng = np.random.default_rng(3)
+    cases, groups, labels = _case_base(rng)
+    ranges = fit_ranges(cases, groups, cases, groups, labels)
+    cal = NoveltyCalibration(1.0, 2.0, 0.995, "leave-one-subject-out", 240, ("asf_amc",), ranges)
+    ordinary = rng.normal(0.0, 1.0, 60)
+    odd = ordinary.copy()
+    odd[:10] = 50.0
+    assert cal.measured(0.5, ordinary, "A") == ""
+    assert cal.measured(0.5, odd, "A") == "features"
+    assert cal.measured(3.0, odd, "A") == "distance"  # the distance is named first
+    assert cal.reason(0.5, "uiprmd_kinect", ordinary, "A") == "sensor"
+    assert cal.reason(0.5, "asf_amc", odd, "A") == "features"
+    # without the clip's problem only the distance is judged (segmentation windows, old calls)
+    assert cal.reason(0.5, "asf_amc") == "" and not cal.unlike(0.5)
+
+
+def test_the_feature_ranges_survive_storage() -> None:
+    rng = np.random.default_rng(4)
+    cases, groups, labels = _case_base(rng)
+    cases[0, 5] = np.nan  # a missing value among the cases
+    ranges = fit_ranges(cases, groups, cases, groups, labels)
+    cal = NoveltyCalibration(1.0, 2.0, 0.995, "leave-one-subject-out", 240, (), ranges)
+    stored = json.loads(json.dumps(cal.to_dict(), allow_nan=False))  # the store's JSON
+    assert NoveltyCalibration.from_dict(stored) == cal
+    before = {k: v for k, v in cal.to_dict().items() if k != "features"}
+    assert NoveltyCalibration.from_dict(before).features is None  # stored before the ranges
+    short = cal.describe()["features"]
+    assert short["folds"] == 6 and short["features"] == 60 and "lo" not in short
+    with pytest.raises(ValueError, match="paired"):
+        FeatureRanges.from_dict({**ranges.to_dict(), "hi": [[0.0]]} if ranges else {})
