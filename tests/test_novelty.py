@@ -5,6 +5,7 @@ case bases whose answer is known by construction; each test well under a second.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +19,8 @@ from cbr.novelty import (
     outside_share,
     summary,
 )
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd" / "labels.csv"
 
 
 def test_a_sequence_is_summarised_by_its_columns_over_time() -> None:
@@ -134,3 +137,22 @@ def test_the_feature_ranges_survive_storage() -> None:
     assert short["folds"] == 6 and short["features"] == 60 and "lo" not in short
     with pytest.raises(ValueError, match="paired"):
         FeatureRanges.from_dict({**ranges.to_dict(), "hi": [[0.0]]} if ranges else {})
+
+
+def test_a_fitted_case_base_keeps_its_ranges_and_flags_few_new_people() -> None:
+    from cbr.estimator import CaseBaseClassifier
+    from features.datasets import load_dataset
+
+    train = load_dataset(DEMO, subjects={"s01", "s02"})
+    test = load_dataset(DEMO, subjects={"s03"})
+    clf = CaseBaseClassifier().fit([c.seq for c in train], [c.label for c in train])
+    ranges = clf.novelty_.features
+    assert ranges is not None and ranges.lo.shape[0] == 2  # the two subjects, each held out
+    assert clf.novelty_.quantile == 0.995 and ranges.quantile == 0.995
+    solved = clf.solve([c.seq for c in test])
+    flagged = [s.unlike_reason for s in solved if s.unlike_cases]
+    assert len(flagged) <= 6, f"{flagged} of 60 ordinary clips flagged"
+    # a new person's clip with a quarter of its features beyond every case: unlike them
+    values = solved[0].problem.values.copy()
+    values[::4] = ranges.hi.max(axis=0)[::4] + 1.0
+    assert ranges.unlike(summary(values), solved[0].solution.label)
