@@ -16,9 +16,11 @@ per dataset:
   what a perfectly calibrated confidence would score at the same confidences ("if
   calibrated": median and 95th percentile, answers drawn right with their confidence);
 - the "unlike the stored cases" flag: **false alarms** on the held-out clips (trained
-  activities, new people) and **detection** of clips from the other dataset, by the distance
-  alone and with the sensor rule (a skeleton no training clip was recorded with), for
-  fluents/euclidean, fluents/dtw, fluents/signature and qmp/euclidean;
+  activities, new people) and **detection** of clips from the other dataset, with the sensor
+  rule (a skeleton no training clip was recorded with), without it (``measured``: the
+  nearest-case distance or the summary features, :mod:`cbr.novelty`) and by each of the two
+  scores alone (per activity of the other dataset too), for fluents/euclidean, fluents/dtw,
+  fluents/signature and qmp/euclidean;
 - the ECE of the repetition check (UI-PRMD correct vs incorrect, one case base per movement),
   overall and per movement.
 

@@ -13,8 +13,9 @@ Learned at fit time from the training clips only (so cross-validation stays hone
   arm finds the right-arm cases;
 - ``feature_weights``: z-normalisation and Fisher-ratio weights of the features
   (:mod:`cbr.weights`), used by the euclidean measure and cited by explanations;
-- how far from the cases a held-out clip usually lies (:mod:`cbr.novelty`), so a clip unlike
-  every stored case is flagged, whatever the configuration; and how often a held-out clip's
+- how far from the cases a held-out clip usually lies and how far outside the cases' feature
+  ranges (:mod:`cbr.novelty`), so a clip unlike every stored case is flagged, whatever the
+  configuration; and how often a held-out clip's
   vote share was right (:mod:`cbr.calibration`), so the confidence is a probability.
 
 With vector problems under euclidean (clip summaries, QMPs), ``"auto"`` chooses the side
@@ -588,8 +589,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         clips name two or more subjects; else by source recording when there are two or more
         (the repetitions cut from one recording are near copies of each other, not what a new
         recording is); else by clip (a clip's mirror image goes with it). From them, how far
-        from the cases a held-out clip usually lies (the "unlike the stored cases" flag) and how
-        often each vote share was right (the confidence)."""
+        from the cases a held-out clip usually lies and how far outside the cases' summary
+        feature ranges (the "unlike the stored cases" flag) and how often each vote share was
+        right (the confidence)."""
         n = len(subjects)
         real = cases.origin < n
         queries = cases.values[real]  # the training clips as queries see them
