@@ -13,9 +13,9 @@ Three judges, each calibrated on the case base itself, never on what is being se
   is where the two error rates are equal (:func:`equal_error_threshold`). A ratio of
   distances needs no common unit, so a new person who lies farther from every case is not
   called unknown for that alone.
-- :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the flag
-  ``classify`` gives): the nearest case lies farther than held-out training clips nearly
-  ever do.
+- :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
+  score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
+  case lies farther than held-out training clips nearly ever do.
 - :class:`Familiarity`: the nearest case lies as far as the case base's activities lie from
   each other.
 """
