@@ -1,8 +1,10 @@
-"""Joining single repetitions into one multi-repetition recording whose count is known exactly.
+"""Joining single repetitions into one recording whose count and labels are known exactly.
 
 Datasets of segmented repetitions (UI-PRMD: one file per repetition; HDM05: one-repetition
 clips) give an exact ground truth for repetition counting when K repetitions of one person
-and one movement are played one after the other. Each repetition starts and ends near rest,
+and one movement are played one after the other, and for segmentation when the repetitions
+of several movements follow one another (each frame labelled with the movement of the
+repetition it comes from). Each repetition starts and ends near rest,
 but the person stood elsewhere in the room and faced another way in each take, and the rest
 postures differ a little: every repetition is turned about the vertical and shifted along
 the floor so that its first frame stands where and faces as the previous one's last frame
@@ -29,11 +31,15 @@ BLEND_S = 0.1
 class Joined:
     """The joined recording, the frame where each repetition starts in it ``(K,)`` (the
     blends lie before them, from the second on), and the largest joint jump (metres) that
-    the blends bridged between consecutive repetitions ``(K - 1,)``."""
+    the blends bridged between consecutive repetitions ``(K - 1,)``; ``labels``: when the
+    repetitions were labelled, the label of every frame ``(frames,)`` (object): each
+    repetition's own, a blend's first half that of the repetition before it, its second
+    half that of the one after (a change of movement lies mid-blend)."""
 
     seq: PoseSequence
     starts: np.ndarray
     jumps_m: np.ndarray
+    labels: np.ndarray | None = None
 
 
 def _heading(frame: np.ndarray) -> float:
@@ -74,14 +80,20 @@ def _placed(p: np.ndarray, after: np.ndarray) -> np.ndarray:
     return np.asarray(out + shift)
 
 
-def join_repetitions(reps: Sequence[PoseSequence], blend_s: float = BLEND_S) -> Joined:
+def join_repetitions(
+    reps: Sequence[PoseSequence], blend_s: float = BLEND_S, labels: Sequence[str] | None = None
+) -> Joined:
     """``reps`` (canonical :class:`PoseSequence` s of one frame rate, positions
-    ``(frames, 33, 3)``) played one after the other (see the module docstring).
+    ``(frames, 33, 3)``) played one after the other (see the module docstring), of one
+    movement or several; ``labels``: the movement of each repetition ``(K,)``, to label
+    every frame of the result (:attr:`Joined.labels`).
 
-    Raises DataError for no repetitions, differing frame rates or a repetition without a
-    frame that shows both hips."""
+    Raises DataError for no repetitions, differing frame rates, a repetition without a
+    frame that shows both hips, or as many labels as repetitions not given."""
     if not reps:
         raise DataError("no repetitions to join")
+    if labels is not None and len(labels) != len(reps):
+        raise DataError(f"{len(labels)} labels for {len(reps)} repetitions to join")
     fps = reps[0].fps
     if any(abs(r.fps - fps) > 1e-6 for r in reps):
         raise DataError("repetitions to join differ in frame rate")
@@ -111,7 +123,18 @@ def join_repetitions(reps: Sequence[PoseSequence], blend_s: float = BLEND_S) -> 
         confidence=None,
         metadata={**reps[0].metadata, "joined_repetitions": len(reps)},
     )
-    return Joined(seq, np.asarray(starts), np.asarray(jumps))
+    starts_a = np.asarray(starts)
+    per_frame = (
+        None if labels is None else _frame_labels(labels, starts_a, n_blend, len(seq.positions))
+    )
+    return Joined(seq, starts_a, np.asarray(jumps), per_frame)
 
 
-__all__ = ["BLEND_S", "Joined", "join_repetitions"]
+def _frame_labels(
+    labels: Sequence[str], starts: np.ndarray, n_blend: int, n_frames: int
+) -> np.ndarray:
+    """``(n_frames,)`` object: repetition i's label from the middle of the blend before it
+    (the first frame, for the first) to the middle of the blend after it (``n_blend``
+    frames before each start but the first)."""
+    cuts = np.r_[0, starts[1:] - n_blend + (n_blend + 1) // 2, n_frames]
+    return np.repeat(np.asarray(list(labels), dtype=object), np.diff(cuts))

@@ -139,6 +139,49 @@ def test_joining_refuses_nothing_and_mixed_frame_rates() -> None:
 UIPRMD = Path("ui-prmd") / "data" / "Segmented Movements"
 
 
+def test_joined_labels_change_mid_blend_and_refuse_a_wrong_number() -> None:
+    """Takes of 30, 20 and 25 frames labelled a, b, b at 30 fps (3 frames of blending): the
+    first 30 frames are a, then 2 blend frames a and 1 b (the change mid-blend), the 20
+    frames of the second take b, the 3 blend frames b, the last 25 frames b."""
+    take = to_sequence(*[standing()] * 30, fps=FPS)
+    joined = join_repetitions(
+        [take, take.slice_frames(0, 20), take.slice_frames(0, 25)], labels=["a", "b", "b"]
+    )
+    assert joined.labels is not None
+    expected = ["a"] * 32 + ["b"] * (1 + 20 + 3 + 25)
+    assert joined.labels.tolist() == expected
+    assert join_repetitions([take]).labels is None
+    with pytest.raises(DataError, match="1 labels for 2 repetitions"):
+        join_repetitions([take, take], labels=["a"])
+
+
+def test_joined_movements_are_labelled_where_their_frames_lie(shared_data: Path) -> None:
+    """Real UI-PRMD Vicon repetitions of three movements of subject s06 (deep squat twice,
+    shoulder abduction once, hurdle step twice): the frames of each take, found by counting
+    frames (the takes' lengths and 0.1 s of blending between), carry its movement's label and
+    its knee angles, and the labels change as often as the movement does, twice."""
+    folder = shared_data / UIPRMD / "Vicon" / "Positions"
+    names = [("m01", 1), ("m01", 2), ("m07", 3), ("m02", 4), ("m02", 5)]
+    reps = [read_uiprmd_vicon(folder / f"{m}_s06_e{e:02d}_positions.txt.gz") for m, e in names]
+    joined = join_repetitions(reps, labels=[m for m, _ in names])
+    assert joined.labels is not None
+    labels = joined.labels
+    n_blend = int(round(0.1 * reps[0].fps))
+    assert len(labels) == joined.seq.n_frames == sum(r.n_frames for r in reps) + 4 * n_blend
+    assert int(np.sum(labels[1:] != labels[:-1])) == 2
+    at = 0
+    for i, (rep, (movement, _)) in enumerate(zip(reps, names, strict=True)):
+        if i:
+            at += n_blend
+        piece = joined.seq.positions[at : at + rep.n_frames]
+        assert set(labels[at : at + rep.n_frames].tolist()) == {movement}
+        np.testing.assert_allclose(
+            _knee_angle(piece), _knee_angle(rep.to_canonical().positions), atol=1e-9
+        )
+        at += rep.n_frames
+    assert at == joined.seq.n_frames
+
+
 @pytest.mark.parametrize(
     ("sensor", "movement", "subject", "episodes"),
     [
