@@ -2,7 +2,8 @@
 classifier in the same run.
 
 Run: ``python -m benchmarks.segment_people [--datasets ...] [--per-person N] [--seed S]``
-(about 10 minutes on a loaded 2-core machine; one core: BLAS, OpenMP and numba threads
+(about 10 minutes of CPU, 20 of wall clock at load 10 on 2 cores, most of it the DTW
+baseline and the case bases of UI-PRMD Kinect; one core: BLAS, OpenMP and numba threads
 pinned to 1). Writes ``benchmarks/results/segment_people.json``.
 
 There is no long recording of several exercises from anyone but CMU subject 13, so the
