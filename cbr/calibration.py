@@ -1,42 +1,69 @@
-"""A confidence that is a probability: the winner's vote share calibrated, in fit, into the
+"""A confidence that is a probability: the answer's soft vote calibrated, in fit, into the
 chance that the answer is right, and the expected calibration error that measures it.
 
-The training clips are classified held out as new people are (each by the cases of the other
-subjects, or of the other clips when subjects are unknown: :func:`held_out`; with learned
-feature weights, by case bases whose weights were learned without the clip's subject:
-:func:`cbr.fitting.inner_loso_votes`); Platt scaling (a logistic curve of the vote share's
+The answer is the k nearest cases' vote (:func:`cbr.reuse.vote`); its confidence comes from a
+finer score than the k-vote's share (with k = 5 it takes six values, and most clips get 1.0,
+whether the answer is right or not): the **soft vote** of the ``NEIGHBOURS`` nearest cases,
+each case weighing ``exp(-(d / d_1)^2 / T)`` for its class (``d_1`` the query's nearest-case
+distance, so the score depends on how much farther the other classes lie than the nearest
+case, not on how dense the case base is), the answer's share of the weight being the score.
+The temperature ``T`` is fitted to the training clips classified held out as new people are
+(each by the cases of the other subjects, or of the other clips when subjects are unknown:
+:func:`held_out`; with learned feature weights, by case bases whose weights were learned
+without the clip's subject: :func:`cbr.fitting.inner_loso_neighbours`) by log loss
+(temperature scaling, Guo et al. 2017); Platt scaling (a logistic curve of the score's
 log-odds, fitted to whether the answer was right, with Platt's smoothed targets so a handful
 of training clips do not make it certain; Platt 1999, as scikit-learn's ``sigmoid``
-calibration) maps their winning vote shares to probabilities. The map is stored as knots of a
-monotone piecewise-linear curve with the case base, so a loaded classifier answers with the
-same confidences. Isotonic regression was tried too: on held-out UI-PRMD subjects it left a
-correct-vs-incorrect ECE of 0.050 where Platt scaling leaves 0.038 (one case base per movement
-learns from about 140 clips, too few for a free-form curve).
+calibration) then maps the scores to probabilities. The map is stored as knots of a monotone
+piecewise-linear curve with the case base, with ``T`` and the neighbourhood, so a loaded
+classifier answers with the same confidences; a calibration stored before the soft vote maps
+the vote share. Why not the vote share: a held-out training clip is classified by a case base
+with one subject fewer than the deployed one, and the share means something else there (HDM05,
+three actors: the inner case bases have one actor, whose unanimous votes were all right, while
+the deployed two-actor case base's unanimous votes on a new actor are right 90-97 %); the
+relative distances carry over between case-base sizes better. Isotonic regression was tried
+too: on held-out UI-PRMD subjects it left a correct-vs-incorrect ECE of 0.050 where Platt
+scaling leaves 0.038 (one case base per movement learns from about 140 clips, too few for a
+free-form curve).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from .casebase import CaseBase
-from .reuse import Weights, vote
+from .reuse import EXACT, Weights, vote
 
 #: bins of the expected calibration error (equal width over [0, 1], as Guo et al. 2017)
 ECE_BINS = 10
+#: the nearest cases whose soft vote is the confidence's score (the answer is the k-vote's)
+NEIGHBOURS = 10
+#: the log loss of the temperature fit mixes this much of a uniform guess into the soft vote:
+#: a true class absent from the neighbourhood would otherwise cost an infinite loss
+_FLOOR = 1e-3
 
 
 @dataclass(frozen=True)
 class HeldOut:
     """The training clips classified held out: ``nearest`` ``(q,)`` distance to the nearest
-    case of another group, ``share`` ``(q,)`` the winning vote share and ``right`` ``(q,)``
-    whether the winner was the clip's label."""
+    case of another group, ``share`` ``(q,)`` the winning vote share, ``right`` ``(q,)``
+    whether the winner was the clip's label, ``answer`` ``(q,)`` the winner's class code;
+    ``distances`` and ``codes`` ``(q, K)`` the ``K``
+    nearest such cases (nearest first; ``inf`` where fewer) and their class codes, ``truth``
+    ``(q,)`` the clip's class code and ``k`` the cases that voted."""
 
     nearest: np.ndarray
     share: np.ndarray
     right: np.ndarray
+    answer: np.ndarray
+    distances: np.ndarray
+    codes: np.ndarray
+    truth: np.ndarray
+    k: int
 
 
 def held_out(
@@ -47,46 +74,120 @@ def held_out(
     case_groups: np.ndarray,
     k: int,
     weights: Weights = "distance",
+    neighbours: int = NEIGHBOURS,
 ) -> HeldOut:
     """Each query ``(q, *problem_shape)`` (true label ``labels[i]``, group ``groups[i]``)
     classified by the ``k`` nearest cases of other groups (``case_groups`` ``(n_cases,)``),
-    voting as the classifier does (:func:`cbr.reuse.vote`)."""
+    voting as the classifier does (:func:`cbr.reuse.vote`), with its ``max(k, neighbours)``
+    nearest such cases for the soft vote."""
     classes, codes = np.unique(cb.labels.astype(str), return_inverse=True)
     measure, index = cb.measure, cb.index
-    q = len(queries)
-    dist = np.full((q, k), np.inf)
-    code = np.zeros((q, k), dtype=np.int64)
+    q, wide = len(queries), max(int(k), int(neighbours))
+    dist = np.full((q, wide), np.inf)
+    code = np.zeros((q, wide), dtype=np.int64)
     for i, p in enumerate(queries):  # one full scan per query: the measure's array work
         d = measure.distances(measure.represent_query(p), index)
         d = np.where(case_groups == groups[i], np.inf, d)
-        top = np.argsort(d, kind="stable")[:k]
+        top = np.argsort(d, kind="stable")[:wide]
         dist[i, : len(top)], code[i, : len(top)] = d[top], codes[top]
-    proba = vote(dist, code, len(classes), weights)
+    return held_out_votes(dist, code, classes, labels, int(k), weights)
+
+
+def held_out_votes(
+    distances: np.ndarray,
+    codes: np.ndarray,
+    classes: np.ndarray,
+    labels: np.ndarray,
+    k: int,
+    weights: Weights = "distance",
+) -> HeldOut:
+    """:class:`HeldOut` of clips whose nearest held-out cases are ``distances`` ``(q, K)``
+    (nearest first) of class codes ``codes`` ``(q, K)`` into ``classes`` ``(C,)`` (sorted
+    str), the first ``k`` of them voting; ``labels`` ``(q,)`` the clips' labels. A label no
+    case has gets code -1 (its answers are all wrong)."""
+    labels = np.asarray(labels).astype(str)
+    proba = vote(distances[:, :k], codes[:, :k], len(classes), weights)
     win = np.argmax(proba, axis=1)
-    right = classes[win] == np.asarray(labels).astype(str)
-    return HeldOut(dist[:, 0], proba[np.arange(q), win], right)
+    at = np.clip(np.searchsorted(classes, labels), 0, len(classes) - 1)
+    truth = np.where(classes[at] == labels, at, -1)
+    share = proba[np.arange(len(win)), win]
+    return HeldOut(distances[:, 0], share, win == truth, win, distances, codes, truth, int(k))
+
+
+def soft_vote(
+    distances: np.ndarray, codes: np.ndarray, n_classes: int, temperature: float
+) -> np.ndarray:
+    """The soft vote ``(q, n_classes)`` of each query's nearest cases, ``distances`` ``(q, K)``
+    (nearest first, ``inf``: no case) of classes ``codes`` ``(q, K)``: a case weighs
+    ``exp(-(d / d_1)^2 / temperature)`` for its class, ``d_1`` the query's nearest distance
+    (an exact match, ``d_1 = 0``, takes all the weight with the cases at distance 0)."""
+    d = np.asarray(distances, dtype=np.float64)
+    present = np.isfinite(d)
+    d1 = np.maximum(d[:, :1], EXACT)
+    e = np.where(present, -((np.where(present, d, 0.0) / d1) ** 2) / float(temperature), -np.inf)
+    w = np.exp(e - e.max(axis=1, keepdims=True))  # the nearest case weighs 1: no underflow
+    rows = np.repeat(np.arange(len(d)), d.shape[1])
+    out = np.zeros((len(d), n_classes))
+    np.add.at(out, (rows, np.where(present, codes, 0).ravel()), w.ravel())
+    return np.asarray(out / out.sum(axis=1, keepdims=True))
+
+
+def fit_temperature(
+    distances: np.ndarray, codes: np.ndarray, truth: np.ndarray, n_classes: int
+) -> float:
+    """The temperature of :func:`soft_vote` that minimises the log loss of the clips' true
+    classes ``truth`` ``(q,)`` (-1: a class no case has, left out), over ``log T`` in
+    [-8, 8]."""
+    from scipy.optimize import minimize_scalar
+
+    known = np.asarray(truth) >= 0
+    d, c, t = distances[known], codes[known], np.asarray(truth)[known]
+    if len(t) == 0:
+        return 1.0
+
+    def loss(log_t: float) -> float:
+        p = soft_vote(d, c, n_classes, float(np.exp(log_t)))[np.arange(len(t)), t]
+        return float(-np.mean(np.log((1.0 - _FLOOR) * p + _FLOOR / n_classes)))
+
+    return float(np.exp(minimize_scalar(loss, bounds=(-8.0, 8.0), method="bounded").x))
 
 
 @dataclass(frozen=True)
 class ConfidenceCalibration:
-    """Monotone piecewise-linear map from a winning vote share to the probability that the
-    answer is right: knots ``x`` (shares) and ``y`` (probabilities); ``basis`` how the training
-    clips were held out, ``n`` how many; ``accuracy`` their held-out accuracy."""
+    """Monotone piecewise-linear map from a score of the answer to the probability that it is
+    right: knots ``x`` (scores) and ``y`` (probabilities); ``basis`` how the training clips
+    were held out, ``n`` how many; ``accuracy`` their held-out accuracy. The score is the
+    answer's :func:`soft_vote` over the ``neighbours`` nearest cases at ``temperature``, or,
+    with ``neighbours`` 0 (calibrations stored before the soft vote), its vote share."""
 
     x: tuple[float, ...]
     y: tuple[float, ...]
     basis: str
     n: int
     accuracy: float
+    temperature: float = 1.0
+    neighbours: int = 0
 
-    def __call__(self, share: float) -> float:
+    def __call__(self, score: float) -> float:
         if not self.x:
+            return float(score)
+        return float(np.interp(float(score), self.x, self.y))
+
+    def score(self, distances: np.ndarray, codes: np.ndarray, n_classes: int, answer: int,
+              share: float) -> float:  # fmt: skip
+        """The score of the ``answer`` (a class code) of one query whose nearest cases are
+        ``distances`` ``(K,)`` (nearest first) of class codes ``codes`` ``(K,)``: its soft
+        vote, or its vote ``share`` when the calibration maps shares."""
+        if self.neighbours == 0:
             return float(share)
-        return float(np.interp(float(share), self.x, self.y))
+        n = self.neighbours
+        p = soft_vote(distances[None, :n], codes[None, :n], n_classes, self.temperature)
+        return float(p[0, answer])
 
     def to_dict(self) -> dict[str, Any]:
         return {"x": list(self.x), "y": list(self.y), "basis": self.basis, "n": self.n,
-                "accuracy": self.accuracy}  # fmt: skip
+                "accuracy": self.accuracy, "temperature": self.temperature,
+                "neighbours": self.neighbours}  # fmt: skip
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> ConfidenceCalibration:
@@ -94,7 +195,11 @@ class ConfidenceCalibration:
         y = tuple(float(v) for v in d["y"])
         if len(x) != len(y) or any(b < a for a, b in zip(x, x[1:], strict=False)):
             raise ValueError("calibration knots must be paired and increasing")
-        return cls(x, y, str(d["basis"]), int(d["n"]), float(d["accuracy"]))
+        temperature, neighbours = float(d.get("temperature", 1.0)), int(d.get("neighbours", 0))
+        if not temperature > 0 or neighbours < 0:
+            raise ValueError("the soft vote needs a positive temperature and neighbourhood")
+        return cls(x, y, str(d["basis"]), int(d["n"]), float(d["accuracy"]), temperature,
+                   neighbours)  # fmt: skip
 
 
 #: no calibration: the confidence is the vote share (case bases stored before calibration)
@@ -132,9 +237,9 @@ def platt(x: np.ndarray, right: np.ndarray) -> tuple[float, float]:
 
 
 def calibrate_confidence(share: np.ndarray, right: np.ndarray, basis: str) -> ConfidenceCalibration:
-    """Platt scaling of the winning vote ``share`` ``(q,)`` to whether the answer was right
-    ``(q,)``; a curve that would fall (a share that is right less often the higher it is)
-    becomes flat at the smoothed accuracy."""
+    """Platt scaling of the answer's score ``share`` ``(q,)`` (a vote share, or a soft vote)
+    to whether the answer was right ``(q,)``; a curve that would fall (a score that is right
+    less often the higher it is) becomes flat at the smoothed accuracy."""
     share = np.asarray(share, dtype=np.float64)
     right = np.asarray(right, dtype=bool)
     if len(share) == 0:
@@ -153,6 +258,21 @@ def calibrate_confidence(share: np.ndarray, right: np.ndarray, basis: str) -> Co
         tuple(float(v) for v in KNOTS), tuple(float(v) for v in y), basis, len(share),
         float(right.mean()),
     )  # fmt: skip
+
+
+def calibrate_soft(h: HeldOut, n_classes: int, basis: str,
+                   neighbours: int = NEIGHBOURS) -> ConfidenceCalibration:  # fmt: skip
+    """The confidence from held-out clips ``h``: the temperature of the soft vote over their
+    ``neighbours`` nearest cases fitted by log loss, then Platt scaling of their answers'
+    soft votes (the answer is the k-vote's, :func:`held_out_votes`)."""
+    if len(h.share) == 0:
+        return UNCALIBRATED
+    n = min(int(neighbours), h.distances.shape[1])
+    d, c = h.distances[:, :n], h.codes[:, :n]
+    temperature = fit_temperature(d, c, h.truth, n_classes)
+    score = soft_vote(d, c, n_classes, temperature)[np.arange(len(h.answer)), h.answer]
+    cal = calibrate_confidence(score, h.right, basis)
+    return dataclasses.replace(cal, temperature=temperature, neighbours=n)
 
 
 def expected_calibration_error(

@@ -44,7 +44,14 @@ from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
 from features.progress import progress
 
-from .calibration import ConfidenceCalibration, calibrate_confidence, held_out
+from .calibration import (
+    NEIGHBOURS,
+    ConfidenceCalibration,
+    HeldOut,
+    calibrate_soft,
+    held_out,
+    held_out_votes,
+)
 from .casebase import CaseBase, skeleton_of
 from .described import DescribedClip, describe_clips
 from .explain import Explanation, explain
@@ -55,7 +62,7 @@ from .fitting import (
     Cases,
     assemble_cases,
     inner_loso_accuracy,
-    inner_loso_votes,
+    inner_loso_neighbours,
     inner_sample,
     side_name,
 )
@@ -400,9 +407,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.novelty_, self.confidence_ = self._calibrate(
             clips, cb, cases, origin, subjects, sources
         )
-        votes = self._nested_votes(described, choice, labels, subjects, measure)
-        if votes is not None:
-            self.confidence_ = calibrate_confidence(*votes, "nested leave-one-subject-out")
+        nested = self._nested_votes(described, choice, labels, subjects, measure)
+        if nested is not None:
+            self.confidence_ = calibrate_soft(nested, len(classes), "nested leave-one-subject-out")
         self.classes_ = classes
         self.case_origin_ = origin
         self.feature_config_ = config
@@ -590,8 +597,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         (the repetitions cut from one recording are near copies of each other, not what a new
         recording is); else by clip (a clip's mirror image goes with it). From them, how far
         from the cases a held-out clip usually lies and how far outside the cases' summary
-        feature ranges (the "unlike the stored cases" flag) and how often each vote share was
-        right (the confidence)."""
+        feature ranges (the "unlike the stored cases" flag) and how often the answer was right
+        at each soft vote (the confidence)."""
         n = len(subjects)
         real = cases.origin < n
         queries = cases.values[real]  # the training clips as queries see them
@@ -629,7 +636,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         novelty = from_distances(h.nearest, basis, quantile, skeletons)
         return (
             dataclasses.replace(novelty, features=ranges),
-            calibrate_confidence(h.share, h.right, basis),
+            calibrate_soft(h, len(np.unique(cb.labels.astype(str))), basis),
         )
 
     def _nested_votes(
@@ -639,11 +646,11 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         labels: np.ndarray,
         subjects: np.ndarray,
         measure: SimilarityMeasure,
-    ) -> tuple[np.ndarray, np.ndarray] | None:
-        """Vote shares and hits of the training clips, each classified by a case base whose
-        weights were learned without its subject (None: no learned weights, or no subjects to
-        hold out). Weights learned with a clip's own subject make its held-out votes look
-        surer than a new person's will be: the confidence would promise too much."""
+    ) -> HeldOut | None:
+        """The training clips, each classified by a case base whose weights were learned
+        without its subject (None: no learned weights, or no subjects to hold out). Weights
+        learned with a clip's own subject make its held-out votes look surer than a new
+        person's will be: the confidence would promise too much."""
         named = set(subjects.tolist())
         if not self._selectable(d.vectors, measure) or "" in named or len(named) < 2:
             return None
@@ -655,12 +662,22 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         M = None if d.M is None else d.columns(d.M[pick], choice.phases)
         left = None if d.left is None else d.left[pick]
         assert R is not None
-        share, right = inner_loso_votes(
-            R, M, left, labels[pick], subjects[pick], choice.side, choice.weighting, int(self.k),
-            self.weights,  # type: ignore[arg-type]
+        k = int(self.k)
+        dist, codes, classes = inner_loso_neighbours(
+            R, M, left, labels[pick], subjects[pick], choice.side, choice.weighting,
+            max(k, NEIGHBOURS),
         )  # fmt: skip
-        ok = np.isfinite(share)
-        return (share[ok], right[ok]) if ok.any() else None
+        ok = np.isfinite(dist[:, 0])
+        if not ok.any():
+            return None
+        return held_out_votes(
+            dist[ok],
+            codes[ok],
+            classes,
+            labels[pick][ok],
+            k,
+            self.weights,  # type: ignore[arg-type]
+        )
 
     def _edit(self, cb: CaseBase) -> MaintenanceReport | None:
         """Run the maintenance editor these parameters ask for (None: no editing)."""
@@ -701,10 +718,20 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         out = []
         problems = [self.case_base_.problem_of(seq) for seq in seqs]
         # every clip's neighbours in one batched search (the same as one retrieve per clip)
-        found = retrieve_many(self.case_base_, problems, int(self.k))
-        for seq, p, r in zip(seqs, problems, found, strict=True):
+        # and the wider neighbourhood the confidence's soft vote reads (the first k of it are
+        # the k nearest: neighbours are ordered, ties to the lower case)
+        k = int(self.k)
+        wide = max(k, self.confidence_.neighbours)
+        code = {str(c): i for i, c in enumerate(labels)}
+        for seq, p, w in zip(seqs, problems, retrieve_many(self.case_base_, problems, wide),
+                             strict=True):  # fmt: skip
+            r = Retrieval(w.indices[:k], w.distances[:k], w.labels[:k], w.case_ids[:k])
             s = reuse(r, labels, self.weights)  # type: ignore[arg-type]
-            s = dataclasses.replace(s, confidence=self.confidence_(s.vote_share))
+            codes = np.array([code[str(lab)] for lab in w.labels], dtype=np.int64)
+            score = self.confidence_.score(
+                w.distances, codes, len(labels), code[s.label], s.vote_share
+            )
+            s = dataclasses.replace(s, confidence=self.confidence_(score))
             nearest = float(r.distances[0]) if len(r.distances) else float("inf")
             reason = self.novelty_.reason(nearest, skeleton_of(seq), p.values, s.label)
             ratio = self.novelty_.ratio(nearest)

@@ -19,6 +19,7 @@ right-arm cases):
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -165,23 +166,78 @@ def knn_proba(
     """The cases' classes ``(C,)`` (sorted) and the vote shares of ``queries`` ``(q, D)``
     over them ``(q, C)``: the k nearest cases under the weighted euclidean distance voting as
     the classifier does (:func:`cbr.reuse.vote`)."""
+    classes, codes = np.unique(cases.labels.astype(str), return_inverse=True)
+    out = np.empty((len(queries), len(classes)))
+    for s, idx, dk in _nearest_chunks(cases, queries, k, ordered=False):
+        out[s : s + len(dk)] = vote(dk, codes[idx], len(classes), weights)
+    return classes, out
+
+
+def knn_neighbours(cases: Cases, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``k`` nearest cases of every query ``(q, D)`` under the weighted euclidean
+    distance, nearest first (ties to the lower case): distances and positions ``(q, k)``."""
+    k = min(int(k), len(cases.values))
+    dist, where = np.empty((len(queries), k)), np.empty((len(queries), k), dtype=np.int64)
+    for s, idx, dk in _nearest_chunks(cases, queries, k, ordered=True):
+        dist[s : s + len(dk)], where[s : s + len(dk)] = dk, idx
+    return dist, where
+
+
+def _nearest_chunks(
+    cases: Cases, queries: np.ndarray, k: int, ordered: bool
+) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+    """The k nearest cases of the ``queries`` ``(q, D)``, a chunk of queries at a time (bounded
+    memory: ``(chunk, n cases)`` distances): each chunk's first row, case positions and
+    distances ``(chunk, k)``, nearest first when ``ordered``."""
     Q = np.asarray(queries, dtype=np.float64)
     if cases.flag:
         Q = np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)
     A = np.asarray(cases.values, dtype=np.float64)
     if cases.weights is not None:
         A, Q = cases.weights.apply(A), cases.weights.apply(Q)
-    classes, codes = np.unique(cases.labels.astype(str), return_inverse=True)
     k = min(int(k), len(A))
     sq_a = np.einsum("ij,ij->i", A, A)
-    out = np.empty((len(Q), len(classes)))
-    for s in range(0, len(Q), _QUERY_CHUNK):  # bounded memory: (chunk, n cases) distances
+    for s in range(0, len(Q), _QUERY_CHUNK):
         q = Q[s : s + _QUERY_CHUNK]
         d = np.sqrt(np.maximum(np.einsum("ij,ij->i", q, q)[:, None] + sq_a - 2.0 * q @ A.T, 0.0))
-        idx = np.argpartition(d, k - 1, axis=1)[:, :k] if k < len(A) else np.argsort(d, axis=1)
-        dk = np.take_along_axis(d, idx, axis=1)
-        out[s : s + len(q)] = vote(dk, codes[idx], len(classes), weights)
-    return classes, out
+        if ordered:
+            idx = np.argsort(d, axis=1, kind="stable")[:, :k]
+        elif k < len(A):
+            idx = np.argpartition(d, k - 1, axis=1)[:, :k]
+        else:
+            idx = np.argsort(d, axis=1)
+        yield s, idx, np.take_along_axis(d, idx, axis=1)
+
+
+def _inner_folds(
+    R: np.ndarray,
+    M: np.ndarray | None,
+    left: np.ndarray | None,
+    y: np.ndarray,
+    subjects: np.ndarray,
+    side: str,
+    weighting: str,
+) -> Iterator[tuple[np.ndarray, Cases, np.ndarray]]:
+    """Leave-one-subject-out inside the training clips (many subjects: over
+    :func:`subject_folds`): each fold's held-out clips ``(n,)`` (a mask), the case base of the
+    other subjects' clips, weights and all, and the held-out clips as queries. A fold whose
+    other subjects lack a second activity is skipped."""
+    queries = canonical(R, M, left) if side == "canonical" else R
+    folds = subject_folds(subjects)
+    for s in np.unique(folds):
+        test = folds == s
+        train = ~test
+        if len(np.unique(y[train])) < 2:
+            continue
+        cases = assemble_cases(
+            R[train],
+            None if M is None else M[train],
+            None if left is None else left[train],
+            y[train],
+            side,
+            weighting,
+        )
+        yield test, cases, queries[test]
 
 
 def inner_loso_votes(
@@ -201,28 +257,39 @@ def inner_loso_votes(
     activity is left out (share NaN). With many subjects, leave-subjects-out over
     :func:`subject_folds`."""
     y = np.asarray(y).astype(str)
-    queries = canonical(R, M, left) if side == "canonical" else R
     share = np.full(len(y), np.nan)
     right = np.zeros(len(y), dtype=bool)
-    folds = subject_folds(subjects)
-    for s in np.unique(folds):
-        test = folds == s
-        train = ~test
-        if len(np.unique(y[train])) < 2:
-            continue
-        cases = assemble_cases(
-            R[train],
-            None if M is None else M[train],
-            None if left is None else left[train],
-            y[train],
-            side,
-            weighting,
-        )
-        classes, proba = knn_proba(cases, queries[test], k, weights)
+    for test, cases, queries in _inner_folds(R, M, left, y, subjects, side, weighting):
+        classes, proba = knn_proba(cases, queries, k, weights)
         win = decide(proba)
         share[test] = proba[np.arange(len(win)), win]
         right[test] = classes[win] == y[test]
     return share, right
+
+
+def inner_loso_neighbours(
+    R: np.ndarray,
+    M: np.ndarray | None,
+    left: np.ndarray | None,
+    y: np.ndarray,
+    subjects: np.ndarray,
+    side: str,
+    weighting: str,
+    k: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``k`` nearest cases of each training clip in a case base built, weights and all,
+    from the OTHER subjects' clips (as :func:`inner_loso_votes`): distances ``(n, k)``
+    (nearest first; ``inf`` where fewer, and for the clips of a skipped fold), their class
+    codes ``(n, k)`` into ``classes`` ``(C,)``, the sorted labels of ``y``."""
+    y = np.asarray(y).astype(str)
+    classes = np.unique(y)
+    dist = np.full((len(y), int(k)), np.inf)
+    codes = np.zeros((len(y), int(k)), dtype=np.int64)
+    for test, cases, queries in _inner_folds(R, M, left, y, subjects, side, weighting):
+        d, where = knn_neighbours(cases, queries, k)
+        found = np.searchsorted(classes, cases.labels.astype(str))
+        dist[test, : d.shape[1]], codes[test, : d.shape[1]] = d, found[where]
+    return dist, codes, classes
 
 
 def inner_loso_accuracy(
