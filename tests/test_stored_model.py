@@ -10,6 +10,7 @@ import pytest
 
 from casebase_store import open_store
 from cbr.estimator import CaseBaseClassifier
+from cbr.retrieve import retrieve
 from cbr.stored import load_classifier
 from features.datasets import load_dataset
 from posecbr.cli import main
@@ -87,5 +88,11 @@ def test_a_stored_classifier_keeps_its_k_and_vote(tmp_path: Path) -> None:
     for s in clf.solve(X):
         assert len(s.retrieval.indices) == 1
         assert s.solution.label == s.retrieval.labels[0] and s.solution.vote_share == 1.0
-        # the confidence is that share calibrated on the held-out training clips
-        assert s.solution.confidence == clf.confidence_(1.0)
+        # the confidence is the stored curve at the answer's soft vote over the 10 nearest
+        # cases (each weighing exp(-(d / d_1)^2 / T)), worked out here from the retrieval
+        cal = clf.confidence_
+        assert cal.neighbours == 10 and cal.temperature > 0
+        near = retrieve(clf.case_base_, s.problem, cal.neighbours)
+        w = np.exp(-((near.distances / max(near.distances[0], 1e-12)) ** 2) / cal.temperature)
+        soft = w[near.labels == s.solution.label].sum() / w.sum()
+        assert s.solution.confidence == pytest.approx(float(np.interp(soft, cal.x, cal.y)))
