@@ -15,8 +15,8 @@ Learned at fit time from the training clips only (so cross-validation stays hone
   (:mod:`cbr.weights`), used by the euclidean measure and cited by explanations;
 - how far from the cases a held-out clip usually lies and how far outside the cases' feature
   ranges (:mod:`cbr.novelty`), so a clip unlike every stored case is flagged, whatever the
-  configuration; and how often a held-out clip's
-  vote share was right (:mod:`cbr.calibration`), so the confidence is a probability.
+  configuration; and how often a held-out clip's answer was right at each score (its soft
+  vote, :mod:`cbr.calibration`), so the confidence is a probability.
 
 With vector problems under euclidean (clip summaries, QMPs), ``"auto"`` chooses the side
 handling, the weighting and (clip summaries) the phase means by leave-one-subject-out accuracy

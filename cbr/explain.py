@@ -878,7 +878,8 @@ def _verbose(
     n_label = sum(n["label"] == label for n in neighbours)
     out.append(
         f"Vote: {n_label} of the {len(neighbours)} most similar clips are {label} (vote share "
-        f"{share:.2f}; the confidence is that share calibrated on the training clips)."
+        f"{share:.2f}; the confidence is the nearest cases' soft vote calibrated on the training "
+        "clips)."
     )
     flag = "" if unlike_ratio is None else f"; flagged beyond {unlike_ratio:.2f}x"
     out.append(f"Nearest case at {solved.novelty:.2f}x the usual held-out distance{flag}.")

@@ -27,8 +27,8 @@ EXACT = 1e-12
 @dataclass(frozen=True)
 class Solution:
     """label, proba ``(n_classes,)`` the vote shares, ``vote_share`` the winner's share and
-    ``confidence`` in [0, 1]: the winner's share as voted, or, from a fitted classifier, that
-    share calibrated into the probability that the label is right (:mod:`cbr.calibration`)."""
+    ``confidence`` in [0, 1]: the winner's share as voted, or, from a fitted classifier, the
+    probability that the label is right (its soft vote calibrated, :mod:`cbr.calibration`)."""
 
     label: str
     confidence: float

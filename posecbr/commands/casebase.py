@@ -170,8 +170,14 @@ def _print_model(m: dict[str, Any]) -> None:
         )
     if m.get("confidence"):
         c = m["confidence"]
+        score = (
+            f"the soft vote of the {c['neighbours']} nearest cases (temperature "
+            f"{c['temperature']:.3g})"
+            if c.get("neighbours")
+            else "the vote share"
+        )
         print(
-            f"  confidence: the vote share calibrated on {c['n']} {c['basis']} training "
+            f"  confidence: {score} calibrated on {c['n']} {c['basis']} training "
             f"clips (their accuracy {c['accuracy']:.3f})"
         )
 
