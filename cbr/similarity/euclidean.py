@@ -94,6 +94,22 @@ def _insert(best_i: np.ndarray, best_d: np.ndarray, i: int, d: float) -> None:
     best_i[pos] = i
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _insert_any(best_i: np.ndarray, best_d: np.ndarray, i: int, d: float) -> None:
+    """Insert (i, d) into the k best sorted by distance, then index: rows may arrive in any
+    order and an equal distance still keeps the lower index."""
+    k = best_d.shape[0]
+    if d > best_d[k - 1] or (d == best_d[k - 1] and i >= best_i[k - 1]):
+        return
+    pos = k - 1
+    while pos > 0 and (d < best_d[pos - 1] or (d == best_d[pos - 1] and i < best_i[pos - 1])):
+        best_d[pos] = best_d[pos - 1]
+        best_i[pos] = best_i[pos - 1]
+        pos -= 1
+    best_d[pos] = d
+    best_i[pos] = i
+
+
 @numba.njit(cache=True, nogil=True, fastmath=True)
 def _all_distances(rows: np.ndarray, sq: np.ndarray, q: np.ndarray, q_sq: float) -> np.ndarray:
     """Distances from ``q`` ``(D,)`` float32 to every row of ``rows`` ``(n, D)`` float32."""
@@ -121,7 +137,7 @@ def _knn_scan(
     return best_i, best_d
 
 
-_BLOCK = 256  # rows per block of the PCA codes (stored dimension-major within a block)
+_BLOCK = 64  # rows per block of the PCA codes (stored dimension-major within a block)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -214,27 +230,92 @@ def _block_bounds(
     out: np.ndarray,
 ) -> None:
     """``out[t]`` ``(_BLOCK,)`` float32: the squared bound of row ``a + t`` (see
-    :func:`_pca_knn`) from the block's integer dot products ``dots``; ``query`` = (the
-    query codes' squared norm, ``e_q`` and ``r_q`` as float32 rounded up, ``step`` as
-    float32 rounded down). In float32, so the loop vectorises 16 rows wide: every term is
-    below ``~1.1 sqrt(scale)`` and each of the few operations errs by ``2^-24`` of its
-    result, so the computed bound exceeds the exact one by less than ``1e-6 scale``."""
+    :func:`_pca_knn`) from the block's integer dot products ``dots``, -1 for a row without
+    a bound (``e_x`` inf: a NaN or inf, or the padding).
+    ``query`` = (the query codes' squared norm, ``e_q`` and ``r_q`` as float32 rounded up,
+    ``step`` as float32 rounded down). In float32, so the loop vectorises 16 rows wide:
+    every term is below ``~1.1 sqrt(scale)`` and each of the few operations errs by
+    ``2^-24`` of its result, so the computed bound exceeds the exact one by less than
+    ``1e-6 scale``. ``s2 = sum(w (c_q - c_x)^2)`` is below ``2^31``, so its sum in int32
+    is exact although the terms wrap around (arithmetic modulo ``2^32``)."""
     qc_sq, e_q, r_q, step = query
     e32 = np.float32(e_q)
     r32 = np.float32(r_q)
     step32 = np.float32(step)
-    c64 = np.int64(qc_sq)
+    c32 = np.uint32(qc_sq)
     for t in range(_BLOCK):
-        s2 = np.int64(code_sq[a + t]) + c64 - 2 * np.int64(dots[t])  # exact in int64
+        s2 = np.int32(np.uint32(code_sq[a + t]) + c32 - np.uint32(2) * np.uint32(dots[t]))
         p = step32 * np.float32(math.sqrt(np.float32(s2))) - e32 - errs[a + t]
         p = p if p > np.float32(0.0) else np.float32(0.0)
         r = resid[a + t] - r32
-        out[t] = p * p + r * r
+        v = p * p + r * r
+        v = v if errs[a + t] < np.float32(np.inf) else np.float32(-1.0)
+        out[t] = v
+
+
+@numba.njit(cache=True, nogil=True)
+def _block_order(
+    boxes: tuple[np.ndarray, ...],
+    q: np.ndarray,
+    qc: np.ndarray,
+    e_q: float,
+    r_q: float,
+    step: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every block's squared bound ``(blocks,)`` float64 (-1: a block with a row without a
+    bound) and the blocks in increasing order of it.
+
+    ``boxes`` = (weights ``(m,)``, lo and hi ``(m, blocks)`` uint8: the box of the block's
+    codes, the block's largest ``e_x``, its smallest and largest ``r_x`` ``(blocks,)``): every
+    row ``x`` of block ``b`` has ``|p_hat_q - p_hat_x|^2 >= step^2 sum(w d^2)`` with ``d``
+    the distance of ``c_q`` to the box (an exact integer sum), so the row's bound of
+    :func:`_pca_knn` is at least ``max(step sqrt(sum(w d^2)) - e_q - max e_x, 0)^2 +
+    dist(r_q, [min r_x, max r_x])^2`` (float64: its rounding is ~1e-16 of the terms)."""
+    weights, box_lo, box_hi, box_err, box_rlo, box_rhi, centres, radii = boxes
+    m, blocks = box_lo.shape
+    centre_sq = np.empty(blocks, dtype=np.float32)
+    _centre_distances_sq(centres, q, centre_sq)
+    dims = centres.shape[1]
+    gamma = (dims + 2) * 2.0**-24 / (1.0 - (dims + 2) * 2.0**-24)
+    shrink = 1.0 - 2.0 * gamma  # the float32 sum of squares is at most (1 + gamma) times
+    g = np.zeros(blocks, dtype=np.int32)  # below 2^31 as every code sum (_PcaCodes)
+    for j in range(m):
+        w = np.int32(weights[j])
+        c = np.int32(qc[j] // weights[j])
+        for b in range(blocks):
+            d = max(np.int32(box_lo[j, b]) - c, c - np.int32(box_hi[j, b]), np.int32(0))
+            g[b] += np.int32(w * d * d)
+    bound = np.empty(blocks)
+    for b in range(blocks):
+        if not (box_err[b] < np.inf and centre_sq[b] < np.inf):
+            bound[b] = -1.0  # no bound: a row with NaN or inf, or a square that overflows
+            continue
+        p = max(step * math.sqrt(np.float64(g[b])) - e_q - box_err[b], 0.0)
+        r = max(box_rlo[b] - r_q, r_q - box_rhi[b], 0.0)
+        ball = max(math.sqrt(centre_sq[b] * shrink) - radii[b], 0.0)
+        bound[b] = max(p * p + r * r, ball * ball)
+    return bound, np.argsort(bound)
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _centre_distances_sq(centres: np.ndarray, q: np.ndarray, out: np.ndarray) -> None:
+    """``out[b]`` = ``|q - centres[b]|^2`` for the centres ``(blocks, D)`` float32 and the
+    query ``q`` ``(D,)`` float32, in float32 (vectorised, in any order): each difference,
+    square and sum errs by ``2^-24`` relative and every term is positive, so the result is
+    within ``gamma_(D+2)`` relative of the exact one (a smaller one where a term underflows,
+    inf where one overflows)."""
+    for b in range(centres.shape[0]):
+        s = np.float32(0.0)
+        for j in range(centres.shape[1]):
+            d = centres[b, j] - q[j]
+            s += d * d
+        out[b] = s
 
 
 @numba.njit(cache=True, nogil=True)
 def _pca_knn(
-    pca: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float],
+    pca: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, np.ndarray],
+    boxes: tuple[np.ndarray, ...],
     query_pca: tuple[np.ndarray, int, float, float],
     rows: np.ndarray,
     sq: np.ndarray,
@@ -245,17 +326,19 @@ def _pca_knn(
     scale: float,
     max_count: int,
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """Exact k nearest of ``q`` ``(D,)`` float32 with the bound of the PCA codes, in one
-    pass over them: (indices ``(k,)``, distances ``(k,)``, rows whose kernel distance was
-    computed), or a count of -1 once more than ``max_count`` were (the caller then runs a
-    pass that prunes better, or the plain pass).
+    """Exact k nearest of ``q`` ``(D,)`` float32 with the bound of the PCA codes: (indices
+    ``(k,)``, distances ``(k,)``, rows whose kernel distance was computed), or a count of -1
+    once more than ``max_count`` were (the caller then runs a pass that prunes better, or
+    the plain pass).
 
     ``pca`` = (codes ``(blocks, m, _BLOCK)`` uint8, code_sq int32, errs float32, resid
-    float32 ``(blocks _BLOCK,)``, step): each row's coordinates ``p_x = B'(x - mean)`` on the
-    orthonormal basis ``B`` ``(D, m)`` on the grid ``base + step * code``, ``e_x = |p_x -
-    p_hat|`` rounded up and the residual norm ``r_x = |x - mean - B p_x|`` (both inf for a
-    row with NaN or inf, which has no bound and always goes to the row kernel, as in the
-    plain pass, and for the padding of the last block, never visited); ``query_pca`` =
+    float32 ``(blocks _BLOCK,)``, step, order ``(blocks _BLOCK,)`` int64): the rows in the
+    order ``order`` (similar rows share a block, :func:`_cluster_order`), each row's
+    coordinates ``p_x = B'(x - mean)`` on the orthonormal basis ``B`` ``(D, m)`` on the grid
+    ``base + step * code``, ``e_x = |p_x - p_hat|`` rounded up and the residual norm ``r_x =
+    |x - mean - B p_x|`` (both inf for a row with NaN or inf, which has no bound and always
+    goes to the row kernel, as in the plain pass, and for the padding of the last block,
+    never visited); ``boxes``: each block's box (:func:`_block_order`); ``query_pca`` =
     (``w c_q`` ``(m,)`` int32, ``sum(w c_q^2)``, ``e_q``, ``r_q``) the same for the query
     (``w`` the dimensions' weights, :class:`_PcaCodes`). ``rounding``: what a row kernel's
     squared distance may lack of the true one; ``scale``: ``(top_norm + |q - mean|)^2``.
@@ -272,12 +355,16 @@ def _pca_knn(
     scale): all far inside the ``1e-5 scale`` the limit allows. A row is pruned when its
     bound exceeds ``limit = (d_k^2 + rounding)(1 + 1e-5) + 1e-5 scale`` with ``d_k`` the
     running k-th smallest kernel distance: its true squared distance then exceeds ``d_k^2 +
-    rounding``, so its kernel distance exceeds ``d_k``. Rows are visited in increasing index
-    order and a row within the limit gets its kernel distance at once (ties keep the lower
-    index, as in the plain pass); ``d_k`` only falls, so a row pruned early would be pruned
-    by the final ``d_k`` too.
+    rounding``, so its kernel distance exceeds ``d_k``; ``d_k`` only falls, so it exceeds
+    the final k-th distance too. A block is pruned, with all its rows, when its bound (at
+    most each row's, :func:`_block_order`) exceeds the limit. So whatever the order the rows
+    are visited in, no row pruned could be among the k nearest, and the k best kept by
+    distance then index (:func:`_insert_any`) are the plain pass's (ties keep the lower
+    index). The blocks are visited in increasing order of their bound: the first ones hold
+    the neighbours or rows near them, so ``d_k`` falls early, and the pass stops at the
+    first block whose bound exceeds the limit.
     """
-    codes, code_sq, errs, resid, step = pca
+    codes, code_sq, errs, resid, step, order = pca
     qc, qc_sq, e_q, r_q = query_pca
     lo = 1.0 - 4.0 * 2.0**-53
     n = len(rows)
@@ -286,22 +373,25 @@ def _pca_knn(
     dots = np.empty(_BLOCK, dtype=np.int32)
     lb = np.empty(_BLOCK, dtype=np.float32)
     query32 = (qc_sq, _up32(e_q), _up32(r_q), _down32(step * lo))
+    block_bound, visit = _block_order(boxes, q, qc, _up32(e_q), r_q, step * lo)
     limit = np.inf
     count = 0
-    for b in range(codes.shape[0]):
+    for b in visit:
+        if block_bound[b] > limit:
+            break  # every block left has a larger bound
         a = b * _BLOCK
         _block_dots(codes, b, qc, dots)
         _block_bounds(dots, code_sq, errs, resid, a, query32, lb)
         for t in range(min(_BLOCK, n - a)):
-            if not lb[t] <= limit and errs[a + t] < np.inf:
-                continue  # (a row with NaN or inf has no bound: the kernel decides)
-            i = a + t
+            if not lb[t] <= limit:
+                continue
+            i = order[a + t]
             count += 1
             if count > max_count:
                 return best_i, best_d, -1
             d = _row_distance(rows, sq, i, q, q_sq)
-            if d < best_d[k - 1]:
-                _insert(best_i, best_d, i, d)
+            if d <= best_d[k - 1]:
+                _insert_any(best_i, best_d, i, d)
                 if best_d[k - 1] < np.inf:
                     limit = (best_d[k - 1] ** 2 + rounding) * (1.0 + 1e-5) + 1e-5 * scale
     return best_i, best_d, count
@@ -383,12 +473,12 @@ class _EuclideanIndex(_PruningRecord):
 class _PcaCodes(_PruningRecord):
     """Every row's coordinates on an orthonormal basis (the leading PCA directions, or the
     identity: the whole row) as uint8 codes on one grid (``p_hat = base + steps * code``),
-    stored in blocks of ``_BLOCK`` rows, dimension-major within a block; with the exact
-    remainder: the residual norm outside the basis."""
+    stored in blocks of ``_BLOCK`` similar rows (``order``), dimension-major within a block,
+    with each block's box; with the exact remainder: the residual norm outside the basis."""
 
     basis: np.ndarray | None  # (D, m) float64 orthonormal columns; None: the identity
     mean: np.ndarray  # (D,) float64 (zeros for the identity)
-    codes: np.ndarray  # (blocks, m, _BLOCK) uint8
+    codes: np.ndarray  # (blocks, m, _BLOCK) uint8, the rows in the order ``order``
     code_sq: np.ndarray  # (blocks * _BLOCK,) int32 squared norms of the codes
     errs: np.ndarray  # (blocks * _BLOCK,) float32 |p_x - p_hat| rounded up; inf: NaN/padding
     resid: np.ndarray  # (blocks * _BLOCK,) float32 residual norms; inf: NaN/padding
@@ -397,6 +487,18 @@ class _PcaCodes(_PruningRecord):
     steps: np.ndarray  # (m,) float64 each dimension's step, step sqrt(weights)
     weights: np.ndarray  # (m,) int32 powers of 4 up to 64 (max(w) m 255^2 < 2^31)
     top_norm: float  # largest |row - mean| over rows without NaN or inf
+    order: np.ndarray  # (blocks * _BLOCK,) int64 the row stored at each place (n: padding)
+    # each block's box: lo, hi (m, blocks) uint8 codes; largest e_x, smallest and largest
+    # r_x (blocks,) float64 (e_x inf: the block holds a row without a bound)
+    # and its ball in the rows' space: centres (blocks, D) float64, radii (blocks,) float64
+    boxes: tuple[np.ndarray, ...]
+
+    def kernel_args(self) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+        """The codes and the boxes as :func:`_pca_knn` takes them."""
+        return (self.codes, self.code_sq, self.errs, self.resid, self.step, self.order), (
+            self.weights,
+            *self.boxes,
+        )
     # [running share of cases given their distance, queries seen] (_PruningRecord; used for
     # the whole rows' codes)
     pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
@@ -430,10 +532,16 @@ def _project(
     return c if basis is None else c @ basis, np.einsum("ij,ij->i", c, c), finite
 
 
-def _pca_codes(rows: np.ndarray, fitted: tuple[np.ndarray, np.ndarray] | None) -> _PcaCodes | None:
+def _pca_codes(
+    rows: np.ndarray,
+    fitted: tuple[np.ndarray, np.ndarray] | None,
+    order: np.ndarray | None = None,
+    balls: tuple[np.ndarray, np.ndarray] | None = None,
+) -> _PcaCodes | None:
     """The codes of ``rows`` ``(n, D)`` on the basis ``fitted`` = (mean, basis ``(D, m)``)
     or, for None, of the whole rows: two passes in chunks (the grid's range, then the
-    codes), so a memmap is read without a float64 copy of it; None without a finite range."""
+    codes), so a memmap is read without a float64 copy of it; None without a finite range.
+    Stored in the order ``order`` ``(n,)`` (None: :func:`_cluster_order` of the codes)."""
     n, dims = rows.shape
     mean, basis = (np.zeros(dims), None) if fitted is None else fitted
     m = dims if basis is None else basis.shape[1]
@@ -460,11 +568,10 @@ def _pca_codes(rows: np.ndarray, fitted: tuple[np.ndarray, np.ndarray] | None) -
     weights = (4.0 ** (levels - shrink)).astype(np.int32)
     step = widest / 255.0 / 2.0**levels
     steps = step * np.sqrt(weights.astype(np.float64))
-    blocks = -(-n // _BLOCK)
-    codes = np.zeros((blocks, m, _BLOCK), dtype=np.uint8)
-    code_sq = np.zeros(blocks * _BLOCK, dtype=np.int32)
-    errs = np.full(blocks * _BLOCK, np.inf, dtype=np.float32)
-    resid = np.full(blocks * _BLOCK, np.inf, dtype=np.float32)
+    flat = np.empty((n, m), dtype=np.uint8)
+    code_sq = np.empty(n, dtype=np.int32)
+    errs = np.empty(n, dtype=np.float32)
+    resid = np.empty(n, dtype=np.float32)
     for a in range(0, n, chunk):
         p, tot, finite = _project(rows[a : a + chunk], mean, basis)
         c, e = _quantize(p, lo, steps)
@@ -472,15 +579,135 @@ def _pca_codes(rows: np.ndarray, fitted: tuple[np.ndarray, np.ndarray] | None) -
         r = np.sqrt(np.maximum(tot - np.einsum("ij,ij->i", p, p), 0.0))
         r[~finite] = np.inf
         end = a + len(p)
-        full = np.zeros((-(-len(p) // _BLOCK) * _BLOCK, m), dtype=np.uint8)
-        full[: len(p)] = c
-        codes[a // _BLOCK : -(-end // _BLOCK)] = full.reshape(-1, _BLOCK, m).transpose(0, 2, 1)
+        flat[a:end] = c
         code_sq[a:end] = np.einsum("ij,ij,j->i", c.astype(np.int32), c.astype(np.int32), weights)
         errs[a:end] = np.nextafter(e.astype(np.float32), np.float32(np.inf))  # rounded up
         resid[a:end] = r
+    if order is None:
+        order = _cluster_order(flat, weights, rows)
     return _PcaCodes(
-        basis, mean, codes, code_sq, errs, resid, lo, step, steps, weights, math.sqrt(top_sq)
+        basis, mean, *_blocked(flat, code_sq, errs, resid, order), lo, step, steps, weights,
+        math.sqrt(top_sq), np.concatenate([order, np.full(-n % _BLOCK, n)]),
+        (*_boxes(flat, errs, resid, order), *(balls or _balls(rows, order))),
+    )  # fmt: skip
+
+
+def _cluster_order(codes: np.ndarray, weights: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """An order of the rows ``(n,)`` int64 in which each block of ``_BLOCK`` holds similar
+    codes ``(n, m)`` uint8: a k-d tree on them, each group split at a multiple of
+    ``_BLOCK`` near its median along its widest dimension (widths in grid units: ``w (hi -
+    lo)^2``), down to single blocks, so the blocks' boxes are small."""
+    n = len(codes)
+    order = np.arange(n)
+    todo = [(0, n)]
+    w = weights.astype(np.float64)
+    while todo:
+        a, b = todo.pop()
+        if b - a <= _BLOCK:
+            continue
+        half = max(_BLOCK, (b - a + _BLOCK) // 2 // _BLOCK * _BLOCK)
+        key = _split_key(rows, order[a:b]) if b - a <= _FINE else None
+        if key is None:
+            part = codes[order[a:b]]
+            spread = w * (part.max(axis=0).astype(np.float64) - part.min(axis=0)) ** 2
+            j = int(np.argmax(spread))
+            if spread[j] == 0.0:
+                continue  # every row alike
+            key = part[:, j]
+        order[a:b] = order[a:b][np.argpartition(key, half)]
+        todo += [(a, a + half), (a + half, b)]
+    return order
+
+
+_FINE = 8192  # groups of at most this many rows are split on the rows themselves
+
+
+def _split_key(rows: np.ndarray, which: np.ndarray) -> np.ndarray | None:
+    """For the rows ``rows[which]``, where each lies along the line between the two means
+    of a 2-means clustering of them (a few Lloyd steps from two far rows; float32, only the
+    order matters: whole clusters fall on one side), or None when they hold NaN or inf."""
+    x = np.asarray(rows[np.sort(which)], dtype=np.float32)
+    x = x[np.argsort(np.argsort(which))]  # back in the order of ``which``
+    if not np.isfinite(x).all():
+        return None
+    sq = np.einsum("ij,ij->i", x, x)
+    a = x[np.argmax(sq - 2.0 * (x @ x[0]))]
+    b = x[np.argmax(sq - 2.0 * (x @ a))]
+    key: np.ndarray = x @ (b - a)
+    for _ in range(4):
+        near_a = key < np.median(key)
+        if near_a.all() or not near_a.any():
+            break
+        key = x @ (x[~near_a].mean(axis=0) - x[near_a].mean(axis=0))
+    return key
+
+
+def _blocked(
+    flat: np.ndarray, code_sq: np.ndarray, errs: np.ndarray, resid: np.ndarray, order: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """The codes ``(n, m)`` uint8 in the order ``order`` in blocks of ``_BLOCK`` rows,
+    dimension-major within a block ``(blocks, m, _BLOCK)``, and the rows' code_sq, errs and
+    resid ``(n,)`` in the same order, padded (inf for the padding)."""
+    n, m = flat.shape
+    blocks = -(-n // _BLOCK)
+    codes = np.zeros((blocks, m, _BLOCK), dtype=np.uint8)
+    step = max(1, (1 << 24) // max(m, 1) // _BLOCK)  # blocks at a time, ~16 MB
+    for b in range(0, blocks, step):
+        part = flat[order[b * _BLOCK : (b + step) * _BLOCK]]
+        full = np.zeros((-(-len(part) // _BLOCK) * _BLOCK, m), dtype=np.uint8)
+        full[: len(part)] = part
+        codes[b : b + len(full) // _BLOCK] = full.reshape(-1, _BLOCK, m).transpose(0, 2, 1)
+    pad = blocks * _BLOCK - n
+    return (
+        codes,
+        np.concatenate([code_sq[order], np.zeros(pad, dtype=np.int32)]),
+        np.concatenate([errs[order], np.full(pad, np.inf, dtype=np.float32)]),
+        np.concatenate([resid[order], np.full(pad, np.inf, dtype=np.float32)]),
     )
+
+
+def _boxes(
+    flat: np.ndarray, errs: np.ndarray, resid: np.ndarray, order: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """Each block's box (:class:`_PcaCodes`): lo, hi ``(m, blocks)`` uint8 of its rows'
+    codes ``flat`` ``(n, m)`` in the order ``order``; its largest ``errs`` and smallest and
+    largest ``resid`` ``(blocks,)`` float64."""
+    n, m = flat.shape
+    blocks = -(-n // _BLOCK)
+    lo = np.empty((m, blocks), dtype=np.uint8)
+    hi = np.empty((m, blocks), dtype=np.uint8)
+    e = np.empty(blocks)
+    r_lo = np.empty(blocks)
+    r_hi = np.empty(blocks)
+    for b in range(blocks):
+        rows = order[b * _BLOCK : (b + 1) * _BLOCK]
+        part = flat[rows]
+        lo[:, b] = part.min(axis=0)
+        hi[:, b] = part.max(axis=0)
+        e[b] = errs[rows].max()
+        r_lo[b] = resid[rows].min()
+        r_hi[b] = resid[rows].max()
+    return lo, hi, e, r_lo, r_hi
+
+
+def _balls(rows: np.ndarray, order: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each block's ball in the rows' space: the mean ``(blocks, D)`` of its rows
+    ``rows[order[...]]`` rounded to float32 and the largest distance ``(blocks,)`` float64
+    of one of them from that point, raised by far more than its float64 rounding (``D u64``
+    relative), so every row of the block lies inside (inf for a block with NaN or inf)."""
+    n, dims = rows.shape
+    blocks = -(-n // _BLOCK)
+    centres = np.empty((blocks, dims), dtype=np.float32)
+    radii = np.empty(blocks)
+    for b in range(blocks):
+        part = np.asarray(rows[np.sort(order[b * _BLOCK : (b + 1) * _BLOCK])], dtype=np.float64)
+        with np.errstate(over="ignore", invalid="ignore"):
+            centres[b] = part.mean(axis=0)
+        diff = part - centres[b].astype(np.float64)
+        radii[b] = math.sqrt(float(np.einsum("ij,ij->i", diff, diff).max())) * (1.0 + 1e-12)
+    radii[~np.isfinite(radii)] = np.inf
+    centres[~np.isfinite(centres)] = 0.0
+    return centres, radii
 
 
 def _check_finite(sq: np.ndarray, what: str) -> None:
@@ -732,10 +959,18 @@ def _quantized_search(
 
 
 def _codes_search(
-    index: _EuclideanIndex, codes: _PcaCodes, q32: np.ndarray, q_sq: float, k: int
+    index: _EuclideanIndex,
+    codes: _PcaCodes,
+    q32: np.ndarray,
+    q_sq: float,
+    k: int,
+    max_count: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """:func:`_pca_knn` for ``q32`` ``(D,)`` with ``codes`` (the PCA codes or the whole
-    rows'), handing over once more than ``FALLBACK`` of the rows need their distance."""
+    rows'), handing over once more than ``max_count`` (default: ``FALLBACK`` of the rows)
+    need their distance."""
+    if max_count is None:
+        max_count = max(k, int(FALLBACK * len(index.rows)))
     if codes.basis is None:  # the whole rows: no projection, nothing outside the grid
         qp = q32.astype(np.float64)
         r_q, q_norm = 0.0, math.sqrt(q_sq)
@@ -743,9 +978,8 @@ def _codes_search(
         qp, r_q, q_norm = _project_query(q32, codes.mean, codes.basis)
     qc, qc_sq, e_q = _grid_codes(qp, codes.base, codes.steps, codes.weights)
     out: tuple[np.ndarray, np.ndarray, int] = _pca_knn(
-        (codes.codes, codes.code_sq, codes.errs, codes.resid, codes.step), (qc, qc_sq, e_q, r_q),
-        index.rows, index.sq_norms, q32, q_sq, k, _allowance(index, q_sq),
-        (codes.top_norm + q_norm) ** 2, max(k, int(FALLBACK * len(index.rows))),
+        *codes.kernel_args(), (qc, qc_sq, e_q, r_q), index.rows, index.sq_norms, q32, q_sq, k,
+        _allowance(index, q_sq), (codes.top_norm + q_norm) ** 2, max_count,
     )  # fmt: skip
     return out
 
@@ -762,9 +996,11 @@ def _row_norms_sq(rows: np.ndarray) -> np.ndarray:
 
 def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
     """The index with the PCA codes of rank ``m`` and the whole rows' codes (either left out
-    when the rows have no finite range)."""
+    when the rows have no finite range), both in the blocks of similar rows the PCA codes
+    make."""
     pca = _pca_codes(rows, _pca_basis(rows, m))
-    codes = _pca_codes(rows, None) if rows.shape[1] * 255**2 < 2**31 else None
+    order, balls = (None, None) if pca is None else (pca.order[: len(rows)], pca.boxes[-2:])
+    codes = _pca_codes(rows, None, order, balls) if rows.shape[1] * 255**2 < 2**31 else None
     return _EuclideanIndex(rows, sq, np.sqrt(sq), pca, _finite_max_norm(sq), codes)
 
 
