@@ -208,8 +208,8 @@ def _quantized_answer(index: object, query: np.ndarray, k: int) -> tuple[np.ndar
     stopped pruning), on the float32 query the measure compares."""
     from cbr.similarity.euclidean import _quantized_search
 
-    q32 = np.asarray(query, dtype=np.float32)
-    return _quantized_search(index, q32, float(np.dot(q32.astype(np.float64), q32)), k)  # type: ignore[arg-type]
+    q32, q_sq = Euclidean()._query(query)
+    return _quantized_search(index, q32, q_sq, k)  # type: ignore[arg-type]
 
 
 def _adversarial(kind: str, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -280,16 +280,8 @@ def _pca_answer(index: object, query: np.ndarray, k: int) -> tuple[np.ndarray, n
     over to another pass (every row may get its distance), so its bound decides alone."""
     import cbr.similarity.euclidean as euclidean
 
-    pca = index.pca  # type: ignore[attr-defined]
-    q32 = np.asarray(query, dtype=np.float32)
-    q_sq = float(np.dot(q32.astype(np.float64), q32))
-    qp, r_q, q_norm = euclidean._project_query(q32, pca.mean, pca.basis)
-    qc, qc_sq, e_q = euclidean._grid_codes(qp, pca.base, pca.steps, pca.weights)
-    idx, dist, count = euclidean._pca_knn(
-        (pca.codes, pca.code_sq, pca.errs, pca.resid, pca.step), (qc, qc_sq, e_q, r_q),
-        index.rows, index.sq_norms, q32, q_sq, k,  # type: ignore[attr-defined]
-        euclidean._allowance(index, q_sq), (pca.top_norm + q_norm) ** 2, len(index.rows),  # type: ignore[arg-type]
-    )  # fmt: skip
+    q32, q_sq = Euclidean()._query(query)
+    idx, dist, count = euclidean._codes_search(index, index.pca, q32, q_sq, k, len(index.rows))  # type: ignore[arg-type, attr-defined]
     assert count >= k
     return idx, dist
 
@@ -364,8 +356,20 @@ def test_euclidean_pca_codes_bound_never_exceeds_the_distance() -> None:
             dots, pca.code_sq, pca.errs, pca.resid, b * euclidean._BLOCK, query32, lb
         )
         bounds.append(lb.astype(np.float64))
-    bound = np.concatenate(bounds)[: len(cases)]
+    row = pca.order[: len(cases)]  # the case stored at each place of the codes
+    bound = np.empty(len(cases))
+    bound[row] = np.concatenate(bounds)[: len(cases)]
     exact = ((cases.astype(np.longdouble) - query.astype(np.longdouble)) ** 2).sum(axis=1)
     scale = (pca.top_norm + q_norm) ** 2
     assert np.all(bound <= exact.astype(np.float64) + 1e-6 * scale)  # the docstring's claim
     assert np.median(bound / exact.astype(np.float64)) > 0.5  # and a bound that prunes
+    # each block's bound (its box of codes and its ball) is under every one of its cases'
+    block_bound, visit = euclidean._block_order(
+        pca.kernel_args[2], query, qc, e_q, r_q, pca.step * (1 - 1e-15)
+    )
+    nearest_in_block = np.minimum.reduceat(
+        exact[row].astype(np.float64), np.arange(0, len(row), euclidean._BLOCK)
+    )
+    assert np.all(block_bound <= nearest_in_block + 1e-6 * scale)
+    assert np.all(np.diff(block_bound[visit]) >= 0)  # blocks visited nearest first
+    assert np.median(block_bound / nearest_in_block) > 0.3  # and bounds that prune

@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numba
@@ -493,12 +494,16 @@ class _PcaCodes(_PruningRecord):
     # and its ball in the rows' space: centres (blocks, D) float64, radii (blocks,) float64
     boxes: tuple[np.ndarray, ...]
 
-    def kernel_args(self) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
-        """The codes and the boxes as :func:`_pca_knn` takes them."""
-        return (self.codes, self.code_sq, self.errs, self.resid, self.step, self.order), (
-            self.weights,
-            *self.boxes,
+    @cached_property
+    def kernel_args(self) -> tuple[tuple[Any, ...], tuple[Any, ...], tuple[Any, ...]]:
+        """The grid, the codes and the boxes as :func:`_codes_query` takes them."""
+        basis = np.zeros((len(self.mean), 0)) if self.basis is None else self.basis
+        return (
+            (self.mean, basis, self.base, self.steps, self.weights, self.top_norm),
+            (self.codes, self.code_sq, self.errs, self.resid, self.step, self.order),
+            (self.weights, *self.boxes),
         )
+
     # [running share of cases given their distance, queries seen] (_PruningRecord; used for
     # the whole rows' codes)
     pruning: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0]))
@@ -770,10 +775,10 @@ class Euclidean(SimilarityMeasure):
         return _pruning_index(rows, sq, m)
 
     def _query(self, query_rep: np.ndarray) -> tuple[np.ndarray, float]:
-        q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
-        q32 = q.astype(np.float32)
-        # |q|^2 of the float32 query the kernel multiplies with, in float64
-        q_sq = float(np.dot(q32.astype(np.float64), q32.astype(np.float64)))
+        q = np.asarray(query_rep)
+        if q.dtype != np.float32 and q.dtype != np.float64:
+            q = q.astype(np.float64)
+        q32, q_sq = _query32(q.reshape(-1))
         if not math.isfinite(q_sq):
             raise InputError("euclidean: the query holds NaN or inf (or overflows float32)")
         return q32, q_sq
@@ -895,14 +900,64 @@ def _plain_search(
 
 
 def _allowance(index: _EuclideanIndex, q_sq: float) -> float:
+    """:func:`_allowance_of` the index's rows for a query of squared norm ``q_sq``."""
+    return float(_allowance_of(index.rows.shape[1], index.max_norm, q_sq))
+
+
+@numba.njit(cache=True, nogil=True)
+def _allowance_of(dims: int, max_norm: float, q_sq: float) -> float:
     """How far a row kernel's squared distance may be from the true one: twice the float32 dot
     product's error (Higham: ``gamma_D |c| |q|``, plus ``D 2^-149`` per side for products that
     underflow), plus the float64 rounding of ``|c|^2 - 2 c.q + |q|^2``."""
-    dims = index.rows.shape[1]
-    gamma = dims * _U32 / (1.0 - dims * _U32)
+    u = 2.0**-24
+    gamma = dims * u / (1.0 - dims * u)
     q_norm = math.sqrt(q_sq)
-    dot = gamma * index.max_norm * q_norm + 2.0 * dims * 2.0**-149
-    return float(2.02 * dot + 1e-15 * (index.max_norm + q_norm) ** 2)
+    dot = gamma * max_norm * q_norm + 2.0 * dims * 2.0**-149
+    return 2.02 * dot + 1e-15 * (max_norm + q_norm) ** 2
+
+
+@numba.njit(cache=True, nogil=True)
+def _query32(q: np.ndarray) -> tuple[np.ndarray, float]:
+    """The query ``q`` ``(D,)`` (float64 or float32) as the float32 vector ``(D,)`` the row
+    kernel multiplies with, and its squared norm summed in float64 in order (the one value
+    of ``|q|^2`` every path uses)."""
+    q32 = np.empty(q.shape[0], dtype=np.float32)
+    q_sq = 0.0
+    for j in range(q.shape[0]):
+        v = np.float32(q[j])
+        q32[j] = v
+        q_sq += np.float64(v) * np.float64(v)
+    return q32, q_sq
+
+
+@numba.njit(cache=True, nogil=True)
+def _codes_query(
+    grid: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float],
+    codes: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, np.ndarray],
+    boxes: tuple[np.ndarray, ...],
+    rows: np.ndarray,
+    sq: np.ndarray,
+    q32: np.ndarray,
+    q_sq: float,
+    k: int,
+    max_norm: float,
+    max_count: int,
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """One query of :func:`_pca_knn`, its codes computed here: ``grid`` = (mean ``(D,)``,
+    basis ``(D, m)`` (``(D, 0)``: the identity, the whole rows' codes), base, steps
+    ``(m,)``, weights ``(m,)``, top_norm) of :class:`_PcaCodes`."""
+    mean, basis, base, steps, weights, top_norm = grid
+    if basis.shape[1] == 0:  # the whole rows: no projection, nothing outside the grid
+        qp = q32.astype(np.float64)
+        r_q, q_norm = 0.0, math.sqrt(q_sq)
+    else:
+        qp, r_q, q_norm = _project_query(q32, mean, basis)
+    qc, qc_sq, e_q = _grid_codes(qp, base, steps, weights)
+    rounding = _allowance_of(rows.shape[1], max_norm, q_sq)
+    return _pca_knn(
+        codes, boxes, (qc, qc_sq, e_q, r_q), rows, sq, q32, q_sq, k, rounding,
+        (top_norm + q_norm) ** 2, max_count,
+    )  # fmt: skip
 
 
 def _finite_max_norm(sq: np.ndarray) -> float:
@@ -971,16 +1026,10 @@ def _codes_search(
     need their distance."""
     if max_count is None:
         max_count = max(k, int(FALLBACK * len(index.rows)))
-    if codes.basis is None:  # the whole rows: no projection, nothing outside the grid
-        qp = q32.astype(np.float64)
-        r_q, q_norm = 0.0, math.sqrt(q_sq)
-    else:
-        qp, r_q, q_norm = _project_query(q32, codes.mean, codes.basis)
-    qc, qc_sq, e_q = _grid_codes(qp, codes.base, codes.steps, codes.weights)
-    out: tuple[np.ndarray, np.ndarray, int] = _pca_knn(
-        *codes.kernel_args(), (qc, qc_sq, e_q, r_q), index.rows, index.sq_norms, q32, q_sq, k,
-        _allowance(index, q_sq), (codes.top_norm + q_norm) ** 2, max_count,
-    )  # fmt: skip
+    grid, kernel, boxes = codes.kernel_args
+    out: tuple[np.ndarray, np.ndarray, int] = _codes_query(
+        grid, kernel, boxes, index.rows, index.sq_norms, q32, q_sq, k, index.max_norm, max_count
+    )
     return out
 
 
