@@ -374,7 +374,10 @@ def _pca_knn(
     dots = np.empty(_BLOCK, dtype=np.int32)
     lb = np.empty(_BLOCK, dtype=np.float32)
     query32 = (qc_sq, _up32(e_q), _up32(r_q), _down32(step * lo))
-    block_bound, visit = _block_order(boxes, q, qc, _up32(e_q), r_q, step * lo)
+    if boxes[-1].shape[0] == 0:  # blocks in the rows' own order: no box to order them by
+        block_bound, visit = np.full(codes.shape[0], -1.0), np.arange(codes.shape[0])
+    else:
+        block_bound, visit = _block_order(boxes, q, qc, _up32(e_q), r_q, step * lo)
     limit = np.inf
     count = 0
     for b in visit:
@@ -590,18 +593,61 @@ def _pca_codes(
         resid[a:end] = r
     if order is None:
         order = _cluster_order(flat, weights, rows)
+        balls = None if order is None else _balls(rows, order)
+    if order is None or balls is None:  # the rows' own order, without boxes
+        order, boxes = np.arange(n), _no_boxes(m, dims)
+    else:
+        boxes = (*_boxes(flat, errs, resid, order), *balls)
     return _PcaCodes(
         basis, mean, *_blocked(flat, code_sq, errs, resid, order), lo, step, steps, weights,
-        math.sqrt(top_sq), np.concatenate([order, np.full(-n % _BLOCK, n)]),
-        (*_boxes(flat, errs, resid, order), *(balls or _balls(rows, order))),
+        math.sqrt(top_sq), np.concatenate([order, np.full(-n % _BLOCK, n)]), boxes,
     )  # fmt: skip
 
 
-def _cluster_order(codes: np.ndarray, weights: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """An order of the rows ``(n,)`` int64 in which each block of ``_BLOCK`` holds similar
-    codes ``(n, m)`` uint8: a k-d tree on them, each group split at a multiple of
-    ``_BLOCK`` near its median along its widest dimension (widths in grid units: ``w (hi -
-    lo)^2``), down to single blocks, so the blocks' boxes are small."""
+def _no_boxes(m: int, dims: int) -> tuple[np.ndarray, ...]:
+    """The boxes of :class:`_PcaCodes` for codes in the rows' own order: none."""
+    return (
+        np.zeros((m, 0), dtype=np.uint8), np.zeros((m, 0), dtype=np.uint8), np.zeros(0),
+        np.zeros(0), np.zeros(0), np.zeros((0, dims), dtype=np.float32), np.zeros(0),
+    )  # fmt: skip
+
+
+def _cluster_order(codes: np.ndarray, weights: np.ndarray, rows: np.ndarray) -> np.ndarray | None:
+    """:func:`_tree_order` of the rows when it makes blocks much tighter than the rows'
+    spread (tried first on a sample of ``_SAMPLE`` rows: the blocks' median radius under
+    ``_TIGHT`` of the rows' median distance from their mean); None when it does not
+    (unstructured data: every block spans the whole cloud, its bounds prune nothing, and
+    the rows read in their own order stream from memory)."""
+    n = len(codes)
+    pick = (
+        np.arange(n)
+        if n <= _SAMPLE
+        else np.sort(np.random.default_rng(1).choice(n, _SAMPLE, replace=False))
+    )
+    sample = np.asarray(rows[pick], dtype=np.float64)
+    if not np.isfinite(sample).all():
+        return None
+    order = _tree_order(codes[pick], weights, sample)
+    _, radii = _balls(sample, order)
+    spread = np.sqrt(
+        np.einsum("ij,ij->i", sample - sample.mean(axis=0), sample - sample.mean(axis=0))
+    )
+    if not np.median(radii) < _TIGHT * np.median(spread):
+        return None
+    return order if n <= _SAMPLE else _tree_order(codes, weights, rows)
+
+
+_SAMPLE = 16384  # rows of the sample that decides whether similar rows share blocks
+_TIGHT = 0.9  # blocks' median radius / rows' median spread under which they do
+
+
+def _tree_order(codes: np.ndarray, weights: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """An order of the rows ``rows`` ``(n, D)`` in which each block of ``_BLOCK`` holds
+    similar rows, so the blocks' boxes and balls are small: a tree, each group split at a
+    multiple of ``_BLOCK`` near its median, down to single blocks; a group of more than
+    ``_FINE`` rows along the widest dimension of its codes ``(n, m)`` uint8 (widths in grid
+    units: ``w (hi - lo)^2``), a smaller one between the means of a 2-means clustering of
+    its rows (:func:`_split_key`)."""
     n = len(codes)
     order = np.arange(n)
     todo = [(0, n)]
@@ -639,7 +685,7 @@ def _split_key(rows: np.ndarray, which: np.ndarray) -> np.ndarray | None:
     a = x[np.argmax(sq - 2.0 * (x @ x[0]))]
     b = x[np.argmax(sq - 2.0 * (x @ a))]
     key: np.ndarray = x @ (b - a)
-    for _ in range(4):
+    for _ in range(2):
         near_a = key < np.median(key)
         if near_a.all() or not near_a.any():
             break
@@ -1049,6 +1095,8 @@ def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
     make."""
     pca = _pca_codes(rows, _pca_basis(rows, m))
     order, balls = (None, None) if pca is None else (pca.order[: len(rows)], pca.boxes[-2:])
+    if balls is not None and len(balls[1]) == 0:
+        order, balls = None, None  # the rows' own order: no boxes for the whole rows either
     codes = _pca_codes(rows, None, order, balls) if rows.shape[1] * 255**2 < 2**31 else None
     return _EuclideanIndex(rows, sq, np.sqrt(sq), pca, _finite_max_norm(sq), codes)
 
