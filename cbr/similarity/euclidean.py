@@ -549,7 +549,8 @@ def _pca_codes(
     """The codes of ``rows`` ``(n, D)`` on the basis ``fitted`` = (mean, basis ``(D, m)``)
     or, for None, of the whole rows: two passes in chunks (the grid's range, then the
     codes), so a memmap is read without a float64 copy of it; None without a finite range.
-    Stored in the order ``order`` ``(n,)`` (None: :func:`_cluster_order` of the codes)."""
+    Stored in the order ``order`` ``(n,)`` with the blocks' ``balls`` (:func:`_balls`;
+    both None: :func:`_cluster_order`'s, or the rows' own order without boxes)."""
     n, dims = rows.shape
     mean, basis = (np.zeros(dims), None) if fitted is None else fitted
     m = dims if basis is None else basis.shape[1]
@@ -591,8 +592,8 @@ def _pca_codes(
         code_sq[a:end] = np.einsum("ij,ij,j->i", c.astype(np.int32), c.astype(np.int32), weights)
         errs[a:end] = np.nextafter(e.astype(np.float32), np.float32(np.inf))  # rounded up
         resid[a:end] = r
-    if order is None:
-        order = _cluster_order(flat, weights, rows)
+    if order is None and balls is None:
+        order = _cluster_order(flat, steps, rows)
         balls = None if order is None else _balls(rows, order)
     if order is None or balls is None:  # the rows' own order, without boxes
         order, boxes = np.arange(n), _no_boxes(m, dims)
@@ -612,78 +613,73 @@ def _no_boxes(m: int, dims: int) -> tuple[np.ndarray, ...]:
     )  # fmt: skip
 
 
-def _cluster_order(codes: np.ndarray, weights: np.ndarray, rows: np.ndarray) -> np.ndarray | None:
-    """:func:`_tree_order` of the rows when it makes blocks much tighter than the rows'
-    spread (tried first on a sample of ``_SAMPLE`` rows: the blocks' median radius under
-    ``_TIGHT`` of the rows' median distance from their mean); None when it does not
-    (unstructured data: every block spans the whole cloud, its bounds prune nothing, and
-    the rows read in their own order stream from memory)."""
+def _cluster_order(codes: np.ndarray, steps: np.ndarray, rows: np.ndarray) -> np.ndarray | None:
+    """:func:`_tree_order` of the rows ``(n, D)`` by their codes ``(n, m)`` uint8 (grid
+    steps ``(m,)``) when it makes blocks much tighter than the rows' spread (tried on a
+    sample of ``_SAMPLE`` rows first: the blocks' median radius under ``_TIGHT`` of the
+    rows' median distance from their mean); None when it does not (unstructured data: every
+    block spans the whole cloud, its bounds prune nothing, and rows read in their own order
+    stream from memory)."""
     n = len(codes)
-    pick = (
-        np.arange(n)
-        if n <= _SAMPLE
-        else np.sort(np.random.default_rng(1).choice(n, _SAMPLE, replace=False))
-    )
-    sample = np.asarray(rows[pick], dtype=np.float64)
-    if not np.isfinite(sample).all():
+    pick = np.arange(n)
+    if n > _SAMPLE:
+        pick = np.sort(np.random.default_rng(1).choice(n, _SAMPLE, replace=False))
+    order = pick[_tree_order(codes[pick], steps)]
+    _, radii = _balls(rows, order)
+    if not np.median(radii) < _TIGHT * _median_spread(rows, pick[:: max(1, len(pick) // 2048)]):
         return None
-    order = _tree_order(codes[pick], weights, sample)
-    _, radii = _balls(sample, order)
-    spread = np.sqrt(
-        np.einsum("ij,ij->i", sample - sample.mean(axis=0), sample - sample.mean(axis=0))
-    )
-    if not np.median(radii) < _TIGHT * np.median(spread):
-        return None
-    return order if n <= _SAMPLE else _tree_order(codes, weights, rows)
+    return order if n <= _SAMPLE else _tree_order(codes, steps)
 
 
 _SAMPLE = 16384  # rows of the sample that decides whether similar rows share blocks
 _TIGHT = 0.9  # blocks' median radius / rows' median spread under which they do
 
 
-def _tree_order(codes: np.ndarray, weights: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """An order of the rows ``rows`` ``(n, D)`` in which each block of ``_BLOCK`` holds
-    similar rows, so the blocks' boxes and balls are small: a tree, each group split at a
-    multiple of ``_BLOCK`` near its median, down to single blocks; a group of more than
-    ``_FINE`` rows along the widest dimension of its codes ``(n, m)`` uint8 (widths in grid
-    units: ``w (hi - lo)^2``), a smaller one between the means of a 2-means clustering of
-    its rows (:func:`_split_key`)."""
+def _median_spread(rows: np.ndarray, pick: np.ndarray) -> float:
+    """The median distance of the rows ``rows[pick]`` from their mean (float64, in chunks)."""
+    total = np.zeros(rows.shape[1])
+    for a in range(0, len(pick), 1024):
+        total += np.asarray(rows[pick[a : a + 1024]], dtype=np.float64).sum(axis=0)
+    mean = total / len(pick)
+    dist = np.empty(len(pick))
+    for a in range(0, len(pick), 1024):
+        diff = np.asarray(rows[pick[a : a + 1024]], dtype=np.float64) - mean
+        dist[a : a + 1024] = np.sqrt(np.einsum("ij,ij->i", diff, diff))
+    return float(np.median(dist))
+
+
+def _tree_order(codes: np.ndarray, steps: np.ndarray) -> np.ndarray:
+    """An order of the rows ``(n,)`` in which each block of ``_BLOCK`` holds similar codes
+    ``(n, m)`` uint8 (grid steps ``(m,)``), so the blocks' boxes and balls are small: a
+    tree, each group split at a multiple of ``_BLOCK`` near its median between the means of
+    a 2-means clustering of its points on the grid (:func:`_split_key`), down to single
+    blocks."""
     n = len(codes)
     order = np.arange(n)
     todo = [(0, n)]
-    w = weights.astype(np.float64)
+    scale = steps.astype(np.float32)
     while todo:
         a, b = todo.pop()
         if b - a <= _BLOCK:
             continue
-        half = max(_BLOCK, (b - a + _BLOCK) // 2 // _BLOCK * _BLOCK)
-        key = _split_key(rows, order[a:b]) if b - a <= _FINE else None
+        key = _split_key(codes[order[a:b]].astype(np.float32) * scale)
         if key is None:
-            part = codes[order[a:b]]
-            spread = w * (part.max(axis=0).astype(np.float64) - part.min(axis=0)) ** 2
-            j = int(np.argmax(spread))
-            if spread[j] == 0.0:
-                continue  # every row alike
-            key = part[:, j]
+            continue  # every point alike
+        half = max(_BLOCK, (b - a + _BLOCK) // 2 // _BLOCK * _BLOCK)
         order[a:b] = order[a:b][np.argpartition(key, half)]
         todo += [(a, a + half), (a + half, b)]
     return order
 
 
-_FINE = 8192  # groups of at most this many rows are split on the rows themselves
-
-
-def _split_key(rows: np.ndarray, which: np.ndarray) -> np.ndarray | None:
-    """For the rows ``rows[which]``, where each lies along the line between the two means
-    of a 2-means clustering of them (a few Lloyd steps from two far rows; float32, only the
-    order matters: whole clusters fall on one side), or None when they hold NaN or inf."""
-    x = np.asarray(rows[np.sort(which)], dtype=np.float32)
-    x = x[np.argsort(np.argsort(which))]  # back in the order of ``which``
-    if not np.isfinite(x).all():
-        return None
+def _split_key(x: np.ndarray) -> np.ndarray | None:
+    """Where each point of ``x`` ``(g, m)`` float32 lies along the line between the two
+    means of a 2-means clustering of them (two Lloyd steps from two far points, split at
+    the median: whole clusters fall on one side), or None when the points are all alike."""
     sq = np.einsum("ij,ij->i", x, x)
     a = x[np.argmax(sq - 2.0 * (x @ x[0]))]
     b = x[np.argmax(sq - 2.0 * (x @ a))]
+    if np.array_equal(a, b):
+        return None
     key: np.ndarray = x @ (b - a)
     for _ in range(2):
         near_a = key < np.median(key)
@@ -746,8 +742,8 @@ def _balls(rows: np.ndarray, order: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     ``rows[order[...]]`` rounded to float32 and the largest distance ``(blocks,)`` float64
     of one of them from that point, raised by far more than its float64 rounding (``D u64``
     relative), so every row of the block lies inside (inf for a block with NaN or inf)."""
-    n, dims = rows.shape
-    blocks = -(-n // _BLOCK)
+    dims = rows.shape[1]
+    blocks = -(-len(order) // _BLOCK)
     centres = np.empty((blocks, dims), dtype=np.float32)
     radii = np.empty(blocks)
     for b in range(blocks):
@@ -1096,7 +1092,7 @@ def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
     pca = _pca_codes(rows, _pca_basis(rows, m))
     order, balls = (None, None) if pca is None else (pca.order[: len(rows)], pca.boxes[-2:])
     if balls is not None and len(balls[1]) == 0:
-        order, balls = None, None  # the rows' own order: no boxes for the whole rows either
+        balls = None  # the rows' own order: no boxes for the whole rows either
     codes = _pca_codes(rows, None, order, balls) if rows.shape[1] * 255**2 < 2**31 else None
     return _EuclideanIndex(rows, sq, np.sqrt(sq), pca, _finite_max_norm(sq), codes)
 
