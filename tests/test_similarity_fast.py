@@ -373,3 +373,33 @@ def test_euclidean_pca_codes_bound_never_exceeds_the_distance() -> None:
     assert np.all(block_bound <= nearest_in_block + 1e-6 * scale)
     assert np.all(np.diff(block_bound[visit]) >= 0)  # blocks visited nearest first
     assert np.median(block_bound / nearest_in_block) > 0.3  # and bounds that prune
+
+
+def test_euclidean_blocks_hold_similar_cases_only_where_that_makes_them_tight() -> None:
+    # 40 tight clusters of 100 cases in shuffled order: the stored blocks (64 cases) each
+    # hold one or two clusters and the search visits them nearest first; uniform cases: no
+    # block could be tight, the cases keep their own order and the blocks have no boxes;
+    # both answer exactly what the brute force does
+    rng = np.random.default_rng(11)
+    labels = rng.permutation(np.repeat(np.arange(40), 100))
+    centres = rng.random((40, 60)) * 3.0
+    clustered = (centres[labels] + rng.normal(scale=0.05, size=(4000, 60))).astype(np.float32)
+    uniform = rng.random((4000, 60), dtype=np.float32)
+    m = Euclidean(prune_min_cases=1000)
+    for cases, tight in ((clustered, True), (uniform, False)):
+        index = m.build_index(cases)
+        stored = index.pca.order[: len(cases)]
+        assert sorted(stored.tolist()) == list(range(len(cases)))  # every case once
+        radii = index.pca.boxes[-1]
+        if tight:
+            per_block = [len(set(labels[stored[a : a + 64]])) for a in range(0, 4000, 64)]
+            assert np.median(per_block) <= 2 and len(radii) == len(per_block)
+        else:
+            assert np.array_equal(stored, np.arange(len(cases))) and len(radii) == 0
+        plain = Euclidean(prune_min_cases=10**9).build_index(cases)
+        for q in np.vstack([cases[[3, 2500]] + 0.01, rng.random((3, 60)) * 3.0]):
+            qr = m.represent_query(q)
+            want_i, want_d = smallest_k(m.distances(qr, plain), 5)
+            got_i, got_d = m.nearest(qr, index, 5)
+            np.testing.assert_array_equal(got_i, want_i)
+            np.testing.assert_array_equal(got_d, want_d)

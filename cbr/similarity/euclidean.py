@@ -21,13 +21,26 @@ which rows they hand it, never in how a row's distance is computed.
   dimension shrinks by a power of two (up to 8) where the dimension's range is narrower,
   so ``|p_hat_q - p_hat_x|^2`` is a fixed step squared times an exact integer sum, and they
   are stored dimension-major in blocks of ``_BLOCK`` rows so the integer kernel vectorises
-  across rows: ``m`` bytes a case (a sixth of a float row's bytes at most). One pass over
-  them; a case whose bound is below the running k-th distance gets its exact distance at
-  once. The search measures its own pruning power: when more than ``FALLBACK`` of the
+  across rows: ``m`` bytes a case (a sixth of a float row's bytes at most). A case whose
+  bound is below the running k-th distance gets its exact distance at once (kept by
+  distance, then index, so the order cases are visited in never changes the answer).
+  **Blocks of similar cases**: where the data has structure, the cases are stored in an
+  order in which each block of ``_BLOCK`` holds similar ones (a tree of balanced 2-means
+  splits on the codes, :func:`_tree_order`), and each block keeps its box of codes and a
+  ball in the rows' space (centre and radius); per query one bound per block
+  (:func:`_block_order`: the box's grid distance and the ball's ``|q - c| - R``, both at
+  most every one of its cases'), the blocks are visited nearest first and the pass stops
+  at the first block whose bound exceeds the limit: the first blocks hold the neighbours,
+  the k-th distance falls at once and most blocks are never read. Whether the blocks come
+  out tight (median radius under ``_TIGHT`` of the cases' spread) is tried on a sample at
+  build time; where they do not (unstructured data), the cases keep their own order, the
+  exact distances stream from memory, and there are no boxes. The search measures its own
+  pruning power: when more than ``FALLBACK`` of the
   cases pass the bound (unstructured data, where no low-rank bound prunes), the query is
   the quantized pass below, and later queries skip the PCA bound (re-probing every
   ``PROBE_EVERY``).
-- **Quantized pass** (VA-file style): the same codes, kernel and pass on the identity basis:
+- **Quantized pass** (VA-file style): the same codes, kernel, blocks and pass on the
+  identity basis:
   every whole row as uint8 codes (``x_hat = base + steps * code``, steps by range as above)
   with its exact grid error ``e_x``, so ``|q - x| >= |q_hat - x_hat| - e_q - e_x`` over a
   quarter of the float rows' bytes. On unstructured data the k-th neighbour lies far below
@@ -380,7 +393,8 @@ def _pca_knn(
         block_bound, visit = _block_order(boxes, q, qc, _up32(e_q), r_q, step * lo)
     limit = np.inf
     count = 0
-    for b in visit:
+    for v in range(len(visit)):
+        b = int(visit[v])
         if block_bound[b] > limit:
             break  # every block left has a larger bound
         a = b * _BLOCK
@@ -599,9 +613,10 @@ def _pca_codes(
         order, boxes = np.arange(n), _no_boxes(m, dims)
     else:
         boxes = (*_boxes(flat, errs, resid, order), *balls)
+    codes, code_sq, errs, resid = _blocked(flat, code_sq, errs, resid, order)
     return _PcaCodes(
-        basis, mean, *_blocked(flat, code_sq, errs, resid, order), lo, step, steps, weights,
-        math.sqrt(top_sq), np.concatenate([order, np.full(-n % _BLOCK, n)]), boxes,
+        basis, mean, codes, code_sq, errs, resid, lo, step, steps, weights, math.sqrt(top_sq),
+        np.concatenate([order, np.full(-n % _BLOCK, n)]), boxes,
     )  # fmt: skip
 
 
@@ -691,7 +706,7 @@ def _split_key(x: np.ndarray) -> np.ndarray | None:
 
 def _blocked(
     flat: np.ndarray, code_sq: np.ndarray, errs: np.ndarray, resid: np.ndarray, order: np.ndarray
-) -> tuple[np.ndarray, ...]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The codes ``(n, m)`` uint8 in the order ``order`` in blocks of ``_BLOCK`` rows,
     dimension-major within a block ``(blocks, m, _BLOCK)``, and the rows' code_sq, errs and
     resid ``(n,)`` in the same order, padded (inf for the padding)."""
@@ -1090,7 +1105,9 @@ def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
     when the rows have no finite range), both in the blocks of similar rows the PCA codes
     make."""
     pca = _pca_codes(rows, _pca_basis(rows, m))
-    order, balls = (None, None) if pca is None else (pca.order[: len(rows)], pca.boxes[-2:])
+    order, balls = None, None
+    if pca is not None:
+        order, balls = pca.order[: len(rows)], (pca.boxes[-2], pca.boxes[-1])
     if balls is not None and len(balls[1]) == 0:
         balls = None  # the rows' own order: no boxes for the whole rows either
     codes = _pca_codes(rows, None, order, balls) if rows.shape[1] * 255**2 < 2**31 else None
