@@ -956,11 +956,6 @@ def _plain_search(
     )
 
 
-def _allowance(index: _EuclideanIndex, q_sq: float) -> float:
-    """:func:`_allowance_of` the index's rows for a query of squared norm ``q_sq``."""
-    return float(_allowance_of(index.rows.shape[1], index.max_norm, q_sq))
-
-
 @numba.njit(cache=True, nogil=True)
 def _allowance_of(dims: int, max_norm: float, q_sq: float) -> float:
     """How far a row kernel's squared distance may be from the true one: twice the float32 dot
