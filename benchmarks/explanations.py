@@ -232,18 +232,11 @@ def flag_fold(
 
 def _scores(clf: Any, solved: list[Any]) -> list[tuple[bool, bool]]:
     """Per clip, the sensor rule aside: whether the nearest-case distance flags it and whether
-    the summary features do (:mod:`cbr.novelty`)."""
-    from cbr.novelty import summary
-
+    the summary features do (:mod:`cbr.novelty`: the clip's fluent summary in every
+    configuration)."""
     nov = clf.novelty_
-    out = []
-    for s in solved:
-        d = float(s.retrieval.distances[0])
-        feats = nov.features is not None and nov.features.unlike(
-            summary(s.problem.values), s.solution.label
-        )
-        out.append((nov.ratio(d) > nov.unlike_ratio, bool(feats)))
-    return out
+    return [nov.scores(float(s.retrieval.distances[0]), s.description, s.solution.label)
+            for s in solved]  # fmt: skip
 
 
 def _by_activity(labels: list[str], hit: list[bool]) -> dict[str, float]:

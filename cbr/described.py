@@ -29,7 +29,8 @@ from features.poses import PoseSequence
 
 from . import long_clip
 from .casebase import CaseBase, frames_of, skeleton_of, subject_of
-from .problem import FeatureConfig, availability, extract_problem, mirror_problem
+from .novelty import DESCRIPTION, own_description
+from .problem import FeatureConfig, availability, candidate_config, extract_problem, mirror_problem
 
 
 @dataclass(frozen=True)
@@ -41,7 +42,10 @@ class DescribedClip:
     it moves its left side more (None when not needed); available: ``(n_candidates,)`` which
     candidate columns it has (fluent level; empty for QMPs); torso_share: the share of its
     frames that show the person (0: nothing can be learned from it); provenance: ``source``,
-    ``subject``, ``frames`` (start, end) and ``skeleton``.
+    ``subject``, ``frames`` (start, end) and ``skeleton``; summary: the clip's fluent summary
+    over the candidate columns of :data:`cbr.novelty.DESCRIPTION` (what the "unlike the stored
+    cases" feature score judges; None when the problem is a fluent summary itself) and
+    summary_available which of them it has.
     """
 
     values: np.ndarray
@@ -55,6 +59,8 @@ class DescribedClip:
     skeleton: str
     names: tuple[str, ...] | None = None
     words: tuple[str, ...] | None = None
+    summary: np.ndarray | None = None
+    summary_available: np.ndarray | None = None
 
     @property
     def mirror_source(self) -> str:
@@ -91,11 +97,26 @@ def describe_clip(
             has = np.zeros(0, dtype=bool)
             names, words = _interned(problem.names), _interned(problem.words)
         return DescribedClip(
-            problem.values, image, left, has, share, *_provenance(seq), names, words
-        )
+            problem.values, image, left, has, share, *_provenance(seq), names, words,
+            *_summary(seq, plain),
+        )  # fmt: skip
     finally:
         if not keep:
             forget(seq)
+
+
+def _summary(
+    seq: PoseSequence, plain: FeatureConfig
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The clip's :data:`~cbr.novelty.DESCRIPTION` over its candidate columns and which of
+    them it has, when its problem under ``plain`` is not a fluent summary already (the
+    fluents computed for a fluent sequence are reused from the clip's cache)."""
+    if own_description(plain):
+        return None, None
+    candidates = candidate_config(DESCRIPTION)
+    chunk = long_clip.chunk_for(seq, None, "fluents")
+    values = extract_problem(seq, candidates, chunk).values
+    return values, availability(seq, candidates, chunk)
 
 
 _INTERNED: dict[tuple[str, ...], tuple[str, ...]] = {}

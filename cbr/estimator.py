@@ -69,9 +69,12 @@ from .fitting import (
 from .maintenance import EDITORS, MaintenanceReport
 from .novelty import (
     CALIBRATION_SAMPLE,
+    DESCRIPTION,
     SHARED_QUANTILE,
     UNLIKE_QUANTILE,
+    FeatureRanges,
     NoveltyCalibration,
+    describe,
     fit_ranges,
     from_distances,
     sample,
@@ -138,7 +141,9 @@ class Solved:
     ``confidence`` calibrated), how far it lies from the cases (``novelty``: nearest-case
     distance over the case base's usual held-out one) and whether it is unlike the stored
     cases (calibrated per case base; ``unlike_reason`` "distance", "features" or "sensor", see
-    :mod:`cbr.novelty`); ``torso_share``: the share of its frames that show the person."""
+    :mod:`cbr.novelty`); ``torso_share``: the share of its frames that show the person;
+    ``description``: what the flag's feature score judged (its fluent summary ``(F,)``, or its
+    problem's values when the case base judges its problems)."""
 
     problem: Problem
     retrieval: Retrieval
@@ -147,6 +152,7 @@ class Solved:
     unlike_cases: bool
     torso_share: float
     unlike_reason: str = ""
+    description: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -625,19 +631,42 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         skeletons = tuple(sorted({c.skeleton for c in clips}))
         # every training clip's summary against the feature ranges of the others (cheap: no
         # scan); the distance and the features then share the false-alarm budget
-        ranges = fit_ranges(
-            summaries(cb.problems),
-            np.asarray(case_groups, dtype=object),
-            summaries(queries),
-            np.asarray(groups, dtype=object)[cases.origin[real]],
-            labels,
-        )
+        group_of = np.asarray(groups, dtype=object)
+        if clips[0].summary is None:  # the problems are fluent summaries: judged as they are
+            ranges = fit_ranges(summaries(cb.problems), np.asarray(case_groups, dtype=object),
+                                summaries(queries), group_of[cases.origin[real]],
+                                labels)  # fmt: skip
+        else:
+            clip_labels = np.empty(n, dtype=object)
+            clip_labels[cases.origin[real]] = labels
+            ranges = self._description_ranges(clips, origin, group_of, clip_labels)
         quantile = UNLIKE_QUANTILE if ranges is None else SHARED_QUANTILE
         novelty = from_distances(h.nearest, basis, quantile, skeletons)
         return (
             dataclasses.replace(novelty, features=ranges),
             calibrate_soft(h, len(np.unique(cb.labels.astype(str))), basis),
         )
+
+    @staticmethod
+    def _description_ranges(
+        clips: Sequence[DescribedClip],
+        origin: np.ndarray,
+        groups: np.ndarray,
+        labels: np.ndarray,
+    ) -> FeatureRanges | None:
+        """The feature ranges over the clips' fluent summaries (:data:`cbr.novelty.DESCRIPTION`,
+        its columns those enough training clips have): the cases are the clips kept in the
+        case base (``origin`` ``(n_cases,)``; mirror images left out: their summaries were not
+        computed), each clip ``groups`` ``(n,)`` held out with its ``labels`` ``(n,)``."""
+        candidates = candidate_config(DESCRIPTION)
+        counts = np.zeros(len(candidates.states), dtype=np.int64)
+        for c in clips:
+            assert c.summary_available is not None
+            counts += c.summary_available
+        config = resolve_counts(DESCRIPTION, counts, len(clips))
+        D = _stack([c.summary for c in clips], column_index(config, candidates))  # type: ignore[misc]
+        kept = origin[origin < len(clips)]
+        return fit_ranges(D[kept], groups[kept], D, groups, labels, description=config)
 
     def _nested_votes(
         self,
@@ -733,10 +762,17 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             )
             s = dataclasses.replace(s, confidence=self.confidence_(score))
             nearest = float(r.distances[0]) if len(r.distances) else float("inf")
-            reason = self.novelty_.reason(nearest, skeleton_of(seq), p.values, s.label)
+            seen = self._description(seq, p)
+            reason = self.novelty_.reason(nearest, skeleton_of(seq), seen, s.label)
             ratio = self.novelty_.ratio(nearest)
-            out.append(Solved(p, r, s, ratio, bool(reason), torso_share(seq), reason))
+            out.append(Solved(p, r, s, ratio, bool(reason), torso_share(seq), reason, seen))
         return out
+
+    def _description(self, seq: PoseSequence, p: Problem) -> np.ndarray:
+        """What the feature score of the flag judges of ``seq``: its fluent summary
+        (:data:`cbr.novelty.DESCRIPTION`) when the calibration has one, else its problem."""
+        config = self.novelty_.description
+        return p.values if config is None else describe(seq, config)
 
     def predict_proba(self, X: Any) -> np.ndarray:
         """``(n_clips, n_classes)`` vote shares, columns in ``classes_`` order (the calibrated

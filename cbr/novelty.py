@@ -7,11 +7,15 @@ usable unit). It is *unlike the stored cases* when
 
 - its nearest case is farther than the ``quantile`` of the held-out training clips'
   nearest-case distances (``"distance"``); or
-- its summary features (a vector problem as it is; a sequence's per-column mean, minimum,
-  maximum and spread over time, :func:`summary`) leave the range the cases span in more of
-  the features than held-out training clips of its answer do (``"features"``,
-  :class:`FeatureRanges`): a measure-independent score, which sees what a distance averages
-  away (a movement the case base knows, done with joints that sit where no case's did); or
+- its summary features leave the range the cases span in more of the features than held-out
+  training clips of its answer do (``"features"``, :class:`FeatureRanges`): a
+  measure-independent score, which sees what a distance averages away (a movement the case
+  base knows, done with joints that sit where no case's did). The features are the fluent
+  summary fluents/euclidean's problem is (:data:`DESCRIPTION`: fluent confidences, joint
+  angles and positions, their mean, lowest, highest and spread over the clip) in every
+  configuration: computed from the clip beside a QMP vector or a dtw/signature sequence, so
+  "unlike the stored cases" looks at the same features whatever the measure (case bases
+  stored before this summarise their own problems, :func:`summary`, and are judged so); or
 - it was recorded with a skeleton (sensor) none of the training clips was recorded with
   (``"sensor"``): the joints of another sensor sit elsewhere on the body, so its clips are
   not comparable with the cases however near they look.
@@ -36,7 +40,14 @@ from typing import Any
 import numpy as np
 
 from .casebase import CaseBase
+from .problem import FeatureConfig, extract_problem
 
+#: the clip description the feature score judges whatever the case base's own problem: the
+#: fluent summary that fluents/euclidean's problem is (its default columns: angle fluents,
+#: joint angles and positions; mean, lowest, highest, variation over 32 frames; no phase
+#: means), resolved by the training clips' available columns
+DESCRIPTION = FeatureConfig("fluents", states="angles", angles=True, positions=True,
+                            summary=True)  # fmt: skip
 #: held-out clips whose nearest-case distance is below this quantile are "like the cases"
 UNLIKE_QUANTILE = 0.99
 #: the quantile of each of the two scores (distance, features) when both flag: they share the
@@ -52,6 +63,18 @@ LABEL_PRIOR = 5.0
 CALIBRATION_SAMPLE = 256
 #: held-out distances below this share of the largest one are exact matches
 EXACT_SHARE = 1e-3
+
+
+def own_description(config: FeatureConfig) -> bool:
+    """Whether a case base of ``config`` is judged on its own problems (a fluent summary
+    already: fluents/euclidean) rather than on :data:`DESCRIPTION` computed beside them."""
+    return config.level == "fluents" and config.summary
+
+
+def describe(seq: Any, description: FeatureConfig) -> np.ndarray:
+    """The description ``(F,)`` of the clip ``seq`` ``(frames, joints, 3)`` under a resolved
+    ``description`` (:data:`DESCRIPTION`'s columns): what the feature score judges."""
+    return extract_problem(seq, description).values
 
 
 def summary(values: np.ndarray) -> np.ndarray:
@@ -93,7 +116,10 @@ class FeatureRanges:
     per label, the typical outside share of held-out clips of that label (their median,
     shrunk toward all clips' by :data:`LABEL_PRIOR`; at least one feature's share), and
     ``default`` for a label not among them; ``unlike_ratio``: the ``quantile`` of held-out
-    clips' outside share over their label's scale, beyond which a clip is unlike the cases."""
+    clips' outside share over their label's scale, beyond which a clip is unlike the cases.
+    ``description``: the resolved fluent summary (:data:`DESCRIPTION`) a clip is described by
+    for the score, computed from the clip beside the case base's problem; None: the summary of
+    the problem itself (fluents/euclidean, and case bases stored before descriptions)."""
 
     lo: np.ndarray
     hi: np.ndarray
@@ -102,6 +128,7 @@ class FeatureRanges:
     default: float
     unlike_ratio: float
     quantile: float
+    description: FeatureConfig | None = None
 
     def outside(self, s: np.ndarray) -> float:
         """The outside share of one clip's summary ``s`` ``(F,)``."""
@@ -127,17 +154,22 @@ class FeatureRanges:
         return (
             np.array_equal(self.lo, other.lo, equal_nan=True)
             and np.array_equal(self.hi, other.hi, equal_nan=True)
-            and (self.labels, self.scales, self.default, self.unlike_ratio, self.quantile)
-            == (other.labels, other.scales, other.default, other.unlike_ratio, other.quantile)
-        )
+            and (self.labels, self.scales, self.default, self.unlike_ratio, self.quantile,
+                 self.description)
+            == (other.labels, other.scales, other.default, other.unlike_ratio, other.quantile,
+                other.description)
+        )  # fmt: skip
 
     __hash__ = None  # type: ignore[assignment]
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (NaN, a feature no case of the other folds has, stored as None)."""
-        return {"lo": _nan_none(self.lo), "hi": _nan_none(self.hi), "labels": list(self.labels),
-                "scales": list(self.scales), "default": self.default,
-                "unlike_ratio": self.unlike_ratio, "quantile": self.quantile}  # fmt: skip
+        d = {"lo": _nan_none(self.lo), "hi": _nan_none(self.hi), "labels": list(self.labels),
+             "scales": list(self.scales), "default": self.default,
+             "unlike_ratio": self.unlike_ratio, "quantile": self.quantile}  # fmt: skip
+        if self.description is not None:
+            d["description"] = self.description.to_dict()
+        return d
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> FeatureRanges:
@@ -147,8 +179,10 @@ class FeatureRanges:
         scales = tuple(float(v) for v in d["scales"])
         if lo.shape != hi.shape or lo.ndim != 2 or len(labels) != len(scales):
             raise ValueError("feature ranges must be paired (folds, features) arrays")
+        described = d.get("description")
         return cls(lo, hi, labels, scales, float(d["default"]), float(d["unlike_ratio"]),
-                   float(d["quantile"]))  # fmt: skip
+                   float(d["quantile"]),
+                   FeatureConfig.from_dict(described) if described else None)  # fmt: skip
 
 
 def _nan_none(a: np.ndarray) -> list[list[float | None]]:
@@ -172,11 +206,13 @@ def fit_ranges(
     groups: np.ndarray,
     labels: Sequence[str] | np.ndarray,
     quantile: float = SHARED_QUANTILE,
+    description: FeatureConfig | None = None,
 ) -> FeatureRanges | None:
     """The feature ranges of ``cases`` ``(m, F)`` (summaries, group ``case_groups`` ``(m,)``)
     calibrated on the training clips ``queries`` ``(n, F)`` (group ``groups`` ``(n,)``,
-    label ``labels``), each scored against the cases of the other folds. None when the cases
-    form fewer than two groups (nothing to hold out)."""
+    label ``labels``), each scored against the cases of the other folds; ``description``: the
+    configuration the summaries were computed with (None: the problems' own). None when the
+    cases form fewer than two groups (nothing to hold out)."""
     everyone = np.concatenate([np.asarray(case_groups, dtype=object),
                                np.asarray(groups, dtype=object)])  # fmt: skip
     fold = fold_of(everyone)
@@ -203,7 +239,7 @@ def fit_ranges(
     per = dict(zip(names, scales, strict=True))
     ratios = held / np.array([per[v] for v in text])
     return FeatureRanges(lo, hi, names, tuple(scales), default,
-                         float(np.quantile(ratios, quantile)), quantile)  # fmt: skip
+                         float(np.quantile(ratios, quantile)), quantile, description)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -247,13 +283,29 @@ class NoveltyCalibration:
         """Why a clip is unlike the stored cases by what it shows, the sensor aside:
         ``"distance"`` (its nearest case is farther than held-out clips' are), ``"features"``
         (its summary features leave the cases' ranges more than held-out clips of its answer
-        ``label`` do; only with ``values`` and ``label``) or ``""`` (neither)."""
-        if self.ratio(distance) > self.unlike_ratio:
-            return "distance"
-        if self.features is not None and values is not None and label is not None:
-            if self.features.unlike(summary(values), label):
-                return "features"
-        return ""
+        ``label`` do; only with ``values``, the clip's :attr:`FeatureRanges.description` when
+        the ranges have one, else its problem, and ``label``) or ``""`` (neither)."""
+        by_distance, by_features = self.scores(distance, values, label)
+        return "distance" if by_distance else "features" if by_features else ""
+
+    def scores(
+        self, distance: float, values: np.ndarray | None = None, label: str | None = None
+    ) -> tuple[bool, bool]:
+        """Whether each score alone flags the clip (:meth:`measured`): the nearest-case
+        ``distance`` and the summary features of ``values`` for the answer ``label``."""
+        by_distance = self.ratio(distance) > self.unlike_ratio
+        by_features = (
+            self.features is not None
+            and values is not None
+            and label is not None
+            and self.features.unlike(summary(values), label)
+        )
+        return by_distance, bool(by_features)
+
+    @property
+    def description(self) -> FeatureConfig | None:
+        """The clip description the feature score judges (None: the problem itself)."""
+        return None if self.features is None else self.features.description
 
     def unlike(self, distance: float, skeleton: str | None = None) -> bool:
         return bool(self.reason(distance, skeleton))
@@ -273,7 +325,9 @@ class NoveltyCalibration:
             f = self.features
             d["features"] = {"unlike_ratio": f.unlike_ratio, "quantile": f.quantile,
                              "folds": int(f.lo.shape[0]), "features": int(f.lo.shape[1]),
-                             "default_scale": f.default}  # fmt: skip
+                             "default_scale": f.default,
+                             "described_by": "the case base's problems" if f.description is None
+                             else f.description.describe()}  # fmt: skip
         return d
 
     @classmethod
