@@ -156,3 +156,77 @@ def test_a_fitted_case_base_keeps_its_ranges_and_flags_few_new_people() -> None:
     values = solved[0].problem.values.copy()
     values[::4] = ranges.hi.max(axis=0)[::4] + 1.0
     assert ranges.unlike(summary(values), solved[0].solution.label)
+
+
+def _records(
+    seq: object, qmp: np.ndarray, names: tuple[str, ...], summary_of: np.ndarray, shift: float
+) -> tuple[list[object], list[str]]:
+    """Training records of a QMP case base, built by hand as :func:`cbr.described.describe_clip`
+    builds them: six subjects, five clips each of "A" (exactly the QMP vector ``qmp``) and "B"
+    (its first four criteria flipped); every clip's fluent summary is ``summary_of`` moved by
+    ``shift`` in every feature, with a little spread of its own."""
+    from cbr.casebase import skeleton_of
+    from cbr.described import DescribedClip
+
+    rng = np.random.default_rng(5)
+    flipped = qmp.copy()
+    flipped[:4] = 1.0 - flipped[:4]
+    out, labels = [], []
+    for j in range(6):
+        for label, values in (("A", qmp), ("B", flipped)):
+            for e in range(5):
+                described = summary_of + shift + rng.normal(0.0, 0.05, summary_of.shape)
+                out.append(DescribedClip(
+                    values.copy(), None, None, np.zeros(0, dtype=bool), 1.0, f"s{j}_{label}{e}",
+                    f"s{j}", (0, 100), skeleton_of(seq), names, names, described,
+                    np.ones(len(summary_of) // 4, dtype=bool),
+                ))  # fmt: skip
+                labels.append(label)
+    return out, labels
+
+
+def test_a_qmp_case_base_flags_a_clip_whose_fluent_summary_is_unlike_its_cases() -> None:
+    """A QMP case base whose cases hold exactly the clip's QMP vector (nearest-case distance
+    0: its own problem is as ordinary as can be) but whose clips' fluent summaries all lie a
+    whole unit above the clip's, in every feature: the clip is unlike the cases by its
+    features. The same case base with the summaries around the clip's: not flagged."""
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.novelty import DESCRIPTION
+    from cbr.problem import candidate_config, extract_problem
+    from features.datasets import load_dataset
+
+    seq = load_dataset(DEMO, subjects={"s03"})[0].seq
+    problem = extract_problem(seq, candidate_config(CaseBaseClassifier("qmp").wanted_config()))
+    summary_of = extract_problem(seq, candidate_config(DESCRIPTION)).values
+    flagged = []
+    for shift in (1.0, 0.0):
+        records, labels = _records(seq, problem.values, problem.names, summary_of, shift)
+        clf = CaseBaseClassifier("qmp", mirror="off", feature_weights="none")
+        clf.fit_described(records, labels)
+        assert clf.novelty_.description is not None  # judged on the fluent summary
+        (solved,) = clf.solve([seq])
+        assert solved.solution.label == "A" and float(solved.retrieval.distances[0]) < 1e-6
+        assert solved.description is not None and solved.description.shape == summary_of.shape
+        flagged.append(solved.unlike_reason)
+        stored = json.loads(json.dumps(clf.novelty_.to_dict(), allow_nan=False))
+        assert NoveltyCalibration.from_dict(stored) == clf.novelty_  # the description kept
+    assert flagged == ["features", ""]
+    # stored before descriptions: the ranges summarise the problem itself, as they did
+    old = {k: v for k, v in stored["features"].items() if k != "description"}
+    assert FeatureRanges.from_dict(old).description is None
+
+
+def test_the_description_is_the_problem_fluents_euclidean_has() -> None:
+    """Every configuration's feature score judges the default case base's clip summary
+    (fluent states, joint angles and positions over 32 frames; without phase means)."""
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.novelty import DESCRIPTION, own_description
+
+    assert CaseBaseClassifier(phases=0).wanted_config() == DESCRIPTION
+    assert own_description(CaseBaseClassifier().wanted_config())
+    for features, similarity in (
+        ("qmp", "euclidean"),
+        ("fluents", "dtw"),
+        ("fluents", "signature"),
+    ):
+        assert not own_description(CaseBaseClassifier(features, similarity).wanted_config())
