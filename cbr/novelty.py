@@ -13,9 +13,11 @@ usable unit). It is *unlike the stored cases* when
   base knows, done with joints that sit where no case's did). The features are the fluent
   summary fluents/euclidean's problem is (:data:`DESCRIPTION`: fluent confidences, joint
   angles and positions, their mean, lowest, highest and spread over the clip) in every
-  configuration: computed from the clip beside a QMP vector or a dtw/signature sequence, so
-  "unlike the stored cases" looks at the same features whatever the measure (case bases
-  stored before this summarise their own problems, :func:`summary`, and are judged so); or
+  configuration: a dtw or signature sequence of those columns summarised over time
+  (:func:`summary`) is that summary already; beside a QMP vector (or a sequence of other
+  columns) it is computed from the clip, so "unlike the stored cases" looks at the same
+  features whatever the measure (case bases stored before this summarise their own problems
+  and are judged so); or
 - it was recorded with a skeleton (sensor) none of the training clips was recorded with
   (``"sensor"``): the joints of another sensor sit elsewhere on the body, so its clips are
   not comparable with the cases however near they look.
@@ -40,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from .casebase import CaseBase
-from .problem import FeatureConfig, extract_problem
+from .problem import FeatureConfig, candidate_config, extract_problem
 
 #: the clip description the feature score judges whatever the case base's own problem: the
 #: fluent summary that fluents/euclidean's problem is (its default columns: angle fluents,
@@ -66,9 +68,17 @@ EXACT_SHARE = 1e-3
 
 
 def own_description(config: FeatureConfig) -> bool:
-    """Whether a case base of ``config`` is judged on its own problems (a fluent summary
-    already: fluents/euclidean) rather than on :data:`DESCRIPTION` computed beside them."""
-    return config.level == "fluents" and config.summary
+    """Whether a case base of ``config`` is judged on its own problems rather than on
+    :data:`DESCRIPTION` computed beside them: a fluent summary already (fluents/euclidean),
+    or a fluent sequence of the description's columns and length (dtw and signature with the
+    default columns), whose :func:`summary` is the description itself."""
+    if config.level != "fluents":
+        return False
+    if config.summary:
+        return True
+    return int(config.length) == int(DESCRIPTION.length) and tuple(
+        candidate_config(config).states
+    ) == tuple(candidate_config(DESCRIPTION).states)
 
 
 def describe(seq: Any, description: FeatureConfig) -> np.ndarray:

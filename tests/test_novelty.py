@@ -218,15 +218,25 @@ def test_a_qmp_case_base_flags_a_clip_whose_fluent_summary_is_unlike_its_cases()
 
 def test_the_description_is_the_problem_fluents_euclidean_has() -> None:
     """Every configuration's feature score judges the default case base's clip summary
-    (fluent states, joint angles and positions over 32 frames; without phase means)."""
+    (fluent states, joint angles and positions over 32 frames; without phase means): a dtw
+    or signature sequence of the same columns summarised over time is that summary (worked
+    out two ways on a real clip: the sequence's columns over time, and the summary problem);
+    a QMP case base computes it beside its problems."""
     from cbr.estimator import CaseBaseClassifier
     from cbr.novelty import DESCRIPTION, own_description
+    from cbr.problem import candidate_config, extract_problem
+    from features.datasets import load_dataset
 
     assert CaseBaseClassifier(phases=0).wanted_config() == DESCRIPTION
     assert own_description(CaseBaseClassifier().wanted_config())
-    for features, similarity in (
-        ("qmp", "euclidean"),
-        ("fluents", "dtw"),
-        ("fluents", "signature"),
-    ):
-        assert not own_description(CaseBaseClassifier(features, similarity).wanted_config())
+    assert not own_description(CaseBaseClassifier("qmp").wanted_config())
+    assert not own_description(
+        CaseBaseClassifier(similarity="dtw", positions=False).wanted_config()
+    )
+    seq = load_dataset(DEMO, subjects={"s03"})[5].seq
+    want = extract_problem(seq, candidate_config(DESCRIPTION)).values
+    for similarity in ("dtw", "signature"):
+        config = candidate_config(CaseBaseClassifier(similarity=similarity).wanted_config())
+        assert own_description(config)
+        sequence = extract_problem(seq, config).values
+        assert sequence.ndim == 2 and summary(sequence) == pytest.approx(want, abs=1e-12)
