@@ -120,3 +120,15 @@ def test_a_calibration_round_trips_and_an_old_one_maps_the_share() -> None:
     loaded = ConfidenceCalibration.from_dict(old)
     assert loaded.neighbours == 0
     assert loaded.score(np.array([1.0, 2.0]), np.array([0, 1]), 2, 0, 0.8) == 0.8
+
+
+@pytest.mark.parametrize(
+    "damage", [{"temperature": 0.0}, {"temperature": -1.0}, {"neighbours": -3}]
+)
+def test_a_damaged_soft_vote_is_refused(damage: dict[str, float]) -> None:
+    # a temperature that is not positive would divide by zero or flip the weights (the
+    # farthest case weighing most); a negative neighbourhood has no cases
+    cal = calibrate_confidence(np.array([0.4, 1.0]), np.array([False, True]), "x")
+    stored = {**ConfidenceCalibration(cal.x, cal.y, "x", 2, 0.5, 0.5, 10).to_dict(), **damage}
+    with pytest.raises(ValueError, match="positive temperature and neighbourhood"):
+        ConfidenceCalibration.from_dict(stored)
