@@ -136,6 +136,13 @@ only (``python -m benchmarks.repetitions``; 1/3, 0.4 and 1/2 tie on their MAE, 0
 most exactly), never on the held-out subjects, HDM05 or the hand counts."""
 """Running median (seconds) before smoothing: drops tracking glitches shorter than 0.1 s."""
 
+EASE_SHARE = 0.5
+"""The posture at ease tells which end of a movement is rest only when the angles that have
+an at-ease value (:data:`AT_EASE`) carry at least this share of the movement direction's
+squared weight."""
+ENDS_S = 0.2
+"""Otherwise the rest end is the one the clip's first and last this many seconds lie nearer."""
+
 AT_EASE: dict[str, float] = {
     **{f"{s}_{j}": np.pi for s in ("left", "right") for j in ("elbow", "knee", "hip")},
     **{f"{s}_armpit": 0.0 for s in ("left", "right")},
@@ -459,34 +466,43 @@ def side_parts(x: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.nd
     return 0.5 * (d + md), 0.5 * (d - md)
 
 
-def _movement_line(x: np.ndarray, names: tuple[str, ...], direction: np.ndarray) -> np.ndarray:
-    """The movement as one number per sample: the posture projected on the movement
-    direction, signed so that it rises away from rest: the end nearer :data:`AT_EASE` (the
-    upper arm's turn has no side nearer ease, the hips' height no value at ease common to all
-    bodies: neither takes part), or, when the two ends lie
-    within :data:`MIN_EXCURSION_RAD` of equally far from it, the end the clip's first and last
-    5 % lie nearer (an exercise starts and ends at rest)."""
+def _movement_line(
+    x: np.ndarray, names: tuple[str, ...], direction: np.ndarray, fps: float
+) -> np.ndarray:
+    """The movement as one number per sample: the posture ``x`` ``(n, C)`` at ``fps``
+    projected on the movement ``direction`` ``(C,)``, signed so that it rises away from rest
+    (:func:`_rest_is_high`)."""
     line = (x - x.mean(axis=0)) @ direction
+    if _rest_is_high(x, names, direction, line, fps):
+        line = -line
+    return np.asarray(line)
+
+
+def _rest_is_high(
+    x: np.ndarray, names: tuple[str, ...], direction: np.ndarray, line: np.ndarray, fps: float
+) -> bool:
+    """Whether the rest end of the movement is the high end of ``line`` ``(n,)``: the end
+    nearer :data:`AT_EASE`, when the angles that have an at-ease value carry at least
+    :data:`EASE_SHARE` of the movement (the upper arm's turn has no side nearer ease, the hips'
+    height no value at ease common to all bodies: a movement mostly along them, a shoulder
+    turning in and out, is not told by the elbow's small part in it) and the two ends lie
+    more than :data:`MIN_EXCURSION_RAD` apart in their distance from it; otherwise the end
+    the clip's first and last :data:`ENDS_S` seconds lie nearer (an exercise starts and ends
+    at rest)."""
     ease = np.array([AT_EASE.get(n, np.pi / 2) for n in names])
     lo, hi = np.percentile(line, [10, 90])
     low_posture = x[line <= lo].mean(axis=0)
     high_posture = x[line >= hi].mean(axis=0)
-    # an upper arm turned in or out is no further from ease one way than the other; the
-    # hips' height above the floor has no value at ease that holds for every body
     free = np.array([n in TWIST_NAMES or n == PELVIS_HEIGHT for n in names])
     high_posture[free] = low_posture[free] = ease[free]
     high_far = float(np.linalg.norm(high_posture - ease))
     low_far = float(np.linalg.norm(low_posture - ease))
-    if abs(high_far - low_far) >= MIN_EXCURSION_RAD:
-        rest_high = high_far < low_far
-    else:
-        # ease cannot tell the ends apart: the clip starts and ends at rest
-        k = max(1, len(line) // 20)
-        ends = float(np.concatenate([line[:k], line[-k:]]).mean())
-        rest_high = abs(ends - hi) < abs(ends - lo)
-    if rest_high:
-        line = -line
-    return np.asarray(line)
+    eased = float(np.sum(direction[~free] ** 2) / max(float(np.sum(direction**2)), 1e-12))
+    if eased >= EASE_SHARE and abs(high_far - low_far) >= MIN_EXCURSION_RAD:
+        return high_far < low_far
+    k = min(len(line) // 2, max(1, int(round(ENDS_S * fps))))
+    ends = float(np.concatenate([line[:k], line[-k:]]).mean())
+    return abs(ends - hi) < abs(ends - lo)
 
 
 def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
@@ -562,7 +578,7 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
     if not alternating:
         period, strength, direction = _periodic_direction(x, period, sig.fps)
-        line = _movement_line(x, sig.names, direction)
+        line = _movement_line(x, sig.names, direction, sig.fps)
         # a slow change of posture (stepping into place, drifting) is no repetition
         line = _steady(line, period, strength, sig.fps)
         clear = period if strength >= CLEAR_PERIODICITY else None
