@@ -140,8 +140,10 @@ EASE_SHARE = 0.5
 """The posture at ease tells which end of a movement is rest only when the angles that have
 an at-ease value (:data:`AT_EASE`) carry at least this share of the movement direction's
 squared weight."""
-ENDS_S = 0.2
-"""Otherwise the rest end is the one the clip's first and last this many seconds lie nearer."""
+ENDS_S = MIN_PERIOD_S / 2
+"""Otherwise the rest end is the one the clip's first and last this many seconds lie nearer
+(0.2 s: half the shortest repetition, so the ends do not reach into its far point, as 5 % of
+a clip of ten repetitions does)."""
 
 AT_EASE: dict[str, float] = {
     **{f"{s}_{j}": np.pi for s in ("left", "right") for j in ("elbow", "knee", "hip")},
@@ -502,7 +504,7 @@ def _rest_is_high(
         return high_far < low_far
     k = min(len(line) // 2, max(1, int(round(ENDS_S * fps))))
     ends = float(np.concatenate([line[:k], line[-k:]]).mean())
-    return abs(ends - hi) < abs(ends - lo)
+    return bool(abs(ends - hi) < abs(ends - lo))
 
 
 def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
