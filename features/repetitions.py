@@ -36,8 +36,10 @@ How (all channels at once, no per-frame loops):
    back and forth along most (:func:`movement_direction`; each angle weighted by its
    periodic energy, :func:`periodic_share`, so that jitter and one-off changes do not pull
    it, and the period read again so weighted), signed so that it rises away from rest (the
-   end nearer standing at ease, :data:`AT_EASE`; where the two ends lie about equally far
-   from it, the end the clip starts and ends at) and, for a clearly periodic
+   end nearer standing at ease, :data:`AT_EASE`, when the angles that have an at-ease value
+   carry the movement; where they do not, a shoulder turning in and out, or the two ends lie
+   about equally far from ease, the end the clip's first and last moments lie nearer,
+   :data:`ENDS_S`) and, for a clearly periodic
    movement, taken about its running mean over one period; for an alternating movement, the
    side-against-side part, whose peaks are one side's repetitions and troughs the other's;
 5. repetitions are the peaks that stand out by at least :data:`SUBSTANTIAL` of the typical
@@ -686,6 +688,8 @@ def _alternating_repetitions(
 __all__ = [
     "ALTERNATION_MIN",
     "AT_EASE",
+    "EASE_SHARE",
+    "ENDS_S",
     "MIN_EXCURSION_RAD",
     "MIN_PERIOD_S",
     "SUBSTANTIAL",
