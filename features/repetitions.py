@@ -90,8 +90,9 @@ estimation from video jitters single joints by a few degrees, postural sway by l
 MIN_VALID_SHARE = 0.5
 """An angle missing in more than half of the frames does not take part."""
 ALTERNATION_MIN = 0.5
-"""A movement alternates sides (one repetition per side) when its direction and that of its
-mirror image are opposed by more than this cosine (:func:`alternation`)."""
+"""A movement alternates sides (one repetition per side) only when what one side does at its
+far points and what the other does at its own are opposed by more than this cosine
+(:func:`_sides_mirror`): the same movement, once on each side."""
 
 _LATERAL = {"neck_frontal", "torso_frontal", "neck_transverse", "torso_transverse"}
 
@@ -623,12 +624,14 @@ def _periodic_direction(
 
 
 def _steady(line: np.ndarray, period: float | None, strength: float, fps: float) -> np.ndarray:
-    """``line`` about its running mean over one ``period`` when the movement repeats clearly
+    """``line`` ``(n,)`` (or each column of ``(n, C)``) about its running mean over one
+    ``period`` when the movement repeats clearly
     (autocorrelation ``strength`` >= :data:`CLEAR_PERIODICITY`): a one-off change of posture
     (bending the arms to start jogging) is no part of what repeats. As it is otherwise."""
     if period is None or strength < CLEAR_PERIODICITY:
         return line
-    return np.asarray(line - uniform_filter1d(line, max(1, int(period * fps)), mode="nearest"))
+    size = max(1, int(period * fps))
+    return np.asarray(line - uniform_filter1d(line, size, axis=0, mode="nearest"))
 
 
 def _both_sides_move(x: np.ndarray, names: tuple[str, ...]) -> bool:
@@ -639,6 +642,18 @@ def _both_sides_move(x: np.ndarray, names: tuple[str, ...]) -> bool:
     left = sum(s for s, n in zip(spans, names, strict=True) if not n.startswith("right_"))
     right = sum(s for s, n in zip(spans, names, strict=True) if not n.startswith("left_"))
     return bool(min(left, right) >= 0.5 * max(left, right))
+
+
+def _sides_mirror(one: np.ndarray, other: np.ndarray) -> bool:
+    """Whether the side-against-side postures at one side's far points ``(k, C)`` and at the
+    other's ``(m, C)`` (about their running mean over one period when the movement repeats
+    clearly: bending the arms once to start jogging is not what repeats) are the same
+    movement mirrored: their means opposed by more than
+    :data:`ALTERNATION_MIN` in cosine (a knee raised on the left, then the same knee raise on
+    the right: -1; a kick of one leg answered by the other arm swinging: about 0)."""
+    a, b = one.mean(axis=0), other.mean(axis=0)
+    norm = float(np.linalg.norm(a) * np.linalg.norm(b))
+    return norm > 0 and float(a @ b) / norm <= -ALTERNATION_MIN
 
 
 def _alternating_repetitions(
@@ -676,6 +691,9 @@ def _alternating_repetitions(
     other = other[line[other] < 0]
     if not len(one) or not len(other):
         return none  # one side only: counted as a plain movement
+    steady = _steady(anti, period, strength, fps)
+    if not _sides_mirror(steady[one], steady[other]):
+        return none  # each side's excursion moves other limbs (a kick, an arm swung to balance)
     reach_one = float(np.median(line[one]))
     reach_other = float(np.median(-line[other]))
     if min(reach_one, reach_other) < 0.5 * max(reach_one, reach_other):
