@@ -352,3 +352,30 @@ def test_shoulder_turns_whose_elbow_opens_count_from_rest() -> None:
     designed = 15 + np.arange(7) * (rise + 15) + rise // 2
     peaks = np.array([r.peak_frame for r in result.repetitions])
     assert np.all(np.abs(peaks - designed) <= 3)
+
+
+def test_a_kick_answered_by_the_other_arm_is_not_one_repetition_per_side() -> None:
+    """Six kicks of the left leg (hip up by 1.4 rad, knee bent by 1.0 rad, 0.6 s, every 2 s),
+    the right arm swinging forward as the leg comes down (armpit 1.2 rad, elbow 0.8 rad, 0.6 s
+    from 0.23 s after each kick starts): the two sides do different things, so there is no
+    one repetition per side, and six kicks."""
+    k, cycle, width, lag = 6, 60, 18, 7
+
+    def bumps(start: int) -> np.ndarray:
+        out = np.zeros(15 + k * cycle)
+        bump = 0.5 * (1 - np.cos(2 * np.pi * np.arange(width) / width))
+        for i in range(k):
+            out[15 + i * cycle + start : 15 + i * cycle + start + width] = bump
+        return out
+
+    kick, arm = bumps(0), bumps(lag)
+    still = np.full_like(kick, np.pi)
+    names = ("left_hip", "left_knee", "right_hip", "right_knee")
+    names += ("left_armpit", "right_armpit", "left_elbow", "right_elbow")
+    values = np.column_stack(
+        [np.pi - 1.4 * kick, np.pi - 1.0 * kick, still, still]
+        + [np.zeros_like(kick), 1.2 * arm, still, np.pi - 0.8 * arm]
+    )
+    result = count_in_signals(_signals(values, names), len(kick), FPS)
+    assert not result.alternating
+    assert result.count == k
