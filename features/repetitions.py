@@ -28,8 +28,9 @@ How (all channels at once, no per-frame loops):
    posture split into what both sides do alike and what one side does against the other
    (:func:`mirror_angles`); the movement alternates when the second spans at least half as
    much as the first, the left and the right limbs move about equally (within a factor of
-   two: a one-legged kick does not alternate) and the body goes out to both sides about
-   equally far (both taken
+   two: a one-legged kick does not alternate), the body goes out to both sides about
+   equally far, and what one side does at its far points is the other's movement mirrored
+   (:data:`ALTERNATION_MIN`: a kick answered by the other arm's swing is not) (all taken
    about their running mean over one period when the side-against-side movement repeats
    clearly: bending the arms once to start jogging is not what repeats);
 4. the movement as one number per sample: the posture projected on the direction it moves
