@@ -28,16 +28,19 @@ How (all channels at once, no per-frame loops):
    posture split into what both sides do alike and what one side does against the other
    (:func:`mirror_angles`); the movement alternates when the second spans at least half as
    much as the first, the left and the right limbs move about equally (within a factor of
-   two: a one-legged kick does not alternate) and the body goes out to both sides about
-   equally far (both taken
+   two: a one-legged kick does not alternate), the body goes out to both sides about
+   equally far, and what one side does at its far points is the other's movement mirrored
+   (:data:`ALTERNATION_MIN`: a kick answered by the other arm's swing is not) (all taken
    about their running mean over one period when the side-against-side movement repeats
    clearly: bending the arms once to start jogging is not what repeats);
 4. the movement as one number per sample: the posture projected on the direction it moves
    back and forth along most (:func:`movement_direction`; each angle weighted by its
    periodic energy, :func:`periodic_share`, so that jitter and one-off changes do not pull
    it, and the period read again so weighted), signed so that it rises away from rest (the
-   end nearer standing at ease, :data:`AT_EASE`; where the two ends lie about equally far
-   from it, the end the clip starts and ends at) and, for a clearly periodic
+   end nearer standing at ease, :data:`AT_EASE`, when the angles that have an at-ease value
+   carry the movement; where they do not, a shoulder turning in and out, or the two ends lie
+   about equally far from ease, the end the clip's first and last moments lie nearer,
+   :data:`ENDS_S`) and, for a clearly periodic
    movement, taken about its running mean over one period; for an alternating movement, the
    side-against-side part, whose peaks are one side's repetitions and troughs the other's;
 5. repetitions are the peaks that stand out by at least :data:`SUBSTANTIAL` of the typical
@@ -88,8 +91,9 @@ estimation from video jitters single joints by a few degrees, postural sway by l
 MIN_VALID_SHARE = 0.5
 """An angle missing in more than half of the frames does not take part."""
 ALTERNATION_MIN = 0.5
-"""A movement alternates sides (one repetition per side) when its direction and that of its
-mirror image are opposed by more than this cosine (:func:`alternation`)."""
+"""A movement alternates sides (one repetition per side) only when what one side does at its
+far points and what the other does at its own are opposed by more than this cosine
+(:func:`_sides_mirror`): the same movement, once on each side."""
 
 _LATERAL = {"neck_frontal", "torso_frontal", "neck_transverse", "torso_transverse"}
 
@@ -135,6 +139,15 @@ the candidates: chosen on joined single repetitions of UI-PRMD's training subjec
 only (``python -m benchmarks.repetitions``; 1/3, 0.4 and 1/2 tie on their MAE, 0.4 counts the
 most exactly), never on the held-out subjects, HDM05 or the hand counts."""
 """Running median (seconds) before smoothing: drops tracking glitches shorter than 0.1 s."""
+
+EASE_SHARE = 0.5
+"""The posture at ease tells which end of a movement is rest only when the angles that have
+an at-ease value (:data:`AT_EASE`) carry at least this share of the movement direction's
+squared weight."""
+ENDS_S = MIN_PERIOD_S / 2
+"""Otherwise the rest end is the one the clip's first and last this many seconds lie nearer
+(0.2 s: half the shortest repetition, so the ends do not reach into its far point, as 5 % of
+a clip of ten repetitions does)."""
 
 AT_EASE: dict[str, float] = {
     **{f"{s}_{j}": np.pi for s in ("left", "right") for j in ("elbow", "knee", "hip")},
@@ -459,34 +472,43 @@ def side_parts(x: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.nd
     return 0.5 * (d + md), 0.5 * (d - md)
 
 
-def _movement_line(x: np.ndarray, names: tuple[str, ...], direction: np.ndarray) -> np.ndarray:
-    """The movement as one number per sample: the posture projected on the movement
-    direction, signed so that it rises away from rest: the end nearer :data:`AT_EASE` (the
-    upper arm's turn has no side nearer ease, the hips' height no value at ease common to all
-    bodies: neither takes part), or, when the two ends lie
-    within :data:`MIN_EXCURSION_RAD` of equally far from it, the end the clip's first and last
-    5 % lie nearer (an exercise starts and ends at rest)."""
+def _movement_line(
+    x: np.ndarray, names: tuple[str, ...], direction: np.ndarray, fps: float
+) -> np.ndarray:
+    """The movement as one number per sample: the posture ``x`` ``(n, C)`` at ``fps``
+    projected on the movement ``direction`` ``(C,)``, signed so that it rises away from rest
+    (:func:`_rest_is_high`)."""
     line = (x - x.mean(axis=0)) @ direction
+    if _rest_is_high(x, names, direction, line, fps):
+        line = -line
+    return np.asarray(line)
+
+
+def _rest_is_high(
+    x: np.ndarray, names: tuple[str, ...], direction: np.ndarray, line: np.ndarray, fps: float
+) -> bool:
+    """Whether the rest end of the movement is the high end of ``line`` ``(n,)``: the end
+    nearer :data:`AT_EASE`, when the angles that have an at-ease value carry at least
+    :data:`EASE_SHARE` of the movement (the upper arm's turn has no side nearer ease, the hips'
+    height no value at ease common to all bodies: a movement mostly along them, a shoulder
+    turning in and out, is not told by the elbow's small part in it) and the two ends lie
+    more than :data:`MIN_EXCURSION_RAD` apart in their distance from it; otherwise the end
+    the clip's first and last :data:`ENDS_S` seconds lie nearer (an exercise starts and ends
+    at rest)."""
     ease = np.array([AT_EASE.get(n, np.pi / 2) for n in names])
     lo, hi = np.percentile(line, [10, 90])
     low_posture = x[line <= lo].mean(axis=0)
     high_posture = x[line >= hi].mean(axis=0)
-    # an upper arm turned in or out is no further from ease one way than the other; the
-    # hips' height above the floor has no value at ease that holds for every body
     free = np.array([n in TWIST_NAMES or n == PELVIS_HEIGHT for n in names])
     high_posture[free] = low_posture[free] = ease[free]
     high_far = float(np.linalg.norm(high_posture - ease))
     low_far = float(np.linalg.norm(low_posture - ease))
-    if abs(high_far - low_far) >= MIN_EXCURSION_RAD:
-        rest_high = high_far < low_far
-    else:
-        # ease cannot tell the ends apart: the clip starts and ends at rest
-        k = max(1, len(line) // 20)
-        ends = float(np.concatenate([line[:k], line[-k:]]).mean())
-        rest_high = abs(ends - hi) < abs(ends - lo)
-    if rest_high:
-        line = -line
-    return np.asarray(line)
+    eased = float(np.sum(direction[~free] ** 2) / max(float(np.sum(direction**2)), 1e-12))
+    if eased >= EASE_SHARE and abs(high_far - low_far) >= MIN_EXCURSION_RAD:
+        return high_far < low_far
+    k = min(len(line) // 2, max(1, int(round(ENDS_S * fps))))
+    ends = float(np.concatenate([line[:k], line[-k:]]).mean())
+    return bool(abs(ends - hi) < abs(ends - lo))
 
 
 def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
@@ -562,7 +584,7 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
     if not alternating:
         period, strength, direction = _periodic_direction(x, period, sig.fps)
-        line = _movement_line(x, sig.names, direction)
+        line = _movement_line(x, sig.names, direction, sig.fps)
         # a slow change of posture (stepping into place, drifting) is no repetition
         line = _steady(line, period, strength, sig.fps)
         clear = period if strength >= CLEAR_PERIODICITY else None
@@ -603,12 +625,14 @@ def _periodic_direction(
 
 
 def _steady(line: np.ndarray, period: float | None, strength: float, fps: float) -> np.ndarray:
-    """``line`` about its running mean over one ``period`` when the movement repeats clearly
+    """``line`` ``(n,)`` (or each column of ``(n, C)``) about its running mean over one
+    ``period`` when the movement repeats clearly
     (autocorrelation ``strength`` >= :data:`CLEAR_PERIODICITY`): a one-off change of posture
     (bending the arms to start jogging) is no part of what repeats. As it is otherwise."""
     if period is None or strength < CLEAR_PERIODICITY:
         return line
-    return np.asarray(line - uniform_filter1d(line, max(1, int(period * fps)), mode="nearest"))
+    size = max(1, int(period * fps))
+    return np.asarray(line - uniform_filter1d(line, size, axis=0, mode="nearest"))
 
 
 def _both_sides_move(x: np.ndarray, names: tuple[str, ...]) -> bool:
@@ -619,6 +643,18 @@ def _both_sides_move(x: np.ndarray, names: tuple[str, ...]) -> bool:
     left = sum(s for s, n in zip(spans, names, strict=True) if not n.startswith("right_"))
     right = sum(s for s, n in zip(spans, names, strict=True) if not n.startswith("left_"))
     return bool(min(left, right) >= 0.5 * max(left, right))
+
+
+def _sides_mirror(one: np.ndarray, other: np.ndarray) -> bool:
+    """Whether the side-against-side postures at one side's far points ``(k, C)`` and at the
+    other's ``(m, C)`` (about their running mean over one period when the movement repeats
+    clearly: bending the arms once to start jogging is not what repeats) are the same
+    movement mirrored: their means opposed by more than
+    :data:`ALTERNATION_MIN` in cosine (a knee raised on the left, then the same knee raise on
+    the right: -1; a kick of one leg answered by the other arm swinging: about 0)."""
+    a, b = one.mean(axis=0), other.mean(axis=0)
+    norm = float(np.linalg.norm(a) * np.linalg.norm(b))
+    return norm > 0 and float(a @ b) / norm <= -ALTERNATION_MIN
 
 
 def _alternating_repetitions(
@@ -656,6 +692,9 @@ def _alternating_repetitions(
     other = other[line[other] < 0]
     if not len(one) or not len(other):
         return none  # one side only: counted as a plain movement
+    steady = _steady(anti, period, strength, fps)
+    if not _sides_mirror(steady[one], steady[other]):
+        return none  # each side's excursion moves other limbs (a kick, an arm swung to balance)
     reach_one = float(np.median(line[one]))
     reach_other = float(np.median(-line[other]))
     if min(reach_one, reach_other) < 0.5 * max(reach_one, reach_other):
@@ -668,6 +707,8 @@ def _alternating_repetitions(
 __all__ = [
     "ALTERNATION_MIN",
     "AT_EASE",
+    "EASE_SHARE",
+    "ENDS_S",
     "MIN_EXCURSION_RAD",
     "MIN_PERIOD_S",
     "SUBSTANTIAL",

@@ -313,3 +313,69 @@ def test_joined_shoulder_rotations_count_exactly(
     read = read_uiprmd_kinect if sensor == "Kinect" else read_uiprmd_vicon
     reps = [read(folder / f"m09_{subject}_e{e:02d}_positions.txt.gz") for e in episodes]
     assert count_repetitions(join_repetitions(reps).seq).count == len(episodes)
+
+
+def _turn_and_open(turn_deg: float, elbow_deg: float) -> dict[str, np.ndarray]:
+    """Standing, the right upper arm hanging and turned out by ``turn_deg`` about its own
+    (vertical) axis, the elbow at ``elbow_deg`` (90 = forearm level, more = opened toward
+    straight, the forearm pointing down)."""
+    body = standing()
+    a, e = np.radians(turn_deg), np.radians(elbow_deg)
+    level = np.array([-np.sin(a), 0.0, np.cos(a)])  # ahead, turned toward the person's right
+    body["right_wrist"] = body["right_elbow"] + 0.25 * (
+        np.sin(e) * level + np.cos(e) * np.array([0.0, 1.0, 0.0])
+    )
+    return body
+
+
+def test_shoulder_turns_whose_elbow_opens_count_from_rest() -> None:
+    """Seven turns of the right upper arm out by 70 degrees and back (1.5 s each, 0.5 s of
+    rest before, between and after), the elbow opening from 80 to 110 degrees as the arm
+    turns out: the far posture is nearer standing at ease (elbow straighter) than rest, but
+    the movement is the arm's turn, which ease cannot place; rest is where the clip starts
+    and ends. Seven, each far point in the middle of its turn."""
+    rise = 44
+    bump = 0.5 * (1 - np.cos(2 * np.pi * np.arange(rise) / rise))
+    share = np.concatenate(
+        [np.zeros(15), *[np.concatenate([bump, np.zeros(15)]) for _ in range(7)]]
+    )
+    frames = [_turn_and_open(70.0 * s, 80.0 + 30.0 * s) for s in share]
+    seq = to_sequence(*frames, fps=FPS)
+    assert joint_angle(
+        seq.positions[:, JOINT_INDEX["right_shoulder"]],
+        seq.positions[:, JOINT_INDEX["right_elbow"]],
+        seq.positions[:, JOINT_INDEX["right_wrist"]],
+    )[[0, 15 + rise // 2]] == pytest.approx(np.radians([80.0, 110.0]))
+    result = count_repetitions(seq)
+    assert result.count == 7
+    assert result.moving[0] == "right_upper_arm_turn"
+    designed = 15 + np.arange(7) * (rise + 15) + rise // 2
+    peaks = np.array([r.peak_frame for r in result.repetitions])
+    assert np.all(np.abs(peaks - designed) <= 3)
+
+
+def test_a_kick_answered_by_the_other_arm_is_not_one_repetition_per_side() -> None:
+    """Six kicks of the left leg (hip up by 1.4 rad, knee bent by 1.0 rad, 0.6 s, every 2 s),
+    the right arm swinging forward as the leg comes down (armpit 1.2 rad, elbow 0.8 rad, 0.6 s
+    from 0.23 s after each kick starts): the two sides do different things, so there is no
+    one repetition per side, and six kicks."""
+    k, cycle, width, lag = 6, 60, 18, 7
+
+    def bumps(start: int) -> np.ndarray:
+        out = np.zeros(15 + k * cycle)
+        bump = 0.5 * (1 - np.cos(2 * np.pi * np.arange(width) / width))
+        for i in range(k):
+            out[15 + i * cycle + start : 15 + i * cycle + start + width] = bump
+        return out
+
+    kick, arm = bumps(0), bumps(lag)
+    still = np.full_like(kick, np.pi)
+    names = ("left_hip", "left_knee", "right_hip", "right_knee")
+    names += ("left_armpit", "right_armpit", "left_elbow", "right_elbow")
+    values = np.column_stack(
+        [np.pi - 1.4 * kick, np.pi - 1.0 * kick, still, still]
+        + [np.zeros_like(kick), 1.2 * arm, still, np.pi - 0.8 * arm]
+    )
+    result = count_in_signals(_signals(values, names), len(kick), FPS)
+    assert not result.alternating
+    assert result.count == k
