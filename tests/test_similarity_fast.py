@@ -478,6 +478,8 @@ def test_euclidean_nibble_pass_equals_brute_force(kind: str) -> None:
     import cbr.similarity.euclidean as euclidean
     from cbr.similarity.nibbles import HAS_SHUFFLE, nibble_codes
 
+    if not HAS_SHUFFLE:  # (where the index keeps the 8-bit codes)
+        pytest.skip("this CPU (or numba's target) has no AVX2 byte shuffle")
     rng = np.random.default_rng(13)
     m = Euclidean(prune_min_cases=1000)
     if kind == "uniform":  # unstructured rows: the index chooses the 4-bit codes itself
@@ -493,8 +495,6 @@ def test_euclidean_nibble_pass_equals_brute_force(kind: str) -> None:
         codes = euclidean._Nibbles(nibble_codes(cases))
         index = euclidean._EuclideanIndex(cases, sq, np.sqrt(sq), None, max_norm, codes)
     plain = Euclidean(prune_min_cases=10**9).build_index(cases)
-    if not HAS_SHUFFLE:
-        pytest.skip("this CPU (or numba's target) has no AVX2 byte shuffle")
     for q in queries:
         qr = m.represent_query(q)
         want_i, want_d = smallest_k(m.distances(qr, plain), 7)

@@ -18,8 +18,9 @@ The codes are stored in blocks of 64 cases, dimension-major: byte ``t`` of dimen
 of a block holds case ``t``'s code in its low nibble and case ``32 + t``'s in its high nibble,
 so one byte shuffle (``pshufb``, AVX2) looks up 32 cases' table entries at once, and a block's
 64 sums come from ``2 m`` shuffles over ``32 m`` bytes: half the bytes of 8-bit codes, with
-no multiplication. Where the CPU lacks AVX2 (or numba is told to compile for another CPU), a
-scalar kernel computes the same sums.
+no multiplication. A scalar kernel computes the same sums on any CPU (the reference the
+shuffle is tested against); where the CPU lacks AVX2 (or numba is told to compile for another
+CPU) the Euclidean index keeps its 8-bit codes instead, which are faster than that kernel.
 """
 
 from __future__ import annotations
