@@ -970,7 +970,7 @@ class Euclidean(SimilarityMeasure):
         n, dims = index.rows.shape
         k = min(int(k), n)
         first = self.nearest(queries[0], index, k)
-        if index.basis is not None and index.pruning[0] <= 0.25:
+        if (index.basis is not None and index.pruning[0] <= 0.25) or _nibbles_prune(index):
             rest = super().nearest_many(queries[1:], index, k)
             return np.vstack([first[0], rest[0]]), np.vstack([first[1], rest[1]])
         out_i = np.empty((len(queries), k), dtype=np.int64)
@@ -993,6 +993,15 @@ class Euclidean(SimilarityMeasure):
 _ALL = np.zeros(0, dtype=np.int64)
 _BLAS_MIN = 1 << 20  # rows x dims from which BLAS's matrix-vector product beats the row kernel
 _BLAS: list[Any] | None = None  # threadpoolctl's BLAS handles, found on first use
+
+
+def _nibbles_prune(index: _EuclideanIndex) -> bool:
+    """Whether the 4-bit pass has been letting through at most 2 % of the cases: then a query
+    costs less than its share of a batch's matrix product (measured at 10^5 and 10^6 x 200
+    uniform rows: 1.3 % and 0.2 % let through, 1.1 and 20.6 ms a query against 2.4 and 25.5
+    batched; at 10^4, 6 %, the batch wins)."""
+    codes = index.codes
+    return isinstance(codes, _Nibbles) and codes.pruning[1] > 0 and codes.pruning[0] <= 0.02
 
 
 def _error(gamma: float, q_sq: float) -> float:
