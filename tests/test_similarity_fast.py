@@ -421,14 +421,16 @@ def _decoded_nibbles(codes: object, n: int, m: int) -> np.ndarray:
 
 
 def test_nibble_codes_hold_each_value_in_its_cell_and_bound_every_distance() -> None:
-    # uniform rows plus a constant column and one 1e4 wide: every value inside its decoded
-    # cell, e_x never below the exact |x - x_hat|, the table sums of both kernels equal a
-    # plain numpy sum of the tables, and sqrt(S / s) - e_x never above the true distance
+    # uniform rows (some on every cell edge) plus a constant column and one 1e4 wide: every
+    # value inside its decoded cell, e_x never below the exact |x - x_hat|, the table sums
+    # of both kernels equal a plain numpy sum of the tables, and sqrt(S / s) - e_x never
+    # above the true distance
     from cbr.similarity import nibbles
 
     rng = np.random.default_rng(12)
     n, m = 1000, 70
     cases = rng.random((n, m)).astype(np.float32)
+    cases[:17] = (np.arange(17) / 16.0)[:, None]  # every value on a cell edge of [0, 1]
     cases[:, 3] = 0.25
     cases[:, 9] *= 1e4
     codes = nibbles.nibble_codes(cases)
