@@ -1243,6 +1243,20 @@ def _pruning_index(rows: np.ndarray, sq: np.ndarray, m: int) -> _EuclideanIndex:
     return _EuclideanIndex(rows, sq, np.sqrt(sq), pca, _finite_max_norm(sq), codes)
 
 
+def _probe_most(index: _EuclideanIndex, k: int) -> int:
+    """How many rows the PCA bound may send to the row kernel before the query hands over:
+    ``FALLBACK`` of the rows, or, once the 4-bit pass has been answering (the PCA bound
+    stopped pruning and is only re-probed), four times the share that pass lets through
+    (the PCA pass is then no better, and a failed probe at 10^6 uniform rows costs a few
+    thousand distances instead of half a million)."""
+    n = len(index.rows)
+    most = max(k, int(FALLBACK * n))
+    codes = index.codes
+    if isinstance(codes, _Nibbles) and codes.pruning[1] > 0 and index.pruning[0] > FALLBACK:
+        most = min(most, max(k, 64, int(4.0 * codes.pruning[0] * n)))
+    return most
+
+
 def _pruned_search(
     index: _EuclideanIndex, q32: np.ndarray, q_sq: float, k: int
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -1252,7 +1266,7 @@ def _pruned_search(
     assert pca is not None
     if not math.isfinite(q_sq):
         return _quantized_search(index, q32, q_sq, k)
-    idx, dist, count = _codes_search(index, pca, q32, q_sq, k)
+    idx, dist, count = _codes_search(index, pca, q32, q_sq, k, _probe_most(index, k))
     if count < 0:  # too many rows needed their distance: a pass that prunes better
         index.record(1.0)
         return _quantized_search(index, q32, q_sq, k)
