@@ -43,10 +43,8 @@ MAX_DIMS = 257  # 257 * 255 < 2^16: a case's table sum is exact in uint16
 
 def _host_has_avx2() -> bool:
     """Whether numba compiles for this machine's CPU and it has AVX2's byte shuffle."""
-    if getattr(numba.config, "CPU_NAME", None) or platform.machine().lower() not in (
-        "x86_64",
-        "amd64",
-    ):
+    x86 = platform.machine().lower() in ("x86_64", "amd64")
+    if getattr(numba.config, "CPU_NAME", None) or not x86:
         return False
     import llvmlite.binding as llvm
 
