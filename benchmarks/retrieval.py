@@ -138,6 +138,7 @@ def run_one(kind: str, cases: np.ndarray, queries: np.ndarray, storage: str) -> 
         "queries": len(queries),
         "build_s": round(build_s, 3),
         "bound_rank": None if pruned.basis is None else int(pruned.basis.shape[1]),
+        "codes_mb": codes_mb(pruned),
         "surviving_share": round(float(pruned.pruning[0]), 4),
         "quantized_surviving_share": (  # None: the quantized pass never ran (PCA pruned)
             None
@@ -149,6 +150,21 @@ def run_one(kind: str, cases: np.ndarray, queries: np.ndarray, storage: str) -> 
         "load_avg": [load_before, C.load()],
     }
     return row
+
+
+def codes_mb(index: Any) -> dict[str, Any]:
+    """The memory (MB) of the index's codes beside the case matrix: the PCA codes and the
+    whole rows' codes (``4-bit`` or ``8-bit``; None: no such codes)."""
+    whole = index.codes
+    kind = None if whole is None else "4-bit" if hasattr(whole.codes, "errs") else "8-bit"
+    nbytes = None
+    if whole is not None:
+        nbytes = whole.codes.nbytes if kind == "4-bit" else whole.codes.nbytes + whole.errs.nbytes
+    return {
+        "pca": None if index.pca is None else round(index.pca.codes.nbytes / 1e6, 1),
+        "whole_rows": None if nbytes is None else round(nbytes / 1e6, 1),
+        "whole_rows_codes": kind,
+    }
 
 
 def print_row(r: dict[str, Any]) -> None:
