@@ -7,12 +7,15 @@ Three judges, each calibrated on the case base itself, never on what is being se
   hardly nearer than the next one. A window of a known activity lies much nearer to that
   activity's cases than to any other's; a window of an activity the case base lacks lies
   about as far from the two activities it resembles most. The margin ``d1 / d2`` (nearest
-  activity over next nearest) is compared with a threshold learned by simulating both on the
-  training cases: each case held out from its own recording (or subject) gives a *known*
-  margin, held out from its own recording and its own activity a *novel* one; the threshold
-  is where the two error rates are equal (:func:`equal_error_threshold`). A ratio of
-  distances needs no common unit, so a new person who lies farther from every case is not
-  called unknown for that alone.
+  activity over next nearest) is compared with a threshold learned on the training cases:
+  each case held out from its own recording (or subject) gives the margin of a *known*
+  activity, and the threshold is the one that at most :data:`FALSE_UNKNOWN` of them exceed
+  (:func:`false_unknown_threshold`): a budget of false "unknown" on people the case base
+  has not seen. (Held out from its own activity too, a case gives a *novel* margin; the
+  point where both err equally, :func:`equal_error_threshold`, depends on which activities
+  happen to be left out and, set there, called a third of new people's known movements
+  unknown.) A ratio of distances needs no common unit, so a new person who lies farther
+  from every case is not called unknown for that alone.
 - :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
   score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
   case lies farther than held-out training clips nearly ever do.
@@ -36,6 +39,9 @@ from .weights import MIRROR_FLAG
 
 JUDGES = ("margin", "held-out", "activities")
 """The judges by name, the default first."""
+FALSE_UNKNOWN = 0.05
+"""The share of held-out training cases of a known activity the margin judge may call
+unknown: its threshold is their margins' ``1 - FALSE_UNKNOWN`` quantile."""
 
 
 class Judge(Protocol):
@@ -72,6 +78,16 @@ def equal_error_threshold(known: np.ndarray, novel: np.ndarray) -> float:
     known_above = 1.0 - np.searchsorted(k, candidates, side="right") / len(k)
     novel_below = np.searchsorted(n, candidates, side="right") / len(n)
     return float(candidates[int(np.argmin(np.abs(known_above - novel_below)))])
+
+
+def false_unknown_threshold(known: np.ndarray, rate: float = FALSE_UNKNOWN) -> float:
+    """The smallest of the ``known`` values ``(n,)`` (non-empty) that at most a share ``rate``
+    of them exceed: the ``1 - rate`` quantile, taken at a sample value (never between two)."""
+    if not 0.0 <= rate < 1.0:
+        raise ConfigError(f"the false-unknown rate must be in [0, 1), got {rate!r}", "--unknown")
+    k = np.sort(np.asarray(known, dtype=np.float64))
+    # the first sorted value with at most rate * n values above it
+    return float(k[max(0, int(np.ceil(len(k) * (1.0 - rate) - 1e-9)) - 1)])
 
 
 def activity_codes(labels: Any, classes: Any) -> np.ndarray:
@@ -154,20 +170,21 @@ def calibration_margins(
 @dataclass(frozen=True)
 class Margin:
     """Unknown when the nearest activity is hardly nearer than the next: margin ``d1 / d2``
-    above ``threshold``, the equal-error point of the case base's own known and novel margins
-    (module docstring); ``basis``: how training cases were held out; ``known``/``novel``: how
-    many margins of each kind the threshold was learned from."""
+    above ``threshold``, which at most a share ``false_unknown`` of the case base's own
+    held-out known margins exceed (module docstring); ``basis``: how training cases were held
+    out; ``known``/``novel``: how many margins of each kind were measured."""
 
     threshold: float
     basis: str
     known: int
     novel: int
+    false_unknown: float = FALSE_UNKNOWN
 
     @classmethod
-    def of(cls, cb: CaseBase) -> Margin:
-        """Calibrated on ``cb``. DataError when it cannot be: fewer than three activities (a
-        held-out activity leaves one to compare with), or no activity whose cases can be held
-        out from each other."""
+    def of(cls, cb: CaseBase, false_unknown: float = FALSE_UNKNOWN) -> Margin:
+        """Calibrated on ``cb`` for a false-unknown rate ``false_unknown``. DataError when it
+        cannot be: fewer than three activities (a held-out activity leaves one to compare
+        with), or no activity whose cases can be held out from each other."""
         if len(set(np.asarray(cb.labels).astype(str).tolist())) < 3:
             raise DataError(
                 "a case base of fewer than three activities cannot calibrate the margin between"
@@ -181,7 +198,8 @@ class Margin:
                 "the margin on (use --unknown held-out)",
                 "case base",
             )
-        return cls(equal_error_threshold(known, novel), basis, len(known), len(novel))
+        threshold = false_unknown_threshold(known, false_unknown)
+        return cls(threshold, basis, len(known), len(novel), false_unknown)
 
     def ratio(self, nearest: np.ndarray) -> float:
         return margin_of(nearest)
@@ -196,6 +214,7 @@ class Margin:
         return (
             f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
             f" as the next ({second}); a known activity comes nearer than {self.threshold:.2f}"
+            f" (in {1.0 - self.false_unknown:.0%} of the case base's held-out cases)"
         )
 
 
@@ -299,6 +318,8 @@ __all__ = [
     "activity_codes",
     "calibration_margins",
     "equal_error_threshold",
+    "false_unknown_threshold",
+    "FALSE_UNKNOWN",
     "held_out_basis",
     "judge_of",
     "margin_of",
