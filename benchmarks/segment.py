@@ -18,8 +18,8 @@ Measured, per test recording and overall:
   recording is in the other two, so all are "seen"; a block called unknown counts as wrong);
 - unknown: each exercise of the test recording in turn is left out of the case base; the share
   of its blocks labelled unknown (1-NN DTW has no unknown: 0 by construction), for each way
-  of judging unknown (:data:`cbr.unknown.JUDGES`: margin, held-out, activities; and the margin
-  at the equal-error point, the default before, for comparison);
+  of judging unknown (:data:`cbr.unknown.JUDGES`: margin, held-out, activities,
+  margin-distance; and the margin at the equal-error point, the default before, to compare);
 - boundaries: for every labelled change of exercise, the distance to the nearest segment
   boundary (seconds), median;
 - repetitions: counts of :func:`features.repetitions.count_repetitions` against the hand
@@ -134,12 +134,13 @@ def _median_time(fn: Any, repeats: int) -> tuple[float, float]:
     return statistics.median(wall), statistics.median(cpu)
 
 
-JUDGES = ("margin", "held-out", "activities", "margin-equal-error")
+JUDGES = ("margin", "held-out", "activities", "margin-distance", "margin-equal-error")
 """How "unknown" is judged (cbr.unknown.JUDGES): the margin between the two nearest activities
 (its threshold exceeded by 5 % of held-out known cases of the case base), the classifier's
 stored calibration (the 99th percentile of held-out training clips' nearest-case distances,
-cbr.novelty), or Familiarity (a stretch as far from its nearest cases as the case base's
-activities lie from each other); and, for comparison, the margin at the point where held-out
+cbr.novelty), Familiarity (a stretch as far from its nearest cases as the case base's
+activities lie from each other), or MarginDistance (the margin alone, or a smaller margin with
+a far nearest case, sharing the 5 %); and, for comparison, the margin at the point where held-out
 known and novel cases err equally (the default before the false-unknown budget)."""
 
 

@@ -37,7 +37,7 @@ from .casebase import CaseBase
 from .novelty import CALIBRATION_SAMPLE, NoveltyCalibration
 from .weights import MIRROR_FLAG
 
-JUDGES = ("margin", "held-out", "activities")
+JUDGES = ("margin", "held-out", "activities", "margin-distance")
 """The judges by name, the default first."""
 FALSE_UNKNOWN = 0.05
 """The share of held-out training cases of a known activity the margin judge may call
@@ -137,12 +137,14 @@ def _left_out(cb: CaseBase, basis: str, groups: np.ndarray, i: int) -> np.ndarra
     return left_out
 
 
-def calibration_margins(
+def held_out_activities(
     cb: CaseBase, sample: int = CALIBRATION_SAMPLE, seed: int = 0
 ) -> tuple[np.ndarray, np.ndarray, str]:
-    """The margins of training cases held out (:func:`held_out_basis`) with their activity in
-    the case base (``known``) and without it (``novel``), and the basis. A seeded sample of at
-    most ``sample`` real cases (not mirror images) is held out, each against all cases."""
+    """Training cases held out (:func:`held_out_basis`) as a new recording is: each one's
+    distance to the nearest case of every activity that is left ``(n, n_classes)`` (inf
+    where none is), each one's activity ``(n,)`` (its index among the sorted labels) and the
+    basis. A seeded sample of at most ``sample`` real cases (not mirror images) is held out,
+    each against all cases."""
     classes = sorted(set(np.asarray(cb.labels).astype(str).tolist()))
     codes = activity_codes(cb.labels, classes)
     basis, groups = held_out_basis(cb)
@@ -154,17 +156,61 @@ def calibration_margins(
         real = real[np.asarray(cb.problems)[:, -1] == 0]
     if len(real) > sample:
         real = np.sort(np.random.default_rng(seed).choice(real, sample, replace=False))
-    known, novel = [], []
-    for i in real.tolist():  # one scan of the case base per held-out case
+    seen = np.full((len(real), len(classes)), np.inf)
+    for row, i in enumerate(real.tolist()):  # one scan of the case base per held-out case
         d = cb.measure.distances(reps[i], index)
         out = _left_out(cb, basis, groups, i)
-        seen = per_activity(np.where(out, np.inf, d), codes, len(classes))
-        if np.isfinite(seen[codes[i]]) and np.isfinite(seen).sum() >= 2:
-            known.append(margin_of(seen))
-        seen[codes[i]] = np.inf  # the same, without the case's own activity
-        if np.isfinite(seen).sum() >= 2:
-            novel.append(margin_of(seen))
-    return np.asarray(known), np.asarray(novel), basis
+        seen[row] = per_activity(np.where(out, np.inf, d), codes, len(classes))
+    return seen, codes[real], basis
+
+
+def known_and_novel(seen: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """From held-out cases' distances to every activity ``(n, n_classes)`` and their own
+    activity ``(n,)``: the rows where the own activity is within reach and another too
+    (``known``), and the rows without the own activity where two others are (``novel``), as
+    ``(k, n_classes)`` arrays (the own activity's column set to inf in ``novel``)."""
+    finite = np.isfinite(seen)
+    own = finite[np.arange(len(seen)), codes]
+    known = seen[own & (finite.sum(axis=1) >= 2)]
+    without = seen.copy()
+    without[np.arange(len(seen)), codes] = np.inf
+    novel = without[np.isfinite(without).sum(axis=1) >= 2]
+    return known, novel
+
+
+def calibration_margins(
+    cb: CaseBase, sample: int = CALIBRATION_SAMPLE, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray, str]:
+    """The margins of training cases held out (:func:`held_out_basis`) with their activity in
+    the case base (``known``) and without it (``novel``), and the basis. A seeded sample of at
+    most ``sample`` real cases (not mirror images) is held out, each against all cases."""
+    seen, codes, basis = held_out_activities(cb, sample, seed)
+    known, novel = known_and_novel(seen, codes)
+    return _margins(known), _margins(novel), basis
+
+
+def _margins(nearest: np.ndarray) -> np.ndarray:
+    """:func:`margin_of` of every row ``(n, n_classes)``: ``(n,)``."""
+    return np.array([margin_of(row) for row in nearest], dtype=np.float64)
+
+
+def _check_margin_calibration(cb: CaseBase) -> None:
+    """DataError when a case base has fewer than three activities (a held-out activity leaves
+    one to compare with)."""
+    if len(set(np.asarray(cb.labels).astype(str).tolist())) < 3:
+        raise DataError(
+            "a case base of fewer than three activities cannot calibrate the margin between"
+            " the two nearest (use --unknown held-out)",
+            "case base",
+        )
+
+
+def _no_apart() -> DataError:
+    return DataError(
+        "no activity of the case base has cases apart from each other to calibrate "
+        "the margin on (use --unknown held-out)",
+        "case base",
+    )
 
 
 @dataclass(frozen=True)
@@ -185,19 +231,10 @@ class Margin:
         """Calibrated on ``cb`` for a false-unknown rate ``false_unknown``. DataError when it
         cannot be: fewer than three activities (a held-out activity leaves one to compare
         with), or no activity whose cases can be held out from each other."""
-        if len(set(np.asarray(cb.labels).astype(str).tolist())) < 3:
-            raise DataError(
-                "a case base of fewer than three activities cannot calibrate the margin between"
-                " the two nearest (use --unknown held-out)",
-                "case base",
-            )
+        _check_margin_calibration(cb)
         known, novel, basis = calibration_margins(cb)
         if not len(known) or not len(novel):
-            raise DataError(
-                "no activity of the case base has cases apart from each other to calibrate "
-                "the margin on (use --unknown held-out)",
-                "case base",
-            )
+            raise _no_apart()
         threshold = false_unknown_threshold(known, false_unknown)
         return cls(threshold, basis, len(known), len(novel), false_unknown)
 
@@ -215,6 +252,81 @@ class Margin:
             f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
             f" as the next ({second}); a known activity comes nearer than {self.threshold:.2f}"
             f" (in {1.0 - self.false_unknown:.0%} of the case base's held-out cases)"
+        )
+
+
+JOINT_GRID = np.linspace(0.5, 1.0, 101)
+"""The quantiles tried for the joint rule of :class:`MarginDistance`, lowest first."""
+
+
+def joint_thresholds(
+    margins: np.ndarray, distances: np.ndarray, above: float, budget: float
+) -> tuple[float, float]:
+    """The margin and distance ``(a, b)`` of the joint rule "margin above ``a`` and nearest
+    case farther than ``b``": both the same quantile ``q`` of held-out known ``margins`` and
+    ``distances`` (``(n,)`` each, paired; taken at sample values as
+    :func:`false_unknown_threshold` takes them), the lowest ``q`` of :data:`JOINT_GRID` for
+    which at most a share ``budget`` of the known cases that the margin alone (``above``)
+    leaves known fall in the rule. ``(inf, inf)`` (the rule never fires) when none does."""
+    alone = margins > above
+    for q in JOINT_GRID.tolist():
+        a = false_unknown_threshold(margins, 1.0 - q)
+        b = false_unknown_threshold(distances, 1.0 - q)
+        if np.mean((margins > a) & (distances > b) & ~alone) <= budget:
+            return a, b
+    return float("inf"), float("inf")
+
+
+@dataclass(frozen=True)
+class MarginDistance:
+    """Unknown when the nearest activity is hardly nearer than the next (margin above
+    ``margin``), or when it is only somewhat so (above ``joint_margin``) and the nearest case
+    lies far (farther than ``joint_distance``): a window of a left-out movement is often both
+    farther than usual and more ambiguous than usual, where a new person's known movement is
+    farther but clear, or ambiguous but near. The case base's held-out known cases
+    (:func:`held_out_activities`) share the budget ``false_unknown``: half to the margin
+    alone (its ``1 - false_unknown / 2`` quantile), half to the joint rule
+    (:func:`joint_thresholds`)."""
+
+    margin: float
+    joint_margin: float
+    joint_distance: float
+    basis: str
+    known: int
+    false_unknown: float = FALSE_UNKNOWN
+
+    @classmethod
+    def of(cls, cb: CaseBase, false_unknown: float = FALSE_UNKNOWN) -> MarginDistance:
+        """Calibrated on ``cb``; DataError as :meth:`Margin.of`."""
+        _check_margin_calibration(cb)
+        seen, codes, basis = held_out_activities(cb)
+        known, novel = known_and_novel(seen, codes)
+        if not len(known) or not len(novel):
+            raise _no_apart()
+        margins, distances = _margins(known), known.min(axis=1)
+        alone = false_unknown_threshold(margins, false_unknown / 2.0)
+        a, b = joint_thresholds(margins, distances, alone, false_unknown / 2.0)
+        return cls(alone, a, b, basis, len(known), false_unknown)
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        return margin_of(nearest)
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        m = margin_of(nearest)
+        far = float(np.min(nearest)) > self.joint_distance
+        return m > self.margin or (m > self.joint_margin and far)
+
+    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
+        order = np.argsort(nearest, kind="stable")
+        first = classes[int(order[0])]
+        second = classes[int(order[1])] if len(order) > 1 else first
+        m = margin_of(nearest)
+        text = f"like no stored activity: the nearest ({first}) is {m:.2f} as far as the next"
+        if m > self.margin:
+            return text + f" ({second}); a known activity comes nearer than {self.margin:.2f}"
+        return text + (
+            f" ({second}) and lies {float(np.min(nearest)) / self.joint_distance:.1f}x as far as"
+            f" held-out cases of known activities with a margin above {self.joint_margin:.2f} do"
         )
 
 
@@ -306,6 +418,8 @@ def judge_of(clf: Any, name: str) -> Judge:
         return HeldOut(clf.novelty_)
     if name == "activities":
         return Familiarity.of(clf.case_base_)
+    if name == "margin-distance":
+        return MarginDistance.of(clf.case_base_)
     raise ConfigError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "--unknown")
 
 
@@ -315,7 +429,11 @@ __all__ = [
     "HeldOut",
     "Judge",
     "Margin",
+    "MarginDistance",
     "activity_codes",
+    "held_out_activities",
+    "joint_thresholds",
+    "known_and_novel",
     "calibration_margins",
     "equal_error_threshold",
     "false_unknown_threshold",
