@@ -196,7 +196,7 @@ def bench_ours(recs: dict[str, Recording], test: str, repeats: int, cases: str) 
 def bench_unknown(recs: dict[str, Recording], test: str, cases: str) -> dict[str, dict[str, float]]:
     """Each exercise of ``test`` left out of the case base in turn: share of its blocks called
     unknown, per judge."""
-    from cbr.segmentation import label, solve_recording
+    from cbr.segmentation import finish, solve_recording
 
     train = [recs[n] for n in RECORDINGS if n != test]
     rec = recs[test]
@@ -205,7 +205,7 @@ def bench_unknown(recs: dict[str, Recording], test: str, cases: str) -> dict[str
         clf = fit(training_clips(train, leave_out=exercise, cases=cases), cases)
         done = solve_recording(clf, rec.seq)  # solved once, finished by every judge
         for name in JUDGES:
-            result = label(clf, done, judge_named(clf, name))
+            result = finish(clf, done, judge_named(clf, name))
             pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
             mine = rec.blocks[: len(pred)] == exercise
             out[name][str(exercise)] = float(np.mean([p is None for p in pred[mine]]))

@@ -242,9 +242,9 @@ def _boundary_errors(truth: np.ndarray, starts_s: np.ndarray) -> list[float]:
 def ours(clf: Any, rec: Recording, judges: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """One recording segmented with each judge: predicted blocks, accuracy, boundary errors,
     seconds. The windows are solved once (:func:`cbr.segmentation.solve_recording`) and
-    finished by every judge (:func:`cbr.segmentation.label`); each judge's time is the
+    finished by every judge (:func:`cbr.segmentation.finish`); each judge's time is the
     solving plus its own finishing."""
-    from cbr.segmentation import label, solve_recording
+    from cbr.segmentation import finish, solve_recording
 
     t0, c0 = time.perf_counter(), time.process_time()
     done = solve_recording(clf, rec.seq)
@@ -252,7 +252,7 @@ def ours(clf: Any, rec: Recording, judges: dict[str, Any]) -> dict[str, dict[str
     out = {}
     for name, judge in judges.items():
         t0, c0 = time.perf_counter(), time.process_time()
-        result = label(clf, done, judge)
+        result = finish(clf, done, judge)
         seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
         pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
         truth = rec.blocks[: len(pred)]
@@ -362,7 +362,7 @@ def run_fold(fold: Fold, read: Reader) -> dict[str, Any]:
 def run_unknown(fold: Fold, joined: list[tuple[Any, Group]]) -> dict[str, Any]:
     """Each movement of the test recordings left out of the case base in turn: per judge,
     its blocks in the recordings that contain it, and how many were called unknown."""
-    from cbr.segmentation import label, solve_recording
+    from cbr.segmentation import finish, solve_recording
     from features.progress import progress
 
     movements = sorted({m for r in fold.recordings for m in r.movements})
@@ -376,7 +376,7 @@ def run_unknown(fold: Fold, joined: list[tuple[Any, Group]]) -> dict[str, Any]:
                 continue
             done = solve_recording(clf, rec.seq)  # solved once, finished by every judge
             for name, judge in judges.items():
-                pred = np.array(label(clf, done, judge).blocks[: len(rec.blocks)], dtype=object)
+                pred = np.array(finish(clf, done, judge).blocks[: len(rec.blocks)], dtype=object)
                 mine = rec.blocks[: len(pred)] == movement
                 counts[name][0] += int(np.sum(mine))
                 counts[name][1] += int(sum(p is None for p in pred[mine]))

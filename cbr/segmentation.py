@@ -510,7 +510,7 @@ def _segment_of(
 @dataclass(frozen=True)
 class SolvedRecording:
     """A recording with its windows solved and its activities decoded, before any judge of
-    unknown has looked at it (:func:`solve_recording`); :func:`label` finishes it. Several
+    unknown has looked at it (:func:`solve_recording`); :func:`finish` finishes it. Several
     judges can finish one (the windows are solved once)."""
 
     rec: PoseSequence
@@ -540,7 +540,7 @@ def solve_recording(
     return SolvedRecording(rec, sig, tuple(solved), votes, path)
 
 
-def label(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
+def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     """Steps 6-7 of the module docstring: the stretches of ``done`` (:func:`solve_recording`
     with ``clf``) unlike every activity of the case base by ``judge`` made unknown, and every
     segment counted and explained."""
@@ -577,7 +577,7 @@ def segment(
     Raises DataError for a recording shorter than one window or without a person, and for a
     case base the judge cannot be calibrated on."""
     judge = judge or Margin.of(clf.case_base_)
-    return label(clf, solve_recording(clf, recording, k, chunk_frames), judge)
+    return finish(clf, solve_recording(clf, recording, k, chunk_frames), judge)
 
 
 __all__ = [
@@ -597,7 +597,7 @@ __all__ = [
     "windows_of",
     "decode",
     "place_changes",
-    "label",
+    "finish",
     "segment",
     "solve_recording",
 ]

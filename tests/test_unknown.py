@@ -13,11 +13,14 @@ from cbr.problem import FeatureConfig
 from cbr.similarity import Euclidean
 from cbr.unknown import (
     FALSE_UNKNOWN,
+    JUDGES,
     Margin,
+    MarginDistance,
     calibration_margins,
     equal_error_threshold,
     false_unknown_threshold,
     held_out_basis,
+    joint_thresholds,
     margin_of,
 )
 from features.datasets import Clip
@@ -141,6 +144,43 @@ def test_a_new_person_farther_from_everything_keeps_the_margin() -> None:
     judge = Margin.of(_two_recordings())
     near = np.array([10.0, 1.0, 9.0])
     assert judge.ratio(near) == judge.ratio(5.0 * near) and not judge.unlike(5.0 * near)
+
+
+def test_joint_thresholds_by_hand() -> None:
+    """Ten held-out known cases, margin i/10 and nearest distance i (i = 1..10); the margin
+    alone flags 1.0 (above 0.95); a budget of 10 % (one case) for the rest. At q = 0.70 the
+    quantiles are 0.7 and 7 (three values above each): cases 8, 9 fall in the rule (10 is
+    the margin's already), 20 %; just above 0.70 they are 0.8 and 8: case 9 alone, 10 %."""
+    i = np.arange(1, 11, dtype=np.float64)
+    a, b = joint_thresholds(i / 10, i, 0.95, 0.10)
+    assert (a, b) == (pytest.approx(0.8), pytest.approx(8.0))
+    # no budget: 0.9 and 9, beyond which lies case 10 only, which the margin flags already
+    a0, b0 = joint_thresholds(i / 10, i, 0.95, 0.0)
+    assert (a0, b0) == (pytest.approx(0.9), pytest.approx(9.0))
+    # nothing flagged by the margin alone and no budget: no quantile is safe but the top
+    assert joint_thresholds(i / 10, i, 1.0, 0.0) == (pytest.approx(1.0), pytest.approx(10.0))
+
+
+def test_margin_distance_calibrated_by_hand() -> None:
+    """The two recordings of the margin test: known margins 1/12, 2/9, 3/8, 1/9, 1/4, 3/13
+    with nearest same-activity distances 1, 2, 3, 1, 2, 3. Budget 5 %, half each (0.15 of a
+    case: none may fall in either rule): the margin alone 3/8 (the largest); the joint rule
+    at q just above 2/3, where the quantiles are 1/4 and 3 (below: 3/13 and 2, which c@20,
+    margin 3/8 at distance 3, would exceed both)."""
+    judge = MarginDistance.of(_two_recordings())
+    assert judge.margin == pytest.approx(3 / 8)
+    assert (judge.joint_margin, judge.joint_distance) == (pytest.approx(1 / 4), 3.0)
+    assert (judge.basis, judge.known) == ("recording", 6)
+    # between a and b: 4/5 -> unknown by the margin alone
+    assert judge.unlike(np.array([4.0, 5.0, 15.0]))
+    # margin 4/13 (0.31: known by the margin alone) with its nearest case 4 away (> 3)
+    assert judge.unlike(np.array([4.0, 13.0, 14.0]))
+    assert "as far as held-out cases" in judge.describe(np.array([4.0, 13.0, 14.0]), "abc")
+    # the same margin 2 away: near enough to be the activity
+    assert not judge.unlike(np.array([2.0, 6.5, 7.0]))
+    # far (15) but clear (margin 15/75 = 0.2 < 1/4): a new person doing a known movement
+    assert not judge.unlike(np.array([15.0, 75.0, 90.0]))
+    assert "margin-distance" in JUDGES
 
 
 def test_held_out_by_subject_then_recording_then_time() -> None:
