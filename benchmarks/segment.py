@@ -330,6 +330,7 @@ def main(argv: list[str] | None = None) -> int:
     import numba
 
     numba.set_num_threads(1)
+    load_at_start = [round(x, 2) for x in os.getloadavg()]
     recs = load_recordings()
     folds: dict[str, Any] = {}
     for test in RECORDINGS:
@@ -351,10 +352,13 @@ def main(argv: list[str] | None = None) -> int:
     _print_table(summary, reps, args.cases)
     result = {
         "benchmark": "segment",
+        "command": f"python -m benchmarks.segment --repeats {args.repeats} --cases {args.cases}"
+        + (" --no-videos" if args.no_videos else ""),
         "note": "all three recordings are one person (CMU subject 13): the figures overstate "
         "what other people get",
         "cases": args.cases,
         "machine": one_thread_machine(),
+        "load_average_at_start": load_at_start,
         "versions": versions(
             "posecbr",
             "numpy",
