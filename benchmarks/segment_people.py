@@ -2,9 +2,10 @@
 classifier in the same run.
 
 Run: ``python -m benchmarks.segment_people [--datasets ...] [--per-person N] [--seed S]``
-(about 10 minutes of CPU, 20 of wall clock at load 10 on 2 cores, most of it the DTW
-baseline and the case bases of UI-PRMD Kinect; one core: BLAS, OpenMP and numba threads
-pinned to 1). Writes ``benchmarks/results/segment_people.json``.
+(about 19 minutes of wall clock at load 6-10 on 2 cores, most of it the DTW baseline and
+the case bases of UI-PRMD Kinect; each window is solved once and finished by every judge;
+one core: BLAS, OpenMP and numba threads pinned to 1; ``--datasets hdm05`` alone takes about
+a minute). Writes ``benchmarks/results/segment_people.json``.
 
 There is no long recording of several exercises from anyone but CMU subject 13, so the
 recordings are made, with labels known exactly, from other people's real single
