@@ -18,7 +18,8 @@ Measured, per test recording and overall:
   recording is in the other two, so all are "seen"; a block called unknown counts as wrong);
 - unknown: each exercise of the test recording in turn is left out of the case base; the share
   of its blocks labelled unknown (1-NN DTW has no unknown: 0 by construction), for each way
-  of judging unknown (:data:`cbr.unknown.JUDGES`: margin, held-out, activities);
+  of judging unknown (:data:`cbr.unknown.JUDGES`: margin, held-out, activities,
+  margin-distance; and the margin at the equal-error point, the default before, to compare);
 - boundaries: for every labelled change of exercise, the distance to the nearest segment
   boundary (seconds), median;
 - repetitions: counts of :func:`features.repetitions.count_repetitions` against the hand
@@ -133,16 +134,22 @@ def _median_time(fn: Any, repeats: int) -> tuple[float, float]:
     return statistics.median(wall), statistics.median(cpu)
 
 
-JUDGES = ("margin", "held-out", "activities")
+JUDGES = ("margin", "held-out", "activities", "margin-distance", "margin-equal-error")
 """How "unknown" is judged (cbr.unknown.JUDGES): the margin between the two nearest activities
-(calibrated on the case base), the classifier's stored calibration (the 99th percentile of
-held-out training clips' nearest-case distances, cbr.novelty), or Familiarity (a stretch as
-far from its nearest cases as the case base's activities lie from each other)."""
+(its threshold exceeded by 5 % of held-out known cases of the case base), the classifier's
+stored calibration (the 99th percentile of held-out training clips' nearest-case distances,
+cbr.novelty), Familiarity (a stretch as far from its nearest cases as the case base's
+activities lie from each other), or MarginDistance (the margin alone, or a smaller margin with
+a far nearest case, sharing the 5 %); and, for comparison, the margin at the point where held-out
+known and novel cases err equally (the default before the false-unknown budget)."""
 
 
-def _judge(clf: Any, name: str) -> Any:
-    from cbr.unknown import judge_of
+def judge_named(clf: Any, name: str) -> Any:
+    from cbr.unknown import Margin, calibration_margins, equal_error_threshold, judge_of
 
+    if name == "margin-equal-error":
+        known, novel, basis = calibration_margins(clf.case_base_)
+        return Margin(equal_error_threshold(known, novel), basis, len(known), len(novel))
     return judge_of(clf, name)
 
 
@@ -158,7 +165,7 @@ def bench_ours(recs: dict[str, Recording], test: str, repeats: int, cases: str) 
     extraction_s = time.perf_counter() - t0
     out: dict[str, Any] = {"cases": len(clf.case_base_), "feature_extraction_s": extraction_s}
     for name in JUDGES:
-        judge = _judge(clf, name)
+        judge = judge_named(clf, name)
         result = segment(clf, rec.seq, judge)
         pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
         truth = rec.blocks[: len(pred)]
@@ -174,7 +181,7 @@ def bench_ours(recs: dict[str, Recording], test: str, repeats: int, cases: str) 
             "segments": [s.to_dict(fps) for s in result.segments],
             "windows": result.windows,
         }
-    judge = _judge(clf, JUDGES[0])  # calibrated once per case base, not per recording
+    judge = judge_named(clf, JUDGES[0])  # calibrated once per case base, not per recording
     seconds, cpu = _median_time(lambda: segment(clf, rec.seq, judge), repeats)
     out.update(
         blocks=len(rec.blocks),
@@ -189,15 +196,16 @@ def bench_ours(recs: dict[str, Recording], test: str, repeats: int, cases: str) 
 def bench_unknown(recs: dict[str, Recording], test: str, cases: str) -> dict[str, dict[str, float]]:
     """Each exercise of ``test`` left out of the case base in turn: share of its blocks called
     unknown, per judge."""
-    from cbr.segmentation import segment
+    from cbr.segmentation import finish, solve_recording
 
     train = [recs[n] for n in RECORDINGS if n != test]
     rec = recs[test]
     out: dict[str, dict[str, float]] = {name: {} for name in JUDGES}
     for exercise in sorted(set(rec.blocks)):
         clf = fit(training_clips(train, leave_out=exercise, cases=cases), cases)
+        done = solve_recording(clf, rec.seq)  # solved once, finished by every judge
         for name in JUDGES:
-            result = segment(clf, rec.seq, _judge(clf, name))
+            result = finish(clf, done, judge_named(clf, name))
             pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
             mine = rec.blocks[: len(pred)] == exercise
             out[name][str(exercise)] = float(np.mean([p is None for p in pred[mine]]))
@@ -322,6 +330,7 @@ def main(argv: list[str] | None = None) -> int:
     import numba
 
     numba.set_num_threads(1)
+    load_at_start = [round(x, 2) for x in os.getloadavg()]
     recs = load_recordings()
     folds: dict[str, Any] = {}
     for test in RECORDINGS:
@@ -343,10 +352,13 @@ def main(argv: list[str] | None = None) -> int:
     _print_table(summary, reps, args.cases)
     result = {
         "benchmark": "segment",
+        "command": f"python -m benchmarks.segment --repeats {args.repeats} --cases {args.cases}"
+        + (" --no-videos" if args.no_videos else ""),
         "note": "all three recordings are one person (CMU subject 13): the figures overstate "
         "what other people get",
         "cases": args.cases,
         "machine": one_thread_machine(),
+        "load_average_at_start": load_at_start,
         "versions": versions(
             "posecbr",
             "numpy",

@@ -2,9 +2,10 @@
 classifier in the same run.
 
 Run: ``python -m benchmarks.segment_people [--datasets ...] [--per-person N] [--seed S]``
-(about 10 minutes of CPU, 20 of wall clock at load 10 on 2 cores, most of it the DTW
-baseline and the case bases of UI-PRMD Kinect; one core: BLAS, OpenMP and numba threads
-pinned to 1). Writes ``benchmarks/results/segment_people.json``.
+(about 19 minutes of wall clock at load 6-10 on 2 cores, most of it the DTW baseline and
+the case bases of UI-PRMD Kinect; each window is solved once and finished by every judge;
+one core: BLAS, OpenMP and numba threads pinned to 1; ``--datasets hdm05`` alone takes about
+a minute). Writes ``benchmarks/results/segment_people.json``.
 
 There is no long recording of several exercises from anyone but CMU subject 13, so the
 recordings are made, with labels known exactly, from other people's real single
@@ -73,7 +74,7 @@ from benchmarks.repetitions import (  # noqa: E402
     read_one,
     uiprmd_groups,
 )
-from benchmarks.segment import DTW_FPS, DTW_TRAIN_HOP_S, DTW_WINDOW_S, JUDGES  # noqa: E402
+from benchmarks.segment import DTW_FPS, DTW_TRAIN_HOP_S, DTW_WINDOW_S, JUDGES, judge_named  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "segment_people.json"
@@ -239,25 +240,34 @@ def _boundary_errors(truth: np.ndarray, starts_s: np.ndarray) -> list[float]:
     return [float(np.min(np.abs(starts_s - b))) for b in true_b]
 
 
-def ours(clf: Any, rec: Recording, judge: Any) -> dict[str, Any]:
-    """One recording segmented: predicted blocks, accuracy, boundary errors, seconds."""
-    from cbr.segmentation import segment
+def ours(clf: Any, rec: Recording, judges: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """One recording segmented with each judge: predicted blocks, accuracy, boundary errors,
+    seconds. The windows are solved once (:func:`cbr.segmentation.solve_recording`) and
+    finished by every judge (:func:`cbr.segmentation.finish`); each judge's time is the
+    solving plus its own finishing."""
+    from cbr.segmentation import finish, solve_recording
 
     t0, c0 = time.perf_counter(), time.process_time()
-    result = segment(clf, rec.seq, judge)
-    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
-    pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
-    truth = rec.blocks[: len(pred)]
-    starts = np.array([s.start_frame / rec.seq.fps for s in result.segments[1:]])
-    return {
-        "pred": pred,
-        "correct": int(np.sum(pred == truth)),
-        "unknown": int(sum(p is None for p in pred)),
-        "boundary_errors_s": _boundary_errors(truth, starts),
-        "segments": [[s.start_frame, s.end_frame, s.label] for s in result.segments],
-        "seconds": seconds,
-        "cpu_s": cpu,
-    }
+    done = solve_recording(clf, rec.seq)
+    solve_s, solve_cpu = time.perf_counter() - t0, time.process_time() - c0
+    out = {}
+    for name, judge in judges.items():
+        t0, c0 = time.perf_counter(), time.process_time()
+        result = finish(clf, done, judge)
+        seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+        pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
+        truth = rec.blocks[: len(pred)]
+        starts = np.array([s.start_frame / rec.seq.fps for s in result.segments[1:]])
+        out[name] = {
+            "pred": pred,
+            "correct": int(np.sum(pred == truth)),
+            "unknown": int(sum(p is None for p in pred)),
+            "boundary_errors_s": _boundary_errors(truth, starts),
+            "segments": [[s.start_frame, s.end_frame, s.label] for s in result.segments],
+            "seconds": solve_s + seconds,
+            "cpu_s": solve_cpu + cpu,
+        }
+    return out
 
 
 def _angles(seq: Any) -> np.ndarray:
@@ -313,14 +323,13 @@ def run_fold(fold: Fold, read: Reader) -> dict[str, Any]:
     """Seen accuracy and boundaries (ours per judge, DTW), and the unknown share of every
     movement left out in turn, per judge."""
     from cbr.problem import warm
-    from cbr.unknown import judge_of
     from features.progress import progress
 
     joined = joined_training(fold.train, read)
     t0 = time.perf_counter()
     clf = fit(training_clips(joined))
     fit_s = time.perf_counter() - t0
-    judges = {name: judge_of(clf, name) for name in JUDGES}
+    judges = {name: judge_named(clf, name) for name in JUDGES}
     X, y = dtw_training([(seq, g.movement) for seq, g in joined])
     recs: list[dict[str, Any]] = []
     for rec in progress(fold.recordings, f"{fold.dataset} {fold.name}: seen", unit="recording"):
@@ -337,8 +346,7 @@ def run_fold(fold: Fold, read: Reader) -> dict[str, Any]:
             "truth": _runs(rec.blocks),
             "dtw": dtw(X, y, rec),
         }
-        for name, judge in judges.items():
-            o = ours(clf, rec, judge)
+        for name, o in ours(clf, rec, judges).items():
             row[name] = {k: v for k, v in o.items() if k != "pred"}
         recs.append(row)
     unknown = run_unknown(fold, joined)
@@ -355,23 +363,21 @@ def run_fold(fold: Fold, read: Reader) -> dict[str, Any]:
 def run_unknown(fold: Fold, joined: list[tuple[Any, Group]]) -> dict[str, Any]:
     """Each movement of the test recordings left out of the case base in turn: per judge,
     its blocks in the recordings that contain it, and how many were called unknown."""
-    from cbr.segmentation import segment
-    from cbr.unknown import judge_of
+    from cbr.segmentation import finish, solve_recording
     from features.progress import progress
 
     movements = sorted({m for r in fold.recordings for m in r.movements})
     out: dict[str, Any] = {}
     for movement in progress(movements, f"{fold.dataset} {fold.name}: left out", unit="movement"):
         clf = fit(training_clips(joined, leave_out=movement))
+        judges = {name: judge_named(clf, name) for name in JUDGES}
         counts = {name: [0, 0] for name in JUDGES}
-        for name in JUDGES:
-            judge = judge_of(clf, name)
-            for rec in fold.recordings:
-                if movement not in rec.movements:
-                    continue
-                pred = np.array(
-                    segment(clf, rec.seq, judge).blocks[: len(rec.blocks)], dtype=object
-                )
+        for rec in fold.recordings:
+            if movement not in rec.movements:
+                continue
+            done = solve_recording(clf, rec.seq)  # solved once, finished by every judge
+            for name, judge in judges.items():
+                pred = np.array(finish(clf, done, judge).blocks[: len(rec.blocks)], dtype=object)
                 mine = rec.blocks[: len(pred)] == movement
                 counts[name][0] += int(np.sum(mine))
                 counts[name][1] += int(sum(p is None for p in pred[mine]))

@@ -507,6 +507,57 @@ def _segment_of(
     return Segment(start, end, label, confidence, reps, text, ratio)
 
 
+@dataclass(frozen=True)
+class SolvedRecording:
+    """A recording with its windows solved and its activities decoded, before any judge of
+    unknown has looked at it (:func:`solve_recording`); :func:`finish` finishes it. Several
+    judges can finish one (the windows are solved once)."""
+
+    rec: PoseSequence
+    sig: MovementSignals
+    windows: tuple[_Solved, ...]
+    votes: np.ndarray  # (n_blocks, n_classes)
+    path: np.ndarray  # (n_blocks,) the decoded activity of every block
+
+
+def solve_recording(
+    clf: Any, recording: PoseSequence, k: int = 1, chunk_frames: int | None = None
+) -> SolvedRecording:
+    """Steps 1-5 of the module docstring for ``recording`` (positions ``(frames, joints,
+    3)``): its windows solved by the fitted classifier ``clf`` and the activity of every block
+    decoded; ``k`` and ``chunk_frames`` as :func:`segment` takes them. Raises DataError for a
+    recording shorter than one window or without a person."""
+    rec = recording.to_canonical()
+    chunk = long_clip.chunk_for(rec, chunk_frames)
+    sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals(rec)
+    windows = windows_of(sig, rec.n_frames, rec.fps, rec.source)
+    config = clf.feature_config_
+    if not chunk:
+        warm(rec, config.level, mirror=config.side == "canonical")
+    solved = _solve_windows(clf, rec, windows, k, chunk)
+    votes = block_votes(solved, rec.n_frames, rec.fps)
+    path = place_changes(solved, rec.fps, decode(votes))
+    return SolvedRecording(rec, sig, tuple(solved), votes, path)
+
+
+def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
+    """Steps 6-7 of the module docstring: the stretches of ``done`` (:func:`solve_recording`
+    with ``clf``) unlike every activity of the case base by ``judge`` made unknown, and every
+    segment counted and explained."""
+    rec, solved, n_classes = done.rec, list(done.windows), len(clf.classes_)
+    path = done.path.copy()
+    evidence = within_runs(solved, rec.fps, path).tolist()
+    path[unknown_blocks(solved, rec.n_frames, rec.fps, judge, path)] = n_classes
+    runs = _runs(path)
+    segments = tuple(
+        _segment_of(clf, rec, done.sig, run, solved, done.votes, judge, evidence) for run in runs
+    )
+    blocks: list[str | None] = []
+    for a, b, state in runs:
+        blocks += [None if state == n_classes else str(clf.classes_[state])] * (b - a)
+    return Segmentation(rec.source, rec.fps, rec.n_frames, segments, tuple(blocks), len(solved))
+
+
 def segment(
     clf: Any,
     recording: PoseSequence,
@@ -525,28 +576,8 @@ def segment(
     at once; None: in pieces of :data:`cbr.long_clip.CHUNK_FRAMES` for a longer recording.
     Raises DataError for a recording shorter than one window or without a person, and for a
     case base the judge cannot be calibrated on."""
-    rec = recording.to_canonical()
     judge = judge or Margin.of(clf.case_base_)
-    chunk = long_clip.chunk_for(rec, chunk_frames)
-    sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals(rec)
-    windows = windows_of(sig, rec.n_frames, rec.fps, rec.source)
-    config = clf.feature_config_
-    if not chunk:
-        warm(rec, config.level, mirror=config.side == "canonical")
-    solved = _solve_windows(clf, rec, windows, k, chunk)
-    votes = block_votes(solved, rec.n_frames, rec.fps)
-    n_classes = len(clf.classes_)
-    path = place_changes(solved, rec.fps, decode(votes))
-    evidence = within_runs(solved, rec.fps, path).tolist()
-    path[unknown_blocks(solved, rec.n_frames, rec.fps, judge, path)] = n_classes
-    runs = _runs(path)
-    segments = tuple(
-        _segment_of(clf, rec, sig, run, solved, votes, judge, evidence) for run in runs
-    )
-    blocks: list[str | None] = []
-    for a, b, state in runs:
-        blocks += [None if state == n_classes else str(clf.classes_[state])] * (b - a)
-    return Segmentation(rec.source, rec.fps, rec.n_frames, segments, tuple(blocks), len(solved))
+    return finish(clf, solve_recording(clf, recording, k, chunk_frames), judge)
 
 
 __all__ = [
@@ -558,6 +589,7 @@ __all__ = [
     "activity_distances",
     "Segment",
     "Segmentation",
+    "SolvedRecording",
     "Window",
     "block_votes",
     "unknown_blocks",
@@ -565,5 +597,7 @@ __all__ = [
     "windows_of",
     "decode",
     "place_changes",
+    "finish",
     "segment",
+    "solve_recording",
 ]

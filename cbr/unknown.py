@@ -7,12 +7,15 @@ Three judges, each calibrated on the case base itself, never on what is being se
   hardly nearer than the next one. A window of a known activity lies much nearer to that
   activity's cases than to any other's; a window of an activity the case base lacks lies
   about as far from the two activities it resembles most. The margin ``d1 / d2`` (nearest
-  activity over next nearest) is compared with a threshold learned by simulating both on the
-  training cases: each case held out from its own recording (or subject) gives a *known*
-  margin, held out from its own recording and its own activity a *novel* one; the threshold
-  is where the two error rates are equal (:func:`equal_error_threshold`). A ratio of
-  distances needs no common unit, so a new person who lies farther from every case is not
-  called unknown for that alone.
+  activity over next nearest) is compared with a threshold learned on the training cases:
+  each case held out from its own recording (or subject) gives the margin of a *known*
+  activity, and the threshold is the one that at most :data:`FALSE_UNKNOWN` of them exceed
+  (:func:`false_unknown_threshold`): a budget of false "unknown" on people the case base
+  has not seen. (Held out from its own activity too, a case gives a *novel* margin; the
+  point where both err equally, :func:`equal_error_threshold`, depends on which activities
+  happen to be left out and, set there, called a third of new people's known movements
+  unknown.) A ratio of distances needs no common unit, so a new person who lies farther
+  from every case is not called unknown for that alone.
 - :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
   score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
   case lies farther than held-out training clips nearly ever do.
@@ -31,11 +34,18 @@ import numpy as np
 from features.errors import ConfigError, DataError
 
 from .casebase import CaseBase
-from .novelty import CALIBRATION_SAMPLE, NoveltyCalibration
+from .novelty import NoveltyCalibration
 from .weights import MIRROR_FLAG
 
-JUDGES = ("margin", "held-out", "activities")
+JUDGES = ("margin", "held-out", "activities", "margin-distance")
 """The judges by name, the default first."""
+FALSE_UNKNOWN = 0.05
+"""The share of held-out training cases of a known activity the margin judge may call
+unknown: its threshold is their margins' ``1 - FALSE_UNKNOWN`` quantile."""
+MARGIN_SAMPLE = 2048
+"""Training cases held out to calibrate the margin (a seeded sample when there are more): a 5 %
+quantile read from 256 lies 13 cases from the top and moved by 10 points of UI-PRMD Vicon's
+seen blocks from one sample to another; each costs one scan of the case base."""
 
 
 class Judge(Protocol):
@@ -72,6 +82,16 @@ def equal_error_threshold(known: np.ndarray, novel: np.ndarray) -> float:
     known_above = 1.0 - np.searchsorted(k, candidates, side="right") / len(k)
     novel_below = np.searchsorted(n, candidates, side="right") / len(n)
     return float(candidates[int(np.argmin(np.abs(known_above - novel_below)))])
+
+
+def false_unknown_threshold(known: np.ndarray, rate: float = FALSE_UNKNOWN) -> float:
+    """The smallest of the ``known`` values ``(n,)`` (non-empty) that at most a share ``rate``
+    of them exceed: the ``1 - rate`` quantile, taken at a sample value (never between two)."""
+    if not 0.0 <= rate < 1.0:
+        raise ConfigError(f"the false-unknown rate must be in [0, 1), got {rate!r}", "--unknown")
+    k = np.sort(np.asarray(known, dtype=np.float64))
+    # the first sorted value with at most rate * n values above it
+    return float(k[max(0, int(np.ceil(len(k) * (1.0 - rate) - 1e-9)) - 1)])
 
 
 def activity_codes(labels: Any, classes: Any) -> np.ndarray:
@@ -121,12 +141,14 @@ def _left_out(cb: CaseBase, basis: str, groups: np.ndarray, i: int) -> np.ndarra
     return left_out
 
 
-def calibration_margins(
-    cb: CaseBase, sample: int = CALIBRATION_SAMPLE, seed: int = 0
+def held_out_activities(
+    cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0
 ) -> tuple[np.ndarray, np.ndarray, str]:
-    """The margins of training cases held out (:func:`held_out_basis`) with their activity in
-    the case base (``known``) and without it (``novel``), and the basis. A seeded sample of at
-    most ``sample`` real cases (not mirror images) is held out, each against all cases."""
+    """Training cases held out (:func:`held_out_basis`) as a new recording is: each one's
+    distance to the nearest case of every activity that is left ``(n, n_classes)`` (inf
+    where none is), each one's activity ``(n,)`` (its index among the sorted labels) and the
+    basis. A seeded sample of at most ``sample`` real cases (not mirror images) is held out,
+    each against all cases."""
     classes = sorted(set(np.asarray(cb.labels).astype(str).tolist()))
     codes = activity_codes(cb.labels, classes)
     basis, groups = held_out_basis(cb)
@@ -138,50 +160,87 @@ def calibration_margins(
         real = real[np.asarray(cb.problems)[:, -1] == 0]
     if len(real) > sample:
         real = np.sort(np.random.default_rng(seed).choice(real, sample, replace=False))
-    known, novel = [], []
-    for i in real.tolist():  # one scan of the case base per held-out case
+    seen = np.full((len(real), len(classes)), np.inf)
+    for row, i in enumerate(real.tolist()):  # one scan of the case base per held-out case
         d = cb.measure.distances(reps[i], index)
         out = _left_out(cb, basis, groups, i)
-        seen = per_activity(np.where(out, np.inf, d), codes, len(classes))
-        if np.isfinite(seen[codes[i]]) and np.isfinite(seen).sum() >= 2:
-            known.append(margin_of(seen))
-        seen[codes[i]] = np.inf  # the same, without the case's own activity
-        if np.isfinite(seen).sum() >= 2:
-            novel.append(margin_of(seen))
-    return np.asarray(known), np.asarray(novel), basis
+        seen[row] = per_activity(np.where(out, np.inf, d), codes, len(classes))
+    return seen, codes[real], basis
+
+
+def known_and_novel(seen: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """From held-out cases' distances to every activity ``(n, n_classes)`` and their own
+    activity ``(n,)``: the rows where the own activity is within reach and another too
+    (``known``), and the rows without the own activity where two others are (``novel``), as
+    ``(k, n_classes)`` arrays (the own activity's column set to inf in ``novel``)."""
+    finite = np.isfinite(seen)
+    own = finite[np.arange(len(seen)), codes]
+    known = seen[own & (finite.sum(axis=1) >= 2)]
+    without = seen.copy()
+    without[np.arange(len(seen)), codes] = np.inf
+    novel = without[np.isfinite(without).sum(axis=1) >= 2]
+    return known, novel
+
+
+def calibration_margins(
+    cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray, str]:
+    """The margins of training cases held out (:func:`held_out_basis`) with their activity in
+    the case base (``known``) and without it (``novel``), and the basis. A seeded sample of at
+    most ``sample`` real cases (not mirror images) is held out, each against all cases."""
+    seen, codes, basis = held_out_activities(cb, sample, seed)
+    known, novel = known_and_novel(seen, codes)
+    return _margins(known), _margins(novel), basis
+
+
+def _margins(nearest: np.ndarray) -> np.ndarray:
+    """:func:`margin_of` of every row ``(n, n_classes)``: ``(n,)``."""
+    return np.array([margin_of(row) for row in nearest], dtype=np.float64)
+
+
+def _check_margin_calibration(cb: CaseBase) -> None:
+    """DataError when a case base has fewer than three activities (a held-out activity leaves
+    one to compare with)."""
+    if len(set(np.asarray(cb.labels).astype(str).tolist())) < 3:
+        raise DataError(
+            "a case base of fewer than three activities cannot calibrate the margin between"
+            " the two nearest (use --unknown held-out)",
+            "case base",
+        )
+
+
+def _no_apart() -> DataError:
+    return DataError(
+        "no activity of the case base has cases apart from each other to calibrate "
+        "the margin on (use --unknown held-out)",
+        "case base",
+    )
 
 
 @dataclass(frozen=True)
 class Margin:
     """Unknown when the nearest activity is hardly nearer than the next: margin ``d1 / d2``
-    above ``threshold``, the equal-error point of the case base's own known and novel margins
-    (module docstring); ``basis``: how training cases were held out; ``known``/``novel``: how
-    many margins of each kind the threshold was learned from."""
+    above ``threshold``, which at most a share ``false_unknown`` of the case base's own
+    held-out known margins exceed (module docstring); ``basis``: how training cases were held
+    out; ``known``/``novel``: how many margins of each kind were measured."""
 
     threshold: float
     basis: str
     known: int
     novel: int
+    false_unknown: float = FALSE_UNKNOWN
 
     @classmethod
-    def of(cls, cb: CaseBase) -> Margin:
-        """Calibrated on ``cb``. DataError when it cannot be: fewer than three activities (a
-        held-out activity leaves one to compare with), or no activity whose cases can be held
-        out from each other."""
-        if len(set(np.asarray(cb.labels).astype(str).tolist())) < 3:
-            raise DataError(
-                "a case base of fewer than three activities cannot calibrate the margin between"
-                " the two nearest (use --unknown held-out)",
-                "case base",
-            )
+    def of(cls, cb: CaseBase, false_unknown: float = FALSE_UNKNOWN) -> Margin:
+        """Calibrated on ``cb`` for a false-unknown rate ``false_unknown``. DataError when it
+        cannot be: fewer than three activities (a held-out activity leaves one to compare
+        with), or no activity whose cases can be held out from each other."""
+        _check_margin_calibration(cb)
         known, novel, basis = calibration_margins(cb)
         if not len(known) or not len(novel):
-            raise DataError(
-                "no activity of the case base has cases apart from each other to calibrate "
-                "the margin on (use --unknown held-out)",
-                "case base",
-            )
-        return cls(equal_error_threshold(known, novel), basis, len(known), len(novel))
+            raise _no_apart()
+        threshold = false_unknown_threshold(known, false_unknown)
+        return cls(threshold, basis, len(known), len(novel), false_unknown)
 
     def ratio(self, nearest: np.ndarray) -> float:
         return margin_of(nearest)
@@ -196,6 +255,82 @@ class Margin:
         return (
             f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
             f" as the next ({second}); a known activity comes nearer than {self.threshold:.2f}"
+            f" (in {1.0 - self.false_unknown:.0%} of the case base's held-out cases)"
+        )
+
+
+JOINT_GRID = np.linspace(0.5, 1.0, 101)
+"""The quantiles tried for the joint rule of :class:`MarginDistance`, lowest first."""
+
+
+def joint_thresholds(
+    margins: np.ndarray, distances: np.ndarray, above: float, budget: float
+) -> tuple[float, float]:
+    """The margin and distance ``(a, b)`` of the joint rule "margin above ``a`` and nearest
+    case farther than ``b``": both the same quantile ``q`` of held-out known ``margins`` and
+    ``distances`` (``(n,)`` each, paired; taken at sample values as
+    :func:`false_unknown_threshold` takes them), the lowest ``q`` of :data:`JOINT_GRID` for
+    which at most a share ``budget`` of the known cases that the margin alone (``above``)
+    leaves known fall in the rule. ``(inf, inf)`` (the rule never fires) when none does."""
+    alone = margins > above
+    for q in JOINT_GRID.tolist():
+        a = false_unknown_threshold(margins, 1.0 - q)
+        b = false_unknown_threshold(distances, 1.0 - q)
+        if np.mean((margins > a) & (distances > b) & ~alone) <= budget:
+            return a, b
+    return float("inf"), float("inf")
+
+
+@dataclass(frozen=True)
+class MarginDistance:
+    """Unknown when the nearest activity is hardly nearer than the next (margin above
+    ``margin``), or when it is only somewhat so (above ``joint_margin``) and the nearest case
+    lies far (farther than ``joint_distance``): a window of a left-out movement is often both
+    farther than usual and more ambiguous than usual, where a new person's known movement is
+    farther but clear, or ambiguous but near. The case base's held-out known cases
+    (:func:`held_out_activities`) share the budget ``false_unknown``: half to the margin
+    alone (its ``1 - false_unknown / 2`` quantile), half to the joint rule
+    (:func:`joint_thresholds`)."""
+
+    margin: float
+    joint_margin: float
+    joint_distance: float
+    basis: str
+    known: int
+    false_unknown: float = FALSE_UNKNOWN
+
+    @classmethod
+    def of(cls, cb: CaseBase, false_unknown: float = FALSE_UNKNOWN) -> MarginDistance:
+        """Calibrated on ``cb``; DataError as :meth:`Margin.of`."""
+        _check_margin_calibration(cb)
+        seen, codes, basis = held_out_activities(cb)
+        known, novel = known_and_novel(seen, codes)
+        if not len(known) or not len(novel):
+            raise _no_apart()
+        margins, distances = _margins(known), known.min(axis=1)
+        alone = false_unknown_threshold(margins, false_unknown / 2.0)
+        a, b = joint_thresholds(margins, distances, alone, false_unknown / 2.0)
+        return cls(alone, a, b, basis, len(known), false_unknown)
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        return margin_of(nearest)
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        m = margin_of(nearest)
+        far = float(np.min(nearest)) > self.joint_distance
+        return m > self.margin or (m > self.joint_margin and far)
+
+    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
+        order = np.argsort(nearest, kind="stable")
+        first = classes[int(order[0])]
+        second = classes[int(order[1])] if len(order) > 1 else first
+        m = margin_of(nearest)
+        text = f"like no stored activity: the nearest ({first}) is {m:.2f} as far as the next"
+        if m > self.margin:
+            return text + f" ({second}); a known activity comes nearer than {self.margin:.2f}"
+        return text + (
+            f" ({second}) and lies {float(np.min(nearest)) / self.joint_distance:.1f}x as far as"
+            f" held-out cases of known activities with a margin above {self.joint_margin:.2f} do"
         )
 
 
@@ -287,18 +422,27 @@ def judge_of(clf: Any, name: str) -> Judge:
         return HeldOut(clf.novelty_)
     if name == "activities":
         return Familiarity.of(clf.case_base_)
+    if name == "margin-distance":
+        return MarginDistance.of(clf.case_base_)
     raise ConfigError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "--unknown")
 
 
 __all__ = [
     "JUDGES",
+    "MARGIN_SAMPLE",
     "Familiarity",
     "HeldOut",
     "Judge",
     "Margin",
+    "MarginDistance",
     "activity_codes",
+    "held_out_activities",
+    "joint_thresholds",
+    "known_and_novel",
     "calibration_margins",
     "equal_error_threshold",
+    "false_unknown_threshold",
+    "FALSE_UNKNOWN",
     "held_out_basis",
     "judge_of",
     "margin_of",

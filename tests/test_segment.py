@@ -21,8 +21,10 @@ from cbr.segmentation import (
     Segmentation,
     _Solved,
     decode,
+    finish,
     place_changes,
     segment,
+    solve_recording,
     unknown_blocks,
 )
 from cbr.unknown import Margin
@@ -101,6 +103,13 @@ class _NeverUnknown:
         return ""
 
 
+class _AlwaysUnknown(_NeverUnknown):
+    """A judge that calls every window unknown."""
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        return True
+
+
 def test_synthetic_recording_changes_within_a_quarter_second() -> None:
     """Squats for 5 s (cut at the deepest point, 1.25 s into a 2.5-s repetition), jumping
     jacks for 4 s, knee lifts for 6 s, built from tests/moves.py at 30 fps: the changes lie at
@@ -115,6 +124,12 @@ def test_synthetic_recording_changes_within_a_quarter_second() -> None:
     assert [s.label for s in result.segments] == ["squat", "jumping_jack", "knee_lift"]
     found = [s.start_frame / fps for s in result.segments[1:]]
     assert found == pytest.approx([5.0, 9.0], abs=0.25), found
+    # solved once, finished by two judges: the first gives what segment gave, the second
+    # (every window unlike) leaves no block known
+    done = solve_recording(clf, to_sequence(*frames, fps=fps))
+    again = finish(clf, done, _NeverUnknown())
+    assert again.blocks == result.blocks and again.windows == result.windows
+    assert set(finish(clf, done, _AlwaysUnknown()).blocks) == {None}
 
 
 @pytest.fixture(scope="module")

@@ -12,14 +12,19 @@ from cbr.casebase import CaseBase
 from cbr.problem import FeatureConfig
 from cbr.similarity import Euclidean
 from cbr.unknown import (
+    FALSE_UNKNOWN,
+    JUDGES,
     Margin,
+    MarginDistance,
     calibration_margins,
     equal_error_threshold,
+    false_unknown_threshold,
     held_out_basis,
+    joint_thresholds,
     margin_of,
 )
 from features.datasets import Clip
-from features.errors import DataError
+from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
 from features.repetitions import WINDOW_HOP_S, WINDOW_S, split_windows
 from features.skeleton import BLAZEPOSE_33
@@ -65,6 +70,35 @@ def test_equal_error_threshold_by_hand() -> None:
     assert equal_error_threshold(np.array([0.1, 0.2]), np.array([0.5, 0.6])) == 0.2
 
 
+def test_false_unknown_threshold_by_hand() -> None:
+    """Twenty known margins 0.05, 0.10, ..., 1.00 (shuffled): at most 5 % of them (one) may
+    lie above the threshold, so it is the 19th, 0.95; at 10 % (two) the 18th, 0.90; at 0 the
+    largest. Never between two samples: of 0.2 and 0.4, at 40 % (0.8 of a value, so none
+    above) 0.4."""
+    known = np.random.default_rng(1).permutation(np.arange(1, 21) * 0.05)
+    assert FALSE_UNKNOWN == 0.05
+    assert false_unknown_threshold(known) == pytest.approx(0.95)
+    assert false_unknown_threshold(known, 0.10) == pytest.approx(0.90)
+    assert false_unknown_threshold(known, 0.0) == pytest.approx(1.00)
+    assert false_unknown_threshold(np.array([0.4, 0.2]), 0.4) == pytest.approx(0.4)
+    assert false_unknown_threshold(np.array([0.4, 0.2]), 0.5) == pytest.approx(0.2)
+    with pytest.raises(ConfigError, match="false-unknown rate must be in"):
+        false_unknown_threshold(known, 1.0)
+
+
+def test_the_threshold_spends_the_false_unknown_budget_not_the_equal_error_point() -> None:
+    """Known margins 0.1-0.9 with one in ten at 0.9 (a person the other people's cases fit
+    badly), novel margins 0.5-1.0: at the equal-error point (0.5: 2 of 10 known above, 2 of
+    10 novel at or below) a fifth of known windows would be called unknown; the budget of 5 %
+    puts the threshold at the largest known margin but none (0.9 is one of ten: 10 % > 5 %,
+    so 0.9 itself)."""
+    known = np.array([0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.9])
+    novel = np.array([0.45, 0.5, 0.55, 0.6, 0.7, 0.75, 0.8, 0.85, 0.9, 1.0])
+    assert equal_error_threshold(known, novel) == pytest.approx(0.5)
+    assert false_unknown_threshold(known) == pytest.approx(0.9)
+    assert false_unknown_threshold(known, 0.2) == pytest.approx(0.5)
+
+
 def _two_recordings() -> CaseBase:
     """Recording r1: a at 0, b at 10, c at 20; recording r2: a at 1, b at 12, c at 23."""
     return _line(
@@ -78,7 +112,8 @@ def test_margin_is_calibrated_by_holding_out_recordings_and_activities() -> None
     """Each case against the other recording's cases. Known margins (its own activity there):
     a@0: 1/12, b@10: 2/9, c@20: 3/8, a@1: 1/9, b@12: 2/8, c@23: 3/13. Novel margins (its
     activity gone too): a@0: 12/23, b@10: 9/13, c@20: 8/19, a@1: 9/19, b@12: 8/12, c@23:
-    13/23. They do not overlap: the threshold is the largest known margin, 3/8."""
+    13/23. A budget of 5 % of 6 known margins (0.3) lets none lie above: the threshold is the
+    largest known margin, 3/8."""
     cb = _two_recordings()
     known, novel, basis = calibration_margins(cb)
     assert basis == "recording"
@@ -94,6 +129,13 @@ def test_margin_is_calibrated_by_holding_out_recordings_and_activities() -> None
     )
     # a window at 11: a at 10, b at 1, c at 9 -> 1/9: b
     assert not judge.unlike(np.array([10.0, 1.0, 9.0]))
+    # a budget of 20 %: at most 1.2 of the 6 known margins above, so one: sorted 1/12, 1/9,
+    # 2/9, 3/13, 1/4, 3/8, the threshold is 1/4 (a window at margin 0.3 is now unknown)
+    strict = Margin.of(cb, false_unknown=0.2)
+    assert strict.threshold == pytest.approx(1 / 4) and strict.false_unknown == 0.2
+    assert strict.unlike(np.array([3.0, 10.0, 20.0])) and not judge.unlike(
+        np.array([3.0, 10.0, 20.0])
+    )
 
 
 def test_a_new_person_farther_from_everything_keeps_the_margin() -> None:
@@ -102,6 +144,43 @@ def test_a_new_person_farther_from_everything_keeps_the_margin() -> None:
     judge = Margin.of(_two_recordings())
     near = np.array([10.0, 1.0, 9.0])
     assert judge.ratio(near) == judge.ratio(5.0 * near) and not judge.unlike(5.0 * near)
+
+
+def test_joint_thresholds_by_hand() -> None:
+    """Ten held-out known cases, margin i/10 and nearest distance i (i = 1..10); the margin
+    alone flags 1.0 (above 0.95); a budget of 10 % (one case) for the rest. At q = 0.70 the
+    quantiles are 0.7 and 7 (three values above each): cases 8, 9 fall in the rule (10 is
+    the margin's already), 20 %; just above 0.70 they are 0.8 and 8: case 9 alone, 10 %."""
+    i = np.arange(1, 11, dtype=np.float64)
+    a, b = joint_thresholds(i / 10, i, 0.95, 0.10)
+    assert (a, b) == (pytest.approx(0.8), pytest.approx(8.0))
+    # no budget: 0.9 and 9, beyond which lies case 10 only, which the margin flags already
+    a0, b0 = joint_thresholds(i / 10, i, 0.95, 0.0)
+    assert (a0, b0) == (pytest.approx(0.9), pytest.approx(9.0))
+    # nothing flagged by the margin alone and no budget: no quantile is safe but the top
+    assert joint_thresholds(i / 10, i, 1.0, 0.0) == (pytest.approx(1.0), pytest.approx(10.0))
+
+
+def test_margin_distance_calibrated_by_hand() -> None:
+    """The two recordings of the margin test: known margins 1/12, 2/9, 3/8, 1/9, 1/4, 3/13
+    with nearest same-activity distances 1, 2, 3, 1, 2, 3. Budget 5 %, half each (0.15 of a
+    case: none may fall in either rule): the margin alone 3/8 (the largest); the joint rule
+    at q just above 2/3, where the quantiles are 1/4 and 3 (below: 3/13 and 2, which c@20,
+    margin 3/8 at distance 3, would exceed both)."""
+    judge = MarginDistance.of(_two_recordings())
+    assert judge.margin == pytest.approx(3 / 8)
+    assert (judge.joint_margin, judge.joint_distance) == (pytest.approx(1 / 4), 3.0)
+    assert (judge.basis, judge.known) == ("recording", 6)
+    # between a and b: 4/5 -> unknown by the margin alone
+    assert judge.unlike(np.array([4.0, 5.0, 15.0]))
+    # margin 4/13 (0.31: known by the margin alone) with its nearest case 4 away (> 3)
+    assert judge.unlike(np.array([4.0, 13.0, 14.0]))
+    assert "as far as held-out cases" in judge.describe(np.array([4.0, 13.0, 14.0]), "abc")
+    # the same margin 2 away: near enough to be the activity
+    assert not judge.unlike(np.array([2.0, 6.5, 7.0]))
+    # far (15) but clear (margin 15/75 = 0.2 < 1/4): a new person doing a known movement
+    assert not judge.unlike(np.array([15.0, 75.0, 90.0]))
+    assert "margin-distance" in JUDGES
 
 
 def test_held_out_by_subject_then_recording_then_time() -> None:
