@@ -34,6 +34,9 @@ flag means the same for every configuration.
 
 from __future__ import annotations
 
+import base64
+import dataclasses
+import io
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -65,6 +68,13 @@ LABEL_PRIOR = 5.0
 CALIBRATION_SAMPLE = 256
 #: held-out distances below this share of the largest one are exact matches
 EXACT_SHARE = 1e-3
+#: a summary feature counts at most this many of the cases' standard deviations in the
+#: nearest-clip distance (:class:`SummaryNeighbours`)
+CLIP_SD = 3.0
+#: the share of held-out training clips the combined flag (:class:`Combined`) may call unlike
+#: the cases (new people score a little farther than held-out training clips: measured false
+#: alarms 2-4 % at this budget)
+FLAG_BUDGET = 0.02
 
 
 def own_description(config: FeatureConfig) -> bool:
@@ -209,7 +219,7 @@ def fold_of(groups: np.ndarray, folds: int = RANGE_FOLDS, seed: int = 0) -> np.n
     return np.array([where[str(g)] for g in groups], dtype=np.int64)
 
 
-def fit_ranges(
+def ranges_and_held(
     cases: np.ndarray,
     case_groups: np.ndarray,
     queries: np.ndarray,
@@ -217,12 +227,13 @@ def fit_ranges(
     labels: Sequence[str] | np.ndarray,
     quantile: float = SHARED_QUANTILE,
     description: FeatureConfig | None = None,
-) -> FeatureRanges | None:
+) -> tuple[FeatureRanges, np.ndarray] | None:
     """The feature ranges of ``cases`` ``(m, F)`` (summaries, group ``case_groups`` ``(m,)``)
     calibrated on the training clips ``queries`` ``(n, F)`` (group ``groups`` ``(n,)``,
     label ``labels``), each scored against the cases of the other folds; ``description``: the
     configuration the summaries were computed with (None: the problems' own). None when the
-    cases form fewer than two groups (nothing to hold out)."""
+    cases form fewer than two groups (nothing to hold out). With them, each query's held-out
+    outside share ``(n,)``."""
     everyone = np.concatenate([np.asarray(case_groups, dtype=object),
                                np.asarray(groups, dtype=object)])  # fmt: skip
     fold = fold_of(everyone)
@@ -248,8 +259,239 @@ def fit_ranges(
         scales.append(max(shrunk, floor))
     per = dict(zip(names, scales, strict=True))
     ratios = held / np.array([per[v] for v in text])
-    return FeatureRanges(lo, hi, names, tuple(scales), default,
-                         float(np.quantile(ratios, quantile)), quantile, description)  # fmt: skip
+    found = FeatureRanges(lo, hi, names, tuple(scales), default,
+                          float(np.quantile(ratios, quantile)), quantile, description)  # fmt: skip
+    return found, held
+
+
+def fit_ranges(
+    cases: np.ndarray,
+    case_groups: np.ndarray,
+    queries: np.ndarray,
+    groups: np.ndarray,
+    labels: Sequence[str] | np.ndarray,
+    quantile: float = SHARED_QUANTILE,
+    description: FeatureConfig | None = None,
+) -> FeatureRanges | None:
+    """:func:`ranges_and_held` without the held-out shares."""
+    got = ranges_and_held(cases, case_groups, queries, groups, labels, quantile, description)
+    return None if got is None else got[0]
+
+
+def nearest_rms(queries: np.ndarray, cases: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each query's ``(q, F)`` nearest case ``(m, F)``: the root mean square difference over
+    the features both have (NaN: missing) ``(q,)`` and the case's position ``(q,)`` (-1 and
+    ``inf`` when there is no case). One matrix product per term: no loop over cases."""
+    q = np.asarray(queries, dtype=np.float64)
+    c = np.asarray(cases, dtype=np.float64)
+    if len(c) == 0 or len(q) == 0:
+        return np.full(len(q), np.inf), np.full(len(q), -1, dtype=np.int64)
+    qm, cm = (~np.isnan(q)).astype(np.float64), (~np.isnan(c)).astype(np.float64)
+    q0, c0 = np.nan_to_num(q), np.nan_to_num(c)
+    # sum over the shared features of (q - c)^2 = q^2 + c^2 - 2 q c, each masked by the other
+    sq = (q0**2) @ cm.T + qm @ (c0**2).T - 2.0 * q0 @ c0.T
+    shared = qm @ cm.T
+    d2 = np.where(shared > 0, np.maximum(sq, 0.0) / np.maximum(shared, 1.0), np.inf)
+    at = np.argmin(d2, axis=1)
+    return np.sqrt(d2[np.arange(len(q)), at]), at.astype(np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class SummaryNeighbours:
+    """The nearest training clip in summary space, whatever the case base's measure: each
+    summary feature standardised by the cases' ``centre`` and ``scale`` ``(F,)`` (their mean
+    and standard deviation) and counted at most :data:`CLIP_SD` standard deviations, so one
+    feature no case shows cannot decide alone (the range count sees those). ``cases``
+    ``(m, F)``: the training clips kept as cases, so standardised (float16: within
+    :data:`CLIP_SD` its rounding is below 0.002), ``labels`` ``(m,)`` their labels."""
+
+    centre: np.ndarray
+    scale: np.ndarray
+    cases: np.ndarray
+    labels: tuple[str, ...]
+
+    def standardise(self, s: np.ndarray) -> np.ndarray:
+        """Summaries ``(..., F)`` in the cases' standard deviations, clipped."""
+        z = (np.asarray(s, dtype=np.float64) - self.centre) / self.scale
+        out: np.ndarray = np.clip(z, -CLIP_SD, CLIP_SD)
+        return out
+
+    def nearest(self, s: np.ndarray) -> tuple[float, str]:
+        """One clip's summary ``(F,)``: the distance to its nearest case and that case's
+        label (``inf`` and "" for a summary of other columns)."""
+        s = np.asarray(s, dtype=np.float64)
+        if s.shape[-1] != self.centre.shape[-1]:
+            return float("inf"), ""
+        d, at = nearest_rms(self.standardise(s)[None, :], self.cases)
+        return float(d[0]), (self.labels[int(at[0])] if at[0] >= 0 else "")
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, SummaryNeighbours):
+            return NotImplemented
+        return (
+            np.array_equal(self.centre, other.centre)
+            and np.array_equal(self.scale, other.scale)
+            and np.array_equal(self.cases, other.cases, equal_nan=True)
+            and self.labels == other.labels
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"centre": self.centre.tolist(), "scale": self.scale.tolist(),
+                "cases": _array_text(self.cases), "labels": list(self.labels)}  # fmt: skip
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> SummaryNeighbours:
+        """Refuses (ValueError, with the reason) what a damaged store would hold."""
+        centre = np.array(d["centre"], dtype=np.float64)
+        scale = np.array(d["scale"], dtype=np.float64)
+        cases = _array_of(d["cases"])
+        labels = tuple(str(v) for v in d["labels"])
+        if centre.ndim != 1 or scale.shape != centre.shape:
+            raise ValueError("the summary neighbours' centre and scale must be paired vectors")
+        if not (np.isfinite(centre).all() and np.isfinite(scale).all() and (scale > 0).all()):
+            raise ValueError("the summary neighbours' scales must be finite and positive")
+        if cases.ndim != 2 or cases.shape[1] != len(centre) or len(labels) != len(cases):
+            raise ValueError("the summary neighbours' cases must be (cases, features) with a "
+                             "label each")  # fmt: skip
+        if np.nanmax(np.abs(cases), initial=0.0) > CLIP_SD:
+            raise ValueError(f"the summary neighbours' cases must lie within {CLIP_SD:g} "
+                             "standard deviations")  # fmt: skip
+        return cls(centre, scale, cases, labels)
+
+
+def _array_text(a: np.ndarray) -> str:
+    """A float16 array as base64 ``.npy`` text (JSON-ready; NaN kept)."""
+    buf = io.BytesIO()
+    np.save(buf, np.asarray(a, dtype=np.float16), allow_pickle=False)
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _array_of(text: Any) -> np.ndarray:
+    """The array :func:`_array_text` wrote (ValueError when it is not one)."""
+    try:
+        a = np.load(io.BytesIO(base64.b64decode(str(text), validate=True)), allow_pickle=False)
+    except (OSError, ValueError, EOFError) as e:
+        raise ValueError(f"the summary neighbours' cases are not a stored array ({e})") from e
+    if a.dtype != np.float16:
+        raise ValueError(f"the summary neighbours' cases must be float16, not {a.dtype}")
+    out: np.ndarray = np.asarray(a, dtype=np.float16)
+    return out
+
+
+def fit_neighbours(
+    cases: np.ndarray,
+    case_groups: np.ndarray,
+    case_labels: Sequence[str] | np.ndarray,
+    queries: np.ndarray,
+    groups: np.ndarray,
+) -> tuple[SummaryNeighbours, np.ndarray, np.ndarray] | None:
+    """The summary neighbours of ``cases`` ``(m, F)`` (group ``case_groups``, label
+    ``case_labels`` ``(m,)``) and, for each training clip ``queries`` ``(n, F)`` (group
+    ``groups`` ``(n,)``), its held-out distance ``(n,)`` and its nearest case's label ``(n,)``
+    among the cases of the other folds (:func:`fold_of`, as :func:`fit_ranges` holds them
+    out). None when the cases form fewer than two groups."""
+    everyone = np.concatenate([np.asarray(case_groups, dtype=object),
+                               np.asarray(groups, dtype=object)])  # fmt: skip
+    fold = fold_of(everyone)
+    case_fold, query_fold = fold[: len(cases)], fold[len(cases) :]
+    if len(fold) == 0 or int(fold.max()) < 1:
+        return None
+    with warnings.catch_warnings():  # a feature no case has: NaN centre, no part in distances
+        warnings.simplefilter("ignore", RuntimeWarning)
+        centre = np.nan_to_num(np.nanmean(cases, axis=0))
+        spread = np.nanstd(cases, axis=0)
+    scale = np.where(np.isfinite(spread) & (spread > 1e-9), spread, 1.0)
+    labels = np.array([str(v) for v in case_labels], dtype=object)
+    found = SummaryNeighbours(centre, scale, np.zeros((0, len(centre))), ())
+    z_cases = found.standardise(cases).astype(np.float16)
+    z_queries = found.standardise(queries).astype(np.float16)
+    held = np.full(len(queries), np.inf)
+    near = np.full(len(queries), "", dtype=object)
+    for f in np.unique(query_fold):
+        mine, theirs = query_fold == f, np.flatnonzero(case_fold != f)
+        d, at = nearest_rms(z_queries[mine], z_cases[theirs])
+        held[mine] = d
+        near[mine] = [labels[theirs[i]] if i >= 0 else "" for i in at]
+    neighbours = SummaryNeighbours(centre, scale, z_cases, tuple(labels.tolist()))
+    return neighbours, held, near
+
+
+#: the summary scores of :class:`Combined`, besides the case base's own distance: the share
+#: of features outside the cases' ranges in units of all held-out clips', the same in units
+#: of the held-out clips of the label of the nearest training clip in summary space, and the
+#: distance to that clip (:class:`SummaryNeighbours`)
+SUMMARY_SCORES = ("outside", "outside_label", "neighbour")
+
+
+@dataclass(frozen=True, eq=False)
+class Combined:
+    """One calibrated statistic from several novelty scores: each score turned into its
+    held-out tail probability (the share of held-out training clips that score at least as
+    high, ``(1 + count) / (n + 1)``), the clip flagged when the smallest of them is at most
+    ``threshold``, which is set so that ``budget`` of the held-out clips are (a Bonferroni-
+    style combination calibrated on the clips themselves: a further score costs no second
+    false-alarm budget). ``held``: per score name, its held-out values sorted ``(n,)``."""
+
+    held: dict[str, np.ndarray]
+    threshold: float
+    budget: float
+
+    def tail(self, name: str, value: float) -> float:
+        """The held-out tail probability of ``value`` of score ``name`` (1 for a score not
+        calibrated or not measured: NaN)."""
+        ref = self.held.get(name)
+        if ref is None or len(ref) == 0 or np.isnan(value):
+            return 1.0
+        above = len(ref) - int(np.searchsorted(ref, value, side="left"))
+        return (1.0 + above) / (len(ref) + 1.0)
+
+    def flags(self, p: float) -> bool:
+        return p <= self.threshold
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Combined):
+            return NotImplemented
+        return (
+            self.held.keys() == other.held.keys()
+            and all(np.array_equal(v, other.held[k]) for k, v in self.held.items())
+            and (self.threshold, self.budget) == (other.threshold, other.budget)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"held": {k: [float(x) for x in v] for k, v in self.held.items()},
+                "threshold": self.threshold, "budget": self.budget}  # fmt: skip
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> Combined:
+        """Refuses (ValueError, with the reason) what a damaged store would hold."""
+        held = {str(k): np.array(v, dtype=np.float64) for k, v in dict(d["held"]).items()}
+        for k, v in held.items():
+            if v.ndim != 1 or np.isnan(v).any() or (np.diff(v) < 0).any():
+                raise ValueError(f"the held-out {k} scores must be an increasing list")
+        threshold, budget = float(d["threshold"]), float(d["budget"])
+        if not (0.0 <= threshold <= 1.0 and 0.0 < budget < 1.0):
+            raise ValueError("the combined flag's threshold and budget must be probabilities")
+        return cls(held, threshold, budget)
+
+
+def combine(
+    held: dict[str, np.ndarray], sample: dict[str, np.ndarray], budget: float = FLAG_BUDGET
+) -> Combined:
+    """The combined statistic from each score's held-out values ``held`` (name: ``(n,)``)
+    and the same clips' scores ``sample`` (name: ``(q,)``, one row per clip, all scores of
+    it): the threshold is the ``budget`` quantile of their smallest tail probability."""
+    ref = {k: np.sort(v[~np.isnan(v)]) for k, v in held.items()}
+    found = Combined(ref, 0.0, budget)
+    rows = len(next(iter(sample.values()))) if sample else 0
+    if rows == 0:
+        return found
+    p = np.array([[found.tail(k, float(x)) for x in v] for k, v in sample.items()])
+    least = p.min(axis=0)
+    return Combined(ref, float(np.quantile(least, budget, method="lower")), budget)
 
 
 @dataclass(frozen=True)
@@ -259,7 +501,9 @@ class NoveltyCalibration:
     flagged; basis: how the training clips were held out; n: how many were; skeletons: the
     skeletons (sensors) the training clips were recorded with (empty: not known); features:
     the summary features' ranges (None: the distance alone, as case bases stored before
-    them)."""
+    them); neighbours and combined: the nearest training clip in summary space and the one
+    statistic that combines the scores (:class:`Combined`; None: each score at its own
+    quantile, as case bases stored before it are judged)."""
 
     scale: float
     unlike_ratio: float
@@ -268,6 +512,8 @@ class NoveltyCalibration:
     n: int
     skeletons: tuple[str, ...] = ()
     features: FeatureRanges | None = field(default=None, compare=True)
+    neighbours: SummaryNeighbours | None = None
+    combined: Combined | None = None
 
     def ratio(self, distance: float) -> float:
         """Nearest-case distance in units of the case base's usual one."""
@@ -292,9 +538,11 @@ class NoveltyCalibration:
     ) -> str:
         """Why a clip is unlike the stored cases by what it shows, the sensor aside:
         ``"distance"`` (its nearest case is farther than held-out clips' are), ``"features"``
-        (its summary features leave the cases' ranges more than held-out clips of its answer
-        ``label`` do; only with ``values``, the clip's :attr:`FeatureRanges.description` when
-        the ranges have one, else its problem, and ``label``) or ``""`` (neither)."""
+        (its summary features are less usual than the held-out clips' by :meth:`tails`, with
+        a combined calibration; before it, they leave the cases' ranges more than held-out
+        clips of its answer ``label`` do; only with ``values``, the clip's
+        :attr:`FeatureRanges.description` when the ranges have one, else its problem) or
+        ``""`` (neither)."""
         by_distance, by_features = self.scores(distance, values, label)
         return "distance" if by_distance else "features" if by_features else ""
 
@@ -304,6 +552,9 @@ class NoveltyCalibration:
         """Whether each score alone flags the clip (:meth:`measured`): the nearest-case
         ``distance`` and the summary features of ``values`` for the answer ``label``."""
         by_distance = self.ratio(distance) > self.unlike_ratio
+        if self.combined is not None:
+            tails = self.tails(values)
+            return by_distance, bool(tails) and self.combined.flags(min(tails.values()))
         by_features = (
             self.features is not None
             and values is not None
@@ -311,6 +562,22 @@ class NoveltyCalibration:
             and self.features.unlike(summary(values), label)
         )
         return by_distance, bool(by_features)
+
+    def tails(self, values: np.ndarray | None) -> dict[str, float]:
+        """The held-out tail probability of each summary score of the clip whose problem (or
+        description) is ``values`` (:data:`SUMMARY_SCORES`; empty without ``values`` or a
+        combined calibration). None of them depends on the answer: the same clip scores the
+        same under every measure."""
+        c, f, n = self.combined, self.features, self.neighbours
+        if c is None or f is None or n is None or values is None:
+            return {}
+        s = summary(values)
+        outside = f.outside(s)
+        distance, label = n.nearest(s)
+        scale = f.scale(label) if label else f.default
+        return {"outside": c.tail("outside", outside / f.default),
+                "outside_label": c.tail("outside_label", outside / scale),
+                "neighbour": c.tail("neighbour", distance)}  # fmt: skip
 
     @property
     def description(self) -> FeatureConfig | None:
@@ -326,6 +593,9 @@ class NoveltyCalibration:
                              "skeletons": list(self.skeletons)}  # fmt: skip
         if self.features is not None:
             d["features"] = self.features.to_dict()
+        if self.neighbours is not None and self.combined is not None:
+            d["neighbours"] = self.neighbours.to_dict()
+            d["combined"] = self.combined.to_dict()
         return d
 
     def describe(self) -> dict[str, Any]:
@@ -338,6 +608,11 @@ class NoveltyCalibration:
                              "default_scale": f.default,
                              "described_by": "the case base's problems" if f.description is None
                              else f.description.describe()}  # fmt: skip
+        if self.neighbours is not None and self.combined is not None:
+            c = self.combined
+            d["neighbours"] = {"cases": int(self.neighbours.cases.shape[0])}
+            d["combined"] = {"threshold": c.threshold, "budget": c.budget,
+                             "scores": {k: len(v) for k, v in c.held.items()}}  # fmt: skip
         return d
 
     @classmethod
@@ -350,7 +625,60 @@ class NoveltyCalibration:
             int(d["n"]),
             tuple(str(s) for s in d.get("skeletons", ())),
             FeatureRanges.from_dict(d["features"]) if d.get("features") else None,
+            *_combined_of(d),
         )
+
+
+def _combined_of(d: dict[str, Any]) -> tuple[SummaryNeighbours | None, Combined | None]:
+    """The stored combined flag (both parts, or neither: stored before it); a half-stored
+    one is refused."""
+    if not d.get("neighbours") and not d.get("combined"):
+        return None, None
+    if not (d.get("neighbours") and d.get("combined") and d.get("features")):
+        raise ValueError("the combined flag needs its feature ranges, neighbours and "
+                         "held-out scores together")  # fmt: skip
+    return SummaryNeighbours.from_dict(d["neighbours"]), Combined.from_dict(d["combined"])
+
+
+def distance_limit(ratios: np.ndarray, threshold: float) -> float:
+    """The held-out distance ratio beyond which a clip's tail probability among ``ratios``
+    ``(n,)`` (:meth:`Combined.tail`) is at most ``threshold``: the distance alone flags
+    exactly what it flags in the combined statistic (``inf``: never)."""
+    r = np.sort(np.asarray(ratios, dtype=np.float64))
+    r = r[~np.isnan(r)]
+    k = int(np.floor(threshold * (len(r) + 1) - 1.0 + 1e-9))  # held-out clips at or above
+    return float("inf") if k < 0 or len(r) == 0 else float(r[max(len(r) - 1 - k, 0)])
+
+
+def combined_calibration(
+    novelty: NoveltyCalibration,
+    nearest: np.ndarray,
+    ranges: FeatureRanges,
+    outside: np.ndarray,
+    neighbours: SummaryNeighbours,
+    neighbour: np.ndarray,
+    near_labels: np.ndarray,
+    pick: np.ndarray,
+    budget: float = FLAG_BUDGET,
+) -> NoveltyCalibration:
+    """``novelty`` (the distance's calibration) with the feature scores and one statistic of
+    them all (:class:`Combined`): the held-out training clips' ``outside`` shares ``(n,)``
+    (:func:`ranges_and_held`), distances to the nearest clip in summary space ``neighbour``
+    and that clip's label ``near_labels`` ``(n,)`` (:func:`fit_neighbours`), and the
+    nearest-case distances ``nearest`` ``(q,)`` of the clips at positions ``pick`` ``(q,)``,
+    on which the threshold is set. The distance alone flags beyond the ratio at which it
+    flags in the combination (:func:`distance_limit`: what :meth:`NoveltyCalibration.unlike`
+    judges when only a distance is known)."""
+    ratio = np.asarray(nearest, dtype=np.float64) / novelty.scale
+    unit = np.array([ranges.scale(str(v)) if str(v) else ranges.default for v in near_labels])
+    held = {"distance": ratio[np.isfinite(ratio)], "outside": outside / ranges.default,
+            "outside_label": outside / unit, "neighbour": neighbour}  # fmt: skip
+    sample = {"distance": ratio, **{k: v[pick] for k, v in held.items() if k != "distance"}}
+    combined = combine(held, sample, budget)
+    limit = distance_limit(held["distance"], combined.threshold)
+    within = float(np.mean(held["distance"] <= limit)) if len(held["distance"]) else 1.0
+    return dataclasses.replace(novelty, unlike_ratio=limit, quantile=within, features=ranges,
+                               neighbours=neighbours, combined=combined)  # fmt: skip
 
 
 def held_out_distances(
