@@ -76,7 +76,9 @@ from .novelty import (
     describe,
     fit_neighbours,
     from_distances,
+    from_problem,
     ranges_and_held,
+    same_columns,
     sample,
     summaries,
 )
@@ -657,8 +659,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             calibrate_soft(h, len(np.unique(cb.labels.astype(str))), basis),
         )
 
-    @staticmethod
     def _summaries(
+        self,
         clips: Sequence[DescribedClip],
         cb: CaseBase,
         origin: np.ndarray,
@@ -670,12 +672,32 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         training clips' as queries ``(n, F)`` (the clips ``query_clip`` ``(n,)``, in the order
         of their problems ``queries``); and the description they were computed with (None:
         the problems' own summaries)."""
-        n = len(clips)
-        if clips[0].summary is None:  # the problems are fluent summaries: judged as they are
+        n, wanted = len(clips), self._feature_config()
+        if clips[0].summary is not None:
+            D, config = CaseBaseClassifier._description_summaries(clips)
+        elif same_columns(wanted):  # the description, from the problems as recorded
+            D, config = CaseBaseClassifier._own_descriptions(clips, wanted)
+        else:  # other columns than the description's: the problems' own summaries
             return summaries(cb.problems), origin % n, origin >= n, summaries(queries), None
-        D, config = CaseBaseClassifier._description_summaries(clips)
-        kept = origin[origin < n]  # mirror images left out: their summaries were not computed
+        kept = origin[origin < n]  # mirror images left out: the clips' own description
         return D[kept], kept, np.zeros(len(kept), dtype=bool), D[query_clip], config
+
+    @staticmethod
+    def _own_descriptions(
+        clips: Sequence[DescribedClip], config: FeatureConfig
+    ) -> tuple[np.ndarray, FeatureConfig]:
+        """The clips' fluent summaries ``(n, F)`` from their problems as recorded (a
+        :func:`cbr.novelty.same_columns` configuration ``config``: the candidate columns of
+        :data:`cbr.novelty.DESCRIPTION`), with the description resolved as :meth:`_describe`
+        resolves the problem's columns."""
+        candidates = candidate_config(DESCRIPTION)
+        counts = np.zeros(len(candidates.states), dtype=np.int64)
+        for c in clips:
+            counts += c.available
+        described = resolve_counts(DESCRIPTION, counts, len(clips))
+        wide = candidate_config(config)  # the columns each clip's problem was described over
+        D = np.stack([from_problem(c.values, wide, described) for c in clips])
+        return D, described
 
     @staticmethod
     def _description_summaries(

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from .casebase import CaseBase
-from .problem import FeatureConfig, candidate_config, extract_problem
+from .problem import FeatureConfig, candidate_config, column_index, extract_problem
 
 #: the clip description the feature score judges whatever the case base's own problem: the
 #: fluent summary that fluents/euclidean's problem is (its default columns: angle fluents,
@@ -95,6 +95,31 @@ def describe(seq: Any, description: FeatureConfig) -> np.ndarray:
     """The description ``(F,)`` of the clip ``seq`` ``(frames, joints, 3)`` under a resolved
     ``description`` (:data:`DESCRIPTION`'s columns): what the feature score judges."""
     return extract_problem(seq, description).values
+
+
+def same_columns(config: FeatureConfig) -> bool:
+    """Whether a clip's problem under ``config`` (an :func:`own_description`) holds
+    :data:`DESCRIPTION`'s candidate columns, so :func:`from_problem` gives its description."""
+    return own_description(config) and tuple(candidate_config(config).states) == tuple(
+        candidate_config(DESCRIPTION).states
+    )
+
+
+def from_problem(
+    values: np.ndarray, candidates: FeatureConfig, description: FeatureConfig
+) -> np.ndarray:
+    """The description ``(F,)`` of a clip (resolved ``description``: :data:`DESCRIPTION`'s
+    columns) from its problem ``values`` as recorded under ``candidates`` (the candidate
+    columns of a :func:`same_columns` configuration): a summary vector's mean, lowest,
+    highest and variation blocks (its phase means left out), or a sequence's columns
+    summarised over time (:func:`summary`); what :func:`describe` computes from the clip."""
+    v = np.asarray(values, dtype=np.float64)
+    if v.ndim == 1:
+        vector: np.ndarray = v[column_index(description, candidates)]
+        return vector
+    plain = dataclasses.replace(description, summary=False, phases=0)
+    out: np.ndarray = summary(v[:, column_index(plain, candidates)])
+    return out
 
 
 def summary(values: np.ndarray) -> np.ndarray:
@@ -427,12 +452,15 @@ SUMMARY_SCORES = ("outside", "outside_label", "neighbour")
 
 @dataclass(frozen=True, eq=False)
 class Combined:
-    """One calibrated statistic from several novelty scores: each score turned into its
+    """One calibrated statistic from the novelty scores. Each score is turned into its
     held-out tail probability (the share of held-out training clips that score at least as
-    high, ``(1 + count) / (n + 1)``), the clip flagged when the smallest of them is at most
-    ``threshold``, which is set so that ``budget`` of the held-out clips are (a Bonferroni-
-    style combination calibrated on the clips themselves: a further score costs no second
-    false-alarm budget). ``held``: per score name, its held-out values sorted ``(n,)``."""
+    high, ``(1 + count) / (n + 1)``); the summary scores (:data:`SUMMARY_SCORES`) into one by
+    Fisher's method (``-sum(log p)``, itself turned into its held-out tail probability,
+    ``"summary"``: several moderately unusual features count together); the clip is flagged
+    when the smaller of the summary's and the distance's tail is at most ``threshold``,
+    set so that ``budget`` of the held-out clips are (a Bonferroni-style minimum calibrated
+    on the clips themselves: a further score costs no second false-alarm budget).
+    ``held``: per score name, its held-out values sorted ``(n,)``."""
 
     held: dict[str, np.ndarray]
     threshold: float
@@ -441,11 +469,23 @@ class Combined:
     def tail(self, name: str, value: float) -> float:
         """The held-out tail probability of ``value`` of score ``name`` (1 for a score not
         calibrated or not measured: NaN)."""
+        return float(self.tails(name, np.array([value], dtype=np.float64))[0])
+
+    def tails(self, name: str, values: np.ndarray) -> np.ndarray:
+        """:meth:`tail` of each of ``values`` ``(q,)``."""
+        v = np.asarray(values, dtype=np.float64)
         ref = self.held.get(name)
-        if ref is None or len(ref) == 0 or np.isnan(value):
-            return 1.0
-        above = len(ref) - int(np.searchsorted(ref, value, side="left"))
-        return (1.0 + above) / (len(ref) + 1.0)
+        if ref is None or len(ref) == 0:
+            return np.ones(len(v))
+        above = len(ref) - np.searchsorted(ref, v, side="left")
+        p = (1.0 + above) / (len(ref) + 1.0)
+        return np.where(np.isnan(v), 1.0, p)
+
+    def summary(self, tails: dict[str, np.ndarray]) -> np.ndarray:
+        """The summary scores' ``tails`` (name: ``(q,)``) as one tail probability ``(q,)``
+        (Fisher's method against the held-out clips' own)."""
+        fisher = -np.sum([np.log(tails[k]) for k in SUMMARY_SCORES], axis=0)
+        return self.tails("summary", np.atleast_1d(fisher))
 
     def flags(self, p: float) -> bool:
         return p <= self.threshold
@@ -479,19 +519,21 @@ class Combined:
 
 
 def combine(
-    held: dict[str, np.ndarray], sample: dict[str, np.ndarray], budget: float = FLAG_BUDGET
+    held: dict[str, np.ndarray], sample: np.ndarray, budget: float = FLAG_BUDGET
 ) -> Combined:
-    """The combined statistic from each score's held-out values ``held`` (name: ``(n,)``)
-    and the same clips' scores ``sample`` (name: ``(q,)``, one row per clip, all scores of
-    it): the threshold is the ``budget`` quantile of their smallest tail probability."""
-    ref = {k: np.sort(v[~np.isnan(v)]) for k, v in held.items()}
+    """The combined statistic from each score's held-out values ``held`` (name: ``(n,)``,
+    the distance's at the clips ``sample`` ``(q,)`` positions, the summary scores' at every
+    clip): the held-out Fisher statistic of the summary scores is added as ``"summary"``
+    and the threshold is the ``budget`` quantile of the clips' smaller tail probability."""
+    ref = {k: np.sort(v[np.isfinite(v)]) for k, v in held.items()}  # JSON has no inf
     found = Combined(ref, 0.0, budget)
-    rows = len(next(iter(sample.values()))) if sample else 0
-    if rows == 0:
+    fisher = -np.sum([np.log(found.tails(k, held[k])) for k in SUMMARY_SCORES], axis=0)
+    found = Combined({**ref, "summary": np.sort(fisher)}, 0.0, budget)
+    if len(sample) == 0:
         return found
-    p = np.array([[found.tail(k, float(x)) for x in v] for k, v in sample.items()])
-    least = p.min(axis=0)
-    return Combined(ref, float(np.quantile(least, budget, method="lower")), budget)
+    tails = {k: found.tails(k, held[k][sample]) for k in SUMMARY_SCORES}
+    least = np.minimum(found.tails("distance", held["distance"]), found.summary(tails))
+    return dataclasses.replace(found, threshold=float(np.quantile(least, budget, method="lower")))
 
 
 @dataclass(frozen=True)
@@ -554,7 +596,7 @@ class NoveltyCalibration:
         by_distance = self.ratio(distance) > self.unlike_ratio
         if self.combined is not None:
             tails = self.tails(values)
-            return by_distance, bool(tails) and self.combined.flags(min(tails.values()))
+            return by_distance, bool(tails) and self.combined.flags(tails["summary"])
         by_features = (
             self.features is not None
             and values is not None
@@ -565,9 +607,9 @@ class NoveltyCalibration:
 
     def tails(self, values: np.ndarray | None) -> dict[str, float]:
         """The held-out tail probability of each summary score of the clip whose problem (or
-        description) is ``values`` (:data:`SUMMARY_SCORES`; empty without ``values`` or a
-        combined calibration). None of them depends on the answer: the same clip scores the
-        same under every measure."""
+        description) is ``values`` (:data:`SUMMARY_SCORES`) and of their Fisher statistic
+        (``"summary"``; empty without ``values`` or a combined calibration). None of them
+        depends on the answer: the same clip scores the same under every measure."""
         c, f, n = self.combined, self.features, self.neighbours
         if c is None or f is None or n is None or values is None:
             return {}
@@ -575,9 +617,11 @@ class NoveltyCalibration:
         outside = f.outside(s)
         distance, label = n.nearest(s)
         scale = f.scale(label) if label else f.default
-        return {"outside": c.tail("outside", outside / f.default),
-                "outside_label": c.tail("outside_label", outside / scale),
-                "neighbour": c.tail("neighbour", distance)}  # fmt: skip
+        tails = {"outside": c.tail("outside", outside / f.default),
+                 "outside_label": c.tail("outside_label", outside / scale),
+                 "neighbour": c.tail("neighbour", distance)}  # fmt: skip
+        summed = c.summary({k: np.array([v]) for k, v in tails.items()})
+        return {**tails, "summary": float(summed[0])}
 
     @property
     def description(self) -> FeatureConfig | None:
@@ -671,10 +715,10 @@ def combined_calibration(
     judges when only a distance is known)."""
     ratio = np.asarray(nearest, dtype=np.float64) / novelty.scale
     unit = np.array([ranges.scale(str(v)) if str(v) else ranges.default for v in near_labels])
-    held = {"distance": ratio[np.isfinite(ratio)], "outside": outside / ranges.default,
+    held = {"distance": ratio, "outside": outside / ranges.default,
             "outside_label": outside / unit, "neighbour": neighbour}  # fmt: skip
-    sample = {"distance": ratio, **{k: v[pick] for k, v in held.items() if k != "distance"}}
-    combined = combine(held, sample, budget)
+    combined = combine(held, np.asarray(pick), budget)
+    held["distance"] = ratio[np.isfinite(ratio)]
     limit = distance_limit(held["distance"], combined.threshold)
     within = float(np.mean(held["distance"] <= limit)) if len(held["distance"]) else 1.0
     return dataclasses.replace(novelty, unlike_ratio=limit, quantile=within, features=ranges,
