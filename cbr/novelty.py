@@ -75,6 +75,9 @@ CLIP_SD = 3.0
 #: the cases (new people score a little farther than held-out training clips: measured false
 #: alarms 2-4 % at this budget)
 FLAG_BUDGET = 0.02
+#: the distance's share of the combined flag's threshold (:class:`Combined`): a tail
+#: probability this many times the summary's flags
+DISTANCE_WEIGHT = 0.25
 
 
 def own_description(config: FeatureConfig) -> bool:
@@ -457,14 +460,17 @@ class Combined:
     high, ``(1 + count) / (n + 1)``); the summary scores (:data:`SUMMARY_SCORES`) into one by
     Fisher's method (``-sum(log p)``, itself turned into its held-out tail probability,
     ``"summary"``: several moderately unusual features count together); the clip is flagged
-    when the smaller of the summary's and the distance's tail is at most ``threshold``,
-    set so that ``budget`` of the held-out clips are (a Bonferroni-style minimum calibrated
-    on the clips themselves: a further score costs no second false-alarm budget).
+    when the summary's tail is at most ``threshold`` or the distance's at most
+    ``distance_weight`` times it, the threshold set so that ``budget`` of the held-out clips
+    are (a weighted Bonferroni minimum calibrated on the clips themselves: a further score
+    costs no second false-alarm budget; the distance, which finds least and whose held-out
+    clips are the measure's own sample, gets the smaller share).
     ``held``: per score name, its held-out values sorted ``(n,)``."""
 
     held: dict[str, np.ndarray]
     threshold: float
     budget: float
+    distance_weight: float = 1.0
 
     def tail(self, name: str, value: float) -> float:
         """The held-out tail probability of ``value`` of score ``name`` (1 for a score not
@@ -488,7 +494,15 @@ class Combined:
         return self.tails("summary", np.atleast_1d(fisher))
 
     def flags(self, p: float) -> bool:
+        """Whether a summary tail probability ``p`` flags (the distance's: :meth:`by_distance`)."""
         return p <= self.threshold
+
+    @property
+    def distance_threshold(self) -> float:
+        """The distance's tail probability at or below which it flags: its share of the
+        threshold, and at least beyond every held-out clip's distance."""
+        n = len(self.held.get("distance", ()))
+        return max(self.distance_weight * self.threshold, 1.0 / (n + 1.0))
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Combined):
@@ -496,14 +510,16 @@ class Combined:
         return (
             self.held.keys() == other.held.keys()
             and all(np.array_equal(v, other.held[k]) for k, v in self.held.items())
-            and (self.threshold, self.budget) == (other.threshold, other.budget)
+            and (self.threshold, self.budget, self.distance_weight)
+            == (other.threshold, other.budget, other.distance_weight)
         )
 
     __hash__ = None  # type: ignore[assignment]
 
     def to_dict(self) -> dict[str, Any]:
         return {"held": {k: [float(x) for x in v] for k, v in self.held.items()},
-                "threshold": self.threshold, "budget": self.budget}  # fmt: skip
+                "threshold": self.threshold, "budget": self.budget,
+                "distance_weight": self.distance_weight}  # fmt: skip
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Combined:
@@ -513,26 +529,32 @@ class Combined:
             if v.ndim != 1 or np.isnan(v).any() or (np.diff(v) < 0).any():
                 raise ValueError(f"the held-out {k} scores must be an increasing list")
         threshold, budget = float(d["threshold"]), float(d["budget"])
-        if not (0.0 <= threshold <= 1.0 and 0.0 < budget < 1.0):
-            raise ValueError("the combined flag's threshold and budget must be probabilities")
-        return cls(held, threshold, budget)
+        weight = float(d["distance_weight"])
+        if not (0.0 <= threshold <= 1.0 and 0.0 < budget < 1.0 and 0.0 < weight <= 1.0):
+            raise ValueError("the combined flag's threshold, budget and distance weight must be "
+                             "probabilities")  # fmt: skip
+        return cls(held, threshold, budget, weight)
 
 
 def combine(
-    held: dict[str, np.ndarray], sample: np.ndarray, budget: float = FLAG_BUDGET
+    held: dict[str, np.ndarray],
+    sample: np.ndarray,
+    budget: float = FLAG_BUDGET,
+    weight: float = DISTANCE_WEIGHT,
 ) -> Combined:
     """The combined statistic from each score's held-out values ``held`` (name: ``(n,)``,
     the distance's at the clips ``sample`` ``(q,)`` positions, the summary scores' at every
     clip): the held-out Fisher statistic of the summary scores is added as ``"summary"``
-    and the threshold is the ``budget`` quantile of the clips' smaller tail probability."""
+    and the threshold is the ``budget`` quantile of the clips' smaller of the summary's tail
+    and the distance's over ``weight``."""
     ref = {k: np.sort(v[np.isfinite(v)]) for k, v in held.items()}  # JSON has no inf
-    found = Combined(ref, 0.0, budget)
+    found = Combined(ref, 0.0, budget, weight)
     fisher = -np.sum([np.log(found.tails(k, held[k])) for k in SUMMARY_SCORES], axis=0)
-    found = Combined({**ref, "summary": np.sort(fisher)}, 0.0, budget)
+    found = Combined({**ref, "summary": np.sort(fisher)}, 0.0, budget, weight)
     if len(sample) == 0:
         return found
     tails = {k: found.tails(k, held[k][sample]) for k in SUMMARY_SCORES}
-    least = np.minimum(found.tails("distance", held["distance"]), found.summary(tails))
+    least = np.minimum(found.tails("distance", held["distance"]) / weight, found.summary(tails))
     return dataclasses.replace(found, threshold=float(np.quantile(least, budget, method="lower")))
 
 
@@ -719,7 +741,7 @@ def combined_calibration(
             "outside_label": outside / unit, "neighbour": neighbour}  # fmt: skip
     combined = combine(held, np.asarray(pick), budget)
     held["distance"] = ratio[np.isfinite(ratio)]
-    limit = distance_limit(held["distance"], combined.threshold)
+    limit = distance_limit(held["distance"], combined.distance_threshold)
     within = float(np.mean(held["distance"] <= limit)) if len(held["distance"]) else 1.0
     return dataclasses.replace(novelty, unlike_ratio=limit, quantile=within, features=ranges,
                                neighbours=neighbours, combined=combined)  # fmt: skip

@@ -12,6 +12,7 @@ import pytest
 
 from cbr.novelty import (
     RANGE_FOLDS,
+    SUMMARY_SCORES,
     Combined,
     FeatureRanges,
     NoveltyCalibration,
@@ -154,7 +155,7 @@ def test_a_fitted_case_base_keeps_its_ranges_and_flags_few_new_people() -> None:
     assert ranges is not None and ranges.lo.shape[0] == 2  # the two subjects, each held out
     combined = clf.novelty_.combined
     assert combined is not None and combined.budget == 0.02
-    assert set(combined.held) == {"distance", "outside", "outside_label", "neighbour"}
+    assert set(combined.held) == {"distance", "summary", *SUMMARY_SCORES}
     solved = clf.solve([c.seq for c in test])
     flagged = [s.unlike_reason for s in solved if s.unlike_cases]
     assert len(flagged) <= 6, f"{flagged} of 60 ordinary clips flagged"
@@ -264,21 +265,33 @@ def test_the_nearest_clip_distance_is_the_root_mean_square_over_shared_features(
 
 def test_tail_probabilities_and_the_threshold_follow_the_held_out_clips() -> None:
     # four held-out values: 2.5 has two at or above it, (1 + 2) / (4 + 1); beyond all, 1 / 5
-    held = {"a": np.array([4.0, 1.0, 3.0, 2.0]), "b": np.array([10.0, 20.0, 30.0, 40.0])}
-    sample = {"a": np.array([1.0, 2.0, 3.0, 4.0]), "b": np.array([40.0, 30.0, 20.0, 10.0])}
-    c = combine(held, sample, budget=0.25)
+    c = Combined({"a": np.array([1.0, 2.0, 3.0, 4.0])}, 0.1, 0.02, 1.0)
     assert c.tail("a", 2.5) == pytest.approx(3 / 5) and c.tail("a", 9.0) == pytest.approx(1 / 5)
     assert c.tail("unknown score", 9.0) == 1.0 and c.tail("a", float("nan")) == 1.0
-    # the sample's smallest tails by hand: min(5/5, 2/5), min(4/5, 3/5), min(3/5, 4/5),
-    # min(2/5, 5/5) = 2/5, 3/5, 3/5, 2/5; their lower 25 % quantile is 2/5
+    # four held-out clips ranked alike by every score: clip i's tails are (5 - i) / 5 in
+    # each, so its Fisher statistic is -3 log((5 - i) / 5) and its summary tail (5 - i) / 5
+    # again; the smaller of the summary's and the distance's tails: 1, 4/5, 3/5, 2/5, whose
+    # lower quartile (budget 0.25) is 2/5
+    same = np.array([1.0, 2.0, 3.0, 4.0])
+    held = {"distance": same, **{k: same for k in SUMMARY_SCORES}}
+    c = combine(held, np.arange(4), budget=0.25, weight=1.0)
+    assert c.held["summary"] == pytest.approx(-3 * np.log([1.0, 0.8, 0.6, 0.4]))
     assert c.threshold == pytest.approx(2 / 5)
+    tails = {k: np.array([2 / 5]) for k in SUMMARY_SCORES}
+    assert c.summary(tails) == pytest.approx([2 / 5])
+    # one score far beyond every held-out clip, the others ordinary: Fisher's statistic
+    # -log(1/5) - 2 log(1) = 1.61 lies between the third and fourth held-out clips' (1.53,
+    # 2.75): one clip at or above it, tail 2/5
+    one = {"outside": np.array([1 / 5]), "outside_label": np.array([1.0]),
+           "neighbour": np.array([1.0])}  # fmt: skip
+    assert c.summary(one) == pytest.approx([2 / 5])
     # the distance's own limit flags exactly the values whose tail is at most the threshold
     rng = np.random.default_rng(6)
     ratios = rng.gamma(2.0, 1.0, 300)
     for threshold in (0.005, 0.02, 0.1):
         limit = distance_limit(ratios, threshold)
         probe = rng.uniform(0.0, 12.0, 2000)
-        d = Combined({"distance": np.sort(ratios)}, threshold, 0.02)
+        d = Combined({"distance": np.sort(ratios)}, threshold, 0.02, 1.0)
         assert [x > limit for x in probe] == [d.tail("distance", x) <= threshold for x in probe]
     assert distance_limit(ratios, 0.001) == np.inf  # 300 clips cannot say 1 in 1000
 
@@ -329,7 +342,7 @@ def test_the_combined_flag_survives_storage_and_a_damaged_one_is_refused() -> No
     back = NoveltyCalibration.from_dict(stored)
     assert back == cal
     x = rng.normal(0.0, 1.0, 60)
-    x[:8] += 15.0
+    x[30:42] += 20.0
     assert back.measured(0.5, x, "A") == cal.measured(0.5, x, "A") == "features"
     short = cal.describe()
     assert short["combined"]["budget"] == 0.02 and "held" not in short["combined"]
@@ -344,7 +357,33 @@ def test_the_combined_flag_survives_storage_and_a_damaged_one_is_refused() -> No
                                                    "held": {"outside": [2.0, 1.0]}}},
         "must be probabilities": {**stored, "combined": {**stored["combined"],
                                                          "threshold": 1.5}},
+        "distance weight must be": {**stored, "combined": {**stored["combined"],
+                                                           "distance_weight": 0.0}},
     }  # fmt: skip
     for reason, d in damaged.items():
         with pytest.raises(ValueError, match=reason):
             NoveltyCalibration.from_dict(d)
+
+
+def test_the_description_is_read_off_a_problem_as_computed_from_the_clip() -> None:
+    """A fluents/euclidean case base (a summary with phase means) and a dtw one (a sequence
+    of the same columns) give the clip's description from their problems as recorded: the
+    same values as computing the description from the clip (two ways on a real clip)."""
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.novelty import DESCRIPTION, describe, from_problem, same_columns
+    from cbr.problem import availability, candidate_config, extract_problem, resolve_counts
+    from features.datasets import load_dataset
+
+    seq = load_dataset(DEMO, subjects={"s03"})[7].seq
+    has = availability(seq, candidate_config(DESCRIPTION))
+    has[3] = False  # a column too few training clips have: left out of the description
+    resolved = resolve_counts(DESCRIPTION, has.astype(np.int64), 1)
+    want = describe(seq, resolved)
+    assert want.shape == (4 * len(resolved.states),)
+    for wanted in (CaseBaseClassifier(phases=2).wanted_config(),
+                   CaseBaseClassifier(similarity="dtw").wanted_config()):  # fmt: skip
+        assert same_columns(wanted)
+        candidates = candidate_config(wanted)
+        values = extract_problem(seq, candidates).values
+        assert from_problem(values, candidates, resolved) == pytest.approx(want, abs=1e-12)
+    assert not same_columns(CaseBaseClassifier(positions=False).wanted_config())
