@@ -3,27 +3,32 @@
 A new clip's *novelty* is the distance to its nearest case divided by the case base's usual
 held-out nearest-case distance (the ``scale``: the median over held-out training clips, exact
 matches left out, so binary QMP vectors, whose held-out clips often match a case exactly, get a
-usable unit). It is *unlike the stored cases* when
+usable unit). It is *unlike the stored cases* when one statistic says it is less usual than
+nearly every held-out training clip (:class:`Combined`, :func:`combined_calibration`), from
+four scores, each turned into its held-out tail probability:
 
-- its nearest case is farther than the ``quantile`` of the held-out training clips'
-  nearest-case distances (``"distance"``); or
-- its summary features leave the range the cases span in more of the features than held-out
-  training clips of its answer do (``"features"``, :class:`FeatureRanges`): a
+- the nearest-case distance under the case base's own measure (``"distance"``);
+- three scores of the clip's summary features, the same in every configuration (the fluent
+  summary fluents/euclidean's problem is, :data:`DESCRIPTION`: fluent confidences, joint
+  angles and positions, their mean, lowest, highest and spread over the clip; read off the
+  problem when it holds those columns, :func:`from_problem`, else computed from the clip),
+  none of which depends on the answer: the share of features outside the ranges the cases
+  span (:class:`FeatureRanges`) in units of all held-out clips' and in units of those of the
+  label of the nearest training clip in summary space, and the distance to that clip
+  (:class:`SummaryNeighbours`, each feature in the cases' standard deviations, at most
+  :data:`CLIP_SD`). Fisher's method joins them into one (``"features"`` when it flags): a
   measure-independent score, which sees what a distance averages away (a movement the case
-  base knows, done with joints that sit where no case's did). The features are the fluent
-  summary fluents/euclidean's problem is (:data:`DESCRIPTION`: fluent confidences, joint
-  angles and positions, their mean, lowest, highest and spread over the clip) in every
-  configuration: a dtw or signature sequence of those columns summarised over time
-  (:func:`summary`) is that summary already; beside a QMP vector (or a sequence of other
-  columns) it is computed from the clip, so "unlike the stored cases" looks at the same
-  features whatever the measure (case bases stored before this summarise their own problems
-  and are judged so); or
-- it was recorded with a skeleton (sensor) none of the training clips was recorded with
-  (``"sensor"``): the joints of another sensor sit elsewhere on the body, so its clips are
-  not comparable with the cases however near they look.
+  base knows, done with joints that sit where no case's did);
 
-With both scores each flags beyond its own 0.995 quantile (:data:`SHARED_QUANTILE`), so
-together they keep about the false alarms one at 0.99 had.
+the threshold set so that :data:`FLAG_BUDGET` of the held-out training clips are flagged,
+the distance holding :data:`DISTANCE_WEIGHT` of it. Or it was recorded with a skeleton
+(sensor) none of the training clips was recorded with (``"sensor"``): the joints of another
+sensor sit elsewhere on the body, so its clips are not comparable with the cases however near
+they look.
+
+Case bases stored before the combined statistic are judged as they were: the distance and the
+outside share (in units of held-out clips of the answer), each beyond its own 0.995 quantile
+(:data:`SHARED_QUANTILE`); before the ranges, the distance at 0.99.
 
 Held out means what a new person is: with subjects known, each training clip's nearest case
 among the OTHER subjects' cases (leave-one-subject-out); otherwise among the cases of other
