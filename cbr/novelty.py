@@ -551,7 +551,8 @@ def combine(
     the distance's at the clips ``sample`` ``(q,)`` positions, the summary scores' at every
     clip): the held-out Fisher statistic of the summary scores is added as ``"summary"``
     and the threshold is the ``budget`` quantile of the clips' smaller of the summary's tail
-    and the distance's over ``weight``."""
+    and the distance's over ``weight`` (0 when fewer than ``1 / budget - 1`` clips were held
+    out: they cannot tell a 1-in-50 clip)."""
     ref = {k: np.sort(v[np.isfinite(v)]) for k, v in held.items()}  # JSON has no inf
     found = Combined(ref, 0.0, budget, weight)
     fisher = -np.sum([np.log(found.tails(k, held[k])) for k in SUMMARY_SCORES], axis=0)
@@ -560,6 +561,10 @@ def combine(
         return found
     tails = {k: found.tails(k, held[k][sample]) for k in SUMMARY_SCORES}
     least = np.minimum(found.tails("distance", held["distance"]) / weight, found.summary(tails))
+    if budget * (len(least) + 1) < 1.0:  # too few clips: a new ordinary clip is less usual
+        # than all n held-out ones with chance 1 / (n + 1), above the budget; the summary does
+        # not flag (the distance still flags beyond every held-out clip's)
+        return found
     return dataclasses.replace(found, threshold=float(np.quantile(least, budget, method="lower")))
 
 

@@ -277,6 +277,9 @@ def test_tail_probabilities_and_the_threshold_follow_the_held_out_clips() -> Non
     c = combine(held, np.arange(4), budget=0.25, weight=1.0)
     assert c.held["summary"] == pytest.approx(-3 * np.log([1.0, 0.8, 0.6, 0.4]))
     assert c.threshold == pytest.approx(2 / 5)
+    # at the 2 % budget, four held-out clips are too few: a new ordinary clip beyond all of
+    # them (chance 1 / 5) would be flagged; the summary flags nothing
+    assert combine(held, np.arange(4), budget=0.02, weight=1.0).threshold == 0.0
     tails = {k: np.array([2 / 5]) for k in SUMMARY_SCORES}
     assert c.summary(tails) == pytest.approx([2 / 5])
     # one score far beyond every held-out clip, the others ordinary: Fisher's statistic
