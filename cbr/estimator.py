@@ -70,13 +70,15 @@ from .maintenance import EDITORS, MaintenanceReport
 from .novelty import (
     CALIBRATION_SAMPLE,
     DESCRIPTION,
-    SHARED_QUANTILE,
     UNLIKE_QUANTILE,
-    FeatureRanges,
     NoveltyCalibration,
+    combined_calibration,
     describe,
-    fit_ranges,
+    fit_neighbours,
     from_distances,
+    from_problem,
+    ranges_and_held,
+    same_columns,
     sample,
     summaries,
 )
@@ -629,35 +631,80 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             self.weights,  # type: ignore[arg-type]
         )
         skeletons = tuple(sorted({c.skeleton for c in clips}))
-        # every training clip's summary against the feature ranges of the others (cheap: no
-        # scan); the distance and the features then share the false-alarm budget
+        # every training clip's summary against the feature ranges and the nearest clip of
+        # the others (cheap: no scan of the measure), then one statistic of the three and the
+        # distance, calibrated on the clips whose distance was measured
         group_of = np.asarray(groups, dtype=object)
-        if clips[0].summary is None:  # the problems are fluent summaries: judged as they are
-            ranges = fit_ranges(summaries(cb.problems), np.asarray(case_groups, dtype=object),
-                                summaries(queries), group_of[cases.origin[real]],
-                                labels)  # fmt: skip
-        else:
-            clip_labels = np.empty(n, dtype=object)
-            clip_labels[cases.origin[real]] = labels
-            ranges = self._description_ranges(clips, origin, group_of, clip_labels)
-        quantile = UNLIKE_QUANTILE if ranges is None else SHARED_QUANTILE
-        novelty = from_distances(h.nearest, basis, quantile, skeletons)
+        clip_labels = np.empty(n, dtype=object)
+        query_clip = cases.origin[real]
+        clip_labels[query_clip] = labels
+        cases_d, case_clip, image, queries_d, config = self._summaries(
+            clips, cb, origin, queries, query_clip
+        )
+        ranges = ranges_and_held(cases_d, group_of[case_clip], queries_d,
+                                 group_of[query_clip], labels, description=config)  # fmt: skip
+        plain = case_clip[~image]  # the summary neighbours: the clips kept, no mirror image
+        near = None if ranges is None else fit_neighbours(
+            cases_d[~image], group_of[plain], clip_labels[plain], queries_d, group_of[query_clip]
+        )  # fmt: skip
+        novelty = from_distances(h.nearest, basis, UNLIKE_QUANTILE, skeletons)
+        if ranges is not None and near is not None:
+            (found, outside), (neighbours, neighbour, near_labels) = ranges, near
+            novelty = combined_calibration(novelty, h.nearest, found, outside, neighbours,
+                                           neighbour, near_labels, pick)  # fmt: skip
+        elif ranges is not None:
+            novelty = dataclasses.replace(novelty, features=ranges[0])
         return (
-            dataclasses.replace(novelty, features=ranges),
+            novelty,
             calibrate_soft(h, len(np.unique(cb.labels.astype(str))), basis),
         )
 
-    @staticmethod
-    def _description_ranges(
+    def _summaries(
+        self,
         clips: Sequence[DescribedClip],
+        cb: CaseBase,
         origin: np.ndarray,
-        groups: np.ndarray,
-        labels: np.ndarray,
-    ) -> FeatureRanges | None:
-        """The feature ranges over the clips' fluent summaries (:data:`cbr.novelty.DESCRIPTION`,
-        its columns those enough training clips have): the cases are the clips kept in the
-        case base (``origin`` ``(n_cases,)``; mirror images left out: their summaries were not
-        computed), each clip ``groups`` ``(n,)`` held out with its ``labels`` ``(n,)``."""
+        queries: np.ndarray,
+        query_clip: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, FeatureConfig | None]:
+        """What the flag's feature scores judge: the cases' summaries ``(m, F)``, the clip
+        each case is of ``(m,)`` and whether it is an augmenting mirror image ``(m,)``; the
+        training clips' as queries ``(n, F)`` (the clips ``query_clip`` ``(n,)``, in the order
+        of their problems ``queries``); and the description they were computed with (None:
+        the problems' own summaries)."""
+        n, wanted = len(clips), self._feature_config()
+        if clips[0].summary is not None:
+            D, config = CaseBaseClassifier._description_summaries(clips)
+        elif same_columns(wanted):  # the description, from the problems as recorded
+            D, config = CaseBaseClassifier._own_descriptions(clips, wanted)
+        else:  # other columns than the description's: the problems' own summaries
+            return summaries(cb.problems), origin % n, origin >= n, summaries(queries), None
+        kept = origin[origin < n]  # mirror images left out: the clips' own description
+        return D[kept], kept, np.zeros(len(kept), dtype=bool), D[query_clip], config
+
+    @staticmethod
+    def _own_descriptions(
+        clips: Sequence[DescribedClip], config: FeatureConfig
+    ) -> tuple[np.ndarray, FeatureConfig]:
+        """The clips' fluent summaries ``(n, F)`` from their problems as recorded (a
+        :func:`cbr.novelty.same_columns` configuration ``config``: the candidate columns of
+        :data:`cbr.novelty.DESCRIPTION`), with the description resolved as :meth:`_describe`
+        resolves the problem's columns."""
+        candidates = candidate_config(DESCRIPTION)
+        counts = np.zeros(len(candidates.states), dtype=np.int64)
+        for c in clips:
+            counts += c.available
+        described = resolve_counts(DESCRIPTION, counts, len(clips))
+        wide = candidate_config(config)  # the columns each clip's problem was described over
+        D = np.stack([from_problem(c.values, wide, described) for c in clips])
+        return D, described
+
+    @staticmethod
+    def _description_summaries(
+        clips: Sequence[DescribedClip],
+    ) -> tuple[np.ndarray, FeatureConfig]:
+        """The clips' fluent summaries ``(n, F)`` (:data:`cbr.novelty.DESCRIPTION`, its
+        columns those enough training clips have) and that resolved description."""
         candidates = candidate_config(DESCRIPTION)
         counts = np.zeros(len(candidates.states), dtype=np.int64)
         for c in clips:
@@ -665,8 +712,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             counts += c.summary_available
         config = resolve_counts(DESCRIPTION, counts, len(clips))
         D = _stack([c.summary for c in clips], column_index(config, candidates))  # type: ignore[misc]
-        kept = origin[origin < len(clips)]
-        return fit_ranges(D[kept], groups[kept], D, groups, labels, description=config)
+        return D, config
 
     def _nested_votes(
         self,

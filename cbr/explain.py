@@ -828,7 +828,7 @@ def unlike_words(solved: Solved) -> str:
     if solved.unlike_reason == "sensor":
         return "; unlike the stored cases (recorded with a skeleton none of them has)"
     if solved.unlike_reason == "features":
-        return "; unlike the stored cases (features outside the range of the cases)"
+        return "; unlike the stored cases (features unlike the cases')"
     return f"; unlike the stored cases (nearest at {solved.novelty:.1f}x the usual distance)"
 
 

@@ -3,27 +3,32 @@
 A new clip's *novelty* is the distance to its nearest case divided by the case base's usual
 held-out nearest-case distance (the ``scale``: the median over held-out training clips, exact
 matches left out, so binary QMP vectors, whose held-out clips often match a case exactly, get a
-usable unit). It is *unlike the stored cases* when
+usable unit). It is *unlike the stored cases* when one statistic says it is less usual than
+nearly every held-out training clip (:class:`Combined`, :func:`combined_calibration`), from
+four scores, each turned into its held-out tail probability:
 
-- its nearest case is farther than the ``quantile`` of the held-out training clips'
-  nearest-case distances (``"distance"``); or
-- its summary features leave the range the cases span in more of the features than held-out
-  training clips of its answer do (``"features"``, :class:`FeatureRanges`): a
+- the nearest-case distance under the case base's own measure (``"distance"``);
+- three scores of the clip's summary features, the same in every configuration (the fluent
+  summary fluents/euclidean's problem is, :data:`DESCRIPTION`: fluent confidences, joint
+  angles and positions, their mean, lowest, highest and spread over the clip; read off the
+  problem when it holds those columns, :func:`from_problem`, else computed from the clip),
+  none of which depends on the answer: the share of features outside the ranges the cases
+  span (:class:`FeatureRanges`) in units of all held-out clips' and in units of those of the
+  label of the nearest training clip in summary space, and the distance to that clip
+  (:class:`SummaryNeighbours`, each feature in the cases' standard deviations, at most
+  :data:`CLIP_SD`). Fisher's method joins them into one (``"features"`` when it flags): a
   measure-independent score, which sees what a distance averages away (a movement the case
-  base knows, done with joints that sit where no case's did). The features are the fluent
-  summary fluents/euclidean's problem is (:data:`DESCRIPTION`: fluent confidences, joint
-  angles and positions, their mean, lowest, highest and spread over the clip) in every
-  configuration: a dtw or signature sequence of those columns summarised over time
-  (:func:`summary`) is that summary already; beside a QMP vector (or a sequence of other
-  columns) it is computed from the clip, so "unlike the stored cases" looks at the same
-  features whatever the measure (case bases stored before this summarise their own problems
-  and are judged so); or
-- it was recorded with a skeleton (sensor) none of the training clips was recorded with
-  (``"sensor"``): the joints of another sensor sit elsewhere on the body, so its clips are
-  not comparable with the cases however near they look.
+  base knows, done with joints that sit where no case's did);
 
-With both scores each flags beyond its own 0.995 quantile (:data:`SHARED_QUANTILE`), so
-together they keep about the false alarms one at 0.99 had.
+the threshold set so that :data:`FLAG_BUDGET` of the held-out training clips are flagged,
+the distance holding :data:`DISTANCE_WEIGHT` of it. Or it was recorded with a skeleton
+(sensor) none of the training clips was recorded with (``"sensor"``): the joints of another
+sensor sit elsewhere on the body, so its clips are not comparable with the cases however near
+they look.
+
+Case bases stored before the combined statistic are judged as they were: the distance and the
+outside share (in units of held-out clips of the answer), each beyond its own 0.995 quantile
+(:data:`SHARED_QUANTILE`); before the ranges, the distance at 0.99.
 
 Held out means what a new person is: with subjects known, each training clip's nearest case
 among the OTHER subjects' cases (leave-one-subject-out); otherwise among the cases of other
@@ -34,6 +39,9 @@ flag means the same for every configuration.
 
 from __future__ import annotations
 
+import base64
+import dataclasses
+import io
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -42,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from .casebase import CaseBase
-from .problem import FeatureConfig, candidate_config, extract_problem
+from .problem import FeatureConfig, candidate_config, column_index, extract_problem
 
 #: the clip description the feature score judges whatever the case base's own problem: the
 #: fluent summary that fluents/euclidean's problem is (its default columns: angle fluents,
@@ -65,6 +73,16 @@ LABEL_PRIOR = 5.0
 CALIBRATION_SAMPLE = 256
 #: held-out distances below this share of the largest one are exact matches
 EXACT_SHARE = 1e-3
+#: a summary feature counts at most this many of the cases' standard deviations in the
+#: nearest-clip distance (:class:`SummaryNeighbours`)
+CLIP_SD = 3.0
+#: the share of held-out training clips the combined flag (:class:`Combined`) may call unlike
+#: the cases (new people score a little farther than held-out training clips: measured false
+#: alarms 2-4 % at this budget)
+FLAG_BUDGET = 0.02
+#: the distance's share of the combined flag's threshold (:class:`Combined`): a tail
+#: probability this many times the summary's flags
+DISTANCE_WEIGHT = 0.25
 
 
 def own_description(config: FeatureConfig) -> bool:
@@ -85,6 +103,31 @@ def describe(seq: Any, description: FeatureConfig) -> np.ndarray:
     """The description ``(F,)`` of the clip ``seq`` ``(frames, joints, 3)`` under a resolved
     ``description`` (:data:`DESCRIPTION`'s columns): what the feature score judges."""
     return extract_problem(seq, description).values
+
+
+def same_columns(config: FeatureConfig) -> bool:
+    """Whether a clip's problem under ``config`` (an :func:`own_description`) holds
+    :data:`DESCRIPTION`'s candidate columns, so :func:`from_problem` gives its description."""
+    return own_description(config) and tuple(candidate_config(config).states) == tuple(
+        candidate_config(DESCRIPTION).states
+    )
+
+
+def from_problem(
+    values: np.ndarray, candidates: FeatureConfig, description: FeatureConfig
+) -> np.ndarray:
+    """The description ``(F,)`` of a clip (resolved ``description``: :data:`DESCRIPTION`'s
+    columns) from its problem ``values`` as recorded under ``candidates`` (the candidate
+    columns of a :func:`same_columns` configuration): a summary vector's mean, lowest,
+    highest and variation blocks (its phase means left out), or a sequence's columns
+    summarised over time (:func:`summary`); what :func:`describe` computes from the clip."""
+    v = np.asarray(values, dtype=np.float64)
+    if v.ndim == 1:
+        vector: np.ndarray = v[column_index(description, candidates)]
+        return vector
+    plain = dataclasses.replace(description, summary=False, phases=0)
+    out: np.ndarray = summary(v[:, column_index(plain, candidates)])
+    return out
 
 
 def summary(values: np.ndarray) -> np.ndarray:
@@ -209,7 +252,7 @@ def fold_of(groups: np.ndarray, folds: int = RANGE_FOLDS, seed: int = 0) -> np.n
     return np.array([where[str(g)] for g in groups], dtype=np.int64)
 
 
-def fit_ranges(
+def ranges_and_held(
     cases: np.ndarray,
     case_groups: np.ndarray,
     queries: np.ndarray,
@@ -217,12 +260,13 @@ def fit_ranges(
     labels: Sequence[str] | np.ndarray,
     quantile: float = SHARED_QUANTILE,
     description: FeatureConfig | None = None,
-) -> FeatureRanges | None:
+) -> tuple[FeatureRanges, np.ndarray] | None:
     """The feature ranges of ``cases`` ``(m, F)`` (summaries, group ``case_groups`` ``(m,)``)
     calibrated on the training clips ``queries`` ``(n, F)`` (group ``groups`` ``(n,)``,
     label ``labels``), each scored against the cases of the other folds; ``description``: the
     configuration the summaries were computed with (None: the problems' own). None when the
-    cases form fewer than two groups (nothing to hold out)."""
+    cases form fewer than two groups (nothing to hold out). With them, each query's held-out
+    outside share ``(n,)``."""
     everyone = np.concatenate([np.asarray(case_groups, dtype=object),
                                np.asarray(groups, dtype=object)])  # fmt: skip
     fold = fold_of(everyone)
@@ -248,8 +292,280 @@ def fit_ranges(
         scales.append(max(shrunk, floor))
     per = dict(zip(names, scales, strict=True))
     ratios = held / np.array([per[v] for v in text])
-    return FeatureRanges(lo, hi, names, tuple(scales), default,
-                         float(np.quantile(ratios, quantile)), quantile, description)  # fmt: skip
+    found = FeatureRanges(lo, hi, names, tuple(scales), default,
+                          float(np.quantile(ratios, quantile)), quantile, description)  # fmt: skip
+    return found, held
+
+
+def fit_ranges(
+    cases: np.ndarray,
+    case_groups: np.ndarray,
+    queries: np.ndarray,
+    groups: np.ndarray,
+    labels: Sequence[str] | np.ndarray,
+    quantile: float = SHARED_QUANTILE,
+    description: FeatureConfig | None = None,
+) -> FeatureRanges | None:
+    """:func:`ranges_and_held` without the held-out shares."""
+    got = ranges_and_held(cases, case_groups, queries, groups, labels, quantile, description)
+    return None if got is None else got[0]
+
+
+def nearest_rms(queries: np.ndarray, cases: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each query's ``(q, F)`` nearest case ``(m, F)``: the root mean square difference over
+    the features both have (NaN: missing) ``(q,)`` and the case's position ``(q,)`` (-1 and
+    ``inf`` when there is no case). One matrix product per term: no loop over cases."""
+    q = np.asarray(queries, dtype=np.float64)
+    c = np.asarray(cases, dtype=np.float64)
+    if len(c) == 0 or len(q) == 0:
+        return np.full(len(q), np.inf), np.full(len(q), -1, dtype=np.int64)
+    qm, cm = (~np.isnan(q)).astype(np.float64), (~np.isnan(c)).astype(np.float64)
+    q0, c0 = np.nan_to_num(q), np.nan_to_num(c)
+    # sum over the shared features of (q - c)^2 = q^2 + c^2 - 2 q c, each masked by the other
+    sq = (q0**2) @ cm.T + qm @ (c0**2).T - 2.0 * q0 @ c0.T
+    shared = qm @ cm.T
+    d2 = np.where(shared > 0, np.maximum(sq, 0.0) / np.maximum(shared, 1.0), np.inf)
+    at = np.argmin(d2, axis=1)
+    return np.sqrt(d2[np.arange(len(q)), at]), at.astype(np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class SummaryNeighbours:
+    """The nearest training clip in summary space, whatever the case base's measure: each
+    summary feature standardised by the cases' ``centre`` and ``scale`` ``(F,)`` (their mean
+    and standard deviation) and counted at most :data:`CLIP_SD` standard deviations, so one
+    feature no case shows cannot decide alone (the range count sees those). ``cases``
+    ``(m, F)``: the training clips kept as cases, so standardised (float16: within
+    :data:`CLIP_SD` its rounding is below 0.002), ``labels`` ``(m,)`` their labels."""
+
+    centre: np.ndarray
+    scale: np.ndarray
+    cases: np.ndarray
+    labels: tuple[str, ...]
+
+    def standardise(self, s: np.ndarray) -> np.ndarray:
+        """Summaries ``(..., F)`` in the cases' standard deviations, clipped."""
+        z = (np.asarray(s, dtype=np.float64) - self.centre) / self.scale
+        out: np.ndarray = np.clip(z, -CLIP_SD, CLIP_SD)
+        return out
+
+    def nearest(self, s: np.ndarray) -> tuple[float, str]:
+        """One clip's summary ``(F,)``: the distance to its nearest case and that case's
+        label (``inf`` and "" for a summary of other columns)."""
+        s = np.asarray(s, dtype=np.float64)
+        if s.shape[-1] != self.centre.shape[-1]:
+            return float("inf"), ""
+        d, at = nearest_rms(self.standardise(s)[None, :], self.cases)
+        return float(d[0]), (self.labels[int(at[0])] if at[0] >= 0 else "")
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, SummaryNeighbours):
+            return NotImplemented
+        return (
+            np.array_equal(self.centre, other.centre)
+            and np.array_equal(self.scale, other.scale)
+            and np.array_equal(self.cases, other.cases, equal_nan=True)
+            and self.labels == other.labels
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"centre": self.centre.tolist(), "scale": self.scale.tolist(),
+                "cases": _array_text(self.cases), "labels": list(self.labels)}  # fmt: skip
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> SummaryNeighbours:
+        """Refuses (ValueError, with the reason) what a damaged store would hold."""
+        centre = np.array(d["centre"], dtype=np.float64)
+        scale = np.array(d["scale"], dtype=np.float64)
+        cases = _array_of(d["cases"])
+        labels = tuple(str(v) for v in d["labels"])
+        if centre.ndim != 1 or scale.shape != centre.shape:
+            raise ValueError("the summary neighbours' centre and scale must be paired vectors")
+        if not (np.isfinite(centre).all() and np.isfinite(scale).all() and (scale > 0).all()):
+            raise ValueError("the summary neighbours' scales must be finite and positive")
+        if cases.ndim != 2 or cases.shape[1] != len(centre) or len(labels) != len(cases):
+            raise ValueError("the summary neighbours' cases must be (cases, features) with a "
+                             "label each")  # fmt: skip
+        if np.nanmax(np.abs(cases), initial=0.0) > CLIP_SD:
+            raise ValueError(f"the summary neighbours' cases must lie within {CLIP_SD:g} "
+                             "standard deviations")  # fmt: skip
+        return cls(centre, scale, cases, labels)
+
+
+def _array_text(a: np.ndarray) -> str:
+    """A float16 array as base64 ``.npy`` text (JSON-ready; NaN kept)."""
+    buf = io.BytesIO()
+    np.save(buf, np.asarray(a, dtype=np.float16), allow_pickle=False)
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _array_of(text: Any) -> np.ndarray:
+    """The array :func:`_array_text` wrote (ValueError when it is not one)."""
+    try:
+        a = np.load(io.BytesIO(base64.b64decode(str(text), validate=True)), allow_pickle=False)
+    except (OSError, ValueError, EOFError) as e:
+        raise ValueError(f"the summary neighbours' cases are not a stored array ({e})") from e
+    if a.dtype != np.float16:
+        raise ValueError(f"the summary neighbours' cases must be float16, not {a.dtype}")
+    out: np.ndarray = np.asarray(a, dtype=np.float16)
+    return out
+
+
+def fit_neighbours(
+    cases: np.ndarray,
+    case_groups: np.ndarray,
+    case_labels: Sequence[str] | np.ndarray,
+    queries: np.ndarray,
+    groups: np.ndarray,
+) -> tuple[SummaryNeighbours, np.ndarray, np.ndarray] | None:
+    """The summary neighbours of ``cases`` ``(m, F)`` (group ``case_groups``, label
+    ``case_labels`` ``(m,)``) and, for each training clip ``queries`` ``(n, F)`` (group
+    ``groups`` ``(n,)``), its held-out distance ``(n,)`` and its nearest case's label ``(n,)``
+    among the cases of the other folds (:func:`fold_of`, as :func:`fit_ranges` holds them
+    out). None when the cases form fewer than two groups."""
+    everyone = np.concatenate([np.asarray(case_groups, dtype=object),
+                               np.asarray(groups, dtype=object)])  # fmt: skip
+    fold = fold_of(everyone)
+    case_fold, query_fold = fold[: len(cases)], fold[len(cases) :]
+    if len(fold) == 0 or int(fold.max()) < 1:
+        return None
+    with warnings.catch_warnings():  # a feature no case has: NaN centre, no part in distances
+        warnings.simplefilter("ignore", RuntimeWarning)
+        centre = np.nan_to_num(np.nanmean(cases, axis=0))
+        spread = np.nanstd(cases, axis=0)
+    scale = np.where(np.isfinite(spread) & (spread > 1e-9), spread, 1.0)
+    labels = np.array([str(v) for v in case_labels], dtype=object)
+    found = SummaryNeighbours(centre, scale, np.zeros((0, len(centre))), ())
+    z_cases = found.standardise(cases).astype(np.float16)
+    z_queries = found.standardise(queries).astype(np.float16)
+    held = np.full(len(queries), np.inf)
+    near = np.full(len(queries), "", dtype=object)
+    for f in np.unique(query_fold):
+        mine, theirs = query_fold == f, np.flatnonzero(case_fold != f)
+        d, at = nearest_rms(z_queries[mine], z_cases[theirs])
+        held[mine] = d
+        near[mine] = [labels[theirs[i]] if i >= 0 else "" for i in at]
+    neighbours = SummaryNeighbours(centre, scale, z_cases, tuple(labels.tolist()))
+    return neighbours, held, near
+
+
+#: the summary scores of :class:`Combined`, besides the case base's own distance: the share
+#: of features outside the cases' ranges in units of all held-out clips', the same in units
+#: of the held-out clips of the label of the nearest training clip in summary space, and the
+#: distance to that clip (:class:`SummaryNeighbours`)
+SUMMARY_SCORES = ("outside", "outside_label", "neighbour")
+
+
+@dataclass(frozen=True, eq=False)
+class Combined:
+    """One calibrated statistic from the novelty scores. Each score is turned into its
+    held-out tail probability (the share of held-out training clips that score at least as
+    high, ``(1 + count) / (n + 1)``); the summary scores (:data:`SUMMARY_SCORES`) into one by
+    Fisher's method (``-sum(log p)``, itself turned into its held-out tail probability,
+    ``"summary"``: several moderately unusual features count together); the clip is flagged
+    when the summary's tail is at most ``threshold`` or the distance's at most
+    ``distance_weight`` times it, the threshold set so that ``budget`` of the held-out clips
+    are (a weighted Bonferroni minimum calibrated on the clips themselves: a further score
+    costs no second false-alarm budget; the distance, which finds least and whose held-out
+    clips are the measure's own sample, gets the smaller share).
+    ``held``: per score name, its held-out values sorted ``(n,)``."""
+
+    held: dict[str, np.ndarray]
+    threshold: float
+    budget: float
+    distance_weight: float = 1.0
+
+    def tail(self, name: str, value: float) -> float:
+        """The held-out tail probability of ``value`` of score ``name`` (1 for a score not
+        calibrated or not measured: NaN)."""
+        return float(self.tails(name, np.array([value], dtype=np.float64))[0])
+
+    def tails(self, name: str, values: np.ndarray) -> np.ndarray:
+        """:meth:`tail` of each of ``values`` ``(q,)``."""
+        v = np.asarray(values, dtype=np.float64)
+        ref = self.held.get(name)
+        if ref is None or len(ref) == 0:
+            return np.ones(len(v))
+        above = len(ref) - np.searchsorted(ref, v, side="left")
+        p = (1.0 + above) / (len(ref) + 1.0)
+        return np.where(np.isnan(v), 1.0, p)
+
+    def summary(self, tails: dict[str, np.ndarray]) -> np.ndarray:
+        """The summary scores' ``tails`` (name: ``(q,)``) as one tail probability ``(q,)``
+        (Fisher's method against the held-out clips' own)."""
+        fisher = -np.sum([np.log(tails[k]) for k in SUMMARY_SCORES], axis=0)
+        return self.tails("summary", np.atleast_1d(fisher))
+
+    def flags(self, p: float) -> bool:
+        """Whether a summary tail probability ``p`` flags (the distance's: :meth:`by_distance`)."""
+        return p <= self.threshold
+
+    @property
+    def distance_threshold(self) -> float:
+        """The distance's tail probability at or below which it flags: its share of the
+        threshold, and at least beyond every held-out clip's distance."""
+        n = len(self.held.get("distance", ()))
+        return max(self.distance_weight * self.threshold, 1.0 / (n + 1.0))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Combined):
+            return NotImplemented
+        return (
+            self.held.keys() == other.held.keys()
+            and all(np.array_equal(v, other.held[k]) for k, v in self.held.items())
+            and (self.threshold, self.budget, self.distance_weight)
+            == (other.threshold, other.budget, other.distance_weight)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"held": {k: [float(x) for x in v] for k, v in self.held.items()},
+                "threshold": self.threshold, "budget": self.budget,
+                "distance_weight": self.distance_weight}  # fmt: skip
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> Combined:
+        """Refuses (ValueError, with the reason) what a damaged store would hold."""
+        held = {str(k): np.array(v, dtype=np.float64) for k, v in dict(d["held"]).items()}
+        for k, v in held.items():
+            if v.ndim != 1 or np.isnan(v).any() or (np.diff(v) < 0).any():
+                raise ValueError(f"the held-out {k} scores must be an increasing list")
+        threshold, budget = float(d["threshold"]), float(d["budget"])
+        weight = float(d["distance_weight"])
+        if not (0.0 <= threshold <= 1.0 and 0.0 < budget < 1.0 and 0.0 < weight <= 1.0):
+            raise ValueError("the combined flag's threshold, budget and distance weight must be "
+                             "probabilities")  # fmt: skip
+        return cls(held, threshold, budget, weight)
+
+
+def combine(
+    held: dict[str, np.ndarray],
+    sample: np.ndarray,
+    budget: float = FLAG_BUDGET,
+    weight: float = DISTANCE_WEIGHT,
+) -> Combined:
+    """The combined statistic from each score's held-out values ``held`` (name: ``(n,)``,
+    the distance's at the clips ``sample`` ``(q,)`` positions, the summary scores' at every
+    clip): the held-out Fisher statistic of the summary scores is added as ``"summary"``
+    and the threshold is the ``budget`` quantile of the clips' smaller of the summary's tail
+    and the distance's over ``weight`` (0 when fewer than ``1 / budget - 1`` clips were held
+    out: they cannot tell a 1-in-50 clip)."""
+    ref = {k: np.sort(v[np.isfinite(v)]) for k, v in held.items()}  # JSON has no inf
+    found = Combined(ref, 0.0, budget, weight)
+    fisher = -np.sum([np.log(found.tails(k, held[k])) for k in SUMMARY_SCORES], axis=0)
+    found = Combined({**ref, "summary": np.sort(fisher)}, 0.0, budget, weight)
+    if len(sample) == 0:
+        return found
+    tails = {k: found.tails(k, held[k][sample]) for k in SUMMARY_SCORES}
+    least = np.minimum(found.tails("distance", held["distance"]) / weight, found.summary(tails))
+    if budget * (len(least) + 1) < 1.0:  # too few clips: a new ordinary clip is less usual
+        # than all n held-out ones with chance 1 / (n + 1), above the budget; the summary does
+        # not flag (the distance still flags beyond every held-out clip's)
+        return found
+    return dataclasses.replace(found, threshold=float(np.quantile(least, budget, method="lower")))
 
 
 @dataclass(frozen=True)
@@ -259,7 +575,9 @@ class NoveltyCalibration:
     flagged; basis: how the training clips were held out; n: how many were; skeletons: the
     skeletons (sensors) the training clips were recorded with (empty: not known); features:
     the summary features' ranges (None: the distance alone, as case bases stored before
-    them)."""
+    them); neighbours and combined: the nearest training clip in summary space and the one
+    statistic that combines the scores (:class:`Combined`; None: each score at its own
+    quantile, as case bases stored before it are judged)."""
 
     scale: float
     unlike_ratio: float
@@ -268,6 +586,8 @@ class NoveltyCalibration:
     n: int
     skeletons: tuple[str, ...] = ()
     features: FeatureRanges | None = field(default=None, compare=True)
+    neighbours: SummaryNeighbours | None = None
+    combined: Combined | None = None
 
     def ratio(self, distance: float) -> float:
         """Nearest-case distance in units of the case base's usual one."""
@@ -292,9 +612,11 @@ class NoveltyCalibration:
     ) -> str:
         """Why a clip is unlike the stored cases by what it shows, the sensor aside:
         ``"distance"`` (its nearest case is farther than held-out clips' are), ``"features"``
-        (its summary features leave the cases' ranges more than held-out clips of its answer
-        ``label`` do; only with ``values``, the clip's :attr:`FeatureRanges.description` when
-        the ranges have one, else its problem, and ``label``) or ``""`` (neither)."""
+        (its summary features are less usual than the held-out clips' by :meth:`tails`, with
+        a combined calibration; before it, they leave the cases' ranges more than held-out
+        clips of its answer ``label`` do; only with ``values``, the clip's
+        :attr:`FeatureRanges.description` when the ranges have one, else its problem) or
+        ``""`` (neither)."""
         by_distance, by_features = self.scores(distance, values, label)
         return "distance" if by_distance else "features" if by_features else ""
 
@@ -304,6 +626,9 @@ class NoveltyCalibration:
         """Whether each score alone flags the clip (:meth:`measured`): the nearest-case
         ``distance`` and the summary features of ``values`` for the answer ``label``."""
         by_distance = self.ratio(distance) > self.unlike_ratio
+        if self.combined is not None:
+            tails = self.tails(values)
+            return by_distance, bool(tails) and self.combined.flags(tails["summary"])
         by_features = (
             self.features is not None
             and values is not None
@@ -311,6 +636,24 @@ class NoveltyCalibration:
             and self.features.unlike(summary(values), label)
         )
         return by_distance, bool(by_features)
+
+    def tails(self, values: np.ndarray | None) -> dict[str, float]:
+        """The held-out tail probability of each summary score of the clip whose problem (or
+        description) is ``values`` (:data:`SUMMARY_SCORES`) and of their Fisher statistic
+        (``"summary"``; empty without ``values`` or a combined calibration). None of them
+        depends on the answer: the same clip scores the same under every measure."""
+        c, f, n = self.combined, self.features, self.neighbours
+        if c is None or f is None or n is None or values is None:
+            return {}
+        s = summary(values)
+        outside = f.outside(s)
+        distance, label = n.nearest(s)
+        scale = f.scale(label) if label else f.default
+        tails = {"outside": c.tail("outside", outside / f.default),
+                 "outside_label": c.tail("outside_label", outside / scale),
+                 "neighbour": c.tail("neighbour", distance)}  # fmt: skip
+        summed = c.summary({k: np.array([v]) for k, v in tails.items()})
+        return {**tails, "summary": float(summed[0])}
 
     @property
     def description(self) -> FeatureConfig | None:
@@ -326,6 +669,9 @@ class NoveltyCalibration:
                              "skeletons": list(self.skeletons)}  # fmt: skip
         if self.features is not None:
             d["features"] = self.features.to_dict()
+        if self.neighbours is not None and self.combined is not None:
+            d["neighbours"] = self.neighbours.to_dict()
+            d["combined"] = self.combined.to_dict()
         return d
 
     def describe(self) -> dict[str, Any]:
@@ -338,6 +684,11 @@ class NoveltyCalibration:
                              "default_scale": f.default,
                              "described_by": "the case base's problems" if f.description is None
                              else f.description.describe()}  # fmt: skip
+        if self.neighbours is not None and self.combined is not None:
+            c = self.combined
+            d["neighbours"] = {"cases": int(self.neighbours.cases.shape[0])}
+            d["combined"] = {"threshold": c.threshold, "budget": c.budget,
+                             "scores": {k: len(v) for k, v in c.held.items()}}  # fmt: skip
         return d
 
     @classmethod
@@ -350,7 +701,60 @@ class NoveltyCalibration:
             int(d["n"]),
             tuple(str(s) for s in d.get("skeletons", ())),
             FeatureRanges.from_dict(d["features"]) if d.get("features") else None,
+            *_combined_of(d),
         )
+
+
+def _combined_of(d: dict[str, Any]) -> tuple[SummaryNeighbours | None, Combined | None]:
+    """The stored combined flag (both parts, or neither: stored before it); a half-stored
+    one is refused."""
+    if not d.get("neighbours") and not d.get("combined"):
+        return None, None
+    if not (d.get("neighbours") and d.get("combined") and d.get("features")):
+        raise ValueError("the combined flag needs its feature ranges, neighbours and "
+                         "held-out scores together")  # fmt: skip
+    return SummaryNeighbours.from_dict(d["neighbours"]), Combined.from_dict(d["combined"])
+
+
+def distance_limit(ratios: np.ndarray, threshold: float) -> float:
+    """The held-out distance ratio beyond which a clip's tail probability among ``ratios``
+    ``(n,)`` (:meth:`Combined.tail`) is at most ``threshold``: the distance alone flags
+    exactly what it flags in the combined statistic (``inf``: never)."""
+    r = np.sort(np.asarray(ratios, dtype=np.float64))
+    r = r[~np.isnan(r)]
+    k = int(np.floor(threshold * (len(r) + 1) - 1.0 + 1e-9))  # held-out clips at or above
+    return float("inf") if k < 0 or len(r) == 0 else float(r[max(len(r) - 1 - k, 0)])
+
+
+def combined_calibration(
+    novelty: NoveltyCalibration,
+    nearest: np.ndarray,
+    ranges: FeatureRanges,
+    outside: np.ndarray,
+    neighbours: SummaryNeighbours,
+    neighbour: np.ndarray,
+    near_labels: np.ndarray,
+    pick: np.ndarray,
+    budget: float = FLAG_BUDGET,
+) -> NoveltyCalibration:
+    """``novelty`` (the distance's calibration) with the feature scores and one statistic of
+    them all (:class:`Combined`): the held-out training clips' ``outside`` shares ``(n,)``
+    (:func:`ranges_and_held`), distances to the nearest clip in summary space ``neighbour``
+    and that clip's label ``near_labels`` ``(n,)`` (:func:`fit_neighbours`), and the
+    nearest-case distances ``nearest`` ``(q,)`` of the clips at positions ``pick`` ``(q,)``,
+    on which the threshold is set. The distance alone flags beyond the ratio at which it
+    flags in the combination (:func:`distance_limit`: what :meth:`NoveltyCalibration.unlike`
+    judges when only a distance is known)."""
+    ratio = np.asarray(nearest, dtype=np.float64) / novelty.scale
+    unit = np.array([ranges.scale(str(v)) if str(v) else ranges.default for v in near_labels])
+    held = {"distance": ratio, "outside": outside / ranges.default,
+            "outside_label": outside / unit, "neighbour": neighbour}  # fmt: skip
+    combined = combine(held, np.asarray(pick), budget)
+    held["distance"] = ratio[np.isfinite(ratio)]
+    limit = distance_limit(held["distance"], combined.distance_threshold)
+    within = float(np.mean(held["distance"] <= limit)) if len(held["distance"]) else 1.0
+    return dataclasses.replace(novelty, unlike_ratio=limit, quantile=within, features=ranges,
+                               neighbours=neighbours, combined=combined)  # fmt: skip
 
 
 def held_out_distances(

@@ -12,10 +12,15 @@ import pytest
 
 from cbr.novelty import (
     RANGE_FOLDS,
+    SUMMARY_SCORES,
+    Combined,
     FeatureRanges,
     NoveltyCalibration,
+    combine,
+    distance_limit,
     fit_ranges,
     fold_of,
+    nearest_rms,
     outside_share,
     summary,
 )
@@ -148,14 +153,18 @@ def test_a_fitted_case_base_keeps_its_ranges_and_flags_few_new_people() -> None:
     clf = CaseBaseClassifier().fit([c.seq for c in train], [c.label for c in train])
     ranges = clf.novelty_.features
     assert ranges is not None and ranges.lo.shape[0] == 2  # the two subjects, each held out
-    assert clf.novelty_.quantile == 0.995 and ranges.quantile == 0.995
+    combined = clf.novelty_.combined
+    assert combined is not None and combined.budget == 0.02
+    assert set(combined.held) == {"distance", "summary", *SUMMARY_SCORES}
     solved = clf.solve([c.seq for c in test])
     flagged = [s.unlike_reason for s in solved if s.unlike_cases]
     assert len(flagged) <= 6, f"{flagged} of 60 ordinary clips flagged"
-    # a new person's clip with a quarter of its features beyond every case: unlike them
+    # a new person's clip with a quarter of its features beyond every case: unlike them,
+    # whatever it is answered
     values = solved[0].problem.values.copy()
     values[::4] = ranges.hi.max(axis=0)[::4] + 1.0
-    assert ranges.unlike(summary(values), solved[0].solution.label)
+    for label in clf.classes_:
+        assert clf.novelty_.measured(0.0, values, str(label)) == "features"
 
 
 def _records(
@@ -240,3 +249,144 @@ def test_the_description_is_the_problem_fluents_euclidean_has() -> None:
         assert own_description(config)
         sequence = extract_problem(seq, config).values
         assert sequence.ndim == 2 and summary(sequence) == pytest.approx(want, abs=1e-12)
+
+
+def test_the_nearest_clip_distance_is_the_root_mean_square_over_shared_features() -> None:
+    cases = np.array([[0.0, 0.0, 0.0], [3.0, 4.0, np.nan]])
+    queries = np.array([[1.0, 2.0, 2.0], [3.0, np.nan, 9.0], [np.nan, np.nan, np.nan]])
+    d, at = nearest_rms(queries, cases)
+    # by hand: first query to case 0 sqrt((1 + 4 + 4) / 3) = sqrt(3), to case 1 sqrt((4 + 4) /
+    # 2) = 2; second to case 0 sqrt((9 + 81) / 2), to case 1 0 over the one shared feature;
+    # the third shares no feature with any case: nothing near
+    assert at[:2].tolist() == [0, 1]
+    assert d[:2] == pytest.approx([np.sqrt(3.0), 0.0])
+    assert d[2] == np.inf
+
+
+def test_tail_probabilities_and_the_threshold_follow_the_held_out_clips() -> None:
+    # four held-out values: 2.5 has two at or above it, (1 + 2) / (4 + 1); beyond all, 1 / 5
+    c = Combined({"a": np.array([1.0, 2.0, 3.0, 4.0])}, 0.1, 0.02, 1.0)
+    assert c.tail("a", 2.5) == pytest.approx(3 / 5) and c.tail("a", 9.0) == pytest.approx(1 / 5)
+    assert c.tail("unknown score", 9.0) == 1.0 and c.tail("a", float("nan")) == 1.0
+    # four held-out clips ranked alike by every score: clip i's tails are (5 - i) / 5 in
+    # each, so its Fisher statistic is -3 log((5 - i) / 5) and its summary tail (5 - i) / 5
+    # again; the smaller of the summary's and the distance's tails: 1, 4/5, 3/5, 2/5, whose
+    # lower quartile (budget 0.25) is 2/5
+    same = np.array([1.0, 2.0, 3.0, 4.0])
+    held = {"distance": same, **{k: same for k in SUMMARY_SCORES}}
+    c = combine(held, np.arange(4), budget=0.25, weight=1.0)
+    assert c.held["summary"] == pytest.approx(-3 * np.log([1.0, 0.8, 0.6, 0.4]))
+    assert c.threshold == pytest.approx(2 / 5)
+    # at the 2 % budget, four held-out clips are too few: a new ordinary clip beyond all of
+    # them (chance 1 / 5) would be flagged; the summary flags nothing
+    assert combine(held, np.arange(4), budget=0.02, weight=1.0).threshold == 0.0
+    tails = {k: np.array([2 / 5]) for k in SUMMARY_SCORES}
+    assert c.summary(tails) == pytest.approx([2 / 5])
+    # one score far beyond every held-out clip, the others ordinary: Fisher's statistic
+    # -log(1/5) - 2 log(1) = 1.61 lies between the third and fourth held-out clips' (1.53,
+    # 2.75): one clip at or above it, tail 2/5
+    one = {"outside": np.array([1 / 5]), "outside_label": np.array([1.0]),
+           "neighbour": np.array([1.0])}  # fmt: skip
+    assert c.summary(one) == pytest.approx([2 / 5])
+    # the distance's own limit flags exactly the values whose tail is at most the threshold
+    rng = np.random.default_rng(6)
+    ratios = rng.gamma(2.0, 1.0, 300)
+    for threshold in (0.005, 0.02, 0.1):
+        limit = distance_limit(ratios, threshold)
+        probe = rng.uniform(0.0, 12.0, 2000)
+        d = Combined({"distance": np.sort(ratios)}, threshold, 0.02, 1.0)
+        assert [x > limit for x in probe] == [d.tail("distance", x) <= threshold for x in probe]
+    assert distance_limit(ratios, 0.001) == np.inf  # 300 clips cannot say 1 in 1000
+
+
+def _combined(rng: np.random.Generator) -> NoveltyCalibration:
+    """A calibration of :func:`_case_base` with every score: the distance's held-out ratios
+    drawn, the feature scores fitted as the estimator fits them."""
+    from cbr.novelty import combined_calibration, fit_neighbours, ranges_and_held
+
+    cases, groups, labels = _case_base(rng)
+    got = ranges_and_held(cases, groups, cases, groups, labels)
+    near = fit_neighbours(cases, groups, labels, cases, groups)
+    assert got is not None and near is not None
+    base = NoveltyCalibration(1.0, 2.0, 0.99, "leave-one-subject-out", 240, ())
+    nearest = rng.gamma(4.0, 0.25, len(cases))
+    return combined_calibration(base, nearest, *got, *near, np.arange(len(cases)))
+
+
+def test_the_combined_flag_judges_a_clip_alike_whatever_the_answer() -> None:
+    """The summary scores do not read the answered label (the same clip flags the same under
+    every measure), flag new clips drawn as the cases were about as often as the budget says
+    and flag clips far outside in a fifth of their features, or lying far from every clip."""
+    rng = np.random.default_rng(7)
+    cal = _combined(rng)
+    assert cal.combined is not None and cal.neighbours is not None
+    like = [rng.normal(0.0, 1.0, 60) for _ in range(300)]
+    flagged = [cal.scores(0.5, x, "A")[1] for x in like]
+    assert all(cal.scores(0.5, x, "B")[1] == f for x, f in zip(like, flagged, strict=True))
+    assert np.mean(flagged) <= 0.06
+    away = [x.copy() for x in like[:50]]
+    for x in away:
+        x[30:42] += 20.0
+    assert all(cal.measured(0.5, x, "A") == "features" for x in away)
+    # the distance alone: beyond its limit it flags whatever the features say
+    assert cal.measured(cal.unlike_ratio * 1.01, like[0], "A") == "distance"
+    assert cal.unlike(cal.unlike_ratio * 1.01) and not cal.unlike(cal.unlike_ratio * 0.99)
+    # and the nearest clip in summary space is a case of the label drawn: a clip made as B's
+    # clips of subject 0 lies nearest a B case
+    b = rng.normal(0.0, 1.0, 60)
+    b[0:5] += 10.0
+    assert cal.neighbours.nearest(b)[1] == "B"
+
+
+def test_the_combined_flag_survives_storage_and_a_damaged_one_is_refused() -> None:
+    rng = np.random.default_rng(8)
+    cal = _combined(rng)
+    stored = json.loads(json.dumps(cal.to_dict(), allow_nan=False))  # the store's JSON
+    back = NoveltyCalibration.from_dict(stored)
+    assert back == cal
+    x = rng.normal(0.0, 1.0, 60)
+    x[30:42] += 20.0
+    assert back.measured(0.5, x, "A") == cal.measured(0.5, x, "A") == "features"
+    short = cal.describe()
+    assert short["combined"]["budget"] == 0.02 and "held" not in short["combined"]
+    damaged = {
+        "the combined flag needs": {k: v for k, v in stored.items() if k != "combined"},
+        "scales must be finite and positive": {
+            **stored, "neighbours": {**stored["neighbours"], "scale": [0.0] * 60}},
+        "a label each": {**stored, "neighbours": {**stored["neighbours"], "labels": ["A"]}},
+        "not a stored array": {**stored, "neighbours": {**stored["neighbours"],
+                                                        "cases": "not base64!"}},
+        "increasing list": {**stored, "combined": {**stored["combined"],
+                                                   "held": {"outside": [2.0, 1.0]}}},
+        "must be probabilities": {**stored, "combined": {**stored["combined"],
+                                                         "threshold": 1.5}},
+        "distance weight must be": {**stored, "combined": {**stored["combined"],
+                                                           "distance_weight": 0.0}},
+    }  # fmt: skip
+    for reason, d in damaged.items():
+        with pytest.raises(ValueError, match=reason):
+            NoveltyCalibration.from_dict(d)
+
+
+def test_the_description_is_read_off_a_problem_as_computed_from_the_clip() -> None:
+    """A fluents/euclidean case base (a summary with phase means) and a dtw one (a sequence
+    of the same columns) give the clip's description from their problems as recorded: the
+    same values as computing the description from the clip (two ways on a real clip)."""
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.novelty import DESCRIPTION, describe, from_problem, same_columns
+    from cbr.problem import availability, candidate_config, extract_problem, resolve_counts
+    from features.datasets import load_dataset
+
+    seq = load_dataset(DEMO, subjects={"s03"})[7].seq
+    has = availability(seq, candidate_config(DESCRIPTION))
+    has[3] = False  # a column too few training clips have: left out of the description
+    resolved = resolve_counts(DESCRIPTION, has.astype(np.int64), 1)
+    want = describe(seq, resolved)
+    assert want.shape == (4 * len(resolved.states),)
+    for wanted in (CaseBaseClassifier(phases=2).wanted_config(),
+                   CaseBaseClassifier(similarity="dtw").wanted_config()):  # fmt: skip
+        assert same_columns(wanted)
+        candidates = candidate_config(wanted)
+        values = extract_problem(seq, candidates).values
+        assert from_problem(values, candidates, resolved) == pytest.approx(want, abs=1e-12)
+    assert not same_columns(CaseBaseClassifier(positions=False).wanted_config())

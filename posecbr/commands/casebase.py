@@ -156,10 +156,14 @@ def _print_model(m: dict[str, Any]) -> None:
         u = m["unlike_cases"]
         sensors = u.get("skeletons") or []
         rule = f", or recorded with a skeleton other than {', '.join(sensors)}" if sensors else ""
-        f = u.get("features")
+        f, c = u.get("features"), u.get("combined")
         feats = (
-            f", or its summary features outside the cases' ranges beyond {f['unlike_ratio']:.2f}x"
-            " what held-out clips of its answer show"
+            f", or its summary features (outside the cases' ranges, far from every training "
+            f"clip) less usual than {1 - c['threshold']:.1%} of held-out clips' (one statistic "
+            f"of all the scores: {c['budget']:.0%} of held-out clips flagged)"
+            if f and c
+            else f", or its summary features outside the cases' ranges beyond "
+            f"{f['unlike_ratio']:.2f}x what held-out clips of its answer show"
             if f
             else ""
         )
