@@ -298,30 +298,42 @@ def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
     clf.selection_ = dict(model.get("selection") or {})
     clf.case_origin_ = np.arange(len(cb))
     clf.maintenance_ = None
-    clf.novelty_ = _novelty(model, cb)
-    clf.confidence_ = _confidence(model)
+    clf.novelty_ = _novelty(model, cb, name, store.where)
+    clf.confidence_ = _confidence(model, name, store.where)
     clf.refresh()
     target = str(model.get("target", "label"))
     return StoredClassifier(name, info.uid, info.version, target, clf, info)
 
 
-def _confidence(model: dict[str, Any]) -> ConfidenceCalibration:
+def _damaged(name: str, what: str, exc: Exception, where: str) -> StoreError:
+    """The error for a stored calibration that is there but cannot be read: answering without
+    it would silently change what the case base says."""
+    reason = (
+        exc.args[0] if isinstance(exc, ValueError) and exc.args else f"{type(exc).__name__}: {exc}"
+    )
+    return StoreError(f"case base {name!r} has a damaged {what} ({reason})", where)
+
+
+def _confidence(model: dict[str, Any], name: str, where: str) -> ConfidenceCalibration:
     """The stored confidence calibration; a case base stored without one (before posecbr
-    0.3) answers with the plain vote share."""
+    0.3) answers with the plain vote share. StoreError when it is there but damaged."""
+    if "confidence" not in model:
+        return UNCALIBRATED
     try:
         return ConfidenceCalibration.from_dict(model["confidence"])
-    except (KeyError, TypeError, ValueError):
-        return UNCALIBRATED
+    except (AttributeError, KeyError, TypeError, ValueError) as exc:
+        raise _damaged(name, "confidence calibration", exc, where) from None
 
 
-def _novelty(model: dict[str, Any], cb: CaseBase) -> NoveltyCalibration:
+def _novelty(model: dict[str, Any], cb: CaseBase, name: str, where: str) -> NoveltyCalibration:
     """The stored calibration; for a case base stored without one (written by posecbr 0.1),
-    calibrated now on its cases, each held out from the cases of its own clip."""
+    calibrated now on its cases, each held out from the cases of its own clip. StoreError when
+    it is there but damaged."""
     if model.get("novelty"):
         try:
             return NoveltyCalibration.from_dict(model["novelty"])
-        except (KeyError, TypeError, ValueError):
-            pass  # an unreadable calibration is recomputed below
+        except (AttributeError, KeyError, TypeError, ValueError) as exc:
+            raise _damaged(name, "novelty calibration", exc, where) from None
     clip = np.array([s.removesuffix(" (mirrored)") for s in cb.sources], dtype=object)
     real = np.ones(len(cb), dtype=bool)
     if cb.names and cb.names[-1] == MIRROR_FLAG:

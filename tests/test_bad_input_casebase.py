@@ -100,6 +100,21 @@ def _tamper(db: Path, sql: str, *params: object) -> None:
             "feature columns but the case base names 2",
         ),  # fmt: skip
         ("DELETE FROM cases", (), "has no cases"),
+        (
+            "UPDATE case_bases SET model = json_set(model, '$.confidence.temperature', -1.0)",
+            (),
+            "damaged confidence calibration (the soft vote needs a positive temperature",
+        ),  # fmt: skip
+        (
+            "UPDATE case_bases SET model = json_set(model, '$.confidence', 'x')",
+            (),
+            "damaged confidence calibration (TypeError",
+        ),  # fmt: skip
+        (
+            "UPDATE case_bases SET model = json_remove(model, '$.novelty.scale')",
+            (),
+            "damaged novelty calibration (KeyError: 'scale')",
+        ),  # fmt: skip
     ],
 )
 def test_a_damaged_case_base_is_one_line_and_stays_as_it_is(

@@ -6,11 +6,13 @@ QMP case base flagged 38 of 60 ordinary clips)."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from casebase_store import StoreError
 from cbr.calibration import (
     UNCALIBRATED,
     ConfidenceCalibration,
@@ -83,10 +85,19 @@ def test_a_case_base_right_every_time_held_out_is_not_certain() -> None:
 
 
 def test_a_case_base_stored_without_calibration_answers_with_the_vote_share() -> None:
-    assert _confidence({}) is UNCALIBRATED and UNCALIBRATED(0.8) == 0.8
+    assert _confidence({}, "cb", "x.sqlite") is UNCALIBRATED and UNCALIBRATED(0.8) == 0.8
+    # a case base fitted with no held-out clip stores the vote share: read back as such
+    stored = json.loads(json.dumps({"confidence": UNCALIBRATED.to_dict()}))
+    assert _confidence(stored, "cb", "x.sqlite")(0.8) == 0.8
+
+
+def test_a_damaged_stored_calibration_is_refused_not_replaced() -> None:
     bad = {"confidence": {"x": [0.5, 0.4], "y": [0.1, 0.2], "basis": "x", "n": 2,
                           "accuracy": 0.5}}  # fmt: skip
-    assert _confidence(bad) is UNCALIBRATED  # knots out of order: refused, not trusted
+    with pytest.raises(StoreError) as err:  # knots out of order: refused, not trusted
+        _confidence(bad, "cb", "x.sqlite")
+    assert "case base 'cb' has a damaged confidence calibration" in err.value.message
+    assert "paired and increasing" in err.value.message and "x.sqlite" in str(err.value)
 
 
 def test_novelty_unit_leaves_exact_matches_out() -> None:
