@@ -328,6 +328,10 @@ def block_votes(solved: Sequence[_Solved], n_frames: int, fps: float) -> np.ndar
     return np.where(counts[:, None] > 0, votes / np.maximum(counts, 1)[:, None], uniform)
 
 
+TIE = 1e-6
+"""Log-odds this close are a tie (sums of the same logs added in another order differ)."""
+
+
 def switch_penalty() -> float:
     """The log-odds a change of label costs: :data:`MIN_SEGMENT_S` of blocks at
     :data:`SWITCH_ODDS` to 1."""
@@ -376,7 +380,9 @@ def decode_unknown(votes: np.ndarray, path: np.ndarray) -> np.ndarray:
 
     Decoding known/unknown on its own would charge only its own changes: an unknown stretch
     ending 0.5 s before a change of activity would leave a 0.5-s segment of the activity
-    before, a change nobody paid for (segments that flicker)."""
+    before, a change nobody paid for (segments that flicker). Where known and unknown are
+    equally likely (within :data:`TIE`, rounding), the block is known: calling a stretch
+    unlike every activity takes evidence."""
     penalty = switch_penalty()
     score = log_votes(votes)
     moved = np.r_[False, path[1:] != path[:-1]]  # the activity changes at this block
@@ -385,11 +391,11 @@ def decode_unknown(votes: np.ndarray, path: np.ndarray) -> np.ndarray:
     for t in range(1, len(score)):  # over 0.1-s blocks: two states
         known, unknown = total[0], total[1]
         stay_known = known - (penalty if moved[t] else 0.0)
-        back[t] = (0 if stay_known >= unknown - penalty else 1,
-                   1 if unknown >= known - penalty else 0)  # fmt: skip
+        back[t] = (0 if stay_known >= unknown - penalty - TIE else 1,
+                   1 if unknown > known - penalty + TIE else 0)  # fmt: skip
         total = np.array([max(stay_known, unknown - penalty), max(unknown, known - penalty)])
         total += score[t]
-    return np.asarray(_backtrack(back, int(np.argmax(total))) == 1)
+    return np.asarray(_backtrack(back, int(total[1] > total[0] + TIE)) == 1)
 
 
 def _log_distances(solved: Sequence[_Solved]) -> np.ndarray:

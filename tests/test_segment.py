@@ -79,6 +79,11 @@ def test_decode_unknown_charges_every_change_seen_once() -> None:
     # unknown, against the one change (6.93) it costs
     votes[25:30] = [0.999, 0.001]
     assert decode_unknown(votes, path).tolist() == [False] * 10 + [True] * 15 + [False] * 15
+    # the activity changes at 25 instead and the votes over 25-29 are even: unknown up to 25
+    # or up to 30 costs the same (one change seen each way, 5 ln 2 either side); a tie is known
+    path = np.r_[np.zeros(25, dtype=np.int64), np.ones(15, dtype=np.int64)]
+    votes[25:30] = [0.5, 0.5]
+    assert decode_unknown(votes, path).tolist() == [False] * 10 + [True] * 15 + [False] * 15
 
 
 def test_a_change_of_activity_under_unknown_costs_nothing() -> None:
