@@ -306,7 +306,7 @@ def _export(store: CaseStore, args: argparse.Namespace) -> int:
 
 def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     from cbr.maintenance import EDITORS, record_trim
-    from cbr.stored import load_classifier, write_matrices
+    from cbr.stored import judges_after_change, load_classifier, recalibrated, write_matrices
 
     name = store.choose(args.name)
     if not 0.0 < args.keep <= 1.0:
@@ -323,8 +323,11 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     else:
         report = fn(cb, weights=clf.weights)
     if not args.dry_run:
+        judges = recalibrated(clf, report.casebase)
         with store.transaction() as tx:
-            record_trim(tx, tx.expect(name, stored.uid), report)
+            info = tx.expect(name, stored.uid)
+            record_trim(tx, info, report)
+            judges_after_change(tx, info, judges)
         write_matrices(store, name)
     doc = {
         "method": report.method,
