@@ -239,7 +239,9 @@ def test_a_change_of_the_cases_drops_the_stored_judges_in_its_transaction(
     assert main(["segment", str(recording), "--db", str(db)]) == 0  # calibrated at run time
 
 
-def test_a_judge_of_another_version_of_the_cases_is_not_read(trained: Path, tmp_path: Path) -> None:
+def test_a_judge_of_another_version_of_the_cases_is_not_read(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """A change made past the commands (the store's own API) leaves the judges stored, but
     stamped with the version of the cases they were calibrated on: not read."""
     db = _copy(trained, tmp_path / "cb.sqlite")
@@ -251,6 +253,12 @@ def test_a_judge_of_another_version_of_the_cases_is_not_read(trained: Path, tmp_
         store.close()
     assert "judges" in _model(db)
     assert _judges_now(db) == {}
+    capsys.readouterr()
+    assert main(["casebase", "info", "--db", str(db), "--json"]) == 0
+    judges = json.loads(capsys.readouterr().out)["case_bases"][0]["model"]["unknown_judges"]
+    assert judges["current"] is False and set(judges["calibrated"]) == set(AT_FIT)
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    assert "the cases changed since: calibrated at run time" in capsys.readouterr().out
 
 
 def test_a_damaged_stored_judge_is_one_line_and_the_database_stays(
