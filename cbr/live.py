@@ -38,7 +38,7 @@ from .segmentation import (
     log_votes,
     span_fields,
 )
-from .unknown import Judge, Margin, activity_codes
+from .unknown import Judge, activity_codes, judge_of
 
 HOP_S = 0.5
 """The rolling label is decided every this many seconds of stream."""
@@ -150,7 +150,7 @@ class LiveSegmenter:
             raise DataError(f"the stream needs a frame rate > 0, got {fps!r}", "stream")
         self.clf = clf
         self.fps = float(fps)
-        self.judge = judge if judge is not None else Margin.of(clf.case_base_)
+        self.judge = judge if judge is not None else judge_of(clf, "margin")
         self.classes = [str(c) for c in clf.classes_]
         self.codes = activity_codes(clf.case_base_.labels, self.classes)
         self.unknown = len(self.classes)

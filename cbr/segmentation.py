@@ -67,7 +67,15 @@ from .explain import Explanation
 from .problem import FeatureConfig, warm
 from .retrieve import Retrieval
 from .reuse import reuse
-from .unknown import Familiarity, HeldOut, Judge, Margin, activity_codes, per_activity
+from .unknown import (
+    Familiarity,
+    HeldOut,
+    Judge,
+    Margin,
+    activity_codes,
+    judge_of,
+    per_activity,
+)
 
 BLOCK_S = 0.1
 """Labels are given per block of this many seconds (the resolution of the label files)."""
@@ -690,7 +698,7 @@ def segment(
     at once; None: in pieces of :data:`cbr.long_clip.CHUNK_FRAMES` for a longer recording.
     Raises DataError for a recording shorter than one window or without a person, and for a
     case base the judge cannot be calibrated on."""
-    judge = judge or Margin.of(clf.case_base_)
+    judge = judge or judge_of(clf, "margin")
     return finish(clf, solve_recording(clf, recording, k, chunk_frames), judge)
 
 
