@@ -66,6 +66,51 @@ def test_uneven_cycles_of_several_people_count_exactly() -> None:
     assert result.count == 10
 
 
+def _ease(n: int, a: float, b: float) -> np.ndarray:
+    """``n`` samples easing (half a cosine) from ``a`` to ``b``."""
+    return a + (b - a) * 0.5 * (1 - np.cos(np.pi * np.arange(n) / n))
+
+
+def test_shallow_repetitions_among_deep_ones_count() -> None:
+    """Nine squats of unequal length (1.5-3.6 s) and rest, two of them a third as deep (0.45
+    rad against 1.2: well above pose jitter, below 0.4 of the typical one): nine."""
+    rng = np.random.default_rng(3)
+    parts = [np.full(20, np.pi)]
+    for n, depth in zip(
+        rng.integers(45, 110, size=9), [1.2, 1.2, 0.45, 1.2, 1.2, 1.2, 1.2, 0.45, 1.2], strict=True
+    ):
+        down = _ease(int(n) // 2, 0.0, depth)
+        parts += [
+            np.pi - np.concatenate([down, down[::-1]]),
+            np.full(int(rng.integers(5, 40)), np.pi),
+        ]
+    knee = np.concatenate(parts)
+    result = count_in_signals(_signals(np.stack([knee, knee], axis=1), KNEES), len(knee), FPS)
+    assert result.count == 9
+
+
+def test_a_second_far_point_after_a_shallow_dip_is_the_same_repetition() -> None:
+    """Seven lunges of unequal length (1.7-3.6 s), each going down 1.2 rad, coming up by 0.45,
+    going down again to 1.14 (a wobble at the bottom, falling back by a third of the
+    depth), then up to rest: seven, not fourteen."""
+    rng = np.random.default_rng(3)
+    parts = [np.full(20, np.pi)]
+    for n in rng.integers(50, 110, size=7):
+        q = int(n) // 4
+        bend = [
+            _ease(q, 0, 1.2),
+            _ease(q, 1.2, 0.75),
+            _ease(q, 0.75, 1.14),
+            _ease(int(n) - 3 * q, 1.14, 0),
+        ]
+        parts += [np.pi - np.concatenate(bend), np.full(int(rng.integers(5, 40)), np.pi)]
+    knee = np.concatenate(parts)
+    result = count_in_signals(_signals(np.stack([knee, knee], axis=1), KNEES), len(knee), FPS)
+    assert result.count == 7
+    # each repetition's far point is its deeper first one
+    assert all(abs(knee[r.peak_frame] - (np.pi - 1.2)) < 0.05 for r in result.repetitions)
+
+
 def test_one_leg_moving_on_and_on_is_not_one_repetition_per_side() -> None:
     """The left knee bends five times with no rest between; the right stands by (a little
     sway): five, not ten."""
