@@ -16,6 +16,11 @@ Three judges, each calibrated on the case base itself, never on what is being se
   happen to be left out and, set there, called a third of new people's known movements
   unknown.) A ratio of distances needs no common unit, so a new person who lies farther
   from every case is not called unknown for that alone.
+- :class:`ActivityMargin`: the margin against a threshold of the nearest activity's own: the
+  quantile of the held-out known cases of that activity that its nearest case names rightly
+  (a case named wrongly is wrong whether called unknown or not), shrunk towards the pooled
+  quantile by :data:`ACTIVITY_PRIOR` cases' worth. An activity whose known cases are clear
+  gets a low threshold; one that resembles another keeps its own high one.
 - :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
   score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
   case lies farther than held-out training clips nearly ever do.
@@ -37,11 +42,16 @@ from .casebase import CaseBase
 from .novelty import NoveltyCalibration
 from .weights import MIRROR_FLAG
 
-JUDGES = ("margin", "held-out", "activities", "margin-distance")
+JUDGES = ("margin", "held-out", "activities", "margin-distance", "activity-margin")
 """The judges by name, the default first."""
 FALSE_UNKNOWN = 0.05
 """The share of held-out training cases of a known activity the margin judge may call
 unknown: its threshold is their margins' ``1 - FALSE_UNKNOWN`` quantile."""
+ACTIVITY_PRIOR = 1.0 / FALSE_UNKNOWN
+"""How many held-out cases the pooled threshold counts for in an activity's own threshold
+(:func:`activity_thresholds`): 1 / :data:`FALSE_UNKNOWN` (20), the number of cases at which
+the budget reaches one case: an activity with fewer has a quantile read from nearly its
+largest margin, and is held near the pooled threshold."""
 MARGIN_SAMPLE = 2048
 """Training cases held out to calibrate the margin (a seeded sample when there are more): a 5 %
 quantile read from 256 lies 13 cases from the top and moved by 10 points of UI-PRMD Vicon's
@@ -168,14 +178,20 @@ def held_out_activities(
     return seen, codes[real], basis
 
 
+def known_rows(seen: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: the held-out cases (distances to every activity ``(n, n_classes)``, own
+    activity ``codes`` ``(n,)``) whose own activity is within reach and another too."""
+    finite = np.isfinite(seen)
+    own = finite[np.arange(len(seen)), codes]
+    return np.asarray(own & (finite.sum(axis=1) >= 2))
+
+
 def known_and_novel(seen: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """From held-out cases' distances to every activity ``(n, n_classes)`` and their own
     activity ``(n,)``: the rows where the own activity is within reach and another too
     (``known``), and the rows without the own activity where two others are (``novel``), as
     ``(k, n_classes)`` arrays (the own activity's column set to inf in ``novel``)."""
-    finite = np.isfinite(seen)
-    own = finite[np.arange(len(seen)), codes]
-    known = seen[own & (finite.sum(axis=1) >= 2)]
+    known = seen[known_rows(seen, codes)]
     without = seen.copy()
     without[np.arange(len(seen)), codes] = np.inf
     novel = without[np.isfinite(without).sum(axis=1) >= 2]
@@ -334,6 +350,82 @@ class MarginDistance:
         )
 
 
+def activity_thresholds(
+    margins: np.ndarray, activities: np.ndarray, n_classes: int, rate: float, prior: float
+) -> tuple[np.ndarray, float]:
+    """Per activity ``(n_classes,)``, the threshold of :class:`ActivityMargin`, and the pooled
+    one: from held-out known ``margins`` ``(n,)`` (non-empty) of cases of ``activities``
+    ``(n,)`` (indices), the pooled threshold ``t`` (:func:`false_unknown_threshold` at
+    ``rate``) and each activity's own ``t_a`` from its ``n_a`` margins, shrunk:
+    ``(n_a t_a + prior t) / (n_a + prior)``; ``t`` for an activity without margins."""
+    pooled = false_unknown_threshold(margins, rate)
+    out = np.full(n_classes, pooled)
+    for a in np.unique(activities).tolist():  # over activities (a few dozen at most)
+        mine = margins[activities == a]
+        own = false_unknown_threshold(mine, rate)
+        out[a] = (len(mine) * own + prior * pooled) / (len(mine) + prior)
+    return out, pooled
+
+
+@dataclass(frozen=True)
+class ActivityMargin:
+    """Unknown when the margin ``d1 / d2`` lies above the threshold of the nearest activity:
+    ``thresholds[a]`` (``a`` the index among the case base's sorted activities) is the margin
+    that a share ``false_unknown`` of the held-out known cases of activity ``a`` exceed, among
+    those whose nearest activity is their own (a case named wrongly is a wrong answer whether
+    called unknown or not: it spends no budget), shrunk towards the pooled threshold
+    ``pooled`` by ``prior`` cases' worth (:func:`activity_thresholds`). One pooled threshold
+    is set by the activities that resemble each other most; an activity whose known cases
+    are clear keeps a low one, so a window of a left-out movement nearest to it is caught.
+    ``basis`` and ``known`` as :class:`Margin`'s (``known``: the rightly named cases)."""
+
+    thresholds: tuple[float, ...]
+    pooled: float
+    basis: str
+    known: int
+    false_unknown: float = FALSE_UNKNOWN
+    prior: float = ACTIVITY_PRIOR
+
+    @classmethod
+    def of(
+        cls, cb: CaseBase, false_unknown: float = FALSE_UNKNOWN, prior: float = ACTIVITY_PRIOR
+    ) -> ActivityMargin:
+        """Calibrated on ``cb``; DataError as :meth:`Margin.of`, and when no held-out known
+        case is named rightly."""
+        _check_margin_calibration(cb)
+        seen, codes, basis = held_out_activities(cb)
+        keep = known_rows(seen, codes)
+        known, own = seen[keep], codes[keep]
+        right = np.argmin(known, axis=1) == own if len(known) else np.zeros(0, dtype=bool)
+        if not right.any() or not len(known_and_novel(seen, codes)[1]):
+            raise _no_apart()
+        per, pooled = activity_thresholds(
+            _margins(known[right]), own[right], seen.shape[1], false_unknown, prior
+        )
+        return cls(tuple(per.tolist()), pooled, basis, int(right.sum()), false_unknown, prior)
+
+    def threshold(self, nearest: np.ndarray) -> float:
+        """The threshold of the window's nearest activity."""
+        return self.thresholds[int(np.argmin(nearest))]
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        return margin_of(nearest)
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        return margin_of(nearest) > self.threshold(nearest)
+
+    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
+        order = np.argsort(nearest, kind="stable")
+        first = classes[int(order[0])]
+        second = classes[int(order[1])] if len(order) > 1 else first
+        return (
+            f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
+            f" as the next ({second}); a known {first} comes nearer than"
+            f" {self.threshold(nearest):.2f} (in {1.0 - self.false_unknown:.0%} of the case"
+            " base's held-out cases)"
+        )
+
+
 @dataclass(frozen=True)
 class HeldOut:
     """The classifier's stored calibration (:class:`cbr.novelty.NoveltyCalibration`): unknown
@@ -424,10 +516,14 @@ def judge_of(clf: Any, name: str) -> Judge:
         return Familiarity.of(clf.case_base_)
     if name == "margin-distance":
         return MarginDistance.of(clf.case_base_)
+    if name == "activity-margin":
+        return ActivityMargin.of(clf.case_base_)
     raise ConfigError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "--unknown")
 
 
 __all__ = [
+    "ACTIVITY_PRIOR",
+    "ActivityMargin",
     "JUDGES",
     "MARGIN_SAMPLE",
     "Familiarity",
@@ -436,6 +532,8 @@ __all__ = [
     "Margin",
     "MarginDistance",
     "activity_codes",
+    "activity_thresholds",
+    "known_rows",
     "held_out_activities",
     "joint_thresholds",
     "known_and_novel",
