@@ -28,7 +28,7 @@ from .estimator import CaseBaseClassifier, Solved, unusable
 from .explain import Explanation
 from .retain import RetainDecision, decide_retention, record_retention
 from .revise import Revision, plan_revision, record_revision
-from .stored import StoredClassifier, load_classifier, write_matrices
+from .stored import StoredClassifier, judges_after_change, load_classifier, write_matrices
 
 SOLVE_CHUNK = 256  # clips per batched solve (one block of queries of the matrix product)
 
@@ -260,6 +260,11 @@ def classify_with_feedback(
     return out
 
 
+def _revised(rev: Revision | None) -> bool:
+    """Whether the revision changes a stored case (moves its problem or relabels it)."""
+    return rev is not None and rev.case_id >= 0 and rev.action in ("moved", "relabelled")
+
+
 def _reload(store: CaseStore, stored: StoredClassifier) -> StoredClassifier:
     """The stored classifier read again (in place, so callers holding it see the new one)."""
     fresh = load_classifier(store, stored.name)
@@ -318,6 +323,9 @@ def _learn(
             skeleton=skeleton_of(clip),
         )
         new = record_revision(tx, info, rev, values) if rev is not None else None
+        changed = case_id is not None or _revised(rev)
+        if changed:
+            judges_after_change(tx, info)
     if case_id is not None:
         cb.add(
             values,
@@ -332,6 +340,8 @@ def _learn(
         cb.set_label(rev.index, rev.new_label)
     elif rev is not None and new is not None:
         cb.set_problem(rev.index, new)
+    if changed:
+        clf.judges_ = {}  # calibrated on the cases as they were
     clf.refresh()
     if info.version != stored.version:  # another process changed the cases meanwhile
         _reload(store, stored)

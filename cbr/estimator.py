@@ -423,6 +423,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.feature_config_ = config
         self.measure_ = measure
         self.case_base_ = cb
+        # the unknown judges calibrated on cb (cbr.unknown): filled when the model is stored
+        # (cbr.stored); until then judge_of calibrates them on demand
+        self.judges_: dict[str, Any] = {}
         self.feature_names_ = cb.names
         self.feature_weights_ = cases.weights
         self.side_ = choice.side

@@ -5,13 +5,17 @@ the last :data:`~cbr.segmentation.DEFAULT_WINDOW_S` seconds are solved by the fi
 classifier and vote (an activity, or unknown when unlike the case base); the mean vote of the
 windows over the latest stretch goes through the forward pass of the same decoder (a change
 needs :data:`~cbr.segmentation.MIN_SEGMENT_S` of evidence at
-:data:`~cbr.segmentation.SWITCH_ODDS` to 1), whose best state is the rolling label. When the
-label changes, the segment before it is finished: its start is where the new label's path
-began (followed back through the decoder), its repetitions are counted.
+:data:`~cbr.segmentation.SWITCH_ODDS` to 1), whose best state now is the rolling label. A
+segment is finished once the decoder's best paths into every state agree on where it ends
+(online Viterbi: what later frames cannot change), not whenever the rolling label turns (the
+label of a stream whose windows waver between two activities turns often; the best path
+through them does not). Its repetitions are counted on its frames, each repetition in the
+one segment that holds where its movement turns (:func:`cbr.segmentation.keep_whole`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,7 +25,7 @@ import numpy as np
 from features.body import torso_share
 from features.errors import DataError
 from features.poses import PoseSequence
-from features.repetitions import count_repetitions
+from features.repetitions import ANALYSIS_FPS, Repetition, count_repetitions
 from features.skeleton import BLAZEPOSE_33
 
 from .segmentation import (
@@ -29,9 +33,12 @@ from .segmentation import (
     MIN_SEGMENT_S,
     SWITCH_ODDS,
     activity_distances,
+    at_cut,
+    keep_whole,
+    log_votes,
     span_fields,
 )
-from .unknown import Judge, Margin, activity_codes
+from .unknown import Judge, activity_codes, judge_of
 
 HOP_S = 0.5
 """The rolling label is decided every this many seconds of stream."""
@@ -57,40 +64,72 @@ class LiveSegment:
 
 @dataclass
 class _Forward:
-    """The decoder's forward pass over hops, with back pointers to find where a state began."""
+    """The decoder's forward pass over hops (Viterbi; ``cost[i, j]``: of going from state i
+    to state j), with the back pointers of the hops not yet settled: those on which the
+    best paths into the states still disagree."""
 
-    n_states: int
-    penalty: float
+    cost: np.ndarray
     total: np.ndarray = field(init=False)
     back: list[np.ndarray] = field(default_factory=list)
+    started: bool = False
+
+    @property
+    def n_states(self) -> int:
+        return len(self.cost)
 
     def __post_init__(self) -> None:
         self.total = np.zeros(self.n_states)
 
-    def step(self, vote: np.ndarray) -> int:
-        score = np.log(np.clip(vote, 1e-3, None))
-        if self.back or self.total.any():
-            best = int(np.argmax(self.total))
-            switch = self.total[best] - self.penalty
-            stay = self.total >= switch
-            self.back.append(np.where(stay, np.arange(self.n_states), best))
-            self.total = np.where(stay, self.total, switch) + score
+    def step(self, score: np.ndarray) -> int:
+        """Take one hop's log evidence ``score`` ``(n_states,)``; the state best supported
+        now."""
+        if self.started:
+            reach = self.total[:, None] - self.cost  # (from, to)
+            best = np.argmax(reach, axis=0)
+            self.back.append(best)
+            self.total = reach[best, np.arange(self.n_states)] + score
         else:
             self.back.append(np.arange(self.n_states))
             self.total = score.copy()
+            self.started = True
         self.total -= self.total.max()  # keep the numbers small; only differences matter
         return int(np.argmax(self.total))
 
-    def began(self, state: int) -> int:
-        """The hop at which the best path ending in ``state`` entered it (0: at the first)."""
-        hop = len(self.back) - 1
-        while hop > 0 and self.back[hop][state] == state:
-            hop -= 1
-        return hop
+    def paths(self) -> np.ndarray:
+        """``(n_states, len(back))``: over the hops not yet settled, the best path ending in
+        each state."""
+        out = np.empty((self.n_states, len(self.back)), dtype=np.int64)
+        out[:, -1] = np.arange(self.n_states)
+        for i in range(len(self.back) - 1, 0, -1):  # over unsettled hops, vectorised over states
+            out[:, i - 1] = self.back[i][out[:, i]]
+        return out
 
-    def forget(self, hops: int) -> None:
-        """Drop the back pointers of the first ``hops`` hops (they are no longer needed)."""
-        del self.back[:hops]
+    def settle(self, final: bool = False) -> list[int]:
+        """The states of the hops now settled, in order, forgotten here: the leading hops on
+        which the best paths into every state agree (whatever comes next, the best path
+        keeps them: they are what the offline decoder would give); ``final``: the stream has
+        ended, every hop is settled on the best path."""
+        if not self.back:
+            return []
+        paths = self.paths()
+        if final:
+            settled = paths[int(np.argmax(self.total))].tolist()
+        else:
+            same = (paths == paths[0]).all(axis=0)
+            agree = len(same) if same.all() else int(np.argmin(same))
+            settled = paths[0, :agree].tolist()
+        del self.back[: len(settled)]
+        return [int(x) for x in settled]
+
+
+def _shifted(rep: Repetition, frames: int) -> Repetition:
+    """``rep`` of a clip that starts ``frames`` into the stream, in stream frames."""
+    return dataclasses.replace(
+        rep,
+        start_frame=rep.start_frame + frames,
+        end_frame=rep.end_frame + frames,
+        peak_frame=rep.peak_frame + frames,
+    )
 
 
 class LiveSegmenter:
@@ -99,6 +138,11 @@ class LiveSegmenter:
     ``clf``: a fitted :class:`~cbr.estimator.CaseBaseClassifier`; ``fps``: the stream's frame
     rate; ``judge``: what says a window is unlike the case base (:mod:`cbr.unknown`; the margin
     between the two nearest activities, calibrated on the case base, when None).
+
+    The rolling label is the state best supported now (it may still change its mind); a
+    segment is finished when the decoder's best paths into every state agree on where it
+    ends (:meth:`_Forward.settle`), so the finished segments are those the offline decoder
+    would give over the same votes, not every turn of the rolling label.
     """
 
     def __init__(self, clf: Any, fps: float, judge: Judge | None = None) -> None:
@@ -106,60 +150,94 @@ class LiveSegmenter:
             raise DataError(f"the stream needs a frame rate > 0, got {fps!r}", "stream")
         self.clf = clf
         self.fps = float(fps)
-        self.judge = judge if judge is not None else Margin.of(clf.case_base_)
+        self.judge = judge if judge is not None else judge_of(clf, "margin")
         self.classes = [str(c) for c in clf.classes_]
         self.codes = activity_codes(clf.case_base_.labels, self.classes)
         self.unknown = len(self.classes)
         self.hop = max(1, int(round(HOP_S * fps)))
         self.window = max(2, int(round(DEFAULT_WINDOW_S * fps)))
+        self.step = max(1, int(round(fps / ANALYSIS_FPS)))  # frames per counted sample
         self.frames: list[np.ndarray] = []
         self.offset = 0  # the stream frame that frames[0] is (older frames are dropped)
         self.n = 0  # frames pushed
-        self.forward = _Forward(self.unknown + 1, (MIN_SEGMENT_S / HOP_S) * math.log(SWITCH_ODDS))
-        self.votes: list[np.ndarray] = []
+        self.forward = _Forward(self._costs())
         self.cover = max(1, math.ceil(self.window / self.hop))  # windows over one stretch
-        self.latest_votes: list[np.ndarray] = []
-        self.hop_frames: list[int] = []  # the frame at which each hop was decided
-        self.state: int | None = None
+        self.latest_votes: list[tuple[np.ndarray, float]] = []
+        self.votes: list[np.ndarray] = []  # of the hops since the segment in progress began:
+        # the share of windows nearest each activity, and the share unlike every one
+        self.hop_frames: list[int] = []  # the frame at which each of those hops was decided
+        self.state: int | None = None  # the rolling label's state
+        self.settled: int | None = None  # the state of the segment in progress
         self.segment_start = 0
+        self.turn = False  # the last finished segment had a far point at its end
+
+    def _costs(self) -> np.ndarray:
+        """``(2 n_classes, 2 n_classes)``: the cost of going from one state to another. A state
+        is an activity and whether it is known (``2 a``) or unknown (``2 a + 1``): which
+        activity the windows are nearest and whether they are unlike it are decoded
+        together, as the offline decoder does in turn (:func:`cbr.segmentation.decode`, then
+        :func:`cbr.segmentation.decode_unknown`): a change of activity costs the penalty
+        (:data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS` to 1), and so does a change of
+        the label seen (an activity, or unknown). A window unlike every activity still says
+        which it is nearest: a vote for unknown taken from the activities instead would
+        split their evidence, and the label would turn with every such window."""
+        hop_s = self.hop / self.fps
+        penalty = (MIN_SEGMENT_S / hop_s) * math.log(SWITCH_ODDS)
+        activity = np.arange(2 * self.unknown) // 2
+        seen = self._seen(np.arange(2 * self.unknown))
+        moved = activity[:, None] != activity[None, :]
+        turned = seen[:, None] != seen[None, :]
+        cost: np.ndarray = penalty * (moved.astype(np.float64) + turned.astype(np.float64))
+        return cost
+
+    def _seen(self, states: np.ndarray) -> np.ndarray:
+        """The label seen of decoder ``states``: the activity's index, or n_classes (unknown)."""
+        return np.asarray(np.where(states % 2 == 1, self.unknown, states // 2))
 
     @property
     def label(self) -> str | None:
         """The rolling label (None: unknown or not decided yet)."""
         return None if self.state in (None, self.unknown) else self.classes[int(self.state)]
 
-    def push(self, world: np.ndarray) -> LiveSegment | None:
-        """Add one frame ``(33, 3)`` (NaN where the person is not seen). Returns the segment
-        that just finished, if the rolling label changed."""
+    def push(self, world: np.ndarray) -> list[LiveSegment]:
+        """Add one frame ``(33, 3)`` (NaN where the person is not seen). Returns the segments
+        that this frame settled as finished (usually none)."""
         self.frames.append(np.asarray(world, dtype=np.float64))
         self.n += 1
         if self.n < self.window or (self.n - self.window) % self.hop:
-            return None
+            return []
         return self._decide(self.n)
 
-    def _decide(self, n: int) -> LiveSegment | None:
+    def _decide(self, n: int) -> list[LiveSegment]:
         self.latest_votes = [*self.latest_votes[1 - self.cover :], self._vote(n)]
         # the evidence for the latest stretch: the mean vote of the windows over it, as each
         # block of the offline decoder gets
-        vote = np.mean(self.latest_votes, axis=0)
-        self.votes.append(vote)
+        nearest = np.mean([v[0] for v in self.latest_votes], axis=0)
+        unlike = np.mean([v[1] for v in self.latest_votes])
+        self.votes.append(np.r_[nearest, unlike])
         self.hop_frames.append(n)
-        state = self.forward.step(vote)
-        if self.state is None:
-            self.state = state
-            return None
-        if state == self.state:
-            self._trim()
-            return None
-        start_hop = self.forward.began(state)
-        boundary = self.hop_frames[start_hop] - self.window // 2
-        finished = None
-        if boundary >= self.segment_start + self.hop:
-            finished = self._segment(self.segment_start, boundary, int(self.state))
-            self.segment_start = boundary
-        # else the new label's path began before this segment did: the segment is relabelled
-        self.state = state
+        score = np.add.outer(
+            log_votes(nearest), log_votes(np.array([1.0 - unlike, unlike]))
+        ).ravel()
+        self.state = int(self._seen(np.array(self.forward.step(score))))
+        finished = self._settle(self._seen(np.array(self.forward.settle(), dtype=np.int64)))
         self._trim()
+        return finished
+
+    def _settle(self, states: np.ndarray) -> list[LiveSegment]:
+        """Follow the newly settled hops' ``states`` (the oldest hops not settled before):
+        each change of state finishes the segment in progress, at the middle of the window
+        that ended at the first hop of the new state."""
+        first = len(self.hop_frames) - len(self.forward.back) - len(states)
+        finished = []
+        for i, state in enumerate(states.tolist(), start=first):
+            if self.settled is None:
+                self.settled = state
+            if state == self.settled:
+                continue
+            boundary = max(self.segment_start + 1, self.hop_frames[i] - self.window // 2)
+            finished.append(self._segment(self.segment_start, boundary, self.settled, True))
+            self.segment_start, self.settled = boundary, state
         return finished
 
     def _trim(self) -> None:
@@ -169,24 +247,22 @@ class LiveSegmenter:
         if drop > self.window:
             del self.frames[:drop]
             self.offset += drop
-        old = sum(f < keep_from for f in self.hop_frames[:-1])
+        settled = len(self.hop_frames) - len(self.forward.back)
+        old = sum(f < keep_from for f in self.hop_frames[: max(0, settled - 1)])
         if old:
             del self.votes[:old], self.hop_frames[:old]
-            self.forward.forget(old)
 
-    def _vote(self, n: int) -> np.ndarray:
-        """The last window's vote over the activities and unknown ``(n_classes + 1,)``."""
+    def _vote(self, n: int) -> tuple[np.ndarray, float]:
+        """The last window's vote over the activities ``(n_classes,)`` (its nearest case's)
+        and whether it is unlike every activity (1.0) or not (0.0)."""
         window = self._sequence(n - self.window, n)
-        vote = np.zeros(self.unknown + 1)
-        if torso_share(window) == 0.0:
-            vote[:] = 1.0 / len(vote)  # no person: no evidence either way
-            return vote
+        if torso_share(window) == 0.0:  # no person: no evidence either way
+            return np.full(self.unknown, 1.0 / self.unknown), 0.5
         solved = self.clf.solve([window])[0]
-        if self.judge.unlike(activity_distances(self.clf, solved, self.codes)):
-            vote[-1] = 1.0
-        else:
-            vote[self.classes.index(str(solved.retrieval.labels[0]))] = 1.0
-        return vote
+        vote = np.zeros(self.unknown)
+        vote[self.classes.index(str(solved.retrieval.labels[0]))] = 1.0
+        unlike = self.judge.unlike(activity_distances(self.clf, solved, self.codes))
+        return vote, 1.0 if unlike else 0.0
 
     def recent(self, frames: int) -> PoseSequence:
         """The last ``frames`` frames pushed, as a clip."""
@@ -197,26 +273,39 @@ class LiveSegmenter:
         rows = self.frames[max(0, a - self.offset) : b - self.offset]
         return PoseSequence(np.stack(rows), BLAZEPOSE_33, self.fps, source="stream")
 
-    def _segment(self, start: int, end: int, state: int) -> LiveSegment:
+    def _segment(self, start: int, end: int, state: int, cut: bool) -> LiveSegment:
+        """Frames [start, end) as a segment of ``state``; ``cut``: it ends where another
+        begins (a finished segment: its repetitions are counted as
+        :func:`cbr.segmentation.keep_whole` says, and the next one learns whether the
+        movement turned at the cut)."""
         hops = [v for v, f in zip(self.votes, self.hop_frames, strict=True) if start < f <= end]
         confidence = float(np.mean([v[state] for v in hops])) if hops else 0.0
         first = max(start, end - int(MAX_SEGMENT_S * self.fps))
         try:
-            reps = count_repetitions(self._sequence(first, end)).count
+            found = count_repetitions(self._sequence(first, end)).repetitions
         except DataError:
-            reps = 0
+            found = ()
+        reps = tuple(_shifted(r, first) for r in found)
+        turn = self.turn and first == start
+        kept = keep_whole(reps, first, end, self.step, turn, cut)
+        if cut:
+            self.turn = at_cut(reps, first, end, self.step)[1]
         label = None if state == self.unknown else self.classes[state]
-        return LiveSegment(start, end, label, confidence, reps)
+        return LiveSegment(start, end, label, confidence, len(kept))
 
     def current(self) -> LiveSegment | None:
-        """The segment in progress (its repetitions so far)."""
+        """The segment in progress (its repetitions so far), labelled with the rolling label."""
         if self.state is None:
             return None
-        return self._segment(self.segment_start, self.n, int(self.state))
+        return self._segment(self.segment_start, self.n, int(self.state), False)
 
-    def finish(self) -> LiveSegment | None:
-        """The last segment, at the end of the stream."""
-        return self.current()
+    def finish(self) -> list[LiveSegment]:
+        """The segments not yet finished, at the end of the stream (the last one ends there)."""
+        if self.state is None:
+            return []
+        out = self._settle(self._seen(np.array(self.forward.settle(final=True), dtype=np.int64)))
+        assert self.settled is not None
+        return [*out, self._segment(self.segment_start, self.n, self.settled, False)]
 
 
 __all__ = ["HOP_S", "LiveSegment", "LiveSegmenter"]

@@ -25,11 +25,14 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    (a vote is all or nothing: a window over a change votes for one side whole);
 6. stretches unlike every activity of the case base become unknown (:func:`unknown_blocks`):
    every window is judged (:mod:`cbr.unknown`; by default the margin between its two nearest
-   activities, calibrated on the case base), and known/unknown is decoded the same way from
-   the windows that lie within one decoded activity (a window across a change of activity
-   is like neither side, whether both are known or not);
-7. each segment is counted (:func:`features.repetitions.count_repetitions`) and explained by
-   its most confident window.
+   activities, calibrated on the case base), and known/unknown is decoded from the windows
+   that lie within one decoded activity (a window across a change of activity is like
+   neither side, whether both are known or not), every change of the label seen costing
+   the same (:func:`decode_unknown`: no sliver of an activity left between an unknown
+   stretch and the next change);
+7. each segment is counted (:func:`features.repetitions.count_repetitions`), each
+   repetition in the one segment that holds where its movement turns (:func:`keep_whole`),
+   and explained by its most confident window.
 """
 
 from __future__ import annotations
@@ -64,7 +67,15 @@ from .explain import Explanation
 from .problem import FeatureConfig, warm
 from .retrieve import Retrieval
 from .reuse import reuse
-from .unknown import Familiarity, HeldOut, Judge, Margin, activity_codes, per_activity
+from .unknown import (
+    Familiarity,
+    HeldOut,
+    Judge,
+    Margin,
+    activity_codes,
+    judge_of,
+    per_activity,
+)
 
 BLOCK_S = 0.1
 """Labels are given per block of this many seconds (the resolution of the label files)."""
@@ -325,11 +336,37 @@ def block_votes(solved: Sequence[_Solved], n_frames: int, fps: float) -> np.ndar
     return np.where(counts[:, None] > 0, votes / np.maximum(counts, 1)[:, None], uniform)
 
 
+TIE = 1e-6
+"""Log-odds this close are a tie (sums of the same logs added in another order differ)."""
+
+
+def switch_penalty() -> float:
+    """The log-odds a change of label costs: :data:`MIN_SEGMENT_S` of blocks at
+    :data:`SWITCH_ODDS` to 1."""
+    return (MIN_SEGMENT_S / BLOCK_S) * math.log(SWITCH_ODDS)
+
+
+def log_votes(votes: np.ndarray) -> np.ndarray:
+    """Log votes, a zero share clipped to 1e-3 (a block no window votes for is unlikely,
+    not impossible)."""
+    out: np.ndarray = np.log(np.clip(votes, 1e-3, None))
+    return out
+
+
+def _backtrack(back: np.ndarray, last: int) -> np.ndarray:
+    """The best path ending in state ``last``, followed back through ``back`` ``(n, k)``."""
+    path = np.empty(len(back), dtype=np.int64)
+    path[-1] = last
+    for t in range(len(back) - 1, 0, -1):
+        path[t - 1] = back[t, path[t]]
+    return path
+
+
 def decode(votes: np.ndarray) -> np.ndarray:
     """The most likely state of every block (Viterbi) under a constant cost per change of
-    state: :data:`MIN_SEGMENT_S` of blocks at :data:`SWITCH_ODDS` to 1. ``(n_blocks,)``."""
-    penalty = (MIN_SEGMENT_S / BLOCK_S) * math.log(SWITCH_ODDS)
-    score = np.log(np.clip(votes, 1e-3, None))
+    state (:func:`switch_penalty`). ``(n_blocks,)``."""
+    penalty = switch_penalty()
+    score = log_votes(votes)
     n, k = score.shape
     back = np.zeros((n, k), dtype=np.int64)
     total = score[0].copy()
@@ -339,11 +376,34 @@ def decode(votes: np.ndarray) -> np.ndarray:
         stay = total >= switch
         back[t] = np.where(stay, np.arange(k), best)
         total = np.where(stay, total, switch) + score[t]
-    path = np.empty(n, dtype=np.int64)
-    path[-1] = int(np.argmax(total))
-    for t in range(n - 1, 0, -1):
-        path[t - 1] = back[t, path[t]]
-    return path
+    return _backtrack(back, int(np.argmax(total)))
+
+
+def decode_unknown(votes: np.ndarray, path: np.ndarray) -> np.ndarray:
+    """``(n_blocks,)`` bool: the most likely known (False) / unknown (True) state of every
+    block given ``votes`` ``(n_blocks, 2)`` (shares known, unknown) and the decoded
+    activities ``path`` ``(n_blocks,)``, where every change of the label a user sees costs
+    :func:`switch_penalty` once: known to unknown and back, and a change of activity between
+    two known blocks; a change of activity under unknown is not seen and costs nothing.
+
+    Decoding known/unknown on its own would charge only its own changes: an unknown stretch
+    ending 0.5 s before a change of activity would leave a 0.5-s segment of the activity
+    before, a change nobody paid for (segments that flicker). Where known and unknown are
+    equally likely (within :data:`TIE`, rounding), the block is known: calling a stretch
+    unlike every activity takes evidence."""
+    penalty = switch_penalty()
+    score = log_votes(votes)
+    moved = np.r_[False, path[1:] != path[:-1]]  # the activity changes at this block
+    back = np.zeros((len(score), 2), dtype=np.int64)
+    total = score[0].copy()
+    for t in range(1, len(score)):  # over 0.1-s blocks: two states
+        known, unknown = total[0], total[1]
+        stay_known = known - (penalty if moved[t] else 0.0)
+        back[t] = (0 if stay_known >= unknown - penalty - TIE else 1,
+                   1 if unknown > known - penalty + TIE else 0)  # fmt: skip
+        total = np.array([max(stay_known, unknown - penalty), max(unknown, known - penalty)])
+        total += score[t]
+    return np.asarray(_backtrack(back, int(total[1] > total[0] + TIE)) == 1)
 
 
 def _log_distances(solved: Sequence[_Solved]) -> np.ndarray:
@@ -427,7 +487,8 @@ def unknown_blocks(
     The windows within one run of the decoded activity ``path`` ``(n_blocks,)``
     (:func:`within_runs`) are judged (:class:`cbr.unknown.Judge`); a block's evidence is the
     share of those over it judged unlike (none over it: no evidence either way), and
-    known/unknown is decoded like the activities (a change needs :data:`MIN_SEGMENT_S`)."""
+    known/unknown is decoded with the activities (:func:`decode_unknown`: every change of
+    label a user sees needs :data:`MIN_SEGMENT_S` of evidence)."""
     inside = within_runs(solved, fps, path)
     marked = [
         dataclasses.replace(w, vote=np.array([0.0, 1.0] if judge.unlike(w.nearest) else [1.0, 0.0]))
@@ -436,7 +497,7 @@ def unknown_blocks(
     ]
     if not marked:
         return np.zeros(len(path), dtype=bool)
-    return np.asarray(decode(block_votes(marked, n_frames, fps)) == 1)
+    return decode_unknown(block_votes(marked, n_frames, fps), path)
 
 
 def _explain_segment(
@@ -477,26 +538,84 @@ def _repetitions(sig: MovementSignals, start: int, end: int) -> tuple[Repetition
     )
 
 
+def at_cut(reps: Sequence[Repetition], start: int, end: int, tolerance: int) -> tuple[bool, bool]:
+    """Whether the first of ``reps`` (of frames [start, end)) has its far point at ``start``
+    and whether the last has it at ``end``, within ``tolerance`` frames (one sample of the
+    counter's signals)."""
+    if not reps:
+        return False, False
+    return reps[0].peak_frame < start + tolerance, reps[-1].peak_frame >= end - tolerance
+
+
+def keep_whole(
+    reps: Sequence[Repetition],
+    start: int,
+    end: int,
+    tolerance: int,
+    after_turn: bool,
+    cut_end: bool,
+) -> tuple[Repetition, ...]:
+    """``reps`` of a segment, frames [start, end), with those whose far point is only where the
+    recording was cut into segments left out: a repetition counts for the one segment that
+    holds where its movement turns.
+
+    Counted on a segment alone, a movement cut mid-way has its far point at the cut (the
+    signal is largest there because it goes on beyond): half a squat each side of a change
+    would count in both segments, and a fragment shorter than one repetition would count
+    the movement at both its ends. So a far point at the segment's end (``cut_end``: the
+    end is a change, not the end of the recording) is left out: the movement turns beyond,
+    where the next segment counts it; one at the start is kept only when the segment before
+    had one at that same cut (``after_turn``: the movement turns at the cut itself: one
+    repetition, counted once, by the segment after). ``tolerance``: frames per sample of the
+    counter's signals."""
+    first, last = at_cut(reps, start, end, tolerance)
+    out = list(reps)
+    if cut_end and last:
+        out = out[:-1]
+    if first and not after_turn and start > 0 and out and out[0] is reps[0]:
+        out = out[1:]
+    return tuple(out)
+
+
+def counted_segments(
+    sig: MovementSignals, bounds: Sequence[tuple[int, int]], n_frames: int
+) -> list[tuple[Repetition, ...]]:
+    """The repetitions of every segment, frames ``bounds`` [start, end) in order covering the
+    recording's ``n_frames``, each counted on its own frames (:func:`_repetitions`), each
+    repetition in one segment (:func:`keep_whole`)."""
+    out = []
+    turn = False  # the segment before had a far point at its end (the cut)
+    for start, end in bounds:
+        reps = _repetitions(sig, start, end)
+        out.append(keep_whole(reps, start, end, sig.step, turn, end < n_frames))
+        turn = at_cut(reps, start, end, sig.step)[1]
+    return out
+
+
+def _frames_of(a: int, b: int, fps: float, n_frames: int) -> tuple[int, int]:
+    """Frames [start, end) of blocks [a, b)."""
+    per_block = fps * BLOCK_S
+    return int(round(a * per_block)), min(n_frames, int(round(b * per_block)))
+
+
 def _segment_of(
     clf: Any,
     rec: PoseSequence,
-    sig: MovementSignals,
     run: tuple[int, int, int],
     solved: Sequence[_Solved],
     votes: np.ndarray,
     judge: Judge,
     evidence: Sequence[bool],
+    reps: tuple[Repetition, ...],
 ) -> Segment:
-    """One decoded run as a segment: frames, label, confidence, repetitions, explanation."""
+    """One decoded run as a segment: frames, label, confidence, ``reps`` (its repetitions,
+    :func:`counted_segments`), explanation."""
     a, b, state = run
     n_classes = len(clf.classes_)
-    frames_per_block = rec.fps * BLOCK_S
-    start = int(round(a * frames_per_block))
-    end = min(rec.n_frames, int(round(b * frames_per_block)))
+    start, end = _frames_of(a, b, rec.fps, rec.n_frames)
     # told by the windows centred in it that were evidence (none across a change of activity)
     centred = [(w, e) for w, e in zip(solved, evidence, strict=True) if start <= w.centre < end]
     inside = [w for w, e in centred if e] or [w for w, _ in centred]
-    reps = _repetitions(sig, start, end)
     text, ratio = _explain_segment(clf, rec, inside, state, judge)
     label: str | None = None
     if state == n_classes:  # confidence: the share of its windows unlike every activity
@@ -549,8 +668,11 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     evidence = within_runs(solved, rec.fps, path).tolist()
     path[unknown_blocks(solved, rec.n_frames, rec.fps, judge, path)] = n_classes
     runs = _runs(path)
+    bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]
+    reps = counted_segments(done.sig, bounds, rec.n_frames)
     segments = tuple(
-        _segment_of(clf, rec, done.sig, run, solved, done.votes, judge, evidence) for run in runs
+        _segment_of(clf, rec, run, solved, done.votes, judge, evidence, r)
+        for run, r in zip(runs, reps, strict=True)
     )
     blocks: list[str | None] = []
     for a, b, state in runs:
@@ -576,7 +698,7 @@ def segment(
     at once; None: in pieces of :data:`cbr.long_clip.CHUNK_FRAMES` for a longer recording.
     Raises DataError for a recording shorter than one window or without a person, and for a
     case base the judge cannot be calibrated on."""
-    judge = judge or Margin.of(clf.case_base_)
+    judge = judge or judge_of(clf, "margin")
     return finish(clf, solve_recording(clf, recording, k, chunk_frames), judge)
 
 
@@ -596,6 +718,11 @@ __all__ = [
     "within_runs",
     "windows_of",
     "decode",
+    "decode_unknown",
+    "keep_whole",
+    "at_cut",
+    "counted_segments",
+    "log_votes",
     "place_changes",
     "finish",
     "segment",

@@ -16,7 +16,15 @@ from typing import Any
 
 import numpy as np
 
-from casebase_store import CaseArrays, CaseBaseInfo, CaseStore, NewCase, StoreError, sqlite_file
+from casebase_store import (
+    CaseArrays,
+    CaseBaseInfo,
+    CaseStore,
+    NewCase,
+    StoreError,
+    StoreTransaction,
+    sqlite_file,
+)
 from casebase_store.case_matrix import cached_case_matrix, matrix_path, open_case_matrix
 from features.errors import ConfigError, DataError
 
@@ -26,6 +34,7 @@ from .estimator import CaseBaseClassifier
 from .novelty import NoveltyCalibration, calibrate
 from .problem import FeatureConfig
 from .similarity import SimilarityMeasure, get_measure
+from .unknown import AT_FIT, Calibrated, calibrate_judges, judges_from_dict, judges_to_dict
 from .weights import MIRROR_FLAG, FeatureWeights
 
 #: bump when the model document changes meaning
@@ -59,9 +68,11 @@ def _jsonable(value: Any) -> Any:
 
 def model_document(clf: CaseBaseClassifier, target: str = "label") -> dict[str, Any]:
     """Everything ``fit`` learned besides the cases, the measure and the feature configuration
-    (which the store keeps in their own columns), as JSON-able data."""
+    (which the store keeps in their own columns), as JSON-able data; the unknown judges
+    calibrated on its case base (``clf.judges_``), stamped with the version of the case base
+    they hold for (1: the store creates a case base at version 1, whatever it holds)."""
     fw = clf.feature_weights_
-    return {
+    doc = {
         "format": MODEL_FORMAT,
         "params": _jsonable(clf.get_params()),
         "target": target,
@@ -77,6 +88,46 @@ def model_document(clf: CaseBaseClassifier, target: str = "label") -> dict[str, 
         "novelty": clf.novelty_.to_dict(),
         "confidence": clf.confidence_.to_dict(),
     }
+    judges = getattr(clf, "judges_", None)
+    if judges:
+        doc["judges"] = judges_document(judges, 1)
+    return doc
+
+
+def judges_document(judges: dict[str, Calibrated], version: int) -> dict[str, Any]:
+    """The model document's ``judges``: the calibrated unknown judges and the version of the
+    case base they were calibrated on (a judge of another version is stale: not read)."""
+    return {"case_base_version": version, "calibrated": judges_to_dict(judges)}
+
+
+def calibrate_stored_judges(clf: CaseBaseClassifier) -> None:
+    """Calibrate the unknown judges :data:`cbr.unknown.AT_FIT` on the classifier's case
+    base, to be stored with it (:func:`model_document`): ``segment`` and ``watch`` then read
+    them instead of scanning the case base at every start."""
+    clf.judges_ = calibrate_judges(clf.case_base_, AT_FIT)
+
+
+def recalibrated(clf: CaseBaseClassifier, cb: CaseBase) -> dict[str, Calibrated]:
+    """The unknown judges ``clf`` holds stored, calibrated anew on ``cb`` (what its case base
+    becomes: the edit of ``casebase trim``, which costs more than calibrating)."""
+    return calibrate_judges(cb, tuple(clf.judges_)) if clf.judges_ else {}
+
+
+def judges_after_change(
+    tx: StoreTransaction, info: CaseBaseInfo, judges: dict[str, Calibrated] | None = None
+) -> None:
+    """Inside ``tx``, which changes the cases of ``info``: store ``judges`` (calibrated on the
+    cases as they will be) in place of the stored ones, or, by default, drop the stored ones
+    (calibrated on the cases as they were; ``segment`` then calibrates at run time). The
+    transaction bumps the version once: the new judges are stamped with the next one."""
+    model = dict(info.model)
+    if judges:
+        model["judges"] = judges_document(judges, info.version + 1)
+    elif "judges" in model:
+        del model["judges"]
+    else:
+        return
+    tx.set_model(info, model)
 
 
 def case_records(cb: CaseBase) -> Iterator[NewCase]:
@@ -300,6 +351,7 @@ def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
     clf.maintenance_ = None
     clf.novelty_ = _novelty(model, cb, name, store.where)
     clf.confidence_ = _confidence(model, name, store.where)
+    clf.judges_ = _judges(model, info.version, name, store.where)
     clf.refresh()
     target = str(model.get("target", "label"))
     return StoredClassifier(name, info.uid, info.version, target, clf, info)
@@ -339,3 +391,23 @@ def _novelty(model: dict[str, Any], cb: CaseBase, name: str, where: str) -> Nove
     if cb.names and cb.names[-1] == MIRROR_FLAG:
         real = cb.problems[:, -1] == 0.0
     return calibrate(cb, cb.problems[real], clip[real], clip, "leave-one-out")
+
+
+def _judges(model: dict[str, Any], version: int, name: str, where: str) -> dict[str, Calibrated]:
+    """The stored unknown judges; none for a case base stored without them (before posecbr
+    stored judges, or with fewer than three activities) or whose cases changed since they
+    were calibrated (another version): ``segment`` calibrates those at run time. StoreError
+    when they are there but damaged."""
+    stored = model.get("judges")
+    if stored is None:
+        return {}
+    try:
+        if not isinstance(stored, dict):
+            raise ValueError(f"the stored judges must be a record, got {stored!r}")
+        stamp = stored["case_base_version"]
+        if isinstance(stamp, bool) or not isinstance(stamp, int):
+            raise ValueError(f"case_base_version must be a whole number, got {stamp!r}")
+        judges = judges_from_dict(stored["calibrated"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise _damaged(name, "unknown judge calibration", exc, where) from None
+    return judges if stamp == version else {}

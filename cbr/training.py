@@ -35,7 +35,14 @@ from .described import DescribedClip, describe_case, describe_clip
 from .estimator import CaseBaseClassifier, check_labels
 from .maintenance import MaintenanceReport, record_trim
 from .problem import FeatureConfig
-from .stored import case_records, load_classifier, model_document, write_matrices
+from .stored import (
+    calibrate_stored_judges,
+    case_records,
+    judges_after_change,
+    load_classifier,
+    model_document,
+    write_matrices,
+)
 from .stored import stored_case_base as to_store
 
 
@@ -215,6 +222,7 @@ def store_fitted(
     """Store the fitted classifier as case base ``name`` in ``db`` in one transaction
     (``labels``: its training clips' solutions, for the summary)."""
     cb = to_store(fitted)
+    calibrate_stored_judges(fitted)
 
     def write(tx: StoreTransaction) -> None:
         info = tx.create_case_base(
@@ -338,6 +346,7 @@ def append_described(
         with store.transaction() as tx:
             info = tx.expect(name, uid)
             ids = np.asarray(tx.add_cases(info, case_records(cb)))
+            judges_after_change(tx, info)
             kind = cb.measure.cache_kind(tuple(cb.problems.shape[1:]))
             if kind is not None:
                 reps = cb.measure.represent(cb.problems)

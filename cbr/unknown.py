@@ -30,9 +30,12 @@ Three judges, each calibrated on the case base itself, never on what is being se
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import dataclasses
+import math
+import typing
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 
@@ -151,9 +154,11 @@ def _left_out(cb: CaseBase, basis: str, groups: np.ndarray, i: int) -> np.ndarra
     return left_out
 
 
-def held_out_activities(
-    cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0
-) -> tuple[np.ndarray, np.ndarray, str]:
+Held = tuple[np.ndarray, np.ndarray, str]
+"""What :func:`held_out_activities` measures: distances, activities and basis."""
+
+
+def held_out_activities(cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0) -> Held:
     """Training cases held out (:func:`held_out_basis`) as a new recording is: each one's
     distance to the nearest case of every activity that is left ``(n, n_classes)`` (inf
     where none is), each one's activity ``(n,)`` (its index among the sorted labels) and the
@@ -233,8 +238,85 @@ def _no_apart() -> DataError:
     )
 
 
+_C = TypeVar("_C", bound="Calibrated")
+
+
+class Calibrated:
+    """A judge calibrated on a case base: a frozen dataclass stored with the fitted model as a
+    plain record of its fields (:meth:`to_dict`, :meth:`from_dict`), so that ``segment`` and
+    ``watch`` read it instead of scanning the case base each run. Generic over the fields: a
+    new field (with a default, which a record stored before it takes) or a new judge (one
+    line in :data:`STORED`) needs no code here. Fields are ``float`` (>= 0, not NaN; +inf is
+    written ``"inf"``: JSON has none), ``int`` (>= 0), ``str`` or ``tuple[float, ...]`` (a
+    list of such numbers)."""
+
+    @classmethod
+    def of(cls: type[_C], cb: CaseBase, *, held: Held | None = None) -> _C:
+        """Calibrated on ``cb`` (``held``: its :func:`held_out_activities`, when measured)."""
+        raise NotImplementedError
+
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as JSON-ready values."""
+        return {
+            f.name: _plain(getattr(self, f.name))
+            for f in dataclasses.fields(typing.cast(Any, self))
+        }
+
+    @classmethod
+    def from_dict(cls: type[_C], d: Mapping[str, Any]) -> _C:
+        """The judge :meth:`to_dict` wrote. ValueError naming the field for a record that is
+        not one: an unknown field, a missing one without a default, a wrong type, a negative
+        or NaN number."""
+        if not isinstance(d, Mapping):
+            raise ValueError(f"a stored judge must be a record of fields, got {d!r}")
+        fields = {f.name: f for f in dataclasses.fields(typing.cast(Any, cls))}
+        extra = sorted(set(d) - set(fields))
+        if extra:
+            raise ValueError(f"unknown field {extra[0]!r}")
+        types = typing.get_type_hints(cls)
+        values = {}
+        for name, f in fields.items():
+            if name in d:
+                values[name] = _field(name, types[name], d[name])
+            elif f.default is dataclasses.MISSING:
+                raise ValueError(f"field {name!r} is missing")
+        return cls(**values)
+
+
+def _plain(value: Any) -> Any:
+    """A field's value for JSON: +inf as ``"inf"``."""
+    if isinstance(value, float) and math.isinf(value) and value > 0:
+        return "inf"
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _field(name: str, kind: Any, value: Any) -> Any:
+    """A stored field's value as its type ``kind`` (ValueError naming ``name`` when it is not
+    one)."""
+    if kind is float:
+        number = math.inf if value == "inf" else value
+        if isinstance(number, int | float) and not isinstance(number, bool) and number >= 0:
+            return float(number)  # NaN fails the comparison
+        raise ValueError(f"field {name!r} must be a number >= 0, got {value!r}")
+    if kind is int:
+        if isinstance(value, int) and not isinstance(value, bool) and value >= 0:
+            return value
+        raise ValueError(f"field {name!r} must be a whole number >= 0, got {value!r}")
+    if kind is str:
+        if isinstance(value, str) and value:
+            return value
+        raise ValueError(f"field {name!r} must be a non-empty text, got {value!r}")
+    if kind == tuple[float, ...]:
+        if isinstance(value, list):
+            return tuple(_field(name, float, v) for v in value)
+        raise ValueError(f"field {name!r} must be a list of numbers >= 0, got {value!r}")
+    raise ValueError(f"field {name!r} is of a type that is not stored ({kind!r})")
+
+
 @dataclass(frozen=True)
-class Margin:
+class Margin(Calibrated):
     """Unknown when the nearest activity is hardly nearer than the next: margin ``d1 / d2``
     above ``threshold``, which at most a share ``false_unknown`` of the case base's own
     held-out known margins exceed (module docstring); ``basis``: how training cases were held
@@ -247,12 +329,17 @@ class Margin:
     false_unknown: float = FALSE_UNKNOWN
 
     @classmethod
-    def of(cls, cb: CaseBase, false_unknown: float = FALSE_UNKNOWN) -> Margin:
-        """Calibrated on ``cb`` for a false-unknown rate ``false_unknown``. DataError when it
-        cannot be: fewer than three activities (a held-out activity leaves one to compare
-        with), or no activity whose cases can be held out from each other."""
+    def of(
+        cls, cb: CaseBase, false_unknown: float = FALSE_UNKNOWN, held: Held | None = None
+    ) -> Margin:
+        """Calibrated on ``cb`` for a false-unknown rate ``false_unknown`` (``held``: its
+        :func:`held_out_activities`, when already measured). DataError when it cannot be:
+        fewer than three activities (a held-out activity leaves one to compare with), or no
+        activity whose cases can be held out from each other."""
         _check_margin_calibration(cb)
-        known, novel, basis = calibration_margins(cb)
+        seen, codes, basis = held if held is not None else held_out_activities(cb)
+        known_rows, novel_rows = known_and_novel(seen, codes)
+        known, novel = _margins(known_rows), _margins(novel_rows)
         if not len(known) or not len(novel):
             raise _no_apart()
         threshold = false_unknown_threshold(known, false_unknown)
@@ -298,7 +385,7 @@ def joint_thresholds(
 
 
 @dataclass(frozen=True)
-class MarginDistance:
+class MarginDistance(Calibrated):
     """Unknown when the nearest activity is hardly nearer than the next (margin above
     ``margin``), or when it is only somewhat so (above ``joint_margin``) and the nearest case
     lies far (farther than ``joint_distance``): a window of a left-out movement is often both
@@ -316,10 +403,12 @@ class MarginDistance:
     false_unknown: float = FALSE_UNKNOWN
 
     @classmethod
-    def of(cls, cb: CaseBase, false_unknown: float = FALSE_UNKNOWN) -> MarginDistance:
-        """Calibrated on ``cb``; DataError as :meth:`Margin.of`."""
+    def of(
+        cls, cb: CaseBase, false_unknown: float = FALSE_UNKNOWN, held: Held | None = None
+    ) -> MarginDistance:
+        """Calibrated on ``cb``; ``held`` and DataError as :meth:`Margin.of`."""
         _check_margin_calibration(cb)
-        seen, codes, basis = held_out_activities(cb)
+        seen, codes, basis = held if held is not None else held_out_activities(cb)
         known, novel = known_and_novel(seen, codes)
         if not len(known) or not len(novel):
             raise _no_apart()
@@ -368,7 +457,7 @@ def activity_thresholds(
 
 
 @dataclass(frozen=True)
-class ActivityMargin:
+class ActivityMargin(Calibrated):
     """Unknown when the margin ``d1 / d2`` lies above the threshold of the nearest activity:
     ``thresholds[a]`` (``a`` the index among the case base's sorted activities) is the margin
     that a share ``false_unknown`` of the held-out known cases of activity ``a`` exceed, among
@@ -388,12 +477,16 @@ class ActivityMargin:
 
     @classmethod
     def of(
-        cls, cb: CaseBase, false_unknown: float = FALSE_UNKNOWN, prior: float = ACTIVITY_PRIOR
+        cls,
+        cb: CaseBase,
+        false_unknown: float = FALSE_UNKNOWN,
+        prior: float = ACTIVITY_PRIOR,
+        held: Held | None = None,
     ) -> ActivityMargin:
-        """Calibrated on ``cb``; DataError as :meth:`Margin.of`, and when no held-out known
-        case is named rightly."""
+        """Calibrated on ``cb``; ``held`` as :meth:`Margin.of`; DataError as
+        :meth:`Margin.of`, and when no held-out known case is named rightly."""
         _check_margin_calibration(cb)
-        seen, codes, basis = held_out_activities(cb)
+        seen, codes, basis = held if held is not None else held_out_activities(cb)
         keep = known_rows(seen, codes)
         known, own = seen[keep], codes[keep]
         right = np.argmin(known, axis=1) == own if len(known) else np.zeros(0, dtype=bool)
@@ -448,7 +541,7 @@ class HeldOut:
 
 
 @dataclass(frozen=True)
-class Familiarity:
+class Familiarity(Calibrated):
     """Unknown when the nearest case lies as far as different activities of the case base
     lie from each other (then it is no more that case's activity than the others are).
 
@@ -463,7 +556,9 @@ class Familiarity:
     threshold: float
 
     @classmethod
-    def of(cls, cb: CaseBase) -> Familiarity:
+    def of(cls, cb: CaseBase, *, held: Held | None = None) -> Familiarity:
+        """Calibrated on ``cb``. DataError for one activity."""
+        del held  # the margins' scan: this judge measures its own distances
         if len(cb.classes) < 2:
             raise DataError("a case base of one activity cannot say what is unlike it", "case base")
         within, between = _neighbour_distances(cb)
@@ -506,25 +601,88 @@ def _neighbour_distances(cb: CaseBase) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(within or nearest), np.asarray(between)
 
 
+STORED: dict[str, type[Calibrated]] = {
+    "margin": Margin,
+    "margin-distance": MarginDistance,
+    "activities": Familiarity,
+    "activity-margin": ActivityMargin,
+}
+"""The judges calibrated on the case base, by name: calibrated when a model is stored
+(:func:`calibrate_judges`) and stored with it. (``held-out`` reads the classifier's novelty
+calibration, already stored.)"""
+
+
+AT_FIT = ("margin", "margin-distance", "activity-margin")
+"""The judges calibrated when a model is stored: the margins, from one held-out scan of the
+case base for at most :data:`MARGIN_SAMPLE` cases (grows linearly with the case base).
+``activities`` measures every case against every other (grows with the square: 4 s of CPU
+on 4,252 cases, hours on the 100,000 of a 50,000-clip training set) and is calibrated when
+asked for, as before."""
+
+
+def calibrate_judges(cb: CaseBase, names: Sequence[str] = tuple(STORED)) -> dict[str, Calibrated]:
+    """The judges ``names`` (of :data:`STORED`) calibrated on ``cb``, by name; the margin
+    judges share one held-out scan of the case base. A judge the case base cannot calibrate
+    (fewer than three activities, no activity with cases apart) is left out: ``segment``
+    then says why, as it did before judges were stored."""
+    three = len(set(np.asarray(cb.labels).astype(str).tolist())) >= 3
+    held = held_out_activities(cb) if three and set(AT_FIT) & set(names) else None
+    out: dict[str, Calibrated] = {}
+    for name in names:
+        try:
+            out[name] = STORED[name].of(cb, held=held)
+        except DataError:
+            continue
+    return out
+
+
+def judges_to_dict(judges: Mapping[str, Calibrated]) -> dict[str, dict[str, Any]]:
+    """The calibrated judges as JSON-ready records, by name."""
+    return {name: judge.to_dict() for name, judge in judges.items()}
+
+
+def judges_from_dict(d: Mapping[str, Any]) -> dict[str, Calibrated]:
+    """The judges :func:`judges_to_dict` wrote. ValueError naming the judge and the field for
+    a record that is not one (an unknown judge's name included)."""
+    if not isinstance(d, Mapping):
+        raise ValueError(f"the stored judges must be a record by name, got {d!r}")
+    out: dict[str, Calibrated] = {}
+    for name, record in d.items():
+        if name not in STORED:
+            raise ValueError(f"unknown judge {name!r}")
+        try:
+            out[name] = STORED[name].from_dict(record)
+        except ValueError as exc:
+            raise ValueError(f"{name}: {exc.args[0]}") from None
+    return out
+
+
 def judge_of(clf: Any, name: str) -> Judge:
-    """The judge called ``name`` (:data:`JUDGES`) for the fitted classifier ``clf``."""
-    if name == "margin":
-        return Margin.of(clf.case_base_)
+    """The judge called ``name`` (:data:`JUDGES`) for the fitted classifier ``clf``: the one
+    stored with it (``clf.judges_``, calibrated when it was stored on the cases it holds)
+    when there is one, else calibrated now on its case base (a model stored before judges
+    were, or after its cases changed, or one fitted in memory)."""
+    if name not in JUDGES:
+        raise ConfigError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "--unknown")
+    stored = getattr(clf, "judges_", None) or {}
+    if name in stored:
+        judge: Judge = stored[name]
+        return judge
     if name == "held-out":
         return HeldOut(clf.novelty_)
-    if name == "activities":
-        return Familiarity.of(clf.case_base_)
-    if name == "margin-distance":
-        return MarginDistance.of(clf.case_base_)
-    if name == "activity-margin":
-        return ActivityMargin.of(clf.case_base_)
-    raise ConfigError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "--unknown")
+    return STORED[name].of(clf.case_base_)  # type: ignore[return-value]
 
 
 __all__ = [
     "ACTIVITY_PRIOR",
+    "AT_FIT",
     "ActivityMargin",
     "JUDGES",
+    "STORED",
+    "Calibrated",
+    "calibrate_judges",
+    "judges_from_dict",
+    "judges_to_dict",
     "MARGIN_SAMPLE",
     "Familiarity",
     "HeldOut",

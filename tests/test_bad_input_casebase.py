@@ -4,6 +4,7 @@ or option, exit 1, and every file involved unchanged (issue 15)."""
 from __future__ import annotations
 
 import hashlib
+import json
 import sqlite3
 from pathlib import Path
 
@@ -114,6 +115,31 @@ def _tamper(db: Path, sql: str, *params: object) -> None:
             "UPDATE case_bases SET model = json_remove(model, '$.novelty.scale')",
             (),
             "damaged novelty calibration (KeyError: 'scale')",
+        ),  # fmt: skip
+        (
+            "UPDATE case_bases SET model = json_set(model, '$.judges', json(?))",
+            (
+                json.dumps(
+                    {
+                        "case_base_version": 1,
+                        "calibrated": {
+                            "margin": {
+                                "threshold": 0.9,
+                                "basis": "subject",
+                                "known": -5,
+                                "novel": 3,
+                            }
+                        },
+                    }
+                ),
+            ),
+            "damaged unknown judge calibration (margin: field 'known' must be a whole number >= 0,"
+            " got -5)",
+        ),  # fmt: skip
+        (
+            "UPDATE case_bases SET model = json_set(model, '$.judges', json(?))",
+            (json.dumps({"calibrated": {}}),),
+            "damaged unknown judge calibration (KeyError: 'case_base_version')",
         ),  # fmt: skip
     ],
 )

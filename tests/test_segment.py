@@ -20,8 +20,11 @@ from cbr.segmentation import (
     SWITCH_ODDS,
     Segmentation,
     _Solved,
+    counted_segments,
     decode,
+    decode_unknown,
     finish,
+    keep_whole,
     place_changes,
     segment,
     solve_recording,
@@ -39,7 +42,7 @@ from features.datasets import (
 from features.derived import stretch
 from features.poses import PoseSequence, save_pose
 from features.readers.asfamc import read_asf_amc
-from features.repetitions import split_windows
+from features.repetitions import Repetition, movement_signals, split_windows
 from posecbr.cli import main
 from tests.bodies import to_sequence
 from tests.moves import MOVES, clip
@@ -58,6 +61,80 @@ def test_decode_ignores_a_short_blip_and_follows_a_long_change() -> None:
     votes[30:50] = [0.1, 0.9]
     path = decode(votes)
     assert (path[30:50] == 1).all() and (path[:30] == 0).all() and (path[50:] == 0).all()
+
+
+def test_decode_unknown_charges_every_change_seen_once() -> None:
+    """40 blocks; activity 0 up to block 30, then activity 1; a change seen costs
+    10 ln 2 = 6.93. Unknown votes 0.9 over blocks 10-24, 0.4 over 25-29, 0.1 elsewhere.
+    Known again at 25 (a 0.5-s sliver of activity 0 before the change to activity 1): three
+    changes seen, 20.79, plus 5 (-ln 0.6) = 2.55 there: 23.34. Unknown up to the change:
+    two changes, 13.86, plus 5 (-ln 0.4) = 4.58: 18.44, the least. (Known/unknown decoded
+    alone would pay only for its own two changes either way and keep the sliver.)"""
+    path = np.r_[np.zeros(30, dtype=np.int64), np.ones(10, dtype=np.int64)]
+    votes = np.tile([0.9, 0.1], (40, 1))
+    votes[10:25] = [0.1, 0.9]
+    votes[25:30] = [0.6, 0.4]
+    assert decode_unknown(votes, path).tolist() == [False] * 10 + [True] * 20 + [False] * 10
+    # a short known stretch the votes hold firmly stays: 5 (-ln 0.001) = 34.5 to make it
+    # unknown, against the one change (6.93) it costs
+    votes[25:30] = [0.999, 0.001]
+    assert decode_unknown(votes, path).tolist() == [False] * 10 + [True] * 15 + [False] * 15
+    # the activity changes at 25 instead and the votes over 25-29 are even: unknown up to 25
+    # or up to 30 costs the same (one change seen each way, 5 ln 2 either side); a tie is known
+    path = np.r_[np.zeros(25, dtype=np.int64), np.ones(15, dtype=np.int64)]
+    votes[25:30] = [0.5, 0.5]
+    assert decode_unknown(votes, path).tolist() == [False] * 10 + [True] * 15 + [False] * 15
+
+
+def test_a_change_of_activity_under_unknown_costs_nothing() -> None:
+    """Activity 0 up to block 20, then 1; unknown votes 0.6 over blocks 10-29, 0.1 elsewhere.
+    Unknown over 10-29: two changes seen, 13.86, plus 20 (-ln 0.6) = 10.22: 24.08 (the
+    change of activity at 20 is not seen). Known throughout: one change seen (at 20), 6.93,
+    plus 20 (-ln 0.4) = 18.33: 25.26. Were the change under unknown charged too, unknown
+    would cost 31.0 and lose."""
+    path = np.r_[np.zeros(20, dtype=np.int64), np.ones(20, dtype=np.int64)]
+    votes = np.tile([0.9, 0.1], (40, 1))
+    votes[10:30] = [0.4, 0.6]
+    assert decode_unknown(votes, path).tolist() == [False] * 10 + [True] * 20 + [False] * 10
+
+
+def _rep(peak: int) -> Repetition:
+    return Repetition(peak - 10, peak + 10, peak)
+
+
+def test_a_far_point_at_a_cut_counts_once() -> None:
+    """A segment of frames [100, 200), one counted sample = 4 frames, far points at 101 (at
+    its start), 150 and 197 (at its end): the one at its end is where the segment was cut,
+    not where the movement turns (left out); the one at its start counts only when the
+    segment before also had one at that cut (the movement turned at the cut: counted once,
+    here); at the recording's own start or end a far point counts as in a clip."""
+    reps = (_rep(101), _rep(150), _rep(197))
+    peaks = [[r.peak_frame for r in keep_whole(reps, 100, 200, 4, turn, cut)]
+             for turn, cut in ((False, True), (True, True), (False, False))]  # fmt: skip
+    assert peaks == [[150], [101, 150], [150, 197]]
+    first = (_rep(1), _rep(50))
+    assert [r.peak_frame for r in keep_whole(first, 0, 100, 4, False, True)] == [1, 50]
+
+
+@pytest.mark.parametrize(("length_s", "offset_s"), [(0.5, -0.25), (0.5, 0.0), (1.0, -0.5)])
+def test_a_fragment_across_a_change_counts_no_repetition_twice(
+    recordings: dict[str, PoseSequence], length_s: float, offset_s: float
+) -> None:
+    """13_30's two squats (11.8-16.1 s) then its four knee raises (6.7-11.8 s), counted by
+    hand (tests/fixtures/repetition_counts.json), cut into three segments with a short one
+    (0.5-1 s, shorter than a repetition) around the change: still six repetitions in all
+    (counted alone, the fragment would count the movement at both its cut ends)."""
+    rec = recordings["13_30"]
+    squat = rec.positions[int(11.8 * 120) : int(16.1 * 120)]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)]
+    joined = PoseSequence(np.concatenate([squat, knee]), rec.joint_names, 120.0, source="joined")
+    seq = joined.to_canonical()
+    a = len(squat) + int(offset_s * 120)
+    b = a + int(length_s * 120)
+    bounds = [(0, a), (a, b), (b, seq.n_frames)]
+    counts = [len(r) for r in counted_segments(movement_signals(seq), bounds, seq.n_frames)]
+    assert sum(counts) == 6, counts
+    assert counts[0] == 2, counts
 
 
 def _crossing_windows() -> list[_Solved]:

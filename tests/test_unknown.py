@@ -276,3 +276,16 @@ def test_split_windows_cuts_as_segment_does() -> None:
     assert all(w.seq.n_frames == 60 and w.label == "squat" for w in windows)
     assert [w.extras["window"] for w in windows] == list(range(1, 8))
     assert split.clips[7].seq.n_frames == 45
+
+
+def test_activity_margin_is_stored_as_a_record_with_its_thresholds_listed() -> None:
+    """Its per-activity thresholds go to a list of numbers and come back as the same judge; a
+    list holding a negative threshold is refused naming the field."""
+    judge = ActivityMargin.of(_one_wrongly_named())
+    record = judge.to_dict()
+    assert record["thresholds"] == list(judge.thresholds)
+    assert ActivityMargin.from_dict(record) == judge
+    with pytest.raises(ValueError, match="'thresholds'"):
+        ActivityMargin.from_dict({**record, "thresholds": [0.3, -0.1, 0.2]})
+    with pytest.raises(ValueError, match="'thresholds'"):
+        ActivityMargin.from_dict({**record, "thresholds": 0.3})

@@ -48,24 +48,41 @@ def test_watch_a_real_video(
     video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
     out = tmp_path / "watched.mp4"
     capsys.readouterr()
-    # the case base is one mocap recording of another person: with the margin's 5 % budget
-    # the video's windows flip between squat, knee raise and unknown, and seven short
-    # segments count a repetition each; the flag classify gives calls the video unknown
-    # whole, one stretch whose three squats are counted (this test is about watch's output)
+    # the case base is one mocap recording of another person, the default judge (the margin):
+    # the 2-s windows of these 4.8-s squats waver with the squat's phase between squat, knee
+    # raise and unlike every activity; the video holds one exercise, and its segments (one,
+    # or a few) hold its three squats, none counted twice
     assert main(["watch", str(video), "--db", str(case_base), "--out", str(out),
-                 "--speed", "0", "--unknown", "held-out"]) == 0  # fmt: skip
+                 "--speed", "0"]) == 0  # fmt: skip
     captured = capsys.readouterr()
     lines = [json.loads(line) for line in captured.out.splitlines()]
     assert lines, "one JSON line per finished segment"
     assert lines[0]["start_frame"] == 0 and lines[-1]["end_frame"] == 65
     for a, b in zip(lines[:-1], lines[1:], strict=True):
         assert a["end_frame"] == b["start_frame"]
+    assert len(lines) == 1, lines  # one exercise: one segment
     # three squats by hand (tests/fixtures/repetition_counts.json)
     assert sum(line["repetitions"] for line in lines) == 3
     assert "latency frame to label: median" in captured.err
     cap = cv2.VideoCapture(str(out))
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 65
     cap.release()
+
+
+def test_segment_the_same_video_counts_each_squat_once(
+    case_base: Path, shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The offline segmentation of the video above with the default judge: its segments
+    (the windows waver as above) each last at least MIN_SEGMENT_S, no sliver between an
+    unknown stretch and a change of activity, and hold the three squats once between them."""
+    from cbr.segmentation import MIN_SEGMENT_S
+
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    capsys.readouterr()
+    assert main(["segment", str(video), "--db", str(case_base), "--json"]) == 0
+    segments = json.loads(capsys.readouterr().out)["segments"]
+    assert all(s["end_s"] - s["start_s"] >= MIN_SEGMENT_S for s in segments), segments
+    assert sum(s["repetitions"] for s in segments) == 3, segments
 
 
 def _mocap_stream(shared_data: Path, n: int, then: str, fps: float = 30.0) -> Any:

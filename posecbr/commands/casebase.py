@@ -116,10 +116,21 @@ def _info_document(store: CaseStore, i: CaseBaseInfo) -> dict[str, Any]:
         "code_version": i.code_version,
         "created": i.created_at.isoformat(),
         "version": i.version,
-        "model": _model_summary(i.model, i.feature_words),
+        "model": {**_model_summary(i.model, i.feature_words), **_judges_summary(i)},
         # how often each maintenance action ran, in the order they first ran
         "maintenance": dict(Counter(e.action for e in store.maintenance_log(i.name))),
     }
+
+
+def _judges_summary(i: CaseBaseInfo) -> dict[str, Any]:
+    """The unknown judges stored with the model (``segment --unknown``), each with its
+    fields, and whether they hold for the cases as they are now (``current``: else
+    ``segment`` calibrates at run time)."""
+    stored = i.model.get("judges")
+    if not isinstance(stored, dict):
+        return {}
+    current = stored.get("case_base_version") == i.version
+    return {"unknown_judges": {"current": current, "calibrated": stored.get("calibrated")}}
 
 
 def _print_info(d: dict[str, Any]) -> None:
@@ -172,6 +183,10 @@ def _print_model(m: dict[str, Any]) -> None:
             f"distance ({u['quantile']:.1%} of {u['basis']} training clips lie within){feats}"
             f"{rule}"
         )
+    if m.get("unknown_judges"):
+        j = m["unknown_judges"]
+        when = "" if j["current"] else " (the cases changed since: calibrated at run time)"
+        print(f"  unknown judges stored: {', '.join(sorted(j['calibrated'] or {}))}{when}")
     if m.get("confidence"):
         c = m["confidence"]
         score = (
@@ -306,7 +321,7 @@ def _export(store: CaseStore, args: argparse.Namespace) -> int:
 
 def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     from cbr.maintenance import EDITORS, record_trim
-    from cbr.stored import load_classifier, write_matrices
+    from cbr.stored import judges_after_change, load_classifier, recalibrated, write_matrices
 
     name = store.choose(args.name)
     if not 0.0 < args.keep <= 1.0:
@@ -323,8 +338,11 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     else:
         report = fn(cb, weights=clf.weights)
     if not args.dry_run:
+        judges = recalibrated(clf, report.casebase)
         with store.transaction() as tx:
-            record_trim(tx, tx.expect(name, stored.uid), report)
+            info = tx.expect(name, stored.uid)
+            record_trim(tx, info, report)
+            judges_after_change(tx, info, judges)
         write_matrices(store, name)
     doc = {
         "method": report.method,

@@ -225,8 +225,8 @@ class Watcher:
         if frame.read_at == frame.read_at:  # not NaN: the source said when it read the frame
             self.latency.append(time.perf_counter() - frame.read_at)
         self.n += 1
-        if finished is not None:
-            self._emit(finished)
+        for segment in finished:
+            self._emit(segment)
         self._draw(frame)
 
     def _emit(self, segment: Any) -> None:
@@ -288,9 +288,8 @@ class Watcher:
         """The end of the stream: the last segment and the latency."""
         import numpy as np
 
-        last = self.live.finish() if self.live is not None else None
-        if last is not None:
-            self._emit(last)
+        for segment in self.live.finish() if self.live is not None else []:
+            self._emit(segment)
         if self.latency:
             ms = np.asarray(self.latency) * 1000.0
             wall = time.perf_counter() - self.started
