@@ -134,14 +134,23 @@ def _median_time(fn: Any, repeats: int) -> tuple[float, float]:
     return statistics.median(wall), statistics.median(cpu)
 
 
-JUDGES = ("margin", "held-out", "activities", "margin-distance", "margin-equal-error")
+JUDGES = (
+    "margin",
+    "held-out",
+    "activities",
+    "margin-distance",
+    "activity-margin",
+    "margin-equal-error",
+)
 """How "unknown" is judged (cbr.unknown.JUDGES): the margin between the two nearest activities
 (its threshold exceeded by 5 % of held-out known cases of the case base), the classifier's
 stored calibration (the 99th percentile of held-out training clips' nearest-case distances,
 cbr.novelty), Familiarity (a stretch as far from its nearest cases as the case base's
 activities lie from each other), or MarginDistance (the margin alone, or a smaller margin with
-a far nearest case, sharing the 5 %); and, for comparison, the margin at the point where held-out
-known and novel cases err equally (the default before the false-unknown budget)."""
+a far nearest case, sharing the 5 %), or ActivityMargin (the margin against the nearest
+activity's own threshold, from its rightly named held-out cases, shrunk to the pooled one);
+and, for comparison, the margin at the point where held-out known and novel cases err equally
+(the default before the false-unknown budget)."""
 
 
 def judge_named(clf: Any, name: str) -> Any:

@@ -16,6 +16,11 @@ Three judges, each calibrated on the case base itself, never on what is being se
   happen to be left out and, set there, called a third of new people's known movements
   unknown.) A ratio of distances needs no common unit, so a new person who lies farther
   from every case is not called unknown for that alone.
+- :class:`ActivityMargin`: the margin against a threshold of the nearest activity's own: the
+  quantile of the held-out known cases of that activity that its nearest case names rightly
+  (a case named wrongly is wrong whether called unknown or not), shrunk towards the pooled
+  quantile by :data:`ACTIVITY_PRIOR` cases' worth. An activity whose known cases are clear
+  gets a low threshold; one that resembles another keeps its own high one.
 - :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
   score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
   case lies farther than held-out training clips nearly ever do.
@@ -40,11 +45,16 @@ from .casebase import CaseBase
 from .novelty import NoveltyCalibration
 from .weights import MIRROR_FLAG
 
-JUDGES = ("margin", "held-out", "activities", "margin-distance")
+JUDGES = ("margin", "held-out", "activities", "margin-distance", "activity-margin")
 """The judges by name, the default first."""
 FALSE_UNKNOWN = 0.05
 """The share of held-out training cases of a known activity the margin judge may call
 unknown: its threshold is their margins' ``1 - FALSE_UNKNOWN`` quantile."""
+ACTIVITY_PRIOR = 1.0 / FALSE_UNKNOWN
+"""How many held-out cases the pooled threshold counts for in an activity's own threshold
+(:func:`activity_thresholds`): 1 / :data:`FALSE_UNKNOWN` (20), the number of cases at which
+the budget reaches one case: an activity with fewer has a quantile read from nearly its
+largest margin, and is held near the pooled threshold."""
 MARGIN_SAMPLE = 2048
 """Training cases held out to calibrate the margin (a seeded sample when there are more): a 5 %
 quantile read from 256 lies 13 cases from the top and moved by 10 points of UI-PRMD Vicon's
@@ -173,14 +183,20 @@ def held_out_activities(cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0
     return seen, codes[real], basis
 
 
+def known_rows(seen: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: the held-out cases (distances to every activity ``(n, n_classes)``, own
+    activity ``codes`` ``(n,)``) whose own activity is within reach and another too."""
+    finite = np.isfinite(seen)
+    own = finite[np.arange(len(seen)), codes]
+    return np.asarray(own & (finite.sum(axis=1) >= 2))
+
+
 def known_and_novel(seen: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """From held-out cases' distances to every activity ``(n, n_classes)`` and their own
     activity ``(n,)``: the rows where the own activity is within reach and another too
     (``known``), and the rows without the own activity where two others are (``novel``), as
     ``(k, n_classes)`` arrays (the own activity's column set to inf in ``novel``)."""
-    finite = np.isfinite(seen)
-    own = finite[np.arange(len(seen)), codes]
-    known = seen[own & (finite.sum(axis=1) >= 2)]
+    known = seen[known_rows(seen, codes)]
     without = seen.copy()
     without[np.arange(len(seen)), codes] = np.inf
     novel = without[np.isfinite(without).sum(axis=1) >= 2]
@@ -231,7 +247,8 @@ class Calibrated:
     ``watch`` read it instead of scanning the case base each run. Generic over the fields: a
     new field (with a default, which a record stored before it takes) or a new judge (one
     line in :data:`STORED`) needs no code here. Fields are ``float`` (>= 0, not NaN; +inf is
-    written ``"inf"``: JSON has none), ``int`` (>= 0) or ``str``."""
+    written ``"inf"``: JSON has none), ``int`` (>= 0), ``str`` or ``tuple[float, ...]`` (a
+    list of such numbers)."""
 
     @classmethod
     def of(cls: type[_C], cb: CaseBase, *, held: Held | None = None) -> _C:
@@ -270,6 +287,8 @@ def _plain(value: Any) -> Any:
     """A field's value for JSON: +inf as ``"inf"``."""
     if isinstance(value, float) and math.isinf(value) and value > 0:
         return "inf"
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
     return value
 
 
@@ -289,6 +308,10 @@ def _field(name: str, kind: Any, value: Any) -> Any:
         if isinstance(value, str) and value:
             return value
         raise ValueError(f"field {name!r} must be a non-empty text, got {value!r}")
+    if kind == tuple[float, ...]:
+        if isinstance(value, list):
+            return tuple(_field(name, float, v) for v in value)
+        raise ValueError(f"field {name!r} must be a list of numbers >= 0, got {value!r}")
     raise ValueError(f"field {name!r} is of a type that is not stored ({kind!r})")
 
 
@@ -416,6 +439,86 @@ class MarginDistance(Calibrated):
         )
 
 
+def activity_thresholds(
+    margins: np.ndarray, activities: np.ndarray, n_classes: int, rate: float, prior: float
+) -> tuple[np.ndarray, float]:
+    """Per activity ``(n_classes,)``, the threshold of :class:`ActivityMargin`, and the pooled
+    one: from held-out known ``margins`` ``(n,)`` (non-empty) of cases of ``activities``
+    ``(n,)`` (indices), the pooled threshold ``t`` (:func:`false_unknown_threshold` at
+    ``rate``) and each activity's own ``t_a`` from its ``n_a`` margins, shrunk:
+    ``(n_a t_a + prior t) / (n_a + prior)``; ``t`` for an activity without margins."""
+    pooled = false_unknown_threshold(margins, rate)
+    out = np.full(n_classes, pooled)
+    for a in np.unique(activities).tolist():  # over activities (a few dozen at most)
+        mine = margins[activities == a]
+        own = false_unknown_threshold(mine, rate)
+        out[a] = (len(mine) * own + prior * pooled) / (len(mine) + prior)
+    return out, pooled
+
+
+@dataclass(frozen=True)
+class ActivityMargin(Calibrated):
+    """Unknown when the margin ``d1 / d2`` lies above the threshold of the nearest activity:
+    ``thresholds[a]`` (``a`` the index among the case base's sorted activities) is the margin
+    that a share ``false_unknown`` of the held-out known cases of activity ``a`` exceed, among
+    those whose nearest activity is their own (a case named wrongly is a wrong answer whether
+    called unknown or not: it spends no budget), shrunk towards the pooled threshold
+    ``pooled`` by ``prior`` cases' worth (:func:`activity_thresholds`). One pooled threshold
+    is set by the activities that resemble each other most; an activity whose known cases
+    are clear keeps a low one, so a window of a left-out movement nearest to it is caught.
+    ``basis`` and ``known`` as :class:`Margin`'s (``known``: the rightly named cases)."""
+
+    thresholds: tuple[float, ...]
+    pooled: float
+    basis: str
+    known: int
+    false_unknown: float = FALSE_UNKNOWN
+    prior: float = ACTIVITY_PRIOR
+
+    @classmethod
+    def of(
+        cls,
+        cb: CaseBase,
+        false_unknown: float = FALSE_UNKNOWN,
+        prior: float = ACTIVITY_PRIOR,
+        held: Held | None = None,
+    ) -> ActivityMargin:
+        """Calibrated on ``cb``; ``held`` as :meth:`Margin.of`; DataError as
+        :meth:`Margin.of`, and when no held-out known case is named rightly."""
+        _check_margin_calibration(cb)
+        seen, codes, basis = held if held is not None else held_out_activities(cb)
+        keep = known_rows(seen, codes)
+        known, own = seen[keep], codes[keep]
+        right = np.argmin(known, axis=1) == own if len(known) else np.zeros(0, dtype=bool)
+        if not right.any() or not len(known_and_novel(seen, codes)[1]):
+            raise _no_apart()
+        per, pooled = activity_thresholds(
+            _margins(known[right]), own[right], seen.shape[1], false_unknown, prior
+        )
+        return cls(tuple(per.tolist()), pooled, basis, int(right.sum()), false_unknown, prior)
+
+    def threshold(self, nearest: np.ndarray) -> float:
+        """The threshold of the window's nearest activity."""
+        return self.thresholds[int(np.argmin(nearest))]
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        return margin_of(nearest)
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        return margin_of(nearest) > self.threshold(nearest)
+
+    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
+        order = np.argsort(nearest, kind="stable")
+        first = classes[int(order[0])]
+        second = classes[int(order[1])] if len(order) > 1 else first
+        return (
+            f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
+            f" as the next ({second}); a known {first} comes nearer than"
+            f" {self.threshold(nearest):.2f} (in {1.0 - self.false_unknown:.0%} of the case"
+            " base's held-out cases)"
+        )
+
+
 @dataclass(frozen=True)
 class HeldOut:
     """The classifier's stored calibration (:class:`cbr.novelty.NoveltyCalibration`): unknown
@@ -502,13 +605,14 @@ STORED: dict[str, type[Calibrated]] = {
     "margin": Margin,
     "margin-distance": MarginDistance,
     "activities": Familiarity,
+    "activity-margin": ActivityMargin,
 }
 """The judges calibrated on the case base, by name: calibrated when a model is stored
 (:func:`calibrate_judges`) and stored with it. (``held-out`` reads the classifier's novelty
 calibration, already stored.)"""
 
 
-AT_FIT = ("margin", "margin-distance")
+AT_FIT = ("margin", "margin-distance", "activity-margin")
 """The judges calibrated when a model is stored: the margins, from one held-out scan of the
 case base for at most :data:`MARGIN_SAMPLE` cases (grows linearly with the case base).
 ``activities`` measures every case against every other (grows with the square: 4 s of CPU
@@ -522,7 +626,7 @@ def calibrate_judges(cb: CaseBase, names: Sequence[str] = tuple(STORED)) -> dict
     (fewer than three activities, no activity with cases apart) is left out: ``segment``
     then says why, as it did before judges were stored."""
     three = len(set(np.asarray(cb.labels).astype(str).tolist())) >= 3
-    held = held_out_activities(cb) if three and {"margin", "margin-distance"} & set(names) else None
+    held = held_out_activities(cb) if three and set(AT_FIT) & set(names) else None
     out: dict[str, Calibrated] = {}
     for name in names:
         try:
@@ -570,7 +674,9 @@ def judge_of(clf: Any, name: str) -> Judge:
 
 
 __all__ = [
+    "ACTIVITY_PRIOR",
     "AT_FIT",
+    "ActivityMargin",
     "JUDGES",
     "STORED",
     "Calibrated",
@@ -584,6 +690,8 @@ __all__ = [
     "Margin",
     "MarginDistance",
     "activity_codes",
+    "activity_thresholds",
+    "known_rows",
     "held_out_activities",
     "joint_thresholds",
     "known_and_novel",

@@ -12,10 +12,13 @@ from cbr.casebase import CaseBase
 from cbr.problem import FeatureConfig
 from cbr.similarity import Euclidean
 from cbr.unknown import (
+    ACTIVITY_PRIOR,
     FALSE_UNKNOWN,
     JUDGES,
+    ActivityMargin,
     Margin,
     MarginDistance,
+    activity_thresholds,
     calibration_margins,
     equal_error_threshold,
     false_unknown_threshold,
@@ -183,6 +186,55 @@ def test_margin_distance_calibrated_by_hand() -> None:
     assert "margin-distance" in JUDGES
 
 
+def test_activity_thresholds_by_hand() -> None:
+    """Margins of activity 0: 0.1, 0.2 (own quantile at 5 %: the largest, 0.2); activity 1:
+    0.4, 0.6 (0.6); activity 2 none. Pooled: the largest of the four, 0.6. With 2 cases'
+    worth of prior: (2 * 0.2 + 2 * 0.6) / 4 = 0.4 for activity 0, 0.6 for 1 and 2."""
+    m = np.array([0.1, 0.4, 0.2, 0.6])
+    per, pooled = activity_thresholds(m, np.array([0, 1, 0, 1]), 3, FALSE_UNKNOWN, 2.0)
+    assert pooled == pytest.approx(0.6)
+    np.testing.assert_allclose(per, [0.4, 0.6, 0.6])
+    own, _ = activity_thresholds(m, np.array([0, 1, 0, 1]), 3, FALSE_UNKNOWN, 0.0)
+    np.testing.assert_allclose(own, [0.2, 0.6, 0.6])
+    assert ACTIVITY_PRIOR == pytest.approx(1.0 / FALSE_UNKNOWN)
+
+
+def _one_wrongly_named() -> CaseBase:
+    """Recording r1: a at 0, b at 10, c at 20; recording r2: a at 1 and 9, b at 12, c at 23."""
+    return _line(
+        [0.0, 10.0, 20.0, 1.0, 9.0, 12.0, 23.0],
+        ["a", "b", "c", "a", "a", "b", "c"],
+        ["r1", "r1", "r1", "r2", "r2", "r2", "r2"],
+    )
+
+
+def test_activity_margin_calibrated_by_hand() -> None:
+    """Each case held out against the other recording. r1: a@0 (a 1, b 12: 1/12), b@10 (a@9
+    at 1, b 2: nearest a, wrong, 1/2), c@20 (c 3, b 8: 3/8); r2: a@1 (a 1, b 9: 1/9), a@9
+    (b@10 at 1, a 9: wrong, 1/9), b@12 (b 2, c 8: 1/4), c@23 (c 3, b 13: 3/13). The margin
+    pools all seven, so its threshold is the wrong b@10's 1/2; the activity margin keeps the
+    five named rightly: pooled 3/8 (the largest of five: 5 % of 5 lets none above); own
+    thresholds a 1/9, b 1/4, c 3/8; with 20 cases' prior a (2/9 + 20 * 3/8) / 22, b (1/4 +
+    20 * 3/8) / 21, c 3/8."""
+    cb = _one_wrongly_named()
+    assert Margin.of(cb).threshold == pytest.approx(1 / 2)
+    judge = ActivityMargin.of(cb)
+    assert (judge.pooled, judge.known, judge.basis) == (pytest.approx(3 / 8), 5, "recording")
+    expected = [(2 / 9 + 7.5) / 22, (1 / 4 + 7.5) / 21, 3 / 8]
+    np.testing.assert_allclose(judge.thresholds, expected)
+    own = ActivityMargin.of(cb, prior=0.0)
+    np.testing.assert_allclose(own.thresholds, [1 / 9, 1 / 4, 3 / 8])
+    # the same margin 0.36 nearest a (threshold 0.351) and nearest c (0.375); the margin's
+    # pooled 1/2 calls neither unknown
+    near_a, near_c = np.array([3.6, 10.0, 20.0]), np.array([20.0, 10.0, 3.6])
+    assert judge.unlike(near_a) and not judge.unlike(near_c)
+    assert not Margin.of(cb).unlike(near_a)
+    assert "a known a comes nearer than 0.35" in judge.describe(near_a, ["a", "b", "c"])
+    # with no prior a clear activity's own threshold is low: margin 0.2 nearest a is unknown
+    assert own.unlike(np.array([2.0, 10.0, 20.0])) and not judge.unlike(np.array([2.0, 10.0, 20.0]))
+    assert "activity-margin" in JUDGES
+
+
 def test_held_out_by_subject_then_recording_then_time() -> None:
     by_subject = _line([0, 1, 10, 11, 20, 21], list("aabbcc"), ["v"] * 6, list("pqpqpq"))
     assert held_out_basis(by_subject)[0] == "subject"
@@ -224,3 +276,16 @@ def test_split_windows_cuts_as_segment_does() -> None:
     assert all(w.seq.n_frames == 60 and w.label == "squat" for w in windows)
     assert [w.extras["window"] for w in windows] == list(range(1, 8))
     assert split.clips[7].seq.n_frames == 45
+
+
+def test_activity_margin_is_stored_as_a_record_with_its_thresholds_listed() -> None:
+    """Its per-activity thresholds go to a list of numbers and come back as the same judge; a
+    list holding a negative threshold is refused naming the field."""
+    judge = ActivityMargin.of(_one_wrongly_named())
+    record = judge.to_dict()
+    assert record["thresholds"] == list(judge.thresholds)
+    assert ActivityMargin.from_dict(record) == judge
+    with pytest.raises(ValueError, match="'thresholds'"):
+        ActivityMargin.from_dict({**record, "thresholds": [0.3, -0.1, 0.2]})
+    with pytest.raises(ValueError, match="'thresholds'"):
+        ActivityMargin.from_dict({**record, "thresholds": 0.3})

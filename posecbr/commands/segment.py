@@ -25,7 +25,7 @@ from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from posecbr.recordings import add_recording_options, check_fps, load_recording
 
-JUDGES = ("margin", "held-out", "activities", "margin-distance")
+JUDGES = ("margin", "held-out", "activities", "margin-distance", "activity-margin")
 """cbr.unknown.JUDGES, the default first (not imported: the command line starts light)."""
 
 
@@ -54,7 +54,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "out of their own recording or person lie beyond), farther from its nearest case than "
         "held-out training clips lie (held-out, the flag classify gives), as far as the "
         "case base's activities lie from each other (activities), or the margin alone or a "
-        "smaller margin with a far nearest case, sharing the 5 %% (margin-distance)",
+        "smaller margin with a far nearest case, sharing the 5 %% (margin-distance), or the "
+        "margin beyond the nearest activity's own threshold, from its rightly named held-out "
+        "cases (activity-margin)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
