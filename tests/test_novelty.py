@@ -19,6 +19,7 @@ from cbr.novelty import (
     combine,
     distance_limit,
     fit_ranges,
+    flag_threshold,
     fold_of,
     nearest_rms,
     outside_share,
@@ -297,6 +298,59 @@ def test_tail_probabilities_and_the_threshold_follow_the_held_out_clips() -> Non
         d = Combined({"distance": np.sort(ratios)}, threshold, 0.02, 1.0)
         assert [x > limit for x in probe] == [d.tail("distance", x) <= threshold for x in probe]
     assert distance_limit(ratios, 0.001) == np.inf  # 300 clips cannot say 1 in 1000
+
+
+def test_the_threshold_counts_the_summary_on_every_clip_and_the_distance_on_its_sample() -> None:
+    # twenty held-out clips whose summary tails are 0.05, 0.10, ..., 1.00; the distance
+    # measured on the ten least unusual of them (clips 10-19). At a 10 % budget two of the
+    # twenty may be flagged (floor(0.1 * 19) + 1, as the budget quantile rounds): the
+    # summary's two smallest, threshold 0.10 (the budget quantile of the ten sampled clips
+    # alone would be 0.55, flagging eleven of the twenty)
+    summary_tails = np.arange(1, 21) / 20
+    sample = np.arange(10, 20)
+    ordinary = np.ones(10)
+    assert flag_threshold(summary_tails, ordinary, sample, 0.1, 0.25) == pytest.approx(0.10)
+    # the last clip's distance tail 0.02 flags it (0.02 <= 0.25 t) from t = 0.08 on: one of
+    # the ten sampled clips, 10 %, and with the summary's 0.05 the share 0.15 passes 0.10, so
+    # the threshold stays at the summary's smallest, 0.05
+    near = ordinary.copy()
+    near[9] = 0.02
+    assert flag_threshold(summary_tails, near, sample, 0.1, 0.25) == pytest.approx(0.05)
+    # the distance flags at least at its floor: a distance tail of 0.03 at a floor of 0.03
+    # flags from the first threshold on, already 0.05 + 0.10 over the budget: nothing flags
+    near[9] = 0.03
+    assert flag_threshold(summary_tails, near, sample, 0.1, 0.25, floor=0.03) == 0.0
+
+
+def test_the_threshold_is_the_last_before_the_flagged_share_passes_the_budget() -> None:
+    """:func:`flag_threshold` against its definition counted clip by clip: at each value a
+    flag can change at (a summary tail, or where weight t reaches a distance tail), the share
+    of clips flagged, the summary's over every clip and the distance's alone over its
+    sample."""
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        n = int(rng.integers(20, 120))
+        q = int(rng.integers(1, n + 1))
+        ps = np.round(rng.uniform(0.0, 1.0, n), 2)  # rounded: ties, as tail probabilities have
+        sample = np.sort(rng.choice(n, q, replace=False))
+        # sixty-fourths over powers of two: weight t reaches a distance tail exactly at t = its
+        # tail over the weight, no rounding between the two
+        pd = rng.integers(0, 65, q) / 64
+        budget, weight = float(rng.uniform(0.05, 0.3)), float(rng.choice([0.125, 0.25, 1.0]))
+        floor = float(rng.choice([0.0, 3 / 64]))
+        events = sorted({*ps.tolist(), *[p / weight for p in pd if p > floor]})
+        allowed = (np.floor(budget * (n - 1)) + 1) / n
+        expected = 0.0
+        for t in events:
+            by_summary = sum(p <= t for p in ps) / n
+            alone = sum(
+                d <= max(weight * t, floor) and ps[j] > t for d, j in zip(pd, sample, strict=True)
+            )
+            if by_summary + alone / q > allowed + 1e-12:
+                break
+            expected = t
+        got = flag_threshold(ps, pd, sample, budget, weight, floor)
+        assert got == pytest.approx(expected, abs=1e-12)
 
 
 def _combined(rng: np.random.Generator) -> NoveltyCalibration:
