@@ -86,6 +86,14 @@ def margin_of(nearest: np.ndarray) -> float:
     return float(finite[0] / finite[1])
 
 
+def two_nearest(nearest: np.ndarray, classes: Sequence[str]) -> tuple[str, str]:
+    """The nearest and next nearest activities of a window with distances ``nearest``
+    ``(n_classes,)`` to each activity's nearest case (the nearest twice when there is one)."""
+    order = np.argsort(nearest, kind="stable")
+    first = classes[int(order[0])]
+    return first, classes[int(order[1])] if len(order) > 1 else first
+
+
 def equal_error_threshold(known: np.ndarray, novel: np.ndarray) -> float:
     """The threshold ``t`` at which as large a share of ``known`` values lies above ``t`` as
     of ``novel`` values at or below it (the equal error rate; the first such value of the
@@ -352,9 +360,7 @@ class Margin(Calibrated):
         return margin_of(nearest) > self.threshold
 
     def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
-        order = np.argsort(nearest, kind="stable")
-        first = classes[int(order[0])]
-        second = classes[int(order[1])] if len(order) > 1 else first
+        first, second = two_nearest(nearest, classes)
         return (
             f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
             f" as the next ({second}); a known activity comes nearer than {self.threshold:.2f}"
@@ -426,9 +432,7 @@ class MarginDistance(Calibrated):
         return m > self.margin or (m > self.joint_margin and far)
 
     def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
-        order = np.argsort(nearest, kind="stable")
-        first = classes[int(order[0])]
-        second = classes[int(order[1])] if len(order) > 1 else first
+        first, second = two_nearest(nearest, classes)
         m = margin_of(nearest)
         text = f"like no stored activity: the nearest ({first}) is {m:.2f} as far as the next"
         if m > self.margin:
@@ -508,9 +512,7 @@ class ActivityMargin(Calibrated):
         return margin_of(nearest) > self.threshold(nearest)
 
     def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
-        order = np.argsort(nearest, kind="stable")
-        first = classes[int(order[0])]
-        second = classes[int(order[1])] if len(order) > 1 else first
+        first, second = two_nearest(nearest, classes)
         return (
             f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
             f" as the next ({second}); a known {first} comes nearer than"
