@@ -778,10 +778,14 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     def _class_labels(self) -> np.ndarray:
         return np.array([str(c) for c in self.classes_], dtype=object)
 
-    def solve(self, X: Any) -> list[Solved]:
+    def solve(self, X: Any, flag: bool = True) -> list[Solved]:
         """Every clip of ``X`` through retrieve and reuse: problem, retrieved cases, solution
         and how unlike the stored cases it is. A clip that shows no person is refused
-        (:class:`features.errors.DataError` naming it): nothing can be said about it."""
+        (:class:`features.errors.DataError` naming it): nothing can be said about it.
+
+        ``flag`` False: the "unlike the stored cases" flag is not judged (``unlike_cases``
+        False, no reason, no description), for callers with a judge of their own (segmenting
+        a recording judges its stretches by :mod:`cbr.unknown`) that would pay for it unused."""
         check_is_fitted(self, "case_base_")
         seqs = as_sequences(X)
         if not seqs:
@@ -811,8 +815,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             )
             s = dataclasses.replace(s, confidence=self.confidence_(score))
             nearest = float(r.distances[0]) if len(r.distances) else float("inf")
-            seen = self._description(seq, p)
-            reason = self.novelty_.reason(nearest, skeleton_of(seq), seen, s.label)
+            seen = self._description(seq, p) if flag else None
+            reason = self.novelty_.reason(nearest, skeleton_of(seq), seen, s.label) if flag else ""
             ratio = self.novelty_.ratio(nearest)
             out.append(Solved(p, r, s, ratio, bool(reason), torso_share(seq), reason, seen))
         return out

@@ -258,7 +258,7 @@ class LiveSegmenter:
         window = self._sequence(n - self.window, n)
         if torso_share(window) == 0.0:  # no person: no evidence either way
             return np.full(self.unknown, 1.0 / self.unknown), 0.5
-        solved = self.clf.solve([window])[0]
+        solved = self.clf.solve([window], flag=False)[0]  # the judge decides unknown
         vote = np.zeros(self.unknown)
         vote[self.classes.index(str(solved.retrieval.labels[0]))] = 1.0
         unlike = self.judge.unlike(activity_distances(self.clf, solved, self.codes))

@@ -33,6 +33,7 @@ from features.body import (
     ARM_PLANE_SIGNALS,
     arm_planes,
     body_positions,
+    frame_rows,
     mirrored,
     moves_left_more,
     position_names,
@@ -209,6 +210,7 @@ def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> No
             fluents_of(s)
             signals_of(s)
             arm_planes(s)
+            frame_rows(s)
             body_positions(s)
 
 

@@ -253,29 +253,47 @@ def activity_distances(clf: Any, solved: Any, codes: np.ndarray | None = None) -
     return per_activity(d, codes, len(clf.classes_))
 
 
+BATCH = 32
+"""Windows solved together (one batched search of the case base): enough to share the
+search's set-up, few enough that a piece's windows are solved before the piece is dropped."""
+
+
 def _solve_windows(
     clf: Any, rec: PoseSequence, windows: list[Window], k: int, chunk: int = 0
 ) -> list[_Solved]:
-    """Each window solved by the classifier; its vote is that of its ``k`` nearest cases.
-    Windows in which no frame shows the person are left out (nothing to solve). With
-    ``chunk``, the windows are cut from pieces of the recording (:func:`_cut_in_pieces`) and
-    keep only their votes and distances (their ``solved`` is None)."""
+    """Each window solved by the classifier, :data:`BATCH` at a time, without the clip flag
+    (the recording's stretches have their own judge, :mod:`cbr.unknown`); its vote is that of
+    its ``k`` nearest cases. Windows in which no frame shows the person are left out (nothing
+    to solve). With ``chunk``, the windows are cut from pieces of the recording
+    (:func:`_cut_in_pieces`) and keep only their votes and distances (their ``solved`` is
+    None)."""
     classes = np.array([str(c) for c in clf.classes_], dtype=object)
     codes = activity_codes(clf.case_base_.labels, classes)
     cuts = _cut_in_pieces(rec, windows, chunk, clf.feature_config_) if chunk else (
         (i, stretch(rec, w.start, w.stop), None) for i, w in enumerate(windows)
     )  # fmt: skip
-    found: dict[int, _Solved] = {}
+    found: list[_Solved] = []
+    batch: list[tuple[int, PoseSequence, tuple[int, int] | None]] = []
+
+    def flush() -> None:
+        for (i, _, piece), solved in zip(batch, clf.solve([b[1] for b in batch], flag=False),
+                                         strict=True):  # fmt: skip
+            w = windows[i]
+            vote = _nearest_vote(solved.retrieval, classes, k)
+            nearest = activity_distances(clf, solved, codes)
+            found.append(_Solved(w.start, w.stop, vote, nearest, None if chunk else solved,
+                                 w.repetition, piece))  # fmt: skip
+        batch.clear()
+
     for i, part, piece in progress(cuts, "classifying windows", len(windows), "window"):
-        if torso_share(part) == 0.0:
-            continue
-        w = windows[i]
-        solved = clf.solve([part])[0]
-        vote = _nearest_vote(solved.retrieval, classes, k)
-        nearest = activity_distances(clf, solved, codes)
-        found[i] = _Solved(w.start, w.stop, vote, nearest, None if chunk else solved,
-                           w.repetition, piece)  # fmt: skip
-    return [found[i] for i in sorted(found)]
+        if batch and (len(batch) == BATCH or batch[0][2] != piece):
+            flush()  # a piece's windows together: the piece is dropped once they are cut
+        if torso_share(part) > 0.0:
+            batch.append((i, part, piece))
+    if batch:
+        flush()
+    order = {(w.start, w.stop, w.repetition): n for n, w in enumerate(windows)}
+    return sorted(found, key=lambda s: order[(s.start, s.stop, s.repetition)])
 
 
 def _cut_in_pieces(
@@ -315,7 +333,7 @@ def _solved(clf: Any, rec: PoseSequence, w: _Solved) -> Any:
         return w.solved
     lo = w.piece[0]
     piece = _piece(rec, w.piece, clf.feature_config_)
-    return clf.solve([stretch(piece, w.start - lo, w.stop - lo)])[0]
+    return clf.solve([stretch(piece, w.start - lo, w.stop - lo)], flag=False)[0]
 
 
 def block_votes(solved: Sequence[_Solved], n_frames: int, fps: float) -> np.ndarray:

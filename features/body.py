@@ -87,13 +87,28 @@ def body_positions(seq: PoseSequence) -> np.ndarray:
     (median neck to mid-hip), so people of different sizes compare. How far the hips drop in a
     squat, how high and how far forward a wrist goes, a knee drifting inwards: the range and
     path of a movement, which joint angles alone do not give. NaN where joints are missing."""
-    return derived(seq, "body_positions", lambda s: _body_positions(s.to_canonical().positions))
+    return derived(seq, "body_positions", _body_positions)
 
 
-def _body_positions(p: np.ndarray) -> np.ndarray:
-    frame = position_frame(p[: start_frames(p.shape[0])], neck_to_hip(p),
-                           lambda: body_frame(p).level_left)  # fmt: skip
-    return positions_in_frame(p, frame)
+def _body_positions(s: PoseSequence) -> np.ndarray:
+    rows = frame_rows(s)
+    k = start_frames(s.n_frames)
+    frame = frame_from(rows[:k, :3], rows[:k, 3:6], rows[:, 6], lambda: rows[:, 3:6])
+    return positions_in_frame(s.to_canonical().positions, frame)
+
+
+def frame_rows(seq: PoseSequence) -> np.ndarray:
+    """What :func:`position_frame` reads of every frame of the canonical clip, ``(frames,
+    7)``: the mid-hip (3), the level left direction (3) and the neck to mid-hip length (1).
+    Per frame, so a stretch of a clip shares its clip's rows (:func:`features.derived.stretch`)
+    and a recording's windows each set their own frame without computing body axes again."""
+
+    def compute(s: PoseSequence) -> np.ndarray:
+        p = s.to_canonical().positions
+        bf = body_frame(p)
+        return np.concatenate([bf.mid_hip, bf.level_left, neck_to_hip(p)[:, None]], axis=1)
+
+    return derived(seq, "frame_rows", compute)
 
 
 def start_frames(frames: int) -> int:
@@ -119,15 +134,26 @@ def position_frame(
     ``(frames, 3)``, asked for only when the start has none (so a long clip can give them a
     piece at a time)."""
     bf = body_frame(start)  # the frame is set at the start; later frames need no axes
+    return frame_from(bf.mid_hip, bf.level_left, torso_lengths, level_left)
+
+
+def frame_from(
+    mid_hip: np.ndarray,
+    left: np.ndarray,
+    torso_lengths: np.ndarray,
+    level_left: Callable[[], np.ndarray],
+) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """:func:`position_frame` from the start's mid-hips and level left directions ``(k,
+    3)`` (of :func:`features.geometry.body_frame`)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN stretches
-        origin = np.nanmean(bf.mid_hip, axis=0)
-        left = np.nanmean(bf.level_left, axis=0)
-        if not np.isfinite(left).all():
-            left = np.nanmean(level_left(), axis=0)
+        origin = np.nanmean(mid_hip, axis=0)
+        mean_left = np.nanmean(left, axis=0)
+        if not np.isfinite(mean_left).all():
+            mean_left = np.nanmean(level_left(), axis=0)
         torso = float(np.nanmedian(torso_lengths))
-    left = unit(left)  # a mean of level directions: level already
-    axes = np.stack([left, WORLD_UP, np.cross(left, WORLD_UP)])  # rows: left, height, forward
+    unit_left = unit(mean_left)  # a mean of level directions: level already
+    axes = np.stack([unit_left, WORLD_UP, np.cross(unit_left, WORLD_UP)])  # left, height, forward
     if not (np.isfinite(axes).all() and np.isfinite(origin).all() and torso > 0):
         return None
     return origin, axes, torso

@@ -94,15 +94,16 @@ def _cut_rows(value: Any, start: int, stop: int) -> Any:
 
 
 # results with one row per frame: a stretch's rows are the clip's rows
-_PER_FRAME = ("fluents", "signals", "arm_planes")
+_PER_FRAME = ("fluents", "signals", "arm_planes", "frame_rows")
 
 
 def stretch(seq: PoseSequence, start: int, stop: int) -> PoseSequence:
     """Frames ``start`` (inclusive) to ``stop`` (exclusive) of ``seq`` as a new clip that shares
-    the per-frame results already computed for ``seq``: its fluents, state signals and arm
-    planes, and those of its mirror image. Motion states near the cut then keep the frames
-    around it as context, as they had in the whole clip. Per-clip results (body-frame
-    positions, which side moves more, QMPs) are computed for the stretch itself."""
+    the per-frame results already computed for ``seq``: its fluents, state signals, arm planes
+    and the rows its body frame is set from, and those of its mirror image. Motion states near
+    the cut then keep the frames around it as context, as they had in the whole clip. Per-clip
+    results (body-frame positions, which side moves more, QMPs) are computed for the stretch
+    itself."""
     part = seq.slice_frames(start, stop)
     for kind in _PER_FRAME:
         cache = _CACHES.get(kind)

@@ -55,6 +55,20 @@ def test_batched_solve_equals_one_clip_at_a_time(fitted: CaseBaseClassifier, uip
         assert got.novelty == alone.novelty
 
 
+@pytest.mark.parametrize("fitted", [{}], indirect=True)
+def test_solve_without_the_flag_answers_the_same_and_judges_nothing(
+    fitted: CaseBaseClassifier, uiprmd: tuple
+) -> None:
+    queries = uiprmd[2][:12]
+    for got, full in zip(fitted.solve(queries, flag=False), fitted.solve(queries), strict=True):
+        np.testing.assert_array_equal(got.retrieval.indices, full.retrieval.indices)
+        assert got.solution.label == full.solution.label
+        np.testing.assert_array_equal(got.solution.proba, full.solution.proba)
+        assert got.solution.confidence == full.solution.confidence
+        assert got.novelty == full.novelty
+        assert (got.unlike_cases, got.unlike_reason, got.description) == (False, "", None)
+
+
 def test_batched_solve_finds_scikit_learns_brute_force_neighbours(
     fitted: CaseBaseClassifier, uiprmd: tuple
 ) -> None:

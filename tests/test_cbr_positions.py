@@ -200,3 +200,18 @@ def test_feature_units(name: str, value: float, expected: tuple[float, str]) -> 
     # angles are stored as radians / pi: 0.5 is a right angle
     got = quantity(name, value)
     assert got[0] == pytest.approx(expected[0]) and got[1] == expected[1]
+
+
+def test_a_stretch_sets_its_own_frame_from_the_rows_it_shares() -> None:
+    # a person who turns 90 degrees half-way: a stretch of the second half faces the new way,
+    # so its positions are those of a clip recorded from the turn on, not of the whole clip
+    from features.derived import stretch
+
+    frames = [standing()] * 6 + [{k: rot_y(90.0) @ v for k, v in standing().items()}] * 6
+    whole = to_sequence(*frames)
+    body_positions(whole)  # the whole clip's rows computed first, then shared by the stretch
+    late = body_positions(stretch(whole, 6, 12))
+    alone = body_positions(to_sequence(*frames[6:]))
+    assert late == pytest.approx(alone, abs=1e-12)
+    # turned with the person: the left wrist is still 0.40 torso lengths to the left
+    assert late[:, position_names().index("left_wrist.left")] == pytest.approx(np.full(6, 0.4))
