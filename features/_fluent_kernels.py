@@ -7,9 +7,8 @@ its ``.T``, a column-major ``(frames, n_states)``). It is the numpy reference in
 vectorise:
 
 - the loops run over the frames of a block (512) for one fluent at a time: each block's
-  signals are first copied into per-fluent series (from ``(frames, n)`` arrays of either
-  layout, read along their contiguous axis), each state's series is written contiguously
-  out, every buffer in L1;
+  signals are first copied into per-fluent series (from row-major ``(frames, n)`` arrays),
+  each state's series is written contiguously out, every buffer in L1;
 - branch-free: a value outside its band gets the logistic argument -inf or +inf (confidence
   exactly 1 or 0), so one formula serves every frame; the band decisions and the differences
   beside a threshold (x - τ, Δθ) stay float64, as in the reference, the rest is float32;
@@ -187,7 +186,7 @@ def _argument(v: float, edge0: float, edge1: float, z: float, below: np.float32,
 def _load_block(a: np.ndarray, cols: np.ndarray, g0: int, count: int, buf: np.ndarray) -> None:
     """buf[i, j] = a[g0 + j, cols[i]] for j < count, NaN outside the clip: a block of
     frames transposed so that each column's series is contiguous (the rows cols lists, all
-    >= 0). Reads along a's contiguous axis, whichever it is; unsigned indices, because a
+    >= 0). ``a`` is row-major (a frame's values contiguous); unsigned indices, because a
     signed one is checked for wrap-around on every access."""
     frames = a.shape[0]
     lead = min(count, max(0, -g0))
@@ -198,16 +197,10 @@ def _load_block(a: np.ndarray, cols: np.ndarray, g0: int, count: int, buf: np.nd
             buf[i, j] = np.nan
         for j in range(top, count):
             buf[i, j] = np.nan
-    if a.strides[0] >= a.strides[1]:  # row-major: a frame's values are contiguous
-        for j in range(lead, top):
-            g = np.uintp(g0 + j)
-            for i in range(n):
-                buf[i, j] = a[g, cols[i]]
-    else:
+    for j in range(lead, top):
+        g = np.uintp(g0 + j)
         for i in range(n):
-            c = cols[i]
-            for j in range(lead, top):
-                buf[i, j] = a[np.uintp(g0 + j), c]
+            buf[i, j] = a[g, cols[i]]
 
 
 @_inline

@@ -735,9 +735,10 @@ def _confidence_numba(
     contiguous), within 1e-6 of the float64 reference."""
     from ._fluent_kernels import all_nan_columns, fluent_columns
 
-    values, distances = sig.values, sig.distances_m
-    if values.dtype != np.float64 or distances.dtype != np.float64:
-        values, distances = values.astype(np.float64), distances.astype(np.float64)
+    # one compiled specialisation: row-major float64 (what state_signals gives; any other
+    # layout or type is copied into it, where numba would compile the kernel again, ~40 s)
+    values = np.ascontiguousarray(sig.values, dtype=np.float64)
+    distances = np.ascontiguousarray(sig.distances_m, dtype=np.float64)
     # A fluent whose signal (and, for near, distance in metres) is missing in every frame is
     # NaN throughout: leave it out of the kernel (e.g. no face on Kinect or mocap).
     skip = all_nan_columns(values)[sig_col]

@@ -2,8 +2,9 @@
 
 Ten movements (chance = 0.10). Accuracies measured when this was written (k = 5; fluents:
 angle states, 32 frames): fluents+euclidean 0.81, fluents+dtw 0.81, fluents+signature 0.65,
-qmp (binary ADD criteria)+euclidean 0.79. The floors below are conservative so a regression in
-features or retrieval shows, not run-to-run noise.
+qmp (binary ADD criteria)+euclidean 0.79 (on every clip; it is tested on the odd episodes,
+half the clips, to halve the suite's costliest step). The floors below are conservative so a
+regression in features or retrieval shows, not run-to-run noise.
 """
 
 from __future__ import annotations
@@ -37,6 +38,14 @@ def uiprmd(shared_data: Path) -> tuple[list, list, list, list]:
     return [c.seq for c in tr], [c.label for c in tr], [c.seq for c in te], [c.label for c in te]
 
 
+def _odd_episodes(seqs: list, labels: list) -> tuple[list, list]:
+    """The clips of episodes 1, 3, 5, ... (correct and incorrect alike): every subject and
+    movement, half the clips. QMP features fit a SINDy model per signal of every clip, the
+    suite's costliest step; half the clips of the same people measure the same thing."""
+    keep = [i for i, s in enumerate(seqs) if s.metadata["episode"] % 2 == 1]
+    return [seqs[i] for i in keep], [labels[i] for i in keep]
+
+
 @pytest.fixture(scope="module")
 def fitted(uiprmd: tuple) -> Callable[[str, str], CaseBaseClassifier]:
     """The classifier of a configuration fitted on the training subjects, fitted once for the
@@ -48,7 +57,8 @@ def fitted(uiprmd: tuple) -> Callable[[str, str], CaseBaseClassifier]:
     def get(features: str, similarity: str) -> CaseBaseClassifier:
         if (features, similarity) not in models:
             clf = CaseBaseClassifier(features=features, similarity=similarity, k=5)
-            models[features, similarity] = clf.fit(Xtr, ytr)
+            X, y = _odd_episodes(Xtr, ytr) if features == "qmp" else (Xtr, ytr)
+            models[features, similarity] = clf.fit(X, y)
         return models[features, similarity]
 
     return get
@@ -69,6 +79,8 @@ def test_held_out_subjects_accuracy(
     features: str, similarity: str, uiprmd: tuple, fitted: Callable[[str, str], Any]
 ) -> None:
     _, _, Xte, yte = uiprmd
+    if features == "qmp":
+        Xte, yte = _odd_episodes(Xte, yte)
     pred = fitted(features, similarity).predict(Xte)
     acc = float(np.mean(pred == np.asarray(yte)))
     assert acc >= FLOORS[features, similarity], f"{features}/{similarity}: accuracy {acc:.3f}"

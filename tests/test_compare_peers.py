@@ -6,9 +6,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from cbr.evaluation.peers import LIMB_ANGLES, DTWKNNPeer, angle_series
 from tests.test_cbr_weights import _arm_clip, _elbow_clip
+
+# under pytest-xdist the module runs on one worker: tslearn compiles its DTW (numba, ~30 s,
+# not cached on disk) once per process, not once per test
+pytestmark = pytest.mark.xdist_group("tslearn-peer")
 
 
 def _dtw(a: np.ndarray, b: np.ndarray) -> float:

@@ -282,9 +282,9 @@ def test_a_distance_fluent_needs_a_joint_pair_signal() -> None:
 
 @pytest.mark.parametrize("layout", ["C", "F", "strided", "float32"])
 def test_fast_equals_reference_in_every_signal_layout(layout: str) -> None:
-    # The kernel reads signals in blocks along whichever axis is contiguous: frames-major
-    # (state_signals), signal-major, a view with gaps between columns, or float32 values;
-    # over two blocks of 512 frames.
+    # Signals in any layout give the reference's confidences: frames-major (state_signals,
+    # what the kernel reads), signal-major, a view with gaps between columns, or float32
+    # values (copied into the kernel's layout); over two blocks of 512 frames.
     for fps in (30.0, 100.0):
         sig = _walk_signals(600, fps, seed=21)
         values, dist_m = sig.values, sig.distances_m
