@@ -144,19 +144,42 @@ def frame_from(
     level_left: Callable[[], np.ndarray],
 ) -> tuple[np.ndarray, np.ndarray, float] | None:
     """:func:`position_frame` from the start's mid-hips and level left directions ``(k,
-    3)`` (of :func:`features.geometry.body_frame`)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN stretches
-        origin = np.nanmean(mid_hip, axis=0)
-        mean_left = np.nanmean(left, axis=0)
-        if not np.isfinite(mean_left).all():
-            mean_left = np.nanmean(level_left(), axis=0)
-        torso = float(np.nanmedian(torso_lengths))
+    3)`` (of :func:`features.geometry.body_frame`). NaN-skipping means and median written
+    out: numpy's ``nanmean``/``nanmedian`` cost more than the arithmetic on a window's few
+    frames, and a recording's windows each set a frame."""
+    origin = _nanmean_rows(mid_hip)
+    mean_left = _nanmean_rows(left)
+    if not np.isfinite(mean_left).all():
+        mean_left = _nanmean_rows(level_left())
+    torso = _nanmedian(torso_lengths)
     unit_left = unit(mean_left)  # a mean of level directions: level already
     axes = np.stack([unit_left, WORLD_UP, np.cross(unit_left, WORLD_UP)])  # left, height, forward
     if not (np.isfinite(axes).all() and np.isfinite(origin).all() and torso > 0):
         return None
     return origin, axes, torso
+
+
+def _nanmean_rows(a: np.ndarray) -> np.ndarray:
+    """``np.nanmean(a, axis=0)`` of ``(n, 3)`` without its warning: NaN for a column without
+    a number."""
+    seen = ~np.isnan(a)
+    count = seen.sum(axis=0)
+    total = np.where(seen, a, 0.0).sum(axis=0)
+    return np.asarray(np.divide(total, count, out=np.full(a.shape[1], np.nan), where=count > 0))
+
+
+def _nanmedian(x: np.ndarray) -> float:
+    """``np.nanmedian(x)`` of ``(n,)``: the middle number (the mean of the two middle ones),
+    NaN without numbers."""
+    x = x[~np.isnan(x)]
+    n = x.size
+    if n == 0:
+        return float("nan")
+    k = n // 2
+    if n % 2:
+        return float(np.partition(x, k)[k])
+    part = np.partition(x, (k - 1, k))
+    return float((part[k - 1] + part[k]) / 2.0)
 
 
 def positions_in_frame(
@@ -167,8 +190,13 @@ def positions_in_frame(
     if frame is None:
         return np.full((p.shape[0], 3 * len(POSITION_JOINTS)), np.nan)
     origin, axes, torso = frame
-    joints = p[:, [JOINT_INDEX[j] for j in POSITION_JOINTS], :] - origin
-    return np.asarray((joints @ axes.T / torso).reshape(p.shape[0], -1))
+    joints = np.take(p, _POSITION_INDEX, axis=1)  # a new array: shifted in place
+    joints -= origin
+    # one (frames * joints, 3) product, not one small product per frame
+    return np.asarray((joints.reshape(-1, 3) @ axes.T / torso).reshape(p.shape[0], -1))
+
+
+_POSITION_INDEX = np.array([JOINT_INDEX[j] for j in POSITION_JOINTS])
 
 
 @cache

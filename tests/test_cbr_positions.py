@@ -7,6 +7,8 @@ those coordinates, in torso lengths.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -215,3 +217,20 @@ def test_a_stretch_sets_its_own_frame_from_the_rows_it_shares() -> None:
     assert late == pytest.approx(alone, abs=1e-12)
     # turned with the person: the left wrist is still 0.40 torso lengths to the left
     assert late[:, position_names().index("left_wrist.left")] == pytest.approx(np.full(6, 0.4))
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 6])
+def test_frame_means_and_median_are_numpys_nan_skipping_ones(n: int) -> None:
+    from features.body import _nanmean_rows, _nanmedian
+
+    rng = np.random.default_rng(n)
+    a = rng.normal(size=(n, 3))
+    a[0, 1] = np.nan  # a gap in one column; with one row that column has no number at all
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # numpy warns of the empty column
+        want = np.nanmean(a, axis=0)
+    np.testing.assert_array_equal(_nanmean_rows(a), want)
+    x = rng.normal(size=n + 1)
+    x[-1] = np.nan
+    assert _nanmedian(x) == np.nanmedian(x)  # n numbers: odd and even counts
+    assert np.isnan(_nanmedian(np.full(3, np.nan)))
