@@ -1,0 +1,25 @@
+"""The suite's own set-up: tests marked with one ``xdist_group`` run on one worker.
+
+Costly module fixtures (a fitted model, a built wheel, a compare run) rely on it: without it
+each worker makes its own, and the suite takes minutes longer. pytest-xdist marks a grouped
+test by appending ``@group`` to its node id; under pytest 9.2 that stopped taking effect
+(pytest-dev/pytest-xdist#1386) without any test failing, hence this one.
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+pytestmark = pytest.mark.xdist_group("suite-grouping")
+
+
+def test_a_grouped_test_is_scheduled_by_its_group(request: pytest.FixtureRequest) -> None:
+    if os.environ.get("PYTEST_XDIST_WORKER") is None:
+        pytest.skip("not run under pytest-xdist (pytest -n 0): there are no groups to check")
+    if not getattr(request.config.option, "loadgroup", False):
+        pytest.skip("pytest-xdist runs without --dist loadgroup: groups are not asked for")
+    assert request.node.nodeid.endswith("@suite-grouping"), (
+        "pytest-xdist did not group this test (is pytest at a version it does not support?)"
+    )
