@@ -482,7 +482,7 @@ def activity_thresholds(
 def _rightly_named(seen: np.ndarray, codes: np.ndarray) -> np.ndarray:
     """``(n,)`` bool: the held-out known cases (:func:`known_rows`) whose nearest activity is
     their own."""
-    return known_rows(seen, codes) & (np.argmin(seen, axis=1) == codes)
+    return np.asarray(known_rows(seen, codes) & (np.argmin(seen, axis=1) == codes))
 
 
 Weight = tuple[float, float]
