@@ -19,8 +19,10 @@ Three judges, each calibrated on the case base itself, never on what is being se
 - :class:`ActivityMargin`: the margin against a threshold of the nearest activity's own: the
   quantile of the held-out known cases of that activity that its nearest case names rightly
   (a case named wrongly is wrong whether called unknown or not), shrunk towards the pooled
-  quantile by :data:`ACTIVITY_PRIOR` cases' worth. An activity whose known cases are clear
-  gets a low threshold; one that resembles another keeps its own high one.
+  quantile; the quantile's rate and the shrink weight are chosen on the held-out cases so that
+  a held-out subject's known cases keep the budget against the others' thresholds
+  (:func:`choose_weight`). An activity whose known cases are clear gets a low threshold; one
+  that resembles another keeps its own high one.
 - :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
   score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
   case lies farther than held-out training clips nearly ever do.
