@@ -148,7 +148,8 @@ stored calibration (the 99th percentile of held-out training clips' nearest-case
 cbr.novelty), Familiarity (a stretch as far from its nearest cases as the case base's
 activities lie from each other), or MarginDistance (the margin alone, or a smaller margin with
 a far nearest case, sharing the 5 %), or ActivityMargin (the margin against the nearest
-activity's own threshold, from its rightly named held-out cases, shrunk to the pooled one);
+activity's own threshold, from its rightly named held-out cases, shrunk to the pooled one
+by a weight chosen on the case base, cbr.unknown.choose_weight);
 and, for comparison, the margin at the point where held-out known and novel cases err equally
 (the default before the false-unknown budget)."""
 

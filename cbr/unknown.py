@@ -19,8 +19,10 @@ Three judges, each calibrated on the case base itself, never on what is being se
 - :class:`ActivityMargin`: the margin against a threshold of the nearest activity's own: the
   quantile of the held-out known cases of that activity that its nearest case names rightly
   (a case named wrongly is wrong whether called unknown or not), shrunk towards the pooled
-  quantile by :data:`ACTIVITY_PRIOR` cases' worth. An activity whose known cases are clear
-  gets a low threshold; one that resembles another keeps its own high one.
+  quantile; the quantile's rate and the shrink weight are chosen on the held-out cases so that
+  a held-out subject's known cases keep the budget against the others' thresholds
+  (:func:`choose_weight`). An activity whose known cases are clear gets a low threshold; one
+  that resembles another keeps its own high one.
 - :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
   score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
   case lies farther than held-out training clips nearly ever do.
@@ -52,9 +54,16 @@ FALSE_UNKNOWN = 0.05
 unknown: its threshold is their margins' ``1 - FALSE_UNKNOWN`` quantile."""
 ACTIVITY_PRIOR = 1.0 / FALSE_UNKNOWN
 """How many held-out cases the pooled threshold counts for in an activity's own threshold
-(:func:`activity_thresholds`): 1 / :data:`FALSE_UNKNOWN` (20), the number of cases at which
-the budget reaches one case: an activity with fewer has a quantile read from nearly its
-largest margin, and is held near the pooled threshold."""
+(:func:`activity_thresholds`) when the case base cannot choose it (:func:`choose_weight`: no
+activity has held-out cases in two groups): 1 / :data:`FALSE_UNKNOWN` (20), the number of
+cases at which the budget reaches one case. Also the weight of :class:`ActivityMargin`
+records stored before the weight was chosen."""
+PRIOR_GRID = (0.0, 5.0, 10.0, 20.0, 40.0, 80.0, 160.0, 320.0, math.inf)
+"""The weights :func:`choose_weight` tries, least shrinkage first (``inf``: the pooled
+threshold for every activity)."""
+RATE_SHARES = (1.0, 0.8, 0.6, 0.4, 0.2)
+"""The shares of the false-unknown budget at which :func:`choose_weight` tries reading the
+thresholds' quantiles, the whole budget first."""
 MARGIN_SAMPLE = 2048
 """Training cases held out to calibrate the margin (a seeded sample when there are more): a 5 %
 quantile read from 256 lies 13 cases from the top and moved by 10 points of UI-PRMD Vicon's
@@ -162,16 +171,16 @@ def _left_out(cb: CaseBase, basis: str, groups: np.ndarray, i: int) -> np.ndarra
     return left_out
 
 
-Held = tuple[np.ndarray, np.ndarray, str]
-"""What :func:`held_out_activities` measures: distances, activities and basis."""
+Held = tuple[np.ndarray, np.ndarray, str, np.ndarray]
+"""What :func:`held_out_activities` measures: distances, activities, basis and groups."""
 
 
 def held_out_activities(cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0) -> Held:
     """Training cases held out (:func:`held_out_basis`) as a new recording is: each one's
     distance to the nearest case of every activity that is left ``(n, n_classes)`` (inf
-    where none is), each one's activity ``(n,)`` (its index among the sorted labels) and the
-    basis. A seeded sample of at most ``sample`` real cases (not mirror images) is held out,
-    each against all cases."""
+    where none is), each one's activity ``(n,)`` (its index among the sorted labels), the
+    basis and each one's group ``(n,)`` (its subject or recording). A seeded sample of at
+    most ``sample`` real cases (not mirror images) is held out, each against all cases."""
     classes = sorted(set(np.asarray(cb.labels).astype(str).tolist()))
     codes = activity_codes(cb.labels, classes)
     basis, groups = held_out_basis(cb)
@@ -188,7 +197,7 @@ def held_out_activities(cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0
         d = cb.measure.distances(reps[i], index)
         out = _left_out(cb, basis, groups, i)
         seen[row] = per_activity(np.where(out, np.inf, d), codes, len(classes))
-    return seen, codes[real], basis
+    return seen, codes[real], basis, groups[real]
 
 
 def known_rows(seen: np.ndarray, codes: np.ndarray) -> np.ndarray:
@@ -217,14 +226,20 @@ def calibration_margins(
     """The margins of training cases held out (:func:`held_out_basis`) with their activity in
     the case base (``known``) and without it (``novel``), and the basis. A seeded sample of at
     most ``sample`` real cases (not mirror images) is held out, each against all cases."""
-    seen, codes, basis = held_out_activities(cb, sample, seed)
+    seen, codes, basis, _ = held_out_activities(cb, sample, seed)
     known, novel = known_and_novel(seen, codes)
     return _margins(known), _margins(novel), basis
 
 
 def _margins(nearest: np.ndarray) -> np.ndarray:
     """:func:`margin_of` of every row ``(n, n_classes)``: ``(n,)``."""
-    return np.array([margin_of(row) for row in nearest], dtype=np.float64)
+    if not len(nearest):
+        return np.zeros(0)
+    two = np.sort(np.asarray(nearest, dtype=np.float64), axis=1)[:, :2]
+    if two.shape[1] < 2:
+        return np.ones(len(two))
+    apart = np.isfinite(two[:, 1]) & (two[:, 1] > 0.0)
+    return np.where(apart, two[:, 0] / np.where(apart, two[:, 1], 1.0), 1.0)
 
 
 def _check_margin_calibration(cb: CaseBase) -> None:
@@ -345,7 +360,7 @@ class Margin(Calibrated):
         fewer than three activities (a held-out activity leaves one to compare with), or no
         activity whose cases can be held out from each other."""
         _check_margin_calibration(cb)
-        seen, codes, basis = held if held is not None else held_out_activities(cb)
+        seen, codes, basis, *_ = held if held is not None else held_out_activities(cb)
         known_rows, novel_rows = known_and_novel(seen, codes)
         known, novel = _margins(known_rows), _margins(novel_rows)
         if not len(known) or not len(novel):
@@ -414,7 +429,7 @@ class MarginDistance(Calibrated):
     ) -> MarginDistance:
         """Calibrated on ``cb``; ``held`` and DataError as :meth:`Margin.of`."""
         _check_margin_calibration(cb)
-        seen, codes, basis = held if held is not None else held_out_activities(cb)
+        seen, codes, basis, *_ = held if held is not None else held_out_activities(cb)
         known, novel = known_and_novel(seen, codes)
         if not len(known) or not len(novel):
             raise _no_apart()
@@ -450,27 +465,113 @@ def activity_thresholds(
     one: from held-out known ``margins`` ``(n,)`` (non-empty) of cases of ``activities``
     ``(n,)`` (indices), the pooled threshold ``t`` (:func:`false_unknown_threshold` at
     ``rate``) and each activity's own ``t_a`` from its ``n_a`` margins, shrunk:
-    ``(n_a t_a + prior t) / (n_a + prior)``; ``t`` for an activity without margins."""
+    ``(n_a t_a + prior t) / (n_a + prior)``; ``t`` for an activity without margins, and for
+    every activity when ``prior`` is inf."""
     pooled = false_unknown_threshold(margins, rate)
     out = np.full(n_classes, pooled)
+    if math.isinf(prior):
+        return out, pooled
     for a in np.unique(activities).tolist():  # over activities (a few dozen at most)
         mine = margins[activities == a]
         own = false_unknown_threshold(mine, rate)
-        out[a] = (len(mine) * own + prior * pooled) / (len(mine) + prior)
+        # (n_a t_a + prior t) / (n_a + prior), written so that prior 0 gives t_a exactly
+        # and t_a = t gives t (a margin equal to its threshold is not above it)
+        w = len(mine) / (len(mine) + prior)
+        out[a] = own if own == pooled else w * own + (1.0 - w) * pooled
     return out, pooled
+
+
+def _rightly_named(seen: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: the held-out known cases (:func:`known_rows`) whose nearest activity is
+    their own."""
+    return np.asarray(known_rows(seen, codes) & (np.argmin(seen, axis=1) == codes))
+
+
+Weight = tuple[float, float]
+"""The quantile rate and the prior of :func:`activity_thresholds`."""
+
+
+def inner_scores(
+    seen: np.ndarray, codes: np.ndarray, groups: np.ndarray, weights: Sequence[Weight]
+) -> tuple[np.ndarray, np.ndarray]:
+    """For each ``(rate, prior)`` of ``weights``, how :class:`ActivityMargin`'s thresholds set
+    from the other groups' held-out cases fare on each group's own, every group (subject or
+    recording) held out in turn, as a new person is; from held-out cases' distances to every
+    activity ``(n, n_classes)``, their activities and groups ``(n,)`` each. ``over``: the
+    share of the held-out group's rightly named known cases above their activity's
+    threshold; ``caught``: the share of its cases of an activity ``a`` above the threshold
+    of their nearest other activity when ``a`` is gone (its column and its cases left out of
+    the thresholds too, as from a case base without it). Both ``(len(weights),)``; 0 where
+    there is nothing to count."""
+    n_classes = seen.shape[1]
+    over, caught = np.zeros(len(weights)), np.zeros(len(weights))
+    n_known = n_novel = 0
+    right, margins = _rightly_named(seen, codes), _margins(seen)
+    for g in np.unique(groups).tolist():  # over groups (subjects or recordings: a few)
+        mine = groups == g
+        train, test = right & ~mine, right & mine
+        if not train.any():
+            continue
+        n_known += int(test.sum())
+        for w, (rate, prior) in enumerate(weights):
+            per, _ = activity_thresholds(margins[train], codes[train], n_classes, rate, prior)
+            over[w] += np.sum(margins[test] > per[codes[test]])
+        for a in np.unique(codes[mine]).tolist():  # the group's activities, each gone in turn
+            without = seen.copy()
+            without[:, a] = np.inf
+            kept = _rightly_named(without, codes) & ~mine & (codes != a)
+            novel = mine & (codes == a) & (np.isfinite(without).sum(axis=1) >= 2)
+            if not kept.any() or not novel.any():
+                continue
+            m, near = _margins(without), np.argmin(without[novel], axis=1)
+            n_novel += int(novel.sum())
+            for w, (rate, prior) in enumerate(weights):
+                per, _ = activity_thresholds(m[kept], codes[kept], n_classes, rate, prior)
+                caught[w] += np.sum(m[novel] > per[near])
+    return over / max(n_known, 1), caught / max(n_novel, 1)
+
+
+def choose_weight(
+    seen: np.ndarray, codes: np.ndarray, groups: np.ndarray, budget: float = FALSE_UNKNOWN
+) -> Weight:
+    """The quantile rate (a share of ``budget``, :data:`RATE_SHARES`) and the prior
+    (:data:`PRIOR_GRID`) of :class:`ActivityMargin`'s thresholds, chosen on the held-out cases
+    themselves (:func:`inner_scores`; arguments as there): of those whose thresholds, set from
+    the other groups, the held-out group's known cases exceed no more often than ``budget``,
+    the one that calls most of a gone activity's cases unknown (on a tie the larger rate,
+    then the larger prior: the less tuned). An activity's own quantile, read from a few
+    people, is exceeded more often by the next person than the pooled one: the prior and the
+    rate are what keep the budget on people the thresholds were not set from. The least
+    over-call when none keeps it; ``(budget, ACTIVITY_PRIOR)`` when no activity has
+    held-out cases in two groups (no held-out group then has an own threshold to test)."""
+    right = _rightly_named(seen, codes)
+    if not any(len(np.unique(groups[right & (codes == a)])) >= 2 for a in np.unique(codes)):
+        return budget, ACTIVITY_PRIOR
+    weights = [(budget * share, prior) for share in RATE_SHARES for prior in PRIOR_GRID]
+    over, caught = inner_scores(seen, codes, groups, weights)
+    within = [w for w in range(len(weights)) if over[w] <= budget]
+    if within:
+        best = max(within, key=lambda w: (caught[w], *weights[w]))
+    else:
+        best = min(range(len(weights)), key=lambda w: (over[w], -weights[w][0], -weights[w][1]))
+    return weights[best]
 
 
 @dataclass(frozen=True)
 class ActivityMargin(Calibrated):
     """Unknown when the margin ``d1 / d2`` lies above the threshold of the nearest activity:
     ``thresholds[a]`` (``a`` the index among the case base's sorted activities) is the margin
-    that a share ``false_unknown`` of the held-out known cases of activity ``a`` exceed, among
-    those whose nearest activity is their own (a case named wrongly is a wrong answer whether
+    that a share ``rate`` of the held-out known cases of activity ``a`` exceed, among those
+    whose nearest activity is their own (a case named wrongly is a wrong answer whether
     called unknown or not: it spends no budget), shrunk towards the pooled threshold
-    ``pooled`` by ``prior`` cases' worth (:func:`activity_thresholds`). One pooled threshold
-    is set by the activities that resemble each other most; an activity whose known cases
-    are clear keeps a low one, so a window of a left-out movement nearest to it is caught.
-    ``basis`` and ``known`` as :class:`Margin`'s (``known``: the rightly named cases)."""
+    ``pooled`` by ``prior`` cases' worth (:func:`activity_thresholds`). ``rate`` (at most the
+    budget ``false_unknown``) and ``prior`` are chosen on the held-out cases so that a held-out
+    subject's or recording's known cases keep the budget against thresholds set from the
+    others' (:func:`choose_weight`); a record stored before they were chosen has the budget
+    and 20. One pooled threshold is set by the activities that resemble each other most; an
+    activity whose known cases are clear keeps a low one, so a window of a left-out movement
+    nearest to it is caught. ``basis`` and ``known`` as :class:`Margin`'s (``known``: the
+    rightly named cases)."""
 
     thresholds: tuple[float, ...]
     pooled: float
@@ -478,28 +579,37 @@ class ActivityMargin(Calibrated):
     known: int
     false_unknown: float = FALSE_UNKNOWN
     prior: float = ACTIVITY_PRIOR
+    rate: float = FALSE_UNKNOWN
 
     @classmethod
     def of(
         cls,
         cb: CaseBase,
         false_unknown: float = FALSE_UNKNOWN,
-        prior: float = ACTIVITY_PRIOR,
+        prior: float | None = None,
         held: Held | None = None,
     ) -> ActivityMargin:
-        """Calibrated on ``cb``; ``held`` as :meth:`Margin.of`; DataError as
-        :meth:`Margin.of`, and when no held-out known case is named rightly."""
+        """Calibrated on ``cb``; ``held`` as :meth:`Margin.of`; the rate and the prior chosen on
+        the held-out cases (:func:`choose_weight`) unless ``prior`` is given (then the rate is
+        ``false_unknown``); DataError as :meth:`Margin.of`, and when no held-out known case is
+        named rightly."""
         _check_margin_calibration(cb)
-        seen, codes, basis = held if held is not None else held_out_activities(cb)
+        seen, codes, basis, groups = held if held is not None else held_out_activities(cb)
         keep = known_rows(seen, codes)
         known, own = seen[keep], codes[keep]
         right = np.argmin(known, axis=1) == own if len(known) else np.zeros(0, dtype=bool)
         if not right.any() or not len(known_and_novel(seen, codes)[1]):
             raise _no_apart()
-        per, pooled = activity_thresholds(
-            _margins(known[right]), own[right], seen.shape[1], false_unknown, prior
+        rate, prior = (
+            choose_weight(seen, codes, groups, false_unknown)
+            if prior is None
+            else (false_unknown, prior)
         )
-        return cls(tuple(per.tolist()), pooled, basis, int(right.sum()), false_unknown, prior)
+        per, pooled = activity_thresholds(
+            _margins(known[right]), own[right], seen.shape[1], rate, prior
+        )
+        known_n = int(right.sum())
+        return cls(tuple(per.tolist()), pooled, basis, known_n, false_unknown, prior, rate)
 
     def threshold(self, nearest: np.ndarray) -> float:
         """The threshold of the window's nearest activity."""
@@ -516,7 +626,7 @@ class ActivityMargin(Calibrated):
         return (
             f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
             f" as the next ({second}); a known {first} comes nearer than"
-            f" {self.threshold(nearest):.2f} (in {1.0 - self.false_unknown:.0%} of the case"
+            f" {self.threshold(nearest):.2f} (in {1.0 - self.rate:.0%} of the case"
             " base's held-out cases)"
         )
 
@@ -693,6 +803,10 @@ __all__ = [
     "MarginDistance",
     "activity_codes",
     "activity_thresholds",
+    "choose_weight",
+    "inner_scores",
+    "PRIOR_GRID",
+    "RATE_SHARES",
     "known_rows",
     "held_out_activities",
     "joint_thresholds",

@@ -20,9 +20,11 @@ from cbr.unknown import (
     MarginDistance,
     activity_thresholds,
     calibration_margins,
+    choose_weight,
     equal_error_threshold,
     false_unknown_threshold,
     held_out_basis,
+    inner_scores,
     joint_thresholds,
     margin_of,
 )
@@ -218,7 +220,7 @@ def test_activity_margin_calibrated_by_hand() -> None:
     20 * 3/8) / 21, c 3/8."""
     cb = _one_wrongly_named()
     assert Margin.of(cb).threshold == pytest.approx(1 / 2)
-    judge = ActivityMargin.of(cb)
+    judge = ActivityMargin.of(cb, prior=ACTIVITY_PRIOR)
     assert (judge.pooled, judge.known, judge.basis) == (pytest.approx(3 / 8), 5, "recording")
     expected = [(2 / 9 + 7.5) / 22, (1 / 4 + 7.5) / 21, 3 / 8]
     np.testing.assert_allclose(judge.thresholds, expected)
@@ -233,6 +235,70 @@ def test_activity_margin_calibrated_by_hand() -> None:
     # with no prior a clear activity's own threshold is low: margin 0.2 nearest a is unknown
     assert own.unlike(np.array([2.0, 10.0, 20.0])) and not judge.unlike(np.array([2.0, 10.0, 20.0]))
     assert "activity-margin" in JUDGES
+
+
+def test_activity_margin_chooses_its_weight_by_hand() -> None:
+    """The rightly named cases of :func:`_one_wrongly_named` by recording: r1 a 1/12, c 3/8;
+    r2 a 1/9, b 1/4, c 3/13. r1 held out, thresholds from r2 (pooled 1/4, the largest of
+    three at any rate up to 5 %): c's 3/8 lies above c's own 3/13 and the pooled 1/4, at any
+    prior. r2 held out, from r1 (pooled 3/8, a's own 1/12): a's 1/9 lies above a's
+    threshold (1/12 + 3/8 p) / (1 + p) at p = 0 only (at 5 it is 0.33). So 2 of 5 over at
+    prior 0, 1 of 5 at every other: none keeps 5 %, and the least over-call with the largest
+    rate and prior is taken: 5 % and inf, every threshold the pooled 3/8."""
+    judge = ActivityMargin.of(_one_wrongly_named())
+    assert (judge.rate, judge.prior, judge.false_unknown) == (FALSE_UNKNOWN, math.inf, 0.05)
+    np.testing.assert_allclose(judge.thresholds, [3 / 8] * 3)
+    assert "(in 95% of the case base's held-out cases)" in judge.describe(
+        np.array([3.6, 10.0, 20.0]), ["a", "b", "c"]
+    )
+
+
+def _two_people() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Held-out distances to activities a, b, c, d of one case of each per person p and q
+    (``seen`` ``(8, 4)``, activity codes, groups). Margins: a 0.1 (p) and 0.2 (q), b and c
+    0.8 (4 / 5: alike), d 1 / 7.2; with d gone, d's case lies 7.2 / 10 = 0.72 from a."""
+    clear = [[1.0, 10.0, 10.0, 10.0], [2.0, 10.0, 10.0, 10.0]]
+    alike = [[10.0, 4.0, 5.0, 10.0], [10.0, 5.0, 4.0, 10.0]]
+    like_a = [7.2, 10.0, 10.0, 1.0]
+    seen = np.array([clear[0], *alike, like_a, clear[1], *alike, like_a])
+    return seen, np.array([0, 1, 2, 3] * 2), np.array(["p"] * 4 + ["q"] * 4)
+
+
+def test_inner_scores_by_hand() -> None:
+    """Known cases, q held out (thresholds from p: pooled 0.8, the largest of four at any
+    rate up to 5 %; a's own 0.1): q's a (0.2) lies above a's (0.1 + 0.8 w) / (1 + w) at w =
+    0 only; p held out: nothing above (a's 0.1 below q's 0.2; the others equal theirs, not
+    above). Over: 1/8 at 0, 0 at 10. Gone activities: a's case (1.0, nearest b) above b's
+    0.8, and b's (0.5, nearest c) above c's 0.4 (and so c's), in both people; d's (0.72,
+    nearest a) above a's threshold (0.2 + 0.8 w) / (1 + w) from q (0.2 at 0, 0.7 at 5, 0.745
+    at 10) and (0.1 + 0.8 w) / (1 + w) from p (0.1, 0.683, 0.736): caught at 0 and 5, not
+    at 10. Caught: 8/8, 8/8, 6/8."""
+    seen, codes, groups = _two_people()
+    over, caught = inner_scores(seen, codes, groups, [(0.05, 0.0), (0.05, 5.0), (0.01, 10.0)])
+    np.testing.assert_allclose(over, [1 / 8, 0.0, 0.0])
+    np.testing.assert_allclose(caught, [1.0, 1.0, 6 / 8])
+
+
+def test_choose_weight_by_hand() -> None:
+    """Of :func:`test_inner_scores_by_hand`'s weights, prior 0 over-calls (1/8 > 5 %) and 5
+    catches the most of those that keep the budget (every rate reads the same quantile from
+    one or four cases: the largest rate is taken). Without an activity held out in two
+    groups (each activity a recording of its own) the weight stays 20 at the budget."""
+    seen, codes, groups = _two_people()
+    assert choose_weight(seen, codes, groups) == (FALSE_UNKNOWN, 5.0)
+    assert choose_weight(seen, codes, np.array(list("abcdabcd"))) == (
+        FALSE_UNKNOWN,
+        ACTIVITY_PRIOR,
+    )
+
+
+def test_activity_margin_stored_before_the_weight_was_chosen_reads_as_before() -> None:
+    """A record without ``rate`` (stored when the weight was 20 and the rate the budget)
+    comes back with the budget as its rate: the same thresholds and the same words."""
+    judge = ActivityMargin.of(_one_wrongly_named(), prior=ACTIVITY_PRIOR)
+    old = {k: v for k, v in judge.to_dict().items() if k != "rate"}
+    back = ActivityMargin.from_dict(old)
+    assert back == judge and (back.rate, back.prior) == (0.05, 20.0)
 
 
 def test_held_out_by_subject_then_recording_then_time() -> None:
