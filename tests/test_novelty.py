@@ -18,6 +18,7 @@ from cbr.novelty import (
     NoveltyCalibration,
     combine,
     distance_limit,
+    fit_activities,
     fit_ranges,
     flag_threshold,
     fold_of,
@@ -156,7 +157,7 @@ def test_a_fitted_case_base_keeps_its_ranges_and_flags_few_new_people() -> None:
     assert ranges is not None and ranges.lo.shape[0] == 2  # the two subjects, each held out
     combined = clf.novelty_.combined
     assert combined is not None and combined.budget == 0.02
-    assert set(combined.held) == {"distance", "summary", *SUMMARY_SCORES}
+    assert set(combined.held) == {"distance", "summary", "activity", *SUMMARY_SCORES}
     solved = clf.solve([c.seq for c in test])
     flagged = [s.unlike_reason for s in solved if s.unlike_cases]
     assert len(flagged) <= 6, f"{flagged} of 60 ordinary clips flagged"
@@ -361,10 +362,12 @@ def _combined(rng: np.random.Generator) -> NoveltyCalibration:
     cases, groups, labels = _case_base(rng)
     got = ranges_and_held(cases, groups, cases, groups, labels)
     near = fit_neighbours(cases, groups, labels, cases, groups)
-    assert got is not None and near is not None
+    spread = fit_activities(cases, groups, labels, cases, groups)
+    assert got is not None and near is not None and spread is not None
     base = NoveltyCalibration(1.0, 2.0, 0.99, "leave-one-subject-out", 240, ())
     nearest = rng.gamma(4.0, 0.25, len(cases))
-    return combined_calibration(base, nearest, *got, *near, np.arange(len(cases)))
+    return combined_calibration(base, nearest, *got, *near, np.arange(len(cases)),
+                                activities=spread)  # fmt: skip
 
 
 def test_the_combined_flag_judges_a_clip_alike_whatever_the_answer() -> None:
