@@ -86,6 +86,8 @@ FLAG_BUDGET = 0.02
 #: its spread among all cases (:class:`ActivitySpread`): a feature one activity's cases hold
 #: constant does not decide alone
 SPREAD_FLOOR = 0.25
+#: differences :func:`activity_scores` holds at once (clips x activities x features: 32 MB)
+SPREAD_BLOCK = 1 << 22
 #: the distance's share of the combined flag's threshold (:class:`Combined`): a tail
 #: probability this many times the summary's flags
 DISTANCE_WEIGHT = 0.25
@@ -517,10 +519,14 @@ class ActivitySpread:
 def activity_scores(s: np.ndarray, centres: np.ndarray, units: np.ndarray) -> np.ndarray:
     """:meth:`ActivitySpread.scores` of ``s`` ``(q, F)`` against ``centres`` and ``units``
     ``(labels, F)``: per clip, the least over labels of the mean over features of
-    ``min(((s - centre) / unit) ** 2, CLIP_SD ** 2)`` (NaN terms count 0)."""
-    z = (s[:, None, :] - centres[None, :, :]) / units[None, :, :]
-    sq = np.minimum(np.nan_to_num(z * z, nan=0.0), CLIP_SD**2)
-    out: np.ndarray = sq.mean(axis=-1).min(axis=-1)
+    ``min(((s - centre) / unit) ** 2, CLIP_SD ** 2)`` (NaN terms count 0). Clips a block at
+    a time, so the ``(block, labels, F)`` differences stay within :data:`SPREAD_BLOCK`."""
+    out = np.empty(len(s))
+    step = max(1, SPREAD_BLOCK // max(centres.size, 1))
+    for i in range(0, len(s), step):
+        z = (s[i : i + step, None, :] - centres[None, :, :]) / units[None, :, :]
+        sq = np.minimum(np.nan_to_num(z * z, nan=0.0), CLIP_SD**2)
+        out[i : i + step] = sq.mean(axis=-1).min(axis=-1)
     return out
 
 
