@@ -74,6 +74,7 @@ from .novelty import (
     NoveltyCalibration,
     combined_calibration,
     describe,
+    fit_activities,
     fit_neighbours,
     from_distances,
     from_problem,
@@ -650,11 +651,15 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         near = None if ranges is None else fit_neighbours(
             cases_d[~image], group_of[plain], clip_labels[plain], queries_d, group_of[query_clip]
         )  # fmt: skip
+        spread = None if ranges is None else fit_activities(
+            cases_d[~image], group_of[plain], clip_labels[plain], queries_d, group_of[query_clip]
+        )  # fmt: skip
         novelty = from_distances(h.nearest, basis, UNLIKE_QUANTILE, skeletons)
         if ranges is not None and near is not None:
             (found, outside), (neighbours, neighbour, near_labels) = ranges, near
             novelty = combined_calibration(novelty, h.nearest, found, outside, neighbours,
-                                           neighbour, near_labels, pick)  # fmt: skip
+                                           neighbour, near_labels, pick,
+                                           activities=spread)  # fmt: skip
         elif ranges is not None:
             novelty = dataclasses.replace(novelty, features=ranges[0])
         return (

@@ -5,19 +5,21 @@ held-out nearest-case distance (the ``scale``: the median over held-out training
 matches left out, so binary QMP vectors, whose held-out clips often match a case exactly, get a
 usable unit). It is *unlike the stored cases* when one statistic says it is less usual than
 nearly every held-out training clip (:class:`Combined`, :func:`combined_calibration`), from
-four scores, each turned into its held-out tail probability:
+five scores, each turned into its held-out tail probability:
 
 - the nearest-case distance under the case base's own measure (``"distance"``);
-- three scores of the clip's summary features, the same in every configuration (the fluent
+- four scores of the clip's summary features, the same in every configuration (the fluent
   summary fluents/euclidean's problem is, :data:`DESCRIPTION`: fluent confidences, joint
   angles and positions, their mean, lowest, highest and spread over the clip; read off the
   problem when it holds those columns, :func:`from_problem`, else computed from the clip),
   none of which depends on the answer: the share of features outside the ranges the cases
   span (:class:`FeatureRanges`) in units of all held-out clips' and in units of those of the
-  label of the nearest training clip in summary space, and the distance to that clip
+  label of the nearest training clip in summary space, the distance to that clip
   (:class:`SummaryNeighbours`, each feature in the cases' standard deviations, at most
-  :data:`CLIP_SD`). Fisher's method joins them into one (``"features"`` when it flags): a
-  measure-independent score, which sees what a distance averages away (a movement the case
+  :data:`CLIP_SD`), and how far the clip lies from the nearest activity in that activity's
+  own spread (:class:`ActivitySpread`: features that each lie within the cases' ranges but
+  together fit no one activity). Fisher's method joins them into one (``"features"`` when it
+  flags): a measure-independent score, which sees what a distance averages away (a movement the case
   base knows, done with joints that sit where no case's did);
 
 the threshold set so that :data:`FLAG_BUDGET` of the held-out training clips are flagged,
@@ -80,6 +82,12 @@ CLIP_SD = 3.0
 #: the cases (new people score a little farther than held-out training clips: measured false
 #: alarms 2-4 % at this budget)
 FLAG_BUDGET = 0.02
+#: a summary feature's spread among the cases of one activity counts at least this share of
+#: its spread among all cases (:class:`ActivitySpread`): a feature one activity's cases hold
+#: constant does not decide alone
+SPREAD_FLOOR = 0.25
+#: differences :func:`activity_scores` holds at once (clips x activities x features: 32 MB)
+SPREAD_BLOCK = 1 << 22
 #: the distance's share of the combined flag's threshold (:class:`Combined`): a tail
 #: probability this many times the summary's flags
 DISTANCE_WEIGHT = 0.25
@@ -451,11 +459,135 @@ def fit_neighbours(
     return neighbours, held, near
 
 
+@dataclass(frozen=True, eq=False)
+class ActivitySpread:
+    """How far a clip lies from every activity's cases in that activity's own spread: per
+    label, the cases' mean ``centres`` and standard deviation ``units`` ``(labels, F)`` of
+    each summary feature (a unit at least :data:`SPREAD_FLOOR` of the feature's standard
+    deviation over all cases; NaN: no case has the feature). A clip's score is the least over
+    the activities of its mean squared standardised difference, each feature counted at most
+    :data:`CLIP_SD` deviations: a clip whose features each lie within the cases' ranges, but
+    which no one activity's cases spread to (an arm raised as in one exercise, the legs and
+    trunk as in another), scores high; the range count and the nearest clip do not see it."""
+
+    centres: np.ndarray
+    units: np.ndarray
+    labels: tuple[str, ...]
+
+    def scores(self, s: np.ndarray) -> np.ndarray:
+        """The score ``(q,)`` of the summaries ``s`` ``(q, F)`` (``inf`` for summaries of other
+        columns; a feature missing in the clip or in every case of an activity counts 0)."""
+        s = np.atleast_2d(np.asarray(s, dtype=np.float64))
+        if s.shape[-1] != self.centres.shape[-1] or len(self.labels) == 0:
+            return np.full(len(s), np.inf)
+        return activity_scores(s, self.centres, self.units)
+
+    def score(self, s: np.ndarray) -> float:
+        """:meth:`scores` of one summary ``(F,)``."""
+        return float(self.scores(s)[0])
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, ActivitySpread):
+            return NotImplemented
+        return (
+            np.array_equal(self.centres, other.centres, equal_nan=True)
+            and np.array_equal(self.units, other.units, equal_nan=True)
+            and self.labels == other.labels
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (NaN, a feature no case of an activity has, stored as None)."""
+        return {"centres": _nan_none(self.centres), "units": _nan_none(self.units),
+                "labels": list(self.labels)}  # fmt: skip
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> ActivitySpread:
+        """Refuses (ValueError, with the reason) what a damaged store would hold."""
+        centres = np.array(d["centres"], dtype=np.float64)
+        units = np.array(d["units"], dtype=np.float64)
+        labels = tuple(str(v) for v in d["labels"])
+        if centres.ndim != 2 or units.shape != centres.shape or len(labels) != len(centres):
+            raise ValueError("the activities' centres and units must be paired (labels, "
+                             "features) arrays with a label each")  # fmt: skip
+        if (units[~np.isnan(units)] <= 0).any():
+            raise ValueError("the activities' units must be positive")
+        return cls(centres, units, labels)
+
+
+def activity_scores(s: np.ndarray, centres: np.ndarray, units: np.ndarray) -> np.ndarray:
+    """:meth:`ActivitySpread.scores` of ``s`` ``(q, F)`` against ``centres`` and ``units``
+    ``(labels, F)``: per clip, the least over labels of the mean over features of
+    ``min(((s - centre) / unit) ** 2, CLIP_SD ** 2)`` (NaN terms count 0). Clips a block at
+    a time, so the ``(block, labels, F)`` differences stay within :data:`SPREAD_BLOCK`."""
+    out = np.empty(len(s))
+    step = max(1, SPREAD_BLOCK // max(centres.size, 1))
+    for i in range(0, len(s), step):
+        z = (s[i : i + step, None, :] - centres[None, :, :]) / units[None, :, :]
+        sq = np.minimum(np.nan_to_num(z * z, nan=0.0), CLIP_SD**2)
+        out[i : i + step] = sq.mean(axis=-1).min(axis=-1)
+    return out
+
+
+def spread_of(cases: np.ndarray, labels: np.ndarray) -> ActivitySpread:
+    """The :class:`ActivitySpread` of ``cases`` ``(m, F)`` of ``labels`` ``(m,)``."""
+    names = tuple(sorted({str(v) for v in labels}))
+    with warnings.catch_warnings():  # a feature no case (of an activity) has: NaN
+        warnings.simplefilter("ignore", RuntimeWarning)
+        overall = np.nanstd(cases, axis=0)
+        centres = np.stack([np.nanmean(cases[labels == n], axis=0) for n in names])
+        spread = np.stack([np.nanstd(cases[labels == n], axis=0) for n in names])
+    units = np.fmax(spread, SPREAD_FLOOR * overall)
+    units = np.where(units > 1e-9, units, np.nan)  # constant among all cases: no part
+    return ActivitySpread(centres.reshape(len(names), cases.shape[-1]),
+                          units.reshape(len(names), cases.shape[-1]), names)  # fmt: skip
+
+
+def fit_activities(
+    cases: np.ndarray,
+    case_groups: np.ndarray,
+    case_labels: Sequence[str] | np.ndarray,
+    queries: np.ndarray,
+    groups: np.ndarray,
+) -> tuple[ActivitySpread, np.ndarray] | None:
+    """The :class:`ActivitySpread` of ``cases`` ``(m, F)`` (group ``case_groups``, label
+    ``case_labels`` ``(m,)``) and each training clip's ``queries`` ``(n, F)`` (group
+    ``groups`` ``(n,)``) held-out score ``(n,)``: against the spread of the cases of the
+    other folds (:func:`fold_of`, as :func:`fit_ranges` holds them out; their centres and
+    units both from those cases, so a held-out clip is judged as a new person's will be).
+    None when the cases form fewer than two groups."""
+    everyone = np.concatenate([np.asarray(case_groups, dtype=object),
+                               np.asarray(groups, dtype=object)])  # fmt: skip
+    fold = fold_of(everyone)
+    case_fold, query_fold = fold[: len(cases)], fold[len(cases) :]
+    if len(fold) == 0 or int(fold.max()) < 1:
+        return None
+    cases = np.asarray(cases, dtype=np.float64)
+    labels = np.array([str(v) for v in case_labels], dtype=object)
+    held = np.full(len(queries), np.inf)
+    for f in np.unique(query_fold):
+        theirs = case_fold != f
+        if theirs.any():
+            mine = query_fold == f
+            held[mine] = spread_of(cases[theirs], labels[theirs]).scores(queries[mine])
+    return spread_of(cases, labels), held
+
+
 #: the summary scores of :class:`Combined`, besides the case base's own distance: the share
 #: of features outside the cases' ranges in units of all held-out clips', the same in units
 #: of the held-out clips of the label of the nearest training clip in summary space, and the
 #: distance to that clip (:class:`SummaryNeighbours`)
 SUMMARY_SCORES = ("outside", "outside_label", "neighbour")
+#: the fourth summary score, when the calibration has it (:class:`ActivitySpread`: case bases
+#: stored before it join the three alone)
+ACTIVITY_SCORE = "activity"
+
+
+def summary_scores(held: dict[str, Any]) -> tuple[str, ...]:
+    """The summary scores Fisher's method joins for held-out scores ``held`` (name: values):
+    :data:`SUMMARY_SCORES`, and :data:`ACTIVITY_SCORE` when it was calibrated."""
+    return SUMMARY_SCORES + ((ACTIVITY_SCORE,) if ACTIVITY_SCORE in held else ())
 
 
 @dataclass(frozen=True, eq=False)
@@ -495,7 +627,7 @@ class Combined:
     def summary(self, tails: dict[str, np.ndarray]) -> np.ndarray:
         """The summary scores' ``tails`` (name: ``(q,)``) as one tail probability ``(q,)``
         (Fisher's method against the held-out clips' own)."""
-        fisher = -np.sum([np.log(tails[k]) for k in SUMMARY_SCORES], axis=0)
+        fisher = -np.sum([np.log(tails[k]) for k in summary_scores(self.held)], axis=0)
         return self.tails("summary", np.atleast_1d(fisher))
 
     def flags(self, p: float) -> bool:
@@ -556,11 +688,12 @@ def combine(
     were held out: they cannot tell a 1-in-50 clip)."""
     ref = {k: np.sort(v[np.isfinite(v)]) for k, v in held.items()}  # JSON has no inf
     found = Combined(ref, 0.0, budget, weight)
-    fisher = -np.sum([np.log(found.tails(k, held[k])) for k in SUMMARY_SCORES], axis=0)
+    joined = summary_scores(held)
+    fisher = -np.sum([np.log(found.tails(k, held[k])) for k in joined], axis=0)
     found = Combined({**ref, "summary": np.sort(fisher)}, 0.0, budget, weight)
     if len(sample) == 0:
         return found
-    every = found.summary({k: found.tails(k, held[k]) for k in SUMMARY_SCORES})
+    every = found.summary({k: found.tails(k, held[k]) for k in joined})
     if budget * (len(every) + 1) < 1.0:  # too few clips: a new ordinary clip is less usual
         # than all n held-out ones with chance 1 / (n + 1), above the budget; the summary does
         # not flag (the distance still flags beyond every held-out clip's)
@@ -622,7 +755,9 @@ class NoveltyCalibration:
     the summary features' ranges (None: the distance alone, as case bases stored before
     them); neighbours and combined: the nearest training clip in summary space and the one
     statistic that combines the scores (:class:`Combined`; None: each score at its own
-    quantile, as case bases stored before it are judged)."""
+    quantile, as case bases stored before it are judged); activities: each activity's spread
+    in summary space, the fourth summary score (None: the three alone, as case bases stored
+    before it are judged)."""
 
     scale: float
     unlike_ratio: float
@@ -633,6 +768,7 @@ class NoveltyCalibration:
     features: FeatureRanges | None = field(default=None, compare=True)
     neighbours: SummaryNeighbours | None = None
     combined: Combined | None = None
+    activities: ActivitySpread | None = None
 
     def ratio(self, distance: float) -> float:
         """Nearest-case distance in units of the case base's usual one."""
@@ -684,7 +820,8 @@ class NoveltyCalibration:
 
     def tails(self, values: np.ndarray | None) -> dict[str, float]:
         """The held-out tail probability of each summary score of the clip whose problem (or
-        description) is ``values`` (:data:`SUMMARY_SCORES`) and of their Fisher statistic
+        description) is ``values`` (:data:`SUMMARY_SCORES`, and :data:`ACTIVITY_SCORE` when
+        calibrated) and of their Fisher statistic
         (``"summary"``; empty without ``values`` or a combined calibration). None of them
         depends on the answer: the same clip scores the same under every measure."""
         c, f, n = self.combined, self.features, self.neighbours
@@ -697,6 +834,8 @@ class NoveltyCalibration:
         tails = {"outside": c.tail("outside", outside / f.default),
                  "outside_label": c.tail("outside_label", outside / scale),
                  "neighbour": c.tail("neighbour", distance)}  # fmt: skip
+        if self.activities is not None:
+            tails[ACTIVITY_SCORE] = c.tail(ACTIVITY_SCORE, self.activities.score(s))
         summed = c.summary({k: np.array([v]) for k, v in tails.items()})
         return {**tails, "summary": float(summed[0])}
 
@@ -717,6 +856,8 @@ class NoveltyCalibration:
         if self.neighbours is not None and self.combined is not None:
             d["neighbours"] = self.neighbours.to_dict()
             d["combined"] = self.combined.to_dict()
+        if self.activities is not None:
+            d["activities"] = self.activities.to_dict()
         return d
 
     def describe(self) -> dict[str, Any]:
@@ -734,6 +875,9 @@ class NoveltyCalibration:
             d["neighbours"] = {"cases": int(self.neighbours.cases.shape[0])}
             d["combined"] = {"threshold": c.threshold, "budget": c.budget,
                              "scores": {k: len(v) for k, v in c.held.items()}}  # fmt: skip
+        if self.activities is not None:
+            d["activities"] = {"labels": list(self.activities.labels),
+                               "features": int(self.activities.centres.shape[1])}  # fmt: skip
         return d
 
     @classmethod
@@ -747,6 +891,7 @@ class NoveltyCalibration:
             tuple(str(s) for s in d.get("skeletons", ())),
             FeatureRanges.from_dict(d["features"]) if d.get("features") else None,
             *_combined_of(d),
+            _activities_of(d),
         )
 
 
@@ -759,6 +904,15 @@ def _combined_of(d: dict[str, Any]) -> tuple[SummaryNeighbours | None, Combined 
         raise ValueError("the combined flag needs its feature ranges, neighbours and "
                          "held-out scores together")  # fmt: skip
     return SummaryNeighbours.from_dict(d["neighbours"]), Combined.from_dict(d["combined"])
+
+
+def _activities_of(d: dict[str, Any]) -> ActivitySpread | None:
+    """The stored activity spread (None: stored before it); one stored without its held-out
+    scores in the combined flag, or held-out scores without it, is refused."""
+    held = dict(d.get("combined") or {}).get("held", {})
+    if bool(d.get("activities")) != (ACTIVITY_SCORE in held):
+        raise ValueError("the activity spread and its held-out scores must be stored together")
+    return ActivitySpread.from_dict(d["activities"]) if d.get("activities") else None
 
 
 def distance_limit(ratios: np.ndarray, threshold: float) -> float:
@@ -781,25 +935,32 @@ def combined_calibration(
     near_labels: np.ndarray,
     pick: np.ndarray,
     budget: float = FLAG_BUDGET,
+    activities: tuple[ActivitySpread, np.ndarray] | None = None,
 ) -> NoveltyCalibration:
     """``novelty`` (the distance's calibration) with the feature scores and one statistic of
     them all (:class:`Combined`): the held-out training clips' ``outside`` shares ``(n,)``
     (:func:`ranges_and_held`), distances to the nearest clip in summary space ``neighbour``
     and that clip's label ``near_labels`` ``(n,)`` (:func:`fit_neighbours`), and the
     nearest-case distances ``nearest`` ``(q,)`` of the clips at positions ``pick`` ``(q,)``,
-    on which the threshold is set. The distance alone flags beyond the ratio at which it
+    on which the threshold is set; ``activities``: the activity spread and the held-out
+    clips' scores ``(n,)`` (:func:`fit_activities`), the fourth summary score (None: the three
+    alone). The distance alone flags beyond the ratio at which it
     flags in the combination (:func:`distance_limit`: what :meth:`NoveltyCalibration.unlike`
     judges when only a distance is known)."""
     ratio = np.asarray(nearest, dtype=np.float64) / novelty.scale
     unit = np.array([ranges.scale(str(v)) if str(v) else ranges.default for v in near_labels])
     held = {"distance": ratio, "outside": outside / ranges.default,
             "outside_label": outside / unit, "neighbour": neighbour}  # fmt: skip
+    if activities is not None:
+        held[ACTIVITY_SCORE] = np.asarray(activities[1], dtype=np.float64)
     combined = combine(held, np.asarray(pick), budget)
     held["distance"] = ratio[np.isfinite(ratio)]
     limit = distance_limit(held["distance"], combined.distance_threshold)
     within = float(np.mean(held["distance"] <= limit)) if len(held["distance"]) else 1.0
+    spread = None if activities is None else activities[0]
     return dataclasses.replace(novelty, unlike_ratio=limit, quantile=within, features=ranges,
-                               neighbours=neighbours, combined=combined)  # fmt: skip
+                               neighbours=neighbours, combined=combined,
+                               activities=spread)  # fmt: skip
 
 
 def held_out_distances(

@@ -18,6 +18,7 @@ from cbr.novelty import (
     NoveltyCalibration,
     combine,
     distance_limit,
+    fit_activities,
     fit_ranges,
     flag_threshold,
     fold_of,
@@ -156,7 +157,7 @@ def test_a_fitted_case_base_keeps_its_ranges_and_flags_few_new_people() -> None:
     assert ranges is not None and ranges.lo.shape[0] == 2  # the two subjects, each held out
     combined = clf.novelty_.combined
     assert combined is not None and combined.budget == 0.02
-    assert set(combined.held) == {"distance", "summary", *SUMMARY_SCORES}
+    assert set(combined.held) == {"distance", "summary", "activity", *SUMMARY_SCORES}
     solved = clf.solve([c.seq for c in test])
     flagged = [s.unlike_reason for s in solved if s.unlike_cases]
     assert len(flagged) <= 6, f"{flagged} of 60 ordinary clips flagged"
@@ -361,10 +362,12 @@ def _combined(rng: np.random.Generator) -> NoveltyCalibration:
     cases, groups, labels = _case_base(rng)
     got = ranges_and_held(cases, groups, cases, groups, labels)
     near = fit_neighbours(cases, groups, labels, cases, groups)
-    assert got is not None and near is not None
+    spread = fit_activities(cases, groups, labels, cases, groups)
+    assert got is not None and near is not None and spread is not None
     base = NoveltyCalibration(1.0, 2.0, 0.99, "leave-one-subject-out", 240, ())
     nearest = rng.gamma(4.0, 0.25, len(cases))
-    return combined_calibration(base, nearest, *got, *near, np.arange(len(cases)))
+    return combined_calibration(base, nearest, *got, *near, np.arange(len(cases)),
+                                activities=spread)  # fmt: skip
 
 
 def test_the_combined_flag_judges_a_clip_alike_whatever_the_answer() -> None:
@@ -444,3 +447,121 @@ def test_the_description_is_read_off_a_problem_as_computed_from_the_clip() -> No
         values = extract_problem(seq, candidates).values
         assert from_problem(values, candidates, resolved) == pytest.approx(want, abs=1e-12)
     assert not same_columns(CaseBaseClassifier(positions=False).wanted_config())
+
+
+def test_the_activity_score_is_the_nearest_activity_in_its_own_spread(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import cbr.novelty
+    from cbr.novelty import CLIP_SD, SPREAD_FLOOR, spread_of
+
+    # two activities of four clips, two features: A at (0|4, 0|4), C at (20|24, 20|24); by
+    # hand each activity's mean is (2, 2) and (22, 22) and its standard deviation 2, the
+    # standard deviation over all eight clips sqrt(104) = 10.2, so the unit is at least a
+    # quarter of it: 2.55
+    a = np.array([[0.0, 0.0], [4.0, 0.0], [0.0, 4.0], [4.0, 4.0]])
+    cases = np.concatenate([a, a + 20.0])
+    labels = np.array(["A"] * 4 + ["C"] * 4, dtype=object)
+    spread = spread_of(cases, labels)
+    assert SPREAD_FLOOR == 0.25 and CLIP_SD == 3.0
+    unit = 0.25 * np.sqrt(104.0)
+    assert spread.centres.ravel() == pytest.approx([2.0, 2.0, 22.0, 22.0])
+    assert spread.units.ravel() == pytest.approx(np.full(4, unit))
+    # (3, 2): one unit-less 1 / 2.55 from A in the first feature, 0 in the second; C is far
+    assert spread.score(np.array([3.0, 2.0])) == pytest.approx((1.0 / unit) ** 2 / 2)
+    # (2, 22): within both activities' ranges feature by feature (each feature's value is
+    # some activity's mean) but A's in one and C's in the other: 20 / 2.55 = 7.8 units from
+    # either in one feature, counted at most 3 (9 squared), so (0 + 9) / 2 from both
+    assert spread.score(np.array([2.0, 22.0])) == pytest.approx(4.5)
+    # a feature the clip lacks counts 0; a summary of other columns is no score
+    assert spread.score(np.array([np.nan, 3.0])) == pytest.approx((1.0 / unit) ** 2 / 2)
+    assert spread.score(np.zeros(3)) == np.inf
+    # many clips a block at a time (here one clip per block): the same scores
+    monkeypatch.setattr(cbr.novelty, "SPREAD_BLOCK", 4)
+    clips = np.array([[3.0, 2.0], [2.0, 22.0], [np.nan, 3.0]])
+    assert spread.scores(clips) == pytest.approx(
+        [(1.0 / unit) ** 2 / 2, 4.5, (1.0 / unit) ** 2 / 2]
+    )
+
+
+def _mixed_case_base(
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Six subjects, twenty clips each of two activities over 40 features: "up" raises the
+    first 20 features by 4 (standard deviation 1), "down" the last 20."""
+    rows, groups, labels = [], [], []
+    for j in range(6):
+        for label, part in (("up", slice(0, 20)), ("down", slice(20, 40))):
+            x = rng.normal(0.0, 1.0, (20, 40))
+            x[:, part] += 4.0
+            rows.append(x)
+            groups += [f"s{j}"] * 20
+            labels += [label] * 20
+    return np.concatenate(rows), np.array(groups, dtype=object), np.array(labels, dtype=object)
+
+
+def test_a_clip_whose_features_fit_no_one_activity_is_flagged_by_the_activity_score() -> None:
+    """Every feature of the clip but one lies well within the cases' ranges (each is the
+    value one of the activities holds it at), but together they are neither activity: 4
+    standard deviations from each in half the features. Held-out clips score about 1 (a mean
+    square of standard normal deviations); this one about 4.5 (half its features at the
+    3-deviation limit, 9): beyond every held-out clip. With one feature just beyond the
+    cases' range besides, the four summary scores flag it; the three before it did not (one
+    feature outside of 40 is what a held-out clip shows one time in three)."""
+    from cbr.novelty import combined_calibration, fit_neighbours, ranges_and_held
+
+    rng = np.random.default_rng(11)
+    cases, groups, labels = _mixed_case_base(rng)
+    got = ranges_and_held(cases, groups, cases, groups, labels)
+    near = fit_neighbours(cases, groups, labels, cases, groups)
+    spread = fit_activities(cases, groups, labels, cases, groups)
+    assert got is not None and near is not None and spread is not None
+    assert np.median(spread[1]) == pytest.approx(1.0, abs=0.15)
+    base = NoveltyCalibration(1.0, 2.0, 0.99, "leave-one-subject-out", 240, ())
+    cal = combined_calibration(base, rng.gamma(4.0, 0.25, len(cases)), *got, *near,
+                               np.arange(len(cases)), activities=spread)  # fmt: skip
+    three = combined_calibration(base, rng.gamma(4.0, 0.25, len(cases)), *got, *near,
+                                 np.arange(len(cases)))  # fmt: skip
+    neither = rng.normal(0.0, 0.3, 40)  # both halves as the activity not raising them
+    assert cal.features is not None and cal.features.outside(neither) == 0.0
+    assert spread[0].score(neither) > spread[1].max()
+    tails = cal.tails(neither)
+    assert tails["activity"] == pytest.approx(1.0 / (len(cases) + 1.0))
+    neither[0] = cases[:, 0].max() + 0.5
+    assert cal.features.outside(neither) == pytest.approx(1 / 40)
+    assert cal.measured(0.5, neither, "up") == "features"
+    assert three.measured(0.5, neither, "up") == ""
+    # a clip of either activity, drawn as its cases were, is not
+    ordinary = rng.normal(0.0, 1.0, 40)
+    ordinary[:20] += 4.0
+    assert cal.measured(0.5, ordinary, "up") == ""
+
+
+def test_a_calibration_stored_before_the_activity_score_judges_as_before() -> None:
+    """Stored without the activity spread: the three summary scores alone, as before (its
+    Fisher statistic is theirs); the spread without its held-out scores is refused."""
+    from cbr.novelty import ACTIVITY_SCORE, combined_calibration, fit_neighbours, ranges_and_held
+
+    rng = np.random.default_rng(12)
+    cases, groups, labels = _case_base(rng)
+    got = ranges_and_held(cases, groups, cases, groups, labels)
+    near = fit_neighbours(cases, groups, labels, cases, groups)
+    assert got is not None and near is not None
+    base = NoveltyCalibration(1.0, 2.0, 0.99, "leave-one-subject-out", 240, ())
+    old = combined_calibration(base, rng.gamma(4.0, 0.25, len(cases)), *got, *near,
+                               np.arange(len(cases)))  # fmt: skip
+    stored = json.loads(json.dumps(old.to_dict(), allow_nan=False))
+    assert "activities" not in stored and ACTIVITY_SCORE not in stored["combined"]["held"]
+    back = NoveltyCalibration.from_dict(stored)
+    assert back == old and back.activities is None
+    x = rng.normal(0.0, 1.0, 60)
+    x[30:42] += 20.0
+    tails = back.tails(x)
+    assert set(tails) == {*SUMMARY_SCORES, "summary"}
+    assert back.combined is not None
+    fisher = -sum(np.log(tails[k]) for k in SUMMARY_SCORES)
+    assert tails["summary"] == pytest.approx(back.combined.tail("summary", fisher))
+    spread = fit_activities(cases, groups, labels, cases, groups)
+    assert spread is not None
+    with pytest.raises(ValueError, match="stored together"):
+        NoveltyCalibration.from_dict({**stored, "activities": spread[0].to_dict()})
