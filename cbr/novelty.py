@@ -165,6 +165,14 @@ def outside_share(s: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.asarray(out.mean(axis=-1), dtype=np.float64)
 
 
+def _fields_equal(a: Any, b: Any, arrays: tuple[str, ...], plain: tuple[str, ...]) -> bool:
+    """Whether ``a`` and ``b`` agree on the named array fields (NaN equal to NaN: a feature no
+    case has) and on the other named fields."""
+    return all(
+        np.array_equal(getattr(a, n), getattr(b, n), equal_nan=True) for n in arrays
+    ) and all(getattr(a, n) == getattr(b, n) for n in plain)
+
+
 @dataclass(frozen=True, eq=False)
 class FeatureRanges:
     """How far outside the cases' feature ranges a clip is, against held-out training clips.
@@ -212,13 +220,9 @@ class FeatureRanges:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, FeatureRanges):
             return NotImplemented
-        return (
-            np.array_equal(self.lo, other.lo, equal_nan=True)
-            and np.array_equal(self.hi, other.hi, equal_nan=True)
-            and (self.labels, self.scales, self.default, self.unlike_ratio, self.quantile,
-                 self.description)
-            == (other.labels, other.scales, other.default, other.unlike_ratio, other.quantile,
-                other.description)
+        return _fields_equal(
+            self, other, ("lo", "hi"),
+            ("labels", "scales", "default", "unlike_ratio", "quantile", "description"),
         )  # fmt: skip
 
     __hash__ = None  # type: ignore[assignment]
@@ -489,11 +493,7 @@ class ActivitySpread:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, ActivitySpread):
             return NotImplemented
-        return (
-            np.array_equal(self.centres, other.centres, equal_nan=True)
-            and np.array_equal(self.units, other.units, equal_nan=True)
-            and self.labels == other.labels
-        )
+        return _fields_equal(self, other, ("centres", "units"), ("labels",))
 
     __hash__ = None  # type: ignore[assignment]
 

@@ -272,7 +272,7 @@ def _solve_windows(
     cuts = _cut_in_pieces(rec, windows, chunk, clf.feature_config_) if chunk else (
         (i, stretch(rec, w.start, w.stop), None) for i, w in enumerate(windows)
     )  # fmt: skip
-    found: list[_Solved] = []
+    found: list[tuple[int, _Solved]] = []
     batch: list[tuple[int, PoseSequence, tuple[int, int] | None]] = []
 
     def flush() -> None:
@@ -281,8 +281,8 @@ def _solve_windows(
             w = windows[i]
             vote = _nearest_vote(solved.retrieval, classes, k)
             nearest = activity_distances(clf, solved, codes)
-            found.append(_Solved(w.start, w.stop, vote, nearest, None if chunk else solved,
-                                 w.repetition, piece))  # fmt: skip
+            found.append((i, _Solved(w.start, w.stop, vote, nearest, None if chunk else solved,
+                                     w.repetition, piece)))  # fmt: skip
         batch.clear()
 
     for i, part, piece in progress(cuts, "classifying windows", len(windows), "window"):
@@ -292,8 +292,7 @@ def _solve_windows(
             batch.append((i, part, piece))
     if batch:
         flush()
-    order = {(w.start, w.stop, w.repetition): n for n, w in enumerate(windows)}
-    return sorted(found, key=lambda s: order[(s.start, s.stop, s.repetition)])
+    return [s for _, s in sorted(found, key=lambda f: f[0])]  # in the windows' order
 
 
 def _cut_in_pieces(
