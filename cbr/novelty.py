@@ -165,6 +165,18 @@ def outside_share(s: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.asarray(out.mean(axis=-1), dtype=np.float64)
 
 
+def _case_and_query_folds(
+    case_groups: np.ndarray, groups: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The :func:`fold_of` of every case (groups ``case_groups``) and of every training clip
+    (``groups``), folded together, or None when they form fewer than two folds."""
+    fold = fold_of(np.concatenate([np.asarray(case_groups, dtype=object),
+                                   np.asarray(groups, dtype=object)]))  # fmt: skip
+    if len(fold) == 0 or int(fold.max()) < 1:
+        return None
+    return fold[: len(case_groups)], fold[len(case_groups) :]
+
+
 def _fields_equal(a: Any, b: Any, arrays: tuple[str, ...], plain: tuple[str, ...]) -> bool:
     """Whether ``a`` and ``b`` agree on the named array fields (NaN equal to NaN: a feature no
     case has) and on the other named fields."""
@@ -437,12 +449,10 @@ def fit_neighbours(
     ``groups`` ``(n,)``), its held-out distance ``(n,)`` and its nearest case's label ``(n,)``
     among the cases of the other folds (:func:`fold_of`, as :func:`fit_ranges` holds them
     out). None when the cases form fewer than two groups."""
-    everyone = np.concatenate([np.asarray(case_groups, dtype=object),
-                               np.asarray(groups, dtype=object)])  # fmt: skip
-    fold = fold_of(everyone)
-    case_fold, query_fold = fold[: len(cases)], fold[len(cases) :]
-    if len(fold) == 0 or int(fold.max()) < 1:
+    folds = _case_and_query_folds(case_groups, groups)
+    if folds is None:
         return None
+    case_fold, query_fold = folds
     with warnings.catch_warnings():  # a feature no case has: NaN centre, no part in distances
         warnings.simplefilter("ignore", RuntimeWarning)
         centre = np.nan_to_num(np.nanmean(cases, axis=0))
@@ -557,12 +567,10 @@ def fit_activities(
     other folds (:func:`fold_of`, as :func:`fit_ranges` holds them out; their centres and
     units both from those cases, so a held-out clip is judged as a new person's will be).
     None when the cases form fewer than two groups."""
-    everyone = np.concatenate([np.asarray(case_groups, dtype=object),
-                               np.asarray(groups, dtype=object)])  # fmt: skip
-    fold = fold_of(everyone)
-    case_fold, query_fold = fold[: len(cases)], fold[len(cases) :]
-    if len(fold) == 0 or int(fold.max()) < 1:
+    folds = _case_and_query_folds(case_groups, groups)
+    if folds is None:
         return None
+    case_fold, query_fold = folds
     cases = np.asarray(cases, dtype=np.float64)
     labels = np.array([str(v) for v in case_labels], dtype=object)
     held = np.full(len(queries), np.inf)
