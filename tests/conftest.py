@@ -8,6 +8,14 @@ from pathlib import Path
 
 import pytest
 
+# The suite runs one process per core (pytest-xdist), and the commands and workers the tests
+# start are more processes. A BLAS or OpenMP pool of every core in each of them oversubscribes
+# the machine: OpenBLAS's threads spin while they wait, and tests/test_similarity_fast.py took
+# 62 s on 2 workers against 18 s with one thread each (2 cores). Set before any worker starts,
+# so every process the suite starts inherits it.
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
 ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
 
