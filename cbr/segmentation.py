@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from features.body import torso_share
-from features.derived import forget, stretch
+from features.derived import forget, movement_signals_of, stretch
 from features.errors import DataError
 from features.fluents import DEFAULT_TABLE, history_frames
 from features.poses import PoseSequence
@@ -59,14 +59,12 @@ from features.repetitions import (
     Repetition,
     RepetitionCount,
     count_in_signals,
-    movement_signals,
 )
 
 from . import long_clip
 from .explain import Explanation
 from .problem import FeatureConfig, warm
-from .retrieve import Retrieval
-from .reuse import reuse
+from .reuse import vote
 from .unknown import (
     Familiarity,
     HeldOut,
@@ -233,12 +231,14 @@ def _periods(count: RepetitionCount) -> list[tuple[int, int]]:
     return [(a.start_frame, b.end_frame) for a, b in zip(reps[:-1], reps[1:], strict=True)]
 
 
-def _nearest_vote(retrieval: Retrieval, classes: np.ndarray, k: int) -> np.ndarray:
-    """Vote shares of the ``k`` nearest retrieved cases (distance-weighted), ``(n_classes,)``."""
-    top = Retrieval(
-        retrieval.indices[:k], retrieval.distances[:k], retrieval.labels[:k], retrieval.case_ids[:k]
-    )
-    return reuse(top, classes, "distance").proba
+def _nearest_votes(solved: Sequence[Any], classes: np.ndarray, k: int) -> np.ndarray:
+    """Vote shares of each solved window's ``k`` nearest retrieved cases (distance-weighted),
+    ``(windows, n_classes)``."""
+    code = {str(c): i for i, c in enumerate(classes)}
+    distances = np.stack([s.retrieval.distances[:k] for s in solved])
+    codes = np.array([[code[str(lab)] for lab in s.retrieval.labels[:k]] for s in solved],
+                     dtype=np.int64).reshape(distances.shape)  # fmt: skip
+    return vote(distances, codes, len(classes), "distance")
 
 
 def activity_distances(clf: Any, solved: Any, codes: np.ndarray | None = None) -> np.ndarray:
@@ -276,12 +276,12 @@ def _solve_windows(
     batch: list[tuple[int, PoseSequence, tuple[int, int] | None]] = []
 
     def flush() -> None:
-        for (i, _, piece), solved in zip(batch, clf.solve([b[1] for b in batch], flag=False),
-                                         strict=True):  # fmt: skip
+        solved = clf.solve([b[1] for b in batch], flag=False)
+        for (i, _, piece), one, votes in zip(batch, solved, _nearest_votes(solved, classes, k),
+                                             strict=True):  # fmt: skip
             w = windows[i]
-            vote = _nearest_vote(solved.retrieval, classes, k)
-            nearest = activity_distances(clf, solved, codes)
-            found.append((i, _Solved(w.start, w.stop, vote, nearest, None if chunk else solved,
+            nearest = activity_distances(clf, one, codes)
+            found.append((i, _Solved(w.start, w.stop, votes, nearest, None if chunk else one,
                                      w.repetition, piece)))  # fmt: skip
         batch.clear()
 
@@ -665,7 +665,7 @@ def solve_recording(
     recording shorter than one window or without a person."""
     rec = recording.to_canonical()
     chunk = long_clip.chunk_for(rec, chunk_frames)
-    sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals(rec)
+    sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals_of(rec)
     windows = windows_of(sig, rec.n_frames, rec.fps, rec.source)
     config = clf.feature_config_
     if not chunk:

@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from .fluents import FluentResult
     from .poses import PoseSequence
     from .qmp import QMPFeatures
+    from .repetitions import MovementSignals
     from .signals import StateSignals
 
 T = TypeVar("T")
@@ -81,6 +82,19 @@ def qmp_of(seq: PoseSequence) -> QMPFeatures:
     return derived(seq, "qmp", compute)
 
 
+def movement_signals_of(seq: PoseSequence) -> MovementSignals:
+    """:func:`features.repetitions.movement_signals` of the canonical clip (the joint angles
+    repetitions are counted on), cached: segmenting a recording counts the periods in many
+    spans of them and the repetitions of every segment."""
+
+    def compute(s: PoseSequence) -> MovementSignals:
+        from .repetitions import movement_signals
+
+        return movement_signals(s.to_canonical())
+
+    return derived(seq, "movement_signals", compute)
+
+
 def _cut_rows(value: Any, start: int, stop: int) -> Any:
     """The frames ``start:stop`` of a per-frame result (fluents, state signals, an array)."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
@@ -94,13 +108,14 @@ def _cut_rows(value: Any, start: int, stop: int) -> Any:
 
 
 # results with one row per frame: a stretch's rows are the clip's rows
-_PER_FRAME = ("fluents", "signals", "arm_planes", "frame_rows")
+_PER_FRAME = ("fluents", "signals", "arm_planes", "frame_rows", "torso_rows")
 
 
 def stretch(seq: PoseSequence, start: int, stop: int) -> PoseSequence:
     """Frames ``start`` (inclusive) to ``stop`` (exclusive) of ``seq`` as a new clip that shares
-    the per-frame results already computed for ``seq``: its fluents, state signals, arm planes
-    and the rows its body frame is set from, and those of its mirror image. Motion states near
+    the per-frame results already computed for ``seq``: its fluents, state signals, arm planes,
+    the rows its body frame is set from and which frames show the torso, and those of its
+    mirror image. Motion states near
     the cut then keep the frames around it as context, as they had in the whole clip. Per-clip
     results (body-frame positions, which side moves more, QMPs) are computed for the stretch
     itself."""

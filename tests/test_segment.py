@@ -137,6 +137,24 @@ def test_a_fragment_across_a_change_counts_no_repetition_twice(
     assert counts[0] == 2, counts
 
 
+def test_the_counted_angles_of_a_recording_are_computed_once(
+    recordings: dict[str, PoseSequence],
+) -> None:
+    """Segmenting reads the joint angles repetitions are counted on from the recording's
+    cache (computed with its other features, timed apart by benchmarks.segment): the same
+    numbers as computed afresh, and the same object when asked again."""
+    from features.derived import movement_signals_of
+
+    rec = recordings["13_30"]
+    seq = PoseSequence(rec.positions[:600], rec.joint_names, 120.0, source="cut").to_canonical()
+    first = movement_signals_of(seq)
+    assert movement_signals_of(seq) is first
+    fresh = movement_signals(seq)
+    np.testing.assert_array_equal(first.values, fresh.values)
+    assert first.names == fresh.names
+    assert (first.fps, first.step) == (30.0, 4)  # 120 fps read at 30 Hz: every 4th frame
+
+
 def _crossing_windows() -> list[_Solved]:
     """10 fps (one frame per block), windows of 20 frames starting every 5 (0, 5, ..., 40);
     those with at least half their frames before frame 40 (starts up to 30) lie at distance 1
