@@ -30,6 +30,7 @@ free-form curve).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -178,11 +179,23 @@ class ConfidenceCalibration:
         """The score of the ``answer`` (a class code) of one query whose nearest cases are
         ``distances`` ``(K,)`` (nearest first) of class codes ``codes`` ``(K,)``: its soft
         vote, or its vote ``share`` when the calibration maps shares."""
+        return float(self.scores(distances[None], codes[None], n_classes, [answer], [share])[0])
+
+    def scores(
+        self,
+        distances: np.ndarray,
+        codes: np.ndarray,
+        n_classes: int,
+        answers: Sequence[int],
+        shares: Sequence[float],
+    ) -> np.ndarray:
+        """:meth:`score` of ``q`` queries at once: ``distances`` and ``codes`` ``(q, K)``,
+        ``answers`` and ``shares`` ``(q,)``; ``(q,)``."""
         if self.neighbours == 0:
-            return float(share)
+            return np.asarray(shares, dtype=np.float64)
         n = self.neighbours
-        p = soft_vote(distances[None, :n], codes[None, :n], n_classes, self.temperature)
-        return float(p[0, answer])
+        p = soft_vote(distances[:, :n], codes[:, :n], n_classes, self.temperature)
+        return np.asarray(p[np.arange(len(p)), np.asarray(answers, dtype=np.int64)])
 
     def to_dict(self) -> dict[str, Any]:
         return {"x": list(self.x), "y": list(self.y), "basis": self.basis, "n": self.n,

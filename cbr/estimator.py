@@ -93,7 +93,7 @@ from .problem import (
 )
 from .retrieve import Retrieval, retrieve, retrieve_many
 from .reuse import WEIGHTINGS as VOTE_WEIGHTINGS
-from .reuse import Solution, reuse
+from .reuse import Solution, reuse, solutions
 from .similarity import SimilarityMeasure, get_measure
 from .weights import MIRROR_FLAG, WEIGHTINGS
 
@@ -810,14 +810,18 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         k = int(self.k)
         wide = max(k, self.confidence_.neighbours)
         code = {str(c): i for i, c in enumerate(labels)}
-        for seq, p, w in zip(seqs, problems, retrieve_many(self.case_base_, problems, wide),
-                             strict=True):  # fmt: skip
+        retrieved = retrieve_many(self.case_base_, problems, wide)
+        # every clip's vote and confidence score in one pass over the rows (row by row alike)
+        distances = np.stack([w.distances for w in retrieved])
+        codes = np.array([[code[str(lab)] for lab in w.labels] for w in retrieved],
+                         dtype=np.int64).reshape(distances.shape)  # fmt: skip
+        voted = solutions(distances[:, :k], codes[:, :k], labels, self.weights)  # type: ignore[arg-type]
+        scores = self.confidence_.scores(
+            distances, codes, len(labels), [code[s.label] for s in voted],
+            [s.vote_share for s in voted],
+        )  # fmt: skip
+        for seq, p, w, s, score in zip(seqs, problems, retrieved, voted, scores, strict=True):
             r = Retrieval(w.indices[:k], w.distances[:k], w.labels[:k], w.case_ids[:k])
-            s = reuse(r, labels, self.weights)  # type: ignore[arg-type]
-            codes = np.array([code[str(lab)] for lab in w.labels], dtype=np.int64)
-            score = self.confidence_.score(
-                w.distances, codes, len(labels), code[s.label], s.vote_share
-            )
             s = dataclasses.replace(s, confidence=self.confidence_(score))
             nearest = float(r.distances[0]) if len(r.distances) else float("inf")
             seen = self._description(seq, p) if flag else None

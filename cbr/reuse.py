@@ -73,6 +73,16 @@ def reuse(retrieval: Retrieval, classes: np.ndarray, weights: Weights = "distanc
     """The solution voted by the retrieved cases over ``classes`` (labels as str, sorted)."""
     where = {str(c): i for i, c in enumerate(classes)}
     codes = np.array([where[str(lab)] for lab in retrieval.labels], dtype=np.int64)
-    proba = vote(retrieval.distances[None, :], codes[None, :], len(classes), weights)[0]
-    best = int(decide(proba[None])[0])
-    return Solution(str(classes[best]), float(proba[best]), proba, float(proba[best]))
+    return solutions(retrieval.distances[None, :], codes[None, :], classes, weights)[0]
+
+
+def solutions(
+    distances: np.ndarray, codes: np.ndarray, classes: np.ndarray, weights: Weights = "distance"
+) -> list[Solution]:
+    """:func:`reuse` of ``q`` queries at once, their retrieved cases given as ``distances``
+    and class ``codes`` ``(q, k)`` (of ``classes``): one vote over every row."""
+    proba = vote(distances, codes, len(classes), weights)
+    return [
+        Solution(str(classes[b]), float(p[b]), p, float(p[b]))
+        for p, b in zip(proba, decide(proba).tolist(), strict=True)
+    ]

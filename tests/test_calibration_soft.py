@@ -132,3 +132,18 @@ def test_a_damaged_soft_vote_is_refused(damage: dict[str, float]) -> None:
     stored = {**ConfidenceCalibration(cal.x, cal.y, "x", 2, 0.5, 0.5, 10).to_dict(), **damage}
     with pytest.raises(ValueError, match="positive temperature and neighbourhood"):
         ConfidenceCalibration.from_dict(stored)
+
+
+def test_scores_of_many_queries_are_each_querys_soft_vote_for_its_answer() -> None:
+    # by hand, T = 1, 2 neighbours read: query 0 d/d1 = 1, 2 (classes 0, 1): weights e^-1,
+    # e^-4; query 1 d/d1 = 1, 1 (classes 1, 1): all of it for class 1
+    cal = ConfidenceCalibration((), (), "subject", 0, 0.0, 1.0, 2)
+    d = np.array([[1.0, 2.0, 9.0], [3.0, 3.0, 9.0]])
+    c = np.array([[0, 1, 0], [1, 1, 0]])
+    got = cal.scores(d, c, 2, [1, 1], [0.5, 1.0])
+    total = math.exp(-1) + math.exp(-4)
+    assert got == pytest.approx([math.exp(-4) / total, 1.0])
+    assert cal.score(d[0], c[0], 2, 1, 0.5) == pytest.approx(math.exp(-4) / total)
+    # a calibration of the vote share maps the shares given
+    shares = ConfidenceCalibration((), (), "subject", 0, 0.0, 1.0, 0)
+    assert shares.scores(d, c, 2, [1, 1], [0.25, 0.75]) == pytest.approx([0.25, 0.75])

@@ -57,3 +57,18 @@ def test_reuse_inner_cross_validation_and_editors_break_a_tie_alike() -> None:
     by_inner = knn_predict(cases, np.array([[0.0]]), 2)[0]
     by_editor = _knn_vote(np.array([[1.0, 1.0]]), labels, np.array(["a", "b"]), 2, "distance")[0]
     assert by_reuse == by_inner == by_editor == "a"
+
+
+def test_solutions_of_many_queries_are_each_querys_own_vote_by_hand() -> None:
+    # query 0: weights 1, 1/2, 1/4 (a, b, b) -> a 4/7; query 1: an exact match of b alone
+    # votes; query 2: no case retrieved, equal shares, the tie to the first class
+    from cbr.reuse import solutions
+
+    classes = np.array(["a", "b"], dtype=object)
+    d = np.array([[1.0, 2.0, 4.0], [0.0, 0.5, 1.0], [np.inf, np.inf, np.inf]])
+    c = np.array([[0, 1, 1], [1, 0, 0], [0, 0, 0]])
+    got = solutions(d, c, classes)
+    assert [s.label for s in got] == ["a", "b", "a"]
+    assert [s.confidence for s in got] == pytest.approx([4 / 7, 1.0, 0.5])
+    assert [s.vote_share for s in got] == pytest.approx([4 / 7, 1.0, 0.5])
+    np.testing.assert_allclose(got[0].proba, [4 / 7, 3 / 7])
