@@ -38,6 +38,7 @@ from features.body import (
     moves_left_more,
     position_names,
     position_word,
+    torso_rows,
 )
 from features.derived import fluents_of, qmp_of, signals_of
 from features.errors import ConfigError, DataError
@@ -211,6 +212,7 @@ def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> No
             signals_of(s)
             arm_planes(s)
             frame_rows(s)
+            torso_rows(s)
             body_positions(s)
 
 
@@ -374,14 +376,17 @@ def resample(x: np.ndarray, length: int) -> np.ndarray:
     return out
 
 
+@lru_cache(maxsize=256)
 def resample_points(frames: int, length: int) -> tuple[np.ndarray, np.ndarray]:
     """Where :func:`resample` reads a clip of ``frames`` (at least 2) frames: output row ``r``
     is ``x[i[r]] * (1 - w[r]) + x[i[r] + 1] * w[r]``; ``i`` ``(length,)``, ``w``
-    ``(length, 1)``."""
+    ``(length, 1)``. Kept per size (read-only): a recording's windows share a few sizes."""
     src = np.linspace(0.0, 1.0, frames)
     dst = np.linspace(0.0, 1.0, length)
     i = np.clip(np.searchsorted(src, dst, side="right") - 1, 0, frames - 2)
     w = ((dst - src[i]) / (src[i + 1] - src[i]))[:, None]
+    i.setflags(write=False)
+    w.setflags(write=False)
     return i, w
 
 

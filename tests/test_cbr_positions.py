@@ -234,3 +234,43 @@ def test_frame_means_and_median_are_numpys_nan_skipping_ones(n: int) -> None:
     x[-1] = np.nan
     assert _nanmedian(x) == np.nanmedian(x)  # n numbers: odd and even counts
     assert np.isnan(_nanmedian(np.full(3, np.nan)))
+
+
+def test_the_frames_cross_product_is_numpys() -> None:
+    from features.body import _cross
+
+    rng = np.random.default_rng(4)
+    for a, b in rng.normal(size=(20, 2, 3)):
+        np.testing.assert_array_equal(_cross(a, b), np.cross(a, b))
+    # by hand: left x up = forward for a person facing +z (x left, y up)
+    np.testing.assert_array_equal(_cross(np.array([1.0, 0, 0]), np.array([0, 1.0, 0])), [0, 0, 1])
+
+
+def test_a_stretch_counts_the_torso_in_its_own_frames() -> None:
+    # frames 0-3 standing, 4-7 without hips: the whole clip shows the torso in half its
+    # frames; a stretch of frames 2-6 in 2 of 4, as a clip of those frames alone does
+    from features.body import torso_rows, torso_share
+    from features.derived import stretch
+
+    no_hips = {k: (np.full(3, np.nan) if k.endswith("hip") else v) for k, v in standing().items()}
+    frames = [standing()] * 4 + [no_hips] * 4
+    whole = to_sequence(*frames)
+    assert torso_share(whole) == 0.5
+    np.testing.assert_array_equal(torso_rows(whole), [True] * 4 + [False] * 4)
+    part = stretch(whole, 2, 6)  # shares the whole clip's rows
+    assert torso_share(part) == 0.5 == torso_share(to_sequence(*frames[2:6]))
+
+
+def test_resampling_points_are_kept_read_only() -> None:
+    from cbr.problem import resample, resample_points
+
+    # times 0, 0.5, 1 over frames at 0, 0.25, ..., 1: frames 0 and 2 exactly, the last as
+    # all of frame 4 after frame 3 (the last pair)
+    i, w = resample_points(5, 3)
+    np.testing.assert_array_equal(i, [0, 2, 3])
+    np.testing.assert_allclose(w[:, 0], [0.0, 0.0, 1.0])
+    assert resample_points(5, 3)[0] is i  # kept, not computed again
+    with pytest.raises(ValueError):
+        i[0] = 1  # so no caller can change what the next one reads
+    x = np.arange(10.0).reshape(5, 2)
+    np.testing.assert_allclose(resample(x, 3), [[0, 1], [4, 5], [8, 9]])
