@@ -261,6 +261,8 @@ class _Reading:
     readable: np.ndarray  # (m,) bool: in degrees, torso lengths, a share of the time, or a QMP
     angles: np.ndarray  # (m,) bool: joint angles (degrees)
     states: np.ndarray  # (m,) bool: the share of the time a fluent state holds
+    state_means: np.ndarray  # the columns of fluent states' clip means (presence lists)
+    seen: np.ndarray  # (m,) the share of all cases at or above SEEN_FRACTION
 
     def prefer_angles(self, score: np.ndarray) -> np.ndarray:
         """``score`` with joint angles ahead of near-equal others: people check an angle most
@@ -328,9 +330,17 @@ def read(cb: CaseBase, problem: Problem) -> _Reading:
              for j, n in enumerate(view.names)]
         )  # fmt: skip
         cb.cache["states"] = np.array([u == "share" for u in units])
+        cb.cache["state_means"] = np.array(
+            [j for j, nm in enumerate(view.names)
+             if nm.endswith("@mean") and not nm.startswith((ANGLE_PREFIX, POSITION_PREFIX))],
+            dtype=np.intp,
+        )  # fmt: skip
+        # of the whole case base, the same for every clip: read once, not per explanation
+        cb.cache["seen"] = (view.of(cb.problems) >= SEEN_FRACTION).mean(axis=0)
     return _Reading(
         cb, view, profiles_of(cb), x, cb.cache["importance"], bool(problem.mirrored),
-        cb.cache["readable"], cb.cache["angles"], cb.cache["states"],
+        cb.cache["readable"], cb.cache["angles"], cb.cache["states"], cb.cache["state_means"],
+        cb.cache["seen"],
     )  # fmt: skip
 
 
@@ -474,18 +484,13 @@ def presence_claims(
     clip holds at least :data:`SEEN_FRACTION` of the time against the similar cases' mean.
     A state is in one list only, and a difference within the spread of the state among cases
     of one label is no presence against absence."""
-    cols = [
-        j
-        for j, nm in enumerate(r.view.names)
-        if nm.endswith("@mean") and not nm.startswith((ANGLE_PREFIX, POSITION_PREFIX))
-    ]
-    if not cols:
+    cols_a = r.state_means
+    if not len(cols_a):
         return [], [], []
-    cols_a = np.array(cols)
     cases = r.view.of(r.cb.problems[similar])[:, cols_a].mean(axis=0)
     here = r.x[cols_a]
     spread = r.prof.within[cols_a]
-    distinct = 1.0 - (r.view.of(r.cb.problems)[:, cols_a] >= SEEN_FRACTION).mean(axis=0)
+    distinct = 1.0 - r.seen[cols_a]
     apart = np.abs(here - cases) > spread
     q_seen, c_seen = here >= SEEN_FRACTION, cases >= SEEN_FRACTION
     lists: list[list[Claim]] = []

@@ -219,3 +219,26 @@ def test_the_checker_finds_planted_contradictions(squats: CaseBaseClassifier) ->
 def test_exclusive_states_follow_the_fluent_table(a: str, b: str, expected: bool) -> None:
     assert exclusive(a, b) is expected
     assert exclusive(b + "@mean", a + "@mean") is expected
+
+
+def test_how_many_cases_hold_a_state_is_read_once_and_follows_the_case_base() -> None:
+    """The share of the case base's cases that hold each state for at least SEEN_FRACTION of
+    the time (how distinctive a shared state is) is counted once per case base, not per
+    explanation, and counted again when the cases change."""
+    from cbr.casebase import CaseBase
+    from cbr.explain import SEEN_FRACTION, read
+    from cbr.problem import FeatureConfig, Problem
+    from cbr.similarity import Euclidean
+
+    # two states' clip means (the rest of the summary ignored): 0.1, 0.2, 0.6, 0.9 of the
+    # time for the first, 0.0, 0.0, 0.0, 0.5 for the second: held by 3/4 and 1/4 of the cases
+    names = ("a@mean", "b@mean")
+    problems = np.array([[0.1, 0.0], [0.2, 0.0], [0.6, 0.0], [0.9, 0.5]])
+    labels = np.array(["x", "x", "y", "y"], dtype=object)
+    cb = CaseBase(FeatureConfig(), Euclidean(exact=True), problems, labels, names, ("a", "b"))
+    query = Problem(np.array([0.5, 0.5]), names, ("a", "b"), "fluents")
+    assert SEEN_FRACTION == 0.15
+    np.testing.assert_array_equal(read(cb, query).seen, [0.75, 0.25])
+    assert read(cb, query).seen is read(cb, query).seen  # kept with the case base
+    cb.set_problem(0, np.array([0.1, 0.3]))  # the first case now holds b for 30 % of the time
+    np.testing.assert_array_equal(read(cb, query).seen, [0.75, 0.5])
