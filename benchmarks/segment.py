@@ -27,9 +27,11 @@ Measured, per test recording and overall:
   the videos through BlazePose): mean absolute error and off-by-one accuracy;
 - speed: segmentation after feature extraction (the recording's fluents, state signals and
   the joint angles repetitions are counted on computed first and timed apart), in times real
-  time on one core, median of repeats, by the process's CPU time (what one core spends,
-  whatever else the shared machine runs) and by the wall clock; the baseline's
-  classification time likewise (its angles are computed beforehand).
+  time on one core, by the process's CPU time (what one core spends, whatever else the shared
+  machine runs) and by the wall clock; the baseline's classification time likewise (its
+  angles are computed beforehand). The median of ``--repeats`` rounds, each round timing every
+  recording's segmentation and the baseline once in turn (a slow spell of a shared machine
+  falls on all alike).
 
 Baseline: tslearn's DTW 1-NN on 2-s windows of the eight limb joint angles (elbows, knees,
 armpits, hips) at 30 Hz; training windows every 0.5 s of the training recordings labelled by
@@ -123,16 +125,22 @@ def fit(clips: list[Any], cases: str = CASES[0]) -> Any:
     return CaseBaseClassifier(**params).fit([c.seq for c in clips], [c.label for c in clips])
 
 
-def _median_time(fn: Any, repeats: int) -> tuple[float, float]:
-    """Median wall-clock and CPU seconds of ``fn()`` over ``repeats`` calls. The CPU time of
-    this one-threaded process is what one core spends, whatever else the machine runs."""
-    wall, cpu = [], []
+def _timed_in_rounds(
+    calls: dict[tuple[str, str], Callable[[], Any]], repeats: int
+) -> dict[tuple[str, str], tuple[float, float]]:
+    """Median wall-clock and CPU seconds of every call over ``repeats`` rounds, each round
+    calling each once in turn: a spell of a shared machine running slow then falls on every
+    call alike, not on the few repeats of one. The CPU time of this one-threaded process is
+    what one core spends, whatever else the machine runs."""
+    wall: dict[tuple[str, str], list[float]] = {key: [] for key in calls}
+    cpu: dict[tuple[str, str], list[float]] = {key: [] for key in calls}
     for _ in range(repeats):
-        t0, c0 = time.perf_counter(), time.process_time()
-        fn()
-        wall.append(time.perf_counter() - t0)
-        cpu.append(time.process_time() - c0)
-    return statistics.median(wall), statistics.median(cpu)
+        for key, fn in calls.items():
+            t0, c0 = time.perf_counter(), time.process_time()
+            fn()
+            wall[key].append(time.perf_counter() - t0)
+            cpu[key].append(time.process_time() - c0)
+    return {key: (statistics.median(wall[key]), statistics.median(cpu[key])) for key in calls}
 
 
 JUDGES = (
@@ -164,7 +172,11 @@ def judge_named(clf: Any, name: str) -> Any:
     return judge_of(clf, name)
 
 
-def bench_ours(recs: dict[str, Recording], test: str, repeats: int, cases: str) -> dict[str, Any]:
+def bench_ours(
+    recs: dict[str, Recording], test: str, cases: str
+) -> tuple[dict[str, Any], Callable[[], Any]]:
+    """The figures of segmenting ``test`` with a case base of the other recordings, by every
+    judge, and the call to time (the default judge's segmentation)."""
     from cbr.problem import warm
     from cbr.segmentation import segment
     from features.derived import movement_signals_of
@@ -195,15 +207,8 @@ def bench_ours(recs: dict[str, Recording], test: str, repeats: int, cases: str) 
             "windows": result.windows,
         }
     judge = judge_named(clf, JUDGES[0])  # calibrated once per case base, not per recording
-    seconds, cpu = _median_time(lambda: segment(clf, rec.seq, judge), repeats)
-    out.update(
-        blocks=len(rec.blocks),
-        segmentation_s=seconds,
-        segmentation_cpu_s=cpu,
-        x_real_time=rec.seq.duration_s / seconds,
-        x_real_time_cpu=rec.seq.duration_s / cpu,
-    )
-    return out
+    out["blocks"] = len(rec.blocks)
+    return out, lambda: segment(clf, rec.seq, judge)
 
 
 def bench_unknown(recs: dict[str, Recording], test: str, cases: str) -> dict[str, dict[str, float]]:
@@ -242,7 +247,8 @@ def _windows(angles: np.ndarray, centres: np.ndarray) -> np.ndarray:
     return np.stack([angles[s : s + width] for s in starts])
 
 
-def bench_dtw(recs: dict[str, Recording], test: str, repeats: int) -> dict[str, Any]:
+def bench_dtw(recs: dict[str, Recording], test: str) -> tuple[dict[str, Any], Callable[[], Any]]:
+    """The baseline's block accuracy on ``test`` and the call to time (its classification)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # tslearn warns that optional h5py is missing
         from tslearn.metrics import cdist_dtw
@@ -268,15 +274,10 @@ def bench_dtw(recs: dict[str, Recording], test: str, repeats: int) -> dict[str, 
         return np.asarray(y_train[np.argmin(d, axis=1)])
 
     pred = classify()
-    seconds, cpu = _median_time(classify, repeats)
     return {
         "training_windows": len(X_train),
         "block_accuracy": float(np.mean(pred == rec.blocks)),
-        "classification_s": seconds,
-        "classification_cpu_s": cpu,
-        "x_real_time": rec.seq.duration_s / seconds,
-        "x_real_time_cpu": rec.seq.duration_s / cpu,
-    }
+    }, classify
 
 
 def bench_repetitions(
@@ -330,7 +331,9 @@ def _count_scores(rows: list[dict[str, Any]], key: str) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.segment", description=__doc__)
-    parser.add_argument("--repeats", type=int, default=3, help="timing repeats (median)")
+    parser.add_argument(
+        "--repeats", type=int, default=9, help="timing rounds (median; each times every call)"
+    )
     parser.add_argument("--no-videos", action="store_true", help="skip the videos (BlazePose)")
     parser.add_argument(
         "--cases", choices=CASES, default=CASES[0], help="how the training stretches are cut"
@@ -346,9 +349,10 @@ def main(argv: list[str] | None = None) -> int:
     load_at_start = [round(x, 2) for x in os.getloadavg()]
     recs = load_recordings()
     folds: dict[str, Any] = {}
+    calls: dict[tuple[str, str], Callable[[], Any]] = {}
     for test in RECORDINGS:
-        ours = bench_ours(recs, test, args.repeats, args.cases)
-        dtw = bench_dtw(recs, test, args.repeats)
+        ours, calls[(test, "ours")] = bench_ours(recs, test, args.cases)
+        dtw, calls[(test, "dtw")] = bench_dtw(recs, test)
         unknown = bench_unknown(recs, test, args.cases)
         folds[test] = {"ours": ours, "dtw": dtw, "unknown_share_when_left_out": unknown}
         for name in JUDGES:
@@ -360,6 +364,14 @@ def main(argv: list[str] | None = None) -> int:
                 + ", ".join(f"{k} {v:.0%}" for k, v in unknown[name].items()),
                 flush=True,
             )
+    for (test, who), (seconds, cpu) in _timed_in_rounds(calls, args.repeats).items():
+        duration = recs[test].seq.duration_s
+        folds[test][who].update({
+            "segmentation_s" if who == "ours" else "classification_s": seconds,
+            "segmentation_cpu_s" if who == "ours" else "classification_cpu_s": cpu,
+            "x_real_time": duration / seconds,
+            "x_real_time_cpu": duration / cpu,
+        })  # fmt: skip
     reps = bench_repetitions(not args.no_videos)
     summary = _summary(folds, recs)
     _print_table(summary, reps, args.cases)
