@@ -484,13 +484,13 @@ def presence_claims(
     clip holds at least :data:`SEEN_FRACTION` of the time against the similar cases' mean.
     A state is in one list only, and a difference within the spread of the state among cases
     of one label is no presence against absence."""
-    cols_a = r.state_means
-    if not len(cols_a):
+    cols = r.state_means
+    if not len(cols):
         return [], [], []
-    cases = r.view.of(r.cb.problems[similar])[:, cols_a].mean(axis=0)
-    here = r.x[cols_a]
-    spread = r.prof.within[cols_a]
-    distinct = 1.0 - r.seen[cols_a]
+    cases = r.view.of(r.cb.problems[similar])[:, cols].mean(axis=0)
+    here = r.x[cols]
+    spread = r.prof.within[cols]
+    distinct = 1.0 - r.seen[cols]
     apart = np.abs(here - cases) > spread
     q_seen, c_seen = here >= SEEN_FRACTION, cases >= SEEN_FRACTION
     lists: list[list[Claim]] = []
@@ -505,7 +505,7 @@ def presence_claims(
             [
                 r.claim(
                     "",
-                    int(cols_a[i]),
+                    int(cols[i]),
                     there=float(cases[i]),
                     label=label,
                     steady=bool(here[i] >= STEADY_FRACTION),

@@ -115,10 +115,9 @@ def stretch(seq: PoseSequence, start: int, stop: int) -> PoseSequence:
     """Frames ``start`` (inclusive) to ``stop`` (exclusive) of ``seq`` as a new clip that shares
     the per-frame results already computed for ``seq``: its fluents, state signals, arm planes,
     the rows its body frame is set from and which frames show the torso, and those of its
-    mirror image. Motion states near
-    the cut then keep the frames around it as context, as they had in the whole clip. Per-clip
-    results (body-frame positions, which side moves more, QMPs) are computed for the stretch
-    itself."""
+    mirror image. Motion states near the cut then keep the frames around it as context, as
+    they had in the whole clip. Per-clip results (body-frame positions, which side moves
+    more, QMPs) are computed for the stretch itself."""
     part = seq.slice_frames(start, stop)
     for kind in _PER_FRAME:
         cache = _CACHES.get(kind)
