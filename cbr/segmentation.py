@@ -13,10 +13,15 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    found in the spans of :data:`PERIOD_SPAN_S` seconds around
    (:func:`features.repetitions.count_in_signals`: a repetition, or two neighbouring ones of
    a movement that alternates sides);
-3. every window is a clip to solve and votes for the activity of its nearest case;
-4. each :data:`BLOCK_S` block gets the mean vote of the windows over it, and the labels are
-   decoded over all blocks at once (Viterbi): a change of activity must be supported by at
-   least :data:`MIN_SEGMENT_S` of evidence at odds of :data:`SWITCH_ODDS` to 1;
+3. every window is a clip to solve and votes for the activity of its nearest case, unless
+   it is like none (the judge of step 6 calls it unlike every activity: across a change of
+   movement, or of one the case base lacks) or it is a repetition window whose period
+   disagrees with its neighbours' (:func:`period_outliers`: found across a change, or a
+   multiple of the period);
+4. each :data:`BLOCK_S` block gets the mean vote of the voting windows over it, and the
+   labels are decoded over all blocks at once (Viterbi): a change of activity must be
+   supported by at least :data:`MIN_SEGMENT_S` of evidence at odds of :data:`SWITCH_ODDS` to
+   1 (:func:`decode_activities`);
 5. each change of activity is then moved to where the two activities' distances cross
    (:func:`place_changes`): the windows around it are split at the change, and the frames of
    each before it are charged the log distance to the activity before, those after it the
@@ -24,12 +29,12 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    which activities follow one another; a window's distances say how much of it is which
    (a vote is all or nothing: a window over a change votes for one side whole);
 6. stretches unlike every activity of the case base become unknown (:func:`unknown_blocks`):
-   every window is judged (:mod:`cbr.unknown`; by default the margin between its two nearest
-   activities, calibrated on the case base), and known/unknown is decoded from the windows
-   that lie within one decoded activity (a window across a change of activity is like
-   neither side, whether both are known or not), every change of the label seen costing
-   the same (:func:`decode_unknown`: no sliver of an activity left between an unknown
-   stretch and the next change);
+   every window but the period outliers is judged (:mod:`cbr.unknown`; by default the margin
+   between its two nearest activities, calibrated on the case base), and known/unknown is
+   decoded from the windows that lie within one decoded activity (a window across a change
+   of activity is like neither side, whether both are known or not), every change of the
+   label seen costing the same (:func:`decode_unknown`: no sliver of an activity left
+   between an unknown stretch and the next change);
 7. each segment is counted (:func:`features.repetitions.count_repetitions`), each
    repetition in the one segment that holds where its movement turns (:func:`keep_whole`),
    and explained by its most confident window.
@@ -89,6 +94,11 @@ DEFAULT_WINDOW_S = WINDOW_S
 DEFAULT_WINDOW_S (as ``train --split windows`` cuts them)."""
 PERIOD_SPAN_S = 6.0
 """The local period is read from this many seconds around a window (periods up to 60 %)."""
+PERIOD_OUTLIER_Z = 3.0
+"""A repetition window whose log length lies more than this many robust standard deviations
+(1.4826 median absolute deviations of such differences over the recording) from the median
+of the repetition windows it overlaps is no clean period of one movement (the conventional
+cut for an outlier): it does not vote (:func:`period_outliers`)."""
 MIN_SEGMENT_S = 1.0
 SWITCH_ODDS = 2.0
 """A change of activity needs MIN_SEGMENT_S of blocks voting SWITCH_ODDS to 1 for it."""
@@ -335,9 +345,48 @@ def _solved(clf: Any, rec: PoseSequence, w: _Solved) -> Any:
     return clf.solve([stretch(piece, w.start - lo, w.stop - lo)], flag=False)[0]
 
 
-def block_votes(solved: Sequence[_Solved], n_frames: int, fps: float) -> np.ndarray:
-    """``(n_blocks, n_classes)``: the mean vote of the windows over each block's centre."""
+def period_outliers(spans: np.ndarray, repetition: np.ndarray, step: int) -> np.ndarray:
+    """``(n_windows,)`` bool: the repetition windows (``repetition``) whose period disagrees
+    with their neighbours': the log length of window ``spans[i]`` (frames [start, stop))
+    differs from the median log length of the other repetition windows it overlaps by more
+    than :data:`PERIOD_OUTLIER_Z` robust standard deviations of those differences over the
+    recording (their scale, not a constant: a recording of steady repetitions is held to
+    steady periods, one of irregular ones is not), the scale at least one sample of the
+    counter's signals (``step`` frames) over the median period.
+
+    A period found in a span across a change of movement, or read as a multiple of the
+    true one, is half one movement and half another, or two repetitions: like neither
+    side, its vote for one activity or for unknown is noise. Nothing is flagged without
+    three repetition windows that overlap others."""
+    out = np.zeros(len(spans), dtype=bool)
+    idx = np.flatnonzero(repetition)
+    if len(idx) < 3:
+        return out
+    start, stop = spans[idx, 0].astype(np.float64), spans[idx, 1].astype(np.float64)
+    length = np.log(np.maximum(stop - start, 1.0))
+    diff = np.full(len(idx), np.nan)
+    for j in range(len(idx)):  # over repetition windows: the neighbours of each
+        near = (start < stop[j]) & (stop > start[j])
+        near[j] = False
+        if near.any():
+            diff[j] = length[j] - np.median(length[near])
+    found = diff[np.isfinite(diff)]
+    if len(found) < 3:
+        return out
+    mad = float(np.median(np.abs(found - np.median(found))))
+    scale = max(1.4826 * mad, step / float(np.median(stop - start)))
+    out[idx] = np.abs(np.nan_to_num(diff)) > PERIOD_OUTLIER_Z * scale
+    return out
+
+
+def block_votes(
+    solved: Sequence[_Solved], n_frames: int, fps: float, n_states: int | None = None
+) -> np.ndarray:
+    """``(n_blocks, n_states)``: the mean vote of the windows over each block's centre (no
+    window: every state alike; ``n_states`` when ``solved`` may be empty)."""
     n_blocks = int(math.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
+    if not solved:
+        return np.full((n_blocks, n_states or 1), 1.0 / (n_states or 1))
     centres = (np.arange(n_blocks) + 0.5) * BLOCK_S * fps  # in frames
     # the blocks whose centre a window covers, [first, end): a run of blocks per window (a
     # blocks x windows matrix would take 64 GB for a recording of 10^6 frames)
@@ -645,24 +694,24 @@ def _segment_of(
 
 @dataclass(frozen=True)
 class SolvedRecording:
-    """A recording with its windows solved and its activities decoded, before any judge of
-    unknown has looked at it (:func:`solve_recording`); :func:`finish` finishes it. Several
-    judges can finish one (the windows are solved once)."""
+    """A recording with its windows solved, before any judge of unknown has looked at it
+    (:func:`solve_recording`); :func:`finish` decodes and finishes it. Several judges can
+    finish one (the windows are solved once)."""
 
     rec: PoseSequence
     sig: MovementSignals
     windows: tuple[_Solved, ...]
-    votes: np.ndarray  # (n_blocks, n_classes)
-    path: np.ndarray  # (n_blocks,) the decoded activity of every block
+    outliers: np.ndarray  # (n_windows,) bool: :func:`period_outliers`, which do not vote
 
 
 def solve_recording(
     clf: Any, recording: PoseSequence, k: int = 1, chunk_frames: int | None = None
 ) -> SolvedRecording:
-    """Steps 1-5 of the module docstring for ``recording`` (positions ``(frames, joints,
-    3)``): its windows solved by the fitted classifier ``clf`` and the activity of every block
-    decoded; ``k`` and ``chunk_frames`` as :func:`segment` takes them. Raises DataError for a
-    recording shorter than one window or without a person."""
+    """Steps 1-3 of the module docstring for ``recording`` (positions ``(frames, joints,
+    3)``): its windows solved by the fitted classifier ``clf``, and the repetition windows
+    whose period disagrees with their neighbours' found (:func:`period_outliers`); ``k`` and
+    ``chunk_frames`` as :func:`segment` takes them. Raises DataError for a recording shorter
+    than one window or without a person."""
     rec = recording.to_canonical()
     chunk = long_clip.chunk_for(rec, chunk_frames)
     sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals_of(rec)
@@ -671,24 +720,43 @@ def solve_recording(
     if not chunk:
         warm(rec, config.level, mirror=config.side == "canonical")
     solved = _solve_windows(clf, rec, windows, k, chunk)
-    votes = block_votes(solved, rec.n_frames, rec.fps)
-    path = place_changes(solved, rec.fps, decode(votes))
-    return SolvedRecording(rec, sig, tuple(solved), votes, path)
+    spans = np.array([(w.start, w.stop) for w in solved], dtype=np.int64).reshape(-1, 2)
+    repetition = np.array([w.repetition for w in solved], dtype=bool)
+    return SolvedRecording(rec, sig, tuple(solved), period_outliers(spans, repetition, sig.step))
+
+
+def decode_activities(
+    solved: Sequence[_Solved], outliers: np.ndarray, unlike: np.ndarray, n_frames: int,
+    fps: float, n_classes: int,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The block votes ``(n_blocks, n_classes)`` and the decoded activity of every block
+    ``(n_blocks,)`` (steps 4-5 of the module docstring). Only the windows that are neither
+    ``outliers`` (:func:`period_outliers`) nor ``unlike`` every activity (by the judge) vote:
+    a window like no activity, across a change of movement or of one the case base lacks,
+    says nothing of which activity a block is (its nearest is whichever lies least far).
+    Every window still tells :func:`place_changes` how much of it is which."""
+    voting = [w for w, out, far in zip(solved, outliers, unlike, strict=True) if not (out or far)]
+    votes = block_votes(voting, n_frames, fps, n_classes)
+    return votes, place_changes(solved, fps, decode(votes))
 
 
 def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
-    """Steps 6-7 of the module docstring: the stretches of ``done`` (:func:`solve_recording`
-    with ``clf``) unlike every activity of the case base by ``judge`` made unknown, and every
-    segment counted and explained."""
+    """Steps 4-7 of the module docstring: the activities of ``done`` (:func:`solve_recording`
+    with ``clf``) decoded from the windows ``judge`` finds like an activity
+    (:func:`decode_activities`), the stretches unlike every activity of the case base made
+    unknown, and every segment counted and explained."""
     rec, solved, n_classes = done.rec, list(done.windows), len(clf.classes_)
-    path = done.path.copy()
+    unlike = np.array([judge.unlike(w.nearest) for w in solved], dtype=bool)
+    votes, path = decode_activities(solved, done.outliers, unlike, rec.n_frames, rec.fps,
+                                    n_classes)  # fmt: skip
     evidence = within_runs(solved, rec.fps, path).tolist()
-    path[unknown_blocks(solved, rec.n_frames, rec.fps, judge, path)] = n_classes
+    counted = [w for w, out in zip(solved, done.outliers.tolist(), strict=True) if not out]
+    path[unknown_blocks(counted, rec.n_frames, rec.fps, judge, path)] = n_classes
     runs = _runs(path)
     bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]
     reps = counted_segments(done.sig, bounds, rec.n_frames)
     segments = tuple(
-        _segment_of(clf, rec, run, solved, done.votes, judge, evidence, r)
+        _segment_of(clf, rec, run, solved, votes, judge, evidence, r)
         for run, r in zip(runs, reps, strict=True)
     )
     blocks: list[str | None] = []
@@ -731,6 +799,8 @@ __all__ = [
     "SolvedRecording",
     "Window",
     "block_votes",
+    "decode_activities",
+    "period_outliers",
     "unknown_blocks",
     "within_runs",
     "windows_of",

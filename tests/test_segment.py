@@ -22,9 +22,11 @@ from cbr.segmentation import (
     _Solved,
     counted_segments,
     decode,
+    decode_activities,
     decode_unknown,
     finish,
     keep_whole,
+    period_outliers,
     place_changes,
     segment,
     solve_recording,
@@ -606,3 +608,74 @@ def test_segment_command_refuses_a_margin_with_no_activity_seen_twice(
     assert "no activity of the case base has cases apart" in captured.err
     assert "--unknown held-out" in captured.err and "Traceback" not in captured.err
     assert (_sha(test), _sha(db)) == before
+
+
+def _steady_periods() -> tuple[np.ndarray, np.ndarray]:
+    """Repetition windows of a steady movement (periods of 29-34 frames, found at two phases,
+    half a period apart), one window twice as long over the middle (index 9: a period read
+    across a change, or two repetitions) and a 60-frame default window (index 10)."""
+    spans = [(0, 30), (30, 61), (61, 90), (90, 119), (119, 150),  # one phase
+             (15, 44), (44, 78), (78, 105), (105, 135),  # the other, one period of 34
+             (40, 100), (0, 60)]  # fmt: skip
+    repetition = np.array([True] * 10 + [False])
+    return np.array(spans, dtype=np.int64), repetition
+
+
+def test_a_period_twice_its_neighbours_is_an_outlier() -> None:
+    """By construction: every steady window's neighbours have periods of 29-34 frames (their
+    log lengths differ from their neighbours' median by at most ln(34/30) = 0.13, below 3
+    times the floor of one 4-frame sample over the median period, 3 x 4/30 = 0.4); the long
+    window's neighbours are all steady, ln(60/30) = 0.69 above. A default window is never
+    one, whatever its length."""
+    spans, repetition = _steady_periods()
+    assert np.flatnonzero(period_outliers(spans, repetition, 4)).tolist() == [9]
+
+
+def test_without_three_repetition_windows_nothing_is_an_outlier() -> None:
+    """Two repetition windows have no scale of disagreement to be judged by."""
+    spans = np.array([(0, 30), (15, 75), (0, 60)], dtype=np.int64)
+    flagged = period_outliers(spans, np.array([True, True, False]), 4)
+    assert not flagged.any()
+
+
+def _change_with_straddlers() -> list[_Solved]:
+    """10 fps (a frame per block), 60 frames: activity 0 until frame 30, then 1. Windows of
+    20 frames: [0, 20), [5, 25), [10, 30) vote 0 and lie at 1 from it, 3 from the others;
+    [30, 50), [35, 55), [40, 60) vote 1 likewise; five across the change, starting at 15,
+    18, 20, 22 and 25, vote activity 2 (the legs of one movement and the arms of the
+    other) and lie at 2 from all three."""
+
+    def window(a: int, activity: int, nearest: list[float]) -> _Solved:
+        return _Solved(a, a + 20, np.eye(3)[activity], np.array(nearest), None)
+
+    return (
+        [window(a, 0, [1.0, 3.0, 3.0]) for a in (0, 5, 10)]
+        + [window(a, 1, [3.0, 1.0, 3.0]) for a in (30, 35, 40)]
+        + [window(a, 2, [2.0, 2.0, 2.0]) for a in (15, 18, 20, 22, 25)]
+    )
+
+
+def test_windows_like_no_activity_do_not_vote() -> None:
+    """The five windows across the change, judged unlike every activity, do not vote: frames
+    0-29 are voted 0 only, 30-59 1 only, and the change goes where the distances cross, at
+    30 (the three windows of activity 0 end by 30, those of 1 start there). When they vote,
+    blocks 25-34 are 5 to 1 for activity 2 (each ln 5 = 1.61 of evidence, 16.1 over the ten
+    blocks, more than the 2 x 10 ln 2 = 13.9 two changes cost): a segment of 2 appears."""
+    solved = _change_with_straddlers()
+    across = np.array([w.vote[2] == 1.0 for w in solved])
+    none = np.zeros(len(solved), dtype=bool)
+    _, path = decode_activities(solved, none, across, 60, 10.0, 3)
+    assert path.tolist() == [0] * 30 + [1] * 30
+    _, voted = decode_activities(solved, none, none, 60, 10.0, 3)
+    assert 2 in voted.tolist()
+    # an outlier does not vote either: the same windows flagged as outliers instead
+    _, path = decode_activities(solved, across, none, 60, 10.0, 3)
+    assert path.tolist() == [0] * 30 + [1] * 30
+
+
+def test_no_voting_window_leaves_every_activity_alike() -> None:
+    """Every window unlike: no block has a vote, each activity gets 1/3 (no evidence)."""
+    solved = _change_with_straddlers()
+    votes, _ = decode_activities(solved, np.zeros(len(solved), dtype=bool),
+                                 np.ones(len(solved), dtype=bool), 60, 10.0, 3)  # fmt: skip
+    assert votes == pytest.approx(np.full((60, 3), 1.0 / 3.0))
