@@ -20,6 +20,24 @@ ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """Before the xdist workers start, numba's kernels are compiled once, in two processes at
+    a time (``tests/_kernels.py``): otherwise every worker, every Dask worker and every
+    command a test starts before a cache is written compiles them again (about 60 s of CPU
+    each, cold). Not in a worker, nor without workers (``-n 0``: the one process compiles)."""
+    if os.environ.get("PYTEST_XDIST_WORKER") or not config.getoption("numprocesses", None):
+        return
+    import subprocess
+    import sys
+
+    procs = [
+        subprocess.Popen([sys.executable, "-m", "tests._kernels", part], cwd=ROOT)
+        for part in ("fluents", "search")
+    ]
+    for proc in procs:
+        proc.wait()  # a failure shows in the tests themselves
+
+
 @pytest.fixture(scope="session")
 def shared_data() -> Path:
     """The read-only real datasets beside the project (``../shared/data``)."""
