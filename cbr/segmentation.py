@@ -241,14 +241,12 @@ def _periods(count: RepetitionCount) -> list[tuple[int, int]]:
     return [(a.start_frame, b.end_frame) for a, b in zip(reps[:-1], reps[1:], strict=True)]
 
 
-def _nearest_votes(solved: Sequence[Any], classes: np.ndarray, k: int) -> np.ndarray:
+def _nearest_votes(solved: Sequence[Any], codes: np.ndarray, n_classes: int, k: int) -> np.ndarray:
     """Vote shares of each solved window's ``k`` nearest retrieved cases (distance-weighted),
-    ``(windows, n_classes)``."""
-    code = {str(c): i for i, c in enumerate(classes)}
+    ``(windows, n_classes)``; ``codes``: every case's activity (:func:`activity_codes`)."""
     distances = np.stack([s.retrieval.distances[:k] for s in solved])
-    codes = np.array([[code[str(lab)] for lab in s.retrieval.labels[:k]] for s in solved],
-                     dtype=np.int64).reshape(distances.shape)  # fmt: skip
-    return vote(distances, codes, len(classes), "distance")
+    nearest = np.stack([s.retrieval.indices[:k] for s in solved])
+    return vote(distances, codes[nearest], n_classes, "distance")
 
 
 def activity_distances(clf: Any, solved: Any, codes: np.ndarray | None = None) -> np.ndarray:
@@ -287,8 +285,8 @@ def _solve_windows(
 
     def flush() -> None:
         solved = clf.solve([b[1] for b in batch], flag=False)
-        for (i, _, piece), one, votes in zip(batch, solved, _nearest_votes(solved, classes, k),
-                                             strict=True):  # fmt: skip
+        shares = _nearest_votes(solved, codes, len(classes), k)
+        for (i, _, piece), one, votes in zip(batch, solved, shares, strict=True):
             w = windows[i]
             nearest = activity_distances(clf, one, codes)
             found.append((i, _Solved(w.start, w.stop, votes, nearest, None if chunk else one,
