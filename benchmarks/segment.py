@@ -18,8 +18,8 @@ Measured, per test recording and overall:
   recording is in the other two, so all are "seen"; a block called unknown counts as wrong);
 - unknown: each exercise of the test recording in turn is left out of the case base; the share
   of its blocks labelled unknown (1-NN DTW has no unknown: 0 by construction), for each way
-  of judging unknown (:data:`cbr.unknown.JUDGES`: margin, held-out, activities,
-  margin-distance; and the margin at the equal-error point, the default before, to compare);
+  of judging unknown (:data:`cbr.unknown.JUDGES`: activity-margin, the default, margin,
+  held-out, activities, margin-distance; and the margin at the equal-error point, to compare);
 - boundaries: for every labelled change of exercise, the distance to the nearest segment
   boundary (seconds), median;
 - repetitions: counts of :func:`features.repetitions.count_repetitions` against the hand
@@ -144,23 +144,23 @@ def _timed_in_rounds(
 
 
 JUDGES = (
+    "activity-margin",
     "margin",
     "held-out",
     "activities",
     "margin-distance",
-    "activity-margin",
     "margin-equal-error",
 )
-"""How "unknown" is judged (cbr.unknown.JUDGES): the margin between the two nearest activities
-(its threshold exceeded by 5 % of held-out known cases of the case base), the classifier's
+"""How "unknown" is judged (cbr.unknown.JUDGES, the default first): ActivityMargin (the margin
+between the two nearest activities against the nearest activity's own threshold, from its
+rightly named held-out cases, shrunk to the pooled one by a weight chosen on the case base,
+cbr.unknown.choose_weight), the margin against one threshold (exceeded by 5 % of held-out known
+cases of the case base), the classifier's
 stored calibration (the 99th percentile of held-out training clips' nearest-case distances,
 cbr.novelty), Familiarity (a stretch as far from its nearest cases as the case base's
 activities lie from each other), or MarginDistance (the margin alone, or a smaller margin with
-a far nearest case, sharing the 5 %), or ActivityMargin (the margin against the nearest
-activity's own threshold, from its rightly named held-out cases, shrunk to the pooled one
-by a weight chosen on the case base, cbr.unknown.choose_weight);
-and, for comparison, the margin at the point where held-out known and novel cases err equally
-(the default before the false-unknown budget)."""
+a far nearest case, sharing the 5 %); and, for comparison, the margin at the point where
+held-out known and novel cases err equally (the default before the false-unknown budget)."""
 
 
 def judge_named(clf: Any, name: str) -> Any:
@@ -450,8 +450,8 @@ def _print_table(summary: dict[str, Any], reps: dict[str, Any], cases: str) -> N
         f"\nSegmenting CMU subject 13, leave one recording out, a case base of {cases}"
         " (ONE PERSON: optimistic)"
     )
-    head = "".join(f"{'unknown by ' + n:>22s}" for n in JUDGES)
-    print(f"  {'':48s}{head}{'DTW 1-NN':>10s}")
+    head = "".join(f"{n:>22s}" for n in JUDGES)  # the names fit; "unknown by " + name did not
+    print(f"  {'unknown judged by':48s}{head}{'DTW 1-NN':>10s}")
     rows = (
         ("block accuracy, exercises in the case base", "block_accuracy", "{:22.1%}"),
         ("left-out exercise's blocks called unknown",

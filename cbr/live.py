@@ -2,15 +2,17 @@
 
 Frames are pushed one at a time (world landmarks ``(33, 3)``). Every :data:`HOP_S` seconds
 the last :data:`~cbr.segmentation.DEFAULT_WINDOW_S` seconds are solved by the fitted
-classifier and vote (an activity, or unknown when unlike the case base); the mean vote of the
-windows over the latest stretch goes through the forward pass of the same decoder (a change
-needs :data:`~cbr.segmentation.MIN_SEGMENT_S` of evidence at
+classifier and vote for the activity of their nearest case unless unlike the case base (then
+for unknown); the mean vote of the last windows goes through the forward pass of the same
+decoder (a change needs :data:`~cbr.segmentation.MIN_SEGMENT_S` of evidence at
 :data:`~cbr.segmentation.SWITCH_ODDS` to 1), whose best state now is the rolling label. A
 segment is finished once the decoder's best paths into every state agree on where it ends
 (online Viterbi: what later frames cannot change), not whenever the rolling label turns (the
 label of a stream whose windows waver between two activities turns often; the best path
-through them does not). Its repetitions are counted on its frames, each repetition in the
-one segment that holds where its movement turns (:func:`cbr.segmentation.keep_whole`).
+through them does not), and placed where the evidence of the hops on either side is of (the
+mean centre of the windows each averages), not where the window that decided it ends. Its
+repetitions are counted on its frames, each repetition in the one segment that holds where
+its movement turns (:func:`cbr.segmentation.keep_whole`).
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ from .segmentation import (
     log_votes,
     span_fields,
 )
-from .unknown import Judge, activity_codes, judge_of
+from .unknown import JUDGES, Judge, activity_codes, judge_of
 
 HOP_S = 0.5
 """The rolling label is decided every this many seconds of stream."""
@@ -122,6 +124,15 @@ class _Forward:
         return [int(x) for x in settled]
 
 
+def _mean_vote(votes: list[np.ndarray], n_classes: int) -> np.ndarray:
+    """The mean of the voting windows' ``votes`` ``(n_classes,)`` each, every activity alike
+    when no window votes."""
+    if not votes:
+        return np.full(n_classes, 1.0 / n_classes)
+    out: np.ndarray = np.mean(votes, axis=0)
+    return out
+
+
 def _shifted(rep: Repetition, frames: int) -> Repetition:
     """``rep`` of a clip that starts ``frames`` into the stream, in stream frames."""
     return dataclasses.replace(
@@ -137,7 +148,8 @@ class LiveSegmenter:
 
     ``clf``: a fitted :class:`~cbr.estimator.CaseBaseClassifier`; ``fps``: the stream's frame
     rate; ``judge``: what says a window is unlike the case base (:mod:`cbr.unknown`; the margin
-    between the two nearest activities, calibrated on the case base, when None).
+    between the two nearest activities against the nearest one's own threshold, calibrated on
+    the case base, when None).
 
     The rolling label is the state best supported now (it may still change its mind); a
     segment is finished when the decoder's best paths into every state agree on where it
@@ -150,7 +162,7 @@ class LiveSegmenter:
             raise DataError(f"the stream needs a frame rate > 0, got {fps!r}", "stream")
         self.clf = clf
         self.fps = float(fps)
-        self.judge = judge if judge is not None else judge_of(clf, "margin")
+        self.judge = judge if judge is not None else judge_of(clf, JUDGES[0])
         self.classes = [str(c) for c in clf.classes_]
         self.codes = activity_codes(clf.case_base_.labels, self.classes)
         self.unknown = len(self.classes)
@@ -165,7 +177,8 @@ class LiveSegmenter:
         self.latest_votes: list[tuple[np.ndarray, float]] = []
         self.votes: list[np.ndarray] = []  # of the hops since the segment in progress began:
         # the share of windows nearest each activity, and the share unlike every one
-        self.hop_frames: list[int] = []  # the frame at which each of those hops was decided
+        self.hop_centres: list[float] = []  # the frame each of those hops' evidence is of:
+        # the mean centre of the windows it averages (:meth:`_decide`)
         self.state: int | None = None  # the rolling label's state
         self.settled: int | None = None  # the state of the segment in progress
         self.segment_start = 0
@@ -178,9 +191,10 @@ class LiveSegmenter:
         together, as the offline decoder does in turn (:func:`cbr.segmentation.decode`, then
         :func:`cbr.segmentation.decode_unknown`): a change of activity costs the penalty
         (:data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS` to 1), and so does a change of
-        the label seen (an activity, or unknown). A window unlike every activity still says
-        which it is nearest: a vote for unknown taken from the activities instead would
-        split their evidence, and the label would turn with every such window."""
+        the label seen (an activity, or unknown). The share of windows unlike every activity
+        is evidence of its own, not a vote taken from the activities (that would split their
+        evidence, and the label would turn with every such window); those windows cast no
+        vote for an activity (:meth:`_vote`)."""
         hop_s = self.hop / self.fps
         penalty = (MIN_SEGMENT_S / hop_s) * math.log(SWITCH_ODDS)
         activity = np.arange(2 * self.unknown) // 2
@@ -212,10 +226,10 @@ class LiveSegmenter:
         self.latest_votes = [*self.latest_votes[1 - self.cover :], self._vote(n)]
         # the evidence for the latest stretch: the mean vote of the windows over it, as each
         # block of the offline decoder gets
-        nearest = np.mean([v[0] for v in self.latest_votes], axis=0)
+        nearest = _mean_vote([v for v, far in self.latest_votes if far == 0.0], self.unknown)
         unlike = np.mean([v[1] for v in self.latest_votes])
         self.votes.append(np.r_[nearest, unlike])
-        self.hop_frames.append(n)
+        self.hop_centres.append(n - self.window / 2 - (len(self.latest_votes) - 1) * self.hop / 2)
         score = np.add.outer(
             log_votes(nearest), log_votes(np.array([1.0 - unlike, unlike]))
         ).ravel()
@@ -226,19 +240,28 @@ class LiveSegmenter:
 
     def _settle(self, states: np.ndarray) -> list[LiveSegment]:
         """Follow the newly settled hops' ``states`` (the oldest hops not settled before):
-        each change of state finishes the segment in progress, at the middle of the window
-        that ended at the first hop of the new state."""
-        first = len(self.hop_frames) - len(self.forward.back) - len(states)
+        each change of state finishes the segment in progress, between the last hop of the old
+        state and the first of the new (:meth:`_between`)."""
+        first = len(self.hop_centres) - len(self.forward.back) - len(states)
         finished = []
         for i, state in enumerate(states.tolist(), start=first):
             if self.settled is None:
                 self.settled = state
             if state == self.settled:
                 continue
-            boundary = max(self.segment_start + 1, self.hop_frames[i] - self.window // 2)
+            boundary = max(self.segment_start + 1, self._between(i))
             finished.append(self._segment(self.segment_start, boundary, self.settled, True))
             self.segment_start, self.settled = boundary, state
         return finished
+
+    def _between(self, i: int) -> int:
+        """The frame where a change from hop ``i - 1``'s state to hop ``i``'s lies: midway
+        between what their evidence is of (the mean centre of the windows each averages).
+        Not the end of hop ``i``'s window, nor its middle: the evidence of the stretch just
+        decided is that of the last few windows, centred a window and a half back."""
+        if i == 0:
+            return int(round(self.hop_centres[0] - self.hop / 2))
+        return int(round((self.hop_centres[i - 1] + self.hop_centres[i]) / 2))
 
     def _trim(self) -> None:
         """Forget frames and hops no segment in progress can need (bounded memory)."""
@@ -247,14 +270,17 @@ class LiveSegmenter:
         if drop > self.window:
             del self.frames[:drop]
             self.offset += drop
-        settled = len(self.hop_frames) - len(self.forward.back)
-        old = sum(f < keep_from for f in self.hop_frames[: max(0, settled - 1)])
+        settled = len(self.hop_centres) - len(self.forward.back)
+        old = sum(f < keep_from for f in self.hop_centres[: max(0, settled - 1)])
         if old:
-            del self.votes[:old], self.hop_frames[:old]
+            del self.votes[:old], self.hop_centres[:old]
 
     def _vote(self, n: int) -> tuple[np.ndarray, float]:
         """The last window's vote over the activities ``(n_classes,)`` (its nearest case's)
-        and whether it is unlike every activity (1.0) or not (0.0)."""
+        and whether it is unlike every activity (1.0), not (0.0), or shows nobody (0.5).
+        Only a window like an activity votes for one (:func:`_mean_vote`), as offline
+        (:func:`cbr.segmentation.decode_activities`): one like none, across a change of
+        movement or of one the case base lacks, is nearest to whichever lies least far."""
         window = self._sequence(n - self.window, n)
         if torso_share(window) == 0.0:  # no person: no evidence either way
             return np.full(self.unknown, 1.0 / self.unknown), 0.5
@@ -278,7 +304,7 @@ class LiveSegmenter:
         begins (a finished segment: its repetitions are counted as
         :func:`cbr.segmentation.keep_whole` says, and the next one learns whether the
         movement turned at the cut)."""
-        hops = [v for v, f in zip(self.votes, self.hop_frames, strict=True) if start < f <= end]
+        hops = [v for v, f in zip(self.votes, self.hop_centres, strict=True) if start < f <= end]
         confidence = float(np.mean([v[state] for v in hops])) if hops else 0.0
         first = max(start, end - int(MAX_SEGMENT_S * self.fps))
         try:

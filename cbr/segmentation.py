@@ -30,7 +30,8 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    (a vote is all or nothing: a window over a change votes for one side whole);
 6. stretches unlike every activity of the case base become unknown (:func:`unknown_blocks`):
    every window but the period outliers is judged (:mod:`cbr.unknown`; by default the margin
-   between its two nearest activities, calibrated on the case base), and known/unknown is
+   between its two nearest activities against the nearest one's own threshold, calibrated on
+   the case base), and known/unknown is
    decoded from the windows that lie within one decoded activity (a window across a change
    of activity is like neither side, whether both are known or not), every change of the
    label seen costing the same (:func:`decode_unknown`: no sliver of an activity left
@@ -71,6 +72,7 @@ from .explain import Explanation
 from .problem import FeatureConfig, warm
 from .reuse import vote
 from .unknown import (
+    JUDGES,
     Familiarity,
     HeldOut,
     Judge,
@@ -774,14 +776,15 @@ def segment(
     ``clf`` (a :class:`~cbr.estimator.CaseBaseClassifier`); see the module docstring.
 
     ``judge``: what makes a stretch unknown (:mod:`cbr.unknown`): the margin between the two
-    nearest activities, calibrated on ``clf.case_base_``, when None; ``k``: a window votes
+    nearest activities against the nearest one's own threshold (``activity-margin``),
+    calibrated on ``clf.case_base_``, when None; ``k``: a window votes
     with its k nearest cases (1: its nearest; the votes of successive windows are pooled over
     time); ``chunk_frames``: what the frames yield is computed that many frames at a time
     (:func:`_cut_in_pieces`; the same segments in bounded memory), 0: for the whole recording
     at once; None: in pieces of :data:`cbr.long_clip.CHUNK_FRAMES` for a longer recording.
     Raises DataError for a recording shorter than one window or without a person, and for a
     case base the judge cannot be calibrated on."""
-    judge = judge or judge_of(clf, "margin")
+    judge = judge or judge_of(clf, JUDGES[0])
     return finish(clf, solve_recording(clf, recording, k, chunk_frames), judge)
 
 

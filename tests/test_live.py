@@ -4,10 +4,11 @@ goes, checked against every path tried by brute force."""
 from __future__ import annotations
 
 import itertools
+from types import SimpleNamespace
 
 import numpy as np
 
-from cbr.live import _Forward
+from cbr.live import LiveSegment, LiveSegmenter, _Forward
 
 
 def _best_path(score: np.ndarray, cost: np.ndarray) -> list[int]:
@@ -44,3 +45,70 @@ def test_settled_hops_follow_the_best_path_whatever_comes_after() -> None:
         settled += forward.settle(final=True)
         assert settled == best
     assert early > 0
+
+
+class _Scripted(LiveSegmenter):
+    """The live segmenter with each window's vote given by where its frames lie: for
+    activity 0 while most of the window lies before frame ``change``, activity 1 after (a
+    window is classified as the movement that fills most of it). Tests where the decoder
+    puts the change, apart from any classifier."""
+
+    change = 0
+
+    def _vote(self, n: int) -> tuple[np.ndarray, float]:
+        centre = n - self.window / 2
+        return np.eye(2)[int(centre >= self.change)], 0.0
+
+
+def test_a_change_is_placed_where_the_windows_say_not_a_window_late() -> None:
+    """30 fps, 2-s windows every 0.5 s (a hop), the movement changing at 10.0-10.5 s: the
+    windows centred after the change vote for the second activity; the change settles a few
+    hops after it happens, but is placed within a hop of it (the decoder's resolution), not
+    where the first window that voted for the new activity ends or its middle (1-2 s late)."""
+    clf = SimpleNamespace(
+        classes_=np.array(["a", "b"]), case_base_=SimpleNamespace(labels=np.array(["a", "b"]))
+    )
+    fps = 30.0
+    rng = np.random.default_rng(0)
+    for change in (300, 306, 311):
+        live = _Scripted(clf, fps, judge=SimpleNamespace())
+        live.change = change
+        segments: list[LiveSegment] = []
+        for _ in range(int(20 * fps)):
+            segments += live.push(rng.normal(size=(33, 3)))
+        segments += live.finish()
+        assert [s.label for s in segments] == ["a", "b"]
+        assert abs(segments[0].end_frame - change) <= live.hop
+        assert segments[1].start_frame == segments[0].end_frame
+
+
+class _Straddling(LiveSegmenter):
+    """Windows for activity 0 before frame ``change`` and 1 after, as :class:`_Scripted`; but
+    the windows centred in the second after the change are unlike every activity, their
+    nearest still the old one (a window across a change is like neither side)."""
+
+    change = 0
+
+    def _vote(self, n: int) -> tuple[np.ndarray, float]:
+        centre = n - self.window / 2
+        if 0 <= centre - self.change < self.fps:
+            return np.eye(2)[0], 1.0
+        return np.eye(2)[int(centre >= self.change)], 0.0
+
+
+def test_windows_like_no_activity_do_not_vote_for_their_nearest() -> None:
+    """The straddling windows say nothing of which activity their stretch is (as offline,
+    cbr.segmentation.decode_activities): the change goes where the windows like an activity
+    put it, at 10 s (to within half a hop); counted as votes for the old activity they hold
+    the change back a hop (0.5 s)."""
+    labels = np.array(["a", "b"])
+    clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
+    live = _Straddling(clf, 30.0, judge=SimpleNamespace())
+    live.change = 300
+    rng = np.random.default_rng(1)
+    segments: list[LiveSegment] = []
+    for _ in range(600):
+        segments += live.push(rng.normal(size=(33, 3)))
+    segments += live.finish()
+    assert [s.label for s in segments] == ["a", "b"]
+    assert abs(segments[0].end_frame - live.change) < live.hop / 2

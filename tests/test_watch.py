@@ -48,10 +48,10 @@ def test_watch_a_real_video(
     video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
     out = tmp_path / "watched.mp4"
     capsys.readouterr()
-    # the case base is one mocap recording of another person, the default judge (the margin):
-    # the 2-s windows of these 4.8-s squats waver with the squat's phase between squat, knee
-    # raise and unlike every activity; the video holds one exercise, and its segments (one,
-    # or a few) hold its three squats, none counted twice
+    # the case base is one mocap recording of another person, the default judge
+    # (activity-margin): the 2-s windows of these 4.8-s squats waver with the squat's phase
+    # between squat, knee raise and unlike every activity; the video holds one exercise, one
+    # segment (unknown here), that holds its three squats, none counted twice
     assert main(["watch", str(video), "--db", str(case_base), "--out", str(out),
                  "--speed", "0"]) == 0  # fmt: skip
     captured = capsys.readouterr()

@@ -25,7 +25,7 @@ from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from posecbr.recordings import add_recording_options, check_fps, load_recording
 
-JUDGES = ("margin", "held-out", "activities", "margin-distance", "activity-margin")
+JUDGES = ("activity-margin", "margin", "held-out", "activities", "margin-distance")
 """cbr.unknown.JUDGES, the default first (not imported: the command line starts light)."""
 
 
@@ -50,13 +50,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         choices=JUDGES,
         default=JUDGES[0],
         help="what makes a stretch unknown: its nearest activity is hardly nearer than the "
-        "next (margin, calibrated on the case base: at most 5 %% of its training cases held "
-        "out of their own recording or person lie beyond), farther from its nearest case than "
-        "held-out training clips lie (held-out, the flag classify gives), as far as the "
-        "case base's activities lie from each other (activities), or the margin alone or a "
-        "smaller margin with a far nearest case, sharing the 5 %% (margin-distance), or the "
-        "margin beyond the nearest activity's own threshold, from its rightly named held-out "
-        "cases (activity-margin)",
+        "next, beyond that activity's own threshold, from its rightly named training cases "
+        "held out of their own recording or person (activity-margin, the default: calibrated "
+        "on the case base, at most 5 %% of those lie beyond), or beyond one threshold for all "
+        "activities (margin), farther from its nearest case than held-out training clips lie "
+        "(held-out, the flag classify gives), as far as the case base's activities lie from "
+        "each other (activities), or the margin alone or a smaller margin with a far nearest "
+        "case, sharing the 5 %% (margin-distance)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
