@@ -82,11 +82,11 @@ class _Forward:
     def __post_init__(self) -> None:
         self.total = np.zeros(self.n_states)
 
-    def step(self, score: np.ndarray) -> int:
-        """Take one hop's log evidence ``score`` ``(n_states,)``; the state best supported
-        now."""
+    def step(self, score: np.ndarray, cost: np.ndarray | None = None) -> int:
+        """Take one hop's log evidence ``score`` ``(n_states,)`` (``cost``: of reaching it,
+        when not the usual); the state best supported now."""
         if self.started:
-            reach = self.total[:, None] - self.cost  # (from, to)
+            reach = self.total[:, None] - (self.cost if cost is None else cost)  # (from, to)
             best = np.argmax(reach, axis=0)
             self.back.append(best)
             self.total = reach[best, np.arange(self.n_states)] + score
@@ -143,6 +143,21 @@ def _shifted(rep: Repetition, frames: int) -> Repetition:
     )
 
 
+@dataclass(frozen=True)
+class _Hop:
+    """A settled hop of a finished stretch of one activity, for the known/unknown decoder:
+    the frame its evidence is of (``centre``), its ``activity``, the share of its windows
+    voting for it (``vote``), the share of the windows inside the stretch over its centre
+    unlike every activity (``unlike``; 0.5 when none is), and the stretch's first frame when
+    it is the stretch's first hop after a change of activity (``change``, else None)."""
+
+    centre: float
+    activity: int
+    vote: float
+    unlike: float
+    change: int | None
+
+
 class LiveSegmenter:
     """Push frames, read the rolling label; finished segments come out of :meth:`push`.
 
@@ -151,10 +166,20 @@ class LiveSegmenter:
     between the two nearest activities against the nearest one's own threshold, calibrated on
     the case base, when None).
 
-    The rolling label is the state best supported now (it may still change its mind); a
-    segment is finished when the decoder's best paths into every state agree on where it
-    ends (:meth:`_Forward.settle`), so the finished segments are those the offline decoder
-    would give over the same votes, not every turn of the rolling label.
+    As offline, in two passes, each an online Viterbi (:class:`_Forward`: a hop is settled
+    when the best paths into every state agree on it, so the settled hops are those the
+    offline decoder gives over the same evidence, not every turn of the rolling label):
+
+    1. the activities (:func:`cbr.segmentation.decode`): the windows like an activity vote
+       for their nearest; a change costs :data:`MIN_SEGMENT_S` of hops at
+       :data:`SWITCH_ODDS` to 1; a settled change finishes a stretch of one activity;
+    2. known or unknown (:func:`cbr.segmentation.decode_unknown`), over the hops of finished
+       stretches: a hop's evidence is the share of the windows inside its stretch over it
+       unlike every activity (a window across a change of activity is like neither side,
+       whether both are known or not); every change of the label seen costs the same, and a
+       change of activity under unknown is not seen and costs nothing.
+
+    A segment is finished when the label seen (an activity, or unknown) settles on a change.
     """
 
     def __init__(self, clf: Any, fps: float, judge: Judge | None = None) -> None:
@@ -172,46 +197,48 @@ class LiveSegmenter:
         self.frames: list[np.ndarray] = []
         self.offset = 0  # the stream frame that frames[0] is (older frames are dropped)
         self.n = 0  # frames pushed
-        self.forward = _Forward(self._costs())
         self.cover = max(1, math.ceil(self.window / self.hop))  # windows over one stretch
         self.latest_votes: list[tuple[np.ndarray, float]] = []
-        self.votes: list[np.ndarray] = []  # of the hops since the segment in progress began:
-        # the share of windows nearest each activity, and the share unlike every one
+        # pass 1, the activities:
+        self.forward = _Forward(self._penalty() * (1.0 - np.eye(self.unknown)))
+        self.votes: list[np.ndarray] = []  # of the hops not yet in a finished stretch (and
+        # the last one that is): the share of the latest windows nearest each activity
         self.hop_centres: list[float] = []  # the frame each of those hops' evidence is of:
         # the mean centre of the windows it averages (:meth:`_decide`)
-        self.state: int | None = None  # the rolling label's state
-        self.settled: int | None = None  # the state of the segment in progress
-        self.segment_start = 0
+        self.windows: list[tuple[int, int, float]] = []  # (start, stop, unlike) of the
+        # windows that start in the stretch in progress (:meth:`_vote`'s unlike)
+        self.state: int | None = None  # the rolling activity
+        self.settled: int | None = None  # the activity of the stretch in progress
+        self.stretch_start = 0
+        # pass 2, known or unknown, over the hops of finished stretches:
+        pen = self._penalty()
+        self.known = _Forward(np.array([[0.0, pen], [pen, 0.0]]))
+        self.pending: list[_Hop] = []  # the hops pass 2 has not settled
+        self.seen: int | None = None  # the label seen of the segment in progress (an
+        # activity, or n_classes: unknown)
+        self.seen_start = 0
+        self.seen_sum: list[float] = [0.0, 0.0]  # its settled hops' votes for it (unknown:
+        # their shares unlike), and how many
+        self.last_centre = 0.0  # of the last hop pass 2 settled
         self.turn = False  # the last finished segment had a far point at its end
 
-    def _costs(self) -> np.ndarray:
-        """``(2 n_classes, 2 n_classes)``: the cost of going from one state to another. A state
-        is an activity and whether it is known (``2 a``) or unknown (``2 a + 1``): which
-        activity the windows are nearest and whether they are unlike it are decoded
-        together, as the offline decoder does in turn (:func:`cbr.segmentation.decode`, then
-        :func:`cbr.segmentation.decode_unknown`): a change of activity costs the penalty
-        (:data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS` to 1), and so does a change of
-        the label seen (an activity, or unknown). The share of windows unlike every activity
-        is evidence of its own, not a vote taken from the activities (that would split their
-        evidence, and the label would turn with every such window); those windows cast no
-        vote for an activity (:meth:`_vote`)."""
-        hop_s = self.hop / self.fps
-        penalty = (MIN_SEGMENT_S / hop_s) * math.log(SWITCH_ODDS)
-        activity = np.arange(2 * self.unknown) // 2
-        seen = self._seen(np.arange(2 * self.unknown))
-        moved = activity[:, None] != activity[None, :]
-        turned = seen[:, None] != seen[None, :]
-        cost: np.ndarray = penalty * (moved.astype(np.float64) + turned.astype(np.float64))
-        return cost
-
-    def _seen(self, states: np.ndarray) -> np.ndarray:
-        """The label seen of decoder ``states``: the activity's index, or n_classes (unknown)."""
-        return np.asarray(np.where(states % 2 == 1, self.unknown, states // 2))
+    def _penalty(self) -> float:
+        """The log-odds a change costs: :data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS`."""
+        return (MIN_SEGMENT_S / (self.hop / self.fps)) * math.log(SWITCH_ODDS)
 
     @property
     def label(self) -> str | None:
-        """The rolling label (None: unknown or not decided yet)."""
-        return None if self.state in (None, self.unknown) else self.classes[int(self.state)]
+        """The rolling label (None: unknown or not decided yet): the rolling activity, unless
+        most of the latest windows inside its stretch are unlike every activity."""
+        if self.state is None or self._unlike_now() > 0.5:
+            return None
+        return self.classes[int(self.state)]
+
+    def _unlike_now(self) -> float:
+        """The share of the latest windows that lie in the stretch in progress (all the
+        latest when none does) unlike every activity."""
+        latest = self.windows[-self.cover :] or [(0, 0, v[1]) for v in self.latest_votes]
+        return float(np.mean([u for *_, u in latest])) if latest else 0.0
 
     def push(self, world: np.ndarray) -> list[LiveSegment]:
         """Add one frame ``(33, 3)`` (NaN where the person is not seen). Returns the segments
@@ -223,25 +250,24 @@ class LiveSegmenter:
         return self._decide(self.n)
 
     def _decide(self, n: int) -> list[LiveSegment]:
-        self.latest_votes = [*self.latest_votes[1 - self.cover :], self._vote(n)]
-        # the evidence for the latest stretch: the mean vote of the windows over it, as each
-        # block of the offline decoder gets
+        vote = self._vote(n)
+        self.latest_votes = [*self.latest_votes[1 - self.cover :], vote]
+        self.windows.append((n - self.window, n, vote[1]))
+        # the evidence for the latest stretch: the mean vote of the windows over it that are
+        # like an activity, as each block of the offline decoder gets
         nearest = _mean_vote([v for v, far in self.latest_votes if far == 0.0], self.unknown)
-        unlike = np.mean([v[1] for v in self.latest_votes])
-        self.votes.append(np.r_[nearest, unlike])
+        self.votes.append(nearest)
         self.hop_centres.append(n - self.window / 2 - (len(self.latest_votes) - 1) * self.hop / 2)
-        score = np.add.outer(
-            log_votes(nearest), log_votes(np.array([1.0 - unlike, unlike]))
-        ).ravel()
-        self.state = int(self._seen(np.array(self.forward.step(score))))
-        finished = self._settle(self._seen(np.array(self.forward.settle(), dtype=np.int64)))
+        self.state = self.forward.step(log_votes(nearest))
+        finished = self._settle(np.array(self.forward.settle(), dtype=np.int64))
         self._trim()
         return finished
 
     def _settle(self, states: np.ndarray) -> list[LiveSegment]:
-        """Follow the newly settled hops' ``states`` (the oldest hops not settled before):
-        each change of state finishes the segment in progress, between the last hop of the old
-        state and the first of the new (:meth:`_between`)."""
+        """Follow the newly settled hops' activity ``states`` (the oldest hops not settled
+        before): each change finishes the stretch in progress, between the last hop of the
+        old activity and the first of the new (:meth:`_between`), and passes its hops to
+        pass 2 (:meth:`_judge`)."""
         first = len(self.hop_centres) - len(self.forward.back) - len(states)
         finished = []
         for i, state in enumerate(states.tolist(), start=first):
@@ -249,9 +275,10 @@ class LiveSegmenter:
                 self.settled = state
             if state == self.settled:
                 continue
-            boundary = max(self.segment_start + 1, self._between(i))
-            finished.append(self._segment(self.segment_start, boundary, self.settled, True))
-            self.segment_start, self.settled = boundary, state
+            boundary = max(self.stretch_start + 1, self._between(i))
+            finished += self._judge(self.stretch_start, boundary, self.settled)
+            self.stretch_start, self.settled = boundary, state
+            self.windows = [w for w in self.windows if w[0] >= boundary]
         return finished
 
     def _between(self, i: int) -> int:
@@ -263,16 +290,67 @@ class LiveSegmenter:
             return int(round(self.hop_centres[0] - self.hop / 2))
         return int(round((self.hop_centres[i - 1] + self.hop_centres[i]) / 2))
 
+    def _unlike_shares(self, centres: np.ndarray, start: int, end: int) -> np.ndarray:
+        """For hops at ``centres``: the share of the windows inside frames [start, end) over
+        each that are unlike every activity (0.5, even, over none)."""
+        inside = np.array([w for w in self.windows if w[0] >= start and w[1] <= end])
+        if not len(inside):
+            return np.full(len(centres), 0.5)
+        over = (inside[None, :, 0] <= centres[:, None]) & (centres[:, None] < inside[None, :, 1])
+        n_over = over.sum(axis=1)
+        shares: np.ndarray = np.where(
+            n_over > 0, (over * inside[None, :, 2]).sum(axis=1) / np.maximum(n_over, 1), 0.5
+        )
+        return shares
+
+    def _judge(self, start: int, end: int, activity: int, final: bool = False) -> list[LiveSegment]:
+        """Pass the hops of the finished stretch [start, end) of ``activity`` to pass 2, and
+        finish the segments that settles (``final``: the stream has ended; every hop)."""
+        centres = np.array(self.hop_centres)
+        hops = np.flatnonzero((centres >= start) & (centres < end))
+        shares = self._unlike_shares(centres[hops], start, end)
+        pen = self._penalty()
+        moved = np.array([[pen, pen], [pen, 0.0]])  # a change of activity under unknown is free
+        for k, (i, share) in enumerate(zip(hops.tolist(), shares.tolist(), strict=True)):
+            change = start if k == 0 and self.known.started else None
+            self.pending.append(_Hop(centres[i], activity, float(self.votes[i][activity]),
+                                     share, change))  # fmt: skip
+            score = log_votes(np.array([1.0 - share, share]))
+            self.known.step(score, moved if change is not None else None)
+        return self._follow(self.known.settle(final=final))
+
+    def _follow(self, unknown: list[int]) -> list[LiveSegment]:
+        """Follow the hops pass 2 newly settled (``unknown``: 1 where unknown, in order, the
+        oldest of :attr:`pending`): each change of the label seen finishes the segment in
+        progress, at the change of activity when one lies there, else midway between the
+        two hops."""
+        finished = []
+        for hop, far in zip(self.pending[: len(unknown)], unknown, strict=True):
+            seen = self.unknown if far else hop.activity
+            if self.seen is None:
+                self.seen = seen
+            elif seen != self.seen:
+                mid = int(round((self.last_centre + hop.centre) / 2))
+                boundary = max(self.seen_start + 1, hop.change if hop.change is not None else mid)
+                finished.append(self._segment(self.seen_start, boundary, self.seen, True))
+                self.seen, self.seen_start, self.seen_sum = seen, boundary, [0.0, 0.0]
+            self.seen_sum[0] += hop.unlike if far else hop.vote
+            self.seen_sum[1] += 1.0
+            self.last_centre = hop.centre
+        del self.pending[: len(unknown)]
+        return finished
+
     def _trim(self) -> None:
         """Forget frames and hops no segment in progress can need (bounded memory)."""
-        keep_from = max(self.segment_start, self.n - int(MAX_SEGMENT_S * self.fps)) - self.window
+        begun = min(self.seen_start, self.stretch_start)
+        keep_from = max(begun, self.n - int(MAX_SEGMENT_S * self.fps)) - self.window
         drop = keep_from - self.offset
         if drop > self.window:
             del self.frames[:drop]
             self.offset += drop
         settled = len(self.hop_centres) - len(self.forward.back)
-        old = sum(f < keep_from for f in self.hop_centres[: max(0, settled - 1)])
-        if old:
+        old = sum(f < self.stretch_start for f in self.hop_centres[: max(0, settled - 1)])
+        if old:  # hops of finished stretches, passed to pass 2 (the last kept: _between)
             del self.votes[:old], self.hop_centres[:old]
 
     def _vote(self, n: int) -> tuple[np.ndarray, float]:
@@ -299,13 +377,24 @@ class LiveSegmenter:
         rows = self.frames[max(0, a - self.offset) : b - self.offset]
         return PoseSequence(np.stack(rows), BLAZEPOSE_33, self.fps, source="stream")
 
+    def _confidence(self, state: int) -> float:
+        """Of the segment in progress labelled ``state``: the mean over the hops pass 2 has
+        settled in it of their vote for its activity, or of their share unlike every activity
+        (unknown); the latest windows' while it has none, or when ``state`` is the rolling
+        label and not the one pass 2 has settled."""
+        total, count = self.seen_sum
+        if count and state == self.seen:
+            return float(total) / count
+        if state == self.unknown:
+            return self._unlike_now()
+        return float(self.votes[-1][state]) if self.votes else 0.0
+
     def _segment(self, start: int, end: int, state: int, cut: bool) -> LiveSegment:
-        """Frames [start, end) as a segment of ``state``; ``cut``: it ends where another
-        begins (a finished segment: its repetitions are counted as
-        :func:`cbr.segmentation.keep_whole` says, and the next one learns whether the
-        movement turned at the cut)."""
-        hops = [v for v, f in zip(self.votes, self.hop_centres, strict=True) if start < f <= end]
-        confidence = float(np.mean([v[state] for v in hops])) if hops else 0.0
+        """Frames [start, end) as a segment of ``state`` (an activity, or n_classes: unknown;
+        :meth:`_confidence`); ``cut``: it ends where another begins (a finished segment: its
+        repetitions are counted as :func:`cbr.segmentation.keep_whole` says, and the next one
+        learns whether the movement turned at the cut)."""
+        confidence = self._confidence(state)
         first = max(start, end - int(MAX_SEGMENT_S * self.fps))
         try:
             found = count_repetitions(self._sequence(first, end)).repetitions
@@ -317,21 +406,24 @@ class LiveSegmenter:
         if cut:
             self.turn = at_cut(reps, first, end, self.step)[1]
         label = None if state == self.unknown else self.classes[state]
-        return LiveSegment(start, end, label, confidence, len(kept))
+        return LiveSegment(start, end, label, float(confidence), len(kept))
 
     def current(self) -> LiveSegment | None:
         """The segment in progress (its repetitions so far), labelled with the rolling label."""
         if self.state is None:
             return None
-        return self._segment(self.segment_start, self.n, int(self.state), False)
+        state = self.unknown if self.label is None else int(self.state)
+        return self._segment(self.seen_start, self.n, state, False)
 
     def finish(self) -> list[LiveSegment]:
         """The segments not yet finished, at the end of the stream (the last one ends there)."""
         if self.state is None:
             return []
-        out = self._settle(self._seen(np.array(self.forward.settle(final=True), dtype=np.int64)))
+        out = self._settle(np.array(self.forward.settle(final=True), dtype=np.int64))
         assert self.settled is not None
-        return [*out, self._segment(self.segment_start, self.n, self.settled, False)]
+        out += self._judge(self.stretch_start, self.n, self.settled, final=True)
+        assert self.seen is not None
+        return [*out, self._segment(self.seen_start, self.n, self.seen, False)]
 
 
 __all__ = ["HOP_S", "LiveSegment", "LiveSegmenter"]

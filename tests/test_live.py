@@ -112,3 +112,34 @@ def test_windows_like_no_activity_do_not_vote_for_their_nearest() -> None:
     segments += live.finish()
     assert [s.label for s in segments] == ["a", "b"]
     assert abs(segments[0].end_frame - live.change) < live.hop / 2
+
+
+class _Novel(LiveSegmenter):
+    """Activity 0 throughout, but the windows centred in frames [300, 540) (8 s at 30 fps)
+    are of a movement the case base lacks: unlike every activity, their nearest activity 1
+    or 2 by turns of 2 s (a left-out movement lies about as far from two stored ones)."""
+
+    def _vote(self, n: int) -> tuple[np.ndarray, float]:
+        centre = n - self.window / 2
+        if 300 <= centre < 540:
+            return np.eye(3)[1 + int((centre - 300) // 60) % 2], 1.0
+        return np.eye(3)[0], 0.0
+
+
+def test_a_movement_like_no_activity_is_one_unknown_segment() -> None:
+    """The novel stretch comes out as one unknown segment, its nearest activities' turns
+    unseen under it (a change of activity under unknown costs nothing, as offline), its
+    ends within a hop and a half of where the novel windows' centres begin and end (10 s,
+    18 s); the stretches before and after are activity 0."""
+    labels = np.array(["a", "b", "c"])
+    clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
+    live = _Novel(clf, 30.0, judge=SimpleNamespace())
+    rng = np.random.default_rng(2)
+    segments: list[LiveSegment] = []
+    for _ in range(900):
+        segments += live.push(rng.normal(size=(33, 3)))
+    segments += live.finish()
+    assert [s.label for s in segments] == ["a", None, "a"]
+    assert abs(segments[1].start_frame - 300) <= 1.5 * live.hop
+    assert abs(segments[1].end_frame - 540) <= 1.5 * live.hop
+    assert segments[1].confidence > 0.5  # the share of its windows unlike every activity
