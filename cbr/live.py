@@ -1,18 +1,19 @@
 """Segmenting a live stream as it arrives: the causal half of :mod:`cbr.segmentation`.
 
 Frames are pushed one at a time (world landmarks ``(33, 3)``). Every :data:`HOP_S` seconds
-the last :data:`~cbr.segmentation.DEFAULT_WINDOW_S` seconds are solved by the fitted
-classifier and vote for the activity of their nearest case unless unlike the case base (then
-for unknown); the mean vote of the last windows goes through the forward pass of the same
-decoder (a change needs :data:`~cbr.segmentation.MIN_SEGMENT_S` of evidence at
-:data:`~cbr.segmentation.SWITCH_ODDS` to 1), whose best state now is the rolling label. A
-segment is finished once the decoder's best paths into every state agree on where it ends
-(online Viterbi: what later frames cannot change), not whenever the rolling label turns (the
-label of a stream whose windows waver between two activities turns often; the best path
-through them does not), and placed where the evidence of the hops on either side is of (the
-mean centre of the windows each averages), not where the window that decided it ends. Its
-repetitions are counted on its frames, each repetition in the one segment that holds where
-its movement turns (:func:`cbr.segmentation.keep_whole`).
+the last :data:`~cbr.segmentation.DEFAULT_WINDOW_S` seconds are a window, and every
+:data:`~cbr.segmentation.SPAN_HOP_S` the periods of the movement found whole in the last
+:data:`~cbr.segmentation.PERIOD_SPAN_S` seconds are windows too (a repetition each, as
+offline); each is solved by the fitted classifier and judged, and the same two passes as
+offline decode them, each made online (:class:`LiveSegmenter`): the activities, then known
+or unknown within each stretch of one activity. A segment is finished once the decoders'
+best paths into every state agree on where it ends (online Viterbi: what later frames cannot
+change), not whenever the rolling label turns (the label of a stream whose windows waver
+between two activities turns often; the best path through them does not), and a change is
+placed where the evidence of the hops on either side is of (the mean centre of the windows
+each averages), not where the window that decided it ends. Its repetitions are counted on
+its frames, each repetition in the one segment that holds where its movement turns
+(:func:`cbr.segmentation.keep_whole`).
 """
 
 from __future__ import annotations
@@ -27,17 +28,21 @@ import numpy as np
 from features.body import torso_share
 from features.errors import DataError
 from features.poses import PoseSequence
-from features.repetitions import ANALYSIS_FPS, Repetition, count_repetitions
+from features.repetitions import ANALYSIS_FPS, Repetition, count_repetitions, movement_signals
 from features.skeleton import BLAZEPOSE_33
 
 from .segmentation import (
     DEFAULT_WINDOW_S,
     MIN_SEGMENT_S,
+    PERIOD_SPAN_S,
+    SPAN_HOP_S,
     SWITCH_ODDS,
     activity_distances,
     at_cut,
     keep_whole,
     log_votes,
+    period_outliers,
+    periods_in_span,
     span_fields,
 )
 from .unknown import JUDGES, Judge, activity_codes, judge_of
@@ -170,12 +175,16 @@ class LiveSegmenter:
     when the best paths into every state agree on it, so the settled hops are those the
     offline decoder gives over the same evidence, not every turn of the rolling label):
 
-    1. the activities (:func:`cbr.segmentation.decode`): the windows like an activity vote
-       for their nearest; a change costs :data:`MIN_SEGMENT_S` of hops at
+    1. the activities (:func:`cbr.segmentation.decode`): a hop's evidence is the mean vote of
+       the latest fixed windows and of the repetition windows over it, each window like an
+       activity voting for its nearest (one unlike every activity votes for none); a change
+       costs :data:`MIN_SEGMENT_S` of hops at
        :data:`SWITCH_ODDS` to 1; a settled change finishes a stretch of one activity;
     2. known or unknown (:func:`cbr.segmentation.decode_unknown`), over the hops of finished
        stretches: a hop's evidence is the share of the windows inside its stretch over it
-       unlike every activity (a window across a change of activity is like neither side,
+       (fixed and repetition windows, those whose period disagrees with their neighbours'
+       left out: :func:`cbr.segmentation.period_outliers`) unlike every activity (a window
+       across a change of activity is like neither side,
        whether both are known or not); every change of the label seen costs the same, and a
        change of activity under unknown is not seen and costs nothing.
 
@@ -207,6 +216,12 @@ class LiveSegmenter:
         # the mean centre of the windows it averages (:meth:`_decide`)
         self.windows: list[tuple[int, int, float]] = []  # (start, stop, unlike) of the
         # windows that start in the stretch in progress (:meth:`_vote`'s unlike)
+        self.periods: list[tuple[int, int, float]] = []  # the same of its repetition windows
+        self.period_votes: list[tuple[int, int, np.ndarray]] = []  # (start, stop, vote) of
+        # the recent repetition windows like an activity
+        self.found: set[tuple[int, int]] = set()  # the recent periods (each solved once)
+        self.span = int(round(PERIOD_SPAN_S * fps))
+        self.span_every = max(1, int(round(SPAN_HOP_S / HOP_S)))  # hops between two spans
         self.state: int | None = None  # the rolling activity
         self.settled: int | None = None  # the activity of the stretch in progress
         self.stretch_start = 0
@@ -253,11 +268,16 @@ class LiveSegmenter:
         vote = self._vote(n)
         self.latest_votes = [*self.latest_votes[1 - self.cover :], vote]
         self.windows.append((n - self.window, n, vote[1]))
+        if (len(self.votes) + 1) % self.span_every == 0:
+            self._repetition_windows(n)
         # the evidence for the latest stretch: the mean vote of the windows over it that are
         # like an activity, as each block of the offline decoder gets
-        nearest = _mean_vote([v for v, far in self.latest_votes if far == 0.0], self.unknown)
+        centre = n - self.window / 2 - (len(self.latest_votes) - 1) * self.hop / 2
+        periods = [v for b, c, v in self.period_votes if b <= centre < c]
+        fixed = [v for v, far in self.latest_votes if far == 0.0]
+        nearest = _mean_vote(fixed + periods, self.unknown)
         self.votes.append(nearest)
-        self.hop_centres.append(n - self.window / 2 - (len(self.latest_votes) - 1) * self.hop / 2)
+        self.hop_centres.append(centre)
         self.state = self.forward.step(log_votes(nearest))
         finished = self._settle(np.array(self.forward.settle(), dtype=np.int64))
         self._trim()
@@ -279,6 +299,7 @@ class LiveSegmenter:
             finished += self._judge(self.stretch_start, boundary, self.settled)
             self.stretch_start, self.settled = boundary, state
             self.windows = [w for w in self.windows if w[0] >= boundary]
+            self.periods = [w for w in self.periods if w[0] >= boundary]
         return finished
 
     def _between(self, i: int) -> int:
@@ -293,7 +314,11 @@ class LiveSegmenter:
     def _unlike_shares(self, centres: np.ndarray, start: int, end: int) -> np.ndarray:
         """For hops at ``centres``: the share of the windows inside frames [start, end) over
         each that are unlike every activity (0.5, even, over none)."""
-        inside = np.array([w for w in self.windows if w[0] >= start and w[1] <= end])
+        spans = np.array([(a, b) for a, b, _ in self.periods], dtype=np.int64).reshape(-1, 2)
+        odd = period_outliers(spans, np.ones(len(spans), dtype=bool), self.step)
+        periods = [w for w, out in zip(self.periods, odd.tolist(), strict=True) if not out]
+        every = self.windows + periods
+        inside = np.array([w for w in every if w[0] >= start and w[1] <= end])
         if not len(inside):
             return np.full(len(centres), 0.5)
         over = (inside[None, :, 0] <= centres[:, None]) & (centres[:, None] < inside[None, :, 1])
@@ -340,10 +365,42 @@ class LiveSegmenter:
         del self.pending[: len(unknown)]
         return finished
 
+    def _repetition_windows(self, n: int) -> None:
+        """The periods of the movement found whole in the last :data:`PERIOD_SPAN_S` seconds,
+        as offline (:func:`cbr.segmentation.periods_in_span`; spans every
+        :data:`SPAN_HOP_S`), each new one solved and judged once: windows of one repetition
+        that vote in pass 1 and are evidence in pass 2 (a stretch shorter than a fixed window
+        holds none of those)."""
+        a = max(0, n - self.span)
+        try:
+            sig = movement_signals(self._sequence(a, n))
+        except DataError:  # nobody in view
+            return
+        new = [
+            (a + first, a + last)
+            for first, last in periods_in_span(sig, self.fps)
+            if (a + first, a + last) not in self.found
+        ]
+        self.found = {f for f in self.found if f[1] > n - 2 * self.span} | set(new)
+        clips = [self._sequence(b, c) for b, c in new]
+        shown = [(w, clip) for w, clip in zip(new, clips, strict=True) if torso_share(clip) > 0]
+        if not shown:
+            return
+        solved = self.clf.solve([clip for _, clip in shown], flag=False)
+        for ((b, c), _), one in zip(shown, solved, strict=True):
+            far = self.judge.unlike(activity_distances(self.clf, one, self.codes))
+            self.periods.append((b, c, 1.0 if far else 0.0))
+            if not far:
+                vote = np.zeros(self.unknown)
+                vote[self.classes.index(str(one.retrieval.labels[0]))] = 1.0
+                self.period_votes.append((b, c, vote))
+        self.period_votes = [w for w in self.period_votes if w[1] > n - 2 * self.span]
+
     def _trim(self) -> None:
         """Forget frames and hops no segment in progress can need (bounded memory)."""
         begun = min(self.seen_start, self.stretch_start)
         keep_from = max(begun, self.n - int(MAX_SEGMENT_S * self.fps)) - self.window
+        keep_from = min(keep_from, self.n - self.span)  # the next span's frames
         drop = keep_from - self.offset
         if drop > self.window:
             del self.frames[:drop]

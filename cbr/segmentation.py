@@ -222,16 +222,26 @@ def _repetition_bounds(sig: MovementSignals, n_frames: int, fps: float) -> list[
     found: set[tuple[int, int]] = set()
     for a in range(0, max(1, len(sig.values) - span + hop), hop):
         part = MovementSignals(sig.values[a : a + span], sig.names, sig.fps, sig.step)
-        if len(part.values) < 4:
-            continue
-        span_frames = len(part.values) * sig.step
-        for first, last in _periods(count_in_signals(part, span_frames, fps)):
-            if first == 0 or last >= span_frames - sig.step:
-                continue  # cut by the span's edge: whole in a neighbouring span
-            start, stop = a * sig.step + first, a * sig.step + last
-            if MIN_WINDOW_S * fps / 2 <= stop - start <= MAX_WINDOW_S * fps:
-                found.add((start, min(n_frames, stop)))
+        for first, last in periods_in_span(part, fps):
+            found.add((a * sig.step + first, min(n_frames, a * sig.step + last)))
     return sorted(found)
+
+
+def periods_in_span(part: MovementSignals, fps: float) -> list[tuple[int, int]]:
+    """Frames [start, stop) of the periods found whole in one span's signals ``part`` (of a
+    clip at ``fps``; :func:`_periods`), each between :data:`MIN_WINDOW_S` / 2 and
+    :data:`MAX_WINDOW_S` long; one cut by the span's edge is left out (whole in a
+    neighbouring span)."""
+    if len(part.values) < 4:
+        return []
+    span_frames = len(part.values) * part.step
+    out = []
+    for first, last in _periods(count_in_signals(part, span_frames, fps)):
+        if first == 0 or last >= span_frames - part.step:
+            continue
+        if MIN_WINDOW_S * fps / 2 <= last - first <= MAX_WINDOW_S * fps:
+            out.append((first, last))
+    return out
 
 
 def _periods(count: RepetitionCount) -> list[tuple[int, int]]:
@@ -802,6 +812,7 @@ __all__ = [
     "block_votes",
     "decode_activities",
     "period_outliers",
+    "periods_in_span",
     "unknown_blocks",
     "within_runs",
     "windows_of",

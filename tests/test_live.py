@@ -59,6 +59,9 @@ class _Scripted(LiveSegmenter):
         centre = n - self.window / 2
         return np.eye(2)[int(centre >= self.change)], 0.0
 
+    def _repetition_windows(self, n: int) -> None:
+        """The fixed windows only (the stream is noise: no repetition to script)."""
+
 
 def test_a_change_is_placed_where_the_windows_say_not_a_window_late() -> None:
     """30 fps, 2-s windows every 0.5 s (a hop), the movement changing at 10.0-10.5 s: the
@@ -82,7 +85,7 @@ def test_a_change_is_placed_where_the_windows_say_not_a_window_late() -> None:
         assert segments[1].start_frame == segments[0].end_frame
 
 
-class _Straddling(LiveSegmenter):
+class _Straddling(_Scripted):
     """Windows for activity 0 before frame ``change`` and 1 after, as :class:`_Scripted`; but
     the windows centred in the second after the change are unlike every activity, their
     nearest still the old one (a window across a change is like neither side)."""
@@ -114,7 +117,7 @@ def test_windows_like_no_activity_do_not_vote_for_their_nearest() -> None:
     assert abs(segments[0].end_frame - live.change) < live.hop / 2
 
 
-class _Novel(LiveSegmenter):
+class _Novel(_Scripted):
     """Activity 0 throughout, but the windows centred in frames [300, 540) (8 s at 30 fps)
     are of a movement the case base lacks: unlike every activity, their nearest activity 1
     or 2 by turns of 2 s (a left-out movement lies about as far from two stored ones)."""

@@ -179,3 +179,39 @@ def test_watch_that_stalls_leaves_the_earlier_video(
     assert "stalled: no frame for 0.5 s" in capsys.readouterr().err
     assert out.read_bytes() == b"the earlier video"
     assert list(tmp_path.iterdir()) == [out]  # no temporary left
+
+
+def test_live_decoder_on_real_mocap_names_the_exercises_and_the_one_it_lacks(
+    case_base: Path, shared_data: Path
+) -> None:
+    """CMU 13_30 (another recording of the same person) streamed at 30 fps into the live
+    decoder with the case base of 13_29, which lacks 13_30's last exercise (jogging): the
+    segments follow the label file's stretches (jumping jacks, twists, knee raises, squats,
+    then unknown), at least 90 % of the blocks of the exercises it has right, and most of
+    the jogging unknown."""
+    from casebase_store import open_store
+    from cbr.live import LiveSegmenter
+    from cbr.stored import load_classifier
+
+    store = open_store(str(case_base), readonly=True)
+    clf = load_classifier(store, store.list_case_bases()[0].name).classifier
+    seq = read_asf_amc(
+        shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
+        shared_data / "cmu-mocap6" / "amc" / "13_30.amc",
+    )
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    codes = np.array(labels.read_text().split(), dtype=int)  # per 0.1 s; 2 is jogging
+    names = {1: "JumpJack", 3: "Squat", 4: "KneeRaise", 6: "Twist"}  # as the case base's
+    live = LiveSegmenter(clf, 30.0)
+    segments = []
+    for frame in seq.positions[::4]:  # 120 fps streamed at 30
+        segments += live.push(frame)
+    segments += live.finish()
+    assert [s.label for s in segments] == ["JumpJack", "Twist", "KneeRaise", "Squat", None]
+    blocks = np.full(len(codes), "", dtype=object)
+    for s in segments:
+        blocks[round(s.start_frame / 3) : round(s.end_frame / 3)] = s.label  # 3 frames a block
+    seen = np.isin(codes, list(names))
+    truth = np.array([names.get(int(c)) for c in codes], dtype=object)
+    assert np.mean(blocks[seen] == truth[seen]) >= 0.9
+    assert np.mean([b is None for b in blocks[codes == 2]]) > 0.5
