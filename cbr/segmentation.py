@@ -31,11 +31,13 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
 6. stretches unlike every activity of the case base become unknown (:func:`unknown_blocks`):
    every window but the period outliers is judged (:mod:`cbr.unknown`; by default the margin
    between its two nearest activities against the nearest one's own threshold, calibrated on
-   the case base), and known/unknown is
+   the case base; graded between the budget's threshold and the judge's own,
+   :func:`cbr.unknown.unknown_evidence`), and known/unknown is
    decoded from the windows that lie within one decoded activity (a window across a change
-   of activity is like neither side, whether both are known or not), every change of the
-   label seen costing the same (:func:`decode_unknown`: no sliver of an activity left
-   between an unknown stretch and the next change);
+   of activity is like neither side, whether both are known or not; a block none of them
+   covers takes its nearest covered neighbours' evidence, :func:`block_evidence`), every
+   change of the label seen costing the same (:func:`decode_unknown`: no sliver of an
+   activity left between an unknown stretch and the next change);
 7. each segment is counted (:func:`features.repetitions.count_repetitions`), each
    repetition in the one segment that holds where its movement turns (:func:`keep_whole`),
    and explained by its most confident window.
@@ -43,7 +45,6 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
@@ -80,6 +81,7 @@ from .unknown import (
     activity_codes,
     judge_of,
     per_activity,
+    unknown_evidence,
 )
 
 BLOCK_S = 0.1
@@ -397,11 +399,7 @@ def block_votes(
     n_blocks = int(math.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
     if not solved:
         return np.full((n_blocks, n_states or 1), 1.0 / (n_states or 1))
-    centres = (np.arange(n_blocks) + 0.5) * BLOCK_S * fps  # in frames
-    # the blocks whose centre a window covers, [first, end): a run of blocks per window (a
-    # blocks x windows matrix would take 64 GB for a recording of 10^6 frames)
-    first = np.searchsorted(centres, [w.start for w in solved], side="left")
-    end = np.searchsorted(centres, [w.stop for w in solved], side="left")
+    first, end = _covered_blocks(solved, n_blocks, fps)
     n_states = len(solved[0].vote)
     votes = np.zeros((n_blocks, n_states))
     counts = np.zeros(n_blocks, dtype=np.int64)
@@ -410,6 +408,42 @@ def block_votes(
         counts[a:b] += 1
     uniform = np.full(n_states, 1.0 / n_states)
     return np.where(counts[:, None] > 0, votes / np.maximum(counts, 1)[:, None], uniform)
+
+
+def _covered_blocks(
+    solved: Sequence[_Solved], n_blocks: int, fps: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The blocks whose centre each window covers, [first, end) ``(n_windows,)`` each: a run
+    of blocks per window (a blocks x windows matrix would take 64 GB for a recording of 10^6
+    frames)."""
+    centres = (np.arange(n_blocks) + 0.5) * BLOCK_S * fps  # in frames
+    first = np.searchsorted(centres, [w.start for w in solved], side="left")
+    end = np.searchsorted(centres, [w.stop for w in solved], side="left")
+    return first, end
+
+
+def block_evidence(
+    solved: Sequence[_Solved], evidence: np.ndarray, n_frames: int, fps: float
+) -> np.ndarray:
+    """``(n_blocks,)``: the mean ``evidence`` ``(n_windows,)`` (0 to 1) of the windows over
+    each block's centre; a block no window covers takes that of the nearest covered blocks
+    on either side, linearly interpolated between them (the nearest one's beyond the
+    first or the last; 0.5 when no block is covered). A gap in the evidence, where a change of
+    activity leaves blocks that no window within one activity covers, is split between
+    the sides by nearness instead of going whole to whichever side wins a tie."""
+    n_blocks = int(math.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
+    if not solved:
+        return np.full(n_blocks, 0.5)
+    first, end = _covered_blocks(solved, n_blocks, fps)
+    total, counts = np.zeros(n_blocks), np.zeros(n_blocks, dtype=np.int64)
+    for e, a, b in zip(evidence.tolist(), first.tolist(), end.tolist(), strict=True):  # windows
+        total[a:b] += e
+        counts[a:b] += 1
+    covered = np.flatnonzero(counts > 0)
+    if not len(covered):
+        return np.full(n_blocks, 0.5)
+    out: np.ndarray = np.interp(np.arange(n_blocks), covered, total[covered] / counts[covered])
+    return out
 
 
 TIE = 1e-6
@@ -561,19 +595,19 @@ def unknown_blocks(
     """``(n_blocks,)`` bool: blocks unlike every activity of the case base.
 
     The windows within one run of the decoded activity ``path`` ``(n_blocks,)``
-    (:func:`within_runs`) are judged (:class:`cbr.unknown.Judge`); a block's evidence is the
-    share of those over it judged unlike (none over it: no evidence either way), and
-    known/unknown is decoded with the activities (:func:`decode_unknown`: every change of
-    label a user sees needs :data:`MIN_SEGMENT_S` of evidence)."""
+    (:func:`within_runs`) are judged (:func:`cbr.unknown.unknown_evidence`: graded between
+    the budget's threshold and the judge's own by the default judge, else all or nothing); a
+    block's evidence is the mean of those over it, a block none covers takes its nearest
+    covered neighbours' (:func:`block_evidence`), and known/unknown is decoded with the
+    activities (:func:`decode_unknown`: every change of label a user sees needs
+    :data:`MIN_SEGMENT_S` of evidence)."""
     inside = within_runs(solved, fps, path)
-    marked = [
-        dataclasses.replace(w, vote=np.array([0.0, 1.0] if judge.unlike(w.nearest) else [1.0, 0.0]))
-        for w, keep in zip(solved, inside.tolist(), strict=True)
-        if keep
-    ]
-    if not marked:
+    judged = [w for w, keep in zip(solved, inside.tolist(), strict=True) if keep]
+    if not judged:
         return np.zeros(len(path), dtype=bool)
-    return decode_unknown(block_votes(marked, n_frames, fps), path)
+    evidence = np.array([unknown_evidence(judge, w.nearest) for w in judged], dtype=np.float64)
+    unknown = block_evidence(judged, evidence, n_frames, fps)
+    return decode_unknown(np.stack([1.0 - unknown, unknown], axis=1), path)
 
 
 def _explain_segment(
@@ -809,6 +843,7 @@ __all__ = [
     "Segmentation",
     "SolvedRecording",
     "Window",
+    "block_evidence",
     "block_votes",
     "decode_activities",
     "period_outliers",

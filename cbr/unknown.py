@@ -576,7 +576,9 @@ class ActivityMargin(Calibrated):
     and 20. One pooled threshold is set by the activities that resemble each other most; an
     activity whose known cases are clear keeps a low one, so a window of a left-out movement
     nearest to it is caught. ``basis`` and ``known`` as :class:`Margin`'s (``known``: the
-    rightly named cases)."""
+    rightly named cases). ``budget_thresholds``: the thresholds read at the whole budget
+    ``false_unknown`` with the same prior, where the windows' graded evidence starts
+    (:meth:`evidence`); empty in a record stored before (its evidence all or nothing)."""
 
     thresholds: tuple[float, ...]
     pooled: float
@@ -585,6 +587,7 @@ class ActivityMargin(Calibrated):
     false_unknown: float = FALSE_UNKNOWN
     prior: float = ACTIVITY_PRIOR
     rate: float = FALSE_UNKNOWN
+    budget_thresholds: tuple[float, ...] = ()
 
     @classmethod
     def of(
@@ -610,11 +613,12 @@ class ActivityMargin(Calibrated):
             if prior is None
             else (false_unknown, prior)
         )
-        per, pooled = activity_thresholds(
-            _margins(known[right]), own[right], seen.shape[1], rate, prior
-        )
+        margins = _margins(known[right])
+        per, pooled = activity_thresholds(margins, own[right], seen.shape[1], rate, prior)
+        budget, _ = activity_thresholds(margins, own[right], seen.shape[1], false_unknown, prior)
         known_n = int(right.sum())
-        return cls(tuple(per.tolist()), pooled, basis, known_n, false_unknown, prior, rate)
+        return cls(tuple(per.tolist()), pooled, basis, known_n, false_unknown, prior, rate,
+                   tuple(budget.tolist()))  # fmt: skip
 
     def threshold(self, nearest: np.ndarray) -> float:
         """The threshold of the window's nearest activity."""
@@ -625,6 +629,24 @@ class ActivityMargin(Calibrated):
 
     def unlike(self, nearest: np.ndarray) -> bool:
         return margin_of(nearest) > self.threshold(nearest)
+
+    def evidence(self, nearest: np.ndarray) -> float:
+        """How much the window says unknown, 0 to 1: 1 above its nearest activity's
+        threshold (:meth:`unlike`), 0 at or below that activity's threshold at the whole
+        budget (``budget_thresholds``: the margin ``false_unknown`` of its held-out known
+        cases exceed), linear in the margin between. The threshold is read at a rate below
+        the budget when the held-out groups say an activity's own quantile is exceeded more
+        often by a new person (:func:`choose_weight`); a margin between the two is unlike by
+        the case base's own cases but not by that safer threshold: half-way evidence, not
+        none. All or nothing without ``budget_thresholds`` (a record stored before them) or
+        when the rate is the budget (the two thresholds are one)."""
+        m, high = margin_of(nearest), self.threshold(nearest)
+        if m > high:
+            return 1.0
+        if not self.budget_thresholds:
+            return 0.0
+        low = min(self.budget_thresholds[int(np.argmin(nearest))], high)
+        return 0.0 if m <= low else (m - low) / (high - low)
 
     def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
         first, second = two_nearest(nearest, classes)
@@ -774,6 +796,15 @@ def judges_from_dict(d: Mapping[str, Any]) -> dict[str, Calibrated]:
     return out
 
 
+def unknown_evidence(judge: Judge, nearest: np.ndarray) -> float:
+    """How much a window whose distances to every activity are ``nearest`` ``(n_classes,)``
+    says it is like none, 0 to 1: graded by :meth:`ActivityMargin.evidence`, all or nothing
+    (:meth:`Judge.unlike`) by every other judge."""
+    if isinstance(judge, ActivityMargin):
+        return judge.evidence(nearest)
+    return 1.0 if judge.unlike(nearest) else 0.0
+
+
 def judge_of(clf: Any, name: str) -> Judge:
     """The judge called ``name`` (:data:`JUDGES`) for the fitted classifier ``clf``: the one
     stored with it (``clf.judges_``, calibrated when it was stored on the cases it holds)
@@ -824,4 +855,5 @@ __all__ = [
     "judge_of",
     "margin_of",
     "per_activity",
+    "unknown_evidence",
 ]

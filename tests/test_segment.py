@@ -20,6 +20,7 @@ from cbr.segmentation import (
     SWITCH_ODDS,
     Segmentation,
     _Solved,
+    block_evidence,
     counted_segments,
     decode,
     decode_activities,
@@ -679,3 +680,42 @@ def test_no_voting_window_leaves_every_activity_alike() -> None:
     votes, _ = decode_activities(solved, np.zeros(len(solved), dtype=bool),
                                  np.ones(len(solved), dtype=bool), 60, 10.0, 3)  # fmt: skip
     assert votes == pytest.approx(np.full((60, 3), 1.0 / 3.0))
+
+
+def test_a_block_no_window_covers_takes_its_neighbours_evidence_by_nearness() -> None:
+    """10 fps (one frame per block), 10 blocks: a window over frames 0-2 with evidence 1, one
+    over 7-9 with 0, and one over 0-1 with 0 (blocks 0-1: mean 0.5). Blocks 3-6, covered by
+    none, lie 1-4 blocks from block 2 (1.0) and 4-1 from block 7 (0.0): 0.8, 0.6, 0.4, 0.2.
+    No window at all: 0.5 everywhere (no evidence either way)."""
+    windows = [_Solved(a, b, np.ones(2), np.ones(3), None) for a, b in ((0, 3), (7, 10), (0, 2))]
+    got = block_evidence(windows, np.array([1.0, 0.0, 0.0]), 10, 10.0)
+    assert got == pytest.approx([0.5, 0.5, 1.0, 0.8, 0.6, 0.4, 0.2, 0.0, 0.0, 0.0])
+    assert block_evidence([], np.zeros(0), 10, 10.0) == pytest.approx(np.full(10, 0.5))
+
+
+def test_a_gap_in_the_evidence_at_a_change_is_split_by_nearness() -> None:
+    """10 fps, 60 blocks decoded as activity 0 up to block 19, then 1. Windows judged unlike
+    cover blocks 0-19 (frames 0-19, within activity 0), windows judged like cover 40-59;
+    blocks 20-39 no window covers. Interpolated, block t has evidence (40 - t) / 21 of
+    unknown: above 0.5 up to block 29, below from 30: blocks 0-29 unknown, 30-59 known (one
+    change of the label seen either way; the change of activity at 20 lies under unknown).
+    At even odds (before) the gap went whole to the known side: only blocks 0-19 were
+    unknown."""
+
+    class Flag:
+        def unlike(self, nearest: np.ndarray) -> bool:
+            return bool(nearest[0] > 1.0)
+
+        def ratio(self, nearest: np.ndarray) -> float:
+            return float(nearest[0])
+
+        def describe(self, nearest: np.ndarray, classes: object) -> str:
+            return ""
+
+    path = np.r_[np.zeros(20, dtype=np.int64), np.ones(40, dtype=np.int64)]
+    windows = [_Solved(a, a + 10, np.ones(2) / 2, np.array([2.0, 3.0]), None) for a in (0, 5, 10)]
+    windows += [
+        _Solved(a, a + 10, np.ones(2) / 2, np.array([0.5, 3.0]), None) for a in (40, 45, 50)
+    ]
+    unknown = unknown_blocks(windows, 60, 10.0, Flag(), path)
+    assert unknown.tolist() == [True] * 30 + [False] * 30

@@ -27,6 +27,7 @@ from cbr.unknown import (
     inner_scores,
     joint_thresholds,
     margin_of,
+    unknown_evidence,
 )
 from features.datasets import Clip
 from features.errors import ConfigError, DataError
@@ -355,3 +356,40 @@ def test_activity_margin_is_stored_as_a_record_with_its_thresholds_listed() -> N
         ActivityMargin.from_dict({**record, "thresholds": [0.3, -0.1, 0.2]})
     with pytest.raises(ValueError, match="'thresholds'"):
         ActivityMargin.from_dict({**record, "thresholds": 0.3})
+
+
+def test_activity_margin_evidence_is_graded_between_the_budget_and_its_threshold() -> None:
+    """Thresholds (0.8, 0.9, 0.7) at the chosen rate, (0.6, 0.9, 0.5) at the whole budget.
+    Nearest activity 0: a margin 0.5 (1/2) is no evidence, 0.7 (0.7/1) is half-way, (0.7 -
+    0.6) / (0.8 - 0.6) = 0.5, 0.85 above the threshold is 1 (and unlike). Activity 1, whose
+    two thresholds are one: 0.89 is 0, 0.95 is 1. A record stored without the budget's
+    thresholds judges all or nothing: 0.7 for activity 0 gives 0."""
+    judge = ActivityMargin((0.8, 0.9, 0.7), 0.8, "subject", 12, rate=0.03,
+                           budget_thresholds=(0.6, 0.9, 0.5))  # fmt: skip
+    assert judge.evidence(np.array([1.0, 2.0, 5.0])) == 0.0
+    assert judge.evidence(np.array([0.7, 1.0, 5.0])) == pytest.approx(0.5)
+    assert judge.evidence(np.array([0.85, 1.0, 5.0])) == 1.0 and judge.unlike(
+        np.array([0.85, 1.0, 5.0])
+    )
+    assert judge.evidence(np.array([5.0, 0.89, 1.0])) == 0.0
+    assert judge.evidence(np.array([5.0, 0.95, 1.0])) == 1.0
+    old = ActivityMargin.from_dict(
+        {k: v for k, v in judge.to_dict().items() if k != "budget_thresholds"}
+    )
+    assert old.budget_thresholds == () and old.evidence(np.array([0.7, 1.0, 5.0])) == 0.0
+    # every other judge: all or nothing, as its unlike says
+    margin = Margin(0.6, "subject", 10, 10)
+    assert unknown_evidence(margin, np.array([0.7, 1.0, 5.0])) == 1.0
+    assert unknown_evidence(margin, np.array([0.5, 1.0, 5.0])) == 0.0
+    assert unknown_evidence(judge, np.array([0.7, 1.0, 5.0])) == pytest.approx(0.5)
+
+
+def test_activity_margin_budget_thresholds_lie_at_or_below_its_own() -> None:
+    """Read at the whole budget, a quantile lies at or below one read at a smaller rate; with
+    the prior given the rate is the budget and the two are one (evidence all or nothing)."""
+    cb = _one_wrongly_named()
+    chosen = ActivityMargin.of(cb)
+    assert len(chosen.budget_thresholds) == len(chosen.thresholds)
+    assert all(b <= t for b, t in zip(chosen.budget_thresholds, chosen.thresholds, strict=True))
+    fixed = ActivityMargin.of(cb, prior=ACTIVITY_PRIOR)
+    assert fixed.budget_thresholds == fixed.thresholds
