@@ -45,7 +45,7 @@ from .segmentation import (
     periods_in_span,
     span_fields,
 )
-from .unknown import JUDGES, Judge, activity_codes, judge_of
+from .unknown import JUDGES, Judge, activity_codes, judge_of, unknown_evidence
 
 HOP_S = 0.5
 """The rolling label is decided every this many seconds of stream."""
@@ -178,15 +178,16 @@ class LiveSegmenter:
     1. the activities (:func:`cbr.segmentation.decode`): a hop's evidence is the mean vote of
        the latest fixed windows and of the repetition windows over it, each window like an
        activity voting for its nearest (one unlike every activity votes for none); a change
-       costs :data:`MIN_SEGMENT_S` of hops at
-       :data:`SWITCH_ODDS` to 1; a settled change finishes a stretch of one activity;
+       costs :data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS` to 1; a settled change
+       finishes a stretch of one activity;
     2. known or unknown (:func:`cbr.segmentation.decode_unknown`), over the hops of finished
-       stretches: a hop's evidence is the share of the windows inside its stretch over it
-       (fixed and repetition windows, those whose period disagrees with their neighbours'
-       left out: :func:`cbr.segmentation.period_outliers`) unlike every activity (a window
-       across a change of activity is like neither side,
-       whether both are known or not); every change of the label seen costs the same, and a
-       change of activity under unknown is not seen and costs nothing.
+       stretches: a hop's evidence is the mean evidence of unknown
+       (:func:`cbr.unknown.unknown_evidence`, graded by the default judge) of the windows
+       inside its stretch over it (fixed and repetition windows, those whose period
+       disagrees with their neighbours' left out: :func:`cbr.segmentation.period_outliers`;
+       a window across a change of activity is like neither side, whether both are known or
+       not); every change of the label seen costs the same, and a change of activity under
+       unknown is not seen and costs nothing.
 
     A segment is finished when the label seen (an activity, or unknown) settles on a change.
     """
@@ -214,8 +215,8 @@ class LiveSegmenter:
         # the last one that is): the share of the latest windows nearest each activity
         self.hop_centres: list[float] = []  # the frame each of those hops' evidence is of:
         # the mean centre of the windows it averages (:meth:`_decide`)
-        self.windows: list[tuple[int, int, float]] = []  # (start, stop, unlike) of the
-        # windows that start in the stretch in progress (:meth:`_vote`'s unlike)
+        self.windows: list[tuple[int, int, float]] = []  # (start, stop, evidence of unknown)
+        # of the windows that start in the stretch in progress (:meth:`_vote`)
         self.periods: list[tuple[int, int, float]] = []  # the same of its repetition windows
         self.period_votes: list[tuple[int, int, np.ndarray]] = []  # (start, stop, vote) of
         # the recent repetition windows like an activity
@@ -274,7 +275,7 @@ class LiveSegmenter:
         # like an activity, as each block of the offline decoder gets
         centre = n - self.window / 2 - (len(self.latest_votes) - 1) * self.hop / 2
         periods = [v for b, c, v in self.period_votes if b <= centre < c]
-        fixed = [v for v, far in self.latest_votes if far == 0.0]
+        fixed = [v for v, far in self.latest_votes if far < 1.0]
         nearest = _mean_vote(fixed + periods, self.unknown)
         self.votes.append(nearest)
         self.hop_centres.append(centre)
@@ -312,8 +313,8 @@ class LiveSegmenter:
         return int(round((self.hop_centres[i - 1] + self.hop_centres[i]) / 2))
 
     def _unlike_shares(self, centres: np.ndarray, start: int, end: int) -> np.ndarray:
-        """For hops at ``centres``: the share of the windows inside frames [start, end) over
-        each that are unlike every activity (0.5, even, over none)."""
+        """For hops at ``centres``: the mean evidence of unknown of the windows inside frames
+        [start, end) over each (0.5, even, over none)."""
         spans = np.array([(a, b) for a, b, _ in self.periods], dtype=np.int64).reshape(-1, 2)
         odd = period_outliers(spans, np.ones(len(spans), dtype=bool), self.step)
         periods = [w for w, out in zip(self.periods, odd.tolist(), strict=True) if not out]
@@ -388,9 +389,9 @@ class LiveSegmenter:
             return
         solved = self.clf.solve([clip for _, clip in shown], flag=False)
         for ((b, c), _), one in zip(shown, solved, strict=True):
-            far = self.judge.unlike(activity_distances(self.clf, one, self.codes))
-            self.periods.append((b, c, 1.0 if far else 0.0))
-            if not far:
+            far = unknown_evidence(self.judge, activity_distances(self.clf, one, self.codes))
+            self.periods.append((b, c, far))
+            if far < 1.0:
                 vote = np.zeros(self.unknown)
                 vote[self.classes.index(str(one.retrieval.labels[0]))] = 1.0
                 self.period_votes.append((b, c, vote))
@@ -412,8 +413,9 @@ class LiveSegmenter:
 
     def _vote(self, n: int) -> tuple[np.ndarray, float]:
         """The last window's vote over the activities ``(n_classes,)`` (its nearest case's)
-        and whether it is unlike every activity (1.0), not (0.0), or shows nobody (0.5).
-        Only a window like an activity votes for one (:func:`_mean_vote`), as offline
+        and how much it says it is unlike every activity (:func:`cbr.unknown.unknown_evidence`:
+        1.0 when unlike; 0.5 when it shows nobody). Only a window not unlike every activity
+        votes for one (:func:`_mean_vote`), as offline
         (:func:`cbr.segmentation.decode_activities`): one like none, across a change of
         movement or of one the case base lacks, is nearest to whichever lies least far."""
         window = self._sequence(n - self.window, n)
@@ -422,8 +424,7 @@ class LiveSegmenter:
         solved = self.clf.solve([window], flag=False)[0]  # the judge decides unknown
         vote = np.zeros(self.unknown)
         vote[self.classes.index(str(solved.retrieval.labels[0]))] = 1.0
-        unlike = self.judge.unlike(activity_distances(self.clf, solved, self.codes))
-        return vote, 1.0 if unlike else 0.0
+        return vote, unknown_evidence(self.judge, activity_distances(self.clf, solved, self.codes))
 
     def recent(self, frames: int) -> PoseSequence:
         """The last ``frames`` frames pushed, as a clip."""
