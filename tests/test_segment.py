@@ -401,6 +401,19 @@ def test_an_exercise_left_out_of_the_case_base_is_unknown(
         assert np.mean([b == "KneeRaise" for b in knees.blocks]) >= 0.8, (j, knees.segments)
 
 
+class _FirstFar:
+    """A judge that calls a window unlike when its distance to the first activity exceeds 1."""
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        return bool(nearest[0] > 1.0)
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        return float(nearest[0])
+
+    def describe(self, nearest: np.ndarray, classes: object) -> str:
+        return ""
+
+
 def test_a_window_across_a_change_of_activity_is_no_evidence_of_unknown() -> None:
     """10 fps (one frame per block), 60 blocks decoded as activity 0 then 1 from block 30.
     Windows of 20 frames every 5: those starting at 15, 20 and 25 lie across the change and
@@ -409,22 +422,12 @@ def test_a_window_across_a_change_of_activity_is_no_evidence_of_unknown() -> Non
     30-59 (covered only by windows judged unlike) are unknown. Counted, they would outvote
     the known windows over blocks 20-29 (2 or 3 of 3 or 4)."""
 
-    class Flag:
-        def unlike(self, nearest: np.ndarray) -> bool:
-            return bool(nearest[0] > 1.0)
-
-        def ratio(self, nearest: np.ndarray) -> float:
-            return float(nearest[0])
-
-        def describe(self, nearest: np.ndarray, classes: object) -> str:
-            return ""
-
     path = np.r_[np.zeros(30, dtype=np.int64), np.ones(30, dtype=np.int64)]
     windows = [
         _Solved(a, a + 20, np.ones(2) / 2, np.array([2.0 if a >= 15 else 0.5, 3.0]), None)
         for a in range(0, 41, 5)
     ]
-    unknown = unknown_blocks(windows, 60, 10.0, Flag(), path)
+    unknown = unknown_blocks(windows, 60, 10.0, _FirstFar(), path)
     assert not unknown[:30].any() and unknown[30:].all()
 
 
@@ -702,20 +705,10 @@ def test_a_gap_in_the_evidence_at_a_change_is_split_by_nearness() -> None:
     At even odds (before) the gap went whole to the known side: only blocks 0-19 were
     unknown."""
 
-    class Flag:
-        def unlike(self, nearest: np.ndarray) -> bool:
-            return bool(nearest[0] > 1.0)
-
-        def ratio(self, nearest: np.ndarray) -> float:
-            return float(nearest[0])
-
-        def describe(self, nearest: np.ndarray, classes: object) -> str:
-            return ""
-
     path = np.r_[np.zeros(20, dtype=np.int64), np.ones(40, dtype=np.int64)]
     windows = [_Solved(a, a + 10, np.ones(2) / 2, np.array([2.0, 3.0]), None) for a in (0, 5, 10)]
     windows += [
         _Solved(a, a + 10, np.ones(2) / 2, np.array([0.5, 3.0]), None) for a in (40, 45, 50)
     ]
-    unknown = unknown_blocks(windows, 60, 10.0, Flag(), path)
+    unknown = unknown_blocks(windows, 60, 10.0, _FirstFar(), path)
     assert unknown.tolist() == [True] * 30 + [False] * 30
