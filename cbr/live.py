@@ -33,6 +33,7 @@ from features.skeleton import BLAZEPOSE_33
 
 from .segmentation import (
     DEFAULT_WINDOW_S,
+    MAX_WINDOW_S,
     MIN_SEGMENT_S,
     PERIOD_SPAN_S,
     SPAN_HOP_S,
@@ -51,6 +52,10 @@ HOP_S = 0.5
 """The rolling label is decided every this many seconds of stream."""
 MAX_SEGMENT_S = 120.0
 """Repetitions are counted over at most the last this many seconds of a segment."""
+MAX_UNSETTLED_S = 30.0
+"""A hop the decoder has not settled after this many seconds of stream is settled on the path
+best now (the best paths into the states may never agree: when every state is equally
+likely, as with nobody in view, each stays in itself); bounds the delay and the memory."""
 
 
 @dataclass(frozen=True)
@@ -111,20 +116,25 @@ class _Forward:
             out[:, i - 1] = self.back[i][out[:, i]]
         return out
 
-    def settle(self, final: bool = False) -> list[int]:
+    def settle(self, final: bool = False, most: int | None = None) -> list[int]:
         """The states of the hops now settled, in order, forgotten here: the leading hops on
         which the best paths into every state agree (whatever comes next, the best path
         keeps them: they are what the offline decoder would give); ``final``: the stream has
-        ended, every hop is settled on the best path."""
+        ended, every hop is settled on the best path; ``most``: at most this many hops are
+        left unsettled (the oldest beyond are settled on the path best now)."""
         if not self.back:
             return []
         paths = self.paths()
+        best = paths[int(np.argmax(self.total))]
         if final:
-            settled = paths[int(np.argmax(self.total))].tolist()
+            settled = best.tolist()
         else:
             same = (paths == paths[0]).all(axis=0)
             agree = len(same) if same.all() else int(np.argmin(same))
-            settled = paths[0, :agree].tolist()
+            if most is not None and len(same) - agree > most:
+                settled = [*paths[0, :agree].tolist(), *best[agree : len(same) - most].tolist()]
+            else:
+                settled = paths[0, :agree].tolist()
         del self.back[: len(settled)]
         return [int(x) for x in settled]
 
@@ -150,11 +160,11 @@ def _shifted(rep: Repetition, frames: int) -> Repetition:
 
 @dataclass(frozen=True)
 class _Hop:
-    """A settled hop of a finished stretch of one activity, for the known/unknown decoder:
-    the frame its evidence is of (``centre``), its ``activity``, the share of its windows
-    voting for it (``vote``), the share of the windows inside the stretch over its centre
-    unlike every activity (``unlike``; 0.5 when none is), and the stretch's first frame when
-    it is the stretch's first hop after a change of activity (``change``, else None)."""
+    """A settled hop whose evidence of unknown is final, for the known/unknown decoder: the
+    frame its evidence is of (``centre``), its ``activity``, the share of its windows voting
+    for it (``vote``), the mean evidence of unknown of the windows inside its stretch over its
+    centre (``unlike``), and its stretch's first frame when it is the stretch's first hop
+    after a change of activity (``change``, else None)."""
 
     centre: float
     activity: int
@@ -173,23 +183,26 @@ class LiveSegmenter:
 
     As offline, in two passes, each an online Viterbi (:class:`_Forward`: a hop is settled
     when the best paths into every state agree on it, so the settled hops are those the
-    offline decoder gives over the same evidence, not every turn of the rolling label):
+    offline decoder gives over the same evidence, not every turn of the rolling label; or
+    after :data:`MAX_UNSETTLED_S` on the path best then):
 
     1. the activities (:func:`cbr.segmentation.decode`): a hop's evidence is the mean vote of
-       the latest fixed windows and of the repetition windows over it, each window like an
-       activity voting for its nearest (one unlike every activity votes for none); a change
-       costs :data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS` to 1; a settled change
-       finishes a stretch of one activity;
-    2. known or unknown (:func:`cbr.segmentation.decode_unknown`), over the hops of finished
-       stretches: a hop's evidence is the mean evidence of unknown
-       (:func:`cbr.unknown.unknown_evidence`, graded by the default judge) of the windows
-       inside its stretch over it (fixed and repetition windows, those whose period
-       disagrees with their neighbours' left out: :func:`cbr.segmentation.period_outliers`;
-       a window across a change of activity is like neither side, whether both are known or
-       not); every change of the label seen costs the same, and a change of activity under
+       the latest fixed windows and of the repetition windows over it, each window not
+       unlike every activity voting for its nearest; a change costs :data:`MIN_SEGMENT_S` of
+       hops at :data:`SWITCH_ODDS` to 1; a settled change ends a stretch of one activity;
+    2. known or unknown (:func:`cbr.segmentation.decode_unknown`), over the settled hops once
+       no window can still change their evidence (:meth:`_final_until`): a hop's evidence is
+       the mean evidence of unknown (:func:`cbr.unknown.unknown_evidence`, graded by the
+       default judge) of the windows inside its stretch over it (fixed and repetition
+       windows, those whose period disagrees with their neighbours' left out:
+       :func:`cbr.segmentation.period_outliers`; a window across a change of activity is like
+       neither side, whether both are known or not; over none, the last evidence carries
+       on); every change of the label seen costs the same, and a change of activity under
        unknown is not seen and costs nothing.
 
     A segment is finished when the label seen (an activity, or unknown) settles on a change.
+    Memory is bounded: windows, hops and frames are kept only while a segment or a decision
+    can still need them.
     """
 
     def __init__(self, clf: Any, fps: float, judge: Judge | None = None) -> None:
@@ -204,37 +217,43 @@ class LiveSegmenter:
         self.hop = max(1, int(round(HOP_S * fps)))
         self.window = max(2, int(round(DEFAULT_WINDOW_S * fps)))
         self.step = max(1, int(round(fps / ANALYSIS_FPS)))  # frames per counted sample
+        self.span = int(round(PERIOD_SPAN_S * fps))
+        self.span_every = max(1, int(round(SPAN_HOP_S / HOP_S)))  # hops between two spans
+        self.longest = max(self.window, int(round(MAX_WINDOW_S * fps)))  # of any window
+        self.most = max(1, int(round(MAX_UNSETTLED_S / HOP_S)))  # hops left unsettled
         self.frames: list[np.ndarray] = []
         self.offset = 0  # the stream frame that frames[0] is (older frames are dropped)
         self.n = 0  # frames pushed
+        self.hops = 0  # hops decided
         self.cover = max(1, math.ceil(self.window / self.hop))  # windows over one stretch
         self.latest_votes: list[tuple[np.ndarray, float]] = []
-        # pass 1, the activities:
-        self.forward = _Forward(self._penalty() * (1.0 - np.eye(self.unknown)))
-        self.votes: list[np.ndarray] = []  # of the hops not yet in a finished stretch (and
-        # the last one that is): the share of the latest windows nearest each activity
-        self.hop_centres: list[float] = []  # the frame each of those hops' evidence is of:
-        # the mean centre of the windows it averages (:meth:`_decide`)
         self.windows: list[tuple[int, int, float]] = []  # (start, stop, evidence of unknown)
-        # of the windows that start in the stretch in progress (:meth:`_vote`)
+        # of the windows that start in the stretch in progress and may still count
         self.periods: list[tuple[int, int, float]] = []  # the same of its repetition windows
         self.period_votes: list[tuple[int, int, np.ndarray]] = []  # (start, stop, vote) of
-        # the recent repetition windows like an activity
+        # the recent repetition windows not unlike every activity
         self.found: set[tuple[int, int]] = set()  # the recent periods (each solved once)
-        self.span = int(round(PERIOD_SPAN_S * fps))
-        self.span_every = max(1, int(round(SPAN_HOP_S / HOP_S)))  # hops between two spans
+        # pass 1, the activities:
+        self.forward = _Forward(self._penalty() * (1.0 - np.eye(self.unknown)))
+        self.votes: list[np.ndarray] = []  # of the hops not yet passed to pass 2 (and the
+        # last settled one): the share of the windows over each nearest each activity
+        self.hop_centres: list[float] = []  # the frame each of those hops' evidence is of:
+        # the mean centre of the fixed windows it averages (:meth:`_decide`)
         self.state: int | None = None  # the rolling activity
         self.settled: int | None = None  # the activity of the stretch in progress
         self.stretch_start = 0
-        # pass 2, known or unknown, over the hops of finished stretches:
+        self.passed = -math.inf  # the centre of the last hop passed to pass 2
+        self.stretch_passed = False  # a hop of the stretch in progress was passed
+        # pass 2, known or unknown:
         pen = self._penalty()
         self.known = _Forward(np.array([[0.0, pen], [pen, 0.0]]))
         self.pending: list[_Hop] = []  # the hops pass 2 has not settled
+        self.carried = 0.0  # the last evidence of unknown of a hop some window covered
         self.seen: int | None = None  # the label seen of the segment in progress (an
         # activity, or n_classes: unknown)
         self.seen_start = 0
         self.seen_sum: list[float] = [0.0, 0.0]  # its settled hops' votes for it (unknown:
-        # their shares unlike), and how many
+        # their evidence of unknown), and how many
         self.last_centre = 0.0  # of the last hop pass 2 settled
         self.turn = False  # the last finished segment had a far point at its end
 
@@ -245,16 +264,20 @@ class LiveSegmenter:
     @property
     def label(self) -> str | None:
         """The rolling label (None: unknown or not decided yet): the rolling activity, unless
-        most of the latest windows inside its stretch are unlike every activity."""
-        if self.state is None or self._unlike_now() > 0.5:
+        the latest windows show nobody or are more unlike every activity than not."""
+        if self.state is None or self._unlike_now() > 0.5 or self._nobody_now():
             return None
         return self.classes[int(self.state)]
 
     def _unlike_now(self) -> float:
-        """The share of the latest windows that lie in the stretch in progress (all the
-        latest when none does) unlike every activity."""
+        """The mean evidence of unknown of the latest windows that lie in the stretch in
+        progress (all the latest when none does)."""
         latest = self.windows[-self.cover :] or [(0, 0, v[1]) for v in self.latest_votes]
         return float(np.mean([u for *_, u in latest])) if latest else 0.0
+
+    def _nobody_now(self) -> bool:
+        """Every one of the latest windows votes every activity alike (nobody in view)."""
+        return all(np.ptp(v) == 0.0 for v, _ in self.latest_votes)
 
     def push(self, world: np.ndarray) -> list[LiveSegment]:
         """Add one frame ``(33, 3)`` (NaN where the person is not seen). Returns the segments
@@ -269,10 +292,11 @@ class LiveSegmenter:
         vote = self._vote(n)
         self.latest_votes = [*self.latest_votes[1 - self.cover :], vote]
         self.windows.append((n - self.window, n, vote[1]))
-        if (len(self.votes) + 1) % self.span_every == 0:
-            self._repetition_windows(n)
+        if self.hops % self.span_every == 0:  # spans end where offline's do: a window, then
+            self._repetition_windows(n)  # every SPAN_HOP_S
+        self.hops += 1
         # the evidence for the latest stretch: the mean vote of the windows over it that are
-        # like an activity, as each block of the offline decoder gets
+        # not unlike every activity, as each block of the offline decoder gets
         centre = n - self.window / 2 - (len(self.latest_votes) - 1) * self.hop / 2
         periods = [v for b, c, v in self.period_votes if b <= centre < c]
         fixed = [v for v, far in self.latest_votes if far < 1.0]
@@ -280,15 +304,17 @@ class LiveSegmenter:
         self.votes.append(nearest)
         self.hop_centres.append(centre)
         self.state = self.forward.step(log_votes(nearest))
-        finished = self._settle(np.array(self.forward.settle(), dtype=np.int64))
+        states = self.forward.settle(most=self.most)
+        finished = self._settle(np.array(states, dtype=np.int64))
         self._trim()
         return finished
 
     def _settle(self, states: np.ndarray) -> list[LiveSegment]:
         """Follow the newly settled hops' activity ``states`` (the oldest hops not settled
-        before): each change finishes the stretch in progress, between the last hop of the
-        old activity and the first of the new (:meth:`_between`), and passes its hops to
-        pass 2 (:meth:`_judge`)."""
+        before): each change ends the stretch in progress between the last hop of the old
+        activity and the first of the new (:meth:`_between`), and passes its remaining hops
+        to pass 2 (:meth:`_pass`); then the hops of the stretch in progress whose evidence
+        no window can change any more are passed too (:meth:`_final_until`)."""
         first = len(self.hop_centres) - len(self.forward.back) - len(states)
         finished = []
         for i, state in enumerate(states.tolist(), start=first):
@@ -297,53 +323,80 @@ class LiveSegmenter:
             if state == self.settled:
                 continue
             boundary = max(self.stretch_start + 1, self._between(i))
-            finished += self._judge(self.stretch_start, boundary, self.settled)
-            self.stretch_start, self.settled = boundary, state
+            finished += self._pass(boundary, boundary)
+            self.stretch_start, self.settled, self.stretch_passed = boundary, state, False
             self.windows = [w for w in self.windows if w[0] >= boundary]
             self.periods = [w for w in self.periods if w[0] >= boundary]
+        if self.settled is not None:
+            last = self.hop_centres[len(self.hop_centres) - len(self.forward.back) - 1]
+            finished += self._pass(self._final_until(last), int(last))
         return finished
 
+    def _final_until(self, last: float) -> float:
+        """The latest hop centre whose evidence of unknown is final when the last settled hop
+        lies at ``last``: the stretch in progress ends after ``last``, so a window that stops
+        by then lies inside it; every window over a hop stops within :attr:`longest` frames
+        of it, and the repetition windows over it are found within a span of it."""
+        return min(last - self.longest, self.n - self.span)
+
     def _between(self, i: int) -> int:
-        """The frame where a change from hop ``i - 1``'s state to hop ``i``'s lies: midway
-        between what their evidence is of (the mean centre of the windows each averages).
-        Not the end of hop ``i``'s window, nor its middle: the evidence of the stretch just
-        decided is that of the last few windows, centred a window and a half back."""
-        if i == 0:
-            return int(round(self.hop_centres[0] - self.hop / 2))
+        """The frame where a change from hop ``i - 1``'s state to hop ``i``'s lies (``i`` > 0:
+        the hop before a change is kept): midway between what their evidence is of (the mean
+        centre of the fixed windows each averages), not the end of hop ``i``'s window nor
+        its middle: the evidence of the stretch just decided is that of the last few windows,
+        centred 1 to 1.75 s back."""
         return int(round((self.hop_centres[i - 1] + self.hop_centres[i]) / 2))
 
-    def _unlike_shares(self, centres: np.ndarray, start: int, end: int) -> np.ndarray:
-        """For hops at ``centres``: the mean evidence of unknown of the windows inside frames
-        [start, end) over each (0.5, even, over none)."""
+    def _evidence(self, centres: np.ndarray, start: int, end: int) -> np.ndarray:
+        """For hops at ``centres`` (in order): the mean evidence of unknown of the windows
+        inside frames [start, end) over each; a hop none covers carries the last covered
+        one's (the first: that of the hop before, :attr:`carried`)."""
         spans = np.array([(a, b) for a, b, _ in self.periods], dtype=np.int64).reshape(-1, 2)
         odd = period_outliers(spans, np.ones(len(spans), dtype=bool), self.step)
         periods = [w for w, out in zip(self.periods, odd.tolist(), strict=True) if not out]
-        every = self.windows + periods
-        inside = np.array([w for w in every if w[0] >= start and w[1] <= end])
-        if not len(inside):
-            return np.full(len(centres), 0.5)
+        inside = np.array(
+            [w for w in self.windows + periods if w[0] >= start and w[1] <= end]
+        ).reshape(-1, 3)
         over = (inside[None, :, 0] <= centres[:, None]) & (centres[:, None] < inside[None, :, 1])
         n_over = over.sum(axis=1)
-        shares: np.ndarray = np.where(
-            n_over > 0, (over * inside[None, :, 2]).sum(axis=1) / np.maximum(n_over, 1), 0.5
-        )
-        return shares
+        mean = (over * inside[None, :, 2]).sum(axis=1) / np.maximum(n_over, 1)
+        out = np.empty(len(centres))
+        for k in range(len(centres)):  # over the hops passed (a few): carry the last evidence
+            if n_over[k]:
+                self.carried = float(mean[k])
+            out[k] = self.carried
+        return out
 
-    def _judge(self, start: int, end: int, activity: int, final: bool = False) -> list[LiveSegment]:
-        """Pass the hops of the finished stretch [start, end) of ``activity`` to pass 2, and
-        finish the segments that settles (``final``: the stream has ended; every hop)."""
+    def _pass(self, until: float, end: int, final: bool = False) -> list[LiveSegment]:
+        """Pass the settled hops of the stretch in progress not passed yet, up to centre
+        ``until``, to pass 2, judged by the windows that stop by ``end``; finish the segments
+        that settles (``final``: the stream has ended: every hop)."""
         centres = np.array(self.hop_centres)
-        hops = np.flatnonzero((centres >= start) & (centres < end))
-        shares = self._unlike_shares(centres[hops], start, end)
-        pen = self._penalty()
-        moved = np.array([[pen, pen], [pen, 0.0]])  # a change of activity under unknown is free
-        for k, (i, share) in enumerate(zip(hops.tolist(), shares.tolist(), strict=True)):
-            change = start if k == 0 and self.known.started else None
-            self.pending.append(_Hop(centres[i], activity, float(self.votes[i][activity]),
-                                     share, change))  # fmt: skip
-            score = log_votes(np.array([1.0 - share, share]))
-            self.known.step(score, moved if change is not None else None)
-        return self._follow(self.known.settle(final=final))
+        settled = len(centres) if final else len(centres) - len(self.forward.back)
+        hops = np.flatnonzero(
+            (centres[:settled] > self.passed)
+            & (centres[:settled] >= self.stretch_start)
+            & (centres[:settled] <= until)
+        )
+        if len(hops):
+            assert self.settled is not None
+            activity = self.settled
+            shares = self._evidence(centres[hops], self.stretch_start, end)
+            pen = self._penalty()
+            moved = np.array([[pen, pen], [pen, 0.0]])  # a change under unknown is free
+            for i, share in zip(hops.tolist(), shares.tolist(), strict=True):
+                change = None
+                if not self.stretch_passed and self.known.started:
+                    change = self.stretch_start
+                self.stretch_passed = True
+                self.pending.append(_Hop(centres[i], activity, float(self.votes[i][activity]),
+                                         share, change))  # fmt: skip
+                score = log_votes(np.array([1.0 - share, share]))
+                self.known.step(score, moved if change is not None else None)
+            self.passed = float(centres[hops[-1]])
+            self.windows = [w for w in self.windows if w[1] > self.passed]
+            self.periods = [w for w in self.periods if w[1] > self.passed - self.span]
+        return self._follow(self.known.settle(final=final, most=self.most))
 
     def _follow(self, unknown: list[int]) -> list[LiveSegment]:
         """Follow the hops pass 2 newly settled (``unknown``: 1 where unknown, in order, the
@@ -372,7 +425,7 @@ class LiveSegmenter:
         :data:`SPAN_HOP_S`), each new one solved and judged once: windows of one repetition
         that vote in pass 1 and are evidence in pass 2 (a stretch shorter than a fixed window
         holds none of those)."""
-        a = max(0, n - self.span)
+        a = max(self.offset, n - self.span)
         try:
             sig = movement_signals(self._sequence(a, n))
         except DataError:  # nobody in view
@@ -383,6 +436,7 @@ class LiveSegmenter:
             if (a + first, a + last) not in self.found
         ]
         self.found = {f for f in self.found if f[1] > n - 2 * self.span} | set(new)
+        self.period_votes = [w for w in self.period_votes if w[1] > n - 2 * self.span]
         clips = [self._sequence(b, c) for b, c in new]
         shown = [(w, clip) for w, clip in zip(new, clips, strict=True) if torso_share(clip) > 0]
         if not shown:
@@ -395,10 +449,9 @@ class LiveSegmenter:
                 vote = np.zeros(self.unknown)
                 vote[self.classes.index(str(one.retrieval.labels[0]))] = 1.0
                 self.period_votes.append((b, c, vote))
-        self.period_votes = [w for w in self.period_votes if w[1] > n - 2 * self.span]
 
     def _trim(self) -> None:
-        """Forget frames and hops no segment in progress can need (bounded memory)."""
+        """Forget frames and hops no segment in progress or decision can need."""
         begun = min(self.seen_start, self.stretch_start)
         keep_from = max(begun, self.n - int(MAX_SEGMENT_S * self.fps)) - self.window
         keep_from = min(keep_from, self.n - self.span)  # the next span's frames
@@ -407,15 +460,15 @@ class LiveSegmenter:
             del self.frames[:drop]
             self.offset += drop
         settled = len(self.hop_centres) - len(self.forward.back)
-        old = sum(f < self.stretch_start for f in self.hop_centres[: max(0, settled - 1)])
-        if old:  # hops of finished stretches, passed to pass 2 (the last kept: _between)
+        old = sum(f <= self.passed for f in self.hop_centres[: max(0, settled - 1)])
+        if old:  # hops passed to pass 2 (the last settled kept: _between)
             del self.votes[:old], self.hop_centres[:old]
 
     def _vote(self, n: int) -> tuple[np.ndarray, float]:
         """The last window's vote over the activities ``(n_classes,)`` (its nearest case's)
         and how much it says it is unlike every activity (:func:`cbr.unknown.unknown_evidence`:
-        1.0 when unlike; 0.5 when it shows nobody). Only a window not unlike every activity
-        votes for one (:func:`_mean_vote`), as offline
+        1.0 when unlike; 0.5 when it shows nobody, whose vote is every activity alike). Only a
+        window not unlike every activity votes for one (:func:`_mean_vote`), as offline
         (:func:`cbr.segmentation.decode_activities`): one like none, across a change of
         movement or of one the case base lacks, is nearest to whichever lies least far."""
         window = self._sequence(n - self.window, n)
@@ -431,15 +484,18 @@ class LiveSegmenter:
         return self._sequence(max(self.offset, self.n - frames), self.n)
 
     def _sequence(self, a: int, b: int) -> PoseSequence:
-        """Stream frames [a, b) as a clip."""
-        rows = self.frames[max(0, a - self.offset) : b - self.offset]
+        """Stream frames [a, b) as a clip (``a`` >= :attr:`offset`: frames not yet dropped)."""
+        if a < self.offset or b <= a:
+            raise DataError(f"stream frames {a}-{b} are no longer kept (from {self.offset})",
+                            "stream")  # fmt: skip
+        rows = self.frames[a - self.offset : b - self.offset]
         return PoseSequence(np.stack(rows), BLAZEPOSE_33, self.fps, source="stream")
 
     def _confidence(self, state: int) -> float:
         """Of the segment in progress labelled ``state``: the mean over the hops pass 2 has
-        settled in it of their vote for its activity, or of their share unlike every activity
-        (unknown); the latest windows' while it has none, or when ``state`` is the rolling
-        label and not the one pass 2 has settled."""
+        settled in it of their vote for its activity, or of their evidence of unknown; the
+        latest windows' while it has none, or when ``state`` is the rolling label and not the
+        one pass 2 has settled."""
         total, count = self.seen_sum
         if count and state == self.seen:
             return float(total) / count
@@ -451,12 +507,13 @@ class LiveSegmenter:
         """Frames [start, end) as a segment of ``state`` (an activity, or n_classes: unknown;
         :meth:`_confidence`); ``cut``: it ends where another begins (a finished segment: its
         repetitions are counted as :func:`cbr.segmentation.keep_whole` says, and the next one
-        learns whether the movement turned at the cut)."""
+        learns whether the movement turned at the cut). Repetitions are counted over at most
+        its last :data:`MAX_SEGMENT_S` seconds, of the frames still kept."""
         confidence = self._confidence(state)
-        first = max(start, end - int(MAX_SEGMENT_S * self.fps))
+        first = max(start, end - int(MAX_SEGMENT_S * self.fps), self.offset)
         try:
             found = count_repetitions(self._sequence(first, end)).repetitions
-        except DataError:
+        except DataError:  # too short, nobody in view, or its frames no longer kept
             found = ()
         reps = tuple(_shifted(r, first) for r in found)
         turn = self.turn and first == start
@@ -479,7 +536,7 @@ class LiveSegmenter:
             return []
         out = self._settle(np.array(self.forward.settle(final=True), dtype=np.int64))
         assert self.settled is not None
-        out += self._judge(self.stretch_start, self.n, self.settled, final=True)
+        out += self._pass(math.inf, self.n, final=True)
         assert self.seen is not None
         return [*out, self._segment(self.seen_start, self.n, self.seen, False)]
 

@@ -23,11 +23,11 @@ The judges, each calibrated on the case base itself, never on what is being segm
   quantile; the quantile's rate and the shrink weight are chosen on the held-out cases so that
   a held-out subject's known cases keep the budget against the others' thresholds
   (:func:`choose_weight`). An activity whose known cases are clear gets a low threshold; one
-  that resembles another keeps its own high one. On people not in the case base it calls
-  as many or more of a left-out movement's blocks unknown than the pooled threshold on
-  UI-PRMD Vicon and HDM05 (HDM05 82 % against 52 %, and 98 % of its known blocks right
-  against 91 %), as many on CMU subject 13, fewer on UI-PRMD Kinect (22 % against 25 %)
-  (README, "Long recordings").
+  that resembles another keeps its own high one. Its evidence is graded between its
+  threshold and the one read at the whole budget (:meth:`ActivityMargin.evidence`). On
+  people not in the case base it calls more of a left-out movement's blocks unknown than
+  the pooled threshold and keeps as many known blocks right, or more (README, "Long
+  recordings", for the figures).
 - :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
   score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
   case lies farther than held-out training clips nearly ever do.
@@ -588,6 +588,13 @@ class ActivityMargin(Calibrated):
     prior: float = ACTIVITY_PRIOR
     rate: float = FALSE_UNKNOWN
     budget_thresholds: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.budget_thresholds and len(self.budget_thresholds) != len(self.thresholds):
+            raise ValueError(
+                f"field 'budget_thresholds' has {len(self.budget_thresholds)} values for"
+                f" {len(self.thresholds)} activities"
+            )
 
     @classmethod
     def of(

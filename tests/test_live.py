@@ -146,3 +146,39 @@ def test_a_movement_like_no_activity_is_one_unknown_segment() -> None:
     assert abs(segments[1].start_frame - 300) <= 1.5 * live.hop
     assert abs(segments[1].end_frame - 540) <= 1.5 * live.hop
     assert segments[1].confidence > 0.5  # the share of its windows unlike every activity
+
+
+class _Pause(_Scripted):
+    """Activity 0 for a long stream, its windows centred in frames [300, 540) unlike every
+    activity (still nearest 0), and activity 1 for the windows centred in the last 20 s."""
+
+    length = 0
+
+    def _vote(self, n: int) -> tuple[np.ndarray, float]:
+        centre = n - self.window / 2
+        return np.eye(2)[int(centre >= self.length - 600)], float(300 <= centre < 540)
+
+
+def test_a_long_stream_keeps_bounded_memory_and_finishes_what_it_settled() -> None:
+    """5 minutes at 30 fps, longer than repetitions are counted over (MAX_SEGMENT_S): the
+    pause is finished as unknown while the activity goes on (pass 2 does not wait for the
+    activity to change, so its frames are still kept), and the change to activity 1 comes
+    out at the end; the windows and hops kept stay those of the last seconds, the frames
+    those of at most MAX_SEGMENT_S, two windows and a hop."""
+    from cbr.live import MAX_SEGMENT_S
+
+    labels = np.array(["a", "b"])
+    clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
+    live = _Pause(clf, 30.0, judge=SimpleNamespace())
+    live.length = 9000
+    frame = np.random.default_rng(3).normal(size=(33, 3))
+    segments: list[LiveSegment] = []
+    for _ in range(live.length):
+        segments += live.push(frame)
+        assert len(live.windows) < 100 and len(live.hop_centres) < 100
+        assert len(live.frames) <= MAX_SEGMENT_S * 30.0 + 2 * live.window + live.hop
+    segments += live.finish()
+    assert [s.label for s in segments] == ["a", None, "a", "b"]
+    assert abs(segments[1].start_frame - 300) <= 1.5 * live.hop
+    assert abs(segments[1].end_frame - 540) <= 1.5 * live.hop
+    assert abs(segments[3].start_frame - (live.length - 600)) <= live.hop

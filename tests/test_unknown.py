@@ -377,6 +377,8 @@ def test_activity_margin_evidence_is_graded_between_the_budget_and_its_threshold
         {k: v for k, v in judge.to_dict().items() if k != "budget_thresholds"}
     )
     assert old.budget_thresholds == () and old.evidence(np.array([0.7, 1.0, 5.0])) == 0.0
+    with pytest.raises(ValueError, match="'budget_thresholds' has 1 values for 3 activities"):
+        ActivityMargin.from_dict({**judge.to_dict(), "budget_thresholds": [0.6]})
     # every other judge: all or nothing, as its unlike says
     margin = Margin(0.6, "subject", 10, 10)
     assert unknown_evidence(margin, np.array([0.7, 1.0, 5.0])) == 1.0
