@@ -256,6 +256,7 @@ class LiveSegmenter:
         # their evidence of unknown), and how many
         self.last_centre = 0.0  # of the last hop pass 2 settled
         self.turn = False  # the last finished segment had a far point at its end
+        self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
 
     def _penalty(self) -> float:
         """The log-odds a change costs: :data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS`."""
@@ -524,11 +525,16 @@ class LiveSegmenter:
         return LiveSegment(start, end, label, float(confidence), len(kept))
 
     def current(self) -> LiveSegment | None:
-        """The segment in progress (its repetitions so far), labelled with the rolling label."""
+        """The segment in progress, labelled with the rolling label; its confidence and
+        repetitions as of the last hop (counted once a hop, not on every frame drawn: a
+        count over up to :data:`MAX_SEGMENT_S` of frames takes longer than a frame lasts)."""
         if self.state is None:
             return None
         state = self.unknown if self.label is None else int(self.state)
-        return self._segment(self.seen_start, self.n, state, False)
+        key = (self.hops, self.seen_start, state)
+        if self.shown is None or self.shown[0] != key:
+            self.shown = (key, self._segment(self.seen_start, self.n, state, False))
+        return dataclasses.replace(self.shown[1], end_frame=self.n)
 
     def finish(self) -> list[LiveSegment]:
         """The segments not yet finished, at the end of the stream (the last one ends there)."""

@@ -207,6 +207,8 @@ def test_live_decoder_on_real_mocap_names_the_exercises_and_the_one_it_lacks(
     segments = []
     for frame in seq.positions[::4]:  # 120 fps streamed at 30
         segments += live.push(frame)
+        now = live.current()  # what watch draws on every frame
+        assert now is None or (now.end_frame == live.n and now.label == live.label)
     segments += live.finish()
     assert [s.label for s in segments] == ["JumpJack", "Twist", "KneeRaise", "Squat", None]
     blocks = np.full(len(codes), "", dtype=object)
