@@ -276,3 +276,21 @@ def test_a_damaged_stored_judge_is_one_line_and_the_database_stays(
     assert "case base 'default' has a damaged unknown judge calibration" in err
     assert "margin: field 'threshold' must be a number >= 0, got 'x'" in err
     assert _sha(db) == before
+
+
+def test_a_stored_judge_with_thresholds_for_other_activities_is_one_line(
+    trained: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The default judge's budget thresholds stored for one activity where the case base has
+    several: refused on load in one line naming the field, the database unchanged."""
+    db = _copy(trained, tmp_path / "cb.sqlite")
+    field = "'$.judges.calibrated.\"activity-margin\".budget_thresholds'"
+    _sql(db, f"UPDATE case_bases SET model = json_set(model, {field}, json('[0.5]'))")
+    before = _sha(db)
+    capsys.readouterr()
+    assert main(["segment", str(recording), "--db", str(db), "--json"]) == 1
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "Traceback" not in err
+    assert err.startswith("posecbr segment: error: ") and str(db) in err
+    assert "field 'budget_thresholds' has 1 values for" in err
+    assert _sha(db) == before
