@@ -444,11 +444,9 @@ class LiveSegmenter:
             return
         solved = self.clf.solve([clip for _, clip in shown], flag=False)
         for ((b, c), _), one in zip(shown, solved, strict=True):
-            far = unknown_evidence(self.judge, activity_distances(self.clf, one, self.codes))
+            vote, far = self._judged(one)
             self.periods.append((b, c, far))
             if far < 1.0:
-                vote = np.zeros(self.unknown)
-                vote[self.classes.index(str(one.retrieval.labels[0]))] = 1.0
                 self.period_votes.append((b, c, vote))
 
     def _trim(self) -> None:
@@ -475,7 +473,11 @@ class LiveSegmenter:
         window = self._sequence(n - self.window, n)
         if torso_share(window) == 0.0:  # no person: no evidence either way
             return np.full(self.unknown, 1.0 / self.unknown), 0.5
-        solved = self.clf.solve([window], flag=False)[0]  # the judge decides unknown
+        return self._judged(self.clf.solve([window], flag=False)[0])  # the judge: unknown
+
+    def _judged(self, solved: Any) -> tuple[np.ndarray, float]:
+        """A solved window's vote for its nearest case's activity ``(n_classes,)`` and its
+        evidence of unknown (:func:`cbr.unknown.unknown_evidence`)."""
         vote = np.zeros(self.unknown)
         vote[self.classes.index(str(solved.retrieval.labels[0]))] = 1.0
         return vote, unknown_evidence(self.judge, activity_distances(self.clf, solved, self.codes))

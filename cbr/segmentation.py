@@ -399,27 +399,28 @@ def block_votes(
     n_blocks = int(math.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
     if not solved:
         return np.full((n_blocks, n_states or 1), 1.0 / (n_states or 1))
-    first, end = _covered_blocks(solved, n_blocks, fps)
     n_states = len(solved[0].vote)
-    votes = np.zeros((n_blocks, n_states))
-    counts = np.zeros(n_blocks, dtype=np.int64)
-    for w, a, b in zip(solved, first.tolist(), end.tolist(), strict=True):  # over windows
-        votes[a:b] += w.vote
-        counts[a:b] += 1
+    votes, counts = _block_sums(solved, np.stack([w.vote for w in solved]), n_blocks, fps)
     uniform = np.full(n_states, 1.0 / n_states)
     return np.where(counts[:, None] > 0, votes / np.maximum(counts, 1)[:, None], uniform)
 
 
-def _covered_blocks(
-    solved: Sequence[_Solved], n_blocks: int, fps: float
+def _block_sums(
+    solved: Sequence[_Solved], values: np.ndarray, n_blocks: int, fps: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The blocks whose centre each window covers, [first, end) ``(n_windows,)`` each: a run
-    of blocks per window (a blocks x windows matrix would take 64 GB for a recording of 10^6
-    frames)."""
+    """The sum of the windows' ``values`` ``(n_windows, ...)`` over each block's centre
+    ``(n_blocks, ...)``, and how many windows cover it ``(n_blocks,)``. A window covers a
+    run of blocks, [first, end) (a blocks x windows matrix would take 64 GB for a recording
+    of 10^6 frames)."""
     centres = (np.arange(n_blocks) + 0.5) * BLOCK_S * fps  # in frames
     first = np.searchsorted(centres, [w.start for w in solved], side="left")
     end = np.searchsorted(centres, [w.stop for w in solved], side="left")
-    return first, end
+    total = np.zeros((n_blocks, *values.shape[1:]))
+    counts = np.zeros(n_blocks, dtype=np.int64)
+    for v, a, b in zip(values, first.tolist(), end.tolist(), strict=True):  # over windows
+        total[a:b] += v
+        counts[a:b] += 1
+    return total, counts
 
 
 def block_evidence(
@@ -434,11 +435,7 @@ def block_evidence(
     n_blocks = int(math.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
     if not solved:
         return np.full(n_blocks, 0.5)
-    first, end = _covered_blocks(solved, n_blocks, fps)
-    total, counts = np.zeros(n_blocks), np.zeros(n_blocks, dtype=np.int64)
-    for e, a, b in zip(evidence.tolist(), first.tolist(), end.tolist(), strict=True):  # windows
-        total[a:b] += e
-        counts[a:b] += 1
+    total, counts = _block_sums(solved, evidence, n_blocks, fps)
     covered = np.flatnonzero(counts > 0)
     if not len(covered):
         return np.full(n_blocks, 0.5)
