@@ -146,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         with _video_output(args.out) as video:
             watcher.video = video
+            watcher.warm_up()
             watcher.watch(frames, is_file)
             if video is not None and watcher.writer is None:
                 raise _NoFrameDrawn
@@ -185,6 +186,22 @@ class Watcher:
         self.latency: list[float] = []
         self.n = 0
         self.started = time.perf_counter()
+
+    def warm_up(self) -> None:
+        """Evaluate the fluents once, on a made-up figure, before the stream starts: the first
+        evaluation loads their compiled kernels (about a third of a second), which would
+        otherwise hold up the first frames drawn and those queued behind them."""
+        if self.args.out is None and not self.args.show:
+            return
+        import numpy as np
+
+        from features.fluents import evaluate
+        from features.poses import PoseSequence
+        from features.skeleton import BLAZEPOSE_33
+
+        figure = np.random.default_rng(0).normal(size=(10, len(BLAZEPOSE_33), 3))
+        evaluate(PoseSequence(figure, BLAZEPOSE_33, 30.0, source="warm-up"))
+        self.started = time.perf_counter()  # frames per second: of the stream alone
 
     def watch(self, frames: Iterator[Any], is_file: bool) -> None:
         """:meth:`follow` until the stream ends or the user stops it (Ctrl-C); the video writer
