@@ -511,13 +511,20 @@ class LiveSegmenter:
         :meth:`_confidence`); ``cut``: it ends where another begins (a finished segment: its
         repetitions are counted as :func:`cbr.segmentation.keep_whole` says, and the next one
         learns whether the movement turned at the cut). Repetitions are counted over at most
-        its last :data:`MAX_SEGMENT_S` seconds, of the frames still kept."""
-        confidence = self._confidence(state)
+        its last :data:`MAX_SEGMENT_S` seconds, of the frames still kept; a segment whose
+        frames never show anybody is unknown, whatever the tie between its windows' evidence
+        (every activity alike, known as likely as not) fell to."""
         first = max(start, end - int(MAX_SEGMENT_S * self.fps), self.offset)
-        try:
-            found = count_repetitions(self._sequence(first, end)).repetitions
-        except DataError:  # too short, nobody in view, or its frames no longer kept
-            found = ()
+        found: tuple[Repetition, ...] = ()
+        if end > first:
+            clip = self._sequence(first, end)
+            if torso_share(clip) == 0.0:
+                state = self.unknown
+            try:
+                found = count_repetitions(clip).repetitions
+            except DataError:  # too short, or nobody in view
+                pass
+        confidence = self._confidence(state)
         reps = tuple(_shifted(r, first) for r in found)
         turn = self.turn and first == start
         kept = keep_whole(reps, first, end, self.step, turn, cut)
@@ -549,4 +556,18 @@ class LiveSegmenter:
         return [*out, self._segment(self.seen_start, self.n, self.seen, False)]
 
 
-__all__ = ["HOP_S", "LiveSegment", "LiveSegmenter"]
+def warm_up(clf: Any, judge: Judge | None = None, fps: float = 30.0) -> None:
+    """Stream a made-up figure moving to and fro through a segmenter of ``clf`` that is then
+    dropped: a stream's first decisions (solving and judging a window, finding its periods,
+    counting repetitions) load compiled kernels, about 0.4 s, which would otherwise hold up
+    the first frames of the real stream and those queued behind them."""
+    rng = np.random.default_rng(0)
+    figure, sway = rng.normal(size=(2, len(BLAZEPOSE_33), 3))
+    seg = LiveSegmenter(clf, fps, judge)
+    t = np.arange(seg.window + seg.span) / fps
+    for phase in np.sin(2.0 * np.pi * t / 2.0):  # one repetition every 2 s
+        seg.push(figure + 0.1 * phase * sway)
+    seg.finish()
+
+
+__all__ = ["HOP_S", "LiveSegment", "LiveSegmenter", "warm_up"]

@@ -218,3 +218,24 @@ def test_live_decoder_on_real_mocap_names_the_exercises_and_the_one_it_lacks(
     truth = np.array([names.get(int(c)) for c in codes], dtype=object)
     assert np.mean(blocks[seen] == truth[seen]) >= 0.9
     assert np.mean([b is None for b in blocks[codes == 2]]) > 0.5
+
+
+def test_a_stream_that_never_shows_anybody_is_one_unknown_segment(case_base: Path) -> None:
+    """Three seconds with nobody in view (every joint missing): every window votes every
+    activity alike and is as likely known as not, so the tie must not fall to an activity:
+    one segment, unknown, no repetitions."""
+    from casebase_store import open_store
+    from cbr.live import LiveSegmenter
+    from cbr.stored import load_classifier
+
+    store = open_store(str(case_base), readonly=True)
+    clf = load_classifier(store, store.list_case_bases()[0].name).classifier
+    live = LiveSegmenter(clf, 30.0)
+    segments = []
+    for _ in range(90):
+        segments += live.push(np.full((33, 3), np.nan))
+        assert live.label is None
+    segments += live.finish()
+    assert [(s.start_frame, s.end_frame, s.label, s.repetitions) for s in segments] == [
+        (0, 90, None, 0)
+    ]

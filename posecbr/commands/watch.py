@@ -188,19 +188,13 @@ class Watcher:
         self.started = time.perf_counter()
 
     def warm_up(self) -> None:
-        """Evaluate the fluents once, on a made-up figure, before the stream starts: the first
-        evaluation loads their compiled kernels (about a third of a second), which would
-        otherwise hold up the first frames drawn and those queued behind them."""
-        if self.args.out is None and not self.args.show:
-            return
-        import numpy as np
+        """Run the segmenter's work once on a made-up figure before the stream starts
+        (:func:`cbr.live.warm_up`; it evaluates the fluents drawn too): the first run loads
+        compiled kernels (about 0.4 s), which would otherwise hold up the first frames and
+        those queued behind them."""
+        from cbr.live import warm_up
 
-        from features.fluents import evaluate
-        from features.poses import PoseSequence
-        from features.skeleton import BLAZEPOSE_33
-
-        figure = np.random.default_rng(0).normal(size=(10, len(BLAZEPOSE_33), 3))
-        evaluate(PoseSequence(figure, BLAZEPOSE_33, 30.0, source="warm-up"))
+        warm_up(self.clf, self.judge)
         self.started = time.perf_counter()  # frames per second: of the stream alone
 
     def watch(self, frames: Iterator[Any], is_file: bool) -> None:
