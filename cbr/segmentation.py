@@ -141,7 +141,7 @@ class Segment:
             **span_fields(self.start_frame, self.end_frame, self.label, self.confidence, fps),
             "repetitions": len(self.repetitions),
             "explanation": self.explanation,
-            "novelty": round(self.novelty, 3),
+            "novelty": round(self.novelty, 3) if math.isfinite(self.novelty) else None,
             "repetition_frames": [[r.start_frame, r.end_frame] for r in self.repetitions],
         }
 
@@ -720,8 +720,12 @@ def _segment_of(
     a, b, state = run
     n_classes = len(clf.classes_)
     start, end = _frames_of(a, b, rec.fps, rec.n_frames)
-    # told by the windows centred in it that were evidence (none across a change of activity)
-    centred = [(w, e) for w, e in zip(solved, evidence, strict=True) if start <= w.centre < end]
+    # told by the windows centred in it that were evidence (none across a change of activity);
+    # a segment too short for any window's centre, by the windows over it
+    pairs = list(zip(solved, evidence, strict=True))
+    centred = [(w, e) for w, e in pairs if start <= w.centre < end]
+    if not centred:
+        centred = [(w, e) for w, e in pairs if w.start < end and w.stop > start]
     inside = [w for w, e in centred if e] or [w for w, _ in centred]
     text, ratio = _explain_segment(clf, rec, inside, state, judge)
     label: str | None = None

@@ -712,3 +712,32 @@ def test_a_gap_in_the_evidence_at_a_change_is_split_by_nearness() -> None:
     ]
     unknown = unknown_blocks(windows, 60, 10.0, _FirstFar(), path)
     assert unknown.tolist() == [True] * 30 + [False] * 30
+
+
+def test_a_segment_too_short_for_a_window_centre_is_told_by_the_windows_over_it() -> None:
+    """An unknown segment of frames 11-15 (10 fps, one block a frame) between the centres of
+    the two windows over it (frames 0-20 and 14-34): its novelty is the median of their
+    margins (0.95 and 0.5: 0.725), its confidence the share of them unlike every activity
+    (one of two, at a 0.8 threshold), its explanation the median window's (the upper one of
+    two: 0.95), and its JSON is strict (no NaN) even when no window lies over it."""
+    from types import SimpleNamespace
+
+    from cbr.segmentation import Segment, _segment_of
+
+    classes = ["a", "b", "c"]
+    clf = SimpleNamespace(classes_=np.array(classes))
+    rec = SimpleNamespace(fps=10.0, n_frames=100)
+    judge = Margin(threshold=0.8, basis="groups", known=10, novel=10)
+    windows = [  # distances to the nearest case of a, b, c: margins 0.95 and 0.5
+        _Solved(0, 20, np.eye(3)[0], np.array([0.95, 1.0, 3.0]), None),
+        _Solved(14, 34, np.eye(3)[0], np.array([1.0, 2.0, 3.0]), None),
+    ]
+    votes = np.zeros((100, 3))
+    seg = _segment_of(clf, rec, (11, 15, 3), windows, votes, judge, [True, True], ())
+    assert (seg.start_frame, seg.end_frame, seg.label) == (11, 15, None)
+    assert seg.novelty == pytest.approx(0.725)
+    assert seg.confidence == pytest.approx(0.5)
+    assert "the nearest (a) is 0.95 as far as the next (b)" in seg.explanation
+    alone = Segment(11, 15, None, 1.0, (), "", float("nan"))
+    doc = json.loads(json.dumps(alone.to_dict(10.0), allow_nan=False))
+    assert doc["novelty"] is None
