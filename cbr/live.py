@@ -45,6 +45,7 @@ from .segmentation import (
     period_outliers,
     periods_in_span,
     span_fields,
+    told,
 )
 from .unknown import JUDGES, Judge, activity_codes, judge_of, unknown_evidence
 
@@ -61,17 +62,43 @@ likely, as with nobody in view, each stays in itself); bounds the delay and the 
 @dataclass(frozen=True)
 class LiveSegment:
     """A finished (or the current) stretch of the stream: frames [start_frame, end_frame),
-    label (None: unknown), mean vote for it, repetitions counted in it."""
+    label (None: unknown), mean vote for it, repetitions counted in it; a finished one also a
+    short explanation and its novelty, as ``segment`` gives them (the current one: "" and
+    NaN)."""
 
     start_frame: int
     end_frame: int
     label: str | None
     confidence: float
     repetitions: int
+    explanation: str = ""
+    novelty: float = math.nan
 
     def to_dict(self, fps: float) -> dict[str, Any]:
         fields = span_fields(self.start_frame, self.end_frame, self.label, self.confidence, fps)
-        return {**fields, "repetitions": self.repetitions}
+        novelty = round(self.novelty, 3) if math.isfinite(self.novelty) else None
+        return {
+            **fields,
+            "repetitions": self.repetitions,
+            "explanation": self.explanation,
+            "novelty": novelty,
+        }
+
+
+@dataclass(frozen=True)
+class _Judged:
+    """A window the segmenter solved: frames [start, stop), its nearest activity, the
+    judge's ratio and its distance to the nearest case of every activity."""
+
+    start: int
+    stop: int
+    activity: int
+    ratio: float
+    nearest: np.ndarray
+
+    @property
+    def centre(self) -> float:
+        return 0.5 * (self.start + self.stop)
 
 
 @dataclass
@@ -257,6 +284,8 @@ class LiveSegmenter:
         self.last_centre = 0.0  # of the last hop pass 2 settled
         self.turn = False  # the last finished segment had a far point at its end
         self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
+        self.judged: list[_Judged] = []  # the windows over the segments not yet finished
+        # whose frames are kept: what explains a finished segment
 
     def _penalty(self) -> float:
         """The log-odds a change costs: :data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS`."""
@@ -444,7 +473,7 @@ class LiveSegmenter:
             return
         solved = self.clf.solve([clip for _, clip in shown], flag=False)
         for ((b, c), _), one in zip(shown, solved, strict=True):
-            vote, far = self._judged(one)
+            vote, far = self._judged(one, b, c)
             self.periods.append((b, c, far))
             if far < 1.0:
                 self.period_votes.append((b, c, vote))
@@ -462,6 +491,8 @@ class LiveSegmenter:
         old = sum(f <= self.passed for f in self.hop_centres[: max(0, settled - 1)])
         if old:  # hops passed to pass 2 (the last settled kept: _between)
             del self.votes[:old], self.hop_centres[:old]
+        kept = [w for w in self.judged if w.stop > self.seen_start and w.start >= self.offset]
+        self.judged = kept  # of the segments not finished, over frames still kept
 
     def _vote(self, n: int) -> tuple[np.ndarray, float]:
         """The last window's vote over the activities ``(n_classes,)`` (its nearest case's)
@@ -473,14 +504,41 @@ class LiveSegmenter:
         window = self._sequence(n - self.window, n)
         if torso_share(window) == 0.0:  # no person: no evidence either way
             return np.full(self.unknown, 1.0 / self.unknown), 0.5
-        return self._judged(self.clf.solve([window], flag=False)[0])  # the judge: unknown
+        solved = self.clf.solve([window], flag=False)[0]
+        return self._judged(solved, n - self.window, n)  # the judge: unknown
 
-    def _judged(self, solved: Any) -> tuple[np.ndarray, float]:
-        """A solved window's vote for its nearest case's activity ``(n_classes,)`` and its
-        evidence of unknown (:func:`cbr.unknown.unknown_evidence`)."""
+    def _judged(self, solved: Any, start: int, stop: int) -> tuple[np.ndarray, float]:
+        """A solved window's (frames [start, stop)) vote for its nearest case's activity
+        ``(n_classes,)`` and its evidence of unknown (:func:`cbr.unknown.unknown_evidence`);
+        kept to explain the segment it lies in (:meth:`_explain`)."""
         vote = np.zeros(self.unknown)
-        vote[self.classes.index(str(solved.retrieval.labels[0]))] = 1.0
-        return vote, unknown_evidence(self.judge, activity_distances(self.clf, solved, self.codes))
+        activity = self.classes.index(str(solved.retrieval.labels[0]))
+        vote[activity] = 1.0
+        nearest = activity_distances(self.clf, solved, self.codes)
+        self.judged.append(_Judged(start, stop, activity, self.judge.ratio(nearest), nearest))
+        return vote, unknown_evidence(self.judge, nearest)
+
+    def _explain(self, start: int, end: int, state: int) -> tuple[str, float]:
+        """A finished segment's explanation and novelty (the judge's ratio, median over its
+        windows), as ``segment`` gives them (:func:`cbr.segmentation.told`), from the windows
+        centred in frames [start, end) (those over it when none is): unknown, told by its
+        median window; an activity, by the window whose nearest activity it is most clearly
+        (the least ratio), solved again from its frames."""
+        inside = [w for w in self.judged if start <= w.centre < end]
+        inside = inside or [w for w in self.judged if w.start < end and w.stop > start]
+        if not inside:
+            return "", math.nan
+        ratios = [w.ratio for w in inside]
+        novelty = float(np.median(ratios))
+        if state == self.unknown:
+            median = inside[int(np.argsort(ratios, kind="stable")[len(ratios) // 2])]
+            return self.judge.describe(median.nearest, self.classes), novelty
+        telling = [w for w in inside if w.activity == state and w.start >= self.offset]
+        if not telling:
+            return "", novelty
+        w = min(telling, key=lambda t: t.ratio)
+        solved = self.clf.solve([self._sequence(w.start, w.stop)], flag=False)[0]
+        return told(self.clf, solved, self.classes[state]), novelty
 
     def recent(self, frames: int) -> PoseSequence:
         """The last ``frames`` frames pushed, as a clip."""
@@ -506,7 +564,9 @@ class LiveSegmenter:
             return self._unlike_now()
         return float(self.votes[-1][state]) if self.votes else 0.0
 
-    def _segment(self, start: int, end: int, state: int, cut: bool) -> LiveSegment:
+    def _segment(
+        self, start: int, end: int, state: int, cut: bool, explained: bool = True
+    ) -> LiveSegment:
         """Frames [start, end) as a segment of ``state`` (an activity, or n_classes: unknown;
         :meth:`_confidence`); ``cut``: it ends where another begins (a finished segment: its
         repetitions are counted as :func:`cbr.segmentation.keep_whole` says, and the next one
@@ -531,7 +591,8 @@ class LiveSegmenter:
         if cut:
             self.turn = at_cut(reps, first, end, self.step)[1]
         label = None if state == self.unknown else self.classes[state]
-        return LiveSegment(start, end, label, float(confidence), len(kept))
+        text, novelty = self._explain(start, end, state) if explained else ("", math.nan)
+        return LiveSegment(start, end, label, float(confidence), len(kept), text, novelty)
 
     def current(self) -> LiveSegment | None:
         """The segment in progress, labelled with the rolling label; its confidence and
@@ -542,7 +603,7 @@ class LiveSegmenter:
         state = self.unknown if self.label is None else int(self.state)
         key = (self.hops, self.seen_start, state)
         if self.shown is None or self.shown[0] != key:
-            self.shown = (key, self._segment(self.seen_start, self.n, state, False))
+            self.shown = (key, self._segment(self.seen_start, self.n, state, False, False))
         return dataclasses.replace(self.shown[1], end_frame=self.n)
 
     def finish(self) -> list[LiveSegment]:

@@ -621,13 +621,18 @@ def _explain_segment(
         w = inside[int(np.argsort(ratios, kind="stable")[len(ratios) // 2])]
         return judge.describe(w.nearest, [str(c) for c in clf.classes_]), ratio
     w = max(inside, key=lambda s: s.vote[state])
-    e: Explanation = clf.explain_solved(_solved(clf, rec, w), counterfactual=False)
-    label = str(clf.classes_[state])
+    return told(clf, _solved(clf, rec, w), str(clf.classes_[state])), ratio
+
+
+def told(clf: Any, solved: Any, label: str) -> str:
+    """Why a window that ``clf`` solved (``solved``) tells of activity ``label``, in a line:
+    how many of its most similar cases are of it, and the fluents it matched them on."""
+    e: Explanation = clf.explain_solved(solved, counterfactual=False)
     agree = sum(str(n["label"]) == label for n in e.neighbours)
     text = f"{agree} of the {len(e.neighbours)} most similar cases are {label}"
     if e.matched:
         text += "; matched: " + ", ".join(e.matched[:3])
-    return text, ratio
+    return text
 
 
 def _repetitions(sig: MovementSignals, start: int, end: int) -> tuple[Repetition, ...]:

@@ -211,6 +211,11 @@ def test_live_decoder_on_real_mocap_names_the_exercises_and_the_one_it_lacks(
         assert now is None or (now.end_frame == live.n and now.label == live.label)
     segments += live.finish()
     assert [s.label for s in segments] == ["JumpJack", "Twist", "KneeRaise", "Squat", None]
+    # each explained as segment explains it: its nearest cases, or why it is like none
+    for s in segments[:-1]:
+        assert f"most similar cases are {s.label}" in s.explanation, s.explanation
+    assert segments[-1].explanation.startswith("like no stored activity"), segments[-1]
+    assert all(np.isfinite(s.novelty) for s in segments)
     blocks = np.full(len(codes), "", dtype=object)
     for s in segments:
         blocks[round(s.start_frame / 3) : round(s.end_frame / 3)] = s.label  # 3 frames a block

@@ -6,7 +6,8 @@ decodes). Poses come from BlazePose frame by frame; the rolling activity label, 
 repetitions counted so far and the fluents that hold now are drawn on the frames
 (``--out video.mp4`` writes them, headless; ``--show`` opens a window where OpenCV has one).
 One JSON line per finished segment goes to stdout (``start_s``, ``end_s``, ``start_frame``,
-``end_frame``, ``label``, null when unknown, ``confidence``, ``repetitions``). At the end the
+``end_frame``, ``label``, null when unknown, ``confidence``, ``repetitions``, ``explanation``,
+``novelty``, as ``posecbr segment --json`` gives them). At the end the
 latency from reading a frame to having its label is printed (median, 95th percentile, worst).
 
 A stream that stalls (no frame for ``--stall`` seconds) or a camera or URL that stops sending
