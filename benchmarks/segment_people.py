@@ -180,23 +180,32 @@ def test_recordings(
     return out
 
 
-def folds(dataset: str, per_person: int, seed: int, read: Reader) -> Iterator[Fold]:
+def folds(
+    dataset: str, per_person: int, seed: int, read: Reader, train_people: int | None = None
+) -> Iterator[Fold]:
     """The folds of ``dataset``: UI-PRMD one (s01-s04 train, s05-s08 test), HDM05 one per
-    actor tested."""
+    actor tested; ``train_people``: the case base of only the first that many training people
+    (by name), as one trained on CMU subject 13 alone is."""
     rng = np.random.default_rng(seed)
     if dataset == "hdm05":
         groups = hdm05_groups()
         for actor in HDM05_ACTORS:
-            train = [g for g in groups if g.person != actor]
+            train = _first_people([g for g in groups if g.person != actor], train_people)
             test = [g for g in groups if g.person == actor]
             yield Fold(
                 dataset, f"test {actor}", train, test_recordings(test, per_person, rng, read)
             )
         return
     groups = uiprmd_groups(dataset.split("-")[-1].capitalize())
-    train = [g for g in groups if g.person in TRAIN_SUBJECTS]
+    train = _first_people([g for g in groups if g.person in TRAIN_SUBJECTS], train_people)
     test = [g for g in groups if g.person not in TRAIN_SUBJECTS]
     yield Fold(dataset, "test s05-s08", train, test_recordings(test, per_person, rng, read))
+
+
+def _first_people(groups: list[Group], n: int | None) -> list[Group]:
+    """The ``groups`` of the first ``n`` people by name (all when ``n`` is None)."""
+    people = sorted({g.person for g in groups})[:n]
+    return [g for g in groups if g.person in people]
 
 
 def joined_training(train: list[Group], read: Reader) -> list[tuple[Any, Group]]:
@@ -441,6 +450,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--datasets", nargs="+", choices=DATASETS, default=list(DATASETS))
     parser.add_argument("--per-person", type=int, default=1, help="recordings per person")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--train-people",
+        type=int,
+        default=None,
+        help="case bases of only the first N training people (1: one person, as a case base "
+        "of CMU subject 13 alone); results go to segment_people_N.json",
+    )
     args = parser.parse_args(argv)
     if not UIPRMD.is_dir() or not HDM05.is_dir():
         print(f"no ui-prmd or hdm05 data under {UIPRMD.parents[1]}: nothing to measure")
@@ -454,7 +470,8 @@ def main(argv: list[str] | None = None) -> int:
     for dataset in args.datasets:
         read = Reader()
         t0 = time.perf_counter()
-        done = [run_fold(f, read) for f in folds(dataset, args.per_person, args.seed, read)]
+        chosen = folds(dataset, args.per_person, args.seed, read, args.train_people)
+        done = [run_fold(f, read) for f in chosen]
         results[dataset] = done
         summary[dataset] = {**summarise(done), "wall_s": time.perf_counter() - t0}
         print_table({dataset: summary[dataset]})
@@ -463,7 +480,8 @@ def main(argv: list[str] | None = None) -> int:
         "benchmark": "segment_people",
         "command": "python -m benchmarks.segment_people --datasets "
         + " ".join(args.datasets)
-        + f" --per-person {args.per_person} --seed {args.seed}",
+        + f" --per-person {args.per_person} --seed {args.seed}"
+        + (f" --train-people {args.train_people}" if args.train_people else ""),
         "note": "joined real single repetitions of people not in the case base: the joins "
         "(0.1 s of blending) and the rest at each repetition's ends differ from a real session",
         "machine": one_thread_machine(),
@@ -472,8 +490,11 @@ def main(argv: list[str] | None = None) -> int:
         "summary": summary,
         "folds": results,
     }
-    write_json(result, RESULTS)
-    print(f"\nwrote {RESULTS.relative_to(ROOT)}")
+    out = RESULTS
+    if args.train_people:
+        out = RESULTS.with_name(f"segment_people_{args.train_people}.json")
+    write_json(result, out)
+    print(f"\nwrote {out.relative_to(ROOT)}")
     return 0
 
 
