@@ -15,6 +15,7 @@ from cbr.unknown import (
     ACTIVITY_PRIOR,
     FALSE_UNKNOWN,
     JUDGES,
+    NOVEL_CATCH,
     ActivityMargin,
     Margin,
     MarginDistance,
@@ -203,16 +204,18 @@ def test_activity_thresholds_by_hand() -> None:
 
 
 def _one_wrongly_named() -> CaseBase:
-    """Recording r1: a at 0, b at 10, c at 20; recording r2: a at 1 and 9, b at 12, c at 23."""
+    """Person r1: a at 0, b at 10, c at 20; person r2: a at 1 and 9, b at 12, c at 23 (two
+    people: held out by person, thresholds with no floor of one person's)."""
     return _line(
         [0.0, 10.0, 20.0, 1.0, 9.0, 12.0, 23.0],
         ["a", "b", "c", "a", "a", "b", "c"],
         ["r1", "r1", "r1", "r2", "r2", "r2", "r2"],
+        subjects=["r1", "r1", "r1", "r2", "r2", "r2", "r2"],
     )
 
 
 def test_activity_margin_calibrated_by_hand() -> None:
-    """Each case held out against the other recording. r1: a@0 (a 1, b 12: 1/12), b@10 (a@9
+    """Each case held out against the other person. r1: a@0 (a 1, b 12: 1/12), b@10 (a@9
     at 1, b 2: nearest a, wrong, 1/2), c@20 (c 3, b 8: 3/8); r2: a@1 (a 1, b 9: 1/9), a@9
     (b@10 at 1, a 9: wrong, 1/9), b@12 (b 2, c 8: 1/4), c@23 (c 3, b 13: 3/13). The margin
     pools all seven, so its threshold is the wrong b@10's 1/2; the activity margin keeps the
@@ -222,7 +225,7 @@ def test_activity_margin_calibrated_by_hand() -> None:
     cb = _one_wrongly_named()
     assert Margin.of(cb).threshold == pytest.approx(1 / 2)
     judge = ActivityMargin.of(cb, prior=ACTIVITY_PRIOR)
-    assert (judge.pooled, judge.known, judge.basis) == (pytest.approx(3 / 8), 5, "recording")
+    assert (judge.pooled, judge.known, judge.basis) == (pytest.approx(3 / 8), 5, "subject")
     expected = [(2 / 9 + 7.5) / 22, (1 / 4 + 7.5) / 21, 3 / 8]
     np.testing.assert_allclose(judge.thresholds, expected)
     own = ActivityMargin.of(cb, prior=0.0)
@@ -239,7 +242,7 @@ def test_activity_margin_calibrated_by_hand() -> None:
 
 
 def test_activity_margin_chooses_its_weight_by_hand() -> None:
-    """The rightly named cases of :func:`_one_wrongly_named` by recording: r1 a 1/12, c 3/8;
+    """The rightly named cases of :func:`_one_wrongly_named` by person: r1 a 1/12, c 3/8;
     r2 a 1/9, b 1/4, c 3/13. r1 held out, thresholds from r2 (pooled 1/4, the largest of
     three at any rate up to 5 %): c's 3/8 lies above c's own 3/13 and the pooled 1/4, at any
     prior. r2 held out, from r1 (pooled 3/8, a's own 1/12): a's 1/9 lies above a's
@@ -395,3 +398,40 @@ def test_activity_margin_budget_thresholds_lie_at_or_below_its_own() -> None:
     assert all(b <= t for b, t in zip(chosen.budget_thresholds, chosen.thresholds, strict=True))
     fixed = ActivityMargin.of(cb, prior=ACTIVITY_PRIOR)
     assert fixed.budget_thresholds == fixed.thresholds
+
+
+def _between() -> CaseBase:
+    """Two recordings (r1, r2) of activities a, b, c on a line, a between the other two:
+    r1 a@0, b@-10, c@10; r2 a@1, b@-11, c@11."""
+    xs = [0.0, -10.0, 10.0, 1.0, -11.0, 11.0]
+    return _line(xs, ["a", "b", "c"] * 2, ["r1"] * 3 + ["r2"] * 3)
+
+
+def test_one_person_thresholds_call_most_held_out_novel_cases_unknown() -> None:
+    """Each case of :func:`_between` held out against the other recording. Known margins
+    (own activity in): a@0 1/11, b@-10 1/11, c@10 1/9, a@1 1/9, b@-11 1/11, c@11 1/11: every
+    threshold at most 1/9. Novel margins (own activity gone): a@0 11/11 (b and c both 11
+    away), b@-10 11/21, c@10 9/21, a@1 9/11, b@-11 11/21, c@11 11/21; sorted 9/21, 11/21
+    (three times), 9/11, 1: at most half of the six lie above the third, 11/21: the floor,
+    so every threshold is 11/21. The same cases named as two people are held out by person,
+    and keep their own thresholds."""
+    assert NOVEL_CATCH == 0.5
+    judge = ActivityMargin.of(_between())
+    assert judge.basis == "recording"
+    assert judge.floor == pytest.approx(11 / 21)
+    np.testing.assert_allclose(judge.thresholds, [11 / 21] * 3)
+    np.testing.assert_allclose(judge.budget_thresholds, [11 / 21] * 3)
+    assert not judge.unlike(np.array([5.0, 10.0, 20.0]))  # margin 0.5 < 11/21
+    assert judge.unlike(np.array([6.0, 10.0, 20.0]))  # 0.6
+    assert judge.evidence(np.array([5.0, 10.0, 20.0])) == 0.0
+    people = _line(
+        [0.0, -10.0, 10.0, 1.0, -11.0, 11.0], ["a", "b", "c"] * 2, ["r1"] * 3 + ["r2"] * 3,
+        subjects=["p"] * 3 + ["q"] * 3,
+    )  # fmt: skip
+    by_person = ActivityMargin.of(people)
+    assert (by_person.basis, by_person.floor) == ("subject", 0.0)
+    assert max(by_person.thresholds) <= 1 / 9 + 1e-12
+    assert by_person.unlike(np.array([5.0, 10.0, 20.0]))
+    # a record stored before the floor loads with none
+    old = {k: v for k, v in judge.to_dict().items() if k != "floor"}
+    assert ActivityMargin.from_dict(old).floor == 0.0
