@@ -195,7 +195,10 @@ class Watcher:
         those queued behind them."""
         from cbr.live import warm_up
 
-        warm_up(self.clf, self.judge)
+        try:
+            warm_up(self.clf, self.judge)
+        except DataError:  # a figure this case base cannot describe: the stream warms it
+            pass
         self.started = time.perf_counter()  # frames per second: of the stream alone
 
     def watch(self, frames: Iterator[Any], is_file: bool) -> None:
