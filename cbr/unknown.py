@@ -347,14 +347,17 @@ def _field(name: str, kind: Any, value: Any) -> Any:
 class Margin(Calibrated):
     """Unknown when the nearest activity is hardly nearer than the next: margin ``d1 / d2``
     above ``threshold``, which at most a share ``false_unknown`` of the case base's own
-    held-out known margins exceed (module docstring); ``basis``: how training cases were held
-    out; ``known``/``novel``: how many margins of each kind were measured."""
+    held-out known margins exceed (module docstring), and at least ``floor`` (when the case
+    base cannot hold out a person: :func:`one_person_floor`; 0 otherwise, and in a record
+    stored before it); ``basis``: how training cases were held out; ``known``/``novel``: how
+    many margins of each kind were measured."""
 
     threshold: float
     basis: str
     known: int
     novel: int
     false_unknown: float = FALSE_UNKNOWN
+    floor: float = 0.0
 
     @classmethod
     def of(
@@ -370,8 +373,9 @@ class Margin(Calibrated):
         known, novel = _margins(known_rows), _margins(novel_rows)
         if not len(known) or not len(novel):
             raise _no_apart()
-        threshold = false_unknown_threshold(known, false_unknown)
-        return cls(threshold, basis, len(known), len(novel), false_unknown)
+        floor = one_person_floor(seen, codes, basis)
+        threshold = max(false_unknown_threshold(known, false_unknown), floor)
+        return cls(threshold, basis, len(known), len(novel), false_unknown, floor)
 
     def ratio(self, nearest: np.ndarray) -> float:
         return margin_of(nearest)
@@ -474,9 +478,10 @@ left-out blocks called unknown (69-70 %); 0.8 loses seen blocks of UI-PRMD (25 %
 
 
 def one_person_floor(seen: np.ndarray, codes: np.ndarray, basis: str) -> float:
-    """The least threshold of :class:`ActivityMargin` when the case base cannot hold out a
-    person (``basis`` not "subject": its cases are held out from their own recording, or
-    from the frames of their own that overlap them): the margin that :data:`NOVEL_CATCH` of
+    """The least threshold of :class:`ActivityMargin` and :class:`Margin` when the case base
+    cannot hold out a person (``basis`` not "subject": its cases are held out from their own
+    recording, or from the frames of their own that overlap them): the margin that
+    :data:`NOVEL_CATCH` of
     the held-out cases with their own activity left out exceed (:func:`known_and_novel`,
     from held-out distances ``seen`` ``(n, n_classes)`` and activities ``codes`` ``(n,)``);
     0 when it can (basis "subject") or no such case is there.

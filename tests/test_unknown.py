@@ -106,12 +106,15 @@ def test_the_threshold_spends_the_false_unknown_budget_not_the_equal_error_point
     assert false_unknown_threshold(known, 0.2) == pytest.approx(0.5)
 
 
-def _two_recordings() -> CaseBase:
-    """Recording r1: a at 0, b at 10, c at 20; recording r2: a at 1, b at 12, c at 23."""
+def _two_recordings(people: bool = False) -> CaseBase:
+    """Recording r1: a at 0, b at 10, c at 20; recording r2: a at 1, b at 12, c at 23
+    (``people``: each recording named as a person of its own)."""
+    sources = ["r1", "r1", "r1", "r2", "r2", "r2"]
     return _line(
         [0.0, 10.0, 20.0, 1.0, 12.0, 23.0],
         ["a", "b", "c", "a", "b", "c"],
-        ["r1", "r1", "r1", "r2", "r2", "r2"],
+        sources,
+        subjects=list(sources) if people else None,
     )
 
 
@@ -120,15 +123,21 @@ def test_margin_is_calibrated_by_holding_out_recordings_and_activities() -> None
     a@0: 1/12, b@10: 2/9, c@20: 3/8, a@1: 1/9, b@12: 2/8, c@23: 3/13. Novel margins (its
     activity gone too): a@0: 12/23, b@10: 9/13, c@20: 8/19, a@1: 9/19, b@12: 8/12, c@23:
     13/23. A budget of 5 % of 6 known margins (0.3) lets none lie above: the threshold is the
-    largest known margin, 3/8."""
-    cb = _two_recordings()
+    largest known margin, 3/8, when the recordings are two people. As recordings of one
+    person, no threshold lies below the novel margin at most half of the six exceed (sorted
+    8/19, 9/19, 12/23, 13/23, 8/12, 9/13: the third), 12/23."""
+    one = Margin.of(_two_recordings())
+    assert (one.threshold, one.floor) == (pytest.approx(12 / 23), pytest.approx(12 / 23))
+    assert not one.unlike(np.array([5.0, 10.0, 20.0]))  # margin 0.5
+    cb = _two_recordings(people=True)
     known, novel, basis = calibration_margins(cb)
-    assert basis == "recording"
+    assert basis == "subject"
     np.testing.assert_allclose(known, [1 / 12, 2 / 9, 3 / 8, 1 / 9, 2 / 8, 3 / 13])
     np.testing.assert_allclose(novel, [12 / 23, 9 / 13, 8 / 19, 9 / 19, 8 / 12, 13 / 23])
     judge = Margin.of(cb)
-    assert judge.threshold == pytest.approx(3 / 8)
-    assert (judge.known, judge.novel, judge.basis) == (6, 6, "recording")
+    assert judge.threshold == pytest.approx(3 / 8) and judge.floor == 0.0
+    assert (judge.known, judge.novel, judge.basis) == (6, 6, "subject")
+    assert judge.unlike(np.array([5.0, 10.0, 20.0]))
     # a window at 5: a at 4, b at 5, c at 15 -> 4/5 = 0.8: between a and b, like neither
     assert judge.unlike(np.array([4.0, 5.0, 15.0]))
     assert "the nearest (a) is 0.80 as far as the next (b)" in judge.describe(
