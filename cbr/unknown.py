@@ -481,10 +481,9 @@ def one_person_floor(seen: np.ndarray, codes: np.ndarray, basis: str) -> float:
     """The least threshold of :class:`ActivityMargin` and :class:`Margin` when the case base
     cannot hold out a person (``basis`` not "subject": its cases are held out from their own
     recording, or from the frames of their own that overlap them): the margin that
-    :data:`NOVEL_CATCH` of
-    the held-out cases with their own activity left out exceed (:func:`known_and_novel`,
-    from held-out distances ``seen`` ``(n, n_classes)`` and activities ``codes`` ``(n,)``);
-    0 when it can (basis "subject") or no such case is there.
+    :data:`NOVEL_CATCH` of the held-out cases with their own activity left out exceed
+    (:func:`known_and_novel`, from held-out distances ``seen`` ``(n, n_classes)`` and
+    activities ``codes`` ``(n,)``); 0 when it can (basis "subject") or no such case is there.
 
     Held out from the same person, a known case lies nearer its activity than a new person's
     will: the budget of false unknowns read there is spent many times over on anyone else
