@@ -1,7 +1,9 @@
 """Segmenting long recordings of people NOT in the case base, against a 1-NN DTW window
 classifier in the same run.
 
-Run: ``python -m benchmarks.segment_people [--datasets ...] [--per-person N] [--seed S]``
+Run: ``python -m benchmarks.segment_people [--datasets ...] [--per-person N] [--seed S]
+[--train-people N]`` (``--train-people 1``: case bases of one person, as one of CMU subject 13
+alone; written to ``segment_people_1.json``)
 (about 19 minutes of wall clock at load 6-10 on 2 cores, most of it the DTW baseline and
 the case bases of UI-PRMD Kinect; each window is solved once and finished by every judge;
 one core: BLAS, OpenMP and numba threads pinned to 1; ``--datasets hdm05`` alone takes about
