@@ -373,7 +373,7 @@ class Margin(Calibrated):
         known, novel = _margins(known_rows), _margins(novel_rows)
         if not len(known) or not len(novel):
             raise _no_apart()
-        floor = one_person_floor(seen, codes, basis)
+        floor = one_person_floor(novel, basis)
         threshold = max(false_unknown_threshold(known, false_unknown), floor)
         return cls(threshold, basis, len(known), len(novel), false_unknown, floor)
 
@@ -477,13 +477,13 @@ left-out blocks called unknown (69-70 %); 0.8 loses seen blocks of UI-PRMD (25 %
 0.2 the unknown ones (16-33 %)."""
 
 
-def one_person_floor(seen: np.ndarray, codes: np.ndarray, basis: str) -> float:
+def one_person_floor(novel: np.ndarray, basis: str) -> float:
     """The least threshold of :class:`ActivityMargin` and :class:`Margin` when the case base
     cannot hold out a person (``basis`` not "subject": its cases are held out from their own
     recording, or from the frames of their own that overlap them): the margin that
-    :data:`NOVEL_CATCH` of the held-out cases with their own activity left out exceed
-    (:func:`known_and_novel`, from held-out distances ``seen`` ``(n, n_classes)`` and
-    activities ``codes`` ``(n,)``); 0 when it can (basis "subject") or no such case is there.
+    :data:`NOVEL_CATCH` of the held-out cases with their own activity left out exceed (their
+    margins ``novel`` ``(n,)``, of :func:`known_and_novel`); 0 when it can (basis "subject")
+    or no such case is there.
 
     Held out from the same person, a known case lies nearer its activity than a new person's
     will: the budget of false unknowns read there is spent many times over on anyone else
@@ -493,7 +493,6 @@ def one_person_floor(seen: np.ndarray, codes: np.ndarray, basis: str) -> float:
     until they call only :data:`NOVEL_CATCH` of those unknown."""
     if basis == "subject":
         return 0.0
-    novel = _margins(known_and_novel(seen, codes)[1])
     return false_unknown_threshold(novel, NOVEL_CATCH) if len(novel) else 0.0
 
 
@@ -651,7 +650,8 @@ class ActivityMargin(Calibrated):
         keep = known_rows(seen, codes)
         known, own = seen[keep], codes[keep]
         right = np.argmin(known, axis=1) == own if len(known) else np.zeros(0, dtype=bool)
-        if not right.any() or not len(known_and_novel(seen, codes)[1]):
+        novel = _margins(known_and_novel(seen, codes)[1])
+        if not right.any() or not len(novel):
             raise _no_apart()
         rate, prior = (
             choose_weight(seen, codes, groups, false_unknown)
@@ -661,7 +661,7 @@ class ActivityMargin(Calibrated):
         margins = _margins(known[right])
         per, pooled = activity_thresholds(margins, own[right], seen.shape[1], rate, prior)
         budget, _ = activity_thresholds(margins, own[right], seen.shape[1], false_unknown, prior)
-        floor = one_person_floor(seen, codes, basis)
+        floor = one_person_floor(novel, basis)
         per, budget = np.maximum(per, floor), np.maximum(budget, floor)
         known_n = int(right.sum())
         return cls(tuple(per.tolist()), pooled, basis, known_n, false_unknown, prior, rate,
