@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -47,12 +48,15 @@ from .segmentation import (
     span_fields,
     told,
 )
-from .unknown import JUDGES, Judge, activity_codes, judge_of, unknown_evidence
+from .unknown import JUDGES, Judge, activity_codes, for_person, judge_of, unknown_evidence
 
 HOP_S = 0.5
 """The rolling label is decided every this many seconds of stream."""
 MAX_SEGMENT_S = 120.0
 """Repetitions are counted over at most the last this many seconds of a segment."""
+PERSON_WINDOWS = 1200
+"""How far the stream's person lies from every case (:func:`cbr.unknown.for_person`) is read
+from at most this many of the latest windows (10 minutes of fixed windows)."""
 MAX_UNSETTLED_S = 30.0
 """A hop the decoder has not settled after this many seconds of stream is settled on the path
 best now (the best paths into the states may never agree: when every state is equally
@@ -88,13 +92,15 @@ class LiveSegment:
 @dataclass(frozen=True)
 class _Judged:
     """A window the segmenter solved: frames [start, stop), its nearest activity, the
-    judge's ratio and its distance to the nearest case of every activity."""
+    judge's ratio, its distance to the nearest case of every activity and the judge it was
+    judged by (that of the person as seen by then: :func:`cbr.unknown.for_person`)."""
 
     start: int
     stop: int
     activity: int
     ratio: float
     nearest: np.ndarray
+    judge: Judge
 
     @property
     def centre(self) -> float:
@@ -220,8 +226,10 @@ class LiveSegmenter:
     2. known or unknown (:func:`cbr.segmentation.decode_unknown`), over the settled hops once
        no window can still change their evidence (:meth:`_final_until`): a hop's evidence is
        the mean evidence of unknown (:func:`cbr.unknown.unknown_evidence`, graded by the
-       default judge) of the windows inside its stretch over it (fixed and repetition
-       windows, those whose period disagrees with their neighbours' left out:
+       default judge; with one person's case base, of the distances less how much farther
+       the person lies from every case, as the windows so far tell:
+       :func:`cbr.unknown.for_person`) of the windows inside its stretch over it (fixed and
+       repetition windows, those whose period disagrees with their neighbours' left out:
        :func:`cbr.segmentation.period_outliers`; a window across a change of activity is like
        neither side, whether both are known or not; over none, the last evidence carries
        on); every change of the label seen costs the same, and a change of activity under
@@ -286,6 +294,8 @@ class LiveSegmenter:
         self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
         self.judged: list[_Judged] = []  # the windows over the segments not yet finished
         # whose frames are kept: what explains a finished segment
+        self.near: deque[float] = deque(maxlen=PERSON_WINDOWS)  # the latest windows'
+        # distances to their nearest case: how far the person lies
 
     def _penalty(self) -> float:
         """The log-odds a change costs: :data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS`."""
@@ -509,14 +519,19 @@ class LiveSegmenter:
 
     def _judged(self, solved: Any, start: int, stop: int) -> tuple[np.ndarray, float]:
         """A solved window's (frames [start, stop)) vote for its nearest case's activity
-        ``(n_classes,)`` and its evidence of unknown (:func:`cbr.unknown.unknown_evidence`);
-        kept to explain the segment it lies in (:meth:`_explain`)."""
+        ``(n_classes,)`` and its evidence of unknown (:func:`cbr.unknown.unknown_evidence`, by
+        the judge of the person as the windows so far show them:
+        :func:`cbr.unknown.for_person`); kept to explain the segment it lies in
+        (:meth:`_explain`)."""
         vote = np.zeros(self.unknown)
         activity = self.classes.index(str(solved.retrieval.labels[0]))
         vote[activity] = 1.0
         nearest = activity_distances(self.clf, solved, self.codes)
-        self.judged.append(_Judged(start, stop, activity, self.judge.ratio(nearest), nearest))
-        return vote, unknown_evidence(self.judge, nearest)
+        if np.isfinite(np.min(nearest)):
+            self.near.append(float(np.min(nearest)))
+        judge = for_person(self.judge, np.array(self.near))
+        self.judged.append(_Judged(start, stop, activity, judge.ratio(nearest), nearest, judge))
+        return vote, unknown_evidence(judge, nearest)
 
     def _explain(self, start: int, end: int, state: int) -> tuple[str, float]:
         """A finished segment's explanation and novelty (the judge's ratio, median over its
@@ -532,7 +547,7 @@ class LiveSegmenter:
         novelty = float(np.median(ratios))
         if state == self.unknown:
             median = inside[int(np.argsort(ratios, kind="stable")[len(ratios) // 2])]
-            return self.judge.describe(median.nearest, self.classes), novelty
+            return median.judge.describe(median.nearest, self.classes), novelty
         telling = [w for w in inside if w.activity == state and w.start >= self.offset]
         if not telling:
             return "", novelty

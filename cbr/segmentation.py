@@ -32,7 +32,9 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    every window but the period outliers is judged (:mod:`cbr.unknown`; by default the margin
    between its two nearest activities against the nearest one's own threshold, calibrated on
    the case base; graded between the budget's threshold and the judge's own,
-   :func:`cbr.unknown.unknown_evidence`), and known/unknown is
+   :func:`cbr.unknown.unknown_evidence`; with one person's case base, of the distances less
+   how much farther the recording's person lies from every case, :func:`cbr.unknown.for_person`),
+   and known/unknown is
    decoded from the windows that lie within one decoded activity (a window across a change
    of activity is like neither side, whether both are known or not; a block none of them
    covers takes its nearest covered neighbours' evidence, :func:`block_evidence`), every
@@ -79,6 +81,7 @@ from .unknown import (
     Judge,
     Margin,
     activity_codes,
+    for_person,
     judge_of,
     per_activity,
     unknown_evidence,
@@ -794,13 +797,15 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     """Steps 4-7 of the module docstring: the activities of ``done`` (:func:`solve_recording`
     with ``clf``) decoded from the windows ``judge`` finds like an activity
     (:func:`decode_activities`), the stretches unlike every activity of the case base made
-    unknown, and every segment counted and explained."""
+    unknown, and every segment counted and explained. The judge sees the recording's person
+    (:func:`cbr.unknown.for_person`, from the windows but the period outliers)."""
     rec, solved, n_classes = done.rec, list(done.windows), len(clf.classes_)
+    counted = [w for w, out in zip(solved, done.outliers.tolist(), strict=True) if not out]
+    judge = for_person(judge, np.array([np.min(w.nearest) for w in counted]))
     unlike = np.array([judge.unlike(w.nearest) for w in solved], dtype=bool)
     votes, path = decode_activities(solved, done.outliers, unlike, rec.n_frames, rec.fps,
                                     n_classes)  # fmt: skip
     evidence = within_runs(solved, rec.fps, path).tolist()
-    counted = [w for w, out in zip(solved, done.outliers.tolist(), strict=True) if not out]
     path[unknown_blocks(counted, rec.n_frames, rec.fps, judge, path)] = n_classes
     runs = _runs(path)
     bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]

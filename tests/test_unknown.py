@@ -19,15 +19,18 @@ from cbr.unknown import (
     ActivityMargin,
     Margin,
     MarginDistance,
+    Offset,
     activity_thresholds,
     calibration_margins,
     choose_weight,
     equal_error_threshold,
     false_unknown_threshold,
+    for_person,
     held_out_basis,
     inner_scores,
     joint_thresholds,
     margin_of,
+    person_offset,
     unknown_evidence,
 )
 from features.datasets import Clip
@@ -124,11 +127,12 @@ def test_margin_is_calibrated_by_holding_out_recordings_and_activities() -> None
     activity gone too): a@0: 12/23, b@10: 9/13, c@20: 8/19, a@1: 9/19, b@12: 8/12, c@23:
     13/23. A budget of 5 % of 6 known margins (0.3) lets none lie above: the threshold is the
     largest known margin, 3/8, when the recordings are two people. As recordings of one
-    person, no threshold lies below the novel margin at most half of the six exceed (sorted
-    8/19, 9/19, 12/23, 13/23, 8/12, 9/13: the third), 12/23."""
+    person, no threshold lies below the novel margin at most 80 % (4.8) of the six exceed
+    (sorted 8/19, 9/19, 12/23, 13/23, 8/12, 9/13: the second; five exceed the first), 9/19."""
     one = Margin.of(_two_recordings())
-    assert (one.threshold, one.floor) == (pytest.approx(12 / 23), pytest.approx(12 / 23))
-    assert not one.unlike(np.array([5.0, 10.0, 20.0]))  # margin 0.5
+    assert (one.threshold, one.floor) == (pytest.approx(9 / 19), pytest.approx(9 / 19))
+    assert not one.unlike(np.array([4.5, 10.0, 20.0]))  # margin 0.45
+    assert one.unlike(np.array([5.0, 10.0, 20.0]))  # 0.5
     cb = _two_recordings(people=True)
     known, novel, basis = calibration_margins(cb)
     assert basis == "subject"
@@ -421,10 +425,10 @@ def test_one_person_thresholds_call_most_held_out_novel_cases_unknown() -> None:
     (own activity in): a@0 1/11, b@-10 1/11, c@10 1/9, a@1 1/9, b@-11 1/11, c@11 1/11: every
     threshold at most 1/9. Novel margins (own activity gone): a@0 11/11 (b and c both 11
     away), b@-10 11/21, c@10 9/21, a@1 9/11, b@-11 11/21, c@11 11/21; sorted 9/21, 11/21
-    (three times), 9/11, 1: at most half of the six lie above the third, 11/21: the floor,
-    so every threshold is 11/21. The same cases named as two people are held out by person,
-    and keep their own thresholds."""
-    assert NOVEL_CATCH == 0.5
+    (three times), 9/11, 1: at most 80 % (4.8) of the six lie above the second (five above
+    the first), 11/21: the floor, so every threshold is 11/21. The same cases named as two
+    people are held out by person, and keep their own thresholds."""
+    assert NOVEL_CATCH == 0.8
     judge = ActivityMargin.of(_between())
     assert judge.basis == "recording"
     assert judge.floor == pytest.approx(11 / 21)
@@ -444,3 +448,56 @@ def test_one_person_thresholds_call_most_held_out_novel_cases_unknown() -> None:
     # a record stored before the floor loads with none
     old = {k: v for k, v in judge.to_dict().items() if k != "floor"}
     assert ActivityMargin.from_dict(old).floor == 0.0
+
+
+def test_person_offset_by_hand() -> None:
+    """The tenth quantile of the windows' distances to their nearest case (numpy's linear
+    one: of 0, 1, ..., 9 it is 0.9) less the reach, shrunk by 8 windows' worth: 10 windows,
+    reach 0.4: (0.9 - 0.4) * 10 / 18 = 5/18. Windows at no finite distance are not counted;
+    a recording nearer than the reach has no offset; an unmeasured reach (inf) none."""
+    assert person_offset(np.arange(10.0), 0.4) == pytest.approx(5 / 18)
+    assert person_offset(np.r_[np.arange(10.0), np.inf], 0.4) == pytest.approx(5 / 18)
+    assert person_offset(np.full(24, 5.0), 1.0) == pytest.approx(4 * 24 / 32)
+    assert person_offset(np.full(24, 0.5), 1.0) == 0.0
+    assert person_offset(np.full(24, 5.0), math.inf) == 0.0
+    assert person_offset(np.zeros(0), 1.0) == 0.0
+
+
+def test_a_person_farther_from_every_case_is_measured_and_taken_off() -> None:
+    """:func:`_two_recordings` as one person's: held out from the other recording, the
+    nearest case of each lies 1 (a), 2 (b) or 3 (c) away, twice; the reach, their tenth
+    quantile (sorted 1, 1, 2, 2, 3, 3: half-way between the first two), is 1. A recording
+    whose 24 windows lie 5 from their nearest case lies 4 farther, shrunk to 4 * 24 / 32 =
+    3. A window at 6, 10, 20 (margin 0.6, above the threshold 9/19) is 3, 7, 17 less the
+    offset: 3/7, below it."""
+    judge = Margin.of(_two_recordings())
+    assert judge.reach == pytest.approx(1.0)
+    person = for_person(judge, np.full(24, 5.0))
+    assert isinstance(person, Offset) and person.offset == pytest.approx(3.0)
+    w = np.array([6.0, 10.0, 20.0])
+    assert judge.unlike(w) and not person.unlike(w)
+    assert person.ratio(w) == pytest.approx(3 / 7)
+    assert "every distance less 3" in person.describe(w, ["a", "b", "c"])
+    assert for_person(judge, np.full(24, 0.5)).offset == 0.0  # type: ignore[attr-defined]
+    # held out by person, the held-out cases already lie as far as a new person: no offset
+    people = Margin.of(_two_recordings(people=True))
+    assert math.isinf(people.reach) and for_person(people, np.full(24, 5.0)) is people
+    # the reach is stored; a record stored before it has none (inf) and takes no offset
+    assert Margin.from_dict(judge.to_dict()) == judge
+    old = Margin.from_dict({k: v for k, v in judge.to_dict().items() if k != "reach"})
+    assert math.isinf(old.reach) and for_person(old, np.full(24, 5.0)) is old
+
+
+def test_the_activity_margin_grades_the_distances_less_the_offset() -> None:
+    """:func:`_between`: every held-out known case's nearest lies 1 away (the reach 1), every
+    threshold and budget threshold 11/21. A window at 6, 10, 20 (margin 0.6) is unknown; less
+    the offset 3 of 24 windows at 5 (3, 7, 17: 3/7) it is known, evidence 0; at 6.5, 8, 20
+    (0.8125) it is unknown either way (3.5/5 = 0.7)."""
+    judge = ActivityMargin.of(_between())
+    assert judge.reach == pytest.approx(1.0)
+    person = for_person(judge, np.full(24, 5.0))
+    w = np.array([6.0, 10.0, 20.0])
+    assert unknown_evidence(judge, w) == 1.0 and unknown_evidence(person, w) == 0.0
+    far = np.array([6.5, 8.0, 20.0])
+    assert unknown_evidence(judge, far) == 1.0 and unknown_evidence(person, far) == 1.0
+    assert person.ratio(far) == pytest.approx(0.7)
