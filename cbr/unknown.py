@@ -28,6 +28,11 @@ The judges, each calibrated on the case base itself, never on what is being segm
   people not in the case base it calls more of a left-out movement's blocks unknown than
   the pooled threshold and keeps as many known blocks right, or more (README, "Long
   recordings", for the figures).
+- With a case base of one person (held out by recording or by time, not by person), the two
+  margin judges also have a floor (:func:`one_person_floor`) and see each recording's
+  distances less how much farther its person lies from every case than the case base's own
+  held-out cases (:func:`for_person`, :class:`Offset`): a threshold read from one person
+  cannot know how far the next one lies, but the recording's nearest windows can tell.
 - :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
   score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
   case lies farther than held-out training clips nearly ever do.
@@ -508,8 +513,9 @@ PERSON_QUANTILE = 0.1
 """Where a recording's distances to the case base and the case base's own held-out ones are
 compared (:func:`person_reach`, :func:`person_offset`): their nearest tenth, which a
 left-out movement inside the recording hardly reaches. Tried 0.1 and 0.25 on the one-person
-runs of :data:`NOVEL_CATCH`: the same on HDM05, UI-PRMD Vicon's left-out blocks 83 % unknown
-at 0.1 and 79 % at 0.25."""
+runs of :data:`NOVEL_CATCH` (unshrunk): the same on HDM05; UI-PRMD Vicon's seen blocks right
+/ left-out blocks unknown at catch 0.8 92 / 87 % at 0.1, 95 / 83 % at 0.25 (at 0.7: 98 / 83,
+98 / 79 %)."""
 PERSON_PRIOR = 8
 """How many windows' worth of no offset :func:`person_offset` starts from: a stream's first
 few windows (4 s at one every half second) show too little of the person to tell how far
