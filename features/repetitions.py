@@ -28,8 +28,10 @@ How (all channels at once, no per-frame loops):
    posture split into what both sides do alike and what one side does against the other
    (:func:`mirror_angles`); the movement alternates when the second spans at least half as
    much as the first, the left and the right limbs move about equally (within a factor of
-   two: a one-legged kick does not alternate), the body goes out to both sides about
-   equally far, and what one side does at its far points is the other's movement mirrored
+   two: a one-legged kick does not alternate), in all and in the limbs that carry the
+   side-against-side movement (a kick whose arms swing to balance neither), the body goes
+   out to both sides about equally far, and what one side does at its far points is the
+   other's movement mirrored
    (:data:`ALTERNATION_MIN`: a kick answered by the other arm's swing is not) (all taken
    about their running mean over one period when the side-against-side movement repeats
    clearly: bending the arms once to start jogging is not what repeats);
@@ -663,6 +665,20 @@ def _both_sides_move(x: np.ndarray, names: tuple[str, ...]) -> bool:
     return bool(min(left, right) >= 0.5 * max(left, right))
 
 
+def _limbs_alike(x: np.ndarray, names: tuple[str, ...], direction: np.ndarray) -> bool:
+    """Whether the limbs that carry the side-against-side movement ``direction`` ``(C,)`` move
+    about equally on the left and on the right (within a factor of two): the robust spans of
+    the left limbs' angles, each weighted by its share of the direction, against the right
+    limbs'. Where the trunk carries more of the movement than the limbs (a twist), the limbs
+    do not decide. A one-legged kick whose arms swing to balance moves both sides about
+    equally in all (:func:`_both_sides_move`), but its legs not."""
+    spans = (np.percentile(x, 95, axis=0) - np.percentile(x, 5, axis=0)) * np.abs(direction)
+    left = sum(s for s, n in zip(spans, names, strict=True) if n.startswith("left_"))
+    right = sum(s for s, n in zip(spans, names, strict=True) if n.startswith("right_"))
+    trunk = float(spans.sum()) - left - right
+    return bool(left + right <= trunk or min(left, right) >= 0.5 * max(left, right))
+
+
 def _sides_mirror(one: np.ndarray, other: np.ndarray) -> bool:
     """Whether the side-against-side postures at one side's far points ``(k, C)`` and at the
     other's ``(m, C)`` (about their running mean over one period when the movement repeats
@@ -698,7 +714,7 @@ def _alternating_repetitions(
         _steady(alike, period, strength, fps)
     ):
         return none  # mostly both sides alike (a squat, a jumping jack)
-    if not _both_sides_move(x, names):
+    if not _both_sides_move(x, names) or not _limbs_alike(x, names, direction):
         return none  # one limb moves, the other stands by (a kick, a one-arm raise)
     # a full period holds one repetition per side
     distance = int(0.25 * (period or 2 * MIN_PERIOD_S) * fps)

@@ -254,6 +254,10 @@ def test_joined_uiprmd_repetitions_count_exactly(
         ("squat1Reps", "10", "bk", (17, 19, 21, 18, 13)),
         ("rotateArmsBothBackward1Reps", "8", "bd", (1, 2, 3)),
         ("elbowToKnee1RepsLelbowStart", "2", "dg", (13, 14, 15, 16, 17, 18)),
+        # a left kick whose arms and trunk swing to balance: over all angles both sides move
+        # about equally, but the legs that carry the side-against-side movement do not, so it
+        # does not alternate (counted as alternating, each kick out and back was two)
+        ("kickLFront1Reps", "6", "dg", (16, 15, 18, 14, 17, 13)),
     ],
 )
 def test_joined_hdm05_repetitions_count_exactly(
