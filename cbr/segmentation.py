@@ -226,7 +226,7 @@ def _repetition_bounds(sig: MovementSignals, n_frames: int, fps: float) -> list[
     hop = max(1, int(SPAN_HOP_S * sig.fps))
     found: set[tuple[int, int]] = set()
     for a in range(0, max(1, len(sig.values) - span + hop), hop):
-        part = MovementSignals(sig.values[a : a + span], sig.names, sig.fps, sig.step)
+        part = sig.part(a, a + span)
         for first, last in periods_in_span(part, fps):
             found.add((a * sig.step + first, min(n_frames, a * sig.step + last)))
     return sorted(found)
@@ -644,7 +644,7 @@ def _repetitions(sig: MovementSignals, start: int, end: int) -> tuple[Repetition
     a, b = start // sig.step, max(start // sig.step + 1, end // sig.step)
     if (b - a) / sig.fps < MIN_PERIOD_S:
         return ()
-    part = MovementSignals(sig.values[a:b], sig.names, sig.fps, sig.step)
+    part = sig.part(a, b)
     found = count_in_signals(part, (b - a) * sig.step, sig.fps * sig.step).repetitions
     off = a * sig.step
     return tuple(

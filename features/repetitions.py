@@ -17,7 +17,10 @@ How (all channels at once, no per-frame loops):
    down), missing where the
    camera does not see their joints,
    gaps interpolated, cleaned of tracking glitches (running median, :data:`MEDIAN_S`),
-   smoothed (Gaussian, :data:`SMOOTHING_S`) and analysed at about :data:`ANALYSIS_FPS`;
+   smoothed (Gaussian, :data:`SMOOTHING_S`) and analysed at about :data:`ANALYSIS_FPS`; a
+   far point (step 5) in a stretch of at least :data:`MIN_PERIOD_S` in which no frame shows
+   the person lies where the person was last or next seen (the values there are filled in: a
+   posture held is a plateau, whose middle is no far point);
 2. the period T (:func:`find_period`): the first strong peak of the summed autocorrelation of
    the angle velocities (velocities, so that a one-off change of posture does not hide the
    repetitions), each lag's estimate weighted by its overlap with the clip (the biased
@@ -258,6 +261,14 @@ class MovementSignals:
     names: tuple[str, ...]
     fps: float
     step: int
+    # (n,) True in a stretch of at least MIN_PERIOD_S in which no frame shows the person (the
+    # values there are filled in, not measured); None: none such
+    blind: np.ndarray | None = None
+
+    def part(self, a: int, b: int) -> MovementSignals:
+        """Samples [a, b) of these signals."""
+        blind = None if self.blind is None else self.blind[a:b]
+        return dataclasses.replace(self, values=self.values[a:b], blind=blind)
 
 
 def counted_angles(seq: PoseSequence) -> np.ndarray:
@@ -358,7 +369,33 @@ def movement_signals(seq: PoseSequence) -> MovementSignals:
     x = median_filter(x, size=(width, 1), mode="nearest")
     step = max(1, int(round(seq.fps / ANALYSIS_FPS)))
     x = gaussian_filter1d(x, SMOOTHING_S * seq.fps, axis=0, mode="nearest")[::step]
-    return MovementSignals(x, names, seq.fps / step, step)
+    unseen = ~np.isfinite(raw[:, keep]).any(axis=1)
+    blind = _long_runs(unseen, MIN_PERIOD_S * seq.fps)[::step]
+    return MovementSignals(x, names, seq.fps / step, step, blind if blind.any() else None)
+
+
+def _long_runs(mask: np.ndarray, length: float) -> np.ndarray:
+    """``mask`` ``(n,)`` kept only in its runs of at least ``length`` samples."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
+    out = np.zeros(len(mask), dtype=bool)
+    for a, b in zip(edges[::2], edges[1::2], strict=True):  # over the runs, not the frames
+        if b - a >= length:
+            out[a:b] = True
+    return out
+
+
+def _in_view(far: np.ndarray, blind: np.ndarray | None) -> np.ndarray:
+    """Where the far points ``far`` (samples, ascending) were seen: one in a ``blind``
+    stretch moved to the nearest sample seen (the values there are the last or next posture
+    seen, held, a plateau whose middle the peak finder names, or interpolated). Ascending,
+    as long as ``far`` (two may land on one sample)."""
+    if blind is None or not len(far) or not blind[far].any():
+        return far
+    seen = np.flatnonzero(~blind)
+    at = np.clip(np.searchsorted(seen, far), 1, len(seen) - 1)
+    before, after = seen[at - 1], seen[at]
+    nearest = np.where(far - before <= after - far, before, after)
+    return np.where(blind[far], nearest, far)
 
 
 _TRUNK = ("left_shoulder", "right_shoulder", "left_hip", "right_hip")
@@ -611,7 +648,12 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
         distance = int(0.5 * (clear or MIN_PERIOD_S) * sig.fps)
         reach = int(period * sig.fps) if period else len(line)
         far = _far_points(line, float(np.percentile(line, 5)), distance)
+        far = np.unique(_in_view(far, sig.blind))
         spans = _bounds(line, far, reach) if len(far) else []
+    else:
+        far = _in_view(far, sig.blind)
+        once = np.concatenate([[True], np.diff(far) > 0])
+        spans, far = [s for s, k in zip(spans, once, strict=True) if k], far[once]
     reps = [
         Repetition(
             start_frame=int(a * sig.step),

@@ -18,6 +18,7 @@ from features.qmp import fit_signals
 from features.readers.asfamc import read_asf_amc
 from features.repetitions import count_repetitions, mirror_angles, pelvis_height
 from posecbr.cli import main
+from posecbr.recordings import load_recording
 from tests.bodies import rot_z, rotate, standing, to_sequence
 
 FIXTURE = Path(__file__).parent / "fixtures" / "repetition_counts.json"
@@ -271,6 +272,21 @@ def test_reps_command_refuses_a_recording_with_no_person(
     assert captured.out == ""
     assert captured.err.count("\n") == 1 and "no person" in captured.err
     assert "Traceback" not in captured.err and _sha(path) == before
+
+
+def test_far_points_of_a_video_lie_where_a_person_was_seen(shared_data: Path) -> None:
+    """The street video: BlazePose finds a walker only from 16.6 s on, and not in every frame
+    after. What is filled in where nobody is seen (the first posture seen, held) holds no far
+    point: each repetition's far point is at a frame that shows the person, or within the
+    0.4 s a repetition takes at least of one."""
+    seq = load_recording(shared_data / "media" / "vtest.avi")
+    seen = np.flatnonzero(np.isfinite(seq.positions).all(axis=(1, 2)))
+    result = count_repetitions(seq)
+    assert result.count > 0
+    peaks = np.array([r.peak_frame for r in result.repetitions])
+    nearest = np.abs(peaks[:, None] - seen[None, :]).min(axis=1)
+    assert (nearest <= 0.4 * seq.fps).all()
+    assert peaks.min() >= seen.min()
 
 
 def test_reps_command_refuses_a_plot_over_its_input(

@@ -54,6 +54,26 @@ def test_cycles_with_a_small_extra_bump_count_the_cycles() -> None:
     assert not result.alternating
 
 
+def test_a_far_point_lies_where_the_person_was_seen() -> None:
+    """The person out of view for the first 2 s (the values there are the first posture
+    seen, held: knees bent 1.2 rad), then seen rising from that squat's bottom, resting and
+    doing two more squats (bottoms 30 and 37 samples into cycles of 60 and 75 starting at
+    sample 110). The held plateau's middle (sample 30) is no far point: the cut-off squat's
+    is where it was first seen (sample 60)."""
+    held = np.full(60, np.pi - 1.2)
+    rise = np.pi - 1.2 + 0.6 * (1 - np.cos(np.pi * np.arange(30) / 30))
+    knee = np.concatenate(
+        [held, rise, np.full(20, np.pi), _bend(np.array([60, 75])), np.full(20, np.pi)]
+    )
+    blind = np.arange(len(knee)) < 60
+    sig = MovementSignals(np.stack([knee, knee], axis=1), KNEES, FPS, 1, blind)
+    result = count_in_signals(sig, len(knee), FPS)
+    np.testing.assert_allclose([r.peak_frame for r in result.repetitions], [60, 140, 207.5], atol=1)
+    # slicing keeps what was seen aligned with the values
+    part = sig.part(50, 150)
+    assert part.blind is not None and part.blind.sum() == 10 and len(part.values) == 100
+
+
 def test_uneven_cycles_of_several_people_count_exactly() -> None:
     """Ten squats of unequal length (1.3-2.7 s) and depth (0.8-1.2 of the mean), with
     sensor noise: a lag of the autocorrelation near the whole clip, estimated from few
