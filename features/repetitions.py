@@ -388,10 +388,12 @@ def _in_view(far: np.ndarray, blind: np.ndarray | None) -> np.ndarray:
     """Where the far points ``far`` (samples, ascending) were seen: one in a ``blind``
     stretch moved to the nearest sample seen (the values there are the last or next posture
     seen, held, a plateau whose middle the peak finder names, or interpolated). Ascending,
-    as long as ``far`` (two may land on one sample)."""
+    as long as ``far`` (two may land on one sample); empty when no sample is seen."""
     if blind is None or not len(far) or not blind[far].any():
         return far
     seen = np.flatnonzero(~blind)
+    if not len(seen):
+        return far[:0]
     at = np.clip(np.searchsorted(seen, far), 1, len(seen) - 1)
     before, after = seen[at - 1], seen[at]
     nearest = np.where(far - before <= after - far, before, after)
@@ -651,9 +653,10 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
         far = np.unique(_in_view(far, sig.blind))
         spans = _bounds(line, far, reach) if len(far) else []
     else:
-        far = _in_view(far, sig.blind)
-        once = np.concatenate([[True], np.diff(far) > 0])
-        spans, far = [s for s, k in zip(spans, once, strict=True) if k], far[once]
+        moved = _in_view(far, sig.blind)
+        once = np.concatenate([[True], np.diff(moved) > 0]) if len(moved) else moved > 0
+        spans = [s for s, k in zip(spans, once, strict=True) if k] if len(moved) else []
+        far = moved[once]
     reps = [
         Repetition(
             start_frame=int(a * sig.step),

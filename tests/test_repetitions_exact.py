@@ -72,6 +72,9 @@ def test_a_far_point_lies_where_the_person_was_seen() -> None:
     # slicing keeps what was seen aligned with the values
     part = sig.part(50, 150)
     assert part.blind is not None and part.blind.sum() == 10 and len(part.values) == 100
+    # nothing seen at all: nothing counted
+    unseen = MovementSignals(sig.values, KNEES, FPS, 1, np.ones(len(knee), dtype=bool))
+    assert count_in_signals(unseen, len(knee), FPS).count == 0
 
 
 def test_uneven_cycles_of_several_people_count_exactly() -> None:
@@ -153,6 +156,15 @@ def test_legs_taking_turns_count_one_per_side() -> None:
     assert result.alternating
     assert result.count == 6
     assert [r.side for r in result.repetitions] == ["left", "right"] * 3
+    # first seen at the first bend's deepest (sample 20), after 50 samples out of view whose
+    # values are that posture held: the cut-off bend's far point is where it was first seen
+    values = np.stack([left, right], axis=1)[20:]
+    values = np.concatenate([np.repeat(values[:1], 50, axis=0), values])
+    blind = np.arange(len(values)) < 50
+    late = count_in_signals(MovementSignals(values, KNEES, FPS, 1, blind), len(values), FPS)
+    assert late.alternating
+    assert [r.peak_frame for r in late.repetitions] == [50, 90, 130, 170, 210, 250]
+    assert [r.side for r in late.repetitions] == ["left", "right"] * 3
 
 
 # ---- joining single repetitions ------------------------------------------------------------
