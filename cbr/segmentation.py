@@ -39,7 +39,9 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    of activity is like neither side, whether both are known or not; a block none of them
    covers takes its nearest covered neighbours' evidence, :func:`block_evidence`), every
    change of the label seen costing the same (:func:`decode_unknown`: no sliver of an
-   activity left between an unknown stretch and the next change);
+   activity left between an unknown stretch and the next change); a stretch of at least
+   :data:`MIN_SEGMENT_S` in which no frame shows the person is an unknown segment of its
+   own, "nobody in view" (:func:`nobody_blocks`);
 7. each segment is counted (:func:`features.repetitions.count_repetitions`), each
    repetition in the one segment that holds where its movement turns (:func:`keep_whole`),
    and explained by its most confident window.
@@ -54,7 +56,7 @@ from typing import Any
 
 import numpy as np
 
-from features.body import torso_share
+from features.body import long_runs, torso_rows, torso_share
 from features.derived import forget, movement_signals_of, stretch
 from features.errors import DataError
 from features.fluents import DEFAULT_TABLE, history_frames
@@ -107,6 +109,7 @@ PERIOD_OUTLIER_Z = 3.0
 of the repetition windows it overlaps is no clean period of one movement (the conventional
 cut for an outlier): it does not vote (:func:`period_outliers`)."""
 MIN_SEGMENT_S = 1.0
+NOBODY = "nobody in view"  # the explanation of a stretch in which no frame shows the person
 SWITCH_ODDS = 2.0
 """A change of activity needs MIN_SEGMENT_S of blocks voting SWITCH_ODDS to 1 for it."""
 
@@ -568,6 +571,15 @@ def place_changes(solved: Sequence[_Solved], fps: float, path: np.ndarray) -> np
     return out
 
 
+def nobody_blocks(rec: PoseSequence, n_blocks: int) -> np.ndarray:
+    """``(n_blocks,)`` bool: the :data:`BLOCK_S` blocks of ``rec`` whose centre lies in a
+    stretch of at least :data:`MIN_SEGMENT_S` in which no frame shows the person (a segment
+    of its own; a shorter dropout of the pose model is not)."""
+    nobody = long_runs(~torso_rows(rec), MIN_SEGMENT_S * rec.fps)
+    centres = ((np.arange(n_blocks) + 0.5) * rec.fps * BLOCK_S).astype(int)
+    return np.asarray(nobody[np.minimum(centres, rec.n_frames - 1)])
+
+
 def _runs(path: np.ndarray) -> list[tuple[int, int, int]]:
     """Runs of one state: (first block, end block exclusive, state)."""
     change = np.flatnonzero(path[1:] != path[:-1]) + 1
@@ -745,6 +757,24 @@ def _segment_of(
     return Segment(start, end, label, confidence, reps, text, ratio)
 
 
+def _nobody_absorbs_slivers(path: np.ndarray, n_classes: int) -> np.ndarray:
+    """``path`` with each unknown run shorter than :data:`MIN_SEGMENT_S` next to a run of
+    nobody in view (state ``n_classes + 1``) made part of it: the windows at its edge, half
+    empty, are like no activity."""
+    runs = _runs(path)
+    for i, (a, b, state) in enumerate(runs):
+        beside = [runs[j][2] for j in (i - 1, i + 1) if 0 <= j < len(runs)]
+        if state == n_classes and (b - a) * BLOCK_S < MIN_SEGMENT_S and n_classes + 1 in beside:
+            path[a:b] = n_classes + 1
+    return path
+
+
+def _nobody_segment(rec: PoseSequence, a: int, b: int) -> Segment:
+    """Blocks [a, b), in which nobody is in view, as an unknown segment that says so."""
+    start, end = _frames_of(a, b, rec.fps, rec.n_frames)
+    return Segment(start, end, None, 1.0, (), NOBODY, float("nan"))
+
+
 @dataclass(frozen=True)
 class SolvedRecording:
     """A recording with its windows solved, before any judge of unknown has looked at it
@@ -807,16 +837,20 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
                                     n_classes)  # fmt: skip
     evidence = within_runs(solved, rec.fps, path).tolist()
     path[unknown_blocks(counted, rec.n_frames, rec.fps, judge, path)] = n_classes
-    runs = _runs(path)
+    # nobody in view: unknown, whatever the neighbours', and a segment of its own
+    path[nobody_blocks(rec, len(path))] = n_classes + 1
+    runs = _runs(_nobody_absorbs_slivers(path, n_classes))
     bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]
     reps = counted_segments(done.sig, bounds, rec.n_frames)
     segments = tuple(
-        _segment_of(clf, rec, run, solved, votes, judge, evidence, r)
-        for run, r in zip(runs, reps, strict=True)
+        _nobody_segment(rec, a, b)
+        if state > n_classes
+        else _segment_of(clf, rec, (a, b, state), solved, votes, judge, evidence, r)
+        for (a, b, state), r in zip(runs, reps, strict=True)
     )
     blocks: list[str | None] = []
     for a, b, state in runs:
-        blocks += [None if state == n_classes else str(clf.classes_[state])] * (b - a)
+        blocks += [None if state >= n_classes else str(clf.classes_[state])] * (b - a)
     return Segmentation(rec.source, rec.fps, rec.n_frames, segments, tuple(blocks), len(solved))
 
 
@@ -870,6 +904,7 @@ __all__ = [
     "log_votes",
     "place_changes",
     "finish",
+    "nobody_blocks",
     "segment",
     "solve_recording",
 ]

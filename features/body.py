@@ -254,6 +254,16 @@ def torso_share(seq: PoseSequence) -> float:
     return float(np.mean(torso_rows(seq)))
 
 
+def long_runs(mask: np.ndarray, length: float) -> np.ndarray:
+    """``mask`` ``(n,)`` kept only in its runs of at least ``length`` samples."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
+    out = np.zeros(len(mask), dtype=bool)
+    for a, b in zip(edges[::2], edges[1::2], strict=True):  # over the runs, not the frames
+        if b - a >= length:
+            out[a:b] = True
+    return out
+
+
 def torso_rows(seq: PoseSequence) -> np.ndarray:
     """``(frames,)`` whether each frame shows the torso as :func:`torso_share` counts it. Per
     frame, so a stretch of a clip shares its clip's rows (:func:`features.derived.stretch`):

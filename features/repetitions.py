@@ -78,6 +78,7 @@ from scipy.fft import next_fast_len
 from scipy.ndimage import gaussian_filter1d, median_filter, uniform_filter1d
 from scipy.signal import find_peaks
 
+from .body import long_runs
 from .datasets import Clip
 from .derived import signals_of, stretch
 from .errors import DataError
@@ -370,18 +371,8 @@ def movement_signals(seq: PoseSequence) -> MovementSignals:
     step = max(1, int(round(seq.fps / ANALYSIS_FPS)))
     x = gaussian_filter1d(x, SMOOTHING_S * seq.fps, axis=0, mode="nearest")[::step]
     unseen = ~np.isfinite(raw[:, keep]).any(axis=1)
-    blind = _long_runs(unseen, MIN_PERIOD_S * seq.fps)[::step]
+    blind = long_runs(unseen, MIN_PERIOD_S * seq.fps)[::step]
     return MovementSignals(x, names, seq.fps / step, step, blind if blind.any() else None)
-
-
-def _long_runs(mask: np.ndarray, length: float) -> np.ndarray:
-    """``mask`` ``(n,)`` kept only in its runs of at least ``length`` samples."""
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
-    out = np.zeros(len(mask), dtype=bool)
-    for a, b in zip(edges[::2], edges[1::2], strict=True):  # over the runs, not the frames
-        if b - a >= length:
-            out[a:b] = True
-    return out
 
 
 def _in_view(far: np.ndarray, blind: np.ndarray | None) -> np.ndarray:

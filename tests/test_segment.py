@@ -302,6 +302,31 @@ def test_two_exercises_joined_at_a_known_frame(
     assert "Squat" in result.segments[0].explanation
 
 
+def test_a_stretch_with_nobody_in_view_is_a_segment_that_says_so(
+    recordings: dict[str, PoseSequence], classifier: CaseBaseClassifier
+) -> None:
+    """13_30's squats, then 5 s in which nobody is in view (every joint missing), then its
+    knee raises: the empty stretch is unknown, told as nobody in view, counted 0, from where
+    the squats end (4.3 s by construction) to where the knee raises start (9.3 s); the
+    exercises around it as alone. (Its windows, half empty at its edges, voted an exercise
+    the case base has, jogging.)"""
+    rec = recordings["13_30"]
+    squat = rec.positions[int(11.8 * 120) : int(16.1 * 120)]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)]
+    gap = np.full((5 * 120, *squat.shape[1:]), np.nan)
+    joined = PoseSequence(np.concatenate([squat, gap, knee]), rec.joint_names, 120.0, source="gap")
+    result = segment(classifier, joined)
+    assert [s.label for s in result.segments] == ["Squat", None, "KneeRaise"]
+    empty = result.segments[1]
+    assert empty.explanation == "nobody in view" and not empty.repetitions
+    assert (
+        abs(empty.start_frame - len(squat)) <= 12 and abs(empty.end_frame - len(squat) - 600) <= 12
+    )
+    assert [len(s.repetitions) for s in result.segments] == [2, 0, 4]
+    assert result.to_dict()["segments"][1]["novelty"] is None
+    assert result.blocks[int(6.0 / 0.1)] is None
+
+
 def test_a_labelled_recording(
     recordings: dict[str, PoseSequence],
     classifier: CaseBaseClassifier,
