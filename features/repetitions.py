@@ -645,7 +645,7 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
         spans = _bounds(line, far, reach) if len(far) else []
     else:
         moved = _in_view(far, sig.blind)
-        once = np.concatenate([[True], np.diff(moved) > 0]) if len(moved) else moved > 0
+        once = np.diff(moved, prepend=-1) > 0  # two far points moved onto one sample: one
         spans = [s for s, k in zip(spans, once, strict=True) if k] if len(moved) else []
         far = moved[once]
     reps = [
@@ -691,24 +691,23 @@ def _steady(line: np.ndarray, period: float | None, strength: float, fps: float)
     return np.asarray(line - uniform_filter1d(line, size, axis=0, mode="nearest"))
 
 
-def _both_sides_move(x: np.ndarray, names: tuple[str, ...]) -> bool:
-    """Whether the left and the right limbs of ``x`` ``(n, C)`` move about equally (within a
-    factor of two, as for the reach of the two sides): the summed robust spans of the left
-    angles against those of the right. The trunk's angles belong to both sides."""
-    spans = np.percentile(x, 95, axis=0) - np.percentile(x, 5, axis=0)
+def _both_sides_move(spans: np.ndarray, names: tuple[str, ...]) -> bool:
+    """Whether the left and the right limbs move about equally (within a factor of two, as
+    for the reach of the two sides): the summed robust spans ``(C,)`` of the left angles
+    against those of the right. The trunk's angles belong to both sides."""
     left = sum(s for s, n in zip(spans, names, strict=True) if not n.startswith("right_"))
     right = sum(s for s, n in zip(spans, names, strict=True) if not n.startswith("left_"))
     return bool(min(left, right) >= 0.5 * max(left, right))
 
 
-def _limbs_alike(x: np.ndarray, names: tuple[str, ...], direction: np.ndarray) -> bool:
+def _limbs_alike(spans: np.ndarray, names: tuple[str, ...], direction: np.ndarray) -> bool:
     """Whether the limbs that carry the side-against-side movement ``direction`` ``(C,)`` move
-    about equally on the left and on the right (within a factor of two): the robust spans of
-    the left limbs' angles, each weighted by its share of the direction, against the right
-    limbs'. Where the trunk carries more of the movement than the limbs (a twist), the limbs
-    do not decide. A one-legged kick whose arms swing to balance moves both sides about
-    equally in all (:func:`_both_sides_move`), but its legs not."""
-    spans = (np.percentile(x, 95, axis=0) - np.percentile(x, 5, axis=0)) * np.abs(direction)
+    about equally on the left and on the right (within a factor of two): the robust spans
+    ``(C,)`` of the left limbs' angles, each weighted by its share of the direction, against
+    the right limbs'. Where the trunk carries more of the movement than the limbs (a twist),
+    the limbs do not decide. A one-legged kick whose arms swing to balance moves both sides
+    about equally in all (:func:`_both_sides_move`), but its legs not."""
+    spans = spans * np.abs(direction)
     left = sum(s for s, n in zip(spans, names, strict=True) if n.startswith("left_"))
     right = sum(s for s, n in zip(spans, names, strict=True) if n.startswith("right_"))
     trunk = float(spans.sum()) - left - right
@@ -750,7 +749,8 @@ def _alternating_repetitions(
         _steady(alike, period, strength, fps)
     ):
         return none  # mostly both sides alike (a squat, a jumping jack)
-    if not _both_sides_move(x, names) or not _limbs_alike(x, names, direction):
+    extent = np.percentile(x, 95, axis=0) - np.percentile(x, 5, axis=0)  # robust spans
+    if not _both_sides_move(extent, names) or not _limbs_alike(extent, names, direction):
         return none  # one limb moves, the other stands by (a kick, a one-arm raise)
     # a full period holds one repetition per side
     distance = int(0.25 * (period or 2 * MIN_PERIOD_S) * fps)
