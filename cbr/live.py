@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from features.body import torso_share
+from features.body import TORSO_JOINTS, torso_seen, torso_share
 from features.errors import DataError
 from features.poses import PoseSequence
 from features.repetitions import ANALYSIS_FPS, Repetition, count_repetitions, movement_signals
@@ -36,6 +36,7 @@ from .segmentation import (
     DEFAULT_WINDOW_S,
     MAX_WINDOW_S,
     MIN_SEGMENT_S,
+    NOBODY,
     PERIOD_SPAN_S,
     SPAN_HOP_S,
     SWITCH_ODDS,
@@ -296,6 +297,16 @@ class LiveSegmenter:
         # whose frames are kept: what explains a finished segment
         self.near: deque[float] = deque(maxlen=PERSON_WINDOWS)  # the latest windows'
         # distances to their nearest case: how far the person lies
+        # nobody in view (a segment of its own, as offline: cbr.segmentation.nobody_blocks):
+        self.nobody = self.unknown + 1  # its label seen
+        self.torso = [BLAZEPOSE_33.index(j) for j in TORSO_JOINTS]
+        self.least_blind = MIN_SEGMENT_S * self.fps  # frames: a shorter dropout is not one
+        self.blind: list[tuple[int, int]] = []  # the recent runs of at least that many
+        # frames without the torso: [first, end)
+        self.blind_from: int | None = None  # the first frame of the run in progress
+        self.blind_hop = 0.0  # the centre of the last hop seen as nobody
+        self.held: list[float] = []  # the evidence of unknown of the unknown hops after a
+        # stretch with nobody in view, not yet a second long (they may join it)
 
     def _penalty(self) -> float:
         """The log-odds a change costs: :data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS`."""
@@ -308,6 +319,12 @@ class LiveSegmenter:
         if self.state is None or self._unlike_now() > 0.5 or self._nobody_now():
             return None
         return self.classes[int(self.state)]
+
+    @property
+    def nobody_in_view(self) -> bool:
+        """Nobody has been seen for the last :data:`MIN_SEGMENT_S` or more (a stretch that
+        will be a segment of its own, "nobody in view")."""
+        return self.blind_from is not None and self.n - self.blind_from >= self.least_blind
 
     def _unlike_now(self) -> float:
         """The mean evidence of unknown of the latest windows that lie in the stretch in
@@ -323,10 +340,29 @@ class LiveSegmenter:
         """Add one frame ``(33, 3)`` (NaN where the person is not seen). Returns the segments
         that this frame settled as finished (usually none)."""
         self.frames.append(np.asarray(world, dtype=np.float64))
+        self._look(self.frames[-1])
         self.n += 1
         if self.n < self.window or (self.n - self.window) % self.hop:
             return []
         return self._decide(self.n)
+
+    def _look(self, frame: np.ndarray) -> None:
+        """Follow the runs of frames without the torso with frame :attr:`n`, ``frame``."""
+        seen = bool(torso_seen(frame[self.torso]))
+        if not seen and self.blind_from is None:
+            self.blind_from = self.n
+        elif seen and self.blind_from is not None:
+            if self.n - self.blind_from >= self.least_blind:
+                self.blind.append((self.blind_from, self.n))
+            self.blind_from = None
+
+    def _blind_run(self, frame: float) -> tuple[int, int] | None:
+        """The run of at least :data:`MIN_SEGMENT_S` with nobody in view that holds ``frame``
+        (the run in progress ends, so far, at the last frame pushed), or None."""
+        runs = list(self.blind)
+        if self.blind_from is not None and self.n - self.blind_from >= self.least_blind:
+            runs.append((self.blind_from, self.n))
+        return next(((a, b) for a, b in runs if a <= frame < b), None)
 
     def _decide(self, n: int) -> list[LiveSegment]:
         vote = self._vote(n)
@@ -442,22 +478,70 @@ class LiveSegmenter:
         """Follow the hops pass 2 newly settled (``unknown``: 1 where unknown, in order, the
         oldest of :attr:`pending`): each change of the label seen finishes the segment in
         progress, at the change of activity when one lies there, else midway between the
-        two hops."""
+        two hops. A hop within a stretch of :data:`MIN_SEGMENT_S` or more with nobody in view
+        is seen as nobody, whatever its evidence, and such a stretch is a segment of its own
+        from the frame the person is lost to the frame they are seen again (as offline); an
+        unknown stretch of less than :data:`MIN_SEGMENT_S` beside it joins it (its windows,
+        half empty, are like no activity)."""
         finished = []
         for hop, far in zip(self.pending[: len(unknown)], unknown, strict=True):
             seen = self.unknown if far else hop.activity
+            run = self._blind_run(hop.centre)
+            if run is not None:
+                seen = self.nobody
             if self.seen is None:
                 self.seen = seen
+            elif self.seen == self.nobody and seen == self.unknown and run is None:
+                finished += self._after_nobody(hop)
             elif seen != self.seen:
-                mid = int(round((self.last_centre + hop.centre) / 2))
-                boundary = max(self.seen_start + 1, hop.change if hop.change is not None else mid)
-                finished.append(self._segment(self.seen_start, boundary, self.seen, True))
-                self.seen, self.seen_start, self.seen_sum = seen, boundary, [0.0, 0.0]
-            self.seen_sum[0] += hop.unlike if far else hop.vote
-            self.seen_sum[1] += 1.0
+                if run is not None:  # nobody from the frame the person was lost
+                    boundary = run[0]
+                elif self.seen == self.nobody and not self.held:  # to where they are seen
+                    boundary = self._blind_end()
+                else:
+                    mid = int(round((self.last_centre + hop.centre) / 2))
+                    boundary = hop.change if hop.change is not None else mid
+                finished += self._change(max(self.seen_start + 1, boundary), seen)
+            if run is not None:
+                self.blind_hop, self.held = hop.centre, []
+            elif self.seen != self.nobody:
+                self.seen_sum[0] += hop.unlike if far else hop.vote
+                self.seen_sum[1] += 1.0
             self.last_centre = hop.centre
         del self.pending[: len(unknown)]
         return finished
+
+    def _change(self, boundary: int, seen: int) -> list[LiveSegment]:
+        """The label seen changes to ``seen`` at frame ``boundary``: the segment in progress
+        is finished there; but an unknown one shorter than :data:`MIN_SEGMENT_S` before
+        nobody in view joins it (one after it: :meth:`_after_nobody`)."""
+        assert self.seen is not None
+        joins = seen == self.nobody and self.seen == self.unknown
+        if joins and boundary - self.seen_start < self.least_blind:
+            self.seen = seen
+            return []
+        done = [self._segment(self.seen_start, boundary, self.seen, True)]
+        self.seen, self.seen_start, self.seen_sum, self.held = seen, boundary, [0.0, 0.0], []
+        return done
+
+    def _after_nobody(self, hop: _Hop) -> list[LiveSegment]:
+        """An unknown hop after nobody in view: held (:attr:`held`) while the unknown stretch
+        is shorter than :data:`MIN_SEGMENT_S`, then the nobody segment is finished where the
+        person is seen again and the unknown one begins there with the held hops."""
+        self.held.append(hop.unlike)
+        end = self._blind_end()
+        if hop.centre - end < self.least_blind:
+            return []
+        held = self.held
+        finished = self._change(max(self.seen_start + 1, end), self.unknown)
+        self.seen_sum = [sum(held[:-1]), float(len(held) - 1)]  # the hop itself: by _follow
+        return finished
+
+    def _blind_end(self) -> int:
+        """Where the stretch with nobody in view of the segment in progress ends: the end of
+        the run that holds its last hop seen as nobody."""
+        run = self._blind_run(self.blind_hop)
+        return run[1] if run is not None else int(round(self.blind_hop))
 
     def _repetition_windows(self, n: int) -> None:
         """The periods of the movement found whole in the last :data:`PERIOD_SPAN_S` seconds,
@@ -503,6 +587,8 @@ class LiveSegmenter:
             del self.votes[:old], self.hop_centres[:old]
         kept = [w for w in self.judged if w.stop > self.seen_start and w.start >= self.offset]
         self.judged = kept  # of the segments not finished, over frames still kept
+        followed = self.blind_hop if self.seen == self.nobody else self.last_centre
+        self.blind = [run for run in self.blind if run[1] > followed]  # hops still to follow
 
     def _vote(self, n: int) -> tuple[np.ndarray, float]:
         """The last window's vote over the activities ``(n_classes,)`` (its nearest case's)
@@ -588,7 +674,12 @@ class LiveSegmenter:
         learns whether the movement turned at the cut). Repetitions are counted over at most
         its last :data:`MAX_SEGMENT_S` seconds, of the frames still kept; a segment whose
         frames never show anybody is unknown, whatever the tie between its windows' evidence
-        (every activity alike, known as likely as not) fell to."""
+        (every activity alike, known as likely as not) fell to. Nobody in view (``state``
+        n_classes + 1): unknown, told so, counted 0, as offline."""
+        if state == self.nobody:
+            if cut:  # no movement turns at its end
+                self.turn = False
+            return LiveSegment(start, end, None, 1.0, 0, NOBODY)
         first = max(start, end - int(MAX_SEGMENT_S * self.fps), self.offset)
         found: tuple[Repetition, ...] = ()
         if end > first:
@@ -629,6 +720,10 @@ class LiveSegmenter:
         assert self.settled is not None
         out += self._pass(math.inf, self.n, final=True)
         assert self.seen is not None
+        held, end = self.held, self._blind_end()
+        if held and self.n - end >= self.least_blind:  # it ends unknown after nobody in view
+            out += self._change(end, self.unknown)
+            self.seen_sum = [sum(held), float(len(held))]
         return [*out, self._segment(self.seen_start, self.n, self.seen, False)]
 
 

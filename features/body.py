@@ -269,11 +269,14 @@ def torso_rows(seq: PoseSequence) -> np.ndarray:
     frame, so a stretch of a clip shares its clip's rows (:func:`features.derived.stretch`):
     a recording's windows each ask."""
 
-    def compute(s: PoseSequence) -> np.ndarray:
-        p = s.joints(TORSO_JOINTS)  # (frames, 4, 3)
-        seen = np.isfinite(p).all(axis=(1, 2))
-        shoulders = norm(p[:, 0] - p[:, 1]) > 0
-        hips = norm(p[:, 2] - p[:, 3]) > 0
-        return np.asarray(seen & shoulders & hips)
+    return derived(seq, "torso_rows", lambda s: torso_seen(s.joints(TORSO_JOINTS)))
 
-    return derived(seq, "torso_rows", compute)
+
+def torso_seen(torso: np.ndarray) -> np.ndarray:
+    """``(...)`` whether each pose of ``torso`` ``(..., 4, 3)`` (the :data:`TORSO_JOINTS`, in
+    order) shows the torso as :func:`torso_share` counts it: all four seen, the shoulders
+    distinct and the hips distinct."""
+    seen = np.isfinite(torso).all(axis=(-2, -1))
+    shoulders = norm(torso[..., 0, :] - torso[..., 1, :]) > 0
+    hips = norm(torso[..., 2, :] - torso[..., 3, :]) > 0
+    return np.asarray(seen & shoulders & hips)

@@ -9,6 +9,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from cbr.live import LiveSegment, LiveSegmenter, _Forward
+from cbr.segmentation import NOBODY
+from features.body import torso_share
 
 
 def _best_path(score: np.ndarray, cost: np.ndarray) -> list[int]:
@@ -182,3 +184,116 @@ def test_a_long_stream_keeps_bounded_memory_and_finishes_what_it_settled() -> No
     assert abs(segments[1].start_frame - 300) <= 1.5 * live.hop
     assert abs(segments[1].end_frame - 540) <= 1.5 * live.hop
     assert abs(segments[3].start_frame - (live.length - 600)) <= live.hop
+
+
+class _Away(_Scripted):
+    """Activity 0 throughout, the person out of view in the frames of ``gaps`` (every joint
+    missing): a window with no torso votes as the real segmenter's does (every activity
+    alike, as likely known as not); the windows centred in the frames of ``unlike`` are
+    unlike every activity (still nearest 0)."""
+
+    gaps: tuple[tuple[int, int], ...] = ()
+    unlike: tuple[tuple[int, int], ...] = ()
+
+    half_empty = False  # a window that shows the person only in part is unlike every one
+
+    def _vote(self, n: int) -> tuple[np.ndarray, float]:
+        shown = torso_share(self._sequence(n - self.window, n))
+        if shown == 0.0:
+            return np.full(2, 0.5), 0.5
+        centre = n - self.window / 2
+        far = any(a <= centre < b for a, b in self.unlike) or (self.half_empty and shown < 1.0)
+        return np.eye(2)[0], float(far)
+
+
+class _HalfEmpty(_Away):
+    half_empty = True
+
+
+def _away(
+    gaps: tuple[tuple[int, int], ...],
+    unlike: tuple[tuple[int, int], ...] = (),
+    length: int = 900,
+    kind: type[_Away] = _Away,
+) -> list[tuple[int, int, str | None, str]]:
+    """The segments of a ``length``-frame stream at 30 fps scripted by :class:`_Away`: (start,
+    end, label, explanation)."""
+    labels = np.array(["a", "b"])
+    clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
+    live = kind(clf, 30.0, judge=SimpleNamespace())
+    live.gaps, live.unlike = gaps, unlike
+    frames = np.random.default_rng(4).normal(size=(length, 33, 3))
+    for a, b in gaps:
+        frames[a:b] = np.nan
+    segments: list[LiveSegment] = []
+    for frame in frames:
+        segments += live.push(frame)
+    segments += live.finish()
+    for s in segments:
+        if s.explanation == NOBODY:
+            assert (s.label, s.repetitions, s.confidence) == (None, 0, 1.0)
+            assert s.to_dict(30.0)["novelty"] is None
+    return [(s.start_frame, s.end_frame, s.label, s.explanation) for s in segments]
+
+
+def test_nobody_in_view_is_a_segment_from_where_the_person_is_lost_to_where_seen_again() -> None:
+    """5 s out of view (frames 300-450 by construction) in a stream of one activity: a
+    segment of its own, told "nobody in view", between the frames the person was lost and
+    seen again (as offline, cbr.segmentation.nobody_blocks), not where the windows' evidence
+    puts it; a dropout shorter than a second (20 frames) is no segment."""
+    got = _away(((300, 450),))
+    assert [(a, b, label) for a, b, label, _ in got] == [
+        (0, 300, "a"), (300, 450, None), (450, 900, "a")
+    ]  # fmt: skip
+    assert got[1][3] == NOBODY
+    assert [label for *_, label, _ in _away(((300, 320),))] == ["a"]
+
+
+def test_a_stream_that_ends_out_of_view_ends_with_nobody() -> None:
+    got = _away(((600, 900),))
+    assert [(a, b, label, text) for a, b, label, text in got][1:] == [(600, 900, None, NOBODY)]
+    assert got[0][:3] == (0, 600, "a")
+
+
+def test_unknown_after_nobody_joins_it_when_shorter_than_a_second() -> None:
+    """Windows that show the person only in part are unlike every activity (as a half-empty
+    window is): the unknown hops just after the stretch out of view (frames 300-450), less
+    than a second of them, join its segment, which then ends where activity 0's hops begin
+    again (465: midway between the last unknown hop and the first of 0); windows unlike every
+    activity centred in the 3 s after it (frames 450-540) are an unknown segment of their
+    own, from the frame the person is seen again."""
+    joined = _away(((300, 450),), kind=_HalfEmpty)
+    longer = _away(((300, 450),), unlike=((450, 540),), kind=_HalfEmpty)
+    assert [(a, b, label) for a, b, label, _ in joined][-2:] == [(300, 465, None), (465, 900, "a")]
+    assert joined[-2][3] == NOBODY
+    assert [(label, text == NOBODY) for *_, label, text in longer][-3:] == [
+        (None, True), (None, False), ("a", False)
+    ]  # fmt: skip
+    assert longer[-3][:2] == (300, 450) and longer[-2][0] == 450
+    assert abs(longer[-2][1] - 540) <= 1.5 * 15
+
+
+def test_unknown_before_nobody_joins_it_when_shorter_than_a_second() -> None:
+    """Pass 2's hops followed by hand: activity 0 to the hop at frame 270, one unknown hop
+    (285), then hops in a stretch with nobody in view (frames 300-450) and 0 again. The
+    unknown stretch, from midway between its hop and the one before (278) to where the
+    person is lost (300), is shorter than a second: it joins the nobody segment; two unknown
+    hops (270, 285: from 262, 38 frames) make an unknown segment of their own."""
+    from cbr.live import _Hop
+
+    labels = np.array(["a", "b"])
+    clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
+    cases = {
+        285: [(0, 278, "a"), (278, 450, None)],
+        270: [(0, 262, "a"), (262, 300, None), (300, 450, None)],
+    }
+    for first_unknown, expected in cases.items():
+        live = LiveSegmenter(clf, 30.0, judge=SimpleNamespace())
+        live.frames = list(np.random.default_rng(5).normal(size=(600, 33, 3)))
+        live.n, live.blind = 600, [(300, 450)]
+        centres = range(0, 600, 15)
+        live.pending = [_Hop(float(c), 0, 1.0, 0.0, None) for c in centres]
+        unknown = [int(first_unknown <= c < 300) for c in centres]
+        finished = live._follow(unknown)
+        assert [(s.start_frame, s.end_frame, s.label) for s in finished] == expected
+        assert finished[-1].explanation == NOBODY

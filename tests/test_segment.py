@@ -17,6 +17,7 @@ from cbr.estimator import CaseBaseClassifier
 from cbr.segmentation import (
     BLOCK_S,
     MIN_SEGMENT_S,
+    NOBODY,
     SWITCH_ODDS,
     Segmentation,
     _Solved,
@@ -325,6 +326,32 @@ def test_a_stretch_with_nobody_in_view_is_a_segment_that_says_so(
     assert [len(s.repetitions) for s in result.segments] == [2, 0, 4]
     assert result.to_dict()["segments"][1]["novelty"] is None
     assert result.blocks[int(6.0 / 0.1)] is None
+
+
+def test_live_nobody_in_view_is_a_segment_as_offline(
+    recordings: dict[str, PoseSequence], classifier: CaseBaseClassifier
+) -> None:
+    """The recording above streamed at 30 fps (every 4th frame) through watch's segmenter:
+    the same three segments, the empty one exactly from the frame the squats end (129 by
+    construction) to the frame the knee raises start (279), counted 2 / 0 / 4 by hand. (Its
+    windows, before, made an unknown segment from 5.0 to 9.5 s told by distances.)"""
+    from cbr.live import LiveSegmenter
+
+    rec = recordings["13_30"]
+    squat = rec.positions[int(11.8 * 120) : int(16.1 * 120) : 4]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120) : 4]
+    gap = np.full((5 * 30, *squat.shape[1:]), np.nan)
+    live = LiveSegmenter(classifier, 30.0)
+    segments = []
+    for i, frame in enumerate(np.concatenate([squat, gap, knee])):
+        segments += live.push(frame)
+        assert live.nobody_in_view == (len(squat) + 30 <= i + 1 <= len(squat) + 150)
+    segments += live.finish()
+    assert [(s.label, s.explanation == NOBODY) for s in segments] == [
+        ("Squat", False), (None, True), ("KneeRaise", False)
+    ]  # fmt: skip
+    assert (segments[1].start_frame, segments[1].end_frame) == (len(squat), len(squat) + 150)
+    assert [s.repetitions for s in segments] == [2, 0, 4]
 
 
 def test_a_labelled_recording(

@@ -248,6 +248,6 @@ def test_a_stream_that_never_shows_anybody_is_one_unknown_segment(case_base: Pat
         segments += live.push(np.full((33, 3), np.nan))
         assert live.label is None
     segments += live.finish()
-    assert [(s.start_frame, s.end_frame, s.label, s.repetitions) for s in segments] == [
-        (0, 90, None, 0)
-    ]
+    assert [
+        (s.start_frame, s.end_frame, s.label, s.repetitions, s.explanation) for s in segments
+    ] == [(0, 90, None, 0, "nobody in view")]

@@ -252,11 +252,14 @@ class Watcher:
             return
         import cv2
 
+        from cbr.segmentation import NOBODY
         from features.pose_estimation.overlay import draw_pose
 
         bgr = cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR)
         current = self.live.current()
         label = self.live.label or ("unknown" if current is not None else "...")
+        if self.live.nobody_in_view:
+            label = NOBODY
         words = [label, f"repetitions: {current.repetitions if current else 0}"]
         draw_pose(bgr, frame.pose.image, words + self._fluents())
         if self.args.out is not None:
