@@ -251,6 +251,7 @@ class Watcher:
         if self.args.out is None and not self.args.show:
             return
         import cv2
+        import numpy as np
 
         from cbr.segmentation import NOBODY
         from features.pose_estimation.overlay import draw_pose
@@ -258,9 +259,11 @@ class Watcher:
         bgr = cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR)
         current = self.live.current()
         label = self.live.label or ("unknown" if current is not None else "...")
-        if self.live.nobody_in_view:
-            label = NOBODY
         words = [label, f"repetitions: {current.repetitions if current else 0}"]
+        if self.live.nobody_in_view:  # not unknown: no movement to be like anything
+            words[0] = NOBODY
+            if np.isnan(frame.pose.image[:, :2]).all():  # draw_pose says "no person"
+                words = words[1:]
         draw_pose(bgr, frame.pose.image, words + self._fluents())
         if self.args.out is not None:
             self._write(bgr)
