@@ -71,6 +71,21 @@ def test_watch_a_real_video(
     cap.release()
 
 
+def test_watch_a_street_with_nobody_in_view(
+    case_base: Path, shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """vtest.avi's first 12 s, a street in which BlazePose finds no one (its people are too
+    small: ../shared/data/README.md): one segment, unknown, told "nobody in view", counted 0,
+    over every frame watched."""
+    video = shared_data / "media" / "vtest.avi"
+    capsys.readouterr()
+    assert main(["watch", str(video), "--db", str(case_base), "--max-frames", "120",
+                 "--speed", "0"]) == 0  # fmt: skip
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [(d["start_frame"], d["end_frame"], d["label"], d["repetitions"], d["explanation"])
+            for d in lines] == [(0, 120, None, 0, "nobody in view")]  # fmt: skip
+
+
 @pytest.mark.parametrize("judge", ["activity-margin", "margin"])
 def test_segment_the_same_video_counts_each_squat_once(
     case_base: Path, shared_data: Path, capsys: pytest.CaptureFixture[str], judge: str
