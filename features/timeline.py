@@ -10,6 +10,8 @@ memory.
 
 from __future__ import annotations
 
+import math
+import textwrap
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -362,7 +364,7 @@ def plot_timeline(
             2, 1, figsize=(11, height), dpi=110, sharex=True,
             gridspec_kw={"height_ratios": [0.8, height - 0.8]},
         )  # fmt: skip
-        _draw_bands(top, bands, band_title)
+        placed = _draw_bands(top, bands, band_title)
     else:
         fig, ax = plt.subplots(figsize=(11, height), dpi=110)
     if len(rows):
@@ -391,6 +393,8 @@ def plot_timeline(
     )
     ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()
+    if bands:
+        fit_texts(top, placed)
     out = Path(path)
     fmt = out.suffix.lower().lstrip(".")
     if fmt not in fig.canvas.get_supported_filetypes():
@@ -403,18 +407,50 @@ def plot_timeline(
     return out
 
 
-def _draw_bands(ax: Any, bands: Sequence[Band], title: str) -> None:
-    """Coloured spans with their text on an axis of their own."""
+def _draw_bands(ax: Any, bands: Sequence[Band], title: str) -> list[tuple[Any, Band]]:
+    """Coloured spans with their text on an axis of their own; each text with its band."""
     import matplotlib.pyplot as plt
 
     keys = sorted({b.key for b in bands if b.key is not None})
     palette = plt.get_cmap("tab10")
     colour = {k: palette(i % 10) for i, k in enumerate(keys)}
+    placed = []
     for b in bands:
         c = colour.get(b.key, (0.75, 0.75, 0.75, 1.0)) if b.key is not None else "0.8"
         ax.axvspan(b.start_s, b.end_s, ymin=0.05, ymax=0.95, color=c, alpha=0.8, lw=0.5,
                    ec="white")  # fmt: skip
-        ax.text(0.5 * (b.start_s + b.end_s), 0.5, b.text, ha="center", va="center",
-                fontsize=7, clip_on=True)  # fmt: skip
+        text = ax.text(0.5 * (b.start_s + b.end_s), 0.5, b.text, ha="center", va="center",
+                       fontsize=7, clip_on=True)  # fmt: skip
+        placed.append((text, b))
     ax.set_yticks([])
     ax.set_ylabel(title, fontsize=8, rotation=0, ha="right", va="center")
+    return placed
+
+
+def fit_texts(ax: Any, placed: Sequence[tuple[Any, Band]]) -> None:
+    """Each band's text as drawn on ``ax`` (its limits and size final) kept within its band:
+    on one line, else broken at spaces into two or three, each at the usual size then one
+    smaller; hidden where none fits (neighbouring texts of short bands would run into each
+    other)."""
+    renderer = ax.figure.canvas.get_renderer()
+    for text, band in placed:
+        left, right = ax.transData.transform([(band.start_s, 0.0), (band.end_s, 0.0)])[:, 0]
+        tries = [
+            (
+                "\n".join(
+                    textwrap.wrap(
+                        band.text, math.ceil(len(band.text) / lines), break_long_words=False
+                    )
+                ),
+                size,
+            )
+            for lines in (1, 2, 3)
+            for size in (7, 6)
+        ]
+        for words, size in tries:
+            text.set_text(words)
+            text.set_fontsize(size)
+            if text.get_window_extent(renderer).width <= abs(right - left):
+                break
+        else:
+            text.set_visible(False)

@@ -326,6 +326,15 @@ def test_a_stretch_with_nobody_in_view_is_a_segment_that_says_so(
     assert [len(s.repetitions) for s in result.segments] == [2, 0, 4]
     assert result.to_dict()["segments"][1]["novelty"] is None
     assert result.blocks[int(6.0 / 0.1)] is None
+    # the overlay's words and the timeline's bands say so too
+    from posecbr.commands.segment import _bands, frame_words
+
+    words = frame_words(result)
+    assert words[len(squat) - 1][0] == "Squat" and words[len(squat) + 300] == [
+        NOBODY,
+        "repetitions: 0",
+    ]
+    assert [b.text for b in _bands(result)] == ["Squat x2", f"{NOBODY} x0", "KneeRaise x4"]
 
 
 def test_live_nobody_in_view_is_a_segment_as_offline(

@@ -161,17 +161,21 @@ def _print(result: Any) -> None:
             print(f"  {'':8}  {'':7}  {'':12}  {s.explanation}")
 
 
+def _shown(segment: Any) -> str:
+    """What a segment is called on pictures: its activity, "nobody in view", or unknown."""
+    from cbr.segmentation import NOBODY
+
+    if segment.label is not None:
+        return str(segment.label)
+    return NOBODY if segment.explanation == NOBODY else "unknown"
+
+
 def _bands(result: Any) -> list[Any]:
     from features.timeline import Band
 
     fps = result.fps
     return [
-        Band(
-            s.start_frame / fps,
-            s.end_frame / fps,
-            f"{s.label or 'unknown'} x{len(s.repetitions)}",
-            s.label,
-        )
+        Band(s.start_frame / fps, s.end_frame / fps, f"{_shown(s)} x{len(s.repetitions)}", s.label)
         for s in result.segments
     ]
 
@@ -191,12 +195,13 @@ def _plot(rec: Any, result: Any, path: Path, name: str) -> None:
 
 
 def frame_words(result: Any) -> list[list[str]]:
-    """Per frame: the current activity (or unknown) and how many of its repetitions are done."""
+    """Per frame: the current activity (or unknown, or nobody in view) and how many of its
+    repetitions are done."""
     import numpy as np
 
     words: list[list[str]] = [[] for _ in range(result.n_frames)]
     for s in result.segments:
-        label = s.label if s.label is not None else "unknown"
+        label = _shown(s)
         ends = np.sort([r.end_frame for r in s.repetitions]).astype(np.int64)
         frames = np.arange(s.start_frame, s.end_frame)
         done = np.searchsorted(ends, frames, side="right")
