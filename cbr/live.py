@@ -491,7 +491,7 @@ class LiveSegmenter:
                 seen = self.nobody
             if self.seen is None:
                 self.seen = seen
-            elif self.seen == self.nobody and seen == self.unknown and run is None:
+            elif self.seen == self.nobody and seen == self.unknown:
                 finished += self._after_nobody(hop)
             elif seen != self.seen:
                 if run is not None:  # nobody from the frame the person was lost
@@ -720,10 +720,11 @@ class LiveSegmenter:
         assert self.settled is not None
         out += self._pass(math.inf, self.n, final=True)
         assert self.seen is not None
-        held, end = self.held, self._blind_end()
-        if held and self.n - end >= self.least_blind:  # it ends unknown after nobody in view
-            out += self._change(end, self.unknown)
-            self.seen_sum = [sum(held), float(len(held))]
+        held = self.held  # a second or more seen after nobody in view, no hop followed of
+        if self.seen == self.nobody and self.n - self._blind_end() >= self.least_blind:
+            tail = self.unknown if self.label is None else int(self.state)  # it: as now
+            out += self._change(self._blind_end(), tail)
+            self.seen_sum = [sum(held), float(len(held))] if tail == self.unknown else [0.0, 0.0]
         return [*out, self._segment(self.seen_start, self.n, self.seen, False)]
 
 

@@ -255,6 +255,16 @@ def test_a_stream_that_ends_out_of_view_ends_with_nobody() -> None:
     assert got[0][:3] == (0, 600, "a")
 
 
+def test_a_stream_that_ends_soon_after_the_person_is_back_ends_nobody_where_they_are() -> None:
+    """The person back for the last 1.5 s (45 frames) and 2.7 s of the stream, too soon for
+    any hop of theirs to be followed: the nobody segment still ends where they are seen
+    again (855, 820 by construction), the rest is what the latest windows say (activity 0);
+    back for less than a second (15 frames), the nobody segment runs to the end."""
+    assert [x[:3] for x in _away(((300, 855),))][1:] == [(300, 855, None), (855, 900, "a")]
+    assert [x[:3] for x in _away(((300, 820),))][1:] == [(300, 820, None), (820, 900, "a")]
+    assert [x[:3] for x in _away(((300, 885),))][1:] == [(300, 900, None)]
+
+
 def test_unknown_after_nobody_joins_it_when_shorter_than_a_second() -> None:
     """Windows that show the person only in part are unlike every activity (as a half-empty
     window is): the unknown hops just after the stretch out of view (frames 300-450), less
