@@ -435,18 +435,7 @@ def fit_texts(ax: Any, placed: Sequence[tuple[Any, Band]]) -> None:
     renderer = ax.figure.canvas.get_renderer()
     for text, band in placed:
         left, right = ax.transData.transform([(band.start_s, 0.0), (band.end_s, 0.0)])[:, 0]
-        tries = [
-            (
-                "\n".join(
-                    textwrap.wrap(
-                        band.text, math.ceil(len(band.text) / lines), break_long_words=False
-                    )
-                ),
-                size,
-            )
-            for lines in (1, 2, 3)
-            for size in (7, 6)
-        ]
+        tries = [(_in_lines(band.text, lines), size) for lines in (1, 2, 3) for size in (7, 6)]
         for words, size in tries:
             text.set_text(words)
             text.set_fontsize(size)
@@ -454,3 +443,9 @@ def fit_texts(ax: Any, placed: Sequence[tuple[Any, Band]]) -> None:
                 break
         else:
             text.set_visible(False)
+
+
+def _in_lines(text: str, lines: int) -> str:
+    """``text`` broken at spaces into about ``lines`` lines of one length (a word unbroken)."""
+    width = math.ceil(len(text) / lines)
+    return "\n".join(textwrap.wrap(text, width, break_long_words=False))
