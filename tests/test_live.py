@@ -307,3 +307,24 @@ def test_unknown_before_nobody_joins_it_when_shorter_than_a_second() -> None:
         finished = live._follow(unknown)
         assert [(s.start_frame, s.end_frame, s.label) for s in finished] == expected
         assert finished[-1].explanation == NOBODY
+
+
+def test_a_long_stretch_with_nobody_in_view_is_one_segment_in_bounded_memory() -> None:
+    """Nobody in view for 5.8 minutes of a 6.7-minute stream: one nobody segment, exactly
+    where the person was lost and seen again (frames 600 and 11000 by construction); the
+    frames kept stay within MAX_SEGMENT_S, two windows and a hop, the runs followed few."""
+    from cbr.live import MAX_SEGMENT_S
+
+    got = []
+    labels = np.array(["a", "b"])
+    clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
+    live = _Away(clf, 30.0, judge=SimpleNamespace())
+    frame = np.random.default_rng(6).normal(size=(33, 3))
+    for i in range(12000):
+        got += live.push(np.full((33, 3), np.nan) if 600 <= i < 11000 else frame)
+        assert len(live.frames) <= MAX_SEGMENT_S * 30.0 + 2 * live.window + live.hop
+        assert len(live.blind) <= 2 and len(live.held) <= 3
+    got += live.finish()
+    assert [(s.start_frame, s.end_frame, s.label, s.explanation) for s in got] == [
+        (0, 600, "a", ""), (600, 11000, None, NOBODY), (11000, 12000, "a", "")
+    ]  # fmt: skip
