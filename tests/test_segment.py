@@ -587,6 +587,30 @@ def test_segment_command_refuses_outputs_over_inputs(
     assert _sha(rec) == before and not (tmp_path / "none.sqlite").exists()
 
 
+def test_segment_command_tells_nobody_in_view_in_its_table(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """13_30's squats, 5 s with every joint missing, its knee raises, as a pose file: the
+    table's empty row says "(nobody in view)" from 4.30 to 9.30 s (by construction), counted
+    0, and says it once (no explanation line repeating it)."""
+    rec = recordings["13_30"]
+    squat = rec.positions[int(11.8 * 120) : int(16.1 * 120)]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)]
+    gap = np.full((5 * 120, *squat.shape[1:]), np.nan)
+    seq = PoseSequence(np.concatenate([squat, gap, knee]), rec.joint_names, 120.0, source="gap")
+    path = save_pose(seq, tmp_path / "gap.npz")
+    capsys.readouterr()
+    assert main(["segment", str(path), "--db", str(case_base)]) == 0
+    out = capsys.readouterr().out
+    rows = [line.split() for line in out.splitlines() if "nobody in view" in line]
+    assert len(rows) == 1, out
+    start, end, _, *label, _, reps = rows[0]
+    assert (start, end, " ".join(label), reps) == ("4.30", "9.30", "(nobody in view)", "0")
+
+
 def test_segment_overlay_on_a_real_video(
     case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

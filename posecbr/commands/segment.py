@@ -152,12 +152,12 @@ def _print(result: Any) -> None:
     )
     for s in result.segments:
         frames = f"{s.start_frame}-{s.end_frame - 1}"
-        label = s.label if s.label is not None else "(unknown)"
+        label = s.label if s.label is not None else f"({_shown(s)})"
         print(
             f"  {s.start_frame / fps:8.2f}  {s.end_frame / fps:7.2f}  {frames:>12}  "
             f"{label:<20} {s.confidence:5.2f}  {len(s.repetitions):>4}"
         )
-        if s.explanation:
+        if s.explanation and s.explanation != _shown(s):
             print(f"  {'':8}  {'':7}  {'':12}  {s.explanation}")
 
 
