@@ -303,6 +303,16 @@ def test_two_exercises_joined_at_a_known_frame(
     assert "Squat" in result.segments[0].explanation
 
 
+def _with_gap(rec: PoseSequence) -> tuple[PoseSequence, int]:
+    """13_30 (``rec``)'s squats (labelled 11.8-16.1 s), 5 s with every joint missing, its knee
+    raises (6.7-11.8 s), at 120 fps; and the frames of the squats."""
+    squat = rec.positions[int(11.8 * 120) : int(16.1 * 120)]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)]
+    gap = np.full((5 * 120, *squat.shape[1:]), np.nan)
+    joined = np.concatenate([squat, gap, knee])
+    return PoseSequence(joined, rec.joint_names, 120.0, source="gap"), len(squat)
+
+
 def test_a_stretch_with_nobody_in_view_is_a_segment_that_says_so(
     recordings: dict[str, PoseSequence], classifier: CaseBaseClassifier
 ) -> None:
@@ -311,18 +321,12 @@ def test_a_stretch_with_nobody_in_view_is_a_segment_that_says_so(
     the squats end (4.3 s by construction) to where the knee raises start (9.3 s); the
     exercises around it as alone. (Its windows, half empty at its edges, voted an exercise
     the case base has, jogging.)"""
-    rec = recordings["13_30"]
-    squat = rec.positions[int(11.8 * 120) : int(16.1 * 120)]
-    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)]
-    gap = np.full((5 * 120, *squat.shape[1:]), np.nan)
-    joined = PoseSequence(np.concatenate([squat, gap, knee]), rec.joint_names, 120.0, source="gap")
+    joined, squat = _with_gap(recordings["13_30"])
     result = segment(classifier, joined)
     assert [s.label for s in result.segments] == ["Squat", None, "KneeRaise"]
     empty = result.segments[1]
     assert empty.explanation == "nobody in view" and not empty.repetitions
-    assert (
-        abs(empty.start_frame - len(squat)) <= 12 and abs(empty.end_frame - len(squat) - 600) <= 12
-    )
+    assert abs(empty.start_frame - squat) <= 12 and abs(empty.end_frame - squat - 600) <= 12
     assert [len(s.repetitions) for s in result.segments] == [2, 0, 4]
     assert result.to_dict()["segments"][1]["novelty"] is None
     assert result.blocks[int(6.0 / 0.1)] is None
@@ -330,7 +334,7 @@ def test_a_stretch_with_nobody_in_view_is_a_segment_that_says_so(
     from posecbr.commands.segment import _bands, frame_words
 
     words = frame_words(result)
-    assert words[len(squat) - 1][0] == "Squat" and words[len(squat) + 300] == [
+    assert words[squat - 1][0] == "Squat" and words[squat + 300] == [
         NOBODY,
         "repetitions: 0",
     ]
@@ -346,20 +350,18 @@ def test_live_nobody_in_view_is_a_segment_as_offline(
     windows, before, made an unknown segment from 5.0 to 9.5 s told by distances.)"""
     from cbr.live import LiveSegmenter
 
-    rec = recordings["13_30"]
-    squat = rec.positions[int(11.8 * 120) : int(16.1 * 120) : 4]
-    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120) : 4]
-    gap = np.full((5 * 30, *squat.shape[1:]), np.nan)
+    joined, at_120 = _with_gap(recordings["13_30"])
+    squat = -(-at_120 // 4)  # frames of the squats streamed (129)
     live = LiveSegmenter(classifier, 30.0)
     segments = []
-    for i, frame in enumerate(np.concatenate([squat, gap, knee])):
+    for i, frame in enumerate(joined.positions[::4]):
         segments += live.push(frame)
-        assert live.nobody_in_view == (len(squat) + 30 <= i + 1 <= len(squat) + 150)
+        assert live.nobody_in_view == (squat + 30 <= i + 1 <= squat + 150)
     segments += live.finish()
     assert [(s.label, s.explanation == NOBODY) for s in segments] == [
         ("Squat", False), (None, True), ("KneeRaise", False)
     ]  # fmt: skip
-    assert (segments[1].start_frame, segments[1].end_frame) == (len(squat), len(squat) + 150)
+    assert (segments[1].start_frame, segments[1].end_frame) == (squat, squat + 150)
     assert [s.repetitions for s in segments] == [2, 0, 4]
 
 
@@ -596,12 +598,7 @@ def test_segment_command_tells_nobody_in_view_in_its_table(
     """13_30's squats, 5 s with every joint missing, its knee raises, as a pose file: the
     table's empty row says "(nobody in view)" from 4.30 to 9.30 s (by construction), counted
     0, and says it once (no explanation line repeating it)."""
-    rec = recordings["13_30"]
-    squat = rec.positions[int(11.8 * 120) : int(16.1 * 120)]
-    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)]
-    gap = np.full((5 * 120, *squat.shape[1:]), np.nan)
-    seq = PoseSequence(np.concatenate([squat, gap, knee]), rec.joint_names, 120.0, source="gap")
-    path = save_pose(seq, tmp_path / "gap.npz")
+    path = save_pose(_with_gap(recordings["13_30"])[0], tmp_path / "gap.npz")
     capsys.readouterr()
     assert main(["segment", str(path), "--db", str(case_base)]) == 0
     out = capsys.readouterr().out
