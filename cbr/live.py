@@ -49,7 +49,15 @@ from .segmentation import (
     span_fields,
     told,
 )
-from .unknown import JUDGES, Judge, activity_codes, for_person, judge_of, unknown_evidence
+from .unknown import (
+    JUDGES,
+    Judge,
+    activity_codes,
+    for_person,
+    judge_of,
+    tell_unknown,
+    unknown_evidence,
+)
 
 HOP_S = 0.5
 """The rolling label is decided every this many seconds of stream."""
@@ -622,18 +630,16 @@ class LiveSegmenter:
     def _explain(self, start: int, end: int, state: int) -> tuple[str, float]:
         """A finished segment's explanation and novelty (the judge's ratio, median over its
         windows), as ``segment`` gives them (:func:`cbr.segmentation.told`), from the windows
-        centred in frames [start, end) (those over it when none is): unknown, told by its
-        median window; an activity, by the window whose nearest activity it is most clearly
-        (the least ratio), solved again from its frames."""
+        centred in frames [start, end) (those over it when none is): unknown, told by
+        :func:`cbr.unknown.tell_unknown`; an activity, by the window whose nearest activity
+        it is most clearly (the least ratio), solved again from its frames."""
         inside = [w for w in self.judged if start <= w.centre < end]
         inside = inside or [w for w in self.judged if w.start < end and w.stop > start]
         if not inside:
             return "", math.nan
-        ratios = [w.ratio for w in inside]
-        novelty = float(np.median(ratios))
+        novelty = float(np.median([w.ratio for w in inside]))
         if state == self.unknown:
-            median = inside[int(np.argsort(ratios, kind="stable")[len(ratios) // 2])]
-            return median.judge.describe(median.nearest, self.classes), novelty
+            return tell_unknown([(w.judge, w.nearest) for w in inside], self.classes), novelty
         telling = [w for w in inside if w.activity == state and w.start >= self.offset]
         if not telling:
             return "", novelty

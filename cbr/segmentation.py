@@ -86,6 +86,7 @@ from .unknown import (
     for_person,
     judge_of,
     per_activity,
+    tell_unknown,
     unknown_evidence,
 )
 
@@ -625,16 +626,17 @@ def unknown_blocks(
 def _explain_segment(
     clf: Any, rec: PoseSequence, inside: list[_Solved], state: int, judge: Judge
 ) -> tuple[str, float]:
-    """A short explanation from the segment's most telling window, and the segment's novelty
-    (the judge's ratio, median over its windows)."""
+    """A short explanation from the segment's most telling window (unknown:
+    :func:`cbr.unknown.tell_unknown`), and the segment's novelty (the judge's ratio, median
+    over its windows)."""
     n_classes = len(clf.classes_)
     if not inside:
         return "", float("nan")
-    ratios = [judge.ratio(w.nearest) for w in inside]
-    ratio = float(np.median(ratios))
-    if state == n_classes:  # unknown: told by its median window
-        w = inside[int(np.argsort(ratios, kind="stable")[len(ratios) // 2])]
-        return judge.describe(w.nearest, [str(c) for c in clf.classes_]), ratio
+    ratio = float(np.median([judge.ratio(w.nearest) for w in inside]))
+    if state == n_classes:
+        return tell_unknown(
+            [(judge, w.nearest) for w in inside], [str(c) for c in clf.classes_]
+        ), ratio
     w = max(inside, key=lambda s: s.vote[state])
     return told(clf, _solved(clf, rec, w), str(clf.classes_[state])), ratio
 

@@ -962,6 +962,29 @@ def unknown_evidence(judge: Judge, nearest: np.ndarray) -> float:
     return 1.0 if judge.unlike(nearest) else 0.0
 
 
+def tell_unknown(judged: Sequence[tuple[Judge, np.ndarray]], classes: Sequence[str]) -> str:
+    """Why a stretch decoded unknown is, in words, from its windows: each one's judge and
+    distances to the nearest case of every activity ``(n_classes,)``. Told by the median
+    (by the judge's ratio; the upper one of two) of the windows the judge calls unlike
+    every activity. When none of them is, the stretch is unknown on the evidence around it
+    (a block no window within one activity covers takes its neighbours' evidence, and every
+    change of label needs :data:`cbr.segmentation.MIN_SEGMENT_S` of it): the words say so
+    instead of quoting a window the judge finds like an activity. "" without windows."""
+    if not judged:
+        return ""
+    unlike = [(j, n) for j, n in judged if j.unlike(n)]
+    told_by = unlike or list(judged)
+    ratios = [j.ratio(n) for j, n in told_by]
+    judge, nearest = told_by[int(np.argsort(ratios, kind="stable")[len(ratios) // 2])]
+    if unlike:
+        return judge.describe(nearest, classes)
+    first, _ = two_nearest(nearest, classes)
+    return (
+        f"unknown on the evidence around it; its own windows (nearest: {first}) are not"
+        " unlike every stored activity"
+    )
+
+
 def judge_of(clf: Any, name: str) -> Judge:
     """The judge called ``name`` (:data:`JUDGES`) for the fitted classifier ``clf``: the one
     stored with it (``clf.judges_``, calibrated when it was stored on the cases it holds)
@@ -1018,5 +1041,6 @@ __all__ = [
     "judge_of",
     "margin_of",
     "per_activity",
+    "tell_unknown",
     "unknown_evidence",
 ]

@@ -823,3 +823,35 @@ def test_a_segment_too_short_for_a_window_centre_is_told_by_the_windows_over_it(
     alone = Segment(11, 15, None, 1.0, (), "", float("nan"))
     doc = json.loads(json.dumps(alone.to_dict(10.0), allow_nan=False))
     assert doc["novelty"] is None
+
+
+def test_an_unknown_segment_is_explained_by_a_window_unlike_every_activity() -> None:
+    """An unknown segment (frames 20-40, 10 fps) whose four windows centred in it have
+    margins 0.5, 0.6, 0.7 and 0.95 against a threshold of 0.8: the explanation quotes the one
+    window over the threshold (the median of all four, 0.7, would read "like no stored
+    activity" beside a margin a known activity stays under), the confidence is the share
+    unlike (1 of 4). With no window unlike, the explanation says the segment is unknown on
+    the evidence around it."""
+    from types import SimpleNamespace
+
+    from cbr.segmentation import _segment_of
+
+    clf = SimpleNamespace(classes_=np.array(["a", "b", "c"]))
+    rec = SimpleNamespace(fps=10.0, n_frames=100)
+    judge = Margin(threshold=0.8, basis="groups", known=10, novel=10)
+
+    def windows(*margins: float) -> list[_Solved]:  # centres 25, 28, 31, 34
+        return [
+            _Solved(15 + 3 * i, 35 + 3 * i, np.eye(3)[0], np.array([m, 1.0, 5.0]), None)
+            for i, m in enumerate(margins)
+        ]
+
+    votes = np.zeros((100, 3))
+    seg = _segment_of(clf, rec, (20, 40, 3), windows(0.5, 0.6, 0.7, 0.95), votes, judge,
+                      [True] * 4, ())  # fmt: skip
+    assert seg.label is None and seg.confidence == pytest.approx(0.25)
+    assert "the nearest (a) is 0.95 as far as the next (b)" in seg.explanation
+    quiet = _segment_of(clf, rec, (20, 40, 3), windows(0.5, 0.6), votes, judge, [True] * 2, ())
+    assert quiet.confidence == 0.0
+    assert quiet.explanation.startswith("unknown on the evidence around it")
+    assert "like no stored activity" not in quiet.explanation

@@ -31,6 +31,7 @@ from cbr.unknown import (
     joint_thresholds,
     margin_of,
     person_offset,
+    tell_unknown,
     unknown_evidence,
 )
 from features.datasets import Clip
@@ -501,3 +502,26 @@ def test_the_activity_margin_grades_the_distances_less_the_offset() -> None:
     far = np.array([6.5, 8.0, 20.0])
     assert unknown_evidence(judge, far) == 1.0 and unknown_evidence(person, far) == 1.0
     assert person.ratio(far) == pytest.approx(0.7)
+
+
+def test_an_unknown_stretch_is_told_by_a_window_unlike_every_activity() -> None:
+    """Four windows of an unknown stretch with margins 0.5, 0.6, 0.7 and 0.95 (distances a, b,
+    c: margin = a / b), the threshold 0.8: only 0.95 is unlike, so it tells the stretch (the
+    median of all four, 0.7, lies under the threshold and would contradict "like no stored
+    activity"). Of two unlike windows (0.9, 0.95), the upper one. None unlike (0.5, 0.6):
+    the words say the stretch is unknown on the evidence around it, quoting no margin."""
+    judge = Margin(threshold=0.8, basis="groups", known=10, novel=10)
+    classes = ["a", "b", "c"]
+
+    def windows(*margins: float) -> list[tuple[Margin, np.ndarray]]:
+        return [(judge, np.array([m, 1.0, 5.0])) for m in margins]
+
+    text = tell_unknown(windows(0.5, 0.6, 0.7, 0.95), classes)
+    assert text.startswith("like no stored activity: the nearest (a) is 0.95 as far as")
+    assert "is 0.95 as far" in tell_unknown(windows(0.9, 0.5, 0.95), classes)
+    quiet = tell_unknown(windows(0.5, 0.6), classes)
+    assert quiet == (
+        "unknown on the evidence around it; its own windows (nearest: a) are not unlike every"
+        " stored activity"
+    )
+    assert tell_unknown([], classes) == ""
