@@ -51,4 +51,10 @@ def size_words(n_bytes: float) -> str:
     return f"{int(n_bytes)} bytes"
 
 
-__all__ = ["shown", "size_words"]
+def counted(n: int, noun: str) -> str:
+    """``n`` and the noun, plural unless ``n`` is 1: ``"1 frame"``, ``"5 frames"`` (nouns with
+    a plain -s plural)."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+__all__ = ["counted", "shown", "size_words"]

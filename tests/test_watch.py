@@ -3,7 +3,13 @@
 
 from __future__ import annotations
 
+import functools
+import http.server
 import json
+import signal
+import subprocess
+import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -266,3 +272,131 @@ def test_a_stream_that_never_shows_anybody_is_one_unknown_segment(case_base: Pat
     assert [
         (s.start_frame, s.end_frame, s.label, s.repetitions, s.explanation) for s in segments
     ] == [(0, 90, None, 0, "nobody in view")]
+
+
+class _Quiet(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 (the base's name)
+        """No request lines on stderr."""
+
+
+@pytest.fixture
+def served(shared_data: Path) -> Iterator[str]:
+    """The address of ../shared/data/media served over HTTP on this machine (a stream URL)."""
+    handler = functools.partial(_Quiet, directory=str(shared_data / "media"))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        yield f"http://127.0.0.1:{server.server_address[1]}"
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+def test_watch_a_stream_url(
+    case_base: Path, served: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """vtest.avi served over HTTP, a file whose length OpenCV knows, so timed by its own
+    frame rate (10 fps) as the file is: its first 120 frames are one segment with nobody in
+    view, 0-12 s. A URL with nothing behind it: one line naming it, exit 1. (A URL was taken
+    for a camera index: a traceback.)"""
+    capsys.readouterr()
+    url = f"{served}/vtest.avi"
+    argv = ["watch", url, "--db", str(case_base), "--max-frames", "120", "--speed", "0"]
+    assert main(argv) == 0
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    got = [
+        (d["start_frame"], d["end_frame"], d["end_s"], d["label"], d["explanation"]) for d in lines
+    ]
+    assert got == [(0, 120, 12.0, None, "nobody in view")]
+    assert main(["watch", f"{served}/none.avi", "--db", str(case_base)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{served}/none.avi: cannot open camera or stream" in err
+
+
+def test_watch_a_stream_shorter_than_a_window_says_so(
+    case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Five frames of the 5-fps squat video (1 s; a window is 2 s): no segment can be
+    given, so one line says why, exit 1, and no --out video (it printed nothing, exit 0)."""
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    out = tmp_path / "out.mp4"
+    capsys.readouterr()
+    argv = ["watch", str(video), "--db", str(case_base), "--max-frames", "5", "--out", str(out)]
+    assert main([*argv, "--speed", "0"]) == 1
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1
+    assert "the stream ended after 5 frames (1.0 s), before one window (2 s)" in captured.err
+    assert list(tmp_path.iterdir()) == []
+
+
+def _watch(argv: list[str]) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "posecbr", "watch", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def test_a_watch_that_stalls_exits_with_one_line_not_an_abort(
+    case_base: Path, shared_data: Path, tmp_path: Path
+) -> None:
+    """A real process: no frame within 0.05 s (the pose model loads first): the stall is
+    reported in one line naming the source, exit 1, no video. (The reader thread was left
+    inside onnxruntime as Python shut down: "terminate called without an active exception",
+    exit 134.)"""
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    out = tmp_path / "out.mp4"
+    run = _watch([str(video), "--db", str(case_base), "--stall", "0.05", "--out", str(out)])
+    stdout, stderr = run.communicate(timeout=120)
+    assert run.returncode == 1, stderr
+    assert stderr == f"posecbr watch: error: {video}: the stream stalled: no frame for 0.05 s\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_ends_a_watch_as_the_end_of_the_stream_does(
+    case_base: Path, shared_data: Path, tmp_path: Path
+) -> None:
+    """A real process watching the squat video at its own rate (13 s), sent SIGINT (Ctrl-C)
+    three seconds after it starts drawing: it finishes the frame in hand, prints the segment
+    in progress and the latency, writes the --out video with every frame it watched, exit 0.
+    (Ctrl-C could land between writing a frame and counting it: "28 frames encoded but 29
+    read back", the video dropped; or abort the process, exit 134.)"""
+    import cv2
+
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    out = tmp_path / "out.mp4"
+    run = _watch([str(video), "--db", str(case_base), "--out", str(out)])
+    deadline = time.monotonic() + 120
+    while not any(tmp_path.iterdir()) and time.monotonic() < deadline:
+        time.sleep(0.1)  # the first frame drawn opens the (temporary) video
+    time.sleep(3.0)  # 2.2 s of video at least: a window and a hop
+    run.send_signal(signal.SIGINT)
+    stdout, stderr = run.communicate(timeout=120)
+    assert run.returncode == 0, stderr
+    watched = int(stderr.split("watched ")[1].split(" frame")[0])
+    assert 0 < watched < 65 and "latency frame to label" in stderr, stderr
+    lines = [json.loads(line) for line in stdout.splitlines()]
+    assert lines and lines[-1]["end_frame"] == watched
+    cap = cv2.VideoCapture(str(out))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == watched
+    cap.release()
+
+
+def test_a_second_ctrl_c_interrupts_at_once() -> None:
+    """Within a watch, the first SIGINT only sets the stop event; the second raises
+    KeyboardInterrupt (the user does not want to wait); after it, SIGINT is handled as
+    before."""
+    import os
+
+    from posecbr.commands.watch import stop_on_interrupt
+
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt), stop_on_interrupt() as stop:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)  # the handler runs in this (the main) thread between bytecodes
+        assert stop.is_set()
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)
+        pytest.fail("the second Ctrl-C did not interrupt")
+    assert signal.getsignal(signal.SIGINT) is before

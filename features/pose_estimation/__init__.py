@@ -19,6 +19,7 @@ from .video import (
     estimate_video,
     iter_frames,
     open_video,
+    served_file_rate,
     stream_poses,
 )
 
@@ -33,5 +34,6 @@ __all__ = [
     "iter_frames",
     "model_version",
     "open_video",
+    "served_file_rate",
     "stream_poses",
 ]

@@ -279,26 +279,42 @@ def _open_quietly(device: int | str) -> cv2.VideoCapture:
         return cv2.VideoCapture(device)
 
 
+def served_file_rate(url: str) -> float | None:
+    """The frame rate of a stream URL that is a video file served over the network (OpenCV
+    knows its frame count and rate), None for a live stream (a camera's: no frame count) and
+    for one that cannot be opened (:func:`stream_poses` reports that)."""
+    cap = _open_quietly(url)
+    try:
+        if not cap.isOpened():
+            return None
+        frames = float(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0)
+        fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+    finally:
+        cap.release()
+    return fps if frames > 0 and math.isfinite(fps) and 0 < fps <= 1000 else None
+
+
 def stream_poses(
     source: int | str | Path,
     *,
     smoothing: bool = True,
     max_frames: int | None = None,
     estimator: PoseEstimator | None = None,
+    fps: float | None = None,
 ) -> Iterator[StreamFrame]:
     """Poses frame by frame from a webcam index, a stream URL or a video path.
 
-    Files are timed by their frame rate; live sources by the wall clock. Stops at the end of
+    Files are timed by their frame rate; live sources by the wall clock, or by ``fps`` when
+    given (a file served over the network: :func:`served_file_rate`). Stops at the end of
     the stream, after ``max_frames``, or when the consumer stops iterating.
     """
-    fps: float | None = None
     if isinstance(source, Path) or (
         isinstance(source, str) and "://" not in source and not source.isdigit()
     ):
         cap, info = open_video(source)
         fps = info.fps
     else:
-        device = int(source) if isinstance(source, str) else source
+        device = int(source) if isinstance(source, str) and source.isdigit() else source
         cap = _open_quietly(device)
         if not cap.isOpened():
             raise DataError("cannot open camera or stream", str(source))

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from features.errors import DataError
 from features.fileio import check_output, staged_folder, write_text_atomic
-from features.text import shown
+from features.text import counted, shown
 
 if TYPE_CHECKING:
     from features.datasets import Clip
@@ -328,7 +328,7 @@ def run(args: argparse.Namespace) -> int:
     with staged_folder(out, last={"labels.csv"}) as stage:
         written, rates = _write_clips(args, stage, inputs)
         write_text_atomic(stage / "labels.csv", _labels_csv(written))
-    print(f"wrote {len(written)} pose files and labels.csv to {shown(out)}")
+    print(f"wrote {counted(len(written), 'pose file')} and labels.csv to {shown(out)}")
     for line in _rate_summary(rates):
         print(f"  {line}")
     return 0

@@ -23,6 +23,7 @@ from typing import Any
 
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
+from features.text import counted
 from posecbr.recordings import add_recording_options, check_fps, load_recording
 
 JUDGES = ("activity-margin", "margin", "held-out", "activities", "margin-distance")
@@ -145,7 +146,7 @@ def _print(result: Any) -> None:
     fps = result.fps
     print(
         f"{result.recording}: {result.n_frames} frames at {fps:g} fps "
-        f"({result.n_frames / fps:.1f} s), {len(result.segments)} segments"
+        f"({result.n_frames / fps:.1f} s), {counted(len(result.segments), 'segment')}"
     )
     print(
         f"  {'start s':>8}  {'end s':>7}  {'frames':>12}  {'activity':<20} {'conf':>5}  {'reps':>4}"

@@ -2,17 +2,21 @@
 
 SOURCE is a webcam index (``0``), a stream URL (``rtsp://...``) or a video file, which is
 played at its own frame rate (``--speed 2`` twice as fast, ``--speed 0`` as fast as it
-decodes). Poses come from BlazePose frame by frame; the rolling activity label, the
-repetitions counted so far and the fluents that hold now are drawn on the frames
-(``--out video.mp4`` writes them, headless; ``--show`` opens a window where OpenCV has one).
+decodes), as is a video file served over the network (a URL whose frame count OpenCV
+knows); a live source is timed by the wall clock. Poses come from BlazePose frame by
+frame; the rolling activity label, the repetitions counted so far and the fluents that hold
+now are drawn on the frames (``--out video.mp4`` writes them, headless; ``--show`` opens a
+window where OpenCV has one).
 One JSON line per finished segment goes to stdout (``start_s``, ``end_s``, ``start_frame``,
 ``end_frame``, ``label``, null when unknown, ``confidence``, ``repetitions``, ``explanation``,
 ``novelty``, as ``posecbr segment --json`` gives them). At the end the
 latency from reading a frame to having its label is printed (median, 95th percentile, worst).
 
-A stream that stalls (no frame for ``--stall`` seconds) or a camera or URL that stops sending
-is reported in one line, with a non-zero exit; the ``--out`` video is then not written (no
-half-written file).
+Ctrl-C ends the watch as the end of a file does (the frame in hand is finished, the last
+segment printed, the ``--out`` video written); a second Ctrl-C stops at once, writing
+nothing. A stream that stalls (no frame for ``--stall`` seconds) or a camera or URL that
+stops sending is reported in one line, with a non-zero exit; the ``--out`` video is then not
+written (no half-written file).
 """
 
 from __future__ import annotations
@@ -20,16 +24,18 @@ from __future__ import annotations
 import argparse
 import json
 import queue
+import signal
 import sys
 import threading
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
+from collections.abc import Generator, Iterator
+from contextlib import closing, contextmanager
 from pathlib import Path
 from typing import Any
 
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import atomic_path, check_output
+from features.text import counted
 
 from .segment import JUDGES
 
@@ -83,52 +89,120 @@ def _check(args: argparse.Namespace) -> None:
         check_output(args.out, inputs=inputs, what="output video")
     if _is_file(args.source) and not Path(args.source).is_file():
         raise DataError("no such video file", args.source)
+    if args.show and not _has_windows():
+        raise ConfigError("this OpenCV has no window support: use --out video.mp4", "--show")
+
+
+def _has_windows() -> bool:
+    """Whether this OpenCV can open a window: its build names a GUI backend (the headless
+    wheel's says NONE)."""
+    import cv2
+
+    for line in cv2.getBuildInformation().splitlines():
+        if line.strip().startswith("GUI:"):
+            return line.split(":", 1)[1].strip().upper() != "NONE"
+    return True
+
+
+JOIN_S = 2.0
+"""How long the end of a watch waits for the reader thread to finish the frame it is reading
+(a pose estimate: tens of milliseconds; a stalled network read may never return)."""
+
+
+class _Reader:
+    """A stream's frames read in a thread into a small queue of (kind, item): ("frame", f),
+    then ("end", None) or ("error", exc); with ``rate`` (frames per second) no faster than
+    that. :meth:`close` stops it and waits up to :data:`JOIN_S` for the frame in hand."""
+
+    def __init__(self, frames: Iterator[Any], rate: float | None) -> None:
+        self.frames, self.rate = frames, rate
+        self.box: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=8)
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._read, name="posecbr-watch-reader", daemon=True)
+        self.thread.start()
+
+    def _hand(self, kind: str, item: Any) -> bool:
+        """Pass an item to the consumer; False once it has stopped listening."""
+        while not self.stop.is_set():
+            try:
+                self.box.put((kind, item), timeout=0.1)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def _read(self) -> None:
+        try:
+            started = time.perf_counter()
+            for i, f in enumerate(self.frames):
+                if not self._hand("frame", f):
+                    return
+                due = started + (i + 1) / self.rate if self.rate else 0.0  # the next frame
+                if due and self.stop.wait(max(0.0, due - time.perf_counter())):
+                    return
+            self._hand("end", None)
+        except BaseException as exc:  # delivered to the main thread
+            self._hand("error", exc)
+        finally:  # the capture is released by the thread that reads it
+            close = getattr(self.frames, "close", None)
+            if close is not None:
+                close()
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(JOIN_S)
 
 
 def frames_in_background(
-    frames: Iterator[Any], stall_s: float, rate: float | None = None
-) -> Iterator[Any]:
-    """The stream's frames, read in a thread; with ``rate`` (frames per second) no faster
-    than that (a file played at its own rate, as a camera delivers). Raises DataError when no
-    frame arrives for ``stall_s`` seconds."""
-    box: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=8)
-    stop = threading.Event()
-
-    def read() -> None:
-        try:
-            started = time.perf_counter()
-            for i, f in enumerate(frames):
-                box.put(("frame", f))
-                if stop.is_set():
-                    return
-                if rate:  # the next frame is due at (i + 1) / rate
-                    time.sleep(max(0.0, started + (i + 1) / rate - time.perf_counter()))
-            box.put(("end", None))
-        except BaseException as exc:  # delivered to the main thread
-            box.put(("error", exc))
-
-    reader = threading.Thread(target=read, name="posecbr-watch-reader", daemon=True)
-    reader.start()
+    frames: Iterator[Any], stall_s: float, rate: float | None = None, where: str = "stream"
+) -> Generator[Any, None, None]:
+    """The stream's frames, read in a thread (:class:`_Reader`); with ``rate`` (frames per
+    second) no faster than that (a file played at its own rate, as a camera delivers).
+    Raises DataError naming ``where`` (the source) when no frame arrives for ``stall_s``
+    seconds. Closed (or ended), it
+    stops the reader and waits for it: a thread left inside OpenCV or onnxruntime while
+    Python shuts down aborts the process (exit 134)."""
+    reader = _Reader(frames, rate)
     try:
         while True:
             try:
-                kind, item = box.get(timeout=stall_s)
+                kind, item = reader.box.get(timeout=stall_s)
             except queue.Empty:
-                raise DataError(
-                    f"the stream stalled: no frame for {stall_s:g} s", "stream"
-                ) from None
+                raise DataError(f"the stream stalled: no frame for {stall_s:g} s", where) from None
             if kind == "end":
                 return
             if kind == "error":
                 raise item
             yield item
     finally:
-        stop.set()
+        reader.close()
+
+
+@contextmanager
+def stop_on_interrupt() -> Iterator[threading.Event]:
+    """Ctrl-C (SIGINT) sets the event instead of raising: the watch ends after the frame in
+    hand, as at the end of a file; a second Ctrl-C raises KeyboardInterrupt at once. Outside
+    the main thread (where no signal handler can be set) the event is never set."""
+    stopped = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stopped
+        return
+
+    def interrupted(_signum: int, _frame: Any) -> None:
+        if stopped.is_set():
+            raise KeyboardInterrupt
+        stopped.set()
+
+    previous = signal.signal(signal.SIGINT, interrupted)
+    try:
+        yield stopped
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def run(args: argparse.Namespace) -> int:
     from cbr.unknown import judge_of
-    from features.pose_estimation import open_video, stream_poses
+    from features.pose_estimation import open_video, served_file_rate, stream_poses
     from features.pose_estimation.overlay import check_encoded
 
     from .segment import load_stored
@@ -136,19 +210,21 @@ def run(args: argparse.Namespace) -> int:
     _check(args)
     clf = load_stored(args.db, args.name)
     judge = judge_of(clf, args.unknown)
-    is_file = _is_file(args.source)
-    fps = open_video(args.source)[1].fps if is_file else None
     source: Any = int(args.source) if args.source.isdigit() else args.source
+    if _is_file(args.source):
+        fps: float | None = open_video(args.source)[1].fps
+    else:  # a file served over the network is played as a file is
+        fps = None if isinstance(source, int) else served_file_rate(source)
+    is_file = fps is not None
     rate = fps * args.speed if fps and args.speed > 0 else None
-    frames = frames_in_background(
-        stream_poses(source, max_frames=args.max_frames), args.stall, rate
-    )
+    poses = stream_poses(source, max_frames=args.max_frames, fps=fps)
+    frames = frames_in_background(poses, args.stall, rate, args.source)
     watcher = Watcher(clf, judge, args, fps)
     try:
-        with _video_output(args.out) as video:
+        with _video_output(args.out) as video, closing(frames), stop_on_interrupt() as stop:
             watcher.video = video
             watcher.warm_up()
-            watcher.watch(frames, is_file)
+            watcher.watch(frames, is_file, stop)
             if video is not None and watcher.writer is None:
                 raise _NoFrameDrawn
             if video is not None:
@@ -184,6 +260,7 @@ class Watcher:
         self.writer: Any = None
         self.video: Path | None = None  # where the drawn frames go (a temporary file)
         self.drawn = 0  # frames written to it
+        self.emitted = 0  # segments printed
         self.latency: list[float] = []
         self.n = 0
         self.started = time.perf_counter()
@@ -201,22 +278,22 @@ class Watcher:
             pass
         self.started = time.perf_counter()  # frames per second: of the stream alone
 
-    def watch(self, frames: Iterator[Any], is_file: bool) -> None:
-        """:meth:`follow` until the stream ends or the user stops it (Ctrl-C); the video writer
-        is released either way."""
+    def watch(self, frames: Iterator[Any], is_file: bool, stop: threading.Event) -> None:
+        """:meth:`follow` until the stream ends or the user stops it (``stop``: Ctrl-C); the
+        video writer is released either way."""
         try:
-            self.follow(frames, is_file)
-        except KeyboardInterrupt:
-            pass  # the user stopped watching: finish what was seen
+            self.follow(frames, is_file, stop)
         finally:
             if self.writer is not None:
                 self.writer.release()
 
-    def follow(self, frames: Iterator[Any], is_file: bool) -> None:
+    def follow(self, frames: Iterator[Any], is_file: bool, stop: threading.Event) -> None:
         from cbr.live import LiveSegmenter
 
         waiting: list[Any] = []  # a live source's first second: to measure its frame rate
         for frame in frames:
+            if stop.is_set():
+                break  # the user stopped watching: finish what was seen
             if self.live is None:
                 if self.fps is None:
                     waiting.append(frame)
@@ -227,11 +304,11 @@ class Watcher:
                 for early in waiting[:-1]:
                     self._take(early)
             self._take(frame)
-        if self.n == 0:
+        if self.n == 0 and not stop.is_set():
             raise DataError("the stream gave no frame", self.args.source)
-        if not is_file and self.args.max_frames is None:
+        if not is_file and self.args.max_frames is None and not stop.is_set():
             raise DataError(
-                f"the stream ended after {self.n} frames (camera or connection lost?)",
+                f"the stream ended after {counted(self.n, 'frame')} (camera or connection lost?)",
                 self.args.source,
             )
 
@@ -246,6 +323,7 @@ class Watcher:
 
     def _emit(self, segment: Any) -> None:
         print(json.dumps(segment.to_dict(self.fps)), flush=True)
+        self.emitted += 1
 
     def _draw(self, frame: Any) -> None:
         if self.args.out is None and not self.args.show:
@@ -311,11 +389,21 @@ class Watcher:
 
         for segment in self.live.finish() if self.live is not None else []:
             self._emit(segment)
+        if not self.emitted:  # as segment refuses a recording shorter than a window
+            from cbr.segmentation import DEFAULT_WINDOW_S
+
+            seconds = f" ({self.n / self.fps:.1f} s)" if self.fps else ""
+            raise DataError(
+                f"the stream ended after {counted(self.n, 'frame')}{seconds}, before one window"
+                f" ({DEFAULT_WINDOW_S:g} s) of it was seen: no segment to give",
+                self.args.source,
+            )
         if self.latency:
             ms = np.asarray(self.latency) * 1000.0
             wall = time.perf_counter() - self.started
             print(
-                f"watched {self.n} frames in {wall:.1f} s ({self.n / wall:.1f} frames/s); "
+                f"watched {counted(self.n, 'frame')} in {wall:.1f} s"
+                f" ({self.n / wall:.1f} frames/s); "
                 f"latency frame to label: median {np.median(ms):.1f} ms, "
                 f"95th percentile {np.percentile(ms, 95):.1f} ms, worst {ms.max():.1f} ms",
                 file=sys.stderr,
