@@ -69,3 +69,33 @@ def test_convert_refuses_a_bad_fps(
     assert err.count("\n") == 1 and "--fps" in err and "Traceback" not in err
     assert not out.exists()
     assert before == {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (asf, amc)}
+
+
+def test_converting_into_a_folder_adds_to_its_labels(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Three CMU recordings converted one at a time into one folder: its labels.csv lists all
+    three (it listed only the last: `posecbr train DIR` then dropped two); converting one
+    again replaces its row. A labels.csv there that is not one (no path column): one line,
+    exit 1, the folder as it was."""
+    import csv
+
+    asf = shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf"
+    out = tmp_path / "p"
+    for trial in ("13_29", "13_30", "13_31", "13_29"):
+        amc = shared_data / "cmu-mocap6" / "amc" / f"{trial}.amc"
+        assert main(["convert", str(amc), "--asf", str(asf), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[0].startswith("wrote 1 pose file and labels.csv to")
+    assert printed[-2].endswith("(2 clips listed before kept)")
+    with open(out / "labels.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["path"] for r in rows] == ["13_30.npz", "13_31.npz", "13_29.npz"]
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "labels.csv").write_text("file,label\nx.npz,a\n")
+    amc = shared_data / "cmu-mocap6" / "amc" / "13_30.amc"
+    assert main(["convert", str(amc), "--asf", str(asf), "--out", str(bad)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "labels.csv: the labels file already there has no 'path'" in err
+    assert [p.name for p in bad.iterdir()] == ["labels.csv"]

@@ -4,7 +4,8 @@ SOURCE is a UI-PRMD folder, an HDM05 (or CMU) ASF/AMC folder, one ``.amc`` file 
 beside it or given with ``--asf``), a ``.bvh`` file, or any other dataset ``iter_dataset``
 reads (labels CSV, class folders). Each clip is written to DIR as ``<name>.npz`` with its
 label, subject and extras in the metadata, and DIR/labels.csv (``path,label,subject,...``)
-lists them, so DIR is itself a dataset for every command.
+lists them, so DIR is itself a dataset for every command; converting into a folder that has
+a labels.csv adds to it (a clip converted again replaces its row).
 
 The frame rate each clip is written with, and where it came from, is printed: AMC files carry
 none (120 Hz, the CMU and HDM05 rate, is assumed unless an HDM05 name states one; a CMU name
@@ -316,6 +317,31 @@ def _labels_csv(written: list[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
+def _listed_before(labels: Path) -> list[dict[str, Any]]:
+    """The rows of a labels.csv already in the output folder (none when there is none):
+    converting into a folder adds to its dataset. DataError naming it when it cannot be read
+    as one (no ``path`` column)."""
+    if not labels.is_file():
+        return []
+    try:
+        with open(labels, newline="", encoding="utf-8") as fh:
+            reader = csv.DictReader(fh)
+            rows = [dict(row) for row in reader]
+            columns = reader.fieldnames or []
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise DataError(f"cannot read the labels file already there ({exc})", labels) from None
+    if "path" not in columns:
+        raise DataError("the labels file already there has no 'path' column", labels)
+    return rows
+
+
+def _merged(before: list[dict[str, Any]], written: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The rows of labels.csv: those listed before whose pose file was not written again,
+    in their order, then the ones written now."""
+    now = {str(row["path"]).lower() for row in written}
+    return [row for row in before if str(row.get("path", "")).lower() not in now] + written
+
+
 def run(args: argparse.Namespace) -> int:
     _check_args(args)
     out: Path = args.out
@@ -323,12 +349,16 @@ def run(args: argparse.Namespace) -> int:
     _check_no_overwrite(out, inputs)
     if out.is_dir():
         check_output(out / "labels.csv", inputs=inputs, what="labels file")
+    before = _listed_before(out / "labels.csv")
     # Clips and labels.csv are staged first: a bad clip halfway leaves the output folder as it
     # was; labels.csv, which names the clips, is moved in last.
     with staged_folder(out, last={"labels.csv"}) as stage:
         written, rates = _write_clips(args, stage, inputs)
-        write_text_atomic(stage / "labels.csv", _labels_csv(written))
-    print(f"wrote {counted(len(written), 'pose file')} and labels.csv to {shown(out)}")
+        rows = _merged(before, written)
+        write_text_atomic(stage / "labels.csv", _labels_csv(rows))
+    kept = len(rows) - len(written)
+    listed = f" ({counted(kept, 'clip')} listed before kept)" if kept else ""
+    print(f"wrote {counted(len(written), 'pose file')} and labels.csv to {shown(out)}{listed}")
     for line in _rate_summary(rates):
         print(f"  {line}")
     return 0
