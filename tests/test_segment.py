@@ -855,3 +855,27 @@ def test_an_unknown_segment_is_explained_by_a_window_unlike_every_activity() -> 
     assert quiet.confidence == 0.0
     assert quiet.explanation.startswith("unknown on the evidence around it")
     assert "like no stored activity" not in quiet.explanation
+
+
+def test_segment_pictures_of_recordings_that_share_a_name_are_all_kept(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Two recordings both named 13_30.npz (in two folders) with --plot FOLDER: two pictures,
+    13_30.png and 13_30_2.png (the second overwrote the first). A --plot file name that is
+    not .png: one line, exit 1, nothing written."""
+    part = recordings["13_30"].slice_frames(0, 600)
+    a = save_pose(part, tmp_path / "a" / "13_30.npz")
+    b = save_pose(recordings["13_30"].slice_frames(600, 1200), tmp_path / "b" / "13_30.npz")
+    plots = tmp_path / "plots"
+    plots.mkdir()
+    assert main(["segment", str(a), str(b), "--db", str(case_base), "--plot", str(plots)]) == 0
+    assert sorted(p.name for p in plots.iterdir()) == ["13_30.png", "13_30_2.png"]
+    assert (plots / "13_30.png").read_bytes() != (plots / "13_30_2.png").read_bytes()
+    capsys.readouterr()
+    text = tmp_path / "timeline.txt"
+    assert main(["segment", str(a), "--db", str(case_base), "--plot", str(text)]) == 1
+    assert "the picture must be a .png file name" in capsys.readouterr().err
+    assert not text.exists()

@@ -81,17 +81,36 @@ def _outputs(args: argparse.Namespace) -> None:
     if args.k < 1:
         raise ConfigError(f"-k must be >= 1, got {args.k}", "-k")
     if args.plot is not None:
-        if len(args.recordings) > 1:
-            if not args.plot.is_dir():
-                raise DataError("with several recordings --plot names a folder", args.plot)
-        else:
-            check_output(args.plot, inputs=args.recordings, what="picture")
+        if len(args.recordings) > 1 and not args.plot.is_dir():
+            raise DataError("with several recordings --plot names a folder", args.plot)
+        for target in plot_targets(args.plot, args.recordings):
+            check_output(target, inputs=args.recordings, what="picture")
+        if not args.plot.is_dir() and args.plot.suffix.lower() != ".png":
+            raise DataError("the picture must be a .png file name (or a folder)", args.plot)
     if args.overlay is not None:
         if len(args.recordings) > 1:
             raise DataError("--overlay takes one recording", args.overlay)
         if args.overlay.suffix.lower() != ".mp4":
             raise DataError("the overlay must be an .mp4 file name", args.overlay)
         check_output(args.overlay, inputs=args.recordings, what="overlay")
+
+
+def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
+    """Where each recording's picture goes: ``plot`` itself, or in the folder ``plot`` one
+    ``<name>.png`` per recording, a name that two recordings share (``a/13_30.npz``,
+    ``b/13_30.npz``) numbered from the second on (``13_30_2.png``), as ``convert`` names
+    pose files: no picture overwrites another."""
+    if not plot.is_dir():
+        return [plot]
+    taken: set[str] = set()
+    out = []
+    for path in recordings:
+        name, k = path.stem, 2
+        while name.lower() in taken:
+            name, k = f"{path.stem}_{k}", k + 1
+        taken.add(name.lower())
+        out.append(plot / f"{name}.png")
+    return out
 
 
 def run(args: argparse.Namespace) -> int:
@@ -102,13 +121,13 @@ def run(args: argparse.Namespace) -> int:
     clf = load_stored(args.db, args.name)
     judge = judge_of(clf, args.unknown)
     docs = []
-    for path in args.recordings:
+    targets = plot_targets(args.plot, args.recordings) if args.plot is not None else []
+    for i, path in enumerate(args.recordings):
         rec, video = _read(path, args)
         result = segment(clf, rec, judge, k=args.k)
         result = _named(result, path)
-        if args.plot is not None:
-            target = args.plot / f"{path.stem}.png" if args.plot.is_dir() else args.plot
-            _plot(rec, result, target, path.name)
+        if targets:
+            _plot(rec, result, targets[i], path.name)
         if args.overlay is not None:
             _overlay(path, video, result, args.overlay)
         docs.append(result)
