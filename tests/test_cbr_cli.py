@@ -190,3 +190,25 @@ def test_train_target_column_missing_is_one_line(
     assert len(err.strip().splitlines()) == 1
     assert "no value for --target 'effort'" in err and "correct" in err and ".npz" in err
     assert not db.exists() or not open_store(str(db)).list_case_bases()
+
+
+def test_train_refuses_before_reading_clips(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A name the store holds (no --replace, no --append) is refused before DATA is read: a
+    missing DATA folder is not even looked at (it was read, cut and described first, then
+    refused). --label-block and --label-names without --frame-labels: one line naming the
+    option (they were ignored, and an error about one activity followed)."""
+    train, _ = dataset
+    db = str(tmp_path / "cb.sqlite")
+    assert _cli(capsys, "train", str(train), "--db", db)[0] == 0
+    code, _, err = _cli(capsys, "train", str(tmp_path / "no-such-folder"), "--db", db)
+    assert code == 1 and err.count("\n") == 1
+    assert "a case base named 'default' already exists" in err and "--replace" in err
+    for option, value in (("--label-block", "0.1"), ("--label-names", str(tmp_path / "n.txt"))):
+        code, _, err = _cli(capsys, "train", str(train), "--db", db, "--name", "x", option, value)
+        assert code == 1 and err.count("\n") == 1
+        assert f"{option}: goes with --frame-labels" in err
+    store = open_store(db, readonly=True)
+    assert [cb.name for cb in store.list_case_bases()] == ["default"]
+    store.close()

@@ -330,6 +330,45 @@ def _entries(args: argparse.Namespace) -> list[Any]:
     return entries
 
 
+def _check_name_free(db: str, name: str) -> None:
+    """Refuse, before any clip is read, a name the store already holds (neither --replace nor
+    --append given); the transaction that stores the model checks again."""
+    from casebase_store import StoreError, open_store
+
+    if "://" not in str(db) and not Path(db).exists():
+        return  # a new database
+    store = open_store(db, create=False, readonly=True)
+    try:
+        if store.has_case_base(name):
+            raise StoreError(
+                f"a case base named {name!r} already exists (choose another --name, --replace"
+                " it or --append to it)",
+                store.where,
+            )
+    finally:
+        store.close()
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse options that cannot work together, in one line, before any clip is read."""
+    if not args.name.strip():
+        raise ConfigError("the case base name is empty", "--name")
+    for option, value in (("--label-block", args.label_block), ("--label-names", args.label_names)):
+        if value is not None and args.frame_labels is None:
+            raise ConfigError(
+                "goes with --frame-labels (a labels CSV gives it in its label_block_s or"
+                " label_names column)",
+                option,
+            )
+    check_scheduler(args.scheduler)
+    if args.scheduler is not None and _in_memory(args):
+        raise ConfigError(
+            "--frame-labels and --split read DATA in this process; leave out --scheduler "
+            "(or extract and cut the clips first)",
+            "--scheduler",
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     from cbr.training import (
         ClipsFailed,
@@ -340,19 +379,13 @@ def run(args: argparse.Namespace) -> int:
         train_described,
     )
 
-    if not args.name.strip():
-        raise ConfigError("the case base name is empty", "--name")
-    check_scheduler(args.scheduler)  # a bad spec: one line before any clip is read
-    if args.scheduler is not None and _in_memory(args):
-        raise ConfigError(
-            "--frame-labels and --split read DATA in this process; leave out --scheduler "
-            "(or extract and cut the clips first)",
-            "--scheduler",
-        )
+    _check_options(args)
     if args.append:
         _check_append(args)
         plan, uid = append_plan(args.db, args.name, args.target)
     else:
+        if not args.replace:
+            _check_name_free(args.db, args.name)
         estimator = _estimator(args)
         plan = fit_plan(estimator)
     try:
