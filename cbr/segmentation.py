@@ -58,7 +58,7 @@ import numpy as np
 
 from features.body import long_runs, torso_rows, torso_share
 from features.derived import forget, movement_signals_of, stretch
-from features.errors import DataError
+from features.errors import ConfigError, DataError
 from features.fluents import DEFAULT_TABLE, history_frames
 from features.poses import PoseSequence
 from features.progress import progress
@@ -796,7 +796,14 @@ def solve_recording(
     3)``): its windows solved by the fitted classifier ``clf``, and the repetition windows
     whose period disagrees with their neighbours' found (:func:`period_outliers`); ``k`` and
     ``chunk_frames`` as :func:`segment` takes them. Raises DataError for a recording shorter
-    than one window or without a person."""
+    than one window or without a person, ConfigError for a ``k`` the classifier does not
+    retrieve (more than its own k)."""
+    if not 1 <= k <= int(clf.k):
+        raise ConfigError(
+            f"-k must be from 1 to the case base's k ({int(clf.k)}, the nearest cases a window"
+            f" retrieves), got {k}",
+            "-k",
+        )
     rec = recording.to_canonical()
     chunk = long_clip.chunk_for(rec, chunk_frames)
     sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals_of(rec)

@@ -879,3 +879,24 @@ def test_segment_pictures_of_recordings_that_share_a_name_are_all_kept(
     assert main(["segment", str(a), "--db", str(case_base), "--plot", str(text)]) == 1
     assert "the picture must be a .png file name" in capsys.readouterr().err
     assert not text.exists()
+
+
+def test_segment_k_beyond_what_a_window_retrieves_is_refused(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The case base retrieves its k (5, CaseBaseClassifier's default) nearest cases per
+    window: -k 6 or 1000 is refused in one line (they were taken silently as 5); -k 5
+    segments."""
+    from cbr.estimator import CaseBaseClassifier
+
+    k = CaseBaseClassifier().k
+    rec = save_pose(recordings["13_30"].slice_frames(0, 600), tmp_path / "r.npz")
+    for bad in (k + 1, 1000):
+        assert main(["segment", str(rec), "--db", str(case_base), "-k", str(bad)]) == 1
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"-k must be from 1 to the case base's k ({k}" in err
+    assert main(["segment", str(rec), "--db", str(case_base), "-k", str(k), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["segments"]

@@ -44,7 +44,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--name", default=None, help="case base name (default: the only one)")
     add_recording_options(p)
     p.add_argument(
-        "-k", "--k", type=int, default=1, help="each window votes with its k nearest cases"
+        "-k",
+        "--k",
+        type=int,
+        default=1,
+        help="each window votes with its k nearest cases (default 1; at most the case base's"
+        " k, which `posecbr casebase info` shows and the explanations count)",
     )
     p.add_argument(
         "--unknown",
