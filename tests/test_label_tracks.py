@@ -187,3 +187,30 @@ def test_a_wrong_frame_rate_shows_as_a_label_count_that_does_not_fit(
     with pytest.raises(DataError, match="at 30 fps need 822 "):
         frame_labels(labels, slow.n_frames, slow.fps, 0.1, "13_30.txt")
     assert np.ceil(2465 / 3) == 822
+
+
+def test_train_leaves_out_a_label_that_flickers_for_a_frame(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """13_30's per-0.1-s labels made per frame (12 frames a label), with one frame in the
+    jumping jacks labelled Box and one in the twists labelled Squat: those two one-frame
+    stretches are left out, and said so (Box became an activity of one one-frame case);
+    the twist around the flicker gives two stretches, as any change of label does."""
+    from casebase_store import open_store
+
+    codes = (shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt").read_text().split()
+    per_frame = np.repeat(np.array(codes, dtype=object), 12)[:2465]
+    assert per_frame[100] == "1" and per_frame[400] == "6"  # jumping jacks, twists
+    per_frame[100], per_frame[400] = "8", "3"  # Box, Squat for one frame each
+    labels = tmp_path / "frames.txt"
+    labels.write_text(" ".join(per_frame.tolist()))
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(recording), "--frame-labels", str(labels), "--label-names",
+            str(_names(tmp_path)), "--db", str(db)]  # fmt: skip
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "left out 2 labelled stretches shorter than 0.4 s (Box, Squat)" in err
+    store = open_store(db, readonly=True)
+    info = store.list_case_bases()[0]
+    store.close()
+    assert info.n_cases == 7  # 5 stretches, the jumping jacks and the twists cut in two

@@ -16,6 +16,7 @@ from typing import Any
 from cbr.similarity import available_measures, get_measure
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
+from features.text import shown
 
 
 def parse_params(items: list[str] | None) -> dict[str, Any]:
@@ -236,7 +237,27 @@ def _recording_clips(args: argparse.Namespace, activities: list[str] | None) -> 
     from features.datasets import LabelTrack, iter_recording
 
     track = LabelTrack(args.frame_labels, args.label_block, args.label_names)
-    return [c for c in iter_recording(args.data, track) if not activities or c.label in activities]
+    clips = [c for c in iter_recording(args.data, track) if not activities or c.label in activities]
+    return _long_enough(clips)
+
+
+def _long_enough(clips: list[Any]) -> list[Any]:
+    """The labelled stretches that last at least the shortest repetition
+    (:data:`features.repetitions.MIN_PERIOD_S`); the others, a label that flickers for a few
+    frames, would each become a case of next to nothing (one frame labelled otherwise: an
+    activity of one one-frame case). Those left out are said on stderr."""
+    from features.repetitions import MIN_PERIOD_S
+
+    short = [c for c in clips if c.seq.n_frames < MIN_PERIOD_S * c.seq.fps]
+    if short:
+        labels = ", ".join(sorted({shown(c.label) for c in short}))
+        stretches = "stretch" if len(short) == 1 else "stretches"
+        print(
+            f"left out {len(short)} labelled {stretches} shorter than {MIN_PERIOD_S:g} s"
+            f" ({labels})",
+            file=sys.stderr,
+        )
+    return [c for c in clips if c.seq.n_frames >= MIN_PERIOD_S * c.seq.fps]
 
 
 def _repetitions(clips: list[Any]) -> list[Any]:
