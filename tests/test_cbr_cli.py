@@ -212,3 +212,17 @@ def test_train_refuses_before_reading_clips(
     store = open_store(db, readonly=True)
     assert [cb.name for cb in store.list_case_bases()] == ["default"]
     store.close()
+
+
+def test_append_says_how_many_activities_it_added(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Appending the two test clips of one activity to the 15 cases of three: "17 cases (2
+    added, of 1 activity)" (it said "from 1 activities", as if the case base held one)."""
+    train, test = dataset
+    db = str(tmp_path / "cb.sqlite")
+    assert _cli(capsys, "train", str(train), "--db", db)[0] == 0
+    one = sorted(p.name for p in test.iterdir())[0]
+    code, out, err = _cli(capsys, "train", str(test / one), "--db", db, "--append")
+    assert code == 0, err
+    assert "17 cases (2 added, of 1 activity)" in out, out

@@ -454,10 +454,15 @@ def _report(args: argparse.Namespace, result: Any) -> None:
         names = ", ".join(shown(s) for s in result.skipped[:5])
         more = " ..." if len(result.skipped) > 5 else ""
         print(f"skipped {len(result.skipped)} clip(s) that show no person: {names}{more}")
-    verb = "added" if args.append else "trained"
+    n = len(result.label_counts)
+    activities = f"{n} {'activity' if n == 1 else 'activities'}"
+    made = (
+        f"({result.n_cases} added, of {activities})"  # the case base may hold more
+        if args.append
+        else f"({result.n_cases} trained) from {activities}"
+    )
     print(
-        f"case base {shown(repr(result.name))} in {shown(args.db)}: {result.n_active} cases "
-        f"({result.n_cases} {verb}) from {len(result.label_counts)} activities"
+        f"case base {shown(repr(result.name))} in {shown(args.db)}: {result.n_active} cases {made}"
     )
     print(f"  features: {result.config.describe()}; similarity: {result.similarity}")
     learned = result.learned
