@@ -498,7 +498,24 @@ def run(args: argparse.Namespace) -> int:
     options = _options(args)
     source: Path = args.input
     jobs = find_jobs(source, args.out, args.overlay)
-    _check_before_work(args, jobs)
-    if len(jobs) == 1 and source.is_file() and source.suffix.lower() != ".csv":
-        return _run_single(jobs[0], options)
-    return _summary(_run_all(jobs, options, args), args.out)
+    made = not args.out.exists()
+    status = 1
+    try:
+        _check_before_work(args, jobs)
+        if len(jobs) == 1 and source.is_file() and source.suffix.lower() != ".csv":
+            status = _run_single(jobs[0], options)
+        else:
+            status = _summary(_run_all(jobs, options, args), args.out)
+        return status
+    finally:
+        if status != 0 and made:
+            _drop_if_empty(args.out)
+
+
+def _drop_if_empty(folder: Path) -> None:
+    """Remove the output folder this run made when nothing was written into it (every clip
+    failed): a failed run leaves no trace."""
+    try:
+        folder.rmdir()  # only an empty folder goes
+    except OSError:
+        pass
