@@ -211,8 +211,8 @@ def windows_of(sig: MovementSignals, n_frames: int, fps: float, where: str = "")
     duration = n_frames / fps
     if duration < MIN_WINDOW_S:
         raise DataError(
-            f"the recording lasts {duration:.2f} s, shorter than one window ({MIN_WINDOW_S:g} s)"
-            " of movement to classify",
+            f"the recording lasts {duration:.2f} s, shorter than the shortest window"
+            f" ({MIN_WINDOW_S:g} s) of movement to classify",
             where or "recording",
         )
     length = int(round(min(DEFAULT_WINDOW_S, duration) * fps))

@@ -666,6 +666,7 @@ def test_segment_command_refuses_a_margin_it_cannot_calibrate(
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err.count("\n") == 1
     assert "fewer than three activities" in captured.err and "--unknown held-out" in captured.err
+    assert captured.err.startswith(f"posecbr segment: error: {db}: its case base: ")
     assert (_sha(rec), _sha(db)) == before and not plot.exists()
     assert main(["segment", str(rec), "--db", str(db), "--unknown", "held-out"]) == 0
 

@@ -118,13 +118,25 @@ def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
     return out
 
 
+def judge_named(clf: Any, name: str, db: str) -> Any:
+    """The judge called ``name`` (``--unknown``) of the model stored in ``db``; a case base
+    it cannot be calibrated on is refused naming the database."""
+    from cbr.unknown import judge_of
+
+    try:
+        return judge_of(clf, name)
+    except DataError as exc:
+        if exc.source != "case base":
+            raise
+        raise DataError(f"its case base: {exc.message}", db) from None
+
+
 def run(args: argparse.Namespace) -> int:
     from cbr.segmentation import segment
-    from cbr.unknown import judge_of
 
     _outputs(args)
     clf = load_stored(args.db, args.name)
-    judge = judge_of(clf, args.unknown)
+    judge = judge_named(clf, args.unknown, args.db)
     docs = []
     targets = plot_targets(args.plot, args.recordings) if args.plot is not None else []
     for i, path in enumerate(args.recordings):

@@ -201,15 +201,14 @@ def stop_on_interrupt() -> Iterator[threading.Event]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.unknown import judge_of
     from features.pose_estimation import open_video, served_file_rate, stream_poses
     from features.pose_estimation.overlay import check_encoded
 
-    from .segment import load_stored
+    from .segment import judge_named, load_stored
 
     _check(args)
     clf = load_stored(args.db, args.name)
-    judge = judge_of(clf, args.unknown)
+    judge = judge_named(clf, args.unknown, args.db)
     source: Any = int(args.source) if args.source.isdigit() else args.source
     if _is_file(args.source):
         fps: float | None = open_video(args.source)[1].fps
