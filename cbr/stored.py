@@ -157,11 +157,17 @@ def stored_case_base(clf: CaseBaseClassifier) -> CaseBase:
 
 def _config(info: CaseBaseInfo, where: str) -> FeatureConfig:
     try:
-        return FeatureConfig.from_dict(info.feature_config)
+        config = FeatureConfig.from_dict(info.feature_config)
     except (ConfigError, TypeError, ValueError) as exc:
         raise StoreError(
             f"case base {info.name!r} has an unreadable feature configuration ({exc})", where
         ) from None
+    if not config.resolved:  # every stored configuration names its states
+        raise StoreError(
+            f"case base {info.name!r} has a damaged feature configuration (no list of states)",
+            where,
+        )
+    return config
 
 
 def _measure(info: CaseBaseInfo, where: str) -> SimilarityMeasure:

@@ -468,7 +468,10 @@ class LabelTrack:
 
     def __post_init__(self) -> None:
         if self.block_s is not None and not (np.isfinite(self.block_s) and self.block_s > 0):
-            raise DataError(f"the label block must be seconds > 0, got {self.block_s!r}", self.path)
+            raise DataError(
+                f"the label block must be a finite number of seconds > 0, got {self.block_s!r}",
+                self.path,
+            )
 
 
 def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTrack | None:
@@ -494,7 +497,8 @@ def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTr
             block = float("nan")
         if not (np.isfinite(block) and block > 0):
             raise DataError(
-                f"line {line_no}: label_block_s must be seconds > 0, got {rec['label_block_s']!r}",
+                f"line {line_no}: label_block_s must be a finite number of seconds > 0, got"
+                f" {rec['label_block_s']!r}",
                 csv_path,
             )
     names = resolve(rec["label_names"]) if rec.get("label_names") else None

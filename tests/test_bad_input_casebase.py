@@ -85,6 +85,11 @@ def _tamper(db: Path, sql: str, *params: object) -> None:
             "unreadable feature configuration",
         ),  # fmt: skip
         (
+            "UPDATE case_bases SET feature_config = '{}'",
+            (),
+            "case base 'default' has a damaged feature configuration (no list of states)",
+        ),  # fmt: skip
+        (
             'UPDATE case_bases SET similarity_config = \'{"name": "cosine"}\'',
             (),
             "unknown similarity 'cosine'",
