@@ -150,7 +150,7 @@ def test_convert_elsewhere_keeps_the_inputs_and_metadata_cannot_redirect_paths(
     before = snapshot(data)
     out = tmp_path / "out"
     assert main(["convert", str(data), "--out", str(out)]) == 0
-    assert "wrote 1 pose files" in capsys.readouterr().out
+    assert "wrote 1 pose file and labels.csv" in capsys.readouterr().out
     assert snapshot(data) == before
     rows = read_labels_csv(out / "labels.csv")
     assert [(r["path"].name, r["label"], r["start"]) for r in rows] == [("a.npz", "squat", None)]
