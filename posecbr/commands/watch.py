@@ -159,9 +159,8 @@ def frames_in_background(
     """The stream's frames, read in a thread (:class:`_Reader`); with ``rate`` (frames per
     second) no faster than that (a file played at its own rate, as a camera delivers).
     Raises DataError naming ``where`` (the source) when no frame arrives for ``stall_s``
-    seconds. Closed (or ended), it
-    stops the reader and waits for it: a thread left inside OpenCV or onnxruntime while
-    Python shuts down aborts the process (exit 134)."""
+    seconds. Closed (or ended), it stops the reader and waits for it: a thread left inside
+    OpenCV or onnxruntime while Python shuts down aborts the process (exit 134)."""
     reader = _Reader(frames, rate)
     try:
         while True:
