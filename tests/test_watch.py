@@ -279,11 +279,16 @@ class _Quiet(http.server.SimpleHTTPRequestHandler):
         """No request lines on stderr."""
 
 
+class _QuietServer(http.server.ThreadingHTTPServer):
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        """No traceback on stderr when the client hangs up (watch stops reading)."""
+
+
 @pytest.fixture
 def served(shared_data: Path) -> Iterator[str]:
     """The address of ../shared/data/media served over HTTP on this machine (a stream URL)."""
     handler = functools.partial(_Quiet, directory=str(shared_data / "media"))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    server = _QuietServer(("127.0.0.1", 0), handler)
     threading.Thread(target=server.serve_forever, daemon=True).start()
     try:
         yield f"http://127.0.0.1:{server.server_address[1]}"

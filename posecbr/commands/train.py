@@ -358,7 +358,10 @@ def _check_name_free(db: str, name: str) -> None:
 
     if "://" not in str(db) and not Path(db).exists():
         return  # a new database
-    store = open_store(db, create=False, readonly=True)
+    try:
+        store = open_store(db, create=False, readonly=True)
+    except StoreError:
+        return  # no store there yet (an empty database), or one the training reports
     try:
         if store.has_case_base(name):
             raise StoreError(
