@@ -14,7 +14,8 @@ replaces one of the inputs it was made from.
   named after their process (``.NAME.pid1234@host.x8k2.tmp``), so that a writer killed
   before it could clean up (``kill -9``, power loss) does not leave them forever: the next
   writer of the same output removes those of processes of this machine that are gone
-  (:func:`remove_stale_temporaries`).
+  (:func:`remove_stale_temporaries`);
+- :func:`unique_name`: one output name per input when two inputs share a name.
 """
 
 from __future__ import annotations
@@ -178,6 +179,16 @@ def staged_folder(folder: str | Path, *, last: Collection[str] = ()) -> Iterator
         if created:
             shutil.rmtree(out, ignore_errors=True)
         raise
+
+
+def unique_name(stem: str, taken: set[str]) -> str:
+    """``stem``, or ``stem_2``, ``stem_3``, ... the first not in ``taken`` (lower-case names,
+    to which it is added): outputs of several inputs with one name each keep their own."""
+    name, k = stem, 2
+    while name.lower() in taken:
+        name, k = f"{stem}_{k}", k + 1
+    taken.add(name.lower())
+    return name
 
 
 def _same_file(a: Path, b: Path) -> bool:

@@ -99,3 +99,4 @@ def test_converting_into_a_folder_adds_to_its_labels(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "labels.csv: the labels file already there has no 'path'" in err
     assert [p.name for p in bad.iterdir()] == ["labels.csv"]
+    assert (bad / "labels.csv").read_text() == "file,label\nx.npz,a\n"

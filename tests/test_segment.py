@@ -877,9 +877,11 @@ def test_segment_pictures_of_recordings_that_share_a_name_are_all_kept(
     assert (plots / "13_30.png").read_bytes() != (plots / "13_30_2.png").read_bytes()
     capsys.readouterr()
     text = tmp_path / "timeline.txt"
+    before = _sha(a), _sha(case_base)
     assert main(["segment", str(a), "--db", str(case_base), "--plot", str(text)]) == 1
-    assert "the picture must be a .png file name" in capsys.readouterr().err
-    assert not text.exists()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "the picture must be a .png file name" in err
+    assert not text.exists() and (_sha(a), _sha(case_base)) == before
 
 
 def test_segment_k_beyond_what_a_window_retrieves_is_refused(
@@ -895,9 +897,11 @@ def test_segment_k_beyond_what_a_window_retrieves_is_refused(
 
     k = CaseBaseClassifier().k
     rec = save_pose(recordings["13_30"].slice_frames(0, 600), tmp_path / "r.npz")
+    before = _sha(rec), _sha(case_base)
     for bad in (k + 1, 1000):
         assert main(["segment", str(rec), "--db", str(case_base), "-k", str(bad)]) == 1
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and f"-k must be from 1 to the case base's k ({k}" in err
+    assert (_sha(rec), _sha(case_base)) == before
     assert main(["segment", str(rec), "--db", str(case_base), "-k", str(k), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["segments"]

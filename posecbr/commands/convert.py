@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from features.errors import DataError
-from features.fileio import check_output, staged_folder, write_text_atomic
+from features.fileio import check_output, staged_folder, unique_name, write_text_atomic
 from features.text import counted, shown
 
 if TYPE_CHECKING:
@@ -262,11 +262,7 @@ def _write_clips(
     names: set[str] = set()
     rates: Rates = {}
     for clip, fallback in _clips(args):
-        name = _clip_name(clip, fallback)
-        base, k = name, 2
-        while name.lower() in names:  # two sources with one stem: keep both
-            name, k = f"{base}_{k}", k + 1
-        names.add(name.lower())
+        name = unique_name(_clip_name(clip, fallback), names)  # two sources, one stem: both
         check_output(args.out / f"{name}.npz", inputs=inputs, what="pose file")
         # ``source`` left empty so a reader names the pose file itself.
         seq = replace(clip.seq, source="").with_metadata(

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from features.errors import ConfigError, DataError
-from features.fileio import check_output
+from features.fileio import check_output, unique_name
 from features.text import counted
 from posecbr.recordings import add_recording_options, check_fps, load_recording
 
@@ -108,14 +108,7 @@ def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
     if not plot.is_dir():
         return [plot]
     taken: set[str] = set()
-    out = []
-    for path in recordings:
-        name, k = path.stem, 2
-        while name.lower() in taken:
-            name, k = f"{path.stem}_{k}", k + 1
-        taken.add(name.lower())
-        out.append(plot / f"{name}.png")
-    return out
+    return [plot / f"{unique_name(path.stem, taken)}.png" for path in recordings]
 
 
 def judge_named(clf: Any, name: str, db: str) -> Any:

@@ -248,7 +248,8 @@ def _long_enough(clips: list[Any]) -> list[Any]:
     activity of one one-frame case). Those left out are said on stderr."""
     from features.repetitions import MIN_PERIOD_S
 
-    short = [c for c in clips if c.seq.n_frames < MIN_PERIOD_S * c.seq.fps]
+    long = [c.seq.n_frames >= MIN_PERIOD_S * c.seq.fps for c in clips]
+    short = [c for c, ok in zip(clips, long, strict=True) if not ok]
     if short:
         labels = ", ".join(sorted({shown(c.label) for c in short}))
         stretches = "stretch" if len(short) == 1 else "stretches"
@@ -257,7 +258,7 @@ def _long_enough(clips: list[Any]) -> list[Any]:
             f" ({labels})",
             file=sys.stderr,
         )
-    return [c for c in clips if c.seq.n_frames >= MIN_PERIOD_S * c.seq.fps]
+    return [c for c, ok in zip(clips, long, strict=True) if ok]
 
 
 def _repetitions(clips: list[Any]) -> list[Any]:
