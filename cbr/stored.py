@@ -45,8 +45,10 @@ MODEL_FORMAT = 1
 class StoredClassifier:
     """A classifier loaded from a store: its case base's ``name``, identity (``uid``) and the
     ``version`` of the cases it holds, the label ``target`` it predicts (``"label"`` or another
-    column such as ``"correct"``) and the fitted ``classifier`` (case ids in
-    ``classifier.case_base_.ids``)."""
+    column such as ``"correct"``), the fitted ``classifier`` (case ids in
+    ``classifier.case_base_.ids``) and what each case is (``cases``: ``train --split``'s
+    ``"clips"``, ``"repetitions"`` or ``"windows"``; None for a case base stored before this
+    was recorded)."""
 
     name: str
     uid: str
@@ -54,6 +56,7 @@ class StoredClassifier:
     target: str
     classifier: CaseBaseClassifier
     info: CaseBaseInfo
+    cases: str | None = None
 
 
 def _jsonable(value: Any) -> Any:
@@ -66,9 +69,13 @@ def _jsonable(value: Any) -> Any:
     return value
 
 
-def model_document(clf: CaseBaseClassifier, target: str = "label") -> dict[str, Any]:
+def model_document(
+    clf: CaseBaseClassifier, target: str = "label", cases: str = "clips"
+) -> dict[str, Any]:
     """Everything ``fit`` learned besides the cases, the measure and the feature configuration
-    (which the store keeps in their own columns), as JSON-able data; the unknown judges
+    (which the store keeps in their own columns), as JSON-able data, with the column the
+    solutions come from (``target``) and what a case is (``cases``: a whole clip, a
+    repetition or a window, as ``train --split`` cut them); the unknown judges
     calibrated on its case base (``clf.judges_``), stamped with the version of the case base
     they hold for (1: the store creates a case base at version 1, whatever it holds)."""
     fw = clf.feature_weights_
@@ -76,6 +83,7 @@ def model_document(clf: CaseBaseClassifier, target: str = "label") -> dict[str, 
         "format": MODEL_FORMAT,
         "params": _jsonable(clf.get_params()),
         "target": target,
+        "cases": cases,
         "side": clf.side_,
         "weighting": clf.weighting_,
         "phases": clf.phases_,
@@ -360,7 +368,10 @@ def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
     clf.judges_ = _judges(model, info.version, name, store.where)
     clf.refresh()
     target = str(model.get("target", "label"))
-    return StoredClassifier(name, info.uid, info.version, target, clf, info)
+    cases = model.get("cases")
+    return StoredClassifier(
+        name, info.uid, info.version, target, clf, info, None if cases is None else str(cases)
+    )
 
 
 def _damaged(name: str, what: str, exc: Exception, where: str) -> StoreError:

@@ -173,10 +173,13 @@ def train(
     estimator: CaseBaseClassifier,
     *,
     target: str = "label",
+    cases: str = "clips",
     replace: bool = False,
 ) -> TrainResult:
     """Fit ``estimator`` on the usable ``clips`` and store it as case base ``name`` in ``db``
-    (a SQLite file or SQLAlchemy URL). Clips that show no person are skipped and named."""
+    (a SQLite file or SQLAlchemy URL), recording what each clip is (``cases``: ``"clips"``,
+    ``"repetitions"`` or ``"windows"``, as ``train --split`` cut them). Clips that show no
+    person are skipped and named."""
     if not name.strip():
         raise ConfigError("the case base name is empty", "--name")
     text = [str(v) for v in check_labels(labels, len(clips))]
@@ -184,7 +187,9 @@ def train(
     described = [
         describe(s, plan) for s in progress(clips, desc="features", total=len(clips), unit="clip")
     ]
-    return train_described(db, name, described, text, estimator, target=target, replace=replace)
+    return train_described(
+        db, name, described, text, estimator, target=target, cases=cases, replace=replace
+    )
 
 
 def train_described(
@@ -195,6 +200,7 @@ def train_described(
     estimator: CaseBaseClassifier,
     *,
     target: str = "label",
+    cases: str = "clips",
     replace: bool = False,
 ) -> TrainResult:
     """:func:`train` on clips already reduced by :func:`fit_plan` (:func:`describe_entries`)."""
@@ -206,7 +212,9 @@ def train_described(
     if not clips:
         raise DataError("no clip shows a person: nothing to learn from", "training set")
     fitted: CaseBaseClassifier = clone(estimator).fit_described(clips, text)
-    return store_fitted(db, name, fitted, text, target=target, replace=replace, skipped=skipped)
+    return store_fitted(
+        db, name, fitted, text, target=target, cases=cases, replace=replace, skipped=skipped
+    )
 
 
 def store_fitted(
@@ -216,6 +224,7 @@ def store_fitted(
     labels: Sequence[str],
     *,
     target: str = "label",
+    cases: str = "clips",
     replace: bool = False,
     skipped: Sequence[str] = (),
 ) -> TrainResult:
@@ -231,7 +240,7 @@ def store_fitted(
             cb.names,
             cb.words,
             fitted.measure_.params(),
-            model=model_document(fitted, target),
+            model=model_document(fitted, target, cases),
             replace=replace,
         )
         records = progress(case_records(cb), desc="storing", total=len(cb), unit="case")
@@ -273,9 +282,13 @@ def _build_reason(clf: CaseBaseClassifier, n_clips: int, labels: Sequence[str]) 
     )
 
 
-def append_plan(db: str | Path, name: str, target: str = "label") -> tuple[Plan, str]:
+def append_plan(
+    db: str | Path, name: str, target: str = "label", cases: str | None = None
+) -> tuple[Plan, str]:
     """The plan of ``--append`` to case base ``name`` (its columns) and its identity
-    (``uid``): the append is refused if the case base is replaced meanwhile."""
+    (``uid``): the append is refused if the case base is replaced meanwhile. Clips cut
+    otherwise than its own cases (``cases``, as :func:`train`'s; None: not checked) are
+    refused: windows added to a case base of whole clips would be cases of another kind."""
     store = open_store(db, create=False, readonly=True)
     try:
         stored = load_classifier(store, name)
@@ -286,6 +299,12 @@ def append_plan(db: str | Path, name: str, target: str = "label") -> tuple[Plan,
             f"case base {name!r} predicts {stored.target!r}, not {target!r}: its cases "
             f"cannot take --target {target}",
             "--target",
+        )
+    if cases is not None and stored.cases is not None and stored.cases != cases:
+        raise ConfigError(
+            f"case base {name!r} holds {stored.cases} (trained with --split {stored.cases}), "
+            f"not {cases}: add to it with --split {stored.cases}",
+            "--split",
         )
     cb = stored.classifier.case_base_
     columns = CaseBase(cb.config, cb.measure, cb.problems[:0], cb.labels[:0], cb.names, cb.words)

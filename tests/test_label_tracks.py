@@ -155,6 +155,17 @@ def test_train_from_one_recording_with_split_repetitions(
     out = capsys.readouterr()
     assert "cut 5 clips into" in out.err
     assert "5 activities" in out.out and db.is_file()
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    assert "model: predicts label, a case per repetition; k = 5" in capsys.readouterr().out
+    # windows are cases of another kind: --append with another --split is refused, in one
+    # line, before the recording is read again, and the case base is left as it was
+    stored = _sha(db)
+    argv[argv.index("repetitions")] = "windows"
+    assert main([*argv, "--append"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert "holds repetitions (trained with --split repetitions), not windows" in err
+    assert _sha(db) == stored
 
 
 def test_train_refuses_a_label_file_that_does_not_fit(

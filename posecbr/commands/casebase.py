@@ -154,11 +154,20 @@ def _print_info(d: dict[str, Any]) -> None:
         print("  history: " + ", ".join(f"{k} x{v}" for k, v in d["maintenance"].items()))
 
 
+#: what a case is, by ``train --split``
+CASE_IS = {
+    "clips": ", a case per clip",
+    "repetitions": ", a case per repetition",
+    "windows": ", a case per window",
+}
+
+
 def _print_model(m: dict[str, Any]) -> None:
     """What fit learned (:func:`_model_summary`), the lines that apply."""
     if m.get("k") is not None:
+        each = CASE_IS.get(m.get("cases") or "", "")
         print(
-            f"  model: predicts {m['target']}; k = {m['k']}, {m['vote']} vote; side handling "
+            f"  model: predicts {m['target']}{each}; k = {m['k']}, {m['vote']} vote; side handling "
             f"{m['side']}; feature weights {m['feature_weights']}"
         )
     if m.get("weighted_most"):
@@ -233,6 +242,7 @@ def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, A
         "k": params.get("k"),
         "vote": params.get("weights"),
         "target": model.get("target", "label"),
+        "cases": model.get("cases"),
         "side": model.get("side"),
         "feature_weights": model.get("weighting"),
         "phases": params.get("phases"),

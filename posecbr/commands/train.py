@@ -407,7 +407,7 @@ def run(args: argparse.Namespace) -> int:
     _check_options(args)
     if args.append:
         _check_append(args)
-        plan, uid = append_plan(args.db, args.name, args.target)
+        plan, uid = append_plan(args.db, args.name, args.target, args.split)
     else:
         if not args.replace:
             _check_name_free(args.db, args.name)
@@ -429,7 +429,8 @@ def run(args: argparse.Namespace) -> int:
         result = append_described(args.db, args.name, clips, solutions, plan, uid)
     else:
         result = train_described(args.db, args.name, clips, solutions, estimator,
-                                 target=args.target, replace=args.replace)  # fmt: skip
+                                 target=args.target, cases=args.split,
+                                 replace=args.replace)  # fmt: skip
     _report(args, result)
     return 0
 
