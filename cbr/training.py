@@ -284,11 +284,12 @@ def _build_reason(clf: CaseBaseClassifier, n_clips: int, labels: Sequence[str]) 
 
 def append_plan(
     db: str | Path, name: str, target: str = "label", cases: str | None = None
-) -> tuple[Plan, str]:
-    """The plan of ``--append`` to case base ``name`` (its columns) and its identity
-    (``uid``): the append is refused if the case base is replaced meanwhile. Clips cut
-    otherwise than its own cases (``cases``, as :func:`train`'s; None: not checked) are
-    refused: windows added to a case base of whole clips would be cases of another kind."""
+) -> tuple[Plan, str, str]:
+    """The plan of ``--append`` to case base ``name`` (its columns), its identity (``uid``:
+    the append is refused if the case base is replaced meanwhile) and what the added clips
+    must be cut into: the case base's own kind of case (``"clips"`` for one stored before
+    this was recorded). ``cases`` given otherwise (as :func:`train`'s) is refused: windows
+    added to a case base of whole clips would be cases of another kind."""
     store = open_store(db, create=False, readonly=True)
     try:
         stored = load_classifier(store, name)
@@ -308,7 +309,7 @@ def append_plan(
         )
     cb = stored.classifier.case_base_
     columns = CaseBase(cb.config, cb.measure, cb.problems[:0], cb.labels[:0], cb.names, cb.words)
-    return Plan(casebase=columns), stored.uid
+    return Plan(casebase=columns), stored.uid, cases or stored.cases or "clips"
 
 
 def append(
@@ -323,7 +324,7 @@ def append(
     stored configuration (nothing is learned anew), in one transaction checked against the
     case base that was read."""
     text = [str(v) for v in check_labels(labels, len(clips))]
-    plan, uid = append_plan(db, name, target)
+    plan, uid, _ = append_plan(db, name, target)
     described = [
         describe(s, plan) for s in progress(clips, desc="features", total=len(clips), unit="clip")
     ]

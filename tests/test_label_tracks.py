@@ -143,6 +143,16 @@ def _sha(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
+def _count_cases(db: Path) -> int:
+    from casebase_store import open_store
+
+    store = open_store(db, create=False, readonly=True)
+    try:
+        return store.count_cases("default")
+    finally:
+        store.close()
+
+
 def test_train_from_one_recording_with_split_repetitions(
     shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -166,6 +176,13 @@ def test_train_from_one_recording_with_split_repetitions(
     assert err.count("\n") == 1 and "Traceback" not in err
     assert "holds repetitions (trained with --split repetitions), not windows" in err
     assert _sha(db) == stored
+    # without --split, --append cuts as the case base was trained: the same repetitions again
+    n = _count_cases(db)
+    argv.remove("--split")
+    argv.remove("windows")
+    assert main([*argv, "--append"]) == 0
+    assert "cut 5 clips into" in capsys.readouterr().err
+    assert _count_cases(db) == 2 * n
 
 
 def test_train_refuses_a_label_file_that_does_not_fit(

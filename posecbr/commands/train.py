@@ -129,11 +129,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--split",
         choices=("clips", "repetitions", "windows"),
-        default="clips",
+        default=None,
         help="repetitions: cut every clip into its repetitions, each a case (a video of ten "
         "squats gives ten cases); windows: into the 2-s windows every 0.5 s that posecbr "
         "segment classifies (the case base for segmenting long recordings; feature weights "
-        "none unless --feature-weights says otherwise); default: one case per clip",
+        "none unless --feature-weights says otherwise); default: one case per clip, or with "
+        "--append as the case base was trained",
     )
     p.add_argument(
         "--frame-labels",
@@ -407,8 +408,9 @@ def run(args: argparse.Namespace) -> int:
     _check_options(args)
     if args.append:
         _check_append(args)
-        plan, uid = append_plan(args.db, args.name, args.target, args.split)
+        plan, uid, args.split = append_plan(args.db, args.name, args.target, args.split)
     else:
+        args.split = args.split or "clips"
         if not args.replace:
             _check_name_free(args.db, args.name)
         estimator = _estimator(args)
