@@ -173,6 +173,14 @@ def test_unwritable_output_is_one_line(
     assert main(["extract", str(clip), "--out", str(not_a_dir / "sub")]) == 1
     assert "cannot write" in _only_line(capfd.readouterr().err)
     assert not_a_dir.read_text() == "x"
+    # one clip's overlay in a folder that does not exist: refused as segment --overlay
+    # refuses it (a mistyped folder was made), before the pose file is written
+    out, missing = tmp_path / "o", tmp_path / "no-such-folder"
+    argv = ["extract", str(clip), "--out", str(out), "--overlay", str(missing / "x.mp4")]
+    assert main(argv) == 1
+    line = _only_line(capfd.readouterr().err)
+    assert "the folder of the overlay does not exist" in line and str(missing) in line
+    assert not missing.exists() and not (out / f"{clip.stem}.npz").exists()
 
 
 def test_cli_process_prints_only_one_line_for_a_corrupt_video(

@@ -436,6 +436,9 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
     if args.overlay is not None and len(jobs) == 1 and args.input.is_file():
         if args.overlay.suffix.lower() != ".mp4":
             raise DataError("overlay must be an .mp4 file name", args.overlay)
+        # one file, as segment --overlay and watch --out: its folder must exist (a folder
+        # of overlays for several clips is made, with the class folders inside)
+        check_output(args.overlay, inputs=[args.input], what="overlay")
     if args.out.exists() and not args.out.is_dir():
         raise DataError("output is not a folder", args.out)
     _check_outputs(jobs)
