@@ -614,7 +614,13 @@ def iter_recording(
     path: str | Path, track: LabelTrack, subject: str | None = None
 ) -> Iterator[Clip]:
     """The labelled stretches of one recording (anything :func:`load_clip` reads) as clips."""
-    seq = load_clip(path)
+    return recording_clips(load_clip(path), track, subject)
+
+
+def recording_clips(
+    seq: PoseSequence, track: LabelTrack, subject: str | None = None
+) -> Iterator[Clip]:
+    """The labelled stretches of the recording ``seq`` as clips."""
     for part, label in split_by_track(seq, track):
         part = part.with_metadata(label=label, subject=subject)
         yield Clip(seq=part, label=label, subject=subject, extras={})

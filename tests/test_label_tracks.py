@@ -242,3 +242,45 @@ def test_train_leaves_out_a_label_that_flickers_for_a_frame(
     info = store.list_case_bases()[0]
     store.close()
     assert info.n_cases == 7  # 5 stretches, the jumping jacks and the twists cut in two
+
+
+def _cases(db: Path) -> tuple[list[str], np.ndarray, list[tuple[int | None, int | None]]]:
+    from casebase_store import open_store
+
+    store = open_store(db, create=False, readonly=True)
+    try:
+        a = store.load_cases("default")
+    finally:
+        store.close()
+    return list(a.labels), a.features, list(a.frame_ranges)
+
+
+def test_train_reads_an_amc_recording_with_its_skeleton(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``train 13_30.amc --asf HDM_bd.asf --frame-labels ...`` reads the recording as
+    ``segment`` does (it had no --asf: convert first): the same cases as from the pose file
+    converted from it, stretch for stretch. --asf and --fps without --frame-labels are
+    refused in one line (they would apply to no recording)."""
+    amc = shared_data / "cmu-mocap6" / "amc" / "13_30.amc"
+    asf = shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf"
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    track = ["--frame-labels", str(labels), "--label-block", "0.1"]
+    from_amc, from_pose = tmp_path / "amc.sqlite", tmp_path / "pose.sqlite"
+    assert main(["train", str(amc), "--asf", str(asf), *track, "--db", str(from_amc)]) == 0
+    assert main(["train", str(recording), *track, "--db", str(from_pose)]) == 0
+    (a_labels, a_features, a_ranges), (p_labels, p_features, p_ranges) = (
+        _cases(from_amc),
+        _cases(from_pose),
+    )
+    codes, _ = _truth(shared_data)
+    assert sorted(a_labels) == sorted(codes) == sorted(p_labels)
+    assert a_ranges == p_ranges
+    np.testing.assert_allclose(a_features, p_features, rtol=1e-9, atol=1e-12)
+    capsys.readouterr()
+    for option, value in (("--asf", str(asf)), ("--fps", "120")):
+        db = tmp_path / f"x{option}.sqlite"
+        assert main(["train", str(recording), option, value, "--db", str(db)]) == 1
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"{option}: goes with --frame-labels" in err
+        assert not db.exists()

@@ -17,6 +17,7 @@ from cbr.similarity import available_measures, get_measure
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.text import shown
+from posecbr.recordings import add_recording_options, check_fps, load_recording
 
 
 def parse_params(items: list[str] | None) -> dict[str, Any]:
@@ -146,6 +147,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument("--label-block", type=float, metavar="SECONDS", help="seconds per label")
     p.add_argument("--label-names", type=Path, metavar="FILE", help="'code name' per line")
+    add_recording_options(p)
     g = p.add_mutually_exclusive_group()
     g.add_argument("--replace", action="store_true", help="replace a case base of that name")
     g.add_argument(
@@ -234,11 +236,13 @@ def _check_append(args: argparse.Namespace) -> None:
 
 
 def _recording_clips(args: argparse.Namespace, activities: list[str] | None) -> list[Any]:
-    """The labelled stretches of one recording (``--frame-labels``)."""
-    from features.datasets import LabelTrack, iter_recording
+    """The labelled stretches of one recording (``--frame-labels``), read as ``segment``
+    reads it (``--asf``, ``--fps``)."""
+    from features.datasets import LabelTrack, recording_clips
 
     track = LabelTrack(args.frame_labels, args.label_block, args.label_names)
-    clips = [c for c in iter_recording(args.data, track) if not activities or c.label in activities]
+    seq = load_recording(args.data, args.asf, args.fps)
+    clips = [c for c in recording_clips(seq, track) if not activities or c.label in activities]
     return _long_enough(clips)
 
 
@@ -386,6 +390,14 @@ def _check_options(args: argparse.Namespace) -> None:
                 " label_names column)",
                 option,
             )
+    for option, value in (("--asf", args.asf), ("--fps", args.fps)):
+        if value is not None and args.frame_labels is None:
+            raise ConfigError(
+                "goes with --frame-labels (the one recording it labels; convert a dataset's "
+                "recordings first: posecbr convert --asf --fps)",
+                option,
+            )
+    check_fps(args.fps)
     check_scheduler(args.scheduler)
     if args.scheduler is not None and _in_memory(args):
         raise ConfigError(
