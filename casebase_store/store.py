@@ -48,6 +48,7 @@ from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
 from features.errors import PosecbrError
+from features.fileio import temporary_name
 from features.version import __version__
 
 from .models import (
@@ -69,6 +70,11 @@ _PG_INIT_LOCK = 0x706F736563627231  # "posecbr1"
 
 class StoreError(PosecbrError):
     """The case base store cannot be opened, read or written (names the database)."""
+
+
+class EmptyStore(StoreError):
+    """A database without a case base store in it yet (``open_store(create=False)``): the
+    first write creates one."""
 
 
 class StaleCaseError(StoreError):
@@ -274,11 +280,27 @@ def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:
         except ArgumentError as exc:
             raise StoreError(f"not a database URL ({exc})", text) from None
         return url, url.render_as_string(hide_password=True)
-    if file.is_dir():
-        raise StoreError("is a folder, not a case base file", file)
+    check_store_file(file)
+    return make_url(_sqlite_readonly_url(file) if readonly else f"sqlite:///{file}"), str(file)
+
+
+def check_store_file(file: Path) -> None:
+    """Refuse a case base file that could not be written: a folder, one in a folder that does
+    not exist, or a name too long for its journal beside it (SQLite writes ``NAME-journal``)."""
     if not file.parent.exists():
         raise StoreError("folder does not exist", file.parent)
-    return make_url(_sqlite_readonly_url(file) if readonly else f"sqlite:///{file}"), str(file)
+    try:
+        allowed = os.pathconf(file.parent, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        allowed = 255
+    if len(os.fsencode(file.name + "-journal")) > allowed:
+        raise StoreError(
+            f"the file name is too long: {len(os.fsencode(file.name))} bytes, at most "
+            f"{allowed - len('-journal')} (SQLite writes a journal named NAME-journal beside it)",
+            file,
+        )
+    if file.is_dir():
+        raise StoreError("is a folder, not a case base file", file)
 
 
 def _connect_args(url: URL, timeout_s: float) -> dict[str, Any]:
@@ -419,7 +441,7 @@ class CaseStore:
                     self.where,
                 )
             if not create:
-                raise StoreError("no case base store here (empty database)", self.where)
+                raise EmptyStore("no case base store here (empty database)", self.where)
             with self.transaction() as tx:
                 conn = tx.session.connection()
                 if self.engine.dialect.name == "postgresql":
@@ -914,7 +936,7 @@ def write_store(
                 return action(tx)
         finally:
             store.close()
-    tmp = file.with_name(f".{file.name}.{uuid.uuid4().hex[:8]}.new")
+    tmp = file.with_name(f".{temporary_name(file.name)}.{uuid.uuid4().hex[:8]}.new")
     try:
         store = open_store(tmp, timeout_s=timeout_s)
         try:

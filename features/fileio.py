@@ -20,6 +20,7 @@ replaces one of the inputs it was made from.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import re
@@ -71,10 +72,26 @@ def _host() -> str:
     return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname()) or "host"
 
 
+#: the longest output name a temporary carries whole: a file name has at most 255 bytes, and
+#: a temporary adds its writer, a random part and a suffix (SQLite's "-journal") to it
+NAME_KEPT = 160
+
+
+def temporary_name(name: str) -> str:
+    """``name`` as the temporaries of an output so called carry it: whole, or when longer
+    than :data:`NAME_KEPT` bytes its start and a digest of the whole (a legal name of 250
+    bytes would make a temporary's name too long to create)."""
+    data = name.encode("utf-8", "surrogateescape")
+    if len(data) <= NAME_KEPT:
+        return name
+    start = data[: NAME_KEPT - 17].decode("utf-8", "ignore")
+    return f"{start}~{hashlib.sha256(data).hexdigest()[:16]}"
+
+
 def temporary_prefix(name: str) -> str:
     """The start of this process's hidden temporaries for an output called ``name``:
-    ``.NAME.pidPID@HOST.``."""
-    return f".{name}.pid{os.getpid()}@{_host()}."
+    ``.NAME.pidPID@HOST.`` (NAME shortened as :func:`temporary_name` says)."""
+    return f".{temporary_name(name)}.pid{os.getpid()}@{_host()}."
 
 
 def temporary_file(dest: str | Path, suffix: str = ".tmp") -> Path:
@@ -110,7 +127,7 @@ def remove_stale_temporaries(folder: str | Path, name: str) -> int:
     ``folder`` whose writer, a process of this machine, is gone; returns how many. Those of
     live processes (a writer at work) and of other machines (a shared folder: their processes
     cannot be asked) are kept; so are temporaries named otherwise."""
-    pattern = re.compile(rf"^\.{re.escape(name)}\.pid(\d+)@([A-Za-z0-9-]*)\.")
+    pattern = re.compile(rf"^\.{re.escape(temporary_name(name))}\.pid(\d+)@([A-Za-z0-9-]*)\.")
     host, removed = _host(), 0
     try:
         entries = list(Path(folder).iterdir())

@@ -213,6 +213,41 @@ def test_train_refuses_before_reading_clips(
     assert Path(db).read_bytes() == stored
 
 
+def test_train_refuses_a_database_it_could_not_write_before_reading_clips(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Each of these was refused only after every clip was read and the model fitted (hours on
+    a large set; a name too long for the temporary file ended in a traceback): now at once, in
+    one line naming the file, with DATA a folder that does not exist (so never read)."""
+    train, _ = dataset
+    folder = tmp_path / "a-folder"
+    folder.mkdir()
+    text = tmp_path / "notes.sqlite"
+    text.write_text("not a database\n")
+    pose = next(train.rglob("*.npz"))
+    before = pose.read_bytes()
+    long_name = tmp_path / ("c" * 250 + ".sqlite")  # SQLite's NAME-journal would not fit
+    cases = [
+        (folder, "is a folder, not a case base file"),
+        (tmp_path / "missing" / "cb.sqlite", "folder does not exist"),
+        (text, "not a readable SQLite database"),
+        (long_name, "the file name is too long: 257 bytes, at most 247"),
+    ]
+    for db, message in cases:
+        code, _, err = _cli(capsys, "train", str(tmp_path / "no-such-data"), "--db", str(db))
+        assert code == 1 and err.count("\n") == 1 and "Traceback" not in err, err
+        assert message in err, err
+    code, _, err = _cli(capsys, "train", str(pose), "--db", str(pose))
+    assert code == 1 and err.count("\n") == 1
+    assert "the case base file would overwrite an input" in err
+    assert pose.read_bytes() == before and text.read_text() == "not a database\n"
+    assert not (tmp_path / "missing").exists() and list(folder.iterdir()) == []
+    # a long name that leaves room for the journal is written (its temporary was too long)
+    db = tmp_path / ("d" * 240 + ".sqlite")
+    assert _cli(capsys, "train", str(train), "--db", str(db))[0] == 0
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith((".d", "d"))) == [db.name]
+
+
 def test_append_says_how_many_activities_it_added(
     dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -156,3 +156,21 @@ def test_a_stale_staging_folder_is_removed_by_the_next_one(tmp_path: Path) -> No
     stage = staging_folder(tmp_path, "posecbr-convert")
     assert sorted(p.name for p in tmp_path.iterdir()) == [stage.name]
     assert remove_stale_temporaries(tmp_path, "posecbr-convert") == 0  # its writer: alive
+
+
+def test_an_output_with_a_long_legal_name_is_written(tmp_path: Path) -> None:
+    """A 250-byte name is legal (the file system takes 255), but its temporary, the name
+    with the writer and a random part added, was not: "File name too long" for a name
+    ``touch`` creates. The temporary carries the name's start and a digest of it, and a dead
+    writer's temporary of that output is still found and removed."""
+    name = "é" * 120 + "x.json"  # 246 bytes in UTF-8
+    assert len(name.encode()) == 246
+    out = tmp_path / name
+    host = socket.gethostname()
+    digest = __import__("hashlib").sha256(name.encode()).hexdigest()[:16]
+    start = name.encode()[:143].decode("utf-8", "ignore")  # 160 bytes kept, 17 the digest's
+    stale = tmp_path / f".{start}~{digest}.pid{_dead_pid()}@{host}.k2x9.tmp"
+    stale.write_text("half")
+    write_json_atomic(out, {"x": 1})
+    assert json.loads(out.read_text()) == {"x": 1}
+    assert [p.name for p in tmp_path.iterdir()] == [name]

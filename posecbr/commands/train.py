@@ -16,6 +16,7 @@ from typing import Any
 from cbr.similarity import available_measures, get_measure
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
+from features.fileio import check_output
 from features.text import shown
 from posecbr.recordings import add_recording_options, check_fps, load_recording
 
@@ -357,22 +358,30 @@ def _entries(args: argparse.Namespace) -> list[Any]:
     return entries
 
 
-def _check_name_free(db: str, name: str) -> None:
-    """Refuse, before any clip is read, a name the store already holds (neither --replace nor
-    --append given); the transaction that stores the model checks again."""
-    from casebase_store import StoreError, open_store
+def _check_new_store(args: argparse.Namespace) -> None:
+    """Refuse, before any clip is read, a ``--db`` the training could not store into: a
+    folder, a file in a missing folder or with too long a name, one of the inputs, a file
+    that is not a case base store, or one that already holds ``--name`` (neither --replace
+    nor --append given). An empty database is left to the training, which creates the store;
+    the transaction that stores the model checks again."""
+    from casebase_store import EmptyStore, StoreError, check_store_file, open_store, sqlite_file
 
-    if "://" not in str(db) and not Path(db).exists():
-        return  # a new database
+    file = sqlite_file(args.db)
+    if file is not None:
+        check_store_file(file)
+        inputs = (args.data, args.frame_labels, args.label_names)
+        check_output(file, inputs=[p for p in inputs if p is not None], what="case base file")
+        if not file.exists() or file.stat().st_size == 0:
+            return  # a new database
     try:
-        store = open_store(db, create=False, readonly=True)
-    except StoreError:
-        return  # no store there yet (an empty database), or one the training reports
+        store = open_store(args.db, create=False, readonly=True)
+    except EmptyStore:
+        return
     try:
-        if store.has_case_base(name):
+        if not args.replace and store.has_case_base(args.name):
             raise StoreError(
-                f"a case base named {name!r} already exists (choose another --name, --replace"
-                " it or --append to it)",
+                f"a case base named {args.name!r} already exists (choose another --name,"
+                " --replace it or --append to it)",
                 store.where,
             )
     finally:
@@ -423,8 +432,7 @@ def run(args: argparse.Namespace) -> int:
         plan, uid, args.split = append_plan(args.db, args.name, args.target, args.split)
     else:
         args.split = args.split or "clips"
-        if not args.replace:
-            _check_name_free(args.db, args.name)
+        _check_new_store(args)
         estimator = _estimator(args)
         plan = fit_plan(estimator)
     try:
