@@ -284,3 +284,25 @@ def test_train_reads_an_amc_recording_with_its_skeleton(
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and f"{option}: goes with --frame-labels" in err
         assert not db.exists()
+
+
+def test_a_recording_too_short_for_any_stretch_says_so(
+    recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """0.3 s of 13_30 labelled JumpJack: its one stretch is shorter than a repetition (0.4 s)
+    and left out; the error says there is no stretch long enough, not "check --labels and
+    --subjects" (neither was given)."""
+    from features.poses import load_pose
+
+    seq = load_pose(recording)
+    short = save_pose(seq.slice_frames(0, 36), tmp_path / "short.npz")
+    labels = tmp_path / "labels.txt"
+    labels.write_text("1 1 1\n", encoding="utf-8")
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(short), "--frame-labels", str(labels), "--label-block", "0.1",
+            "--db", str(db)]  # fmt: skip
+    assert main(argv) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == "left out 1 labelled stretch shorter than 0.4 s (1)"
+    assert err[1:] == [f"posecbr train: error: {short}: no labelled stretch of 0.4 s or more"]
+    assert not db.exists()

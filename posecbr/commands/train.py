@@ -321,8 +321,32 @@ def _clips(args: argparse.Namespace) -> list[Any]:
     elif args.split == "windows" and clips:
         clips = _windows(clips)
     if not clips:
-        raise DataError("no clips found (check --labels and --subjects)", str(args.data))
+        raise _no_clips(args)
     return clips
+
+
+def _no_clips(args: argparse.Namespace) -> DataError:
+    """Nothing to train from: said with the options that left everything out, if any."""
+    from features.repetitions import MIN_PERIOD_S
+
+    given = [o for o, v in (("--labels", args.labels), ("--subjects", args.subjects)) if v]
+    what = (
+        f"no labelled stretch of {MIN_PERIOD_S:g} s or more"
+        if args.frame_labels
+        else "no clips found"
+    )
+    return DataError(what + (f" (check {' and '.join(given)})" if given else ""), str(args.data))
+
+
+def _one_activity(args: argparse.Namespace, solutions: list[str]) -> None:
+    """A new case base needs two activities: refused naming DATA, before any fitting."""
+    values = sorted(set(solutions))
+    if len(values) == 1:
+        raise DataError(
+            f"the training data hold only one {'activity' if args.target == 'label' else 'value'}"
+            f" ({shown(repr(values[0]))}); a classifier needs at least two",
+            str(args.data),
+        )
 
 
 def _described_in_memory(args: argparse.Namespace, plan: Any) -> tuple[list[Any], list[str]]:
@@ -354,7 +378,7 @@ def _entries(args: argparse.Namespace) -> list[Any]:
     activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
     entries = dataset_entries(args.data, sensor=args.sensor, subjects=subjects, labels=activities)
     if not entries:
-        raise DataError("no clips found (check --labels and --subjects)", str(args.data))
+        raise _no_clips(args)
     return entries
 
 
@@ -446,10 +470,11 @@ def run(args: argparse.Namespace) -> int:
             print(f"posecbr train: error: {line}", file=sys.stderr)
         raise
     if not clips:
-        raise DataError("no clips found (check --labels and --subjects)", str(args.data))
+        raise _no_clips(args)
     if args.append:
         result = append_described(args.db, args.name, clips, solutions, plan, uid)
     else:
+        _one_activity(args, solutions)
         result = train_described(args.db, args.name, clips, solutions, estimator,
                                  target=args.target, cases=args.split,
                                  replace=args.replace)  # fmt: skip
