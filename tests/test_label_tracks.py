@@ -306,3 +306,27 @@ def test_a_recording_too_short_for_any_stretch_says_so(
     assert err[0] == "left out 1 labelled stretch shorter than 0.4 s (1)"
     assert err[1:] == [f"posecbr train: error: {short}: no labelled stretch of 0.4 s or more"]
     assert not db.exists()
+
+
+def test_windows_that_show_no_person_are_counted_as_windows_of_their_file(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """13_30 with its first 10 s blanked, cut into windows: the windows inside the blank are
+    skipped, said as windows of that one file ("skipped 10 clip(s) ...: nan.npz, nan.npz,
+    nan.npz, nan.npz, nan.npz ..." counted windows as clips and repeated the file)."""
+    import re
+
+    from features.poses import load_pose
+
+    seq = load_pose(recording)
+    positions = seq.positions.copy()
+    positions[: int(10 * seq.fps)] = np.nan
+    path = save_pose(PoseSequence(positions, seq.joint_names, seq.fps), tmp_path / "nan.npz")
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    argv = ["train", str(path), "--frame-labels", str(labels), "--label-block", "0.1",
+            "--split", "windows", "--db", str(tmp_path / "cb.sqlite")]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    m = re.search(r"^skipped (\d+) windows that show no person: (.+) \((\d+)\)$", out, re.M)
+    assert m is not None, out
+    assert m.group(2) == str(path) and m.group(1) == m.group(3) and int(m.group(1)) > 1

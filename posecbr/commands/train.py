@@ -17,7 +17,7 @@ from cbr.similarity import available_measures, get_measure
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
-from features.text import shown
+from features.text import counted, shown
 from posecbr.recordings import add_recording_options, check_fps, load_recording
 
 
@@ -274,7 +274,8 @@ def _repetitions(clips: list[Any]) -> list[Any]:
     split = split_repetitions(clips)
     whole = f" ({split.kept_whole} without a repetition kept whole)" if split.kept_whole else ""
     n_reps = len(split.clips) - split.kept_whole
-    print(f"cut {len(clips)} clips into {n_reps} repetitions{whole}", file=sys.stderr)
+    pieces = f"{counted(len(clips), 'clip')} into {counted(n_reps, 'repetition')}"
+    print(f"cut {pieces}{whole}", file=sys.stderr)
     return split.clips
 
 
@@ -286,8 +287,8 @@ def _windows(clips: list[Any]) -> list[Any]:
     whole = f" ({split.kept_whole} shorter than a window kept whole)" if split.kept_whole else ""
     n_windows = len(split.clips) - split.kept_whole
     print(
-        f"cut {len(clips)} clips into {n_windows} windows of {WINDOW_S:g} s every "
-        f"{WINDOW_HOP_S:g} s{whole}",
+        f"cut {counted(len(clips), 'clip')} into {counted(n_windows, 'window')} of "
+        f"{WINDOW_S:g} s every {WINDOW_HOP_S:g} s{whole}",
         file=sys.stderr,
     )
     return split.clips
@@ -482,6 +483,22 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+#: what a training piece is, by --split
+PIECE = {"clips": "clip", "repetitions": "repetition", "windows": "window"}
+
+
+def _skipped(sources: list[str], split: str) -> str:
+    """The pieces that show no person, by their file (a recording cut into windows has many:
+    each file once, with how many of its pieces)."""
+    from collections import Counter
+
+    per_file = Counter(sources)
+    names = [shown(f) + (f" ({n})" if n > 1 else "") for f, n in list(per_file.items())[:5]]
+    more = " ..." if len(per_file) > 5 else ""
+    piece = counted(len(sources), PIECE.get(split, "clip"))
+    return f"skipped {piece} that show no person: {', '.join(names)}{more}"
+
+
 def _report(args: argparse.Namespace, result: Any) -> None:
     summary: dict[str, Any] = {
         "db": str(args.db),
@@ -503,9 +520,7 @@ def _report(args: argparse.Namespace, result: Any) -> None:
     from features.text import shown
 
     if result.skipped:
-        names = ", ".join(shown(s) for s in result.skipped[:5])
-        more = " ..." if len(result.skipped) > 5 else ""
-        print(f"skipped {len(result.skipped)} clip(s) that show no person: {names}{more}")
+        print(_skipped(result.skipped, args.split))
     n = len(result.label_counts)
     activities = f"{n} {'activity' if n == 1 else 'activities'}"
     made = (
