@@ -24,7 +24,7 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
 
 def check_fps(fps: float | None) -> None:
     if fps is not None and not (0.0 < fps <= 10000.0):
-        raise DataError(f"--fps must be a frame rate in (0, 10000], got {fps:g}", "--fps")
+        raise DataError(f"must be a frame rate in (0, 10000], got {fps:g}", "--fps")
 
 
 def load_recording(path: Path, asf: Path | None = None, fps: float | None = None) -> Any:

@@ -175,11 +175,11 @@ def test_a_damaged_case_base_is_one_line_and_stays_as_it_is(
             ["classify", str(CLIP), "--benefit", "-1", "--feedback", "deep_squat"],
             "benefit threshold must be in [0, 1]",
         ),  # fmt: skip
-        (["classify", str(CLIP), "--top", "-1"], "--top must be >= 0"),
-        (["classify", str(CLIP), "-k", "0"], "-k must be >= 1"),
+        (["classify", str(CLIP), "--top", "-1"], "--top: must be >= 0, got -1"),
+        (["classify", str(CLIP), "-k", "0"], "-k: must be >= 1, got 0"),
         (["classify", str(CLIP), "--new-label"], "--new-label goes with --feedback"),
-        (["casebase", "trim", "-k", "0"], "-k must be >= 1"),
-        (["casebase", "trim", "--keep", "0"], "--keep must be in (0, 1]"),
+        (["casebase", "trim", "-k", "0"], "-k: must be >= 1, got 0"),
+        (["casebase", "trim", "--keep", "0"], "--keep: must be in (0, 1]"),
         (["train", str(LABELS), "--name", ""], "the case base name is empty"),
         (
             ["train", str(LABELS), "--name", "x", "--length", "100000000"],
@@ -190,7 +190,7 @@ def test_a_damaged_case_base_is_one_line_and_stays_as_it_is(
             "--append adds cases to the stored model as it is; it does not take --similarity",
         ),  # fmt: skip
         (["train", str(LABELS), "--name", "x", "-k", "0"], "k must be a positive integer"),
-        (["train", str(LABELS), "--name", "x", "--trim", "1.5"], "--trim must be in (0, 1]"),
+        (["train", str(LABELS), "--name", "x", "--trim", "1.5"], "--trim: must be in (0, 1]"),
     ],
 )
 def test_bad_options_are_refused_before_anything_is_written(

@@ -188,6 +188,29 @@ def test_watch_refuses_a_missing_file(case_base: Path, tmp_path: Path, capsys: A
     assert "no such video file" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("option", "value", "message"),
+    [
+        ("--speed", "nan", "--speed: must be a number >= 0 (0: as fast as possible), got nan"),
+        ("--speed", "inf", "--speed: must be a number >= 0 (0: as fast as possible), got inf"),
+        ("--speed", "-1", "--speed: must be a number >= 0 (0: as fast as possible), got -1"),
+        ("--stall", "0", "--stall: must be > 0 seconds, got 0"),
+        ("--max-frames", "0", "--max-frames: must be >= 1, got 0"),
+    ],
+)
+def test_watch_refuses_options_it_cannot_follow(
+    shared_data: Path, tmp_path: Path, capsys: Any, option: str, value: str, message: str
+) -> None:
+    """One line naming the option once ("--speed: --speed must be >= 0"); a --speed of nan
+    or inf played the video as fast as it could, exit 0. Refused before the case base is
+    opened (there is none here)."""
+    video = next((shared_data / "videos").rglob("*.mp4"))
+    argv = ["watch", str(video), "--db", str(tmp_path / "none.sqlite"), option, value]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert err == f"posecbr watch: error: {message}\n"
+
+
 def test_watch_that_stalls_leaves_the_earlier_video(
     case_base: Path,
     shared_data: Path,

@@ -335,9 +335,9 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
 
     name = store.choose(args.name)
     if not 0.0 < args.keep <= 1.0:
-        raise ConfigError(f"--keep must be in (0, 1], got {args.keep}", "--keep")
+        raise ConfigError(f"must be in (0, 1], got {args.keep}", "--keep")
     if args.k is not None and args.k < 1:
-        raise ConfigError(f"-k must be >= 1, got {args.k}", "-k")
+        raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     stored = load_classifier(store, name)
     clf = stored.classifier
     k = int(clf.k) if args.k is None else args.k

@@ -110,9 +110,9 @@ def load_inputs(
 
 def _check_args(args: argparse.Namespace) -> None:
     if args.k is not None and args.k < 1:
-        raise ConfigError(f"-k must be >= 1, got {args.k}", "-k")
+        raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     if args.top is not None and args.top < 0:
-        raise ConfigError(f"--top must be >= 0, got {args.top}", "--top")
+        raise ConfigError(f"must be >= 0, got {args.top}", "--top")
     if args.new_label and args.feedback is None:
         raise ConfigError("--new-label goes with --feedback LABEL", "--new-label")
     if args.quiet and args.verbose:

@@ -203,7 +203,7 @@ def _check_args(args: argparse.Namespace) -> None:
     if not src.exists():
         raise DataError("no such file or folder", src)
     if args.fps is not None and not (0.0 < args.fps <= 10000.0):
-        raise DataError(f"--fps must be a frame rate in (0, 10000], got {args.fps:g}", "--fps")
+        raise DataError(f"must be a frame rate in (0, 10000], got {args.fps:g}", "--fps")
     if args.correct and args.incorrect:
         raise DataError("choose --correct or --incorrect, not both", "--correct")
     if args.limit is not None and args.limit < 1:

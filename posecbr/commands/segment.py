@@ -84,7 +84,7 @@ def _outputs(args: argparse.Namespace) -> None:
     """Refuse bad output paths before any work."""
     check_fps(args.fps)
     if args.k < 1:
-        raise ConfigError(f"-k must be >= 1, got {args.k}", "-k")
+        raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     if args.plot is not None:
         if len(args.recordings) > 1 and not args.plot.is_dir():
             raise DataError("with several recordings --plot names a folder", args.plot)

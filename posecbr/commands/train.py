@@ -206,7 +206,7 @@ def _estimator(args: argparse.Namespace) -> Any:
             "--similarity",
         )
     if args.trim is not None and not 0.0 < args.trim <= 1.0:
-        raise ConfigError(f"--trim must be in (0, 1], got {args.trim}", "--trim")
+        raise ConfigError(f"must be in (0, 1], got {args.trim}", "--trim")
     estimator = CaseBaseClassifier(
         features=o["features"],
         similarity=o["similarity"],

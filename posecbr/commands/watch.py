@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import queue
 import signal
 import sys
@@ -76,12 +77,14 @@ def _is_file(source: str) -> bool:
 
 
 def _check(args: argparse.Namespace) -> None:
-    if args.speed < 0:
-        raise ConfigError(f"--speed must be >= 0, got {args.speed:g}", "--speed")
+    if not (math.isfinite(args.speed) and args.speed >= 0):
+        raise ConfigError(
+            f"must be a number >= 0 (0: as fast as possible), got {args.speed:g}", "--speed"
+        )
     if not args.stall > 0:
-        raise ConfigError(f"--stall must be > 0 seconds, got {args.stall:g}", "--stall")
+        raise ConfigError(f"must be > 0 seconds, got {args.stall:g}", "--stall")
     if args.max_frames is not None and args.max_frames < 1:
-        raise ConfigError(f"--max-frames must be >= 1, got {args.max_frames}", "--max-frames")
+        raise ConfigError(f"must be >= 1, got {args.max_frames}", "--max-frames")
     if args.out is not None:
         if args.out.suffix.lower() != ".mp4":
             raise DataError("the output video must be an .mp4 file name", args.out)
