@@ -800,7 +800,7 @@ def solve_recording(
     retrieve (more than its own k)."""
     if not 1 <= k <= int(clf.k):
         raise ConfigError(
-            f"-k must be from 1 to the case base's k ({int(clf.k)}, the nearest cases a window"
+            f"must be from 1 to the case base's k ({int(clf.k)}, the nearest cases a window"
             f" retrieves), got {k}",
             "-k",
         )

@@ -901,7 +901,7 @@ def test_segment_k_beyond_what_a_window_retrieves_is_refused(
     for bad in (k + 1, 1000):
         assert main(["segment", str(rec), "--db", str(case_base), "-k", str(bad)]) == 1
         err = capsys.readouterr().err
-        assert err.count("\n") == 1 and f"-k must be from 1 to the case base's k ({k}" in err
+        assert err.count("\n") == 1 and f"-k: must be from 1 to the case base's k ({k}" in err
     assert (_sha(rec), _sha(case_base)) == before
     assert main(["segment", str(rec), "--db", str(case_base), "-k", str(k), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["segments"]
