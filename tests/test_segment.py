@@ -541,7 +541,11 @@ def test_segment_command_json_text_and_plot(
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["segment", str(rec), "--db", str(case_base)]) == 0
     text = capsys.readouterr().out
-    assert "2465 frames at 120 fps" in text and "activity" in text
+    # 2465 / 120 = 20.5417 s: the header rounds as the table's seconds do (it said 20.5)
+    assert "2465 frames at 120 fps (20.54 s)" in text and "activity" in text
+    fields = [line.split() for line in text.splitlines()[2:]]
+    rows = [f for f in fields if len(f) > 2 and f[2].replace("-", "", 1).isdigit()]
+    assert rows[-1][1] == "20.54" and rows[-1][2].endswith("-2464")  # end frame inclusive
 
 
 def test_segment_command_refuses_a_recording_shorter_than_a_window(
@@ -882,6 +886,13 @@ def test_segment_pictures_of_recordings_that_share_a_name_are_all_kept(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "the picture must be a .png file name" in err
     assert not text.exists() and (_sha(a), _sha(case_base)) == before
+    # several recordings and a --plot folder that does not exist: said so (it said "names a
+    # folder" to one who had named a folder)
+    missing = tmp_path / "plots2"
+    assert main(["segment", str(a), str(b), "--db", str(case_base), "--plot", str(missing)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{missing}: with several recordings --plot names a" in err
+    assert err.rstrip().endswith("this one does not exist") and not missing.exists()
 
 
 def test_segment_k_beyond_what_a_window_retrieves_is_refused(

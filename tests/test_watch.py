@@ -211,6 +211,19 @@ def test_watch_refuses_options_it_cannot_follow(
     assert err == f"posecbr watch: error: {message}\n"
 
 
+def test_watch_of_a_pose_file_points_to_segment(tmp_path: Path, capsys: Any) -> None:
+    """A pose file is a recording, not a video ("not a video OpenCV can decode" said what
+    it is not): one line saying which command reads it, before the case base is opened."""
+    pose = tmp_path / "13_30.npz"
+    pose.write_bytes(b"not read")
+    assert main(["watch", str(pose), "--db", str(tmp_path / "none.sqlite")]) == 1
+    err = capsys.readouterr().err
+    assert err == (
+        f"posecbr watch: error: {pose}: watch plays videos, cameras and streams; segment this "
+        "recording with posecbr segment\n"
+    )
+
+
 def test_watch_that_stalls_leaves_the_earlier_video(
     case_base: Path,
     shared_data: Path,
@@ -353,7 +366,7 @@ def test_watch_a_stream_shorter_than_a_window_says_so(
     assert main([*argv, "--speed", "0"]) == 1
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err.count("\n") == 1
-    assert "the stream ended after 5 frames (1.0 s), before one window (2 s)" in captured.err
+    assert "the stream ended after 5 frames (1.00 s), before one window (2 s)" in captured.err
     assert list(tmp_path.iterdir()) == []
 
 

@@ -87,7 +87,12 @@ def _outputs(args: argparse.Namespace) -> None:
         raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     if args.plot is not None:
         if len(args.recordings) > 1 and not args.plot.is_dir():
-            raise DataError("with several recordings --plot names a folder", args.plot)
+            problem = "is a file" if args.plot.exists() else "does not exist"
+            raise DataError(
+                f"with several recordings --plot names a folder for their pictures; this one "
+                f"{problem}",
+                args.plot,
+            )
         for target in plot_targets(args.plot, args.recordings):
             check_output(target, inputs=args.recordings, what="picture")
         if not args.plot.is_dir() and args.plot.suffix.lower() != ".png":
@@ -175,7 +180,7 @@ def _print(result: Any) -> None:
     fps = result.fps
     print(
         f"{result.recording}: {result.n_frames} frames at {fps:g} fps "
-        f"({result.n_frames / fps:.1f} s), {counted(len(result.segments), 'segment')}"
+        f"({result.n_frames / fps:.2f} s), {counted(len(result.segments), 'segment')}"
     )
     print(
         f"  {'start s':>8}  {'end s':>7}  {'frames':>12}  {'activity':<20} {'conf':>5}  {'reps':>4}"

@@ -72,6 +72,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.set_defaults(func=run)
 
 
+#: recordings of poses, not videos: segment reads them
+RECORDING_SUFFIXES = frozenset({".npz", ".bvh", ".amc"})
+
+
 def _is_file(source: str) -> bool:
     return "://" not in source and not source.isdigit()
 
@@ -92,6 +96,11 @@ def _check(args: argparse.Namespace) -> None:
         check_output(args.out, inputs=inputs, what="output video")
     if _is_file(args.source) and not Path(args.source).is_file():
         raise DataError("no such video file", args.source)
+    if _is_file(args.source) and Path(args.source).suffix.lower() in RECORDING_SUFFIXES:
+        raise DataError(
+            "watch plays videos, cameras and streams; segment this recording with posecbr segment",
+            args.source,
+        )
     if args.show and not _has_windows():
         raise ConfigError("this OpenCV has no window support: use --out video.mp4", "--show")
 
@@ -393,7 +402,7 @@ class Watcher:
         if not self.emitted:  # as segment refuses a recording shorter than a window
             from cbr.segmentation import DEFAULT_WINDOW_S
 
-            seconds = f" ({self.n / self.fps:.1f} s)" if self.fps else ""
+            seconds = f" ({self.n / self.fps:.2f} s)" if self.fps else ""
             raise DataError(
                 f"the stream ended after {counted(self.n, 'frame')}{seconds}, before one window"
                 f" ({DEFAULT_WINDOW_S:g} s) of it was seen: no segment to give",
