@@ -602,24 +602,31 @@ def within_runs(solved: Sequence[_Solved], fps: float, path: np.ndarray) -> np.n
     return np.asarray(run[first] == run[np.maximum(first, end)])
 
 
-def unknown_blocks(
+def unknown_shares(
     solved: Sequence[_Solved], n_frames: int, fps: float, judge: Judge, path: np.ndarray
 ) -> np.ndarray:
-    """``(n_blocks,)`` bool: blocks unlike every activity of the case base.
-
-    The windows within one run of the decoded activity ``path`` ``(n_blocks,)``
-    (:func:`within_runs`) are judged (:func:`cbr.unknown.unknown_evidence`: graded between
-    the budget's threshold and the judge's own by the default judge, else all or nothing); a
-    block's evidence is the mean of those over it, a block none covers takes its nearest
-    covered neighbours' (:func:`block_evidence`), and known/unknown is decoded with the
-    activities (:func:`decode_unknown`: every change of label a user sees needs
-    :data:`MIN_SEGMENT_S` of evidence)."""
+    """``(n_blocks,)``: every block's evidence (0 to 1) that it is unlike every activity of
+    the case base. The windows within one run of the decoded activity ``path``
+    ``(n_blocks,)`` (:func:`within_runs`) are judged (:func:`cbr.unknown.unknown_evidence`:
+    graded between the budget's threshold and the judge's own by the default judge, else all
+    or nothing); a block's evidence is the mean of those over it, a block none covers takes
+    its nearest covered neighbours' (:func:`block_evidence`); 0 everywhere when no window is
+    judged."""
     inside = within_runs(solved, fps, path)
     judged = [w for w, keep in zip(solved, inside.tolist(), strict=True) if keep]
     if not judged:
-        return np.zeros(len(path), dtype=bool)
+        return np.zeros(len(path))
     evidence = np.array([unknown_evidence(judge, w.nearest) for w in judged], dtype=np.float64)
-    unknown = block_evidence(judged, evidence, n_frames, fps)
+    return block_evidence(judged, evidence, n_frames, fps)
+
+
+def unknown_blocks(
+    solved: Sequence[_Solved], n_frames: int, fps: float, judge: Judge, path: np.ndarray
+) -> np.ndarray:
+    """``(n_blocks,)`` bool: blocks unlike every activity of the case base: their evidence
+    (:func:`unknown_shares`) decoded with the activities (:func:`decode_unknown`: every
+    change of label a user sees needs :data:`MIN_SEGMENT_S` of evidence)."""
+    unknown = unknown_shares(solved, n_frames, fps, judge, path)
     return decode_unknown(np.stack([1.0 - unknown, unknown], axis=1), path)
 
 
@@ -737,7 +744,9 @@ def _segment_of(
     evidence: Sequence[bool],
     reps: tuple[Repetition, ...],
 ) -> Segment:
-    """One decoded run as a segment: frames, label, confidence, ``reps`` (its repetitions,
+    """One decoded run as a segment: frames, label, confidence (the mean over its blocks of
+    ``votes`` ``(n_blocks, n_classes + 1)`` for its state: a known activity's share of the
+    votes, unknown's evidence, :func:`unknown_shares`), ``reps`` (its repetitions,
     :func:`counted_segments`), explanation."""
     a, b, state = run
     n_classes = len(clf.classes_)
@@ -750,13 +759,8 @@ def _segment_of(
         centred = [(w, e) for w, e in pairs if w.start < end and w.stop > start]
     inside = [w for w, e in centred if e] or [w for w, _ in centred]
     text, ratio = _explain_segment(clf, rec, inside, state, judge)
-    label: str | None = None
-    if state == n_classes:  # confidence: the share of its windows unlike every activity
-        share = [1.0 if judge.unlike(w.nearest) else 0.0 for w in inside]
-        confidence = float(np.mean(share)) if share else 1.0
-    else:
-        label, confidence = str(clf.classes_[state]), float(votes[a:b, state].mean())
-    return Segment(start, end, label, confidence, reps, text, ratio)
+    label = None if state == n_classes else str(clf.classes_[state])
+    return Segment(start, end, label, float(votes[a:b, state].mean()), reps, text, ratio)
 
 
 def _nobody_absorbs_slivers(path: np.ndarray, n_classes: int) -> np.ndarray:
@@ -845,7 +849,9 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     votes, path = decode_activities(solved, done.outliers, unlike, rec.n_frames, rec.fps,
                                     n_classes)  # fmt: skip
     evidence = within_runs(solved, rec.fps, path).tolist()
-    path[unknown_blocks(counted, rec.n_frames, rec.fps, judge, path)] = n_classes
+    unknown = unknown_shares(counted, rec.n_frames, rec.fps, judge, path)
+    path[decode_unknown(np.stack([1.0 - unknown, unknown], axis=1), path)] = n_classes
+    votes = np.column_stack([votes, unknown])  # an unknown segment's: its evidence of unknown
     # nobody in view: unknown, whatever the neighbours', and a segment of its own
     path[nobody_blocks(rec, len(path))] = n_classes + 1
     runs = _runs(_nobody_absorbs_slivers(path, n_classes))

@@ -33,6 +33,7 @@ from cbr.segmentation import (
     segment,
     solve_recording,
     unknown_blocks,
+    unknown_shares,
 )
 from cbr.unknown import ActivityMargin, Margin
 from features.body import mirrored, moves_left_more
@@ -492,6 +493,9 @@ def test_a_window_across_a_change_of_activity_is_no_evidence_of_unknown() -> Non
     ]
     unknown = unknown_blocks(windows, 60, 10.0, _FirstFar(), path)
     assert not unknown[:30].any() and unknown[30:].all()
+    # the evidence decoded: all or nothing from this judge, 0 before the change, 1 after
+    shares = unknown_shares(windows, 60, 10.0, _FirstFar(), path)
+    assert list(shares) == [0.0] * 30 + [1.0] * 30
 
 
 # ---- the command ---------------------------------------------------------------------------
@@ -804,8 +808,8 @@ def test_a_gap_in_the_evidence_at_a_change_is_split_by_nearness() -> None:
 def test_a_segment_too_short_for_a_window_centre_is_told_by_the_windows_over_it() -> None:
     """An unknown segment of frames 11-15 (10 fps, one block a frame) between the centres of
     the two windows over it (frames 0-20 and 14-34): its novelty is the median of their
-    margins (0.95 and 0.5: 0.725), its confidence the share of them unlike every activity
-    (one of two, at a 0.8 threshold), its explanation the median window's (the upper one of
+    margins (0.95 and 0.5: 0.725), its confidence the mean evidence of unknown of its
+    blocks (0.4, 0.6, 0.8, 1.0: 0.7), its explanation the median window's (the upper one of
     two: 0.95), and its JSON is strict (no NaN) even when no window lies over it."""
     from types import SimpleNamespace
 
@@ -819,11 +823,12 @@ def test_a_segment_too_short_for_a_window_centre_is_told_by_the_windows_over_it(
         _Solved(0, 20, np.eye(3)[0], np.array([0.95, 1.0, 3.0]), None),
         _Solved(14, 34, np.eye(3)[0], np.array([1.0, 2.0, 3.0]), None),
     ]
-    votes = np.zeros((100, 3))
+    votes = np.zeros((100, 4))  # per block: the three activities' votes, unknown's evidence
+    votes[11:15, 3] = [0.4, 0.6, 0.8, 1.0]
     seg = _segment_of(clf, rec, (11, 15, 3), windows, votes, judge, [True, True], ())
     assert (seg.start_frame, seg.end_frame, seg.label) == (11, 15, None)
     assert seg.novelty == pytest.approx(0.725)
-    assert seg.confidence == pytest.approx(0.5)
+    assert seg.confidence == pytest.approx(0.7)
     assert "the nearest (a) is 0.95 as far as the next (b)" in seg.explanation
     alone = Segment(11, 15, None, 1.0, (), "", float("nan"))
     doc = json.loads(json.dumps(alone.to_dict(10.0), allow_nan=False))
@@ -834,9 +839,10 @@ def test_an_unknown_segment_is_explained_by_a_window_unlike_every_activity() -> 
     """An unknown segment (frames 20-40, 10 fps) whose four windows centred in it have
     margins 0.5, 0.6, 0.7 and 0.95 against a threshold of 0.8: the explanation quotes the one
     window over the threshold (the median of all four, 0.7, would read "like no stored
-    activity" beside a margin a known activity stays under), the confidence is the share
-    unlike (1 of 4). With no window unlike, the explanation says the segment is unknown on
-    the evidence around it."""
+    activity" beside a margin a known activity stays under). With no window unlike, the
+    explanation says the segment is unknown on the evidence around it. Either way the
+    confidence is its blocks' mean evidence of unknown (it was the share of its windows
+    unlike: 0 for the verdict it gave)."""
     from types import SimpleNamespace
 
     from cbr.segmentation import _segment_of
@@ -851,13 +857,14 @@ def test_an_unknown_segment_is_explained_by_a_window_unlike_every_activity() -> 
             for i, m in enumerate(margins)
         ]
 
-    votes = np.zeros((100, 3))
+    votes = np.zeros((100, 4))
+    votes[20:40, 3] = np.linspace(0.45, 0.65, 20)  # unknown's evidence: from its neighbours
     seg = _segment_of(clf, rec, (20, 40, 3), windows(0.5, 0.6, 0.7, 0.95), votes, judge,
                       [True] * 4, ())  # fmt: skip
-    assert seg.label is None and seg.confidence == pytest.approx(0.25)
+    assert seg.label is None and seg.confidence == pytest.approx(0.55)
     assert "the nearest (a) is 0.95 as far as the next (b)" in seg.explanation
     quiet = _segment_of(clf, rec, (20, 40, 3), windows(0.5, 0.6), votes, judge, [True] * 2, ())
-    assert quiet.confidence == 0.0
+    assert quiet.confidence == pytest.approx(0.55)
     assert quiet.explanation.startswith("unknown on the evidence around it")
     assert "like no stored activity" not in quiet.explanation
 

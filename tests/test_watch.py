@@ -110,6 +110,10 @@ def test_segment_the_same_video_counts_each_squat_once(
     assert judge != "margin" or len(segments) > 1, segments  # the wavering
     assert all(s["end_s"] - s["start_s"] >= MIN_SEGMENT_S for s in segments), segments
     assert sum(s["repetitions"] for s in segments) == 3, segments
+    # an unknown segment's confidence is its evidence of unknown, never 0 for the verdict it
+    # gives (it was the share of its own windows unlike: 0.00 for one unknown on the evidence
+    # around it)
+    assert all(s["confidence"] > 0.0 for s in segments if s["label"] is None), segments
 
 
 def _mocap_stream(shared_data: Path, n: int, then: str, fps: float = 30.0) -> Any:
