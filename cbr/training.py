@@ -44,6 +44,7 @@ from .stored import (
     write_matrices,
 )
 from .stored import stored_case_base as to_store
+from .unknown import JUDGES
 
 
 @dataclass(frozen=True)
@@ -60,6 +61,8 @@ class TrainResult:
     maintenance: MaintenanceReport | None
     learned: dict[str, Any]
     skipped: list[str] = field(default_factory=list)
+    #: whether the default judge of unknown (``segment``, ``watch``) could be calibrated on it
+    judges_unknown: bool = True
 
 
 @dataclass(frozen=True)
@@ -262,6 +265,7 @@ def store_fitted(
         fitted.maintenance_,
         _learned(fitted),
         list(skipped),
+        JUDGES[0] in fitted.judges_,
     )
 
 

@@ -257,16 +257,16 @@ def _check_margin_calibration(cb: CaseBase) -> None:
     one to compare with)."""
     if len(set(np.asarray(cb.labels).astype(str).tolist())) < 3:
         raise DataError(
-            "a case base of fewer than three activities cannot calibrate the margin between"
-            " the two nearest (use --unknown held-out)",
+            "fewer than three activities to calibrate the margin between the two nearest on"
+            " (use --unknown held-out, or train with three or more)",
             "case base",
         )
 
 
 def _no_apart() -> DataError:
     return DataError(
-        "no activity of the case base has cases apart from each other to calibrate "
-        "the margin on (use --unknown held-out)",
+        "no activity has cases apart from each other to calibrate the margin on (use "
+        "--unknown held-out, or train with --split windows)",
         "case base",
     )
 

@@ -126,7 +126,7 @@ def judge_named(clf: Any, name: str, db: str) -> Any:
     except DataError as exc:
         if exc.source != "case base":
             raise
-        raise DataError(f"its case base: {exc.message}", db) from None
+        raise DataError(f"its case base cannot judge unknown: {exc.message}", db) from None
 
 
 def run(args: argparse.Namespace) -> int:

@@ -513,6 +513,17 @@ def _report(args: argparse.Namespace, result: Any) -> None:
     }
     if result.maintenance is not None:
         summary["trim"] = result.maintenance.summary()
+    if not args.append and args.split == "windows" and not result.judges_unknown:
+        why = (
+            "fewer than three activities"
+            if len(result.label_counts) < 3
+            else "no activity with windows apart from each other"
+        )
+        print(
+            f"note: segment and watch cannot tell stretches unlike every activity with this case"
+            f" base ({why}); they run with --unknown held-out",
+            file=sys.stderr,
+        )
     if args.json:
         json.dump(summary, sys.stdout, indent=2, ensure_ascii=False)
         print()
