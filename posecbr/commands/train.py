@@ -413,6 +413,26 @@ def _check_new_store(args: argparse.Namespace) -> None:
         store.close()
 
 
+def _note_shared_names(path: Path) -> None:
+    """Read the ``--label-names`` file before any clip (a bad line: one error, at once), and
+    say on stderr which codes share a name: their stretches become one activity (meant, to
+    merge two variants of a movement, or a slip of the pen)."""
+    from collections import defaultdict
+
+    from features.datasets import read_label_names
+
+    codes: dict[str, list[str]] = defaultdict(list)
+    for code, name in read_label_names(path).items():
+        codes[name].append(code)
+    for name, shared in codes.items():
+        if len(shared) > 1:
+            print(
+                f"note: codes {', '.join(shared[:-1])} and {shared[-1]} of {shown(path)} are "
+                f"{'both' if len(shared) == 2 else 'all'} named {shown(name)}: one activity",
+                file=sys.stderr,
+            )
+
+
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse options that cannot work together, in one line, before any clip is read."""
     if not args.name.strip():
@@ -432,6 +452,8 @@ def _check_options(args: argparse.Namespace) -> None:
                 option,
             )
     check_fps(args.fps)
+    if args.label_names is not None:
+        _note_shared_names(args.label_names)
     check_scheduler(args.scheduler)
     if args.scheduler is not None and _in_memory(args):
         raise ConfigError(
