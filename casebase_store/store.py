@@ -778,6 +778,24 @@ class StoreTransaction:
             self._changed.add(cb.id)
         return [r.id for r in rows]
 
+    def cases_from(
+        self, cb: CaseBaseInfo, sources: Iterable[str]
+    ) -> dict[tuple[str, int | None, int | None], int]:
+        """The active cases of ``cb`` made from ``sources``, by (source, first frame, end
+        frame): their ids (the first of each)."""
+        wanted = sorted(set(sources))
+        out: dict[tuple[str, int | None, int | None], int] = {}
+        for i in range(0, len(wanted), 500):  # bounded IN lists
+            q = (
+                select(CaseRow.id, CaseRow.source, CaseRow.frame_start, CaseRow.frame_end)
+                .where(CaseRow.case_base_id == cb.id, CaseRow.active.is_(True))
+                .where(CaseRow.source.in_(wanted[i : i + 500]))
+                .order_by(CaseRow.id)
+            )
+            for case_id, source, a, b in self.session.execute(q):
+                out.setdefault((source, a, b), int(case_id))
+        return out
+
     def _case_row(self, cb: CaseBaseInfo, case_id: int, lock: bool) -> CaseRow:
         q = select(CaseRow).where(CaseRow.id == int(case_id))
         if lock:

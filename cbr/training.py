@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from sklearn.base import clone
 
-from casebase_store import StoreTransaction, open_store, write_store
+from casebase_store import CaseBaseInfo, StoreError, StoreTransaction, open_store, write_store
 from features.cluster import connect, gather, map_outcomes
 from features.datasets import DatasetEntry, clip_target
 from features.errors import ConfigError, DataError
@@ -214,6 +214,7 @@ def train_described(
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise DataError("no clip shows a person: nothing to learn from", "training set")
+    _check_unique(clips, "training set")
     fitted: CaseBaseClassifier = clone(estimator).fit_described(clips, text)
     return store_fitted(
         db, name, fitted, text, target=target, cases=cases, replace=replace, skipped=skipped
@@ -335,6 +336,46 @@ def append(
     return append_described(db, name, described, text, plan, uid)
 
 
+def _provenance(clip: DescribedClip) -> tuple[str, int, int]:
+    return clip.source, int(clip.frames[0]), int(clip.frames[1])
+
+
+def _shown_frames(key: tuple[str, int | None, int | None]) -> str:
+    source, a, b = key
+    return source if a is None or b is None else f"{source} frames {a}-{b}"
+
+
+def _check_unique(clips: Sequence[DescribedClip], where: str) -> None:
+    """Refuse training clips of which two are the same stretch of the same file (a labels
+    CSV listing a file twice): their cases would vote twice. Clips without a source (the
+    Python API's arrays) are not compared."""
+    seen: set[tuple[str, int, int]] = set()
+    for clip in clips:
+        key = _provenance(clip)
+        if not key[0]:
+            continue
+        if key in seen:
+            raise DataError(f"{_shown_frames(key)} is listed twice: its cases would vote twice",
+                            where)  # fmt: skip
+        seen.add(key)
+
+
+def _check_new(
+    tx: StoreTransaction, info: CaseBaseInfo, clips: Sequence[DescribedClip], where: str
+) -> None:
+    """Refuse an append of a stretch the case base already holds (the same file's same
+    frames: appended before), in the transaction that would add it."""
+    stored = tx.cases_from(info, [c.source for c in clips if c.source])
+    for clip in clips:
+        key = _provenance(clip)
+        if key in stored:
+            raise StoreError(
+                f"{_shown_frames(key)} is already case {stored[key]} of {info.name!r} (added"
+                " before?): nothing added",
+                where,
+            )
+
+
 def append_described(
     db: str | Path,
     name: str,
@@ -365,10 +406,12 @@ def append_described(
         frames=tuple(c.frames for c in clips),
         skeletons=tuple(c.skeleton for c in clips),
     )
+    _check_unique(clips, "training set")
     store = open_store(db, create=False)
     try:
         with store.transaction() as tx:
             info = tx.expect(name, uid)
+            _check_new(tx, info, clips, store.where)
             ids = np.asarray(tx.add_cases(info, case_records(cb)))
             judges_after_change(tx, info)
             kind = cb.measure.cache_kind(tuple(cb.problems.shape[1:]))

@@ -250,6 +250,29 @@ def test_train_refuses_a_database_it_could_not_write_before_reading_clips(
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith((".d", "d"))) == [db.name]
 
 
+def test_a_clip_is_not_trained_from_twice(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A labels CSV listing one file twice, and an --append of clips already in the case base:
+    refused in one line naming the file (their cases would vote twice: the case base doubled
+    silently), nothing written."""
+    train, _ = dataset
+    clips = sorted(train.rglob("*.npz"))
+    csv = tmp_path / "labels.csv"
+    rows = [f"{p},{p.parent.name}" for p in [*clips, clips[3]]]
+    csv.write_text("path,label\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    db = tmp_path / "cb.sqlite"
+    code, _, err = _cli(capsys, "train", str(csv), "--db", str(db))
+    assert code == 1 and err.count("\n") == 1 and not db.exists()
+    assert f"{clips[3]} frames 0-" in err and "is listed twice" in err
+    assert _cli(capsys, "train", str(train), "--db", str(db))[0] == 0
+    stored = db.read_bytes()
+    code, _, err = _cli(capsys, "train", str(clips[3].parent), "--db", str(db), "--append")
+    assert code == 1 and err.count("\n") == 1
+    assert "is already case " in err and "of 'default' (added before?): nothing added" in err
+    assert db.read_bytes() == stored
+
+
 def test_append_says_how_many_activities_it_added(
     dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -176,10 +176,19 @@ def test_train_from_one_recording_with_split_repetitions(
     assert err.count("\n") == 1 and "Traceback" not in err
     assert "holds repetitions (trained with --split repetitions), not windows" in err
     assert _sha(db) == stored
-    # without --split, --append cuts as the case base was trained: the same repetitions again
-    n = _count_cases(db)
+    # the same recording again is refused: its stretches are already cases
     argv.remove("--split")
     argv.remove("windows")
+    assert main([*argv, "--append"]) == 1
+    err = capsys.readouterr().err.splitlines()[-1]
+    assert f"{recording} frames " in err and "is already case " in err
+    assert err.endswith("(added before?): nothing added") and _sha(db) == stored
+    # without --split, --append cuts as the case base was trained: a copy of the recording
+    # under another name gives as many repetitions again
+    n = _count_cases(db)
+    copy = tmp_path / "again.npz"
+    copy.write_bytes(recording.read_bytes())
+    argv[argv.index(str(recording))] = str(copy)
     assert main([*argv, "--append"]) == 0
     assert "cut 5 clips into" in capsys.readouterr().err
     assert _count_cases(db) == 2 * n
