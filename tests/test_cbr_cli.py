@@ -285,3 +285,12 @@ def test_append_says_how_many_activities_it_added(
     code, out, err = _cli(capsys, "train", str(test / one), "--db", db, "--append")
     assert code == 0, err
     assert "17 cases (2 added, of 1 activity)" in out, out
+    # casebase info says the calibrations are of the 15 training clips, not the 17 cases
+    # (it described them as if they held for the case base as it is), and that the unknown
+    # judges, dropped by the append, are calibrated as segment starts
+    code, out, _ = _cli(capsys, "casebase", "info", "--db", db)
+    assert code == 0
+    assert "training clips (their accuracy " in out
+    assert "; cases added or changed since are not in it)" in out
+    assert "(at training: cases added or changed since are not in it)" in out
+    assert "unknown judges: none stored (the cases changed since training" in out

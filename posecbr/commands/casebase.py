@@ -147,7 +147,7 @@ def _print_info(d: dict[str, Any]) -> None:
         f"hash {d['feature_hash'][:12]}"
     )
     print(f"  similarity: {_measure_words(d['similarity'])}")
-    _print_model(d["model"])
+    _print_model(d["model"], len(d["labels"]), _changed_since_training(d["maintenance"]))
     for lab, n in d["labels"].items():
         print(f"  {n:6d}  {shown(lab)}")
     if d["maintenance"]:
@@ -162,8 +162,22 @@ CASE_IS = {
 }
 
 
-def _print_model(m: dict[str, Any]) -> None:
-    """What fit learned (:func:`_model_summary`), the lines that apply."""
+#: maintenance actions that add or change cases after training (trim stores the
+#: calibrations anew)
+CHANGES = ("append", "retain", "revise")
+
+
+def _changed_since_training(history: dict[str, int]) -> bool:
+    """Whether cases were added or changed since the model was fitted: its calibrations
+    (unlike the stored cases, confidence) are of the cases it was trained on."""
+    return any(history.get(a) for a in CHANGES)
+
+
+def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) -> None:
+    """What fit learned (:func:`_model_summary`), the lines that apply; ``changed``: cases
+    were added or changed since (the calibrations are of the training's cases)."""
+    pieces = str(m.get("cases") or "clips")
+    since = " (at training: cases added or changed since are not in it)" if changed else ""
     if m.get("k") is not None:
         each = CASE_IS.get(m.get("cases") or "", "")
         print(
@@ -189,13 +203,21 @@ def _print_model(m: dict[str, Any]) -> None:
         )
         print(
             f"  unlike the stored cases beyond {u['unlike_ratio']:.2f}x the usual held-out "
-            f"distance ({u['quantile']:.1%} of {u['basis']} training clips lie within){feats}"
-            f"{rule}"
+            f"distance ({u['quantile']:.1%} of {u['basis']} training {pieces} lie within){feats}"
+            f"{rule}{since}"
         )
     if m.get("unknown_judges"):
         j = m["unknown_judges"]
         when = "" if j["current"] else " (the cases changed since: calibrated at run time)"
         print(f"  unknown judges stored: {', '.join(sorted(j['calibrated'] or {}))}{when}")
+    elif m.get("k") is not None:
+        print(
+            "  unknown judges: none (fewer than three activities: segment and watch need "
+            "--unknown held-out)"
+            if n_activities < 3
+            else "  unknown judges: none stored (the cases changed since training, or a model "
+            "stored before they were): segment and watch calibrate them as they start"
+        )
     if m.get("confidence"):
         c = m["confidence"]
         score = (
@@ -206,7 +228,8 @@ def _print_model(m: dict[str, Any]) -> None:
         )
         print(
             f"  confidence: {score} calibrated on {c['n']} {c['basis']} training "
-            f"clips (their accuracy {c['accuracy']:.3f})"
+            f"{pieces} (their accuracy {c['accuracy']:.3f}"
+            f"{'; cases added or changed since are not in it' if changed else ''})"
         )
 
 
