@@ -603,13 +603,21 @@ def _bounds(line: np.ndarray, peaks: np.ndarray, reach: int) -> list[tuple[int, 
     return [(s, max(e, s + 1)) for s, e in zip(starts, ends, strict=True)]
 
 
-def _side(x: np.ndarray, names: tuple[str, ...], a: int, b: int) -> str:
-    """The side whose angles move more over samples ``a..b``."""
-    part = x[a : b + 1]
-    spread = part.std(axis=0) if len(part) > 1 else np.zeros(part.shape[1])
-    left = sum(spread[i] for i, n in enumerate(names) if n.startswith("left_"))
-    right = sum(spread[i] for i, n in enumerate(names) if n.startswith("right_"))
-    return "left" if left >= right else "right"
+def _sides(x: np.ndarray, names: tuple[str, ...], one: np.ndarray, other: np.ndarray) -> str:
+    """Which side the far points ``one`` (samples of ``x`` ``(n, C)`` on one side of the
+    symmetric posture) go out to, the far points ``other`` going out to the other: "left"
+    when the left limbs' angles lie farther from their mean posture, against the right
+    limbs', at ``one``'s far points than at ``other``'s.
+
+    Compared between the two sides' far points, not within one: in a jog both legs and arms
+    move at every step, and a person whose right arm swings wider makes every step look
+    right-sided (13_30's steps were right, right, right, right, left, ...); what changes
+    between a left step and a right one is which side leads."""
+    dev = np.abs(x - x.mean(axis=0))
+    left = np.array([n.startswith("left_") for n in names])
+    right = np.array([n.startswith("right_") for n in names])
+    lead = dev[:, left].sum(axis=1) - dev[:, right].sum(axis=1)
+    return "left" if lead[one].mean() >= lead[other].mean() else "right"
 
 
 def count_repetitions(seq: PoseSequence) -> RepetitionCount:
@@ -630,9 +638,10 @@ def count_repetitions(seq: PoseSequence) -> RepetitionCount:
 def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> RepetitionCount:
     """:func:`count_repetitions` on already prepared signals (of a clip of ``n_frames``)."""
     x = sig.values
-    spans, far, direction, alternating = _alternating_repetitions(x, sig.names, sig.fps)
+    spans, far, direction, sides = _alternating_repetitions(x, sig.names, sig.fps)
+    alternating = sides is not None
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
-    if not alternating:
+    if sides is None:
         period, strength, direction = _periodic_direction(x, period, sig.fps)
         line = _movement_line(x, sig.names, direction, sig.fps)
         # a slow change of posture (stepping into place, drifting) is no repetition
@@ -647,15 +656,15 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
         moved = _in_view(far, sig.blind)
         once = np.diff(moved, prepend=-1) > 0  # two far points moved onto one sample: one
         spans = [s for s, k in zip(spans, once, strict=True) if k] if len(moved) else []
-        far = moved[once]
+        far, sides = moved[once], sides[once]
     reps = [
         Repetition(
             start_frame=int(a * sig.step),
             end_frame=int(min(n_frames, b * sig.step)),
             peak_frame=int(min(n_frames - 1, p * sig.step)),
-            side=_side(x, sig.names, a, b) if alternating else None,
+            side=None if sides is None else str(sides[i]),
         )
-        for (a, b), p in zip(spans, far, strict=True)
+        for i, ((a, b), p) in enumerate(zip(spans, far, strict=True))
     ]
     weights = np.abs(direction)
     order = np.argsort(-weights, kind="stable")
@@ -726,20 +735,23 @@ def _sides_mirror(one: np.ndarray, other: np.ndarray) -> bool:
     return norm > 0 and float(a @ b) / norm <= -ALTERNATION_MIN
 
 
+OTHER_SIDE = {"left": "right", "right": "left"}
+
+
 def _alternating_repetitions(
     x: np.ndarray, names: tuple[str, ...], fps: float
-) -> tuple[list[tuple[int, int]], np.ndarray, np.ndarray, bool]:
+) -> tuple[list[tuple[int, int]], np.ndarray, np.ndarray, np.ndarray | None]:
     """Repetitions of a movement that alternates sides: what one side does against the other
     spans at least half as much as what both do alike (a knee raise: as much), and the body
-    goes out to both sides about equally far. Returns spans,
-    far points, the movement direction and whether the movement alternates (when it does not,
-    the rest is empty)."""
+    goes out to both sides about equally far. Returns spans, far points, the movement
+    direction and the side of each far point (:func:`_sides`); None when the movement does
+    not alternate (and the rest empty)."""
     sym, anti = side_parts(x, names)
-    none: tuple[list[tuple[int, int]], np.ndarray, np.ndarray, bool] = (
+    none: tuple[list[tuple[int, int]], np.ndarray, np.ndarray, np.ndarray | None] = (
         [],
         np.array([], dtype=np.int64),
         np.zeros(x.shape[1]),
-        False,
+        None,
     )
     direction = movement_direction(anti)
     line = anti @ direction  # 0 = a symmetric posture
@@ -769,9 +781,12 @@ def _alternating_repetitions(
     reach_other = float(np.median(-line[other]))
     if min(reach_one, reach_other) < 0.5 * max(reach_one, reach_other):
         return none  # one side goes out far, the other barely: not alternating
-    far = np.sort(np.concatenate([one, other]))
+    first = _sides(x, names, one, other)
+    order = np.argsort(np.concatenate([one, other]), kind="stable")
+    far = np.concatenate([one, other])[order]
+    sides = np.array([first] * len(one) + [OTHER_SIDE[first]] * len(other))[order]
     reach = int(0.5 * period * fps) if period else len(line)
-    return _bounds(np.abs(line), far, reach), far, direction, True
+    return _bounds(np.abs(line), far, reach), far, direction, sides
 
 
 __all__ = [

@@ -190,6 +190,43 @@ def test_jogging_counts_one_repetition_per_step(recordings: dict[str, PoseSequen
         assert abs(result.count - clip["count"]) <= 1, (result.count, clip["how"])
 
 
+#: sides marked by hand (tests/fixtures/repetition_counts.json, "how"): the leg a jogging step
+#: or a knee raise lifts, at the knee's trough, seconds into the recording
+HAND_SIDES = {
+    ("cmu-mocap6/amc/13_30.amc", "Jog"): {
+        "left": (16.5, 17.2, 18.0, 18.75, 19.45),
+        "right": (16.9, 17.6, 18.4, 19.05),
+    },
+    ("cmu-mocap6/amc/13_29.amc", "KneeRaise"): {
+        "left": (25.4, 28.0, 30.8),
+        "right": (24.1, 26.6, 29.5),
+    },
+    ("cmu-mocap6/amc/13_30.amc", "KneeRaise"): {"left": (7.5, 9.9), "right": (8.7, 11.0)},
+    ("cmu-mocap6/amc/13_31.amc", "KneeRaise"): {"left": (4.0, 7.6), "right": (5.2, 6.4)},
+}
+
+
+@pytest.mark.parametrize(("source", "activity"), sorted(HAND_SIDES))
+def test_each_alternating_repetition_has_the_side_marked_by_hand(
+    recordings: dict[str, PoseSequence], source: str, activity: str
+) -> None:
+    """Every marked step or knee raise has a repetition whose far point lies within 0.25 s
+    of it, on the side marked. 13_30's jog was right, right, right, right, left, right, left,
+    ... (both legs and arms move at every step; the right arm swings wider): the sides are
+    now told by which side leads at one side's far points against the other's."""
+    (clip,) = [c for c in _fixture()["clips"]
+               if c["source"] == source and c.get("activity") == activity]  # fmt: skip
+    seq = recordings[source].slice_frames(clip["start_frame"], clip["end_frame"])
+    result = count_repetitions(seq)
+    assert result.alternating
+    peaks = [(clip["start_frame"] + r.peak_frame) / seq.fps for r in result.repetitions]
+    for side, times in HAND_SIDES[(source, activity)].items():
+        for t in times:
+            i = int(np.argmin(np.abs(np.array(peaks) - t)))
+            assert abs(peaks[i] - t) <= 0.25, (t, peaks)
+            assert result.repetitions[i].side == side, (t, side, peaks[i])
+
+
 @pytest.mark.parametrize("activity", ["Squat", "JumpJack", "KneeRaise"])
 def test_mocap_plain_exercises_counted_exactly(
     recordings: dict[str, PoseSequence], activity: str
