@@ -127,7 +127,11 @@ def test_standing_still_with_jitter_has_no_repetition() -> None:
         {k: v + rng.normal(0.0, 0.005, 3) for k, v in body.items()} for _ in range(int(4 * FPS))
     ]
     seq = to_sequence(*frames, fps=FPS)
-    assert count_repetitions(seq).count == 0
+    result = count_repetitions(seq)
+    assert result.count == 0
+    # and names no joint as moving: the jitter's direction is no movement ("0 repetitions
+    # (moving left elbow)" of a still pose)
+    assert result.moving == ()
 
 
 def test_mirror_angles_swaps_sides_and_reflects_lateral_tilts() -> None:
