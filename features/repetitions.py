@@ -391,6 +391,24 @@ def _in_view(far: np.ndarray, blind: np.ndarray | None) -> np.ndarray:
     return np.where(blind[far], nearest, far)
 
 
+def _seen_spans(
+    spans: list[tuple[int, int]], far: np.ndarray, blind: np.ndarray | None
+) -> list[tuple[int, int]]:
+    """Each repetition's span ``[a, b)`` cut to the stretch seen around its far point (the
+    far points are seen, :func:`_in_view`): a repetition next to a stretch with nobody seen
+    starts where the person is first seen, not where the held posture began (13_30 with its
+    first 10 s blank: a repetition from 4.5 s, far point 10.0 s)."""
+    if blind is None:
+        return spans
+    out = []
+    for (a, b), p in zip(spans, far, strict=True):
+        before = np.flatnonzero(blind[a:p])
+        after = np.flatnonzero(blind[p:b])
+        out.append((a + int(before[-1]) + 1 if len(before) else a,
+                    p + int(after[0]) if len(after) else b))  # fmt: skip
+    return out
+
+
 _TRUNK = ("left_shoulder", "right_shoulder", "left_hip", "right_hip")
 _ARM = ("shoulder", "elbow", "wrist")
 _ANGLE_JOINTS: dict[str, tuple[str, ...]] = {
@@ -657,6 +675,7 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
         once = np.diff(moved, prepend=-1) > 0  # two far points moved onto one sample: one
         spans = [s for s, k in zip(spans, once, strict=True) if k] if len(moved) else []
         far, sides = moved[once], sides[once]
+    spans = _seen_spans(spans, far, sig.blind)
     reps = [
         Repetition(
             start_frame=int(a * sig.step),

@@ -352,3 +352,15 @@ def test_reps_command_on_a_real_squat_video(
     # far points at the bottoms seen by hand: 2.0 s, 6.8 s, and 12.0-12.8 s
     bottoms = [r["peak_frame"] / doc["fps"] for r in doc["repetitions"]]
     np.testing.assert_allclose(bottoms, [2.0, 6.8, 12.0], atol=0.7)
+
+
+def test_no_repetition_starts_where_nobody_is_seen(recordings: dict[str, PoseSequence]) -> None:
+    """13_30 with its first 10 s blank (nobody seen, by construction): every repetition lies
+    where the person is seen, from frame 1200 on (the first ran from 4.5 s, across 5.5 s of
+    nobody, to its far point at 10.0 s)."""
+    seq = recordings["cmu-mocap6/amc/13_30.amc"]
+    positions = seq.positions.copy()
+    positions[:1200] = np.nan
+    blank = PoseSequence(positions, seq.joint_names, seq.fps)
+    reps = count_repetitions(blank).repetitions
+    assert reps and min(r.start_frame for r in reps) >= 1200, reps[:2]
