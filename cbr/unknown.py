@@ -266,7 +266,8 @@ def _check_margin_calibration(cb: CaseBase) -> None:
 def _no_apart() -> DataError:
     return DataError(
         "no activity has cases apart from each other to calibrate the margin on (use "
-        "--unknown held-out, or train with --split windows)",
+        "--unknown held-out, or train with --split windows and two or more recordings of an "
+        "activity)",
         "case base",
     )
 
