@@ -437,20 +437,17 @@ def _check_options(args: argparse.Namespace) -> None:
     """Refuse options that cannot work together, in one line, before any clip is read."""
     if not args.name.strip():
         raise ConfigError("the case base name is empty", "--name")
-    for option, value in (("--label-block", args.label_block), ("--label-names", args.label_names)):
+    in_csv = "a labels CSV gives it in its label_block_s or label_names column"
+    converted = "the one recording it labels; convert a dataset's recordings first: "
+    converted += "posecbr convert --asf --fps"
+    for option, value, instead in (
+        ("--label-block", args.label_block, in_csv),
+        ("--label-names", args.label_names, in_csv),
+        ("--asf", args.asf, converted),
+        ("--fps", args.fps, converted),
+    ):
         if value is not None and args.frame_labels is None:
-            raise ConfigError(
-                "goes with --frame-labels (a labels CSV gives it in its label_block_s or"
-                " label_names column)",
-                option,
-            )
-    for option, value in (("--asf", args.asf), ("--fps", args.fps)):
-        if value is not None and args.frame_labels is None:
-            raise ConfigError(
-                "goes with --frame-labels (the one recording it labels; convert a dataset's "
-                "recordings first: posecbr convert --asf --fps)",
-                option,
-            )
+            raise ConfigError(f"goes with --frame-labels ({instead})", option)
     check_fps(args.fps)
     if args.label_names is not None:
         _note_shared_names(args.label_names)
