@@ -39,6 +39,8 @@ from .weights import MIRROR_FLAG, FeatureWeights
 
 #: bump when the model document changes meaning
 MODEL_FORMAT = 1
+#: what a case is (the model document's ``cases``, ``train --split``), and one of them
+CASE_KINDS = {"clips": "clip", "repetitions": "repetition", "windows": "window"}
 
 
 @dataclass

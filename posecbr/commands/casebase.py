@@ -154,14 +154,6 @@ def _print_info(d: dict[str, Any]) -> None:
         print("  history: " + ", ".join(f"{k} x{v}" for k, v in d["maintenance"].items()))
 
 
-#: what a case is, by ``train --split``
-CASE_IS = {
-    "clips": ", a case per clip",
-    "repetitions": ", a case per repetition",
-    "windows": ", a case per window",
-}
-
-
 #: maintenance actions that add or change cases after training (trim stores the
 #: calibrations anew)
 CHANGES = ("append", "retain", "revise")
@@ -179,7 +171,10 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
     pieces = str(m.get("cases") or "clips")
     since = " (at training: cases added or changed since are not in it)" if changed else ""
     if m.get("k") is not None:
-        each = CASE_IS.get(m.get("cases") or "", "")
+        from cbr.stored import CASE_KINDS
+
+        kind = CASE_KINDS.get(m.get("cases") or "")
+        each = f", a case per {kind}" if kind else ""
         print(
             f"  model: predicts {m['target']}{each}; k = {m['k']}, {m['vote']} vote; side handling "
             f"{m['side']}; feature weights {m['feature_weights']}"

@@ -502,19 +502,17 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-#: what a training piece is, by --split
-PIECE = {"clips": "clip", "repetitions": "repetition", "windows": "window"}
-
-
 def _skipped(sources: list[str], split: str) -> str:
     """The pieces that show no person, by their file (a recording cut into windows has many:
     each file once, with how many of its pieces)."""
     from collections import Counter
 
+    from cbr.stored import CASE_KINDS
+
     per_file = Counter(sources)
     names = [shown(f) + (f" ({n})" if n > 1 else "") for f, n in list(per_file.items())[:5]]
     more = " ..." if len(per_file) > 5 else ""
-    piece = counted(len(sources), PIECE.get(split, "clip"))
+    piece = counted(len(sources), CASE_KINDS.get(split, "clip"))
     return f"skipped {piece} that show no person: {', '.join(names)}{more}"
 
 
