@@ -907,6 +907,7 @@ def test_segment_pictures_of_recordings_that_share_a_name_are_all_kept(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"{missing}: with several recordings --plot names a" in err
     assert err.rstrip().endswith("this one does not exist") and not missing.exists()
+    assert (_sha(a), _sha(case_base)) == before
 
 
 def test_segment_k_beyond_what_a_window_retrieves_is_refused(

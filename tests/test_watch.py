@@ -210,9 +210,11 @@ def test_watch_refuses_options_it_cannot_follow(
     opened (there is none here)."""
     video = next((shared_data / "videos").rglob("*.mp4"))
     argv = ["watch", str(video), "--db", str(tmp_path / "none.sqlite"), option, value]
+    before = video.read_bytes()
     assert main(argv) == 1
     err = capsys.readouterr().err
     assert err == f"posecbr watch: error: {message}\n"
+    assert video.read_bytes() == before and list(tmp_path.iterdir()) == []
 
 
 def test_watch_of_a_pose_file_points_to_segment(tmp_path: Path, capsys: Any) -> None:
@@ -221,6 +223,7 @@ def test_watch_of_a_pose_file_points_to_segment(tmp_path: Path, capsys: Any) -> 
     pose = tmp_path / "13_30.npz"
     pose.write_bytes(b"not read")
     assert main(["watch", str(pose), "--db", str(tmp_path / "none.sqlite")]) == 1
+    assert pose.read_bytes() == b"not read" and sorted(tmp_path.iterdir()) == [pose]
     err = capsys.readouterr().err
     assert err == (
         f"posecbr watch: error: {pose}: watch plays videos, cameras and streams; segment this "
