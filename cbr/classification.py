@@ -204,6 +204,21 @@ def check_feedback_label(label: str, known: Sequence[str], new_label: bool) -> s
     return text
 
 
+def check_feedback_cases(stored: StoredClassifier) -> None:
+    """Refuse feedback to a case base of repetitions or windows (``train --split``): the clip
+    would be retained whole, a case of another kind than every other; ``train --append``
+    cuts it as the case base was cut."""
+    if stored.cases in (None, "clips"):
+        return
+    raise ConfigError(
+        f"case base {stored.name!r} holds {stored.cases} (trained with --split "
+        f"{stored.cases}): feedback would retain the clip whole, a case of another kind; "
+        f"add the clip with posecbr train CLIP --append (a pose file carrying its label, or a "
+        f"labels CSV), which cuts it into {stored.cases} as the case base was; nothing written",
+        "--feedback",
+    )
+
+
 @dataclass(frozen=True)
 class FeedbackSettings:
     """Retain thresholds (novelty in units of the case base's usual held-out distance,
@@ -239,7 +254,9 @@ def classify_with_feedback(
     """Classify every clip, then learn from its true ``label`` (checked by
     :func:`check_feedback_label` first): retain it as a new case when it is novel and
     beneficial (always, for the first clip of a new activity), otherwise revise the case base
-    toward it. One transaction per clip."""
+    toward it. One transaction per clip. Refused for a case base of repetitions or windows
+    (:func:`check_feedback_cases`)."""
+    check_feedback_cases(stored)
     out = []
     pairs = list(zip(clips, truths, strict=True))
     for clip, truth in progress(pairs, desc="classifying", total=len(pairs), unit="clip"):

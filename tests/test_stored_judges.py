@@ -76,6 +76,15 @@ def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="module")
+def trained_clips(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """As ``trained``, a case per clip: feedback is given to case bases of whole clips."""
+    db = tmp_path_factory.mktemp("cb") / "cb.sqlite"
+    argv = ["train", str(LABELS), "--db", str(db), "--subjects", "s01,s02", "--labels", SEEN]
+    assert main(argv) == 0
+    return db
+
+
+@pytest.fixture(scope="module")
 def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Subject s03 (not in the case base): two squats, two side lunges, two hurdle steps (a
     movement the case base lacks), real repetitions joined one after the other."""
@@ -221,22 +230,43 @@ def test_trim_recalibrates_the_stored_judges_on_the_cases_it_keeps(
 
 
 @pytest.mark.parametrize(
-    "argv",
+    ("base", "argv"),
     [
         # a new activity's first clip is always retained
-        ["classify", str(DEMO / "m02_s03_e01.npz"), "--feedback", "hurdle_step", "--new-label"],
-        ["train", str(LABELS), "--append", "--subjects", "s03", "--labels", "deep_squat"],
+        ("trained_clips",
+         ["classify", str(DEMO / "m02_s03_e01.npz"), "--feedback", "hurdle_step", "--new-label"]),
+        ("trained", ["train", str(LABELS), "--append", "--subjects", "s03", "--labels",
+                     "deep_squat"]),
     ],
     ids=["feedback", "append"],
-)
+)  # fmt: skip
 def test_a_change_of_the_cases_drops_the_stored_judges_in_its_transaction(
-    trained: Path, recording: Path, tmp_path: Path, argv: list[str]
+    request: pytest.FixtureRequest, recording: Path, tmp_path: Path, base: str, argv: list[str]
 ) -> None:
-    db = _copy(trained, tmp_path / "cb.sqlite")
+    db = _copy(request.getfixturevalue(base), tmp_path / "cb.sqlite")
+    assert "judges" in _model(db)
     assert main([*argv, "--db", str(db)]) == 0
     assert "judges" not in _model(db)
     assert _judges_now(db) == {}
     assert main(["segment", str(recording), "--db", str(db)]) == 0  # calibrated at run time
+
+
+def test_feedback_to_a_case_base_of_windows_is_refused_and_writes_nothing(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A clip retained whole among windows would be a case of another kind: refused in one
+    line pointing to ``train --append``, which cuts it into windows."""
+    db = _copy(trained, tmp_path / "cb.sqlite")
+    before = _sha(db)
+    capsys.readouterr()
+    argv = ["classify", str(DEMO / "m02_s03_e01.npz"), "--feedback", "deep_squat", "--db", str(db)]
+    assert main(argv) == 1
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "Traceback" not in err
+    assert "case base 'default' holds windows (trained with --split windows)" in err
+    assert "posecbr train CLIP --append" in err
+    assert _sha(db) == before
+    assert main(["classify", str(DEMO / "m02_s03_e01.npz"), "--db", str(db)]) == 0  # no feedback
 
 
 def test_a_judge_of_another_version_of_the_cases_is_not_read(

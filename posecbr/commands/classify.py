@@ -123,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
     from casebase_store import open_store
     from cbr.classification import (
         FeedbackSettings,
+        check_feedback_cases,
         check_feedback_label,
         classify_clips,
         classify_with_feedback,
@@ -144,6 +145,8 @@ def run(args: argparse.Namespace) -> int:
                 f"{target!r}, train a case base with --target {target}",
                 "--target",
             )
+        if args.feedback is not None:
+            check_feedback_cases(stored)
         subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
         inputs = load_inputs(args.clips, args.sensor, subjects, target)
         clips, truths = [s for s, _ in inputs], [t for _, t in inputs]
