@@ -63,6 +63,8 @@ class TrainResult:
     skipped: list[str] = field(default_factory=list)
     #: whether the default judge of unknown (``segment``, ``watch``) could be calibrated on it
     judges_unknown: bool = True
+    #: cases whose features equal a case's of another activity (:func:`same_features`)
+    indistinct: list[str] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -267,7 +269,57 @@ def store_fitted(
         _learned(fitted),
         list(skipped),
         JUDGES[0] in fitted.judges_,
+        same_features(cb),
     )
+
+
+SAME_TOLERANCE = 1e-3
+"""Features within this of each other, every one, are the same (:func:`same_features`): a
+thousandth of a fluent's confidence, of a metre, of a degree."""
+
+
+def same_features(cb: CaseBase) -> list[str]:
+    """The cases whose features are those of an earlier case of another activity (each
+    within :data:`SAME_TOLERANCE`; NaN where the same features are missing), each told as
+    ``"A (label) = B (label)"`` with one such case: nothing can tell them apart (a still or
+    unseen stretch labelled as several activities, a file copied under another label).
+
+    Candidates come from eight random projections of the rows (a pair within the tolerance
+    in every feature lies within ``tolerance * sum |w|`` in each projection ``w``), checked
+    feature by feature a few hundred at a time until one matches."""
+    n = len(cb)
+    if n < 2:
+        return []
+    rows = cb.problems.reshape(n, -1).astype(float)
+    rows = np.where(np.isnan(rows), 1e9, rows)  # missing matches missing only
+    w = np.random.default_rng(0).normal(size=(rows.shape[1], 8))
+    proj, bound = rows @ w, SAME_TOLERANCE * np.abs(w).sum(axis=0) * 1.01  # and rounding
+    labels = cb.labels
+    codes = np.unique(labels.astype(str), return_inverse=True)[1].reshape(-1)
+    order = np.argsort(proj[:, 0], kind="stable")
+    key = proj[order, 0]
+    lows = np.searchsorted(key, key - bound[0], side="left")
+    highs = np.searchsorted(key, key + bound[0], side="right")
+    found: dict[int, int] = {}
+    for t in range(n):
+        i = int(order[t])
+        near = order[lows[t] : highs[t]]
+        near = near[(near < i) & (codes[near] != codes[i])]
+        for a in range(0, len(near), 256):  # a few at a time: most stills match at once
+            chunk = near[a : a + 256]
+            chunk = chunk[np.all(np.abs(proj[chunk] - proj[i]) <= bound, axis=1)]
+            same = chunk[np.all(np.abs(rows[chunk] - rows[i]) <= SAME_TOLERANCE, axis=1)]
+            if len(same):
+                found[i] = int(same[0])
+                break
+
+    def told(i: int) -> str:
+        a, b = cb.frames[i]
+        where = cb.sources[i] or f"case {i + 1}"
+        frames = "" if a is None or b is None else f" frames {a}-{b}"
+        return f"{where}{frames} ({labels[i]})"
+
+    return [f"{told(i)} = {told(j)}" for i, j in sorted(found.items())]
 
 
 def _cache_representations(
@@ -425,6 +477,7 @@ def append_described(
         store.close()
     return TrainResult(
         name, len(cb), total, _counts(text), cb.config, cb.measure.name, None, {}, skipped,
+        indistinct=same_features(cb),
     )  # fmt: skip
 
 

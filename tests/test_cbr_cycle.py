@@ -128,3 +128,20 @@ def test_revision_and_retention_are_logged_in_one_transaction(tmp_path: Path) ->
     log = store.maintenance_log("x")
     assert [e.action for e in log] == ["revise", "retain"] and log[1].case_id == new_id
     assert log[1].novelty == pytest.approx(3.0)  # 7 is 3 from the case at 10
+
+
+def test_same_features_finds_cases_of_other_activities_within_a_thousandth() -> None:
+    """By hand: case 2 (b) differs from case 1 (a) by 0.0009 in one feature: the same; case 4
+    (c) from case 3 (a) by 0.0011: not; case 5 equals case 3 but is of its activity; NaN
+    matches NaN only (cases 6 and 7, of two activities), never a number (case 8)."""
+    from cbr.training import same_features
+
+    p = np.array(
+        [[0.0, 0.0], [0.0009, 0.0], [0.0, 1.0], [0.0011, 1.0], [0.0, 1.0], [np.nan, 2.0],
+         [np.nan, 2.0], [0.0, 2.0]]
+    )  # fmt: skip
+    labels = ["a", "b", "a", "c", "a", "d", "e", "f"]
+    cb = CaseBase(FeatureConfig(), Euclidean(exact=True), p, labels, ("x", "y"), ("x", "y"),
+                  sources=tuple(f"f{i}.npz" for i in range(1, 9)))  # fmt: skip
+    assert same_features(cb) == ["f2.npz (b) = f1.npz (a)", "f7.npz (e) = f6.npz (d)"]
+    assert same_features(cb.subset(np.array([2, 3, 4, 5, 7]))) == []

@@ -357,3 +357,31 @@ def test_codes_that_share_a_name_are_one_activity_and_said_so(
     err = capsys.readouterr().err
     assert f"note: codes 1 and 3 of {names} are both named Hop: one activity" in err
     assert sorted(_cases(db)[0]) == ["Hop", "Hop", "Jog", "KneeRaise", "Twist"]
+
+
+def test_a_still_recording_labelled_as_several_activities_is_noted(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """13_30's first frame held for the whole recording, with 13_30's five labelled stretches:
+    five cases of one pose, nothing tells them apart; the four after the first (JumpJack,
+    frames 0-216) are each said to equal an earlier case of another activity (trained in
+    silence before). 13_30 itself, moving, gives no such note."""
+    from features.poses import load_pose
+
+    seq = load_pose(recording)
+    held = np.repeat(seq.positions[:1], seq.n_frames, axis=0)
+    still = save_pose(PoseSequence(held, seq.joint_names, seq.fps), tmp_path / "still.npz")
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    for path, note in ((still, True), (recording, False)):
+        db = tmp_path / f"{path.stem}.sqlite"
+        argv = ["train", str(path), "--frame-labels", str(labels), "--label-block", "0.1",
+                "--db", str(db)]  # fmt: skip
+        assert main(argv) == 0
+        err = capsys.readouterr().err
+        assert (
+            "note: 4 clips with the same features as a case of another activity: nothing tells "
+            f"them apart (a still stretch, or a file copied under another label?): {path} "
+            "frames 216-804 (6) = " in err
+        ) is note, err
+        assert ("same features" in err) is note
+        assert len(_cases(db)[0]) == 5  # trained all the same

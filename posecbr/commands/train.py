@@ -516,6 +516,37 @@ def _skipped(sources: list[str], split: str) -> str:
     return f"skipped {piece} that show no person: {', '.join(names)}{more}"
 
 
+def _indistinct(pairs: list[str], split: str) -> str:
+    """The note on cases nothing tells apart from a case of another activity."""
+    from cbr.stored import CASE_KINDS
+
+    kind = counted(len(pairs), CASE_KINDS.get(split, "clip"))
+    more = f" (and {len(pairs) - 1} more)" if len(pairs) > 1 else ""
+    return (
+        f"note: {kind} with the same features as a case of another activity: nothing tells "
+        f"them apart (a still stretch, or a file copied under another label?): "
+        f"{shown(pairs[0])}{more}"
+    )
+
+
+def _notes(args: argparse.Namespace, result: Any) -> None:
+    """What the user should know of the case base stored, on stderr: cases nothing tells
+    apart, and a case base of windows segment cannot judge unknown with."""
+    if result.indistinct:
+        print(_indistinct(result.indistinct, args.split), file=sys.stderr)
+    if not args.append and args.split == "windows" and not result.judges_unknown:
+        why = (
+            "fewer than three activities"
+            if len(result.label_counts) < 3
+            else "no activity with windows apart from each other"
+        )
+        print(
+            f"note: segment and watch cannot tell stretches unlike every activity with this case"
+            f" base ({why}); they run with --unknown held-out",
+            file=sys.stderr,
+        )
+
+
 def _report(args: argparse.Namespace, result: Any) -> None:
     summary: dict[str, Any] = {
         "db": str(args.db),
@@ -530,17 +561,9 @@ def _report(args: argparse.Namespace, result: Any) -> None:
     }
     if result.maintenance is not None:
         summary["trim"] = result.maintenance.summary()
-    if not args.append and args.split == "windows" and not result.judges_unknown:
-        why = (
-            "fewer than three activities"
-            if len(result.label_counts) < 3
-            else "no activity with windows apart from each other"
-        )
-        print(
-            f"note: segment and watch cannot tell stretches unlike every activity with this case"
-            f" base ({why}); they run with --unknown held-out",
-            file=sys.stderr,
-        )
+    if result.indistinct:
+        summary["indistinct"] = result.indistinct
+    _notes(args, result)
     if args.json:
         json.dump(summary, sys.stdout, indent=2, ensure_ascii=False)
         print()
