@@ -143,6 +143,11 @@ REFUSED = [
      "data/labels.csv: --out must be a folder, and this is a file"),
     ("out in a missing folder", ["--out", "nope/deeper"],
      "nope: the folder for --out does not exist"),
+    # the CSV written second replaced the JSON
+    ("json and csv one file", ["--json", "r.json", "--csv", "r.json"],
+     "r.json: the JSON output and the CSV output are the same file"),
+    ("json in the out folder", ["--out", "res", "--json", "res/results.json"],
+     "res/results.json: the JSON output and the results file are the same file"),
 ]  # fmt: skip
 
 
@@ -154,11 +159,55 @@ def test_an_output_that_cannot_be_written_is_refused_before_the_run(
     (tmp_path / "folder").mkdir()
     (tmp_path / "folder" / "kept.json").write_text("{}")
     before = snapshot(tmp_path)
-    args = [args[0], str(tmp_path / args[1])]
+    args = [a if a.startswith("--") else str(tmp_path / a) for a in args]
     assert main(["compare", str(labels), *FAST, *args]) == 1
     line = _one_error_line(capsys, "compare")
     assert f"error: {tmp_path}/{message}" in line
     assert snapshot(tmp_path) == before
+
+
+def test_a_negative_seed_is_refused_before_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """It ended in a traceback from numpy after the whole cross-validation."""
+    labels = _swapped_data(tmp_path / "data")
+    before = snapshot(tmp_path)
+    argv = ["compare", str(labels), *FAST, "--seed", "-1", "--json", str(tmp_path / "r.json")]
+    assert main(argv) == 1
+    assert _one_error_line(capsys, "compare").endswith(
+        "error: --seed: seed must be in 0 to 2**32 - 1, got -1"
+    )
+    assert snapshot(tmp_path) == before
+
+
+def test_a_clip_that_shows_nobody_is_left_out_of_every_method_and_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An all-NaN clip among the ten: it failed the case base ("shows no person") while DAD,
+    which needs no description, went on, and DAD was crowned best with exit 0. Now it is left
+    out of every method, said so, and the others compare as without it: the case base
+    learns the labels as given (100 %), DAD the movements performed (0 %)."""
+    import numpy as np
+
+    labels = _swapped_data(tmp_path / "data")
+    blank = dict(np.load(DEMO / "m01_s03_e02.npz"))
+    blank["positions"] = np.full_like(blank["positions"], np.nan)
+    np.savez(tmp_path / "data" / "blank.npz", **blank)  # type: ignore[arg-type]
+    with labels.open("a") as f:
+        f.write("blank.npz,standing_shoulder_abduction,s03\n")
+    out = tmp_path / "r.json"
+    assert main(["compare", str(labels), *FAST, "--json", str(out)]) == 0
+    out_text, err = capsys.readouterr()
+    assert f"note: left out 1 clip that shows no person: {tmp_path}/data/blank.npz" in err
+    # DAD's wrong clips explained on stdout (they went only to --json and --out before)
+    assert "\nm01_s01_e01.npz: standing_shoulder_abduction, answered deep_squat by dad\n" in (
+        out_text
+    )
+    assert "  The true activity: standing shoulder abduction" in out_text
+    res = json.loads(out.read_text())
+    acc = {m["name"]: m["accuracy"] for m in res["methods"]}
+    assert acc == {"cbr fluents/euclidean": 1.0, "dad": 0.0}
+    assert res["dataset"]["n_clips"] == 10
 
 
 # ---------------------------------------------------------------------------- report

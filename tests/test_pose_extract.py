@@ -136,6 +136,8 @@ def _bad_inputs(tmp: Path, shared_data: Path) -> dict[str, Path]:
         "not_a_video": (tmp / "notes.mp4", b"these are my notes, not a video\n"),
         "text_file": (tmp / "readme.txt", b"hello\n"),
         "empty_file": (tmp / "empty.mp4", b""),
+        # a labels CSV with its header alone (a ZeroDivisionError before: no clip, no worker)
+        "header_only_csv": (tmp / "header.csv", b"path,label\n"),
     }
     out = {}
     for name, (path, data) in files.items():
@@ -181,6 +183,18 @@ def test_unwritable_output_is_one_line(
     line = _only_line(capfd.readouterr().err)
     assert "the folder of the overlay does not exist" in line and str(missing) in line
     assert not missing.exists() and not (out / f"{clip.stem}.npz").exists()
+    # a folder's overlays go to a folder: one named like a video was made as a folder
+    folder = tmp_path / "videos"
+    folder.mkdir()
+    (folder / "a.mp4").write_bytes(clip.read_bytes())
+    argv = ["extract", str(folder), "--out", str(out), "--overlay", str(tmp_path / "all.mp4")]
+    assert main(argv) == 1
+    line = _only_line(capfd.readouterr().err)
+    assert line.endswith(
+        "all.mp4: for a folder or labels CSV, --overlay names the folder for the overlay "
+        "videos, not one video file"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file.txt", "videos"]
 
 
 def test_cli_process_prints_only_one_line_for_a_corrupt_video(

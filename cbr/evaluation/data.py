@@ -67,6 +67,24 @@ def _groups(clips: Sequence[Clip], column: str | None, source: str) -> np.ndarra
     return np.array([str(v) for v in values], dtype=object)
 
 
+def _shown(clips: Sequence[Clip]) -> tuple[list[Clip], list[str]]:
+    """The clips that show a person (some frame shows the torso), and a note naming the
+    others (left out for every method alike: a clip nothing can be computed from failed the
+    methods that describe clips, and the comparison crowned the others)."""
+    from features.body import torso_share
+
+    keep = [c for c in clips if torso_share(c.seq) > 0.0]
+    if len(keep) == len(clips):
+        return list(clips), []
+    gone = [c.seq.source or str(c.label) for c in clips if torso_share(c.seq) == 0.0]
+    more = " ..." if len(gone) > 5 else ""
+    n = len(gone)
+    return keep, [
+        f"left out {n} clip{'s' if n > 1 else ''} that show{'s' if n == 1 else ''} no "
+        f"person: {', '.join(gone[:5])}{more}"
+    ]
+
+
 def _single_clip_note(single: list[str]) -> str:
     many = len(single) > 1
     return (
@@ -81,6 +99,9 @@ def prepare(clips: Sequence[Clip], settings: CompareSettings, source: str = "dat
     a note."""
     if not clips:
         raise DataError("no clips found", source)
+    clips, nobody = _shown(clips)
+    if not clips:
+        raise DataError("no clip shows a person: nothing to compare", source)
     y = _targets(clips, settings.target, source)
     within = _groups(clips, settings.within_column, source)
     counts = Counter(y)
@@ -101,7 +122,7 @@ def prepare(clips: Sequence[Clip], settings: CompareSettings, source: str = "dat
         labels=np.array([str(clips[i].label) for i in idx], dtype=object),
         within=None if within is None else within[idx],
         classes=classes,
-        notes=[_single_clip_note(single)] if single else [],
+        notes=nobody + ([_single_clip_note(single)] if single else []),
     )
 
 

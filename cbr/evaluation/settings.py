@@ -82,6 +82,8 @@ class CompareSettings:
             raise ConfigError(f"bootstrap must be at least 1, got {self.bootstrap}", "bootstrap")
         if int(self.explain) < 0:
             raise ConfigError(f"explain must be 0 or more, got {self.explain}", "--explain")
+        if not 0 <= int(self.seed) < 2**32:  # numpy's seeds
+            raise ConfigError(f"seed must be in 0 to 2**32 - 1, got {self.seed}", "--seed")
 
     def _check_cbr_params(self) -> None:
         from cbr.estimator import CaseBaseClassifier

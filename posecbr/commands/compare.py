@@ -197,6 +197,10 @@ def _outputs(args: argparse.Namespace) -> list[Output]:
             raise DataError("the folder for --out does not exist", args.out.parent)
         out.append(Output("results file", args.out / "results.json", "json", True))
         out.append(Output("results table", args.out / "results.csv", "csv", True))
+    for i, o in enumerate(out):  # the second written would replace the first
+        for other in out[:i]:
+            if o.path.resolve() == other.path.resolve():
+                raise DataError(f"the {other.what} and the {o.what} are the same file", o.path)
     return out
 
 
@@ -234,6 +238,17 @@ def _draw_pictures(run_: Any, out: Path, trim: float | None) -> None:
     run_.results.notes += drawing.failures
 
 
+def _print_explanations(explained: list[Any]) -> None:
+    """Why the clips explained (``--explain``) were got wrong, each its explanation's text
+    under a line naming the clip, its true label and the answer."""
+    from features.text import shown
+
+    for e in explained:
+        print(f"\n{shown(e.clip)}: {shown(e.true)}, answered {shown(e.predicted)} by {e.method}")
+        for line in e.text.splitlines():
+            print(f"  {shown(line)}")
+
+
 def run(args: argparse.Namespace) -> int:
     from cbr.evaluation.compare import run_compare
     from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
@@ -254,6 +269,7 @@ def run(args: argparse.Namespace) -> int:
     print(format_table(results))
     if results.best:
         print(f"best: {results.best}; best interpretable (*): {results.best_interpretable}")
+    _print_explanations(results.explanations)
     if args.out:
         args.out.mkdir(exist_ok=True)
     _write_results(results, outputs)  # the results are safe before any picture is drawn

@@ -135,6 +135,8 @@ def _csv_jobs(csv_path: Path, out: Path) -> list[Job]:
                 extras=dict(rec["extras"]),
             )
         )
+    if not jobs:
+        raise DataError("the labels CSV lists no clip", csv_path)
     return jobs
 
 
@@ -433,12 +435,20 @@ def _options(args: argparse.Namespace) -> Options:
 
 def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
     """Every output path refused or prepared before the first clip is read."""
-    if args.overlay is not None and len(jobs) == 1 and args.input.is_file():
+    single = len(jobs) == 1 and args.input.is_file()
+    if args.overlay is not None and single:
         if args.overlay.suffix.lower() != ".mp4":
             raise DataError("overlay must be an .mp4 file name", args.overlay)
         # one file, as segment --overlay and watch --out: its folder must exist (a folder
         # of overlays for several clips is made, with the class folders inside)
         check_output(args.overlay, inputs=[args.input], what="overlay")
+    elif args.overlay is not None and not args.overlay.is_dir():
+        if args.overlay.suffix.lower() in VIDEO_SUFFIXES:
+            raise DataError(
+                "for a folder or labels CSV, --overlay names the folder for the overlay "
+                "videos, not one video file",
+                args.overlay,
+            )
     if args.out.exists() and not args.out.is_dir():
         raise DataError("output is not a folder", args.out)
     _check_outputs(jobs)
