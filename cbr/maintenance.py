@@ -50,12 +50,22 @@ class MaintenanceReport:
     distribution_shift: float | None = None  # max over activities, in pooled std units
     original_ids: np.ndarray | None = None  # (size_before,) store ids (-1: not stored)
     before: CaseBase | None = None  # the case base that was edited
+    #: what the accuracies were measured on, in words
+    measured: str = ""
+    #: activities the editor dropped every case of, one kept (:func:`keep_every_activity`)
+    kept_alone: tuple[str, ...] = ()
 
     def summary(self) -> str:
-        return (
+        text = (
             f"{self.method}: {self.size_before} -> {self.size_after} cases, accuracy "
             f"{self.accuracy_before:.3f} -> {self.accuracy_after:.3f}"
         )
+        if self.measured:
+            text += f" ({self.measured})"
+        if self.kept_alone:
+            names = ", ".join(repr(a) for a in self.kept_alone)
+            text += f"; one case kept of {names}, every case of which the editor dropped"
+        return text
 
 
 def pairwise_distances(cb: CaseBase, desc: str = "distances") -> np.ndarray:
@@ -110,15 +120,18 @@ def _report(
     eval_set: tuple[np.ndarray, np.ndarray] | None,
     **extra: object,
 ) -> MaintenanceReport:
+    kept, alone = keep_every_activity(cb, kept, dist)
     after = cb.subset(kept)
     if eval_set is not None:
         acc_b = _eval_accuracy(cb, eval_set[0], eval_set[1], k, weights)
         acc_a = _eval_accuracy(after, eval_set[0], eval_set[1], k, weights)
+        measured = f"{k}-NN on the {len(eval_set[1])} evaluation clips"
     else:
         if dist is None:
             dist = pairwise_distances(cb)
         acc_b = loo_accuracy(dist, cb.labels, np.ones(len(cb), bool), k, weights)
         acc_a = loo_accuracy(dist, cb.labels, kept, k, weights)
+        measured = f"{k}-NN, each of the {len(cb)} cases before left out in turn"
     assert cb.ids is not None
     return MaintenanceReport(
         method,
@@ -130,8 +143,30 @@ def _report(
         after,
         original_ids=cb.ids.copy(),
         before=cb,
+        measured=measured,
+        kept_alone=alone,
         **extra,  # type: ignore[arg-type]
     )
+
+
+def keep_every_activity(
+    cb: CaseBase, kept: np.ndarray, dist: np.ndarray | None
+) -> tuple[np.ndarray, tuple[str, ...]]:
+    """``kept`` with one case of every activity it lost whole (RENN and ICF drop a case its
+    neighbours misclassify, so an activity of one case, or of a few among others, goes
+    entirely, and the case base could no longer answer it): its medoid, the case with the
+    least summed distance to its activity's others. The activities so kept, in order."""
+    labels = cb.labels.astype(str)
+    lost = [a for a in np.unique(labels) if not kept[labels == a].any()]
+    if not lost:
+        return kept, ()
+    if dist is None:
+        dist = pairwise_distances(cb)
+    kept = kept.copy()
+    for a in lost:
+        idx = np.flatnonzero(labels == a)
+        kept[idx[int(np.argmin(dist[np.ix_(idx, idx)].sum(axis=1)))]] = True
+    return kept, tuple(str(a) for a in lost)
 
 
 def distribution_shift(cb: CaseBase, kept: np.ndarray) -> float:

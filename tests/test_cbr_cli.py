@@ -144,6 +144,36 @@ def test_bad_input_one_line_errors(
     assert code == 1 and "unknown similarity 'cosine'" in err
 
 
+def test_trim_and_classify_options_that_cannot_hold_are_refused(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--keep`` with CNN (ignored before: it keeps what it needs), ``-k`` as large as the
+    case base for trim or larger for classify (clamped before, and the accuracies changed):
+    one line each, nothing changed."""
+    import hashlib
+
+    train, _ = dataset
+    db = tmp_path / "cb.sqlite"
+    assert _cli(capsys, "train", str(train), "--db", str(db))[0] == 0
+    n = 5 * len(ACTIVITIES)
+    before = hashlib.sha256(db.read_bytes()).hexdigest()
+    for argv, message in (
+        (["--editor", "cnn", "--keep", "0.5"],
+         "--keep: goes with --editor novelty-benefit; cnn decides how many cases it keeps"),
+        (["-k", str(n)],
+         f"-k: must be less than the {n} cases of 'default' (each is left out in turn), got {n}"),
+    ):  # fmt: skip
+        code, out, err = _cli(capsys, "casebase", "trim", "--db", str(db), *argv)
+        assert code == 1 and out == "" and err.count("\n") == 1, err
+        assert err.strip().endswith(message), err
+    code, out, err = _cli(capsys, "classify", str(train), "--db", str(db), "-k", str(n + 1))
+    assert code == 1 and out == "" and err.count("\n") == 1
+    assert err.strip().endswith(f"-k: must be at most the {n} cases of 'default', got {n + 1}")
+    assert hashlib.sha256(db.read_bytes()).hexdigest() == before
+    code, out, _ = _cli(capsys, "casebase", "trim", "--db", str(db), "-k", str(n - 1), "--dry-run")
+    assert code == 0 and f"({n - 1}-NN, each of the {n} cases before left out in turn)" in out
+
+
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 

@@ -96,6 +96,25 @@ def test_cnn_and_renn_by_hand() -> None:
     assert c.accuracy_after == pytest.approx(7 / 9) and c.accuracy_before == 1.0
 
 
+def test_renn_and_icf_keep_the_middle_case_of_an_activity_they_drop_whole() -> None:
+    """By hand: activity c's three cases (x = 4.9, 5.2, 5.6) sit among b's (x = 4.0 ... 7.0,
+    every 0.5): each has two b cases among its three nearest, so ENN drops all three and c
+    could no longer be answered. One is kept: 5.2, whose summed distance to the other two
+    (0.3 + 0.4) is the least (4.9: 0.3 + 0.7; 5.6: 0.7 + 0.4); the summary says so."""
+    from cbr.maintenance import icf
+
+    xs = [0.0, 0.5, 1.0, 4.0, 4.5, 5.0, 5.5, 6.0, 6.5, 7.0, 4.9, 5.2, 5.6]
+    ys = ["a"] * 3 + ["b"] * 7 + ["c"] * 3
+    for editor in (renn, icf):
+        rep = editor(_line(xs, ys), k=3)
+        assert list(rep.kept[10:]) == [False, True, False], editor
+        assert rep.kept_alone == ("c",)
+        assert rep.summary().endswith(
+            "; one case kept of 'c', every case of which the editor dropped"
+        )
+        assert "(3-NN, each of the 13 cases before left out in turn)" in rep.summary()
+
+
 def test_trim_drops_near_duplicates_first() -> None:
     xs = [0.0, 0.01, 3.0, 6.0, 20.0, 20.01, 23.0, 26.0]
     ys = ["a"] * 4 + ["b"] * 4

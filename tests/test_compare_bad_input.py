@@ -166,17 +166,25 @@ def test_an_output_that_cannot_be_written_is_refused_before_the_run(
     assert snapshot(tmp_path) == before
 
 
-def test_a_negative_seed_is_refused_before_the_run(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        # a traceback from numpy after the whole cross-validation
+        (["--seed", "-1"], "--seed: seed must be in 0 to 2**32 - 1, got -1"),
+        # clamped: every case voted and the figures changed with the folds' sizes
+        (["--k", "7"], "--k: must be at most 6, the training clips of the smallest fold, got 7"),
+    ],
+)
+def test_a_seed_or_k_that_cannot_hold_is_refused_before_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], option: list[str], message: str
 ) -> None:
-    """It ended in a traceback from numpy after the whole cross-validation."""
+    """Ten clips of three subjects (s01 and s02 four each, s03 two): a fold holding out s01
+    trains on 6, the fewest."""
     labels = _swapped_data(tmp_path / "data")
     before = snapshot(tmp_path)
-    argv = ["compare", str(labels), *FAST, "--seed", "-1", "--json", str(tmp_path / "r.json")]
+    argv = ["compare", str(labels), *FAST, *option, "--json", str(tmp_path / "r.json")]
     assert main(argv) == 1
-    assert _one_error_line(capsys, "compare").endswith(
-        "error: --seed: seed must be in 0 to 2**32 - 1, got -1"
-    )
+    assert _one_error_line(capsys, "compare").endswith(f"error: {message}")
     assert snapshot(tmp_path) == before
 
 

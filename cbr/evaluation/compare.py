@@ -31,6 +31,7 @@ from datetime import UTC, datetime
 import numpy as np
 
 from features.datasets import Clip
+from features.errors import ConfigError
 
 from ..similarity import get_measure
 from .data import Prepared, prepare
@@ -159,6 +160,18 @@ def _clips(data: Prepared) -> list[ClipInfo]:
     ]
 
 
+def _check_k(settings: CompareSettings, folds: np.ndarray) -> None:
+    """Refuse a ``k`` larger than a fold's training clips: the vote would take every case
+    there is, and the accuracy change with the fold's size, not with ``k``."""
+    _, held = np.unique(folds, return_counts=True)
+    fewest = int(len(folds) - held.max())
+    if int(settings.k) > fewest:
+        raise ConfigError(
+            f"must be at most {fewest}, the training clips of the smallest fold, got {settings.k}",
+            "--k",
+        )
+
+
 def run_compare(
     clips: Sequence[Clip],
     settings: CompareSettings,
@@ -174,6 +187,7 @@ def run_compare(
     """
     data = prepare(clips, settings, source)
     scheme, folds, fold_notes = _folds(data, settings, fold_indices)
+    _check_k(settings, folds)
     methods = methods_for(settings)
     skipped, method_notes = _skipped(methods, data, settings)
     active = tuple(mi for mi in range(len(methods)) if mi not in skipped)

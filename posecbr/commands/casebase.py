@@ -44,10 +44,18 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--editor", choices=("novelty-benefit", "cnn", "renn", "icf"), default="novelty-benefit"
     )
     q.add_argument(
-        "--keep", type=float, default=0.7, help="novelty-benefit: fraction of each activity to keep"
+        "--keep",
+        type=float,
+        default=None,
+        help="novelty-benefit: fraction of each activity to keep (0.7)",
     )
     q.add_argument(
-        "-k", "--k", type=int, default=None, help="neighbours for novelty/benefit (as trained)"
+        "-k",
+        "--k",
+        type=int,
+        default=None,
+        help="neighbours: novelty-benefit's (as trained), RENN's and ICF's edits (3), the "
+        "accuracy reported (as trained; CNN: 1)",
     )
     q.add_argument("--dry-run", action="store_true", help="report only, change nothing")
     q = act.add_parser(
@@ -352,19 +360,32 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     from cbr.stored import judges_after_change, load_classifier, recalibrated, write_matrices
 
     name = store.choose(args.name)
-    if not 0.0 < args.keep <= 1.0:
-        raise ConfigError(f"must be in (0, 1], got {args.keep}", "--keep")
+    if args.keep is not None and args.editor != "novelty-benefit":
+        raise ConfigError(
+            f"goes with --editor novelty-benefit; {args.editor} decides how many cases it keeps",
+            "--keep",
+        )
+    keep = 0.7 if args.keep is None else args.keep
+    if not 0.0 < keep <= 1.0:
+        raise ConfigError(f"must be in (0, 1], got {keep}", "--keep")
     if args.k is not None and args.k < 1:
         raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     stored = load_classifier(store, name)
     clf = stored.classifier
-    k = int(clf.k) if args.k is None else args.k
     cb = clf.case_base_
+    if args.k is not None and args.k >= len(cb):
+        raise ConfigError(
+            f"must be less than the {len(cb)} cases of {name!r} (each is left out in turn), "
+            f"got {args.k}",
+            "-k",
+        )
     fn = EDITORS[args.editor]
     if args.editor == "novelty-benefit":
-        report = fn(cb, args.keep, k, clf.weights)
-    else:
+        report = fn(cb, keep, int(clf.k) if args.k is None else args.k, clf.weights)
+    elif args.k is None:
         report = fn(cb, weights=clf.weights)
+    else:
+        report = fn(cb, k=args.k, weights=clf.weights)
     if not args.dry_run:
         judges = recalibrated(clf, report.casebase)
         with store.transaction() as tx:
@@ -379,6 +400,8 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
         "accuracy_before": report.accuracy_before,
         "accuracy_after": report.accuracy_after,
         "distribution_shift": report.distribution_shift,
+        "measured": report.measured,
+        "kept_alone": list(report.kept_alone),
         "dry_run": bool(args.dry_run),
     }
     if args.json:

@@ -137,6 +137,11 @@ def run(args: argparse.Namespace) -> int:
         name = store.choose(args.name)
         stored = load_classifier(store, name)
         if args.k is not None:
+            n_cases = len(stored.classifier.case_base_)
+            if args.k > n_cases:
+                raise ConfigError(
+                    f"must be at most the {n_cases} cases of {name!r}, got {args.k}", "-k"
+                )
             stored.classifier.set_params(k=args.k)
         target = stored.target if args.target is None else args.target
         if target != stored.target:
