@@ -100,3 +100,18 @@ def test_converting_into_a_folder_adds_to_its_labels(
     assert err.count("\n") == 1 and "labels.csv: the labels file already there has no 'path'" in err
     assert [p.name for p in bad.iterdir()] == ["labels.csv"]
     assert (bad / "labels.csv").read_text() == "file,label\nx.npz,a\n"
+    # rows train could not read were kept and merged (an unclosed quote became a row of its
+    # own; a row without its label, a clip that is not there): refused, naming the line
+    for text, problem in (
+        ('path,label\n"unterminated,foo\n', "line 2: malformed CSV"),
+        ("path,label\n13_29.npz,\n", "line 2: empty label"),
+    ):
+        (bad / "labels.csv").write_text(text)
+        (bad / "13_29.npz").write_bytes((out / "13_29.npz").read_bytes())
+        assert main(["convert", str(amc), "--asf", str(asf), "--out", str(bad)]) == 1
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and (
+            f"labels.csv: the labels file already there cannot be added to: {problem}" in err
+        ), err
+        assert sorted(p.name for p in bad.iterdir()) == ["13_29.npz", "labels.csv"]
+        assert (bad / "labels.csv").read_text() == text

@@ -328,6 +328,15 @@ def _listed_before(labels: Path) -> list[dict[str, Any]]:
         raise DataError(f"cannot read the labels file already there ({exc})", labels) from None
     if "path" not in columns:
         raise DataError("the labels file already there has no 'path' column", labels)
+    from features.datasets import read_labels_csv
+
+    try:  # every row a clip with its label, as train and classify will read it
+        read_labels_csv(labels)
+    except DataError as exc:
+        raise DataError(
+            f"the labels file already there cannot be added to: {exc.message}; nothing written",
+            labels,
+        ) from None
     return rows
 
 
