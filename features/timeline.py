@@ -165,7 +165,7 @@ class _RunTracker:
             self.start[state] = -1
 
     def _close(self, state: int, s: int, e: int, total: float, count: float) -> None:
-        if e - s + 1 >= self.min_run or self.n_frames < self.min_run:
+        if e - s + 1 >= self.min_run:
             mean = float(total / count) if count else float("nan")
             self.spans.setdefault((s, e), []).append((state, mean))
 
@@ -220,6 +220,7 @@ def describe_clip(
     ``backend``: of :func:`features.fluents.evaluate`.
     """
     n = clip.n_frames
+    min_run = max(1, min(min_run, n))  # a state holding the whole clip is a run of it
     margin = 0 if per_frame is not None or min_run <= 1 else _median_size(min_run) // 2
     bins = max(1, min(n, PLOT_COLUMNS))
     tracker: _RunTracker | None = None
@@ -243,7 +244,9 @@ def describe_clip(
             for run in _frame_runs(start, on[own], conf, layout):
                 per_frame(run)
         else:
-            tracker.add(start, _clean(on, min_run)[own], conf)
+            raw = on[own]  # a run's confidence: its mean where the state held, not in the
+            # flicker the cleaning filled (a state shown is one that held)
+            tracker.add(start, _clean(on, min_run)[own], np.where(raw, conf, np.nan))
     assert tracker is not None  # a clip has at least one frame
     tracker.finish()
     return Timeline(
