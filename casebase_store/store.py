@@ -202,6 +202,8 @@ class CaseArrays:
     subjects: tuple[str | None, ...]
     origins: tuple[str, ...]
     frame_ranges: tuple[tuple[int | None, int | None], ...]
+    #: (n,) bool: the case takes part (False: trimmed; only with ``include_inactive``)
+    active: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
 
 @dataclass(frozen=True)
@@ -520,6 +522,7 @@ class CaseStore:
             CaseRow.origin,
             CaseRow.frame_start,
             CaseRow.frame_end,
+            CaseRow.active,
         ]
         q = select(*columns, *([CaseRow.features] if with_features else [])).where(
             CaseRow.case_base_id == cb.id
@@ -538,6 +541,7 @@ class CaseStore:
             subjects=tuple(r.subject for r in rows),
             origins=tuple(r.origin for r in rows),
             frame_ranges=tuple((r.frame_start, r.frame_end) for r in rows),
+            active=np.array([bool(r.active) for r in rows], dtype=bool),
         )
 
     def _stack_features(self, cb: CaseBaseRow, rows: Sequence[Any]) -> np.ndarray:

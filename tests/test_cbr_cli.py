@@ -174,6 +174,40 @@ def test_trim_and_classify_options_that_cannot_hold_are_refused(
     assert code == 0 and f"({n - 1}-NN, each of the {n} cases before left out in turn)" in out
 
 
+def test_casebase_history_counts_operations_and_list_marks_trimmed_cases(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two trims read "trim x2", not one entry per case dropped plus two ("trim x92"), with
+    the cases dropped beside (the trims' own sizes before and after); a feedback clip not
+    retained is not a retain; ``list --all`` marks the trimmed cases ("trained" for all)."""
+    train, test = dataset
+    db = str(tmp_path / "cb.sqlite")
+    assert _cli(capsys, "train", str(train), "--db", db)[0] == 0
+    retained = 0
+    for clip in sorted(test.rglob("*.npz"))[:2]:
+        code, out, _ = _cli(capsys, "classify", str(clip), "--db", db, "--feedback",
+                            ACTIVITIES[0], "--json")  # fmt: skip
+        assert code == 0
+        retained += json.loads(out)["results"][0]["retention"]["retained"]
+    dropped = 0
+    for _ in range(2):
+        code, out, _ = _cli(capsys, "casebase", "trim", "--db", db, "--keep", "0.5", "--json")
+        rep = json.loads(out)
+        dropped += rep["size_before"] - rep["size_after"]
+    code, out, _ = _cli(capsys, "casebase", "info", "--db", db, "--json")
+    info = json.loads(out)["case_bases"][0]
+    assert info["maintenance"]["trim"] == 2 and info["trimmed_cases"] == dropped > 0
+    assert info["maintenance"].get("retain", 0) == retained
+    assert info["not_retained"] == 2 - retained
+    code, out, _ = _cli(capsys, "casebase", "info", "--db", db)
+    assert f"trim x2 ({dropped} cases dropped)" in out
+    code, out, _ = _cli(capsys, "casebase", "list", "--db", db, "--all", "--json")
+    cases = json.loads(out)["cases"]
+    assert sum(not c["active"] for c in cases) == dropped
+    code, out, _ = _cli(capsys, "casebase", "list", "--db", db, "--all")
+    assert out.count(", trimmed\t") == dropped
+
+
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError
 from features.fileio import atomic_path, check_output
-from features.text import shown
+from features.text import counted, shown
 
 if TYPE_CHECKING:
     from casebase_store import CaseBaseInfo, CaseStore
@@ -125,9 +125,24 @@ def _info_document(store: CaseStore, i: CaseBaseInfo) -> dict[str, Any]:
         "created": i.created_at.isoformat(),
         "version": i.version,
         "model": {**_model_summary(i.model, i.feature_words), **_judges_summary(i)},
-        # how often each maintenance action ran, in the order they first ran
-        "maintenance": dict(Counter(e.action for e in store.maintenance_log(i.name))),
+        **_history(store.maintenance_log(i.name)),
     }
+
+
+def _history(log: list[Any]) -> dict[str, Any]:
+    """How often each maintenance action ran, in the order they first ran (``maintenance``:
+    a trim once, however many cases it dropped; a clip retained once, one not retained not
+    at all), with the cases trims dropped and the feedback clips not retained."""
+    runs: Counter[str] = Counter()
+    dropped = not_retained = 0
+    for e in log:
+        if e.action == "trim" and e.reason.endswith(": dropped"):  # one per case it dropped
+            dropped += 1
+        elif e.action == "retain" and e.case_id is None:  # the decision not to
+            not_retained += 1
+        else:
+            runs[e.action] += 1
+    return {"maintenance": dict(runs), "trimmed_cases": dropped, "not_retained": not_retained}
 
 
 def _judges_summary(i: CaseBaseInfo) -> dict[str, Any]:
@@ -158,8 +173,17 @@ def _print_info(d: dict[str, Any]) -> None:
     _print_model(d["model"], len(d["labels"]), _changed_since_training(d["maintenance"]))
     for lab, n in d["labels"].items():
         print(f"  {n:6d}  {shown(lab)}")
-    if d["maintenance"]:
-        print("  history: " + ", ".join(f"{k} x{v}" for k, v in d["maintenance"].items()))
+    if d["maintenance"] or d["not_retained"]:
+        notes = {
+            "trim": f" ({counted(d['trimmed_cases'], 'case')} dropped)",
+            "retain": f" ({counted(d['not_retained'], 'clip')} not retained)"
+            if d["not_retained"]
+            else "",
+        }
+        words = [f"{k} x{v}{notes.get(k, '')}" for k, v in d["maintenance"].items()]
+        if d["not_retained"] and "retain" not in d["maintenance"]:
+            words.append(f"{counted(d['not_retained'], 'feedback clip')} not retained")
+        print("  history: " + ", ".join(words))
 
 
 #: maintenance actions that add or change cases after training (trim stores the
@@ -291,6 +315,7 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
             "case_id": int(a.ids[i]),
             "label": str(a.labels[i]),
             "origin": a.origins[i],
+            "active": bool(a.active[i]),
             "subject": a.subjects[i],
             "source": a.sources[i],
             "frames": list(a.frame_ranges[i]),
@@ -303,8 +328,9 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
     for r in rows:
         fr = r["frames"]
         span = f"{fr[0]}-{fr[1]}" if fr[0] is not None else "-"
+        origin = r["origin"] if r["active"] else f"{r['origin']}, trimmed"
         print(
-            f"#{r['case_id']}\t{shown(r['label'])}\t{r['origin']}\t{shown(r['subject'] or '-')}\t"
+            f"#{r['case_id']}\t{shown(r['label'])}\t{origin}\t{shown(r['subject'] or '-')}\t"
             f"{span}\t{shown(r['source'])}"
         )
     return 0
