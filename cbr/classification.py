@@ -67,7 +67,8 @@ class Classification:
             out.update(label=None, unclassifiable=self.unclassifiable)
         if self.true_label is not None:
             out["true_label"] = self.true_label
-            out["correct"] = self.true_label == self.label
+            # an unclassifiable clip is not judged (the summary counts it as not labelled)
+            out["correct"] = None if self.solved is None else self.true_label == self.label
         if self.revision is not None:
             r = self.revision
             out["revision"] = {
@@ -88,9 +89,28 @@ class Classification:
         return out
 
 
+def too_short(clip: PoseSequence) -> str | None:
+    """Why ``clip`` is too short to classify (None when it is not): it lasts less than one
+    movement can (:data:`features.repetitions.MIN_PERIOD_S`); a single frame, or a few, show
+    a posture, and a classifier of movements answers it with confidence all the same."""
+    from features.repetitions import MIN_PERIOD_S
+
+    if clip.duration_s >= MIN_PERIOD_S:
+        return None
+    return (
+        f"lasts {clip.duration_s:.2f} s ({clip.n_frames} frame{'s' if clip.n_frames != 1 else ''}),"
+        f" shorter than one movement can be ({MIN_PERIOD_S:g} s): nothing to classify"
+    )
+
+
 def _solve_all(clf: CaseBaseClassifier, clips: Sequence[PoseSequence]) -> list[Solved | str]:
     """Every clip through :meth:`~cbr.estimator.CaseBaseClassifier.solve`, the usable ones in
     one call (one batched retrieval); a clip that cannot be classified gets the reason."""
+    short = {i: why for i, c in enumerate(clips) if (why := too_short(c)) is not None}
+    if short:
+        rest = [i for i in range(len(clips)) if i not in short]
+        solved = iter(_solve_all(clf, [clips[i] for i in rest]) if rest else [])
+        return [short[i] if i in short else next(solved) for i in range(len(clips))]
     bad = set(unusable(clips))
     good = [c for i, c in enumerate(clips) if i not in bad]
     try:
@@ -101,6 +121,9 @@ def _solve_all(clf: CaseBaseClassifier, clips: Sequence[PoseSequence]) -> list[S
 
 
 def _solve_one(clf: CaseBaseClassifier, clip: PoseSequence) -> Solved | str:
+    why = too_short(clip)
+    if why is not None:
+        return why
     try:
         return clf.solve([clip])[0]
     except DataError as exc:

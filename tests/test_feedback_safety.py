@@ -243,21 +243,54 @@ def test_a_clip_with_no_person_is_unclassifiable_and_never_stored(
     db = _copy(trained, tmp_path / "cb.sqlite")
     blank = _no_person(DEMO / "m01_s03_e01.npz", tmp_path / "blank.npz")
     code = main(["classify", str(blank), "--db", str(db), "--json"])
-    doc = json.loads(capsys.readouterr().out)
-    assert code == 0
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    # nothing asked for could be done: exit 1 (it was 0), the JSON still says why
+    assert code == 1
+    assert err == (
+        "posecbr classify: error: no clip could be classified (1 clip, each unclassifiable: "
+        "see above)\n"
+    )
     assert doc["results"][0]["label"] is None
     assert "no person" in doc["results"][0]["unclassifiable"]
+    # not judged: "correct": false before, while the summary counted no labelled clip
+    assert doc["results"][0]["correct"] is None and doc["summary"]["labelled"] == 0
     store = open_store(db, readonly=True)
     n, log = store.count_cases("default"), len(store.maintenance_log("default"))
     store.close()
     argv = ["classify", str(blank), "--db", str(db), "--feedback", "deep_squat", "--novelty", "0",
             "--benefit", "0"]  # fmt: skip
-    assert main(argv) == 0
+    assert main(argv) == 1
     out = capsys.readouterr().out
     assert "unclassifiable" in out
     store = open_store(db, readonly=True)
     assert store.count_cases("default") == n and len(store.maintenance_log("default")) == log
     store.close()
+
+
+def test_a_clip_shorter_than_a_movement_is_unclassifiable_and_never_stored(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One frame of a deep squat (0.03 s) was answered "standing_shoulder_abduction,
+    confidence 0.86" and could be retained by feedback. 12 frames at 30 fps (0.4 s, the
+    shortest repetition) are classified; 11 are not."""
+    import numpy as np
+
+    db = _copy(trained, tmp_path / "cb.sqlite")
+    before = hashlib.sha256(db.read_bytes()).hexdigest()
+    clip = dict(np.load(DEMO / "m01_s03_e01.npz"))
+    for n, usable in ((1, False), (11, False), (12, True)):
+        path = tmp_path / f"first{n}.npz"
+        np.savez(path, **{**clip, "positions": clip["positions"][:n]})  # type: ignore[arg-type]
+        code = main(["classify", str(path), "--db", str(db), "--feedback", "deep_squat"])
+        out = capsys.readouterr().out
+        if usable:
+            assert code == 0 and "unclassifiable" not in out
+            continue
+        frames = f"{n} frame{'s' if n > 1 else ''}"
+        assert code == 1
+        assert f"unclassifiable (lasts {n / 30:.2f} s ({frames}), shorter than one movement" in out
+        assert hashlib.sha256(db.read_bytes()).hexdigest() == before
 
 
 def test_train_skips_clips_with_no_person_and_names_them(

@@ -164,6 +164,15 @@ def run(args: argparse.Namespace) -> int:
     finally:
         store.close()
     _print(args, store.where, name, target, results)
+    if all(r.solved is None for r in results):  # nothing the user asked for could be done
+        from features.text import counted
+
+        print(
+            f"posecbr classify: error: no clip could be classified "
+            f"({counted(len(results), 'clip')}, each unclassifiable: see above)",
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 
