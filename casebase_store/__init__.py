@@ -2,6 +2,7 @@
 
 from .models import SCHEMA_VERSION
 from .store import (
+    EMPTY_DB,
     CaseArrays,
     CaseBaseInfo,
     CaseStore,
@@ -24,6 +25,7 @@ from .store import (
 from .upgrade import upgrade_store
 
 __all__ = [
+    "EMPTY_DB",
     "SCHEMA_VERSION",
     "CaseArrays",
     "CaseBaseInfo",

@@ -29,6 +29,8 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 #: Bump when the tables change; a store written with another version is refused clearly
 #: (version 1 stores are converted by ``upgrade_store``).
 SCHEMA_VERSION = 2
+#: the schema versions `posecbr casebase upgrade` converts from
+UPGRADABLE = (1,)
 
 
 def utcnow() -> datetime:

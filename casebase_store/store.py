@@ -53,6 +53,7 @@ from features.version import __version__
 
 from .models import (
     SCHEMA_VERSION,
+    UPGRADABLE,
     Base,
     CaseBaseRow,
     CaseRow,
@@ -424,11 +425,11 @@ class CaseStore:
                     row = s.get(SchemaVersion, 1)
                 if row is None or row.version != SCHEMA_VERSION:
                     found = "none" if row is None else str(row.version)
-                    hint = (
-                        " (convert it with `posecbr casebase upgrade --db FILE`)"
-                        if row is not None and row.version < SCHEMA_VERSION
-                        else ""
-                    )
+                    hint = ""
+                    if row is not None and row.version in UPGRADABLE:
+                        hint = " (convert it with `posecbr casebase upgrade --db FILE`)"
+                    elif row is not None and row.version > SCHEMA_VERSION:
+                        hint = " (written by a newer posecbr: read it with that one)"
                     raise StoreError(
                         f"case base store schema version {found}, this posecbr "
                         f"{__version__} reads version {SCHEMA_VERSION}{hint}",
@@ -906,6 +907,10 @@ class StoreTransaction:
         )
 
 
+EMPTY_DB = "is empty: name a case base file (SQLite) or a SQLAlchemy URL"
+"""The error of an empty ``--db``."""
+
+
 def open_store(
     url_or_path: str | Path,
     *,
@@ -921,6 +926,8 @@ def open_store(
     read-only folder can be read. Raises :class:`StoreError` naming the file for a corrupt,
     locked, foreign or other-version database.
     """
+    if not str(url_or_path).strip():
+        raise StoreError(EMPTY_DB, "--db")
     file = sqlite_file(url_or_path)
     if file is not None and (readonly or not create) and not file.exists():
         raise StoreError("no such case base file", file)

@@ -14,8 +14,11 @@ from typing import Any
 
 from sqlalchemy import MetaData, inspect, text
 
+from features.version import __version__
+
 from .models import (
     SCHEMA_VERSION,
+    UPGRADABLE,
     CaseBaseRow,
     CaseRow,
     MaintenanceRow,
@@ -40,8 +43,19 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
             found = _schema_version(conn, where)
             if found == SCHEMA_VERSION:
                 return found
-            if found != 1:
-                raise StoreError(f"cannot upgrade a store of schema version {found}", where)
+            if found > SCHEMA_VERSION:
+                raise StoreError(
+                    f"the store has schema version {found}, newer than this posecbr "
+                    f"{__version__} knows ({SCHEMA_VERSION}): read it with the posecbr that "
+                    "wrote it",
+                    where,
+                )
+            if found not in UPGRADABLE:
+                raise StoreError(
+                    f"cannot upgrade a store of schema version {found}: posecbr upgrades "
+                    f"versions {', '.join(map(str, UPGRADABLE))}",
+                    where,
+                )
             _from_1(conn)
             return found
     except StoreError:

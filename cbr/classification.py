@@ -218,9 +218,9 @@ def check_feedback_label(label: str, known: Sequence[str], new_label: bool) -> s
         raise ConfigError("the feedback label is empty", "--feedback")
     if text not in known and not new_label:
         close = difflib.get_close_matches(text, list(known), n=1)
-        hint = f"; did you mean {close[0]!r}?" if close else ""
+        hint = f"; did you mean {close[0]!r}? " if close else ". "
         raise ConfigError(
-            f"{text!r} is not an activity of this case base (known: {', '.join(known)}){hint} "
+            f"{text!r} is not an activity of this case base (known: {', '.join(known)}){hint}"
             "To add a new activity, pass --new-label as well",
             "--feedback",
         )

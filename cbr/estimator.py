@@ -43,6 +43,7 @@ from features.body import torso_share
 from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
 from features.progress import progress
+from features.text import counted
 
 from .calibration import (
     NEIGHBOURS,
@@ -450,8 +451,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         if bad:
             names = ", ".join(clips[i].source or f"X[{i}]" for i in bad[:5])
             raise DataError(
-                f"{len(bad)} training clip(s) show no person (no frame with a torso): {names}"
-                f"{' ...' if len(bad) > 5 else ''}",
+                f"{counted(len(bad), 'training clip')} {'shows' if len(bad) == 1 else 'show'} "
+                f"no person (no frame with a torso): {names}{' ...' if len(bad) > 5 else ''}",
                 "X",
             )
         classes = np.unique(np.asarray(y))

@@ -29,6 +29,7 @@ from features.datasets import DatasetEntry, clip_target
 from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
 from features.progress import progress
+from features.text import counted
 
 from .casebase import CaseBase
 from .described import DescribedClip, describe_case, describe_clip
@@ -143,7 +144,9 @@ class ClipsFailed(DataError):
 
     def __init__(self, lines: list[str]) -> None:
         self.lines = lines
-        super().__init__(f"{len(lines)} clip(s) failed (listed above); nothing was written")
+        super().__init__(
+            f"{counted(len(lines), 'clip')} failed (listed above); nothing was written"
+        )
 
 
 def usable(clips: Sequence[DescribedClip]) -> tuple[list[int], list[str]]:

@@ -39,14 +39,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    # "posecbr casebase trim": a command with actions is named with its action
+    command = " ".join(str(c) for c in (args.command, getattr(args, "action", None)) if c)
     try:
         return int(args.func(args) or 0)
     except PosecbrError as exc:
         # The message quotes the user's files and labels: escaped, it cannot drive the terminal.
-        print(f"posecbr {args.command}: error: {shown(exc)}", file=sys.stderr)
+        print(f"posecbr {command}: error: {shown(exc)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print(f"posecbr {args.command}: interrupted", file=sys.stderr)
+        print(f"posecbr {command}: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0

@@ -53,7 +53,8 @@ def refused(
     assert code == 1, (code, captured.err)
     assert len(lines) == 1, captured.err
     assert "Traceback" not in captured.err
-    assert lines[0].startswith(f"posecbr {argv[0]}: error: "), lines[0]
+    command = " ".join(argv[:2]) if argv[0] == "casebase" else argv[0]  # with its action
+    assert lines[0].startswith(f"posecbr {command}: error: "), lines[0]
     for needle in needles:
         assert needle in lines[0], (needle, lines[0])
     assert captured.out == ""

@@ -7,6 +7,7 @@ import hashlib
 import json
 import sqlite3
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -30,7 +31,8 @@ def _one_line_error(capsys: pytest.CaptureFixture[str], argv: list[str]) -> str:
     out, err = capsys.readouterr()
     assert code == 1, (argv, out, err)
     assert out == "" and err.count("\n") == 1 and "Traceback" not in err, err
-    assert err.startswith(f"posecbr {argv[0]}: error: ")
+    command = " ".join(argv[:2]) if argv[0] == "casebase" else argv[0]  # with its action
+    assert err.startswith(f"posecbr {command}: error: "), err
     return err
 
 
@@ -177,7 +179,15 @@ def test_a_damaged_case_base_is_one_line_and_stays_as_it_is(
         ),  # fmt: skip
         (["classify", str(CLIP), "--top", "-1"], "--top: must be >= 0, got -1"),
         (["classify", str(CLIP), "-k", "0"], "-k: must be >= 1, got 0"),
-        (["classify", str(CLIP), "--new-label"], "--new-label goes with --feedback"),
+        (["classify", str(CLIP), "--new-label"], "--new-label: goes with --feedback LABEL"),
+        # accepted and ignored before
+        (["classify", str(CLIP), "--novelty", "0.1"], "--novelty: goes with --feedback LABEL"),
+        (["classify", str(CLIP), "--benefit", "0.1"], "--benefit: goes with --feedback LABEL"),
+        (["classify", str(CLIP), "--top", "2"], "--top: goes with --verbose"),
+        (
+            ["casebase", "trim", "--editor", "icf", "--keep", "0.5"],
+            "--keep: goes with --editor novelty-benefit",
+        ),
         (["casebase", "trim", "-k", "0"], "-k: must be >= 1, got 0"),
         (["casebase", "trim", "--keep", "0"], "--keep: must be in (0, 1]"),
         (["train", str(LABELS), "--name", ""], "the case base name is empty"),
@@ -205,6 +215,56 @@ def test_bad_options_are_refused_before_anything_is_written(
     err = _one_line_error(capsys, [*argv, "--db", str(db)])
     assert message in err
     assert _sha(db) == before and sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite"]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [["train", str(LABELS)], ["classify", str(CLIP)], ["segment", str(CLIP)],
+     ["casebase", "info"]],
+)  # fmt: skip
+def test_an_empty_db_is_named_as_such(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], monkeypatch: Any
+) -> None:
+    """``--db ''`` (an unset variable in a script): "--db: is empty", where train said ".: is a
+    folder, not a case base file" and the others looked for a file named ''. Nothing made."""
+    monkeypatch.chdir(tmp_path)
+    err = _one_line_error(capsys, [*argv, "--db", ""])
+    assert err.endswith(
+        "error: --db: is empty: name a case base file (SQLite) or a SQLAlchemy URL\n"
+    ), err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("version", "read", "upgrade"),
+    [
+        # told to upgrade, which then said it cannot
+        (0, "schema version 0, this posecbr", "cannot upgrade a store of schema version 0: "
+         "posecbr upgrades versions 1"),
+        # "cannot upgrade" where a newer posecbr wrote it
+        (3, "(written by a newer posecbr: read it with that one)",
+         "the store has schema version 3, newer than this posecbr"),
+    ],
+)  # fmt: skip
+def test_a_store_of_a_schema_it_cannot_read_or_upgrade_says_which(
+    trained: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    version: int,
+    read: str,
+    upgrade: str,
+) -> None:
+    db = tmp_path / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    con = sqlite3.connect(db)
+    con.execute("UPDATE posecbr_schema_version SET version = ?", (version,))
+    con.commit()
+    con.close()
+    before = _sha(db)
+    err = _one_line_error(capsys, ["classify", str(CLIP), "--db", str(db)])
+    assert read in err and "casebase upgrade" not in err
+    assert upgrade in _one_line_error(capsys, ["casebase", "upgrade", "--db", str(db)])
+    assert _sha(db) == before
 
 
 def test_a_store_of_schema_1_is_refused_then_upgraded_in_place(

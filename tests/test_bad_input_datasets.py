@@ -306,6 +306,7 @@ def test_bad_motion_capture_file_is_one_clear_line(
     [
         (["--correct", "--incorrect"], "choose --correct or --incorrect, not both"),
         (["--episodes", "one-three"], "--episodes: not a number or range a-b: 'one-three'"),
+        (["--episodes", "3-1"], "--episodes: the range '3-1' runs backwards: write 1-3"),
         (["--limit", "0"], "--limit: must be at least 1, got 0"),
         (["--limit", "-5"], "--limit: must be at least 1, got -5"),
         (["--bvh-unit", "-1"], "--bvh-unit: must be a unit name or a positive number, got '-1'"),

@@ -114,7 +114,7 @@ def test_failed_clips_are_named_the_rest_finish_and_nothing_is_written(
     err = capsys.readouterr().err.strip().splitlines()
     assert "Traceback" not in "\n".join(err)
     assert [ln for ln in err if "broken_a.npz" in ln] and [ln for ln in err if "broken_b.npz" in ln]
-    assert err[-1] == ("posecbr train: error: 2 clip(s) failed (listed above); nothing was written")
+    assert err[-1] == ("posecbr train: error: 2 clips failed (listed above); nothing was written")
     assert len(err) == 3
     assert not db.exists()
     assert {p.name: _sha(p) for p in tmp_path.iterdir()} == before

@@ -8,6 +8,7 @@ from collections import Counter
 import numpy as np
 
 from features.errors import DataError
+from features.text import counted
 
 from .data import Prepared
 from .settings import CompareSettings
@@ -22,7 +23,8 @@ def _loso_fallback(subjects: list[str | None], k: int) -> str | None:
     fallback = f"falling back to stratified {k}-fold cross-validation over clips "
     if unknown:
         return (
-            f"{unknown} clip(s) have no subject, so leave-one-subject-out is impossible; "
+            f"{counted(unknown, 'clip')} {'has' if unknown == 1 else 'have'} no subject, "
+            "so leave-one-subject-out is impossible; "
             + fallback
             + _OPTIMISTIC.format("a person can be")
         )

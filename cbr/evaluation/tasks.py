@@ -13,6 +13,7 @@ import numpy as np
 from features.errors import ConfigError, PosecbrError
 from features.poses import PoseSequence
 from features.progress import progress
+from features.text import counted
 
 from .data import Prepared
 from .methods import Method, make_estimator
@@ -77,7 +78,8 @@ def _fit_predict(
 def _one_class_note(group: object, present: list[str], fallback: str, n_test: int) -> str:
     lead = "" if group is None else f"{group}: "
     has = "only " + repr(present[0]) if present else "no clips"
-    return f"{lead}training fold has {has}; predicted {fallback!r} for its {n_test} test clip(s)"
+    tested = counted(n_test, "test clip")
+    return f"{lead}training fold has {has}; predicted {fallback!r} for its {tested}"
 
 
 def _run_group(

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
+from features.text import counted
 
 if TYPE_CHECKING:
     from features.poses import PoseSequence
@@ -54,8 +55,18 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="with --feedback: the label may be a new activity (otherwise it must be one of the "
         "case base's)",
     )
-    p.add_argument("--novelty", type=float, default=0.5, help="retain novelty threshold")
-    p.add_argument("--benefit", type=float, default=0.2, help="retain benefit threshold")
+    p.add_argument(
+        "--novelty",
+        type=float,
+        default=None,
+        help="with --feedback: retain novelty threshold (0.5)",
+    )
+    p.add_argument(
+        "--benefit",
+        type=float,
+        default=None,
+        help="with --feedback: retain benefit threshold (0.2)",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor (kinect or vicon)")
     p.add_argument("--subjects", help="datasets: only these subjects, comma-separated")
@@ -113,8 +124,12 @@ def _check_args(args: argparse.Namespace) -> None:
         raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     if args.top is not None and args.top < 0:
         raise ConfigError(f"must be >= 0, got {args.top}", "--top")
-    if args.new_label and args.feedback is None:
-        raise ConfigError("--new-label goes with --feedback LABEL", "--new-label")
+    for flag, given in (("--new-label", args.new_label), ("--novelty", args.novelty is not None),
+                        ("--benefit", args.benefit is not None)):  # fmt: skip
+        if given and args.feedback is None:
+            raise ConfigError("goes with --feedback LABEL: nothing is retained without it", flag)
+    if args.top is not None and not args.verbose:
+        raise ConfigError("goes with --verbose (the similar cases it lists)", "--top")
     if args.quiet and args.verbose:
         raise ConfigError("--quiet and --verbose exclude each other", "--quiet")
 
@@ -131,7 +146,11 @@ def run(args: argparse.Namespace) -> int:
     from cbr.stored import load_classifier
 
     _check_args(args)
-    settings = FeedbackSettings(args.novelty, args.benefit)
+    defaults = FeedbackSettings()
+    settings = FeedbackSettings(
+        defaults.novelty_threshold if args.novelty is None else args.novelty,
+        defaults.benefit_threshold if args.benefit is None else args.benefit,
+    )
     store = open_store(args.db, create=False, readonly=args.feedback is None)
     try:
         name = store.choose(args.name)
@@ -165,8 +184,6 @@ def run(args: argparse.Namespace) -> int:
         store.close()
     _print(args, store.where, name, target, results)
     if all(r.solved is None for r in results):  # nothing the user asked for could be done
-        from features.text import counted
-
         print(
             f"posecbr classify: error: no clip could be classified "
             f"({counted(len(results), 'clip')}, each unclassifiable: see above)",
@@ -241,7 +258,7 @@ def _print_summary(s: dict[str, Any], target: str) -> None:
     def said(label: str) -> str:
         return shown(label_words(label, target))
 
-    print(f"\n{s['clips']} clips: {s['classified']} classified", end="")
+    print(f"\n{counted(s['clips'], 'clip')}: {s['classified']} classified", end="")
     if s["unclassifiable"]:
         print(f", {len(s['unclassifiable'])} unclassifiable", end="")
     print(f"; {len(s['unlike_cases'])} unlike the stored cases.")

@@ -110,13 +110,13 @@ def parse_ranges(value: str | None) -> Ranges | None:
         try:
             if "-" in part:
                 a, b = (int(x) for x in part.split("-", 1))
-                if b < a:
-                    raise ValueError
-                out.append(range(a, b + 1))
             else:
-                out.append(range(int(part), int(part) + 1))
+                a = b = int(part)
         except ValueError:
             raise DataError(f"not a number or range a-b: {part[:40]!r}", "--episodes") from None
+        if b < a:
+            raise DataError(f"the range {part!r} runs backwards: write {b}-{a}", "--episodes")
+        out.append(range(a, b + 1))
     return Ranges(out)
 
 

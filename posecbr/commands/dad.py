@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from features.errors import PosecbrError
-from features.text import shown
+from features.text import counted, shown
 
 MAX_SECONDS = 3600.0  # a window of an hour is no single movement
 
@@ -87,7 +87,7 @@ def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[
         yield f"{name}: {result.status}: {result.message}"
         return
     yield (
-        f"{name}: {result.duration_s:.1f} s, {len(result.windows_s)} window(s) of up to "
+        f"{name}: {result.duration_s:.1f} s, {counted(len(result.windows_s), 'window')} of up to "
         f"{config.window_s:g} s"
     )
     best = result.best

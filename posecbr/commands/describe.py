@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, TextIO
 
 from features.errors import PosecbrError
 from features.fileio import check_output
-from features.text import shown
+from features.text import counted, shown
 
 if TYPE_CHECKING:
     from features.fluents import Backend, FluentResult
@@ -87,7 +87,7 @@ def _run_line(r: Run, layout: FluentResult) -> str:
 
 def _header(args: argparse.Namespace, seq: PoseSequence) -> None:
     label = f", label {shown(seq.label)}" if seq.label else ""
-    print(f"{shown(args.posefile)}: {seq.n_frames} frames at {seq.fps:g} fps"
+    print(f"{shown(args.posefile)}: {counted(seq.n_frames, 'frame')} at {seq.fps:g} fps"
           f" ({seq.duration_s:.1f} s){label}")  # fmt: skip
 
 

@@ -25,7 +25,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import DataError, PosecbrError
 from features.fileio import check_output
 from features.progress import progress
-from features.text import shown
+from features.text import counted, shown
 
 # FFmpeg prints decoder complaints straight to stderr; the user should get posecbr's one line.
 # OpenCV reads this once, when it first opens a video, so it is set as early as possible.
@@ -361,7 +361,7 @@ def process(job: Job, options: Options) -> Outcome:
                 job.video, image_lm, job.overlay, seq.fps, words, frame_offset=job.start or 0
             )
         n_missing = int(np.isnan(seq.positions).all(axis=(1, 2)).sum())
-        return "done", job.out, f"{seq.n_frames} frames, {n_missing} without a person"
+        return "done", job.out, f"{counted(seq.n_frames, 'frame')}, {n_missing} without a person"
     except PosecbrError as exc:
         return "failed", job.out, str(exc)
 

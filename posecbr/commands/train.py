@@ -389,8 +389,17 @@ def _check_new_store(args: argparse.Namespace) -> None:
     that is not a case base store, or one that already holds ``--name`` (neither --replace
     nor --append given). An empty database is left to the training, which creates the store;
     the transaction that stores the model checks again."""
-    from casebase_store import EmptyStore, StoreError, check_store_file, open_store, sqlite_file
+    from casebase_store import (
+        EMPTY_DB,
+        EmptyStore,
+        StoreError,
+        check_store_file,
+        open_store,
+        sqlite_file,
+    )
 
+    if not str(args.db).strip():
+        raise StoreError(EMPTY_DB, "--db")
     file = sqlite_file(args.db)
     if file is not None:
         check_store_file(file)
