@@ -52,10 +52,24 @@ def test_json_output_is_the_api_structure(
 def test_too_short_clip_says_not_enough_data(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    """Three frames at 30 fps (0.1 s, DAD judges 0.5 s or more): one line on stderr and exit 1
+    (it was a line on stdout and exit 0); with --json the document says why, exit 1. A
+    --window shorter than DAD judges is refused before the clip is read."""
     path = tmp_path / "blink.npz"
     save_pose(to_sequence(standing(), standing(), standing()), path)
-    assert main(["dad", str(path)]) == 0
-    assert "not enough data" in capsys.readouterr().out
+    assert main(["dad", str(path)]) == 1
+    out, err = capsys.readouterr()
+    assert out == "" and err == (
+        f"posecbr dad: error: {path}: not enough data: clip lasts 0.10 s; DAD needs at least "
+        "0.5 s\n"
+    )
+    assert main(["dad", str(path), "--json"]) == 1
+    assert json.loads(capsys.readouterr().out)["status"] == "not enough data"
+    assert main(["dad", str(tmp_path / "absent.npz"), "--window", "0.1"]) == 1
+    assert capsys.readouterr().err == (
+        "posecbr dad: error: --window must be at least 0.5 s, the shortest stretch DAD judges, "
+        "got 0.1\n"
+    )
 
 
 def test_bad_add_and_missing_file_are_one_line_errors(
@@ -70,3 +84,28 @@ def test_bad_add_and_missing_file_are_one_line_errors(
     assert err.startswith("posecbr dad: error:") and "broken.toml" in err and "\n" not in err
     assert main(["dad", str(tmp_path / "nothing.npz")]) == 1
     assert "nothing.npz" in capsys.readouterr().err
+
+
+def test_a_best_match_tied_with_others_says_so() -> None:
+    """Three activities at 100 % and one at 66 % (the reverse-lunge video with the default
+    ADD): "best match: a" alone read as if DAD had told them apart."""
+    import argparse
+
+    from cbr.dad import DADConfig
+    from cbr.dad.outcome import ActivityScore, DADResult
+    from posecbr.commands.dad import _text_lines
+
+    def act(name: str, score: float) -> ActivityScore:
+        return ActivityScore(name, f"{name} words", (name,), score, 3, 3, ())
+
+    acts = (act("a", 1.0), act("b", 1.0), act("c", 1.0), act("d", 2 / 3))
+    result = DADResult("x.npz", "ok", "", 30.0, 10.0, ((0.0, 4.0),), ((),), acts)
+    args = argparse.Namespace(posefile=Path("x.npz"), top=1)
+    lines = list(_text_lines(args, result, DADConfig()))
+    assert lines[1] == (
+        "best match: a words (100% of its QMPs in order; tied with b words, c words)"
+    )
+    alone = DADResult("x.npz", "ok", "", 30.0, 10.0, ((0.0, 4.0),), ((),), acts[2:])
+    assert list(_text_lines(args, alone, DADConfig()))[1] == (
+        "best match: c words (100% of its QMPs in order)"
+    )

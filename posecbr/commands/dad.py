@@ -67,14 +67,22 @@ def run(args: argparse.Namespace) -> int:
     for flag, value in (("--window", args.window), ("--step", args.step)):
         if not (math.isfinite(value) and 0 < value <= MAX_SECONDS):
             raise PosecbrError(f"{flag} must be in (0, {MAX_SECONDS:g}] seconds, got {value}")
+    shortest = DADConfig().min_duration_s
+    if args.window < shortest:  # every window would be too short to judge
+        raise PosecbrError(
+            f"--window must be at least {shortest:g} s, the shortest stretch DAD judges, got "
+            f"{args.window:g}"
+        )
     add = load_add(args.add)
     config = DADConfig(window_s=args.window, step_s=args.step)
     seq = load_clip(args.posefile)
     result = detect(seq, add, config)
-    if args.json:
+    if args.json:  # the document says why, for a clip DAD cannot judge too
         json.dump(result.to_dict(), sys.stdout, indent=2)
         sys.stdout.write("\n")
-        return 0
+        return 0 if result.status == "ok" else 1
+    if result.status != "ok":  # too short, nobody in it: nothing asked for could be done
+        raise PosecbrError(f"{result.status}: {result.message}", args.posefile)
     # Every line quotes the clip's name and the ADD's words: printed escaped.
     for line in _text_lines(args, result, config):
         print(shown(line))
@@ -83,16 +91,15 @@ def run(args: argparse.Namespace) -> int:
 
 def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[str]:
     name = args.posefile.name
-    if result.status != "ok":
-        yield f"{name}: {result.status}: {result.message}"
-        return
     yield (
         f"{name}: {result.duration_s:.1f} s, {counted(len(result.windows_s), 'window')} of up to "
         f"{config.window_s:g} s"
     )
     best = result.best
     if best is not None:
-        yield f"best match: {best.words} ({best.score:.0%} of its QMPs in order)"
+        tied = [a.words for a in result.activities if a is not best and a.score == best.score]
+        also = f"; tied with {', '.join(tied)}" if tied else ""
+        yield f"best match: {best.words} ({best.score:.0%} of its QMPs in order{also})"
     yield ""
     yield "ranking:"
     for i, act in enumerate(result.activities, 1):
