@@ -188,10 +188,19 @@ def test_demo_output_folder_that_cannot_be(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     data = tmp_path / "data"
-    good_pose_file(data / "m01_s01_e01.npz", label="deep_squat")
-    (data / "labels.csv").write_text("path,label\nm01_s01_e01.npz,deep_squat\n")
+    rows = ["path,label,subject"]
+    for subject in ("s01", "s02", "s03"):
+        good_pose_file(data / f"m01_{subject}_e01.npz", label="deep_squat")
+        rows.append(f"m01_{subject}_e01.npz,deep_squat,{subject}")
+    (data / "labels.csv").write_text("\n".join(rows[:3]) + "\n")  # no s03 yet
     (tmp_path / "afile").write_text("x")
     demo = ["demo", "--data", str(data), "--quick", "--out"]
+    # data the steps cannot run on: refused before anything is written (it stopped at step 3,
+    # classify, leaving the case base and the comparison's folder behind)
+    refused([*demo, str(tmp_path / "out")], tmp_path, capsys,
+            f"{data}: the demo trains on subjects s01 and s02, classifies s03 and describes "
+            "m01_s01_e01.npz; this folder's labels.csv has subjects s01, s02")  # fmt: skip
+    (data / "labels.csv").write_text("\n".join(rows) + "\n")
     refused([*demo, str(tmp_path / "afile")], tmp_path, capsys, "exists and is not a folder")
     # the demo clears its earlier outputs in --out: never in the data it reads
     refused([*demo, str(data)], tmp_path, capsys, "is the demo data folder or inside it")

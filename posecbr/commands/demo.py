@@ -104,6 +104,10 @@ def _run_step(step: Step) -> int:
     return code
 
 
+DEMO_SUBJECTS = ("s01", "s02", "s03")
+DEMO_CLIP = "m01_s01_e01.npz"
+
+
 def _check_out(out: Path, data: Path) -> None:
     """The output folder: created if needed, never a file, never the demo data (the demo
     clears its own earlier outputs there)."""
@@ -134,7 +138,7 @@ def _steps(data: Path, out: Path, quick: bool) -> list[Step]:
         compare += ["--out", str(out / "compare")]
     return [
         Step("1. describe: a deep squat in words",
-             ["describe", str(data / "m01_s01_e01.npz"), "--plot",
+             ["describe", str(data / DEMO_CLIP), "--plot",
               str(out / "timeline_deep_squat.png")]),
         # the configuration the README recommends is train's default: fluent clip summaries
         # under weighted euclidean, side handling and weights chosen inside the training clips
@@ -148,9 +152,27 @@ def _steps(data: Path, out: Path, quick: bool) -> list[Step]:
     ]  # fmt: skip
 
 
-def _run(args: argparse.Namespace, data: Path) -> int:
+def _check_data(data: Path) -> None:
+    """Refuse, before anything is written, a ``--data`` folder the steps cannot run on: the
+    demo describes ``m01_s01_e01.npz``, trains on subjects s01 and s02 and classifies s03."""
+    from features.datasets import read_labels_csv
+
     if not (data / "labels.csv").is_file():
         raise PosecbrError("demo data not found (expected labels.csv)", data)
+    subjects = {str(r["subject"]) for r in read_labels_csv(data / "labels.csv")}
+    missing = [s for s in DEMO_SUBJECTS if s not in subjects]
+    if missing or not (data / DEMO_CLIP).is_file():
+        have = ", ".join(sorted(subjects)[:6]) or "none"
+        raise PosecbrError(
+            f"the demo trains on subjects s01 and s02, classifies s03 and describes {DEMO_CLIP}"
+            f"; this folder's labels.csv has subjects {have}"
+            + ("" if (data / DEMO_CLIP).is_file() else f" and no {DEMO_CLIP}"),
+            data,
+        )
+
+
+def _run(args: argparse.Namespace, data: Path) -> int:
+    _check_data(data)
     out: Path = args.out
     _check_out(out, data)
     db = out / "casebase.sqlite"
