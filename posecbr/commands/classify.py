@@ -68,7 +68,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="with --feedback: retain benefit threshold (0.2)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor (kinect or vicon)")
+    p.add_argument("--sensor", choices=("kinect", "vicon"), default="kinect", help="UI-PRMD sensor")
     p.add_argument("--subjects", help="datasets: only these subjects, comma-separated")
     p.add_argument(
         "--target",

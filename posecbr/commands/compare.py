@@ -91,7 +91,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="a further CaseBaseClassifier parameter for every case-base configuration "
         "(repeatable; VALUE is JSON or a plain string), e.g. --param states=all --param length=48",
     )
-    p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor: kinect or vicon")
+    p.add_argument("--sensor", choices=("kinect", "vicon"), default="kinect", help="UI-PRMD sensor")
     p.add_argument("--labels", default=None, metavar="LIST", help="only these activity labels")
     p.add_argument("--subjects", default=None, metavar="LIST", help="only these subjects")
     p.add_argument(

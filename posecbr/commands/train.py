@@ -127,7 +127,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "the labels, e.g. correct (UI-PRMD: correct / incorrect repetition); train one case "
         "base per activity with --labels",
     )
-    p.add_argument("--sensor", default="kinect", help="UI-PRMD sensor (kinect or vicon)")
+    p.add_argument("--sensor", choices=("kinect", "vicon"), default="kinect", help="UI-PRMD sensor")
     p.add_argument(
         "--split",
         choices=("clips", "repetitions", "windows"),
