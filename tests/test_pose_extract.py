@@ -195,6 +195,14 @@ def test_unwritable_output_is_one_line(
         "videos, not one video file"
     )
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file.txt", "videos"]
+    # one video is extracted in this process: a --scheduler (even a bogus one) was ignored
+    argv = ["extract", str(clip), "--out", str(out), "--scheduler", "tcp://nowhere:1"]
+    assert main(argv) == 1
+    assert _only_line(capfd.readouterr().err).endswith(
+        "--scheduler: one video is extracted here, in this process; the cluster takes a folder "
+        "or labels CSV of clips"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file.txt", "videos"]
 
 
 def test_cli_process_prints_only_one_line_for_a_corrupt_video(

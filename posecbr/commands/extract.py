@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from features.cluster import SCHEDULER_HELP, check_scheduler
-from features.errors import DataError, PosecbrError
+from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_output
 from features.progress import progress
 from features.text import counted, shown
@@ -436,6 +436,12 @@ def _options(args: argparse.Namespace) -> Options:
 def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
     """Every output path refused or prepared before the first clip is read."""
     single = len(jobs) == 1 and args.input.is_file()
+    if single and args.scheduler is not None:
+        raise ConfigError(
+            "one video is extracted here, in this process; the cluster takes a folder or "
+            "labels CSV of clips",
+            "--scheduler",
+        )
     if args.overlay is not None and single:
         if args.overlay.suffix.lower() != ".mp4":
             raise DataError("overlay must be an .mp4 file name", args.overlay)
