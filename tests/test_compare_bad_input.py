@@ -166,6 +166,21 @@ def test_an_output_that_cannot_be_written_is_refused_before_the_run(
     assert snapshot(tmp_path) == before
 
 
+def test_a_json_output_in_the_folder_out_makes_is_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--out res --json res/mine.json`` was refused: res did not exist yet."""
+    labels = _swapped_data(tmp_path / "data")
+    res = tmp_path / "res"
+    argv = ["compare", str(labels), *FAST, "--no-dad", "--explain", "0", "--out", str(res),
+            "--json", str(res / "mine.json")]  # fmt: skip
+    assert main(argv) == 0
+    capsys.readouterr()
+    assert json.loads((res / "mine.json").read_text()) == json.loads(
+        (res / "results.json").read_text()
+    )
+
+
 @pytest.mark.parametrize(
     ("option", "message"),
     [

@@ -174,7 +174,7 @@ def _settings(args: argparse.Namespace) -> Any:
 @dataclass(frozen=True)
 class Output:
     """A file the run writes: what it is (for messages), where, and as "json" or "csv";
-    ``in_out_folder``: one of the files of ``--out`` (whose folder may not exist yet)."""
+    ``in_out_folder``: a file in the folder ``--out`` makes (which may not exist yet)."""
 
     what: str
     path: Path
@@ -186,10 +186,15 @@ def _outputs(args: argparse.Namespace) -> list[Output]:
     """Every file the run will write; ``--out`` is checked to be a folder, or a new one in a
     folder that exists."""
     out = []
+    new_out = args.out is not None and not args.out.exists()  # made before anything is written
+
+    def inside(path: Path) -> bool:
+        return new_out and path.parent.resolve() == args.out.resolve()
+
     if args.json:
-        out.append(Output("JSON output", args.json, "json"))
+        out.append(Output("JSON output", args.json, "json", inside(args.json)))
     if args.csv:
-        out.append(Output("CSV output", args.csv, "csv"))
+        out.append(Output("CSV output", args.csv, "csv", inside(args.csv)))
     if args.out:
         if args.out.exists() and not args.out.is_dir():
             raise DataError("--out must be a folder, and this is a file", args.out)
