@@ -339,6 +339,10 @@ def test_convert_sources_and_outputs_that_cannot_be(
     pose_file(unlabelled.mkdir() or unlabelled / "u.npz", metadata=json.dumps({}))
     refused(["convert", str(unlabelled), "--out", str(tmp_path / "o")], tmp_path, capsys,
             "no label: its metadata has none (put it in a labels CSV)")  # fmt: skip
+    # a labels CSV with its header alone, no filter given: "check the filters" sent one looking
+    (tmp_path / "header.csv").write_text("path,label\n")
+    refused(["convert", str(tmp_path / "header.csv"), "--out", str(tmp_path / "o")], tmp_path,
+            capsys, "header.csv: holds no clip to convert")  # fmt: skip
 
 
 def test_episodes_as_wide_ranges_cost_nothing(tmp_path: Path) -> None:

@@ -280,7 +280,10 @@ def _write_clips(
             {**extras, "path": path.name, "label": clip.label, "subject": clip.subject or ""}
         )
     if not written:
-        raise DataError("no clips matched (check the filters)", args.source)
+        filters = ("subjects", "movements", "episodes", "correct", "incorrect")
+        if any(getattr(args, f, None) for f in filters):
+            raise DataError("no clips matched (check the filters)", args.source)
+        raise DataError("holds no clip to convert", args.source)
     return written, rates
 
 
