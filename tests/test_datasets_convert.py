@@ -92,7 +92,7 @@ def test_convert_bvh(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--episodes", "3-1"], "--episodes: not a number or range"),
+        (["--episodes", "3-1"], "--episodes: the range '3-1' runs backwards: write 1-3"),
         (["--correct", "--incorrect"], "not both"),
     ],
 )
