@@ -13,6 +13,7 @@ import numpy as np
 from features.datasets import Clip, clip_column, clip_target
 from features.errors import DataError
 from features.poses import PoseSequence
+from features.text import counted
 
 from .settings import CompareSettings
 
@@ -73,15 +74,14 @@ def _shown(clips: Sequence[Clip]) -> tuple[list[Clip], list[str]]:
     methods that describe clips, and the comparison crowned the others)."""
     from features.body import torso_share
 
-    keep = [c for c in clips if torso_share(c.seq) > 0.0]
-    if len(keep) == len(clips):
+    seen = [torso_share(c.seq) > 0.0 for c in clips]
+    if all(seen):
         return list(clips), []
-    gone = [c.seq.source or str(c.label) for c in clips if torso_share(c.seq) == 0.0]
+    gone = [c.seq.source or str(c.label) for c, s in zip(clips, seen, strict=True) if not s]
     more = " ..." if len(gone) > 5 else ""
-    n = len(gone)
-    return keep, [
-        f"left out {n} clip{'s' if n > 1 else ''} that show{'s' if n == 1 else ''} no "
-        f"person: {', '.join(gone[:5])}{more}"
+    verb = "shows" if len(gone) == 1 else "show"
+    return [c for c, s in zip(clips, seen, strict=True) if s], [
+        f"left out {counted(len(gone), 'clip')} that {verb} no person: {', '.join(gone[:5])}{more}"
     ]
 
 
