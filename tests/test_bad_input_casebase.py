@@ -235,6 +235,27 @@ def test_an_empty_db_is_named_as_such(
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("command", ["classify", "train"])
+def test_an_unknown_sensor_is_refused_by_the_parser(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str
+) -> None:
+    """``--sensor foo`` was taken (and ignored) when the data were not a UI-PRMD folder: the
+    parser refuses it as it refuses any unknown choice (exit 2, its error line last)."""
+    db = tmp_path / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    before = _sha(db)
+    with pytest.raises(SystemExit) as stop:
+        main([command, str(LABELS if command == "train" else CLIP), "--db", str(db), "--sensor",
+              "foo"])  # fmt: skip
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == (
+        f"posecbr {command}: error: argument --sensor: invalid choice: 'foo' (choose from "
+        "'kinect', 'vicon')"
+    )
+    assert _sha(db) == before and sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite"]
+
+
 @pytest.mark.parametrize(
     ("version", "read", "upgrade"),
     [

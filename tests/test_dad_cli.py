@@ -57,6 +57,7 @@ def test_too_short_clip_says_not_enough_data(
     --window shorter than DAD judges is refused before the clip is read."""
     path = tmp_path / "blink.npz"
     save_pose(to_sequence(standing(), standing(), standing()), path)
+    before = path.read_bytes()
     assert main(["dad", str(path)]) == 1
     out, err = capsys.readouterr()
     assert out == "" and err == (
@@ -70,6 +71,9 @@ def test_too_short_clip_says_not_enough_data(
         "posecbr dad: error: --window must be at least 0.5 s, the shortest stretch DAD judges, "
         "got 0.1\n"
     )
+    assert path.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == [
+        "blink.npz"
+    ]
 
 
 def test_bad_add_and_missing_file_are_one_line_errors(

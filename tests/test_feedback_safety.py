@@ -283,12 +283,15 @@ def test_a_clip_shorter_than_a_movement_is_unclassifiable_and_never_stored(
         path = tmp_path / f"first{n}.npz"
         np.savez(path, **{**clip, "positions": clip["positions"][:n]})  # type: ignore[arg-type]
         code = main(["classify", str(path), "--db", str(db), "--feedback", "deep_squat"])
-        out = capsys.readouterr().out
+        out, err = capsys.readouterr()
         if usable:
             assert code == 0 and "unclassifiable" not in out
             continue
         frames = f"{n} frame{'s' if n > 1 else ''}"
-        assert code == 1
+        assert code == 1 and err == (
+            "posecbr classify: error: no clip could be classified (1 clip, each "
+            "unclassifiable: see above)\n"
+        )
         assert f"unclassifiable (lasts {n / 30:.2f} s ({frames}), shorter than one movement" in out
         assert hashlib.sha256(db.read_bytes()).hexdigest() == before
 

@@ -156,8 +156,10 @@ def test_bad_input_one_line_exit_1_no_file(
     bad = _bad_inputs(tmp_path, shared_data)
     for name, path in bad.items():
         out = tmp_path / f"out_{name}"
+        before = path.read_bytes() if path.exists() else None
         capfd.readouterr()
         assert main(["extract", str(path), "--out", str(out)]) == 1, name
+        assert (path.read_bytes() if path.exists() else None) == before, name
         captured = capfd.readouterr()
         line = _only_line(captured.err)
         assert line.startswith("posecbr extract: error: ") and path.name in line, line
