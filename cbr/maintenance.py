@@ -33,6 +33,10 @@ from .casebase import CaseBase
 from .retrieve import retrieve
 from .reuse import Weights, decide, vote
 
+DROPPED = ": dropped"
+"""How the maintenance log's entry of each case a trim dropped ends (after the editor's name);
+the trim itself is one entry more."""
+
 
 @dataclass(frozen=True)
 class MaintenanceReport:
@@ -354,6 +358,6 @@ def record_trim(
             case_id=int(full_ids[i]) if full_ids[i] >= 0 else None,
             novelty=None if report.novelty is None else float(report.novelty[i]),
             benefit=None if report.benefit is None else float(report.benefit[i]),
-            reason=f"{report.method}: dropped",
+            reason=f"{report.method}{DROPPED}",
         )
     tx.log(info, "trim", reason=report.summary())

@@ -72,9 +72,10 @@ def _shown(clips: Sequence[Clip]) -> tuple[list[Clip], list[str]]:
     """The clips that show a person (some frame shows the torso), and a note naming the
     others (left out for every method alike: a clip nothing can be computed from failed the
     methods that describe clips, and the comparison crowned the others)."""
-    from features.body import torso_share
+    from ..estimator import unusable
 
-    seen = [torso_share(c.seq) > 0.0 for c in clips]
+    nobody = set(unusable([c.seq for c in clips]))
+    seen = [i not in nobody for i in range(len(clips))]
     if all(seen):
         return list(clips), []
     gone = [c.seq.source or str(c.label) for c, s in zip(clips, seen, strict=True) if not s]

@@ -133,10 +133,12 @@ def _history(log: list[Any]) -> dict[str, Any]:
     """How often each maintenance action ran, in the order they first ran (``maintenance``:
     a trim once, however many cases it dropped; a clip retained once, one not retained not
     at all), with the cases trims dropped and the feedback clips not retained."""
+    from cbr.maintenance import DROPPED
+
     runs: Counter[str] = Counter()
     dropped = not_retained = 0
     for e in log:
-        if e.action == "trim" and e.reason.endswith(": dropped"):  # one per case it dropped
+        if e.action == "trim" and e.reason.endswith(DROPPED):  # one per case it dropped
             dropped += 1
         elif e.action == "retain" and e.case_id is None:  # the decision not to
             not_retained += 1
