@@ -133,6 +133,16 @@ def test_z_up_file_is_turned_to_y_up(tmp_path: Path) -> None:
         ),
         (lambda t: t.split("MOTION")[0], "MOTION"),
         (lambda t: "hello", "HIERARCHY"),
+        # 18 channels a frame: the second frame's second value is value 20
+        (
+            lambda t: t[::-1].replace(" 09 ", " o9 ", 1)[::-1],
+            r"motion value '9o' \(value 20 after the header\) is not a number",
+        ),
+        # comma-separated values: one token per frame, a count that cannot match
+        (
+            lambda t: t.replace("0 90 0 0 0 0  0 0 0", "0,90,0,0,0,0,0,0,0", 1),
+            r"motion value '0,90,0,0,0,0,0,0,0' \(value 1 after the header\)",
+        ),
     ],
 )
 def test_malformed_names_file(tmp_path: Path, mutate, message: str) -> None:

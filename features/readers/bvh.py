@@ -285,9 +285,24 @@ def _motion_header(tokens: list[str], i: int, path: Path) -> tuple[int, float]:
     return n_frames, frame_time
 
 
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
 def _motion(data: list[str], n_frames: int, n_chan: int, path: Path) -> np.ndarray:
     """The channel values ``(frames, channels)``: exactly as many finite numbers as the
     header and the hierarchy promise."""
+    try:
+        values = np.array(data, dtype=float)
+    except ValueError:
+        i, token = next((i, t) for i, t in enumerate(data) if not _is_number(t))
+        raise DataError(
+            f"motion value {token!r} (value {i + 1} after the header) is not a number", path
+        ) from None
     if len(data) != n_frames * n_chan:
         raise DataError(
             f"{len(data)} numbers after the header, expected {n_frames} frames x {n_chan}"
@@ -296,10 +311,7 @@ def _motion(data: list[str], n_frames: int, n_chan: int, path: Path) -> np.ndarr
         )
     if n_frames < 1:
         raise DataError("no frames", path)
-    try:
-        motion = np.array(data, dtype=float).reshape(n_frames, n_chan)
-    except ValueError:
-        raise DataError("a motion value is not a number", path) from None
+    motion = values.reshape(n_frames, n_chan)
     if not np.isfinite(motion).all():
         frame = int(np.flatnonzero(~np.isfinite(motion).all(axis=1))[0]) + 1
         raise DataError(f"a motion value in frame {frame} is not a finite number", path)
