@@ -17,6 +17,7 @@ from features.poses import PoseSequence, save_pose
 from features.qmp import fit_signals
 from features.readers.asfamc import read_asf_amc
 from features.repetitions import count_repetitions, mirror_angles, pelvis_height
+from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
 from posecbr.recordings import load_recording
 from tests.bodies import rot_z, rotate, standing, to_sequence
@@ -229,6 +230,34 @@ def test_each_alternating_repetition_has_the_side_marked_by_hand(
             i = int(np.argmin(np.abs(np.array(peaks) - t)))
             assert abs(peaks[i] - t) <= 0.25, (t, peaks)
             assert result.repetitions[i].side == side, (t, side, peaks[i])
+
+
+def _shoulders_turned(seq: PoseSequence, frame: int) -> str:
+    """Which way the shoulders are turned at ``frame``, from the positions alone: "left" when
+    the left shoulder lies behind the right one along the way the feet point (toe minus
+    ankle, both feet; a trunk twist leaves the feet where they stand)."""
+    p = seq.positions[frame]
+    forward = sum(p[JOINT_INDEX[f"{s}_foot_index"]] - p[JOINT_INDEX[f"{s}_ankle"]]
+                  for s in ("left", "right"))  # fmt: skip
+    across = p[JOINT_INDEX["left_shoulder"]] - p[JOINT_INDEX["right_shoulder"]]
+    return "left" if float(across @ forward) < 0 else "right"
+
+
+def test_each_twist_is_on_the_side_the_shoulders_turn(
+    recordings: dict[str, PoseSequence],
+) -> None:
+    """A twist's side is the way its shoulders turn, not which arm turns farther: at every
+    far point of CMU subject 13's four twist stretches, the side given is the one read off
+    the shoulder line against the feet, and the sides take turns."""
+    clips = [c for c in _fixture()["clips"] if c.get("activity") == "Twist"]
+    assert len(clips) == 4
+    for clip in clips:
+        seq = recordings[clip["source"]].slice_frames(clip["start_frame"], clip["end_frame"])
+        result = count_repetitions(seq)
+        assert result.alternating, clip["how"]
+        sides = [r.side for r in result.repetitions]
+        assert sides == [_shoulders_turned(seq, r.peak_frame) for r in result.repetitions]
+        assert all(a != b for a, b in zip(sides, sides[1:], strict=False)), sides
 
 
 @pytest.mark.parametrize("activity", ["Squat", "JumpJack", "KneeRaise"])
