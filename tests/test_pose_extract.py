@@ -129,6 +129,7 @@ def test_overlay_has_every_frame(clip: Path, tmp_path: Path) -> None:
 def _bad_inputs(tmp: Path, shared_data: Path) -> dict[str, Path]:
     good = (shared_data / SQUAT).read_bytes()
     avi = (shared_data / "media" / "vtest.avi").read_bytes()
+    jpeg = (shared_data / "media" / "messi5.jpg").read_bytes()
     files = {
         "truncated_mp4": (tmp / "trunc.mp4", good[: len(good) // 2]),
         "truncated_avi": (tmp / "trunc.avi", avi[: len(avi) // 3]),
@@ -138,6 +139,8 @@ def _bad_inputs(tmp: Path, shared_data: Path) -> dict[str, Path]:
         "empty_file": (tmp / "empty.mp4", b""),
         # a labels CSV with its header alone (a ZeroDivisionError before: no clip, no worker)
         "header_only_csv": (tmp / "header.csv", b"path,label\n"),
+        # OpenCV decodes the first half of a cut-off JPEG and greys the rest: refused
+        "truncated_jpeg": (tmp / "cut.jpg", jpeg[: len(jpeg) // 2]),
     }
     out = {}
     for name, (path, data) in files.items():
@@ -165,6 +168,30 @@ def test_bad_input_one_line_exit_1_no_file(
         assert line.startswith("posecbr extract: error: ") and path.name in line, line
         assert captured.out == ""
         assert not out.exists() or not any(out.iterdir()), f"{name}: files left in {out}"
+
+
+def test_out_may_name_the_pose_file_of_one_video(
+    tmp_path: Path, shared_data: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """``--out x.npz`` for one video (here a one-frame image) writes that file, not a folder
+    named x.npz holding one; for a folder of videos it is refused, with nothing made."""
+    image = shared_data / "media" / "messi5.jpg"
+    out = tmp_path / "poses" / "messi.npz"
+    assert main(["extract", str(image), "--out", str(out)]) == 0
+    assert out.is_file() and sorted(p.name for p in out.parent.iterdir()) == ["messi.npz"]
+    assert load_pose(out).n_frames == 1
+    assert "messi.npz (1 frame" in capfd.readouterr().out
+    assert main(["extract", str(image), "--out", str(out)]) == 0  # up to date: skipped
+    assert "skipped" in capfd.readouterr().out
+    folder = tmp_path / "videos"
+    folder.mkdir()
+    (folder / "one.mp4").write_bytes((shared_data / SQUAT).read_bytes())
+    assert main(["extract", str(folder), "--out", str(tmp_path / "all.npz")]) == 1
+    assert _only_line(capfd.readouterr().err).endswith(
+        "all.npz: for a folder or labels CSV, --out names the folder for the pose files, not"
+        " one pose file"
+    )
+    assert not (tmp_path / "all.npz").exists()
 
 
 def test_unwritable_output_is_one_line(

@@ -33,6 +33,8 @@ from .model import model_version  # noqa: E402
 from .smoothing import AUX_FILTER, IMAGE_FILTER, VISIBILITY_ALPHA, WORLD_FILTER  # noqa: E402
 from .tracker import FramePose, PoseEstimator  # noqa: E402
 
+JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
+"""A JPEG file's start-of-image and end-of-image markers."""
 IMAGE_LANDMARK_FIELDS = ("x_px", "y_px", "z_px", "visibility", "presence")
 
 
@@ -89,10 +91,15 @@ def open_video(
     try:
         with open(path, "rb") as fh:
             head = fh.read(16)
+            fh.seek(max(0, path.stat().st_size - 64))
+            tail = fh.read()
     except OSError as exc:
         raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
     if not head:
         raise DataError("empty file, not a video", path)
+    if head.startswith(JPEG_START) and not tail.rstrip(b"\x00\r\n\t ").endswith(JPEG_END):
+        # OpenCV decodes what it has of a cut-off JPEG and greys the rest
+        raise DataError("truncated JPEG (no end-of-image marker)", path)
     try:
         cap = _capture(str(path), decode_threads)
     except cv2.error as exc:

@@ -70,7 +70,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "indices, end exclusive). Up-to-date outputs are skipped.",
     )
     p.add_argument("input", type=Path, metavar="INPUT", help="video, folder or labels CSV")
-    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
+    p.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        metavar="DIR",
+        help="output folder (for one video, a pose file name x.npz may be given instead)",
+    )
     p.add_argument(
         "--workers",
         type=int,
@@ -146,37 +152,51 @@ def _safe(name: str) -> str:
     return cleaned if cleaned not in ("", ".", "..") else "_"
 
 
+def _names_pose_file(out: Path) -> bool:
+    """Whether ``--out`` names one pose file (``x.npz``, not an existing folder) rather than
+    the folder the pose files go in."""
+    return out.suffix.lower() == ".npz" and not out.is_dir()
+
+
+def _folder_jobs(source: Path, out: Path) -> list[Job]:
+    """The videos of a folder, directly in it or one subfolder per class (label = name)."""
+    try:
+        subdirs = sorted(d for d in source.iterdir() if d.is_dir() and not d.name.startswith("."))
+    except OSError as exc:
+        raise DataError(f"cannot list folder ({exc.strerror or exc})", source) from None
+    jobs = [
+        Job(video=v, out=out / _safe(d.name) / f"{v.stem}.npz", label=d.name)
+        for d in subdirs
+        for v in _videos_in(d)
+    ]
+    jobs += [Job(video=v, out=out / f"{v.stem}.npz") for v in _videos_in(source)]
+    if not jobs:
+        raise DataError(
+            f"no videos found ({', '.join(VIDEO_SUFFIXES)}), directly or one subfolder per class",
+            source,
+        )
+    return jobs
+
+
 def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
     """The clips ``source`` names, with their output paths (see the command's help)."""
     if not source.exists():
         raise DataError("no such file or folder", source)
-    jobs: list[Job]
+    if source.is_file() and source.suffix.lower() != ".csv":
+        name = out if _names_pose_file(out) else out / f"{source.stem}.npz"
+        return [Job(video=source, out=name, overlay=overlay)]
+    if _names_pose_file(out):
+        raise DataError(
+            "for a folder or labels CSV, --out names the folder for the pose files, not one"
+            " pose file",
+            out,
+        )
     if source.is_file():
-        if source.suffix.lower() == ".csv":
-            jobs = _csv_jobs(source, out)
-        else:
-            return [Job(video=source, out=out / f"{source.stem}.npz", overlay=overlay)]
+        jobs = _csv_jobs(source, out)
     elif (source / "labels.csv").is_file():
         jobs = _csv_jobs(source / "labels.csv", out)
     else:
-        try:
-            subdirs = sorted(
-                d for d in source.iterdir() if d.is_dir() and not d.name.startswith(".")
-            )
-        except OSError as exc:
-            raise DataError(f"cannot list folder ({exc.strerror or exc})", source) from None
-        jobs = [
-            Job(video=v, out=out / _safe(d.name) / f"{v.stem}.npz", label=d.name)
-            for d in subdirs
-            for v in _videos_in(d)
-        ]
-        jobs += [Job(video=v, out=out / f"{v.stem}.npz") for v in _videos_in(source)]
-        if not jobs:
-            raise DataError(
-                f"no videos found ({', '.join(VIDEO_SUFFIXES)}), directly or one subfolder "
-                "per class",
-                source,
-            )
+        jobs = _folder_jobs(source, out)
     seen: dict[Path, Path] = {}
     for job in jobs:
         if job.out in seen and seen[job.out] != job.video:
@@ -455,6 +475,9 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
                 "videos, not one video file",
                 args.overlay,
             )
+    if single and jobs[0].out == args.out:  # --out names the pose file itself
+        _check_outputs(jobs)
+        return
     if args.out.exists() and not args.out.is_dir():
         raise DataError("output is not a folder", args.out)
     _check_outputs(jobs)
