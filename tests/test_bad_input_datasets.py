@@ -251,6 +251,8 @@ READER_CASES: list[tuple[str, Callable[[Path], Path], str]] = [
      "expected finite numbers after OFFSET, got '10 nan 0'"),
     ("BVH motion value inf", lambda d: _bvh(d, BVH.replace("30 40 0", "30 inf 0")),
      "a motion value in frame 2 is not a finite number"),
+    ("BVH motion value a word", lambda d: _bvh(d, BVH.replace("30 40 0", "30 forty 0")),
+     "motion value 'forty' (value "),
     ("ASF bone missing from the hierarchy",
      lambda d: _asf_amc(d, ASF.replace("root lfemur", "root"), AMC),
      "bone 'lfemur' is not in the :hierarchy"),
