@@ -266,6 +266,7 @@ class LiveSegmenter:
         self.longest = max(self.window, int(round(MAX_WINDOW_S * fps)))  # of any window
         self.most = max(1, int(round(MAX_UNSETTLED_S / HOP_S)))  # hops left unsettled
         self.frames: list[np.ndarray] = []
+        self.seen_by: list[np.ndarray | None] = []  # each kept frame's joints' confidence
         self.offset = 0  # the stream frame that frames[0] is (older frames are dropped)
         self.n = 0  # frames pushed
         self.hops = 0  # hops decided
@@ -344,10 +345,13 @@ class LiveSegmenter:
         """Every one of the latest windows votes every activity alike (nobody in view)."""
         return all(np.ptp(v) == 0.0 for v, _ in self.latest_votes)
 
-    def push(self, world: np.ndarray) -> list[LiveSegment]:
-        """Add one frame ``(33, 3)`` (NaN where the person is not seen). Returns the segments
-        that this frame settled as finished (usually none)."""
+    def push(self, world: np.ndarray, confidence: np.ndarray | None = None) -> list[LiveSegment]:
+        """Add one frame ``(33, 3)`` (NaN where the person is not seen) and, from a pose
+        model, its joints' confidence ``(33,)`` (visibility: the repetitions leave out a joint
+        below 0.5 as ``segment`` does, :func:`features.repetitions.counted_angles`). Returns
+        the segments that this frame settled as finished (usually none)."""
         self.frames.append(np.asarray(world, dtype=np.float64))
+        self.seen_by.append(None if confidence is None else np.asarray(confidence, np.float64))
         self._look(self.frames[-1])
         self.n += 1
         if self.n < self.window or (self.n - self.window) % self.hop:
@@ -587,7 +591,7 @@ class LiveSegmenter:
         keep_from = min(keep_from, self.n - self.span)  # the next span's frames
         drop = keep_from - self.offset
         if drop > self.window:
-            del self.frames[:drop]
+            del self.frames[:drop], self.seen_by[:drop]
             self.offset += drop
         settled = len(self.hop_centres) - len(self.forward.back)
         old = sum(f <= self.passed for f in self.hop_centres[: max(0, settled - 1)])
@@ -657,7 +661,14 @@ class LiveSegmenter:
             raise DataError(f"stream frames {a}-{b} are no longer kept (from {self.offset})",
                             "stream")  # fmt: skip
         rows = self.frames[a - self.offset : b - self.offset]
-        return PoseSequence(np.stack(rows), BLAZEPOSE_33, self.fps, source="stream")
+        seen = self.seen_by[a - self.offset : b - self.offset]
+        confidence = None
+        if any(c is not None for c in seen):  # a frame without stays unknown (NaN)
+            confidence = np.stack([np.full(len(BLAZEPOSE_33), np.nan) if c is None else c
+                                   for c in seen])  # fmt: skip
+        return PoseSequence(
+            np.stack(rows), BLAZEPOSE_33, self.fps, confidence=confidence, source="stream"
+        )
 
     def _confidence(self, state: int) -> float:
         """Of the segment in progress labelled ``state``: the mean over the hops pass 2 has

@@ -116,6 +116,30 @@ def test_segment_the_same_video_counts_each_squat_once(
     assert all(s["confidence"] > 0.0 for s in segments if s["label"] is None), segments
 
 
+def test_watch_sees_the_joints_that_segment_sees(
+    case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One slow reverse lunge (counted by hand: tests/fixtures/repetition_counts.json), filmed
+    with the feet often below the frame's edge: ``watch`` must count it once, as ``segment``
+    does on the same video, and give the same segments. It counted 3: the stream kept the
+    model's guesses for joints outside the frame and joints it did not see (visibility below
+    0.5), which ``extract`` and ``segment`` leave missing."""
+    video = shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
+    capsys.readouterr()
+    assert main(["watch", str(video), "--db", str(case_base), "--speed", "0",
+                 "--out", str(tmp_path / "w.mp4")]) == 0  # fmt: skip
+    watched = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert main(["segment", str(video), "--db", str(case_base), "--json"]) == 0
+    offline = json.loads(capsys.readouterr().out)["segments"]
+    assert sum(d["repetitions"] for d in watched) == 1, watched
+
+    def spans(segments: list[dict[str, Any]]) -> list[tuple[Any, ...]]:
+        keys = ("start_frame", "end_frame", "label", "repetitions")
+        return [tuple(d[k] for k in keys) for d in segments]
+
+    assert spans(watched) == spans(offline)
+
+
 def _mocap_stream(shared_data: Path, n: int, then: str, fps: float = 30.0) -> Any:
     """A stand-in for ``stream_poses``: real poses (13_30 at 120 fps, every 4th frame) as a
     camera would deliver them; after ``n`` frames it stalls ("stall") or stops ("end")."""
@@ -127,7 +151,9 @@ def _mocap_stream(shared_data: Path, n: int, then: str, fps: float = 30.0) -> An
 
     def stream(source: Any, **kwargs: Any) -> Iterator[StreamFrame]:
         for i in range(n):
-            pose = FramePose(np.full((33, 5), np.nan), world[i], True, False, 1.0, None)
+            image = np.full((33, 5), np.nan)
+            image[:, 3] = 1.0  # every joint seen (mocap)
+            pose = FramePose(image, world[i], True, False, 1.0, None)
             rgb = np.zeros((48, 64, 3), dtype=np.uint8)
             yield StreamFrame(i, i / fps, pose, rgb, time.perf_counter())
         if then == "stall":

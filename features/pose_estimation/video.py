@@ -264,6 +264,20 @@ class StreamFrame:
     rgb: np.ndarray
     read_at: float = float("nan")
 
+    @property
+    def seen_world(self) -> np.ndarray:
+        """The world landmarks ``(33, 3)`` as :func:`estimate_video` stores them: a joint the
+        model places outside the frame is not seen, so it is missing (NaN)."""
+        height, width = self.rgb.shape[:2]
+        world = self.pose.world.copy()
+        world[outside_frame(self.pose.image, width, height)] = np.nan
+        return world
+
+    @property
+    def visibility(self) -> np.ndarray:
+        """Each landmark's visibility ``(33,)`` (the sequence's confidence offline)."""
+        return np.asarray(self.pose.image[:, 3])
+
 
 @contextmanager
 def _quiet_opencv() -> Iterator[None]:

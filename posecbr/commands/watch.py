@@ -323,7 +323,7 @@ class Watcher:
             )
 
     def _take(self, frame: Any) -> None:
-        finished = self.live.push(frame.pose.world)
+        finished = self.live.push(frame.seen_world, frame.visibility)
         if frame.read_at == frame.read_at:  # not NaN: the source said when it read the frame
             self.latency.append(time.perf_counter() - frame.read_at)
         self.n += 1
