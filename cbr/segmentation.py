@@ -668,8 +668,13 @@ def _repetitions(sig: MovementSignals, start: int, end: int) -> tuple[Repetition
     part = sig.part(a, b)
     found = count_in_signals(part, (b - a) * sig.step, sig.fps * sig.step).repetitions
     off = a * sig.step
-    return tuple(
-        Repetition(r.start_frame + off, min(end, r.end_frame + off), r.peak_frame + off, r.side)
+    return tuple(  # the first sample may begin up to a step before ``start``: cut there
+        Repetition(
+            max(start, r.start_frame + off),
+            min(end, r.end_frame + off),
+            max(start, r.peak_frame + off),
+            r.side,
+        )
         for r in found
     )
 

@@ -608,6 +608,18 @@ def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
     return np.asarray(cand)
 
 
+def _beyond(height: np.ndarray, far: np.ndarray) -> np.ndarray:
+    """The far points ``far`` of one side of an alternating movement that go out beyond the
+    symmetric posture (``height`` > 0) by at least :data:`SUBSTANTIAL` of their median: a
+    peak's prominence is measured down to the other side's far points around it, so a
+    wobble just past the symmetric posture between two of those stands out as much as a
+    repetition (a street's walkers, 0.5-5 degrees, among steps of 15-35)."""
+    far = far[height[far] > 0]
+    if not len(far):
+        return far
+    return np.asarray(far[height[far] >= SUBSTANTIAL * float(np.median(height[far]))])
+
+
 def _span(line: np.ndarray) -> float:
     """The robust range of a line: 5th to 95th percentile."""
     lo, hi = np.percentile(line, [5, 95])
@@ -617,16 +629,21 @@ def _span(line: np.ndarray) -> float:
 def _bounds(line: np.ndarray, peaks: np.ndarray, reach: int) -> list[tuple[int, int]]:
     """Each peak's repetition as samples [start, end): from the lowest point of ``line`` since
     the previous peak (at most ``reach`` samples before the first) to the lowest point before
-    the next one, where the next repetition starts."""
+    the next one, where the next repetition starts. The spans follow one another without
+    overlap and each holds its peak (``peaks`` ascending, distinct): the lowest point between
+    two peaks is sought after the first, so a peak lower than all that follows it up to the
+    next (the other side's barely past the symmetric posture) is a repetition of one sample,
+    not of none."""
     n = len(line)
-    cuts = [int(a + np.argmin(line[a : b + 1])) for a, b in zip(peaks[:-1], peaks[1:], strict=True)]
+    cuts = [
+        int(a + 1 + np.argmin(line[a + 1 : b + 1]))
+        for a, b in zip(peaks[:-1], peaks[1:], strict=True)
+    ]
     first_lo = max(0, int(peaks[0]) - reach)
     first = first_lo + int(np.argmin(line[first_lo : peaks[0] + 1]))
     last_hi = min(n, int(peaks[-1]) + reach + 1)
     last = int(peaks[-1]) + int(np.argmin(line[peaks[-1] : last_hi]))
-    starts = [first, *cuts]
-    ends = [*cuts, last + 1]
-    return [(s, max(e, s + 1)) for s, e in zip(starts, ends, strict=True)]
+    return list(zip([first, *cuts], [*cuts, last + 1], strict=True))
 
 
 def _sides(
@@ -677,7 +694,7 @@ def count_repetitions(seq: PoseSequence) -> RepetitionCount:
 def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> RepetitionCount:
     """:func:`count_repetitions` on already prepared signals (of a clip of ``n_frames``)."""
     x = sig.values
-    spans, far, direction, sides = _alternating_repetitions(x, sig.names, sig.fps)
+    spans, far, direction, sides = _alternating_repetitions(x, sig.names, sig.fps, sig.blind)
     alternating = sides is not None
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
     if sides is None:
@@ -691,11 +708,6 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
         far = _far_points(line, float(np.percentile(line, 5)), distance)
         far = np.unique(_in_view(far, sig.blind))
         spans = _bounds(line, far, reach) if len(far) else []
-    else:
-        moved = _in_view(far, sig.blind)
-        once = np.diff(moved, prepend=-1) > 0  # two far points moved onto one sample: one
-        spans = [s for s, k in zip(spans, once, strict=True) if k] if len(moved) else []
-        far, sides = moved[once], sides[once]
     spans = _seen_spans(spans, far, sig.blind)
     reps = [
         Repetition(
@@ -781,13 +793,14 @@ OTHER_SIDE = {"left": "right", "right": "left"}
 
 
 def _alternating_repetitions(
-    x: np.ndarray, names: tuple[str, ...], fps: float
+    x: np.ndarray, names: tuple[str, ...], fps: float, blind: np.ndarray | None = None
 ) -> tuple[list[tuple[int, int]], np.ndarray, np.ndarray, np.ndarray | None]:
     """Repetitions of a movement that alternates sides: what one side does against the other
     spans at least half as much as what both do alike (a knee raise: as much), and the body
     goes out to both sides about equally far. Returns spans, far points, the movement
     direction and the side of each far point (:func:`_sides`); None when the movement does
-    not alternate (and the rest empty)."""
+    not alternate (and the rest empty). ``blind``: the samples where nobody is seen
+    (:func:`_in_view`)."""
     sym, anti = side_parts(x, names)
     none: tuple[list[tuple[int, int]], np.ndarray, np.ndarray, np.ndarray | None] = (
         [],
@@ -810,10 +823,8 @@ def _alternating_repetitions(
     distance = int(0.25 * (period or 2 * MIN_PERIOD_S) * fps)
     # far points on each side of the symmetric posture; a posture held off to one side (a
     # lunge's split stance, lying on one side) does not alternate
-    one = _far_points(line, 0.0, distance)
-    one = one[line[one] > 0]
-    other = _far_points(-line, 0.0, distance)
-    other = other[line[other] < 0]
+    one = _beyond(line, _far_points(line, 0.0, distance))
+    other = _beyond(-line, _far_points(-line, 0.0, distance))
     if not len(one) or not len(other):
         return none  # one side only: counted as a plain movement
     steady = _steady(anti, period, strength, fps)
@@ -827,6 +838,11 @@ def _alternating_repetitions(
     order = np.argsort(np.concatenate([one, other]), kind="stable")
     far = np.concatenate([one, other])[order]
     sides = np.array([first] * len(one) + [OTHER_SIDE[first]] * len(other))[order]
+    moved = _in_view(far, blind)
+    once = np.diff(moved, prepend=-1) > 0  # two far points moved onto one sample: one
+    far, sides = moved[once], sides[once]
+    if not len(far):
+        return none
     reach = int(0.5 * period * fps) if period else len(line)
     return _bounds(np.abs(line), far, reach), far, direction, sides
 

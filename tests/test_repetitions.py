@@ -11,12 +11,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cbr.segmentation import counted_segments
 from features.derived import signals_of
 from features.errors import DataError
 from features.poses import PoseSequence, save_pose
 from features.qmp import fit_signals
 from features.readers.asfamc import read_asf_amc
-from features.repetitions import count_repetitions, mirror_angles, pelvis_height
+from features.repetitions import (
+    count_repetitions,
+    mirror_angles,
+    movement_signals,
+    pelvis_height,
+)
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
 from posecbr.recordings import load_recording
@@ -357,6 +363,17 @@ def test_far_points_of_a_video_lie_where_a_person_was_seen(shared_data: Path) ->
     nearest = np.abs(peaks[:, None] - seen[None, :]).min(axis=1)
     assert (nearest <= 0.4 * seq.fps).all()
     assert peaks.min() >= seen.min()
+    # cut into pieces as segments are (each counted on the recording's own signals): in
+    # every piece the repetitions follow one another without overlap, each holding its far
+    # point (they overlapped, one of them over a repetition of one frame, with 15-s pieces)
+    sig = movement_signals(seq)
+    for length in (100, 150, 200):
+        edges = [*range(0, seq.n_frames, length), seq.n_frames]
+        bounds = list(zip(edges[:-1], edges[1:], strict=True))
+        for (a, b), reps in zip(bounds, counted_segments(sig, bounds, seq.n_frames), strict=True):
+            ends = [a, *(r.end_frame for r in reps)]
+            for r, before in zip(reps, ends, strict=False):
+                assert before <= r.start_frame <= r.peak_frame < r.end_frame <= b, (a, b, reps)
 
 
 def test_reps_command_refuses_a_plot_over_its_input(

@@ -17,6 +17,7 @@ from features.readers.asfamc import read_asf_amc
 from features.readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon
 from features.repetitions import (
     MovementSignals,
+    _bounds,
     count_in_signals,
     count_repetitions,
     periodic_share,
@@ -75,6 +76,38 @@ def test_a_far_point_lies_where_the_person_was_seen() -> None:
     # nothing seen at all: nothing counted
     unseen = MovementSignals(sig.values, KNEES, FPS, 1, np.ones(len(knee), dtype=bool))
     assert count_in_signals(unseen, len(knee), FPS).count == 0
+
+
+def test_a_wobble_just_past_the_symmetric_posture_is_no_repetition() -> None:
+    """Knee raises left, right, left, right, left, left, right, left, right (1 s each, 1.2 rad,
+    0.2 s rest after each); between the two lefts in a row the right knee bends 0.05 rad
+    (3 degrees) for 0.4 s. That wobble is no right raise: nine repetitions, far points at
+    the raises' middles (sample 15 of each 36; the wobble takes 18), sides as raised."""
+    order = ["L", "R", "L", "R", "L", "w", "L", "R", "L", "R"]
+    left: list[np.ndarray] = []
+    right: list[np.ndarray] = []
+    for o in order:
+        n, depth = (12, 0.05) if o == "w" else (30, 1.2)
+        bend = depth * 0.5 * (1 - np.cos(2 * np.pi * np.arange(n) / n))
+        left += [bend if o == "L" else np.zeros(n), np.zeros(6)]
+        right += [np.zeros(n) if o == "L" else bend, np.zeros(6)]
+    values = np.pi - np.stack([np.concatenate(left), np.concatenate(right)], axis=1)
+    result = count_in_signals(_signals(values, KNEES), len(values), FPS)
+    assert result.alternating
+    starts = [0, 36, 72, 108, 144, 198, 234, 270, 306]  # each raise's first sample
+    assert [r.peak_frame for r in result.repetitions] == [a + 15 for a in starts]
+    sides = [r.side for r in result.repetitions]
+    assert sides == ["left", "right", "left", "right", "left", "left", "right", "left", "right"]
+
+
+def test_repetitions_follow_one_another_each_holding_its_far_point() -> None:
+    """Three far points, the second lower than everything after it up to the third (the other
+    side's, barely past the symmetric posture): each repetition runs from the lowest point
+    after the far point before it, so the three spans tile samples 0-6 without overlap and
+    each holds its far point. (Sought from the far point itself, the lowest point after the
+    second far point was that far point: spans [3, 4) and [3, 6) overlapped.)"""
+    line = np.array([0.0, 1.0, 0.5, 0.2, 0.9, 0.0])
+    assert _bounds(line, np.array([1, 3, 4]), reach=5) == [(0, 3), (3, 4), (4, 6)]
 
 
 def test_uneven_cycles_of_several_people_count_exactly() -> None:
