@@ -48,6 +48,7 @@ from .segmentation import (
     periods_in_span,
     span_fields,
     told,
+    unknown_reason,
 )
 from .unknown import (
     JUDGES,
@@ -92,6 +93,7 @@ class LiveSegment:
         novelty = round(self.novelty, 3) if math.isfinite(self.novelty) else None
         return {
             **fields,
+            "unknown": unknown_reason(self.label, self.explanation),
             "repetitions": self.repetitions,
             "explanation": self.explanation,
             "novelty": novelty,

@@ -129,6 +129,17 @@ def span_fields(start_frame: int, end_frame: int, label: str | None, confidence:
     }
 
 
+UNLIKE = "unlike every activity"  # why a stretch in which the person is seen is unknown
+
+
+def unknown_reason(label: str | None, explanation: str) -> str | None:
+    """Why a stretch is unknown, for machines: :data:`NOBODY` (no frame shows the person) or
+    :data:`UNLIKE` (seen, but like no activity of the case base); None when it has a label."""
+    if label is not None:
+        return None
+    return NOBODY if explanation == NOBODY else UNLIKE
+
+
 @dataclass(frozen=True)
 class Segment:
     """Frames ``start_frame`` to ``end_frame`` (exclusive) labelled ``label`` (None: unlike
@@ -146,6 +157,7 @@ class Segment:
     def to_dict(self, fps: float) -> dict[str, Any]:
         return {
             **span_fields(self.start_frame, self.end_frame, self.label, self.confidence, fps),
+            "unknown": unknown_reason(self.label, self.explanation),
             "repetitions": len(self.repetitions),
             "explanation": self.explanation,
             "novelty": round(self.novelty, 3) if math.isfinite(self.novelty) else None,

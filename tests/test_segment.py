@@ -329,7 +329,10 @@ def test_a_stretch_with_nobody_in_view_is_a_segment_that_says_so(
     assert empty.explanation == "nobody in view" and not empty.repetitions
     assert abs(empty.start_frame - squat) <= 12 and abs(empty.end_frame - squat - 600) <= 12
     assert [len(s.repetitions) for s in result.segments] == [2, 0, 4]
-    assert result.to_dict()["segments"][1]["novelty"] is None
+    doc = result.to_dict()["segments"]
+    assert doc[1]["novelty"] is None
+    # for machines, why each is unknown (or not): not only in the explanation's words
+    assert [d["unknown"] for d in doc] == [None, "nobody in view", None]
     assert result.blocks[int(6.0 / 0.1)] is None
     # the overlay's words and the timeline's bands say so too
     from posecbr.commands.segment import _bands, frame_words
@@ -461,6 +464,7 @@ def test_an_exercise_left_out_of_the_case_base_is_unknown(
         assert all(s.label != "Squat" for s in squats.segments)
         unknown = [s for s in squats.segments if s.label is None]
         assert "like no stored activity" in unknown[0].explanation
+        assert unknown[0].to_dict(rec.fps)["unknown"] == "unlike every activity"
         knees = segment(clf, stretch(rec, int(6.7 * 120), int(11.8 * 120)), j)
         assert np.mean([b == "KneeRaise" for b in knees.blocks]) >= 0.8, (j, knees.segments)
 

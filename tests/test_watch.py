@@ -88,8 +88,9 @@ def test_watch_a_street_with_nobody_in_view(
     assert main(["watch", str(video), "--db", str(case_base), "--max-frames", "120",
                  "--speed", "0"]) == 0  # fmt: skip
     lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
-    assert [(d["start_frame"], d["end_frame"], d["label"], d["repetitions"], d["explanation"])
-            for d in lines] == [(0, 120, None, 0, "nobody in view")]  # fmt: skip
+    assert [(d["start_frame"], d["end_frame"], d["label"], d["unknown"], d["repetitions"],
+             d["explanation"]) for d in lines] == [
+        (0, 120, None, "nobody in view", 0, "nobody in view")]  # fmt: skip
 
 
 @pytest.mark.parametrize("judge", ["activity-margin", "margin"])
