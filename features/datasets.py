@@ -556,15 +556,14 @@ def frame_labels(
     (``block_s`` None) or one per ``block_s`` seconds (label t covers [t, t+1) x block_s).
 
     The count must fit the recording: one label per block, the last block possibly partial;
-    one more label is accepted when the frames fill the last block exactly (the cmu-mocap6
-    label files were made that way). Otherwise DataError naming the file: a different count
-    means another frame rate or block length, and labels would land on the wrong frames."""
+    one more label is accepted when the frames fill the last block exactly (a label for the
+    recording's end time as well as its start: the cmu-mocap6 label files were made that
+    way), so a file of one label per frame may hold one more than there are frames, and no
+    more. Otherwise DataError naming the file: a different count means another frame rate
+    or block length, and labels would land on the wrong frames."""
     per_block = 1.0 if block_s is None else block_s * fps
-    if block_s is None:
-        low = high = n_frames
-    else:
-        low = int(np.ceil(n_frames / per_block - 1e-9))
-        high = int(np.floor(n_frames / per_block + 1e-9)) + 1
+    low = int(np.ceil(n_frames / per_block - 1e-9))
+    high = int(np.floor(n_frames / per_block + 1e-9)) + 1
     if not low <= len(labels) <= high:
         unit = "frame" if block_s is None else f"{block_s:g} s"
         need = str(low) if low == high else f"{low} or {high}"

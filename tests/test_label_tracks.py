@@ -39,12 +39,14 @@ def test_block_labels_land_on_their_frames() -> None:
     # frames that fill the last block exactly: one more label is accepted (the cmu-mocap6
     # files were made so) and lands on no frame
     assert list(frame_labels(["a", "b", "c"], 24, 120.0, 0.1, "x")) == ["a"] * 12 + ["b"] * 12
-    # one label per frame
+    # one label per frame; one more, for the end time, as with blocks, lands on no frame
     assert list(frame_labels(["a", "a", "b"], 3, 30.0, None, "x")) == ["a", "a", "b"]
+    assert list(frame_labels(["a", "a", "b", "c"], 3, 30.0, None, "x")) == ["a", "a", "b"]
 
 
 @pytest.mark.parametrize(
-    ("n_labels", "frames", "block"), [(4, 24, 0.1), (1, 24, 0.1), (2, 3, None), (10, 24, 0.1)]
+    ("n_labels", "frames", "block"),
+    [(4, 24, 0.1), (1, 24, 0.1), (2, 3, None), (5, 3, None), (7, 3, None), (10, 24, 0.1)],
 )
 def test_a_label_count_that_does_not_fit_is_refused(
     n_labels: int, frames: int, block: float | None
