@@ -589,35 +589,47 @@ def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
     the repetition before it), at least ``distance`` samples apart. The clip is padded with
     the rest level, so a repetition cut off at either end (the line falls back from it by less
     than :data:`MIN_EXCURSION_RAD` before the clip's start or after its end, a tail that only
-    levels off) counts when it got (nearly) as far as the others: three quarters of their
-    median height above rest."""
+    levels off) counts when it got (nearly) as far as the others (:func:`_reached`)."""
+    cand, cut_off = _candidates(line, rest, distance)
+    return np.asarray(cand[_reached(line[cand] - rest, cut_off)])
+
+
+def _candidates(line: np.ndarray, rest: float, distance: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_far_points` before the cut-off ones are judged: the samples, and which of
+    them are cut off at the clip's start or end."""
     padded = np.concatenate([[rest], line, [rest]])
     cand, props = find_peaks(padded, prominence=MIN_EXCURSION_RAD, distance=max(1, distance))
     if not len(cand):
-        return np.array([], dtype=np.int64)
+        return np.array([], dtype=np.int64), np.array([], dtype=bool)
     prom = props["prominences"]
     height = padded[cand] - rest
     keep = (prom >= SUBSTANTIAL * float(np.median(prom))) & (prom >= RETURN_SHARE * height)
-    cand, height = cand[keep] - 1, height[keep]
+    cand = cand[keep] - 1
     before = np.minimum.accumulate(line)[cand]
     after = np.minimum.accumulate(line[::-1])[::-1][cand]
     cut_off = (line[cand] - before < MIN_EXCURSION_RAD) | (line[cand] - after < MIN_EXCURSION_RAD)
-    if (~cut_off).any():
-        reach = 0.75 * float(np.median(height[~cut_off]))
-        cand = cand[~cut_off | (height >= reach)]
-    return np.asarray(cand)
+    return np.asarray(cand), np.asarray(cut_off)
+
+
+def _reached(height: np.ndarray, cut_off: np.ndarray) -> np.ndarray:
+    """Which far points count, of heights ``height`` above rest: every whole one, and one
+    cut off at the clip's start or end when it got (nearly) as far as the whole ones: three
+    quarters of their median height (all, when none is whole)."""
+    if not (~cut_off).any():
+        return np.ones(len(height), dtype=bool)
+    return np.asarray(~cut_off | (height >= 0.75 * float(np.median(height[~cut_off]))))
 
 
 def _beyond(height: np.ndarray, far: np.ndarray) -> np.ndarray:
-    """The far points ``far`` of one side of an alternating movement that go out beyond the
-    symmetric posture (``height`` > 0) by at least :data:`SUBSTANTIAL` of their median: a
-    peak's prominence is measured down to the other side's far points around it, so a
-    wobble just past the symmetric posture between two of those stands out as much as a
-    repetition (a street's walkers, 0.5-5 degrees, among steps of 15-35)."""
-    far = far[height[far] > 0]
-    if not len(far):
-        return far
-    return np.asarray(far[height[far] >= SUBSTANTIAL * float(np.median(height[far]))])
+    """Which of the candidate far points ``far`` of one side of an alternating movement go
+    out beyond the symmetric posture (``height`` > 0) by at least :data:`SUBSTANTIAL` of
+    their median: a peak's prominence is measured down to the other side's far points around
+    it, so a wobble just past the symmetric posture between two of those stands out as much
+    as a repetition (a street's walkers, 0.5-5 degrees, among steps of 15-35)."""
+    out = height[far] > 0
+    if out.any():
+        out &= height[far] >= SUBSTANTIAL * float(np.median(height[far][out]))
+    return np.asarray(out)
 
 
 def _span(line: np.ndarray) -> float:
@@ -823,8 +835,22 @@ def _alternating_repetitions(
     distance = int(0.25 * (period or 2 * MIN_PERIOD_S) * fps)
     # far points on each side of the symmetric posture; a posture held off to one side (a
     # lunge's split stance, lying on one side) does not alternate
-    one = _beyond(line, _far_points(line, 0.0, distance))
-    other = _beyond(-line, _far_points(-line, 0.0, distance))
+    one, one_cut = _candidates(line, 0.0, distance)
+    other, other_cut = _candidates(-line, 0.0, distance)
+    out_one, out_other = _beyond(line, one), _beyond(-line, other)
+    one, one_cut, other, other_cut = (
+        one[out_one],
+        one_cut[out_one],
+        other[out_other],
+        other_cut[out_other],
+    )
+    keep_one, keep_other = _reached(line[one], one_cut), _reached(-line[other], other_cut)
+    one, one_cut, other, other_cut = (
+        one[keep_one],
+        one_cut[keep_one],
+        other[keep_other],
+        other_cut[keep_other],
+    )
     if not len(one) or not len(other):
         return none  # one side only: counted as a plain movement
     steady = _steady(anti, period, strength, fps)
@@ -835,9 +861,14 @@ def _alternating_repetitions(
     if min(reach_one, reach_other) < 0.5 * max(reach_one, reach_other):
         return none  # one side goes out far, the other barely: not alternating
     first = _sides(x, names, one, other, direction)
-    order = np.argsort(np.concatenate([one, other]), kind="stable")
-    far = np.concatenate([one, other])[order]
-    sides = np.array([first] * len(one) + [OTHER_SIDE[first]] * len(other))[order]
+    far = np.concatenate([one, other])
+    sides = np.array([first] * len(one) + [OTHER_SIDE[first]] * len(other))
+    # and a far point cut off at the clip's start or end, against the whole ones of both
+    # sides (a side whose only far point is cut off had none of its own: a single twist
+    # that turns back as the clip ends)
+    reached = _reached(np.abs(line[far]), np.r_[one_cut, other_cut])
+    order = np.argsort(far[reached], kind="stable")
+    far, sides = far[reached][order], sides[reached][order]
     moved = _in_view(far, blind)
     once = np.diff(moved, prepend=-1) > 0  # two far points moved onto one sample: one
     far, sides = moved[once], sides[once]
