@@ -170,6 +170,24 @@ def test_bad_input_one_line_exit_1_no_file(
         assert not out.exists() or not any(out.iterdir()), f"{name}: files left in {out}"
 
 
+def test_still_images_in_a_folder_are_clips_of_one_frame(tmp_path: Path, shared_data: Path) -> None:
+    """A class folder of photos (a JPEG and a PNG) beside a video: each image is a clip of
+    one frame, labelled by its folder, as one image given alone is; the images' people are
+    found (one person in each: ../shared/data/README.md)."""
+    data = tmp_path / "data"
+    (data / "pose").mkdir(parents=True)
+    for name in ("messi5.jpg", "basketball1.png"):
+        os.symlink(shared_data / "media" / name, data / "pose" / name)
+    _cut(shared_data / SQUAT, data / "squat.mp4", 3)
+    out = tmp_path / "out"
+    assert main(["extract", str(data), "--out", str(out)]) == 0
+    for stem in ("messi5", "basketball1"):
+        seq = load_pose(out / "pose" / f"{stem}.npz")
+        assert (seq.label, seq.n_frames) == ("pose", 1)
+        assert np.isfinite(seq.positions).any(), stem
+    assert load_pose(out / "squat.npz").n_frames == 3
+
+
 def test_out_may_name_the_pose_file_of_one_video(
     tmp_path: Path, shared_data: Path, capfd: pytest.CaptureFixture[str]
 ) -> None:

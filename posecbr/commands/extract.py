@@ -32,6 +32,7 @@ from features.text import counted, shown
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v")
+IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp")  # one frame each
 
 
 @dataclass(frozen=True)
@@ -65,9 +66,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "extract",
         help="estimate 3D poses from videos (BlazePose on onnxruntime) and write pose files",
         description="Run BlazePose (full) on every frame and write one pose file per clip. "
-        "INPUT is a video, a folder of videos, a folder with one subfolder per class (label = "
-        "subfolder name), or a labels CSV path,label[,subject][,start,end] (start/end: frame "
-        "indices, end exclusive). Up-to-date outputs are skipped.",
+        "INPUT is a video or still image, a folder of them, a folder with one subfolder per "
+        "class (label = subfolder name), or a labels CSV path,label[,subject][,start,end] "
+        "(start/end: frame indices, end exclusive). Up-to-date outputs are skipped.",
     )
     p.add_argument("input", type=Path, metavar="INPUT", help="video, folder or labels CSV")
     p.add_argument(
@@ -115,9 +116,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _videos_in(folder: Path) -> list[Path]:
+    """The videos and still images in ``folder`` (not its subfolders), by name."""
+    kinds = VIDEO_SUFFIXES + IMAGE_SUFFIXES
     return sorted(
         p for p in folder.iterdir()
-        if p.is_file() and p.suffix.lower() in VIDEO_SUFFIXES and not p.name.startswith(".")
+        if p.is_file() and p.suffix.lower() in kinds and not p.name.startswith(".")
     )  # fmt: skip
 
 
@@ -172,7 +175,8 @@ def _folder_jobs(source: Path, out: Path) -> list[Job]:
     jobs += [Job(video=v, out=out / f"{v.stem}.npz") for v in _videos_in(source)]
     if not jobs:
         raise DataError(
-            f"no videos found ({', '.join(VIDEO_SUFFIXES)}), directly or one subfolder per class",
+            f"no videos or images found ({', '.join(VIDEO_SUFFIXES + IMAGE_SUFFIXES)}),"
+            " directly or one subfolder per class",
             source,
         )
     return jobs
