@@ -292,3 +292,28 @@ def test_stream_poses_from_a_file_and_a_missing_camera(shared_data: Path) -> Non
     assert got[0].rgb.shape == (1280, 720, 3)
     with pytest.raises(DataError, match="cannot open camera or stream"):
         next(iter(stream_poses(99)))
+
+
+def test_a_streamed_frame_sees_what_extract_stores() -> None:
+    """A 64 x 48 frame whose landmarks are all inside but the left ankle (x = 64: one pixel
+    past the last column) and the right ankle (y = -1): those two are missing in the world
+    landmarks the stream gives, as :func:`estimate_video` stores them; the rest as the model
+    gave them; the visibility is the image landmarks' fourth field."""
+    from features.pose_estimation import StreamFrame
+    from features.pose_estimation.tracker import FramePose
+
+    image = np.zeros((33, 5))
+    image[:, :2] = [10.0, 20.0]
+    image[:, 3] = np.linspace(0.0, 1.0, 33)
+    image[JOINT_INDEX["left_ankle"], 0] = 64.0
+    image[JOINT_INDEX["right_ankle"], 1] = -1.0
+    world = np.arange(99.0).reshape(33, 3)
+    frame = StreamFrame(0, 0.0, FramePose(image, world, True, True, 1.0, None),
+                        np.zeros((48, 64, 3), dtype=np.uint8))  # fmt: skip
+    seen = frame.seen_world
+    gone = [JOINT_INDEX["left_ankle"], JOINT_INDEX["right_ankle"]]
+    assert np.isnan(seen[gone]).all()
+    kept = np.setdiff1d(np.arange(33), gone)
+    np.testing.assert_array_equal(seen[kept], world[kept])
+    np.testing.assert_array_equal(frame.visibility, np.linspace(0.0, 1.0, 33))
+    assert np.isfinite(frame.pose.world).all()  # the model's output itself is kept
