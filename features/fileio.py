@@ -215,6 +215,12 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
+def _read_from(src: Path) -> list[Path]:
+    """What reading ``src`` reads: the file; of a folder, also its ``labels.csv`` (the
+    clips' labels when it has one)."""
+    return [src, src / "labels.csv"] if src.is_dir() else [src]
+
+
 def check_output(
     path: str | Path,
     *,
@@ -227,7 +233,8 @@ def check_output(
 
     Refused, with one line naming the path: a folder; a file inside a folder that does not
     exist (unless ``make_parents``: the writer creates it, so only a file in its way is
-    refused); one of ``inputs`` (an output never overwrites an input); an existing file when
+    refused); one of ``inputs`` or, of a folder among them, its ``labels.csv`` (an output
+    never overwrites an input); an existing file when
     ``must_not_exist``.
     """
     out = Path(path)
@@ -240,8 +247,9 @@ def check_output(
     elif not out.parent.is_dir():
         raise DataError(f"the folder of the {what} does not exist", out.parent)
     for src in inputs:
-        if _same_file(out, Path(src)):
-            raise DataError(f"the {what} would overwrite an input ({src})", out)
+        for read in _read_from(Path(src)):
+            if _same_file(out, read):
+                raise DataError(f"the {what} would overwrite an input ({read})", out)
     if must_not_exist and out.exists():
         raise DataError(f"the {what} already exists", out)
     return out

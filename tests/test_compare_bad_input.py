@@ -166,6 +166,20 @@ def test_an_output_that_cannot_be_written_is_refused_before_the_run(
     assert snapshot(tmp_path) == before
 
 
+@pytest.mark.parametrize(("flag", "what"), [("--csv", "CSV"), ("--json", "JSON")])
+def test_an_output_over_the_label_file_of_a_folder_given_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], flag: str, what: str
+) -> None:
+    """The data given as a folder: its labels.csv is read, so it is an input too (it was
+    replaced by the results table, and the folder could no longer be read)."""
+    labels = _swapped_data(tmp_path / "data")
+    before = snapshot(tmp_path)
+    assert main(["compare", str(labels.parent), *FAST, flag, str(labels)]) == 1
+    line = _one_error_line(capsys, "compare")
+    assert line.endswith(f"{labels}: the {what} output would overwrite an input ({labels})")
+    assert snapshot(tmp_path) == before
+
+
 def test_a_json_output_in_the_folder_out_makes_is_written(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -326,12 +340,14 @@ def test_report_refuses_to_overwrite_its_results(
     compared: tuple[Path, Path, dict[str, str]], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     folder = _edited(compared, tmp_path, lambda doc: None)
+    (folder / "results.csv").write_text("method,accuracy\n")  # compare's table beside it
     before = snapshot(tmp_path)
-    results = folder / "results.json"
-    assert main(["report", str(folder), "--out", str(results)]) == 1
-    line = _one_error_line(capsys, "report")
-    assert line.endswith(f"{results}: the report would overwrite an input ({results})")
-    assert snapshot(tmp_path) == before
+    for name in ("results.json", "results.csv"):  # the CSV was replaced by the page
+        results = folder / name
+        assert main(["report", str(folder), "--out", str(results)]) == 1
+        line = _one_error_line(capsys, "report")
+        assert line.endswith(f"{results}: the report would overwrite an input ({results})")
+        assert snapshot(tmp_path) == before
 
 
 def _replace_everywhere(value: Any, old: str, new: str) -> Any:

@@ -291,7 +291,10 @@ def write_report(results_path: str | Path, out: str | Path) -> tuple[Path, list[
     folder."""
     results, source = load_results(results_path)
     images = picture_files(results, source)
-    dest = check_output(out, inputs=[source, *images.values()], what="report")
+    folder = Path(results_path)
+    kept = sorted(p for p in folder.iterdir() if p.is_file()) if folder.is_dir() else []
+    # the compare run's own files (its results table too) are kept as they are
+    dest = check_output(out, inputs=[source, *images.values(), *kept], what="report")
     drawing = Drawing()
     with tempfile.TemporaryDirectory() as tmp:
         if results.pictures.accuracy not in images:
