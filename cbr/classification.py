@@ -269,7 +269,6 @@ def classify_with_feedback(
     store: CaseStore,
     stored: StoredClassifier,
     clips: Sequence[PoseSequence],
-    truths: Sequence[str | None],
     label: str,
     settings: FeedbackSettings = FeedbackSettings(),
     target: str = "label",
@@ -278,11 +277,12 @@ def classify_with_feedback(
     :func:`check_feedback_label` first): retain it as a new case when it is novel and
     beneficial (always, for the first clip of a new activity), otherwise revise the case base
     toward it. One transaction per clip. Refused for a case base of repetitions or windows
-    (:func:`check_feedback_cases`)."""
+    (:func:`check_feedback_cases`). Each answer is judged against ``label`` (the user's word,
+    whatever label the clip's file carries: it is the one stored)."""
     check_feedback_cases(stored)
     out = []
-    pairs = list(zip(clips, truths, strict=True))
-    for clip, truth in progress(pairs, desc="classifying", total=len(pairs), unit="clip"):
+    truth = label
+    for clip in progress(clips, desc="classifying", total=len(clips), unit="clip"):
         c = _solve(stored, clip, truth, target)
         if c.solved is not None:
             try:

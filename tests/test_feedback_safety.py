@@ -175,7 +175,7 @@ def test_a_feedback_run_sees_the_replacement_and_stops_with_one_line(
     before = _sha(db)
     with pytest.raises(Exception, match="replaced by another process"):
         classify_with_feedback(
-            store, stored, [load_pose(DEMO / "m01_s03_e01.npz")], [None], "deep_squat",
+            store, stored, [load_pose(DEMO / "m01_s03_e01.npz")], "deep_squat",
             FeedbackSettings(),
         )  # fmt: skip
     store.close()
@@ -225,6 +225,24 @@ def test_a_new_label_needs_new_label_and_then_makes_one_case(
     assert sum(counts.values()) == 121  # 120 trained + the new one; no case relabelled
     assert counts["deep_squat"] == 12
     store.close()
+
+
+def test_answers_are_judged_against_the_label_the_user_gives(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A deep squat clip (its file says deep_squat) told to be sit_to_stand: it is stored as
+    sit_to_stand, so the answer is judged against sit_to_stand too, not against its file's
+    label (it said "correct", accuracy 1.0, while storing the other label)."""
+    db = _copy(trained, tmp_path / "cb.sqlite")
+    clip = DEMO / "m01_s03_e01.npz"
+    assert load_pose(clip).label == "deep_squat"
+    argv = ["classify", str(clip), "--db", str(db), "--feedback", "sit_to_stand", "--json"]
+    assert main(argv) == 0
+    doc = json.loads(capsys.readouterr().out)
+    (result,) = doc["results"]
+    assert result["true_label"] == "sit_to_stand"
+    assert result["correct"] == (result["label"] == "sit_to_stand")
+    assert doc["accuracy"] == (1.0 if result["correct"] else 0.0)
 
 
 def _no_person(like: Path, out: Path) -> Path:

@@ -179,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
         else:
             known = sorted(set(stored.classifier.case_base_.labels.tolist()))
             label = check_feedback_label(args.feedback, known, args.new_label)
-            results = classify_with_feedback(store, stored, clips, truths, label, settings, target)
+            results = classify_with_feedback(store, stored, clips, label, settings, target)
     finally:
         store.close()
     _print(args, store.where, name, target, results)
