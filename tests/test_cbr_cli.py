@@ -174,6 +174,55 @@ def test_trim_and_classify_options_that_cannot_hold_are_refused(
     assert code == 0 and f"({n - 1}-NN, each of the {n} cases before left out in turn)" in out
 
 
+def test_k_beyond_the_cases_is_refused_or_said(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """k counts cases, so: ``train -k`` above the clips it gets is refused, nothing written;
+    ``trim`` that would leave fewer cases than the k the case base votes with is refused,
+    nothing changed (it went 15 -> 3 cases under k = 5, and then reported a "5-NN"
+    accuracy over 3 cases); ``trim`` whose stored k leaves no case to vote when one is
+    left out is refused as an explicit -k is; a case base of fewer clips than the default k
+    says so when it classifies (every case votes)."""
+    import hashlib
+
+    train, _ = dataset
+    n = 5 * len(ACTIVITIES)
+    db = tmp_path / "cb.sqlite"
+    code, out, err = _cli(capsys, "train", str(train), "--db", str(db), "-k", str(n + 1))
+    assert code == 1 and out == "" and err.count("\n") == 1
+    assert err.strip().endswith(f"-k: must be at most the {n} cases, got {n + 1}")
+    assert not db.exists()
+    assert _cli(capsys, "train", str(train), "--db", str(db))[0] == 0  # k = 5
+    before = hashlib.sha256(db.read_bytes()).hexdigest()
+    code, out, err = _cli(capsys, "casebase", "trim", "--db", str(db), "--keep", "0.2")
+    assert code == 1 and out == "" and err.count("\n") == 1
+    assert err.strip().endswith(
+        f"trimming would leave {len(ACTIVITIES)} cases, fewer than the 5 that case base"
+        " 'default' votes with (k): nothing trimmed (keep more: --keep)"
+    )
+    assert hashlib.sha256(db.read_bytes()).hexdigest() == before
+    every = tmp_path / "every.sqlite"
+    assert _cli(capsys, "train", str(train), "--db", str(every), "-k", str(n))[0] == 0
+    code, out, err = _cli(capsys, "casebase", "trim", "--db", str(every), "--dry-run")
+    assert code == 1 and out == "" and err.count("\n") == 1
+    assert err.strip().endswith(
+        f"case base 'default' votes with k = {n}, not less than its {n} cases (each is left"
+        " out in turn): give -k"
+    )
+    small = tmp_path / "small"
+    for label in ACTIVITIES:  # one clip each: 3 cases, k = 5
+        first = sorted((train / label).iterdir())[0]
+        (small / label).mkdir(parents=True)
+        (small / label / first.name).write_bytes(first.read_bytes())
+    assert _cli(capsys, "train", str(small), "--db", str(tmp_path / "small.sqlite"))[0] == 0
+    code, out, err = _cli(capsys, "classify", str(small), "--db", str(tmp_path / "small.sqlite"))
+    assert code == 0 and out
+    assert (
+        f"note: case base 'default' holds {len(ACTIVITIES)} cases, fewer than the 5 it votes"
+        " with (k): every case votes"
+    ) in err
+
+
 def test_casebase_history_counts_operations_and_list_marks_trimmed_cases(
     dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

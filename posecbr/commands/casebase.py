@@ -9,7 +9,7 @@ from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from features.errors import ConfigError
+from features.errors import ConfigError, DataError
 from features.fileio import atomic_path, check_output
 from features.text import counted, shown
 
@@ -383,11 +383,9 @@ def _export(store: CaseStore, args: argparse.Namespace) -> int:
     return 0
 
 
-def _trim(store: CaseStore, args: argparse.Namespace) -> int:
-    from cbr.maintenance import EDITORS, record_trim
-    from cbr.stored import judges_after_change, load_classifier, recalibrated, write_matrices
-
-    name = store.choose(args.name)
+def _trim_keep(args: argparse.Namespace) -> float:
+    """``--keep`` (novelty-benefit's share of each activity, 0.7 unless given), checked with
+    ``-k``'s range: refused for the other editors, which decide how many cases they keep."""
     if args.keep is not None and args.editor != "novelty-benefit":
         raise ConfigError(
             f"goes with --editor novelty-benefit; {args.editor} decides how many cases it keeps",
@@ -398,8 +396,15 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
         raise ConfigError(f"must be in (0, 1], got {keep}", "--keep")
     if args.k is not None and args.k < 1:
         raise ConfigError(f"must be >= 1, got {args.k}", "-k")
-    stored = load_classifier(store, name)
-    clf = stored.classifier
+    return float(keep)
+
+
+def _edited(args: argparse.Namespace, clf: Any, name: str, keep: float, where: str) -> Any:
+    """The editor's report on the case base of ``clf`` (nothing written). Each case is left
+    out in turn, so the k it is judged with (``-k``, or novelty-benefit's the case base's
+    own) must leave cases to vote."""
+    from cbr.maintenance import EDITORS
+
     cb = clf.case_base_
     if args.k is not None and args.k >= len(cb):
         raise ConfigError(
@@ -409,11 +414,34 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
         )
     fn = EDITORS[args.editor]
     if args.editor == "novelty-benefit":
-        report = fn(cb, keep, int(clf.k) if args.k is None else args.k, clf.weights)
-    elif args.k is None:
-        report = fn(cb, weights=clf.weights)
-    else:
-        report = fn(cb, k=args.k, weights=clf.weights)
+        if args.k is None and int(clf.k) >= len(cb):
+            raise DataError(
+                f"case base {name!r} votes with k = {int(clf.k)}, not less than its "
+                f"{len(cb)} cases (each is left out in turn): give -k",
+                where,
+            )
+        return fn(cb, keep, int(clf.k) if args.k is None else args.k, clf.weights)
+    if args.k is None:
+        return fn(cb, weights=clf.weights)
+    return fn(cb, k=args.k, weights=clf.weights)
+
+
+def _trim(store: CaseStore, args: argparse.Namespace) -> int:
+    from cbr.maintenance import record_trim
+    from cbr.stored import judges_after_change, load_classifier, recalibrated, write_matrices
+
+    name = store.choose(args.name)
+    keep = _trim_keep(args)
+    stored = load_classifier(store, name)
+    clf = stored.classifier
+    report = _edited(args, clf, name, keep, store.where)
+    if report.size_after < int(clf.k):
+        raise DataError(
+            f"trimming would leave {report.size_after} cases, fewer than the {int(clf.k)} that "
+            f"case base {name!r} votes with (k): nothing trimmed"
+            + (" (keep more: --keep)" if args.editor == "novelty-benefit" else ""),
+            store.where,
+        )
     if not args.dry_run:
         judges = recalibrated(clf, report.casebase)
         with store.transaction() as tx:

@@ -155,13 +155,19 @@ def run(args: argparse.Namespace) -> int:
     try:
         name = store.choose(args.name)
         stored = load_classifier(store, name)
+        n_cases = len(stored.classifier.case_base_)
         if args.k is not None:
-            n_cases = len(stored.classifier.case_base_)
             if args.k > n_cases:
                 raise ConfigError(
                     f"must be at most the {n_cases} cases of {name!r}, got {args.k}", "-k"
                 )
             stored.classifier.set_params(k=args.k)
+        elif int(stored.classifier.k) > n_cases:  # trained or trimmed below it
+            print(
+                f"note: case base {name!r} holds {n_cases} cases, fewer than the "
+                f"{int(stored.classifier.k)} it votes with (k): every case votes",
+                file=sys.stderr,
+            )
         target = stored.target if args.target is None else args.target
         if target != stored.target:
             raise ConfigError(

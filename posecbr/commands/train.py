@@ -504,6 +504,8 @@ def run(args: argparse.Namespace) -> int:
         result = append_described(args.db, args.name, clips, solutions, plan, uid)
     else:
         _one_activity(args, solutions)
+        if args.k is not None and args.k > len(clips):
+            raise ConfigError(f"must be at most the {len(clips)} cases, got {args.k}", "-k")
         result = train_described(args.db, args.name, clips, solutions, estimator,
                                  target=args.target, cases=args.split,
                                  replace=args.replace)  # fmt: skip
