@@ -312,10 +312,13 @@ def unavailable_fluents(result: FluentResult) -> list[str]:
 
 
 def runs_to_json(runs: list[Run], fps: float) -> list[dict[str, Any]]:
+    """The spans for machines: frames ``[start_frame, end_frame)``, end exclusive (as
+    ``segment``'s, ``reps``' and a labels CSV's; the text's "frames 0–12" is inclusive), and
+    seconds ``[start_s, end_s)``."""
     return [
         {
             "start_frame": r.start,
-            "end_frame": r.end,
+            "end_frame": r.end + 1,
             "start_s": round(r.start / fps, 4),
             "end_s": round((r.end + 1) / fps, 4),
             "states": [

@@ -57,12 +57,16 @@ def test_describe_json_and_plot(tmp_path: Path, capsys: pytest.CaptureFixture[st
     data = json.loads(capsys.readouterr().out)
     assert data["frames"] == 60 and data["fps"] == 30
     # at the deepest frame (30) both knees are bent
-    names = {s["name"] for r in data["runs"] if r["start_frame"] <= 30 <= r["end_frame"]
+    names = {s["name"] for r in data["runs"] if r["start_frame"] <= 30 < r["end_frame"]
              for s in r["states"]}  # fmt: skip
     assert {"left_leg_bent.bent", "right_leg_bent.bent"} <= names
     assert "left_leg_bent.straight" not in names
     assert min(r["start_frame"] for r in data["runs"]) == 0
-    assert max(r["end_frame"] for r in data["runs"]) == 59
+    # the last span ends with the clip: frame 60 exclusive, 2.0 s, as segment's and reps'
+    assert max(r["end_frame"] for r in data["runs"]) == 60
+    for r in data["runs"]:
+        assert r["end_s"] == pytest.approx(r["end_frame"] / 30, abs=1e-4)
+        assert r["start_frame"] < r["end_frame"]
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
 
 
