@@ -289,14 +289,14 @@ def ranges_and_held(
     calibrated on the training clips ``queries`` ``(n, F)`` (group ``groups`` ``(n,)``,
     label ``labels``), each scored against the cases of the other folds; ``description``: the
     configuration the summaries were computed with (None: the problems' own). None when the
-    cases form fewer than two groups (nothing to hold out). With them, each query's held-out
+    cases lie in fewer than two folds (nothing to hold out). With them, each query's held-out
     outside share ``(n,)``."""
     everyone = np.concatenate([np.asarray(case_groups, dtype=object),
                                np.asarray(groups, dtype=object)])  # fmt: skip
     fold = fold_of(everyone)
     case_fold, query_fold = fold[: len(cases)], fold[len(cases) :]
     k = int(fold.max()) + 1 if len(fold) else 0
-    if k < 2:
+    if k < 2 or len(np.unique(case_fold)) < 2:  # an edited case base may keep one group's
         return None
     with warnings.catch_warnings():  # a feature no case of the other folds has: NaN, no range
         warnings.simplefilter("ignore", RuntimeWarning)

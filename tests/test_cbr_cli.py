@@ -174,6 +174,30 @@ def test_trim_and_classify_options_that_cannot_hold_are_refused(
     assert code == 0 and f"({n - 1}-NN, each of the {n} cases before left out in turn)" in out
 
 
+def test_an_edited_case_base_left_with_one_subject_trains(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """16 UI-PRMD clips of two subjects and two movements: CNN keeps 2 cases (a traceback
+    before: the feature ranges were calibrated holding out each subject's fold, and every
+    case kept was one subject's). It trains, and the case base classifies its own clips."""
+    demo = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+    data = tmp_path / "data"
+    data.mkdir()
+    takes = tuple(f"{m}_{s}_e0{e}" for m in ("m01", "m07") for s in ("s01", "s02") for e in (1, 2))
+    rows = [r for r in (demo / "labels.csv").read_text().splitlines()[1:] if r.startswith(takes)]
+    assert len(rows) == 16
+    for r in rows:
+        (data / r.split(",")[0]).write_bytes((demo / r.split(",")[0]).read_bytes())
+    head = (demo / "labels.csv").read_text().splitlines()[0]
+    (data / "labels.csv").write_text("\n".join([head, *rows]) + "\n")
+    db = tmp_path / "cnn.sqlite"
+    code, out, err = _cli(capsys, "train", str(data), "--db", str(db), "--editor", "cnn")
+    assert code == 0 and "Traceback" not in err, err
+    assert "CNN: 16 ->" in out
+    code, out, err = _cli(capsys, "classify", str(data), "--db", str(db), "-k", "1", "-q")
+    assert code == 0 and "16 clips: 16 classified" in out
+
+
 def test_k_beyond_the_cases_is_refused_or_said(
     dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
