@@ -15,6 +15,7 @@ same fit either way.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -419,16 +420,33 @@ def _check_new(
     tx: StoreTransaction, info: CaseBaseInfo, clips: Sequence[DescribedClip], where: str
 ) -> None:
     """Refuse an append of a stretch the case base already holds (the same file's same
-    frames: appended before), in the transaction that would add it."""
-    stored = tx.cases_from(info, [c.source for c in clips if c.source])
+    frames: appended before), in the transaction that would add it. A file is the same
+    however its path is written (relative or absolute, through a link): each clip's source
+    is looked for as given, resolved, and resolved relative to the working folder."""
+    names = {c.source: _spellings(c.source) for c in clips if c.source}
+    stored = tx.cases_from(info, [n for spelt in names.values() for n in spelt])
     for clip in clips:
-        key = _provenance(clip)
-        if key in stored:
-            raise StoreError(
-                f"{_shown_frames(key)} is already case {stored[key]} of {info.name!r} (added"
-                " before?): nothing added",
-                where,
-            )
+        _, a, b = _provenance(clip)
+        for name in names.get(clip.source, ()):
+            if (name, a, b) in stored:
+                raise StoreError(
+                    f"{_shown_frames((clip.source, a, b))} is already case "
+                    f"{stored[(name, a, b)]} of {info.name!r} (added before?): nothing added",
+                    where,
+                )
+
+
+def _spellings(source: str) -> tuple[str, ...]:
+    """The ways a case's source may have been written: as given, the file's resolved path,
+    and that path relative to the working folder (when it lies below it)."""
+    out = [source]
+    try:
+        real = Path(source).resolve()
+        out.append(str(real))
+        out.append(os.path.relpath(real))
+    except (OSError, ValueError):  # another drive (Windows), a path that cannot resolve
+        pass
+    return tuple(dict.fromkeys(out))
 
 
 def append_described(

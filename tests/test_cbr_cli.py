@@ -388,11 +388,15 @@ def test_train_refuses_a_database_it_could_not_write_before_reading_clips(
 
 
 def test_a_clip_is_not_trained_from_twice(
-    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    dataset: tuple[Path, Path],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """A labels CSV listing one file twice, and an --append of clips already in the case base:
     refused in one line naming the file (their cases would vote twice: the case base doubled
-    silently), nothing written."""
+    silently), nothing written; also when the folder is named another way (through a link,
+    or relative to the working folder where it was trained by its absolute path)."""
     train, _ = dataset
     clips = sorted(train.rglob("*.npz"))
     csv = tmp_path / "labels.csv"
@@ -408,6 +412,14 @@ def test_a_clip_is_not_trained_from_twice(
     assert code == 1 and err.count("\n") == 1
     assert "is already case " in err and "of 'default' (added before?): nothing added" in err
     assert db.read_bytes() == stored
+    link = tmp_path / "link"
+    link.symlink_to(clips[3].parent, target_is_directory=True)
+    monkeypatch.chdir(clips[3].parent.parent)
+    for again in (str(link), clips[3].parent.name):
+        code, _, err = _cli(capsys, "train", again, "--db", str(db), "--append")
+        assert code == 1 and err.count("\n") == 1, (again, err)
+        assert "is already case " in err, err
+        assert db.read_bytes() == stored
 
 
 def test_append_says_how_many_activities_it_added(
