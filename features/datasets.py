@@ -47,24 +47,11 @@ from features.progress import progress
 from .poses import PoseSequence, load_pose
 from .readers.asfamc import hdm05_metadata, read_asf_amc
 from .readers.bvh import read_bvh
-from .readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon, uiprmd_metadata
+from .readers.uiprmd import UIPRMD_MOVEMENTS, read_uiprmd_kinect, read_uiprmd_vicon, uiprmd_metadata
 
 VIDEO_SUFFIXES = frozenset({".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v"})
 POSE_SUFFIXES = frozenset({".npz"})
 CLIP_SUFFIXES = POSE_SUFFIXES | VIDEO_SUFFIXES | {".bvh"}
-
-UIPRMD_MOVEMENTS: dict[str, str] = {
-    "m01": "deep_squat",
-    "m02": "hurdle_step",
-    "m03": "inline_lunge",
-    "m04": "side_lunge",
-    "m05": "sit_to_stand",
-    "m06": "standing_active_straight_leg_raise",
-    "m07": "standing_shoulder_abduction",
-    "m08": "standing_shoulder_extension",
-    "m09": "standing_shoulder_internal_external_rotation",
-    "m10": "standing_shoulder_scaption",
-}
 
 CSV_REQUIRED = ("path", "label")
 

@@ -115,3 +115,25 @@ def test_converting_into_a_folder_adds_to_its_labels(
         ), err
         assert sorted(p.name for p in bad.iterdir()) == ["13_29.npz", "labels.csv"]
         assert (bad / "labels.csv").read_text() == text
+
+
+def test_one_ui_prmd_file_is_labelled_by_its_movement_and_its_rate_said_assumed(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One Kinect positions file (m01: the deep squat), converted alone: labelled deep_squat as
+    when its folder is converted (it was written with an empty label, which train and
+    convert then refused), and its rate said to be assumed, not read (the files hold
+    coordinates only)."""
+    kinect = shared_data / "ui-prmd" / "data" / "Segmented Movements" / "Kinect"
+    for part in ("Positions", "Angles"):
+        (tmp_path / "up" / part).mkdir(parents=True)
+        name = f"m01_s01_e01_{part.lower()}.txt.gz"
+        (tmp_path / "up" / part / name).write_bytes((kinect / part / name).read_bytes())
+    src = tmp_path / "up" / "Positions" / "m01_s01_e01_positions.txt.gz"
+    out = tmp_path / "one"
+    assert main(["convert", str(src), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "frame rate 30 fps for 1 clip (assumed" in printed and "from the file" not in printed
+    rows = (out / "labels.csv").read_text().splitlines()
+    assert rows[1].startswith("m01_s01_e01.npz,deep_squat,s01,")
+    assert load_pose(out / "m01_s01_e01.npz").label == "deep_squat"

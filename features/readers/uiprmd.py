@@ -214,13 +214,31 @@ def read_uiprmd_kinect_joints(
     return cm / 100.0
 
 
+UIPRMD_MOVEMENTS: dict[str, str] = {
+    "m01": "deep_squat",
+    "m02": "hurdle_step",
+    "m03": "inline_lunge",
+    "m04": "side_lunge",
+    "m05": "sit_to_stand",
+    "m06": "standing_active_straight_leg_raise",
+    "m07": "standing_shoulder_abduction",
+    "m08": "standing_shoulder_extension",
+    "m09": "standing_shoulder_internal_external_rotation",
+    "m10": "standing_shoulder_scaption",
+}
+"""The label of each UI-PRMD movement code."""
+
+
 def uiprmd_metadata(path: Path) -> dict[str, object]:
-    """movement/subject/episode/correct from a UI-PRMD file name (empty when it does not fit)."""
+    """label (the movement's name, :data:`UIPRMD_MOVEMENTS`; the code when unknown),
+    movement/subject/episode/correct from a UI-PRMD file name (empty when it does not fit)."""
     m = re.match(r"^m(\d+)_s(\d+)_e(\d+)_[a-z]+(_inc)?\.txt(\.gz)?$", path.name)
     if not m:
         return {}
+    movement = f"m{int(m.group(1)):02d}"
     return {
-        "movement": f"m{int(m.group(1)):02d}",
+        "label": UIPRMD_MOVEMENTS.get(movement, movement),
+        "movement": movement,
         "subject": f"s{int(m.group(2)):02d}",
         "episode": int(m.group(3)),
         "correct": m.group(4) is None,
@@ -238,7 +256,12 @@ def read_uiprmd_kinect(
     """
     ppath = Path(positions_path)
     joints = read_uiprmd_kinect_joints(ppath, angles_path)
-    meta: dict[str, object] = {"dataset": "ui-prmd", "sensor": "kinect", **uiprmd_metadata(ppath)}
+    meta: dict[str, object] = {
+        "dataset": "ui-prmd",
+        "sensor": "kinect",
+        "fps_source": "assumed: UI-PRMD's Kinect rate; the files carry no time",
+        **uiprmd_metadata(ppath),
+    }
     return PoseSequence(
         positions=to_canonical(joints, KINECT_JOINTS, KINECT_TO_BLAZEPOSE),
         joint_names=BLAZEPOSE_33,
@@ -354,7 +377,12 @@ def read_uiprmd_vicon(path: str | Path) -> PoseSequence:
     left_hip, right_hip = harrington_hip_centres(fill_rigid_gaps(markers, PELVIS_MARKERS))
     out[:, JOINT_INDEX["left_hip"]] = left_hip
     out[:, JOINT_INDEX["right_hip"]] = right_hip
-    meta: dict[str, object] = {"dataset": "ui-prmd", "sensor": "vicon", **uiprmd_metadata(path)}
+    meta: dict[str, object] = {
+        "dataset": "ui-prmd",
+        "sensor": "vicon",
+        "fps_source": "assumed: UI-PRMD's Vicon rate, inferred upstream; the files carry no time",
+        **uiprmd_metadata(path),
+    }
     return PoseSequence(
         positions=out,
         joint_names=BLAZEPOSE_33,
