@@ -51,8 +51,9 @@ from .unknown import JUDGES
 
 @dataclass(frozen=True)
 class TrainResult:
-    """What ``train`` stored: ``n_cases`` cases (``n_active`` after editing), how many clips of
-    each label, the clips skipped because they show no person, and what fit learned."""
+    """What ``train`` stored: ``n_cases`` cases (``n_active`` after editing), how many of
+    those active cases of each label (mirror images and windows counted as the cases they
+    are), the clips skipped because they show no person, and what fit learned."""
 
     name: str
     n_cases: int
@@ -266,7 +267,7 @@ def store_fitted(
         name,
         len(cb),
         len(fitted.case_base_),
-        _counts(labels),
+        _counts([str(v) for v in fitted.case_base_.labels]),  # its cases, as counted above
         fitted.feature_config_,
         fitted.measure_.name,
         fitted.maintenance_,
@@ -497,7 +498,8 @@ def append_described(
     finally:
         store.close()
     return TrainResult(
-        name, len(cb), total, _counts(text), cb.config, cb.measure.name, None, {}, skipped,
+        name, len(cb), total, _counts([str(v) for v in cb.labels]), cb.config, cb.measure.name,
+        None, {}, skipped,
         indistinct=same_features(cb),
     )  # fmt: skip
 

@@ -174,12 +174,9 @@ def test_trim_and_classify_options_that_cannot_hold_are_refused(
     assert code == 0 and f"({n - 1}-NN, each of the {n} cases before left out in turn)" in out
 
 
-def test_an_edited_case_base_left_with_one_subject_trains(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """16 UI-PRMD clips of two subjects and two movements: CNN keeps 2 cases (a traceback
-    before: the feature ranges were calibrated holding out each subject's fold, and every
-    case kept was one subject's). It trains, and the case base classifies its own clips."""
+def _demo_subset(tmp_path: Path) -> Path:
+    """16 demo UI-PRMD clips with their labels.csv: deep squats and shoulder abductions of
+    s01 and s02, takes 1-2, correct and incorrect."""
     demo = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
     data = tmp_path / "data"
     data.mkdir()
@@ -190,12 +187,41 @@ def test_an_edited_case_base_left_with_one_subject_trains(
         (data / r.split(",")[0]).write_bytes((demo / r.split(",")[0]).read_bytes())
     head = (demo / "labels.csv").read_text().splitlines()[0]
     (data / "labels.csv").write_text("\n".join([head, *rows]) + "\n")
+    return data
+
+
+def test_an_edited_case_base_left_with_one_subject_trains(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """16 UI-PRMD clips of two subjects and two movements: CNN keeps 2 cases (a traceback
+    before: the feature ranges were calibrated holding out each subject's fold, and every
+    case kept was one subject's). It trains, and the case base classifies its own clips."""
+    data = _demo_subset(tmp_path)
     db = tmp_path / "cnn.sqlite"
     code, out, err = _cli(capsys, "train", str(data), "--db", str(db), "--editor", "cnn")
     assert code == 0 and "Traceback" not in err, err
     assert "CNN: 16 ->" in out
     code, out, err = _cli(capsys, "classify", str(data), "--db", str(db), "-k", "1", "-q")
     assert code == 0 and "16 clips: 16 classified" in out
+
+
+def test_train_counts_the_cases_it_stored_per_activity(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """With mirror-image cases (``--mirror augment``: 16 UI-PRMD clips, 16 mirror images
+    added) the per-activity counts add up to the cases stored, as ``casebase info`` counts
+    them (they counted the clips: 8 + 8 beside 32 cases)."""
+    data = _demo_subset(tmp_path)
+    db = tmp_path / "aug.sqlite"
+    code, out, _ = _cli(capsys, "train", str(data), "--db", str(db), "--mirror", "augment",
+                        "--json")  # fmt: skip
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["active_cases"] > 16  # mirror images were added
+    assert sum(doc["labels"].values()) == doc["active_cases"]
+    store = open_store(db, readonly=True)
+    assert store.get_case_base("default").label_counts == doc["labels"]
+    store.close()
 
 
 def test_k_beyond_the_cases_is_refused_or_said(
