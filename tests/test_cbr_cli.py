@@ -144,6 +144,34 @@ def test_bad_input_one_line_errors(
     assert code == 1 and "unknown similarity 'cosine'" in err
 
 
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--similarity", "dtw", "--phases", "3"], "--phases: goes with clip summaries"),
+        (["--features", "qmp", "--phases", "3"], "--phases: goes with clip summaries"),
+        (["--no-summary", "--phases", "2"], "--phases: goes with clip summaries"),
+        (["--features", "qmp", "--no-positions"],
+         "--no-positions: goes with fluent features, not qmp"),
+        (["--features", "qmp", "--no-summary"], "--no-summary: goes with fluent features, not qmp"),
+    ],
+)  # fmt: skip
+def test_train_refuses_options_its_features_would_ignore(
+    dataset: tuple[Path, Path],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    argv: list[str],
+    message: str,
+) -> None:
+    """Options of fluent features and their clip summaries given where nothing would take them
+    (they were accepted, and the case base was what it would have been without them): one
+    line naming the option, no case base written."""
+    train, _ = dataset
+    db = tmp_path / "cb.sqlite"
+    code, out, err = _cli(capsys, "train", str(train), "--db", str(db), *argv)
+    assert code == 1 and out == "" and err.count("\n") == 1
+    assert message in err and not db.exists()
+
+
 def test_trim_and_classify_options_that_cannot_hold_are_refused(
     dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

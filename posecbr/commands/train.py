@@ -207,6 +207,7 @@ def _estimator(args: argparse.Namespace) -> Any:
         )
     if args.trim is not None and not 0.0 < args.trim <= 1.0:
         raise ConfigError(f"must be in (0, 1], got {args.trim}", "--trim")
+    _check_fluent_options(args, o["features"], measure.name)
     estimator = CaseBaseClassifier(
         features=o["features"],
         similarity=o["similarity"],
@@ -224,6 +225,23 @@ def _estimator(args: argparse.Namespace) -> Any:
     )
     estimator.wanted_config()  # bad --states / --length / -k: one line before any clip is read
     return estimator
+
+
+def _check_fluent_options(args: argparse.Namespace, features: str, similarity: str) -> None:
+    """Refuse the options of fluent features and their clip summaries where they would be
+    ignored: ``--no-positions`` and ``--no-summary`` with QMP features, ``--phases`` without
+    clip summaries (QMP features, ``--no-summary``, or a similarity other than euclidean)."""
+    if features != "fluents":
+        for flag, given in (("--no-positions", args.no_positions),
+                            ("--no-summary", args.no_summary)):  # fmt: skip
+            if given:
+                raise ConfigError(f"goes with fluent features, not {features}", flag)
+    summaries = features == "fluents" and similarity == "euclidean" and not args.no_summary
+    if args.phases is not None and not summaries:
+        raise ConfigError(
+            "goes with clip summaries (fluent features, euclidean similarity, no --no-summary)",
+            "--phases",
+        )
 
 
 def _check_append(args: argparse.Namespace) -> None:
