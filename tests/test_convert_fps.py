@@ -137,3 +137,29 @@ def test_one_ui_prmd_file_is_labelled_by_its_movement_and_its_rate_said_assumed(
     rows = (out / "labels.csv").read_text().splitlines()
     assert rows[1].startswith("m01_s01_e01.npz,deep_squat,s01,")
     assert load_pose(out / "m01_s01_e01.npz").label == "deep_squat"
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--subjects", "dg"], "--subjects: filters the clips of a dataset folder"),
+        (["--episodes", "5"], "--episodes: filters the clips of a dataset folder"),
+        (["--correct"], "--correct: filters the clips of a dataset folder"),
+        (["--bvh-unit", "mm"], "--bvh-unit: goes with BVH files, not 13_30.amc"),
+    ],
+)
+def test_one_amc_file_refuses_what_would_be_ignored(
+    shared_data: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    argv: list[str],
+    message: str,
+) -> None:
+    """A dataset folder's filters and BVH's unit given with one AMC file: converted as it is
+    before, the filters unused (a subject that matched nothing still wrote the file)."""
+    asf, amc = _cmu(shared_data)
+    out = tmp_path / "out"
+    assert main(["convert", str(amc), "--asf", str(asf), "--out", str(out), *argv]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err and "Traceback" not in err
+    assert not out.exists()

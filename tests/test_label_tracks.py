@@ -213,6 +213,34 @@ def test_train_refuses_a_label_file_that_does_not_fit(
     assert before == {p: _sha(p) for p in (recording, wrong)}
 
 
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--asf", "HDM_bd.asf"], "--asf: goes with an AMC recording, not "),
+        (["--subjects", "s09"], "--subjects: --frame-labels labels one recording"),
+    ],
+)
+def test_train_refuses_recording_options_it_would_ignore(
+    shared_data: Path,
+    recording: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    extra: list[str],
+    message: str,
+) -> None:
+    """A skeleton for a recording that is a pose file, and a subject filter over one
+    recording's stretches: accepted and ignored before (every case had no subject, the
+    skeleton file need not even exist), now one line each, no case base."""
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(recording), "--frame-labels", str(labels), "--label-block", "0.1",
+            "--db", str(db), *extra]  # fmt: skip
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err and "Traceback" not in err
+    assert not db.exists()
+
+
 def test_a_wrong_frame_rate_shows_as_a_label_count_that_does_not_fit(
     recording: Path, shared_data: Path
 ) -> None:

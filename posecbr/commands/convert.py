@@ -212,6 +212,32 @@ def _check_args(args: argparse.Namespace) -> None:
         raise DataError("exists and is not a folder", args.out)
     _bvh_unit(args.bvh_unit)
     parse_ranges(args.episodes)
+    _check_one_file_options(args)
+
+
+def _check_one_file_options(args: argparse.Namespace) -> None:
+    """Refuse, for one .amc or .bvh file, what would be ignored: the filters of a dataset
+    folder (it is converted as it is), ``--asf`` for a BVH file, ``--bvh-unit`` for an AMC
+    file, and the UI-PRMD options."""
+    src: Path = args.source
+    suffix = src.suffix.lower()
+    if not (src.is_file() and suffix in (".bvh", ".amc")):
+        return
+    for flag, given in (
+        ("--subjects", args.subjects), ("--movements", args.movements),
+        ("--labels", args.labels), ("--episodes", args.episodes),
+        ("--correct", args.correct), ("--incorrect", args.incorrect),
+    ):  # fmt: skip
+        if given:
+            raise DataError(
+                f"filters the clips of a dataset folder; {src.name} is one file, converted as it"
+                " is",
+                flag,
+            )
+    if suffix == ".bvh" and args.asf is not None:
+        raise DataError(f"goes with an AMC file, not {src.name}", "--asf")
+    if suffix == ".amc" and args.bvh_unit != "auto":
+        raise DataError(f"goes with BVH files, not {src.name}", "--bvh-unit")
 
 
 def _clips(args: argparse.Namespace) -> Iterator[tuple[Clip, str]]:

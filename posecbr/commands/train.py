@@ -475,6 +475,14 @@ def _check_options(args: argparse.Namespace) -> None:
     ):
         if value is not None and args.frame_labels is None:
             raise ConfigError(f"goes with --frame-labels ({instead})", option)
+    if args.asf is not None and args.data.suffix.lower() != ".amc":
+        raise ConfigError(f"goes with an AMC recording, not {args.data.name}", "--asf")
+    if args.frame_labels is not None and args.subjects is not None:
+        raise ConfigError(
+            "--frame-labels labels one recording: its stretches are one person's (a labels "
+            "CSV with a label_file column takes --subjects over several)",
+            "--subjects",
+        )
     check_fps(args.fps)
     if args.label_names is not None:
         _note_shared_names(args.label_names)
