@@ -137,6 +137,11 @@ def _uiprmd_root(path: Path) -> Path | None:
     return None
 
 
+def is_uiprmd_folder(path: str | Path) -> bool:
+    """Whether ``path`` is a UI-PRMD folder (the data of both sensors, one chosen to read)."""
+    return Path(path).is_dir() and _uiprmd_root(Path(path)) is not None
+
+
 def _amc_files(path: Path) -> list[Path]:
     return sorted(p for p in path.rglob("*") if p.suffix.lower() == ".amc" and p.is_file())
 
@@ -831,6 +836,7 @@ __all__ = [
     "target_value",
     "truth_value",
     "UIPRMD_MOVEMENTS",
+    "is_uiprmd_folder",
     "VIDEO_SUFFIXES",
     "dataset_entries",
     "detect_kind",

@@ -1,6 +1,6 @@
 """Reading one recording for ``reps``, ``segment`` and ``watch``: any clip the loaders read
 (pose file, video, BVH, UI-PRMD file) or an AMC file with its skeleton; the frame rate may be
-given (an AMC file carries none)."""
+given (an AMC file carries none); and the options that say how to read recordings."""
 
 from __future__ import annotations
 
@@ -20,6 +20,30 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
         type=float,
         help="frame rate of the recording (default: from the file; AMC files carry none: 120)",
     )
+
+
+def add_sensor_option(p: argparse.ArgumentParser) -> None:
+    """``--sensor``: which of a UI-PRMD folder's two recordings to read."""
+    p.add_argument(
+        "--sensor",
+        choices=("kinect", "vicon"),
+        default=None,
+        help="a UI-PRMD folder's sensor (default kinect)",
+    )
+
+
+def sensor_for(sensor: str | None, sources: list[Path]) -> str:
+    """``--sensor`` (kinect when not given); refused when given for data of which no source
+    is a UI-PRMD folder (it chooses nothing there: it was taken without a word)."""
+    from features.datasets import is_uiprmd_folder
+
+    if sensor is not None and not any(is_uiprmd_folder(p) for p in sources):
+        raise DataError(
+            f"chooses a UI-PRMD folder's sensor; {sources[0] if sources else 'the data'} is not"
+            " one",
+            "--sensor",
+        )
+    return sensor or "kinect"
 
 
 def check_fps(fps: float | None) -> None:

@@ -163,3 +163,30 @@ def test_one_amc_file_refuses_what_would_be_ignored(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "Traceback" not in err
     assert not out.exists()
+
+
+def test_a_sensor_is_refused_for_data_that_is_not_a_ui_prmd_folder(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--sensor`` chooses which recordings of a UI-PRMD folder are read; for an AMC file or a
+    folder of pose files it chose nothing and was taken without a word (``convert`` and
+    ``train``). The UI-PRMD folder takes it."""
+    asf, amc = _cmu(shared_data)
+    out = tmp_path / "out"
+    argv = ["convert", str(amc), "--asf", str(asf), "--out", str(out), "--sensor", "vicon"]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--sensor: chooses a UI-PRMD folder's sensor" in err
+    assert not out.exists()
+    assert main(["convert", str(amc), "--asf", str(asf), "--out", str(out)]) == 0
+    capsys.readouterr()
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(out), "--db", str(db), "--sensor", "vicon"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--sensor: chooses a UI-PRMD folder's sensor" in err
+    assert not db.exists()
+    ui = tmp_path / "ui"
+    argv = ["convert", str(shared_data / "ui-prmd"), "--sensor", "vicon", "--subjects", "s01",
+            "--movements", "m01", "--episodes", "1", "--correct", "--out", str(ui)]  # fmt: skip
+    assert main(argv) == 0
+    assert load_pose(ui / "m01_s01_e01.npz").metadata["sensor"] == "vicon"

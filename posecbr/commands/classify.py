@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
 from features.text import counted
+from posecbr.recordings import add_sensor_option, sensor_for
 
 if TYPE_CHECKING:
     from features.poses import PoseSequence
@@ -68,7 +69,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="with --feedback: retain benefit threshold (0.2)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--sensor", choices=("kinect", "vicon"), default="kinect", help="UI-PRMD sensor")
+    add_sensor_option(p)
     p.add_argument("--subjects", help="datasets: only these subjects, comma-separated")
     p.add_argument(
         "--target",
@@ -178,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
         if args.feedback is not None:
             check_feedback_cases(stored)
         subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
-        inputs = load_inputs(args.clips, args.sensor, subjects, target)
+        inputs = load_inputs(args.clips, sensor_for(args.sensor, args.clips), subjects, target)
         clips, truths = [s for s, _ in inputs], [t for _, t in inputs]
         if args.feedback is None:
             results = classify_clips(stored, clips, truths, target)

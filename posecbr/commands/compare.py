@@ -13,6 +13,7 @@ from typing import Any
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, write_json_atomic
+from posecbr.recordings import add_sensor_option, sensor_for
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -91,7 +92,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="a further CaseBaseClassifier parameter for every case-base configuration "
         "(repeatable; VALUE is JSON or a plain string), e.g. --param states=all --param length=48",
     )
-    p.add_argument("--sensor", choices=("kinect", "vicon"), default="kinect", help="UI-PRMD sensor")
+    add_sensor_option(p)
     p.add_argument("--labels", default=None, metavar="LIST", help="only these activity labels")
     p.add_argument("--subjects", default=None, metavar="LIST", help="only these subjects")
     p.add_argument(
@@ -141,7 +142,10 @@ def _load(args: argparse.Namespace) -> list[Any]:
 
     if not args.data.exists():
         raise DataError("no such dataset (file or folder)", args.data)
-    kw: dict[str, Any] = {"sensor": args.sensor, "progress_desc": "loading"}
+    kw: dict[str, Any] = {
+        "sensor": sensor_for(args.sensor, [args.data]),
+        "progress_desc": "loading",
+    }
     if args.labels:
         kw["labels"] = set(_names(args.labels))
     if args.subjects:

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 from features.errors import DataError
 from features.fileio import check_output, staged_folder, unique_name, write_text_atomic
 from features.text import counted, shown
+from posecbr.recordings import add_sensor_option, sensor_for
 
 if TYPE_CHECKING:
     from features.datasets import Clip
@@ -41,7 +42,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     p.add_argument("source", type=Path, help="dataset folder, .amc, .bvh, labels CSV, ...")
     p.add_argument("--out", type=Path, required=True, help="output folder (created)")
-    p.add_argument("--sensor", choices=("kinect", "vicon"), default="kinect", help="UI-PRMD")
+    add_sensor_option(p)
     p.add_argument("--asf", type=Path, help="skeleton for a single .amc (default: beside it)")
     p.add_argument("--subjects", help="comma list, e.g. s01,s02 (UI-PRMD) or bd,dg (HDM05)")
     p.add_argument("--movements", help="UI-PRMD movements, e.g. m01,m07")
@@ -213,6 +214,7 @@ def _check_args(args: argparse.Namespace) -> None:
     _bvh_unit(args.bvh_unit)
     parse_ranges(args.episodes)
     _check_one_file_options(args)
+    args.sensor = sensor_for(args.sensor, [src])
 
 
 def _check_one_file_options(args: argparse.Namespace) -> None:

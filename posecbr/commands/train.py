@@ -18,7 +18,13 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.text import counted, shown
-from posecbr.recordings import add_recording_options, check_fps, load_recording
+from posecbr.recordings import (
+    add_recording_options,
+    add_sensor_option,
+    check_fps,
+    load_recording,
+    sensor_for,
+)
 
 
 def parse_params(items: list[str] | None) -> dict[str, Any]:
@@ -127,7 +133,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "the labels, e.g. correct (UI-PRMD: correct / incorrect repetition); train one case "
         "base per activity with --labels",
     )
-    p.add_argument("--sensor", choices=("kinect", "vicon"), default="kinect", help="UI-PRMD sensor")
+    add_sensor_option(p)
     p.add_argument(
         "--split",
         choices=("clips", "repetitions", "windows"),
@@ -484,6 +490,7 @@ def _check_options(args: argparse.Namespace) -> None:
             "--subjects",
         )
     check_fps(args.fps)
+    args.sensor = sensor_for(args.sensor, [args.data])
     if args.label_names is not None:
         _note_shared_names(args.label_names)
     check_scheduler(args.scheduler)
