@@ -166,10 +166,12 @@ def test_train_refuses_options_its_features_would_ignore(
     (they were accepted, and the case base was what it would have been without them): one
     line naming the option, no case base written."""
     train, _ = dataset
+    before = {p: p.read_bytes() for p in train.rglob("*") if p.is_file()}
     db = tmp_path / "cb.sqlite"
     code, out, err = _cli(capsys, "train", str(train), "--db", str(db), *argv)
     assert code == 1 and out == "" and err.count("\n") == 1
     assert message in err and not db.exists()
+    assert before == {p: p.read_bytes() for p in train.rglob("*") if p.is_file()}
 
 
 def test_trim_and_classify_options_that_cannot_hold_are_refused(

@@ -158,11 +158,13 @@ def test_one_amc_file_refuses_what_would_be_ignored(
     """A dataset folder's filters and BVH's unit given with one AMC file: converted as it is
     before, the filters unused (a subject that matched nothing still wrote the file)."""
     asf, amc = _cmu(shared_data)
+    before = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (asf, amc)}
     out = tmp_path / "out"
     assert main(["convert", str(amc), "--asf", str(asf), "--out", str(out), *argv]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "Traceback" not in err
     assert not out.exists()
+    assert before == {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (asf, amc)}
 
 
 def test_a_sensor_is_refused_for_data_that_is_not_a_ui_prmd_folder(
@@ -172,19 +174,23 @@ def test_a_sensor_is_refused_for_data_that_is_not_a_ui_prmd_folder(
     folder of pose files it chose nothing and was taken without a word (``convert`` and
     ``train``). The UI-PRMD folder takes it."""
     asf, amc = _cmu(shared_data)
+    before = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (asf, amc)}
     out = tmp_path / "out"
     argv = ["convert", str(amc), "--asf", str(asf), "--out", str(out), "--sensor", "vicon"]
     assert main(argv) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--sensor: chooses a UI-PRMD folder's sensor" in err
     assert not out.exists()
+    assert before == {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (asf, amc)}
     assert main(["convert", str(amc), "--asf", str(asf), "--out", str(out)]) == 0
     capsys.readouterr()
+    converted = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in out.iterdir()}
     db = tmp_path / "cb.sqlite"
     assert main(["train", str(out), "--db", str(db), "--sensor", "vicon"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--sensor: chooses a UI-PRMD folder's sensor" in err
     assert not db.exists()
+    assert converted == {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in out.iterdir()}
     ui = tmp_path / "ui"
     argv = ["convert", str(shared_data / "ui-prmd"), "--sensor", "vicon", "--subjects", "s01",
             "--movements", "m01", "--episodes", "1", "--correct", "--out", str(ui)]  # fmt: skip

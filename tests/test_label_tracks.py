@@ -232,6 +232,7 @@ def test_train_refuses_recording_options_it_would_ignore(
     recording's stretches: accepted and ignored before (every case had no subject, the
     skeleton file need not even exist), now one line each, no case base."""
     labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    before = {p: _sha(p) for p in (recording, labels)}
     db = tmp_path / "cb.sqlite"
     argv = ["train", str(recording), "--frame-labels", str(labels), "--label-block", "0.1",
             "--db", str(db), *extra]  # fmt: skip
@@ -239,6 +240,7 @@ def test_train_refuses_recording_options_it_would_ignore(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "Traceback" not in err
     assert not db.exists()
+    assert before == {p: _sha(p) for p in (recording, labels)}
 
 
 def test_a_wrong_frame_rate_shows_as_a_label_count_that_does_not_fit(
