@@ -66,12 +66,32 @@ _KIND_WORDS = {
 
 
 def _real_array(value: Any, what: str, where: str | None) -> np.ndarray:
-    """``value`` as a float64 array; PoseFileError unless it holds real numbers."""
+    """``value`` as a read-only float64 array; PoseFileError unless it holds real numbers.
+
+    A sequence is frozen and what is worked out from it is cached by the sequence
+    (:mod:`features.derived`), so its arrays must not change under it: an array the caller
+    could still write to (itself or the memory it views) is copied; a read-only one (a slice
+    of another sequence's) is kept as it is.
+    """
     arr = np.asarray(value)
     if arr.dtype.kind not in "fiu":
         got = _KIND_WORDS.get(arr.dtype.kind, str(arr.dtype))
         raise PoseFileError(f"{what} must be real numbers, got {got}", where)
-    return arr.astype(np.float64, copy=False)
+    out = arr.astype(np.float64, copy=False)
+    if out is arr and _writable(arr):
+        out = arr.copy()
+    out.flags.writeable = False
+    return out
+
+
+def _writable(arr: np.ndarray) -> bool:
+    """True when ``arr`` or any array whose memory it views can be written to."""
+    base: Any = arr
+    while isinstance(base, np.ndarray):
+        if base.flags.writeable:
+            return True
+        base = base.base
+    return False
 
 
 def _check_fps(fps: Any, where: str | None) -> float:
@@ -142,7 +162,7 @@ class PoseSequence:
         where = self.source or None
         pos = _real_array(self.positions, "positions", where)
         object.__setattr__(self, "positions", pos)
-        object.__setattr__(self, "joint_names", tuple(str(j) for j in self.joint_names))
+        object.__setattr__(self, "joint_names", _joint_names(self.joint_names, where))
         if pos.ndim != 3 or pos.shape[2] != 3:
             raise PoseFileError(
                 f"positions must have shape (frames, joints, 3), got {pos.shape}", where
@@ -171,8 +191,14 @@ class PoseSequence:
                 f"unknown skeleton {self.skeleton!r} (known: {', '.join(sorted(KNOWN_SKELETONS))})",
                 where,
             )
-        object.__setattr__(self, "metadata", dict(self.metadata))
-        offset = self.metadata.get("frame_offset", 0)
+        if not isinstance(self.metadata, Mapping):
+            raise PoseFileError(
+                f"metadata must be a mapping of names, not {type(self.metadata).__name__}",
+                where,
+            )
+        meta = {k: _plain(v) for k, v in self.metadata.items()}
+        object.__setattr__(self, "metadata", meta)
+        offset = meta.get("frame_offset", 0)
         if isinstance(offset, bool) or not isinstance(offset, int) or offset < 0:
             raise PoseFileError(
                 f"metadata frame_offset must be a whole number >= 0, got {offset!r}", where
@@ -221,7 +247,7 @@ class PoseSequence:
         conf = None
         if self.confidence is not None:
             index = {n: i for i, n in enumerate(self.joint_names)}
-            conf = np.zeros((self.n_frames, len(BLAZEPOSE_33)))
+            conf = np.full((self.n_frames, len(BLAZEPOSE_33)), np.nan)  # absent: unknown
             for k, n in enumerate(BLAZEPOSE_33):
                 if n in index:
                     conf[:, k] = self.confidence[:, index[n]]
@@ -229,8 +255,12 @@ class PoseSequence:
             self, positions=self.joints(BLAZEPOSE_33), joint_names=BLAZEPOSE_33, confidence=conf
         )
 
-    def slice_frames(self, start: int, stop: int) -> PoseSequence:
-        """Frames ``start`` (inclusive) to ``stop`` (exclusive)."""
+    def slice_frames(self, start: int, stop: int | None) -> PoseSequence:
+        """Frames ``start`` (inclusive) to ``stop`` (exclusive; None: the end), as Python
+        slices them."""
+        start = _frame_index(start, "start")
+        stop = None if stop is None else _frame_index(stop, "stop")
+        start = range(self.n_frames)[start:stop].start
         conf = None if self.confidence is None else self.confidence[start:stop]
         meta = dict(self.metadata)
         meta["frame_offset"] = int(meta.get("frame_offset", 0)) + start
@@ -240,6 +270,33 @@ class PoseSequence:
         meta = dict(self.metadata)
         meta.update(updates)
         return replace(self, metadata=meta)
+
+
+def _joint_names(names: Any, where: str | None) -> tuple[str, ...]:
+    """``names`` as a tuple of text; PoseFileError for one string or names that are not text
+    (bytes would become ``"b'nose'"`` and match no joint)."""
+    if isinstance(names, str | bytes):
+        raise PoseFileError("joint_names must be a sequence of names, got one string", where)
+    out = []
+    for name in names:
+        if isinstance(name, bytes):
+            name = name.decode("utf-8", "replace")
+        elif not isinstance(name, str | np.str_):
+            raise PoseFileError(f"joint names must be text, got {name!r}", where)
+        out.append(str(name))
+    return tuple(out)
+
+
+def _plain(value: Any) -> Any:
+    """A numpy scalar in metadata as the Python number or text it holds (JSON can store it)."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _frame_index(value: Any, what: str) -> int:
+    """A frame index given as any whole number (``np.int64`` too); ConfigError otherwise."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | np.integer):
+        raise ConfigError(f"must be a whole number of frames, got {value!r}", what)
+    return int(value)
 
 
 EXTRA_PREFIX = "extra_"
@@ -260,6 +317,8 @@ def save_pose(
     """
     dtype = np.float32 if float32 else np.float64
     path = Path(path)
+    if path.is_dir():
+        raise PoseFileError("is a folder: give a file name for the pose file", path)
     if path.suffix != ".npz":
         path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
     arrays: dict[str, Any] = {
@@ -267,7 +326,7 @@ def save_pose(
         "joint_names": np.array(seq.joint_names, dtype=str),
         "fps": np.float64(seq.fps),
         "skeleton": np.array(seq.skeleton),
-        "metadata": np.array(json.dumps({"source": seq.source, **dict(seq.metadata)})),
+        "metadata": np.array(_metadata_text(seq, path)),
     }
     if seq.confidence is not None:
         arrays["confidence"] = seq.confidence.astype(dtype)
@@ -276,6 +335,20 @@ def save_pose(
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
         np.savez_compressed(fh, **arrays)
     return path
+
+
+def _metadata_text(seq: PoseSequence, path: Path) -> str:
+    try:
+        return json.dumps({"source": seq.source, **dict(seq.metadata)}, default=_plain_json)
+    except (TypeError, ValueError) as exc:
+        raise PoseFileError(f"metadata cannot be stored as JSON ({exc})", path) from None
+
+
+def _plain_json(value: Any) -> Any:
+    """What JSON cannot store as it is: numpy numbers and arrays as Python's."""
+    if isinstance(value, np.generic | np.ndarray):
+        return value.tolist()
+    raise TypeError(f"{type(value).__name__} is not JSON serializable")
 
 
 def read_limits() -> tuple[int, int]:
