@@ -52,6 +52,7 @@ def atomic_path(
     name's ending, for writers that choose the format by it (OpenCV's video writer).
     """
     dest = Path(path)
+    _refuse_special(dest, "output")
     try:
         if make_parents:
             dest.parent.mkdir(parents=True, exist_ok=True)
@@ -215,10 +216,27 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
+def _refuse_special(out: Path, what: str) -> None:
+    """A device, pipe or socket at ``out`` is not replaced by a file (``--plot /dev/null``
+    would put a picture where the system's null device was)."""
+    if out.exists() and not out.is_file():
+        raise DataError(f"the {what} is not a regular file (a device, pipe or socket)", out)
+
+
 def _read_from(src: Path) -> list[Path]:
     """What reading ``src`` reads: the file; of a folder, also its ``labels.csv`` (the
-    clips' labels when it has one)."""
-    return [src, src / "labels.csv"] if src.is_dir() else [src]
+    clips' labels when it has one); of a file, the companions its reader opens with it: a
+    UI-PRMD positions file's angles file, an AMC recording's skeleton (every ``.asf`` beside
+    it: the reader picks one of them)."""
+    if src.is_dir():
+        return [src, src / "labels.csv"]
+    if "_positions" in src.name:
+        from .readers.uiprmd import angles_path_for  # the reader's own rule
+
+        return [src, angles_path_for(src)]
+    if src.suffix.lower() == ".amc" and src.parent.is_dir():
+        return [src, *(p for p in src.parent.iterdir() if p.suffix.lower() == ".asf")]
+    return [src]
 
 
 def check_output(
@@ -240,6 +258,7 @@ def check_output(
     out = Path(path)
     if out.is_dir():
         raise DataError(f"the {what} is a folder, not a file", out)
+    _refuse_special(out, what)
     if make_parents:
         parent = next((p for p in out.parents if p.exists()), None)
         if parent is not None and not parent.is_dir():

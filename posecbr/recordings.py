@@ -9,7 +9,7 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
-from features.errors import DataError
+from features.errors import ConfigError, DataError
 
 
 def add_recording_options(p: argparse.ArgumentParser) -> None:
@@ -47,8 +47,18 @@ def sensor_for(sensor: str | None, sources: list[Path]) -> str:
 
 
 def check_fps(fps: float | None) -> None:
-    if fps is not None and not (0.0 < fps <= 10000.0):
-        raise DataError(f"must be a frame rate in (0, 10000], got {fps:g}", "--fps")
+    """``--fps`` within the frame rates a pose sequence takes (refused as the option's, not
+    blamed on the file it would be given to)."""
+    from features.poses import MAX_FPS, MIN_FPS
+
+    if fps is not None and not (MIN_FPS <= fps <= MAX_FPS):
+        raise DataError(f"must be a frame rate in [{MIN_FPS:g}, {MAX_FPS:g}], got {fps:g}", "--fps")
+
+
+def check_asf(asf: Path | None, recordings: list[Path]) -> None:
+    """``--asf`` refused when no recording is an AMC file (it would be ignored)."""
+    if asf is not None and not any(p.suffix.lower() == ".amc" for p in recordings):
+        raise ConfigError(f"goes with an AMC recording, not {recordings[0].name}", "--asf")
 
 
 def load_recording(path: Path, asf: Path | None = None, fps: float | None = None) -> Any:

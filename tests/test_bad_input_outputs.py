@@ -236,3 +236,60 @@ def test_convert_removes_the_staging_folder_a_killed_convert_left(tmp_path: Path
     (stale / ".a.npz.pid1@x.tmp").write_bytes(b"half a pose file")
     assert main(["convert", str(data), "--out", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["a.npz", "labels.csv"]
+
+
+def test_describe_plot_never_overwrites_the_files_read_beside_the_clip(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A UI-PRMD positions file's angles file and an AMC file's skeleton are read with it:
+    ``--plot`` onto either replaced it with a picture, and the clip could not be read."""
+    positions = tmp_path / "m01_s01_e01_positions.txt"
+    angles = tmp_path / "m01_s01_e01_angles.txt"
+    amc, asf = tmp_path / "HDM_bd_01.amc", tmp_path / "HDM_bd.asf"
+    for p in (positions, angles, amc, asf):
+        p.write_text("not read: refused before\n")
+    refused(["describe", str(positions), "--plot", str(angles)], tmp_path, capsys,
+            "the picture would overwrite an input", str(angles))  # fmt: skip
+    refused(["describe", str(amc), "--plot", str(asf)], tmp_path, capsys,
+            "the picture would overwrite an input", str(asf))  # fmt: skip
+
+
+def test_describe_plot_onto_a_pipe_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import os
+    import stat
+
+    clip = good_pose_file(tmp_path / "in" / "clip.npz")
+    pipe = tmp_path / "out" / "pipe.png"
+    pipe.parent.mkdir()
+    os.mkfifo(pipe)
+    refused(["describe", str(clip), "--plot", str(pipe)], tmp_path / "in", capsys,
+            "the picture is not a regular file", str(pipe))  # fmt: skip
+    assert stat.S_ISFIFO(pipe.lstat().st_mode) and sorted(pipe.parent.iterdir()) == [pipe]
+
+
+def test_reps_refuses_asf_it_would_ignore_and_a_plot_over_the_skeleton(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    clip = good_pose_file(tmp_path / "clip.npz")
+    amc, asf = tmp_path / "13_29.amc", tmp_path / "sk.asf"
+    for p in (amc, asf):
+        p.write_text("not read: refused before\n")
+    refused(["reps", str(clip), "--asf", str(tmp_path / "none.asf")], tmp_path, capsys,
+            "--asf: goes with an AMC recording, not clip.npz")  # fmt: skip
+    refused(["reps", str(amc), "--asf", str(asf), "--plot", str(asf)], tmp_path, capsys,
+            "the picture would overwrite an input", str(asf))  # fmt: skip
+    refused(["reps", str(clip), "--fps", "0.001"], tmp_path, capsys,
+            "--fps: must be a frame rate in [0.01, 10000], got 0.001")  # fmt: skip
+
+
+def test_watch_out_never_overwrites_the_case_base(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A case base named like a video: ``--out`` onto it replaced the case base."""
+    video, db = tmp_path / "v.mp4", tmp_path / "cb.mp4"
+    video.write_bytes(b"not read: refused before")
+    db.write_bytes(b"not opened: refused before")
+    refused(["watch", str(video), "--db", str(db), "--out", str(db)], tmp_path, capsys,
+            "the output video would overwrite an input", str(db))  # fmt: skip

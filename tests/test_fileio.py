@@ -174,3 +174,38 @@ def test_an_output_with_a_long_legal_name_is_written(tmp_path: Path) -> None:
     write_json_atomic(out, {"x": 1})
     assert json.loads(out.read_text()) == {"x": 1}
     assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+def test_an_output_on_a_device_or_pipe_is_refused_and_left_as_it_was(tmp_path: Path) -> None:
+    """``--plot`` onto a special file replaced the node with a regular file (as root,
+    ``/dev/null`` became a picture)."""
+    import stat
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    with pytest.raises(DataError, match="not a regular file"):
+        check_output(fifo)
+    with pytest.raises(DataError, match="not a regular file"), atomic_path(fifo) as tmp:
+        tmp.write_bytes(b"never")
+    assert stat.S_ISFIFO(fifo.lstat().st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe"]  # no temporary either
+
+
+def test_check_output_refuses_the_files_a_reader_opens_beside_its_input(tmp_path: Path) -> None:
+    """A UI-PRMD positions file is read with its angles file (beside it or in ``Angles/``),
+    an AMC recording with an ``.asf`` beside it: neither may be overwritten by an output."""
+    kinect = tmp_path / "Kinect"
+    (kinect / "Positions").mkdir(parents=True)
+    (kinect / "Angles").mkdir()
+    positions = kinect / "Positions" / "m01_s01_e01_positions.txt"
+    angles = kinect / "Angles" / "m01_s01_e01_angles.txt"
+    for p in (positions, angles):
+        p.write_text("1,2,3\n")
+    with pytest.raises(DataError, match="overwrite an input"):
+        check_output(angles, inputs=[positions])
+    amc, asf = tmp_path / "13_29.amc", tmp_path / "skeleton.ASF"
+    amc.write_text(":FULLY-SPECIFIED\n")
+    asf.write_text(":version 1.10\n")
+    with pytest.raises(DataError, match=r"overwrite an input \(.*skeleton\.ASF\)"):
+        check_output(asf, inputs=[amc])
+    assert check_output(tmp_path / "new.png", inputs=[positions, amc]) == tmp_path / "new.png"

@@ -8,6 +8,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -601,6 +602,63 @@ def test_segment_command_refuses_outputs_over_inputs(
     assert _sha(rec) == before and not (tmp_path / "none.sqlite").exists()
 
 
+def test_segment_outputs_never_overwrite_the_case_base(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A case base named like a picture or a video: ``--plot`` or ``--overlay`` onto it
+    replaced it (the case base lost)."""
+    rec = save_pose(recordings["13_30"].slice_frames(0, 600), tmp_path / "r.npz")
+    for name, option in (("cb.png", "--plot"), ("cb.mp4", "--overlay")):
+        db = tmp_path / name
+        shutil.copy(case_base, db)
+        before = _sha(db)
+        assert main(["segment", str(rec), "--db", str(db), option, str(db)]) == 1
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "would overwrite an input" in err, err
+        assert _sha(db) == before
+
+
+def test_segment_refuses_options_the_recordings_would_ignore(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    rec = save_pose(recordings["13_30"].slice_frames(0, 600), tmp_path / "r.npz")
+    argv = ["segment", str(rec), "--db", str(case_base)]
+    assert main([*argv, "--asf", str(tmp_path / "none.asf")]) == 1
+    assert capsys.readouterr().err == (
+        "posecbr segment: error: --asf: goes with an AMC recording, not r.npz\n"
+    )
+    assert main([*argv, "--fps", "0.001"]) == 1
+    assert "--fps: must be a frame rate in [0.01, 10000]" in capsys.readouterr().err
+
+
+def test_a_bad_recording_among_several_leaves_no_picture_of_the_others(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The first recording was segmented and its picture written before the second (too
+    short) was refused: a picture of a run that failed, exit 1. A missing recording is
+    refused before the first is read."""
+    good = save_pose(recordings["13_30"].slice_frames(0, 600), tmp_path / "good.npz")
+    short = save_pose(recordings["13_30"].slice_frames(0, 60), tmp_path / "short.npz")
+    pictures = tmp_path / "pictures"
+    pictures.mkdir()
+    for second in (short, tmp_path / "missing.npz"):
+        argv = ["segment", str(good), str(second), "--db", str(case_base), "--plot"]
+        assert main([*argv, str(pictures), "--json"]) == 1
+        captured = capsys.readouterr()
+        assert captured.out == "" and captured.err.count("\n") == 1
+        assert str(second) in captured.err
+        assert list(pictures.iterdir()) == []
+
+
 def test_segment_command_tells_nobody_in_view_in_its_table(
     recordings: dict[str, PoseSequence],
     case_base: Path,
@@ -635,6 +693,10 @@ def test_segment_overlay_on_a_real_video(
     cap.release()
     assert frames == 65
     assert "segments" in capsys.readouterr().out
+    # --fps is the recording's frame rate with --overlay too (it was the video's, 5 fps)
+    argv = ["segment", str(video), "--db", str(case_base), "--overlay", str(out), "--fps", "10"]
+    assert main([*argv, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["fps"] == 10.0
 
 
 def test_train_split_windows_makes_a_case_of_every_window(

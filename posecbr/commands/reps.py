@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 from features.fileio import check_output
-from posecbr.recordings import add_recording_options, load_recording
+from posecbr.recordings import add_recording_options, check_asf, load_recording
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -36,8 +36,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def run(args: argparse.Namespace) -> int:
     from features.repetitions import count_repetitions
 
+    check_asf(args.asf, [args.clip])
     if args.plot is not None:
-        check_output(args.plot, inputs=[args.clip], what="picture")
+        check_output(
+            args.plot, inputs=[args.clip, *([args.asf] if args.asf else [])], what="picture"
+        )
     seq = load_recording(args.clip, args.asf, args.fps)
     result = count_repetitions(seq)
     if args.plot is not None:

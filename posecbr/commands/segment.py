@@ -16,6 +16,7 @@ current activity and its repetition count on every frame (as ``extract --overlay
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -24,7 +25,7 @@ from typing import Any
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, unique_name
 from features.text import counted
-from posecbr.recordings import add_recording_options, check_fps, load_recording
+from posecbr.recordings import add_recording_options, check_asf, check_fps, load_recording
 
 JUDGES = ("activity-margin", "margin", "held-out", "activities", "margin-distance")
 """cbr.unknown.JUDGES, the default first (not imported: the command line starts light)."""
@@ -80,9 +81,18 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.set_defaults(func=run)
 
 
+def _inputs_given(args: argparse.Namespace) -> None:
+    """Refuse options that do not fit the recordings, and missing recordings, before any
+    is read."""
+    check_fps(args.fps)
+    check_asf(args.asf, args.recordings)
+    for path in args.recordings:
+        if not path.exists():
+            raise DataError("no such file", path)
+
+
 def _outputs(args: argparse.Namespace) -> None:
     """Refuse bad output paths before any work."""
-    check_fps(args.fps)
     if args.k < 1:
         raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     if args.plot is not None:
@@ -94,7 +104,7 @@ def _outputs(args: argparse.Namespace) -> None:
                 args.plot,
             )
         for target in plot_targets(args.plot, args.recordings):
-            check_output(target, inputs=args.recordings, what="picture")
+            check_output(target, inputs=_inputs(args), what="picture")
         if not args.plot.is_dir() and args.plot.suffix.lower() != ".png":
             raise DataError("the picture must be a .png file name (or a folder)", args.plot)
     if args.overlay is not None:
@@ -102,7 +112,12 @@ def _outputs(args: argparse.Namespace) -> None:
             raise DataError("--overlay takes one recording", args.overlay)
         if args.overlay.suffix.lower() != ".mp4":
             raise DataError("the overlay must be an .mp4 file name", args.overlay)
-        check_output(args.overlay, inputs=args.recordings, what="overlay")
+        check_output(args.overlay, inputs=_inputs(args), what="overlay")
+
+
+def _inputs(args: argparse.Namespace) -> list[Path]:
+    """What segmenting reads: the recordings, the case base and the skeleton file."""
+    return [*args.recordings, args.db, *([args.asf] if args.asf is not None else [])]
 
 
 def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
@@ -132,20 +147,23 @@ def judge_named(clf: Any, name: str, db: str) -> Any:
 def run(args: argparse.Namespace) -> int:
     from cbr.segmentation import segment
 
+    _inputs_given(args)
     _outputs(args)
     clf = load_stored(args.db, args.name)
     judge = judge_named(clf, args.unknown, args.db)
-    docs = []
-    targets = plot_targets(args.plot, args.recordings) if args.plot is not None else []
-    for i, path in enumerate(args.recordings):
+    done = []  # every recording segmented before any picture is drawn: a bad one among
+    for path in args.recordings:  # several leaves no picture of the others behind
         rec, video = _read(path, args)
-        result = segment(clf, rec, judge, k=args.k)
-        result = _named(result, path)
-        if targets:
-            _plot(rec, result, targets[i], path.name)
+        done.append((rec, video, _named(segment(clf, rec, judge, k=args.k), path)))
+    targets = plot_targets(args.plot, args.recordings) if args.plot is not None else []
+    for (rec, video, result), path, target in zip(
+        done, args.recordings, targets or [None] * len(done), strict=True
+    ):
+        if target is not None:
+            _plot(rec, result, target, path.name)
         if args.overlay is not None:
             _overlay(path, video, result, args.overlay)
-        docs.append(result)
+    docs = [result for _, _, result in done]
     if args.json:
         out = [r.to_dict() for r in docs]
         json.dump(out[0] if len(out) == 1 else out, sys.stdout, indent=1, ensure_ascii=False)
@@ -166,13 +184,12 @@ def _read(path: Path, args: argparse.Namespace) -> tuple[Any, Any]:
         from features.pose_estimation import estimate_video
 
         found = estimate_video(path)
-        return found.sequence.to_canonical(), found
+        seq = found.sequence.to_canonical()
+        return (seq if args.fps is None else dataclasses.replace(seq, fps=args.fps)), found
     return load_recording(path, args.asf, args.fps), None
 
 
 def _named(result: Any, path: Path) -> Any:
-    import dataclasses
-
     return dataclasses.replace(result, recording=str(path))
 
 

@@ -21,6 +21,7 @@ from features.text import counted, shown
 from posecbr.recordings import (
     add_recording_options,
     add_sensor_option,
+    check_asf,
     check_fps,
     load_recording,
     sensor_for,
@@ -481,8 +482,7 @@ def _check_options(args: argparse.Namespace) -> None:
     ):
         if value is not None and args.frame_labels is None:
             raise ConfigError(f"goes with --frame-labels ({instead})", option)
-    if args.asf is not None and args.data.suffix.lower() != ".amc":
-        raise ConfigError(f"goes with an AMC recording, not {args.data.name}", "--asf")
+    check_asf(args.asf, [args.data])
     if args.frame_labels is not None and args.subjects is not None:
         raise ConfigError(
             "--frame-labels labels one recording: its stretches are one person's (a labels "

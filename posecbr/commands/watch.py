@@ -92,7 +92,7 @@ def _check(args: argparse.Namespace) -> None:
     if args.out is not None:
         if args.out.suffix.lower() != ".mp4":
             raise DataError("the output video must be an .mp4 file name", args.out)
-        inputs = [args.source] if _is_file(args.source) else []
+        inputs = [args.source, args.db] if _is_file(args.source) else [args.db]
         check_output(args.out, inputs=inputs, what="output video")
     if _is_file(args.source) and not Path(args.source).is_file():
         raise DataError("no such video file", args.source)
