@@ -155,10 +155,10 @@ def run(args: argparse.Namespace) -> int:
     for path in args.recordings:  # several leaves no picture of the others behind
         rec, video = _read(path, args)
         done.append((rec, video, _named(segment(clf, rec, judge, k=args.k), path)))
-    targets = plot_targets(args.plot, args.recordings) if args.plot is not None else []
-    for (rec, video, result), path, target in zip(
-        done, args.recordings, targets or [None] * len(done), strict=True
-    ):
+    targets: list[Path | None] = [None] * len(done)
+    if args.plot is not None:
+        targets = list(plot_targets(args.plot, args.recordings))
+    for (rec, video, result), path, target in zip(done, args.recordings, targets, strict=True):
         if target is not None:
             _plot(rec, result, target, path.name)
         if args.overlay is not None:
