@@ -36,6 +36,7 @@ from .segmentation import (
     DEFAULT_WINDOW_S,
     MAX_WINDOW_S,
     MIN_SEGMENT_S,
+    MIN_WINDOW_S,
     NOBODY,
     PERIOD_SPAN_S,
     SPAN_HOP_S,
@@ -46,6 +47,7 @@ from .segmentation import (
     log_votes,
     period_outliers,
     periods_in_span,
+    segment,
     span_fields,
     told,
     unknown_reason,
@@ -732,9 +734,12 @@ class LiveSegmenter:
         return dataclasses.replace(self.shown[1], end_frame=self.n)
 
     def finish(self) -> list[LiveSegment]:
-        """The segments not yet finished, at the end of the stream (the last one ends there)."""
+        """The segments not yet finished, at the end of the stream (the last one ends there);
+        a stream that ended before its first window (:data:`DEFAULT_WINDOW_S`) but lasted
+        the shortest window :func:`cbr.segmentation.segment` takes (:data:`MIN_WINDOW_S`) is
+        segmented as that segments such a recording."""
         if self.state is None:
-            return []
+            return self._short_stream()
         out = self._settle(np.array(self.forward.settle(final=True), dtype=np.int64))
         assert self.settled is not None
         out += self._pass(math.inf, self.n, final=True)
@@ -745,6 +750,16 @@ class LiveSegmenter:
             out += self._change(self._blind_end(), tail)
             self.seen_sum = [sum(held), float(len(held))] if tail == self.unknown else [0.0, 0.0]
         return [*out, self._segment(self.seen_start, self.n, self.seen, False)]
+
+    def _short_stream(self) -> list[LiveSegment]:
+        if self.offset or not self.n or self.n < MIN_WINDOW_S * self.fps:
+            return []
+        found = segment(self.clf, self._sequence(0, self.n), self.judge)
+        return [
+            LiveSegment(s.start_frame, s.end_frame, s.label, s.confidence, len(s.repetitions),
+                        s.explanation, s.novelty)
+            for s in found.segments
+        ]  # fmt: skip
 
 
 def warm_up(clf: Any, judge: Judge | None = None, fps: float = 30.0) -> None:

@@ -219,13 +219,21 @@ def test_watch_refuses_a_missing_file(case_base: Path, tmp_path: Path, capsys: A
     assert "no such video file" in capsys.readouterr().err
 
 
+SPEED = "must be 0 (as fast as possible) or a number >= 0.01"
+STALL = "must be > 0 seconds and at most 86400 (a day)"
+
+
 @pytest.mark.parametrize(
     ("option", "value", "message"),
     [
-        ("--speed", "nan", "--speed: must be a number >= 0 (0: as fast as possible), got nan"),
-        ("--speed", "inf", "--speed: must be a number >= 0 (0: as fast as possible), got inf"),
-        ("--speed", "-1", "--speed: must be a number >= 0 (0: as fast as possible), got -1"),
-        ("--stall", "0", "--stall: must be > 0 seconds, got 0"),
+        ("--speed", "nan", f"--speed: {SPEED}, got nan"),
+        ("--speed", "inf", f"--speed: {SPEED}, got inf"),
+        ("--speed", "-1", f"--speed: {SPEED}, got -1"),
+        # a wait of 1e300 s overflowed the clock: a traceback
+        ("--speed", "1e-300", f"--speed: {SPEED}, got 1e-300"),
+        ("--stall", "0", f"--stall: {STALL}, got 0"),
+        ("--stall", "inf", f"--stall: {STALL}, got inf"),
+        ("--stall", "1e300", f"--stall: {STALL}, got 1e+300"),
         ("--max-frames", "0", "--max-frames: must be >= 1, got 0"),
     ],
 )
@@ -391,17 +399,48 @@ def test_watch_a_stream_url(
 def test_watch_a_stream_shorter_than_a_window_says_so(
     case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """Five frames of the 5-fps squat video (1 s; a window is 2 s): no segment can be
-    given, so one line says why, exit 1, and no --out video (it printed nothing, exit 0)."""
+    """Four frames of the 5-fps squat video (0.8 s; segment takes 1 s or more): no segment
+    can be given, so one line says why, exit 1, and no --out video (it printed nothing,
+    exit 0)."""
     video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
     out = tmp_path / "out.mp4"
     capsys.readouterr()
-    argv = ["watch", str(video), "--db", str(case_base), "--max-frames", "5", "--out", str(out)]
+    argv = ["watch", str(video), "--db", str(case_base), "--max-frames", "4", "--out", str(out)]
     assert main([*argv, "--speed", "0"]) == 1
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err.count("\n") == 1
-    assert "the stream ended after 5 frames (1.00 s), before one window (2 s)" in captured.err
+    assert (
+        "the stream ended after 4 frames (0.80 s), before the shortest window (1 s)" in captured.err
+    )
     assert list(tmp_path.iterdir()) == []
+
+
+def test_watch_a_stream_shorter_than_its_first_window_segments_it_as_segment_does(
+    case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The first 8 frames (1.6 s) of the 5-fps squat video: ``segment`` gives its segments
+    (it takes 1 s or more), ``watch`` refused the stream ("before one window (2 s)")."""
+    import cv2
+
+    cap = cv2.VideoCapture(
+        str(shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4")
+    )
+    frames = [cap.read()[1] for _ in range(8)]
+    cap.release()
+    short = tmp_path / "short.mp4"
+    h, w = frames[0].shape[:2]
+    writer = cv2.VideoWriter(str(short), cv2.VideoWriter_fourcc(*"mp4v"), 5.0, (w, h))
+    for f in frames:
+        writer.write(f)
+    writer.release()
+    capsys.readouterr()
+    assert main(["segment", str(short), "--db", str(case_base), "--json"]) == 0
+    offline = json.loads(capsys.readouterr().out)["segments"]
+    assert main(["watch", str(short), "--db", str(case_base), "--speed", "0"]) == 0
+    live = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    keys = ("start_frame", "end_frame", "label")
+    assert [[s[k] for k in keys] for s in live] == [[s[k] for k in keys] for s in offline]
+    assert live[0]["start_frame"] == 0 and live[-1]["end_frame"] == 8
 
 
 def _watch(argv: list[str]) -> subprocess.Popen[str]:
@@ -477,3 +516,30 @@ def test_a_second_ctrl_c_interrupts_at_once() -> None:
         time.sleep(0.05)
         pytest.fail("the second Ctrl-C did not interrupt")
     assert signal.getsignal(signal.SIGINT) is before
+
+
+def test_watch_refuses_a_truncated_video_as_segment_does(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An MJPG AVI of 60 frames cut to two thirds of its bytes: its index still says 60.
+    ``segment`` and ``reps`` refused it ("decoded 40 of 60 frames"); ``watch`` watched what
+    decoded, exit 0, and wrote its --out video."""
+    import cv2
+
+    whole = tmp_path / "whole.avi"
+    writer = cv2.VideoWriter(str(whole), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (96, 96))
+    rng = np.random.default_rng(0)
+    for _ in range(60):
+        writer.write(rng.integers(0, 255, (96, 96, 3), dtype=np.uint8))
+    writer.release()
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size * 2 // 3])
+    out = tmp_path / "out.mp4"
+    capsys.readouterr()
+    assert main(["watch", str(cut), "--db", str(case_base), "--speed", "0", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "truncated or corrupt: decoded" in err and str(cut) in err
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == [
+        "cut.avi",
+        "whole.avi",
+    ]

@@ -142,7 +142,12 @@ def iter_frames(path: str | Path, decode_threads: int | None = None) -> Iterator
         cap.release()
     if count == 0:
         raise DataError("video has no frames (empty, truncated or corrupt)", info.path)
-    # Containers state their frame count; allow a small slack for ones that estimate it.
+    check_whole(count, info)
+
+
+def check_whole(count: int, info: VideoInfo) -> None:
+    """DataError when ``count`` frames decoded to the end fall short of the frame count the
+    container states (with a small slack for containers that estimate it)."""
     if info.frames and count + max(2, math.ceil(0.01 * info.frames)) < info.frames:
         raise DataError(f"truncated or corrupt: decoded {count} of {info.frames} frames", info.path)
 
@@ -327,8 +332,11 @@ def stream_poses(
 
     Files are timed by their frame rate; live sources by the wall clock, or by ``fps`` when
     given (a file served over the network: :func:`served_file_rate`). Stops at the end of
-    the stream, after ``max_frames``, or when the consumer stops iterating.
+    the stream, after ``max_frames``, or when the consumer stops iterating. A file that
+    ends before the frame count its container states raises DataError, as
+    :func:`iter_frames` does.
     """
+    info = None
     if isinstance(source, Path) or (
         isinstance(source, str) and "://" not in source and not source.isdigit()
     ):
@@ -348,6 +356,8 @@ def stream_poses(
             ok, bgr = cap.read()
             read_at = time.perf_counter()
             if not ok or bgr is None:
+                if info is not None:  # a file read to its end: all of it, as iter_frames
+                    check_whole(index, info)
                 break
             t = index / fps if fps else read_at - start
             rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)

@@ -80,13 +80,23 @@ def _is_file(source: str) -> bool:
     return "://" not in source and not source.isdigit()
 
 
+#: the slowest --speed (a hundredth of the frame rate) and the longest --stall (a day): the
+#: waits they make must be ones the clock can time
+MIN_SPEED = 0.01
+MAX_STALL_S = 86_400.0
+
+
 def _check(args: argparse.Namespace) -> None:
-    if not (math.isfinite(args.speed) and args.speed >= 0):
+    if not (math.isfinite(args.speed) and (args.speed == 0 or args.speed >= MIN_SPEED)):
         raise ConfigError(
-            f"must be a number >= 0 (0: as fast as possible), got {args.speed:g}", "--speed"
+            f"must be 0 (as fast as possible) or a number >= {MIN_SPEED:g}, got {args.speed:g}",
+            "--speed",
         )
-    if not args.stall > 0:
-        raise ConfigError(f"must be > 0 seconds, got {args.stall:g}", "--stall")
+    if not 0 < args.stall <= MAX_STALL_S:
+        raise ConfigError(
+            f"must be > 0 seconds and at most {MAX_STALL_S:g} (a day), got {args.stall:g}",
+            "--stall",
+        )
     if args.max_frames is not None and args.max_frames < 1:
         raise ConfigError(f"must be >= 1, got {args.max_frames}", "--max-frames")
     if args.out is not None:
@@ -400,12 +410,12 @@ class Watcher:
         for segment in self.live.finish() if self.live is not None else []:
             self._emit(segment)
         if not self.emitted:  # as segment refuses a recording shorter than a window
-            from cbr.segmentation import DEFAULT_WINDOW_S
+            from cbr.segmentation import MIN_WINDOW_S
 
             seconds = f" ({self.n / self.fps:.2f} s)" if self.fps else ""
             raise DataError(
-                f"the stream ended after {counted(self.n, 'frame')}{seconds}, before one window"
-                f" ({DEFAULT_WINDOW_S:g} s) of it was seen: no segment to give",
+                f"the stream ended after {counted(self.n, 'frame')}{seconds}, before the"
+                f" shortest window ({MIN_WINDOW_S:g} s) of it was seen: no segment to give",
                 self.args.source,
             )
         if self.latency:
