@@ -83,7 +83,10 @@ def contradictions(exp: Explanation, cb: CaseBase, problem: Problem) -> list[str
         if j is None:
             out.append(f"{c.words}: no such column {c.column!r} in the case base")
             continue
-        if abs(_value(x[j], c.column, c.unit) - c.here) > _TOLERANCE * max(1.0, abs(c.here)):
+        if c.here is None:  # said not seen: the clip must not have shown it
+            if c.column.split("@", 1)[0] not in problem.unseen:
+                out.append(f"{c.words}: said not seen, the clip has {x[j]:.4g}")
+        elif abs(_value(x[j], c.column, c.unit) - c.here) > _TOLERANCE * max(1.0, abs(c.here)):
             out.append(f"{c.words}: said to be {c.here:.4g}, the clip has {x[j]:.4g}")
         out += _range(c, j, x, prof)
     out += _changes(exp, cb, view, index)

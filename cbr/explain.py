@@ -27,6 +27,7 @@ When the clip moves its left side more and is compared as its mirror image
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -143,7 +144,8 @@ class Claim:
     """One statement about one readable column (:mod:`cbr.profiles`): ``part`` the list it
     belongs to ("why", "outside", "change", "matched", "not_seen", "only_here",
     "difference"), ``column`` its machine name and ``feature`` its feature's, the clip's value
-    ``here`` and what it is compared with: ``there`` (a case's value or a label's mean), the
+    ``here`` (None: the clip did not show it, a change claim's only) and what it is compared
+    with: ``there`` (a case's value or a label's mean), the
     ``low``-``high`` usual range of ``label``'s cases; ``steady``: said to hold for most of the
     clip (fluent states in the presence lists)."""
 
@@ -151,7 +153,7 @@ class Claim:
     column: str
     feature: str
     words: str
-    here: float
+    here: float | None
     unit: str
     there: float | None = None
     low: float | None = None
@@ -263,6 +265,7 @@ class _Reading:
     states: np.ndarray  # (m,) bool: the share of the time a fluent state holds
     state_means: np.ndarray  # the columns of fluent states' clip means (presence lists)
     seen: np.ndarray  # (m,) the share of all cases at or above SEEN_FRACTION
+    known: np.ndarray  # (m,) bool: measured in the clip (False: a fill, Problem.unseen)
 
     def prefer_angles(self, score: np.ndarray) -> np.ndarray:
         """``score`` with joint angles ahead of near-equal others: people check an angle most
@@ -337,10 +340,11 @@ def read(cb: CaseBase, problem: Problem) -> _Reading:
         )  # fmt: skip
         # of the whole case base, the same for every clip: read once, not per explanation
         cb.cache["seen"] = (view.of(cb.problems) >= SEEN_FRACTION).mean(axis=0)
+    known = np.array([n.split("@", 1)[0] not in problem.unseen for n in view.names], dtype=bool)
     return _Reading(
         cb, view, profiles_of(cb), x, cb.cache["importance"], bool(problem.mirrored),
         cb.cache["readable"], cb.cache["angles"], cb.cache["states"], cb.cache["state_means"],
-        cb.cache["seen"],
+        cb.cache["seen"], known,
     )  # fmt: skip
 
 
@@ -390,7 +394,7 @@ def evidence(r: _Reading, label: str) -> np.ndarray:
     typical = r.view.binary | ((x >= prof.low[row]) & (x <= prof.high[row]))
     # a fluent state the clip holds (almost) never is no feature of the clip
     shown = ~r.states | (x >= SEEN_FRACTION)
-    return np.where(typical & shown & (r.importance > 0) & r.readable, e, -np.inf)
+    return np.where(typical & shown & (r.importance > 0) & r.readable & r.known, e, -np.inf)
 
 
 def margin(r: _Reading, own: np.ndarray, other: np.ndarray) -> np.ndarray | None:
@@ -459,7 +463,8 @@ def outside_claims(r: _Reading, reference: str, n: int = SHORT_ITEMS) -> list[Cl
     beyond = np.maximum(prof.low[row] - r.x, r.x - prof.high[row])
     # how far outside, in spreads; features the measure weighs below average count for less
     score = np.where(r.view.binary, 0.0, beyond / spread) * np.sqrt(np.minimum(r.importance, 1))
-    score = np.where((beyond / spread >= 1.0) & r.readable, r.prefer_angles(score), -np.inf)
+    ok = (beyond / spread >= 1.0) & r.readable & r.known
+    score = np.where(ok, r.prefer_angles(score), -np.inf)
     return [
         r.claim(
             "outside",
@@ -493,11 +498,12 @@ def presence_claims(
     distinct = 1.0 - r.seen[cols]
     apart = np.abs(here - cases) > spread
     q_seen, c_seen = here >= SEEN_FRACTION, cases >= SEEN_FRACTION
+    known = r.known[cols]  # a state the clip could not show is neither shared nor missed
     lists: list[list[Claim]] = []
     for mask, score in (
-        (q_seen & c_seen, distinct * here),
-        (~q_seen & c_seen & apart, distinct * cases),
-        (q_seen & ~c_seen & apart, distinct * here),
+        (known & q_seen & c_seen, distinct * here),
+        (known & ~q_seen & c_seen & apart, distinct * cases),
+        (known & q_seen & ~c_seen & apart, distinct * here),
     ):
         idx = np.flatnonzero(mask)
         idx = idx[np.argsort(-score[idx], kind="stable")][:MAX_LISTED]
@@ -552,12 +558,15 @@ def change_claims(r: _Reading, cf: Counterfactual, guide: np.ndarray) -> list[Cl
     out = []
     for f in cf.features:
         cols = np.flatnonzero(r.view.feature == f)
+        if r.known[cols].any():  # the clip's value of an unseen column is a fill
+            cols = cols[r.known[cols]]
         if r.readable[cols].any():
             cols = cols[r.readable[cols]]
         spread = np.maximum(r.prof.within[cols], 1e-9)
         gap = np.abs(r.x[cols] - g[cols]) / spread * np.sqrt(np.maximum(r.importance[cols], 1e-12))
         j = int(cols[int(np.argmax(np.where(r.angles[cols], gap * ANGLE_PREFERENCE, gap)))])
-        out.append(r.claim("change", j, there=float(g[j]), label=cf.label))
+        claim = r.claim("change", j, there=float(g[j]), label=cf.label)
+        out.append(claim if r.known[j] else dataclasses.replace(claim, here=None))
     return out
 
 
@@ -565,7 +574,8 @@ def _change_text(c: Claim) -> str:
     if c.unit == "detected":
         return f"{'not ' if c.there is not None and c.there < 0.5 else ''}show {c.words}"
     there = c.there if c.there is not None else float("nan")
-    return f"{c.words} {said(c.here, c.unit)} → {said(there, c.unit)}"
+    here = "not seen" if c.here is None else said(c.here, c.unit)
+    return f"{c.words} {here} → {said(there, c.unit)}"
 
 
 def _claim_text(c: Claim, whose: str) -> str:
@@ -577,7 +587,7 @@ def _claim_text(c: Claim, whose: str) -> str:
     rng = ""
     if c.low is not None and c.high is not None and whose:
         rng = f" ({whose}: {_span(c.low, c.high, c.unit)})"
-    return f"{c.words} {said(c.here, c.unit)}{rng}"
+    return f"{c.words} {'not seen' if c.here is None else said(c.here, c.unit)}{rng}"
 
 
 # -------------------------------------------------------------------------- neighbours

@@ -190,13 +190,16 @@ class FeatureConfig:
 class Problem:
     """A case's problem: ``values`` ``(length, n_features)`` (fluent sequence) or
     ``(n_features,)`` (QMP vector); ``names`` machine names and ``words`` human words of the
-    feature columns (so explanations can cite them)."""
+    feature columns (so explanations can cite them); ``unseen``: the features (names before
+    any ``@`` statistic) the clip never showed, whose values are fills, not measurements
+    (explanations cite no value of them; known for clips computed whole)."""
 
     values: np.ndarray
     names: tuple[str, ...]
     words: tuple[str, ...]
     level: Level
     mirrored: bool = False
+    unseen: frozenset[str] = frozenset()
 
 
 def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> None:
@@ -499,8 +502,11 @@ def _qmp_problem(q: QMPFeatures, config: FeatureConfig) -> Problem:
             "qmp",
         )
     # parameters not observable in this clip (NaN) get the configured fill value
-    vals = np.nan_to_num(np.asarray(q.values, dtype=np.float64), nan=float(config.fill))
-    return Problem(vals, tuple(q.names), tuple(str(n).replace("_", " ") for n in q.names), "qmp")
+    raw = np.asarray(q.values, dtype=np.float64)
+    vals = np.nan_to_num(raw, nan=float(config.fill))
+    unseen = frozenset(str(n) for n, v in zip(q.names, raw, strict=True) if np.isnan(v))
+    words = tuple(str(n).replace("_", " ") for n in q.names)
+    return Problem(vals, tuple(q.names), words, "qmp", unseen=unseen)
 
 
 def _fluent_problem(seq: PoseSequence, config: FeatureConfig, chunk: int, mirror: bool) -> Problem:
@@ -534,6 +540,14 @@ def _fluent_problem(seq: PoseSequence, config: FeatureConfig, chunk: int, mirror
             positions,
         )
         values = resample(fill_nan_time(columns, fills), int(config.length))
+        never = np.isnan(columns).all(axis=0) if len(columns) else np.zeros(len(states), bool)
+        unseen = frozenset(s for s, n in zip(states, never, strict=True) if n)
+        problem = (
+            summarise(values, states, plan.words, int(config.phases))
+            if config.summary
+            else Problem(values, states, plan.words, "fluents")
+        )
+        return dataclasses.replace(problem, unseen=unseen)
     if config.summary:
         return summarise(values, states, plan.words, int(config.phases))
     return Problem(values, states, plan.words, "fluents")

@@ -242,3 +242,33 @@ def test_how_many_cases_hold_a_state_is_read_once_and_follows_the_case_base() ->
     assert read(cb, query).seen is read(cb, query).seen  # kept with the case base
     cb.set_problem(0, np.array([0.1, 0.3]))  # the first case now holds b for 30 % of the time
     np.testing.assert_array_equal(read(cb, query).seen, [0.75, 0.5])
+
+
+def test_a_clip_without_its_legs_is_not_explained_by_leg_values(
+    squats: CaseBaseClassifier,
+) -> None:
+    """Knees, ankles and feet missing in every frame: their angles and fluents were filled
+    (90 degrees, never held) and the explanation quoted the fills as measurements ("knee
+    bent" not seen, a knee angle of 90 degrees). Nothing it cites may rest on them."""
+    clip = _made_shallower()
+    pos = clip.positions.copy()
+    legs = [i for i, n in enumerate(clip.joint_names) if n.split("_", 1)[-1] in LEG_JOINTS]
+    pos[:, legs] = np.nan
+    blind = dataclasses.replace(clip, positions=pos)
+    problem = squats.problems([blind])[0]
+    assert {"angle:left_knee", "angle:right_knee"} <= problem.unseen
+    whole = squats.problems([clip])[0].unseen  # (the arms hang: their plane is undefined)
+    assert not {n for n in whole if "knee" in n or "leg" in n}, whole
+    exp = squats.explain([blind])[0]
+    assert exp.claims
+    # a counterfactual may change what was not seen ("left knee height not seen -> -0.95"):
+    # it then quotes no value of the clip's
+    quoted = {c.column.split("@", 1)[0] for c in exp.claims if c.here is not None}
+    assert not quoted & problem.unseen, quoted & problem.unseen
+    assert not any(c.part != "change" for c in exp.claims if c.here is None)
+    for line in exp.text.splitlines():
+        assert "knee" not in line or "not seen" in line, exp.text
+    assert contradictions(exp, squats.case_base_, problem) == []
+
+
+LEG_JOINTS = {"knee", "ankle", "heel", "foot_index"}
