@@ -542,7 +542,12 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
 
 
 def frame_labels(
-    labels: list[str], n_frames: int, fps: float, block_s: float | None, where: str | Path
+    labels: list[str],
+    n_frames: int,
+    fps: float,
+    block_s: float | None,
+    where: str | Path,
+    recording: str = "",
 ) -> np.ndarray:
     """The label of every frame, ``(n_frames,)`` objects, from one label per frame
     (``block_s`` None) or one per ``block_s`` seconds (label t covers [t, t+1) x block_s).
@@ -551,8 +556,10 @@ def frame_labels(
     one more label is accepted when the frames fill the last block exactly (a label for the
     recording's end time as well as its start: the cmu-mocap6 label files were made that
     way), so a file of one label per frame may hold one more than there are frames, and no
-    more. Otherwise DataError naming the file: a different count means another frame rate
-    or block length, and labels would land on the wrong frames."""
+    more. Otherwise DataError naming the file (and ``recording``, the name of the recording
+    it was given for, when known: one label file may be named for several): a different
+    count means another frame rate or block length, and labels would land on the wrong
+    frames."""
     per_block = 1.0 if block_s is None else block_s * fps
     low = int(np.ceil(n_frames / per_block - 1e-9))
     high = int(np.floor(n_frames / per_block + 1e-9)) + 1
@@ -560,8 +567,9 @@ def frame_labels(
         unit = "frame" if block_s is None else f"{block_s:g} s"
         need = str(low) if low == high else f"{low} or {high}"
         raise DataError(
-            f"{len(labels)} labels (one per {unit}) do not fit the recording: {n_frames} frames"
-            f" at {fps:g} fps need {need} (another frame rate or label block?)",
+            f"{len(labels)} labels (one per {unit}) do not fit the recording"
+            f"{' ' + recording if recording else ''}: {n_frames} frames at {fps:g} fps need"
+            f" {need} (another frame rate or label block?)",
             where,
         )
     block = np.floor(np.arange(n_frames) / per_block + 1e-9).astype(np.int64)
@@ -584,7 +592,8 @@ def split_by_track(seq: PoseSequence, track: LabelTrack) -> list[tuple[PoseSeque
 
     names = read_label_names(track.names) if track.names is not None else None
     labels = read_label_track(track.path, names)
-    per_frame = frame_labels(labels, seq.n_frames, seq.fps, track.block_s, track.path)
+    recording = Path(seq.source).name if seq.source else ""
+    per_frame = frame_labels(labels, seq.n_frames, seq.fps, track.block_s, track.path, recording)
     return [(stretch(seq, a, b), lab) for a, b, lab in labelled_stretches(per_frame)]
 
 

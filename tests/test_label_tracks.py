@@ -207,7 +207,11 @@ def test_train_refuses_a_label_file_that_does_not_fit(
     assert main(argv) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err
-    assert "383 labels (one per 0.1 s) do not fit the recording: 2465 frames at 120 fps" in err
+    # the recording named too: one label file may be named for several (a labels CSV)
+    assert (
+        "383 labels (one per 0.1 s) do not fit the recording 13_30.npz: 2465 frames at 120 fps"
+        in err
+    )
     assert str(wrong) in err
     assert not db.exists()
     assert before == {p: _sha(p) for p in (recording, wrong)}

@@ -659,6 +659,28 @@ def test_a_bad_recording_among_several_leaves_no_picture_of_the_others(
         assert list(pictures.iterdir()) == []
 
 
+def test_train_split_windows_of_one_activity_is_refused_in_one_line(
+    recordings: dict[str, PoseSequence],
+    names: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Every 0.1-s block of 13_29 labelled squat: "cut 1 clip into 73 windows" came on
+    stderr before the refusal (two lines); the refusal comes before any cutting."""
+    rec = save_pose(recordings["13_29"], tmp_path / "13_29.npz")
+    blocks = math.ceil(recordings["13_29"].n_frames / 12)  # of 0.1 s at 120 fps
+    labels = tmp_path / "labels.txt"
+    labels.write_text("3\n" * blocks, encoding="utf-8")
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(rec), "--frame-labels", str(labels), "--label-block", "0.1"]
+    capsys.readouterr()
+    assert main([*argv, "--label-names", str(names), "--split", "windows", "--db", str(db)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert "hold only one activity ('Squat')" in err
+    assert not db.exists()
+
+
 def test_segment_command_tells_nobody_in_view_in_its_table(
     recordings: dict[str, PoseSequence],
     case_base: Path,

@@ -342,6 +342,11 @@ def _clips(args: argparse.Namespace) -> list[Any]:
             progress_desc="loading clips",
         )
     )
+    if clips and not args.append:  # before the cutting is said: the refusal is one line
+        from features.datasets import clip_target
+
+        values = [clip_target(c, args.target) for c in clips]
+        _one_activity(args, [v for v in values if v is not None])
     if args.split == "repetitions" and clips:
         clips = _repetitions(clips)
     elif args.split == "windows" and clips:
