@@ -159,6 +159,9 @@ CASES: list[tuple[str, Callable[[Path], Path], str]] = [
     ("joints that are not BlazePose landmarks",
      lambda d: pose_file(d / "j.npz", joint_names=np.array([f"j{i}" for i in range(33)])),
      "joint names are not BlazePose landmark names: j0"),
+    ("nobody in any frame",  # it printed every state unavailable, exit 0
+     lambda d: pose_file(d / "n.npz", positions=np.full((8, 33, 3), np.nan)),
+     "shows no person (every joint missing in every frame): nothing to describe"),
     ("fps zero", lambda d: pose_file(d / "f.npz", fps=0.0), "fps must be a positive number"),
     ("fps negative", lambda d: pose_file(d / "f.npz", fps=-30.0), "fps must be a positive number"),
     ("fps NaN", lambda d: pose_file(d / "f.npz", fps=np.nan), "fps must be a positive number"),

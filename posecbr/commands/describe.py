@@ -10,7 +10,7 @@ import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
-from features.errors import PosecbrError
+from features.errors import DataError, PosecbrError
 from features.fileio import check_output
 from features.text import counted, shown
 
@@ -125,6 +125,8 @@ class _Spool:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from features.datasets import load_clip
     from features.fluents import DEFAULT_TABLE, FluentTable, evaluate
     from features.timeline import describe_clip, plot_timeline
@@ -132,6 +134,11 @@ def run(args: argparse.Namespace) -> int:
     _check_args(args)
     table = FluentTable.from_file(args.thresholds) if args.thresholds else DEFAULT_TABLE
     seq = load_clip(args.posefile)
+    if np.isnan(seq.positions).all():  # as classify, dad, reps and segment refuse it
+        raise DataError(
+            "shows no person (every joint missing in every frame): nothing to describe",
+            args.posefile,
+        )
     backend: Backend = "numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba"
     spool = None
     if args.per_frame:  # the state names and words, from the first frame
