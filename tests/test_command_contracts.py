@@ -4,10 +4,12 @@ that are true where they can."""
 
 from __future__ import annotations
 
+import json
 import shutil
 import sqlite3
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from posecbr.cli import main
@@ -75,3 +77,34 @@ def test_a_maintenance_date_that_is_not_one_is_named_damage(
     refused(["casebase", "info", "--db", str(db)], tmp_path, capsys,
             "case base 'default' is damaged: a date in its maintenance log is not a date",
             "'bad-date'")  # fmt: skip
+
+
+# ----------------------------------------------------------------- export of a damaged base
+
+
+def test_export_refuses_feature_names_that_do_not_match_the_cases(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One feature name for cases of many columns: export wrote it as it was (exit 0), an
+    export whose names do not describe its problems; now refused as trim refuses it."""
+    with sqlite3.connect(case_base) as conn:
+        (names,) = conn.execute("SELECT feature_names FROM case_bases").fetchone()
+    conn.close()
+    width = len(json.loads(names))
+    assert width > 1
+    db = _damaged(case_base, tmp_path, """UPDATE case_bases SET feature_names = '["a"]'""")
+    out = tmp_path / "fn.npz"
+    capsys.readouterr()
+    refused(["casebase", "export", "--db", str(db), "--out", str(out)], tmp_path, capsys,
+            f"case base 'default' is damaged: its cases have {width} feature columns but the "
+            "case base names 1")  # fmt: skip
+
+
+def test_export_of_a_sound_case_base_names_every_column(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "ok.npz"
+    assert main(["casebase", "export", "--db", str(case_base), "--out", str(out)]) == 0
+    capsys.readouterr()
+    with np.load(out) as z:
+        assert z["problems"].shape[-1] == len(z["feature_names"]) > 1

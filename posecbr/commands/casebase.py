@@ -357,10 +357,13 @@ def _check_export(args: argparse.Namespace) -> None:
 def _export(store: CaseStore, args: argparse.Namespace) -> int:
     import numpy as np
 
+    from cbr.stored import check_width
+
     out = _export_path(args)
     name = store.choose(args.name)
-    info = store.get_case_base(name)
-    a = store.load_cases(name)
+    info, a = store.load_case_base(name)
+    if len(a.ids):
+        check_width(info, a.features.shape[-1], store.where)
     arrays: dict[str, Any] = {
         "problems": a.features,
         "labels": np.asarray(a.labels, dtype=str),
