@@ -108,3 +108,26 @@ def test_export_of_a_sound_case_base_names_every_column(
     capsys.readouterr()
     with np.load(out) as z:
         assert z["problems"].shape[-1] == len(z["feature_names"]) > 1
+
+
+# ----------------------------------------------------------------- casebase info of QMPs
+
+
+def test_info_of_a_qmp_case_base_says_its_qmp_columns(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """It said "features: qmp, angles states, length 32": "angles" is the group of state
+    signals, not a count of states, and QMP features have no length."""
+    data = _write_classes(tmp_path / "train", 3, 5)
+    db = tmp_path / "qmp.sqlite"
+    assert main(["train", str(data), "--db", str(db), "--features", "qmp", "--mirror", "off",
+                 "--feature-weights", "none"]) == 0  # fmt: skip
+    out = tmp_path / "qmp.npz"
+    assert main(["casebase", "export", "--db", str(db), "--out", str(out)]) == 0
+    with np.load(out) as z:
+        columns = z["problems"].shape[-1]
+    capsys.readouterr()
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    line = capsys.readouterr().out.splitlines()[1]
+    assert line.startswith(f"  features: qmp (binary), {columns} QMP columns; hash "), line
+    assert "states" not in line and "length" not in line
