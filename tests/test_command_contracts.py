@@ -4,16 +4,21 @@ that are true where they can."""
 
 from __future__ import annotations
 
+import argparse
 import json
+import math
 import shutil
 import sqlite3
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from features.poses import save_pose
+from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
-from tests.badinput import refused
+from tests.badinput import refused, standing_clip
 from tests.test_cbr_cli import _write_classes
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -131,3 +136,104 @@ def test_info_of_a_qmp_case_base_says_its_qmp_columns(
     line = capsys.readouterr().out.splitlines()[1]
     assert line.startswith(f"  features: qmp (binary), {columns} QMP columns; hash "), line
     assert "states" not in line and "length" not in line
+
+
+# ----------------------------------------------------------------- dad
+
+
+def test_dad_json_on_a_clip_it_cannot_judge_says_so_on_stderr_too(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A one-frame clip and an all-NaN clip: the document on stdout, exit 1, and (it was
+    empty) the one-line error on stderr."""
+    one = save_pose(standing_clip(1), tmp_path / "one.npz")
+    seq = standing_clip(60)
+    blank = save_pose(replace(seq, positions=np.full_like(seq.positions, np.nan)),
+                      tmp_path / "blank.npz")  # fmt: skip
+    for clip in (one, blank):
+        assert main(["dad", str(clip), "--json"]) == 1
+        captured = capsys.readouterr()
+        assert json.loads(captured.out)["status"] == "not enough data"
+        lines = captured.err.splitlines()
+        assert len(lines) == 1 and lines[0].startswith(
+            f"posecbr dad: error: {clip}: not enough data: "
+        ), captured.err
+
+
+_ADD = """schema = 1
+
+[qmp.arm_still]
+words = "left elbow still"
+conditions = [ { signal = "left_elbow", quantity = "amplitude", max = 0.1 } ]
+
+[qmp.knee_still]
+words = "left knee still"
+conditions = [ { signal = "left_knee", quantity = "amplitude", max = 0.1 } ]
+
+[activity.legs]
+words = "legs still"
+labels = ["legs"]
+sequence = [ { qmp = "knee_still", weight = 5 }, { qmp = "knee_still", weight = 5 } ]
+"""
+
+LEGS = ("hip", "knee", "ankle", "heel", "foot_index")
+
+
+def _upper_body_only(path: Path) -> Path:
+    """Three seconds of a person standing, every leg joint (hips down) missing."""
+    seq = standing_clip(90)
+    pos = seq.positions.copy()
+    for side in ("left", "right"):
+        for joint in LEGS:
+            pos[:, JOINT_INDEX[f"{side}_{joint}"]] = np.nan
+    return save_pose(replace(seq, positions=pos), path)
+
+
+def test_dad_with_no_activity_observable_is_not_enough_data(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An ADD whose only activity watches the knee, on a clip without legs: the elbow's QMP
+    is observable, no activity's is. It named "best match: legs still (nan% ...)", exit 0."""
+    add = tmp_path / "my.toml"
+    add.write_text(_ADD, encoding="utf-8")
+    clip = _upper_body_only(tmp_path / "upper.npz")
+    capsys.readouterr()
+    line = refused(["dad", str(clip), "--add", str(add)], tmp_path, capsys,
+                   f"{clip}: not enough data: no activity's QMPs could be observed")  # fmt: skip
+    assert "nan" not in line
+    # with the legs there the same ADD judges the clip: the knee stays still
+    whole = save_pose(standing_clip(90), tmp_path / "whole.npz")
+    assert main(["dad", str(whole), "--add", str(add)]) == 0
+    assert "best match: legs still (100% of its QMPs in order)" in capsys.readouterr().out
+
+
+def test_dad_names_no_best_match_when_nothing_was_met(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The shipped ADD on a still clip without legs: some upper-body QMPs observable, none met
+    in order. It named a best match at 0% tied with others; now none, and no "nan%"."""
+    clip = _upper_body_only(tmp_path / "upper.npz")
+    assert main(["dad", str(clip)]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[1] == "best match: none (no activity has any of its QMPs met in order)"
+    assert "nan%" not in out and "0% of its QMPs" not in out
+
+
+def test_dad_text_never_names_a_best_match_without_a_met_qmp() -> None:
+    """By construction: activities at 0 % and unobservable (NaN) ones have no best match."""
+    from cbr.dad import DADConfig
+    from cbr.dad.outcome import ActivityScore, DADResult
+    from posecbr.commands.dad import _text_lines
+
+    def act(name: str, score: float, met: int, observable: int) -> ActivityScore:
+        return ActivityScore(name, f"{name} words", (name,), score, met, observable, ())
+
+    args = argparse.Namespace(posefile=Path("x.npz"), top=0)
+    for acts in ((act("a", 0.0, 0, 3), act("b", 0.0, 0, 5)), (act("c", math.nan, 0, 0),)):
+        result = DADResult("x.npz", "ok", "", 30.0, 10.0, ((0.0, 4.0),), ((),), acts)
+        assert result.best is None
+        lines = list(_text_lines(args, result, DADConfig()))
+        assert lines[1] == "best match: none (no activity has any of its QMPs met in order)"
+        assert not any("nan%" in line for line in lines)
+    met = (act("d", 0.5, 2, 4), act("e", 0.0, 0, 3))
+    assert DADResult("x", "ok", "", 30.0, 10.0, (), (), met).best is met[0]
