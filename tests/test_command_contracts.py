@@ -237,3 +237,51 @@ def test_dad_text_never_names_a_best_match_without_a_met_qmp() -> None:
         assert not any("nan%" in line for line in lines)
     met = (act("d", 0.5, 2, 4), act("e", 0.0, 0, 3))
     assert DADResult("x", "ok", "", 30.0, 10.0, (), (), met).best is met[0]
+
+
+# ----------------------------------------------------------------- ADD relation bounds
+
+
+_RELATION_ADD = """schema = 1
+
+[qmp.knees_together]
+words = "both knees bending together"
+conditions = [ {{ signals = ["left_knee", "right_knee"], relation = "in_phase", {field} }} ]
+
+[activity.squat]
+words = "squat"
+labels = ["squat"]
+sequence = [ {{ qmp = "knees_together", weight = 5 }}, {{ qmp = "knees_together", weight = 5 }} ]
+"""
+
+
+@pytest.mark.parametrize(
+    ("field", "problem"),
+    [
+        ("max_phase_diff_rad = -1", "field 'max_phase_diff_rad' must be in [0, pi]"),
+        ("max_phase_diff_rad = 3.2", "field 'max_phase_diff_rad' must be in [0, pi]"),
+        ("min_amplitude = -0.1", "field 'min_amplitude' must be >= 0"),
+    ],
+)
+def test_add_relation_bounds_that_can_never_hold_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], field: str, problem: str
+) -> None:
+    """A phase gap lies in [0, pi] and an amplitude is >= 0: a bound outside made a QMP that
+    can never be met (or always is), accepted in silence."""
+    add = tmp_path / "bad.toml"
+    add.write_text(_RELATION_ADD.format(field=field), encoding="utf-8")
+    clip = save_pose(standing_clip(30), tmp_path / "still.npz")
+    capsys.readouterr()
+    refused(["dad", str(clip), "--add", str(add)], tmp_path, capsys,
+            f"{add}: qmp 'knees_together'", problem)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "field", ["max_phase_diff_rad = 0", "max_phase_diff_rad = 3.14159", "min_amplitude = 0"]
+)
+def test_add_relation_bounds_at_the_edges_are_accepted(tmp_path: Path, field: str) -> None:
+    from features.qmp.add import load_add
+
+    add = tmp_path / "edge.toml"
+    add.write_text(_RELATION_ADD.format(field=field), encoding="utf-8")
+    assert "squat" in load_add(add).activities
