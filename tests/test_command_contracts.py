@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from features.errors import ConfigError
+from features.fluents import FluentTable
 from features.poses import save_pose
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
@@ -285,3 +287,34 @@ def test_add_relation_bounds_at_the_edges_are_accepted(tmp_path: Path, field: st
     add = tmp_path / "edge.toml"
     add.write_text(_RELATION_ADD.format(field=field), encoding="utf-8")
     assert "squat" in load_add(add).activities
+
+
+# ----------------------------------------------------------------- thresholds overrides
+
+
+@pytest.mark.parametrize("fluent_first", [True, False])
+def test_a_fluents_own_override_wins_over_its_familys_in_any_order(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], fluent_first: bool
+) -> None:
+    """left_leg_bent's own tau 3.0 and leg_bent's 1.0: the fluent's own applied only when it
+    came after its family's entry; now always, the other leg taking the family's."""
+    entries = [("left_leg_bent", {"lower": {"tau": 3.0}}), ("leg_bent", {"lower": {"tau": 1.0}})]
+    fluents = dict(entries if fluent_first else entries[::-1])
+    path = tmp_path / "o.json"
+    path.write_text(json.dumps({"fluents": fluents}), encoding="utf-8")
+    table = FluentTable.from_file(path)
+    tau = {s.name: s.lower.tau for s in table.specs}
+    assert (tau["left_leg_bent"], tau["right_leg_bent"]) == (3.0, 1.0)
+    capsys.readouterr()
+    assert main(["thresholds", "--from", str(path)]) == 0
+    shown = json.loads(capsys.readouterr().out)["fluents"]
+    assert shown["left_leg_bent"]["lower"]["tau"] == 3.0
+    assert shown["right_leg_bent"]["lower"]["tau"] == 1.0
+
+
+def test_family_overrides_still_apply_to_every_member() -> None:
+    table = FluentTable().with_overrides({"fluents": {"leg_bent": {"lower": {"tau": 1.0}}}})
+    taus = [s.lower.tau for s in table.specs if s.family == "leg_bent"]
+    assert taus == [1.0, 1.0]
+    with pytest.raises(ConfigError, match="unknown fluent 'no_such'"):
+        FluentTable().with_overrides({"fluents": {"no_such": {}}})
