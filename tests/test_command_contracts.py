@@ -21,6 +21,7 @@ from features.poses import save_pose
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
 from tests.badinput import refused, standing_clip
+from tests.bodies import standing, to_sequence
 from tests.test_cbr_cli import _write_classes
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -318,3 +319,22 @@ def test_family_overrides_still_apply_to_every_member() -> None:
     assert taus == [1.0, 1.0]
     with pytest.raises(ConfigError, match="unknown fluent 'no_such'"):
         FluentTable().with_overrides({"fluents": {"no_such": {}}})
+
+
+# ----------------------------------------------------------------- describe
+
+
+def test_describe_refuses_min_run_with_per_frame(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--min-run drops short spans; --per-frame has none: it was ignored in silence."""
+    clip = save_pose(to_sequence(*[standing()] * 20), tmp_path / "still.npz")
+    capsys.readouterr()
+    refused(["describe", str(clip), "--per-frame", "--min-run", "10"], tmp_path, capsys,
+            "--min-run", "--per-frame")  # fmt: skip
+    # either alone as before; the default 5 still applies to spans
+    assert main(["describe", str(clip), "--per-frame"]) == 0
+    assert capsys.readouterr().out.count("\nframe ") == 20
+    assert main(["describe", str(clip), "--min-run", "10"]) == 0
+    assert main(["describe", str(clip), "--min-run", "0"]) == 1
+    assert "--min-run must be at least 1 frame" in capsys.readouterr().err
