@@ -338,3 +338,26 @@ def test_describe_refuses_min_run_with_per_frame(
     assert main(["describe", str(clip), "--min-run", "10"]) == 0
     assert main(["describe", str(clip), "--min-run", "0"]) == 1
     assert "--min-run must be at least 1 frame" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------- train's note
+
+
+def test_the_windows_note_says_what_segment_needs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two activities cut into windows: the note said segment and watch "run with --unknown
+    held-out", but segment refused without it. The note now says to pass it, and it holds."""
+    db = tmp_path / "two.sqlite"
+    argv = ["train", str(DEMO), "--db", str(db), "--split", "windows",
+            "--labels", "deep_squat,hurdle_step"]  # fmt: skip
+    assert main(argv) == 0
+    note = capsys.readouterr().err.splitlines()[-1]
+    assert note == (
+        "note: segment and watch cannot tell stretches unlike every activity with this case "
+        "base (fewer than three activities) by default: run them with --unknown held-out"
+    )
+    rec = str(DEMO / "m01_s01_e01.npz")
+    assert main(["segment", rec, "--db", str(db)]) == 1
+    assert "--unknown held-out" in capsys.readouterr().err
+    assert main(["segment", rec, "--db", str(db), "--unknown", "held-out"]) == 0
