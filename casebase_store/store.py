@@ -462,8 +462,9 @@ class CaseStore:
 
     def list_case_bases(self) -> list[CaseBaseInfo]:
         with self._read() as s:
-            rows = s.scalars(select(CaseBaseRow).order_by(CaseBaseRow.name)).all()
-            return [self._info(s, r) for r in rows]
+            # one row at a time: a damaged one is named
+            names = s.scalars(select(CaseBaseRow.name).order_by(CaseBaseRow.name)).all()
+            return [self._info(s, self._row(s, n)) for n in names]
 
     def get_case_base(self, name: str) -> CaseBaseInfo:
         with self._read() as s:
@@ -579,11 +580,13 @@ class CaseStore:
     def maintenance_log(self, name: str) -> list[MaintenanceEntry]:
         with self._read() as s:
             cb = self._row(s, name)
-            rows = s.scalars(
-                select(MaintenanceRow)
-                .where(MaintenanceRow.case_base_id == cb.id)
-                .order_by(MaintenanceRow.id)
-            ).all()
+            damaged = f"case base {name!r} is damaged: a date in its maintenance log is not a date"
+            with self._dates(damaged):
+                rows = s.scalars(
+                    select(MaintenanceRow)
+                    .where(MaintenanceRow.case_base_id == cb.id)
+                    .order_by(MaintenanceRow.id)
+                ).all()
             return [
                 MaintenanceEntry(
                     r.id, r.action, r.case_id, r.novelty, r.benefit, r.reason, _utc(r.at)
@@ -607,8 +610,18 @@ class CaseStore:
 
     # -- helpers
 
+    @contextmanager
+    def _dates(self, what: str) -> Iterator[None]:
+        """Rows fetched inside carry dates; SQLite keeps them as text, and text that is not a
+        date is damage (a StoreError saying ``what``), not a crash."""
+        try:
+            yield
+        except ValueError as exc:
+            raise StoreError(f"{what} ({exc})", self.where) from None
+
     def _row(self, s: Session, name: str) -> CaseBaseRow:
-        row = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
+        with self._dates(f"case base {name!r} is damaged: its created_at is not a date"):
+            row = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
         if row is None:
             known = s.scalars(select(CaseBaseRow.name).order_by(CaseBaseRow.name)).all()
             hint = f" (case bases here: {', '.join(known)})" if known else " (the store is empty)"
@@ -715,7 +728,8 @@ class StoreTransaction:
         _check_text(name, "case base name", self.store.where, max_len=200)
         if not name.strip():
             raise StoreError("the case base name is empty", self.store.where)
-        old = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
+        with self.store._dates(f"case base {name!r} is damaged: its created_at is not a date"):
+            old = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
         if old is not None:
             if not replace:
                 raise StoreError(

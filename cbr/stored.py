@@ -279,6 +279,17 @@ def _read(
     return info, arrays, mapped
 
 
+def check_width(info: CaseBaseInfo, width: int, where: str) -> None:
+    """The case base names as many feature columns as its cases have (``width``), or is
+    damaged: a StoreError naming both."""
+    if len(info.feature_names) and width != len(info.feature_names):
+        raise StoreError(
+            f"case base {info.name!r} is damaged: its cases have {width} "
+            f"feature columns but the case base names {len(info.feature_names)}",
+            where,
+        )
+
+
 def _case_base(
     store: CaseStore,
     info: CaseBaseInfo,
@@ -289,13 +300,7 @@ def _case_base(
     measure = _measure(info, store.where)
     if len(arrays.ids) == 0:
         raise StoreError(f"case base {info.name!r} has no cases", store.where)
-    width = (arrays.features if mapped is None else mapped[0]).shape[-1]
-    if len(info.feature_names) and width != len(info.feature_names):
-        raise StoreError(
-            f"case base {info.name!r} is damaged: its cases have {width} "
-            f"feature columns but the case base names {len(info.feature_names)}",
-            store.where,
-        )
+    check_width(info, (arrays.features if mapped is None else mapped[0]).shape[-1], store.where)
     problems = arrays.features if mapped is None else mapped[0]
     cb = CaseBase(
         config,

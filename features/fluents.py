@@ -402,7 +402,9 @@ class FluentTable:
         if not isinstance(fluents, Mapping):
             raise ConfigError("'fluents' must be a table of fluent names", source)
         specs = list(table.specs)
-        for key, params in fluents.items():
+        # families first, then single fluents: a fluent's own entry wins whatever the order
+        names = {s.name for s in specs}
+        for key, params in sorted(fluents.items(), key=lambda kv: kv[0] in names):
             for i in _fluents_named(specs, key, params, source):
                 specs[i] = _overridden(specs[i], key, params, source)
         return replace(table, specs=tuple(specs))

@@ -759,7 +759,7 @@ def test_segment_command_refuses_a_margin_it_cannot_calibrate(
     note = capsys.readouterr().err.splitlines()[-1]
     assert note == (
         "note: segment and watch cannot tell stretches unlike every activity with this case "
-        "base (fewer than three activities); they run with --unknown held-out"
+        "base (fewer than three activities) by default: run them with --unknown held-out"
     )
     rec = save_pose(recordings["13_30"].slice_frames(0, 600), tmp_path / "r.npz")
     before = _sha(rec), _sha(db)

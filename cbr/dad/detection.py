@@ -187,6 +187,9 @@ def detect_signals(
         why = "no QMP could be observed (joints missing, or gaps too long)"
         return _unjudged(source, fps, duration, db, why, spans, detected)
     scores = [_score_activity(a, db, crit, windows_s) for a in db.activities.values()]
+    if not any(s.observable_weight for s in scores):  # QMPs seen, but none an activity uses
+        why = "no activity's QMPs could be observed (joints missing, or gaps too long)"
+        return _unjudged(source, fps, duration, db, why, spans, detected)
     ranked = tuple(sorted(scores, key=_rank_key))
     words = {n: c.words for n, c in db.criteria.items()}
     return DADResult(source, "ok", "", fps, duration, spans, detected, ranked, db.source, words)

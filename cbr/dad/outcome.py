@@ -81,7 +81,10 @@ class DADResult:
 
     @property
     def best(self) -> ActivityScore | None:
-        return self.activities[0] if self.activities else None
+        """The top-ranked activity, when some of its QMPs were met in order (None when no
+        activity's were: a 0% or unobservable activity is no match)."""
+        top = self.activities[0] if self.activities else None
+        return top if top is not None and top.met_weight > 0 else None
 
     def activity_for(self, label: str) -> ActivityScore | None:
         """The best-ranked activity that stands for ``label`` (None if the ADD has none)."""

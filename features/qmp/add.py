@@ -269,6 +269,11 @@ def _parse_test(raw: Any, side: str | None, where: str, src: str) -> Test:
         }
         if opts.get("max_period_ratio", 1.0) < 1.0:
             raise ConfigError(f"{where}: field 'max_period_ratio' must be >= 1", src)
+        # the phase gap lies in [0, pi] and amplitudes are >= 0: bounds outside never hold
+        if not 0.0 <= opts.get("max_phase_diff_rad", 0.0) <= np.pi:
+            raise ConfigError(f"{where}: field 'max_phase_diff_rad' must be in [0, pi]", src)
+        if opts.get("min_amplitude", 0.0) < 0.0:
+            raise ConfigError(f"{where}: field 'min_amplitude' must be >= 0", src)
         return Relation(
             _resolve(pair[0], side, where, src), _resolve(pair[1], side, where, src), rel, **opts
         )

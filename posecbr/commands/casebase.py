@@ -167,10 +167,13 @@ def _print_info(d: dict[str, Any]) -> None:
         f"{shown(d['name'])}: {d['cases']} cases, {len(d['labels'])} activities "
         f"(created {d['created']}, posecbr {d['code_version']})"
     )
-    print(
-        f"  features: {feats['level']}, {n_states} states, length {feats['length']}; "
-        f"hash {d['feature_hash'][:12]}"
+    # a QMP case base has no states or length of its own: one column per QMP
+    shape = (
+        f"qmp ({feats.get('qmp_part', 'binary')}), {counted(d['n_features'], 'QMP column')}"
+        if feats["level"] == "qmp"
+        else f"{feats['level']}, {n_states} states, length {feats['length']}"
     )
+    print(f"  features: {shape}; hash {d['feature_hash'][:12]}")
     print(f"  similarity: {_measure_words(d['similarity'])}")
     _print_model(d["model"], len(d["labels"]), _changed_since_training(d["maintenance"]))
     for lab, n in d["labels"].items():
@@ -357,10 +360,13 @@ def _check_export(args: argparse.Namespace) -> None:
 def _export(store: CaseStore, args: argparse.Namespace) -> int:
     import numpy as np
 
+    from cbr.stored import check_width
+
     out = _export_path(args)
     name = store.choose(args.name)
-    info = store.get_case_base(name)
-    a = store.load_cases(name)
+    info, a = store.load_case_base(name)
+    if len(a.ids):
+        check_width(info, a.features.shape[-1], store.where)
     arrays: dict[str, Any] = {
         "problems": a.features,
         "labels": np.asarray(a.labels, dtype=str),

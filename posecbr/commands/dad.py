@@ -80,9 +80,10 @@ def run(args: argparse.Namespace) -> int:
     if args.json:  # the document says why, for a clip DAD cannot judge too
         json.dump(result.to_dict(), sys.stdout, indent=2)
         sys.stdout.write("\n")
-        return 0 if result.status == "ok" else 1
     if result.status != "ok":  # too short, nobody in it: nothing asked for could be done
         raise PosecbrError(f"{result.status}: {result.message}", args.posefile)
+    if args.json:
+        return 0
     # Every line quotes the clip's name and the ADD's words: printed escaped.
     for line in _text_lines(args, result, config):
         print(shown(line))
@@ -100,6 +101,8 @@ def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[
         tied = [a.words for a in result.activities if a is not best and a.score == best.score]
         also = f"; tied with {', '.join(tied)}" if tied else ""
         yield f"best match: {best.words} ({best.score:.0%} of its QMPs in order{also})"
+    else:
+        yield "best match: none (no activity has any of its QMPs met in order)"
     yield ""
     yield "ranking:"
     for i, act in enumerate(result.activities, 1):

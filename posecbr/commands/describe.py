@@ -46,7 +46,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--min-run",
         type=int,
-        default=5,
+        default=None,  # None: not given (refused with --per-frame, which has no spans)
         metavar="N",
         help="ignore flicker: drop spans shorter than N frames (default 5)",
     )
@@ -70,8 +70,10 @@ def _check_args(args: argparse.Namespace) -> None:
     """Everything about the arguments that can be refused before any work."""
     if not 0.0 < args.min_confidence <= 1.0:
         raise PosecbrError(f"--min-confidence must be in (0, 1], got {args.min_confidence}")
-    if args.min_run < 1:
+    if args.min_run is not None and args.min_run < 1:
         raise PosecbrError(f"--min-run must be at least 1 frame, got {args.min_run}")
+    if args.min_run is not None and args.per_frame:
+        raise PosecbrError("--min-run drops short spans; --per-frame shows every frame, not spans")
     if args.plot is not None:
         inputs = [args.posefile] + ([args.thresholds] if args.thresholds else [])
         check_output(args.plot, inputs=inputs, what="picture")
@@ -144,7 +146,7 @@ def run(args: argparse.Namespace) -> int:
     if args.per_frame:  # the state names and words, from the first frame
         first = evaluate(seq.slice_frames(0, 1), table, backend="numpy")
         spool = _Spool(args.json, first, seq.fps)
-    min_run = 1 if args.per_frame else args.min_run
+    min_run = 1 if args.per_frame else 5 if args.min_run is None else args.min_run
     tl = describe_clip(
         seq, table, args.min_confidence, min_run, args.all, per_frame=spool, backend=backend
     )

@@ -591,7 +591,7 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
         )
         print(
             f"note: segment and watch cannot tell stretches unlike every activity with this case"
-            f" base ({why}); they run with --unknown held-out",
+            f" base ({why}) by default: run them with --unknown held-out",
             file=sys.stderr,
         )
 
