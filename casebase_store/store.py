@@ -87,9 +87,16 @@ class StaleCaseError(StoreError):
 
 
 def encode_array(array: np.ndarray) -> bytes:
-    """``.npy`` bytes of ``array`` (no pickles)."""
+    """``.npy`` bytes of ``array`` (no pickles: an array of Python objects is a
+    :class:`StoreError`)."""
+    values = np.asarray(array, order="C")  # a 0-d array stays 0-d
+    if values.dtype.hasobject:
+        raise StoreError(
+            "an array of Python objects (dtype object) cannot be stored: "
+            "give numbers or text (a numeric or str dtype)"
+        )
     buf = io.BytesIO()
-    np.save(buf, np.ascontiguousarray(array), allow_pickle=False)
+    np.save(buf, values, allow_pickle=False)
     return buf.getvalue()
 
 

@@ -446,7 +446,16 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         """The labels as text ``(n,)`` and the classes in the caller's type (sorted)."""
         if len(clips) == 0:
             raise DataError("the training set is empty", "X")
-        labels = check_labels(y, len(clips))
+        check_labels(y, len(clips))
+        # the labels as scikit-learn reads them: in numpy's common type (1 and 2.0 are 1.0 and
+        # 2.0), so the cases' text labels are the text of the classes
+        values = np.asarray(y)
+        try:
+            classes = np.unique(values)
+        except TypeError:  # objects of kinds that do not sort together: compared as text
+            values = values.astype(str)
+            classes = np.unique(values)
+        labels = np.array([str(v) for v in values], dtype=object)
         bad = [i for i, c in enumerate(clips) if c.torso_share == 0.0]
         if bad:
             names = ", ".join(clips[i].source or f"X[{i}]" for i in bad[:5])
@@ -455,7 +464,6 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
                 f"no person (no frame with a torso): {names}{' ...' if len(bad) > 5 else ''}",
                 "X",
             )
-        classes = np.unique(np.asarray(y))
         if len(np.unique(labels)) < 2:
             raise DataError(
                 f"the training set has only one activity ({labels[0]!r}); a classifier needs "

@@ -11,11 +11,14 @@ entry inside the caller's transaction.
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
 
 from casebase_store import CaseBaseInfo, NewCase, StoreTransaction
+from features.errors import ConfigError
 
 from .casebase import CaseBase
 from .problem import Problem
@@ -34,6 +37,12 @@ class RetainDecision:
 def novelty(cb: CaseBase, problem: Problem | np.ndarray, scale: float) -> float:
     """Distance to the nearest case over ``scale`` (the case base's usual held-out nearest-case
     distance, :class:`cbr.novelty.NoveltyCalibration`)."""
+    if (
+        isinstance(scale, bool)
+        or not isinstance(scale, numbers.Real)
+        or not (math.isfinite(float(scale)) and float(scale) > 0.0)
+    ):
+        raise ConfigError(f"scale must be a finite number > 0, got {scale!r}", "scale")
     values = problem.values if isinstance(problem, Problem) else problem
     return float(retrieve(cb, values, 1).distances[0]) / scale
 

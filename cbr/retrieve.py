@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from features.errors import ConfigError
+
 from .casebase import CaseBase
 from .problem import Problem
 
@@ -22,11 +24,17 @@ class Retrieval:
     case_ids: np.ndarray
 
 
+def _check_k(k: int) -> None:
+    if isinstance(k, bool) or not isinstance(k, int | np.integer) or k < 1:
+        raise ConfigError(f"k must be a whole number >= 1, got {k!r}", "k")
+
+
 def retrieve(
     casebase: CaseBase, problem: Problem | np.ndarray, k: int, *, exclude: int | None = None
 ) -> Retrieval:
     """The ``k`` nearest cases to ``problem`` (``exclude``: a case position to leave out, for
     leave-one-out evaluation)."""
+    _check_k(k)
     values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
     measure = casebase.measure
     query = measure.represent_query(values)
@@ -45,6 +53,7 @@ def retrieve_many(
     """:func:`retrieve` for every problem at once: one ``nearest_many`` call, which a measure
     may batch (Euclidean: one matrix product per block of queries), with the same neighbours,
     in the same order, as one :func:`retrieve` per problem."""
+    _check_k(k)
     if not problems:
         return []
     measure = casebase.measure

@@ -15,11 +15,14 @@ Every revision is recorded in the store's maintenance log by :func:`record_revis
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
 
 from casebase_store import CaseBaseInfo, StaleCaseError, StoreTransaction
+from features.errors import ConfigError
 
 from .casebase import CaseBase
 from .problem import Problem
@@ -42,6 +45,16 @@ class Revision:
     rate: float = 0.25
 
 
+def _check_rate(rate: float) -> None:
+    """A move's ``rate`` must be a number in (0, 1]: 0 changes nothing, more overshoots."""
+    if (
+        isinstance(rate, bool)
+        or not isinstance(rate, numbers.Real)
+        or not (math.isfinite(float(rate)) and 0.0 < float(rate) <= 1.0)
+    ):
+        raise ConfigError(f"rate must be a number in (0, 1], got {rate!r}", "rate")
+
+
 def plan_revision(
     cb: CaseBase,
     problem: Problem | np.ndarray,
@@ -52,6 +65,7 @@ def plan_revision(
 ) -> Revision:
     """The revision the observation ``problem`` labelled ``true_label`` calls for (nothing is
     changed yet: :func:`apply_revision` or :func:`record_revision` carry it out)."""
+    _check_rate(rate)
     values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
     true_label = str(true_label)
     assert cb.ids is not None
@@ -95,6 +109,7 @@ def plan_revision(
 
 def apply_revision(cb: CaseBase, rev: Revision, observation: np.ndarray) -> None:
     """Carry out ``rev`` on the in-memory case base (``observation``: the problem values)."""
+    _check_rate(rev.rate)
     if rev.action == "relabelled":
         cb.set_label(rev.index, rev.new_label)
     elif rev.action == "moved":
@@ -126,6 +141,7 @@ def record_revision(
     transaction), not to this process's copy: ``p <- p + rate (q - p)`` on the stored ``p``, so
     concurrent revisions of one case all take effect. Returns the case's new problem (None when
     no problem changed)."""
+    _check_rate(rev.rate)
     new = None
     if rev.action == "moved" and rev.case_id >= 0:
         current = tx.read_case(info, rev.case_id)

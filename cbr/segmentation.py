@@ -55,10 +55,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from sklearn.utils.validation import check_is_fitted
 
 from features.body import long_runs, torso_rows, torso_share
 from features.derived import forget, movement_signals_of, stretch
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError, InputError
 from features.fluents import DEFAULT_TABLE, history_frames
 from features.poses import PoseSequence
 from features.progress import progress
@@ -810,6 +811,23 @@ class SolvedRecording:
     outliers: np.ndarray  # (n_windows,) bool: :func:`period_outliers`, which do not vote
 
 
+def _check_call(clf: Any, recording: Any, chunk_frames: Any) -> None:
+    """Refuse an unfitted ``clf`` (NotFittedError, as its ``predict`` does), a ``recording``
+    that is not a PoseSequence and a ``chunk_frames`` that is not None or a whole number >= 0."""
+    check_is_fitted(clf, "case_base_")
+    if not isinstance(recording, PoseSequence):
+        raise InputError(f"a PoseSequence is expected, got {type(recording).__name__}", "recording")
+    if chunk_frames is not None and (
+        isinstance(chunk_frames, bool)
+        or not isinstance(chunk_frames, int | np.integer)
+        or chunk_frames < 0
+    ):
+        raise ConfigError(
+            f"chunk_frames must be None or a whole number >= 0, got {chunk_frames!r}",
+            "chunk_frames",
+        )
+
+
 def solve_recording(
     clf: Any, recording: PoseSequence, k: int = 1, chunk_frames: int | None = None
 ) -> SolvedRecording:
@@ -819,6 +837,7 @@ def solve_recording(
     ``chunk_frames`` as :func:`segment` takes them. Raises DataError for a recording shorter
     than one window or without a person, ConfigError for a ``k`` the classifier does not
     retrieve (more than its own k)."""
+    _check_call(clf, recording, chunk_frames)
     if not 1 <= k <= int(clf.k):
         raise ConfigError(
             f"must be from 1 to the case base's k ({int(clf.k)}, the nearest cases a window"
@@ -904,7 +923,10 @@ def segment(
     (:func:`_cut_in_pieces`; the same segments in bounded memory), 0: for the whole recording
     at once; None: in pieces of :data:`cbr.long_clip.CHUNK_FRAMES` for a longer recording.
     Raises DataError for a recording shorter than one window or without a person, and for a
-    case base the judge cannot be calibrated on."""
+    case base the judge cannot be calibrated on; InputError for a ``recording`` that is not a
+    PoseSequence, ConfigError for a negative ``chunk_frames``, NotFittedError for an unfitted
+    ``clf``."""
+    _check_call(clf, recording, chunk_frames)
     judge = judge or judge_of(clf, JUDGES[0])
     return finish(clf, solve_recording(clf, recording, k, chunk_frames), judge)
 

@@ -382,7 +382,12 @@ class FluentTable:
         for s in self.specs:
             if s.name == name:
                 return s
-        raise KeyError(name)
+        known = [s.name for s in self.specs]
+        raise ConfigError(
+            f"unknown fluent {name!r} (known: {', '.join(known[:5])}"
+            f"{', ...' if len(known) > 5 else ''})",
+            "fluent",
+        )
 
     def with_overrides(self, raw: Mapping[str, Any], source: str = "thresholds") -> FluentTable:
         """A copy with parameters replaced from a parsed JSON/TOML mapping (see module doc)."""
@@ -843,8 +848,9 @@ def evaluate_chunks(
     ``evaluate(seq, table, backend=backend)`` for the same frames.
     """
     table = table or DEFAULT_TABLE
-    if chunk_frames < 1 or margin < 0:
-        raise ValueError("chunk_frames must be >= 1 and margin >= 0")
+    for name, value, least in (("chunk_frames", chunk_frames, 1), ("margin", margin, 0)):
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < least:
+            raise ConfigError(f"{name} must be a whole number >= {least}, got {value!r}", name)
     n = seq.n_frames
     history = history_frames(table, seq.fps)
     for start in range(0, n, chunk_frames):

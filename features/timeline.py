@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .errors import ConfigError
 from .fileio import atomic_path
 from .fluents import CHUNK_FRAMES, Backend, FluentResult, FluentTable, evaluate_chunks
 from .poses import PoseSequence
@@ -203,6 +204,19 @@ def _pieces(
         yield from evaluate_chunks(clip, table, chunk_frames, margin, backend)
 
 
+def _check_options(threshold: float, min_run: int) -> None:
+    """A state holds at confidence >= ``threshold``, in (0, 1] (the command's
+    ``--min-confidence``); ``min_run``: a whole number of frames >= 1."""
+    if (
+        isinstance(threshold, bool)
+        or not isinstance(threshold, int | float | np.integer | np.floating)
+        or not 0.0 < float(threshold) <= 1.0
+    ):
+        raise ConfigError(f"threshold must be in (0, 1], got {threshold!r}", "threshold")
+    if isinstance(min_run, bool) or not isinstance(min_run, int | np.integer) or min_run < 1:
+        raise ConfigError(f"min_run must be a whole number >= 1, got {min_run!r}", "min_run")
+
+
 def describe_clip(
     clip: PoseSequence | FluentResult,
     table: FluentTable | None = None,
@@ -219,6 +233,7 @@ def describe_clip(
     it in order instead (as :func:`frame_states` lists them) and ``runs`` stays empty.
     ``backend``: of :func:`features.fluents.evaluate`.
     """
+    _check_options(threshold, min_run)
     n = clip.n_frames
     min_run = max(1, min(min_run, n))  # a state holding the whole clip is a run of it
     margin = 0 if per_frame is not None or min_run <= 1 else _median_size(min_run) // 2

@@ -13,6 +13,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
+from features.body import torso_share
 from features.errors import InputError
 from features.poses import PoseSequence
 from features.qmp.add import ADD, load_add
@@ -62,11 +63,14 @@ def class_labels(y: Any, n_clips: int) -> np.ndarray:
     kinds = sorted({_kind(v) for v in items})
     if values.dtype == object and len(kinds) > 1:
         raise InputError(f"y mixes label types ({', '.join(kinds)}); use one type", "y")
+    if values.dtype == object:
+        # a list of labels: in numpy's own type (ints stay ints), as scikit-learn reads y
+        values = np.asarray(values.tolist())
     try:
         check_classification_targets(values)
     except ValueError as exc:  # a continuous or multi-output target
         raise InputError(str(exc).splitlines()[0], "y") from None
-    return values if values.dtype != object else np.asarray(values.tolist())
+    return values
 
 
 def _kind(v: Any) -> str:
@@ -85,8 +89,11 @@ class DADClassifier(ClassifierMixin, BaseEstimator):
     ``fit`` learns nothing but ``classes_`` (DAD needs no training data); ``predict`` maps the
     top-ranked ADD activity among those standing for a known class to that class (activities
     for other datasets' labels are ignored); a clip DAD cannot judge ("not enough data") gets
-    the first class. ``decision_function`` gives each class its best activity's score;
-    ``predict_proba`` normalises those scores.
+    the first class, except a clip that shows no person (no frame with a torso) or has a single
+    frame: those are refused with an :class:`~features.errors.InputError` (a ``DataError``), as
+    :class:`~cbr.estimator.CaseBaseClassifier` refuses a clip with no person.
+    ``decision_function`` gives each class its best activity's score; ``predict_proba``
+    normalises those scores.
 
     Input is checked as scikit-learn checks it, with :class:`features.errors.InputError` (a
     ``ValueError``): X a non-empty sequence of PoseSequence (``predict([])`` is refused, as
@@ -135,7 +142,16 @@ class DADClassifier(ClassifierMixin, BaseEstimator):
     def decision_function(self, X: Sequence[PoseSequence]) -> np.ndarray:
         """Best activity score per class, ``(n_clips, n_classes)``; -1 where no activity."""
         check_is_fitted(self, "classes_")
-        return np.stack([self._class_scores(seq) for seq in pose_sequences(X)])
+        seqs = pose_sequences(X)
+        for i, seq in enumerate(seqs):
+            self._check_judgeable(seq, seq.source or f"X[{i}]")
+        return np.stack([self._class_scores(seq) for seq in seqs])
+
+    def _check_judgeable(self, seq: PoseSequence, where: str) -> None:
+        if torso_share(seq) == 0.0:
+            raise InputError("shows no person (no frame with a torso): nothing to classify", where)
+        if seq.positions.shape[0] < 2:
+            raise InputError("has one frame, no movement: nothing to classify", where)
 
     def predict(self, X: Sequence[PoseSequence]) -> np.ndarray:
         """The class of each clip, ``(n_clips,)``."""
