@@ -345,19 +345,21 @@ def _build_reason(clf: CaseBaseClassifier, n_clips: int, labels: Sequence[str]) 
 
 
 def append_plan(
-    db: str | Path, name: str, target: str = "label", cases: str | None = None
-) -> tuple[Plan, str, str]:
+    db: str | Path, name: str, target: str | None = None, cases: str | None = None
+) -> tuple[Plan, str, str, str]:
     """The plan of ``--append`` to case base ``name`` (its columns), its identity (``uid``:
-    the append is refused if the case base is replaced meanwhile) and what the added clips
+    the append is refused if the case base is replaced meanwhile), what the added clips
     must be cut into: the case base's own kind of case (``"clips"`` for one stored before
-    this was recorded). ``cases`` given otherwise (as :func:`train`'s) is refused: windows
-    added to a case base of whole clips would be cases of another kind."""
+    this was recorded), and what their solution is: the case base's target. ``cases`` or
+    ``target`` given otherwise (as :func:`train`'s) is refused: windows added to a case base
+    of whole clips would be cases of another kind, labels added to one of correct/incorrect
+    another solution."""
     store = open_store(db, create=False, readonly=True)
     try:
         stored = load_classifier(store, name)
     finally:
         store.close()
-    if stored.target != target:
+    if target is not None and stored.target != target:
         raise ConfigError(
             f"case base {name!r} predicts {stored.target!r}, not {target!r}: its cases "
             f"cannot take --target {target}",
@@ -371,7 +373,7 @@ def append_plan(
         )
     cb = stored.classifier.case_base_
     columns = CaseBase(cb.config, cb.measure, cb.problems[:0], cb.labels[:0], cb.names, cb.words)
-    return Plan(casebase=columns), stored.uid, cases or stored.cases or "clips"
+    return Plan(casebase=columns), stored.uid, cases or stored.cases or "clips", stored.target
 
 
 def append(
@@ -380,13 +382,14 @@ def append(
     clips: Sequence[PoseSequence],
     labels: Sequence[Any],
     *,
-    target: str = "label",
+    target: str | None = None,
 ) -> TrainResult:
     """Add the usable ``clips`` as cases of the stored case base ``name``, described with its
     stored configuration (nothing is learned anew), in one transaction checked against the
-    case base that was read."""
+    case base that was read. ``target``: what ``labels`` are (refused unless the case base's
+    own; None: whatever it predicts)."""
     text = [str(v) for v in check_labels(labels, len(clips))]
-    plan, uid, _ = append_plan(db, name, target)
+    plan, uid, _, _ = append_plan(db, name, target)
     described = [
         describe(s, plan) for s in progress(clips, desc="features", total=len(clips), unit="clip")
     ]

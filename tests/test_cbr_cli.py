@@ -499,3 +499,37 @@ def test_append_says_how_many_activities_it_added(
     assert "; cases added or changed since are not in it)" in out
     assert "(at training: cases added or changed since are not in it)" in out
     assert "unknown judges: none stored (the cases changed since training" in out
+
+
+def test_append_takes_the_case_base_s_target(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A case base of correct/incorrect repetitions (``--target correct``): ``--append``
+    without ``--target`` was refused ("predicts 'correct', not 'label'"), though it takes
+    the stored kind of case (``--split``) without being told; the clips added are judged by
+    their ``correct`` column. ``--target label`` given is still refused."""
+    demo = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+    rows = (demo / "labels.csv").read_text(encoding="utf-8").splitlines()
+    header = rows[0]
+    movements = ("m01_", "m02_")
+
+    def subset(name: str, subjects: tuple[str, ...]) -> Path:
+        keep = [r for r in rows[1:] if r.startswith(movements) and r.split(",")[2] in subjects]
+        path = tmp_path / name
+        path.write_text("\n".join([header, *(f"{demo}/{r}" for r in keep)]) + "\n")
+        return path
+
+    train, more = subset("train.csv", ("s01", "s02")), subset("more.csv", ("s03",))
+    db = str(tmp_path / "cb.sqlite")
+    code, _, err = _cli(capsys, "train", str(train), "--db", db, "--target", "correct")
+    assert code == 0, err
+    code, out, err = _cli(capsys, "train", str(more), "--db", db, "--append")
+    assert code == 0, err
+    # 2 movements x 2 subjects x 3 episodes x (correct, incorrect) = 24, then 12 more
+    assert "36 cases (12 added, of 2 activities)" in out, out
+    store = open_store(db, readonly=True)
+    counts = store.get_case_base("default").label_counts
+    store.close()
+    assert counts == {"correct": 18, "incorrect": 18}
+    code, _, err = _cli(capsys, "train", str(more), "--db", db, "--append", "--target", "label")
+    assert code == 1 and "predicts 'correct', not 'label'" in err

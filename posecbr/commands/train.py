@@ -129,8 +129,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--labels", help="only these activities, comma-separated (e.g. deep_squat)")
     p.add_argument(
         "--target",
-        default="label",
-        help="what the cases' solution is: the activity label (default) or another column of "
+        default=None,
+        help="what the cases' solution is: the activity label (default; with --append the "
+        "case base's own) or another column of "
         "the labels, e.g. correct (UI-PRMD: correct / incorrect repetition); train one case "
         "base per activity with --labels",
     )
@@ -520,9 +521,12 @@ def run(args: argparse.Namespace) -> int:
     _check_options(args)
     if args.append:
         _check_append(args)
-        plan, uid, args.split = append_plan(args.db, args.name, args.target, args.split)
+        plan, uid, args.split, args.target = append_plan(
+            args.db, args.name, args.target, args.split
+        )
     else:
         args.split = args.split or "clips"
+        args.target = args.target or "label"
         _check_new_store(args)
         estimator = _estimator(args)
         plan = fit_plan(estimator)
