@@ -18,6 +18,7 @@ the clip is read: in this process, clip after clip, or on the workers of a Dask 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
@@ -41,11 +42,12 @@ class DescribedClip:
     sequence); mirror: its mirror image's (None when no side handling needs it); left: whether
     it moves its left side more (None when not needed); available: ``(n_candidates,)`` which
     candidate columns it has (fluent level; empty for QMPs); torso_share: the share of its
-    frames that show the person (0: nothing can be learned from it); provenance: ``source``,
-    ``subject``, ``frames`` (start, end) and ``skeleton``; summary: the clip's fluent summary
-    over the candidate columns of :data:`cbr.novelty.DESCRIPTION` (what the "unlike the stored
-    cases" feature score judges; None when the problem is a fluent summary itself) and
-    summary_available which of them it has.
+    frames that show the person (0: nothing can be learned from it); duration_s: how long it
+    lasts (shorter than one movement can be: nothing can be learned from it); provenance:
+    ``source``, ``subject``, ``frames`` (start, end) and ``skeleton``; summary: the clip's
+    fluent summary over the candidate columns of :data:`cbr.novelty.DESCRIPTION` (what the
+    "unlike the stored cases" feature score judges; None when the problem is a fluent summary
+    itself) and summary_available which of them it has.
     """
 
     values: np.ndarray
@@ -61,6 +63,7 @@ class DescribedClip:
     words: tuple[str, ...] | None = None
     summary: np.ndarray | None = None
     summary_available: np.ndarray | None = None
+    duration_s: float = math.inf
 
     @property
     def mirror_source(self) -> str:
@@ -81,7 +84,7 @@ def describe_clip(
         if share == 0.0:  # no person: nothing to compute, the fit refuses or skips it
             empty = np.zeros(0)
             return DescribedClip(empty, None, None, empty.astype(bool), share,
-                                 *_provenance(seq))  # fmt: skip
+                                 *_provenance(seq), duration_s=seq.duration_s)  # fmt: skip
         plain = candidates if candidates.side == "as_recorded" else _as_recorded(candidates)
         # a long clip is described a piece at a time (cbr.long_clip): problem, mirror image,
         # favoured side and available columns, none of them over the whole clip at once
@@ -98,7 +101,7 @@ def describe_clip(
             names, words = _interned(problem.names), _interned(problem.words)
         return DescribedClip(
             problem.values, image, left, has, share, *_provenance(seq), names, words,
-            *_summary(seq, plain),
+            *_summary(seq, plain), duration_s=seq.duration_s,
         )  # fmt: skip
     finally:
         if not keep:
@@ -152,7 +155,7 @@ def describe_case(seq: PoseSequence, casebase: CaseBase) -> DescribedClip:
     try:
         values = casebase.problem_of(seq).values if share > 0.0 else np.zeros(0)
         return DescribedClip(values, None, None, np.zeros(0, dtype=bool), share,
-                             *_provenance(seq))  # fmt: skip
+                             *_provenance(seq), duration_s=seq.duration_s)  # fmt: skip
     finally:
         if not keep:
             forget(seq)

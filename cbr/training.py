@@ -151,12 +151,32 @@ class ClipsFailed(DataError):
         )
 
 
+def _no_case(what: str) -> DataError:
+    """No clip can be a case (:func:`usable`): ``what`` there is then nothing to do."""
+    from features.repetitions import MIN_PERIOD_S
+
+    return DataError(
+        f"no clip shows a person for as long as one movement can last ({MIN_PERIOD_S:g} s):"
+        f" nothing to {what}",
+        "training set",
+    )
+
+
 def usable(clips: Sequence[DescribedClip]) -> tuple[list[int], list[str]]:
-    """Positions of the clips that can be learned from, and the names of those that cannot
-    (no frame shows the person's torso)."""
-    bad = [i for i, c in enumerate(clips) if c.torso_share == 0.0]
-    names = [clips[i].source or f"clip {i}" for i in bad]
-    return [i for i in range(len(clips)) if i not in set(bad)], names
+    """Positions of the clips that can be learned from, and the names of those that cannot:
+    no frame shows the person's torso, or it lasts less than one movement can
+    (:data:`features.repetitions.MIN_PERIOD_S`, named with its length: ``classify`` calls such
+    a clip unclassifiable, so it is no case either)."""
+    from features.repetitions import MIN_PERIOD_S
+
+    names: dict[int, str] = {}
+    for i, c in enumerate(clips):
+        name = c.source or f"clip {i}"
+        if c.torso_share == 0.0:
+            names[i] = name
+        elif c.duration_s < MIN_PERIOD_S:
+            names[i] = f"{name} (lasts {c.duration_s:.2f} s)"
+    return [i for i in range(len(clips)) if i not in names], list(names.values())
 
 
 def _learned(clf: CaseBaseClassifier) -> dict[str, Any]:
@@ -220,7 +240,7 @@ def train_described(
     keep, skipped = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
-        raise DataError("no clip shows a person: nothing to learn from", "training set")
+        raise _no_case("learn from")
     _check_unique(clips, "training set")
     fitted: CaseBaseClassifier = clone(estimator).fit_described(clips, text)
     return store_fitted(
@@ -468,7 +488,7 @@ def append_described(
     keep, skipped = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
-        raise DataError("no clip shows a person: nothing to add", "training set")
+        raise _no_case("add")
     columns = plan.casebase
     assert columns is not None
     cb = CaseBase(

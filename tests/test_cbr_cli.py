@@ -533,3 +533,32 @@ def test_append_takes_the_case_base_s_target(
     assert counts == {"correct": 18, "incorrect": 18}
     code, _, err = _cli(capsys, "train", str(more), "--db", db, "--append", "--target", "label")
     assert code == 1 and "predicts 'correct', not 'label'" in err
+
+
+def test_a_clip_shorter_than_a_movement_is_no_case_as_it_is_unclassifiable(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``classify`` calls a 1-frame clip unclassifiable (shorter than one movement can be,
+    0.4 s); ``train``, ``train --append`` and ``compare`` took it as a case all the same."""
+    import shutil
+
+    from features.poses import load_pose
+
+    train = shutil.copytree(dataset[0], tmp_path / "train")
+    first = sorted(train.rglob("*.npz"))[0]
+    one = save_pose(load_pose(first).slice_frames(0, 1), first.parent / "one_frame.npz")
+    seconds = 1 / load_pose(one).fps
+    db = str(tmp_path / "cb.sqlite")
+    code, out, err = _cli(capsys, "train", str(train), "--db", db)
+    assert code == 0, err
+    assert (
+        f"skipped 1 clip shorter than one movement can be (0.4 s): {one} (lasts {seconds:.2f} s)"
+    ) in out
+    assert "15 cases" in out  # the five clips of each of three activities, not the sixteenth
+    code, _, err = _cli(capsys, "train", str(one), "--db", db, "--append")
+    assert code == 1 and err.count("\n") == 1
+    assert "no clip shows a person for as long as one movement can last (0.4 s)" in err
+    code, _, err = _cli(capsys, "compare", str(train), "--no-dad", "--peers", "none",
+                        "--similarities", "euclidean", "--features", "fluents")  # fmt: skip
+    assert code == 0
+    assert f"left out 1 clip shorter than one movement can be (0.4 s): {one}" in err

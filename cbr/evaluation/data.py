@@ -69,21 +69,32 @@ def _groups(clips: Sequence[Clip], column: str | None, source: str) -> np.ndarra
 
 
 def _shown(clips: Sequence[Clip]) -> tuple[list[Clip], list[str]]:
-    """The clips that show a person (some frame shows the torso), and a note naming the
-    others (left out for every method alike: a clip nothing can be computed from failed the
-    methods that describe clips, and the comparison crowned the others)."""
+    """The clips that show a person (some frame shows the torso) for as long as one movement
+    can last, and notes naming the others (left out for every method alike: a clip nothing
+    can be computed from failed the methods that describe clips, and the comparison crowned
+    the others; a clip of a frame or two is what ``classify`` calls unclassifiable)."""
+    from features.repetitions import MIN_PERIOD_S
+
     from ..estimator import unusable
 
     nobody = set(unusable([c.seq for c in clips]))
-    seen = [i not in nobody for i in range(len(clips))]
-    if all(seen):
-        return list(clips), []
-    gone = [c.seq.source or str(c.label) for c, s in zip(clips, seen, strict=True) if not s]
-    more = " ..." if len(gone) > 5 else ""
-    verb = "shows" if len(gone) == 1 else "show"
-    return [c for c, s in zip(clips, seen, strict=True) if s], [
-        f"left out {counted(len(gone), 'clip')} that {verb} no person: {', '.join(gone[:5])}{more}"
+    short = {i for i, c in enumerate(clips) if c.seq.duration_s < MIN_PERIOD_S} - nobody
+    verb = "shows" if len(nobody) == 1 else "show"
+    notes = [
+        _left_out(clips, gone, why)
+        for gone, why in (
+            (nobody, f"that {verb} no person"),
+            (short, f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"),
+        )
+        if gone
     ]
+    return [c for i, c in enumerate(clips) if i not in nobody | short], notes
+
+
+def _left_out(clips: Sequence[Clip], gone: set[int], why: str) -> str:
+    names = [clips[i].seq.source or str(clips[i].label) for i in sorted(gone)]
+    more = " ..." if len(names) > 5 else ""
+    return f"left out {counted(len(names), 'clip')} {why}: {', '.join(names[:5])}{more}"
 
 
 def _single_clip_note(single: list[str]) -> str:
@@ -102,7 +113,10 @@ def prepare(clips: Sequence[Clip], settings: CompareSettings, source: str = "dat
         raise DataError("no clips found", source)
     clips, nobody = _shown(clips)
     if not clips:
-        raise DataError("no clip shows a person: nothing to compare", source)
+        raise DataError(
+            "no clip shows a person for as long as one movement can last: nothing to compare",
+            source,
+        )
     y = _targets(clips, settings.target, source)
     within = _groups(clips, settings.within_column, source)
     counts = Counter(y)

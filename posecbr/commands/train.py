@@ -557,7 +557,24 @@ def run(args: argparse.Namespace) -> int:
 
 def _skipped(sources: list[str], split: str) -> str:
     """The pieces that show no person, by their file (a recording cut into windows has many:
-    each file once, with how many of its pieces)."""
+    each file once, with how many of its pieces), and those shorter than one movement can be
+    (:func:`cbr.training.usable` names them with their length)."""
+    from features.repetitions import MIN_PERIOD_S
+
+    short = [s for s in sources if s.endswith(" s)") and " (lasts " in s]
+    nobody = [s for s in sources if s not in short]
+    lines = [
+        _listed(names, split, why)
+        for names, why in (
+            (nobody, "that show no person"),
+            (short, f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"),
+        )
+        if names
+    ]
+    return "\n".join(lines)
+
+
+def _listed(sources: list[str], split: str, why: str) -> str:
     from collections import Counter
 
     from cbr.stored import CASE_KINDS
@@ -566,7 +583,7 @@ def _skipped(sources: list[str], split: str) -> str:
     names = [shown(f) + (f" ({n})" if n > 1 else "") for f, n in list(per_file.items())[:5]]
     more = " ..." if len(per_file) > 5 else ""
     piece = counted(len(sources), CASE_KINDS.get(split, "clip"))
-    return f"skipped {piece} that show no person: {', '.join(names)}{more}"
+    return f"skipped {piece} {why}: {', '.join(names)}{more}"
 
 
 def _indistinct(pairs: list[str], split: str) -> str:
