@@ -123,3 +123,16 @@ def good_pose_file(dest: Path, /, frames: int = 8, **metadata: object) -> Path:
     """A valid pose file of a person standing, with ``metadata``."""
     seq = standing_clip(frames).with_metadata(**metadata)
     return save_pose(seq, dest)
+
+
+def small_case_base(folder: Path) -> Path:
+    """A small real case base (SQLite) in ``folder``, trained by the command from synthetic
+    arm movements (three activities, three clips each)."""
+    from tests.test_cbr_cli import _write_classes
+
+    data = _write_classes(folder / "train", 3, 5)
+    db = folder / "cb.sqlite"
+    code = main(["train", str(data), "--db", str(db), "--mirror", "off",
+                 "--feature-weights", "none", "--phases", "0"])  # fmt: skip
+    assert code == 0
+    return db

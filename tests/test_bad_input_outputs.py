@@ -12,8 +12,7 @@ import pytest
 
 from features.text import shown
 from posecbr.cli import main
-from tests.badinput import good_pose_file, refused, snapshot
-from tests.test_cbr_cli import _write_classes
+from tests.badinput import good_pose_file, refused, small_case_base, snapshot
 
 
 def test_describe_plot_is_checked_before_the_run(
@@ -66,14 +65,7 @@ def test_describe_plot_is_written_whole_in_the_format_of_its_name(
 
 @pytest.fixture(scope="module")
 def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A small real case base (SQLite) trained from synthetic arm movements."""
-    base = tmp_path_factory.mktemp("cb")
-    data = _write_classes(base / "train", 3, 5)
-    db = base / "cb.sqlite"
-    code = main(["train", str(data), "--db", str(db), "--mirror", "off",
-                 "--feature-weights", "none", "--phases", "0"])  # fmt: skip
-    assert code == 0
-    return db
+    return small_case_base(tmp_path_factory.mktemp("cb"))
 
 
 def test_casebase_export_never_overwrites_the_case_base(

@@ -20,7 +20,7 @@ from features.fluents import FluentTable
 from features.poses import save_pose
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
-from tests.badinput import refused, standing_clip
+from tests.badinput import refused, small_case_base, standing_clip
 from tests.bodies import standing, to_sequence
 from tests.test_cbr_cli import _write_classes
 
@@ -30,14 +30,7 @@ DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 
 @pytest.fixture(scope="module")
 def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A small real case base (SQLite) trained from synthetic arm movements."""
-    base = tmp_path_factory.mktemp("cb")
-    data = _write_classes(base / "train", 3, 5)
-    db = base / "cb.sqlite"
-    code = main(["train", str(data), "--db", str(db), "--mirror", "off",
-                 "--feature-weights", "none", "--phases", "0"])  # fmt: skip
-    assert code == 0
-    return db
+    return small_case_base(tmp_path_factory.mktemp("cb"))
 
 
 def _damaged(case_base: Path, folder: Path, *sql: str) -> Path:
