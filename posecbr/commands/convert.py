@@ -214,6 +214,7 @@ def _check_args(args: argparse.Namespace) -> None:
     _bvh_unit(args.bvh_unit)
     parse_ranges(args.episodes)
     _check_one_file_options(args)
+    _check_folder_options(args)
     args.sensor = sensor_for(args.sensor, [src])
 
 
@@ -240,6 +241,29 @@ def _check_one_file_options(args: argparse.Namespace) -> None:
         raise DataError(f"goes with an AMC file, not {src.name}", "--asf")
     if suffix == ".amc" and args.bvh_unit != "auto":
         raise DataError(f"goes with BVH files, not {src.name}", "--bvh-unit")
+
+
+def _check_folder_options(args: argparse.Namespace) -> None:
+    """Refuse, for a dataset (a folder or labels CSV), what would be ignored: ``--asf`` and
+    ``--bvh-unit`` (they go with one .amc or .bvh file) and, for an HDM05 or CMU folder, the
+    UI-PRMD options."""
+    from features.datasets import detect_kind
+
+    src: Path = args.source
+    if src.is_file() and src.suffix.lower() in (".bvh", ".amc"):
+        return
+    if args.asf is not None:
+        raise DataError(f"goes with one .amc file, not the dataset {src.name}", "--asf")
+    if args.bvh_unit != "auto":
+        raise DataError(f"goes with one .bvh file, not the dataset {src.name}", "--bvh-unit")
+    if detect_kind(src) == "asf_amc":
+        for flag, given in (("--correct", args.correct), ("--incorrect", args.incorrect)):
+            if given:
+                raise DataError(
+                    f"goes with UI-PRMD; {src.name} is an ASF/AMC folder, whose clips are not"
+                    " marked correct or incorrect",
+                    flag,
+                )
 
 
 def _clips(args: argparse.Namespace) -> Iterator[tuple[Clip, str]]:
