@@ -5,6 +5,7 @@ options a source would ignore are refused."""
 from __future__ import annotations
 
 import csv
+import shutil
 from pathlib import Path
 
 import pytest
@@ -22,6 +23,37 @@ def _convert(source: Path, out: Path, *extra: str) -> None:
 def _rows(labels: Path) -> list[dict[str, str]]:
     with labels.open(newline="", encoding="utf-8-sig") as fh:
         return list(csv.DictReader(fh))
+
+
+def test_columns_of_rows_listed_before_are_kept(shared_data: Path, tmp_path: Path) -> None:
+    out = tmp_path / "kb"
+    out.mkdir()
+    shutil.copy(Path(__file__).parents[1] / "posecbr/demo_data/uiprmd/m02_s01_e01.npz", out)
+    (out / "labels.csv").write_text(
+        "path,label,subject,source,origin,notes\n"
+        "m02_s01_e01.npz,hurdle_step,s01,lab,camera 2,tired\n"
+    )
+    _convert(shared_data / "ui-prmd", out)
+    rows = _rows(out / "labels.csv")
+    assert [r["path"] for r in rows] == ["m02_s01_e01.npz", "m01_s01_e01.npz"]
+    old = rows[0]
+    assert (old["source"], old["origin"], old["notes"]) == ("lab", "camera 2", "tired")
+    assert rows[1]["origin"] == ""  # the new clip's origin is in its pose file, not a column
+
+
+@pytest.mark.parametrize("header", ["\ufeffpath,label,subject", "Path,Label,Subject"])
+def test_a_labels_file_train_reads_is_added_to(
+    shared_data: Path, tmp_path: Path, header: str
+) -> None:
+    out = tmp_path / "kh"
+    out.mkdir()
+    shutil.copy(Path(__file__).parents[1] / "posecbr/demo_data/uiprmd/m02_s01_e01.npz", out)
+    (out / "labels.csv").write_text(f"{header}\nm02_s01_e01.npz,hurdle_step,s01\n")
+    _convert(shared_data / "ui-prmd", out)
+    text = (out / "labels.csv").read_text(encoding="utf-8-sig")
+    assert text.splitlines()[0].startswith(header.lstrip("\ufeff"))  # spelt as it was
+    rows = _rows(out / "labels.csv")
+    assert [r[header.lstrip("\ufeff")[:4]] for r in rows] == ["m02_s01_e01.npz", "m01_s01_e01.npz"]
 
 
 @pytest.mark.parametrize(

@@ -122,6 +122,7 @@ def parse_ranges(value: str | None) -> Ranges | None:
 
 
 _RESERVED_COLUMNS = ("path", "label", "subject", "start", "end")
+_INTERNAL = ("source", "asf", "origin", "fps_source")  # a clip's extras not made columns
 
 
 def _safe_name(name: str) -> str:
@@ -326,7 +327,9 @@ def _write_clips(
         rates[(seq.fps, why)] = rates.get((seq.fps, why), 0) + 1
         path = save_pose(seq, stage / f"{name}.npz", float32=args.float32)
         extras = {
-            k: v for k, v in clip.extras.items() if k.strip().lower() not in _RESERVED_COLUMNS
+            k: v
+            for k, v in clip.extras.items()
+            if k.strip().lower() not in _RESERVED_COLUMNS and k not in _INTERNAL
         }
         written.append(
             {**extras, "path": path.name, "label": clip.label, "subject": clip.subject or ""}
@@ -347,41 +350,45 @@ def _rate_summary(rates: dict[tuple[float, str], int]) -> list[str]:
     ]
 
 
-def _labels_csv(written: list[dict[str, Any]]) -> str:
-    """labels.csv: path,label,subject then every extra column any clip has, in first-seen
-    order (one column per name as a reader sees it: case and spaces do not make another)."""
+def _labels_csv(written: list[dict[str, Any]], header: list[str] | None = None) -> str:
+    """labels.csv: path,label,subject, the columns of ``header`` (that of the file already
+    there, every one kept and spelled as it is), then every extra column any clip has, in
+    first-seen order (one column per name as a reader sees it: case and spaces do not make
+    another)."""
     from features.progress import progress
 
-    columns = ["path", "label", "subject"]
-    seen = set(columns)
-    for row in written:
+    spelling = {c.strip().lower(): c for c in reversed(header or [])}
+    columns = [spelling.get(c, c) for c in ("path", "label", "subject")]
+    seen = {"path", "label", "subject"}
+    for row in [dict.fromkeys(header or []), *written]:
         for c in row:
             key = c.strip().lower()
-            if key not in seen and c not in ("source", "asf", "origin", "fps_source"):
+            if key not in seen:
                 seen.add(key)
                 columns.append(c)
     buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=columns, extrasaction="ignore", lineterminator="\n")
-    writer.writeheader()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(columns)
     for row in progress(written, "labels.csv", unit="row"):
-        writer.writerow({c: _csv_value(row.get(c, "")) for c in columns})
+        values = {c.strip().lower(): v for c, v in row.items() if c is not None}
+        writer.writerow([_csv_value(values.get(c.strip().lower(), "")) for c in columns])
     return buf.getvalue()
 
 
-def _listed_before(labels: Path) -> list[dict[str, Any]]:
-    """The rows of a labels.csv already in the output folder (none when there is none):
-    converting into a folder adds to its dataset. DataError naming it when it cannot be read
-    as one (no ``path`` column)."""
+def _listed_before(labels: Path) -> tuple[list[dict[str, Any]], list[str]]:
+    """The rows of a labels.csv already in the output folder and its header (none when there
+    is none): converting into a folder adds to its dataset. DataError naming it when it cannot
+    be read as one (no ``path`` column)."""
     if not labels.is_file():
-        return []
+        return [], []
     try:
-        with open(labels, newline="", encoding="utf-8") as fh:
+        with open(labels, newline="", encoding="utf-8-sig") as fh:
             reader = csv.DictReader(fh)
             rows = [dict(row) for row in reader]
             columns = reader.fieldnames or []
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise DataError(f"cannot read the labels file already there ({exc})", labels) from None
-    if "path" not in columns:
+    if "path" not in (c.strip().lower() for c in columns):
         raise DataError("the labels file already there has no 'path' column", labels)
     from features.datasets import read_labels_csv
 
@@ -392,14 +399,19 @@ def _listed_before(labels: Path) -> list[dict[str, Any]]:
             f"the labels file already there cannot be added to: {exc.message}; nothing written",
             labels,
         ) from None
-    return rows
+    return rows, list(columns)
 
 
 def _merged(before: list[dict[str, Any]], written: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """The rows of labels.csv: those listed before whose pose file was not written again,
     in their order, then the ones written now."""
     now = {str(row["path"]).lower() for row in written}
-    return [row for row in before if str(row.get("path", "")).lower() not in now] + written
+    return [row for row in before if _path_of(row).lower() not in now] + written
+
+
+def _path_of(row: dict[str, Any]) -> str:
+    """A row's path as train reads it (the column in any case, spaces around it ignored)."""
+    return next((str(v).strip() for c, v in row.items() if c and c.strip().lower() == "path"), "")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -409,13 +421,13 @@ def run(args: argparse.Namespace) -> int:
     _check_no_overwrite(out, inputs)
     if out.is_dir():
         check_output(out / "labels.csv", inputs=inputs, what="labels file")
-    before = _listed_before(out / "labels.csv")
+    before, header = _listed_before(out / "labels.csv")
     # Clips and labels.csv are staged first: a bad clip halfway leaves the output folder as it
     # was; labels.csv, which names the clips, is moved in last.
     with staged_folder(out, last={"labels.csv"}) as stage:
         written, rates = _write_clips(args, stage, inputs)
         rows = _merged(before, written)
-        write_text_atomic(stage / "labels.csv", _labels_csv(rows))
+        write_text_atomic(stage / "labels.csv", _labels_csv(rows, header))
     kept = len(rows) - len(written)
     listed = f" ({counted(kept, 'clip')} listed before kept)" if kept else ""
     print(f"wrote {counted(len(written), 'pose file')} and labels.csv to {shown(out)}{listed}")
