@@ -25,6 +25,19 @@ def _rows(labels: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(fh))
 
 
+def test_another_recording_with_the_same_name_is_refused_and_kept(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    uiprmd = shared_data / "ui-prmd"
+    out = tmp_path / "kv"
+    _convert(uiprmd, out)
+    capsys.readouterr()
+    argv = ["convert", str(uiprmd), "--sensor", "vicon", "--out", str(out), *ONE_CLIP[:-1]]
+    refused(argv, tmp_path, capsys, "m01_s01_e01.npz", "Kinect", "Vicon", "another recording")
+    _convert(uiprmd, out)  # the same clip again replaces its row
+    assert [r["path"] for r in _rows(out / "labels.csv")] == ["m01_s01_e01.npz"]
+
+
 def test_columns_of_rows_listed_before_are_kept(shared_data: Path, tmp_path: Path) -> None:
     out = tmp_path / "kb"
     out.mkdir()
@@ -39,6 +52,20 @@ def test_columns_of_rows_listed_before_are_kept(shared_data: Path, tmp_path: Pat
     old = rows[0]
     assert (old["source"], old["origin"], old["notes"]) == ("lab", "camera 2", "tired")
     assert rows[1]["origin"] == ""  # the new clip's origin is in its pose file, not a column
+
+
+def test_a_listed_file_whose_name_differs_only_in_case_is_not_replaced(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "kc"
+    out.mkdir()
+    shutil.copy(
+        Path(__file__).parents[1] / "posecbr/demo_data/uiprmd/m02_s01_e01.npz",
+        out / "M01_S01_E01.npz",
+    )
+    (out / "labels.csv").write_text("path,label,subject\nM01_S01_E01.npz,hurdle_step,s01\n")
+    argv = ["convert", str(shared_data / "ui-prmd"), "--out", str(out), *ONE_CLIP]
+    refused(argv, tmp_path, capsys, "m01_s01_e01.npz", "M01_S01_E01.npz", "only in case")
 
 
 @pytest.mark.parametrize("header", ["\ufeffpath,label,subject", "Path,Label,Subject"])

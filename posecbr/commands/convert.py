@@ -5,7 +5,8 @@ beside it or given with ``--asf``), a ``.bvh`` file, or any other dataset ``iter
 reads (labels CSV, class folders). Each clip is written to DIR as ``<name>.npz`` with its
 label, subject and extras in the metadata, and DIR/labels.csv (``path,label,subject,...``)
 lists them, so DIR is itself a dataset for every command; converting into a folder that has
-a labels.csv adds to it (a clip converted again replaces its row).
+a labels.csv adds to it (a clip converted again replaces its row; another recording whose
+pose file would take the name, or the name but for case, of a file there is refused).
 
 The frame rate each clip is written with, and where it came from, is printed: AMC files carry
 none (120 Hz, the CMU and HDM05 rate, is assumed unless an HDM05 name states one; a CMU name
@@ -314,6 +315,7 @@ def _write_clips(
     written: list[dict[str, Any]] = []
     names: set[str] = set()
     rates: Rates = {}
+    there = {p.name.lower(): p.name for p in args.out.iterdir()} if args.out.is_dir() else {}
     for clip, fallback in _clips(args):
         name = unique_name(_clip_name(clip, fallback), names)  # two sources, one stem: both
         check_output(args.out / f"{name}.npz", inputs=inputs, what="pose file")
@@ -321,6 +323,7 @@ def _write_clips(
         seq = replace(clip.seq, source="").with_metadata(
             origin=_origin(clip.seq.source, args.source)
         )
+        _check_replaces(args.out, f"{name}.npz", str(seq.metadata["origin"]), there)
         if args.fps is not None:
             seq = replace(seq, fps=float(args.fps)).with_metadata(fps_source="--fps")
         why = str(seq.metadata.get("fps_source", "from the file"))
@@ -340,6 +343,41 @@ def _write_clips(
             raise DataError("no clips matched (check the filters)", args.source)
         raise DataError("holds no clip to convert", args.source)
     return written, rates
+
+
+def _same_origin(a: str, b: str) -> bool:
+    """Whether two origins name one source file: the shorter's parts end the longer's (an
+    origin is relative to the folder above SOURCE, which may be given at another depth)."""
+    pa, pb = Path(a).parts, Path(b).parts
+    n = min(len(pa), len(pb))
+    return n > 0 and pa[-n:] == pb[-n:]
+
+
+def _check_replaces(out: Path, file: str, origin: str, there: dict[str, str]) -> None:
+    """Refuse to write ``file`` into ``out`` over another file (``there``: the names in
+    ``out`` by their lower-case spelling): one whose name differs only in case, or a pose
+    file that is not this clip converted before (another recording, same name)."""
+    from features.errors import PosecbrError
+    from features.poses import load_pose
+
+    old = there.get(file.lower())
+    if old is None:
+        return
+    if old != file:
+        raise DataError(
+            f"differs only in case from {old} already there; choose another --out", out / file
+        )
+    try:
+        meta = load_pose(out / file).metadata  # older conversions: made_from, not origin
+        was = str(meta.get("origin") or meta.get("made_from") or "")
+    except PosecbrError:
+        was = ""
+    if not _same_origin(was, origin):
+        raise DataError(
+            f"already there from another recording ({was or 'not converted from a source'}),"
+            f" not from {origin}: converting would overwrite it; choose another --out",
+            out / file,
+        )
 
 
 def _rate_summary(rates: dict[tuple[float, str], int]) -> list[str]:
@@ -405,8 +443,8 @@ def _listed_before(labels: Path) -> tuple[list[dict[str, Any]], list[str]]:
 def _merged(before: list[dict[str, Any]], written: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """The rows of labels.csv: those listed before whose pose file was not written again,
     in their order, then the ones written now."""
-    now = {str(row["path"]).lower() for row in written}
-    return [row for row in before if _path_of(row).lower() not in now] + written
+    now = {str(row["path"]) for row in written}
+    return [row for row in before if _path_of(row) not in now] + written
 
 
 def _path_of(row: dict[str, Any]) -> str:
