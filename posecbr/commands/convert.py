@@ -5,7 +5,8 @@ beside it or given with ``--asf``), a ``.bvh`` file, or any other dataset ``iter
 reads (labels CSV, class folders). Each clip is written to DIR as ``<name>.npz`` with its
 label, subject and extras in the metadata, and DIR/labels.csv (``path,label,subject,...``)
 lists them, so DIR is itself a dataset for every command; converting into a folder that has
-a labels.csv adds to it (a clip converted again replaces its row).
+a labels.csv adds to it (a clip converted again replaces its row; another recording whose
+pose file would take the name, or the name but for case, of a file there is refused).
 
 The frame rate each clip is written with, and where it came from, is printed: AMC files carry
 none (120 Hz, the CMU and HDM05 rate, is assumed unless an HDM05 name states one; a CMU name
@@ -122,6 +123,7 @@ def parse_ranges(value: str | None) -> Ranges | None:
 
 
 _RESERVED_COLUMNS = ("path", "label", "subject", "start", "end")
+_INTERNAL = ("source", "asf", "origin", "fps_source")  # a clip's extras not made columns
 
 
 def _safe_name(name: str) -> str:
@@ -214,6 +216,7 @@ def _check_args(args: argparse.Namespace) -> None:
     _bvh_unit(args.bvh_unit)
     parse_ranges(args.episodes)
     _check_one_file_options(args)
+    _check_folder_options(args)
     args.sensor = sensor_for(args.sensor, [src])
 
 
@@ -240,6 +243,29 @@ def _check_one_file_options(args: argparse.Namespace) -> None:
         raise DataError(f"goes with an AMC file, not {src.name}", "--asf")
     if suffix == ".amc" and args.bvh_unit != "auto":
         raise DataError(f"goes with BVH files, not {src.name}", "--bvh-unit")
+
+
+def _check_folder_options(args: argparse.Namespace) -> None:
+    """Refuse, for a dataset (a folder or labels CSV), what would be ignored: ``--asf`` and
+    ``--bvh-unit`` (they go with one .amc or .bvh file) and, for an HDM05 or CMU folder, the
+    UI-PRMD options."""
+    from features.datasets import detect_kind
+
+    src: Path = args.source
+    if src.is_file() and src.suffix.lower() in (".bvh", ".amc"):
+        return
+    if args.asf is not None:
+        raise DataError(f"goes with one .amc file, not the dataset {src.name}", "--asf")
+    if args.bvh_unit != "auto":
+        raise DataError(f"goes with one .bvh file, not the dataset {src.name}", "--bvh-unit")
+    if detect_kind(src) == "asf_amc":
+        for flag, given in (("--correct", args.correct), ("--incorrect", args.incorrect)):
+            if given:
+                raise DataError(
+                    f"goes with UI-PRMD; {src.name} is an ASF/AMC folder, whose clips are not"
+                    " marked correct or incorrect",
+                    flag,
+                )
 
 
 def _clips(args: argparse.Namespace) -> Iterator[tuple[Clip, str]]:
@@ -289,6 +315,7 @@ def _write_clips(
     written: list[dict[str, Any]] = []
     names: set[str] = set()
     rates: Rates = {}
+    there = {p.name.lower(): p.name for p in args.out.iterdir()} if args.out.is_dir() else {}
     for clip, fallback in _clips(args):
         name = unique_name(_clip_name(clip, fallback), names)  # two sources, one stem: both
         check_output(args.out / f"{name}.npz", inputs=inputs, what="pose file")
@@ -296,13 +323,16 @@ def _write_clips(
         seq = replace(clip.seq, source="").with_metadata(
             origin=_origin(clip.seq.source, args.source)
         )
+        _check_replaces(args.out, f"{name}.npz", str(seq.metadata["origin"]), there)
         if args.fps is not None:
             seq = replace(seq, fps=float(args.fps)).with_metadata(fps_source="--fps")
         why = str(seq.metadata.get("fps_source", "from the file"))
         rates[(seq.fps, why)] = rates.get((seq.fps, why), 0) + 1
         path = save_pose(seq, stage / f"{name}.npz", float32=args.float32)
         extras = {
-            k: v for k, v in clip.extras.items() if k.strip().lower() not in _RESERVED_COLUMNS
+            k: v
+            for k, v in clip.extras.items()
+            if k.strip().lower() not in _RESERVED_COLUMNS and k not in _INTERNAL
         }
         written.append(
             {**extras, "path": path.name, "label": clip.label, "subject": clip.subject or ""}
@@ -315,6 +345,41 @@ def _write_clips(
     return written, rates
 
 
+def _same_origin(a: str, b: str) -> bool:
+    """Whether two origins name one source file: the shorter's parts end the longer's (an
+    origin is relative to the folder above SOURCE, which may be given at another depth)."""
+    pa, pb = Path(a).parts, Path(b).parts
+    n = min(len(pa), len(pb))
+    return n > 0 and pa[-n:] == pb[-n:]
+
+
+def _check_replaces(out: Path, file: str, origin: str, there: dict[str, str]) -> None:
+    """Refuse to write ``file`` into ``out`` over another file (``there``: the names in
+    ``out`` by their lower-case spelling): one whose name differs only in case, or a pose
+    file that is not this clip converted before (another recording, same name)."""
+    from features.errors import PosecbrError
+    from features.poses import load_pose
+
+    old = there.get(file.lower())
+    if old is None:
+        return
+    if old != file:
+        raise DataError(
+            f"differs only in case from {old} already there; choose another --out", out / file
+        )
+    try:
+        meta = load_pose(out / file).metadata  # older conversions: made_from, not origin
+        was = str(meta.get("origin") or meta.get("made_from") or "")
+    except PosecbrError:
+        was = ""
+    if not _same_origin(was, origin):
+        raise DataError(
+            f"already there from another recording ({was or 'not converted from a source'}),"
+            f" not from {origin}: converting would overwrite it; choose another --out",
+            out / file,
+        )
+
+
 def _rate_summary(rates: dict[tuple[float, str], int]) -> list[str]:
     """One line per frame rate written and where it came from."""
     return [
@@ -323,41 +388,45 @@ def _rate_summary(rates: dict[tuple[float, str], int]) -> list[str]:
     ]
 
 
-def _labels_csv(written: list[dict[str, Any]]) -> str:
-    """labels.csv: path,label,subject then every extra column any clip has, in first-seen
-    order (one column per name as a reader sees it: case and spaces do not make another)."""
+def _labels_csv(written: list[dict[str, Any]], header: list[str] | None = None) -> str:
+    """labels.csv: path,label,subject, the columns of ``header`` (that of the file already
+    there, every one kept and spelled as it is), then every extra column any clip has, in
+    first-seen order (one column per name as a reader sees it: case and spaces do not make
+    another)."""
     from features.progress import progress
 
-    columns = ["path", "label", "subject"]
-    seen = set(columns)
-    for row in written:
+    spelling = {c.strip().lower(): c for c in reversed(header or [])}
+    columns = [spelling.get(c, c) for c in ("path", "label", "subject")]
+    seen = {"path", "label", "subject"}
+    for row in [dict.fromkeys(header or []), *written]:
         for c in row:
             key = c.strip().lower()
-            if key not in seen and c not in ("source", "asf", "origin", "fps_source"):
+            if key not in seen:
                 seen.add(key)
                 columns.append(c)
     buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=columns, extrasaction="ignore", lineterminator="\n")
-    writer.writeheader()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(columns)
     for row in progress(written, "labels.csv", unit="row"):
-        writer.writerow({c: _csv_value(row.get(c, "")) for c in columns})
+        values = {c.strip().lower(): v for c, v in row.items() if c is not None}
+        writer.writerow([_csv_value(values.get(c.strip().lower(), "")) for c in columns])
     return buf.getvalue()
 
 
-def _listed_before(labels: Path) -> list[dict[str, Any]]:
-    """The rows of a labels.csv already in the output folder (none when there is none):
-    converting into a folder adds to its dataset. DataError naming it when it cannot be read
-    as one (no ``path`` column)."""
+def _listed_before(labels: Path) -> tuple[list[dict[str, Any]], list[str]]:
+    """The rows of a labels.csv already in the output folder and its header (none when there
+    is none): converting into a folder adds to its dataset. DataError naming it when it cannot
+    be read as one (no ``path`` column)."""
     if not labels.is_file():
-        return []
+        return [], []
     try:
-        with open(labels, newline="", encoding="utf-8") as fh:
+        with open(labels, newline="", encoding="utf-8-sig") as fh:
             reader = csv.DictReader(fh)
             rows = [dict(row) for row in reader]
             columns = reader.fieldnames or []
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise DataError(f"cannot read the labels file already there ({exc})", labels) from None
-    if "path" not in columns:
+    if "path" not in (c.strip().lower() for c in columns):
         raise DataError("the labels file already there has no 'path' column", labels)
     from features.datasets import read_labels_csv
 
@@ -368,14 +437,19 @@ def _listed_before(labels: Path) -> list[dict[str, Any]]:
             f"the labels file already there cannot be added to: {exc.message}; nothing written",
             labels,
         ) from None
-    return rows
+    return rows, list(columns)
 
 
 def _merged(before: list[dict[str, Any]], written: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """The rows of labels.csv: those listed before whose pose file was not written again,
     in their order, then the ones written now."""
-    now = {str(row["path"]).lower() for row in written}
-    return [row for row in before if str(row.get("path", "")).lower() not in now] + written
+    now = {str(row["path"]) for row in written}
+    return [row for row in before if _path_of(row) not in now] + written
+
+
+def _path_of(row: dict[str, Any]) -> str:
+    """A row's path as train reads it (the column in any case, spaces around it ignored)."""
+    return next((str(v).strip() for c, v in row.items() if c and c.strip().lower() == "path"), "")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -385,13 +459,13 @@ def run(args: argparse.Namespace) -> int:
     _check_no_overwrite(out, inputs)
     if out.is_dir():
         check_output(out / "labels.csv", inputs=inputs, what="labels file")
-    before = _listed_before(out / "labels.csv")
+    before, header = _listed_before(out / "labels.csv")
     # Clips and labels.csv are staged first: a bad clip halfway leaves the output folder as it
     # was; labels.csv, which names the clips, is moved in last.
     with staged_folder(out, last={"labels.csv"}) as stage:
         written, rates = _write_clips(args, stage, inputs)
         rows = _merged(before, written)
-        write_text_atomic(stage / "labels.csv", _labels_csv(rows))
+        write_text_atomic(stage / "labels.csv", _labels_csv(rows, header))
     kept = len(rows) - len(written)
     listed = f" ({counted(kept, 'clip')} listed before kept)" if kept else ""
     print(f"wrote {counted(len(written), 'pose file')} and labels.csv to {shown(out)}{listed}")
