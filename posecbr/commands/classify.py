@@ -137,6 +137,7 @@ def _check_args(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from casebase_store import open_store
+    from cbr.casebase import frames_of
     from cbr.classification import (
         FeedbackSettings,
         check_feedback_cases,
@@ -145,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
         classify_with_feedback,
     )
     from cbr.stored import load_classifier
+    from cbr.training import check_listed_once
 
     _check_args(args)
     defaults = FeedbackSettings()
@@ -181,6 +183,11 @@ def run(args: argparse.Namespace) -> int:
         subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
         inputs = load_inputs(args.clips, sensor_for(args.sensor, args.clips), subjects, target)
         clips, truths = [s for s, _ in inputs], [t for _, t in inputs]
+        check_listed_once(
+            [(s.source, *frames_of(s)) for s in clips],
+            " ".join(str(p) for p in args.clips),
+            "it would be classified and counted twice",
+        )
         if args.feedback is None:
             results = classify_clips(stored, clips, truths, target)
         else:
