@@ -98,9 +98,15 @@ def load_inputs(
         subject = seq.metadata.get("subject")
         return Clip(seq=seq, label=seq.label or "", subject=subject, extras={})
 
+    kinds = [detect_kind(path) for path in paths]
+    if subjects is not None and all(k in ("pose_file", "pose_folder") for k in kinds):
+        raise ConfigError(
+            "filters the clips of a labels CSV or dataset, and none is given (pose files are "
+            "classified as given)",
+            "--subjects",
+        )
     out: list[tuple[PoseSequence, str | None]] = []
-    for path in paths:
-        kind = detect_kind(path)
+    for path, kind in zip(paths, kinds, strict=True):
         if kind == "pose_file":
             seq = load_clip(path)
             out.append((seq, clip_target(of_file(seq), target)))
