@@ -486,6 +486,7 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
                 args.overlay,
             )
     if single and jobs[0].out == args.out:  # --out names the pose file itself
+        check_output(args.out, inputs=[args.input], what="pose file")  # one file: as --overlay
         _check_outputs(jobs)
         return
     if args.out.exists() and not args.out.is_dir():
