@@ -101,7 +101,8 @@ def test_classify_refuses_a_clip_listed_twice(
     csv.write_text(f"path,label,subject\n{row}\n{row}\n")
     capsys.readouterr()
     refused(["classify", str(csv), "--db", str(db)], tmp_path, capsys,
-            str(clip), "is listed twice", "classified and counted twice")  # fmt: skip
+            f"{csv}: {clip} frames", "is listed twice: it would be classified and counted twice",
+            )  # fmt: skip
 
 
 def test_classify_refuses_subjects_for_pose_files(

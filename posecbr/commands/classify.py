@@ -85,6 +85,8 @@ def load_inputs(
 ) -> list[tuple[PoseSequence, str | None]]:
     """Every clip named by ``paths`` with its value of ``target`` (the label, or another
     column such as ``correct``) when the input carries one."""
+    from cbr.casebase import frames_of
+    from cbr.training import check_listed_once
     from features.datasets import (
         CLIP_SUFFIXES,
         Clip,
@@ -116,9 +118,14 @@ def load_inputs(
                 seq = load_clip(f)
                 out.append((seq, clip_target(of_file(seq), target)))
         else:
-            clips = iter_dataset(
-                path, sensor=sensor, subjects=subjects, progress_desc=f"loading {path.name}"
+            clips = list(
+                iter_dataset(
+                    path, sensor=sensor, subjects=subjects, progress_desc=f"loading {path.name}"
+                )
             )
+            # as train: a clip listed twice in one labels CSV would count twice
+            check_listed_once([(c.seq.source, *frames_of(c.seq)) for c in clips], str(path),
+                              "it would be classified and counted twice")  # fmt: skip
             for clip in clips:
                 out.append((clip.seq, clip_target(clip, target)))
     if not out:
@@ -143,7 +150,6 @@ def _check_args(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from casebase_store import open_store
-    from cbr.casebase import frames_of
     from cbr.classification import (
         FeedbackSettings,
         check_feedback_cases,
@@ -152,7 +158,6 @@ def run(args: argparse.Namespace) -> int:
         classify_with_feedback,
     )
     from cbr.stored import load_classifier
-    from cbr.training import check_listed_once
 
     _check_args(args)
     defaults = FeedbackSettings()
@@ -189,11 +194,6 @@ def run(args: argparse.Namespace) -> int:
         subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
         inputs = load_inputs(args.clips, sensor_for(args.sensor, args.clips), subjects, target)
         clips, truths = [s for s, _ in inputs], [t for _, t in inputs]
-        check_listed_once(
-            [(s.source, *frames_of(s)) for s in clips],
-            " ".join(str(p) for p in args.clips),
-            "it would be classified and counted twice",
-        )
         if args.feedback is None:
             results = classify_clips(stored, clips, truths, target)
         else:
