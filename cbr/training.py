@@ -429,14 +429,18 @@ def _check_unique(clips: Sequence[DescribedClip], where: str) -> None:
     """Refuse training clips of which two are the same stretch of the same file (a labels
     CSV listing a file twice): their cases would vote twice. Clips without a source (the
     Python API's arrays) are not compared."""
+    check_listed_once([_provenance(c) for c in clips], where, "its cases would vote twice")
+
+
+def check_listed_once(keys: Sequence[tuple[str, int, int]], where: str, consequence: str) -> None:
+    """Refuse two of ``keys`` (source, first frame, end frame) that are the same stretch of
+    the same file, saying the ``consequence``; keys without a source are not compared."""
     seen: set[tuple[str, int, int]] = set()
-    for clip in clips:
-        key = _provenance(clip)
+    for key in keys:
         if not key[0]:
             continue
         if key in seen:
-            raise DataError(f"{_shown_frames(key)} is listed twice: its cases would vote twice",
-                            where)  # fmt: skip
+            raise DataError(f"{_shown_frames(key)} is listed twice: {consequence}", where)
         seen.add(key)
 
 

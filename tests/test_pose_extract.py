@@ -195,6 +195,7 @@ def test_out_may_name_the_pose_file_of_one_video(
     named x.npz holding one; for a folder of videos it is refused, with nothing made."""
     image = shared_data / "media" / "messi5.jpg"
     out = tmp_path / "poses" / "messi.npz"
+    out.parent.mkdir()  # a pose file's folder must exist, as an overlay's
     assert main(["extract", str(image), "--out", str(out)]) == 0
     assert out.is_file() and sorted(p.name for p in out.parent.iterdir()) == ["messi.npz"]
     assert load_pose(out).n_frames == 1

@@ -8,6 +8,7 @@ key (``methods[2].accuracy``), and a picture must be a file name inside the resu
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import PurePosixPath, PureWindowsPath
@@ -98,6 +99,20 @@ class Reader:
             for i, item in enumerate(self.items(obj, key, where, "dict"))
         ]
 
+    def share(self, obj: dict[str, Any], key: str, where: str) -> float:
+        """``obj[key]``: a share, a number in [0, 1]."""
+        v: float = self.get(obj, key, where, "num")
+        if not 0.0 <= v <= 1.0:
+            self.fail(f"{where}.{key}", f"must be in [0, 1], got {v}")
+        return v
+
+    def amount(self, obj: dict[str, Any], key: str, where: str) -> float:
+        """``obj[key]``: a finite number of 0 or more (a time)."""
+        v: float = self.get(obj, key, where, "num")
+        if not (math.isfinite(v) and v >= 0.0):
+            self.fail(f"{where}.{key}", f"must be a finite number of 0 or more, got {v}")
+        return v
+
     def pair(self, obj: dict[str, Any], key: str, where: str) -> tuple[float, float]:
         """``obj[key]``: two numbers (an interval)."""
         vals = self.items(obj, key, where, "num")
@@ -141,9 +156,7 @@ class Rate:
 
     @staticmethod
     def read(r: Reader, d: dict[str, Any], where: str, key: str) -> Rate:
-        return Rate(
-            r.get(d, "n", where, "int"), r.get(d, key, where, "num"), r.pair(d, "ci", where)
-        )
+        return Rate(r.get(d, "n", where, "int"), r.share(d, key, where), r.pair(d, "ci", where))
 
 
 def _rates(r: Reader, d: dict[str, Any], name: str, where: str, key: str) -> dict[str, Rate]:
@@ -228,17 +241,17 @@ class Scores:
             for i, row in enumerate(r.items(d, "confusion", where, "list"))
         ]
         return Scores(
-            accuracy=r.get(d, "accuracy", where, "num"),
+            accuracy=r.share(d, "accuracy", where),
             accuracy_ci=r.pair(d, "accuracy_ci", where),
-            macro_f1=r.get(d, "macro_f1", where, "num"),
+            macro_f1=r.share(d, "macro_f1", where),
             macro_f1_ci=r.pair(d, "macro_f1_ci", where),
             per_class=_rates(r, d, "per_class", where, "recall"),
             per_group=_rates(r, d, "per_group", where, "accuracy"),
             confusion=confusion,
             unassigned=r.items(d, "unassigned", where, "int"),
-            fit_s=r.get(d, "fit_s", where, "num"),
-            predict_s=r.get(d, "predict_s", where, "num"),
-            predict_ms_per_clip=r.get(d, "predict_ms_per_clip", where, "num"),
+            fit_s=r.amount(d, "fit_s", where),
+            predict_s=r.amount(d, "predict_s", where),
+            predict_ms_per_clip=r.amount(d, "predict_ms_per_clip", where),
             case_base_size=r.get(d, "case_base_size", where, "num", optional=True),
             training_size=r.get(d, "training_size", where, "num"),
             predictions=r.items(d, "predictions", where, "str"),
@@ -590,7 +603,7 @@ class CompareResults:
         r.get(settings, "target", "settings", "str")
         r.get(settings, "within", "settings", "str", optional=True)
         prevalence = r.get(doc, "prevalence", "", "dict", optional=True)
-        return CompareResults(
+        results = CompareResults(
             created_utc=r.get(doc, "created_utc", "", "str"),
             machine=machine,
             dataset=DatasetSummary.read(r, r.get(doc, "dataset", "", "dict"), "dataset"),
@@ -605,3 +618,31 @@ class CompareResults:
             pictures=Pictures.read(r, r.get(doc, "pictures", "", "dict"), "pictures"),
             prevalence=None if prevalence is None else Prevalence.read(r, prevalence, "prevalence"),
         )
+        results.check(r)
+        return results
+
+    def check(self, r: Reader) -> None:
+        """What the keys say of each other: methods to report, the best ones among them, and
+        each method's confusion matrix and predictions the size of the classes and clips."""
+        if not self.methods:
+            r.fail("methods", "lists no method: nothing to report")
+        names = [m.name for m in self.methods]
+        for key, name in (("best", self.best), ("best_interpretable", self.best_interpretable)):
+            if name is not None and name not in names:
+                r.fail(key, f"names no method of the results, got {name!r}")
+        n_classes, n_clips = len(self.dataset.classes), len(self.clips)
+        for i, s in enumerate(m.scores for m in self.methods):
+            if s is None:
+                continue
+            where = f"methods[{i}]"
+            if len(s.confusion) != n_classes or any(len(row) != n_classes for row in s.confusion):
+                shape = f"{len(s.confusion)} rows of " + "/".join(
+                    sorted({str(len(row)) for row in s.confusion}) or ["0"]
+                )
+                r.fail(f"{where}.confusion",
+                       f"must be {n_classes} x {n_classes} (the classes), got {shape}")  # fmt: skip
+            for key, values in (("predictions", s.predictions), ("correct", s.correct)):
+                if len(values) != n_clips:
+                    r.fail(
+                        f"{where}.{key}", f"must hold one per clip ({n_clips}), got {len(values)}"
+                    )

@@ -61,6 +61,8 @@ class CompareSettings:
             ("--features", self.features, FEATURE_LEVELS, "feature level"),
             ("--peers", self.peers, PEERS, "peer"),
         ):
+            if not given and flag != "--peers":  # no peers is a choice ("none")
+                raise ConfigError(f"no {what} given", flag)
             for name in given:
                 if name not in known:
                     raise ConfigError(

@@ -85,6 +85,8 @@ def load_inputs(
 ) -> list[tuple[PoseSequence, str | None]]:
     """Every clip named by ``paths`` with its value of ``target`` (the label, or another
     column such as ``correct``) when the input carries one."""
+    from cbr.casebase import frames_of
+    from cbr.training import check_listed_once
     from features.datasets import (
         CLIP_SUFFIXES,
         Clip,
@@ -98,9 +100,15 @@ def load_inputs(
         subject = seq.metadata.get("subject")
         return Clip(seq=seq, label=seq.label or "", subject=subject, extras={})
 
+    kinds = [detect_kind(path) for path in paths]
+    if subjects is not None and all(k in ("pose_file", "pose_folder") for k in kinds):
+        raise ConfigError(
+            "filters the clips of a labels CSV or dataset, and none is given (pose files are "
+            "classified as given)",
+            "--subjects",
+        )
     out: list[tuple[PoseSequence, str | None]] = []
-    for path in paths:
-        kind = detect_kind(path)
+    for path, kind in zip(paths, kinds, strict=True):
         if kind == "pose_file":
             seq = load_clip(path)
             out.append((seq, clip_target(of_file(seq), target)))
@@ -110,9 +118,14 @@ def load_inputs(
                 seq = load_clip(f)
                 out.append((seq, clip_target(of_file(seq), target)))
         else:
-            clips = iter_dataset(
-                path, sensor=sensor, subjects=subjects, progress_desc=f"loading {path.name}"
+            clips = list(
+                iter_dataset(
+                    path, sensor=sensor, subjects=subjects, progress_desc=f"loading {path.name}"
+                )
             )
+            # as train: a clip listed twice in one labels CSV would count twice
+            check_listed_once([(c.seq.source, *frames_of(c.seq)) for c in clips], str(path),
+                              "it would be classified and counted twice")  # fmt: skip
             for clip in clips:
                 out.append((clip.seq, clip_target(clip, target)))
     if not out:

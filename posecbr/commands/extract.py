@@ -201,19 +201,25 @@ def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
         jobs = _csv_jobs(source / "labels.csv", out)
     else:
         jobs = _folder_jobs(source, out)
-    seen: dict[Path, Path] = {}
+    seen: dict[Path, Job] = {}
     for job in jobs:
-        if job.out in seen and seen[job.out] != job.video:
-            raise DataError(
-                f"{seen[job.out]} and {job.video} would both be written to {job.out}", source
-            )
-        seen[job.out] = job.video
+        if job.out in seen:
+            first, second = _shown_job(seen[job.out]), _shown_job(job)
+            what = f"{first} is listed twice" if first == second else f"{first} and {second}"
+            raise DataError(f"{what}: both would be written to {job.out}", source)
+        seen[job.out] = job
     if overlay is not None:
         jobs = [
             Job(**{**vars(j), "overlay": overlay / j.out.relative_to(out).with_suffix(".mp4")})
             for j in jobs
         ]
     return jobs
+
+
+def _shown_job(job: Job) -> str:
+    """A clip as the user listed it: the video, its frames and its subject."""
+    shown = str(job.video) if job.start is None else f"{job.video} frames {job.start}-{job.end}"
+    return shown if job.subject is None else f"{shown} (subject {job.subject})"
 
 
 def longest_first(jobs: list[Job]) -> list[Job]:
@@ -480,6 +486,7 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
                 args.overlay,
             )
     if single and jobs[0].out == args.out:  # --out names the pose file itself
+        check_output(args.out, inputs=[args.input], what="pose file")  # one file: as --overlay
         _check_outputs(jobs)
         return
     if args.out.exists() and not args.out.is_dir():
