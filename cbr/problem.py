@@ -495,11 +495,15 @@ def mirror_problem(
 def _qmp_problem(q: QMPFeatures, config: FeatureConfig) -> Problem:
     """The QMP-level problem from a clip's QMP features ``q``."""
     if config.qmp_part == "binary":
+        tested = q.values[: len(q.binary_names)]
         return Problem(
             np.asarray(q.binary, dtype=np.float64),
             tuple(q.binary_names),
             tuple(str(n).replace("_", " ") for n in q.binary_names),
             "qmp",
+            unseen=frozenset(
+                str(n) for n, v in zip(q.binary_names, tested, strict=True) if np.isnan(v)
+            ),
         )
     # parameters not observable in this clip (NaN) get the configured fill value
     raw = np.asarray(q.values, dtype=np.float64)

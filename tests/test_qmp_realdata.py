@@ -52,3 +52,34 @@ def test_feature_vectors_have_stable_readable_names(uiprmd_clips: list[Clip]) ->
     assert 0.8 < f["left_knee.period_s"] < 2 * squat.seq.positions.shape[0] / squat.seq.fps
     # Heels and ears are not on the Kinect skeleton: distances are not observable (NaN).
     assert np.isnan(f["left_heel~right_heel.range_hl"])
+
+
+def test_a_criterion_no_window_could_test_is_unknown_not_unmet() -> None:
+    """A deep squat with its legs missing: the knee and hip criteria could be tested in no
+    window, so they are NaN (unknown) in ``values``, not 0.0 (unmet), and the problem names
+    them unseen (explanations cite none of them); with nobody in view every criterion is."""
+    import dataclasses
+
+    from cbr.problem import FeatureConfig, extract_problem
+    from features.poses import load_pose
+
+    demo = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+    clip = load_pose(demo / "m01_s01_e01.npz")
+    n = len(qmp_features(clip).binary_names)
+    whole = qmp_features(clip).values[:n]
+    pos = clip.positions.copy()
+    legs = [i for i, j in enumerate(clip.joint_names) if j.endswith(("hip", "knee", "ankle"))]
+    pos[:, legs] = np.nan
+    blind = qmp_features(dataclasses.replace(clip, positions=pos))
+    unknown = np.isnan(blind.values[:n])
+    assert unknown.sum() > np.isnan(whole).sum()
+    assert not blind.binary[unknown].any()
+    knees = [w for w in blind.binary_names if "knee" in w]
+    assert knees and all(np.isnan(blind.values[blind.binary_names.index(w)]) for w in knees)
+    for part in ("binary", "values"):
+        config = FeatureConfig(level="qmp", qmp_part=part)
+        problem = extract_problem(dataclasses.replace(clip, positions=pos), config)
+        assert set(knees) <= problem.unseen
+        assert not np.isnan(problem.values).any()  # filled for the measure, as before
+    nobody = qmp_features(dataclasses.replace(clip, positions=np.full_like(pos, np.nan)))
+    assert nobody.status == "not enough data" and np.isnan(nobody.values[:n]).all()

@@ -20,7 +20,8 @@ class QMPFeatures:
     names ``(n,)``: the binary criteria first (their ADD words, e.g. "knees bending and
     straightening in rhythm"), then the continuous parameters as ``signal.quantity_unit``
     (e.g. "left_knee.amplitude_rad", "left_knee.period_s"); values ``(n,)`` float64: 1.0/0.0
-    for the criteria, the fitted parameter otherwise (NaN = not observable in this clip);
+    for the criteria, the fitted parameter otherwise (NaN = not observable in this clip: a
+    criterion in no window, a parameter in no fit);
     binary ``(n_binary,)`` bool with binary_names; criteria ``(n_binary,)`` the ADD names;
     status: "ok" or "not enough data".
     """
@@ -75,6 +76,7 @@ def qmp_from_signals(
     )
     crit = evaluate_criteria(add, fits)
     binary = (crit.met & crit.observable).any(axis=0)
+    seen = crit.observable.any(axis=0)  # a criterion no window could test is unknown, not unmet
     pairs = feature_columns(add)
     cont = np.full(len(pairs), np.nan)
     for i, (signal, quantity) in enumerate(pairs):
@@ -87,7 +89,7 @@ def qmp_from_signals(
     status = "not enough data" if (fits.status == NOT_ENOUGH_DATA).all() else "ok"
     return QMPFeatures(
         names=names,
-        values=np.concatenate([binary.astype(np.float64), cont]),
+        values=np.concatenate([np.where(seen, binary.astype(np.float64), np.nan), cont]),
         binary=binary,
         binary_names=binary_names,
         criteria=crit.names,
