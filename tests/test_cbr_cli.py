@@ -476,6 +476,15 @@ def test_a_clip_is_not_trained_from_twice(
         assert code == 1 and err.count("\n") == 1, (again, err)
         assert "is already case " in err, err
         assert db.read_bytes() == stored
+    # cut into windows: the note on the cutting came before the refusal (two lines); it is
+    # said once the training is done, so a refusal is its one line
+    windows = tmp_path / "windows.sqlite"
+    code, _, err = _cli(capsys, "train", str(train), "--db", str(windows), "--split", "windows")
+    assert code == 0 and "cut 15 clips into " in err
+    stored = windows.read_bytes()
+    code, _, err = _cli(capsys, "train", str(clips[3].parent), "--db", str(windows), "--append")
+    assert code == 1 and err.count("\n") == 1 and "is already case " in err, err
+    assert windows.read_bytes() == stored
 
 
 def test_append_says_how_many_activities_it_added(

@@ -270,10 +270,16 @@ def _recording_clips(args: argparse.Namespace, activities: list[str] | None) -> 
     track = LabelTrack(args.frame_labels, args.label_block, args.label_names)
     seq = load_recording(args.data, args.asf, args.fps)
     clips = [c for c in recording_clips(seq, track) if not activities or c.label in activities]
-    return _long_enough(clips)
+    return _long_enough(args, clips)
 
 
-def _long_enough(clips: list[Any]) -> list[Any]:
+def _note(args: argparse.Namespace, text: str) -> None:
+    """A note on how the data was read, said on stderr once the training is done (a refusal
+    after it is then the one line it is, not a note and a refusal)."""
+    args.notes.append(text)
+
+
+def _long_enough(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
     """The labelled stretches that last at least the shortest repetition
     (:data:`features.repetitions.MIN_PERIOD_S`); the others, a label that flickers for a few
     frames, would each become a case of next to nothing (one frame labelled otherwise: an
@@ -285,15 +291,15 @@ def _long_enough(clips: list[Any]) -> list[Any]:
     if short:
         labels = ", ".join(sorted({shown(c.label) for c in short}))
         stretches = "stretch" if len(short) == 1 else "stretches"
-        print(
+        _note(
+            args,
             f"left out {len(short)} labelled {stretches} shorter than {MIN_PERIOD_S:g} s"
             f" ({labels})",
-            file=sys.stderr,
         )
     return [c for c, ok in zip(clips, long, strict=True) if ok]
 
 
-def _repetitions(clips: list[Any]) -> list[Any]:
+def _repetitions(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
     """``--split repetitions``: every clip cut into its repetitions (said on stderr)."""
     from features.repetitions import split_repetitions
 
@@ -301,21 +307,21 @@ def _repetitions(clips: list[Any]) -> list[Any]:
     whole = f" ({split.kept_whole} without a repetition kept whole)" if split.kept_whole else ""
     n_reps = len(split.clips) - split.kept_whole
     pieces = f"{counted(len(clips), 'clip')} into {counted(n_reps, 'repetition')}"
-    print(f"cut {pieces}{whole}", file=sys.stderr)
+    _note(args, f"cut {pieces}{whole}")
     return split.clips
 
 
-def _windows(clips: list[Any]) -> list[Any]:
+def _windows(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
     """``--split windows``: every clip cut into the windows segment classifies (on stderr)."""
     from features.repetitions import WINDOW_HOP_S, WINDOW_S, split_windows
 
     split = split_windows(clips)
     whole = f" ({split.kept_whole} shorter than a window kept whole)" if split.kept_whole else ""
     n_windows = len(split.clips) - split.kept_whole
-    print(
+    _note(
+        args,
         f"cut {counted(len(clips), 'clip')} into {counted(n_windows, 'window')} of "
         f"{WINDOW_S:g} s every {WINDOW_HOP_S:g} s{whole}",
-        file=sys.stderr,
     )
     return split.clips
 
@@ -349,9 +355,9 @@ def _clips(args: argparse.Namespace) -> list[Any]:
         values = [clip_target(c, args.target) for c in clips]
         _one_activity(args, [v for v in values if v is not None])
     if args.split == "repetitions" and clips:
-        clips = _repetitions(clips)
+        clips = _repetitions(args, clips)
     elif args.split == "windows" and clips:
-        clips = _windows(clips)
+        clips = _windows(args, clips)
     if not clips:
         raise _no_clips(args)
     return clips
@@ -519,6 +525,7 @@ def run(args: argparse.Namespace) -> int:
     )
 
     _check_options(args)
+    args.notes = []
     if args.append:
         _check_append(args)
         plan, uid, args.split, args.target = append_plan(
@@ -551,6 +558,8 @@ def run(args: argparse.Namespace) -> int:
         result = train_described(args.db, args.name, clips, solutions, estimator,
                                  target=args.target, cases=args.split,
                                  replace=args.replace)  # fmt: skip
+    for text in args.notes:
+        print(text, file=sys.stderr)
     _report(args, result)
     return 0
 
