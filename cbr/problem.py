@@ -529,6 +529,7 @@ def _fluent_problem(seq: PoseSequence, config: FeatureConfig, chunk: int, mirror
     names, words, _ = state_columns()
     plan = _column_plan(states, names, words)
     fills = _column_fills(plan, float(config.fill))
+    unseen: frozenset[str] = frozenset()  # known of a clip computed whole
     if chunk:
         values = long_clip.resampled_columns(seq, plan, fills, int(config.length), chunk, mirror)
     else:
@@ -546,15 +547,10 @@ def _fluent_problem(seq: PoseSequence, config: FeatureConfig, chunk: int, mirror
         values = resample(fill_nan_time(columns, fills), int(config.length))
         never = np.isnan(columns).all(axis=0) if len(columns) else np.zeros(len(states), bool)
         unseen = frozenset(s for s, n in zip(states, never, strict=True) if n)
-        problem = (
-            summarise(values, states, plan.words, int(config.phases))
-            if config.summary
-            else Problem(values, states, plan.words, "fluents")
-        )
-        return dataclasses.replace(problem, unseen=unseen)
     if config.summary:
-        return summarise(values, states, plan.words, int(config.phases))
-    return Problem(values, states, plan.words, "fluents")
+        problem = summarise(values, states, plan.words, int(config.phases))
+        return dataclasses.replace(problem, unseen=unseen)
+    return Problem(values, states, plan.words, "fluents", unseen=unseen)
 
 
 def _column_fills(plan: _ColumnPlan, fill: float) -> np.ndarray:
