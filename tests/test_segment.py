@@ -628,13 +628,17 @@ def test_segment_refuses_options_the_recordings_would_ignore(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     rec = save_pose(recordings["13_30"].slice_frames(0, 600), tmp_path / "r.npz")
+    before = _sha(rec), _sha(case_base)
     argv = ["segment", str(rec), "--db", str(case_base)]
     assert main([*argv, "--asf", str(tmp_path / "none.asf")]) == 1
     assert capsys.readouterr().err == (
         "posecbr segment: error: --asf: goes with an AMC recording, not r.npz\n"
     )
     assert main([*argv, "--fps", "0.001"]) == 1
-    assert "--fps: must be a frame rate in [0.01, 10000]" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--fps: must be a frame rate in [0.01, 10000]" in err
+    assert (_sha(rec), _sha(case_base)) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.npz"]
 
 
 def test_a_bad_recording_among_several_leaves_no_picture_of_the_others(
@@ -650,6 +654,7 @@ def test_a_bad_recording_among_several_leaves_no_picture_of_the_others(
     short = save_pose(recordings["13_30"].slice_frames(0, 60), tmp_path / "short.npz")
     pictures = tmp_path / "pictures"
     pictures.mkdir()
+    before = _sha(good), _sha(short), _sha(case_base)
     for second in (short, tmp_path / "missing.npz"):
         argv = ["segment", str(good), str(second), "--db", str(case_base), "--plot"]
         assert main([*argv, str(pictures), "--json"]) == 1
@@ -657,6 +662,7 @@ def test_a_bad_recording_among_several_leaves_no_picture_of_the_others(
         assert captured.out == "" and captured.err.count("\n") == 1
         assert str(second) in captured.err
         assert list(pictures.iterdir()) == []
+    assert (_sha(good), _sha(short), _sha(case_base)) == before
 
 
 def test_train_split_windows_of_one_activity_is_refused_in_one_line(
@@ -672,13 +678,14 @@ def test_train_split_windows_of_one_activity_is_refused_in_one_line(
     labels = tmp_path / "labels.txt"
     labels.write_text("3\n" * blocks, encoding="utf-8")
     db = tmp_path / "cb.sqlite"
+    before = _sha(rec), _sha(labels)
     argv = ["train", str(rec), "--frame-labels", str(labels), "--label-block", "0.1"]
     capsys.readouterr()
     assert main([*argv, "--label-names", str(names), "--split", "windows", "--db", str(db)]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1, err
     assert "hold only one activity ('Squat')" in err
-    assert not db.exists()
+    assert not db.exists() and (_sha(rec), _sha(labels)) == before
 
 
 def test_segment_command_tells_nobody_in_view_in_its_table(

@@ -534,11 +534,13 @@ def test_watch_refuses_a_truncated_video_as_segment_does(
     writer.release()
     cut = tmp_path / "cut.avi"
     cut.write_bytes(whole.read_bytes()[: whole.stat().st_size * 2 // 3])
+    given = cut.read_bytes()
     out = tmp_path / "out.mp4"
     capsys.readouterr()
     assert main(["watch", str(cut), "--db", str(case_base), "--speed", "0", "--out", str(out)]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "truncated or corrupt: decoded" in err and str(cut) in err
+    assert cut.read_bytes() == given
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == [
         "cut.avi",
         "whole.avi",
