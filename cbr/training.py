@@ -53,7 +53,8 @@ from .unknown import JUDGES
 class TrainResult:
     """What ``train`` stored: ``n_cases`` cases (``n_active`` after editing), how many of
     those active cases of each label (mirror images and windows counted as the cases they
-    are), the clips skipped because they show no person, and what fit learned."""
+    are), the clips skipped because they show no person or are too short, and what fit
+    learned."""
 
     name: str
     n_cases: int
@@ -64,6 +65,8 @@ class TrainResult:
     maintenance: MaintenanceReport | None
     learned: dict[str, Any]
     skipped: list[str] = field(default_factory=list)
+    #: the clips skipped because they last less than one movement can, with their lengths
+    too_short: list[str] = field(default_factory=list)
     #: whether the default judge of unknown (``segment``, ``watch``) could be calibrated on it
     judges_unknown: bool = True
     #: cases whose features equal a case's of another activity (:func:`same_features`)
@@ -162,21 +165,23 @@ def _no_case(what: str) -> DataError:
     )
 
 
-def usable(clips: Sequence[DescribedClip]) -> tuple[list[int], list[str]]:
-    """Positions of the clips that can be learned from, and the names of those that cannot:
-    no frame shows the person's torso, or it lasts less than one movement can
-    (:data:`features.repetitions.MIN_PERIOD_S`, named with its length: ``classify`` calls such
-    a clip unclassifiable, so it is no case either)."""
+def usable(clips: Sequence[DescribedClip]) -> tuple[list[int], list[str], list[str]]:
+    """Positions of the clips that can be learned from, the names of those in which no frame
+    shows the person's torso, and of those that last less than one movement can
+    (:data:`features.repetitions.MIN_PERIOD_S`, each named with its length: ``classify``
+    calls such a clip unclassifiable, so it is no case either)."""
     from features.repetitions import MIN_PERIOD_S
 
-    names: dict[int, str] = {}
+    nobody: dict[int, str] = {}
+    short: dict[int, str] = {}
     for i, c in enumerate(clips):
         name = c.source or f"clip {i}"
         if c.torso_share == 0.0:
-            names[i] = name
+            nobody[i] = name
         elif c.duration_s < MIN_PERIOD_S:
-            names[i] = f"{name} (lasts {c.duration_s:.2f} s)"
-    return [i for i in range(len(clips)) if i not in names], list(names.values())
+            short[i] = f"{name} (lasts {c.duration_s:.2f} s)"
+    keep = [i for i in range(len(clips)) if i not in nobody and i not in short]
+    return keep, list(nobody.values()), list(short.values())
 
 
 def _learned(clf: CaseBaseClassifier) -> dict[str, Any]:
@@ -237,14 +242,22 @@ def train_described(
     if not name.strip():
         raise ConfigError("the case base name is empty", "--name")
     text = [str(v) for v in check_labels(labels, len(clips))]
-    keep, skipped = usable(clips)
+    keep, skipped, too_short = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise _no_case("learn from")
     _check_unique(clips, "training set")
     fitted: CaseBaseClassifier = clone(estimator).fit_described(clips, text)
     return store_fitted(
-        db, name, fitted, text, target=target, cases=cases, replace=replace, skipped=skipped
+        db,
+        name,
+        fitted,
+        text,
+        target=target,
+        cases=cases,
+        replace=replace,
+        skipped=skipped,
+        too_short=too_short,
     )
 
 
@@ -258,6 +271,7 @@ def store_fitted(
     cases: str = "clips",
     replace: bool = False,
     skipped: Sequence[str] = (),
+    too_short: Sequence[str] = (),
 ) -> TrainResult:
     """Store the fitted classifier as case base ``name`` in ``db`` in one transaction
     (``labels``: its training clips' solutions, for the summary)."""
@@ -293,6 +307,7 @@ def store_fitted(
         fitted.maintenance_,
         _learned(fitted),
         list(skipped),
+        list(too_short),
         JUDGES[0] in fitted.judges_,
         same_features(cb),
     )
@@ -489,7 +504,7 @@ def append_described(
     processes may append to one case base at once: each commits its cases in one transaction
     (ids from the database, never reused), so none is lost or duplicated."""
     text = [str(v) for v in check_labels(labels, len(clips))]
-    keep, skipped = usable(clips)
+    keep, skipped, too_short = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise _no_case("add")
@@ -526,7 +541,7 @@ def append_described(
         store.close()
     return TrainResult(
         name, len(cb), total, _counts([str(v) for v in cb.labels]), cb.config, cb.measure.name,
-        None, {}, skipped,
+        None, {}, skipped, too_short,
         indistinct=same_features(cb),
     )  # fmt: skip
 

@@ -564,14 +564,12 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _skipped(sources: list[str], split: str) -> str:
+def _skipped(nobody: list[str], short: list[str], split: str) -> str:
     """The pieces that show no person, by their file (a recording cut into windows has many:
     each file once, with how many of its pieces), and those shorter than one movement can be
     (:func:`cbr.training.usable` names them with their length)."""
     from features.repetitions import MIN_PERIOD_S
 
-    short = [s for s in sources if s.endswith(" s)") and " (lasts " in s]
-    nobody = [s for s in sources if s not in short]
     lines = [
         _listed(names, split, why)
         for names, why in (
@@ -636,7 +634,7 @@ def _report(args: argparse.Namespace, result: Any) -> None:
         "features": result.config.describe(),
         "similarity": result.similarity,
         "learned": result.learned,
-        "skipped": result.skipped,
+        "skipped": result.skipped + result.too_short,
     }
     if result.maintenance is not None:
         summary["trim"] = result.maintenance.summary()
@@ -649,8 +647,8 @@ def _report(args: argparse.Namespace, result: Any) -> None:
         return
     from features.text import shown
 
-    if result.skipped:
-        print(_skipped(result.skipped, args.split))
+    if result.skipped or result.too_short:
+        print(_skipped(result.skipped, result.too_short, args.split))
     n = len(result.label_counts)
     activities = f"{n} {'activity' if n == 1 else 'activities'}"
     made = (
