@@ -17,10 +17,12 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import sys
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 from typing import Any, Generic, TypeVar
 
 from features.errors import PosecbrError
@@ -98,12 +100,26 @@ class ProcessRunner(Runner[C]):
                 for fut in progress(as_completed(futures), desc, total=len(futures), unit=unit):
                     yield fut.result()
             except BrokenProcessPool:
-                raise PosecbrError(
-                    "a worker process died (out of memory?); try fewer --jobs", "--jobs"
-                ) from None
+                raise PosecbrError(_died(), "--jobs") from None
             finally:
                 for fut in futures:
                     fut.cancel()
+
+
+def _died() -> str:
+    """Why a worker process may have died: out of memory, or (run from a script) the script
+    starts the workers as it is imported: each spawned worker imports the main script again,
+    and one that starts workers there dies (``multiprocessing``'s "safe importing of main
+    module")."""
+    main = sys.modules.get("__main__")
+    script = getattr(main, "__file__", None)
+    from_script = script is not None and getattr(main, "__spec__", None) is None
+    if from_script and Path(str(script)).suffix == ".py":
+        return (
+            f"a worker process died: out of memory (try fewer --jobs), or {script} starts"
+            ' workers when imported (put its code under `if __name__ == "__main__":`)'
+        )
+    return "a worker process died (out of memory?); try fewer --jobs"
 
 
 # The contexts this Dask worker process has run ``setup`` for (kept alive: identity, not id()).
