@@ -1,0 +1,51 @@
+"""Machine outputs at numeric edges: every ``--json`` document strict JSON (no NaN or
+Infinity), its frames and seconds consistent with the clip, and options at their bounds."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from features.poses import save_pose
+from posecbr.cli import main
+from tests.badinput import small_case_base
+from tests.moves import clip
+
+
+def strict(text: str) -> object:
+    """``text`` parsed as strict JSON: NaN, Infinity and -Infinity refused."""
+
+    def refuse(token: str) -> object:
+        raise ValueError(f"not strict JSON: {token}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+@pytest.fixture(scope="module")
+def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return small_case_base(tmp_path_factory.mktemp("cb"))
+
+
+def test_segment_at_the_lowest_frame_rates_covers_the_recording(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """At 0.2 fps a 2 s window holds 0.4 frames: rounded to none, each window was an empty
+    slice and the recording was refused as having no frames. Windows now hold two frames at
+    least (as watch's do), and the 60 frames at 0.2 fps (300 s) are segmented whole."""
+    rec = save_pose(clip("squat", 2.0), tmp_path / "squat.npz")  # 60 frames
+    code = main(["segment", str(rec), "--db", str(case_base), "--fps", "0.2", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    doc = strict(out)
+    assert isinstance(doc, dict)
+    assert doc["fps"] == 0.2 and doc["frames"] == 60
+    segments = doc["segments"]
+    assert segments[0]["start_frame"] == 0 and segments[-1]["end_frame"] == 60
+    assert segments[-1]["end_s"] == pytest.approx(300.0)
+    for a, b in zip(segments[:-1], segments[1:], strict=True):
+        assert a["end_frame"] == b["start_frame"]
+    for s in segments:
+        assert s["end_frame"] > s["start_frame"]
+        assert s["start_s"] == pytest.approx(s["start_frame"] / 0.2)
