@@ -49,3 +49,26 @@ def test_segment_at_the_lowest_frame_rates_covers_the_recording(
     for s in segments:
         assert s["end_frame"] > s["start_frame"]
         assert s["start_s"] == pytest.approx(s["start_frame"] / 0.2)
+
+
+def test_train_at_the_shortest_length_leaves_automatic_phases_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--length 2`` is in the documented range (2 to 4096), but ``--phases auto`` (3 or
+    none) tried 3 phases of a 2-frame sequence and the run was refused for ``phases``, an
+    option not given. Auto now chooses none when 3 phases cannot fit; asked for, they are
+    still refused."""
+    from tests.test_cbr_cli import _write_classes
+
+    data = _write_classes(tmp_path / "train", 3, 5)
+    db = tmp_path / "cb.sqlite"
+    code = main(["train", str(data), "--db", str(db), "--length", "2", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    doc = strict(out)
+    assert isinstance(doc, dict)
+    assert doc["learned"]["phases"] == 0 and doc["cases"] == 9
+    code = main(["train", str(data), "--db", str(db), "--replace", "--length", "2",
+                 "--phases", "3"])  # fmt: skip
+    _, err = capsys.readouterr()
+    assert code == 1 and "phases" in err and "got 3" in err
