@@ -72,3 +72,32 @@ def test_train_at_the_shortest_length_leaves_automatic_phases_out(
                  "--phases", "3"])  # fmt: skip
     _, err = capsys.readouterr()
     assert code == 1 and "phases" in err and "got 3" in err
+
+
+def test_classify_json_says_null_for_the_plausibility_of_no_counterfactual(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A case base of three copies of one standing clip and three of one 3 s squat: a 7.5 s
+    squat finds no change that makes it "still" (``changes`` empty). Its plausibility, the
+    changed clip's distance over the usual one, has no changed clip to measure: it was
+    printed as the bare token NaN, which strict JSON parsers refuse; now null."""
+    still, squat = clip("still", 3.0), clip("squat", 3.0)
+    for i in range(3):
+        save_pose(
+            still.with_metadata(subject=f"p{i}", take=str(i)), tmp_path / "still" / f"s{i}.npz"
+        )
+        save_pose(
+            squat.with_metadata(subject=f"p{i}", take=str(i)), tmp_path / "squat" / f"q{i}.npz"
+        )
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(tmp_path), "--db", str(db)]) == 0
+    query = save_pose(clip("squat", 7.5), tmp_path / "query.npz")
+    capsys.readouterr()
+    code = main(["classify", str(query), "--db", str(db), "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    doc = strict(out)
+    assert isinstance(doc, dict)
+    contrast = doc["results"][0]["contrast"]
+    assert contrast["label"] == "still" and contrast["changes"] == []
+    assert contrast["plausibility"] is None
