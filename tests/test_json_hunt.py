@@ -10,7 +10,7 @@ import pytest
 
 from features.poses import save_pose
 from posecbr.cli import main
-from tests.badinput import small_case_base
+from tests.badinput import good_pose_file, refused, small_case_base
 from tests.moves import clip
 
 
@@ -101,3 +101,19 @@ def test_classify_json_says_null_for_the_plausibility_of_no_counterfactual(
     contrast = doc["results"][0]["contrast"]
     assert contrast["label"] == "still" and contrast["changes"] == []
     assert contrast["plausibility"] is None
+
+
+@pytest.mark.parametrize("block", ["0", "-1", "nan", "inf"])
+def test_train_refuses_a_label_block_that_is_no_length_of_time_naming_the_option(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], block: str
+) -> None:
+    """``--label-block`` NaN, infinite, zero or negative: one line naming the option (it
+    named the label file, which holds nothing wrong), nothing written."""
+    rec = good_pose_file(tmp_path / "rec.npz", frames=60)
+    labels = tmp_path / "labels.txt"
+    labels.write_text("1\n1\n", encoding="utf-8")
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(rec), "--db", str(db), "--frame-labels", str(labels),
+            "--label-block", block]  # fmt: skip
+    line = refused(argv, tmp_path, capsys, "--label-block", block)
+    assert str(labels) not in line
