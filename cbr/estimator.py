@@ -278,10 +278,18 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             positions=bool(self.positions) and fluents,
             summary=self._summary(),
             # "auto": computed with the phases, which fit may then drop
-            phases=(AUTO_PHASES if self.phases == "auto" else int(self.phases))
+            phases=(self._auto_phases() if self.phases == "auto" else int(self.phases))
             if self._summary()
             else 0,
         )
+
+    def _auto_phases(self) -> int:
+        """The phases "auto" computes: AUTO_PHASES (tried against none), or none when the
+        sequences are shorter than that (a phase is one frame at least)."""
+        length = self.length
+        if isinstance(length, int | np.integer) and not isinstance(length, bool):
+            return AUTO_PHASES if int(length) >= AUTO_PHASES else 0
+        return AUTO_PHASES  # not a length: FeatureConfig refuses it
 
     def _check_params(self) -> None:
         if isinstance(self.k, bool) or not isinstance(self.k, int | np.integer) or self.k < 1:

@@ -198,7 +198,8 @@ class Contrast:
             "answer": self.answer,
             "guide_case_id": self.guide_case_id,
             "guide_source": self.guide_source,
-            "plausibility": self.plausibility,
+            # NaN when no counterfactual was found: null in JSON
+            "plausibility": self.plausibility if np.isfinite(self.plausibility) else None,
         }
 
 

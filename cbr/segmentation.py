@@ -228,7 +228,9 @@ def windows_of(sig: MovementSignals, n_frames: int, fps: float, where: str = "")
             f" ({MIN_WINDOW_S:g} s) of movement to classify",
             where or "recording",
         )
-    length = int(round(min(DEFAULT_WINDOW_S, duration) * fps))
+    # at least two frames (as live windows are): at a low frame rate the window's seconds
+    # may hold less than one
+    length = min(n_frames, max(2, int(round(min(DEFAULT_WINDOW_S, duration) * fps))))
     out = []
     for centre in np.arange(HOP_S / 2, duration, HOP_S):
         start = min(max(0, int(centre * fps) - length // 2), n_frames - length)

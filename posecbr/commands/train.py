@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -494,6 +495,9 @@ def _check_options(args: argparse.Namespace) -> None:
     ):
         if value is not None and args.frame_labels is None:
             raise ConfigError(f"goes with --frame-labels ({instead})", option)
+    block = args.label_block
+    if block is not None and not (math.isfinite(block) and block > 0):
+        raise ConfigError(f"must be a finite number of seconds > 0, got {block:g}", "--label-block")
     check_asf(args.asf, [args.data])
     if args.frame_labels is not None and args.subjects is not None:
         raise ConfigError(
