@@ -528,7 +528,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             return _Choice(sides[0], weightings[0], phase_options[-1], {})
         if n_subjects < 2 or "" in set(subjects.tolist()):  # no subjects to hold out
             weighting = "fisher" if "fisher" in weightings and self._summary() else "none"
-            return _Choice("off", weighting, phase_options[-1], {})
+            side = sides[0] if len(sides) == 1 else "off"  # a side asked for is kept
+            return _Choice(side, weighting, phase_options[-1], {})
         # a capped, stratified sample: the inner scores cost the square of the clips
         R, M, left = d.R, d.M, d.left
         pick = inner_sample(labels, subjects)

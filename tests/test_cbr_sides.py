@@ -269,3 +269,16 @@ def test_side_twins_beat_the_plain_choice_by_more_than_a_standard_error() -> Non
     # filing the left-arm clips under the right arm leaves nothing to tell the two apart
     assert clf.selection_["canonical/fisher/0 phases"] <= 0.75
     assert clf.side_ != "canonical"
+
+
+def test_one_subject_keeps_the_side_asked_for() -> None:
+    # one subject: nobody to hold out, so nothing is chosen; a side asked for is still the
+    # side used (the phases left to choose do not undo it), and a new person's left-arm clip
+    # is then recognised as the right-arm cases' activity
+    X, y = _data({"s1": "right"}, 3, 7)
+    clip = _arm_clip("left", "sideways", "s9", np.random.default_rng(8))
+    clf = CaseBaseClassifier(k=1, mirror="canonical").fit(X, y)
+    assert clf.side_ == "canonical"
+    assert clf.solve([clip])[0].problem.mirrored
+    assert list(clf.predict([clip])) == ["one arm sideways"]
+    assert CaseBaseClassifier(k=1).fit(X, y).side_ == "off"  # auto with one subject
