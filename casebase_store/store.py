@@ -699,10 +699,12 @@ class StoreTransaction:
         q = select(CaseBaseRow.id).where(CaseBaseRow.name == name)
         return self.session.scalar(q) is not None
 
-    def expect(self, name: str, uid: str) -> CaseBaseInfo:
+    def expect(self, name: str, uid: str, version: int | None = None) -> CaseBaseInfo:
         """The case base ``name``, checked to be the very one read earlier (same ``uid``):
         a case base replaced or deleted by another process since is refused, so nothing read
-        from the old one is ever written into the new one."""
+        from the old one is ever written into the new one. ``version``: the cases must also be
+        exactly as read (a change decided on all of them, such as a trim, is refused with
+        :class:`StaleCaseError` when another process changed any case since)."""
         if not self.has_case_base(name):
             raise StoreError(
                 f"case base {name!r} was deleted by another process since it was read; "
@@ -714,6 +716,13 @@ class StoreTransaction:
             raise StoreError(
                 f"case base {name!r} was replaced by another process since it was read; "
                 "nothing was written (run the command again)",
+                self.store.where,
+            )
+        if version is not None and info.version != version:
+            raise StaleCaseError(
+                f"case base {name!r} was changed by another process since it was read "
+                f"(version {version}, now {info.version}); nothing was written (run the "
+                "command again)",
                 self.store.where,
             )
         return info

@@ -1,0 +1,95 @@
+"""Case base store faults found by hunting: concurrent writers, side files of readers, real
+processes on real SQLite files."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from tests.badinput import small_case_base
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
+
+
+def _sha(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _posecbr(*argv: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "posecbr", *argv],
+        cwd=ROOT,
+        env=ENV,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A small trained case base (three activities, three clips each), copied per test."""
+    return small_case_base(tmp_path_factory.mktemp("small"))
+
+
+def _copy(src: Path, dst: Path) -> Path:
+    dst.write_bytes(src.read_bytes())
+    return dst
+
+
+#: ``posecbr ARGV`` that prints PAUSED once trim has read and edited the case base, and waits
+#: (outside any transaction) until the file ``argv[1]`` exists before it writes
+GATED_TRIM = """
+import os, sys, time
+import cbr.stored as stored
+recalibrated = stored.recalibrated
+def gated(*a, **kw):
+    out = recalibrated(*a, **kw)
+    print("PAUSED", flush=True)
+    while not os.path.exists(sys.argv[1]):
+        time.sleep(0.01)
+    return out
+stored.recalibrated = gated
+from posecbr.cli import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
+def test_trim_of_a_case_base_changed_since_it_was_read_writes_nothing(
+    small: Path, tmp_path: Path
+) -> None:
+    """A clip retained while trim edits the case base: the trim, decided on the cases as they
+    were (and its unknown judges calibrated on them), is refused with one line, not committed
+    over the new case."""
+    db = _copy(small, tmp_path / "cb.sqlite")
+    gate = tmp_path / "go"
+    trim = subprocess.Popen(
+        [sys.executable, "-c", textwrap.dedent(GATED_TRIM), str(gate),
+         "casebase", "trim", "--db", str(db), "-k", "1", "--keep", "0.5"],
+        cwd=ROOT, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert trim.stdout is not None
+    assert trim.stdout.readline().strip() == "PAUSED"
+    clip = small.parent / "train" / "右腕 raise" / "clip01.npz"
+    retained = _posecbr("classify", str(clip), "--db", str(db), "--feedback", "右腕 raise",
+                        "--novelty", "0", "--benefit", "0")  # fmt: skip
+    assert retained.returncode == 0, retained.stderr
+    before = _sha(db)
+    gate.touch()
+    out, err = trim.communicate(timeout=120)
+    assert trim.returncode == 1, (out, err)
+    assert err.splitlines() == [
+        f"posecbr casebase trim: error: {db}: case base 'default' was changed by another "
+        "process since it was read (version 1, now 2); nothing was written (run the command "
+        "again)"
+    ]
+    assert out == ""
+    assert _sha(db) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite", "go"]
