@@ -48,7 +48,7 @@ from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
 from features.errors import PosecbrError
-from features.fileio import temporary_name
+from features.fileio import remove_stale_temporaries, temporary_prefix
 from features.version import __version__
 
 from .models import (
@@ -984,10 +984,13 @@ def write_store(
     store when there is none.
 
     A SQLite file that does not exist yet is built under a temporary name beside it and appears
-    under its own name only when complete: a failed or killed first write leaves no file. If
-    another process created the file meanwhile, ``action`` runs again, on that store.
+    under its own name only when complete: a failed first write leaves no file, a killed one
+    only its hidden temporary, which the next write removes. If another process created the
+    file meanwhile, ``action`` runs again, on that store.
     """
     file = sqlite_file(url_or_path)
+    if file is not None:  # the temporaries of killed first writes (named for their process)
+        remove_stale_temporaries(file.parent, file.name)
     if file is None or file.exists():
         store = open_store(url_or_path, timeout_s=timeout_s)
         try:
@@ -995,7 +998,7 @@ def write_store(
                 return action(tx)
         finally:
             store.close()
-    tmp = file.with_name(f".{temporary_name(file.name)}.{uuid.uuid4().hex[:8]}.new")
+    tmp = file.with_name(f"{temporary_prefix(file.name)}{uuid.uuid4().hex[:8]}.new")
     try:
         store = open_store(tmp, timeout_s=timeout_s)
         try:

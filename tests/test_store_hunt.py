@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -13,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from tests.badinput import small_case_base
+from tests.processes import posecbr_process
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
@@ -93,3 +95,25 @@ def test_trim_of_a_case_base_changed_since_it_was_read_writes_nothing(
     assert out == ""
     assert _sha(db) == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite", "go"]
+
+
+def test_a_killed_first_train_leaves_a_temporary_the_next_train_removes(
+    small: Path, tmp_path: Path
+) -> None:
+    """A first ``train`` builds its case base file under a hidden temporary name: killed in
+    its transaction it leaves only that temporary (and its journal), and the next train into
+    the same file removes them, so killed runs never pile up copies of a case base."""
+    folder = tmp_path / "out"
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    argv = ["train", str(small.parent / "train"), "--db", str(db), "--mirror", "off",
+            "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+    killed = posecbr_process(*argv, pause_after="build")
+    assert killed.stdout is not None and killed.stdout.readline().strip() == "PAUSED"
+    killed.send_signal(signal.SIGKILL)
+    killed.wait(timeout=30)
+    left = sorted(p.name for p in folder.iterdir())
+    assert len(left) == 2 and left[0].startswith(".cb.sqlite.") and left[1] == left[0] + "-journal"
+    done = _posecbr(*argv)
+    assert done.returncode == 0, done.stderr
+    assert sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]
