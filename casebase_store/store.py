@@ -34,7 +34,7 @@ import os
 import sqlite3
 import uuid
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -1000,12 +1000,17 @@ def write_store(
             store.close()
     tmp = file.with_name(f"{temporary_prefix(file.name)}{uuid.uuid4().hex[:8]}.new")
     try:
-        store = open_store(tmp, timeout_s=timeout_s)
         try:
-            with store.transaction() as tx:
-                result = action(tx)
-        finally:
-            store.close()
+            store = open_store(tmp, timeout_s=timeout_s)
+            try:
+                with store.transaction() as tx:
+                    result = action(tx)
+            finally:
+                store.close()
+        except StoreError as exc:  # named for the file asked for, never its hidden temporary
+            if exc.source != str(tmp):
+                raise
+            raise type(exc)(exc.message, file) from None
         try:
             os.link(tmp, file)  # appears whole, and never over a store made meanwhile
         except FileExistsError:
@@ -1015,4 +1020,6 @@ def write_store(
         return result
     finally:
         for suffix in ("", "-journal", "-wal", "-shm"):
-            Path(f"{tmp}{suffix}").unlink(missing_ok=True)
+            # a read-only file system refuses even to unlink what was never created
+            with suppress(OSError):
+                Path(f"{tmp}{suffix}").unlink(missing_ok=True)

@@ -117,3 +117,46 @@ def test_a_killed_first_train_leaves_a_temporary_the_next_train_removes(
     done = _posecbr(*argv)
     assert done.returncode == 0, done.stderr
     assert sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]
+
+
+def _read_only_mounts_work() -> bool:
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        script = f"mount --bind {d} {d} && mount -o remount,ro,bind {d} {d}"
+        try:
+            done = subprocess.run(["unshare", "-rm", "sh", "-c", script], capture_output=True)
+        except OSError:
+            return False
+        return done.returncode == 0
+
+
+@pytest.mark.skipif(
+    not _read_only_mounts_work(),
+    reason="this machine cannot make a private read-only mount (unshare -rm, mount)",
+)
+def test_a_first_train_into_a_read_only_folder_names_the_file_asked_for(
+    small: Path, tmp_path: Path
+) -> None:
+    """The case base file cannot be created: the one line names it, not the hidden temporary
+    it would have been built under."""
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    argv = ["train", str(small.parent / "train"), "--db", str(db), "--mirror", "off",
+            "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+    script = (
+        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
+        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
+        f'exec "$0" -m posecbr "$@"'
+    )
+    done = subprocess.run(
+        ["unshare", "-rm", "sh", "-c", script, sys.executable, *argv],
+        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.splitlines() == [
+        f"posecbr train: error: {db}: cannot open or write the database (unable to open "
+        "database file)"
+    ]
+    assert list(folder.iterdir()) == []
