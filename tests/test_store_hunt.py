@@ -9,10 +9,16 @@ import signal
 import subprocess
 import sys
 import textwrap
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from casebase_store import open_store
+from cbr.similarity import get_measure
+from features.poses import load_pose, save_pose
+from posecbr.cli import main
 from tests.badinput import small_case_base
 from tests.processes import posecbr_process
 
@@ -160,3 +166,69 @@ def test_a_first_train_into_a_read_only_folder_names_the_file_asked_for(
         "database file)"
     ]
     assert list(folder.iterdir()) == []
+
+
+#: ``posecbr ARGV`` that prints PAUSED once it has read the case base's cached representations
+#: (before it caches those it computed) and waits until the file ``argv[1]`` exists
+GATED_CACHE = """
+import os, sys, time
+from casebase_store import store
+load = store.CaseStore.load_representations
+def gated(self, *a, **kw):
+    out = load(self, *a, **kw)
+    print("PAUSED", flush=True)
+    while not os.path.exists(sys.argv[1]):
+        time.sleep(0.01)
+    return out
+store.CaseStore.load_representations = gated
+from posecbr.cli import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
+def test_a_case_revised_while_another_process_caches_representations_keeps_its_own(
+    small: Path, tmp_path: Path
+) -> None:
+    """DTW retrieval compares with the cached representations. A writer that read a revised
+    case (its representation dropped) computes one from the problem it read; a revision
+    committed meanwhile must not be hidden behind that old representation."""
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(small.parent / "train"), "--db", str(db), "--similarity", "dtw",
+                 "--mirror", "off"]) == 0  # fmt: skip
+    seq = load_pose(small.parent / "train" / "右腕 raise" / "clip01.npz")
+    noise = np.random.default_rng(0).normal(scale=0.02, size=seq.positions.shape)
+    clip = save_pose(replace(seq, positions=seq.positions + noise, source=""), tmp_path / "q.npz")
+    revise = [
+        "classify",
+        str(clip),
+        "--db",
+        str(db),
+        "--feedback",
+        "右腕 raise",
+        "--novelty",
+        "1e9",
+    ]  # fmt: skip  (never retained: the nearest case is revised)
+    assert _posecbr(*revise).returncode == 0  # its representation is dropped
+    gate = tmp_path / "go"
+    reader = subprocess.Popen(
+        [sys.executable, "-c", textwrap.dedent(GATED_CACHE), str(gate),
+         "casebase", "trim", "--db", str(db), "-k", "1"],
+        cwd=ROOT, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert reader.stdout is not None and reader.stdout.readline().strip() == "PAUSED"
+    assert _posecbr(*revise).returncode == 0  # the same case, revised again
+    gate.touch()
+    reader.communicate(timeout=120)
+    store = open_store(db, readonly=True)
+    info, cases = store.load_case_base("default")
+    measure = get_measure(info.similarity)
+    kind = measure.cache_kind(tuple(cases.features.shape[1:]))
+    assert kind is not None
+    cached = store.load_representations("default", kind)
+    store.close()
+    revised = [i for i, o in enumerate(cases.origins) if o == "revised"]
+    assert len(revised) == 1
+    for i, case_id in enumerate(cases.ids.tolist()):
+        if case_id in cached:
+            want = measure.represent(cases.features[i : i + 1])[0]
+            np.testing.assert_array_equal(cached[case_id], want, err_msg=f"case {case_id}")
