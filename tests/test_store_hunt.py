@@ -1,5 +1,5 @@
-"""Case base store faults found by hunting: concurrent writers, side files of readers, real
-processes on real SQLite files."""
+"""Case base store faults found by hunting: a writer racing another, a killed first train, a
+read-only folder; real processes on real SQLite files."""
 
 from __future__ import annotations
 
