@@ -34,7 +34,7 @@ import os
 import sqlite3
 import uuid
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -48,7 +48,7 @@ from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
 from features.errors import PosecbrError
-from features.fileio import temporary_name
+from features.fileio import remove_stale_temporaries, temporary_prefix
 from features.version import __version__
 
 from .models import (
@@ -699,10 +699,12 @@ class StoreTransaction:
         q = select(CaseBaseRow.id).where(CaseBaseRow.name == name)
         return self.session.scalar(q) is not None
 
-    def expect(self, name: str, uid: str) -> CaseBaseInfo:
+    def expect(self, name: str, uid: str, version: int | None = None) -> CaseBaseInfo:
         """The case base ``name``, checked to be the very one read earlier (same ``uid``):
         a case base replaced or deleted by another process since is refused, so nothing read
-        from the old one is ever written into the new one."""
+        from the old one is ever written into the new one. ``version``: the cases must also be
+        exactly as read (a change decided on all of them, such as a trim, is refused with
+        :class:`StaleCaseError` when another process changed any case since)."""
         if not self.has_case_base(name):
             raise StoreError(
                 f"case base {name!r} was deleted by another process since it was read; "
@@ -714,6 +716,13 @@ class StoreTransaction:
             raise StoreError(
                 f"case base {name!r} was replaced by another process since it was read; "
                 "nothing was written (run the command again)",
+                self.store.where,
+            )
+        if version is not None and info.version != version:
+            raise StaleCaseError(
+                f"case base {name!r} was changed by another process since it was read "
+                f"(version {version}, now {info.version}); nothing was written (run the "
+                "command again)",
                 self.store.where,
             )
         return info
@@ -975,10 +984,13 @@ def write_store(
     store when there is none.
 
     A SQLite file that does not exist yet is built under a temporary name beside it and appears
-    under its own name only when complete: a failed or killed first write leaves no file. If
-    another process created the file meanwhile, ``action`` runs again, on that store.
+    under its own name only when complete: a failed first write leaves no file, a killed one
+    only its hidden temporary, which the next write removes. If another process created the
+    file meanwhile, ``action`` runs again, on that store.
     """
     file = sqlite_file(url_or_path)
+    if file is not None:  # the temporaries of killed first writes (named for their process)
+        remove_stale_temporaries(file.parent, file.name)
     if file is None or file.exists():
         store = open_store(url_or_path, timeout_s=timeout_s)
         try:
@@ -986,14 +998,19 @@ def write_store(
                 return action(tx)
         finally:
             store.close()
-    tmp = file.with_name(f".{temporary_name(file.name)}.{uuid.uuid4().hex[:8]}.new")
+    tmp = file.with_name(f"{temporary_prefix(file.name)}{uuid.uuid4().hex[:8]}.new")
     try:
-        store = open_store(tmp, timeout_s=timeout_s)
         try:
-            with store.transaction() as tx:
-                result = action(tx)
-        finally:
-            store.close()
+            store = open_store(tmp, timeout_s=timeout_s)
+            try:
+                with store.transaction() as tx:
+                    result = action(tx)
+            finally:
+                store.close()
+        except StoreError as exc:  # named for the file asked for, never its hidden temporary
+            if exc.source != str(tmp):
+                raise
+            raise type(exc)(exc.message, file) from None
         try:
             os.link(tmp, file)  # appears whole, and never over a store made meanwhile
         except FileExistsError:
@@ -1003,4 +1020,6 @@ def write_store(
         return result
     finally:
         for suffix in ("", "-journal", "-wal", "-shm"):
-            Path(f"{tmp}{suffix}").unlink(missing_ok=True)
+            # a read-only file system refuses even to unlink what was never created
+            with suppress(OSError):
+                Path(f"{tmp}{suffix}").unlink(missing_ok=True)

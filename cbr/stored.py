@@ -203,10 +203,12 @@ def _representations(
             cached[int(arrays.ids[i])] = new[j]
         if not store.readonly:
             with store.transaction() as tx:
-                tx.expect(info.name, info.uid)
-                tx.put_representations(
-                    kind, {int(arrays.ids[i]): new[j] for j, i in enumerate(missing)}
-                )
+                # cached only for the cases as read: a case revised since would keep the
+                # representation of its old problem (and retrieval would use that)
+                if tx.expect(info.name, info.uid).version == info.version:
+                    tx.put_representations(
+                        kind, {int(arrays.ids[i]): new[j] for j, i in enumerate(missing)}
+                    )
     return np.stack([cached[int(cid)] for cid in arrays.ids]).astype(np.float64)
 
 

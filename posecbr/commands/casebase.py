@@ -451,7 +451,7 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     if not args.dry_run:
         judges = recalibrated(clf, report.casebase)
         with store.transaction() as tx:
-            info = tx.expect(name, stored.uid)
+            info = tx.expect(name, stored.uid, stored.version)
             record_trim(tx, info, report)
             judges_after_change(tx, info, judges)
         write_matrices(store, name)
