@@ -136,3 +136,17 @@ def small_case_base(folder: Path) -> Path:
                  "--feature-weights", "none", "--phases", "0"])  # fmt: skip
     assert code == 0
     return db
+
+
+def read_only_mounts_work() -> bool:
+    """Whether this machine can make a private read-only mount (``unshare -rm``, ``mount``):
+    how tests give a folder that not even root can write to."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        script = f"mount --bind {d} {d} && mount -o remount,ro,bind {d} {d}"
+        try:
+            done = subprocess.run(["unshare", "-rm", "sh", "-c", script], capture_output=True)
+        except OSError:
+            return False
+        return done.returncode == 0

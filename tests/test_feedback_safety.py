@@ -19,6 +19,7 @@ from casebase_store import open_store
 from cbr.stored import load_classifier
 from features.poses import PoseSequence, load_pose, save_pose
 from posecbr.cli import main
+from tests.badinput import read_only_mounts_work
 from tests.postgres import empty_postgres
 from tests.processes import posecbr_process as _posecbr
 
@@ -352,20 +353,8 @@ def test_read_only_commands_create_and_change_nothing(
     assert not (tmp_path / "none.sqlite").exists() and not (tmp_path / "none2.sqlite").exists()
 
 
-def _read_only_mounts_work() -> bool:
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as d:
-        script = f"mount --bind {d} {d} && mount -o remount,ro,bind {d} {d}"
-        try:
-            done = subprocess.run(["unshare", "-rm", "sh", "-c", script], capture_output=True)
-        except OSError:
-            return False
-        return done.returncode == 0
-
-
 @pytest.mark.skipif(
-    not _read_only_mounts_work(),
+    not read_only_mounts_work(),
     reason="this machine cannot make a private read-only mount (unshare -rm, mount)",
 )
 @pytest.mark.parametrize("journal", ["delete", "wal"])  # wal: a file written by posecbr 0.1

@@ -19,7 +19,7 @@ from casebase_store import open_store
 from cbr.similarity import get_measure
 from features.poses import load_pose, save_pose
 from posecbr.cli import main
-from tests.badinput import small_case_base
+from tests.badinput import read_only_mounts_work, small_case_base
 from tests.processes import posecbr_process
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -125,20 +125,8 @@ def test_a_killed_first_train_leaves_a_temporary_the_next_train_removes(
     assert sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]
 
 
-def _read_only_mounts_work() -> bool:
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as d:
-        script = f"mount --bind {d} {d} && mount -o remount,ro,bind {d} {d}"
-        try:
-            done = subprocess.run(["unshare", "-rm", "sh", "-c", script], capture_output=True)
-        except OSError:
-            return False
-        return done.returncode == 0
-
-
 @pytest.mark.skipif(
-    not _read_only_mounts_work(),
+    not read_only_mounts_work(),
     reason="this machine cannot make a private read-only mount (unshare -rm, mount)",
 )
 def test_a_first_train_into_a_read_only_folder_names_the_file_asked_for(
