@@ -2,8 +2,9 @@
 classifier in the same run.
 
 Run: ``python -m benchmarks.segment_people [--datasets ...] [--per-person N] [--seed S]
-[--train-people N]`` (``--train-people 1``: case bases of one person, as one of CMU subject 13
-alone; written to ``segment_people_1.json``)
+[--train-people N] [--mirror SIDE]`` (``--train-people 1``: case bases of one person, as one of
+CMU subject 13 alone; written to ``segment_people_1.json``; ``--mirror``: their side handling,
+as ``train --mirror``, written to ``segment_people[_N]_SIDE.json``)
 (about 19 minutes of wall clock at load 6-10 on 2 cores, most of it the DTW baseline and
 the case bases of UI-PRMD Kinect; each window is solved once and finished by every judge;
 one core: BLAS, OpenMP and numba threads pinned to 1; ``--datasets hdm05`` alone takes about
@@ -233,11 +234,12 @@ def training_clips(joined: list[tuple[Any, Group]], leave_out: str | None = None
     return split_windows(clips).clips
 
 
-def fit(clips: list[Any]) -> Any:
-    """The classifier ``posecbr train --split windows`` makes (feature weights none)."""
+def fit(clips: list[Any], mirror: str = "auto") -> Any:
+    """The classifier ``posecbr train --split windows [--mirror MIRROR]`` makes (feature
+    weights none)."""
     from cbr.estimator import CaseBaseClassifier
 
-    return CaseBaseClassifier(feature_weights="none").fit(
+    return CaseBaseClassifier(feature_weights="none", mirror=mirror).fit(
         [c.seq for c in clips], [c.label for c in clips]
     )
 
@@ -330,7 +332,7 @@ def dtw(X: np.ndarray, y: np.ndarray, rec: Recording) -> dict[str, Any]:
     }
 
 
-def run_fold(fold: Fold, read: Reader) -> dict[str, Any]:
+def run_fold(fold: Fold, read: Reader, mirror: str = "auto") -> dict[str, Any]:
     """Seen accuracy and boundaries (ours per judge, DTW), and the unknown share of every
     movement left out in turn, per judge."""
     from cbr.problem import warm
@@ -338,7 +340,7 @@ def run_fold(fold: Fold, read: Reader) -> dict[str, Any]:
 
     joined = joined_training(fold.train, read)
     t0 = time.perf_counter()
-    clf = fit(training_clips(joined))
+    clf = fit(training_clips(joined), mirror)
     fit_s = time.perf_counter() - t0
     judges = {name: judge_named(clf, name) for name in JUDGES}
     X, y = dtw_training([(seq, g.movement) for seq, g in joined])
@@ -360,7 +362,7 @@ def run_fold(fold: Fold, read: Reader) -> dict[str, Any]:
         for name, o in ours(clf, rec, judges).items():
             row[name] = {k: v for k, v in o.items() if k != "pred"}
         recs.append(row)
-    unknown = run_unknown(fold, joined)
+    unknown = run_unknown(fold, joined, mirror)
     return {
         "fold": fold.name,
         "cases": len(clf.case_base_),
@@ -371,7 +373,9 @@ def run_fold(fold: Fold, read: Reader) -> dict[str, Any]:
     }
 
 
-def run_unknown(fold: Fold, joined: list[tuple[Any, Group]]) -> dict[str, Any]:
+def run_unknown(
+    fold: Fold, joined: list[tuple[Any, Group]], mirror: str = "auto"
+) -> dict[str, Any]:
     """Each movement of the test recordings left out of the case base in turn: per judge,
     its blocks in the recordings that contain it, and how many were called unknown."""
     from cbr.segmentation import finish, solve_recording
@@ -380,7 +384,7 @@ def run_unknown(fold: Fold, joined: list[tuple[Any, Group]]) -> dict[str, Any]:
     movements = sorted({m for r in fold.recordings for m in r.movements})
     out: dict[str, Any] = {}
     for movement in progress(movements, f"{fold.dataset} {fold.name}: left out", unit="movement"):
-        clf = fit(training_clips(joined, leave_out=movement))
+        clf = fit(training_clips(joined, leave_out=movement), mirror)
         judges = {name: judge_named(clf, name) for name in JUDGES}
         counts = {name: [0, 0] for name in JUDGES}
         for rec in fold.recordings:
@@ -459,6 +463,13 @@ def main(argv: list[str] | None = None) -> int:
         help="case bases of only the first N training people (1: one person, as a case base "
         "of CMU subject 13 alone); results go to segment_people_N.json",
     )
+    parser.add_argument(
+        "--mirror",
+        choices=("auto", "off", "canonical", "augment"),
+        default="auto",
+        help="the case bases' side handling, as train's --mirror (given: results go to "
+        "segment_people[_N]_MIRROR.json)",
+    )
     args = parser.parse_args(argv)
     if not UIPRMD.is_dir() or not HDM05.is_dir():
         print(f"no ui-prmd or hdm05 data under {UIPRMD.parents[1]}: nothing to measure")
@@ -473,7 +484,7 @@ def main(argv: list[str] | None = None) -> int:
         read = Reader()
         t0 = time.perf_counter()
         chosen = folds(dataset, args.per_person, args.seed, read, args.train_people)
-        done = [run_fold(f, read) for f in chosen]
+        done = [run_fold(f, read, args.mirror) for f in chosen]
         results[dataset] = done
         summary[dataset] = {**summarise(done), "wall_s": time.perf_counter() - t0}
         print_table({dataset: summary[dataset]})
@@ -483,7 +494,8 @@ def main(argv: list[str] | None = None) -> int:
         "command": "python -m benchmarks.segment_people --datasets "
         + " ".join(args.datasets)
         + f" --per-person {args.per_person} --seed {args.seed}"
-        + (f" --train-people {args.train_people}" if args.train_people else ""),
+        + (f" --train-people {args.train_people}" if args.train_people else "")
+        + (f" --mirror {args.mirror}" if args.mirror != "auto" else ""),
         "note": "joined real single repetitions of people not in the case base: the joins "
         "(0.1 s of blending) and the rest at each repetition's ends differ from a real session",
         "machine": one_thread_machine(),
@@ -495,6 +507,8 @@ def main(argv: list[str] | None = None) -> int:
     out = RESULTS
     if args.train_people:
         out = RESULTS.with_name(f"segment_people_{args.train_people}.json")
+    if args.mirror != "auto":
+        out = out.with_name(f"{out.stem}_{args.mirror}.json")
     write_json(result, out)
     print(f"\nwrote {out.relative_to(ROOT)}")
     return 0
