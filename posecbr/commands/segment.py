@@ -7,8 +7,9 @@ and frames, a confidence, the number of repetitions and a short explanation. A c
 windows (``posecbr train ... --split windows``) matches how the recording's windows are cut.
 
 ``--json`` prints ``{"recording", "fps", "segments": [{"start_s", "end_s", "start_frame",
-"end_frame", "label" (null when unknown), "confidence", "repetitions", "explanation"}]}``
-(a list of those for several recordings; end frames exclusive); ``--plot`` draws the segments
+"end_frame", "label" (null when unknown), "confidence", "unknown" (why, or null),
+"repetitions", "explanation", "novelty", "repetition_frames"}]}`` (a list of those for
+several recordings; end frames exclusive); ``--plot`` draws the segments
 over the fluent timeline; ``--overlay`` writes a video recording with the stick figure, the
 current activity and its repetition count on every frame (as ``extract --overlay`` does).
 """
