@@ -67,6 +67,17 @@ class HeldOut:
     k: int
 
 
+def answered(h: HeldOut) -> HeldOut:
+    """The held-out clips that had a case to answer them: a clip whose group held every case
+    of the case base (one subject left after editing, held out) had none, and says nothing
+    of how often an answer is right."""
+    keep = np.isfinite(np.asarray(h.distances, dtype=np.float64)[:, 0])
+    if keep.all():
+        return h
+    return HeldOut(h.nearest[keep], h.share[keep], h.right[keep], h.answer[keep],
+                   h.distances[keep], h.codes[keep], h.truth[keep], h.k)  # fmt: skip
+
+
 def held_out(
     cb: CaseBase,
     queries: np.ndarray,
@@ -124,13 +135,18 @@ def soft_vote(
     (an exact match, ``d_1 = 0``, takes all the weight with the cases at distance 0)."""
     d = np.asarray(distances, dtype=np.float64)
     present = np.isfinite(d)
-    d1 = np.maximum(d[:, :1], EXACT)
+    d1 = np.maximum(np.where(present[:, :1], d[:, :1], 1.0), EXACT)
     e = np.where(present, -((np.where(present, d, 0.0) / d1) ** 2) / float(temperature), -np.inf)
-    w = np.exp(e - e.max(axis=1, keepdims=True))  # the nearest case weighs 1: no underflow
+    # the nearest case weighs 1 (no underflow), a missing one nothing (a query without any
+    # case has no maximum to subtract: 0)
+    top = np.where(present.any(axis=1, keepdims=True), e.max(axis=1, keepdims=True), 0.0)
+    w = np.exp(e - top)
     rows = np.repeat(np.arange(len(d)), d.shape[1])
     out = np.zeros((len(d), n_classes))
     np.add.at(out, (rows, np.where(present, codes, 0).ravel()), w.ravel())
-    return np.asarray(out / out.sum(axis=1, keepdims=True))
+    total = out.sum(axis=1, keepdims=True)
+    # a query with no case at all has no vote: all zeros, never NaN
+    return np.asarray(np.divide(out, total, out=np.zeros_like(out), where=total > 0))
 
 
 def fit_temperature(
@@ -278,6 +294,7 @@ def calibrate_soft(h: HeldOut, n_classes: int, basis: str,
     """The confidence from held-out clips ``h``: the temperature of the soft vote over their
     ``neighbours`` nearest cases fitted by log loss, then Platt scaling of their answers'
     soft votes (the answer is the k-vote's, :func:`held_out_votes`)."""
+    h = answered(h)
     if len(h.share) == 0:
         return UNCALIBRATED
     n = min(int(neighbours), h.distances.shape[1])

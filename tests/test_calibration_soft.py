@@ -147,3 +147,26 @@ def test_scores_of_many_queries_are_each_querys_soft_vote_for_its_answer() -> No
     # a calibration of the vote share maps the shares given
     shares = ConfidenceCalibration((), (), "subject", 0, 0.0, 1.0, 0)
     assert shares.scores(d, c, 2, [1, 1], [0.25, 0.75]) == pytest.approx([0.25, 0.75])
+
+
+def test_a_clip_no_case_could_answer_is_left_out_of_the_calibration() -> None:
+    # the training clips of two people held out by person; the second person's clips are
+    # then held out again against a case base of the first person only, as a case base edited
+    # down to one subject is: those clips have no case (all inf) and say nothing of how often
+    # an answer is right. The calibration is the one of the answered clips alone, with no
+    # NaN on the way (it was NaN-poisoned: an all-inf row's soft vote was 0/0)
+    rng = np.random.default_rng(3)
+    x, y, who = _people(rng, 2, 40)
+    codes = np.searchsorted(CLASSES, y)
+    d, idx = _nearest(x, x, who[:, None] == who[None, :], WIDE)
+    answered = held_out_votes(d, codes[idx], CLASSES, y, K)
+    none = np.full((10, WIDE), np.inf)
+    with np.errstate(invalid="raise"):  # no NaN made (underflow of far weights is fine)
+        assert soft_vote(none, np.zeros((10, WIDE), dtype=int), 3, 1.0).tolist() == [[0.0] * 3] * 10
+        mixed = held_out_votes(np.vstack([d, none]), np.vstack([codes[idx], np.zeros_like(
+            none, dtype=int)]), CLASSES, np.concatenate([y, y[:10]]), K)  # fmt: skip
+        cal = calibrate_soft(mixed, 3, "leave-one-person-out", WIDE)
+    alone = calibrate_soft(answered, 3, "leave-one-person-out", WIDE)
+    assert cal.n == alone.n == len(x)
+    assert cal.temperature == pytest.approx(alone.temperature)
+    assert cal.y == pytest.approx(alone.y)
