@@ -371,6 +371,17 @@ def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
         return StoreError("not a readable SQLite database (corrupt or not a database)", where)
     if "unable to open" in low or "readonly" in low or "read-only" in low:
         return StoreError(f"cannot open or write the database ({text})", where)
+    if "no such table" in low or ("relation" in low and "does not exist" in low):
+        first = text.splitlines()[0]
+        return StoreError(
+            f"not a whole posecbr case base store: a table is missing ({first})", where
+        )
+    if "could not decode" in low:
+        return StoreError(
+            "not a readable case base store (damaged: a text column holds bytes that are not"
+            " UTF-8)",
+            where,
+        )
     if "connection failed" in low or "could not connect" in low or "connection refused" in low:
         first = " ".join(text.split())
         return StoreError(f"cannot connect to the database server ({first})", where)

@@ -220,3 +220,35 @@ def test_a_case_revised_while_another_process_caches_representations_keeps_its_o
         if case_id in cached:
             want = measure.represent(cases.features[i : i + 1])[0]
             np.testing.assert_array_equal(cached[case_id], want, err_msg=f"case {case_id}")
+
+
+@pytest.mark.parametrize(
+    ("damage", "said"),
+    [
+        ("DROP TABLE cases", "not a whole posecbr case base store: a table is missing"),
+        (
+            "UPDATE case_bases SET name = CAST(X'66ff6f' AS TEXT)",
+            "a text column holds bytes that are not UTF-8",
+        ),
+    ],
+)
+def test_a_store_missing_a_table_or_holding_broken_text_is_named_so(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], damage: str, said: str
+) -> None:
+    """Another program dropped a table, or damaged pages left a name that is not UTF-8: one
+    line saying what is wrong with the file (it was SQLite's raw "no such table: cases" or
+    "Could not decode to UTF-8 column"), exit 1, the file unchanged."""
+    import sqlite3
+
+    db = tmp_path / "damaged.sqlite"
+    _copy(small, db)
+    con = sqlite3.connect(db)
+    con.execute(damage)
+    con.commit()
+    con.close()
+    before = _sha(db)
+    for argv in (["casebase", "info"], ["casebase", "list"]):
+        assert main([*argv, "--db", str(db)]) == 1
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and str(db) in err[0] and said in err[0], err
+    assert _sha(db) == before
