@@ -71,7 +71,8 @@ def answered(h: HeldOut) -> HeldOut:
     """The held-out clips that had a case to answer them: a clip whose group held every case
     of the case base (one subject left after editing, held out) had none, and says nothing
     of how often an answer is right."""
-    keep = np.isfinite(np.asarray(h.distances, dtype=np.float64)[:, 0])
+    d = np.asarray(h.distances, dtype=np.float64)
+    keep = np.isfinite(d[:, 0]) if d.shape[1] else np.zeros(len(d), dtype=bool)
     if keep.all():
         return h
     return HeldOut(h.nearest[keep], h.share[keep], h.right[keep], h.answer[keep],
