@@ -120,3 +120,61 @@ def test_frame_labels_are_read_before_the_recording(
             "--db", str(tmp_path / "cb.sqlite")]  # fmt: skip
     refused(argv, tmp_path, capsys, f"{empty}: the label file holds no labels")
     assert read == []
+
+
+# ---- (c) segment given several recordings, one it cannot segment ---------------------------
+
+
+@pytest.fixture(scope="module")
+def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from tests.badinput import small_case_base
+
+    return small_case_base(tmp_path_factory.mktemp("cb"))
+
+
+def _spoiled(kind: str, path: Path) -> tuple[Path, str]:
+    """A recording ``segment`` cannot segment, and what its refusal says."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from tests.badinput import pose_file
+
+    if kind == "one frame":
+        return save_pose(standing_clip(1), path), "the recording lasts 0.03 s, shorter than"
+    if kind == "no joints":
+        seq = standing_clip(60)
+        nan = replace(seq, positions=np.full_like(seq.positions, np.nan), confidence=None)
+        return save_pose(nan, path), "no person in view in enough frames"
+    positions = standing_clip().positions[:, :, :2]
+    return pose_file(path, positions=positions), "positions must have shape (frames, joints, 3)"
+
+
+@pytest.mark.parametrize("kind", ["one frame", "no joints", "wrong shape"])
+def test_segment_refuses_a_bad_recording_among_several_before_segmenting_any(
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    kind: str,
+) -> None:
+    """``segment good.npz bad.npz --json``: the second, a 1-frame clip, a clip of NaN joints
+    or a pose file of 2-D positions, is refused in one line before the first is segmented
+    (it was segmented, minutes for a long recording, and then thrown away)."""
+    import cbr.segmentation
+
+    data = tmp_path / "data"
+    data.mkdir()
+    good = save_pose(standing_clip(90), data / "good.npz")
+    bad, problem = _spoiled(kind, data / "bad.npz")
+    segmented: list[str] = []
+    real = cbr.segmentation.segment
+
+    def segment(clf: Any, rec: Any, *args: Any, **kwargs: Any) -> Any:
+        segmented.append(rec.source)
+        return real(clf, rec, *args, **kwargs)
+
+    monkeypatch.setattr(cbr.segmentation, "segment", segment)
+    argv = ["segment", str(good), str(bad), "--db", str(case_base), "--json"]
+    refused(argv, tmp_path, capsys, str(bad), problem)
+    assert segmented == []
