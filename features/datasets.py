@@ -755,8 +755,9 @@ def dataset_entries(
     """The clips of the dataset at ``path`` that may pass the filters (those of
     :func:`iter_dataset`), found from names alone: nothing is decoded yet. The label file
     of every recording labelled over time is read and fitted to the recording where that
-    is cheap (:func:`check_track`): one label file named for two recordings of different
-    lengths, or a malformed one, is refused before the first recording is worked on."""
+    is cheap (:func:`check_track`), and every AMC file's skeleton found (:func:`find_asf`):
+    one label file named for two recordings of different lengths, a malformed one, or an
+    AMC file with no skeleton beside it is refused before the first file is worked on."""
     path = Path(path)
     kind = detect_kind(path)
     kept = [
@@ -765,6 +766,8 @@ def dataset_entries(
         if _keep(e.label, e.subject, e.extras, labels, subjects, movements, episodes, correct)
     ]
     for d in kept:
+        if _suffix(d.entry.path) == ".amc":
+            find_asf(d.entry.path)  # one without its skeleton: refused before any is read
         if d.entry.check is not None:
             d.entry.check()
     return kept

@@ -178,3 +178,23 @@ def test_segment_refuses_a_bad_recording_among_several_before_segmenting_any(
     argv = ["segment", str(good), str(bad), "--db", str(case_base), "--json"]
     refused(argv, tmp_path, capsys, str(bad), problem)
     assert segmented == []
+
+
+def test_an_amc_recording_without_its_skeleton_is_refused_before_the_others_are_described(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], described: list[str]
+) -> None:
+    """A labels CSV listing a pose file, then an AMC recording with no .asf beside it (as
+    cmu-mocap6/amc ships): refused naming the AMC file before the pose file was described
+    (it was described first, and the skeleton looked for only when the AMC was read)."""
+    first, _ = _recordings(tmp_path / "data")
+    amc = tmp_path / "data" / "13_30.amc"
+    amc.write_text(":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 0 0 0 0 0\n", encoding="utf-8")
+    (tmp_path / "data" / "labels.txt").write_text("1 1 1 1\n", encoding="utf-8")
+    csv = tmp_path / "data" / "recordings.csv"
+    csv.write_text(
+        f"path,label_file,label_block_s\n{first.name},labels.txt,0.5\n{amc.name},labels.txt,0.5\n",
+        encoding="utf-8",
+    )
+    refused(["train", str(csv), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
+            f"{amc}: no .asf skeleton file beside it")  # fmt: skip
+    assert described == []
