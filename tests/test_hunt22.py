@@ -198,3 +198,16 @@ def test_an_amc_recording_without_its_skeleton_is_refused_before_the_others_are_
     refused(["train", str(csv), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
             f"{amc}: no .asf skeleton file beside it")  # fmt: skip
     assert described == []
+
+
+# ---- (b) watch ------------------------------------------------------------------------------
+
+
+def test_watch_of_a_folder_says_it_is_a_folder(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``watch FOLDER``: the folder exists, and is no video (it was "no such video file")."""
+    folder = tmp_path / "videos"
+    folder.mkdir()
+    refused(["watch", str(folder), "--db", str(case_base)], tmp_path, capsys,
+            f"{folder}: is a folder, not a video file")  # fmt: skip
