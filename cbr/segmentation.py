@@ -830,6 +830,18 @@ def _check_call(clf: Any, recording: Any, chunk_frames: Any) -> None:
         )
 
 
+def check_segmentable(recording: PoseSequence) -> None:
+    """Refuse, with the DataError :func:`segment` would raise, a recording it cannot segment
+    (no person in enough frames to follow a movement, shorter than the shortest window),
+    from its movement signals alone: cheap, and cached for the segmenting when the recording
+    is not cut in pieces. A command given several recordings refuses a bad one so before it
+    segments any."""
+    rec = recording.to_canonical()
+    chunk = long_clip.chunk_for(rec, None)
+    sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals_of(rec)
+    windows_of(sig, rec.n_frames, rec.fps, rec.source)
+
+
 def solve_recording(
     clf: Any, recording: PoseSequence, k: int = 1, chunk_frames: int | None = None
 ) -> SolvedRecording:
@@ -940,6 +952,7 @@ __all__ = [
     "Judge",
     "Margin",
     "activity_distances",
+    "check_segmentable",
     "Segment",
     "Segmentation",
     "SolvedRecording",

@@ -44,7 +44,7 @@ import numpy as np
 from features.errors import DataError
 from features.progress import progress
 
-from .poses import PoseSequence, load_pose
+from .poses import PoseSequence, load_pose, pose_file_length
 from .readers.asfamc import hdm05_metadata, read_asf_amc
 from .readers.bvh import read_bvh
 from .readers.uiprmd import UIPRMD_MOVEMENTS, read_uiprmd_kinect, read_uiprmd_vicon, uiprmd_metadata
@@ -78,6 +78,8 @@ class _Entry:
     path: Path  # the file it is read from
     # a recording labelled over time: its labelled stretches, each with its label
     pieces: Callable[[PoseSequence], list[tuple[PoseSequence, str]]] | None = None
+    # what can be checked before the file is read (a recording's label file)
+    check: Callable[[], None] | None = None
 
 
 def _suffix(path: Path) -> str:
@@ -597,6 +599,18 @@ def split_by_track(seq: PoseSequence, track: LabelTrack) -> list[tuple[PoseSeque
     return [(stretch(seq, a, b), lab) for a, b, lab in labelled_stretches(per_frame)]
 
 
+def check_track(path: Path, track: LabelTrack) -> None:
+    """What can be checked of a recording labelled over time before it is read: its label
+    file (and names) read, and, for a pose file, the count fitted to its frames (the
+    header's frame count and rate, :func:`features.poses.pose_file_length`; other formats
+    are checked once read). DataError naming the label file, as :func:`split_by_track`."""
+    names = read_label_names(track.names) if track.names is not None else None
+    labels = read_label_track(track.path, names)
+    if _suffix(path) in POSE_SUFFIXES:
+        n_frames, fps = pose_file_length(path)
+        frame_labels(labels, n_frames, fps, track.block_s, track.path, path.name)
+
+
 def _track_entry(rec: dict[str, Any]) -> _Entry:
     track: LabelTrack = rec["track"]
     return _Entry(
@@ -607,6 +621,7 @@ def _track_entry(rec: dict[str, Any]) -> _Entry:
         rec["path"].name,
         rec["path"],
         pieces=lambda seq: split_by_track(seq, track),
+        check=lambda: check_track(rec["path"], track),
     )
 
 
@@ -738,14 +753,24 @@ def dataset_entries(
     correct: bool | None = None,
 ) -> list[DatasetEntry]:
     """The clips of the dataset at ``path`` that may pass the filters (those of
-    :func:`iter_dataset`), found from names alone: nothing is decoded yet."""
+    :func:`iter_dataset`), found from names alone: nothing is decoded yet. The label file
+    of every recording labelled over time is read and fitted to the recording where that
+    is cheap (:func:`check_track`), and every AMC file's skeleton found (:func:`find_asf`):
+    one label file named for two recordings of different lengths, a malformed one, or an
+    AMC file with no skeleton beside it is refused before the first file is worked on."""
     path = Path(path)
     kind = detect_kind(path)
-    return [
+    kept = [
         DatasetEntry(e, kind, labels, subjects, movements, episodes, correct)
         for e in _entries(path, kind, sensor)
         if _keep(e.label, e.subject, e.extras, labels, subjects, movements, episodes, correct)
     ]
+    for d in kept:
+        if _suffix(d.entry.path) == ".amc":
+            find_asf(d.entry.path)  # one without its skeleton: refused before any is read
+        if d.entry.check is not None:
+            d.entry.check()
+    return kept
 
 
 def iter_dataset(
@@ -832,6 +857,7 @@ __all__ = [
     "CLIP_SUFFIXES",
     "Clip",
     "LabelTrack",
+    "check_track",
     "frame_labels",
     "iter_recording",
     "labelled_stretches",

@@ -568,6 +568,36 @@ def load_pose(path: str | Path) -> PoseSequence:
         raise PoseFileError(exc.message, path) from None
 
 
+def pose_file_length(path: str | Path) -> tuple[int, float]:
+    """A pose file's frame count and frame rate, from the header of ``positions`` and the
+    ``fps`` array alone (the positions are not decompressed): what a label file must fit,
+    checked before the recording is read. Raises PoseFileError naming the file, as
+    :func:`load_pose` would, for a file it cannot read that far."""
+    path = Path(path)
+    if not path.is_file():
+        raise PoseFileError("no such file", path)
+    check_archive(path, ("positions", "fps"))
+    try:
+        with zipfile.ZipFile(path) as zf:
+            members = set(zf.namelist())
+            positions, fps = _member(zf, members, "positions"), _member(zf, members, "fps")
+            missing = [k for k, m in (("positions", positions), ("fps", fps)) if m is None]
+            if positions is None or fps is None:
+                raise PoseFileError("not a pose file: missing " + ", ".join(missing), path)
+            shape = _npy_header(zf, positions, path)
+        with np.load(path, allow_pickle=False) as data:
+            rate = _one_fps(np.asarray(data["fps"]), path)
+    except PoseFileError:
+        raise
+    except _READ_ERRORS as exc:
+        raise PoseFileError(f"cannot read pose file ({type(exc).__name__}: {exc})", path) from None
+    if len(shape) != 3 or shape[2] != 3:
+        raise PoseFileError(f"positions must have shape (frames, joints, 3), got {shape}", path)
+    if shape[0] < 1:
+        raise PoseFileError("pose sequence has no frames", path)
+    return int(shape[0]), rate
+
+
 def load_pose_arrays(path: str | Path) -> dict[str, np.ndarray]:
     """The ``extra_<name>`` arrays of a pose file, by ``name`` (empty if it has none)."""
     path = Path(path)

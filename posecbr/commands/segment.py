@@ -146,16 +146,22 @@ def judge_named(clf: Any, name: str, db: str) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.segmentation import segment
+    from cbr.segmentation import check_segmentable, segment
 
     _inputs_given(args)
     _outputs(args)
     clf = load_stored(args.db, args.name)
     judge = judge_named(clf, args.unknown, args.db)
-    done = []  # every recording segmented before any picture is drawn: a bad one among
-    for path in args.recordings:  # several leaves no picture of the others behind
-        rec, video = _read(path, args)
-        done.append((rec, video, _named(segment(clf, rec, judge, k=args.k), path)))
+    # every recording read and checked before any is segmented (a bad one among several is
+    # refused before the work on the others), and segmented before any picture is drawn (it
+    # leaves no picture of the others behind)
+    read = [_read(path, args) for path in args.recordings]
+    for rec, _ in read:
+        check_segmentable(rec)
+    done = [
+        (rec, video, _named(segment(clf, rec, judge, k=args.k), path))
+        for (rec, video), path in zip(read, args.recordings, strict=True)
+    ]
     targets: list[Path | None] = [None] * len(done)
     if args.plot is not None:
         targets = list(plot_targets(args.plot, args.recordings))

@@ -480,6 +480,16 @@ def _note_shared_names(path: Path) -> None:
             )
 
 
+def _read_frame_labels(args: argparse.Namespace) -> None:
+    """Read the ``--frame-labels`` file (and its names) before the recording: a malformed or
+    empty label file is one error at once, not after the recording is decoded (a video's
+    poses estimated). Whether its count fits the recording is checked once that is read."""
+    from features.datasets import read_label_names, read_label_track
+
+    names = read_label_names(args.label_names) if args.label_names is not None else None
+    read_label_track(args.frame_labels, names)
+
+
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse options that cannot work together, in one line, before any clip is read."""
     if not args.name.strip():
@@ -509,6 +519,8 @@ def _check_options(args: argparse.Namespace) -> None:
     args.sensor = sensor_for(args.sensor, [args.data])
     if args.label_names is not None:
         _note_shared_names(args.label_names)
+    if args.frame_labels is not None:
+        _read_frame_labels(args)
     check_scheduler(args.scheduler)
     if args.scheduler is not None and _in_memory(args):
         raise ConfigError(

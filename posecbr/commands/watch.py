@@ -104,6 +104,8 @@ def _check(args: argparse.Namespace) -> None:
             raise DataError("the output video must be an .mp4 file name", args.out)
         inputs = [args.source, args.db] if _is_file(args.source) else [args.db]
         check_output(args.out, inputs=inputs, what="output video")
+    if _is_file(args.source) and Path(args.source).is_dir():
+        raise DataError("is a folder, not a video file", args.source)
     if _is_file(args.source) and not Path(args.source).is_file():
         raise DataError("no such video file", args.source)
     if _is_file(args.source) and Path(args.source).suffix.lower() in RECORDING_SUFFIXES:
