@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ConfigError
+from .errors import ConfigError, DataError
 from .fileio import atomic_path
 from .fluents import CHUNK_FRAMES, Backend, FluentResult, FluentTable, evaluate_chunks
 from .poses import PoseSequence
@@ -356,6 +356,24 @@ class Band:
     key: str | None = None
 
 
+def picture_format(path: str | Path) -> str:
+    """The format a picture named ``path`` is written in, from its suffix (``png``, ``svg``,
+    ``pdf``, ...: what matplotlib writes). A name whose suffix matplotlib does not write
+    (``timeline.txt``, none at all) is refused naming the file: the picture would be a PNG
+    under a name that says otherwise."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    fmt = Path(path).suffix.lower().lstrip(".")
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if fmt not in formats:
+        raise DataError(
+            "the picture must be a file name ending in a format matplotlib writes"
+            f" (.png, .svg, .pdf, ...; got {Path(path).suffix or 'no suffix'!r})",
+            path,
+        )
+    return fmt
+
+
 def plot_timeline(
     result: FluentResult | Timeline,
     path: str | Path,
@@ -417,9 +435,7 @@ def plot_timeline(
     if bands:
         fit_texts(top, placed)
     out = Path(path)
-    fmt = out.suffix.lower().lstrip(".")
-    if fmt not in fig.canvas.get_supported_filetypes():
-        fmt = "png"
+    fmt = picture_format(out)
     try:
         with atomic_path(out) as tmp:
             fig.savefig(tmp, format=fmt)

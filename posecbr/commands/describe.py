@@ -62,7 +62,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="JSON/TOML file overriding fluent thresholds (see `posecbr thresholds`)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--plot", type=Path, metavar="PNG", help="write a fluent timeline picture")
+    p.add_argument(
+        "--plot",
+        type=Path,
+        metavar="PICTURE",
+        help="write a fluent timeline picture (.png, .svg, .pdf: by the name)",
+    )
     p.set_defaults(func=run)
 
 
@@ -77,6 +82,9 @@ def _check_args(args: argparse.Namespace) -> None:
     if args.plot is not None:
         inputs = [args.posefile] + ([args.thresholds] if args.thresholds else [])
         check_output(args.plot, inputs=inputs, what="picture")
+        from features.timeline import picture_format
+
+        picture_format(args.plot)
 
 
 def _run_line(r: Run, layout: FluentResult) -> str:

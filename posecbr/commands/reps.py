@@ -29,7 +29,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("clip", type=Path, help="pose file, video, BVH, .amc or UI-PRMD file")
     add_recording_options(p)
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--plot", type=Path, metavar="PNG", help="repetitions over the fluent timeline")
+    p.add_argument(
+        "--plot",
+        type=Path,
+        metavar="PICTURE",
+        help="repetitions over the fluent timeline (.png, .svg, .pdf: by the name)",
+    )
     p.set_defaults(func=run)
 
 
@@ -41,6 +46,9 @@ def run(args: argparse.Namespace) -> int:
         check_output(
             args.plot, inputs=[args.clip, *([args.asf] if args.asf else [])], what="picture"
         )
+        from features.timeline import picture_format
+
+        picture_format(args.plot)
     seq = load_recording(args.clip, args.asf, args.fps)
     result = count_repetitions(seq)
     if args.plot is not None:
