@@ -101,7 +101,9 @@ MIN_EXCURSION_RAD = float(np.radians(15.0))
 """A repetition moves the body at least this far in joint-angle space (radians); pose
 estimation from video jitters single joints by a few degrees, postural sway by less."""
 MIN_VALID_SHARE = 0.5
-"""An angle missing in more than half of the frames does not take part."""
+"""An angle missing in more than half of the frames that show the person does not take part
+(frames in which nobody is seen do not count against it: a recording the person leaves for
+most of its time is followed while they are there)."""
 ALTERNATION_MIN = 0.5
 """A movement alternates sides (one repetition per side) only when what one side does at its
 far points and what the other does at its own are opposed by more than this cosine
@@ -386,7 +388,9 @@ def movement_signals(seq: PoseSequence) -> MovementSignals:
 
     Raises DataError when no angle is available in enough frames (no person in view)."""
     raw = counted_angles(seq)
-    keep = np.isfinite(raw).mean(axis=0) >= MIN_VALID_SHARE
+    finite = np.isfinite(raw)
+    there = finite.sum(axis=0)
+    keep = (there > 0) & (there >= MIN_VALID_SHARE * finite.any(axis=1).sum())
     if not keep.any():
         raise DataError(
             "no person in view in enough frames to follow a movement (joint angles missing)",
