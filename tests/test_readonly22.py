@@ -1,0 +1,112 @@
+"""A read-only command writes nothing: not beside the case base (SQLite's side files), not in
+it (the measure's cached representations), and every file in its folder keeps its bytes and
+its modification time."""
+
+from __future__ import annotations
+
+import hashlib
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from posecbr.cli import main
+from tests.badinput import refused, snapshot
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
+LABELS = DEMO / "labels.csv"
+CLIP = DEMO / "m01_s03_e01.npz"
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A small DTW case base (its envelopes are cached per case in the file)."""
+    db = tmp_path_factory.mktemp("cb") / "cb.sqlite"
+    argv = ["train", str(LABELS), "--db", str(db), "--subjects", "s01", "--similarity", "dtw",
+            "--labels", "deep_squat,standing_shoulder_abduction,sit_to_stand",
+            "--mirror", "off"]  # fmt: skip
+    assert main(argv) == 0
+    return db
+
+
+def _stat_snapshot(root: Path) -> dict[str, tuple[int, int, str]]:
+    """Every file under ``root``: size, modification time (ns) and sha256."""
+    out = {}
+    for p in sorted(root.rglob("*")):
+        if p.is_file():
+            st = p.stat()
+            out[p.name] = (st.st_size, st.st_mtime_ns, hashlib.sha256(p.read_bytes()).hexdigest())
+    return out
+
+
+def _in_wal_mode(db: Path) -> None:
+    con = sqlite3.connect(db)
+    assert con.execute("PRAGMA journal_mode = WAL").fetchone() == ("wal",)
+    con.close()
+
+
+def _readers(db: Path, out: Path) -> list[list[str]]:
+    return [
+        ["classify", str(CLIP), "--db", str(db)],
+        ["segment", str(CLIP), "--db", str(db), "--unknown", "held-out"],
+        ["casebase", "info", "--db", str(db)],
+        ["casebase", "list", "--db", str(db)],
+        ["casebase", "export", "--db", str(db), "--out", str(out / "cases.npz")],
+        ["casebase", "trim", "--db", str(db), "--dry-run"],
+    ]
+
+
+@pytest.mark.parametrize("which", range(6))
+def test_a_reader_leaves_no_wal_side_files_beside_a_store_in_wal_mode(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], which: int
+) -> None:
+    """A store still in WAL mode, in a folder this process can write: SQLite's read-only
+    opening created ``cb.sqlite-wal`` and ``cb.sqlite-shm`` beside it and left them there
+    (a reader cannot remove them), and touched ``-shm`` on every later read. Opening it
+    ``immutable`` instead would read without locks while a writer may convert and change the
+    file; so the reader refuses it in one line, before SQLite opens it, naming the writer
+    that converts it."""
+    folder, out = tmp_path / "cb", tmp_path / "out"
+    folder.mkdir()
+    out.mkdir()
+    db = folder / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    _in_wal_mode(db)
+    argv = _readers(db, out)[which]
+    refused(argv, folder, capsys, "WAL", "posecbr casebase upgrade --db FILE")
+    assert sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]
+    assert not list(out.iterdir())
+
+
+def test_readers_never_write_the_representation_cache(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A case base missing cached DTW envelopes (a revised case's are dropped) is read by
+    ``classify``, ``segment``, ``casebase export`` and ``trim --dry-run`` with the envelopes
+    computed in memory: the file keeps its bytes and its modification time, and nothing
+    appears beside it. The writer ``classify --feedback`` is the one that stores them."""
+    folder, out = tmp_path / "cb", tmp_path / "out"
+    folder.mkdir()
+    out.mkdir()
+    db = folder / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    con = sqlite3.connect(db)
+    n = con.execute("SELECT COUNT(*) FROM case_representations").fetchone()[0]
+    con.execute("DELETE FROM case_representations WHERE case_id % 3 = 0")
+    con.commit()
+    missing = n - con.execute("SELECT COUNT(*) FROM case_representations").fetchone()[0]
+    con.close()
+    assert n > 0 and missing > 0
+    before, files = _stat_snapshot(folder), snapshot(folder)
+    for argv in _readers(db, out):
+        assert main(argv) == 0, capsys.readouterr().err
+        capsys.readouterr()
+        assert _stat_snapshot(folder) == before, argv
+    assert snapshot(folder) == files
+    argv = ["classify", str(CLIP), "--db", str(db), "--feedback", "deep_squat"]
+    assert main(argv) == 0, capsys.readouterr().err
+    con = sqlite3.connect(db)
+    stored = con.execute("SELECT COUNT(*) FROM case_representations").fetchone()[0]
+    con.close()
+    assert stored > n - missing  # the writer filled the cache in
