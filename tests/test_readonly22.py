@@ -17,6 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 LABELS = DEMO / "labels.csv"
 CLIP = DEMO / "m01_s03_e01.npz"
+V1_SQL = Path(__file__).with_name("fixtures") / "store_v1.sql"
 
 
 @pytest.fixture(scope="module")
@@ -77,6 +78,49 @@ def test_a_reader_leaves_no_wal_side_files_beside_a_store_in_wal_mode(
     refused(argv, folder, capsys, "WAL", "posecbr casebase upgrade --db FILE")
     assert sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]
     assert not list(out.iterdir())
+
+
+def test_a_store_of_posecbr_0_1_is_refused_without_side_files_then_upgraded(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """posecbr 0.1 kept its stores in WAL mode: reading one was refused for its schema, but
+    the refusal left ``-wal`` and ``-shm`` beside it. ``casebase upgrade`` (a writer) converts
+    the schema and the journal; readers then create nothing."""
+    folder = tmp_path / "cb"
+    folder.mkdir()
+    db = folder / "old.sqlite"
+    con = sqlite3.connect(db)
+    con.executescript(V1_SQL.read_text(encoding="utf-8"))
+    con.close()
+    _in_wal_mode(db)
+    refused(["classify", str(CLIP), "--db", str(db)], folder, capsys, "casebase upgrade")
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    said = capsys.readouterr().out
+    assert "converted from schema version 1 to 2" in said and "WAL" in said
+    assert sorted(p.name for p in folder.iterdir()) == ["old.sqlite"]
+    before = _stat_snapshot(folder)
+    assert main(["classify", str(CLIP), "--db", str(db), "--json"]) == 0
+    assert '"label": "deep_squat"' in capsys.readouterr().out
+    assert _stat_snapshot(folder) == before
+
+
+def test_upgrade_of_a_current_store_in_wal_mode_says_it_converted_the_journal(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The refusal sends the user to ``casebase upgrade``, which converted the journal but
+    said "already schema version 2, nothing to do"."""
+    db = tmp_path / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    _in_wal_mode(db)
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    said = capsys.readouterr().out
+    assert "nothing to do" not in said and "WAL" in said and "rollback journal" in said
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite"]
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    assert "already schema version 2, nothing to do" in capsys.readouterr().out
+    before = _stat_snapshot(tmp_path)
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    assert _stat_snapshot(tmp_path) == before
 
 
 def test_readers_never_write_the_representation_cache(

@@ -88,13 +88,18 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _upgrade(args: argparse.Namespace) -> int:
-    from casebase_store import SCHEMA_VERSION, upgrade_store
+    from casebase_store import SCHEMA_VERSION, in_wal_mode, sqlite_file, upgrade_store
 
-    found = upgrade_store(args.db)
-    if found == SCHEMA_VERSION:
-        print(f"{args.db}: already schema version {SCHEMA_VERSION}, nothing to do")
+    file = sqlite_file(args.db)
+    wal = file is not None and in_wal_mode(file)
+    found = upgrade_store(args.db)  # a writer: it also leaves WAL mode (posecbr 0.1's)
+    journal = wal and file is not None and not in_wal_mode(file)
+    converted = [f"from schema version {found} to {SCHEMA_VERSION}"] * (found != SCHEMA_VERSION)
+    converted += ["from WAL mode to a rollback journal"] * journal
+    if converted:
+        print(f"{args.db}: converted {', and '.join(converted)}")
     else:
-        print(f"{args.db}: converted from schema version {found} to {SCHEMA_VERSION}")
+        print(f"{args.db}: already schema version {SCHEMA_VERSION}, nothing to do")
     return 0
 
 
