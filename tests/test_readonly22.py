@@ -129,7 +129,7 @@ def test_readers_never_write_the_representation_cache(
     """A case base missing cached DTW envelopes (a revised case's are dropped) is read by
     ``classify``, ``segment``, ``casebase export`` and ``trim --dry-run`` with the envelopes
     computed in memory: the file keeps its bytes and its modification time, and nothing
-    appears beside it. The writer ``classify --feedback`` is the one that stores them."""
+    appears beside it."""
     folder, out = tmp_path / "cb", tmp_path / "out"
     folder.mkdir()
     out.mkdir()
@@ -148,9 +148,52 @@ def test_readers_never_write_the_representation_cache(
         capsys.readouterr()
         assert _stat_snapshot(folder) == before, argv
     assert snapshot(folder) == files
-    argv = ["classify", str(CLIP), "--db", str(db), "--feedback", "deep_squat"]
-    assert main(argv) == 0, capsys.readouterr().err
+
+
+def _without_some_representations(trained: Path, folder: Path) -> Path:
+    """A copy of ``trained`` in ``folder`` missing a third of its cached envelopes, as a case
+    base whose cases were revised is (their representations are dropped)."""
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
     con = sqlite3.connect(db)
-    stored = con.execute("SELECT COUNT(*) FROM case_representations").fetchone()[0]
+    con.execute("DELETE FROM case_representations WHERE case_id % 3 = 0")
+    con.commit()
     con.close()
-    assert stored > n - missing  # the writer filled the cache in
+    return db
+
+
+@pytest.mark.parametrize(
+    ("extra", "needle"),
+    [
+        (["--feedback", "deep_sqat"], "did you mean"),  # a typo
+        (["--feedback", "new_thing"], "--new-label"),  # a new activity without --new-label
+        (["--feedback", "deep_squat", "--target", "correct"], "--target"),
+        (["--feedback", "deep_squat", "-k", "999"], "-k"),
+    ],
+)
+def test_refused_feedback_writes_nothing_into_the_case_base(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str],
+    needle: str,
+) -> None:  # fmt: skip
+    """``classify --feedback`` loaded the classifier through its writable store, which stored
+    the missing representations in the file before the label, ``--target`` or ``-k`` were
+    checked: a refused command changed the case base."""
+    db = _without_some_representations(trained, tmp_path / "cb")
+    argv = ["classify", str(CLIP), "--db", str(db), *extra]
+    refused(argv, db.parent, capsys, needle)
+
+
+def test_feedback_on_an_unclassifiable_clip_writes_nothing_into_the_case_base(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import numpy as np
+
+    db = _without_some_representations(trained, tmp_path / "cb")
+    clip = dict(np.load(CLIP))
+    short = tmp_path / "short.npz"
+    np.savez(short, **{**clip, "positions": clip["positions"][:3]})  # type: ignore[arg-type]
+    before = _stat_snapshot(db.parent)
+    assert main(["classify", str(short), "--db", str(db), "--feedback", "deep_squat"]) == 1
+    assert "no clip could be classified" in capsys.readouterr().err
+    assert _stat_snapshot(db.parent) == before
