@@ -197,3 +197,20 @@ def test_feedback_on_an_unclassifiable_clip_writes_nothing_into_the_case_base(
     assert main(["classify", str(short), "--db", str(db), "--feedback", "deep_squat"]) == 1
     assert "no clip could be classified" in capsys.readouterr().err
     assert _stat_snapshot(db.parent) == before
+
+
+@pytest.mark.parametrize(
+    ("extra", "needle"),
+    [
+        (["--editor", "renn", "-k", "100000"], "-k: must be less than"),
+        (["--keep", "0.01"], "nothing trimmed"),  # fewer cases left than the case base's k
+    ],
+)
+def test_refused_trim_writes_nothing_into_the_case_base(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str],
+    needle: str,
+) -> None:  # fmt: skip
+    """``casebase trim`` too loaded the classifier through its writable store, storing the
+    missing representations before it refused."""
+    db = _without_some_representations(trained, tmp_path / "cb")
+    refused(["casebase", "trim", "--db", str(db), *extra], db.parent, capsys, needle)
