@@ -247,13 +247,37 @@ def sqlite_file(url_or_path: str | Path) -> Path | None:
     return Path(db[len("file:") :].split("?")[0]) if db.startswith("file:") else Path(db)
 
 
+def in_wal_mode(path: Path) -> bool:
+    """Whether the SQLite file ``path`` is in WAL mode (as posecbr 0.1 wrote its stores), from
+    its header alone (bytes 18 and 19, the file format's write and read versions: 2 in WAL
+    mode), without opening it with SQLite."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(20)
+    except OSError:
+        return False
+    return head[:16] == b"SQLite format 3\x00" and 2 in head[18:20]
+
+
 def _sqlite_readonly_url(path: Path) -> str:
     """A read-only SQLite URL for ``path``. A database still in WAL mode (written by posecbr
-    0.1) needs its ``-shm`` file: where this process cannot create it (a read-only folder) the
-    file is opened ``immutable``."""
+    0.1) needs its ``-wal`` and ``-shm`` files: where this process cannot create them (a
+    read-only folder) the file is opened ``immutable``. Where it can, SQLite creates them
+    and, opened read-only, cannot remove them again; ``immutable`` there would read without
+    locks a file that a writer may be converting or changing. So such a file in a folder that
+    can be written is refused before SQLite opens it: ``posecbr casebase upgrade`` (a writer)
+    converts it to a rollback journal once."""
     params = "mode=ro"
     shm = path.with_name(path.name + "-shm")
-    if not os.access(path.parent, os.W_OK) and not shm.exists():
+    writable = os.access(path.parent, os.W_OK)
+    if writable and in_wal_mode(path):
+        raise StoreError(
+            "the file is in WAL mode (as posecbr 0.1 wrote it): reading it would leave "
+            f"{path.name}-wal and {path.name}-shm beside it; convert it once with "
+            "`posecbr casebase upgrade --db FILE`",
+            path,
+        )
+    if not writable and not shm.exists():
         params += "&immutable=1"
     return f"sqlite:///file:{quote(str(path.resolve()))}?{params}&uri=true"
 

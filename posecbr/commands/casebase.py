@@ -77,8 +77,9 @@ def run(args: argparse.Namespace) -> int:
         return _upgrade(args)
     if args.action == "export":
         _check_export(args)  # before the store is opened: a refusal touches nothing
-    readonly = args.action != "trim" or args.dry_run
-    store = open_store(args.db, create=False, readonly=readonly)
+    # read-only for trim too: loading fills in nothing (a writable store would store the
+    # representations missing from it) and trim may still refuse; it opens the writer itself
+    store = open_store(args.db, create=False, readonly=True)
     try:
         return {"info": _info, "list": _list, "export": _export, "trim": _trim}[args.action](
             store, args
@@ -88,13 +89,18 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _upgrade(args: argparse.Namespace) -> int:
-    from casebase_store import SCHEMA_VERSION, upgrade_store
+    from casebase_store import SCHEMA_VERSION, in_wal_mode, sqlite_file, upgrade_store
 
-    found = upgrade_store(args.db)
-    if found == SCHEMA_VERSION:
-        print(f"{args.db}: already schema version {SCHEMA_VERSION}, nothing to do")
+    file = sqlite_file(args.db)
+    wal = file is not None and in_wal_mode(file)
+    found = upgrade_store(args.db)  # a writer: it also leaves WAL mode (posecbr 0.1's)
+    journal = wal and file is not None and not in_wal_mode(file)
+    converted = [f"from schema version {found} to {SCHEMA_VERSION}"] * (found != SCHEMA_VERSION)
+    converted += ["from WAL mode to a rollback journal"] * journal
+    if converted:
+        print(f"{args.db}: converted {', and '.join(converted)}")
     else:
-        print(f"{args.db}: converted from schema version {found} to {SCHEMA_VERSION}")
+        print(f"{args.db}: already schema version {SCHEMA_VERSION}, nothing to do")
     return 0
 
 
@@ -433,6 +439,7 @@ def _edited(args: argparse.Namespace, clf: Any, name: str, keep: float, where: s
 
 
 def _trim(store: CaseStore, args: argparse.Namespace) -> int:
+    from casebase_store import open_store
     from cbr.maintenance import record_trim
     from cbr.stored import judges_after_change, load_classifier, recalibrated, write_matrices
 
@@ -450,11 +457,15 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
         )
     if not args.dry_run:
         judges = recalibrated(clf, report.casebase)
-        with store.transaction() as tx:
-            info = tx.expect(name, stored.uid, stored.version)
-            record_trim(tx, info, report)
-            judges_after_change(tx, info, judges)
-        write_matrices(store, name)
+        writer = open_store(args.db, create=False)
+        try:
+            with writer.transaction() as tx:
+                info = tx.expect(name, stored.uid, stored.version)
+                record_trim(tx, info, report)
+                judges_after_change(tx, info, judges)
+            write_matrices(writer, name)
+        finally:
+            writer.close()
     doc = {
         "method": report.method,
         "size_before": report.size_before,

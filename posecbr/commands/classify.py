@@ -165,7 +165,11 @@ def run(args: argparse.Namespace) -> int:
         defaults.novelty_threshold if args.novelty is None else args.novelty,
         defaults.benefit_threshold if args.benefit is None else args.benefit,
     )
-    store = open_store(args.db, create=False, readonly=args.feedback is None)
+    # read-only even with --feedback: loading fills in nothing (a writable store would store
+    # the representations missing from it) and every check below may still refuse; the
+    # writer is opened for the feedback alone
+    store = open_store(args.db, create=False, readonly=True)
+    label = None
     try:
         name = store.choose(args.name)
         stored = load_classifier(store, name)
@@ -199,9 +203,14 @@ def run(args: argparse.Namespace) -> int:
         else:
             known = sorted(set(stored.classifier.case_base_.labels.tolist()))
             label = check_feedback_label(args.feedback, known, args.new_label)
-            results = classify_with_feedback(store, stored, clips, label, settings, target)
     finally:
         store.close()
+    if label is not None:
+        writer = open_store(args.db, create=False)
+        try:
+            results = classify_with_feedback(writer, stored, clips, label, settings, target)
+        finally:
+            writer.close()
     _print(args, store.where, name, target, results)
     if all(r.solved is None for r in results):  # nothing the user asked for could be done
         print(
