@@ -251,8 +251,9 @@ def check_output(
 
     Refused, with one line naming the path: a folder; a file inside a folder that does not
     exist (unless ``make_parents``: the writer creates it, so only a file in its way is
-    refused); one of ``inputs`` or, of a folder among them, its ``labels.csv`` (an output
-    never overwrites an input); an existing file when
+    refused); a file in a folder this process cannot write (a read-only mount: found before
+    the work, not when the result is written); one of ``inputs`` or, of a folder among them,
+    its ``labels.csv`` (an output never overwrites an input); an existing file when
     ``must_not_exist``.
     """
     out = Path(path)
@@ -265,6 +266,9 @@ def check_output(
             raise DataError(f"cannot write the {what}: {parent} is a file, not a folder", out)
     elif not out.parent.is_dir():
         raise DataError(f"the folder of the {what} does not exist", out.parent)
+    folder = next((p for p in out.parents if p.exists()), None)
+    if folder is not None and folder.is_dir() and not os.access(folder, os.W_OK | os.X_OK):
+        raise DataError(f"cannot write the {what}: the folder {folder} is read-only", out)
     for src in inputs:
         for read in _read_from(Path(src)):
             if _same_file(out, read):

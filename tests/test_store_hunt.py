@@ -150,9 +150,9 @@ def test_a_first_train_into_a_read_only_folder_names_the_file_asked_for(
     )  # fmt: skip
     assert done.returncode == 1, done.stderr
     assert done.stderr.splitlines() == [
-        f"posecbr train: error: {db}: cannot open or write the database (unable to open "
-        "database file)"
-    ]
+        f"posecbr train: error: {db}: cannot write the case base file: the folder {folder} is "
+        "read-only"
+    ]  # refused before the training, naming the file asked for
     assert list(folder.iterdir()) == []
 
 

@@ -214,11 +214,12 @@ def _outputs(args: argparse.Namespace) -> list[Output]:
 
 
 def check_outputs(outputs: list[Output], inputs: list[str | Path]) -> None:
-    """Refuse, before any work, an output that is a folder, lies in a missing folder or would
-    overwrite an input (the files of a new ``--out`` folder cannot, so are not checked)."""
+    """Refuse, before any work, an output that is a folder, lies in a missing folder (a new
+    ``--out`` folder is made), in a folder that cannot be written, or would overwrite an
+    input."""
     for o in outputs:
-        if not (o.in_out_folder and not o.path.parent.exists()):
-            check_output(o.path, inputs=inputs, what=o.what)
+        new_folder = o.in_out_folder and not o.path.parent.exists()
+        check_output(o.path, inputs=inputs, what=o.what, make_parents=new_folder)
 
 
 def _write_results(results: Any, outputs: list[Output]) -> None:

@@ -1,0 +1,81 @@
+"""An output asked for in a folder that cannot be written (a read-only mount) is refused in one
+line before the work, not when the result is written: `compare` cross-validated every
+configuration and then failed to write its results."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from features.poses import save_pose
+from tests.badinput import read_only_mounts_work, standing_clip
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
+FAST = ["--similarities", "euclidean", "--features", "fluents", "--peers", "none", "--no-dad"]
+
+pytestmark = pytest.mark.skipif(
+    not read_only_mounts_work(),
+    reason="this machine cannot make a private read-only mount (unshare -rm, mount)",
+)
+
+
+def _in_read_only(folder: Path, argv: list[str]) -> subprocess.CompletedProcess[str]:
+    """``posecbr argv`` with ``folder`` mounted read-only for it alone (root ignores file
+    modes; a read-only mount binds it too)."""
+    script = (
+        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
+        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
+        f'exec "$0" -m posecbr "$@"'
+    )
+    return subprocess.run(
+        ["unshare", "-rm", "sh", "-c", script, sys.executable, *argv],
+        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from tests.test_cbr_cli import _write_classes
+
+    return _write_classes(tmp_path_factory.mktemp("data") / "train", 3, 5)
+
+
+@pytest.mark.parametrize(
+    ("option", "name", "what"),
+    [
+        ("--out", "results", "cannot write the results file"),
+        ("--json", "results.json", "cannot write the JSON output"),
+    ],
+)
+def test_compare_into_a_read_only_folder_is_refused_before_it_cross_validates(
+    data: Path, tmp_path: Path, option: str, name: str, what: str
+) -> None:
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    done = _in_read_only(folder, ["compare", str(data), *FAST, option, str(folder / name)])
+    assert done.returncode == 1, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert f"{what}: the folder {folder} is read-only" in lines[0], lines[0]
+    assert lines[0].startswith("posecbr compare: error")
+    assert done.stdout == ""  # no fold was run, no table printed
+    assert list(folder.iterdir()) == []
+
+
+def test_describe_plot_into_a_read_only_folder_is_refused(tmp_path: Path) -> None:
+    clip = save_pose(standing_clip(30), tmp_path / "clip.npz")
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    done = _in_read_only(folder, ["describe", str(clip), "--plot", str(folder / "t.png")])
+    assert done.returncode == 1, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert (
+        len(lines) == 1
+        and f"cannot write the picture: the folder {folder} is read-only" in (lines[0])
+    ), done.stderr
+    assert done.stdout == "" and list(folder.iterdir()) == []
