@@ -33,7 +33,7 @@ fitted classifier is stored with its case base and loaded back whole by :mod:`cb
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Container, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,7 +42,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted
 
 from features.body import torso_share
-from features.errors import ConfigError, InputError
+from features.errors import ConfigError, DataError, InputError
 from features.poses import PoseSequence
 from features.progress import progress
 from features.text import counted
@@ -853,6 +853,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         wide = max(k, self.confidence_.neighbours)
         code = {str(c): i for i, c in enumerate(labels)}
         retrieved = retrieve_many(self.case_base_, problems, wide)
+        self._check_known(np.concatenate([w.labels for w in retrieved]), code)
         # every clip's vote and confidence score in one pass over the rows (row by row alike)
         distances = np.stack([w.distances for w in retrieved])
         codes = np.array([[code[str(lab)] for lab in w.labels] for w in retrieved],
@@ -914,12 +915,33 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         :meth:`solve` does): how counterfactuals are checked."""
         check_is_fitted(self, "case_base_")
         r = retrieve(self.case_base_, np.asarray(values), int(self.k))
-        return reuse(r, self._class_labels(), self.weights).label  # type: ignore[arg-type]
+        classes = self._class_labels()
+        self._check_known(r.labels, set(classes.tolist()))
+        return reuse(r, classes, self.weights).label  # type: ignore[arg-type]
 
     def refresh(self) -> None:
         """Follow changes to ``case_base_`` (revised or retained cases): the classes are the
-        labels the cases have now."""
-        self.classes_ = np.unique(self.case_base_.labels.astype(str))
+        labels the cases have now. While every one of them is a class already, the classes
+        keep their type and order (labels fitted as numbers stay numbers); a label new to the
+        classifier (retained with feedback: text) makes them the cases' labels as text."""
+        now = set(np.unique(self.case_base_.labels.astype(str)).tolist())
+        old = getattr(self, "classes_", None)
+        if old is not None and now <= {str(c) for c in old}:
+            self.classes_ = np.asarray(old)[[str(c) in now for c in old]]
+        else:
+            self.classes_ = np.array(sorted(now))
+
+    def _check_known(self, found: np.ndarray, known: Container[str]) -> None:
+        """Refuse cases whose labels are not among the classes (cases retained or relabelled
+        in ``case_base_`` without :meth:`refresh`): their votes would have no class."""
+        unknown = sorted(v for v in {str(x) for x in found.tolist()} if v not in known)
+        if unknown:
+            raise DataError(
+                f"the case base holds {counted(len(unknown), 'label')} not among classes_ "
+                f"({', '.join(repr(u) for u in unknown)}): call refresh() after retaining or "
+                "revising cases",
+                "case_base_",
+            )
 
     def __sklearn_tags__(self) -> Any:
         tags = super().__sklearn_tags__()

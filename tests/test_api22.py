@@ -124,3 +124,63 @@ def test_predict_refuses_no_clips_and_a_clip_with_nobody_with_a_value_error(
         fitted.predict_proba([X[0], _nobody(X[1])])
     with pytest.raises(InputError, match="single PoseSequence"):
         fitted.solve(X[0])
+
+
+# -- refresh after the case base changed (cbr.revise, cbr.retain on case_base_)
+
+
+@pytest.fixture(scope="module")
+def numbered(squats_and_steps: tuple[list[PoseSequence], list[str]]) -> tuple[Any, ...]:
+    """A classifier fitted on the clips labelled 10 (deep squat) and 2 (hurdle step)."""
+    X, y = squats_and_steps
+    code = {"deep_squat": 10, "hurdle_step": 2}
+    numbers = [code[v] for v in y]
+    return X, numbers, CaseBaseClassifier(k=3).fit(X, numbers)
+
+
+def test_refresh_without_a_change_keeps_number_classes_and_their_answers(
+    numbered: tuple[Any, ...],
+) -> None:
+    X, numbers, fitted = clone_of(numbered)
+    before = fitted.predict(X)
+    fitted.refresh()  # nothing changed: nothing may change
+    assert fitted.classes_.tolist() == [2, 10] and fitted.classes_.dtype.kind == "i"
+    after = fitted.predict(X)
+    assert after.dtype.kind == "i" and after.tolist() == before.tolist()
+    assert fitted.score(X, numbers) == pytest.approx(np.mean(before == np.array(numbers)))
+
+
+def test_refresh_after_a_revision_keeps_number_classes(numbered: tuple[Any, ...]) -> None:
+    from cbr.revise import revise
+
+    X, numbers, fitted = clone_of(numbered)
+    revise(fitted.case_base_, fitted.problems(X[:1])[0], "10")  # its cases' labels are text
+    fitted.refresh()
+    assert fitted.classes_.tolist() == [2, 10]
+    assert set(fitted.predict(X).tolist()) <= {2, 10}
+
+
+def test_a_case_retained_with_a_new_label_is_named_until_refresh_then_answers(
+    fitted: CaseBaseClassifier, squats_and_steps: tuple[list[PoseSequence], list[str]]
+) -> None:
+    from cbr.retain import retain
+
+    X, _ = squats_and_steps
+    clf = clone_of((fitted,))[0]
+    half = X[0].positions[: X[0].n_frames // 2]  # the first half of a squat: no case's problem
+    new = [PoseSequence(half, X[0].joint_names, X[0].fps, skeleton=X[0].skeleton)]
+    # a tiny scale makes any case novel; the clip's own problem: benefit 1
+    assert retain(clf.case_base_, clf.problems(new)[0], "lunge", scale=1e-9, k=3).retained
+    with pytest.raises(DataError, match=r"'lunge'.*call refresh\(\)"):
+        clf.predict(new)
+    clf.refresh()
+    assert clf.classes_.tolist() == ["deep_squat", "hurdle_step", "lunge"]
+    # the retained case is the clip's own problem: at distance 0 it decides alone
+    assert clf.predict(new).tolist() == ["lunge"]
+
+
+def clone_of(items: tuple[Any, ...]) -> tuple[Any, ...]:
+    """A deep copy of a module fixture's fitted classifiers (tests change their cases)."""
+    import copy
+
+    return tuple(copy.deepcopy(v) if isinstance(v, CaseBaseClassifier) else v for v in items)
