@@ -2,7 +2,9 @@
 
 ``X`` is a sequence (list or 1-D object array) of :class:`features.poses.PoseSequence`; ``y``
 the activity labels. ``__init__`` only stores its parameters; ``fit`` extracts the problems,
-builds (and optionally trims) the case base; learned state ends with ``_``.
+builds (and optionally trims) the case base; learned state ends with ``_``. Bad ``X`` or ``y``
+(not clips, empty, a missing label, one activity, a clip with no person) is refused with
+:class:`features.errors.InputError`, the ``ValueError`` scikit-learn users catch.
 
 Learned at fit time from the training clips only (so cross-validation stays honest):
 
@@ -31,7 +33,7 @@ fitted classifier is stored with its case base and loaded back whole by :mod:`cb
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Container, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -40,7 +42,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted
 
 from features.body import torso_share
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError, InputError
 from features.poses import PoseSequence
 from features.progress import progress
 from features.text import counted
@@ -100,26 +102,47 @@ from .weights import MIRROR_FLAG, WEIGHTINGS
 
 
 def as_sequences(X: Any, where: str = "X") -> list[PoseSequence]:
-    """``X`` as a list of PoseSequence (a list, tuple or 1-D object array)."""
+    """``X`` as a list of PoseSequence (a list, tuple or 1-D object array); anything else is an
+    :class:`features.errors.InputError` (the ``ValueError`` scikit-learn users catch) naming
+    what was given."""
     if isinstance(X, PoseSequence):
-        raise DataError("X must be a sequence of PoseSequence, got a single PoseSequence", where)
+        raise InputError("X must be a sequence of PoseSequence, got a single PoseSequence", where)
+    if isinstance(X, np.ndarray) and X.dtype != object:
+        raise InputError(
+            f"X must be a sequence of PoseSequence, got a {X.dtype} array of shape {X.shape}",
+            where,
+        )
     if isinstance(X, str | bytes) or not hasattr(X, "__iter__"):
-        raise DataError(f"X must be a sequence of PoseSequence, got {type(X).__name__}", where)
+        raise InputError(f"X must be a sequence of PoseSequence, got {type(X).__name__}", where)
     items = list(np.asarray(X, dtype=object).reshape(-1)) if isinstance(X, np.ndarray) else list(X)
     for i, s in enumerate(items):
         if not isinstance(s, PoseSequence):
-            raise DataError(f"X[{i}] is a {type(s).__name__}, not a PoseSequence", where)
+            raise InputError(f"X[{i}] is a {type(s).__name__}, not a PoseSequence", where)
     return items
 
 
+def _missing(v: Any) -> bool:
+    """Whether a label is missing: None, or a value unequal to itself (NaN of any float type,
+    NaT) or whose comparison is neither true nor false (pandas' NA), without importing pandas."""
+    if v is None:
+        return True
+    try:
+        return bool(v != v)
+    except TypeError:  # pd.NA: "boolean value of NA is ambiguous"
+        return True
+    except ValueError:  # an array: not a label, but not a missing one
+        return False
+
+
 def check_labels(y: Any, n: int) -> np.ndarray:
-    """``y`` as ``(n,)`` labels (str); None, NaN and empty labels are refused."""
+    """``y`` as ``(n,)`` labels (str); None, NaN, NaT, pandas' NA and empty labels are refused
+    (:class:`features.errors.InputError`)."""
     y_arr = np.asarray(y, dtype=object)
     if y_arr.ndim != 1 or len(y_arr) != n:
-        raise DataError(f"{n} clips but y has shape {y_arr.shape}", "y")
+        raise InputError(f"{n} clips but y has shape {y_arr.shape}", "y")
     for i, v in enumerate(y_arr):
-        if v is None or (isinstance(v, float) and np.isnan(v)) or str(v).strip() == "":
-            raise DataError(f"y[{i}] is {v!r}: every clip needs a label", "y")
+        if _missing(v) or str(v).strip() == "":
+            raise InputError(f"y[{i}] is {v!r}: every clip needs a label", "y")
     return np.array([str(v) for v in y_arr], dtype=object)
 
 
@@ -391,7 +414,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         candidates, mirror, sides = self.describe_plan()
         seqs = as_sequences(X)
         if len(seqs) == 0:
-            raise DataError("the training set is empty", "X")
+            raise InputError("the training set is empty", "X")
         clips = progress(seqs, desc="features", total=len(seqs), unit="clip")
         return self.fit_described(list(describe_clips(clips, candidates, mirror, sides)), y)
 
@@ -453,7 +476,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     ) -> tuple[np.ndarray, np.ndarray]:
         """The labels as text ``(n,)`` and the classes in the caller's type (sorted)."""
         if len(clips) == 0:
-            raise DataError("the training set is empty", "X")
+            raise InputError("the training set is empty", "X")
         check_labels(y, len(clips))
         # the labels as scikit-learn reads them: in numpy's common type (1 and 2.0 are 1.0 and
         # 2.0), so the cases' text labels are the text of the classes
@@ -467,13 +490,13 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         bad = [i for i, c in enumerate(clips) if c.torso_share == 0.0]
         if bad:
             names = ", ".join(clips[i].source or f"X[{i}]" for i in bad[:5])
-            raise DataError(
+            raise InputError(
                 f"{counted(len(bad), 'training clip')} {'shows' if len(bad) == 1 else 'show'} "
                 f"no person (no frame with a torso): {names}{' ...' if len(bad) > 5 else ''}",
                 "X",
             )
         if len(np.unique(labels)) < 2:
-            raise DataError(
+            raise InputError(
                 f"the training set has only one activity ({labels[0]!r}); a classifier needs "
                 "at least two",
                 "y",
@@ -804,7 +827,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     def solve(self, X: Any, flag: bool = True) -> list[Solved]:
         """Every clip of ``X`` through retrieve and reuse: problem, retrieved cases, solution
         and how unlike the stored cases it is. A clip that shows no person is refused
-        (:class:`features.errors.DataError` naming it): nothing can be said about it.
+        (:class:`features.errors.InputError`, a ``DataError`` and ``ValueError``, naming it):
+        nothing can be said about it.
 
         ``flag`` False: the "unlike the stored cases" flag is not judged (``unlike_cases``
         False, no reason, no description), for callers with a judge of their own (segmenting
@@ -812,10 +836,10 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         check_is_fitted(self, "case_base_")
         seqs = as_sequences(X)
         if not seqs:
-            raise DataError("no clips to classify", "X")
+            raise InputError("no clips to classify", "X")
         bad = unusable(seqs)
         if bad:
-            raise DataError(
+            raise InputError(
                 "shows no person (no frame with a torso): nothing to classify",
                 seqs[bad[0]].source or f"X[{bad[0]}]",
             )
@@ -829,6 +853,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         wide = max(k, self.confidence_.neighbours)
         code = {str(c): i for i, c in enumerate(labels)}
         retrieved = retrieve_many(self.case_base_, problems, wide)
+        self._check_known(np.concatenate([w.labels for w in retrieved]), code)
         # every clip's vote and confidence score in one pass over the rows (row by row alike)
         distances = np.stack([w.distances for w in retrieved])
         codes = np.array([[code[str(lab)] for lab in w.labels] for w in retrieved],
@@ -890,12 +915,33 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         :meth:`solve` does): how counterfactuals are checked."""
         check_is_fitted(self, "case_base_")
         r = retrieve(self.case_base_, np.asarray(values), int(self.k))
-        return reuse(r, self._class_labels(), self.weights).label  # type: ignore[arg-type]
+        classes = self._class_labels()
+        self._check_known(r.labels, set(classes.tolist()))
+        return reuse(r, classes, self.weights).label  # type: ignore[arg-type]
 
     def refresh(self) -> None:
         """Follow changes to ``case_base_`` (revised or retained cases): the classes are the
-        labels the cases have now."""
-        self.classes_ = np.unique(self.case_base_.labels.astype(str))
+        labels the cases have now. While every one of them is a class already, the classes
+        keep their type and order (labels fitted as numbers stay numbers); a label new to the
+        classifier (retained with feedback: text) makes them the cases' labels as text."""
+        now = set(np.unique(self.case_base_.labels.astype(str)).tolist())
+        old = getattr(self, "classes_", None)
+        if old is not None and now <= {str(c) for c in old}:
+            self.classes_ = np.asarray(old)[[str(c) in now for c in old]]
+        else:
+            self.classes_ = np.array(sorted(now))
+
+    def _check_known(self, found: np.ndarray, known: Container[str]) -> None:
+        """Refuse cases whose labels are not among the classes (cases retained or relabelled
+        in ``case_base_`` without :meth:`refresh`): their votes would have no class."""
+        unknown = sorted(v for v in {str(x) for x in found.tolist()} if v not in known)
+        if unknown:
+            raise DataError(
+                f"the case base holds {counted(len(unknown), 'label')} not among classes_ "
+                f"({', '.join(repr(u) for u in unknown)}): call refresh() after retaining or "
+                "revising cases",
+                "case_base_",
+            )
 
     def __sklearn_tags__(self) -> Any:
         tags = super().__sklearn_tags__()
