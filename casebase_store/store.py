@@ -498,7 +498,16 @@ class CaseStore:
                 tx.session.add(SchemaVersion(id=1, version=SCHEMA_VERSION))
 
     def close(self) -> None:
+        """Release the store's connections (the engine's pool); the store is not used after."""
         self.engine.dispose()
+
+    def __enter__(self) -> CaseStore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        """``with open_store(...) as store:`` closes the store at the end of the block, also
+        when it raised."""
+        self.close()
 
     # -- reads
 
