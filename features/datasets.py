@@ -535,12 +535,44 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     tokens = [t for t in re.split(r"[\s,]+", text) if t]
     if not tokens:
         raise DataError("the label file holds no labels", path)
+    _refuse_a_table(text, path)
     if names is None:
         return tokens
     unknown = sorted({t for t in tokens if t not in names})
     if unknown:
         raise DataError(f"label code(s) {', '.join(unknown[:5])} not in the label names", path)
     return [names[t] for t in tokens]
+
+
+def _refuse_a_table(text: str, path: Path) -> None:
+    """Refuse a label file that is a table whose first column counts up (``time,label`` or
+    ``frame label`` per line, a header line allowed): read as labels, its times would be
+    labels too, and the count would not fit the recording for a reason the file does not
+    show. A label file holds the labels alone, one per frame or block."""
+    rows = [re.split(r"[\s,]+", line.strip()) for line in text.splitlines() if line.strip()]
+    body = rows[1:] if rows and not _numbers(rows[0][:1]) else rows
+    widths = {len(r) for r in body}
+    if len(body) < 2 or len(widths) != 1 or widths == {1}:
+        return
+    first = _numbers([r[0] for r in body])
+    labels = {t for r in body for t in r[1:]}
+    # a column of times takes a new value on every line; labels repeat (a label file wrapped
+    # one activity per line, "1 1 1 / 2 2 2 / 3 3 3", has as many lines as labels)
+    if first is not None and bool(np.all(np.diff(first) > 0)) and len(body) > 2 * len(labels):
+        raise DataError(
+            f"the label file is a table of {widths.pop()} columns whose first counts up (times"
+            " or frames?); it takes the labels alone, one per frame or per block"
+            " (--label-block), separated by spaces, commas or line ends",
+            path,
+        )
+
+
+def _numbers(tokens: list[str]) -> np.ndarray | None:
+    """``tokens`` as numbers, or None when one is not a number."""
+    try:
+        return np.array([float(t) for t in tokens])
+    except ValueError:
+        return None
 
 
 def frame_labels(
