@@ -67,6 +67,8 @@ def load_results(path: str | Path) -> tuple[CompareResults, Path]:
         doc = json.loads(p.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise DataError(f"not a JSON results file ({exc})", p) from None
+    except RecursionError:  # json's decoder recurses once per level of nesting
+        raise DataError("not a JSON results file (nested too deeply)", p) from None
     return CompareResults.from_dict(doc, str(p)), p
 
 
