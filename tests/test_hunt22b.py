@@ -22,3 +22,56 @@ def test_report_on_a_results_file_nested_too_deeply_is_refused_in_one_line(
     results.write_text("[" * 100_000 + "]" * 100_000, encoding="utf-8")
     refused(["report", str(results), "--out", str(tmp_path / "report.html")], tmp_path, capsys,
             f"{results}: not a JSON results file (nested too deeply)")  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def compared_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One ``compare --out`` on ten demo clips: its results folder (results.json,
+    results.csv, the pictures)."""
+    from posecbr.cli import main
+    from tests.test_compare_bad_input import FAST, _swapped_data
+
+    root = tmp_path_factory.mktemp("compared")
+    labels = _swapped_data(root / "data")
+    assert main(["compare", str(labels), *FAST, "--no-dad", "--out", str(root / "out")]) == 0
+    return root / "out"
+
+
+def test_the_report_command_compare_suggests_can_be_run_again(
+    compared_folder: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """compare ends with "report: posecbr report DIR --out DIR/report.html". Run a second
+    time (after another compare into the folder, say), it was refused: "the report would
+    overwrite an input (report.html)", every file of the folder counting as an input, the
+    previous report too. The report is the command's own output: it is written again."""
+    import shutil
+
+    from posecbr.cli import main
+
+    folder = tmp_path / "cmp"
+    shutil.copytree(compared_folder, folder)
+    capsys.readouterr()
+    page = folder / "report.html"
+    assert main(["report", str(folder), "--out", str(page)]) == 0
+    first = page.read_text(encoding="utf-8")
+    page.write_text("an old report\n", encoding="utf-8")
+    assert main(["report", str(folder), "--out", str(page)]) == 0
+    captured = capsys.readouterr()
+    assert captured.err == ""
+    assert page.read_text(encoding="utf-8") == first  # the page again, not the old one
+
+
+def test_report_over_the_results_table_beside_the_results_file_is_refused(
+    compared_folder: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The results file named instead of its folder (README: ``posecbr report
+    cmp/results.json``): ``--out cmp/results.csv`` replaced compare's table with the page,
+    which the folder's form refuses."""
+    import shutil
+
+    folder = tmp_path / "cmp"
+    shutil.copytree(compared_folder, folder)
+    table = folder / "results.csv"
+    assert table.is_file()
+    refused(["report", str(folder / "results.json"), "--out", str(table)], tmp_path, capsys,
+            f"{table}: the report would overwrite an input ({table})")  # fmt: skip
