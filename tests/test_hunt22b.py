@@ -75,3 +75,24 @@ def test_report_over_the_results_table_beside_the_results_file_is_refused(
     assert table.is_file()
     refused(["report", str(folder / "results.json"), "--out", str(table)], tmp_path, capsys,
             f"{table}: the report would overwrite an input ({table})")  # fmt: skip
+
+
+# ---- train, compare: --param ----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("command", ["train", "compare"])
+def test_a_param_value_nested_too_deeply_is_refused_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str
+) -> None:
+    """``--param k=[[[...`` (a VALUE is read as JSON when it parses): 5,000 nested lists
+    ended in a RecursionError traceback."""
+    from tests.badinput import good_pose_file
+
+    data = tmp_path / "data"
+    data.mkdir()
+    for i in range(2):
+        good_pose_file(data / f"clip{i}.npz", label="squat", subject=f"s{i}")
+    extra = ["--db", str(tmp_path / "cb.sqlite")] if command == "train" else []
+    value = "[" * 5000 + "]" * 5000
+    refused([command, str(data), *extra, "--param", f"band={value}"], tmp_path, capsys,
+            "--param: the value of band is nested too deeply")  # fmt: skip

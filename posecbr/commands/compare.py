@@ -134,6 +134,10 @@ def parse_params(items: list[str]) -> dict[str, Any]:
             out[key.strip()] = json.loads(raw)
         except json.JSONDecodeError:
             out[key.strip()] = raw
+        except RecursionError:  # json's decoder recurses once per level of nesting
+            raise ConfigError(
+                f"the value of {key.strip()} is nested too deeply", "--param"
+            ) from None
     return out
 
 
