@@ -96,3 +96,34 @@ def test_a_param_value_nested_too_deeply_is_refused_in_one_line(
     value = "[" * 5000 + "]" * 5000
     refused([command, str(data), *extra, "--param", f"band={value}"], tmp_path, capsys,
             "--param: the value of band is nested too deeply")  # fmt: skip
+
+
+# ---- compare: its notes name clips ----------------------------------------------------------
+
+
+def test_compare_prints_a_clip_name_in_a_note_with_its_control_characters_escaped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A clip that shows nobody is left out and named in a note on stderr; its file name,
+    which holds an OSC escape (it retitles the terminal), went out raw (README, "Bad input":
+    names and paths are printed with control characters escaped)."""
+    import numpy as np
+
+    from posecbr.cli import main
+    from tests.test_compare_bad_input import DEMO, FAST, _swapped_data
+
+    labels = _swapped_data(tmp_path / "data")
+    name = "blank\x1b]0;pwned\x07.npz"
+    blank = dict(np.load(DEMO / "m01_s03_e02.npz"))
+    blank["positions"] = np.full_like(blank["positions"], np.nan)
+    np.savez(tmp_path / "data" / name, **blank)  # type: ignore[arg-type]
+    with labels.open("a", encoding="utf-8") as f:
+        f.write(f"{name},standing_shoulder_abduction,s03\n")
+    capsys.readouterr()
+    assert (
+        main(["compare", str(labels), *FAST, "--no-dad", "--json", str(tmp_path / "r.json")]) == 0
+    )
+    out, err = capsys.readouterr()
+    assert "note: left out 1 clip that shows no person: " in err
+    assert "blank\\x1b]0;pwned\\x07.npz" in err
+    assert "\x1b" not in err and "\x07" not in err and "\x1b" not in out
