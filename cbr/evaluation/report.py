@@ -67,6 +67,8 @@ def load_results(path: str | Path) -> tuple[CompareResults, Path]:
         doc = json.loads(p.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise DataError(f"not a JSON results file ({exc})", p) from None
+    except RecursionError:  # json's decoder recurses once per level of nesting
+        raise DataError("not a JSON results file (nested too deeply)", p) from None
     return CompareResults.from_dict(doc, str(p)), p
 
 
@@ -291,9 +293,11 @@ def write_report(results_path: str | Path, out: str | Path) -> tuple[Path, list[
     folder."""
     results, source = load_results(results_path)
     images = picture_files(results, source)
-    folder = Path(results_path)
-    kept = sorted(p for p in folder.iterdir() if p.is_file()) if folder.is_dir() else []
-    # the compare run's own files (its results table too) are kept as they are
+    # The compare run's own files are kept as they are: the results, their pictures and the
+    # table compare writes beside them (named as a folder or as its results.json). Any other
+    # file there, an earlier report the first, is no input and may be replaced.
+    table = source.with_name("results.csv")
+    kept = [table] if table.is_file() else []
     dest = check_output(out, inputs=[source, *images.values(), *kept], what="report")
     drawing = Drawing()
     with tempfile.TemporaryDirectory() as tmp:

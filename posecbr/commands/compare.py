@@ -13,6 +13,7 @@ from typing import Any
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, write_json_atomic
+from features.text import shown
 from posecbr.recordings import add_sensor_option, sensor_for
 
 
@@ -134,6 +135,10 @@ def parse_params(items: list[str]) -> dict[str, Any]:
             out[key.strip()] = json.loads(raw)
         except json.JSONDecodeError:
             out[key.strip()] = raw
+        except RecursionError:  # json's decoder recurses once per level of nesting
+            raise ConfigError(
+                f"the value of {key.strip()} is nested too deeply", "--param"
+            ) from None
     return out
 
 
@@ -251,7 +256,6 @@ def _draw_pictures(run_: Any, out: Path, trim: float | None) -> None:
 def _print_explanations(explained: list[Any]) -> None:
     """Why the clips explained (``--explain``) were got wrong, each its explanation's text
     under a line naming the clip, its true label and the answer."""
-    from features.text import shown
 
     for e in explained:
         print(f"\n{shown(e.clip)}: {shown(e.true)}, answered {shown(e.predicted)} by {e.method}")
@@ -275,7 +279,7 @@ def run(args: argparse.Namespace) -> int:
     results.explanations = explain_errors(run_, settings.explain)
     results.explanations += explain_dad_errors(run_, min(settings.explain, 3))
     for note in results.notes:
-        print(f"note: {note}", file=sys.stderr)
+        print(f"note: {shown(note)}", file=sys.stderr)
     print(format_table(results))
     if results.best:
         print(f"best: {results.best}; best interpretable (*): {results.best_interpretable}")

@@ -40,6 +40,8 @@ def parse_params(items: list[str] | None) -> dict[str, Any]:
             out[key] = json.loads(value)
         except json.JSONDecodeError:
             out[key] = value
+        except RecursionError:  # json's decoder recurses once per level of nesting
+            raise ConfigError(f"the value of {key} is nested too deeply", "--param") from None
     return out
 
 
