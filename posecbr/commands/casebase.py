@@ -98,9 +98,9 @@ def _upgrade(args: argparse.Namespace) -> int:
     converted = [f"from schema version {found} to {SCHEMA_VERSION}"] * (found != SCHEMA_VERSION)
     converted += ["from WAL mode to a rollback journal"] * journal
     if converted:
-        print(f"{args.db}: converted {', and '.join(converted)}")
+        print(f"{shown(args.db)}: converted {', and '.join(converted)}")
     else:
-        print(f"{args.db}: already schema version {SCHEMA_VERSION}, nothing to do")
+        print(f"{shown(args.db)}: already schema version {SCHEMA_VERSION}, nothing to do")
     return 0
 
 

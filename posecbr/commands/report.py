@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from features.text import shown
+
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
@@ -33,5 +35,5 @@ def run(args: argparse.Namespace) -> int:
     dest, failures = write_report(args.results, args.out)
     for line in failures:
         print(line, file=sys.stderr)
-    print(f"report written to {dest}")
+    print(f"report written to {shown(dest)}")
     return 0

@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 from features.fileio import check_output
+from features.text import shown
 from posecbr.recordings import add_recording_options, check_asf, load_recording
 
 
@@ -62,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     _print(args.clip, seq.fps, result)
     if args.plot is not None:
-        print(f"picture written to {args.plot}")
+        print(f"picture written to {shown(args.plot)}")
     return 0
 
 

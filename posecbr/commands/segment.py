@@ -25,7 +25,7 @@ from typing import Any
 
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, unique_name
-from features.text import counted
+from features.text import counted, shown
 from posecbr.recordings import add_recording_options, check_asf, check_fps, load_recording
 
 JUDGES = ("activity-margin", "margin", "held-out", "activities", "margin-distance")
@@ -295,4 +295,4 @@ def _overlay(path: Path, video: Any, result: Any, out: Path) -> None:
     from features.pose_estimation.overlay import write_overlay
 
     write_overlay(path, video.image_landmarks, out, result.fps, frame_words(result))
-    print(f"overlay written to {out}", file=sys.stderr)
+    print(f"overlay written to {shown(out)}", file=sys.stderr)
