@@ -102,7 +102,9 @@ class Timeline:
     columns: np.ndarray
 
     def unavailable(self) -> list[str]:
-        """Names of fluents with no defined value in any frame (their joints are missing)."""
+        """Names of fluents with no defined value in any frame: their joints are missing, or the
+        angle is undefined (an arm held exactly sideways has no projection on the sagittal plane,
+        SPEC.md), in every frame."""
         return [
             spec.name
             for i, spec in enumerate(self.layout.table.specs)
@@ -316,7 +318,9 @@ def phrase_list(states: tuple[StateInRun, ...], result: FluentResult) -> str:
 
 
 def unavailable_fluents(result: FluentResult) -> list[str]:
-    """Names of fluents with no defined value in any frame (their joints are missing)."""
+    """Names of fluents with no defined value in any frame: their joints are missing, or the
+    angle is undefined (an arm held exactly sideways has no projection on the sagittal plane,
+    SPEC.md), in every frame."""
     avail = result.available()
     out: list[str] = []
     for i, spec in enumerate(result.table.specs):

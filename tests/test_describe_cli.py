@@ -86,7 +86,10 @@ def test_describe_reports_unavailable_fluents(
     path = save_pose(to_sequence(body, body), tmp_path / "noface.npz")
     assert main(["describe", str(path)]) == 0
     out = capsys.readouterr().out
-    missing = "unavailable (joints missing): head tilted forward, head tilted left, head twisted"
+    missing = (
+        "unavailable (joints missing or the angle undefined in every frame): head tilted forward,"
+        " head tilted left, head twisted"
+    )
     assert missing in out
     # head-lengths need the ears: near/far are unavailable, touching (raw metres) is not
     assert main(["describe", str(path), "--json", "--all"]) == 0
@@ -189,3 +192,25 @@ def test_pose_files_are_written_with_ordinary_permissions(tmp_path: Path) -> Non
         os.umask(mask)
     assert oct(path.stat().st_mode & 0o777) == "0o644"
     assert not list(tmp_path.glob(".*.tmp"))  # no temporary file left behind
+
+
+def test_an_angle_undefined_with_every_joint_present_is_not_blamed_on_missing_joints(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Both arms held exactly sideways (a T-pose) for the whole clip, every joint present: "arm
+    in front" reads the arm's projection on the sagittal plane, which has no length there
+    (SPEC.md), so the fluent is unavailable; the line must not say the joints are missing."""
+    from tests.bodies import rot_z, rotate
+
+    arm = tuple(
+        f"{s}_{j}" for s in ("left",) for j in ("elbow", "wrist", "pinky", "index", "thumb")
+    )
+    body = standing()
+    body = rotate(body, arm, rot_z(-90.0), body["left_shoulder"])
+    right = tuple(a.replace("left_", "right_") for a in arm)
+    body = rotate(body, right, rot_z(90.0), body["right_shoulder"])
+    path = save_pose(to_sequence(body, body, body), tmp_path / "tpose.npz")
+    assert main(["describe", str(path)]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("unavailable"))
+    assert "left arm in front" in line and "right arm in front" in line
+    assert line.startswith("unavailable (joints missing or the angle undefined in every frame)")

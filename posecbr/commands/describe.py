@@ -105,7 +105,7 @@ def _unavailable_line(missing: list[str]) -> str:
     near = [m for m in missing if m.startswith("near:")]
     other = [m.replace("_", " ") for m in missing if not m.startswith("near:")]
     parts = other + ([f"{len(near)} near pairs"] if near else [])
-    return f"unavailable (joints missing): {', '.join(parts)}"
+    return f"unavailable (joints missing or the angle undefined in every frame): {', '.join(parts)}"
 
 
 class _Spool:
