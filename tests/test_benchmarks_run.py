@@ -1,0 +1,84 @@
+"""The benchmarks still run: ``benchmarks.compare`` end to end on a slice of the bundled demo
+data (the suite runs no other benchmark; ``python -m benchmarks NAME`` runs any of them).
+
+``compare --quick`` takes about a minute on the whole demo subset (180 clips); this runs its
+``main`` on the correct repetitions of two movements of it (18 clips of three subjects: three
+leave-one-subject-out folds), its results written under ``tmp_path``, never into
+``benchmarks/results``. Most of its ~15 s is the tslearn peer's numba kernels compiling (tslearn
+does not cache them): kept, since the peer is what the benchmark's ratios are measured against.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import shutil
+from pathlib import Path
+
+import pytest
+
+from benchmarks import compare
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+MOVEMENTS = {"m01", "m02"}
+
+
+def _demo_slice(folder: Path) -> int:
+    """The correct demo repetitions of ``MOVEMENTS`` copied into ``folder`` with their labels;
+    how many."""
+    folder.mkdir()
+    with (DEMO / "labels.csv").open(newline="", encoding="utf-8") as f:
+        reader = csv.DictReader(f)
+        fields = reader.fieldnames
+        rows = [r for r in reader if r["movement"] in MOVEMENTS and r["correct"] == "true"]
+    assert fields is not None
+    with (folder / "labels.csv").open("w", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, fieldnames=fields)
+        writer.writeheader()
+        writer.writerows(rows)
+    for r in rows:
+        shutil.copy(DEMO / r["path"], folder / r["path"])
+    return len(rows)
+
+
+def test_compare_quick_runs_and_records_the_peers(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    n_clips = _demo_slice(tmp_path / "demo")
+    out = tmp_path / "compare.json"
+    monkeypatch.setattr(compare, "QUICK", (("demo slice", tmp_path / "demo", "label"),))
+    monkeypatch.setattr(compare, "RESULTS", out)
+    # the run prints its path relative to the project: a path under tmp_path is not
+    monkeypatch.setattr(compare, "ROOT", tmp_path)
+
+    assert compare.main(["--quick"]) == 0
+
+    printed = capsys.readouterr().out
+    methods = ["cbr fluents/euclidean", "cbr fluents/dtw", "cbr fluents/signature",
+               "cbr qmp/euclidean", "dad", "dtw-knn"]  # fmt: skip
+    for name in methods:  # one table row each
+        assert any(line.startswith(name) for line in printed.splitlines()), name
+    doc = json.loads(out.read_text(encoding="utf-8"))
+    assert doc["benchmark"] == "compare"
+    assert "platform" in doc["machine"]
+    task = doc["tasks"]["demo slice"]
+    assert task["n_clips"] == n_clips == 18
+    assert task["subjects"] == ["s01", "s02", "s03"]
+    assert task["cv"] == {"scheme": "loso", "n_folds": 3}
+    assert sorted(task["classes"]) == ["deep_squat", "hurdle_step"]
+    by_name = {m["name"]: m for m in task["methods"]}
+    assert set(methods) <= set(by_name)
+    for name in methods:
+        m = by_name[name]
+        assert m["status"] == "ok", m
+        assert 0.0 <= m["accuracy"] <= 1.0
+        assert m["predict_ms_per_clip"] > 0
+    assert by_name[task["best_interpretable"]]["interpretable"]
+    versus = task["best_interpretable_vs_peers"]
+    assert "dtw-knn" in {v["peer"] for v in versus}  # tslearn is a dependency: it always runs
+    for v in versus:
+        assert v["interpretable"] == task["best_interpretable"]
+        assert math.isfinite(v["predict_time_ratio"]) and v["predict_time_ratio"] > 0
+        assert -1.0 <= v["accuracy_difference"] <= 1.0
+        assert 0.0 <= v["mcnemar_p"] <= 1.0
