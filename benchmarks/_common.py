@@ -33,6 +33,18 @@ DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data
 RESULTS = ROOT / "benchmarks" / "results"
 
 
+def require_peer(module: str, package: str, benchmark: str) -> None:
+    """Exit with one line when ``module``, the peer ``benchmark`` measures against, is not
+    installed (the ``bench`` extra): without its peer a benchmark has nothing to compare."""
+    import importlib.util
+
+    if importlib.util.find_spec(module) is None:
+        raise SystemExit(
+            f"python -m benchmarks.{benchmark}: needs {package}, the peer it measures against "
+            "(pip install -e '.[bench]')"
+        )
+
+
 def pin_one_thread() -> dict[str, Any]:
     """One thread for BLAS and OpenMP (threadpoolctl) and FAISS; what is pinned, as data."""
     from threadpoolctl import threadpool_info, threadpool_limits

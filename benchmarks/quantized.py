@@ -126,6 +126,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--queries", type=int, default=20)
     ap.add_argument("--out", type=Path, default=RESULTS)
     args = ap.parse_args(argv)
+    C.require_peer("faiss", "faiss-cpu", "quantized")
     threads = C.pin_one_thread()
     rng = np.random.default_rng(0)
     print(
