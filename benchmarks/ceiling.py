@@ -23,7 +23,7 @@ a new person's first clips):
 Prints the accuracy (Wilson 95 % interval) and per movement for each, and writes
 ``benchmarks/results/ceiling.json`` with machine and versions.
 
-    python -m benchmarks.ceiling        # ~40 s on 2 cores
+    python -m benchmarks.ceiling        # about 4 min on 2 cores (260 s at load 1-5, 2026-12-04)
 """
 
 from __future__ import annotations

@@ -27,7 +27,7 @@ per dataset:
     python -m benchmarks.explanations [--jobs 2]  # both datasets from ../shared/data
     python -m benchmarks.explanations --train DATA --test DATA [--train-subjects s01,s02]
         [--test-subjects s03] [--other DATA]      # one split of your own
-    python -m benchmarks.explanations --quick     # the bundled demo subset (~1 min)
+    python -m benchmarks.explanations --quick     # the bundled demo subset (about 10 s)
     python -m benchmarks.explanations --datasets hdm05,repetitions --out FILE  # some of them
 
 The shared run is a list of tasks (a fold of a dataset with its four flag configurations, or one
