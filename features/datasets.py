@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import csv
 import re
-from collections.abc import Callable, Collection, Iterator
+from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -223,14 +223,17 @@ def _uiprmd_entries(path: Path, sensor: str) -> list[_Entry]:
     return entries
 
 
-def find_asf(amc: Path) -> Path:
-    """The skeleton beside an AMC file: ``HDM_<actor>.asf`` for HDM05, else the only .asf."""
+def find_asf(amc: Path, beside: Sequence[Path] | None = None) -> Path:
+    """The skeleton beside an AMC file: ``HDM_<actor>.asf`` for HDM05, else the only .asf.
+    ``beside``: the files of the AMC file's folder, when the caller has listed them already
+    (one listing for a folder of many takes, not one per take)."""
+    files = list(amc.parent.iterdir()) if beside is None else beside
     meta = hdm05_metadata(amc)
     if meta:
-        for cand in amc.parent.iterdir():
+        for cand in files:
             if cand.name.lower() == f"hdm_{meta['subject']}.asf".lower():
                 return cand
-    asfs = [p for p in amc.parent.iterdir() if p.suffix.lower() == ".asf"]
+    asfs = [p for p in files if p.suffix.lower() == ".asf"]
     if len(asfs) == 1:
         return asfs[0]
     if not asfs:
@@ -797,9 +800,13 @@ def dataset_entries(
         for e in _entries(path, kind, sensor)
         if _keep(e.label, e.subject, e.extras, labels, subjects, movements, episodes, correct)
     ]
+    listed: dict[Path, list[Path]] = {}  # each folder of AMC files listed once
     for d in kept:
         if _suffix(d.entry.path) == ".amc":
-            find_asf(d.entry.path)  # one without its skeleton: refused before any is read
+            folder = d.entry.path.parent
+            if folder not in listed:
+                listed[folder] = [p for p in folder.iterdir() if p.suffix.lower() == ".asf"]
+            find_asf(d.entry.path, listed[folder])  # one without a skeleton: refused first
         if d.entry.check is not None:
             d.entry.check()
     return kept
