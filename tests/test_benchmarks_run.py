@@ -18,8 +18,6 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks import compare
-
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 MOVEMENTS = {"m01", "m02"}
 
@@ -42,9 +40,12 @@ def _demo_slice(folder: Path) -> int:
     return len(rows)
 
 
+@pytest.mark.filterwarnings("ignore:h5py not installed:UserWarning")  # tslearn's import chatter
 def test_compare_quick_runs_and_records_the_peers(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    from benchmarks import compare  # imported here: tslearn's chatter under the filter above
+
     n_clips = _demo_slice(tmp_path / "demo")
     out = tmp_path / "compare.json"
     monkeypatch.setattr(compare, "QUICK", (("demo slice", tmp_path / "demo", "label"),))
