@@ -83,3 +83,26 @@ def test_compare_quick_runs_and_records_the_peers(
         assert math.isfinite(v["predict_time_ratio"]) and v["predict_time_ratio"] > 0
         assert -1.0 <= v["accuracy_difference"] <= 1.0
         assert 0.0 <= v["mcnemar_p"] <= 1.0
+
+
+@pytest.mark.skipif(
+    __import__("importlib.util").util.find_spec("faiss") is not None,
+    reason="faiss is installed here: the benchmarks would run, not refuse",
+)
+@pytest.mark.parametrize("name", ["quantized", "retrieval"])
+def test_a_benchmark_without_its_peer_says_so_in_one_line(name: str, tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "out.json"
+    done = subprocess.run(
+        [sys.executable, "-m", f"benchmarks.{name}", "--sizes", "100", "--out", str(out)],
+        cwd=root, capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 1
+    assert done.stderr.strip().splitlines() == [
+        f"python -m benchmarks.{name}: needs faiss-cpu, the peer it measures against"
+        " (pip install -e '.[bench]')"
+    ]
+    assert done.stdout == "" and not out.exists()

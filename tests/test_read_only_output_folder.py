@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from features.poses import save_pose
-from tests.badinput import read_only_mounts_work, standing_clip
+from tests.badinput import read_only_mounts_work, snapshot, standing_clip
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
@@ -57,7 +57,9 @@ def test_compare_into_a_read_only_folder_is_refused_before_it_cross_validates(
 ) -> None:
     folder = tmp_path / "ro"
     folder.mkdir()
+    inputs = snapshot(data)
     done = _in_read_only(folder, ["compare", str(data), *FAST, option, str(folder / name)])
+    assert snapshot(data) == inputs  # the clips and labels read are as they were
     assert done.returncode == 1, done.stderr
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1, done.stderr
@@ -71,7 +73,9 @@ def test_describe_plot_into_a_read_only_folder_is_refused(tmp_path: Path) -> Non
     clip = save_pose(standing_clip(30), tmp_path / "clip.npz")
     folder = tmp_path / "ro"
     folder.mkdir()
+    before = clip.read_bytes()
     done = _in_read_only(folder, ["describe", str(clip), "--plot", str(folder / "t.png")])
+    assert clip.read_bytes() == before
     assert done.returncode == 1, done.stderr
     lines = done.stderr.strip().splitlines()
     assert (
