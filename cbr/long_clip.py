@@ -107,7 +107,13 @@ def movement_signals(seq: PoseSequence, chunk: int) -> MovementSignals:
     its state signals computed ``chunk`` frames at a time (they are per frame): only the
     joint angles ``(frames, 22)`` are kept whole, which is all the counted angles read, not
     the near distances ``(frames, 148)``. They are handed over as the signals of a
-    stand-in for ``seq`` (a new object: what is cached for it goes with it)."""
+    stand-in for ``seq`` (a new object: what is cached for it goes with it). Cached for
+    ``seq`` and ``chunk``: a command checks a recording can be segmented before segmenting it
+    (:func:`cbr.segmentation.check_segmentable`), and both read these."""
+    return derived(seq, f"movement_signals/{chunk}", lambda s: _movement_signals(s, chunk))
+
+
+def _movement_signals(seq: PoseSequence, chunk: int) -> MovementSignals:
     n = seq.n_frames
     angles = np.empty((n, len(ANGLE_SIGNALS)))
     head = np.empty(n)

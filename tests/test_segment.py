@@ -425,6 +425,34 @@ def test_a_recording_segmented_a_piece_at_a_time_gives_the_same_segments(
     _same_segments(pieces, whole)
 
 
+def test_a_long_recording_checked_then_segmented_computes_its_counted_angles_once(
+    recordings: dict[str, PoseSequence],
+    classifier: CaseBaseClassifier,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A recording longer than CHUNK_FRAMES (made 500 here) is read in pieces; ``segment``
+    checks every recording before segmenting any, and the check's joint angles are the ones
+    the segmenting counts on: computed once, not once per step."""
+    from cbr import long_clip
+    from cbr.segmentation import check_segmentable, solve_recording
+
+    monkeypatch.setattr(long_clip, "CHUNK_FRAMES", 500)
+    computed = []
+    real = long_clip.count_signals  # the counted angles from the pieces' joint angles
+
+    def counted(seq: PoseSequence) -> object:
+        computed.append(seq.n_frames)
+        return real(seq)
+
+    monkeypatch.setattr(long_clip, "count_signals", counted)
+    rec = recordings["13_30"]
+    cut = PoseSequence(rec.positions[:1500], rec.joint_names, 120.0, source="cut")
+    check_segmentable(cut)
+    done = solve_recording(classifier, cut)
+    assert computed == [1500]
+    assert len(done.windows) > 0
+
+
 def test_a_canonical_side_case_base_segments_the_same_in_pieces() -> None:
     """Mirror images of the pieces (side canonical): the synthetic recording of
     test_synthetic_recording_changes_within_a_quarter_second, mirrored, in pieces of 97
