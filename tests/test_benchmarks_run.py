@@ -40,7 +40,6 @@ def _demo_slice(folder: Path) -> int:
     return len(rows)
 
 
-@pytest.mark.filterwarnings("ignore:h5py not installed:UserWarning")  # tslearn's import chatter
 def test_compare_quick_runs_and_records_the_peers(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
