@@ -38,7 +38,7 @@ from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -404,34 +404,110 @@ class CriteriaResult:
     failed: tuple[tuple[str, ...], ...]
 
 
-def _test_values(test: Test, fits: QMPFits) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """(passed ``(W,)``, observable ``(W,)``, observed values) of one test over all windows.
-    The observed values, each ``(W,)``: a condition's quantity; a relation's phase gap (from
-    anti-phase for ``anti_phase``), period ratio and smaller amplitude."""
-    idx = [fits.index(s) for s in test.signals]
-    observable = (fits.status[:, idx] != NOT_ENOUGH_DATA).all(axis=1)
-    if isinstance(test, Condition):
-        v = fits.quantity(test.quantity)[:, idx[0]]
+@dataclass(frozen=True)
+class _Tested:
+    """Every distinct test of an ADD over all windows at once (columns in ``tests`` order):
+    passed and observable ``(W, U)`` bool, and what was observed (``values``: a condition's
+    quantity ``(W, U)``; for a relation its phase gap, from anti-phase for ``anti_phase``, its
+    period ratio and smaller amplitude, each ``(W, U)``; NaN in the other kind's columns)."""
+
+    tests: tuple[Test, ...]
+    passed: np.ndarray
+    observable: np.ndarray
+    values: np.ndarray
+    gap: np.ndarray
+    ratio: np.ndarray
+    amplitude: np.ndarray
+
+    def observed(self, u: int) -> list[np.ndarray]:
+        """The observed values of test ``u``, each ``(W,)``."""
+        if isinstance(self.tests[u], Condition):
+            return [self.values[:, u]]
+        return [self.gap[:, u], self.ratio[:, u], self.amplitude[:, u]]
+
+
+def _bounds(values: list[float | None], missing: float) -> np.ndarray:
+    return np.array([missing if v is None else v for v in values], dtype=np.float64)
+
+
+def _test_all(tests: tuple[Test, ...], fits: QMPFits) -> _Tested:
+    """:class:`_Tested` of ``tests`` on ``fits``: array work per kind of test, not per test."""
+    n_win, n_tests = len(fits.windows), len(tests)
+    where = {s: fits.index(s) for t in tests for s in t.signals}
+    passed = np.zeros((n_win, n_tests), dtype=bool)
+    observed = np.full((n_win, n_tests, 4), np.nan)  # value, gap, ratio, amplitude
+    cond = [u for u, t in enumerate(tests) if isinstance(t, Condition)]
+    rel = [u for u, t in enumerate(tests) if isinstance(t, Relation)]
+    if cond:
+        conditions = [cast(Condition, tests[u]) for u in cond]
+        sig = np.array([where[c.signal] for c in conditions], dtype=np.int64)
+        v = np.empty((n_win, len(cond)))
+        quantity = np.array([c.quantity for c in conditions], dtype=object)
+        for q in dict.fromkeys(quantity.tolist()):
+            at = np.flatnonzero(quantity == q)
+            v[:, at] = fits.quantity(q)[:, sig[at]]
+        lo = _bounds([c.min for c in conditions], -np.inf)
+        hi = _bounds([c.max for c in conditions], np.inf)
         with np.errstate(invalid="ignore"):
-            ok = np.isfinite(v)
-            if test.min is not None:
-                ok &= v >= test.min
-            if test.max is not None:
-                ok &= v <= test.max
-        return ok, observable, [v]
-    amp = fits.quantity("amplitude")[:, idx]
-    per = fits.quantity("period_s")[:, idx]
+            passed[:, cond] = np.isfinite(v) & (v >= lo) & (v <= hi)
+        observed[:, cond, 0] = v
+    if rel:
+        relations = [cast(Relation, tests[u]) for u in rel]
+        a = np.array([where[r.signal_a] for r in relations], dtype=np.int64)
+        b = np.array([where[r.signal_b] for r in relations], dtype=np.int64)
+        amp, per = fits.quantity("amplitude"), fits.quantity("period_s")
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ratio = np.maximum(per[:, a], per[:, b]) / np.minimum(per[:, a], per[:, b])
+            gap = _phase_gaps(fits, a, b)
+            anti = np.array([r.relation == "anti_phase" for r in relations])
+            gap = np.where(anti, np.pi - gap, gap)
+            smaller = np.minimum(amp[:, a], amp[:, b])
+            least = np.array([r.min_amplitude for r in relations])
+            ok = (
+                (amp[:, a] >= least)
+                & (amp[:, b] >= least)
+                & (ratio <= np.array([r.max_period_ratio for r in relations]))
+                & (gap <= np.array([r.max_phase_diff_rad for r in relations]))
+            )
+        passed[:, rel] = ok & np.isfinite(gap)
+        observed[:, rel, 1], observed[:, rel, 2], observed[:, rel, 3] = gap, ratio, smaller
+    signals = [[where[s] for s in t.signals] for t in tests]
+    enough = fits.status != NOT_ENOUGH_DATA  # (W, S)
+    observable = np.stack([enough[:, idx].all(axis=1) for idx in signals], axis=1).reshape(
+        n_win, n_tests
+    )
+    return _Tested(tests, passed, observable, *np.moveaxis(observed, 2, 0))
+
+
+def _oscillations(fits: QMPFits, signals: np.ndarray, samples: int) -> np.ndarray:
+    """Each of ``signals``' fitted oscillation rebuilt over the window, less its mean
+    ``(W, len(signals), samples)``: the derivative's cos/sin parts at its own T; 0 where the
+    signal has no oscillation (no T)."""
+    lib = ExplicitTimeLibrary()
+    # Windows of one fit all have the same length, so one time grid serves them all.
+    t = np.linspace(0.0, (fits.windows[0, 1] - fits.windows[0, 0]) / fits.fps, samples)
+    curves = np.empty((len(fits.windows), len(signals), samples))
+    for j, s in enumerate(signals.tolist()):
+        T = fits.period_T_s[:, s]
+        theta = lib.matrices(t, np.where(np.isfinite(T), T, 1.0))  # (W, samples, 6)
+        osc = np.einsum("wfk,wk->wf", theta[..., 2:], fits.coefficients[:, s, 2:])
+        osc = np.where(np.isfinite(T)[:, None], osc, 0.0)  # no sinusoid: no oscillation
+        curves[:, j] = osc - osc.mean(axis=1, keepdims=True)
+    return curves
+
+
+def _phase_gaps(fits: QMPFits, a: np.ndarray, b: np.ndarray, samples: int = 64) -> np.ndarray:
+    """:func:`phase_gap` of the signal pairs ``(a[i], b[i])`` ``(W, len(a))``, each signal's
+    oscillation rebuilt once."""
+    signals, inverse = np.unique(np.r_[a, b], return_inverse=True)
+    curves = _oscillations(fits, signals, samples)
+    ca, cb = curves[:, inverse[: len(a)]], curves[:, inverse[len(a) :]]
+    num = (ca * cb).sum(axis=2)
+    den = np.sqrt((ca**2).sum(axis=2) * (cb**2).sum(axis=2))
     with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = np.maximum(per[:, 0], per[:, 1]) / np.minimum(per[:, 0], per[:, 1])
-        diff = phase_gap(fits, idx[0], idx[1])
-        if test.relation == "anti_phase":
-            diff = np.pi - diff
-        ok = (
-            (amp >= test.min_amplitude).all(axis=1)
-            & (ratio <= test.max_period_ratio)
-            & (diff <= test.max_phase_diff_rad)
-        )
-    return ok & np.isfinite(diff), observable, [diff, ratio, amp.min(axis=1)]
+        corr = np.where(den > 0, num / den, np.nan)
+    gap: np.ndarray = np.arccos(np.clip(corr, -1.0, 1.0))
+    return gap
 
 
 def phase_gap(fits: QMPFits, a: int, b: int, samples: int = 64) -> np.ndarray:
@@ -443,21 +519,7 @@ def phase_gap(fits: QMPFits, a: int, b: int, samples: int = 64) -> np.ndarray:
     numbers stays right when the two fits chose different T (one whole-period, one
     half-period) for the same motion. NaN where either signal has no oscillation.
     """
-    lib = ExplicitTimeLibrary()
-    # Windows of one fit all have the same length, so one time grid serves them all.
-    t = np.linspace(0.0, (fits.windows[0, 1] - fits.windows[0, 0]) / fits.fps, samples)
-    curves = []
-    for s in (a, b):
-        T = fits.period_T_s[:, s]
-        theta = lib.matrices(t, np.where(np.isfinite(T), T, 1.0))  # (W, samples, 6)
-        osc = np.einsum("wfk,wk->wf", theta[..., 2:], fits.coefficients[:, s, 2:])
-        osc = np.where(np.isfinite(T)[:, None], osc, 0.0)  # no sinusoid: no oscillation
-        curves.append(osc - osc.mean(axis=1, keepdims=True))
-    num = (curves[0] * curves[1]).sum(axis=1)
-    den = np.sqrt((curves[0] ** 2).sum(axis=1) * (curves[1] ** 2).sum(axis=1))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = np.where(den > 0, num / den, np.nan)
-    gap: np.ndarray = np.arccos(np.clip(corr, -1.0, 1.0))
+    gap: np.ndarray = _phase_gaps(fits, np.array([a]), np.array([b]), samples)[:, 0]
     return gap
 
 
@@ -483,49 +545,62 @@ def _failure_text(test: Test, values: list[np.ndarray], w: int) -> str:
 
 
 def evaluate_criteria(add: ADD, fits: QMPFits) -> CriteriaResult:
-    """Evaluate every ADD criterion in every window of ``fits`` (array work per test)."""
+    """Evaluate every ADD criterion in every window of ``fits``: every distinct test at once
+    (:func:`_test_all`), then each variant's tests and each criterion's variants combined by
+    counting (a variant holds when none of its tests fails)."""
     names = tuple(add.criteria)
-    n_win, n_q = len(fits.windows), len(names)
-    met = np.zeros((n_win, n_q), dtype=bool)
-    observable = np.zeros((n_win, n_q), dtype=bool)
-    fraction = np.zeros((n_win, n_q))
+    crits = [add.criteria[n] for n in names]
+    n_q = len(names)
+    tests = tuple(dict.fromkeys(t for c in crits for v in c.variants for t in v))
+    column = {t: u for u, t in enumerate(tests)}
+    tested = _test_all(tests, fits)
+    # incidence of tests (rows) in the variants of all criteria (columns), criteria in order
+    variants = [v for c in crits for v in c.variants]
+    member = np.zeros((len(tests), len(variants)))
+    for j, variant in enumerate(variants):
+        member[[column[t] for t in variant], j] = 1.0
+    size = member.sum(axis=0)
+    passes = tested.passed.astype(np.float64) @ member  # (W, variants): tests passed
+    seen = tested.observable.astype(np.float64) @ member
+    v_obs = seen == size
+    v_met = (passes == size) & v_obs
+    v_frac = np.where(v_obs, passes / size, 0.0)
+    first = np.cumsum([0] + [len(c.variants) for c in crits])[:-1]
+    both = np.array([c.sides == "both" for c in crits])
+    n_var = np.array([len(c.variants) for c in crits], dtype=np.float64)
+    met = np.where(
+        both, np.logical_and.reduceat(v_met, first, axis=1),
+        np.logical_or.reduceat(v_met, first, axis=1),
+    )  # fmt: skip
+    observable = np.where(
+        both, np.logical_and.reduceat(v_obs, first, axis=1),
+        np.logical_or.reduceat(v_obs, first, axis=1),
+    )  # fmt: skip
+    fraction = np.where(
+        both, np.add.reduceat(v_frac, first, axis=1) / n_var,
+        np.maximum.reduceat(v_frac, first, axis=1),
+    )  # fmt: skip
     closest = np.full(n_q, -1, dtype=np.int64)
     failed: list[tuple[str, ...]] = [() for _ in range(n_q)]
-    for q, name in enumerate(names):
-        crit = add.criteria[name]
-        v_met, v_obs, v_frac, v_tests = [], [], [], []
-        for variant in crit.variants:
-            results = [(_test_values(t, fits), t) for t in variant]
-            passed = np.stack([r[0][0] for r in results], axis=1)  # (W, tests)
-            obs = np.stack([r[0][1] for r in results], axis=1)
-            v_met.append(passed.all(axis=1) & obs.all(axis=1))
-            v_obs.append(obs.all(axis=1))
-            v_frac.append(np.where(obs.all(axis=1), passed.mean(axis=1), 0.0))
-            v_tests.append(results)
-        vm, vo, vf = np.stack(v_met, 1), np.stack(v_obs, 1), np.stack(v_frac, 1)
-        if crit.sides == "both":
-            met[:, q] = vm.all(axis=1)
-            observable[:, q] = vo.all(axis=1)
-            fraction[:, q] = vf.mean(axis=1)
-        else:
-            met[:, q] = vm.any(axis=1)
-            observable[:, q] = vo.any(axis=1)
-            fraction[:, q] = vf.max(axis=1)
+    for q, crit in enumerate(crits):
         # Explain a miss once, in the observable window where the criterion came closest.
         missed = ~met[:, q] & observable[:, q]
-        if missed.any():
-            w = int(np.argmax(np.where(missed, fraction[:, q], -1.0)))
-            closest[q] = w
-            texts: list[str] = []
-            # "both": every failing side counts; "either": explain the closest side.
-            variants = range(len(crit.variants))
-            if crit.sides != "both":
-                variants = range(int(np.argmax(vf[w])), int(np.argmax(vf[w])) + 1)
-            for v in variants:
-                for (ok, _obs, values), test in v_tests[v]:
-                    if not ok[w]:
-                        texts.append(_failure_text(test, values, w))
-            failed[q] = tuple(dict.fromkeys(texts))
+        if not missed.any():
+            continue
+        w = int(np.argmax(np.where(missed, fraction[:, q], -1.0)))
+        closest[q] = w
+        # "both": every failing side counts; "either": explain the closest side.
+        chosen = range(len(crit.variants))
+        if crit.sides != "both":
+            best = int(np.argmax(v_frac[w, first[q] : first[q] + len(crit.variants)]))
+            chosen = range(best, best + 1)
+        texts = [
+            _failure_text(test, tested.observed(column[test]), w)
+            for v in chosen
+            for test in crit.variants[v]
+            if not tested.passed[w, column[test]]
+        ]
+        failed[q] = tuple(dict.fromkeys(texts))
     return CriteriaResult(names, met, observable, fraction, closest, tuple(failed))
 
 
