@@ -120,6 +120,10 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
                 threads_per_worker=1,
                 processes=True,
                 dashboard_address=None,
+                # no dashboard, but the scheduler's HTTP routes (health, metrics) still serve
+                # on 8787 unless told: a free port, so a second cluster (another command,
+                # a notebook's) does not warn that 8787 is taken
+                scheduler_kwargs={"dashboard_address": ":0"},
                 silence_logs=logging.ERROR,
             )
         client = dd.Client(cluster)

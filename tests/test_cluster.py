@@ -10,6 +10,7 @@ import builtins
 import hashlib
 import json
 import os
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -169,6 +170,18 @@ def test_a_worker_that_dies_with_the_only_copy_of_the_shared_input_is_survived(
         )
     assert (tmp_path / "died").exists()
     assert [(o.name, o.error) for o in failed] == [] and values == [0, 1, 4, 9, 16, 25]
+
+
+def test_a_second_local_cluster_takes_a_free_port_without_a_warning(client: Any) -> None:
+    # the module's cluster is up; another (a second command, a notebook's) starts beside it
+    # without Dask's "Port 8787 is already in use" on the user's terminal
+    assert client.submit(int, 1).result(timeout=60) == 1
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with connect("local:1") as one:
+            assert one.submit(int, 2).result(timeout=120) == 2
+    said = [str(w.message) for w in caught if "already in use" in str(w.message)]
+    assert said == []
 
 
 def test_compare_on_the_cluster_predicts_as_one_process(address: str, tmp_path: Path) -> None:
