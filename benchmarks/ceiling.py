@@ -28,6 +28,7 @@ Prints the accuracy (Wilson 95 % interval) and per movement for each, and writes
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import sys
@@ -147,7 +148,13 @@ def summary(correct: np.ndarray, movement: np.ndarray, names: dict[str, str]) ->
     }
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    # no options: --help prints what it does instead of running it and overwriting its results
+    argparse.ArgumentParser(
+        prog="python -m benchmarks.ceiling",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    ).parse_args(argv)
     os.environ.setdefault("POSECBR_NO_PROGRESS", "1")
     warnings.filterwarnings("ignore", category=RuntimeWarning)
     from cbr.evaluation.machine import machine_info

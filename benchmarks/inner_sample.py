@@ -14,6 +14,7 @@ Run: ``python -m benchmarks.inner_sample`` (about 10 min). Writes
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 import time
@@ -63,7 +64,13 @@ def _with_cap(cap: int, clips: list[Any]) -> dict[str, Any]:
     }
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    # no options: --help prints what it does instead of running it and overwriting its results
+    argparse.ArgumentParser(
+        prog="python -m benchmarks.inner_sample",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    ).parse_args(argv)
     from features.datasets import load_dataset
 
     os.environ["POSECBR_NO_PROGRESS"] = "1"

@@ -17,6 +17,7 @@ minus whole: above 0, repetitions counted twice).
 
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 from typing import Any
@@ -58,7 +59,13 @@ def _scores(diffs: list[int]) -> dict[str, float] | None:
     return {"cuts": len(d), "unchanged": float(np.mean(d == 0)), "mean_difference": float(d.mean())}
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    # no options: --help prints what it does instead of running it and overwriting its results
+    argparse.ArgumentParser(
+        prog="python -m benchmarks.segment_cuts",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    ).parse_args(argv)
     from cbr.segmentation import counted_segments
     from features.readers.asfamc import read_asf_amc
     from features.repetitions import movement_signals

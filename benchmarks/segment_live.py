@@ -21,6 +21,7 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
     os.environ[_var] = "1"
 
+import argparse  # noqa: E402
 import json  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
@@ -69,7 +70,13 @@ def left_out_unknown(recs: dict[str, Any], test: str) -> dict[str, list[int]]:
     return out
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    # no options: --help prints what it does instead of running it and overwriting its results
+    argparse.ArgumentParser(
+        prog="python -m benchmarks.segment_live",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    ).parse_args(argv)
     recs = load_recordings()
     clips = json.loads(FIXTURE.read_text(encoding="utf-8"))["clips"]
     rows = []

@@ -1,0 +1,35 @@
+"""README audit: what the README's commands promise, checked where the code fell short."""
+
+from __future__ import annotations
+
+import importlib
+
+import pytest
+
+# benchmarks that take no options: `python -m benchmarks.<name> --help` ran the whole
+# benchmark (ceiling: about 4 minutes) and overwrote its results file
+NO_OPTIONS = ("segment_cuts", "segment_live", "ceiling", "inner_sample")
+
+
+@pytest.mark.parametrize("name", NO_OPTIONS)
+def test_a_benchmark_without_options_answers_help_without_running(
+    name: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    module = importlib.import_module(f"benchmarks.{name}")
+    with pytest.raises(SystemExit) as stop:
+        module.main(["--help"])
+    assert stop.value.code == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"usage: python -m benchmarks.{name}")
+    assert "benchmarks/results/" in out  # the docstring: what it writes
+
+
+@pytest.mark.parametrize("name", NO_OPTIONS)
+def test_a_benchmark_without_options_refuses_an_unknown_option(
+    name: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    module = importlib.import_module(f"benchmarks.{name}")
+    with pytest.raises(SystemExit) as stop:
+        module.main(["--no-such-option"])
+    assert stop.value.code == 2
+    assert "unrecognized arguments: --no-such-option" in capsys.readouterr().err
