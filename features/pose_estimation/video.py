@@ -344,7 +344,10 @@ def stream_poses(
         fps = info.fps
     else:
         device = int(source) if isinstance(source, str) and source.isdigit() else source
-        cap = _open_quietly(device)
+        try:
+            cap = _open_quietly(device)
+        except (cv2.error, OverflowError):  # an index too large for OpenCV (a C int)
+            raise DataError("cannot open camera or stream", str(source)) from None
         if not cap.isOpened():
             raise DataError("cannot open camera or stream", str(source))
     est = estimator or PoseEstimator(smoothing=smoothing)

