@@ -8,6 +8,10 @@ Tiny synthetic videos (OpenCV writes them) keep each case to a few seconds.
 
 from __future__ import annotations
 
+import socket
+import threading
+import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -50,4 +54,46 @@ def test_watch_a_camera_index_too_large_for_opencv_is_one_line(
     assert main(["watch", index, "--db", str(case_base), "--out", str(out)]) == 1
     captured = capsys.readouterr()
     assert _one_line(captured.err) == f"posecbr watch: error: {index}: cannot open camera or stream"
+    assert captured.out == "" and list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture
+def silent_server() -> Iterator[str]:
+    """A URL on this machine whose server accepts connections and never sends a byte."""
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+    held: list[socket.socket] = []
+
+    def accept() -> None:
+        while True:
+            try:
+                held.append(server.accept()[0])
+            except OSError:  # closed: the test is over
+                return
+
+    threading.Thread(target=accept, daemon=True).start()
+    yield f"http://127.0.0.1:{server.getsockname()[1]}/live.mp4"
+    server.close()
+    for conn in held:
+        conn.close()
+
+
+def test_watch_a_server_that_never_answers_gives_up_after_the_stall(
+    case_base: Path, silent_server: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--stall 1`` on a URL whose server accepts and never answers: the same line as a
+    stream that stalls, after about a second. (The URL was first opened to learn whether it
+    is a served file with FFmpeg's own 30-s timeout, in the main thread, where neither
+    --stall nor Ctrl-C could end the wait.)"""
+    out = tmp_path / "w.mp4"
+    started = time.monotonic()
+    argv = ["watch", silent_server, "--db", str(case_base), "--stall", "1", "--out", str(out)]
+    assert main(argv) == 1
+    took = time.monotonic() - started
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == (
+        f"posecbr watch: error: {silent_server}: the stream stalled: no frame for 1 s"
+    )
+    assert took < 15, took
     assert captured.out == "" and list(tmp_path.iterdir()) == []

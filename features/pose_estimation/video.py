@@ -299,19 +299,30 @@ def _quiet_opencv() -> Iterator[None]:
         logging.setLogLevel(level)
 
 
-def _open_quietly(device: int | str) -> cv2.VideoCapture:
-    """Open a camera or stream without OpenCV's own warnings on stderr (posecbr reports)."""
+def _open_quietly(device: int | str, timeout_s: float | None = None) -> cv2.VideoCapture:
+    """Open a camera or stream without OpenCV's own warnings on stderr (posecbr reports).
+    ``timeout_s``: for a stream URL, how long opening it may wait for the server (FFmpeg's
+    default is 30 s, whatever the caller's patience; reads keep theirs: a stream that stalls
+    later is the caller's to notice, not an end of the stream)."""
     with _quiet_opencv():
+        if isinstance(device, str) and timeout_s is not None:
+            ms = max(1, round(timeout_s * 1000))
+            return cv2.VideoCapture(device, cv2.CAP_ANY, [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, ms])
         return cv2.VideoCapture(device)
 
 
-def served_file_rate(url: str) -> float | None:
+def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
     """The frame rate of a stream URL that is a video file served over the network (OpenCV
     knows its frame count and rate), None for a live stream (a camera's: no frame count) and
-    for one that cannot be opened (:func:`stream_poses` reports that)."""
-    cap = _open_quietly(url)
+    for one that cannot be opened (:func:`stream_poses` reports that). ``timeout_s``: how
+    long the server may take to answer; one that says nothing for that long raises
+    DataError (the stream stalled)."""
+    started = time.perf_counter()
+    cap = _open_quietly(url, timeout_s)
     try:
         if not cap.isOpened():
+            if timeout_s is not None and time.perf_counter() - started >= timeout_s:
+                raise DataError(f"the stream stalled: no frame for {timeout_s:g} s", url)
             return None
         frames = float(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0)
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
@@ -327,6 +338,7 @@ def stream_poses(
     max_frames: int | None = None,
     estimator: PoseEstimator | None = None,
     fps: float | None = None,
+    timeout_s: float | None = None,
 ) -> Iterator[StreamFrame]:
     """Poses frame by frame from a webcam index, a stream URL or a video path.
 
@@ -334,7 +346,8 @@ def stream_poses(
     given (a file served over the network: :func:`served_file_rate`). Stops at the end of
     the stream, after ``max_frames``, or when the consumer stops iterating. A file that
     ends before the frame count its container states raises DataError, as
-    :func:`iter_frames` does.
+    :func:`iter_frames` does. ``timeout_s``: how long a stream URL may take to open
+    (FFmpeg's default: 30 s).
     """
     info = None
     if isinstance(source, Path) or (
@@ -345,7 +358,7 @@ def stream_poses(
     else:
         device = int(source) if isinstance(source, str) and source.isdigit() else source
         try:
-            cap = _open_quietly(device)
+            cap = _open_quietly(device, timeout_s)
         except (cv2.error, OverflowError):  # an index too large for OpenCV (a C int)
             raise DataError("cannot open camera or stream", str(source)) from None
         if not cap.isOpened():

@@ -236,10 +236,10 @@ def run(args: argparse.Namespace) -> int:
     if _is_file(args.source):
         fps: float | None = open_video(args.source)[1].fps
     else:  # a file served over the network is played as a file is
-        fps = None if isinstance(source, int) else served_file_rate(source)
+        fps = None if isinstance(source, int) else served_file_rate(source, args.stall)
     is_file = fps is not None
     rate = fps * args.speed if fps and args.speed > 0 else None
-    poses = stream_poses(source, max_frames=args.max_frames, fps=fps)
+    poses = stream_poses(source, max_frames=args.max_frames, fps=fps, timeout_s=args.stall)
     frames = frames_in_background(poses, args.stall, rate, args.source)
     watcher = Watcher(clf, judge, args, fps)
     try:
