@@ -20,7 +20,7 @@ import pytest
 
 import features.pose_estimation  # noqa: F401  (silences FFmpeg before any video is opened)
 from posecbr.cli import main
-from tests.badinput import small_case_base
+from tests.badinput import small_case_base, snapshot
 
 
 @pytest.fixture(scope="module")
@@ -34,6 +34,23 @@ def _video(path: Path, frames: int = 12, fps: float = 10.0, size: int = 64) -> P
     for k in range(frames):
         writer.write(np.full((size, size, 3), 10 * k, np.uint8))
     writer.release()
+    return path
+
+
+SQUAT = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+
+
+def _squat(shared_data: Path, path: Path, frames: int = 12) -> Path:
+    """The first ``frames`` of the real squat video (5 fps, a woman in view) at a quarter
+    size, as an MJPG AVI."""
+    cap = cv2.VideoCapture(str(shared_data / SQUAT))
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), 5.0, (180, 320))
+    for _ in range(frames):
+        ok, bgr = cap.read()
+        assert ok
+        writer.write(cv2.resize(bgr, (180, 320)))
+    writer.release()
+    cap.release()
     return path
 
 
@@ -97,3 +114,23 @@ def test_watch_a_server_that_never_answers_gives_up_after_the_stall(
     )
     assert took < 15, took
     assert captured.out == "" and list(tmp_path.iterdir()) == []
+
+
+def test_watch_out_never_overwrites_the_file_a_file_url_names(
+    case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``watch file:///x/clip.avi --out /x/clip.avi`` (here an .mp4): the URL was taken for a
+    stream, so the file it names was no input; the watch played it and replaced it with the
+    annotated video, exit 0. Refused as ``watch /x/clip.mp4 --out /x/clip.mp4`` is."""
+    video = _squat(shared_data, tmp_path / "clip.avi")
+    given = tmp_path / "clip.mp4"
+    video.rename(given)
+    before = snapshot(tmp_path)
+    url = f"file://{given}"
+    argv = ["watch", url, "--db", str(case_base), "--speed", "0", "--out", str(given)]
+    assert main(argv) == 1
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == (
+        f"posecbr watch: error: {given}: the output video would overwrite an input ({given})"
+    )
+    assert captured.out == "" and snapshot(tmp_path) == before

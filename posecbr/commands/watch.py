@@ -80,6 +80,14 @@ def _is_file(source: str) -> bool:
     return "://" not in source and not source.isdigit()
 
 
+def _read_files(source: str) -> list[str]:
+    """The files on this machine a source reads: a video file, or the one a ``file://`` URL
+    names (FFmpeg opens the path after ``file:`` as it is); none for a camera or a stream."""
+    if _is_file(source):
+        return [source]
+    return [source.removeprefix("file:")] if source.startswith("file://") else []
+
+
 #: the slowest --speed (a hundredth of the frame rate) and the longest --stall (a day): the
 #: waits they make must be ones the clock can time
 MIN_SPEED = 0.01
@@ -102,7 +110,7 @@ def _check(args: argparse.Namespace) -> None:
     if args.out is not None:
         if args.out.suffix.lower() != ".mp4":
             raise DataError("the output video must be an .mp4 file name", args.out)
-        inputs = [args.source, args.db] if _is_file(args.source) else [args.db]
+        inputs = [*_read_files(args.source), args.db]
         check_output(args.out, inputs=inputs, what="output video")
     if _is_file(args.source) and Path(args.source).is_dir():
         raise DataError("is a folder, not a video file", args.source)
