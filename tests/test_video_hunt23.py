@@ -134,3 +134,42 @@ def test_watch_out_never_overwrites_the_file_a_file_url_names(
         f"posecbr watch: error: {given}: the output video would overwrite an input ({given})"
     )
     assert captured.out == "" and snapshot(tmp_path) == before
+
+
+def _declaring_fps(path: Path, rate: int, scale: int) -> Path:
+    """An MJPG AVI of 12 frames whose header declares ``rate / scale`` frames per second
+    (OpenCV refuses to write a rate under 1: its stream header is edited)."""
+    _video(path, fps=10.0)
+    data = bytearray(path.read_bytes())
+    strh = data.index(b"strh") + 8  # dwScale, dwRate at 20 bytes into the stream header
+    data[strh + 20 : strh + 28] = scale.to_bytes(4, "little") + rate.to_bytes(4, "little")
+    avih = data.index(b"avih") + 8
+    data[avih : avih + 4] = bytes(4)  # microseconds per frame: unknown
+    path.write_bytes(bytes(data))
+    return path
+
+
+def test_a_video_declaring_under_a_hundredth_of_a_frame_per_second_is_refused_at_once(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A header declaring 0.001 frames per second: ``extract`` ran the model on every frame
+    and then could not save the pose file (its rate under the pose files' 0.01); ``watch``
+    played it at one frame per 1000 s and reported "the stream stalled". Both refuse it as
+    a video with no usable frame rate, before any work, naming the rate."""
+    video = _declaring_fps(tmp_path / "slow.avi", 1, 1000)
+    assert cv2.VideoCapture(str(video)).get(cv2.CAP_PROP_FPS) == pytest.approx(0.001)
+    before = snapshot(tmp_path)
+    message = (
+        f"{video}: video declares no usable frame rate (0.001 frames per second; posecbr takes"
+        " 0.01 to 1000)"
+    )
+    argv = ["extract", str(video), "--out", str(tmp_path / "poses")]
+    assert main(argv) == 1
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == f"posecbr extract: error: {message}"
+    argv = ["watch", str(video), "--db", str(case_base), "--stall", "2",
+            "--out", str(tmp_path / "w.mp4")]  # fmt: skip
+    assert main(argv) == 1
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == f"posecbr watch: error: {message}"
+    assert captured.out == "" and snapshot(tmp_path) == before

@@ -25,7 +25,7 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from features.errors import DataError  # noqa: E402
-from features.poses import PoseSequence  # noqa: E402
+from features.poses import MIN_FPS, PoseSequence  # noqa: E402
 from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
 
@@ -36,6 +36,8 @@ from .tracker import FramePose, PoseEstimator  # noqa: E402
 JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
 """A JPEG file's start-of-image and end-of-image markers."""
 IMAGE_LANDMARK_FIELDS = ("x_px", "y_px", "z_px", "visibility", "presence")
+MAX_VIDEO_FPS = 1000.0
+"""The highest frame rate a video may declare (more is a broken header, no camera's)."""
 
 
 @dataclass(frozen=True)
@@ -113,9 +115,14 @@ def open_video(
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
-    if not math.isfinite(fps) or fps <= 0 or fps > 1000:
+    if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
+        # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
         cap.release()
-        raise DataError("video declares no usable frame rate", path)
+        raise DataError(
+            f"video declares no usable frame rate ({fps:g} frames per second; posecbr takes"
+            f" {MIN_FPS:g} to {MAX_VIDEO_FPS:g})",
+            path,
+        )
     return cap, VideoInfo(path, frames, fps, width, height)
 
 
@@ -328,7 +335,7 @@ def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     finally:
         cap.release()
-    return fps if frames > 0 and math.isfinite(fps) and 0 < fps <= 1000 else None
+    return fps if frames > 0 and math.isfinite(fps) and 0 < fps <= MAX_VIDEO_FPS else None
 
 
 def stream_poses(
