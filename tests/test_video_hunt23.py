@@ -173,3 +173,41 @@ def test_a_video_declaring_under_a_hundredth_of_a_frame_per_second_is_refused_at
     captured = capsys.readouterr()
     assert _one_line(captured.err) == f"posecbr watch: error: {message}"
     assert captured.out == "" and snapshot(tmp_path) == before
+
+
+def test_extract_that_fails_leaves_none_of_the_folders_it_made(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--out`` three folders deep, none of them there, for a text file named .mp4: the
+    refusal removed the last folder it had made and left the two above it."""
+    video = tmp_path / "notes.mp4"
+    video.write_text("not a video\n")
+    before = snapshot(tmp_path)
+    out = tmp_path / "runs" / "today" / "poses"
+    assert main(["extract", str(video), "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == (
+        f"posecbr extract: error: {video}: not a video OpenCV can decode (unknown format,"
+        " truncated or corrupt)"
+    )
+    assert captured.out == "" and snapshot(tmp_path) == before
+
+
+def test_extract_interrupted_leaves_none_of_the_folders_it_made(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Ctrl-C while the model runs (here raised by a stand-in for it): "interrupted", exit
+    130, the video as it was and none of the output folders left behind."""
+    import features.pose_estimation as pose_estimation
+
+    def interrupted(*_args: object, **_kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    video = _video(tmp_path / "clip.avi")
+    before = snapshot(tmp_path)
+    monkeypatch.setattr(pose_estimation, "estimate_video", interrupted)
+    out = tmp_path / "runs" / "today" / "poses"
+    assert main(["extract", str(video), "--out", str(out)]) == 130
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == "posecbr extract: interrupted"
+    assert captured.out == "" and snapshot(tmp_path) == before

@@ -551,7 +551,7 @@ def run(args: argparse.Namespace) -> int:
     options = _options(args)
     source: Path = args.input
     jobs = find_jobs(source, args.out, args.overlay)
-    made = not args.out.exists()
+    made = _missing_folders(args.out)
     status = 1
     try:
         _check_before_work(args, jobs)
@@ -561,14 +561,21 @@ def run(args: argparse.Namespace) -> int:
             status = _summary(_run_all(jobs, options, args), args.out)
         return status
     finally:
-        if status != 0 and made:
-            _drop_if_empty(args.out)
+        if status != 0:
+            _drop_if_empty(made)
 
 
-def _drop_if_empty(folder: Path) -> None:
-    """Remove the output folder this run made when nothing was written into it (every clip
-    failed): a failed run leaves no trace."""
-    try:
-        folder.rmdir()  # only an empty folder goes
-    except OSError:
-        pass
+def _missing_folders(out: Path) -> list[Path]:
+    """``out`` and those of its parents that do not exist yet, deepest first: the folders a
+    run writing into ``out`` makes."""
+    return [p for p in (out, *out.parents) if not p.exists()]
+
+
+def _drop_if_empty(folders: list[Path]) -> None:
+    """Remove the output folders this run made (deepest first) when nothing was written
+    into them (every clip failed, or the run was interrupted): a failed run leaves no trace."""
+    for folder in folders:
+        try:
+            folder.rmdir()  # only an empty folder goes
+        except OSError:
+            return  # not empty (or not a folder): neither are those above it
