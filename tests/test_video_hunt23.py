@@ -211,3 +211,31 @@ def test_extract_interrupted_leaves_none_of_the_folders_it_made(
     captured = capsys.readouterr()
     assert _one_line(captured.err) == "posecbr extract: interrupted"
     assert captured.out == "" and snapshot(tmp_path) == before
+
+
+def test_a_pipe_named_like_a_video_is_refused_not_waited_on(tmp_path: Path) -> None:
+    """A named pipe ``clip.mp4`` (nobody writing to it) given to ``describe``: opening it to
+    read its first bytes waited for a writer forever. Refused in one line, exit 1, as
+    ``extract`` now refuses it (it said "cannot list folder (Not a directory)")."""
+    import os
+    import subprocess
+    import sys
+
+    pipe = tmp_path / "clip.mp4"
+    os.mkfifo(pipe)
+    for argv, line in [
+        (["describe", str(pipe)], f"posecbr describe: error: {pipe}: is a pipe, socket or"
+         " device, not a video file"),
+        (["extract", str(pipe), "--out", str(tmp_path / "poses")], f"posecbr extract: error:"
+         f" {pipe}: is a pipe, socket or device, not a video, folder or labels CSV"),
+    ]:  # fmt: skip
+        done = subprocess.run(
+            [sys.executable, "-m", "posecbr", *argv],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            env={**os.environ, "POSECBR_NO_PROGRESS": "1"},
+        )
+        assert done.returncode == 1, done.stderr
+        assert _one_line(done.stderr) == line and done.stdout == ""
+    assert list(tmp_path.iterdir()) == [pipe] and pipe.is_fifo()  # (reading it would block)

@@ -90,6 +90,8 @@ def open_video(
         raise DataError("no such file", path)
     if path.is_dir():
         raise DataError("is a folder, not a video", path)
+    if not path.is_file():  # reading a pipe waits for a writer that may never come
+        raise DataError("is a pipe, socket or device, not a video file", path)
     try:
         with open(path, "rb") as fh:
             head = fh.read(16)

@@ -186,6 +186,8 @@ def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
     """The clips ``source`` names, with their output paths (see the command's help)."""
     if not source.exists():
         raise DataError("no such file or folder", source)
+    if not source.is_file() and not source.is_dir():
+        raise DataError("is a pipe, socket or device, not a video, folder or labels CSV", source)
     if source.is_file() and source.suffix.lower() != ".csv":
         name = out if _names_pose_file(out) else out / f"{source.stem}.npz"
         return [Job(video=source, out=name, overlay=overlay)]
