@@ -239,3 +239,34 @@ def test_a_pipe_named_like_a_video_is_refused_not_waited_on(tmp_path: Path) -> N
         assert done.returncode == 1, done.stderr
         assert _one_line(done.stderr) == line and done.stdout == ""
     assert list(tmp_path.iterdir()) == [pipe] and pipe.is_fifo()  # (reading it would block)
+
+
+def test_an_overlay_too_wide_for_mp4_is_refused_before_the_work(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A video 8192 pixels wide (one more than an MP4 frame can be): ``extract --overlay``
+    ran the model, wrote the pose file, then failed "cannot encode an MP4 overlay here"
+    (exit 1 with a pose file written; as if the machine lacked the codec); ``watch --out``
+    failed the same way at the first frame. Both refuse it first, saying why."""
+    video = tmp_path / "wide.avi"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter.fourcc(*"MJPG"), 10.0, (8192, 16))
+    for k in range(3):
+        writer.write(np.full((16, 8192, 3), 40 * k, np.uint8))
+    writer.release()
+    before = snapshot(tmp_path)
+    overlay, out = tmp_path / "overlay.mp4", tmp_path / "poses"
+    assert main(["extract", str(video), "--out", str(out), "--overlay", str(overlay)]) == 1
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == (
+        f"posecbr extract: error: {overlay}: cannot encode an MP4 overlay of 8192x16 frames:"
+        " MP4 frames are at most 8191 pixels a side"
+    )
+    assert captured.out == "" and snapshot(tmp_path) == before
+    argv = ["watch", str(video), "--db", str(case_base), "--speed", "0", "--out", str(overlay)]
+    assert main(argv) == 1
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == (
+        f"posecbr watch: error: {overlay}: cannot encode an MP4 video of 8192x16 frames:"
+        " MP4 frames are at most 8191 pixels a side"
+    )
+    assert captured.out == "" and snapshot(tmp_path) == before

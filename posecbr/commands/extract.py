@@ -349,8 +349,8 @@ def process(job: Job, options: Options) -> Outcome:
     """Extract one clip. Returns (status, path, detail); status "done", "skipped" or "failed"."""
     import numpy as np
 
-    from features.pose_estimation import estimate_video
-    from features.pose_estimation.overlay import write_overlay
+    from features.pose_estimation import estimate_video, open_video
+    from features.pose_estimation.overlay import check_mp4_size, write_overlay
     from features.poses import load_pose, load_pose_arrays, save_pose
 
     try:
@@ -359,6 +359,10 @@ def process(job: Job, options: Options) -> Outcome:
         up_to_date = not options.force and job.out.is_file() and stored_key(job.out) == key
         if up_to_date and (job.overlay is None or job.overlay.is_file()):
             return "skipped", job.out, "up to date"
+        if job.overlay is not None:  # before the model runs and the pose file is written
+            cap, info = open_video(job.video)
+            cap.release()
+            check_mp4_size(info.width, info.height, job.overlay)
         if up_to_date:
             seq = load_pose(job.out)
             image_lm = load_pose_arrays(job.out)["image_landmarks"]

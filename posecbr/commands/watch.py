@@ -233,7 +233,7 @@ def stop_on_interrupt() -> Iterator[threading.Event]:
 
 def run(args: argparse.Namespace) -> int:
     from features.pose_estimation import open_video, served_file_rate, stream_poses
-    from features.pose_estimation.overlay import check_encoded
+    from features.pose_estimation.overlay import check_encoded, check_mp4_size
 
     from .segment import judge_named, load_stored
 
@@ -242,7 +242,11 @@ def run(args: argparse.Namespace) -> int:
     judge = judge_named(clf, args.unknown, args.db)
     source: Any = int(args.source) if args.source.isdigit() else args.source
     if _is_file(args.source):
-        fps: float | None = open_video(args.source)[1].fps
+        cap, info = open_video(args.source)
+        cap.release()
+        if args.out is not None:
+            check_mp4_size(info.width, info.height, args.out, "video")
+        fps: float | None = info.fps
     else:  # a file served over the network is played as a file is
         fps = None if isinstance(source, int) else served_file_rate(source, args.stall)
     is_file = fps is not None
@@ -396,7 +400,10 @@ class Watcher:
         import cv2
 
         if self.writer is None:
+            from features.pose_estimation.overlay import check_mp4_size
+
             h, w = bgr.shape[:2]
+            check_mp4_size(w, h, self.args.out, "video")
             fourcc = cv2.VideoWriter.fourcc(*"mp4v")
             self.writer = cv2.VideoWriter(str(self.video), fourcc, float(self.fps or 30.0), (w, h))
             if not self.writer.isOpened():
