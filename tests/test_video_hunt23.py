@@ -270,3 +270,28 @@ def test_an_overlay_too_wide_for_mp4_is_refused_before_the_work(
         " MP4 frames are at most 8191 pixels a side"
     )
     assert captured.out == "" and snapshot(tmp_path) == before
+
+
+def test_an_empty_input_is_refused_not_taken_for_the_current_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``posecbr extract "$VIDEO" --out poses`` with VIDEO unset: the empty argument became
+    Path(""), the current folder, and every video and picture in it (and one folder down)
+    was extracted, exit 0; ``watch ""`` said "is a folder, not a video file" naming nothing.
+    Both refuse the empty path, before any work."""
+    _video(tmp_path / "clip.avi")
+    monkeypatch.chdir(tmp_path)
+    before = snapshot(tmp_path)
+    assert main(["extract", "", "--out", str(tmp_path / "poses")]) == 1
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == (
+        "posecbr extract: error: the input is an empty path: name a video, still image, folder"
+        " or labels CSV"
+    )
+    assert captured.out == "" and snapshot(tmp_path) == before
+    assert main(["watch", "", "--db", str(tmp_path / "none.sqlite")]) == 1
+    captured = capsys.readouterr()
+    assert _one_line(captured.err) == (
+        "posecbr watch: error: the source is empty: name a webcam index, stream URL or video file"
+    )
+    assert captured.out == "" and snapshot(tmp_path) == before

@@ -70,7 +70,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "class (label = subfolder name), or a labels CSV path,label[,subject][,start,end] "
         "(start/end: frame indices, end exclusive). Up-to-date outputs are skipped.",
     )
-    p.add_argument("input", type=Path, metavar="INPUT", help="video, folder or labels CSV")
+    # a str, not a Path: Path("") is the current folder, which an empty argument is not
+    p.add_argument("input", metavar="INPUT", help="video, folder or labels CSV")
     p.add_argument(
         "--out",
         type=Path,
@@ -554,6 +555,11 @@ def _summary(results: list[Outcome], out: Path) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
+    if not str(args.input):  # an unset shell variable ("$VIDEO"): not the current folder
+        raise DataError(
+            "the input is an empty path: name a video, still image, folder or labels CSV"
+        )
+    args.input = Path(args.input)
     options = _options(args)
     source: Path = args.input
     jobs = find_jobs(source, args.out, args.overlay)

@@ -112,17 +112,24 @@ def _check(args: argparse.Namespace) -> None:
             raise DataError("the output video must be an .mp4 file name", args.out)
         inputs = [*_read_files(args.source), args.db]
         check_output(args.out, inputs=inputs, what="output video")
-    if _is_file(args.source) and Path(args.source).is_dir():
-        raise DataError("is a folder, not a video file", args.source)
-    if _is_file(args.source) and not Path(args.source).is_file():
-        raise DataError("no such video file", args.source)
-    if _is_file(args.source) and Path(args.source).suffix.lower() in RECORDING_SUFFIXES:
-        raise DataError(
-            "watch plays videos, cameras and streams; segment this recording with posecbr segment",
-            args.source,
-        )
+    _check_source(args.source)
     if args.show and not _has_windows():
         raise ConfigError("this OpenCV has no window support: use --out video.mp4", "--show")
+
+
+def _check_source(source: str) -> None:
+    """A source that is a file must be a video file there is."""
+    if not source:  # an unset shell variable: Path("") is the current folder
+        raise DataError("the source is empty: name a webcam index, stream URL or video file")
+    if _is_file(source) and Path(source).is_dir():
+        raise DataError("is a folder, not a video file", source)
+    if _is_file(source) and not Path(source).is_file():
+        raise DataError("no such video file", source)
+    if _is_file(source) and Path(source).suffix.lower() in RECORDING_SUFFIXES:
+        raise DataError(
+            "watch plays videos, cameras and streams; segment this recording with posecbr segment",
+            source,
+        )
 
 
 def _has_windows() -> bool:
