@@ -74,6 +74,21 @@ def draw_pose(
     return bgr
 
 
+MAX_MP4_SIDE = 8191
+"""The widest and highest frame the MP4 encoder (``mp4v``, MPEG-4 part 2: 13-bit sizes) takes."""
+
+
+def check_mp4_size(width: int, height: int, out: str | Path, what: str = "overlay") -> None:
+    """DataError naming ``out`` when frames of ``width`` x ``height`` cannot be encoded as an
+    MP4 (:data:`MAX_MP4_SIDE`): checked before the work, not found when the first frame is."""
+    if width > MAX_MP4_SIDE or height > MAX_MP4_SIDE:
+        raise DataError(
+            f"cannot encode an MP4 {what} of {width}x{height} frames: MP4 frames are at most"
+            f" {MAX_MP4_SIDE} pixels a side",
+            out,
+        )
+
+
 def write_overlay(
     video_path: str | Path,
     image_landmarks: np.ndarray,
@@ -117,6 +132,7 @@ def _encode(
             bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
             if writer is None:
                 h, w = bgr.shape[:2]
+                check_mp4_size(w, h, out)
                 writer = cv2.VideoWriter(str(tmp), cv2.VideoWriter.fourcc(*"mp4v"), fps, (w, h))
                 if not writer.isOpened():
                     raise DataError("cannot encode an MP4 overlay here", out)

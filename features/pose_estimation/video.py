@@ -25,7 +25,7 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from features.errors import DataError  # noqa: E402
-from features.poses import PoseSequence  # noqa: E402
+from features.poses import MIN_FPS, PoseSequence  # noqa: E402
 from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
 
@@ -36,6 +36,8 @@ from .tracker import FramePose, PoseEstimator  # noqa: E402
 JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
 """A JPEG file's start-of-image and end-of-image markers."""
 IMAGE_LANDMARK_FIELDS = ("x_px", "y_px", "z_px", "visibility", "presence")
+MAX_VIDEO_FPS = 1000.0
+"""The highest frame rate a video may declare (more is a broken header, no camera's)."""
 
 
 @dataclass(frozen=True)
@@ -88,6 +90,8 @@ def open_video(
         raise DataError("no such file", path)
     if path.is_dir():
         raise DataError("is a folder, not a video", path)
+    if not path.is_file():  # reading a pipe waits for a writer that may never come
+        raise DataError("is a pipe, socket or device, not a video file", path)
     try:
         with open(path, "rb") as fh:
             head = fh.read(16)
@@ -113,9 +117,14 @@ def open_video(
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
-    if not math.isfinite(fps) or fps <= 0 or fps > 1000:
+    if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
+        # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
         cap.release()
-        raise DataError("video declares no usable frame rate", path)
+        raise DataError(
+            f"video declares no usable frame rate ({fps:g} frames per second; posecbr takes"
+            f" {MIN_FPS:g} to {MAX_VIDEO_FPS:g})",
+            path,
+        )
     return cap, VideoInfo(path, frames, fps, width, height)
 
 
@@ -299,25 +308,36 @@ def _quiet_opencv() -> Iterator[None]:
         logging.setLogLevel(level)
 
 
-def _open_quietly(device: int | str) -> cv2.VideoCapture:
-    """Open a camera or stream without OpenCV's own warnings on stderr (posecbr reports)."""
+def _open_quietly(device: int | str, timeout_s: float | None = None) -> cv2.VideoCapture:
+    """Open a camera or stream without OpenCV's own warnings on stderr (posecbr reports).
+    ``timeout_s``: for a stream URL, how long opening it may wait for the server (FFmpeg's
+    default is 30 s, whatever the caller's patience; reads keep theirs: a stream that stalls
+    later is the caller's to notice, not an end of the stream)."""
     with _quiet_opencv():
+        if isinstance(device, str) and timeout_s is not None:
+            ms = max(1, round(timeout_s * 1000))
+            return cv2.VideoCapture(device, cv2.CAP_ANY, [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, ms])
         return cv2.VideoCapture(device)
 
 
-def served_file_rate(url: str) -> float | None:
+def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
     """The frame rate of a stream URL that is a video file served over the network (OpenCV
     knows its frame count and rate), None for a live stream (a camera's: no frame count) and
-    for one that cannot be opened (:func:`stream_poses` reports that)."""
-    cap = _open_quietly(url)
+    for one that cannot be opened (:func:`stream_poses` reports that). ``timeout_s``: how
+    long the server may take to answer; one that says nothing for that long raises
+    DataError (the stream stalled)."""
+    started = time.perf_counter()
+    cap = _open_quietly(url, timeout_s)
     try:
         if not cap.isOpened():
+            if timeout_s is not None and time.perf_counter() - started >= timeout_s:
+                raise DataError(f"the stream stalled: no frame for {timeout_s:g} s", url)
             return None
         frames = float(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0)
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     finally:
         cap.release()
-    return fps if frames > 0 and math.isfinite(fps) and 0 < fps <= 1000 else None
+    return fps if frames > 0 and math.isfinite(fps) and 0 < fps <= MAX_VIDEO_FPS else None
 
 
 def stream_poses(
@@ -327,6 +347,7 @@ def stream_poses(
     max_frames: int | None = None,
     estimator: PoseEstimator | None = None,
     fps: float | None = None,
+    timeout_s: float | None = None,
 ) -> Iterator[StreamFrame]:
     """Poses frame by frame from a webcam index, a stream URL or a video path.
 
@@ -334,7 +355,8 @@ def stream_poses(
     given (a file served over the network: :func:`served_file_rate`). Stops at the end of
     the stream, after ``max_frames``, or when the consumer stops iterating. A file that
     ends before the frame count its container states raises DataError, as
-    :func:`iter_frames` does.
+    :func:`iter_frames` does. ``timeout_s``: how long a stream URL may take to open
+    (FFmpeg's default: 30 s).
     """
     info = None
     if isinstance(source, Path) or (
@@ -344,7 +366,10 @@ def stream_poses(
         fps = info.fps
     else:
         device = int(source) if isinstance(source, str) and source.isdigit() else source
-        cap = _open_quietly(device)
+        try:
+            cap = _open_quietly(device, timeout_s)
+        except (cv2.error, OverflowError):  # an index too large for OpenCV (a C int)
+            raise DataError("cannot open camera or stream", str(source)) from None
         if not cap.isOpened():
             raise DataError("cannot open camera or stream", str(source))
     est = estimator or PoseEstimator(smoothing=smoothing)

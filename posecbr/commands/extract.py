@@ -70,7 +70,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "class (label = subfolder name), or a labels CSV path,label[,subject][,start,end] "
         "(start/end: frame indices, end exclusive). Up-to-date outputs are skipped.",
     )
-    p.add_argument("input", type=Path, metavar="INPUT", help="video, folder or labels CSV")
+    # a str, not a Path: Path("") is the current folder, which an empty argument is not
+    p.add_argument("input", metavar="INPUT", help="video, folder or labels CSV")
     p.add_argument(
         "--out",
         type=Path,
@@ -186,6 +187,8 @@ def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
     """The clips ``source`` names, with their output paths (see the command's help)."""
     if not source.exists():
         raise DataError("no such file or folder", source)
+    if not source.is_file() and not source.is_dir():
+        raise DataError("is a pipe, socket or device, not a video, folder or labels CSV", source)
     if source.is_file() and source.suffix.lower() != ".csv":
         name = out if _names_pose_file(out) else out / f"{source.stem}.npz"
         return [Job(video=source, out=name, overlay=overlay)]
@@ -347,8 +350,8 @@ def process(job: Job, options: Options) -> Outcome:
     """Extract one clip. Returns (status, path, detail); status "done", "skipped" or "failed"."""
     import numpy as np
 
-    from features.pose_estimation import estimate_video
-    from features.pose_estimation.overlay import write_overlay
+    from features.pose_estimation import estimate_video, open_video
+    from features.pose_estimation.overlay import check_mp4_size, write_overlay
     from features.poses import load_pose, load_pose_arrays, save_pose
 
     try:
@@ -357,6 +360,10 @@ def process(job: Job, options: Options) -> Outcome:
         up_to_date = not options.force and job.out.is_file() and stored_key(job.out) == key
         if up_to_date and (job.overlay is None or job.overlay.is_file()):
             return "skipped", job.out, "up to date"
+        if job.overlay is not None:  # before the model runs and the pose file is written
+            cap, info = open_video(job.video)
+            cap.release()
+            check_mp4_size(info.width, info.height, job.overlay)
         if up_to_date:
             seq = load_pose(job.out)
             image_lm = load_pose_arrays(job.out)["image_landmarks"]
@@ -548,10 +555,15 @@ def _summary(results: list[Outcome], out: Path) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
+    if not str(args.input):  # an unset shell variable ("$VIDEO"): not the current folder
+        raise DataError(
+            "the input is an empty path: name a video, still image, folder or labels CSV"
+        )
+    args.input = Path(args.input)
     options = _options(args)
     source: Path = args.input
     jobs = find_jobs(source, args.out, args.overlay)
-    made = not args.out.exists()
+    made = _missing_folders(args.out)
     status = 1
     try:
         _check_before_work(args, jobs)
@@ -561,14 +573,21 @@ def run(args: argparse.Namespace) -> int:
             status = _summary(_run_all(jobs, options, args), args.out)
         return status
     finally:
-        if status != 0 and made:
-            _drop_if_empty(args.out)
+        if status != 0:
+            _drop_if_empty(made)
 
 
-def _drop_if_empty(folder: Path) -> None:
-    """Remove the output folder this run made when nothing was written into it (every clip
-    failed): a failed run leaves no trace."""
-    try:
-        folder.rmdir()  # only an empty folder goes
-    except OSError:
-        pass
+def _missing_folders(out: Path) -> list[Path]:
+    """``out`` and those of its parents that do not exist yet, deepest first: the folders a
+    run writing into ``out`` makes."""
+    return [p for p in (out, *out.parents) if not p.exists()]
+
+
+def _drop_if_empty(folders: list[Path]) -> None:
+    """Remove the output folders this run made (deepest first) when nothing was written
+    into them (every clip failed, or the run was interrupted): a failed run leaves no trace."""
+    for folder in folders:
+        try:
+            folder.rmdir()  # only an empty folder goes
+        except OSError:
+            return  # not empty (or not a folder): neither are those above it

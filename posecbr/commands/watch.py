@@ -80,6 +80,14 @@ def _is_file(source: str) -> bool:
     return "://" not in source and not source.isdigit()
 
 
+def _read_files(source: str) -> list[str]:
+    """The files on this machine a source reads: a video file, or the one a ``file://`` URL
+    names (FFmpeg opens the path after ``file:`` as it is); none for a camera or a stream."""
+    if _is_file(source):
+        return [source]
+    return [source.removeprefix("file:")] if source.startswith("file://") else []
+
+
 #: the slowest --speed (a hundredth of the frame rate) and the longest --stall (a day): the
 #: waits they make must be ones the clock can time
 MIN_SPEED = 0.01
@@ -102,19 +110,26 @@ def _check(args: argparse.Namespace) -> None:
     if args.out is not None:
         if args.out.suffix.lower() != ".mp4":
             raise DataError("the output video must be an .mp4 file name", args.out)
-        inputs = [args.source, args.db] if _is_file(args.source) else [args.db]
+        inputs = [*_read_files(args.source), args.db]
         check_output(args.out, inputs=inputs, what="output video")
-    if _is_file(args.source) and Path(args.source).is_dir():
-        raise DataError("is a folder, not a video file", args.source)
-    if _is_file(args.source) and not Path(args.source).is_file():
-        raise DataError("no such video file", args.source)
-    if _is_file(args.source) and Path(args.source).suffix.lower() in RECORDING_SUFFIXES:
-        raise DataError(
-            "watch plays videos, cameras and streams; segment this recording with posecbr segment",
-            args.source,
-        )
+    _check_source(args.source)
     if args.show and not _has_windows():
         raise ConfigError("this OpenCV has no window support: use --out video.mp4", "--show")
+
+
+def _check_source(source: str) -> None:
+    """A source that is a file must be a video file there is."""
+    if not source:  # an unset shell variable: Path("") is the current folder
+        raise DataError("the source is empty: name a webcam index, stream URL or video file")
+    if _is_file(source) and Path(source).is_dir():
+        raise DataError("is a folder, not a video file", source)
+    if _is_file(source) and not Path(source).is_file():
+        raise DataError("no such video file", source)
+    if _is_file(source) and Path(source).suffix.lower() in RECORDING_SUFFIXES:
+        raise DataError(
+            "watch plays videos, cameras and streams; segment this recording with posecbr segment",
+            source,
+        )
 
 
 def _has_windows() -> bool:
@@ -225,7 +240,7 @@ def stop_on_interrupt() -> Iterator[threading.Event]:
 
 def run(args: argparse.Namespace) -> int:
     from features.pose_estimation import open_video, served_file_rate, stream_poses
-    from features.pose_estimation.overlay import check_encoded
+    from features.pose_estimation.overlay import check_encoded, check_mp4_size
 
     from .segment import judge_named, load_stored
 
@@ -234,12 +249,16 @@ def run(args: argparse.Namespace) -> int:
     judge = judge_named(clf, args.unknown, args.db)
     source: Any = int(args.source) if args.source.isdigit() else args.source
     if _is_file(args.source):
-        fps: float | None = open_video(args.source)[1].fps
+        cap, info = open_video(args.source)
+        cap.release()
+        if args.out is not None:
+            check_mp4_size(info.width, info.height, args.out, "video")
+        fps: float | None = info.fps
     else:  # a file served over the network is played as a file is
-        fps = None if isinstance(source, int) else served_file_rate(source)
+        fps = None if isinstance(source, int) else served_file_rate(source, args.stall)
     is_file = fps is not None
     rate = fps * args.speed if fps and args.speed > 0 else None
-    poses = stream_poses(source, max_frames=args.max_frames, fps=fps)
+    poses = stream_poses(source, max_frames=args.max_frames, fps=fps, timeout_s=args.stall)
     frames = frames_in_background(poses, args.stall, rate, args.source)
     watcher = Watcher(clf, judge, args, fps)
     try:
@@ -388,7 +407,10 @@ class Watcher:
         import cv2
 
         if self.writer is None:
+            from features.pose_estimation.overlay import check_mp4_size
+
             h, w = bgr.shape[:2]
+            check_mp4_size(w, h, self.args.out, "video")
             fourcc = cv2.VideoWriter.fourcc(*"mp4v")
             self.writer = cv2.VideoWriter(str(self.video), fourcc, float(self.fps or 30.0), (w, h))
             if not self.writer.isOpened():
