@@ -28,7 +28,6 @@ Prints the accuracy (Wilson 95 % interval) and per movement for each, and writes
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -40,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks import write_json
+from benchmarks import no_options, write_json
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
@@ -149,12 +148,7 @@ def summary(correct: np.ndarray, movement: np.ndarray, names: dict[str, str]) ->
 
 
 def main(argv: list[str] | None = None) -> int:
-    # no options: --help prints what it does instead of running it and overwriting its results
-    argparse.ArgumentParser(
-        prog="python -m benchmarks.ceiling",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    ).parse_args(argv)
+    no_options("ceiling", __doc__, argv)
     os.environ.setdefault("POSECBR_NO_PROGRESS", "1")
     warnings.filterwarnings("ignore", category=RuntimeWarning)
     from cbr.evaluation.machine import machine_info

@@ -14,14 +14,13 @@ Run: ``python -m benchmarks.inner_sample`` (about 10 min). Writes
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
-from benchmarks import write_json
+from benchmarks import no_options, write_json
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
@@ -65,12 +64,7 @@ def _with_cap(cap: int, clips: list[Any]) -> dict[str, Any]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    # no options: --help prints what it does instead of running it and overwriting its results
-    argparse.ArgumentParser(
-        prog="python -m benchmarks.inner_sample",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    ).parse_args(argv)
+    no_options("inner_sample", __doc__, argv)
     from features.datasets import load_dataset
 
     os.environ["POSECBR_NO_PROGRESS"] = "1"

@@ -17,14 +17,13 @@ minus whole: above 0, repetitions counted twice).
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from benchmarks import write_json
+from benchmarks import no_options, write_json
 from benchmarks.segment import DATA, FIXTURE
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -60,12 +59,7 @@ def _scores(diffs: list[int]) -> dict[str, float] | None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    # no options: --help prints what it does instead of running it and overwriting its results
-    argparse.ArgumentParser(
-        prog="python -m benchmarks.segment_cuts",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    ).parse_args(argv)
+    no_options("segment_cuts", __doc__, argv)
     from cbr.segmentation import counted_segments
     from features.readers.asfamc import read_asf_amc
     from features.repetitions import movement_signals

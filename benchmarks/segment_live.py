@@ -21,14 +21,13 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
     os.environ[_var] = "1"
 
-import argparse  # noqa: E402
 import json  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from benchmarks import write_json  # noqa: E402
+from benchmarks import no_options, write_json  # noqa: E402
 from benchmarks.segment import FIXTURE, RECORDINGS, fit, load_recordings, training_clips  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -71,12 +70,7 @@ def left_out_unknown(recs: dict[str, Any], test: str) -> dict[str, list[int]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    # no options: --help prints what it does instead of running it and overwriting its results
-    argparse.ArgumentParser(
-        prog="python -m benchmarks.segment_live",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    ).parse_args(argv)
+    no_options("segment_live", __doc__, argv)
     recs = load_recordings()
     clips = json.loads(FIXTURE.read_text(encoding="utf-8"))["clips"]
     rows = []
