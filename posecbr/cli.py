@@ -12,14 +12,23 @@ import importlib
 import pkgutil
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from features.errors import PosecbrError
 from features.text import shown
 from posecbr import __version__, commands
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse's parser (its subcommands' too) with a usage error in one line: the error
+    and where the usage is, not the usage itself (a command's is many lines)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message}; see {self.prog} --help\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="posecbr",
         description="Interpretable human activity recognition: poses -> fluents and QMPs -> CBR.",
     )

@@ -10,11 +10,14 @@ from pathlib import Path
 from typing import Any
 
 from features.errors import ConfigError, DataError
+from posecbr.arguments import path_arg
 
 
 def add_recording_options(p: argparse.ArgumentParser) -> None:
     """``--asf`` and ``--fps`` for recordings that need them."""
-    p.add_argument("--asf", type=Path, help="skeleton of an .amc recording (default: beside it)")
+    p.add_argument(
+        "--asf", type=path_arg, help="skeleton of an .amc recording (default: beside it)"
+    )
     p.add_argument(
         "--fps",
         type=float,

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from features.errors import ConfigError, DataError
 from features.fileio import atomic_path, check_output
 from features.text import counted, shown
+from posecbr.arguments import path_arg
 
 if TYPE_CHECKING:
     from casebase_store import CaseBaseInfo, CaseStore
@@ -37,7 +38,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     q.add_argument("--all", action="store_true", help="include trimmed cases")
     q = act.add_parser("export", help="write the cases (problems, labels, provenance) to .npz")
     common(q)
-    q.add_argument("--out", required=True, type=Path, help="output .npz file")
+    q.add_argument("--out", required=True, type=path_arg, help="output .npz file")
     q = act.add_parser("trim", help="run a maintenance editor and deactivate dropped cases")
     common(q)
     q.add_argument(

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
 from features.text import counted
+from posecbr.arguments import path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
 if TYPE_CHECKING:
@@ -26,7 +27,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="classify clips with a case base, with explanations",
         description="Retrieve the most similar cases for each clip, vote, and explain.",
     )
-    p.add_argument("clips", nargs="+", type=Path, help="pose files, videos, folders or labels CSVs")
+    p.add_argument(
+        "clips", nargs="+", type=path_arg, help="pose files, videos, folders or labels CSVs"
+    )
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.add_argument("--name", default=None, help="case base name (default: the only one)")
     p.add_argument(

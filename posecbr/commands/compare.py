@@ -14,6 +14,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, write_json_atomic
 from features.text import shown
+from posecbr.arguments import path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
 
@@ -33,7 +34,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument(
         "data",
-        type=Path,
+        type=path_arg,
         help="dataset: UI-PRMD or HDM05 folder, labels CSV, folder per class, ...",
     )
     p.add_argument(
@@ -112,11 +113,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         metavar="N",
         help="explain N misclassified clips of the best case-base configuration",
     )
-    p.add_argument("--json", type=Path, metavar="FILE", help="write all results as JSON")
-    p.add_argument("--csv", type=Path, metavar="FILE", help="write one row per method as CSV")
+    p.add_argument("--json", type=path_arg, metavar="FILE", help="write all results as JSON")
+    p.add_argument("--csv", type=path_arg, metavar="FILE", help="write one row per method as CSV")
     p.add_argument(
         "--out",
-        type=Path,
+        type=path_arg,
         metavar="DIR",
         help="write results.json, results.csv and the pictures to DIR "
         "(then `posecbr report DIR --out report.html`)",

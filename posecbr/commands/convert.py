@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 from features.errors import DataError
 from features.fileio import check_output, staged_folder, unique_name, write_text_atomic
 from features.text import counted, shown
+from posecbr.arguments import path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
 if TYPE_CHECKING:
@@ -41,10 +42,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("source", type=Path, help="dataset folder, .amc, .bvh, labels CSV, ...")
-    p.add_argument("--out", type=Path, required=True, help="output folder (created)")
+    p.add_argument("source", type=path_arg, help="dataset folder, .amc, .bvh, labels CSV, ...")
+    p.add_argument("--out", type=path_arg, required=True, help="output folder (created)")
     add_sensor_option(p)
-    p.add_argument("--asf", type=Path, help="skeleton for a single .amc (default: beside it)")
+    p.add_argument("--asf", type=path_arg, help="skeleton for a single .amc (default: beside it)")
     p.add_argument("--subjects", help="comma list, e.g. s01,s02 (UI-PRMD) or bd,dg (HDM05)")
     p.add_argument("--movements", help="UI-PRMD movements, e.g. m01,m07")
     p.add_argument("--labels", help="comma list of labels to keep")

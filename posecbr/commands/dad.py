@@ -12,11 +12,11 @@ import json
 import math
 import sys
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 from features.errors import PosecbrError
 from features.text import counted, shown
+from posecbr.arguments import path_arg
 
 MAX_SECONDS = 3600.0  # a window of an hour is no single movement
 
@@ -29,10 +29,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "activity by the weighted ratio of its QMPs detected in order, and list which QMPs "
         "were met and which were not.",
     )
-    p.add_argument("posefile", type=Path, help="pose file (.npz) or a clip the loaders read")
+    p.add_argument("posefile", type=path_arg, help="pose file (.npz) or a clip the loaders read")
     p.add_argument(
         "--add",
-        type=Path,
+        type=path_arg,
         metavar="FILE",
         help="Action Description Database (TOML) to use instead of the shipped one",
     )

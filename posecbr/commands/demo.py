@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import TextIO
 
 from features.errors import DataError, PosecbrError
+from posecbr.arguments import path_arg
 
 # --quick: one configuration, no DAD or peers, one explanation and no pictures that need the
 # clips again (the report draws the accuracy and confusion pictures from the results).
@@ -46,11 +47,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument(
         "--data",
-        type=Path,
+        type=path_arg,
         default=None,
         help="folder with the demo's labels.csv (default: the subset bundled with posecbr)",
     )
-    p.add_argument("--out", type=Path, default=Path("demo-output"), help="output folder")
+    p.add_argument("--out", type=path_arg, default=Path("demo-output"), help="output folder")
     p.add_argument(
         "--quick",
         action="store_true",

@@ -7,12 +7,12 @@ import json
 import shutil
 import sys
 import tempfile
-from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
 from features.errors import DataError, PosecbrError
 from features.fileio import check_output
 from features.text import counted, shown
+from posecbr.arguments import path_arg
 
 if TYPE_CHECKING:
     from features.fluents import Backend, FluentResult
@@ -34,7 +34,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "spans of frames in order of their start, states with the same span on one line; or "
         "frame by frame.",
     )
-    p.add_argument("posefile", type=Path, help="pose file (.npz) or a clip the loaders read")
+    p.add_argument("posefile", type=path_arg, help="pose file (.npz) or a clip the loaders read")
     p.add_argument(
         "--min-confidence",
         type=float,
@@ -57,14 +57,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument(
         "--thresholds",
-        type=Path,
+        type=path_arg,
         metavar="FILE",
         help="JSON/TOML file overriding fluent thresholds (see `posecbr thresholds`)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
         "--plot",
-        type=Path,
+        type=path_arg,
         metavar="PICTURE",
         help="write a fluent timeline picture (.png, .svg, .pdf: by the name)",
     )

@@ -26,6 +26,7 @@ from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_output
 from features.progress import progress
 from features.text import counted, shown
+from posecbr.arguments import path_arg
 
 # FFmpeg prints decoder complaints straight to stderr; the user should get posecbr's one line.
 # OpenCV reads this once, when it first opens a video, so it is set as early as possible.
@@ -74,7 +75,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("input", metavar="INPUT", help="video, folder or labels CSV")
     p.add_argument(
         "--out",
-        type=Path,
+        type=path_arg,
         required=True,
         metavar="DIR",
         help="output folder (for one video, a pose file name x.npz may be given instead)",
@@ -88,7 +89,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument(
         "--overlay",
-        type=Path,
+        type=path_arg,
         metavar="OUT.mp4",
         help="also write the video with the stick figure (and the fluents that hold) "
         "drawn on it; for several clips, a folder for one MP4 each",

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from features.text import shown
+from posecbr.arguments import path_arg
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -18,10 +19,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "misclassified clips. Pictures missing from a --json-only run are drawn from the "
         "results (accuracy, confusion matrices).",
     )
-    p.add_argument("results", type=Path, help="compare --out folder or results JSON file")
+    p.add_argument("results", type=path_arg, help="compare --out folder or results JSON file")
     p.add_argument(
         "--out",
-        type=Path,
+        type=path_arg,
         default=Path("report.html"),
         metavar="HTML",
         help="where to write the page (default report.html)",

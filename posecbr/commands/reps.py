@@ -17,6 +17,7 @@ from pathlib import Path
 
 from features.fileio import check_output
 from features.text import shown
+from posecbr.arguments import path_arg
 from posecbr.recordings import add_recording_options, check_asf, load_recording
 
 
@@ -27,12 +28,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("clip", type=Path, help="pose file, video, BVH, .amc or UI-PRMD file")
+    p.add_argument("clip", type=path_arg, help="pose file, video, BVH, .amc or UI-PRMD file")
     add_recording_options(p)
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
         "--plot",
-        type=Path,
+        type=path_arg,
         metavar="PICTURE",
         help="repetitions over the fluent timeline (.png, .svg, .pdf: by the name)",
     )

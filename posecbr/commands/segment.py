@@ -26,6 +26,7 @@ from typing import Any
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, unique_name
 from features.text import counted, shown
+from posecbr.arguments import path_arg
 from posecbr.recordings import add_recording_options, check_asf, check_fps, load_recording
 
 JUDGES = ("activity-margin", "margin", "held-out", "activities", "margin-distance")
@@ -40,7 +41,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument(
-        "recordings", nargs="+", type=Path, metavar="RECORDING", help="pose file, video, BVH, .amc"
+        "recordings",
+        nargs="+",
+        type=path_arg,
+        metavar="RECORDING",
+        help="pose file, video, BVH, .amc",
     )
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.add_argument("--name", default=None, help="case base name (default: the only one)")
@@ -69,13 +74,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
         "--plot",
-        type=Path,
+        type=path_arg,
         metavar="PNG",
         help="segments over the fluent timeline (several recordings: a folder)",
     )
     p.add_argument(
         "--overlay",
-        type=Path,
+        type=path_arg,
         metavar="OUT.mp4",
         help="a video recording with the stick figure, activity and count drawn",
     )

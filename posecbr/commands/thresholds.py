@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
+
+from posecbr.arguments import path_arg
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -16,7 +17,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--from",
         dest="source",
-        type=Path,
+        type=path_arg,
         metavar="FILE",
         help="show the table after the overrides in FILE (validates FILE)",
     )

@@ -19,6 +19,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.text import counted, shown
+from posecbr.arguments import path_arg
 from posecbr.recordings import (
     add_recording_options,
     add_sensor_option,
@@ -62,7 +63,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         description="Compute qualitative features of every clip and store them as cases "
         "(problem = features, solution = label) in a case base file.",
     )
-    p.add_argument("data", type=Path, help="dataset folder, labels CSV or pose file folder")
+    p.add_argument("data", type=path_arg, help="dataset folder, labels CSV or pose file folder")
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.add_argument("--name", default="default", help="case base name in the store")
     p.add_argument(
@@ -151,14 +152,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument(
         "--frame-labels",
-        type=Path,
+        type=path_arg,
         metavar="FILE",
         help="DATA is one recording labelled over time: one label per frame, or per "
         "--label-block seconds; each labelled stretch becomes a clip (several recordings: a "
         "labels CSV with a label_file column)",
     )
     p.add_argument("--label-block", type=float, metavar="SECONDS", help="seconds per label")
-    p.add_argument("--label-names", type=Path, metavar="FILE", help="'code name' per line")
+    p.add_argument("--label-names", type=path_arg, metavar="FILE", help="'code name' per line")
     add_recording_options(p)
     g = p.add_mutually_exclusive_group()
     g.add_argument("--replace", action="store_true", help="replace a case base of that name")

@@ -37,6 +37,7 @@ from typing import Any
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import atomic_path, check_output
 from features.text import counted
+from posecbr.arguments import path_arg
 
 from .segment import JUDGES
 
@@ -51,7 +52,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("source", help="webcam index (0), stream URL or video file")
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.add_argument("--name", default=None, help="case base name (default: the only one)")
-    p.add_argument("--out", type=Path, metavar="VIDEO.mp4", help="write the annotated frames")
+    p.add_argument("--out", type=path_arg, metavar="VIDEO.mp4", help="write the annotated frames")
     p.add_argument("--show", action="store_true", help="show the annotated frames in a window")
     p.add_argument(
         "--speed",
