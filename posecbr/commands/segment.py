@@ -193,8 +193,12 @@ def _read(path: Path, args: argparse.Namespace) -> tuple[Any, Any]:
     if args.overlay is not None:
         if path.suffix.lower() not in VIDEO_SUFFIXES:
             raise DataError("--overlay needs a video recording", path)
-        from features.pose_estimation import estimate_video
+        from features.pose_estimation import estimate_video, open_video
+        from features.pose_estimation.overlay import check_mp4_size
 
+        cap, info = open_video(path)  # a size MP4 cannot take is refused before the model runs
+        cap.release()
+        check_mp4_size(info.width, info.height, args.overlay)
         found = estimate_video(path)
         seq = found.sequence.to_canonical()
         return (seq if args.fps is None else dataclasses.replace(seq, fps=args.fps)), found

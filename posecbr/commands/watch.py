@@ -124,8 +124,10 @@ def _check_source(source: str) -> None:
         raise DataError("the source is empty: name a webcam index, stream URL or video file")
     if _is_file(source) and Path(source).is_dir():
         raise DataError("is a folder, not a video file", source)
-    if _is_file(source) and not Path(source).is_file():
+    if _is_file(source) and not Path(source).exists():
         raise DataError("no such video file", source)
+    if _is_file(source) and not Path(source).is_file():  # reading a pipe waits for a writer
+        raise DataError("is a pipe, socket or device, not a video file", source)
     if _is_file(source) and Path(source).suffix.lower() in RECORDING_SUFFIXES:
         raise DataError(
             "watch plays videos, cameras and streams; segment this recording with posecbr segment",
