@@ -47,6 +47,7 @@ import io
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -335,18 +336,31 @@ def fit_ranges(
     return None if got is None else got[0]
 
 
-def nearest_rms(queries: np.ndarray, cases: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def rms_terms(cases: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cases' side of :func:`nearest_rms`, ``(m, F)`` each: where each case has a
+    feature (1.0), its values with the missing ones 0 and their squares. Worked out once,
+    they serve every query (a clip at a time, as classifying asks)."""
+    c = np.asarray(cases, dtype=np.float64)
+    c0 = np.nan_to_num(c)
+    return (~np.isnan(c)).astype(np.float64), c0, c0**2
+
+
+def nearest_rms(
+    queries: np.ndarray,
+    cases: np.ndarray,
+    terms: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Each query's ``(q, F)`` nearest case ``(m, F)``: the root mean square difference over
     the features both have (NaN: missing) ``(q,)`` and the case's position ``(q,)`` (-1 and
-    ``inf`` when there is no case). One matrix product per term: no loop over cases."""
+    ``inf`` when there is no case). One matrix product per term: no loop over cases.
+    ``terms``: :func:`rms_terms` of ``cases``, when already worked out."""
     q = np.asarray(queries, dtype=np.float64)
-    c = np.asarray(cases, dtype=np.float64)
-    if len(c) == 0 or len(q) == 0:
+    if len(cases) == 0 or len(q) == 0:
         return np.full(len(q), np.inf), np.full(len(q), -1, dtype=np.int64)
-    qm, cm = (~np.isnan(q)).astype(np.float64), (~np.isnan(c)).astype(np.float64)
-    q0, c0 = np.nan_to_num(q), np.nan_to_num(c)
+    cm, c0, c2 = rms_terms(cases) if terms is None else terms
+    qm, q0 = (~np.isnan(q)).astype(np.float64), np.nan_to_num(q)
     # sum over the shared features of (q - c)^2 = q^2 + c^2 - 2 q c, each masked by the other
-    sq = (q0**2) @ cm.T + qm @ (c0**2).T - 2.0 * q0 @ c0.T
+    sq = (q0**2) @ cm.T + qm @ c2.T - 2.0 * q0 @ c0.T
     shared = qm @ cm.T
     d2 = np.where(shared > 0, np.maximum(sq, 0.0) / np.maximum(shared, 1.0), np.inf)
     at = np.argmin(d2, axis=1)
@@ -373,13 +387,18 @@ class SummaryNeighbours:
         out: np.ndarray = np.clip(z, -CLIP_SD, CLIP_SD)
         return out
 
+    @cached_property
+    def _terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`rms_terms` of the cases, for every clip classified with this model."""
+        return rms_terms(self.cases)
+
     def nearest(self, s: np.ndarray) -> tuple[float, str]:
         """One clip's summary ``(F,)``: the distance to its nearest case and that case's
         label (``inf`` and "" for a summary of other columns)."""
         s = np.asarray(s, dtype=np.float64)
         if s.shape[-1] != self.centre.shape[-1]:
             return float("inf"), ""
-        d, at = nearest_rms(self.standardise(s)[None, :], self.cases)
+        d, at = nearest_rms(self.standardise(s)[None, :], self.cases, self._terms)
         return float(d[0]), (self.labels[int(at[0])] if at[0] >= 0 else "")
 
     def __eq__(self, other: object) -> bool:

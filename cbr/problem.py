@@ -361,12 +361,33 @@ def fill_nan_time(x: np.ndarray, fill: float | np.ndarray) -> np.ndarray:
     nan = np.isnan(x)
     if not nan.any():
         return x
-    fills = np.broadcast_to(np.asarray(fill, dtype=np.float64), (x.shape[1],))
-    t = np.arange(x.shape[0])
-    for j in np.flatnonzero(nan.any(axis=0)):  # loop over the few gappy columns only
-        ok = ~nan[:, j]
-        x[:, j] = np.interp(t, t[ok], x[ok, j]) if ok.any() else fills[j]
+    gappy = nan.any(axis=0)
+    fills = np.broadcast_to(np.asarray(fill, dtype=np.float64), (x.shape[1],))[gappy]
+    x[:, gappy] = _filled(x[:, gappy], ~nan[:, gappy], fills)
     return x
+
+
+def _filled(x: np.ndarray, ok: np.ndarray, fills: np.ndarray) -> np.ndarray:
+    """:func:`fill_nan_time` of the columns ``x`` ``(frames, n)`` that have a gap (``ok``:
+    where they have a value; ``fills`` ``(n,)``), all at once, as ``np.interp`` fills each."""
+    frames, cols = x.shape
+    t = np.arange(frames)[:, None]
+    # every frame's last valid frame at or before it and first at or after it; before the
+    # first valid frame and after the last, that one (the edge value held)
+    before = np.maximum.accumulate(np.where(ok, t, -1), axis=0)
+    after = np.minimum.accumulate(np.where(ok, t, frames)[::-1], axis=0)[::-1]
+    first, last = ok.argmax(axis=0), frames - 1 - ok[::-1].argmax(axis=0)
+    lo = np.where(before < 0, first, before)
+    hi = np.where(after >= frames, last, after)
+    at = np.arange(cols)
+    y_lo, y_hi = x[lo, at], x[hi, at]
+    # np.interp's arithmetic: the slope between the valid frames around, from the lower one
+    gap = np.where(hi > lo, hi - lo, 1).astype(np.float64)
+    inside = np.where(hi > lo, (y_hi - y_lo) / gap * (t - lo) + y_lo, y_lo)
+    out = np.where(ok, x, inside)
+    empty = ~ok.any(axis=0)
+    out[:, empty] = fills[empty]
+    return out
 
 
 def resample(x: np.ndarray, length: int) -> np.ndarray:
