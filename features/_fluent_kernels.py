@@ -29,7 +29,9 @@ the same NaN, the same exact 0 and the same exact 1.
 frames (body frame, 22 angles, near distances), repeating the reference's float operations.
 
 Compiled with ``cache=True`` so only the first run on a machine pays the compile time. The
-helpers are inlined into the kernel (numba IR inlining: no call, no reference counting).
+helpers are compiled on their own and left to LLVM to inline: numba's IR inlining of every
+helper into the kernel (``inline="always"``) doubled its compile time (34 s -> 18 s of CPU
+without it, cold) for the same speed and the same confidences bit for bit.
 """
 
 from __future__ import annotations
@@ -122,9 +124,8 @@ def _bits_of_f32(_typingctx: Any, _x: Any) -> tuple[Any, _Codegen]:
     return sig, codegen
 
 
-# Helpers inlined into the kernel (numba IR inlining: no call, no reference counting), with
-# the kernel's float semantics.
-_inline = _compiled(cache=True, nogil=True, inline="always", fastmath=_FM, error_model="numpy")
+# The kernel's helpers, with its float semantics (LLVM inlines them).
+_inline = _compiled(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 
 
 @_inline

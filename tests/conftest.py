@@ -23,7 +23,7 @@ SHARED_DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" 
 def pytest_configure(config: pytest.Config) -> None:
     """Before the xdist workers start, numba's kernels are compiled once, in two processes at
     a time (``tests/_kernels.py``): otherwise every worker, every Dask worker and every
-    command a test starts before a cache is written compiles them again (about 60 s of CPU
+    command a test starts before a cache is written compiles them again (about 50 s of CPU
     each, cold). Not in a worker, nor without workers (``-n 0``: the one process compiles)."""
     if os.environ.get("PYTEST_XDIST_WORKER") or not config.getoption("numprocesses", None):
         return
