@@ -21,10 +21,11 @@ from posecbr import __version__, commands
 
 class Parser(argparse.ArgumentParser):
     """argparse's parser (its subcommands' too) with a usage error in one line: the error
-    and where the usage is, not the usage itself (a command's is many lines)."""
+    and where the usage is, not the usage itself (a command's is many lines). The error
+    quotes the user's arguments: escaped, they cannot break the line or drive the terminal."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message}; see {self.prog} --help\n")
+        self.exit(2, f"{self.prog}: error: {shown(message)}; see {self.prog} --help\n")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -6,7 +6,8 @@ the folder held, ``convert ""`` listed it (a traceback when a file there vanishe
 ``describe ""`` said ".: unknown clip format". Every file or folder argument of every command
 now refuses it while the command line is read, before any work, in one line naming the
 argument; and every usage error of the parser is one line (argparse printed the command's
-usage first, ten lines for ``train``), exit 2.
+usage first, ten lines for ``train``; a newline or escape sequence in an argument it quotes
+went to the terminal as it was), exit 2.
 """
 
 from __future__ import annotations
@@ -127,6 +128,9 @@ def test_every_file_argument_refuses_an_empty_path(
          " required: --db; see posecbr train --help"),
         (["casebase", "trim", "--db"], "posecbr casebase trim: error: argument --db: expected"
          " one argument; see posecbr casebase trim --help"),
+        (["train", "labels.csv", "--db", "cb.sqlite", "--sensor", "k\ninect\x1b[2J"],
+         "posecbr train: error: argument --sensor: invalid choice: 'k\\ninect\\x1b[2J'"
+         " (choose from 'kinect', 'vicon'); see posecbr train --help"),
         (["no-such-command"], "posecbr: error: argument COMMAND: invalid choice:"
          " 'no-such-command' (choose from 'casebase', 'classify', 'compare', 'convert', 'dad',"
          " 'demo', 'describe', 'extract', 'report', 'reps', 'segment', 'thresholds', 'train',"
