@@ -79,27 +79,18 @@ def test_no_file_argument_of_any_command_is_a_plain_path() -> None:
             (("extract",), "out"), (("casebase", "export"), "out")} <= names  # fmt: skip
 
 
-@pytest.mark.parametrize(
-    ("argv", "line"),
-    [
-        (["describe", ""], "posecbr describe: error: argument posefile: is an empty path (an"
-         " unset variable?); see posecbr describe --help"),
-        (["train", "", "--db", "cb.sqlite"], "posecbr train: error: argument data: is an empty"
-         " path (an unset variable?); see posecbr train --help"),
-        (["convert", "", "--out", "poses"], "posecbr convert: error: argument source: is an"
-         " empty path (an unset variable?); see posecbr convert --help"),
-        (["classify", "m01_s01_e01.npz", "", "--db", "cb.sqlite"], "posecbr classify: error:"
-         " argument clips: is an empty path (an unset variable?); see posecbr classify --help"),
-        (["describe", "m01_s01_e01.npz", "--plot", ""], "posecbr describe: error: argument"
-         " --plot: is an empty path (an unset variable?); see posecbr describe --help"),
-    ],
-)  # fmt: skip
-def test_an_empty_file_argument_is_refused_in_one_line_before_any_work(
-    folder: Path, argv: list[str], line: str, capsys: pytest.CaptureFixture[str]
-) -> None:
-    before = snapshot(folder)
-    assert _refused(argv, capsys) == line
-    assert snapshot(folder) == before
+EMPTY = [
+    (["describe", ""], "posecbr describe: error: argument posefile: is an empty path (an"
+     " unset variable?); see posecbr describe --help"),
+    (["train", "", "--db", "cb.sqlite"], "posecbr train: error: argument data: is an empty"
+     " path (an unset variable?); see posecbr train --help"),
+    (["convert", "", "--out", "poses"], "posecbr convert: error: argument source: is an"
+     " empty path (an unset variable?); see posecbr convert --help"),
+    (["classify", "m01_s01_e01.npz", "", "--db", "cb.sqlite"], "posecbr classify: error:"
+     " argument clips: is an empty path (an unset variable?); see posecbr classify --help"),
+    (["describe", "m01_s01_e01.npz", "--plot", ""], "posecbr describe: error: argument"
+     " --plot: is an empty path (an unset variable?); see posecbr describe --help"),
+]  # fmt: skip
 
 
 def test_every_file_argument_refuses_an_empty_path(
@@ -119,27 +110,29 @@ def test_every_file_argument_refuses_an_empty_path(
     assert snapshot(folder) == before
 
 
-@pytest.mark.parametrize(
-    ("argv", "line"),
-    [
-        (["describe"], "posecbr describe: error: the following arguments are required:"
-         " posefile; see posecbr describe --help"),
-        (["train", "labels.csv"], "posecbr train: error: the following arguments are"
-         " required: --db; see posecbr train --help"),
-        (["casebase", "trim", "--db"], "posecbr casebase trim: error: argument --db: expected"
-         " one argument; see posecbr casebase trim --help"),
-        (["train", "labels.csv", "--db", "cb.sqlite", "--sensor", "k\ninect\x1b[2J"],
-         "posecbr train: error: argument --sensor: invalid choice: 'k\\ninect\\x1b[2J'"
-         " (choose from 'kinect', 'vicon'); see posecbr train --help"),
-        (["no-such-command"], "posecbr: error: argument COMMAND: invalid choice:"
-         " 'no-such-command' (choose from 'casebase', 'classify', 'compare', 'convert', 'dad',"
-         " 'demo', 'describe', 'extract', 'report', 'reps', 'segment', 'thresholds', 'train',"
-         " 'watch'); see posecbr --help"),
-    ],
-)  # fmt: skip
-def test_a_usage_error_is_one_line_saying_where_the_usage_is(
+USAGE = [
+    (["describe"], "posecbr describe: error: the following arguments are required:"
+     " posefile; see posecbr describe --help"),
+    (["train", "labels.csv"], "posecbr train: error: the following arguments are"
+     " required: --db; see posecbr train --help"),
+    (["casebase", "trim", "--db"], "posecbr casebase trim: error: argument --db: expected"
+     " one argument; see posecbr casebase trim --help"),
+    (["train", "labels.csv", "--db", "cb.sqlite", "--sensor", "k\ninect\x1b[2J"],
+     "posecbr train: error: argument --sensor: invalid choice: 'k\\ninect\\x1b[2J'"
+     " (choose from 'kinect', 'vicon'); see posecbr train --help"),
+    (["no-such-command"], "posecbr: error: argument COMMAND: invalid choice:"
+     " 'no-such-command' (choose from 'casebase', 'classify', 'compare', 'convert', 'dad',"
+     " 'demo', 'describe', 'extract', 'report', 'reps', 'segment', 'thresholds', 'train',"
+     " 'watch'); see posecbr --help"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("argv", "line"), EMPTY + USAGE)
+def test_a_refused_command_line_is_one_line_and_changes_nothing(
     folder: Path, argv: list[str], line: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    """An empty file argument is refused in one line before any work, as every usage error
+    now is, saying where the usage is."""
     before = snapshot(folder)
     assert _refused(argv, capsys) == line
     assert snapshot(folder) == before
