@@ -150,3 +150,15 @@ def read_only_mounts_work() -> bool:
         except OSError:
             return False
         return done.returncode == 0
+
+
+def too_wide_video(path: Path, frames: int) -> Path:
+    """An MJPG AVI of ``frames`` grey frames 8192 x 16 pixels (one pixel wider than an MP4
+    frame can be; nobody in view)."""
+    import cv2
+
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), 10.0, (8192, 16))
+    for k in range(frames):
+        writer.write(np.full((16, 8192, 3), 5 * k, np.uint8))
+    writer.release()
+    return path

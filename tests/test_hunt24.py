@@ -9,13 +9,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import cv2
-import numpy as np
 import pytest
 
 import features.pose_estimation  # noqa: F401  (silences FFmpeg before any video is opened)
 from posecbr.cli import main
-from tests.badinput import small_case_base, snapshot
+from tests.badinput import small_case_base, snapshot, too_wide_video
 
 
 @pytest.fixture(scope="module")
@@ -52,11 +50,7 @@ def test_segment_overlay_too_wide_for_mp4_is_refused_before_the_model_runs(
 ) -> None:
     """8192 pixels wide, one more than an MP4 frame can be; 40 frames, no person in view
     (the model would have said "nobody in view" after reading them all)."""
-    video = tmp_path / "wide.avi"
-    writer = cv2.VideoWriter(str(video), cv2.VideoWriter.fourcc(*"MJPG"), 10.0, (8192, 16))
-    for k in range(40):
-        writer.write(np.full((16, 8192, 3), 5 * k, np.uint8))
-    writer.release()
+    video = too_wide_video(tmp_path / "wide.avi", frames=40)
     overlay = tmp_path / "overlay.mp4"
     before = snapshot(tmp_path)
     argv = ["segment", str(video), "--db", str(case_base), "--overlay", str(overlay)]

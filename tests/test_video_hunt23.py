@@ -20,7 +20,7 @@ import pytest
 
 import features.pose_estimation  # noqa: F401  (silences FFmpeg before any video is opened)
 from posecbr.cli import main
-from tests.badinput import small_case_base, snapshot
+from tests.badinput import small_case_base, snapshot, too_wide_video
 
 
 @pytest.fixture(scope="module")
@@ -248,11 +248,7 @@ def test_an_overlay_too_wide_for_mp4_is_refused_before_the_work(
     ran the model, wrote the pose file, then failed "cannot encode an MP4 overlay here"
     (exit 1 with a pose file written; as if the machine lacked the codec); ``watch --out``
     failed the same way at the first frame. Both refuse it first, saying why."""
-    video = tmp_path / "wide.avi"
-    writer = cv2.VideoWriter(str(video), cv2.VideoWriter.fourcc(*"MJPG"), 10.0, (8192, 16))
-    for k in range(3):
-        writer.write(np.full((16, 8192, 3), 40 * k, np.uint8))
-    writer.release()
+    video = too_wide_video(tmp_path / "wide.avi", frames=3)
     before = snapshot(tmp_path)
     overlay, out = tmp_path / "overlay.mp4", tmp_path / "poses"
     assert main(["extract", str(video), "--out", str(out), "--overlay", str(overlay)]) == 1
