@@ -225,7 +225,7 @@ class LiveSegmenter:
     ``clf``: a fitted :class:`~cbr.estimator.CaseBaseClassifier`; ``fps``: the stream's frame
     rate; ``judge``: what says a window is unlike the case base (:mod:`cbr.unknown`; the margin
     between the two nearest activities against the nearest one's own threshold, calibrated on
-    the case base, when None).
+    the case base, when None); ``source``: the stream's name in errors (a camera, a URL, a file).
 
     As offline, in two passes, each an online Viterbi (:class:`_Forward`: a hop is settled
     when the best paths into every state agree on it, so the settled hops are those the
@@ -253,10 +253,12 @@ class LiveSegmenter:
     can still need them.
     """
 
-    def __init__(self, clf: Any, fps: float, judge: Judge | None = None) -> None:
+    def __init__(
+        self, clf: Any, fps: float, judge: Judge | None = None, source: str = "stream"
+    ) -> None:
         if not (math.isfinite(fps) and fps > 0):
-            raise DataError(f"the stream needs a frame rate > 0, got {fps!r}", "stream")
-        self.clf = clf
+            raise DataError(f"the stream needs a frame rate > 0, got {fps!r}", source)
+        self.clf, self.source = clf, source
         self.fps = float(fps)
         self.judge = judge if judge is not None else judge_of(clf, JUDGES[0])
         self.classes = [str(c) for c in clf.classes_]
@@ -663,7 +665,7 @@ class LiveSegmenter:
         """Stream frames [a, b) as a clip (``a`` >= :attr:`offset`: frames not yet dropped)."""
         if a < self.offset or b <= a:
             raise DataError(f"stream frames {a}-{b} are no longer kept (from {self.offset})",
-                            "stream")  # fmt: skip
+                            self.source)  # fmt: skip
         rows = self.frames[a - self.offset : b - self.offset]
         seen = self.seen_by[a - self.offset : b - self.offset]
         confidence = None
@@ -671,7 +673,7 @@ class LiveSegmenter:
             confidence = np.stack([np.full(len(BLAZEPOSE_33), np.nan) if c is None else c
                                    for c in seen])  # fmt: skip
         return PoseSequence(
-            np.stack(rows), BLAZEPOSE_33, self.fps, confidence=confidence, source="stream"
+            np.stack(rows), BLAZEPOSE_33, self.fps, confidence=confidence, source=self.source
         )
 
     def _confidence(self, state: int) -> float:

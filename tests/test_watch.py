@@ -518,22 +518,29 @@ def test_a_second_ctrl_c_interrupts_at_once() -> None:
     assert signal.getsignal(signal.SIGINT) is before
 
 
+def _cut_avi(folder: Path) -> Path:
+    """``folder/cut.avi``: an MJPG AVI of 60 frames cut to two thirds of its bytes (its
+    header still says 60 frames), beside the whole one, ``folder/whole.avi``."""
+    import cv2
+
+    whole = folder / "whole.avi"
+    writer = cv2.VideoWriter(str(whole), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (96, 96))
+    rng = np.random.default_rng(0)
+    for _ in range(60):
+        writer.write(rng.integers(0, 255, (96, 96, 3), dtype=np.uint8))
+    writer.release()
+    cut = folder / "cut.avi"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size * 2 // 3])
+    return cut
+
+
 def test_watch_refuses_a_truncated_video_as_segment_does(
     case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """An MJPG AVI of 60 frames cut to two thirds of its bytes: its index still says 60.
     ``segment`` and ``reps`` refused it ("decoded 40 of 60 frames"); ``watch`` watched what
     decoded, exit 0, and wrote its --out video."""
-    import cv2
-
-    whole = tmp_path / "whole.avi"
-    writer = cv2.VideoWriter(str(whole), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (96, 96))
-    rng = np.random.default_rng(0)
-    for _ in range(60):
-        writer.write(rng.integers(0, 255, (96, 96, 3), dtype=np.uint8))
-    writer.release()
-    cut = tmp_path / "cut.avi"
-    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size * 2 // 3])
+    cut = _cut_avi(tmp_path)
     given = cut.read_bytes()
     out = tmp_path / "out.mp4"
     capsys.readouterr()
@@ -545,3 +552,43 @@ def test_watch_refuses_a_truncated_video_as_segment_does(
         "cut.avi",
         "whole.avi",
     ]
+
+
+def test_watch_refuses_a_truncated_video_served_over_http(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The cut MJPG AVI of the test above, served over HTTP (a file whose frame count OpenCV
+    knows, so played as a file): refused as the file is, one line naming the URL, exit 1,
+    no --out video. (A served file was watched to where it broke off, exit 0.)"""
+    _cut_avi(tmp_path)
+    handler = functools.partial(_Quiet, directory=str(tmp_path))
+    server = _QuietServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    url = f"http://127.0.0.1:{server.server_address[1]}/cut.avi"
+    out = tmp_path / "out.mp4"
+    capsys.readouterr()
+    try:
+        argv = ["watch", url, "--db", str(case_base), "--speed", "0", "--out", str(out)]
+        assert main(argv) == 1
+    finally:
+        server.shutdown()
+        server.server_close()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{url}: truncated or corrupt: decoded" in err
+    assert not out.exists()
+
+
+def test_watch_of_a_short_video_with_nobody_in_it_names_the_video(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """1.6 s of noise (40 frames; nobody to follow, too short for a segment with nobody in
+    view): refused as ``segment`` refuses such a video, one line naming the video (it named
+    "stream"), exit 1."""
+    _cut_avi(tmp_path)
+    whole = tmp_path / "whole.avi"
+    capsys.readouterr()
+    argv = ["watch", str(whole), "--db", str(case_base), "--speed", "0", "--max-frames", "40"]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert err.startswith(f"posecbr watch: error: {whole}: no person in view in enough frames")

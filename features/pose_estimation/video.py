@@ -151,14 +151,15 @@ def iter_frames(path: str | Path, decode_threads: int | None = None) -> Iterator
         cap.release()
     if count == 0:
         raise DataError("video has no frames (empty, truncated or corrupt)", info.path)
-    check_whole(count, info)
+    check_whole(count, info.frames, info.path)
 
 
-def check_whole(count: int, info: VideoInfo) -> None:
-    """DataError when ``count`` frames decoded to the end fall short of the frame count the
-    container states (with a small slack for containers that estimate it)."""
-    if info.frames and count + max(2, math.ceil(0.01 * info.frames)) < info.frames:
-        raise DataError(f"truncated or corrupt: decoded {count} of {info.frames} frames", info.path)
+def check_whole(count: int, declared: int, where: str | Path) -> None:
+    """DataError naming ``where`` when ``count`` frames decoded to the end fall short of the
+    ``declared`` frame count the container states (0: none stated; with a small slack for
+    containers that estimate it)."""
+    if declared > 0 and count + max(2, math.ceil(0.01 * declared)) < declared:
+        raise DataError(f"truncated or corrupt: decoded {count} of {declared} frames", where)
 
 
 def outside_frame(image_landmarks: np.ndarray, width: int, height: int) -> np.ndarray:
@@ -320,6 +321,12 @@ def _open_quietly(device: int | str, timeout_s: float | None = None) -> cv2.Vide
         return cv2.VideoCapture(device)
 
 
+def _frame_count(cap: cv2.VideoCapture) -> int:
+    """The frame count an open capture's container states, 0 when it states none."""
+    frames = float(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0)
+    return int(frames) if math.isfinite(frames) and frames > 0 else 0
+
+
 def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
     """The frame rate of a stream URL that is a video file served over the network (OpenCV
     knows its frame count and rate), None for a live stream (a camera's: no frame count) and
@@ -333,11 +340,11 @@ def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
             if timeout_s is not None and time.perf_counter() - started >= timeout_s:
                 raise DataError(f"the stream stalled: no frame for {timeout_s:g} s", url)
             return None
-        frames = float(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0)
+        frames = _frame_count(cap)
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     finally:
         cap.release()
-    return fps if frames > 0 and math.isfinite(fps) and 0 < fps <= MAX_VIDEO_FPS else None
+    return fps if frames and math.isfinite(fps) and 0 < fps <= MAX_VIDEO_FPS else None
 
 
 def stream_poses(
@@ -353,17 +360,17 @@ def stream_poses(
 
     Files are timed by their frame rate; live sources by the wall clock, or by ``fps`` when
     given (a file served over the network: :func:`served_file_rate`). Stops at the end of
-    the stream, after ``max_frames``, or when the consumer stops iterating. A file that
-    ends before the frame count its container states raises DataError, as
-    :func:`iter_frames` does. ``timeout_s``: how long a stream URL may take to open
-    (FFmpeg's default: 30 s).
+    the stream, after ``max_frames``, or when the consumer stops iterating. A file, or a
+    file served over the network (``fps`` given), that ends before the frame count its
+    container states raises DataError, as :func:`iter_frames` does. ``timeout_s``: how long
+    a stream URL may take to open (FFmpeg's default: 30 s).
     """
-    info = None
+    declared = 0  # the frame count a file's container states (none for a live source)
     if isinstance(source, Path) or (
         isinstance(source, str) and "://" not in source and not source.isdigit()
     ):
         cap, info = open_video(source)
-        fps = info.fps
+        fps, declared = info.fps, info.frames
     else:
         device = int(source) if isinstance(source, str) and source.isdigit() else source
         try:
@@ -372,6 +379,8 @@ def stream_poses(
             raise DataError("cannot open camera or stream", str(source)) from None
         if not cap.isOpened():
             raise DataError("cannot open camera or stream", str(source))
+        if fps is not None:  # a file served over the network: whole, as a file must be
+            declared = _frame_count(cap)
     est = estimator or PoseEstimator(smoothing=smoothing)
     est.reset()
     start = time.perf_counter()
@@ -381,8 +390,7 @@ def stream_poses(
             ok, bgr = cap.read()
             read_at = time.perf_counter()
             if not ok or bgr is None:
-                if info is not None:  # a file read to its end: all of it, as iter_frames
-                    check_whole(index, info)
+                check_whole(index, declared, str(source))  # read to its end: all of it
                 break
             t = index / fps if fps else read_at - start
             rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)

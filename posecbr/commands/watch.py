@@ -344,7 +344,7 @@ class Watcher:
                     self.fps = _frame_rate(waiting)
                     if self.fps is None:
                         continue
-                self.live = LiveSegmenter(self.clf, self.fps, self.judge)
+                self.live = LiveSegmenter(self.clf, self.fps, self.judge, self.args.source)
                 for early in waiting[:-1]:
                     self._take(early)
             self._take(frame)
