@@ -2,9 +2,11 @@
 classifier in the same run.
 
 Run: ``python -m benchmarks.segment_people [--datasets ...] [--per-person N] [--seed S]
-[--train-people N] [--mirror SIDE]`` (``--train-people 1``: case bases of one person, as one of
-CMU subject 13 alone; written to ``segment_people_1.json``; ``--mirror``: their side handling,
-as ``train --mirror``, written to ``segment_people[_N]_SIDE.json``)
+[--train-people N [--rotate]] [--mirror SIDE]`` (``--train-people 1``: case bases of one
+person, as one of CMU subject 13 alone, the first training person's; written to
+``segment_people_1.json``; ``--rotate``: each training person's in turn, every recording
+segmented by each, pooled, ``segment_people_1_rotate.json``; ``--mirror``: their side
+handling, as ``train --mirror``, written to ``segment_people[_N]_SIDE.json``)
 (about 19 minutes of wall clock at load 6-10 on 2 cores, most of it the DTW baseline and
 the case bases of UI-PRMD Kinect; each window is solved once and finished by every judge;
 one core: BLAS, OpenMP and numba threads pinned to 1; ``--datasets hdm05`` alone takes about
@@ -184,31 +186,48 @@ def test_recordings(
 
 
 def folds(
-    dataset: str, per_person: int, seed: int, read: Reader, train_people: int | None = None
+    dataset: str,
+    per_person: int,
+    seed: int,
+    read: Reader,
+    train_people: int | None = None,
+    rotate: bool = False,
 ) -> Iterator[Fold]:
     """The folds of ``dataset``: UI-PRMD one (s01-s04 train, s05-s08 test), HDM05 one per
     actor tested; ``train_people``: the case base of only the first that many training people
-    (by name), as one trained on CMU subject 13 alone is."""
+    (by name), as one trained on CMU subject 13 alone is; with ``rotate``, of every that many
+    in turn (1: each training person alone), the same recordings segmented by each."""
     rng = np.random.default_rng(seed)
     if dataset == "hdm05":
         groups = hdm05_groups()
         for actor in HDM05_ACTORS:
-            train = _first_people([g for g in groups if g.person != actor], train_people)
-            test = [g for g in groups if g.person == actor]
-            yield Fold(
-                dataset, f"test {actor}", train, test_recordings(test, per_person, rng, read)
-            )
+            test = test_recordings([g for g in groups if g.person == actor], per_person, rng, read)
+            for train in _people([g for g in groups if g.person != actor], train_people, rotate):
+                yield Fold(dataset, f"test {actor}{_trained_on(train, rotate)}", train, test)
         return
     groups = uiprmd_groups(dataset.split("-")[-1].capitalize())
-    train = _first_people([g for g in groups if g.person in TRAIN_SUBJECTS], train_people)
-    test = [g for g in groups if g.person not in TRAIN_SUBJECTS]
-    yield Fold(dataset, "test s05-s08", train, test_recordings(test, per_person, rng, read))
+    test = test_recordings([g for g in groups if g.person not in TRAIN_SUBJECTS], per_person,
+                           rng, read)  # fmt: skip
+    for train in _people([g for g in groups if g.person in TRAIN_SUBJECTS], train_people, rotate):
+        yield Fold(dataset, f"test s05-s08{_trained_on(train, rotate)}", train, test)
 
 
-def _first_people(groups: list[Group], n: int | None) -> list[Group]:
-    """The ``groups`` of the first ``n`` people by name (all when ``n`` is None)."""
-    people = sorted({g.person for g in groups})[:n]
-    return [g for g in groups if g.person in people]
+def _people(groups: list[Group], n: int | None, rotate: bool) -> Iterator[list[Group]]:
+    """The ``groups`` of the first ``n`` people by name (all when ``n`` is None); with
+    ``rotate``, of every ``n`` people by name in turn."""
+    people = sorted({g.person for g in groups})
+    if n is None:
+        yield groups
+        return
+    for first in range(0, len(people) if rotate else 1, n):
+        chosen = people[first : first + n]
+        if len(chosen) == n:
+            yield [g for g in groups if g.person in chosen]
+
+
+def _trained_on(train: list[Group], rotate: bool) -> str:
+    """A fold's name's ending when the case bases rotate: whose they are."""
+    return f", trained on {'+'.join(sorted({g.person for g in train}))}" if rotate else ""
 
 
 def joined_training(train: list[Group], read: Reader) -> list[tuple[Any, Group]]:
@@ -464,6 +483,12 @@ def main(argv: list[str] | None = None) -> int:
         "of CMU subject 13 alone); results go to segment_people_N.json",
     )
     parser.add_argument(
+        "--rotate",
+        action="store_true",
+        help="with --train-people N: the case bases of every N training people in turn (1: "
+        "each alone), not only the first N; results go to segment_people_N_rotate.json",
+    )
+    parser.add_argument(
         "--mirror",
         choices=("auto", "off", "canonical", "augment"),
         default="auto",
@@ -471,6 +496,8 @@ def main(argv: list[str] | None = None) -> int:
         "segment_people[_N]_MIRROR.json)",
     )
     args = parser.parse_args(argv)
+    if args.rotate and not args.train_people:
+        parser.error("--rotate needs --train-people N")
     if not UIPRMD.is_dir() or not HDM05.is_dir():
         print(f"no ui-prmd or hdm05 data under {UIPRMD.parents[1]}: nothing to measure")
         return 1
@@ -483,7 +510,7 @@ def main(argv: list[str] | None = None) -> int:
     for dataset in args.datasets:
         read = Reader()
         t0 = time.perf_counter()
-        chosen = folds(dataset, args.per_person, args.seed, read, args.train_people)
+        chosen = folds(dataset, args.per_person, args.seed, read, args.train_people, args.rotate)
         done = [run_fold(f, read, args.mirror) for f in chosen]
         results[dataset] = done
         summary[dataset] = {**summarise(done), "wall_s": time.perf_counter() - t0}
@@ -495,6 +522,7 @@ def main(argv: list[str] | None = None) -> int:
         + " ".join(args.datasets)
         + f" --per-person {args.per_person} --seed {args.seed}"
         + (f" --train-people {args.train_people}" if args.train_people else "")
+        + (" --rotate" if args.rotate else "")
         + (f" --mirror {args.mirror}" if args.mirror != "auto" else ""),
         "note": "joined real single repetitions of people not in the case base: the joins "
         "(0.1 s of blending) and the rest at each repetition's ends differ from a real session",
@@ -507,6 +535,8 @@ def main(argv: list[str] | None = None) -> int:
     out = RESULTS
     if args.train_people:
         out = RESULTS.with_name(f"segment_people_{args.train_people}.json")
+    if args.rotate:
+        out = out.with_name(f"{out.stem}_rotate.json")
     if args.mirror != "auto":
         out = out.with_name(f"{out.stem}_{args.mirror}.json")
     write_json(result, out)
