@@ -33,6 +33,7 @@ measured between the two fitted oscillations over the window (see :func:`phase_g
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
@@ -199,9 +200,21 @@ def _canonical_signal(name: str) -> str | None:
 
 
 def _number(raw: Any, where: str, src: str) -> float:
-    if isinstance(raw, bool) or not isinstance(raw, int | float) or not np.isfinite(raw):
+    if isinstance(raw, bool) or not isinstance(raw, int | float):
         raise ConfigError(f"{where}: expected a number, got {raw!r}", src)
-    return float(raw)
+    try:  # TOML's integers may be of any length: past 1e308 there is no float
+        value = float(raw)
+    except OverflowError:
+        value = math.inf
+    if not math.isfinite(value):
+        raise ConfigError(f"{where}: expected a finite number, got {_quoted(raw)}", src)
+    return value
+
+
+def _quoted(raw: Any) -> str:
+    """``raw`` as the message quotes it: a number of hundreds of digits is cut short."""
+    text = repr(raw)
+    return text if len(text) <= 40 else f"{text[:20]}...({len(text)} characters)"
 
 
 def _table(raw: Any, where: str, src: str) -> dict[str, Any]:

@@ -1,0 +1,49 @@
+"""What the hunt of the configuration files and outputs (25a) found in ``dad --add``,
+``thresholds``, ``describe --thresholds`` and ``casebase export``: a traceback for an ADD
+number too large for a float, a fluent's own threshold left out of the printed table, a
+duplicated key of a JSON thresholds file dropped in silence, and a traceback or a file
+beside the folder for ``casebase export --out`` a folder.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from posecbr.cli import main
+from tests.badinput import good_pose_file, refused
+
+_MINI_ADD = """schema = 1
+[qmp.knees]
+words = "knees swinging"
+conditions = [ {{ signal = "left_knee", quantity = "amplitude", min = {min} }} ]
+[qmp.hips]
+words = "hips swinging"
+conditions = [ {{ signal = "left_hip", quantity = "amplitude", min = 0.1 }} ]
+[activity.swing]
+words = "swing"
+labels = ["swing"]
+sequence = [ {{ qmp = "knees", weight = 1 }}, {{ qmp = "hips", weight = 2 }} ]
+"""
+
+
+def test_dad_add_with_a_number_past_any_float_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """TOML's integers have any length in Python's reader: ``min = 999...9`` (400 digits) in
+    an ADD ended ``posecbr dad --add`` in a TypeError traceback from numpy's isfinite."""
+    clip = good_pose_file(tmp_path / "still.npz", frames=60)
+    add = tmp_path / "add.toml"
+    add.write_text(_MINI_ADD.format(min="9" * 400))
+    line = refused(["dad", str(clip), "--add", str(add)], tmp_path, capsys)
+    assert line == (
+        f"posecbr dad: error: {add}: qmp 'knees': conditions[0]: field 'min': expected a "
+        "finite number, got 99999999999999999999...(400 characters)"
+    )
+    add.write_text(_MINI_ADD.format(min="nan"))  # NaN and inf are refused as they were
+    refused(["dad", str(clip), "--add", str(add)], tmp_path, capsys,
+            "field 'min': expected a finite number, got nan")  # fmt: skip
+    add.write_text(_MINI_ADD.format(min="-0.0"))  # and a good file still runs
+    assert main(["dad", str(clip), "--add", str(add)]) == 0
+    assert "swing" in capsys.readouterr().out
