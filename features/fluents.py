@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from collections import Counter
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -422,18 +423,30 @@ class FluentTable:
         return cls().with_overrides(raw, str(path))
 
     def to_dict(self) -> dict[str, Any]:
-        """The whole table as plain data (what a user edits to override it)."""
-        fluents: dict[str, Any] = {}
-        for s in self.specs:
-            key = s.family if s.family == "near" else s.name
-            entry: dict[str, Any] = {
+        """The whole table as plain data (what a user edits to override it). The near pairs
+        are one ``near`` entry, with the thresholds most of them have, and an entry of its
+        own for each pair whose thresholds differ: read back, it gives the same table."""
+
+        def entry(s: FluentSpec) -> dict[str, Any]:
+            out: dict[str, Any] = {
                 **_descriptive(s),
                 "lower": asdict(s.lower),
                 "motion": asdict(s.motion_threshold),
             }
             if s.upper is not None:
-                entry["upper"] = asdict(s.upper)
-            fluents.setdefault(key, entry)
+                out["upper"] = asdict(s.upper)
+            return out
+
+        texts = [json.dumps(entry(s)) for s in self.specs if s.family == "near"]
+        common = Counter(texts).most_common(1)[0][0] if texts else ""
+        fluents: dict[str, Any] = {}
+        for s in self.specs:
+            if s.family != "near":
+                fluents[s.name] = entry(s)
+                continue
+            fluents.setdefault("near", json.loads(common))  # the family, where its first was
+            if json.dumps(entry(s)) != common:
+                fluents[s.name] = entry(s)
         return {
             "epsilon": self.epsilon,
             "window": self.window,

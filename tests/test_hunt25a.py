@@ -7,10 +7,12 @@ beside the folder for ``casebase export --out`` a folder.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
 
+from features.fluents import FluentTable
 from posecbr.cli import main
 from tests.badinput import good_pose_file, refused
 
@@ -47,3 +49,27 @@ def test_dad_add_with_a_number_past_any_float_is_one_line(
     add.write_text(_MINI_ADD.format(min="-0.0"))  # and a good file still runs
     assert main(["dad", str(clip), "--add", str(add)]) == 0
     assert "swing" in capsys.readouterr().out
+
+
+def test_thresholds_from_shows_a_near_pair_of_its_own_and_reads_back_the_same(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The near pairs were printed as one ``near`` entry copied from the first pair. An
+    override of one pair (``near:left_index~nose``) was missing from ``thresholds --from``,
+    which says it shows the table after the overrides; an override of the first pair
+    (``near:left_index~right_index``) was printed as the family's, so the printed table,
+    passed back with ``--thresholds``, set all 74 pairs to it."""
+    for pair, tau in (("near:left_index~nose", 1.5), ("near:left_index~right_index", 1.25)):
+        overrides = tmp_path / "pair.toml"
+        overrides.write_text(f'[fluents."{pair}".lower]\ntau = {tau}\n')
+        assert main(["thresholds", "--from", str(overrides)]) == 0
+        printed = capsys.readouterr().out
+        fluents = json.loads(printed)["fluents"]
+        assert fluents["near"]["lower"] == {"tau": 0.5, "delta": 0.25}
+        assert fluents[pair]["lower"] == {"tau": tau, "delta": 0.25}
+        assert [k for k in fluents if k.startswith("near")] == ["near", pair]
+        table = tmp_path / "t.json"  # the documented round trip: the same table again
+        table.write_text(printed)
+        assert FluentTable.from_file(table) == FluentTable.from_file(overrides)
+        assert main(["thresholds", "--from", str(table)]) == 0
+        assert capsys.readouterr().out == printed
