@@ -45,8 +45,19 @@ def read_config(
     path = Path(path)
     text = _read_text(path, what)
     fmt = fmt or ("toml" if path.suffix.lower() == ".toml" else "json")
+
+    def unique(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+        # JSON's reader keeps the last of a repeated key and drops the others unsaid (TOML's
+        # refuses them): a setting given twice is a mistake to name, not to guess at
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise ConfigError(f"the key {key[:64]!r} is given twice in one object", path)
+            seen.add(key)
+        return dict(pairs)
+
     try:
-        raw = tomllib.loads(text) if fmt == "toml" else json.loads(text)
+        raw = tomllib.loads(text) if fmt == "toml" else json.loads(text, object_pairs_hook=unique)
     except RecursionError:
         raise ConfigError(f"the {what} is nested too deeply", path) from None
     except ValueError as exc:  # JSONDecodeError, TOMLDecodeError, over-long integers

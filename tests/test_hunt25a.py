@@ -73,3 +73,33 @@ def test_thresholds_from_shows_a_near_pair_of_its_own_and_reads_back_the_same(
         assert FluentTable.from_file(table) == FluentTable.from_file(overrides)
         assert main(["thresholds", "--from", str(table)]) == 0
         assert capsys.readouterr().out == printed
+
+
+def test_a_key_given_twice_in_a_json_thresholds_file_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """JSON's reader keeps the last of a repeated key: ``left_leg_bent`` given twice (its
+    lower tau, then its motion) had ``describe --thresholds`` and ``thresholds --from`` run
+    with the motion alone, the tau dropped unsaid; ``epsilon`` twice took the second. TOML's
+    reader refused both already; JSON's now does too, naming the key."""
+    clip = good_pose_file(tmp_path / "still.npz")
+    twice = tmp_path / "t.json"
+    twice.write_text(
+        '{"fluents": {"left_leg_bent": {"lower": {"tau": 3.0}},\n'
+        '             "left_leg_bent": {"motion": {"tau": 0.1}}}}\n'
+    )
+    message = f"{twice}: the key 'left_leg_bent' is given twice in one object"
+    line = refused(["describe", str(clip), "--thresholds", str(twice)], tmp_path, capsys)
+    assert line == f"posecbr describe: error: {message}"
+    assert refused(["thresholds", "--from", str(twice)], tmp_path, capsys) == (
+        f"posecbr thresholds: error: {message}"
+    )
+    twice.write_text('{"epsilon": 0.01, "epsilon": 0.2}')
+    refused(["thresholds", "--from", str(twice)], tmp_path, capsys,
+            "the key 'epsilon' is given twice in one object")  # fmt: skip
+    once = tmp_path / "once.json"  # the same key in two objects is no repeat
+    once.write_text('{"fluents": {"leg_bent": {"lower": {"tau": 2.0}, "motion": {"tau": 0.1}},'
+                    ' "arm_bent": {"lower": {"tau": 2.0}}}}')  # fmt: skip
+    assert main(["thresholds", "--from", str(once)]) == 0
+    fluents = json.loads(capsys.readouterr().out)["fluents"]
+    assert fluents["left_leg_bent"]["lower"]["tau"] == fluents["left_arm_bent"]["lower"]["tau"]
