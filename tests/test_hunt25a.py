@@ -14,7 +14,7 @@ import pytest
 
 from features.fluents import FluentTable
 from posecbr.cli import main
-from tests.badinput import good_pose_file, refused
+from tests.badinput import good_pose_file, refused, small_case_base
 
 _MINI_ADD = """schema = 1
 [qmp.knees]
@@ -103,3 +103,25 @@ def test_a_key_given_twice_in_a_json_thresholds_file_is_refused(
     assert main(["thresholds", "--from", str(once)]) == 0
     fluents = json.loads(capsys.readouterr().out)["fluents"]
     assert fluents["left_leg_bent"]["lower"]["tau"] == fluents["left_arm_bent"]["lower"]["tau"]
+
+
+def test_casebase_export_out_a_folder_is_refused_as_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--out`` gets ``.npz`` added when it has another ending, and the folder check came
+    after: ``casebase export --out .`` (or ``/``) ended in a ValueError traceback from
+    pathlib ("has an empty name"), and ``--out cases/``, an existing folder, wrote
+    ``cases.npz`` beside it; ``--out ..`` wrote a file named ``...npz``."""
+    db = small_case_base(tmp_path)
+    capsys.readouterr()
+    (tmp_path / "cases").mkdir()
+    monkeypatch.chdir(tmp_path / "cases")
+    folders = [(".", "."), ("/", "/"), ("..", ".."), (f"{tmp_path}/cases/", f"{tmp_path}/cases")]
+    for out, named in folders:
+        line = refused(["casebase", "export", "--db", str(db), "--out", out], tmp_path, capsys)
+        assert line == (
+            f"posecbr casebase export: error: {named}: the export file is a folder, not a file"
+        )
+    # a name without .npz still gets it
+    assert main(["casebase", "export", "--db", str(db), "--out", str(tmp_path / "e")]) == 0
+    assert (tmp_path / "e.npz").is_file()

@@ -349,7 +349,12 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
 
 
 def _export_path(args: argparse.Namespace) -> Path:
+    """``--out``, with ``.npz`` added when it has another ending. A folder is refused as
+    named, before the ending is added: ``--out cases/`` is no ``cases.npz`` beside it, and
+    ``--out .`` has no name to add it to."""
     out = Path(args.out)
+    if out.is_dir() or not out.name:
+        raise DataError("the export file is a folder, not a file", out)
     return out if out.suffix == ".npz" else out.with_suffix(".npz")
 
 
