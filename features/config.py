@@ -24,7 +24,15 @@ def _read_text(path: Path, what: str) -> str:
             raise ConfigError(
                 f"the {what} is {size / 1e6:.0f} MB: too large for a configuration file", path
             )
-        data = path.read_bytes()
+        # a pipe or a device has no size to check first: read no more than the most allowed
+        with path.open("rb") as fh:
+            data = fh.read(MAX_CONFIG_BYTES + 1)
+        if len(data) > MAX_CONFIG_BYTES:
+            raise ConfigError(
+                f"the {what} is over {MAX_CONFIG_BYTES / 1e6:.0f} MB: too large for a"
+                " configuration file",
+                path,
+            )
     except FileNotFoundError:
         raise ConfigError(f"{what} not found", path) from None
     except OSError as exc:

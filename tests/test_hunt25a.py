@@ -8,6 +8,8 @@ beside the folder for ``casebase export --out`` a folder.
 from __future__ import annotations
 
 import json
+import os
+import threading
 from pathlib import Path
 
 import pytest
@@ -125,3 +127,34 @@ def test_casebase_export_out_a_folder_is_refused_as_named(
     # a name without .npz still gets it
     assert main(["casebase", "export", "--db", str(db), "--out", str(tmp_path / "e")]) == 0
     assert (tmp_path / "e.npz").is_file()
+
+
+def test_a_thresholds_pipe_that_goes_on_is_cut_at_the_size_limit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The 10 MB limit of a configuration file was checked on its size on disk, which a
+    pipe or a device does not have: ``--thresholds /dev/zero`` (or a pipe that goes on) was
+    read whole, until the memory ran out (a MemoryError traceback). Here a pipe of 11 MB of
+    spaces, which was read whole and then called "not valid JSON"."""
+    root = tmp_path / "clip"
+    root.mkdir()
+    clip = good_pose_file(root / "still.npz")
+    pipe = tmp_path / "t.json"
+    os.mkfifo(pipe)
+
+    def feed() -> None:
+        try:
+            with open(pipe, "wb") as fh:
+                for _ in range(11):
+                    fh.write(b" " * 1024**2)
+        except BrokenPipeError:  # the reader stopped at the limit
+            pass
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    line = refused(["describe", str(clip), "--thresholds", str(pipe)], root, capsys)
+    writer.join(timeout=10)
+    assert line == (
+        f"posecbr describe: error: {pipe}: the thresholds file is over 10 MB: too large for a"
+        " configuration file"
+    )
