@@ -79,7 +79,7 @@ def test_classifier_follows_the_sklearn_contract() -> None:
     from sklearn.exceptions import NotFittedError
 
     clf = clone(DADClassifier(window_s=3.0))
-    assert clf.get_params() == {"add": None, "window_s": 3.0, "step_s": 1.0}
+    assert clf.get_params() == {"add": None, "window_s": 3.0, "step_s": None}
     with pytest.raises(NotFittedError, match="not fitted"):
         clf.predict([_still(2.0)])
     X, y = [_still(2.0), _still(2.5)], ["standing_shoulder_abduction", "squat"]

@@ -158,3 +158,54 @@ def test_a_thresholds_pipe_that_goes_on_is_cut_at_the_size_limit(
         f"posecbr describe: error: {pipe}: the thresholds file is over 10 MB: too large for a"
         " configuration file"
     )
+
+
+def test_dad_step_longer_than_the_window_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``dad --window 1 --step 3`` on a 4-s clip judged the windows at 0-1 s and 3-4 s and
+    said "2 windows of up to 1 s": the 2 s between them were judged by none, unsaid. Refused
+    in one line, from the command and from Python (``DADConfig``)."""
+    from cbr.dad import DADConfig
+    from features.errors import ConfigError
+
+    clip = good_pose_file(tmp_path / "still.npz", frames=120)
+    refused(["dad", str(clip), "--window", "1", "--step", "3"], tmp_path, capsys,
+            "--step (3 s) must not be longer than --window (1 s)")  # fmt: skip
+    with pytest.raises(ConfigError, match="longer than window_s"):
+        DADConfig(window_s=1.0, step_s=3.0)
+    assert DADConfig(window_s=2.0, step_s=2.0).step_s == 2.0  # windows end to end: all judged
+
+
+def test_report_of_a_named_pipe_says_what_it_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``report`` given a named pipe said "no such results file" of a file that is there."""
+    fifo = tmp_path / "results.json"
+    os.mkfifo(fifo)
+    outputs = tmp_path / "out"  # checked unchanged (reading the pipe itself would wait)
+    outputs.mkdir()
+    refused(["report", str(fifo), "--out", str(outputs / "report.html")], outputs, capsys,
+            f"{fifo}: is a pipe, socket or device, not a results file")  # fmt: skip
+
+
+def test_dad_window_shorter_than_the_step_steps_by_the_window(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``dad --window 0.5`` without ``--step`` (default 1 s) on a 4-s clip: windows end to
+    end, 0-0.5 s, 0.5-1 s, ... (8 of them), not every other half second judged; the same from
+    Python with ``DADClassifier(window_s=0.5)``."""
+    from cbr.dad import DADClassifier
+    from features.poses import load_pose
+
+    clip = good_pose_file(tmp_path / "still.npz", frames=120)  # 30 fps: 4 s
+    capsys.readouterr()
+    assert main(["dad", str(clip), "--window", "0.5", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    starts = [w[0] for w in doc["windows_s"]]
+    assert starts == pytest.approx([0.5 * i for i in range(8)])
+    dad = DADClassifier(window_s=0.5).fit([load_pose(clip)], ["still"])
+    assert (
+        dad.config_.step_s == 0.5
+        and DADClassifier().fit([load_pose(clip)], ["x"]).config_.step_s == 1.0
+    )

@@ -18,7 +18,7 @@ from features.errors import InputError
 from features.poses import PoseSequence
 from features.qmp.add import ADD, load_add
 
-from .detection import DADConfig, detect
+from .detection import DADConfig, default_step, detect
 
 _NEEDS = "X must be a sequence (list, tuple or 1-D object array) of PoseSequence"
 
@@ -101,11 +101,15 @@ class DADClassifier(ClassifierMixin, BaseEstimator):
     ``predict`` before ``fit`` raises ``sklearn.exceptions.NotFittedError``.
 
     add: an :class:`ADD`, a path to an ADD file, or None for the shipped one; window_s and
-    step_s: the sliding windows (see :class:`~cbr.dad.detection.DADConfig`).
+    step_s: the sliding windows (see :class:`~cbr.dad.detection.DADConfig`; step_s None: 1 s,
+    or the window's length when that is shorter).
     """
 
     def __init__(
-        self, add: ADD | str | Path | None = None, window_s: float = 4.0, step_s: float = 1.0
+        self,
+        add: ADD | str | Path | None = None,
+        window_s: float = 4.0,
+        step_s: float | None = None,
     ) -> None:
         self.add = add
         self.window_s = window_s
@@ -119,7 +123,8 @@ class DADClassifier(ClassifierMixin, BaseEstimator):
     def fit(self, X: Sequence[PoseSequence], y: Sequence[Any] | np.ndarray) -> DADClassifier:
         """Record the classes of ``y`` and load the ADD; X: ``(n_clips,)`` PoseSequence."""
         labels = class_labels(y, len(pose_sequences(X)))
-        self.config_ = DADConfig(window_s=self.window_s, step_s=self.step_s)
+        step = default_step(self.window_s) if self.step_s is None else self.step_s
+        self.config_ = DADConfig(window_s=self.window_s, step_s=step)
         self.add_ = self.add if isinstance(self.add, ADD) else load_add(self.add)
         self.classes_ = np.unique(labels)
         return self

@@ -31,6 +31,15 @@ from features.qmp.add import ADD, Activity, CriteriaResult, evaluate_criteria, l
 from .matching import ordered_match
 from .outcome import NOT_ENOUGH_DATA, ActivityScore, DADResult, QMPOutcome
 
+DEFAULT_STEP_S = 1.0
+"""How far apart DAD's windows start, unless the window is shorter: then end to end."""
+
+
+def default_step(window_s: float) -> float:
+    """The step of windows ``window_s`` long when none is given: :data:`DEFAULT_STEP_S`, or
+    the window's length when that is shorter (no part of a clip between two windows)."""
+    return min(DEFAULT_STEP_S, window_s)
+
 
 @dataclass(frozen=True)
 class DADConfig:
@@ -38,7 +47,7 @@ class DADConfig:
     window is judged as a single window if it lasts at least ``min_duration_s``."""
 
     window_s: float = 4.0
-    step_s: float = 1.0
+    step_s: float = DEFAULT_STEP_S
     min_duration_s: float = 0.5
     qmp: QMPConfig = field(default_factory=QMPConfig)
 
@@ -47,6 +56,12 @@ class DADConfig:
             v = getattr(self, name)
             if not (isinstance(v, numbers.Real) and math.isfinite(float(v)) and float(v) > 0):
                 raise ConfigError(f"{name} must be a number > 0, got {v!r}", "DAD")
+        if self.step_s > self.window_s:
+            raise ConfigError(
+                f"step_s ({self.step_s:g} s) is longer than window_s ({self.window_s:g} s): "
+                "the clip between two windows would be judged by none",
+                "DAD",
+            )
 
 
 def _step_outcome(

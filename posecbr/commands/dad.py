@@ -44,7 +44,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="window length in seconds (default 4)",
     )
     p.add_argument(
-        "--step", type=float, default=1.0, metavar="S", help="window step in seconds (default 1)"
+        "--step",
+        type=float,
+        default=None,
+        metavar="S",
+        help="window step in seconds (default 1, or the window's length when shorter)",
     )
     p.add_argument(
         "--top",
@@ -58,23 +62,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.dad import DADConfig, detect
+    from cbr.dad import detect
     from features.datasets import load_clip
     from features.qmp.add import load_add
 
     if args.top < 0:
         raise PosecbrError(f"--top must be >= 0, got {args.top}")
-    for flag, value in (("--window", args.window), ("--step", args.step)):
-        if not (math.isfinite(value) and 0 < value <= MAX_SECONDS):
-            raise PosecbrError(f"{flag} must be in (0, {MAX_SECONDS:g}] seconds, got {value}")
-    shortest = DADConfig().min_duration_s
-    if args.window < shortest:  # every window would be too short to judge
-        raise PosecbrError(
-            f"--window must be at least {shortest:g} s, the shortest stretch DAD judges, got "
-            f"{args.window:g}"
-        )
+    config = _windows(args.window, args.step)
     add = load_add(args.add)
-    config = DADConfig(window_s=args.window, step_s=args.step)
     seq = load_clip(args.posefile)
     result = detect(seq, add, config)
     if args.json:  # the document says why, for a clip DAD cannot judge too
@@ -119,3 +114,27 @@ def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[
             for reason in q.reasons:
                 lead = "needs " if q.status == "not met" else ""
                 yield f"      {lead}{reason}"
+
+
+def _windows(window: float, step: float | None) -> Any:
+    """The DAD configuration of ``--window`` and ``--step`` (None: 1 s, or the window when
+    shorter), or a one-line refusal of windows DAD cannot judge or that leave gaps."""
+    from cbr.dad import DADConfig
+    from cbr.dad.detection import default_step
+
+    step = default_step(window) if step is None else step
+    for flag, value in (("--window", window), ("--step", step)):
+        if not (math.isfinite(value) and 0 < value <= MAX_SECONDS):
+            raise PosecbrError(f"{flag} must be in (0, {MAX_SECONDS:g}] seconds, got {value}")
+    shortest = DADConfig().min_duration_s
+    if window < shortest:  # every window would be too short to judge
+        raise PosecbrError(
+            f"--window must be at least {shortest:g} s, the shortest stretch DAD judges, got "
+            f"{window:g}"
+        )
+    if step > window:  # windows every --step: what lies between two is in none
+        raise PosecbrError(
+            f"--step ({step:g} s) must not be longer than --window ({window:g} s): "
+            "the clip between two windows would be judged by none"
+        )
+    return DADConfig(window_s=window, step_s=step)
