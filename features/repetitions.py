@@ -590,7 +590,12 @@ def _rest_is_high(
     the clip's first and last :data:`ENDS_S` seconds lie nearer (an exercise starts and ends
     at rest)."""
     ease = np.array([AT_EASE.get(n, np.pi / 2) for n in names])
+    # the line's two ends: its outer tenth of the frames, or of its range when fewer frames
+    # reach that far (a clip mostly at rest: its tenths by frames both lie in the rest)
     lo, hi = np.percentile(line, [10, 90])
+    low_end, high_end = float(line.min()), float(line.max())
+    lo = min(float(lo), low_end + 0.1 * (high_end - low_end))
+    hi = max(float(hi), high_end - 0.1 * (high_end - low_end))
     low_posture = x[line <= lo].mean(axis=0)
     high_posture = x[line >= hi].mean(axis=0)
     free = np.array([n in TWIST_NAMES or n == PELVIS_HEIGHT for n in names])
@@ -747,13 +752,14 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
     if sides is None:
         period, strength, direction = _periodic_direction(x, period, sig.fps)
-        line = _movement_line(x, sig.names, direction, sig.fps)
+        recorded = _movement_line(x, sig.names, direction, sig.fps)
         # a slow change of posture (stepping into place, drifting) is no repetition
-        line = _steady(line, period, strength, sig.fps)
+        line = _steady(recorded, period, strength, sig.fps)
         clear = period if strength >= CLEAR_PERIODICITY else None
         distance = int(0.5 * (clear or MIN_PERIOD_S) * sig.fps)
         reach = int(period * sig.fps) if period else len(line)
         far = _far_points(line, float(np.percentile(line, 5)), distance)
+        far = far[_above_rest(recorded, far)]
         far = np.unique(_in_view(far, sig.blind))
         spans = _bounds(line, far, reach) if len(far) else []
     spans = _seen_spans(spans, far, sig.blind)
@@ -789,6 +795,18 @@ def _periodic_direction(
     d = movement_direction(weighted) * w
     norm = float(np.linalg.norm(d))
     return period, strength, d / norm if norm > 0 else movement_direction(x)
+
+
+def _above_rest(line: np.ndarray, far: np.ndarray) -> np.ndarray:
+    """Which far points ``far`` of ``line`` ``(n,)`` (the movement as recorded, before
+    :func:`_steady`) stand out above its rest level (5th percentile) by at least
+    :data:`SUBSTANTIAL` of the median far point's height: about the running mean, a long
+    still stretch between repetitions is a plateau as high above their low points as half a
+    repetition, and its middle a far point, though nothing moves there."""
+    if not len(far):
+        return np.zeros(0, dtype=bool)
+    height = line[far] - float(np.percentile(line, 5))
+    return np.asarray(height >= SUBSTANTIAL * float(np.median(height)))
 
 
 def _steady(line: np.ndarray, period: float | None, strength: float, fps: float) -> np.ndarray:
