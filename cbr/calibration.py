@@ -69,14 +69,37 @@ class HeldOut:
 
 def answered(h: HeldOut) -> HeldOut:
     """The held-out clips that had a case to answer them: a clip whose group held every case
-    of the case base (one subject left after editing, held out) had none, and says nothing
-    of how often an answer is right."""
+    of the case base (one subject left after editing, held out) had none, and a clip whose
+    group held every case of its activity (truth -1: the only subject who did it) could not
+    be answered right; neither says how often an answer to a trained activity is right."""
     d = np.asarray(h.distances, dtype=np.float64)
     keep = np.isfinite(d[:, 0]) if d.shape[1] else np.zeros(len(d), dtype=bool)
+    keep &= np.asarray(h.truth) >= 0
     if keep.all():
         return h
     return HeldOut(h.nearest[keep], h.share[keep], h.right[keep], h.answer[keep],
                    h.distances[keep], h.codes[keep], h.truth[keep], h.k)  # fmt: skip
+
+
+def held_elsewhere(
+    labels: np.ndarray, groups: np.ndarray, case_labels: np.ndarray, case_groups: np.ndarray
+) -> np.ndarray:
+    """Whether a case of each clip's label ``labels`` ``(q,)`` lies outside the clip's own
+    group ``groups`` ``(q,)`` (cases ``case_labels`` of ``case_groups``, ``(n,)``): whether
+    the clip, held out with its group, could be answered right."""
+    labels, case_labels = np.asarray(labels).astype(str), np.asarray(case_labels).astype(str)
+    own = np.char.add(np.char.add(labels, "\0"), np.asarray(groups).astype(str))
+    cases = np.char.add(np.char.add(case_labels, "\0"), np.asarray(case_groups).astype(str))
+    return np.asarray(_count(labels, case_labels) > _count(own, cases))
+
+
+def _count(keys: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """How many of ``values`` ``(n,)`` equal each of ``keys`` ``(q,)``."""
+    names, counts = np.unique(values, return_counts=True)
+    if not len(names):
+        return np.zeros(len(keys), dtype=np.int64)
+    at = np.clip(np.searchsorted(names, keys), 0, len(names) - 1)
+    return np.asarray(np.where(names[at] == keys, counts[at], 0))
 
 
 def held_out(
@@ -103,7 +126,8 @@ def held_out(
         d = np.where(case_groups == groups[i], np.inf, d)
         top = np.argsort(d, kind="stable")[:wide]
         dist[i, : len(top)], code[i, : len(top)] = d[top], codes[top]
-    return held_out_votes(dist, code, classes, labels, int(k), weights)
+    held = held_elsewhere(labels, groups, cb.labels, case_groups)
+    return held_out_votes(dist, code, classes, labels, int(k), weights, held)
 
 
 def held_out_votes(
@@ -113,16 +137,20 @@ def held_out_votes(
     labels: np.ndarray,
     k: int,
     weights: Weights = "distance",
+    held: np.ndarray | None = None,
 ) -> HeldOut:
     """:class:`HeldOut` of clips whose nearest held-out cases are ``distances`` ``(q, K)``
     (nearest first) of class codes ``codes`` ``(q, K)`` into ``classes`` ``(C,)`` (sorted
     str), the first ``k`` of them voting; ``labels`` ``(q,)`` the clips' labels. A label no
-    case has gets code -1 (its answers are all wrong)."""
+    case has gets code -1 (its answers are all wrong), and so does a clip whose label no case
+    it was held out against has (``held`` ``(q,)`` False: :func:`held_elsewhere`)."""
     labels = np.asarray(labels).astype(str)
     proba = vote(distances[:, :k], codes[:, :k], len(classes), weights)
     win = np.argmax(proba, axis=1)
     at = np.clip(np.searchsorted(classes, labels), 0, len(classes) - 1)
     truth = np.where(classes[at] == labels, at, -1)
+    if held is not None:
+        truth = np.where(np.asarray(held, dtype=bool), truth, -1)
     share = proba[np.arange(len(win)), win]
     return HeldOut(distances[:, 0], share, win == truth, win, distances, codes, truth, int(k))
 

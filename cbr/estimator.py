@@ -52,6 +52,7 @@ from .calibration import (
     ConfidenceCalibration,
     HeldOut,
     calibrate_soft,
+    held_elsewhere,
     held_out,
     held_out_votes,
 )
@@ -68,6 +69,7 @@ from .fitting import (
     inner_loso_neighbours,
     inner_sample,
     side_name,
+    subject_folds,
 )
 from .maintenance import EDITORS, MaintenanceReport
 from .novelty import (
@@ -450,7 +452,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         )
         nested = self._nested_votes(described, choice, labels, subjects, measure)
         if nested is not None:
-            self.confidence_ = calibrate_soft(nested, len(classes), "nested leave-one-subject-out")
+            inner = calibrate_soft(nested, len(classes), "nested leave-one-subject-out")
+            if inner.n:  # else no subject's activity was another's too: as calibrated above
+                self.confidence_ = inner
         self.classes_ = classes
         self.case_origin_ = origin
         self.feature_config_ = config
@@ -657,7 +661,12 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         queries = cases.values[real]  # the training clips as queries see them
         labels = cases.labels[real]
         clip = origin % n
-        if "" not in set(subjects.tolist()) and len(set(subjects.tolist())) >= 2:
+        named = "" not in set(subjects.tolist()) and len(set(subjects.tolist())) >= 2
+        # by subject when some subject's activity is another's too: held out by subject, a
+        # clip of an activity one subject alone did cannot be answered right, and if that is
+        # every clip, the subjects cannot say how often an answer is right
+        if named and held_elsewhere(labels, subjects[cases.origin[real]], cb.labels,
+                                    subjects[clip]).any():  # fmt: skip
             groups, case_groups, basis = subjects, subjects[clip], "leave-one-subject-out"
         elif len(set(sources.tolist())) >= 2:
             groups, case_groups, basis = sources, sources[clip], "leave-one-recording-out"
@@ -794,6 +803,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         ok = np.isfinite(dist[:, 0])
         if not ok.any():
             return None
+        folds = subject_folds(subjects[pick])  # the inner folds: whose cases answered whom
         return held_out_votes(
             dist[ok],
             codes[ok],
@@ -801,6 +811,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             labels[pick][ok],
             k,
             self.weights,  # type: ignore[arg-type]
+            held_elsewhere(labels[pick][ok], folds[ok], labels[pick], folds),
         )
 
     def _edit(self, cb: CaseBase) -> MaintenanceReport | None:

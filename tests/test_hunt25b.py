@@ -12,9 +12,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from features.poses import save_pose
+from cbr.estimator import CaseBaseClassifier
+from features.poses import PoseSequence, save_pose
 from posecbr.cli import main
 from tests.bodies import squat_clip
+from tests.test_cbr_clips import ACTIVITIES, arm_clip
 
 # one squat of tests.bodies: 45 frames at 30 fps, standing at its first and last frame and
 # deepest at frame 22 (its depth is 0.5 (1 - cos(2 pi i / 44)), largest at i = 22)
@@ -65,3 +67,57 @@ def test_reps_counts_the_squats_of_a_clip_that_mostly_stands_still(
     assert np.abs(np.array(peaks) - np.array(deepest)).max() <= 2, (peaks, deepest)
     for r, peak in zip(doc["repetitions"], deepest, strict=True):
         assert r["start_frame"] < peak < r["end_frame"]
+
+
+def _one_activity_per_person(n_per_person: int, seed: int) -> tuple[list[PoseSequence], list[str]]:
+    """Three people, each of whom did one of the three arm movements only, ``n_per_person``
+    times: activity ``i`` by subject ``p{i}``."""
+    rng = np.random.default_rng(seed)
+    X, y = [], []
+    for i, activity in enumerate(ACTIVITIES):
+        for _ in range(n_per_person):
+            X.append(arm_clip(activity, rng).with_metadata(subject=f"p{i}"))
+            y.append(activity)
+    return X, y
+
+
+@pytest.mark.parametrize("weighting", ["fisher", "none"])
+def test_confidence_when_every_person_did_one_activity_only(weighting: str) -> None:
+    """Each person did one activity. Held out by subject, no clip can be answered right
+    (its activity leaves the case base with its person), so the calibration learned that
+    answers are never right: every confidence was 1/14 = 0.07, for clips the classifier
+    answers right at distance 0. Such clips now say nothing of how often an answer is right;
+    with no subject's activity shared, the clips are held out by recording (each clip its own
+    file), where all 12 are answered right (three well-apart movements): Platt's smoothed
+    accuracy (12 + 1) / (12 + 2)."""
+    X, y = _one_activity_per_person(4, seed=5)
+    clf = CaseBaseClassifier(mirror="off", feature_weights=weighting, phases=0).fit(X, y)
+    solved = clf.solve(X)
+    assert [s.solution.label for s in solved] == y
+    confidence = np.array([s.solution.confidence for s in solved])
+    assert confidence == pytest.approx(13 / 14)
+    assert clf.confidence_.basis != "leave-one-subject-out"
+    assert clf.confidence_.n == 12 and clf.confidence_.accuracy == 1.0
+
+
+def test_a_person_alone_in_an_activity_does_not_count_against_the_others() -> None:
+    """Two people did all three activities and a third only one of them, plus a fourth
+    activity (squats) no one else did: that person's squats could not be right held out, and
+    counted as wrong answers, pulling every confidence down (held-out accuracy 20 of 22). The
+    calibration now holds the 2 x 3 x 3 + 2 clips of activities another person did too, all
+    answered right (three well-apart arm movements)."""
+    rng = np.random.default_rng(9)
+    X, y = [], []
+    for person in ("p0", "p1"):
+        for activity in ACTIVITIES:
+            for _ in range(3):
+                X.append(arm_clip(activity, rng).with_metadata(subject=person))
+                y.append(activity)
+    for depth in (0.8, 1.0):  # p2: squats, which no one else did, and two left arm raises
+        X.append(replace(squat_clip(depth), source="").with_metadata(subject="p2"))
+        y.append("squat")
+        X.append(arm_clip(ACTIVITIES[0], rng).with_metadata(subject="p2"))
+        y.append(ACTIVITIES[0])
+    clf = CaseBaseClassifier(mirror="off", feature_weights="none", phases=0).fit(X, y)
+    assert clf.confidence_.basis == "leave-one-subject-out"
+    assert clf.confidence_.n == 20 and clf.confidence_.accuracy == 1.0
