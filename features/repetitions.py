@@ -79,7 +79,7 @@ from typing import Any
 
 import numpy as np
 from scipy.fft import next_fast_len
-from scipy.ndimage import gaussian_filter1d, median_filter, uniform_filter1d
+from scipy.ndimage import gaussian_filter1d, median_filter, minimum_filter1d, uniform_filter1d
 from scipy.signal import find_peaks
 
 from .body import long_runs
@@ -171,6 +171,13 @@ its height): a second far point reached after a shallow dip (a wobble at the bot
 lunge, a pause on the way up) is part of the same repetition. Chosen with
 :data:`SUBSTANTIAL` on the training subjects only (at 0.3: MAE 0.063 without the rule, 0.046
 at 0.4, 0.051 at 0.5 and 0.6)."""
+STILL_SHARE = 0.1
+"""A far point is a still stretch, not a repetition, when the movement line as recorded (not
+about its running mean) rises less than this share of the median far point's rise above the
+lowest of the line within a period of it: the middle of a long rest between repetitions rises
+by nothing but noise. Far below :data:`SUBSTANTIAL`: a shallow repetition among deep ones
+rises little (the shallowest of the training subjects' joined clips, an incorrect side lunge
+of s04 in UI-PRMD Kinect, 0.24 of the median; at 0.3 it was dropped)."""
 
 LEAVE_SHARE = 0.1
 """The first repetition starts at the last sample before its peak, and the last ends at the
@@ -759,7 +766,7 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
         distance = int(0.5 * (clear or MIN_PERIOD_S) * sig.fps)
         reach = int(period * sig.fps) if period else len(line)
         far = _far_points(line, float(np.percentile(line, 5)), distance)
-        far = far[_above_rest(recorded, far)]
+        far = far[_above_rest(recorded, far, reach)]
         far = np.unique(_in_view(far, sig.blind))
         spans = _bounds(line, far, reach) if len(far) else []
     spans = _seen_spans(spans, far, sig.blind)
@@ -797,16 +804,18 @@ def _periodic_direction(
     return period, strength, d / norm if norm > 0 else movement_direction(x)
 
 
-def _above_rest(line: np.ndarray, far: np.ndarray) -> np.ndarray:
+def _above_rest(line: np.ndarray, far: np.ndarray, reach: int) -> np.ndarray:
     """Which far points ``far`` of ``line`` ``(n,)`` (the movement as recorded, before
-    :func:`_steady`) stand out above its rest level (5th percentile) by at least
-    :data:`SUBSTANTIAL` of the median far point's height: about the running mean, a long
-    still stretch between repetitions is a plateau as high above their low points as half a
-    repetition, and its middle a far point, though nothing moves there."""
+    :func:`_steady`) rise above the lowest of the line within ``reach`` frames of them by at
+    least :data:`STILL_SHARE` of the median such rise: about the running mean, a long still
+    stretch between repetitions is a plateau as high above their low points as half a
+    repetition, and its middle a far point, though nothing near it moves. Measured near each
+    point, so a line that drifts over the clip keeps its shallower repetitions."""
     if not len(far):
         return np.zeros(0, dtype=bool)
-    height = line[far] - float(np.percentile(line, 5))
-    return np.asarray(height >= SUBSTANTIAL * float(np.median(height)))
+    lowest = minimum_filter1d(line, size=2 * max(1, reach) + 1, mode="nearest")
+    height = line[far] - lowest[far]
+    return np.asarray(height >= STILL_SHARE * float(np.median(height)))
 
 
 def _steady(line: np.ndarray, period: float | None, strength: float, fps: float) -> np.ndarray:
@@ -941,6 +950,7 @@ __all__ = [
     "MIN_EXCURSION_RAD",
     "MIN_PERIOD_S",
     "RETURN_SHARE",
+    "STILL_SHARE",
     "SUBSTANTIAL",
     "TRUNK_SIDE_SHARE",
     "MovementSignals",
