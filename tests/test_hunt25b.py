@@ -121,3 +121,31 @@ def test_a_person_alone_in_an_activity_does_not_count_against_the_others() -> No
     clf = CaseBaseClassifier(mirror="off", feature_weights="none", phases=0).fit(X, y)
     assert clf.confidence_.basis == "leave-one-subject-out"
     assert clf.confidence_.n == 20 and clf.confidence_.accuracy == 1.0
+
+
+def test_train_notes_labels_that_differ_only_in_case_or_spacing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A labels CSV naming one activity two ways ("deep_squat" for one subject, "Deep Squat"
+    for another) trained two activities without a word; now a note names them (exit 0, the
+    case base as asked: three activities)."""
+    demo = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+    rows = ["path,label,subject"]
+    for subject in ("s01", "s02"):
+        for movement, label in (("m01", "deep_squat"), ("m07", "shoulder_abduction")):
+            if subject == "s02" and movement == "m01":
+                label = "Deep Squat"
+            for clip in sorted(demo.glob(f"{movement}_{subject}_e0[1-3].npz")):
+                rows.append(f"{clip},{label},{subject}")
+    labels = tmp_path / "labels.csv"
+    labels.write_text("\n".join(rows) + "\n")
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(labels), "--db", str(db), "--mirror", "off",
+            "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    notes = [line for line in err.splitlines() if "differ only in case or spacing" in line]
+    assert notes == [
+        "note: 'Deep Squat' and 'deep_squat' differ only in case or spacing: they are 2 "
+        "activities (one spelt two ways in the labels?)"
+    ]

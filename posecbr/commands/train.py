@@ -625,9 +625,31 @@ def _indistinct(pairs: list[str], split: str) -> str:
     )
 
 
+def _alike_labels(labels: Any) -> list[list[str]]:
+    """The groups of two or more ``labels`` that differ only in case or in spaces, hyphens
+    and underscores ("deep_squat", "Deep Squat"): most likely one activity spelt two ways."""
+    import re
+    from collections import defaultdict
+
+    groups: dict[str, list[str]] = defaultdict(list)
+    for label in labels:
+        groups[re.sub(r"[\s_\-]+", " ", str(label)).strip().casefold()].append(str(label))
+    return [sorted(g) for g in groups.values() if len(g) > 1]
+
+
 def _notes(args: argparse.Namespace, result: Any) -> None:
-    """What the user should know of the case base stored, on stderr: cases nothing tells
-    apart, and a case base of windows segment cannot judge unknown with."""
+    """What the user should know of the case base stored, on stderr: activities spelt two
+    ways, cases nothing tells apart, and a case base of windows segment cannot judge unknown
+    with."""
+    for group in _alike_labels(result.label_counts):
+        names = " and ".join(", ".join(repr(g) for g in group).rsplit(", ", 1))
+        print(
+            shown(
+                f"note: {names} differ only in case or spacing: they are {len(group)} "
+                "activities (one spelt two ways in the labels?)"
+            ),
+            file=sys.stderr,
+        )
     if result.indistinct:
         print(_indistinct(result.indistinct, args.split), file=sys.stderr)
     if not args.append and args.split == "windows" and not result.judges_unknown:
