@@ -159,7 +159,8 @@ def _no_case(what: str) -> DataError:
     from features.repetitions import MIN_PERIOD_S
 
     return DataError(
-        f"no clip shows a person for as long as one movement can last ({MIN_PERIOD_S:g} s):"
+        f"no clip shows a person's torso (both shoulders and hips) for as long as one movement"
+        f" can last ({MIN_PERIOD_S:g} s):"
         f" nothing to {what}",
         "training set",
     )
