@@ -12,6 +12,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -362,10 +363,10 @@ class _QuietServer(http.server.ThreadingHTTPServer):
         """No traceback on stderr when the client hangs up (watch stops reading)."""
 
 
-@pytest.fixture
-def served(shared_data: Path) -> Iterator[str]:
-    """The address of ../shared/data/media served over HTTP on this machine (a stream URL)."""
-    handler = functools.partial(_Quiet, directory=str(shared_data / "media"))
+@contextmanager
+def _serving(folder: Path) -> Iterator[str]:
+    """The address of ``folder`` served over HTTP on this machine while the block runs."""
+    handler = functools.partial(_Quiet, directory=str(folder))
     server = _QuietServer(("127.0.0.1", 0), handler)
     threading.Thread(target=server.serve_forever, daemon=True).start()
     try:
@@ -373,6 +374,13 @@ def served(shared_data: Path) -> Iterator[str]:
     finally:
         server.shutdown()
         server.server_close()
+
+
+@pytest.fixture
+def served(shared_data: Path) -> Iterator[str]:
+    """The address of ../shared/data/media served over HTTP on this machine (a stream URL)."""
+    with _serving(shared_data / "media") as url:
+        yield url
 
 
 def test_watch_a_stream_url(
@@ -561,18 +569,12 @@ def test_watch_refuses_a_truncated_video_served_over_http(
     knows, so played as a file): refused as the file is, one line naming the URL, exit 1,
     no --out video. (A served file was watched to where it broke off, exit 0.)"""
     _cut_avi(tmp_path)
-    handler = functools.partial(_Quiet, directory=str(tmp_path))
-    server = _QuietServer(("127.0.0.1", 0), handler)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
-    url = f"http://127.0.0.1:{server.server_address[1]}/cut.avi"
     out = tmp_path / "out.mp4"
     capsys.readouterr()
-    try:
+    with _serving(tmp_path) as address:
+        url = f"{address}/cut.avi"
         argv = ["watch", url, "--db", str(case_base), "--speed", "0", "--out", str(out)]
         assert main(argv) == 1
-    finally:
-        server.shutdown()
-        server.server_close()
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"{url}: truncated or corrupt: decoded" in err
     assert not out.exists()
