@@ -11,8 +11,9 @@ import pytest
 from cbr.evaluation.peers import LIMB_ANGLES, DTWKNNPeer, angle_series
 from tests.test_cbr_weights import _arm_clip, _elbow_clip
 
-# under pytest-xdist the module runs on one worker: tslearn compiles its DTW (numba, ~30 s,
-# not cached on disk) once per process, not once per test
+# under pytest-xdist the module runs on one worker: tslearn compiles its DTW (numba, 15-30 s)
+# once per process, not once per test (once per machine since it is cached on disk:
+# cbr.evaluation.peers.cache_tslearn_kernels)
 pytestmark = pytest.mark.xdist_group("tslearn-peer")
 
 
@@ -86,3 +87,35 @@ def test_spawned_fold_workers_give_the_tslearn_peer_the_serial_predictions(
     for m in serial.methods:
         assert m.scores is not None and parallel[m.name]["status"] == "ok"
         assert parallel[m.name]["predictions"] == m.scores.predictions
+
+
+_CACHED_DTW = """
+from pathlib import Path
+import numpy as np
+from tslearn.metrics import _dtw, cdist_dtw
+from cbr.evaluation.peers import cache_tslearn_kernels
+cache_tslearn_kernels()
+d = cdist_dtw(np.ones((1, 5, 3)), np.zeros((1, 5, 3)))[0, 0]
+kernel = _dtw._njit_accumulated_matrix
+saved = Path(kernel._cache._cache_file._index_path).is_file()
+print(d, sum(kernel.stats.cache_hits.values()), sum(kernel.stats.cache_misses.values()), saved)
+"""
+
+
+def test_tslearn_dtw_is_kept_for_the_next_process() -> None:
+    """tslearn compiled its DTW in every process (each spawned fold worker of ``compare
+    --jobs`` too: 15-20 s of CPU each here); with numba's cache enabled for its kernels, a
+    process loads the dynamic programme (the accumulated cost matrix, most of the compile)
+    from disk, or compiles it and leaves it there for the next one: a cache hit, or a miss
+    and its index on disk afterwards. The distance is unchanged: five frames one apart in
+    each of three coordinates, sqrt(5 * 3) along the diagonal."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    out = subprocess.run([sys.executable, "-c", _CACHED_DTW], capture_output=True, text=True,
+                         timeout=300, env=env, check=True).stdout.split()  # fmt: skip
+    distance, hits, misses, saved = float(out[0]), int(out[1]), int(out[2]), out[3] == "True"
+    assert distance == pytest.approx(np.sqrt(15.0))
+    assert hits >= 1 or (misses >= 1 and saved), out

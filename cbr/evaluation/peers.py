@@ -4,6 +4,7 @@ the eight limb angles of each clip."""
 from __future__ import annotations
 
 import importlib.util
+import sys
 import warnings
 from collections.abc import Sequence
 from typing import Any
@@ -52,6 +53,27 @@ def angle_series(seq: PoseSequence, length: int) -> np.ndarray:
     return derived(seq, f"limb angles/{int(length)}", compute)
 
 
+def cache_tslearn_kernels() -> int:
+    """Let numba keep tslearn's compiled kernels on disk, as it keeps ours (``cache=True``):
+    tslearn compiles its DTW on first use in every process (15-20 s of CPU on a slow core),
+    again in each spawned fold worker of ``compare --jobs``; cached, the next process loads
+    it in a second or two. The same machine code runs either way. Every kernel of the
+    ``tslearn.metrics`` modules imported so far; returns how many were newly cached."""
+    from numba.core.dispatcher import Dispatcher
+
+    newly = 0
+    for name, module in list(sys.modules.items()):
+        if not name.startswith("tslearn.metrics") or module is None:
+            continue
+        for value in list(vars(module).values()):
+            cache = getattr(value, "_cache", None)
+            if (isinstance(value, Dispatcher) and value.__module__ == name
+                    and type(cache).__name__ == "NullCache"):  # fmt: skip
+                value.enable_caching()
+                newly += 1
+    return newly
+
+
 class DTWKNNPeer(ClassifierMixin, BaseEstimator):
     """k-NN with DTW from tslearn (``KNeighborsTimeSeriesClassifier``) on the eight limb
     angles resampled to ``length`` frames: the plain peer a user would reach for."""
@@ -69,6 +91,7 @@ class DTWKNNPeer(ClassifierMixin, BaseEstimator):
             warnings.simplefilter("ignore", UserWarning)
             from tslearn.neighbors import KNeighborsTimeSeriesClassifier
 
+        cache_tslearn_kernels()
         self.model_ = KNeighborsTimeSeriesClassifier(
             n_neighbors=int(self.n_neighbors), metric="dtw"
         )
