@@ -124,9 +124,26 @@ def test_casebase_export_out_a_folder_is_refused_as_named(
         assert line == (
             f"posecbr casebase export: error: {named}: the export file is a folder, not a file"
         )
-    # a name without .npz still gets it
-    assert main(["casebase", "export", "--db", str(db), "--out", str(tmp_path / "e")]) == 0
-    assert (tmp_path / "e.npz").is_file()
+    # a name without .npz still gets it, added as numpy adds it (cases.v2 was cases.npz);
+    # one ending in .NPZ keeps its name (it became x.npz)
+    for given, written in (("e", "e.npz"), ("cases.v2", "cases.v2.npz"), ("x.NPZ", "x.NPZ")):
+        assert main(["casebase", "export", "--db", str(db), "--out", str(tmp_path / given)]) == 0
+        assert (tmp_path / written).is_file()
+    assert not (tmp_path / "cases.npz").exists() and not (tmp_path / "x.npz").exists()
+
+
+def test_add_schema_true_and_an_empty_label_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An ADD with ``schema = true`` was taken for schema 1 (true == 1 in Python), and
+    ``labels = [""]`` for an activity no clip can be labelled: each is refused in one line."""
+    clip = good_pose_file(tmp_path / "still.npz", frames=60)
+    add = tmp_path / "add.toml"
+    add.write_text(_MINI_ADD.format(min=0.1).replace("schema = 1", "schema = true"))
+    refused(["dad", str(clip), "--add", str(add)], tmp_path, capsys, "unsupported ADD schema True")
+    add.write_text(_MINI_ADD.format(min=0.1).replace('labels = ["swing"]', 'labels = [" "]'))
+    refused(["dad", str(clip), "--add", str(add)], tmp_path, capsys,
+            "activity 'swing'", "field 'labels' holds an empty label")  # fmt: skip
 
 
 def test_a_thresholds_pipe_that_goes_on_is_cut_at_the_size_limit(

@@ -337,6 +337,8 @@ def _parse_activity(name: str, raw: Any, criteria: Mapping[str, Criterion], src:
         raise ConfigError(f"{where}: missing field 'labels'", src)
     if not isinstance(labels, list) or not labels or not all(isinstance(x, str) for x in labels):
         raise ConfigError(f"{where}: field 'labels' must be a non-empty list of strings", src)
+    if not all(x.strip() for x in labels):  # no clip's label is empty: it would match none
+        raise ConfigError(f"{where}: field 'labels' holds an empty label", src)
     seq = raw.get("sequence")
     if seq is None:
         raise ConfigError(f"{where}: missing field 'sequence'", src)
@@ -367,7 +369,7 @@ def _parse_step(raw: Any, criteria: Mapping[str, Criterion], where: str, src: st
 def parse_add(raw: Mapping[str, Any], source: str = "ADD") -> ADD:
     """Validate a parsed ADD document (see the module docstring for the schema)."""
     src = source
-    if raw.get("schema", 1) != 1:
+    if raw.get("schema", 1) != 1 or isinstance(raw.get("schema"), bool):  # true == 1
         raise ConfigError(f"unsupported ADD schema {raw.get('schema')!r} (expected 1)", src)
     extra = set(raw) - {"schema", "qmp", "activity"}
     if extra:

@@ -355,7 +355,7 @@ def _export_path(args: argparse.Namespace) -> Path:
     out = Path(args.out)
     if out.is_dir() or not out.name:
         raise DataError("the export file is a folder, not a file", out)
-    return out if out.suffix == ".npz" else out.with_suffix(".npz")
+    return out if out.name.lower().endswith(".npz") else out.with_name(out.name + ".npz")
 
 
 def _check_export(args: argparse.Namespace) -> None:
