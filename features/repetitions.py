@@ -45,13 +45,16 @@ How (all channels at once, no per-frame loops):
    end nearer standing at ease, :data:`AT_EASE`, when the angles that have an at-ease value
    carry the movement; where they do not, a shoulder turning in and out, or the two ends lie
    about equally far from ease, the end the clip's first and last moments lie nearer,
-   :data:`ENDS_S`) and, for a clearly periodic
+   :data:`ENDS_S`; each end the line's outer tenth of the frames, or of its range where a
+   clip mostly at rest has fewer frames there) and, for a clearly periodic
    movement, taken about its running mean over one period; for an alternating movement, the
    side-against-side part, whose peaks are one side's repetitions and troughs the other's;
 5. repetitions are the peaks that stand out by at least :data:`SUBSTANTIAL` of the typical
    repetition and by :data:`MIN_EXCURSION_RAD` (more than pose-estimation jitter), from which
    the movement falls back by :data:`RETURN_SHARE` of their height above rest on both sides
-   (a far point reached again after a shallow dip is the same repetition), at least
+   (a far point reached again after a shallow dip is the same repetition), that rise above
+   the lowest of the line as recorded within a period of them by :data:`STILL_SHARE` of
+   the typical rise (the middle of a long rest between repetitions does not), at least
    half a period apart when the movement repeats clearly (:data:`CLEAR_PERIODICITY`; a
    period read from a weak autocorrelation is often a multiple of the true one, and would
    merge repetitions); each runs from the low point between it and the one before to the
