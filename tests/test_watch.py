@@ -24,6 +24,7 @@ from features.pose_estimation import StreamFrame
 from features.pose_estimation.tracker import FramePose
 from features.readers.asfamc import read_asf_amc
 from posecbr.cli import main
+from tests.badinput import snapshot
 
 
 @pytest.fixture(scope="module")
@@ -569,6 +570,7 @@ def test_watch_refuses_a_truncated_video_served_over_http(
     knows, so played as a file): refused as the file is, one line naming the URL, exit 1,
     no --out video. (A served file was watched to where it broke off, exit 0.)"""
     _cut_avi(tmp_path)
+    before = snapshot(tmp_path)
     out = tmp_path / "out.mp4"
     capsys.readouterr()
     with _serving(tmp_path) as address:
@@ -577,7 +579,7 @@ def test_watch_refuses_a_truncated_video_served_over_http(
         assert main(argv) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"{url}: truncated or corrupt: decoded" in err
-    assert not out.exists()
+    assert snapshot(tmp_path) == before  # no --out video, the served files as they were
 
 
 def test_watch_of_a_short_video_with_nobody_in_it_names_the_video(
@@ -588,9 +590,11 @@ def test_watch_of_a_short_video_with_nobody_in_it_names_the_video(
     "stream"), exit 1."""
     _cut_avi(tmp_path)
     whole = tmp_path / "whole.avi"
+    before = snapshot(tmp_path)
     capsys.readouterr()
     argv = ["watch", str(whole), "--db", str(case_base), "--speed", "0", "--max-frames", "40"]
     assert main(argv) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert err.startswith(f"posecbr watch: error: {whole}: no person in view in enough frames")
+    assert snapshot(tmp_path) == before
