@@ -437,16 +437,17 @@ class FluentTable:
                 out["upper"] = asdict(s.upper)
             return out
 
-        texts = [json.dumps(entry(s)) for s in self.specs if s.family == "near"]
-        common = Counter(texts).most_common(1)[0][0] if texts else ""
+        entries = {s.name: entry(s) for s in self.specs}
+        texts = {s.name: json.dumps(entries[s.name]) for s in self.specs if s.family == "near"}
+        common = Counter(texts.values()).most_common(1)[0][0] if texts else ""
         fluents: dict[str, Any] = {}
         for s in self.specs:
             if s.family != "near":
-                fluents[s.name] = entry(s)
+                fluents[s.name] = entries[s.name]
                 continue
             fluents.setdefault("near", json.loads(common))  # the family, where its first was
-            if json.dumps(entry(s)) != common:
-                fluents[s.name] = entry(s)
+            if texts[s.name] != common:
+                fluents[s.name] = entries[s.name]
         return {
             "epsilon": self.epsilon,
             "window": self.window,
