@@ -24,6 +24,25 @@ def test_report_on_a_results_file_nested_too_deeply_is_refused_in_one_line(
             f"{results}: not a JSON results file (nested too deeply)")  # fmt: skip
 
 
+def test_report_on_a_results_file_of_gigabytes_is_refused_before_reading_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 1.1 GiB file named results.json (sparse: no disk used) was read whole into memory
+    before json could refuse it; refused from its size in one line, no page written."""
+    from posecbr.cli import main
+
+    results = tmp_path / "results.json"
+    with results.open("wb") as fh:
+        fh.truncate(1024**3 + 1024**3 // 10)
+    page = tmp_path / "report.html"
+    assert main(["report", str(results), "--out", str(page)]) == 1
+    err = capsys.readouterr().err
+    assert err == (f"posecbr report: error: {results}: is 1.18 GB: larger than any compare"
+                   " results file (the limit is 1.07 GB; the wrong file?)\n")  # fmt: skip
+    assert not page.exists() and results.stat().st_size == 1024**3 + 1024**3 // 10
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json"]
+
+
 @pytest.fixture(scope="module")
 def compared_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """One ``compare --out`` on ten demo clips: its results folder (results.json,

@@ -22,6 +22,7 @@ import numpy as np
 
 from features.errors import DataError
 from features.fileio import check_output, write_text_atomic
+from features.text import size_words
 
 from .pictures import Drawing, result_pictures
 from .results import CompareResults, MethodResult, Rate, Scores
@@ -55,6 +56,11 @@ def _pct(x: float | None) -> str:
 
 # ---------------------------------------------------------------------------- reading
 
+# A compare's results file holds a few hundred bytes per clip and method: a gigabyte is
+# hundreds of thousands of clips. Anything larger is the wrong file, and reading it whole
+# would exhaust the memory before json could say so.
+MAX_RESULTS_BYTES = 1024**3
+
 
 def load_results(path: str | Path) -> tuple[CompareResults, Path]:
     """A compare results file (or a folder holding ``results.json``), checked, and its path."""
@@ -65,6 +71,13 @@ def load_results(path: str | Path) -> tuple[CompareResults, Path]:
         raise DataError("is a pipe, socket or device, not a results file", p)
     if not p.is_file():
         raise DataError("no such results file (run `posecbr compare DATA --out DIR` first)", p)
+    size = p.stat().st_size
+    if size > MAX_RESULTS_BYTES:
+        raise DataError(
+            f"is {size_words(size)}: larger than any compare results file (the limit is"
+            f" {size_words(MAX_RESULTS_BYTES)}; the wrong file?)",
+            p,
+        )
     try:
         doc = json.loads(p.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
