@@ -41,7 +41,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted
 
-from features.body import torso_share
+from features.body import no_person, torso_share
 from features.errors import ConfigError, DataError, InputError
 from features.poses import PoseSequence
 from features.progress import progress
@@ -850,10 +850,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             raise InputError("no clips to classify", "X")
         bad = unusable(seqs)
         if bad:
-            raise InputError(
-                "shows no person (no frame with a torso): nothing to classify",
-                seqs[bad[0]].source or f"X[{bad[0]}]",
-            )
+            seq = seqs[bad[0]]
+            raise InputError(f"{no_person(seq)}: nothing to classify", seq.source or f"X[{bad[0]}]")
         labels = self._class_labels()
         out = []
         problems = [self.case_base_.problem_of(seq) for seq in seqs]

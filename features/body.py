@@ -16,7 +16,16 @@ from functools import cache
 import numpy as np
 
 from .derived import derived, signals_of
-from .geometry import WORLD_UP, angle_between, body_frame, joint_angle, norm, project, unit
+from .geometry import (
+    MIN_LINK_M,
+    WORLD_UP,
+    angle_between,
+    body_frame,
+    joint_angle,
+    norm,
+    project,
+    unit,
+)
 from .poses import PoseSequence
 from .skeleton import BLAZEPOSE_33, JOINT_INDEX
 
@@ -275,8 +284,22 @@ def torso_rows(seq: PoseSequence) -> np.ndarray:
 def torso_seen(torso: np.ndarray) -> np.ndarray:
     """``(...)`` whether each pose of ``torso`` ``(..., 4, 3)`` (the :data:`TORSO_JOINTS`, in
     order) shows the torso as :func:`torso_share` counts it: all four seen, the shoulders
-    distinct and the hips distinct."""
+    distinct and the hips distinct (at least :data:`~features.geometry.MIN_LINK_M` apart, as
+    the body frame needs)."""
     seen = np.isfinite(torso).all(axis=(-2, -1))
-    shoulders = norm(torso[..., 0, :] - torso[..., 1, :]) > 0
-    hips = norm(torso[..., 2, :] - torso[..., 3, :]) > 0
+    shoulders = norm(torso[..., 0, :] - torso[..., 1, :]) >= MIN_LINK_M
+    hips = norm(torso[..., 2, :] - torso[..., 3, :]) >= MIN_LINK_M
     return np.asarray(seen & shoulders & hips)
+
+
+def no_person(seq: PoseSequence) -> str:
+    """Why ``seq``, no frame of which shows the torso (:func:`torso_share` 0), shows no person,
+    in words: its torso joints are missing, or they are all there but the shoulders or the hips
+    lie within :data:`~features.geometry.MIN_LINK_M` of each other (a pose at micrometre
+    scale, not in metres, or every joint at one point)."""
+    if np.isfinite(seq.joints(TORSO_JOINTS)).all(axis=(-2, -1)).any():
+        return (
+            f"shows no person (its shoulders or hips lie within {MIN_LINK_M * 1e6:g} µm of each"
+            " other in every frame: positions must be metres)"
+        )
+    return "shows no person (no frame with a torso)"

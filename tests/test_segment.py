@@ -1054,3 +1054,39 @@ def test_segment_k_beyond_what_a_window_retrieves_is_refused(
     assert (_sha(rec), _sha(case_base)) == before
     assert main(["segment", str(rec), "--db", str(case_base), "-k", str(k), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["segments"]
+
+
+def test_a_recording_at_micrometre_scale_is_refused_naming_the_unit(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A recording in metres scaled by 1e-6 (a person 2 µm tall): its pelvis still rises and
+    falls, but no body frame can be built (shoulders under a micrometre apart). It was
+    segmented as one stretch of "nobody in view", exit 0; refused in one line naming the
+    unit, the case base and the recording unchanged."""
+    from dataclasses import replace
+
+    rec = recordings["13_30"].slice_frames(0, 600)
+    tiny = save_pose(replace(rec, positions=rec.positions * 1e-6, source=""), tmp_path / "r.npz")
+    before = _sha(tiny), _sha(case_base)
+    assert main(["segment", str(tiny), "--db", str(case_base)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"posecbr segment: error: {tiny}: shows no")
+    assert "within 1 µm of each other in every frame: positions must be metres" in err
+    assert (_sha(tiny), _sha(case_base)) == before
+
+
+def test_classifying_a_micrometre_recording_names_the_unit(
+    recordings: dict[str, PoseSequence], classifier: CaseBaseClassifier
+) -> None:
+    from dataclasses import replace
+
+    from features.errors import DataError
+
+    rec = recordings["13_30"].slice_frames(0, 240)
+    tiny = replace(rec, positions=rec.positions * 1e-6, source="tiny.npz")
+    with pytest.raises(DataError, match="within 1 µm of each other in every frame: positions"):
+        classifier.predict([tiny])
+    assert classifier.predict([rec])[0] in set(classifier.classes_)  # metres: classified

@@ -13,7 +13,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
-from features.body import torso_share
+from features.body import no_person, torso_share
 from features.errors import InputError
 from features.poses import PoseSequence
 from features.qmp.add import ADD, load_add
@@ -154,7 +154,7 @@ class DADClassifier(ClassifierMixin, BaseEstimator):
 
     def _check_judgeable(self, seq: PoseSequence, where: str) -> None:
         if torso_share(seq) == 0.0:
-            raise InputError("shows no person (no frame with a torso): nothing to classify", where)
+            raise InputError(f"{no_person(seq)}: nothing to classify", where)
         if seq.positions.shape[0] < 2:
             raise InputError("has one frame, no movement: nothing to classify", where)
 
