@@ -197,7 +197,12 @@ def _units_line(skel: Skeleton, tokens: list[str], line_no: int) -> None:
         return
     head = tokens[0].lower()
     if head == "length":
-        skel.length_scale = float(_floats(tokens[1:2], skel.path, line_no)[0])
+        scale = float(_floats(tokens[1:2], skel.path, line_no)[0])
+        if scale <= 0:  # metres = value x 0.0254 / scale
+            raise DataError(
+                f"line {line_no}: units length must be positive, got {scale:g}", skel.path
+            )
+        skel.length_scale = scale
     elif head == "angle":
         skel.angle_deg = tokens[1].lower().startswith("deg")
 
