@@ -319,7 +319,7 @@ def save_pose(
     path = Path(path)
     if path.is_dir():
         raise PoseFileError("is a folder: give a file name for the pose file", path)
-    if path.suffix != ".npz":
+    if path.suffix.lower() != ".npz":  # x.NPZ keeps its name, as casebase export's
         path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
     arrays: dict[str, Any] = {
         "positions": seq.positions.astype(dtype),

@@ -8,8 +8,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import cv2
+import numpy as np
 import pytest
 
+import features.pose_estimation  # noqa: F401  (silences FFmpeg before any video is opened)
+from features.poses import load_pose
+from posecbr.cli import main
 from tests.badinput import refused
 from tests.test_readers_asfamc import ASF, _write
 
@@ -30,3 +35,27 @@ def test_an_asf_length_unit_that_is_not_positive_is_refused(
         ["convert", str(amc), "--asf", str(skel), "--out", str(out)],
         tmp_path, capsys, str(skel), "length", "positive",
     )  # fmt: skip
+
+
+def _one_frame_video(path: Path) -> Path:
+    """An MJPG AVI of one grey 16 x 16 frame (nobody in view)."""
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), 10.0, (16, 16))
+    writer.write(np.full((16, 16, 3), 90, np.uint8))
+    writer.release()
+    return path
+
+
+def test_extract_out_a_pose_file_name_in_capitals_is_written_by_that_name(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``extract clip.avi --out clip.NPZ`` printed "done: clip.NPZ" but wrote
+    ``clip.NPZ.npz``: the file named was never made, so every run extracted again ("done",
+    never "up to date")."""
+    video = _one_frame_video(tmp_path / "clip.avi")
+    out = tmp_path / "clip.NPZ"
+    assert main(["extract", str(video), "--out", str(out)]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["clip.NPZ", "clip.avi"]
+    assert load_pose(out).n_frames == 1
+    capsys.readouterr()
+    assert main(["extract", str(video), "--out", str(out)]) == 0
+    assert "up to date" in capsys.readouterr().out
