@@ -15,7 +15,7 @@ import pytest
 import features.pose_estimation  # noqa: F401  (silences FFmpeg before any video is opened)
 from features.poses import load_pose
 from posecbr.cli import main
-from tests.badinput import refused
+from tests.badinput import good_pose_file, refused
 from tests.test_readers_asfamc import ASF, _write
 
 
@@ -59,3 +59,53 @@ def test_extract_out_a_pose_file_name_in_capitals_is_written_by_that_name(
     capsys.readouterr()
     assert main(["extract", str(video), "--out", str(out)]) == 0
     assert "up to date" in capsys.readouterr().out
+
+
+def _demo_data(folder: Path) -> Path:
+    """Data the demo accepts: one clip of a person standing per demo subject."""
+    rows = ["path,label,subject"]
+    for subject in ("s01", "s02", "s03"):
+        good_pose_file(folder / f"m01_{subject}_e01.npz", label="deep_squat")
+        rows.append(f"m01_{subject}_e01.npz,deep_squat,{subject}")
+    (folder / "labels.csv").write_text("\n".join(rows) + "\n")
+    return folder
+
+
+@pytest.mark.parametrize("theirs", ["casebase.sqlite", "compare", "report.html"])
+def test_demo_never_replaces_a_users_own_files_in_its_output_folder(
+    theirs: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``demo --out .`` in a folder holding the user's own ``casebase.sqlite`` (or the
+    ``compare`` folder of their own comparison, or a ``report.html``) deleted or replaced it
+    with the demo's, without a word."""
+    data = _demo_data(tmp_path / "data")
+    out = tmp_path / "work"
+    mine = out / theirs
+    if theirs == "compare":
+        mine.mkdir(parents=True)
+        (mine / "results.json").write_text('{"mine": 1}')
+    else:
+        out.mkdir()
+        mine.write_bytes(b"the user's own")
+    refused(["demo", "--data", str(data), "--quick", "--out", str(out)], tmp_path, capsys,
+            f"{out}: holds {theirs}, not written by the demo")  # fmt: skip
+
+
+def test_demo_replaces_its_own_earlier_outputs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The demo's own folder is still the demo's to rerun into: what an earlier demo wrote
+    there is cleared (the steps themselves are skipped here; test_wheel runs them)."""
+    from posecbr.commands import demo
+
+    monkeypatch.setattr(demo, "_run_step", lambda step: 0)
+    monkeypatch.setattr(demo, "_write_report", lambda *a: None)
+    data = _demo_data(tmp_path / "data")
+    out = tmp_path / "demo-output"
+    argv = ["demo", "--data", str(data), "--quick", "--out", str(out)]
+    assert main(argv) == 0
+    (out / "casebase.sqlite").write_bytes(b"an earlier demo's")
+    (out / "compare" / "results.json").write_text("{}")
+    assert main(argv) == 0
+    assert not (out / "casebase.sqlite").exists()
+    assert list((out / "compare").iterdir()) == []

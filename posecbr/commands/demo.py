@@ -107,17 +107,32 @@ def _run_step(step: Step) -> int:
 
 DEMO_SUBJECTS = ("s01", "s02", "s03")
 DEMO_CLIP = "m01_s01_e01.npz"
+# What the demo writes in --out (a rerun replaces them), and the file that marks the folder
+# as the demo's: only there are they the demo's own to replace.
+DEMO_OUTPUTS = ("casebase.sqlite", "casebase.sqlite-wal", "casebase.sqlite-shm", "compare",
+                "timeline_deep_squat.png", "report.html")  # fmt: skip
+DEMO_MARK = ".posecbr-demo"
 
 
 def _check_out(out: Path, data: Path) -> None:
-    """The output folder: created if needed, never a file, never the demo data (the demo
-    clears its own earlier outputs there)."""
+    """The output folder: created if needed, never a file, never the demo data, never a
+    folder holding a file the demo writes that an earlier demo did not (the demo clears its
+    own earlier outputs there); marked as the demo's."""
     if out.exists() and not out.is_dir():
         raise DataError("exists and is not a folder", out)
     if out.resolve() == data.resolve() or data.resolve() in out.resolve().parents:
         raise DataError("is the demo data folder or inside it: choose another --out", out)
+    if out.is_dir() and not (out / DEMO_MARK).is_file():
+        theirs = [name for name in DEMO_OUTPUTS if (out / name).exists()]
+        if theirs:
+            raise DataError(
+                f"holds {theirs[0]}, not written by the demo, which would replace it: choose"
+                " another --out",
+                out,
+            )
     try:
         out.mkdir(parents=True, exist_ok=True)
+        (out / DEMO_MARK).touch()
     except OSError as exc:
         raise DataError(f"cannot create: {exc.strerror or exc}", out) from None
 
