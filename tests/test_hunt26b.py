@@ -6,6 +6,7 @@ fix.
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import cv2
@@ -16,6 +17,7 @@ import features.pose_estimation  # noqa: F401  (silences FFmpeg before any video
 from features.poses import load_pose
 from posecbr.cli import main
 from tests.badinput import good_pose_file, refused
+from tests.test_compare_bad_input import DEMO
 from tests.test_readers_asfamc import ASF, _write
 
 
@@ -109,3 +111,35 @@ def test_demo_replaces_its_own_earlier_outputs(
     assert main(argv) == 0
     assert not (out / "casebase.sqlite").exists()
     assert list((out / "compare").iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("param", "needle"),
+    [
+        ("states=x", "states must be one of"),
+        ("length=1", "length must be a whole number of frames from 2"),
+        ("mirror=maybe", "mirror must be"),
+        ("phases=-1", "phases must be 'auto' or a whole number >= 0"),
+    ],
+)
+def test_compare_refuses_a_bad_case_base_parameter_value_before_the_run(
+    param: str, needle: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Only the names of ``--param`` were checked: ``--param states=x`` loaded the data and
+    cross-validated every fold, each case-base configuration "failed: states: ..." in the
+    table, and the command exited 0, having written its results."""
+    data = tmp_path / "data"
+    data.mkdir()
+    rows = ["path,label,subject"]
+    for movement, label in (("m01", "deep_squat"), ("m07", "shoulder_abduction")):
+        for subject in ("s01", "s02", "s03"):
+            name = f"{movement}_{subject}_e01.npz"
+            shutil.copy(DEMO / name, data / name)
+            rows.append(f"{name},{label},{subject}")
+    (data / "labels.csv").write_text("\n".join(rows) + "\n")
+    out = tmp_path / "res"
+    refused(
+        ["compare", str(data), "--similarities", "euclidean,dtw", "--no-dad", "--peers",
+         "none", "--k", "1", "--param", param, "--out", str(out)],
+        tmp_path, capsys, "--param: ", needle, "(cbr fluents/euclidean)",
+    )  # fmt: skip

@@ -45,6 +45,18 @@ def _cbr_methods(settings: CompareSettings) -> list[Method]:
     ]
 
 
+def check_cbr_params(settings: CompareSettings) -> None:
+    """Refuse, before any work, case-base parameters (``cbr_params``) that a configuration
+    cannot be built with: every fold of it would fail the same way."""
+    from ..estimator import CaseBaseClassifier
+
+    for method in _cbr_methods(settings):
+        try:
+            CaseBaseClassifier(**method.params).wanted_config()
+        except ConfigError as exc:
+            raise ConfigError(f"{exc.message} ({method.name})", "--param") from None
+
+
 def _peer_method(peer: str, settings: CompareSettings) -> Method:
     params: dict[str, Any] = {"length": int(settings.peer_length)}
     if peer == "dtw-knn":

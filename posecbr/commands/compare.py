@@ -266,11 +266,13 @@ def _print_explanations(explained: list[Any]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from cbr.evaluation.compare import run_compare
+    from cbr.evaluation.methods import check_cbr_params
     from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
     from cbr.evaluation.tables import format_table
 
     check_scheduler(args.scheduler)
     settings = _settings(args)
+    check_cbr_params(settings)
     outputs = _outputs(args)
     check_outputs(outputs, [args.data])
     clips = _load(args)
