@@ -143,3 +143,20 @@ def test_compare_refuses_a_bad_case_base_parameter_value_before_the_run(
          "none", "--k", "1", "--param", param, "--out", str(out)],
         tmp_path, capsys, "--param: ", needle, "(cbr fluents/euclidean)",
     )  # fmt: skip
+
+
+@pytest.mark.parametrize(("width", "height"), [(1, 1), (1, 16), (16, 1)])
+def test_extract_overlay_of_frames_one_pixel_wide_is_refused_before_the_model_runs(
+    width: int, height: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The MP4 encoder takes no frame 1 pixel wide or high: the pose file was written, then
+    the overlay failed ("cannot encode an MP4 overlay here") and the command exited 1 with
+    the pose file left behind."""
+    picture = tmp_path / "thin.png"
+    cv2.imwrite(str(picture), np.full((height, width, 3), 90, np.uint8))
+    line = refused(
+        ["extract", str(picture), "--out", str(tmp_path / "thin.npz"),
+         "--overlay", str(tmp_path / "thin.mp4")],
+        tmp_path, capsys, str(tmp_path / "thin.mp4"), f"{width}x{height} frames",
+    )  # fmt: skip
+    assert line.endswith("MP4 frames are at least 2 pixels a side")

@@ -76,11 +76,20 @@ def draw_pose(
 
 MAX_MP4_SIDE = 8191
 """The widest and highest frame the MP4 encoder (``mp4v``, MPEG-4 part 2: 13-bit sizes) takes."""
+MIN_MP4_SIDE = 2
+"""The narrowest and lowest frame it takes (OpenCV's writer does not open for 1 pixel)."""
 
 
 def check_mp4_size(width: int, height: int, out: str | Path, what: str = "overlay") -> None:
     """DataError naming ``out`` when frames of ``width`` x ``height`` cannot be encoded as an
-    MP4 (:data:`MAX_MP4_SIDE`): checked before the work, not found when the first frame is."""
+    MP4 (:data:`MIN_MP4_SIDE` to :data:`MAX_MP4_SIDE`): checked before the work, not found
+    when the first frame is."""
+    if width < MIN_MP4_SIDE or height < MIN_MP4_SIDE:
+        raise DataError(
+            f"cannot encode an MP4 {what} of {width}x{height} frames: MP4 frames are at least"
+            f" {MIN_MP4_SIDE} pixels a side",
+            out,
+        )
     if width > MAX_MP4_SIDE or height > MAX_MP4_SIDE:
         raise DataError(
             f"cannot encode an MP4 {what} of {width}x{height} frames: MP4 frames are at most"
