@@ -160,3 +160,19 @@ def test_extract_overlay_of_frames_one_pixel_wide_is_refused_before_the_model_ru
         tmp_path, capsys, str(tmp_path / "thin.mp4"), f"{width}x{height} frames",
     )  # fmt: skip
     assert line.endswith("MP4 frames are at least 2 pixels a side")
+
+
+def test_extract_of_pose_files_is_one_line_pointing_to_the_other_commands(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``extract`` of a folder whose labels.csv lists pose files (the demo's, a converted
+    dataset) tried each as a video: one "not a video OpenCV can decode" line per clip (181
+    lines for the demo's 180 clips), exit 1; and a pose file given alone said only what it
+    is not."""
+    data = _demo_data(tmp_path / "data")
+    first = data / "m01_s01_e01.npz"
+    refused(["extract", str(data), "--out", str(tmp_path / "poses")], tmp_path, capsys,
+            f"{first}: is a pose file already (listed in {data / 'labels.csv'})",
+            "extract makes pose files from videos and pictures")  # fmt: skip
+    refused(["extract", str(first), "--out", str(tmp_path / "poses")], tmp_path, capsys,
+            f"{first}: is a pose file already: extract makes")  # fmt: skip

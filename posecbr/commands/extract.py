@@ -34,6 +34,8 @@ os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v")
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp")  # one frame each
+# what is a recording already, not a video: refused by name
+RECORDING_SUFFIXES = {".npz": "a pose file", ".bvh": "a BVH recording", ".amc": "an AMC recording"}
 
 
 @dataclass(frozen=True)
@@ -191,6 +193,7 @@ def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
     if not source.is_file() and not source.is_dir():
         raise DataError("is a pipe, socket or device, not a video, folder or labels CSV", source)
     if source.is_file() and source.suffix.lower() != ".csv":
+        _check_not_recording(source)
         name = out if _names_pose_file(out) else out / f"{source.stem}.npz"
         return [Job(video=source, out=name, overlay=overlay)]
     if _names_pose_file(out):
@@ -199,12 +202,7 @@ def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
             " pose file",
             out,
         )
-    if source.is_file():
-        jobs = _csv_jobs(source, out)
-    elif (source / "labels.csv").is_file():
-        jobs = _csv_jobs(source / "labels.csv", out)
-    else:
-        jobs = _folder_jobs(source, out)
+    jobs = _listed_jobs(source, out)
     seen: dict[Path, Job] = {}
     for job in jobs:
         if job.out in seen:
@@ -217,6 +215,31 @@ def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
             Job(**{**vars(j), "overlay": overlay / j.out.relative_to(out).with_suffix(".mp4")})
             for j in jobs
         ]
+    return jobs
+
+
+def _check_not_recording(clip: Path, listed_in: Path | None = None) -> None:
+    """Refuse a pose file or mocap recording where a video is wanted (each would fail as
+    "not a video"): the other commands read it as it is."""
+    what = RECORDING_SUFFIXES.get(clip.suffix.lower())
+    if what is not None:
+        where = f" (listed in {listed_in})" if listed_in is not None else ""
+        raise DataError(
+            f"is {what} already{where}: extract makes pose files from videos and pictures;"
+            " the other commands read it as it is",
+            clip,
+        )
+
+
+def _listed_jobs(source: Path, out: Path) -> list[Job]:
+    """The clips of a labels CSV (``source``, or its labels.csv) or of a folder of videos;
+    a recording listed is refused."""
+    csv_path = source if source.is_file() else source / "labels.csv"
+    if not csv_path.is_file():
+        return _folder_jobs(source, out)
+    jobs = _csv_jobs(csv_path, out)
+    for job in jobs:
+        _check_not_recording(job.video, csv_path)
     return jobs
 
 
