@@ -25,9 +25,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from sklearn.exceptions import NotFittedError
 
 from features.body import TORSO_JOINTS, torso_seen, torso_share
-from features.errors import DataError
+from features.errors import DataError, InputError, PoseFileError
 from features.poses import PoseSequence
 from features.repetitions import ANALYSIS_FPS, Repetition, count_repetitions, movement_signals
 from features.skeleton import BLAZEPOSE_33
@@ -256,8 +257,17 @@ class LiveSegmenter:
     def __init__(
         self, clf: Any, fps: float, judge: Judge | None = None, source: str = "stream"
     ) -> None:
-        if not (math.isfinite(fps) and fps > 0):
-            raise DataError(f"the stream needs a frame rate > 0, got {fps!r}", source)
+        if getattr(clf, "case_base_", None) is None:
+            raise NotFittedError(
+                f"This {type(clf).__name__} instance is not fitted yet: fit it (or load a "
+                "stored one) before streaming to it"
+            )
+        if (
+            isinstance(fps, bool | np.bool_)
+            or not isinstance(fps, int | float | np.integer | np.floating)
+            or not (math.isfinite(fps) and fps > 0)
+        ):
+            raise InputError(f"the stream needs a frame rate > 0, got {fps!r}", source)
         self.clf, self.source = clf, source
         self.fps = float(fps)
         self.judge = judge if judge is not None else judge_of(clf, JUDGES[0])
@@ -355,14 +365,38 @@ class LiveSegmenter:
         """Add one frame ``(33, 3)`` (NaN where the person is not seen) and, from a pose
         model, its joints' confidence ``(33,)`` (visibility: the repetitions leave out a joint
         below 0.5 as ``segment`` does, :func:`features.repetitions.counted_angles`). Returns
-        the segments that this frame settled as finished (usually none)."""
-        self.frames.append(np.asarray(world, dtype=np.float64))
-        self.seen_by.append(None if confidence is None else np.asarray(confidence, np.float64))
-        self._look(self.frames[-1])
+        the segments that this frame settled as finished (usually none). A copy is kept; a
+        frame that is not one (another skeleton's joints, an infinite coordinate) is refused
+        with :class:`features.errors.InputError`, nothing kept."""
+        frame, seen = self._checked(world, confidence)
+        self.frames.append(frame)
+        self.seen_by.append(seen)
+        self._look(frame)
         self.n += 1
         if self.n < self.window or (self.n - self.window) % self.hop:
             return []
         return self._decide(self.n)
+
+    def _checked(self, world: Any, confidence: Any) -> tuple[np.ndarray, np.ndarray | None]:
+        """Frame :attr:`n` as it is kept: ``world`` ``(33, 3)`` and ``confidence`` ``(33,)``
+        (or None) as read-only copies (a caller may refill its buffer for the next frame),
+        checked as a pose file's are. InputError naming the stream and the frame for one that
+        is not, before anything is kept: a window would read it seconds later, and every
+        window after it."""
+        joints = len(BLAZEPOSE_33)
+        for value, shape, what in ((world, (joints, 3), "positions"),
+                                   (confidence, (joints,), "confidence")):  # fmt: skip
+            if value is not None and np.shape(value) != shape:
+                raise InputError(
+                    f"frame {self.n}: {what} must have shape {shape}, got {np.shape(value)}",
+                    self.source,
+                )
+        conf = None if confidence is None else np.asarray(confidence)[None]
+        try:
+            one = PoseSequence(np.asarray(world)[None], BLAZEPOSE_33, self.fps, confidence=conf)
+        except PoseFileError as exc:
+            raise InputError(f"frame {self.n}: {exc.message}", self.source) from None
+        return one.positions[0], None if one.confidence is None else one.confidence[0]
 
     def _look(self, frame: np.ndarray) -> None:
         """Follow the runs of frames without the torso with frame :attr:`n`, ``frame``."""

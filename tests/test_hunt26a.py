@@ -1,0 +1,113 @@
+"""The Python API as an engineer drives it (hunt 26a): ``LiveSegmenter``, ``segment``,
+``DADClassifier`` and ``CaseBaseClassifier`` given odd but plausible arguments (a reused
+frame buffer, a frame of another skeleton, parameters of the wrong type). A mistake is one
+clear error naming the problem, with nothing kept or changed. Each test says what happened
+before its fix.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sklearn.exceptions import NotFittedError
+
+from cbr.estimator import CaseBaseClassifier
+from cbr.live import LiveSegmenter
+from cbr.unknown import judge_of
+from features.errors import InputError
+from features.poses import PoseSequence
+from tests.test_cbr_clips import arm_dataset
+
+
+@pytest.fixture(scope="module")
+def fitted() -> tuple[CaseBaseClassifier, list[PoseSequence]]:
+    X, y = arm_dataset(3, seed=3)
+    return CaseBaseClassifier(k=3).fit(X, y), X
+
+
+def _live(clf: CaseBaseClassifier) -> LiveSegmenter:
+    # the arm clips have no activity with cases apart to calibrate the default judge on
+    return LiveSegmenter(clf, 30.0, judge=judge_of(clf, "held-out"))
+
+
+def test_live_keeps_each_frame_as_pushed_when_the_caller_reuses_its_buffer(
+    fitted: tuple[CaseBaseClassifier, list[PoseSequence]],
+) -> None:
+    """A camera loop that fills one buffer and pushes it every frame: the frames kept are the
+    three pushed. Before, the segmenter kept the caller's array itself, so every kept frame
+    became the last one written (a stream of one posture)."""
+    clf, X = fitted
+    live = _live(clf)
+    buf = np.empty((33, 3))
+    conf = np.empty(33)
+    for i in range(3):
+        buf[:] = X[0].positions[i]
+        conf[:] = 0.5 + 0.1 * i
+        live.push(buf, conf)
+    buf[:] = np.nan
+    recent = live.recent(3)
+    np.testing.assert_array_equal(recent.positions, X[0].positions[:3])
+    assert recent.confidence is not None
+    np.testing.assert_allclose(recent.confidence[:, 0], [0.5, 0.6, 0.7])
+
+
+@pytest.mark.parametrize(
+    ("frame", "confidence", "message"),
+    [
+        ("kinect", None, r"frame 2: positions must have shape \(33, 3\), got \(25, 3\)"),
+        ("2d", None, r"frame 2: positions must have shape \(33, 3\), got \(33, 2\)"),
+        ("inf", None, "frame 2: positions contain infinite values"),
+        ("text", None, "frame 2: positions must be real numbers, got text"),
+        ("ok", np.ones(5), r"frame 2: confidence must have shape \(33,\), got \(5,\)"),
+        ("ok", np.full(33, 2.0), r"frame 2: confidence must lie in \[0, 1\], found 2"),
+    ],
+)
+def test_live_refuses_a_bad_frame_when_pushed_and_keeps_going(
+    fitted: tuple[CaseBaseClassifier, list[PoseSequence]],
+    frame: str,
+    confidence: np.ndarray | None,
+    message: str,
+) -> None:
+    """A frame that is not 33 BlazePose joints' positions (another skeleton's 25 joints, 2-D
+    points, an infinite coordinate, text) or whose confidence is not 33 values in [0, 1] is
+    refused as it is pushed, naming the stream and the frame; the frames before stay, and the
+    stream goes on. Before, it was kept: two seconds later, when a window first read it, a
+    PoseFileError ("25 joints in positions but 33 joint names") came out of a later push, and
+    out of every push after it (the frame stayed in the window)."""
+    clf, X = fitted
+    good = X[0].positions
+    bad = {
+        "kinect": good[0][:25],
+        "2d": good[0][:, :2],
+        "inf": np.where(np.arange(33)[:, None] == 5, np.inf, good[0]),
+        "text": good[0].astype(str),
+        "ok": good[0],
+    }[frame]
+    live = _live(clf)
+    live.push(good[0])
+    live.push(good[1])
+    with pytest.raises(InputError, match=message) as err:
+        live.push(bad, confidence)
+    assert err.value.source == "stream"
+    assert live.n == 2
+    for i in range(2, 100):  # past the first window (2 s at 30 fps)
+        live.push(good[i % len(good)])
+    np.testing.assert_array_equal(live.recent(100).positions[:2], good[:2])
+
+
+@pytest.mark.parametrize("fps", ["30", None, True])
+def test_live_refuses_a_frame_rate_that_is_not_a_number(
+    fitted: tuple[CaseBaseClassifier, list[PoseSequence]], fps: object
+) -> None:
+    """Before: "30" and None raised a bare TypeError from ``math.isfinite``, and True was a
+    stream of 1 frame per second."""
+    clf, _ = fitted
+    with pytest.raises(InputError, match="the stream needs a frame rate > 0"):
+        LiveSegmenter(clf, fps, judge=judge_of(clf, "held-out"))  # type: ignore[arg-type]
+
+
+def test_live_refuses_an_unfitted_classifier() -> None:
+    """As ``predict`` and ``segment`` do. Before: AttributeError ('CaseBaseClassifier'
+    object has no attribute 'case_base_')."""
+    with pytest.raises(NotFittedError):
+        LiveSegmenter(CaseBaseClassifier(), 30.0)
