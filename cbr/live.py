@@ -44,6 +44,7 @@ from .segmentation import (
     SWITCH_ODDS,
     activity_distances,
     at_cut,
+    check_judge,
     keep_whole,
     log_votes,
     period_outliers,
@@ -268,6 +269,7 @@ class LiveSegmenter:
             or not (math.isfinite(fps) and fps > 0)
         ):
             raise InputError(f"the stream needs a frame rate > 0, got {fps!r}", source)
+        check_judge(judge)
         self.clf, self.source = clf, source
         self.fps = float(fps)
         self.judge = judge if judge is not None else judge_of(clf, JUDGES[0])

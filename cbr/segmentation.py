@@ -830,6 +830,17 @@ def _check_call(clf: Any, recording: Any, chunk_frames: Any) -> None:
         )
 
 
+def check_judge(judge: Any) -> None:
+    """Refuse a judge given by its name (:func:`cbr.unknown.judge_of` makes the judge of a
+    name): it would be found not to be one only when the first window is judged."""
+    if isinstance(judge, str):
+        raise InputError(
+            f"judge must be None or a judge of cbr.unknown (judge_of(clf, {judge!r})), not its"
+            " name",
+            "judge",
+        )
+
+
 def check_segmentable(recording: PoseSequence) -> None:
     """Refuse, with the DataError :func:`segment` would raise, a recording it cannot segment
     (no person in enough frames to follow a movement, shorter than the shortest window),
@@ -861,10 +872,10 @@ def solve_recording(
     than one window or without a person, ConfigError for a ``k`` the classifier does not
     retrieve (more than its own k)."""
     _check_call(clf, recording, chunk_frames)
-    if not 1 <= k <= int(clf.k):
+    if isinstance(k, bool) or not isinstance(k, int | np.integer) or not 1 <= k <= int(clf.k):
         raise ConfigError(
             f"must be from 1 to the case base's k ({int(clf.k)}, the nearest cases a window"
-            f" retrieves), got {k}",
+            f" retrieves), a whole number, got {k!r}",
             "-k",
         )
     rec = recording.to_canonical()
@@ -948,9 +959,11 @@ def segment(
     at once; None: in pieces of :data:`cbr.long_clip.CHUNK_FRAMES` for a longer recording.
     Raises DataError for a recording shorter than one window or without a person, and for a
     case base the judge cannot be calibrated on; InputError for a ``recording`` that is not a
-    PoseSequence, ConfigError for a negative ``chunk_frames``, NotFittedError for an unfitted
-    ``clf``."""
+    PoseSequence or a ``judge`` given by its name (:func:`cbr.unknown.judge_of` makes
+    the judge), ConfigError for a negative ``chunk_frames`` or a ``k`` that is not a whole
+    number, NotFittedError for an unfitted ``clf``."""
     _check_call(clf, recording, chunk_frames)
+    check_judge(judge)
     judge = judge or judge_of(clf, JUDGES[0])
     return finish(clf, solve_recording(clf, recording, k, chunk_frames), judge)
 
@@ -962,6 +975,7 @@ __all__ = [
     "Judge",
     "Margin",
     "activity_distances",
+    "check_judge",
     "check_segmentable",
     "Segment",
     "Segmentation",

@@ -13,8 +13,9 @@ from sklearn.exceptions import NotFittedError
 
 from cbr.estimator import CaseBaseClassifier
 from cbr.live import LiveSegmenter
+from cbr.segmentation import segment
 from cbr.unknown import judge_of
-from features.errors import InputError
+from features.errors import ConfigError, InputError
 from features.poses import PoseSequence
 from tests.test_cbr_clips import arm_dataset
 
@@ -111,3 +112,31 @@ def test_live_refuses_an_unfitted_classifier() -> None:
     object has no attribute 'case_base_')."""
     with pytest.raises(NotFittedError):
         LiveSegmenter(CaseBaseClassifier(), 30.0)
+
+
+def _recording(X: list[PoseSequence]) -> PoseSequence:
+    return PoseSequence(np.concatenate([x.positions for x in X]), X[0].joint_names, 30.0)
+
+
+@pytest.mark.parametrize("k", [1.5, "2", None, True])
+def test_segment_refuses_a_k_that_is_not_a_whole_number(
+    fitted: tuple[CaseBaseClassifier, list[PoseSequence]], k: object
+) -> None:
+    """Before: 1.5 and "2" raised a bare TypeError (a slice index, a comparison of int and
+    str), None too, and True was taken for 1."""
+    clf, X = fitted
+    with pytest.raises(ConfigError, match=f"must be from 1 to .*a whole number, got {k!r}"):
+        segment(clf, _recording(X), judge=judge_of(clf, "held-out"), k=k)  # type: ignore[arg-type]
+
+
+def test_segment_and_live_refuse_a_judge_given_by_name(
+    fitted: tuple[CaseBaseClassifier, list[PoseSequence]],
+) -> None:
+    """A judge's name where the judge is wanted is refused, pointing at ``judge_of``. Before:
+    segment raised AttributeError ('str' object has no attribute 'unlike') after solving
+    every window, and LiveSegmenter took it, to fail the same way at its first window."""
+    clf, X = fitted
+    with pytest.raises(InputError, match=r"judge must be .*judge_of\(clf, 'held-out'\)"):
+        segment(clf, _recording(X), judge="held-out")  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"judge must be .*judge_of\(clf, 'held-out'\)"):
+        LiveSegmenter(clf, 30.0, judge="held-out")  # type: ignore[arg-type]
