@@ -33,7 +33,7 @@ fitted classifier is stored with its case base and loaded back whole by :mod:`cb
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Container, Sequence
+from collections.abc import Container, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -323,9 +323,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             raise ConfigError(
                 f"weights must be 'distance' or 'uniform', got {self.weights!r}", "weights"
             )
-        trim = self.trim
-        if trim is not None and not (isinstance(trim, int | float) and 0.0 < float(trim) <= 1.0):
-            raise ConfigError(f"trim must be in (0, 1], got {trim!r}", "trim")
+        self._check_kinds()
         if self.editor is not None and self.editor not in EDITORS:
             raise ConfigError(
                 f"editor must be None or one of {', '.join(EDITORS)}, got {self.editor!r}",
@@ -355,6 +353,28 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
                 "feature_weights",
             )
         self._feature_config()  # length, states, phases: FeatureConfig's own checks
+
+    def _check_kinds(self) -> None:
+        """Refuse ``trim``, ``angles``, ``positions`` and ``similarity_params`` of the wrong
+        kind (``bool("no")`` is true; True is no fraction; ``**"band=0.1"`` a TypeError)."""
+        trim = self.trim
+        if trim is not None and (
+            isinstance(trim, bool)
+            or not isinstance(trim, int | float | np.integer | np.floating)
+            or not 0.0 < float(trim) <= 1.0
+        ):
+            raise ConfigError(f"trim must be in (0, 1], got {trim!r}", "trim")
+        for name in ("angles", "positions"):
+            if not isinstance(getattr(self, name), bool | np.bool_):
+                raise ConfigError(
+                    f"{name} must be True or False, got {getattr(self, name)!r}", name
+                )
+        if self.similarity_params is not None and not isinstance(self.similarity_params, Mapping):
+            raise ConfigError(
+                "similarity_params must be None or a dict of the measure's parameters, got "
+                f"{self.similarity_params!r}",
+                "similarity_params",
+            )
 
     def _measure(self) -> SimilarityMeasure:
         return get_measure(self.similarity, **(self.similarity_params or {}))

@@ -140,3 +140,32 @@ def test_segment_and_live_refuse_a_judge_given_by_name(
         segment(clf, _recording(X), judge="held-out")  # type: ignore[arg-type]
     with pytest.raises(InputError, match=r"judge must be .*judge_of\(clf, 'held-out'\)"):
         LiveSegmenter(clf, 30.0, judge="held-out")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("params", "message"),
+    [
+        ({"angles": "no"}, "angles must be True or False, got 'no'"),
+        ({"positions": None}, "positions must be True or False, got None"),
+        ({"positions": "false"}, "positions must be True or False, got 'false'"),
+        ({"trim": True}, r"trim must be in \(0, 1\], got True"),
+        ({"similarity_params": "band=0.1"}, "similarity_params must be None or a dict"),
+        ({"similarity_params": [("band", 0.1)]}, "similarity_params must be None or a dict"),
+    ],
+)
+def test_classifier_refuses_parameters_of_the_wrong_kind(params: dict, message: str) -> None:
+    """Before: ``angles="no"`` and ``positions="false"`` were true (``bool("no")``), None
+    false, ``trim=True`` kept every case (1.0), and a ``similarity_params`` that is not a
+    mapping raised a bare TypeError from ``get_measure(**params)``. Now one ConfigError naming
+    the parameter, before any clip is read."""
+    with pytest.raises(ConfigError, match=message) as err:
+        CaseBaseClassifier(**params).describe_plan()
+    assert err.value.source == next(iter(params))
+
+
+@pytest.mark.parametrize("trim", [np.float32(0.5), np.float16(0.75), np.int64(1)])
+def test_classifier_takes_a_numpy_number_for_trim(trim: object) -> None:
+    """A trim from a numpy array (a grid of ``np.float32`` values) in (0, 1] is taken, as a
+    numpy integer k is. Before: "trim must be in (0, 1], got np.float32(0.5)"."""
+    clf = CaseBaseClassifier(trim=trim, angles=np.True_, positions=np.False_)  # type: ignore[arg-type]
+    assert clf.describe_plan()[0].angles and not clf.describe_plan()[0].positions
