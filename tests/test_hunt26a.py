@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from sklearn.exceptions import NotFittedError
 
+from cbr.dad import DADClassifier
 from cbr.estimator import CaseBaseClassifier
 from cbr.live import LiveSegmenter
 from cbr.segmentation import segment
@@ -169,3 +170,22 @@ def test_classifier_takes_a_numpy_number_for_trim(trim: object) -> None:
     numpy integer k is. Before: "trim must be in (0, 1], got np.float32(0.5)"."""
     clf = CaseBaseClassifier(trim=trim, angles=np.True_, positions=np.False_)  # type: ignore[arg-type]
     assert clf.describe_plan()[0].angles and not clf.describe_plan()[0].positions
+
+
+@pytest.mark.parametrize(
+    ("params", "message"),
+    [
+        ({"window_s": "4"}, "window_s must be a number > 0, got '4'"),
+        ({"window_s": None}, "window_s must be a number > 0, got None"),
+        ({"window_s": True}, "window_s must be a number > 0, got True"),
+        ({"step_s": True}, "step_s must be a number > 0, got True"),
+    ],
+)
+def test_dad_refuses_windows_that_are_not_numbers(
+    fitted: tuple[CaseBaseClassifier, list[PoseSequence]], params: dict, message: str
+) -> None:
+    """Before: a window_s of text or None raised a bare TypeError (``min(1.0, "4")``), and
+    True was taken for windows of one second (``window_s``) or steps of one second."""
+    _, X = fitted
+    with pytest.raises(ConfigError, match=message):
+        DADClassifier(**params).fit(X[:2], ["a", "b"])

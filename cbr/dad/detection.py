@@ -19,6 +19,7 @@ import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -37,8 +38,20 @@ DEFAULT_STEP_S = 1.0
 
 def default_step(window_s: float) -> float:
     """The step of windows ``window_s`` long when none is given: :data:`DEFAULT_STEP_S`, or
-    the window's length when that is shorter (no part of a clip between two windows)."""
-    return min(DEFAULT_STEP_S, window_s)
+    the window's length when that is shorter (no part of a clip between two windows; a
+    ``window_s`` that is no length: :data:`DEFAULT_STEP_S`, for :class:`DADConfig` to refuse
+    the length)."""
+    return min(DEFAULT_STEP_S, window_s) if _positive(window_s) else DEFAULT_STEP_S
+
+
+def _positive(value: Any) -> bool:
+    """Whether ``value`` is a finite number > 0 (a bool is no length of time)."""
+    return (
+        isinstance(value, numbers.Real)
+        and not isinstance(value, bool | np.bool_)
+        and math.isfinite(float(value))
+        and float(value) > 0
+    )
 
 
 @dataclass(frozen=True)
@@ -54,7 +67,7 @@ class DADConfig:
     def __post_init__(self) -> None:
         for name in ("window_s", "step_s", "min_duration_s"):
             v = getattr(self, name)
-            if not (isinstance(v, numbers.Real) and math.isfinite(float(v)) and float(v) > 0):
+            if not _positive(v):
                 raise ConfigError(f"{name} must be a number > 0, got {v!r}", "DAD")
         if self.step_s > self.window_s:
             raise ConfigError(
