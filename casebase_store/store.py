@@ -47,7 +47,7 @@ from sqlalchemy.engine import URL, Connection, make_url
 from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
-from features.errors import PosecbrError
+from features.errors import ConfigError, PosecbrError
 from features.fileio import remove_stale_temporaries, temporary_prefix
 from features.version import __version__
 
@@ -135,6 +135,8 @@ def _utc(value: datetime) -> datetime:
 def _check_text(value: str, what: str, where: str, max_len: int | None = None) -> str:
     # PostgreSQL refuses NUL in text and enforces VARCHAR lengths, SQLite stores both; refuse
     # them on every backend so a store behaves the same wherever it lives
+    if not isinstance(value, str):
+        raise StoreError(f"the {what} must be text, got {value!r}", where)
     if "\x00" in value:
         raise StoreError(f"{what} {value!r} contains a NUL character", where)
     if max_len is not None and len(value) > max_len:
@@ -985,6 +987,19 @@ EMPTY_DB = "is empty: name a case base file (SQLite) or a SQLAlchemy URL"
 """The error of an empty ``--db``."""
 
 
+def _check_timeout(timeout_s: Any) -> None:
+    """Refuse a ``timeout_s`` that is not a finite number of seconds >= 0 (SQLite turns
+    its busy timeout off for a negative one; a bool is no time)."""
+    if (
+        isinstance(timeout_s, bool | np.bool_)
+        or not isinstance(timeout_s, int | float | np.integer | np.floating)
+        or not 0.0 <= float(timeout_s) < float("inf")
+    ):
+        raise ConfigError(
+            f"timeout_s must be a number of seconds >= 0, got {timeout_s!r}", "timeout_s"
+        )
+
+
 def open_store(
     url_or_path: str | Path,
     *,
@@ -1002,6 +1017,7 @@ def open_store(
     """
     if not str(url_or_path).strip():
         raise StoreError(EMPTY_DB, "--db")
+    _check_timeout(timeout_s)
     file = sqlite_file(url_or_path)
     if file is not None and (readonly or not create) and not file.exists():
         raise StoreError("no such case base file", file)

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 from sklearn.base import clone
+from sklearn.utils.validation import check_is_fitted
 
 from casebase_store import CaseBaseInfo, StoreError, StoreTransaction, open_store, write_store
 from features.cluster import connect, gather, map_outcomes
@@ -201,6 +202,14 @@ def _counts(labels: Sequence[str]) -> dict[str, int]:
     return {str(v): int(c) for v, c in zip(values, counts, strict=True)}
 
 
+def _check_name(name: Any) -> None:
+    """Refuse a case base name that is not text, or empty, before any clip is read."""
+    if not isinstance(name, str):
+        raise ConfigError(f"the case base name must be text, got {name!r}", "--name")
+    if not name.strip():
+        raise ConfigError("the case base name is empty", "--name")
+
+
 def train(
     db: str | Path,
     name: str,
@@ -216,8 +225,7 @@ def train(
     (a SQLite file or SQLAlchemy URL), recording what each clip is (``cases``: ``"clips"``,
     ``"repetitions"`` or ``"windows"``, as ``train --split`` cut them). Clips that show no
     person are skipped and named."""
-    if not name.strip():
-        raise ConfigError("the case base name is empty", "--name")
+    _check_name(name)
     text = [str(v) for v in check_labels(labels, len(clips))]
     plan = fit_plan(estimator)
     described = [
@@ -240,8 +248,7 @@ def train_described(
     replace: bool = False,
 ) -> TrainResult:
     """:func:`train` on clips already reduced by :func:`fit_plan` (:func:`describe_entries`)."""
-    if not name.strip():
-        raise ConfigError("the case base name is empty", "--name")
+    _check_name(name)
     text = [str(v) for v in check_labels(labels, len(clips))]
     keep, skipped, too_short = usable(clips)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
@@ -276,6 +283,7 @@ def store_fitted(
 ) -> TrainResult:
     """Store the fitted classifier as case base ``name`` in ``db`` in one transaction
     (``labels``: its training clips' solutions, for the summary)."""
+    check_is_fitted(fitted, "case_base_")
     cb = to_store(fitted)
     calibrate_stored_judges(fitted)
 

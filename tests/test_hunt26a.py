@@ -7,16 +7,20 @@ before its fix.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from sklearn.exceptions import NotFittedError
 
+from casebase_store import open_store
 from cbr.dad import DADClassifier
 from cbr.estimator import CaseBaseClassifier
 from cbr.live import LiveSegmenter
 from cbr.segmentation import segment
+from cbr.training import store_fitted, train
 from cbr.unknown import judge_of
-from features.errors import ConfigError, InputError
+from features.errors import ConfigError, InputError, PosecbrError
 from features.poses import PoseSequence
 from tests.test_cbr_clips import arm_dataset
 
@@ -189,3 +193,41 @@ def test_dad_refuses_windows_that_are_not_numbers(
     _, X = fitted
     with pytest.raises(ConfigError, match=message):
         DADClassifier(**params).fit(X[:2], ["a", "b"])
+
+
+def test_store_fitted_refuses_an_unfitted_classifier_before_the_store_is_made(
+    fitted: tuple[CaseBaseClassifier, list[PoseSequence]], tmp_path: Path
+) -> None:
+    """Before: AttributeError ('CaseBaseClassifier' object has no attribute 'maintenance_')."""
+    db = tmp_path / "cases.sqlite"
+    with pytest.raises(NotFittedError):
+        store_fitted(db, "arms", CaseBaseClassifier(), ["a", "b"])
+    assert not db.exists()
+
+
+@pytest.mark.parametrize("name", [None, 3, b"arms"])
+def test_a_case_base_name_that_is_not_text_is_refused_and_nothing_stored(
+    fitted: tuple[CaseBaseClassifier, list[PoseSequence]], tmp_path: Path, name: object
+) -> None:
+    """Before: store_fitted raised a bare TypeError ("argument of type 'NoneType' is not
+    iterable", "a bytes-like object is required") and train an AttributeError ('NoneType'
+    object has no attribute 'strip') after describing every clip."""
+    clf, X = fitted
+    db = tmp_path / "cases.sqlite"
+    store_fitted(db, "kept", clf, ["a"] * len(X))
+    with pytest.raises(PosecbrError, match=f"the case base name must be text, got {name!r}"):
+        store_fitted(db, name, clf, ["a"] * len(X))  # type: ignore[arg-type]
+    with pytest.raises(PosecbrError, match=f"the case base name must be text, got {name!r}"):
+        train(db, name, X, ["a", "b"] * (len(X) // 2), CaseBaseClassifier())  # type: ignore[arg-type]
+    with open_store(db, readonly=True) as store:
+        assert [c.name for c in store.list_case_bases()] == ["kept"]
+
+
+@pytest.mark.parametrize("timeout", ["5", float("nan"), -1.0, True, None])
+def test_open_store_refuses_a_timeout_that_is_not_seconds(tmp_path: Path, timeout: object) -> None:
+    """Before: "5" and None raised TypeError, NaN ValueError ("cannot convert float NaN to
+    integer") and -1 and True were taken (SQLite's busy timeout turned off; one second)."""
+    db = tmp_path / "cases.sqlite"
+    with pytest.raises(ConfigError, match="timeout_s must be a number of seconds >= 0, got"):
+        open_store(db, timeout_s=timeout)  # type: ignore[arg-type]
+    assert not db.exists()
