@@ -159,6 +159,7 @@ class PoseSequence:
     metadata: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "source", _source_text(self.source))
         where = self.source or None
         pos = _real_array(self.positions, "positions", where)
         object.__setattr__(self, "positions", pos)
@@ -270,6 +271,17 @@ class PoseSequence:
         meta = dict(self.metadata)
         meta.update(updates)
         return replace(self, metadata=meta)
+
+
+def _source_text(source: Any) -> str:
+    """``source`` as text: a path (the video a sequence was made from) as its text, as a
+    loaded sequence's source is; PoseFileError for anything else, which no reader of the
+    source (errors, ``save_pose``'s JSON, the store) could use."""
+    if isinstance(source, os.PathLike):
+        return os.fspath(source)  # type: ignore[no-any-return]
+    if not isinstance(source, str):
+        raise PoseFileError(f"source must be text or a path, got {source!r}")
+    return source
 
 
 def _joint_names(names: Any, where: str | None) -> tuple[str, ...]:

@@ -7,6 +7,7 @@ before its fix.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -20,8 +21,9 @@ from cbr.live import LiveSegmenter
 from cbr.segmentation import segment
 from cbr.training import store_fitted, train
 from cbr.unknown import judge_of
-from features.errors import ConfigError, InputError, PosecbrError
-from features.poses import PoseSequence
+from features.errors import ConfigError, InputError, PosecbrError, PoseFileError
+from features.poses import PoseSequence, load_pose, save_pose
+from features.skeleton import BLAZEPOSE_33
 from tests.test_cbr_clips import arm_dataset
 
 
@@ -231,3 +233,25 @@ def test_open_store_refuses_a_timeout_that_is_not_seconds(tmp_path: Path, timeou
     with pytest.raises(ConfigError, match="timeout_s must be a number of seconds >= 0, got"):
         open_store(db, timeout_s=timeout)  # type: ignore[arg-type]
     assert not db.exists()
+
+
+def test_a_pose_sequence_made_from_a_path_keeps_it_as_text_and_saves(tmp_path: Path) -> None:
+    """``source=Path(...)`` (the video a sequence was made from) is kept as its text, as a
+    loaded sequence's source is, and the sequence saves and loads back naming it. Before: the
+    Path was kept as it was, and ``save_pose`` refused the sequence with "metadata cannot be
+    stored as JSON (PosixPath is not JSON serializable)"."""
+    video = tmp_path / "take 1.mp4"
+    body = np.zeros((2, 33, 3))
+    seq = PoseSequence(body, BLAZEPOSE_33, 30.0, source=video)  # type: ignore[arg-type]
+    assert seq.source == str(video) and isinstance(seq.source, str)
+    back = load_pose(save_pose(seq, tmp_path / "pose.npz"))
+    assert back.metadata["made_from"] == str(video)
+
+
+@pytest.mark.parametrize("source", [123, None, ["a.mp4"]])
+def test_a_pose_sequence_refuses_a_source_that_is_not_text(source: object) -> None:
+    """Before: kept as given (an int, None, a list) where every reader expects text."""
+    with pytest.raises(
+        PoseFileError, match=re.escape(f"source must be text or a path, got {source!r}")
+    ):
+        PoseSequence(np.zeros((2, 33, 3)), BLAZEPOSE_33, 30.0, source=source)  # type: ignore[arg-type]
