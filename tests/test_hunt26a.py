@@ -1,8 +1,9 @@
 """The Python API as an engineer drives it (hunt 26a): ``LiveSegmenter``, ``segment``,
-``DADClassifier`` and ``CaseBaseClassifier`` given odd but plausible arguments (a reused
-frame buffer, a frame of another skeleton, parameters of the wrong type). A mistake is one
-clear error naming the problem, with nothing kept or changed. Each test says what happened
-before its fix.
+``DADClassifier``, ``CaseBaseClassifier``, storing a fitted model (``store_fitted``,
+``train``, ``open_store``) and ``PoseSequence`` given odd but plausible arguments (a reused
+frame buffer, a frame of another skeleton, parameters of the wrong type, a source given as a
+path). A mistake is one clear error naming the problem, with nothing kept or changed. Each
+test says what happened before its fix.
 """
 
 from __future__ import annotations
