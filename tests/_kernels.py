@@ -16,6 +16,23 @@ def fluents() -> None:
     from tests.bodies import squat_clip
 
     evaluate(squat_clip(0.8, 30, 10.0, 10.0))
+    tslearn_dtw()
+
+
+def tslearn_dtw() -> None:
+    """tslearn's DTW, the peer several test modules compare with, as they call it (float64
+    series, with and without a Sakoe-Chiba band): kept in numba's cache
+    (:func:`cbr.evaluation.peers.cache_tslearn_kernels`, which those modules call too)."""
+    from tslearn.metrics import cdist_dtw, dtw
+
+    from cbr.evaluation.peers import cache_tslearn_kernels
+
+    cache_tslearn_kernels()
+    x = np.random.default_rng(0).random((3, 12, 2))
+    dtw(x[0], x[1])
+    dtw(x[0], x[1], global_constraint="sakoe_chiba", sakoe_chiba_radius=2)
+    cdist_dtw(x)
+    cdist_dtw(x, x[:2], global_constraint="sakoe_chiba", sakoe_chiba_radius=2)
 
 
 def search() -> None:

@@ -9,9 +9,13 @@ from sklearn.model_selection import cross_val_score
 from tslearn.neighbors import KNeighborsTimeSeriesClassifier
 
 from cbr.estimator import CaseBaseClassifier
+from cbr.evaluation.peers import cache_tslearn_kernels
 from features.errors import ConfigError, DataError
 from features.fluents import evaluate
 from tests.test_cbr_clips import ACTIVITIES, arm_dataset
+
+# tslearn's DTW compiled once per machine, not once per process (numba's disk cache)
+cache_tslearn_kernels()
 
 
 @pytest.fixture(scope="module")

@@ -9,12 +9,16 @@ from tslearn.metrics import dtw as tslearn_dtw
 from tslearn.neighbors import KNeighborsTimeSeriesClassifier
 
 from cbr.casebase import CaseBase
+from cbr.evaluation.peers import cache_tslearn_kernels
 from cbr.problem import FeatureConfig
 from cbr.retrieve import retrieve
 from cbr.reuse import reuse
 from cbr.similarity import DTW, Euclidean, Signature, available_measures, get_measure
 from cbr.similarity.dtw import dtw_all, knn_dtw
 from features.errors import ConfigError
+
+# tslearn's DTW compiled once per machine, not once per process (numba's disk cache)
+cache_tslearn_kernels()
 
 
 def _walks(rng: np.random.Generator, n: int, length: int, d: int) -> np.ndarray:
