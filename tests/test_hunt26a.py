@@ -25,6 +25,7 @@ from cbr.unknown import judge_of
 from features.errors import ConfigError, InputError, PosecbrError, PoseFileError
 from features.poses import PoseSequence, load_pose, save_pose
 from features.skeleton import BLAZEPOSE_33
+from tests.bodies import standing, to_sequence
 from tests.test_cbr_clips import arm_dataset
 
 
@@ -256,3 +257,21 @@ def test_a_pose_sequence_refuses_a_source_that_is_not_text(source: object) -> No
         PoseFileError, match=re.escape(f"source must be text or a path, got {source!r}")
     ):
         PoseSequence(np.zeros((2, 33, 3)), BLAZEPOSE_33, 30.0, source=source)  # type: ignore[arg-type]
+
+
+def test_dad_predict_is_the_argmax_of_its_probabilities() -> None:
+    """A still standing clip, classes "aaa" (no ADD activity) and an ADD activity that
+    scores 0 on it: decision_function ranks the activity's class first (0 less a tie-break
+    of 1e-6 per rank, above -1), and predict names it, but predict_proba clipped both to 0
+    and gave [0.5, 0.5], whose argmax is "aaa". Now the probabilities keep predict's order,
+    still [0.5, 0.5] to 1e-3 (1e-9 each, and 1e-12 times one more than the score)."""
+    seq = to_sequence(*[standing()] * 60)
+    classes = ["aaa", "elbowToKnee1RepsLelbowStart"]
+    clf = DADClassifier().fit([seq, seq], classes)
+    decision = clf.decision_function([seq])[0]
+    assert decision[0] == -1.0 and -1e-3 < decision[1] < 0.0  # the tie the clip makes
+    proba = clf.predict_proba([seq])[0]
+    assert clf.predict([seq])[0] == classes[int(np.argmax(proba))] == classes[1]
+    np.testing.assert_allclose(proba, [0.5, 0.5], atol=1e-3)
+    assert proba[1] > proba[0]
+    assert proba.sum() == pytest.approx(1.0)

@@ -164,6 +164,10 @@ class DADClassifier(ClassifierMixin, BaseEstimator):
         return np.asarray(self.classes_[np.argmax(scores, axis=1)])
 
     def predict_proba(self, X: Sequence[PoseSequence]) -> np.ndarray:
-        """The class scores normalised to sum to one, ``(n_clips, n_classes)``."""
-        scores = np.clip(self.decision_function(X), 0.0, None) + 1e-9
+        """The class scores normalised to sum to one, ``(n_clips, n_classes)``: each class's
+        score clipped at 0, plus 1e-9 and a trace (1e-12) of the score itself, so that the
+        order is :meth:`predict`'s (a class whose best activity scored 0 stays above a class
+        with no activity, as in its argmax)."""
+        decision = self.decision_function(X)  # >= -1 (no activity)
+        scores = np.clip(decision, 0.0, None) + 1e-9 + 1e-12 * (1.0 + decision)
         return np.asarray(scores / scores.sum(axis=1, keepdims=True))
