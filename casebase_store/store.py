@@ -1015,6 +1015,10 @@ def open_store(
     read-only folder can be read. Raises :class:`StoreError` naming the file for a corrupt,
     locked, foreign or other-version database.
     """
+    if not isinstance(url_or_path, str | os.PathLike):  # open_store(5) made a file "5"
+        raise StoreError(
+            f"a case base is a file path or a SQLAlchemy URL, got {url_or_path!r}", "--db"
+        )
     if not str(url_or_path).strip():
         raise StoreError(EMPTY_DB, "--db")
     _check_timeout(timeout_s)

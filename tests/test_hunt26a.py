@@ -275,3 +275,14 @@ def test_dad_predict_is_the_argmax_of_its_probabilities() -> None:
     np.testing.assert_allclose(proba, [0.5, 0.5], atol=1e-3)
     assert proba[1] > proba[0]
     assert proba.sum() == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("where", [5, None, b"cb.sqlite", ["cb.sqlite"]])
+def test_open_store_of_something_not_a_path_is_refused_and_makes_no_file(
+    where: object, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``open_store(5)`` created a case base file named "5" in the working folder."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(PosecbrError, match="a file path or a SQLAlchemy URL, got"):
+        open_store(where)  # type: ignore[arg-type]
+    assert list(tmp_path.iterdir()) == []
