@@ -187,7 +187,7 @@ class PoseSequence:
                 )
             _check_confidence(conf, where)
             object.__setattr__(self, "confidence", conf)
-        if self.skeleton not in KNOWN_SKELETONS:
+        if not isinstance(self.skeleton, str) or self.skeleton not in KNOWN_SKELETONS:
             raise PoseFileError(
                 f"unknown skeleton {self.skeleton!r} (known: {', '.join(sorted(KNOWN_SKELETONS))})",
                 where,

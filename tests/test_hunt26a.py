@@ -286,3 +286,11 @@ def test_open_store_of_something_not_a_path_is_refused_and_makes_no_file(
     with pytest.raises(PosecbrError, match="a file path or a SQLAlchemy URL, got"):
         open_store(where)  # type: ignore[arg-type]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_skeleton_that_is_not_a_name_is_the_unknown_skeleton_error() -> None:
+    """``PoseSequence(..., skeleton=["blazepose33"])`` was a TypeError (a list is not
+    hashable, looked up among the known skeletons); it is an unknown skeleton, named."""
+    frames = to_sequence(*[standing()] * 3)
+    with pytest.raises(PoseFileError, match=r"unknown skeleton \['blazepose33'\] \(known: "):
+        PoseSequence(frames.positions, frames.joint_names, 30.0, skeleton=["blazepose33"])  # type: ignore[arg-type]
