@@ -101,7 +101,23 @@ def model_document(
     judges = getattr(clf, "judges_", None)
     if judges:
         doc["judges"] = judges_document(judges, 1)
+    numbered = _numbered_classes(clf.classes_)
+    if numbered is not None:
+        doc["classes"] = numbered
     return doc
+
+
+def _numbered_classes(classes: np.ndarray) -> list[int] | None:
+    """``classes`` as a list of whole numbers when they all are (labels fitted as numbers,
+    which the store keeps as text): read back, the classifier answers with the numbers, in
+    their order ("10" sorts before "9" as text). None for any other labels."""
+    values = np.asarray(classes)
+    if values.dtype.kind in "iu" or (
+        values.dtype == object
+        and all(isinstance(v, int | np.integer) and not isinstance(v, bool) for v in values)
+    ):
+        return [int(v) for v in values]
+    return None
 
 
 def judges_document(judges: dict[str, Calibrated], version: int) -> dict[str, Any]:
@@ -375,6 +391,9 @@ def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
     clf.novelty_ = _novelty(model, cb, name, store.where)
     clf.confidence_ = _confidence(model, name, store.where)
     clf.judges_ = _judges(model, info.version, name, store.where)
+    numbered = model.get("classes")
+    if isinstance(numbered, list) and all(type(v) is int for v in numbered):
+        clf.classes_ = np.asarray(numbered)  # kept by refresh while the cases' labels match
     clf.refresh()
     target = str(model.get("target", "label"))
     cases = model.get("cases")

@@ -294,3 +294,26 @@ def test_a_skeleton_that_is_not_a_name_is_the_unknown_skeleton_error() -> None:
     frames = to_sequence(*[standing()] * 3)
     with pytest.raises(PoseFileError, match=r"unknown skeleton \['blazepose33'\] \(known: "):
         PoseSequence(frames.positions, frames.joint_names, 30.0, skeleton=["blazepose33"])  # type: ignore[arg-type]
+
+
+def test_a_model_fitted_on_numbered_labels_answers_with_numbers_once_stored(
+    tmp_path: Path,
+) -> None:
+    """Labels 9 and 10 (numbers): the store keeps labels as text, and the loaded classifier's
+    classes were ["10", "9"] (sorted as text), so its answers were text and ``score`` against
+    the numbers 0. Now the loaded classes are [9, 10], as fitted, and it scores as the
+    fitted classifier does."""
+    from cbr.stored import load_classifier
+
+    X, names = arm_dataset(3, seed=3)
+    number = {name: 9 + i for i, name in enumerate(sorted(set(names)))}
+    y = np.array([number[n] for n in names])
+    clf = CaseBaseClassifier(k=3).fit(X, y)
+    assert clf.classes_.tolist() == sorted(number.values())
+    store_fitted(tmp_path / "cb.sqlite", "numbers", clf, [str(v) for v in y])
+    with open_store(tmp_path / "cb.sqlite", readonly=True) as store:
+        loaded = load_classifier(store, "numbers").classifier
+    assert loaded.classes_.tolist() == clf.classes_.tolist()
+    assert all(type(v) is int for v in loaded.predict(X).tolist())
+    np.testing.assert_array_equal(loaded.predict(X), clf.predict(X))
+    assert loaded.score(X, y) == clf.score(X, y) > 0.5
