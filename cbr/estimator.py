@@ -116,7 +116,13 @@ def as_sequences(X: Any, where: str = "X") -> list[PoseSequence]:
         )
     if isinstance(X, str | bytes) or not hasattr(X, "__iter__"):
         raise InputError(f"X must be a sequence of PoseSequence, got {type(X).__name__}", where)
-    items = list(np.asarray(X, dtype=object).reshape(-1)) if isinstance(X, np.ndarray) else list(X)
+    if isinstance(X, np.ndarray) and X.ndim != 1:  # flattened, a (2, 3) table was six clips
+        raise InputError(
+            f"X must be a sequence of PoseSequence, got an object array of shape {X.shape}"
+            " (one dimension: a clip each)",
+            where,
+        )
+    items = list(X)
     for i, s in enumerate(items):
         if not isinstance(s, PoseSequence):
             raise InputError(f"X[{i}] is a {type(s).__name__}, not a PoseSequence", where)

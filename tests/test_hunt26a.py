@@ -317,3 +317,19 @@ def test_a_model_fitted_on_numbered_labels_answers_with_numbers_once_stored(
     assert all(type(v) is int for v in loaded.predict(X).tolist())
     np.testing.assert_array_equal(loaded.predict(X), clf.predict(X))
     assert loaded.score(X, y) == clf.score(X, y) > 0.5
+
+
+def test_a_table_of_clips_is_refused_as_dad_refuses_it(
+    fitted: tuple[CaseBaseClassifier, list[PoseSequence]],
+) -> None:
+    """An object array of shape (2, 3) holding six clips was flattened and answered as six
+    clips (any shape was), where DADClassifier refuses it: X is one clip per row."""
+    clf, X = fitted
+    table = np.empty((2, 3), dtype=object)
+    for i, seq in enumerate(X[:6]):
+        table[i // 3, i % 3] = seq
+    with pytest.raises(InputError, match=r"got an object array of shape \(2, 3\)"):
+        clf.predict(table)
+    column = np.empty(6, dtype=object)
+    column[:] = X[:6]
+    np.testing.assert_array_equal(clf.predict(column), clf.predict(X[:6]))
