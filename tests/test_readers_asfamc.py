@@ -137,6 +137,20 @@ def test_radians_amc(tmp_path: Path) -> None:
                                np.array([1, 2, 3]) * M + [0, 20 * M, 0], atol=1e-9)  # fmt: skip
 
 
+def test_a_skeleton_in_radians_has_its_axes_in_radians(tmp_path: Path) -> None:
+    """``:units angle rad`` makes every angle of the ASF radians, the bones' axes too (the
+    Acclaim definition: one angle unit for the file). lfemur's axis "0 0 1.5708" was read as
+    1.57 degrees, so frame 3's rx = 90 turned about x, not y: the knee stayed at [L, 0, 0]
+    instead of [L, 0, -L]. The AMC says :DEGREES for its own values."""
+    asf = ASF.replace("angle deg", "angle rad").replace("axis 0 0 90 XYZ",
+                                                          f"axis 0 0 {np.pi / 2} XYZ")  # fmt: skip
+    seq = read_asf_amc(*_write(tmp_path, asf=asf))
+    L = 10 * M
+    np.testing.assert_allclose(seq.positions[2, JOINT_INDEX["left_knee"]], [L, 0, -L], atol=1e-9)
+    np.testing.assert_allclose(seq.positions[2, JOINT_INDEX["left_ankle"]], [L, 0, -2 * L],
+                               atol=1e-9)  # fmt: skip
+
+
 @pytest.mark.parametrize(
     ("amc", "message"),
     [

@@ -78,12 +78,13 @@ _DOF_AXES = {"rx": "x", "ry": "y", "rz": "z", "tx": "X", "ty": "Y", "tz": "Z", "
 
 @dataclass
 class Bone:
-    """One ASF bone: direction ``(3,)`` unit, length (ASF units), local axis, dofs."""
+    """One ASF bone: direction ``(3,)`` unit, length (ASF units), local axis (Euler angles in
+    the skeleton's angle unit), dofs."""
 
     name: str
     direction: np.ndarray
     length: float
-    axis_deg: np.ndarray
+    axis: np.ndarray
     axis_order: str
     dof: tuple[str, ...] = ()
     parent: str = "root"
@@ -91,14 +92,16 @@ class Bone:
 
 @dataclass
 class Skeleton:
-    """A parsed ASF file. Bones are listed parents first."""
+    """A parsed ASF file. Bones are listed parents first; every angle in it (the root's
+    orientation, the bones' axes) is in degrees when ``angle_deg``, else radians (``:units
+    angle``)."""
 
     path: Path
     length_scale: float
     angle_deg: bool
     root_order: tuple[str, ...]
     root_axis: str
-    root_orientation_deg: np.ndarray
+    root_orientation: np.ndarray
     bones: dict[str, Bone] = field(default_factory=dict)
 
     @property
@@ -215,7 +218,7 @@ def _root_line(skel: Skeleton, tokens: list[str], line_no: int) -> None:
     elif head == "axis":
         skel.root_axis = _axis_order(tokens[1], skel.path, line_no)
     elif head == "orientation":
-        skel.root_orientation_deg = _floats(tokens[1:4], skel.path, line_no, 3)
+        skel.root_orientation = _floats(tokens[1:4], skel.path, line_no, 3)
 
 
 @dataclass
@@ -292,7 +295,7 @@ def _bone(draft: _BoneDraft, path: Path) -> Bone:
         name=draft.name,
         direction=draft.direction / norm if norm > 0 else draft.direction,
         length=draft.length,
-        axis_deg=draft.axis if draft.axis is not None else np.zeros(3),
+        axis=draft.axis if draft.axis is not None else np.zeros(3),
         axis_order=draft.order,
         dof=draft.dof,
     )
@@ -526,7 +529,7 @@ def forward_kinematics(skel: Skeleton, motion: Motion) -> tuple[tuple[str, ...],
         elif tok.startswith("R"):
             rot_letters += tok[1].lower()
             rot_cols.append(col)
-    c_root = _euler(skel.root_axis, skel.root_orientation_deg[None], True)[0]
+    c_root = _euler(skel.root_axis, skel.root_orientation[None], skel.angle_deg)[0]
     m_root = (
         _euler(rot_letters, root_vals[:, rot_cols], degrees)
         if rot_letters
@@ -537,7 +540,7 @@ def forward_kinematics(skel: Skeleton, motion: Motion) -> tuple[tuple[str, ...],
     names = tuple(skel.bones)
     out = np.empty((frames, len(names), 3))
     for k, (name, bone) in enumerate(skel.bones.items()):
-        c = _euler(bone.axis_order, bone.axis_deg[None], True)[0]
+        c = _euler(bone.axis_order, bone.axis[None], skel.angle_deg)[0]
         rot_dofs = [(i, d) for i, d in enumerate(bone.dof) if d.startswith("r")]
         if rot_dofs and name in motion.values:
             vals = motion.values[name][:, [i for i, _ in rot_dofs]]
