@@ -24,6 +24,7 @@ they stay NaN.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -280,7 +281,7 @@ def _motion_header(tokens: list[str], i: int, path: Path) -> tuple[int, float]:
         frame_time = float(tokens[i + 4])
     except (IndexError, ValueError):
         raise DataError("MOTION header is malformed or truncated", path) from None
-    if frame_time <= 0:
+    if not (math.isfinite(frame_time) and frame_time > 0):  # nan or inf: no frame rate
         raise DataError(f"Frame Time must be positive, got {frame_time}", path)
     return n_frames, frame_time
 
