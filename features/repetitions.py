@@ -1026,7 +1026,9 @@ def split_windows(
     """Every clip cut into windows of ``length_s`` seconds starting every ``hop_s`` seconds
     (as many as fit whole), each a clip of its own with the clip's label, subject and extras
     (plus ``window``: 1, 2, ...); frames and per-frame results are shared with the clip
-    (:func:`features.derived.stretch`). A clip shorter than one window stays whole.
+    (:func:`features.derived.stretch`). Window k starts at frame k x ``hop_s`` x fps rounded
+    (a hop rounded once would drift: 12 frames at 25 fps, a window every 0.48 s). A clip
+    shorter than one window stays whole.
 
     A case base of windows is what segmenting a long recording matches its windows against:
     every phase of a repeated movement is among the cases, as it is among the queries."""
@@ -1034,8 +1036,8 @@ def split_windows(
     whole = 0
     for clip in clips:
         fps = clip.seq.fps
-        length, hop = int(round(length_s * fps)), max(1, int(round(hop_s * fps)))
-        starts = range(0, clip.seq.n_frames - length + 1, hop)
+        length = int(round(length_s * fps))
+        starts = _window_starts(clip.seq.n_frames, length, hop_s * fps)
         if length < 2 or not len(starts):
             out.append(clip)
             whole += 1
@@ -1044,3 +1046,12 @@ def split_windows(
             part = stretch(clip.seq, a, a + length).with_metadata(window=k)
             out.append(dataclasses.replace(clip, seq=part, extras={**clip.extras, "window": k}))
     return Split(out, whole)
+
+
+def _window_starts(n_frames: int, length: int, hop: float) -> list[int]:
+    """The first frames of the windows of ``length`` frames that fit whole in ``n_frames``,
+    one every ``hop`` frames (a fraction: each start rounded on its own), none twice."""
+    if n_frames < length:
+        return []
+    count = int(np.floor((n_frames - length) / hop + 1e-9)) + 1
+    return sorted({int(round(k * hop)) for k in range(count)})
