@@ -264,13 +264,14 @@ def _plot(rec: Any, result: Any, path: Path, name: str) -> None:
 
 def frame_words(result: Any) -> list[list[str]]:
     """Per frame: the current activity (or unknown, or nobody in view) and how many of its
-    repetitions are done."""
+    repetitions are done: a repetition counts from its last frame (ends are exclusive; one
+    that runs to its segment's end is done within the segment, as ``segment`` counts it)."""
     import numpy as np
 
     words: list[list[str]] = [[] for _ in range(result.n_frames)]
     for s in result.segments:
         label = _shown(s)
-        ends = np.sort([r.end_frame for r in s.repetitions]).astype(np.int64)
+        ends = np.sort([r.end_frame - 1 for r in s.repetitions]).astype(np.int64)
         frames = np.arange(s.start_frame, s.end_frame)
         done = np.searchsorted(ends, frames, side="right")
         for f, n in zip(frames.tolist(), done.tolist(), strict=True):
