@@ -306,8 +306,10 @@ def _revised(rev: Revision | None) -> bool:
 
 
 def _reload(store: CaseStore, stored: StoredClassifier) -> StoredClassifier:
-    """The stored classifier read again (in place, so callers holding it see the new one)."""
+    """The stored classifier read again (in place, so callers holding it see the new one),
+    voting with the k it voted with (``classify -k``), not the one stored."""
     fresh = load_classifier(store, stored.name)
+    fresh.classifier.set_params(k=stored.classifier.k)
     if fresh.uid != stored.uid:
         raise StoreError(
             f"case base {stored.name!r} was replaced by another process while classifying; "

@@ -1,0 +1,66 @@
+"""Hunt 26c: ``posecbr classify`` (feedback, ``-k``, ``--json`` and the text beside it) and
+the ``posecbr casebase`` actions (info, list, export, trim), checked against the store's
+rows counted by hand and against what the options say."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import cbr.classification
+from casebase_store import NewCase, open_store
+from posecbr.cli import main
+from tests.badinput import small_case_base
+
+
+@pytest.fixture(scope="module")
+def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A small real case base (three synthetic arm activities, three clips each; k = 5)."""
+    return small_case_base(tmp_path_factory.mktemp("cb"))
+
+
+def _copy(db: Path, folder: Path) -> Path:
+    out = folder / "cb.sqlite"
+    out.write_bytes(db.read_bytes())
+    return out
+
+
+def _clips(case_base: Path) -> list[str]:
+    return sorted(str(p) for p in (case_base.parent / "train").rglob("*.npz"))
+
+
+def test_feedback_keeps_the_k_asked_for_after_another_process_changes_the_cases(
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``classify --feedback -k 1``: when another process changed the case base during the
+    run, the classifier was read again from the store with the k it was trained with (5),
+    so the clips after the change were answered and retained by 5 neighbours, not 1. Every
+    clip is now answered by the one nearest case asked for."""
+    db = _copy(case_base, tmp_path)
+    clips = _clips(case_base)[:3]
+    solve = cbr.classification._solve
+    calls = []
+
+    def other_process_between(*args: object, **kwargs: object) -> object:
+        calls.append(1)
+        if len(calls) == 2:  # after the first clip's feedback: another writer adds a case
+            with open_store(db, create=False) as other:
+                a = other.load_cases("default", ids=None)
+                case = NewCase(str(a.labels[0]), a.features[0], source="another process")
+                other.add_cases("default", [case])
+        return solve(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(cbr.classification, "_solve", other_process_between)
+    label = Path(clips[0]).parent.name
+    argv = ["classify", *clips, "--db", str(db), "--feedback", label, "-k", "1", "--json"]
+    code = main(argv)
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert len(calls) >= 3
+    results = json.loads(out)["results"]
+    assert [len(r["neighbours"]) for r in results] == [1, 1, 1]
