@@ -12,7 +12,7 @@ import pytest
 import cbr.classification
 from casebase_store import NewCase, open_store
 from posecbr.cli import main
-from tests.badinput import small_case_base
+from tests.badinput import refused, small_case_base
 
 
 @pytest.fixture(scope="module")
@@ -64,3 +64,23 @@ def test_feedback_keeps_the_k_asked_for_after_another_process_changes_the_cases(
     assert len(calls) >= 3
     results = json.loads(out)["results"]
     assert [len(r["neighbours"]) for r in results] == [1, 1, 1]
+
+
+@pytest.mark.parametrize(
+    ("options", "flag"),
+    [(["--quiet"], "--quiet"), (["--verbose", "--top", "1"], "--top")],
+)
+def test_json_with_an_option_it_would_ignore_is_refused(
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    options: list[str],
+    flag: str,
+) -> None:
+    """``classify --json --quiet`` printed every clip's full record (the summary alone was
+    asked for), and ``--json --verbose --top 1`` every similar case (one was asked for): the
+    option was ignored without a word. Each is now refused in one line naming it, before the
+    case base is read."""
+    db = _copy(case_base, tmp_path)
+    argv = ["classify", _clips(case_base)[0], "--db", str(db), "--json", *options]
+    refused(argv, tmp_path, capsys, f"{flag}: ", "--json")

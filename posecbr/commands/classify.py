@@ -149,6 +149,10 @@ def _check_args(args: argparse.Namespace) -> None:
         raise ConfigError("goes with --verbose (the similar cases it lists)", "--top")
     if args.quiet and args.verbose:
         raise ConfigError("--quiet and --verbose exclude each other", "--quiet")
+    for flag, given, holds in (("--quiet", args.quiet, "every clip's record"),
+                               ("--top", args.top is not None, "every similar case")):  # fmt: skip
+        if given and args.json:
+            raise ConfigError(f"goes without --json (its document holds {holds})", flag)
 
 
 def run(args: argparse.Namespace) -> int:
