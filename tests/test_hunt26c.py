@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import cbr.classification
@@ -84,3 +85,25 @@ def test_json_with_an_option_it_would_ignore_is_refused(
     db = _copy(case_base, tmp_path)
     argv = ["classify", _clips(case_base)[0], "--db", str(db), "--json", *options]
     refused(argv, tmp_path, capsys, f"{flag}: ", "--json")
+
+
+def test_export_holds_each_cases_frames_as_list_shows_them(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``casebase export`` wrote the cases' problems, labels, sources, subjects and origins
+    but not the frames of its recording each case is (``list`` shows them): the cases of a
+    case base cut into repetitions or windows, several per file, could not be told apart.
+    ``frames`` now holds each case's first frame and end frame (exclusive), as ``list``
+    shows them; here every case is a whole training clip, 0 to its length."""
+    from features.poses import load_pose
+
+    out = tmp_path / "cases.npz"
+    assert main(["casebase", "export", "--db", str(case_base), "--out", str(out)]) == 0
+    capsys.readouterr()
+    with np.load(out) as z:
+        sources, frames = z["sources"].tolist(), z["frames"]
+    assert frames.shape == (len(sources), 2)
+    assert frames.tolist() == [[0, load_pose(s).n_frames] for s in sources]
+    assert main(["casebase", "list", "--db", str(case_base), "--json"]) == 0
+    listed = json.loads(capsys.readouterr().out)["cases"]
+    assert [c["frames"] for c in listed] == frames.tolist()

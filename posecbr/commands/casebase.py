@@ -369,6 +369,15 @@ def _check_export(args: argparse.Namespace) -> None:
     check_output(_export_path(args), inputs=store_files, what="export file")
 
 
+def _frames(ranges: tuple[tuple[int | None, int | None], ...]) -> Any:
+    """``(n, 2)`` each case's first frame and end frame (exclusive) in its recording, as
+    ``list`` shows them; NaN where the case has none (a case added by the Python API)."""
+    import numpy as np
+
+    rows = [[np.nan if v is None else v for v in r] for r in ranges]
+    return np.asarray(rows, dtype=np.float64).reshape(len(rows), 2)
+
+
 def _export(store: CaseStore, args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -386,6 +395,7 @@ def _export(store: CaseStore, args: argparse.Namespace) -> int:
         "sources": np.asarray(a.sources, dtype=str),
         "subjects": np.asarray([s or "" for s in a.subjects], dtype=str),
         "origins": np.asarray(a.origins, dtype=str),
+        "frames": _frames(a.frame_ranges),
         "feature_names": np.asarray(info.feature_names, dtype=str),
         "feature_words": np.asarray(info.feature_words, dtype=str),
         "feature_config": np.asarray(json.dumps(info.feature_config)),
