@@ -107,3 +107,22 @@ def test_export_holds_each_cases_frames_as_list_shows_them(
     assert main(["casebase", "list", "--db", str(case_base), "--json"]) == 0
     listed = json.loads(capsys.readouterr().out)["cases"]
     assert [c["frames"] for c in listed] == frames.tolist()
+
+
+@pytest.mark.parametrize("subjects", ["s03,s99", "s03,"])
+def test_classify_refuses_a_subject_no_clip_has(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], case_base: Path, subjects: str
+) -> None:
+    """``classify labels.csv --subjects s03,s99`` (a mistyped subject, or a stray comma)
+    classified the clips of s03 alone and reported their accuracy as if the subjects asked
+    for had been: the one that matched nothing went unsaid. It is refused in one line naming
+    it (the labels CSV holds subjects s01 and s03)."""
+    from tests.test_feedback_safety import DEMO
+
+    labels = tmp_path / "labels.csv"
+    rows = [f"{DEMO / f'm01_{s}_e01.npz'},deep_squat,{s}" for s in ("s01", "s03")]
+    labels.write_text("\n".join(["path,label,subject", *rows]) + "\n", encoding="utf-8")
+    db = _copy(case_base, tmp_path)
+    argv = ["classify", str(labels), "--db", str(db), "--subjects", subjects]
+    missing = subjects.split(",")[1]
+    refused(argv, tmp_path, capsys, "--subjects: ", f"{missing!r}")

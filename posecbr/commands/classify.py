@@ -111,6 +111,7 @@ def load_inputs(
             "--subjects",
         )
     out: list[tuple[PoseSequence, str | None]] = []
+    seen: set[str | None] = set()  # the subjects of the clips the filter kept
     for path, kind in zip(paths, kinds, strict=True):
         if kind == "pose_file":
             seq = load_clip(path)
@@ -131,9 +132,22 @@ def load_inputs(
                               "it would be classified and counted twice")  # fmt: skip
             for clip in clips:
                 out.append((clip.seq, clip_target(clip, target)))
+                seen.add(clip.subject)
     if not out:
         raise DataError("no clips found", " ".join(str(p) for p in paths))
+    _check_subjects_found(subjects, seen)
     return out
+
+
+def _check_subjects_found(subjects: list[str] | None, seen: set[str | None]) -> None:
+    """Refuse a ``--subjects`` entry no clip has (mistyped, or a stray comma's empty one):
+    the clips of the others alone would be classified and counted as if all had been."""
+    missing = [s for s in subjects or () if s not in seen]
+    if missing:
+        raise ConfigError(
+            f"no clip of subject {', '.join(repr(s) for s in missing)} in the clips given",
+            "--subjects",
+        )
 
 
 def _check_args(args: argparse.Namespace) -> None:
