@@ -55,8 +55,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--k",
         type=int,
         default=None,
-        help="neighbours: novelty-benefit's (as trained), RENN's and ICF's edits (3), the "
-        "accuracy reported (as trained; CNN: 1)",
+        help="neighbours each editor judges with and reports the accuracy with (default: "
+        "novelty-benefit the case base's own k, RENN and ICF 3, CNN 1)",
     )
     q.add_argument("--dry-run", action="store_true", help="report only, change nothing")
     q = act.add_parser(
