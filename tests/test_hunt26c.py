@@ -126,3 +126,29 @@ def test_classify_refuses_a_subject_no_clip_has(
     argv = ["classify", str(labels), "--db", str(db), "--subjects", subjects]
     missing = subjects.split(",")[1]
     refused(argv, tmp_path, capsys, "--subjects: ", f"{missing!r}")
+
+
+def test_a_trim_that_drops_nothing_writes_nothing(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Three well-apart activities, three cases each: every case's 3 nearest others (RENN's
+    k) hold two of its own activity, so RENN drops none. The trim still wrote the case base:
+    a new version (another process's change since it read would be refused) and a trim in
+    its history. Now the file is left byte for byte as it was, and the line says so."""
+    import hashlib
+
+    db = _copy(case_base, tmp_path)
+    before = hashlib.sha256(db.read_bytes()).hexdigest()
+    with open_store(db, readonly=True) as store:
+        version = store.get_case_base("default").version
+    capsys.readouterr()
+    assert main(["casebase", "trim", "--db", str(db), "--editor", "renn"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("RENN: 9 -> 9 cases") and "(nothing dropped: nothing changed)" in out
+    assert hashlib.sha256(db.read_bytes()).hexdigest() == before
+    assert main(["casebase", "trim", "--db", str(db), "--editor", "renn", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert (doc["size_before"], doc["size_after"], doc["changed"]) == (9, 9, False)
+    with open_store(db, readonly=True) as store:
+        assert store.get_case_base("default").version == version
+        assert [e.action for e in store.maintenance_log("default")] == ["build"]

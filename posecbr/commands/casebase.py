@@ -454,6 +454,13 @@ def _edited(args: argparse.Namespace, clf: Any, name: str, keep: float, where: s
     return fn(cb, k=args.k, weights=clf.weights)
 
 
+def _unchanged(dry_run: bool, dropped: bool) -> str:
+    """What the trim's summary line adds when it changed nothing."""
+    if dry_run:
+        return " (dry run: nothing changed)"
+    return "" if dropped else " (nothing dropped: nothing changed)"
+
+
 def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     from casebase_store import open_store
     from cbr.maintenance import record_trim
@@ -471,7 +478,8 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
             + (" (keep more: --keep)" if args.editor == "novelty-benefit" else ""),
             store.where,
         )
-    if not args.dry_run:
+    dropped = report.size_after < report.size_before
+    if dropped and not args.dry_run:  # a trim that drops nothing writes nothing
         judges = recalibrated(clf, report.casebase)
         writer = open_store(args.db, create=False)
         try:
@@ -492,11 +500,12 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
         "measured": report.measured,
         "kept_alone": list(report.kept_alone),
         "dry_run": bool(args.dry_run),
+        "changed": dropped and not args.dry_run,
     }
     if args.json:
         _emit(doc)
     else:
-        print(report.summary() + (" (dry run: nothing changed)" if args.dry_run else ""))
+        print(report.summary() + _unchanged(args.dry_run, dropped))
         if report.distribution_shift is not None:
             print(
                 f"  largest per-activity mean shift: {report.distribution_shift:.3f} "
