@@ -505,8 +505,8 @@ def test_append_says_how_many_activities_it_added(
     code, out, _ = _cli(capsys, "casebase", "info", "--db", db)
     assert code == 0
     assert "training clips (their accuracy " in out
-    assert "; cases added or changed since are not in it)" in out
-    assert "(at training: cases added or changed since are not in it)" in out
+    assert "; cases added, changed or dropped since are not taken into account)" in out
+    assert "(at training: cases added, changed or dropped since are not taken into account)" in out
     assert "unknown judges: none stored (the cases changed since training" in out
 
 

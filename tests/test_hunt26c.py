@@ -152,3 +152,19 @@ def test_a_trim_that_drops_nothing_writes_nothing(
     with open_store(db, readonly=True) as store:
         assert store.get_case_base("default").version == version
         assert [e.action for e in store.maintenance_log("default")] == ["build"]
+
+
+def test_info_after_a_trim_says_the_calibrations_are_of_the_training_cases(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A trim calibrates the unknown judges anew on the cases it keeps, not the confidence
+    or the unlike-the-cases flag: ``casebase info`` after one described those as holding for
+    the case base as it is (the note it gives after an append, retain or revise was left
+    out for a trim)."""
+    db = _copy(case_base, tmp_path)
+    assert main(["casebase", "trim", "--db", str(db), "--keep", "0.5", "-k", "1"]) == 0
+    capsys.readouterr()
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    out = capsys.readouterr().out
+    assert "trim x1" in out
+    assert "; cases added, changed or dropped since are not taken into account)" in out

@@ -198,22 +198,23 @@ def _print_info(d: dict[str, Any]) -> None:
         print("  history: " + ", ".join(words))
 
 
-#: maintenance actions that add or change cases after training (trim stores the
-#: calibrations anew)
-CHANGES = ("append", "retain", "revise")
+#: maintenance actions that add, change or drop cases after training (trim calibrates the
+#: unknown judges anew, not the unlike-the-cases flag or the confidence)
+CHANGES = ("append", "retain", "revise", "trim")
+SINCE = "cases added, changed or dropped since are not taken into account"
 
 
 def _changed_since_training(history: dict[str, int]) -> bool:
-    """Whether cases were added or changed since the model was fitted: its calibrations
-    (unlike the stored cases, confidence) are of the cases it was trained on."""
+    """Whether cases were added, changed or dropped since the model was fitted: its
+    calibrations (unlike the stored cases, confidence) are of the cases it was trained on."""
     return any(history.get(a) for a in CHANGES)
 
 
 def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) -> None:
     """What fit learned (:func:`_model_summary`), the lines that apply; ``changed``: cases
-    were added or changed since (the calibrations are of the training's cases)."""
+    were added, changed or dropped since (the calibrations are of the training's cases)."""
     pieces = str(m.get("cases") or "clips")
-    since = " (at training: cases added or changed since are not in it)" if changed else ""
+    since = f" (at training: {SINCE})" if changed else ""
     if m.get("k") is not None:
         from cbr.stored import CASE_KINDS
 
@@ -268,7 +269,7 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
         print(
             f"  confidence: {score} calibrated on {c['n']} {c['basis']} training "
             f"{pieces} (their accuracy {c['accuracy']:.3f}"
-            f"{'; cases added or changed since are not in it' if changed else ''})"
+            f"{f'; {SINCE}' if changed else ''})"
         )
 
 
