@@ -49,6 +49,7 @@ from sqlalchemy.orm import Session
 
 from features.errors import ConfigError, PosecbrError
 from features.fileio import remove_stale_temporaries, temporary_prefix
+from features.values import is_number
 from features.version import __version__
 
 from .models import (
@@ -990,11 +991,7 @@ EMPTY_DB = "is empty: name a case base file (SQLite) or a SQLAlchemy URL"
 def _check_timeout(timeout_s: Any) -> None:
     """Refuse a ``timeout_s`` that is not a finite number of seconds >= 0 (SQLite turns
     its busy timeout off for a negative one; a bool is no time)."""
-    if (
-        isinstance(timeout_s, bool | np.bool_)
-        or not isinstance(timeout_s, int | float | np.integer | np.floating)
-        or not 0.0 <= float(timeout_s) < float("inf")
-    ):
+    if not (is_number(timeout_s) and 0.0 <= float(timeout_s) < float("inf")):
         raise ConfigError(
             f"timeout_s must be a number of seconds >= 0, got {timeout_s!r}", "timeout_s"
         )

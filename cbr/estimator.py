@@ -46,6 +46,7 @@ from features.errors import ConfigError, DataError, InputError
 from features.poses import PoseSequence
 from features.progress import progress
 from features.text import counted
+from features.values import is_number
 
 from .calibration import (
     NEIGHBOURS,
@@ -364,11 +365,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         """Refuse ``trim``, ``angles``, ``positions`` and ``similarity_params`` of the wrong
         kind (``bool("no")`` is true; True is no fraction; ``**"band=0.1"`` a TypeError)."""
         trim = self.trim
-        if trim is not None and (
-            isinstance(trim, bool)
-            or not isinstance(trim, int | float | np.integer | np.floating)
-            or not 0.0 < float(trim) <= 1.0
-        ):
+        if trim is not None and not (is_number(trim) and 0.0 < float(trim) <= 1.0):
             raise ConfigError(f"trim must be in (0, 1], got {trim!r}", "trim")
         for name in ("angles", "positions"):
             if not isinstance(getattr(self, name), bool | np.bool_):

@@ -32,6 +32,7 @@ from features.errors import DataError, InputError, PoseFileError
 from features.poses import PoseSequence
 from features.repetitions import ANALYSIS_FPS, Repetition, count_repetitions, movement_signals
 from features.skeleton import BLAZEPOSE_33
+from features.values import is_number
 
 from .segmentation import (
     DEFAULT_WINDOW_S,
@@ -263,11 +264,7 @@ class LiveSegmenter:
                 f"This {type(clf).__name__} instance is not fitted yet: fit it (or load a "
                 "stored one) before streaming to it"
             )
-        if (
-            isinstance(fps, bool | np.bool_)
-            or not isinstance(fps, int | float | np.integer | np.floating)
-            or not (math.isfinite(fps) and fps > 0)
-        ):
+        if not (is_number(fps) and math.isfinite(fps) and fps > 0):
             raise InputError(f"the stream needs a frame rate > 0, got {fps!r}", source)
         check_judge(judge)
         self.clf, self.source = clf, source

@@ -15,7 +15,6 @@ as "not observable" and left out of that activity's ratio, rather than counted a
 from __future__ import annotations
 
 import math
-import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,6 +27,7 @@ from features.fluents import state_signals
 from features.poses import PoseSequence
 from features.qmp import QMPConfig, fit_signals
 from features.qmp.add import ADD, Activity, CriteriaResult, evaluate_criteria, load_add
+from features.values import is_number
 
 from .matching import ordered_match
 from .outcome import NOT_ENOUGH_DATA, ActivityScore, DADResult, QMPOutcome
@@ -46,12 +46,7 @@ def default_step(window_s: float) -> float:
 
 def _positive(value: Any) -> bool:
     """Whether ``value`` is a finite number > 0 (a bool is no length of time)."""
-    return (
-        isinstance(value, numbers.Real)
-        and not isinstance(value, bool | np.bool_)
-        and math.isfinite(float(value))
-        and float(value) > 0
-    )
+    return is_number(value) and math.isfinite(float(value)) and float(value) > 0
 
 
 @dataclass(frozen=True)
