@@ -749,9 +749,15 @@ def counted_segments(
 
 
 def _frames_of(a: int, b: int, fps: float, n_frames: int) -> tuple[int, int]:
-    """Frames [start, end) of blocks [a, b)."""
+    """Frames [start, end) of blocks [a, b): a block's first frame is the first whose time
+    lies in it, as a label file's blocks are read (:func:`features.datasets.frame_labels`)."""
     per_block = fps * BLOCK_S
-    return int(round(a * per_block)), min(n_frames, int(round(b * per_block)))
+    return _first_frame(a, per_block), min(n_frames, _first_frame(b, per_block))
+
+
+def _first_frame(block: int, per_block: float) -> int:
+    """The first frame of ``block`` at ``per_block`` frames a block."""
+    return int(math.ceil(block * per_block - 1e-9 * per_block))
 
 
 def _segment_of(

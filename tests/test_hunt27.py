@@ -1,0 +1,26 @@
+"""Left by the hunts of session 26 and fixed in session 27. Each test says what happened
+before its fix."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cbr.segmentation import BLOCK_S, _frames_of
+from features.datasets import frame_labels
+
+
+@pytest.mark.parametrize("fps", [5.0, 24.0, 25.0, 29.97, 30.0, 60.0, 120.0])
+def test_segment_frames_are_the_label_files_blocks(fps: float) -> None:
+    """A segment's frames are those a label file gives its 0.1-s blocks (one label per
+    block, label t covering [t, t + 1) x 0.1 s). Before, the segment's first frame was
+    rounded half to even: at 25 fps (2.5 frames a block) block 1 began at frame 2, whose
+    time, 0.08 s, is in block 0, and block 3 at frame 8 while frame 7 (0.28 s) is in it."""
+    n_frames = 997
+    n_blocks = int(np.ceil(n_frames / (fps * BLOCK_S) - 1e-9))
+    labels = [str(i) for i in range(n_blocks)]
+    block = frame_labels(labels, n_frames, fps, BLOCK_S, "labels.txt").astype(np.int64)
+    for b in range(n_blocks):  # at 5 fps every other block holds no frame: [f, f)
+        want = np.searchsorted(block, [b, b + 1])
+        assert _frames_of(b, b + 1, fps, n_frames) == tuple(want), b
+    assert _frames_of(0, n_blocks, fps, n_frames) == (0, n_frames)
