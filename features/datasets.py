@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import csv
 import re
-from collections.abc import Callable, Collection, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -54,6 +54,7 @@ POSE_SUFFIXES = frozenset({".npz"})
 CLIP_SUFFIXES = POSE_SUFFIXES | VIDEO_SUFFIXES | {".bvh"}
 
 CSV_REQUIRED = ("path", "label")
+_CSV_COLUMNS = ("path", "label", "subject", "start", "end")  # any other column is an extra
 
 
 @dataclass(frozen=True)
@@ -342,9 +343,13 @@ def _csv_rows(csv_path: Path) -> list[list[str]]:
 
 
 def _csv_header(row: list[str], csv_path: Path) -> list[str]:
-    """The column names in lower case: ``path`` and ``label`` (or ``label_file``) present,
-    none repeated, ``start`` and ``end`` both or neither."""
-    header = [h.strip().lower() for h in row]
+    """The column names: those the reader knows (``path``, ``label``, ``subject``, ``start``,
+    ``end`` and those of a recording labelled over time) in lower case, written in any case;
+    every other column as the file spells it (spaces around it stripped). ``path`` and
+    ``label`` (or ``label_file``) present, none repeated (in any case), ``start`` and ``end``
+    both or neither."""
+    known = (*_CSV_COLUMNS, *_TRACK_COLUMNS)
+    header = [h.strip().lower() if h.strip().lower() in known else h.strip() for h in row]
     missing = [c for c in CSV_REQUIRED if c not in header]
     if missing == ["label"] and "label_file" in header:
         missing = []  # recordings labelled over time
@@ -354,7 +359,7 @@ def _csv_header(row: list[str], csv_path: Path) -> list[str]:
             f" {', '.join(missing)} (header row required)",
             csv_path,
         )
-    if len(set(header)) != len(header):
+    if len({h.lower() for h in header}) != len(header):
         raise DataError("line 1: repeated column names in the header", csv_path)
     if ("start" in header) != ("end" in header):
         raise DataError("line 1: columns start and end go together", csv_path)
@@ -376,9 +381,7 @@ def _csv_record(header: list[str], row: list[str], line_no: int, csv_path: Path)
     clip = _clip_path(rec["path"], line_no, csv_path)
     start, end = _frame_range(rec, line_no, csv_path)
     extras = {
-        k: _parse_bool(v)
-        for k, v in rec.items()
-        if k not in ("path", "label", "subject", "start", "end", *_TRACK_COLUMNS)
+        k: _parse_bool(v) for k, v in rec.items() if k not in (*_CSV_COLUMNS, *_TRACK_COLUMNS)
     }
     return {
         "path": clip,
@@ -722,12 +725,23 @@ def _keep(
         return False
     if subjects is not None and subject is not None and subject not in subjects:
         return False
-    if movements is not None and extras.get("movement") not in movements:
+    if movements is not None and extra(extras, "movement") not in movements:
         return False
-    episode = extras.get("episode", extras.get("take"))
+    episode = extra(extras, "episode")
+    episode = extra(extras, "take") if episode is None else episode
     if episodes is not None and episode is not None and int(episode) not in episodes:
         return False
-    return not (correct is not None and "correct" in extras and extras["correct"] != correct)
+    marked = extra(extras, "correct")
+    return not (correct is not None and marked is not None and marked != correct)
+
+
+def extra(extras: Mapping[str, Any], column: str) -> Any:
+    """The value of ``column`` among a clip's extras, its name in any case (a labels CSV's
+    columns keep their spelling: ``Correct`` is the column ``correct``); None if absent."""
+    if column in extras:
+        return extras[column]
+    low = column.strip().lower()
+    return next((v for k, v in extras.items() if k.strip().lower() == low), None)
 
 
 @dataclass(frozen=True)
@@ -856,9 +870,8 @@ def clip_column(clip: Clip, column: str) -> Any:
         return clip.label
     if column == "subject":
         return clip.subject
-    if column in clip.extras:
-        return clip.extras[column]
-    return clip.seq.metadata.get(column)
+    value = extra(clip.extras, column)
+    return extra(clip.seq.metadata, column) if value is None else value
 
 
 def clip_target(clip: Clip, column: str) -> str | None:
@@ -906,6 +919,7 @@ __all__ = [
     "DatasetEntry",
     "clip_column",
     "clip_target",
+    "extra",
     "dataset_files",
     "target_value",
     "truth_value",

@@ -125,6 +125,15 @@ def parse_ranges(value: str | None) -> Ranges | None:
 
 _RESERVED_COLUMNS = ("path", "label", "subject", "start", "end")
 _INTERNAL = ("source", "asf", "origin", "fps_source")  # a clip's extras not made columns
+# What a pose file convert writes says itself, in any case: a labels CSV column of that name
+# would be overwritten, or read back as something else, so it is refused.
+_WRITTEN = {
+    "origin": "where each clip came from",
+    "source": "what a pose file was made from",
+    "made_from": "what a pose file was made from",
+    "fps_source": "where the frame rate came from",
+    "asf": "an AMC clip's skeleton file",
+}
 
 
 def _safe_name(name: str) -> str:
@@ -218,6 +227,7 @@ def _check_args(args: argparse.Namespace) -> None:
     parse_ranges(args.episodes)
     _check_one_file_options(args)
     _check_folder_options(args)
+    _check_columns(src)
     args.sensor = sensor_for(args.sensor, [src])
 
 
@@ -267,6 +277,25 @@ def _check_folder_options(args: argparse.Namespace) -> None:
                     " marked correct or incorrect",
                     flag,
                 )
+
+
+def _check_columns(src: Path) -> None:
+    """Refuse a labels CSV with a column named as something convert writes in each pose file
+    itself (:data:`_WRITTEN`, in any case): the column's values would be lost or misread."""
+    from features.datasets import detect_kind, read_labels_csv
+
+    if (src.is_file() and src.suffix.lower() in (".bvh", ".amc")) or detect_kind(src) != "csv":
+        return
+    csv_path = src if src.is_file() else src / "labels.csv"
+    columns = {k for rec in read_labels_csv(csv_path) for k in rec["extras"]}
+    for column in sorted(columns):
+        what = _WRITTEN.get(column.strip().lower())
+        if what is not None:
+            raise DataError(
+                f"column {column!r}: convert writes {column.strip().lower()!r} in each pose file"
+                f" itself ({what}); rename the column",
+                csv_path,
+            )
 
 
 def _clips(args: argparse.Namespace) -> Iterator[tuple[Clip, str]]:
@@ -333,7 +362,7 @@ def _write_clips(
         extras = {
             k: v
             for k, v in clip.extras.items()
-            if k.strip().lower() not in _RESERVED_COLUMNS and k not in _INTERNAL
+            if k.strip().lower() not in _RESERVED_COLUMNS and k.strip().lower() not in _INTERNAL
         }
         written.append(
             {**extras, "path": path.name, "label": clip.label, "subject": clip.subject or ""}
