@@ -24,7 +24,7 @@ from features.poses import PoseSequence
 from features.progress import progress
 
 from .casebase import frames_of, skeleton_of, subject_of
-from .estimator import CaseBaseClassifier, Solved, unusable
+from .estimator import CaseBaseClassifier, Solved, too_short, unusable
 from .explain import Explanation
 from .retain import RetainDecision, decide_retention, record_retention
 from .revise import Revision, plan_revision, record_revision
@@ -87,20 +87,6 @@ class Classification:
                 "reason": d.reason,
             }
         return out
-
-
-def too_short(clip: PoseSequence) -> str | None:
-    """Why ``clip`` is too short to classify (None when it is not): it lasts less than one
-    movement can (:data:`features.repetitions.MIN_PERIOD_S`); a single frame, or a few, show
-    a posture, and a classifier of movements answers it with confidence all the same."""
-    from features.repetitions import MIN_PERIOD_S
-
-    if clip.duration_s >= MIN_PERIOD_S:
-        return None
-    return (
-        f"lasts {clip.duration_s:.2f} s ({clip.n_frames} frame{'s' if clip.n_frames != 1 else ''}),"
-        f" shorter than one movement can be ({MIN_PERIOD_S:g} s): nothing to classify"
-    )
 
 
 def _solve_all(clf: CaseBaseClassifier, clips: Sequence[PoseSequence]) -> list[Solved | str]:

@@ -171,6 +171,20 @@ def unusable(seqs: Sequence[PoseSequence]) -> list[int]:
     return [i for i, s in enumerate(seqs) if torso_share(s) == 0.0]
 
 
+def too_short(clip: PoseSequence) -> str | None:
+    """Why ``clip`` is too short to classify (None when it is not): it lasts less than one
+    movement can (:data:`features.repetitions.MIN_PERIOD_S`); a single frame, or a few, show
+    a posture, and a classifier of movements answers it with confidence all the same."""
+    from features.repetitions import MIN_PERIOD_S
+
+    if clip.duration_s >= MIN_PERIOD_S:
+        return None
+    return (
+        f"lasts {clip.duration_s:.2f} s ({clip.n_frames} frame{'s' if clip.n_frames != 1 else ''}),"
+        f" shorter than one movement can be ({MIN_PERIOD_S:g} s): nothing to classify"
+    )
+
+
 @dataclass(frozen=True)
 class Solved:
     """One clip through the cycle: its problem, the retrieved cases, the reused solution (its
@@ -860,9 +874,10 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
 
     def solve(self, X: Any, flag: bool = True) -> list[Solved]:
         """Every clip of ``X`` through retrieve and reuse: problem, retrieved cases, solution
-        and how unlike the stored cases it is. A clip that shows no person is refused
+        and how unlike the stored cases it is. A clip that shows no person, or lasts less
+        than one movement can (:func:`too_short`: one frame, or a few), is refused
         (:class:`features.errors.InputError`, a ``DataError`` and ``ValueError``, naming it):
-        nothing can be said about it.
+        nothing can be said about it, as ``classify`` calls it unclassifiable.
 
         ``flag`` False: the "unlike the stored cases" flag is not judged (``unlike_cases``
         False, no reason, no description), for callers with a judge of their own (segmenting
@@ -875,6 +890,10 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         if bad:
             seq = seqs[bad[0]]
             raise InputError(f"{no_person(seq)}: nothing to classify", seq.source or f"X[{bad[0]}]")
+        for i, seq in enumerate(seqs):  # as the commands call it unclassifiable
+            why = too_short(seq)
+            if why is not None:
+                raise InputError(why, seq.source or f"X[{i}]")
         labels = self._class_labels()
         out = []
         problems = [self.case_base_.problem_of(seq) for seq in seqs]
@@ -988,5 +1007,6 @@ __all__ = [
     "Solved",
     "as_sequences",
     "check_labels",
+    "too_short",
     "unusable",
 ]

@@ -1,5 +1,6 @@
 """Leftovers fixed in session 27 (27b): ``convert`` keeps a labels CSV's columns as spelt and
-refuses one named as what it writes itself."""
+refuses one named as what it writes itself; the Python API refuses a clip too short to classify,
+as the commands do; ..."""
 
 from __future__ import annotations
 
@@ -8,10 +9,13 @@ from pathlib import Path
 
 import pytest
 
+from cbr.estimator import CaseBaseClassifier
 from features.datasets import load_dataset
+from features.errors import InputError
 from features.poses import load_pose
 from posecbr.cli import main
 from tests.badinput import good_pose_file, refused
+from tests.test_cbr_clips import arm_dataset
 
 
 def _labelled(folder: Path, header: str, *rows: str) -> Path:
@@ -70,3 +74,29 @@ def test_a_column_convert_writes_itself_is_refused(
     )
     argv = ["convert", str(src), "--out", str(tmp_path / "out")]
     refused(argv, tmp_path, capsys, "labels.csv", repr(column), needle, "rename the column")
+
+
+@pytest.fixture(scope="module")
+def fitted() -> tuple[CaseBaseClassifier, list[object]]:
+    X, y = arm_dataset(3, 5)
+    clf = CaseBaseClassifier(k=3, feature_weights="none", phases=0, mirror="off")
+    return clf.fit(X, y), X
+
+
+@pytest.mark.parametrize("call", ["solve", "predict", "predict_proba", "explain"])
+def test_the_api_refuses_a_clip_too_short_to_classify(
+    fitted: tuple[CaseBaseClassifier, list[object]], call: str
+) -> None:
+    """Before: ``solve`` (and ``predict``, ``explain``) answered a clip of one frame, here
+    with confidence 0.91, where ``classify`` calls it unclassifiable (one posture, no
+    movement)."""
+    from cbr.classification import too_short
+
+    clf, X = fitted
+    one = X[0].slice_frames(0, 1)  # type: ignore[attr-defined]
+    with pytest.raises(InputError) as caught:
+        getattr(clf, call)([X[1], one])
+    assert caught.value.message == too_short(one)  # the words classify prints
+    assert "1 frame" in caught.value.message and "nothing to classify" in caught.value.message
+    assert isinstance(caught.value, ValueError)  # what scikit-learn users catch
+    assert len(clf.solve([X[1]])) == 1  # a clip long enough is answered
