@@ -196,18 +196,24 @@ def summarise(results: Sequence[Classification], target: str = "label") -> dict[
     }
 
 
-def check_feedback_label(label: str, known: Sequence[str], new_label: bool) -> str:
+def check_feedback_label(
+    label: str, known: Sequence[str], new_label: bool, target: str | None = None
+) -> str:
     """The feedback label, refused when empty, or (without ``new_label``) when it is no
-    activity of the case base: a typo must not relabel a trained case or start a class."""
+    activity of the case base (no class of it, for a case base predicting another ``target``
+    column): a typo must not relabel a trained case or start a class."""
+    from .explain import class_noun
+
     text = str(label).strip()
+    noun = class_noun(target)
     if not text:
         raise ConfigError("the feedback label is empty", "--feedback")
     if text not in known and not new_label:
         close = difflib.get_close_matches(text, list(known), n=1)
         hint = f"; did you mean {close[0]!r}? " if close else ". "
         raise ConfigError(
-            f"{text!r} is not an activity of this case base (known: {', '.join(known)}){hint}"
-            "To add a new activity, pass --new-label as well",
+            f"{text!r} is not {'an' if noun[0] in 'aeiou' else 'a'} {noun} of this case base"
+            f" (known: {', '.join(known)}){hint}To add a new {noun}, pass --new-label as well",
             "--feedback",
         )
     return text

@@ -139,6 +139,15 @@ def label_words(label: str, target: str | None = None, article: bool = True) -> 
     return label
 
 
+def class_noun(target: str | None, n: int = 1) -> str:
+    """What a case base's solutions are called, ``n`` of them: activities when it predicts the
+    activity label (``target`` "label" or None), classes when it predicts another column
+    (``correct``: correct and incorrect repetitions are no activities)."""
+    if target in (None, "label"):
+        return "activity" if n == 1 else "activities"
+    return "class" if n == 1 else "classes"
+
+
 @dataclass(frozen=True)
 class Claim:
     """One statement about one readable column (:mod:`cbr.profiles`): ``part`` the list it

@@ -535,7 +535,7 @@ def test_append_takes_the_case_base_s_target(
     code, out, err = _cli(capsys, "train", str(more), "--db", db, "--append")
     assert code == 0, err
     # 2 movements x 2 subjects x 3 episodes x (correct, incorrect) = 24, then 12 more
-    assert "36 cases (12 added, of 2 activities)" in out, out
+    assert "36 cases (12 added, of 2 classes)" in out, out  # correct, incorrect
     store = open_store(db, readonly=True)
     counts = store.get_case_base("default").label_counts
     store.close()

@@ -1,6 +1,7 @@
 """Leftovers fixed in session 27 (27b): ``convert`` keeps a labels CSV's columns as spelt and
 refuses one named as what it writes itself; the Python API refuses a clip too short to classify,
-as the commands do; ..."""
+as the commands do; a case base of correct / incorrect repetitions is worded as classes, not
+activities; ..."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from features.datasets import load_dataset
 from features.errors import InputError
 from features.poses import load_pose
 from posecbr.cli import main
-from tests.badinput import good_pose_file, refused
+from tests.badinput import good_pose_file, refused, small_case_base
 from tests.test_cbr_clips import arm_dataset
 
 
@@ -100,3 +101,61 @@ def test_the_api_refuses_a_clip_too_short_to_classify(
     assert "1 frame" in caught.value.message and "nothing to classify" in caught.value.message
     assert isinstance(caught.value, ValueError)  # what scikit-learn users catch
     assert len(clf.solve([X[1]])) == 1  # a clip long enough is answered
+
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+
+
+@pytest.fixture(scope="module")
+def correct_db(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str, str]:
+    """A case base of correct / incorrect deep squats (``--target correct``), and what train
+    printed (stdout, stderr)."""
+    import contextlib
+    import io
+
+    db = tmp_path_factory.mktemp("correct") / "cb.sqlite"
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["train", str(DEMO / "labels.csv"), "--labels", "deep_squat",
+                     "--target", "correct", "--db", str(db), "--mirror", "off",
+                     "--feature-weights", "none", "--phases", "0"])  # fmt: skip
+    assert code == 0, err.getvalue()
+    return db, out.getvalue(), err.getvalue()
+
+
+def test_a_case_base_of_correct_repetitions_is_not_called_activities(
+    correct_db: tuple[Path, str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: ``train --target correct`` said "18 cases (18 trained) from 2 activities", and
+    ``casebase info`` "18 cases, 2 activities" and "fewer than three activities": correct and
+    incorrect repetitions are no activities."""
+    db, out, err = correct_db
+    assert "from 2 classes" in out
+    assert "activit" not in out + err
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    info = capsys.readouterr().out
+    assert "18 cases, 2 classes" in info and "fewer than three classes" in info
+    assert "activit" not in info
+
+
+def test_feedback_of_no_class_of_a_correct_case_base_is_refused_in_its_words(
+    correct_db: tuple[Path, str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: "'corect' is not an activity of this case base ... To add a new activity"."""
+    db = correct_db[0]
+    argv = ["classify", str(DEMO / "m01_s01_e02_inc.npz"), "--db", str(db), "--feedback",
+            "corect"]  # fmt: skip
+    line = refused(argv, db.parent, capsys, "not a class of this case base", "'correct'")
+    assert "activit" not in line
+
+
+def test_a_case_base_of_activities_still_says_activities(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = small_case_base(tmp_path)
+    capsys.readouterr()
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    assert "9 cases, 3 activities" in capsys.readouterr().out
+    argv = ["classify", str(next((tmp_path / "train").rglob("*.npz"))), "--db", str(db),
+            "--feedback", "nothing"]  # fmt: skip
+    refused(argv, tmp_path, capsys, "not an activity of this case base", "new activity")

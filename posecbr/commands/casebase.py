@@ -170,8 +170,11 @@ def _print_info(d: dict[str, Any]) -> None:
     feats = d["features"]
     states = feats.get("states")
     n_states = len(states) if isinstance(states, list) else states
+    from cbr.explain import class_noun
+
+    n = len(d["labels"])
     print(
-        f"{shown(d['name'])}: {d['cases']} cases, {len(d['labels'])} activities "
+        f"{shown(d['name'])}: {d['cases']} cases, {n} {class_noun(d['model'].get('target'), n)} "
         f"(created {d['created']}, posecbr {d['code_version']})"
     )
     # a QMP case base has no states or length of its own: one column per QMP
@@ -182,7 +185,7 @@ def _print_info(d: dict[str, Any]) -> None:
     )
     print(f"  features: {shape}; hash {d['feature_hash'][:12]}")
     print(f"  similarity: {_measure_words(d['similarity'])}")
-    _print_model(d["model"], len(d["labels"]), _changed_since_training(d["maintenance"]))
+    _print_model(d["model"], n, _changed_since_training(d["maintenance"]))
     for lab, n in d["labels"].items():
         print(f"  {n:6d}  {shown(lab)}")
     if d["maintenance"] or d["not_retained"]:
@@ -251,9 +254,11 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
         when = "" if j["current"] else " (the cases changed since: calibrated at run time)"
         print(f"  unknown judges stored: {', '.join(sorted(j['calibrated'] or {}))}{when}")
     elif m.get("k") is not None:
+        from cbr.explain import class_noun
+
         print(
-            "  unknown judges: none (fewer than three activities: segment and watch need "
-            "--unknown held-out)"
+            f"  unknown judges: none (fewer than three {class_noun(m.get('target'), 3)}: segment"
+            " and watch need --unknown held-out)"
             if n_activities < 3
             else "  unknown judges: none stored (the cases changed since training, or a model "
             "stored before they were): segment and watch calibrate them as they start"
@@ -508,8 +513,11 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     else:
         print(report.summary() + _unchanged(args.dry_run, dropped))
         if report.distribution_shift is not None:
+            from cbr.explain import class_noun
+
             print(
-                f"  largest per-activity mean shift: {report.distribution_shift:.3f} "
+                f"  largest per-{class_noun(stored.target)} mean shift:"
+                f" {report.distribution_shift:.3f} "
                 "pooled standard deviations"
             )
     return 0

@@ -223,7 +223,7 @@ def run(args: argparse.Namespace) -> int:
             results = classify_clips(stored, clips, truths, target)
         else:
             known = sorted(set(stored.classifier.case_base_.labels.tolist()))
-            label = check_feedback_label(args.feedback, known, args.new_label)
+            label = check_feedback_label(args.feedback, known, args.new_label, target)
     finally:
         store.close()
     if label is not None:

@@ -612,14 +612,17 @@ def _listed(sources: list[str], split: str, why: str) -> str:
     return f"skipped {piece} {why}: {', '.join(names)}{more}"
 
 
-def _indistinct(pairs: list[str], split: str) -> str:
-    """The note on cases nothing tells apart from a case of another activity."""
+def _indistinct(pairs: list[str], split: str, target: str | None = None) -> str:
+    """The note on cases nothing tells apart from a case of another activity (or class, for
+    another ``target``)."""
+    from cbr.explain import class_noun
     from cbr.stored import CASE_KINDS
 
     kind = counted(len(pairs), CASE_KINDS.get(split, "clip"))
     more = f" (and {len(pairs) - 1} more)" if len(pairs) > 1 else ""
     return (
-        f"note: {kind} with the same features as a case of another activity: nothing tells "
+        f"note: {kind} with the same features as a case of another {class_noun(target)}: "
+        "nothing tells "
         f"them apart (a still stretch, or a file copied under another label?): "
         f"{shown(pairs[0])}{more}"
     )
@@ -640,26 +643,30 @@ def _alike_labels(labels: Any) -> list[list[str]]:
 def _notes(args: argparse.Namespace, result: Any) -> None:
     """What the user should know of the case base stored, on stderr: activities spelt two
     ways, cases nothing tells apart, and a case base of windows segment cannot judge unknown
-    with."""
+    with. Activities are called classes when the case base predicts another column
+    (``--target correct``)."""
+    from cbr.explain import class_noun
+
     for group in _alike_labels(result.label_counts):
         names = " and ".join(", ".join(repr(g) for g in group).rsplit(", ", 1))
         print(
             shown(
                 f"note: {names} differ only in case or spacing: they are {len(group)} "
-                "activities (one spelt two ways in the labels?)"
+                f"{class_noun(args.target, len(group))} (one spelt two ways in the labels?)"
             ),
             file=sys.stderr,
         )
     if result.indistinct:
-        print(_indistinct(result.indistinct, args.split), file=sys.stderr)
+        print(_indistinct(result.indistinct, args.split, args.target), file=sys.stderr)
     if not args.append and args.split == "windows" and not result.judges_unknown:
         why = (
-            "fewer than three activities"
+            f"fewer than three {class_noun(args.target, 3)}"
             if len(result.label_counts) < 3
-            else "no activity with windows apart from each other"
+            else f"no {class_noun(args.target)} with windows apart from each other"
         )
         print(
-            f"note: segment and watch cannot tell stretches unlike every activity with this case"
+            f"note: segment and watch cannot tell stretches unlike every {class_noun(args.target)}"
+            " with this case"
             f" base ({why}) by default: run them with --unknown held-out",
             file=sys.stderr,
         )
@@ -690,8 +697,10 @@ def _report(args: argparse.Namespace, result: Any) -> None:
 
     if result.skipped or result.too_short:
         print(_skipped(result.skipped, result.too_short, args.split))
+    from cbr.explain import class_noun
+
     n = len(result.label_counts)
-    activities = f"{n} {'activity' if n == 1 else 'activities'}"
+    activities = f"{n} {class_noun(args.target, n)}"  # classes of another --target
     made = (
         f"({result.n_cases} added, of {activities})"  # the case base may hold more
         if args.append
