@@ -1,7 +1,7 @@
 """Leftovers fixed in session 27 (27b): ``convert`` keeps a labels CSV's columns as spelt and
 refuses one named as what it writes itself; the Python API refuses a clip too short to classify,
 as the commands do; a case base of correct / incorrect repetitions is worded as classes, not
-activities; ..."""
+activities. Each test says what happened before its fix."""
 
 from __future__ import annotations
 
