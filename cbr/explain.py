@@ -50,6 +50,8 @@ if TYPE_CHECKING:
     from .estimator import Solved
 
 SEEN_FRACTION = 0.15
+#: a QMP is shown by the similar cases when at least this share of them detect it
+SHARED_BY = 0.5
 #: a fluent state held at least this share of the clip is a steady property of it
 STEADY_FRACTION = 0.5
 MAX_LISTED = 6
@@ -215,9 +217,9 @@ class Contrast:
 @dataclass(frozen=True)
 class Explanation:
     """One clip's explanation: the answer (``label``, calibrated ``confidence``,
-    ``vote_share``), the retrieved cases one per clip (``neighbours``), the fluent states shared
-    with the similar cases and not (``matched``, ``not_seen``, ``only_here``; "(at times)"
-    when held under half the clip), the nearest case of another label with the checked
+    ``vote_share``), the retrieved cases one per clip (``neighbours``), the fluent states (or
+    QMPs) shared with the similar cases and not (``matched``, ``not_seen``, ``only_here``;
+    "(at times)" when held under half the clip), the nearest case of another label with the checked
     counterfactual (``contrast``), the four-line ``text``, the ``verbose`` text, every
     statement as a :class:`Claim` and whether the clip was compared as its mirror image."""
 
@@ -274,6 +276,7 @@ class _Reading:
     angles: np.ndarray  # (m,) bool: joint angles (degrees)
     states: np.ndarray  # (m,) bool: the share of the time a fluent state holds
     state_means: np.ndarray  # the columns of fluent states' clip means (presence lists)
+    qmps: np.ndarray  # the columns of a QMP vector's QMPs, each detected or not (presence lists)
     seen: np.ndarray  # (m,) the share of all cases at or above SEEN_FRACTION
     known: np.ndarray  # (m,) bool: measured in the clip (False: a fill, Problem.unseen)
 
@@ -348,13 +351,16 @@ def read(cb: CaseBase, problem: Problem) -> _Reading:
              if nm.endswith("@mean") and not nm.startswith((ANGLE_PREFIX, POSITION_PREFIX))],
             dtype=np.intp,
         )  # fmt: skip
+        cb.cache["qmps"] = np.flatnonzero(
+            view.binary & np.array(["@" not in n for n in view.names], dtype=bool)
+        )
         # of the whole case base, the same for every clip: read once, not per explanation
         cb.cache["seen"] = (view.of(cb.problems) >= SEEN_FRACTION).mean(axis=0)
     known = np.array([n.split("@", 1)[0] not in problem.unseen for n in view.names], dtype=bool)
     return _Reading(
         cb, view, profiles_of(cb), x, cb.cache["importance"], bool(problem.mirrored),
         cb.cache["readable"], cb.cache["angles"], cb.cache["states"], cb.cache["state_means"],
-        cb.cache["seen"], known,
+        cb.cache["qmps"], cb.cache["seen"], known,
     )  # fmt: skip
 
 
@@ -496,10 +502,12 @@ def presence_claims(
 ) -> tuple[list[Claim], list[Claim], list[Claim]]:
     """What the clip shares with its similar cases of ``label`` (``similar``: positions) and
     what not: fluent states (clip-summary means; for sequences, the mean over the clip) the
-    clip holds at least :data:`SEEN_FRACTION` of the time against the similar cases' mean.
-    A state is in one list only, and a difference within the spread of the state among cases
-    of one label is no presence against absence."""
-    cols = r.state_means
+    clip holds at least :data:`SEEN_FRACTION` of the time against the similar cases' mean, and
+    a QMP vector's QMPs, detected in the clip or not, against whether most of the similar
+    cases (at least :data:`SHARED_BY`) show them. A feature is in one list only, and a
+    difference within the spread of the feature among cases of one label is no presence
+    against absence."""
+    cols = np.concatenate([r.state_means, r.qmps]).astype(np.intp)
     if not len(cols):
         return [], [], []
     cases = r.view.of(r.cb.problems[similar])[:, cols].mean(axis=0)
@@ -507,7 +515,10 @@ def presence_claims(
     spread = r.prof.within[cols]
     distinct = 1.0 - r.seen[cols]
     apart = np.abs(here - cases) > spread
-    q_seen, c_seen = here >= SEEN_FRACTION, cases >= SEEN_FRACTION
+    # a fluent state is shown by the similar cases when their mean share of the time reaches
+    # SEEN_FRACTION; a QMP (detected or not in each case) when most of them detect it
+    shared_by = np.where(np.arange(len(cols)) < len(r.state_means), SEEN_FRACTION, SHARED_BY)
+    q_seen, c_seen = here >= SEEN_FRACTION, cases >= shared_by
     known = r.known[cols]  # a state the clip could not show is neither shared nor missed
     lists: list[list[Claim]] = []
     for mask, score in (
