@@ -654,9 +654,8 @@ def state_signal_values(
         )
         values[f, 21] = _angle(_project(_sub(lh, mid_hip), up), _project(forward, up), min_len)
         e = _sub(mid_ear, neck)
-        hl = 2.0 * math.sqrt(_dot(e, e))
-        if not hl > 0.0:
-            hl = np.nan
+        link = math.sqrt(_dot(e, e))
+        hl = 2.0 * link if link >= min_len else np.nan  # a degenerate link: no unit
         head_length[f] = hl
         for k in range(n_pairs):
             d = _sub(_get(p, f, near_a[k]), _get(p, f, near_b[k]))

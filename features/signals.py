@@ -198,8 +198,10 @@ def state_signals(seq: PoseSequence, backend: Literal["numba", "numpy"] = "numba
     angles = _angles(p)
     mid_ear = 0.5 * (p[:, JOINT_INDEX["left_ear"]] + p[:, JOINT_INDEX["right_ear"]])
     neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])
-    head_length = 2.0 * norm(mid_ear - neck)
-    head_length = np.where(head_length > 0, head_length, np.nan)
+    # a degenerate neck -> mid-ear link (shorter than MIN_LINK_M, as for every angle's links)
+    # gives no unit: the distances in head-lengths are unavailable
+    link = norm(mid_ear - neck)
+    head_length = np.where(link >= MIN_LINK_M, 2.0 * link, np.nan)
     dist_m = norm(p[:, _NEAR_A, :] - p[:, _NEAR_B, :])
     dist_hl = dist_m / head_length[:, None]
     values = np.concatenate([angles, dist_hl], axis=1)

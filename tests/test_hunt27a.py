@@ -7,6 +7,10 @@
   classification names the matched and unmatched features against the retrieved cases and
   the winning activity, in words" ("knees bending and straightening in rhythm, matched; arms
   raised, not seen").
+- A neck -> mid-ear link shorter than the degenerate-link bound (``MIN_LINK_M``, 1 micrometre)
+  but not exactly 0 was a head-length: every near distance divided by it read as hundreds of
+  thousands of head-lengths, "far from" with confidence 1. SPEC: a degenerate link gives an
+  unavailable value, not a silent one; the angles' links already followed that bound.
 
 Each expected value is worked out by hand in the test from SPEC's definitions.
 """
@@ -14,12 +18,16 @@ Each expected value is worked out by hand in the test from SPEC's definitions.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from cbr.casebase import CaseBase
 from cbr.consistency import contradictions
 from cbr.explain import Explanation, presence_claims, read
 from cbr.problem import FeatureConfig, Problem
 from cbr.similarity import Euclidean
+from features.fluents import evaluate, state_signals
+from features.geometry import MIN_LINK_M
+from tests.bodies import standing, to_sequence
 
 # ---- QMP-level explanations name the matched and unmatched QMPs ----------------------------
 
@@ -106,3 +114,41 @@ def test_a_qmp_the_clip_could_not_show_is_in_no_list() -> None:
     assert [c.words for c in matched] == ["knees bending and straightening in rhythm"]
     assert not_seen == []
     assert [c.words for c in only_here] == ["legs moving outward and in"]
+
+
+# ---- a degenerate head-length gives unavailable near fluents --------------------------------
+
+
+def _ears_at(link_m: float) -> dict[str, np.ndarray]:
+    """The standing body with both ears ``link_m`` above the neck (the shoulders' midpoint,
+    (0, 1.50, 0)), 0.08 m to either side: mid-ear -> neck is ``link_m`` long."""
+    body = standing()
+    body["left_ear"] = np.array([0.08, 1.50 + link_m, 0.0])
+    body["right_ear"] = np.array([-0.08, 1.50 + link_m, 0.0])
+    return body
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_a_head_length_of_a_degenerate_link_leaves_the_near_fluents_unavailable(
+    backend: str,
+) -> None:
+    """Mid-ear 0.4 micrometres above the neck: the link is degenerate (under MIN_LINK_M = 1e-6
+    m), so there is no head-length and every distance in head-lengths, and every near/far
+    confidence, is unavailable (NaN). Touching is in metres, not head-lengths: the left index
+    finger (0.20, 0.86, 0.02) to the nose (0, 1.63, 0.10) is sqrt(0.04 + 0.5929 + 0.0064) =
+    0.80 m, over 0.1 m: not touching (0), still known. Before, the near distances were
+    0.80 / 8e-7 = 10^6 head-lengths and "far from" held with confidence 1."""
+    assert 4e-7 < MIN_LINK_M
+    seq = to_sequence(_ears_at(4e-7), _ears_at(4e-7))
+    sig = state_signals(seq, backend)  # type: ignore[arg-type]
+    assert np.isnan(sig.head_length_m).all()
+    assert np.isnan(sig.column("left_index~nose")).all()
+    # the raw distances stay: left index (0.20, 0.86, 0.02) to right index (-0.20, ...): 0.40 m
+    assert sig.distances_m[0, 0] == pytest.approx(0.40)
+    res = evaluate(seq, backend=backend)  # type: ignore[arg-type]
+    assert np.isnan(res.column("near:left_index~nose.near")).all()
+    assert np.isnan(res.column("near:left_index~nose.far_from")).all()
+    assert res.column("near:left_index~nose.touching")[0] == 0.0
+    # a link just over the bound (2 micrometres) is a head-length, 4e-6 m: defined
+    ok = state_signals(to_sequence(_ears_at(2e-6)), backend)  # type: ignore[arg-type]
+    assert ok.head_length_m[0] == pytest.approx(4e-6)
