@@ -131,7 +131,12 @@ def _angles(p: np.ndarray) -> np.ndarray:
     for side, sign in (("left", 1.0), ("right", -1.0)):
         sh, el, wr = j(f"{side}_shoulder"), j(f"{side}_elbow"), j(f"{side}_wrist")
         hip, knee, ankle = j(f"{side}_hip"), j(f"{side}_knee"), j(f"{side}_ankle")
-        outward = sign * bf.left  # ⊥²torso of this side, pointing away from the body
+        # The outward axis: the body's left-right axis, pointing away from the body on this
+        # side. Not the paper's ⊥²torso of the side, (shoulder→hip) × ⊥torso, which leans
+        # with that side's shoulder-to-hip line (10-18° on UI-PRMD's skeletons, the shoulders
+        # wider than the hip joints) and would read an arm hanging straight down as half
+        # "outward" (SPEC: meaning wins over the literal vector).
+        outward = sign * bf.left
         upper_arm, upper_leg = el - sh, knee - hip
         cols[f"{side}_elbow"] = joint_angle(sh, el, wr)
         cols[f"{side}_knee"] = joint_angle(hip, knee, ankle)
