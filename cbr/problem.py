@@ -4,7 +4,9 @@ Fluent level: the per-frame confidences of the selected fluent states
 (:func:`features.fluents.evaluate`), with NaN handled consistently, resampled to ``length``
 frames: a ``(length, n_states)`` array. Euclidean compares it flattened; DTW and signatures
 compare it as a sequence. QMP level: the QMP feature vector (:func:`features.qmp.qmp_features`),
-binary by default (Euclidean then counts mismatched QMPs).
+binary by default (plain Euclidean then counts mismatched QMPs; with learned feature weights,
+which ``CaseBaseClassifier``'s ``feature_weights="auto"`` mostly chooses, each mismatch counts
+by its QMP's weight).
 
 Options of the fluent level: ``angles`` adds the named joint angles of the state signals
 (:func:`features.fluents.state_signals`, "left knee angle", divided by pi so they lie in [0, 1]

@@ -2,8 +2,11 @@
 
 For every state signal (joint angle in radians, joint distance in head-lengths) and every
 window, the derivative is fitted on the explicit-time library (:mod:`.library`) with STLSQ
-(:mod:`.optimizer`) for a range of periods T, and the period with the smallest residual is kept
-(paper section "High level: QMPs"). All signals and windows are fitted together as array work.
+(:mod:`.optimizer`) for a range of periods T, and the best period is kept: by default the one
+with the smallest BIC, the residual penalised by the number of terms
+(``QMPConfig(selection="residual")``: the smallest residual, the rule of the paper's section
+"High level: QMPs" and of SPEC.md; see :func:`selection_score`). All signals and windows are
+fitted together as array work.
 
 Readable quantities derived from the coefficients ``(c0, c1, a1, b1, a2, b2)`` of
 ``x' = c0 + c1 t + a1 cos(wt) + b1 sin(wt) + a2 cos(wt/2) + b2 sin(wt/2)``, ``w = 2 pi / T``:
