@@ -18,8 +18,10 @@ BVH names tried in turn (compared in lower case, after any ``prefix:``), each wi
 joint's origin or its End Site is meant. Joint origins are joint centres (``LeftUpLeg`` origin
 = hip, ``LeftLeg`` = knee, ``LeftFoot`` = ankle, ``LeftArm`` = shoulder, ``LeftForeArm`` =
 elbow, ``LeftHand`` = wrist, ``LeftHandIndex1`` = index knuckle); the toe joint's End Site is
-the tip of the foot (``left_foot_index``). No common BVH skeleton has face landmarks or heels:
-they stay NaN.
+the tip of the foot (``left_foot_index``). A skeleton without ``LeftArm`` names its shoulder
+joint otherwise: Poser/DAZ's ``lShldr`` (after the clavicle ``lCollar``) or a skeleton named by
+joints (``LeftShoulder``, ``LeftElbow``, ``LeftWrist``); the shoulder is that joint's origin.
+No common BVH skeleton has face landmarks or heels: they stay NaN.
 """
 
 from __future__ import annotations
@@ -50,7 +52,8 @@ def _side_map(side: str) -> dict[str, tuple[tuple[str, str], ...]]:
         f"{s}_foot_index": ((f"{s}toebase", "end"), (f"{s}toe", "end"), (f"{s}toes", "end"),
                             (f"{s}toe_end", "joint"), (f"{s}toebase_end", "joint")),
         f"{s}_shoulder": ((f"{s}arm", "joint"), (f"{s}upperarm", "joint"),
-                          (f"{s}shoulder", "end"), (f"{c}shldr", "end"), (f"{c}uparm", "joint")),
+                          (f"{s}shoulder", "joint"), (f"{c}shldr", "joint"),
+                          (f"{c}uparm", "joint")),
         f"{s}_elbow": ((f"{s}forearm", "joint"), (f"{s}elbow", "joint"), (f"{c}forearm", "joint"),
                        (f"{s}lowerarm", "joint")),
         f"{s}_wrist": ((f"{s}hand", "joint"), (f"{s}wrist", "joint"), (f"{c}hand", "joint")),
