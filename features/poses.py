@@ -3,7 +3,8 @@
 File format (``.npz``, written with :func:`save_pose`, read with :func:`load_pose`):
 
 - ``positions``: float array ``(frames, joints, 3)``, metres, right-handed, y up; NaN = missing
-- ``joint_names``: string array ``(joints,)`` (canonical: the 33 BlazePose names)
+- ``joint_names``: string array ``(joints,)`` (canonical: the 33 BlazePose names; a ``kinect_v2``
+  file may name Kinect's 25 joints, mapped by :data:`features.skeleton.SKELETON_JOINTS`)
 - ``fps``: scalar float, frames per second
 - ``confidence`` (optional): float array ``(frames, joints)`` in [0, 1]
 - ``skeleton`` (optional): string, the source skeleton (default ``blazepose33``)
@@ -35,7 +36,7 @@ from features.errors import ConfigError, PoseFileError
 from features.fileio import atomic_path
 from features.text import size_words
 
-from .skeleton import BLAZEPOSE_33, CANONICAL_SKELETON, KNOWN_SKELETONS
+from .skeleton import BLAZEPOSE_33, CANONICAL_SKELETON, KNOWN_SKELETONS, SKELETON_JOINTS
 
 # What a pose can physically be. A coordinate beyond MAX_COORDINATE_M (10 km) is no person's
 # joint in metres but a wrong unit or garbage, and would overflow the geometry into a confident
@@ -236,25 +237,32 @@ class PoseSequence:
         return out
 
     def to_canonical(self) -> PoseSequence:
-        """The same sequence on the 33 BlazePose joints, in canonical order (NaN where absent)."""
+        """The same sequence on the 33 BlazePose joints, in canonical order (NaN where absent).
+
+        A skeleton with a declared joint map (Kinect v2, :data:`SKELETON_JOINTS`) may name its
+        own joints; any other names BlazePose landmarks. PoseFileError for other names."""
         if self.joint_names == BLAZEPOSE_33:
             return self
-        unknown = [n for n in self.joint_names if n not in BLAZEPOSE_33]
+        own, joint_map = SKELETON_JOINTS.get(self.skeleton, ((), {}))
+        unknown = [n for n in self.joint_names if n not in BLAZEPOSE_33 and n not in own]
         if unknown:
+            also = f" nor {self.skeleton} joint names" if own else ""
             raise PoseFileError(
-                "joint names are not BlazePose landmark names: " + ", ".join(unknown[:5]),
+                f"joint names are not BlazePose landmark names{also}: " + ", ".join(unknown[:5]),
                 self.source or None,
             )
-        conf = None
-        if self.confidence is not None:
-            index = {n: i for i, n in enumerate(self.joint_names)}
-            conf = np.full((self.n_frames, len(BLAZEPOSE_33)), np.nan)  # absent: unknown
-            for k, n in enumerate(BLAZEPOSE_33):
-                if n in index:
-                    conf[:, k] = self.confidence[:, index[n]]
-        return replace(
-            self, positions=self.joints(BLAZEPOSE_33), joint_names=BLAZEPOSE_33, confidence=conf
-        )
+        # each BlazePose joint from the file's joint of that name, else from its own joint the
+        # skeleton's declared map names for it; NaN (positions) and unknown (confidence) else
+        index = {n: i for i, n in enumerate(self.joint_names)}
+        source = [index.get(n, index.get(joint_map.get(n, ""))) for n in BLAZEPOSE_33]
+        pos = np.full((self.n_frames, len(BLAZEPOSE_33), 3), np.nan)
+        conf = None if self.confidence is None else np.full(pos.shape[:2], np.nan)
+        for k, i in enumerate(source):
+            if i is not None:
+                pos[:, k] = self.positions[:, i]
+                if conf is not None and self.confidence is not None:
+                    conf[:, k] = self.confidence[:, i]
+        return replace(self, positions=pos, joint_names=BLAZEPOSE_33, confidence=conf)
 
     def slice_frames(self, start: int, stop: int | None) -> PoseSequence:
         """Frames ``start`` (inclusive) to ``stop`` (exclusive; None: the end), as Python

@@ -58,3 +58,38 @@ KNOWN_SKELETONS: frozenset[str] = frozenset(
         "coco17",
     }
 )
+
+# Kinect v2's 25 joints as its SDK names them (``JointType``). Its camera space is already
+# the canonical frame: metres, right-handed, y up; ``...Left`` is the person's left.
+KINECT_V2_JOINTS: tuple[str, ...] = (
+    "SpineBase", "SpineMid", "Neck", "Head",
+    "ShoulderLeft", "ElbowLeft", "WristLeft", "HandLeft",
+    "ShoulderRight", "ElbowRight", "WristRight", "HandRight",
+    "HipLeft", "KneeLeft", "AnkleLeft", "FootLeft",
+    "HipRight", "KneeRight", "AnkleRight", "FootRight",
+    "SpineShoulder", "HandTipLeft", "ThumbLeft", "HandTipRight", "ThumbRight",
+)  # fmt: skip
+
+# BlazePose joint -> Kinect v2 joint. Kinect's Head is the skull's centre (no face landmark),
+# HandLeft the middle of the hand and HandTip/Thumb the finger tips (not BlazePose's knuckles):
+# those BlazePose joints stay NaN. FootLeft is the front of the foot, as UI-PRMD's toes.
+KINECT_V2_TO_BLAZEPOSE: dict[str, str] = {
+    f"{side}_{part}": f"{kinect}{side.capitalize()}"
+    for side in ("left", "right")
+    for part, kinect in (
+        ("shoulder", "Shoulder"),
+        ("elbow", "Elbow"),
+        ("wrist", "Wrist"),
+        ("hip", "Hip"),
+        ("knee", "Knee"),
+        ("ankle", "Ankle"),
+        ("foot_index", "Foot"),
+    )
+}
+
+# The declared joint maps of the skeletons whose pose files name their own joints (any other
+# skeleton's file names BlazePose joints): the skeleton's joints, and BlazePose joint -> its
+# joint. COCO-17's keypoint names are BlazePose's own.
+SKELETON_JOINTS: dict[str, tuple[tuple[str, ...], dict[str, str]]] = {
+    "kinect_v2": (KINECT_V2_JOINTS, KINECT_V2_TO_BLAZEPOSE),
+}

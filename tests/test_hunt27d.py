@@ -10,8 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from features.errors import PoseFileError
+from features.poses import PoseSequence, load_pose, save_pose
 from features.readers import read_bvh
 from features.skeleton import JOINT_INDEX
+from posecbr.cli import main
 
 # ---- BVH ---------------------------------------------------------------------------------
 
@@ -89,3 +92,76 @@ def test_bvh_shoulder_joint_named_shldr_or_shoulder_is_read(tmp_path: Path, arm:
     # the elbow 0.3 m below the shoulder, the wrist 0.25 m further
     np.testing.assert_allclose(seq.positions[0, JOINT_INDEX["left_elbow"]], [0.2, 1.3, 0.0])
     np.testing.assert_allclose(seq.positions[0, JOINT_INDEX["left_wrist"]], [0.2, 1.05, 0.0])
+
+
+# ---- Kinect v2 pose files ----------------------------------------------------------------
+
+# A person 2.5 m in front of a Kinect v2, facing it (-z in Kinect's camera space, where x is
+# the sensor's left): the person's left is -x. Left arm straight up, right arm hanging.
+_KINECT_POSE = {
+    "SpineBase": (0.0, 1.0, 2.5),
+    "SpineMid": (0.0, 1.25, 2.5),
+    "SpineShoulder": (0.0, 1.5, 2.5),
+    "Neck": (0.0, 1.55, 2.5),
+    "Head": (0.0, 1.7, 2.5),
+    "ShoulderLeft": (-0.2, 1.5, 2.5),
+    "ElbowLeft": (-0.2, 1.8, 2.5),
+    "WristLeft": (-0.2, 2.05, 2.5),
+    "HandLeft": (-0.2, 2.12, 2.5),
+    "ShoulderRight": (0.2, 1.5, 2.5),
+    "ElbowRight": (0.2, 1.2, 2.5),
+    "WristRight": (0.2, 0.95, 2.5),
+    "HandRight": (0.2, 0.88, 2.5),
+    "HipLeft": (-0.1, 0.95, 2.5),
+    "KneeLeft": (-0.1, 0.5, 2.5),
+    "AnkleLeft": (-0.1, 0.08, 2.5),
+    "FootLeft": (-0.1, 0.03, 2.38),
+    "HipRight": (0.1, 0.95, 2.5),
+    "KneeRight": (0.1, 0.5, 2.5),
+    "AnkleRight": (0.1, 0.08, 2.5),
+    "FootRight": (0.1, 0.03, 2.38),
+}
+
+
+def _kinect_file(path: Path, frames: int = 20) -> Path:
+    names = tuple(_KINECT_POSE)
+    pos = np.repeat(np.array([list(_KINECT_POSE.values())]), frames, axis=0)
+    conf = np.full(pos.shape[:2], 0.9)
+    conf[:, names.index("ShoulderLeft")] = 0.5
+    seq = PoseSequence(pos, names, 30.0, confidence=conf, skeleton="kinect_v2")
+    return save_pose(seq, path)
+
+
+def test_kinect_v2_pose_file_maps_onto_blazepose(tmp_path: Path) -> None:
+    """Before: a pose file of skeleton ``kinect_v2`` (a known skeleton) naming Kinect's joints
+    was refused: "joint names are not BlazePose landmark names: SpineBase, ..."; the spec's
+    declared Kinect v2 joint map did not exist."""
+    seq = load_pose(_kinect_file(tmp_path / "kinect.npz")).to_canonical()
+    p = seq.positions[0]
+    np.testing.assert_allclose(p[JOINT_INDEX["left_shoulder"]], [-0.2, 1.5, 2.5])
+    np.testing.assert_allclose(p[JOINT_INDEX["right_wrist"]], [0.2, 0.95, 2.5])
+    np.testing.assert_allclose(p[JOINT_INDEX["left_foot_index"]], [-0.1, 0.03, 2.38])
+    # Kinect has no face landmarks, knuckles or heels: NaN, and their confidence unknown
+    for missing in ("nose", "left_index", "left_thumb", "right_heel"):
+        assert np.isnan(p[JOINT_INDEX[missing]]).all(), missing
+        assert np.isnan(seq.confidence[0, JOINT_INDEX[missing]]), missing
+    assert seq.confidence[0, JOINT_INDEX["left_shoulder"]] == 0.5
+    assert seq.confidence[0, JOINT_INDEX["right_shoulder"]] == 0.9
+
+
+def test_kinect_v2_left_arm_raised_reads_left(tmp_path: Path, capsys) -> None:
+    """Before: ``describe`` refused the file (see above). The person's left arm (Kinect's
+    ``ElbowLeft``/``WristLeft``, above the shoulder) is the one raised."""
+    path = _kinect_file(tmp_path / "kinect.npz")
+    assert main(["describe", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "left arm raised" in out and "right arm lowered" in out, out
+    assert "right arm raised" not in out and "left arm lowered" not in out, out
+
+
+def test_other_skeleton_with_foreign_joint_names_is_still_refused(tmp_path: Path) -> None:
+    """Kinect's names belong to ``kinect_v2`` only: a BlazePose file naming them is refused."""
+    names = tuple(_KINECT_POSE)
+    seq = PoseSequence(np.zeros((2, len(names), 3)), names, 30.0)
+    with pytest.raises(PoseFileError, match="not BlazePose landmark names: SpineBase"):
+        seq.to_canonical()
