@@ -12,7 +12,7 @@ import pytest
 
 from features.errors import PoseFileError
 from features.poses import PoseSequence, load_pose, save_pose
-from features.readers import read_bvh
+from features.readers import read_asf_amc, read_bvh
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
 
@@ -165,3 +165,81 @@ def test_other_skeleton_with_foreign_joint_names_is_still_refused(tmp_path: Path
     seq = PoseSequence(np.zeros((2, len(names), 3)), names, 30.0)
     with pytest.raises(PoseFileError, match="not BlazePose landmark names: SpineBase"):
         seq.to_canonical()
+
+
+# ---- ASF/AMC -----------------------------------------------------------------------------
+
+# One left arm: clavicle 0.2 m along +x (the skeleton's left), humerus 0.3 m and radius
+# 0.25 m down. ``length 0.0254`` makes one ASF unit one metre (metres = value x 0.0254 / 0.0254).
+_ASF = """:version 1.10
+:name arm
+:units
+  mass 1.0
+  length 0.0254
+  angle deg
+:root
+  order TX TY TZ RX RY RZ
+  axis XYZ
+  position 0 0 0
+  orientation 0 0 0
+:bonedata
+  begin
+    id 1
+    name lclavicle
+    direction 1 0 0
+    length 0.2
+    axis 0 0 0 XYZ
+    dof rx ry rz
+  end
+  begin
+    id 2
+    name lhumerus
+    direction 0 -1 0
+    length 0.3
+    axis 0 0 0 XYZ
+    dof rx ry rz
+  end
+  begin
+    id 3
+    name lradius
+    direction 0 -1 0
+    length 0.25
+    axis 0 0 0 XYZ
+    dof rx
+  end
+:hierarchy
+  begin
+    root lclavicle
+    lclavicle lhumerus
+    lhumerus lradius
+  end
+"""
+
+
+def _amc(bones: str, frames: int = 3) -> str:
+    return ":FULLY-SPECIFIED\n:DEGREES\n" + "".join(
+        f"{f}\nroot 0 1 0 0 0 0\n{bones}" for f in range(1, frames + 1)
+    )
+
+
+def test_amc_without_a_bone_leaves_it_and_below_nan(tmp_path: Path) -> None:
+    """Before: an AMC file that never lists ``lhumerus`` (a bone the skeleton says turns) drew
+    the arm in the ASF's rest pose: an elbow at (0.2, 0.7, 0) and a wrist below it that no
+    frame recorded."""
+    asf = tmp_path / "arm.asf"
+    asf.write_text(_ASF)
+    full = tmp_path / "full.amc"
+    full.write_text(_amc("lclavicle 0 0 0\nlhumerus 0 0 0\nlradius 0\n"))
+    seq = read_asf_amc(asf, full)
+    # root at (0, 1, 0); the clavicle ends 0.2 m to the left, the humerus 0.3 m below it
+    np.testing.assert_allclose(seq.positions[0, JOINT_INDEX["left_shoulder"]], [0.2, 1.0, 0.0])
+    np.testing.assert_allclose(seq.positions[0, JOINT_INDEX["left_elbow"]], [0.2, 0.7, 0.0])
+    np.testing.assert_allclose(seq.positions[0, JOINT_INDEX["left_wrist"]], [0.2, 0.45, 0.0])
+    partial = tmp_path / "partial.amc"
+    partial.write_text(_amc("lclavicle 0 0 0\nlradius 0\n"))
+    seq = read_asf_amc(asf, partial)
+    np.testing.assert_allclose(
+        seq.positions[:, JOINT_INDEX["left_shoulder"]], [[0.2, 1.0, 0.0]] * 3
+    )
+    assert np.isnan(seq.positions[:, JOINT_INDEX["left_elbow"]]).all()
+    assert np.isnan(seq.positions[:, JOINT_INDEX["left_wrist"]]).all()

@@ -515,7 +515,10 @@ def _euler(letters: str, angles: np.ndarray, degrees: bool) -> np.ndarray:
 
 
 def forward_kinematics(skel: Skeleton, motion: Motion) -> tuple[tuple[str, ...], np.ndarray]:
-    """End points of every bone in metres: names ``(bones,)`` and ``(frames, bones, 3)``."""
+    """End points of every bone in metres: names ``(bones,)`` and ``(frames, bones, 3)``.
+
+    A bone with rotation dofs that the AMC file never lists has an unknown rotation: its end
+    point and those of the bones below it are NaN."""
     frames = motion.n_frames
     degrees = skel.angle_deg if motion.angle_deg is None else motion.angle_deg
     scale = skel.metres_per_unit
@@ -546,6 +549,10 @@ def forward_kinematics(skel: Skeleton, motion: Motion) -> tuple[tuple[str, ...],
             vals = motion.values[name][:, [i for i, _ in rot_dofs]]
             m = _euler("".join(_DOF_AXES[d] for _, d in rot_dofs), vals, degrees)
             local = c @ m @ c.T
+        elif rot_dofs:
+            # the bone turns but the AMC gives it no values: its end and everything below it
+            # are unknown (NaN), not the rest pose
+            local = np.full((frames, 3, 3), np.nan)
         else:
             local = np.broadcast_to(np.eye(3), (frames, 3, 3))
         g = glob[bone.parent] @ local
