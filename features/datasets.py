@@ -47,7 +47,13 @@ from features.progress import progress
 from .poses import PoseSequence, load_pose, pose_file_length
 from .readers.asfamc import hdm05_metadata, read_asf_amc
 from .readers.bvh import read_bvh
-from .readers.uiprmd import UIPRMD_MOVEMENTS, read_uiprmd_kinect, read_uiprmd_vicon, uiprmd_metadata
+from .readers.uiprmd import (
+    UIPRMD_MOVEMENTS,
+    read_uiprmd_kinect,
+    read_uiprmd_vicon,
+    uiprmd_metadata,
+    uiprmd_sensor,
+)
 
 VIDEO_SUFFIXES = frozenset({".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v"})
 POSE_SUFFIXES = frozenset({".npz"})
@@ -118,7 +124,7 @@ def load_clip(path: str | Path) -> PoseSequence:
         seq: PoseSequence = estimate_poses(path)
         return seq.to_canonical()
     if re.search(r"_positions(_inc)?\.txt(\.gz)?$", path.name):
-        if "vicon" in str(path).lower():
+        if uiprmd_sensor(path) == "vicon":
             return read_uiprmd_vicon(path)
         return read_uiprmd_kinect(path)
     if suffix == ".amc":

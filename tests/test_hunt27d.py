@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from features.datasets import load_clip
 from features.errors import PoseFileError
 from features.poses import PoseSequence, load_pose, save_pose
 from features.readers import read_asf_amc, read_bvh
@@ -243,3 +244,30 @@ def test_amc_without_a_bone_leaves_it_and_below_nan(tmp_path: Path) -> None:
     )
     assert np.isnan(seq.positions[:, JOINT_INDEX["left_elbow"]]).all()
     assert np.isnan(seq.positions[:, JOINT_INDEX["left_wrist"]]).all()
+
+
+# ---- UI-PRMD files outside their folders -------------------------------------------------
+
+
+def _rows(width: int, value: float, n: int = 4) -> str:
+    return "\n".join(",".join([f"{value:g}"] * width) for _ in range(n)) + "\n"
+
+
+def test_uiprmd_sensor_is_told_by_the_file_not_its_folder(tmp_path: Path) -> None:
+    """Before: a UI-PRMD positions file was read as Vicon when "vicon" appeared anywhere in its
+    path, else as Kinect. A Vicon file copied to ``clips/`` was refused for lacking a Kinect
+    angles file; a Kinect file in ``vicon_study/`` for having 66 numbers, not 117. The width
+    of a row tells them apart: Kinect 22 joints x 3, Vicon 39 markers x 3."""
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    (clips / "m01_s01_e01_positions.txt").write_text(_rows(117, 500.0))
+    seq = load_clip(clips / "m01_s01_e01_positions.txt")
+    assert (seq.skeleton, seq.fps, seq.n_frames) == ("uiprmd_vicon", 100.0, 4)
+    # every marker at (500, 500, 500) mm: the knee marker at 0.5 m on each canonical axis
+    np.testing.assert_allclose(seq.positions[0, JOINT_INDEX["left_knee"]], [0.5, 0.5, 0.5])
+    study = tmp_path / "vicon_study"
+    study.mkdir()
+    (study / "m01_s01_e01_positions.txt").write_text(_rows(66, 0.0))
+    (study / "m01_s01_e01_angles.txt").write_text(_rows(66, 0.0))
+    seq = load_clip(study / "m01_s01_e01_positions.txt")
+    assert (seq.skeleton, seq.fps, seq.n_frames) == ("uiprmd_kinect", 30.0, 4)

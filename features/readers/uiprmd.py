@@ -72,7 +72,9 @@ face, pinky, thumb  (none)                            no such marker: NaN
 
 from __future__ import annotations
 
+import gzip
 import re
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -145,6 +147,28 @@ VICON_TO_BLAZEPOSE: dict[str, tuple[str, ...]] = {
     "right_heel": ("RHEE",),
     "right_foot_index": ("RTOE",),
 }
+
+
+def uiprmd_sensor(positions_path: Path) -> str:
+    """``"kinect"`` or ``"vicon"``: which sensor a UI-PRMD positions file is from, by the width
+    of its first row (Kinect 66 numbers, Vicon 117), whatever folder it was copied to; by its
+    folder (a path part ``Vicon``) when the first row is neither, so that reader names the
+    problem. Raises DataError naming the file when it cannot be read."""
+    widths = {len(KINECT_JOINTS) * 3: "kinect", len(VICON_MARKERS) * 3: "vicon"}
+    try:
+        opener = gzip.open if positions_path.suffix == ".gz" else open
+        with opener(positions_path, "rb") as fh:
+            first = b""
+            while not first.strip():
+                first = fh.readline(100_000)
+                if not first:
+                    break
+    except (OSError, EOFError, zlib.error) as exc:
+        raise DataError(f"cannot read ({type(exc).__name__}: {exc})", positions_path) from None
+    sensor = widths.get(len(first.split(b",")) if first.strip() else 0)
+    if sensor is not None:
+        return sensor
+    return "vicon" if any(p.lower() == "vicon" for p in positions_path.parts) else "kinect"
 
 
 def angles_path_for(positions_path: Path) -> Path:
