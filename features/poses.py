@@ -36,7 +36,13 @@ from features.errors import ConfigError, PoseFileError
 from features.fileio import atomic_path
 from features.text import size_words
 
-from .skeleton import BLAZEPOSE_33, CANONICAL_SKELETON, KNOWN_SKELETONS, SKELETON_JOINTS
+from .skeleton import (
+    BLAZEPOSE_33,
+    CANONICAL_SKELETON,
+    JOINT_INDEX,
+    KNOWN_SKELETONS,
+    SKELETON_JOINTS,
+)
 
 # What a pose can physically be. A coordinate beyond MAX_COORDINATE_M (10 km) is no person's
 # joint in metres but a wrong unit or garbage, and would overflow the geometry into a confident
@@ -239,29 +245,46 @@ class PoseSequence:
     def to_canonical(self) -> PoseSequence:
         """The same sequence on the 33 BlazePose joints, in canonical order (NaN where absent).
 
-        A skeleton with a declared joint map (Kinect v2, :data:`SKELETON_JOINTS`) may name its
-        own joints; any other names BlazePose landmarks. PoseFileError for other names."""
+        Joint names are BlazePose landmark names, in any case (MediaPipe's ``PoseLandmark``
+        names are ``LEFT_SHOULDER``, ...); a skeleton with a declared joint map (Kinect v2,
+        :data:`SKELETON_JOINTS`) may name its own joints. PoseFileError for other names, or two
+        names for one joint."""
         if self.joint_names == BLAZEPOSE_33:
             return self
         own, joint_map = SKELETON_JOINTS.get(self.skeleton, ((), {}))
-        unknown = [n for n in self.joint_names if n not in BLAZEPOSE_33 and n not in own]
+        mapped = {theirs: blazepose for blazepose, theirs in joint_map.items()}
+        index: dict[str, int] = {}  # BlazePose joint -> the file's joint for it
+        unknown = []
+        for i, name in enumerate(self.joint_names):
+            target = name if name in JOINT_INDEX else name.lower()
+            if target not in JOINT_INDEX:
+                if name not in own:
+                    unknown.append(name)
+                    continue
+                if name not in mapped:
+                    continue  # a joint of the skeleton with no BlazePose twin
+                target = mapped[name]
+            if target in index:
+                raise PoseFileError(
+                    f"joint names {self.joint_names[index[target]]!r} and {name!r} are both"
+                    f" BlazePose's {target}",
+                    self.source or None,
+                )
+            index[target] = i
         if unknown:
             also = f" nor {self.skeleton} joint names" if own else ""
             raise PoseFileError(
                 f"joint names are not BlazePose landmark names{also}: " + ", ".join(unknown[:5]),
                 self.source or None,
             )
-        # each BlazePose joint from the file's joint of that name, else from its own joint the
-        # skeleton's declared map names for it; NaN (positions) and unknown (confidence) else
-        index = {n: i for i, n in enumerate(self.joint_names)}
-        source = [index.get(n, index.get(joint_map.get(n, ""))) for n in BLAZEPOSE_33]
+        # NaN (positions) and unknown (confidence) for the joints the file lacks
         pos = np.full((self.n_frames, len(BLAZEPOSE_33), 3), np.nan)
         conf = None if self.confidence is None else np.full(pos.shape[:2], np.nan)
-        for k, i in enumerate(source):
-            if i is not None:
-                pos[:, k] = self.positions[:, i]
-                if conf is not None and self.confidence is not None:
-                    conf[:, k] = self.confidence[:, i]
+        for target, i in index.items():
+            k = JOINT_INDEX[target]
+            pos[:, k] = self.positions[:, i]
+            if conf is not None and self.confidence is not None:
+                conf[:, k] = self.confidence[:, i]
         return replace(self, positions=pos, joint_names=BLAZEPOSE_33, confidence=conf)
 
     def slice_frames(self, start: int, stop: int | None) -> PoseSequence:

@@ -16,6 +16,7 @@ from features.poses import PoseSequence, load_pose, save_pose
 from features.readers import read_asf_amc, read_bvh
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
+from tests.badinput import refused
 
 # ---- BVH ---------------------------------------------------------------------------------
 
@@ -271,3 +272,32 @@ def test_uiprmd_sensor_is_told_by_the_file_not_its_folder(tmp_path: Path) -> Non
     (study / "m01_s01_e01_angles.txt").write_text(_rows(66, 0.0))
     seq = load_clip(study / "m01_s01_e01_positions.txt")
     assert (seq.skeleton, seq.fps, seq.n_frames) == ("uiprmd_kinect", 30.0, 4)
+
+
+# ---- joint names in MediaPipe's spelling -------------------------------------------------
+
+
+def test_mediapipe_upper_case_joint_names_are_blazepose_joints(tmp_path: Path, capsys) -> None:
+    """Before: a pose file naming its joints as MediaPipe's ``PoseLandmark`` does
+    (``LEFT_SHOULDER``, the names the canonical skeleton says it follows) was refused: "joint
+    names are not BlazePose landmark names: LEFT_SHOULDER, ..."."""
+    from features.skeleton import KINECT_V2_TO_BLAZEPOSE
+
+    names = tuple(n.upper() for n in KINECT_V2_TO_BLAZEPOSE)
+    pos = np.array([[_KINECT_POSE[k] for k in KINECT_V2_TO_BLAZEPOSE.values()]] * 20)
+    path = save_pose(PoseSequence(pos, names, 30.0), tmp_path / "mediapipe.npz")
+    seq = load_pose(path).to_canonical()
+    np.testing.assert_allclose(seq.positions[0, JOINT_INDEX["left_elbow"]], [-0.2, 1.8, 2.5])
+    assert np.isnan(seq.positions[0, JOINT_INDEX["nose"]]).all()
+    assert main(["describe", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "left arm raised" in out and "right arm lowered" in out, out
+
+
+def test_two_names_for_one_joint_are_refused(tmp_path: Path, capsys) -> None:
+    """``nose`` and ``NOSE`` in one file name one joint twice, now that names are read in any
+    case: refused in one line naming both, neither silently dropped. (Before: refused as "not
+    BlazePose landmark names: NOSE".)"""
+    names = ("nose", "NOSE", "left_shoulder")
+    path = save_pose(PoseSequence(np.zeros((3, 3, 3)), names, 30.0), tmp_path / "twice.npz")
+    refused(["describe", str(path)], tmp_path, capsys, "twice.npz", "'nose' and 'NOSE'")
