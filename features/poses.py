@@ -194,11 +194,7 @@ class PoseSequence:
                 )
             _check_confidence(conf, where)
             object.__setattr__(self, "confidence", conf)
-        if not isinstance(self.skeleton, str) or self.skeleton not in KNOWN_SKELETONS:
-            raise PoseFileError(
-                f"unknown skeleton {self.skeleton!r} (known: {', '.join(sorted(KNOWN_SKELETONS))})",
-                where,
-            )
+        object.__setattr__(self, "skeleton", _skeleton(self.skeleton, where))
         if not isinstance(self.metadata, Mapping):
             raise PoseFileError(
                 f"metadata must be a mapping of names, not {type(self.metadata).__name__}",
@@ -302,6 +298,16 @@ class PoseSequence:
         meta = dict(self.metadata)
         meta.update(updates)
         return replace(self, metadata=meta)
+
+
+def _skeleton(name: Any, where: str | None) -> str:
+    """A known skeleton's name, as the project spells it ("Kinect_V2" is ``kinect_v2``);
+    PoseFileError for any other."""
+    if isinstance(name, str) and name.strip().lower() in KNOWN_SKELETONS:
+        return name.strip().lower()
+    raise PoseFileError(
+        f"unknown skeleton {name!r} (known: {', '.join(sorted(KNOWN_SKELETONS))})", where
+    )
 
 
 def _source_text(source: Any) -> str:

@@ -301,3 +301,21 @@ def test_two_names_for_one_joint_are_refused(tmp_path: Path, capsys) -> None:
     names = ("nose", "NOSE", "left_shoulder")
     path = save_pose(PoseSequence(np.zeros((3, 3, 3)), names, 30.0), tmp_path / "twice.npz")
     refused(["describe", str(path)], tmp_path, capsys, "twice.npz", "'nose' and 'NOSE'")
+
+
+def test_skeleton_name_in_another_case_is_the_known_skeleton(tmp_path: Path) -> None:
+    """Before: ``skeleton="Kinect_V2"`` (or ``"BlazePose33"``) was refused as an unknown
+    skeleton, though the message listed it as known in lower case."""
+    names = tuple(_KINECT_POSE)
+    pos = np.array([list(_KINECT_POSE.values())] * 3)
+    path = tmp_path / "kinect.npz"
+    save_pose(PoseSequence(pos, names, 30.0, skeleton="kinect_v2"), path)
+    np.savez(tmp_path / "k2.npz", **{**np.load(path), "skeleton": np.array("Kinect_V2")})
+    seq = load_pose(tmp_path / "k2.npz")
+    assert seq.skeleton == "kinect_v2"
+    np.testing.assert_allclose(
+        seq.to_canonical().positions[0, JOINT_INDEX["left_knee"]], [-0.1, 0.5, 2.5]
+    )
+    assert (
+        PoseSequence(pos[:, :1], ("nose",), 30.0, skeleton="BlazePose33").skeleton == "blazepose33"
+    )
