@@ -152,10 +152,20 @@ def is_uiprmd_folder(path: str | Path) -> bool:
 
 
 def _amc_files(path: Path) -> list[Path]:
-    return sorted(p for p in path.rglob("*") if p.suffix.lower() == ".amc" and p.is_file())
+    """The AMC files under ``path`` (any depth), none hidden or in a hidden folder."""
+    return sorted(
+        p
+        for p in path.rglob("*")
+        if p.suffix.lower() == ".amc"
+        and not any(part.startswith(".") for part in p.relative_to(path).parts)
+        and p.is_file()
+    )
 
 
-def _clip_files(folder: Path) -> list[Path]:
+def clip_files(folder: Path) -> list[Path]:
+    """The clip files of ``folder`` (not its subfolders), in name order: files whose suffix
+    is in :data:`CLIP_SUFFIXES`, not hidden (``._clip.npz``, macOS's resource fork on a
+    copied disk, is no clip); what every command reads from a folder of clips."""
     return sorted(
         p
         for p in folder.iterdir()
@@ -177,9 +187,9 @@ def detect_kind(path: str | Path) -> str:
     if _amc_files(path):
         return "asf_amc"
     subdirs = sorted(p for p in path.iterdir() if p.is_dir() and not p.name.startswith("."))
-    if any(_clip_files(d) for d in subdirs):
+    if any(clip_files(d) for d in subdirs):
         return "class_folders"
-    if _clip_files(path):
+    if clip_files(path):
         return "pose_folder"
     raise DataError(
         "cannot tell what dataset this is: expected a UI-PRMD or HDM05 folder, a labels.csv,"
@@ -240,7 +250,7 @@ def find_asf(amc: Path, beside: Sequence[Path] | None = None) -> Path:
         for cand in files:
             if cand.name.lower() == f"hdm_{meta['subject']}.asf".lower():
                 return cand
-    asfs = [p for p in files if p.suffix.lower() == ".asf"]
+    asfs = [p for p in files if p.suffix.lower() == ".asf" and not p.name.startswith(".")]
     if len(asfs) == 1:
         return asfs[0]
     if not asfs:
@@ -287,7 +297,7 @@ def _from_metadata(seq: PoseSequence) -> tuple[str | None, str | None, dict[str,
 def _class_folder_entries(path: Path) -> list[_Entry]:
     entries = []
     for d in sorted(p for p in path.iterdir() if p.is_dir() and not p.name.startswith(".")):
-        for f in _clip_files(d):
+        for f in clip_files(d):
             entries.append(_Entry(lambda f=f: load_clip(f), d.name, None, {}, f.name, f))  # type: ignore[misc]
     return entries
 
@@ -295,7 +305,7 @@ def _class_folder_entries(path: Path) -> list[_Entry]:
 def _pose_folder_entries(path: Path) -> list[_Entry]:
     return [
         _Entry(lambda f=f: load_clip(f), None, None, {}, f.name, f)  # type: ignore[misc]
-        for f in _clip_files(path)
+        for f in clip_files(path)
     ]
 
 
@@ -914,6 +924,7 @@ def load_dataset(path: str | Path, **kwargs: Any) -> list[Clip]:
 __all__ = [
     "CLIP_SUFFIXES",
     "Clip",
+    "clip_files",
     "LabelTrack",
     "check_track",
     "frame_labels",

@@ -10,13 +10,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from features.datasets import load_clip
+from features.datasets import load_clip, load_dataset
 from features.errors import PoseFileError
 from features.poses import PoseSequence, load_pose, save_pose
 from features.readers import read_asf_amc, read_bvh
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
-from tests.badinput import refused
+from tests.badinput import good_pose_file, refused
 
 # ---- BVH ---------------------------------------------------------------------------------
 
@@ -319,3 +319,40 @@ def test_skeleton_name_in_another_case_is_the_known_skeleton(tmp_path: Path) -> 
     assert (
         PoseSequence(pos[:, :1], ("nose",), 30.0, skeleton="BlazePose33").skeleton == "blazepose33"
     )
+
+
+# ---- hidden files beside the clips -------------------------------------------------------
+
+_APPLE_DOUBLE = b"\x00\x05\x16\x07\x00\x02\x00\x00" + b"\x00" * 80  # a macOS "._name" file
+
+
+def test_classify_reads_a_folder_of_clips_as_train_does(tmp_path: Path) -> None:
+    """Before: ``classify FOLDER`` read every name ending in .npz/.bvh/a video suffix,
+    hidden or not, file or not: a folder copied from a Mac (``._a.npz`` beside ``a.npz``) was
+    refused ("._a.npz: cannot read pose file: not an .npz archive"), though ``train`` reads
+    the same folder without it."""
+    from posecbr.commands.classify import load_inputs
+
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    good_pose_file(clips / "a.npz", frames=20, label="stand")
+    (clips / "._a.npz").write_bytes(_APPLE_DOUBLE)
+    (clips / "old.npz").mkdir()
+    got = load_inputs([clips], "kinect")
+    assert [(Path(s.source).name, label) for s, label in got] == [("a.npz", "stand")]
+
+
+def test_hidden_amc_and_asf_files_are_not_takes_or_skeletons(tmp_path: Path) -> None:
+    """Before: in a CMU-style folder (``arm.asf`` with its takes) copied from a Mac, the
+    hidden ``._arm.asf`` counted as a second skeleton ("2 .asf files beside it and none named
+    for its actor: cannot pick one") and ``._take.amc`` as a take to read."""
+    folder = tmp_path / "reach"
+    folder.mkdir()
+    (folder / "arm.asf").write_text(_ASF)
+    (folder / "take.amc").write_text(_amc("lclavicle 0 0 0\nlhumerus 0 0 0\nlradius 0\n"))
+    (folder / "._arm.asf").write_bytes(_APPLE_DOUBLE)
+    (folder / "._take.amc").write_bytes(_APPLE_DOUBLE)
+    seq = load_clip(folder / "take.amc")
+    np.testing.assert_allclose(seq.positions[0, JOINT_INDEX["left_elbow"]], [0.2, 0.7, 0.0])
+    clips = load_dataset(tmp_path)
+    assert [(Path(c.seq.source).name, c.label) for c in clips] == [("take.amc", "reach")]

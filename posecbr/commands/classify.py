@@ -91,8 +91,8 @@ def load_inputs(
     from cbr.casebase import frames_of
     from cbr.training import check_listed_once
     from features.datasets import (
-        CLIP_SUFFIXES,
         Clip,
+        clip_files,
         clip_target,
         detect_kind,
         iter_dataset,
@@ -118,7 +118,7 @@ def load_inputs(
             out.append((seq, clip_target(of_file(seq), target)))
         elif kind == "pose_folder":
             # may hold unlabelled clips: read them one by one
-            for f in sorted(q for q in path.iterdir() if q.suffix.lower() in CLIP_SUFFIXES):
+            for f in clip_files(path):
                 seq = load_clip(f)
                 out.append((seq, clip_target(of_file(seq), target)))
         else:
