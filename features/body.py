@@ -278,7 +278,7 @@ def torso_rows(seq: PoseSequence) -> np.ndarray:
     frame, so a stretch of a clip shares its clip's rows (:func:`features.derived.stretch`):
     a recording's windows each ask."""
 
-    return derived(seq, "torso_rows", lambda s: torso_seen(s.joints(TORSO_JOINTS)))
+    return derived(seq, "torso_rows", lambda s: torso_seen(s.to_canonical().joints(TORSO_JOINTS)))
 
 
 def torso_seen(torso: np.ndarray) -> np.ndarray:
@@ -297,7 +297,7 @@ def no_person(seq: PoseSequence) -> str:
     in words: its torso joints are missing, or they are all there but the shoulders or the hips
     lie within :data:`~features.geometry.MIN_LINK_M` of each other (a pose at micrometre
     scale, not in metres, or every joint at one point)."""
-    if np.isfinite(seq.joints(TORSO_JOINTS)).all(axis=(-2, -1)).any():
+    if np.isfinite(seq.to_canonical().joints(TORSO_JOINTS)).all(axis=(-2, -1)).any():
         return (
             f"shows no person (its shoulders or hips lie within {MIN_LINK_M * 1e6:g} µm of each"
             " other in every frame: positions must be metres)"

@@ -14,7 +14,7 @@ from features.datasets import load_clip, load_dataset
 from features.errors import PoseFileError
 from features.poses import PoseSequence, load_pose, save_pose
 from features.readers import read_asf_amc, read_bvh
-from features.skeleton import JOINT_INDEX
+from features.skeleton import JOINT_INDEX, KINECT_V2_TO_BLAZEPOSE
 from posecbr.cli import main
 from tests.badinput import good_pose_file, refused
 
@@ -281,8 +281,6 @@ def test_mediapipe_upper_case_joint_names_are_blazepose_joints(tmp_path: Path, c
     """Before: a pose file naming its joints as MediaPipe's ``PoseLandmark`` does
     (``LEFT_SHOULDER``, the names the canonical skeleton says it follows) was refused: "joint
     names are not BlazePose landmark names: LEFT_SHOULDER, ..."."""
-    from features.skeleton import KINECT_V2_TO_BLAZEPOSE
-
     names = tuple(n.upper() for n in KINECT_V2_TO_BLAZEPOSE)
     pos = np.array([[_KINECT_POSE[k] for k in KINECT_V2_TO_BLAZEPOSE.values()]] * 20)
     path = save_pose(PoseSequence(pos, names, 30.0), tmp_path / "mediapipe.npz")
@@ -356,3 +354,18 @@ def test_hidden_amc_and_asf_files_are_not_takes_or_skeletons(tmp_path: Path) -> 
     np.testing.assert_allclose(seq.positions[0, JOINT_INDEX["left_elbow"]], [0.2, 0.7, 0.0])
     clips = load_dataset(tmp_path)
     assert [(Path(c.seq.source).name, c.label) for c in clips] == [("take.amc", "reach")]
+
+
+def test_kinect_v2_and_mediapipe_named_sequences_show_their_torso() -> None:
+    """The torso check (which refuses a clip with "shows no person") looked the torso joints
+    up by BlazePose name in the sequence as given; a Kinect-named or MediaPipe-named sequence
+    handed to the Python API (``DADClassifier``, ``CaseBaseClassifier``) showed no torso in
+    any frame, though every frame has both shoulders and both hips."""
+    from features.body import torso_share
+
+    names = tuple(_KINECT_POSE)
+    pos = np.array([list(_KINECT_POSE.values())] * 5)
+    assert torso_share(PoseSequence(pos, names, 30.0, skeleton="kinect_v2")) == 1.0
+    upper = tuple(n.upper() for n in KINECT_V2_TO_BLAZEPOSE)
+    pos = np.array([[_KINECT_POSE[k] for k in KINECT_V2_TO_BLAZEPOSE.values()]] * 5)
+    assert torso_share(PoseSequence(pos, upper, 30.0)) == 1.0
