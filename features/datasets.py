@@ -396,6 +396,12 @@ def _csv_record(header: list[str], row: list[str], line_no: int, csv_path: Path)
         raise DataError(f"line {line_no}: empty label", csv_path)
     clip = _clip_path(rec["path"], line_no, csv_path)
     start, end = _frame_range(rec, line_no, csv_path)
+    if track is not None and start is not None:
+        raise DataError(
+            f"line {line_no}: start and end do not go with a label_file (it labels the whole"
+            " recording, frame by frame or block by block)",
+            csv_path,
+        )
     extras = {
         k: _parse_bool(v) for k, v in rec.items() if k not in (*_CSV_COLUMNS, *_TRACK_COLUMNS)
     }

@@ -369,3 +369,20 @@ def test_kinect_v2_and_mediapipe_named_sequences_show_their_torso() -> None:
     upper = tuple(n.upper() for n in KINECT_V2_TO_BLAZEPOSE)
     pos = np.array([[_KINECT_POSE[k] for k in KINECT_V2_TO_BLAZEPOSE.values()]] * 5)
     assert torso_share(PoseSequence(pos, upper, 30.0)) == 1.0
+
+
+# ---- labels CSV ----------------------------------------------------------------------------
+
+
+def test_frame_range_with_a_label_file_is_refused(tmp_path: Path, capsys) -> None:
+    """Before: a labels CSV row with both a ``label_file`` and ``start``/``end`` read the
+    whole recording (frames 0-19 labelled a, b), the range 0-5 silently ignored."""
+    data = tmp_path / "data"
+    data.mkdir()
+    good_pose_file(data / "rec.npz", frames=20)
+    (data / "rec.txt").write_text(" ".join(["a"] * 10 + ["b"] * 10))
+    (data / "labels.csv").write_text("path,label_file,start,end\nrec.npz,rec.txt,0,5\n")
+    refused(
+        ["train", str(data), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
+        "labels.csv", "line 2: start and end do not go with a label_file",
+    )  # fmt: skip
