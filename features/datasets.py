@@ -500,6 +500,13 @@ def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTr
     """The label track a labels CSV row names (``label_file``, ``label_block_s``,
     ``label_names``), or None."""
     if not rec.get("label_file"):
+        stray = [c for c in ("label_block_s", "label_names") if rec.get(c)]
+        if stray:
+            raise DataError(
+                f"line {line_no}: {' and '.join(stray)} go{'es' if len(stray) == 1 else ''}"
+                " with a label_file, and the row has none",
+                csv_path,
+            )
         return None
     if rec.get("label"):
         raise DataError(f"line {line_no}: give a label or a label_file, not both", csv_path)

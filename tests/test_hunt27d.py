@@ -386,3 +386,16 @@ def test_frame_range_with_a_label_file_is_refused(tmp_path: Path, capsys) -> Non
         ["train", str(data), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
         "labels.csv", "line 2: start and end do not go with a label_file",
     )  # fmt: skip
+
+
+def test_label_block_without_a_label_file_is_refused(tmp_path: Path, capsys) -> None:
+    """Before: ``label_block_s`` on a row with a plain ``label`` (no ``label_file``) was
+    dropped without a word: the user meant a recording labelled over time."""
+    data = tmp_path / "data"
+    data.mkdir()
+    good_pose_file(data / "rec.npz", frames=20)
+    (data / "labels.csv").write_text("path,label,label_block_s\nrec.npz,walk,0.5\n")
+    refused(
+        ["train", str(data), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
+        "labels.csv", "line 2: label_block_s goes with a label_file",
+    )  # fmt: skip
