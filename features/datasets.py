@@ -251,6 +251,16 @@ def find_asf(amc: Path, beside: Sequence[Path] | None = None) -> Path:
             if cand.name.lower() == f"hdm_{meta['subject']}.asf".lower():
                 return cand
     asfs = [p for p in files if p.suffix.lower() == ".asf" and not p.name.startswith(".")]
+    if meta:
+        # another HDM05 actor's skeleton would move this actor's take on the wrong bones
+        others = [p for p in asfs if re.fullmatch(r"hdm_[a-z]+\.asf", p.name.lower())]
+        asfs = [p for p in asfs if p not in others]
+        if not asfs and others:
+            raise DataError(
+                f"no HDM_{meta['subject']}.asf (the skeleton of actor {meta['subject']}) beside"
+                f" it; {others[0].name} is another actor's",
+                amc,
+            )
     if len(asfs) == 1:
         return asfs[0]
     if not asfs:

@@ -399,3 +399,14 @@ def test_label_block_without_a_label_file_is_refused(tmp_path: Path, capsys) -> 
         ["train", str(data), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
         "labels.csv", "line 2: label_block_s goes with a label_file",
     )  # fmt: skip
+
+
+def test_hdm05_take_is_not_read_on_another_actors_skeleton(tmp_path: Path, capsys) -> None:
+    """Before: an HDM05 take of actor dg with only actor bd's skeleton beside it was read on
+    bd's bones (the only .asf there), another person's limb lengths, without a word."""
+    (tmp_path / "HDM_bd.asf").write_text(_ASF)
+    amc = tmp_path / "HDM_dg_reach_001_120.amc"
+    amc.write_text(_amc("lclavicle 0 0 0\nlhumerus 0 0 0\nlradius 0\n"))
+    refused(["describe", str(amc)], tmp_path, capsys, amc.name, "no HDM_dg.asf", "HDM_bd.asf")
+    (tmp_path / "HDM_dg.asf").write_text(_ASF)  # its own skeleton: read
+    assert np.isfinite(load_clip(amc).positions[:, JOINT_INDEX["left_wrist"]]).all()
