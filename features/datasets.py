@@ -111,6 +111,8 @@ def load_clip(path: str | Path) -> PoseSequence:
     path = Path(path)
     if not _exists(path):
         raise DataError("no such file", path)
+    if path.is_dir():
+        raise DataError("is a folder, not a clip file (give one of the clips in it)", path)
     suffix = _suffix(path)
     if suffix in POSE_SUFFIXES:
         return load_pose(path).to_canonical()

@@ -85,7 +85,7 @@ CSV_CASES: list[tuple[str, str | bytes, str]] = [
     ("a path too long for the system", "path,label\n" + "a" * 5000 + ".npz,squat\n",
      "line 2: cannot use the path (File name too long)"),
     ("a clip path that is a folder", "path,label\nsub,squat\n",
-     "unknown clip format"),
+     "is a folder, not a clip file"),
     ("the CSV listing itself", "path,label\nlabels.csv,squat\n", "unknown clip format"),
     ("a start of a hundred digits", "path,label,start,end\na.npz,x,0," + "9" * 100 + "\n",
      "is past the clip's 8 frames"),

@@ -410,3 +410,13 @@ def test_hdm05_take_is_not_read_on_another_actors_skeleton(tmp_path: Path, capsy
     refused(["describe", str(amc)], tmp_path, capsys, amc.name, "no HDM_dg.asf", "HDM_bd.asf")
     (tmp_path / "HDM_dg.asf").write_text(_ASF)  # its own skeleton: read
     assert np.isfinite(load_clip(amc).positions[:, JOINT_INDEX["left_wrist"]]).all()
+
+
+@pytest.mark.parametrize("command", ["describe", "dad", "reps"])
+def test_a_folder_given_for_one_clip_is_called_a_folder(tmp_path: Path, capsys, command) -> None:
+    """Before: "clips: unknown clip format (expected .npz pose file, .bvh, ...)" for a folder
+    of clips given where one clip goes: the refusal blamed a format the folder does not have."""
+    folder = tmp_path / "clips"
+    folder.mkdir()
+    good_pose_file(folder / "a.npz", frames=20)
+    refused([command, str(folder)], tmp_path, capsys, "clips: is a folder, not a clip file")
