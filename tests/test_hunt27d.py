@@ -420,3 +420,89 @@ def test_a_folder_given_for_one_clip_is_called_a_folder(tmp_path: Path, capsys, 
     folder.mkdir()
     good_pose_file(folder / "a.npz", frames=20)
     refused([command, str(folder)], tmp_path, capsys, "clips: is a folder, not a clip file")
+
+
+# ---- BVH in the CMU database's unit ------------------------------------------------------
+
+# The legs and head of a CMU database BVH conversion (offsets as those files write them: the
+# ASF's unit, inches / 0.45). Rest height: head end 2.03559 + 2.04885 + 1.74624 + 1.76136 +
+# 1.77044 = 9.36248 above the hips, toe end 1.79463 + 6.72613 + 7.03959 + 0.43311 = 15.99346
+# below: 25.35594 units.
+_CMU_BVH = """HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation
+  JOINT LeftHip
+  {
+    OFFSET 1.36306 -1.79463 0.83929
+    CHANNELS 3 Zrotation Yrotation Xrotation
+    JOINT LeftKnee
+    {
+      OFFSET 2.44811 -6.72613 0.00000
+      CHANNELS 3 Zrotation Yrotation Xrotation
+      JOINT LeftAnkle
+      {
+        OFFSET 2.56220 -7.03959 0.00000
+        CHANNELS 3 Zrotation Yrotation Xrotation
+        JOINT LeftToe
+        {
+          OFFSET 0.15764 -0.43311 2.32255
+          CHANNELS 3 Zrotation Yrotation Xrotation
+          End Site
+          {
+            OFFSET 0 0 1.18966
+          }
+        }
+      }
+    }
+  }
+  JOINT Chest
+  {
+    OFFSET 0.02827 2.03559 -0.19338
+    CHANNELS 3 Zrotation Yrotation Xrotation
+    JOINT Chest2
+    {
+      OFFSET 0.05672 2.04885 -0.04275
+      CHANNELS 3 Zrotation Yrotation Xrotation
+      JOINT Neck
+      {
+        OFFSET -0.05417 1.74624 0.17202
+        CHANNELS 3 Zrotation Yrotation Xrotation
+        JOINT Head
+        {
+          OFFSET 0.10407 1.76136 -0.12397
+          CHANNELS 3 Zrotation Yrotation Xrotation
+          End Site
+          {
+            OFFSET 0.03720 1.77044 -0.06241
+          }
+        }
+      }
+    }
+  }
+}
+MOTION
+Frames: 1
+Frame Time: .0083333
+9.3722 17.8693 -17.3198 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0
+"""
+
+
+def test_cmu_bvh_reads_in_the_cmu_unit(tmp_path: Path) -> None:
+    """Before: the rest pose of a CMU database BVH, 25.36 units tall, was read as inches (the
+    unit that made it closest to 1.7 m among m, cm, mm, inch: 0.64 m), a person of a child's
+    size: a 0.19 m shin. In the CMU unit (0.0254 / 0.45 m) it stands 1.43 m."""
+    path = tmp_path / "13_29.bvh"
+    path.write_text(_CMU_BVH)
+    seq = read_bvh(path)
+    assert seq.metadata["bvh_unit"] == "cmu"
+    knee = seq.positions[0, JOINT_INDEX["left_knee"]]
+    ankle = seq.positions[0, JOINT_INDEX["left_ankle"]]
+    # the LeftAnkle offset (2.56220, -7.03959, 0) is 7.4914 units: 7.4914 x 0.0254 / 0.45 m
+    assert np.linalg.norm(ankle - knee) == pytest.approx(0.42285, abs=1e-4)
+    # the root position channel (9.3722, 17.8693, -17.3198) units, in metres
+    np.testing.assert_allclose(
+        seq.positions[0, JOINT_INDEX["left_hip"]],
+        (np.array([9.3722, 17.8693, -17.3198]) + [1.36306, -1.79463, 0.83929]) * 0.0254 / 0.45,
+    )

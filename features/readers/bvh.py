@@ -38,7 +38,16 @@ from ..poses import PoseSequence
 from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
 from ._common import read_text
 
-UNITS: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "inch": 0.0254}
+# "cmu": the CMU motion capture database's ASF unit (inches / 0.45, its ``:units length
+# 0.45``), which the widely used BVH conversions of that database keep: a CMU subject stands
+# about 25-30 of them tall, which read as inches would be a person of 0.65-0.75 m.
+UNITS: dict[str, float] = {
+    "m": 1.0,
+    "cm": 0.01,
+    "mm": 0.001,
+    "inch": 0.0254,
+    "cmu": 0.0254 / 0.45,
+}
 
 
 def _side_map(side: str) -> dict[str, tuple[tuple[str, str], ...]]:

@@ -67,7 +67,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     p.add_argument(
         "--bvh-unit",
         default="auto",
-        help="BVH unit: m, cm, mm, inch or auto (default: guessed from the rest pose)",
+        help="BVH unit: m, cm, mm, inch, cmu (the CMU database's inches/0.45) or auto"
+        " (default: guessed from the rest pose)",
     )
     p.set_defaults(func=run)
 
