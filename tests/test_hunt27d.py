@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from features.datasets import load_clip, load_dataset
-from features.errors import PoseFileError
+from features.errors import DataError, PoseFileError
 from features.poses import PoseSequence, load_pose, save_pose
 from features.readers import read_asf_amc, read_bvh
 from features.skeleton import JOINT_INDEX, KINECT_V2_TO_BLAZEPOSE
@@ -506,3 +506,25 @@ def test_cmu_bvh_reads_in_the_cmu_unit(tmp_path: Path) -> None:
         seq.positions[0, JOINT_INDEX["left_hip"]],
         (np.array([9.3722, 17.8693, -17.3198]) + [1.36306, -1.79463, 0.83929]) * 0.0254 / 0.45,
     )
+
+
+def test_amc_frame_with_a_bone_the_first_frame_lacks_is_named(tmp_path: Path) -> None:
+    """Before: when frame 1 lacked ``lhumerus`` and frame 2 listed it, the refusal said
+    "last frame 2 is incomplete (truncated file?)": frame 2 is the complete one, the file not
+    truncated. Now it names the bone and the frames."""
+    asf = tmp_path / "arm.asf"
+    asf.write_text(_ASF)
+    amc = tmp_path / "take.amc"
+    amc.write_text(
+        ":DEGREES\n1\nroot 0 1 0 0 0 0\nlclavicle 0 0 0\nlradius 0\n"
+        "2\nroot 0 1 0 0 0 0\nlclavicle 0 0 0\nlhumerus 0 0 0\nlradius 0\n"
+    )
+    with pytest.raises(DataError, match="frame 2 lists lhumerus, which frame 1 does not") as info:
+        read_asf_amc(asf, amc)
+    assert "truncated" not in info.value.message
+    amc.write_text(
+        ":DEGREES\n1\nroot 0 1 0 0 0 0\nlclavicle 0 0 0\nlhumerus 0 0 0\nlradius 0\n"
+        "2\nroot 0 1 0 0 0 0\nlclavicle 0 0 0\nlradius 0\n3\nroot 0 1 0 0 0 0\n"
+    )
+    with pytest.raises(DataError, match=r"line 11: frame 2 is incomplete: no lhumerus"):
+        read_asf_amc(asf, amc)

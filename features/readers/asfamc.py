@@ -446,13 +446,24 @@ class _AmcFrames:
         self.first: set[str] | None = None
 
     def next_frame(self, line_no: int) -> None:
-        """A frame number: the frame before it must be complete."""
+        """A frame number: the frame before it must list the bones the first one lists."""
         if self.n_frames == 1:
             self.first = set(self.seen)
         elif self.first is not None and self.seen != self.first:
-            raise DataError(f"line {line_no}: frame {self.n_frames} is incomplete", self.path)
+            raise DataError(f"line {line_no}: {self._mismatch()}", self.path)
         self.n_frames += 1
         self.seen = set()
+
+    def _mismatch(self) -> str:
+        """How the current frame's bones differ from the first frame's, in words."""
+        assert self.first is not None
+        lacks, extra = sorted(self.first - self.seen), sorted(self.seen - self.first)
+        if lacks:
+            return f"frame {self.n_frames} is incomplete: no {', '.join(lacks[:5])}"
+        return (
+            f"frame {self.n_frames} lists {', '.join(extra[:5])}, which frame 1 does not (every"
+            " frame must list the same bones)"
+        )
 
     def add(
         self, tokens: list[str], line_no: int, n_dof: Mapping[str, int], skeleton_name: str
@@ -479,9 +490,8 @@ class _AmcFrames:
         if self.n_frames == 0:
             raise DataError("no frames (not an AMC file?)", self.path)
         if self.first is not None and self.seen != self.first:
-            raise DataError(
-                f"last frame {self.n_frames} is incomplete (truncated file?)", self.path
-            )
+            truncated = " (truncated file?)" if self.seen < self.first else ""
+            raise DataError(f"last {self._mismatch()}{truncated}", self.path)
         if "root" not in self.rows:
             raise DataError("no root values", self.path)
         return {name: self._array(name, rows) for name, rows in self.rows.items()}
