@@ -1,7 +1,15 @@
 """What hunt 27d found in the readers, skeletons and pose files: a BVH skeleton that names its
-shoulder joint ``lShldr`` (Poser/DAZ) or ``LeftShoulder`` (named by joints) lost both shoulders.
-Each test says what happened before its fix; the expected values are worked out by hand from
-the offsets and angles written here."""
+shoulder joint ``lShldr`` (Poser/DAZ) or ``LeftShoulder`` (named by joints, as a CMU
+conversion does) lost both shoulders; CMU BVH conversions (inches / 0.45) were read as inches, a
+0.64 m person; a ``kinect_v2`` pose file naming Kinect's joints, or any pose file naming
+MediaPipe's ``LEFT_SHOULDER``, was refused (and such a sequence given to the Python API showed
+"no person"), as was a skeleton name in another case; an AMC file that never lists a bone drew
+it in the rest pose, and one whose first frame lacks a bone blamed a complete frame; a UI-PRMD
+file's sensor was guessed from "vicon" in its path; hidden ``._name`` files were read as clips,
+takes and skeletons; an HDM05 take was read on another actor's skeleton; a labels CSV's frame
+range or label block was ignored beside (or without) a label file; a folder given for one clip
+was called an unknown clip format. Each test says what happened before its fix; the expected
+values are worked out by hand from the offsets, angles and positions written here."""
 
 from __future__ import annotations
 
