@@ -536,3 +536,21 @@ def test_amc_frame_with_a_bone_the_first_frame_lacks_is_named(tmp_path: Path) ->
     )
     with pytest.raises(DataError, match=r"line 11: frame 2 is incomplete: no lhumerus"):
         read_asf_amc(asf, amc)
+
+
+def test_bvh_with_no_known_joint_name_is_refused_as_such(tmp_path: Path, capsys) -> None:
+    """Before: a BVH whose joints the reader has no names for (Unreal's ``thigh_l``,
+    ``upperarm_l``, ...) read as a clip with every joint NaN: ``describe`` said it "shows no
+    person", and ``convert`` wrote an all-NaN pose file without a word."""
+    text = _bvh(("", "{S}Shoulder", "{S}Elbow", "{S}Wrist"), [[0.0, 1.0, 0.0] + [0.0] * 45])
+    for old, new in (("LeftUpLeg", "thigh_l"), ("RightUpLeg", "thigh_r"), ("LeftLeg", "calf_l"),
+                     ("RightLeg", "calf_r"), ("LeftFoot", "foot_l"), ("RightFoot", "foot_r"),
+                     ("LeftShoulder", "upperarm_l"), ("RightShoulder", "upperarm_r"),
+                     ("LeftElbow", "lowerarm_l"), ("RightElbow", "lowerarm_r"),
+                     ("LeftWrist", "hand_l"), ("RightWrist", "hand_r")):  # fmt: skip
+        text = text.replace(old, new)
+    path = tmp_path / "unreal.bvh"
+    path.write_text(text)
+    refused(["describe", str(path)], tmp_path, capsys, "unreal.bvh", "none of its joint names")
+    refused(["convert", str(path), "--out", str(tmp_path / "out")], tmp_path, capsys,
+            "unreal.bvh", "it has Hips, Spine, Chest, upperarm_l")  # fmt: skip

@@ -266,6 +266,7 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
     n_frames, frame_time = _motion_header(tokens, i, path)
     n_chan = sum(len(j.channels) for j in joints)
     motion = _motion(tokens[i + 5 :], n_frames, n_chan, path)
+    _check_names(joints, path)
     pos, ends = _forward(joints, motion)
     rest, rest_ends = _forward(joints, np.zeros((1, n_chan)))
     pos, ends, rest, rest_ends = _y_up((pos, ends, rest, rest_ends), up, path)
@@ -359,6 +360,20 @@ def _unit(
             raise DataError(f"unknown unit {unit!r} (known: {', '.join(UNITS)})", path)
         return unit, UNITS[unit]
     return f"{unit} m", float(unit)
+
+
+def _check_names(joints: list[BvhJoint], path: Path) -> None:
+    """Refuse a skeleton none of whose joints :data:`BVH_TO_BLAZEPOSE` names: every joint of
+    the clip would be NaN, a clip that "shows no person" though it holds one."""
+    names = {_normalise(j.name) for j in joints}
+    if not any(name in names for tried in BVH_TO_BLAZEPOSE.values() for name, _ in tried):
+        raise DataError(
+            "none of its joint names is one the BVH reader knows (LeftUpLeg, LeftLeg, LeftArm,"
+            " LeftForeArm, LeftHand, ...; features.readers.bvh.BVH_TO_BLAZEPOSE): it has "
+            + ", ".join(j.name for j in joints[:8])
+            + (", ..." if len(joints) > 8 else ""),
+            path,
+        )
 
 
 def _to_blazepose(joints: list[BvhJoint], pos: np.ndarray, ends: np.ndarray) -> np.ndarray:
