@@ -1,7 +1,8 @@
 """What hunt 27d found in the readers, skeletons and pose files: a BVH skeleton that names its
 shoulder joint ``lShldr`` (Poser/DAZ) or ``LeftShoulder`` (named by joints, as a CMU
 conversion does) lost both shoulders; CMU BVH conversions (inches / 0.45) were read as inches, a
-0.64 m person; a ``kinect_v2`` pose file naming Kinect's joints, or any pose file naming
+0.64 m person, and a BVH with no joint name the reader knows read as all NaN ("shows no
+person"); a ``kinect_v2`` pose file naming Kinect's joints, or any pose file naming
 MediaPipe's ``LEFT_SHOULDER``, was refused (and such a sequence given to the Python API showed
 "no person"), as was a skeleton name in another case; an AMC file that never lists a bone drew
 it in the rest pose, and one whose first frame lacks a bone blamed a complete frame; a UI-PRMD
