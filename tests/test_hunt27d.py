@@ -555,3 +555,13 @@ def test_bvh_with_no_known_joint_name_is_refused_as_such(tmp_path: Path, capsys)
     refused(["describe", str(path)], tmp_path, capsys, "unreal.bvh", "none of its joint names")
     refused(["convert", str(path), "--out", str(tmp_path / "out")], tmp_path, capsys,
             "unreal.bvh", "it has Hips, Spine, Chest, upperarm_l")  # fmt: skip
+
+
+def test_bvh_negative_frame_count_is_named(tmp_path: Path) -> None:
+    """Before: ``Frames: -2`` with no data lines was refused as "0 numbers after the header,
+    expected -2 frames x 48 channels (truncated file?)", blaming the data, not the count."""
+    text = _bvh(("", "{S}Shoulder", "{S}Elbow", "{S}Wrist"), [])
+    path = tmp_path / "neg.bvh"
+    path.write_text(text.replace("Frames: 0", "Frames: -2"))
+    with pytest.raises(DataError, match="Frames must be at least 1, got -2"):
+        read_bvh(path)

@@ -294,6 +294,8 @@ def _motion_header(tokens: list[str], i: int, path: Path) -> tuple[int, float]:
         frame_time = float(tokens[i + 4])
     except (IndexError, ValueError):
         raise DataError("MOTION header is malformed or truncated", path) from None
+    if n_frames < 1:
+        raise DataError(f"Frames must be at least 1, got {n_frames}", path)
     if not (math.isfinite(frame_time) and frame_time > 0):  # nan or inf: no frame rate
         raise DataError(f"Frame Time must be positive, got {frame_time}", path)
     return n_frames, frame_time
