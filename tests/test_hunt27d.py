@@ -9,7 +9,8 @@ it in the rest pose, and one whose first frame lacks a bone blamed a complete fr
 file's sensor was guessed from "vicon" in its path; hidden ``._name`` files were read as clips,
 takes and skeletons; an HDM05 take was read on another actor's skeleton; a labels CSV's frame
 range or label block was ignored beside (or without) a label file; a folder given for one clip
-was called an unknown clip format. Each test says what happened before its fix; the expected
+was called an unknown clip format; a BVH's negative frame count or CHANNELS inside an End Site
+were blamed on its data. Each test says what happened before its fix; the expected
 values are worked out by hand from the offsets, angles and positions written here."""
 
 from __future__ import annotations
@@ -564,4 +565,21 @@ def test_bvh_negative_frame_count_is_named(tmp_path: Path) -> None:
     path = tmp_path / "neg.bvh"
     path.write_text(text.replace("Frames: 0", "Frames: -2"))
     with pytest.raises(DataError, match="Frames must be at least 1, got -2"):
+        read_bvh(path)
+
+
+def test_bvh_channels_inside_an_end_site_are_refused(tmp_path: Path) -> None:
+    """Before: ``CHANNELS 1 Xrotation`` inside the left wrist's End Site replaced the wrist's
+    own three channels, and the file was refused as "48 numbers after the header, expected 1
+    frames x 46 channels (truncated file?)"; with the values counted to fit, the wrist's
+    rotation would have been read from one value and every later joint's shifted."""
+    rest = [0.0, 1.0, 0.0] + [0.0] * 45
+    text = _bvh(("", "{S}Shoulder", "{S}Elbow", "{S}Wrist"), [rest])
+    first_end = "End Site\n{\nOFFSET 0 -0.1 0\n}\n"
+    assert first_end in text
+    path = tmp_path / "bad.bvh"
+    path.write_text(
+        text.replace(first_end, "End Site\n{\nOFFSET 0 -0.1 0\nCHANNELS 1 Xrotation\n}\n", 1)
+    )
+    with pytest.raises(DataError, match="CHANNELS inside an End Site"):
         read_bvh(path)

@@ -148,6 +148,10 @@ class _Hierarchy:
     def _joint(self, up: str) -> None:
         """``ROOT name {`` or ``JOINT name {``: a joint under the innermost open one."""
         name = self._need(2)[1]
+        if self.in_end_site:
+            raise DataError(
+                f"{up} {name} inside an End Site (an End Site has no joints)", self.path
+            )
         if up == "ROOT" and self.joints:
             raise DataError("more than one ROOT is not supported", self.path)
         parent = self.stack[-1] if self.stack else -1
@@ -185,6 +189,9 @@ class _Hierarchy:
 
     def _channels(self) -> None:
         """``CHANNELS n name ...`` of the open joint: known channels, each at most once."""
+        if self.in_end_site:
+            # they would replace the joint's own channels, and its values be read wrongly
+            raise DataError("CHANNELS inside an End Site (an End Site has no channels)", self.path)
         try:
             n = int(self._need(2)[1])
         except ValueError:
