@@ -243,24 +243,26 @@ def _uiprmd_entries(path: Path, sensor: str) -> list[_Entry]:
 
 
 def find_asf(amc: Path, beside: Sequence[Path] | None = None) -> Path:
-    """The skeleton beside an AMC file: ``HDM_<actor>.asf`` for HDM05, else the only .asf.
-    ``beside``: the files of the AMC file's folder, when the caller has listed them already
-    (one listing for a folder of many takes, not one per take)."""
+    """The skeleton beside an AMC file: the one named for its subject (``HDM_<actor>.asf``
+    for an HDM05 take ``HDM_<actor>_...``, ``<subject>.asf`` for a CMU take
+    ``<subject>_<trial>.amc``), else the only .asf. Another subject's skeleton (named so) is
+    refused: the take would move on someone else's bones. ``beside``: the files of the AMC
+    file's folder, when the caller has listed them already (one listing for a folder of many
+    takes, not one per take)."""
     files = list(amc.parent.iterdir()) if beside is None else beside
-    meta = hdm05_metadata(amc)
-    if meta:
-        for cand in files:
-            if cand.name.lower() == f"hdm_{meta['subject']}.asf".lower():
-                return cand
     asfs = [p for p in files if p.suffix.lower() == ".asf" and not p.name.startswith(".")]
-    if meta:
-        # another HDM05 actor's skeleton would move this actor's take on the wrong bones
-        others = [p for p in asfs if re.fullmatch(r"hdm_[a-z]+\.asf", p.name.lower())]
+    subject, own, pattern = _asf_subject(amc)
+    if subject is not None:
+        for cand in asfs:
+            if cand.name.lower() == own:
+                return cand
+        # another subject's skeleton would move this subject's take on the wrong bones
+        others = [p for p in asfs if re.fullmatch(pattern, p.name.lower())]
         asfs = [p for p in asfs if p not in others]
         if not asfs and others:
             raise DataError(
-                f"no HDM_{meta['subject']}.asf (the skeleton of actor {meta['subject']}) beside"
-                f" it; {others[0].name} is another actor's",
+                f"no {own if own[0].isdigit() else own.replace('hdm_', 'HDM_')} (the skeleton of"
+                f" subject {subject}) beside it; {others[0].name} is another subject's",
                 amc,
             )
     if len(asfs) == 1:
@@ -270,6 +272,19 @@ def find_asf(amc: Path, beside: Sequence[Path] | None = None) -> Path:
     raise DataError(
         f"{len(asfs)} .asf files beside it and none named for its actor: cannot pick one", amc
     )
+
+
+def _asf_subject(amc: Path) -> tuple[str | None, str, str]:
+    """(subject, the name of its skeleton file in lower case, a pattern matching any
+    subject's skeleton name) of an HDM05 or CMU take; (None, "", "") for another name."""
+    meta = hdm05_metadata(amc)
+    if meta:
+        subject = str(meta["subject"])
+        return subject, f"hdm_{subject.lower()}.asf", r"hdm_[a-z]+\.asf"
+    m = re.fullmatch(r"(\d+)_\d+", amc.stem)
+    if m:
+        return m.group(1), f"{m.group(1)}.asf", r"\d+\.asf"
+    return None, "", ""
 
 
 def _asf_amc_entries(path: Path) -> list[_Entry]:

@@ -7,11 +7,11 @@ MediaPipe's ``LEFT_SHOULDER``, was refused (and such a sequence given to the Pyt
 "no person"), as was a skeleton name in another case; an AMC file that never lists a bone drew
 it in the rest pose, and one whose first frame lacks a bone blamed a complete frame; a UI-PRMD
 file's sensor was guessed from "vicon" in its path; hidden ``._name`` files were read as clips,
-takes and skeletons; an HDM05 take was read on another actor's skeleton; a labels CSV's frame
-range or label block was ignored beside (or without) a label file; a folder given for one clip
-was called an unknown clip format; a BVH's negative frame count or CHANNELS inside an End Site
-were blamed on its data. Each test says what happened before its fix; the expected
-values are worked out by hand from the offsets, angles and positions written here."""
+takes and skeletons; an HDM05 or CMU take was read on another subject's skeleton; a labels
+CSV's frame range or label block was ignored beside (or without) a label file; a folder given
+for one clip was called an unknown clip format; a BVH's negative frame count or CHANNELS
+inside an End Site were blamed on its data. Each test says what happened before its fix; the
+expected values are worked out by hand from the offsets, angles and positions written here."""
 
 from __future__ import annotations
 
@@ -583,3 +583,18 @@ def test_bvh_channels_inside_an_end_site_are_refused(tmp_path: Path) -> None:
     )
     with pytest.raises(DataError, match="CHANNELS inside an End Site"):
         read_bvh(path)
+
+
+def test_cmu_take_is_read_on_its_subjects_skeleton(tmp_path: Path, capsys) -> None:
+    """Before: a CMU take ``13_29.amc`` with only subject 14's ``14.asf`` beside it was read
+    on 14's bones without a word; with ``13.asf`` and ``14.asf`` both there it was refused
+    ("2 .asf files beside it and none named for its actor"), though 13.asf is named for it."""
+    (tmp_path / "14.asf").write_text(_ASF.replace("length 0.3", "length 0.5"))
+    amc = tmp_path / "13_29.amc"
+    amc.write_text(_amc("lclavicle 0 0 0\nlhumerus 0 0 0\nlradius 0\n"))
+    refused(["describe", str(amc)], tmp_path, capsys, "13_29.amc", "no 13.asf", "14.asf")
+    (tmp_path / "13.asf").write_text(_ASF)
+    # 13.asf's humerus is 0.3 m (14.asf's 0.5 m): the elbow 0.3 m below the shoulder
+    np.testing.assert_allclose(
+        load_clip(amc).positions[0, JOINT_INDEX["left_elbow"]], [0.2, 0.7, 0.0]
+    )
