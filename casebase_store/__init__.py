@@ -20,6 +20,7 @@ from .store import (
     encode_array,
     in_wal_mode,
     open_store,
+    shown_db,
     sqlite_file,
     write_store,
 )
@@ -45,6 +46,7 @@ __all__ = [
     "encode_array",
     "in_wal_mode",
     "open_store",
+    "shown_db",
     "sqlite_file",
     "write_store",
     "upgrade_store",

@@ -31,6 +31,7 @@ import hashlib
 import io
 import json
 import os
+import re
 import sqlite3
 import uuid
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -242,7 +243,7 @@ def sqlite_file(url_or_path: str | Path) -> Path | None:
         return Path(text)
     try:
         url = make_url(text)
-    except ArgumentError:
+    except (ArgumentError, ValueError):  # ValueError: a port that is not a number
         return None
     if url.get_backend_name() != "sqlite" or url.database in (None, "", ":memory:"):
         return None
@@ -306,6 +307,27 @@ def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> t
     return engine, where
 
 
+_PASSWORD = re.compile(r"^([^:/?#]*://[^:/?#@]*:)[^@/]*@")
+
+
+def _hide_password(text: str) -> str:
+    """``text`` with the password of a URL in it replaced by ``***``, as SQLAlchemy shows a URL
+    it could read, for a URL it could not."""
+    return _PASSWORD.sub(r"\1***@", text)
+
+
+def shown_db(url_or_path: str | Path) -> str:
+    """How to name a store to the user: a case base file as given, a database URL without its
+    password (``postgresql://me:***@host/db``), as :class:`StoreError` names them."""
+    text = str(url_or_path)
+    if "://" not in text:
+        return text
+    try:
+        return make_url(text).render_as_string(hide_password=True)
+    except (ArgumentError, ValueError):
+        return _hide_password(text)
+
+
 def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:
     """The database URL of a case base file (read-only when asked; its folder must exist) or
     of a URL, and the name to show for it."""
@@ -315,7 +337,11 @@ def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:
         try:
             url = make_url(text)
         except ArgumentError as exc:
-            raise StoreError(f"not a database URL ({exc})", text) from None
+            raise StoreError(f"not a database URL ({exc})", _hide_password(text)) from None
+        except ValueError:  # SQLAlchemy reads the port with int()
+            raise StoreError(
+                "not a database URL (its port is not a number)", _hide_password(text)
+            ) from None
         return url, url.render_as_string(hide_password=True)
     check_store_file(file)
     return make_url(_sqlite_readonly_url(file) if readonly else f"sqlite:///{file}"), str(file)
@@ -409,7 +435,16 @@ def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
             " UTF-8)",
             where,
         )
-    if "connection failed" in low or "could not connect" in low or "connection refused" in low:
+    if any(
+        words in low
+        for words in (
+            "connection failed",
+            "could not connect",
+            "connection refused",
+            "failed to resolve host",  # psycopg: a host name the DNS does not know
+            "could not translate host name",  # libpq's own words for it
+        )
+    ):
         first = " ".join(text.split())
         return StoreError(f"cannot connect to the database server ({first})", where)
     first = text.splitlines()[0] if text else type(exc).__name__
