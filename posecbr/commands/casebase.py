@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _upgrade(args: argparse.Namespace) -> int:
-    from casebase_store import SCHEMA_VERSION, in_wal_mode, sqlite_file, upgrade_store
+    from casebase_store import SCHEMA_VERSION, in_wal_mode, shown_db, sqlite_file, upgrade_store
 
     file = sqlite_file(args.db)
     wal = file is not None and in_wal_mode(file)
@@ -99,9 +99,9 @@ def _upgrade(args: argparse.Namespace) -> int:
     converted = [f"from schema version {found} to {SCHEMA_VERSION}"] * (found != SCHEMA_VERSION)
     converted += ["from WAL mode to a rollback journal"] * journal
     if converted:
-        print(f"{shown(args.db)}: converted {', and '.join(converted)}")
+        print(f"{shown(shown_db(args.db))}: converted {', and '.join(converted)}")
     else:
-        print(f"{shown(args.db)}: already schema version {SCHEMA_VERSION}, nothing to do")
+        print(f"{shown(shown_db(args.db))}: already schema version {SCHEMA_VERSION}, nothing to do")
     return 0
 
 

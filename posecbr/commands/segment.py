@@ -140,6 +140,7 @@ def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
 def judge_named(clf: Any, name: str, db: str) -> Any:
     """The judge called ``name`` (``--unknown``) of the model stored in ``db``; a case base
     it cannot be calibrated on is refused naming the database."""
+    from casebase_store import shown_db
     from cbr.unknown import judge_of
 
     try:
@@ -147,7 +148,8 @@ def judge_named(clf: Any, name: str, db: str) -> Any:
     except DataError as exc:
         if exc.source != "case base":
             raise
-        raise DataError(f"its case base cannot judge unknown: {exc.message}", db) from None
+        message = f"its case base cannot judge unknown: {exc.message}"
+        raise DataError(message, shown_db(db)) from None
 
 
 def run(args: argparse.Namespace) -> int:

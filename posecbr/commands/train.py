@@ -673,8 +673,10 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
 
 
 def _report(args: argparse.Namespace, result: Any) -> None:
+    from casebase_store import shown_db
+
     summary: dict[str, Any] = {
-        "db": str(args.db),
+        "db": shown_db(args.db),  # a URL without its password
         "name": result.name,
         "cases": result.n_cases,
         "active_cases": result.n_active,
@@ -707,7 +709,8 @@ def _report(args: argparse.Namespace, result: Any) -> None:
         else f"({result.n_cases} trained) from {activities}"
     )
     print(
-        f"case base {shown(repr(result.name))} in {shown(args.db)}: {result.n_active} cases {made}"
+        f"case base {shown(repr(result.name))} in {shown(summary['db'])}: {result.n_active} cases"
+        f" {made}"
     )
     print(f"  features: {result.config.describe()}; similarity: {result.similarity}")
     learned = result.learned
