@@ -18,7 +18,9 @@ timeout so several processes can write one file; write transactions start with
 Commands that only read open the store read-only (``open_store(..., readonly=True)``): they
 create no file, not even a journal, and work on a case base in a read-only folder. On
 PostgreSQL the same timeout is the connect timeout and the ``lock_timeout`` of every session,
-so a write blocked by another client's lock fails with the same "locked" error.
+so a write blocked by another client's lock fails with the same "locked" error. A write
+transaction holds each case base it checks or creates (an advisory lock on its name) until it
+ends, so PostgreSQL's writers of one case base queue as SQLite's do.
 
 The same code runs on every backend; what differs is kept to :func:`_make_engine` and the
 per-dialect connect hooks. Values a stricter server would refuse (over-long names, NUL
@@ -69,6 +71,9 @@ ORIGINS = ("trained", "retained", "revised")
 #: Serialises creating the tables when several clients open an empty PostgreSQL database at
 #: once (``pg_advisory_xact_lock`` key; any constant unlikely to collide with other apps).
 _PG_INIT_LOCK = 0x706F736563627231  # "posecbr1"
+#: The first key of the per-case-base locks (``pg_advisory_xact_lock(int, int)``, a key space
+#: apart from the one-key locks; the second key is from the case base's name).
+_PG_NAME_LOCKS = 0x706F7365  # "pose"
 
 
 class StoreError(PosecbrError):
@@ -773,7 +778,21 @@ class StoreTransaction:
             )
         self._changed.clear()
 
+    def _lock(self, name: str) -> None:
+        """Hold the case base ``name`` against every other writer of it until this transaction
+        ends, as SQLite's ``BEGIN IMMEDIATE`` holds the whole file. PostgreSQL's writers run at
+        READ COMMITTED and would otherwise both pass a check of what they read (two trims of
+        one version both committed; two trains of one new name met a unique constraint). The
+        lock is taken before the check, so the check sees what the other writer committed."""
+        if self.session.get_bind().dialect.name != "postgresql":
+            return
+        key = int.from_bytes(hashlib.sha256(name.encode("utf-8")).digest()[:4], "big", signed=True)
+        self.session.execute(
+            select(func.pg_advisory_xact_lock(_PG_NAME_LOCKS, key))
+        )  # waits at most the store's timeout (lock_timeout), then "locked"
+
     def case_base(self, name: str) -> CaseBaseInfo:
+        self._lock(name)
         return self.store._info(self.session, self.store._row(self.session, name))
 
     def has_case_base(self, name: str) -> bool:
@@ -786,7 +805,9 @@ class StoreTransaction:
         a case base replaced or deleted by another process since is refused, so nothing read
         from the old one is ever written into the new one. ``version``: the cases must also be
         exactly as read (a change decided on all of them, such as a trim, is refused with
-        :class:`StaleCaseError` when another process changed any case since)."""
+        :class:`StaleCaseError` when another process changed any case since). Other writers of
+        ``name`` wait until this transaction ends: what is checked here stays so."""
+        self._lock(name)
         if not self.has_case_base(name):
             raise StoreError(
                 f"case base {name!r} was deleted by another process since it was read; "
@@ -826,6 +847,7 @@ class StoreTransaction:
         _check_text(name, "case base name", self.store.where, max_len=200)
         if not name.strip():
             raise StoreError("the case base name is empty", self.store.where)
+        self._lock(name)  # another process creating or replacing it meanwhile: after it
         with self.store._dates(f"case base {name!r} is damaged: its created_at is not a date"):
             old = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
         if old is not None:

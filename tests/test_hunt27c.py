@@ -1,6 +1,7 @@
 """What hunt 27c found in the PostgreSQL store, the Dask path, watch and report: a database
 URL with a port that is not a number (a traceback), passwords printed by ``train`` and
-``casebase upgrade``, ... Each test says what happened before its fix.
+``casebase upgrade``, two writers of one case base on PostgreSQL both committing, ... Each
+test says what happened before its fix.
 
 The PostgreSQL tests run against the server in ``POSECBR_TEST_POSTGRES_URL`` (``.ci/postgres.sh``
 starts one) and skip without it, as ``test_store_postgres.py`` does; each gets a fresh database.
@@ -9,6 +10,9 @@ starts one) and skip without it, as ``test_store_postgres.py`` does; each gets a
 from __future__ import annotations
 
 import json
+import threading
+import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -109,3 +113,126 @@ def test_open_store_names_an_unreadable_url_without_its_password() -> None:
     with pytest.raises(StoreError) as e:
         open_store("postgresql+psycopg://me:s3cret@db.example:port/cases")
     assert "s3cret" not in str(e.value) and "me:***@db.example:port/cases" in str(e.value)
+
+
+# ----------------------------------------------------------------------------- two writers
+
+
+def _waiters(url: str) -> int:
+    """Sessions of this database waiting for a lock (another writer's) now."""
+    from sqlalchemy import create_engine, text
+
+    engine = create_engine(url)
+    try:
+        with engine.connect() as conn:
+            query = (
+                "SELECT count(*) FROM pg_stat_activity WHERE datname = current_database() "
+                "AND wait_event_type = 'Lock'"
+            )
+            return int(conn.execute(text(query)).scalar_one())
+    finally:
+        engine.dispose()
+
+
+class _Holder(threading.Thread):
+    """A writer of ``url`` that opens its transaction, runs ``first(tx)``, then holds the
+    transaction open until another session waits for a lock (or ``done`` is set: the other
+    writer ran through without waiting), runs ``then(tx)`` and commits."""
+
+    def __init__(
+        self, url: str, first: Callable[[Any], Any], then: Callable[[Any], Any] | None = None
+    ) -> None:
+        super().__init__(daemon=True)
+        self.url, self.first, self.then = url, first, then
+        self.ready, self.done = threading.Event(), threading.Event()
+        self.error: BaseException | None = None
+
+    def run(self) -> None:
+        try:
+            with open_store(self.url) as store, store.transaction() as tx:
+                state = self.first(tx)
+                self.ready.set()
+                deadline = time.monotonic() + 60
+                while not self.done.is_set() and time.monotonic() < deadline:
+                    if _waiters(self.url):
+                        break
+                    time.sleep(0.05)
+                if self.then is not None:
+                    self.then((tx, state))
+        except BaseException as exc:  # reported by the test
+            self.error = exc
+        finally:
+            self.ready.set()
+
+
+def _while_held(holder: _Holder, capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str]:
+    """``posecbr argv`` run while ``holder`` holds its transaction; its exit status and
+    stderr."""
+    holder.start()
+    assert holder.ready.wait(30)
+    try:
+        code, _, err = _cli(capsys, *argv)
+    finally:
+        holder.done.set()
+        holder.join(60)
+    assert holder.error is None, holder.error
+    return code, err
+
+
+def test_a_trim_while_another_writer_changes_the_cases_is_refused_on_postgresql(
+    pg_url: str,  # noqa: F811
+    clips: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Another process holds case base version 1 in its write transaction (it checked it
+    and is about to trim a case) while ``casebase trim`` decides on version 1 too. SQLite's
+    writers queue (BEGIN IMMEDIATE): the trim waits, finds version 2, and is refused. On
+    PostgreSQL (READ COMMITTED, nothing locked by the check) both checks passed and both
+    commits went through: two trims decided on one version, the case base left smaller than
+    either meant (a trim to 50 % then the other's case, version 3)."""
+    code, _, err = _cli(capsys, "train", str(clips), "--db", pg_url, *FAST)
+    assert code == 0, err
+    with open_store(pg_url, readonly=True) as store:
+        info = store.get_case_base("default")
+        ids = [int(i) for i in store.load_cases("default").ids]
+
+    def drop_one(args: tuple[Any, Any]) -> None:
+        tx, cb = args
+        tx.deactivate_cases(cb, ids[:1])
+
+    holder = _Holder(pg_url, lambda tx: tx.expect("default", info.uid, info.version), drop_one)
+    code, err = _while_held(holder, capsys, "casebase", "trim", "--db", pg_url, "--keep", "0.5")
+    assert code == 1 and err.count("\n") == 1, err
+    assert "changed by another process since it was read (version 1, now 2)" in err
+    with open_store(pg_url, readonly=True) as store:
+        after = store.get_case_base("default")
+    assert (after.version, after.n_cases) == (2, len(ids) - 1)  # the other writer's alone
+
+
+@pytest.mark.parametrize("replace", [False, True])
+def test_two_trains_of_one_new_name_on_postgresql_end_as_on_sqlite(
+    replace: bool,
+    pg_url: str,  # noqa: F811
+    clips: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Another process creates case base "x" while ``train --name x`` does. The second to
+    write was refused with PostgreSQL's own words, "database error: duplicate key value violates
+    unique constraint "case_bases_name_key"", with or without ``--replace``; on SQLite it is
+    "a case base named 'x' already exists", and with ``--replace`` it replaces the other's."""
+
+    def create(tx: Any) -> Any:
+        return tx.create_case_base("x", {"level": "other"}, ["a"], ["a"], {"name": "euclidean"})
+
+    holder = _Holder(pg_url, create, lambda _: None)
+    argv = ["train", str(clips), "--db", pg_url, "--name", "x", *FAST]
+    code, err = _while_held(holder, capsys, *argv, *(["--replace"] if replace else []))
+    with open_store(pg_url, readonly=True) as store:
+        stored = store.get_case_base("x")
+    if replace:
+        assert code == 0, err
+        assert stored.feature_config["level"] == "fluents" and stored.n_cases == 6
+    else:
+        assert code == 1 and err.count("\n") == 1, err
+        assert "a case base named 'x' already exists" in err and "duplicate key" not in err
+        assert stored.feature_config == {"level": "other"}
