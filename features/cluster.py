@@ -89,7 +89,8 @@ def local_workers(spec: str) -> int | None:
             raise ConfigError("the scheduler address is empty", "--scheduler")
         return None
     text = spec[len(LOCAL_PREFIX) :]
-    if not text.isdigit() or int(text) < 1:
+    # isdigit() holds for "²", which int() refuses; isdecimal() for what int() reads
+    if not text.isdecimal() or int(text) < 1:
         raise ConfigError(
             f"local:N needs a whole number of workers >= 1, got {spec!r}", "--scheduler"
         )
@@ -135,7 +136,9 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
         return
     try:
         client = dd.Client(spec, timeout=CONNECT_TIMEOUT_S)
-    except (OSError, TimeoutError, ValueError) as exc:
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        # TypeError: a scheme this Dask cannot connect by as set up (tls:// without
+        # certificates, ucx:// without UCX)
         raise ConfigError(
             f"cannot reach the Dask scheduler at {spec} ({exc})", "--scheduler"
         ) from None

@@ -1,7 +1,7 @@
 """What hunt 27c found in the PostgreSQL store, the Dask path, watch and report: a database
 URL with a port that is not a number (a traceback), passwords printed by ``train`` and
-``casebase upgrade``, two writers of one case base on PostgreSQL both committing, ... Each
-test says what happened before its fix.
+``casebase upgrade``, two writers of one case base on PostgreSQL both committing,
+``--scheduler`` values that were tracebacks, ... Each test says what happened before its fix.
 
 The PostgreSQL tests run against the server in ``POSECBR_TEST_POSTGRES_URL`` (``.ci/postgres.sh``
 starts one) and skip without it, as ``test_store_postgres.py`` does; each gets a fresh database.
@@ -236,3 +236,31 @@ def test_two_trains_of_one_new_name_on_postgresql_end_as_on_sqlite(
         assert code == 1 and err.count("\n") == 1, err
         assert "a case base named 'x' already exists" in err and "duplicate key" not in err
         assert stored.feature_config == {"level": "other"}
+
+
+# ----------------------------------------------------------------------------- the Dask path
+
+
+@pytest.mark.parametrize("command", ["train", "compare"])
+def test_a_superscript_number_of_local_workers_is_one_line(
+    command: str, clips: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--scheduler local:²`` (a superscript two, as a phone keyboard may give): str.isdigit()
+    holds for it and int() refuses it, a ValueError traceback before any work."""
+    argv = [command, str(clips), "--scheduler", "local:²"]
+    if command == "train":
+        argv += ["--db", str(tmp_path / "cb.sqlite")]
+    refused(argv, tmp_path, capsys, "local:N needs a whole number of workers >= 1")
+
+
+@pytest.mark.parametrize("scheme", ["tls", "ucx"])
+def test_a_scheduler_address_dask_cannot_use_here_is_one_line(
+    scheme: str, clips: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--scheduler tls://host:8786`` without TLS set up in Dask's configuration (or
+    ``ucx://`` without UCX): Dask raised TypeError, a traceback, where an address it cannot
+    reach is "cannot reach the Dask scheduler"."""
+    pytest.importorskip("dask.distributed")
+    argv = ["train", str(clips), "--db", str(tmp_path / "cb.sqlite")]
+    refused([*argv, "--scheduler", f"{scheme}://127.0.0.1:1"], tmp_path, capsys,
+            f"--scheduler: cannot reach the Dask scheduler at {scheme}://127.0.0.1:1")  # fmt: skip
