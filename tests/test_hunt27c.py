@@ -1,7 +1,8 @@
 """What hunt 27c found in the PostgreSQL store, the Dask path, watch and report: a database
 URL with a port that is not a number (a traceback), passwords printed by ``train`` and
 ``casebase upgrade``, two writers of one case base on PostgreSQL both committing,
-``--scheduler`` values that were tracebacks, ... Each test says what happened before its fix.
+``--scheduler`` values that were tracebacks, huge numbers in a results file ``report``
+fell over, ... Each test says what happened before its fix.
 
 The PostgreSQL tests run against the server in ``POSECBR_TEST_POSTGRES_URL`` (``.ci/postgres.sh``
 starts one) and skip without it, as ``test_store_postgres.py`` does; each gets a fresh database.
@@ -264,3 +265,42 @@ def test_a_scheduler_address_dask_cannot_use_here_is_one_line(
     argv = ["train", str(clips), "--db", str(tmp_path / "cb.sqlite")]
     refused([*argv, "--scheduler", f"{scheme}://127.0.0.1:1"], tmp_path, capsys,
             f"--scheduler: cannot reach the Dask scheduler at {scheme}://127.0.0.1:1")  # fmt: skip
+
+
+# ----------------------------------------------------------------------------- report
+
+
+@pytest.fixture(scope="module")
+def results(clips: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """A real ``compare --json`` results document (one configuration on the synthetic clips)."""
+    out = tmp_path_factory.mktemp("compared") / "results.json"
+    argv = ["compare", str(clips), "--similarities", "euclidean", "--features", "fluents",
+            "--no-dad", "--peers", "none", "--k", "1", "--json", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    doc: dict[str, Any] = json.loads(out.read_text())
+    return doc
+
+
+@pytest.mark.parametrize(
+    ("number", "message"),
+    [
+        ("1" + "0" * 400, "key 'methods[0].case_base_size' is too large a number (401 digits)"),
+        ("9" * 5000, "not a results file: it holds a number of more than 4300 digits"),
+    ],
+)
+def test_report_of_a_results_file_with_a_huge_number_is_one_line(
+    number: str,
+    message: str,
+    results: dict[str, Any],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A whole number past any float where the results hold a number (an edited or damaged
+    file): OverflowError, a traceback; one of more than 4300 digits, which Python's JSON
+    reader refuses with a ValueError that is not a JSONDecodeError: a traceback too."""
+    doc = dict(results, methods=[dict(results["methods"][0], case_base_size=0)])
+    text = json.dumps(doc).replace('"case_base_size": 0', f'"case_base_size": {number}')
+    path = tmp_path / "results.json"
+    path.write_text(text)
+    line = refused(["report", str(path), "--out", str(tmp_path / "r.html")], tmp_path, capsys)
+    assert line.endswith(f"{path}: {message}"), line

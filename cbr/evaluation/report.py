@@ -13,6 +13,7 @@ from __future__ import annotations
 import base64
 import html
 import json
+import sys
 import tempfile
 from collections.abc import Mapping
 from pathlib import Path
@@ -82,6 +83,12 @@ def load_results(path: str | Path) -> tuple[CompareResults, Path]:
         doc = json.loads(p.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise DataError(f"not a JSON results file ({exc})", p) from None
+    except ValueError:  # a whole number of more digits than Python reads
+        raise DataError(
+            f"not a results file: it holds a number of more than {sys.get_int_max_str_digits()}"
+            " digits",
+            p,
+        ) from None
     except RecursionError:  # json's decoder recurses once per level of nesting
         raise DataError("not a JSON results file (nested too deeply)", p) from None
     return CompareResults.from_dict(doc, str(p)), p

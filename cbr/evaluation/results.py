@@ -63,7 +63,12 @@ class Reader:
         name, ok = _KINDS[kind]
         if not ok(v):
             self.fail(where, f"must be {name}{' or null' if optional else ''}, got {_describe(v)}")
-        return float(v) if kind == "num" else v
+        if kind != "num":
+            return v
+        try:
+            return float(v)
+        except OverflowError:  # a whole number past any float (JSON allows 4300 digits)
+            self.fail(where, f"is too large a number ({len(str(abs(v)))} digits)")
 
     def get(
         self, obj: dict[str, Any], key: str, where: str, kind: str, optional: bool = False
