@@ -2,7 +2,8 @@
 URL with a port that is not a number (a traceback), passwords printed by ``train`` and
 ``casebase upgrade``, two writers of one case base on PostgreSQL both committing,
 ``--scheduler`` values that were tracebacks, huge numbers in a results file ``report``
-fell over, ... Each test says what happened before its fix.
+fell over, and ``--param`` values too large for any number, ... Each test says what
+happened before its fix.
 
 The PostgreSQL tests run against the server in ``POSECBR_TEST_POSTGRES_URL`` (``.ci/postgres.sh``
 starts one) and skip without it, as ``test_store_postgres.py`` does; each gets a fresh database.
@@ -304,3 +305,26 @@ def test_report_of_a_results_file_with_a_huge_number_is_one_line(
     path.write_text(text)
     line = refused(["report", str(path), "--out", str(tmp_path / "r.html")], tmp_path, capsys)
     assert line.endswith(f"{path}: {message}"), line
+
+
+# ----------------------------------------------------------------------------- --param
+
+
+@pytest.mark.parametrize(
+    ("command", "param", "message"),
+    [
+        ("train", "band=1" + "0" * 400, "the value of band holds too large a number"),
+        ("compare", "k=" + "9" * 5000, "the value of k is a number of more than 4300 digits"),
+    ],
+)
+def test_a_param_too_large_for_any_number_is_one_line(
+    command: str, param: str, message: str, clips: Path, tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    """``--param band=1000...0`` (401 digits) reached DTW's check as an int no float holds:
+    OverflowError, a traceback; a value of more than 4300 digits was a ValueError traceback
+    from the JSON reader (which only JSONDecodeError and RecursionError were caught of)."""
+    argv = [command, str(clips), "--param", param]
+    if command == "train":
+        argv += ["--db", str(tmp_path / "cb.sqlite"), "--similarity", "dtw"]
+    refused(argv, tmp_path, capsys, f"--param: {message}")

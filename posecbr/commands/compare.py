@@ -4,7 +4,6 @@ classifiers on a labelled dataset and print the table (JSON, CSV and pictures on
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,7 +13,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, write_json_atomic
 from features.text import shown
-from posecbr.arguments import path_arg
+from posecbr.arguments import param_value, path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
 
@@ -132,14 +131,7 @@ def parse_params(items: list[str]) -> dict[str, Any]:
         key, sep, raw = item.partition("=")
         if not sep or not key.strip():
             raise ConfigError(f"expected KEY=VALUE, got {item!r}", "--param")
-        try:
-            out[key.strip()] = json.loads(raw)
-        except json.JSONDecodeError:
-            out[key.strip()] = raw
-        except RecursionError:  # json's decoder recurses once per level of nesting
-            raise ConfigError(
-                f"the value of {key.strip()} is nested too deeply", "--param"
-            ) from None
+        out[key.strip()] = param_value(key.strip(), raw)
     return out
 
 

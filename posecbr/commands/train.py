@@ -19,7 +19,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.text import counted, shown
-from posecbr.arguments import path_arg
+from posecbr.arguments import param_value, path_arg
 from posecbr.recordings import (
     add_recording_options,
     add_sensor_option,
@@ -37,12 +37,7 @@ def parse_params(items: list[str] | None) -> dict[str, Any]:
         key, sep, value = item.partition("=")
         if not sep or not key:
             raise ConfigError(f"expected KEY=VALUE, got {item!r}", "--param")
-        try:
-            out[key] = json.loads(value)
-        except json.JSONDecodeError:
-            out[key] = value
-        except RecursionError:  # json's decoder recurses once per level of nesting
-            raise ConfigError(f"the value of {key} is nested too deeply", "--param") from None
+        out[key] = param_value(key, value)
     return out
 
 
