@@ -146,12 +146,54 @@ def _check_text(value: str, what: str, where: str, max_len: int | None = None) -
         raise StoreError(f"the {what} must be text, got {value!r}", where)
     if "\x00" in value:
         raise StoreError(f"{what} {value!r} contains a NUL character", where)
+    _check_utf8(value, what, where)
     if max_len is not None and len(value) > max_len:
         raise StoreError(
             f"{what} is {len(value)} characters long (at most {max_len}): {value[:40]!r}...",
             where,
         )
     return value
+
+
+def _check_utf8(value: str, what: str, where: str, within: str = "") -> None:
+    """Refuse text that has no UTF-8 form: a name read from a file or folder whose bytes are
+    not UTF-8 (Python keeps them as lone surrogates), which no database driver can send.
+    ``within``: the document that holds it."""
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        said = f"the {within} holds {value!r}, which" if within else f"{what} {value!r}"
+        raise StoreError(
+            f"{said} is not UTF-8 text (a name in another encoding, from a file or folder"
+            " name?): rename it",
+            where,
+        ) from None
+
+
+def _check_document(doc: Any, what: str, where: str) -> Any:
+    """``doc`` (JSON-ready), every string in it checked by :func:`_check_utf8`."""
+    stack = [doc]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, str):
+            _check_utf8(item, "text", where, within=what)
+        elif isinstance(item, Mapping):
+            stack.extend(item.keys())
+            stack.extend(item.values())
+        elif isinstance(item, list | tuple):
+            stack.extend(item)
+    return doc
+
+
+def _as_stored(text: str) -> str:
+    """Provenance text (a clip's file name, a log entry's reason) as it is stored: bytes of a
+    file name that are not UTF-8 written as ``\\xNN`` (the name stays readable and the same
+    name is always stored alike)."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    return text
 
 
 # ----------------------------------------------------------------------------- records
@@ -859,6 +901,15 @@ class StoreTransaction:
                 )
             s.delete(old)
             s.flush()
+        where = self.store.where
+        for what, doc in (
+            ("feature configuration", feature_config),
+            ("feature names", feature_names),
+            ("feature words", feature_words),
+            ("similarity configuration", similarity),
+            ("model", model or {}),
+        ):
+            _check_document(doc, what, where)
         row = CaseBaseRow(
             uid=uuid.uuid4().hex,
             version=1,
@@ -878,6 +929,7 @@ class StoreTransaction:
 
     def set_model(self, cb: CaseBaseInfo, model: Mapping[str, Any]) -> None:
         """Replace the fitted model of ``cb`` (what fit learned besides the cases)."""
+        _check_document(model, "model", self.store.where)
         self.session.execute(
             update(CaseBaseRow)
             .where(CaseBaseRow.id == cb.id)
@@ -894,14 +946,14 @@ class StoreTransaction:
             where = self.store.where
             if c.skeleton is not None:
                 _check_text(c.skeleton, "skeleton name", where, max_len=64)
-            _check_text(c.source, "source", where)
+            _check_text(_as_stored(c.source), "source", where)
             if c.subject is not None:
                 _check_text(c.subject, "subject", where)
             row = CaseRow(
                 case_base_id=cb.id,
                 label=_check_text(str(c.label), "label", where),
                 features=encode_array(np.asarray(c.features)),
-                source=c.source,
+                source=_as_stored(c.source),
                 frame_start=c.frame_start,
                 frame_end=c.frame_end,
                 subject=c.subject,
@@ -921,8 +973,12 @@ class StoreTransaction:
         self, cb: CaseBaseInfo, sources: Iterable[str]
     ) -> dict[tuple[str, int | None, int | None], int]:
         """The active cases of ``cb`` made from ``sources``, by (source, first frame, end
-        frame): their ids (the first of each)."""
-        wanted = sorted(set(sources))
+        frame): their ids (the first of each); each source as given (a file name that is not
+        UTF-8 is looked for as it is stored, :func:`_as_stored`)."""
+        given: dict[str, set[str]] = {}
+        for source in sources:
+            given.setdefault(_as_stored(source), set()).add(source)
+        wanted = sorted(given)
         out: dict[tuple[str, int | None, int | None], int] = {}
         for i in range(0, len(wanted), 500):  # bounded IN lists
             q = (
@@ -932,7 +988,8 @@ class StoreTransaction:
                 .order_by(CaseRow.id)
             )
             for case_id, source, a, b in self.session.execute(q):
-                out.setdefault((source, a, b), int(case_id))
+                for name in given[source]:
+                    out.setdefault((name, a, b), int(case_id))
         return out
 
     def _case_row(self, cb: CaseBaseInfo, case_id: int, lock: bool) -> CaseRow:
@@ -1036,7 +1093,7 @@ class StoreTransaction:
                 action=action,
                 novelty=None if novelty is None else float(novelty),
                 benefit=None if benefit is None else float(benefit),
-                reason=reason,
+                reason=_as_stored(reason),
             )
         )
 

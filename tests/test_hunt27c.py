@@ -2,8 +2,8 @@
 URL with a port that is not a number (a traceback), passwords printed by ``train`` and
 ``casebase upgrade``, two writers of one case base on PostgreSQL both committing,
 ``--scheduler`` values that were tracebacks, huge numbers in a results file ``report``
-fell over, and ``--param`` values too large for any number, ... Each test says what
-happened before its fix.
+fell over, ``--param`` values too large for any number, and names that are not UTF-8
+(tracebacks from the database driver). Each test says what happened before its fix.
 
 The PostgreSQL tests run against the server in ``POSECBR_TEST_POSTGRES_URL`` (``.ci/postgres.sh``
 starts one) and skip without it, as ``test_store_postgres.py`` does; each gets a fresh database.
@@ -328,3 +328,78 @@ def test_a_param_too_large_for_any_number_is_one_line(
     if command == "train":
         argv += ["--db", str(tmp_path / "cb.sqlite"), "--similarity", "dtw"]
     refused(argv, tmp_path, capsys, f"--param: {message}")
+
+
+# ----------------------------------------------------------------------------- names not UTF-8
+
+
+def _not_utf8(clips: Path, root: Path, where: str) -> Path:
+    """The synthetic clips under ``root``, two activities; one byte that is not UTF-8 (latin-1
+    "ä") in the name of the first activity's folder (``where="folder"``) or of one clip of
+    each activity (``"files"``)."""
+    import os
+    import shutil
+
+    folders = sorted(p for p in clips.iterdir() if p.is_dir())[:2]
+    for k, folder in enumerate(folders):
+        name = os.fsencode(folder.name) + (b"\xe4" if where == "folder" and k == 0 else b"")
+        target = os.path.join(os.fsencode(root), name)
+        os.makedirs(target)
+        for j, clip in enumerate(sorted(folder.glob("*.npz"))):
+            odd = b"\xe4" if where == "files" and j == 0 else b""
+            file = os.fsencode(clip.stem) + odd + b".npz"
+            shutil.copy(clip, os.path.join(target, file))
+    return root
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def db(request: pytest.FixtureRequest, tmp_path: Path) -> str:
+    """A store on each backend: a SQLite file, a fresh PostgreSQL database."""
+    if request.param == "sqlite":
+        return str(tmp_path / "cb.sqlite")
+    return str(request.getfixturevalue("pg_url"))
+
+
+def test_an_activity_folder_named_in_another_encoding_is_one_line(
+    db: str, clips: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A class folder whose name holds a byte that is not UTF-8 (Python reads it as a lone
+    surrogate): the label reached the database driver, a UnicodeEncodeError traceback on
+    SQLite and PostgreSQL alike, after every clip's features were computed."""
+    data = _not_utf8(clips, tmp_path / "data", "folder")
+    line = refused(["train", str(data), "--db", db, *FAST], tmp_path, capsys, "\\udce4")
+    assert "is not UTF-8 text" in line
+    if "://" in db:
+        with open_store(db, readonly=True) as store:
+            assert store.list_case_bases() == []
+
+
+def test_clips_whose_file_names_are_in_another_encoding_are_cases(
+    db: str, clips: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Clips named with a byte that is not UTF-8 were a UnicodeEncodeError traceback of
+    ``train`` (the source of the case). They are cases now, their source stored with the byte
+    written ``\\xe4``; appending the same file again is refused as already there."""
+    data = _not_utf8(clips, tmp_path / "data", "files")
+    code, _, err = _cli(capsys, "train", str(data), "--db", db, *FAST)
+    assert code == 0, err
+    with open_store(db, readonly=True) as store:
+        sources = store.load_cases("default").sources
+    assert sum(s.endswith("\\xe4.npz") for s in sources) == 2, sources
+    odd = next(p for p in data.rglob("*") if p.name.endswith("\udce4.npz"))
+    code, _, err = _cli(capsys, "train", str(odd), "--db", db, "--append")
+    assert code == 1 and "is already case" in err, err
+
+
+def test_feedback_with_a_label_in_another_encoding_is_one_line(
+    clips: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``classify --feedback`` with a label given in latin-1 on a UTF-8 terminal: a
+    UnicodeEncodeError traceback from the database driver."""
+    db = str(tmp_path / "cb.sqlite")
+    code, _, err = _cli(capsys, "train", str(clips), "--db", db, *FAST)
+    assert code == 0, err
+    clip = next(clips.rglob("*.npz"))
+    argv = ["classify", db, str(clip), "--feedback", "squat\udce4", "--new-label"]
+    argv[1:1] = ["--db"]
+    refused(argv, tmp_path, capsys, "label 'squat\\udce4' is not UTF-8 text")
