@@ -357,10 +357,21 @@ def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> t
 _PASSWORD = re.compile(r"^([^:/?#]*://[^:/?#@]*:)[^@/]*@")
 
 
+_QUERY_PASSWORD = re.compile(r"([?&]password=)[^&#]*", re.IGNORECASE)
+
+
 def _hide_password(text: str) -> str:
     """``text`` with the password of a URL in it replaced by ``***``, as SQLAlchemy shows a URL
     it could read, for a URL it could not."""
-    return _PASSWORD.sub(r"\1***@", text)
+    return _QUERY_PASSWORD.sub(r"\1***", _PASSWORD.sub(r"\1***@", text))
+
+
+def _shown_url(url: URL) -> str:
+    """``url`` as the user is shown it: without its password, whether given before the host
+    (``me:PASSWORD@host``) or as libpq's ``?password=`` parameter."""
+    hidden = {key: "***" for key in url.query if key.lower() == "password"}
+    text = url.update_query_dict(hidden).render_as_string(hide_password=True)
+    return text.replace("=%2A%2A%2A", "=***")
 
 
 def shown_db(url_or_path: str | Path) -> str:
@@ -370,7 +381,7 @@ def shown_db(url_or_path: str | Path) -> str:
     if "://" not in text:
         return text
     try:
-        return make_url(text).render_as_string(hide_password=True)
+        return _shown_url(make_url(text))
     except (ArgumentError, ValueError):
         return _hide_password(text)
 
@@ -389,7 +400,7 @@ def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:
             raise StoreError(
                 "not a database URL (its port is not a number)", _hide_password(text)
             ) from None
-        return url, url.render_as_string(hide_password=True)
+        return url, _shown_url(url)
     check_store_file(file)
     return make_url(_sqlite_readonly_url(file) if readonly else f"sqlite:///{file}"), str(file)
 

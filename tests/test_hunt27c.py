@@ -92,6 +92,29 @@ def test_train_and_upgrade_name_a_database_without_its_password(
     assert password not in out + err and "already schema version" in out
 
 
+def test_a_password_given_as_a_url_parameter_is_not_shown(
+    pg_url: str,  # noqa: F811
+    clips: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """libpq takes the password as a parameter too (``...@host/db?password=PASSWORD``):
+    every message and ``train``'s summary showed it, SQLAlchemy hiding only the one before
+    the host."""
+    url = make_url(pg_url)
+    password = url.password
+    assert password
+    given = url.set(password=None).update_query_dict({"password": password})
+    text = given.render_as_string(hide_password=False)
+    assert f"password={password}" in text
+    code, out, err = _cli(capsys, "train", str(clips), "--db", text, *FAST)
+    assert code == 0, err
+    assert password not in out + err and "?password=***" in out
+    wrong = given.set(database="no_such_database").render_as_string(hide_password=False)
+    line = refused(["casebase", "info", "--db", wrong], tmp_path, capsys, "cannot connect")
+    assert password not in line and "?password=***" in line
+
+
 def test_a_case_base_that_cannot_judge_unknown_is_named_without_the_password(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
