@@ -609,8 +609,10 @@ class CaseStore:
 
     def list_case_bases(self) -> list[CaseBaseInfo]:
         with self._read() as s:
-            # one row at a time: a damaged one is named
-            names = s.scalars(select(CaseBaseRow.name).order_by(CaseBaseRow.name)).all()
+            # one row at a time: a damaged one is named. Text is sorted here, not by the
+            # server: PostgreSQL sorts by the database's collation ("apple" before "Squat" in
+            # en-US), SQLite by code point, and a store gives one order wherever it lives
+            names = sorted(s.scalars(select(CaseBaseRow.name)).all())
             return [self._info(s, self._row(s, n)) for n in names]
 
     def get_case_base(self, name: str) -> CaseBaseInfo:
@@ -770,19 +772,20 @@ class CaseStore:
         with self._dates(f"case base {name!r} is damaged: its created_at is not a date"):
             row = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
         if row is None:
-            known = s.scalars(select(CaseBaseRow.name).order_by(CaseBaseRow.name)).all()
+            known = sorted(s.scalars(select(CaseBaseRow.name)).all())  # as list_case_bases
             hint = f" (case bases here: {', '.join(known)})" if known else " (the store is empty)"
             raise StoreError(f"no case base named {name!r}{hint}", self.where)
         return row
 
     def _info(self, s: Session, r: CaseBaseRow) -> CaseBaseInfo:
         counts = dict(
-            s.execute(
-                select(CaseRow.label, func.count(CaseRow.id))
-                .where(CaseRow.case_base_id == r.id, CaseRow.active.is_(True))
-                .group_by(CaseRow.label)
-                .order_by(CaseRow.label)
-            ).all()
+            sorted(  # by code point on every backend (as list_case_bases sorts names)
+                s.execute(
+                    select(CaseRow.label, func.count(CaseRow.id))
+                    .where(CaseRow.case_base_id == r.id, CaseRow.active.is_(True))
+                    .group_by(CaseRow.label)
+                ).tuples()
+            )
         )
         what = f"configuration of case base {r.name!r}"
         info = CaseBaseInfo(

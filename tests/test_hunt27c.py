@@ -2,8 +2,9 @@
 URL with a port that is not a number (a traceback), passwords printed by ``train`` and
 ``casebase upgrade``, two writers of one case base on PostgreSQL both committing,
 ``--scheduler`` values that were tracebacks, huge numbers in a results file ``report``
-fell over, ``--param`` values too large for any number, and names that are not UTF-8
-(tracebacks from the database driver). Each test says what happened before its fix.
+fell over, ``--param`` values too large for any number, names that are not UTF-8
+(tracebacks from the database driver), and listings in the order of the server's collation.
+Each test says what happened before its fix.
 
 The PostgreSQL tests run against the server in ``POSECBR_TEST_POSTGRES_URL`` (``.ci/postgres.sh``
 starts one) and skip without it, as ``test_store_postgres.py`` does; each gets a fresh database.
@@ -14,7 +15,8 @@ from __future__ import annotations
 import json
 import threading
 import time
-from collections.abc import Callable
+import uuid
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -426,3 +428,57 @@ def test_feedback_with_a_label_in_another_encoding_is_one_line(
     argv = ["classify", db, str(clip), "--feedback", "squat\udce4", "--new-label"]
     argv[1:1] = ["--db"]
     refused(argv, tmp_path, capsys, "label 'squat\\udce4' is not UTF-8 text")
+
+
+# ----------------------------------------------------------------------------- one order
+
+
+@pytest.fixture
+def pg_icu_url(pg_server: str) -> Iterator[str]:  # noqa: F811
+    """A fresh database on the test server that sorts text by ICU's en-US collation (as a
+    server set up with en_US.UTF-8 does), dropped afterwards; skips where ICU is missing."""
+    from sqlalchemy import create_engine, text
+
+    name = f"posecbr_icu_{uuid.uuid4().hex[:8]}"
+    admin = create_engine(pg_server, isolation_level="AUTOCOMMIT")
+    try:
+        with admin.connect() as conn:
+            try:
+                icu = "LOCALE_PROVIDER icu ICU_LOCALE 'en-US' LOCALE 'C.UTF-8'"
+                conn.execute(text(f'CREATE DATABASE "{name}" TEMPLATE template0 {icu}'))
+            except Exception as exc:  # an older server, or one built without ICU
+                pytest.skip(f"no ICU collation on the test server: {str(exc).splitlines()[0]}")
+        yield make_url(pg_server).set(database=name).render_as_string(hide_password=False)
+    finally:
+        with admin.connect() as conn:
+            conn.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
+        admin.dispose()
+
+
+def test_case_bases_and_labels_come_in_one_order_on_every_backend(
+    pg_icu_url: str, tmp_path: Path
+) -> None:
+    """The case bases of a store and the activities of a case base were listed in the order
+    the server sorts text: by code point on SQLite ("Squat", "Zebra", "_walk", "apple"), by
+    the database's collation on PostgreSQL (en-US: "_walk", "apple", "Squat", "Zebra"), so
+    ``casebase info`` (text and --json) and the "choose one with --name" refusal listed them
+    differently from one backend to the other, and from ``train``'s own summary."""
+    import numpy as np
+
+    from casebase_store import NewCase
+
+    labels = ["apple", "Squat", "_walk", "Zebra"]
+    seen = []
+    for db in (str(tmp_path / "cb.sqlite"), pg_icu_url):
+        with open_store(db) as store:
+            with store.transaction() as tx:
+                for name in ("apple2", "Beta"):
+                    cb = tx.create_case_base(name, {"level": "x"}, ["a"], ["a"], {"name": "e"})
+                    tx.add_cases(cb, [NewCase(lab, np.zeros(1)) for lab in labels])
+            infos = store.list_case_bases()
+            seen.append(([i.name for i in infos], list(infos[0].label_counts)))
+            with pytest.raises(StoreError) as e:
+                store.choose(None)
+            seen.append(str(e.value).split(": ", 1)[1])
+    assert seen[0] == (["Beta", "apple2"], ["Squat", "Zebra", "_walk", "apple"])
+    assert seen[2:] == seen[:2]
