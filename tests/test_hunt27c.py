@@ -482,3 +482,13 @@ def test_case_bases_and_labels_come_in_one_order_on_every_backend(
             seen.append(str(e.value).split(": ", 1)[1])
     assert seen[0] == (["Beta", "apple2"], ["Squat", "Zebra", "_walk", "apple"])
     assert seen[2:] == seen[:2]
+
+
+def test_report_of_a_folder_whose_results_json_is_a_folder_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``report DIR`` where ``DIR/results.json`` is a folder was refused as "is a pipe,
+    socket or device, not a results file"."""
+    (tmp_path / "run" / "results.json").mkdir(parents=True)
+    argv = ["report", str(tmp_path / "run"), "--out", str(tmp_path / "r.html")]
+    refused(argv, tmp_path, capsys, "results.json: is a folder, not a results file")

@@ -68,6 +68,8 @@ def load_results(path: str | Path) -> tuple[CompareResults, Path]:
     p = Path(path)
     if p.is_dir():
         p = p / "results.json"
+    if p.is_dir():  # a folder named results.json in the folder given
+        raise DataError("is a folder, not a results file", p)
     if p.exists() and not p.is_file():  # reading a pipe waits for a writer that may not come
         raise DataError("is a pipe, socket or device, not a results file", p)
     if not p.is_file():
