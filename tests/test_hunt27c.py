@@ -492,3 +492,31 @@ def test_report_of_a_folder_whose_results_json_is_a_folder_says_so(
     (tmp_path / "run" / "results.json").mkdir(parents=True)
     argv = ["report", str(tmp_path / "run"), "--out", str(tmp_path / "r.html")]
     refused(argv, tmp_path, capsys, "results.json: is a folder, not a results file")
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        ("negative", "key 'methods[0].confusion[0][0]' is a count of clips, got -1"),
+        ("short", "key 'methods[0].unassigned' must hold one per class (3), got 1"),
+    ],
+)
+def test_report_refuses_a_confusion_matrix_no_run_could_give(
+    edit: str,
+    message: str,
+    results: dict[str, Any],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A confusion matrix with a negative count (or ``unassigned`` not one per class) passed
+    the reader, which checks every other count, and the page drew -1 clips in its matrix."""
+    method = dict(results["methods"][0])
+    if edit == "negative":
+        method["confusion"] = [[-1, *row[1:]] if i == 0 else row
+                               for i, row in enumerate(method["confusion"])]  # fmt: skip
+    else:
+        method["unassigned"] = [0]
+    path = tmp_path / "results.json"
+    path.write_text(json.dumps(dict(results, methods=[method, *results["methods"][1:]])))
+    line = refused(["report", str(path), "--out", str(tmp_path / "r.html")], tmp_path, capsys)
+    assert line.endswith(f"{path}: {message}"), line

@@ -538,6 +538,20 @@ class Pictures:
 # ---------------------------------------------------------------------------- the whole
 
 
+def _check_counts(r: Reader, s: Scores, where: str, n_classes: int) -> None:
+    """``s``'s clips outside the classes one count per class, and every count of clips at
+    least 0."""
+    if len(s.unassigned) != n_classes:
+        r.fail(f"{where}.unassigned",
+               f"must hold one per class ({n_classes}), got {len(s.unassigned)}")  # fmt: skip
+    cells = [(f"confusion[{a}][{b}]", n) for a, row in enumerate(s.confusion)
+             for b, n in enumerate(row)]  # fmt: skip
+    cells += [(f"unassigned[{a}]", n) for a, n in enumerate(s.unassigned)]
+    for key, count in cells:
+        if count < 0:
+            r.fail(f"{where}.{key}", f"is a count of clips, got {count}")
+
+
 @dataclass
 class CompareResults:
     """Everything a comparison found, as written to ``results.json``.
@@ -646,6 +660,7 @@ class CompareResults:
                 )
                 r.fail(f"{where}.confusion",
                        f"must be {n_classes} x {n_classes} (the classes), got {shape}")  # fmt: skip
+            _check_counts(r, s, where, n_classes)
             for key, values in (("predictions", s.predictions), ("correct", s.correct)):
                 if len(values) != n_clips:
                     r.fail(
