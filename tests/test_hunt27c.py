@@ -3,8 +3,8 @@ URL with a port that is not a number (a traceback), passwords printed by ``train
 ``casebase upgrade``, two writers of one case base on PostgreSQL both committing,
 ``--scheduler`` values that were tracebacks, huge numbers in a results file ``report``
 fell over, ``--param`` values too large for any number, names that are not UTF-8
-(tracebacks from the database driver), and listings in the order of the server's collation.
-Each test says what happened before its fix.
+(tracebacks from the database driver), listings in the order of the server's collation, and
+matplotlib's raw warnings of missing glyphs. Each test says what happened before its fix.
 
 The PostgreSQL tests run against the server in ``POSECBR_TEST_POSTGRES_URL`` (``.ci/postgres.sh``
 starts one) and skip without it, as ``test_store_postgres.py`` does; each gets a fresh database.
@@ -520,3 +520,28 @@ def test_report_refuses_a_confusion_matrix_no_run_could_give(
     path.write_text(json.dumps(dict(results, methods=[method, *results["methods"][1:]])))
     line = refused(["report", str(path), "--out", str(tmp_path / "r.html")], tmp_path, capsys)
     assert line.endswith(f"{path}: {message}"), line
+
+
+def test_report_names_the_characters_its_font_lacks_in_one_line(
+    results: dict[str, Any], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An activity named in a script the pictures' font (DejaVu Sans) lacks ("右腕 raise"):
+    matplotlib warned twice per character and picture, eight lines of raw Python warnings
+    (``UserWarning: Glyph 21491 (\\N{CJK UNIFIED IDEOGRAPH-53F3}) missing from font(s)``,
+    the source line under each) around "report written", saying nothing of the boxes drawn.
+    One line names the characters now (none where the font has them)."""
+    import warnings
+
+    path = tmp_path / "results.json"
+    path.write_text(json.dumps(results))
+    assert any("右" in c for c in results["dataset"]["classes"])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code, out, err = _cli(capsys, "report", str(path), "--out", str(tmp_path / "r.html"))
+    assert code == 0 and out.startswith("report written to"), err
+    assert not [w for w in caught if "missing from font" in str(w.message)]
+    lines = err.splitlines()
+    assert lines == [] or (
+        len(lines) == 1 and lines[0].startswith("pictures: the font has no glyph for ")
+    ), err
+    assert "Warning" not in err

@@ -7,6 +7,8 @@ the others are still drawn, because a picture is never worth the results it show
 
 from __future__ import annotations
 
+import re
+import warnings
 from collections.abc import Callable, Sequence
 from functools import partial
 from pathlib import Path
@@ -181,19 +183,51 @@ def confusion_methods(results: CompareResults) -> list[tuple[MethodResult, Score
     return [scored[n] for n in names if n in scored]
 
 
+_NO_GLYPH = re.compile(r"^Glyph (\d+) .*missing from font")
+
+
 class Drawing:
     """Draws pictures one at a time; a failure becomes a line in ``failures``, not an
-    exception."""
+    exception. Characters the font lacks (an activity named in a script DejaVu Sans does not
+    cover) are drawn as boxes: matplotlib warns of each, twice per picture, in several lines
+    of Python's warnings; they are one line in ``failures`` instead, naming the characters."""
 
     def __init__(self) -> None:
         self.failures: list[str] = []
+        self._lacking: dict[str, None] = {}  # the characters, in the order met
+        self._lacking_line: int | None = None  # where their line is in failures
 
     def attempt(self, name: str, draw: Callable[[], T]) -> T | None:
-        try:
-            return draw()
-        except Exception as exc:  # any library error: the results matter more than a picture
-            self.failures.append(f"picture {name} failed: {exc}")
-            return None
+        result: T | None = None
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                result = draw()
+            except Exception as exc:  # any library error: the results matter more than it
+                self.failures.append(f"picture {name} failed: {exc}")
+        for w in caught:  # every other warning as it would have been
+            if not self._no_glyph(w):
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        return result
+
+    def _no_glyph(self, w: warnings.WarningMessage) -> bool:
+        """Whether ``w`` is matplotlib's "Glyph N missing from font(s)"; if so its character
+        is noted in the one line that names them all."""
+        found = _NO_GLYPH.match(str(w.message))
+        if found is None:
+            return False
+        self._lacking.setdefault(chr(int(found.group(1))), None)
+        line = (
+            "pictures: the font has no glyph for "
+            + ", ".join(self._lacking)
+            + " (in names drawn): drawn as boxes"
+        )
+        if self._lacking_line is None:
+            self._lacking_line = len(self.failures)
+            self.failures.append(line)
+        else:
+            self.failures[self._lacking_line] = line
+        return True
 
 
 def result_pictures(results: CompareResults, out_dir: str | Path, drawing: Drawing) -> Pictures:
