@@ -939,13 +939,17 @@ def _verbose(
         + "."
     )
     if contrast is not None:
-        out += _verbose_contrast(contrast, differences)
+        out += _verbose_contrast(contrast, differences, bool(solved.problem.mirrored))
     return "\n".join(out)
 
 
-def _verbose_contrast(contrast: Contrast, differences: list[dict[str, Any]]) -> list[str]:
+def _verbose_contrast(
+    contrast: Contrast, differences: list[dict[str, Any]], mirrored: bool = False
+) -> list[str]:
     """The verbose lines on the nearest case of the other label and the counterfactual's
-    checks."""
+    checks. ``mirrored``: the clip was compared as its mirror image, so the changed features
+    (named in the compared, mirrored frame) are named by the clip's own sides, as every other
+    word is."""
     out: list[str] = []
     out.append(
         f"Nearest other label: {contrast.label}"
@@ -963,7 +967,10 @@ def _verbose_contrast(contrast: Contrast, differences: list[dict[str, Any]]) -> 
         ) + contrast.answer  # fmt: skip
         out.append(
             f"Counterfactual ({_count(len(contrast.changes), 'feature')}: "
-            + ", ".join(c.feature.removeprefix("joint:") for c in contrast.changes)
+            + ", ".join(
+                swap_side(name) if mirrored else name
+                for name in (c.feature.removeprefix("joint:") for c in contrast.changes)
+            )
             + ", every value measured there as in "
             + (
                 f"case #{contrast.guide_case_id}"

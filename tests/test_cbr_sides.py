@@ -110,6 +110,23 @@ def test_a_clip_compared_as_its_mirror_image_is_explained_with_its_own_sides() -
     assert any("left" in c.words for c in why)
 
 
+def test_the_verbose_counterfactual_names_the_changed_features_by_the_clips_own_sides() -> None:
+    # the changes are found in the compared (mirrored) frame: "joint:right shoulder" there is
+    # the clip's left shoulder, and the verbose line said "right shoulder" beside "left upper
+    # arm plane angle 90° → 2°"
+    X, y = _data({"s1": "right", "s2": "right", "s3": "right"}, 3, 3)
+    clip = _arm_clip("left", "sideways", "s9", np.random.default_rng(4))
+    clf = CaseBaseClassifier(k=1, mirror="canonical").fit(X, y)
+    exp = clf.explain_solved(clf.solve([clip])[0])
+    assert exp.mirrored and exp.contrast is not None and exp.contrast.changes
+    line = next(x for x in exp.verbose.splitlines() if "Counterfactual (" in x)
+    named = line.split(": ", 1)[1].split(", every value", 1)[0]
+    features = [c.feature.removeprefix("joint:") for c in exp.contrast.changes]
+    assert named == ", ".join(swap_side(f) for f in features)
+    assert all(c.words.startswith("left") for c in exp.contrast.changes)  # the moving arm
+    assert "right" not in named
+
+
 def test_auto_keeps_side_twins_apart() -> None:
     rng = np.random.default_rng(6)
     X, y = [], []
