@@ -8,6 +8,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 import shutil
 from pathlib import Path
 
@@ -575,6 +576,11 @@ def test_segment_command_json_text_and_plot(
     assert segs[0]["start_frame"] == 0 and segs[-1]["end_frame"] == 2465
     known = {"JumpJack", "Jog", "Squat", "KneeRaise", "ArmCircle", "Twist", "ToeTouchOneHand"}
     assert all(s["label"] is None or s["label"] in known for s in segs)
+    # the help names every key the JSON holds (it left out "frames")
+    from posecbr.commands import segment as segment_command
+
+    named = set(re.findall(r'"(\w+)"', segment_command.__doc__ or ""))
+    assert set(doc) <= named and set(segs[0]) <= named
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["segment", str(rec), "--db", str(case_base)]) == 0
     text = capsys.readouterr().out

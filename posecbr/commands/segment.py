@@ -6,7 +6,7 @@ its activities, judged by the case base's own calibration), with its start and e
 and frames, a confidence, the number of repetitions and a short explanation. A case base of
 windows (``posecbr train ... --split windows``) matches how the recording's windows are cut.
 
-``--json`` prints ``{"recording", "fps", "segments": [{"start_s", "end_s", "start_frame",
+``--json`` prints ``{"recording", "fps", "frames", "segments": [{"start_s", "end_s", "start_frame",
 "end_frame", "label" (null when unknown), "confidence", "unknown" (why, or null),
 "repetitions", "explanation", "novelty", "repetition_frames"}]}`` (a list of those for
 several recordings; end frames exclusive); ``--plot`` draws the segments
