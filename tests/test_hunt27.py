@@ -3,11 +3,14 @@ before its fix."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from cbr.segmentation import BLOCK_S, _frames_of
 from features.datasets import frame_labels
+from tests.badinput import refused
 
 
 @pytest.mark.parametrize("fps", [5.0, 24.0, 25.0, 29.97, 30.0, 60.0, 120.0])
@@ -24,3 +27,17 @@ def test_segment_frames_are_the_label_files_blocks(fps: float) -> None:
         want = np.searchsorted(block, [b, b + 1])
         assert _frames_of(b, b + 1, fps, n_frames) == tuple(want), b
     assert _frames_of(0, n_blocks, fps, n_frames) == (0, n_frames)
+
+
+def test_compare_jobs_with_a_scheduler_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``compare --jobs 4 --scheduler local:1`` ran the folds on the one-worker cluster and
+    said nothing of ``--jobs`` (hunt 27c): the two ask for different workers; refused in one
+    line before any clip is read, nothing written."""
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "labels.csv").write_text("path,label\nmissing.npz,squat\n")  # never read
+    argv = ["compare", str(data / "labels.csv"), "--jobs", "4", "--scheduler", "local:1",
+            "--out", str(tmp_path / "out")]  # fmt: skip
+    refused(argv, tmp_path, capsys, "--jobs", "local:1")

@@ -78,6 +78,12 @@ class CompareSettings:
             raise ConfigError(f"trim must be in (0, 1], got {self.trim}", "--trim")
         if int(self.jobs) < 1:
             raise ConfigError(f"jobs must be at least 1, got {self.jobs}", "--jobs")
+        if int(self.jobs) > 1 and self.scheduler is not None:
+            raise ConfigError(
+                f"goes with worker processes of this machine; the folds run on the Dask"
+                f" scheduler {self.scheduler} (its workers are the cluster's: local:N for N)",
+                "--jobs",
+            )
         if int(self.peer_length) < 9:
             raise ConfigError("peer_length must be at least 9 frames", "peer_length")
         if int(self.bootstrap) < 1:
