@@ -471,6 +471,16 @@ def _configure_postgresql(engine: Engine, timeout_s: float, readonly: bool) -> N
         dbapi_conn.commit()  # SET ran in the driver's implicit transaction
 
 
+#: How a server or driver says a connection that was open is gone (the server shut down or
+#: restarted, an administrator ended the session, the network dropped it).
+_LOST_WORDS = (
+    "terminating connection",  # PostgreSQL ending a session (pg_terminate_backend, shutdown)
+    "server closed the connection",  # libpq
+    "connection is closed",  # psycopg, on a connection already gone
+    "consuming input failed",  # psycopg, reading from a dropped socket
+)
+
+
 def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
     text = str(getattr(exc, "orig", None) or exc).strip()
     low = text.lower()
@@ -505,6 +515,9 @@ def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
     ):
         first = " ".join(text.split())
         return StoreError(f"cannot connect to the database server ({first})", where)
+    if any(words in low for words in _LOST_WORDS):
+        first = " ".join(text.split())
+        return StoreError(f"the connection to the database server was lost ({first})", where)
     first = text.splitlines()[0] if text else type(exc).__name__
     return StoreError(f"database error: {first}", where)
 

@@ -7,10 +7,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from sqlalchemy.engine import make_url
 
 from cbr.segmentation import BLOCK_S, _frames_of
 from features.datasets import frame_labels
 from tests.badinput import refused
+from tests.test_store_postgres import pg_server as pg_server  # noqa: F401  (fixture)
+from tests.test_store_postgres import pg_url as pg_url  # noqa: F401  (fixture)
 
 
 @pytest.mark.parametrize("fps", [5.0, 24.0, 25.0, 29.97, 30.0, 60.0, 120.0])
@@ -41,3 +44,31 @@ def test_compare_jobs_with_a_scheduler_is_refused(
     argv = ["compare", str(data / "labels.csv"), "--jobs", "4", "--scheduler", "local:1",
             "--out", str(tmp_path / "out")]  # fmt: skip
     refused(argv, tmp_path, capsys, "--jobs", "local:1")
+
+
+def test_a_postgresql_session_ended_mid_transaction_says_the_connection_was_lost(
+    pg_url: str,
+) -> None:
+    """The server ending the session of a command in its transaction (an administrator's
+    ``pg_terminate_backend``, a restart) was "database error: terminating connection due to
+    administrator command" (hunt 27c): it says the connection was lost, and the store
+    names the database without its password."""
+    from sqlalchemy import create_engine, text
+
+    from casebase_store import StoreError, open_store
+
+    store = open_store(pg_url)
+    other = create_engine(pg_url, isolation_level="AUTOCOMMIT")
+    try:
+        with pytest.raises(StoreError) as err, store.transaction() as tx:
+            pid = tx.session.execute(text("SELECT pg_backend_pid()")).scalar_one()
+            with other.connect() as conn:
+                conn.execute(text("SELECT pg_terminate_backend(:p)"), {"p": pid})
+            tx.session.execute(text("SELECT 1"))
+    finally:
+        other.dispose()
+        store.close()
+    message = str(err.value)
+    assert "the connection to the database server was lost" in message, message
+    password = make_url(pg_url).password
+    assert not password or str(password) not in message
