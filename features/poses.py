@@ -149,6 +149,18 @@ def _check_confidence(conf: np.ndarray, where: str | None) -> None:
         raise PoseFileError(f"confidence must lie in [0, 1], found {bad:g}", where)
 
 
+def _unseen_missing(seq: PoseSequence) -> PoseSequence:
+    """``seq`` with the positions of joints of confidence exactly 0 set to NaN (missing)."""
+    if seq.confidence is None:
+        return seq
+    unseen = seq.confidence == 0
+    if not unseen.any():
+        return seq
+    pos = seq.positions.copy()
+    pos[unseen] = np.nan
+    return replace(seq, positions=pos)
+
+
 @dataclass(frozen=True, eq=False)
 class PoseSequence:
     """A 3D stick figure over time.
@@ -244,9 +256,13 @@ class PoseSequence:
         Joint names are BlazePose landmark names, in any case (MediaPipe's ``PoseLandmark``
         names are ``LEFT_SHOULDER``, ...); a skeleton with a declared joint map (Kinect v2,
         :data:`SKELETON_JOINTS`) may name its own joints. PoseFileError for other names, or two
-        names for one joint."""
+        names for one joint.
+
+        A joint the source says it did not see (confidence exactly 0: OpenPose and COCO-style
+        files write such joints as (0, 0, 0)) is missing here, NaN, so no feature reads the
+        placeholder as a position; the sequence itself keeps what the file holds."""
         if self.joint_names == BLAZEPOSE_33:
-            return self
+            return _unseen_missing(self)
         own, joint_map = SKELETON_JOINTS.get(self.skeleton, ((), {}))
         mapped = {theirs: blazepose for blazepose, theirs in joint_map.items()}
         index: dict[str, int] = {}  # BlazePose joint -> the file's joint for it
@@ -281,7 +297,9 @@ class PoseSequence:
             pos[:, k] = self.positions[:, i]
             if conf is not None and self.confidence is not None:
                 conf[:, k] = self.confidence[:, i]
-        return replace(self, positions=pos, joint_names=BLAZEPOSE_33, confidence=conf)
+        return _unseen_missing(
+            replace(self, positions=pos, joint_names=BLAZEPOSE_33, confidence=conf)
+        )
 
     def slice_frames(self, start: int, stop: int | None) -> PoseSequence:
         """Frames ``start`` (inclusive) to ``stop`` (exclusive; None: the end), as Python

@@ -1,0 +1,75 @@
+"""Pose-file leftovers fixed in session 27 (27f): a joint the pose file says it did not see
+(confidence exactly 0, written as (0, 0, 0) by OpenPose and COCO-style tools) was used as a
+real position, a knee at the origin. Each test says what happened before its fix; the expected
+values are worked out by hand from the positions written here."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from features.fluents import evaluate
+from features.poses import load_pose
+from features.signals import state_signals
+
+# A COCO-style subset: the left leg bent at a right angle (thigh straight down from the hip to
+# the knee, shin forward along +z), the right leg straight.
+LEGS = ("left_hip", "left_knee", "left_ankle", "right_hip", "right_knee", "right_ankle")
+LEG_POSE = [
+    [0.1, 1.0, 0.0],
+    [0.1, 0.5, 0.0],
+    [0.1, 0.5, 0.5],
+    [-0.1, 1.0, 0.0],
+    [-0.1, 0.5, 0.0],
+    [-0.1, 0.0, 0.0],
+]
+
+
+def _legs_file(path: Path, unseen_frames: slice | None) -> Path:
+    pos = np.tile(np.array(LEG_POSE), (4, 1, 1))
+    conf = np.ones((4, len(LEGS)))
+    if unseen_frames is not None:
+        pos[unseen_frames, 1] = 0.0  # the left knee, not seen: (0, 0, 0) with confidence 0
+        conf[unseen_frames, 1] = 0.0
+    np.savez(path, positions=pos, joint_names=np.array(LEGS), fps=30.0, confidence=conf)
+    return path
+
+
+def test_unseen_joint_is_missing_not_at_the_origin(tmp_path: Path) -> None:
+    """Before: frames 1-2's left knee at (0, 0, 0) read as a position, a knee angle of
+    0.78 rad (hip-knee-ankle through the origin) and confident "left knee bent" there."""
+    whole = load_pose(_legs_file(tmp_path / "seen.npz", None))
+    # hip - knee = (0, 0.5, 0), ankle - knee = (0, 0, 0.5): a right angle
+    np.testing.assert_allclose(state_signals(whole).column("left_knee"), [math.pi / 2] * 4)
+
+    seq = load_pose(_legs_file(tmp_path / "coco.npz", slice(1, 3)))
+    knee = state_signals(seq).column("left_knee")
+    np.testing.assert_allclose(knee[[0, 3]], [math.pi / 2] * 2)
+    assert np.isnan(knee[1:3]).all()
+    bent = evaluate(seq).column("left_leg_bent.bent")
+    assert np.isnan(bent[1:3]).all()
+    assert not np.isnan(bent[[0, 3]]).any()
+    # the right knee (straight, pi) is untouched by the left knee's gaps
+    np.testing.assert_allclose(state_signals(seq).column("right_knee"), [math.pi] * 4)
+    # the sequence as read keeps what the file holds
+    np.testing.assert_array_equal(seq.positions[1:3, 1], 0.0)
+
+
+def test_unseen_joint_is_missing_on_the_full_skeleton(tmp_path: Path) -> None:
+    """Before: the same on a file naming all 33 BlazePose joints (which the features read as
+    they are): the knee at the origin gave 0.78 rad."""
+    from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
+
+    pos = np.full((4, 33, 3), np.nan)
+    conf = np.full((4, 33), 0.9)
+    for name, xyz in zip(LEGS, LEG_POSE, strict=True):
+        pos[:, JOINT_INDEX[name]] = xyz
+    pos[2, JOINT_INDEX["left_knee"]] = 0.0
+    conf[2, JOINT_INDEX["left_knee"]] = 0.0
+    path = tmp_path / "full.npz"
+    np.savez(path, positions=pos, joint_names=np.array(BLAZEPOSE_33), fps=30.0, confidence=conf)
+    knee = state_signals(load_pose(path)).column("left_knee")
+    np.testing.assert_allclose(knee[[0, 1, 3]], [math.pi / 2] * 3)
+    assert np.isnan(knee[2])
