@@ -1,6 +1,7 @@
 """Pose-file leftovers fixed in session 27 (27f): a joint the pose file says it did not see
 (confidence exactly 0, written as (0, 0, 0) by OpenPose and COCO-style tools) was used as a
-real position, a knee at the origin. Each test says what happened before its fix; the expected
+real position, a knee at the origin; an AMC frame listing a bone twice was "bone appears in 4 of
+3 frames". Each test says what happened before its fix; the expected
 values are worked out by hand from the positions written here."""
 
 from __future__ import annotations
@@ -9,10 +10,12 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from features.fluents import evaluate
 from features.poses import load_pose
 from features.signals import state_signals
+from tests.badinput import refused
 
 # A COCO-style subset: the left leg bent at a right angle (thigh straight down from the hip to
 # the knee, shin forward along +z), the right leg straight.
@@ -73,3 +76,64 @@ def test_unseen_joint_is_missing_on_the_full_skeleton(tmp_path: Path) -> None:
     knee = state_signals(load_pose(path)).column("left_knee")
     np.testing.assert_allclose(knee[[0, 1, 3]], [math.pi / 2] * 3)
     assert np.isnan(knee[2])
+
+
+# ---- ASF/AMC -----------------------------------------------------------------------------
+
+# One bone: a left clavicle 0.2 m along +x; ``length 0.0254`` makes one ASF unit one metre.
+_ASF = """:version 1.10
+:name arm
+:units
+  mass 1.0
+  length 0.0254
+  angle deg
+:root
+  order TX TY TZ RX RY RZ
+  axis XYZ
+  position 0 0 0
+  orientation 0 0 0
+:bonedata
+  begin
+    id 1
+    name lclavicle
+    direction 1 0 0
+    length 0.2
+    axis 0 0 0 XYZ
+    dof rx ry rz
+  end
+:hierarchy
+  begin
+    root lclavicle
+  end
+"""
+_FRAME = "root 0 1 0 0 0 0\nlclavicle 0 0 0\n"
+
+
+def _amc_pair(root: Path, frames: list[str]) -> tuple[Path, Path]:
+    (root / "arm.asf").write_text(_ASF)
+    amc = root / "arm.amc"
+    amc.write_text(
+        ":FULLY-SPECIFIED\n:DEGREES\n" + "".join(f"{i}\n{f}" for i, f in enumerate(frames, start=1))
+    )
+    return root / "arm.asf", amc
+
+
+@pytest.mark.parametrize("twice", [1, 2])
+def test_amc_bone_listed_twice_in_a_frame_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], twice: int
+) -> None:
+    """Before: ``lclavicle`` twice in frame 2 of 3 was "bone 'lclavicle' appears in 4 of 3
+    frames" (in frame 1: "4 of 3" too), naming neither the frame nor the line."""
+    frames = [_FRAME] * 3
+    frames[twice - 1] = _FRAME + "lclavicle 0 0 0\n"
+    asf, amc = _amc_pair(tmp_path, frames)
+    # frame k's lines start at 3 + 3 (k - 1) (two header lines, then number, root, bone); the
+    # second lclavicle follows frame k's first one
+    line = 3 + 3 * (twice - 1) + 3
+    refused(
+        ["convert", str(amc), "--asf", str(asf), "--out", str(tmp_path / "out")],
+        tmp_path,
+        capsys,
+        "arm.amc",
+        f"line {line}: bone 'lclavicle' is listed twice in frame {twice}",
+    )

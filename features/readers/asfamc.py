@@ -482,6 +482,11 @@ class _AmcFrames:
                 f" {n_dof[name]}",
                 self.path,
             )
+        if name in self.seen:
+            raise DataError(
+                f"line {line_no}: bone {name!r} is listed twice in frame {self.n_frames}",
+                self.path,
+            )
         self.rows.setdefault(name, []).append(tokens[1:])
         self.seen.add(name)
 
