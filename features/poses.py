@@ -11,7 +11,8 @@ File format (``.npz``, written with :func:`save_pose`, read with :func:`load_pos
 - ``metadata`` (optional): a JSON string (object) with anything else: ``label``, ``subject``,
   ``source`` (what the file was made from, e.g. the video), ``correct``, ... A loaded
   sequence's ``source`` is the file's path; a different ``source`` in the file becomes
-  ``metadata["made_from"]``.
+  ``metadata["made_from"]``. Saved, the sequence's ``source`` is the file's ``source``; a
+  different ``metadata["source"]`` is kept as ``metadata_source``.
 - ``extra_<name>`` (optional): further arrays a producer keeps beside the pose, e.g.
   ``extra_image_landmarks`` ``(frames, 33, 5)`` from the video pose estimator; written with
   ``save_pose(..., extra_arrays=...)``, read with :func:`load_pose_arrays`.
@@ -405,8 +406,15 @@ def save_pose(
 
 
 def _metadata_text(seq: PoseSequence, path: Path) -> str:
+    """The metadata JSON: the sequence's ``source`` under "source" (what the file was made
+    from); a different ``metadata["source"]`` is kept apart as "metadata_source", not let
+    hide it."""
+    meta = dict(seq.metadata)
+    other = meta.pop("source", None)
+    if other is not None and other != seq.source and "metadata_source" not in meta:
+        meta["metadata_source"] = other
     try:
-        return json.dumps({"source": seq.source, **dict(seq.metadata)}, default=_plain_json)
+        return json.dumps({**meta, "source": seq.source}, default=_plain_json)
     except (TypeError, ValueError) as exc:
         raise PoseFileError(f"metadata cannot be stored as JSON ({exc})", path) from None
 

@@ -1,8 +1,9 @@
-"""Pose-file leftovers fixed in session 27 (27f): a joint the pose file says it did not see
+"""pose-file leftovers fixed in session 27 (27f): a joint the pose file says it did not see
 (confidence exactly 0, written as (0, 0, 0) by OpenPose and COCO-style tools) was used as a
-real position, a knee at the origin; an AMC frame listing a bone twice was "bone appears in 4 of
-3 frames". Each test says what happened before its fix; the expected
-values are worked out by hand from the positions written here."""
+real position, a knee at the origin; an AMC frame listing a bone twice was "bone appears in 4
+of 3 frames"; a ``metadata["source"]`` replaced the sequence's source when saved. Each test
+says what happened before its fix; the expected values are worked out by hand from the
+positions written here."""
 
 from __future__ import annotations
 
@@ -13,8 +14,9 @@ import numpy as np
 import pytest
 
 from features.fluents import evaluate
-from features.poses import load_pose
+from features.poses import PoseSequence, load_pose, save_pose
 from features.signals import state_signals
+from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
 from tests.badinput import refused
 
 # A COCO-style subset: the left leg bent at a right angle (thigh straight down from the hip to
@@ -63,8 +65,6 @@ def test_unseen_joint_is_missing_not_at_the_origin(tmp_path: Path) -> None:
 def test_unseen_joint_is_missing_on_the_full_skeleton(tmp_path: Path) -> None:
     """Before: the same on a file naming all 33 BlazePose joints (which the features read as
     they are): the knee at the origin gave 0.78 rad."""
-    from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
-
     pos = np.full((4, 33, 3), np.nan)
     conf = np.full((4, 33), 0.9)
     for name, xyz in zip(LEGS, LEG_POSE, strict=True):
@@ -137,3 +137,26 @@ def test_amc_bone_listed_twice_in_a_frame_is_refused(
         "arm.amc",
         f"line {line}: bone 'lclavicle' is listed twice in frame {twice}",
     )
+
+
+def test_metadata_source_does_not_hide_the_sequence_source(tmp_path: Path) -> None:
+    """Before: saved, ``metadata={"source": "notes.txt"}`` overwrote the sequence's source
+    ``walk.mp4`` in the file: read back, made_from was notes.txt and walk.mp4 was lost."""
+    seq = PoseSequence(
+        np.zeros((2, 1, 3)),
+        ("nose",),
+        30.0,
+        source="walk.mp4",
+        metadata={"source": "notes.txt", "label": "walk"},
+    )
+    back = load_pose(save_pose(seq, tmp_path / "walk.npz"))
+    assert back.metadata == {
+        "label": "walk",
+        "made_from": "walk.mp4",
+        "metadata_source": "notes.txt",
+    }
+    # the same text in both: nothing to keep apart
+    same = PoseSequence(
+        np.zeros((2, 1, 3)), ("nose",), 30.0, source="walk.mp4", metadata={"source": "walk.mp4"}
+    )
+    assert load_pose(save_pose(same, tmp_path / "same.npz")).metadata == {"made_from": "walk.mp4"}
