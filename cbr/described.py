@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from features.body import moves_left_more, torso_share
+from features.body import mirror_source, moves_left_more, torso_share
 from features.derived import forget, is_cached
 from features.poses import PoseSequence
 
@@ -69,7 +69,7 @@ class DescribedClip:
     def mirror_source(self) -> str:
         """The provenance of the clip's mirror image (as :func:`features.body.mirrored` names
         it)."""
-        return f"{self.source} (mirrored)"
+        return mirror_source(self.source)
 
 
 def describe_clip(

@@ -50,6 +50,17 @@ def swap_side(name: str) -> str:
     return name.replace("left", "\0").replace("right", "left").replace("\0", "right")
 
 
+MIRRORED = " (mirrored)"
+
+
+def mirror_source(source: str) -> str:
+    """The source of the mirror image of a sequence from ``source``: `` (mirrored)`` added, or
+    taken off a mirror image's (the mirror of a mirror image is the original)."""
+    if source.endswith(MIRRORED):
+        return source.removesuffix(MIRRORED)
+    return source + MIRRORED
+
+
 def mirrored(seq: PoseSequence) -> PoseSequence:
     """The left-right mirror image of ``seq``: x negated (a reflection, y stays up) and every
     left joint swapped with its right twin, so the left arm's movement becomes the right arm's.
@@ -62,7 +73,7 @@ def mirrored(seq: PoseSequence) -> PoseSequence:
         pos[..., 0] *= -1.0
         conf = None if c.confidence is None else c.confidence[:, swap]
         return dataclasses.replace(
-            c, positions=pos, confidence=conf, source=f"{c.source} (mirrored)"
+            c, positions=pos, confidence=conf, source=mirror_source(c.source)
         )
 
     return derived(seq, "mirror", compute)

@@ -1,9 +1,10 @@
 """pose-file leftovers fixed in session 27 (27f): a joint the pose file says it did not see
 (confidence exactly 0, written as (0, 0, 0) by OpenPose and COCO-style tools) was used as a
 real position, a knee at the origin; an AMC frame listing a bone twice was "bone appears in 4
-of 3 frames"; a ``metadata["source"]`` replaced the sequence's source when saved. Each test
-says what happened before its fix; the expected values are worked out by hand from the
-positions written here."""
+of 3 frames"; a ``metadata["source"]`` replaced the sequence's source when saved; the mirror
+image of a mirror image was named "... (mirrored) (mirrored)". Each test says what happened
+before its fix; the expected values are worked out by hand from the positions written
+here."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from features.body import mirrored
 from features.fluents import evaluate
 from features.poses import PoseSequence, load_pose, save_pose
 from features.signals import state_signals
@@ -160,3 +162,18 @@ def test_metadata_source_does_not_hide_the_sequence_source(tmp_path: Path) -> No
         np.zeros((2, 1, 3)), ("nose",), 30.0, source="walk.mp4", metadata={"source": "walk.mp4"}
     )
     assert load_pose(save_pose(same, tmp_path / "same.npz")).metadata == {"made_from": "walk.mp4"}
+
+
+def test_mirror_of_a_mirror_is_named_as_the_original() -> None:
+    """Before: mirrored twice, the source was "walk.npz (mirrored) (mirrored)" though the
+    positions are the original's (x negated twice, left and right swapped back)."""
+    pos = np.array([[[0.2, 1.4, 0.1], [-0.2, 1.4, 0.0]]])  # left shoulder, right shoulder
+    seq = PoseSequence(pos, ("left_shoulder", "right_shoulder"), 30.0, source="walk.npz")
+    once = mirrored(seq)
+    assert once.source == "walk.npz (mirrored)"
+    # once: the right shoulder (-0.2, 1.4, 0) becomes the left one at (0.2, 1.4, 0)
+    np.testing.assert_array_equal(once.positions[0, JOINT_INDEX["left_shoulder"]], [0.2, 1.4, 0])
+    twice = mirrored(once)
+    assert twice.source == "walk.npz"
+    np.testing.assert_array_equal(twice.positions[0, JOINT_INDEX["left_shoulder"]], pos[0, 0])
+    np.testing.assert_array_equal(twice.positions[0, JOINT_INDEX["right_shoulder"]], pos[0, 1])
