@@ -146,11 +146,11 @@ def _presence(
     for c in listed:
         share = x[index[c.column]]
         if c.part in ("matched", "only_here") and share < SEEN_FRACTION - _TOLERANCE:
-            out.append(f"{c.words}: said to be shown, held {100 * share:.0f} % of the time")
+            out.append(f"{c.words}: said to be shown, mean confidence {share:.2f}")
         if c.part == "not_seen" and share >= SEEN_FRACTION:
-            out.append(f"{c.words}: said not to be shown, held {100 * share:.0f} % of the time")
+            out.append(f"{c.words}: said not to be shown, mean confidence {share:.2f}")
         if c.steady and share < STEADY_FRACTION - _TOLERANCE:
-            out.append(f"{c.words}: said to hold steadily, held {100 * share:.0f} % of the time")
+            out.append(f"{c.words}: said to hold steadily, mean confidence {share:.2f}")
         if c.part in ("not_seen", "only_here") and c.there is not None:
             if abs(share - c.there) <= prof.within[index[c.column]]:
                 out.append(

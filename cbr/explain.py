@@ -93,8 +93,10 @@ def state_columns(names: tuple[str, ...]) -> tuple[np.ndarray, bool] | None:
 def quantity(name: str, value: float) -> tuple[float, str]:
     """A problem column's value in its own unit: joint angles in degrees (stored as radians /
     pi), positions in torso lengths; a fluent state's mean (over the clip or a phase of it) is
-    about the share of the frames it holds ("share"), its lowest and highest values are
-    confidences, its variation a plain number."""
+    its mean confidence ("share": near the share of the frames it holds when its confidences
+    are near 0 or 1, but not where the angle stays near a threshold, so it is said as a mean
+    confidence, not as a share of the time), its lowest and highest values are confidences,
+    its variation a plain number."""
     base, _, stat = name.partition("@")
     if base.startswith(ANGLE_PREFIX):
         return float(value) * 180.0, "degrees"
@@ -108,11 +110,11 @@ def quantity(name: str, value: float) -> tuple[float, str]:
 
 
 def said(value: float, unit: str) -> str:
-    """A value in its unit as people write it: 62°, 40 % of the time, 0.36 torso lengths."""
+    """A value in its unit as people write it: 62°, mean confidence 0.40, 0.36 torso lengths."""
     if unit == "degrees":
         return f"{value:.0f}°"
     if unit == "share":
-        return f"{100.0 * value:.0f} % of the time"
+        return f"mean confidence {value:.2f}"
     if unit == "confidence":
         return f"confidence {value:.2f}"
     if unit == "detected":
@@ -121,11 +123,10 @@ def said(value: float, unit: str) -> str:
 
 
 def _span(low: float, high: float, unit: str) -> str:
-    """A range in a unit: 45–80°, 20–60 %, 0.90–1.10 (torso lengths, said with the value)."""
+    """A range in a unit: 45–80°, 0.20–0.60 (mean confidences; torso lengths, said with the
+    value)."""
     if unit == "degrees":
         return f"{low:.0f}–{high:.0f}°"
-    if unit == "share":
-        return f"{100 * low:.0f}–{100 * high:.0f} %"
     return f"{low:.2f}–{high:.2f}"
 
 
