@@ -72,3 +72,33 @@ def test_a_postgresql_session_ended_mid_transaction_says_the_connection_was_lost
     assert "the connection to the database server was lost" in message, message
     password = make_url(pg_url).password
     assert not password or str(password) not in message
+
+
+def test_overlay_words_beyond_ascii_are_drawn_not_question_marks() -> None:
+    """``watch --out`` and the overlays wrote every label and fluent word with OpenCV's font,
+    which has ASCII only: an activity named "élévation" or "Kniebeuge – tief" came out with
+    question marks for its letters (hunt 27c). Drawn in DejaVu Sans it is not what OpenCV's
+    font makes of it, and lies on the line an ASCII word does."""
+    import cv2
+
+    from features.pose_estimation.overlay import draw_pose
+
+    nobody = np.full((33, 5), np.nan)
+    word = "élévation – tief"
+
+    def drawn(text: str) -> np.ndarray:
+        image = np.zeros((240, 640, 3), dtype=np.uint8)
+        draw_pose(image, nobody, [text])
+        return image[22:]  # below the "no person" line (its baseline at row 18)
+
+    opencv = np.zeros((240, 640, 3), dtype=np.uint8)  # what OpenCV's font draws of the word
+    for colour, width in (((0, 0, 0), 4), ((255, 255, 255), 1)):  # as draw_pose outlines
+        cv2.putText(opencv, word, (12, 36), cv2.FONT_HERSHEY_SIMPLEX, 0.42, colour, width,
+                    cv2.LINE_AA)  # fmt: skip
+    accented, plain = drawn(word), drawn("elevation")
+    assert (accented != opencv[22:]).any()
+    rows = np.flatnonzero(accented.any(axis=(1, 2)))
+    plain_rows = np.flatnonzero(plain.any(axis=(1, 2)))
+    assert rows.size and plain_rows.size
+    # the same line: the baselines (the last rows of letters without descenders) agree
+    assert abs(int(rows.max()) - int(plain_rows.max())) <= 4, (rows, plain_rows)

@@ -3,6 +3,7 @@ to check. Written to a temporary name and renamed, so no half-written file is le
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -66,12 +67,60 @@ def draw_pose(
         words = ["no person", *words]
     scale = max(0.6, min(h, w) / 600)
     for n, text in enumerate(words):
-        org = (12, int((n + 1) * 30 * scale))
-        for colour, width in (((0, 0, 0), 4), ((255, 255, 255), 1)):  # outlined text
+        _write(bgr, text, (12, int((n + 1) * 30 * scale)), scale)
+    return bgr
+
+
+def _write(bgr: np.ndarray, text: str, org: tuple[int, int], scale: float) -> None:
+    """``text`` white outlined in black, its baseline starting at ``org``: OpenCV's own font
+    for ASCII; text beyond it (an activity named "élévation" or "Kniebeuge – tief", which
+    OpenCV's fonts draw as "?") in DejaVu Sans, the font matplotlib ships (:func:`_masks`)."""
+    if text.isascii():
+        for colour, width in (((0, 0, 0), 4), ((255, 255, 255), 1)):
             cv2.putText(
                 bgr, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.7 * scale, colour, width, cv2.LINE_AA
             )
-    return bgr
+        return
+    outline, fill, ascent = _masks(text, round(19 * scale))
+    top, left = org[1] - ascent, org[0]
+    h, w = bgr.shape[:2]
+    y0, x0 = max(0, top), max(0, left)
+    y1, x1 = min(h, top + fill.shape[0]), min(w, left + fill.shape[1])
+    if y1 <= y0 or x1 <= x0:
+        return
+    region: np.ndarray = bgr[y0:y1, x0:x1].astype(np.float32)
+    for mask, value in ((outline, 0.0), (fill, 255.0)):
+        a = mask[y0 - top : y1 - top, x0 - left : x1 - left, None]
+        region = region * (1.0 - a) + value * a
+    bgr[y0:y1, x0:x1] = np.round(region).astype(bgr.dtype)
+
+
+@functools.lru_cache(maxsize=256)
+def _masks(text: str, size: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """The outline and the fill of ``text`` in DejaVu Sans at ``size`` pixels, as coverage
+    ``(height, width)`` in [0, 1], and the baseline's row in them; drawn once per text and
+    size (a stream's labels and fluent words repeat)."""
+    import matplotlib
+    from PIL import Image, ImageDraw, ImageFont
+
+    font = ImageFont.truetype(str(Path(matplotlib.get_data_path()) / _FONT), size)
+    stroke = max(1, round(size / 10))
+    ascent, descent = font.getmetrics()
+    width = int(font.getlength(text)) + 2 * stroke + 2
+    height = ascent + descent + 2 * stroke
+    out = []
+    for wide in (stroke, 0):
+        image = Image.new("L", (width, height), 0)
+        ImageDraw.Draw(image).text(
+            (stroke, stroke + ascent), text, font=font, fill=255, anchor="ls",
+            stroke_width=wide, stroke_fill=255,
+        )  # fmt: skip
+        out.append(np.asarray(image, dtype=np.float32) / 255.0)
+    return out[0], out[1], stroke + ascent
+
+
+_FONT = "fonts/ttf/DejaVuSans.ttf"
+"""The font of non-ASCII words, within matplotlib's data (a dependency of the reports)."""
 
 
 MAX_MP4_SIDE = 8191
