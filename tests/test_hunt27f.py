@@ -20,6 +20,7 @@ from features.poses import PoseSequence, load_pose, save_pose
 from features.signals import state_signals
 from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
 from tests.badinput import refused
+from tests.test_hunt27d import _ASF
 
 # A COCO-style subset: the left leg bent at a right angle (thigh straight down from the hip to
 # the knee, shin forward along +z), the right leg straight.
@@ -82,32 +83,8 @@ def test_unseen_joint_is_missing_on_the_full_skeleton(tmp_path: Path) -> None:
 
 # ---- ASF/AMC -----------------------------------------------------------------------------
 
-# One bone: a left clavicle 0.2 m along +x; ``length 0.0254`` makes one ASF unit one metre.
-_ASF = """:version 1.10
-:name arm
-:units
-  mass 1.0
-  length 0.0254
-  angle deg
-:root
-  order TX TY TZ RX RY RZ
-  axis XYZ
-  position 0 0 0
-  orientation 0 0 0
-:bonedata
-  begin
-    id 1
-    name lclavicle
-    direction 1 0 0
-    length 0.2
-    axis 0 0 0 XYZ
-    dof rx ry rz
-  end
-:hierarchy
-  begin
-    root lclavicle
-  end
-"""
+# hunt 27d's left arm (clavicle, humerus, radius); the frames below list the clavicle alone
+# (the bones below it are then unknown, NaN)
 _FRAME = "root 0 1 0 0 0 0\nlclavicle 0 0 0\n"
 
 
