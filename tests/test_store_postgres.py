@@ -418,7 +418,7 @@ def test_cli_gives_the_same_answers_on_postgres_as_on_sqlite(
 # ----------------------------------------------------------------------------- processes
 
 
-def test_two_processes_retaining_500_each_lose_nothing(pg_url: str, tmp_path: Path) -> None:
+def test_two_processes_retaining_200_each_lose_nothing(pg_url: str, tmp_path: Path) -> None:
     store = open_store(pg_url)
     with store.transaction() as tx:
         cb = tx.create_case_base(
@@ -432,12 +432,12 @@ def test_two_processes_retaining_500_each_lose_nothing(pg_url: str, tmp_path: Pa
     for p in procs:
         out, err = p.communicate(timeout=120)
         assert out.strip() == "OK", err
-    assert store.count_cases("shared") == 4 + 1000
+    assert store.count_cases("shared") == 4 + 400
     counts = store.get_case_base("shared").label_counts
-    assert counts["p1"] == 500 and counts["p2"] == 500
+    assert counts["p1"] == 200 and counts["p2"] == 200
     log = store.maintenance_log("shared")
-    assert sum(e.action == "retain" for e in log) == 1000
-    assert len({e.case_id for e in log}) == 1000  # each logged retention names its own case
+    assert sum(e.action == "retain" for e in log) == 400
+    assert len({e.case_id for e in log}) == 400  # each logged retention names its own case
     store.close()
 
 

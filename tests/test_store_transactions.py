@@ -108,7 +108,7 @@ cb = CaseBase(FeatureConfig(), get_measure("euclidean"), a.features, a.labels, (
 rng = np.random.default_rng(int(tag))
 while not __import__("os").path.exists(go):
     time.sleep(0.01)
-for i in range(500):
+for i in range(200):
     p = rng.normal(size=(4, 2))
     d = retain(cb, p, f"p{tag}", k=3, novelty_threshold=0.0, benefit_threshold=0.0, scale=1.0)
     assert d.retained
@@ -118,7 +118,7 @@ print("OK", flush=True)
 """
 
 
-def test_two_processes_retaining_500_each_end_with_1000_more(tmp_path: Path) -> None:
+def test_two_processes_retaining_200_each_end_with_400_more(tmp_path: Path) -> None:
     db = tmp_path / "cb.sqlite"
     store = open_store(db)
     with store.transaction() as tx:
@@ -133,10 +133,10 @@ def test_two_processes_retaining_500_each_end_with_1000_more(tmp_path: Path) -> 
     for p in procs:
         out, err = p.communicate(timeout=120)
         assert out.strip() == "OK", err
-    assert store.count_cases("shared") == 4 + 1000
+    assert store.count_cases("shared") == 4 + 400
     counts = store.get_case_base("shared").label_counts
-    assert counts["p1"] == 500 and counts["p2"] == 500
-    assert sum(e.action == "retain" for e in store.maintenance_log("shared")) == 1000
+    assert counts["p1"] == 200 and counts["p2"] == 200
+    assert sum(e.action == "retain" for e in store.maintenance_log("shared")) == 400
 
 
 def test_corrupt_and_foreign_files_get_one_clear_error(tmp_path: Path) -> None:
