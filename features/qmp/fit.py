@@ -278,13 +278,14 @@ def fill_short_gaps(values: np.ndarray, max_gap: int) -> np.ndarray:
         col, miss = out[:, s], missing[:, s]
         if miss.all():
             continue
-        # Run lengths of the NaN stretches: label runs by their start.
+        # Run lengths of the NaN stretches; the missing frames in order are the runs one after
+        # another, so each run's verdict is repeated over its frames (no loop over the runs: a
+        # flickering joint has one per frame or two).
         starts = np.flatnonzero(miss & ~np.r_[False, miss[:-1]])
         ends = np.flatnonzero(miss & ~np.r_[miss[1:], False]) + 1
+        lengths = ends - starts
         short = np.zeros_like(miss)
-        for a, b in zip(starts, ends, strict=True):
-            if b - a <= max_gap:
-                short[a:b] = True
+        short[miss] = np.repeat(lengths <= max_gap, lengths)
         good = ~miss
         col[short] = np.interp(frames[short], frames[good], col[good])
     return out
