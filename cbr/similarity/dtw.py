@@ -37,7 +37,7 @@ import numba
 import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
-from features.errors import ConfigError
+from features.errors import ConfigError, InputError
 
 from .base import SimilarityMeasure, register_measure
 
@@ -455,6 +455,7 @@ class DTW(SimilarityMeasure):
 
     def build_index(self, reps: np.ndarray) -> Any:
         reps = _float(reps)  # float32 stays float32 (large case bases), costs sum in float64
+        _check_finite(reps[:, 0], "case rows")
         upper = np.ascontiguousarray(reps[:, 1])
         lower = np.ascontiguousarray(reps[:, 2])
         seg = segment_envelopes(upper, lower, max(1, int(self.segment)))
@@ -488,6 +489,7 @@ class DTW(SimilarityMeasure):
                 f"{seqs.shape}, {up.shape} and {lo.shape}",
                 "similarity dtw",
             )
+        _check_finite(seqs, "case rows")
         seg = segment_envelopes(up, lo, max(1, int(self.segment)))
         return _DTWIndex(seqs, up, lo, self.radius_for(seqs.shape[1]), *seg)
 
@@ -498,6 +500,7 @@ class DTW(SimilarityMeasure):
                 f"query sequence shape {q.shape} differs from the cases' {index.cases.shape[1:]}",
                 "similarity dtw",
             )
+        _check_finite(q[None], "query")
         return q
 
     def distances(self, query_rep: np.ndarray, index: Any) -> np.ndarray:
@@ -529,6 +532,23 @@ class DTW(SimilarityMeasure):
             self.threads(),
         )
         return idx, np.sqrt(sq)
+
+
+def _check_finite(seqs: np.ndarray, what: str) -> None:
+    """Refuse sequences ``(n, L, d)`` holding NaN or inf (``what``: "case rows" or "query"):
+    a NaN cost is never below the k-th best, so such a case would silently never be a
+    neighbour, and a NaN query would have no neighbour at all (every cost NaN); problems fill
+    their missing values before they are compared. One float64 sum tells cheaply that all is
+    well (float32 values cannot overflow it)."""
+    if seqs.size == 0 or math.isfinite(float(np.sum(seqs, dtype=np.float64))):
+        return
+    bad = np.flatnonzero(~np.isfinite(seqs.reshape(len(seqs), -1)).all(axis=1))
+    if not len(bad):  # finite values whose sum overflowed
+        return
+    if what == "query":
+        raise InputError("dtw: the query holds NaN or inf: fill missing values before comparing")
+    rows = ", ".join(map(str, bad[:5])) + (" ..." if len(bad) > 5 else "")
+    raise InputError(f"dtw: {what} {rows} hold NaN or inf: fill missing values before comparing")
 
 
 def _float(a: np.ndarray) -> np.ndarray:

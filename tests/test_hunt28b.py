@@ -1,0 +1,254 @@
+"""The CBR cycle against SPEC.md and the peer libraries (hunt 28b).
+
+- The similarity plug-ins against their peers in the same test: DTW against tslearn's ``dtw``
+  (with the Sakoe-Chiba band the plug-in exposes), signatures against iisignature's ``sig`` on
+  the augmented path built here by hand, Euclidean by hand; the vote against scikit-learn's
+  ``KNeighborsClassifier``.
+- Found and fixed: a DTW query holding NaN had no neighbour (every cost NaN) and ``nearest``
+  answered the case position ``n``, one past the last case, at distance inf; a case holding
+  NaN was silently never a neighbour (Euclidean refused both already).
+"""
+
+from __future__ import annotations
+
+import iisignature
+import numpy as np
+import pytest
+from sklearn.base import clone
+from sklearn.neighbors import KNeighborsClassifier
+from tslearn.metrics import dtw as tslearn_dtw
+
+from cbr.casebase import CaseBase
+from cbr.estimator import CaseBaseClassifier
+from cbr.evaluation.peers import cache_tslearn_kernels
+from cbr.maintenance import novelty_benefit, trim_novelty_benefit
+from cbr.problem import FeatureConfig
+from cbr.retrieve import retrieve
+from cbr.reuse import reuse
+from cbr.similarity import get_measure
+from features.errors import ConfigError, InputError
+from tests.moves import clip
+
+# tslearn's DTW compiled once per machine, not once per process (numba's disk cache)
+cache_tslearn_kernels()
+# ---- similarity measures against their peers ----------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("params", "radius"),
+    [({}, 2), ({"band": 1.0}, 20), ({"band": 0.25, "prune": False}, 5)],
+)  # fmt: skip
+def test_dtw_equals_tslearn_within_the_same_sakoe_chiba_band(
+    params: dict[str, object], radius: int
+) -> None:
+    """Distances and the 3 nearest equal tslearn's dtw with ``sakoe_chiba_radius`` = the
+    plug-in's radius (band 0.1 x 20 frames = 2; band 1.0 = unconstrained)."""
+    rng = np.random.default_rng(0)
+    cases, q = rng.normal(size=(6, 20, 3)), rng.normal(size=(20, 3))
+    m = get_measure("dtw", **params)
+    assert m.radius_for(20) == radius  # type: ignore[attr-defined]
+    index = m.build_index(m.represent(cases))
+    peer = np.array(
+        [tslearn_dtw(q, c, global_constraint="sakoe_chiba", sakoe_chiba_radius=radius)
+         for c in cases]
+    )  # fmt: skip
+    np.testing.assert_allclose(m.distances(m.represent_query(q), index), peer, rtol=1e-9)
+    idx, dist = m.nearest(m.represent_query(q), index, 3)
+    assert idx.tolist() == np.argsort(peer, kind="stable")[:3].tolist()
+    np.testing.assert_allclose(dist, np.sort(peer)[:3], rtol=1e-9)
+
+
+@pytest.mark.parametrize("length", [1, 2])
+def test_dtw_of_one_and_two_frames_and_of_integers_equals_tslearn(length: int) -> None:
+    rng = np.random.default_rng(length)
+    cases, q = rng.integers(0, 5, size=(4, length, 2)), rng.integers(0, 5, size=(length, 2))
+    m = get_measure("dtw")
+    d = m.distances(m.represent_query(q), m.build_index(m.represent(cases)))
+    peer = [tslearn_dtw(q, c, global_constraint="sakoe_chiba", sakoe_chiba_radius=1)
+            for c in cases]  # fmt: skip
+    np.testing.assert_allclose(d, peer, rtol=1e-12)
+
+
+@pytest.mark.parametrize("where", ["query", "case"])
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_dtw_refuses_nan_or_inf_instead_of_answering_no_case_or_skipping_one(
+    where: str, bad: float
+) -> None:
+    """Before: a NaN query gave every distance NaN and nearest answered case 4 of a 4-case
+    base (one past the last) at distance inf; a NaN case was never a neighbour, silently.
+    Euclidean refuses both; DTW now does too, naming the query or the case."""
+    rng = np.random.default_rng(5)
+    cases, q = rng.normal(size=(4, 10, 2)), rng.normal(size=(10, 2))
+    if where == "query":
+        q[3, 1] = bad
+    else:
+        cases[1, 4, 0] = bad
+    for params in ({}, {"prune": False}):
+        m = get_measure("dtw", **params)
+        with pytest.raises(InputError, match="query holds NaN" if where == "query" else "rows 1 "):
+            m.nearest(m.represent_query(q), m.build_index(m.represent(cases)), 2)
+        if where == "query":
+            with pytest.raises(InputError, match="NaN or inf"):
+                m.distances(m.represent_query(q), m.build_index(m.represent(cases)))
+        else:
+            with pytest.raises(InputError, match="NaN or inf"):
+                m.index_for(cases)  # type: ignore[attr-defined]
+
+
+def _path(x: np.ndarray, *, time: bool, lead_lag: bool, basepoint: bool) -> np.ndarray:
+    """The augmented path, built point by point (Chevyrev & Kormilitzin's lead-lag: lead
+    steps first, then the lag catches up)."""
+    p = np.asarray(x, dtype=np.float64)
+    if basepoint:
+        p = np.vstack([np.zeros((1, p.shape[1])), p])
+    if lead_lag:
+        pts = []
+        for i in range(len(p)):
+            pts.append(np.concatenate([p[i], p[i]]))
+            if i + 1 < len(p):
+                pts.append(np.concatenate([p[i + 1], p[i]]))
+        p = np.array(pts)
+    if time:
+        p = np.hstack([np.linspace(0.0, 1.0, len(p))[:, None], p])
+    return p
+
+
+@pytest.mark.parametrize(
+    "params",
+    [{}, {"depth": 3}, {"time": False}, {"lead_lag": True}, {"basepoint": False},
+     {"depth": 1, "time": False, "basepoint": False}],
+)  # fmt: skip
+def test_signature_distance_equals_iisignature_on_the_augmented_path(
+    params: dict[str, object],
+) -> None:
+    rng = np.random.default_rng(1)
+    cases, q = rng.normal(size=(5, 12, 3)), rng.normal(size=(12, 3))
+    m = get_measure("signature", **params)
+    kw = {"time": m.time, "lead_lag": m.lead_lag, "basepoint": m.basepoint}  # type: ignore[attr-defined]
+    depth = int(m.depth)  # type: ignore[attr-defined]
+
+    def sig(x: np.ndarray) -> np.ndarray:
+        return np.asarray(iisignature.sig(_path(x, **kw), depth))
+
+    peer = [np.linalg.norm(sig(q) - sig(c)) for c in cases]
+    d = m.distances(m.represent_query(q), m.build_index(m.represent(cases)))
+    np.testing.assert_allclose(d, peer, rtol=1e-6)  # float32 rows (the documented kernel)
+
+
+def test_signature_of_one_frame_sees_its_level_only_with_the_basepoint() -> None:
+    """One frame is a constant path: its signature is all zeros, so without the basepoint
+    every one-frame clip is at distance 0 from every other; with it, the path 0 -> x."""
+    cases, q = np.array([[[1.0, 2.0]], [[3.0, -1.0]]]), np.array([[1.0, 2.0]])
+    plain = get_measure("signature", basepoint=False)
+    np.testing.assert_array_equal(
+        plain.distances(plain.represent_query(q), plain.build_index(plain.represent(cases))), 0.0
+    )
+    m = get_measure("signature", depth=2, time=False)
+
+    # the straight path 0 -> x: signature (x, x (x) x / 2)
+    def sig(x: np.ndarray) -> np.ndarray:
+        return np.concatenate([x, np.outer(x, x).ravel() / 2])
+
+    peer = [np.linalg.norm(sig(q[0]) - sig(c[0])) for c in cases]
+    d = m.distances(m.represent_query(q), m.build_index(m.represent(cases)))
+    np.testing.assert_allclose(d, peer, rtol=1e-6, atol=1e-6)
+
+
+def test_euclidean_by_hand_on_integers_and_float32_and_nan_refused() -> None:
+    cases = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 1], [0, 1, 0]])
+    q = np.array([1, 1, 0])
+    m = get_measure("euclidean")
+    for c in (cases, cases.astype(np.float32)):
+        idx, d = m.nearest(m.represent_query(q), m.build_index(m.represent(c)), 10)
+        # mismatches: 2, 1, 1, 1 -> three at distance 1 (lower index first), then sqrt 2
+        assert idx.tolist() == [1, 2, 3, 0]
+        np.testing.assert_allclose(d, [1, 1, 1, np.sqrt(2)], rtol=1e-6)
+    with pytest.raises(InputError, match="NaN"):
+        m.nearest(m.represent_query(np.array([1.0, np.nan, 0.0])), m.build_index(cases), 1)
+
+
+# ---- reuse: the vote -----------------------------------------------------------------------
+
+
+def _line(xs: list[float], labels: list[str]) -> CaseBase:
+    """Cases on a line: problem (x,), every distance |x_i - x_j|."""
+    p = np.asarray(xs, dtype=np.float64)[:, None]
+    return CaseBase(FeatureConfig(), get_measure("euclidean", exact=True), p,
+                    np.array(labels, dtype=object), ("x",), ("x",))  # fmt: skip
+
+
+@pytest.mark.parametrize("weights", ["distance", "uniform"])
+def test_the_vote_equals_scikit_learns_k_neighbours(weights: str) -> None:
+    rng = np.random.default_rng(7)
+    xs = rng.uniform(0, 10, 15)
+    labels = list(rng.choice(["a", "b", "c"], 15))
+    cb = _line(list(xs), labels)
+    peer = KNeighborsClassifier(n_neighbors=4, weights=weights).fit(xs[:, None], labels)
+    queries = rng.uniform(0, 10, 20)
+    classes = np.array(["a", "b", "c"], dtype=object)
+    ours = [reuse(retrieve(cb, np.array([x]), 4), classes, weights) for x in queries]  # type: ignore[arg-type]
+    np.testing.assert_allclose([s.proba for s in ours], peer.predict_proba(queries[:, None]))
+    assert [s.label for s in ours] == peer.predict(queries[:, None]).tolist()
+
+
+def test_a_tie_between_classes_goes_to_the_first_class_and_duplicates_decide_alone() -> None:
+    cb = _line([1.0, 3.0, 2.0, 2.0], ["b", "a", "a", "b"])
+    classes = np.array(["a", "b"], dtype=object)
+    # x=2: two exact matches (a, b) decide alone, one vote each: the tie goes to "a"
+    s = reuse(retrieve(cb, np.array([2.0]), 4), classes)
+    assert (s.label, s.proba.tolist()) == ("a", [0.5, 0.5])
+    # k larger than the case base: every case votes; k < 1 refused
+    assert len(retrieve(cb, np.array([0.0]), 99).indices) == 4
+    for k in (0, -1):
+        with pytest.raises(ConfigError, match="k must be"):
+            retrieve(cb, np.array([0.0]), k)
+
+
+# ---- maintenance: novelty and benefit ------------------------------------------------------
+
+
+def test_novelty_and_benefit_of_a_five_case_base_by_hand() -> None:
+    """x = 0, 1, 3 (a), 4, 10 (b), k = 2.
+
+    novelty: nearest case of the same activity over the activity's median of those:
+    a: 1, 1, 2 (median 1) -> 1, 1, 2; b: 6, 6 (median 6) -> 1, 1.
+    2-NN of each case: 0 -> 1, 3 (a, a); 1 -> 0, 3 (a, a); 3 -> 4 (b), 1 (a);
+    4 -> 3 (a), 1 (a); 10 -> 4 (b), 3 (a).
+    coverage (among the 2-NN of a case of its label): 1, 2, 2, 1, 0
+    liability (among the 2-NN of a case of another label): 0, 1, 2, 1, 0
+    benefit = coverage - liability: 1, 1, 0, 0, 0."""
+    cb = _line([0.0, 1.0, 3.0, 4.0, 10.0], list("aaabb"))
+    nov, ben = novelty_benefit(cb, 2)
+    np.testing.assert_allclose(nov, [1, 1, 2, 1, 1])
+    np.testing.assert_allclose(ben, [1, 1, 0, 0, 0])
+
+
+def test_trim_never_drops_an_activity_and_leaves_a_one_case_base_alone() -> None:
+    cb = _line([0.0, 0.1, 0.2, 5.0], list("aaab"))
+    rep = trim_novelty_benefit(cb, keep=0.01, k=2)
+    assert rep.kept[3] and rep.kept[:3].sum() == 1  # one case of each activity stays
+    one = trim_novelty_benefit(_line([1.0], ["a"]), keep=0.5, k=2)
+    assert one.kept.tolist() == [True]
+
+
+# ---- revise / retain -----------------------------------------------------------------------
+
+
+# ---- the Python API ------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def fitted() -> tuple[CaseBaseClassifier, list[object]]:
+    X = [clip("squat", seconds=s) for s in (3, 4)] + [clip("jumping_jack", seconds=s)
+                                                      for s in (3, 4)]  # fmt: skip
+    clf = CaseBaseClassifier(similarity="dtw", k=3).fit(X, ["squat"] * 2 + ["jj"] * 2)
+    return clf, [clip("squat", seconds=2.5), clip("jumping_jack", seconds=6)]
+
+
+def test_clips_of_mixed_lengths_are_classified_and_a_clone_is_unfitted(
+    fitted: tuple[CaseBaseClassifier, list[object]],
+) -> None:
+    clf, Q = fitted
+    assert clf.predict(Q).tolist() == ["squat", "jj"]
+    twin = clone(clf)
+    assert twin.get_params() == clf.get_params() and not hasattr(twin, "case_base_")
