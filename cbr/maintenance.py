@@ -8,7 +8,8 @@ and its feature distribution stays comparable):
   divided by that activity's median: a case with a near twin adds little;
 - benefit = coverage - liability (Smyth & Keane 1995): how many other cases have it among
   their k nearest with the same label, minus those where it votes for a wrong label;
-- per activity, the cases with the lowest combined rank (novelty rank + benefit rank) go.
+- per activity, the cases with the lowest combined rank (novelty rank + benefit rank, equal
+  values sharing their mean rank) go; equal combined ranks: the later case goes.
 
 Editors (Wilson & Martinez 2000, Brighton & Mellish 2002) work on the leave-one-out pairwise
 distance matrix: CNN (Hart 1968) keeps a consistent subset for 1-NN; RENN repeats Wilson's
@@ -215,6 +216,16 @@ def novelty_benefit(
     return novelty, (coverage - liability).astype(np.float64)
 
 
+def average_ranks(values: np.ndarray) -> np.ndarray:
+    """Ranks of ``values`` ``(n,)`` from 0 (smallest), equal values sharing the mean of their
+    ranks: cases of equal benefit (a count, so often equal) rank alike, and their order in the
+    case base does not decide which of them goes."""
+    _, inverse, counts = np.unique(values, return_inverse=True, return_counts=True)
+    first = np.cumsum(counts) - counts
+    ranks: np.ndarray = (first + (counts - 1) / 2.0)[inverse.reshape(-1)]
+    return ranks
+
+
 def trim_novelty_benefit(
     cb: CaseBase,
     keep: float,
@@ -231,9 +242,7 @@ def trim_novelty_benefit(
     for lab in np.unique(labels):
         idx = np.flatnonzero(labels == lab)
         n_keep = max(1, int(np.ceil(keep * len(idx))))
-        rank = np.argsort(np.argsort(nov[idx], kind="stable"), kind="stable") + np.argsort(
-            np.argsort(ben[idx], kind="stable"), kind="stable"
-        )
+        rank = average_ranks(nov[idx]) + average_ranks(ben[idx])
         order = np.lexsort((idx, -rank))  # highest combined rank first; ties: lower index
         kept[idx[order[:n_keep]]] = True
     return _report(

@@ -7,6 +7,9 @@
 - Found and fixed: a DTW query holding NaN had no neighbour (every cost NaN) and ``nearest``
   answered the case position ``n``, one past the last case, at distance inf; a case holding
   NaN was silently never a neighbour (Euclidean refused both already).
+- Found and fixed: novelty/benefit trimming ranked equal values by their position in the case
+  base (the later case ranked higher), so of cases of equal benefit (a count) the earlier
+  one went, even when it was the most novel of its activity.
 """
 
 from __future__ import annotations
@@ -221,6 +224,21 @@ def test_novelty_and_benefit_of_a_five_case_base_by_hand() -> None:
     nov, ben = novelty_benefit(cb, 2)
     np.testing.assert_allclose(nov, [1, 1, 2, 1, 1])
     np.testing.assert_allclose(ben, [1, 1, 0, 0, 0])
+
+
+def test_trim_ranks_equal_benefits_alike_and_keeps_the_most_novel() -> None:
+    """Two far clusters of four, cases at x = 7, 0, 3, 1 (a) and 107, 100, 103, 101 (b), k = 3:
+    every case's 3 nearest are its own activity's three others, so every benefit is 3 (a tie).
+    Nearest same-activity distances, in case order: 4, 1, 2, 1 (median 1.5). Keeping half,
+    the two most novel of each activity stay: x = 7 and 3. Before, equal benefits got ranks
+    0, 1, 2, 3 by position, and the most novel case (x = 7, the first) went."""
+    xs = [7.0, 0.0, 3.0, 1.0]
+    cb = _line(xs + [x + 100.0 for x in xs], list("aaaabbbb"))
+    nov, ben = novelty_benefit(cb, 3)
+    np.testing.assert_allclose(ben, 3.0)
+    np.testing.assert_allclose(nov, np.array([4, 1, 2, 1] * 2) / 1.5)
+    rep = trim_novelty_benefit(cb, keep=0.5, k=3)
+    assert np.flatnonzero(rep.kept).tolist() == [0, 2, 4, 6]
 
 
 def test_trim_never_drops_an_activity_and_leaves_a_one_case_base_alone() -> None:
