@@ -139,11 +139,13 @@ def record_revision(
 
     A move is applied to the case as it is in the store NOW (read and locked in this
     transaction), not to this process's copy: ``p <- p + rate (q - p)`` on the stored ``p``, so
-    concurrent revisions of one case all take effect. Returns the case's new problem (None when
-    no problem changed)."""
+    concurrent revisions of one case all take effect. A case trimmed meanwhile is neither
+    moved nor relabelled (:class:`StaleCaseError`: the caller reads the cases again). Returns
+    the case's new problem (None when no problem changed)."""
     _check_rate(rev.rate)
     new = None
-    if rev.action == "moved" and rev.case_id >= 0:
+    if rev.action in ("moved", "relabelled") and rev.case_id >= 0:
+        # a trimmed case no longer takes part in retrieval: revising it would change nothing
         current = tx.read_case(info, rev.case_id)
         if not current.active:
             raise StaleCaseError(
@@ -151,11 +153,12 @@ def record_revision(
                 "nothing was written",
                 tx.store.where,
             )
-        obs = np.asarray(observation, dtype=np.float64).reshape(current.features.shape)
-        new = current.features + rev.rate * (obs - current.features)
-        tx.update_case(info, rev.case_id, features=new)
-    elif rev.action == "relabelled" and rev.case_id >= 0:
-        tx.update_case(info, rev.case_id, label=rev.new_label)
+        if rev.action == "moved":
+            obs = np.asarray(observation, dtype=np.float64).reshape(current.features.shape)
+            new = current.features + rev.rate * (obs - current.features)
+            tx.update_case(info, rev.case_id, features=new)
+        else:
+            tx.update_case(info, rev.case_id, label=rev.new_label)
     tx.log(
         info,
         "revise",

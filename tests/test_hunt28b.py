@@ -10,9 +10,14 @@
 - Found and fixed: novelty/benefit trimming ranked equal values by their position in the case
   base (the later case ranked higher), so of cases of equal benefit (a count) the earlier
   one went, even when it was the most novel of its activity.
+- Found and fixed: feedback could relabel a case trimmed meanwhile by another process
+  (a move was refused; a relabel was written to the inactive case and the feedback lost).
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
 
 import iisignature
 import numpy as np
@@ -21,6 +26,7 @@ from sklearn.base import clone
 from sklearn.neighbors import KNeighborsClassifier
 from tslearn.metrics import dtw as tslearn_dtw
 
+from casebase_store import StaleCaseError, open_store
 from cbr.casebase import CaseBase
 from cbr.estimator import CaseBaseClassifier
 from cbr.evaluation.peers import cache_tslearn_kernels
@@ -28,7 +34,9 @@ from cbr.maintenance import novelty_benefit, trim_novelty_benefit
 from cbr.problem import FeatureConfig
 from cbr.retrieve import retrieve
 from cbr.reuse import reuse
+from cbr.revise import Revision, record_revision
 from cbr.similarity import get_measure
+from cbr.stored import case_records
 from features.errors import ConfigError, InputError
 from tests.moves import clip
 
@@ -250,6 +258,25 @@ def test_trim_never_drops_an_activity_and_leaves_a_one_case_base_alone() -> None
 
 
 # ---- revise / retain -----------------------------------------------------------------------
+
+
+def test_relabelling_a_case_trimmed_meanwhile_is_refused_as_stale(tmp_path: Path) -> None:
+    """Before: moving a trimmed case was refused (StaleCaseError: the caller reads again),
+    but relabelling one was written to the inactive case, and the feedback was lost."""
+    store = open_store(tmp_path / "cb.sqlite")
+    cb = _line([0.0, 4.0, 10.0], ["a", "a", "b"])
+    with store.transaction() as tx:
+        info = tx.create_case_base("x", {"level": "fluents"}, ["x"], ["x"], {"name": "euclidean"})
+        ids = tx.add_cases(info, case_records(cb))
+    with store.transaction() as tx:  # another process trims case 2
+        tx.deactivate_cases(tx.case_base("x"), [ids[2]])
+    rev = Revision("relabelled", 2, ids[2], "b", "a", 1.0, "by hand")
+    for action in ("relabelled", "moved"):
+        with pytest.raises(StaleCaseError, match="trimmed"), store.transaction() as tx:
+            record_revision(tx, tx.case_base("x"), replace(rev, action=action), np.array([9.0]))
+    cases = store.load_cases("x", include_inactive=True)
+    assert cases.labels[2] == "b" and cases.features[2].tolist() == [10.0]
+    assert all(e.action != "revise" for e in store.maintenance_log("x"))
 
 
 # ---- the Python API ------------------------------------------------------------------------
