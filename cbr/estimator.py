@@ -337,13 +337,18 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             return AUTO_PHASES if int(length) >= AUTO_PHASES else 0
         return AUTO_PHASES  # not a length: FeatureConfig refuses it
 
-    def _check_params(self) -> None:
+    def _check_vote(self) -> None:
+        """Refuse a ``k`` or ``weights`` the vote cannot use: checked by fit, and again by
+        every classification (``set_params(k=...)`` after fit, as ``classify -k`` votes)."""
         if isinstance(self.k, bool) or not isinstance(self.k, int | np.integer) or self.k < 1:
             raise ConfigError(f"k must be a positive integer, got {self.k!r}", "k")
         if self.weights not in VOTE_WEIGHTINGS:
             raise ConfigError(
                 f"weights must be 'distance' or 'uniform', got {self.weights!r}", "weights"
             )
+
+    def _check_params(self) -> None:
+        self._check_vote()
         self._check_kinds()
         if self.editor is not None and self.editor not in EDITORS:
             raise ConfigError(
@@ -883,6 +888,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         False, no reason, no description), for callers with a judge of their own (segmenting
         a recording judges its stretches by :mod:`cbr.unknown`) that would pay for it unused."""
         check_is_fitted(self, "case_base_")
+        self._check_vote()
         seqs = as_sequences(X)
         if not seqs:
             raise InputError("no clips to classify", "X")
@@ -965,6 +971,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         """The label the classifier gives a problem ``values`` (retrieve and reuse, as
         :meth:`solve` does): how counterfactuals are checked."""
         check_is_fitted(self, "case_base_")
+        self._check_vote()
         r = retrieve(self.case_base_, np.asarray(values), int(self.k))
         classes = self._class_labels()
         self._check_known(r.labels, set(classes.tolist()))

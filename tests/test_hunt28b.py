@@ -12,6 +12,8 @@
   one went, even when it was the most novel of its activity.
 - Found and fixed: feedback could relabel a case trimmed meanwhile by another process
   (a move was refused; a relabel was written to the inactive case and the feedback lost).
+- Found and fixed: after fit, ``set_params(k=0)`` (or ``k=-1``, ``k=2.5``, ``weights="x"``)
+  classified without complaint: k=0 gave every clip the first class at share 0.5.
 """
 
 from __future__ import annotations
@@ -297,3 +299,23 @@ def test_clips_of_mixed_lengths_are_classified_and_a_clone_is_unfitted(
     assert clf.predict(Q).tolist() == ["squat", "jj"]
     twin = clone(clf)
     assert twin.get_params() == clf.get_params() and not hasattr(twin, "case_base_")
+
+
+@pytest.mark.parametrize(("param", "value"), [("k", 0), ("k", -1), ("k", 2.5), ("k", True),
+                                              ("weights", "nearest")])  # fmt: skip
+def test_a_bad_k_or_weighting_set_after_fit_is_refused_when_classifying(
+    fitted: tuple[CaseBaseClassifier, list[object]], param: str, value: object
+) -> None:
+    """Before: k=0 gave every clip the first class at share 0.5; k=-1 voted with the wide
+    neighbourhood but its last case; 2.5 voted with 2; an unknown weighting voted 1/d."""
+    clf, Q = fitted
+    good = clf.get_params()[param]
+    clf.set_params(**{param: value})
+    try:
+        with pytest.raises(ConfigError, match=param):
+            clf.predict(Q)
+        with pytest.raises(ConfigError, match=param):
+            clf.answer(clf.case_base_.problems[0])
+    finally:
+        clf.set_params(**{param: good})
+    assert clf.predict(Q).tolist() == ["squat", "jj"]
