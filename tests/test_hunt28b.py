@@ -12,6 +12,8 @@
   one went, even when it was the most novel of its activity.
 - Found and fixed: feedback could relabel a case trimmed meanwhile by another process
   (a move was refused; a relabel was written to the inactive case and the feedback lost).
+- Found and fixed: ``Euclidean(exact=True)`` given a NaN query answered no neighbour at all
+  (every distance NaN), without a word; the float32 path refused it already.
 - Found and fixed: after fit, ``set_params(k=0)`` (or ``k=-1``, ``k=2.5``, ``weights="x"``)
   classified without complaint: k=0 gave every clip the first class at share 0.5.
 """
@@ -178,6 +180,19 @@ def test_euclidean_by_hand_on_integers_and_float32_and_nan_refused() -> None:
         np.testing.assert_allclose(d, [1, 1, 1, np.sqrt(2)], rtol=1e-6)
     with pytest.raises(InputError, match="NaN"):
         m.nearest(m.represent_query(np.array([1.0, np.nan, 0.0])), m.build_index(cases), 1)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_exact_euclidean_refuses_a_nan_or_inf_query_as_the_float32_path_does(bad: float) -> None:
+    """Before: with ``exact=True`` a NaN query had every distance NaN and no neighbour at all
+    (the vote then gave equal shares: the first class), an inf query every case at inf."""
+    m = get_measure("euclidean", exact=True)
+    index = m.build_index(m.represent(np.arange(12.0).reshape(4, 3)))
+    q = np.array([1.0, bad, 2.0])
+    with pytest.raises(InputError, match="query holds NaN or inf"):
+        m.nearest(m.represent_query(q), index, 2)
+    with pytest.raises(InputError, match="query holds NaN or inf"):
+        m.distances(m.represent_query(q), index)
 
 
 # ---- reuse: the vote -----------------------------------------------------------------------

@@ -937,6 +937,8 @@ class Euclidean(SimilarityMeasure):
             index = self.build_index(np.asarray(index, dtype=np.float64))
         if self.exact:
             q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
+            if not np.isfinite(q).all():  # as the float32 path refuses it (:meth:`_query`)
+                raise InputError("euclidean: the query holds NaN or inf")
             exact: np.ndarray = np.sqrt(((index.rows - q) ** 2).sum(axis=1))
             return exact
         q32, q_sq = self._query(query_rep)
