@@ -14,6 +14,8 @@
   (a move was refused; a relabel was written to the inactive case and the feedback lost).
 - Found and fixed: ``Euclidean(exact=True)`` given a NaN query answered no neighbour at all
   (every distance NaN), without a word; the float32 path refused it already.
+- Found and fixed: the Euclidean measure given a query of another number of values than the
+  cases' read a shorter query past its end and left a longer one's last values out.
 - Found and fixed: after fit, ``set_params(k=0)`` (or ``k=-1``, ``k=2.5``, ``weights="x"``)
   classified without complaint: k=0 gave every clip the first class at share 0.5.
 """
@@ -193,6 +195,24 @@ def test_exact_euclidean_refuses_a_nan_or_inf_query_as_the_float32_path_does(bad
         m.nearest(m.represent_query(q), index, 2)
     with pytest.raises(InputError, match="query holds NaN or inf"):
         m.distances(m.represent_query(q), index)
+
+
+@pytest.mark.parametrize("exact", [False, True])
+@pytest.mark.parametrize("width", [2, 4])
+def test_euclidean_refuses_a_query_of_another_width_than_the_cases(exact: bool, width: int) -> None:
+    """Before: the float32 row kernel read a 2-value query past its end (whatever lay in
+    memory as its third value) and left a 4-value query's last value out, answering either
+    as a distance; the exact path raised numpy's broadcasting error."""
+    m = get_measure("euclidean", exact=exact)
+    index = m.build_index(m.represent(np.arange(12.0).reshape(4, 3)))
+    q = np.arange(float(width))
+    for call in (
+        lambda: m.distances(m.represent_query(q), index),
+        lambda: m.nearest(m.represent_query(q), index, 2),
+        lambda: m.nearest_many(np.stack([q, q]), index, 2),
+    ):
+        with pytest.raises(ConfigError, match=f"the query has {width} values but the cases have 3"):
+            call()
 
 
 # ---- reuse: the vote -----------------------------------------------------------------------

@@ -70,7 +70,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from features.errors import InputError
+from features.errors import ConfigError, InputError
 
 from .base import SimilarityMeasure, check_weighting, register_measure, weighted
 from .nibbles import (
@@ -876,6 +876,17 @@ def _check_finite(sq: np.ndarray, what: str) -> None:
         )
 
 
+def _check_width(size: int, index: _EuclideanIndex) -> None:
+    """Refuse a query of another number of values than the cases' columns: the row kernel
+    would read past a shorter query's end (whatever lies in memory there) or leave a longer
+    one's last values out, and answer either without a word."""
+    dims = index.rows.shape[1]
+    if int(size) != dims:
+        raise ConfigError(
+            f"the query has {int(size)} values but the cases have {dims}", "similarity euclidean"
+        )
+
+
 @register_measure("euclidean")
 @dataclass(frozen=True)
 class Euclidean(SimilarityMeasure):
@@ -935,6 +946,7 @@ class Euclidean(SimilarityMeasure):
     def distances(self, query_rep: np.ndarray, index: Any) -> np.ndarray:
         if not isinstance(index, _EuclideanIndex):
             index = self.build_index(np.asarray(index, dtype=np.float64))
+        _check_width(np.size(query_rep), index)
         if self.exact:
             q = np.asarray(query_rep, dtype=np.float64).reshape(-1)
             if not np.isfinite(q).all():  # as the float32 path refuses it (:meth:`_query`)
@@ -947,6 +959,7 @@ class Euclidean(SimilarityMeasure):
     def nearest(self, query_rep: np.ndarray, index: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
         if not isinstance(index, _EuclideanIndex) or self.exact:
             return super().nearest(query_rep, index, k)
+        _check_width(np.size(query_rep), index)
         k = min(int(k), len(index.rows))
         if k <= 0:
             return np.zeros(0, dtype=np.int64), np.zeros(0)
@@ -966,6 +979,8 @@ class Euclidean(SimilarityMeasure):
         prunes well (then query by query), with the rounding error of the product bounded so
         the neighbours are exactly :meth:`nearest`'s."""
         queries = np.asarray(query_reps, dtype=np.float64).reshape(len(query_reps), -1)
+        if isinstance(index, _EuclideanIndex):
+            _check_width(queries.shape[1], index)
         _check_finite(np.einsum("ij,ij->i", queries, queries), "queries")
         if not isinstance(index, _EuclideanIndex) or self.exact or len(queries) < 2:
             return super().nearest_many(queries, index, k)
