@@ -26,6 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import rankdata
 
 from casebase_store import CaseBaseInfo, StoreTransaction
 from features.progress import progress
@@ -216,16 +217,6 @@ def novelty_benefit(
     return novelty, (coverage - liability).astype(np.float64)
 
 
-def average_ranks(values: np.ndarray) -> np.ndarray:
-    """Ranks of ``values`` ``(n,)`` from 0 (smallest), equal values sharing the mean of their
-    ranks: cases of equal benefit (a count, so often equal) rank alike, and their order in the
-    case base does not decide which of them goes."""
-    _, inverse, counts = np.unique(values, return_inverse=True, return_counts=True)
-    first = np.cumsum(counts) - counts
-    ranks: np.ndarray = (first + (counts - 1) / 2.0)[inverse.reshape(-1)]
-    return ranks
-
-
 def trim_novelty_benefit(
     cb: CaseBase,
     keep: float,
@@ -242,7 +233,9 @@ def trim_novelty_benefit(
     for lab in np.unique(labels):
         idx = np.flatnonzero(labels == lab)
         n_keep = max(1, int(np.ceil(keep * len(idx))))
-        rank = average_ranks(nov[idx]) + average_ranks(ben[idx])
+        # equal values (benefit is a count: often equal) share their mean rank, so a case's
+        # place in the case base does not decide which of them goes
+        rank = rankdata(nov[idx]) + rankdata(ben[idx])
         order = np.lexsort((idx, -rank))  # highest combined rank first; ties: lower index
         kept[idx[order[:n_keep]]] = True
     return _report(
