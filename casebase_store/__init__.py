@@ -22,6 +22,7 @@ from .store import (
     open_store,
     shown_db,
     sqlite_file,
+    store_files,
     write_store,
 )
 from .upgrade import upgrade_store
@@ -48,6 +49,7 @@ __all__ = [
     "open_store",
     "shown_db",
     "sqlite_file",
+    "store_files",
     "write_store",
     "upgrade_store",
 ]

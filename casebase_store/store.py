@@ -298,6 +298,17 @@ def sqlite_file(url_or_path: str | Path) -> Path | None:
     return Path(db[len("file:") :].split("?")[0]) if db.startswith("file:") else Path(db)
 
 
+def store_files(url_or_path: str | Path) -> list[Path]:
+    """The files of a SQLite store (path or ``sqlite:///`` URL) on this machine: the database
+    and its journals (``-journal``, ``-wal``, ``-shm``); none for another backend. What an
+    output of a command that reads the store must never be: ``--db sqlite:///cb.mp4
+    --overlay cb.mp4`` compared the URL's text with the output and missed it."""
+    file = sqlite_file(url_or_path)
+    if file is None:
+        return []
+    return [file.with_name(file.name + j) for j in ("", "-journal", "-wal", "-shm")]
+
+
 def in_wal_mode(path: Path) -> bool:
     """Whether the SQLite file ``path`` is in WAL mode (as posecbr 0.1 wrote its stores), from
     its header alone (bytes 18 and 19, the file format's write and read versions: 2 in WAL

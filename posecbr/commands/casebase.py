@@ -367,12 +367,9 @@ def _export_path(args: argparse.Namespace) -> Path:
 def _check_export(args: argparse.Namespace) -> None:
     """The export file is not a folder and never the store's files (the database, its
     journals): ``--db X.npz --out X.npz`` would replace the case base by its export."""
-    from casebase_store import sqlite_file
+    from casebase_store import store_files
 
-    db = sqlite_file(args.db)
-    journals = ("", "-wal", "-shm", "-journal")
-    store_files = [] if db is None else [db.with_name(db.name + j) for j in journals]
-    check_output(_export_path(args), inputs=store_files, what="export file")
+    check_output(_export_path(args), inputs=store_files(args.db), what="export file")
 
 
 def _frames(ranges: tuple[tuple[int | None, int | None], ...]) -> Any:

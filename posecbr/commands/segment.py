@@ -122,8 +122,12 @@ def _outputs(args: argparse.Namespace) -> None:
 
 
 def _inputs(args: argparse.Namespace) -> list[Path]:
-    """What segmenting reads: the recordings, the case base and the skeleton file."""
-    return [*args.recordings, args.db, *([args.asf] if args.asf is not None else [])]
+    """What segmenting reads: the recordings, the case base's files (a ``sqlite:///`` URL's
+    too) and the skeleton file."""
+    from casebase_store import store_files
+
+    asf = [args.asf] if args.asf is not None else []
+    return [*args.recordings, *store_files(args.db), *asf]
 
 
 def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:

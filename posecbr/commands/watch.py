@@ -111,7 +111,9 @@ def _check(args: argparse.Namespace) -> None:
     if args.out is not None:
         if args.out.suffix.lower() != ".mp4":
             raise DataError("the output video must be an .mp4 file name", args.out)
-        inputs = [*_read_files(args.source), args.db]
+        from casebase_store import store_files
+
+        inputs: list[str | Path] = [*_read_files(args.source), *store_files(args.db)]
         check_output(args.out, inputs=inputs, what="output video")
     _check_source(args.source)
     if args.show and not _has_windows():

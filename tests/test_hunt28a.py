@@ -1,0 +1,44 @@
+"""Hunt 28a: "data is sacred", command by command. Outputs that reach an input by a way the
+commands did not compare (a case base named by a ``sqlite:///`` URL), a demo output folder
+holding the demo data, ..."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tests.badinput import refused
+
+
+@pytest.mark.parametrize(
+    ("argv", "what"),
+    [
+        (["watch", "v.mp4", "--db", "sqlite:///{db}", "--out", "{out}"], "output video"),
+        (["segment", "v.mp4", "--db", "sqlite:///{db}", "--overlay", "{out}"], "overlay"),
+        (["segment", "c.npz", "--db", "sqlite:///{db}", "--plot", "{out}"], "picture"),
+    ],
+    ids=["watch --out", "segment --overlay", "segment --plot"],
+)
+def test_an_output_onto_the_case_base_its_url_names_is_refused(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    argv: list[str],
+    what: str,
+) -> None:
+    """``--db sqlite:///x/cb.mp4 --out x/cb.mp4``: the URL's text was compared with the output
+    path, so the case base was no input; the command read it and replaced it with the video
+    (or picture) it wrote, exit 0."""
+    suffix = ".png" if what == "picture" else ".mp4"
+    db = tmp_path / f"cb{suffix}"
+    db.write_bytes(b"not opened: refused before")
+    (tmp_path / "v.mp4").write_bytes(b"not read: refused before")
+    (tmp_path / "c.npz").write_bytes(b"not read: refused before")
+    filled = [a.format(db=db, out=db) for a in argv]
+    filled[1] = str(tmp_path / filled[1])
+    refused(filled, tmp_path, capsys, f"the {what} would overwrite an input ({db})")
+    # a URL relative to the current folder, the output spelt absolute: the same file
+    monkeypatch.chdir(tmp_path)
+    filled = [a.format(db=db.name, out=tmp_path / "." / db.name) for a in argv]
+    refused(filled, tmp_path, capsys, f"the {what} would overwrite an input ({db.name})")
