@@ -4,11 +4,14 @@ holding the demo data, ..."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pytest
 
 from tests.badinput import refused
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 
 @pytest.mark.parametrize(
@@ -42,3 +45,24 @@ def test_an_output_onto_the_case_base_its_url_names_is_refused(
     monkeypatch.chdir(tmp_path)
     filled = [a.format(db=db.name, out=tmp_path / "." / db.name) for a in argv]
     refused(filled, tmp_path, capsys, f"the {what} would overwrite an input ({db.name})")
+
+
+def test_demo_data_inside_the_comparison_folder_it_replaces_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``demo --data out/compare --out out`` in a folder an earlier demo wrote: the demo
+    removed ``out/compare`` (its earlier comparison) with the data in it, then failed on the
+    missing clip."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ".posecbr-demo").touch()
+    data = out / "compare"
+    shutil.copytree(DEMO, data)
+    refused(["demo", "--data", str(data), "--out", str(out), "--quick"], tmp_path, capsys,
+            f"{data}: the demo data is in {data}, which the demo replaces")  # fmt: skip
+    nested = out / "compare" / "mine"
+    data.rename(tmp_path / "moved")
+    data.mkdir()
+    (tmp_path / "moved").rename(nested)
+    refused(["demo", "--data", f"{nested}/", "--out", f"{out}/.", "--quick"], tmp_path, capsys,
+            "which the demo replaces with its comparison: choose another --out")  # fmt: skip

@@ -122,6 +122,13 @@ def _check_out(out: Path, data: Path) -> None:
         raise DataError("exists and is not a folder", out)
     if out.resolve() == data.resolve() or data.resolve() in out.resolve().parents:
         raise DataError("is the demo data folder or inside it: choose another --out", out)
+    replaced = out / "compare"  # removed with all it holds before the steps run
+    if replaced.resolve() == data.resolve() or replaced.resolve() in data.resolve().parents:
+        raise DataError(
+            f"the demo data is in {replaced}, which the demo replaces with its comparison: "
+            "choose another --out",
+            data,
+        )
     if out.is_dir() and not (out / DEMO_MARK).is_file():
         theirs = [name for name in DEMO_OUTPUTS if (out / name).exists()]
         if theirs:
