@@ -25,6 +25,8 @@ from .fluents import CHUNK_FRAMES, Backend, FluentResult, FluentTable, evaluate_
 from .poses import PoseSequence
 
 PLOT_COLUMNS = 2_000  # a picture is about a thousand pixels wide
+#: the timeline's shade where a state is unknown (its joints missing): not the white of 0
+UNSEEN = "#d9d9d9"
 
 
 @dataclass(frozen=True)
@@ -88,9 +90,10 @@ class Timeline:
     ``runs``: spans of frames with the states holding over exactly that span (empty when the
     runs went to a per-frame callback); ``available`` ``(n_states,)``: the state is defined in
     some frame; ``share`` ``(n_states,)``: the fraction of frames in which it holds
-    (background states left out); ``columns`` ``(bins, n_states)``: the mean confidence (NaN
-    as 0) over each of up to :data:`PLOT_COLUMNS` equal stretches of the clip, for the
-    picture; ``layout``: the states' names and words (a result with no frames).
+    (background states left out); ``columns`` ``(bins, n_states)``: the mean confidence over
+    the frames the state is defined in, in each of up to :data:`PLOT_COLUMNS` equal stretches
+    of the clip, NaN where it is defined in none (missing stays missing), for the picture;
+    ``layout``: the states' names and words (a result with no frames).
     """
 
     n_frames: int
@@ -248,15 +251,16 @@ def describe_clip(
             tracker = _RunTracker(n_states, n, min_run)
             available = np.zeros(n_states, dtype=bool)
             held = np.zeros(n_states)
-            sums, counts = np.zeros((bins, n_states)), np.zeros(bins)
+            sums, counts = np.zeros((bins, n_states)), np.zeros((bins, n_states))
         own = slice(start - first, stop - first)
         conf = result.confidence[own]
         on = holding(result, threshold, include_background)
         available |= ~np.all(np.isnan(conf), axis=0)
         held += holding(result, threshold)[own].sum(axis=0)
         column = np.arange(start, stop) * bins // n
-        np.add.at(sums, column, np.nan_to_num(conf, nan=0.0))
-        np.add.at(counts, column, 1.0)
+        defined = ~np.isnan(conf)  # a frame where the state is unknown is no frame of 0
+        np.add.at(sums, column, np.where(defined, conf, 0.0))
+        np.add.at(counts, column, defined)
         if per_frame is not None:
             for run in _frame_runs(start, on[own], conf, layout):
                 per_frame(run)
@@ -273,7 +277,7 @@ def describe_clip(
         runs=[] if per_frame is not None else tracker.runs(layout),
         available=available,
         share=held / n,
-        columns=sums / np.maximum(counts, 1.0)[:, None],
+        columns=np.where(counts > 0, sums / np.maximum(counts, 1.0), np.nan),
     )
 
 
@@ -415,7 +419,7 @@ def plot_timeline(
             conf,
             aspect="auto",
             interpolation="nearest",
-            cmap="Blues",
+            cmap=matplotlib.colormaps["Blues"].with_extremes(bad=UNSEEN),
             vmin=0,
             vmax=1,
             extent=(0, tl.n_frames / tl.fps, len(rows) - 0.5, -0.5),
@@ -432,7 +436,8 @@ def plot_timeline(
     ax.set_xlim(0, tl.n_frames / tl.fps)
     ax.set_xlabel("time (s)")
     (top if bands else ax).set_title(
-        title or "fluent timeline (shade = confidence; orange labels = motion)", fontsize=10
+        title or "fluent timeline (shade = confidence; grey = unknown; orange labels = motion)",
+        fontsize=10,
     )
     ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()

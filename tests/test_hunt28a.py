@@ -66,3 +66,33 @@ def test_demo_data_inside_the_comparison_folder_it_replaces_is_refused(
     (tmp_path / "moved").rename(nested)
     refused(["demo", "--data", f"{nested}/", "--out", f"{out}/.", "--quick"], tmp_path, capsys,
             "which the demo replaces with its comparison: choose another --out")  # fmt: skip
+
+
+def test_a_timeline_column_averages_the_frames_a_state_is_known_in(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The picture's columns (frames averaged, 2,000 columns at most) counted a frame where a
+    state is unknown (nobody in view) as confidence 0: a person seen in every other frame,
+    knees straight whenever seen, was drawn at half shade, and a stretch with nobody as "not
+    holding". A column averages the frames the state is known in; none: NaN, drawn grey."""
+    from dataclasses import replace
+
+    import matplotlib.image
+    import numpy as np
+
+    import features.timeline as timeline
+    from tests.badinput import standing_clip
+
+    seq = standing_clip(40)
+    positions = seq.positions.copy()
+    positions[1::2] = np.nan  # nobody in every other frame
+    positions[24:] = np.nan  # nor in the last 16
+    monkeypatch.setattr(timeline, "PLOT_COLUMNS", 10)  # 4 frames a column
+    tl = timeline.describe_clip(replace(seq, positions=positions))
+    knee = tl.layout.state_names.index("left_leg_bent.straight")  # standing: 180 degrees
+    assert tl.columns[:6, knee].tolist() == [1.0] * 6
+    assert np.isnan(tl.columns[6:, knee]).all()
+    picture = timeline.plot_timeline(tl, tmp_path / "t.png")
+    pixels = matplotlib.image.imread(picture)[..., :3]
+    grey = np.array([0xD9, 0xD9, 0xD9]) / 255
+    assert (np.abs(pixels - grey).max(axis=-1) < 0.01).sum() > 100  # the unknown stretch
