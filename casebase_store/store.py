@@ -433,6 +433,19 @@ def check_store_file(file: Path) -> None:
         )
     if file.is_dir():
         raise StoreError("is a folder, not a case base file", file)
+    _refuse_dangling(file)
+
+
+def _refuse_dangling(file: Path) -> None:
+    """A symbolic link to a file that does not exist is refused: a new store appears under its
+    name only when no file of that name exists (never over one made meanwhile), and the link
+    is one for good."""
+    if file.is_symlink() and not file.exists():
+        raise StoreError(
+            f"is a symbolic link to {os.readlink(file)}, which does not exist: create the case"
+            " base there, or name another file",
+            file,
+        )
 
 
 def _connect_args(url: URL, timeout_s: float) -> dict[str, Any]:
@@ -1227,6 +1240,7 @@ def write_store(
         try:
             os.link(tmp, file)  # appears whole, and never over a store made meanwhile
         except FileExistsError:
+            _refuse_dangling(file)  # else it "exists" for link() alone: this would loop
             return write_store(url_or_path, action, timeout_s=timeout_s)
         except OSError as exc:
             raise StoreError(f"cannot create the case base file ({exc.strerror})", file) from None

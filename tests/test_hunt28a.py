@@ -96,3 +96,33 @@ def test_a_timeline_column_averages_the_frames_a_state_is_known_in(
     pixels = matplotlib.image.imread(picture)[..., :3]
     grey = np.array([0xD9, 0xD9, 0xD9]) / 255
     assert (np.abs(pixels - grey).max(axis=-1) < 0.01).sum() > 100  # the unknown stretch
+
+
+def test_a_first_store_through_a_dangling_link_is_refused_not_retried_for_ever(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``train --db cb.sqlite`` where cb.sqlite is a symbolic link to a file not made yet: the
+    new store, built under a temporary name, could not be linked to the name (link() finds
+    the link there) and was built again, and again, for ever (a temporary of each left behind
+    when the run was killed). Refused in one line before any clip is read; the store's own
+    writer stops too."""
+    from casebase_store import StoreError, write_store
+
+    folder = tmp_path / "data"
+    folder.mkdir()
+    (folder / "a.npz").write_bytes(b"not read: refused before")
+    link = tmp_path / "cb.sqlite"
+    link.symlink_to("target.sqlite")
+    refused(["train", str(folder), "--db", str(link)], tmp_path, capsys,
+            f"{link}: is a symbolic link to target.sqlite, which does not exist")  # fmt: skip
+    calls = []
+
+    def action(tx: object) -> None:
+        calls.append(tx)
+        if len(calls) > 2:
+            raise RuntimeError("the store was built again and again")
+
+    with pytest.raises(StoreError, match="is a symbolic link to target.sqlite"):
+        write_store(link, action)
+    assert len(calls) <= 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite", "data"]
