@@ -239,6 +239,21 @@ def _read_from(src: Path) -> list[Path]:
     return [src]
 
 
+def _check_folders_to_make(out: Path, what: str) -> None:
+    """The folders of ``out`` a writer makes can be made: the nearest one there is a folder,
+    and none to make is a symbolic link to nothing (making it fails, after the work)."""
+    parent = next((p for p in out.parents if p.exists()), None)
+    if parent is not None and not parent.is_dir():
+        raise DataError(f"cannot write the {what}: {parent} is a file, not a folder", out)
+    link = next((p for p in out.parents if p.is_symlink() and not p.exists()), None)
+    if link is not None:
+        raise DataError(
+            f"cannot write the {what}: {link} is a symbolic link to {os.readlink(link)},"
+            " which does not exist",
+            out,
+        )
+
+
 def check_output(
     path: str | Path,
     *,
@@ -261,9 +276,7 @@ def check_output(
         raise DataError(f"the {what} is a folder, not a file", out)
     _refuse_special(out, what)
     if make_parents:
-        parent = next((p for p in out.parents if p.exists()), None)
-        if parent is not None and not parent.is_dir():
-            raise DataError(f"cannot write the {what}: {parent} is a file, not a folder", out)
+        _check_folders_to_make(out, what)
     elif not out.parent.is_dir():
         raise DataError(f"the folder of the {what} does not exist", out.parent)
     folder = next((p for p in out.parents if p.exists()), None)

@@ -126,3 +126,19 @@ def test_a_first_store_through_a_dangling_link_is_refused_not_retried_for_ever(
         write_store(link, action)
     assert len(calls) <= 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite", "data"]
+
+
+def test_compare_out_onto_a_link_to_nothing_is_refused_before_it_cross_validates(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``compare DATA --out res`` where res is a symbolic link to a folder not made yet: the
+    run cross-validated every configuration, then failed making the folder with a traceback
+    (FileExistsError), the results written nowhere."""
+    demo = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+    link = tmp_path / "res"
+    link.symlink_to("nowhere")
+    argv = ["compare", str(demo), "--similarities", "euclidean", "--features", "fluents",
+            "--no-dad", "--peers", "none", "--out", str(link)]  # fmt: skip
+    refused(argv, tmp_path, capsys,
+            f"cannot write the results file: {link} is a symbolic link to nowhere, which does"
+            " not exist")  # fmt: skip
