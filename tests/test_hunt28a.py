@@ -142,3 +142,30 @@ def test_compare_out_onto_a_link_to_nothing_is_refused_before_it_cross_validates
     refused(argv, tmp_path, capsys,
             f"cannot write the results file: {link} is a symbolic link to nowhere, which does"
             " not exist")  # fmt: skip
+
+
+def test_a_failed_demo_leaves_the_earlier_demo_outputs_as_they_were(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The demo removed the earlier run's case base and comparison before its steps ran: a
+    step that failed (here describe, on a clip that is no pose file) or a Ctrl-C left neither
+    the old outputs nor new ones. They are put back as they were."""
+    from posecbr.cli import main
+    from tests.badinput import good_pose_file, snapshot
+
+    data = tmp_path / "data"
+    rows = ["path,label,subject"]
+    for subject in ("s01", "s02", "s03"):
+        good_pose_file(data / f"m02_{subject}_e01.npz", label="deep_squat")
+        rows.append(f"m02_{subject}_e01.npz,deep_squat,{subject}")
+    (data / "labels.csv").write_text("\n".join(rows) + "\n")
+    (data / "m01_s01_e01.npz").write_text("not a pose file")  # the clip step 1 describes
+    out = tmp_path / "out"
+    (out / "compare").mkdir(parents=True)
+    (out / ".posecbr-demo").touch()
+    (out / "casebase.sqlite").write_bytes(b"the earlier demo's case base")
+    (out / "compare" / "results.json").write_text('{"the earlier": "comparison"}')
+    before = snapshot(out)
+    assert main(["demo", "--data", str(data), "--out", str(out), "--quick"]) == 1
+    assert "m01_s01_e01.npz" in capsys.readouterr().err
+    assert snapshot(out) == before

@@ -194,25 +194,65 @@ def _check_data(data: Path) -> None:
         )
 
 
+#: what an earlier demo left that a rerun builds anew (a case base is trained only into a new
+#: file; a comparison's folder would keep the earlier run's pictures)
+REBUILT = ("casebase.sqlite", "casebase.sqlite-wal", "casebase.sqlite-shm", "compare")
+
+
+def _set_aside(out: Path) -> Path:
+    """The earlier demo's case base and comparison moved into a hidden folder in ``out``
+    (renamed, not copied), to be put back if this run fails and removed once it succeeds."""
+    from features.fileio import staging_folder
+
+    try:
+        aside = staging_folder(out, "posecbr-demo-earlier")
+        for name in REBUILT:
+            if (out / name).exists() or (out / name).is_symlink():
+                (out / name).rename(aside / name)
+    except OSError as exc:
+        raise DataError(f"cannot set the earlier demo's outputs aside: {exc}", out) from None
+    return aside
+
+
+def _put_back(out: Path, aside: Path) -> None:
+    """The earlier demo's outputs in place again, over what the failed run made of them."""
+    for kept in aside.iterdir():
+        made = out / kept.name
+        if made.is_dir() and not made.is_symlink():
+            shutil.rmtree(made)
+        else:
+            made.unlink(missing_ok=True)
+        kept.rename(made)
+    aside.rmdir()
+
+
 def _run(args: argparse.Namespace, data: Path) -> int:
     _check_data(data)
     out: Path = args.out
     _check_out(out, data)
     db = out / "casebase.sqlite"
-    for stale in (db, db.with_name(db.name + "-wal"), db.with_name(db.name + "-shm")):
-        stale.unlink(missing_ok=True)
-    shutil.rmtree(out / "compare", ignore_errors=True)
-    if args.quick:
-        (out / "compare").mkdir()  # compare --json writes into an existing folder only
-    steps = _steps(data, out, args.quick)
-    for step in steps:
-        code = _run_step(step)
-        if code:
-            return code
-    report = out / "report.html"
-    results = steps[-1].argv[steps[-1].argv.index("--json" if args.quick else "--out") + 1]
-    print("\n== 5. report: every step on one page ==", flush=True)
-    _write_report(steps, Path(results), out / "timeline_deep_squat.png", report)
+    # the earlier outputs stay until this run has made its own (a failed or interrupted run
+    # removed them and made none)
+    aside = _set_aside(out)
+    done = False
+    try:
+        if args.quick:
+            (out / "compare").mkdir()  # compare --json writes into an existing folder only
+        steps = _steps(data, out, args.quick)
+        for step in steps:
+            code = _run_step(step)
+            if code:
+                return code
+        report = out / "report.html"
+        results = steps[-1].argv[steps[-1].argv.index("--json" if args.quick else "--out") + 1]
+        print("\n== 5. report: every step on one page ==", flush=True)
+        _write_report(steps, Path(results), out / "timeline_deep_squat.png", report)
+        done = True
+    finally:
+        if done:
+            shutil.rmtree(aside, ignore_errors=True)
+        else:
+            _put_back(out, aside)
     total = sum(s.seconds for s in steps)
     print(f"\nDone in {total:.0f} s. Case base: {db}\nReport: {report.resolve()}")
     return 0
