@@ -261,7 +261,7 @@ def _plot(rec: Any, result: Any, path: Path, name: str) -> None:
     plot_timeline(
         fluents_of(rec),
         path,
-        title=f"{name}: activities and repetition counts over the fluent timeline",
+        title=f"{name}: activities and repetition counts over the fluent timeline (grey = unknown)",
         bands=_bands(result),
         band_title="activity",
         max_rows=30,
