@@ -120,6 +120,20 @@ def check_weighting(
         )
 
 
+def check_whole(measure: str, **values: object) -> None:
+    """Refuse a count parameter (a band radius in frames, a signature depth, threads, ...)
+    that is not a whole number: ``--param radius=2.5`` was read as 2 without a word. ``None``
+    (the parameter left to its default rule) passes."""
+    for name, value in values.items():
+        if value is None:
+            continue
+        whole = isinstance(value, int | np.integer) and not isinstance(value, bool)
+        if not whole and not (isinstance(value, float | np.floating) and float(value).is_integer()):
+            raise ConfigError(
+                f"{name} must be a whole number, got {value!r}", f"similarity {measure}"
+            )
+
+
 def weighted(
     x: np.ndarray,
     centre: tuple[float, ...] | None,

@@ -39,7 +39,7 @@ from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from features.errors import ConfigError, InputError
 
-from .base import SimilarityMeasure, register_measure
+from .base import SimilarityMeasure, check_whole, register_measure
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
@@ -426,6 +426,7 @@ class DTW(SimilarityMeasure):
     jobs: int = 0
 
     def __post_init__(self) -> None:
+        check_whole("dtw", radius=self.radius, segment=self.segment, jobs=self.jobs)
         if self.radius is not None and int(self.radius) < 0:
             raise ConfigError(f"radius must be >= 0, got {self.radius!r}", "similarity dtw")
         if int(self.jobs) < 0:

@@ -72,7 +72,7 @@ import numpy as np
 
 from features.errors import ConfigError, InputError
 
-from .base import SimilarityMeasure, check_weighting, register_measure, weighted
+from .base import SimilarityMeasure, check_weighting, check_whole, register_measure, weighted
 from .nibbles import (
     HAS_SHUFFLE,
     MAX_DIMS,
@@ -908,6 +908,7 @@ class Euclidean(SimilarityMeasure):
     multiplier: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
+        check_whole("euclidean", prune_min_cases=self.prune_min_cases, prune_dims=self.prune_dims)
         check_weighting(self.centre, self.multiplier, "euclidean")
 
     def represent(self, problems: np.ndarray) -> np.ndarray:

@@ -18,9 +18,9 @@ from typing import Any, ClassVar
 import iisignature
 import numpy as np
 
-from features.errors import ConfigError
+from features.errors import ConfigError, InputError
 
-from .base import SimilarityMeasure, register_measure
+from .base import SimilarityMeasure, check_whole, register_measure
 from .euclidean import Euclidean
 
 
@@ -66,6 +66,7 @@ class Signature(SimilarityMeasure):
     prune_dims: int = 128
 
     def __post_init__(self) -> None:
+        check_whole("signature", depth=self.depth, prune_dims=self.prune_dims)
         if not 1 <= int(self.depth) <= 6:
             raise ConfigError(f"depth must be 1..6, got {self.depth!r}", "similarity signature")
 
@@ -85,6 +86,10 @@ class Signature(SimilarityMeasure):
             raise ConfigError(
                 f"signature compares sequences (n, frames, channels), got {p.shape}",
                 "similarity signature",
+            )
+        if not np.isfinite(p).all():  # else the Euclidean search of the signatures says so
+            raise InputError(
+                "signature: the problems hold NaN or inf: fill missing values before comparing"
             )
         path = np.ascontiguousarray(
             augment(p, time=self.time, lead_lag_=self.lead_lag, basepoint=self.basepoint)
