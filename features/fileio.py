@@ -277,6 +277,8 @@ def check_output(
     _refuse_special(out, what)
     if make_parents:
         _check_folders_to_make(out, what)
+    elif out.parent.exists() and not out.parent.is_dir():
+        raise DataError(f"cannot write the {what} into it: it is a file, not a folder", out.parent)
     elif not out.parent.is_dir():
         raise DataError(f"the folder of the {what} does not exist", out.parent)
     folder = next((p for p in out.parents if p.exists()), None)

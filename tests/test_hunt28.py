@@ -55,3 +55,18 @@ def test_a_signature_of_missing_values_is_refused_by_its_own_name() -> None:
     problems[1, 3, 0] = np.nan
     with pytest.raises(InputError, match="^signature: the problems hold NaN or inf"):
         get_measure("signature").represent(problems)
+
+
+def test_a_picture_inside_a_file_says_the_file_is_no_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--plot notes.txt/t.png`` said "the folder of the picture does not exist" of a file
+    that exists."""
+    from tests.badinput import good_pose_file
+
+    clip = good_pose_file(tmp_path / "clip.npz")
+    notes = tmp_path / "notes.txt"
+    notes.write_text("mine\n")
+    line = refused(["describe", str(clip), "--plot", str(notes / "t.png")], tmp_path, capsys,
+                   "it is a file, not a folder")  # fmt: skip
+    assert str(notes) in line and "does not exist" not in line
