@@ -19,7 +19,8 @@ Measured, per test recording and overall:
 - unknown: each exercise of the test recording in turn is left out of the case base; the share
   of its blocks labelled unknown (1-NN DTW has no unknown: 0 by construction), for each way
   of judging unknown (:data:`cbr.unknown.JUDGES`: activity-margin, the default, margin,
-  held-out, activities, margin-distance; and the margin at the equal-error point, to compare);
+  held-out, activities, margin-distance, spread-margin; and the margin at the equal-error
+  point, to compare);
 - boundaries: for every labelled change of exercise, the distance to the nearest segment
   boundary (seconds), median;
 - repetitions: counts of :func:`features.repetitions.count_repetitions` against the hand
@@ -149,6 +150,7 @@ JUDGES = (
     "held-out",
     "activities",
     "margin-distance",
+    "spread-margin",
     "margin-equal-error",
 )
 """How "unknown" is judged (cbr.unknown.JUDGES, the default first): ActivityMargin (the margin
@@ -158,8 +160,9 @@ cbr.unknown.choose_weight), the margin against one threshold (exceeded by 5 % of
 cases of the case base), the classifier's
 stored calibration (the 99th percentile of held-out training clips' nearest-case distances,
 cbr.novelty), Familiarity (a stretch as far from its nearest cases as the case base's
-activities lie from each other), or MarginDistance (the margin alone, or a smaller margin with
-a far nearest case, sharing the 5 %); and, for comparison, the margin at the point where
+activities lie from each other), MarginDistance (the margin alone, or a smaller margin with
+a far nearest case, sharing the 5 %), or SpreadMargin (ActivityMargin's margin times the nearest
+distance in the nearest activity's own spread); and, for comparison, the margin at the point where
 held-out known and novel cases err equally (the default before the false-unknown budget)."""
 
 

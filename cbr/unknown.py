@@ -28,6 +28,11 @@ The judges, each calibrated on the case base itself, never on what is being segm
   people not in the case base it calls more of a left-out movement's blocks unknown than
   the pooled threshold and keeps as many known blocks right, or more (README, "Long
   recordings", for the figures).
+- :class:`SpreadMargin` (``--unknown spread-margin``, not the default): the margin times how
+  far the window lies from its nearest activity in that activity's own spread (the median
+  distance of its held-out known cases), to a power chosen on the held-out cases with the
+  rate and the prior; per-activity thresholds as :class:`ActivityMargin`'s. With a case base
+  of one person it is :class:`ActivityMargin`.
 - With a case base of one person (held out by recording or by time, not by person), the two
   margin judges also have a floor (:func:`one_person_floor`) and see each recording's
   distances less how much farther its person lies from every case than the case base's own
@@ -57,7 +62,14 @@ from .casebase import CaseBase
 from .novelty import NoveltyCalibration
 from .weights import MIRROR_FLAG
 
-JUDGES = ("activity-margin", "margin", "held-out", "activities", "margin-distance")
+JUDGES = (
+    "activity-margin",
+    "margin",
+    "held-out",
+    "activities",
+    "margin-distance",
+    "spread-margin",
+)
 """The judges by name, the default first."""
 FALSE_UNKNOWN = 0.05
 """The share of held-out training cases of a known activity the margin judge may call
@@ -640,7 +652,11 @@ Weight = tuple[float, float]
 
 
 def inner_scores(
-    seen: np.ndarray, codes: np.ndarray, groups: np.ndarray, weights: Sequence[Weight]
+    seen: np.ndarray,
+    codes: np.ndarray,
+    groups: np.ndarray,
+    weights: Sequence[Weight],
+    power: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """For each ``(rate, prior)`` of ``weights``, how :class:`ActivityMargin`'s thresholds set
     from the other groups' held-out cases fare on each group's own, every group (subject or
@@ -650,7 +666,9 @@ def inner_scores(
     threshold; ``caught``: the share of its cases of an activity ``a`` above the threshold
     of their nearest other activity when ``a`` is gone (its column and its cases left out of
     the thresholds too, as from a case base without it). Both ``(len(weights),)``; 0 where
-    there is nothing to count."""
+    there is nothing to count. ``power``: the margins are :class:`SpreadMargin`'s scores of
+    that power (:func:`spread_scores`), each activity's spread read from the other groups'
+    cases as the thresholds are; 0, the margins themselves."""
     n_classes = seen.shape[1]
     over, caught = np.zeros(len(weights)), np.zeros(len(weights))
     n_known = n_novel = 0
@@ -660,6 +678,8 @@ def inner_scores(
         train, test = right & ~mine, right & mine
         if not train.any():
             continue
+        if power:
+            margins = spread_scores(seen, activity_spreads(seen, codes, train), power)
         n_known += int(test.sum())
         for w, (rate, prior) in enumerate(weights):
             per, _ = activity_thresholds(margins[train], codes[train], n_classes, rate, prior)
@@ -672,6 +692,8 @@ def inner_scores(
             if not kept.any() or not novel.any():
                 continue
             m, near = _margins(without), np.argmin(without[novel], axis=1)
+            if power:
+                m = spread_scores(without, activity_spreads(without, codes, kept), power)
             n_novel += int(novel.sum())
             for w, (rate, prior) in enumerate(weights):
                 per, _ = activity_thresholds(m[kept], codes[kept], n_classes, rate, prior)
@@ -786,7 +808,7 @@ class ActivityMargin(Calibrated):
         return margin_of(nearest)
 
     def unlike(self, nearest: np.ndarray) -> bool:
-        return margin_of(nearest) > self.threshold(nearest)
+        return self.ratio(nearest) > self.threshold(nearest)
 
     def evidence(self, nearest: np.ndarray) -> float:
         """How much the window says unknown, 0 to 1: 1 above its nearest activity's
@@ -798,7 +820,7 @@ class ActivityMargin(Calibrated):
         the case base's own cases but not by that safer threshold: half-way evidence, not
         none. All or nothing without ``budget_thresholds`` (a record stored before them) or
         when the rate is the budget (the two thresholds are one)."""
-        m, high = margin_of(nearest), self.threshold(nearest)
+        m, high = self.ratio(nearest), self.threshold(nearest)
         if m > high:
             return 1.0
         if not self.budget_thresholds:
@@ -813,6 +835,139 @@ class ActivityMargin(Calibrated):
             f" as the next ({second}); a known {first} comes nearer than"
             f" {self.threshold(nearest):.2f} (in {1.0 - self.rate:.0%} of the case"
             " base's held-out cases)"
+        )
+
+
+SPREAD_POWERS = (0.0, 0.5, 1.0, 2.0, 4.0)
+"""The powers of the spread :func:`choose_spread` tries (0: the margin alone, as
+:class:`ActivityMargin`'s)."""
+
+
+def activity_spreads(seen: np.ndarray, codes: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``(n_classes,)``: how far a held-out known case of each activity usually lies from
+    that activity's nearest case, the median of the distances to their own activity of the
+    held-out cases ``rows`` (``(n,)`` bool; distances to every activity ``seen`` ``(n,
+    n_classes)``, activities ``codes`` ``(n,)``) of that activity; their pooled median for an
+    activity without such a case (1 when there is none at all)."""
+    own = seen[np.arange(len(seen)), codes]
+    pooled = float(np.median(own[rows])) if rows.any() else 1.0
+    out = np.full(seen.shape[1], pooled)
+    for a in np.unique(codes[rows]).tolist():  # over activities (a few dozen at most)
+        out[a] = float(np.median(own[rows & (codes == a)]))
+    return out
+
+
+def spread_scores(nearest: np.ndarray, spreads: np.ndarray, power: float) -> np.ndarray:
+    """:class:`SpreadMargin`'s score of every row of ``nearest`` ``(n, n_classes)`` (distances
+    to every activity): the margin ``d1 / d2`` times ``(d1 / s) ** power``, ``s`` the spread
+    (:func:`activity_spreads`, ``(n_classes,)``) of the row's nearest activity. ``(n,)``."""
+    nearest = np.asarray(nearest, dtype=np.float64)
+    m = _margins(nearest)
+    if not power or not len(nearest):
+        return m
+    a1 = np.argmin(nearest, axis=1)
+    d1, s = nearest[np.arange(len(nearest)), a1], spreads[a1]
+    far = np.where(s > 0.0, d1 / np.where(s > 0.0, s, 1.0), np.where(d1 > 0.0, np.inf, 1.0))
+    return np.asarray(m * far**power)
+
+
+def choose_spread(
+    seen: np.ndarray, codes: np.ndarray, groups: np.ndarray, budget: float = FALSE_UNKNOWN
+) -> tuple[float, float, float]:
+    """The quantile rate, the prior and the power of :class:`SpreadMargin`, chosen on the
+    held-out cases as :func:`choose_weight` chooses the first two (arguments as there), over
+    the powers of :data:`SPREAD_POWERS` too: of the triples whose thresholds the held-out
+    group's known cases exceed no more often than ``budget``, the one that calls most of a
+    gone activity's cases unknown (on a tie the larger rate, prior, then the smaller power);
+    the least over-call when none keeps it. ``(budget, ACTIVITY_PRIOR, 0)`` when no activity
+    has held-out cases in two groups."""
+    right = _rightly_named(seen, codes)
+    if not any(len(np.unique(groups[right & (codes == a)])) >= 2 for a in np.unique(codes)):
+        return budget, ACTIVITY_PRIOR, 0.0
+    weights = [(budget * share, prior) for share in RATE_SHARES for prior in PRIOR_GRID]
+    scored = [(p, *inner_scores(seen, codes, groups, weights, p)) for p in SPREAD_POWERS]
+    tried = [(p, w, over[w], caught[w]) for p, over, caught in scored for w in range(len(weights))]
+    within = [t for t in tried if t[2] <= budget]
+    if within:
+        p, w, *_ = max(within, key=lambda t: (t[3], *weights[t[1]], -t[0]))
+    else:
+        p, w, *_ = min(tried, key=lambda t: (t[2], -weights[t[1]][0], -weights[t[1]][1], t[0]))
+    return weights[w][0], weights[w][1], p
+
+
+@dataclass(frozen=True)
+class SpreadMargin(ActivityMargin):
+    """:class:`ActivityMargin` whose margin also weighs how far the window lies from its
+    nearest activity in units of that activity's own spread (``--unknown spread-margin``):
+    the score ``d1 / d2 * (d1 / spreads[a]) ** power``, ``a`` the nearest activity and
+    ``spreads[a]`` the median distance of its rightly named held-out known cases to it
+    (:func:`activity_spreads`), against per-activity thresholds of the score read as
+    :class:`ActivityMargin` reads them from the margin. The power (0 to 4; 0: the margin
+    alone), the rate and the prior are chosen on the held-out cases, every group held out in
+    turn with the spreads read from the others (:func:`choose_spread`). A movement the case
+    base lacks is often as clearly nearer one activity as a known one is, but farther from it
+    than that activity's own cases lie from each other; the margin alone sees only the first
+    (UI-PRMD Kinect, where every activity's cases lie loosely: README, "Unknown").
+
+    Only with a case base that holds out people (basis "subject"): a spread read from one
+    person's held-out cases says nothing of how far the next person's known movement lies,
+    so a case base of one person gets the power 0 and ``spreads`` empty, the judge
+    :class:`ActivityMargin` is (its floor and its person offset included)."""
+
+    spreads: tuple[float, ...] = ()
+    power: float = 0.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.spreads and len(self.spreads) != len(self.thresholds):
+            raise ValueError(
+                f"field 'spreads' has {len(self.spreads)} values for"
+                f" {len(self.thresholds)} activities"
+            )
+
+    @classmethod
+    def of(  # type: ignore[override]
+        cls,
+        cb: CaseBase,
+        false_unknown: float = FALSE_UNKNOWN,
+        held: Held | None = None,
+    ) -> SpreadMargin:
+        """Calibrated on ``cb``; ``held`` and DataError as :meth:`ActivityMargin.of`."""
+        held = held if held is not None else held_out_activities(cb)
+        seen, codes, basis, groups = held
+        plain = ActivityMargin.of(cb, false_unknown, held=held)
+        if basis != "subject":
+            return cls(**{f.name: getattr(plain, f.name) for f in dataclasses.fields(plain)})
+        rate, prior, power = choose_spread(seen, codes, groups, false_unknown)
+        right = _rightly_named(seen, codes)
+        spreads = activity_spreads(seen, codes, right)
+        scores = spread_scores(seen[right], spreads, power)
+        n_classes = seen.shape[1]
+        per, pooled = activity_thresholds(scores, codes[right], n_classes, rate, prior)
+        budget, _ = activity_thresholds(scores, codes[right], n_classes, false_unknown, prior)
+        return cls(tuple(per.tolist()), pooled, basis, int(right.sum()), false_unknown, prior,
+                   rate, tuple(budget.tolist()), 0.0, math.inf, tuple(spreads.tolist()),
+                   power)  # fmt: skip
+
+    def ratio(self, nearest: np.ndarray) -> float:
+        """The score: the margin times the nearest distance in spreads of the nearest
+        activity to the power ``power`` (the margin when ``spreads`` is empty)."""
+        if not self.spreads:
+            return margin_of(nearest)
+        row = np.asarray(nearest, dtype=np.float64)[None, :]
+        return float(spread_scores(row, np.asarray(self.spreads), self.power)[0])
+
+    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
+        if not self.spreads or not self.power:
+            return super().describe(nearest, classes)
+        first, second = two_nearest(nearest, classes)
+        a = int(np.argmin(nearest))
+        return (
+            f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
+            f" as the next ({second}) and {float(np.min(nearest)) / self.spreads[a]:.1f}x as far"
+            f" as a known {first} usually lies; together {self.ratio(nearest):.2f}, where a"
+            f" known {first} stays below {self.threshold(nearest):.2f} (in"
+            f" {1.0 - self.rate:.0%} of the case base's held-out cases)"
         )
 
 
@@ -903,6 +1058,7 @@ STORED: dict[str, type[Calibrated]] = {
     "margin-distance": MarginDistance,
     "activities": Familiarity,
     "activity-margin": ActivityMargin,
+    "spread-margin": SpreadMargin,
 }
 """The judges calibrated on the case base, by name: calibrated when a model is stored
 (:func:`calibrate_judges`) and stored with it. (``held-out`` reads the classifier's novelty
@@ -1007,6 +1163,11 @@ __all__ = [
     "AT_FIT",
     "ActivityMargin",
     "JUDGES",
+    "SPREAD_POWERS",
+    "SpreadMargin",
+    "activity_spreads",
+    "choose_spread",
+    "spread_scores",
     "STORED",
     "Calibrated",
     "calibrate_judges",
