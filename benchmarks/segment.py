@@ -60,6 +60,7 @@ import numpy as np  # noqa: E402
 
 from benchmarks import write_json  # noqa: E402
 from benchmarks._common import one_thread_machine, versions  # noqa: E402
+from cbr.unknown import JUDGES as UNKNOWN_JUDGES  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
@@ -144,15 +145,7 @@ def _timed_in_rounds(
     return {key: (statistics.median(wall[key]), statistics.median(cpu[key])) for key in calls}
 
 
-JUDGES = (
-    "activity-margin",
-    "margin",
-    "held-out",
-    "activities",
-    "margin-distance",
-    "spread-margin",
-    "margin-equal-error",
-)
+JUDGES = (*UNKNOWN_JUDGES, "margin-equal-error")
 """How "unknown" is judged (cbr.unknown.JUDGES, the default first): ActivityMargin (the margin
 between the two nearest activities against the nearest activity's own threshold, from its
 rightly named held-out cases, shrunk to the pooled one by a weight chosen on the case base,
