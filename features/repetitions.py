@@ -83,7 +83,6 @@ from typing import Any
 import numpy as np
 from scipy.fft import next_fast_len
 from scipy.ndimage import gaussian_filter1d, median_filter, minimum_filter1d, uniform_filter1d
-from scipy.signal import find_peaks
 
 from .body import long_runs
 from .datasets import Clip
@@ -535,6 +534,8 @@ def find_period(x: np.ndarray, fps: float) -> tuple[float | None, float]:
     if hi <= lo + 2:
         return None, 0.0
     acf = autocorrelation(x) * (1.0 - np.arange(n) / n)
+    from scipy.signal import find_peaks  # here: scipy.signal costs 0.6 s to import
+
     peaks, _ = find_peaks(acf[: hi + 1])
     peaks = peaks[(peaks >= lo) & (acf[peaks] > 0)]
     if not len(peaks):
@@ -637,6 +638,8 @@ def _candidates(line: np.ndarray, rest: float, distance: int) -> tuple[np.ndarra
     """:func:`_far_points` before the cut-off ones are judged: the samples, and which of
     them are cut off at the clip's start or end."""
     padded = np.concatenate([[rest], line, [rest]])
+    from scipy.signal import find_peaks
+
     cand, props = find_peaks(padded, prominence=MIN_EXCURSION_RAD, distance=max(1, distance))
     if not len(cand):
         return np.array([], dtype=np.int64), np.array([], dtype=bool)
