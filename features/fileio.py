@@ -254,6 +254,28 @@ def _check_folders_to_make(out: Path, what: str) -> None:
         )
 
 
+def check_not_in_walked_folder(
+    out: str | Path, folder: str | Path, what: str, *, same_too: bool = True
+) -> None:
+    """Refuse an output folder inside ``folder`` (or ``folder`` itself when ``same_too``),
+    an input read as one subfolder per class: what is written there would be read as one
+    more class (or each clip twice) the next time the folder is read. One line naming both."""
+    out_r, folder_r = Path(out).resolve(), Path(folder).resolve()
+    if out_r == folder_r and same_too:
+        raise DataError(
+            f"the {what} is the input folder, read as one subfolder per class: what is written"
+            " there would be read as clips the next time; choose a folder outside it",
+            out,
+        )
+    if folder_r in out_r.parents:
+        raise DataError(
+            f"the {what} is inside the input folder {folder}, read as one subfolder per class:"
+            " what is written there would be read as another class the next time; choose a"
+            " folder outside it",
+            out,
+        )
+
+
 def check_output(
     path: str | Path,
     *,

@@ -26,7 +26,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from features.errors import DataError
-from features.fileio import check_output, staged_folder, unique_name, write_text_atomic
+from features.fileio import (
+    check_not_in_walked_folder,
+    check_output,
+    staged_folder,
+    unique_name,
+    write_text_atomic,
+)
 from features.text import counted, shown
 from posecbr.arguments import path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
@@ -210,6 +216,19 @@ def _check_no_overwrite(out: Path, inputs: list[Path]) -> None:
             " and labels.csv there would overwrite them; choose another --out",
             out,
         )
+
+
+def _check_not_in_source(args: argparse.Namespace) -> None:
+    """Refuse an output folder inside a SOURCE read as one subfolder per class (or as a
+    folder of clips, which one subfolder of clips turns into class folders): the pose files
+    written there would be read as one more class the next time SOURCE is read. Into SOURCE
+    itself is allowed: its labels.csv then names the clips (and a pose file there that
+    would be replaced is refused by :func:`_check_no_overwrite`)."""
+    from features.datasets import detect_kind
+
+    src: Path = args.source
+    if src.is_dir() and detect_kind(src) in ("class_folders", "pose_folder"):
+        check_not_in_walked_folder(args.out, src, "output folder", same_too=False)
 
 
 def _check_args(args: argparse.Namespace) -> None:
@@ -488,6 +507,7 @@ def run(args: argparse.Namespace) -> int:
     out: Path = args.out
     inputs = _inputs(args)
     _check_no_overwrite(out, inputs)
+    _check_not_in_source(args)
     if out.is_dir():
         check_output(out / "labels.csv", inputs=inputs, what="labels file")
     before, header = _listed_before(out / "labels.csv")

@@ -23,7 +23,7 @@ from typing import Any
 
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import check_output
+from features.fileio import check_not_in_walked_folder, check_output
 from features.progress import progress
 from features.text import counted, shown
 from posecbr.arguments import path_arg
@@ -523,6 +523,11 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
     if args.out.exists() and not args.out.is_dir():
         raise DataError("output is not a folder", args.out)
     _check_outputs(jobs)
+    if args.input.is_dir() and not (args.input / "labels.csv").is_file():
+        # the folder is walked for class folders: an output folder in it becomes a class
+        check_not_in_walked_folder(args.out, args.input, "output folder")
+        if args.overlay is not None:
+            check_not_in_walked_folder(args.overlay, args.input, "overlay folder")
     _check_out_dir(args.out)
 
 
