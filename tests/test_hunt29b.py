@@ -64,3 +64,34 @@ def test_convert_refuses_an_output_folder_inside_its_class_folders(
     # data/conv/a.npz and labels.csv would make `train data` read a third class, "conv"
     refused(["convert", str(data), "--out", str(data / "conv")], tmp_path, capsys,
             "output folder is inside the input folder", str(data / "conv"))  # fmt: skip
+
+
+# ------------------------------------------------ compare: no output over a file of the data
+
+_QUICK = ["--similarities", "euclidean", "--features", "fluents", "--no-dad", "--peers", "none",
+          "--k", "1", "--explain", "0"]  # fmt: skip
+
+
+@pytest.mark.parametrize("option", ["--json", "--csv"])
+@pytest.mark.parametrize("victim", ["left out", "label file"])
+def test_compare_refuses_an_output_named_as_a_file_of_the_data_it_does_not_load(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], option: str, victim: str
+) -> None:
+    # A labels CSV of five clips and a recording labelled over time; `--labels squat,lunge`
+    # loads four of the clips, but the others (and the label file) are the data's all
+    # the same: the results were written over the clip left out.
+    data = tmp_path / "data"
+    data.mkdir()
+    rows = ["path,label,subject,label_file,label_block_s"]
+    for name, label, subject in [("a", "squat", "p1"), ("b", "lunge", "p1"),
+                                 ("c", "squat", "p2"), ("e", "lunge", "p2"),
+                                 ("d", "reach", "p2")]:  # fmt: skip
+        good_pose_file(data / f"{name}.npz", frames=40)
+        rows.append(f"{name}.npz,{label},{subject},,")
+    good_pose_file(data / "rec.npz", frames=60)  # 2 s: four labels of 0.5 s
+    (data / "rec.txt").write_text("1\n1\n2\n2\n")
+    rows.append("rec.npz,,p3,rec.txt,0.5")
+    (data / "labels.csv").write_text("\n".join(rows) + "\n")
+    target = data / ("d.npz" if victim == "left out" else "rec.txt")
+    argv = ["compare", str(data), "--labels", "squat,lunge", *_QUICK, option, str(target)]
+    refused(argv, tmp_path, capsys, "would overwrite an input", str(target))

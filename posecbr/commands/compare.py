@@ -151,6 +151,17 @@ def _load(args: argparse.Namespace) -> list[Any]:
     return load_dataset(args.data, **kw)
 
 
+def _dataset_files(args: argparse.Namespace) -> list[str | Path]:
+    """Every file of the dataset, from names and listings (no clip read): each clip's file,
+    also those ``--labels`` and ``--subjects`` leave out, the labels CSV and the label files
+    of recordings labelled over time; an output is none of them."""
+    from features.datasets import dataset_files
+
+    if not args.data.exists():
+        raise DataError("no such dataset (file or folder)", args.data)
+    return [*dataset_files(args.data, sensor=sensor_for(args.sensor, [args.data]))]
+
+
 def _settings(args: argparse.Namespace) -> Any:
     from cbr.evaluation.settings import CompareSettings
 
@@ -267,6 +278,7 @@ def run(args: argparse.Namespace) -> int:
     check_cbr_params(settings)
     outputs = _outputs(args)
     check_outputs(outputs, [args.data])
+    check_outputs(outputs, _dataset_files(args))  # clips --labels/--subjects leave out too
     clips = _load(args)
     check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
     run_ = run_compare(clips, settings, source=str(args.data))
