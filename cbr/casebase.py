@@ -77,6 +77,13 @@ class CaseBase:
     def __len__(self) -> int:
         return len(self.labels)
 
+    def check_not_empty(self, where: str = "case base") -> None:
+        """Refuse a case base of no cases (every case trimmed, or a subset of none) where
+        cases are compared with: DataError naming ``where``, not numpy's error of an empty
+        sequence or a vote of no neighbours."""
+        if len(self) == 0:
+            raise DataError("the case base holds no cases: nothing to compare with", where)
+
     @property
     def classes(self) -> np.ndarray:
         return np.unique(self.labels)

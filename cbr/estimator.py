@@ -889,6 +889,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         a recording judges its stretches by :mod:`cbr.unknown`) that would pay for it unused."""
         check_is_fitted(self, "case_base_")
         self._check_vote()
+        self.case_base_.check_not_empty("case_base_")
         seqs = as_sequences(X)
         if not seqs:
             raise InputError("no clips to classify", "X")
@@ -972,6 +973,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         :meth:`solve` does): how counterfactuals are checked."""
         check_is_fitted(self, "case_base_")
         self._check_vote()
+        self.case_base_.check_not_empty("case_base_")
         r = retrieve(self.case_base_, np.asarray(values), int(self.k))
         classes = self._class_labels()
         self._check_known(r.labels, set(classes.tolist()))

@@ -226,6 +226,7 @@ def trim_novelty_benefit(
 ) -> MaintenanceReport:
     """Keep ``keep`` (a fraction) of every activity's cases, dropping the least novel and
     least beneficial first."""
+    cb.check_not_empty()
     dist = pairwise_distances(cb, desc="trim")
     nov, ben = novelty_benefit(cb, k, dist)
     labels = cb.labels.astype(str)
@@ -259,6 +260,7 @@ def cnn(
     eval_set: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> MaintenanceReport:
     """Hart's condensed nearest neighbour: a subset that classifies every case right by 1-NN."""
+    cb.check_not_empty()
     dist = pairwise_distances(cb, desc="CNN")
     labels = cb.labels.astype(str)
     kept = np.zeros(len(cb), dtype=bool)
@@ -293,6 +295,7 @@ def renn(
     eval_set: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> MaintenanceReport:
     """Repeated edited nearest neighbour: drop cases their k nearest misclassify, until stable."""
+    cb.check_not_empty()
     dist = pairwise_distances(cb, desc="RENN")
     labels = cb.labels.astype(str)
     kept = np.ones(len(cb), dtype=bool)
@@ -312,6 +315,7 @@ def icf(
     eval_set: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> MaintenanceReport:
     """Iterative case filtering (Brighton & Mellish 2002)."""
+    cb.check_not_empty()
     dist = pairwise_distances(cb, desc="ICF")
     labels = cb.labels.astype(str)
     kept = _enn_pass(dist, labels, np.ones(len(cb), dtype=bool), k)

@@ -35,6 +35,7 @@ def retrieve(
     """The ``k`` nearest cases to ``problem`` (``exclude``: a case position to leave out, for
     leave-one-out evaluation)."""
     _check_k(k)
+    casebase.check_not_empty()
     values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
     measure = casebase.measure
     query = measure.represent_query(values)
@@ -54,6 +55,7 @@ def retrieve_many(
     may batch (Euclidean: one matrix product per block of queries), with the same neighbours,
     in the same order, as one :func:`retrieve` per problem."""
     _check_k(k)
+    casebase.check_not_empty()
     if not problems:
         return []
     measure = casebase.measure

@@ -823,6 +823,7 @@ def _check_call(clf: Any, recording: Any, chunk_frames: Any) -> None:
     """Refuse an unfitted ``clf`` (NotFittedError, as its ``predict`` does), a ``recording``
     that is not a PoseSequence and a ``chunk_frames`` that is not None or a whole number >= 0."""
     check_is_fitted(clf, "case_base_")
+    clf.case_base_.check_not_empty("case_base_")
     if not isinstance(recording, PoseSequence):
         raise InputError(f"a PoseSequence is expected, got {type(recording).__name__}", "recording")
     if chunk_frames is not None and (

@@ -5,6 +5,7 @@ case base actions (``reps``, ``convert``, ``casebase``)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -95,3 +96,57 @@ def test_compare_refuses_an_output_named_as_a_file_of_the_data_it_does_not_load(
     target = data / ("d.npz" if victim == "left out" else "rec.txt")
     argv = ["compare", str(data), "--labels", "squat,lunge", *_QUICK, option, str(target)]
     refused(argv, tmp_path, capsys, "would overwrite an input", str(target))
+
+
+# ------------------------------------------------ an empty case base through the Python API
+
+
+@pytest.fixture(scope="module")
+def emptied() -> tuple[Any, list[Any]]:
+    """A fitted classifier whose case base was then emptied (every case taken out, as a
+    subset of none), and a clip to classify."""
+    from cbr.estimator import CaseBaseClassifier
+    from tests.moves import clip
+
+    names = ("squat", "squat", "arm_abduction", "arm_abduction")
+    X = [clip(n, seconds=3.0).with_metadata(subject=f"p{i % 2}") for i, n in enumerate(names)]
+    clf = CaseBaseClassifier(mirror="off", feature_weights="none", phases=0, k=1)
+    clf.fit(X, list(names))
+    clf.case_base_ = clf.case_base_.subset(np.array([], dtype=int))
+    return clf, X
+
+
+def _calls(clf: Any, X: list[Any]) -> dict[str, Any]:
+    from cbr.maintenance import EDITORS
+    from cbr.retrieve import retrieve, retrieve_many
+    from cbr.segmentation import segment
+    from tests.moves import clip
+
+    values = np.zeros(len(clf.case_base_.names))
+    cb = clf.case_base_
+    return {
+        "predict": lambda: clf.predict(X[:1]),  # was numpy's "zero-size array to reduction"
+        "solve": lambda: clf.solve(X[:1]),
+        "explain": lambda: clf.explain(X[:1]),
+        "answer": lambda: clf.answer(values),  # was the first class, without a word
+        "retrieve": lambda: retrieve(cb, values, 1),  # was no neighbour at all
+        "retrieve_many": lambda: retrieve_many(cb, [values], 1),
+        "segment": lambda: segment(clf, clip("squat", seconds=8.0)),
+        **{
+            f"trim {n}": (lambda e=e, n=n: e(cb) if n != "novelty-benefit" else e(cb, 0.5))
+            for n, e in EDITORS.items()
+        },  # fmt: skip
+    }
+
+
+@pytest.mark.parametrize(
+    "call",
+    ["predict", "solve", "explain", "answer", "retrieve", "retrieve_many", "segment",
+     "trim novelty-benefit", "trim cnn", "trim renn", "trim icf"],
+)  # fmt: skip
+def test_an_empty_case_base_is_named_as_empty(emptied: tuple[Any, list[Any]], call: str) -> None:
+    from features.errors import DataError
+
+    clf, X = emptied
+    with pytest.raises(DataError, match="the case base holds no cases"):
+        _calls(clf, X)[call]()
