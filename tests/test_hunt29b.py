@@ -150,3 +150,64 @@ def test_an_empty_case_base_is_named_as_empty(emptied: tuple[Any, list[Any]], ca
     clf, X = emptied
     with pytest.raises(DataError, match="the case base holds no cases"):
         _calls(clf, X)[call]()
+
+
+# ------------------------------------------------ mocap text written on Windows (BOM)
+
+_BVH = """HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 95 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT LeftUpLeg
+  {
+    OFFSET 10 0 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT LeftLeg
+    {
+      OFFSET 0 -45 0
+      CHANNELS 3 Zrotation Xrotation Yrotation
+      End Site
+      {
+        OFFSET 0 -45 0
+      }
+    }
+  }
+}
+MOTION
+Frames: 2
+Frame Time: 0.04
+0 95 0 0 0 0 0 0 0 0 0 0
+0 95 0 0 0 0 0 0 0 0 90 0
+"""
+
+
+def test_a_bvh_file_with_a_byte_order_mark_is_read(tmp_path: Path) -> None:
+    # Notepad and other Windows editors start a UTF-8 file with EF BB BF: the reader took it
+    # for part of the first word and refused the file ("does not start with HIERARCHY").
+    from features.readers.bvh import read_bvh
+    from features.skeleton import JOINT_INDEX
+
+    path = tmp_path / "knee.bvh"
+    path.write_bytes(b"\xef\xbb\xbf" + _BVH.replace("\n", "\r\n").encode())
+    seq = read_bvh(path, unit="cm")
+    assert seq.fps == pytest.approx(25.0)
+    hip, knee = JOINT_INDEX["left_hip"], JOINT_INDEX["left_knee"]
+    # the hips 95 cm up, the left hip 10 cm to the side, the knee 45 cm below it; in the
+    # second frame the knee joint turns 90 degrees about x (the hip does not: the knee stays)
+    np.testing.assert_allclose(seq.positions[:, hip], [[0.10, 0.95, 0.0]] * 2, atol=1e-12)
+    np.testing.assert_allclose(seq.positions[:, knee], [[0.10, 0.50, 0.0]] * 2, atol=1e-12)
+
+
+def test_an_amc_file_with_a_byte_order_mark_is_read(tmp_path: Path, shared_data: Path) -> None:
+    # an HDM05 squat (one repetition) saved again by a Windows editor: refused before ("line
+    # 1: data before the first frame number", the mark glued to the header's "#")
+    from features.readers.asfamc import read_asf_amc
+
+    folder = shared_data / "hdm05" / "train" / "10"
+    amc, asf = folder / "HDM_bd_squat1Reps_001_120.amc", folder / "HDM_bd.asf"
+    marked = tmp_path / amc.name
+    marked.write_bytes(b"\xef\xbb\xbf" + amc.read_bytes())
+    np.testing.assert_array_equal(
+        read_asf_amc(asf, marked).positions, read_asf_amc(asf, amc).positions
+    )

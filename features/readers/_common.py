@@ -18,7 +18,8 @@ from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
 
 
 def read_text(path: Path) -> str:
-    """The text of ``path`` (gzip when it ends in ``.gz``), latin-1 tolerant, newlines unified.
+    """The text of ``path`` (gzip when it ends in ``.gz``), latin-1 tolerant, newlines unified,
+    without a UTF-8 byte order mark.
 
     Raises DataError naming the file when it is missing, unreadable, a truncated gzip, or
     larger (decompressed) than the reading limit of :func:`features.poses.read_limits`.
@@ -45,6 +46,9 @@ def read_text(path: Path) -> str:
         raise DataError(f"cannot read ({type(exc).__name__}: {exc})", path) from None
     if len(raw) > limit:
         raise too_big
+    # a byte order mark (Windows editors write one) is no part of the text: left in, it glued
+    # itself to the first word ("HIERARCHY", an AMC header's "#") and the file was refused
+    raw = raw.removeprefix(b"\xef\xbb\xbf")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
