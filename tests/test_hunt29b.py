@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from posecbr.cli import main
 from tests.badinput import good_pose_file, refused
 
 # ------------------------------------------------ outputs inside a folder of class folders
@@ -211,3 +212,24 @@ def test_an_amc_file_with_a_byte_order_mark_is_read(tmp_path: Path, shared_data:
     np.testing.assert_array_equal(
         read_asf_amc(asf, marked).positions, read_asf_amc(asf, amc).positions
     )
+
+
+def test_convert_refuses_a_recording_of_the_same_name_from_another_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # monday/squat.bvh and tuesday/squat.bvh, two takes, converted one after the other into
+    # one folder: the second replaced the first's pose file without a word (each pose file's
+    # origin was its file name alone, "squat.bvh", the same for both)
+    from features.poses import load_pose
+
+    for day, knee in (("monday", "90"), ("tuesday", "45")):
+        (tmp_path / day).mkdir()
+        (tmp_path / day / "squat.bvh").write_text(_BVH.replace(" 90 0\n", f" {knee} 0\n"))
+    out = tmp_path / "poses"
+    assert main(["convert", str(tmp_path / "monday" / "squat.bvh"), "--out", str(out)]) == 0
+    capsys.readouterr()
+    refused(["convert", str(tmp_path / "tuesday" / "squat.bvh"), "--out", str(out)], tmp_path,
+            capsys, "already there from another recording", "monday", "tuesday")  # fmt: skip
+    assert load_pose(out / "squat.npz").metadata["origin"] == "monday/squat.bvh"
+    # the same take again replaces its own pose file, as before
+    assert main(["convert", str(tmp_path / "monday" / "squat.bvh"), "--out", str(out)]) == 0

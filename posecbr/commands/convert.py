@@ -344,11 +344,15 @@ def _clips(args: argparse.Namespace) -> Iterator[tuple[Clip, str]]:
 
 
 def _origin(seq_source: str, src: Path) -> str:
-    """Where a clip came from relative to SOURCE (no machine-specific absolute path)."""
+    """Where a clip came from, from the folder SOURCE is in (no machine-specific absolute
+    path): ``hdm05/train/1/x.amc`` for the folder ``hdm05``; for a file (one recording, a
+    labels CSV) from the folder above the one it is in, ``takes/x.bvh``: its name alone would
+    take another folder's ``x.bvh`` for the same recording, and replace its pose file."""
     if not seq_source:
         return seq_source
+    base = src.resolve().parent if src.is_dir() else src.resolve().parent.parent
     try:
-        return str(Path(seq_source).resolve().relative_to(src.resolve().parent))
+        return str(Path(seq_source).resolve().relative_to(base))
     except (ValueError, OSError):
         return Path(seq_source).name
 
