@@ -233,3 +233,15 @@ def test_convert_refuses_a_recording_of_the_same_name_from_another_folder(
     assert load_pose(out / "squat.npz").metadata["origin"] == "monday/squat.bvh"
     # the same take again replaces its own pose file, as before
     assert main(["convert", str(tmp_path / "monday" / "squat.bvh"), "--out", str(out)]) == 0
+
+
+def test_convert_names_fps_it_cannot_write_before_any_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # 0.005 fps passed convert's own check, (0, 10000], and was refused by the pose file
+    # when the first clip was written: "fps must be between ..." naming neither the option
+    # nor a file. The rates a pose file takes are [0.01, 10000] (README).
+    bvh = tmp_path / "squat.bvh"
+    bvh.write_text(_BVH)
+    argv = ["convert", str(bvh), "--out", str(tmp_path / "poses"), "--fps", "0.005"]
+    refused(argv, tmp_path, capsys, "--fps: must be a frame rate in [0.01, 10000], got 0.005")
