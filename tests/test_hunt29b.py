@@ -245,3 +245,26 @@ def test_convert_names_fps_it_cannot_write_before_any_work(
     bvh.write_text(_BVH)
     argv = ["convert", str(bvh), "--out", str(tmp_path / "poses"), "--fps", "0.005"]
     refused(argv, tmp_path, capsys, "--fps: must be a frame rate in [0.01, 10000], got 0.005")
+
+
+# ------------------------------------------------ casebase: --json on every action
+
+
+def test_casebase_upgrade_takes_json_as_every_action_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # info, list, export and trim took --json; upgrade stopped at argparse's usage message.
+    # A case base written by posecbr 0.1 (schema version 1: tests/fixtures/store_v1.sql),
+    # upgraded, then upgraded again (nothing to do).
+    import json
+    import sqlite3
+
+    db = tmp_path / "old.sqlite"
+    con = sqlite3.connect(db)
+    con.executescript((Path(__file__).with_name("fixtures") / "store_v1.sql").read_text("utf-8"))
+    con.close()
+    for before, changed in ((1, True), (2, False)):
+        assert main(["casebase", "upgrade", "--db", str(db), "--json"]) == 0
+        assert json.loads(capsys.readouterr().out) == {
+            "db": str(db), "schema_version_before": before, "schema_version": 2,
+            "left_wal_mode": False, "changed": changed}  # fmt: skip

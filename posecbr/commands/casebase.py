@@ -63,6 +63,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "upgrade", help="convert a case base file written by an older posecbr, in place"
     )
     q.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
+    q.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=run)
 
 
@@ -98,7 +99,17 @@ def _upgrade(args: argparse.Namespace) -> int:
     journal = wal and file is not None and not in_wal_mode(file)
     converted = [f"from schema version {found} to {SCHEMA_VERSION}"] * (found != SCHEMA_VERSION)
     converted += ["from WAL mode to a rollback journal"] * journal
-    if converted:
+    if args.json:
+        _emit(
+            {
+                "db": shown_db(args.db),
+                "schema_version_before": found,
+                "schema_version": SCHEMA_VERSION,
+                "left_wal_mode": bool(journal),
+                "changed": bool(converted),
+            }
+        )
+    elif converted:
         print(f"{shown(shown_db(args.db))}: converted {', and '.join(converted)}")
     else:
         print(f"{shown(shown_db(args.db))}: already schema version {SCHEMA_VERSION}, nothing to do")
