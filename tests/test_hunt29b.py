@@ -268,3 +268,23 @@ def test_casebase_upgrade_takes_json_as_every_action_does(
         assert json.loads(capsys.readouterr().out) == {
             "db": str(db), "schema_version_before": before, "schema_version": 2,
             "left_wal_mode": False, "changed": changed}  # fmt: skip
+
+
+def test_convert_into_a_windows_labels_file_keeps_its_clips_not_its_blank_lines(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # a labels.csv saved by a Windows editor: byte order mark, CRLF, blank lines at the end
+    # (one of spaces, one of commas alone). The blank lines were counted as clips ("3 clips
+    # listed before kept") and written back as rows.
+    out = tmp_path / "poses"
+    out.mkdir()
+    good_pose_file(out / "old.npz")
+    (out / "labels.csv").write_bytes(
+        b"\xef\xbb\xbfpath,label,subject\r\nold.npz,squat,p1\r\n\r\n   \r\n,,\r\n"
+    )
+    bvh = tmp_path / "knee.bvh"
+    bvh.write_text(_BVH)
+    assert main(["convert", str(bvh), "--out", str(out), "--bvh-unit", "cm"]) == 0
+    assert "(1 clip listed before kept)" in capsys.readouterr().out
+    assert (out / "labels.csv").read_text().splitlines() == [
+        "path,label,subject,bvh_unit", "old.npz,squat,p1,", "knee.npz,knee,,cm"]  # fmt: skip

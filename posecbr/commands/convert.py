@@ -475,7 +475,9 @@ def _listed_before(labels: Path) -> tuple[list[dict[str, Any]], list[str]]:
     try:
         with open(labels, newline="", encoding="utf-8-sig") as fh:
             reader = csv.DictReader(fh)
-            rows = [dict(row) for row in reader]
+            # blank rows (a trailing blank line, one of commas alone) list no clip: train
+            # skips them, and they are neither counted as kept nor written back
+            rows = [dict(row) for row in reader if any(_filled(v) for v in row.values())]
             columns = reader.fieldnames or []
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise DataError(f"cannot read the labels file already there ({exc})", labels) from None
@@ -491,6 +493,14 @@ def _listed_before(labels: Path) -> tuple[list[dict[str, Any]], list[str]]:
             labels,
         ) from None
     return rows, list(columns)
+
+
+def _filled(value: Any) -> bool:
+    """Whether a labels.csv cell holds something (csv.DictReader gives a list for the cells
+    past the header's columns, None for those missing)."""
+    if isinstance(value, list):
+        return any(_filled(v) for v in value)
+    return value is not None and bool(str(value).strip())
 
 
 def _merged(before: list[dict[str, Any]], written: list[dict[str, Any]]) -> list[dict[str, Any]]:
