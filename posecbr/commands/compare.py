@@ -278,7 +278,8 @@ def run(args: argparse.Namespace) -> int:
     check_cbr_params(settings)
     outputs = _outputs(args)
     check_outputs(outputs, [args.data])
-    check_outputs(outputs, _dataset_files(args))  # clips --labels/--subjects leave out too
+    if outputs:  # clips --labels/--subjects leave out are the data's too
+        check_outputs(outputs, _dataset_files(args))
     clips = _load(args)
     check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
     run_ = run_compare(clips, settings, source=str(args.data))
