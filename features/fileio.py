@@ -255,21 +255,27 @@ def _check_folders_to_make(out: Path, what: str) -> None:
 
 
 def check_not_in_walked_folder(
-    out: str | Path, folder: str | Path, what: str, *, same_too: bool = True
+    out: str | Path,
+    folder: str | Path,
+    what: str,
+    *,
+    same_too: bool = True,
+    folder_what: str = "the input folder",
 ) -> None:
-    """Refuse an output folder inside ``folder`` (or ``folder`` itself when ``same_too``),
-    an input read as one subfolder per class: what is written there would be read as one
-    more class (or each clip twice) the next time the folder is read. One line naming both."""
+    """Refuse an output folder inside ``folder`` (or ``folder`` itself when ``same_too``), a
+    folder read as one subfolder per class (``folder_what``: what it is, for the message):
+    what is written there would be read as one more class (or each clip twice) the next time
+    the folder is read. One line naming both."""
     out_r, folder_r = Path(out).resolve(), Path(folder).resolve()
     if out_r == folder_r and same_too:
         raise DataError(
-            f"the {what} is the input folder, read as one subfolder per class: what is written"
+            f"the {what} is {folder_what}, read as one subfolder per class: what is written"
             " there would be read as clips the next time; choose a folder outside it",
             out,
         )
     if folder_r in out_r.parents:
         raise DataError(
-            f"the {what} is inside the input folder {folder}, read as one subfolder per class:"
+            f"the {what} is inside {folder_what} {folder}, read as one subfolder per class:"
             " what is written there would be read as another class the next time; choose a"
             " folder outside it",
             out,

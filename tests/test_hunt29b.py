@@ -34,8 +34,11 @@ def _video(path: Path) -> Path:
         ("--overlay", "videos/ovl", ["overlay folder is inside the input folder", "videos"]),
         ("--out", "videos/poses", ["output folder is inside the input folder", "videos"]),
         ("--out", "videos", ["output folder is the input folder"]),
+        # the pose files' folder is what `train poses` reads: each overlay one more clip
+        ("--overlay", "poses", ["overlay folder is the folder of the pose files"]),
+        ("--overlay", "poses/ovl", ["overlay folder is inside the folder of the pose files"]),
     ],
-    ids=["overlay inside", "out inside", "out is the input"],
+    ids=["overlay inside", "out inside", "out is the input", "overlay is out", "overlay in out"],
 )
 def test_extract_refuses_an_output_folder_in_the_folder_it_walks(
     tmp_path: Path,

@@ -523,12 +523,24 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
     if args.out.exists() and not args.out.is_dir():
         raise DataError("output is not a folder", args.out)
     _check_outputs(jobs)
+    _check_not_read_again(args, single)
+    _check_out_dir(args.out)
+
+
+def _check_not_read_again(args: argparse.Namespace, single: bool) -> None:
+    """Refuse output folders where the next ``extract`` or ``train`` of the input, or a
+    ``train`` of the pose files, would read what this run writes as clips: the pose files or
+    overlays in the input folder when it is walked for class folders (no labels.csv), the
+    overlays in the folder of the pose files (several clips: both are folders; one video's
+    overlay is one file, put where the user likes, beside the video in ``--out .``)."""
     if args.input.is_dir() and not (args.input / "labels.csv").is_file():
-        # the folder is walked for class folders: an output folder in it becomes a class
         check_not_in_walked_folder(args.out, args.input, "output folder")
         if args.overlay is not None:
             check_not_in_walked_folder(args.overlay, args.input, "overlay folder")
-    _check_out_dir(args.out)
+    if args.overlay is not None and not single:
+        check_not_in_walked_folder(
+            args.overlay, args.out, "overlay folder", folder_what="the folder of the pose files"
+        )
 
 
 def _run_single(job: Job, options: Options) -> int:
