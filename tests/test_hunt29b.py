@@ -102,6 +102,19 @@ def test_compare_refuses_an_output_named_as_a_file_of_the_data_it_does_not_load(
     refused(argv, tmp_path, capsys, "would overwrite an input", str(target))
 
 
+def test_compare_refuses_the_data_folder_as_its_out_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # `compare data --out data` wrote results.json, results.csv and the pictures among the
+    # clips: every output of compare is refused when named as an input, the data folder too
+    data = tmp_path / "data"
+    for label, subject in (("squat", "p1"), ("squat", "p2"), ("lunge", "p1"), ("lunge", "p2")):
+        (data / label).mkdir(parents=True, exist_ok=True)
+        good_pose_file(data / label / f"{subject}.npz", frames=40, subject=subject)
+    argv = ["compare", str(data), *_QUICK, "--out", str(data)]
+    refused(argv, tmp_path, capsys, "--out is the data folder", str(data))
+
+
 # ------------------------------------------------ an empty case base through the Python API
 
 

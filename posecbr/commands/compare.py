@@ -195,6 +195,21 @@ class Output:
     in_out_folder: bool = False
 
 
+def _check_out_folder(out: Path, data: Path) -> None:
+    """``--out``: a folder, or a new one in a folder that exists; not the data folder (the
+    results and pictures would be written among the clips)."""
+    if out.exists() and not out.is_dir():
+        raise DataError("--out must be a folder, and this is a file", out)
+    if not out.parent.is_dir():
+        raise DataError("the folder for --out does not exist", out.parent)
+    if data.exists() and out.resolve() == data.resolve():
+        raise DataError(
+            "--out is the data folder: the results and pictures would be written among the"
+            " clips; choose another folder",
+            out,
+        )
+
+
 def _outputs(args: argparse.Namespace) -> list[Output]:
     """Every file the run will write; ``--out`` is checked to be a folder, or a new one in a
     folder that exists."""
@@ -209,10 +224,7 @@ def _outputs(args: argparse.Namespace) -> list[Output]:
     if args.csv:
         out.append(Output("CSV output", args.csv, "csv", inside(args.csv)))
     if args.out:
-        if args.out.exists() and not args.out.is_dir():
-            raise DataError("--out must be a folder, and this is a file", args.out)
-        if not args.out.parent.is_dir():
-            raise DataError("the folder for --out does not exist", args.out.parent)
+        _check_out_folder(args.out, args.data)
         out.append(Output("results file", args.out / "results.json", "json", True))
         out.append(Output("results table", args.out / "results.csv", "csv", True))
     for i, o in enumerate(out):  # the second written would replace the first
