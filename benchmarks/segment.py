@@ -18,8 +18,8 @@ Measured, per test recording and overall:
   recording is in the other two, so all are "seen"; a block called unknown counts as wrong);
 - unknown: each exercise of the test recording in turn is left out of the case base; the share
   of its blocks labelled unknown (1-NN DTW has no unknown: 0 by construction), for each way
-  of judging unknown (:data:`cbr.unknown.JUDGES`: activity-margin, the default, margin,
-  held-out, activities, margin-distance, spread-margin; and the margin at the equal-error
+  of judging unknown (:data:`cbr.unknown.JUDGES`: spread-margin, the default,
+  activity-margin, margin, held-out, activities, margin-distance; and the margin at the equal-error
   point, to compare);
 - boundaries: for every labelled change of exercise, the distance to the nearest segment
   boundary (seconds), median;
@@ -146,16 +146,17 @@ def _timed_in_rounds(
 
 
 JUDGES = (*UNKNOWN_JUDGES, "margin-equal-error")
-"""How "unknown" is judged (cbr.unknown.JUDGES, the default first): ActivityMargin (the margin
+"""How "unknown" is judged (cbr.unknown.JUDGES, the default first): SpreadMargin (ActivityMargin's
+margin times the nearest distance in the nearest activity's own spread; with a case base of
+one person, as CMU subject 13's, ActivityMargin itself), ActivityMargin (the margin
 between the two nearest activities against the nearest activity's own threshold, from its
 rightly named held-out cases, shrunk to the pooled one by a weight chosen on the case base,
 cbr.unknown.choose_weight), the margin against one threshold (exceeded by 5 % of held-out known
 cases of the case base), the classifier's
 stored calibration (the 99th percentile of held-out training clips' nearest-case distances,
 cbr.novelty), Familiarity (a stretch as far from its nearest cases as the case base's
-activities lie from each other), MarginDistance (the margin alone, or a smaller margin with
-a far nearest case, sharing the 5 %), or SpreadMargin (ActivityMargin's margin times the nearest
-distance in the nearest activity's own spread); and, for comparison, the margin at the point where
+activities lie from each other), or MarginDistance (the margin alone, or a smaller margin with
+a far nearest case, sharing the 5 %); and, for comparison, the margin at the point where
 held-out known and novel cases err equally (the default before the false-unknown budget)."""
 
 

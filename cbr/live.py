@@ -227,8 +227,9 @@ class LiveSegmenter:
 
     ``clf``: a fitted :class:`~cbr.estimator.CaseBaseClassifier`; ``fps``: the stream's frame
     rate; ``judge``: what says a window is unlike the case base (:mod:`cbr.unknown`; the margin
-    between the two nearest activities against the nearest one's own threshold, calibrated on
-    the case base, when None); ``source``: the stream's name in errors (a camera, a URL, a file).
+    between the two nearest activities times how far the window lies in the nearest one's own
+    spread, against that activity's own threshold, ``spread-margin``, calibrated on the case
+    base, when None); ``source``: the stream's name in errors (a camera, a URL, a file).
 
     As offline, in two passes, each an online Viterbi (:class:`_Forward`: a hop is settled
     when the best paths into every state agree on it, so the settled hops are those the

@@ -958,8 +958,9 @@ def segment(
     ``clf`` (a :class:`~cbr.estimator.CaseBaseClassifier`); see the module docstring.
 
     ``judge``: what makes a stretch unknown (:mod:`cbr.unknown`): the margin between the two
-    nearest activities against the nearest one's own threshold (``activity-margin``),
-    calibrated on ``clf.case_base_``, when None; ``k``: a window votes
+    nearest activities times how far the window lies in the nearest one's own spread,
+    against that activity's own threshold (``spread-margin``), calibrated on
+    ``clf.case_base_``, when None; ``k``: a window votes
     with its k nearest cases (1: its nearest; the votes of successive windows are pooled over
     time); ``chunk_frames``: what the frames yield is computed that many frames at a time
     (:func:`_cut_in_pieces`; the same segments in bounded memory), 0: for the whole recording

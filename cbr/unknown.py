@@ -16,7 +16,8 @@ The judges, each calibrated on the case base itself, never on what is being segm
   happen to be left out and, set there, called a third of new people's known movements
   unknown.) A ratio of distances needs no common unit, so a new person who lies farther
   from every case is not called unknown for that alone.
-- :class:`ActivityMargin` (the default of ``posecbr segment`` and ``watch``): the margin
+- :class:`ActivityMargin` (``--unknown activity-margin``; the default before
+  :class:`SpreadMargin`): the margin
   against a threshold of the nearest activity's own: the
   quantile of the held-out known cases of that activity that its nearest case names rightly
   (a case named wrongly is wrong whether called unknown or not), shrunk towards the pooled
@@ -28,7 +29,7 @@ The judges, each calibrated on the case base itself, never on what is being segm
   people not in the case base it calls more of a left-out movement's blocks unknown than
   the pooled threshold and keeps as many known blocks right, or more (README, "Long
   recordings", for the figures).
-- :class:`SpreadMargin` (``--unknown spread-margin``, not the default): the margin times how
+- :class:`SpreadMargin` (the default of ``posecbr segment`` and ``watch``): the margin times how
   far the window lies from its nearest activity in that activity's own spread (the median
   distance of its held-out known cases), to a power chosen on the held-out cases with the
   rate and the prior; per-activity thresholds as :class:`ActivityMargin`'s. With a case base
@@ -63,12 +64,12 @@ from .novelty import NoveltyCalibration
 from .weights import MIRROR_FLAG
 
 JUDGES = (
+    "spread-margin",
     "activity-margin",
     "margin",
     "held-out",
     "activities",
     "margin-distance",
-    "spread-margin",
 )
 """The judges by name, the default first."""
 FALSE_UNKNOWN = 0.05
@@ -641,6 +642,41 @@ def activity_thresholds(
     return out, pooled
 
 
+def _quantile_at(counts: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """Where :func:`false_unknown_threshold` reads its quantile among ``counts`` sorted values
+    at each rate of ``rates`` (each in [0, 1)): ``(len(rates), len(counts))``."""
+    at = np.ceil(counts[None, :] * (1.0 - rates[:, None]) - 1e-9).astype(np.int64) - 1
+    return np.maximum(at, 0)
+
+
+def threshold_grid(
+    margins: np.ndarray, activities: np.ndarray, n_classes: int, weights: Sequence[Weight]
+) -> np.ndarray:
+    """``(len(weights), n_classes)``: for every ``(rate, prior)`` of ``weights``, the
+    per-activity thresholds of :func:`activity_thresholds` (arguments as there), the margins
+    sorted once for all of them and every activity at once; the same numbers, computed
+    alike."""
+    rates = np.array([w[0] for w in weights], dtype=np.float64)
+    priors = np.array([w[1] for w in weights], dtype=np.float64)
+    for rate in rates.tolist():
+        if not 0.0 <= rate < 1.0:
+            raise ConfigError(
+                f"the false-unknown rate must be in [0, 1), got {rate!r}", "--unknown"
+            )
+    margins = np.asarray(margins, dtype=np.float64)
+    pooled = np.sort(margins)[_quantile_at(np.array([len(margins)]), rates)[:, 0]]
+    out = np.repeat(pooled[:, None], n_classes, axis=1)
+    order = np.lexsort((margins, activities))  # by activity, then margin
+    present, starts, counts = np.unique(activities[order], return_index=True, return_counts=True)
+    own = margins[order][starts[None, :] + _quantile_at(counts, rates)]  # (weights, present)
+    w = counts[None, :] / (counts[None, :] + priors[:, None])
+    with np.errstate(invalid="ignore"):  # 0 * inf, as activity_thresholds' floats give
+        mixed = np.where(own == pooled[:, None], own, w * own + (1.0 - w) * pooled[:, None])
+    shrunk = ~np.isinf(priors)  # an inf prior: the pooled threshold for every activity
+    out[np.ix_(shrunk, present)] = mixed[shrunk]
+    return out
+
+
 def _rightly_named(seen: np.ndarray, codes: np.ndarray) -> np.ndarray:
     """``(n,)`` bool: the held-out known cases (:func:`known_rows`) whose nearest activity is
     their own."""
@@ -669,21 +705,36 @@ def inner_scores(
     there is nothing to count. ``power``: the margins are :class:`SpreadMargin`'s scores of
     that power (:func:`spread_scores`), each activity's spread read from the other groups'
     cases as the thresholds are; 0, the margins themselves."""
+    over, caught = inner_grid(seen, codes, groups, weights, (power,))
+    return over[0], caught[0]
+
+
+def inner_grid(
+    seen: np.ndarray,
+    codes: np.ndarray,
+    groups: np.ndarray,
+    weights: Sequence[Weight],
+    powers: Sequence[float] = (0.0,),
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`inner_scores` at every power of ``powers``, ``over`` and ``caught`` each
+    ``(len(powers), len(weights))``: what the powers share (the groups held out, the
+    activities gone, the spreads) is found once."""
     n_classes = seen.shape[1]
-    over, caught = np.zeros(len(weights)), np.zeros(len(weights))
+    over, caught = np.zeros((len(powers), len(weights))), np.zeros((len(powers), len(weights)))
     n_known = n_novel = 0
+    spread = any(powers)
     right, margins = _rightly_named(seen, codes), _margins(seen)
     for g in np.unique(groups).tolist():  # over groups (subjects or recordings: a few)
         mine = groups == g
         train, test = right & ~mine, right & mine
         if not train.any():
             continue
-        if power:
-            margins = spread_scores(seen, activity_spreads(seen, codes, train), power)
+        far = _spread_far(seen, activity_spreads(seen, codes, train)) if spread else margins
         n_known += int(test.sum())
-        for w, (rate, prior) in enumerate(weights):
-            per, _ = activity_thresholds(margins[train], codes[train], n_classes, rate, prior)
-            over[w] += np.sum(margins[test] > per[codes[test]])
+        for i, power in enumerate(powers):
+            scores = _scored(margins, far, power)
+            per = threshold_grid(scores[train], codes[train], n_classes, weights)
+            over[i] += np.sum(scores[test][None, :] > per[:, codes[test]], axis=1)
         for a in np.unique(codes[mine]).tolist():  # the group's activities, each gone in turn
             without = seen.copy()
             without[:, a] = np.inf
@@ -692,12 +743,12 @@ def inner_scores(
             if not kept.any() or not novel.any():
                 continue
             m, near = _margins(without), np.argmin(without[novel], axis=1)
-            if power:
-                m = spread_scores(without, activity_spreads(without, codes, kept), power)
+            far = _spread_far(without, activity_spreads(without, codes, kept)) if spread else m
             n_novel += int(novel.sum())
-            for w, (rate, prior) in enumerate(weights):
-                per, _ = activity_thresholds(m[kept], codes[kept], n_classes, rate, prior)
-                caught[w] += np.sum(m[novel] > per[near])
+            for i, power in enumerate(powers):
+                scores = _scored(m, far, power)
+                per = threshold_grid(scores[kept], codes[kept], n_classes, weights)
+                caught[i] += np.sum(scores[novel][None, :] > per[:, near], axis=1)
     return over / max(n_known, 1), caught / max(n_novel, 1)
 
 
@@ -865,10 +916,21 @@ def spread_scores(nearest: np.ndarray, spreads: np.ndarray, power: float) -> np.
     m = _margins(nearest)
     if not power or not len(nearest):
         return m
+    return _scored(m, _spread_far(nearest, spreads), power)
+
+
+def _spread_far(nearest: np.ndarray, spreads: np.ndarray) -> np.ndarray:
+    """``(n,)``: the distance of every row of ``nearest`` ``(n, n_classes)`` (non-empty) to
+    its nearest activity in that activity's spread ``spreads`` ``(n_classes,)`` (inf for a
+    spread of 0, 1 when the distance is 0 too)."""
     a1 = np.argmin(nearest, axis=1)
     d1, s = nearest[np.arange(len(nearest)), a1], spreads[a1]
-    far = np.where(s > 0.0, d1 / np.where(s > 0.0, s, 1.0), np.where(d1 > 0.0, np.inf, 1.0))
-    return np.asarray(m * far**power)
+    return np.where(s > 0.0, d1 / np.where(s > 0.0, s, 1.0), np.where(d1 > 0.0, np.inf, 1.0))
+
+
+def _scored(margins: np.ndarray, far: np.ndarray, power: float) -> np.ndarray:
+    """:func:`spread_scores` from the rows' margins and :func:`_spread_far` ``(n,)`` each."""
+    return margins if not power else np.asarray(margins * far**power)
 
 
 def choose_spread(
@@ -885,8 +947,9 @@ def choose_spread(
     if not any(len(np.unique(groups[right & (codes == a)])) >= 2 for a in np.unique(codes)):
         return budget, ACTIVITY_PRIOR, 0.0
     weights = [(budget * share, prior) for share in RATE_SHARES for prior in PRIOR_GRID]
-    scored = [(p, *inner_scores(seen, codes, groups, weights, p)) for p in SPREAD_POWERS]
-    tried = [(p, w, over[w], caught[w]) for p, over, caught in scored for w in range(len(weights))]
+    over, caught = inner_grid(seen, codes, groups, weights, SPREAD_POWERS)
+    tried = [(p, w, over[i, w], caught[i, w]) for i, p in enumerate(SPREAD_POWERS)
+             for w in range(len(weights))]  # fmt: skip
     within = [t for t in tried if t[2] <= budget]
     if within:
         p, w, *_ = max(within, key=lambda t: (t[3], *weights[t[1]], -t[0]))
@@ -935,9 +998,11 @@ class SpreadMargin(ActivityMargin):
         """Calibrated on ``cb``; ``held`` and DataError as :meth:`ActivityMargin.of`."""
         held = held if held is not None else held_out_activities(cb)
         seen, codes, basis, groups = held
-        plain = ActivityMargin.of(cb, false_unknown, held=held)
         if basis != "subject":
+            plain = ActivityMargin.of(cb, false_unknown, held=held)
             return cls(**{f.name: getattr(plain, f.name) for f in dataclasses.fields(plain)})
+        # ActivityMargin's DataErrors only: choose_spread chooses the weight (power 0 among)
+        ActivityMargin.of(cb, false_unknown, ACTIVITY_PRIOR, held)
         rate, prior, power = choose_spread(seen, codes, groups, false_unknown)
         right = _rightly_named(seen, codes)
         spreads = activity_spreads(seen, codes, right)
@@ -1065,9 +1130,11 @@ STORED: dict[str, type[Calibrated]] = {
 calibration, already stored.)"""
 
 
-AT_FIT = ("margin", "margin-distance", "activity-margin")
+AT_FIT = ("margin", "margin-distance", "activity-margin", "spread-margin")
 """The judges calibrated when a model is stored: the margins, from one held-out scan of the
-case base for at most :data:`MARGIN_SAMPLE` cases (grows linearly with the case base).
+case base for at most :data:`MARGIN_SAMPLE` cases (grows linearly with the case base);
+``spread-margin``'s choice of power, rate and prior adds about 0.05-0.2 s of CPU to it
+(:func:`inner_grid`; UI-PRMD case bases of 120 to 4,252 cases).
 ``activities`` measures every case against every other (grows with the square: 4 s of CPU
 on 4,252 cases, hours on the 100,000 of a 50,000-clip training set) and is calibrated when
 asked for, as before."""

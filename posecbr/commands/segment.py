@@ -30,12 +30,12 @@ from posecbr.arguments import path_arg
 from posecbr.recordings import add_recording_options, check_asf, check_fps, load_recording
 
 JUDGES = (
+    "spread-margin",
     "activity-margin",
     "margin",
     "held-out",
     "activities",
     "margin-distance",
-    "spread-margin",
 )
 """cbr.unknown.JUDGES, the default first (not imported: the command line starts light)."""
 
@@ -70,16 +70,15 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         choices=JUDGES,
         default=JUDGES[0],
         help="what makes a stretch unknown: its nearest activity is hardly nearer than the "
-        "next, beyond that activity's own threshold, from its rightly named training cases "
-        "held out of their own recording or person (activity-margin, the default: calibrated "
-        "on the case base, at most 5 %% of those lie beyond), or beyond one threshold for all "
-        "activities (margin), farther from its nearest case than held-out training clips lie "
-        "(held-out, the flag classify gives), as far as the case base's activities lie from "
-        "each other (activities), the margin alone or a smaller margin with a far nearest "
-        "case, sharing the 5 %% (margin-distance), or the margin times how far the window "
-        "lies from its nearest activity in that activity's own spread, against thresholds "
-        "read as activity-margin's (spread-margin; with a case base of one person the same "
-        "as activity-margin)",
+        "next, times how far the window lies from that activity in its own spread, beyond "
+        "that activity's own threshold, from its rightly named training cases held out of "
+        "their own recording or person (spread-margin, the default: calibrated on the case "
+        "base, at most 5 %% of those lie beyond; with a case base of one person the same as "
+        "activity-margin), the margin alone against such thresholds (activity-margin), or "
+        "beyond one threshold for all activities (margin), farther from its nearest case than "
+        "held-out training clips lie (held-out, the flag classify gives), as far as the case "
+        "base's activities lie from each other (activities), or the margin alone or a smaller "
+        "margin with a far nearest case, sharing the 5 %% (margin-distance)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
