@@ -76,6 +76,13 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="BVH unit: m, cm, mm, inch, cmu (the CMU database's inches/0.45) or auto"
         " (default: guessed from the rest pose)",
     )
+    p.add_argument(
+        "--bvh-up",
+        choices=("y", "z"),
+        default="y",
+        help="the axis a BVH file has pointing up: y (default; most exporters) or z (e.g."
+        " 3ds Max, MotionBuilder set to z up); turned so that y is up, handedness kept",
+    )
     p.set_defaults(func=run)
 
 
@@ -166,7 +173,7 @@ def _single_clips(args: argparse.Namespace) -> list[tuple[Clip, str]]:
     src: Path = args.source
     suffix = src.suffix.lower()
     if suffix == ".bvh":
-        seq = read_bvh(src, unit=_bvh_unit(args.bvh_unit))
+        seq = read_bvh(src, unit=_bvh_unit(args.bvh_unit), up=args.bvh_up)
     else:
         asf = args.asf if args.asf is not None else find_asf(src)
         seq = read_asf_amc(asf, src, fps=args.fps)
@@ -252,8 +259,8 @@ def _check_args(args: argparse.Namespace) -> None:
 
 def _check_one_file_options(args: argparse.Namespace) -> None:
     """Refuse, for one .amc or .bvh file, what would be ignored: the filters of a dataset
-    folder (it is converted as it is), ``--asf`` for a BVH file, ``--bvh-unit`` for an AMC
-    file, and the UI-PRMD options."""
+    folder (it is converted as it is), ``--asf`` for a BVH file, ``--bvh-unit`` and
+    ``--bvh-up`` for an AMC file, and the UI-PRMD options."""
     src: Path = args.source
     suffix = src.suffix.lower()
     if not (src.is_file() and suffix in (".bvh", ".amc")):
@@ -271,14 +278,15 @@ def _check_one_file_options(args: argparse.Namespace) -> None:
             )
     if suffix == ".bvh" and args.asf is not None:
         raise DataError(f"goes with an AMC file, not {src.name}", "--asf")
-    if suffix == ".amc" and args.bvh_unit != "auto":
-        raise DataError(f"goes with BVH files, not {src.name}", "--bvh-unit")
+    for flag, given in (("--bvh-unit", args.bvh_unit != "auto"), ("--bvh-up", args.bvh_up != "y")):
+        if suffix == ".amc" and given:
+            raise DataError(f"goes with BVH files, not {src.name}", flag)
 
 
 def _check_folder_options(args: argparse.Namespace) -> None:
-    """Refuse, for a dataset (a folder or labels CSV), what would be ignored: ``--asf`` and
-    ``--bvh-unit`` (they go with one .amc or .bvh file) and, for an HDM05 or CMU folder, the
-    UI-PRMD options."""
+    """Refuse, for a dataset (a folder or labels CSV), what would be ignored: ``--asf``,
+    ``--bvh-unit`` and ``--bvh-up`` (they go with one .amc or .bvh file) and, for an HDM05 or
+    CMU folder, the UI-PRMD options."""
     from features.datasets import detect_kind
 
     src: Path = args.source
@@ -286,8 +294,9 @@ def _check_folder_options(args: argparse.Namespace) -> None:
         return
     if args.asf is not None:
         raise DataError(f"goes with one .amc file, not the dataset {src.name}", "--asf")
-    if args.bvh_unit != "auto":
-        raise DataError(f"goes with one .bvh file, not the dataset {src.name}", "--bvh-unit")
+    for flag, given in (("--bvh-unit", args.bvh_unit != "auto"), ("--bvh-up", args.bvh_up != "y")):
+        if given:
+            raise DataError(f"goes with one .bvh file, not the dataset {src.name}", flag)
     if detect_kind(src) == "asf_amc":
         for flag, given in (("--correct", args.correct), ("--incorrect", args.incorrect)):
             if given:
