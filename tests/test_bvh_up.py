@@ -77,3 +77,26 @@ def test_bvh_up_with_an_amc_file_or_a_dataset_is_refused(
     (data / "squat" / "legs.bvh").write_text(_BVH_Z_UP)
     refused(["convert", str(data), "--out", str(tmp_path / "o"), "--bvh-up", "z"], tmp_path,
             capsys, "--bvh-up", "goes with one .bvh file")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("written", "fps"),
+    [
+        ("0.0333333", 30.0),  # 1/30 = 0.03333333...: within half a unit of the 7th decimal
+        ("0.00833333", 120.0),
+        ("0.0416667", 24.0),
+        ("0.04", 25.0),
+        ("0.0333334", 1 / 0.0333334),  # 1/30 lies 6.7e-8 below: more than half a unit
+        ("0.03", 1 / 0.03),  # 33.3 frames per second, not 33
+        ("0.0333", 1 / 0.0333),  # 30 lies 0.1 % away: what was written is kept
+    ],
+)
+def test_a_frame_time_written_to_its_precision_gives_the_whole_frame_rate_it_means(
+    tmp_path: Path, written: str, fps: float
+) -> None:
+    # a BVH exporter writes 1/30 s as 0.0333333: the clip was said to be 30.00003 fps
+    from features.readers.bvh import read_bvh
+
+    path = tmp_path / "legs.bvh"
+    path.write_text(_BVH_Z_UP.replace("Frame Time: 0.04", f"Frame Time: {written}"))
+    assert read_bvh(path, unit="cm").fps == fps

@@ -271,6 +271,7 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
     if not joints:
         raise DataError("no joints in the hierarchy", path)
     n_frames, frame_time = _motion_header(tokens, i, path)
+    text_time = tokens[i + 4]
     n_chan = sum(len(j.channels) for j in joints)
     motion = _motion(tokens[i + 5 :], n_frames, n_chan, path)
     _check_names(joints, path)
@@ -281,7 +282,7 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
     return PoseSequence(
         positions=_to_blazepose(joints, pos, ends) * scale,
         joint_names=BLAZEPOSE_33,
-        fps=1.0 / frame_time,
+        fps=frame_rate(frame_time, text_time),
         skeleton="bvh",
         source=str(path),
         metadata={"bvh_unit": unit_name},
@@ -306,6 +307,23 @@ def _motion_header(tokens: list[str], i: int, path: Path) -> tuple[int, float]:
     if not (math.isfinite(frame_time) and frame_time > 0):  # nan or inf: no frame rate
         raise DataError(f"Frame Time must be positive, got {frame_time}", path)
     return n_frames, frame_time
+
+
+def frame_rate(frame_time: float, written: str) -> float:
+    """Frames per second of a ``Frame Time`` of ``frame_time`` seconds, as ``written`` in the
+    file: the whole number of frames per second within the precision it was written to, when
+    there is one and it lies within 0.01 % (``0.0333333``, 30.00003 as written, is 30 to its
+    seven decimals: 1/30 s lies within half a unit of its last digit; ``0.03`` stays 33.3, and
+    ``0.0333`` 30.03, 0.1 % off), else ``1 / frame_time``."""
+    mantissa = written.lower().split("e")[0]
+    decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
+    exponent = int(written.lower().split("e")[1]) if "e" in written.lower() else 0
+    half = 0.5 * 10.0 ** (exponent - decimals)
+    whole = round(1.0 / frame_time)
+    off = abs(1.0 / whole - frame_time) if whole >= 1 else math.inf
+    if off <= half and off <= 1e-4 * frame_time:
+        return float(whole)
+    return 1.0 / frame_time
 
 
 def _is_number(token: str) -> bool:
