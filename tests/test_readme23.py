@@ -33,3 +33,19 @@ def test_a_benchmark_without_options_refuses_an_unknown_option(
         module.main(["--no-such-option"])
     assert stop.value.code == 2
     assert "unrecognized arguments: --no-such-option" in capsys.readouterr().err
+
+
+def test_every_section_is_in_the_contents_and_every_link_there_finds_its_heading() -> None:
+    """The README's contents line links each ``##`` section by GitHub's anchor (lower case,
+    punctuation but hyphens dropped, spaces as hyphens): a section renamed or added without
+    it is caught here."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    headings = [line[3:].strip() for line in text.splitlines() if line.startswith("## ")]
+    anchors = {re.sub(r"[^\w\- ]", "", h.lower()).replace(" ", "-"): h for h in headings}
+    block = text[text.index("**Contents:**") : text.index("\n\n", text.index("**Contents:**"))]
+    links = re.findall(r"\[([^\]]+)\]\(#([^)]+)\)", block)
+    assert [anchors.get(a) for _, a in links] == headings
+    assert [name for name, _ in links] == headings
