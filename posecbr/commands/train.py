@@ -587,7 +587,7 @@ def _skipped(nobody: list[str], short: list[str], split: str) -> str:
     lines = [
         _listed(names, split, why)
         for names, why in (
-            (nobody, "that show no person"),
+            (nobody, "that shows no person" if len(nobody) == 1 else "that show no person"),
             (short, f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"),
         )
         if names
