@@ -200,6 +200,17 @@ def detect_kind(path: str | Path) -> str:
     )
 
 
+def labelled_over_time(path: str | Path) -> bool:
+    """Whether the dataset at ``path`` holds recordings labelled over time: a labels CSV (or a
+    folder with one) with a row naming a ``label_file``. DataError as :func:`detect_kind` and
+    :func:`read_labels_csv` give it."""
+    path = Path(path)
+    if detect_kind(path) != "csv":
+        return False
+    csv_path = path if path.is_file() else path / "labels.csv"
+    return any(rec["track"] is not None for rec in read_labels_csv(csv_path))
+
+
 def _uiprmd_entries(path: Path, sensor: str) -> list[_Entry]:
     root = _uiprmd_root(path)
     assert root is not None

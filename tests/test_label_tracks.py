@@ -279,7 +279,7 @@ def test_train_leaves_out_a_label_that_flickers_for_a_frame(
     labels.write_text(" ".join(per_frame.tolist()))
     db = tmp_path / "cb.sqlite"
     argv = ["train", str(recording), "--frame-labels", str(labels), "--label-names",
-            str(_names(tmp_path)), "--db", str(db)]  # fmt: skip
+            str(_names(tmp_path)), "--db", str(db), "--split", "clips"]  # fmt: skip
     assert main(argv) == 0
     err = capsys.readouterr().err
     assert "left out 2 labelled stretches shorter than 0.4 s (Box, Squat)" in err
@@ -310,7 +310,7 @@ def test_train_reads_an_amc_recording_with_its_skeleton(
     amc = shared_data / "cmu-mocap6" / "amc" / "13_30.amc"
     asf = shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf"
     labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
-    track = ["--frame-labels", str(labels), "--label-block", "0.1"]
+    track = ["--frame-labels", str(labels), "--label-block", "0.1", "--split", "clips"]
     from_amc, from_pose = tmp_path / "amc.sqlite", tmp_path / "pose.sqlite"
     assert main(["train", str(amc), "--asf", str(asf), *track, "--db", str(from_amc)]) == 0
     assert main(["train", str(recording), *track, "--db", str(from_pose)]) == 0
@@ -388,7 +388,7 @@ def test_codes_that_share_a_name_are_one_activity_and_said_so(
     labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
     db = tmp_path / "cb.sqlite"
     argv = ["train", str(recording), "--frame-labels", str(labels), "--label-block", "0.1",
-            "--label-names", str(names), "--db", str(db)]  # fmt: skip
+            "--label-names", str(names), "--db", str(db), "--split", "clips"]  # fmt: skip
     assert main(argv) == 0
     err = capsys.readouterr().err
     assert f"note: codes 1 and 3 of {names} are both named Hop: one activity" in err
@@ -411,7 +411,7 @@ def test_a_still_recording_labelled_as_several_activities_is_noted(
     for path, note in ((still, True), (recording, False)):
         db = tmp_path / f"{path.stem}.sqlite"
         argv = ["train", str(path), "--frame-labels", str(labels), "--label-block", "0.1",
-                "--db", str(db)]  # fmt: skip
+                "--db", str(db), "--split", "clips"]  # fmt: skip
         assert main(argv) == 0
         err = capsys.readouterr().err
         assert (
@@ -421,3 +421,73 @@ def test_a_still_recording_labelled_as_several_activities_is_noted(
         ) is note, err
         assert ("same features" in err) is note
         assert len(_cases(db)[0]) == 5  # trained all the same
+
+
+def test_train_makes_a_case_per_window_of_recordings_labelled_over_time(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Without --split, a recording labelled over time (``--frame-labels``, or a labels CSV
+    row with a label_file) trains a case per 2-s window every 0.5 s, the windows segment
+    labels: each of 13_30's five stretches gives its whole windows, ``1 + (frames - 240) //
+    60`` at 120 fps, each inside its stretch and named as it; one shorter than a window (the
+    jumping jacks, 1.9 s) is kept whole.
+    ``--split clips`` keeps a case per stretch; clips labelled one label each stay clips."""
+    from casebase_store import open_store
+    from cbr.stored import load_classifier
+
+    codes, changes = _truth(shared_data)
+    bounds = [0, *changes, 2465]
+    names = read_label_names(_names(tmp_path))
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(
+        f"path,label_file,label_block_s,label_names\n{recording},{labels},0.1,names.txt\n",
+        encoding="utf-8",
+    )
+    lengths = [b - a for a, b in zip(bounds, bounds[1:], strict=False)]
+    expected = [1 + (n - 240) // 60 if n >= 240 else 1 for n in lengths]
+    for data, extra in ((str(recording), ["--frame-labels", str(labels), "--label-block", "0.1",
+                                          "--label-names", str(_names(tmp_path))]),
+                        (str(csv), [])):  # fmt: skip
+        db = tmp_path / f"{len(extra)}.sqlite"
+        assert main(["train", data, *extra, "--db", str(db)]) == 0
+        err = capsys.readouterr().err
+        assert "recordings labelled over time: a case per window" in err, err
+        cases, _, ranges = _cases(db)
+        assert len(cases) == sum(expected) and len(ranges) == len(cases)
+        for label, (start, end) in zip(cases, ranges, strict=True):
+            assert start is not None and end is not None
+            i = int(np.searchsorted(bounds, start, side="right")) - 1
+            assert end - start == min(240, lengths[i]) and end <= bounds[i + 1]
+            assert label == names[codes[i]], (label, start, end)
+        store = open_store(db, create=False, readonly=True)
+        try:
+            assert load_classifier(store, "default").cases == "windows"
+        finally:
+            store.close()
+    db = tmp_path / "clips.sqlite"
+    assert main(["train", str(csv), "--db", str(db), "--split", "clips"]) == 0
+    assert len(_cases(db)[0]) == 5
+    # a labels CSV of clips with one label each stays a case per clip
+    plain = tmp_path / "plain.csv"
+    plain.write_text(
+        f"path,label,start,end\n{recording},Mixed,0,600\n{recording},Other,600,1200\n",
+        encoding="utf-8",
+    )
+    db = tmp_path / "plain.sqlite"
+    capsys.readouterr()
+    assert main(["train", str(plain), "--db", str(db)]) == 0
+    assert "labelled over time" not in capsys.readouterr().err
+    assert len(_cases(db)[0]) == 2
+
+
+def test_train_of_recordings_labelled_over_time_on_a_cluster_asks_for_split_clips(
+    recording: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tests.badinput import refused
+
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(f"path,label_file,label_block_s\n{recording},{labels},0.1\n", encoding="utf-8")
+    argv = ["train", str(csv), "--db", str(tmp_path / "cb.sqlite"), "--scheduler", "local:1"]
+    refused(argv, tmp_path, capsys, "--scheduler", "--split clips")
