@@ -394,7 +394,8 @@ def plot_timeline(
     """A fluent timeline: one row per state that holds at some time, shaded by confidence (a
     long clip's frames averaged into up to :data:`PLOT_COLUMNS` columns); with ``bands``, a
     strip above it marks stretches of time (activities, repetitions). Written atomically, in
-    the format of the file's suffix (PNG for a suffix matplotlib does not know)."""
+    the format of the file's suffix (a suffix matplotlib does not know: :func:`picture_format`
+    refuses it)."""
     import matplotlib
 
     matplotlib.use("Agg")

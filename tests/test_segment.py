@@ -11,6 +11,7 @@ import math
 import re
 import shutil
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import pytest
@@ -51,6 +52,7 @@ from features.poses import PoseSequence, save_pose
 from features.readers.asfamc import read_asf_amc
 from features.repetitions import Repetition, movement_signals, split_windows
 from posecbr.cli import main
+from tests.badinput import refused
 from tests.bodies import to_sequence
 from tests.moves import MOVES, clip
 
@@ -1012,8 +1014,8 @@ def test_segment_pictures_of_recordings_that_share_a_name_are_all_kept(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     """Two recordings both named 13_30.npz (in two folders) with --plot FOLDER: two pictures,
-    13_30.png and 13_30_2.png (the second overwrote the first). A --plot file name that is
-    not .png: one line, exit 1, nothing written."""
+    13_30.png and 13_30_2.png (the second overwrote the first). A --plot file name in no
+    picture format: one line, exit 1, nothing written."""
     part = recordings["13_30"].slice_frames(0, 600)
     a = save_pose(part, tmp_path / "a" / "13_30.npz")
     b = save_pose(recordings["13_30"].slice_frames(600, 1200), tmp_path / "b" / "13_30.npz")
@@ -1027,7 +1029,7 @@ def test_segment_pictures_of_recordings_that_share_a_name_are_all_kept(
     before = _sha(a), _sha(case_base)
     assert main(["segment", str(a), "--db", str(case_base), "--plot", str(text)]) == 1
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "the picture must be a .png file name" in err
+    assert err.count("\n") == 1 and "the picture must be a file name ending in a format" in err
     assert not text.exists() and (_sha(a), _sha(case_base)) == before
     # several recordings and a --plot folder that does not exist: said so (it said "names a
     # folder" to one who had named a folder)
@@ -1037,6 +1039,42 @@ def test_segment_pictures_of_recordings_that_share_a_name_are_all_kept(
     assert err.count("\n") == 1 and f"{missing}: with several recordings --plot names a" in err
     assert err.rstrip().endswith("this one does not exist") and not missing.exists()
     assert (_sha(a), _sha(case_base)) == before
+
+
+DEMO_CLIP = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+
+
+@pytest.mark.parametrize("name", ["timeline.SVG", "timeline.pdf"])
+def test_segment_plot_is_written_in_the_format_its_name_asks(
+    name: str, case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--plot timeline.svg`` or ``.pdf`` (the suffix in any case) for a real recording: an
+    SVG or a PDF, as ``describe --plot`` and ``reps --plot`` write (segment refused any name
+    but .png)."""
+    rec = Path(shutil.copy(DEMO_CLIP / "m01_s01_e01.npz", tmp_path / "m01_s01_e01.npz"))
+    out = tmp_path / name
+    assert main(["segment", str(rec), "--db", str(case_base), "--json", "--plot", str(out)]) == 0
+    assert json.loads(capsys.readouterr().out)["segments"]
+    data = out.read_bytes()
+    if name.lower().endswith(".svg"):
+        assert ElementTree.fromstring(data).tag.endswith("svg")
+    else:
+        assert data.startswith(b"%PDF-")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([rec.name, name])
+
+
+@pytest.mark.parametrize("name", ["timeline.txt", "timeline.mp4", "timeline"])
+def test_segment_plot_named_in_no_picture_format_is_refused(
+    name: str, case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rec = Path(shutil.copy(DEMO_CLIP / "m01_s01_e01.npz", tmp_path / "m01_s01_e01.npz"))
+    before = _sha(case_base)
+    line = refused(["segment", str(rec), "--db", str(case_base), "--plot", str(tmp_path / name)],
+                   tmp_path, capsys, str(tmp_path / name), "the picture must be a file name",
+                   ".png, .svg, .pdf")  # fmt: skip
+    suffix = Path(name).suffix
+    assert (repr(suffix) if suffix else "no suffix") in line
+    assert _sha(case_base) == before
 
 
 def test_segment_k_beyond_what_a_window_retrieves_is_refused(

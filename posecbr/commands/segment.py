@@ -84,8 +84,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--plot",
         type=path_arg,
-        metavar="PNG",
-        help="segments over the fluent timeline (several recordings: a folder)",
+        metavar="PICTURE",
+        help="segments over the fluent timeline (.png, .svg, .pdf: by the name; several"
+        " recordings: a folder, one .png each)",
     )
     p.add_argument(
         "--overlay",
@@ -120,8 +121,10 @@ def _outputs(args: argparse.Namespace) -> None:
             )
         for target in plot_targets(args.plot, args.recordings):
             check_output(target, inputs=_inputs(args), what="picture")
-        if not args.plot.is_dir() and args.plot.suffix.lower() != ".png":
-            raise DataError("the picture must be a .png file name (or a folder)", args.plot)
+        if not args.plot.is_dir():  # a folder's pictures are .png
+            from features.timeline import picture_format
+
+            picture_format(args.plot)
     if args.overlay is not None:
         if len(args.recordings) > 1:
             raise DataError("--overlay takes one recording", args.overlay)
