@@ -42,6 +42,8 @@ How (all channels at once, no per-frame loops):
    back and forth along most (:func:`movement_direction`; each angle weighted by its
    periodic energy, :func:`periodic_share`, so that jitter and one-off changes do not pull
    it, and the period read again so weighted), signed so that it rises away from rest (the
+   end whose trunk tilts less far head-down past the horizontal when the ends differ in it:
+   hips held up above the shoulders, a bridge lying on the back, are no rest; otherwise the
    end nearer standing at ease, :data:`AT_EASE`, when the angles that have an at-ease value
    carry the movement; where they do not, a shoulder turning in and out, or the two ends lie
    about equally far from ease, the end the clip's first and last moments lie nearer,
@@ -216,7 +218,9 @@ AT_EASE: dict[str, float] = {
 }
 """Joint angles (radians) of a person standing at ease: elbows, knees and hips straight, arms
 down, head and trunk upright and facing forward. The rest end of a movement is the one nearer
-this posture."""
+this posture, unless one end's trunk tilts farther head-down past the horizontal (the hips
+held up above the shoulders: a bridge lying on the back, whose straightened hips lie nearer
+this posture than lying flat does)."""
 
 
 @dataclass(frozen=True)
@@ -593,7 +597,10 @@ def _rest_is_high(
     x: np.ndarray, names: tuple[str, ...], direction: np.ndarray, line: np.ndarray, fps: float
 ) -> bool:
     """Whether the rest end of the movement is the high end of ``line`` ``(n,)``: the end
-    nearer :data:`AT_EASE`, when the angles that have an at-ease value carry at least
+    whose trunk tilts less far head-down past the horizontal, when the two ends differ in it
+    by :data:`MIN_EXCURSION_RAD` (hips held up above the shoulders, a bridge lying on the
+    back, are no rest; standing at ease would name the bridge, whose hips straighten); else
+    the end nearer :data:`AT_EASE`, when the angles that have an at-ease value carry at least
     :data:`EASE_SHARE` of the movement (the upper arm's turn has no side nearer ease, the hips'
     height no value at ease common to all bodies: a movement mostly along them, a shoulder
     turning in and out, is not told by the elbow's small part in it) and the two ends lie
@@ -613,6 +620,15 @@ def _rest_is_high(
     high_posture[free] = low_posture[free] = ease[free]
     high_far = float(np.linalg.norm(high_posture - ease))
     low_far = float(np.linalg.norm(low_posture - ease))
+    if "trunk_inclination" in names:
+        # the hips held up above the shoulders (a bridge) are no rest: the end whose trunk
+        # tilts less far head-down past the horizontal is, whatever standing at ease says
+        i = names.index("trunk_inclination")
+        high_past, low_past = (
+            max(0.0, float(p[i]) - np.pi / 2) for p in (high_posture, low_posture)
+        )
+        if abs(high_past - low_past) >= MIN_EXCURSION_RAD:
+            return high_past < low_past
     eased = float(np.sum(direction[~free] ** 2) / max(float(np.sum(direction**2)), 1e-12))
     if eased >= EASE_SHARE and abs(high_far - low_far) >= MIN_EXCURSION_RAD:
         return high_far < low_far
