@@ -4,6 +4,7 @@ one clip per labelled stretch, ``train --split repetitions``, and label files th
 from __future__ import annotations
 
 import hashlib
+import json
 from pathlib import Path
 
 import numpy as np
@@ -448,11 +449,13 @@ def test_train_makes_a_case_per_window_of_recordings_labelled_over_time(
     expected = [1 + (n - 240) // 60 if n >= 240 else 1 for n in lengths]
     for data, extra in ((str(recording), ["--frame-labels", str(labels), "--label-block", "0.1",
                                           "--label-names", str(_names(tmp_path))]),
-                        (str(csv), [])):  # fmt: skip
+                        (str(csv), ["--json"])):  # fmt: skip
         db = tmp_path / f"{len(extra)}.sqlite"
         assert main(["train", data, *extra, "--db", str(db)]) == 0
-        err = capsys.readouterr().err
+        out, err = capsys.readouterr()
         assert "recordings labelled over time: a case per window" in err, err
+        if extra == ["--json"]:
+            assert json.loads(out)["split"] == "windows"
         cases, _, ranges = _cases(db)
         assert len(cases) == sum(expected) and len(ranges) == len(cases)
         for label, (start, end) in zip(cases, ranges, strict=True):
@@ -466,7 +469,8 @@ def test_train_makes_a_case_per_window_of_recordings_labelled_over_time(
         finally:
             store.close()
     db = tmp_path / "clips.sqlite"
-    assert main(["train", str(csv), "--db", str(db), "--split", "clips"]) == 0
+    assert main(["train", str(csv), "--db", str(db), "--split", "clips", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["split"] == "clips"
     assert len(_cases(db)[0]) == 5
     # a labels CSV of clips with one label each stays a case per clip
     plain = tmp_path / "plain.csv"

@@ -702,6 +702,7 @@ def _report(args: argparse.Namespace, result: Any) -> None:
         "name": result.name,
         "cases": result.n_cases,
         "active_cases": result.n_active,
+        "split": args.split,  # what a case is: a clip, a repetition or a window
         "labels": result.label_counts,
         "features": result.config.describe(),
         "similarity": result.similarity,
