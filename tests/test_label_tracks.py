@@ -495,3 +495,31 @@ def test_train_of_recordings_labelled_over_time_on_a_cluster_asks_for_split_clip
     csv.write_text(f"path,label_file,label_block_s\n{recording},{labels},0.1\n", encoding="utf-8")
     argv = ["train", str(csv), "--db", str(tmp_path / "cb.sqlite"), "--scheduler", "local:1"]
     refused(argv, tmp_path, capsys, "--scheduler", "--split clips")
+
+
+def test_train_k_is_held_to_the_windows_that_become_cases(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """13_30 with its jumping jacks and twists blanked (nobody seen): their windows are no
+    cases, so -k is held to the windows of the other three stretches, worked out from the
+    label file (``1 + (frames - 240) // 60`` each at 120 fps). It was held to every window cut,
+    blank ones too: a k above the cases was stored (every case voting)."""
+    from features.poses import load_pose
+    from tests.badinput import refused
+
+    codes, changes = _truth(shared_data)
+    bounds = [0, *changes, 2465]
+    seq = load_pose(recording)
+    positions = seq.positions.copy()
+    positions[: bounds[2]] = np.nan  # JumpJack and Twist, the first two stretches
+    path = save_pose(PoseSequence(positions, seq.joint_names, seq.fps), tmp_path / "blank.npz")
+    lengths = [b - a for a, b in zip(bounds, bounds[1:], strict=False)]
+    windows = [1 + (n - 240) // 60 if n >= 240 else 1 for n in lengths]
+    seen, blank = sum(windows[2:]), sum(windows[:2])
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    argv = ["train", str(path), "--frame-labels", str(labels), "--label-block", "0.1",
+            "--db", str(tmp_path / "cb.sqlite")]  # fmt: skip
+    need = f"-k: must be at most the {seen} cases ({blank} windows left out"
+    refused([*argv, "-k", str(seen + 1)], tmp_path, capsys, need, f"got {seen + 1}")
+    assert main([*argv, "-k", str(seen)]) == 0
+    assert _count_cases(tmp_path / "cb.sqlite") == seen

@@ -376,6 +376,26 @@ def _no_clips(args: argparse.Namespace) -> DataError:
     return DataError(what + (f" (check {' and '.join(given)})" if given else ""), str(args.data))
 
 
+def _check_k(args: argparse.Namespace, clips: list[Any]) -> None:
+    """Refuse ``-k`` above the cases the training will make: the clips that can be cases
+    (:func:`cbr.training.usable`; a window of a recording where nobody is seen is none). None
+    usable is left to the training's own refusal."""
+    from cbr.stored import CASE_KINDS
+    from cbr.training import usable
+
+    n = len(usable(clips)[0])
+    if args.k is None or not 0 < n < args.k:
+        return
+    left_out = len(clips) - n
+    why = (
+        f" ({counted(left_out, CASE_KINDS.get(args.split, 'clip'))} left out: no person seen"
+        " or too short)"
+        if left_out
+        else ""
+    )
+    raise ConfigError(f"must be at most the {n} cases{why}, got {args.k}", "-k")
+
+
 def _one_activity(args: argparse.Namespace, solutions: list[str]) -> None:
     """A new case base needs two activities: refused naming DATA, before any fitting."""
     values = sorted(set(solutions))
@@ -594,8 +614,7 @@ def run(args: argparse.Namespace) -> int:
         result = append_described(args.db, args.name, clips, solutions, plan, uid)
     else:
         _one_activity(args, solutions)
-        if args.k is not None and args.k > len(clips):
-            raise ConfigError(f"must be at most the {len(clips)} cases, got {args.k}", "-k")
+        _check_k(args, clips)
         result = train_described(args.db, args.name, clips, solutions, estimator,
                                  target=args.target, cases=args.split,
                                  replace=args.replace)  # fmt: skip
