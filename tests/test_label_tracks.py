@@ -523,3 +523,32 @@ def test_train_k_is_held_to_the_windows_that_become_cases(
     refused([*argv, "-k", str(seen + 1)], tmp_path, capsys, need, f"got {seen + 1}")
     assert main([*argv, "-k", str(seen)]) == 0
     assert _count_cases(tmp_path / "cb.sqlite") == seen
+
+
+def test_codes_that_share_a_name_in_a_labels_csv_are_said_and_a_refusal_is_one_line(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A labels CSV's label_names file that names codes 1 and 3 "Hop" merges their stretches
+    as --label-names does, and says so as --label-names does (it merged them in silence).
+    With a refusal after the names are read (-k above the cases), the refusal is the one
+    line: --label-names' note came before it."""
+    from tests.badinput import refused
+
+    names = tmp_path / "names.txt"
+    names.write_text("1 Hop\n2 Jog\n3 Hop\n4 KneeRaise\n6 Twist\n", encoding="utf-8")
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(
+        f"path,label_file,label_block_s,label_names\n{recording},{labels},0.1,names.txt\n",
+        encoding="utf-8",
+    )
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(csv), "--db", str(db), "--split", "clips"]) == 0
+    err = capsys.readouterr().err
+    assert err.count(f"note: codes 1 and 3 of {names} are both named Hop: one activity") == 1
+    assert sorted(_cases(db)[0]) == ["Hop", "Hop", "Jog", "KneeRaise", "Twist"]
+    db.unlink()
+    for data, extra in ((str(csv), []), (str(recording), ["--frame-labels", str(labels),
+                        "--label-block", "0.1", "--label-names", str(names)])):  # fmt: skip
+        argv = ["train", data, *extra, "--db", str(db), "--split", "clips", "-k", "6"]
+        refused(argv, tmp_path, capsys, "-k: must be at most the 5 cases, got 6")

@@ -479,10 +479,10 @@ def _check_new_store(args: argparse.Namespace) -> None:
         store.close()
 
 
-def _note_shared_names(path: Path) -> None:
-    """Read the ``--label-names`` file before any clip (a bad line: one error, at once), and
-    say on stderr which codes share a name: their stretches become one activity (meant, to
-    merge two variants of a movement, or a slip of the pen)."""
+def _note_shared_names(args: argparse.Namespace, path: Path) -> None:
+    """Read a label names file (a bad line: one error, at once) and note which codes share a
+    name: their stretches become one activity (meant, to merge two variants of a movement,
+    or a slip of the pen). Said with the other notes, once the training is done."""
     from collections import defaultdict
 
     from features.datasets import read_label_names
@@ -492,11 +492,29 @@ def _note_shared_names(path: Path) -> None:
         codes[name].append(code)
     for name, shared in codes.items():
         if len(shared) > 1:
-            print(
+            _note(
+                args,
                 f"note: codes {', '.join(shared[:-1])} and {shared[-1]} of {shown(path)} are "
                 f"{'both' if len(shared) == 2 else 'all'} named {shown(name)}: one activity",
-                file=sys.stderr,
             )
+
+
+def _note_csv_names(args: argparse.Namespace) -> None:
+    """The codes that share a name in the ``label_names`` files of a labels CSV's recordings
+    labelled over time, each file once, as ``--label-names`` (the stretches of such codes
+    were merged in silence)."""
+    from features.datasets import detect_kind, read_labels_csv
+
+    data = Path(args.data)
+    if args.frame_labels is not None or detect_kind(data) != "csv":
+        return
+    files: list[Path] = []
+    for rec in read_labels_csv(data if data.is_file() else data / "labels.csv"):
+        names = rec["track"].names if rec["track"] is not None else None
+        if names is not None and names not in files:
+            files.append(names)
+    for names in files:
+        _note_shared_names(args, names)
 
 
 def _read_frame_labels(args: argparse.Namespace) -> None:
@@ -563,7 +581,7 @@ def _check_options(args: argparse.Namespace) -> None:
     check_fps(args.fps)
     args.sensor = sensor_for(args.sensor, [args.data])
     if args.label_names is not None:
-        _note_shared_names(args.label_names)
+        _note_shared_names(args, args.label_names)
     if args.frame_labels is not None:
         _read_frame_labels(args)
     check_scheduler(args.scheduler)
@@ -585,16 +603,18 @@ def run(args: argparse.Namespace) -> int:
         train_described,
     )
 
-    _check_options(args)
     args.notes = []
+    _check_options(args)
     if args.append:
         _check_append(args)
         plan, uid, args.split, args.target = append_plan(
             args.db, args.name, args.target, args.split
         )
+        _note_csv_names(args)
     else:
         args.target = args.target or "label"
         _check_new_store(args)
+        _note_csv_names(args)
         args.split = args.split or _default_split(args)
         estimator = _estimator(args)
         plan = fit_plan(estimator)
