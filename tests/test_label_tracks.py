@@ -552,3 +552,36 @@ def test_codes_that_share_a_name_in_a_labels_csv_are_said_and_a_refusal_is_one_l
                         "--label-block", "0.1", "--label-names", str(names)])):  # fmt: skip
         argv = ["train", data, *extra, "--db", str(db), "--split", "clips", "-k", "6"]
         refused(argv, tmp_path, capsys, "-k: must be at most the 5 cases, got 6")
+
+
+def test_a_labels_csv_leaves_out_a_flicker_as_frame_labels_does(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """13_30's labels with one 0.1-s block in the twists labelled Squat, named in a labels
+    CSV and cut into windows: the 12-frame stretch is left out and said as a labelled
+    stretch, as with --frame-labels (it was kept whole as a "window" and then "skipped 1
+    window shorter than one movement can be ... (lasts 0.10 s)"). The cases: the windows
+    of the six stretches around it, ``1 + (frames - 240) // 60`` each at 120 fps (whole
+    when shorter than 240 frames)."""
+    codes = (shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt").read_text().split()
+    assert codes[40] == "6"  # in the twists (blocks 18-66)
+    codes[40] = "3"
+    labels = tmp_path / "flicker.txt"
+    labels.write_text(" ".join(codes), encoding="utf-8")
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(
+        f"path,label_file,label_block_s,label_names\n{recording},{labels},0.1,names.txt\n",
+        encoding="utf-8",
+    )
+    _names(tmp_path)
+    changes = [i for i in range(1, len(codes)) if codes[i] != codes[i - 1]]
+    bounds = [0, *(12 * i for i in changes), 2465]
+    lengths = [b - a for a, b in zip(bounds, bounds[1:], strict=False) if b - a != 12]
+    assert len(lengths) == 6  # JumpJack, Twist, Twist, KneeRaise, Squat, Jog
+    windows = sum(1 + (n - 240) // 60 if n >= 240 else 1 for n in lengths)
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(csv), "--db", str(db)]) == 0
+    out, err = capsys.readouterr()
+    assert "left out 1 labelled stretch shorter than 0.4 s (Squat)" in err
+    assert "cut 6 clips into " in err and "skipped" not in out
+    assert _count_cases(db) == windows

@@ -349,6 +349,11 @@ def _clips(args: argparse.Namespace) -> list[Any]:
             progress_desc="loading clips",
         )
     )
+    if not args.frame_labels and clips:
+        from features.datasets import labelled_over_time
+
+        if labelled_over_time(args.data):  # its flickers left out as --frame-labels' are
+            clips = _long_enough(args, clips)
     if clips and not args.append:  # before the cutting is said: the refusal is one line
         from features.datasets import clip_target
 
