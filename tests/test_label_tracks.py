@@ -585,3 +585,35 @@ def test_a_labels_csv_leaves_out_a_flicker_as_frame_labels_does(
     assert "left out 1 labelled stretch shorter than 0.4 s (Squat)" in err
     assert "cut 6 clips into " in err and "skipped" not in out
     assert _count_cases(db) == windows
+
+
+def test_compare_on_recordings_labelled_over_time_says_it_compares_stretches(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """compare cross-validates a clip per labelled stretch, while train makes a case per 2-s
+    window of the same CSV by default: its figures are those of --split clips, and it says
+    so (nothing did: they read as the figures of the case base train makes). A labels CSV of
+    clips with one label each gets no such note."""
+    copy = tmp_path / "13_30_again.npz"
+    copy.write_bytes(recording.read_bytes())
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    _names(tmp_path)
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(
+        "path,label_file,label_block_s,label_names,subject\n"
+        f"{recording},{labels},0.1,names.txt,a\n{copy},{labels},0.1,names.txt,b\n",
+        encoding="utf-8",
+    )
+    plain = tmp_path / "plain.csv"
+    plain.write_text(
+        f"path,label,subject,start,end\n{recording},Twist,a,216,804\n"
+        f"{recording},Squat,a,1416,1932\n{copy},Twist,b,216,804\n{copy},Squat,b,1416,1932\n",
+        encoding="utf-8",
+    )
+    fast = ["--similarities", "euclidean", "--features", "fluents", "--no-dad", "--peers",
+            "none", "--explain", "0", "--k", "1"]  # fmt: skip
+    for data, said in ((csv, True), (plain, False)):
+        assert main(["compare", str(data), *fast]) == 0
+        err = capsys.readouterr().err
+        assert ("one clip here, not cut into the 2-s windows" in err) is said, err
+        assert ("those of train --split clips" in err) is said

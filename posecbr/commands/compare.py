@@ -279,11 +279,21 @@ def _print_explanations(explained: list[Any]) -> None:
             print(f"  {shown(line)}")
 
 
+#: what is compared on recordings labelled over time, said beside the figures
+STRETCHES_NOTE = (
+    "each labelled stretch of a recording labelled over time is one clip here, not cut into"
+    " the 2-s windows train makes its cases of by default: these figures are those of train"
+    " --split clips (a case base of windows is measured by segmenting a recording it has not"
+    " seen)"
+)
+
+
 def run(args: argparse.Namespace) -> int:
     from cbr.evaluation.compare import run_compare
     from cbr.evaluation.methods import check_cbr_params
     from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
     from cbr.evaluation.tables import format_table
+    from features.datasets import labelled_over_time
 
     check_scheduler(args.scheduler)
     settings = _settings(args)
@@ -296,6 +306,8 @@ def run(args: argparse.Namespace) -> int:
     check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
     run_ = run_compare(clips, settings, source=str(args.data))
     results = run_.results
+    if labelled_over_time(args.data):
+        results.notes.insert(0, STRETCHES_NOTE)
     results.explanations = explain_errors(run_, settings.explain)
     results.explanations += explain_dad_errors(run_, min(settings.explain, 3))
     for note in results.notes:
