@@ -617,3 +617,18 @@ def test_compare_on_recordings_labelled_over_time_says_it_compares_stretches(
         err = capsys.readouterr().err
         assert ("one clip here, not cut into the 2-s windows" in err) is said, err
         assert ("those of train --split clips" in err) is said
+
+
+def test_a_labels_csv_of_flickers_alone_says_no_stretch_is_long_enough(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """13_30's 206 blocks labelled 1, 3, 1, 3, ...: every stretch is 0.1 s, all left out; the
+    refusal says no stretch is long enough, as --frame-labels', not "no clips found"."""
+    from tests.badinput import refused
+
+    labels = tmp_path / "flicker.txt"
+    labels.write_text(" ".join(["1", "3"] * 103), encoding="utf-8")
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(f"path,label_file,label_block_s\n{recording},{labels},0.1\n", encoding="utf-8")
+    argv = ["train", str(csv), "--db", str(tmp_path / "cb.sqlite")]
+    refused(argv, tmp_path, capsys, f"{csv}: no labelled stretch of 0.4 s or more")

@@ -349,10 +349,12 @@ def _clips(args: argparse.Namespace) -> list[Any]:
             progress_desc="loading clips",
         )
     )
+    stretches = False
     if not args.frame_labels and clips:
         from features.datasets import labelled_over_time
 
-        if labelled_over_time(args.data):  # its flickers left out as --frame-labels' are
+        stretches = labelled_over_time(args.data)
+        if stretches:  # its flickers left out as --frame-labels' are
             clips = _long_enough(args, clips)
     if clips and not args.append:  # before the cutting is said: the refusal is one line
         from features.datasets import clip_target
@@ -364,18 +366,20 @@ def _clips(args: argparse.Namespace) -> list[Any]:
     elif args.split == "windows" and clips:
         clips = _windows(args, clips)
     if not clips:
-        raise _no_clips(args)
+        raise _no_clips(args, stretches)
     return clips
 
 
-def _no_clips(args: argparse.Namespace) -> DataError:
-    """Nothing to train from: said with the options that left everything out, if any."""
+def _no_clips(args: argparse.Namespace, stretches: bool = False) -> DataError:
+    """Nothing to train from: said with the options that left everything out, if any.
+    ``stretches``: the clips were the labelled stretches of recordings labelled over time
+    (as with ``--frame-labels``)."""
     from features.repetitions import MIN_PERIOD_S
 
     given = [o for o, v in (("--labels", args.labels), ("--subjects", args.subjects)) if v]
     what = (
         f"no labelled stretch of {MIN_PERIOD_S:g} s or more"
-        if args.frame_labels
+        if args.frame_labels or stretches
         else "no clips found"
     )
     return DataError(what + (f" (check {' and '.join(given)})" if given else ""), str(args.data))
