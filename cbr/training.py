@@ -72,18 +72,22 @@ class TrainResult:
     judges_unknown: bool = True
     #: cases whose features equal a case's of another activity (:func:`same_features`)
     indistinct: list[str] = field(default_factory=list)
+    #: ``--append``: the activities added that the case base did not hold when read
+    new_labels: list[str] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
 class Plan:
     """What each training clip is reduced to: for a new fit, the estimator's
     :meth:`~cbr.estimator.CaseBaseClassifier.describe_plan` (``candidates``, ``mirror``,
-    ``sides``); for ``--append``, the stored case base's columns (``casebase``, no cases)."""
+    ``sides``); for ``--append``, the stored case base's columns (``casebase``, no cases)
+    and the activities it held when read (``known``)."""
 
     candidates: FeatureConfig | None = None
     mirror: bool = False
     sides: bool = False
     casebase: CaseBase | None = None
+    known: tuple[str, ...] = ()
 
 
 def fit_plan(estimator: CaseBaseClassifier) -> Plan:
@@ -417,7 +421,9 @@ def append_plan(
         )
     cb = stored.classifier.case_base_
     columns = CaseBase(cb.config, cb.measure, cb.problems[:0], cb.labels[:0], cb.names, cb.words)
-    return Plan(casebase=columns), stored.uid, cases or stored.cases or "clips", stored.target
+    known = tuple(str(c) for c in stored.classifier.classes_)
+    plan = Plan(casebase=columns, known=known)
+    return plan, stored.uid, cases or stored.cases or "clips", stored.target
 
 
 def append(
@@ -551,7 +557,7 @@ def append_described(
     return TrainResult(
         name, len(cb), total, _counts([str(v) for v in cb.labels]), cb.config, cb.measure.name,
         None, {}, skipped, too_short,
-        indistinct=same_features(cb),
+        indistinct=same_features(cb), new_labels=sorted(set(text) - set(plan.known)),
     )  # fmt: skip
 
 

@@ -499,6 +499,7 @@ def test_append_says_how_many_activities_it_added(
     code, out, err = _cli(capsys, "train", str(test / one), "--db", db, "--append")
     assert code == 0, err
     assert "17 cases (2 added, of 1 activity)" in out, out
+    assert "did not hold" not in err  # an activity it holds: nothing new
     # casebase info says the calibrations are of the 15 training clips, not the 17 cases
     # (it described them as if they held for the case base as it is), and that the unknown
     # judges, dropped by the append, are calibrated as segment starts
@@ -576,3 +577,21 @@ def test_a_clip_shorter_than_a_movement_is_no_case_as_it_is_unclassifiable(
                         "--similarities", "euclidean", "--features", "fluents")  # fmt: skip
     assert code == 0
     assert f"left out 1 clip shorter than one movement can be (0.4 s): {one}" in err
+
+
+def test_append_names_the_activities_the_case_base_did_not_hold(
+    dataset: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A clip whose label the case base lacks becomes a new activity, as it may; said, with
+    the labels (before: in silence, so a pose file converted alone, labelled with its file
+    name, added an activity called "13_31")."""
+    train, test = dataset
+    db = str(tmp_path / "cb.sqlite")
+    assert _cli(capsys, "train", str(train), "--db", db)[0] == 0
+    clip = sorted((test / ACTIVITIES[0]).iterdir())[0]
+    csv = tmp_path / "new.csv"
+    csv.write_text(f"path,label\n{clip},13_31\n", encoding="utf-8")
+    code, out, err = _cli(capsys, "train", str(csv), "--db", db, "--append", "--json")
+    assert code == 0, err
+    assert json.loads(out)["new_labels"] == ["13_31"]
+    assert "note: 1 activity the case base did not hold, added as new: 13_31" in err, err

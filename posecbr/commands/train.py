@@ -728,6 +728,16 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
         )
     if result.indistinct:
         print(_indistinct(result.indistinct, args.split, args.target), file=sys.stderr)
+    if result.new_labels:
+        n = len(result.new_labels)
+        print(
+            shown(
+                f"note: {n} {class_noun(args.target, n)} the case base did not hold, added as "
+                f"new: {', '.join(result.new_labels)} (a pose file converted alone is labelled "
+                "with its name)"
+            ),
+            file=sys.stderr,
+        )
     if not args.append and args.split == "windows" and not result.judges_unknown:
         why = (
             f"fewer than three {class_noun(args.target, 3)}"
@@ -742,7 +752,8 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
         )
 
 
-def _report(args: argparse.Namespace, result: Any) -> None:
+def _summary(args: argparse.Namespace, result: Any) -> dict[str, Any]:
+    """What ``train --json`` prints."""
     from casebase_store import shown_db
 
     summary: dict[str, Any] = {
@@ -761,6 +772,13 @@ def _report(args: argparse.Namespace, result: Any) -> None:
         summary["trim"] = result.maintenance.summary()
     if result.indistinct:
         summary["indistinct"] = result.indistinct
+    if args.append:
+        summary["new_labels"] = result.new_labels
+    return summary
+
+
+def _report(args: argparse.Namespace, result: Any) -> None:
+    summary = _summary(args, result)
     _notes(args, result)
     if args.json:
         json.dump(summary, sys.stdout, indent=2, ensure_ascii=False)
