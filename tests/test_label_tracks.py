@@ -632,3 +632,26 @@ def test_a_labels_csv_of_flickers_alone_says_no_stretch_is_long_enough(
     csv.write_text(f"path,label_file,label_block_s\n{recording},{labels},0.1\n", encoding="utf-8")
     argv = ["train", str(csv), "--db", str(tmp_path / "cb.sqlite")]
     refused(argv, tmp_path, capsys, f"{csv}: no labelled stretch of 0.4 s or more")
+
+
+def test_classify_notes_a_whole_recording_against_a_case_base_of_windows(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A case base of 2-s windows gives a whole recording (13_30: 2465 frames at 120 fps,
+    20.5 s, five activities) one answer: said, pointing to segment; a 4-s stretch of it
+    (480 frames) is not noted, nor is anything against a case base of clips."""
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    track = ["--frame-labels", str(labels), "--label-block", "0.1"]
+    windows, clips = tmp_path / "w.sqlite", tmp_path / "c.sqlite"
+    assert main(["train", str(recording), *track, "--db", str(windows)]) == 0
+    assert main(["train", str(recording), *track, "--db", str(clips), "--split", "clips"]) == 0
+    csv = tmp_path / "part.csv"
+    csv.write_text(f"path,label,start,end\n{recording},Twist,300,780\n", encoding="utf-8")
+    capsys.readouterr()
+    assert main(["classify", str(recording), "--db", str(windows)]) == 0
+    err = capsys.readouterr().err
+    assert "holds a case per 2-s window and 1 clip lasts longer than 10 s (20.5 s)" in err, err
+    assert "posecbr segment" in err
+    for db, data in ((windows, csv), (clips, recording)):
+        assert main(["classify", str(data), "--db", str(db)]) == 0
+        assert "note:" not in capsys.readouterr().err

@@ -169,6 +169,29 @@ def _check_args(args: argparse.Namespace) -> None:
             raise ConfigError(f"goes without --json (its document holds {holds})", flag)
 
 
+LONG_CLIP_WINDOWS = 5
+"""A clip longer than this many windows, classified against a case base of windows, is noted:
+one answer for a recording that may hold several activities."""
+
+
+def _note_long_clips(name: str, clips: list[Any]) -> None:
+    """Note, on stderr, clips much longer than the windows a case base of windows holds: each
+    gets one answer, where ``segment`` labels each stretch."""
+    from features.repetitions import WINDOW_S
+
+    seconds = [c.n_frames / c.fps for c in clips]
+    long = [t for t in seconds if t > LONG_CLIP_WINDOWS * WINDOW_S]
+    if long:
+        print(
+            f"note: case base {name!r} holds a case per {WINDOW_S:g}-s window and "
+            f"{counted(len(long), 'clip')} {'lasts' if len(long) == 1 else 'last'} longer than "
+            f"{LONG_CLIP_WINDOWS * WINDOW_S:g} s ({'' if len(long) == 1 else 'up to '}"
+            f"{max(long):.1f} s): each gets one answer "
+            "here; posecbr segment labels each activity of a long recording",
+            file=sys.stderr,
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     from casebase_store import open_store
     from cbr.classification import (
@@ -232,6 +255,8 @@ def run(args: argparse.Namespace) -> int:
             results = classify_with_feedback(writer, stored, clips, label, settings, target)
         finally:
             writer.close()
+    if stored.cases == "windows":
+        _note_long_clips(name, clips)
     _print(args, store.where, name, target, results)
     if all(r.solved is None for r in results):  # nothing the user asked for could be done
         print(
