@@ -201,7 +201,11 @@ def test_a_json_output_in_the_folder_out_makes_is_written(
         # a traceback from numpy after the whole cross-validation
         (["--seed", "-1"], "--seed: seed must be in 0 to 2**32 - 1, got -1"),
         # clamped: every case voted and the figures changed with the folds' sizes
-        (["--k", "7"], "--k: must be at most 6, the training clips of the smallest fold, got 7"),
+        (
+            ["--k", "7"],
+            "--k: must be at most 6, the training clips of the smallest fold, got 7"
+            " (5 unless given): give --k 6 or less",
+        ),
     ],
 )
 def test_a_seed_or_k_that_cannot_hold_is_refused_before_the_run(

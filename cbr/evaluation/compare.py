@@ -167,7 +167,8 @@ def _check_k(settings: CompareSettings, folds: np.ndarray) -> None:
     fewest = int(len(folds) - held.max())
     if int(settings.k) > fewest:
         raise ConfigError(
-            f"must be at most {fewest}, the training clips of the smallest fold, got {settings.k}",
+            f"must be at most {fewest}, the training clips of the smallest fold, got "
+            f"{settings.k} (5 unless given): give --k {fewest} or less",
             "--k",
         )
 
