@@ -744,7 +744,7 @@ class LiveSegmenter:
             if torso_share(clip) == 0.0:
                 state = self.unknown
             try:
-                found = count_repetitions(clip).repetitions
+                found = count_repetitions(clip, recording_edges=False).repetitions
             except DataError:  # too short, or nobody in view
                 pass
         confidence = self._confidence(state)

@@ -260,7 +260,7 @@ def periods_in_span(part: MovementSignals, fps: float) -> list[tuple[int, int]]:
         return []
     span_frames = len(part.values) * part.step
     out = []
-    for first, last in _periods(count_in_signals(part, span_frames, fps)):
+    for first, last in _periods(count_in_signals(part, span_frames, fps, recording_edges=False)):
         if first == 0 or last >= span_frames - part.step:
             continue
         if MIN_WINDOW_S * fps / 2 <= last - first <= MAX_WINDOW_S * fps:
@@ -681,7 +681,9 @@ def _repetitions(sig: MovementSignals, start: int, end: int) -> tuple[Repetition
     if (b - a) / sig.fps < MIN_PERIOD_S:
         return ()
     part = sig.part(a, b)
-    found = count_in_signals(part, (b - a) * sig.step, sig.fps * sig.step).repetitions
+    found = count_in_signals(
+        part, (b - a) * sig.step, sig.fps * sig.step, recording_edges=False
+    ).repetitions
     off = a * sig.step
     return tuple(  # the first sample may begin up to a step before ``start``: cut there
         Repetition(

@@ -64,7 +64,9 @@ How (all channels at once, no per-frame loops):
    where the movement leaves rest and the last ends where it returns to rest: where the
    line lies within :data:`LEAVE_SHARE` of the peak's height above the low point before the
    first peak and after the last (a lone repetition between two rests, whose flat, noisy
-   low point lies anywhere in the rest, does not take the rest in).
+   low point lies anywhere in the rest, does not take the rest in). A recording with one
+   far point that starts at one end of the movement and ends at the other, held still
+   there, got into a posture once (a side plank) and has none (:func:`_held_change`).
 
 The period also comes out of the QMP fits (:mod:`features.qmp`: SINDy with a period per state
 signal); the autocorrelation is used here because it reads all angles together and needs no
@@ -608,12 +610,7 @@ def _rest_is_high(
     the clip's first and last :data:`ENDS_S` seconds lie nearer (an exercise starts and ends
     at rest)."""
     ease = np.array([AT_EASE.get(n, np.pi / 2) for n in names])
-    # the line's two ends: its outer tenth of the frames, or of its range when fewer frames
-    # reach that far (a clip mostly at rest: its tenths by frames both lie in the rest)
-    lo, hi = np.percentile(line, [10, 90])
-    low_end, high_end = float(line.min()), float(line.max())
-    lo = min(float(lo), low_end + 0.1 * (high_end - low_end))
-    hi = max(float(hi), high_end - 0.1 * (high_end - low_end))
+    lo, hi = _end_levels(line)
     low_posture = x[line <= lo].mean(axis=0)
     high_posture = x[line >= hi].mean(axis=0)
     free = np.array([n in TWIST_NAMES or n == PELVIS_HEIGHT for n in names])
@@ -632,9 +629,50 @@ def _rest_is_high(
     eased = float(np.sum(direction[~free] ** 2) / max(float(np.sum(direction**2)), 1e-12))
     if eased >= EASE_SHARE and abs(high_far - low_far) >= MIN_EXCURSION_RAD:
         return high_far < low_far
-    k = min(len(line) // 2, max(1, int(round(ENDS_S * fps))))
+    k = _ends_samples(len(line), fps)
     ends = float(np.concatenate([line[:k], line[-k:]]).mean())
     return bool(abs(ends - hi) < abs(ends - lo))
+
+
+def _end_levels(line: np.ndarray) -> tuple[float, float]:
+    """The levels below and above which ``line`` ``(n,)`` lies at its two ends: its outer
+    tenth of the frames, or of its range when fewer frames reach that far (a clip mostly at
+    rest: its tenths by frames both lie in the rest)."""
+    lo, hi = np.percentile(line, [10, 90])
+    low_end, high_end = float(line.min()), float(line.max())
+    lo = min(float(lo), low_end + 0.1 * (high_end - low_end))
+    hi = max(float(hi), high_end - 0.1 * (high_end - low_end))
+    return lo, hi
+
+
+def _ends_samples(n: int, fps: float) -> int:
+    """How many samples the clip's first and last :data:`ENDS_S` seconds hold (of ``n``)."""
+    return min(n // 2, max(1, int(round(ENDS_S * fps))))
+
+
+def _held_change(x: np.ndarray, line: np.ndarray, fps: float) -> bool:
+    """Whether the clip ``x`` ``(n, C)`` goes from one end of its movement ``line`` ``(n,)``
+    to the other and holds still there: its first :data:`ENDS_S` seconds' posture lies nearer
+    one end's posture (the mean posture where the line lies at that end, :func:`_end_levels`)
+    and its last nearer the other's, each by :data:`MIN_EXCURSION_RAD` (distances over all
+    the counted angles, which the line is read from), and the line moves less than
+    :data:`MIN_EXCURSION_RAD` in all over the clip's last :data:`MIN_PERIOD_S` (over its
+    first, for a clip that starts at the far end and ends at rest): no repetition is under
+    way there, none being smaller or quicker. A clip with one far point that does so went
+    out once and stayed (getting into a side plank and holding it), or left a posture held
+    from its start: a change of posture, not a repetition cut off by the clip's end or start
+    (which is still under way there)."""
+    lo, hi = _end_levels(line)
+    low, high = x[line <= lo].mean(axis=0), x[line >= hi].mean(axis=0)
+    k = _ends_samples(len(line), fps)
+    sides = []
+    for posture in (x[:k].mean(axis=0), x[-k:].mean(axis=0)):
+        nearer_high = float(np.linalg.norm(posture - low) - np.linalg.norm(posture - high))
+        sides.append(0.0 if abs(nearer_high) < MIN_EXCURSION_RAD else float(np.sign(nearer_high)))
+    m = min(len(line) - 1, max(1, int(round(MIN_PERIOD_S * fps))))
+    still_start = float(np.abs(np.diff(line[: m + 1])).sum()) < MIN_EXCURSION_RAD
+    still_end = float(np.abs(np.diff(line[-m - 1 :])).sum()) < MIN_EXCURSION_RAD
+    return (sides[0] < 0 < sides[1] and still_end) or (sides[0] > 0 > sides[1] and still_start)
 
 
 def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
@@ -758,11 +796,15 @@ def _sides(
     return "left" if lead[one].mean() >= lead[other].mean() else "right"
 
 
-def count_repetitions(seq: PoseSequence) -> RepetitionCount:
+def count_repetitions(seq: PoseSequence, recording_edges: bool = True) -> RepetitionCount:
     """The repetitions in ``seq`` (positions ``(frames, joints, 3)``): see the module docstring.
 
-    Raises DataError when the clip is shorter than one repetition could be
-    (:data:`MIN_PERIOD_S`) or shows no person."""
+    ``recording_edges``: the clip starts and ends where its recording does, so that a clip
+    whose one far point the body went out to and held still until the end is a change of
+    posture, no repetition (:func:`_held_change`); False for a piece cut out of a longer
+    recording (a segment), whose far point at a cut is handed to the piece beyond it
+    (:func:`cbr.segmentation.keep_whole`) and must stay. Raises DataError when the clip is
+    shorter than one repetition could be (:data:`MIN_PERIOD_S`) or shows no person."""
     if seq.duration_s < MIN_PERIOD_S:
         raise DataError(
             f"the clip lasts {seq.duration_s:.2f} s, shorter than one repetition can be"
@@ -770,11 +812,14 @@ def count_repetitions(seq: PoseSequence) -> RepetitionCount:
             seq.source or None,
         )
     sig = movement_signals(seq)
-    return count_in_signals(sig, seq.n_frames, seq.fps)
+    return count_in_signals(sig, seq.n_frames, seq.fps, recording_edges)
 
 
-def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> RepetitionCount:
-    """:func:`count_repetitions` on already prepared signals (of a clip of ``n_frames``)."""
+def count_in_signals(
+    sig: MovementSignals, n_frames: int, fps: float, recording_edges: bool = True
+) -> RepetitionCount:
+    """:func:`count_repetitions` on already prepared signals (of a clip of ``n_frames``;
+    ``recording_edges`` as there)."""
     x = sig.values
     spans, far, direction, sides = _alternating_repetitions(x, sig.names, sig.fps, sig.blind)
     alternating = sides is not None
@@ -790,6 +835,8 @@ def count_in_signals(sig: MovementSignals, n_frames: int, fps: float) -> Repetit
         far = _far_points(line, float(np.percentile(line, 5)), distance)
         far = far[_above_rest(recorded, far, reach)]
         far = np.unique(_in_view(far, sig.blind))
+        if recording_edges and len(far) == 1 and _held_change(x, recorded, sig.fps):
+            far = far[:0]  # got into a posture once and held it: no repetition
         spans = _bounds(line, far, reach) if len(far) else []
     spans = _seen_spans(spans, far, sig.blind)
     reps = [

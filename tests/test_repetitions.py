@@ -166,6 +166,35 @@ def test_bridges_lying_on_the_back_counted_from_lying_flat() -> None:
     assert ((peaks >= starts - 2) & (peaks <= starts + hold + 2)).all()
 
 
+def _arms_raised_and_held(hold_s: float = 6.0, lowered: bool = False) -> PoseSequence:
+    """Standing 0.6 s, both arms raised sideways to 90 degrees over 0.8 s (eased), held still
+    ``hold_s`` seconds; with ``lowered`` they come down again over 0.8 s and 0.6 s of standing
+    follow."""
+    rest, move, hold = int(0.6 * FPS), int(0.8 * FPS), int(hold_s * FPS)
+    up = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, move)))  # 0 -> 1, eased
+    parts = [np.zeros(rest), up, np.ones(hold)] + ([up[::-1], np.zeros(rest)] if lowered else [])
+    body = standing()
+    return to_sequence(*(_raise_arms(body, a, a) for a in 90.0 * np.concatenate(parts)), fps=FPS)
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_getting_into_a_held_posture_once_is_no_repetition(reverse: bool) -> None:
+    """Arms raised once and held still for the 6 s until the clip ends (or, played backward,
+    held from the start and lowered once): the movement goes out once and never comes back,
+    no repetition by construction (the clip's start and end in the two postures, each
+    posture as its end of the movement). Counted 1 before: the far point cut off at the end
+    was kept, there being no whole one to measure it against."""
+    seq = _arms_raised_and_held()
+    if reverse:
+        seq = PoseSequence(seq.positions[::-1].copy(), seq.joint_names, seq.fps)
+    assert count_repetitions(seq).count == 0
+    # raised, held as long and lowered again: one repetition
+    assert count_repetitions(_arms_raised_and_held(lowered=True)).count == 1
+    # a piece cut out of a longer recording (a segment) keeps the far point its cut ends at:
+    # the piece beyond it decides whether the movement comes back
+    assert count_repetitions(seq, recording_edges=False).count == 1
+
+
 def test_standing_still_with_jitter_has_no_repetition() -> None:
     seq = _movement([])  # 0.6 s of rest only: too short, so build a longer hold
     body = standing()
@@ -474,6 +503,22 @@ def test_reps_command_on_a_real_glute_bridge_video(
     tops = np.array([r["peak_frame"] / doc["fps"] for r in doc["repetitions"]])
     up, down = np.array([0.0, 2.8, 5.9]), np.array([1.1, 3.9, 6.6])
     assert ((tops >= up - 0.2) & (tops <= down + 0.2)).all()
+
+
+def test_reps_command_on_a_real_side_plank_video(
+    shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A person lying on the side gets into a side plank in the first 1.4 s and holds it to
+    the end (8.6 s): no repetition by hand. Counted 1 before: the supporting shoulder's angle
+    sags from 88 to about 72 degrees over the hold, and the movement line, mostly that angle,
+    fell back from its far point at 2.2 s by more than a repetition's return. Now the clip is
+    seen to start lying (the movement's rest end) and end in the plank, holding still."""
+    video = shared_data / "videos" / "side_plank" / "fit_side_plank_pexels6023266.mp4"
+    hand = next(c for c in _fixture()["clips"] if c["source"].endswith(video.name))
+    assert main(["reps", str(video), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["count"] == hand["count"] == 0
+    assert doc["repetitions"] == []
 
 
 def test_no_repetition_starts_where_nobody_is_seen(recordings: dict[str, PoseSequence]) -> None:
