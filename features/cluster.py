@@ -18,6 +18,7 @@ dask is an optional dependency (``pip install 'posecbr[cluster]'``): without it,
 
 from __future__ import annotations
 
+import gc
 import logging
 import os
 from collections.abc import Callable, Iterator, Sequence
@@ -134,14 +135,20 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
             client.close()
             cluster.close()
         return
+    refused: ConfigError | None = None
     try:
         client = dd.Client(spec, timeout=CONNECT_TIMEOUT_S)
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
         # TypeError: a scheme this Dask cannot connect by as set up (tls:// without
         # certificates, ucx:// without UCX)
-        raise ConfigError(
-            f"cannot reach the Dask scheduler at {spec} ({exc})", "--scheduler"
-        ) from None
+        refused = ConfigError(f"cannot reach the Dask scheduler at {spec} ({exc})", "--scheduler")
+    if refused is not None:
+        # the client that failed to connect is left half-built in a reference cycle, its loop
+        # runner started: collected at some later moment, its __del__ closes it and takes
+        # Dask's loop-runner lock, which a new client holds while it starts (a garbage
+        # collection there hung the process for good). Collected now, outside any lock.
+        gc.collect()
+        raise refused
     try:
         yield client
     finally:

@@ -545,3 +545,29 @@ def test_report_names_the_characters_its_font_lacks_in_one_line(
         len(lines) == 1 and lines[0].startswith("pictures: the font has no glyph for ")
     ), err
     assert "Warning" not in err
+
+
+def test_a_client_that_could_not_connect_is_not_left_for_a_later_collection() -> None:
+    """A Dask client that failed to connect (``tls://`` without certificates, ``ucx://``
+    without UCX) was left half-built in a reference cycle, its loop runner started. Collected
+    later, inside the next client's start (which holds Dask's loop-runner lock), its
+    ``__del__`` waited for that lock: the suite hung there for good. With automatic
+    collection off, no such client is left once the refusal is raised."""
+    pytest.importorskip("dask.distributed")
+    import gc
+
+    from distributed import Client
+
+    from features.cluster import connect
+    from features.errors import ConfigError
+
+    gc.collect()
+    gc.disable()
+    try:
+        for scheme in ("tls", "ucx"):
+            with pytest.raises(ConfigError), connect(f"{scheme}://127.0.0.1:1"):
+                pass
+        left = [str(o.status) for o in gc.get_objects() if isinstance(o, Client)]
+    finally:
+        gc.enable()
+    assert [s for s in left if "closed" not in s] == []
