@@ -111,23 +111,40 @@ def held_out(
     k: int,
     weights: Weights = "distance",
     neighbours: int = NEIGHBOURS,
+    frames: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> HeldOut:
     """Each query ``(q, *problem_shape)`` (true label ``labels[i]``, group ``groups[i]``)
     classified by the ``k`` nearest cases of other groups (``case_groups`` ``(n_cases,)``),
     voting as the classifier does (:func:`cbr.reuse.vote`), with its ``max(k, neighbours)``
-    nearest such cases for the soft vote."""
+    nearest such cases for the soft vote. ``frames``: the queries' and the cases' frame
+    ranges in their one recording, ``(q, 2)`` and ``(n_cases, 2)`` (start, end; -1 where not
+    known): the cases whose frames overlap a query's are held out with it too (windows cut
+    from one recording every 0.5 s overlap their neighbours, near copies of them)."""
     classes, codes = np.unique(cb.labels.astype(str), return_inverse=True)
     measure, index = cb.measure, cb.index
     q, wide = len(queries), max(int(k), int(neighbours))
     dist = np.full((q, wide), np.inf)
     code = np.zeros((q, wide), dtype=np.int64)
+    held = held_elsewhere(labels, groups, cb.labels, case_groups)
     for i, p in enumerate(queries):  # one full scan per query: the measure's array work
         d = measure.distances(measure.represent_query(p), index)
-        d = np.where(case_groups == groups[i], np.inf, d)
+        out = case_groups == groups[i]
+        if frames is not None:
+            out = out | _overlapping(frames[0][i], frames[1])
+            held[i] = bool(np.any(~out & (cb.labels.astype(str) == str(labels[i]))))
+        d = np.where(out, np.inf, d)
         top = np.argsort(d, kind="stable")[:wide]
         dist[i, : len(top)], code[i, : len(top)] = d[top], codes[top]
-    held = held_elsewhere(labels, groups, cb.labels, case_groups)
     return held_out_votes(dist, code, classes, labels, int(k), weights, held)
+
+
+def _overlapping(query: np.ndarray, cases: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: which of the frame ranges ``cases`` ``(n, 2)`` overlap ``query``
+    ``(2,)`` (start, end exclusive; -1: not known, overlapping nothing)."""
+    a, b = int(query[0]), int(query[1])
+    if a < 0:
+        return np.zeros(len(cases), dtype=bool)
+    return np.asarray((cases[:, 0] >= 0) & (cases[:, 0] < b) & (a < cases[:, 1]))
 
 
 def held_out_votes(

@@ -76,6 +76,7 @@ from .maintenance import EDITORS, MaintenanceReport
 from .novelty import (
     CALIBRATION_SAMPLE,
     DESCRIPTION,
+    RANGE_FOLDS,
     UNLIKE_QUANTILE,
     NoveltyCalibration,
     combined_calibration,
@@ -236,6 +237,29 @@ class _Choice:
 
 #: training clips classified held out to calibrate (vector problems: a full scan costs little)
 MAX_CALIBRATION_VECTORS = 2000
+
+
+def _one_recording_frames(cb: CaseBase, sources: np.ndarray) -> np.ndarray | None:
+    """The cases' frame ranges ``(n_cases, 2)`` (-1 where not known) when every training
+    clip is a piece of one named recording and some of them know where they lie in it; else
+    None (clips with no recording named: their frames all start at 0 and say nothing)."""
+    named = {str(s) for s in sources.tolist()}
+    if len(named) != 1 or named & {"", "None"}:
+        return None
+    frames = np.array([(-1, -1) if a is None or b is None else (a, b) for a, b in cb.frames])
+    return frames if (frames[:, 0] >= 0).any() else None
+
+
+def _time_blocks(frames: np.ndarray, clip: np.ndarray, n: int) -> np.ndarray:
+    """Each of the ``n`` clips' time block ``(n,)``: the clips (pieces of one recording,
+    ``frames`` ``(q, 2)`` of clips ``clip`` ``(q,)``) by start frame, dealt into
+    :data:`~cbr.novelty.RANGE_FOLDS` runs of consecutive pieces, so that a fold of the
+    feature ranges holds out a stretch of time, not every other window of it."""
+    start = np.zeros(n)
+    start[clip] = frames[:, 0]
+    rank = np.empty(n, dtype=np.int64)
+    rank[np.argsort(start, kind="stable")] = np.arange(n)
+    return np.asarray(rank * min(RANGE_FOLDS, n) // max(n, 1), dtype=object)
 
 
 class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
@@ -714,6 +738,13 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             groups, case_groups, basis = sources, sources[clip], "leave-one-recording-out"
         else:
             groups, case_groups, basis = np.arange(n), clip, "leave-one-out"
+        # pieces cut from one recording (windows, repetitions, labelled stretches): held out
+        # with the pieces whose frames overlap theirs, and in time blocks where folds are
+        # dealt (the windows of one stretch, 0.5 s apart, are near copies of each other)
+        frames = _one_recording_frames(cb, sources) if basis == "leave-one-out" else None
+        if frames is not None:
+            basis = "leave-overlapping-out"
+        query_clip = cases.origin[real]
         # a full scan per clip: every clip of vector problems, a sample of sequences
         size = MAX_CALIBRATION_VECTORS if queries.ndim == 2 else CALIBRATION_SAMPLE
         pick = sample(len(queries), size)
@@ -725,14 +756,16 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             np.asarray(case_groups, dtype=object),
             int(self.k),
             self.weights,  # type: ignore[arg-type]
+            frames=None if frames is None else (frames[real][pick], frames),
         )
         skeletons = tuple(sorted({c.skeleton for c in clips}))
         # every training clip's summary against the feature ranges and the nearest clip of
         # the others (cheap: no scan of the measure), then one statistic of the three and the
         # distance, calibrated on the clips whose distance was measured
         group_of = np.asarray(groups, dtype=object)
+        if frames is not None:
+            group_of = _time_blocks(frames[real], query_clip, n)
         clip_labels = np.empty(n, dtype=object)
-        query_clip = cases.origin[real]
         clip_labels[query_clip] = labels
         cases_d, case_clip, image, queries_d, config = self._summaries(
             clips, cb, origin, queries, query_clip

@@ -170,3 +170,38 @@ def test_a_clip_no_case_could_answer_is_left_out_of_the_calibration() -> None:
     assert cal.n == alone.n == len(x)
     assert cal.temperature == pytest.approx(alone.temperature)
     assert cal.y == pytest.approx(alone.y)
+
+
+def test_pieces_of_one_recording_are_held_out_with_those_overlapping_them() -> None:
+    """Windows cut every 0.5 s from one recording overlap their neighbours, near copies of
+    them: held out one by one, a window's nearest case was its neighbour. With the frames,
+    the cases overlapping a query leave with it. Cases on a line, problem (x, 0), so every
+    distance is |x_i - x_j|: three overlapping A windows at x 0, 0.1, 0.2 (frames 0-240,
+    60-300, 120-360), two more A at 1.0 and 1.1 later on (600-840, 900-1140), B at 5.0
+    (1200-1440). The window at x = 0 lies 0.1 from its neighbour, 1.0 from the first A it
+    does not overlap."""
+    from cbr.calibration import held_out
+    from cbr.casebase import CaseBase
+    from cbr.problem import FeatureConfig
+    from cbr.similarity import Euclidean
+
+    xs = [0.0, 0.1, 0.2, 1.0, 1.1, 5.0]
+    labels = ["A", "A", "A", "A", "A", "B"]
+    spans = [(0, 240), (60, 300), (120, 360), (600, 840), (900, 1140), (1200, 1440)]
+    p = np.array([[x, 0.0] for x in xs])
+    cb = CaseBase(FeatureConfig(), Euclidean(exact=True), p, np.array(labels, dtype=object),
+                  ("x", "y"), ("x", "y"), frames=tuple(spans))  # fmt: skip
+    frames = np.array(spans)
+    queries, groups = p[[0, 3]], np.array([0, 3], dtype=object)
+    case_groups = np.arange(6).astype(object)
+    alone = held_out(cb, queries, np.array(["A", "A"]), groups, case_groups, k=1)
+    np.testing.assert_allclose(alone.nearest, [0.1, 0.1])  # its neighbour; 1.1's window
+    with_frames = held_out(cb, queries, np.array(["A", "A"]), groups, case_groups, k=1,
+                           frames=(frames[[0, 3]], frames))  # fmt: skip
+    # x = 0: 0.1 and 0.2 overlap it, the nearest left is 1.0; x = 1.0 overlaps nothing
+    np.testing.assert_allclose(with_frames.nearest, [1.0, 0.1])
+    assert with_frames.right.tolist() == [True, True]
+    # a query whose every other case of its label overlaps it cannot be answered right
+    lone = held_out(cb, p[[0]], np.array(["A"]), np.array([0], dtype=object), case_groups, k=1,
+                    frames=(np.array([[0, 1200]]), frames))  # fmt: skip
+    assert lone.truth.tolist() == [-1] and lone.nearest.tolist() == [5.0]

@@ -655,3 +655,29 @@ def test_classify_notes_a_whole_recording_against_a_case_base_of_windows(
     for db, data in ((windows, csv), (clips, recording)):
         assert main(["classify", str(data), "--db", str(db)]) == 0
         assert "note:" not in capsys.readouterr().err
+
+
+def test_windows_of_one_recording_are_calibrated_held_out_from_their_overlapping_ones(
+    shared_data: Path, recording: Path, tmp_path: Path
+) -> None:
+    """Windows cut from one recording every 0.5 s were held out one at a time for the
+    confidence and the "unlike" calibration: a window's nearest cases were the windows
+    overlapping it, so every held-out answer was right and every later answer got the
+    confidence of a sure one (0.96). They are now held out with the windows they overlap."""
+    from casebase_store import open_store
+    from cbr.stored import load_classifier
+
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    db = tmp_path / "w.sqlite"
+    argv = ["train", str(recording), "--frame-labels", str(labels), "--label-block", "0.1"]
+    assert main([*argv, "--db", str(db)]) == 0
+    store = open_store(db, create=False, readonly=True)
+    try:
+        clf = load_classifier(store, "default").classifier
+    finally:
+        store.close()
+    assert clf.confidence_.basis == clf.novelty_.basis == "leave-overlapping-out"
+    # 13_30's stretches (1.8-5.1 s) are its activities' only ones: only the windows of the
+    # stretches long enough to hold two windows that do not overlap can be answered, and
+    # not all are right
+    assert clf.confidence_.n < len(clf.case_base_) and clf.confidence_.accuracy < 1.0
