@@ -239,26 +239,32 @@ class _Choice:
 MAX_CALIBRATION_VECTORS = 2000
 
 
-def _one_recording_frames(cb: CaseBase, sources: np.ndarray) -> np.ndarray | None:
-    """The cases' frame ranges ``(n_cases, 2)`` (-1 where not known) when every training
-    clip is a piece of one named recording and some of them know where they lie in it; else
-    None (clips with no recording named: their frames all start at 0 and say nothing)."""
+def _one_recording_frames(
+    clips: Sequence[DescribedClip], cb: CaseBase, sources: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The training clips' and the cases' frame ranges, ``(n_clips, 2)`` and ``(n_cases, 2)``
+    (-1 where not known), when every clip is a piece of one named recording, each starting
+    at a frame of its own (windows, repetitions, labelled stretches); else None (clips of
+    files that share a name all start at frame 0: their frames say nothing of overlap)."""
     named = {str(s) for s in sources.tolist()}
-    if len(named) != 1 or named & {"", "None"}:
+    starts = [c.frames[0] for c in clips]
+    if len(named) != 1 or named & {"", "None"} or None in starts:
         return None
-    frames = np.array([(-1, -1) if a is None or b is None else (a, b) for a, b in cb.frames])
-    return frames if (frames[:, 0] >= 0).any() else None
+    if len(set(starts)) != len(starts):
+        return None
+    ranges = np.array([c.frames for c in clips], dtype=np.int64)
+    cases = np.array([(-1, -1) if a is None or b is None else (a, b) for a, b in cb.frames])
+    return ranges, cases.reshape(-1, 2)
 
 
-def _time_blocks(frames: np.ndarray, clip: np.ndarray, n: int) -> np.ndarray:
-    """Each of the ``n`` clips' time block ``(n,)``: the clips (pieces of one recording,
-    ``frames`` ``(q, 2)`` of clips ``clip`` ``(q,)``) by start frame, dealt into
-    :data:`~cbr.novelty.RANGE_FOLDS` runs of consecutive pieces, so that a fold of the
-    feature ranges holds out a stretch of time, not every other window of it."""
-    start = np.zeros(n)
-    start[clip] = frames[:, 0]
+def _time_blocks(ranges: np.ndarray) -> np.ndarray:
+    """Each clip's time block ``(n,)``: the clips (pieces of one recording, frame ranges
+    ``ranges`` ``(n, 2)``) by start frame, dealt into :data:`~cbr.novelty.RANGE_FOLDS` runs
+    of consecutive pieces, so that a fold of the feature ranges holds out a stretch of time,
+    not every other window of it."""
+    n = len(ranges)
     rank = np.empty(n, dtype=np.int64)
-    rank[np.argsort(start, kind="stable")] = np.arange(n)
+    rank[np.argsort(ranges[:, 0], kind="stable")] = np.arange(n)
     return np.asarray(rank * min(RANGE_FOLDS, n) // max(n, 1), dtype=object)
 
 
@@ -741,7 +747,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         # pieces cut from one recording (windows, repetitions, labelled stretches): held out
         # with the pieces whose frames overlap theirs, and in time blocks where folds are
         # dealt (the windows of one stretch, 0.5 s apart, are near copies of each other)
-        frames = _one_recording_frames(cb, sources) if basis == "leave-one-out" else None
+        frames = _one_recording_frames(clips, cb, sources) if basis == "leave-one-out" else None
         if frames is not None:
             basis = "leave-overlapping-out"
         query_clip = cases.origin[real]
@@ -756,7 +762,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             np.asarray(case_groups, dtype=object),
             int(self.k),
             self.weights,  # type: ignore[arg-type]
-            frames=None if frames is None else (frames[real][pick], frames),
+            frames=None if frames is None else (frames[0][query_clip][pick], frames[1]),
         )
         skeletons = tuple(sorted({c.skeleton for c in clips}))
         # every training clip's summary against the feature ranges and the nearest clip of
@@ -764,7 +770,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         # distance, calibrated on the clips whose distance was measured
         group_of = np.asarray(groups, dtype=object)
         if frames is not None:
-            group_of = _time_blocks(frames[real], query_clip, n)
+            group_of = _time_blocks(frames[0])
         clip_labels = np.empty(n, dtype=object)
         clip_labels[query_clip] = labels
         cases_d, case_clip, image, queries_d, config = self._summaries(
