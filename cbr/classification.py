@@ -37,7 +37,9 @@ SOLVE_CHUNK = 256  # clips per batched solve (one block of queries of the matrix
 class Classification:
     """One clip's answer: ``solved`` and ``explanation`` (None when the clip could not be
     classified: ``unclassifiable`` says why), and what feedback changed; ``source`` the file
-    passed and ``made_from`` what that pose file was made from (a video), if anything."""
+    passed and ``made_from`` what that pose file was made from (a video), if anything;
+    ``frames`` the clip's frames in that file (start, end exclusive) when it is a piece of it
+    (a labels CSV's ``start,end`` row, a labelled stretch), else None."""
 
     source: str
     true_label: str | None
@@ -47,13 +49,23 @@ class Classification:
     revision: Revision | None = None
     retention: RetainDecision | None = None
     made_from: str | None = None
+    frames: tuple[int, int] | None = None
 
     @property
     def label(self) -> str | None:
         return None if self.solved is None else self.solved.solution.label
 
+    @property
+    def name(self) -> str:
+        """The file passed, with the frames of it the clip is when a piece (end inclusive)."""
+        if self.frames is None:
+            return self.source
+        return f"{self.source} frames {self.frames[0]}-{self.frames[1] - 1}"
+
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"clip": self.source}
+        if self.frames is not None:
+            out["frames"] = list(self.frames)
         if self.made_from:
             out["made_from"] = self.made_from
         if self.explanation is not None and self.solved is not None:
@@ -150,10 +162,13 @@ def _classification(
     """One clip's answer from its :meth:`solve` result (or the reason it has none), explained."""
     made_from = clip.metadata.get("made_from")
     made = None if made_from is None else str(made_from)
+    piece = frames_of(clip) if "frame_offset" in clip.metadata else None
     if isinstance(solved, str):
-        return Classification(clip.source, truth, None, None, unclassifiable=solved, made_from=made)
+        return Classification(
+            clip.source, truth, None, None, unclassifiable=solved, made_from=made, frames=piece
+        )
     exp = clf.explain_solved(solved, target)
-    return Classification(clip.source, truth, solved, exp, made_from=made)
+    return Classification(clip.source, truth, solved, exp, made_from=made, frames=piece)
 
 
 def _solve(
@@ -188,6 +203,7 @@ def summarise(results: Sequence[Classification], target: str = "label") -> dict[
         "recall": recall,
         "wrong": [
             {"clip": r.source, "label": r.label, "true_label": r.true_label}
+            | ({} if r.frames is None else {"frames": list(r.frames)})
             for r in labelled
             if r.true_label != r.label
         ],
@@ -285,7 +301,7 @@ def classify_with_feedback(
                 assert c.solved is not None
                 dec, rev = _learn(store, stored, clip, c.solved, label, settings)
             c = Classification(
-                c.source, truth, c.solved, c.explanation, None, rev, dec, c.made_from
+                c.source, truth, c.solved, c.explanation, None, rev, dec, c.made_from, c.frames
             )
         out.append(c)
     write_matrices(store, stored.name)  # a large case base: its matrices follow the change

@@ -654,7 +654,14 @@ def test_classify_notes_a_whole_recording_against_a_case_base_of_windows(
     assert "posecbr segment" in err
     for db, data in ((windows, csv), (clips, recording)):
         assert main(["classify", str(data), "--db", str(db)]) == 0
-        assert "note:" not in capsys.readouterr().err
+        out, err = capsys.readouterr()
+        assert "note:" not in err
+        # a piece of a file is named with its frames (end inclusive); the whole file alone
+        first = out.splitlines()[0]
+        assert first.startswith(f"{recording} "), first
+        assert ("frames 300-779" in first) == (data == csv), first
+    assert main(["classify", str(csv), "--db", str(windows), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["results"][0]["frames"] == [300, 780]
 
 
 def test_windows_of_one_recording_are_calibrated_held_out_from_their_overlapping_ones(

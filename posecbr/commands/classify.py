@@ -291,7 +291,7 @@ def _print(
     if not args.quiet:
         for r in results:
             _print_one(r, args, target)
-    _print_summary(summary, target)
+    _print_summary(summary, target, results)
 
 
 def _print_one(r: Any, args: argparse.Namespace, target: str) -> None:
@@ -302,14 +302,14 @@ def _print_one(r: Any, args: argparse.Namespace, target: str) -> None:
 
     made = f" (from {shown(r.made_from)})" if r.made_from else ""
     if r.solved is None:
-        print(f"{shown(r.source)}{made}: unclassifiable ({shown(r.unclassifiable)})")
+        print(f"{shown(r.name)}{made}: unclassifiable ({shown(r.unclassifiable)})")
         return
     e = r.explanation
     lines = (e.verbose if args.verbose else e.text).splitlines()
     if args.verbose and args.top is not None:  # the similar cases are the "  case " lines
         cases = [i for i, line in enumerate(lines) if line.startswith("  case ")]
         lines = [line for i, line in enumerate(lines) if i not in cases[args.top :]]
-    head = f"{shown(r.source)}{made}: {shown(lines[0])}"
+    head = f"{shown(r.name)}{made}: {shown(lines[0])}"
     if r.true_label is not None:
         right = r.true_label == e.label
         head += "  [right]" if right else f"  [wrong: {shown(label_words(r.true_label, target))}]"
@@ -325,8 +325,9 @@ def _print_one(r: Any, args: argparse.Namespace, target: str) -> None:
         )
 
 
-def _print_summary(s: dict[str, Any], target: str) -> None:
-    """The closing summary: clips, accuracy and recall per class, flagged and wrong clips."""
+def _print_summary(s: dict[str, Any], target: str, results: list[Any]) -> None:
+    """The closing summary: clips, accuracy and recall per class, flagged and wrong clips
+    (each named with its frames when a piece of its file: ``results``' names)."""
     from cbr.explain import label_words
     from features.text import shown
 
@@ -346,8 +347,12 @@ def _print_summary(s: dict[str, Any], target: str) -> None:
         if s["expected_accuracy"] is not None:
             print(f"mean confidence: {s['expected_accuracy']:.3f}")
     for w in s["wrong"]:
-        print(f"wrong: {shown(w['clip'])}: {said(w['label'])}, true {said(w['true_label'])}")
-    for clip in s["unlike_cases"]:
-        print(f"unlike the stored cases: {shown(clip)}")
-    for clip in s["unclassifiable"]:
-        print(f"unclassifiable: {shown(clip)}")
+        frames = w.get("frames")
+        clip = w["clip"] if frames is None else f"{w['clip']} frames {frames[0]}-{frames[1] - 1}"
+        print(f"wrong: {shown(clip)}: {said(w['label'])}, true {said(w['true_label'])}")
+    flagged = [r for r in results if r.solved is not None and r.solved.unlike_cases]
+    for r in flagged:
+        print(f"unlike the stored cases: {shown(r.name)}")
+    for r in results:
+        if r.solved is None:
+            print(f"unclassifiable: {shown(r.name)}")
