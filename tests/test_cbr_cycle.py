@@ -164,3 +164,22 @@ def test_same_features_finds_cases_of_other_activities_within_a_thousandth() -> 
                   sources=tuple(f"f{i}.npz" for i in range(1, 9)))  # fmt: skip
     assert same_features(cb) == ["f2.npz (b) = f1.npz (a)", "f7.npz (e) = f6.npz (d)"]
     assert same_features(cb.subset(np.array([2, 3, 4, 5, 7]))) == []
+
+
+def test_trim_accuracy_leaves_out_the_windows_overlapping_each_case() -> None:
+    """Cases on a line (1-NN, every distance |x_i - x_j|), windows of one recording: A at x
+    0, 0.1, 0.2 (frames 0-240, 60-300, 120-360, all overlapping), B at 0.35, 0.45 (600-840,
+    660-900) and A at 1.0 (1200-1440). Each left out alone: 0 -> 0.1 A, 0.1 -> 0 or 0.2 A,
+    0.2 -> 0.1 A, 0.35 -> 0.45 B, 0.45 -> 0.35 B, 1.0 -> 0.45 B: 5 of 6 right. With the
+    windows overlapping it left out too: 0, 0.1, 0.2 -> 0.35 B, 0.35 and 0.45 -> 0.2 A, 1.0
+    -> 0.45 B: none right. From separate files, the first count stands."""
+    xs = [0.0, 0.1, 0.2, 0.35, 0.45, 1.0]
+    labels = ["A", "A", "A", "B", "B", "A"]
+    spans = [(0, 240), (60, 300), (120, 360), (600, 840), (660, 900), (1200, 1440)]
+    p = np.array([[x, 0.0] for x in xs])
+    for sources, right in ((("rec.npz",) * 6, 0.0), (tuple(f"{i}.npz" for i in range(6)), 5 / 6)):
+        cb = CaseBase(FeatureConfig(), Euclidean(exact=True), p, labels, ("x", "y"), ("x", "y"),
+                      ids=np.arange(6), sources=sources, frames=tuple(spans))  # fmt: skip
+        report = cnn(cb, k=1)
+        assert report.accuracy_before == pytest.approx(right)
+        assert ("overlapping" in report.measured) == (right == 0.0)
