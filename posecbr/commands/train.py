@@ -304,9 +304,17 @@ def _repetitions(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
     from features.repetitions import split_repetitions
 
     split = split_repetitions(clips)
-    whole = f" ({split.kept_whole} without a repetition kept whole)" if split.kept_whole else ""
+    whole = (
+        f"; {counted(split.kept_whole, 'clip')} without a repetition kept whole"
+        if split.kept_whole
+        else ""
+    )
     n_reps = len(split.clips) - split.kept_whole
-    pieces = f"{counted(len(clips), 'clip')} into {counted(n_reps, 'repetition')}"
+    n_cut = len(clips) - split.kept_whole
+    if not n_cut:
+        _note(args, f"kept {counted(len(clips), 'clip')} whole: no repetition found in any")
+        return split.clips
+    pieces = f"{counted(n_cut, 'clip')} into {counted(n_reps, 'repetition')}"
     _note(args, f"cut {pieces}{whole}")
     return split.clips
 
@@ -316,11 +324,20 @@ def _windows(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
     from features.repetitions import WINDOW_HOP_S, WINDOW_S, split_windows
 
     split = split_windows(clips)
-    whole = f" ({split.kept_whole} shorter than a window kept whole)" if split.kept_whole else ""
+    whole = (
+        f"; {counted(split.kept_whole, 'clip')} shorter than a window kept whole"
+        if split.kept_whole
+        else ""
+    )
     n_windows = len(split.clips) - split.kept_whole
+    n_cut = len(clips) - split.kept_whole
+    if not n_cut:
+        _note(args, f"kept {counted(len(clips), 'clip')} whole: each shorter than a window "
+                    f"of {WINDOW_S:g} s")  # fmt: skip
+        return split.clips
     _note(
         args,
-        f"cut {counted(len(clips), 'clip')} into {counted(n_windows, 'window')} of "
+        f"cut {counted(n_cut, 'clip')} into {counted(n_windows, 'window')} of "
         f"{WINDOW_S:g} s every {WINDOW_HOP_S:g} s{whole}",
     )
     return split.clips
