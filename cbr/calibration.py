@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .casebase import CaseBase
+from .casebase import CaseBase, overlapping
 from .reuse import EXACT, Weights, vote
 
 #: bins of the expected calibration error (equal width over [0, 1], as Guo et al. 2017)
@@ -126,25 +126,17 @@ def held_out(
     dist = np.full((q, wide), np.inf)
     code = np.zeros((q, wide), dtype=np.int64)
     held = held_elsewhere(labels, groups, cb.labels, case_groups)
+    case_labels = cb.labels.astype(str)
     for i, p in enumerate(queries):  # one full scan per query: the measure's array work
         d = measure.distances(measure.represent_query(p), index)
         out = case_groups == groups[i]
         if frames is not None:
-            out = out | _overlapping(frames[0][i], frames[1])
-            held[i] = bool(np.any(~out & (cb.labels.astype(str) == str(labels[i]))))
+            out = out | overlapping(frames[0][i], frames[1])
+            held[i] = bool(np.any(~out & (case_labels == str(labels[i]))))
         d = np.where(out, np.inf, d)
         top = np.argsort(d, kind="stable")[:wide]
         dist[i, : len(top)], code[i, : len(top)] = d[top], codes[top]
     return held_out_votes(dist, code, classes, labels, int(k), weights, held)
-
-
-def _overlapping(query: np.ndarray, cases: np.ndarray) -> np.ndarray:
-    """``(n,)`` bool: which of the frame ranges ``cases`` ``(n, 2)`` overlap ``query``
-    ``(2,)`` (start, end exclusive; -1: not known, overlapping nothing)."""
-    a, b = int(query[0]), int(query[1])
-    if a < 0:
-        return np.zeros(len(cases), dtype=bool)
-    return np.asarray((cases[:, 0] >= 0) & (cases[:, 0] < b) & (a < cases[:, 1]))
 
 
 def held_out_votes(

@@ -28,6 +28,22 @@ def frames_of(seq: Any) -> tuple[int, int]:
     return start, start + int(seq.n_frames)
 
 
+def frame_array(frames: Sequence[tuple[int | None, int | None]]) -> np.ndarray:
+    """``(n, 2)`` the frame ranges ``frames`` (start, end exclusive), ``(-1, -1)`` where not
+    known."""
+    rows = [(-1, -1) if a is None or b is None else (a, b) for a, b in frames]
+    return np.array(rows, dtype=np.int64).reshape(-1, 2)
+
+
+def overlapping(query: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: which of the frame ranges ``frames`` ``(n, 2)`` (:func:`frame_array`)
+    share a frame with ``query`` ``(2,)``; a range not known overlaps nothing."""
+    a, b = int(query[0]), int(query[1])
+    if a < 0:
+        return np.zeros(len(frames), dtype=bool)
+    return np.asarray((frames[:, 0] >= 0) & (frames[:, 0] < b) & (a < frames[:, 1]))
+
+
 def skeleton_of(seq: Any) -> str:
     """The skeleton the clip was recorded with (before conversion to the canonical one)."""
     return str(seq.metadata.get("source_skeleton", seq.skeleton))

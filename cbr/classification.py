@@ -33,6 +33,12 @@ from .stored import StoredClassifier, judges_after_change, load_classifier, writ
 SOLVE_CHUNK = 256  # clips per batched solve (one block of queries of the matrix product)
 
 
+def piece_name(source: str, frames: Sequence[int] | None) -> str:
+    """``source`` named with the frames of it a clip is (start, end exclusive; shown with the
+    end inclusive, as ``segment``'s table), or alone when the clip is the whole file."""
+    return source if frames is None else f"{source} frames {frames[0]}-{frames[1] - 1}"
+
+
 @dataclass(frozen=True)
 class Classification:
     """One clip's answer: ``solved`` and ``explanation`` (None when the clip could not be
@@ -58,9 +64,7 @@ class Classification:
     @property
     def name(self) -> str:
         """The file passed, with the frames of it the clip is when a piece (end inclusive)."""
-        if self.frames is None:
-            return self.source
-        return f"{self.source} frames {self.frames[0]}-{self.frames[1] - 1}"
+        return piece_name(self.source, self.frames)
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"clip": self.source}

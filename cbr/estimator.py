@@ -57,7 +57,7 @@ from .calibration import (
     held_out,
     held_out_votes,
 )
-from .casebase import CaseBase, skeleton_of
+from .casebase import CaseBase, frame_array, skeleton_of
 from .described import DescribedClip, describe_clips
 from .explain import Explanation, explain
 from .fitting import (
@@ -253,8 +253,7 @@ def _one_recording_frames(
     if len(set(starts)) != len(starts):
         return None
     ranges = np.array([c.frames for c in clips], dtype=np.int64)
-    cases = np.array([(-1, -1) if a is None or b is None else (a, b) for a, b in cb.frames])
-    return ranges, cases.reshape(-1, 2)
+    return ranges, frame_array(cb.frames)
 
 
 def _time_blocks(ranges: np.ndarray) -> np.ndarray:

@@ -31,7 +31,7 @@ from scipy.stats import rankdata
 from casebase_store import CaseBaseInfo, StoreTransaction
 from features.progress import progress
 
-from .casebase import CaseBase
+from .casebase import CaseBase, frame_array
 from .retrieve import retrieve
 from .reuse import Weights, decide, vote
 
@@ -166,9 +166,7 @@ def overlapping_pieces(cb: CaseBase) -> np.ndarray:
     clips that share a name, all from frame 0). Windows cut every 0.5 s are near copies of
     their neighbours: left out alone, a window is answered by them and every answer is
     right."""
-    n = len(cb)
-    frames = np.array([(-1, -1) if a is None or b is None else (a, b) for a, b in cb.frames])
-    frames = frames.reshape(n, 2)
+    frames = frame_array(cb.frames)
     names = np.array([str(x) for x in cb.sources], dtype=object)
     known = (frames[:, 0] >= 0) & ~np.isin(names, ["", "None"])
     for name in set(names.tolist()):

@@ -59,7 +59,7 @@ import numpy as np
 
 from features.errors import ConfigError, DataError
 
-from .casebase import CaseBase
+from .casebase import CaseBase, frame_array, overlapping
 from .novelty import NoveltyCalibration
 from .weights import MIRROR_FLAG
 
@@ -187,9 +187,8 @@ def _left_out(cb: CaseBase, basis: str, groups: np.ndarray, i: int) -> np.ndarra
     if basis != "time":
         return np.asarray(same)
     # a case whose frames are not known overlaps nothing but itself
-    frames = np.array([(-1, -1) if a is None or b is None else (a, b) for a, b in cb.frames])
-    a, b = frames[i]
-    overlap = (frames[:, 0] < b) & (a < frames[:, 1]) & (frames[:, 0] >= 0)
+    frames = frame_array(cb.frames)
+    overlap = overlapping(frames[i], frames)
     left_out: np.ndarray = np.asarray(same & overlap) | (np.arange(len(cb)) == i)
     return left_out
 

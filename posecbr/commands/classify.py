@@ -328,6 +328,7 @@ def _print_one(r: Any, args: argparse.Namespace, target: str) -> None:
 def _print_summary(s: dict[str, Any], target: str, results: list[Any]) -> None:
     """The closing summary: clips, accuracy and recall per class, flagged and wrong clips
     (each named with its frames when a piece of its file: ``results``' names)."""
+    from cbr.classification import piece_name
     from cbr.explain import label_words
     from features.text import shown
 
@@ -347,8 +348,7 @@ def _print_summary(s: dict[str, Any], target: str, results: list[Any]) -> None:
         if s["expected_accuracy"] is not None:
             print(f"mean confidence: {s['expected_accuracy']:.3f}")
     for w in s["wrong"]:
-        frames = w.get("frames")
-        clip = w["clip"] if frames is None else f"{w['clip']} frames {frames[0]}-{frames[1] - 1}"
+        clip = piece_name(w["clip"], w.get("frames"))
         print(f"wrong: {shown(clip)}: {said(w['label'])}, true {said(w['true_label'])}")
     flagged = [r for r in results if r.solved is not None and r.solved.unlike_cases]
     for r in flagged:

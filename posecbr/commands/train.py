@@ -366,13 +366,9 @@ def _clips(args: argparse.Namespace) -> list[Any]:
             progress_desc="loading clips",
         )
     )
-    stretches = False
-    if not args.frame_labels and clips:
-        from features.datasets import labelled_over_time
-
-        stretches = labelled_over_time(args.data)
-        if stretches:  # its flickers left out as --frame-labels' are
-            clips = _long_enough(args, clips)
+    stretches = bool(clips) and not args.frame_labels and args.over_time
+    if stretches:  # a labels CSV's recordings: its flickers left out as --frame-labels' are
+        clips = _long_enough(args, clips)
     if clips and not args.append:  # before the cutting is said: the refusal is one line
         from features.datasets import clip_target
 
@@ -553,6 +549,14 @@ def _read_frame_labels(args: argparse.Namespace) -> None:
     read_label_track(args.frame_labels, names)
 
 
+def _over_time(args: argparse.Namespace) -> bool:
+    """Whether DATA is recordings labelled over time: ``--frame-labels``, or a labels CSV with
+    a ``label_file`` (read once, after the store is checked)."""
+    from features.datasets import labelled_over_time
+
+    return args.frame_labels is not None or labelled_over_time(args.data)
+
+
 def _default_split(args: argparse.Namespace) -> str:
     """What a case is when ``--split`` is left out: a window for recordings labelled over time
     (``--frame-labels``, a labels CSV with a ``label_file``), as ``segment`` and ``watch`` cut
@@ -561,9 +565,7 @@ def _default_split(args: argparse.Namespace) -> str:
     from a new stretch too (CMU subject 13, each recording against the other two: 33-60 % of
     its 0.1-s blocks segmented right, 10 of its 18 seen stretches classified right, against
     94-98 % and 18 of 18 with a case per window)."""
-    from features.datasets import labelled_over_time
-
-    if args.frame_labels is None and not labelled_over_time(args.data):
+    if not args.over_time:
         return "clips"
     if args.scheduler is not None:
         raise ConfigError(
@@ -636,10 +638,12 @@ def run(args: argparse.Namespace) -> int:
         plan, uid, args.split, args.target = append_plan(
             args.db, args.name, args.target, args.split
         )
+        args.over_time = _over_time(args)
         _note_csv_names(args)
     else:
         args.target = args.target or "label"
         _check_new_store(args)
+        args.over_time = _over_time(args)
         _note_csv_names(args)
         args.split = args.split or _default_split(args)
         estimator = _estimator(args)
