@@ -14,7 +14,11 @@ none of them in the case base; Kinect with its incorrect repetitions), each move
 theirs once per round (``--rounds``, 2): the person's movements in a random order, cut into
 recordings of 3-4 movements, K repetitions of each (K drawn from 3-6, at most as many as
 recorded), joined as :mod:`benchmarks.segment_people` joins them
-(:func:`features.joining.join_repetitions`, 0.1 s of blending between repetitions).
+(:func:`features.joining.join_repetitions`, 0.1 s of blending between repetitions). Most
+recordings then hold none of CMU 13's exercises; ``--with-seen``: each holds one of them and
+2-3 others (``segment_cross_with_seen.json``), as the open question's recordings do, in case
+the judge's allowance for a far person (:func:`cbr.unknown.for_person`, read off the
+recording's own windows) took a recording of unseen movements alone for a far person.
 
 Each movement is expected to be named as one of CMU's exercises (:data:`EXPECTED`), or to be
 called unknown (not among CMU 13's seven), or is ambiguous (reported apart, in no goal):
@@ -109,10 +113,17 @@ def hdm05_groups() -> list[Group]:
 
 
 def recordings(
-    groups: list[Group], rng: np.random.Generator, read: Reader, round_: int = 1
+    groups: list[Group],
+    rng: np.random.Generator,
+    read: Reader,
+    round_: int = 1,
+    with_seen: bool = False,
 ) -> list[Recording]:
     """Every person's movements, each once, in a random order, cut into recordings of 3-4
-    movements of K (3-6, at most as recorded) random repetitions each."""
+    movements of K (3-6, at most as recorded) random repetitions each. ``with_seen``: the
+    movements CMU 13 did (:data:`EXPECTED`) are not among them; each recording holds 2-3 of
+    the others and one of those, taken in turn, at a random place (its repetitions drawn
+    anew): every recording is of a CMU exercise and others, as the open question's are."""
     from features.joining import join_repetitions
 
     by_person: dict[str, list[Group]] = defaultdict(list)
@@ -120,13 +131,20 @@ def recordings(
         by_person[g.person].append(g)
     out = []
     for person, mine in sorted(by_person.items()):
-        order = [mine[int(i)] for i in rng.permutation(len(mine))]
+        seen = [g for g in mine if expected(g.dataset, g.movement) not in (UNKNOWN, AMBIGUOUS)]
+        if not with_seen or not seen:
+            seen = []
+        rest = [g for g in mine if g not in seen]
+        order = [rest[int(i)] for i in rng.permutation(len(rest))]
+        lo, hi = MOVEMENTS_RANGE[0] - bool(seen), MOVEMENTS_RANGE[1] - bool(seen)
         parts: list[list[Group]] = []
         while order:
-            n = int(rng.integers(MOVEMENTS_RANGE[0], MOVEMENTS_RANGE[1] + 1))
-            n = len(order) if len(order) - n < MOVEMENTS_RANGE[0] else n
+            n = int(rng.integers(lo, hi + 1))
+            n = len(order) if len(order) - n < lo else n
             parts.append(order[:n])
             order = order[n:]
+        for r, part in enumerate(parts if seen else []):
+            part.insert(int(rng.integers(len(part) + 1)), seen[r % len(seen)])
         for r, chosen in enumerate(parts):
             reps, labels = [], []
             for g in chosen:
@@ -274,6 +292,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--rounds", type=int, default=2, help="recordings of every movement of every person"
     )
+    parser.add_argument(
+        "--with-seen",
+        action="store_true",
+        help="every recording one of CMU 13's exercises and 2-3 others (results go to "
+        "segment_cross_with_seen.json)",
+    )
     parser.add_argument("--no-dtw", action="store_true", help="leave the DTW baseline out")
     args = parser.parse_args(argv)
     if not UIPRMD.is_dir() or not HDM05.is_dir():
@@ -296,7 +320,11 @@ def main(argv: list[str] | None = None) -> int:
             else uiprmd_groups(dataset.split("-")[-1].capitalize())
         )
         rng = np.random.default_rng([args.seed, DATASETS.index(dataset)])
-        recs = [r for i in range(args.rounds) for r in recordings(groups, rng, read, i + 1)]
+        recs = [
+            r
+            for i in range(args.rounds)
+            for r in recordings(groups, rng, read, i + 1, args.with_seen)
+        ]
         preds = segment_all(clf, recs, judges)
         results[dataset] = {name: tally(dataset, recs, preds[name]) for name in judges}
         results[dataset]["recordings"] = [
@@ -316,6 +344,7 @@ def main(argv: list[str] | None = None) -> int:
         "command": "python -m benchmarks.segment_cross --datasets "
         + " ".join(args.datasets)
         + f" --seed {args.seed} --rounds {args.rounds}"
+        + (" --with-seen" if args.with_seen else "")
         + (" --no-dtw" if args.no_dtw else ""),
         "note": "case base: CMU subject 13's three recordings (windows); recordings: joined real "
         "single repetitions of HDM05 and UI-PRMD people (0.1 s of blending at each join)",
@@ -327,8 +356,9 @@ def main(argv: list[str] | None = None) -> int:
         "summary": summary,
         "results": results,
     }
-    write_json(result, RESULTS)
-    print(f"\nwrote {RESULTS.relative_to(ROOT)}")
+    out = RESULTS.with_name("segment_cross_with_seen.json") if args.with_seen else RESULTS
+    write_json(result, out)
+    print(f"\nwrote {out.relative_to(ROOT)}")
     return 0
 
 
