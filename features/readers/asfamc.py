@@ -361,7 +361,7 @@ def _read_amc_fast(
 
 def _frame_stride(lines: list[str]) -> int | None:
     """Lines per frame (its number and its bones) when every frame has as many lines, each
-    starting with its frame number; None otherwise."""
+    starting with its frame number, numbered one after another; None otherwise."""
     if not lines or not lines[0].isdigit():
         return None
     k = 1
@@ -369,6 +369,8 @@ def _frame_stride(lines: list[str]) -> int | None:
         k += 1
     if len(lines) % k or not all(line.isdigit() for line in lines[::k]):
         return None
+    if any(int(b) != int(a) + 1 for a, b in zip(lines[:-k:k], lines[k::k], strict=True)):
+        return None  # frames missing or out of order: the line by line parser names them
     return k
 
 
@@ -428,7 +430,7 @@ def _read_amc_by_line(
             continue
         tokens = line.split()
         if len(tokens) == 1 and tokens[0].isdigit():
-            frames.next_frame(line_no)
+            frames.next_frame(line_no, int(tokens[0]))
         else:
             frames.add(tokens, line_no, n_dof, skeleton.path.name)
     return Motion(path, frames.values(), frames.n_frames, deg)
@@ -444,9 +446,19 @@ class _AmcFrames:
         self.n_frames = 0
         self.seen: set[str] = set()
         self.first: set[str] | None = None
+        self.number: int | None = None  # the frame number last read
 
-    def next_frame(self, line_no: int) -> None:
-        """A frame number: the frame before it must list the bones the first one lists."""
+    def next_frame(self, line_no: int, number: int) -> None:
+        """A frame number: one more than the frame before it (a gap would join the frames
+        around it as if no time passed between them), and the frame before it must list the
+        bones the first one lists."""
+        if self.number is not None and number != self.number + 1:
+            raise DataError(
+                f"line {line_no}: frame {number} follows frame {self.number} (AMC frames are"
+                " numbered one after another: frames missing or out of order?)",
+                self.path,
+            )
+        self.number = number
         if self.n_frames == 1:
             self.first = set(self.seen)
         elif self.first is not None and self.seen != self.first:
