@@ -35,7 +35,7 @@ from __future__ import annotations
 import csv
 import re
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -85,8 +85,9 @@ class _Entry:
     path: Path  # the file it is read from
     # a recording labelled over time: its labelled stretches, each with its label
     pieces: Callable[[PoseSequence], list[tuple[PoseSequence, str]]] | None = None
-    # what can be checked before the file is read (a recording's label file)
-    check: Callable[[], None] | None = None
+    # what can be checked before the file is read (a recording's label file), given the
+    # frame rate that replaces the file's (None: the file's own)
+    check: Callable[[float | None], None] | None = None
 
 
 def _suffix(path: Path) -> str:
@@ -704,16 +705,18 @@ def split_by_track(seq: PoseSequence, track: LabelTrack) -> list[tuple[PoseSeque
     return [(stretch(seq, a, b), lab) for a, b, lab in labelled_stretches(per_frame)]
 
 
-def check_track(path: Path, track: LabelTrack) -> None:
+def check_track(path: Path, track: LabelTrack, fps: float | None = None) -> None:
     """What can be checked of a recording labelled over time before it is read: its label
     file (and names) read, and, for a pose file, the count fitted to its frames (the
-    header's frame count and rate, :func:`features.poses.pose_file_length`; other formats
-    are checked once read). DataError naming the label file, as :func:`split_by_track`."""
+    header's frame count and rate, or ``fps`` when given,
+    :func:`features.poses.pose_file_length`; other formats are checked once read).
+    DataError naming the label file, as :func:`split_by_track`."""
     names = read_label_names(track.names) if track.names is not None else None
     labels = read_label_track(track.path, names)
     if _suffix(path) in POSE_SUFFIXES:
-        n_frames, fps = pose_file_length(path)
-        frame_labels(labels, n_frames, fps, track.block_s, track.path, path.name)
+        n_frames, rate = pose_file_length(path)
+        rate = rate if fps is None else fps
+        frame_labels(labels, n_frames, rate, track.block_s, track.path, path.name)
 
 
 def _track_entry(rec: dict[str, Any]) -> _Entry:
@@ -726,7 +729,7 @@ def _track_entry(rec: dict[str, Any]) -> _Entry:
         rec["path"].name,
         rec["path"],
         pieces=lambda seq: split_by_track(seq, track),
-        check=lambda: check_track(rec["path"], track),
+        check=lambda fps: check_track(rec["path"], track, fps),
     )
 
 
@@ -825,6 +828,7 @@ class DatasetEntry:
     movements: Collection[str] | None = None
     episodes: Collection[int] | None = None
     correct: bool | None = None
+    fps: float | None = None  # the frame rate that replaces the file's, None: the file's
 
     @property
     def name(self) -> str:
@@ -839,6 +843,8 @@ class DatasetEntry:
         recording labelled over time), without those that fail the filters."""
         e = self.entry
         whole = e.load()
+        if self.fps is not None:  # before a label file in seconds is laid over its frames
+            whole = replace(whole, fps=float(self.fps)).with_metadata(fps_source="given")
         pieces = e.pieces(whole) if e.pieces is not None else [(whole, e.label)]
         out = []
         for seq, piece_label in pieces:
@@ -867,17 +873,20 @@ def dataset_entries(
     movements: Collection[str] | None = None,
     episodes: Collection[int] | None = None,
     correct: bool | None = None,
+    fps: float | None = None,
 ) -> list[DatasetEntry]:
     """The clips of the dataset at ``path`` that may pass the filters (those of
     :func:`iter_dataset`), found from names alone: nothing is decoded yet. The label file
     of every recording labelled over time is read and fitted to the recording where that
     is cheap (:func:`check_track`), and every AMC file's skeleton found (:func:`find_asf`):
     one label file named for two recordings of different lengths, a malformed one, or an
-    AMC file with no skeleton beside it is refused before the first file is worked on."""
+    AMC file with no skeleton beside it is refused before the first file is worked on.
+    ``fps``: the frame rate of every clip, in place of the files' own (None: their own);
+    a label file in seconds is laid over the frames at that rate."""
     path = Path(path)
     kind = detect_kind(path)
     kept = [
-        DatasetEntry(e, kind, labels, subjects, movements, episodes, correct)
+        DatasetEntry(e, kind, labels, subjects, movements, episodes, correct, fps)
         for e in _entries(path, kind, sensor)
         if _keep(e.label, e.subject, e.extras, labels, subjects, movements, episodes, correct)
     ]
@@ -889,7 +898,7 @@ def dataset_entries(
                 listed[folder] = [p for p in folder.iterdir() if p.suffix.lower() == ".asf"]
             find_asf(d.entry.path, listed[folder])  # one without a skeleton: refused first
         if d.entry.check is not None:
-            d.entry.check()
+            d.entry.check(fps)
     return kept
 
 
@@ -904,17 +913,20 @@ def iter_dataset(
     episodes: Collection[int] | None = None,
     correct: bool | None = None,
     limit: int | None = None,
+    fps: float | None = None,
 ) -> Iterator[Clip]:
     """Labelled clips of the dataset at ``path`` (kind detected by :func:`detect_kind`).
 
     Filters (None = all): ``labels``, ``subjects`` ("s01", "bd"), ``movements`` (UI-PRMD
     "m01"), ``episodes`` (UI-PRMD episode / HDM05 take), ``correct``; ``limit`` caps the
-    number of clips. Clips are read one at a time, with a progress bar. A clip without a label
-    (a pose file whose metadata has none) raises DataError naming it.
+    number of clips; ``fps`` replaces every clip's frame rate before a recording labelled
+    over time is cut by its label file. Clips are read one at a time, with a progress bar. A
+    clip without a label (a pose file whose metadata has none) raises DataError naming it.
     """
     path = Path(path)
     entries = dataset_entries(path, sensor=sensor, labels=labels, subjects=subjects,
-                              movements=movements, episodes=episodes, correct=correct)  # fmt: skip
+                              movements=movements, episodes=episodes, correct=correct,
+                              fps=fps)  # fmt: skip
     if limit is not None and entries and entries[0].kind not in ("class_folders", "pose_folder"):
         # Everything these filters test is known from the names; the folder kinds learn the
         # subject only from the file, so they stop after ``limit`` clips instead.

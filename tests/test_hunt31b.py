@@ -56,3 +56,44 @@ def test_convert_refuses_an_amc_file_with_a_gap_in_one_line(
     asf, amc = _write(tmp_path, asf=ASF, amc=_renumbered([1, 2, 4]))
     argv = ["convert", str(amc), "--asf", str(asf), "--out", str(tmp_path / "out")]
     refused(argv, tmp_path, capsys, str(amc), "line 14: frame 4 follows frame 2")
+
+
+def _labelled_recording(tmp_path: Path, recording: Path, labels: str) -> Path:
+    """A labels CSV naming ``recording`` labelled over time, one label per 0.1 s."""
+    (tmp_path / "track.txt").write_text(labels)
+    csv = tmp_path / "list.csv"
+    csv.write_text(f"path,label_file,label_block_s\n{recording},track.txt,0.1\n")
+    return csv
+
+
+def test_convert_fps_cuts_a_recording_by_its_label_file_at_that_rate(tmp_path: Path) -> None:
+    """``convert LIST.csv --fps R``: the label file (one label per 0.1 s) is laid over the
+    frames at R fps, the rate the pose files are written with. It was laid over them at the
+    file's own rate, and the pieces then relabelled R fps: each stretch cut at the wrong
+    frames, and a label file that fitted the recording at R fps refused. 24 frames (30 fps
+    in the file) at 60 fps are 0.4 s: labels a a b b cover frames 0-11 and 12-23."""
+    from features.poses import load_pose
+    from posecbr.cli import main
+    from tests.badinput import good_pose_file
+
+    rec = good_pose_file(tmp_path / "rec.npz", frames=24)
+    csv = _labelled_recording(tmp_path, rec, "a a b b\n")
+    out = tmp_path / "out"
+    assert main(["convert", str(csv), "--out", str(out), "--fps", "60"]) == 0
+    first, second = load_pose(out / "rec.npz"), load_pose(out / "rec_2.npz")
+    assert (first.metadata["label"], first.n_frames, first.fps) == ("a", 12, 60.0)
+    assert (second.metadata["label"], second.n_frames, second.fps) == ("b", 12, 60.0)
+    assert second.metadata["frame_offset"] == 12
+
+
+def test_convert_fps_refuses_a_label_file_that_does_not_fit_at_that_rate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An AMC recording of 3 frames is 0.025 s at 120 fps (one 0.1-s label) but 0.3 s at
+    10 fps (three): one label at --fps 10 is refused, naming the label file; it was cut at
+    120 fps and written as 10 fps without a word."""
+    asf, amc = _write(tmp_path)
+    csv = _labelled_recording(tmp_path, amc, "a\n")
+    argv = ["convert", str(csv), "--out", str(tmp_path / "out"), "--fps", "10"]
+    refused(argv, tmp_path, capsys, "track.txt", "1 labels (one per 0.1 s) do not fit the"
+            " recording t_60.AMC: 3 frames at 10 fps need 3")  # fmt: skip

@@ -345,6 +345,7 @@ def _clips(args: argparse.Namespace) -> Iterator[tuple[Clip, str]]:
         episodes=parse_ranges(args.episodes),
         correct=correct,
         limit=args.limit,
+        fps=args.fps,  # a label file in seconds is laid over the frames at this rate
     )
     for clip in clips:
         stem = Path(clip.seq.source).name.split(".")[0] if clip.seq.source else kind
