@@ -97,3 +97,26 @@ def test_convert_fps_refuses_a_label_file_that_does_not_fit_at_that_rate(
     argv = ["convert", str(csv), "--out", str(tmp_path / "out"), "--fps", "10"]
     refused(argv, tmp_path, capsys, "track.txt", "1 labels (one per 0.1 s) do not fit the"
             " recording t_60.AMC: 3 frames at 10 fps need 3")  # fmt: skip
+
+
+def test_asf_units_written_on_one_line(tmp_path: Path) -> None:
+    """``:units mass 1.0 length 0.5 angle deg`` on one line (the statements usually have a
+    line each): the words after ``:units`` were dropped, so the length unit stayed 1 and the
+    person came out half as tall (0.45 in CMU's files: 0.68 m instead of 1.51 m). The test
+    chain's first bone is 10 units along +x: 10 x 0.0254 / 0.5 = 0.508 m."""
+    from features.skeleton import JOINT_INDEX
+
+    units = ":units\n  mass 1.0\n  length 0.5\n  angle deg\n"
+    assert units in ASF
+    asf = ASF.replace(units, ":units mass 1.0 length 0.5 angle deg\n")
+    seq = read_asf_amc(*_write(tmp_path, asf=asf))
+    np.testing.assert_allclose(seq.positions[0, JOINT_INDEX["left_hip"]], [0.508, 0, 0])
+    # radians said there hold for the axes too: lfemur's axis 0 0 pi/2 is 90 degrees
+    rad = asf.replace("angle deg", "angle rad").replace(
+        "axis 0 0 90 XYZ", "axis 0 0 1.5707963267948966 XYZ"
+    )
+    seq = read_asf_amc(*_write(tmp_path, asf=rad))
+    np.testing.assert_allclose(seq.positions[2, JOINT_INDEX["left_knee"]], [0.508, 0, -0.508],
+                               atol=1e-9)  # fmt: skip
+    with pytest.raises(DataError, match="line 4: :units 'mass 1.0 length' is not name value"):
+        read_asf_amc(*_write(tmp_path, asf=ASF.replace(units, ":units mass 1.0 length\n")))

@@ -190,8 +190,23 @@ def _asf_sections(lines: list[str], path: Path) -> Iterator[tuple[str, int, list
             raise DataError(f"line {line_no}: {head!r} without a value", path)
         if head.startswith(":"):
             section = head[1:]
+            if section == "units":  # ``:units mass 1.0 length 0.45 angle deg`` on one line
+                yield from _unit_pairs(tokens[1:], path, line_no)
             continue
         yield section, line_no, tokens
+
+
+def _unit_pairs(
+    tokens: list[str], path: Path, line_no: int
+) -> Iterator[tuple[str, int, list[str]]]:
+    """The ``name value`` statements written on the ``:units`` line itself, as if each had
+    a line of its own (as they usually do)."""
+    if len(tokens) % 2:
+        raise DataError(
+            f"line {line_no}: :units {' '.join(tokens)[:40]!r} is not name value pairs", path
+        )
+    for k in range(0, len(tokens), 2):
+        yield "units", line_no, tokens[k : k + 2]
 
 
 def _units_line(skel: Skeleton, tokens: list[str], line_no: int) -> None:
