@@ -120,3 +120,15 @@ def test_asf_units_written_on_one_line(tmp_path: Path) -> None:
                                atol=1e-9)  # fmt: skip
     with pytest.raises(DataError, match="line 4: :units 'mass 1.0 length' is not name value"):
         read_asf_amc(*_write(tmp_path, asf=ASF.replace(units, ":units mass 1.0 length\n")))
+
+
+def test_asf_documentation_is_free_text(tmp_path: Path) -> None:
+    """A line of ``:documentation`` that is one of the ASF's keywords alone ("Length", a
+    heading of the notes) was refused as "'length' without a value": the notes are text."""
+    asf = ASF.replace(":documentation\n", ":documentation\n  Length\n  measured, axis\n  name\n")
+    with_notes = read_asf_amc(*_write(tmp_path, asf=asf))
+    np.testing.assert_array_equal(with_notes.positions, read_asf_amc(*_write(tmp_path)).positions)
+    # in a bone block the keyword alone is still refused
+    bad = ASF.replace("     length 10\n     axis 0 0 90", "     length\n     axis 0 0 90")
+    with pytest.raises(DataError, match="line 29: 'length' without a value"):
+        read_asf_amc(*_write(tmp_path, asf=bad))

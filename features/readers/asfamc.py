@@ -175,6 +175,7 @@ def read_asf(path: str | Path) -> Skeleton:
 
 
 _NEEDS_VALUE = frozenset({"name", "axis", "order", "direction", "length"})
+_STATEMENTS = frozenset({"units", "root", "bonedata"})  # not free text (``:documentation``)
 
 
 def _asf_sections(lines: list[str], path: Path) -> Iterator[tuple[str, int, list[str]]]:
@@ -186,7 +187,7 @@ def _asf_sections(lines: list[str], path: Path) -> Iterator[tuple[str, int, list
         if not tokens:
             continue
         head = tokens[0].lower()
-        if len(tokens) < 2 and head in _NEEDS_VALUE:
+        if len(tokens) < 2 and head in _NEEDS_VALUE and section in _STATEMENTS:
             raise DataError(f"line {line_no}: {head!r} without a value", path)
         if head.startswith(":"):
             section = head[1:]
