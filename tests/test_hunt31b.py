@@ -132,3 +132,24 @@ def test_asf_documentation_is_free_text(tmp_path: Path) -> None:
     bad = ASF.replace("     length 10\n     axis 0 0 90", "     length\n     axis 0 0 90")
     with pytest.raises(DataError, match="line 29: 'length' without a value"):
         read_asf_amc(*_write(tmp_path, asf=bad))
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (("ltibia -90\n", ""), "line 13: frame 1 is incomplete: no ltibia"),
+        (
+            ("ltibia -90\n", "ltibia -90\nlfemur 0\n"),
+            "line 14: bone 'lfemur' is listed twice in frame 1",
+        ),
+        (("lfemur 90\n", "lfemur nan\n"), "bone 'lfemur': not a finite number in frame 2"),
+    ],
+)
+def test_amc_messages_name_frames_by_the_files_numbers(
+    tmp_path: Path, change: tuple[str, str], message: str
+) -> None:
+    """A file numbered from 0: a frame is named by the number the file gives it (they were
+    counted from 1, so "frame 2" was the file's frame 1, the one after the frame named)."""
+    amc = _renumbered([0, 1, 2]).replace(*change)
+    with pytest.raises(DataError, match=message):
+        read_asf_amc(*_write(tmp_path, amc=amc))

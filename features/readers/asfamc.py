@@ -117,6 +117,7 @@ class Motion:
     values: dict[str, np.ndarray]
     n_frames: int
     angle_deg: bool | None
+    first_number: int = 1  # the first frame's number in the file (0 or 1, usually)
 
 
 def _floats(tokens: list[str], path: Path, line_no: int, n: int | None = None) -> np.ndarray:
@@ -372,7 +373,7 @@ def _read_amc_fast(
         values[column[0]] = column[1]
     if "root" not in values:
         return None
-    return Motion(path, values, n_frames, angle_deg)
+    return Motion(path, values, n_frames, angle_deg, int(lines[0]))
 
 
 def _frame_stride(lines: list[str]) -> int | None:
@@ -449,7 +450,7 @@ def _read_amc_by_line(
             frames.next_frame(line_no, int(tokens[0]))
         else:
             frames.add(tokens, line_no, n_dof, skeleton.path.name)
-    return Motion(path, frames.values(), frames.n_frames, deg)
+    return Motion(path, frames.values(), frames.n_frames, deg, frames.first_number)
 
 
 class _AmcFrames:
@@ -462,35 +463,39 @@ class _AmcFrames:
         self.n_frames = 0
         self.seen: set[str] = set()
         self.first: set[str] | None = None
-        self.number: int | None = None  # the frame number last read
+        self.number: int | None = None  # the frame number last read, as the file has it
+        self.first_number = 1
 
     def next_frame(self, line_no: int, number: int) -> None:
         """A frame number: one more than the frame before it (a gap would join the frames
         around it as if no time passed between them), and the frame before it must list the
         bones the first one lists."""
-        if self.number is not None and number != self.number + 1:
+        if self.n_frames == 1:
+            self.first = set(self.seen)
+        elif self.first is not None and self.seen != self.first:
+            raise DataError(f"line {line_no}: {self._mismatch()}", self.path)
+        if self.number is None:
+            self.first_number = number
+        elif number != self.number + 1:
             raise DataError(
                 f"line {line_no}: frame {number} follows frame {self.number} (AMC frames are"
                 " numbered one after another: frames missing or out of order?)",
                 self.path,
             )
         self.number = number
-        if self.n_frames == 1:
-            self.first = set(self.seen)
-        elif self.first is not None and self.seen != self.first:
-            raise DataError(f"line {line_no}: {self._mismatch()}", self.path)
         self.n_frames += 1
         self.seen = set()
 
     def _mismatch(self) -> str:
-        """How the current frame's bones differ from the first frame's, in words."""
+        """How the current frame's bones differ from the first frame's, in words (frames by
+        their numbers in the file)."""
         assert self.first is not None
         lacks, extra = sorted(self.first - self.seen), sorted(self.seen - self.first)
         if lacks:
-            return f"frame {self.n_frames} is incomplete: no {', '.join(lacks[:5])}"
+            return f"frame {self.number} is incomplete: no {', '.join(lacks[:5])}"
         return (
-            f"frame {self.n_frames} lists {', '.join(extra[:5])}, which frame 1 does not (every"
-            " frame must list the same bones)"
+            f"frame {self.number} lists {', '.join(extra[:5])}, which frame"
+            f" {self.first_number} does not (every frame must list the same bones)"
         )
 
     def add(
@@ -512,7 +517,7 @@ class _AmcFrames:
             )
         if name in self.seen:
             raise DataError(
-                f"line {line_no}: bone {name!r} is listed twice in frame {self.n_frames}",
+                f"line {line_no}: bone {name!r} is listed twice in frame {self.number}",
                 self.path,
             )
         self.rows.setdefault(name, []).append(tokens[1:])
@@ -544,7 +549,8 @@ def _finite(motion: Motion) -> Motion:
     """AMC has no missing values: nan or inf is a damaged file."""
     for name, values in motion.values.items():
         if not np.isfinite(values).all():
-            frame = int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0]) + 1
+            frame = int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0])
+            frame += motion.first_number  # as the file numbers it
             raise DataError(f"bone {name!r}: not a finite number in frame {frame}", motion.path)
     return motion
 
