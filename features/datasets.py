@@ -462,8 +462,17 @@ def _clip_path(path: str, line_no: int, csv_path: Path) -> Path:
     if not clip.is_absolute():
         clip = csv_path.parent / clip
     if not _exists(clip, f"line {line_no}: ", csv_path):
-        raise DataError(f"line {line_no}: no such file {path[:200]}", csv_path)
+        raise DataError(f"line {line_no}: {_no_such_file(path, clip)}", csv_path)
     return clip
+
+
+def _no_such_file(value: str, looked_for: Path) -> str:
+    """What a labels CSV's missing file is, in words; a relative path says where it was
+    looked for (from the CSV's folder, not the working folder)."""
+    if Path(value).is_absolute():
+        return f"no such file {value[:200]}"
+    where = str(looked_for)[:200]
+    return f"no such file {value[:200]} (looked for {where}: paths are from the CSV's folder)"
 
 
 def _frame_range(
@@ -554,7 +563,7 @@ def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTr
         f = Path(value)
         f = f if f.is_absolute() else csv_path.parent / f
         if not f.is_file():
-            raise DataError(f"line {line_no}: no such file {value}", csv_path)
+            raise DataError(f"line {line_no}: {_no_such_file(value, f)}", csv_path)
         return f
 
     block: float | None = None

@@ -153,3 +153,28 @@ def test_amc_messages_name_frames_by_the_files_numbers(
     amc = _renumbered([0, 1, 2]).replace(*change)
     with pytest.raises(DataError, match=message):
         read_asf_amc(*_write(tmp_path, amc=amc))
+
+
+def test_a_labels_csv_names_where_it_looked_for_a_relative_path(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A labels CSV in another folder naming its files from the working folder (as the
+    commands' own arguments are): "no such file cmu/names.txt" of a file that is there, seen
+    from where the user stands. The line says where it was looked for."""
+    from tests.badinput import good_pose_file
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "cmu").mkdir()
+    good_pose_file(tmp_path / "cmu" / "rec.npz", frames=24)
+    (tmp_path / "cmu" / "track.txt").write_text("a a b b a a b b\n")
+    (tmp_path / "cmu" / "names.txt").write_text("a Squat\nb Jog\n")
+    (tmp_path / "lists").mkdir()
+    csv = tmp_path / "lists" / "train.csv"
+    csv.write_text("path,label_file,label_block_s,label_names\n"
+                   "../cmu/rec.npz,../cmu/track.txt,0.1,cmu/names.txt\n")  # fmt: skip
+    refused(["train", "lists/train.csv", "--db", "cb.sqlite"], tmp_path, capsys,
+            "lists/train.csv: line 2: no such file cmu/names.txt (looked for"
+            " lists/cmu/names.txt: paths are from the CSV's folder)")  # fmt: skip
+    csv.write_text("path,label\ncmu/rec.npz,squat\n")
+    refused(["train", "lists/train.csv", "--db", "cb.sqlite"], tmp_path, capsys,
+            "line 2: no such file cmu/rec.npz (looked for lists/cmu/rec.npz: ")  # fmt: skip
