@@ -43,6 +43,7 @@ import numpy as np
 
 from features.errors import DataError
 from features.progress import progress
+from features.text import counted
 
 from .poses import PoseSequence, load_pose, pose_file_length
 from .readers.asfamc import hdm05_metadata, read_asf_amc
@@ -684,9 +685,10 @@ def frame_labels(
         unit = "frame" if block_s is None else f"{block_s:g} s"
         need = str(low) if low == high else f"{low} or {high}"
         raise DataError(
-            f"{len(labels)} labels (one per {unit}) do not fit the recording"
-            f"{' ' + recording if recording else ''}: {n_frames} frames at {fps:g} fps need"
-            f" {need} (another frame rate or label block?)",
+            f"{counted(len(labels), 'label')} (one per {unit})"
+            f" {'does' if len(labels) == 1 else 'do'} not fit the recording"
+            f"{' ' + recording if recording else ''}: {counted(n_frames, 'frame')} at {fps:g}"
+            f" fps need {need} (another frame rate or label block?)",
             where,
         )
     block = np.floor(np.arange(n_frames) / per_block + 1e-9).astype(np.int64)

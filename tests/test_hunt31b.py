@@ -95,7 +95,7 @@ def test_convert_fps_refuses_a_label_file_that_does_not_fit_at_that_rate(
     asf, amc = _write(tmp_path)
     csv = _labelled_recording(tmp_path, amc, "a\n")
     argv = ["convert", str(csv), "--out", str(tmp_path / "out"), "--fps", "10"]
-    refused(argv, tmp_path, capsys, "track.txt", "1 labels (one per 0.1 s) do not fit the"
+    refused(argv, tmp_path, capsys, "track.txt", "1 label (one per 0.1 s) does not fit the"
             " recording t_60.AMC: 3 frames at 10 fps need 3")  # fmt: skip
 
 
@@ -178,3 +178,16 @@ def test_a_labels_csv_names_where_it_looked_for_a_relative_path(
     csv.write_text("path,label\ncmu/rec.npz,squat\n")
     refused(["train", "lists/train.csv", "--db", "cb.sqlite"], tmp_path, capsys,
             "line 2: no such file cmu/rec.npz (looked for lists/cmu/rec.npz: ")  # fmt: skip
+
+
+def test_a_label_file_too_long_for_a_one_frame_recording_counts_in_words() -> None:
+    """A label file of 24 for a recording of one frame read "... do not fit the recording
+    one.amc: 1 frames at 120 fps": a count of one is singular, as the verb of one label is."""
+    from features.datasets import frame_labels
+
+    with pytest.raises(DataError, match=r"3 labels \(one per frame\) do not fit the recording"
+                       r" one.amc: 1 frame at 120 fps need 1 or 2 "):  # fmt: skip
+        frame_labels(["a", "a", "b"], 1, 120.0, None, "t.txt", "one.amc")
+    with pytest.raises(DataError, match=r"^t.txt: 1 label \(one per 0.1 s\) does not fit the"
+                       r" recording: 24 frames at 120 fps need 2 "):  # fmt: skip
+        frame_labels(["a"], 24, 120.0, 0.1, "t.txt")

@@ -52,7 +52,7 @@ def test_block_labels_land_on_their_frames() -> None:
 def test_a_label_count_that_does_not_fit_is_refused(
     n_labels: int, frames: int, block: float | None
 ) -> None:
-    with pytest.raises(DataError, match="do not fit the recording") as info:
+    with pytest.raises(DataError, match="not fit the recording") as info:
         frame_labels(["a"] * n_labels, frames, 120.0, block, "labels.txt")
     assert info.value.source == "labels.txt"
 
