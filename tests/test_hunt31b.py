@@ -191,3 +191,12 @@ def test_a_label_file_too_long_for_a_one_frame_recording_counts_in_words() -> No
     with pytest.raises(DataError, match=r"^t.txt: 1 label \(one per 0.1 s\) does not fit the"
                        r" recording: 24 frames at 120 fps need 2 "):  # fmt: skip
         frame_labels(["a"], 24, 120.0, 0.1, "t.txt")
+
+
+def test_an_amc_line_of_a_superscript_digit_is_no_frame_number(tmp_path: Path) -> None:
+    """Byte 0xB2 read as latin-1 is "²", a digit to ``str.isdigit``: as a line of its own it
+    was taken for a frame number, which int() cannot read (a traceback once frame numbers
+    were checked). It is a line that is no bone of the skeleton."""
+    amc = AMC.replace("2\nroot 1 2 3", "\xb2\nroot 1 2 3")
+    with pytest.raises(DataError, match="line 9: bone '\xb2' is not in the skeleton"):
+        read_asf_amc(*_write(tmp_path, amc=amc))

@@ -376,15 +376,21 @@ def _read_amc_fast(
     return Motion(path, values, n_frames, angle_deg, int(lines[0]))
 
 
+def _is_frame_number(text: str) -> bool:
+    """Whether a line is a frame number: ASCII digits (``"²"``, a latin-1 byte read as a
+    superscript, is a digit to ``str.isdigit`` but no number to ``int``)."""
+    return text.isascii() and text.isdigit()
+
+
 def _frame_stride(lines: list[str]) -> int | None:
     """Lines per frame (its number and its bones) when every frame has as many lines, each
     starting with its frame number, numbered one after another; None otherwise."""
-    if not lines or not lines[0].isdigit():
+    if not lines or not _is_frame_number(lines[0]):
         return None
     k = 1
-    while k < len(lines) and not lines[k].isdigit():
+    while k < len(lines) and not _is_frame_number(lines[k]):
         k += 1
-    if len(lines) % k or not all(line.isdigit() for line in lines[::k]):
+    if len(lines) % k or not all(_is_frame_number(line) for line in lines[::k]):
         return None
     if any(int(b) != int(a) + 1 for a, b in zip(lines[:-k:k], lines[k::k], strict=True)):
         return None  # frames missing or out of order: the line by line parser names them
@@ -446,7 +452,7 @@ def _read_amc_by_line(
         if not line or line.startswith(("#", ":")):
             continue
         tokens = line.split()
-        if len(tokens) == 1 and tokens[0].isdigit():
+        if len(tokens) == 1 and _is_frame_number(tokens[0]):
             frames.next_frame(line_no, int(tokens[0]))
         else:
             frames.add(tokens, line_no, n_dof, skeleton.path.name)
