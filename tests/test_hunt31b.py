@@ -10,6 +10,7 @@ import pytest
 
 from features.errors import DataError
 from features.readers.asfamc import read_asf_amc
+from features.skeleton import JOINT_INDEX
 from tests.badinput import refused
 from tests.test_readers_asfamc import AMC, ASF, _write
 
@@ -104,8 +105,6 @@ def test_asf_units_written_on_one_line(tmp_path: Path) -> None:
     line each): the words after ``:units`` were dropped, so the length unit stayed 1 and the
     person came out half as tall (0.45 in CMU's files: 0.68 m instead of 1.51 m). The test
     chain's first bone is 10 units along +x: 10 x 0.0254 / 0.5 = 0.508 m."""
-    from features.skeleton import JOINT_INDEX
-
     units = ":units\n  mass 1.0\n  length 0.5\n  angle deg\n"
     assert units in ASF
     asf = ASF.replace(units, ":units mass 1.0 length 0.5 angle deg\n")
@@ -200,3 +199,15 @@ def test_an_amc_line_of_a_superscript_digit_is_no_frame_number(tmp_path: Path) -
     amc = AMC.replace("2\nroot 1 2 3", "\xb2\nroot 1 2 3")
     with pytest.raises(DataError, match="line 9: bone '\xb2' is not in the skeleton"):
         read_asf_amc(*_write(tmp_path, amc=amc))
+
+
+def test_asf_negative_bone_length_is_refused(tmp_path: Path) -> None:
+    """ "length -10" (a sign slipped in by hand) drew the bone the other way from its joint,
+    the knee behind the hip, without a word. A length is a distance."""
+    bad = ASF.replace("     length 10\n     axis 0 0 90", "     length -10\n     axis 0 0 90")
+    with pytest.raises(DataError, match="line 29: a bone's length must be >= 0, got -10"):
+        read_asf_amc(*_write(tmp_path, asf=bad))
+    zero = ASF.replace("     length 10\n     axis 0 0 90", "     length 0\n     axis 0 0 90")
+    seq = read_asf_amc(*_write(tmp_path, asf=zero))  # a bone of no length: its end is its start
+    hip, knee = JOINT_INDEX["left_hip"], JOINT_INDEX["left_knee"]
+    np.testing.assert_allclose(seq.positions[:, knee], seq.positions[:, hip], atol=1e-12)

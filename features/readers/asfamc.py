@@ -291,6 +291,8 @@ def _bone_field(draft: _BoneDraft, tokens: list[str], path: Path, line_no: int) 
         draft.direction = _floats(tokens[1:4], path, line_no, 3)
     elif head == "length":
         draft.length = float(_floats(tokens[1:2], path, line_no, 1)[0])
+        if draft.length < 0:  # the bone would point the other way: the joint below it flipped
+            raise DataError(f"line {line_no}: a bone's length must be >= 0, got {tokens[1]}", path)
     elif head == "axis":
         draft.axis = _floats(tokens[1:4], path, line_no, 3)
         draft.order = _axis_order(tokens[4], path, line_no) if len(tokens) > 4 else "XYZ"
