@@ -409,6 +409,13 @@ def _csv_header(row: list[str], csv_path: Path) -> list[str]:
     missing = [c for c in CSV_REQUIRED if c not in header]
     if missing == ["label"] and "label_file" in header:
         missing = []  # recordings labelled over time
+    other = next((c for c in (";", "\t") if len(row) == 1 and c in row[0]), None)
+    if missing and other is not None:  # Excel in many locales saves "CSV" with semicolons
+        raise DataError(
+            f"line 1: the columns are separated by {'tabs' if other == chr(9) else repr(other)},"
+            " not commas (header path,label[,subject][,start,end])",
+            csv_path,
+        )
     if missing:
         raise DataError(
             f"line 1: header must name columns path,label[,subject][,start,end]; missing"

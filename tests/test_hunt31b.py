@@ -211,3 +211,21 @@ def test_asf_negative_bone_length_is_refused(tmp_path: Path) -> None:
     seq = read_asf_amc(*_write(tmp_path, asf=zero))  # a bone of no length: its end is its start
     hip, knee = JOINT_INDEX["left_hip"], JOINT_INDEX["left_knee"]
     np.testing.assert_allclose(seq.positions[:, knee], seq.positions[:, hip], atol=1e-12)
+
+
+@pytest.mark.parametrize(("sep", "said"), [(";", "';'"), ("\t", "tabs")])
+def test_a_labels_csv_separated_by_semicolons_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], sep: str, said: str
+) -> None:
+    """A "CSV" saved by a spreadsheet set to a locale whose decimal mark is the comma has its
+    columns separated by semicolons: it was told "missing path, label" of a header whose
+    first word is path."""
+    from tests.badinput import good_pose_file
+
+    good_pose_file(tmp_path / "rec.npz", frames=24)
+    (tmp_path / "track.txt").write_text("a a b b a a b b\n")
+    csv = tmp_path / "list.csv"
+    csv.write_text(sep.join(["path", "label_file", "label_block_s"]) + "\n"
+                   + sep.join(["rec.npz", "track.txt", "0.1"]) + "\n")  # fmt: skip
+    refused(["train", str(csv), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
+            f"list.csv: line 1: the columns are separated by {said}, not commas")  # fmt: skip
