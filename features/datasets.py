@@ -631,7 +631,11 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
         return tokens
     unknown = sorted({t for t in tokens if t not in names})
     if unknown:
-        raise DataError(f"label code(s) {', '.join(unknown[:5])} not in the label names", path)
+        held = ", ".join(list(names)[:5]) + (", ..." if len(names) > 5 else "")
+        raise DataError(
+            f"label code(s) {', '.join(unknown[:5])} not in the label names (which name {held})",
+            path,
+        )
     return [names[t] for t in tokens]
 
 

@@ -229,3 +229,17 @@ def test_a_labels_csv_separated_by_semicolons_says_so(
                    + sep.join(["rec.npz", "track.txt", "0.1"]) + "\n")  # fmt: skip
     refused(["train", str(csv), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
             f"list.csv: line 1: the columns are separated by {said}, not commas")  # fmt: skip
+
+
+def test_label_codes_not_named_say_what_the_names_file_names(tmp_path: Path) -> None:
+    """A names file written "1: JumpJack" names the code "1:": the label file's codes 1 and
+    2 were "not in the label names", of a file the user sees naming 1 and 2. The codes it
+    does name are shown."""
+    from features.datasets import read_label_names, read_label_track
+
+    (tmp_path / "names.txt").write_text("1: JumpJack\n2: Jog\n")
+    (tmp_path / "track.txt").write_text("1 1 2 2\n")
+    names = read_label_names(tmp_path / "names.txt")
+    with pytest.raises(DataError, match=r"track.txt: label code\(s\) 1, 2 not in the label"
+                       r" names \(which name 1:, 2:\)$"):  # fmt: skip
+        read_label_track(tmp_path / "track.txt", names)
