@@ -673,6 +673,24 @@ def pose_file_length(path: str | Path) -> tuple[int, float]:
     return int(shape[0]), rate
 
 
+def pose_file_metadata(path: str | Path) -> dict[str, Any]:
+    """A pose file's metadata alone (the positions are not decompressed); ``{}`` when it has
+    none. Raises PoseFileError naming the file, as :func:`load_pose` would, for a file it
+    cannot read that far."""
+    path = Path(path)
+    if not path.is_file():
+        raise PoseFileError("no such file", path)
+    check_archive(path, ("metadata",))
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            if "metadata" not in data.files:
+                return {}
+            value = np.asarray(data["metadata"])
+    except _READ_ERRORS as exc:
+        raise PoseFileError(f"cannot read pose file ({type(exc).__name__}: {exc})", path) from None
+    return _metadata(value, path)
+
+
 def load_pose_arrays(path: str | Path) -> dict[str, np.ndarray]:
     """The ``extra_<name>`` arrays of a pose file, by ``name`` (empty if it has none)."""
     path = Path(path)

@@ -690,3 +690,38 @@ def test_windows_of_one_recording_are_calibrated_held_out_from_their_overlapping
     # stretches long enough to hold two windows that do not overlap can be answered, and
     # not all are right
     assert clf.confidence_.n < len(clf.case_base_) and clf.confidence_.accuracy < 1.0
+
+
+def test_train_notes_stretches_that_convert_cut_from_a_recording(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``convert`` of a labels CSV with a label_file writes each labelled stretch as a pose
+    file of its own; ``train`` on those made a case per stretch without a word, where ``train``
+    of the CSV itself makes a case per window (a stretch as one case lies far from any
+    window). 13_30's label file has 5 stretches (worked out from it here), all but the first
+    (1.8 s) longer than two windows: the note names 5 clips cut from 1 recording. Given
+    ``--split clips``, or trained on a labels CSV's rows of the recording, there is no note."""
+    codes, _ = _truth(shared_data)
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    _names(tmp_path)
+    listing = tmp_path / "recordings.csv"
+    listing.write_text(
+        f"path,label_file,label_block_s,label_names\n{recording},{labels},0.1,names.txt\n",
+        encoding="utf-8",
+    )
+    assert main(["convert", str(listing), "--out", str(tmp_path / "pieces")]) == 0
+    capsys.readouterr()
+    pieces = tmp_path / "pieces" / "labels.csv"
+    assert main(["train", str(pieces), "--db", str(tmp_path / "a.sqlite"), "-k", "1"]) == 0
+    err = capsys.readouterr().err
+    assert f"note: {len(codes)} clips are labelled stretches cut from 1 recording" in err
+    assert "--split windows makes a case per 2-s window" in err
+    argv = ["train", str(pieces), "--db", str(tmp_path / "b.sqlite"), "-k", "1"]
+    assert main([*argv, "--split", "clips"]) == 0
+    assert "labelled stretches cut from" not in capsys.readouterr().err
+    whole = tmp_path / "whole.csv"  # rows of the recording itself: no file cut from it
+    whole.write_text(
+        f"path,label,start,end\n{recording},a,0,600\n{recording},b,600,1200\n", encoding="utf-8"
+    )
+    assert main(["train", str(whole), "--db", str(tmp_path / "c.sqlite"), "-k", "1"]) == 0
+    assert "labelled stretches cut from" not in capsys.readouterr().err
