@@ -33,10 +33,14 @@ from .stored import StoredClassifier, judges_after_change, load_classifier, writ
 SOLVE_CHUNK = 256  # clips per batched solve (one block of queries of the matrix product)
 
 
-def piece_name(source: str, frames: Sequence[int] | None) -> str:
+def piece_name(source: str, frames: Sequence[int] | None, origin: str | None = None) -> str:
     """``source`` named with the frames of it a clip is (start, end exclusive; shown with the
-    end inclusive, as ``segment``'s table), or alone when the clip is the whole file."""
-    return source if frames is None else f"{source} frames {frames[0]}-{frames[1] - 1}"
+    end inclusive, as ``segment``'s table), or alone when the clip is the whole file. A file
+    cut from another recording (``origin``, as ``convert`` writes a labelled stretch) counts
+    its frames in that recording, and says so."""
+    if frames is None:
+        return source
+    return f"{source} frames {frames[0]}-{frames[1] - 1}" + (f" of {origin}" if origin else "")
 
 
 @dataclass(frozen=True)
@@ -45,7 +49,9 @@ class Classification:
     classified: ``unclassifiable`` says why), and what feedback changed; ``source`` the file
     passed and ``made_from`` what that pose file was made from (a video), if anything;
     ``frames`` the clip's frames in that file (start, end exclusive) when it is a piece of it
-    (a labels CSV's ``start,end`` row, a labelled stretch), else None."""
+    (a labels CSV's ``start,end`` row, a labelled stretch), else None; ``origin`` the
+    recording a file was cut from (``convert`` of a labelled recording), whose frames
+    ``frames`` then counts."""
 
     source: str
     true_label: str | None
@@ -56,6 +62,7 @@ class Classification:
     retention: RetainDecision | None = None
     made_from: str | None = None
     frames: tuple[int, int] | None = None
+    origin: str | None = None
 
     @property
     def label(self) -> str | None:
@@ -64,12 +71,14 @@ class Classification:
     @property
     def name(self) -> str:
         """The file passed, with the frames of it the clip is when a piece (end inclusive)."""
-        return piece_name(self.source, self.frames)
+        return piece_name(self.source, self.frames, self.origin)
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"clip": self.source}
         if self.frames is not None:
             out["frames"] = list(self.frames)
+        if self.frames is not None and self.origin:
+            out["origin"] = self.origin  # the recording whose frames ``frames`` counts
         if self.made_from:
             out["made_from"] = self.made_from
         if self.explanation is not None and self.solved is not None:
@@ -167,12 +176,17 @@ def _classification(
     made_from = clip.metadata.get("made_from")
     made = None if made_from is None else str(made_from)
     piece = frames_of(clip) if "frame_offset" in clip.metadata else None
+    cut_from = clip.metadata.get("origin")
+    origin = None if cut_from is None else str(cut_from)
     if isinstance(solved, str):
         return Classification(
-            clip.source, truth, None, None, unclassifiable=solved, made_from=made, frames=piece
-        )
+            clip.source, truth, None, None, unclassifiable=solved, made_from=made, frames=piece,
+            origin=origin,
+        )  # fmt: skip
     exp = clf.explain_solved(solved, target)
-    return Classification(clip.source, truth, solved, exp, made_from=made, frames=piece)
+    return Classification(
+        clip.source, truth, solved, exp, made_from=made, frames=piece, origin=origin
+    )
 
 
 def _solve(
@@ -208,6 +222,7 @@ def summarise(results: Sequence[Classification], target: str = "label") -> dict[
         "wrong": [
             {"clip": r.source, "label": r.label, "true_label": r.true_label}
             | ({} if r.frames is None else {"frames": list(r.frames)})
+            | ({"origin": r.origin} if r.frames is not None and r.origin else {})
             for r in labelled
             if r.true_label != r.label
         ],
@@ -305,8 +320,9 @@ def classify_with_feedback(
                 assert c.solved is not None
                 dec, rev = _learn(store, stored, clip, c.solved, label, settings)
             c = Classification(
-                c.source, truth, c.solved, c.explanation, None, rev, dec, c.made_from, c.frames
-            )
+                c.source, truth, c.solved, c.explanation, None, rev, dec, c.made_from, c.frames,
+                c.origin,
+            )  # fmt: skip
         out.append(c)
     write_matrices(store, stored.name)  # a large case base: its matrices follow the change
     return out

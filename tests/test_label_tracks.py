@@ -725,3 +725,34 @@ def test_train_notes_stretches_that_convert_cut_from_a_recording(
     )
     assert main(["train", str(whole), "--db", str(tmp_path / "c.sqlite"), "-k", "1"]) == 0
     assert "labelled stretches cut from" not in capsys.readouterr().err
+
+
+def test_classify_names_a_stretch_file_by_the_frames_of_its_recording(
+    shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A stretch ``convert`` wrote (the third of 13_30: KneeRaise) keeps where it lay in its
+    recording; ``classify`` named it "13_30_3.npz frames 804-1415", frames the 612-frame
+    file does not have. It now says whose frames they are: "... of <recording>" (the change
+    positions worked out from the label file, 12 frames a label)."""
+    _, changes = _truth(shared_data)
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    _names(tmp_path)
+    listing = tmp_path / "recordings.csv"
+    listing.write_text(
+        f"path,label_file,label_block_s,label_names\n{recording},{labels},0.1,names.txt\n",
+        encoding="utf-8",
+    )
+    assert main(["convert", str(listing), "--out", str(tmp_path / "pieces")]) == 0
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(tmp_path / "pieces" / "labels.csv"), "--db", str(db), "-k", "1"]) == 0
+    capsys.readouterr()
+    third = tmp_path / "pieces" / "13_30_3.npz"
+    assert main(["classify", str(third), "--db", str(db)]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.startswith(f"{third} frames {changes[1]}-{changes[2] - 1} of ")
+    origin = f"{recording.parent.name}/{recording.name}"  # convert keeps the folder above
+    assert f"{changes[2] - 1} of {origin} " in first
+    assert main(["classify", str(third), "--db", str(db), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)["results"][0]
+    assert result["frames"] == [changes[1], changes[2]]
+    assert result["origin"] == origin

@@ -348,7 +348,7 @@ def _print_summary(s: dict[str, Any], target: str, results: list[Any]) -> None:
         if s["expected_accuracy"] is not None:
             print(f"mean confidence: {s['expected_accuracy']:.3f}")
     for w in s["wrong"]:
-        clip = piece_name(w["clip"], w.get("frames"))
+        clip = piece_name(w["clip"], w.get("frames"), w.get("origin"))
         print(f"wrong: {shown(clip)}: {said(w['label'])}, true {said(w['true_label'])}")
     flagged = [r for r in results if r.solved is not None and r.solved.unlike_cases]
     for r in flagged:
