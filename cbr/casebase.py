@@ -28,6 +28,16 @@ def frames_of(seq: Any) -> tuple[int, int]:
     return start, start + int(seq.n_frames)
 
 
+def piece_name(source: str, frames: Sequence[int] | None, origin: str | None = None) -> str:
+    """``source`` named with the frames of it a clip is (start, end exclusive; shown with the
+    end inclusive, as ``segment``'s table), or alone when the clip is the whole file. A file
+    cut from another recording (``origin``, as ``convert`` writes a labelled stretch) counts
+    its frames in that recording, and says so."""
+    if frames is None:
+        return source
+    return f"{source} frames {frames[0]}-{frames[1] - 1}" + (f" of {origin}" if origin else "")
+
+
 def frame_array(frames: Sequence[tuple[int | None, int | None]]) -> np.ndarray:
     """``(n, 2)`` the frame ranges ``frames`` (start, end exclusive), ``(-1, -1)`` where not
     known."""

@@ -23,7 +23,7 @@ from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
 from features.progress import progress
 
-from .casebase import frames_of, skeleton_of, subject_of
+from .casebase import frames_of, piece_name, skeleton_of, subject_of
 from .estimator import CaseBaseClassifier, Solved, too_short, unusable
 from .explain import Explanation
 from .retain import RetainDecision, decide_retention, record_retention
@@ -31,16 +31,6 @@ from .revise import Revision, plan_revision, record_revision
 from .stored import StoredClassifier, judges_after_change, load_classifier, write_matrices
 
 SOLVE_CHUNK = 256  # clips per batched solve (one block of queries of the matrix product)
-
-
-def piece_name(source: str, frames: Sequence[int] | None, origin: str | None = None) -> str:
-    """``source`` named with the frames of it a clip is (start, end exclusive; shown with the
-    end inclusive, as ``segment``'s table), or alone when the clip is the whole file. A file
-    cut from another recording (``origin``, as ``convert`` writes a labelled stretch) counts
-    its frames in that recording, and says so."""
-    if frames is None:
-        return source
-    return f"{source} frames {frames[0]}-{frames[1] - 1}" + (f" of {origin}" if origin else "")
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ from features.poses import PoseSequence
 from features.progress import progress
 from features.text import counted
 
-from .casebase import CaseBase
+from .casebase import CaseBase, piece_name
 from .described import DescribedClip, describe_case, describe_clip
 from .estimator import CaseBaseClassifier, check_labels
 from .maintenance import MaintenanceReport, record_trim
@@ -369,8 +369,7 @@ def same_features(cb: CaseBase) -> list[str]:
     def told(i: int) -> str:
         a, b = cb.frames[i]
         where = cb.sources[i] or f"case {i + 1}"
-        frames = "" if a is None or b is None else f" frames {a}-{b}"
-        return f"{where}{frames} ({labels[i]})"
+        return f"{_shown_frames((where, a, b))} ({labels[i]})"
 
     return [f"{told(i)} = {told(j)}" for i, j in sorted(found.items())]
 
@@ -451,8 +450,9 @@ def _provenance(clip: DescribedClip) -> tuple[str, int, int]:
 
 
 def _shown_frames(key: tuple[str, int | None, int | None]) -> str:
+    """A clip named as ``classify`` and ``segment`` name it (its frames end inclusive)."""
     source, a, b = key
-    return source if a is None or b is None else f"{source} frames {a}-{b}"
+    return piece_name(source, None if a is None or b is None else (a, b))
 
 
 def _check_unique(clips: Sequence[DescribedClip], where: str) -> None:

@@ -614,6 +614,13 @@ def read_label_names(path: str | Path) -> dict[str, str]:
     return names
 
 
+def _code_order(code: str) -> tuple[int, int, str]:
+    """How label codes are listed: whole numbers by value (2 before 10), then the rest as
+    text."""
+    number = code.isascii() and code.isdigit()
+    return (0, int(code), code) if number else (1, 0, code)
+
+
 def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> list[str]:
     """The labels of a label file in order: tokens separated by spaces, tabs, commas or line
     ends (as in cmu-mocap6/truelabels), each mapped through ``names`` when given. Raises
@@ -629,7 +636,7 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     _refuse_a_table(text, path)
     if names is None:
         return tokens
-    unknown = sorted({t for t in tokens if t not in names})
+    unknown = sorted({t for t in tokens if t not in names}, key=_code_order)
     if unknown:
         held = ", ".join(list(names)[:5]) + (", ..." if len(names) > 5 else "")
         raise DataError(

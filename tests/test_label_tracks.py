@@ -401,7 +401,7 @@ def test_a_still_recording_labelled_as_several_activities_is_noted(
 ) -> None:
     """13_30's first frame held for the whole recording, with 13_30's five labelled stretches:
     five cases of one pose, nothing tells them apart; the four after the first (JumpJack,
-    frames 0-216) are each said to equal an earlier case of another activity (trained in
+    frames 0-215) are each said to equal an earlier case of another activity (trained in
     silence before). 13_30 itself, moving, gives no such note."""
     from features.poses import load_pose
 
@@ -418,7 +418,7 @@ def test_a_still_recording_labelled_as_several_activities_is_noted(
         assert (
             "note: 4 clips with the same features as a case of another activity: nothing tells "
             f"them apart (a still stretch, or a file copied under another label?): {path} "
-            "frames 216-804 (6) = " in err
+            "frames 216-803 (6) = " in err  # end inclusive, as classify and segment
         ) is note, err
         assert ("same features" in err) is note
         assert len(_cases(db)[0]) == 5  # trained all the same
@@ -756,3 +756,14 @@ def test_classify_names_a_stretch_file_by_the_frames_of_its_recording(
     result = json.loads(capsys.readouterr().out)["results"][0]
     assert result["frames"] == [changes[1], changes[2]]
     assert result["origin"] == origin
+
+
+def test_label_codes_not_named_are_listed_by_number(tmp_path: Path) -> None:
+    """Codes 10, 3 and 1 not in a names file naming 2 only: listed 1, 3, 10 (by value), not
+    1, 10, 3 (as text); a code that is no number comes after them."""
+    names = tmp_path / "names.txt"
+    names.write_text("2 Jog\n", encoding="utf-8")
+    track = tmp_path / "track.txt"
+    track.write_text("10 3 2 1 x 10\n", encoding="utf-8")
+    with pytest.raises(DataError, match=r"label code\(s\) 1, 3, 10, x not in the label names"):
+        read_label_track(track, read_label_names(names))

@@ -328,7 +328,7 @@ def _print_one(r: Any, args: argparse.Namespace, target: str) -> None:
 def _print_summary(s: dict[str, Any], target: str, results: list[Any]) -> None:
     """The closing summary: clips, accuracy and recall per class, flagged and wrong clips
     (each named with its frames when a piece of its file: ``results``' names)."""
-    from cbr.classification import piece_name
+    from cbr.casebase import piece_name
     from cbr.explain import label_words
     from features.text import shown
 
