@@ -281,7 +281,11 @@ def find_asf(amc: Path, beside: Sequence[Path] | None = None) -> Path:
     if len(asfs) == 1:
         return asfs[0]
     if not asfs:
-        raise DataError("no .asf skeleton file beside it", amc)
+        raise DataError(
+            "no .asf skeleton file beside it (put the subject's .asf there, or convert the"
+            " file alone: posecbr convert FILE.amc --asf SKELETON.asf)",
+            amc,
+        )
     raise DataError(
         f"{len(asfs)} .asf files beside it and none named for its actor: cannot pick one", amc
     )
