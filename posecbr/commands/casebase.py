@@ -274,7 +274,12 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
             else "  unknown judges: none stored (the cases changed since training, or a model "
             "stored before they were): segment and watch calibrate them as they start"
         )
-    if m.get("confidence"):
+    if m.get("confidence") and not m["confidence"].get("n"):
+        print(
+            f"  confidence: the vote share, not calibrated (each activity's training {pieces} "
+            "come from one recording or person: none could be classified held out of it)"
+        )
+    elif m.get("confidence"):
         c = m["confidence"]
         score = (
             f"the soft vote of the {c['neighbours']} nearest cases (temperature "
@@ -311,6 +316,14 @@ def _novelty_summary(stored: dict[str, Any] | None) -> dict[str, Any] | None:
         return {k: v for k, v in stored.items() if k != "features"}
 
 
+def _confidence_summary(stored: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The stored confidence calibration, its accuracy None where no training piece could be
+    classified held out (``n`` 0: NaN, which JSON has not)."""
+    if not isinstance(stored, dict) or stored.get("n"):
+        return stored
+    return {**stored, "accuracy": None}
+
+
 def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, Any]:
     """What fit learned, for people: k, vote, target, side handling, weighting, the heaviest
     feature weights and the novelty calibration."""
@@ -326,7 +339,7 @@ def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, A
         "feature_weights": model.get("weighting"),
         "phases": params.get("phases"),
         "unlike_cases": _novelty_summary(model.get("novelty")),
-        "confidence": model.get("confidence"),
+        "confidence": _confidence_summary(model.get("confidence")),
     }
     fw = model.get("feature_weights")
     if fw and len(fw.get("weight", ())) == len(words):

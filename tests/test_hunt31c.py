@@ -1,0 +1,78 @@
+"""Hunt 31c, the video path as a physiotherapist or coach meets it: one video of each exercise
+with several repetitions, trained with ``--split repetitions``. Each activity's cases then
+come from one recording, so no training repetition can be classified held out of its
+recording with a case of its activity left, and the confidence is the plain vote share:
+``casebase info`` said "calibrated on 0 none training repetitions (their accuracy nan)" and
+its ``--json`` wrote ``NaN``, which is not JSON.
+
+Synthetic arm movements (three activities, three pieces of one recording each) stand in for
+the videos: the same grouping, a second to train.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from features.poses import save_pose
+from posecbr.cli import main
+from tests.test_cbr_clips import arm_dataset
+
+
+def _strict(text: str) -> Any:
+    """JSON as the standard has it: NaN and Infinity refused."""
+
+    def refuse(constant: str) -> Any:
+        raise ValueError(f"not JSON: {constant}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+@pytest.fixture(scope="module")
+def one_recording_each(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A case base of three activities, each three pieces of one recording (a labels CSV's
+    start,end rows)."""
+    root = tmp_path_factory.mktemp("one_recording_each")
+    clips, labels = arm_dataset(3, 5)
+    rows = ["path,label,start,end"]
+    for k, label in enumerate(sorted(set(labels))):
+        pieces = [c for c, lab in zip(clips, labels, strict=True) if lab == label]
+        positions = np.concatenate([c.positions for c in pieces])
+        save_pose(
+            dataclasses.replace(pieces[0], positions=positions, confidence=None),
+            root / f"rec{k}.npz",
+        )
+        start = 0
+        for c in pieces:
+            rows.append(f"rec{k}.npz,activity{k},{start},{start + len(c.positions)}")
+            start += len(c.positions)
+    (root / "labels.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    db = root / "cb.sqlite"
+    argv = ["train", str(root / "labels.csv"), "--db", str(db), "--mirror", "off",
+            "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+    assert main(argv) == 0
+    return db
+
+
+def test_info_of_a_case_base_whose_confidence_could_not_be_calibrated(
+    one_recording_each: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    capsys.readouterr()
+    assert main(["casebase", "info", "--db", str(one_recording_each)]) == 0
+    out = capsys.readouterr().out
+    line = next(x for x in out.splitlines() if x.startswith("  confidence: "))
+    assert line == (
+        "  confidence: the vote share, not calibrated (each activity's training clips come "
+        "from one recording or person: none could be classified held out of it)"
+    )
+    assert "nan" not in out
+
+    assert main(["casebase", "info", "--db", str(one_recording_each), "--json"]) == 0
+    doc = _strict(capsys.readouterr().out)
+    confidence = doc["case_bases"][0]["model"]["confidence"]
+    assert confidence["n"] == 0 and confidence["accuracy"] is None
