@@ -223,6 +223,14 @@ class ConfidenceCalibration:
     temperature: float = 1.0
     neighbours: int = 0
 
+    @property
+    def words(self) -> str:
+        """What the confidence is, as the verbose explanation says it."""
+        if not self.x:  # UNCALIBRATED: no training clip could be held out, or stored before
+            return "the vote share, not calibrated"
+        score = "the nearest cases' soft vote" if self.neighbours else "the vote share"
+        return f"{score} calibrated on the training clips"
+
     def __call__(self, score: float) -> float:
         if not self.x:
             return float(score)

@@ -1004,6 +1004,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             k=int(self.k),
             weights=self.weights,  # type: ignore[arg-type]
             counterfactual_search=counterfactual,
+            confidence=self.confidence_.words,
         )
 
     def answer(self, values: np.ndarray) -> str:

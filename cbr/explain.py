@@ -685,13 +685,16 @@ def explain(
     k: int = 5,
     weights: Weights = "distance",
     counterfactual_search: bool = True,
+    confidence: str = "the nearest cases' soft vote calibrated on the training clips",
 ) -> Explanation:
     """Explain one classification (:meth:`cbr.estimator.CaseBaseClassifier.solve`);
     ``answer`` classifies a problem the way the classifier does (to check counterfactuals);
     ``target`` the column the labels come from ("correct": repetition words); ``k`` and
     ``weights`` the classifier's vote (the counterfactual search follows it);
     ``counterfactual_search`` False leaves the counterfactual out (callers that need the
-    neighbours only: it costs a few retrievals per feature changed)."""
+    neighbours only: it costs a few retrievals per feature changed); ``confidence`` what the
+    confidence is (:attr:`cbr.calibration.ConfidenceCalibration.words`), for the verbose
+    lines."""
     problem, label = solved.problem, solved.solution.label
     r = read(cb, problem)
     near = _nearest(cb, solved)
@@ -707,7 +710,7 @@ def explain(
     presence_ = presence_claims(r, label, win if len(win) else retrieval.indices)
     differences = _differences(r, contrast, cb)
     verbose = _verbose(lines, solved, near.neighbours, *presence_, contrast, differences,
-                       unlike_ratio)  # fmt: skip
+                       unlike_ratio, confidence)  # fmt: skip
     return _explanation(
         solved, near, (*outside, *why), presence_, contrast, lines, verbose, differences
     )
@@ -908,6 +911,7 @@ def _verbose(
     contrast: Contrast | None,
     differences: list[dict[str, Any]],
     unlike_ratio: float | None,
+    confidence: str,
 ) -> str:
     label = solved.solution.label
     share = float(solved.solution.vote_share)
@@ -915,8 +919,7 @@ def _verbose(
     n_label = sum(n["label"] == label for n in neighbours)
     out.append(
         f"Vote: {n_label} of the {len(neighbours)} most similar clips are {label} (vote share "
-        f"{share:.2f}; the confidence is the nearest cases' soft vote calibrated on the training "
-        "clips)."
+        f"{share:.2f}; the confidence is {confidence})."
     )
     flag = "" if unlike_ratio is None else f"; flagged beyond {unlike_ratio:.2f}x"
     out.append(f"Nearest case at {solved.novelty:.2f}x the usual held-out distance{flag}.")

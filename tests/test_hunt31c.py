@@ -76,3 +76,18 @@ def test_info_of_a_case_base_whose_confidence_could_not_be_calibrated(
     doc = _strict(capsys.readouterr().out)
     confidence = doc["case_bases"][0]["model"]["confidence"]
     assert confidence["n"] == 0 and confidence["accuracy"] is None
+
+
+def test_verbose_explanation_of_an_uncalibrated_confidence_says_so(
+    one_recording_each: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The verbose lines said "the confidence is the nearest cases' soft vote calibrated on
+    the training clips" where it is the plain vote share."""
+    clip = one_recording_each.parent / "rec0.npz"
+    capsys.readouterr()
+    argv = ["classify", str(clip), "--db", str(one_recording_each), "--verbose", "--json"]
+    assert main(argv) == 0
+    result = _strict(capsys.readouterr().out)["results"][0]
+    assert result["confidence"] == result["vote_share"]  # nothing maps it
+    vote = next(x for x in result["verbose"].splitlines() if x.startswith("Vote: "))
+    assert vote.endswith("; the confidence is the vote share, not calibrated).")
