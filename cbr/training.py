@@ -171,6 +171,30 @@ def _no_case(what: str) -> DataError:
     )
 
 
+def _one_left(
+    clips: Sequence[DescribedClip], labels: Sequence[str], keep: Sequence[int], target: str
+) -> DataError:
+    """Of two or more activities (``labels`` of ``clips``), only one is left in the clips
+    :func:`usable` keeps (positions ``keep``): the error names the others and their clips."""
+    from features.repetitions import MIN_PERIOD_S
+
+    from .explain import class_noun
+
+    left = labels[keep[0]]
+    lost = sorted(set(labels) - {left})
+    dropped = list(  # each file once: a recording cut into windows is many clips
+        dict.fromkeys(c.source or f"clip {i}" for i, c in enumerate(clips) if labels[i] in lost)
+    )
+    more = " ..." if len(dropped) > 5 else ""
+    return DataError(
+        f"only one {class_noun(target)} ({left!r}) is left to learn from, a classifier needs "
+        f"two or more: every clip of {', '.join(repr(v) for v in lost)} shows no person's "
+        f"torso for as long as one movement can last ({MIN_PERIOD_S:g} s): "
+        f"{', '.join(dropped[:5])}{more}",
+        "training set",
+    )
+
+
 def usable(clips: Sequence[DescribedClip]) -> tuple[list[int], list[str], list[str]]:
     """Positions of the clips that can be learned from, the names of those in which no frame
     shows the person's torso, and of those that last less than one movement can
@@ -255,6 +279,8 @@ def train_described(
     _check_name(name)
     text = [str(v) for v in check_labels(labels, len(clips))]
     keep, skipped, too_short = usable(clips)
+    if len({text[i] for i in keep}) == 1 < len(set(text)):
+        raise _one_left(clips, text, keep, target)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise _no_case("learn from")

@@ -1,9 +1,15 @@
 """Hunt 31c, the video path as a physiotherapist or coach meets it: one video of each exercise
-with several repetitions, trained with ``--split repetitions``. Each activity's cases then
-come from one recording, so no training repetition can be classified held out of its
-recording with a case of its activity left, and the confidence is the plain vote share:
-``casebase info`` said "calibrated on 0 none training repetitions (their accuracy nan)" and
-its ``--json`` wrote ``NaN``, which is not JSON.
+with several repetitions, trained with ``--split repetitions``.
+
+- Each activity's cases then come from one recording, so no training repetition can be
+  classified held out of its recording with a case of its activity left, and the confidence
+  is the plain vote share: ``casebase info`` said "calibrated on 0 none training repetitions
+  (their accuracy nan)", its ``--json`` wrote ``NaN``, which is not JSON, and ``classify
+  --verbose`` called the confidence "the nearest cases' soft vote calibrated on the training
+  clips".
+- A class folder whose only video shows nobody, leaving one activity: ``train`` refused with
+  "y: the training set has only one activity" (scikit-learn's argument), without naming the
+  clip.
 
 Synthetic arm movements (three activities, three pieces of one recording each) stand in for
 the videos: the same grouping, a second to train.
@@ -21,6 +27,7 @@ import pytest
 
 from features.poses import save_pose
 from posecbr.cli import main
+from tests.badinput import refused, standing_clip
 from tests.test_cbr_clips import arm_dataset
 
 
@@ -91,3 +98,37 @@ def test_verbose_explanation_of_an_uncalibrated_confidence_says_so(
     assert result["confidence"] == result["vote_share"]  # nothing maps it
     vote = next(x for x in result["verbose"].splitlines() if x.startswith("Vote: "))
     assert vote.endswith("; the confidence is the vote share, not calibrated).")
+
+
+def _nobody(path: Path) -> Path:
+    """A pose file of 2 s in which no frame shows anybody (every joint missing)."""
+    seq = standing_clip(60)
+    return save_pose(dataclasses.replace(seq, positions=np.full_like(seq.positions, np.nan)), path)
+
+
+def _classes(root: Path, n_activities: int) -> Path:
+    """A folder per class: ``n_activities`` of the arm movements (three clips each) and
+    ``walk``, whose only clip shows nobody."""
+    clips, labels = arm_dataset(3, 5)
+    for i, (seq, label) in enumerate(zip(clips, labels, strict=True)):
+        if label in sorted(set(labels))[:n_activities]:
+            save_pose(seq, root / f"a{sorted(set(labels)).index(label)}" / f"clip{i:02d}.npz")
+    _nobody(root / "walk" / "empty.npz")
+    return root
+
+
+def test_train_names_the_class_whose_every_clip_shows_nobody(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = _classes(tmp_path / "data", 1)
+    line = refused(
+        ["train", str(data), "--db", str(tmp_path / "cb.sqlite"), "--split", "repetitions"],
+        tmp_path,
+        capsys,
+    )
+    assert line == (
+        "posecbr train: error: training set: only one activity ('a0') is left to learn from, a "
+        "classifier needs two or more: every clip of 'walk' shows no person's torso for as "
+        f"long as one movement can last (0.4 s): {data / 'walk' / 'empty.npz'}"
+    )
+
