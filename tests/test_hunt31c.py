@@ -7,9 +7,9 @@ with several repetitions, trained with ``--split repetitions``.
   (their accuracy nan)", its ``--json`` wrote ``NaN``, which is not JSON, and ``classify
   --verbose`` called the confidence "the nearest cases' soft vote calibrated on the training
   clips".
-- A class folder whose only video shows nobody, leaving one activity: ``train`` refused with
-  "y: the training set has only one activity" (scikit-learn's argument), without naming the
-  clip.
+- A class folder whose only video shows nobody: ``train`` called the clip kept whole "1
+  repetition that shows no person"; and when it left one activity, refused with "y: the
+  training set has only one activity" (scikit-learn's argument), without naming the clip.
 
 Synthetic arm movements (three activities, three pieces of one recording each) stand in for
 the videos: the same grouping, a second to train.
@@ -132,3 +132,14 @@ def test_train_names_the_class_whose_every_clip_shows_nobody(
         f"long as one movement can last (0.4 s): {data / 'walk' / 'empty.npz'}"
     )
 
+
+def test_train_split_repetitions_calls_a_clip_that_shows_nobody_a_clip(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = _classes(tmp_path / "data", 3)
+    argv = ["train", str(data), "--db", str(tmp_path / "cb.sqlite"), "--split", "repetitions",
+            "--mirror", "off", "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert f"skipped 1 clip that shows no person: {data / 'walk' / 'empty.npz'}\n" in out
+    assert "from 3 activities" in out

@@ -723,14 +723,20 @@ def run(args: argparse.Namespace) -> int:
 def _skipped(nobody: list[str], short: list[str], split: str) -> str:
     """The pieces that show no person, by their file (a recording cut into windows has many:
     each file once, with how many of its pieces), and those shorter than one movement can be
-    (:func:`cbr.training.usable` names them with their length)."""
+    (:func:`cbr.training.usable` names them with their length). Cut into repetitions, a
+    piece that shows no person is a clip kept whole: repetitions are found where the person
+    is seen."""
     from features.repetitions import MIN_PERIOD_S
 
     lines = [
-        _listed(names, split, why)
-        for names, why in (
-            (nobody, "that shows no person" if len(nobody) == 1 else "that show no person"),
-            (short, f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"),
+        _listed(names, kind, why)
+        for names, kind, why in (
+            (
+                nobody,
+                "clips" if split == "repetitions" else split,
+                "that shows no person" if len(nobody) == 1 else "that show no person",
+            ),
+            (short, split, f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"),
         )
         if names
     ]
