@@ -143,3 +143,22 @@ def test_train_split_repetitions_calls_a_clip_that_shows_nobody_a_clip(
     out = capsys.readouterr().out
     assert f"skipped 1 clip that shows no person: {data / 'walk' / 'empty.npz'}\n" in out
     assert "from 3 activities" in out
+
+
+def test_casebase_list_shows_a_case_s_frames_end_inclusive_as_every_table_does(
+    one_recording_each: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``casebase list`` showed a repetition of frames 3-24 (``reps``' table, end inclusive)
+    as 3-25, and the next one's start as 25: two cases seemingly sharing frame 25."""
+    rows = (one_recording_each.parent / "labels.csv").read_text().splitlines()[1:]
+    spans = {(path, int(start), int(end)) for path, _, start, end in (r.split(",") for r in rows)}
+    capsys.readouterr()
+    assert main(["casebase", "list", "--db", str(one_recording_each)]) == 0
+    shown = {
+        (Path(f[5]).name, f[4])
+        for f in (x.split("\t") for x in capsys.readouterr().out.splitlines())
+    }
+    assert shown == {(path, f"{start}-{end - 1}") for path, start, end in spans}
+    assert main(["casebase", "list", "--db", str(one_recording_each), "--json"]) == 0
+    cases = _strict(capsys.readouterr().out)["cases"]
+    assert {(Path(c["source"]).name, *c["frames"]) for c in cases} == spans  # end exclusive

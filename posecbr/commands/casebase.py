@@ -369,7 +369,8 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
         return 0
     for r in rows:
         fr = r["frames"]
-        span = f"{fr[0]}-{fr[1]}" if fr[0] is not None else "-"
+        # end inclusive, as segment's and reps' tables and classify's pieces (JSON: exclusive)
+        span = f"{fr[0]}-{fr[1] - 1}" if fr[0] is not None else "-"
         origin = r["origin"] if r["active"] else f"{r['origin']}, trimmed"
         print(
             f"#{r['case_id']}\t{shown(r['label'])}\t{origin}\t{shown(r['subject'] or '-')}\t"
