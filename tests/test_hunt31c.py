@@ -10,6 +10,7 @@ with several repetitions, trained with ``--split repetitions``.
 - A class folder whose only video shows nobody: ``train`` called the clip kept whole "1
   repetition that shows no person"; and when it left one activity, refused with "y: the
   training set has only one activity" (scikit-learn's argument), without naming the clip.
+- ``casebase list`` showed a case's frames end exclusive, every other table end inclusive.
 
 Synthetic arm movements (three activities, three pieces of one recording each) stand in for
 the videos: the same grouping, a second to train.
