@@ -338,9 +338,29 @@ def _from_metadata(seq: PoseSequence) -> tuple[str | None, str | None, dict[str,
     )
 
 
+def check_not_nested(folder: Path, files: Callable[[Path], list[Path]]) -> None:
+    """Refuse a class folder ``folder`` that holds no clip itself (``files``: the clips of a
+    folder, not of its subfolders) while a subfolder of it does (``squat/day1/clip.mp4``):
+    class folders are read one level deep, and the class would be dropped without a word."""
+    if files(folder):
+        return
+    nested = sorted(
+        d.name for d in folder.iterdir() if d.is_dir() and not d.name.startswith(".") and files(d)
+    )
+    if nested:
+        raise DataError(
+            f"this class folder holds no clip itself, its subfolder {nested[0]!r} does"
+            f"{f' (and {len(nested) - 1} more)' if len(nested) > 1 else ''}: class folders are"
+            " read one level deep (put the clips in the class folder, or list them in a labels"
+            " CSV)",
+            folder,
+        )
+
+
 def _class_folder_entries(path: Path) -> list[_Entry]:
     entries = []
     for d in sorted(p for p in path.iterdir() if p.is_dir() and not p.name.startswith(".")):
+        check_not_nested(d, clip_files)
         for f in clip_files(d):
             entries.append(_Entry(lambda f=f: load_clip(f), d.name, None, {}, f.name, f))  # type: ignore[misc]
     return entries

@@ -11,6 +11,8 @@ with several repetitions, trained with ``--split repetitions``.
   repetition that shows no person"; and when it left one activity, refused with "y: the
   training set has only one activity" (scikit-learn's argument), without naming the clip.
 - ``casebase list`` showed a case's frames end exclusive, every other table end inclusive.
+- A class folder whose clips lie in a subfolder (``lunge/day1/``) was dropped without a word
+  by ``extract`` and ``train``.
 
 Synthetic arm movements (three activities, three pieces of one recording each) stand in for
 the videos: the same grouping, a second to train.
@@ -163,3 +165,49 @@ def test_casebase_list_shows_a_case_s_frames_end_inclusive_as_every_table_does(
     assert main(["casebase", "list", "--db", str(one_recording_each), "--json"]) == 0
     cases = _strict(capsys.readouterr().out)["cases"]
     assert {(Path(c["source"]).name, *c["frames"]) for c in cases} == spans  # end exclusive
+
+
+def _grey_video(path: Path, frames: int = 4) -> Path:
+    """A small MJPG AVI of grey frames (nobody in view)."""
+    import cv2
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), 10.0, (32, 32))
+    for k in range(frames):
+        writer.write(np.full((32, 32, 3), 10 * k, np.uint8))
+    writer.release()
+    return path
+
+
+def test_train_refuses_a_class_folder_whose_clips_lie_in_a_subfolder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``squat/clip.npz`` beside ``lunge/day1/clip.npz``: the lunges were dropped without a
+    word and train refused "the training data hold only one activity ('squat')"."""
+    clips, _ = arm_dataset(1, 5)
+    data = tmp_path / "data"
+    save_pose(clips[0], data / "squat" / "a.npz")
+    save_pose(clips[1], data / "lunge" / "day1" / "b.npz")
+    refused(
+        ["train", str(data), "--db", str(tmp_path / "cb.sqlite")],
+        tmp_path,
+        capsys,
+        f"{data / 'lunge'}: this class folder holds no clip itself, its subfolder 'day1' does",
+    )
+
+
+def test_extract_refuses_a_class_folder_whose_videos_lie_in_a_subfolder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Extracted, the lunges in ``lunge/day1/`` were skipped without a word."""
+    videos = tmp_path / "videos"
+    _grey_video(videos / "squat" / "a.avi")
+    _grey_video(videos / "lunge" / "day1" / "b.avi")
+    _grey_video(videos / "lunge" / "day2" / "c.avi")
+    refused(
+        ["extract", str(videos), "--out", str(tmp_path / "poses")],
+        tmp_path,
+        capsys,
+        f"{videos / 'lunge'}: this class folder holds no clip itself, its subfolder 'day1' does"
+        " (and 1 more): class folders are read one level deep",
+    )

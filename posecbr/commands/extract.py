@@ -171,6 +171,10 @@ def _folder_jobs(source: Path, out: Path) -> list[Job]:
         subdirs = sorted(d for d in source.iterdir() if d.is_dir() and not d.name.startswith("."))
     except OSError as exc:
         raise DataError(f"cannot list folder ({exc.strerror or exc})", source) from None
+    from features.datasets import check_not_nested
+
+    for d in subdirs:
+        check_not_nested(d, _videos_in)
     jobs = [
         Job(video=v, out=out / _safe(d.name) / f"{v.stem}.npz", label=d.name)
         for d in subdirs
