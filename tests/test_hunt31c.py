@@ -77,7 +77,7 @@ def test_info_of_a_case_base_whose_confidence_could_not_be_calibrated(
     out = capsys.readouterr().out
     line = next(x for x in out.splitlines() if x.startswith("  confidence: "))
     assert line == (
-        "  confidence: the vote share, not calibrated (each activity's training clips come "
+        "  confidence: the vote share, not calibrated (each activity's training clips came "
         "from one recording or person: none could be classified held out of it)"
     )
     assert "nan" not in out
@@ -210,4 +210,24 @@ def test_extract_refuses_a_class_folder_whose_videos_lie_in_a_subfolder(
         capsys,
         f"{videos / 'lunge'}: this class folder holds no clip itself, its subfolder 'day1' does"
         " (and 1 more): class folders are read one level deep",
+    )
+
+
+def test_info_of_an_uncalibrated_case_base_appended_to_says_the_cases_changed_since(
+    one_recording_each: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """After ``train --append``, the activity may come from two recordings: the line says it
+    is of the training's cases, as the line of a calibrated confidence does."""
+    import shutil
+
+    db = shutil.copy(one_recording_each, tmp_path / "cb.sqlite")
+    clips, _ = arm_dataset(1, 9)
+    save_pose(clips[0], tmp_path / "more" / "activity0" / "new.npz")
+    assert main(["train", str(tmp_path / "more"), "--db", str(db), "--append"]) == 0
+    capsys.readouterr()
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "  confidence: " in x)
+    assert line.endswith(
+        "none could be classified held out of it; cases added, changed or dropped since are "
+        "not taken into account)"
     )

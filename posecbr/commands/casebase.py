@@ -277,7 +277,8 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
     if m.get("confidence") and not m["confidence"].get("n"):
         print(
             f"  confidence: the vote share, not calibrated (each activity's training {pieces} "
-            "come from one recording or person: none could be classified held out of it)"
+            "came from one recording or person: none could be classified held out of it"
+            f"{f'; {SINCE}' if changed else ''})"
         )
     elif m.get("confidence"):
         c = m["confidence"]
