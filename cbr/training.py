@@ -222,6 +222,8 @@ def _learned(clf: CaseBaseClassifier) -> dict[str, Any]:
         "mirror_cases": clf.mirror_cases_,
         "inner_loso_accuracy": dict(clf.selection_),
         "unlike_cases": clf.novelty_.describe(),
+        # 0: no training clip could be classified held out, the confidence is the vote share
+        "confidence_calibrated_on": int(clf.confidence_.n),
     }
 
 

@@ -3,7 +3,7 @@ with several repetitions, trained with ``--split repetitions``.
 
 - Each activity's cases then come from one recording, so no training repetition can be
   classified held out of its recording with a case of its activity left, and the confidence
-  is the plain vote share: ``casebase info`` said "calibrated on 0 none training repetitions
+  is the plain vote share: ``train`` said nothing of it, ``casebase info`` said "calibrated on 0 none training repetitions
   (their accuracy nan)", its ``--json`` wrote ``NaN``, which is not JSON, and ``classify
   --verbose`` called the confidence "the nearest cases' soft vote calibrated on the training
   clips".
@@ -67,6 +67,34 @@ def one_recording_each(tmp_path_factory: pytest.TempPathFactory) -> Path:
             "--feature-weights", "none", "--phases", "0"]  # fmt: skip
     assert main(argv) == 0
     return db
+
+
+def test_train_says_when_the_confidence_could_not_be_calibrated(
+    one_recording_each: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``train`` said nothing of it: the README promises a calibrated confidence."""
+    csv = one_recording_each.parent / "labels.csv"
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(csv), "--db", str(db), "--mirror", "off", "--feature-weights", "none",
+            "--phases", "0", "--json"]  # fmt: skip
+    capsys.readouterr()
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    assert _strict(out)["learned"]["confidence_calibrated_on"] == 0
+    assert (
+        "note: the confidence is the vote share, not calibrated: each activity's training clips"
+        " came from one recording or person, so none could be classified held out of it (a "
+        "second recording or person per activity calibrates it)\n"
+    ) in err
+    # each clip its own recording: calibrated leave-one-recording-out, no note
+    clips, labels = arm_dataset(3, 5)
+    for i, (seq, label) in enumerate(zip(clips, labels, strict=True)):
+        save_pose(seq, tmp_path / "own" / f"a{sorted(set(labels)).index(label)}" / f"{i}.npz")
+    argv[1:4] = [str(tmp_path / "own"), "--db", str(tmp_path / "own.sqlite")]
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    assert _strict(out)["learned"]["confidence_calibrated_on"] == 9
+    assert "not calibrated" not in err
 
 
 def test_info_of_a_case_base_whose_confidence_could_not_be_calibrated(

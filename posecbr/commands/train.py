@@ -811,6 +811,17 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
             ),
             file=sys.stderr,
         )
+    if result.learned.get("confidence_calibrated_on") == 0:
+        from cbr.stored import CASE_KINDS
+
+        pieces = CASE_KINDS.get(args.split, "clip") + "s"
+        print(
+            f"note: the confidence is the vote share, not calibrated: each "
+            f"{class_noun(args.target)}'s training {pieces} came from one recording or person,"
+            " so none could be classified held out of it (a second recording or person per"
+            f" {class_noun(args.target)} calibrates it)",
+            file=sys.stderr,
+        )
     if not args.append and args.split == "windows" and not result.judges_unknown:
         why = (
             f"fewer than three {class_noun(args.target, 3)}"
