@@ -173,8 +173,9 @@ def _folder_jobs(source: Path, out: Path) -> list[Job]:
         raise DataError(f"cannot list folder ({exc.strerror or exc})", source) from None
     from features.datasets import check_not_nested
 
-    for d in subdirs:
-        check_not_nested(d, _videos_in)
+    if any(_videos_in(d) for d in subdirs):  # read as class folders, as train reads them
+        for d in subdirs:
+            check_not_nested(d, _videos_in)
     jobs = [
         Job(video=v, out=out / _safe(d.name) / f"{v.stem}.npz", label=d.name)
         for d in subdirs
