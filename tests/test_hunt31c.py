@@ -3,16 +3,18 @@ with several repetitions, trained with ``--split repetitions``.
 
 - Each activity's cases then come from one recording, so no training repetition can be
   classified held out of its recording with a case of its activity left, and the confidence
-  is the plain vote share: ``train`` said nothing of it, ``casebase info`` said "calibrated on 0 none training repetitions
-  (their accuracy nan)", its ``--json`` wrote ``NaN``, which is not JSON, and ``classify
-  --verbose`` called the confidence "the nearest cases' soft vote calibrated on the training
-  clips".
+  is the plain vote share: ``train`` said nothing of it, ``casebase info`` said "calibrated
+  on 0 none training repetitions (their accuracy nan)", its ``--json`` wrote ``NaN``, which
+  is not JSON, and ``classify --verbose`` called the confidence "the nearest cases' soft
+  vote calibrated on the training clips".
 - A class folder whose only video shows nobody: ``train`` called the clip kept whole "1
   repetition that shows no person"; and when it left one activity, refused with "y: the
   training set has only one activity" (scikit-learn's argument), without naming the clip.
 - ``casebase list`` showed a case's frames end exclusive, every other table end inclusive.
 - A class folder whose clips lie in a subfolder (``lunge/day1/``) was dropped without a word
   by ``extract`` and ``train``.
+- ``watch --out`` stopped before its first frame exited 0 in silence, without ``--out`` 1 with
+  a line.
 
 Synthetic arm movements (three activities, three pieces of one recording each) stand in for
 the videos: the same grouping, a second to train.
@@ -258,4 +260,39 @@ def test_info_of_an_uncalibrated_case_base_appended_to_says_the_cases_changed_si
     assert line.endswith(
         "none could be classified held out of it; cases added, changed or dropped since are "
         "not taken into account)"
+    )
+
+
+@pytest.mark.parametrize("out", [False, True])
+def test_watch_stopped_before_its_first_frame_says_so_with_or_without_out(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    out: bool,
+) -> None:
+    """Ctrl-C while the pose model loads (the stop event set before the first frame): without
+    ``--out``, "the stream ended after 0 frames ... no segment to give", exit 1; with
+    ``--out`` it exited 0 and said nothing. The same line now, and no video either way."""
+    from contextlib import contextmanager
+    from threading import Event
+
+    import posecbr.commands.watch as watch
+    from tests.badinput import small_case_base
+
+    @contextmanager
+    def stopped() -> Any:
+        event = Event()
+        event.set()
+        yield event
+
+    monkeypatch.setattr(watch, "stop_on_interrupt", stopped)
+    db = small_case_base(tmp_path / "cb")
+    video = _grey_video(tmp_path / "in" / "clip.avi")
+    argv = ["watch", str(video), "--db", str(db), "--speed", "0"]
+    capsys.readouterr()
+    refused(
+        [*argv, "--out", str(tmp_path / "in" / "seen.mp4")] if out else argv,
+        tmp_path / "in",
+        capsys,
+        f"{video}: the stream ended after 0 frames (0.00 s), before the shortest window (1 s)",
     )

@@ -272,6 +272,7 @@ def run(args: argparse.Namespace) -> int:
             watcher.warm_up()
             watcher.watch(frames, is_file, stop)
             if video is not None and watcher.writer is None:
+                watcher.close()  # nothing watched: says so, exit 1, as without --out
                 raise _NoFrameDrawn
             if video is not None:
                 check_encoded(video, watcher.drawn, args.out)
