@@ -56,7 +56,10 @@ from .readers.uiprmd import (
     uiprmd_sensor,
 )
 
-VIDEO_SUFFIXES = frozenset({".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v"})
+VIDEO_SUFFIXES = frozenset(
+    {".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".3gp", ".mts", ".m2ts", ".mpg", ".mpeg",
+     ".wmv"}
+)  # fmt: skip
 POSE_SUFFIXES = frozenset({".npz"})
 CLIP_SUFFIXES = POSE_SUFFIXES | VIDEO_SUFFIXES | {".bvh"}
 

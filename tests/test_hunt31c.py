@@ -15,6 +15,7 @@ with several repetitions, trained with ``--split repetitions``.
   by ``extract`` and ``train``.
 - ``watch --out`` stopped before its first frame exited 0 in silence, without ``--out`` 1 with
   a line.
+- ``.3gp`` and ``.MTS`` videos in class folders were skipped without a word.
 
 Synthetic arm movements (three activities, three pieces of one recording each) stand in for
 the videos: the same grouping, a second to train.
@@ -296,3 +297,22 @@ def test_watch_stopped_before_its_first_frame_says_so_with_or_without_out(
         capsys,
         f"{video}: the stream ended after 0 frames (0.00 s), before the shortest window (1 s)",
     )
+
+
+def test_phone_and_camcorder_videos_in_class_folders_are_read(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An Android ``.3gp`` and an AVCHD camcorder's ``.MTS`` in class folders were skipped
+    without a word (``extract`` of one of them named alone worked; ``reps`` refused it as
+    "unknown clip format"). FFmpeg reads a file by its content: MJPG AVIs so named stand in."""
+    from features.datasets import clip_files
+
+    videos = tmp_path / "videos"
+    a = _grey_video(videos / "squat" / "a.avi").rename(videos / "squat" / "a.3gp")
+    b = _grey_video(videos / "lunge" / "b.avi").rename(videos / "lunge" / "b.MTS")
+    assert clip_files(a.parent) == [a] and clip_files(b.parent) == [b]
+    capsys.readouterr()
+    assert main(["extract", str(videos), "--out", str(tmp_path / "poses")]) == 0
+    assert "2 extracted, 0 up to date, 0 failed" in capsys.readouterr().out
+    assert (tmp_path / "poses" / "squat" / "a.npz").is_file()
+    assert (tmp_path / "poses" / "lunge" / "b.npz").is_file()
