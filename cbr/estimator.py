@@ -57,7 +57,7 @@ from .calibration import (
     held_out,
     held_out_votes,
 )
-from .casebase import CaseBase, skeleton_of
+from .casebase import CaseBase, frame_array, skeleton_of
 from .described import DescribedClip, describe_clips
 from .explain import Explanation, explain
 from .fitting import (
@@ -239,27 +239,21 @@ class _Choice:
 MAX_CALIBRATION_VECTORS = 2000
 
 
-def _piece_frames(
-    clips: Sequence[DescribedClip], sources: np.ndarray, case_clip: np.ndarray
+def _one_recording_frames(
+    clips: Sequence[DescribedClip], cb: CaseBase, sources: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """The training clips' and the cases' frame ranges, ``(n_clips, 2)`` and ``(n_cases, 2)``
-    (``case_clip``: each case's clip), when the clips are pieces of named recordings, at
-    least one recording cut into several, each piece starting at a frame of its own in its
-    recording (windows, repetitions, labelled stretches); else None (clips of files that
-    share a name all start at frame 0: their frames say nothing of overlap). Each
-    recording's frames are moved past the one before's, so that only pieces of the same
-    recording can overlap."""
-    names = [str(s) for s in sources.tolist()]
+    (-1 where not known), when every clip is a piece of one named recording, each starting
+    at a frame of its own (windows, repetitions, labelled stretches); else None (clips of
+    files that share a name all start at frame 0: their frames say nothing of overlap)."""
+    named = {str(s) for s in sources.tolist()}
     starts = [c.frames[0] for c in clips]
-    if {"", "None"} & set(names) or None in starts or len(set(names)) == len(names):
+    if len(named) != 1 or named & {"", "None"} or None in starts:
         return None
-    if len(set(zip(names, starts, strict=True))) != len(clips):
+    if len(set(starts)) != len(starts):
         return None
-    _, recording = np.unique(np.asarray(names, dtype=object).astype(str), return_inverse=True)
     ranges = np.array([c.frames for c in clips], dtype=np.int64)
-    span = int(ranges.max()) + 1
-    ranges = ranges + (recording.astype(np.int64) * span)[:, None]
-    return ranges, ranges[case_clip]
+    return ranges, frame_array(cb.frames)
 
 
 def _time_blocks(ranges: np.ndarray) -> np.ndarray:
@@ -749,19 +743,13 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             groups, case_groups, basis = sources, sources[clip], "leave-one-recording-out"
         else:
             groups, case_groups, basis = np.arange(n), clip, "leave-one-out"
-        query_clip = cases.origin[real]
-        # pieces cut from recordings (windows, repetitions, labelled stretches), where no
-        # recording holds out another's activity (one recording, or one per activity: a
-        # video per exercise): held out with the pieces of their recording whose frames
-        # overlap theirs, and in time blocks where folds are dealt (the windows of one
-        # stretch, 0.5 s apart, are near copies of each other)
-        alone = basis == "leave-one-out" or (
-            basis == "leave-one-recording-out"
-            and not held_elsewhere(labels, sources[query_clip], cb.labels, sources[clip]).any()
-        )
-        frames = _piece_frames(clips, sources, clip) if alone else None
+        # pieces cut from one recording (windows, repetitions, labelled stretches): held out
+        # with the pieces whose frames overlap theirs, and in time blocks where folds are
+        # dealt (the windows of one stretch, 0.5 s apart, are near copies of each other)
+        frames = _one_recording_frames(clips, cb, sources) if basis == "leave-one-out" else None
         if frames is not None:
-            groups, case_groups, basis = np.arange(n), clip, "leave-overlapping-out"
+            basis = "leave-overlapping-out"
+        query_clip = cases.origin[real]
         # a full scan per clip: every clip of vector problems, a sample of sequences
         size = MAX_CALIBRATION_VECTORS if queries.ndim == 2 else CALIBRATION_SAMPLE
         pick = sample(len(queries), size)

@@ -3,12 +3,10 @@ with several repetitions, trained with ``--split repetitions``.
 
 - Each activity's cases then come from one recording, so no training repetition can be
   classified held out of its recording with a case of its activity left, and the confidence
-  was the plain vote share: ``train`` said nothing of it, ``casebase info`` said "calibrated
+  is the plain vote share: ``train`` said nothing of it, ``casebase info`` said "calibrated
   on 0 none training repetitions (their accuracy nan)", its ``--json`` wrote ``NaN``, which
   is not JSON, and ``classify --verbose`` called the confidence "the nearest cases' soft
-  vote calibrated on the training clips". Pieces of one recording per activity are now held
-  out of it with the pieces that overlap them (leave-overlapping-out) and calibrate it; a
-  case base of one whole clip per activity still cannot, and says so.
+  vote calibrated on the training clips".
 - A class folder whose only video shows nobody: ``train`` called the clip kept whole "1
   repetition that shows no person"; and when it left one activity, refused with "y: the
   training set has only one activity" (scikit-learn's argument), without naming the clip.
@@ -74,30 +72,14 @@ def one_recording_each(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return db
 
 
-@pytest.fixture(scope="module")
-def one_clip_each(one_recording_each: Path) -> Path:
-    """The same three recordings, each one whole clip of its activity (nothing to hold out
-    of a recording but the recording)."""
-    root = one_recording_each.parent
-    (root / "whole.csv").write_text(
-        "path,label\n" + "".join(f"rec{k}.npz,activity{k}\n" for k in range(3)), encoding="utf-8"
-    )
-    db = root / "whole.sqlite"
-    argv = ["train", str(root / "whole.csv"), "--db", str(db), "--mirror", "off",
-            "--feature-weights", "none", "--phases", "0", "-k", "1"]  # fmt: skip
-    assert main(argv) == 0
-    return db
-
-
 def test_train_says_when_the_confidence_could_not_be_calibrated(
-    one_clip_each: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    one_recording_each: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """``train`` said nothing of it: the README promises a calibrated confidence. Three
-    activities, one whole clip each: none can be held out of its recording."""
-    csv = one_clip_each.parent / "whole.csv"
+    """``train`` said nothing of it: the README promises a calibrated confidence."""
+    csv = one_recording_each.parent / "labels.csv"
     db = tmp_path / "cb.sqlite"
     argv = ["train", str(csv), "--db", str(db), "--mirror", "off", "--feature-weights", "none",
-            "--phases", "0", "-k", "1", "--json"]  # fmt: skip
+            "--phases", "0", "--json"]  # fmt: skip
     capsys.readouterr()
     assert main(argv) == 0
     out, err = capsys.readouterr()
@@ -118,25 +100,11 @@ def test_train_says_when_the_confidence_could_not_be_calibrated(
     assert "not calibrated" not in err
 
 
-def test_pieces_of_one_recording_per_activity_calibrate_the_confidence(
+def test_info_of_a_case_base_whose_confidence_could_not_be_calibrated(
     one_recording_each: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """Three activities, each three pieces (start,end rows) of one recording of its own: held
-    out by recording, no piece could be answered, and the confidence was the vote share,
-    not calibrated. Each piece is now held out with the pieces of its recording that overlap
-    it (here none: the rows do not overlap), and all 3 x 3 calibrate it."""
     capsys.readouterr()
-    assert main(["casebase", "info", "--db", str(one_recording_each), "--json"]) == 0
-    model = _strict(capsys.readouterr().out)["case_bases"][0]["model"]
-    assert model["confidence"]["n"] == 9
-    assert model["confidence"]["basis"] == "leave-overlapping-out"
-
-
-def test_info_of_a_case_base_whose_confidence_could_not_be_calibrated(
-    one_clip_each: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    capsys.readouterr()
-    assert main(["casebase", "info", "--db", str(one_clip_each)]) == 0
+    assert main(["casebase", "info", "--db", str(one_recording_each)]) == 0
     out = capsys.readouterr().out
     line = next(x for x in out.splitlines() if x.startswith("  confidence: "))
     assert line == (
@@ -145,20 +113,20 @@ def test_info_of_a_case_base_whose_confidence_could_not_be_calibrated(
     )
     assert "nan" not in out
 
-    assert main(["casebase", "info", "--db", str(one_clip_each), "--json"]) == 0
+    assert main(["casebase", "info", "--db", str(one_recording_each), "--json"]) == 0
     doc = _strict(capsys.readouterr().out)
     confidence = doc["case_bases"][0]["model"]["confidence"]
     assert confidence["n"] == 0 and confidence["accuracy"] is None
 
 
 def test_verbose_explanation_of_an_uncalibrated_confidence_says_so(
-    one_clip_each: Path, capsys: pytest.CaptureFixture[str]
+    one_recording_each: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The verbose lines said "the confidence is the nearest cases' soft vote calibrated on
     the training clips" where it is the plain vote share."""
-    clip = one_clip_each.parent / "rec0.npz"
+    clip = one_recording_each.parent / "rec0.npz"
     capsys.readouterr()
-    argv = ["classify", str(clip), "--db", str(one_clip_each), "--verbose", "--json"]
+    argv = ["classify", str(clip), "--db", str(one_recording_each), "--verbose", "--json"]
     assert main(argv) == 0
     result = _strict(capsys.readouterr().out)["results"][0]
     assert result["confidence"] == result["vote_share"]  # nothing maps it
@@ -277,13 +245,13 @@ def test_extract_refuses_a_class_folder_whose_videos_lie_in_a_subfolder(
 
 
 def test_info_of_an_uncalibrated_case_base_appended_to_says_the_cases_changed_since(
-    one_clip_each: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    one_recording_each: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """After ``train --append``, the activity may come from two recordings: the line says it
     is of the training's cases, as the line of a calibrated confidence does."""
     import shutil
 
-    db = shutil.copy(one_clip_each, tmp_path / "cb.sqlite")
+    db = shutil.copy(one_recording_each, tmp_path / "cb.sqlite")
     clips, _ = arm_dataset(1, 9)
     save_pose(clips[0], tmp_path / "more" / "activity0" / "new.npz")
     assert main(["train", str(tmp_path / "more"), "--db", str(db), "--append"]) == 0
