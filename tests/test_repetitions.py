@@ -7,6 +7,7 @@ from __future__ import annotations
 import hashlib
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -19,6 +20,8 @@ from features.poses import PoseSequence, save_pose
 from features.qmp import fit_signals
 from features.readers.asfamc import read_asf_amc
 from features.repetitions import (
+    MovementSignals,
+    count_in_signals,
     count_repetitions,
     mirror_angles,
     movement_signals,
@@ -33,7 +36,9 @@ ARM = ("elbow", "wrist", "pinky", "index", "thumb")
 FPS = 30.0
 
 
-def _raise_arms(body: dict[str, np.ndarray], left_deg: float, right_deg: float) -> dict:
+def _raise_arms(
+    body: dict[str, np.ndarray], left_deg: float, right_deg: float
+) -> dict[str, np.ndarray]:
     """Arms lifted sideways (abduction) by the given angles about the shoulders."""
     out = rotate(body, tuple(f"left_{j}" for j in ARM), rot_z(-left_deg), body["left_shoulder"])
     return rotate(out, tuple(f"right_{j}" for j in ARM), rot_z(right_deg), body["right_shoulder"])
@@ -227,8 +232,9 @@ def test_too_short_and_no_person_are_refused() -> None:
 # ---- real mocap against hand counts -------------------------------------------------------
 
 
-def _fixture() -> dict:
-    return json.loads(FIXTURE.read_text(encoding="utf-8"))
+def _fixture() -> dict[str, Any]:
+    data: dict[str, Any] = json.loads(FIXTURE.read_text(encoding="utf-8"))
+    return data
 
 
 @pytest.fixture(scope="module")
@@ -286,9 +292,104 @@ def test_jogging_counts_one_repetition_per_step(recordings: dict[str, PoseSequen
         assert abs(result.count - clip["count"]) <= 1, (result.count, clip["how"])
 
 
+def _jog_after_a_twist(steps: int, lead_s: float) -> tuple[MovementSignals, np.ndarray]:
+    """Joint angles (radians, 30 Hz) of ``steps`` jogging steps, the left knee first, each
+    knee bending 0.5 rad over 11 samples while the other stays straight, the arms swinging a
+    little with them; before them ``lead_s`` seconds of the end of a twist: the upper arms
+    turning back across each other by 2 rad, the trunk turning back from 0.7 to 0.2 rad (the
+    person stays a little turned), the arms lowering and the elbows bending into the jogging
+    posture. Returns the signals and the steps' far points (samples)."""
+    k, lead = 11, int(round(lead_s * FPS))
+    bend = 0.5 * np.sin(np.pi * np.arange(k) / (k - 1)) ** 2
+    left = np.concatenate([bend if i % 2 == 0 else np.zeros(k) for i in range(steps)])
+    right = np.concatenate([np.zeros(k) if i % 2 == 0 else bend for i in range(steps)])
+    swing = 0.1 * (left - right)
+    jogging = {
+        "left_elbow": 1.6 + 0 * left,
+        "right_elbow": 1.6 + 0 * left,
+        "left_armpit": 0.5 - swing,
+        "right_armpit": 0.5 + swing,
+        "left_knee": np.pi - left,
+        "right_knee": np.pi - right,
+        "torso_transverse": np.pi / 2 + 0.2 + 0 * left,
+        "left_upper_arm_turn": -0.3 + swing,
+        "right_upper_arm_turn": -0.3 - swing,
+    }
+    before = {
+        "left_elbow": 2.3,
+        "right_elbow": 2.3,
+        "left_armpit": 1.1,
+        "right_armpit": 1.1,
+        "left_knee": np.pi,
+        "right_knee": np.pi,
+        "torso_transverse": np.pi / 2 + 0.7,
+        "left_upper_arm_turn": 1.7,
+        "right_upper_arm_turn": -2.3,
+    }
+    back = 0.5 * (1 + np.cos(np.pi * np.arange(lead) / max(1, lead - 1)))  # 1 -> 0
+    names = tuple(jogging)
+    x = np.stack([np.r_[v[0] + (before[n] - v[0]) * back, v] for n, v in jogging.items()], axis=1)
+    return MovementSignals(x, names, FPS, 1), lead + np.arange(steps) * k + (k - 1) / 2
+
+
+def test_jogging_steps_counted_after_the_end_of_a_twist() -> None:
+    """A jog of six steps whose signals start 0.7 s early, in the end of a twist (as a
+    stretch cut up to half a second or so early does): that one-off change made the
+    side-against-side movement repeat less clearly (autocorrelation below 0.5), and the
+    alternation was then judged on the angles as recorded, where the arms lowering from the
+    twist outweighed what the legs did against each other and a trunk left a little turned
+    kept the steps from mirroring: 3 repetitions, one per pair of steps, not alternating.
+    Six steps, each at its far point, left and right in turn (the twist's turning back at
+    the first sample, a far point before the clip, is left aside)."""
+    sig, designed = _jog_after_a_twist(6, 0.7)
+    result = count_in_signals(sig, len(sig.values), FPS)
+    assert result.alternating
+    steps = [r for r in result.repetitions if r.peak_frame >= designed[0] - 3]
+    np.testing.assert_allclose([r.peak_frame for r in steps], designed, atol=2)
+    assert [r.side for r in steps] == ["left", "right"] * 3
+    # without the twist before it, as before
+    sig, designed = _jog_after_a_twist(6, 0.0)
+    result = count_in_signals(sig, len(sig.values), FPS)
+    assert result.alternating
+    np.testing.assert_allclose([r.peak_frame for r in result.repetitions], designed, atol=2)
+
+
+@pytest.mark.parametrize(
+    ("asf", "early_s", "end_frame"),
+    [
+        ("hdm05/train/3/HDM_bd.asf", 0.0, 2052),
+        ("hdm05/train/3/HDM_bd.asf", 0.25, 2052),
+        ("hdm05/train/3/HDM_bd.asf", 0.5, 2052),
+        ("hdm05/train/3/HDM_bd.asf", 0.7, 2028),
+        ("hdm05/train/3/HDM_bd.asf", 0.75, 2052),
+        ("hdm05/train/1/HDM_bk.asf", 0.7, 2028),
+    ],
+)
+def test_jogging_counted_when_its_stretch_starts_in_the_twist_before(
+    recordings: dict[str, PoseSequence], shared_data: Path, asf: str, early_s: float, end_frame: int
+) -> None:
+    """13_31's jog (frames 1608-2052; 7 steps by hand, knee troughs at 13.79, 14.1, 14.48,
+    14.86, 15.25, 15.64 and 16.02 s) counted from up to 0.75 s earlier, in the end of the
+    twist before it, as segmentation may cut it (frames 1524-2028: 0.7 s early, 0.2 s short),
+    with the fixture's skeleton and another: alternating, seven steps from the labelled start
+    on (the twist's turning back before it may add one of its own). Was 3, not alternating,
+    from 0.7 s early."""
+    clip = next(c for c in _fixture()["clips"] if c["source"].endswith("13_31.amc")
+                and c.get("activity") == "Jog")  # fmt: skip
+    if asf == clip["asf"]:
+        rec = recordings[clip["source"]]
+    else:
+        rec = read_asf_amc(shared_data / asf, shared_data / clip["source"])
+    start = clip["start_frame"] - int(round(early_s * rec.fps))
+    result = count_repetitions(rec.slice_frames(start, end_frame))
+    assert result.alternating
+    steps = [r for r in result.repetitions if start + r.peak_frame >= clip["start_frame"]]
+    assert len(steps) == clip["count"] == 7, [start + r.peak_frame for r in result.repetitions]
+
+
 #: sides marked by hand (tests/fixtures/repetition_counts.json, "how"): the leg a jogging step
 #: or a knee raise lifts, at the knee's trough, seconds into the recording
-HAND_SIDES = {
+HAND_SIDES: dict[tuple[str, str], dict[str, tuple[float, ...]]] = {
     ("cmu-mocap6/amc/13_30.amc", "Jog"): {
         "left": (16.5, 17.2, 18.0, 18.75, 19.45),
         "right": (16.9, 17.6, 18.4, 19.05),
