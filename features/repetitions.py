@@ -37,8 +37,9 @@ How (all channels at once, no per-frame loops):
    other's movement mirrored
    (:data:`ALTERNATION_MIN`: a kick answered by the other arm's swing is not) (the spans and
    the mirroring taken about their running mean over one period, however clearly the
-   side-against-side movement repeats: bending the arms once to start jogging, or the end of
-   the exercise before it in a stretch cut a little early, is not what repeats; and the far
+   side-against-side movement repeats, as long as it repeats more than noise would:
+   bending the arms once to start jogging, or the end of the exercise before it in a
+   stretch cut a little early, is not what repeats; and the far
    points' postures opposed about the symmetric posture as well, as recorded: about its
    running mean a one-arm raise is opposed to itself);
 4. the movement as one number per sample: the posture projected on the direction it moves
@@ -900,6 +901,13 @@ def _steady(line: np.ndarray, period: float | None, strength: float, fps: float)
     return _about_running_mean(line, period, fps)
 
 
+def _chance_correlation(n: int) -> float:
+    """The autocorrelation that ``n`` samples of noise reach by chance (its 95 % bound,
+    2 / sqrt(n)): a period whose autocorrelation is below it repeats nothing; a statistical
+    bound, not a value fitted to data."""
+    return 2.0 / float(np.sqrt(max(1, n)))
+
+
 def _about_running_mean(line: np.ndarray, period: float | None, fps: float) -> np.ndarray:
     """``line`` ``(n,)`` (or each column of ``(n, C)``) about its running mean over one
     ``period`` (as it is without a period): what changes slower than the period, once, is
@@ -938,7 +946,8 @@ def _sides_mirror(
 ) -> bool:
     """Whether the side-against-side postures ``anti`` ``(n, C)`` at one side's far points
     ``one`` and at the other's ``other`` (samples) are the same movement mirrored: about their
-    running mean over one ``period``, their means opposed by more than :data:`ALTERNATION_MIN`
+    running mean over one ``period`` (None: nothing repeats, as recorded), their means
+    opposed by more than :data:`ALTERNATION_MIN`
     in cosine (a knee raised on the left, then the same knee raise on the right: -1; a kick of
     one leg answered by the other arm swinging: about 0), and as recorded (about the symmetric
     posture) opposed at all (cosine below 0).
@@ -987,12 +996,15 @@ def _alternating_repetitions(
     direction = movement_direction(anti)
     line = anti @ direction  # 0 = a symmetric posture
     alike = sym @ movement_direction(sym)
-    period, _ = find_period(np.diff(line)[:, None], fps)
-    # about the running mean whether or not the movement repeats clearly: a stretch that
-    # starts in the exercise before (the arms lowering from a twist into a jog) repeats less
-    # clearly, and that one-off change must not pass for what both sides do alike
-    if _span(_about_running_mean(line, period, fps)) < 0.5 * _span(
-        _about_running_mean(alike, period, fps)
+    period, strength = find_period(np.diff(line)[:, None], fps)
+    # what repeats, about the running mean over a period, whether or not the movement
+    # repeats clearly (a stretch that starts in the exercise before, the arms lowering from a
+    # twist into a jog, repeats less clearly, and that one-off change must not pass for what
+    # both sides do alike), but not over a "period" that repeats no more than noise would (a
+    # squat stretch ending in three jogging steps: its squats, slower, are no one-off change)
+    repeating = period if strength >= _chance_correlation(len(line) - 1) else None
+    if _span(_about_running_mean(line, repeating, fps)) < 0.5 * _span(
+        _about_running_mean(alike, repeating, fps)
     ):
         return none  # mostly both sides alike (a squat, a jumping jack)
     extent = np.percentile(x, 95, axis=0) - np.percentile(x, 5, axis=0)  # robust spans
@@ -1020,7 +1032,7 @@ def _alternating_repetitions(
     )
     if not len(one) or not len(other):
         return none  # one side only: counted as a plain movement
-    if not _sides_mirror(anti, period, fps, one, other):
+    if not _sides_mirror(anti, repeating, fps, one, other):
         return none  # each side's excursion moves other limbs (a kick, an arm swung to balance)
     reach_one = float(np.median(line[one]))
     reach_other = float(np.median(-line[other]))
