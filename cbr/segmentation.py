@@ -260,7 +260,8 @@ def periods_in_span(part: MovementSignals, fps: float) -> list[tuple[int, int]]:
         return []
     span_frames = len(part.values) * part.step
     out = []
-    for first, last in _periods(count_in_signals(part, span_frames, fps, recording_edges=False)):
+    found = count_in_signals(part, span_frames, fps, recording_edges=False, clear_alternation=True)
+    for first, last in _periods(found):
         if first == 0 or last >= span_frames - part.step:
             continue
         if MIN_WINDOW_S * fps / 2 <= last - first <= MAX_WINDOW_S * fps:

@@ -820,12 +820,24 @@ def count_repetitions(seq: PoseSequence, recording_edges: bool = True) -> Repeti
 
 
 def count_in_signals(
-    sig: MovementSignals, n_frames: int, fps: float, recording_edges: bool = True
+    sig: MovementSignals,
+    n_frames: int,
+    fps: float,
+    recording_edges: bool = True,
+    clear_alternation: bool = False,
 ) -> RepetitionCount:
     """:func:`count_repetitions` on already prepared signals (of a clip of ``n_frames``;
-    ``recording_edges`` as there)."""
+    ``recording_edges`` as there). ``clear_alternation``: a movement alternates sides only
+    as judged about its running mean where the side-against-side movement repeats clearly
+    (:data:`CLEAR_PERIODICITY`), as recorded where it does not, for signals that may well
+    straddle a change of exercise (segmentation's search for whole periods in fixed spans,
+    :func:`cbr.segmentation.periods_in_span`: a twist's last turn and a jog's first steps are
+    no period); False, the default: wherever it repeats more than noise would, for a stretch
+    of one exercise whose ends may hold a little of the next (:func:`_alternating_repetitions`)."""
     x = sig.values
-    spans, far, direction, sides = _alternating_repetitions(x, sig.names, sig.fps, sig.blind)
+    spans, far, direction, sides = _alternating_repetitions(
+        x, sig.names, sig.fps, sig.blind, clear_alternation
+    )
     alternating = sides is not None
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
     if sides is None:
@@ -978,14 +990,18 @@ OTHER_SIDE = {"left": "right", "right": "left"}
 
 
 def _alternating_repetitions(
-    x: np.ndarray, names: tuple[str, ...], fps: float, blind: np.ndarray | None = None
+    x: np.ndarray,
+    names: tuple[str, ...],
+    fps: float,
+    blind: np.ndarray | None = None,
+    clear_alternation: bool = False,
 ) -> tuple[list[tuple[int, int]], np.ndarray, np.ndarray, np.ndarray | None]:
     """Repetitions of a movement that alternates sides: what one side does against the other
     spans at least half as much as what both do alike (a knee raise: as much), and the body
     goes out to both sides about equally far. Returns spans, far points, the movement
     direction and the side of each far point (:func:`_sides`); None when the movement does
     not alternate (and the rest empty). ``blind``: the samples where nobody is seen
-    (:func:`_in_view`)."""
+    (:func:`_in_view`); ``clear_alternation`` as for :func:`count_in_signals`."""
     sym, anti = side_parts(x, names)
     none: tuple[list[tuple[int, int]], np.ndarray, np.ndarray, np.ndarray | None] = (
         [],
@@ -1002,7 +1018,8 @@ def _alternating_repetitions(
     # twist into a jog, repeats less clearly, and that one-off change must not pass for what
     # both sides do alike), but not over a "period" that repeats no more than noise would (a
     # squat stretch ending in three jogging steps: its squats, slower, are no one-off change)
-    repeating = period if strength >= _chance_correlation(len(line) - 1) else None
+    least = CLEAR_PERIODICITY if clear_alternation else _chance_correlation(len(line) - 1)
+    repeating = period if strength >= least else None
     if _span(_about_running_mean(line, repeating, fps)) < 0.5 * _span(
         _about_running_mean(alike, repeating, fps)
     ):
