@@ -4,6 +4,7 @@ classifiers on a labelled dataset and print the table (JSON, CSV and pictures on
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -279,6 +280,17 @@ def _print_explanations(explained: list[Any]) -> None:
             print(f"  {shown(line)}")
 
 
+def _stdout_gone() -> None:
+    """Standard output's reader has gone: what is left to print goes nowhere (the file
+    descriptor too, so the interpreter's flush at exit does not fail again)."""
+    devnull = open(os.devnull, "w")  # noqa: SIM115 - kept open to the end of the process
+    try:
+        os.dup2(devnull.fileno(), sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no file descriptor (a captured stream)
+        pass
+    sys.stdout = devnull
+
+
 #: what is compared on recordings labelled over time, said beside the figures
 STRETCHES_NOTE = (
     "each labelled stretch of a recording labelled over time is one clip here, not cut into"
@@ -312,10 +324,13 @@ def run(args: argparse.Namespace) -> int:
     results.explanations += explain_dad_errors(run_, min(settings.explain, 3))
     for note in results.notes:
         print(f"note: {shown(note)}", file=sys.stderr)
-    print(format_table(results))
-    if results.best:
-        print(f"best: {results.best}; best interpretable (*): {results.best_interpretable}")
-    _print_explanations(results.explanations)
+    try:
+        print(format_table(results))
+        if results.best:
+            print(f"best: {results.best}; best interpretable (*): {results.best_interpretable}")
+        _print_explanations(results.explanations)
+    except BrokenPipeError:  # the reader stopped reading (`| head`): the files are still written
+        _stdout_gone()
     if args.out:
         args.out.mkdir(exist_ok=True)
     _write_results(results, outputs)  # the results are safe before any picture is drawn
