@@ -245,10 +245,28 @@ def test_bad_input_gives_one_clear_line(
         assert "'colour'" in err[0] and "correct" in err[0]  # names what exists
 
 
-def test_report_from_json_only_draws_its_pictures(
+def test_report_from_json_beside_the_out_folder_shows_its_pictures(
     run_slice: tuple[Path, str], tmp_path: Path
 ) -> None:
+    """r.json lies beside the --out folder o/: it names the pictures from its own folder
+    ("o/accuracy.png"), and its report shows every picture of the run."""
     out, _ = run_slice
+    assert main(["report", str(out / "r.json"), "--out", str(tmp_path / "r.html")]) == 0
+    page = (tmp_path / "r.html").read_text()
+    # accuracy + confusion matrices (best, DAD) + prevalence + a timeline per activity
+    assert page.count('src="data:image/png;base64,') == 1 + 2 + 1 + 3
+    assert json.loads((out / "r.json").read_text())["pictures"]["accuracy"] == "o/accuracy.png"
+    assert "cbr fluents/euclidean" in page
+
+
+def test_report_from_json_only_draws_its_pictures(tmp_path: Path) -> None:
+    out = tmp_path
+    rc = main([
+        "compare", str(DEMO), "--labels", "deep_squat,hurdle_step", "--subjects", "s01,s02",
+        "--features", "fluents", "--similarities", "euclidean", "--peers", "none",
+        "--json", str(out / "r.json"),
+    ])  # fmt: skip
+    assert rc == 0
     assert main(["report", str(out / "r.json"), "--out", str(tmp_path / "r.html")]) == 0
     page = (tmp_path / "r.html").read_text()
     # accuracy + confusion matrices (best, DAD), no data-dependent pictures

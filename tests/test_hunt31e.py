@@ -1,16 +1,23 @@
 """What the hunt of the evaluation path (31e) found in ``posecbr compare`` and ``posecbr
 report``: the files asked for not written when standard output's reader stopped reading
-(``| head``).
+(``| head``); the report of a ``--json`` file beside the ``--out`` folder without the run's
+pictures, or with another run's.
 """
 
 from __future__ import annotations
 
+import base64
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+from cbr.evaluation.results import ConfusionPicture, Pictures, TimelinePicture
+from posecbr.cli import main
 from tests.badinput import ROOT
 
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
@@ -45,3 +52,55 @@ def test_compare_piped_into_a_reader_that_stops_still_writes_its_files(tmp_path:
     assert json.loads((tmp_path / "o" / "results.json").read_text())["clips"] == doc["clips"]
     assert (tmp_path / "o" / "results.csv").is_file()
     assert (tmp_path / "o" / "accuracy.png").is_file()
+
+
+def _inlined(page: str) -> list[bytes]:
+    """The PNG pictures an HTML report inlines, in order."""
+    found = re.findall(r'src="data:image/png;base64,([^"]+)"', page)
+    return [base64.b64decode(data) for data in found]
+
+
+def test_report_of_a_json_beside_the_out_folder_shows_that_runs_pictures(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``compare --json run.json --out run``: run.json named its pictures as the folder
+    run/ holds them ("timeline_00.png"), but ``report run.json`` reads them from run.json's
+    own folder: it left out the prevalence and timelines of the run, and inlined a
+    timeline_00.png of another run lying beside run.json, captioned as this run's."""
+    decoy = tmp_path / "timeline_00.png"
+    decoy.write_bytes((ROOT / "docs" / "workout_timeline.png").read_bytes())
+    run = tmp_path / "run"
+    argv = ["compare", str(DEMO), *SMALL, "--json", str(tmp_path / "run.json"), "--out", str(run)]
+    assert main(argv) == 0
+    doc = json.loads((tmp_path / "run.json").read_text())
+    assert doc["pictures"]["timelines"][0]["file"] == "run/timeline_00.png"
+    assert doc["pictures"]["accuracy"] == "run/accuracy.png"
+    assert main(["report", str(tmp_path / "run.json"), "--out", str(tmp_path / "r.html")]) == 0
+    capsys.readouterr()
+    # the run's five pictures, as in its folder (the order of the page): none other
+    names = ["accuracy", "confusion_cbr_fluents_euclidean", "prevalence"]
+    names += ["timeline_00", "timeline_01"]
+    expected = [(run / f"{n}.png").read_bytes() for n in names]
+    assert _inlined((tmp_path / "r.html").read_text()) == expected
+    assert decoy.read_bytes() not in expected
+
+
+def test_a_results_file_away_from_the_pictures_names_none() -> None:
+    """A --json file whose folder does not hold the --out folder cannot name the pictures
+    from its folder: it names none (``report`` draws the accuracy and confusion pictures
+    from the results)."""
+    from posecbr.commands.compare import _pictures_seen_from
+
+    pics = Pictures(
+        accuracy="accuracy.png",
+        confusion=[ConfusionPicture("dad", "confusion_dad.png")],
+        prevalence="prevalence.png",
+        timelines=[TimelinePicture("squat", "a.npz", "timeline_00.png")],
+    )
+    away = _pictures_seen_from(pics, Path("/data/x/r.json"), Path("/data/y/o"))
+    assert away.to_dict() == {}
+    below = _pictures_seen_from(pics, Path("/data/r.json"), Path("/data/y/o"))
+    assert below.files() == [
+        "y/o/accuracy.png", "y/o/prevalence.png", "y/o/confusion_dad.png", "y/o/timeline_00.png"
+    ]  # fmt: skip
+    assert _pictures_seen_from(pics, Path("/data/y/o/r.json"), Path("/data/y/o")) == pics

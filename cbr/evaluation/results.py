@@ -503,6 +503,20 @@ class Pictures:
         out = [self.accuracy, self.prevalence] + [c.file for c in self.confusion]
         return [f for f in out + [t.file for t in self.timelines] if f is not None]
 
+    def under(self, folder: str) -> Pictures:
+        """The same pictures named from the folder that holds ``folder`` (a relative name
+        inside it, '/'-separated): for a results file there, beside the pictures' folder."""
+
+        def name(file: str) -> str:
+            return f"{folder}/{file}"
+
+        return Pictures(
+            accuracy=None if self.accuracy is None else name(self.accuracy),
+            confusion=[ConfusionPicture(c.method, name(c.file)) for c in self.confusion],
+            prevalence=None if self.prevalence is None else name(self.prevalence),
+            timelines=[TimelinePicture(t.activity, t.clip, name(t.file)) for t in self.timelines],
+        )
+
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {}
         if self.accuracy is not None:

@@ -244,13 +244,32 @@ def check_outputs(outputs: list[Output], inputs: list[str | Path]) -> None:
         check_output(o.path, inputs=inputs, what=o.what, make_parents=new_folder)
 
 
-def _write_results(results: Any, outputs: list[Output]) -> None:
-    """The results as JSON and CSV to every output asked for (each written atomically)."""
+def _pictures_seen_from(pictures: Any, results_file: Path, out: Path) -> Any:
+    """``pictures`` (named in the ``--out`` folder) as a results file at ``results_file``
+    names them: from its own folder, which ``posecbr report`` reads them from; none when
+    ``--out`` is not inside that folder (the report draws what the results hold)."""
+    from cbr.evaluation.results import Pictures, is_inside_name
+
+    try:
+        rel = Path(os.path.relpath(out.resolve(), results_file.parent.resolve())).as_posix()
+    except ValueError:  # another drive
+        return Pictures()
+    if rel == ".":
+        return pictures
+    return pictures.under(rel) if is_inside_name(rel) else Pictures()
+
+
+def _write_results(results: Any, outputs: list[Output], out: Path | None = None) -> None:
+    """The results as JSON and CSV to every output asked for (each written atomically); a
+    JSON file names the pictures drawn into ``out`` from its own folder."""
     from cbr.evaluation.tables import csv_rows, write_csv
 
     for o in outputs:
         if o.format == "json":
-            write_json_atomic(o.path, results.to_dict())
+            doc = results.to_dict()
+            if out is not None:
+                doc["pictures"] = _pictures_seen_from(results.pictures, o.path, out).to_dict()
+            write_json_atomic(o.path, doc)
         else:
             write_csv(csv_rows(results), o.path)
 
@@ -337,7 +356,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out:
         _draw_pictures(run_, args.out, args.trim)
         # the JSON again, now naming the pictures (the CSV holds no pictures)
-        _write_results(results, [o for o in outputs if o.format == "json"])
+        _write_results(results, [o for o in outputs if o.format == "json"], args.out)
         print(
             f"results and pictures in {args.out}; report: posecbr report {args.out} "
             f"--out {args.out / 'report.html'}"
