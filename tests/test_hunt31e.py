@@ -1,12 +1,15 @@
 """What the hunt of the evaluation path (31e) found in ``posecbr compare`` and ``posecbr
 report``: the files asked for not written when standard output's reader stopped reading
 (``| head``); the report of a ``--json`` file beside the ``--out`` folder without the run's
-pictures, or with another run's.
+pictures, or with another run's; figures of models never trained (one class to learn from,
+or none) without a word.
 """
 
 from __future__ import annotations
 
 import base64
+import contextlib
+import io
 import json
 import os
 import re
@@ -18,7 +21,7 @@ import pytest
 
 from cbr.evaluation.results import ConfusionPicture, Pictures, TimelinePicture
 from posecbr.cli import main
-from tests.badinput import ROOT
+from tests.badinput import ROOT, refused
 
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 # 24 clips, one configuration: a comparison of a few seconds
@@ -104,3 +107,48 @@ def test_a_results_file_away_from_the_pictures_names_none() -> None:
         "y/o/accuracy.png", "y/o/prevalence.png", "y/o/confusion_dad.png", "y/o/timeline_00.png"
     ]  # fmt: skip
     assert _pictures_seen_from(pics, Path("/data/y/o/r.json"), Path("/data/y/o")) == pics
+
+
+def test_compare_refuses_a_model_per_subject_under_leave_one_subject_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--target correct --within subject`` (cv loso): each subject's model was trained on
+    the clips of that subject the fold left in, none, so every clip got the fallback answer
+    'correct': a table of 50.0 % crowned best, no case base, without a word (the fallback
+    was noted only inside the JSON)."""
+    argv = ["compare", str(DEMO), *SMALL, "--target", "correct", "--within", "subject"]
+    refused([*argv, "--json", str(tmp_path / "r.json")], tmp_path, capsys, "--within: ")
+    line = refused(argv, tmp_path, capsys, "'subject'", "--cv kfold")
+    assert "no model" in line
+
+
+@pytest.fixture(scope="module")
+def per_movement(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, object], str]:
+    """A comparison with one model per movement (one activity each): the results document
+    and what was printed on stderr."""
+    out = tmp_path_factory.mktemp("per_movement") / "r.json"
+    argv = ["compare", str(DEMO), *SMALL, "--within", "movement", "--json", str(out)]
+    argv.remove("--no-dad")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("POSECBR_NO_PROGRESS", "1")
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            assert main(argv) == 0
+    return json.loads(out.read_text()), err.getvalue()
+
+
+def test_compare_says_where_no_model_was_trained(
+    per_movement: tuple[dict[str, object], str],
+) -> None:
+    """Each movement's clips are one activity: its model had one class to learn from in
+    every fold and answered it for the fold's 6 clips of the movement (2 subjects, 6 clips
+    each), which the table counted as 100 % without a word."""
+    doc, err = per_movement
+    expected = [
+        f"{m}: training fold has only {a!r}; predicted {a!r} for its 6 test clips (no model "
+        "trained there; the figures count that answer)"
+        for m, a in (("m01", "deep_squat"), ("m02", "hurdle_step"))
+    ]
+    assert [n for n in doc["notes"] if "training fold" in n] == expected  # type: ignore[attr-defined]
+    for note in expected:
+        assert f"note: {note}\n" in err

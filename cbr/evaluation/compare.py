@@ -67,6 +67,33 @@ def _folds(
     return scheme, folds, notes
 
 
+def _check_within(data: Prepared, settings: CompareSettings, folds: np.ndarray) -> None:
+    """Refuse model groups (``--within``) each inside one fold: when a group's clips are
+    held out, no clip of it is left to train its model on (``--within subject`` under
+    leave-one-subject-out), and every figure would count a fixed fallback answer."""
+    within = data.within
+    if within is None:
+        return
+    trained = any(
+        bool(np.any((folds != f) & (within == g)))
+        for f, g in set(zip(folds.tolist(), within, strict=True))
+    )
+    if not trained:
+        raise ConfigError(
+            f"every {settings.within_column!r} value's clips lie in one fold, so no model "
+            "per value is ever trained on any clip (each is tested when its fold is held "
+            "out); use --cv kfold or another --within",
+            "--within",
+        )
+
+
+def _fallback_notes(rows: list[MethodResult]) -> list[str]:
+    """Where a model had fewer than two classes to learn from and answered one class for
+    its test clips (the same for every method): the figures count those answers."""
+    seen = sorted({note for m in rows if m.scores for note in m.scores.fold_notes})
+    return [f"{note} (no model trained there; the figures count that answer)" for note in seen]
+
+
 def _qmp_note(settings: CompareSettings) -> list[str]:
     if "qmp" in settings.features and any(
         get_measure(s).compares_sequences for s in settings.similarities
@@ -189,6 +216,7 @@ def run_compare(
     data = prepare(clips, settings, source)
     scheme, folds, fold_notes = _folds(data, settings, fold_indices)
     _check_k(settings, folds)
+    _check_within(data, settings, folds)
     methods = methods_for(settings)
     skipped, method_notes = _skipped(methods, data, settings)
     active = tuple(mi for mi in range(len(methods)) if mi not in skipped)
@@ -204,7 +232,12 @@ def run_compare(
         dataset=_dataset(data, source),
         settings=settings.to_dict(),
         cv=CVSummary(scheme, len(set(folds.tolist())), folds.tolist()),
-        notes=data.notes + fold_notes + _qmp_note(settings) + method_notes + _status_notes(rows),
+        notes=data.notes
+        + fold_notes
+        + _qmp_note(settings)
+        + method_notes
+        + _fallback_notes(rows)
+        + _status_notes(rows),
         clips=_clips(data),
         methods=with_mcnemar(rows, best),
         best=best,
