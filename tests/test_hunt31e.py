@@ -2,7 +2,8 @@
 report``: the files asked for not written when standard output's reader stopped reading
 (``| head``); the report of a ``--json`` file beside the ``--out`` folder without the run's
 pictures, or with another run's; figures of models never trained (one class to learn from,
-or none) without a word.
+or none) without a word; the per-group table's columns run together and a label's escape
+sequence printed raw.
 """
 
 from __future__ import annotations
@@ -19,7 +20,8 @@ from pathlib import Path
 
 import pytest
 
-from cbr.evaluation.results import ConfusionPicture, Pictures, TimelinePicture
+from cbr.evaluation.results import CompareResults, ConfusionPicture, Pictures, TimelinePicture
+from cbr.evaluation.tables import group_table
 from posecbr.cli import main
 from tests.badinput import ROOT, refused
 
@@ -152,3 +154,25 @@ def test_compare_says_where_no_model_was_trained(
     assert [n for n in doc["notes"] if "training fold" in n] == expected  # type: ignore[attr-defined]
     for note in expected:
         assert f"note: {note}\n" in err
+
+
+def test_compare_table_per_group_keeps_its_columns_apart(
+    per_movement: tuple[dict[str, object], str],
+) -> None:
+    """The per-group table gave each method a column as wide as its name and two spaces:
+    "dad" (5) printed "100.0100.0" beside the case base's column, and a header "movement"
+    wider than the groups ("m01") shifted the row under it; a label's escape sequence was
+    printed raw (an ANSI colour)."""
+    doc, _ = per_movement
+    lines = group_table(CompareResults.from_dict(doc))
+    assert lines[1:] == [
+        "accuracy % per movement (one model each):",
+        "movement    cbr fluents/euclidean    dad",
+        "m01                         100.0  100.0",
+        "m02                         100.0  100.0",
+    ]
+    hostile = json.loads(json.dumps(doc).replace('"m01"', '"m\\u001b[31m01"'))
+    lines = group_table(CompareResults.from_dict(hostile))
+    assert "\x1b" not in "".join(lines)
+    # the escaped name (12 characters) and two spaces, then the columns as above
+    assert lines[3] == "m\\x1b[31m01" + " " * 2 + " " * 18 + "100.0" + "  100.0"

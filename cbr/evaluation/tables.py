@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from features.fileio import write_text_atomic
+from features.text import shown
 
 from .results import CompareResults, MethodResult, Scores
 
@@ -54,16 +55,18 @@ def group_table(results: CompareResults) -> list[str]:
     if not ok:
         return []
     groups = list(ok[0][1].per_group)
-    width = max(len(g) for g in groups) + 2
-    within = results.settings.get("within") or "group"
-    cols = [len(m.name) + 2 for m, _ in ok]
+    within = shown(results.settings.get("within") or "group")
+    # the groups are the data's values (labels): escaped, they cannot drive the terminal
+    names = {g: shown(g) for g in groups}
+    width = max(len(within), *(len(n) for n in names.values())) + 2
+    cols = [max(len(m.name), len("100.0")) + 2 for m, _ in ok]
     head = "".join(f"{m.name:>{w}}" for (m, _), w in zip(ok, cols, strict=True))
     lines = ["", f"accuracy % per {within} (one model each):", f"{within:<{width}}{head}"]
     for g in groups:
         row = "".join(
             f"{100 * s.per_group[g].value:>{w}.1f}" for (_, s), w in zip(ok, cols, strict=True)
         )
-        lines.append(f"{g:<{width}}{row}")
+        lines.append(f"{names[g]:<{width}}{row}")
     return lines
 
 
