@@ -176,3 +176,20 @@ def test_compare_table_per_group_keeps_its_columns_apart(
     assert "\x1b" not in "".join(lines)
     # the escaped name (12 characters) and two spaces, then the columns as above
     assert lines[3] == "m\\x1b[31m01" + " " * 2 + " " * 18 + "100.0" + "  100.0"
+
+
+@pytest.mark.parametrize(
+    ("flag", "value", "needle"),
+    [
+        ("--labels", "deep_squat,hurdle_step,sit_to_stnd", "no clip labelled 'sit_to_stnd'"),
+        ("--subjects", "s01,s02,s9", "no clip of subject 's9'"),
+    ],
+)
+def test_compare_refuses_a_label_or_subject_no_clip_has(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], flag: str, value: str, needle: str
+) -> None:
+    """A mistyped ``--labels`` or ``--subjects`` entry was dropped without a word: the
+    comparison of two movements was printed and written as the one of three asked for
+    (``classify --subjects`` refuses the same mistake)."""
+    argv = ["compare", str(DEMO), *SMALL, flag, value, "--json", str(tmp_path / "r.json")]
+    refused(argv, tmp_path, capsys, f"{flag}: ", needle)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -149,7 +150,20 @@ def _load(args: argparse.Namespace) -> list[Any]:
         kw["labels"] = set(_names(args.labels))
     if args.subjects:
         kw["subjects"] = set(_names(args.subjects))
-    return load_dataset(args.data, **kw)
+    clips = load_dataset(args.data, **kw)
+    _check_found(clips, "--labels", kw.get("labels"), "labelled", lambda c: c.label)
+    _check_found(clips, "--subjects", kw.get("subjects"), "of subject", lambda c: c.subject)
+    return clips
+
+
+def _check_found(
+    clips: list[Any], flag: str, asked: set[str] | None, what: str, key: Callable[[Any], Any]
+) -> None:
+    """Refuse a ``--labels`` or ``--subjects`` entry no clip has (mistyped): the comparison of
+    the others alone would be reported as the one asked for."""
+    missing = sorted((asked or set()) - {key(c) for c in clips})
+    if missing:
+        raise ConfigError(f"no clip {what} {', '.join(repr(m) for m in missing)} in the data", flag)
 
 
 def _dataset_files(args: argparse.Namespace) -> list[str | Path]:
