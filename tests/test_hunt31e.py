@@ -193,3 +193,25 @@ def test_compare_refuses_a_label_or_subject_no_clip_has(
     (``classify --subjects`` refuses the same mistake)."""
     argv = ["compare", str(DEMO), *SMALL, flag, value, "--json", str(tmp_path / "r.json")]
     refused(argv, tmp_path, capsys, f"{flag}: ", needle)
+
+
+@pytest.mark.parametrize(
+    ("params", "needle"),
+    [
+        (["--similarities", "dtw", "--param", 'similarity_params={"band": 2}'],
+         "band must be in [0, 1], got 2 (cbr fluents/dtw)"),
+        (["--similarities", "dtw", "--param", "feature_weights=fisher"],
+         "learned feature weights need vector problems"),
+        (["--param", 'similarity_params={"band": 0.2}'],
+         "similarity 'euclidean' has no parameter band"),
+    ],
+)  # fmt: skip
+def test_compare_refuses_a_measure_its_configurations_cannot_build(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], params: list[str], needle: str
+) -> None:
+    """``--param similarity_params={"band": 2}`` (or a weighting the measure cannot take)
+    was checked only when each fold fitted: every configuration failed as a row of the
+    table, and the command ended with status 0 having written a results file of failures.
+    Like the other case-base parameters, it is refused before any work."""
+    argv = ["compare", str(DEMO), *SMALL, *params, "--json", str(tmp_path / "r.json")]
+    refused(argv, tmp_path, capsys, "--param: ", needle)

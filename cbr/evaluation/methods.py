@@ -52,7 +52,7 @@ def check_cbr_params(settings: CompareSettings) -> None:
 
     for method in _cbr_methods(settings):
         try:
-            CaseBaseClassifier(**method.params).wanted_config()
+            CaseBaseClassifier(**method.params).describe_plan()  # the measure built too
         except ConfigError as exc:
             raise ConfigError(f"{exc.message} ({method.name})", "--param") from None
 
