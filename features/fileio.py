@@ -218,7 +218,10 @@ def _same_file(a: Path, b: Path) -> bool:
 
 def _refuse_special(out: Path, what: str) -> None:
     """A device, pipe or socket at ``out`` is not replaced by a file (``--plot /dev/null``
-    would put a picture where the system's null device was)."""
+    would put a picture where the system's null device was); nor is "-", the usual name of
+    standard output (which no output here is), made a file of that name."""
+    if str(out) == "-":
+        raise DataError(f"the {what} goes to a file, not standard output: name the file", out)
     if out.exists() and not out.is_file():
         raise DataError(f"the {what} is not a regular file (a device, pipe or socket)", out)
 
@@ -292,7 +295,8 @@ def check_output(
 ) -> Path:
     """Check an output path before any work starts; returns it as a Path.
 
-    Refused, with one line naming the path: a folder; a file inside a folder that does not
+    Refused, with one line naming the path: "-" (taken for standard output, it was a file
+    named "-"); a folder; a file inside a folder that does not
     exist (unless ``make_parents``: the writer creates it, so only a file in its way is
     refused); a file in a folder this process cannot write (a read-only mount: found before
     the work, not when the result is written); one of ``inputs`` or, of a folder among them,

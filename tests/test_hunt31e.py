@@ -23,7 +23,7 @@ import pytest
 from cbr.evaluation.results import CompareResults, ConfusionPicture, Pictures, TimelinePicture
 from cbr.evaluation.tables import group_table
 from posecbr.cli import main
-from tests.badinput import ROOT, refused
+from tests.badinput import ROOT, refused, small_case_base
 
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 # 24 clips, one configuration: a comparison of a few seconds
@@ -215,3 +215,47 @@ def test_compare_refuses_a_measure_its_configurations_cannot_build(
     Like the other case-base parameters, it is refused before any work."""
     argv = ["compare", str(DEMO), *SMALL, *params, "--json", str(tmp_path / "r.json")]
     refused(argv, tmp_path, capsys, "--param: ", needle)
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["compare", str(DEMO), *SMALL, "--json", "-"], "-: the JSON output goes to a file"),
+        (["compare", str(DEMO), *SMALL, "--csv", "-"], "-: the CSV output goes to a file"),
+        (["compare", str(DEMO), *SMALL, "--out", "-"], "-: --out is a folder"),
+    ],
+)
+def test_an_output_named_dash_is_refused_not_a_file_named_dash(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    argv: list[str],
+    needle: str,
+) -> None:
+    """``--json -`` (standard output, as a user of Unix tools writes it) wrote the results
+    to a file named "-" in the current folder, and nothing to standard output."""
+    monkeypatch.chdir(tmp_path)
+    refused(argv, tmp_path, capsys, needle)
+
+
+def test_casebase_export_to_dash_is_refused_not_dash_npz(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``casebase export --out -`` wrote "-.npz" in the current folder."""
+    db = small_case_base(tmp_path)
+    capsys.readouterr()
+    monkeypatch.chdir(tmp_path)
+    argv = ["casebase", "export", "--db", str(db), "--out", "-"]
+    refused(argv, tmp_path, capsys, "-: the export file goes to a file")
+
+
+def test_report_to_dash_is_refused_not_a_file_named_dash(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    per_movement: tuple[dict[str, object], str],
+) -> None:
+    """``report r.json --out -`` wrote the page to a file named "-"."""
+    (tmp_path / "r.json").write_text(json.dumps(per_movement[0]))
+    monkeypatch.chdir(tmp_path)
+    refused(["report", "r.json", "--out", "-"], tmp_path, capsys, "-: the report goes to a file")

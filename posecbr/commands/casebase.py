@@ -385,6 +385,8 @@ def _export_path(args: argparse.Namespace) -> Path:
     named, before the ending is added: ``--out cases/`` is no ``cases.npz`` beside it, and
     ``--out .`` has no name to add it to."""
     out = Path(args.out)
+    if str(args.out) == "-":  # standard output's name, not "-.npz"
+        raise DataError("the export file goes to a file, not standard output: name the file", out)
     if out.is_dir() or not out.name:
         raise DataError("the export file is a folder, not a file", out)
     return out if out.name.lower().endswith(".npz") else out.with_name(out.name + ".npz")

@@ -213,6 +213,8 @@ class Output:
 def _check_out_folder(out: Path, data: Path) -> None:
     """``--out``: a folder, or a new one in a folder that exists; not the data folder (the
     results and pictures would be written among the clips)."""
+    if str(out) == "-":  # standard output's name, not a folder "-"
+        raise DataError("--out is a folder for the results and pictures: name the folder", out)
     if out.exists() and not out.is_dir():
         raise DataError("--out must be a folder, and this is a file", out)
     if not out.parent.is_dir():
