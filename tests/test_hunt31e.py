@@ -259,3 +259,30 @@ def test_report_to_dash_is_refused_not_a_file_named_dash(
     (tmp_path / "r.json").write_text(json.dumps(per_movement[0]))
     monkeypatch.chdir(tmp_path)
     refused(["report", "r.json", "--out", "-"], tmp_path, capsys, "-: the report goes to a file")
+
+
+def test_picture_notes_print_a_labels_control_character_escaped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A label holding an escape character: the pictures' note "the font has no glyph for
+    ..." named the character itself, printed raw on the terminal by ``compare --out`` and by
+    ``report`` (every other line escapes it)."""
+    rows = ["path,label,subject"]
+    for movement, label in (("m01", "squat\x1b[31m"), ("m02", "hurdle_step")):
+        for subject in ("s01", "s02"):
+            for clip in sorted(DEMO.glob(f"{movement}_{subject}_*.npz")):
+                rows.append(f"{clip},{label},{subject}")
+    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
+    argv = ["compare", str(tmp_path / "labels.csv"), "--peers", "none", "--no-dad"]
+    argv += ["--features", "fluents", "--similarities", "euclidean", "--explain", "0"]
+    assert main([*argv, "--out", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    assert "pictures: the font has no glyph for \\x1b (in names drawn)" in err
+    assert "\x1b" not in err
+    doc = json.loads((tmp_path / "o" / "results.json").read_text())
+    doc["pictures"] = {}  # the report draws the accuracy and confusion pictures itself
+    (tmp_path / "r.json").write_text(json.dumps(doc))
+    assert main(["report", str(tmp_path / "r.json"), "--out", str(tmp_path / "r.html")]) == 0
+    err = capsys.readouterr().err
+    assert "pictures: the font has no glyph for \\x1b (in names drawn)" in err
+    assert "\x1b" not in err

@@ -301,7 +301,7 @@ def _draw_pictures(run_: Any, out: Path, trim: float | None) -> None:
     pics.prevalence, pics.timelines = more.prevalence, more.timelines
     run_.results.pictures = pics
     for line in drawing.failures:
-        print(line, file=sys.stderr)
+        print(shown(line), file=sys.stderr)  # a label's character it names, escaped
     run_.results.notes += drawing.failures
 
 
@@ -373,8 +373,7 @@ def run(args: argparse.Namespace) -> int:
         _draw_pictures(run_, args.out, args.trim)
         # the JSON again, now naming the pictures (the CSV holds no pictures)
         _write_results(results, [o for o in outputs if o.format == "json"], args.out)
-        print(
-            f"results and pictures in {args.out}; report: posecbr report {args.out} "
-            f"--out {args.out / 'report.html'}"
-        )
+        out = shown(args.out)
+        report = shown(args.out / "report.html")
+        print(f"results and pictures in {out}; report: posecbr report {out} --out {report}")
     return 0

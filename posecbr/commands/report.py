@@ -35,6 +35,6 @@ def run(args: argparse.Namespace) -> int:
 
     dest, failures = write_report(args.results, args.out)
     for line in failures:
-        print(line, file=sys.stderr)
+        print(shown(line), file=sys.stderr)  # a label's character it names, escaped
     print(f"report written to {shown(dest)}")
     return 0
