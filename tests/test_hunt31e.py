@@ -286,3 +286,43 @@ def test_picture_notes_print_a_labels_control_character_escaped(
     err = capsys.readouterr().err
     assert "pictures: the font has no glyph for \\x1b (in names drawn)" in err
     assert "\x1b" not in err
+
+
+@pytest.mark.parametrize(
+    ("flags", "needle"),
+    [
+        (["--features", "qmp", "--similarities", "dtw"],
+         "--features: qmp features are one vector per clip, compared by euclidean only"),
+        (["--features", "fluents,fluents"], "--features: feature level 'fluents' given twice"),
+        (["--similarities", "euclidean,dtw,euclidean"],
+         "--similarities: similarity 'euclidean' given twice"),
+        (["--peers", "dtw-knn,dtw-knn"], "--peers: peer 'dtw-knn' given twice"),
+    ],
+)  # fmt: skip
+def test_compare_refuses_a_method_list_of_nothing_or_twice_the_same(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], flags: list[str], needle: str
+) -> None:
+    """``--features qmp --similarities dtw --no-dad``: QMP vectors are compared by euclidean
+    alone, so no method was left, and the command printed an empty table and wrote its
+    results with status 0. ``--features fluents,fluents``: every configuration twice, rows of
+    one name (their pictures one file)."""
+    argv = ["compare", str(DEMO), *SMALL, *flags, "--json", str(tmp_path / "r.json")]
+    refused(argv, tmp_path, capsys, needle)
+
+
+def test_compare_says_qmp_is_not_compared_when_no_measure_takes_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--similarities dtw`` with the default feature levels (fluents, qmp): the note said
+    "qmp features ...: compared by euclidean only", and no QMP configuration was run (no
+    euclidean): it says they were not compared."""
+    argv = ["compare", str(DEMO), *SMALL, "--similarities", "dtw", "--features", "fluents,qmp"]
+    assert main([*argv, "--json", str(tmp_path / "r.json")]) == 0
+    note = (
+        "qmp features are one vector per clip, compared by euclidean only, which "
+        "--similarities leaves out: not compared"
+    )
+    assert f"note: {note}\n" in capsys.readouterr().err
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert note in doc["notes"]
+    assert [m["name"] for m in doc["methods"]] == ["cbr fluents/dtw"]

@@ -95,6 +95,13 @@ def _fallback_notes(rows: list[MethodResult]) -> list[str]:
 
 
 def _qmp_note(settings: CompareSettings) -> list[str]:
+    if "qmp" in settings.features and all(
+        get_measure(s).compares_sequences for s in settings.similarities
+    ):
+        return [
+            "qmp features are one vector per clip, compared by euclidean only, which "
+            "--similarities leaves out: not compared"
+        ]
     if "qmp" in settings.features and any(
         get_measure(s).compares_sequences for s in settings.similarities
     ):

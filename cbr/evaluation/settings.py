@@ -63,11 +63,28 @@ class CompareSettings:
         ):
             if not given and flag != "--peers":  # no peers is a choice ("none")
                 raise ConfigError(f"no {what} given", flag)
-            for name in given:
+            for i, name in enumerate(given):
                 if name not in known:
                     raise ConfigError(
                         f"unknown {what} {name!r} (choose from {', '.join(known)})", flag
                     )
+                if name in given[:i]:  # its rows, pictures and results would be there twice
+                    raise ConfigError(f"{what} {name!r} given twice", flag)
+        self._check_levels_compared()
+
+    def _check_levels_compared(self) -> None:
+        """Some feature level asked for is compared by a similarity asked for: QMP vectors
+        are one per clip, which the sequence measures (dtw, signature) do not compare."""
+        from ..similarity import get_measure
+
+        if set(self.features) == {"qmp"} and all(
+            get_measure(s).compares_sequences for s in self.similarities
+        ):
+            raise ConfigError(
+                "qmp features are one vector per clip, compared by euclidean only, which"
+                " --similarities leaves out: nothing would compare them (add euclidean)",
+                "--features",
+            )
 
     def _check_numbers(self) -> None:
         if int(self.folds) < 2:
