@@ -326,3 +326,25 @@ def test_compare_says_qmp_is_not_compared_when_no_measure_takes_it(
     doc = json.loads((tmp_path / "r.json").read_text())
     assert note in doc["notes"]
     assert [m["name"] for m in doc["methods"]] == ["cbr fluents/dtw"]
+
+
+def test_compare_into_an_earlier_runs_folder_leaves_none_of_its_pictures(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``compare --out DIR`` over the folder of an earlier comparison: the earlier run's
+    pictures this one did not draw (DAD's confusion matrix, a third activity's timeline)
+    stayed beside the new results as if they were this run's."""
+    out = tmp_path / "o"
+    three = ["--labels", "deep_squat,hurdle_step,sit_to_stand", "--out", str(out)]
+    first = [a for a in SMALL if a != "--no-dad"]
+    assert main(["compare", str(DEMO), *first, *three]) == 0
+    assert (out / "confusion_dad.png").is_file() and (out / "timeline_02.png").is_file()
+    (out / "mine.png").write_bytes((out / "timeline_02.png").read_bytes())  # not compare's
+    assert main(["compare", str(DEMO), *SMALL, "--out", str(out)]) == 0
+    capsys.readouterr()
+    doc = json.loads((out / "results.json").read_text())
+    drawn = ["accuracy.png", "confusion_cbr_fluents_euclidean.png", "prevalence.png"]
+    drawn += ["timeline_00.png", "timeline_01.png"]
+    assert sorted(doc["pictures"]["timelines"][i]["file"] for i in range(2)) == drawn[3:]
+    files = sorted(p.name for p in out.iterdir())
+    assert files == sorted([*drawn, "mine.png", "results.csv", "results.json"])

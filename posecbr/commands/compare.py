@@ -305,6 +305,37 @@ def _draw_pictures(run_: Any, out: Path, trim: float | None) -> None:
     run_.results.notes += drawing.failures
 
 
+def _earlier_pictures(out: Path) -> list[str]:
+    """The pictures the results file of an earlier comparison in ``out`` names (none when
+    there is none, or it cannot be read): those this run does not draw again are removed
+    after it has drawn its own (:func:`_remove_stale`)."""
+    from cbr.evaluation.report import load_results
+    from features.errors import PosecbrError
+
+    if not (out / "results.json").is_file():
+        return []
+    try:
+        return load_results(out / "results.json")[0].pictures.files()
+    except PosecbrError:
+        return []
+
+
+def _remove_stale(out: Path, earlier: list[str], drawn: list[str]) -> None:
+    """Remove the PNG pictures of an earlier comparison in ``out`` this one did not draw
+    again: a confusion matrix of a method this run has not, or a timeline of an activity it
+    has not, lay beside its results as if it were one of them."""
+    from cbr.evaluation.report import PNG_MAGIC
+
+    for name in sorted(set(earlier) - set(drawn)):
+        path = out / name
+        if path.is_symlink() or not path.is_file():
+            continue
+        with open(path, "rb") as fh:
+            if fh.read(len(PNG_MAGIC)) != PNG_MAGIC:
+                continue
+        path.unlink(missing_ok=True)
+
+
 def _print_explanations(explained: list[Any]) -> None:
     """Why the clips explained (``--explain``) were got wrong, each its explanation's text
     under a line naming the clip, its true label and the answer."""
@@ -368,9 +399,11 @@ def run(args: argparse.Namespace) -> int:
         _stdout_gone()
     if args.out:
         args.out.mkdir(exist_ok=True)
+    earlier = _earlier_pictures(args.out) if args.out else []  # before results.json is new
     _write_results(results, outputs)  # the results are safe before any picture is drawn
     if args.out:
         _draw_pictures(run_, args.out, args.trim)
+        _remove_stale(args.out, earlier, results.pictures.files())
         # the JSON again, now naming the pictures (the CSV holds no pictures)
         _write_results(results, [o for o in outputs if o.format == "json"], args.out)
         out = shown(args.out)
