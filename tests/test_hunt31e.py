@@ -14,8 +14,10 @@ import io
 import json
 import os
 import re
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -348,3 +350,50 @@ def test_compare_into_an_earlier_runs_folder_leaves_none_of_its_pictures(
     assert sorted(doc["pictures"]["timelines"][i]["file"] for i in range(2)) == drawn[3:]
     files = sorted(p.name for p in out.iterdir())
     assert files == sorted([*drawn, "mine.png", "results.csv", "results.json"])
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="process groups and /proc: Linux")
+def test_ctrl_c_of_a_compare_with_workers_prints_one_line(tmp_path: Path) -> None:
+    """Ctrl-C in a terminal signals every process of the group: the spawned workers of
+    ``compare --jobs 2`` each printed a KeyboardInterrupt traceback (of a task or of their
+    imports) under "posecbr compare: interrupted". The workers now leave Ctrl-C to the
+    command, which stops them: the one line, status 130, no process left, nothing
+    written."""
+    env = {**os.environ, "POSECBR_NO_PROGRESS": "1"}
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
+    argv = [sys.executable, "-m", "posecbr", "compare", str(DEMO), "--peers", "none"]
+    argv += ["--labels", "deep_squat,hurdle_step,sit_to_stand", "--jobs", "2"]
+    argv += ["--out", str(tmp_path / "o")]
+    proc = subprocess.Popen(
+        argv,
+        cwd=tmp_path,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,  # a group of its own, as a terminal's job
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    children: list[str] = []
+    deadline = time.monotonic() + 300
+    while not children and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.2)
+        found = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True)
+        children = found.stdout.split()
+    assert children, "the workers never started"
+    time.sleep(1.5)  # the workers importing, or at their first tasks
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert (proc.returncode, err.decode(), out.decode()) == (
+        130,
+        "posecbr compare: interrupted\n",
+        "",
+    )
+    left = ["?"]
+    for _ in range(50):  # the workers (and multiprocessing's tracker) end with the command
+        found = subprocess.run(["pgrep", "-g", str(proc.pid)], capture_output=True, text=True)
+        left = found.stdout.split()
+        if not left:
+            break
+        time.sleep(0.2)
+    assert left == []
+    assert not (tmp_path / "o").exists()

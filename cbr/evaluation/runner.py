@@ -17,11 +17,14 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 import sys
+import threading
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Generic, TypeVar
 
@@ -94,16 +97,50 @@ class ProcessRunner(Runner[C]):
             initializer=_start_worker,
             initargs=(self.context, self.setup),
         )
+        futures: list[Future[R]] = []
         with pool:
-            futures: list[Future[R]] = [pool.submit(_call, fn, t) for t in tasks]
             try:
+                with _interrupts_held():  # inherited by the workers submit starts
+                    futures = [pool.submit(_call, fn, t) for t in tasks]
                 for fut in progress(as_completed(futures), desc, total=len(futures), unit=unit):
                     yield fut.result()
             except BrokenProcessPool:
                 raise PosecbrError(_died(), "--jobs") from None
+            except KeyboardInterrupt:  # Ctrl-C, which reached this process alone: stop them
+                for proc in list((pool._processes or {}).values()):
+                    proc.terminate()
+                # the pool finds them gone and fails their tasks: its thread done with them,
+                # no future is left to cancel under it (it failed on one cancelled meanwhile)
+                pool.shutdown(wait=True)
+                raise
             finally:
                 for fut in futures:
                     fut.cancel()
+
+
+@contextmanager
+def _interrupts_held() -> Iterator[None]:
+    """Ctrl-C held back while worker processes are started, then raised: SIGINT is blocked
+    in this thread, and the workers inherit the block, so the terminal's Ctrl-C (sent to
+    every process of the group) reaches this process alone, which stops them; and one that
+    comes meanwhile is raised only once every worker started is known (raised in the middle
+    of starting one, it left that worker running after this process had ended). Each worker
+    printed a KeyboardInterrupt traceback, of a task or of its imports."""
+    if not hasattr(signal, "pthread_sigmask"):  # Windows: Ctrl-C is not a POSIX signal
+        yield
+        return
+    came: list[int] = []
+    main = threading.current_thread() is threading.main_thread()  # where handlers are set
+    handler = signal.signal(signal.SIGINT, lambda n, _: came.append(n)) if main else None
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        if main:  # None: a handler not set from Python, which cannot be set back
+            signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
+    if came:
+        raise KeyboardInterrupt
 
 
 def _died() -> str:
