@@ -888,12 +888,13 @@ def _case_ref(cb: CaseBase, i: int, names: int) -> str:
 
 def _differences(r: _Reading, contrast: Contrast | None, cb: CaseBase) -> list[dict[str, Any]]:
     """The few columns (one per feature) that, weighted, differ most between the clip and the
-    nearest case of the other label, in their units."""
+    nearest case of the other label, in their units; of those the clip measured (the value
+    of a joint it never showed is a fill, not what it did)."""
     if contrast is None:
         return []
     o = r.view.of(cb.problems[contrast.position][None])[0]
     spread = np.maximum(r.prof.within, 1e-9)
-    gap = np.where(r.readable, (np.abs(r.x - o) / spread) ** 2 * r.importance, 0.0)
+    gap = np.where(r.readable & r.known, (np.abs(r.x - o) / spread) ** 2 * r.importance, 0.0)
     out = []
     for j in _best_per_feature(r, gap, SHORT_ITEMS, 1e-12):
         here, unit = r.unit(j)

@@ -20,10 +20,12 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cbr.evaluation.results import CompareResults, ConfusionPicture, Pictures, TimelinePicture
 from cbr.evaluation.tables import group_table
+from features.poses import load_pose
 from posecbr.cli import main
 from tests.badinput import ROOT, refused, small_case_base
 
@@ -397,3 +399,29 @@ def test_ctrl_c_of_a_compare_with_workers_prints_one_line(tmp_path: Path) -> Non
         time.sleep(0.2)
     assert left == []
     assert not (tmp_path / "o").exists()
+
+
+def test_classify_differences_name_no_joint_the_clip_never_showed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A Kinect clip (19 of BlazePose's 33 joints never seen: face, fingers, heels) against
+    a case base of BlazePose clips: "Differs from it most in: left index to the left
+    (highest) 0.00 torso lengths here, 1.68 there" (``--verbose``; "differences" in the
+    JSON), the fill of a joint the clip has not, read as what it did (the counterfactual
+    already said "not seen")."""
+    from tests.test_cbr_cli import _write_classes
+
+    train = _write_classes(tmp_path / "train", 3, 5)  # synthetic BlazePose-33 arm movements
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(train), "--db", str(db)]) == 0  # clip summaries, euclidean
+    clip = DEMO / "m01_s01_e01.npz"
+    missing = [n for n, gone in zip(load_pose(clip).joint_names,
+                                    np.isnan(load_pose(clip).positions).all(axis=(0, 2)),
+                                    strict=True) if gone]  # fmt: skip
+    assert len(missing) == 19 and "left_index" in missing
+    capsys.readouterr()
+    assert main(["classify", str(clip), "--db", str(db), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)["results"][0]
+    assert result["differences"]
+    for d in result["differences"]:
+        assert not any(j.replace("_", " ") in d["feature"] for j in missing), d
