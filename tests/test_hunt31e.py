@@ -425,3 +425,21 @@ def test_classify_differences_name_no_joint_the_clip_never_showed(
     assert result["differences"]
     for d in result["differences"]:
         assert not any(j.replace("_", " ") in d["feature"] for j in missing), d
+
+
+def test_removing_an_earlier_runs_pictures_keeps_what_is_not_its_own(tmp_path: Path) -> None:
+    """Only PNG files directly in the --out folder are removed: a name in a folder of its
+    own ("o/accuracy.png", a --json results file naming another run's --out), a file that
+    is no PNG image and a link are kept."""
+    from posecbr.commands.compare import _remove_stale
+
+    png = (ROOT / "docs" / "workout_timeline.png").read_bytes()
+    (tmp_path / "o").mkdir()
+    for name in ("o/accuracy.png", "timeline_02.png", "confusion_dad.png"):
+        (tmp_path / name).write_bytes(png)
+    (tmp_path / "prevalence.png").write_text("not a picture")
+    (tmp_path / "linked.png").symlink_to(tmp_path / "o" / "accuracy.png")
+    earlier = ["o/accuracy.png", "timeline_02.png", "confusion_dad.png", "prevalence.png"]
+    _remove_stale(tmp_path, [*earlier, "linked.png", "gone.png"], ["confusion_dad.png"])
+    left = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*"))
+    assert left == ["confusion_dad.png", "linked.png", "o", "o/accuracy.png", "prevalence.png"]

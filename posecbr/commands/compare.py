@@ -328,8 +328,8 @@ def _remove_stale(out: Path, earlier: list[str], drawn: list[str]) -> None:
 
     for name in sorted(set(earlier) - set(drawn)):
         path = out / name
-        if path.is_symlink() or not path.is_file():
-            continue
+        if path.parent != out or path.is_symlink() or not path.is_file():
+            continue  # in a folder of its own: another run's, which its results name
         with open(path, "rb") as fh:
             if fh.read(len(PNG_MAGIC)) != PNG_MAGIC:
                 continue
