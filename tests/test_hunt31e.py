@@ -443,3 +443,21 @@ def test_removing_an_earlier_runs_pictures_keeps_what_is_not_its_own(tmp_path: P
     _remove_stale(tmp_path, [*earlier, "linked.png", "gone.png"], ["confusion_dad.png"])
     left = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*"))
     assert left == ["confusion_dad.png", "linked.png", "o", "o/accuracy.png", "prevalence.png"]
+
+
+def test_compare_refuses_a_clip_listed_twice(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A labels CSV listing one clip twice was compared with both copies: the clip counted
+    twice, and cross-validated over clips (``--cv kfold``) one copy could be the training
+    case that answers the other. ``train`` and ``classify`` refuse the same CSV."""
+    rows = ["path,label,subject"]
+    for movement, label in (("m01", "deep_squat"), ("m02", "hurdle_step")):
+        for clip in sorted(DEMO.glob(f"{movement}_s0[12]_*.npz")):
+            rows.append(f"{clip},{label},{clip.name[4:7]}")
+    rows.append(rows[-1])
+    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
+    argv = ["compare", str(tmp_path / "labels.csv"), "--peers", "none", "--no-dad"]
+    argv += ["--features", "fluents", "--similarities", "euclidean", "--cv", "kfold"]
+    needle = "m02_s02_e03_inc.npz frames 0-"
+    refused([*argv, "--json", str(tmp_path / "r.json")], tmp_path, capsys, needle, "twice")

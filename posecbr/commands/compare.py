@@ -138,6 +138,8 @@ def parse_params(items: list[str]) -> dict[str, Any]:
 
 
 def _load(args: argparse.Namespace) -> list[Any]:
+    from cbr.casebase import frames_of
+    from cbr.training import check_listed_once
     from features.datasets import load_dataset
 
     if not args.data.exists():
@@ -151,6 +153,10 @@ def _load(args: argparse.Namespace) -> list[Any]:
     if args.subjects:
         kw["subjects"] = set(_names(args.subjects))
     clips = load_dataset(args.data, **kw)
+    # as train and classify: a clip listed twice would be tested twice, and in k-fold folds
+    # one copy could be a training case of the other
+    check_listed_once([(c.seq.source, *frames_of(c.seq)) for c in clips], str(args.data),
+                      "it would be tested twice, or be a training case of itself")  # fmt: skip
     _check_found(clips, "--labels", kw.get("labels"), "labelled", lambda c: c.label)
     _check_found(clips, "--subjects", kw.get("subjects"), "of subject", lambda c: c.subject)
     return clips
