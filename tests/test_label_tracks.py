@@ -692,6 +692,20 @@ def test_windows_of_one_recording_are_calibrated_held_out_from_their_overlapping
     assert clf.confidence_.n < len(clf.case_base_) and clf.confidence_.accuracy < 1.0
 
 
+def _converted_stretches(shared_data: Path, recording: Path, tmp_path: Path) -> Path:
+    """13_30's labelled stretches, each written by ``convert`` to a pose file of its own in
+    ``tmp_path/pieces`` (with a ``labels.csv`` naming them)."""
+    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    _names(tmp_path)
+    listing = tmp_path / "recordings.csv"
+    listing.write_text(
+        f"path,label_file,label_block_s,label_names\n{recording},{labels},0.1,names.txt\n",
+        encoding="utf-8",
+    )
+    assert main(["convert", str(listing), "--out", str(tmp_path / "pieces")]) == 0
+    return tmp_path / "pieces"
+
+
 def test_train_notes_stretches_that_convert_cut_from_a_recording(
     shared_data: Path, recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -702,14 +716,7 @@ def test_train_notes_stretches_that_convert_cut_from_a_recording(
     (1.8 s) longer than two windows: the note names 5 clips cut from 1 recording. Given
     ``--split clips``, or trained on a labels CSV's rows of the recording, there is no note."""
     codes, _ = _truth(shared_data)
-    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
-    _names(tmp_path)
-    listing = tmp_path / "recordings.csv"
-    listing.write_text(
-        f"path,label_file,label_block_s,label_names\n{recording},{labels},0.1,names.txt\n",
-        encoding="utf-8",
-    )
-    assert main(["convert", str(listing), "--out", str(tmp_path / "pieces")]) == 0
+    _converted_stretches(shared_data, recording, tmp_path)
     capsys.readouterr()
     pieces = tmp_path / "pieces" / "labels.csv"
     assert main(["train", str(pieces), "--db", str(tmp_path / "a.sqlite"), "-k", "1"]) == 0
@@ -735,14 +742,7 @@ def test_classify_names_a_stretch_file_by_the_frames_of_its_recording(
     file does not have. It now says whose frames they are: "... of <recording>" (the change
     positions worked out from the label file, 12 frames a label)."""
     _, changes = _truth(shared_data)
-    labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
-    _names(tmp_path)
-    listing = tmp_path / "recordings.csv"
-    listing.write_text(
-        f"path,label_file,label_block_s,label_names\n{recording},{labels},0.1,names.txt\n",
-        encoding="utf-8",
-    )
-    assert main(["convert", str(listing), "--out", str(tmp_path / "pieces")]) == 0
+    _converted_stretches(shared_data, recording, tmp_path)
     db = tmp_path / "cb.sqlite"
     assert main(["train", str(tmp_path / "pieces" / "labels.csv"), "--db", str(db), "-k", "1"]) == 0
     capsys.readouterr()
