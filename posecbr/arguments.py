@@ -1,10 +1,11 @@
-"""The argparse types of the commands' arguments."""
+"""The argparse types of the commands' arguments, and what is checked of them against the data."""
 
 from __future__ import annotations
 
 import argparse
 import json
 import sys
+from collections.abc import Collection, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -50,3 +51,13 @@ def param_value(key: str, raw: str) -> Any:
         elif isinstance(item, int) and not isinstance(item, bool) and abs(item) > MAX_PARAM_INT:
             raise ConfigError(f"the value of {key} holds too large a number", "--param")
     return value
+
+
+def check_found(found: Iterable[Any], asked: Collection[str] | None, flag: str, what: str) -> None:
+    """Refuse a ``--labels`` or ``--subjects`` entry (``asked``) that none of the clips' values
+    ``found`` is (mistyped): the work on the others alone would be taken for the one asked
+    for. ``what`` says what a clip is to have it ("labelled", "of subject")."""
+    have = {str(v) for v in found if v is not None}
+    missing = sorted(set(asked or ()) - have)
+    if missing:
+        raise ConfigError(f"no clip {what} {', '.join(repr(m) for m in missing)} in the data", flag)

@@ -199,6 +199,31 @@ def test_compare_refuses_a_label_or_subject_no_clip_has(
     refused(argv, tmp_path, capsys, f"{flag}: ", needle)
 
 
+@pytest.mark.parametrize("split", [None, "windows"])  # clips read by entries, or in memory
+@pytest.mark.parametrize(
+    ("flag", "value", "needle"),
+    [
+        ("--labels", "deep_squat,sit_to_stnd", "no clip labelled 'sit_to_stnd'"),
+        ("--subjects", "s01,s9", "no clip of subject 's9'"),
+    ],
+)
+def test_train_refuses_a_label_or_subject_no_clip_has(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    flag: str,
+    value: str,
+    needle: str,
+    split: str | None,
+) -> None:
+    """As ``compare``: ``train --labels deep_squat,sit_to_stnd`` stored a case base of deep
+    squats alone without a word (with the other option the demo's s01-s03 narrow it to one
+    movement and subject, 6 clips; the case base is not written)."""
+    narrow = ["--subjects", "s01"] if flag == "--labels" else ["--labels", "deep_squat"]
+    argv = ["train", str(DEMO / "labels.csv"), "--db", str(tmp_path / "cb.sqlite"), flag, value,
+            *narrow, "-k", "1", *(["--split", split] if split else [])]  # fmt: skip
+    refused(argv, tmp_path, capsys, f"{flag}: ", needle)
+
+
 @pytest.mark.parametrize(
     ("params", "needle"),
     [

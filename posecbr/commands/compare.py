@@ -6,7 +6,6 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -15,7 +14,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, write_json_atomic
 from features.text import shown
-from posecbr.arguments import param_value, path_arg
+from posecbr.arguments import check_found, param_value, path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
 
@@ -157,19 +156,9 @@ def _load(args: argparse.Namespace) -> list[Any]:
     # one copy could be a training case of the other
     check_listed_once([(c.seq.source, *frames_of(c.seq)) for c in clips], str(args.data),
                       "it would be tested twice, or be a training case of itself")  # fmt: skip
-    _check_found(clips, "--labels", kw.get("labels"), "labelled", lambda c: c.label)
-    _check_found(clips, "--subjects", kw.get("subjects"), "of subject", lambda c: c.subject)
+    check_found([c.label for c in clips], kw.get("labels"), "--labels", "labelled")
+    check_found([c.subject for c in clips], kw.get("subjects"), "--subjects", "of subject")
     return clips
-
-
-def _check_found(
-    clips: list[Any], flag: str, asked: set[str] | None, what: str, key: Callable[[Any], Any]
-) -> None:
-    """Refuse a ``--labels`` or ``--subjects`` entry no clip has (mistyped): the comparison of
-    the others alone would be reported as the one asked for."""
-    missing = sorted((asked or set()) - {key(c) for c in clips})
-    if missing:
-        raise ConfigError(f"no clip {what} {', '.join(repr(m) for m in missing)} in the data", flag)
 
 
 def _dataset_files(args: argparse.Namespace) -> list[str | Path]:

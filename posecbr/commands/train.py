@@ -19,7 +19,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.text import counted, shown
-from posecbr.arguments import param_value, path_arg
+from posecbr.arguments import check_found, param_value, path_arg
 from posecbr.recordings import (
     add_recording_options,
     add_sensor_option,
@@ -366,6 +366,8 @@ def _clips(args: argparse.Namespace) -> list[Any]:
             progress_desc="loading clips",
         )
     )
+    check_found([c.label for c in clips], activities, "--labels", "labelled")
+    check_found([c.subject for c in clips], subjects, "--subjects", "of subject")
     stretches = bool(clips) and not args.frame_labels and args.over_time
     if stretches:  # a labels CSV's recordings: its flickers left out as --frame-labels' are
         clips = _long_enough(args, clips)
@@ -381,6 +383,17 @@ def _clips(args: argparse.Namespace) -> list[Any]:
     if not clips:
         raise _no_clips(args, stretches)
     return clips
+
+
+def _check_asked(args: argparse.Namespace, clips: list[Any], solutions: list[str]) -> None:
+    """Refuse a ``--labels`` or ``--subjects`` entry no clip read has (mistyped), before
+    anything is stored: a case base of the others alone was trained without a word. The
+    labels are the solutions when the case base predicts them (``--target label``)."""
+    if args.labels and args.target == "label":
+        check_found(solutions, [s.strip() for s in args.labels.split(",")], "--labels", "labelled")
+    if args.subjects:
+        asked = [s.strip() for s in args.subjects.split(",")]
+        check_found([c.subject for c in clips], asked, "--subjects", "of subject")
 
 
 def _no_clips(args: argparse.Namespace, stretches: bool = False) -> DataError:
@@ -700,6 +713,7 @@ def run(args: argparse.Namespace) -> int:
             if split_defaulted:
                 _note_cut_stretches(args, entries)
             clips, solutions = describe_entries(entries, plan, args.target, args.scheduler)
+            _check_asked(args, clips, solutions)
     except ClipsFailed as exc:
         for line in exc.lines:
             print(f"posecbr train: error: {line}", file=sys.stderr)
