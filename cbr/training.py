@@ -288,6 +288,7 @@ def train_described(
         raise _no_case("learn from")
     _check_unique(clips, "training set")
     fitted: CaseBaseClassifier = clone(estimator).fit_described(clips, text)
+    _check_trimmed(fitted)
     return store_fitted(
         db,
         name,
@@ -299,6 +300,19 @@ def train_described(
         skipped=skipped,
         too_short=too_short,
     )
+
+
+def _check_trimmed(fitted: CaseBaseClassifier) -> None:
+    """Refuse a case base its own trimming left with fewer active cases than it votes with
+    (k), as ``casebase trim`` refuses it: every answer would be the vote of all its cases."""
+    report = fitted.maintenance_
+    if report is not None and report.size_after < int(fitted.k):
+        raise DataError(
+            f"trimming would leave {report.size_after} cases, fewer than the {int(fitted.k)}"
+            " the case base votes with (k): nothing stored (keep more with --trim, or give a"
+            " smaller -k)",
+            "training set",
+        )
 
 
 def store_fitted(

@@ -224,6 +224,19 @@ def test_train_refuses_a_label_or_subject_no_clip_has(
     refused(argv, tmp_path, capsys, f"{flag}: ", needle)
 
 
+def test_train_refuses_a_trim_that_leaves_fewer_cases_than_k(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``train --trim 0.1`` of 12 clips (s01's deep squats and hurdle steps, 6 each) kept a
+    tenth of each activity, fewer cases than the 5 it votes with, and stored them without a
+    word (``casebase trim`` refuses the same). With ``-k 1`` the same trim is stored."""
+    argv = ["train", str(DEMO / "labels.csv"), "--subjects", "s01", "--labels",
+            "deep_squat,hurdle_step", "--trim", "0.1"]  # fmt: skip
+    refused([*argv, "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
+            "fewer than the 5 the case base votes with (k): nothing stored")  # fmt: skip
+    assert main([*argv, "--db", str(tmp_path / "one.sqlite"), "-k", "1"]) == 0
+
+
 @pytest.mark.parametrize(
     ("params", "needle"),
     [
