@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
 
@@ -10,8 +11,21 @@ from features.fileio import write_json_atomic
 
 
 def write_json(doc: Any, path: Path) -> None:
-    """Write ``doc`` as JSON to ``path`` atomically (a temporary file beside it, then rename)."""
-    write_json_atomic(path, doc)
+    """Write ``doc`` as JSON to ``path`` atomically (a temporary file beside it, then rename);
+    a figure that is not a finite number (a median of no boundary found: infinite) is written
+    null, since JSON has no NaN or Infinity and strict readers refuse them."""
+    write_json_atomic(path, _finite(doc))
+
+
+def _finite(value: Any) -> Any:
+    """``value`` with every float that is not finite replaced by None, in lists and dicts."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    return value
 
 
 def no_options(name: str, doc: str | None, argv: list[str] | None) -> None:

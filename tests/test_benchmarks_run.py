@@ -105,3 +105,19 @@ def test_a_benchmark_without_its_peer_says_so_in_one_line(name: str, tmp_path: P
         " (pip install -e '.[bench]')"
     ]
     assert done.stdout == "" and not out.exists()
+
+
+def test_benchmark_results_are_strict_json(tmp_path: Path) -> None:
+    """A benchmark's median of no boundary found is infinite: it was written ``Infinity``,
+    which JSON has not (strict readers refuse it). Non-finite figures are written null,
+    nested too; finite ones are kept."""
+    from benchmarks import write_json
+
+    doc = {"median": float("inf"), "rows": [1.5, float("nan"), {"x": -float("inf")}], "n": 3}
+    write_json(doc, tmp_path / "r.json")
+
+    def refuse(constant: str) -> None:
+        raise ValueError(constant)
+
+    got = json.loads((tmp_path / "r.json").read_text(), parse_constant=refuse)
+    assert got == {"median": None, "rows": [1.5, None, {"x": None}], "n": 3}
