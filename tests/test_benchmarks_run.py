@@ -112,12 +112,10 @@ def test_benchmark_results_are_strict_json(tmp_path: Path) -> None:
     which JSON has not (strict readers refuse it). Non-finite figures are written null,
     nested too; finite ones are kept."""
     from benchmarks import write_json
+    from tests.test_json_hunt import strict
 
     doc = {"median": float("inf"), "rows": [1.5, float("nan"), {"x": -float("inf")}], "n": 3}
     write_json(doc, tmp_path / "r.json")
 
-    def refuse(constant: str) -> None:
-        raise ValueError(constant)
-
-    got = json.loads((tmp_path / "r.json").read_text(), parse_constant=refuse)
+    got = strict((tmp_path / "r.json").read_text())
     assert got == {"median": None, "rows": [1.5, None, {"x": None}], "n": 3}

@@ -24,7 +24,6 @@ the videos: the same grouping, a second to train.
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 from typing import Any
 
@@ -35,15 +34,7 @@ from features.poses import save_pose
 from posecbr.cli import main
 from tests.badinput import refused, standing_clip
 from tests.test_cbr_clips import arm_dataset
-
-
-def _strict(text: str) -> Any:
-    """JSON as the standard has it: NaN and Infinity refused."""
-
-    def refuse(constant: str) -> Any:
-        raise ValueError(f"not JSON: {constant}")
-
-    return json.loads(text, parse_constant=refuse)
+from tests.test_json_hunt import strict
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +74,7 @@ def test_train_says_when_the_confidence_could_not_be_calibrated(
     capsys.readouterr()
     assert main(argv) == 0
     out, err = capsys.readouterr()
-    assert _strict(out)["learned"]["confidence_calibrated_on"] == 0
+    assert strict(out)["learned"]["confidence_calibrated_on"] == 0
     assert (
         "note: the confidence is the vote share, not calibrated: each activity's training clips"
         " came from one recording or person, so none could be classified held out of it (a "
@@ -96,7 +87,7 @@ def test_train_says_when_the_confidence_could_not_be_calibrated(
     argv[1:4] = [str(tmp_path / "own"), "--db", str(tmp_path / "own.sqlite")]
     assert main(argv) == 0
     out, err = capsys.readouterr()
-    assert _strict(out)["learned"]["confidence_calibrated_on"] == 9
+    assert strict(out)["learned"]["confidence_calibrated_on"] == 9
     assert "not calibrated" not in err
 
 
@@ -114,7 +105,7 @@ def test_info_of_a_case_base_whose_confidence_could_not_be_calibrated(
     assert "nan" not in out
 
     assert main(["casebase", "info", "--db", str(one_recording_each), "--json"]) == 0
-    doc = _strict(capsys.readouterr().out)
+    doc = strict(capsys.readouterr().out)
     confidence = doc["case_bases"][0]["model"]["confidence"]
     assert confidence["n"] == 0 and confidence["accuracy"] is None
 
@@ -128,7 +119,7 @@ def test_verbose_explanation_of_an_uncalibrated_confidence_says_so(
     capsys.readouterr()
     argv = ["classify", str(clip), "--db", str(one_recording_each), "--verbose", "--json"]
     assert main(argv) == 0
-    result = _strict(capsys.readouterr().out)["results"][0]
+    result = strict(capsys.readouterr().out)["results"][0]
     assert result["confidence"] == result["vote_share"]  # nothing maps it
     vote = next(x for x in result["verbose"].splitlines() if x.startswith("Vote: "))
     assert vote.endswith("; the confidence is the vote share, not calibrated).")
@@ -194,7 +185,7 @@ def test_casebase_list_shows_a_case_s_frames_end_inclusive_as_every_table_does(
     }
     assert shown == {(path, f"{start}-{end - 1}") for path, start, end in spans}
     assert main(["casebase", "list", "--db", str(one_recording_each), "--json"]) == 0
-    cases = _strict(capsys.readouterr().out)["cases"]
+    cases = strict(capsys.readouterr().out)["cases"]
     assert {(Path(c["source"]).name, *c["frames"]) for c in cases} == spans  # end exclusive
 
 

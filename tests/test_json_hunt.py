@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -14,7 +15,7 @@ from tests.badinput import good_pose_file, refused, small_case_base
 from tests.moves import clip
 
 
-def strict(text: str) -> object:
+def strict(text: str) -> Any:
     """``text`` parsed as strict JSON: NaN, Infinity and -Infinity refused."""
 
     def refuse(token: str) -> object:
