@@ -685,7 +685,7 @@ def explain(
     k: int = 5,
     weights: Weights = "distance",
     counterfactual_search: bool = True,
-    confidence: str = "the nearest cases' soft vote calibrated on the training clips",
+    confidence: str,
 ) -> Explanation:
     """Explain one classification (:meth:`cbr.estimator.CaseBaseClassifier.solve`);
     ``answer`` classifies a problem the way the classifier does (to check counterfactuals);

@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import DataError
+from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 from features.progress import progress
 from features.text import counted
 
@@ -56,10 +57,7 @@ from .readers.uiprmd import (
     uiprmd_sensor,
 )
 
-VIDEO_SUFFIXES = frozenset(
-    {".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".3gp", ".mts", ".m2ts", ".mpg", ".mpeg",
-     ".wmv"}
-)  # fmt: skip
+VIDEO_SUFFIXES = frozenset(VIDEO_SUFFIX_ORDER)
 POSE_SUFFIXES = frozenset({".npz"})
 CLIP_SUFFIXES = POSE_SUFFIXES | VIDEO_SUFFIXES | {".bvh"}
 

@@ -24,6 +24,7 @@ from typing import Any
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_not_in_walked_folder, check_output
+from features.formats import VIDEO_SUFFIXES
 from features.progress import progress
 from features.text import counted, shown
 from posecbr.arguments import path_arg
@@ -32,10 +33,6 @@ from posecbr.arguments import path_arg
 # OpenCV reads this once, when it first opens a video, so it is set as early as possible.
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
-VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".3gp", ".mts", ".m2ts",
-                  ".mpg", ".mpeg", ".wmv")  # fmt: skip
-"""What a folder is searched for (as :data:`features.datasets.VIDEO_SUFFIXES`); a video file
-named alone is opened whatever its name."""
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp")  # one frame each
 # what is a recording already, not a video: refused by name
 RECORDING_SUFFIXES = {".npz": "a pose file", ".bvh": "a BVH recording", ".amc": "an AMC recording"}
