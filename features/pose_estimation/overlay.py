@@ -154,16 +154,22 @@ def write_overlay(
     fps: float,
     words: Sequence[Sequence[str]] | None = None,
     frame_offset: int = 0,
+    video_frames: np.ndarray | None = None,
 ) -> Path:
     """Write ``video_path`` with the stick figure drawn as an MP4 (``mp4v``) at ``out_path``.
 
-    image_landmarks: ``(frames, 33, 5)``; frame ``frame_offset + i`` of the video gets row i.
-    words: per row, phrases to print (e.g. the fluents that hold).
+    image_landmarks: ``(frames, 33, 5)``; frame ``frame_offset + i`` of the video gets row i,
+    or with ``video_frames`` (a variable-frame-rate video resampled to ``fps``:
+    :attr:`~features.pose_estimation.video.VideoPoses.video_frames`), frame
+    ``video_frames[i]`` does (a frame may carry several rows, or none), so the overlay plays
+    at ``fps`` in step with the video. words: per row, phrases to print (e.g. the fluents
+    that hold).
     """
     out = Path(out_path)
+    rows = None if video_frames is None else np.asarray(video_frames, dtype=np.int64)
     # The temporary name ends in .mp4: OpenCV picks the container by the file name.
     with atomic_path(out, suffix=".mp4") as tmp:
-        _encode(video_path, image_landmarks, tmp, out, fps, words, frame_offset)
+        _encode(video_path, image_landmarks, tmp, out, fps, words, frame_offset, rows)
     return out
 
 
@@ -175,28 +181,36 @@ def _encode(
     fps: float,
     words: Sequence[Sequence[str]] | None,
     frame_offset: int,
+    video_frames: np.ndarray | None = None,
 ) -> None:
     """The frames of ``video_path`` with the stick figure drawn, encoded into ``tmp``
     (``out`` names the overlay in messages); see :func:`write_overlay`."""
     writer: cv2.VideoWriter | None = None
     written = 0
     try:
+        n = image_landmarks.shape[0]
+        if video_frames is None:  # row i on frame frame_offset + i
+            video_frames = np.arange(n) + frame_offset
+        first = 0  # the first row not yet drawn
         for k, rgb in enumerate(iter_frames(video_path)):
-            i = k - frame_offset
-            if i < 0:
-                continue
-            if i >= image_landmarks.shape[0]:
+            if first >= n:
                 break
-            bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
-            if writer is None:
-                h, w = bgr.shape[:2]
-                check_mp4_size(w, h, out)
-                writer = cv2.VideoWriter(str(tmp), cv2.VideoWriter.fourcc(*"mp4v"), fps, (w, h))
-                if not writer.isOpened():
-                    raise DataError("cannot encode an MP4 overlay here", out)
-            draw_pose(bgr, image_landmarks[i], words[i] if words is not None else ())
-            writer.write(bgr)
-            written += 1
+            stop = first + int(np.searchsorted(video_frames[first:], k, side="right"))
+            if stop == first:
+                continue
+            for i in range(first, stop):
+                bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
+                if writer is None:
+                    h, w = bgr.shape[:2]
+                    check_mp4_size(w, h, out)
+                    fourcc = cv2.VideoWriter.fourcc(*"mp4v")
+                    writer = cv2.VideoWriter(str(tmp), fourcc, fps, (w, h))
+                    if not writer.isOpened():
+                        raise DataError("cannot encode an MP4 overlay here", out)
+                draw_pose(bgr, image_landmarks[i], words[i] if words is not None else ())
+                writer.write(bgr)
+                written += 1
+            first = stop
         if writer is None:
             raise DataError("no frames to draw", video_path)
     finally:

@@ -5,12 +5,21 @@ Frames are decoded with OpenCV (FFmpeg). A video that cannot be used raises
 not a video, no frames, no frame rate, or fewer frames decoded than the container declares
 (truncated or corrupt). Damage that the decoder conceals (a few broken macroblocks in a
 stream that still decodes every frame) cannot be seen from here and is not reported.
+
+Variable frame rate (phone videos often are): each decoded frame's presentation time is read
+from OpenCV (``CAP_PROP_POS_MSEC`` after the read; with the FFmpeg backend the frame's own
+timestamp). When some frame lies more than :data:`VFR_TOLERANCE` of a frame interval away from
+``index / fps`` (``fps``: the rate the container declares), :func:`estimate_video` puts the
+poses on a uniform grid at that declared rate by linear interpolation between the two decoded
+frames around each grid time (:func:`resample_to_grid`). A constant-rate video is left as it
+was decoded.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -38,6 +47,10 @@ JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
 IMAGE_LANDMARK_FIELDS = ("x_px", "y_px", "z_px", "visibility", "presence")
 MAX_VIDEO_FPS = 1000.0
 """The highest frame rate a video may declare (more is a broken header, no camera's)."""
+VFR_TOLERANCE = 0.25
+"""How far (in frame intervals at the declared rate) a frame's presentation time may lie from
+``index / fps`` and the video still count as constant-rate: timestamp rounding and a phone's
+jitter of a millisecond or two stay well inside it; a dropped or doubled frame does not."""
 
 
 @dataclass(frozen=True)
@@ -58,12 +71,21 @@ class VideoPoses:
     sequence: canonical :class:`PoseSequence` (world landmarks, metres, y up, NaN where no
     person; confidence = visibility). image_landmarks: ``(frames, 33, 5)`` x px, y px, z px,
     visibility, presence (NaN where no person). missing: indices of frames with no person.
+    video_frames: for a variable-frame-rate video (resampled), the decoded frame on screen at
+    each row's time (the last one at or before it), for drawing; None when the rows are the
+    decoded frames themselves.
     """
 
     sequence: PoseSequence
     image_landmarks: np.ndarray
     missing: tuple[int, ...]
     info: VideoInfo
+    video_frames: np.ndarray | None = None
+
+    @property
+    def resampled(self) -> bool:
+        """Whether the video's frame times were irregular and the poses put on a grid."""
+        return self.video_frames is not None
 
 
 def _capture(name: str, threads: int | None) -> cv2.VideoCapture:
@@ -132,8 +154,20 @@ def iter_frames(path: str | Path, decode_threads: int | None = None) -> Iterator
     """RGB uint8 frames ``(h, w, 3)`` of a video file; raises :class:`DataError` at the end if
     fewer frames decoded than the container declares, or none at all. ``decode_threads``: see
     :func:`open_video`."""
+    for rgb, _time_s in iter_timed_frames(path, decode_threads):
+        yield rgb
+
+
+def iter_timed_frames(
+    path: str | Path, decode_threads: int | None = None
+) -> Iterator[tuple[np.ndarray, float]]:
+    """:func:`iter_frames` with each frame's presentation time in seconds, as the decoder
+    gives it (``CAP_PROP_POS_MSEC``; NaN when it gives none). A file whose frame count the
+    container only estimates (Matroska/WebM: duration x rate, too many for a variable rate) is
+    whole when its frames' times reach the container's duration."""
     cap, info = open_video(path, decode_threads)
     count = 0
+    times: list[float] = []
     try:
         while True:
             try:
@@ -146,19 +180,84 @@ def iter_frames(path: str | Path, decode_threads: int | None = None) -> Iterator
                     f"cannot decode frame {count} ({exc.msg or exc})", info.path
                 ) from None
             count += 1
-            yield rgb
+            t = frame_time_s(cap)
+            times.append(t)
+            yield rgb, t
     finally:
         cap.release()
     if count == 0:
         raise DataError("video has no frames (empty, truncated or corrupt)", info.path)
-    check_whole(count, info.frames, info.path)
+    check_whole(count, info.frames, info.path, span_s(times, info.fps), info.fps)
 
 
-def check_whole(count: int, declared: int, where: str | Path) -> None:
+def frame_time_s(cap: cv2.VideoCapture) -> float:
+    """The presentation time (s) of the frame ``cap`` read last; NaN when the decoder gives
+    none."""
+    ms = float(cap.get(cv2.CAP_PROP_POS_MSEC))
+    return ms / 1000.0 if math.isfinite(ms) else float("nan")
+
+
+def usable_times(times: np.ndarray | list[float]) -> bool:
+    """Whether decoded frame times can be trusted: finite and strictly increasing."""
+    t = np.asarray(times, dtype=np.float64)
+    return bool(t.size >= 2 and np.isfinite(t).all() and (np.diff(t) > 0).all())
+
+
+def span_s(times: list[float], fps: float) -> float | None:
+    """How long the decoded frames cover (s): first frame's time to the last one's end (one
+    interval at ``fps``); None when the times cannot be trusted."""
+    if not usable_times(times):
+        return None
+    return times[-1] - times[0] + 1.0 / fps
+
+
+def irregular(times: np.ndarray, fps: float) -> bool:
+    """Whether frame times (s; usable) stray more than :data:`VFR_TOLERANCE` of a frame from
+    ``first + index / fps``: a variable frame rate (or a rate the container misstates)."""
+    tau = times - times[0]
+    return bool(np.abs(tau * fps - np.arange(tau.size)).max() > VFR_TOLERANCE)
+
+
+def resample_to_grid(
+    times: np.ndarray, values: np.ndarray, fps: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``values`` (frames first) sampled at ``times`` (s, strictly increasing), put on the
+    uniform grid ``times[0] + k / fps`` for k = 0 .. floor((last - first) * fps): each grid
+    value is the linear interpolation between the decoded frames just before and just after
+    it (a grid time on a frame takes that frame's value). A value missing (NaN) in either
+    neighbour stays missing. Returns (the grid values, the index of the frame at or before
+    each grid time)."""
+    tau = np.asarray(times, dtype=np.float64) - times[0]
+    n = int(np.floor(tau[-1] * fps + 1e-9)) + 1
+    grid = np.arange(n) / fps
+    before = np.searchsorted(tau, grid, side="right") - 1
+    j = np.clip(before, 0, tau.size - 2)
+    w = (grid - tau[j]) / (tau[j + 1] - tau[j])
+    w = w.reshape((-1,) + (1,) * (values.ndim - 1))
+    left, right = values[j], values[j + 1]
+    mixed = (1.0 - w) * left + w * right
+    # a grid time on a frame (up to rounding) is that frame: its neighbour's gap is no matter
+    out = np.where(w <= 1e-9, left, np.where(w >= 1.0 - 1e-9, right, mixed))
+    return out, before
+
+
+def check_whole(
+    count: int,
+    declared: int,
+    where: str | Path,
+    span: float | None = None,
+    fps: float | None = None,
+) -> None:
     """DataError naming ``where`` when ``count`` frames decoded to the end fall short of the
     ``declared`` frame count the container states (0: none stated; with a small slack for
-    containers that estimate it)."""
-    if declared > 0 and count + max(2, math.ceil(0.01 * declared)) < declared:
+    containers that estimate it). With ``span`` (s, the decoded frames' times: :func:`span_s`)
+    and the declared ``fps``, frames that cover the container's duration (``declared / fps``,
+    the same slack) are whole however few: a variable rate has fewer frames than an estimate
+    at the declared rate gives."""
+    slack = max(2, math.ceil(0.01 * declared))
+    if declared > 0 and count + slack < declared:
+        if span is not None and fps and span * fps + slack >= declared:
+            return
         raise DataError(f"truncated or corrupt: decoded {count} of {declared} frames", where)
 
 
@@ -180,6 +279,7 @@ def estimate_video(
     max_frames: int | None = None,
     keep_outside: bool = False,
     decode_threads: int | None = None,
+    announce: bool = True,
 ) -> VideoPoses:
     """Run BlazePose over every frame of a video file.
 
@@ -190,6 +290,9 @@ def estimate_video(
     edge) is not seen, so its position is set missing (NaN) in the sequence unless
     ``keep_outside``; the image landmarks keep the model's guess and its (low) visibility.
     ``decode_threads``: FFmpeg's decoding threads (None: one per core; see :func:`open_video`).
+    A video whose frame times are irregular (variable frame rate: see the module docstring)
+    is resampled to a uniform grid at its declared rate; ``announce`` says so in one line on
+    stderr, and the metadata's ``variable_frame_rate`` records it.
     Raises :class:`DataError` for a video that cannot be used.
     """
     path = Path(video_path)
@@ -199,27 +302,58 @@ def estimate_video(
     est.reset()
     world: list[np.ndarray] = []
     image: list[np.ndarray] = []
-    missing: list[int] = []
-    frames = iter_frames(path, decode_threads)
+    person: list[bool] = []
+    times: list[float] = []
+    frames = iter_timed_frames(path, decode_threads)
     total = info.frames or None
     if max_frames is not None:
         total = min(total or max_frames, max_frames)
     if progress_bar:
         frames = progress(frames, desc=path.name, total=total, unit="frame")
-    for i, rgb in enumerate(frames):
+    on_grid = True  # the frames so far lie at index / fps: the filters get exactly that
+    for i, (rgb, t) in enumerate(frames):
         if max_frames is not None and i >= max_frames:
             break
-        pose = est.process(rgb, i / info.fps)
+        times.append(t)
+        if on_grid and i and math.isfinite(t) and math.isfinite(times[0]):
+            on_grid = abs((t - times[0]) * info.fps - i) <= VFR_TOLERANCE
+        # once the times stray, the temporal filters get the frames' own times
+        since = t - times[0]
+        pose = est.process(rgb, i / info.fps if on_grid or not math.isfinite(since) else since)
         world.append(pose.world)
         image.append(pose.image)
-        if not pose.person:
-            missing.append(i)
+        person.append(pose.person)
     image_lm = np.stack(image)
     positions = np.stack(world)
     outside = np.zeros(image_lm.shape[:2], dtype=bool)
     if not keep_outside:
         outside = outside_frame(image_lm, info.width, info.height)
         positions[outside] = np.nan
+    t_s = np.asarray(times)
+    video_frames = None
+    vfr: dict[str, object] | None = None
+    if usable_times(t_s) and irregular(t_s, info.fps):
+        both = np.concatenate([positions, image_lm], axis=2)
+        nobody = np.where(np.asarray(person), 0.0, np.nan)
+        both, video_frames = resample_to_grid(t_s, both, info.fps)
+        positions, image_lm = both[:, :, :3], both[:, :, 3:]
+        person_on_grid = ~np.isnan(resample_to_grid(t_s, nobody, info.fps)[0])
+        missing = np.flatnonzero(~person_on_grid).tolist()
+        gaps = np.diff(t_s)
+        vfr = {
+            "resampled_to_fps": info.fps,
+            "decoded_frames": int(t_s.size),
+            "frame_interval_s": {
+                "min": round(float(gaps.min()), 6),
+                "max": round(float(gaps.max()), 6),
+            },
+            "method": "linear interpolation between the decoded frames around each grid time;"
+            " missing in either stays missing",
+        }
+        if announce:
+            print(f"note: {vfr_words(path, info.fps, gaps)}", file=sys.stderr)
+    else:
+        missing = [i for i, p in enumerate(person) if not p]
     meta: dict[str, object] = {
         "source_video": str(path),
         "video_fps": info.fps,
@@ -234,6 +368,8 @@ def estimate_video(
         "coordinates": "world landmarks, metres, x right, y up, z toward the camera, "
         "origin at the hip centre",
     }
+    if vfr is not None:
+        meta["variable_frame_rate"] = vfr
     meta.update(metadata or {})
     seq = PoseSequence(
         positions=positions,
@@ -243,7 +379,15 @@ def estimate_video(
         source=str(path),
         metadata=meta,
     )
-    return VideoPoses(seq, image_lm, tuple(missing), info)
+    return VideoPoses(seq, image_lm, tuple(missing), info, video_frames)
+
+
+def vfr_words(path: str | Path, fps: float, gaps: np.ndarray) -> str:
+    """The one line that tells a user a video was resampled (``gaps``: its frame intervals)."""
+    return (
+        f"{path}: variable frame rate (frames {gaps.min() * 1000:.0f} to"
+        f" {gaps.max() * 1000:.0f} ms apart): poses resampled to {fps:g} fps"
+    )
 
 
 def _smoothing_meta() -> dict[str, object]:

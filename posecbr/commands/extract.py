@@ -375,13 +375,51 @@ def _fluent_words(seq: Any, top: int = 4) -> list[list[str]] | None:
     ]
 
 
+def _estimate(job: Job, options: Options, key: dict[str, Any], digest: str) -> tuple[Any, Any, Any]:
+    """Run the pose model over ``job``'s video and write its pose file: the sequence, its
+    image landmarks and (a variable frame rate resampled) the decoded frame of each row."""
+    from features.pose_estimation import estimate_video
+    from features.poses import save_pose
+
+    meta: dict[str, Any] = {**job.extras, "extract_key": key, "video_sha256": digest}
+    if job.label is not None:
+        meta["label"] = job.label
+    if job.subject is not None:
+        meta["subject"] = job.subject
+    vp = estimate_video(
+        job.video,
+        smoothing=options.smoothing,
+        tracking=options.tracking,
+        keep_outside=options.keep_outside,
+        progress_bar=True,
+        estimator=_estimator(options),
+        metadata=meta,
+        announce=False,  # said in the clip's line (a worker's stderr may be lost)
+    )
+    seq, image_lm, video_frames = vp.sequence, vp.image_landmarks, vp.video_frames
+    if job.start is not None and job.end is not None:
+        if job.end > seq.n_frames:
+            raise DataError(
+                f"end frame {job.end} is past the video's {seq.n_frames} frames", job.video
+            )
+        seq = seq.slice_frames(job.start, job.end)
+        image_lm = image_lm[job.start : job.end]
+        if video_frames is not None:
+            video_frames = video_frames[job.start : job.end]
+    extra = {"image_landmarks": image_lm}
+    if video_frames is not None:  # the overlay draws row i on this decoded frame
+        extra["video_frames"] = video_frames
+    save_pose(seq, job.out, extra_arrays=extra)
+    return seq, image_lm, video_frames
+
+
 def process(job: Job, options: Options) -> Outcome:
     """Extract one clip. Returns (status, path, detail); status "done", "skipped" or "failed"."""
     import numpy as np
 
-    from features.pose_estimation import estimate_video, open_video
+    from features.pose_estimation import open_video
     from features.pose_estimation.overlay import check_mp4_size, write_overlay
-    from features.poses import load_pose, load_pose_arrays, save_pose
+    from features.poses import load_pose, load_pose_arrays
 
     try:
         digest = sha256_file(job.video)
@@ -395,39 +433,27 @@ def process(job: Job, options: Options) -> Outcome:
             check_mp4_size(info.width, info.height, job.overlay)
         if up_to_date:
             seq = load_pose(job.out)
-            image_lm = load_pose_arrays(job.out)["image_landmarks"]
+            stored = load_pose_arrays(job.out)
+            image_lm, video_frames = stored["image_landmarks"], stored.get("video_frames")
         else:
-            meta: dict[str, Any] = {**job.extras, "extract_key": key, "video_sha256": digest}
-            if job.label is not None:
-                meta["label"] = job.label
-            if job.subject is not None:
-                meta["subject"] = job.subject
-            vp = estimate_video(
-                job.video,
-                smoothing=options.smoothing,
-                tracking=options.tracking,
-                keep_outside=options.keep_outside,
-                progress_bar=True,
-                estimator=_estimator(options),
-                metadata=meta,
-            )
-            seq, image_lm = vp.sequence, vp.image_landmarks
-            if job.start is not None and job.end is not None:
-                if job.end > seq.n_frames:
-                    raise DataError(
-                        f"end frame {job.end} is past the video's {seq.n_frames} frames",
-                        job.video,
-                    )
-                seq = seq.slice_frames(job.start, job.end)
-                image_lm = image_lm[job.start : job.end]
-            save_pose(seq, job.out, extra_arrays={"image_landmarks": image_lm})
+            seq, image_lm, video_frames = _estimate(job, options, key, digest)
+        vfr_note = (
+            "" if video_frames is None else f"; variable frame rate: resampled to {seq.fps:g} fps"
+        )
         if job.overlay is not None:
             words = _fluent_words(seq) if options.fluents else None
             write_overlay(
-                job.video, image_lm, job.overlay, seq.fps, words, frame_offset=job.start or 0
+                job.video,
+                image_lm,
+                job.overlay,
+                seq.fps,
+                words,
+                frame_offset=job.start or 0,
+                video_frames=video_frames,
             )
         n_missing = int(np.isnan(seq.positions).all(axis=(1, 2)).sum())
-        return "done", job.out, f"{counted(seq.n_frames, 'frame')}, {n_missing} without a person"
+        detail = f"{counted(seq.n_frames, 'frame')}, {n_missing} without a person{vfr_note}"
+        return "done", job.out, detail
     except PosecbrError as exc:
         return "failed", job.out, str(exc)
 

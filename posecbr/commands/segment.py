@@ -322,5 +322,12 @@ def load_stored(db: str, name: str | None) -> Any:
 def _overlay(path: Path, video: Any, result: Any, out: Path) -> None:
     from features.pose_estimation.overlay import write_overlay
 
-    write_overlay(path, video.image_landmarks, out, result.fps, frame_words(result))
+    write_overlay(
+        path,
+        video.image_landmarks,
+        out,
+        result.fps,
+        frame_words(result),
+        video_frames=video.video_frames,
+    )
     print(f"overlay written to {shown(out)}", file=sys.stderr)

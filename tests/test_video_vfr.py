@@ -1,0 +1,222 @@
+"""Variable-frame-rate videos (phones make them): frame times read from the decoder, poses put
+on a uniform grid at the declared rate by linear interpolation, the user told in one line; a
+constant-rate video as before.
+
+The videos are written here with PyAV (FFmpeg bundled) at presentation times chosen by the
+test: frames of the real lunge video in ../shared/data/videos where a person is needed, plain
+grey frames where only the timing matters.
+"""
+
+from __future__ import annotations
+
+import json
+from fractions import Fraction
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+import features.pose_estimation  # noqa: F401  (silences FFmpeg before any video is opened)
+from features.errors import DataError
+from features.pose_estimation import PoseEstimator, estimate_video, iter_frames
+from features.pose_estimation.video import (
+    check_whole,
+    iter_timed_frames,
+    outside_frame,
+    resample_to_grid,
+)
+from features.poses import load_pose, load_pose_arrays
+from posecbr.cli import main
+
+av = pytest.importorskip("av", reason="PyAV writes the variable-frame-rate videos")
+
+LUNGE = Path("videos") / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
+# presentation times (ms): gaps of 20, 40 and 80 ms where 25 fps would be 40 ms throughout
+PTS_MS = [0, 20, 100, 180, 220, 260, 300, 380, 400, 440, 520, 540, 620]
+LEFT_HIP = 23
+
+
+def _write(path: Path, pts_ms: list[int], frames: list[np.ndarray], rate: int = 25) -> Path:
+    """An H.264 video of RGB ``frames`` with these presentation times (1 ms time base);
+    ``rate``: the nominal rate the stream declares."""
+    tb = Fraction(1, 1000)
+    out = av.open(str(path), "w")
+    stream = out.add_stream("libx264", rate=rate)
+    h, w = frames[0].shape[:2]
+    stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
+    stream.time_base = tb
+    stream.codec_context.time_base = tb
+    for t, rgb in zip(pts_ms, frames, strict=True):
+        frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
+        frame.pts, frame.time_base = t, tb
+        for packet in stream.encode(frame):
+            out.mux(packet)
+    for packet in stream.encode():
+        out.mux(packet)
+    out.close()
+    return path
+
+
+def _grey(n: int) -> list[np.ndarray]:
+    return [np.full((48, 64, 3), 8 * k, np.uint8) for k in range(n)]
+
+
+@pytest.fixture(scope="module")
+def people(shared_data: Path) -> list[np.ndarray]:
+    """The lunge video's first frames, RGB, a quarter size (a person in each)."""
+    cap = cv2.VideoCapture(str(shared_data / LUNGE))
+    frames = []
+    while len(frames) < len(PTS_MS):
+        ok, bgr = cap.read()
+        assert ok
+        size = (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2)  # even: H.264's 4:2:0 needs it
+        small = cv2.resize(bgr, size)
+        frames.append(np.ascontiguousarray(small[:, :, ::-1]))
+    cap.release()
+    return frames
+
+
+@pytest.fixture(scope="module")
+def vfr_mkv(people: list[np.ndarray], tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return _write(tmp_path_factory.mktemp("vfr") / "lunge_vfr.mkv", PTS_MS, people)
+
+
+@pytest.mark.parametrize("suffix", [".mp4", ".mkv", ".mov"])
+def test_frame_times_read_back_are_the_times_written(tmp_path: Path, suffix: str) -> None:
+    path = _write(tmp_path / f"grey{suffix}", PTS_MS, _grey(len(PTS_MS)))
+    times = [t for _rgb, t in iter_timed_frames(path)]
+    assert times == pytest.approx([t / 1000 for t in PTS_MS], abs=1e-9)
+
+
+def test_resample_to_grid_is_linear_between_neighbours_and_keeps_missing_missing() -> None:
+    times = np.array([0.0, 0.1, 0.15, 0.4])
+    values = np.array([[0.0, 1.0], [2.0, 3.0], [4.0, np.nan], [9.0, 8.0]])
+    grid, before = resample_to_grid(times, values, 10.0)
+    # grid 0, 0.1, 0.2, 0.3, 0.4 s; 0.2 and 0.3 lie between 0.15 and 0.4: weights 0.2, 0.6
+    expected = np.array(
+        [
+            [0.0, 1.0],
+            [2.0, 3.0],  # on frame 1: its own value, the missing joint of frame 2 no matter
+            [0.8 * 4.0 + 0.2 * 9.0, np.nan],
+            [0.4 * 4.0 + 0.6 * 9.0, np.nan],
+            [9.0, 8.0],
+        ]
+    )
+    np.testing.assert_allclose(grid, expected, rtol=0, atol=1e-12)
+    assert before.tolist() == [0, 1, 2, 2, 3]
+
+
+def test_a_variable_rate_video_is_resampled_to_its_declared_rate(
+    vfr_mkv: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    vp = estimate_video(vfr_mkv, smoothing=False, progress_bar=False)
+    seq = vp.sequence
+    # 0 to 620 ms at the 25 fps the stream declares: floor(0.62 * 25) + 1 = 16 frames
+    assert seq.fps == 25.0
+    assert seq.n_frames == 16
+    assert vp.image_landmarks.shape == (16, 33, 5)
+    # grid 120 ms lies between the frames at 100 and 180 ms (0.25 of the way);
+    # grid 400 ms is the frame at 400 ms itself
+    raw = PoseEstimator(smoothing=False)
+    world = []
+    for rgb in iter_frames(vfr_mkv):
+        pose = raw.process(rgb)
+        w = pose.world.copy()
+        w[outside_frame(pose.image, rgb.shape[1], rgb.shape[0])] = np.nan
+        world.append(w)
+    hip = np.array(world)[:, LEFT_HIP]
+    assert np.isfinite(hip).all()
+    np.testing.assert_allclose(seq.positions[3, LEFT_HIP], 0.75 * hip[2] + 0.25 * hip[3])
+    np.testing.assert_array_equal(seq.positions[10, LEFT_HIP], hip[8])
+    assert vp.video_frames is not None
+    assert vp.video_frames.tolist()[:4] == [0, 1, 1, 2]  # 0, 40, 80, 120 ms
+    vfr = seq.metadata["variable_frame_rate"]
+    assert vfr["resampled_to_fps"] == 25.0 and vfr["decoded_frames"] == len(PTS_MS)
+    assert vfr["frame_interval_s"] == {"min": 0.02, "max": 0.08}
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"note: {vfr_mkv}: variable frame rate (frames 20 to 80 ms apart):"
+        " poses resampled to 25 fps"
+    ]
+
+
+def test_a_joint_missing_beside_a_grid_time_stays_missing(
+    vfr_mkv: Path, people: list[np.ndarray], tmp_path: Path
+) -> None:
+    """Frame 3 (180 ms) shows nobody: grid times 160 and 200 ms, which lean on it, have no
+    person; 120 ms leans on it too (100 to 180 ms); 240 ms (220 to 260 ms) does not."""
+    frames = list(people)
+    frames[3] = np.zeros_like(frames[3])
+    path = _write(tmp_path / "gap.mkv", PTS_MS, frames)
+    vp = estimate_video(path, smoothing=False, progress_bar=False, announce=False)
+    assert vp.missing == (3, 4, 5)
+    assert np.isnan(vp.sequence.positions[[3, 4, 5]]).all()
+    assert np.isfinite(vp.sequence.positions[[2, 6], LEFT_HIP]).all()
+    assert vp.sequence.metadata["missing_frames"] == [3, 4, 5]
+
+
+def test_a_constant_rate_video_is_as_it_was_decoded(
+    people: list[np.ndarray], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Frames 40 ms apart (25 fps): no resampling, and each frame's pose is what the model
+    gives it at index / fps, bit for bit (as before frame times were read)."""
+    path = _write(tmp_path / "cfr.mp4", [40 * k for k in range(len(PTS_MS))], people)
+    vp = estimate_video(path, progress_bar=False)
+    est = PoseEstimator()
+    world, image = [], []
+    for i, rgb in enumerate(iter_frames(path)):
+        pose = est.process(rgb, i / 25.0)
+        w = pose.world.copy()
+        w[outside_frame(pose.image, rgb.shape[1], rgb.shape[0])] = np.nan
+        world.append(w)
+        image.append(pose.image)
+    assert vp.video_frames is None and not vp.resampled
+    assert vp.sequence.fps == 25.0
+    np.testing.assert_array_equal(vp.sequence.positions, np.array(world))
+    np.testing.assert_array_equal(vp.image_landmarks, np.array(image))
+    assert "variable_frame_rate" not in vp.sequence.metadata
+    assert capsys.readouterr().err == ""
+
+
+def test_jitter_within_a_quarter_frame_is_constant_rate(tmp_path: Path) -> None:
+    pts = [40 * k + (5 if k % 2 else 0) for k in range(10)]  # 5 ms of 40: an eighth
+    path = _write(tmp_path / "jitter.mkv", pts, _grey(10))
+    vp = estimate_video(path, progress_bar=False, announce=False)
+    assert not vp.resampled and vp.sequence.n_frames == 10
+
+
+def test_a_variable_rate_matroska_is_whole_not_truncated(tmp_path: Path) -> None:
+    """Matroska states no frame count: OpenCV estimates duration x rate (23 at 25 fps for
+    these 0.9 s), more than the 13 frames there are; the frames' times reach the end."""
+    path = _write(tmp_path / "grey.mkv", PTS_MS + [900], _grey(len(PTS_MS) + 1))
+    assert sum(1 for _ in iter_frames(path)) == len(PTS_MS) + 1
+    # a file that really ends early is still refused
+    with pytest.raises(DataError, match="decoded 13 of 23 frames"):
+        check_whole(13, 23, path, span=0.66, fps=25.0)
+
+
+def test_extract_says_it_resampled_and_draws_the_overlay_in_step(
+    vfr_mkv: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out, overlay = tmp_path / "poses", tmp_path / "overlay.mp4"
+    assert main(["extract", str(vfr_mkv), "--out", str(out), "--overlay", str(overlay)]) == 0
+    printed = capsys.readouterr()
+    assert "variable frame rate: resampled to 25 fps" in printed.out + printed.err
+    pose_file = out / "lunge_vfr.npz"
+    seq = load_pose(pose_file)
+    assert seq.n_frames == 16 and seq.fps == 25.0
+    assert seq.metadata["variable_frame_rate"]["resampled_to_fps"] == 25.0
+    rows = load_pose_arrays(pose_file)["video_frames"]
+    assert rows.tolist() == [0, 1, 1, 2, 2, 3, 4, 5, 6, 6, 8, 9, 9, 10, 11, 11]
+    cap = cv2.VideoCapture(str(overlay))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 16  # one frame per pose row, at 25 fps
+    assert cap.get(cv2.CAP_PROP_FPS) == pytest.approx(25.0)
+    cap.release()
+    # the up-to-date pose file still gives the overlay its rows
+    overlay.unlink()
+    assert main(["extract", str(vfr_mkv), "--out", str(out), "--overlay", str(overlay)]) == 0
+    cap = cv2.VideoCapture(str(overlay))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 16
+    cap.release()
+    json.loads(json.dumps(seq.metadata))  # the note in the file is plain JSON
