@@ -19,7 +19,8 @@ import pytest
 
 import features.pose_estimation  # noqa: F401  (silences FFmpeg before any video is opened)
 from features.errors import DataError
-from features.pose_estimation import PoseEstimator, estimate_video, iter_frames
+from features.pose_estimation import PoseEstimator, StreamFrame, estimate_video, iter_frames
+from features.pose_estimation.tracker import FramePose
 from features.pose_estimation.video import (
     check_whole,
     iter_timed_frames,
@@ -28,6 +29,7 @@ from features.pose_estimation.video import (
 )
 from features.poses import load_pose, load_pose_arrays
 from posecbr.cli import main
+from posecbr.commands.watch import Regrid
 
 av = pytest.importorskip("av", reason="PyAV writes the variable-frame-rate videos")
 
@@ -220,3 +222,35 @@ def test_extract_says_it_resampled_and_draws_the_overlay_in_step(
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 16
     cap.release()
     json.loads(json.dumps(seq.metadata))  # the note in the file is plain JSON
+
+
+def _frame(index: int, video_time_s: float, world: np.ndarray) -> StreamFrame:
+    image = np.full((33, 5), np.nan)
+    image[:, 3] = 1.0
+    pose = FramePose(image, world, True, False, 1.0, None)
+    return StreamFrame(index, index / 10, pose, np.zeros((4, 4, 3), np.uint8), 0.0, video_time_s)
+
+
+def test_watch_puts_a_variable_rate_file_on_the_grid_as_it_comes(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Frames at 0, 0.1, 0.15 and 0.4 s of a 10 fps file: the first two lie on the grid and
+    pass as they are; 0.15 s strays (told once); 0.2 and 0.3 s lie 0.2 and 0.6 of the way
+    from 0.15 to 0.4 s, and 0.4 s is the last frame itself."""
+    worlds = [np.full((33, 3), v) for v in (0.0, 2.0, 4.0, 9.0)]
+    worlds[2][5] = np.nan  # a joint not seen at 0.15 s
+    grid = Regrid(10.0, "phone.mp4")
+    taken = [grid.take(_frame(i, t, worlds[i])) for i, t in enumerate([0.0, 0.1, 0.15, 0.4])]
+    assert [len(t) for t in taken] == [1, 1, 0, 3]
+    pushed = [w for step in taken for w, _vis, _shown in step]
+    assert [float(w[0, 0]) for w in pushed] == pytest.approx(
+        [0.0, 2.0, 0.8 * 4.0 + 0.2 * 9.0, 0.4 * 4.0 + 0.6 * 9.0, 9.0], abs=1e-12
+    )
+    assert np.isnan(pushed[2][5]).all() and np.isnan(pushed[3][5]).all()
+    assert np.isfinite(pushed[4][5]).all()
+    assert [shown.index for step in taken for _w, _v, shown in step] == [0, 1, 2, 2, 3]
+    err = capsys.readouterr().err.splitlines()
+    assert err == [
+        "note: phone.mp4: variable frame rate (frame 2 is at 0.150 s, not 0.200 s):"
+        " poses resampled to 10 fps as they come"
+    ]

@@ -598,3 +598,58 @@ def test_watch_of_a_short_video_with_nobody_in_it_names_the_video(
     assert err.count("\n") == 1
     assert err.startswith(f"posecbr watch: error: {whole}: no person in view in enough frames")
     assert snapshot(tmp_path) == before
+
+
+def test_watch_and_segment_agree_on_a_variable_frame_rate_video(
+    case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The reverse lunge of the test above re-timed at irregular intervals (gaps of 30, 50,
+    40, 60 and 20 ms, 40 on average: the 25 fps it declares): both resample it to 25 fps
+    (``watch`` as the frames come), so both give the same segments and repetitions; each
+    says once that it resampled. Both had timed the frames as evenly spaced, silently."""
+    av = pytest.importorskip("av", reason="PyAV writes the variable-frame-rate video")
+    from fractions import Fraction
+
+    import cv2
+
+    src = cv2.VideoCapture(
+        str(shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4")
+    )
+    video = tmp_path / "lunge_vfr.mkv"
+    out = av.open(str(video), "w")
+    stream = out.add_stream("libx264", rate=25)
+    tb = Fraction(1, 1000)
+    stream.time_base = stream.codec_context.time_base = tb
+    t, k = 0, 0
+    while True:
+        ok, bgr = src.read()
+        if not ok:
+            break
+        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
+        if k == 0:
+            stream.width, stream.height, stream.pix_fmt = small.shape[1], small.shape[0], "yuv420p"
+        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(small[:, :, ::-1]), format="rgb24")
+        frame.pts, frame.time_base = t, tb
+        for packet in stream.encode(frame):
+            out.mux(packet)
+        t += (30, 50, 40, 60, 20)[k % 5]
+        k += 1
+    for packet in stream.encode():
+        out.mux(packet)
+    out.close()
+    src.release()
+    capsys.readouterr()
+    assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 0
+    printed = capsys.readouterr()
+    watched = [json.loads(line) for line in printed.out.splitlines()]
+    assert printed.err.count("variable frame rate") == 1
+    assert main(["segment", str(video), "--db", str(case_base), "--json"]) == 0
+    printed = capsys.readouterr()
+    offline = json.loads(printed.out)["segments"]
+    assert printed.err.count("variable frame rate") == 1
+
+    def spans(segments: list[dict[str, Any]]) -> list[tuple[Any, ...]]:
+        keys = ("start_frame", "end_frame", "label", "repetitions")
+        return [tuple(d[k] for k in keys) for d in segments]
+
+    assert spans(watched) == spans(offline)

@@ -422,6 +422,10 @@ class StreamFrame:
     pose: FramePose
     rgb: np.ndarray
     read_at: float = float("nan")
+    video_time_s: float = float("nan")
+    """A file's frame: its presentation time as the decoder gives it, from the first frame's
+    (s; NaN for a live source or when the decoder gives none). A variable frame rate shows in
+    it, not in ``time_s``."""
 
     @property
     def seen_world(self) -> np.ndarray:
@@ -529,16 +533,26 @@ def stream_poses(
     est.reset()
     start = time.perf_counter()
     index = 0
+    times: list[float] = []  # a file's frame times (s), as the decoder gives them
+    on_grid = True
     try:
         while max_frames is None or index < max_frames:
             ok, bgr = cap.read()
             read_at = time.perf_counter()
-            if not ok or bgr is None:
-                check_whole(index, declared, str(source))  # read to its end: all of it
+            if not ok or bgr is None:  # read to its end: all of it
+                span = span_s(times, fps) if fps else None
+                check_whole(index, declared, str(source), span, fps)
                 break
             t = index / fps if fps else read_at - start
+            video_t = float("nan")
+            if fps:
+                times.append(frame_time_s(cap))
+                video_t = times[-1] - times[0]
+                # as estimate_video times the filters: index / fps until the frames stray
+                on_grid = on_grid and not abs(video_t * fps - index) > VFR_TOLERANCE
             rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
-            yield StreamFrame(index, t, est.process(rgb, t), rgb, read_at)
+            at = t if on_grid or not math.isfinite(video_t) else video_t
+            yield StreamFrame(index, t, est.process(rgb, at), rgb, read_at, video_t)
             index += 1
     finally:
         cap.release()

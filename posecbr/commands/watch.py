@@ -304,6 +304,7 @@ class Watcher:
         self.clf, self.judge, self.args = clf, judge, args
         self.fps = fps
         self.live: Any = None
+        self._grid: Any = None  # Regrid, made with the segmenter
         self.writer: Any = None
         self.video: Path | None = None  # where the drawn frames go (a temporary file)
         self.drawn = 0  # frames written to it
@@ -348,6 +349,7 @@ class Watcher:
                     if self.fps is None:
                         continue
                 self.live = LiveSegmenter(self.clf, self.fps, self.judge, self.args.source)
+                self._grid = Regrid(self.fps, self.args.source)
                 for early in waiting[:-1]:
                     self._take(early)
             self._take(frame)
@@ -360,13 +362,14 @@ class Watcher:
             )
 
     def _take(self, frame: Any) -> None:
-        finished = self.live.push(frame.seen_world, frame.visibility)
+        for world, visibility, shown_frame in self._grid.take(frame):
+            finished = self.live.push(world, visibility)
+            self.n += 1
+            for segment in finished:
+                self._emit(segment)
+            self._draw(shown_frame)
         if frame.read_at == frame.read_at:  # not NaN: the source said when it read the frame
             self.latency.append(time.perf_counter() - frame.read_at)
-        self.n += 1
-        for segment in finished:
-            self._emit(segment)
-        self._draw(frame)
 
     def _emit(self, segment: Any) -> None:
         print(json.dumps(segment.to_dict(self.fps)), flush=True)
@@ -458,6 +461,59 @@ class Watcher:
                 f"95th percentile {np.percentile(ms, 95):.1f} ms, worst {ms.max():.1f} ms",
                 file=sys.stderr,
             )
+
+
+class Regrid:
+    """A file's frames as the live segmenter takes them: evenly spaced at ``fps``. While the
+    frames' own times (``video_time_s``) lie at index / fps (a constant rate, or a live
+    source: no times), each frame is passed as it is. From the first frame that strays (a
+    variable frame rate: see :mod:`features.pose_estimation.video`), the poses are put on the
+    grid k / fps as the frames come, each grid time linearly between the frames around it
+    (a joint missing in either stays missing), and the user is told once on stderr."""
+
+    def __init__(self, fps: float, source: str) -> None:
+        self.fps, self.source = fps, source
+        self.resampling = False
+        self.k = 0  # the next grid frame
+        self.prev: Any = None  # the last frame taken
+
+    def take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
+        """(world, visibility, the frame on screen then) for each grid time up to this
+        frame's."""
+        import math
+
+        import numpy as np
+
+        from features.pose_estimation.video import VFR_TOLERANCE
+
+        t = frame.video_time_s
+        if not self.resampling:
+            if not math.isfinite(t) or abs(t * self.fps - frame.index) <= VFR_TOLERANCE:
+                self.prev, self.k = frame, frame.index + 1
+                return [(frame.seen_world, frame.visibility, frame)]
+            self.resampling = True
+            print(
+                f"note: {self.source}: variable frame rate (frame {frame.index} is at"
+                f" {t:.3f} s, not {frame.index / self.fps:.3f} s): poses resampled to"
+                f" {self.fps:g} fps as they come",
+                file=sys.stderr,
+            )
+        prev = self.prev
+        if prev is None or not math.isfinite(t) or t <= prev.video_time_s:
+            return []  # no time to place it by
+        out = []
+        while self.k / self.fps <= t + 1e-9:
+            w = (self.k / self.fps - prev.video_time_s) / (t - prev.video_time_s)
+            if w >= 1.0 - 1e-9:
+                out.append((frame.seen_world, frame.visibility, frame))
+            else:
+                w = max(w, 0.0)
+                world = (1.0 - w) * prev.seen_world + w * frame.seen_world
+                vis = (1.0 - w) * np.asarray(prev.visibility) + w * frame.visibility
+                out.append((world, vis, prev))
+            self.k += 1
+        self.prev = frame
+        return out
 
 
 def _frame_rate(frames: list[Any]) -> float | None:
