@@ -161,16 +161,18 @@ def read_asf(path: str | Path) -> Skeleton:
     skel = Skeleton(path, 1.0, True, ("TX", "TY", "TZ", "RX", "RY", "RZ"), "XYZ", np.zeros(3))
     blocks = _BoneBlocks(path)
     hierarchy: list[tuple[int, list[str]]] = []
+    root_seen = False
     for section, line_no, tokens in _asf_sections(read_text(path).split("\n"), path):
         if section == "units":
             _units_line(skel, tokens, line_no)
         elif section == "root":
+            root_seen = True
             _root_line(skel, tokens, line_no)
         elif section == "bonedata":
             blocks.line(tokens, line_no)
         elif section == "hierarchy" and tokens[0].lower() not in ("begin", "end"):
             hierarchy.append((line_no, tokens))
-    defined = {bone.name: bone for bone in blocks.bones()}
+    defined = {bone.name: bone for bone in blocks.bones(root_seen)}
     skel.bones = _parents_first(defined, _parent_of(hierarchy, defined, path), path)
     return skel
 
@@ -272,11 +274,17 @@ class _BoneBlocks:
         elif self.open is not None:
             _bone_field(self.open, tokens, self.path, line_no)
 
-    def bones(self) -> list[Bone]:
+    def bones(self, root_seen: bool) -> list[Bone]:
         """The bones read, checked (every block closed, name, direction and length given,
-        known dofs), in file order."""
+        known dofs), in file order. ``root_seen``: the file has a ``:root`` section, so a
+        file without bones is a skeleton of its root alone, not another kind of file."""
         if self.open is not None:
             raise DataError("bone definition not closed with 'end' (truncated?)", self.path)
+        if not self.closed and root_seen:
+            raise DataError(
+                "the skeleton has only its root (no :bonedata bones); there are no limbs to draw",
+                self.path,
+            )
         if not self.closed:
             raise DataError("no :bonedata bones (not an ASF file?)", self.path)
         return [_bone(draft, self.path) for draft in self.closed]
@@ -656,15 +664,57 @@ def read_asf_amc(
     """
     amc = Path(amc_path)
     skel = read_asf(asf_path)
+    joint_map = _joint_map(skel)
     motion = read_amc(amc, skel)
     names, ends = forward_kinematics(skel, motion)
-    joint_map = {k: v for k, v in ASF_TO_BLAZEPOSE.items() if v in skel.bones}
+    positions = to_canonical(ends, names, joint_map)
+    _check_limbs_given(skel, motion, positions)
     rate, rate_source = (float(fps), "given") if fps is not None else amc_frame_rate(amc)
     return PoseSequence(
-        positions=to_canonical(ends, names, joint_map),
+        positions=positions,
         joint_names=BLAZEPOSE_33,
         fps=rate,
         skeleton="asf_amc",
         source=str(amc),
         metadata={"asf": str(asf_path), "fps_source": rate_source, **hdm05_metadata(amc)},
+    )
+
+
+def _joint_map(skel: Skeleton) -> dict[str, str]:
+    """:data:`ASF_TO_BLAZEPOSE` for the bones ``skel`` has. Raises DataError naming the ASF
+    file when it has none of them: every joint of every frame would be missing, a clip that
+    converts and then "shows no person" to every command."""
+    joint_map = {k: v for k, v in ASF_TO_BLAZEPOSE.items() if v in skel.bones}
+    if not joint_map:
+        bones = list(skel.bones)
+        raise DataError(
+            "none of its bones is one a joint is placed at (lhipjoint, lfemur, ltibia, lclavicle,"
+            " lhumerus, lradius, ...; features.readers.asfamc.ASF_TO_BLAZEPOSE): it has "
+            + ", ".join(bones[:8])
+            + (", ..." if len(bones) > 8 else "")
+            + "; there are no limbs to draw",
+            skel.path,
+        )
+    return joint_map
+
+
+def _check_limbs_given(skel: Skeleton, motion: Motion, positions: np.ndarray) -> None:
+    """Refuse, naming the AMC file, a motion that gives no values for the skeleton's turning
+    bones (it lists the root alone) or places no joint in any frame: the limbs hang from those
+    bones, so the clip would convert and then "show no person" to every command (a real
+    skeleton's hip bones do not turn, so the root alone still places the two hips)."""
+    turning = [n for n, b in skel.bones.items() if any(d.startswith("r") for d in b.dof)]
+    unlisted = [n for n in turning if n not in motion.values]
+    only_root = set(motion.values) == {"root"}
+    if not ((only_root and turning) or np.isnan(positions).all()):
+        return
+    listed = sorted(motion.values)
+    what = (
+        "only root" if only_root else ", ".join(listed[:5]) + (", ..." if len(listed) > 5 else "")
+    )
+    raise DataError(
+        f"lists {what}, no values for {', '.join(unlisted[:5])}"
+        f"{', ...' if len(unlisted) > 5 else ''} (bones of {skel.path.name} that turn): there"
+        " are no limbs to draw",
+        motion.path,
     )

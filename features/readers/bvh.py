@@ -270,6 +270,10 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
     joints, i = _parse_hierarchy(tokens, path)
     if not joints:
         raise DataError("no joints in the hierarchy", path)
+    if len(joints) == 1:  # named LeftUpLeg or not: one point, no limb, "no person" later
+        raise DataError(
+            f"the skeleton has only its root ({joints[0].name}); there are no limbs to draw", path
+        )
     n_frames, frame_time = _motion_header(tokens, i, path)
     text_time = tokens[i + 4]
     n_chan = sum(len(j.channels) for j in joints)
