@@ -29,6 +29,7 @@ import numpy as np
 from scipy.stats import rankdata
 
 from casebase_store import CaseBaseInfo, StoreTransaction
+from features.body import MIRRORED
 from features.progress import progress
 
 from .casebase import CaseBase, frame_array
@@ -136,12 +137,17 @@ def _report(
         if dist is None:
             dist = pairwise_distances(cb)
         overlap = overlapping_pieces(cb)
-        apart = np.where(overlap, np.inf, dist)
+        twins = mirror_twins(cb)
+        apart = np.where(overlap | twins, np.inf, dist)
         acc_b = loo_accuracy(apart, cb.labels, np.ones(len(cb), bool), k, weights)
         acc_a = loo_accuracy(apart, cb.labels, kept, k, weights)
         measured = f"{k}-NN, each of the {len(cb)} cases before left out in turn"
-        if overlap.any():
-            measured += " with the cases overlapping it in its recording"
+        with_it = [
+            *(["its mirror image"] if twins.any() else []),
+            *(["the cases overlapping it in its recording"] if overlap.any() else []),
+        ]
+        if with_it:
+            measured += " with " + " and ".join(with_it)
     assert cb.ids is not None
     return MaintenanceReport(
         method,
@@ -179,6 +185,24 @@ def overlapping_pieces(cb: CaseBase) -> np.ndarray:
     out: np.ndarray = same & meet & known[:, None] & known[None, :]
     np.fill_diagonal(out, False)
     return out
+
+
+def mirror_twins(cb: CaseBase) -> np.ndarray:
+    """``(n, n)`` bool: the pairs of cases that are a clip and its mirror image (``--mirror
+    augment``; the image's source is the clip's with :data:`features.body.MIRRORED` added, its
+    frames the clip's). Left out alone, a case is answered by its own mirror image, the same
+    movement on the other side: near, and always of its activity. Two clips of one name and
+    the same frames (whole clips from two folders, say) pair with each other's image too:
+    held out the more, never the less."""
+    names = [str(x) for x in cb.sources]
+    image = np.array([n.endswith(MIRRORED) for n in names])
+    if not image.any() or image.all():
+        return np.zeros((len(cb), len(cb)), dtype=bool)
+    key = np.array(
+        [repr((n.removesuffix(MIRRORED), tuple(f))) for n, f in zip(names, cb.frames, strict=True)],
+        dtype=object,
+    )
+    return np.asarray((key[:, None] == key[None, :]) & (image[:, None] != image[None, :]))
 
 
 def keep_every_activity(

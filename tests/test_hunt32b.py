@@ -129,3 +129,98 @@ def test_bvh_of_the_root_alone_is_refused(
     bvh.write_text(_BVH.format(root=root, end=end))
     argv = ["convert", str(bvh), "--out", str(tmp_path / "out")]
     refused(argv, tmp_path, capsys, f"r.bvh: the skeleton has only its root ({root})")
+
+
+# ---- 2. compare --trim leaving fewer cases than k in a fold --------------------------------
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+
+
+def test_compare_trim_below_k_marks_the_method_failed(
+    tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import json
+
+    from posecbr.cli import main
+
+    monkeypatch.setenv("POSECBR_NO_PROGRESS", "1")
+    # 3 subjects x 3 movements x 6 clips: each fold trains on 2 subjects, 12 clips of each
+    # movement; --trim 0.05 keeps ceil(0.05 x 12) = 1 of each: 3 cases of 36, and k = 5
+    argv = ["compare", str(DEMO), "--labels", "deep_squat,sit_to_stand,standing_shoulder_abduction",
+            "--similarities", "euclidean", "--features", "fluents", "--peers", "none",
+            "--explain", "0", "--trim", "0.05", "--json", str(tmp_path / "r.json")]  # fmt: skip
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    res = json.loads((tmp_path / "r.json").read_text())
+    rows = {m["name"]: m for m in res["methods"]}
+    why = (
+        "fold 0 (subject s01 held out): trimming kept 3 of 36 cases, fewer than the 5 the case"
+        " base votes with (k): not scored (keep more with --trim, or give a smaller --k)"
+    )
+    assert rows["cbr fluents/euclidean"]["status"] == "failed"
+    assert rows["cbr fluents/euclidean"]["message"] == why
+    assert f"note: cbr fluents/euclidean failed: {why}" in err.splitlines()
+    assert rows["dad"]["status"] == "ok" and res["best"] == "dad"  # the other rows are kept
+    # ceil(0.1 x 12) = 2 of each movement: 6 cases, not fewer than k = 5: scored
+    argv[argv.index("0.05")] = "0.1"
+    assert main(argv) == 0
+    res = json.loads((tmp_path / "r.json").read_text())
+    row = next(m for m in res["methods"] if m["name"] == "cbr fluents/euclidean")
+    assert row["status"] == "ok" and row["case_base_size"] == 6
+
+
+# ---- 3. casebase trim's held-out accuracy with mirror twins --------------------------------
+
+
+def test_trim_accuracy_holds_out_the_mirror_twin(
+    tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import json
+    import shutil
+
+    from posecbr.cli import main
+
+    monkeypatch.setenv("POSECBR_NO_PROGRESS", "1")
+    # three real Kinect clips: one deep squat, two shoulder abductions (two subjects); with
+    # --mirror augment six cases, each clip and its mirror image
+    data = tmp_path / "data"
+    data.mkdir()
+    for name in ("m01_s01_e01.npz", "m07_s01_e01.npz", "m07_s02_e01.npz"):
+        shutil.copy(DEMO / name, data / name)
+    (data / "labels.csv").write_text(
+        "path,label\nm01_s01_e01.npz,deep_squat\nm07_s01_e01.npz,abduction\n"
+        "m07_s02_e01.npz,abduction\n"
+    )
+    db = str(tmp_path / "cb.sqlite")
+    assert main(["train", str(data), "--db", db, "--mirror", "augment", "-k", "1"]) == 0
+    capsys.readouterr()
+    assert main(["casebase", "trim", "--db", db, "--dry-run", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    # Held out with its mirror image, a squat case has no squat left to find (the only other
+    # is its twin): both squat cases are answered abduction, wrong. Each abduction case finds
+    # the other subject's abduction (or its image): right. 4 of 6, before and after (the trim
+    # keeps ceil(0.7 x 2) = 2 squat cases, ceil(0.7 x 4) = 3 abduction cases, so every
+    # abduction case still has the other clip or its image). Before, a squat case was answered
+    # by its own mirror image: 5 of 6 before trimming.
+    assert doc["size_before"] == 6 and doc["size_after"] == 5
+    assert doc["accuracy_before"] == pytest.approx(4 / 6)
+    assert doc["accuracy_after"] == pytest.approx(4 / 6)
+    assert (
+        doc["measured"] == "1-NN, each of the 6 cases before left out in turn with its mirror image"
+    )
+
+
+def test_mirror_twins_pair_a_clip_with_its_image_only() -> None:
+    import numpy as np
+
+    from cbr.casebase import CaseBase
+    from cbr.maintenance import mirror_twins
+
+    sources = ("a.npz", "b.npz", "a.npz (mirrored)", "b.npz (mirrored)", "a.npz")
+    frames = ((0, 10), (0, 10), (0, 10), (0, 10), (10, 20))
+    cb = CaseBase(None, None, np.zeros((5, 1)), np.array(["x"] * 5, dtype=object),  # type: ignore[arg-type]
+                  ("f",), ("f",), sources=sources, frames=frames)  # fmt: skip
+    got = mirror_twins(cb)
+    want = np.zeros((5, 5), dtype=bool)
+    want[0, 2] = want[2, 0] = want[1, 3] = want[3, 1] = True  # a's frames 10-20 have no image
+    np.testing.assert_array_equal(got, want)

@@ -60,13 +60,38 @@ class FoldResult:
     notes: list[str] = field(default_factory=list)
 
 
+class TrimmedBelowK(PosecbrError):
+    """A fold's trimming kept fewer cases than the case base votes with (k): the method is
+    not scored (``train --trim`` refuses such a case base)."""
+
+
+def _check_trimmed(est: object, where: str) -> None:
+    """Refuse a case base that its trimming (``--trim``, an ``editor``) left with fewer cases
+    than k, as ``train`` refuses it: every answer would be the vote of all its cases, and the
+    figures those of another k."""
+    report = getattr(est, "maintenance_", None)
+    k = int(getattr(est, "k", 0))
+    if report is not None and report.size_after < k:
+        raise TrimmedBelowK(
+            f"{where}: trimming kept {report.size_after} of {report.size_before} cases, fewer"
+            f" than the {k} the case base votes with (k): not scored (keep more with --trim,"
+            " or give a smaller --k)"
+        )
+
+
 def _fit_predict(
-    method: Method, X_train: list[PoseSequence], y_train: np.ndarray, X_test: list[PoseSequence]
+    method: Method,
+    X_train: list[PoseSequence],
+    y_train: np.ndarray,
+    X_test: list[PoseSequence],
+    where: str = "fold",
 ) -> tuple[np.ndarray, float, float, int | None]:
-    """Predictions ``(n_test,)`` as str, fit and predict seconds, and the case-base size."""
+    """Predictions ``(n_test,)`` as str, fit and predict seconds, and the case-base size.
+    ``where``: the fold (and model group), as a refusal names it."""
     est = make_estimator(method)
     t0 = time.perf_counter()
     est.fit(X_train, y_train)
+    _check_trimmed(est, where)
     t1 = time.perf_counter()
     pred = np.asarray(est.predict(X_test), dtype=object)
     t2 = time.perf_counter()
@@ -102,12 +127,21 @@ def _run_group(
         [data.seqs[i] for i in train],
         y_train,
         [data.seqs[i] for i in test],
+        fold_name(ctx, out.fold) + ("" if group is None else f", {group}"),
     )
     out.pred[where] = pred
     out.fit_s += fit_s
     out.predict_s += predict_s
     if size is not None:
         out.case_base_size = (out.case_base_size or 0) + size
+
+
+def fold_name(ctx: RunContext, fold: int) -> str:
+    """A fold in words: its number as the results' ``fold_of_clip`` gives it, and the subject
+    it holds out when it holds out one (leave one subject out)."""
+    held = {ctx.data.subjects[i] for i in np.flatnonzero(ctx.folds == fold)}
+    subject = next(iter(held)) if len(held) == 1 else None
+    return f"fold {fold}" + ("" if subject is None else f" (subject {subject} held out)")
 
 
 def run_fold(ctx: RunContext, task: FoldTask) -> FoldResult:
