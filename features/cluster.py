@@ -23,11 +23,12 @@ import logging
 import os
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import CancelledError
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
 from .errors import ConfigError, PosecbrError
+from .interrupts import interrupts_held, interrupts_ignored_by_children
 from .progress import progress
 
 T = TypeVar("T")
@@ -115,25 +116,32 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
     if n is not None:
         import dask
 
-        # the workers get the config they start with
-        with dask.config.set(LEAN_CONFIG if lean else {}):
-            cluster = dd.LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                # no dashboard, but the scheduler's HTTP routes (health, metrics) still serve
-                # on 8787 unless told: a free port, so a second cluster (another command,
-                # a notebook's) does not warn that 8787 is taken
-                scheduler_kwargs={"dashboard_address": ":0"},
-                silence_logs=logging.ERROR,
-            )
-        client = dd.Client(cluster)
+        # the workers start ignoring Ctrl-C, so the terminal's Ctrl-C (sent to the whole
+        # process group) reaches this process alone, which closes them; each used to print
+        # Dask's shutdown tracebacks under "posecbr ...: interrupted"
+        cluster: Any = None
+        client: Any = None
         try:
+            with interrupts_ignored_by_children(), dask.config.set(LEAN_CONFIG if lean else {}):
+                # the workers get the config they start with
+                cluster = dd.LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    # no dashboard, but the scheduler's HTTP routes (health, metrics) still
+                    # serve on 8787 unless told: a free port, so a second cluster (another
+                    # command, a notebook's) does not warn that 8787 is taken
+                    scheduler_kwargs={"dashboard_address": ":0"},
+                    silence_logs=logging.ERROR,
+                )
+                client = dd.Client(cluster)
             yield client
+        except KeyboardInterrupt:
+            _hush(client)
+            raise
         finally:
-            client.close()
-            cluster.close()
+            _close(client, cluster)
         return
     refused: ConfigError | None = None
     try:
@@ -153,6 +161,32 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
         yield client
     finally:
         client.close()
+
+
+def _no_logs() -> None:
+    """Dask's logging off in this process: its cluster is being closed mid-run, so each
+    server logs the work it is losing, each worker the scheduler it lost ("Stream is
+    closed", "caused the cluster to lose scattered data"): the run ends on Ctrl-C."""
+    logging.disable(logging.CRITICAL)
+
+
+def _hush(client: Any) -> None:
+    """Dask's logging off here (the scheduler and the nannies) and on every worker, before a
+    cluster interrupted mid-run (Ctrl-C) is closed: its one line is the command's."""
+    _no_logs()
+    if client is not None:
+        with suppress(Exception):  # best effort: a worker gone meanwhile says nothing either
+            client.run(_no_logs)
+
+
+def _close(client: Any, cluster: Any) -> None:
+    """Close a local cluster's client and the cluster (its workers end), whichever were made;
+    Ctrl-C held meanwhile, so that a second one does not leave the workers running."""
+    with interrupts_held():
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 def _quiet_worker() -> None:

@@ -4,11 +4,16 @@ LocalCluster run."""
 
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
 
-from tests.badinput import refused
+from tests.badinput import ROOT, refused
 
 # ---- 1. a skeleton with no limbs ----------------------------------------------------------
 
@@ -133,7 +138,7 @@ def test_bvh_of_the_root_alone_is_refused(
 
 # ---- 2. compare --trim leaving fewer cases than k in a fold --------------------------------
 
-DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 
 
 def test_compare_trim_below_k_marks_the_method_failed(
@@ -224,3 +229,72 @@ def test_mirror_twins_pair_a_clip_with_its_image_only() -> None:
     want = np.zeros((5, 5), dtype=bool)
     want[0, 2] = want[2, 0] = want[1, 3] = want[3, 1] = True  # a's frames 10-20 have no image
     np.testing.assert_array_equal(got, want)
+
+
+# ---- 4. Ctrl-C of compare --scheduler local:2 ------------------------------------------------
+
+
+def _group(pgid: int) -> list[int]:
+    """The processes of process group ``pgid`` that are still running (from /proc)."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue  # ended meanwhile
+        if int(fields[2]) == pgid and fields[0] != "Z":  # pgrp; a zombie has ended
+            out.append(int(stat.parent.name))
+    return out
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="process groups and /proc: Linux")
+@pytest.mark.parametrize("wait_s", [0.0, 3.0])  # as the workers start; at the first tasks
+def test_ctrl_c_of_compare_on_a_local_cluster_prints_one_line(
+    tmp_path: Path, wait_s: float
+) -> None:
+    """Ctrl-C in a terminal signals every process of the group: the Dask workers (and their
+    nannies' shutdown) printed KeyboardInterrupt tracebacks, CancelledError, "Failed to
+    communicate with scheduler during heartbeat" and "Removing worker ... lose scattered
+    data" under "posecbr compare: interrupted". Now the one line, status 130, no process of
+    the run left, nothing written."""
+    pytest.importorskip("dask.distributed", reason="dask is in the test extra")
+    env = {**os.environ, "POSECBR_NO_PROGRESS": "1"}
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
+    argv = [sys.executable, "-m", "posecbr", "compare", str(DEMO), "--peers", "none"]
+    argv += ["--labels", "deep_squat,hurdle_step,sit_to_stand", "--scheduler", "local:2"]
+    argv += ["--out", str(tmp_path / "o")]
+    proc = subprocess.Popen(
+        argv,
+        cwd=tmp_path,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,  # a group of its own, as a terminal's job
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    workers: list[int] = []
+    deadline = time.monotonic() + 300
+    while len(workers) < 2 and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.1)
+        workers = [
+            p
+            for p in _group(proc.pid)
+            if b"spawn_main" in Path(f"/proc/{p}/cmdline").read_bytes()  # Dask's workers
+        ]
+    assert len(workers) >= 2, "the workers never started"
+    time.sleep(wait_s)
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert (proc.returncode, err.decode(), out.decode()) == (
+        130,
+        "posecbr compare: interrupted\n",
+        "",
+    )
+    left = _group(proc.pid)
+    for _ in range(50):  # the workers end with the command
+        if not left:
+            break
+        time.sleep(0.2)
+        left = _group(proc.pid)
+    assert left == []
+    assert not (tmp_path / "o").exists()

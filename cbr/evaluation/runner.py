@@ -17,18 +17,16 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-import signal
 import sys
-import threading
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Generic, TypeVar
 
 from features.errors import PosecbrError
+from features.interrupts import interrupts_held
 from features.progress import progress
 
 C = TypeVar("C")
@@ -100,7 +98,7 @@ class ProcessRunner(Runner[C]):
         futures: list[Future[R]] = []
         with pool:
             try:
-                with _interrupts_held():  # inherited by the workers submit starts
+                with interrupts_held():  # inherited by the workers submit starts
                     futures = [pool.submit(_call, fn, t) for t in tasks]
                 for fut in progress(as_completed(futures), desc, total=len(futures), unit=unit):
                     yield fut.result()
@@ -116,31 +114,6 @@ class ProcessRunner(Runner[C]):
             finally:
                 for fut in futures:
                     fut.cancel()
-
-
-@contextmanager
-def _interrupts_held() -> Iterator[None]:
-    """Ctrl-C held back while worker processes are started, then raised: SIGINT is blocked
-    in this thread, and the workers inherit the block, so the terminal's Ctrl-C (sent to
-    every process of the group) reaches this process alone, which stops them; and one that
-    comes meanwhile is raised only once every worker started is known (raised in the middle
-    of starting one, it left that worker running after this process had ended). Each worker
-    printed a KeyboardInterrupt traceback, of a task or of its imports."""
-    if not hasattr(signal, "pthread_sigmask"):  # Windows: Ctrl-C is not a POSIX signal
-        yield
-        return
-    came: list[int] = []
-    main = threading.current_thread() is threading.main_thread()  # where handlers are set
-    handler = signal.signal(signal.SIGINT, lambda n, _: came.append(n)) if main else None
-    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
-        if main:  # None: a handler not set from Python, which cannot be set back
-            signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
-    if came:
-        raise KeyboardInterrupt
 
 
 def _died() -> str:

@@ -1,0 +1,76 @@
+"""Ctrl-C held back while worker processes are started (:func:`interrupts_held`), for the
+commands that start them: ``compare --jobs`` and ``--scheduler local:N``."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+
+@contextmanager
+def interrupts_held() -> Iterator[None]:
+    """Ctrl-C held back while worker processes are started, then raised: SIGINT is blocked
+    in this thread, and the workers inherit the block (as does a thread started meanwhile,
+    and the processes it starts: a Dask local cluster's event loop and its workers), so the
+    terminal's Ctrl-C (sent to every process of the group) reaches this process alone, which
+    stops them; and one that comes meanwhile is raised only once every worker started is
+    known (raised in the middle of starting one, it left that worker running after this
+    process had ended). Each worker printed a KeyboardInterrupt traceback, of a task or of its
+    imports."""
+    if not hasattr(signal, "pthread_sigmask"):  # Windows: Ctrl-C is not a POSIX signal
+        yield
+        return
+    came: list[int] = []
+    main = threading.current_thread() is threading.main_thread()  # where handlers are set
+    handler = signal.signal(signal.SIGINT, lambda n, _: came.append(n)) if main else None
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        if main:  # None: a handler not set from Python, which cannot be set back
+            signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
+    if came:
+        raise KeyboardInterrupt
+
+
+@contextmanager
+def interrupts_ignored_by_children() -> Iterator[None]:
+    """Processes started meanwhile ignore Ctrl-C for good; this one raises KeyboardInterrupt
+    after the block when one came meanwhile.
+
+    A process started by *spawn* (fork and exec, as ``multiprocessing`` and Dask's nannies
+    start their workers) does not keep the blocked signal mask :func:`interrupts_held` sets,
+    but keeps an ignored signal (``SIG_IGN`` survives exec, and Python leaves an ignored
+    SIGINT ignored): SIGINT is ignored meanwhile. This process would then miss a Ctrl-C that
+    came meanwhile (blocking it in this thread does not keep it: another thread, a native
+    library's, takes it and ignores it), so a sentinel process of the same process group,
+    started first and not ignoring it, tells: the terminal's Ctrl-C, sent to every process
+    of the group, ends it. (A SIGINT sent to this process alone meanwhile is missed.)"""
+    main = threading.current_thread() is threading.main_thread()  # where handlers are set
+    if not (hasattr(signal, "pthread_sigmask") and main):  # Windows: no POSIX signals
+        yield
+        return
+    sentinel = subprocess.Popen(
+        [sys.executable, "-I", "-S", "-c", "import time; time.sleep(86400)"],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
+        came = sentinel.poll() is not None
+    finally:
+        if sentinel.poll() is None:
+            sentinel.kill()
+        sentinel.wait()
+    if came:
+        raise KeyboardInterrupt
