@@ -55,22 +55,34 @@ def interrupts_ignored_by_children() -> Iterator[None]:
     if not (hasattr(signal, "pthread_sigmask") and main):  # Windows: no POSIX signals
         yield
         return
-    sentinel = subprocess.Popen(
-        [sys.executable, "-I", "-S", "-c", "import time; time.sleep(86400)"],
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
+    sentinel = _sentinel()
     try:
         handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
             yield
         finally:
             signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
-        came = sentinel.poll() is not None
+        came = sentinel is not None and sentinel.poll() is not None
     finally:
-        if sentinel.poll() is None:
-            sentinel.kill()
-        sentinel.wait()
+        if sentinel is not None:
+            if sentinel.poll() is None:
+                sentinel.kill()
+            sentinel.wait()
     if came:
         raise KeyboardInterrupt
+
+
+def _sentinel() -> subprocess.Popen[bytes] | None:
+    """A process of this process group that ends on Ctrl-C (it waits a day otherwise); None
+    where none can be started (no Python executable known: an embedded interpreter)."""
+    if not sys.executable:
+        return None
+    try:
+        return subprocess.Popen(
+            [sys.executable, "-I", "-S", "-c", "import time; time.sleep(86400)"],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    except OSError:
+        return None

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -172,6 +173,24 @@ def test_compare_trim_below_k_marks_the_method_failed(
     res = json.loads((tmp_path / "r.json").read_text())
     row = next(m for m in res["methods"] if m["name"] == "cbr fluents/euclidean")
     assert row["status"] == "ok" and row["case_base_size"] == 6
+
+
+def test_a_fold_is_named_by_the_subject_it_holds_out_only_when_it_holds_one_out() -> None:
+    import numpy as np
+
+    from cbr.evaluation.tasks import RunContext, fold_name
+
+    def ctx(subjects: list[str], folds: list[int]) -> RunContext:
+        data = SimpleNamespace(subjects=subjects)
+        return RunContext(data, (), np.array(folds), ())  # type: ignore[arg-type]
+
+    loso = ctx(["s1", "s1", "s2", "s2"], [0, 0, 1, 1])
+    assert fold_name(loso, 1) == "fold 1 (subject s2 held out)"
+    # k folds of one subject's clips: every fold's clips are s1's, and so are the training's
+    one = ctx(["s1"] * 4, [0, 1, 0, 1])
+    assert fold_name(one, 0) == "fold 0"
+    mixed = ctx(["s1", "s2", "s1", "s2"], [0, 0, 1, 1])
+    assert fold_name(mixed, 0) == "fold 0"
 
 
 # ---- 3. casebase trim's held-out accuracy with mirror twins --------------------------------

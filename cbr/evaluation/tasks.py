@@ -138,10 +138,14 @@ def _run_group(
 
 def fold_name(ctx: RunContext, fold: int) -> str:
     """A fold in words: its number as the results' ``fold_of_clip`` gives it, and the subject
-    it holds out when it holds out one (leave one subject out)."""
-    held = {ctx.data.subjects[i] for i in np.flatnonzero(ctx.folds == fold)}
+    it holds out when it holds out one (leave one subject out: every clip of one subject,
+    none of whose clips is trained on; not k folds of a one-subject dataset)."""
+    subjects = np.array(ctx.data.subjects, dtype=object)
+    held = set(subjects[ctx.folds == fold].tolist())
     subject = next(iter(held)) if len(held) == 1 else None
-    return f"fold {fold}" + ("" if subject is None else f" (subject {subject} held out)")
+    if subject is None or subject in set(subjects[ctx.folds != fold].tolist()):
+        return f"fold {fold}"
+    return f"fold {fold} (subject {subject} held out)"
 
 
 def run_fold(ctx: RunContext, task: FoldTask) -> FoldResult:
