@@ -19,7 +19,7 @@ def p_value(p: float) -> str:
     return "<1e-300" if p < 1e-300 else f"{p:.3g}"
 
 
-def _row(results: CompareResults, m: MethodResult, s: Scores) -> str:
+def _row(results: CompareResults, m: MethodResult, s: Scores, width: int) -> str:
     acc = f"{100 * s.accuracy:5.1f} [{100 * s.accuracy_ci[0]:4.1f}, {100 * s.accuracy_ci[1]:5.1f}]"
     f1 = f"{100 * s.macro_f1:5.1f} [{100 * s.macro_f1_ci[0]:4.1f}, {100 * s.macro_f1_ci[1]:5.1f}]"
     cases = "" if s.case_base_size is None else f"{s.case_base_size:.0f}"
@@ -27,7 +27,7 @@ def _row(results: CompareResults, m: MethodResult, s: Scores) -> str:
     pv = "best" if m.name == results.best else p_value(p)
     mark = " *" if m.name == results.best_interpretable else ""
     return (
-        f"{m.name + mark:<22} {acc:<22} {f1:<22} {s.fit_s:8.2f} "
+        f"{m.name + mark:<{width}} {acc:<22} {f1:<22} {s.fit_s:8.2f} "
         f"{s.predict_ms_per_clip:8.2f} {cases:>7} {pv:>10}"
     )
 
@@ -35,16 +35,18 @@ def _row(results: CompareResults, m: MethodResult, s: Scores) -> str:
 def format_table(results: CompareResults) -> str:
     """The comparison as a plain-text table in method order (``*``: best interpretable), then
     the accuracy per model group when there are groups."""
+    # the method column holds the longest name with its " *" ("cbr fluents/euclidean *": 23)
+    width = max([22, *(len(m.name) + 2 for m in results.methods)])
     head = (
-        f"{'method':<22} {'accuracy [95% CI]':<22} {'macro-F1 [95% CI]':<22} "
+        f"{'method':<{width}} {'accuracy [95% CI]':<22} {'macro-F1 [95% CI]':<22} "
         f"{'fit s':>8} {'ms/clip':>8} {'cases':>7} {'McNemar p':>10}"
     )
     lines = [head, "-" * len(head)]
     for m in results.methods:
         if m.scores is None:
-            lines.append(f"{m.name:<22} {m.status}: {m.message}")
+            lines.append(f"{m.name:<{width}} {m.status}: {m.message}")
         else:
-            lines.append(_row(results, m, m.scores))
+            lines.append(_row(results, m, m.scores, width))
     return "\n".join(lines + group_table(results))
 
 

@@ -1,0 +1,50 @@
+"""README walk-through (hunt 32c): what the commands print, against what the README shows."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from cbr.evaluation.results import CompareResults
+from cbr.evaluation.tables import format_table
+from posecbr.cli import main
+from tests.test_hunt31e import DEMO, SMALL
+
+
+@pytest.fixture(scope="module")
+def one_configuration(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, object], str]:
+    """`posecbr demo --quick`'s comparison, smaller: fluents/euclidean alone, which is then
+    the best interpretable method and marked " *"."""
+    out = tmp_path_factory.mktemp("one_configuration") / "r.json"
+    printed = io.StringIO()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("POSECBR_NO_PROGRESS", "1")
+        with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(io.StringIO()):
+            assert main(["compare", str(DEMO), *SMALL, "--json", str(out)]) == 0
+    return json.loads(Path(out).read_text()), printed.getvalue()
+
+
+def test_compare_table_keeps_a_marked_long_name_in_its_column(
+    one_configuration: tuple[dict[str, object], str],
+) -> None:
+    """`posecbr demo --quick` printed "cbr fluents/euclidean *  89.4 [84.1,  93.1] ...": the
+    name and its best-interpretable mark (23 characters) overflowed the 22-character method
+    column and pushed the row one character right of the header."""
+    doc, printed = one_configuration
+    table = format_table(CompareResults.from_dict(doc))
+    head, rule, row = table.splitlines()[:3]
+    figures = re.compile(r"^ *\d+\.\d \[ *\d+\.\d, +\d+\.\d\] *$")
+    # every column starts where its header does: the name column 23 wide, then a space
+    assert row[:24] == "cbr fluents/euclidean * "
+    assert head.index("accuracy [95% CI]") == 24
+    assert figures.match(row[24:46]) and row[46] == " "
+    assert head.index("macro-F1 [95% CI]") == 47
+    assert figures.match(row[47:69]) and row[69] == " "
+    assert len(rule) == len(head)
+    assert row.endswith("best") and len(row) == len(head)
+    assert table in printed  # what compare printed
