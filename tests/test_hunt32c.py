@@ -13,6 +13,7 @@ import pytest
 from cbr.evaluation.results import CompareResults
 from cbr.evaluation.tables import format_table
 from posecbr.cli import main
+from tests.badinput import small_case_base
 from tests.test_hunt31e import DEMO, SMALL
 
 
@@ -48,3 +49,21 @@ def test_compare_table_keeps_a_marked_long_name_in_its_column(
     assert len(rule) == len(head)
     assert row.endswith("best") and len(row) == len(head)
     assert table in printed  # what compare printed
+
+
+def test_segment_says_where_its_picture_went(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The README's workout, `segment ... --plot timeline.png --overlay seen.mp4`, said
+    "overlay written to seen.mp4" and nothing of the picture, where `describe --plot` says
+    "timeline written to ..." and `reps --plot` "picture written to ...". It is said on
+    stderr, beside the overlay's line, so `--json` stays one document on stdout."""
+    db = small_case_base(tmp_path)
+    clip = sorted((tmp_path / "train").rglob("*.npz"))[0]
+    plot = tmp_path / "timeline.png"
+    capsys.readouterr()
+    assert main(["segment", str(clip), "--db", str(db), "--json", "--plot", str(plot)]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["recording"] == str(clip)
+    assert err == f"timeline written to {plot}\n"
+    assert plot.stat().st_size > 0

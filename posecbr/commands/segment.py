@@ -191,6 +191,7 @@ def run(args: argparse.Namespace) -> int:
     for (rec, video, result), path, target in zip(done, args.recordings, targets, strict=True):
         if target is not None:
             _plot(rec, result, target, path.name)
+            print(f"timeline written to {shown(target)}", file=sys.stderr)
         if args.overlay is not None:
             _overlay(path, video, result, args.overlay)
     docs = [result for _, _, result in done]
