@@ -67,3 +67,13 @@ def test_segment_says_where_its_picture_went(
     assert json.loads(out)["recording"] == str(clip)
     assert err == f"timeline written to {plot}\n"
     assert plot.stat().st_size > 0
+
+
+def test_casebase_trim_help_says_what_editor_does(capsys: pytest.CaptureFixture[str]) -> None:
+    """`posecbr casebase trim --help` listed `--editor {novelty-benefit,cnn,renn,icf}` with no
+    words and no default, where every other option of it had both (README: "`--keep` is
+    novelty-benefit's share of each activity and refused with the others")."""
+    with pytest.raises(SystemExit):
+        main(["casebase", "trim", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "novelty-benefit (default; keeps --keep of each activity)" in text

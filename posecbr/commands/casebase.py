@@ -42,7 +42,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     q = act.add_parser("trim", help="run a maintenance editor and deactivate dropped cases")
     common(q)
     q.add_argument(
-        "--editor", choices=("novelty-benefit", "cnn", "renn", "icf"), default="novelty-benefit"
+        "--editor",
+        choices=("novelty-benefit", "cnn", "renn", "icf"),
+        default="novelty-benefit",
+        help="the maintenance editor: novelty-benefit (default; keeps --keep of each "
+        "activity), cnn, renn or icf (each decides how many it keeps)",
     )
     q.add_argument(
         "--keep",
