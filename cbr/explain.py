@@ -845,7 +845,8 @@ def _short(
             said_ = [_claim_text(c, "its cases" if names else "") for c in why[:items]]
             why_line = _line_items("Why: ", said_, 400)
         else:
-            why_line = f"Why: nearest to the {name} cases overall; no one feature sets it apart."
+            plain = label_words(label, target, article=False)
+            why_line = f"Why: nearest to the {plain} cases overall; no one feature sets it apart."
         near = []
         if own is not None and names:
             near.append("Nearest case of this label " + _case_ref(cb, own, names))

@@ -77,3 +77,31 @@ def test_casebase_trim_help_says_what_editor_does(capsys: pytest.CaptureFixture[
         main(["casebase", "trim", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "novelty-benefit (default; keeps --keep of each activity)" in text
+
+
+def test_a_repetition_check_with_no_deciding_feature_reads_as_english(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`posecbr compare ../shared/data/ui-prmd --target correct` (README, "Comparing
+    configurations") explained a clip "Why: nearest to the a correct repetition cases
+    overall; no one feature sets it apart.": the answer's words with their article inside
+    "the ... cases". Here every clip's deciding features are taken away, as they were for
+    that clip, so the line is the one said when none decides."""
+    import cbr.explain
+
+    db = tmp_path / "squat.sqlite"
+    argv = ["train", str(DEMO / "labels.csv"), "--labels", "deep_squat", "--subjects",
+            "s01,s02", "--target", "correct", "--db", str(db)]  # fmt: skip
+    assert main(argv) == 0
+    monkeypatch.setattr(cbr.explain, "_reasons", lambda *a, **k: ([], []))
+    capsys.readouterr()
+    clips = [str(DEMO / "m01_s03_e01.npz"), str(DEMO / "m01_s03_e01_inc.npz")]
+    assert main(["classify", *clips, "--db", str(db)]) == 0
+    why = [ln.strip() for ln in capsys.readouterr().out.splitlines() if "Why:" in ln]
+    assert len(why) == 2
+    for line in why:
+        assert re.fullmatch(
+            r"Why: nearest to the (correct|incorrect) repetition cases overall; "
+            r"no one feature sets it apart\.",
+            line,
+        ), line
