@@ -321,7 +321,7 @@ def in_wal_mode(path: Path) -> bool:
     return head[:16] == b"SQLite format 3\x00" and 2 in head[18:20]
 
 
-def _sqlite_readonly_url(path: Path) -> str:
+def _sqlite_readonly_url(path: Path) -> URL:
     """A read-only SQLite URL for ``path``. A database still in WAL mode (written by posecbr
     0.1) needs its ``-wal`` and ``-shm`` files: where this process cannot create them (a
     read-only folder) the file is opened ``immutable``. Where it can, SQLite creates them
@@ -329,7 +329,7 @@ def _sqlite_readonly_url(path: Path) -> str:
     locks a file that a writer may be converting or changing. So such a file in a folder that
     can be written is refused before SQLite opens it: ``posecbr casebase upgrade`` (a writer)
     converts it to a rollback journal once."""
-    params = "mode=ro"
+    params = {"mode": "ro", "uri": "true"}
     shm = path.with_name(path.name + "-shm")
     writable = os.access(path.parent, os.W_OK)
     if writable and in_wal_mode(path):
@@ -340,8 +340,11 @@ def _sqlite_readonly_url(path: Path) -> str:
             path,
         )
     if not writable and not shm.exists():
-        params += "&immutable=1"
-    return f"sqlite:///file:{quote(str(path.resolve()))}?{params}&uri=true"
+        params["immutable"] = "1"
+    # built, not parsed: SQLAlchemy would undo the quoting, and SQLite would then read a "?",
+    # "#" or "%20" of the file's name as the URI's query, fragment or escape (a read of
+    # "a?b.sqlite" opened, and created, a file "a")
+    return URL.create("sqlite", database=f"file:{quote(str(path.resolve()))}", query=params)
 
 
 def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> tuple[Engine, str]:
@@ -413,7 +416,11 @@ def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:
             ) from None
         return url, _shown_url(url)
     check_store_file(file)
-    return make_url(_sqlite_readonly_url(file) if readonly else f"sqlite:///{file}"), str(file)
+    if readonly:
+        return _sqlite_readonly_url(file), str(file)
+    # built, not parsed: a path's "?" or "%20" is part of the file name, not a URL's query or
+    # escape ("a?b.sqlite" as text made SQLAlchemy open a file "a")
+    return URL.create("sqlite", database=str(file)), str(file)
 
 
 def check_store_file(file: Path) -> None:
