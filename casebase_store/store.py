@@ -85,6 +85,12 @@ class EmptyStore(StoreError):
     first write creates one."""
 
 
+class InterruptedWrite(StoreError):
+    """A SQLite file whose last writer was killed inside a transaction: its ``-journal``
+    holds what to undo, which a command that only reads does not write
+    (:func:`roll_back_interrupted` does)."""
+
+
 class StaleCaseError(StoreError):
     """A case read earlier is no longer as it was (deleted, moved to another case base, or
     trimmed by another process): nothing was written; reload and decide again."""
@@ -340,11 +346,68 @@ def _sqlite_readonly_url(path: Path) -> URL:
             path,
         )
     if not writable and not shm.exists():
+        if _hot_journal(path):  # immutable reads the file as the killed writer left it
+            raise InterruptedWrite(
+                f"{_INTERRUPTED.format(journal=path.name + '-journal')}; its folder cannot be "
+                "written, so it cannot be rolled back here: copy both files to a folder that "
+                "can be written and run `posecbr casebase upgrade --db FILE` there",
+                path,
+            )
         params["immutable"] = "1"
     # built, not parsed: SQLAlchemy would undo the quoting, and SQLite would then read a "?",
     # "#" or "%20" of the file's name as the URI's query, fragment or escape (a read of
     # "a?b.sqlite" opened, and created, a file "a")
     return URL.create("sqlite", database=f"file:{quote(str(path.resolve()))}", query=params)
+
+
+#: The first bytes of a rollback journal that holds a transaction (SQLite zeroes or deletes
+#: it when the transaction ends)
+_JOURNAL_MAGIC = bytes.fromhex("d9d505f920a163d7")
+
+_INTERRUPTED = (
+    "its last change was interrupted (the process writing it was killed): {journal} beside it "
+    "holds what to undo"
+)
+
+
+def _hot_journal(path: Path) -> bool:
+    """Whether ``path``'s rollback journal holds a transaction (left by a killed writer when no
+    process is writing it now)."""
+    try:
+        with open(path.with_name(path.name + "-journal"), "rb") as fh:
+            return fh.read(len(_JOURNAL_MAGIC)) == _JOURNAL_MAGIC
+    except OSError:
+        return False
+
+
+def roll_back_interrupted(url_or_path: str | Path, *, timeout_s: float = 30.0) -> bool:
+    """Undo the transaction a killed writer left in a SQLite file (its ``-journal``), as
+    SQLite does when a connection that may write opens it: for a command that will write,
+    which reads the store read-only first (a read-only connection cannot undo it and fails
+    with :class:`InterruptedWrite`). Returns whether one was undone; nothing happens to a
+    file without such a journal, another backend, or a transaction another process is still
+    writing (SQLite undoes only a journal whose writer is gone)."""
+    file = sqlite_file(url_or_path)
+    if file is None or not file.is_file() or not _hot_journal(file):
+        return False
+    _check_timeout(timeout_s)
+    for readonly in (True, False):  # first a look that writes nothing: is it to be undone?
+        engine, where = _make_engine(file, timeout_s, readonly)
+        try:
+            with engine.connect() as conn:
+                conn.exec_driver_sql("SELECT count(*) FROM sqlite_master").scalar()
+            return not readonly
+        except DBAPIError as exc:
+            code = getattr(exc.orig, "sqlite_errorcode", None)
+            if not (readonly and code == _SQLITE_READONLY_ROLLBACK):
+                raise _translate(exc, where, timeout_s) from None
+        finally:
+            engine.dispose()
+    return False
+
+
+#: SQLite's extended result code for a read-only connection that met such a journal
+_SQLITE_READONLY_ROLLBACK = 776
 
 
 def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> tuple[Engine, str]:
@@ -515,6 +578,14 @@ _LOST_WORDS = (
 def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
     text = str(getattr(exc, "orig", None) or exc).strip()
     low = text.lower()
+    code = getattr(getattr(exc, "orig", None) or exc, "sqlite_errorcode", None)
+    if code == _SQLITE_READONLY_ROLLBACK:  # before "readonly" below: the file can be written
+        return InterruptedWrite(
+            f"{_INTERRUPTED.format(journal=Path(where).name + '-journal')}, and a command "
+            "that only reads writes nothing: undo it with `posecbr casebase upgrade --db FILE`"
+            " (a command that changes the case base also does)",
+            where,
+        )
     if "locked" in low or "busy" in low or "lock timeout" in low:
         return StoreError(
             f"database is locked by another process (gave up after {timeout_s:g} s)", where

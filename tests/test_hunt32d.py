@@ -4,6 +4,11 @@ files, real processes where the point is a process."""
 from __future__ import annotations
 
 import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +16,10 @@ import pytest
 
 from casebase_store import NewCase, open_store, write_store
 from posecbr.cli import main
-from tests.badinput import small_case_base
+from tests.badinput import read_only_mounts_work, refused, small_case_base
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
 
 #: file names whose characters mean something in a URL: a query, a fragment, an escape
 URL_LIKE_NAMES = ("a?b.sqlite", "a#b.sqlite", "a%20b.sqlite", "a?mode=rw.sqlite")
@@ -60,3 +68,128 @@ def test_train_and_info_on_a_file_name_with_a_question_mark(
     assert main(["casebase", "info", "--db", str(named), "--json"]) == 0
     assert '"cases": 9' in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cb?v2.sqlite", "first"]
+
+
+#: a writer killed (SIGKILL) inside its transaction after SQLite wrote changed pages into the
+#: database file (a small page cache spills them): what undoes them is the journal beside it
+KILLED_WRITER = """
+import os, sys
+import numpy as np
+from sqlalchemy import text
+from casebase_store import NewCase, open_store
+store = open_store(sys.argv[1], create=False)
+with store.transaction() as tx:
+    tx.session.execute(text("PRAGMA cache_size = 2"))
+    info = tx.case_base("default")
+    tx.deactivate_cases(info, range(1, 10**6))
+    tx.add_cases(info, [NewCase("zzz", np.zeros(2000)) for _ in range(100)])
+    tx.session.flush()
+    os.kill(os.getpid(), 9)
+"""
+
+
+def _killed_mid_write(db: Path) -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", KILLED_WRITER, str(db)], env=ENV, capture_output=True, timeout=120
+    )
+    assert done.returncode == -9, done.stderr
+    journal = db.with_name(db.name + "-journal")
+    # a journal that holds a transaction: SQLite's header (it zeroes or deletes it at commit)
+    assert journal.read_bytes()[:8] == bytes.fromhex("d9d505f920a163d7")
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return small_case_base(tmp_path_factory.mktemp("small"))
+
+
+def _listed(db: Path, capsys: pytest.CaptureFixture[str]) -> object:
+    capsys.readouterr()
+    assert main(["casebase", "list", "--all", "--json", "--db", str(db)]) == 0
+    return json.loads(capsys.readouterr().out)["cases"]
+
+
+def test_after_a_writer_was_killed_a_reader_says_so_and_upgrade_rolls_it_back(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: every command, reading or writing, said "cannot open or write the database
+    # (attempt to write a readonly database)" (each opens the file read-only first, and a
+    # read-only connection cannot undo the killed transaction), `casebase upgrade` undid it
+    # saying "already schema version 2, nothing to do"
+    db = tmp_path / "cb.sqlite"
+    shutil.copy(small, db)
+    before = _listed(db, capsys)
+    assert len(before) == 9  # three activities, three clips each
+    _killed_mid_write(db)
+    for argv in (["casebase", "info"], ["casebase", "list"], ["casebase", "trim", "--dry-run"]):
+        refused(
+            [*argv, "--db", str(db)], tmp_path, capsys,
+            f"{db}: its last change was interrupted", "cb.sqlite-journal beside it",
+            "posecbr casebase upgrade --db FILE",
+        )  # fmt: skip
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    assert "rolled back the change a killed process left half-made" in capsys.readouterr().out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite"]
+    assert _listed(db, capsys) == before
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0  # nothing more to undo
+    assert capsys.readouterr().out.strip().endswith("nothing to do")
+
+
+@pytest.mark.parametrize("command", ["trim", "feedback", "append"])
+def test_a_writer_after_a_killed_one_undoes_its_change_first(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str
+) -> None:
+    clip = sorted((small.parent / "train").rglob("*.npz"))[0]
+    more = tmp_path / "more" / clip.parent.name / "new.npz"  # a clip not in the case base
+    more.parent.mkdir(parents=True)
+    shutil.copy(clip, more)
+    argv = {
+        "trim": ["casebase", "trim", "-k", "1", "--keep", "0.5"],
+        "feedback": ["classify", str(clip), "--feedback", clip.parent.name, "--quiet"],
+        "append": ["train", str(tmp_path / "more"), "--append"],
+    }[command]
+    pristine, killed = tmp_path / "pristine.sqlite", tmp_path / "killed.sqlite"
+    shutil.copy(small, pristine)
+    shutil.copy(small, killed)
+    _killed_mid_write(killed)
+    assert main([*argv, "--db", str(pristine)]) == 0
+    assert main([*argv, "--db", str(killed)]) == 0, capsys.readouterr().err
+    assert not killed.with_name("killed.sqlite-journal").exists()
+    # the same change, made to the case base as it was before the killed write
+    mine, theirs = _listed(killed, capsys), _listed(pristine, capsys)
+    assert [{**c, "source": ""} for c in mine] == [{**c, "source": ""} for c in theirs]  # type: ignore[union-attr]
+    assert len(mine) == {"trim": 9, "feedback": 9, "append": 10}[command]  # type: ignore[arg-type]
+
+
+@pytest.mark.skipif(
+    not read_only_mounts_work(),
+    reason="this machine cannot make a private read-only mount (unshare -rm, mount)",
+)
+def test_a_killed_writers_journal_in_a_read_only_folder_is_refused_not_ignored(
+    small: Path, tmp_path: Path
+) -> None:
+    # before: a read-only folder's file is opened "immutable", which ignores the journal:
+    # the half-written file was read ("not a readable SQLite database (corrupt or not a
+    # database)" here; a smaller change would have been read as if committed)
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    shutil.copy(small, db)
+    _killed_mid_write(db)
+    script = (
+        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
+        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
+        f'exec "$0" -m posecbr "$@"'
+    )
+    done = subprocess.run(
+        ["unshare", "-rm", "sh", "-c", script, sys.executable, "casebase", "info", "--db",
+         str(db)],
+        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.splitlines() == [
+        f"posecbr casebase info: error: {db}: its last change was interrupted (the process "
+        "writing it was killed): cb.sqlite-journal beside it holds what to undo; its folder "
+        "cannot be written, so it cannot be rolled back here: copy both files to a folder that "
+        "can be written and run `posecbr casebase upgrade --db FILE` there"
+    ]

@@ -77,12 +77,14 @@ def _emit(doc: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from casebase_store import open_store
+    from casebase_store import open_store, roll_back_interrupted
 
     if args.action == "upgrade":
         return _upgrade(args)
     if args.action == "export":
         _check_export(args)  # before the store is opened: a refusal touches nothing
+    if args.action == "trim" and not args.dry_run:  # a writer: a killed one's change undone
+        roll_back_interrupted(args.db)
     # read-only for trim too: loading fills in nothing (a writable store would store the
     # representations missing from it) and trim may still refuse; it opens the writer itself
     store = open_store(args.db, create=False, readonly=True)
@@ -95,10 +97,18 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _upgrade(args: argparse.Namespace) -> int:
-    from casebase_store import SCHEMA_VERSION, in_wal_mode, shown_db, sqlite_file, upgrade_store
+    from casebase_store import (
+        SCHEMA_VERSION,
+        in_wal_mode,
+        roll_back_interrupted,
+        shown_db,
+        sqlite_file,
+        upgrade_store,
+    )
 
     file = sqlite_file(args.db)
     wal = file is not None and in_wal_mode(file)
+    rolled_back = roll_back_interrupted(args.db)  # a change a killed writer left half-made
     found = upgrade_store(args.db)  # a writer: it also leaves WAL mode (posecbr 0.1's)
     journal = wal and file is not None and not in_wal_mode(file)
     converted = [f"from schema version {found} to {SCHEMA_VERSION}"] * (found != SCHEMA_VERSION)
@@ -110,12 +120,19 @@ def _upgrade(args: argparse.Namespace) -> int:
                 "schema_version_before": found,
                 "schema_version": SCHEMA_VERSION,
                 "left_wal_mode": bool(journal),
-                "changed": bool(converted),
+                "rolled_back_interrupted_change": rolled_back,
+                "changed": bool(converted) or rolled_back,
             }
         )
-    elif converted:
+        return 0
+    if rolled_back:
+        print(
+            f"{shown(shown_db(args.db))}: rolled back the change a killed process left half-made"
+            " (the case bases are as its last whole change left them)"
+        )
+    if converted:
         print(f"{shown(shown_db(args.db))}: converted {', and '.join(converted)}")
-    else:
+    elif not rolled_back:
         print(f"{shown(shown_db(args.db))}: already schema version {SCHEMA_VERSION}, nothing to do")
     return 0
 

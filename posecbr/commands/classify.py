@@ -18,6 +18,7 @@ from posecbr.arguments import path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
 if TYPE_CHECKING:
+    from casebase_store import CaseStore
     from features.poses import PoseSequence
 
 
@@ -192,6 +193,18 @@ def _note_long_clips(name: str, clips: list[Any]) -> None:
         )
 
 
+def _open_reader(args: argparse.Namespace) -> CaseStore:
+    """The store, read-only even with --feedback: loading fills in nothing (a writable store
+    would store the representations missing from it) and every check may still refuse; the
+    writer is opened for the feedback alone. With --feedback, a change a killed writer left
+    half-made is undone first, which a read-only look cannot."""
+    from casebase_store import open_store, roll_back_interrupted
+
+    if args.feedback is not None:
+        roll_back_interrupted(args.db)
+    return open_store(args.db, create=False, readonly=True)
+
+
 def run(args: argparse.Namespace) -> int:
     from casebase_store import open_store
     from cbr.classification import (
@@ -209,10 +222,7 @@ def run(args: argparse.Namespace) -> int:
         defaults.novelty_threshold if args.novelty is None else args.novelty,
         defaults.benefit_threshold if args.benefit is None else args.benefit,
     )
-    # read-only even with --feedback: loading fills in nothing (a writable store would store
-    # the representations missing from it) and every check below may still refuse; the
-    # writer is opened for the feedback alone
-    store = open_store(args.db, create=False, readonly=True)
+    store = _open_reader(args)
     label = None
     try:
         name = store.choose(args.name)

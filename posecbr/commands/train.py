@@ -678,6 +678,7 @@ def _check_options(args: argparse.Namespace) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from casebase_store import roll_back_interrupted
     from cbr.training import (
         ClipsFailed,
         append_described,
@@ -690,6 +691,8 @@ def run(args: argparse.Namespace) -> int:
     args.notes = []
     _check_options(args)
     split_defaulted = args.split is None and not args.append
+    if str(args.db).strip():  # a writer: a killed one's change undone before it reads
+        roll_back_interrupted(args.db)
     if args.append:
         _check_append(args)
         plan, uid, args.split, args.target = append_plan(
