@@ -336,6 +336,7 @@ def _sqlite_readonly_url(path: Path) -> URL:
     can be written is refused before SQLite opens it: ``posecbr casebase upgrade`` (a writer)
     converts it to a rollback journal once."""
     params = {"mode": "ro", "uri": "true"}
+    given, path = path, path.resolve()  # SQLite's side files are beside the file a link names
     shm = path.with_name(path.name + "-shm")
     writable = os.access(path.parent, os.W_OK)
     if writable and in_wal_mode(path):
@@ -343,15 +344,15 @@ def _sqlite_readonly_url(path: Path) -> URL:
             "the file is in WAL mode (as posecbr 0.1 wrote it): reading it would leave "
             f"{path.name}-wal and {path.name}-shm beside it; convert it once with "
             "`posecbr casebase upgrade --db FILE`",
-            path,
+            given,
         )
     if not writable and not shm.exists():
         if _hot_journal(path):  # immutable reads the file as the killed writer left it
             raise InterruptedWrite(
-                f"{_INTERRUPTED.format(journal=path.name + '-journal')}; its folder cannot be "
+                f"{_INTERRUPTED.format(journal=_journal(path))}; its folder cannot be "
                 "written, so it cannot be rolled back here: copy both files to a folder that "
                 "can be written and run `posecbr casebase upgrade --db FILE` there",
-                path,
+                given,
             )
         params["immutable"] = "1"
     # built, not parsed: SQLAlchemy would undo the quoting, and SQLite would then read a "?",
@@ -365,16 +366,23 @@ def _sqlite_readonly_url(path: Path) -> URL:
 _JOURNAL_MAGIC = bytes.fromhex("d9d505f920a163d7")
 
 _INTERRUPTED = (
-    "its last change was interrupted (the process writing it was killed): {journal} beside it "
-    "holds what to undo"
+    "its last change was interrupted (the process writing it was killed): {journal} holds what "
+    "to undo"
 )
+
+
+def _journal(path: Path) -> Path:
+    """The rollback journal of the database file ``path``: beside the file a symbolic link
+    leads to, where SQLite writes it."""
+    real = path.resolve()
+    return real.with_name(real.name + "-journal")
 
 
 def _hot_journal(path: Path) -> bool:
     """Whether ``path``'s rollback journal holds a transaction (left by a killed writer when no
     process is writing it now)."""
     try:
-        with open(path.with_name(path.name + "-journal"), "rb") as fh:
+        with open(_journal(path), "rb") as fh:
             return fh.read(len(_JOURNAL_MAGIC)) == _JOURNAL_MAGIC
     except OSError:
         return False
@@ -581,7 +589,7 @@ def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
     code = getattr(getattr(exc, "orig", None) or exc, "sqlite_errorcode", None)
     if code == _SQLITE_READONLY_ROLLBACK:  # before "readonly" below: the file can be written
         return InterruptedWrite(
-            f"{_INTERRUPTED.format(journal=Path(where).name + '-journal')}, and a command "
+            f"{_INTERRUPTED.format(journal=_journal(Path(where)))}, and a command "
             "that only reads writes nothing: undo it with `posecbr casebase upgrade --db FILE`"
             " (a command that changes the case base also does)",
             where,

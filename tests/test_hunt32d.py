@@ -124,7 +124,7 @@ def test_after_a_writer_was_killed_a_reader_says_so_and_upgrade_rolls_it_back(
     for argv in (["casebase", "info"], ["casebase", "list"], ["casebase", "trim", "--dry-run"]):
         refused(
             [*argv, "--db", str(db)], tmp_path, capsys,
-            f"{db}: its last change was interrupted", "cb.sqlite-journal beside it",
+            f"{db}: its last change was interrupted", f"{db}-journal holds what to undo",
             "posecbr casebase upgrade --db FILE",
         )  # fmt: skip
     assert main(["casebase", "upgrade", "--db", str(db)]) == 0
@@ -161,6 +161,31 @@ def test_a_writer_after_a_killed_one_undoes_its_change_first(
     assert len(mine) == {"trim": 9, "feedback": 9, "append": 10}[command]  # type: ignore[arg-type]
 
 
+def test_through_a_symbolic_link_the_journal_beside_the_file_it_names_is_found(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # SQLite keeps the journal beside the file the link leads to: looked for beside the link,
+    # a writer did not find it and failed as a reader does
+    (tmp_path / "real").mkdir()
+    (tmp_path / "via").mkdir()
+    db = tmp_path / "real" / "cb.sqlite"
+    shutil.copy(small, db)
+    before = _listed(db, capsys)
+    link = tmp_path / "via" / "cb.sqlite"
+    link.symlink_to(db)
+    _killed_mid_write(db)
+    refused(
+        ["casebase", "info", "--db", str(link)], tmp_path, capsys,
+        f"{link}: its last change was interrupted", f"{db}-journal holds what to undo",
+    )  # fmt: skip
+    assert main(["casebase", "trim", "--dry-run", "--db", str(link)]) == 1
+    assert main(["classify", str(sorted((small.parent / "train").rglob("*.npz"))[0]),
+                 "--feedback", "x", "--new-label", "--quiet", "--db", str(link)]) == 0  # fmt: skip
+    assert not db.with_name("cb.sqlite-journal").exists()
+    after = _listed(db, capsys)
+    assert after[:-1] == before and after[-1]["label"] == "x"  # type: ignore[index]
+
+
 @pytest.mark.skipif(
     not read_only_mounts_work(),
     reason="this machine cannot make a private read-only mount (unshare -rm, mount)",
@@ -189,7 +214,7 @@ def test_a_killed_writers_journal_in_a_read_only_folder_is_refused_not_ignored(
     assert done.returncode == 1, done.stderr
     assert done.stderr.splitlines() == [
         f"posecbr casebase info: error: {db}: its last change was interrupted (the process "
-        "writing it was killed): cb.sqlite-journal beside it holds what to undo; its folder "
-        "cannot be written, so it cannot be rolled back here: copy both files to a folder that "
-        "can be written and run `posecbr casebase upgrade --db FILE` there"
+        f"writing it was killed): {db}-journal holds what to undo; its folder cannot be "
+        "written, so it cannot be rolled back here: copy both files to a folder that can be "
+        "written and run `posecbr casebase upgrade --db FILE` there"
     ]
