@@ -485,6 +485,12 @@ def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:
             raise StoreError(
                 "not a database URL (its port is not a number)", _hide_password(text)
             ) from None
+        if url.get_backend_name() == "sqlite":  # no file: in memory (sqlite://, :memory:)
+            raise StoreError(
+                "an in-memory SQLite database keeps nothing once the command ends: name a "
+                "case base file (a path, or sqlite:///FILE)",
+                text,
+            )
         return url, _shown_url(url)
     check_store_file(file)
     if readonly:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import difflib
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,7 @@ from casebase_store import CaseStore, StaleCaseError, StoreError
 from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
 from features.progress import progress
+from features.text import shown
 
 from .casebase import frames_of, piece_name, skeleton_of, subject_of
 from .estimator import CaseBaseClassifier, Solved, too_short, unusable
@@ -299,23 +301,59 @@ def classify_with_feedback(
     check_feedback_cases(stored)
     out = []
     truth = label
-    for clip in progress(clips, desc="classifying", total=len(clips), unit="clip"):
-        c = _solve(stored, clip, truth, target)
-        if c.solved is not None:
-            try:
-                dec, rev = _learn(store, stored, clip, c.solved, label, settings)
-            except StaleCaseError:  # a case changed under us: read again, decide again
-                stored = _reload(store, stored)
-                c = _solve(stored, clip, truth, target)
-                assert c.solved is not None
-                dec, rev = _learn(store, stored, clip, c.solved, label, settings)
-            c = Classification(
-                c.source, truth, c.solved, c.explanation, None, rev, dec, c.made_from, c.frames,
-                c.origin,
-            )  # fmt: skip
-        out.append(c)
+    learnt: list[str] = []  # the clips whose feedback is stored, in order
+    try:
+        for clip in progress(clips, desc="classifying", total=len(clips), unit="clip"):
+            out.append(_feedback(store, stored, clip, truth, target, label, settings, learnt))
+    except KeyboardInterrupt:
+        raise FeedbackInterrupted(learnt, len(clips)) from None
     write_matrices(store, stored.name)  # a large case base: its matrices follow the change
     return out
+
+
+def _feedback(
+    store: CaseStore,
+    stored: StoredClassifier,
+    clip: PoseSequence,
+    truth: str,
+    target: str,
+    label: str,
+    settings: FeedbackSettings,
+    learnt: list[str],
+) -> Classification:
+    """One clip of :func:`classify_with_feedback`: classified, then learnt from."""
+    c = _solve(stored, clip, truth, target)
+    if c.solved is not None:
+        try:
+            dec, rev = _learn(store, stored, clip, c.solved, label, settings, learnt)
+        except StaleCaseError:  # a case changed under us: read again, decide again
+            stored = _reload(store, stored)
+            c = _solve(stored, clip, truth, target)
+            assert c.solved is not None
+            dec, rev = _learn(store, stored, clip, c.solved, label, settings, learnt)
+        c = Classification(
+            c.source, truth, c.solved, c.explanation, None, rev, dec, c.made_from, c.frames,
+            c.origin,
+        )  # fmt: skip
+    return c
+
+
+class FeedbackInterrupted(KeyboardInterrupt):
+    """Ctrl-C during ``classify --feedback``: says whose feedback is stored (each clip's is one
+    transaction: those before are in the case base, the one under way is not)."""
+
+    def __init__(self, learnt: Sequence[str], n_clips: int) -> None:
+        if len(learnt) == n_clips:
+            text = f"the feedback of every clip ({n_clips}) is stored in the case base"
+        elif learnt:
+            text = (
+                f"the feedback of {len(learnt)} of the {n_clips} clips is stored in the case "
+                f"base (the last: {shown(Path(learnt[-1]).name)}); the others' is not"
+            )
+        else:
+            text = "no clip's feedback is stored: the case base is as it was"
+        super().__init__(text)
+        self.learnt = tuple(learnt)
 
 
 def _revised(rev: Revision | None) -> bool:
@@ -345,6 +383,7 @@ def _learn(
     solved: Solved,
     label: str,
     settings: FeedbackSettings,
+    learnt: list[str],
 ) -> tuple[RetainDecision, Revision | None]:
     """Decide on the in-memory case base, write in one checked transaction, then follow the
     committed change in memory."""
@@ -386,6 +425,7 @@ def _learn(
         changed = case_id is not None or _revised(rev)
         if changed:
             judges_after_change(tx, info)
+    learnt.append(clip.source)  # committed
     if case_id is not None:
         cb.add(
             values,

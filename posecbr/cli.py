@@ -57,8 +57,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         # The message quotes the user's files and labels: escaped, it cannot drive the terminal.
         print(f"posecbr {command}: error: {shown(exc)}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print(f"posecbr {command}: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:  # its text, if any: what was done before (escaped)
+        said = f": {shown(exc)}" if str(exc) else ""
+        print(f"posecbr {command}: interrupted{said}", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0

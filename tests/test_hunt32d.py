@@ -7,6 +7,7 @@ import hashlib
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -17,6 +18,7 @@ import pytest
 from casebase_store import NewCase, open_store, write_store
 from posecbr.cli import main
 from tests.badinput import read_only_mounts_work, refused, small_case_base
+from tests.processes import posecbr_process
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
@@ -218,3 +220,45 @@ def test_a_killed_writers_journal_in_a_read_only_folder_is_refused_not_ignored(
         "written, so it cannot be rolled back here: copy both files to a folder that can be "
         "written and run `posecbr casebase upgrade --db FILE` there"
     ]
+
+
+def test_ctrl_c_during_feedback_says_whose_feedback_is_stored(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: "posecbr classify: interrupted" alone, with the first clips' feedback stored:
+    # run again on the same clips, they were learnt from twice
+    db = tmp_path / "cb.sqlite"
+    shutil.copy(small, db)
+    clips = sorted((small.parent / "train").rglob("*.npz"))[:3]
+    gate = tmp_path / "never"  # never made: the process waits after the first clip's commit
+    proc = posecbr_process(
+        "classify", *map(str, clips), "--feedback", clips[0].parent.name, "--quiet",
+        "--db", str(db), gate=gate,
+    )  # fmt: skip
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "PAUSED"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert err.splitlines() == [
+        "posecbr classify: interrupted: the feedback of 1 of the 3 clips is stored in the case "
+        f"base (the last: {clips[0].name}); the others' is not"
+    ]
+    with open_store(db, readonly=True) as store:
+        learnt = [e for e in store.maintenance_log("default") if e.action != "build"]
+    assert len([e for e in learnt if e.action == "retain"]) == 1  # one clip's decision
+
+
+@pytest.mark.parametrize("url", ["sqlite://", "sqlite:///:memory:"])
+def test_an_in_memory_sqlite_url_is_refused_before_any_work(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], url: str
+) -> None:
+    # before: train read and fitted every clip, stored the case base in a database that
+    # vanished as the command ended, then failed "no case base store here (empty database)"
+    data = tmp_path / "data"
+    shutil.copytree(small.parent / "train", data)
+    for argv in (["train", str(data)], ["casebase", "info"], ["casebase", "upgrade"]):
+        refused(
+            [*argv, "--db", url], tmp_path, capsys,
+            f"{url}: an in-memory SQLite database keeps nothing once the command ends: name "
+            "a case base file",
+        )  # fmt: skip
