@@ -145,6 +145,20 @@ def _utc(value: datetime) -> datetime:
     return value.replace(tzinfo=UTC) if value.tzinfo is None else value.astimezone(UTC)
 
 
+#: The longest case base name a store holds (its column's width on every backend)
+NAME_MAX = 200
+
+
+def check_case_base_name(name: str, where: str) -> str:
+    """``name`` when a store can hold it as a case base's name (text of at most
+    :data:`NAME_MAX` characters, not blank, no NUL, UTF-8); else a :class:`StoreError` naming
+    ``where``: for a command to refuse it before any work, as the write would."""
+    _check_text(name, "case base name", where, max_len=NAME_MAX)
+    if not name.strip():
+        raise StoreError("the case base name is empty", where)
+    return name
+
+
 def _check_text(value: str, what: str, where: str, max_len: int | None = None) -> str:
     # PostgreSQL refuses NUL in text and enforces VARCHAR lengths, SQLite stores both; refuse
     # them on every backend so a store behaves the same wherever it lives
@@ -1029,9 +1043,7 @@ class StoreTransaction:
         """A new, empty case base with a new identity; ``replace`` drops an existing one of
         that name first (its cases and history go with it)."""
         s = self.session
-        _check_text(name, "case base name", self.store.where, max_len=200)
-        if not name.strip():
-            raise StoreError("the case base name is empty", self.store.where)
+        check_case_base_name(name, self.store.where)
         self._lock(name)  # another process creating or replacing it meanwhile: after it
         with self.store._dates(f"case base {name!r} is damaged: its created_at is not a date"):
             old = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))

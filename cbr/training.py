@@ -25,7 +25,14 @@ import numpy as np
 from sklearn.base import clone
 from sklearn.utils.validation import check_is_fitted
 
-from casebase_store import CaseBaseInfo, StoreError, StoreTransaction, open_store, write_store
+from casebase_store import (
+    CaseBaseInfo,
+    StoreError,
+    StoreTransaction,
+    check_case_base_name,
+    open_store,
+    write_store,
+)
 from features.cluster import connect, gather, map_outcomes
 from features.datasets import DatasetEntry, clip_target
 from features.errors import ConfigError, DataError
@@ -233,11 +240,13 @@ def _counts(labels: Sequence[str]) -> dict[str, int]:
 
 
 def _check_name(name: Any) -> None:
-    """Refuse a case base name that is not text, or empty, before any clip is read."""
+    """Refuse a case base name that is not text, empty, or one no store can hold (too long,
+    a NUL), before any clip is read."""
     if not isinstance(name, str):
         raise ConfigError(f"the case base name must be text, got {name!r}", "--name")
     if not name.strip():
         raise ConfigError("the case base name is empty", "--name")
+    check_case_base_name(name, "--name")
 
 
 def train(

@@ -262,3 +262,26 @@ def test_an_in_memory_sqlite_url_is_refused_before_any_work(
             f"{url}: an in-memory SQLite database keeps nothing once the command ends: name "
             "a case base file",
         )  # fmt: skip
+
+
+def test_a_case_base_name_no_store_can_hold_is_refused_before_training(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # before: every clip was read and the classifier fitted (minutes on a real dataset), then
+    # the write refused "DB: case base name is 201 characters long (at most 200)"
+    import cbr.training
+    from features.errors import DataError
+
+    def no_work(*args: object, **kwargs: object) -> None:
+        raise DataError("clips were read")
+
+    monkeypatch.setattr(cbr.training, "describe_entries", no_work)
+    data = tmp_path / "data"
+    shutil.copytree(small.parent / "train", data)
+    refused(
+        ["train", str(data), "--db", str(tmp_path / "cb.sqlite"), "--name", "n" * 201],
+        tmp_path, capsys, "--name: case base name is 201 characters long (at most 200)",
+    )  # fmt: skip
+    assert main(["train", str(data), "--db", str(tmp_path / "cb.sqlite"), "--name", "é" * 200,
+                 "--mirror", "off", "--feature-weights", "none", "--phases", "0"]) == 1  # fmt: skip
+    assert "clips were read" in capsys.readouterr().err  # 200 characters pass the check

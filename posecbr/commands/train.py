@@ -641,6 +641,10 @@ def _check_options(args: argparse.Namespace) -> None:
     """Refuse options that cannot work together, in one line, before any clip is read."""
     if not args.name.strip():
         raise ConfigError("the case base name is empty", "--name")
+    if not args.append:  # a new case base's: one no store can hold is refused before training
+        from casebase_store import check_case_base_name
+
+        check_case_base_name(args.name, "--name")
     in_csv = "a labels CSV gives it in its label_block_s or label_names column"
     converted = "the one recording it labels; convert a dataset's recordings first: "
     converted += "posecbr convert --asf --fps"
