@@ -428,6 +428,25 @@ def roll_back_interrupted(url_or_path: str | Path, *, timeout_s: float = 30.0) -
     return False
 
 
+def prepare_write(url_or_path: str | Path, *, timeout_s: float = 30.0) -> bool:
+    """For a command that will change a store and reads it read-only first: refuse, before any
+    work, a SQLite file it cannot write (the file read-only, or its folder, where SQLite writes
+    its journal), then undo a change a killed writer left half-made
+    (:func:`roll_back_interrupted`, whose answer it returns)."""
+    file = sqlite_file(url_or_path)
+    if file is not None and file.is_file():
+        folder = file.resolve().parent
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise StoreError(
+                f"cannot write the case base file: the folder {folder} is read-only (SQLite "
+                "writes its journal beside it)",
+                file,
+            )
+        if not os.access(file, os.W_OK):
+            raise StoreError("cannot write the case base file: it is read-only", file)
+    return roll_back_interrupted(url_or_path, timeout_s=timeout_s)
+
+
 #: SQLite's extended result code for a read-only connection that met such a journal
 _SQLITE_READONLY_ROLLBACK = 776
 

@@ -285,3 +285,43 @@ def test_a_case_base_name_no_store_can_hold_is_refused_before_training(
     assert main(["train", str(data), "--db", str(tmp_path / "cb.sqlite"), "--name", "é" * 200,
                  "--mirror", "off", "--feature-weights", "none", "--phases", "0"]) == 1  # fmt: skip
     assert "clips were read" in capsys.readouterr().err  # 200 characters pass the check
+
+
+@pytest.mark.skipif(
+    not read_only_mounts_work(),
+    reason="this machine cannot make a private read-only mount (unshare -rm, mount)",
+)
+@pytest.mark.parametrize("command", ["trim", "feedback", "append"])
+def test_a_writer_in_a_read_only_folder_is_refused_before_its_work(
+    small: Path, tmp_path: Path, command: str
+) -> None:
+    # before: trim edited the case base and classify classified the clip (train --append read
+    # and described its clips) before the write failed "cannot open or write the database
+    # (attempt to write a readonly database)"; train of a new file was already refused so
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    shutil.copy(small, db)
+    clip = sorted((small.parent / "train").rglob("*.npz"))[0]
+    argv = {
+        "trim": ["casebase", "trim", "-k", "1"],
+        "feedback": ["classify", str(clip), "--feedback", clip.parent.name],
+        "append": ["train", str(clip.parent), "--append"],
+    }[command]
+    script = (
+        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
+        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
+        f'exec "$0" -m posecbr "$@"'
+    )
+    done = subprocess.run(
+        ["unshare", "-rm", "sh", "-c", script, sys.executable, *argv, "--db", str(db)],
+        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    name = {"trim": "casebase trim", "feedback": "classify", "append": "train"}[command]
+    assert done.stderr.splitlines() == [
+        f"posecbr {name}: error: {db}: cannot write the case base file: the folder {folder} is "
+        "read-only (SQLite writes its journal beside it)"
+    ]
+    assert done.stdout == ""
+    assert _sha(db) == _sha(small)

@@ -77,14 +77,14 @@ def _emit(doc: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from casebase_store import open_store, roll_back_interrupted
+    from casebase_store import open_store, prepare_write
 
     if args.action == "upgrade":
         return _upgrade(args)
     if args.action == "export":
         _check_export(args)  # before the store is opened: a refusal touches nothing
-    if args.action == "trim" and not args.dry_run:  # a writer: a killed one's change undone
-        roll_back_interrupted(args.db)
+    if args.action == "trim" and not args.dry_run:  # a writer: one that cannot is refused
+        prepare_write(args.db)
     # read-only for trim too: loading fills in nothing (a writable store would store the
     # representations missing from it) and trim may still refuse; it opens the writer itself
     store = open_store(args.db, create=False, readonly=True)

@@ -198,10 +198,10 @@ def _open_reader(args: argparse.Namespace) -> CaseStore:
     would store the representations missing from it) and every check may still refuse; the
     writer is opened for the feedback alone. With --feedback, a change a killed writer left
     half-made is undone first, which a read-only look cannot."""
-    from casebase_store import open_store, roll_back_interrupted
+    from casebase_store import open_store, prepare_write
 
     if args.feedback is not None:
-        roll_back_interrupted(args.db)
+        prepare_write(args.db)
     return open_store(args.db, create=False, readonly=True)
 
 

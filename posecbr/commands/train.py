@@ -682,7 +682,7 @@ def _check_options(args: argparse.Namespace) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from casebase_store import roll_back_interrupted
+    from casebase_store import prepare_write
     from cbr.training import (
         ClipsFailed,
         append_described,
@@ -695,8 +695,8 @@ def run(args: argparse.Namespace) -> int:
     args.notes = []
     _check_options(args)
     split_defaulted = args.split is None and not args.append
-    if str(args.db).strip():  # a writer: a killed one's change undone before it reads
-        roll_back_interrupted(args.db)
+    if str(args.db).strip():  # a writer: refused where it cannot write, before any work
+        prepare_write(args.db)
     if args.append:
         _check_append(args)
         plan, uid, args.split, args.target = append_plan(
