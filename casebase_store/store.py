@@ -333,6 +333,8 @@ def in_wal_mode(path: Path) -> bool:
     """Whether the SQLite file ``path`` is in WAL mode (as posecbr 0.1 wrote its stores), from
     its header alone (bytes 18 and 19, the file format's write and read versions: 2 in WAL
     mode), without opening it with SQLite."""
+    if not path.is_file():  # a pipe would make open() wait for a writer
+        return False
     try:
         with open(path, "rb") as fh:
             head = fh.read(20)
@@ -395,6 +397,8 @@ def _journal(path: Path) -> Path:
 def _hot_journal(path: Path) -> bool:
     """Whether ``path``'s rollback journal holds a transaction (left by a killed writer when no
     process is writing it now)."""
+    if not _journal(path).is_file():  # a pipe would make open() wait for a writer
+        return False
     try:
         with open(_journal(path), "rb") as fh:
             return fh.read(len(_JOURNAL_MAGIC)) == _JOURNAL_MAGIC
@@ -534,8 +538,9 @@ def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:
 
 
 def check_store_file(file: Path) -> None:
-    """Refuse a case base file that could not be written: a folder, one in a folder that does
-    not exist, or a name too long for its journal beside it (SQLite writes ``NAME-journal``)."""
+    """Refuse a case base file that could not be written: a folder, a device, pipe or socket,
+    one in a folder that does not exist, or a name too long for its journal beside it (SQLite
+    writes ``NAME-journal``)."""
     if not file.parent.exists():
         raise StoreError("folder does not exist", file.parent)
     try:
@@ -550,6 +555,15 @@ def check_store_file(file: Path) -> None:
         )
     if file.is_dir():
         raise StoreError("is a folder, not a case base file", file)
+    if file.exists() and not file.is_file():  # SQLite would wait on a pipe for a writer
+        raise StoreError("is not a case base file: a device, pipe or socket", file)
+    for side in (Path(f"{file}{j}") for j in ("-journal", "-wal", "-shm")):
+        if side.exists() and not side.is_file():  # SQLite opens these too
+            raise StoreError(
+                f"{side.name} beside it, where SQLite keeps its journal, is not a file (a "
+                "folder, device, pipe or socket): remove or rename it",
+                file,
+            )
     _refuse_dangling(file)
 
 

@@ -325,3 +325,43 @@ def test_a_writer_in_a_read_only_folder_is_refused_before_its_work(
     ]
     assert done.stdout == ""
     assert _sha(db) == _sha(small)
+
+
+def _refused_quickly(argv: list[str], folder: Path) -> str:
+    """``posecbr argv`` in a process: one line, exit 1, within a minute (a pipe made SQLite
+    wait for a writer forever); ``folder`` holds the same names after."""
+    names = sorted(p.name for p in folder.iterdir())
+    done = subprocess.run(
+        [sys.executable, "-m", "posecbr", *argv],
+        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    lines = done.stderr.splitlines()
+    assert len(lines) == 1 and done.stdout == "", done.stderr
+    assert sorted(p.name for p in folder.iterdir()) == names
+    return lines[0]
+
+
+@pytest.mark.parametrize("argv", [["casebase", "info"], ["casebase", "upgrade"]])
+def test_a_pipe_as_the_case_base_file_is_refused_not_waited_on(
+    tmp_path: Path, argv: list[str]
+) -> None:
+    # before: every reader (info, list, classify, segment...) and upgrade hung, SQLite (or the
+    # WAL check) waiting in open() for a process to write into the pipe; train refused it
+    pipe = tmp_path / "cb.sqlite"
+    os.mkfifo(pipe)
+    line = _refused_quickly([*argv, "--db", str(pipe)], tmp_path)
+    assert line.endswith(f"{pipe}: is not a case base file: a device, pipe or socket"), line
+
+
+def test_a_pipe_where_sqlite_keeps_the_journal_is_refused_not_waited_on(
+    small: Path, tmp_path: Path
+) -> None:
+    db = tmp_path / "cb.sqlite"
+    shutil.copy(small, db)
+    os.mkfifo(tmp_path / "cb.sqlite-journal")
+    line = _refused_quickly(["casebase", "info", "--db", str(db)], tmp_path)
+    assert line == (
+        f"posecbr casebase info: error: {db}: cb.sqlite-journal beside it, where SQLite keeps its "
+        "journal, is not a file (a folder, device, pipe or socket): remove or rename it"
+    )
