@@ -10,6 +10,7 @@ fitted in memory.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -27,6 +28,7 @@ from casebase_store import (
 )
 from casebase_store.case_matrix import cached_case_matrix, matrix_path, open_case_matrix
 from features.errors import ConfigError, DataError
+from features.text import shown
 
 from .calibration import UNCALIBRATED, ConfidenceCalibration
 from .casebase import CaseBase
@@ -262,10 +264,21 @@ def write_matrices(store: CaseStore, name: str, min_cases: int | None = None) ->
 
     rep_shape = measure.represent(arrays.features[:1]).shape[1:]
     key = _matrix_key(info)
-    cached_case_matrix(db, name, "problems", key, arrays.features.shape, problems, np.float64)
-    cached_case_matrix(
-        db, name, "representations", key, (len(arrays.ids), *rep_shape), representations
-    )
+    try:
+        cached_case_matrix(db, name, "problems", key, arrays.features.shape, problems, np.float64)
+        cached_case_matrix(
+            db, name, "representations", key, (len(arrays.ids), *rep_shape), representations
+        )
+    except DataError as exc:
+        # called after the change committed: the matrices are a copy of the cases for speed,
+        # and a reader without them reads the database. Failing here said the command failed,
+        # and run again it made its change twice (a second trim)
+        print(
+            f"note: {shown(str(exc))} (the change is stored; commands read its cases from the"
+            " database instead of a memory-mapped copy)",
+            file=sys.stderr,
+        )
+        return False
     return True
 
 

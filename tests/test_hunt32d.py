@@ -365,3 +365,29 @@ def test_a_pipe_where_sqlite_keeps_the_journal_is_refused_not_waited_on(
         f"posecbr casebase info: error: {db}: cb.sqlite-journal beside it, where SQLite keeps its "
         "journal, is not a file (a folder, device, pipe or socket): remove or rename it"
     )
+
+
+def test_a_trim_whose_memory_mapped_copy_cannot_be_written_still_succeeds_once(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # before: the trim committed, then writing the large case base's matrices failed and the
+    # command exited 1 ("cannot write: File exists"); run again, it trimmed a second time
+    import cbr.stored
+
+    monkeypatch.setattr(cbr.stored, "MAPPED_MIN_CASES", 1)  # matrices for every case base
+    db = tmp_path / "cb.sqlite"
+    shutil.copy(small, db)
+    (tmp_path / "cb.sqlite.matrices").write_text("in the way\n")  # a file, not their folder
+    capsys.readouterr()
+    assert main(["casebase", "trim", "-k", "1", "--keep", "0.5", "--json", "--db", str(db)]) == 0
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)
+    assert doc["changed"] and doc["size_before"] == 9 and doc["size_after"] < 9
+    note = captured.err.strip().splitlines()
+    assert len(note) == 1 and note[0].startswith("note: "), captured.err
+    assert note[0].endswith(
+        "(the change is stored; commands read its cases from the database instead of a "
+        "memory-mapped copy)"
+    )
+    with open_store(db, readonly=True) as store:
+        assert store.count_cases("default") == doc["size_after"]
