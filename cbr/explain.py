@@ -379,6 +379,9 @@ def _rest(prof: Profiles, row: int) -> tuple[np.ndarray, np.ndarray]:
     """Mean and standard deviation of every column over the cases of all labels but
     ``row``'s."""
     others = [i for i in range(len(prof.labels)) if i != row]
+    if not others:  # a case base of one activity (feedback relabelled the other's last case)
+        unknown = np.full(prof.mean.shape[1:], np.nan)
+        return unknown, unknown.copy()  # as 0 / 0 gave, without its RuntimeWarning
     n = prof.count[others][:, None]
     mean = (n * prof.mean[others]).sum(axis=0) / n.sum()
     var = (n * (prof.sd[others] ** 2 + (prof.mean[others] - mean) ** 2)).sum(axis=0) / n.sum()

@@ -391,3 +391,30 @@ def test_a_trim_whose_memory_mapped_copy_cannot_be_written_still_succeeds_once(
     )
     with open_store(db, readonly=True) as store:
         assert store.count_cases("default") == doc["size_after"]
+
+
+def test_a_case_base_left_with_one_activity_classifies_without_runtime_warnings(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # feedback can relabel the last case of an activity (classify --feedback deep_squat on
+    # hurdle_step clips left a case base of deep_squat alone); classify then printed two
+    # "RuntimeWarning: invalid value encountered in divide" lines from the Why line's
+    # comparison with the other activities, of which there were none
+    import warnings
+
+    db = tmp_path / "cb.sqlite"
+    shutil.copy(small, db)
+    with open_store(db) as store:
+        ids = store.load_cases("default").ids
+        with store.transaction() as tx:
+            info = tx.case_base("default")
+            for case_id in ids:
+                tx.update_case(info, int(case_id), label="walk")
+    clip = sorted((small.parent / "train").rglob("*.npz"))[0]
+    capsys.readouterr()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        assert main(["classify", str(clip), "--db", str(db)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"{clip} (from synthetic): walk, confidence")
+    assert "Why: nearest to the walk cases overall; no one feature sets it apart." in out
