@@ -541,8 +541,8 @@ def check_store_file(file: Path) -> None:
     """Refuse a case base file that could not be written: a folder, a device, pipe or socket,
     one in a folder that does not exist, or a name too long for its journal beside it (SQLite
     writes ``NAME-journal``)."""
-    if not file.parent.exists():
-        raise StoreError("folder does not exist", file.parent)
+    if not file.parent.exists():  # named with the file asked for, as every refusal of it
+        raise StoreError(f"its folder {file.parent} does not exist", file)
     try:
         allowed = os.pathconf(file.parent, "PC_NAME_MAX")
     except (OSError, ValueError):

@@ -418,3 +418,14 @@ def test_a_case_base_left_with_one_activity_classifies_without_runtime_warnings(
     out = capsys.readouterr().out
     assert out.startswith(f"{clip} (from synthetic): walk, confidence")
     assert "Why: nearest to the walk cases overall; no one feature sets it apart." in out
+
+
+def test_a_case_base_file_in_a_folder_that_does_not_exist_is_named_with_it(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: "posecbr train: error: DIR/missing: folder does not exist", the file not named
+    data = tmp_path / "data"
+    shutil.copytree(small.parent / "train", data)
+    db = tmp_path / "missing" / "cb.sqlite"
+    line = refused(["train", str(data), "--db", str(db)], tmp_path, capsys)
+    assert line == f"posecbr train: error: {db}: its folder {db.parent} does not exist"
