@@ -333,12 +333,12 @@ def in_wal_mode(path: Path) -> bool:
     """Whether the SQLite file ``path`` is in WAL mode (as posecbr 0.1 wrote its stores), from
     its header alone (bytes 18 and 19, the file format's write and read versions: 2 in WAL
     mode), without opening it with SQLite."""
-    if not path.is_file():  # a pipe would make open() wait for a writer
-        return False
     try:
+        if not path.is_file():  # a pipe would make open() wait for a writer
+            return False
         with open(path, "rb") as fh:
             head = fh.read(20)
-    except OSError:
+    except OSError:  # also a name longer than the file system allows
         return False
     return head[:16] == b"SQLite format 3\x00" and 2 in head[18:20]
 
@@ -397,9 +397,9 @@ def _journal(path: Path) -> Path:
 def _hot_journal(path: Path) -> bool:
     """Whether ``path``'s rollback journal holds a transaction (left by a killed writer when no
     process is writing it now)."""
-    if not _journal(path).is_file():  # a pipe would make open() wait for a writer
-        return False
     try:
+        if not _journal(path).is_file():  # a pipe would make open() wait for a writer
+            return False
         with open(_journal(path), "rb") as fh:
             return fh.read(len(_JOURNAL_MAGIC)) == _JOURNAL_MAGIC
     except OSError:
@@ -414,7 +414,10 @@ def roll_back_interrupted(url_or_path: str | Path, *, timeout_s: float = 30.0) -
     file without such a journal, another backend, or a transaction another process is still
     writing (SQLite undoes only a journal whose writer is gone)."""
     file = sqlite_file(url_or_path)
-    if file is None or not file.is_file() or not _hot_journal(file):
+    if file is None:
+        return False
+    check_name_length(file)
+    if not file.is_file() or not _hot_journal(file):
         return False
     _check_timeout(timeout_s)
     for readonly in (True, False):  # first a look that writes nothing: is it to be undone?
@@ -438,6 +441,8 @@ def prepare_write(url_or_path: str | Path, *, timeout_s: float = 30.0) -> bool:
     its journal), then undo a change a killed writer left half-made
     (:func:`roll_back_interrupted`, whose answer it returns)."""
     file = sqlite_file(url_or_path)
+    if file is not None:
+        check_name_length(file)
     if file is not None and file.is_file():
         folder = file.resolve().parent
         if not os.access(folder, os.W_OK | os.X_OK):
@@ -537,12 +542,10 @@ def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:
     return URL.create("sqlite", database=str(file)), str(file)
 
 
-def check_store_file(file: Path) -> None:
-    """Refuse a case base file that could not be written: a folder, a device, pipe or socket,
-    one in a folder that does not exist, or a name too long for its journal beside it (SQLite
-    writes ``NAME-journal``)."""
-    if not file.parent.exists():  # named with the file asked for, as every refusal of it
-        raise StoreError(f"its folder {file.parent} does not exist", file)
+def check_name_length(file: Path) -> None:
+    """Refuse a case base file name too long for the file system with its journal's ending
+    (SQLite writes ``NAME-journal``): before anything asks whether the file exists, which for
+    a name longer than the file system allows is an OSError, not "no"."""
     try:
         allowed = os.pathconf(file.parent, "PC_NAME_MAX")
     except (OSError, ValueError):
@@ -553,6 +556,15 @@ def check_store_file(file: Path) -> None:
             f"{allowed - len('-journal')} (SQLite writes a journal named NAME-journal beside it)",
             file,
         )
+
+
+def check_store_file(file: Path) -> None:
+    """Refuse a case base file that could not be written: a folder, a device, pipe or socket,
+    one in a folder that does not exist, or a name too long for its journal beside it (SQLite
+    writes ``NAME-journal``)."""
+    if not file.parent.exists():  # named with the file asked for, as every refusal of it
+        raise StoreError(f"folder does not exist ({file.parent})", file)
+    check_name_length(file)
     if file.is_dir():
         raise StoreError("is a folder, not a case base file", file)
     if file.exists() and not file.is_file():  # SQLite would wait on a pipe for a writer
@@ -1322,6 +1334,8 @@ def open_store(
         raise StoreError(EMPTY_DB, "--db")
     _check_timeout(timeout_s)
     file = sqlite_file(url_or_path)
+    if file is not None:
+        check_name_length(file)
     if file is not None and (readonly or not create) and not file.exists():
         raise StoreError("no such case base file", file)
     engine, where = _make_engine(url_or_path, timeout_s, readonly)

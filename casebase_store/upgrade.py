@@ -25,7 +25,7 @@ from .models import (
     RepresentationRow,
     SchemaVersion,
 )
-from .store import StoreError, _make_engine, _translate, sqlite_file
+from .store import StoreError, _make_engine, _translate, check_name_length, sqlite_file
 
 _TABLES = (CaseBaseRow, CaseRow, RepresentationRow, MaintenanceRow)
 
@@ -35,6 +35,8 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
     when nothing was to do). Everything happens in one transaction: an interrupted upgrade
     leaves the store as it was."""
     file = sqlite_file(url_or_path)
+    if file is not None:
+        check_name_length(file)
     if file is not None and not file.exists():
         raise StoreError("no such case base file", file)
     engine, where = _make_engine(url_or_path, timeout_s, readonly=False)

@@ -283,7 +283,8 @@ def test_casebase_upgrade_takes_json_as_every_action_does(
         assert main(["casebase", "upgrade", "--db", str(db), "--json"]) == 0
         assert json.loads(capsys.readouterr().out) == {
             "db": str(db), "schema_version_before": before, "schema_version": 2,
-            "left_wal_mode": False, "changed": changed}  # fmt: skip
+            "left_wal_mode": False, "rolled_back_interrupted_change": False,
+            "changed": changed}  # fmt: skip
 
 
 def test_convert_into_a_windows_labels_file_keeps_its_clips_not_its_blank_lines(

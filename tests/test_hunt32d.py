@@ -428,4 +428,19 @@ def test_a_case_base_file_in_a_folder_that_does_not_exist_is_named_with_it(
     shutil.copytree(small.parent / "train", data)
     db = tmp_path / "missing" / "cb.sqlite"
     line = refused(["train", str(data), "--db", str(db)], tmp_path, capsys)
-    assert line == f"posecbr train: error: {db}: its folder {db.parent} does not exist"
+    assert line == f"posecbr train: error: {db}: folder does not exist ({db.parent})"
+
+
+@pytest.mark.parametrize(
+    "argv", [["casebase", "info"], ["casebase", "upgrade"], ["casebase", "trim"]]
+)
+def test_a_case_base_file_name_too_long_for_the_file_system_is_refused_by_every_command(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str]
+) -> None:
+    # before: OSError "[Errno 36] File name too long" with a traceback (asking whether the
+    # file exists); train alone refused it in one line
+    db = tmp_path / ("c" * 300 + ".sqlite")
+    refused(
+        [*argv, "--db", str(db)], tmp_path, capsys,
+        f"{db}: the file name is too long: 307 bytes, at most 247",
+    )  # fmt: skip

@@ -107,8 +107,8 @@ def _upgrade(args: argparse.Namespace) -> int:
     )
 
     file = sqlite_file(args.db)
-    wal = file is not None and in_wal_mode(file)
     rolled_back = roll_back_interrupted(args.db)  # a change a killed writer left half-made
+    wal = file is not None and in_wal_mode(file)
     found = upgrade_store(args.db)  # a writer: it also leaves WAL mode (posecbr 0.1's)
     journal = wal and file is not None and not in_wal_mode(file)
     converted = [f"from schema version {found} to {SCHEMA_VERSION}"] * (found != SCHEMA_VERSION)
