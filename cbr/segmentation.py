@@ -221,13 +221,7 @@ def windows_of(sig: MovementSignals, n_frames: int, fps: float, where: str = "")
     """The windows to classify: one of :data:`DEFAULT_WINDOW_S` every :data:`HOP_S` seconds
     (whatever is done there, repeated or not), and every period of the movement found whole
     in spans of :data:`PERIOD_SPAN_S` seconds starting every :data:`SPAN_HOP_S` seconds."""
-    duration = n_frames / fps
-    if duration < MIN_WINDOW_S:
-        raise DataError(
-            f"the recording lasts {duration:.2f} s, shorter than the shortest window"
-            f" ({MIN_WINDOW_S:g} s) of movement to classify",
-            where or "recording",
-        )
+    duration = _check_duration(n_frames, fps, where)
     # at least two frames (as live windows are): at a low frame rate the window's seconds
     # may hold less than one
     length = min(n_frames, max(2, int(round(min(DEFAULT_WINDOW_S, duration) * fps))))
@@ -238,13 +232,26 @@ def windows_of(sig: MovementSignals, n_frames: int, fps: float, where: str = "")
     return out + [Window(a, b, True) for a, b in _repetition_bounds(sig, n_frames, fps)]
 
 
+def _check_duration(n_frames: int, fps: float, where: str = "") -> float:
+    """The recording's duration in seconds; DataError when shorter than one window."""
+    duration = n_frames / fps
+    if duration < MIN_WINDOW_S:
+        raise DataError(
+            f"the recording lasts {duration:.2f} s, shorter than the shortest window"
+            f" ({MIN_WINDOW_S:g} s) of movement to classify",
+            where or "recording",
+        )
+    return duration
+
+
 def _repetition_bounds(sig: MovementSignals, n_frames: int, fps: float) -> list[tuple[int, int]]:
     """Frame ranges of the periods found whole in the spans, each once: a repetition, or for a
     movement that alternates sides two neighbouring ones (a step with each leg)."""
     span = int(PERIOD_SPAN_S * sig.fps)
     hop = max(1, int(SPAN_HOP_S * sig.fps))
     found: set[tuple[int, int]] = set()
-    for a in range(0, max(1, len(sig.values) - span + hop), hop):
+    starts = range(0, max(1, len(sig.values) - span + hop), hop)
+    for a in progress(starts, "finding repetitions", len(starts), "span", leave=False):
         part = sig.part(a, a + span)
         for first, last in periods_in_span(part, fps):
             found.add((a * sig.step + first, min(n_frames, a * sig.step + last)))
@@ -370,13 +377,41 @@ def _piece(rec: PoseSequence, bounds: tuple[int, int], config: FeatureConfig) ->
     return piece
 
 
-def _solved(clf: Any, rec: PoseSequence, w: _Solved) -> Any:
+class _LastPiece:
+    """The piece (:func:`_piece`) last computed again to explain a window, kept for the next
+    window of the same piece: the segments of a long recording come in order, so a piece of
+    :data:`cbr.long_clip.CHUNK_FRAMES` frames is computed once for all the segments its
+    windows explain, not once a segment (before: 143 segments of a 503-s recording at 120
+    fps computed a 20,000-frame piece 143 times, three quarters of the run). One piece at a
+    time: the memory of one piece, as when the windows were solved."""
+
+    def __init__(self) -> None:
+        self.bounds: tuple[int, int] | None = None
+        self.piece: PoseSequence | None = None
+
+    def get(
+        self, rec: PoseSequence, bounds: tuple[int, int], config: FeatureConfig
+    ) -> PoseSequence:
+        if self.piece is None or bounds != self.bounds:
+            self.drop()
+            self.bounds, self.piece = bounds, _piece(rec, bounds, config)
+        return self.piece
+
+    def drop(self) -> None:
+        if self.piece is not None:
+            forget(self.piece)
+        self.bounds, self.piece = None, None
+
+
+def _solved(clf: Any, rec: PoseSequence, w: _Solved, pieces: _LastPiece | None = None) -> Any:
     """What solve gave for window ``w``: kept, or (cut from a piece) solved again from the
-    same piece, so with the same numbers."""
+    same piece, so with the same numbers (the piece kept in ``pieces`` for the next window
+    of it, when given)."""
     if w.solved is not None or w.piece is None:
         return w.solved
     lo = w.piece[0]
-    piece = _piece(rec, w.piece, clf.feature_config_)
+    config = clf.feature_config_
+    piece = pieces.get(rec, w.piece, config) if pieces else _piece(rec, w.piece, config)
     return clf.solve([stretch(piece, w.start - lo, w.stop - lo)], flag=False)[0]
 
 
@@ -647,7 +682,12 @@ def unknown_blocks(
 
 
 def _explain_segment(
-    clf: Any, rec: PoseSequence, inside: list[_Solved], state: int, judge: Judge
+    clf: Any,
+    rec: PoseSequence,
+    inside: list[_Solved],
+    state: int,
+    judge: Judge,
+    pieces: _LastPiece | None = None,
 ) -> tuple[str, float]:
     """A short explanation from the segment's most telling window (unknown:
     :func:`cbr.unknown.tell_unknown`), and the segment's novelty (the judge's ratio, median
@@ -661,7 +701,7 @@ def _explain_segment(
             [(judge, w.nearest) for w in inside], [str(c) for c in clf.classes_]
         ), ratio
     w = max(inside, key=lambda s: s.vote[state])
-    return told(clf, _solved(clf, rec, w), str(clf.classes_[state])), ratio
+    return told(clf, _solved(clf, rec, w, pieces), str(clf.classes_[state])), ratio
 
 
 def told(clf: Any, solved: Any, label: str) -> str:
@@ -772,6 +812,7 @@ def _segment_of(
     judge: Judge,
     evidence: Sequence[bool],
     reps: tuple[Repetition, ...],
+    pieces: _LastPiece | None = None,
 ) -> Segment:
     """One decoded run as a segment: frames, label, confidence (the mean over its blocks of
     ``votes`` ``(n_blocks, n_classes + 1)`` for its state: a known activity's share of the
@@ -787,7 +828,7 @@ def _segment_of(
     if not centred:
         centred = [(w, e) for w, e in pairs if w.start < end and w.stop > start]
     inside = [w for w, e in centred if e] or [w for w, _ in centred]
-    text, ratio = _explain_segment(clf, rec, inside, state, judge)
+    text, ratio = _explain_segment(clf, rec, inside, state, judge, pieces)
     label = None if state == n_classes else str(clf.classes_[state])
     return Segment(start, end, label, float(votes[a:b, state].mean()), reps, text, ratio)
 
@@ -859,8 +900,13 @@ def check_segmentable(recording: PoseSequence) -> None:
     segments any."""
     rec = recording.to_canonical()
     chunk = long_clip.chunk_for(rec, None)
-    sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals_of(rec)
-    windows_of(sig, rec.n_frames, rec.fps, rec.source)
+    if chunk:
+        long_clip.movement_signals(rec, chunk)
+    else:
+        movement_signals_of(rec)
+    # the windows are not cut here: finding the periods in them took 3 s of a long recording's
+    # run, done again when it is segmented
+    _check_duration(rec.n_frames, rec.fps, rec.source)
     _check_person(rec)
 
 
@@ -938,12 +984,16 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     runs = _runs(_nobody_absorbs_slivers(path, n_classes))
     bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]
     reps = counted_segments(done.sig, bounds, rec.n_frames)
+    pieces = _LastPiece()
     segments = tuple(
         _nobody_segment(rec, a, b)
         if state > n_classes
-        else _segment_of(clf, rec, (a, b, state), solved, votes, judge, evidence, r)
-        for (a, b, state), r in zip(runs, reps, strict=True)
+        else _segment_of(clf, rec, (a, b, state), solved, votes, judge, evidence, r, pieces)
+        for (a, b, state), r in progress(
+            zip(runs, reps, strict=True), "explaining segments", len(runs), "segment"
+        )
     )
+    pieces.drop()
     blocks: list[str | None] = []
     for a, b, state in runs:
         blocks += [None if state >= n_classes else str(clf.classes_[state])] * (b - a)
