@@ -868,7 +868,8 @@ def count_in_signals(
     order = np.argsort(-weights, kind="stable")
     moving = tuple(sig.names[i] for i in order[:4] if weights[i] > 0.2 * weights.max())
     if _span((x - x.mean(axis=0)) @ direction) < MIN_EXCURSION_RAD:
-        moving = ()  # nothing moves as far as a repetition would: jitter names no joint
+        moving = ()  # nothing moves as far as a repetition would: jitter names no joint,
+        period = None  # nor a period (its autocorrelation peaks somewhere)
     return RepetitionCount(tuple(reps), fps, n_frames, period, strength, bool(alternating), moving)
 
 

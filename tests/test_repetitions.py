@@ -213,6 +213,9 @@ def test_standing_still_with_jitter_has_no_repetition() -> None:
     # and names no joint as moving: the jitter's direction is no movement ("0 repetitions
     # (moving left elbow)" of a still pose)
     assert result.moving == ()
+    # nor a period: the jitter's autocorrelation has a peak somewhere ("0 repetitions (period
+    # 0.77 s)" of CMU 13_31 held still with 2 mm of noise)
+    assert result.period_s is None
 
 
 def test_mirror_angles_swaps_sides_and_reflects_lateral_tilts() -> None:
