@@ -113,7 +113,16 @@ estimation from video jitters single joints by a few degrees, postural sway by l
 MIN_VALID_SHARE = 0.5
 """An angle missing in more than half of the frames that show the person does not take part
 (frames in which nobody is seen do not count against it: a recording the person leaves for
-most of its time is followed while they are there)."""
+most of its time is followed while they are there). A frame in a gap of at most
+:data:`MAX_FILLED_GAP_S` counts as there: the angle is filled in it between its values either
+side."""
+MAX_FILLED_GAP_S = 0.1
+"""An angle missing for this long or less (a joint the pose model dropped for a frame or two,
+however often) is filled between its values either side, as finely as the running median
+(:data:`MEDIAN_S`) already reads it, and counts as followed there. Before, an angle had to be
+seen itself in half of the frames: with a third of the joints dropped at random in each
+frame, only the hips' height took part and the jumping jacks' arms, twists, knee raises and
+arm circles of CMU 13_29 counted none."""
 ALTERNATION_MIN = 0.5
 """A movement alternates sides (one repetition per side) only when what one side does at its
 far points and what the other does at its own are opposed by more than this cosine
@@ -408,7 +417,7 @@ def movement_signals(seq: PoseSequence) -> MovementSignals:
     Raises DataError when no angle is available in enough frames (no person in view)."""
     raw = counted_angles(seq)
     finite = np.isfinite(raw)
-    there = finite.sum(axis=0)
+    there = _followed(finite, seq.fps).sum(axis=0)
     keep = (there > 0) & (there >= MIN_VALID_SHARE * finite.any(axis=1).sum())
     if not keep.any():
         raise DataError(
@@ -483,6 +492,16 @@ def _unseen(confidence: np.ndarray | None) -> np.ndarray:
         np.all(seen[:, [JOINT_INDEX[j] for j in _ANGLE_JOINTS[n]]], axis=1) for n in COUNTED_ANGLES
     ]
     return np.asarray(~np.stack(cols, axis=1))
+
+
+def _followed(finite: np.ndarray, fps: float) -> np.ndarray:
+    """``(frames, n)``: where each angle (``finite``: where it was computed) is seen or lies
+    in a gap of at most :data:`MAX_FILLED_GAP_S` (at least one frame)."""
+    longest = max(1, int(round(MAX_FILLED_GAP_S * fps)))
+    out = finite.copy()
+    for j in np.flatnonzero(~finite.all(axis=0)):
+        out[:, j] |= ~long_runs(~finite[:, j], longest + 1)
+    return out
 
 
 def _interpolate(x: np.ndarray) -> np.ndarray:
