@@ -33,6 +33,7 @@ from features.body import (
 from features.derived import derived, is_cached
 from features.fluents import DEFAULT_TABLE, evaluate, history_frames
 from features.geometry import body_frame
+from features.progress import progress
 from features.qmp import QMPFeatures, load_add, qmp_from_signals
 from features.repetitions import MovementSignals
 from features.repetitions import movement_signals as count_signals
@@ -117,7 +118,8 @@ def _movement_signals(seq: PoseSequence, chunk: int) -> MovementSignals:
     n = seq.n_frames
     angles = np.empty((n, len(ANGLE_SIGNALS)))
     head = np.empty(n)
-    for start in range(0, n, chunk):
+    starts = range(0, n, chunk)
+    for start in progress(starts, "joint angles", len(starts), "piece", leave=False):
         sig = state_signals(seq.slice_frames(start, start + chunk))
         angles[start : start + len(sig.values)] = sig.values[:, : len(ANGLE_SIGNALS)]
         head[start : start + len(sig.values)] = sig.head_length_m

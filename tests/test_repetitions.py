@@ -558,6 +558,44 @@ def test_reps_command_json_and_plot(
     assert "2 repetitions" in capsys.readouterr().out
 
 
+def test_reps_command_reads_a_long_recording_in_pieces(
+    recordings: dict[str, PoseSequence],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A recording longer than CHUNK_FRAMES (made 500 here) has its joint angles computed
+    500 frames at a time, as segment reads it: no piece of the pose model's signals spans
+    more (before, the whole recording's at once: 1 GB for 42 minutes at 120 fps), and the
+    repetitions are the ones counted on the whole (13_29's knee raises, 1,104 frames: 6 by
+    hand)."""
+    import features.signals
+    from cbr import long_clip
+
+    rec = recordings["cmu-mocap6/amc/13_29.amc"]
+    path = tmp_path / "long.npz"
+    save_pose(PoseSequence(rec.positions[2700:3804], rec.joint_names, 120.0), path)
+    assert main(["reps", str(path), "--json"]) == 0
+    whole = json.loads(capsys.readouterr().out)
+    sizes: list[int] = []
+
+    def spy(real: Any) -> Any:
+        def signals(seq: PoseSequence) -> Any:
+            sizes.append(seq.n_frames)
+            return real(seq)
+
+        return signals
+
+    monkeypatch.setattr(long_clip, "CHUNK_FRAMES", 500)
+    monkeypatch.setattr(long_clip, "state_signals", spy(long_clip.state_signals))
+    monkeypatch.setattr(features.signals, "state_signals", spy(features.signals.state_signals))
+    assert main(["reps", str(path), "--json"]) == 0
+    pieces = json.loads(capsys.readouterr().out)
+    assert sizes and max(sizes) <= 500, sizes
+    assert pieces == whole
+    assert whole["count"] == 6
+
+
 def _sha(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 

@@ -14,6 +14,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 from features.fileio import check_output
 from features.text import shown
@@ -41,8 +42,6 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from features.repetitions import count_repetitions
-
     check_asf(args.asf, [args.clip])
     if args.plot is not None:
         check_output(
@@ -52,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
 
         picture_format(args.plot)
     seq = load_recording(args.clip, args.asf, args.fps)
-    result = count_repetitions(seq)
+    result = _count(seq)
     if args.plot is not None:
         _plot(seq, result, args.plot, args.clip.name)
     if args.json:
@@ -66,6 +65,21 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         print(f"picture written to {shown(args.plot)}")
     return 0
+
+
+def _count(seq: Any) -> Any:
+    """:func:`features.repetitions.count_repetitions` of ``seq``; a recording longer than
+    :data:`cbr.long_clip.CHUNK_FRAMES` has its joint angles computed that many frames at a
+    time, as ``segment`` reads it (the same counts in the memory of one piece: before, a
+    42-minute recording at 120 fps took 1 GB, a million frames would take 3)."""
+    from cbr import long_clip
+    from features.repetitions import count_in_signals, count_repetitions
+
+    rec = seq.to_canonical()
+    chunk = long_clip.chunk_for(rec, None)
+    if not chunk:
+        return count_repetitions(rec)
+    return count_in_signals(long_clip.movement_signals(rec, chunk), rec.n_frames, rec.fps)
 
 
 def _print(clip: Path, fps: float, result: object) -> None:
