@@ -107,9 +107,8 @@ def _print(clip: Path, fps: float, result: object) -> None:
 
 
 def _plot(seq: object, result: object, path: Path, name: str) -> None:
-    from features.derived import fluents_of
     from features.repetitions import RepetitionCount
-    from features.timeline import Band, plot_timeline
+    from features.timeline import Band, plot_timeline, timeline_of
 
     assert isinstance(result, RepetitionCount)
     fps = result.fps
@@ -118,7 +117,7 @@ def _plot(seq: object, result: object, path: Path, name: str) -> None:
         for i, r in enumerate(result.repetitions, start=1)
     ]
     plot_timeline(
-        fluents_of(seq),  # type: ignore[arg-type]
+        timeline_of(seq),  # type: ignore[arg-type]
         path,
         title=f"{name}: {result.count} repetitions over the fluent timeline",
         bands=bands,

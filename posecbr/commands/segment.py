@@ -268,11 +268,10 @@ def _bands(result: Any) -> list[Any]:
 
 
 def _plot(rec: Any, result: Any, path: Path, name: str) -> None:
-    from features.derived import fluents_of
-    from features.timeline import plot_timeline
+    from features.timeline import plot_timeline, timeline_of
 
     plot_timeline(
-        fluents_of(rec),
+        timeline_of(rec),
         path,
         title=f"{name}: activities and repetition counts over the fluent timeline (grey = unknown)",
         bands=_bands(result),
