@@ -590,6 +590,28 @@ def _sha(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
+def test_segment_notes_a_recording_too_slow_to_follow_a_repetition(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """13_30 read at 2 fps (every 60th frame) with 13_30 at 10 fps: the 2-fps recording is
+    noted, naming it, as `reps` notes it (tests/test_repetitions.py); both are segmented."""
+    from tests.test_repetitions import LOW_RATE_NOTE
+
+    rec = recordings["13_30"]
+    slow, fast = tmp_path / "slow.npz", tmp_path / "fast.npz"
+    save_pose(PoseSequence(rec.positions[::60], rec.joint_names, 2.0), slow)
+    save_pose(PoseSequence(rec.positions[::12], rec.joint_names, 10.0), fast)
+    capsys.readouterr()
+    assert main(["segment", str(slow), str(fast), "--db", str(case_base), "--json"]) == 0
+    captured = capsys.readouterr()
+    notes = [line for line in captured.err.splitlines() if line.startswith("note:")]
+    assert notes == [LOW_RATE_NOTE.format(path=slow)], captured.err
+    assert [doc["fps"] for doc in json.loads(captured.out)] == [2.0, 10.0]
+
+
 def test_segment_command_json_text_and_plot(
     recordings: dict[str, PoseSequence],
     case_base: Path,

@@ -19,7 +19,7 @@ from typing import Any
 from features.fileio import check_output
 from features.text import shown
 from posecbr.arguments import path_arg
-from posecbr.recordings import add_recording_options, check_asf, load_recording
+from posecbr.recordings import add_recording_options, check_asf, load_recording, note_low_rate
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -51,6 +51,7 @@ def run(args: argparse.Namespace) -> int:
 
         picture_format(args.plot)
     seq = load_recording(args.clip, args.asf, args.fps)
+    note_low_rate(seq)
     result = _count(seq)
     if args.plot is not None:
         _plot(seq, result, args.plot, args.clip.name)

@@ -27,7 +27,13 @@ from features.errors import ConfigError, DataError
 from features.fileio import check_output, unique_name
 from features.text import counted, shown
 from posecbr.arguments import path_arg
-from posecbr.recordings import add_recording_options, check_asf, check_fps, load_recording
+from posecbr.recordings import (
+    add_recording_options,
+    check_asf,
+    check_fps,
+    load_recording,
+    note_low_rate,
+)
 
 JUDGES = (
     "spread-margin",
@@ -181,6 +187,8 @@ def run(args: argparse.Namespace) -> int:
     read = [_read(path, args) for path in args.recordings]
     for rec, _ in read:
         check_segmentable(rec)
+    for rec, _ in read:
+        note_low_rate(rec)
     done = [
         (rec, video, _named(segment(clf, rec, judge, k=args.k), path))
         for (rec, video), path in zip(read, args.recordings, strict=True)
