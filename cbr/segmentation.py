@@ -918,6 +918,18 @@ def _check_person(rec: PoseSequence) -> None:
         raise DataError(f"{no_person(rec)}: nothing to segment", rec.source or None)
 
 
+def check_k(clf: Any, k: Any) -> None:
+    """Refuse, with ConfigError, a ``k`` (a window's nearest cases that vote) the fitted
+    classifier ``clf`` does not retrieve: a whole number from 1 to its own k. A command
+    checks it before it reads any recording (before, a video's poses were estimated first)."""
+    if isinstance(k, bool) or not isinstance(k, int | np.integer) or not 1 <= k <= int(clf.k):
+        raise ConfigError(
+            f"must be from 1 to the case base's k ({int(clf.k)}, the nearest cases a window"
+            f" retrieves), a whole number, got {k!r}",
+            "-k",
+        )
+
+
 def solve_recording(
     clf: Any, recording: PoseSequence, k: int = 1, chunk_frames: int | None = None
 ) -> SolvedRecording:
@@ -928,12 +940,7 @@ def solve_recording(
     than one window or without a person, ConfigError for a ``k`` the classifier does not
     retrieve (more than its own k)."""
     _check_call(clf, recording, chunk_frames)
-    if isinstance(k, bool) or not isinstance(k, int | np.integer) or not 1 <= k <= int(clf.k):
-        raise ConfigError(
-            f"must be from 1 to the case base's k ({int(clf.k)}, the nearest cases a window"
-            f" retrieves), a whole number, got {k!r}",
-            "-k",
-        )
+    check_k(clf, k)
     rec = recording.to_canonical()
     chunk = long_clip.chunk_for(rec, chunk_frames)
     sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals_of(rec)
@@ -1037,6 +1044,7 @@ __all__ = [
     "Margin",
     "activity_distances",
     "check_judge",
+    "check_k",
     "check_segmentable",
     "Segment",
     "Segmentation",

@@ -1150,6 +1150,32 @@ def test_segment_k_beyond_what_a_window_retrieves_is_refused(
     assert json.loads(capsys.readouterr().out)["segments"]
 
 
+def test_segment_k_beyond_the_case_base_is_refused_before_any_recording_is_read(
+    recordings: dict[str, PoseSequence],
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """-k beyond the case base's k is known once the case base is open: refused then, before
+    the recordings are read (before, after every recording was read and checked: a video's
+    poses estimated for 12 s, then "-k: must be from 1 to the case base's k")."""
+    import posecbr.commands.segment as command
+
+    read: list[Path] = []
+    real = command.load_recording
+
+    def load(path: Path, *args: object) -> object:
+        read.append(path)
+        return real(path, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(command, "load_recording", load)
+    rec = save_pose(recordings["13_30"].slice_frames(0, 600), tmp_path / "r.npz")
+    line = refused(["segment", str(rec), "--db", str(case_base), "-k", "6"], tmp_path, capsys)
+    assert "-k: must be from 1 to the case base's k (5" in line
+    assert read == []
+
+
 def test_a_recording_at_micrometre_scale_is_refused_naming_the_unit(
     recordings: dict[str, PoseSequence],
     case_base: Path,

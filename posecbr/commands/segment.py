@@ -175,11 +175,12 @@ def judge_named(clf: Any, name: str, db: str) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.segmentation import check_segmentable, segment
+    from cbr.segmentation import check_k, check_segmentable, segment
 
     _inputs_given(args)
     _outputs(args)
     clf = load_stored(args.db, args.name)
+    check_k(clf, args.k)  # before any recording is read (a video's poses take seconds)
     judge = judge_named(clf, args.unknown, args.db)
     # every recording read and checked before any is segmented (a bad one among several is
     # refused before the work on the others), and segmented before any picture is drawn (it
