@@ -997,7 +997,7 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
         if state > n_classes
         else _segment_of(clf, rec, (a, b, state), solved, votes, judge, evidence, r, pieces)
         for (a, b, state), r in progress(
-            zip(runs, reps, strict=True), "explaining segments", len(runs), "segment"
+            zip(runs, reps, strict=True), "explaining segments", len(runs), "segment", False
         )
     )
     pieces.drop()
