@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -663,6 +664,38 @@ def test_a_recording_too_slow_to_follow_a_repetition_is_noted(
         notes = [line for line in captured.err.splitlines() if line.startswith("note:")]
         assert notes == ([LOW_RATE_NOTE.format(path=path)] if fps == 2 else []), captured.err
         assert "repetition" in captured.out
+
+
+def test_a_recording_at_a_very_high_rate_is_filtered_at_a_few_hundred_fps(
+    recordings: dict[str, PoseSequence], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """13_29's jumping jacks (4 by hand) interpolated to 4800 fps (18,681 frames): the running
+    median reads every 20th frame (240 fps), so it spans 49 samples, not 961 at every frame
+    (29 s of a 5-s clip's count, before); the same 4 repetitions, at the same far points
+    within a 120-fps frame as at 120 fps. Up to 240 fps every frame is read, as before."""
+    import features.repetitions as repetitions
+
+    widths: list[tuple[int, int]] = []
+    real = repetitions.median_filter
+
+    def median(x: np.ndarray, size: tuple[int, int], **kwargs: Any) -> Any:
+        widths.append((len(x), size[0]))
+        return real(x, size=size, **kwargs)
+
+    monkeypatch.setattr(repetitions, "median_filter", median)
+    seq = recordings["cmu-mocap6/amc/13_29.amc"].slice_frames(0, 468)
+    t = np.arange(seq.n_frames)
+    fine = np.arange(0.0, seq.n_frames - 1 + 1e-9, 1 / 40)
+    flat = seq.positions.reshape(seq.n_frames, -1)
+    high = np.stack([np.interp(fine, t, flat[:, i]) for i in range(flat.shape[1])], axis=1)
+    fast = PoseSequence(high.reshape(len(fine), *seq.positions.shape[1:]), seq.joint_names, 4800.0)
+    at_120 = count_repetitions(seq)
+    at_4800 = count_repetitions(fast)
+    assert widths == [(468, 25), (math.ceil(len(fine) / 20), 49)], widths
+    assert at_120.count == at_4800.count == 4
+    peaks = [r.peak_frame for r in at_120.repetitions]
+    far = [r.peak_frame / 40 for r in at_4800.repetitions]
+    assert np.abs(np.subtract(far, peaks)).max() <= 1, (far, peaks)
 
 
 def _sha(path: Path) -> str:
