@@ -16,6 +16,14 @@ distance matrix: CNN (Hart 1968) keeps a consistent subset for 1-NN; RENN repeat
 edited nearest neighbour (drop cases their k nearest misclassify) until nothing changes; ICF
 runs ENN, then repeatedly drops cases whose reachable set is larger than their coverage set.
 
+Mirror images (``--mirror augment``: every clip and its left-right image, :func:`mirror_twins`):
+every editor judges a case without its own image (its nearest same-activity case otherwise,
+the same movement on the other side: a case looked redundant, covered or, its image relabelled,
+noisy because of its own reflection), and keeps or drops a case and its image together
+(:func:`twin_groups`), so the case base stays mirror-symmetric: novelty-benefit ranks the pair
+by its two cases' mean rank and keeps ``keep`` of each activity's pairs; CNN adds both when
+either is misclassified; RENN and ICF drop the pair only when they would drop both.
+
 Accuracy before/after: on an evaluation set when given, otherwise leave-one-out over the
 original cases (each case classified by the other cases of the edited case base).
 """
@@ -26,6 +34,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
 from scipy.stats import rankdata
 
 from casebase_store import CaseBaseInfo, StoreTransaction
@@ -61,6 +71,8 @@ class MaintenanceReport:
     measured: str = ""
     #: activities the editor dropped every case of, one kept (:func:`keep_every_activity`)
     kept_alone: tuple[str, ...] = ()
+    #: the case kept of each such activity was kept with its mirror image
+    kept_alone_with_image: bool = False
 
     def summary(self) -> str:
         text = (
@@ -71,7 +83,8 @@ class MaintenanceReport:
             text += f" ({self.measured})"
         if self.kept_alone:
             names = ", ".join(repr(a) for a in self.kept_alone)
-            text += f"; one case kept of {names}, every case of which the editor dropped"
+            one = "one case (and its mirror image)" if self.kept_alone_with_image else "one case"
+            text += f"; {one} kept of {names}, every case of which the editor dropped"
         return text
 
 
@@ -127,7 +140,11 @@ def _report(
     eval_set: tuple[np.ndarray, np.ndarray] | None,
     **extra: object,
 ) -> MaintenanceReport:
+    before_alone = kept
     kept, alone = keep_every_activity(cb, kept, dist)
+    groups = twin_groups(cb)
+    kept = with_twins(kept, groups)
+    with_image = bool(alone) and int((kept & ~before_alone).sum()) > len(alone)
     after = cb.subset(kept)
     if eval_set is not None:
         acc_b = _eval_accuracy(cb, eval_set[0], eval_set[1], k, weights)
@@ -161,6 +178,7 @@ def _report(
         before=cb,
         measured=measured,
         kept_alone=alone,
+        kept_alone_with_image=with_image,
         **extra,  # type: ignore[arg-type]
     )
 
@@ -203,6 +221,32 @@ def mirror_twins(cb: CaseBase) -> np.ndarray:
         dtype=object,
     )
     return np.asarray((key[:, None] == key[None, :]) & (image[:, None] != image[None, :]))
+
+
+def twin_groups(cb: CaseBase, twins: np.ndarray | None = None) -> np.ndarray:
+    """``(n,)`` group numbers: a case and its mirror image (:func:`mirror_twins`) of the same
+    activity share one, which the editors keep or drop together; a case without an image (a
+    case added by feedback, or whose image was relabelled) is a group of its own."""
+    if twins is None:
+        twins = mirror_twins(cb)
+    labels = cb.labels.astype(str)
+    pairs = twins & (labels[:, None] == labels[None, :])
+    if not pairs.any():
+        return np.arange(len(cb))
+    _, groups = connected_components(csr_matrix(pairs), directed=False)
+    return np.asarray(groups)
+
+
+def with_twins(kept: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """``kept`` with every case of a group one of whose cases it keeps."""
+    return np.asarray(np.isin(groups, groups[kept]))
+
+
+def _apart(cb: CaseBase, dist: np.ndarray) -> np.ndarray:
+    """``dist`` with each case's mirror image out of its reach (inf): the editors judge a case
+    by the other clips, not by its own image."""
+    twins = mirror_twins(cb)
+    return np.where(twins, np.inf, dist) if twins.any() else dist
 
 
 def keep_every_activity(
@@ -248,7 +292,7 @@ def novelty_benefit(
     labels = cb.labels.astype(str)
     if dist is None:
         dist = pairwise_distances(cb, desc="novelty/benefit")
-    d = dist.copy()
+    d = np.array(_apart(cb, dist))
     np.fill_diagonal(d, np.inf)
     same = labels[:, None] == labels[None, :]
     nearest_same = np.where(same, d, np.inf).min(axis=1)
@@ -261,9 +305,10 @@ def novelty_benefit(
         novelty[m] = np.where(np.isfinite(vals), vals / (med if med > 0 else 1.0), 1e6)
     kk = min(k, n - 1)
     nbrs = np.argsort(d, axis=1, kind="stable")[:, :kk]  # (n, kk): j's neighbours
+    reach = np.isfinite(np.take_along_axis(d, nbrs, axis=1))  # not the case's own image
     helps = same[np.arange(n)[:, None], nbrs]  # neighbour shares j's label
-    coverage = np.bincount(nbrs[helps], minlength=n)
-    liability = np.bincount(nbrs[~helps], minlength=n)
+    coverage = np.bincount(nbrs[helps & reach], minlength=n)
+    liability = np.bincount(nbrs[~helps & reach], minlength=n)
     return novelty, (coverage - liability).astype(np.float64)
 
 
@@ -275,20 +320,24 @@ def trim_novelty_benefit(
     eval_set: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> MaintenanceReport:
     """Keep ``keep`` (a fraction) of every activity's cases, dropping the least novel and
-    least beneficial first."""
+    least beneficial first; a case and its mirror image are one unit, ranked by their mean
+    rank, and ``keep`` is of the activity's units."""
     cb.check_not_empty()
     dist = pairwise_distances(cb, desc="trim")
     nov, ben = novelty_benefit(cb, k, dist)
     labels = cb.labels.astype(str)
+    groups = twin_groups(cb)
     kept = np.zeros(len(cb), dtype=bool)
     for lab in np.unique(labels):
         idx = np.flatnonzero(labels == lab)
-        n_keep = max(1, int(np.ceil(keep * len(idx))))
         # equal values (benefit is a count: often equal) share their mean rank, so a case's
         # place in the case base does not decide which of them goes
         rank = rankdata(nov[idx]) + rankdata(ben[idx])
-        order = np.lexsort((idx, -rank))  # highest combined rank first; ties: lower index
-        kept[idx[order[:n_keep]]] = True
+        units, first, unit_of = np.unique(groups[idx], return_index=True, return_inverse=True)
+        score = np.bincount(unit_of, rank) / np.bincount(unit_of)  # a pair: its mean rank
+        n_keep = max(1, int(np.ceil(keep * len(units))))
+        order = np.lexsort((idx[first], -score))  # highest rank first; ties: lower index
+        kept[idx[np.isin(unit_of, order[:n_keep])]] = True
     return _report(
         "novelty-benefit",
         cb,
@@ -309,33 +358,40 @@ def cnn(
     weights: Weights = "distance",
     eval_set: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> MaintenanceReport:
-    """Hart's condensed nearest neighbour: a subset that classifies every case right by 1-NN."""
+    """Hart's condensed nearest neighbour: a subset that classifies every case right by 1-NN
+    (a case is judged without its mirror image, and added with it)."""
     cb.check_not_empty()
     dist = pairwise_distances(cb, desc="CNN")
+    apart = _apart(cb, dist)
+    groups = twin_groups(cb)
     labels = cb.labels.astype(str)
     kept = np.zeros(len(cb), dtype=bool)
     for lab in np.unique(labels):
-        kept[np.flatnonzero(labels == lab)[0]] = True
+        kept[groups == groups[np.flatnonzero(labels == lab)[0]]] = True
     changed = True
     while changed:
         changed = False
         for i in range(len(cb)):  # Hart's algorithm is sequential by definition
             if kept[i]:
                 continue
-            cand = np.where(kept, dist[i], np.inf)
-            if labels[int(np.argmin(cand))] != labels[i]:
-                kept[i] = True
+            cand = np.where(kept, apart[i], np.inf)
+            if not np.isfinite(cand).any() or labels[int(np.argmin(cand))] != labels[i]:
+                kept[groups == groups[i]] = True
                 changed = True
     return _report("CNN", cb, kept, dist, k, weights, eval_set)
 
 
-def _enn_pass(dist: np.ndarray, labels: np.ndarray, kept: np.ndarray, k: int) -> np.ndarray:
+def _enn_pass(
+    dist: np.ndarray, labels: np.ndarray, kept: np.ndarray, k: int, groups: np.ndarray
+) -> np.ndarray:
+    """Wilson's pass: ``kept`` without the cases their k nearest kept cases misclassify
+    (``dist``: each case's mirror image out of reach); a case and its image go only together
+    (both misclassified)."""
     d = np.where(kept[None, :], dist, np.inf)
     np.fill_diagonal(d, np.inf)
     classes = np.unique(labels)
     pred = _knn_vote(d, labels, classes, k, "uniform")
-    still: np.ndarray = kept & (pred == labels)
-    return still
+    return kept & with_twins(kept & (pred == labels), groups)
 
 
 def renn(
@@ -347,10 +403,11 @@ def renn(
     """Repeated edited nearest neighbour: drop cases their k nearest misclassify, until stable."""
     cb.check_not_empty()
     dist = pairwise_distances(cb, desc="RENN")
+    apart, groups = _apart(cb, dist), twin_groups(cb)
     labels = cb.labels.astype(str)
     kept = np.ones(len(cb), dtype=bool)
     while True:
-        new = _enn_pass(dist, labels, kept, k)
+        new = _enn_pass(apart, labels, kept, k, groups)
         if new.sum() == kept.sum() or new.sum() == 0:
             kept = new if new.sum() else kept
             break
@@ -367,13 +424,14 @@ def icf(
     """Iterative case filtering (Brighton & Mellish 2002)."""
     cb.check_not_empty()
     dist = pairwise_distances(cb, desc="ICF")
+    apart, groups = _apart(cb, dist), twin_groups(cb)
     labels = cb.labels.astype(str)
-    kept = _enn_pass(dist, labels, np.ones(len(cb), dtype=bool), k)
+    kept = _enn_pass(apart, labels, np.ones(len(cb), dtype=bool), k, groups)
     if not kept.any():
         kept = np.ones(len(cb), dtype=bool)
     diff = labels[:, None] != labels[None, :]
     while True:
-        d = np.where(kept[None, :] & kept[:, None], dist, np.inf)
+        d = np.where(kept[None, :] & kept[:, None], apart, np.inf)
         np.fill_diagonal(d, np.inf)
         enemy = np.where(diff, d, np.inf).min(axis=1)  # distance to nearest other-label case
         # local set of c: same-label cases closer than c's nearest enemy
@@ -381,6 +439,7 @@ def icf(
         coverage = local.sum(axis=0)  # coverage(j) = #cases whose local set holds j
         reachable = local.sum(axis=1)  # reachable(c) = |LocalSet(c)|
         drop = kept & (reachable > coverage)
+        drop &= ~with_twins(kept & ~drop, groups)  # a case and its image: both or neither
         if not drop.any():
             break
         kept = kept & ~drop

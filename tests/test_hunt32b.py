@@ -223,10 +223,10 @@ def test_trim_accuracy_holds_out_the_mirror_twin(
     # Held out with its mirror image, a squat case has no squat left to find (the only other
     # is its twin): both squat cases are answered abduction, wrong. Each abduction case finds
     # the other subject's abduction (or its image): right. 4 of 6, before and after (the trim
-    # keeps ceil(0.7 x 2) = 2 squat cases, ceil(0.7 x 4) = 3 abduction cases, so every
-    # abduction case still has the other clip or its image). Before, a squat case was answered
-    # by its own mirror image: 5 of 6 before trimming.
-    assert doc["size_before"] == 6 and doc["size_after"] == 5
+    # keeps a case and its image together: ceil(0.7 x 1) = 1 squat pair, ceil(0.7 x 2) = 2
+    # abduction pairs, every case). Before, a squat case was answered by its own mirror image:
+    # 5 of 6 before trimming.
+    assert doc["size_before"] == 6 and doc["size_after"] == 6
     assert doc["accuracy_before"] == pytest.approx(4 / 6)
     assert doc["accuracy_after"] == pytest.approx(4 / 6)
     assert (
