@@ -391,7 +391,8 @@ def _enn_pass(
     np.fill_diagonal(d, np.inf)
     classes = np.unique(labels)
     pred = _knn_vote(d, labels, classes, k, "uniform")
-    return kept & with_twins(kept & (pred == labels), groups)
+    still: np.ndarray = kept & with_twins(kept & (pred == labels), groups)
+    return still
 
 
 def renn(
