@@ -206,13 +206,11 @@ def _open_reader(args: argparse.Namespace) -> CaseStore:
 
 
 def run(args: argparse.Namespace) -> int:
-    from casebase_store import open_store
     from cbr.classification import (
         FeedbackSettings,
         check_feedback_cases,
         check_feedback_label,
         classify_clips,
-        classify_with_feedback,
     )
     from cbr.stored import load_classifier
 
@@ -259,15 +257,12 @@ def run(args: argparse.Namespace) -> int:
             label = check_feedback_label(args.feedback, known, args.new_label, target)
     finally:
         store.close()
+    gone: list[str] | None = None  # with feedback: the labels it left without a case
     if label is not None:
-        writer = open_store(args.db, create=False)
-        try:
-            results = classify_with_feedback(writer, stored, clips, label, settings, target)
-        finally:
-            writer.close()
+        results, gone = _with_feedback(args.db, stored, clips, label, settings, target, known)
     if stored.cases == "windows":
         _note_long_clips(name, clips)
-    _print(args, store.where, name, target, results)
+    _print(args, store.where, name, target, results, gone)
     if all(r.solved is None for r in results):  # nothing the user asked for could be done
         print(
             f"posecbr classify: error: no clip could be classified "
@@ -278,8 +273,70 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _with_feedback(
+    db: Path,
+    stored: Any,
+    clips: list[Any],
+    label: str,
+    settings: Any,
+    target: str,
+    known: list[str],
+) -> tuple[list[Any], list[str]]:
+    """The clips classified and learnt from (a writer opened for the feedback alone), and the
+    labels of ``known`` the feedback left without any case (a note names them)."""
+    from casebase_store import open_store
+    from cbr.classification import classify_with_feedback
+
+    writer = open_store(db, create=False)
+    try:
+        results = classify_with_feedback(writer, stored, clips, label, settings, target)
+    except KeyboardInterrupt:  # the feedback stored before it may have left them so
+        _note_gone(stored.name, target, _gone(known, stored))
+        raise
+    finally:
+        writer.close()
+    gone = _gone(known, stored)
+    _note_gone(stored.name, target, gone)
+    return results, gone
+
+
+def _gone(known: list[str], stored: Any) -> list[str]:
+    """The labels of ``known`` (the case base's before the feedback) no active case of
+    ``stored`` carries now: feedback relabelled the last case of each."""
+    now = set(stored.classifier.case_base_.labels.tolist())
+    return [lab for lab in known if lab not in now]
+
+
+def _note_gone(name: str, target: str, gone: list[str]) -> None:
+    """One note line naming the labels the feedback left without a case: the user's
+    correction stands (``casebase trim`` keeps an activity's last case; feedback does not), but
+    the case base no longer predicts them."""
+    from cbr.explain import class_noun
+    from features.text import shown
+
+    if not gone:
+        return
+    noun = class_noun(target, len(gone))
+    names = ", ".join(repr(lab) for lab in gone)
+    one = len(gone) == 1
+    print(
+        shown(
+            f"note: case base {name!r} no longer has any case of the {noun} {names}: the "
+            f"feedback relabelled {'its last case' if one else 'the last case of each'}, so "
+            f"{'it is' if one else 'they are'} no longer predicted (to add "
+            f"{'it' if one else 'one'} again: --feedback LABEL --new-label)"
+        ),
+        file=sys.stderr,
+    )
+
+
 def _print(
-    args: argparse.Namespace, where: str, name: str, target: str, results: list[Any]
+    args: argparse.Namespace,
+    where: str,
+    name: str,
+    target: str,
+    results: list[Any],
+    gone: list[str] | None = None,
 ) -> None:
     from cbr.classification import summarise
 
@@ -292,6 +349,8 @@ def _print(
             "results": [r.to_dict() for r in results],
             "summary": summary,
         }
+        if gone is not None:  # with --feedback: the labels it left without any case
+            doc["left_without_cases"] = gone
         if summary.get("accuracy") is not None:  # the names of posecbr 0.2
             doc["accuracy"] = summary["accuracy"]
             doc["n_labelled"] = summary["labelled"]
