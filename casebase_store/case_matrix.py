@@ -8,16 +8,22 @@ touches are read at all; the similarity measures use such a matrix in place (the
 index keeps a read-only float32 matrix as it is, without a copy).
 
 Files are keyed by what they hold, so a stale matrix is never read: ``<database>.matrices/
-<case base>.<kind>.<version>.npy`` where ``version`` is the case base's version (anything that
-changes whenever an active case's features change: ids, revision counter, content hash; see
-:func:`content_version`). Written atomically (a temporary file beside it, renamed when
-complete: a reader sees the whole matrix or none), in chunks, so writing a matrix larger than
-memory needs no full copy either. Older versions of the same case base and kind are removed
-when a new one is written (a process that still maps one keeps reading it: POSIX unlink).
+<case base>~<hash>.<kind>.<version>.npy`` where ``<case base>`` is the name with the
+characters a file name cannot safely hold replaced by ``_``, ``<hash>`` a short hash of the
+exact name (so "a b" and "a_b", or "A" and "a" on a file system blind to case, do not share
+files: each removed the other's as stale), and ``version`` the case base's version (anything
+that changes whenever an active case's features change: ids, revision counter, content hash;
+see :func:`content_version`). Files posecbr 0.2 named without the hash are still read when
+of the very case base and version asked for. Written atomically (a temporary file beside it,
+renamed when complete: a reader sees the whole matrix or none), in chunks, so writing a
+matrix larger than memory needs no full copy either. Older versions of the same case base
+and kind are removed when a new one is written (a process that still maps one keeps reading
+it: POSIX unlink).
 """
 
 from __future__ import annotations
 
+import glob
 import hashlib
 import re
 from collections.abc import Callable, Iterable
@@ -44,11 +50,39 @@ def content_version(ids: np.ndarray, *parts: str) -> str:
     return h.hexdigest()[:20]
 
 
+def _prefix(case_base: str, kind: str) -> str:
+    """The start of the file names of ``case_base``'s matrices of ``kind`` (every version):
+    its name made safe, then a hash of the exact name (``~`` never comes out of the slug, so
+    no name's files start like another's)."""
+    h = hashlib.sha256(case_base.encode("utf-8", "surrogatepass")).hexdigest()[:12]
+    return f"{_slug(case_base)}~{h}.{_slug(kind)}."
+
+
+def _legacy_prefix(case_base: str, kind: str) -> str:
+    """The start of the file names older posecbr gave them: without the hash, so two names
+    with the same slug ("a b", "a_b") shared them."""
+    return f"{_slug(case_base)}.{_slug(kind)}."
+
+
 def matrix_path(database: str | Path, case_base: str, kind: str, version: str) -> Path:
     """Where the matrix of ``case_base``'s representation ``kind`` at ``version`` lives."""
     db = Path(database)
     folder = db.with_name(db.name + ".matrices")
-    return folder / f"{_slug(case_base)}.{_slug(kind)}.{_slug(version)}.npy"
+    return folder / f"{_prefix(case_base, kind)}{_slug(version)}.npy"
+
+
+def find_case_matrix(
+    database: str | Path, case_base: str, kind: str, version: str, identity: str = ""
+) -> Path:
+    """The file holding ``case_base``'s ``kind`` at ``version``: :func:`matrix_path`, or the
+    name an older posecbr gave it when only that is there and ``version`` begins with the
+    case base's ``identity`` (then the file is its own, though another case base whose name
+    has the same slug shared the name; without an identity it is never read)."""
+    path = matrix_path(database, case_base, kind, version)
+    if path.exists() or not identity or not version.startswith(identity):
+        return path
+    legacy = path.with_name(f"{_legacy_prefix(case_base, kind)}{_slug(version)}.npy")
+    return legacy if legacy.exists() else path
 
 
 def write_case_matrix(
@@ -112,14 +146,23 @@ def cached_case_matrix(
     shape: tuple[int, ...],
     chunks: Callable[[], Iterable[np.ndarray]],
     dtype: np.dtype | type = np.float32,
+    identity: str = "",
 ) -> np.ndarray:
     """The memory-mapped matrix of ``case_base``'s ``kind`` at ``version``: opened when it is
-    on disk, else written first from ``chunks()`` (then older versions are removed)."""
-    path = matrix_path(database, case_base, kind, version)
+    on disk, else written first from ``chunks()``; then its older versions are removed.
+    ``identity``: how every version of this case base (and no other's) begins; with it, a
+    file an older posecbr named without the hash is read when of this version, and removed
+    when of an older one (one of another identity may be another case base's whose name has
+    the same slug, and is kept); without it such files are never read, and all removed."""
+    path = find_case_matrix(database, case_base, kind, version, identity)
     if not path.exists():
         write_case_matrix(path, chunks(), shape, dtype)
-        prefix = f"{_slug(case_base)}.{_slug(kind)}."
-        for old in path.parent.glob(prefix + "*.npy"):
-            if old != path and old.name[len(prefix) : -4].count(".") == 0:
-                old.unlink(missing_ok=True)
+        for prefix, own in (
+            (_prefix(case_base, kind), ""),
+            (_legacy_prefix(case_base, kind), _slug(identity) if identity else ""),
+        ):
+            for old in path.parent.glob(glob.escape(prefix) + "*.npy"):
+                stale = old.name[len(prefix) : -4]
+                if old != path and stale.count(".") == 0 and stale.startswith(own):
+                    old.unlink(missing_ok=True)
     return open_case_matrix(path, shape)

@@ -26,7 +26,7 @@ from casebase_store import (
     StoreTransaction,
     sqlite_file,
 )
-from casebase_store.case_matrix import cached_case_matrix, matrix_path, open_case_matrix
+from casebase_store.case_matrix import cached_case_matrix, find_case_matrix, open_case_matrix
 from features.errors import ConfigError, DataError
 from features.text import shown
 
@@ -242,6 +242,11 @@ def _matrix_key(info: CaseBaseInfo) -> str:
     return f"{info.uid}-{info.version}"
 
 
+def _matrix_identity(info: CaseBaseInfo) -> str:
+    """How the key of every state of this case base, and of no other, begins."""
+    return f"{info.uid}-"
+
+
 def write_matrices(store: CaseStore, name: str, min_cases: int | None = None) -> bool:
     """Write the memory-mapped matrices of case base ``name`` as it is now (a large case base
     in a SQLite file; the commands that change a case base call this after their change).
@@ -263,12 +268,15 @@ def write_matrices(store: CaseStore, name: str, min_cases: int | None = None) ->
             yield measure.represent(arrays.features[a : a + chunk])
 
     rep_shape = measure.represent(arrays.features[:1]).shape[1:]
-    key = _matrix_key(info)
+    key, identity = _matrix_key(info), _matrix_identity(info)
     try:
-        cached_case_matrix(db, name, "problems", key, arrays.features.shape, problems, np.float64)
         cached_case_matrix(
-            db, name, "representations", key, (len(arrays.ids), *rep_shape), representations
+            db, name, "problems", key, arrays.features.shape, problems, np.float64, identity
         )
+        cached_case_matrix(
+            db, name, "representations", key, (len(arrays.ids), *rep_shape), representations,
+            identity=identity,
+        )  # fmt: skip
     except DataError as exc:
         # called after the change committed: the matrices are a copy of the cases for speed,
         # and a reader without them reads the database. Failing here said the command failed,
@@ -288,7 +296,8 @@ def _mapped(store: CaseStore, info: CaseBaseInfo, n: int) -> tuple[np.ndarray, .
     db = sqlite_file(store.where)
     if db is None or n < 1:
         return None
-    paths = [matrix_path(db, info.name, kind, _matrix_key(info)) for kind in _MATRICES]
+    key, identity = _matrix_key(info), _matrix_identity(info)
+    paths = [find_case_matrix(db, info.name, kind, key, identity) for kind in _MATRICES]
     if not all(p.exists() for p in paths):
         return None
     try:

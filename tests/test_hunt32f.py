@@ -4,13 +4,17 @@ in a clip's subject refused only after training."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+import cbr.stored as stored_module
 from casebase_store import open_store
+from cbr.stored import load_classifier, write_matrices
 from posecbr.cli import main
 from tests.badinput import small_case_base
 
@@ -69,3 +73,77 @@ def test_feedback_that_leaves_every_activity_a_case_has_no_note(
     assert main(["classify", *clips, "--db", str(db), "--quiet"]) == 0  # without feedback
     out, err = capsys.readouterr()
     assert "left_without_cases" not in out and err == ""
+
+
+def _matrices(db: Path) -> list[str]:
+    folder = db.with_name(db.name + ".matrices")
+    return sorted(p.name for p in folder.iterdir()) if folder.exists() else []
+
+
+def _is_mapped(a: np.ndarray) -> bool:
+    while a is not None and not isinstance(a, np.memmap):
+        a = a.base  # type: ignore[assignment]
+    return isinstance(a, np.memmap)
+
+
+def _hash(name: str) -> str:
+    return hashlib.sha256(name.encode("utf-8")).hexdigest()[:12]
+
+
+def test_two_case_base_names_of_one_file_name_keep_their_own_matrices(
+    small: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: "a b" and "a_b" both wrote "a_b.problems.<uid>-<version>.npy" and the like, and
+    # each write removed the other's files as its own older versions: the first case base was
+    # read from SQL again (only slower)
+    monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 5)  # "large": the 9 cases
+    db = tmp_path / "cb.sqlite"
+    data = small.parent / "train"
+    for name in ("a b", "a_b"):
+        argv = ["train", str(data), "--db", str(db), "--name", name, "--mirror", "off",
+                "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+        assert main(argv) == 0
+    capsys.readouterr()
+    with open_store(db, readonly=True) as store:
+        keys = {n: f"{store.get_case_base(n).uid}-1" for n in ("a b", "a_b")}
+        assert _matrices(db) == sorted(
+            f"a_b~{_hash(n)}.{kind}.{keys[n]}.npy"
+            for n in ("a b", "a_b")
+            for kind in ("problems", "representations")
+        )
+        for n in ("a b", "a_b"):
+            cb = load_classifier(store, n).classifier.case_base_
+            assert _is_mapped(cb.problems) and _is_mapped(cb.reps)
+
+
+def test_matrices_an_older_posecbr_named_are_read_then_replaced(
+    small: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # files named without the hash ("a_b.problems.<uid>-<version>.npy", posecbr 0.2) are still
+    # mapped when of this very case base and version; the next change writes the new names and
+    # removes its old ones, but not an old file of another case base with the same slug
+    monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 5)
+    db = tmp_path / "cb.sqlite"
+    shutil.copy(small, db)
+    name = "default"
+    with open_store(db) as store:
+        assert write_matrices(store, name)
+    folder = db.with_name(db.name + ".matrices")
+    for p in folder.iterdir():  # as posecbr 0.2 named them
+        p.rename(folder / p.name.replace(f"~{_hash(name)}.", "."))
+    with open_store(db, readonly=True) as store:
+        uid = store.get_case_base(name).uid
+    other = folder / "default.problems.0123456789abcdef0123456789abcdef-1.npy"
+    shutil.copy(folder / f"default.problems.{uid}-1.npy", other)  # another 'default' case base's
+    assert _matrices(db) == sorted(
+        [other.name, f"default.problems.{uid}-1.npy", f"default.representations.{uid}-1.npy"]
+    )
+    with open_store(db, readonly=True) as store:
+        cb = load_classifier(store, name).classifier.case_base_
+        assert _is_mapped(cb.problems) and _is_mapped(cb.reps)
+    clip = str(sorted((small.parent / "train" / BOTH).glob("*.npz"))[0])
+    assert main(["classify", clip, "--db", str(db), "--feedback", BOTH, "--quiet"]) == 0
+    assert _matrices(db) == sorted(
+        [other.name]
+        + [f"default~{_hash(name)}.{kind}.{uid}-2.npy" for kind in ("problems", "representations")]
+    )

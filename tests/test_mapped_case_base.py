@@ -3,6 +3,7 @@ process (issue 17, item 4); the answers are those of the case base read from SQL
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +16,8 @@ from features.datasets import load_dataset
 from posecbr.cli import main
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+#: the matrices' file names carry a hash of the exact case base name (its first 12 digits)
+DEFAULT = hashlib.sha256(b"default").hexdigest()[:12]
 
 
 def _matrices(db: Path) -> list[str]:
@@ -39,8 +42,8 @@ def test_a_large_case_base_is_mapped_and_answers_as_read_from_sql(
     store = open_store(db, readonly=True)
     uid, version = store.get_case_base("default").uid, store.get_case_base("default").version
     assert _matrices(db) == [
-        f"default.problems.{uid}-{version}.npy",
-        f"default.representations.{uid}-{version}.npy",
+        f"default~{DEFAULT}.problems.{uid}-{version}.npy",
+        f"default~{DEFAULT}.representations.{uid}-{version}.npy",
     ]
     mapped = load_classifier(store, "default").classifier
     assert _is_mapped(mapped.case_base_.problems) and _is_mapped(mapped.case_base_.reps)
@@ -70,8 +73,8 @@ def test_a_change_maps_the_new_version_and_a_stale_matrix_is_never_read(
     info = store.get_case_base("default")
     assert info.version == 2
     assert _matrices(db) == [
-        f"default.problems.{info.uid}-2.npy",
-        f"default.representations.{info.uid}-2.npy",
+        f"default~{DEFAULT}.problems.{info.uid}-2.npy",
+        f"default~{DEFAULT}.representations.{info.uid}-2.npy",
     ]
     revised = load_classifier(store, "default").classifier
     sql = store.load_cases("default").features
