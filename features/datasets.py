@@ -461,6 +461,13 @@ def _csv_record(header: list[str], row: list[str], line_no: int, csv_path: Path)
             f"line {line_no}: {len(row)} fields, the header has {len(header)}", csv_path
         )
     rec = dict(zip(header, (c.strip() for c in row), strict=True))
+    for column in ("label", "subject"):  # stored with each case: no store holds a NUL
+        if "\x00" in rec.get(column, ""):
+            raise DataError(
+                f"line {line_no}: column {column}: {rec[column]!r} contains a NUL character "
+                "(a case base cannot store it)",
+                csv_path,
+            )
     if not rec["path"]:
         raise DataError(f"line {line_no}: empty path", csv_path)
     track = _track_columns(rec, csv_path, line_no)

@@ -4,6 +4,7 @@ in a clip's subject refused only after training."""
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import json
 import shutil
@@ -16,7 +17,7 @@ import cbr.stored as stored_module
 from casebase_store import open_store
 from cbr.stored import load_classifier, write_matrices
 from posecbr.cli import main
-from tests.badinput import small_case_base
+from tests.badinput import refused, small_case_base
 
 #: the small case base's activities (three clips each: tests/badinput.small_case_base)
 BOTH = "l'avant – both arms"
@@ -147,3 +148,40 @@ def test_matrices_an_older_posecbr_named_are_read_then_replaced(
         [other.name]
         + [f"default~{_hash(name)}.{kind}.{uid}-2.npy" for kind in ("problems", "representations")]
     )
+
+
+@pytest.mark.parametrize(
+    ("column", "line"), [("subject", 3), ("label", 4)], ids=["subject", "label"]
+)
+def test_a_nul_in_a_labels_csv_subject_or_label_is_refused_as_the_labels_are_read(
+    small: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    column: str,
+    line: int,
+) -> None:
+    # before: the whole training ran (every clip's features, the fit), then the case base
+    # refused it: "posecbr train: error: cb.sqlite: subject 's\x001' contains a NUL
+    # character", the labels CSV, its row and column not named
+    import cbr.training
+
+    def no_features(*args: object, **kwargs: object) -> object:
+        raise AssertionError("a clip was read before the labels were checked")
+
+    monkeypatch.setattr(cbr.training, "describe_entry", no_features)
+    csv_file = tmp_path / "labels.csv"
+    with csv_file.open("w", newline="", encoding="utf-8") as fh:
+        out = csv.writer(fh)
+        out.writerow(["path", "label", "subject"])
+        for i, clip in enumerate(sorted((small.parent / "train").rglob("*.npz"))):
+            label, subject = clip.parent.name, f"s{i % 2}"
+            if i + 2 == line:  # the CSV's line of this row (the header is line 1)
+                label, subject = ("sq\x00uat", subject) if column == "label" else (label, "s\x001")
+            out.writerow([str(clip), label, subject])
+    value = "'sq\\x00uat'" if column == "label" else "'s\\x001'"
+    refused(
+        ["train", str(csv_file), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
+        f"posecbr train: error: {csv_file}: line {line}: column {column}: {value} contains a "
+        "NUL character (a case base cannot store it)",
+    )  # fmt: skip
