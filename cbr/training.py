@@ -40,7 +40,7 @@ from features.poses import PoseSequence
 from features.progress import progress
 from features.text import counted
 
-from .casebase import CaseBase, piece_name
+from .casebase import CaseBase, piece_name, subject_of
 from .described import DescribedClip, describe_case, describe_clip
 from .estimator import CaseBaseClassifier, check_labels
 from .maintenance import MaintenanceReport, record_trim
@@ -127,8 +127,20 @@ def describe_entry(entry: DatasetEntry, plan: Plan, target: str) -> list[tuple[D
                 + ")",
                 clip.seq.source,
             )
+        _check_stored_text(clip.seq, value, target)
         out.append((describe(clip.seq, plan), value))
     return out
+
+
+def _check_stored_text(seq: PoseSequence, value: str, target: str) -> None:
+    """Refuse a clip whose subject or ``target`` value (a pose file's metadata) holds a NUL,
+    which no case base can store, as it is read: not after every clip and the fit."""
+    for what, text in (("subject", subject_of(seq)), (target, value)):
+        if text is not None and "\x00" in str(text):
+            raise DataError(
+                f"{what} {str(text)!r} contains a NUL character (a case base cannot store it)",
+                seq.source,
+            )
 
 
 def describe_entries(

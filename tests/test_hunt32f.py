@@ -185,3 +185,21 @@ def test_a_nul_in_a_labels_csv_subject_or_label_is_refused_as_the_labels_are_rea
         f"posecbr train: error: {csv_file}: line {line}: column {column}: {value} contains a "
         "NUL character (a case base cannot store it)",
     )  # fmt: skip
+
+
+def test_a_nul_in_a_pose_files_subject_is_refused_as_the_clip_is_read(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: "posecbr train: error: cb.sqlite: subject 's\x001' contains a NUL character"
+    # after every clip's features and the fit, the pose file not named
+    from features.poses import load_pose, save_pose
+
+    data = tmp_path / "data"
+    shutil.copytree(small.parent / "train", data)
+    bad = sorted(data.rglob("*.npz"))[0]
+    save_pose(load_pose(bad).with_metadata(subject="s\x001"), bad)
+    refused(
+        ["train", str(data), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
+        f"posecbr train: error: {bad}: subject 's\\x001' contains a NUL character (a case base "
+        "cannot store it)",
+    )  # fmt: skip
