@@ -4,6 +4,7 @@ there (deterministic fault injection: no race against the clock)."""
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -55,4 +56,21 @@ def posecbr_process(
         stderr=subprocess.PIPE,
         text=True,
         env=env,
+    )
+
+
+def terminal_job(argv: list[str], cwd: Path) -> subprocess.Popen[bytes]:
+    """``python -m posecbr ARGV`` as a terminal runs a job: in a process group of its own
+    (so a test can send Ctrl-C to the whole group with ``os.killpg``), SIGINT not ignored
+    (a shell's background job ignores it), this checkout first on the path, no progress."""
+    env = {**os.environ, "POSECBR_NO_PROGRESS": "1"}
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
+    return subprocess.Popen(
+        [sys.executable, "-m", "posecbr", *argv],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )

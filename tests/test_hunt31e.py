@@ -28,6 +28,7 @@ from cbr.evaluation.tables import group_table
 from features.poses import load_pose
 from posecbr.cli import main
 from tests.badinput import ROOT, refused, small_case_base
+from tests.processes import terminal_job
 
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 # 24 clips, one configuration: a comparison of a few seconds
@@ -399,20 +400,10 @@ def test_ctrl_c_of_a_compare_with_workers_prints_one_line(tmp_path: Path) -> Non
     imports) under "posecbr compare: interrupted". The workers now leave Ctrl-C to the
     command, which stops them: the one line, status 130, no process left, nothing
     written."""
-    env = {**os.environ, "POSECBR_NO_PROGRESS": "1"}
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
-    argv = [sys.executable, "-m", "posecbr", "compare", str(DEMO), "--peers", "none"]
+    argv = ["compare", str(DEMO), "--peers", "none"]
     argv += ["--labels", "deep_squat,hurdle_step,sit_to_stand", "--jobs", "2"]
     argv += ["--out", str(tmp_path / "o")]
-    proc = subprocess.Popen(
-        argv,
-        cwd=tmp_path,
-        env=env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        start_new_session=True,  # a group of its own, as a terminal's job
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )
+    proc = terminal_job(argv, tmp_path)
     children: list[str] = []
     deadline = time.monotonic() + 300
     while not children and proc.poll() is None and time.monotonic() < deadline:

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import os
 import signal
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -15,6 +14,7 @@ from types import SimpleNamespace
 import pytest
 
 from tests.badinput import ROOT, refused
+from tests.processes import terminal_job
 
 # ---- 1. a skeleton with no limbs ----------------------------------------------------------
 
@@ -277,20 +277,10 @@ def test_ctrl_c_of_compare_on_a_local_cluster_prints_one_line(
     data" under "posecbr compare: interrupted". Now the one line, status 130, no process of
     the run left, nothing written."""
     pytest.importorskip("dask.distributed", reason="dask is in the test extra")
-    env = {**os.environ, "POSECBR_NO_PROGRESS": "1"}
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
-    argv = [sys.executable, "-m", "posecbr", "compare", str(DEMO), "--peers", "none"]
+    argv = ["compare", str(DEMO), "--peers", "none"]
     argv += ["--labels", "deep_squat,hurdle_step,sit_to_stand", "--scheduler", "local:2"]
     argv += ["--out", str(tmp_path / "o")]
-    proc = subprocess.Popen(
-        argv,
-        cwd=tmp_path,
-        env=env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        start_new_session=True,  # a group of its own, as a terminal's job
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )
+    proc = terminal_job(argv, tmp_path)
     workers: list[int] = []
     deadline = time.monotonic() + 300
     while len(workers) < 2 and proc.poll() is None and time.monotonic() < deadline:

@@ -10,7 +10,6 @@ import json
 import shutil
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 import cbr.stored as stored_module
@@ -18,6 +17,7 @@ from casebase_store import open_store
 from cbr.stored import load_classifier, write_matrices
 from posecbr.cli import main
 from tests.badinput import refused, small_case_base
+from tests.test_mapped_case_base import _is_mapped, _matrices
 
 #: the small case base's activities (three clips each: tests/badinput.small_case_base)
 BOTH = "l'avant – both arms"
@@ -74,17 +74,6 @@ def test_feedback_that_leaves_every_activity_a_case_has_no_note(
     assert main(["classify", *clips, "--db", str(db), "--quiet"]) == 0  # without feedback
     out, err = capsys.readouterr()
     assert "left_without_cases" not in out and err == ""
-
-
-def _matrices(db: Path) -> list[str]:
-    folder = db.with_name(db.name + ".matrices")
-    return sorted(p.name for p in folder.iterdir()) if folder.exists() else []
-
-
-def _is_mapped(a: np.ndarray) -> bool:
-    while a is not None and not isinstance(a, np.memmap):
-        a = a.base  # type: ignore[assignment]
-    return isinstance(a, np.memmap)
 
 
 def _hash(name: str) -> str:
