@@ -58,12 +58,19 @@ class DADConfig:
     step_s: float = DEFAULT_STEP_S
     min_duration_s: float = 0.5
     qmp: QMPConfig = field(default_factory=QMPConfig)
+    min_observable_share: float = 0.5
+    """An activity is scored only when at least this share of its QMPs' weight is observable
+    (on Kinect, Vicon, HDM05 and BlazePose skeletons every shipped activity has 87 % or more;
+    a clip with a knee missing throughout would otherwise crown a kick from its arms alone)."""
 
     def __post_init__(self) -> None:
         for name in ("window_s", "step_s", "min_duration_s"):
             v = getattr(self, name)
             if not _positive(v):
                 raise ConfigError(f"{name} must be a number > 0, got {v!r}", "DAD")
+        share = self.min_observable_share
+        if not (_positive(share) and float(share) <= 1.0):
+            raise ConfigError(f"min_observable_share must be in (0, 1], got {share!r}", "DAD")
         if self.step_s > self.window_s:
             raise ConfigError(
                 f"step_s ({self.step_s:g} s) is longer than window_s ({self.window_s:g} s): "
@@ -96,9 +103,10 @@ def _step_outcome(
 
 
 def _score_activity(
-    act: Activity, add: ADD, crit: CriteriaResult, windows_s: np.ndarray
+    act: Activity, add: ADD, crit: CriteriaResult, windows_s: np.ndarray, min_share: float = 0.5
 ) -> ActivityScore:
-    """Score ``act``: its observable steps chained in order over the windows ``(W, 2)``."""
+    """Score ``act``: its observable steps chained in order over the windows ``(W, 2)``; NaN
+    when less than ``min_share`` of its weight is observable."""
     q_index = {n: i for i, n in enumerate(crit.names)}
     cols = [q_index[step.qmp] for step in act.sequence]
     weights = np.array([step.weight for step in act.sequence])
@@ -122,9 +130,11 @@ def _score_activity(
         for j, step in enumerate(act.sequence)
     )
     obs_weight = int(weights[observable].sum())
-    score = matched / obs_weight if obs_weight > 0 else float("nan")
+    total = int(weights.sum())
+    judged = obs_weight > 0 and obs_weight >= min_share * total
+    score = matched / obs_weight if judged else float("nan")
     return ActivityScore(
-        act.name, act.words, act.labels, float(score), int(matched), obs_weight, outcomes
+        act.name, act.words, act.labels, float(score), int(matched), obs_weight, outcomes, total
     )
 
 
@@ -209,9 +219,16 @@ def detect_signals(
     if not crit.observable.any():
         why = "no QMP could be observed (joints missing, or gaps too long)"
         return _unjudged(source, fps, duration, db, why, spans, detected)
-    scores = [_score_activity(a, db, crit, windows_s) for a in db.activities.values()]
+    share = cfg.min_observable_share
+    scores = [_score_activity(a, db, crit, windows_s, share) for a in db.activities.values()]
     if not any(s.observable_weight for s in scores):  # QMPs seen, but none an activity uses
         why = "no activity's QMPs could be observed (joints missing, or gaps too long)"
+        return _unjudged(source, fps, duration, db, why, spans, detected)
+    if not any(np.isfinite(s.score) for s in scores):  # each seen too little to judge
+        why = (
+            f"no activity has {share:.0%} of its QMPs' weight observable (joints missing, "
+            "or gaps too long)"
+        )
         return _unjudged(source, fps, duration, db, why, spans, detected)
     ranked = tuple(sorted(scores, key=_rank_key))
     words = {n: c.words for n, c in db.criteria.items()}

@@ -30,7 +30,10 @@ class QMPOutcome:
 
 @dataclass(frozen=True)
 class ActivityScore:
-    """An activity's score (weighted ratio of its QMPs met in order; NaN if none observable)."""
+    """An activity's score: the weighted ratio of its QMPs met in order among those observable,
+    NaN when less than the configured share of its weight (``DADConfig.min_observable_share``,
+    half) is observable: two QMPs of a kick seen out of seventeen are no kick, whatever they
+    show. ``total_weight``: all its QMPs' weight (0: not given)."""
 
     activity: str
     words: str
@@ -39,6 +42,7 @@ class ActivityScore:
     met_weight: int
     observable_weight: int
     qmps: tuple[QMPOutcome, ...]
+    total_weight: int = 0
 
     @property
     def met(self) -> tuple[QMPOutcome, ...]:
@@ -50,7 +54,13 @@ class ActivityScore:
 
     def in_words(self) -> str:
         """Score, QMPs met and not met (with the first reason) in one line."""
-        score = "no observable QMP" if not np.isfinite(self.score) else f"score {self.score:.2f}"
+        score = (
+            f"score {self.score:.2f}"
+            if np.isfinite(self.score)
+            else "no observable QMP"
+            if self.observable_weight == 0
+            else f"too little observable: weight {self.observable_weight} of {self.total_weight}"
+        )
         met = ", ".join(q.words for q in self.met) or "none"
         missed = "; ".join(
             q.words + (f" ({q.status}: {q.reasons[0]})" if q.reasons else f" ({q.status})")
@@ -84,7 +94,9 @@ class DADResult:
         """The top-ranked activity, when some of its QMPs were met in order (None when no
         activity's were: a 0% or unobservable activity is no match)."""
         top = self.activities[0] if self.activities else None
-        return top if top is not None and top.met_weight > 0 else None
+        if top is None or not np.isfinite(top.score) or top.met_weight == 0:
+            return None
+        return top
 
     def activity_for(self, label: str) -> ActivityScore | None:
         """The best-ranked activity that stands for ``label`` (None if the ADD has none)."""

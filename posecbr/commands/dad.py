@@ -95,7 +95,9 @@ def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[
     if best is not None:
         tied = [a.words for a in result.activities if a is not best and a.score == best.score]
         also = f"; tied with {', '.join(tied)}" if tied else ""
-        yield f"best match: {best.words} ({best.score:.0%} of its QMPs in order{also})"
+        unseen = best.total_weight - best.observable_weight
+        seen = f"; {unseen} of its {best.total_weight} weight not observable" if unseen > 0 else ""
+        yield f"best match: {best.words} ({best.score:.0%} of its QMPs in order{seen}{also})"
     else:
         yield "best match: none (no activity has any of its QMPs met in order)"
     yield ""
@@ -107,7 +109,15 @@ def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[
     mark = {"met": "+", "not met": "-", "out of order": "~", "not observable": "?"}
     for act in detail:
         yield ""
-        yield f"{act.words}: {act.met_weight}/{act.observable_weight} weight in order"
+        unseen = act.total_weight - act.observable_weight
+        if act.score != act.score:  # NaN: too little of it observable to score
+            yield (
+                f"{act.words}: not scored: only {act.observable_weight} of its "
+                f"{act.total_weight} weight observable"
+            )
+        else:
+            also = f" ({unseen} of {act.total_weight} not observable)" if unseen > 0 else ""
+            yield f"{act.words}: {act.met_weight}/{act.observable_weight} weight in order{also}"
         for q in act.qmps:
             when = f" (at {q.window_s[0]:.1f}-{q.window_s[1]:.1f} s)" if q.window_s else ""
             yield f"  {mark[q.status]} {q.words} [w {q.weight}]: {q.status}{when}"

@@ -1,0 +1,90 @@
+"""Defects found hunting the coach's commands besides train/classify/segment (dad, describe,
+thresholds, report), on real UI-PRMD data."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cbr.dad import detect
+from features.datasets import load_clip
+from features.poses import PoseSequence, save_pose
+from features.skeleton import JOINT_INDEX
+from posecbr.cli import main
+
+KINECT_SQUAT = "ui-prmd/data/Segmented Movements/Kinect/Positions/m01_s01_e01_positions.txt.gz"
+
+
+@pytest.fixture(scope="module")
+def squat(shared_data: Path) -> PoseSequence:
+    return load_clip(shared_data / KINECT_SQUAT)
+
+
+def _without(seq: PoseSequence, joint: str) -> PoseSequence:
+    pos = seq.positions.copy()
+    pos[:, JOINT_INDEX[joint], :] = np.nan
+    return replace(seq, positions=pos)
+
+
+def test_dad_does_not_score_an_activity_mostly_unobservable(squat: PoseSequence) -> None:
+    """A deep squat with its left knee missing throughout: the left kick's QMPs (weights 10, 5
+    and 2 in add.toml) are observable only through "arms held steady" (2 of 17), which used to
+    score the kick 100 % and tie it for best match. An activity is scored only when at least
+    half its weight is observable."""
+    result = detect(_without(squat, "left_knee"))
+    kick = next(a for a in result.activities if a.activity == "kick_left_front")
+    assert (kick.observable_weight, kick.total_weight) == (2, 17)
+    assert math.isnan(kick.score)
+    for act in result.activities:
+        seen = act.observable_weight / act.total_weight
+        assert math.isnan(act.score) == (seen < 0.5), act.activity
+    assert result.best is not None and result.best.activity != "kick_left_front"
+    # The whole clip keeps every activity scored as before (Kinect lacks only the heels).
+    whole = detect(squat)
+    assert all(np.isfinite(a.score) for a in whole.activities)
+    assert whole.best is not None and whole.best.activity == "deep_squat"
+
+
+def test_dad_text_and_json_say_how_much_was_not_observable(
+    squat: PoseSequence, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    clip = tmp_path / "no_left_knee.npz"
+    save_pose(_without(squat, "left_knee"), clip)
+    assert main(["dad", str(clip), "--top", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "tied with" not in out.splitlines()[1]  # no 100 % tie of squat, kick, lunges...
+    assert "kicking forward with the left leg: not scored: only 2 of its 17 weight observable" in (
+        out
+    )
+    assert main(["dad", str(clip), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    kick = next(a for a in doc["activities"] if a["activity"] == "kick_left_front")
+    assert kick["score"] is None and kick["total_weight"] == 17
+    # The deep squat seen whole: its squat reads 33 of 38 weight observable (no heels).
+    whole = tmp_path / "whole.npz"
+    save_pose(squat, whole)
+    assert main(["dad", str(whole), "--top", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "squat: 33/33 weight in order (5 of 38 not observable)" in out
+
+
+def test_dad_refuses_a_clip_where_no_activity_is_half_observable(
+    squat: PoseSequence, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Both hips missing throughout: no activity has half its weight observable, and one used
+    to be crowned from the few QMPs left."""
+    seq = _without(_without(squat, "left_hip"), "right_hip")
+    result = detect(seq)
+    assert result.status == "not enough data" and result.best is None
+    assert "of its QMPs' weight observable" in result.message
+    clip = tmp_path / "legless.npz"
+    save_pose(seq, clip)
+    assert main(["dad", str(clip)]) == 1
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert "legless.npz" in captured.err and "not enough data" in captured.err
