@@ -88,3 +88,50 @@ def test_dad_refuses_a_clip_where_no_activity_is_half_observable(
     captured = capsys.readouterr()
     assert captured.out == ""
     assert "legless.npz" in captured.err and "not enough data" in captured.err
+
+
+def _resampled(seq: PoseSequence, fps: float) -> PoseSequence:
+    """``seq`` at ``fps``, each coordinate linearly interpolated in time (the same movement)."""
+    t0 = np.arange(seq.n_frames) / seq.fps
+    t1 = np.arange(0.0, t0[-1] + 1e-9, 1.0 / fps)
+    flat = seq.positions.reshape(seq.n_frames, -1)
+    cols = [np.interp(t1, t0, flat[:, c]) for c in range(flat.shape[1])]
+    pos = np.stack(cols, axis=1).reshape(len(t1), *seq.positions.shape[1:])
+    return replace(seq, positions=pos, fps=fps, confidence=None)
+
+
+def _spans_s(doc: dict, words: str) -> list[tuple[float, float]]:
+    return [
+        (r["start_s"], r["end_s"]) for r in doc["runs"] for s in r["states"] if s["words"] == words
+    ]
+
+
+def test_describe_default_min_run_is_a_time_not_a_frame_count(
+    squat: PoseSequence, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The deep squat's left knee bends from 0.60 to 0.93 s at 30 fps (10 frames). At 10 fps
+    those are 3-4 frames, and the default --min-run of 5 frames dropped the bending (and the
+    straightening) from the description; at 240 fps 5 frames (21 ms) let flicker split the
+    straightening in two. The default is 1/6 s: 5 frames at 30, 2 at 10, 40 at 240 fps."""
+    from posecbr.commands.describe import default_min_run
+
+    assert [default_min_run(f) for f in (10.0, 30.0, 240.0, 100.0)] == [2, 5, 40, 17]
+    docs = {}
+    for fps in (30.0, 10.0, 240.0):
+        clip = save_pose(_resampled(squat, fps), tmp_path / f"squat_{fps:g}.npz")
+        assert main(["describe", str(clip), "--json"]) == 0
+        docs[fps] = json.loads(capsys.readouterr().out)
+    for words in ("left knee bending", "left knee straightening"):
+        ((start, end),) = _spans_s(docs[30.0], words)
+        for fps in (10.0, 240.0):
+            spans = _spans_s(docs[fps], words)
+            assert len(spans) == 1, (fps, words, spans)
+            # the same stretch of time: overlapping at least half the 30-fps span
+            overlap = min(spans[0][1], end) - max(spans[0][0], start)
+            assert overlap >= 0.5 * (end - start), (fps, words, spans, (start, end))
+    # at 30 fps the default is the 5 frames it was: the same lines as --min-run 5
+    clip = tmp_path / "squat_30.npz"
+    assert main(["describe", str(clip)]) == 0
+    default = capsys.readouterr().out
+    assert main(["describe", str(clip), "--min-run", "5"]) == 0
+    assert capsys.readouterr().out == default

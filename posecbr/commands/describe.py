@@ -48,7 +48,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         type=int,
         default=None,  # None: not given (refused with --per-frame, which has no spans)
         metavar="N",
-        help="ignore flicker: drop spans shorter than N frames (default 5)",
+        help="ignore flicker: drop spans shorter than N frames (default: 5 at 30 fps, as many "
+        "as last 1/6 s at the clip's rate: 2 at 10 fps, 40 at 240 fps)",
     )
     p.add_argument(
         "--all",
@@ -69,6 +70,26 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="write a fluent timeline picture (.png, .svg, .pdf: by the name)",
     )
     p.set_defaults(func=run)
+
+
+DEFAULT_MIN_RUN = 5
+"""``--min-run``'s default, in frames at the fluents' reference rate (30 fps): 1/6 s."""
+
+
+def default_min_run(fps: float, reference_fps: float = 30.0) -> int:
+    """The frames of ``--min-run``'s default at ``fps``: :data:`DEFAULT_MIN_RUN` reference
+    frames, so the same movement reads the same at any rate (five frames at 10 fps were half a
+    second and dropped a knee's bending; at 240 fps a fiftieth and let flicker through)."""
+    return max(1, round(DEFAULT_MIN_RUN * fps / reference_fps))
+
+
+def _min_run(args: argparse.Namespace, fps: float, reference_fps: float) -> int:
+    """The frames a span must last: 1 frame by frame, ``--min-run`` given, or the default."""
+    if args.per_frame:
+        return 1
+    if args.min_run is None:
+        return default_min_run(fps, reference_fps)
+    return int(args.min_run)
 
 
 def _check_args(args: argparse.Namespace) -> None:
@@ -154,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
     if args.per_frame:  # the state names and words, from the first frame
         first = evaluate(seq.slice_frames(0, 1), table, backend="numpy")
         spool = _Spool(args.json, first, seq.fps)
-    min_run = 1 if args.per_frame else 5 if args.min_run is None else args.min_run
+    min_run = _min_run(args, seq.fps, table.reference_fps)
     tl = describe_clip(
         seq, table, args.min_confidence, min_run, args.all, per_frame=spool, backend=backend
     )
