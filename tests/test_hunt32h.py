@@ -135,3 +135,31 @@ def test_describe_default_min_run_is_a_time_not_a_frame_count(
     default = capsys.readouterr().out
     assert main(["describe", str(clip), "--min-run", "5"]) == 0
     assert capsys.readouterr().out == default
+
+
+def test_dad_says_a_window_has_too_few_frames_not_that_joints_are_missing(
+    squat: PoseSequence, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """At 5 fps (the bundled squat video's rate) a 2-s window is 10 frames and the QMP fit
+    needs 12 (twice its six basis functions): every window was "not enough data" and DAD
+    said "no QMP could be observed (joints missing, or gaps too long)" of a clip with every
+    joint in every frame."""
+    slow = _resampled(squat, 5.0)  # 2.4 s: 12 frames
+    assert not np.isnan(slow.positions[:, JOINT_INDEX["left_knee"]]).any()
+    clip = save_pose(slow, tmp_path / "slow.npz")
+    capsys.readouterr()
+    assert main(["dad", str(clip), "--window", "2"]) == 1
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.strip() == (
+        f"posecbr dad: error: {clip}: not enough data: a window of 2 s is 10 frames at 5 fps; "
+        "fitting QMPs needs at least 12 frames (2.4 s at this rate)"
+    )
+    # the whole clip cut to 10 frames (2 s, more than DAD's 0.5 s) is named as the clip
+    short = save_pose(slow.slice_frames(0, 10), tmp_path / "short.npz")
+    result = detect(load_clip(short))
+    assert result.status == "not enough data" and "joints missing" not in result.message
+    assert result.message.startswith("the clip is 10 frames at 5 fps")
+    # with 12 frames a window is judged
+    assert main(["dad", str(clip), "--window", "2.4"]) == 0
+    assert "best match: " in capsys.readouterr().out

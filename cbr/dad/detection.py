@@ -25,7 +25,7 @@ import numpy as np
 from features.errors import ConfigError
 from features.fluents import state_signals
 from features.poses import PoseSequence
-from features.qmp import QMPConfig, fit_signals
+from features.qmp import QMPConfig, fit_signals, sliding_windows
 from features.qmp.add import ADD, Activity, CriteriaResult, evaluate_criteria, load_add
 from features.values import is_number
 
@@ -165,6 +165,25 @@ def _too_short(duration: float, cfg: DADConfig) -> str:
     return f"clip lasts {duration:.2f} s; DAD needs at least {cfg.min_duration_s:g} s"
 
 
+def _too_few_frames(n_frames: int, fps: float, cfg: DADConfig) -> str:
+    """Why the windows of a clip of ``n_frames`` at ``fps`` are too short to fit QMPs in (a
+    5-fps video's 2-s window is 10 frames; the fit needs 12), or "" when they are not."""
+    windows = sliding_windows(n_frames, fps, cfg.window_s, cfg.step_s)
+    frames = int(windows[0, 1] - windows[0, 0])
+    need = cfg.qmp.min_frames(fps)
+    if frames >= need:
+        return ""
+    what = (
+        f"the clip is {frames} frames"
+        if len(windows) == 1 and frames == n_frames
+        else f"a window of {cfg.window_s:g} s is {frames} frames"
+    )
+    return (
+        f"{what} at {fps:g} fps; fitting QMPs needs at least {need} frames "
+        f"({need / fps:.2g} s at this rate)"
+    )
+
+
 def _unjudged(
     source: str,
     fps: float,
@@ -196,6 +215,9 @@ def detect_signals(
     duration = values.shape[0] / fps
     if duration < cfg.min_duration_s:
         return _unjudged(source, fps, duration, db, _too_short(duration, cfg))
+    short = _too_few_frames(values.shape[0], fps, cfg)
+    if short:  # every window would be "not enough data", as if joints were missing
+        return _unjudged(source, fps, duration, db, short)
     used = db.signals
     names = list(names)
     missing = [s for s in used if s not in names]
