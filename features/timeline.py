@@ -71,16 +71,44 @@ def _median_size(min_run: int) -> int:
     return min_run if min_run % 2 else min_run + 1
 
 
-def _clean(on: np.ndarray, min_run: int) -> np.ndarray:
+def _clean(on: np.ndarray, min_run: int, defined: np.ndarray | None = None) -> np.ndarray:
     """Each state's on/off track with a running median over ``min_run`` frames (flicker at a
-    threshold shorter than about half of that is not news for a reader)."""
+    threshold shorter than about half of that is not news for a reader), of the frames where
+    the state is ``defined`` (all when None): a frame whose joints are missing is no vote
+    against the state (a knee tracked every other frame was a state that never held for
+    five frames, and vanished from the description). A frame with no defined frame near it
+    stays off."""
     if min_run <= 1 or on.shape[0] <= 1:
         return on
-    from scipy.ndimage import median_filter  # scipy loads only when there is flicker to clean
+    if defined is None or defined.all():
+        from scipy.ndimage import median_filter  # scipy loads only for flicker to clean
 
-    size = (_median_size(min_run), 1)
-    cleaned: np.ndarray = median_filter(on.astype(np.uint8), size=size, mode="nearest")
-    return cleaned.astype(bool)
+        size = (_median_size(min_run), 1)
+        cleaned: np.ndarray = median_filter(on.astype(np.uint8), size=size, mode="nearest")
+        return cleaned.astype(bool)
+    # The median of 0/1 votes is their majority: counted over the defined frames alone, with
+    # the ends repeated as median_filter's "nearest" does.
+    half = _median_size(min_run) // 2
+    votes = np.pad(
+        np.stack([on & defined, defined]).astype(np.int32),
+        ((0, 0), (half, half), (0, 0)),
+        mode="edge",
+    )
+    sums = np.cumsum(votes, axis=1)
+    sums = np.concatenate([np.zeros_like(sums[:, :1]), sums], axis=1)
+    window = sums[:, 2 * half + 1 :] - sums[:, : -(2 * half + 1)]
+    cleaned = 2 * window[0] > window[1]
+    # An undefined frame is shown only inside a run: with a defined frame holding the state
+    # after cleaning within the window's half on either side (never at the edge of a stretch
+    # in which the person, or the joint, was not seen).
+    n = on.shape[0]
+    frames = np.arange(n)[:, None]
+    before = np.maximum.accumulate(np.where(defined, frames, -1), axis=0)
+    after = np.minimum.accumulate(np.where(defined, frames, n)[::-1], axis=0)[::-1]
+    cols = np.arange(on.shape[1])[None, :]
+    near = (before >= 0) & (frames - before <= half) & (after < n) & (after - frames <= half)
+    inside = near & cleaned[before.clip(0), cols] & cleaned[after.clip(max=n - 1), cols]
+    return np.asarray(cleaned & (defined | inside))
 
 
 @dataclass
@@ -291,7 +319,8 @@ def describe_clip(
         else:
             raw = on[own]  # a run's confidence: its mean where the state held, not in the
             # flicker the cleaning filled (a state shown is one that held)
-            tracker.add(start, _clean(on, min_run)[own], np.where(raw, conf, np.nan))
+            known = ~np.isnan(result.confidence)
+            tracker.add(start, _clean(on, min_run, known)[own], np.where(raw, conf, np.nan))
     assert tracker is not None  # a clip has at least one frame
     tracker.finish()
     return Timeline(

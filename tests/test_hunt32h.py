@@ -163,3 +163,50 @@ def test_dad_says_a_window_has_too_few_frames_not_that_joints_are_missing(
     # with 12 frames a window is judged
     assert main(["dad", str(clip), "--window", "2.4"]) == 0
     assert "best match: " in capsys.readouterr().out
+
+
+def test_describe_a_joint_seen_every_other_frame_is_still_described(
+    squat: PoseSequence, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The left knee tracked in every other frame (a joint at the edge of a video): each
+    frame without it counted as a frame its states did not hold, so "left knee bent" never
+    held five frames running and vanished from the description, while "right knee bent"
+    (frames 17-61) was there, and the knee was not listed as unavailable either."""
+    pos = squat.positions.copy()
+    pos[1::2, JOINT_INDEX["left_knee"]] = np.nan
+    clip = save_pose(replace(squat, positions=pos), tmp_path / "flicker.npz")
+    capsys.readouterr()
+    assert main(["describe", str(clip), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    ((start, end),) = [
+        (r["start_frame"], r["end_frame"])
+        for r in doc["runs"]
+        for s in r["states"]
+        if s["words"] == "left knee bent"
+    ]
+    whole = save_pose(squat, tmp_path / "whole.npz")
+    assert main(["describe", str(whole), "--json"]) == 0
+    ((s0, e0),) = [
+        (r["start_frame"], r["end_frame"])
+        for r in json.loads(capsys.readouterr().out)["runs"]
+        for s in r["states"]
+        if s["words"] == "left knee bent"
+    ]
+    assert abs(start - s0) <= 1 and abs(end - e0) <= 1, ((start, end), (s0, e0))
+
+
+def test_describe_claims_no_state_in_frames_where_nobody_was_seen(
+    squat: PoseSequence, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Every joint missing in frames 10-19: no span of any state may include them (the
+    missing frames are bridged only inside a run, never at its edge)."""
+    pos = squat.positions.copy()
+    pos[10:20] = np.nan
+    clip = save_pose(replace(squat, positions=pos), tmp_path / "gap.npz")
+    capsys.readouterr()
+    for extra in ([], ["--min-run", "9"]):
+        assert main(["describe", str(clip), "--json", *extra]) == 0
+        doc = json.loads(capsys.readouterr().out)
+        assert doc["runs"]
+        for r in doc["runs"]:  # end_frame exclusive
+            assert r["end_frame"] <= 10 or r["start_frame"] >= 20, r
