@@ -237,6 +237,12 @@ def parse_value(value: Any, where: str) -> float:
     return out
 
 
+MIN_DELTA = 1e-300
+"""The smallest ``delta``: ln((1 - ε)/ε) is at most 745 for any ε a float holds, so the
+slope stays finite (a delta of 1e-320 overflowed to an infinite slope, with a RuntimeWarning
+for every command that used the table)."""
+
+
 def _threshold(raw: Any, where: str) -> Threshold:
     if not isinstance(raw, Mapping) or set(raw) - {"tau", "delta"} or not raw:
         raise ConfigError("expected a table with keys tau and/or delta", where)
@@ -244,6 +250,12 @@ def _threshold(raw: Any, where: str) -> Threshold:
     delta = parse_value(raw["delta"], f"{where}.delta") if "delta" in raw else math.nan
     if "delta" in raw and delta <= 0:
         raise ConfigError(f"delta must be positive, got {raw['delta']!r}", f"{where}.delta")
+    if "delta" in raw and delta < MIN_DELTA:  # the logistic's slope ln(..)/delta overflows
+        raise ConfigError(
+            f"delta must be at least {MIN_DELTA:g} (the confidence's slope would be "
+            f"infinite), got {raw['delta']!r}",
+            f"{where}.delta",
+        )
     return Threshold(tau, delta)
 
 

@@ -114,6 +114,9 @@ CASES: list[tuple[str, str, str | bytes, str]] = [
      "value is too large"),
     ("delta zero", "t.toml", "[fluents.leg_bent.lower]\ndelta = 0\n",
      "delta must be positive"),
+    # found by hunt 32h: accepted, then an infinite slope and a RuntimeWarning in describe
+    ("delta subnormal", "t.json", '{"fluents": {"leg_bent": {"lower": {"delta": 1e-320}}}}',
+     "delta must be at least 1e-300 (the confidence's slope would be infinite), got 1e-320"),
     ("upper tau below lower tau", "t.toml", "[fluents.arm_raised.upper]\ntau = 0.5\n",
      "upper tau is below lower tau"),
     ("an upper boundary on a two-state fluent", "t.toml", "[fluents.leg_bent.upper]\ntau = 3\n",
