@@ -72,23 +72,23 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.set_defaults(func=run)
 
 
-DEFAULT_MIN_RUN = 5
-"""``--min-run``'s default, in frames at the fluents' reference rate (30 fps): 1/6 s."""
+DEFAULT_MIN_RUN_S = 1 / 6
+"""``--min-run``'s default as a time: five frames at 30 fps."""
 
 
-def default_min_run(fps: float, reference_fps: float = 30.0) -> int:
-    """The frames of ``--min-run``'s default at ``fps``: :data:`DEFAULT_MIN_RUN` reference
-    frames, so the same movement reads the same at any rate (five frames at 10 fps were half a
-    second and dropped a knee's bending; at 240 fps a fiftieth and let flicker through)."""
-    return max(1, round(DEFAULT_MIN_RUN * fps / reference_fps))
+def default_min_run(fps: float) -> int:
+    """The frames of ``--min-run``'s default at ``fps``: :data:`DEFAULT_MIN_RUN_S`, so the
+    same movement reads the same at any rate (five frames at 10 fps were half a second and
+    dropped a knee's bending; at 240 fps a fiftieth and let flicker through)."""
+    return max(1, round(DEFAULT_MIN_RUN_S * fps))
 
 
-def _min_run(args: argparse.Namespace, fps: float, reference_fps: float) -> int:
+def _min_run(args: argparse.Namespace, fps: float) -> int:
     """The frames a span must last: 1 frame by frame, ``--min-run`` given, or the default."""
     if args.per_frame:
         return 1
     if args.min_run is None:
-        return default_min_run(fps, reference_fps)
+        return default_min_run(fps)
     return int(args.min_run)
 
 
@@ -175,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
     if args.per_frame:  # the state names and words, from the first frame
         first = evaluate(seq.slice_frames(0, 1), table, backend="numpy")
         spool = _Spool(args.json, first, seq.fps)
-    min_run = _min_run(args, seq.fps, table.reference_fps)
+    min_run = _min_run(args, seq.fps)
     tl = describe_clip(
         seq, table, args.min_confidence, min_run, args.all, per_frame=spool, backend=backend
     )
