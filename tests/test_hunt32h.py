@@ -210,3 +210,24 @@ def test_describe_claims_no_state_in_frames_where_nobody_was_seen(
         assert doc["runs"]
         for r in doc["runs"]:  # end_frame exclusive
             assert r["end_frame"] <= 10 or r["start_frame"] >= 20, r
+
+
+def test_describe_per_frame_says_when_nobody_was_seen(
+    squat: PoseSequence, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A frame with every joint missing read "(no state above the threshold)", as if the
+    person had been seen doing nothing in particular."""
+    pos = squat.positions.copy()
+    pos[10:20] = np.nan
+    clip = save_pose(replace(squat, positions=pos), tmp_path / "gap.npz")
+    capsys.readouterr()
+    assert main(["describe", str(clip), "--per-frame"]) == 0
+    lines = {
+        int(line.split(":")[0].split()[1]): line
+        for line in capsys.readouterr().out.splitlines()
+        if line.startswith("frame ")
+    }
+    assert len(lines) == squat.n_frames
+    for k in range(10, 20):
+        assert lines[k] == f"frame {k}: (nobody seen: every joint missing)"
+    assert "nobody" not in lines[9] and "nobody" not in lines[20]

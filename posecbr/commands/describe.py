@@ -7,7 +7,7 @@ import json
 import shutil
 import sys
 import tempfile
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from features.errors import DataError, PosecbrError
 from features.fileio import check_output
@@ -108,6 +108,9 @@ def _check_args(args: argparse.Namespace) -> None:
         picture_format(args.plot)
 
 
+NOBODY = "(nobody seen: every joint missing)"
+
+
 def _run_line(r: Run, layout: FluentResult) -> str:
     from features.timeline import phrase_list
 
@@ -133,8 +136,8 @@ class _Spool:
     """Per-frame output kept on disk (past 32 MB) until the header is known: a long clip's
     frames are never all held in memory."""
 
-    def __init__(self, as_json: bool, layout: FluentResult, fps: float) -> None:
-        self.as_json, self.layout, self.fps = as_json, layout, fps
+    def __init__(self, as_json: bool, layout: FluentResult, fps: float, unseen: Any = None) -> None:
+        self.as_json, self.layout, self.fps, self.unseen = as_json, layout, fps, unseen
         self.file = tempfile.SpooledTemporaryFile(max_size=32 * 1024**2, mode="w+")
         self.empty = True
 
@@ -145,7 +148,10 @@ class _Spool:
             item = json.dumps(runs_to_json([run], self.fps)[0])
             self.file.write(item if self.empty else ",\n" + item)
         else:
-            self.file.write(_run_line(run, self.layout) + "\n")
+            nobody = self.unseen is not None and not run.states and self.unseen[run.start]
+            self.file.write(
+                (f"frame {run.start}: {NOBODY}" if nobody else _run_line(run, self.layout)) + "\n"
+            )
         self.empty = False
 
     def copy_to(self, out: TextIO) -> None:
@@ -174,7 +180,8 @@ def run(args: argparse.Namespace) -> int:
     spool = None
     if args.per_frame:  # the state names and words, from the first frame
         first = evaluate(seq.slice_frames(0, 1), table, backend="numpy")
-        spool = _Spool(args.json, first, seq.fps)
+        unseen = np.isnan(seq.positions).all(axis=(1, 2))  # (frames,): nobody in the frame
+        spool = _Spool(args.json, first, seq.fps, unseen)
     min_run = _min_run(args, seq.fps)
     tl = describe_clip(
         seq, table, args.min_confidence, min_run, args.all, per_frame=spool, backend=backend
