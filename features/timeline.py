@@ -80,14 +80,10 @@ def _clean(on: np.ndarray, min_run: int, defined: np.ndarray | None = None) -> n
     stays off."""
     if min_run <= 1 or on.shape[0] <= 1:
         return on
-    if defined is None or defined.all():
-        from scipy.ndimage import median_filter  # scipy loads only for flicker to clean
-
-        size = (_median_size(min_run), 1)
-        cleaned: np.ndarray = median_filter(on.astype(np.uint8), size=size, mode="nearest")
-        return cleaned.astype(bool)
-    # The median of 0/1 votes is their majority: counted over the defined frames alone, with
-    # the ends repeated as median_filter's "nearest" does.
+    if defined is None:
+        defined = np.ones_like(on, dtype=bool)
+    # The median of 0/1 votes is their majority (scipy's median_filter, which cannot leave
+    # out the undefined frames): counted over the defined frames alone, the ends repeated.
     half = _median_size(min_run) // 2
     votes = np.pad(
         np.stack([on & defined, defined]).astype(np.int32),

@@ -231,3 +231,18 @@ def test_describe_per_frame_says_when_nobody_was_seen(
     for k in range(10, 20):
         assert lines[k] == f"frame {k}: (nobody seen: every joint missing)"
     assert "nobody" not in lines[9] and "nobody" not in lines[20]
+
+
+@pytest.mark.parametrize("min_run", [2, 5, 8])
+def test_cleaning_with_every_frame_known_is_scipys_running_median(min_run: int) -> None:
+    """With every frame known the running majority is the running median of the on/off
+    tracks that scipy's ``median_filter`` (ends repeated: ``mode="nearest"``) gives, of an
+    odd window of ``min_run`` frames (one more when even)."""
+    from scipy.ndimage import median_filter
+
+    from features.timeline import _clean
+
+    on = np.random.default_rng(min_run).random((200, 7)) < 0.5
+    size = min_run if min_run % 2 else min_run + 1
+    expected = median_filter(on.astype(np.uint8), size=(size, 1), mode="nearest").astype(bool)
+    np.testing.assert_array_equal(_clean(on, min_run), expected)

@@ -97,12 +97,13 @@ def _describe(clip: Path, tmp_path: Path) -> tuple[dict[str, Any], set[str]]:
     return doc, loaded
 
 
-def test_describe_of_a_short_clip_loads_only_numpy_and_scipy(tmp_path: Path) -> None:
+def test_describe_of_a_short_clip_loads_only_numpy(tmp_path: Path) -> None:
     doc, loaded = _describe(CLIP, tmp_path)
     assert doc["frames"] == 73 and doc["runs"]
     # one short clip: the numpy reference (numba would take longer to load its kernels than
-    # they save); the spans are median-cleaned (scipy); no case base, estimator, plot or video
-    assert loaded == {"numpy", "scipy"}
+    # they save); the spans are cleaned by a running majority in numpy; no scipy, case base,
+    # estimator, plot or video
+    assert loaded == {"numpy"}
 
 
 def test_describe_of_a_long_clip_uses_the_compiled_kernels(tmp_path: Path) -> None:
