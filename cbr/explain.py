@@ -124,10 +124,12 @@ def said(value: float, unit: str) -> str:
 
 def _span(low: float, high: float, unit: str) -> str:
     """A range in a unit: 45–80°, 0.20–0.60 (mean confidences; torso lengths, said with the
-    value)."""
+    value); one value when both ends read alike (159°, not 159–159°)."""
     if unit == "degrees":
-        return f"{low:.0f}–{high:.0f}°"
-    return f"{low:.2f}–{high:.2f}"
+        a, b = f"{low:.0f}", f"{high:.0f}"
+        return f"{a}°" if a == b else f"{a}–{b}°"
+    a, b = f"{low:.2f}", f"{high:.2f}"
+    return a if a == b else f"{a}–{b}"
 
 
 def label_words(label: str, target: str | None = None, article: bool = True) -> str:
@@ -599,8 +601,11 @@ def _change_text(c: Claim) -> str:
     if c.unit == "detected":
         return f"{'not ' if c.there is not None and c.there < 0.5 else ''}show {c.words}"
     there = c.there if c.there is not None else float("nan")
-    here = "not seen" if c.here is None else said(c.here, c.unit)
-    return f"{c.words} {here} → {said(there, c.unit)}"
+    if c.here is None:
+        return f"{c.words} not seen → {said(there, c.unit)}"
+    # the unit's words once: "mean confidence 0.96 → 0.79", "62° → 80°"
+    to = f"{there:.2f}" if c.unit in ("share", "confidence") else said(there, c.unit)
+    return f"{c.words} {said(c.here, c.unit)} → {to}"
 
 
 def _claim_text(c: Claim, whose: str) -> str:

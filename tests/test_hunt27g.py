@@ -12,6 +12,7 @@ following SPEC.md's angles, thresholds and confidence formula (not the project's
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -68,3 +69,19 @@ def test_a_mean_confidence_is_not_said_as_a_share_of_the_time() -> None:
     assert _span(0.66, 0.85, quantity("torso_tilted_forward.tilted_forward@mean", 0.7)[1]) == (
         "0.66–0.85"
     )
+
+
+def test_a_change_says_its_unit_once_and_a_one_value_range_once() -> None:
+    """A counterfactual change read "right leg raised mean confidence 0.96 → mean confidence
+    0.79" (the unit's words twice) and a range of cases that agree "159–159°"."""
+    from cbr.explain import Claim, _change_text
+
+    share = Claim("change", "c", "f", "right leg raised", 0.96, "share", there=0.79)
+    assert _change_text(share) == "right leg raised mean confidence 0.96 → 0.79"
+    angle = Claim("change", "c", "f", "left knee angle (lowest)", 62.4, "degrees", there=80.2)
+    assert _change_text(angle) == "left knee angle (lowest) 62° → 80°"
+    unseen = dataclasses.replace(share, here=None)
+    assert _change_text(unseen) == "right leg raised not seen → mean confidence 0.79"
+    assert _span(159.2, 158.9, "degrees") == "159°"
+    assert _span(45.0, 80.0, "degrees") == "45–80°"
+    assert _span(0.201, 0.204, "share") == "0.20"
