@@ -25,6 +25,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 # FFmpeg prints decoder complaints straight to stderr; a user should see one clear line from
 # posecbr instead. Must be set before OpenCV first opens a video.
@@ -211,11 +212,25 @@ def span_s(times: list[float], fps: float) -> float | None:
     return times[-1] - times[0] + 1.0 / fps
 
 
+def strays(elapsed_s: Any, index: Any, fps: float) -> Any:
+    """Whether a frame ``elapsed_s`` after the first (scalars or arrays) lies more than
+    :data:`VFR_TOLERANCE` of a frame from ``index / fps``; a NaN time strays not."""
+    return np.abs(np.asarray(elapsed_s) * fps - index) > VFR_TOLERANCE
+
+
 def irregular(times: np.ndarray, fps: float) -> bool:
-    """Whether frame times (s; usable) stray more than :data:`VFR_TOLERANCE` of a frame from
-    ``first + index / fps``: a variable frame rate (or a rate the container misstates)."""
+    """Whether frame times (s; usable) stray from ``first + index / fps`` (:func:`strays`):
+    a variable frame rate (or a rate the container misstates)."""
     tau = times - times[0]
-    return bool(np.abs(tau * fps - np.arange(tau.size)).max() > VFR_TOLERANCE)
+    return bool(strays(tau, np.arange(tau.size), fps).any())
+
+
+def blend(left: Any, right: Any, w: Any) -> Any:
+    """``(1 - w) left + w right``, a missing (NaN) value in either staying missing, except
+    that a weight within rounding of 0 or 1 takes that side whole (a time on a frame is that
+    frame, whatever its neighbour lacks)."""
+    mixed = (1.0 - w) * left + w * right
+    return np.where(w <= 1e-9, left, np.where(w >= 1.0 - 1e-9, right, mixed))
 
 
 def resample_to_grid(
@@ -234,11 +249,7 @@ def resample_to_grid(
     j = np.clip(before, 0, tau.size - 2)
     w = (grid - tau[j]) / (tau[j + 1] - tau[j])
     w = w.reshape((-1,) + (1,) * (values.ndim - 1))
-    left, right = values[j], values[j + 1]
-    mixed = (1.0 - w) * left + w * right
-    # a grid time on a frame (up to rounding) is that frame: its neighbour's gap is no matter
-    out = np.where(w <= 1e-9, left, np.where(w >= 1.0 - 1e-9, right, mixed))
-    return out, before
+    return blend(values[j], values[j + 1], w), before
 
 
 def check_whole(
@@ -316,7 +327,7 @@ def estimate_video(
             break
         times.append(t)
         if on_grid and i and math.isfinite(t) and math.isfinite(times[0]):
-            on_grid = abs((t - times[0]) * info.fps - i) <= VFR_TOLERANCE
+            on_grid = not strays(t - times[0], i, info.fps)
         # once the times stray, the temporal filters get the frames' own times
         since = t - times[0]
         pose = est.process(rgb, i / info.fps if on_grid or not math.isfinite(since) else since)
@@ -549,7 +560,7 @@ def stream_poses(
                 times.append(frame_time_s(cap))
                 video_t = times[-1] - times[0]
                 # as estimate_video times the filters: index / fps until the frames stray
-                on_grid = on_grid and not abs(video_t * fps - index) > VFR_TOLERANCE
+                on_grid = on_grid and not strays(video_t, index, fps)
             rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
             at = t if on_grid or not math.isfinite(video_t) else video_t
             yield StreamFrame(index, t, est.process(rgb, at), rgb, read_at, video_t)

@@ -484,11 +484,11 @@ class Regrid:
 
         import numpy as np
 
-        from features.pose_estimation.video import VFR_TOLERANCE
+        from features.pose_estimation.video import blend, strays
 
         t = frame.video_time_s
         if not self.resampling:
-            if not math.isfinite(t) or abs(t * self.fps - frame.index) <= VFR_TOLERANCE:
+            if not strays(t, frame.index, self.fps):
                 self.prev, self.k = frame, frame.index + 1
                 return [(frame.seen_world, frame.visibility, frame)]
             self.resampling = True
@@ -504,13 +504,9 @@ class Regrid:
         out = []
         while self.k / self.fps <= t + 1e-9:
             w = (self.k / self.fps - prev.video_time_s) / (t - prev.video_time_s)
-            if w >= 1.0 - 1e-9:
-                out.append((frame.seen_world, frame.visibility, frame))
-            else:
-                w = max(w, 0.0)
-                world = (1.0 - w) * prev.seen_world + w * frame.seen_world
-                vis = (1.0 - w) * np.asarray(prev.visibility) + w * frame.visibility
-                out.append((world, vis, prev))
+            world = blend(prev.seen_world, frame.seen_world, w)
+            vis = blend(np.asarray(prev.visibility), np.asarray(frame.visibility), w)
+            out.append((world, vis, frame if w >= 1.0 - 1e-9 else prev))
             self.k += 1
         self.prev = frame
         return out
