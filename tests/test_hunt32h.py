@@ -16,6 +16,7 @@ from features.datasets import load_clip
 from features.poses import PoseSequence, save_pose
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
+from tests.badinput import refused
 
 KINECT_SQUAT = "ui-prmd/data/Segmented Movements/Kinect/Positions/m01_s01_e01_positions.txt.gz"
 
@@ -84,10 +85,8 @@ def test_dad_refuses_a_clip_where_no_activity_is_half_observable(
     assert "of its QMPs' weight observable" in result.message
     clip = tmp_path / "legless.npz"
     save_pose(seq, clip)
-    assert main(["dad", str(clip)]) == 1
-    captured = capsys.readouterr()
-    assert captured.out == ""
-    assert "legless.npz" in captured.err and "not enough data" in captured.err
+    capsys.readouterr()
+    refused(["dad", str(clip)], tmp_path, capsys, "legless.npz", "not enough data")
 
 
 def _resampled(seq: PoseSequence, fps: float) -> PoseSequence:
@@ -148,10 +147,8 @@ def test_dad_says_a_window_has_too_few_frames_not_that_joints_are_missing(
     assert not np.isnan(slow.positions[:, JOINT_INDEX["left_knee"]]).any()
     clip = save_pose(slow, tmp_path / "slow.npz")
     capsys.readouterr()
-    assert main(["dad", str(clip), "--window", "2"]) == 1
-    captured = capsys.readouterr()
-    assert captured.out == ""
-    assert captured.err.strip() == (
+    line = refused(["dad", str(clip), "--window", "2"], tmp_path, capsys)
+    assert line == (
         f"posecbr dad: error: {clip}: not enough data: a window of 2 s is 10 frames at 5 fps; "
         "fitting QMPs needs at least 12 frames (2.4 s at this rate)"
     )
