@@ -966,15 +966,13 @@ class CaseStore:
         return row
 
     def _info(self, s: Session, r: CaseBaseRow) -> CaseBaseInfo:
-        counts = dict(
-            sorted(  # by code point on every backend (as list_case_bases sorts names)
-                s.execute(
-                    select(CaseRow.label, func.count(CaseRow.id))
-                    .where(CaseRow.case_base_id == r.id, CaseRow.active.is_(True))
-                    .group_by(CaseRow.label)
-                ).tuples()
-            )
+        rows = s.execute(
+            select(CaseRow.label, func.count(CaseRow.id))
+            .where(CaseRow.case_base_id == r.id, CaseRow.active.is_(True))
+            .group_by(CaseRow.label)
         )
+        # by code point on every backend (as list_case_bases sorts names)
+        counts = dict(sorted((label, n) for label, n in rows))
         what = f"configuration of case base {r.name!r}"
         info = CaseBaseInfo(
             id=r.id,

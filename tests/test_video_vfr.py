@@ -109,6 +109,25 @@ def test_resample_to_grid_is_linear_between_neighbours_and_keeps_missing_missing
     assert before.tolist() == [0, 1, 2, 2, 3]
 
 
+def test_extract_and_watch_resample_the_same_way() -> None:
+    """Frames at 0, 0.08, 0.2, 0.35 and 0.4 s of a 10 fps file: 0.08 s lies within a quarter
+    frame of 0.1 s, so it is on the grid, as ``watch`` takes it while no frame has strayed yet
+    (it cannot know the future); 0.35 s strays. Both give v0, v1, v2, then 0.3 s two thirds
+    of the way from 0.2 to 0.35 s, then the last frame. ``extract`` had blended 0.1 s from
+    0.08 and 0.2 s, so ``segment`` and ``watch`` of one video could label it differently."""
+    times = [0.0, 0.08, 0.2, 0.35, 0.4]
+    values = np.array([0.0, 1.0, 4.0, 10.0, 7.0])
+    expected = [0.0, 1.0, 4.0, 4.0 + (10.0 - 4.0) * 2 / 3, 7.0]
+    grid, before = resample_to_grid(np.array(times), values, 10.0)
+    np.testing.assert_allclose(grid, expected, rtol=0, atol=1e-12)
+    assert before.tolist() == [0, 1, 2, 2, 4]
+    live = Regrid(10.0, "phone.mp4")
+    worlds = [np.full((33, 3), v) for v in values]
+    steps = [live.take(_frame(i, t, worlds[i])) for i, t in enumerate(times)]
+    pushed = [float(w[0, 0]) for step in steps for w, _vis, _shown in step]
+    assert pushed == pytest.approx(expected, abs=1e-12)
+
+
 def test_a_variable_rate_video_is_resampled_to_its_declared_rate(
     vfr_mkv: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -10,9 +10,9 @@ Variable frame rate (phone videos often are): each decoded frame's presentation 
 from OpenCV (``CAP_PROP_POS_MSEC`` after the read; with the FFmpeg backend the frame's own
 timestamp). When some frame lies more than :data:`VFR_TOLERANCE` of a frame interval away from
 ``index / fps`` (``fps``: the rate the container declares), :func:`estimate_video` puts the
-poses on a uniform grid at that declared rate by linear interpolation between the two decoded
-frames around each grid time (:func:`resample_to_grid`). A constant-rate video is left as it
-was decoded.
+poses from there on on a uniform grid at that declared rate by linear interpolation between the
+two decoded frames around each grid time (:func:`resample_to_grid`), as ``watch`` does while
+the frames come. A constant-rate video is left as it was decoded.
 """
 
 from __future__ import annotations
@@ -237,17 +237,21 @@ def resample_to_grid(
     times: np.ndarray, values: np.ndarray, fps: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """``values`` (frames first) sampled at ``times`` (s, strictly increasing), put on the
-    uniform grid ``times[0] + k / fps`` for k = 0 .. floor((last - first) * fps): each grid
-    value is the linear interpolation between the decoded frames just before and just after
-    it (a grid time on a frame takes that frame's value). A value missing (NaN) in either
-    neighbour stays missing. Returns (the grid values, the index of the frame at or before
-    each grid time)."""
+    uniform grid ``times[0] + k / fps``, as ``watch`` puts them as the frames come: the frames
+    before the first that :func:`strays` lie on the grid and are taken as they are; every grid
+    time from there to the last frame's is the linear interpolation between the decoded frames
+    just before and just after it (a grid time on a frame takes that frame's value). A value
+    missing (NaN) in either neighbour stays missing. Returns (the grid values, the index of
+    the frame at or before each grid time)."""
     tau = np.asarray(times, dtype=np.float64) - times[0]
-    n = int(np.floor(tau[-1] * fps + 1e-9)) + 1
-    grid = np.arange(n) / fps
-    before = np.searchsorted(tau, grid, side="right") - 1
+    stray = np.flatnonzero(strays(tau, np.arange(tau.size), fps))
+    s = int(stray[0]) if stray.size else tau.size  # frames 0 .. s-1: on the grid
+    k = np.arange(s, int((tau[-1] + 1e-9) * fps) + 2)
+    grid = k[k / fps <= tau[-1] + 1e-9] / fps  # the grid times after them, to the last frame
+    before = np.concatenate([np.arange(s), np.searchsorted(tau, grid, side="right") - 1])
     j = np.clip(before, 0, tau.size - 2)
-    w = (grid - tau[j]) / (tau[j + 1] - tau[j])
+    t = np.concatenate([tau[:s], grid])  # an on-grid frame: at its own time, weight 0
+    w = (t - tau[j]) / (tau[j + 1] - tau[j])
     w = w.reshape((-1,) + (1,) * (values.ndim - 1))
     return blend(values[j], values[j + 1], w), before
 
