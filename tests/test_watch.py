@@ -606,7 +606,10 @@ def test_watch_and_segment_agree_on_a_variable_frame_rate_video(
     """The reverse lunge of the test above re-timed at irregular intervals (gaps of 30, 50,
     40, 60 and 20 ms, 40 on average: the 25 fps it declares): both resample it to 25 fps
     (``watch`` as the frames come), so both give the same segments and repetitions; each
-    says once that it resampled. Both had timed the frames as evenly spaced, silently."""
+    says once that it resampled. Both had timed the frames as evenly spaced, silently. (PyAV's
+    x264 does not give the same bits each run, so the labels may vary from run to run; the
+    agreement must hold whatever they are: it failed once in CI while extraction still blended
+    the frames before the first off-grid one.)"""
     av = pytest.importorskip("av", reason="PyAV writes the variable-frame-rate video")
     from fractions import Fraction
 
