@@ -46,6 +46,7 @@ from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 from features.progress import progress
 from features.text import counted
 
+from .handedness import right_handed
 from .poses import PoseSequence, load_pose, pose_file_length
 from .readers.asfamc import hdm05_metadata, read_asf_amc
 from .readers.bvh import read_bvh
@@ -118,7 +119,7 @@ def load_clip(path: str | Path) -> PoseSequence:
         raise DataError("is a folder, not a clip file (give one of the clips in it)", path)
     suffix = _suffix(path)
     if suffix in POSE_SUFFIXES:
-        return load_pose(path).to_canonical()
+        return right_handed(load_pose(path).to_canonical())
     if suffix == ".bvh":
         return read_bvh(path)
     if suffix in VIDEO_SUFFIXES:

@@ -48,6 +48,7 @@ import numpy as np
 
 from features.errors import DataError
 
+from ..handedness import right_handed
 from ..poses import PoseSequence
 from ..skeleton import BLAZEPOSE_33
 from ._common import read_text, to_canonical
@@ -670,7 +671,7 @@ def read_asf_amc(
     positions = to_canonical(ends, names, joint_map)
     _check_limbs_given(skel, motion, positions)
     rate, rate_source = (float(fps), "given") if fps is not None else amc_frame_rate(amc)
-    return PoseSequence(
+    seq = PoseSequence(
         positions=positions,
         joint_names=BLAZEPOSE_33,
         fps=rate,
@@ -678,6 +679,7 @@ def read_asf_amc(
         source=str(amc),
         metadata={"asf": str(asf_path), "fps_source": rate_source, **hdm05_metadata(amc)},
     )
+    return right_handed(seq)
 
 
 def _joint_map(skel: Skeleton) -> dict[str, str]:

@@ -34,6 +34,7 @@ import numpy as np
 
 from features.errors import DataError
 
+from ..handedness import right_handed
 from ..poses import PoseSequence
 from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
 from ._common import read_text
@@ -283,7 +284,7 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
     rest, rest_ends = _forward(joints, np.zeros((1, n_chan)))
     pos, ends, rest, rest_ends = _y_up((pos, ends, rest, rest_ends), up, path)
     unit_name, scale = _unit(unit, rest[0], rest_ends[0], path)
-    return PoseSequence(
+    seq = PoseSequence(
         positions=_to_blazepose(joints, pos, ends) * scale,
         joint_names=BLAZEPOSE_33,
         fps=frame_rate(frame_time, text_time),
@@ -291,6 +292,7 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
         source=str(path),
         metadata={"bvh_unit": unit_name},
     )
+    return right_handed(seq)
 
 
 def _motion_header(tokens: list[str], i: int, path: Path) -> tuple[int, float]:

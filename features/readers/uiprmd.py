@@ -81,6 +81,7 @@ import numpy as np
 
 from features.errors import DataError
 
+from ..handedness import right_handed
 from ..poses import PoseSequence
 from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
 from ._common import read_csv_matrix, to_canonical
@@ -286,7 +287,7 @@ def read_uiprmd_kinect(
         "fps_source": "assumed: UI-PRMD's Kinect rate; the files carry no time",
         **uiprmd_metadata(ppath),
     }
-    return PoseSequence(
+    seq = PoseSequence(
         positions=to_canonical(joints, KINECT_JOINTS, KINECT_TO_BLAZEPOSE),
         joint_names=BLAZEPOSE_33,
         fps=KINECT_FPS,
@@ -294,6 +295,7 @@ def read_uiprmd_kinect(
         source=str(ppath),
         metadata=meta,
     )
+    return right_handed(seq)
 
 
 def read_uiprmd_vicon_markers(path: str | Path) -> np.ndarray:
@@ -407,11 +409,13 @@ def read_uiprmd_vicon(path: str | Path) -> PoseSequence:
         "fps_source": "assumed: UI-PRMD's Vicon rate, inferred upstream; the files carry no time",
         **uiprmd_metadata(path),
     }
-    return PoseSequence(
-        positions=out,
-        joint_names=BLAZEPOSE_33,
-        fps=VICON_FPS,
-        skeleton="uiprmd_vicon",
-        source=str(path),
-        metadata=meta,
+    return right_handed(
+        PoseSequence(
+            positions=out,
+            joint_names=BLAZEPOSE_33,
+            fps=VICON_FPS,
+            skeleton="uiprmd_vicon",
+            source=str(path),
+            metadata=meta,
+        )
     )
