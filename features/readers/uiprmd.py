@@ -175,15 +175,23 @@ def uiprmd_sensor(positions_path: Path) -> str:
 def angles_path_for(positions_path: Path) -> Path:
     """The angles file that belongs to a Kinect positions file.
 
-    Looks beside it, then in the sibling ``Angles`` folder (the UI-PRMD layout).
+    Looks beside it, then in the sibling ``Angles`` folder (the UI-PRMD layout); in each, the
+    name with the positions file's compression first, then the same file gzipped or not
+    (``..._angles.txt`` for ``..._positions.txt.gz``: one of the two decompressed). When there
+    is none, the name beside it (for the message that says so).
     """
     name = positions_path.name.replace("_positions", "_angles")
-    beside = positions_path.with_name(name)
-    if beside.exists():
-        return beside
+    other = name.removesuffix(".gz") if name.endswith(".gz") else name + ".gz"
+    folders = [positions_path.parent]
     if positions_path.parent.name == "Positions":
-        return positions_path.parent.parent / "Angles" / name
-    return beside
+        folders.append(positions_path.parent.parent / "Angles")
+    for folder in folders:
+        for candidate in (folder / name, folder / other):
+            if candidate.exists():
+                return candidate
+    if len(folders) > 1:
+        return folders[1] / name
+    return positions_path.with_name(name)
 
 
 def kinect_forward_kinematics(offsets: np.ndarray, angles_deg: np.ndarray) -> np.ndarray:
