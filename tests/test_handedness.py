@@ -188,6 +188,9 @@ def test_reflected_bvh_reads_as_the_original(
     out = load_pose(tmp_path / "out" / "flipped.npz")
     np.testing.assert_allclose(out.positions, want.positions, atol=1e-9)
     assert METADATA_KEY in out.metadata
+    # the pose file says it, not a column of labels.csv (a sentence in every row)
+    header = (tmp_path / "out" / "labels.csv").read_text().splitlines()[0]
+    assert header == "path,label,subject,bvh_unit"
 
 
 def test_too_little_evidence_is_left_alone(capsys: pytest.CaptureFixture[str]) -> None:

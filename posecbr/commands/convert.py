@@ -138,7 +138,8 @@ def parse_ranges(value: str | None) -> Ranges | None:
 
 
 _RESERVED_COLUMNS = ("path", "label", "subject", "start", "end")
-_INTERNAL = ("source", "asf", "origin", "fps_source")  # a clip's extras not made columns
+# a clip's extras not made columns
+_INTERNAL = ("source", "asf", "origin", "fps_source", "x_reflected")
 # What a pose file convert writes says itself, in any case: a labels CSV column of that name
 # would be overwritten, or read back as something else, so it is refused.
 _WRITTEN = {
@@ -147,6 +148,7 @@ _WRITTEN = {
     "made_from": "what a pose file was made from",
     "fps_source": "where the frame rate came from",
     "asf": "an AMC clip's skeleton file",
+    "x_reflected": "why a recording written left-handed was read with x negated",
 }
 
 
