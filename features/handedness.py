@@ -80,7 +80,10 @@ def reflected_evidence(positions: np.ndarray) -> tuple[float, int]:
 def is_reflected(positions: np.ndarray) -> bool:
     """Whether canonical positions ``(frames, 33, 3)`` are a reflected (left-handed) body by
     clear evidence: median cue at most ``-MARGIN`` over at least ``MIN_CUES`` values."""
-    median, n = reflected_evidence(positions)
+    return _clear(*reflected_evidence(positions))
+
+
+def _clear(median: float, n: int) -> bool:
     return n >= MIN_CUES and median <= -MARGIN
 
 
@@ -89,11 +92,12 @@ def right_handed(seq: PoseSequence, *, announce: bool = True) -> PoseSequence:
     positions), with x negated: the metadata's ``x_reflected`` says why, and (``announce``)
     one note line on stderr names the file."""
     median, n = reflected_evidence(seq.to_canonical().positions)
-    if not (n >= MIN_CUES and median <= -MARGIN):
+    if not _clear(median, n):
         return seq
     why = (
-        "read with x negated: written left-handed (x reflected, left/right names kept), its toes"
-        f" and nose pointed behind its body (median cue {median:+.2f} of {n}; -1 = reflected)"
+        "read with x negated: written left-handed (x reflected, left/right names kept), its toes,"
+        " heels and nose (those it has) pointed behind its body (median cue"
+        f" {median:+.2f} of {n}; -1 = reflected)"
     )
     pos = seq.positions.copy()
     pos[..., 0] *= -1.0
