@@ -15,6 +15,11 @@ keeps it), -1 for a reflected one. A recording is read with x negated when the m
 its frames' cues is at most ``-MARGIN`` from at least ``MIN_CUES`` values, and says so in its
 metadata (``x_reflected``) and in one note line on stderr.
 
+A reflection of z instead is read back by the same negation of x as the same body turned half
+way round the vertical, which changes no description (every direction is the body's own or
+about the vertical); one of y (upside down as well) is not told from lying exercises (a glute
+bridge's shoulders are below its hips) and stays upside down.
+
 Measured on the shared real data (1,600 UI-PRMD Kinect and 790 Vicon repetitions, 189 HDM05
 and 3 CMU takes, BlazePose pose files of the 10 videos and 3 stills): the median is between
 +0.37 (Kinect's noisy toes) and +0.998 on every recording as read, so none is touched;
@@ -95,7 +100,8 @@ def right_handed(seq: PoseSequence, *, announce: bool = True) -> PoseSequence:
     if not _clear(median, n):
         return seq
     why = (
-        "read with x negated: written left-handed (x reflected, left/right names kept), its toes,"
+        "read with x negated: written left-handed (x or z reflected, left/right names kept), its"
+        " toes,"
         " heels and nose (those it has) pointed behind its body (median cue"
         f" {median:+.2f} of {n}; -1 = reflected)"
     )

@@ -38,9 +38,9 @@ def _real(shared_data: Path, which: str) -> PoseSequence:
     return load_clip(shared_data / UIPRMD.format(which))
 
 
-def _reflected(seq: PoseSequence) -> PoseSequence:
+def _reflected(seq: PoseSequence, axis: int = 0) -> PoseSequence:
     pos = seq.positions.copy()
-    pos[..., 0] *= -1.0
+    pos[..., axis] *= -1.0
     return dataclasses.replace(seq, positions=pos)
 
 
@@ -62,8 +62,9 @@ def test_real_recordings_read_as_they_are_and_reflected_read_back(
     assert reflected_evidence(mirrored(seq).positions)[0] > 0.25
 
 
+@pytest.mark.parametrize("axis", [0, 2])  # x or z reflected
 def test_reflected_squat_describes_as_the_original(
-    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], axis: int
 ) -> None:
     seq = _real(shared_data, "hdm05")
     # hand check of the scene: at the bottom of the squat (frame 70) both wrists are ahead of
@@ -75,7 +76,7 @@ def test_reflected_squat_describes_as_the_original(
         reach = p[JOINT_INDEX[f"{side}_wrist"]] - p[JOINT_INDEX[f"{side}_shoulder"]]
         assert reach @ ahead > 0.3
     plain = save_pose(seq, tmp_path / "squat.npz")
-    flipped = save_pose(_reflected(seq), tmp_path / "flipped.npz")
+    flipped = save_pose(_reflected(seq, axis), tmp_path / "flipped.npz")
     assert main(["describe", str(plain)]) == 0
     want = capsys.readouterr().out.splitlines()
     assert main(["describe", str(flipped)]) == 0
