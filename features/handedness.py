@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import dataclasses
 import sys
+from collections.abc import Callable
 
 import numpy as np
 
@@ -92,10 +93,20 @@ def _clear(median: float, n: int) -> bool:
     return n >= MIN_CUES and median <= -MARGIN
 
 
-def right_handed(seq: PoseSequence, *, announce: bool = True) -> PoseSequence:
+def right_handed(
+    seq: PoseSequence,
+    *,
+    announce: bool = True,
+    reflected_back: Callable[[], np.ndarray] | None = None,
+) -> PoseSequence:
     """``seq`` as it is, or, when it is reflected (:func:`is_reflected` of its canonical
     positions), with x negated: the metadata's ``x_reflected`` says why, and (``announce``)
-    one note line on stderr names the file."""
+    one note line on stderr names the file.
+
+    ``reflected_back``: the positions read again from the source with x negated, for a reader
+    whose joints are not its source's points reflected alike (UI-PRMD Vicon's hip centres are
+    placed in a pelvis frame whose up is a cross product: placed before the reflection is
+    undone, they land above the pelvis instead of below it)."""
     median, n = reflected_evidence(seq.to_canonical().positions)
     if not _clear(median, n):
         return seq
@@ -105,8 +116,11 @@ def right_handed(seq: PoseSequence, *, announce: bool = True) -> PoseSequence:
         " heels and nose (those it has) pointed behind its body (median cue"
         f" {median:+.2f} of {n}; -1 = reflected)"
     )
-    pos = seq.positions.copy()
-    pos[..., 0] *= -1.0
+    if reflected_back is not None:
+        pos = reflected_back()
+    else:
+        pos = seq.positions.copy()
+        pos[..., 0] *= -1.0
     if announce:
         print(f"note: {shown(seq.source)}: {why}", file=sys.stderr)
     return dataclasses.replace(seq, positions=pos, metadata={**seq.metadata, METADATA_KEY: why})

@@ -9,6 +9,7 @@ it from the toes and the nose (:mod:`features.handedness`) and negate x, with a 
 from __future__ import annotations
 
 import dataclasses
+import gzip
 from pathlib import Path
 
 import numpy as np
@@ -207,3 +208,29 @@ def test_too_little_evidence_is_left_alone(capsys: pytest.CaptureFixture[str]) -
 
     assert right_handed(seq) is seq
     assert capsys.readouterr().err == ""
+
+
+def test_reflected_vicon_markers_give_the_hips_of_the_original(
+    shared_data: Path, tmp_path: Path
+) -> None:
+    # A UI-PRMD Vicon file with its x column reflected (every marker's first coordinate
+    # negated). The hip centres are placed from the pelvis markers in a frame whose "up" is a
+    # cross product, so they must be placed after the reflection is undone, not before: read
+    # back before that, they stood about 17 cm above the true ones (up pointed down).
+    src = shared_data / UIPRMD.format("Vicon")
+    rows = [r for r in gzip.decompress(src.read_bytes()).decode().splitlines() if r.strip()]
+    flipped = []
+    for row in rows:
+        values = row.split(",")
+        for k in range(0, len(values), 3):  # the file's x (forward) of each marker
+            values[k] = repr(-float(values[k])) if float(values[k]) != 0 else values[k]
+        flipped.append(",".join(values))
+    path = tmp_path / src.name
+    path.write_bytes(gzip.compress(("\n".join(flipped) + "\n").encode()))
+    want = load_clip(src)
+    got = load_clip(path)
+    assert METADATA_KEY in got.metadata
+    # the file's x is canonical z: negated back through canonical x, the body comes back
+    # turned half way round the vertical, (x, y, z) -> (-x, y, -z), hips included
+    turned = want.positions * np.array([-1.0, 1.0, -1.0])
+    np.testing.assert_allclose(got.positions, turned, atol=1e-9)

@@ -402,28 +402,36 @@ def read_uiprmd_vicon(path: str | Path) -> PoseSequence:
     """
     path = Path(path)
     markers = read_uiprmd_vicon_markers(path)
-    ix = {n: i for i, n in enumerate(VICON_MARKERS)}
-    frames = markers.shape[0]
-    out = np.full((frames, len(JOINT_INDEX), 3), np.nan)
-    for joint, names in VICON_TO_BLAZEPOSE.items():
-        # a plain mean: a joint is NaN in a frame where any of its markers is missing
-        out[:, JOINT_INDEX[joint]] = markers[:, [ix[n] for n in names]].mean(axis=1)
-    left_hip, right_hip = harrington_hip_centres(fill_rigid_gaps(markers, PELVIS_MARKERS))
-    out[:, JOINT_INDEX["left_hip"]] = left_hip
-    out[:, JOINT_INDEX["right_hip"]] = right_hip
     meta: dict[str, object] = {
         "dataset": "ui-prmd",
         "sensor": "vicon",
         "fps_source": "assumed: UI-PRMD's Vicon rate, inferred upstream; the files carry no time",
         **uiprmd_metadata(path),
     }
-    return right_handed(
-        PoseSequence(
-            positions=out,
-            joint_names=BLAZEPOSE_33,
-            fps=VICON_FPS,
-            skeleton="uiprmd_vicon",
-            source=str(path),
-            metadata=meta,
-        )
+    seq = PoseSequence(
+        positions=vicon_joints(markers),
+        joint_names=BLAZEPOSE_33,
+        fps=VICON_FPS,
+        skeleton="uiprmd_vicon",
+        source=str(path),
+        metadata=meta,
     )
+    # a left-handed file: its joints placed again from the markers reflected back (the hips'
+    # pelvis frame is right-handed only then)
+    return right_handed(
+        seq, reflected_back=lambda: vicon_joints(markers * np.array([-1.0, 1.0, 1.0]))
+    )
+
+
+def vicon_joints(markers: np.ndarray) -> np.ndarray:
+    """The canonical joints ``(frames, 33, 3)`` placed from Vicon markers ``(frames, 39, 3)``
+    (canonical frame, metres; NaN where occluded), :data:`VICON_TO_BLAZEPOSE` and the hips."""
+    ix = {n: i for i, n in enumerate(VICON_MARKERS)}
+    out = np.full((markers.shape[0], len(JOINT_INDEX), 3), np.nan)
+    for joint, names in VICON_TO_BLAZEPOSE.items():
+        # a plain mean: a joint is NaN in a frame where any of its markers is missing
+        out[:, JOINT_INDEX[joint]] = markers[:, [ix[n] for n in names]].mean(axis=1)
+    left_hip, right_hip = harrington_hip_centres(fill_rigid_gaps(markers, PELVIS_MARKERS))
+    out[:, JOINT_INDEX["left_hip"]] = left_hip
+    out[:, JOINT_INDEX["right_hip"]] = right_hip
+    return out
