@@ -234,3 +234,63 @@ def test_reflected_vicon_markers_give_the_hips_of_the_original(
     # turned half way round the vertical, (x, y, z) -> (-x, y, -z), hips included
     turned = want.positions * np.array([-1.0, 1.0, -1.0])
     np.testing.assert_allclose(got.positions, turned, atol=1e-9)
+
+
+def _negated(value: str) -> str:
+    return repr(-float(value))
+
+
+def test_hdm05_take_written_reflected_reads_as_the_original(
+    shared_data: Path, tmp_path: Path
+) -> None:
+    # HDM05 bd's squat as an exporter reflecting x writes it: bone directions' x, the root's x
+    # translation and every rotation about y and z negated (reflecting x conjugates a rotation:
+    # about x it stays, about y and z it turns the other way), axes and dofs in XYZ order.
+    amc = shared_data / SQUAT
+    asf = amc.parent / "HDM_bd.asf"
+    asf_lines, dof, bone = [], {"root": ["tx", "ty", "tz", "rx", "ry", "rz"]}, ""
+    for line in asf.read_text(encoding="latin-1").splitlines():
+        t = line.split()
+        if t[:1] == ["name"]:
+            bone = t[1]
+        elif t[:1] == ["dof"]:
+            dof[bone] = t[1:]
+        elif t[:1] == ["direction"]:
+            line = f"direction {_negated(t[1])} {t[2]} {t[3]}"
+        elif t[:1] == ["axis"] and len(t) == 5:
+            assert t[4] == "XYZ"
+            line = f"axis {t[1]} {_negated(t[2])} {_negated(t[3])} XYZ"
+        asf_lines.append(line)
+    assert "order TX TY TZ RX RY RZ" in " ".join(" ".join(line.split()) for line in asf_lines)
+    amc_lines = []
+    for line in amc.read_text(encoding="latin-1").splitlines():
+        t = line.split()
+        if len(t) > 1 and not line.startswith(("#", ":")):
+            flip = [c in ("tx", "ry", "rz") for c in dof[t[0]]]
+            values = [_negated(v) if f else v for f, v in zip(flip, t[1:], strict=True)]
+            line = " ".join([t[0], *values])
+        amc_lines.append(line)
+    (tmp_path / "HDM_bd.asf").write_text("\n".join(asf_lines) + "\n", encoding="latin-1")
+    (tmp_path / amc.name).write_text("\n".join(amc_lines) + "\n", encoding="latin-1")
+    want = read_asf_amc(asf, amc)
+    got = read_asf_amc(tmp_path / "HDM_bd.asf", tmp_path / amc.name)
+    assert METADATA_KEY in got.metadata
+    np.testing.assert_allclose(got.positions, want.positions, atol=1e-12)
+
+
+def test_kinect_take_written_reflected_reads_as_the_original(
+    shared_data: Path, tmp_path: Path
+) -> None:
+    # UI-PRMD Kinect: every offset's x negated, and each joint's rotations about y and z (its
+    # second and third angle: R = Rz(c3) Ry(c2) Rx(c1)) turned the other way
+    positions = shared_data / UIPRMD.format("Kinect")
+    angles = positions.parent.parent / "Angles" / positions.name.replace("_positions", "_angles")
+    for src, columns in ((positions, (0,)), (angles, (1, 2))):
+        table = np.loadtxt(gzip.open(src, "rt"), delimiter=",", ndmin=2)
+        for c in columns:
+            table[:, c::3] *= -1.0
+        with gzip.open(tmp_path / src.name, "wt") as fh:
+            np.savetxt(fh, table, delimiter=",", fmt="%.17g")
+    got = load_clip(tmp_path / positions.name)
+    assert METADATA_KEY in got.metadata
+    np.testing.assert_allclose(got.positions, load_clip(positions).positions, atol=1e-12)
