@@ -21,6 +21,8 @@ elbow, ``LeftHand`` = wrist, ``LeftHandIndex1`` = index knuckle); the toe joint'
 the tip of the foot (``left_foot_index``). A skeleton without ``LeftArm`` names its shoulder
 joint otherwise: Poser/DAZ's ``lShldr`` (after the clavicle ``lCollar``) or a skeleton named by
 joints (``LeftShoulder``, ``LeftElbow``, ``LeftWrist``); the shoulder is that joint's origin.
+The Biovision example skeleton of the format's own description names its limbs ``LeftUpArm``,
+``LeftLowArm``, ``LeftUpLeg``, ``LeftLowLeg`` (shoulder, elbow, hip, knee at their origins).
 No common BVH skeleton has face landmarks or heels: they stay NaN.
 """
 
@@ -57,15 +59,15 @@ def _side_map(side: str) -> dict[str, tuple[tuple[str, str], ...]]:
         f"{s}_hip": ((f"{s}upleg", "joint"), (f"{s}hip", "joint"), (f"{s}thigh", "joint"),
                      (f"{c}thigh", "joint")),
         f"{s}_knee": ((f"{s}knee", "joint"), (f"{s}leg", "joint"), (f"{s}shin", "joint"),
-                      (f"{c}shin", "joint")),
+                      (f"{c}shin", "joint"), (f"{s}lowleg", "joint")),
         f"{s}_ankle": ((f"{s}ankle", "joint"), (f"{s}foot", "joint"), (f"{c}foot", "joint")),
         f"{s}_foot_index": ((f"{s}toebase", "end"), (f"{s}toe", "end"), (f"{s}toes", "end"),
                             (f"{s}toe_end", "joint"), (f"{s}toebase_end", "joint")),
         f"{s}_shoulder": ((f"{s}arm", "joint"), (f"{s}upperarm", "joint"),
                           (f"{s}shoulder", "joint"), (f"{c}shldr", "joint"),
-                          (f"{c}uparm", "joint")),
+                          (f"{c}uparm", "joint"), (f"{s}uparm", "joint")),
         f"{s}_elbow": ((f"{s}forearm", "joint"), (f"{s}elbow", "joint"), (f"{c}forearm", "joint"),
-                       (f"{s}lowerarm", "joint")),
+                       (f"{s}lowerarm", "joint"), (f"{s}lowarm", "joint")),
         f"{s}_wrist": ((f"{s}hand", "joint"), (f"{s}wrist", "joint"), (f"{c}hand", "joint")),
         f"{s}_index": ((f"{s}handindex1", "joint"), (f"{s}index1", "joint")),
     }  # fmt: skip
