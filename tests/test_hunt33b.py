@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from features.datasets import load_clip
+from features.readers.asfamc import read_asf_amc
 from features.readers.bvh import read_bvh
 from features.skeleton import JOINT_INDEX
 
@@ -104,3 +105,31 @@ def test_bvh_with_the_biovision_example_names_has_shoulders_elbows_and_knees(
     }
     for joint, xyz in want.items():
         np.testing.assert_allclose(seq.positions[:, JOINT_INDEX[joint]], [xyz, xyz], atol=1e-12)
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be"])
+def test_utf16_text_files_read_as_their_utf8_twins(
+    shared_data: Path, tmp_path: Path, encoding: str
+) -> None:
+    # Windows tools write text as UTF-16 with a byte order mark (PowerShell's ">", Notepad's
+    # "Unicode"). Read as latin-1, every other character was a NUL: the BVH file "does not
+    # start with HIERARCHY (not a BVH file?)", the ASF had "no :bonedata bones".
+    def utf16(text: str, name: str) -> Path:
+        body = text.encode("utf-16-be") if encoding == "utf-16-be" else text.encode("utf-16")
+        path = tmp_path / name
+        path.write_bytes((b"\xfe\xff" if encoding == "utf-16-be" else b"") + body)
+        return path
+
+    bvh = tmp_path / "plain.bvh"
+    bvh.write_text(_biovision_names_bvh())
+    want = read_bvh(bvh, unit="cm")
+    got = read_bvh(utf16(_biovision_names_bvh().replace("\n", "\r\n"), "wide.bvh"), unit="cm")
+    np.testing.assert_array_equal(got.positions, want.positions)
+    # a real HDM05 take, its ASF and AMC (latin-1 header bytes: "für") both in UTF-16
+    amc = shared_data / "hdm05/train/10/HDM_bd_squat1Reps_001_120.amc"
+    asf = amc.parent / "HDM_bd.asf"
+    wide_asf = utf16(asf.read_text(encoding="latin-1"), "HDM_bd.asf")
+    wide_amc = utf16(amc.read_text(encoding="latin-1"), amc.name)
+    np.testing.assert_array_equal(
+        read_asf_amc(wide_asf, wide_amc).positions, read_asf_amc(asf, amc).positions
+    )

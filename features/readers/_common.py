@@ -19,7 +19,7 @@ from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
 
 def read_text(path: Path) -> str:
     """The text of ``path`` (gzip when it ends in ``.gz``), latin-1 tolerant, newlines unified,
-    without a UTF-8 byte order mark.
+    without a UTF-8 byte order mark; UTF-16 when it starts with a UTF-16 byte order mark.
 
     Raises DataError naming the file when it is missing, unreadable, a truncated gzip, or
     larger (decompressed) than the reading limit of :func:`features.poses.read_limits`.
@@ -49,11 +49,19 @@ def read_text(path: Path) -> str:
     # a byte order mark (Windows editors write one) is no part of the text: left in, it glued
     # itself to the first word ("HIERARCHY", an AMC header's "#") and the file was refused
     raw = raw.removeprefix(b"\xef\xbb\xbf")
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        # Motion capture headers (HDM05 AMC) carry latin-1 bytes; latin-1 decodes anything.
-        text = raw.decode("latin-1")
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        # UTF-16 with its byte order mark, as Windows tools write text (PowerShell's ``>``,
+        # Notepad's "Unicode"): read as latin-1 it was "not a BVH file", every other byte NUL
+        try:
+            text = raw.decode("utf-16")
+        except UnicodeDecodeError:
+            raise DataError("starts as UTF-16 text (byte order mark) but is not", path) from None
+    else:
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError:
+            # Motion capture headers (HDM05 AMC) carry latin-1 bytes; latin-1 decodes anything.
+            text = raw.decode("latin-1")
     return text.replace("\r\n", "\n").replace("\r", "\n")
 
 
