@@ -10,6 +10,8 @@ grey frames where only the timing matters.
 from __future__ import annotations
 
 import json
+import time
+from collections.abc import Iterator
 from fractions import Fraction
 from pathlib import Path
 
@@ -273,3 +275,123 @@ def test_watch_puts_a_variable_rate_file_on_the_grid_as_it_comes(
         "note: phone.mp4: variable frame rate (frame 2 is at 0.150 s, not 0.200 s):"
         " poses resampled to 10 fps as they come"
     ]
+
+
+def test_watch_paces_each_frame_by_its_own_time(tmp_path: Path) -> None:
+    """``watch FILE`` holds each frame until its own presentation time over ``--speed``
+    (:func:`due_s`), read from the frames as ``stream_poses`` hands them to its pacer, not
+    at index / the declared 25 fps (a variable-rate file's gaps of 20 to 80 ms had all been
+    played 40 ms apart). A frame with no time to trust is due at index / fps."""
+    from features.pose_estimation import stream_poses
+    from posecbr.commands.watch import due_s
+
+    path = _write(tmp_path / "grey.mkv", PTS_MS, _grey(len(PTS_MS)))
+    seen: list[tuple[int, float]] = []
+
+    def pace(index: int, video_time_s: float) -> bool:
+        seen.append((index, video_time_s))
+        return True
+
+    frames = list(stream_poses(path, smoothing=False, pace=pace))
+    assert [f.index for f in frames] == list(range(len(PTS_MS)))
+    assert [i for i, _t in seen] == list(range(len(PTS_MS)))
+    assert [t for _i, t in seen] == pytest.approx([t / 1000 for t in PTS_MS], abs=1e-9)
+    # by hand: at --speed 1 the times themselves; at --speed 2 half of them
+    dues = [due_s(i, t, 25.0, 1.0) for i, t in seen]
+    assert dues[:4] == pytest.approx([0.0, 0.02, 0.1, 0.18], abs=1e-9)
+    assert due_s(2, 0.1, 25.0, 2.0) == pytest.approx(0.05)
+    assert due_s(3, float("nan"), 25.0, 1.0) == pytest.approx(0.12)  # 3 / 25
+    assert due_s(3, float("nan"), 25.0, 0.5) == pytest.approx(0.24)
+    # a pacer that says stop ends the stream there, before the frame is read
+    stop_at: list[int] = []
+
+    def stop(index: int, video_time_s: float) -> bool:
+        stop_at.append(index)
+        return index < 4
+
+    assert [f.index for f in stream_poses(path, smoothing=False, pace=stop)] == [0, 1, 2, 3]
+    assert stop_at == [0, 1, 2, 3, 4]
+
+
+def test_the_pacer_counts_each_due_time_from_the_first_frame() -> None:
+    """The clock time a frame is held until: the first frame's arrival plus its due time.
+    With ``stop`` set no wait is made (the watch is ending), and the pacer says stop."""
+    from posecbr.commands.watch import Pacer
+
+    pacer = Pacer(25.0, 2.0)
+    pacer.stop.set()
+    assert not pacer(0, 0.0)
+    started = pacer.started
+    assert started is not None and pacer.until == started
+    assert not pacer(1, 0.02)
+    assert pacer.until - started == pytest.approx(0.01)
+    assert not pacer(2, float("nan"))
+    assert pacer.until - started == pytest.approx(0.04)  # 2 / 25 / 2
+
+
+def test_a_long_gap_in_a_paced_file_is_not_a_stall() -> None:
+    """A variable-rate file may have a gap longer than ``--stall`` between two frames (a
+    screen recording of nothing moving): waiting for the frame's time is not a stalled
+    stream. Frames due 0.3 s apart, a stall of 0.1 s: all three come, no error (the reader
+    had given up after the stall time whatever the wait was for)."""
+    from posecbr.commands.watch import Pacer, frames_in_background
+
+    pacer = Pacer(10.0, 1.0)
+
+    def frames() -> Iterator[int]:
+        for i in range(3):
+            if not pacer(i, 0.3 * i):
+                return
+            yield i
+
+    assert list(frames_in_background(frames(), 0.1, pacer, "screen.mkv")) == [0, 1, 2]
+
+
+def test_a_stream_that_stalls_after_its_due_time_is_still_a_stall() -> None:
+    from posecbr.commands.watch import Pacer, frames_in_background
+
+    pacer = Pacer(10.0, 1.0)
+
+    def frames() -> Iterator[int]:
+        pacer(0, 0.0)
+        yield 0
+        pacer(1, 0.05)
+        time.sleep(1.0)  # due at 0.05 s, nothing for 1 s after it
+        yield 1
+
+    got = []
+    with pytest.raises(DataError, match=r"screen.mkv: the stream stalled: no frame for 0.2 s"):
+        for f in frames_in_background(frames(), 0.2, pacer, "screen.mkv"):
+            got.append(f)
+    assert got == [0]
+
+
+def test_a_raw_stream_without_frame_times_is_read_at_its_declared_rate(
+    people: list[np.ndarray], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A raw H.264 stream (an IP camera's or a dashcam's ``.h264``) carries no frame times:
+    OpenCV gives 0 ms for every frame. That is no variable frame rate: the frames are taken
+    at index / fps as a constant-rate video's, smoothed as one (frame 1 at 0 s, not after
+    frame 0, had left the filters with no time step: every later frame passed through
+    unsmoothed), and ``stream_poses`` gives them no time (``watch`` had called frame 1 off
+    the grid and dropped every frame after the first)."""
+    from features.pose_estimation import stream_poses
+
+    path = _write(tmp_path / "camera.h264", [40 * k for k in range(len(PTS_MS))], people)
+    assert [t for _rgb, t in iter_timed_frames(path)] == [0.0] * len(PTS_MS)
+    vp = estimate_video(path, progress_bar=False)
+    est = PoseEstimator()
+    world = []
+    for i, rgb in enumerate(iter_frames(path)):
+        pose = est.process(rgb, i / 25.0)
+        w = pose.world.copy()
+        w[outside_frame(pose.image, rgb.shape[1], rgb.shape[0])] = np.nan
+        world.append(w)
+    assert not vp.resampled and vp.sequence.n_frames == len(PTS_MS)
+    np.testing.assert_array_equal(vp.sequence.positions, np.array(world))
+    streamed = list(stream_poses(path))
+    assert [f.video_time_s == f.video_time_s for f in streamed] == [True] + [False] * (
+        len(PTS_MS) - 1
+    )  # frame 0 at 0 s, the others NaN: no time to trust
+    np.testing.assert_array_equal([f.seen_world for f in streamed], np.array(world))
+    assert "variable frame rate" not in capsys.readouterr().err

@@ -656,3 +656,50 @@ def test_watch_and_segment_agree_on_a_variable_frame_rate_video(
         return [tuple(d[k] for k in keys) for d in segments]
 
     assert spans(watched) == spans(offline)
+
+
+def test_watch_a_raw_stream_without_frame_times(
+    case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The reverse lunge as a raw H.264 stream (an IP camera's or a dashcam's ``.h264``): no
+    frame times (OpenCV gives 0 ms for each), so it is played at the 25 fps it declares,
+    every frame watched. It had been called a variable frame rate at frame 1 ("frame 1 is
+    at 0.000 s, not 0.040 s") and every frame after the first dropped: "the stream ended
+    after 1 frame", exit 1."""
+    av = pytest.importorskip("av", reason="PyAV writes the raw stream")
+    from fractions import Fraction
+
+    import cv2
+
+    src = cv2.VideoCapture(
+        str(shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4")
+    )
+    video = tmp_path / "lunge.h264"
+    out = av.open(str(video), "w", format="h264")
+    stream = out.add_stream("libx264", rate=25)
+    tb = Fraction(1, 1000)
+    stream.time_base = stream.codec_context.time_base = tb
+    k = 0
+    while True:
+        ok, bgr = src.read()
+        if not ok:
+            break
+        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
+        if k == 0:
+            stream.width, stream.height, stream.pix_fmt = small.shape[1], small.shape[0], "yuv420p"
+        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(small[:, :, ::-1]), format="rgb24")
+        frame.pts, frame.time_base = 40 * k, tb
+        for packet in stream.encode(frame):
+            out.mux(packet)
+        k += 1
+    for packet in stream.encode():
+        out.mux(packet)
+    out.close()
+    src.release()
+    capsys.readouterr()
+    assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 0
+    printed = capsys.readouterr()
+    lines = [json.loads(line) for line in printed.out.splitlines()]
+    assert lines[0]["start_frame"] == 0 and lines[-1]["end_frame"] == k
+    assert lines[-1]["end_s"] == pytest.approx(k / 25)
+    assert "variable frame rate" not in printed.err

@@ -21,7 +21,7 @@ import math
 import os
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -218,6 +218,44 @@ def strays(elapsed_s: Any, index: Any, fps: float) -> Any:
     return np.abs(np.asarray(elapsed_s) * fps - index) > VFR_TOLERANCE
 
 
+class FrameClock:
+    """A file's frame times as they come, the rule :func:`estimate_video` and
+    :func:`stream_poses` share: :meth:`take` gives each frame's time from the first frame's
+    and whether every frame so far lies on the grid ``index / fps`` (:func:`strays`). A
+    decoder's times can be trusted until one is missing (NaN) or not after the one before (a
+    raw H.264 stream has none: OpenCV gives 0 for every frame); from then on every frame's
+    time is NaN, so the file is taken as constant-rate (as :func:`usable_times` decides for
+    the whole file), not as frames that all stray from the grid at time 0."""
+
+    def __init__(self, fps: float) -> None:
+        self.fps = fps
+        self.first = self.last = float("nan")
+        self.trusted = True
+        self.on_grid = True
+
+    def take(self, index: int, time_s: float) -> float:
+        """Frame ``index``'s time (s) from the first frame's; NaN once the times are not
+        to be trusted."""
+        if index == 0:
+            self.first = self.last = time_s
+            self.trusted = math.isfinite(time_s)
+            return 0.0 if self.trusted else float("nan")
+        if not (self.trusted and math.isfinite(time_s) and time_s > self.last):
+            self.trusted = False
+            return float("nan")
+        self.last = time_s
+        elapsed = time_s - self.first
+        self.on_grid = self.on_grid and not strays(elapsed, index, self.fps)
+        return elapsed
+
+    def filter_time(self, index: int, elapsed_s: float) -> float:
+        """The time the temporal filters get for a frame: ``index / fps`` while the frames lie
+        on the grid (or have no usable time), its own time once they stray."""
+        if self.on_grid or not math.isfinite(elapsed_s):
+            return index / self.fps
+        return elapsed_s
+
+
 def irregular(times: np.ndarray, fps: float) -> bool:
     """Whether frame times (s; usable) stray from ``first + index / fps`` (:func:`strays`):
     a variable frame rate (or a rate the container misstates)."""
@@ -325,16 +363,12 @@ def estimate_video(
         total = min(total or max_frames, max_frames)
     if progress_bar:
         frames = progress(frames, desc=path.name, total=total, unit="frame")
-    on_grid = True  # the frames so far lie at index / fps: the filters get exactly that
+    clock = FrameClock(info.fps)  # the filters get index / fps until the frames stray
     for i, (rgb, t) in enumerate(frames):
         if max_frames is not None and i >= max_frames:
             break
         times.append(t)
-        if on_grid and i and math.isfinite(t) and math.isfinite(times[0]):
-            on_grid = not strays(t - times[0], i, info.fps)
-        # once the times stray, the temporal filters get the frames' own times
-        since = t - times[0]
-        pose = est.process(rgb, i / info.fps if on_grid or not math.isfinite(since) else since)
+        pose = est.process(rgb, clock.filter_time(i, clock.take(i, t)))
         world.append(pose.world)
         image.append(pose.image)
         person.append(pose.person)
@@ -439,8 +473,8 @@ class StreamFrame:
     read_at: float = float("nan")
     video_time_s: float = float("nan")
     """A file's frame: its presentation time as the decoder gives it, from the first frame's
-    (s; NaN for a live source or when the decoder gives none). A variable frame rate shows in
-    it, not in ``time_s``."""
+    (s; NaN for a live source, or when the decoder gives none it can be trusted with:
+    :class:`FrameClock`). A variable frame rate shows in it, not in ``time_s``."""
 
     @property
     def seen_world(self) -> np.ndarray:
@@ -518,6 +552,7 @@ def stream_poses(
     estimator: PoseEstimator | None = None,
     fps: float | None = None,
     timeout_s: float | None = None,
+    pace: Callable[[int, float], bool] | None = None,
 ) -> Iterator[StreamFrame]:
     """Poses frame by frame from a webcam index, a stream URL or a video path.
 
@@ -526,7 +561,10 @@ def stream_poses(
     the stream, after ``max_frames``, or when the consumer stops iterating. A file, or a
     file served over the network (``fps`` given), that ends before the frame count its
     container states raises DataError, as :func:`iter_frames` does. ``timeout_s``: how long
-    a stream URL may take to open (FFmpeg's default: 30 s).
+    a stream URL may take to open (FFmpeg's default: 30 s). ``pace``: called with each
+    frame's index and ``video_time_s`` once it is decoded and before it is read (its
+    ``read_at``) and its pose estimated; it may wait (a file played at its own rate) and
+    returns False to stop the stream there.
     """
     declared = 0  # the frame count a file's container states (none for a live source)
     if isinstance(source, Path) or (
@@ -549,24 +587,28 @@ def stream_poses(
     start = time.perf_counter()
     index = 0
     times: list[float] = []  # a file's frame times (s), as the decoder gives them
-    on_grid = True
+    clock = FrameClock(fps or 1.0)
     try:
         while max_frames is None or index < max_frames:
-            ok, bgr = cap.read()
+            # grabbed (demuxed and decoded), then timed, paced and only then taken: a paced
+            # frame is read when it is due, as a camera would deliver it
+            ok = cap.grab()
+            video_t = float("nan")
+            if ok and fps:
+                times.append(frame_time_s(cap))
+                video_t = clock.take(index, times[-1])
+            if ok and pace is not None and not pace(index, video_t):
+                break
+            ok, bgr = cap.retrieve() if ok else (False, None)
             read_at = time.perf_counter()
             if not ok or bgr is None:  # read to its end: all of it
                 span = span_s(times, fps) if fps else None
                 check_whole(index, declared, str(source), span, fps)
                 break
             t = index / fps if fps else read_at - start
-            video_t = float("nan")
-            if fps:
-                times.append(frame_time_s(cap))
-                video_t = times[-1] - times[0]
-                # as estimate_video times the filters: index / fps until the frames stray
-                on_grid = on_grid and not strays(video_t, index, fps)
             rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
-            at = t if on_grid or not math.isfinite(video_t) else video_t
+            # as estimate_video times the filters: index / fps until the frames stray
+            at = clock.filter_time(index, video_t) if fps else t
             yield StreamFrame(index, t, est.process(rgb, at), rgb, read_at, video_t)
             index += 1
     finally:

@@ -1,9 +1,10 @@
 """``posecbr watch SOURCE --db CB``: segment a live stream as it comes (:mod:`cbr.live`).
 
 SOURCE is a webcam index (``0``), a stream URL (``rtsp://...``) or a video file, which is
-played at its own frame rate (``--speed 2`` twice as fast, ``--speed 0`` as fast as it
-decodes), as is a video file served over the network (a URL whose frame count OpenCV
-knows); a live source is timed by the wall clock. Poses come from BlazePose frame by
+played at its own rate, each frame when its presentation time comes (a variable frame rate
+as it was filmed; ``--speed 2`` twice as fast, ``--speed 0`` as fast as it decodes), as is
+a video file served over the network (a URL whose frame count OpenCV knows); a live source
+is timed by the wall clock. Poses come from BlazePose frame by
 frame; the rolling activity label, the repetitions counted so far and the fluents that hold
 now are drawn on the frames (``--out video.mp4`` writes them, headless; ``--show`` opens a
 window where OpenCV has one).
@@ -58,7 +59,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--speed",
         type=float,
         default=1.0,
-        help="a video file plays at this multiple of its frame rate (0: as fast as possible)",
+        help="a video file plays at this multiple of its own rate (0: as fast as possible)",
     )
     p.add_argument(
         "--stall", type=float, default=5.0, help="seconds without a frame before giving up"
@@ -153,13 +154,42 @@ JOIN_S = 2.0
 (a pose estimate: tens of milliseconds; a stalled network read may never return)."""
 
 
+def due_s(index: int, video_time_s: float, fps: float, speed: float) -> float:
+    """When a file's frame ``index`` is due, in seconds after its first frame, played at
+    ``speed`` times its own rate: its presentation time (``video_time_s``, from the first
+    frame's: a variable frame rate plays as it was filmed) over ``speed``, or
+    ``index / fps`` over ``speed`` when it has none to trust (NaN: :class:`FrameClock`)."""
+    t = video_time_s if math.isfinite(video_time_s) else index / fps
+    return t / speed
+
+
+class Pacer:
+    """Holds each frame of a file played at ``speed`` times its rate until it is due
+    (:func:`due_s`, counted from the first frame): ``stream_poses``'s ``pace``. :attr:`until`
+    is when the frame in hand is due (``time.perf_counter()``): until then the stream is not
+    stalled, however long the wait. :attr:`stop` set ends a wait at once."""
+
+    def __init__(self, fps: float, speed: float) -> None:
+        self.fps, self.speed = fps, speed
+        self.stop = threading.Event()
+        self.started: float | None = None
+        self.until = 0.0
+
+    def __call__(self, index: int, video_time_s: float) -> bool:
+        now = time.perf_counter()
+        if self.started is None:
+            self.started = now
+        self.until = self.started + due_s(index, video_time_s, self.fps, self.speed)
+        return not self.stop.wait(max(0.0, self.until - now))
+
+
 class _Reader:
     """A stream's frames read in a thread into a small queue of (kind, item): ("frame", f),
-    then ("end", None) or ("error", exc); with ``rate`` (frames per second) no faster than
-    that. :meth:`close` stops it and waits up to :data:`JOIN_S` for the frame in hand."""
+    then ("end", None) or ("error", exc). :meth:`close` stops it (and the ``pacer`` holding
+    the stream back, if any) and waits up to :data:`JOIN_S` for the frame in hand."""
 
-    def __init__(self, frames: Iterator[Any], rate: float | None) -> None:
-        self.frames, self.rate = frames, rate
+    def __init__(self, frames: Iterator[Any], pacer: Pacer | None = None) -> None:
+        self.frames, self.pacer = frames, pacer
         self.box: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=8)
         self.stop = threading.Event()
         self.thread = threading.Thread(target=self._read, name="posecbr-watch-reader", daemon=True)
@@ -177,12 +207,8 @@ class _Reader:
 
     def _read(self) -> None:
         try:
-            started = time.perf_counter()
-            for i, f in enumerate(self.frames):
+            for f in self.frames:
                 if not self._hand("frame", f):
-                    return
-                due = started + (i + 1) / self.rate if self.rate else 0.0  # the next frame
-                if due and self.stop.wait(max(0.0, due - time.perf_counter())):
                     return
             self._hand("end", None)
         except BaseException as exc:  # delivered to the main thread
@@ -192,26 +218,41 @@ class _Reader:
             if close is not None:
                 close()
 
+    def get(self, stall_s: float, where: str) -> tuple[str, Any]:
+        """The next item; DataError naming ``where`` when none comes for ``stall_s`` seconds
+        beyond the time the frame in hand is due (a file's frames held back by the pacer are
+        not a stall, however long the gap between two of them)."""
+        asked = time.perf_counter()
+        while True:
+            quiet_since = max(asked, self.pacer.until if self.pacer is not None else 0.0)
+            left = quiet_since + stall_s - time.perf_counter()
+            if left <= 0:
+                raise DataError(f"the stream stalled: no frame for {stall_s:g} s", where)
+            try:
+                return self.box.get(timeout=left)
+            except queue.Empty:
+                continue
+
     def close(self) -> None:
         self.stop.set()
+        if self.pacer is not None:
+            self.pacer.stop.set()
         self.thread.join(JOIN_S)
 
 
 def frames_in_background(
-    frames: Iterator[Any], stall_s: float, rate: float | None = None, where: str = "stream"
+    frames: Iterator[Any], stall_s: float, pacer: Pacer | None = None, where: str = "stream"
 ) -> Generator[Any, None, None]:
-    """The stream's frames, read in a thread (:class:`_Reader`); with ``rate`` (frames per
-    second) no faster than that (a file played at its own rate, as a camera delivers).
-    Raises DataError naming ``where`` (the source) when no frame arrives for ``stall_s``
-    seconds. Closed (or ended), it stops the reader and waits for it: a thread left inside
-    OpenCV or onnxruntime while Python shuts down aborts the process (exit 134)."""
-    reader = _Reader(frames, rate)
+    """The stream's frames, read in a thread (:class:`_Reader`); ``pacer``: the one that
+    holds ``frames`` back (a file played at its own rate, as a camera delivers), stopped
+    with the reader. Raises DataError naming ``where`` (the source) when no frame arrives
+    for ``stall_s`` seconds (beyond the frame's due time). Closed (or ended), it stops the
+    reader and waits for it: a thread left inside OpenCV or onnxruntime while Python shuts
+    down aborts the process (exit 134)."""
+    reader = _Reader(frames, pacer)
     try:
         while True:
-            try:
-                kind, item = reader.box.get(timeout=stall_s)
-            except queue.Empty:
-                raise DataError(f"the stream stalled: no frame for {stall_s:g} s", where) from None
+            kind, item = reader.get(stall_s, where)
             if kind == "end":
                 return
             if kind == "error":
@@ -262,9 +303,11 @@ def run(args: argparse.Namespace) -> int:
     else:  # a file served over the network is played as a file is
         fps = None if isinstance(source, int) else served_file_rate(source, args.stall)
     is_file = fps is not None
-    rate = fps * args.speed if fps and args.speed > 0 else None
-    poses = stream_poses(source, max_frames=args.max_frames, fps=fps, timeout_s=args.stall)
-    frames = frames_in_background(poses, args.stall, rate, args.source)
+    pacer = Pacer(fps, args.speed) if fps and args.speed > 0 else None
+    poses = stream_poses(
+        source, max_frames=args.max_frames, fps=fps, timeout_s=args.stall, pace=pacer
+    )
+    frames = frames_in_background(poses, args.stall, pacer, args.source)
     watcher = Watcher(clf, judge, args, fps)
     try:
         with _video_output(args.out) as video, closing(frames), stop_on_interrupt() as stop:
