@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import csv
 import re
+import sys
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -47,7 +48,7 @@ from features.progress import progress
 from features.text import counted
 
 from .handedness import right_handed
-from .poses import PoseSequence, load_pose, pose_file_length
+from .poses import EXTRACTION_VERSION, PoseSequence, load_pose, pose_file_length
 from .readers.asfamc import hdm05_metadata, read_asf_amc
 from .readers.bvh import read_bvh
 from .readers.uiprmd import (
@@ -119,7 +120,9 @@ def load_clip(path: str | Path) -> PoseSequence:
         raise DataError("is a folder, not a clip file (give one of the clips in it)", path)
     suffix = _suffix(path)
     if suffix in POSE_SUFFIXES:
-        return right_handed(load_pose(path).to_canonical())
+        pose = load_pose(path)
+        note_older_extraction(pose, path)
+        return right_handed(pose.to_canonical())
     if suffix == ".bvh":
         return read_bvh(path)
     if suffix in VIDEO_SUFFIXES:
@@ -140,6 +143,32 @@ def load_clip(path: str | Path) -> PoseSequence:
         f" video: {', '.join(sorted(VIDEO_SUFFIXES))})",
         path,
     )
+
+
+def note_older_extraction(seq: PoseSequence, path: Path) -> None:
+    """Say on stderr when a pose file was made from a variable-frame-rate video by an older
+    posecbr (:func:`features.pose_estimation.video.older_vfr_extraction`): its poses are not
+    what ``extract`` gives now (which extracts it again). Only a file extracted from a video
+    (its metadata names the pose model) without today's ``extraction_version`` is looked at,
+    and the video itself only when it is where the file says (``source_video``)."""
+    meta = seq.metadata
+    if "pose_model" not in meta or meta.get("extraction_version") == EXTRACTION_VERSION:
+        return  # not from a video, or made by today's extraction
+    video = meta.get("source_video")
+    if "variable_frame_rate" not in meta and not (isinstance(video, str) and Path(video).is_file()):
+        return  # nothing says it was a variable frame rate, and no video to look at
+    try:
+        from features.pose_estimation.video import older_vfr_extraction
+
+        older = older_vfr_extraction(meta, str(video))
+    except (ImportError, DataError):
+        return
+    if older:
+        print(
+            f"note: {path}: made from a variable-frame-rate video by an older posecbr (its"
+            " frames timed differently): `posecbr extract` of the video makes it again",
+            file=sys.stderr,
+        )
 
 
 # ---- kinds -----------------------------------------------------------------------------

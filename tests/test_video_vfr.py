@@ -395,3 +395,104 @@ def test_a_raw_stream_without_frame_times_is_read_at_its_declared_rate(
     )  # frame 0 at 0 s, the others NaN: no time to trust
     np.testing.assert_array_equal([f.seen_world for f in streamed], np.array(world))
     assert "variable frame rate" not in capsys.readouterr().err
+
+
+def _as_older(pose_file: Path, *drop: str) -> None:
+    """Rewrite a pose file as older extraction code left it: without the metadata ``drop``
+    (and, no longer resampled, without ``video_frames``); its ``extract_key`` as it was."""
+    import dataclasses
+
+    from features.poses import save_pose
+
+    seq = load_pose(pose_file)
+    image = load_pose_arrays(pose_file)["image_landmarks"]
+    meta = {k: v for k, v in seq.metadata.items() if k not in drop}
+    save_pose(
+        dataclasses.replace(seq, metadata=meta), pose_file, extra_arrays={"image_landmarks": image}
+    )
+
+
+def test_a_pose_file_of_a_variable_rate_video_from_older_code_is_extracted_again(
+    vfr_mkv: Path, people: list[np.ndarray], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A pose file of a variable-frame-rate video made before frame times were read (no
+    ``extraction_version``, no ``variable_frame_rate``: its frames timed as evenly spaced),
+    or made before extraction kept the frames before the first stray as they are (it has
+    ``variable_frame_rate`` but no version), has its ``extract_key`` (same video, model,
+    options) yet not today's poses: ``extract`` counted it up to date and kept it. It is now
+    extracted again, said in the clip's line. A constant-rate video's pose file without the
+    version stays up to date: its poses are what they were."""
+    from posecbr.commands.extract import STALE_VFR
+
+    out = tmp_path / "poses"
+    pose_file = out / "lunge_vfr.npz"
+    assert main(["extract", str(vfr_mkv), "--out", str(out)]) == 0
+    assert load_pose(pose_file).metadata["extraction_version"] == 2
+    for older in (("extraction_version", "variable_frame_rate"), ("extraction_version",)):
+        _as_older(pose_file, *older)
+        capsys.readouterr()
+        assert main(["extract", str(vfr_mkv), "--out", str(out)]) == 0
+        line = capsys.readouterr().out.strip()
+        assert line.startswith(f"done: {pose_file}") and line.endswith(f"; {STALE_VFR})")
+        seq = load_pose(pose_file)
+        assert seq.metadata["extraction_version"] == 2 and seq.n_frames == 16
+        assert seq.metadata["variable_frame_rate"]["resampled_to_fps"] == 25.0
+        assert main(["extract", str(vfr_mkv), "--out", str(out)]) == 0  # now up to date
+        assert "up to date" in capsys.readouterr().out
+    cfr = _write(tmp_path / "cfr.mkv", [40 * k for k in range(len(PTS_MS))], people)
+    assert main(["extract", str(cfr), "--out", str(out)]) == 0
+    _as_older(out / "cfr.npz", "extraction_version")
+    capsys.readouterr()
+    assert main(["extract", str(cfr), "--out", str(out)]) == 0
+    assert capsys.readouterr().out.startswith(f"skipped: {out / 'cfr.npz'} (up to date)")
+
+
+def test_extract_of_a_folder_notes_each_pose_file_extracted_again(
+    vfr_mkv: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import shutil
+
+    from posecbr.commands.extract import STALE_VFR
+
+    videos, out = tmp_path / "videos", tmp_path / "poses"
+    (videos / "lunge").mkdir(parents=True)
+    for name in ("a.mkv", "b.mkv"):
+        shutil.copy(vfr_mkv, videos / "lunge" / name)
+    assert main(["extract", str(videos), "--out", str(out)]) == 0
+    _as_older(out / "lunge" / "a.npz", "extraction_version", "variable_frame_rate")
+    capsys.readouterr()
+    assert main(["extract", str(videos), "--out", str(out)]) == 0
+    printed = capsys.readouterr()
+    assert printed.err.splitlines() == [f"note: {out / 'lunge' / 'a.npz'}: {STALE_VFR}"]
+    assert printed.out.strip().endswith(f"1 extracted, 1 up to date, 0 failed -> {out}")
+
+
+def test_segment_and_train_note_a_pose_file_of_older_vfr_extraction(
+    vfr_mkv: Path, people: list[np.ndarray], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``segment``, ``classify`` and ``train`` read pose files through ``load_clip``: one made
+    from a variable-frame-rate video by older extraction code is read (its poses are all
+    there is) with one note saying ``extract`` makes it again; it was read in silence. A
+    current file, and an older one of a constant-rate video, are read without a word."""
+    from features.datasets import load_clip
+
+    out = tmp_path / "poses"
+    cfr = _write(tmp_path / "cfr.mkv", [40 * k for k in range(len(PTS_MS))], people)
+    for video in (vfr_mkv, cfr):
+        assert main(["extract", str(video), "--out", str(out)]) == 0
+    capsys.readouterr()
+    vfr_file, cfr_file = out / "lunge_vfr.npz", out / "cfr.npz"
+    load_clip(vfr_file)
+    load_clip(cfr_file)
+    assert capsys.readouterr().err == ""
+    note = (
+        f"note: {vfr_file}: made from a variable-frame-rate video by an older posecbr (its"
+        " frames timed differently): `posecbr extract` of the video makes it again"
+    )
+    for older in (("extraction_version", "variable_frame_rate"), ("extraction_version",)):
+        _as_older(vfr_file, *older)
+        assert load_clip(vfr_file).n_frames == 16
+        assert capsys.readouterr().err.splitlines() == [note]
+    _as_older(cfr_file, "extraction_version")
+    load_clip(cfr_file)
+    assert capsys.readouterr().err == ""

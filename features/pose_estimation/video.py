@@ -21,7 +21,7 @@ import math
 import os
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,7 +35,7 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from features.errors import DataError  # noqa: E402
-from features.poses import MIN_FPS, PoseSequence  # noqa: E402
+from features.poses import EXTRACTION_VERSION, MIN_FPS, PoseSequence  # noqa: E402
 from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
 
@@ -256,6 +256,52 @@ class FrameClock:
         return elapsed_s
 
 
+def container_frame_times(path: str | Path) -> tuple[np.ndarray, float]:
+    """The presentation times (s, in order) the container gives a video's frames, and the
+    frame rate it declares, read from its packets without decoding them (FFmpeg's raw mode:
+    a few milliseconds where decoding takes a second); decoded (:func:`iter_timed_frames`)
+    where FFmpeg cannot give the packets. Raises DataError for a file that is no video."""
+    with _quiet_opencv():
+        cap = cv2.VideoCapture(str(path), cv2.CAP_FFMPEG)
+    try:
+        if cap.isOpened() and cap.set(cv2.CAP_PROP_FORMAT, -1):
+            fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+            times = []
+            while cap.grab():
+                times.append(frame_time_s(cap))
+            if times and math.isfinite(fps) and MIN_FPS <= fps <= MAX_VIDEO_FPS:
+                return np.sort(np.asarray(times)), fps
+    finally:
+        cap.release()
+    _cap, info = open_video(path)
+    _cap.release()
+    return np.asarray([t for _rgb, t in iter_timed_frames(path)]), info.fps
+
+
+def variable_rate(path: str | Path) -> bool:
+    """Whether a video's frame times (:func:`container_frame_times`) are usable and stray from
+    the rate it declares: the videos :func:`estimate_video` resamples."""
+    times, fps = container_frame_times(path)
+    return usable_times(times) and irregular(times, fps)
+
+
+def older_vfr_extraction(meta: Mapping[str, Any], video: str | Path) -> bool:
+    """Whether a pose file (its metadata ``meta``) was made from ``video``, a
+    variable-frame-rate video, by extraction code older than today's
+    (:data:`EXTRACTION_VERSION`): its poses differ from what extracting the video now gives.
+    A file of the current version is not; one of an older version or none (written before
+    the version was) is when its metadata says it was resampled; one without the version
+    that does not say so (the oldest code did not notice a variable rate) is when the
+    video's frame times, read from its packets (milliseconds, no decoding), stray from its
+    declared rate. A constant-rate video's pose file never is: its poses are what they were."""
+    version = meta.get("extraction_version")
+    if version == EXTRACTION_VERSION:
+        return False
+    if "variable_frame_rate" in meta:
+        return True
+    return version is None and variable_rate(video)
+
+
 def irregular(times: np.ndarray, fps: float) -> bool:
     """Whether frame times (s; usable) stray from ``first + index / fps`` (:func:`strays`):
     a variable frame rate (or a rate the container misstates)."""
@@ -408,6 +454,7 @@ def estimate_video(
         "video_fps": info.fps,
         "video_size": [info.width, info.height],
         "pose_model": model_version(),
+        "extraction_version": EXTRACTION_VERSION,
         "missing_frames": missing,
         "n_missing_frames": len(missing),
         "smoothing": _smoothing_meta() if est.smoothing else None,

@@ -310,8 +310,8 @@ def extract_key(job: Job, options: Options, video_sha256: str) -> dict[str, Any]
     }
 
 
-def stored_key(path: Path) -> dict[str, Any] | None:
-    """The ``extract_key`` of an existing pose file, or None (absent or unreadable)."""
+def stored_metadata(path: Path) -> dict[str, Any] | None:
+    """The metadata of an existing pose file, or None (absent or unreadable)."""
     import numpy as np
 
     from features.poses import check_archive
@@ -322,8 +322,18 @@ def stored_key(path: Path) -> dict[str, Any] | None:
             meta = json.loads(str(data["metadata"]))
     except (PosecbrError, OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError):
         return None
-    key = meta.get("extract_key") if isinstance(meta, dict) else None
+    return meta if isinstance(meta, dict) else None
+
+
+def stored_key(path: Path) -> dict[str, Any] | None:
+    """The ``extract_key`` of an existing pose file, or None (absent or unreadable)."""
+    meta = stored_metadata(path)
+    key = meta.get("extract_key") if meta is not None else None
     return key if isinstance(key, dict) else None
+
+
+STALE_VFR = "made from a variable-frame-rate video by an older posecbr: extracted again"
+"""Said of a pose file ``older_vfr_extraction`` found stale (the clip's line; a note)."""
 
 
 # onnxruntime threads per model in this process (None: default). FFmpeg keeps its own
@@ -419,12 +429,16 @@ def process(job: Job, options: Options) -> Outcome:
 
     from features.pose_estimation import open_video
     from features.pose_estimation.overlay import check_mp4_size, write_overlay
+    from features.pose_estimation.video import older_vfr_extraction
     from features.poses import load_pose, load_pose_arrays
 
     try:
         digest = sha256_file(job.video)
         key = extract_key(job, options, digest)
-        up_to_date = not options.force and job.out.is_file() and stored_key(job.out) == key
+        meta = None if options.force or not job.out.is_file() else stored_metadata(job.out)
+        up_to_date = meta is not None and meta.get("extract_key") == key
+        stale = up_to_date and older_vfr_extraction(meta or {}, job.video)
+        up_to_date = up_to_date and not stale
         if up_to_date and (job.overlay is None or job.overlay.is_file()):
             return "skipped", job.out, "up to date"
         if job.overlay is not None:  # before the model runs and the pose file is written
@@ -453,7 +467,7 @@ def process(job: Job, options: Options) -> Outcome:
             )
         n_missing = int(np.isnan(seq.positions).all(axis=(1, 2)).sum())
         detail = f"{counted(seq.n_frames, 'frame')}, {n_missing} without a person{vfr_note}"
-        return "done", job.out, detail
+        return "done", job.out, f"{detail}; {STALE_VFR}" if stale else detail
     except PosecbrError as exc:
         return "failed", job.out, str(exc)
 
@@ -615,6 +629,9 @@ def _run_all(jobs: list[Job], options: Options, args: argparse.Namespace) -> lis
 def _summary(results: list[Outcome], out: Path) -> int:
     """One line per failed clip and the counts; the exit status (1 if any clip failed)."""
     failed = [r for r in results if r[0] == "failed"]
+    for status, path, detail in results:
+        if status == "done" and detail.endswith(STALE_VFR):
+            print(f"note: {shown(path)}: {STALE_VFR}", file=sys.stderr)
     for _, _, detail in failed:
         print(f"posecbr extract: error: {shown(detail)}", file=sys.stderr)
     done = sum(r[0] == "done" for r in results)
