@@ -527,6 +527,30 @@ def test_a_second_ctrl_c_interrupts_at_once() -> None:
     assert signal.getsignal(signal.SIGINT) is before
 
 
+def test_ctrl_c_during_a_long_wait_for_a_frame_ends_the_watch_there() -> None:
+    """A file's next frame due 30 s on (a gap in a variable-frame-rate screen recording, or
+    ``--speed 0.01``): Ctrl-C ends the wait and the stream there, as the end of the file
+    does, instead of after the 30 s (the watch saw the Ctrl-C only with the next frame)."""
+    import os
+
+    from posecbr.commands.watch import Pacer, frames_in_background, stop_on_interrupt
+
+    pacer = Pacer(10.0, 1.0)
+
+    def frames() -> Iterator[int]:
+        for i, t in enumerate([0.0, 30.0]):
+            if not pacer(i, t):
+                return
+            yield i
+
+    got = []
+    with stop_on_interrupt(pacer.stop) as stop:
+        for f in frames_in_background(frames(), 60.0, pacer, "screen.mkv"):
+            got.append(f)
+            threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT)).start()
+    assert got == [0] and stop.is_set()
+
+
 def _cut_avi(folder: Path) -> Path:
     """``folder/cut.avi``: an MJPG AVI of 60 frames cut to two thirds of its bytes (its
     header still says 60 frames), beside the whole one, ``folder/whole.avi``."""
@@ -703,3 +727,73 @@ def test_watch_a_raw_stream_without_frame_times(
     assert lines[0]["start_frame"] == 0 and lines[-1]["end_frame"] == k
     assert lines[-1]["end_s"] == pytest.approx(k / 25)
     assert "variable frame rate" not in printed.err
+
+
+class _Ranges(_Quiet):
+    """A server that answers range requests ("bytes=START-[END]"), as web servers do."""
+
+    def send_head(self) -> Any:
+        import os
+        import re
+
+        asked = re.fullmatch(r"bytes=(\d+)-(\d*)", self.headers.get("Range", ""))
+        if asked is None:
+            return super().send_head()
+        path = self.translate_path(self.path)
+        size = os.path.getsize(path)
+        start = int(asked.group(1))
+        end = min(int(asked.group(2) or size - 1), size - 1)
+        fh = open(path, "rb")  # noqa: SIM115 (closed by the base class after copying)
+        fh.seek(start)
+        self.send_response(206)
+        self.send_header("Content-Type", "application/octet-stream")
+        self.send_header("Content-Range", f"bytes {start}-{end}/{size}")
+        self.send_header("Content-Length", str(end - start + 1))
+        self.send_header("Accept-Ranges", "bytes")
+        self.end_headers()
+        return fh
+
+
+def test_a_served_mp4_that_gives_no_frame_says_why(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An MP4 whose index (moov) comes after its frames, as OpenCV's writer and cameras
+    write it, served by a server that ignores range requests (``python -m http.server``):
+    FFmpeg reads to the index at the end and cannot go back for the frames. One line says
+    so, naming the URL, exit 1 (it said the whole file was "truncated or corrupt: decoded
+    0 of 75 frames"). Served by one that answers range requests, it is watched: nobody in
+    view for its 3 s."""
+    import cv2
+
+    video = tmp_path / "noise.mp4"  # 3 s of noise: 200 kB, more than FFmpeg reads ahead
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), 25.0, (96, 96))
+    rng = np.random.default_rng(0)
+    for _ in range(75):
+        writer.write(rng.integers(0, 255, (96, 96, 3), dtype=np.uint8))
+    writer.release()
+    data = video.read_bytes()
+    assert data.find(b"moov") > data.find(b"mdat")  # the index after the frames
+    capsys.readouterr()
+    with _serving(tmp_path) as address:
+        url = f"{address}/noise.mp4"
+        assert main(["watch", url, "--db", str(case_base), "--speed", "0"]) == 1
+    err = capsys.readouterr().err
+    assert err == (
+        f"posecbr watch: error: {url}: read none of the 75 frames the served file holds:"
+        " truncated or corrupt, or its index comes at its end (as cameras often write MP4 and"
+        " MOV files) and the server does not answer range requests (python -m http.server"
+        " does not)\n"
+    )
+    handler = functools.partial(_Ranges, directory=str(tmp_path))
+    server = _QuietServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        url = f"http://127.0.0.1:{server.server_address[1]}/noise.mp4"
+        assert main(["watch", url, "--db", str(case_base), "--speed", "0"]) == 0
+    finally:
+        server.shutdown()
+        server.server_close()
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [(d["start_frame"], d["end_frame"], d["explanation"]) for d in lines] == [
+        (0, 75, "nobody in view")
+    ]

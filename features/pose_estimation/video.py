@@ -571,6 +571,14 @@ def _frame_count(cap: cv2.VideoCapture) -> int:
     return int(frames) if math.isfinite(frames) and frames > 0 else 0
 
 
+NONE_SERVED = (
+    "read none of the {} frames the served file holds: truncated or corrupt, or its index"
+    " comes at its end (as cameras often write MP4 and MOV files) and the server does not"
+    " answer range requests (python -m http.server does not)"
+)
+"""Why a file served over the network gave no frame though its container states some."""
+
+
 def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
     """The frame rate of a stream URL that is a video file served over the network (OpenCV
     knows its frame count and rate), None for a live stream (a camera's: no frame count) and
@@ -614,6 +622,7 @@ def stream_poses(
     returns False to stop the stream there.
     """
     declared = 0  # the frame count a file's container states (none for a live source)
+    served = False  # a file served over the network
     if isinstance(source, Path) or (
         isinstance(source, str) and "://" not in source and not source.isdigit()
     ):
@@ -629,6 +638,7 @@ def stream_poses(
             raise DataError("cannot open camera or stream", str(source))
         if fps is not None:  # a file served over the network: whole, as a file must be
             declared = _frame_count(cap)
+            served = True
     est = estimator or PoseEstimator(smoothing=smoothing)
     est.reset()
     start = time.perf_counter()
@@ -649,6 +659,8 @@ def stream_poses(
             ok, bgr = cap.retrieve() if ok else (False, None)
             read_at = time.perf_counter()
             if not ok or bgr is None:  # read to its end: all of it
+                if served and index == 0 and declared:
+                    raise DataError(NONE_SERVED.format(declared), str(source))
                 span = span_s(times, fps) if fps else None
                 check_whole(index, declared, str(source), span, fps)
                 break

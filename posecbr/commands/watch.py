@@ -263,10 +263,12 @@ def frames_in_background(
 
 
 @contextmanager
-def stop_on_interrupt() -> Iterator[threading.Event]:
+def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[threading.Event]:
     """Ctrl-C (SIGINT) sets the event instead of raising: the watch ends after the frame in
-    hand, as at the end of a file; a second Ctrl-C raises KeyboardInterrupt at once. Outside
-    the main thread (where no signal handler can be set) the event is never set."""
+    hand, as at the end of a file; a second Ctrl-C raises KeyboardInterrupt at once. ``also``
+    is set with it (a :class:`Pacer`'s stop: a file held back until a frame's time, however
+    far off, ends there). Outside the main thread (where no signal handler can be set) the
+    event is never set."""
     stopped = threading.Event()
     if threading.current_thread() is not threading.main_thread():
         yield stopped
@@ -276,6 +278,8 @@ def stop_on_interrupt() -> Iterator[threading.Event]:
         if stopped.is_set():
             raise KeyboardInterrupt
         stopped.set()
+        if also is not None:
+            also.set()
 
     previous = signal.signal(signal.SIGINT, interrupted)
     try:
@@ -310,7 +314,11 @@ def run(args: argparse.Namespace) -> int:
     frames = frames_in_background(poses, args.stall, pacer, args.source)
     watcher = Watcher(clf, judge, args, fps)
     try:
-        with _video_output(args.out) as video, closing(frames), stop_on_interrupt() as stop:
+        with (
+            _video_output(args.out) as video,
+            closing(frames),
+            stop_on_interrupt(pacer.stop if pacer is not None else None) as stop,
+        ):
             watcher.video = video
             watcher.warm_up()
             watcher.watch(frames, is_file, stop)
