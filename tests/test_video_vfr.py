@@ -496,3 +496,65 @@ def test_segment_and_train_note_a_pose_file_of_older_vfr_extraction(
     _as_older(cfr_file, "extraction_version")
     load_clip(cfr_file)
     assert capsys.readouterr().err == ""
+
+
+def _browser_webm(path: Path, pts_ms: list[int], frames: list[np.ndarray]) -> Path:
+    """A WebM as a browser's MediaRecorder writes it: VP8 on a millisecond clock, no frame
+    rate stated (FFmpeg, and so OpenCV, then guesses 1000 fps from the clock)."""
+    tb = Fraction(1, 1000)
+    out = av.open(str(path), "w")
+    stream = out.add_stream("libvpx")
+    h, w = frames[0].shape[:2]
+    stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
+    stream.time_base = stream.codec_context.time_base = tb
+    stream.codec_context.framerate = Fraction(0, 1)
+    for t, rgb in zip(pts_ms, frames, strict=True):
+        frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
+        frame.pts, frame.time_base = t, tb
+        for packet in stream.encode(frame):
+            out.mux(packet)
+    for packet in stream.encode():
+        out.mux(packet)
+    out.close()
+    return path
+
+
+# a browser's frame times: 28 to 39 ms apart (about 30 fps), on no regular pattern
+BROWSER_GAPS_MS = [33, 34, 37, 39, 28, 29, 37, 39, 30, 31, 38, 33, 31, 37, 31, 32, 35, 34, 29,
+                   28, 38, 37, 38, 34, 37, 31, 33, 37, 29, 31, 29, 33, 39, 29, 32, 32, 38, 30,
+                   34]  # fmt: skip
+
+
+def test_a_webm_that_states_no_frame_rate_is_taken_at_its_frames_rate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A browser's recording states no frame rate: for 40 frames 28 to 39 ms apart, OpenCV
+    gives 1000 fps (FFmpeg's guess: the millisecond clock). They were resampled to 1000 fps:
+    1307 pose frames for 40 decoded, each movement spread over 33 times as many frames. They
+    are now taken at their own average rate, 39 intervals in 1.306 s (29.862 fps), and,
+    irregular at that rate, resampled to it: 40 frames again (k / rate up to 1.306 s)."""
+    import cv2
+
+    from features.pose_estimation import open_video
+
+    pts = [sum(BROWSER_GAPS_MS[:k]) for k in range(40)]
+    assert pts[-1] == 1306
+    path = _browser_webm(
+        tmp_path / "recording.webm", pts, [np.full((48, 64, 3), 6 * k, np.uint8) for k in range(40)]
+    )
+    cap = cv2.VideoCapture(str(path))
+    assert cap.get(cv2.CAP_PROP_FPS) == 1000.0  # what OpenCV states
+    cap.release()
+    cap, info = open_video(path)
+    cap.release()
+    assert info.fps == pytest.approx(39 / 1.306, rel=1e-12) and info.frames == 40
+    vp = estimate_video(path, smoothing=False, progress_bar=False, announce=False)
+    assert vp.sequence.fps == info.fps and vp.sequence.n_frames == 40
+    assert vp.sequence.metadata["variable_frame_rate"]["decoded_frames"] == 40
+    out = tmp_path / "poses"
+    capsys.readouterr()
+    assert main(["extract", str(path), "--out", str(out)]) == 0
+    assert capsys.readouterr().out == (
+        f"done: {out / 'recording.npz'} (40 frames, 40 without a person; variable frame rate:"
+        " resampled to 29.8622 fps)\n"
+    )

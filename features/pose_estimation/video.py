@@ -9,10 +9,12 @@ stream that still decodes every frame) cannot be seen from here and is not repor
 Variable frame rate (phone videos often are): each decoded frame's presentation time is read
 from OpenCV (``CAP_PROP_POS_MSEC`` after the read; with the FFmpeg backend the frame's own
 timestamp). When some frame lies more than :data:`VFR_TOLERANCE` of a frame interval away from
-``index / fps`` (``fps``: the rate the container declares), :func:`estimate_video` puts the
-poses from there on on a uniform grid at that declared rate by linear interpolation between the
-two decoded frames around each grid time (:func:`resample_to_grid`), as ``watch`` does while
-the frames come. A constant-rate video is left as it was decoded.
+``index / fps`` (``fps``: the rate the container declares; above :data:`SUSPECT_FPS` and more
+than twice the frames' own, their average rate instead: :func:`own_rate`),
+:func:`estimate_video` puts the poses from there on on a uniform grid at that rate by linear
+interpolation between the two decoded frames around each grid time
+(:func:`resample_to_grid`), as ``watch`` does while the frames come. A constant-rate video is
+left as it was decoded; so is one whose frames carry no times to trust (:class:`FrameClock`).
 """
 
 from __future__ import annotations
@@ -48,6 +50,10 @@ JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
 IMAGE_LANDMARK_FIELDS = ("x_px", "y_px", "z_px", "visibility", "presence")
 MAX_VIDEO_FPS = 1000.0
 """The highest frame rate a video may declare (more is a broken header, no camera's)."""
+SUSPECT_FPS = 120.0
+"""Above this stated frame rate, :func:`open_video` looks at the frames' times (from their
+packets, milliseconds): a rate more than twice theirs is a container's clock, not a frame
+rate (:func:`own_rate`). A phone's 240-fps slow motion has frames at 240 fps and keeps it."""
 VFR_TOLERANCE = 0.25
 """How far (in frame intervals at the declared rate) a frame's presentation time may lie from
 ``index / fps`` and the video still count as constant-rate: timestamp rounding and a phone's
@@ -140,6 +146,7 @@ def open_video(
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
+    fps, frames = _frames_rate(path, fps, frames)
     if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
         cap.release()
@@ -149,6 +156,19 @@ def open_video(
             path,
         )
     return cap, VideoInfo(path, frames, fps, width, height)
+
+
+def _frames_rate(path: Path, fps: float, frames: int) -> tuple[float, int]:
+    """The frame rate and count OpenCV states for a video (``fps``, ``frames``), or, when
+    that rate is above :data:`SUSPECT_FPS` and a clock's ticks rather than a frame rate
+    (:func:`own_rate`), the frames' own rate and their number."""
+    if not (math.isfinite(fps) and fps > SUSPECT_FPS):
+        return fps, frames
+    got = _packet_times(path)
+    rate = own_rate(*got) if got is not None else None
+    if got is None or rate is None:
+        return fps, frames
+    return rate, int(got[0].size)
 
 
 def iter_frames(path: str | Path, decode_threads: int | None = None) -> Iterator[np.ndarray]:
@@ -256,23 +276,46 @@ class FrameClock:
         return elapsed_s
 
 
-def container_frame_times(path: str | Path) -> tuple[np.ndarray, float]:
-    """The presentation times (s, in order) the container gives a video's frames, and the
-    frame rate it declares, read from its packets without decoding them (FFmpeg's raw mode:
-    a few milliseconds where decoding takes a second); decoded (:func:`iter_timed_frames`)
-    where FFmpeg cannot give the packets. Raises DataError for a file that is no video."""
+def _packet_times(path: str | Path) -> tuple[np.ndarray, float] | None:
+    """The presentation times (s, in order) of a video's packets and the frame rate OpenCV
+    states, read without decoding (FFmpeg's raw mode: a few milliseconds where decoding
+    takes a second); None where FFmpeg cannot give the packets."""
     with _quiet_opencv():
         cap = cv2.VideoCapture(str(path), cv2.CAP_FFMPEG)
     try:
-        if cap.isOpened() and cap.set(cv2.CAP_PROP_FORMAT, -1):
-            fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
-            times = []
-            while cap.grab():
-                times.append(frame_time_s(cap))
-            if times and math.isfinite(fps) and MIN_FPS <= fps <= MAX_VIDEO_FPS:
-                return np.sort(np.asarray(times)), fps
+        if not (cap.isOpened() and cap.set(cv2.CAP_PROP_FORMAT, -1)):
+            return None
+        fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+        times = []
+        while cap.grab():
+            times.append(frame_time_s(cap))
     finally:
         cap.release()
+    return (np.sort(np.asarray(times)), fps) if times else None
+
+
+def own_rate(times: np.ndarray, fps: float) -> float | None:
+    """The rate a video's frames come at (their average: intervals over the time they span)
+    when the rate stated for it, ``fps``, is more than twice that:
+    no frame rate but the container's time base (a browser's MediaRecorder WebM states
+    none: FFmpeg guesses 1000 from its millisecond clock). None when ``fps`` will do."""
+    if not usable_times(times):
+        return None
+    rate = (times.size - 1) / float(times[-1] - times[0])
+    return rate if MIN_FPS <= rate and 2.0 * rate < fps else None
+
+
+def container_frame_times(path: str | Path) -> tuple[np.ndarray, float]:
+    """The presentation times (s, in order) the container gives a video's frames and its
+    frame rate as :func:`open_video` takes it, read from its packets without decoding them
+    (:func:`_packet_times`); decoded (:func:`iter_timed_frames`) where FFmpeg cannot give
+    the packets. Raises DataError for a file that is no video."""
+    got = _packet_times(path)
+    if got is not None:
+        times, fps = got
+        fps = own_rate(times, fps) or fps
+        if math.isfinite(fps) and MIN_FPS <= fps <= MAX_VIDEO_FPS:
+            return times, fps
     _cap, info = open_video(path)
     _cap.release()
     return np.asarray([t for _rgb, t in iter_timed_frames(path)]), info.fps
