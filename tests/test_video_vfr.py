@@ -326,7 +326,13 @@ def test_the_pacer_counts_each_due_time_from_the_first_frame() -> None:
     assert not pacer(1, 0.02)
     assert pacer.until - started == pytest.approx(0.01)
     assert not pacer(2, float("nan"))
-    assert pacer.until - started == pytest.approx(0.04)  # 2 / 25 / 2
+    assert pacer.until - started == pytest.approx(0.03)  # (0.02 + 1 / 25) / 2
+    untimed = Pacer(25.0, 2.0)  # a file with no frame times: index / fps
+    untimed.stop.set()
+    untimed(0, float("nan"))
+    untimed(2, float("nan"))
+    assert untimed.started is not None
+    assert untimed.until - untimed.started == pytest.approx(0.04)  # 2 / 25 / 2
 
 
 def test_a_long_gap_in_a_paced_file_is_not_a_stall() -> None:
@@ -558,3 +564,35 @@ def test_a_webm_that_states_no_frame_rate_is_taken_at_its_frames_rate(
         f"done: {out / 'recording.npz'} (40 frames, 40 without a person; variable frame rate:"
         " resampled to 29.8622 fps)\n"
     )
+
+
+def test_the_frame_clock_trusts_times_until_they_fail_on_the_grid() -> None:
+    """By hand, at 10 fps: times that fail (repeat) while the frames lie on the grid are no
+    times at all (a raw stream's zeros): NaN from there on, even if later ones increase.
+    Once the frames have strayed, a repeated time is that frame's alone (NaN), the next
+    frame's is its own."""
+    from features.pose_estimation.video import FrameClock
+
+    raw = FrameClock(10.0)
+    got = [raw.take(i, t) for i, t in enumerate([0.0, 0.0, 0.2, 0.3])]
+    assert got[0] == 0.0 and np.isnan(got[1:]).all() and raw.on_grid
+    assert raw.filter_time(2, got[2]) == pytest.approx(0.2)  # index / fps
+    vfr = FrameClock(10.0)
+    got = [vfr.take(i, t) for i, t in enumerate([1.0, 1.1, 1.25, 1.25, 1.4])]
+    assert got[:3] == pytest.approx([0.0, 0.1, 0.25]) and np.isnan(got[3])
+    assert got[4] == pytest.approx(0.4) and not vfr.on_grid
+    assert vfr.filter_time(2, got[2]) == pytest.approx(0.25)  # its own time, off the grid
+    assert vfr.filter_time(3, got[3]) == pytest.approx(0.3)
+
+
+def test_a_frame_without_a_time_among_timed_ones_is_paced_after_the_last() -> None:
+    """At 10 fps a frame at 0.25 s, then one with no time: due 0.35 s (a frame interval
+    after the last timed frame), not 0.2 s (index / fps, behind the frames' own clock)."""
+    from posecbr.commands.watch import Pacer
+
+    pacer = Pacer(10.0, 1.0)
+    pacer.stop.set()
+    for i, t in enumerate([0.0, 0.25, float("nan")]):
+        pacer(i, t)
+    assert pacer.started is not None
+    assert pacer.until - pacer.started == pytest.approx(0.35)

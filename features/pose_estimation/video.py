@@ -241,11 +241,13 @@ def strays(elapsed_s: Any, index: Any, fps: float) -> Any:
 class FrameClock:
     """A file's frame times as they come, the rule :func:`estimate_video` and
     :func:`stream_poses` share: :meth:`take` gives each frame's time from the first frame's
-    and whether every frame so far lies on the grid ``index / fps`` (:func:`strays`). A
-    decoder's times can be trusted until one is missing (NaN) or not after the one before (a
-    raw H.264 stream has none: OpenCV gives 0 for every frame); from then on every frame's
-    time is NaN, so the file is taken as constant-rate (as :func:`usable_times` decides for
-    the whole file), not as frames that all stray from the grid at time 0."""
+    and whether every frame so far lies on the grid ``index / fps`` (:func:`strays`). A time
+    missing (NaN) or not after the one before while the frames still lie on the grid means
+    the decoder has none to give (a raw H.264 stream: OpenCV gives 0 for every frame): from
+    then on every frame's time is NaN, so the file is taken as constant-rate (as
+    :func:`usable_times` decides for the whole file), not as frames that all stray from the
+    grid at time 0. Once the frames have strayed (a variable rate), such a frame alone has
+    no time (NaN)."""
 
     def __init__(self, fps: float) -> None:
         self.fps = fps
@@ -254,14 +256,15 @@ class FrameClock:
         self.on_grid = True
 
     def take(self, index: int, time_s: float) -> float:
-        """Frame ``index``'s time (s) from the first frame's; NaN once the times are not
-        to be trusted."""
+        """Frame ``index``'s time (s) from the first frame's; NaN when it has none to trust."""
         if index == 0:
             self.first = self.last = time_s
             self.trusted = math.isfinite(time_s)
             return 0.0 if self.trusted else float("nan")
-        if not (self.trusted and math.isfinite(time_s) and time_s > self.last):
-            self.trusted = False
+        if not self.trusted:
+            return float("nan")
+        if not (math.isfinite(time_s) and time_s > self.last):
+            self.trusted = not self.on_grid
             return float("nan")
         self.last = time_s
         elapsed = time_s - self.first

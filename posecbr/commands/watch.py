@@ -165,21 +165,29 @@ def due_s(index: int, video_time_s: float, fps: float, speed: float) -> float:
 
 class Pacer:
     """Holds each frame of a file played at ``speed`` times its rate until it is due
-    (:func:`due_s`, counted from the first frame): ``stream_poses``'s ``pace``. :attr:`until`
-    is when the frame in hand is due (``time.perf_counter()``): until then the stream is not
-    stalled, however long the wait. :attr:`stop` set ends a wait at once."""
+    (:func:`due_s`, counted from the first frame; a frame without a time, among frames with
+    them, is due a frame interval after the last one with one): ``stream_poses``'s
+    ``pace``. :attr:`until` is when the frame in hand is due (``time.perf_counter()``):
+    until then the stream is not stalled, however long the wait. :attr:`stop` set ends a
+    wait at once."""
 
     def __init__(self, fps: float, speed: float) -> None:
         self.fps, self.speed = fps, speed
         self.stop = threading.Event()
         self.started: float | None = None
         self.until = 0.0
+        self.timed: tuple[int, float] | None = None  # the last frame with a time, and it
 
     def __call__(self, index: int, video_time_s: float) -> bool:
         now = time.perf_counter()
         if self.started is None:
             self.started = now
-        self.until = self.started + due_s(index, video_time_s, self.fps, self.speed)
+        t = video_time_s
+        if math.isfinite(t):
+            self.timed = (index, t)
+        elif self.timed is not None:  # no time of its own: a frame interval after the last
+            t = self.timed[1] + (index - self.timed[0]) / self.fps
+        self.until = self.started + due_s(index, t, self.fps, self.speed)
         return not self.stop.wait(max(0.0, self.until - now))
 
 
