@@ -216,12 +216,33 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
+def _names_an_open_stream(out: Path) -> bool:
+    """``out`` names one of this process's open files: ``/dev/stdout``, ``/dev/fd/1``,
+    ``/proc/self/fd/1`` or a link to one of them, each a link into ``/proc``. With standard
+    output redirected to a file the link leads to a regular file, but writing there replaces
+    the link itself (``/dev/stdout`` made an ordinary file for every process of the machine)."""
+    p = Path(os.path.abspath(out))
+    for _ in range(40):  # the kernel's own limit on links followed
+        if Path(os.path.realpath(p.parent)).parts[:2] == ("/", "proc"):
+            return True
+        if not p.is_symlink():
+            return False
+        p = Path(os.path.abspath(p.parent / os.readlink(p)))
+    return False
+
+
 def _refuse_special(out: Path, what: str) -> None:
     """A device, pipe or socket at ``out`` is not replaced by a file (``--plot /dev/null``
     would put a picture where the system's null device was); nor is "-", the usual name of
-    standard output (which no output here is), made a file of that name."""
+    standard output (which no output here is), made a file of that name, nor a name of
+    standard output or another open stream such as ``/dev/stdout``."""
     if str(out) == "-":
         raise DataError(f"the {what} goes to a file, not standard output: name the file", out)
+    if _names_an_open_stream(out):
+        raise DataError(
+            f"names standard output or another open stream, not a file: name a file for the {what}",
+            out,
+        )
     if out.exists() and not out.is_file():
         raise DataError(f"the {what} is not a regular file (a device, pipe or socket)", out)
 
