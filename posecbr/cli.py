@@ -40,12 +40,28 @@ def build_parser() -> argparse.ArgumentParser:
             continue
         module = importlib.import_module(f"{commands.__name__}.{info.name}")
         module.register(sub)
+    _name_own_parser(parser)
     return parser
+
+
+def _name_own_parser(parser: argparse.ArgumentParser) -> None:
+    """Give every subcommand's (and action's) parser itself as the default ``_parser``, so
+    that an argument none of them knows is refused by the command it was given to
+    ("posecbr classify: error: unrecognized arguments: --verbse; see posecbr classify
+    --help"), not by ``posecbr`` (whose help does not list the command's options)."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                child.set_defaults(_parser=child)
+                _name_own_parser(child)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, unknown = parser.parse_known_args(argv)
+    own = args.__dict__.pop("_parser", parser)
+    if unknown:
+        own.error(f"unrecognized arguments: {' '.join(unknown)}")
     if not getattr(args, "func", None):
         parser.print_help()
         return 2

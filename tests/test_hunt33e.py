@@ -11,6 +11,7 @@ import pytest
 
 from features.errors import DataError
 from features.fileio import check_output
+from posecbr.cli import main
 from tests.badinput import good_pose_file, refused
 
 
@@ -62,3 +63,33 @@ def test_train_db_to_a_name_of_standard_output_is_refused(
     refused(["train", str(data), "--db", str(stream_link)], stream_link.parent, capsys,
             "out.png: names standard output", "case base file")  # fmt: skip
     assert (stream_link.parent.parent / "redirected.txt").read_bytes() == b""
+
+
+@pytest.mark.parametrize(
+    ("argv", "command"),
+    [
+        (["classify", "clip.npz", "--db", "cb.sqlite", "--verbse"], "posecbr classify"),
+        (["casebase", "info", "--db", "cb.sqlite", "--jsn"], "posecbr casebase info"),
+        (["describe", "clip.npz", "other.npz"], "posecbr describe"),
+    ],
+)
+def test_an_unknown_argument_is_refused_by_the_command_it_was_given_to(
+    argv: list[str], command: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: "posecbr: error: unrecognized arguments: --verbse; see posecbr --help", whose
+    # help lists the commands, not the options of the command the typo was made in
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    extra = argv[-1]
+    assert capsys.readouterr().err == (
+        f"{command}: error: unrecognized arguments: {extra}; see {command} --help\n"
+    )
+
+
+def test_an_unknown_argument_before_the_command_is_still_posecbrs(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    with pytest.raises(SystemExit):
+        main(["--jsn"])
+    assert capsys.readouterr().err.startswith("posecbr: error: unrecognized arguments: --jsn;")
