@@ -3,15 +3,17 @@ JSON outputs, plausible mistakes and the words and units the commands share."""
 
 from __future__ import annotations
 
+import argparse
 import os
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from features.errors import DataError
 from features.fileio import check_output
-from posecbr.cli import main
+from posecbr.cli import build_parser, main
 from tests.badinput import good_pose_file, refused
 
 
@@ -93,3 +95,49 @@ def test_an_unknown_argument_before_the_command_is_still_posecbrs(
     with pytest.raises(SystemExit):
         main(["--jsn"])
     assert capsys.readouterr().err.startswith("posecbr: error: unrecognized arguments: --jsn;")
+
+
+def _options(parser: argparse.ArgumentParser, name: str = "posecbr") -> Iterator[tuple[str, Any]]:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub, child in action.choices.items():
+                yield from _options(child, f"{name} {sub}")
+        elif action.option_strings and action.help != argparse.SUPPRESS:
+            yield name, action
+
+
+def test_every_option_with_a_default_says_it_in_its_help() -> None:
+    # before: `train --similarity`, `--mirror`, `--feature-weights`, `--phases`, `--name`,
+    # `demo --out`, `watch --speed`, `--stall`, `--unknown`, `compare --peers`, `--k`,
+    # `--jobs`, `--seed` and `--explain` left their default unsaid
+    silent = [
+        f"{command} {action.option_strings[-1]}"
+        for command, action in _options(build_parser())
+        if action.nargs != 0
+        and action.default not in (None, [], argparse.SUPPRESS)
+        and "default" not in (action.help or "").lower()
+        and f"({action.default})" not in (action.help or "")
+    ]
+    assert silent == []
+
+
+def test_train_help_says_the_defaults_it_fills_in_itself() -> None:
+    # these options default to None (so that --append can tell them unset) and get their
+    # value in `train`: argparse's default says nothing, so the help must
+    train = next(
+        child
+        for action in build_parser()._actions
+        if isinstance(action, argparse._SubParsersAction)
+        for name, child in action.choices.items()
+        if name == "train"
+    )
+    helps = {
+        a.option_strings[-1]: " ".join((a.help or "").split())
+        for a in train._actions
+        if a.option_strings
+    }
+    assert "(default euclidean)" in helps["--similarity"]
+    assert "auto (the default)" in helps["--mirror"]
+    assert "default: auto" in helps["--feature-weights"]
+    assert "auto (the default)" in helps["--phases"]
+    assert "(default: keep all)" in helps["--trim"]

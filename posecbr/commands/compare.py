@@ -75,9 +75,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         default="dtw-knn,minirocket",
         metavar="LIST",
         help="peer classifiers: dtw-knn (tslearn), minirocket (needs sktime or "
-        "aeon; skipped with a note otherwise); 'none' for no peers",
+        "aeon; skipped with a note otherwise); default: both; 'none' for no peers",
     )
-    p.add_argument("--k", type=int, default=5, help="cases retrieved by the case-base classifier")
+    p.add_argument(
+        "--k", type=int, default=5, help="cases retrieved by the case-base classifier (5)"
+    )
     p.add_argument(
         "--trim",
         type=float,
@@ -102,16 +104,16 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         type=int,
         default=1,
         metavar="N",
-        help="worker processes for the folds (1: all in this process)",
+        help="worker processes for the folds (default 1: all in this process)",
     )
     p.add_argument("--scheduler", metavar="ADDRESS|local:N", help=SCHEDULER_HELP)
-    p.add_argument("--seed", type=int, default=0, help="seed for k-fold, bootstrap, MiniRocket")
+    p.add_argument("--seed", type=int, default=0, help="seed for k-fold, bootstrap, MiniRocket (0)")
     p.add_argument(
         "--explain",
         type=int,
         default=5,
         metavar="N",
-        help="explain N misclassified clips of the best case-base configuration",
+        help="explain N misclassified clips of the best case-base configuration (5)",
     )
     p.add_argument("--json", type=path_arg, metavar="FILE", help="write all results as JSON")
     p.add_argument("--csv", type=path_arg, metavar="FILE", help="write one row per method as CSV")

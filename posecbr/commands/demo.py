@@ -51,7 +51,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         default=None,
         help="folder with the demo's labels.csv (default: the subset bundled with posecbr)",
     )
-    p.add_argument("--out", type=path_arg, default=Path("demo-output"), help="output folder")
+    p.add_argument(
+        "--out",
+        type=path_arg,
+        default=Path("demo-output"),
+        help="output folder (default demo-output)",
+    )
     p.add_argument(
         "--quick",
         action="store_true",

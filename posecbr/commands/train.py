@@ -60,14 +60,16 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument("data", type=path_arg, help="dataset folder, labels CSV or pose file folder")
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
-    p.add_argument("--name", default="default", help="case base name in the store")
+    p.add_argument(
+        "--name", default="default", help="case base name in the store (default: default)"
+    )
     p.add_argument(
         "--features", choices=("fluents", "qmp"), default=None, help="feature level (fluents)"
     )
     p.add_argument(
         "--similarity",
         default=None,
-        help=f"similarity measure ({', '.join(available_measures())})",
+        help=f"similarity measure: {', '.join(available_measures())} (default euclidean)",
     )
     p.add_argument(
         "--param",
@@ -85,7 +87,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--trim",
         metavar="KEEP",
         type=float,
-        help="novelty/benefit trimming: keep this fraction of each activity",
+        help="novelty/benefit trimming: keep this fraction of each activity (default: keep all)",
     )
     p.add_argument(
         "--editor",
@@ -97,7 +99,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         choices=("auto", "off", "canonical", "augment"),
         default=None,
         help="side handling: clips as recorded (off), left-side clips mirrored (canonical), "
-        "mirror images as further cases (augment); auto: chosen by leave-one-subject-out "
+        "mirror images as further cases (augment); auto (the default): chosen by "
+        "leave-one-subject-out "
         "inside the training clips (euclidean on clip summaries or QMPs)",
     )
     p.add_argument(
@@ -105,13 +108,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         choices=("auto", "fisher", "none"),
         default=None,
         help="learned feature weights (fisher: between/within-activity variance), chosen like "
-        "--mirror when auto",
+        "--mirror when auto (default: auto; none with --split windows)",
     )
     p.add_argument(
         "--phases",
         default=None,
         help="clip summaries: also the mean of every feature over this many equal stretches of "
-        "the clip (0: none); auto: 3 or none, chosen like --mirror",
+        "the clip (0: none); auto (the default): 3 or none, chosen like --mirror",
     )
     p.add_argument(
         "--no-positions",

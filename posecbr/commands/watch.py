@@ -59,17 +59,21 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--speed",
         type=float,
         default=1.0,
-        help="a video file plays at this multiple of its own rate (0: as fast as possible)",
+        help="a video file plays at this multiple of its own rate (default 1; 0: as fast as "
+        "possible)",
     )
     p.add_argument(
-        "--stall", type=float, default=5.0, help="seconds without a frame before giving up"
+        "--stall",
+        type=float,
+        default=5.0,
+        help="seconds without a frame before giving up (default 5)",
     )
     p.add_argument("--max-frames", type=int, help="stop after this many frames")
     p.add_argument(
         "--unknown",
         choices=JUDGES,
         default=JUDGES[0],
-        help="what makes a stretch unknown (as in posecbr segment)",
+        help="what makes a stretch unknown, as in posecbr segment (default spread-margin)",
     )
     p.set_defaults(func=run)
 
