@@ -9,12 +9,17 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
+from cbr.dad import detect
 from features.errors import DataError
 from features.fileio import check_output
+from features.qmp import fit_signals
+from features.qmp.add import evaluate_criteria, load_add
 from posecbr.cli import build_parser, main
 from tests.badinput import good_pose_file, refused
+from tests.bodies import standing, to_sequence
 
 
 @pytest.fixture
@@ -141,3 +146,28 @@ def test_train_help_says_the_defaults_it_fills_in_itself() -> None:
     assert "default: auto" in helps["--feature-weights"]
     assert "auto (the default)" in helps["--phases"]
     assert "(default: keep all)" in helps["--trim"]
+
+
+def test_dad_says_why_a_qmp_was_not_met_in_degrees_as_its_words_do() -> None:
+    # before: "arms kept within about 115 degrees of the torso: not met; needs left armpit
+    # mean at most 2 rad (observed 2.35 rad)": the ADD's radians beside the words' degrees,
+    # where every other output (describe, classify, reps) gives angles in degrees
+    add = load_add()
+    names = add.signals
+    t = np.arange(120) / 30.0
+    values = np.full((len(t), len(names)), 1.5) + 1e-4 * np.arange(len(names))
+    values[:, names.index("left_armpit")] = 2.35  # 134.6°
+    values[:, names.index("right_armpit")] = 0.5  # 28.6°, within
+    res = evaluate_criteria(add, fit_signals(values, 30.0, names))
+    q = res.names.index("arms_below_shoulders")
+    assert res.observable[0, q] and not res.met[0, q]
+    assert res.failed[q] == ("left armpit mean at most 115° (observed 135°)",)
+
+
+def test_dad_explanation_in_compare_gives_the_score_as_dad_does() -> None:
+    # before: compare's explanation of a DAD error said "(score 0.78)" where `posecbr dad`
+    # says "78% of its QMPs in order"
+    still = to_sequence(*[standing()] * 90, fps=30.0)
+    squat = next(a for a in detect(still).activities if a.activity == "squat")
+    share = f"{squat.score:.0%} of its QMPs in order"
+    assert squat.in_words().startswith(f"squat ({share}); met: ")

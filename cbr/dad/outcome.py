@@ -55,7 +55,7 @@ class ActivityScore:
     def in_words(self) -> str:
         """Score, QMPs met and not met (with the first reason) in one line."""
         score = (
-            f"score {self.score:.2f}"
+            f"{self.score:.0%} of its QMPs in order"
             if np.isfinite(self.score)
             else "no observable QMP"
             if self.observable_weight == 0

@@ -75,13 +75,17 @@ class Condition:
         return (self.signal,)
 
     def describe(self) -> str:
-        unit = _unit_words(self.signal, self.quantity)
         what = f"{_signal_words(self.signal)} {self.quantity.replace('_', ' ')}"
+
+        def shown(v: float) -> str:
+            return shown_value(v, self.signal, self.quantity)
+
         if self.min is not None and self.max is not None:
-            return f"{what} between {self.min:g} and {self.max:g}{unit}"
+            return f"{what} between {shown(self.min)} and {shown(self.max)}"
         if self.min is not None:
-            return f"{what} at least {self.min:g}{unit}"
-        return f"{what} at most {self.max:g}{unit}"
+            return f"{what} at least {shown(self.min)}"
+        assert self.max is not None
+        return f"{what} at most {shown(self.max)}"
 
 
 @dataclass(frozen=True)
@@ -167,6 +171,8 @@ def _signal_words(signal: str) -> str:
 
 
 def _unit_words(signal: str, quantity: str) -> str:
+    """The unit of ``quantity`` of ``signal`` as the ADD states it: radians for angles,
+    head-lengths ("hl") for joint distances."""
     if quantity in ("period_s",):
         return " s"
     if quantity in ("r2",):
@@ -177,6 +183,23 @@ def _unit_words(signal: str, quantity: str) -> str:
     if quantity == "accel":
         return f" {unit}/s^2"
     return f" {unit}"
+
+
+def _digits(v: float) -> str:
+    """Three significant digits, no exponent below 100,000."""
+    return f"{v:.0f}" if abs(v) >= 100 else f"{v:.3g}"
+
+
+def shown_value(value: float, signal: str, quantity: str) -> str:
+    """``value`` of ``quantity`` of ``signal`` in the words and units every other output
+    uses: an angle (radians in the ADD) in degrees ("115°", "17.2°/s"), a joint distance in
+    head lengths; the rest as the ADD states it."""
+    unit = _unit_words(signal, quantity)
+    if unit.startswith(" rad"):
+        return f"{_digits(math.degrees(value))}°{unit[len(' rad') :]}"
+    if unit.startswith(" hl"):
+        return f"{_digits(value)} head lengths{unit[len(' hl') :]}"
+    return f"{_digits(value)}{unit}"
 
 
 @cache
@@ -543,19 +566,17 @@ def _failure_text(test: Test, values: list[np.ndarray], w: int) -> str:
     observed there (a relation: every part it checks, the amplitude included)."""
     if isinstance(test, Condition):
         v = values[0][w]
-        unit = _unit_words(test.signal, test.quantity)
         if np.isfinite(v):
-            seen = f"{v:.3g}{unit}"
+            seen = shown_value(float(v), test.signal, test.quantity)
         else:
             seen = "no oscillation" if test.quantity in ("period_s", "phase_rad") else "undefined"
         return f"{test.describe()} (observed {seen})"
     diff, ratio, amp = values[0][w], values[1][w], values[2][w]
     if not np.isfinite(diff):
         return f"{test.describe()} (observed: not oscillating)"
-    unit = _unit_words(test.signal_a, "amplitude")
     return (
-        f"{test.describe()} (observed phase gap {diff:.2f} rad, period ratio {ratio:.2f}, "
-        f"smaller amplitude {amp:.3g}{unit})"
+        f"{test.describe()} (observed phase gap {math.degrees(diff):.0f}°, period ratio"
+        f" {ratio:.2f}, smaller amplitude {shown_value(float(amp), test.signal_a, 'amplitude')})"
     )
 
 
