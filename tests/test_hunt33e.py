@@ -171,3 +171,36 @@ def test_dad_explanation_in_compare_gives_the_score_as_dad_does() -> None:
     squat = next(a for a in detect(still).activities if a.activity == "squat")
     share = f"{squat.score:.0%} of its QMPs in order"
     assert squat.in_words().startswith(f"squat ({share}); met: ")
+
+
+@pytest.mark.parametrize(
+    ("options", "needles"),
+    [
+        (["--similarity", "dtwx"], ("error: --similarity: unknown similarity 'dtwx'",)),
+        # the help's example was "--param band=0.2", a parameter of dtw, not of the default
+        (["--param", "band=0.2"], ("error: --param: similarity 'euclidean' has no parameter",)),
+    ],
+)
+def test_train_names_the_option_of_a_bad_similarity(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], options: list[str], needles: tuple[str]
+) -> None:
+    # before: "posecbr train: error: similarity: unknown similarity 'dtwx' ...": the
+    # registry's field, not the option the user typed
+    data = tmp_path / "data"
+    for label in ("stand", "wait"):
+        (data / label).mkdir(parents=True)
+        good_pose_file(data / label / "c.npz", frames=40)
+    refused(["train", str(data), "--db", str(tmp_path / "cb.sqlite"), *options], tmp_path,
+            capsys, *needles)  # fmt: skip
+
+
+def test_train_help_example_of_a_similarity_parameter_names_its_similarity() -> None:
+    train = next(
+        child
+        for action in build_parser()._actions
+        if isinstance(action, argparse._SubParsersAction)
+        for name, child in action.choices.items()
+        if name == "train"
+    )
+    (param,) = [a for a in train._actions if "--param" in a.option_strings]
+    assert "--similarity dtw --param band=0.2" in str(param.help)

@@ -75,7 +75,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--param",
         action="append",
         metavar="KEY=VALUE",
-        help="similarity parameter, e.g. --param band=0.2 (repeatable)",
+        help="similarity parameter, e.g. --similarity dtw --param band=0.2 (repeatable)",
     )
     p.add_argument("--length", type=int, default=None, help="frames per fluent sequence (32)")
     p.add_argument(
@@ -209,7 +209,11 @@ def _estimator(args: argparse.Namespace) -> Any:
         # Fisher weights divide by would be that of one performance, not of the activity
         o["feature_weights"] = "none"
     params = parse_params(args.param)
-    measure = get_measure(o["similarity"], **params)
+    try:
+        measure = get_measure(o["similarity"], **params)
+    except ConfigError as exc:  # the registry names its field; the user gave an option
+        raise ConfigError(exc.message, "--param" if "no parameter" in exc.message
+                          else "--similarity") from None  # fmt: skip
     if o["features"] == "qmp" and measure.compares_sequences:
         raise ConfigError(
             f"similarity {measure.name!r} compares sequences; QMP features are "
