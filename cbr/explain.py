@@ -603,9 +603,13 @@ def _change_text(c: Claim) -> str:
     there = c.there if c.there is not None else float("nan")
     if c.here is None:
         return f"{c.words} not seen → {said(there, c.unit)}"
-    # the unit's words once: "mean confidence 0.96 → 0.79", "62° → 80°"
-    to = f"{there:.2f}" if c.unit in ("share", "confidence") else said(there, c.unit)
-    return f"{c.words} {said(c.here, c.unit)} → {to}"
+    # the unit's words once: "mean confidence 0.96 → 0.79", "62° → 80°", "1.31 → 0.81 torso
+    # lengths" (a unit said before the value is said with the first, after it with the last)
+    if c.unit in ("share", "confidence"):
+        return f"{c.words} {said(c.here, c.unit)} → {there:.2f}"
+    if c.unit == "degrees" or not c.unit:
+        return f"{c.words} {said(c.here, c.unit)} → {said(there, c.unit)}"
+    return f"{c.words} {c.here:.2f} → {said(there, c.unit)}"
 
 
 def _claim_text(c: Claim, whose: str) -> str:

@@ -204,3 +204,15 @@ def test_train_help_example_of_a_similarity_parameter_names_its_similarity() -> 
     )
     (param,) = [a for a in train._actions if "--param" in a.option_strings]
     assert "--similarity dtw --param band=0.2" in str(param.help)
+
+
+def test_a_change_in_torso_lengths_says_its_unit_once() -> None:
+    # before: "left elbow height (highest) 1.31 torso lengths → 0.81 torso lengths" (hunt
+    # 27g's fix said a confidence's words once, but not a unit written after the value)
+    from cbr.explain import Claim, _change_text
+
+    height = Claim("change", "c", "f", "left elbow height (highest)", 1.313, "torso lengths",
+                   there=0.807)  # fmt: skip
+    assert _change_text(height) == "left elbow height (highest) 1.31 → 0.81 torso lengths"
+    unseen = Claim("change", "c", "f", "left hip height", None, "torso lengths", there=-0.5)
+    assert _change_text(unseen) == "left hip height not seen → -0.50 torso lengths"
