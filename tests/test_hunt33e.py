@@ -216,3 +216,19 @@ def test_a_change_in_torso_lengths_says_its_unit_once() -> None:
     assert _change_text(height) == "left elbow height (highest) 1.31 → 0.81 torso lengths"
     unseen = Claim("change", "c", "f", "left hip height", None, "torso lengths", there=-0.5)
     assert _change_text(unseen) == "left hip height not seen → -0.50 torso lengths"
+
+
+def test_compare_help_says_its_json_is_a_file_unlike_the_other_commands() -> None:
+    # `posecbr compare DATA --json` (as every other command takes it) was refused "expected
+    # one argument", and its help said only "write all results as JSON"
+    compare = next(
+        child
+        for action in build_parser()._actions
+        if isinstance(action, argparse._SubParsersAction)
+        for name, child in action.choices.items()
+        if name == "compare"
+    )
+    (json_,) = [a for a in compare._actions if "--json" in a.option_strings]
+    assert "unlike other commands' --json" in str(json_.help)
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    assert "`--json FILE`, `--csv FILE`: files, unlike other commands' `--json`" in readme

@@ -115,7 +115,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         metavar="N",
         help="explain N misclassified clips of the best case-base configuration (5)",
     )
-    p.add_argument("--json", type=path_arg, metavar="FILE", help="write all results as JSON")
+    p.add_argument(
+        "--json",
+        type=path_arg,
+        metavar="FILE",
+        help="write all results as JSON to FILE (a file, unlike other commands' --json: the "
+        "table still goes to standard output)",
+    )
     p.add_argument("--csv", type=path_arg, metavar="FILE", help="write one row per method as CSV")
     p.add_argument(
         "--out",
