@@ -652,14 +652,27 @@ def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTr
     return LabelTrack(resolve(rec["label_file"]), block, names)
 
 
+def _read_label_text(path: Path, what: str) -> str:
+    """The text of a label or label names file; a folder, a missing file or one that cannot
+    be read in one line as every other input says it ("the label file is a folder, not a
+    file"), not Python's "[Errno 21] Is a directory"."""
+    if path.is_dir():
+        raise DataError(f"the {what} is a folder, not a file", path)
+    if not path.exists():
+        raise DataError(f"no such {what}", path)
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise DataError(f"cannot read the {what} ({exc.strerror or exc})", path) from None
+    except UnicodeDecodeError as exc:
+        raise DataError(f"cannot read the {what} ({exc})", path) from None
+
+
 def read_label_names(path: str | Path) -> dict[str, str]:
     """Names of label codes: one ``code name`` pair per line (space, tab or comma between;
     ``#`` starts a comment). Raises DataError naming the file and line."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataError(f"cannot read label names ({exc})", path) from None
+    text = _read_label_text(path, "label names file")
     names: dict[str, str] = {}
     for line_no, raw in enumerate(text.splitlines(), start=1):
         line = raw.split("#", 1)[0].strip()
@@ -688,10 +701,7 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     ends (as in cmu-mocap6/truelabels), each mapped through ``names`` when given. Raises
     DataError for an empty or unreadable file or a code ``names`` does not name."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataError(f"cannot read the label file ({exc})", path) from None
+    text = _read_label_text(path, "label file")
     tokens = [t for t in re.split(r"[\s,]+", text) if t]
     if not tokens:
         raise DataError("the label file holds no labels", path)

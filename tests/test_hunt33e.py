@@ -232,3 +232,33 @@ def test_compare_help_says_its_json_is_a_file_unlike_the_other_commands() -> Non
     assert "unlike other commands' --json" in str(json_.help)
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
     assert "`--json FILE`, `--csv FILE`: files, unlike other commands' `--json`" in readme
+
+
+@pytest.mark.parametrize(
+    ("spoil", "needle"),
+    [
+        ("labels", "frames: the label file is a folder, not a file"),
+        ("names", "frames: the label names file is a folder, not a file"),
+        ("missing", "nowhere.txt: no such label file"),
+    ],
+)
+def test_a_label_file_that_is_a_folder_or_missing_is_said_as_other_inputs_are(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], spoil: str, needle: str
+) -> None:
+    # before: "cannot read the label file ([Errno 21] Is a directory: 'frames')", Python's
+    # words where every other input says "is a folder, not a file" or "no such file"
+    clip = good_pose_file(tmp_path / "rec.npz", frames=60)
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    labels = tmp_path / "labels.txt"
+    labels.write_text("1 " * 60)
+    names = tmp_path / "names.txt"
+    names.write_text("1 stand\n")
+    given = {
+        "labels": [str(folder), "--label-names", str(names)],
+        "names": [str(labels), "--label-names", str(folder)],
+        "missing": [str(tmp_path / "nowhere.txt")],
+    }[spoil]
+    line = refused(["train", str(clip), "--db", str(tmp_path / "cb.sqlite"), "--frame-labels",
+                    *given], tmp_path, capsys, needle)  # fmt: skip
+    assert "Errno" not in line
