@@ -648,6 +648,22 @@ _LOST_WORDS = (
 )
 
 
+def _what_file(where: str) -> str:
+    """What a file that is no SQLite database looks like it is, for the one line that refuses
+    it: an input given as ``--db`` (``classify cb.sqlite --db clip.npz``, the two swapped) is
+    said so."""
+    try:
+        with open(where, "rb") as f:
+            head = f.read(512)
+    except OSError:
+        return "corrupt or not a database"
+    if head.startswith((b"PK\x03\x04", b"\x93NUMPY")):
+        return "a NumPy file, such as a pose file: --db takes the case base file"
+    if head and all(32 <= b < 127 or b in b"\t\r\n" for b in head):
+        return "a text file, such as a labels CSV: --db takes the case base file"
+    return "corrupt or not a database"
+
+
 def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
     text = str(getattr(exc, "orig", None) or exc).strip()
     low = text.lower()
@@ -664,7 +680,7 @@ def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
             f"database is locked by another process (gave up after {timeout_s:g} s)", where
         )
     if "not a database" in low or "malformed" in low or "disk image" in low:
-        return StoreError("not a readable SQLite database (corrupt or not a database)", where)
+        return StoreError(f"not a readable SQLite database ({_what_file(where)})", where)
     if "unable to open" in low or "readonly" in low or "read-only" in low:
         return StoreError(f"cannot open or write the database ({text})", where)
     if "no such table" in low or ("relation" in low and "does not exist" in low):

@@ -262,3 +262,26 @@ def test_a_label_file_that_is_a_folder_or_missing_is_said_as_other_inputs_are(
     line = refused(["train", str(clip), "--db", str(tmp_path / "cb.sqlite"), "--frame-labels",
                     *given], tmp_path, capsys, needle)  # fmt: skip
     assert "Errno" not in line
+
+
+@pytest.mark.parametrize(
+    ("kind", "needle"),
+    [
+        ("pose", "(a NumPy file, such as a pose file: --db takes the case base file)"),
+        ("csv", "(a text file, such as a labels CSV: --db takes the case base file)"),
+        ("junk", "(corrupt or not a database)"),
+    ],
+)
+def test_db_given_an_input_file_says_what_that_file_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str, needle: str
+) -> None:
+    # before: "classify cb.sqlite --db clip.npz" (the two swapped) said only "clip.npz: not a
+    # readable SQLite database (corrupt or not a database)"
+    clip = good_pose_file(tmp_path / "clip.npz", frames=12)
+    db = {"pose": clip, "csv": tmp_path / "labels.csv", "junk": tmp_path / "junk.sqlite"}[kind]
+    if kind == "csv":
+        db.write_text("path,label\nclip.npz,stand\n")
+    if kind == "junk":
+        db.write_bytes(bytes(range(256)) * 8)
+    refused(["classify", str(clip), "--db", str(db)], tmp_path, capsys,
+            f"{db.name}: not a readable SQLite database {needle}")  # fmt: skip
