@@ -193,13 +193,13 @@ def test_a_damaged_case_base_is_one_line_and_stays_as_it_is(
         (["train", str(LABELS), "--name", ""], "the case base name is empty"),
         (
             ["train", str(LABELS), "--name", "x", "--length", "100000000"],
-            "length must be a whole number of frames from 2 to 4096",
+            "--length: must be a whole number of frames from 2 to 4096",
         ),  # fmt: skip
         (
             ["train", str(LABELS), "--append", "--similarity", "dtw"],
             "--append adds cases to the stored model as it is; it does not take --similarity",
         ),  # fmt: skip
-        (["train", str(LABELS), "--name", "x", "-k", "0"], "k must be a positive integer"),
+        (["train", str(LABELS), "--name", "x", "-k", "0"], "-k: must be a positive integer"),
         (["train", str(LABELS), "--name", "x", "--trim", "1.5"], "--trim: must be in (0, 1]"),
     ],
 )

@@ -285,3 +285,29 @@ def test_db_given_an_input_file_says_what_that_file_is(
         db.write_bytes(bytes(range(256)) * 8)
     refused(["classify", str(clip), "--db", str(db)], tmp_path, capsys,
             f"{db.name}: not a readable SQLite database {needle}")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("options", "needle"),
+    [
+        (["--states", "foo"], "error: --states: must be one of angles, instantaneous, all"),
+        (["--length", "5000"], "error: --length: must be a whole number of frames from 2 to"),
+        (["-k", "0"], "error: -k: must be a positive integer, got 0"),
+        (["--phases", "x"], "error: --phases: must be auto or a whole number, got 'x'"),
+        (["--similarity", "dtw", "--feature-weights", "fisher"],
+         "error: --feature-weights: learned feature weights need clip summaries or QMP"),
+    ],
+)  # fmt: skip
+def test_train_names_the_option_of_a_bad_model_parameter(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], options: list[str], needle: str
+) -> None:
+    # before: "states: states must be one of ...", "k: k must be ...", "--phases: --phases
+    # must be ...", "feature_weights: ... (summary=True or QMP features, with
+    # similarity='euclidean')": the estimator's parameter (and Python's words), not the option
+    data = tmp_path / "data"
+    for label in ("stand", "wait"):
+        (data / label).mkdir(parents=True)
+        good_pose_file(data / label / "c.npz", frames=40)
+    line = refused(["train", str(data), "--db", str(tmp_path / "cb.sqlite"), *options],
+                   tmp_path, capsys, needle)  # fmt: skip
+    assert "summary=True" not in line

@@ -47,7 +47,7 @@ def _phases(value: str) -> int | str:
     try:
         return int(value)
     except ValueError:
-        msg = f"--phases must be auto or a whole number, got {value!r}"
+        msg = f"must be auto or a whole number, got {value!r}"
         raise ConfigError(msg, "--phases") from None
 
 
@@ -238,8 +238,40 @@ def _estimator(args: argparse.Namespace) -> Any:
         trim=args.trim,
         editor=args.editor,
     )
-    estimator.wanted_config()  # bad --states / --length / -k: one line before any clip is read
+    try:  # bad --states / --length / -k: one line before any clip is read
+        estimator.wanted_config()
+        estimator.describe_plan()
+    except ConfigError as exc:
+        raise _as_option(exc) from None
     return estimator
+
+
+#: the estimator's parameters, as the options of `train` that set them
+PARAMETER_OPTIONS = {
+    "states": "--states",
+    "length": "--length",
+    "k": "-k",
+    "feature_weights": "--feature-weights",
+    "mirror": "--mirror",
+    "phases": "--phases",
+    "editor": "--editor",
+    "trim": "--trim",
+}
+
+
+def _as_option(exc: ConfigError) -> ConfigError:
+    """A refusal of the estimator's parameter ("states: states must be one of ...") as one
+    of the option typed ("--states: must be one of ...")."""
+    option = PARAMETER_OPTIONS.get(exc.source or "")
+    if option is None:
+        return exc
+    message = exc.message.removeprefix(f"{exc.source} ")
+    if exc.source == "feature_weights" and "vector problems" in message:  # Python's words
+        message = (
+            "learned feature weights need clip summaries or QMP features under euclidean"
+            " similarity (not dtw, signature or --no-summary)"
+        )
+    return ConfigError(message, option)
 
 
 def _check_fluent_options(args: argparse.Namespace, features: str, similarity: str) -> None:
