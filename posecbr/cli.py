@@ -48,11 +48,15 @@ def _name_own_parser(parser: argparse.ArgumentParser) -> None:
     """Give every subcommand's (and action's) parser itself as the default ``_parser``, so
     that an argument none of them knows is refused by the command it was given to
     ("posecbr classify: error: unrecognized arguments: --verbse; see posecbr classify
-    --help"), not by ``posecbr`` (whose help does not list the command's options)."""
+    --help"), not by ``posecbr`` (whose help does not list the command's options); and one
+    whose ``--help`` would say only its options the line ``posecbr --help`` gives it."""
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
-            for child in action.choices.values():
+            said = {a.dest: a.help for a in action._choices_actions}
+            for name, child in action.choices.items():
                 child.set_defaults(_parser=child)
+                if child.description is None and said.get(name):  # its --help says what it does
+                    child.description = f"{str(said[name])[0].upper()}{str(said[name])[1:]}."
                 _name_own_parser(child)
 
 

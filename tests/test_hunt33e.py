@@ -311,3 +311,23 @@ def test_train_names_the_option_of_a_bad_model_parameter(
     line = refused(["train", str(data), "--db", str(tmp_path / "cb.sqlite"), *options],
                    tmp_path, capsys, needle)  # fmt: skip
     assert "summary=True" not in line
+
+
+def test_every_command_help_says_what_the_command_does(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # before: `posecbr thresholds --help` and every `posecbr casebase ACTION --help` gave
+    # the usage and the options alone
+    commands = [
+        ["thresholds"],
+        *[["casebase", a] for a in ("info", "list", "export", "trim", "upgrade")],
+    ]
+    for argv in commands:
+        with pytest.raises(SystemExit):
+            main([*argv, "--help"])
+        out = capsys.readouterr().out
+        description = out.split("\n\n")[1]
+        assert not description.startswith(("options:", "positional")), (argv, out)
+    with pytest.raises(SystemExit):
+        main(["casebase", "trim", "--help"])
+    assert "Run a maintenance editor and deactivate dropped cases." in capsys.readouterr().out
