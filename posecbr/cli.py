@@ -8,8 +8,10 @@ command means adding a module; nothing here changes.
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib
 import pkgutil
+import re
 import sys
 from collections.abc import Sequence
 from typing import NoReturn
@@ -25,7 +27,28 @@ class Parser(argparse.ArgumentParser):
     quotes the user's arguments: escaped, they cannot break the line or drive the terminal."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {shown(message)}; see {self.prog} --help\n")
+        guess = self._guess(message)
+        self.exit(2, f"{self.prog}: error: {shown(message)}{guess}; see {self.prog} --help\n")
+
+    def _guess(self, message: str) -> str:
+        """ " (did you mean 'classify'?)" for a mistyped command or option, when one is close."""
+        typed: list[str] = []
+        known: list[str] = []
+        choice = re.match(r"argument .*: invalid choice: '(.*?)' \(choose from", message)
+        if choice:
+            typed = [choice.group(1)]
+            for action in self._actions:
+                if isinstance(action, argparse._SubParsersAction):
+                    known = list(action.choices)
+        elif message.startswith("unrecognized arguments: "):
+            typed = [a.split("=")[0] for a in message.split(": ", 1)[1].split()]
+            typed = [a for a in typed if a.startswith("--")]
+            known = [o for a in self._actions for o in a.option_strings if o.startswith("--")]
+        for word in typed:
+            close = difflib.get_close_matches(word, known, n=1, cutoff=0.75)
+            if close:
+                return f" (did you mean {close[0]!r}?)"
+        return ""
 
 
 def build_parser() -> argparse.ArgumentParser:

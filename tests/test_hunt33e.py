@@ -331,3 +331,42 @@ def test_every_command_help_says_what_the_command_does(
     with pytest.raises(SystemExit):
         main(["casebase", "trim", "--help"])
     assert "Run a maintenance editor and deactivate dropped cases." in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["classfy", "clip.npz"],
+         "posecbr: error: argument COMMAND: invalid choice: 'classfy' (choose from "),
+        (["casebase", "inf", "--db", "cb.sqlite"],
+         "posecbr casebase: error: argument ACTION: invalid choice: 'inf' (choose from "),
+        (["describe", "clip.npz", "--jsn"],
+         "posecbr describe: error: unrecognized arguments: --jsn (did you mean '--json'?); "
+         "see posecbr describe --help"),
+        (["train", "data", "--db", "cb.sqlite", "--similarty", "dtw"],
+         "posecbr train: error: unrecognized arguments: --similarty dtw (did you mean "
+         "'--similarity'?); see posecbr train --help"),
+    ],
+)  # fmt: skip
+def test_a_mistyped_command_or_option_gets_a_guess(
+    argv: list[str], said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: the choices or the help alone; `classify --feedback` already guessed a label
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(said) and err.count("\n") == 1, err
+    if "invalid choice" in said:
+        wanted = {"classfy": "classify", "inf": "info"}[
+            argv[0] if argv[0] != "casebase" else argv[1]
+        ]
+        assert f"(did you mean '{wanted}'?); see posecbr" in err
+
+
+def test_nothing_is_guessed_when_nothing_is_close(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["describe", "clip.npz", "--zzz"])
+    assert capsys.readouterr().err == (
+        "posecbr describe: error: unrecognized arguments: --zzz; see posecbr describe --help\n"
+    )
