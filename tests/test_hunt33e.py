@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shlex
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -370,3 +371,24 @@ def test_nothing_is_guessed_when_nothing_is_close(capsys: pytest.CaptureFixture[
     assert capsys.readouterr().err == (
         "posecbr describe: error: unrecognized arguments: --zzz; see posecbr describe --help\n"
     )
+
+
+def test_compare_prints_a_report_command_that_can_be_pasted(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: "report: posecbr report my results --out my results/report.html", which a
+    # shell reads as four arguments
+    from tests.test_cbr_cli import _write_classes
+
+    data = _write_classes(tmp_path / "data", 4, 3)
+    out = tmp_path / "my results"
+    argv = ["compare", str(data), "--similarities", "euclidean", "--features", "fluents",
+            "--no-dad", "--peers", "none", "--explain", "0", "--cv", "kfold", "--folds", "2",
+            "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    command = last.split("report: ", 1)[1]
+    assert shlex.split(command) == ["posecbr", "report", str(out), "--out",
+                                    str(out / "report.html")]  # fmt: skip
+    assert main(shlex.split(command)[1:]) == 0
+    assert (out / "report.html").is_file()

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shlex
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -409,7 +410,8 @@ def run(args: argparse.Namespace) -> int:
         _remove_stale(args.out, earlier, results.pictures.files())
         # the JSON again, now naming the pictures (the CSV holds no pictures)
         _write_results(results, [o for o in outputs if o.format == "json"], args.out)
-        out = shown(args.out)
-        report = shown(args.out / "report.html")
-        print(f"results and pictures in {out}; report: posecbr report {out} --out {report}")
+        # the command as it can be pasted into a shell: a folder named with a space quoted
+        out, report = shlex.quote(str(args.out)), shlex.quote(str(args.out / "report.html"))
+        said = f"results and pictures in {args.out}; report: posecbr report {out} --out {report}"
+        print(shown(said))
     return 0
