@@ -51,6 +51,13 @@ class Parser(argparse.ArgumentParser):
         return ""
 
 
+def plain_text(doc: str) -> str:
+    """A docstring as a terminal shows it: ``x`` as `x`, :mod:`features.repetitions` (any
+    Sphinx role) as features.repetitions, a role's ~ dropped."""
+    doc = re.sub(r":[a-z]+:`~?([^`]+)`", r"\1", doc)
+    return doc.replace("``", "`")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="posecbr",
@@ -80,6 +87,8 @@ def _name_own_parser(parser: argparse.ArgumentParser) -> None:
                 child.set_defaults(_parser=child)
                 if child.description is None and said.get(name):  # its --help says what it does
                     child.description = f"{str(said[name])[0].upper()}{str(said[name])[1:]}."
+                if child.description:  # a module's docstring: its Sphinx markup read as text
+                    child.description = plain_text(child.description)
                 _name_own_parser(child)
 
 

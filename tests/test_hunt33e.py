@@ -392,3 +392,14 @@ def test_compare_prints_a_report_command_that_can_be_pasted(
                                     str(out / "report.html")]  # fmt: skip
     assert main(shlex.split(command)[1:]) == 0
     assert (out / "report.html").is_file()
+
+
+@pytest.mark.parametrize("command", ["convert", "reps", "segment", "watch"])
+def test_help_shows_no_sphinx_markup(command: str, capsys: pytest.CaptureFixture[str]) -> None:
+    # before: these commands' --help was their module docstring as written for Sphinx:
+    # "``posecbr reps CLIP``: ... (:mod:`features.repetitions`)"
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    out = capsys.readouterr().out
+    assert "``" not in out and ":mod:" not in out and ":func:" not in out
+    assert f"`posecbr {command} " in out
