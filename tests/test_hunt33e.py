@@ -19,7 +19,7 @@ from features.fileio import check_output
 from features.qmp import fit_signals
 from features.qmp.add import evaluate_criteria, load_add
 from posecbr.cli import build_parser, main
-from tests.badinput import good_pose_file, refused
+from tests.badinput import good_pose_file, refused, small_case_base
 from tests.bodies import standing, to_sequence
 
 
@@ -402,3 +402,18 @@ def test_help_shows_no_sphinx_markup(command: str, capsys: pytest.CaptureFixture
     out = capsys.readouterr().out
     assert "``" not in out and ":mod:" not in out and ":func:" not in out
     assert f"`posecbr {command} " in out
+
+
+def test_classify_subjects_matching_no_clip_names_the_filter(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: "labels.csv: no clips found", the filter that left them all out unsaid (a
+    # subject matching some clips but not all was already named)
+    for i in range(2):
+        good_pose_file(tmp_path / f"c{i}.npz", frames=12)
+    csv = tmp_path / "labels.csv"
+    csv.write_text("path,label,subject\nc0.npz,stand,s01\nc1.npz,stand,s02\n")
+    db = small_case_base(tmp_path / "cb")
+    capsys.readouterr()  # what training it printed
+    refused(["classify", str(csv), "--db", str(db), "--subjects", "s09"], tmp_path, capsys,
+            "error: --subjects: no clip of subject 's09' in the clips given")  # fmt: skip

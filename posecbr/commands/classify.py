@@ -134,9 +134,9 @@ def load_inputs(
             for clip in clips:
                 out.append((clip.seq, clip_target(clip, target)))
                 seen.add(clip.subject)
+    _check_subjects_found(subjects, seen)  # before "no clips found": the filter said why
     if not out:
         raise DataError("no clips found", " ".join(str(p) for p in paths))
-    _check_subjects_found(subjects, seen)
     return out
 
 
