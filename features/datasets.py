@@ -673,6 +673,7 @@ def read_label_names(path: str | Path) -> dict[str, str]:
     ``#`` starts a comment). Raises DataError naming the file and line."""
     path = Path(path)
     text = _read_label_text(path, "label names file")
+    _refuse_nul(text, path)
     names: dict[str, str] = {}
     for line_no, raw in enumerate(text.splitlines(), start=1):
         line = raw.split("#", 1)[0].strip()
@@ -705,6 +706,7 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     tokens = [t for t in re.split(r"[\s,]+", text) if t]
     if not tokens:
         raise DataError("the label file holds no labels", path)
+    _refuse_nul(text, path)
     _refuse_a_table(text, path)
     if names is None:
         return tokens
@@ -716,6 +718,28 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
             path,
         )
     return [names[t] for t in tokens]
+
+
+def _refuse_nul(text: str, path: Path) -> None:
+    """Refuse a label file or label names file holding a NUL character (stored with each
+    case, and no store holds one, as in a labels CSV), naming its line and the word of the
+    line it is in. Text of NULs every other character is UTF-16 read as UTF-8: said so."""
+    at = text.find("\x00")
+    if at < 0:
+        return
+    line_start = text.rfind("\n", 0, at) + 1
+    line_no = text.count("\n", 0, at) + 1
+    line = text[line_start:].split("\n", 1)[0]
+    words = list(re.finditer(r"[^\s,]+", line))  # a NUL is neither space nor comma
+    word_no, word = next(
+        (i, m.group()) for i, m in enumerate(words, 1) if m.end() > at - line_start
+    )
+    utf16 = text.count("\x00") * 3 >= len(text)
+    raise DataError(
+        f"line {line_no}, word {word_no}: {word[:80]!r} contains a NUL character"
+        + (" (UTF-16 text? save the file as UTF-8)" if utf16 else " (a case base cannot store it)"),
+        path,
+    )
 
 
 def _refuse_a_table(text: str, path: Path) -> None:
