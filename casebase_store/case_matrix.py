@@ -18,7 +18,8 @@ of the very case base and version asked for. Written atomically (a temporary fil
 renamed when complete: a reader sees the whole matrix or none), in chunks, so writing a
 matrix larger than memory needs no full copy either. Older versions of the same case base
 and kind are removed when a new one is written (a process that still maps one keeps reading
-it: POSIX unlink).
+it: POSIX unlink); :func:`case_matrix_files` lists them all for a sweep of those of case
+bases gone or too small to be mapped any more (``cbr.stored.remove_stale_matrices``).
 """
 
 from __future__ import annotations
@@ -83,6 +84,24 @@ def find_case_matrix(
         return path
     legacy = path.with_name(f"{_legacy_prefix(case_base, kind)}{_slug(version)}.npy")
     return legacy if legacy.exists() else path
+
+
+#: a matrix file's name in either naming, ``<name>[~<hash>].<kind>.<version>.npy`` (neither
+#: kind nor version holds a dot; the name may)
+_MATRIX_FILE = re.compile(r"(?s).+\.[A-Za-z0-9_=-]+\.(?P<version>[A-Za-z0-9_=-]+)\.npy")
+
+
+def case_matrix_files(database: str | Path) -> list[tuple[Path, str]]:
+    """Every file beside ``database`` named as a case matrix (either naming), with its
+    version (as :func:`matrix_path` wrote it); nothing else (temporaries, other files)."""
+    db = Path(database)
+    folder = db.with_name(db.name + ".matrices")
+    try:
+        names = sorted(p.name for p in folder.iterdir())
+    except OSError:  # none written yet, or a folder that cannot be listed
+        return []
+    found = ((n, _MATRIX_FILE.fullmatch(n)) for n in names)
+    return [(folder / n, m["version"]) for n, m in found if m is not None]
 
 
 def write_case_matrix(

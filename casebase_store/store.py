@@ -819,6 +819,13 @@ class CaseStore:
             names = sorted(s.scalars(select(CaseBaseRow.name)).all())
             return [self._info(s, self._row(s, n)) for n in names]
 
+    def identities(self) -> dict[str, tuple[str, int]]:
+        """Every case base's identity (``uid``) with its name and version, read without
+        checking the rest of it (what names its matrix files beside the database)."""
+        with self._read() as s:
+            rows = s.execute(select(CaseBaseRow.uid, CaseBaseRow.name, CaseBaseRow.version))
+            return {str(uid): (str(name), int(version)) for uid, name, version in rows}
+
     def get_case_base(self, name: str) -> CaseBaseInfo:
         with self._read() as s:
             return self._info(s, self._row(s, name))

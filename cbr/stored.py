@@ -10,6 +10,7 @@ fitted in memory.
 
 from __future__ import annotations
 
+import re
 import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -26,7 +27,12 @@ from casebase_store import (
     StoreTransaction,
     sqlite_file,
 )
-from casebase_store.case_matrix import cached_case_matrix, find_case_matrix, open_case_matrix
+from casebase_store.case_matrix import (
+    cached_case_matrix,
+    case_matrix_files,
+    find_case_matrix,
+    open_case_matrix,
+)
 from features.errors import ConfigError, DataError
 from features.text import shown
 
@@ -253,7 +259,10 @@ def write_matrices(store: CaseStore, name: str, min_cases: int | None = None) ->
     Returns whether it wrote them; read-only commands only ever read them."""
     db = sqlite_file(store.where)
     least = MAPPED_MIN_CASES if min_cases is None else min_cases
-    if db is None or store.readonly or store.count_cases(name) < least:
+    if db is None or store.readonly:
+        return False
+    remove_stale_matrices(store, name)
+    if store.count_cases(name) < least:
         return False
     info, arrays = store.load_case_base(name)
     measure = _measure(info, store.where)
@@ -288,6 +297,38 @@ def write_matrices(store: CaseStore, name: str, min_cases: int | None = None) ->
         )
         return False
     return True
+
+
+_KEY = re.compile(r"(?P<uid>[0-9a-f]{32})-(?P<version>[0-9]+)")
+
+
+def remove_stale_matrices(store: CaseStore, name: str) -> None:
+    """Remove the matrix files beside a SQLite store that nothing will read again, in either
+    naming (posecbr 0.2 named them without the hash): those of case bases no longer in it
+    (replaced by ``train --replace``: an identity no case base has) and those of ``name``'s
+    older versions. Other case bases' files of their current state, and files not named as
+    matrices, are left alone; a file that cannot be removed is left too (a copy for speed)."""
+    db = sqlite_file(store.where)
+    if db is None or store.readonly:
+        return
+    # the files are listed before the case bases are read: matrices are written after their
+    # change commits, so a file listed is of a case base (or version) already readable here
+    files = case_matrix_files(db)
+    if not files:
+        return
+    live = store.identities()
+    for path, key in files:
+        m = _KEY.fullmatch(key)
+        if m is None:
+            continue
+        owner = live.get(m["uid"])
+        gone = owner is None
+        older = owner is not None and owner[0] == name and int(m["version"]) < owner[1]
+        if gone or older:
+            try:
+                path.unlink(missing_ok=True)
+            except OSError:
+                pass
 
 
 def _mapped(store: CaseStore, info: CaseBaseInfo, n: int) -> tuple[np.ndarray, ...] | None:

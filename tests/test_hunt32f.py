@@ -121,9 +121,17 @@ def test_matrices_an_older_posecbr_named_are_read_then_replaced(
     folder = db.with_name(db.name + ".matrices")
     for p in folder.iterdir():  # as posecbr 0.2 named them
         p.rename(folder / p.name.replace(f"~{_hash(name)}.", "."))
+    # another case base whose name makes the same file name, "default." (small: not mapped),
+    # given a file as 0.2 named them (a file of an identity no case base has is stale: removed)
+    argv = ["train", str(small.parent / "train"), "--db", str(db), "--name", "default.",
+            "--mirror", "off", "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+    monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 10**9)
+    assert main(argv) == 0
+    monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 5)
     with open_store(db, readonly=True) as store:
         uid = store.get_case_base(name).uid
-    other = folder / "default.problems.0123456789abcdef0123456789abcdef-1.npy"
+        other_uid = store.get_case_base("default.").uid
+    other = folder / f"default.problems.{other_uid}-1.npy"
     shutil.copy(folder / f"default.problems.{uid}-1.npy", other)  # another 'default' case base's
     assert _matrices(db) == sorted(
         [other.name, f"default.problems.{uid}-1.npy", f"default.representations.{uid}-1.npy"]
@@ -132,7 +140,8 @@ def test_matrices_an_older_posecbr_named_are_read_then_replaced(
         cb = load_classifier(store, name).classifier.case_base_
         assert _is_mapped(cb.problems) and _is_mapped(cb.reps)
     clip = str(sorted((small.parent / "train" / BOTH).glob("*.npz"))[0])
-    assert main(["classify", clip, "--db", str(db), "--feedback", BOTH, "--quiet"]) == 0
+    argv = ["classify", clip, "--db", str(db), "--name", name, "--feedback", BOTH, "--quiet"]
+    assert main(argv) == 0
     assert _matrices(db) == sorted(
         [other.name]
         + [f"default~{_hash(name)}.{kind}.{uid}-2.npy" for kind in ("problems", "representations")]

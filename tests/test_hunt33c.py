@@ -3,10 +3,15 @@
 
 from __future__ import annotations
 
+import hashlib
+import re
 from pathlib import Path
 
 import pytest
 
+import cbr.stored as stored_module
+from casebase_store import open_store
+from posecbr.cli import main
 from tests.badinput import good_pose_file, refused
 
 
@@ -60,3 +65,80 @@ def test_a_nul_in_a_label_file_or_its_names_is_refused_in_one_line(
         encoding="utf-8",
     )
     refused(["train", str(csv), "--split", "clips", "--db", db], tmp_path, capsys, needle)
+
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+
+
+def _name_hash(name: str) -> str:
+    return hashlib.sha256(name.encode("utf-8")).hexdigest()[:12]
+
+
+def _files(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir())
+
+
+def _uid(db: Path, name: str) -> tuple[str, int]:
+    with open_store(db, readonly=True) as store:
+        info = store.get_case_base(name)
+        return info.uid, info.version
+
+
+def test_a_replaced_case_base_leaves_no_matrix_file_in_either_naming(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``train --replace`` gives the case base a new identity: the matrices of the one it
+    replaced are never read again. Those named as posecbr 0.2 named them (no hash) stayed
+    for ever (the sweep kept files of another identity: they might be another case base's
+    whose name has the same file name), and when the new case base was too small to be
+    mapped nothing was swept at all. Now both go; the files of "a_b" (the same file name as
+    "a b", old naming too) and files not named as matrices are left alone."""
+    monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 100)  # the demo's 120 are large
+    db = tmp_path / "cb.sqlite"
+    folder = tmp_path / "cb.sqlite.matrices"
+    labels = str(DEMO / "labels.csv")
+    for name in ("a b", "a_b"):
+        assert (
+            main(["train", labels, "--db", str(db), "--name", name, "--subjects", "s01,s02"]) == 0
+        )
+    for p in folder.iterdir():  # as posecbr 0.2 named them
+        p.rename(folder / re.sub(r"~[0-9a-f]{12}\.", ".", p.name))
+    old, _ = _uid(db, "a b")
+    other, _ = _uid(db, "a_b")
+    legacy = {n: [f"a_b.{k}.{u}-1.npy" for k in ("problems", "representations")]
+              for n, u in (("a b", old), ("a_b", other))}  # fmt: skip
+    keep = ["notes.txt", "a_b.problems.npy", f"a_b.problems.{old}.npy"]  # not matrices' names
+    for n in keep:
+        (folder / n).write_text("mine", encoding="utf-8")
+    assert _files(folder) == sorted(legacy["a b"] + legacy["a_b"] + keep)
+    # replaced by a case base too small to be mapped (the 60 clips of s01)
+    argv = ["train", labels, "--db", str(db), "--name", "a b", "--subjects", "s01", "--replace"]
+    assert main(argv) == 0
+    assert _files(folder) == sorted(legacy["a_b"] + keep)
+    # replaced again by a large one: only its own files are added
+    argv[argv.index("s01")] = "s01,s02"
+    assert main(argv) == 0
+    new, version = _uid(db, "a b")
+    assert new != old and version == 1
+    mine = [f"a_b~{_name_hash('a b')}.{k}.{new}-1.npy" for k in ("problems", "representations")]
+    assert _files(folder) == sorted(legacy["a_b"] + keep + mine)
+    capsys.readouterr()
+
+
+def test_a_trim_below_the_mapped_size_removes_the_matrices_it_made_stale(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A case base trimmed below the size that is mapped left its old version's matrices
+    (read by nothing, as large as the case base) beside the database; now they go."""
+    monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 100)
+    db = tmp_path / "cb.sqlite"
+    folder = tmp_path / "cb.sqlite.matrices"
+    argv = ["train", str(DEMO / "labels.csv"), "--db", str(db), "--subjects", "s01,s02"]
+    assert main(argv) == 0
+    uid, _ = _uid(db, "default")
+    assert len(_files(folder)) == 2
+    assert main(["casebase", "trim", "--db", str(db), "--keep", "0.5"]) == 0
+    with open_store(db, readonly=True) as store:
+        assert store.count_cases("default") == 60 and store.get_case_base("default").version == 2
+    assert _files(folder) == []
+    capsys.readouterr()
