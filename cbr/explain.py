@@ -603,13 +603,18 @@ def _change_text(c: Claim) -> str:
     there = c.there if c.there is not None else float("nan")
     if c.here is None:
         return f"{c.words} not seen → {said(there, c.unit)}"
-    # the unit's words once: "mean confidence 0.96 → 0.79", "62° → 80°", "1.31 → 0.81 torso
-    # lengths" (a unit said before the value is said with the first, after it with the last)
-    if c.unit in ("share", "confidence"):
-        return f"{c.words} {said(c.here, c.unit)} → {there:.2f}"
-    if c.unit == "degrees" or not c.unit:
-        return f"{c.words} {said(c.here, c.unit)} → {said(there, c.unit)}"
-    return f"{c.words} {c.here:.2f} → {said(there, c.unit)}"
+    return f"{c.words} {_pair(c.here, there, c.unit, ' → ', '')}"
+
+
+def _pair(a: float, b: float, unit: str, between: str, after: str = "") -> str:
+    """Two values in one unit, the unit's words said once: "mean confidence 0.96 → 0.79",
+    "-0.32 → -0.54 torso lengths", "0.20 torso lengths here, 0.06 there" (``after``
+    follows the second value); degrees keep their sign on each ("62° → 80°")."""
+    if unit in ("degrees", "detected"):  # a sign on each value, or words that are the value
+        return f"{said(a, unit)}{between}{said(b, unit)}{after}"
+    if unit in ("share", "confidence") or after:  # the unit with the first value
+        return f"{said(a, unit)}{between}{b:.2f}{after}"
+    return f"{a:.2f}{between}{said(b, unit)}"  # the unit after the last value
 
 
 def _claim_text(c: Claim, whose: str) -> str:
@@ -975,8 +980,8 @@ def _verbose_contrast(
         + f" (distance {contrast.distance:.3g}) {contrast.source}."
     )
     if differences:
-        said_ = [f"{d['feature']} {said(d['here'], d['unit'])} here, "
-                 f"{said(d['there'], d['unit'])} there" for d in differences]  # fmt: skip
+        said_ = [f"{d['feature']} {_pair(d['here'], d['there'], d['unit'], ' here, ', ' there')}"
+                 for d in differences]  # fmt: skip
         out.append("Differs from it most in: " + "; ".join(said_) + ".")
     if contrast.changes:
         status = (

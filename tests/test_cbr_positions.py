@@ -7,6 +7,7 @@ those coordinates, in torso lengths.
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -182,7 +183,9 @@ def test_explanation_gives_what_was_done_differently_in_units() -> None:
     ]
     assert min(abs(d["there"] - v) for v in overhead) < 1e-9
     assert d["there"] > d["here"]
-    assert f"{d['feature']} {d['here']:.2f} torso lengths" in exp.text
+    # the change said with its unit once, after the value it becomes
+    said = re.escape(f"{d['feature']} {d['here']:.2f} → ") + r"-?\d+\.\d\d torso lengths"
+    assert re.search(said, exp.text), exp.text
 
 
 @pytest.mark.parametrize(

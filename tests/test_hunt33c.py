@@ -142,3 +142,54 @@ def test_a_trim_below_the_mapped_size_removes_the_matrices_it_made_stale(
         assert store.count_cases("default") == 60 and store.get_case_base("default").version == 2
     assert _files(folder) == []
     capsys.readouterr()
+
+
+def test_a_change_in_torso_lengths_says_its_unit_once() -> None:
+    """Last session's fix said a change's unit once for confidences and kept the degree sign
+    on each value; a change in torso lengths still read "left hip forward (lowest) -0.32
+    torso lengths → -0.54 torso lengths" (``compare --explain`` on the demo data). Now the
+    unit follows the last value, as a range's does."""
+    from cbr.explain import Claim, _change_text
+
+    hip = Claim(
+        "change", "c", "f", "left hip forward (lowest)", -0.324, "torso lengths", there=-0.541
+    )
+    assert _change_text(hip) == "left hip forward (lowest) -0.32 → -0.54 torso lengths"
+    spread = Claim("change", "c", "f", "left knee bent (variation)", 0.1, "", there=0.3)
+    assert _change_text(spread) == "left knee bent (variation) 0.10 → 0.30"
+
+
+def test_compares_explanations_say_each_difference_with_its_unit_once(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``compare --explain`` on the demo's squats and sit-to-stands: the verbose explanation
+    in the results ("Differs from it most in: ...") said each unit twice ("left arm centered
+    mean confidence 0.55 here, mean confidence 0.04 there", "right knee forward 0.13 torso
+    lengths here, -0.34 torso lengths there"), as ``classify --verbose`` did. Each item is
+    now worked out from the explanation's own figures: the unit once."""
+    import json
+
+    out = tmp_path / "r.json"
+    argv = ["compare", str(DEMO / "labels.csv"), "--similarities", "euclidean", "--features",
+            "fluents", "--peers", "none", "--no-dad", "--labels", "deep_squat,sit_to_stand",
+            "--explain", "4", "--json", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    capsys.readouterr()
+    explained = json.loads(out.read_text(encoding="utf-8"))["explanations"]
+    seen: set[str] = set()
+    assert explained
+    for e in explained:
+        doc = e["explanation"]
+        line = next(x for x in doc["verbose"].splitlines() if x.startswith("Differs"))
+        items = line.removeprefix("Differs from it most in: ").removesuffix(".").split("; ")
+        assert len(items) == len(doc["differences"])
+        for item, d in zip(items, doc["differences"], strict=True):
+            here, there, unit = d["here"], d["there"], d["unit"]
+            seen.add(unit)
+            want = {
+                "degrees": f"{here:.0f}° here, {there:.0f}° there",
+                "share": f"mean confidence {here:.2f} here, {there:.2f} there",
+                "torso lengths": f"{here:.2f} torso lengths here, {there:.2f} there",
+            }[unit]
+            assert item == f"{d['feature']} {want}"
+    assert {"torso lengths", "degrees"} <= seen
