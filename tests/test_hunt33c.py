@@ -193,3 +193,31 @@ def test_compares_explanations_say_each_difference_with_its_unit_once(
             }[unit]
             assert item == f"{d['feature']} {want}"
     assert {"torso lengths", "degrees"} <= seen
+
+
+def test_labels_written_with_other_unicode_characters_are_noted(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """ "Plié" typed (é one character, NFC) and "Plié" as a file name some systems save (e and
+    a combining accent, NFD) were two activities that print alike, without a word; labels
+    differing in case or spacing were already noted. Now the note names them by their
+    characters' codes."""
+    import unicodedata
+
+    nfc, nfd = (unicodedata.normalize(form, "Plié") for form in ("NFC", "NFD"))
+    assert nfc != nfd
+    rows = [("m01_s01_e01", nfc), ("m01_s02_e01", nfd), ("m02_s01_e01", "lunge"),
+            ("m02_s02_e01", "lunge")]  # fmt: skip
+    csv = tmp_path / "labels.csv"
+    csv.write_text(
+        "path,label,subject\n"
+        + "".join(f"{DEMO / (c + '.npz')},{lab},{c[4:7]}\n" for c, lab in rows),
+        encoding="utf-8",
+    )
+    assert main(["train", str(csv), "--db", str(tmp_path / "cb.sqlite"), "--mirror", "off"]) == 0
+    notes = [x for x in capsys.readouterr().err.splitlines() if "Unicode" in x]
+    assert notes == [
+        "note: 'Plie\\u0301' and 'Pli\\xe9' are the same letters written with other Unicode"
+        " characters (an accented letter as one character or two): they are 2 activities (one"
+        " spelt two ways in the labels?)"
+    ]

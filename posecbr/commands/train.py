@@ -833,13 +833,17 @@ def _indistinct(pairs: list[str], split: str, target: str | None = None) -> str:
 
 def _alike_labels(labels: Any) -> list[list[str]]:
     """The groups of two or more ``labels`` that differ only in case or in spaces, hyphens
-    and underscores ("deep_squat", "Deep Squat"): most likely one activity spelt two ways."""
+    and underscores ("deep_squat", "Deep Squat"), or in how Unicode writes the same letters
+    ("Plié" with its é as one character or as e and an accent, as some systems save file
+    names): most likely one activity spelt two ways."""
     import re
+    import unicodedata
     from collections import defaultdict
 
     groups: dict[str, list[str]] = defaultdict(list)
     for label in labels:
-        groups[re.sub(r"[\s_\-]+", " ", str(label)).strip().casefold()].append(str(label))
+        key = unicodedata.normalize("NFKC", str(label))
+        groups[re.sub(r"[\s_\-]+", " ", key).strip().casefold()].append(str(label))
     return [sorted(g) for g in groups.values() if len(g) > 1]
 
 
@@ -848,13 +852,24 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
     ways, cases nothing tells apart, and a case base of windows segment cannot judge unknown
     with. Activities are called classes when the case base predicts another column
     (``--target correct``)."""
+    import unicodedata
+
     from cbr.explain import class_noun
 
     for group in _alike_labels(result.label_counts):
-        names = " and ".join(", ".join(repr(g) for g in group).rsplit(", ", 1))
+        # labels that read alike on screen are told apart by their characters' codes
+        encoded = len({unicodedata.normalize("NFC", g) for g in group}) == 1
+        said = ascii if encoded else repr
+        names = " and ".join(", ".join(said(g) for g in group).rsplit(", ", 1))
+        how = (
+            "are the same letters written with other Unicode characters (an accented letter"
+            " as one character or two)"
+            if encoded
+            else "differ only in case or spacing"
+        )
         print(
             shown(
-                f"note: {names} differ only in case or spacing: they are {len(group)} "
+                f"note: {names} {how}: they are {len(group)} "
                 f"{class_noun(args.target, len(group))} (one spelt two ways in the labels?)"
             ),
             file=sys.stderr,
