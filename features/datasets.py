@@ -699,14 +699,16 @@ def _code_order(code: str) -> tuple[int, int, str]:
 
 def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> list[str]:
     """The labels of a label file in order: tokens separated by spaces, tabs, commas or line
-    ends (as in cmu-mocap6/truelabels), each mapped through ``names`` when given. Raises
-    DataError for an empty or unreadable file or a code ``names`` does not name."""
+    ends (as in cmu-mocap6/truelabels; ``#`` starts a comment, as in a label names file),
+    each mapped through ``names`` when given. Raises DataError for an empty or unreadable
+    file or a code ``names`` does not name."""
     path = Path(path)
-    text = _read_label_text(path, "label file")
+    raw = _read_label_text(path, "label file")
+    _refuse_nul(raw, path)
+    text = "\n".join(line.split("#", 1)[0] for line in raw.splitlines())
     tokens = [t for t in re.split(r"[\s,]+", text) if t]
     if not tokens:
         raise DataError("the label file holds no labels", path)
-    _refuse_nul(text, path)
     _refuse_a_table(text, path)
     if names is None:
         return tokens

@@ -221,3 +221,33 @@ def test_labels_written_with_other_unicode_characters_are_noted(
         " characters (an accented letter as one character or two): they are 2 activities (one"
         " spelt two ways in the labels?)"
     ]
+
+
+def test_a_label_file_may_hold_comments_as_a_label_names_file_may(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A label names file takes ``#`` comments; a label file read "# 30 fps, one per frame"
+    as five more labels, and was refused as not fitting the recording ("65 labels (one per
+    frame) do not fit the recording rec.npz: 60 frames at 30 fps need 60 or 61"), or with
+    comments in the right number shifted every label. Now a comment is a comment there too;
+    with a BOM, CRLF line ends, tabs and blank lines at the end."""
+    from features.datasets import read_label_track
+
+    track = tmp_path / "labels.txt"
+    body = (
+        "\ufeff# 30 fps, one per frame\r\n"
+        + "a\t" * 30
+        + "\r\n"
+        + "b " * 29
+        + "b # end\r\n\r\n\r\n"
+    )
+    track.write_text(body, encoding="utf-8", newline="")
+    assert read_label_track(track) == ["a"] * 30 + ["b"] * 30
+    rec = _recording(tmp_path, frames=60)
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(rec), "--frame-labels", str(track), "--split", "clips", "--db", str(db),
+            "--mirror", "off"]  # fmt: skip
+    assert main(argv) == 0
+    capsys.readouterr()
+    with open_store(db, readonly=True) as store:
+        assert dict(store.get_case_base("default").label_counts) == {"a": 1, "b": 1}
