@@ -804,11 +804,32 @@ def frame_labels(
             f"{counted(len(labels), 'label')} (one per {unit})"
             f" {'does' if len(labels) == 1 else 'do'} not fit the recording"
             f"{' ' + recording if recording else ''}: {counted(n_frames, 'frame')} at {fps:g}"
-            f" fps need {need} (another frame rate or label block?)",
+            f" fps need {need}{_why_not_fit(where, low, high, len(labels))}",
             where,
         )
     block = np.floor(np.arange(n_frames) / per_block + 1e-9).astype(np.int64)
     return np.asarray(labels, dtype=object)[np.minimum(block, len(labels) - 1)]
+
+
+def _why_not_fit(where: str | Path, low: int, high: int, n_labels: int) -> str:
+    """What likely made a label file's count not fit: labels written one per line with
+    spaces in them ("sit down", read as two labels) when its lines would fit, else another
+    frame rate or block length."""
+    try:
+        text = Path(where).read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError, ValueError):
+        text = ""
+    lines = [ln.split("#", 1)[0].strip() for ln in text.splitlines()]
+    lines = [ln for ln in lines if ln]
+    spaced = next((ln for ln in lines if len(re.split(r"[\s,]+", ln)) > 1), None)
+    if spaced is None or not low <= len(lines) <= high or len(lines) >= n_labels:
+        return " (another frame rate or label block?)"
+    parts = re.split(r"[\s,]+", spaced)
+    return (
+        f": its {len(lines)} lines would, and a line such as {spaced[:40]!r} is"
+        f" {len(parts)} labels (labels are separated by spaces, tabs and commas: write"
+        f" {'_'.join(parts)[:40]})"
+    )
 
 
 def labelled_stretches(frame_label: np.ndarray) -> list[tuple[int, int, str]]:

@@ -251,3 +251,27 @@ def test_a_label_file_may_hold_comments_as_a_label_names_file_may(
     capsys.readouterr()
     with open_store(db, readonly=True) as store:
         assert dict(store.get_case_base("default").label_counts) == {"a": 1, "b": 1}
+
+
+def test_labels_with_spaces_one_per_line_are_said_to_be_the_reason_a_count_does_not_fit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A label per frame written one per line, "sit down" and "stand up": each line is two
+    labels (spaces separate them), so 120 labels for 60 frames, refused as "(another frame
+    rate or label block?)", which it is not. The refusal now says the 60 lines would fit and
+    why they did not; a count that fits no reading keeps the old hint."""
+    rec = _recording(tmp_path, frames=60)
+    track = tmp_path / "labels.txt"
+    track.write_text("sit down\n" * 30 + "stand up\n" * 30 + "\n", encoding="utf-8")
+    db = str(tmp_path / "cb.sqlite")
+    argv = ["train", str(rec), "--frame-labels", str(track), "--split", "clips", "--db", db]
+    refused(
+        argv,
+        tmp_path,
+        capsys,
+        "labels.txt: 120 labels (one per frame) do not fit the recording rec.npz: 60 frames at"
+        " 30 fps need 60 or 61: its 60 lines would, and a line such as 'sit down' is 2 labels"
+        " (labels are separated by spaces, tabs and commas: write sit_down)",
+    )
+    track.write_text("sit_down " * 50, encoding="utf-8")
+    refused(argv, tmp_path, capsys, "50 labels (one per frame)", "(another frame rate or label")
