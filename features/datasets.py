@@ -532,13 +532,22 @@ def _clip_path(path: str, line_no: int, csv_path: Path) -> Path:
     if not clip.is_absolute():
         clip = csv_path.parent / clip
     if not _exists(clip, f"line {line_no}: ", csv_path):
-        raise DataError(f"line {line_no}: {_no_such_file(path, clip)}", csv_path)
+        raise DataError(f"line {line_no}: {_no_such_file(path, clip, csv_path)}", csv_path)
     return clip
 
 
-def _no_such_file(value: str, looked_for: Path) -> str:
+def _no_such_file(value: str, looked_for: Path, csv_path: Path) -> str:
     """What a labels CSV's missing file is, in words; a relative path says where it was
-    looked for (from the CSV's folder, not the working folder)."""
+    looked for (from the CSV's folder, not the working folder), and a path written with
+    Windows' backslashes between folders says so when the file is there with slashes."""
+    if "\\" in value:
+        slashed = value.replace("\\", "/")
+        there = Path(slashed) if Path(slashed).is_absolute() else csv_path.parent / slashed
+        if _exists(there):
+            return (
+                f"no such file {value[:200]} ({slashed[:200]} is there: a path takes / between"
+                " folders, not \\)"
+            )
     if Path(value).is_absolute():
         return f"no such file {value[:200]}"
     where = str(looked_for)[:200]
@@ -633,7 +642,7 @@ def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTr
         f = Path(value)
         f = f if f.is_absolute() else csv_path.parent / f
         if not f.is_file():
-            raise DataError(f"line {line_no}: {_no_such_file(value, f)}", csv_path)
+            raise DataError(f"line {line_no}: {_no_such_file(value, f, csv_path)}", csv_path)
         return f
 
     block: float | None = None

@@ -275,3 +275,30 @@ def test_labels_with_spaces_one_per_line_are_said_to_be_the_reason_a_count_does_
     )
     track.write_text("sit_down " * 50, encoding="utf-8")
     refused(argv, tmp_path, capsys, "50 labels (one per frame)", "(another frame rate or label")
+
+
+@pytest.mark.parametrize("column", ["path", "label_file"])
+def test_a_labels_csv_path_with_windows_backslashes_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], column: str
+) -> None:
+    """A labels CSV made on Windows names ``clips\\rec.npz``: on Linux the backslash is part
+    of a file name, and the refusal said only "no such file clips\\rec.npz (looked for
+    .../clips\\rec.npz: paths are from the CSV's folder)". It now says the file is there
+    with a slash."""
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    _recording(clips)
+    (clips / "labels.txt").write_text("a " * 30 + "b " * 30, encoding="utf-8")
+    paths = {"path": "clips/rec.npz", "label_file": "clips/labels.txt"}
+    paths[column] = paths[column].replace("/", "\\")
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(f"path,label_file\n{paths['path']},{paths['label_file']}\n", encoding="utf-8")
+    argv = ["train", str(csv), "--split", "clips", "--db", str(tmp_path / "cb.sqlite")]
+    wrong, right = paths[column], paths[column].replace("\\", "/")
+    refused(
+        argv,
+        tmp_path,
+        capsys,
+        f"recordings.csv: line 2: no such file {wrong} ({right} is there: a path takes / between"
+        " folders, not \\)",
+    )
