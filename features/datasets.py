@@ -719,6 +719,7 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     if not tokens:
         raise DataError("the label file holds no labels", path)
     _refuse_a_table(text, path)
+    _refuse_a_header(text, tokens, path)
     if names is None:
         return tokens
     unknown = sorted({t for t in tokens if t not in names}, key=_code_order)
@@ -774,6 +775,34 @@ def _refuse_a_table(text: str, path: Path) -> None:
             " (--label-block), separated by spaces, commas or line ends",
             path,
         )
+
+
+#: the names a column of labels is given (``pandas.Series.to_csv`` writes one on top)
+_HEADER_WORDS = frozenset(
+    "label labels activity activities action actions class classes code codes target y"
+    " annotation annotations gesture gestures category".split()
+)
+
+
+def _refuse_a_header(text: str, tokens: list[str], path: Path) -> None:
+    """Refuse a label file whose first line is a column's name alone (``label``, as pandas
+    writes a column out, over numeric codes or a label each line): read as the first label,
+    it would shift every label one frame or block later, and pass when the frames fill the
+    last block exactly. A word alone on the first line, nowhere else in the file, that is a
+    column's usual name or the only word among numbers."""
+    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), "")
+    head = tokens[0]
+    if first != head or len(tokens) < 3 or head in tokens[1:]:
+        return
+    numbers = _numbers(tokens[1:]) is not None and _numbers([head]) is None
+    if not numbers and head.casefold() not in _HEADER_WORDS:
+        return
+    raise DataError(
+        f"line 1: {head[:40]!r} looks like a column's name, not a label"
+        f" ({'the others are numbers' if numbers else 'it is nowhere else in the file'}); a"
+        " label file takes the labels alone, one per frame or block: remove that line",
+        path,
+    )
 
 
 def _numbers(tokens: list[str]) -> np.ndarray | None:

@@ -302,3 +302,30 @@ def test_a_labels_csv_path_with_windows_backslashes_says_so(
         f"recordings.csv: line 2: no such file {wrong} ({right} is there: a path takes / between"
         " folders, not \\)",
     )
+
+
+@pytest.mark.parametrize(
+    ("header", "labels", "why"),
+    [("label", ["walk"] * 30 + ["run"] * 30, "it is nowhere else in the file"),
+     ("activity", ["1"] * 30 + ["2"] * 30, "the others are numbers")],
+)  # fmt: skip
+def test_a_label_file_with_a_column_name_on_top_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], header: str, labels: list[str], why: str
+) -> None:
+    """``pandas.Series.to_csv`` writes a column's name on top ("label", then a label a line):
+    read as the first frame's label, it shifted every label one frame later (60 frames, 61
+    labels: accepted, the stretches 1-30 and 31-59, "label" left out as a flicker). Refused
+    now, naming the line; the same labels without it train, as frames 0-29 and 30-59."""
+    rec = _recording(tmp_path, frames=60)
+    track = tmp_path / "labels.txt"
+    track.write_text("\n".join([header, *labels]) + "\n", encoding="utf-8")
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(rec), "--frame-labels", str(track), "--split", "clips", "--db", str(db),
+            "--mirror", "off"]  # fmt: skip
+    refused(argv, tmp_path, capsys, f"labels.txt: line 1: {header!r} looks like a column's", why)
+    track.write_text("\n".join(labels) + "\n", encoding="utf-8")
+    assert main(argv) == 0
+    capsys.readouterr()
+    with open_store(db, readonly=True) as store:
+        frames = list(store.load_cases("default").frame_ranges)
+    assert sorted(frames) == [(0, 30), (30, 60)]
