@@ -543,7 +543,11 @@ def _no_such_file(value: str, looked_for: Path, csv_path: Path) -> str:
     if "\\" in value:
         slashed = value.replace("\\", "/")
         there = Path(slashed) if Path(slashed).is_absolute() else csv_path.parent / slashed
-        if _exists(there):
+        try:
+            found = _exists(there)
+        except DataError:  # not a path the system can look up either
+            found = False
+        if found:
             return (
                 f"no such file {value[:200]} ({slashed[:200]} is there: a path takes / between"
                 " folders, not \\)"
@@ -638,10 +642,12 @@ def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTr
     if rec.get("label"):
         raise DataError(f"line {line_no}: give a label or a label_file, not both", csv_path)
 
-    def resolve(value: str) -> Path:
+    def resolve(column: str) -> Path:
+        value = rec[column]
         f = Path(value)
         f = f if f.is_absolute() else csv_path.parent / f
-        if not f.is_file():
+        # a path the system cannot look up (a name too long): one line, not a traceback
+        if not _exists(f, f"line {line_no}: column {column}: ", csv_path) or not f.is_file():
             raise DataError(f"line {line_no}: {_no_such_file(value, f, csv_path)}", csv_path)
         return f
 
@@ -657,8 +663,8 @@ def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTr
                 f" {rec['label_block_s']!r}",
                 csv_path,
             )
-    names = resolve(rec["label_names"]) if rec.get("label_names") else None
-    return LabelTrack(resolve(rec["label_file"]), block, names)
+    names = resolve("label_names") if rec.get("label_names") else None
+    return LabelTrack(resolve("label_file"), block, names)
 
 
 def _read_label_text(path: Path, what: str) -> str:

@@ -329,3 +329,24 @@ def test_a_label_file_with_a_column_name_on_top_is_refused(
     with open_store(db, readonly=True) as store:
         frames = list(store.load_cases("default").frame_ranges)
     assert sorted(frames) == [(0, 30), (30, 60)]
+
+
+@pytest.mark.parametrize("column", ["label_file", "label_names"])
+def test_a_label_file_path_too_long_to_look_up_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], column: str
+) -> None:
+    """A labels CSV's ``label_file`` or ``label_names`` too long for the system to look up
+    (a file name over 255 bytes: a cell pasted wrong) ended ``train`` in a traceback
+    (OSError: File name too long), where the ``path`` column's is one line. Now one line too,
+    naming the line and the column."""
+    _recording(tmp_path)
+    (tmp_path / "labels.txt").write_text("a " * 30 + "b " * 30, encoding="utf-8")
+    cells = {"label_file": "labels.txt", "label_names": ""}
+    cells[column] = "x" * 300 + ".txt"
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(
+        f"path,label_file,label_names\nrec.npz,{cells['label_file']},{cells['label_names']}\n",
+        encoding="utf-8",
+    )
+    argv = ["train", str(csv), "--split", "clips", "--db", str(tmp_path / "cb.sqlite")]
+    refused(argv, tmp_path, capsys, f"recordings.csv: line 2: column {column}: cannot use the path")
