@@ -108,16 +108,24 @@ def _exists(path: Path, lead: str = "", where: Path | None = None) -> bool:
         raise DataError(f"{lead}cannot use the path ({reason})", where or path) from None
 
 
+def _check_clip_file(path: Path) -> None:
+    """A DataError naming ``path`` unless it is a file: missing, a folder, or a pipe, socket
+    or device (reading a pipe waits for a writer that may never come)."""
+    if not _exists(path):
+        raise DataError("no such file", path)
+    if path.is_dir():
+        raise DataError("is a folder, not a clip file (give one of the clips in it)", path)
+    if not path.is_file():
+        raise DataError("is a pipe, socket or device, not a clip file", path)
+
+
 def load_clip(path: str | Path) -> PoseSequence:
     """One clip file as a canonical sequence: pose file, BVH, UI-PRMD text file or video.
 
     Raises PoseFileError/DataError naming the file when it cannot be read.
     """
     path = Path(path)
-    if not _exists(path):
-        raise DataError("no such file", path)
-    if path.is_dir():
-        raise DataError("is a folder, not a clip file (give one of the clips in it)", path)
+    _check_clip_file(path)
     suffix = _suffix(path)
     if suffix in POSE_SUFFIXES:
         pose = load_pose(path)
@@ -215,6 +223,10 @@ def detect_kind(path: str | Path) -> str:
         raise DataError("no such file or folder", path)
     if path.is_file():
         return "csv" if _suffix(path) == ".csv" else "pose_file"
+    if not path.is_dir():  # reading a pipe (``<(cat labels.csv)``) waits for a writer
+        raise DataError(
+            "is a pipe, socket or device, not a dataset (a labels CSV, a clip or a folder)", path
+        )
     if _uiprmd_root(path) is not None:
         return "uiprmd"
     if (path / "labels.csv").is_file():
@@ -647,8 +659,14 @@ def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTr
         f = Path(value)
         f = f if f.is_absolute() else csv_path.parent / f
         # a path the system cannot look up (a name too long): one line, not a traceback
-        if not _exists(f, f"line {line_no}: column {column}: ", csv_path) or not f.is_file():
+        if not _exists(f, f"line {line_no}: column {column}: ", csv_path):
             raise DataError(f"line {line_no}: {_no_such_file(value, f, csv_path)}", csv_path)
+        if not f.is_file():  # a pipe would wait for a writer
+            raise DataError(
+                f"line {line_no}: column {column}: {value[:200]} is a folder, pipe, socket or"
+                " device, not a file",
+                csv_path,
+            )
         return f
 
     block: float | None = None
@@ -671,16 +689,24 @@ def _read_label_text(path: Path, what: str) -> str:
     """The text of a label or label names file; a folder, a missing file or one that cannot
     be read in one line as every other input says it ("the label file is a folder, not a
     file"), not Python's "[Errno 21] Is a directory"."""
+    if not _exists(path):
+        raise DataError(f"no such {what}", path)
     if path.is_dir():
         raise DataError(f"the {what} is a folder, not a file", path)
-    if not path.exists():
-        raise DataError(f"no such {what}", path)
+    _refuse_a_pipe(path, f"a {what}")
     try:
         return path.read_text(encoding="utf-8-sig")
     except OSError as exc:
         raise DataError(f"cannot read the {what} ({exc.strerror or exc})", path) from None
     except UnicodeDecodeError as exc:
         raise DataError(f"cannot read the {what} ({exc})", path) from None
+
+
+def _refuse_a_pipe(path: Path, what: str) -> None:
+    """Refuse a pipe, socket or device (reading a pipe waits for a writer that may never
+    come); a folder or a missing file is refused by the read, naming the reason."""
+    if _exists(path) and not path.is_file() and not path.is_dir():
+        raise DataError(f"is a pipe, socket or device, not {what}", path)
 
 
 def read_label_names(path: str | Path) -> dict[str, str]:

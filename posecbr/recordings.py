@@ -73,6 +73,8 @@ def load_recording(path: Path, asf: Path | None = None, fps: float | None = None
     check_fps(fps)
     if not path.exists():
         raise DataError("no such file", path)
+    if not path.is_file() and not path.is_dir():  # reading a pipe waits for a writer
+        raise DataError("is a pipe, socket or device, not a recording", path)
     if path.suffix.lower() == ".amc" and asf is not None:
         seq = read_asf_amc(asf, path, fps=fps)
     else:

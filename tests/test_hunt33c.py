@@ -350,3 +350,45 @@ def test_a_label_file_path_too_long_to_look_up_is_one_line(
     )
     argv = ["train", str(csv), "--split", "clips", "--db", str(tmp_path / "cb.sqlite")]
     refused(argv, tmp_path, capsys, f"recordings.csv: line 2: column {column}: cannot use the path")
+
+
+@pytest.mark.parametrize("where", ["data", "frame-labels", "label-names", "label_file", "clip"])
+def test_a_pipe_for_data_or_a_label_file_is_refused_not_waited_on(
+    tmp_path: Path, where: str
+) -> None:
+    """A named pipe (or ``<(cat labels.csv)``, which is one) given as DATA ended ``train``,
+    ``compare`` and ``classify`` in a traceback (NotADirectoryError); given as
+    ``--frame-labels`` or ``--label-names``, or named as a clip or a label file by a labels
+    CSV, ``train`` waited for a writer for ever (a CSV's label file was also "no such file").
+    Each is now one line, as a case base file that is a pipe is. (The pipe lies outside the
+    folder checked unchanged: reading it to check would wait too.)"""
+    import os
+
+    from tests.badinput import refused_in_process
+
+    work = tmp_path / "work"
+    work.mkdir()
+    rec = _recording(work)
+    labels = work / "labels.txt"
+    labels.write_text("a " * 30 + "b " * 30, encoding="utf-8")
+    (tmp_path / "pipes").mkdir()
+    pipe = tmp_path / "pipes" / ("pipe.npz" if where == "clip" else "pipe")
+    os.mkfifo(pipe)
+    db = ["--db", str(work / "cb.sqlite"), "--split", "clips"]
+    csv = work / "recordings.csv"
+    argv, needles = {
+        "data": (["train", str(pipe), *db], ["is a pipe, socket or device, not a dataset"]),
+        "frame-labels": (["train", str(rec), "--frame-labels", str(pipe), *db],
+                         ["is a pipe, socket or device, not a label file"]),
+        "label-names": (["train", str(rec), "--frame-labels", str(labels), "--label-names",
+                         str(pipe), *db], ["is a pipe, socket or device, not a label names"]),
+        "label_file": (["train", str(csv), *db],
+                       ["recordings.csv: line 2: column label_file: ",
+                        "is a folder, pipe, socket or device, not a file"]),
+        "clip": (["train", str(csv), *db], ["pipe.npz: is a pipe, socket or device, not a clip"]),
+    }[where]  # fmt: skip
+    rows = {"label_file": f"path,label_file\nrec.npz,{pipe}\n",
+            "clip": f"path,label\n{pipe},a\nrec.npz,b\n"}  # fmt: skip
+    if where in rows:
+        csv.write_text(rows[where], encoding="utf-8")
+    refused_in_process(argv, work, *needles)
