@@ -686,20 +686,30 @@ def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTr
 
 
 def _read_label_text(path: Path, what: str) -> str:
-    """The text of a label or label names file; a folder, a missing file or one that cannot
-    be read in one line as every other input says it ("the label file is a folder, not a
-    file"), not Python's "[Errno 21] Is a directory"."""
+    """The text of a label or label names file (a BOM dropped); one DataError naming the file
+    otherwise, as every other input says it: a folder, a missing file, a pipe ("the label file
+    is a folder, not a file", not Python's "[Errno 21] Is a directory"), or a file in another
+    encoding (a Windows code page) by the line and byte of its first character that is not
+    UTF-8, as a labels CSV's is."""
     if not _exists(path):
         raise DataError(f"no such {what}", path)
     if path.is_dir():
         raise DataError(f"the {what} is a folder, not a file", path)
     _refuse_a_pipe(path, f"a {what}")
     try:
-        return path.read_text(encoding="utf-8-sig")
+        data = path.read_bytes()
     except OSError as exc:
         raise DataError(f"cannot read the {what} ({exc.strerror or exc})", path) from None
+    try:
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise DataError(f"cannot read the {what} ({exc})", path) from None
+        if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+            raise DataError("UTF-16 text (its byte order mark): save it as UTF-8", path) from None
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise DataError(
+            f"not UTF-8 text ({exc.reason} at byte {exc.start}, line {line}): save it as UTF-8",
+            path,
+        ) from None
 
 
 def _refuse_a_pipe(path: Path, what: str) -> None:

@@ -392,3 +392,31 @@ def test_a_pipe_for_data_or_a_label_file_is_refused_not_waited_on(
     if where in rows:
         csv.write_text(rows[where], encoding="utf-8")
     refused_in_process(argv, work, *needles)
+
+
+@pytest.mark.parametrize(
+    ("which", "data", "needle"),
+    [
+        ("labels", b"a a \xe9t\xe9\n", "not UTF-8 text (invalid continuation byte at byte 4,"
+         " line 1): save it as UTF-8"),
+        ("names", b"1 walk\n2 Genou lev\xe9\n", "not UTF-8 text (invalid continuation byte at"
+         " byte 18, line 2)"),
+        ("labels", "a b\n".encode("utf-16"), "UTF-16 text (its byte order mark): save it as UTF-8"),
+    ],
+)  # fmt: skip
+def test_a_label_file_in_another_encoding_is_said_so_by_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], which: str, data: bytes, needle: str
+) -> None:
+    """A label or label names file saved in a Windows code page was refused with Python's
+    words ("cannot read the label file ('utf-8' codec can't decode byte 0xe9 in position 4:
+    invalid continuation byte)"); a labels CSV says "not UTF-8 text (... at byte N)". Now the
+    same words, with the line, and a UTF-16 file is named as one."""
+    rec = _recording(tmp_path)
+    track, names = tmp_path / "labels.txt", tmp_path / "names.txt"
+    track.write_text("1 " * 30 + "2 " * 30, encoding="utf-8")
+    (track if which == "labels" else names).write_bytes(data)
+    argv = ["train", str(rec), "--frame-labels", str(track), "--split", "clips", "--db",
+            str(tmp_path / "cb.sqlite")]  # fmt: skip
+    if which == "names":
+        argv += ["--label-names", str(names)]
+    refused(argv, tmp_path, capsys, f"{which}.txt: {needle}")
