@@ -420,3 +420,19 @@ def test_a_label_file_in_another_encoding_is_said_so_by_line(
     if which == "names":
         argv += ["--label-names", str(names)]
     refused(argv, tmp_path, capsys, f"{which}.txt: {needle}")
+
+
+def test_frame_labels_with_a_labels_csv_says_to_use_its_label_file_column(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``train labels.csv --frame-labels FILE`` was refused as "labels.csv: unknown clip
+    format (expected .npz pose file, ...)": the CSV read as the recording. It now says what
+    to do instead."""
+    rec = _recording(tmp_path)
+    (tmp_path / "labels.txt").write_text("a " * 30 + "b " * 30, encoding="utf-8")
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(f"path,label\n{rec.name},a\n", encoding="utf-8")
+    argv = ["train", str(csv), "--frame-labels", str(tmp_path / "labels.txt"), "--db",
+            str(tmp_path / "cb.sqlite")]  # fmt: skip
+    refused(argv, tmp_path, capsys, "--frame-labels: labels one recording, and DATA is a labels"
+            " CSV: name each recording's label file in its label_file column")  # fmt: skip

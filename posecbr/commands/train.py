@@ -676,6 +676,23 @@ def _note_cut_stretches(args: argparse.Namespace, entries: list[Any]) -> None:
     )
 
 
+def _check_one_recording(args: argparse.Namespace) -> None:
+    """``--frame-labels`` labels DATA, one recording: not a labels CSV (it names a label file
+    per recording), and one person's (no --subjects)."""
+    if Path(args.data).suffix.lower() == ".csv":
+        raise ConfigError(
+            "labels one recording, and DATA is a labels CSV: name each recording's label file"
+            " in its label_file column (with label_block_s, label_names) instead",
+            "--frame-labels",
+        )
+    if args.subjects is not None:
+        raise ConfigError(
+            "--frame-labels labels one recording: its stretches are one person's (a labels "
+            "CSV with a label_file column takes --subjects over several)",
+            "--subjects",
+        )
+
+
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse options that cannot work together, in one line, before any clip is read."""
     if not args.name.strip():
@@ -699,12 +716,8 @@ def _check_options(args: argparse.Namespace) -> None:
     if block is not None and not (math.isfinite(block) and block > 0):
         raise ConfigError(f"must be a finite number of seconds > 0, got {block:g}", "--label-block")
     check_asf(args.asf, [args.data])
-    if args.frame_labels is not None and args.subjects is not None:
-        raise ConfigError(
-            "--frame-labels labels one recording: its stretches are one person's (a labels "
-            "CSV with a label_file column takes --subjects over several)",
-            "--subjects",
-        )
+    if args.frame_labels is not None:
+        _check_one_recording(args)
     check_fps(args.fps)
     args.sensor = sensor_for(args.sensor, [args.data])
     if args.label_names is not None:
