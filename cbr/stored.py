@@ -33,7 +33,7 @@ from casebase_store.case_matrix import (
     find_case_matrix,
     open_case_matrix,
 )
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError, PosecbrError
 from features.text import shown
 
 from .calibration import UNCALIBRATED, ConfidenceCalibration
@@ -261,7 +261,10 @@ def write_matrices(store: CaseStore, name: str, min_cases: int | None = None) ->
     least = MAPPED_MIN_CASES if min_cases is None else min_cases
     if db is None or store.readonly:
         return False
-    remove_stale_matrices(store, name)
+    try:
+        remove_stale_matrices(store, name)
+    except (PosecbrError, OSError):  # after the change committed: a copy's tidying, no more
+        pass
     if store.count_cases(name) < least:
         return False
     info, arrays = store.load_case_base(name)
