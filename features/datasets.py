@@ -875,8 +875,16 @@ def frame_labels(
     count means another frame rate or block length, and labels would land on the wrong
     frames."""
     per_block = 1.0 if block_s is None else block_s * fps
-    low = int(np.ceil(n_frames / per_block - 1e-9))
-    high = int(np.floor(n_frames / per_block + 1e-9)) + 1
+    blocks = n_frames / per_block if per_block > 0 else float("inf")
+    if not np.isfinite(blocks):  # a block of 1e-320 s: more blocks than a number holds
+        raise DataError(
+            f"a label block of {block_s:g} s is too short for {counted(n_frames, 'frame')} at"
+            f" {fps:g} fps (more blocks than can be counted)",
+            where,
+        )
+    # a recording of any frames needs a label, however long the block
+    low = max(int(np.ceil(blocks - 1e-9)), min(n_frames, 1))
+    high = int(np.floor(blocks + 1e-9)) + 1
     if not low <= len(labels) <= high:
         unit = "frame" if block_s is None else f"{block_s:g} s"
         need = str(low) if low == high else f"{low} or {high}"
@@ -902,7 +910,7 @@ def _why_not_fit(where: str | Path, low: int, high: int, n_labels: int) -> str:
     lines = [ln.split("#", 1)[0].strip() for ln in text.splitlines()]
     lines = [ln for ln in lines if ln]
     spaced = next((ln for ln in lines if len(re.split(r"[\s,]+", ln)) > 1), None)
-    if spaced is None or not low <= len(lines) <= high or len(lines) >= n_labels:
+    if spaced is None or len(lines) < 2 or not low <= len(lines) <= high or len(lines) >= n_labels:
         return " (another frame rate or label block?)"
     parts = re.split(r"[\s,]+", spaced)
     return (

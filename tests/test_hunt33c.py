@@ -436,3 +436,21 @@ def test_frame_labels_with_a_labels_csv_says_to_use_its_label_file_column(
             str(tmp_path / "cb.sqlite")]  # fmt: skip
     refused(argv, tmp_path, capsys, "--frame-labels: labels one recording, and DATA is a labels"
             " CSV: name each recording's label file in its label_file column")  # fmt: skip
+
+
+def test_a_label_block_too_short_to_count_is_refused_not_a_traceback(tmp_path: Path) -> None:
+    """``--label-block 1e-320`` (60 frames at 30 fps: 6e321 blocks, more than a float holds)
+    ended in "OverflowError: cannot convert float infinity to integer"; now a DataError
+    naming the label file. A block longer than the recording needs one label, said as
+    "need 1" (it said "need 0 or 1"), and a file on one line gets no hint about its lines."""
+    from features.datasets import frame_labels
+    from features.errors import DataError
+
+    with pytest.raises(DataError, match="too short for 60 frames at 30 fps") as info:
+        frame_labels(["a", "b"], 60, 30.0, 1e-320, "labels.txt")
+    assert info.value.source == "labels.txt"
+    one_line = tmp_path / "labels.txt"
+    one_line.write_text("a b", encoding="utf-8")
+    with pytest.raises(DataError) as info:
+        frame_labels(["a", "b"], 60, 30.0, 1e308, one_line)
+    assert str(info.value.message).endswith("need 1 (another frame rate or label block?)")
