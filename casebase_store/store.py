@@ -149,6 +149,15 @@ def _utc(value: datetime) -> datetime:
 NAME_MAX = 200
 
 
+def listed_names(names: Sequence[str]) -> str:
+    """Case base names as a list in a message: each as it is, or quoted when it would not
+    read as itself there (spaces around it, a comma, a character that does not print):
+    "squats " among others was "a, b, squats )"."""
+    return ", ".join(
+        repr(n) if n != n.strip() or "," in n or not n.isprintable() else n for n in names
+    )
+
+
 def check_case_base_name(name: str, where: str) -> str:
     """``name`` when a store can hold it as a case base's name (text of at most
     :data:`NAME_MAX` characters, not blank, no NUL, UTF-8); else a :class:`StoreError` naming
@@ -845,7 +854,7 @@ class CaseStore:
             return names[0]
         if names:
             raise StoreError(
-                f"the store holds case bases {', '.join(names)}: choose one with --name",
+                f"the store holds case bases {listed_names(names)}: choose one with --name",
                 self.where,
             )
         raise StoreError("the store holds no case base (run posecbr train)", self.where)
@@ -984,7 +993,9 @@ class CaseStore:
             row = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
         if row is None:
             known = sorted(s.scalars(select(CaseBaseRow.name)).all())  # as list_case_bases
-            hint = f" (case bases here: {', '.join(known)})" if known else " (the store is empty)"
+            hint = (
+                f" (case bases here: {listed_names(known)})" if known else " (the store is empty)"
+            )
             raise StoreError(f"no case base named {name!r}{hint}", self.where)
         return row
 

@@ -454,3 +454,24 @@ def test_a_label_block_too_short_to_count_is_refused_not_a_traceback(tmp_path: P
     with pytest.raises(DataError) as info:
         frame_labels(["a", "b"], 60, 30.0, 1e308, one_line)
     assert str(info.value.message).endswith("need 1 (another frame rate or label block?)")
+
+
+def test_case_base_names_that_do_not_read_as_themselves_in_a_list_are_quoted(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Case bases "squats " (a space typed after it) and "a, b" were listed unquoted: "no
+    case base named 'squats' (case bases here: a, b, squats )", three names or two, and the
+    space unseen. Such names are now quoted; the others are as they were."""
+    from tests.test_cbr_cli import _write_classes
+
+    data = _write_classes(tmp_path / "train", 3, 5)
+    db = tmp_path / "cb.sqlite"
+    for name in ("squats ", "a, b", "plain"):
+        argv = ["train", str(data), "--db", str(db), "--name", name, "--mirror", "off",
+                "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+        assert main(argv) == 0
+    capsys.readouterr()
+    refused(["casebase", "info", "--db", str(db), "--name", "squats"], tmp_path, capsys,
+            "no case base named 'squats' (case bases here: 'a, b', plain, 'squats ')")  # fmt: skip
+    refused(["casebase", "list", "--db", str(db)], tmp_path, capsys,
+            "the store holds case bases 'a, b', plain, 'squats ': choose one")  # fmt: skip
