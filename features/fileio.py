@@ -231,6 +231,15 @@ def _names_an_open_stream(out: Path) -> bool:
     return False
 
 
+def check_lookup(path: Path, what: str) -> None:
+    """A DataError naming ``path`` when the system cannot even look it up (a file name over
+    255 bytes): asked whether it is a folder, Python raises there, a traceback."""
+    try:
+        path.exists()
+    except OSError as exc:
+        raise DataError(f"cannot use the {what} path ({exc.strerror or exc})", path) from None
+
+
 def _refuse_special(out: Path, what: str) -> None:
     """A device, pipe or socket at ``out`` is not replaced by a file (``--plot /dev/null``
     would put a picture where the system's null device was); nor is "-", the usual name of
@@ -325,6 +334,7 @@ def check_output(
     ``must_not_exist``.
     """
     out = Path(path)
+    check_lookup(out, what)
     if out.is_dir():
         raise DataError(f"the {what} is a folder, not a file", out)
     _refuse_special(out, what)

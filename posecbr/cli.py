@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import errno
 import importlib
 import pkgutil
 import re
@@ -115,6 +116,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except OSError as exc:
+        # a path the system cannot look up (a file name over 255 bytes), met by whichever
+        # check asks about it first: refused before anything is written, so said as one
+        if exc.errno != errno.ENAMETOOLONG:
+            raise
+        where = exc.filename if exc.filename is not None else "a path"
+        print(
+            f"posecbr {command}: error: {shown(str(where)[:200])}: cannot use the path"
+            f" ({exc.strerror})",
+            file=sys.stderr,
+        )
+        return 1
 
 
 if __name__ == "__main__":

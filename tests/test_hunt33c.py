@@ -475,3 +475,30 @@ def test_case_base_names_that_do_not_read_as_themselves_in_a_list_are_quoted(
             "no case base named 'squats' (case bases here: 'a, b', plain, 'squats ')")  # fmt: skip
     refused(["casebase", "list", "--db", str(db)], tmp_path, capsys,
             "the store holds case bases 'a, b', plain, 'squats ': choose one")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "command",
+    ["casebase export", "compare --json", "compare --out", "convert --out", "segment --plot"],
+)
+def test_an_output_name_too_long_to_look_up_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str
+) -> None:
+    """An output file name over 255 bytes (a name pasted wrong) ended these commands in a
+    traceback ("OSError: [Errno 36] File name too long"), raised by the first check that
+    asked whether the path was a folder. Now one line naming the path, nothing written."""
+    from tests.badinput import small_case_base
+
+    db = small_case_base(tmp_path)
+    capsys.readouterr()
+    long = str(tmp_path / ("x" * 300))
+    demo = str(DEMO / "labels.csv")
+    argv = {
+        "casebase export": ["casebase", "export", "--db", str(db), "--out", long],
+        "compare --json": ["compare", demo, "--json", long + ".json"],
+        "compare --out": ["compare", demo, "--out", long],
+        "convert --out": ["convert", str(DEMO / "m01_s01_e01.npz"), "--out", long],
+        "segment --plot": ["segment", str(DEMO / "m01_s01_e01.npz"), "--db", str(db),
+                           "--plot", long + ".png"],
+    }[command]  # fmt: skip
+    refused(argv, tmp_path, capsys, "xxxxxxxxxx", "cannot use the", "File name too long")

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
-from features.fileio import atomic_path, check_output
+from features.fileio import atomic_path, check_lookup, check_output
 from features.text import counted, shown
 from posecbr.arguments import path_arg
 
@@ -408,6 +408,7 @@ def _export_path(args: argparse.Namespace) -> Path:
     out = Path(args.out)
     if str(args.out) == "-":  # standard output's name, not "-.npz"
         raise DataError("the export file goes to a file, not standard output: name the file", out)
+    check_lookup(out, "export file")
     if out.is_dir() or not out.name:
         raise DataError("the export file is a folder, not a file", out)
     return out if out.name.lower().endswith(".npz") else out.with_name(out.name + ".npz")
