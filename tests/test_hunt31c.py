@@ -272,7 +272,7 @@ def test_watch_stopped_before_its_first_frame_says_so_with_or_without_out(
     from tests.badinput import small_case_base
 
     @contextmanager
-    def stopped() -> Any:
+    def stopped(also: Event | None = None) -> Any:
         event = Event()
         event.set()
         yield event
