@@ -111,6 +111,12 @@ def _options(parser: argparse.ArgumentParser, name: str = "posecbr") -> Iterator
             yield name, action
 
 
+def _subcommand(name: str) -> argparse.ArgumentParser:
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    found: argparse.ArgumentParser = sub.choices[name]
+    return found
+
+
 def test_every_option_with_a_default_says_it_in_its_help() -> None:
     # before: `train --similarity`, `--mirror`, `--feature-weights`, `--phases`, `--name`,
     # `demo --out`, `watch --speed`, `--stall`, `--unknown`, `compare --peers`, `--k`,
@@ -129,13 +135,7 @@ def test_every_option_with_a_default_says_it_in_its_help() -> None:
 def test_train_help_says_the_defaults_it_fills_in_itself() -> None:
     # these options default to None (so that --append can tell them unset) and get their
     # value in `train`: argparse's default says nothing, so the help must
-    train = next(
-        child
-        for action in build_parser()._actions
-        if isinstance(action, argparse._SubParsersAction)
-        for name, child in action.choices.items()
-        if name == "train"
-    )
+    train = _subcommand("train")
     helps = {
         a.option_strings[-1]: " ".join((a.help or "").split())
         for a in train._actions
@@ -195,13 +195,7 @@ def test_train_names_the_option_of_a_bad_similarity(
 
 
 def test_train_help_example_of_a_similarity_parameter_names_its_similarity() -> None:
-    train = next(
-        child
-        for action in build_parser()._actions
-        if isinstance(action, argparse._SubParsersAction)
-        for name, child in action.choices.items()
-        if name == "train"
-    )
+    train = _subcommand("train")
     (param,) = [a for a in train._actions if "--param" in a.option_strings]
     assert "--similarity dtw --param band=0.2" in str(param.help)
 
@@ -221,13 +215,7 @@ def test_a_change_in_torso_lengths_says_its_unit_once() -> None:
 def test_compare_help_says_its_json_is_a_file_unlike_the_other_commands() -> None:
     # `posecbr compare DATA --json` (as every other command takes it) was refused "expected
     # one argument", and its help said only "write all results as JSON"
-    compare = next(
-        child
-        for action in build_parser()._actions
-        if isinstance(action, argparse._SubParsersAction)
-        for name, child in action.choices.items()
-        if name == "compare"
-    )
+    compare = _subcommand("compare")
     (json_,) = [a for a in compare._actions if "--json" in a.option_strings]
     assert "unlike other commands' --json" in str(json_.help)
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()

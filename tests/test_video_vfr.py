@@ -41,16 +41,24 @@ PTS_MS = [0, 20, 100, 180, 220, 260, 300, 380, 400, 440, 520, 540, 620]
 LEFT_HIP = 23
 
 
-def _write(path: Path, pts_ms: list[int], frames: list[np.ndarray], rate: int = 25) -> Path:
-    """An H.264 video of RGB ``frames`` with these presentation times (1 ms time base);
-    ``rate``: the nominal rate the stream declares."""
+def _write(
+    path: Path,
+    pts_ms: list[int],
+    frames: list[np.ndarray],
+    rate: int | None = 25,
+    codec: str = "libx264",
+) -> Path:
+    """A video of RGB ``frames`` with these presentation times (1 ms time base); ``rate``:
+    the nominal rate the stream declares (None: none, as a browser's MediaRecorder writes)."""
     tb = Fraction(1, 1000)
     out = av.open(str(path), "w")
-    stream = out.add_stream("libx264", rate=rate)
+    stream = out.add_stream(codec, rate=rate) if rate else out.add_stream(codec)
     h, w = frames[0].shape[:2]
     stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
     stream.time_base = tb
     stream.codec_context.time_base = tb
+    if rate is None:
+        stream.codec_context.framerate = Fraction(0, 1)
     for t, rgb in zip(pts_ms, frames, strict=True):
         frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
         frame.pts, frame.time_base = t, tb
@@ -507,22 +515,7 @@ def test_segment_and_train_note_a_pose_file_of_older_vfr_extraction(
 def _browser_webm(path: Path, pts_ms: list[int], frames: list[np.ndarray]) -> Path:
     """A WebM as a browser's MediaRecorder writes it: VP8 on a millisecond clock, no frame
     rate stated (FFmpeg, and so OpenCV, then guesses 1000 fps from the clock)."""
-    tb = Fraction(1, 1000)
-    out = av.open(str(path), "w")
-    stream = out.add_stream("libvpx")
-    h, w = frames[0].shape[:2]
-    stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
-    stream.time_base = stream.codec_context.time_base = tb
-    stream.codec_context.framerate = Fraction(0, 1)
-    for t, rgb in zip(pts_ms, frames, strict=True):
-        frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
-        frame.pts, frame.time_base = t, tb
-        for packet in stream.encode(frame):
-            out.mux(packet)
-    for packet in stream.encode():
-        out.mux(packet)
-    out.close()
-    return path
+    return _write(path, pts_ms, frames, rate=None, codec="libvpx")
 
 
 # a browser's frame times: 28 to 39 ms apart (about 30 fps), on no regular pattern

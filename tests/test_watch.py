@@ -634,37 +634,8 @@ def test_watch_and_segment_agree_on_a_variable_frame_rate_video(
     x264 does not give the same bits each run, so the labels may vary from run to run; the
     agreement must hold whatever they are: it failed once in CI while extraction still blended
     the frames before the first off-grid one.)"""
-    av = pytest.importorskip("av", reason="PyAV writes the variable-frame-rate video")
-    from fractions import Fraction
-
-    import cv2
-
-    src = cv2.VideoCapture(
-        str(shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4")
-    )
-    video = tmp_path / "lunge_vfr.mkv"
-    out = av.open(str(video), "w")
-    stream = out.add_stream("libx264", rate=25)
-    tb = Fraction(1, 1000)
-    stream.time_base = stream.codec_context.time_base = tb
-    t, k = 0, 0
-    while True:
-        ok, bgr = src.read()
-        if not ok:
-            break
-        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
-        if k == 0:
-            stream.width, stream.height, stream.pix_fmt = small.shape[1], small.shape[0], "yuv420p"
-        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(small[:, :, ::-1]), format="rgb24")
-        frame.pts, frame.time_base = t, tb
-        for packet in stream.encode(frame):
-            out.mux(packet)
-        t += (30, 50, 40, 60, 20)[k % 5]
-        k += 1
-    for packet in stream.encode():
-        out.mux(packet)
-    out.close()
-    src.release()
+    pytest.importorskip("av", reason="PyAV writes the variable-frame-rate video")
+    video, _ = _lunge_h264(shared_data, tmp_path / "lunge_vfr.mkv", (30, 50, 40, 60, 20))
     capsys.readouterr()
     assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 0
     printed = capsys.readouterr()
@@ -690,36 +661,8 @@ def test_watch_a_raw_stream_without_frame_times(
     every frame watched. It had been called a variable frame rate at frame 1 ("frame 1 is
     at 0.000 s, not 0.040 s") and every frame after the first dropped: "the stream ended
     after 1 frame", exit 1."""
-    av = pytest.importorskip("av", reason="PyAV writes the raw stream")
-    from fractions import Fraction
-
-    import cv2
-
-    src = cv2.VideoCapture(
-        str(shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4")
-    )
-    video = tmp_path / "lunge.h264"
-    out = av.open(str(video), "w", format="h264")
-    stream = out.add_stream("libx264", rate=25)
-    tb = Fraction(1, 1000)
-    stream.time_base = stream.codec_context.time_base = tb
-    k = 0
-    while True:
-        ok, bgr = src.read()
-        if not ok:
-            break
-        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
-        if k == 0:
-            stream.width, stream.height, stream.pix_fmt = small.shape[1], small.shape[0], "yuv420p"
-        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(small[:, :, ::-1]), format="rgb24")
-        frame.pts, frame.time_base = 40 * k, tb
-        for packet in stream.encode(frame):
-            out.mux(packet)
-        k += 1
-    for packet in stream.encode():
-        out.mux(packet)
-    out.close()
-    src.release()
+    pytest.importorskip("av", reason="PyAV writes the raw stream")
+    video, k = _lunge_h264(shared_data, tmp_path / "lunge.h264", (40,), container="h264")
     capsys.readouterr()
     assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 0
     printed = capsys.readouterr()
@@ -797,3 +740,42 @@ def test_a_served_mp4_that_gives_no_frame_says_why(
     assert [(d["start_frame"], d["end_frame"], d["explanation"]) for d in lines] == [
         (0, 75, "nobody in view")
     ]
+
+
+def _lunge_h264(
+    shared_data: Path, video: Path, gaps_ms: tuple[int, ...], container: str | None = None
+) -> tuple[Path, int]:
+    """The reverse lunge video at a quarter of its size, written as H.264 by PyAV with its
+    frames ``gaps_ms`` apart in turn (1-ms time base; 25 fps declared), in ``container``
+    (None: by the file name); and its number of frames."""
+    from fractions import Fraction
+
+    import av
+    import cv2
+
+    src = cv2.VideoCapture(
+        str(shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4")
+    )
+    out = av.open(str(video), "w", format=container)
+    stream = out.add_stream("libx264", rate=25)
+    tb = Fraction(1, 1000)
+    stream.time_base = stream.codec_context.time_base = tb
+    t, k = 0, 0
+    while True:
+        ok, bgr = src.read()
+        if not ok:
+            break
+        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
+        if k == 0:
+            stream.width, stream.height, stream.pix_fmt = small.shape[1], small.shape[0], "yuv420p"
+        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(small[:, :, ::-1]), format="rgb24")
+        frame.pts, frame.time_base = t, tb
+        for packet in stream.encode(frame):
+            out.mux(packet)
+        t += gaps_ms[k % len(gaps_ms)]
+        k += 1
+    for packet in stream.encode():
+        out.mux(packet)
+    out.close()
+    src.release()
+    return video, k
