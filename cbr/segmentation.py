@@ -715,15 +715,22 @@ def told(clf: Any, solved: Any, label: str) -> str:
     return text
 
 
-def _repetitions(sig: MovementSignals, start: int, end: int) -> tuple[Repetition, ...]:
+def _repetitions(
+    sig: MovementSignals, start: int, end: int, n_frames: int | None = None
+) -> tuple[Repetition, ...]:
     """The repetitions within frames [start, end) of the recording whose signals are ``sig``
-    (counted on the recording's own smoothed signals: no edge effects at the cut)."""
+    (counted on the recording's own smoothed signals: no edge effects at the cut). Given the
+    recording's ``n_frames``, a segment at its start or end has no repetition there that is
+    only part of one when none of its repetitions is whole (the way down of a squat as the
+    recording ends: :func:`features.repetitions.count_in_signals`); one at a cut is left to
+    :func:`keep_whole`."""
     a, b = start // sig.step, max(start // sig.step + 1, end // sig.step)
     if (b - a) / sig.fps < MIN_PERIOD_S:
         return ()
     part = sig.part(a, b)
+    edges = (start == 0 and n_frames is not None, n_frames is not None and end >= n_frames)
     found = count_in_signals(
-        part, (b - a) * sig.step, sig.fps * sig.step, recording_edges=False
+        part, (b - a) * sig.step, sig.fps * sig.step, recording_edges=edges
     ).repetitions
     off = a * sig.step
     return tuple(  # the first sample may begin up to a step before ``start``: cut there
@@ -785,7 +792,7 @@ def counted_segments(
     out = []
     turn = False  # the segment before had a far point at its end (the cut)
     for start, end in bounds:
-        reps = _repetitions(sig, start, end)
+        reps = _repetitions(sig, start, end, n_frames)
         out.append(keep_whole(reps, start, end, sig.step, turn, end < n_frames))
         turn = at_cut(reps, start, end, sig.step)[1]
     return out

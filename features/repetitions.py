@@ -194,6 +194,13 @@ its height): a second far point reached after a shallow dip (a wobble at the bot
 lunge, a pause on the way up) is part of the same repetition. Chosen with
 :data:`SUBSTANTIAL` on the training subjects only (at 0.3: MAE 0.063 without the rule, 0.046
 at 0.4, 0.051 at 0.5 and 0.6)."""
+WHOLE_SHARE = RETURN_SHARE
+"""A far point is whole (not cut off by the clip's start or end) when, within the clip, the
+movement rises to it and falls back from it by at least this share of its height above rest
+(and by :data:`MIN_EXCURSION_RAD`): the fall back that makes a far point a repetition
+(:data:`RETURN_SHARE`), here without the clip's padding with rest. The way down of a squat
+and the first 40 degrees of the way up (CMU 13_29, 31.7-33.6 s: 234 degrees out, 43 back)
+are no whole squat; the way down and two thirds of the way up (to 34.0 s: 149 back) are."""
 STILL_SHARE = 0.1
 """A far point is a still stretch, not a repetition, when the movement line as recorded (not
 about its running mean) rises less than this share of the median far point's rise above the
@@ -269,7 +276,10 @@ class RepetitionCount:
 
     period_s: the movement's full cycle (None when it does not repeat); periodicity: the
     autocorrelation at that period (1 = exact repetition); alternating: one repetition per
-    side; moving: the joint angles (or the hips' height) that carry the movement, most first.
+    side; moving: the joint angles (or the hips' height) that carry the movement, most first;
+    partial: no repetition is whole, but the movement reached a far point cut off by the
+    clip's start or end (part of one repetition: the way down of a squat), which does not
+    count (:func:`_whole_only`).
     """
 
     repetitions: tuple[Repetition, ...]
@@ -279,6 +289,7 @@ class RepetitionCount:
     periodicity: float
     alternating: bool
     moving: tuple[str, ...]
+    partial: bool = False
 
     @property
     def count(self) -> int:
@@ -292,6 +303,7 @@ class RepetitionCount:
             "periodicity": round(self.periodicity, 3),
             "alternating": self.alternating,
             "moving": list(self.moving),
+            "partial": self.partial,
         }
 
 
@@ -713,7 +725,7 @@ def _held_change(x: np.ndarray, line: np.ndarray, fps: float) -> bool:
     return (sides[0] < 0 < sides[1] and still_end) or (sides[0] > 0 > sides[1] and still_start)
 
 
-def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
+def _far_points(line: np.ndarray, rest: float, distance: int) -> tuple[np.ndarray, np.ndarray]:
     """Samples where ``line`` reaches a far point: peaks that stand out by at least
     :data:`SUBSTANTIAL` of the typical repetition (the median prominence of the candidates) and by
     :data:`MIN_EXCURSION_RAD`, from which the line falls back on both sides by at least
@@ -721,37 +733,58 @@ def _far_points(line: np.ndarray, rest: float, distance: int) -> np.ndarray:
     the repetition before it), at least ``distance`` samples apart. The clip is padded with
     the rest level, so a repetition cut off at either end (the line falls back from it by less
     than :data:`MIN_EXCURSION_RAD` before the clip's start or after its end, a tail that only
-    levels off) counts when it got (nearly) as far as the others (:func:`_reached`)."""
-    cand, cut_off = _candidates(line, rest, distance)
-    return np.asarray(cand[_reached(line[cand] - rest, cut_off)])
+    levels off) counts when it got (nearly) as far as the others (:func:`_reached`). Returns
+    the far points and how far the line rises to each and falls back from it within the clip
+    (``(k, 2)``, :func:`_candidates`)."""
+    cand, back = _candidates(line, rest, distance)
+    keep = _reached(line[cand] - rest, back < MIN_EXCURSION_RAD)
+    return np.asarray(cand[keep]), back[keep]
 
 
 def _candidates(line: np.ndarray, rest: float, distance: int) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_far_points` before the cut-off ones are judged: the samples, and which of
-    them are cut off at the clip's start or end."""
+    """:func:`_far_points` before the cut-off ones are judged: the samples, and how far the
+    line rises to each from its lowest since the clip's start and falls back from it to its
+    lowest until the clip's end, ``(k, 2)`` (below :data:`MIN_EXCURSION_RAD`: cut off there)."""
     padded = np.concatenate([[rest], line, [rest]])
     from scipy.signal import find_peaks
 
     cand, props = find_peaks(padded, prominence=MIN_EXCURSION_RAD, distance=max(1, distance))
     if not len(cand):
-        return np.array([], dtype=np.int64), np.array([], dtype=bool)
+        return np.array([], dtype=np.int64), np.zeros((0, 2))
     prom = props["prominences"]
     height = padded[cand] - rest
     keep = (prom >= SUBSTANTIAL * float(np.median(prom))) & (prom >= RETURN_SHARE * height)
     cand = cand[keep] - 1
     before = np.minimum.accumulate(line)[cand]
     after = np.minimum.accumulate(line[::-1])[::-1][cand]
-    cut_off = (line[cand] - before < MIN_EXCURSION_RAD) | (line[cand] - after < MIN_EXCURSION_RAD)
-    return np.asarray(cand), np.asarray(cut_off)
+    return np.asarray(cand), np.stack([line[cand] - before, line[cand] - after], axis=1)
 
 
-def _reached(height: np.ndarray, cut_off: np.ndarray) -> np.ndarray:
-    """Which far points count, of heights ``height`` above rest: every whole one, and one
-    cut off at the clip's start or end when it got (nearly) as far as the whole ones: three
-    quarters of their median height (all, when none is whole)."""
-    if not (~cut_off).any():
+def _reached(height: np.ndarray, cut: np.ndarray) -> np.ndarray:
+    """Which far points count, of heights ``height`` above rest, cut off at the clip's start
+    or end where ``cut`` ``(k,)`` or ``(k, 2)`` says: every whole one, and one cut off when it
+    got (nearly) as far as the whole ones: three quarters of their median height (all, when
+    none is whole: :func:`_whole_only` judges those)."""
+    whole = ~cut.any(axis=1) if cut.ndim == 2 else ~cut
+    if not whole.any():
         return np.ones(len(height), dtype=bool)
-    return np.asarray(~cut_off | (height >= 0.75 * float(np.median(height[~cut_off]))))
+    return np.asarray(whole | (height >= 0.75 * float(np.median(height[whole]))))
+
+
+def _whole_only(height: np.ndarray, back: np.ndarray, edges: tuple[bool, bool]) -> np.ndarray:
+    """Which far points count, of heights ``height`` above rest and rising to them and
+    falling back from them by ``back`` ``(k, 2)`` within the clip (:func:`_candidates`), when
+    the clip's start and its end are the recording's as ``edges`` says: all when one of them
+    is whole, the line rising to it and falling back from it by :data:`WHOLE_SHARE` of its
+    height (and :data:`MIN_EXCURSION_RAD`); otherwise none that falls short of that at the
+    recording's start or end. A clip without one whole repetition (the way down of a squat,
+    half an arm circle) has none: before, its one far point, cut off with nothing whole to be
+    measured against, counted as a repetition. A far point cut off where a longer recording
+    was cut into pieces stays: :func:`cbr.segmentation.keep_whole` gives it to one piece."""
+    short = back < np.maximum(MIN_EXCURSION_RAD, WHOLE_SHARE * height)[:, None]
+    if not len(back) or (~short.any(axis=1)).any():
+        return np.ones(len(back), dtype=bool)
+    return np.asarray(~(short & np.array(edges)).any(axis=1))
 
 
 def _beyond(height: np.ndarray, far: np.ndarray) -> np.ndarray:
@@ -857,11 +890,13 @@ def count_in_signals(
     sig: MovementSignals,
     n_frames: int,
     fps: float,
-    recording_edges: bool = True,
+    recording_edges: bool | tuple[bool, bool] = True,
     clear_alternation: bool = False,
 ) -> RepetitionCount:
     """:func:`count_repetitions` on already prepared signals (of a clip of ``n_frames``;
-    ``recording_edges`` as there). ``clear_alternation``: a movement alternates sides only
+    ``recording_edges`` as there, or a pair: whether the clip's start, and its end, are the
+    recording's; a far point cut off at one of those counts only beside a whole one,
+    :func:`_whole_only`). ``clear_alternation``: a movement alternates sides only
     as judged about its running mean where the side-against-side movement repeats clearly
     (:data:`CLEAR_PERIODICITY`), as recorded where it does not, for signals that may well
     straddle a change of exercise (segmentation's search for whole periods in fixed spans,
@@ -869,9 +904,15 @@ def count_in_signals(
     no period); False, the default: wherever it repeats more than noise would, for a stretch
     of one exercise whose ends may hold a little of the next (:func:`_alternating_repetitions`)."""
     x = sig.values
-    spans, far, direction, sides = _alternating_repetitions(
-        x, sig.names, sig.fps, sig.blind, clear_alternation
+    edges = (
+        (recording_edges, recording_edges)
+        if isinstance(recording_edges, bool)
+        else (bool(recording_edges[0]), bool(recording_edges[1]))
     )
+    spans, far, direction, sides = _alternating_repetitions(
+        x, sig.names, sig.fps, sig.blind, clear_alternation, edges
+    )
+    partial = False
     alternating = sides is not None
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
     if sides is None:
@@ -882,10 +923,14 @@ def count_in_signals(
         clear = period if strength >= CLEAR_PERIODICITY else None
         distance = int(0.5 * (clear or MIN_PERIOD_S) * sig.fps)
         reach = int(period * sig.fps) if period else len(line)
-        far = _far_points(line, float(np.percentile(line, 5)), distance)
-        far = far[_above_rest(recorded, far, reach)]
-        far = np.unique(_in_view(far, sig.blind))
-        if recording_edges and len(far) == 1 and _held_change(x, recorded, sig.fps):
+        rest = float(np.percentile(line, 5))
+        far, back = _far_points(line, rest, distance)
+        above = _above_rest(recorded, far, reach)
+        far, back = far[above], back[above]
+        whole = _whole_only(line[far] - rest, back, edges)
+        partial = bool(len(far)) and not whole.any()  # part of one repetition, none whole
+        far = np.unique(_in_view(far[whole], sig.blind))
+        if all(edges) and len(far) == 1 and _held_change(x, recorded, sig.fps):
             far = far[:0]  # got into a posture once and held it: no repetition
         spans = _bounds(line, far, reach) if len(far) else []
     spans = _seen_spans(spans, far, sig.blind)
@@ -904,7 +949,9 @@ def count_in_signals(
     if _span((x - x.mean(axis=0)) @ direction) < MIN_EXCURSION_RAD:
         moving = ()  # nothing moves as far as a repetition would: jitter names no joint,
         period = None  # nor a period (its autocorrelation peaks somewhere)
-    return RepetitionCount(tuple(reps), fps, n_frames, period, strength, bool(alternating), moving)
+    return RepetitionCount(
+        tuple(reps), fps, n_frames, period, strength, bool(alternating), moving, partial
+    )
 
 
 def _periodic_direction(
@@ -1030,13 +1077,15 @@ def _alternating_repetitions(
     fps: float,
     blind: np.ndarray | None = None,
     clear_alternation: bool = False,
+    edges: tuple[bool, bool] = (True, True),
 ) -> tuple[list[tuple[int, int]], np.ndarray, np.ndarray, np.ndarray | None]:
     """Repetitions of a movement that alternates sides: what one side does against the other
     spans at least half as much as what both do alike (a knee raise: as much), and the body
     goes out to both sides about equally far. Returns spans, far points, the movement
     direction and the side of each far point (:func:`_sides`); None when the movement does
     not alternate (and the rest empty). ``blind``: the samples where nobody is seen
-    (:func:`_in_view`); ``clear_alternation`` as for :func:`count_in_signals`."""
+    (:func:`_in_view`); ``clear_alternation`` as for :func:`count_in_signals`; ``edges``:
+    whether the clip's start and its end are the recording's (:func:`_whole_only`)."""
     sym, anti = side_parts(x, names)
     none: tuple[list[tuple[int, int]], np.ndarray, np.ndarray, np.ndarray | None] = (
         [],
@@ -1066,21 +1115,22 @@ def _alternating_repetitions(
     distance = int(0.25 * (period or 2 * MIN_PERIOD_S) * fps)
     # far points on each side of the symmetric posture; a posture held off to one side (a
     # lunge's split stance, lying on one side) does not alternate
-    one, one_cut = _candidates(line, 0.0, distance)
-    other, other_cut = _candidates(-line, 0.0, distance)
+    one, one_back = _candidates(line, 0.0, distance)
+    other, other_back = _candidates(-line, 0.0, distance)
     out_one, out_other = _beyond(line, one), _beyond(-line, other)
-    one, one_cut, other, other_cut = (
+    one, one_back, other, other_back = (
         one[out_one],
-        one_cut[out_one],
+        one_back[out_one],
         other[out_other],
-        other_cut[out_other],
+        other_back[out_other],
     )
-    keep_one, keep_other = _reached(line[one], one_cut), _reached(-line[other], other_cut)
-    one, one_cut, other, other_cut = (
+    keep_one = _reached(line[one], one_back < MIN_EXCURSION_RAD)
+    keep_other = _reached(-line[other], other_back < MIN_EXCURSION_RAD)
+    one, one_back, other, other_back = (
         one[keep_one],
-        one_cut[keep_one],
+        one_back[keep_one],
         other[keep_other],
-        other_cut[keep_other],
+        other_back[keep_other],
     )
     if not len(one) or not len(other):
         return none  # one side only: counted as a plain movement
@@ -1096,7 +1146,9 @@ def _alternating_repetitions(
     # and a far point cut off at the clip's start or end, against the whole ones of both
     # sides (a side whose only far point is cut off had none of its own: a single twist
     # that turns back as the clip ends)
-    reached = _reached(np.abs(line[far]), np.r_[one_cut, other_cut])
+    back = np.concatenate([one_back, other_back])
+    reached = _reached(np.abs(line[far]), back < MIN_EXCURSION_RAD)
+    reached[reached] = _whole_only(np.abs(line[far[reached]]), back[reached], edges)
     order = np.argsort(far[reached], kind="stable")
     far, sides = far[reached][order], sides[reached][order]
     moved = _in_view(far, blind)
@@ -1117,6 +1169,7 @@ __all__ = [
     "MIN_EXCURSION_RAD",
     "MIN_PERIOD_S",
     "RETURN_SHARE",
+    "WHOLE_SHARE",
     "STILL_SHARE",
     "SUBSTANTIAL",
     "TRUNK_SIDE_SHARE",

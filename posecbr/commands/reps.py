@@ -5,7 +5,9 @@ A repetition is one excursion from the rest posture to the far point of the move
 (a squat: down and up); a movement that alternates sides (knee raises, twists, jogging steps)
 has one repetition per side. ``--json`` gives ``{"clip", "fps", "count", "repetitions":
 [{"start_frame", "end_frame", "start_s", "end_s", "peak_frame", "side"}], ...}`` (end frames
-exclusive); ``--plot`` draws the repetitions over the clip's fluent timeline.
+exclusive; ``"partial": true`` when no repetition is whole but part of one is there, which
+does not count: a clip of the way down of a squat counts 0, with a note on stderr);
+``--plot`` draws the repetitions over the clip's fluent timeline.
 """
 
 from __future__ import annotations
@@ -53,6 +55,13 @@ def run(args: argparse.Namespace) -> int:
     seq = load_recording(args.clip, args.asf, args.fps)
     note_low_rate(seq)
     result = _count(seq)
+    if result.partial:
+        print(
+            f"note: {shown(args.clip)}: no whole repetition: the movement goes out once, but"
+            " the clip starts or ends before it has come back (part of one repetition is not"
+            " counted)",
+            file=sys.stderr,
+        )
     if args.plot is not None:
         _plot(seq, result, args.plot, args.clip.name)
     if args.json:

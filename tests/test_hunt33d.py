@@ -1,0 +1,149 @@
+"""Hunt 33d: repetition counting and segmentation on odd recordings.
+
+A clip without one whole repetition (the way down of a squat, half an arm circle) counted
+as one repetition: its one far point was cut off by the clip's start or end, and with no
+whole far point to be measured against it counted anyway."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cbr.segmentation import counted_segments
+from features.geometry import angle_between
+from features.poses import PoseSequence, save_pose
+from features.readers.asfamc import read_asf_amc
+from features.readers.uiprmd import read_uiprmd_vicon
+from features.repetitions import count_repetitions, movement_signals
+from features.skeleton import JOINT_INDEX
+from posecbr.cli import main
+
+CMU_FPS = 120
+
+
+@pytest.fixture(scope="module")
+def cmu_13_29(shared_data: Path) -> PoseSequence:
+    return read_asf_amc(
+        shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
+        shared_data / "cmu-mocap6" / "amc" / "13_29.amc",
+    )
+
+
+def _cut(rec: PoseSequence, a_s: float, b_s: float) -> PoseSequence:
+    return rec.slice_frames(int(round(a_s * CMU_FPS)), int(round(b_s * CMU_FPS)))
+
+
+def _angle(seq: PoseSequence, a: str, b: str, c: str) -> np.ndarray:
+    """The angle at joint ``b`` between ``a`` and ``c``, degrees, from the positions alone."""
+    p = seq.to_canonical().positions
+    at = p[:, JOINT_INDEX[b]]
+    return np.degrees(angle_between(p[:, JOINT_INDEX[a]] - at, p[:, JOINT_INDEX[c]] - at))
+
+
+# CMU 13_29's squats (labelled 31.7-38.3 s): knee troughs at 33.25 and 36.3 s by hand
+# (tests/fixtures/repetition_counts.json), standing at 31.7, 34.6 and 37.5 s.
+@pytest.mark.parametrize(
+    ("a_s", "b_s", "count", "what"),
+    [
+        (31.7, 33.3, 0, "standing to the bottom of the first squat: only the way down"),
+        (32.5, 33.25, 0, "the way down from half-way"),
+        (31.7, 33.6, 0, "the way down and the first sixth of the way up"),
+        (33.25, 35.0, 0, "the way up, then the next squat's way down begins"),
+        (31.7, 34.8, 1, "one whole squat, standing to standing"),
+        (31.7, 34.0, 1, "down and two thirds of the way up: a squat (the rest of it is missing)"),
+        (31.7, 38.3, 2, "the labelled stretch: two squats"),
+    ],
+)
+def test_a_squat_cut_short_counts_only_whole_repetitions(
+    cmu_13_29: PoseSequence, a_s: float, b_s: float, count: int, what: str
+) -> None:
+    seq = _cut(cmu_13_29, a_s, b_s)
+    knee = _angle(seq, "left_hip", "left_knee", "left_ankle")
+    if count == 0 and a_s < 33.0:  # hand check: the knee is still near its deepest at the end
+        assert knee[-1] < knee.min() + 0.25 * (knee.max() - knee.min()), what
+    result = count_repetitions(seq)
+    assert result.count == count, what
+    assert result.partial == (count == 0), what
+
+
+# 13_29's arm circles: wrist-height peaks (arms up) at 12.2, 13.4 and 14.6 s by hand.
+@pytest.mark.parametrize(
+    ("a_s", "b_s"), [(12.8, 13.4), (13.0, 13.4), (13.4, 14.0)], ids=["up", "up-late", "down"]
+)
+def test_half_an_arm_circle_counts_none(cmu_13_29: PoseSequence, a_s: float, b_s: float) -> None:
+    seq = _cut(cmu_13_29, a_s, b_s)
+    wrist = seq.to_canonical().positions[:, JOINT_INDEX["left_wrist"], 1]  # height (y up)
+    top = int(np.argmax(wrist))
+    assert top in (0, seq.n_frames - 1) or min(top, seq.n_frames - top) < 0.1 * CMU_FPS
+    result = count_repetitions(seq)
+    assert result.count == 0 and result.partial
+
+
+def test_a_whole_arm_circle_still_counts(cmu_13_29: PoseSequence) -> None:
+    """The first circle of the stretch (arms up at 10.4 s, labelled from 10.1 s) cut from
+    9.9 to 10.8 s: one whole circle."""
+    assert count_repetitions(_cut(cmu_13_29, 9.9, 10.8)).count == 1
+
+
+VICON = ("ui-prmd", "data", "Segmented Movements", "Vicon", "Positions")
+
+
+@pytest.mark.parametrize(
+    ("movement", "joints", "deepest"),
+    [
+        ("m01", ("left_hip", "left_knee", "left_ankle"), np.argmin),  # deep squat
+        ("m07", ("right_elbow", "right_shoulder", "right_hip"), np.argmax),  # arm abduction
+    ],
+)
+def test_uiprmd_single_repetitions_cut_at_their_far_point_count_none(
+    shared_data: Path, movement: str, joints: tuple[str, str, str], deepest: object
+) -> None:
+    """UI-PRMD Vicon, subject s01's ten correct repetitions of the deep squat and of the
+    shoulder abduction: each whole counts 1; cut at its far point (the knee's smallest angle,
+    the arm's widest, read off the positions here), the way out alone counts 0, and so does
+    the way back alone."""
+    folder = shared_data.joinpath(*VICON)
+    for e in range(1, 11):
+        seq = read_uiprmd_vicon(folder / f"{movement}_s01_e{e:02d}_positions.txt.gz")
+        far = int(deepest(_angle(seq, *joints)))  # type: ignore[operator]
+        assert count_repetitions(seq).count == 1, e
+        if min(far, seq.n_frames - far) < 0.5 * seq.fps:
+            continue  # a far point near the file's end: one half is too short to count
+        out, back = seq.slice_frames(0, far + 1), seq.slice_frames(far, seq.n_frames)
+        assert count_repetitions(out).count == 0, (e, "out")
+        assert count_repetitions(back).count == 0, (e, "back")
+
+
+def test_segment_counts_no_repetition_in_half_a_squat(cmu_13_29: PoseSequence) -> None:
+    """``segment``'s count of a recording that is one segment: the way down of a squat is
+    none (before: 1); a whole squat is one."""
+    for b_s, count in ((33.3, 0), (34.8, 1)):
+        seq = _cut(cmu_13_29, 31.7, b_s).to_canonical()
+        sig = movement_signals(seq)
+        (reps,) = counted_segments(sig, [(0, seq.n_frames)], seq.n_frames)
+        assert len(reps) == count, b_s
+
+
+def test_reps_command_says_no_whole_repetition(
+    cmu_13_29: PoseSequence, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Exit 0, "0 repetitions", and one note line on stderr naming the file; ``--json``
+    has ``"partial": true`` (a count of 0 is an answer, not a refusal)."""
+    path = save_pose(_cut(cmu_13_29, 31.7, 33.3), tmp_path / "half_squat.npz")
+    assert main(["reps", str(path)]) == 0
+    out, err = capsys.readouterr()
+    assert out.splitlines()[0].startswith(f"{path}: 0 repetitions")
+    (note,) = err.strip().splitlines()
+    assert note.startswith(f"note: {path}: no whole repetition")
+    assert main(["reps", str(path), "--json"]) == 0
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    assert doc["count"] == 0 and doc["partial"] is True and doc["repetitions"] == []
+    assert len(err.strip().splitlines()) == 1
+    whole = save_pose(_cut(cmu_13_29, 31.7, 34.8), tmp_path / "squat.npz")
+    assert main(["reps", str(whole), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["partial"] is False and json.loads(out)["count"] == 1 and not err
