@@ -42,11 +42,13 @@ from .segmentation import (
     NOBODY,
     PERIOD_SPAN_S,
     SPAN_HOP_S,
+    STILL_TEXT,
     SWITCH_ODDS,
     activity_distances,
     at_cut,
     check_judge,
     keep_whole,
+    least_movement,
     log_votes,
     period_outliers,
     periods_in_span,
@@ -54,6 +56,7 @@ from .segmentation import (
     span_fields,
     told,
     unknown_reason,
+    window_still,
 )
 from .unknown import (
     JUDGES,
@@ -109,7 +112,8 @@ class LiveSegment:
 class _Judged:
     """A window the segmenter solved: frames [start, stop), its nearest activity, the
     judge's ratio, its distance to the nearest case of every activity and the judge it was
-    judged by (that of the person as seen by then: :func:`cbr.unknown.for_person`)."""
+    judged by (that of the person as seen by then: :func:`cbr.unknown.for_person`); still:
+    it moves too little to be any activity (:func:`cbr.segmentation.too_still`)."""
 
     start: int
     stop: int
@@ -117,6 +121,7 @@ class _Judged:
     ratio: float
     nearest: np.ndarray
     judge: Judge
+    still: bool = False
 
     @property
     def centre(self) -> float:
@@ -273,6 +278,7 @@ class LiveSegmenter:
         self.judge = judge if judge is not None else judge_of(clf, JUDGES[0])
         self.classes = [str(c) for c in clf.classes_]
         self.codes = activity_codes(clf.case_base_.labels, self.classes)
+        self.movement, self.least = least_movement(clf)  # as offline: too still for any
         self.unknown = len(self.classes)
         self.hop = max(1, int(round(HOP_S * fps)))
         self.window = max(2, int(round(DEFAULT_WINDOW_S * fps)))
@@ -668,8 +674,12 @@ class LiveSegmenter:
         if np.isfinite(np.min(nearest)):
             self.near.append(float(np.min(nearest)))
         judge = for_person(self.judge, np.array(self.near))
-        self.judged.append(_Judged(start, stop, activity, judge.ratio(nearest), nearest, judge))
-        return vote, unknown_evidence(judge, nearest)
+        # as offline (cbr.segmentation._solve_windows): too still for any activity, unknown
+        still = window_still(solved, self.movement, self.least)
+        self.judged.append(
+            _Judged(start, stop, activity, judge.ratio(nearest), nearest, judge, still)
+        )
+        return vote, 1.0 if still else unknown_evidence(judge, nearest)
 
     def _explain(self, start: int, end: int, state: int) -> tuple[str, float]:
         """A finished segment's explanation and novelty (the judge's ratio, median over its
@@ -682,6 +692,8 @@ class LiveSegmenter:
         if not inside:
             return "", math.nan
         novelty = float(np.median([w.ratio for w in inside]))
+        if state == self.unknown and sum(w.still for w in inside) > len(inside) / 2:
+            return STILL_TEXT, novelty
         if state == self.unknown:
             return tell_unknown([(w.judge, w.nearest) for w in inside], self.classes), novelty
         telling = [w for w in inside if w.activity == state and w.start >= self.offset]
@@ -743,8 +755,11 @@ class LiveSegmenter:
             clip = self._sequence(first, end)
             if torso_share(clip) == 0.0:
                 state = self.unknown
+            # the stream's own start and (once finished) end are the recording's, as offline
+            # (cbr.segmentation._repetitions): part of one repetition there is none
+            edges = (first == 0, not cut and explained)
             try:
-                found = count_repetitions(clip, recording_edges=False).repetitions
+                found = count_repetitions(clip, recording_edges=edges).repetitions
             except DataError:  # too short, or nobody in view
                 pass
         confidence = self._confidence(state)

@@ -50,6 +50,7 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -131,6 +132,10 @@ def span_fields(start_frame: int, end_frame: int, label: str | None, confidence:
 
 
 UNLIKE = "unlike every activity"  # why a stretch in which the person is seen is unknown
+STILL_TEXT = (
+    "still: its joint angles vary less than half as much as in the least-moving case of the"
+    " case base"
+)  # why a stretch of windows that each move too little to be any activity is unknown
 
 
 def unknown_reason(label: str | None, explanation: str) -> str | None:
@@ -201,6 +206,7 @@ class _Solved:
     solved: Any  # the classifier's Solved: problem, retrieval, solution, novelty, ...
     repetition: bool = False
     piece: tuple[int, int] | None = None  # in pieces: solved is None, solved again from these
+    still: bool = False  # moves too little to be any activity of the case base (too_still)
 
     @property
     def centre(self) -> float:
@@ -305,6 +311,70 @@ def activity_distances(clf: Any, solved: Any, codes: np.ndarray | None = None) -
     return per_activity(d, codes, len(clf.classes_))
 
 
+STILL_MOVEMENT_SHARE = 0.5
+"""A window moves too little to be any activity of the case base when its joint angles vary
+less than this share of what they vary in the least-moving of its cases (:func:`too_still`):
+a person standing still is not doing an exercise when every stored window moves, whatever its
+nearest case (a case base trained from CMU 13_30 holds windows of the jog that end standing,
+and 5 s of standing still came out "Jog 0.99"). A share of the case base's own least
+movement, not a distance: a case base holding an activity that is itself still (a plank
+held, standing) keeps still windows, and the nearest case tells which activity they are."""
+MOVEMENT_COLUMNS = ("angle:", "@std")
+"""The problem columns :func:`movement_of` reads: each joint angle's standard deviation over
+the window (a fluent summary with ``angles``, the default ``train`` problem)."""
+
+
+def movement_columns(names: Sequence[str]) -> np.ndarray:
+    """The indices of the columns of a problem with column ``names`` that
+    :func:`movement_of` reads (:data:`MOVEMENT_COLUMNS`; empty: the problem has none, a QMP
+    or fluent-sequence case base, whose windows are never too still)."""
+    head, tail = MOVEMENT_COLUMNS
+    return np.array(
+        [i for i, n in enumerate(names) if n.startswith(head) and n.endswith(tail)], dtype=np.int64
+    )
+
+
+def movement_of(values: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """How much a clip moves: the mean of its joint angles' standard deviations over it (the
+    problem ``values`` ``(F,)`` or ``(n, F)`` at ``columns``, :func:`movement_columns`), in
+    units of pi radians; ``()`` or ``(n,)`` (NaN where none is defined)."""
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # none defined: NaN
+        return np.asarray(np.nanmean(np.asarray(values, dtype=np.float64)[..., columns], axis=-1))
+
+
+def least_movement(clf: Any) -> tuple[np.ndarray, float]:
+    """The columns :func:`movement_of` reads of ``clf``'s problems
+    (:func:`movement_columns`) and how much the least-moving case of its case base moves
+    (0 when no case tells, or the problem has no such columns: no window is then too
+    still)."""
+    columns = movement_columns(getattr(clf.case_base_, "names", ()))
+    problems = np.asarray(clf.case_base_.problems) if len(columns) else np.zeros((0, 0, 0))
+    if problems.ndim != 2:  # none such, or sequences (DTW): not summaries of the clip
+        return columns[:0], 0.0
+    moved = movement_of(problems, columns)
+    moved = moved[np.isfinite(moved)]
+    return columns, float(moved.min()) if len(moved) else 0.0
+
+
+def window_still(solved: Any, columns: np.ndarray, least: float) -> bool:
+    """Whether a window the classifier solved (its ``Solved``) moves too little to be any
+    activity of a case base whose least-moving case moves ``least`` (:func:`least_movement`,
+    with its ``columns``): measured over the whole window only (every frame showing the
+    person: where nobody is seen the angles are held, not still), on a summary problem."""
+    values = np.asarray(solved.problem.values)
+    if least <= 0 or values.ndim != 1 or solved.torso_share < 1.0:
+        return False
+    return too_still(float(movement_of(values, columns)), least)
+
+
+def too_still(moved: float, least: float) -> bool:
+    """Whether a window that moves ``moved`` (:func:`movement_of`) moves too little to be any
+    activity of a case base whose least-moving case moves ``least``
+    (:func:`least_movement`): less than :data:`STILL_MOVEMENT_SHARE` of it."""
+    return bool(np.isfinite(moved) and moved < STILL_MOVEMENT_SHARE * least)
+
+
 BATCH = 32
 """Windows solved together (one batched search of the case base): enough to share the
 search's set-up, few enough that a piece's windows are solved before the piece is dropped."""
@@ -321,6 +391,7 @@ def _solve_windows(
     None)."""
     classes = np.array([str(c) for c in clf.classes_], dtype=object)
     codes = activity_codes(clf.case_base_.labels, classes)
+    columns, least = least_movement(clf)
     cuts = _cut_in_pieces(rec, windows, chunk, clf.feature_config_) if chunk else (
         (i, stretch(rec, w.start, w.stop), None) for i, w in enumerate(windows)
     )  # fmt: skip
@@ -333,8 +404,9 @@ def _solve_windows(
         for (i, _, piece), one, votes in zip(batch, solved, shares, strict=True):
             w = windows[i]
             nearest = activity_distances(clf, one, codes)
+            still = window_still(one, columns, least)
             found.append((i, _Solved(w.start, w.stop, votes, nearest, None if chunk else one,
-                                     w.repetition, piece)))  # fmt: skip
+                                     w.repetition, piece, still)))  # fmt: skip
         batch.clear()
 
     for i, part, piece in progress(cuts, "classifying windows", len(windows), "window"):
@@ -667,7 +739,9 @@ def unknown_shares(
     judged = [w for w, keep in zip(solved, inside.tolist(), strict=True) if keep]
     if not judged:
         return np.zeros(len(path))
-    evidence = np.array([unknown_evidence(judge, w.nearest) for w in judged], dtype=np.float64)
+    evidence = np.array(
+        [1.0 if w.still else unknown_evidence(judge, w.nearest) for w in judged], dtype=np.float64
+    )
     return block_evidence(judged, evidence, n_frames, fps)
 
 
@@ -696,6 +770,8 @@ def _explain_segment(
     if not inside:
         return "", float("nan")
     ratio = float(np.median([judge.ratio(w.nearest) for w in inside]))
+    if state == n_classes and sum(w.still for w in inside) > len(inside) / 2:
+        return STILL_TEXT, ratio
     if state == n_classes:
         return tell_unknown(
             [(judge, w.nearest) for w in inside], [str(c) for c in clf.classes_]
@@ -986,7 +1062,7 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     rec, solved, n_classes = done.rec, list(done.windows), len(clf.classes_)
     counted = [w for w, out in zip(solved, done.outliers.tolist(), strict=True) if not out]
     judge = for_person(judge, np.array([np.min(w.nearest) for w in counted]))
-    unlike = np.array([judge.unlike(w.nearest) for w in solved], dtype=bool)
+    unlike = np.array([w.still or judge.unlike(w.nearest) for w in solved], dtype=bool)
     votes, path = decode_activities(solved, done.outliers, unlike, rec.n_frames, rec.fps,
                                     n_classes)  # fmt: skip
     evidence = within_runs(solved, rec.fps, path).tolist()
@@ -1068,6 +1144,13 @@ __all__ = [
     "decode",
     "decode_unknown",
     "keep_whole",
+    "least_movement",
+    "movement_columns",
+    "movement_of",
+    "too_still",
+    "window_still",
+    "STILL_MOVEMENT_SHARE",
+    "STILL_TEXT",
     "at_cut",
     "counted_segments",
     "log_votes",

@@ -867,14 +867,17 @@ def _sides(
     return "left" if lead[one].mean() >= lead[other].mean() else "right"
 
 
-def count_repetitions(seq: PoseSequence, recording_edges: bool = True) -> RepetitionCount:
+def count_repetitions(
+    seq: PoseSequence, recording_edges: bool | tuple[bool, bool] = True
+) -> RepetitionCount:
     """The repetitions in ``seq`` (positions ``(frames, joints, 3)``): see the module docstring.
 
     ``recording_edges``: the clip starts and ends where its recording does, so that a clip
     whose one far point the body went out to and held still until the end is a change of
     posture, no repetition (:func:`_held_change`); False for a piece cut out of a longer
     recording (a segment), whose far point at a cut is handed to the piece beyond it
-    (:func:`cbr.segmentation.keep_whole`) and must stay. Raises DataError when the clip is
+    (:func:`cbr.segmentation.keep_whole`) and must stay; or a pair, for the clip's start and
+    its end (:func:`count_in_signals`). Raises DataError when the clip is
     shorter than one repetition could be (:data:`MIN_PERIOD_S`) or shows no person."""
     if seq.duration_s < MIN_PERIOD_S:
         raise DataError(

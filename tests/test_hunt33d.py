@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -147,3 +148,115 @@ def test_reps_command_says_no_whole_repetition(
     assert main(["reps", str(whole), "--json"]) == 0
     out, err = capsys.readouterr()
     assert json.loads(out)["partial"] is False and json.loads(out)["count"] == 1 and not err
+
+
+# Standing still before exercising was labelled as the exercise whose labelled stretch ends
+# standing: a case base of CMU 13_29's and 13_30's windows holds 13_30's jog, whose last
+# second is standing, and 5 s of standing still came out "Jog 0.99".
+
+
+def _still(seq: PoseSequence, frame: int, seconds: float, seed: int) -> np.ndarray:
+    """``seconds`` of the posture at ``frame`` of ``seq``, each joint jittered by 3 mm (a
+    person standing nearly still, as a mocap system sees one)."""
+    n = int(round(seconds * seq.fps))
+    rng = np.random.default_rng(seed)
+    return np.repeat(seq.positions[frame : frame + 1], n, axis=0) + rng.normal(
+        0.0, 0.003, (n, *seq.positions.shape[1:])
+    )
+
+
+@pytest.fixture(scope="module")
+def cmu(shared_data: Path) -> dict[str, PoseSequence]:
+    asf = shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf"
+    return {t: read_asf_amc(asf, shared_data / "cmu-mocap6" / "amc" / f"{t}.amc")
+            for t in ("13_29", "13_30", "13_31")}  # fmt: skip
+
+
+def _windows_classifier(
+    cmu: dict[str, PoseSequence], shared_data: Path, tmp_path: Path, extra: list[Any]
+) -> Any:
+    """The classifier ``train --split windows`` makes of 13_29's and 13_30's labelled
+    stretches (and ``extra`` clips)."""
+    from cbr.estimator import CaseBaseClassifier
+    from features.datasets import Clip, LabelTrack, split_by_track
+    from features.repetitions import split_windows
+
+    names = tmp_path / "names.txt"
+    names.write_text("1 JumpJack\n2 Jog\n3 Squat\n4 KneeRaise\n5 ArmCircle\n6 Twist\n"
+                     "10 ToeTouchOneHand\n", encoding="utf-8")  # fmt: skip
+    clips = list(extra)
+    for t in ("13_29", "13_30"):
+        track = LabelTrack(shared_data / "cmu-mocap6" / "truelabels" / f"{t}.txt", 0.1, names)
+        for part, label in split_by_track(cmu[t], track):
+            clips.append(Clip(part.with_metadata(label=label, subject="13"), label, "13", {}))
+    windows = split_windows(clips).clips
+    return CaseBaseClassifier(feature_weights="none").fit(
+        [c.seq for c in windows], [c.label for c in windows]
+    )
+
+
+def test_standing_still_is_no_exercise_whose_cases_all_move(
+    cmu: dict[str, PoseSequence], shared_data: Path, tmp_path: Path
+) -> None:
+    """5 s of 13_31's first posture held (3 mm of jitter), then 13_31's twists and knee
+    raises (labelled 0-3.3 and 3.3-8.2 s there): the still stretch is unknown, told as
+    still; the exercises after it keep their labels. Every Jog case moves its joint angles
+    at least 0.034 pi rad (the mean standard deviation), the still stretch 0.004."""
+    from cbr.segmentation import STILL_TEXT, segment
+
+    clf = _windows_classifier(cmu, shared_data, tmp_path, [])
+    rec = cmu["13_31"]
+    still = _still(rec, 0, 5.0, 0)
+    seq = PoseSequence(np.concatenate([still, rec.positions[: int(8.2 * 120)]]),
+                       rec.joint_names, 120.0)  # fmt: skip
+    result = segment(clf, seq)
+    blocks = result.blocks
+    assert all(b is None for b in blocks[:45]), blocks[:50]  # 0-4.5 s
+    first = result.segments[0]
+    assert first.label is None and first.explanation == STILL_TEXT
+    assert first.end_frame <= int(5.6 * 120)
+    assert blocks[int(6.5 / 0.1)] == "Twist" and blocks[int(11.0 / 0.1)] == "KneeRaise"
+
+
+def test_standing_still_stays_an_activity_whose_cases_are_still(
+    cmu: dict[str, PoseSequence], shared_data: Path, tmp_path: Path
+) -> None:
+    """With a stored activity that is itself still (6 s of 13_29's last posture held,
+    labelled Stand), the still stretch is Stand: only the activities whose every case moves
+    much more are ruled out."""
+    from cbr.segmentation import segment
+    from features.datasets import Clip
+
+    src = cmu["13_29"]
+    stand = PoseSequence(_still(src, src.n_frames - 1, 6.0, 1), src.joint_names, 120.0)
+    extra = [Clip(stand.with_metadata(label="Stand", subject="13"), "Stand", "13", {})]
+    clf = _windows_classifier(cmu, shared_data, tmp_path, extra)
+    rec = cmu["13_31"]
+    seq = PoseSequence(np.concatenate([_still(rec, 0, 5.0, 0), rec.positions[: int(8.2 * 120)]]),
+                       rec.joint_names, 120.0)  # fmt: skip
+    blocks = segment(clf, seq).blocks
+    assert all(b == "Stand" for b in blocks[:45]), blocks[:50]
+
+
+def test_watch_tells_standing_still_as_segment_does(
+    cmu: dict[str, PoseSequence], shared_data: Path, tmp_path: Path
+) -> None:
+    """``watch`` (the live segmenter) on the same stream, read at 30 fps: the standing is
+    unknown and told as still, as ``segment`` tells it, then the twists."""
+    from cbr.live import LiveSegmenter
+    from cbr.segmentation import STILL_TEXT
+
+    clf = _windows_classifier(cmu, shared_data, tmp_path, [])
+    rec = cmu["13_31"]
+    seq = PoseSequence(np.concatenate([_still(rec, 0, 5.0, 0), rec.positions[: int(8.2 * 120)]]),
+                       rec.joint_names, 120.0)  # fmt: skip
+    frames = seq.to_canonical().positions[::4]
+    live = LiveSegmenter(clf, 30.0)
+    segments = []
+    for f in frames:
+        segments += live.push(f)
+    segments += live.finish()
+    first = segments[0]
+    assert first.label is None and first.explanation == STILL_TEXT, segments
+    assert 4.0 * 30 <= first.end_frame <= 5.6 * 30, segments
+    assert "Twist" in [s.label for s in segments[1:]], segments
