@@ -57,9 +57,8 @@ def run(args: argparse.Namespace) -> int:
     result = _count(seq)
     if result.partial:
         print(
-            f"note: {shown(args.clip)}: no whole repetition: the movement goes out once, but"
-            " the clip starts or ends before it has come back (part of one repetition is not"
-            " counted)",
+            f"note: {shown(args.clip)}: no whole repetition: the clip starts or ends part-way"
+            " through the movement, and part of a repetition is not counted",
             file=sys.stderr,
         )
     if args.plot is not None:
