@@ -5,7 +5,8 @@ What counts as one repetition (the way people count exercises):
 
 - one excursion from the rest posture to the far point of the movement and back (a squat:
   standing, down, standing); a repetition cut off by the clip's start or end counts when its
-  far point is in the clip and reaches (nearly) as far as the others;
+  far point is in the clip and reaches (nearly) as far as the whole ones, and a clip with no
+  whole repetition (only the way down of a squat) has none (:func:`_whole_only`);
 - a movement that alternates sides (left knee up, then right knee up; twist right, then left;
   jogging steps) has one repetition per side.
 

@@ -260,3 +260,13 @@ def test_watch_tells_standing_still_as_segment_does(
     assert first.label is None and first.explanation == STILL_TEXT, segments
     assert 4.0 * 30 <= first.end_frame <= 5.6 * 30, segments
     assert "Twist" in [s.label for s in segments[1:]], segments
+
+
+@pytest.mark.parametrize(("b_s", "count"), [(23.5, 0), (24.0, 0), (25.0, 1), (31.7, 6)])
+def test_knee_raises_cut_before_the_first_comes_back(
+    cmu_13_29: PoseSequence, b_s: float, count: int
+) -> None:
+    """13_29's knee raises (labelled from 22.5 s; by hand the right knee up at 24.1 s, the
+    left at 25.4 s, six in all by 31.7 s) cut to end before the first knee is down again
+    count none (before: 1 at 23.5 s, 2 at 24.0 s), and one once it is."""
+    assert count_repetitions(_cut(cmu_13_29, 22.5, b_s)).count == count
