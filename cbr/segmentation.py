@@ -800,13 +800,16 @@ def _repetitions(
     only part of one when none of its repetitions is whole (the way down of a squat as the
     recording ends: :func:`features.repetitions.count_in_signals`); one at a cut is left to
     :func:`keep_whole`."""
+    last = n_frames is not None and end >= n_frames
     a, b = start // sig.step, max(start // sig.step + 1, end // sig.step)
+    if last:  # to the recording's last sample, as reps reads it (a far point there counts)
+        b = max(b, len(sig.values))
     if (b - a) / sig.fps < MIN_PERIOD_S:
         return ()
     part = sig.part(a, b)
-    edges = (start == 0 and n_frames is not None, n_frames is not None and end >= n_frames)
+    edges = (start == 0 and n_frames is not None, last)
     found = count_in_signals(
-        part, (b - a) * sig.step, sig.fps * sig.step, recording_edges=edges
+        part, min((b - a) * sig.step, end - a * sig.step), sig.fps * sig.step, edges
     ).repetitions
     off = a * sig.step
     return tuple(  # the first sample may begin up to a step before ``start``: cut there

@@ -270,3 +270,21 @@ def test_knee_raises_cut_before_the_first_comes_back(
     left at 25.4 s, six in all by 31.7 s) cut to end before the first knee is down again
     count none (before: 1 at 23.5 s, 2 at 24.0 s), and one once it is."""
     assert count_repetitions(_cut(cmu_13_29, 22.5, b_s)).count == count
+
+
+@pytest.mark.parametrize(("a_s", "b_s"), [(3.9, 8.65), (22.5, 30.75)], ids=["twist", "knee"])
+def test_segment_counts_a_recording_of_one_segment_as_reps_does(
+    cmu_13_29: PoseSequence, a_s: float, b_s: float
+) -> None:
+    """``segment``'s count of a recording that is one segment is ``reps``' count of it: the
+    segment is read to the recording's last analysis sample, as ``reps`` reads it. Before, it
+    was read to the last whole one (frames // 4 at 120 fps) and lost a far point there:
+    13_29's twists cut at 8.65 s, whose third turn (left, 8.6 s by hand) lies in the clip,
+    counted 3 by ``reps`` and 2 by ``segment``; its knee raises cut at 30.75 s, as the sixth
+    rises, 6 and 5."""
+    seq = _cut(cmu_13_29, a_s, b_s).to_canonical()
+    whole = count_repetitions(seq).count
+    (reps,) = counted_segments(movement_signals(seq), [(0, seq.n_frames)], seq.n_frames)
+    assert len(reps) == whole
+    if a_s == 3.9:
+        assert whole == 3  # twists at 5.1, 6.75 and 8.6 s by hand
