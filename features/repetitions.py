@@ -195,13 +195,6 @@ its height): a second far point reached after a shallow dip (a wobble at the bot
 lunge, a pause on the way up) is part of the same repetition. Chosen with
 :data:`SUBSTANTIAL` on the training subjects only (at 0.3: MAE 0.063 without the rule, 0.046
 at 0.4, 0.051 at 0.5 and 0.6)."""
-WHOLE_SHARE = RETURN_SHARE
-"""A far point is whole (not cut off by the clip's start or end) when, within the clip, the
-movement rises to it and falls back from it by at least this share of its height above rest
-(and by :data:`MIN_EXCURSION_RAD`): the fall back that makes a far point a repetition
-(:data:`RETURN_SHARE`), here without the clip's padding with rest. The way down of a squat
-and the first 40 degrees of the way up (CMU 13_29, 31.7-33.6 s: 234 degrees out, 43 back)
-are no whole squat; the way down and two thirds of the way up (to 34.0 s: 149 back) are."""
 STILL_SHARE = 0.1
 """A far point is a still stretch, not a repetition, when the movement line as recorded (not
 about its running mean) rises less than this share of the median far point's rise above the
@@ -772,17 +765,17 @@ def _reached(height: np.ndarray, cut: np.ndarray) -> np.ndarray:
     return np.asarray(whole | (height >= 0.75 * float(np.median(height[whole]))))
 
 
-def _whole_only(height: np.ndarray, back: np.ndarray, edges: tuple[bool, bool]) -> np.ndarray:
-    """Which far points count, of heights ``height`` above rest and rising to them and
-    falling back from them by ``back`` ``(k, 2)`` within the clip (:func:`_candidates`), when
-    the clip's start and its end are the recording's as ``edges`` says: all when one of them
-    is whole, the line rising to it and falling back from it by :data:`WHOLE_SHARE` of its
-    height (and :data:`MIN_EXCURSION_RAD`); otherwise none that falls short of that at the
-    recording's start or end. A clip without one whole repetition (the way down of a squat,
-    half an arm circle) has none: before, its one far point, cut off with nothing whole to be
-    measured against, counted as a repetition. A far point cut off where a longer recording
-    was cut into pieces stays: :func:`cbr.segmentation.keep_whole` gives it to one piece."""
-    short = back < np.maximum(MIN_EXCURSION_RAD, WHOLE_SHARE * height)[:, None]
+def _whole_only(back: np.ndarray, edges: tuple[bool, bool]) -> np.ndarray:
+    """Which far points count, the line rising to them and falling back from them by
+    ``back`` ``(k, 2)`` within the clip (:func:`_candidates`), when the clip's start and its
+    end are the recording's as ``edges`` says: all when one of them is whole (rising and
+    falling back by :data:`MIN_EXCURSION_RAD`: the movement turns there); otherwise none cut
+    off at the recording's start or end. A clip without one whole repetition (only the way
+    down of a squat, half an arm circle) has none: before, its far point, cut off with
+    nothing whole to be measured against, counted as a repetition. A far point cut off where
+    a longer recording was cut into pieces stays: :func:`cbr.segmentation.keep_whole` gives
+    it to one piece."""
+    short = back < MIN_EXCURSION_RAD
     if not len(back) or (~short.any(axis=1)).any():
         return np.ones(len(back), dtype=bool)
     return np.asarray(~(short & np.array(edges)).any(axis=1))
@@ -931,7 +924,7 @@ def count_in_signals(
         far, back = _far_points(line, rest, distance)
         above = _above_rest(recorded, far, reach)
         far, back = far[above], back[above]
-        whole = _whole_only(line[far] - rest, back, edges)
+        whole = _whole_only(back, edges)
         partial = bool(len(far)) and not whole.any()  # part of one repetition, none whole
         far = np.unique(_in_view(far[whole], sig.blind))
         if all(edges) and len(far) == 1 and _held_change(x, recorded, sig.fps):
@@ -1152,7 +1145,7 @@ def _alternating_repetitions(
     # that turns back as the clip ends)
     back = np.concatenate([one_back, other_back])
     reached = _reached(np.abs(line[far]), back < MIN_EXCURSION_RAD)
-    reached[reached] = _whole_only(np.abs(line[far[reached]]), back[reached], edges)
+    reached[reached] = _whole_only(back[reached], edges)
     order = np.argsort(far[reached], kind="stable")
     far, sides = far[reached][order], sides[reached][order]
     moved = _in_view(far, blind)
@@ -1173,7 +1166,6 @@ __all__ = [
     "MIN_EXCURSION_RAD",
     "MIN_PERIOD_S",
     "RETURN_SHARE",
-    "WHOLE_SHARE",
     "STILL_SHARE",
     "SUBSTANTIAL",
     "TRUNK_SIDE_SHARE",

@@ -51,7 +51,7 @@ def _angle(seq: PoseSequence, a: str, b: str, c: str) -> np.ndarray:
     [
         (31.7, 33.3, 0, "standing to the bottom of the first squat: only the way down"),
         (32.5, 33.25, 0, "the way down from half-way"),
-        (31.7, 33.6, 0, "the way down and the first sixth of the way up"),
+        (31.7, 33.6, 1, "down and turned back up by 43 of 234 degrees: its far point passed"),
         (33.25, 35.0, 0, "the way up, then the next squat's way down begins"),
         (31.7, 34.8, 1, "one whole squat, standing to standing"),
         (31.7, 34.0, 1, "down and two thirds of the way up: a squat (the rest of it is missing)"),
@@ -63,8 +63,8 @@ def test_a_squat_cut_short_counts_only_whole_repetitions(
 ) -> None:
     seq = _cut(cmu_13_29, a_s, b_s)
     knee = _angle(seq, "left_hip", "left_knee", "left_ankle")
-    if count == 0 and a_s < 33.0:  # hand check: the knee is still near its deepest at the end
-        assert knee[-1] < knee.min() + 0.25 * (knee.max() - knee.min()), what
+    if count == 0 and a_s < 33.0:  # hand check: the knee is at its deepest at the end
+        assert knee[-1] < knee.min() + 0.05 * (knee.max() - knee.min()), what
     result = count_repetitions(seq)
     assert result.count == count, what
     assert result.partial == (count == 0), what
