@@ -225,7 +225,7 @@ def test_a_pipe_named_like_a_video_is_refused_not_waited_on(tmp_path: Path) -> N
     os.mkfifo(pipe)
     for argv, line in [
         (["describe", str(pipe)], f"posecbr describe: error: {pipe}: is a pipe, socket or"
-         " device, not a video file"),
+         " device, not a clip file"),
         (["extract", str(pipe), "--out", str(tmp_path / "poses")], f"posecbr extract: error:"
          f" {pipe}: is a pipe, socket or device, not a video, folder or labels CSV"),
     ]:  # fmt: skip
