@@ -589,3 +589,38 @@ def test_a_frame_without_a_time_among_timed_ones_is_paced_after_the_last() -> No
         pacer(i, t)
     assert pacer.started is not None
     assert pacer.until - pacer.started == pytest.approx(0.35)
+
+
+def test_a_video_declaring_a_faster_rate_than_its_frames_is_stale_as_extract_resamples_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A video declaring 60 fps whose 25 frames come every 40 ms (25 fps): 60 is not above
+    ``SUSPECT_FPS``, so ``open_video`` keeps it, frame 1 at 0.04 s lies 2.4 frames from 1/60
+    s, and ``estimate_video`` resamples the frames to 60 fps. The check for a pose file of
+    older code took the frames' own rate instead (60 is more than twice 25) and found them
+    regular at it: ``extract`` kept a pose file the oldest code made of evenly spaced frames,
+    and ``load_clip`` said nothing. Both now take the rate ``open_video`` takes."""
+    from features.pose_estimation import open_video
+    from features.pose_estimation.video import (
+        container_frame_times,
+        older_vfr_extraction,
+        variable_rate,
+    )
+    from posecbr.commands.extract import STALE_VFR
+
+    path = _write(tmp_path / "d60.mkv", [40 * k for k in range(25)], _grey(25), rate=60)
+    cap, info = open_video(path)
+    cap.release()
+    assert info.fps == 60.0
+    times, fps = container_frame_times(path)
+    assert fps == 60.0 and times == pytest.approx([0.04 * k for k in range(25)], abs=1e-9)
+    assert variable_rate(path) and older_vfr_extraction({}, path)
+    out = tmp_path / "poses"
+    assert main(["extract", str(path), "--out", str(out)]) == 0
+    pose_file = out / "d60.npz"
+    assert load_pose(pose_file).metadata["variable_frame_rate"]["resampled_to_fps"] == 60.0
+    _as_older(pose_file, "extraction_version", "variable_frame_rate")
+    capsys.readouterr()
+    assert main(["extract", str(path), "--out", str(out)]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith(f"done: {pose_file}") and line.endswith(f"; {STALE_VFR})")

@@ -165,10 +165,18 @@ def _frames_rate(path: Path, fps: float, frames: int) -> tuple[float, int]:
     if not (math.isfinite(fps) and fps > SUSPECT_FPS):
         return fps, frames
     got = _packet_times(path)
-    rate = own_rate(*got) if got is not None else None
-    if got is None or rate is None:
-        return fps, frames
-    return rate, int(got[0].size)
+    rate = taken_rate(*got) if got is not None else fps
+    return (fps, frames) if got is None or rate == fps else (rate, int(got[0].size))
+
+
+def taken_rate(times: np.ndarray, fps: float) -> float:
+    """The frame rate :func:`open_video` takes for a video stating ``fps`` whose frames come
+    at ``times`` (s): ``fps``, or, above :data:`SUSPECT_FPS`, the frames' own rate when
+    :func:`own_rate` finds ``fps`` a clock's ticks. One rule for the rate a video is
+    resampled to and the rate :func:`variable_rate` judges it by."""
+    if math.isfinite(fps) and fps > SUSPECT_FPS:
+        return own_rate(times, fps) or fps
+    return fps
 
 
 def iter_frames(path: str | Path, decode_threads: int | None = None) -> Iterator[np.ndarray]:
@@ -316,7 +324,7 @@ def container_frame_times(path: str | Path) -> tuple[np.ndarray, float]:
     got = _packet_times(path)
     if got is not None:
         times, fps = got
-        fps = own_rate(times, fps) or fps
+        fps = taken_rate(times, fps)  # as open_video takes it: a 60 fps header stays 60
         if math.isfinite(fps) and MIN_FPS <= fps <= MAX_VIDEO_FPS:
             return times, fps
     _cap, info = open_video(path)
