@@ -624,3 +624,28 @@ def test_a_video_declaring_a_faster_rate_than_its_frames_is_stale_as_extract_res
     assert main(["extract", str(path), "--out", str(out)]) == 0
     line = capsys.readouterr().out.strip()
     assert line.startswith(f"done: {pose_file}") and line.endswith(f"; {STALE_VFR})")
+
+
+def test_a_pose_file_of_a_newer_extraction_is_not_called_older(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A pose file a newer posecbr wrote (``extraction_version`` 3) of a variable-frame-rate
+    video was taken as older code's: ``load_clip`` said "made ... by an older posecbr" and
+    ``extract`` would make it again with today's, older, code. Only a version below today's
+    (or none) is older."""
+    from features.datasets import load_clip
+    from features.pose_estimation.video import older_vfr_extraction
+    from features.poses import EXTRACTION_VERSION, PoseSequence, save_pose
+    from features.skeleton import BLAZEPOSE_33
+
+    meta = {"pose_model": "blazepose", "variable_frame_rate": {"resampled_to_fps": 25.0}}
+    newer = {**meta, "extraction_version": EXTRACTION_VERSION + 1}
+    assert older_vfr_extraction({**meta, "extraction_version": EXTRACTION_VERSION - 1}, "x")
+    assert older_vfr_extraction(meta, "x")
+    assert not older_vfr_extraction(newer, "x")
+    pose_file = tmp_path / "newer.npz"
+    positions = np.zeros((3, 33, 3))
+    save_pose(PoseSequence(positions, BLAZEPOSE_33, 25.0, metadata=newer), pose_file)
+    capsys.readouterr()
+    assert load_clip(pose_file).n_frames == 3
+    assert capsys.readouterr().err == ""

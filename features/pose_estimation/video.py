@@ -343,14 +343,15 @@ def older_vfr_extraction(meta: Mapping[str, Any], video: str | Path) -> bool:
     """Whether a pose file (its metadata ``meta``) was made from ``video``, a
     variable-frame-rate video, by extraction code older than today's
     (:data:`EXTRACTION_VERSION`): its poses differ from what extracting the video now gives.
-    A file of the current version is not; one of an older version or none (written before
-    the version was) is when its metadata says it was resampled; one without the version
-    that does not say so (the oldest code did not notice a variable rate) is when the
-    video's frame times, read from its packets (milliseconds, no decoding), stray from its
-    declared rate. A constant-rate video's pose file never is: its poses are what they were."""
+    A file of the current version, or of a newer posecbr's, is not; one of an older version
+    or none (written before the version was) is when its metadata says it was resampled; one
+    without the version that does not say so (the oldest code did not notice a variable
+    rate) is when the video's frame times, read from its packets (milliseconds, no decoding),
+    stray from its declared rate. A constant-rate video's pose file never is: its poses are
+    what they were."""
     version = meta.get("extraction_version")
-    if version == EXTRACTION_VERSION:
-        return False
+    if isinstance(version, int | float) and version >= EXTRACTION_VERSION:
+        return False  # today's, or a newer posecbr's: not older
     if "variable_frame_rate" in meta:
         return True
     return version is None and variable_rate(video)
