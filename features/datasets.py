@@ -163,7 +163,11 @@ def note_older_extraction(seq: PoseSequence, path: Path) -> None:
     if "pose_model" not in meta or meta.get("extraction_version") == EXTRACTION_VERSION:
         return  # not from a video, or made by today's extraction
     video = meta.get("source_video")
-    if "variable_frame_rate" not in meta and not (isinstance(video, str) and Path(video).is_file()):
+    try:  # a name the system cannot look up (over 255 bytes) is no video to look at
+        have_video = isinstance(video, str) and Path(video).is_file()
+    except (OSError, ValueError):
+        have_video = False
+    if "variable_frame_rate" not in meta and not have_video:
         return  # nothing says it was a variable frame rate, and no video to look at
     try:
         from features.pose_estimation.video import older_vfr_extraction

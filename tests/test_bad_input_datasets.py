@@ -410,3 +410,23 @@ def test_a_pose_file_named_with_control_characters_is_converted_to_a_safe_name(
     assert main(["convert", str(data), "--out", str(out)]) == 0
     capsys.readouterr()
     assert sorted(p.name for p in out.iterdir()) == ["a_[2Jb.npz", "labels.csv"]
+
+
+def test_a_pose_file_naming_a_video_too_long_to_look_up_is_read(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A pose file whose metadata names its source video by a name over 255 bytes (written on
+    another system, or by hand): the look for an older variable-frame-rate extraction asked
+    whether that video is a file, and Python's "File name too long" came out as a traceback
+    from every command reading the clip. The video is taken as not there: the file is read,
+    in silence."""
+    from features.datasets import load_clip
+    from features.poses import PoseSequence, save_pose
+    from features.skeleton import BLAZEPOSE_33
+
+    meta = {"pose_model": "blazepose", "source_video": "v" * 300 + ".mp4"}
+    path = tmp_path / "clip.npz"
+    save_pose(PoseSequence(np.zeros((4, 33, 3)), BLAZEPOSE_33, 25.0, metadata=meta), path)
+    capsys.readouterr()
+    assert load_clip(path).n_frames == 4
+    assert capsys.readouterr().err == ""
