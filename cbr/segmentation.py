@@ -319,6 +319,15 @@ nearest case (a case base trained from CMU 13_30 holds windows of the jog that e
 and 5 s of standing still came out "Jog 0.99"). A share of the case base's own least
 movement, not a distance: a case base holding an activity that is itself still (a plank
 held, standing) keeps still windows, and the nearest case tells which activity they are."""
+STILL_CASE_MOVEMENT = 0.02
+"""A case that moves less than this (:func:`movement_of`, pi radians: a mean standard
+deviation of 3.6 degrees) is itself still, a posture held: a case base holding one keeps
+still windows, whatever its other cases move (:func:`least_movement`), since the sensor's
+jitter alone sets how little a still window moves (a posture held in CMU mocap with 3 mm of
+jitter: 0.004; a side plank held in a Pexels video through BlazePose: 0.015) and a person
+holding a stored posture may jitter less than its case did (a frozen frame not at all).
+Exercises move more: the least-moving HDM05 clip (a hop) 0.030, CMU 13_30's jog windows
+0.034."""
 MOVEMENT_COLUMNS = ("angle:", "@std")
 """The problem columns :func:`movement_of` reads: each joint angle's standard deviation over
 the window (a fluent summary with ``angles``, the default ``train`` problem)."""
@@ -346,15 +355,16 @@ def movement_of(values: np.ndarray, columns: np.ndarray) -> np.ndarray:
 def least_movement(clf: Any) -> tuple[np.ndarray, float]:
     """The columns :func:`movement_of` reads of ``clf``'s problems
     (:func:`movement_columns`) and how much the least-moving case of its case base moves
-    (0 when no case tells, or the problem has no such columns: no window is then too
-    still)."""
+    (0 when no case tells, the problem has no such columns, or the case base holds a case
+    that is itself still, :data:`STILL_CASE_MOVEMENT`: no window is then too still)."""
     columns = movement_columns(getattr(clf.case_base_, "names", ()))
     problems = np.asarray(clf.case_base_.problems) if len(columns) else np.zeros((0, 0, 0))
     if problems.ndim != 2:  # none such, or sequences (DTW): not summaries of the clip
         return columns[:0], 0.0
     moved = movement_of(problems, columns)
     moved = moved[np.isfinite(moved)]
-    return columns, float(moved.min()) if len(moved) else 0.0
+    least = float(moved.min()) if len(moved) else 0.0
+    return columns, least if least >= STILL_CASE_MOVEMENT else 0.0
 
 
 def window_still(solved: Any, columns: np.ndarray, least: float) -> bool:
@@ -1153,6 +1163,7 @@ __all__ = [
     "too_still",
     "window_still",
     "STILL_MOVEMENT_SHARE",
+    "STILL_CASE_MOVEMENT",
     "STILL_TEXT",
     "at_cut",
     "counted_segments",
