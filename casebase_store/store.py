@@ -29,6 +29,7 @@ characters in text) are refused here first, with the same error on every backend
 
 from __future__ import annotations
 
+import codecs
 import hashlib
 import io
 import json
@@ -668,9 +669,20 @@ def _what_file(where: str) -> str:
         return "corrupt or not a database"
     if head.startswith((b"PK\x03\x04", b"\x93NUMPY")):
         return "a NumPy file, such as a pose file: --db takes the case base file"
-    if head and all(32 <= b < 127 or b in b"\t\r\n" for b in head):
+    if _looks_like_text(head):
         return "a text file, such as a labels CSV: --db takes the case base file"
     return "corrupt or not a database"
+
+
+def _looks_like_text(head: bytes) -> bool:
+    """Whether a file's first bytes ``head`` read as UTF-8 text (a byte order mark, as Excel
+    saves a CSV, skipped; a character cut off by the end of ``head`` allowed): printable
+    characters, tabs and line ends, accented letters among them."""
+    try:
+        text = codecs.getincrementaldecoder("utf-8-sig")().decode(head, final=False)
+    except UnicodeDecodeError:
+        return False
+    return bool(text) and all(c.isprintable() or c in "\t\r\n" for c in text)
 
 
 def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:

@@ -80,3 +80,31 @@ def test_a_posture_held_is_its_activity_when_every_case_is_still(
         found += live.push(frame)
     found += live.finish()
     assert [s.label for s in found] == ["Stand"], found
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "path,label\nclip.npz,Plié\n",  # a label not in ASCII
+        "\ufeffpath,label\nclip.npz,stand\n",  # as Excel saves a CSV: UTF-8 with a BOM
+        # an é whose two bytes are the 512th and 513th: the first 512 bytes end part-way
+        "path,label\n" + "clip.npz,stand\n" * 32 + "clip.npz," + "x" * 11 + "é\n",
+    ],
+    ids=["accented", "bom", "split"],
+)
+def test_db_given_a_labels_csv_in_utf8_says_it_is_a_text_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str
+) -> None:
+    """``classify clip --db labels.csv`` (the two swapped) with a labels CSV that is UTF-8
+    text but not ASCII said only "not a readable SQLite database (corrupt or not a
+    database)"; it says what an ASCII one gets: a text file, and that --db takes the case
+    base file."""
+    from tests.badinput import refused
+    from tests.test_hunt33e import good_pose_file
+
+    clip = good_pose_file(tmp_path / "clip.npz", frames=12)
+    db = tmp_path / "labels.csv"
+    db.write_bytes(text.encode("utf-8"))
+    refused(["classify", str(clip), "--db", str(db)], tmp_path, capsys,
+            "labels.csv: not a readable SQLite database (a text file, such as a labels CSV:"
+            " --db takes the case base file)")  # fmt: skip
