@@ -723,6 +723,16 @@ def _refuse_a_pipe(path: Path, what: str) -> None:
         raise DataError(f"is a pipe, socket or device, not {what}", path)
 
 
+_COMMENT = re.compile(r"(?:^|(?<=[\s,]))#.*")
+
+
+def _uncommented(line: str) -> str:
+    """``line`` without its comment: from a ``#`` that begins a word (at the line's start,
+    or after a space, tab or comma) to the end; a ``#`` inside a label (``take#2``) is part
+    of it."""
+    return _COMMENT.sub("", line)
+
+
 def read_label_names(path: str | Path) -> dict[str, str]:
     """Names of label codes: one ``code name`` pair per line (space, tab or comma between;
     ``#`` starts a comment). Raises DataError naming the file and line."""
@@ -731,7 +741,7 @@ def read_label_names(path: str | Path) -> dict[str, str]:
     _refuse_nul(text, path)
     names: dict[str, str] = {}
     for line_no, raw in enumerate(text.splitlines(), start=1):
-        line = raw.split("#", 1)[0].strip()
+        line = _uncommented(raw).strip()
         if not line:
             continue
         parts = re.split(r"[\s,]+", line, maxsplit=1)
@@ -760,7 +770,7 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     path = Path(path)
     raw = _read_label_text(path, "label file")
     _refuse_nul(raw, path)
-    text = "\n".join(line.split("#", 1)[0] for line in raw.splitlines())
+    text = "\n".join(_uncommented(line) for line in raw.splitlines())
     tokens = [t for t in re.split(r"[\s,]+", text) if t]
     if not tokens:
         raise DataError("the label file holds no labels", path)
@@ -911,7 +921,7 @@ def _why_not_fit(where: str | Path, low: int, high: int, n_labels: int) -> str:
         text = Path(where).read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError, ValueError):
         text = ""
-    lines = [ln.split("#", 1)[0].strip() for ln in text.splitlines()]
+    lines = [_uncommented(ln).strip() for ln in text.splitlines()]
     lines = [ln for ln in lines if ln]
     spaced = next((ln for ln in lines if len(re.split(r"[\s,]+", ln)) > 1), None)
     if spaced is None or len(lines) < 2 or not low <= len(lines) <= high or len(lines) >= n_labels:

@@ -502,3 +502,17 @@ def test_an_output_name_too_long_to_look_up_is_one_line(
                            "--plot", long + ".png"],
     }[command]  # fmt: skip
     refused(argv, tmp_path, capsys, "xxxxxxxxxx", "cannot use the", "File name too long")
+
+
+def test_a_hash_inside_a_label_is_part_of_it_not_a_comment(tmp_path: Path) -> None:
+    """A comment starts at a ``#`` that begins a word; ``take#2`` (inside a word) is a label
+    whole, in a label file and in a label names file. The comment rule cut it to ``take``
+    without a word, so takes 1 and 2 became one activity."""
+    from features.datasets import read_label_names, read_label_track
+
+    track = tmp_path / "labels.txt"
+    track.write_text("take#1 take#1 # first take\ntake#2,take#2,#second\n")
+    assert read_label_track(track) == ["take#1", "take#1", "take#2", "take#2"]
+    names = tmp_path / "names.txt"
+    names.write_text("1 C#-minor scale  # the piano's\n2 take#2\n")
+    assert read_label_names(names) == {"1": "C#-minor scale", "2": "take#2"}
