@@ -138,6 +138,61 @@ def test_extract_and_watch_resample_the_same_way() -> None:
     assert pushed == pytest.approx(expected, abs=1e-12)
 
 
+def test_a_frame_without_a_time_after_straying_is_left_out_by_extract_as_by_watch() -> None:
+    """Frames at 0, 0.1, 0.25, 0.25 (repeated), 0.4, 0.35 (going back) and 0.5 s of a 10 fps
+    file: 0.25 s strays, so ``watch`` (FrameClock, then Regrid) leaves out the frames with a
+    repeated or earlier time and puts the others on the grid: v0, v1, then 0.2 s two thirds
+    of the way from 0.1 to 0.25 s (1 + 3 * 2/3 = 3), 0.3 s a third of the way from 0.25 to
+    0.4 s (4 + 6 / 3 = 6), then the frames at 0.4 and 0.5 s. ``extract`` found the times not
+    strictly increasing and took all seven frames as evenly spaced, so ``segment`` and
+    ``watch`` of one video saw different poses."""
+    from features.pose_estimation.video import FrameClock, clocked_times, resample_timed
+
+    times = [0.0, 0.1, 0.25, 0.25, 0.4, 0.35, 0.5]
+    values = np.array([0.0, 1.0, 4.0, 100.0, 10.0, 200.0, 7.0])
+    expected = [0.0, 1.0, 3.0, 6.0, 10.0, 7.0]
+    elapsed, strayed = clocked_times(times, 10.0)
+    assert strayed and np.isnan(elapsed[[3, 5]]).all()
+    grid, shown = resample_timed(elapsed, values, 10.0)
+    np.testing.assert_allclose(grid, expected, rtol=0, atol=1e-12)
+    assert shown.tolist() == [0, 1, 1, 2, 4, 6]  # the decoded frame on screen at each
+    live, clock = Regrid(10.0, "phone.mkv"), FrameClock(10.0)
+    worlds = [np.full((33, 3), v) for v in values]
+    steps = [live.take(_frame(i, clock.take(i, t), worlds[i])) for i, t in enumerate(times)]
+    pushed = [float(w[0, 0]) for step in steps for w, _vis, _shown in step]
+    assert pushed == pytest.approx(expected, abs=1e-12)
+    assert [s.index for step in steps for _w, _vis, s in step] == [0, 1, 1, 2, 4, 6]
+
+
+def test_a_video_with_a_repeated_frame_time_is_resampled_without_that_frame(
+    people: list[np.ndarray], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The variable-rate lunge frames (lossless, so each decodes the same in both files),
+    once as they are and once with a grey frame at 180 ms again after the frame at 180 ms
+    (Matroska keeps a repeated time; MP4 and a time going back are refused when written).
+    The repeated frame is left out and the rest resampled: the same 16 poses as the video
+    without it. ``extract`` had refused the file as "truncated or corrupt: decoded 14 of 17
+    frames" (its frames' times not increasing, they could not show it whole), and would have
+    taken all 14 frames as evenly spaced at 25 fps."""
+    rep_ms = [*PTS_MS[:4], 180, *PTS_MS[4:]]
+    assert PTS_MS[3] == 180
+    grey = np.full_like(people[0], 128)
+    clean = _write(tmp_path / "clean.mkv", PTS_MS, people, codec="ffv1")
+    frames = [*people[:4], grey, *people[4:]]
+    repeated = _write(tmp_path / "repeated.mkv", rep_ms, frames, codec="ffv1")
+    options = {"smoothing": False, "tracking": False, "progress_bar": False}
+    want = estimate_video(clean, **options)
+    got = estimate_video(repeated, **options)
+    assert got.sequence.n_frames == want.sequence.n_frames == 16
+    np.testing.assert_array_equal(got.sequence.positions, want.sequence.positions)
+    assert want.video_frames is not None and got.video_frames is not None
+    assert got.video_frames.tolist() == [i + (i >= 4) for i in want.video_frames.tolist()]
+    vfr = got.sequence.metadata["variable_frame_rate"]
+    assert vfr["decoded_frames"] == 14 and vfr["frames_left_out"]["frames"] == [4]
+    assert vfr["frame_interval_s"] == {"min": 0.02, "max": 0.08}
+    assert got.sequence.metadata["missing_frames"] == want.sequence.metadata["missing_frames"]
+
+
 def test_a_variable_rate_video_is_resampled_to_its_declared_rate(
     vfr_mkv: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

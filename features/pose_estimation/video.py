@@ -15,6 +15,9 @@ than twice the frames' own, their average rate instead: :func:`own_rate`),
 interpolation between the two decoded frames around each grid time
 (:func:`resample_to_grid`), as ``watch`` does while the frames come. A constant-rate video is
 left as it was decoded; so is one whose frames carry no times to trust (:class:`FrameClock`).
+Once the frames have strayed, a frame whose time is missing, repeated or earlier than the
+frame's before is left out of the grid and the others are resampled (:func:`clocked_times`),
+as ``watch`` does: ``segment`` and ``watch`` of one video see the same poses.
 """
 
 from __future__ import annotations
@@ -234,10 +237,13 @@ def usable_times(times: np.ndarray | list[float]) -> bool:
 
 def span_s(times: list[float], fps: float) -> float | None:
     """How long the decoded frames cover (s): first frame's time to the last one's end (one
-    interval at ``fps``); None when the times cannot be trusted."""
-    if not usable_times(times):
-        return None
-    return times[-1] - times[0] + 1.0 / fps
+    interval at ``fps``); None when the times cannot be trusted. A frame left without a time
+    after the frames strayed (:func:`clocked_times`: a repeated time) does not stop the
+    others counting."""
+    if usable_times(times):
+        return times[-1] - times[0] + 1.0 / fps
+    elapsed, strayed = clocked_times(times, fps)
+    return float(np.nanmax(elapsed)) + 1.0 / fps if strayed else None
 
 
 def strays(elapsed_s: Any, index: Any, fps: float) -> Any:
@@ -285,6 +291,18 @@ class FrameClock:
         if self.on_grid or not math.isfinite(elapsed_s):
             return index / self.fps
         return elapsed_s
+
+
+def clocked_times(times: np.ndarray | list[float], fps: float) -> tuple[np.ndarray, bool]:
+    """A file's decoded frame times (s) as :class:`FrameClock` takes them one by one, as
+    ``watch`` does: each frame's time from the first frame's (NaN: none to trust), and
+    whether the frames strayed from the grid (a variable frame rate: the videos
+    :func:`estimate_video` resamples). Once they have strayed, a frame whose time is missing,
+    repeated or earlier than the last one's has none (NaN) and the others keep theirs; before
+    that, such a time means the file has none to trust (all NaN after it, not strayed)."""
+    clock = FrameClock(fps)
+    elapsed = np.asarray([clock.take(i, float(t)) for i, t in enumerate(times)], np.float64)
+    return elapsed, not clock.on_grid
 
 
 def _packet_times(path: str | Path) -> tuple[np.ndarray, float] | None:
@@ -336,7 +354,7 @@ def variable_rate(path: str | Path) -> bool:
     """Whether a video's frame times (:func:`container_frame_times`) are usable and stray from
     the rate it declares: the videos :func:`estimate_video` resamples."""
     times, fps = container_frame_times(path)
-    return usable_times(times) and irregular(times, fps)
+    return clocked_times(times, fps)[1]
 
 
 def older_vfr_extraction(meta: Mapping[str, Any], video: str | Path) -> bool:
@@ -393,6 +411,18 @@ def resample_to_grid(
     w = (t - tau[j]) / (tau[j + 1] - tau[j])
     w = w.reshape((-1,) + (1,) * (values.ndim - 1))
     return blend(values[j], values[j + 1], w), before
+
+
+def resample_timed(
+    elapsed: np.ndarray, values: np.ndarray, fps: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`resample_to_grid` of a file's frames timed by :func:`clocked_times` (strayed):
+    a frame without a time (NaN) is left out, as ``watch`` leaves it out, and the grid is
+    made from the others. Returns (the grid values, the index among all the frames of the
+    frame at or before each grid time)."""
+    timed = np.flatnonzero(np.isfinite(elapsed))
+    grid, before = resample_to_grid(elapsed[timed], values[timed], fps)
+    return grid, timed[before]
 
 
 def check_whole(
@@ -468,8 +498,8 @@ def estimate_video(
     for i, (rgb, t) in enumerate(frames):
         if max_frames is not None and i >= max_frames:
             break
-        times.append(t)
-        pose = est.process(rgb, clock.filter_time(i, clock.take(i, t)))
+        times.append(clock.take(i, t))  # as watch takes it: NaN where it has none to trust
+        pose = est.process(rgb, clock.filter_time(i, times[-1]))
         world.append(pose.world)
         image.append(pose.image)
         person.append(pose.person)
@@ -479,20 +509,23 @@ def estimate_video(
     if not keep_outside:
         outside = outside_frame(image_lm, info.width, info.height)
         positions[outside] = np.nan
-    t_s = np.asarray(times)
+    elapsed = np.asarray(times)
     video_frames = None
     vfr: dict[str, object] | None = None
-    if usable_times(t_s) and irregular(t_s, info.fps):
+    if not clock.on_grid:  # strayed: on the grid as watch's Regrid puts them
+        # a frame that came without a time of its own (missing, repeated or going back)
+        # after the frames strayed is left out, as watch leaves it out
+        timed = np.flatnonzero(np.isfinite(elapsed))
         both = np.concatenate([positions, image_lm], axis=2)
         nobody = np.where(np.asarray(person), 0.0, np.nan)
-        both, video_frames = resample_to_grid(t_s, both, info.fps)
+        both, video_frames = resample_timed(elapsed, both, info.fps)
         positions, image_lm = both[:, :, :3], both[:, :, 3:]
-        person_on_grid = ~np.isnan(resample_to_grid(t_s, nobody, info.fps)[0])
+        person_on_grid = ~np.isnan(resample_timed(elapsed, nobody, info.fps)[0])
         missing = np.flatnonzero(~person_on_grid).tolist()
-        gaps = np.diff(t_s)
+        gaps = np.diff(elapsed[timed])
         vfr = {
             "resampled_to_fps": info.fps,
-            "decoded_frames": int(t_s.size),
+            "decoded_frames": int(elapsed.size),
             "frame_interval_s": {
                 "min": round(float(gaps.min()), 6),
                 "max": round(float(gaps.max()), 6),
@@ -500,6 +533,13 @@ def estimate_video(
             "method": "linear interpolation between the decoded frames around each grid time;"
             " missing in either stays missing",
         }
+        if timed.size < elapsed.size:
+            untimed = np.setdiff1d(np.arange(elapsed.size), timed)
+            vfr["frames_left_out"] = {
+                "frames": untimed.tolist(),
+                "why": "no time of its own after the frames strayed (missing, repeated or"
+                " earlier than the frame before): left out, as watch leaves it out",
+            }
         if announce:
             print(f"note: {vfr_words(path, info.fps, gaps)}", file=sys.stderr)
     else:
