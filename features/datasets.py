@@ -33,6 +33,7 @@ Each :class:`Clip` holds a canonical sequence (33 BlazePose joints) whose metada
 from __future__ import annotations
 
 import csv
+import os
 import re
 import sys
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
@@ -153,20 +154,37 @@ def load_clip(path: str | Path) -> PoseSequence:
     )
 
 
+def source_video(meta: Mapping[str, Any], pose_path: Path) -> Path | None:
+    """The video a pose file was extracted from (its metadata's ``source_video``), where it
+    is, or None. ``extract`` writes the path as it was given, so a relative one is relative
+    to the folder ``extract`` ran in: it is looked up from the current folder, then from the
+    pose file's folder and each folder above it (``extract videos --out poses`` run in a
+    project's folder: poses/lunge/x.npz names videos/lunge/x.mp4), the first found."""
+    video = meta.get("source_video")
+    if not isinstance(video, str) or not video:
+        return None
+    given = Path(video)
+    folders = [] if given.is_absolute() else list(Path(os.path.abspath(pose_path)).parents)
+    for where in [given, *(folder / given for folder in folders)]:
+        try:  # a name the system cannot look up (over 255 bytes) is no video to look at
+            if where.is_file():
+                return where
+        except (OSError, ValueError):
+            return None
+    return None
+
+
 def note_older_extraction(seq: PoseSequence, path: Path) -> None:
     """Say on stderr when a pose file was made from a variable-frame-rate video by an older
     posecbr (:func:`features.pose_estimation.video.older_vfr_extraction`): its poses are not
     what ``extract`` gives now (which extracts it again). Only a file extracted from a video
     (its metadata names the pose model) without today's ``extraction_version`` is looked at,
-    and the video itself only when it is where the file says (``source_video``)."""
+    and the video itself only when it is found where the file says (:func:`source_video`)."""
     meta = seq.metadata
     if "pose_model" not in meta or meta.get("extraction_version") == EXTRACTION_VERSION:
         return  # not from a video, or made by today's extraction
-    video = meta.get("source_video")
-    try:  # a name the system cannot look up (over 255 bytes) is no video to look at
-        have_video = isinstance(video, str) and Path(video).is_file()
-    except (OSError, ValueError):
-        have_video = False
+    video = source_video(meta, path)
+    have_video = video is not None
     if "variable_frame_rate" not in meta and not have_video:
         return  # nothing says it was a variable frame rate, and no video to look at
     try:

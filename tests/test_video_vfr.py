@@ -567,6 +567,42 @@ def test_segment_and_train_note_a_pose_file_of_older_vfr_extraction(
     assert capsys.readouterr().err == ""
 
 
+def test_an_older_pose_file_is_noted_from_any_folder_its_video_named_relative(
+    vfr_mkv: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``extract videos/lunge_vfr.mkv --out poses`` run in a project's folder writes
+    ``source_video`` as given, relative to that folder. A pose file of the oldest code (no
+    version, nothing saying it was resampled) needs the video to be found older: read from
+    the project's folder or from any other, it is noted the same. From another folder the
+    video was looked up there and not found, and the file was read in silence."""
+    import shutil
+
+    from features.datasets import load_clip
+
+    project = tmp_path / "project"
+    (project / "videos").mkdir(parents=True)
+    shutil.copy(vfr_mkv, project / "videos" / "lunge_vfr.mkv")
+    monkeypatch.chdir(project)
+    assert main(["extract", "videos/lunge_vfr.mkv", "--out", "poses"]) == 0
+    pose_file = project / "poses" / "lunge_vfr.npz"
+    assert load_pose(pose_file).metadata["source_video"] == "videos/lunge_vfr.mkv"
+    _as_older(pose_file, "extraction_version", "variable_frame_rate")
+    capsys.readouterr()
+    note = (
+        f"note: {pose_file}: made from a variable-frame-rate video by an older posecbr (its"
+        " frames timed differently): `posecbr extract` of the video makes it again"
+    )
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    for folder in (project, elsewhere, project / "poses"):
+        monkeypatch.chdir(folder)
+        assert load_clip(pose_file).n_frames == 16  # its poses, read as they are
+        assert capsys.readouterr().err.splitlines() == [note], folder
+
+
 def _browser_webm(path: Path, pts_ms: list[int], frames: list[np.ndarray]) -> Path:
     """A WebM as a browser's MediaRecorder writes it: VP8 on a millisecond clock, no frame
     rate stated (FFmpeg, and so OpenCV, then guesses 1000 fps from the clock)."""
