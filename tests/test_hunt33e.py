@@ -373,7 +373,7 @@ def test_compare_prints_a_report_command_that_can_be_pasted(
             "--no-dad", "--peers", "none", "--explain", "0", "--cv", "kfold", "--folds", "2",
             "--out", str(out)]  # fmt: skip
     assert main(argv) == 0
-    last = capsys.readouterr().out.strip().splitlines()[-1]
+    last = capsys.readouterr().err.strip().splitlines()[-1]  # where the files went: stderr
     command = last.split("report: ", 1)[1]
     assert shlex.split(command) == ["posecbr", "report", str(out), "--out",
                                     str(out / "report.html")]  # fmt: skip

@@ -23,10 +23,10 @@ def test_reps_says_where_the_picture_went_escaped(
     folder.mkdir()
     clip = save_pose(standing_clip(30), tmp_path / "clip.npz")
     assert main(["reps", str(clip), "--plot", str(folder / "reps.png")]) == 0
-    out = capsys.readouterr().out
+    err = capsys.readouterr().err  # said on stderr, as every "written to"
     assert (folder / "reps.png").exists()
-    assert "\x1b" not in out and "\x07" not in out
-    assert "picture written to" in out and "set-title\\x1b]0;pwned\\x07" in out
+    assert "\x1b" not in err and "\x07" not in err
+    assert "picture written to" in err and "set-title\\x1b]0;pwned\\x07" in err
 
 
 def test_casebase_upgrade_names_the_database_escaped(

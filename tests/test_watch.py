@@ -779,3 +779,27 @@ def _lunge_h264(
     out.close()
     src.release()
     return video, k
+
+
+def test_watch_says_where_its_video_went(
+    case_base: Path,
+    shared_data: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``watch --out`` wrote its video and said nothing of it, where ``segment --overlay``
+    says "overlay written to ...": it says "video written to ..." now, on stderr (stdout
+    holds only the segments' JSON lines), after the latency line."""
+    monkeypatch.setattr(pose_estimation, "stream_poses", _mocap_stream(shared_data, 120, "end"))
+    out = tmp_path / "watched.mp4"
+    capsys.readouterr()
+    assert (
+        main(["watch", "0", "--db", str(case_base), "--max-frames", "120", "--out", str(out)]) == 0
+    )
+    captured = capsys.readouterr()
+    assert [json.loads(line)["end_frame"] for line in captured.out.splitlines()][-1] == 120
+    lines = captured.err.splitlines()
+    assert lines[-1] == f"video written to {out}"
+    assert lines[-2].startswith("watched 120 frames in ")
+    assert out.stat().st_size > 0

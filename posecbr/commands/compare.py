@@ -413,5 +413,5 @@ def run(args: argparse.Namespace) -> int:
         # the command as it can be pasted into a shell: a folder named with a space quoted
         out, report = shlex.quote(str(args.out)), shlex.quote(str(args.out / "report.html"))
         said = f"results and pictures in {args.out}; report: posecbr report {out} --out {report}"
-        print(shown(said))
+        print(shown(said), file=sys.stderr)  # as every "written to": stdout holds the table
     return 0

@@ -272,9 +272,14 @@ def _write_report(steps: list[Step], results: Path, timeline: Path, report: Path
     dest = check_output(report, inputs=[results, timeline], what="report")
     with tempfile.TemporaryDirectory() as tmp:
         page_path = Path(tmp) / "compare.html"
-        with contextlib.redirect_stdout(io.StringIO()):
-            if main(["report", str(results), "--out", str(page_path)]):
-                raise PosecbrError("the comparison's report could not be written", results)
+        said = io.StringIO()  # its "report written to" names the temporary page: not said
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(said):
+            code = main(["report", str(results), "--out", str(page_path)])
+        for line in said.getvalue().splitlines():  # its notes (a glyph the font lacks), said
+            if not line.startswith("report written to "):
+                print(line, file=sys.stderr)
+        if code:
+            raise PosecbrError("the comparison's report could not be written", results)
         page = page_path.read_text(encoding="utf-8")
     sections = ["<h2>The demo, step by step</h2>",
                 "<p>Each command below is what the demo ran; run it yourself to repeat the "

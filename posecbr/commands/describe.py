@@ -188,6 +188,8 @@ def run(args: argparse.Namespace) -> int:
     )
     if args.plot:
         plot_timeline(tl, args.plot, args.min_confidence, title=args.posefile.name)
+        # on stderr, as every command's "written to": stdout holds only the answer (--json)
+        print(f"timeline written to {shown(args.plot)}", file=sys.stderr)
     if args.json:
         _print_json(args, seq, tl, spool)
         return 0
@@ -198,8 +200,6 @@ def run(args: argparse.Namespace) -> int:
         spool.copy_to(sys.stdout)
     for r in tl.runs:
         print(_run_line(r, tl.layout))
-    if args.plot:
-        print(f"timeline written to {shown(args.plot)}")
     return 0
 
 

@@ -36,5 +36,5 @@ def run(args: argparse.Namespace) -> int:
     dest, failures = write_report(args.results, args.out)
     for line in failures:
         print(shown(line), file=sys.stderr)  # a label's character it names, escaped
-    print(f"report written to {shown(dest)}")
+    print(f"report written to {shown(dest)}", file=sys.stderr)  # as every "written to"
     return 0

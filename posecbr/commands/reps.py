@@ -63,6 +63,8 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.plot is not None:
         _plot(seq, result, args.plot, args.clip.name)
+        # on stderr, as every command's "written to": stdout holds only the answer (--json)
+        print(f"picture written to {shown(args.plot)}", file=sys.stderr)
     if args.json:
         doc = {"clip": str(args.clip), "fps": seq.fps, "frames": seq.n_frames, **result.to_dict()}
         if args.plot is not None:
@@ -71,8 +73,6 @@ def run(args: argparse.Namespace) -> int:
         print()
         return 0
     _print(args.clip, seq.fps, result)
-    if args.plot is not None:
-        print(f"picture written to {shown(args.plot)}")
     return 0
 
 

@@ -37,7 +37,7 @@ from typing import Any
 
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import atomic_path, check_output
-from features.text import counted
+from features.text import counted, shown
 from posecbr.arguments import path_arg
 
 from .segment import JUDGES
@@ -340,6 +340,8 @@ def run(args: argparse.Namespace) -> int:
             if video is not None:
                 check_encoded(video, watcher.drawn, args.out)
             watcher.close()
+        if args.out is not None:  # on stderr, as every "written to": stdout holds the segments
+            print(f"video written to {shown(args.out)}", file=sys.stderr)
     except _NoFrameDrawn:
         pass  # stopped before the first frame: no video, not an empty one
     return 0
