@@ -35,12 +35,14 @@ class Parser(argparse.ArgumentParser):
         """ " (did you mean 'classify'?)" for a mistyped command or option, when one is close."""
         typed: list[str] = []
         known: list[str] = []
-        choice = re.match(r"argument .*: invalid choice: '(.*?)' \(choose from", message)
-        if choice:
-            typed = [choice.group(1)]
+        choice = re.match(r"argument (.*?): invalid choice: '(.*?)' \(choose from", message)
+        if choice:  # a command, an action or an option's value (segment --unknown helt-out)
+            typed = [choice.group(2)]
             for action in self._actions:
-                if isinstance(action, argparse._SubParsersAction):
-                    known = list(action.choices)
+                if action.choices is not None and argparse._get_action_name(action) == (
+                    choice.group(1)
+                ):
+                    known = [str(c) for c in action.choices]
         elif message.startswith("unrecognized arguments: "):
             typed = [a.split("=")[0] for a in message.split(": ", 1)[1].split()]
             typed = [a for a in typed if a.startswith("--")]
@@ -93,11 +95,37 @@ def _name_own_parser(parser: argparse.ArgumentParser) -> None:
                 _name_own_parser(child)
 
 
+def _given_to(
+    parser: argparse.ArgumentParser,
+    argv: list[str],
+    unknown: list[str],
+    deepest: argparse.ArgumentParser,
+) -> tuple[argparse.ArgumentParser, list[str]]:
+    """The parser the first of the ``unknown`` arguments was given to, and those given to
+    it: ``posecbr casebase --bogus list`` gave ``--bogus`` to ``casebase`` (whose words
+    come before its action's), not to ``casebase list``; ``deepest`` (the command or action
+    run) when no level above it was given one. argparse gathers every level's unknown
+    arguments in one list; each level's own words lie between its command and the next
+    command (``posecbr`` and ``casebase`` take no option with a value, so the first word
+    naming a command is the next command)."""
+    while True:
+        sub = next((a for a in parser._actions if isinstance(a, argparse._SubParsersAction)), None)
+        at = next((i for i, word in enumerate(argv) if sub and word in sub.choices), None)
+        if sub is None or at is None:
+            return deepest, unknown
+        own = [word for word in argv[:at] if word in unknown]
+        if own:
+            return parser, own
+        parser, argv = sub.choices[argv[at]], argv[at + 1 :]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args, unknown = parser.parse_known_args(argv)
     own = args.__dict__.pop("_parser", parser)
     if unknown:
+        given = list(sys.argv[1:] if argv is None else argv)
+        own, unknown = _given_to(parser, given, unknown, own)
         own.error(f"unrecognized arguments: {' '.join(unknown)}")
     if not getattr(args, "func", None):
         parser.print_help()
