@@ -667,11 +667,22 @@ def _what_file(where: str) -> str:
             head = f.read(512)
     except OSError:
         return "corrupt or not a database"
-    if head.startswith((b"PK\x03\x04", b"\x93NUMPY")):
+    if head.startswith(b"\x93NUMPY") or _first_zip_member(head).endswith(b".npy"):
         return "a NumPy file, such as a pose file: --db takes the case base file"
+    if head.startswith(b"PK\x03\x04"):  # a .zip, an .xlsx spreadsheet: no arrays in it
+        return "a zip archive, not a pose file: --db takes the case base file"
     if _looks_like_text(head):
         return "a text file, such as a labels CSV: --db takes the case base file"
     return "corrupt or not a database"
+
+
+def _first_zip_member(head: bytes) -> bytes:
+    """The name of the first member of a zip file whose first bytes are ``head``, from its
+    local file header (the name's length at bytes 26-27, the name from byte 30); b"" for
+    what is not a zip. A .npz (a pose file) is a zip of ``<array>.npy`` members."""
+    if not head.startswith(b"PK\x03\x04") or len(head) < 30:
+        return b""
+    return head[30 : 30 + int.from_bytes(head[26:28], "little")]
 
 
 def _looks_like_text(head: bytes) -> bool:
