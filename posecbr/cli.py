@@ -119,14 +119,26 @@ def _given_to(
         parser, argv = sub.choices[argv[at]], argv[at + 1 :]
 
 
+def _belongs(unknown: list[str], command: argparse.ArgumentParser) -> str:
+    """ " (--json is an option of posecbr describe: give it after describe)" when one of the
+    ``unknown`` arguments, given before the command, is an option of the command run."""
+    options = {o for a in command._actions for o in a.option_strings}
+    for word in unknown:
+        if word.split("=")[0] in options:
+            where = command.prog.removeprefix("posecbr ")
+            return f" ({word.split('=')[0]} is an option of {command.prog}: give it after {where})"
+    return ""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args, unknown = parser.parse_known_args(argv)
     own = args.__dict__.pop("_parser", parser)
     if unknown:
         given = list(sys.argv[1:] if argv is None else argv)
-        own, unknown = _given_to(parser, given, unknown, own)
-        own.error(f"unrecognized arguments: {' '.join(unknown)}")
+        deepest = own
+        own, unknown = _given_to(parser, given, unknown, deepest)
+        own.error(f"unrecognized arguments: {' '.join(unknown)}{_belongs(unknown, deepest)}")
     if not getattr(args, "func", None):
         parser.print_help()
         return 2

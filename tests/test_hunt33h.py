@@ -83,6 +83,13 @@ def test_report_says_where_the_page_went_on_stderr(
          " see posecbr casebase list --help"),
         (["--bogus", "reps", "clip.npz"],
          "posecbr: error: unrecognized arguments: --bogus; see posecbr --help"),
+        # before: "posecbr describe: ... --json (did you mean '--json'?)", which it was
+        (["--json", "describe", "clip.npz"],
+         "posecbr: error: unrecognized arguments: --json (--json is an option of posecbr "
+         "describe: give it after describe); see posecbr --help"),
+        (["casebase", "--json", "list", "--db", "cb.sqlite"],
+         "posecbr casebase: error: unrecognized arguments: --json (--json is an option of "
+         "posecbr casebase list: give it after casebase list); see posecbr casebase --help"),
     ],
 )  # fmt: skip
 def test_an_unknown_argument_is_blamed_on_the_command_it_was_given_to(
