@@ -114,11 +114,16 @@ def test_class_folders_and_csv_carry_labels(clip: Path, tmp_path: Path, shared_d
     np.testing.assert_allclose(part.positions, whole.positions[2:7])
 
 
-def test_overlay_has_every_frame(clip: Path, tmp_path: Path) -> None:
+def test_overlay_has_every_frame(
+    clip: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     overlay = tmp_path / "check.mp4"
+    capsys.readouterr()
     assert (
         main(["extract", str(clip), "--out", str(tmp_path / "o"), "--overlay", str(overlay)]) == 0
     )
+    # said where it went, as segment --overlay says it (it was not said)
+    assert capsys.readouterr().err.splitlines()[-1] == f"overlay written to {overlay}"
     cap = cv2.VideoCapture(str(overlay))
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 8
     ok, frame = cap.read()

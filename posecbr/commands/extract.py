@@ -594,6 +594,8 @@ def _run_single(job: Job, options: Options) -> int:
     if status == "failed":
         raise PosecbrError(detail)
     print(f"{status}: {shown(path)} ({shown(detail)})")
+    if status == "done" and job.overlay is not None:  # as segment --overlay says it
+        print(f"overlay written to {shown(job.overlay)}", file=sys.stderr)
     return 0
 
 
