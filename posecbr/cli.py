@@ -8,6 +8,7 @@ command means adding a module; nothing here changes.
 from __future__ import annotations
 
 import argparse
+import ast
 import difflib
 import errno
 import importlib
@@ -35,9 +36,14 @@ class Parser(argparse.ArgumentParser):
         """ " (did you mean 'classify'?)" for a mistyped command or option, when one is close."""
         typed: list[str] = []
         known: list[str] = []
-        choice = re.match(r"argument (.*?): invalid choice: '(.*?)' \(choose from", message)
+        # the value as repr() gives it: in double quotes when it holds a single quote
+        choice = re.match(
+            r"argument (.*?): invalid choice: ('(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\") "
+            r"\(choose from",
+            message,
+        )
         if choice:  # a command, an action or an option's value (segment --unknown helt-out)
-            typed = [choice.group(2)]
+            typed = [str(ast.literal_eval(choice.group(2)))]
             for action in self._actions:
                 if action.choices is not None and argparse._get_action_name(action) == (
                     choice.group(1)

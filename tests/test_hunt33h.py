@@ -108,6 +108,9 @@ def test_an_unknown_argument_is_blamed_on_the_command_it_was_given_to(
         (["watch", "0", "--db", "cb.sqlite", "--unknown", "spread-margn"], "spread-margin"),
         (["casebase", "trim", "--db", "cb.sqlite", "--editor", "rennn"], "renn"),
         (["train", "data", "--db", "cb.sqlite", "--split", "window"], "windows"),
+        # a value holding a quote is said in double quotes: it got no guess
+        (["segment", "rec.npz", "--db", "cb.sqlite", "--unknown", "held'out"], "held-out"),
+        (["clas'sify", "clip.npz"], "classify"),
     ],
 )
 def test_a_mistyped_choice_gets_a_guess(
