@@ -671,9 +671,23 @@ def _what_file(where: str) -> str:
         return "a NumPy file, such as a pose file: --db takes the case base file"
     if head.startswith(b"PK\x03\x04"):  # a .zip, an .xlsx spreadsheet: no arrays in it
         return "a zip archive, not a pose file: --db takes the case base file"
+    if _is_video(head):
+        return "a video file: --db takes the case base file"
+    if head.startswith((b"\x89PNG\r\n\x1a\n", b"\xff\xd8\xff")):
+        return "a PNG or JPEG picture: --db takes the case base file"
     if _looks_like_text(head):
         return "a text file, such as a labels CSV: --db takes the case base file"
     return "corrupt or not a database"
+
+
+def _is_video(head: bytes) -> bool:
+    """Whether a file's first bytes ``head`` are a video's: MP4 or QuickTime (an ``ftyp``
+    box first), AVI (RIFF ... AVI) or Matroska/WebM (its EBML signature)."""
+    return (
+        head[4:8] == b"ftyp"
+        or (head.startswith(b"RIFF") and head[8:12] == b"AVI ")
+        or head.startswith(b"\x1a\x45\xdf\xa3")
+    )
 
 
 def _first_zip_member(head: bytes) -> bytes:

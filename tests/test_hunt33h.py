@@ -157,3 +157,25 @@ def test_db_given_a_zip_says_whether_it_holds_arrays(
             z.writestr("positions.npy.txt", "not an array")
     refused(["classify", str(clip), "--db", str(db)], tmp_path, capsys,
             f"{db.name}: not a readable SQLite database {said}")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("given", "said"),
+    [
+        ("videos/squat/tfjs_pose_squats_pexels4838220.mp4", "a video file"),
+        ("media/vtest.avi", "a video file"),
+        ("media/messi5.jpg", "a PNG or JPEG picture"),
+        ("media/basketball1.png", "a PNG or JPEG picture"),
+    ],
+)
+def test_db_given_a_video_or_picture_says_so(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], given: str, said: str
+) -> None:
+    """`classify cb.sqlite --db video.mp4` (the two swapped; classify reads videos) said
+    "corrupt or not a database", where a pose file or a labels CSV is named for what it is."""
+    clip = good_pose_file(tmp_path / "clip.npz", frames=12)
+    db = tmp_path / Path(given).name
+    db.write_bytes((shared_data / given).read_bytes())
+    refused(["classify", str(clip), "--db", str(db)], tmp_path, capsys,
+            f"{db.name}: not a readable SQLite database",
+            f"({said}: --db takes the case base file)")  # fmt: skip
