@@ -45,7 +45,7 @@ from features.body import no_person, torso_share
 from features.errors import ConfigError, DataError, InputError
 from features.poses import PoseSequence
 from features.progress import progress
-from features.text import counted
+from features.text import counted, did_you_mean
 from features.values import is_number
 
 from .calibration import (
@@ -381,7 +381,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self._check_kinds()
         if self.editor is not None and self.editor not in EDITORS:
             raise ConfigError(
-                f"editor must be None or one of {', '.join(EDITORS)}, got {self.editor!r}",
+                f"editor must be None or one of {', '.join(EDITORS)}, got {self.editor!r}"
+                f"{did_you_mean(str(self.editor), EDITORS)}",
                 "editor",
             )
         if self.summary != "auto" and not isinstance(self.summary, bool | np.bool_):
@@ -391,7 +392,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         if not isinstance(self.mirror, bool | np.bool_) and self.mirror not in ("auto", *SIDES):
             raise ConfigError(
                 f"mirror must be True, False, 'auto', {', '.join(repr(s) for s in SIDES)}; "
-                f"got {self.mirror!r}",
+                f"got {self.mirror!r}{did_you_mean(str(self.mirror), ('auto', *SIDES))}",
                 "mirror",
             )
         if self.phases != "auto" and (
@@ -404,7 +405,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             )
         if self.feature_weights not in ("auto", *WEIGHTINGS):
             raise ConfigError(
-                f"feature_weights must be 'auto', 'fisher' or 'none', got {self.feature_weights!r}",
+                f"feature_weights must be 'auto', 'fisher' or 'none', got {self.feature_weights!r}"
+                f"{did_you_mean(str(self.feature_weights), ('auto', *WEIGHTINGS))}",
                 "feature_weights",
             )
         self._feature_config()  # length, states, phases: FeatureConfig's own checks

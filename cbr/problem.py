@@ -48,6 +48,7 @@ from features.fluents import state_columns
 from features.poses import PoseSequence
 from features.qmp import QMPFeatures
 from features.signals import ANGLE_SIGNALS
+from features.text import did_you_mean
 
 from . import long_clip
 
@@ -127,7 +128,7 @@ class FeatureConfig:
             if self.states not in STATE_GROUPS:
                 raise ConfigError(
                     f"states must be one of {', '.join(STATE_GROUPS)} or a list of state names,"
-                    f" got {self.states!r}",
+                    f" got {self.states!r}{did_you_mean(self.states, STATE_GROUPS)}",
                     "states",
                 )
         else:

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import ConfigError, DataError
+from features.text import did_you_mean
 
 MIRROR_FLAG = "mirror_image"
 _PENALTY_SAMPLE = 2000
@@ -86,7 +87,8 @@ def learn_weights(
     """
     if method not in WEIGHTINGS:
         raise ConfigError(
-            f"feature weighting must be one of {', '.join(WEIGHTINGS)}, got {method!r}",
+            f"feature weighting must be one of {', '.join(WEIGHTINGS)}, got {method!r}"
+            f"{did_you_mean(str(method), WEIGHTINGS)}",
             "feature_weights",
         )
     X = np.asarray(X, dtype=np.float64)

@@ -9,8 +9,10 @@ prints user data through it.
 
 from __future__ import annotations
 
+import difflib
 import re
 import unicodedata
+from collections.abc import Iterable
 
 # C0 and C1 controls and DEL, the Unicode line/paragraph separators, and every format
 # character (bidirectional overrides and isolates, zero-width joiners, the BOM, ...).
@@ -58,3 +60,10 @@ def counted(n: int, noun: str) -> str:
 
 
 __all__ = ["counted", "shown", "size_words"]
+
+
+def did_you_mean(typed: str, known: Iterable[object]) -> str:
+    """``" (did you mean 'euclidean'?)"`` when one of ``known`` is close to ``typed`` (a
+    mistyped name: ``difflib`` ratio 0.75 or more), else ``""``."""
+    close = difflib.get_close_matches(typed, [str(k) for k in known], n=1, cutoff=0.75)
+    return f" (did you mean {close[0]!r}?)" if close else ""

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import ast
-import difflib
 import errno
 import importlib
 import pkgutil
@@ -19,7 +18,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from features.errors import PosecbrError
-from features.text import shown
+from features.text import did_you_mean, shown
 from posecbr import __version__, commands
 
 
@@ -54,9 +53,9 @@ class Parser(argparse.ArgumentParser):
             typed = [a for a in typed if a.startswith("--")]
             known = [o for a in self._actions for o in a.option_strings if o.startswith("--")]
         for word in typed:
-            close = difflib.get_close_matches(word, known, n=1, cutoff=0.75)
-            if close:
-                return f" (did you mean {close[0]!r}?)"
+            guess = did_you_mean(word, known)
+            if guess:
+                return guess
         return ""
 
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from features.errors import ConfigError
+from features.text import did_you_mean
 
 SIMILARITIES = ("euclidean", "dtw", "signature")
 FEATURE_LEVELS = ("fluents", "qmp")
@@ -55,7 +56,11 @@ class CompareSettings:
 
     def _check_choices(self) -> None:
         if self.cv not in CV_SCHEMES:
-            raise ConfigError(f"cv must be one of {', '.join(CV_SCHEMES)}, got {self.cv!r}", "--cv")
+            raise ConfigError(
+                f"cv must be one of {', '.join(CV_SCHEMES)}, got {self.cv!r}"
+                f"{did_you_mean(str(self.cv), CV_SCHEMES)}",
+                "--cv",
+            )
         for flag, given, known, what in (
             ("--similarities", self.similarities, SIMILARITIES, "similarity"),
             ("--features", self.features, FEATURE_LEVELS, "feature level"),
@@ -66,7 +71,9 @@ class CompareSettings:
             for i, name in enumerate(given):
                 if name not in known:
                     raise ConfigError(
-                        f"unknown {what} {name!r} (choose from {', '.join(known)})", flag
+                        f"unknown {what} {name!r} (choose from {', '.join(known)})"
+                        f"{did_you_mean(str(name), known)}",
+                        flag,
                     )
                 if name in given[:i]:  # its rows, pictures and results would be there twice
                     raise ConfigError(f"{what} {name!r} given twice", flag)
@@ -118,7 +125,7 @@ class CompareSettings:
         if bad:
             raise ConfigError(
                 f"unknown case-base parameter(s) {', '.join(bad)} "
-                f"(known: {', '.join(sorted(known))})",
+                f"(known: {', '.join(sorted(known))}){did_you_mean(bad[0], known)}",
                 "--param",
             )
 

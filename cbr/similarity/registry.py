@@ -14,6 +14,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from features.errors import ConfigError
+from features.text import did_you_mean
 
 if TYPE_CHECKING:
     from .base import SimilarityMeasure
@@ -71,7 +72,8 @@ def get_measure(spec: str | SimilarityMeasure | dict[str, Any], **params: Any) -
     cls = _REGISTRY.get(str(spec))
     if cls is None:
         raise ConfigError(
-            f"unknown similarity {spec!r} (known: {', '.join(available_measures())})",
+            f"unknown similarity {spec!r} (known: {', '.join(available_measures())})"
+            f"{did_you_mean(str(spec), available_measures())}",
             "similarity",
         )
     fields = {f.name for f in dataclasses.fields(cls)}

@@ -405,6 +405,9 @@ def run(args: argparse.Namespace) -> int:
         args.out.mkdir(exist_ok=True)
     earlier = _earlier_pictures(args.out) if args.out else []  # before results.json is new
     _write_results(results, outputs)  # the results are safe before any picture is drawn
+    for given, what in ((args.json, "results"), (args.csv, "results table")):
+        if given:  # the files named by --json / --csv, as every command's "written to"
+            print(f"{what} written to {shown(given)}", file=sys.stderr)
     if args.out:
         _draw_pictures(run_, args.out, args.trim)
         _remove_stale(args.out, earlier, results.pictures.files())
