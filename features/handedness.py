@@ -83,13 +83,10 @@ def reflected_evidence(positions: np.ndarray) -> tuple[float, int]:
     return (float(np.median(values)) if values.size else float("nan")), int(values.size)
 
 
-def is_reflected(positions: np.ndarray) -> bool:
-    """Whether canonical positions ``(frames, 33, 3)`` are a reflected (left-handed) body by
-    clear evidence: median cue at most ``-MARGIN`` over at least ``MIN_CUES`` values."""
-    return _clear(*reflected_evidence(positions))
-
-
 def _clear(median: float, n: int) -> bool:
+    """Whether a recording's (median cue, number of cue values) (:func:`reflected_evidence`)
+    is clear evidence of a reflected (left-handed) body: median at most ``-MARGIN`` over at
+    least ``MIN_CUES`` values."""
     return n >= MIN_CUES and median <= -MARGIN
 
 
@@ -99,7 +96,7 @@ def right_handed(
     announce: bool = True,
     reflected_back: Callable[[], np.ndarray] | None = None,
 ) -> PoseSequence:
-    """``seq`` as it is, or, when it is reflected (:func:`is_reflected` of its canonical
+    """``seq`` as it is, or, when it is reflected (:func:`_clear` evidence from its canonical
     positions), with x negated: the metadata's ``x_reflected`` says why, and (``announce``)
     one note line on stderr names the file.
 

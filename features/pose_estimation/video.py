@@ -375,13 +375,6 @@ def older_vfr_extraction(meta: Mapping[str, Any], video: str | Path) -> bool:
     return version is None and variable_rate(video)
 
 
-def irregular(times: np.ndarray, fps: float) -> bool:
-    """Whether frame times (s; usable) stray from ``first + index / fps`` (:func:`strays`):
-    a variable frame rate (or a rate the container misstates)."""
-    tau = times - times[0]
-    return bool(strays(tau, np.arange(tau.size), fps).any())
-
-
 def blend(left: Any, right: Any, w: Any) -> Any:
     """``(1 - w) left + w right``, a missing (NaN) value in either staying missing, except
     that a weight within rounding of 0 or 1 takes that side whole (a time on a frame is that
