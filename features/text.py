@@ -64,6 +64,28 @@ __all__ = ["counted", "shown", "size_words"]
 
 def did_you_mean(typed: str, known: Iterable[object]) -> str:
     """``" (did you mean 'euclidean'?)"`` when one of ``known`` is close to ``typed`` (a
-    mistyped name: ``difflib`` ratio 0.75 or more), else ``""``."""
-    close = difflib.get_close_matches(typed, [str(k) for k in known], n=1, cutoff=0.75)
+    mistyped name: ``difflib`` ratio 0.75 or more, which one wrong, missing, extra or swapped
+    letter in a word of four or more letters reaches), or, failing that, when exactly one of
+    ``known`` is ``typed`` with two neighbouring letters swapped (``dwt`` for ``dtw``: in a
+    word of three letters any one edit leaves the ratio at 0.67, but a swap keeps every
+    letter; a wrong letter, ``cnm`` for ``cnn``, keeps two of three and gets no guess);
+    else ``""``."""
+    names = [str(k) for k in known]
+    close = difflib.get_close_matches(typed, names, n=1, cutoff=0.75)
+    if not close:
+        swapped = [name for name in dict.fromkeys(names) if _one_swap(typed, name)]
+        close = swapped if len(swapped) == 1 else []
     return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _one_swap(typed: str, name: str) -> bool:
+    """Whether ``name`` is ``typed`` with two neighbouring (different) letters swapped."""
+    if len(typed) != len(name):
+        return False
+    differ = [i for i, (a, b) in enumerate(zip(typed, name, strict=True)) if a != b]
+    return (
+        len(differ) == 2
+        and differ[1] == differ[0] + 1
+        and typed[differ[0]] == name[differ[1]]
+        and typed[differ[1]] == name[differ[0]]
+    )
