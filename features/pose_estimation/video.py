@@ -30,7 +30,7 @@ from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeGuard
 
 # FFmpeg prints decoder complaints straight to stderr; a user should see one clear line from
 # posecbr instead. Must be set before OpenCV first opens a video.
@@ -305,19 +305,31 @@ def clocked_times(times: np.ndarray | list[float], fps: float) -> tuple[np.ndarr
     return elapsed, not clock.on_grid
 
 
-def _packet_times(path: str | Path) -> tuple[np.ndarray, float] | None:
+def _packet_times(
+    path: str | Path, window_s: float | None = None, timeout_s: float | None = None
+) -> tuple[np.ndarray, float] | None:
     """The presentation times (s, in order) of a video's packets and the frame rate OpenCV
     states, read without decoding (FFmpeg's raw mode: a few milliseconds where decoding
-    takes a second); None where FFmpeg cannot give the packets."""
+    takes a second); None where FFmpeg cannot give the packets. ``window_s``: only the
+    packets up to the first that lies that long after the earliest (a stream's start, not the
+    whole of it); ``timeout_s``: how long opening it and each read may wait (a stream URL)."""
+    params: list[int] = []
+    if timeout_s is not None:
+        ms = max(1, round(timeout_s * 1000))
+        params = [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, ms, cv2.CAP_PROP_READ_TIMEOUT_MSEC, ms]
     with _quiet_opencv():
-        cap = cv2.VideoCapture(str(path), cv2.CAP_FFMPEG)
+        cap = cv2.VideoCapture(str(path), cv2.CAP_FFMPEG, params)
     try:
         if not (cap.isOpened() and cap.set(cv2.CAP_PROP_FORMAT, -1)):
             return None
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
-        times = []
+        times: list[float] = []
+        earliest = math.inf
         while cap.grab():
             times.append(frame_time_s(cap))
+            earliest = min(earliest, times[-1])  # NaN: stays as it was
+            if window_s is not None and times[-1] - earliest >= window_s:
+                break
     finally:
         cap.release()
     return (np.sort(np.asarray(times)), fps) if times else None
@@ -667,12 +679,24 @@ NONE_SERVED = (
 """Why a file served over the network gave no frame though its container states some."""
 
 
+RATE_WINDOW_S = 10.0
+"""How much of a file served over the network (s of its frames, from the first)
+:func:`served_file_rate` reads ahead for the frames' own rate when the rate it states is a
+clock's ticks (:func:`own_rate`: a browser's WebM): the whole file when it is shorter, as for
+a file on this machine; not the whole stream before the first frame is watched."""
+
+
 def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
-    """The frame rate of a stream URL that is a video file served over the network (OpenCV
-    knows its frame count and rate), None for a live stream (a camera's: no frame count) and
-    for one that cannot be opened (:func:`stream_poses` reports that). ``timeout_s``: how
-    long the server may take to answer; one that says nothing for that long raises
-    DataError (the stream stalled)."""
+    """The frame rate of a stream URL that is a video file served over the network, None for
+    a live stream (a camera's) and for one that cannot be opened (:func:`stream_poses`
+    reports that). A file is one whose frame count OpenCV knows, or, when it knows none (a
+    raw ``.h264`` stream, a browser's WebM without a duration), one an HTTP(S) server gives
+    whole (:func:`_served_whole`). The rate is the one OpenCV states, or, when that is a
+    clock's ticks (above :data:`SUSPECT_FPS`, more than twice the frames' own), the frames'
+    own average rate over their first :data:`RATE_WINDOW_S` seconds (read from the packets,
+    not decoded), as :func:`open_video` takes it for a file here. ``timeout_s``: how long
+    the server may take to answer; one that says nothing for that long raises DataError
+    (the stream stalled)."""
     started = time.perf_counter()
     cap = _open_quietly(url, timeout_s)
     try:
@@ -684,7 +708,71 @@ def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     finally:
         cap.release()
-    return fps if frames and math.isfinite(fps) and 0 < fps <= MAX_VIDEO_FPS else None
+    if not (math.isfinite(fps) and 0 < fps <= MAX_VIDEO_FPS):
+        return None
+    if not frames and not _served_whole(url, timeout_s):
+        return None  # a live stream: it has no end to know
+    if fps > SUSPECT_FPS:
+        got = _packet_times(url, RATE_WINDOW_S, timeout_s)
+        if got is not None:
+            fps = taken_rate(got[0], fps)
+    return fps
+
+
+def _served_whole(url: str, timeout_s: float | None = None) -> bool:
+    """Whether an HTTP(S) URL is a file the server gives whole: it states the file's length
+    (a live stream, a camera's, has none: it goes on) and the file is no text (an HLS or DASH
+    playlist, whose own length says nothing of the stream's, is). False for any other URL and
+    for a server that does not answer within ``timeout_s`` (FFmpeg's 30 s when None)."""
+    import http.client
+    import urllib.request
+    from urllib.parse import urlsplit
+
+    if urlsplit(url).scheme.lower() not in ("http", "https"):
+        return False
+    try:
+        with urllib.request.urlopen(url, timeout=timeout_s or 30.0) as answer:  # noqa: S310
+            length = (answer.headers.get("Content-Length") or "").strip()
+            if answer.status != 200 or not length.isdigit() or int(length) == 0:
+                return False
+            head = answer.read(16)
+    except (OSError, ValueError, http.client.HTTPException):
+        return False
+    return bool(head) and not all(32 <= b < 127 or b in b"\t\r\n" for b in head)
+
+
+def _is_path(source: int | str | Path) -> TypeGuard[str | Path]:
+    """Whether a stream source is a video file's path (not a camera index or a URL)."""
+    return isinstance(source, Path) or (
+        isinstance(source, str) and "://" not in source and not source.isdigit()
+    )
+
+
+def _open_source(
+    source: int | str | Path, fps: float | None, timeout_s: float | None
+) -> tuple[cv2.VideoCapture, float | None, int]:
+    """:func:`stream_poses`'s source opened: the capture, the frame rate it is timed by (None:
+    a live source, the wall clock) and the frame count its container states (0: none; a file
+    served over the network, ``fps`` given, must hold them all, as a file must)."""
+    if _is_path(source):
+        cap, info = open_video(source)
+        return cap, info.fps, info.frames
+    device = source if isinstance(source, int) else str(source)
+    try:
+        cap = _open_quietly(int(device) if str(device).isdigit() else device, timeout_s)
+    except (cv2.error, OverflowError):  # an index too large for OpenCV (a C int)
+        raise DataError("cannot open camera or stream", str(source)) from None
+    if not cap.isOpened():
+        raise DataError("cannot open camera or stream", str(source))
+    if fps is None:
+        return cap, None, 0
+    declared = _frame_count(cap)
+    stated = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+    if declared and math.isfinite(stated) and stated > fps:
+        # a clock's ticks, not a frame rate (served_file_rate): the count OpenCV gives is
+        # the duration at that rate; at the frames' own rate it is this many
+        declared = int(declared * fps / stated)
+    return cap, fps, declared
 
 
 def stream_poses(
@@ -709,24 +797,8 @@ def stream_poses(
     ``read_at``) and its pose estimated; it may wait (a file played at its own rate) and
     returns False to stop the stream there.
     """
-    declared = 0  # the frame count a file's container states (none for a live source)
-    served = False  # a file served over the network
-    if isinstance(source, Path) or (
-        isinstance(source, str) and "://" not in source and not source.isdigit()
-    ):
-        cap, info = open_video(source)
-        fps, declared = info.fps, info.frames
-    else:
-        device = int(source) if isinstance(source, str) and source.isdigit() else source
-        try:
-            cap = _open_quietly(device, timeout_s)
-        except (cv2.error, OverflowError):  # an index too large for OpenCV (a C int)
-            raise DataError("cannot open camera or stream", str(source)) from None
-        if not cap.isOpened():
-            raise DataError("cannot open camera or stream", str(source))
-        if fps is not None:  # a file served over the network: whole, as a file must be
-            declared = _frame_count(cap)
-            served = True
+    cap, fps, declared = _open_source(source, fps, timeout_s)
+    served = fps is not None and not _is_path(source)  # a file served over the network
     est = estimator or PoseEstimator(smoothing=smoothing)
     est.reset()
     start = time.perf_counter()

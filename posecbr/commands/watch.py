@@ -3,11 +3,12 @@
 SOURCE is a webcam index (``0``), a stream URL (``rtsp://...``) or a video file, which is
 played at its own rate, each frame when its presentation time comes (a variable frame rate
 as it was filmed; ``--speed 2`` twice as fast, ``--speed 0`` as fast as it decodes), as is
-a video file served over the network (a URL whose frame count OpenCV knows); a live source
-is timed by the wall clock. Poses come from BlazePose frame by
-frame; the rolling activity label, the repetitions counted so far and the fluents that hold
-now are drawn on the frames (``--out video.mp4`` writes them, headless; ``--show`` opens a
-window where OpenCV has one).
+a video file served over the network (a URL whose frame count OpenCV knows, or an HTTP(S)
+file whose server states its length: a raw ``.h264`` stream, a browser's WebM), at the rate
+the file here would be read at; a live source is timed by the wall clock. Poses come from
+BlazePose frame by frame; the rolling activity label, the repetitions counted so far and the
+fluents that hold now are drawn on the frames (``--out video.mp4`` writes them, headless;
+``--show`` opens a window where OpenCV has one).
 One JSON line per finished segment goes to stdout (``start_s``, ``end_s``, ``start_frame``,
 ``end_frame``, ``label``, null when unknown, ``confidence``, ``repetitions``, ``explanation``,
 ``novelty``, as ``posecbr segment --json`` gives them). At the end the
