@@ -287,9 +287,11 @@ def test_only_a_whole_binary_file_counts_as_served_whole(tmp_path: Path) -> None
 
     (tmp_path / "clip.bin").write_bytes(b"\x00\x00\x00\x01\x67" + bytes(100))
     (tmp_path / "live.m3u8").write_text("#EXTM3U\n#EXT-X-TARGETDURATION:2\n")
+    (tmp_path / "marked.m3u8").write_bytes(b"\xef\xbb\xbf#EXTM3U\n#EXT-X-VERSION:3\n")
     with _serving(tmp_path) as address:
         assert _served_whole(f"{address}/clip.bin", 5.0)
         assert not _served_whole(f"{address}/live.m3u8", 5.0)
+        assert not _served_whole(f"{address}/marked.m3u8", 5.0)
         assert not _served_whole(f"{address}/none.bin", 5.0)
     with _serving(tmp_path, _Unsized) as address:
         assert not _served_whole(f"{address}/clip.bin", 5.0)

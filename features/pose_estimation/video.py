@@ -738,7 +738,8 @@ def _served_whole(url: str, timeout_s: float | None = None) -> bool:
             head = answer.read(16)
     except (OSError, ValueError, http.client.HTTPException):
         return False
-    return bool(head) and not all(32 <= b < 127 or b in b"\t\r\n" for b in head)
+    text = head.removeprefix(b"\xef\xbb\xbf")  # a playlist may start with UTF-8's mark
+    return bool(text) and not all(32 <= b < 127 or b in b"\t\r\n" for b in text)
 
 
 def _is_path(source: int | str | Path) -> TypeGuard[str | Path]:
