@@ -26,6 +26,7 @@ import os
 import re
 import shutil
 import socket
+import sys
 import tempfile
 from collections.abc import Collection, Iterable, Iterator
 from contextlib import contextmanager
@@ -63,10 +64,24 @@ def atomic_path(
         yield tmp
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; outputs are ordinary files
         os.replace(tmp, dest)
+    except BrokenPipeError:  # standard output's reader has gone: not this file's fault
+        raise
     except OSError as exc:
         raise DataError(f"cannot write: {exc.strerror or exc}", dest) from None
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def stdout_gone() -> None:
+    """Standard output's reader has gone (``| head``, a consumer that exited): what is left
+    to print goes nowhere (the file descriptor too, so the interpreter's flush at exit does
+    not fail again)."""
+    devnull = open(os.devnull, "w")  # noqa: SIM115 - kept open to the end of the process
+    try:
+        os.dup2(devnull.fileno(), sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no file descriptor (a captured stream)
+        pass
+    sys.stdout = devnull
 
 
 def _host() -> str:

@@ -13,7 +13,7 @@ from typing import Any
 
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
-from features.fileio import check_output, write_json_atomic
+from features.fileio import check_output, stdout_gone, write_json_atomic
 from features.text import shown
 from posecbr.arguments import check_found, param_value, path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
@@ -350,17 +350,6 @@ def _print_explanations(explained: list[Any]) -> None:
             print(f"  {shown(line)}")
 
 
-def _stdout_gone() -> None:
-    """Standard output's reader has gone: what is left to print goes nowhere (the file
-    descriptor too, so the interpreter's flush at exit does not fail again)."""
-    devnull = open(os.devnull, "w")  # noqa: SIM115 - kept open to the end of the process
-    try:
-        os.dup2(devnull.fileno(), sys.stdout.fileno())
-    except (OSError, ValueError, AttributeError):  # no file descriptor (a captured stream)
-        pass
-    sys.stdout = devnull
-
-
 #: what is compared on recordings labelled over time, said beside the figures
 STRETCHES_NOTE = (
     "each labelled stretch of a recording labelled over time is one clip here, not cut into"
@@ -400,7 +389,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"best: {results.best}; best interpretable (*): {results.best_interpretable}")
         _print_explanations(results.explanations)
     except BrokenPipeError:  # the reader stopped reading (`| head`): the files are still written
-        _stdout_gone()
+        stdout_gone()
     if args.out:
         args.out.mkdir(exist_ok=True)
     earlier = _earlier_pictures(args.out) if args.out else []  # before results.json is new

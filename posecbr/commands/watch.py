@@ -9,16 +9,18 @@ the file here would be read at; a live source is timed by the wall clock. Poses 
 BlazePose frame by frame; the rolling activity label, the repetitions counted so far and the
 fluents that hold now are drawn on the frames (``--out video.mp4`` writes them, headless;
 ``--show`` opens a window where OpenCV has one).
-One JSON line per finished segment goes to stdout (``start_s``, ``end_s``, ``start_frame``,
-``end_frame``, ``label``, null when unknown, ``confidence``, ``repetitions``, ``explanation``,
-``novelty``, as ``posecbr segment --json`` gives them). At the end the
-latency from reading a frame to having its label is printed (median, 95th percentile, worst).
+One JSON line per finished segment goes to stdout, as it finishes (``start_s``, ``end_s``,
+``start_frame``, ``end_frame``, ``label``, null when unknown, ``confidence``, ``unknown``,
+``repetitions``, ``explanation``, ``novelty``, as ``posecbr segment --json`` gives them). At
+the end the latency from reading a frame to having its label is printed on stderr (median,
+95th percentile, worst).
 
-Ctrl-C ends the watch as the end of a file does (the frame in hand is finished, the last
-segment printed, the ``--out`` video written); a second Ctrl-C stops at once, writing
-nothing. A stream that stalls (no frame for ``--stall`` seconds) or a camera or URL that
-stops sending is reported in one line, with a non-zero exit; the ``--out`` video is then not
-written (no half-written file).
+Ctrl-C or SIGTERM (``kill``, a supervisor's stop) ends the watch as the end of a file does
+(the frame in hand is finished, the last segment printed, the ``--out`` video written, exit
+0); a second one stops at once, writing nothing. A reader that closes stdout (``| head -1``)
+ends it too, the ``--out`` video written up to there. A stream that stalls (no frame for
+``--stall`` seconds) or a camera or URL that stops sending is reported in one line, with a
+non-zero exit; the ``--out`` video is then not written (no half-written file).
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import atomic_path, check_output
+from features.fileio import atomic_path, check_output, stdout_gone
 from features.text import counted, shown
 from posecbr.arguments import path_arg
 
@@ -275,13 +277,19 @@ def frames_in_background(
         reader.close()
 
 
+#: the signals that end a watch as the end of the stream does: Ctrl-C, and the polite stop
+#: a supervisor sends (systemd, ``docker stop``, ``kill PID``, a program's
+#: ``Popen.terminate()``)
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
 @contextmanager
 def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[threading.Event]:
-    """Ctrl-C (SIGINT) sets the event instead of raising: the watch ends after the frame in
-    hand, as at the end of a file; a second Ctrl-C raises KeyboardInterrupt at once. ``also``
-    is set with it (a :class:`Pacer`'s stop: a file held back until a frame's time, however
-    far off, ends there). Outside the main thread (where no signal handler can be set) the
-    event is never set."""
+    """Ctrl-C (SIGINT) or SIGTERM sets the event instead of raising: the watch ends after
+    the frame in hand, as at the end of a file; a second one raises KeyboardInterrupt at
+    once. ``also`` is set with it (a :class:`Pacer`'s stop: a file held back until a frame's
+    time, however far off, ends there). Outside the main thread (where no signal handler can
+    be set) the event is never set."""
     stopped = threading.Event()
     if threading.current_thread() is not threading.main_thread():
         yield stopped
@@ -294,11 +302,12 @@ def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[threading
         if also is not None:
             also.set()
 
-    previous = signal.signal(signal.SIGINT, interrupted)
+    previous = {signum: signal.signal(signum, interrupted) for signum in STOP_SIGNALS}
     try:
         yield stopped
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -375,6 +384,7 @@ class Watcher:
         self.video: Path | None = None  # where the drawn frames go (a temporary file)
         self.drawn = 0  # frames written to it
         self.emitted = 0  # segments printed
+        self.stdout_gone = False  # the reader of the printed segments has gone: stop
         self.latency: list[float] = []
         self.n = 0
         self.started = time.perf_counter()
@@ -406,7 +416,7 @@ class Watcher:
 
         waiting: list[Any] = []  # a live source's first second: to measure its frame rate
         for frame in frames:
-            if stop.is_set():
+            if stop.is_set() or self.stdout_gone:
                 break  # the user stopped watching: finish what was seen
             if self.live is None:
                 if self.fps is None:
@@ -419,6 +429,8 @@ class Watcher:
                 for early in waiting[:-1]:
                     self._take(early)
             self._take(frame)
+        if self.stdout_gone:
+            return
         if self.n == 0 and not stop.is_set():
             raise DataError("the stream gave no frame", self.args.source)
         if not is_file and self.args.max_frames is None and not stop.is_set():
@@ -438,8 +450,19 @@ class Watcher:
             self.latency.append(time.perf_counter() - frame.read_at)
 
     def _emit(self, segment: Any) -> None:
-        print(json.dumps(segment.to_dict(self.fps)), flush=True)
         self.emitted += 1
+        if self.stdout_gone:
+            return
+        try:
+            print(json.dumps(segment.to_dict(self.fps)), flush=True)
+        except BrokenPipeError:  # the program reading the lines has closed them or exited
+            stdout_gone()
+            self.stdout_gone = True
+            print(
+                f"note: {shown(self.args.source)}: standard output was closed by its reader:"
+                " the watch ends here",
+                file=sys.stderr,
+            )
 
     def _draw(self, frame: Any) -> None:
         if self.args.out is None and not self.args.show:

@@ -1,0 +1,119 @@
+"""What hunt 34f found integrating ``posecbr watch`` into another program (a robot's
+supervisor reading its JSON lines through a pipe): a SIGTERM killed the watch with nothing
+said, no last segment, no video and its hidden temporary left behind; a reader closing the
+pipe made it exit 1 blaming the ``--out`` video ("cannot write: Broken pipe") and keep no
+video.
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from features.errors import DataError
+from features.fileio import atomic_path
+from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
+
+SQUATS = ("videos", "squat", "tfjs_pose_squats_pexels4838220.mp4")  # 65 frames at 5 fps
+
+
+def _watch(argv: list[str]) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "posecbr", "watch", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def _frames(video: Path) -> int:
+    """The frames a video decodes to, counted one by one."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(video))
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    cap.release()
+    return n
+
+
+def _watched(stderr: str) -> int:
+    """N of the final report's "watched N frames"."""
+    return int(stderr.split("watched ")[1].split(" frame")[0])
+
+
+def test_sigterm_ends_a_watch_as_ctrl_c_does(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    tmp_path: Path,
+) -> None:
+    """A real process watching the squat video at its own rate (13 s), sent SIGTERM (what
+    ``kill``, systemd, ``docker stop`` and ``Popen.terminate()`` send) six seconds after it
+    starts drawing: it ends as at Ctrl-C, the segment in progress printed, the latency
+    report, the --out video with every frame watched, exit 0. (It was killed: status -15,
+    nothing printed, no video, and its 0600 temporary ``.out.mp4.pid...mp4`` left.)"""
+    video = shared_data.joinpath(*SQUATS)
+    out = tmp_path / "out.mp4"
+    run = _watch([str(video), "--db", str(case_base), "--out", str(out)])
+    deadline = time.monotonic() + 120
+    while not any(tmp_path.iterdir()) and time.monotonic() < deadline:
+        time.sleep(0.1)  # the first frame drawn opens the (temporary) video
+    time.sleep(6.0)
+    run.send_signal(signal.SIGTERM)
+    stdout, stderr = run.communicate(timeout=120)
+    assert run.returncode == 0, stderr
+    assert "latency frame to label" in stderr and "Traceback" not in stderr, stderr
+    watched = _watched(stderr)
+    assert 0 < watched < 65, stderr
+    lines = [json.loads(line) for line in stdout.splitlines()]
+    assert lines and lines[0]["start_frame"] == 0 and lines[-1]["end_frame"] == watched
+    assert [p.name for p in tmp_path.iterdir()] == ["out.mp4"]  # no temporary left
+    assert _frames(out) == watched
+
+
+def test_a_reader_that_closes_the_pipe_ends_the_watch_and_keeps_the_video(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    tmp_path: Path,
+) -> None:
+    """A program reading watch's lines through a pipe takes the first and closes it (as
+    ``| head -1`` does): the watch ends there as at Ctrl-C, saying so in one note, the
+    latency report and the --out video of the frames watched, exit 0. (The next line raised
+    BrokenPipeError inside the video's atomic write, which blamed the video: "posecbr
+    watch: error: out.mp4: cannot write: Broken pipe", exit 1, no video.)"""
+    video = shared_data.joinpath(*SQUATS)
+    out = tmp_path / "out.mp4"
+    run = _watch([str(video), "--db", str(case_base), "--out", str(out), "--speed", "0"])
+    assert run.stdout is not None and run.stderr is not None
+    first = json.loads(run.stdout.readline())
+    assert first["start_frame"] == 0
+    run.stdout.close()
+    stderr = run.stderr.read()
+    assert run.wait(timeout=120) == 0, stderr
+    assert "Traceback" not in stderr and "BrokenPipe" not in stderr, stderr
+    assert f"note: {video}: standard output was closed by its reader" in stderr, stderr
+    assert "latency frame to label" in stderr, stderr
+    assert [p.name for p in tmp_path.iterdir()] == ["out.mp4"]
+    assert _frames(out) == _watched(stderr) >= first["end_frame"]
+
+
+def test_a_broken_pipe_inside_an_atomic_write_is_not_the_files_fault(tmp_path: Path) -> None:
+    """Standard output's reader gone while a file is being written: the BrokenPipeError
+    goes on as it is (the command ends quietly on it) instead of a DataError naming the
+    file ("cannot write: Broken pipe"); the file is not written, no temporary is left."""
+    dest = tmp_path / "out.json"
+    with pytest.raises(BrokenPipeError), atomic_path(dest) as tmp:
+        tmp.write_text("{}")
+        raise BrokenPipeError(32, "Broken pipe")
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(DataError, match="cannot write: No space left on device"):
+        with atomic_path(dest) as tmp:
+            raise OSError(28, "No space left on device")
+    assert list(tmp_path.iterdir()) == []
