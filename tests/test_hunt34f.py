@@ -117,3 +117,54 @@ def test_a_broken_pipe_inside_an_atomic_write_is_not_the_files_fault(tmp_path: P
         with atomic_path(dest) as tmp:
             raise OSError(28, "No space left on device")
     assert list(tmp_path.iterdir()) == []
+
+
+def _readme_block(first: str) -> str:
+    """The README's ```python block holding the line ``first``, as written."""
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    at = text.index(first)
+    start = text.rindex("```python\n", 0, at) + len("```python\n")
+    return text[start : text.index("```", at)]
+
+
+def test_the_readme_python_example_segments_and_watches(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    tmp_path: Path,
+) -> None:
+    """The README showed no way to segment or watch from Python (only the commands): its
+    example, run as written in a folder holding the files it names (the case base, CMU
+    13_31 as a pose file, a video), prints segment's segments of 13_31 (3017 frames at
+    120 fps) and watch's lines of the video (65 frames at 5 fps), each strict JSON, one
+    after the other without a gap."""
+    import shutil
+
+    from features.poses import save_pose
+    from features.readers.asfamc import read_asf_amc
+
+    shutil.copy(case_base, tmp_path / "cmu.sqlite")
+    (tmp_path / "cmu").mkdir()
+    seq = read_asf_amc(
+        shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
+        shared_data / "cmu-mocap6" / "amc" / "13_31.amc",
+    )
+    save_pose(seq, tmp_path / "cmu" / "13_31.npz")
+    (tmp_path / "workout").mkdir()
+    shutil.copy(shared_data.joinpath(*SQUATS), tmp_path / "workout" / "workout.mp4")
+    code = _readme_block("from cbr.live import LiveSegmenter")
+    run = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert run.returncode == 0, run.stderr
+
+    def strict(word: str) -> None:
+        raise ValueError(word)
+
+    lines = [json.loads(line, parse_constant=strict) for line in run.stdout.splitlines()]
+    restart = next(i for i, s in enumerate(lines) if i and s["start_frame"] == 0)
+    for part, frames, fps in ((lines[:restart], 3017, 120.0), (lines[restart:], 65, 5.0)):
+        assert [s["start_frame"] for s in part] == [0] + [s["end_frame"] for s in part[:-1]]
+        assert part[-1]["end_frame"] == frames
+        assert part[-1]["end_s"] == round(frames / fps, 3)
+        assert all(s["label"] is None or isinstance(s["label"], str) for s in part)
+    assert "repetition_frames" in lines[0] and "repetition_frames" not in lines[-1]
