@@ -41,6 +41,7 @@ from scipy.stats import rankdata
 from casebase_store import CaseBaseInfo, StoreTransaction
 from features.body import MIRRORED
 from features.progress import progress
+from features.text import percent
 
 from .casebase import CaseBase, frame_array
 from .retrieve import retrieve
@@ -77,7 +78,7 @@ class MaintenanceReport:
     def summary(self) -> str:
         text = (
             f"{self.method}: {self.size_before} -> {self.size_after} cases, accuracy "
-            f"{self.accuracy_before:.3f} -> {self.accuracy_after:.3f}"
+            f"{percent(self.accuracy_before)} -> {percent(self.accuracy_after)}"
         )
         if self.measured:
             text += f" ({self.measured})"

@@ -58,6 +58,7 @@ from typing import Any, Protocol, TypeVar
 import numpy as np
 
 from features.errors import ConfigError, DataError
+from features.text import percent
 
 from .casebase import CaseBase, frame_array, overlapping
 from .novelty import NoveltyCalibration
@@ -411,7 +412,7 @@ class Margin(Calibrated):
         return (
             f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
             f" as the next ({second}); a known activity comes nearer than {self.threshold:.2f}"
-            f" (in {1.0 - self.false_unknown:.0%} of the case base's held-out cases)"
+            f" (in {percent(1.0 - self.false_unknown, 0)} of the case base's held-out cases)"
         )
 
 
@@ -883,7 +884,7 @@ class ActivityMargin(Calibrated):
         return (
             f"like no stored activity: the nearest ({first}) is {margin_of(nearest):.2f} as far"
             f" as the next ({second}); a known {first} comes nearer than"
-            f" {self.threshold(nearest):.2f} (in {1.0 - self.rate:.0%} of the case"
+            f" {self.threshold(nearest):.2f} (in {percent(1.0 - self.rate, 0)} of the case"
             " base's held-out cases)"
         )
 
@@ -1031,7 +1032,7 @@ class SpreadMargin(ActivityMargin):
             f" as the next ({second}) and {float(np.min(nearest)) / self.spreads[a]:.1f}x as far"
             f" as a known {first} usually lies; together {self.ratio(nearest):.2f}, where a"
             f" known {first} stays below {self.threshold(nearest):.2f} (in"
-            f" {1.0 - self.rate:.0%} of the case base's held-out cases)"
+            f" {percent(1.0 - self.rate, 0)} of the case base's held-out cases)"
         )
 
 

@@ -59,7 +59,17 @@ def counted(n: int, noun: str) -> str:
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
-__all__ = ["counted", "shown", "size_words"]
+def percent(share: float | None, digits: int = 1) -> str:
+    """A share, rate or accuracy (a fraction 0-1) as every command prints it for people: a
+    percentage with its sign, a space before it, ``percent(0.75)`` is ``"75.0 %"``,
+    ``percent(0.02, 0)`` ``"2 %"``; one not known (None or NaN) is ``"n/a"``. Confidences
+    are printed as they are (0-1, labelled "confidence"); ``--json`` holds fractions."""
+    if share is None or share != share:
+        return "n/a"
+    return f"{100 * share:.{digits}f} %"
+
+
+__all__ = ["counted", "did_you_mean", "percent", "shown", "size_words"]
 
 
 def did_you_mean(typed: str, known: Iterable[object]) -> str:

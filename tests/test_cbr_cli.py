@@ -50,7 +50,7 @@ def test_train_classify_feedback_export_trim(
 
     code, out, err = _cli(capsys, "classify", str(test), "--db", db)
     assert code == 0, err
-    assert "accuracy: 1.000 (6/6 labelled clips)" in out
+    assert "accuracy: 100.0 % (6/6 labelled clips)" in out
     assert "\n  Why: " in out and "\n  To be " in out
     assert "6 clips: 6 classified; 0 unlike the stored cases." in out
     code, out, _ = _cli(capsys, "classify", str(test), "--db", db, "--json", "-k", "3")

@@ -69,10 +69,12 @@ def test_four_lines_per_clip_and_a_summary(
     ends = [*heads[1:], len(body.splitlines())]
     assert all(b - a <= 4 for a, b in zip(heads, ends, strict=True))
     assert summary.startswith("4 clips: 4 classified; 0 unlike the stored cases.")
-    accuracy = re.search(r"accuracy: ([\d.]+) \((\d+)/4 labelled clips\)", summary)
-    assert accuracy is not None
+    # a percentage, as compare's table gives it (it was a fraction, "0.750")
+    accuracy = re.search(r"accuracy: (\d+\.\d) % \((\d+)/4 labelled clips\)", summary)
+    assert accuracy is not None, summary
     right = out.count("  [right]")
     assert int(accuracy.group(2)) == right
+    assert accuracy.group(1) == {0: "0.0", 1: "25.0", 2: "50.0", 3: "75.0", 4: "100.0"}[right]
     assert "recall per class: deep squat " in summary and "; shallow squat " in summary
     assert summary.count("\nwrong: ") == 4 - right
 

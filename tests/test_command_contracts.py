@@ -200,7 +200,7 @@ def test_dad_with_no_activity_observable_is_not_enough_data(
     # with the legs there the same ADD judges the clip: the knee stays still
     whole = save_pose(standing_clip(90), tmp_path / "whole.npz")
     assert main(["dad", str(whole), "--add", str(add)]) == 0
-    assert "best match: legs still (100% of its QMPs in order)" in capsys.readouterr().out
+    assert "best match: legs still (100 % of its QMPs in order)" in capsys.readouterr().out
 
 
 def test_dad_names_no_best_match_when_nothing_was_met(
@@ -211,7 +211,7 @@ def test_dad_names_no_best_match_when_nothing_was_met(
     has half its QMPs' weight observable without the hips, the clip is not judged at all."""
     clip = _upper_body_only(tmp_path / "upper.npz")
     capsys.readouterr()
-    why = "not enough data: no activity has 50% of its QMPs' weight observable"
+    why = "not enough data: no activity has 50 % of its QMPs' weight observable"
     line = refused(["dad", str(clip)], tmp_path, capsys, f"{clip}: {why}")
     assert "nan" not in line and "best match" not in line
 

@@ -107,9 +107,9 @@ def test_a_best_match_tied_with_others_says_so() -> None:
     args = argparse.Namespace(posefile=Path("x.npz"), top=1)
     lines = list(_text_lines(args, result, DADConfig()))
     assert lines[1] == (
-        "best match: a words (100% of its QMPs in order; tied with b words, c words)"
+        "best match: a words (100 % of its QMPs in order; tied with b words, c words)"
     )
     alone = DADResult("x.npz", "ok", "", 30.0, 10.0, ((0.0, 4.0),), ((),), acts[2:])
     assert list(_text_lines(args, alone, DADConfig()))[1] == (
-        "best match: c words (100% of its QMPs in order)"
+        "best match: c words (100 % of its QMPs in order)"
     )

@@ -42,9 +42,9 @@ def test_compare_table_keeps_a_marked_long_name_in_its_column(
     figures = re.compile(r"^ *\d+\.\d \[ *\d+\.\d, +\d+\.\d\] *$")
     # every column starts where its header does: the name column 23 wide, then a space
     assert row[:24] == "cbr fluents/euclidean * "
-    assert head.index("accuracy [95% CI]") == 24
+    assert head.index("accuracy % [95 % CI]") == 24
     assert figures.match(row[24:46]) and row[46] == " "
-    assert head.index("macro-F1 [95% CI]") == 47
+    assert head.index("macro-F1 % [95 % CI]") == 47
     assert figures.match(row[47:69]) and row[69] == " "
     assert len(rule) == len(head)
     assert row.endswith("best") and len(row) == len(head)

@@ -169,7 +169,7 @@ def test_dad_explanation_in_compare_gives_the_score_as_dad_does() -> None:
     # says "78% of its QMPs in order"
     still = to_sequence(*[standing()] * 90, fps=30.0)
     squat = next(a for a in detect(still).activities if a.activity == "squat")
-    share = f"{squat.score:.0%} of its QMPs in order"
+    share = f"{100 * squat.score:.0f} % of its QMPs in order"
     assert squat.in_words().startswith(f"squat ({share}); met: ")
 
 

@@ -266,7 +266,7 @@ def test_activity_margin_chooses_its_weight_by_hand() -> None:
     judge = ActivityMargin.of(_one_wrongly_named())
     assert (judge.rate, judge.prior, judge.false_unknown) == (FALSE_UNKNOWN, math.inf, 0.05)
     np.testing.assert_allclose(judge.thresholds, [3 / 8] * 3)
-    assert "(in 95% of the case base's held-out cases)" in judge.describe(
+    assert "(in 95 % of the case base's held-out cases)" in judge.describe(
         np.array([3.6, 10.0, 20.0]), ["a", "b", "c"]
     )
 

@@ -27,6 +27,7 @@ from features.fluents import state_signals
 from features.poses import PoseSequence
 from features.qmp import QMPConfig, fit_signals, sliding_windows
 from features.qmp.add import ADD, Activity, CriteriaResult, evaluate_criteria, load_add
+from features.text import percent
 from features.values import is_number
 
 from .matching import ordered_match
@@ -248,7 +249,7 @@ def detect_signals(
         return _unjudged(source, fps, duration, db, why, spans, detected)
     if not any(np.isfinite(s.score) for s in scores):  # each seen too little to judge
         why = (
-            f"no activity has {share:.0%} of its QMPs' weight observable (joints missing, "
+            f"no activity has {percent(share, 0)} of its QMPs' weight observable (joints missing, "
             "or gaps too long)"
         )
         return _unjudged(source, fps, duration, db, why, spans, detected)

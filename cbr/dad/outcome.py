@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from features.text import percent
+
 NOT_ENOUGH_DATA = "not enough data"
 
 
@@ -55,7 +57,7 @@ class ActivityScore:
     def in_words(self) -> str:
         """Score, QMPs met and not met (with the first reason) in one line."""
         score = (
-            f"{self.score:.0%} of its QMPs in order"
+            f"{percent(self.score, 0)} of its QMPs in order"
             if np.isfinite(self.score)
             else "no observable QMP"
             if self.observable_weight == 0

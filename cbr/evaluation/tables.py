@@ -38,7 +38,7 @@ def format_table(results: CompareResults) -> str:
     # the method column holds the longest name with its " *" ("cbr fluents/euclidean *": 23)
     width = max([22, *(len(m.name) + 2 for m in results.methods)])
     head = (
-        f"{'method':<{width}} {'accuracy [95% CI]':<22} {'macro-F1 [95% CI]':<22} "
+        f"{'method':<{width}} {'accuracy % [95 % CI]':<22} {'macro-F1 % [95 % CI]':<22} "
         f"{'fit s':>8} {'ms/clip':>8} {'cases':>7} {'McNemar p':>10}"
     )
     lines = [head, "-" * len(head)]

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
 from features.fileio import atomic_path, check_lookup, check_output
-from features.text import counted, shown
+from features.text import counted, percent, shown
 from posecbr.arguments import path_arg
 
 if TYPE_CHECKING:
@@ -268,8 +268,8 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
         f, c = u.get("features"), u.get("combined")
         feats = (
             f", or its summary features (outside the cases' ranges, far from every training "
-            f"clip) less usual than {1 - c['threshold']:.1%} of held-out clips' (one statistic "
-            f"of all the scores: {c['budget']:.0%} of held-out clips flagged)"
+            f"clip) less usual than {percent(1 - c['threshold'])} of held-out clips' (one "
+            f"statistic of all the scores: {percent(c['budget'], 0)} of held-out clips flagged)"
             if f and c
             else f", or its summary features outside the cases' ranges beyond "
             f"{f['unlike_ratio']:.2f}x what held-out clips of its answer show"
@@ -278,7 +278,8 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
         )
         print(
             f"  unlike the stored cases beyond {u['unlike_ratio']:.2f}x the usual held-out "
-            f"distance ({u['quantile']:.1%} of {u['basis']} training {pieces} lie within){feats}"
+            f"distance ({percent(u['quantile'])} of {u['basis']} training {pieces} lie within)"
+            f"{feats}"
             f"{rule}{since}"
         )
     if m.get("unknown_judges"):
@@ -311,7 +312,7 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
         )
         print(
             f"  confidence: {score} calibrated on {c['n']} {c['basis']} training "
-            f"{pieces} (their accuracy {c['accuracy']:.3f}"
+            f"{pieces} (their accuracy {percent(c['accuracy'])}"
             f"{f'; {SINCE}' if changed else ''})"
         )
 

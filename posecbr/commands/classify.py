@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
-from features.text import counted
+from features.text import counted, percent
 from posecbr.arguments import path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
@@ -409,7 +409,8 @@ def _print_summary(s: dict[str, Any], target: str, results: list[Any]) -> None:
         print(f", {len(s['unclassifiable'])} unclassifiable", end="")
     print(f"; {len(s['unlike_cases'])} unlike the stored cases.")
     if s.get("accuracy") is not None:
-        print(f"accuracy: {s['accuracy']:.3f} ({s['right']}/{s['labelled']} labelled clips)")
+        accuracy = percent(s["accuracy"])  # as compare's table: a percentage (--json: 0-1)
+        print(f"accuracy: {accuracy} ({s['right']}/{s['labelled']} labelled clips)")
         recall = "; ".join(
             f"{said(lab)} {v['right']}/{v['clips']}" for lab, v in s["recall"].items()
         )

@@ -15,7 +15,7 @@ from collections.abc import Iterator
 from typing import Any
 
 from features.errors import PosecbrError
-from features.text import counted, shown
+from features.text import counted, percent, shown
 from posecbr.arguments import path_arg
 
 MAX_SECONDS = 3600.0  # a window of an hour is no single movement
@@ -97,13 +97,14 @@ def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[
         also = f"; tied with {', '.join(tied)}" if tied else ""
         unseen = best.total_weight - best.observable_weight
         seen = f"; {unseen} of its {best.total_weight} weight not observable" if unseen > 0 else ""
-        yield f"best match: {best.words} ({best.score:.0%} of its QMPs in order{seen}{also})"
+        share = percent(best.score, 0)
+        yield f"best match: {best.words} ({share} of its QMPs in order{seen}{also})"
     else:
         yield "best match: none (no activity has any of its QMPs met in order)"
     yield ""
     yield "ranking:"
     for i, act in enumerate(result.activities, 1):
-        score = f"{act.score:4.0%}" if act.score == act.score else "  - "
+        score = f"{percent(act.score, 0):>5}" if act.score == act.score else "   - "
         yield f"  {i:2d}. {score}  {act.words}  [{', '.join(act.labels)}]"
     detail = result.activities if args.top == 0 else result.activities[: args.top]
     mark = {"met": "+", "not met": "-", "out of order": "~", "not observable": "?"}

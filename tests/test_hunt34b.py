@@ -1,0 +1,113 @@
+"""The units every command prints (hunt 34b): an accuracy, share or rate is a percentage for
+people ("75.0 %", as `compare`'s table and the explanations give it), a fraction 0-1 in
+``--json``; a confidence stays a number 0-1 labelled "confidence". Before, `classify` said
+"accuracy: 0.750", `casebase info` "their accuracy 0.907" beside "94.5%", `casebase trim`
+"accuracy 1.000 -> 0.875", DAD "78%" without the space every other percentage has."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+
+def test_percent_is_one_way_of_writing_a_share() -> None:
+    from features.text import percent
+
+    assert percent(3 / 4) == "75.0 %"
+    assert percent(1.0) == "100.0 %"
+    assert percent(0.02, 0) == "2 %"
+    assert percent(1 - 0.055) == "94.5 %"
+    assert percent(None) == "n/a" and percent(math.nan) == "n/a"
+
+
+def test_classify_summary_gives_the_accuracy_as_a_percentage(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """3 of 4 labelled clips right: 75.0 %, as compare's table would say (it said 0.750)."""
+    from posecbr.commands.classify import _print_summary
+
+    summary: dict[str, Any] = {
+        "target": "label",
+        "clips": 4,
+        "classified": 4,
+        "labelled": 4,
+        "right": 3,
+        "accuracy": 0.75,
+        "expected_accuracy": 0.8125,
+        "recall": {"a": {"right": 2, "clips": 2}, "b": {"right": 1, "clips": 2}},
+        "wrong": [{"clip": "d.npz", "label": "a", "true_label": "b"}],
+        "unlike_cases": [],
+        "unclassifiable": [],
+    }
+    _print_summary(summary, "label", [])
+    out = capsys.readouterr().out
+    assert "accuracy: 75.0 % (3/4 labelled clips)" in out
+    assert "mean confidence: 0.812" in out  # a confidence: 0-1, labelled so
+    assert "0.750" not in out
+
+
+def test_casebase_info_gives_every_share_as_a_percentage(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The calibration's accuracy 0.9 (36 of 40 held-out training clips) read "their
+    accuracy 0.900" two lines below "99.5% of ... lie within": now 90.0 % and 99.5 %."""
+    from posecbr.commands.casebase import _print_model
+
+    model = {
+        "unlike_cases": {
+            "unlike_ratio": 1.72,
+            "quantile": 0.995,
+            "basis": "leave-one-subject-out",
+            "features": {"unlike_ratio": 1.0},
+            "combined": {"threshold": 0.055, "budget": 0.02},
+        },
+        "confidence": {
+            "neighbours": 10,
+            "temperature": 0.08,
+            "n": 40,
+            "basis": "nested leave-one-subject-out",
+            "accuracy": 36 / 40,
+        },
+    }
+    _print_model(model, 3)
+    out = capsys.readouterr().out
+    assert "(99.5 % of leave-one-subject-out training clips lie within)" in out
+    assert "less usual than 94.5 % of held-out clips'" in out
+    assert "2 % of held-out clips flagged" in out
+    assert "training clips (their accuracy 90.0 %)" in out
+
+
+def test_trim_gives_the_accuracies_as_percentages() -> None:
+    """18 of 20 cases right before, 7 of 8 after: "accuracy 90.0 % -> 87.5 %"."""
+    from cbr.maintenance import MaintenanceReport
+
+    report = MaintenanceReport("ICF", 20, 8, 18 / 20, 7 / 8, np.arange(8), None)  # type: ignore[arg-type]
+    assert report.summary().startswith("ICF: 20 -> 8 cases, accuracy 90.0 % -> 87.5 %")
+
+
+def test_dad_ranking_writes_its_percentages_as_every_command_does() -> None:
+    """2 of 3 weight in order is 67 %, with the space the other commands' percentages have
+    (it printed " 67%"); an activity too little observed to score keeps its dash."""
+    from cbr.dad import DADConfig
+    from cbr.dad.outcome import ActivityScore, DADResult
+    from posecbr.commands.dad import _text_lines
+
+    acts = (
+        ActivityScore("a", "a words", ("a",), 1.0, 3, 3, ()),
+        ActivityScore("d", "d words", ("d",), 2 / 3, 3, 3, ()),
+        ActivityScore("e", "e words", ("e",), math.nan, 1, 3, ()),
+    )
+    result = DADResult("x.npz", "ok", "", 30.0, 10.0, ((0.0, 4.0),), ((),), acts)
+    args = argparse.Namespace(posefile=Path("x.npz"), top=1)
+    lines = list(_text_lines(args, result, DADConfig()))
+    assert lines[1] == "best match: a words (100 % of its QMPs in order)"
+    assert "   1. 100 %  a words  [a]" in lines
+    assert "   2.  67 %  d words  [d]" in lines
+    assert "   3.    -   e words  [e]" in lines
+    assert acts[1].in_words().startswith("d words (67 % of its QMPs in order)")
+
