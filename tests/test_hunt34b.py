@@ -111,3 +111,22 @@ def test_dad_ranking_writes_its_percentages_as_every_command_does() -> None:
     assert "   3.    -   e words  [e]" in lines
     assert acts[1].in_words().startswith("d words (67 % of its QMPs in order)")
 
+
+def test_dad_and_describe_name_the_clip_clip_as_classify_and_reps_do(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`classify` and `reps` name the clip they read `clip`; `dad` and `describe` said only
+    `source`. Both now say `clip` too, keeping `source`; every document strict JSON."""
+    from features.poses import save_pose
+    from posecbr.cli import main
+    from tests.moves import clip
+    from tests.test_json_hunt import strict
+
+    path = save_pose(clip("squat", 2.0), tmp_path / "squat.npz")
+    docs = {}
+    for command in ("dad", "describe", "reps"):
+        assert main([command, str(path), "--json"]) == 0
+        docs[command] = strict(capsys.readouterr().out)
+    for command, doc in docs.items():
+        assert doc["clip"] == str(path), command
+    assert docs["dad"]["source"] == docs["describe"]["source"] == str(path)

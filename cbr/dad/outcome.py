@@ -105,8 +105,9 @@ class DADResult:
         return next((a for a in self.activities if label in a.labels), None)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready form (NaN scores become None)."""
-        out = asdict(self)
+        """JSON-ready form (NaN scores become None); the clip is ``clip``, as in ``classify`` and
+        ``reps``, and ``source``, the name it had first."""
+        out = {"clip": self.source, **asdict(self)}
         for act in out["activities"]:
             if not np.isfinite(act["score"]):
                 act["score"] = None

@@ -209,7 +209,8 @@ def _print_json(
     from features.timeline import runs_to_json
 
     out: dict[str, object] = {
-        "source": str(args.posefile),
+        "clip": str(args.posefile),  # as classify and reps name it
+        "source": str(args.posefile),  # the name it had first, kept
         "fps": seq.fps,
         "frames": seq.n_frames,
         "min_confidence": args.min_confidence,
