@@ -130,3 +130,18 @@ def test_dad_and_describe_name_the_clip_clip_as_classify_and_reps_do(
     for command, doc in docs.items():
         assert doc["clip"] == str(path), command
     assert docs["dad"]["source"] == docs["describe"]["source"] == str(path)
+
+
+def test_describe_says_its_figures_are_confidences(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`describe` printed "torso upright 0.97" with no word of what 0.97 is, where classify
+    says "confidence 0.59": its header now says so, once."""
+    from features.poses import save_pose
+    from posecbr.cli import main
+    from tests.moves import clip
+
+    path = save_pose(clip("squat", 2.0), tmp_path / "squat.npz")
+    assert main(["describe", str(path)]) == 0
+    head = capsys.readouterr().out.splitlines()[0]
+    assert head == f"{path}: 60 frames at 30 fps (2.0 s); each state with its confidence, 0-1"

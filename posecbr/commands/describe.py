@@ -121,8 +121,10 @@ def _run_line(r: Run, layout: FluentResult) -> str:
 
 def _header(args: argparse.Namespace, seq: PoseSequence) -> None:
     label = f", label {shown(seq.label)}" if seq.label else ""
+    # the figure after each state is a confidence (0-1), said once here (as classify's
+    # "confidence 0.59"): read without it, "torso upright 0.97" could be a share or a length
     print(f"{shown(args.posefile)}: {counted(seq.n_frames, 'frame')} at {seq.fps:g} fps"
-          f" ({seq.duration_s:.1f} s){label}")  # fmt: skip
+          f" ({seq.duration_s:.1f} s){label}; each state with its confidence, 0-1")  # fmt: skip
 
 
 def _unavailable_line(missing: list[str]) -> str:
