@@ -145,3 +145,23 @@ def test_describe_says_its_figures_are_confidences(
     assert main(["describe", str(path)]) == 0
     head = capsys.readouterr().out.splitlines()[0]
     assert head == f"{path}: 60 frames at 30 fps (2.0 s); each state with its confidence, 0-1"
+
+
+def test_reps_and_segment_escape_the_file_name_as_describe_and_dad_do(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A pose file named with an ANSI escape: `describe` and `dad` print it as ``\\x1b``,
+    `reps` and `segment` printed the escape itself, which recolours the terminal."""
+    from features.poses import save_pose
+    from posecbr.cli import main
+    from tests.badinput import small_case_base
+    from tests.moves import clip
+
+    db = small_case_base(tmp_path)
+    path = save_pose(clip("squat", 4.0), tmp_path / "a\x1b[31mred.npz")
+    capsys.readouterr()  # what train printed
+    for command in (["reps", str(path)], ["segment", str(path), "--db", str(db)]):
+        assert main(command) == 0
+        out = capsys.readouterr().out
+        assert "\x1b" not in out, command
+        assert out.startswith(f"{tmp_path}/a\\x1b[31mred.npz: "), command

@@ -103,7 +103,8 @@ def _print(clip: Path, fps: float, result: object) -> None:
     if result.moving:
         how.append("moving " + ", ".join(m.replace("_", " ") for m in result.moving))
     plural = "" if result.count == 1 else "s"
-    print(f"{clip}: {result.count} repetition{plural}" + (f" ({'; '.join(how)})" if how else ""))
+    said = f" ({'; '.join(how)})" if how else ""
+    print(f"{shown(clip)}: {result.count} repetition{plural}{said}")  # a name escaped
     if not result.repetitions:
         return
     print(f"  {'#':>3}  {'start s':>8}  {'end s':>7}  {'frames':>13}  {'far point s':>11}  side")

@@ -240,7 +240,7 @@ def _named(result: Any, path: Path) -> Any:
 def _print(result: Any) -> None:
     fps = result.fps
     print(
-        f"{result.recording}: {result.n_frames} frames at {fps:g} fps "
+        f"{shown(result.recording)}: {result.n_frames} frames at {fps:g} fps "
         f"({result.n_frames / fps:.2f} s), {counted(len(result.segments), 'segment')}"
     )
     print(
@@ -248,13 +248,13 @@ def _print(result: Any) -> None:
     )
     for s in result.segments:
         frames = f"{s.start_frame}-{s.end_frame - 1}"
-        label = s.label if s.label is not None else f"({_shown(s)})"
+        label = shown(s.label) if s.label is not None else f"({_shown(s)})"
         print(
             f"  {s.start_frame / fps:8.2f}  {s.end_frame / fps:7.2f}  {frames:>12}  "
             f"{label:<20} {s.confidence:5.2f}  {len(s.repetitions):>4}"
         )
         if s.explanation and s.explanation != _shown(s):
-            print(f"  {'':8}  {'':7}  {'':12}  {s.explanation}")
+            print(f"  {'':8}  {'':7}  {'':12}  {shown(s.explanation)}")
 
 
 def _shown(segment: Any) -> str:
