@@ -166,7 +166,7 @@ def test_dad_says_why_a_qmp_was_not_met_in_degrees_as_its_words_do() -> None:
 
 def test_dad_explanation_in_compare_gives_the_score_as_dad_does() -> None:
     # before: compare's explanation of a DAD error said "(score 0.78)" where `posecbr dad`
-    # says "78% of its QMPs in order"
+    # says "78 % of its QMPs in order"
     still = to_sequence(*[standing()] * 90, fps=30.0)
     squat = next(a for a in detect(still).activities if a.activity == "squat")
     share = f"{100 * squat.score:.0f} % of its QMPs in order"
