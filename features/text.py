@@ -4,7 +4,8 @@ A label or file name comes from the user's files, and a terminal obeys the contr
 in what it prints: an ANSI/OSC escape in a label can set the window title, recolour or clear
 the screen, and a bidirectional override can make a line read differently from what it holds.
 :func:`shown` makes such characters visible instead (``\\x1b``, ``\\u202e``), so every command
-prints user data through it.
+prints user data through it. :func:`percent` is how every command writes an accuracy, share
+or rate for people ("75.0 %"; ``--json`` keeps fractions 0-1).
 """
 
 from __future__ import annotations
