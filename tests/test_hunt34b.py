@@ -165,3 +165,16 @@ def test_reps_and_segment_escape_the_file_name_as_describe_and_dad_do(
         out = capsys.readouterr().out
         assert "\x1b" not in out, command
         assert out.startswith(f"{tmp_path}/a\\x1b[31mred.npz: "), command
+
+
+def test_compare_results_name_the_clip_and_its_truth_as_classify_does() -> None:
+    """`compare`'s results named a clip `id` in `clips` and `clip` in `explanations`, and
+    the value a clip is checked against `true` where classify says `true_label`: both names
+    now, the old ones kept (posecbr report reads either)."""
+    from cbr.evaluation.results import ClipInfo, ExplainedClip
+
+    clip = ClipInfo("a.npz", "squat", "s01", "squat").to_dict()
+    assert clip["clip"] == clip["id"] == "a.npz"
+    wrong = ExplainedClip("a.npz", "s01", "squat", "squat", "lunge", "dad", "why").to_dict()
+    assert wrong["true_label"] == wrong["true"] == "squat"
+    assert wrong["clip"] == "a.npz" and wrong["predicted"] == "lunge"

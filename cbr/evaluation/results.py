@@ -375,7 +375,14 @@ class ClipInfo:
     target: str
 
     def to_dict(self) -> dict[str, Any]:
-        return {"id": self.id, "label": self.label, "subject": self.subject, "target": self.target}
+        # "clip" as the explanations below, classify and reps name it; "id" kept (its first name)
+        return {
+            "id": self.id,
+            "clip": self.id,
+            "label": self.label,
+            "subject": self.subject,
+            "target": self.target,
+        }
 
     @staticmethod
     def read(r: Reader, d: dict[str, Any], where: str) -> ClipInfo:
@@ -407,6 +414,7 @@ class ExplainedClip:
             "subject": self.subject,
             "activity": self.activity,
             "true": self.true,
+            "true_label": self.true,  # as classify names the value checked against
             "predicted": self.predicted,
             "method": self.method,
             "text": self.text,
