@@ -1,0 +1,575 @@
+"""How well ANY threshold could call left-out movements unknown, on the windows the segmenter
+judges: is the gap to issue 14's goal (left-out blocks called unknown >= 80 %, seen blocks
+right >= 95 %) the judge's or the features'?
+
+Run: ``python -m benchmarks.unknown_ceiling [--datasets ...] [--left-out N] [--cache DIR]``
+(``--datasets hdm05`` alone takes a few minutes; UI-PRMD Vicon about 20 minutes and
+Kinect about 5 minutes per left-out movement at load 6-10 on 2 cores, most of it fitting
+each case base: ``--left-out N`` keeps N of a fold's movements, evenly spaced in sorted
+order, and is recorded in the results; ``--cache DIR`` keeps each fold's and each left-out
+movement's measurements, so an interrupted run resumes). Writes
+``benchmarks/results/unknown_ceiling.json``.
+
+The folds, recordings, readers and case bases are :mod:`benchmarks.segment_people`'s (one
+recording per held-out person, seed 0): each movement of the test recordings left out of the
+case base in turn, every test recording solved with it (:func:`cbr.segmentation.solve_recording`)
+and its 2-s windows (not the repetition windows) taken whole within one labelled movement
+(windows across a change of movement are left out and counted). A window of a movement the
+case base has is *known*, one of the left-out movement *novel*. Each score below is higher
+for "more unknown"; for each: AUROC (known vs novel windows, sklearn's ``roc_auc_score``)
+and the ORACLE rate: the share of novel windows above the threshold read from the test
+windows themselves, the lowest that keeps >= 95 % of the known windows known
+(:func:`oracle_rate`; the best any threshold on that score can do at that budget), and,
+where the score has one, the threshold calibrated from the case base alone (held out by
+training person: the 95 % quantile of held-out known scores) with what it keeps and calls.
+
+- ``spread-margin``: the default judge (as ``segment`` sees it, :func:`cbr.unknown.for_person`
+  per recording): its score over its nearest activity's threshold (1 = its own threshold;
+  a window too still for every case, ``cbr.segmentation.too_still``, counts as inf), its
+  graded evidence (:func:`cbr.unknown.unknown_evidence`, what ``segment`` averages over
+  blocks) and its plain decisions (:meth:`unlike`); also the blocks ``segment`` then calls
+  unknown (:func:`cbr.segmentation.finish`), to tie the windows to
+  ``benchmarks.segment_people``'s table;
+- ``margin`` d1/d2 (calibrated: the ``margin`` judge's pooled threshold) and ``nearest``
+  d1, the distance to the nearest case;
+- peers from scikit-learn fit on the case base's own window vectors (the measure's
+  representation, the mirror flag column dropped, standardised on the cases):
+  ``LocalOutlierFactor(novelty=True)``, ``IsolationForest``, ``OneClassSVM(nu=0.05)``, the
+  mean distance to the 5 nearest cases, the least Mahalanobis distance to an activity's
+  cases (Ledoit-Wolf covariance, per activity);
+- ``dtw``: the DTW 1-NN distance (tslearn) from the window's eight limb angles at 30 Hz to
+  the baseline's training windows (``benchmarks.segment_people.dtw_training``) of the
+  movements in the case base.
+
+Pooled over a dataset's left-out movements with ONE threshold (as one judge would have);
+per movement each with its own. Window level: ``segment`` averages evidence over blocks and
+decodes with a cost per change, so its block figures can exceed what a threshold on single
+windows gives; the block figures are reported beside.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import pickle  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from functools import partial  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from benchmarks import write_json  # noqa: E402
+from benchmarks._common import one_thread_machine, versions  # noqa: E402
+from benchmarks.repetitions import HDM05, UIPRMD, Group  # noqa: E402
+from benchmarks.segment_people import (  # noqa: E402
+    BLOCK_S,
+    DATASETS,
+    Fold,
+    Reader,
+    Recording,
+    dtw_training,
+    fit,
+    folds,
+    joined_training,
+    training_clips,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results" / "unknown_ceiling.json"
+KEEP_KNOWN = 0.95
+"""The oracle threshold keeps at least this share of known windows known (issue 14's goal)."""
+GOAL_UNKNOWN = 0.80
+HELD_OUT_SAMPLE = 500
+"""Held-out training windows per person scored to calibrate a peer's threshold (a seeded
+sample when there are more)."""
+CACHE_VERSION = 1
+JUDGE = "spread-margin"
+SCORES = ("spread-margin", "margin", "nearest", "lof", "iforest", "ocsvm", "knn5",
+          "mahalanobis", "dtw")  # fmt: skip
+"""The scores, the default judge first."""
+
+
+# ---------------------------------------------------------------- pure scoring helpers
+
+
+def auroc(known: np.ndarray, novel: np.ndarray) -> float:
+    """The area under the ROC curve of telling ``novel`` scores (positives) from ``known``
+    ones (higher = more unknown), sklearn's ``roc_auc_score``; NaN without both. Infinite
+    scores rank above every finite one."""
+    from sklearn.metrics import roc_auc_score
+
+    if not len(known) or not len(novel):
+        return float("nan")
+    scores = np.r_[np.asarray(known, float), np.asarray(novel, float)]
+    finite = scores[np.isfinite(scores)]
+    top = (finite.max() if len(finite) else 0.0) + 1.0
+    scores = np.where(np.isposinf(scores), top, np.where(np.isneginf(scores), -top, scores))
+    truth = np.r_[np.zeros(len(known)), np.ones(len(novel))]
+    return float(roc_auc_score(truth, scores))
+
+
+def oracle_threshold(known: np.ndarray, keep: float = KEEP_KNOWN) -> float:
+    """The lowest threshold ``t`` that keeps at least a share ``keep`` of ``known`` scores
+    ``(n,)`` (non-empty) known (``score <= t``): the ``ceil(keep * n)``-th smallest."""
+    k = np.sort(np.asarray(known, dtype=np.float64))
+    return float(k[max(0, int(np.ceil(keep * len(k) - 1e-9)) - 1)])
+
+
+def called(known: np.ndarray, novel: np.ndarray, threshold: float) -> tuple[float, float]:
+    """With a window unknown when its score exceeds ``threshold``: the share of ``known``
+    scores kept known and the share of ``novel`` scores called unknown (NaN for none)."""
+    k, n = np.asarray(known, float), np.asarray(novel, float)
+    kept = float(np.mean(k <= threshold)) if len(k) else float("nan")
+    caught = float(np.mean(n > threshold)) if len(n) else float("nan")
+    return kept, caught
+
+
+def oracle_rate(known: np.ndarray, novel: np.ndarray, keep: float = KEEP_KNOWN) -> float:
+    """The share of ``novel`` scores above :func:`oracle_threshold` of ``known``: the most
+    of them any threshold calls unknown while keeping ``keep`` of the known ones known (ties
+    at the threshold stay known). NaN without both."""
+    if not len(known) or not len(novel):
+        return float("nan")
+    return called(known, novel, oracle_threshold(known, keep))[1]
+
+
+def figures(known: np.ndarray, novel: np.ndarray, calibrated: float | None) -> dict[str, Any]:
+    """AUROC, the oracle rate and threshold, and with a ``calibrated`` threshold (from the
+    case base alone) the shares it keeps known and calls unknown."""
+    out: dict[str, Any] = {
+        "known_windows": len(known),
+        "novel_windows": len(novel),
+        "auroc": auroc(known, novel),
+        "oracle_unknown_at_95_known": oracle_rate(known, novel),
+    }
+    if calibrated is not None and len(known) and len(novel):
+        kept, caught = called(known, novel, calibrated)
+        out["calibrated"] = {"threshold": calibrated, "known_kept": kept, "novel_unknown": caught}
+    return out
+
+
+# ---------------------------------------------------------------- measuring
+
+
+def _cached(cache: Path | None, name: str, make: Callable[[], Any]) -> Any:
+    """``make()``, kept in ``cache/name.pkl`` when a cache is given."""
+    if cache is None:
+        return make()
+    path = cache / f"{name}.pkl"
+    if path.exists():
+        with path.open("rb") as f:
+            return pickle.load(f)
+    value = make()
+    cache.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    with tmp.open("wb") as f:
+        pickle.dump(value, f)
+    tmp.replace(path)
+    return value
+
+
+def pure_windows(rec: Recording, spans: np.ndarray, fps: float) -> np.ndarray:
+    """The movement of each window ``spans`` ``(n, 2)`` (frames [start, stop)) of ``rec``
+    whose blocks (by their centres) are all of one movement, None for one across a change."""
+    centres = (np.arange(len(rec.blocks)) + 0.5) * BLOCK_S * fps
+    out = np.empty(len(spans), dtype=object)
+    for i, (a, b) in enumerate(spans.tolist()):
+        inside = rec.blocks[(centres >= a) & (centres < b)]
+        out[i] = inside[0] if len(inside) and np.all(inside == inside[0]) else None
+    return out
+
+
+def case_vectors(cb: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The case base's window vectors as its measure compares them ``(n, D)`` (the mirror
+    flag column, when there is one, dropped) and which cases are real (not mirror images)."""
+    from cbr.weights import MIRROR_FLAG
+
+    reps = np.asarray(cb.measure.represent(cb.problems), dtype=np.float64)
+    real = np.ones(len(cb), dtype=bool)
+    if cb.names and cb.names[-1] == MIRROR_FLAG:
+        real = np.asarray(cb.problems)[:, -1] == 0
+        reps = reps[:, :-1]
+    return reps, real
+
+
+def query_vectors(cb: Any, solved: list[Any]) -> np.ndarray:
+    """The solved windows' problems as the case base's measure represents them ``(n, D)``
+    (the mirror flag column dropped as :func:`case_vectors` drops it)."""
+    from cbr.weights import MIRROR_FLAG
+
+    q = np.stack([cb.measure.represent_query(s.problem.values) for s in solved])
+    q = np.asarray(q, dtype=np.float64).reshape(len(solved), -1)
+    return q[:, :-1] if cb.names and cb.names[-1] == MIRROR_FLAG else q
+
+
+class Peers:
+    """scikit-learn's open-set detectors fit on window vectors ``X`` ``(n, D)`` of activities
+    ``y`` (standardised on ``X``); :meth:`scores` higher = more unknown."""
+
+    NAMES = ("lof", "iforest", "ocsvm", "knn5", "mahalanobis")
+
+    def __init__(self, X: np.ndarray, y: np.ndarray) -> None:
+        from sklearn.covariance import LedoitWolf
+        from sklearn.ensemble import IsolationForest
+        from sklearn.neighbors import LocalOutlierFactor, NearestNeighbors
+        from sklearn.preprocessing import StandardScaler
+        from sklearn.svm import OneClassSVM
+
+        self.scaler = StandardScaler().fit(X)
+        Z = self.scaler.transform(X)
+        self.lof = LocalOutlierFactor(n_neighbors=20, novelty=True).fit(Z)
+        self.iforest = IsolationForest(random_state=0).fit(Z)
+        self.ocsvm = OneClassSVM(nu=0.05, gamma="scale").fit(Z)
+        self.knn = NearestNeighbors(n_neighbors=min(5, len(Z))).fit(Z)
+        self.gauss = []
+        for a in np.unique(y):
+            mine = Z[y == a]
+            if len(mine) >= 2:
+                lw = LedoitWolf().fit(mine)
+                self.gauss.append(lw)
+
+    def scores(self, X: np.ndarray) -> dict[str, np.ndarray]:
+        Z = self.scaler.transform(X)
+        return {
+            "lof": -self.lof.score_samples(Z),
+            "iforest": -self.iforest.score_samples(Z),
+            "ocsvm": -self.ocsvm.score_samples(Z),
+            "knn5": self.knn.kneighbors(Z)[0].mean(axis=1),
+            "mahalanobis": np.sqrt(np.min([g.mahalanobis(Z) for g in self.gauss], axis=0)),
+        }
+
+
+def peer_thresholds(X: np.ndarray, y: np.ndarray, people: np.ndarray,
+                    real: np.ndarray) -> dict[str, float]:  # fmt: skip
+    """Each peer's threshold from the case base alone: every training person held out in
+    turn, the detectors fit on the others' cases and scored on (a sample of at most
+    :data:`HELD_OUT_SAMPLE` of) the held-out person's real cases; the 95 % quantile of all
+    those scores (:func:`oracle_threshold` of the held-out known scores)."""
+    rng = np.random.default_rng(0)
+    held: dict[str, list[np.ndarray]] = {n: [] for n in Peers.NAMES}
+    for person in np.unique(people):
+        mine = np.flatnonzero((people == person) & real)
+        rest = people != person
+        if not len(mine) or not rest.any():
+            continue
+        if len(mine) > HELD_OUT_SAMPLE:
+            mine = np.sort(rng.choice(mine, HELD_OUT_SAMPLE, replace=False))
+        for name, s in Peers(X[rest], y[rest]).scores(X[mine]).items():
+            held[name].append(s)
+    return {n: oracle_threshold(np.concatenate(v)) for n, v in held.items() if v}
+
+
+def distance_thresholds(cb: Any) -> dict[str, float]:
+    """The ``nearest`` distance's threshold from the case base alone: the 95 % quantile of
+    the nearest-case distance of training cases held out as the margin judges hold them out
+    (:func:`cbr.unknown.held_out_activities`, known rows)."""
+    from cbr.unknown import held_out_activities, known_rows
+
+    seen, codes, _, _ = held_out_activities(cb)
+    known = seen[known_rows(seen, codes)]
+    return {"nearest": oracle_threshold(known.min(axis=1))}
+
+
+def dtw_fold(fold: Fold, joined: list[tuple[Any, Group]], recs: dict[str, Any]) -> dict[str, Any]:
+    """The DTW distances of a fold, computed once for every left-out movement: from every
+    judged test window (``recs``: each recording's window centres in seconds) to every
+    training window, and from a sample of training windows to every training window (for
+    the threshold held out by person)."""
+    from benchmarks.segment import DTW_FPS
+    from benchmarks.segment_people import _angles, _windows
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        from tslearn.metrics import cdist_dtw
+
+    Xs, ys, ps = [], [], []
+    for seq, g in joined:
+        try:
+            X, y = dtw_training([(seq, g.movement)])
+        except ValueError:  # shorter than one window: none
+            continue
+        Xs.append(X)
+        ys.append(y)
+        ps.append(np.full(len(y), g.person, dtype=object))
+    X, y, people = np.concatenate(Xs), np.concatenate(ys), np.concatenate(ps)
+    test = {}
+    for rec in fold.recordings:
+        centres_s = recs[rec.name]["centres_s"]
+        test[rec.name] = cdist_dtw(_windows(_angles(rec.seq), centres_s * DTW_FPS), X)
+    rng = np.random.default_rng(0)
+    sample = np.sort(rng.choice(len(X), min(len(X), 4 * HELD_OUT_SAMPLE), replace=False))
+    return {"y": y, "people": people, "test": test, "sample": sample,
+            "train": cdist_dtw(X[sample], X)}  # fmt: skip
+
+
+def measure_left_out(fold: Fold, joined: list[tuple[Any, Group]], movement: str) -> dict[str, Any]:
+    """With ``movement`` left out of the fold's case base: for every test recording, its
+    judged windows' spans, movements and scores, and the blocks ``segment`` calls unknown;
+    the calibrated thresholds."""
+    from benchmarks.segment import judge_named
+    from cbr.segmentation import finish, solve_recording
+    from cbr.unknown import for_person, unknown_evidence
+
+    clf = fit(training_clips(joined, leave_out=movement))
+    cb = clf.case_base_
+    judge = judge_named(clf, JUDGE)
+    margin_judge = judge_named(clf, "margin")
+    X, real = case_vectors(cb)
+    y = np.asarray(cb.labels).astype(str)
+    people = np.array([s or "" for s in cb.subjects], dtype=object)
+    peers = Peers(X, y)
+    thresholds: dict[str, float] = {JUDGE: 1.0, "margin": float(margin_judge.threshold)}
+    thresholds.update(distance_thresholds(cb))
+    thresholds.update(peer_thresholds(X, y, people, real))
+    recs: dict[str, Any] = {}
+    for rec in fold.recordings:
+        done = solve_recording(clf, rec.seq, chunk_frames=0)
+        counted = [w for w, out in zip(done.windows, done.outliers.tolist(), strict=True)
+                   if not out]  # fmt: skip
+        mine = for_person(judge, np.array([np.min(w.nearest) for w in counted]))
+        windows = [w for w in done.windows if not w.repetition]
+        nearest = np.stack([w.nearest for w in windows])
+        still = np.array([w.still for w in windows], dtype=bool)
+        spans = np.array([(w.start, w.stop) for w in windows], dtype=np.int64)
+        score = np.array([mine.ratio(n) / mine.threshold(n) for n in nearest])  # type: ignore[attr-defined]
+        two = np.sort(nearest, axis=1)[:, :2]
+        scores = {
+            JUDGE: np.where(still, np.inf, score),
+            "margin": np.where(two[:, 1] > 0, two[:, 0] / np.maximum(two[:, 1], 1e-300), 1.0),
+            "nearest": two[:, 0],
+            **peers.scores(query_vectors(cb, [w.solved for w in windows])),
+        }
+        blocks = np.array(finish(clf, done, judge).blocks[: len(rec.blocks)], dtype=object)
+        truth = rec.blocks[: len(blocks)]
+        recs[rec.name] = {
+            "movements": pure_windows(rec, spans, rec.seq.fps),
+            "centres_s": spans.mean(axis=1) / rec.seq.fps,
+            "scores": scores,
+            "evidence": np.array(
+                [
+                    1.0 if s else unknown_evidence(mine, n)
+                    for s, n in zip(still, nearest, strict=True)
+                ]
+            ),  # fmt: skip
+            "unlike": np.array([s or mine.unlike(n) for s, n in zip(still, nearest, strict=True)]),
+            "blocks_novel": int(np.sum(truth == movement)),
+            "blocks_novel_unknown": int(sum(b is None for b in blocks[truth == movement])),
+            "blocks_known": int(np.sum(truth != movement)),
+            "blocks_known_unknown": int(sum(b is None for b in blocks[truth != movement])),
+        }
+    return {"cases": len(cb), "thresholds": thresholds, "recordings": recs}
+
+
+def with_dtw(left: dict[str, Any], dtw: dict[str, Any], movement: str) -> dict[str, Any]:
+    """``left`` (:func:`measure_left_out`) with each recording's ``dtw`` score (the nearest
+    training window of a movement other than ``movement``) and the DTW threshold held out by
+    person."""
+    keep = dtw["y"] != movement
+    for name, r in left["recordings"].items():
+        r["scores"]["dtw"] = dtw["test"][name][:, keep].min(axis=1)
+    sample = dtw["sample"]
+    rows = [i for i, j in enumerate(sample.tolist()) if keep[j]]
+    held = [dtw["train"][i][keep & (dtw["people"] != dtw["people"][sample[i]])].min()
+            for i in rows]  # fmt: skip
+    left["thresholds"]["dtw"] = oracle_threshold(np.array(held))
+    return left
+
+
+def pool(parts: list[tuple[str, dict[str, Any]]]) -> dict[str, Any]:
+    """Known and novel windows' scores, evidence and decisions pooled over ``parts`` (left-out
+    movement, :func:`measure_left_out` with DTW), and the blocks."""
+    known: dict[str, list[np.ndarray]] = {s: [] for s in SCORES + ("evidence", "unlike")}
+    novel: dict[str, list[np.ndarray]] = {s: [] for s in SCORES + ("evidence", "unlike")}
+    mixed = 0
+    blocks = np.zeros(4, dtype=np.int64)
+    for movement, left in parts:
+        for r in left["recordings"].values():
+            m = r["movements"]
+            mixed += int(sum(v is None for v in m))
+            is_novel = np.array([v == movement for v in m], dtype=bool)
+            is_known = np.array([v is not None and v != movement for v in m], dtype=bool)
+            for s in known:
+                values = r["scores"][s] if s in r["scores"] else r[s]
+                known[s].append(np.asarray(values)[is_known])
+                novel[s].append(np.asarray(values)[is_novel])
+            blocks += [r["blocks_known"], r["blocks_known_unknown"], r["blocks_novel"],
+                       r["blocks_novel_unknown"]]  # fmt: skip
+    return {
+        "known": {s: np.concatenate(v) for s, v in known.items()},
+        "novel": {s: np.concatenate(v) for s, v in novel.items()},
+        "mixed_windows": mixed,
+        "blocks": blocks,
+    }
+
+
+def summarise(parts: list[tuple[str, dict[str, Any]]]) -> dict[str, Any]:
+    """The figures of every score over ``parts`` (left-out movement, measured), pooled: one
+    oracle threshold for all; each part's calibrated threshold applied to its own windows."""
+    p = pool(parts)
+    k, n = p["known"], p["novel"]
+    out: dict[str, Any] = {
+        "known_windows": len(k[JUDGE]),
+        "novel_windows": len(n[JUDGE]),
+        "windows_across_a_change_left_out": p["mixed_windows"],
+    }
+    for s in SCORES:
+        out[s] = figures(k[s], n[s], None)
+        kept, caught = _calibrated_shares(parts, s)
+        if kept is not None:
+            out[s]["calibrated"] = {"known_kept": kept, "novel_unknown": caught}
+    out[JUDGE]["evidence_auroc"] = auroc(k["evidence"], n["evidence"])
+    out[JUDGE]["mean_evidence"] = {"known": float(np.mean(k["evidence"])),
+                                   "novel": float(np.mean(n["evidence"]))}  # fmt: skip
+    out[JUDGE]["decisions"] = {"known_kept": float(np.mean(~k["unlike"])),
+                               "novel_unknown": float(np.mean(n["unlike"]))}  # fmt: skip
+    b = p["blocks"]
+    out["segment_blocks"] = {
+        "known_blocks_not_unknown": 1.0 - float(b[1]) / max(1, int(b[0])),
+        "novel_blocks_unknown": float(b[3]) / max(1, int(b[2])),
+    }
+    return out
+
+
+def _calibrated_shares(
+    parts: list[tuple[str, dict[str, Any]]], score: str
+) -> tuple[float | None, float | None]:
+    """The shares of known windows kept and novel windows called unknown when each part's
+    windows meet that part's threshold for ``score`` calibrated on its case base."""
+    kept, caught, nk, nn = 0, 0, 0, 0
+    for movement, left in parts:
+        t = left["thresholds"].get(score)
+        if t is None:
+            return None, None
+        one = pool([(movement, left)])
+        kept += int(np.sum(one["known"][score] <= t))
+        caught += int(np.sum(one["novel"][score] > t))
+        nk += len(one["known"][score])
+        nn += len(one["novel"][score])
+    return kept / max(1, nk), caught / max(1, nn)
+
+
+def spaced(items: list[str], n: int | None) -> list[str]:
+    """``n`` of ``items`` evenly spaced (all when ``n`` is None or not fewer)."""
+    if n is None or n >= len(items):
+        return items
+    return [items[int(i)] for i in np.linspace(0, len(items) - 1, n).round().astype(int)]
+
+
+def run_dataset(
+    dataset: str, left_out: int | None, cache: Path | None, seed: int = 0
+) -> list[tuple[str, str, dict[str, Any]]]:
+    """``(fold, movement, measured)`` for every fold of ``dataset`` and each movement left out."""
+    from features.progress import progress
+
+    read = Reader()
+    out = []
+    for fold in folds(dataset, 1, seed, read):
+        tag = f"v{CACHE_VERSION}-{dataset}-{fold.name.replace(' ', '_')}-seed{seed}"
+        joined = joined_training(fold.train, read)
+        movements = spaced(sorted({m for r in fold.recordings for m in r.movements}), left_out)
+        measured = {}
+        for movement in progress(movements, f"{dataset} {fold.name}: left out", unit="movement"):
+            measured[movement] = _cached(
+                cache, f"{tag}-{movement}", partial(measure_left_out, fold, joined, movement)
+            )
+        first = next(iter(measured.values()))["recordings"]
+        dtw = _cached(cache, f"{tag}-dtw", partial(dtw_fold, fold, joined, first))
+        out += [(fold.name, m, with_dtw(v, dtw, m)) for m, v in measured.items()]
+    return out
+
+
+def dataset_summary(measured: list[tuple[str, str, dict[str, Any]]]) -> dict[str, Any]:
+    """Pooled over the dataset's left-out movements (one threshold), and per movement."""
+    parts = [(m, v) for _, m, v in measured]
+    per: dict[str, Any] = {}
+    for movement in sorted({m for m, _ in parts}):
+        per[movement] = summarise([p for p in parts if p[0] == movement])
+    return {"pooled": summarise(parts), "per_movement": per,
+            "cases": sorted({v["cases"] for _, _, v in measured})}  # fmt: skip
+
+
+def print_table(summary: dict[str, Any]) -> None:
+    print("\nLeft-out movements' 2-s windows vs known ones, people not in the case base")
+    print(f"  {'dataset, score':32s}{'AUROC':>7s}{'oracle @95%':>13s}"
+          f"{'calibrated: kept':>18s}{'unknown':>9s}")  # fmt: skip
+    for dataset, s in summary.items():
+        p = s["pooled"]
+        for name in SCORES:
+            o = p[name]
+            cal = o.get("calibrated")
+            tail = f"{cal['known_kept']:18.1%}{cal['novel_unknown']:9.1%}" if cal else ""
+            print(f"  {dataset + ', ' + name:32s}{o['auroc']:7.3f}"
+                  f"{o['oracle_unknown_at_95_known']:13.1%}{tail}")  # fmt: skip
+        d, e = p[JUDGE]["decisions"], p["segment_blocks"]
+        print(
+            f"  {dataset + ', ' + JUDGE + ' decisions':32s}{p[JUDGE]['evidence_auroc']:7.3f}"
+            f"{'(evidence)':>13s}{d['known_kept']:18.1%}{d['novel_unknown']:9.1%}"
+        )
+        print(
+            f"  {dataset + ', segment blocks':32s}{'':7s}{'':13s}"
+            f"{e['known_blocks_not_unknown']:18.1%}{e['novel_blocks_unknown']:9.1%}"
+        )
+        print(f"  {'':4s}per movement, AUROC " + " / ".join(SCORES))
+        for movement, o in s["per_movement"].items():
+            print(f"  {'':4s}{movement:24s}" + " ".join(f"{o[n]['auroc']:.2f}" for n in SCORES))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.unknown_ceiling",
+                                     description=__doc__.split("\n\n")[0])  # fmt: skip
+    parser.add_argument("--datasets", nargs="+", choices=DATASETS, default=list(DATASETS))
+    parser.add_argument("--left-out", type=int, default=None, metavar="N",
+                        help="left out in turn: only N of each fold's movements, evenly "
+                        "spaced in sorted order (default: every one)")  # fmt: skip
+    parser.add_argument(
+        "--cache",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="keep each fold's measurements here (a rerun resumes)",
+    )
+    args = parser.parse_args(argv)
+    if args.left_out is not None and args.left_out < 1:
+        parser.error(f"--left-out must be at least 1, got {args.left_out}")
+    if not UIPRMD.is_dir() or not HDM05.is_dir():
+        print(f"no ui-prmd or hdm05 data under {UIPRMD.parents[1]}: nothing to measure")
+        return 1
+    import numba
+
+    numba.set_num_threads(1)
+    load_at_start = [round(x, 2) for x in os.getloadavg()]
+    summary: dict[str, Any] = {}
+    for dataset in args.datasets:
+        t0 = time.perf_counter()
+        measured = run_dataset(dataset, args.left_out, args.cache)
+        summary[dataset] = {**dataset_summary(measured), "wall_s": time.perf_counter() - t0,
+                            "left_out": sorted({m for _, m, _ in measured})}  # fmt: skip
+        print_table({dataset: summary[dataset]})
+    print_table(summary)
+    result = {
+        "benchmark": "unknown_ceiling",
+        "command": "python -m benchmarks.unknown_ceiling --datasets "
+        + " ".join(args.datasets)
+        + (f" --left-out {args.left_out}" if args.left_out else ""),
+        "note": "window level, as cbr.unknown's judges see each window; oracle: the threshold "
+        "read from the test windows themselves, the lowest keeping >= 95 % of known windows "
+        "known; calibrated: from the case base alone (held out by training person)",
+        "machine": one_thread_machine(),
+        "load_average_at_start": load_at_start,
+        "versions": versions("posecbr", "numpy", "scipy", "scikit-learn", "tslearn", "numba"),
+        "summary": summary,
+    }
+    write_json(result, RESULTS)
+    print(f"\nwrote {RESULTS.relative_to(ROOT)}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,74 @@
+"""The pure scoring helpers of ``benchmarks.unknown_ceiling`` (issue 14's ceiling of any
+threshold), against values worked out by hand and against scikit-learn."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from sklearn.metrics import roc_auc_score
+
+from benchmarks.unknown_ceiling import (
+    auroc,
+    called,
+    figures,
+    oracle_rate,
+    oracle_threshold,
+    pure_windows,
+    spaced,
+)
+
+
+def test_oracle_threshold_keeps_the_share_of_known_scores() -> None:
+    known = np.arange(1.0, 21.0)  # 1..20: 19 of 20 (95 %) kept at 19, 18 of 20 at 18
+    assert oracle_threshold(known) == 19.0
+    assert oracle_threshold(known, 0.90) == 18.0
+    assert oracle_threshold(known, 0.91) == 19.0  # 18.2 scores: the 19th smallest
+    assert oracle_threshold(np.array([3.0, 1.0, 2.0]), 1.0) == 3.0
+    assert oracle_threshold(np.array([5.0]), 0.5) == 5.0
+
+
+def test_oracle_rate_by_hand() -> None:
+    known = np.arange(1.0, 21.0)  # threshold 19 at 95 %
+    novel = np.array([0.5, 10.0, 19.0, 19.5, 25.0])  # above 19: 19.5 and 25 (19 ties: known)
+    assert oracle_rate(known, novel) == pytest.approx(2 / 5)
+    kept, caught = called(known, novel, 19.0)
+    assert (kept, caught) == (19 / 20, 2 / 5)
+    assert oracle_rate(known, novel, 0.5) == pytest.approx(3 / 5)  # threshold 10: 19 above
+    assert math.isnan(oracle_rate(np.zeros(0), novel))
+
+
+def test_auroc_is_sklearns_and_ranks_infinity_first() -> None:
+    rng = np.random.default_rng(3)
+    known, novel = rng.normal(0, 1, 40), rng.normal(0.7, 1, 30)
+    truth = np.r_[np.zeros(40), np.ones(30)]
+    assert auroc(known, novel) == pytest.approx(roc_auc_score(truth, np.r_[known, novel]))
+    # by hand: pairs (known, novel) with novel above, ties half: (1,2) (1,inf) (3,inf); (3,2) no
+    assert auroc(np.array([1.0, 3.0]), np.array([2.0, np.inf])) == pytest.approx(3 / 4)
+    assert auroc(np.array([1.0, 2.0]), np.array([2.0])) == pytest.approx(0.75)
+    assert math.isnan(auroc(np.array([1.0]), np.zeros(0)))
+
+
+def test_figures_name_the_calibrated_shares() -> None:
+    out = figures(np.array([1.0, 2.0, 3.0, 4.0]), np.array([2.5, 5.0]), 3.0)
+    # pairs with the novel score above: 2.5 over 1 and 2, 5 over all four
+    assert out["auroc"] == pytest.approx(6 / 8)
+    assert out["oracle_unknown_at_95_known"] == pytest.approx(1 / 2)  # threshold 4
+    assert out["calibrated"] == {"threshold": 3.0, "known_kept": 0.75, "novel_unknown": 0.5}
+
+
+def test_pure_windows_leave_out_windows_across_a_change() -> None:
+    class Rec:
+        blocks = np.array(["a"] * 10 + ["b"] * 10, dtype=object)
+
+    # 10 frames a second: block i's centre at frame i + 0.5
+    spans = np.array([[0, 10], [5, 15], [10, 20], [12, 14]])
+    assert pure_windows(Rec(), spans, 10.0).tolist() == ["a", None, "b", "b"]  # type: ignore[arg-type]
+
+
+def test_spaced_keeps_the_ends() -> None:
+    items = [f"m{i:02d}" for i in range(1, 11)]
+    assert spaced(items, 4) == ["m01", "m04", "m07", "m10"]
+    assert spaced(items, None) == items
+    assert spaced(items, 12) == items
