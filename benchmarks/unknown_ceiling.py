@@ -463,15 +463,16 @@ def spaced(items: list[str], n: int | None) -> list[str]:
 
 
 def run_dataset(
-    dataset: str, left_out: int | None, cache: Path | None, seed: int = 0
+    dataset: str, left_out: int | None, cache: Path | None, per_person: int = 1, seed: int = 0
 ) -> list[tuple[str, str, dict[str, Any]]]:
     """``(fold, movement, measured)`` for every fold of ``dataset`` and each movement left out."""
     from features.progress import progress
 
     read = Reader()
     out = []
-    for fold in folds(dataset, 1, seed, read):
+    for fold in folds(dataset, per_person, seed, read):
         tag = f"v{CACHE_VERSION}-{dataset}-{fold.name.replace(' ', '_')}-seed{seed}"
+        tag += f"-per{per_person}" if per_person != 1 else ""
         joined = joined_training(fold.train, read)
         movements = spaced(sorted({m for r in fold.recordings for m in r.movements}), left_out)
         measured = {}
@@ -529,6 +530,13 @@ def main(argv: list[str] | None = None) -> int:
                         help="left out in turn: only N of each fold's movements, evenly "
                         "spaced in sorted order (default: every one)")  # fmt: skip
     parser.add_argument(
+        "--per-person",
+        type=int,
+        default=1,
+        metavar="N",
+        help="test recordings per person (segment_people's; default 1, its table's)",
+    )
+    parser.add_argument(
         "--cache",
         type=Path,
         default=None,
@@ -538,6 +546,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.left_out is not None and args.left_out < 1:
         parser.error(f"--left-out must be at least 1, got {args.left_out}")
+    if args.per_person < 1:
+        parser.error(f"--per-person must be at least 1, got {args.per_person}")
     if not UIPRMD.is_dir() or not HDM05.is_dir():
         print(f"no ui-prmd or hdm05 data under {UIPRMD.parents[1]}: nothing to measure")
         return 1
@@ -548,7 +558,7 @@ def main(argv: list[str] | None = None) -> int:
     summary: dict[str, Any] = {}
     for dataset in args.datasets:
         t0 = time.perf_counter()
-        measured = run_dataset(dataset, args.left_out, args.cache)
+        measured = run_dataset(dataset, args.left_out, args.cache, args.per_person)
         summary[dataset] = {**dataset_summary(measured), "wall_s": time.perf_counter() - t0,
                             "left_out": sorted({m for _, m, _ in measured})}  # fmt: skip
         print_table({dataset: summary[dataset]})
@@ -557,7 +567,8 @@ def main(argv: list[str] | None = None) -> int:
         "benchmark": "unknown_ceiling",
         "command": "python -m benchmarks.unknown_ceiling --datasets "
         + " ".join(args.datasets)
-        + (f" --left-out {args.left_out}" if args.left_out else ""),
+        + (f" --left-out {args.left_out}" if args.left_out else "")
+        + (f" --per-person {args.per_person}" if args.per_person != 1 else ""),
         "note": "window level, as cbr.unknown's judges see each window; oracle: the threshold "
         "read from the test windows themselves, the lowest keeping >= 95 % of known windows "
         "known; calibrated: from the case base alone (held out by training person)",
@@ -566,8 +577,11 @@ def main(argv: list[str] | None = None) -> int:
         "versions": versions("posecbr", "numpy", "scipy", "scikit-learn", "tslearn", "numba"),
         "summary": summary,
     }
-    write_json(result, RESULTS)
-    print(f"\nwrote {RESULTS.relative_to(ROOT)}")
+    out = RESULTS
+    if args.per_person != 1:
+        out = RESULTS.with_name(f"unknown_ceiling_per{args.per_person}.json")
+    write_json(result, out)
+    print(f"\nwrote {out.relative_to(ROOT)}")
     return 0
 
 
