@@ -89,6 +89,9 @@ GOAL_UNKNOWN = 0.80
 HELD_OUT_SAMPLE = 500
 """Held-out training windows per person scored to calibrate a peer's threshold (a seeded
 sample when there are more)."""
+DTW_HELD_OUT_SAMPLE = 400
+"""Training windows (a seeded sample) whose DTW 1-NN distance to other people's windows sets
+the DTW threshold held out by person (each costs a DTW against every training window)."""
 CACHE_VERSION = 1
 JUDGE = "spread-margin"
 SCORES = ("spread-margin", "margin", "nearest", "lof", "iforest", "ocsvm", "knn5",
@@ -304,7 +307,7 @@ def dtw_fold(fold: Fold, joined: list[tuple[Any, Group]], recs: dict[str, Any]) 
         centres_s = recs[rec.name]["centres_s"]
         test[rec.name] = cdist_dtw(_windows(_angles(rec.seq), centres_s * DTW_FPS), X)
     rng = np.random.default_rng(0)
-    sample = np.sort(rng.choice(len(X), min(len(X), 4 * HELD_OUT_SAMPLE), replace=False))
+    sample = np.sort(rng.choice(len(X), min(len(X), DTW_HELD_OUT_SAMPLE), replace=False))
     return {"y": y, "people": people, "test": test, "sample": sample,
             "train": cdist_dtw(X[sample], X)}  # fmt: skip
 
@@ -379,6 +382,7 @@ def with_dtw(left: dict[str, Any], dtw: dict[str, Any], movement: str) -> dict[s
     held = [dtw["train"][i][keep & (dtw["people"] != dtw["people"][sample[i]])].min()
             for i in rows]  # fmt: skip
     left["thresholds"]["dtw"] = oracle_threshold(np.array(held))
+    left["dtw_held_out_windows"] = len(rows)
     return left
 
 
@@ -492,8 +496,12 @@ def dataset_summary(measured: list[tuple[str, str, dict[str, Any]]]) -> dict[str
     per: dict[str, Any] = {}
     for movement in sorted({m for m, _ in parts}):
         per[movement] = summarise([p for p in parts if p[0] == movement])
-    return {"pooled": summarise(parts), "per_movement": per,
-            "cases": sorted({v["cases"] for _, _, v in measured})}  # fmt: skip
+    return {
+        "pooled": summarise(parts),
+        "per_movement": per,
+        "cases": sorted({v["cases"] for _, _, v in measured}),
+        "dtw_held_out_windows": sorted({v["dtw_held_out_windows"] for _, _, v in measured}),
+    }
 
 
 def print_table(summary: dict[str, Any]) -> None:
