@@ -2,20 +2,26 @@
 judges: is the gap to issue 14's goal (left-out blocks called unknown >= 80 %, seen blocks
 right >= 95 %) the judge's or the features'?
 
-Run: ``python -m benchmarks.unknown_ceiling [--datasets ...] [--left-out N] [--cache DIR]``
-(``--datasets hdm05`` alone takes a few minutes; UI-PRMD Vicon about 20 minutes and
-Kinect about 5 minutes per left-out movement at load 6-10 on 2 cores, most of it fitting
-each case base: ``--left-out N`` keeps N of a fold's movements, evenly spaced in sorted
-order, and is recorded in the results; ``--cache DIR`` keeps each fold's and each left-out
-movement's measurements, so an interrupted run resumes). Writes
-``benchmarks/results/unknown_ceiling.json``.
+Run: ``python -m benchmarks.unknown_ceiling [--datasets ...] [--left-out N] [--per-person N]
+[--cache DIR]`` (at load 10-16 on 2 cores: HDM05 about 4 minutes, 10 with ``--per-person
+3``; UI-PRMD Vicon and Kinect 3-4 minutes per left-out movement, most of it fitting each
+case base, and a few minutes of DTW per fold; ``--left-out N`` keeps N of a fold's
+movements, evenly spaced in sorted order, and the results name the movements measured;
+``--per-person N``: segment_people's, more test recordings per person; ``--cache DIR``
+keeps each left-out movement's and each fold's DTW measurements, so an interrupted run
+resumes and a run of several datasets reuses single runs'). Writes
+``benchmarks/results/unknown_ceiling.json`` (``unknown_ceiling_perN.json`` with
+``--per-person N``).
 
 The folds, recordings, readers and case bases are :mod:`benchmarks.segment_people`'s (one
 recording per held-out person, seed 0): each movement of the test recordings left out of the
 case base in turn, every test recording solved with it (:func:`cbr.segmentation.solve_recording`)
 and its 2-s windows (not the repetition windows) taken whole within one labelled movement
 (windows across a change of movement are left out and counted). A window of a movement the
-case base has is *known*, one of the left-out movement *novel*. Each score below is higher
+case base has is *known*, one of the left-out movement *novel*, both measured with the
+case base that lacks the left-out movement (the share of known windows kept is what the
+threshold costs there, not ``segment_people``'s seen accuracy, which uses the full case
+base). Each score below is higher
 for "more unknown"; for each: AUROC (known vs novel windows, sklearn's ``roc_auc_score``)
 and the ORACLE rate: the share of novel windows above the threshold read from the test
 windows themselves, the lowest that keeps >= 95 % of the known windows known
@@ -506,7 +512,7 @@ def dataset_summary(measured: list[tuple[str, str, dict[str, Any]]]) -> dict[str
 
 def print_table(summary: dict[str, Any]) -> None:
     print("\nLeft-out movements' 2-s windows vs known ones, people not in the case base")
-    print(f"  {'dataset, score':32s}{'AUROC':>7s}{'oracle @95%':>13s}"
+    print(f"  {'dataset, score':42s}{'AUROC':>7s}{'oracle @95%':>13s}"
           f"{'calibrated: kept':>18s}{'unknown':>9s}")  # fmt: skip
     for dataset, s in summary.items():
         p = s["pooled"]
@@ -514,15 +520,15 @@ def print_table(summary: dict[str, Any]) -> None:
             o = p[name]
             cal = o.get("calibrated")
             tail = f"{cal['known_kept']:18.1%}{cal['novel_unknown']:9.1%}" if cal else ""
-            print(f"  {dataset + ', ' + name:32s}{o['auroc']:7.3f}"
+            print(f"  {dataset + ', ' + name:42s}{o['auroc']:7.3f}"
                   f"{o['oracle_unknown_at_95_known']:13.1%}{tail}")  # fmt: skip
         d, e = p[JUDGE]["decisions"], p["segment_blocks"]
         print(
-            f"  {dataset + ', ' + JUDGE + ' decisions':32s}{p[JUDGE]['evidence_auroc']:7.3f}"
+            f"  {dataset + ', ' + JUDGE + ' decisions':42s}{p[JUDGE]['evidence_auroc']:7.3f}"
             f"{'(evidence)':>13s}{d['known_kept']:18.1%}{d['novel_unknown']:9.1%}"
         )
         print(
-            f"  {dataset + ', segment blocks':32s}{'':7s}{'':13s}"
+            f"  {dataset + ', segment blocks':42s}{'':7s}{'':13s}"
             f"{e['known_blocks_not_unknown']:18.1%}{e['novel_blocks_unknown']:9.1%}"
         )
         print(f"  {'':4s}per movement, AUROC " + " / ".join(SCORES))
