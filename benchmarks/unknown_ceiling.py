@@ -533,7 +533,9 @@ def print_table(summary: dict[str, Any]) -> None:
         )
         print(f"  {'':4s}per movement, AUROC " + " / ".join(SCORES))
         for movement, o in s["per_movement"].items():
-            print(f"  {'':4s}{movement:24s}" + " ".join(f"{o[n]['auroc']:.2f}" for n in SCORES))
+            print(
+                f"  {'':4s}{movement[:29]:30s}" + " ".join(f"{o[n]['auroc']:.2f}" for n in SCORES)
+            )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -591,6 +593,10 @@ def main(argv: list[str] | None = None) -> int:
         "versions": versions("posecbr", "numpy", "scipy", "scikit-learn", "tslearn", "numba"),
         "summary": summary,
     }
+    if args.cache is not None:
+        result["cache"] = (
+            "measurements read from --cache where a run had made them: wall_s is this run's"
+        )
     out = RESULTS
     if args.per_person != 1:
         out = RESULTS.with_name(f"unknown_ceiling_per{args.per_person}.json")
