@@ -649,8 +649,9 @@ def _rest_is_high(
     the end nearer :data:`AT_EASE`, when the angles that have an at-ease value carry at least
     :data:`EASE_SHARE` of the movement (the upper arm's turn has no side nearer ease, the hips'
     height no value at ease common to all bodies: a movement mostly along them, a shoulder
-    turning in and out, is not told by the elbow's small part in it) and the two ends lie
-    more than :data:`MIN_EXCURSION_RAD` apart in their distance from it; otherwise the end
+    turning in and out, is not told by the elbow's small part in it) and one end lies nearer
+    it by :data:`MIN_EXCURSION_RAD`, summed angle by angle (an angle as far from ease at both
+    ends adds nothing); otherwise the end
     the clip's first and last :data:`ENDS_S` seconds lie nearer (an exercise starts and ends
     at rest)."""
     ease = np.array([AT_EASE.get(n, np.pi / 2) for n in names])
@@ -659,8 +660,12 @@ def _rest_is_high(
     high_posture = x[line >= hi].mean(axis=0)
     free = np.array([n in TWIST_NAMES or n == PELVIS_HEIGHT for n in names])
     high_posture[free] = low_posture[free] = ease[free]
-    high_far = float(np.linalg.norm(high_posture - ease))
-    low_far = float(np.linalg.norm(low_posture - ease))
+    # how much nearer ease one end lies than the other, angle by angle (degrees summed): an
+    # angle that stays far from ease at both ends (lying on the side, the lower arm bent under
+    # the head) adds nothing, where in the distances' difference it swamped the angles that
+    # move and left the ends undecided
+    # (> 0: the low end nearer ease)
+    nearer_low = float(np.sum(np.abs(high_posture - ease) - np.abs(low_posture - ease)))
     if "trunk_inclination" in names:
         # the hips held up above the shoulders (a bridge) are no rest: the end whose trunk
         # tilts less far head-down past the horizontal is, whatever standing at ease says
@@ -671,8 +676,8 @@ def _rest_is_high(
         if abs(high_past - low_past) >= MIN_EXCURSION_RAD:
             return high_past < low_past
     eased = float(np.sum(direction[~free] ** 2) / max(float(np.sum(direction**2)), 1e-12))
-    if eased >= EASE_SHARE and abs(high_far - low_far) >= MIN_EXCURSION_RAD:
-        return high_far < low_far
+    if eased >= EASE_SHARE and abs(nearer_low) >= MIN_EXCURSION_RAD:
+        return nearer_low < 0
     k = _ends_samples(len(line), fps)
     ends = float(np.concatenate([line[:k], line[-k:]]).mean())
     return bool(abs(ends - hi) < abs(ends - lo))
