@@ -262,6 +262,9 @@ def run(args: argparse.Namespace) -> int:
         results, gone = _with_feedback(args.db, stored, clips, label, settings, target, known)
     if stored.cases == "windows":
         _note_long_clips(name, clips)
+    # with --feedback the clips' label is the feedback's, checked or added as a new activity
+    held = None if label is not None else stored.classifier.case_base_.labels.tolist()
+    _note_unknown_truths(name, target, results, held)
     _print(args, store.where, name, target, results, gone)
     if all(r.solved is None for r in results):  # nothing the user asked for could be done
         print(
@@ -326,6 +329,38 @@ def _note_gone(name: str, target: str, gone: list[str]) -> None:
             f"{'it is' if one else 'they are'} no longer predicted (to add "
             f"{'it' if one else 'one'} again: --feedback LABEL --new-label)"
         ),
+        file=sys.stderr,
+    )
+
+
+def _note_unknown_truths(
+    name: str, target: str, results: list[Any], known: list[Any] | None
+) -> None:
+    """A note on stderr naming the true labels of the clips that the case base holds no case
+    of: such a clip is counted wrong whatever it is answered (a clip of an activity never
+    trained, or labelled by its folder's name, as ``extract`` labels a folder's videos)."""
+    from cbr.explain import class_noun, label_words
+    from features.text import shown
+
+    if known is None:
+        return
+    have = {str(k) for k in known}
+    missing: dict[str, int] = {}
+    for r in results:
+        if r.solved is not None and r.true_label is not None and str(r.true_label) not in have:
+            missing[str(r.true_label)] = missing.get(str(r.true_label), 0) + 1
+    if not missing:
+        return
+    labels = ", ".join(
+        f"{shown(label_words(lab, target))!r} ({counted(n, 'clip')})"
+        for lab, n in sorted(missing.items())
+    )
+    ours = ", ".join(shown(label_words(k, target)) for k in sorted(have))
+    these = "that clip" if sum(missing.values()) == 1 else "those clips"
+    counts = "counts" if sum(missing.values()) == 1 else "count"
+    print(
+        f"note: case base {name!r} has no case of {labels}: {these} cannot be answered right "
+        f"and {counts} as wrong (its {class_noun(target, 2)}: {ours})",
         file=sys.stderr,
     )
 
