@@ -28,6 +28,7 @@ When the clip moves its left side more and is compared as its mirror image
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -597,13 +598,35 @@ def change_claims(r: _Reading, cf: Counterfactual, guide: np.ndarray) -> list[Cl
     return out
 
 
+_SIDEWAYS = re.compile(r"(?P<joint>.+) to the (?P<side>left|right)(?P<stat> \(.+\))?")
+_TURNED = {" (lowest)": " (highest)", " (highest)": " (lowest)"}
+
+
+def _sideways(words: str, unit: str, *values: float | None) -> tuple[str, float]:
+    """A sideways position said the way its values point: "right knee to the left" with
+    every value at or below 0 (-0.31, its cases -0.35 to -0.24) reads "right knee to the
+    right" with the values negated (0.31, 0.24-0.35), as people say where a joint is; its
+    lowest is then its highest. The words and the sign to multiply the values by (1: as
+    they were)."""
+    known = [v for v in values if v is not None]
+    m = _SIDEWAYS.fullmatch(words)
+    if unit != "torso lengths" or m is None or not known or any(v > 0 for v in known):
+        return words, 1.0
+    stat = m["stat"] or ""
+    if stat == " (variation)" or all(v == 0 for v in known):
+        return words, 1.0
+    side = "right" if m["side"] == "left" else "left"
+    return f"{m['joint']} to the {side}{_TURNED.get(stat, stat)}", -1.0
+
+
 def _change_text(c: Claim) -> str:
     if c.unit == "detected":
         return f"{'not ' if c.there is not None and c.there < 0.5 else ''}show {c.words}"
-    there = c.there if c.there is not None else float("nan")
+    words, sign = _sideways(c.words, c.unit, c.here, c.there)
+    there = sign * c.there if c.there is not None else float("nan")
     if c.here is None:
-        return f"{c.words} not seen → {said(there, c.unit)}"
-    return f"{c.words} {_pair(c.here, there, c.unit, ' → ', '')}"
+        return f"{words} not seen → {said(there, c.unit)}"
+    return f"{words} {_pair(sign * c.here, there, c.unit, ' → ', '')}"
 
 
 def _pair(a: float, b: float, unit: str, between: str, after: str = "") -> str:
@@ -617,16 +640,25 @@ def _pair(a: float, b: float, unit: str, between: str, after: str = "") -> str:
     return f"{a:.2f}{between}{said(b, unit)}"  # the unit after the last value
 
 
+def _difference_text(d: dict[str, Any]) -> str:
+    """One of the features that differ most from the nearest case of another label: "left
+    knee angle (lowest) 62° here, 80° there"."""
+    words, sign = _sideways(d["feature"], d["unit"], d["here"], d["there"])
+    return f"{words} {_pair(sign * d['here'], sign * d['there'], d['unit'], ' here, ', ' there')}"
+
+
 def _claim_text(c: Claim, whose: str) -> str:
     """``left knee angle (lowest) 62° (its cases: 45–80°)``: ``whose`` names the cases the
     range is of."""
     if c.unit == "detected":
         share = "" if c.there is None else f" (in {100 * c.there:.0f} % of {whose})"
         return f"{c.words}{share}"
+    words, sign = _sideways(c.words, c.unit, c.here, c.low, c.high)
     rng = ""
     if c.low is not None and c.high is not None and whose:
-        rng = f" ({whose}: {_span(c.low, c.high, c.unit)})"
-    return f"{c.words} {'not seen' if c.here is None else said(c.here, c.unit)}{rng}"
+        low, high = sorted((sign * c.low, sign * c.high))
+        rng = f" ({whose}: {_span(low, high, c.unit)})"
+    return f"{words} {'not seen' if c.here is None else said(sign * c.here, c.unit)}{rng}"
 
 
 # -------------------------------------------------------------------------- neighbours
@@ -980,8 +1012,7 @@ def _verbose_contrast(
         + f" (distance {contrast.distance:.3g}) {contrast.source}."
     )
     if differences:
-        said_ = [f"{d['feature']} {_pair(d['here'], d['there'], d['unit'], ' here, ', ' there')}"
-                 for d in differences]  # fmt: skip
+        said_ = [_difference_text(d) for d in differences]
         out.append("Differs from it most in: " + "; ".join(said_) + ".")
     if contrast.changes:
         status = (

@@ -45,3 +45,54 @@ def test_classify_notes_clips_labelled_with_an_activity_the_case_base_lacks(
     out, err = capsys.readouterr()
     assert json.loads(out)["summary"]["accuracy"] == 0.0
     assert "has no case of 'edge'" in err
+
+
+def test_a_sideways_position_is_said_the_way_it_points() -> None:
+    """UI-PRMD deep squat m01_s01_e02_inc against a case base of s02 and s03: its right knee
+    lies 0.31 torso lengths to the right of the starting mid-hip (worked out by hand from the
+    pose file: -0.313 along the level left line of the hips over the first tenth, over the
+    median neck-to-mid-hip length), which the explanation said as "right knee to the left
+    -0.31 torso lengths (its cases: -0.35–-0.24)"; and a sit-to-stand's knees coming
+    together as "left knee to the right -0.15 torso lengths (correct ones: -0.33–-0.26)".
+    Now each reads the way the values point, the lowest of a value turned round its highest;
+    values on both sides of the mid-hip keep the words as computed."""
+    from cbr.explain import Claim, _change_text, _claim_text
+
+    def claim(words: str, here: float | None, low: float, high: float) -> Claim:
+        return Claim("why", "c", "f", words, here, "torso lengths", low=low, high=high)
+
+    assert (
+        _claim_text(claim("right knee to the left", -0.3126, -0.35, -0.24), "its cases")
+        == "right knee to the right 0.31 torso lengths (its cases: 0.24–0.35)"
+    )
+    assert (
+        _claim_text(claim("left knee to the right", -0.15, -0.33, -0.26), "correct ones")
+        == "left knee to the left 0.15 torso lengths (correct ones: 0.26–0.33)"
+    )
+    assert (
+        _claim_text(claim("right knee to the left (lowest)", -0.51, -0.74, -0.40), "its cases")
+        == "right knee to the right (highest) 0.51 torso lengths (its cases: 0.40–0.74)"
+    )
+    assert (
+        _claim_text(claim("left wrist to the left (middle third)", -0.2, -0.3, -0.1), "its cases")
+        == "left wrist to the right (middle third) 0.20 torso lengths (its cases: 0.10–0.30)"
+    )
+    # either side of the mid-hip, a height, a variation: as computed
+    assert (
+        _claim_text(claim("right knee to the left", -0.05, -0.1, 0.02), "its cases")
+        == "right knee to the left -0.05 torso lengths (its cases: -0.10–0.02)"
+    )
+    assert (
+        _claim_text(claim("left wrist height", -0.5, -0.6, -0.4), "its cases")
+        == "left wrist height -0.50 torso lengths (its cases: -0.60–-0.40)"
+    )
+    change = Claim("change", "c", "f", "right knee to the left", -0.43, "torso lengths", -0.15)
+    assert _change_text(change) == "right knee to the right 0.43 → 0.15 torso lengths"
+    from cbr.explain import _difference_text  # the verbose "Differs from it most in"
+
+    difference = {"feature": "right foot index to the left", "here": -0.60, "there": -0.38,
+                  "unit": "torso lengths"}  # fmt: skip
+    assert (
+        _difference_text(difference)
+        == "right foot index to the right 0.60 torso lengths here, 0.38 there"
+    )
