@@ -243,6 +243,8 @@ def _learned(clf: CaseBaseClassifier) -> dict[str, Any]:
         "unlike_cases": clf.novelty_.describe(),
         # 0: no training clip could be classified held out, the confidence is the vote share
         "confidence_calibrated_on": int(clf.confidence_.n),
+        # the share of those clips answered right (None when none could be held out)
+        "held_out_accuracy": float(clf.confidence_.accuracy) if clf.confidence_.n else None,
     }
 
 

@@ -7,11 +7,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from features.poses import load_pose, save_pose
+from features.poses import PoseSequence, load_pose, save_pose
 from posecbr.cli import main
 from tests.badinput import small_case_base
+from tests.bodies import rot_z, rotate, standing, to_sequence
 
 
 def test_classify_notes_clips_labelled_with_an_activity_the_case_base_lacks(
@@ -96,3 +98,58 @@ def test_a_sideways_position_is_said_the_way_it_points() -> None:
         _difference_text(difference)
         == "right foot index to the right 0.60 torso lengths here, 0.38 there"
     )
+
+
+def _arm_raises(top_deg: float, frames: int = 45) -> PoseSequence:
+    """Both arms raised sideways to ``top_deg`` and lowered once (a sin-squared bump)."""
+    arm = tuple(f"{side}_{j}" for side in ("left", "right") for j in _ARM)
+    body = standing()
+    out = []
+    for a in top_deg * np.sin(np.pi * np.arange(frames) / (frames - 1)) ** 2:
+        left = rotate(body, arm[:5], rot_z(-a), body["left_shoulder"])
+        out.append(rotate(left, arm[5:], rot_z(a), body["right_shoulder"]))
+    return to_sequence(*out, fps=30.0)
+
+
+_ARM = ("elbow", "wrist", "pinky", "index", "thumb")
+
+
+@pytest.mark.parametrize("crossed", [True, False])
+def test_train_notes_a_case_base_no_better_than_a_guess(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], crossed: bool
+) -> None:
+    """Two people whose "correct" and "incorrect" repetitions are each other's (s1's correct
+    raise is 40 degrees, s2's 90; crossed): every training clip held out by person is
+    answered wrong, so the case base tells nothing; before, `train` printed its cases and
+    nothing else (UI-PRMD's sit to stand of s01 and s03: 7 of 16 held-out clips right, and
+    `classify` then answered "an incorrect repetition, confidence 0.00"). Labelled alike
+    for both people (not crossed), no note."""
+    rows = ["path,label,subject,correct"]
+    for subject, (good, bad) in (
+        ("s1", (40.0, 90.0)),
+        ("s2", (90.0, 40.0) if crossed else (40.0, 90.0)),
+    ):
+        for i in range(4):
+            for truth, top in (("true", good), ("false", bad)):
+                name = f"{subject}_{truth}_{i}.npz"
+                save_pose(_arm_raises(top + 2.0 * i), tmp_path / name)
+                rows.append(f"{name},raise,{subject},{truth}")
+    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(tmp_path / "labels.csv"), "--db", str(db), "--target", "correct"]
+    assert main([*argv, "--json"]) == 0
+    out, err = capsys.readouterr()
+    learned = json.loads(out)["learned"]
+    assert learned["confidence_calibrated_on"] == 16
+    notes = [line for line in err.splitlines() if "no better than" in line]
+    if not crossed:
+        assert notes == []
+        assert learned["held_out_accuracy"] == 1.0
+        return
+    assert notes == [
+        "note: held out in turn, the training clips were answered right 0 % of the time "
+        "(0 of 16), no better than always answering a correct repetition (50 %): this case "
+        "base does not tell its classes apart (more people, or clips of one movement per "
+        "case base, may)"
+    ]
+    assert learned["held_out_accuracy"] == 0.0

@@ -910,6 +910,7 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
             f" {class_noun(args.target)} calibrates it)",
             file=sys.stderr,
         )
+    _note_chance(args, result)
     if not args.append and args.split == "windows" and not result.judges_unknown:
         why = (
             f"fewer than three {class_noun(args.target, 3)}"
@@ -922,6 +923,39 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
             f" base ({why}) by default: run them with --unknown held-out",
             file=sys.stderr,
         )
+
+
+def _note_chance(args: argparse.Namespace, result: Any) -> None:
+    """A note when the training clips, each classified held out (by subject, recording or
+    non-overlapping piece) as the confidence is calibrated, were answered right no more
+    often than always answering the commonest class would be: the case base tells its
+    classes apart no better than a guess, however sure its explanations read."""
+    from cbr.explain import class_noun, label_words
+    from cbr.stored import CASE_KINDS
+
+    n = int(result.learned.get("confidence_calibrated_on") or 0)
+    accuracy = result.learned.get("held_out_accuracy")
+    counts = result.label_counts
+    if args.append or not n or accuracy is None or len(counts) < 2:
+        return
+    commonest = max(counts, key=lambda k: counts[k])
+    share = counts[commonest] / sum(counts.values())
+    if accuracy > share:
+        return
+    right = round(accuracy * n)
+    said = label_words(commonest, args.target)
+    said = repr(said) if said == commonest else said  # a correct repetition: said in words
+    print(
+        shown(
+            f"note: held out in turn, the training {CASE_KINDS.get(args.split, 'clip')}s were "
+            f"answered right {100 * accuracy:.0f} % of the time ({right} of {n}), no better "
+            f"than always answering {said} ({100 * share:.0f} %): this case base does not "
+            f"tell its "
+            f"{class_noun(args.target, 2)} apart (more people, or clips of one movement per "
+            "case base, may)"
+        ),
+        file=sys.stderr,
+    )
 
 
 def _summary(args: argparse.Namespace, result: Any) -> dict[str, Any]:
