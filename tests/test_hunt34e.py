@@ -153,3 +153,43 @@ def test_train_notes_a_case_base_no_better_than_a_guess(
         "case base, may)"
     ]
     assert learned["held_out_accuracy"] == 0.0
+
+
+def _raises(top_deg: float, times: int) -> PoseSequence:
+    """``times`` arm raises to ``top_deg``, 0.5 s of standing before, between and after."""
+    rest = _arm_raises(0.0, 15)
+    one = _arm_raises(top_deg)
+    parts = [rest.positions] + [np.concatenate([one.positions, rest.positions])] * times
+    return PoseSequence(np.concatenate(parts), one.joint_names, one.fps)
+
+
+def test_classify_notes_clips_of_several_repetitions_against_a_case_base_of_one_each(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A case base trained with --split repetitions holds one repetition per case; a video
+    of three squats classified against it got one answer for the three with nothing said
+    (the README's note covered case bases of windows only). Now a note names the clip and
+    its count, and says how to classify each repetition."""
+    rows = ["path,label,subject"]
+    for subject in ("s1", "s2"):
+        for label, top in (("high", 90.0), ("low", 40.0)):
+            name = f"{subject}_{label}.npz"
+            save_pose(_raises(top + (5.0 if subject == "s2" else 0.0), 2), tmp_path / name)
+            rows.append(f"{name},{label},{subject}")
+    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(tmp_path / "labels.csv"), "--db", str(db), "--split", "repetitions"]
+    assert main(argv) == 0
+    assert "cut 4 clips into 8 repetitions" in capsys.readouterr().err
+    three = save_pose(_raises(85.0, 3), tmp_path / "three.npz")
+    one = save_pose(_raises(85.0, 1), tmp_path / "one.npz")
+    assert main(["classify", str(three), str(one), "--db", str(db), "-q"]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "per repetition" in line]
+    assert notes == [
+        "note: case base 'default' holds a case per repetition and 1 clip holds several "
+        "(three.npz: 3): each gets one answer here; to classify each repetition, give them "
+        "as rows path,label,start,end of a labels CSV (posecbr reps CLIP --json: each one's "
+        "start_frame and end_frame)"
+    ]
+    assert main(["classify", str(one), "--db", str(db), "-q"]) == 0
+    assert "per repetition" not in capsys.readouterr().err

@@ -657,7 +657,9 @@ def test_classify_notes_a_whole_recording_against_a_case_base_of_windows(
     for db, data in ((windows, csv), (clips, recording)):
         assert main(["classify", str(data), "--db", str(db)]) == 0
         out, err = capsys.readouterr()
-        assert "note:" not in err
+        assert "holds a case per" not in err
+        # the part's label, Twist, is no activity of the case base (its codes 1-6 unnamed)
+        assert ("has no case of 'Twist'" in err) == (data == csv), err
         # a piece of a file is named with its frames (end inclusive); the whole file alone
         first = out.splitlines()[0]
         assert first.startswith(f"{recording} "), first

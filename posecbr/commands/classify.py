@@ -175,6 +175,20 @@ LONG_CLIP_WINDOWS = 5
 one answer for a recording that may hold several activities."""
 
 
+def _notes(
+    name: str, target: str, stored: Any, clips: list[Any], results: list[Any], feedback: bool
+) -> None:
+    """What the user should know of the answers, on stderr: clips longer or of more
+    repetitions than the case base's cases, and labels it has no case of."""
+    if stored.cases == "windows":
+        _note_long_clips(name, clips)
+    if stored.cases == "repetitions":
+        _note_repeated_clips(name, clips)
+    # with --feedback the clips' label is the feedback's, checked or added as a new activity
+    held = None if feedback else stored.classifier.case_base_.labels.tolist()
+    _note_unknown_truths(name, target, results, held)
+
+
 def _note_long_clips(name: str, clips: list[Any]) -> None:
     """Note, on stderr, clips much longer than the windows a case base of windows holds: each
     gets one answer, where ``segment`` labels each stretch."""
@@ -191,6 +205,36 @@ def _note_long_clips(name: str, clips: list[Any]) -> None:
             "here; posecbr segment labels each activity of a long recording",
             file=sys.stderr,
         )
+
+
+def _note_repeated_clips(name: str, clips: list[Any]) -> None:
+    """Note, on stderr, clips of several repetitions classified against a case base of
+    single repetitions (``train --split repetitions``): each gets one answer, its
+    repetitions' summary held against cases of one; how to classify each instead."""
+    from features.errors import DataError
+    from features.repetitions import count_repetitions
+    from features.text import shown
+
+    several: list[tuple[str, int]] = []
+    for clip in clips:
+        try:
+            n = count_repetitions(clip).count
+        except DataError:  # too short to count, nobody seen: classify says what it can
+            continue
+        if n > 1:
+            several.append((clip.source or "a clip", n))
+    if not several:
+        return
+    named = ", ".join(f"{shown(Path(src).name)}: {n}" for src, n in several[:3])
+    more = f" and {len(several) - 3} more" if len(several) > 3 else ""
+    print(
+        f"note: case base {name!r} holds a case per repetition and "
+        f"{counted(len(several), 'clip')} {'holds' if len(several) == 1 else 'hold'} several "
+        f"({named}{more}): each gets one answer here; to classify each repetition, give them "
+        "as rows path,label,start,end of a labels CSV (posecbr reps CLIP --json: each "
+        "one's start_frame and end_frame)",
+        file=sys.stderr,
+    )
 
 
 def _open_reader(args: argparse.Namespace) -> CaseStore:
@@ -260,11 +304,7 @@ def run(args: argparse.Namespace) -> int:
     gone: list[str] | None = None  # with feedback: the labels it left without a case
     if label is not None:
         results, gone = _with_feedback(args.db, stored, clips, label, settings, target, known)
-    if stored.cases == "windows":
-        _note_long_clips(name, clips)
-    # with --feedback the clips' label is the feedback's, checked or added as a new activity
-    held = None if label is not None else stored.classifier.case_base_.labels.tolist()
-    _note_unknown_truths(name, target, results, held)
+    _notes(name, target, stored, clips, results, label is not None)
     _print(args, store.where, name, target, results, gone)
     if all(r.solved is None for r in results):  # nothing the user asked for could be done
         print(
