@@ -112,6 +112,19 @@ def describe(seq: PoseSequence, plan: Plan) -> DescribedClip:
     return describe_clip(seq, plan.candidates, plan.mirror, plan.sides)
 
 
+def no_target_value(clip: Any, target: str) -> DataError:
+    """The error for a clip without a value of the ``target`` column: the columns it has,
+    and the one meant when ``target`` is a mistyped one of them."""
+    from features.text import did_you_mean
+
+    columns = ["label", "subject", *sorted(clip.extras)]
+    return DataError(
+        f"no value for --target {target!r} (columns: {', '.join(columns)})"
+        + did_you_mean(target, columns),
+        clip.seq.source,
+    )
+
+
 def describe_entry(entry: DatasetEntry, plan: Plan, target: str) -> list[tuple[DescribedClip, str]]:
     """The work unit of ``train``: read one file of a dataset (decode, and pose estimation for
     a video), reduce each of its clips by ``plan`` (usually one; one per labelled stretch of a
@@ -121,12 +134,7 @@ def describe_entry(entry: DatasetEntry, plan: Plan, target: str) -> list[tuple[D
     for clip in entry.read():
         value = clip_target(clip, target)
         if value is None:
-            raise DataError(
-                f"no value for --target {target!r} (columns: label, subject"
-                + "".join(f", {k}" for k in sorted(clip.extras))
-                + ")",
-                clip.seq.source,
-            )
+            raise no_target_value(clip, target)
         _check_stored_text(clip.seq, value, target)
         out.append((describe(clip.seq, plan), value))
     return out

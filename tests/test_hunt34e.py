@@ -12,7 +12,7 @@ import pytest
 
 from features.poses import PoseSequence, load_pose, save_pose
 from posecbr.cli import main
-from tests.badinput import small_case_base
+from tests.badinput import good_pose_file, refused, small_case_base
 from tests.bodies import rot_z, rotate, standing, to_sequence
 
 
@@ -193,3 +193,32 @@ def test_classify_notes_clips_of_several_repetitions_against_a_case_base_of_one_
     ]
     assert main(["classify", str(one), "--db", str(db), "-q"]) == 0
     assert "per repetition" not in capsys.readouterr().err
+
+
+def test_a_mistyped_target_column_gets_a_guess(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`--target corect` (UI-PRMD's column is `correct`) listed the columns alone; now the
+    column meant is guessed, in train, compare and classify."""
+    data = tmp_path / "data"
+    for subject in ("s1", "s2"):
+        for truth in (True, False):
+            for i in range(2):
+                good_pose_file(data / f"{subject}_{truth}_{i}.npz", frames=40, label="squat",
+                               subject=subject, correct=truth)  # fmt: skip
+    line = refused(["train", str(data), "--db", str(tmp_path / "cb.sqlite"), "--target",
+                    "corect"], tmp_path, capsys, "no value for --target 'corect'")  # fmt: skip
+    assert line.endswith("(did you mean 'correct'?)"), line
+    line = refused(["compare", str(data), "--target", "corect", "--no-dad", "--peers", "none"],
+                   tmp_path, capsys, "no value for target 'corect'")  # fmt: skip
+    assert line.endswith("(did you mean 'correct'?)"), line
+    db = small_case_base(tmp_path / "cb")
+    capsys.readouterr()
+    clip = good_pose_file(tmp_path / "clip.npz", frames=40, label="squat")
+    line = refused(["classify", str(clip), "--db", str(db), "--target", "lable"], tmp_path,
+                   capsys, "case base 'default' predicts 'label'")  # fmt: skip
+    assert line.endswith("(did you mean 'label'?)"), line
+    # nothing close: the columns alone, as before
+    line = refused(["train", str(data), "--db", str(tmp_path / "cb.sqlite"), "--target",
+                    "grade"], tmp_path, capsys, "no value for --target 'grade'")  # fmt: skip
+    assert "did you mean" not in line

@@ -48,11 +48,13 @@ def _targets(clips: Sequence[Clip], target: str, source: str) -> np.ndarray:
     values = [clip_target(c, target) for c in clips]
     missing = [i for i, v in enumerate(values) if v is None]
     if missing:
+        from features.text import did_you_mean
+
         cols = sorted({"label", "subject"} | {k for c in clips for k in c.extras})
         raise DataError(
             f"{len(missing)} of {len(clips)} clips have no value for target "
             f"{target!r} (e.g. {clip_id(clips[missing[0]], missing[0])}); "
-            f"columns available: {', '.join(cols)}",
+            f"columns available: {', '.join(cols)}" + did_you_mean(target, cols),
             source,
         )
     return np.array(values, dtype=object)

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
-from features.text import counted, percent
+from features.text import counted, did_you_mean, percent
 from posecbr.arguments import path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
@@ -286,7 +286,8 @@ def run(args: argparse.Namespace) -> int:
         if target != stored.target:
             raise ConfigError(
                 f"case base {name!r} predicts {stored.target!r}; to check clips against "
-                f"{target!r}, train a case base with --target {target}",
+                f"{target!r}, train a case base with --target {target}"
+                + did_you_mean(target, [stored.target]),
                 "--target",
             )
         if args.feedback is not None:

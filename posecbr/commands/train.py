@@ -482,7 +482,7 @@ def _one_activity(args: argparse.Namespace, solutions: list[str]) -> None:
 
 
 def _described_in_memory(args: argparse.Namespace, plan: Any) -> tuple[list[Any], list[str]]:
-    from cbr.training import describe
+    from cbr.training import describe, no_target_value
     from features.datasets import clip_target
     from features.progress import progress
 
@@ -491,12 +491,7 @@ def _described_in_memory(args: argparse.Namespace, plan: Any) -> tuple[list[Any]
     for clip in clips:
         value = clip_target(clip, args.target)
         if value is None:
-            raise DataError(
-                f"no value for --target {args.target!r} (columns: label, subject"
-                + "".join(f", {k}" for k in sorted(clip.extras))
-                + ")",
-                clip.seq.source,
-            )
+            raise no_target_value(clip, args.target)
         solutions.append(value)
     seqs = progress([c.seq for c in clips], desc="features", total=len(clips), unit="clip")
     return [describe(s, plan) for s in seqs], solutions
