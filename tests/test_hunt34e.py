@@ -33,7 +33,7 @@ def test_classify_notes_clips_labelled_with_an_activity_the_case_base_lacks(
     same = save_pose(seq.with_metadata(label=known[0]), tmp_path / "same.npz")
     assert main(["classify", str(odd), str(same), "--db", str(db), "-q"]) == 0
     out, err = capsys.readouterr()
-    assert "accuracy: 0.500 (1/2 labelled clips)" in out
+    assert "accuracy: 50.0 % (1/2 labelled clips)" in out
     notes = [line for line in err.splitlines() if "has no case of" in line]
     assert notes == [
         "note: case base 'default' has no case of 'edge' (1 clip): that clip cannot be "
