@@ -133,9 +133,7 @@ def open_video(
         raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
     if not head:
         raise DataError("empty file, not a video", path)
-    if head.startswith(JPEG_START) and not tail.rstrip(b"\x00\r\n\t ").endswith(JPEG_END):
-        # OpenCV decodes what it has of a cut-off JPEG and greys the rest
-        raise DataError("truncated JPEG (no end-of-image marker)", path)
+    _refuse_cut(path, head, tail)
     try:
         cap = _capture(str(path), decode_threads)
     except cv2.error as exc:
@@ -161,15 +159,92 @@ def open_video(
     return cap, VideoInfo(path, frames, fps, width, height)
 
 
+def _refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
+    """DataError for a file whose first and last bytes (``head``, ``tail``) show it cut
+    short: a JPEG without its end-of-image marker (OpenCV decodes what it has of it and
+    greys the rest), a Matroska/WebM file that ends inside an element (:func:`_matroska_end`:
+    FFmpeg reads the frames before the cut as the whole video when the file states no
+    duration, or no frame rate, as a browser's WebM)."""
+    if head.startswith(JPEG_START) and not tail.rstrip(b"\x00\r\n\t ").endswith(JPEG_END):
+        raise DataError("truncated JPEG (no end-of-image marker)", path)
+    if head.startswith(EBML_START):
+        try:
+            size, end = path.stat().st_size, _matroska_end(path)
+        except OSError as exc:
+            raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
+        if end is not None and end > size:
+            runs = f" that runs to byte {end:,}" if end > size + 1 else "'s header"
+            raise DataError(
+                f"truncated Matroska/WebM: the file ends at byte {size:,}, inside an element{runs}",
+                path,
+            )
+
+
 def _frames_rate(path: Path, fps: float, frames: int) -> tuple[float, int]:
     """The frame rate and count OpenCV states for a video (``fps``, ``frames``), or, when
     that rate is above :data:`SUSPECT_FPS` and a clock's ticks rather than a frame rate
-    (:func:`own_rate`), the frames' own rate and their number."""
+    (:func:`own_rate`), the frames' own rate and their number (their packets: not the
+    container's duration at that rate, which counts an audio track running on after the
+    video; a WebM cut short is found by :func:`_matroska_end`)."""
     if not (math.isfinite(fps) and fps > SUSPECT_FPS):
         return fps, frames
     got = _packet_times(path)
     rate = taken_rate(*got) if got is not None else fps
     return (fps, frames) if got is None or rate == fps else (rate, int(got[0].size))
+
+
+EBML_START = b"\x1a\x45\xdf\xa3"
+"""The first bytes of a Matroska or WebM file (its EBML header's ID)."""
+_SEGMENT, _CLUSTER = 0x18538067, 0x1F43B675
+
+
+def _ebml_number(fh: Any, keep_marker: bool) -> tuple[int, bool]:
+    """An EBML number (an ID with its length marker kept; a size without it, and
+    whether it is unknown: all ones); raises EOFError where the file ends inside it,
+    ValueError where its first byte is no number's."""
+    first = fh.read(1)
+    if not first:
+        raise EOFError
+    if first[0] == 0:
+        raise ValueError
+    n = 9 - first[0].bit_length()  # the leading zeros say how many bytes follow
+    rest = fh.read(n - 1)
+    if len(rest) < n - 1:
+        raise EOFError
+    value = first[0] if keep_marker else first[0] & ((1 << (8 - n)) - 1)
+    for b in rest:
+        value = (value << 8) | b
+    return value, not keep_marker and value == (1 << (7 * n)) - 1
+
+
+def _matroska_end(path: Path) -> int | None:
+    """Where a Matroska/WebM file's data ends as its elements state it (bytes): the end of
+    its segment when the segment states its size; when it does not (a recording written as
+    it went, as a browser's MediaRecorder writes it), the end of its last element, walked
+    from the start (into clusters that do not state their size either, past the others
+    whole). Beyond the file's size, the file is truncated. None where the walk meets
+    anything it cannot read (bytes that are no element: padding, damage): not judged."""
+    size = path.stat().st_size
+    end = 0
+    with open(path, "rb") as fh:
+        while fh.tell() < size:
+            try:
+                ident, _ = _ebml_number(fh, True)
+                stated, unknown = _ebml_number(fh, False)
+            except EOFError:  # the file ends inside an element's header
+                return size + 1
+            except ValueError:
+                return None
+            if ident == _SEGMENT and not unknown:
+                return fh.tell() + stated
+            if ident in (_SEGMENT, _CLUSTER) and unknown:
+                end = fh.tell()  # its children follow, one by one
+                continue
+            if unknown:
+                return None  # no other element may leave its size open
+            end = fh.tell() + stated
+            fh.seek(end)
+    return end
 
 
 def taken_rate(times: np.ndarray, fps: float) -> float:
