@@ -1,16 +1,33 @@
 """Hunt 34h: video input. A Matroska/WebM file cut short on this machine (a browser's WebM,
-whose frame count came from the frames that were there, was taken as whole)."""
+whose frame count came from the frames that were there, was taken as whole); a served
+file's probe asks as FFmpeg asks (credentials in the URL, a self-signed HTTPS server)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import base64
+import functools
+import json
+import shutil
+import ssl
+import subprocess
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from posecbr.cli import main
 from tests.badinput import refused, small_case_base
-from tests.test_hunt34c import BROWSER_PTS_MS, _browser_webm, _encode
+from tests.test_hunt34c import (
+    BROWSER_PTS_MS,
+    _browser_webm,
+    _encode,
+    _Quiet,
+    _QuietServer,
+    _serving,
+)
 
 
 @pytest.fixture(scope="module")
@@ -101,3 +118,123 @@ def test_commands_refuse_a_cut_webm_in_one_line(
         "watch": ["watch", str(cut), "--db", str(case_base), "--speed", "0"],
     }[command]
     refused(argv, tmp_path, capsys, f"{cut}: truncated Matroska/WebM")
+
+
+# --- a served file's probe asks as FFmpeg asks: credentials in the URL, HTTPS -------------
+
+USER, PASSWORD = "coach", "p@ss:w rd"  # '@', ':' and ' ' percent-escaped in the URL
+IN_URL = "coach:p%40ss%3Aw%20rd"
+
+
+class _Guarded(_Quiet):
+    """Gives its files only to a client that sends USER and PASSWORD (HTTP Basic): any
+    other request gets 401 and a challenge, as a camera's or a NAS's server does."""
+
+    def do_GET(self) -> None:  # noqa: N802 (the base's name)
+        token = base64.b64encode(f"{USER}:{PASSWORD}".encode()).decode()
+        if self.headers.get("Authorization") != f"Basic {token}":
+            self.send_response(401)
+            self.send_header("WWW-Authenticate", 'Basic realm="videos"')
+            self.send_header("Content-Length", "0")
+            self.end_headers()
+            return
+        super().do_GET()
+
+
+def _raw_h264(folder: Path, n: int = 50) -> Path:
+    """A raw H.264 stream (no container: FFmpeg knows no frame count, takes it at 25 fps)."""
+    return _encode(folder / "camera.h264", [40 * k for k in range(n)], "libx264", 25, {})
+
+
+def test_a_served_file_behind_basic_auth_is_a_file(tmp_path: Path) -> None:
+    """FFmpeg reads ``http://user:pass@host/camera.h264`` (it answers the server's Basic
+    challenge with the URL's credentials, percent-escapes decoded); the probe that tells a
+    file from a live stream, by urllib, took ``user:pass@host`` for the host, failed and
+    called the file live (``served_file_rate`` None: watched as a camera). Now the file is
+    taken at its 25 fps, as without a password; with a wrong password it is no file."""
+    from features.pose_estimation import served_file_rate
+    from features.pose_estimation.video import _served_whole
+
+    _raw_h264(tmp_path)
+    with _serving(tmp_path, _Guarded) as address:
+        host = address.removeprefix("http://")
+        url = f"http://{IN_URL}@{host}/camera.h264"
+        assert _served_whole(url, 5.0)
+        assert served_file_rate(url, 5.0) == 25.0
+        assert not _served_whole(f"http://coach:wrong@{host}/camera.h264", 5.0)
+        assert not _served_whole(f"{address}/camera.h264", 5.0)  # no credentials: 401
+
+
+def test_watch_of_a_served_file_behind_basic_auth_reads_it_to_its_end(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``watch`` of that URL: watched as the file here is, 50 frames at 25 fps, one segment
+    0-2 s, exit 0 (it was taken for a camera: wall-clock times, "camera or connection
+    lost", exit 1)."""
+    _raw_h264(tmp_path)
+    with _serving(tmp_path, _Guarded) as address:
+        url = f"http://{IN_URL}@{address.removeprefix('http://')}/camera.h264"
+        capsys.readouterr()
+        code = main(["watch", url, "--db", str(case_base), "--speed", "0"])
+    got = capsys.readouterr()
+    assert code == 0, got.err
+    segments = [json.loads(line) for line in got.out.splitlines()]
+    assert [(s["start_frame"], s["end_frame"], s["end_s"]) for s in segments] == [(0, 50, 2.0)]
+    assert "camera or connection lost" not in got.err
+
+
+@pytest.fixture(scope="module")
+def self_signed(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """A certificate for 127.0.0.1 that no authority signed, and its key (openssl)."""
+    if shutil.which("openssl") is None:
+        pytest.skip("openssl makes the certificate")
+    folder = tmp_path_factory.mktemp("tls")
+    cert, key = folder / "cert.pem", folder / "key.pem"
+    subprocess.run(
+        ["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2",
+         "-subj", "/CN=127.0.0.1", "-keyout", str(key), "-out", str(cert)],
+        check=True, capture_output=True,
+    )  # fmt: skip
+    return cert, key
+
+
+@contextmanager
+def _serving_tls(folder: Path, cert: Path, key: Path) -> Iterator[str]:
+    """``folder`` served over HTTPS with the self-signed certificate while the block runs."""
+    server = _QuietServer(("127.0.0.1", 0), functools.partial(_Quiet, directory=str(folder)))
+    context = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
+    context.load_cert_chain(cert, key)
+    server.socket = context.wrap_socket(server.socket, server_side=True)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        yield f"https://127.0.0.1:{server.server_address[1]}"
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+def test_a_self_signed_https_server_is_probed_as_ffmpeg_reads_it(
+    tmp_path: Path, self_signed: tuple[Path, Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """FFmpeg (as OpenCV ships it) checks an HTTPS server's certificate: from a server whose
+    certificate no authority signed, no video opens, and the probe calls it no file either.
+    With FFmpeg's check turned off (``OPENCV_FFMPEG_CAPTURE_OPTIONS=tls_verify;0``) FFmpeg
+    reads the video; the probe, by urllib, still checked the certificate, failed and called
+    the file live. Now it is taken at its 25 fps, as FFmpeg reads it."""
+    import cv2
+
+    from features.pose_estimation import served_file_rate
+    from features.pose_estimation.video import _served_whole
+
+    _raw_h264(tmp_path)
+    with _serving_tls(tmp_path, *self_signed) as address:
+        url = f"{address}/camera.h264"
+        monkeypatch.delenv("OPENCV_FFMPEG_CAPTURE_OPTIONS", raising=False)
+        cap = cv2.VideoCapture(url, cv2.CAP_FFMPEG)
+        assert not cap.isOpened()
+        assert not _served_whole(url, 5.0) and served_file_rate(url, 5.0) is None
+        monkeypatch.setenv("OPENCV_FFMPEG_CAPTURE_OPTIONS", "rw_timeout;5000000|tls_verify;0")
+        cap = cv2.VideoCapture(url, cv2.CAP_FFMPEG)
+        assert cap.isOpened() and cap.read()[0]
+        cap.release()
+        assert served_file_rate(url, 5.0) == 25.0

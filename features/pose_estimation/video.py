@@ -798,15 +798,16 @@ def _served_whole(url: str, timeout_s: float | None = None) -> bool:
     """Whether an HTTP(S) URL is a file the server gives whole: it states the file's length
     (a live stream, a camera's, has none: it goes on) and the file is no text (an HLS or DASH
     playlist, whose own length says nothing of the stream's, is). False for any other URL and
-    for a server that does not answer within ``timeout_s`` (FFmpeg's 30 s when None)."""
+    for a server that does not answer within ``timeout_s`` (FFmpeg's 30 s when None). Asked
+    as FFmpeg asks for the same URL (:func:`_ffmpeg_opener`)."""
     import http.client
-    import urllib.request
     from urllib.parse import urlsplit
 
     if urlsplit(url).scheme.lower() not in ("http", "https"):
         return False
     try:
-        with urllib.request.urlopen(url, timeout=timeout_s or 30.0) as answer:  # noqa: S310
+        opener, bare = _ffmpeg_opener(url)
+        with opener.open(bare, timeout=timeout_s or 30.0) as answer:
             length = (answer.headers.get("Content-Length") or "").strip()
             if answer.status != 200 or not length.isdigit() or int(length) == 0:
                 return False
@@ -815,6 +816,50 @@ def _served_whole(url: str, timeout_s: float | None = None) -> bool:
         return False
     text = head.removeprefix(b"\xef\xbb\xbf")  # a playlist may start with UTF-8's mark
     return bool(text) and not all(32 <= b < 127 or b in b"\t\r\n" for b in text)
+
+
+def _ffmpeg_opener(url: str) -> tuple[Any, str]:
+    """A urllib opener that reads an HTTP(S) URL as FFmpeg (OpenCV's backend) reads it, and
+    the URL it is to open: credentials in the URL (``http://user:pass@host/...``,
+    percent-escapes decoded) are taken out of it (urllib would take ``user:pass@host`` for
+    the host) and given when the server asks for them, Basic or Digest, as FFmpeg gives
+    them. An HTTPS server's certificate is checked, as the FFmpeg OpenCV ships checks it by
+    default (FFmpeg 8: ``tls_verify`` 1; a self-signed server's video does not open), and
+    not when the user has turned FFmpeg's check off (``OPENCV_FFMPEG_CAPTURE_OPTIONS``
+    holding ``tls_verify;0``): the probe accepts the servers FFmpeg reads from."""
+    import ssl
+    import urllib.request
+    from urllib.parse import unquote, urlsplit, urlunsplit
+
+    parts = urlsplit(url)
+    handlers: list[Any] = []
+    if parts.username is not None:
+        host = parts.netloc.rpartition("@")[2]
+        url = urlunsplit(parts._replace(netloc=host))
+        passwords = urllib.request.HTTPPasswordMgrWithDefaultRealm()
+        passwords.add_password(None, url, unquote(parts.username), unquote(parts.password or ""))
+        handlers += [
+            urllib.request.HTTPBasicAuthHandler(passwords),
+            urllib.request.HTTPDigestAuthHandler(passwords),
+        ]
+    if not _ffmpeg_verifies_tls():
+        unchecked = ssl.create_default_context()
+        unchecked.check_hostname = False
+        unchecked.verify_mode = ssl.CERT_NONE
+        handlers.append(urllib.request.HTTPSHandler(context=unchecked))
+    return urllib.request.build_opener(*handlers), url
+
+
+def _ffmpeg_verifies_tls() -> bool:
+    """Whether FFmpeg, opened by OpenCV, checks an HTTPS server's certificate: unless the
+    options OpenCV gives it (``OPENCV_FFMPEG_CAPTURE_OPTIONS``, ``key;value`` pairs joined
+    by ``|``) set ``tls_verify`` to 0."""
+    options = os.environ.get("OPENCV_FFMPEG_CAPTURE_OPTIONS", "")
+    for pair in options.split("|"):
+        key, _, value = pair.partition(";")
+        if key.strip() == "tls_verify":
+            return value.strip() not in ("0", "false")
+    return True
 
 
 def _is_path(source: int | str | Path) -> TypeGuard[str | Path]:
