@@ -238,3 +238,63 @@ def test_a_self_signed_https_server_is_probed_as_ffmpeg_reads_it(
         assert cap.isOpened() and cap.read()[0]
         cap.release()
         assert served_file_rate(url, 5.0) == 25.0
+
+
+# --- a Matroska/WebM whose audio runs on after its last frame -----------------------------
+
+
+def _with_longer_audio(path: Path, frames: int, audio_s: float) -> Path:
+    """``frames`` grey frames at 30 fps (VP8 in WebM, MJPEG in Matroska) and a silent
+    mono track (Opus, 48 kHz, 20-ms packets) of ``audio_s`` seconds, interleaved by time."""
+    av = pytest.importorskip("av", reason="PyAV writes the videos")
+    out = av.open(str(path), "w")
+    video = out.add_stream("libvpx" if path.suffix == ".webm" else "mjpeg", rate=30)
+    video.width, video.height = 64, 48
+    video.pix_fmt = "yuv420p" if path.suffix == ".webm" else "yuvj420p"
+    audio = out.add_stream("libopus", rate=48000)
+    chunks = round(audio_s * 48000 / 960)
+    v = a = 0
+    while v < frames or a < chunks:
+        if v < frames and (a >= chunks or v / 30 <= a * 960 / 48000):
+            picture = np.full((48, 64, 3), (3 * v) % 250, np.uint8)
+            frame = av.VideoFrame.from_ndarray(picture, format="rgb24")
+            frame.pts, v = v, v + 1
+            packets = video.encode(frame)
+        else:
+            sound = av.AudioFrame.from_ndarray(np.zeros((1, 960), np.float32), "flt", "mono")
+            sound.sample_rate, sound.pts, a = 48000, a * 960, a + 1
+            packets = audio.encode(sound)
+        for packet in packets:
+            out.mux(packet)
+    for stream in (video, audio):
+        for packet in stream.encode():
+            out.mux(packet)
+    out.close()
+    return path
+
+
+@pytest.mark.parametrize("name", ["clip.webm", "clip.mkv"])
+def test_audio_running_on_after_the_last_frame_is_no_truncation(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 4-s clip, 120 frames at 30 fps, whose sound runs on to 4.3 s: OpenCV counts the
+    container's duration at 30 fps, round(4.3 x 30) = 129 frames, and the clip was refused
+    as "truncated or corrupt: decoded 120 of 129 frames" (``extract``, ``segment``,
+    ``watch``). Its frames are its 120 packets: all decode, ``extract`` writes 120 poses."""
+    import cv2
+
+    from features.pose_estimation import iter_frames, open_video
+    from features.poses import load_pose
+
+    clip = _with_longer_audio(tmp_path / name, 120, 4.3)
+    stated = cv2.VideoCapture(str(clip))
+    assert stated.get(cv2.CAP_PROP_FRAME_COUNT) == 129  # the duration's count
+    stated.release()
+    cap, info = open_video(clip)
+    cap.release()
+    assert (info.frames, info.fps) == (120, 30.0)
+    assert sum(1 for _ in iter_frames(clip)) == 120
+    out = tmp_path / "poses"
+    assert main(["extract", str(clip), "--out", str(out)]) == 0, capsys.readouterr().err
+    (written,) = out.glob("*.npz")
+    assert load_pose(written).n_frames == 120

@@ -147,7 +147,7 @@ def open_video(
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
-    fps, frames = _frames_rate(path, fps, frames)
+    fps, frames = _frames_rate(path, fps, frames, head.startswith(EBML_START))
     if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
         cap.release()
@@ -180,17 +180,24 @@ def _refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
             )
 
 
-def _frames_rate(path: Path, fps: float, frames: int) -> tuple[float, int]:
+def _frames_rate(path: Path, fps: float, frames: int, matroska: bool) -> tuple[float, int]:
     """The frame rate and count OpenCV states for a video (``fps``, ``frames``), or, when
     that rate is above :data:`SUSPECT_FPS` and a clock's ticks rather than a frame rate
     (:func:`own_rate`), the frames' own rate and their number (their packets: not the
     container's duration at that rate, which counts an audio track running on after the
-    video; a WebM cut short is found by :func:`_matroska_end`)."""
-    if not (math.isfinite(fps) and fps > SUSPECT_FPS):
+    video; a WebM cut short is found by :func:`_matroska_end`). A ``matroska`` file (not cut
+    short: :func:`_refuse_cut`) holds no more frames than its packets: OpenCV's count is its
+    duration at the rate, and the duration is its longest track's (audio running on 0.3 s
+    after the last frame of a 4-s clip counted 9 frames more than there are)."""
+    if not (matroska and frames) and not (math.isfinite(fps) and fps > SUSPECT_FPS):
         return fps, frames
     got = _packet_times(path)
-    rate = taken_rate(*got) if got is not None else fps
-    return (fps, frames) if got is None or rate == fps else (rate, int(got[0].size))
+    if got is None:
+        return fps, frames
+    rate = taken_rate(*got)
+    if rate != fps:
+        return rate, int(got[0].size)
+    return fps, min(frames, int(got[0].size)) if matroska and frames else frames
 
 
 EBML_START = b"\x1a\x45\xdf\xa3"
