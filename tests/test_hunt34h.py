@@ -298,3 +298,48 @@ def test_audio_running_on_after_the_last_frame_is_no_truncation(
     assert main(["extract", str(clip), "--out", str(out)]) == 0, capsys.readouterr().err
     (written,) = out.glob("*.npz")
     assert load_pose(written).n_frames == 120
+
+
+# --- a sound file given for a video --------------------------------------------------------
+
+SOUNDS = {
+    # file name: (codec, sample format, samples a packet, what the line calls it)
+    "talk.m4a": ("aac", "fltp", 1024, "an MP4 file of sound alone"),
+    "talk.mp4": ("aac", "fltp", 1024, "an MP4 file of sound alone"),
+    "talk.wav": ("pcm_s16le", "s16", 1024, "a WAVE file"),
+    "talk.mp3": ("libmp3lame", "s16p", 1152, "an MP3 file"),
+    "talk.webm": ("libopus", "flt", 960, "a Matroska/WebM file of sound alone"),
+    "talk.ogg": ("libopus", "flt", 960, "an Ogg sound file"),
+}
+
+
+def _sound(path: Path) -> Path:
+    """One second of silence (48 kHz, mono) in the format the file name says."""
+    av = pytest.importorskip("av", reason="PyAV writes the sound files")
+    codec, fmt, n, _kind = SOUNDS[path.name]
+    out = av.open(str(path), "w")
+    stream = out.add_stream(codec, rate=48000)
+    dtype = np.int16 if fmt.startswith("s16") else np.float32
+    for k in range(48000 // n):
+        frame = av.AudioFrame.from_ndarray(np.zeros((1, n), dtype), format=fmt, layout="mono")
+        frame.sample_rate, frame.pts = 48000, k * n
+        for packet in stream.encode(frame):
+            out.mux(packet)
+    for packet in stream.encode():
+        out.mux(packet)
+    out.close()
+    return path
+
+
+@pytest.mark.parametrize("name", list(SOUNDS))
+def test_a_sound_file_is_refused_as_sound_not_as_damage(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A sound file (an M4A, a sound-only MP4 or WebM as downloaders save a video's sound,
+    a WAVE, MP3 or Ogg) given to ``extract``: refused, one line, exit 1, nothing written,
+    saying what it is. It said "not a video OpenCV can decode (unknown format, truncated or
+    corrupt)", sending the user after damage that is not there."""
+    sound = _sound(tmp_path / name)
+    argv = ["extract", str(sound), "--out", str(tmp_path / "poses")]
+    line = refused(argv, tmp_path, capsys, f"{sound}: sound alone, no video")
+    assert line.endswith(f"({SOUNDS[name][3]})") and "truncated" not in line, line

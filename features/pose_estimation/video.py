@@ -140,6 +140,9 @@ def open_video(
         raise DataError(f"cannot open as a video ({exc.msg or exc})", path) from None
     if not cap.isOpened():
         cap.release()
+        sound = _sound_only(path, head)
+        if sound is not None:
+            raise DataError(f"sound alone, no video ({sound})", path)
         raise DataError(
             "not a video OpenCV can decode (unknown format, truncated or corrupt)", path
         )
@@ -178,6 +181,77 @@ def _refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
                 f"truncated Matroska/WebM: the file ends at byte {size:,}, inside an element{runs}",
                 path,
             )
+
+
+_SOUND_STARTS = {
+    b"fLaC": "a FLAC file",
+    b"ID3": "an MP3 file",
+    b"\xff\xfb": "an MP3 file",
+    b"\xff\xf3": "an MP3 file",
+    b"\xff\xf2": "an MP3 file",
+    b"\xff\xf1": "an AAC file",
+    b"\xff\xf9": "an AAC file",
+}
+"""The first bytes of audio formats that hold no video, and what they are."""
+_TRACKS, _TRACK_ENTRY, _TRACK_TYPE = 0x1654AE6B, 0xAE, 0x83
+
+
+def _sound_only(path: Path, head: bytes) -> str | None:
+    """What a file OpenCV cannot open as a video is when it holds sound and no video (a
+    WAVE, FLAC, MP3, AAC or Ogg sound file; an MP4/M4A/MOV or Matroska/WebM file whose only
+    tracks are sound), else None (not told apart from damage: not judged)."""
+    import mmap
+
+    for start, kind in _SOUND_STARTS.items():
+        if head.startswith(start):
+            return kind
+    if head.startswith(b"RIFF") and head[8:12] == b"WAVE":
+        return "a WAVE file"
+    try:
+        with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
+            if head.startswith(b"OggS"):  # Theora's, Daala's or a skeleton's header: video
+                video = any(v in data[:4096] for v in (b"\x80theora", b"\x80daala", b"fishead"))
+                return None if video else "an Ogg sound file"
+            if head[4:8] == b"ftyp":  # each track's handler: soun, vide, ...
+                tracks = {data[i + 12 : i + 16] for i in _all(data, b"hdlr")}
+                only = b"soun" in tracks and b"vide" not in tracks
+                return "an MP4 file of sound alone" if only else None
+            if head.startswith(EBML_START):
+                fh.seek(0)
+                only = _matroska_track_types(fh, len(data)) == {2}
+                return "a Matroska/WebM file of sound alone" if only else None
+    except (OSError, ValueError):
+        return None
+    return None
+
+
+def _all(data: Any, word: bytes) -> Iterator[int]:
+    """Where ``word`` occurs in ``data``."""
+    at = data.find(word)
+    while at >= 0:
+        yield at
+        at = data.find(word, at + 1)
+
+
+def _matroska_track_types(fh: Any, size: int) -> set[int]:
+    """The kinds of a Matroska/WebM file's tracks (its TrackType values: 1 video, 2 sound,
+    17 subtitles, ...), read from ``fh`` at its start; empty where they cannot be read."""
+    kinds: set[int] = set()
+    try:
+        while fh.tell() < size:
+            ident, _ = _ebml_number(fh, True)
+            stated, unknown = _ebml_number(fh, False)
+            if ident == _SEGMENT or (ident in (_TRACKS, _TRACK_ENTRY) and not unknown):
+                continue  # step in: the tracks lie inside
+            if unknown or ident == _CLUSTER:
+                return kinds  # the frames: the tracks come before them
+            if ident == _TRACK_TYPE:
+                kinds.add(int.from_bytes(fh.read(stated), "big"))
+            else:
+                fh.seek(fh.tell() + stated)
+    except (EOFError, ValueError):
+        return set()
+    return kinds
 
 
 def _frames_rate(path: Path, fps: float, frames: int, matroska: bool) -> tuple[float, int]:
