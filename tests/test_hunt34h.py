@@ -343,3 +343,26 @@ def test_a_sound_file_is_refused_as_sound_not_as_damage(
     argv = ["extract", str(sound), "--out", str(tmp_path / "poses")]
     line = refused(argv, tmp_path, capsys, f"{sound}: sound alone, no video")
     assert line.endswith(f"({SOUNDS[name][3]})") and "truncated" not in line, line
+
+
+def test_watch_of_a_served_clip_whose_sound_runs_on_reads_it_whole(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """That WebM clip (120 frames, sound to 4.3 s) served over HTTP: ``watch`` refused it
+    as "truncated or corrupt: decoded 120 of 129 frames", exit 1. Its segment ends within
+    the length the server states: watched whole, 120 frames, 0-4 s, exit 0, as the file
+    here. The same clip cut at half its bytes is still refused ("decoded 54 of 129")."""
+    _with_longer_audio(tmp_path / "clip.webm", 120, 4.3)
+    data = (tmp_path / "clip.webm").read_bytes()
+    (tmp_path / "cut.webm").write_bytes(data[: len(data) // 2])
+    with _serving(tmp_path) as address:
+        capsys.readouterr()
+        code = main(["watch", f"{address}/clip.webm", "--db", str(case_base), "--speed", "0"])
+        got = capsys.readouterr()
+        assert code == 0, got.err
+        segments = [json.loads(line) for line in got.out.splitlines()]
+        assert [(s["start_frame"], s["end_frame"], s["end_s"]) for s in segments] == [(0, 120, 4.0)]
+        url = f"{address}/cut.webm"
+        argv = ["watch", url, "--db", str(case_base), "--speed", "0"]
+        line = refused(argv, tmp_path, capsys, f"{url}: truncated or corrupt: decoded")
+        assert line.endswith(" of 129 frames"), line

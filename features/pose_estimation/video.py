@@ -943,6 +943,36 @@ def _ffmpeg_verifies_tls() -> bool:
     return True
 
 
+def _served_matroska_whole(url: str, timeout_s: float | None = None) -> bool:
+    """Whether an HTTP(S) URL is a Matroska/WebM file that its server gives whole: its
+    segment states its size and ends within the length the server states (a file cut
+    short on the server states more). Its first bytes only are read."""
+    import http.client
+    import io
+
+    try:
+        opener, bare = _ffmpeg_opener(url)
+        with opener.open(bare, timeout=timeout_s or 30.0) as answer:
+            length = (answer.headers.get("Content-Length") or "").strip()
+            head = answer.read(4096)
+    except (OSError, ValueError, http.client.HTTPException):
+        return False
+    if not (head.startswith(EBML_START) and length.isdigit()):
+        return False
+    fh = io.BytesIO(head)
+    try:
+        for expected in (None, _SEGMENT):  # the EBML header, then the segment
+            ident, _ = _ebml_number(fh, True)
+            stated, unknown = _ebml_number(fh, False)
+            if unknown or (expected is not None and ident != expected):
+                return False
+            if expected is None:
+                fh.seek(fh.tell() + stated)
+    except (EOFError, ValueError):
+        return False
+    return fh.tell() + stated <= int(length)
+
+
 def _is_path(source: int | str | Path) -> TypeGuard[str | Path]:
     """Whether a stream source is a video file's path (not a camera index or a URL)."""
     return isinstance(source, Path) or (
@@ -1024,7 +1054,13 @@ def stream_poses(
                 if served and index == 0 and declared:
                     raise DataError(NONE_SERVED.format(declared), str(source))
                 span = span_s(times, fps) if fps else None
-                check_whole(index, declared, str(source), span, fps)
+                try:
+                    check_whole(index, declared, str(source), span, fps)
+                except DataError:
+                    # a Matroska/WebM file whole on the server: its count was its duration
+                    # (its longest track's: sound running on), its frames are what came
+                    if not (served and _served_matroska_whole(str(source), timeout_s)):
+                        raise
                 break
             t = index / fps if fps else read_at - start
             rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
