@@ -366,3 +366,30 @@ def test_watch_of_a_served_clip_whose_sound_runs_on_reads_it_whole(
         argv = ["watch", url, "--db", str(case_base), "--speed", "0"]
         line = refused(argv, tmp_path, capsys, f"{url}: truncated or corrupt: decoded")
         assert line.endswith(" of 129 frames"), line
+
+
+def test_a_song_with_a_cover_picture_is_refused_as_sound(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An MP3 with its cover picture (FFmpeg shows the picture as a one-picture video
+    stream on a 90-kHz clock): ``extract`` said "video declares no usable frame rate (90000
+    frames per second; ...)". Now: sound alone, no video (an MP3 file with a picture)."""
+    av = pytest.importorskip("av", reason="PyAV writes the song")
+    song = tmp_path / "song.mp3"
+    out = av.open(str(song), "w")
+    sound = out.add_stream("libmp3lame", rate=48000)
+    cover = out.add_stream("mjpeg", rate=1)
+    cover.width, cover.height, cover.pix_fmt = 64, 48, "yuvj420p"
+    cover.disposition = av.stream.Disposition.attached_pic
+    picture = av.VideoFrame.from_ndarray(np.full((48, 64, 3), 128, np.uint8), format="rgb24")
+    pictures = [*cover.encode(picture), *cover.encode()]
+    for k in range(40):
+        frame = av.AudioFrame.from_ndarray(np.zeros((1, 1152), np.int16), "s16p", "mono")
+        frame.sample_rate, frame.pts = 48000, k * 1152
+        for packet in sound.encode(frame):
+            out.mux(packet)
+    for packet in [*sound.encode(), *pictures]:
+        out.mux(packet)
+    out.close()
+    argv = ["extract", str(song), "--out", str(tmp_path / "poses")]
+    refused(argv, tmp_path, capsys, f"{song}: sound alone, no video (an MP3 file with a picture)")

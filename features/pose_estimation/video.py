@@ -140,12 +140,7 @@ def open_video(
         raise DataError(f"cannot open as a video ({exc.msg or exc})", path) from None
     if not cap.isOpened():
         cap.release()
-        sound = _sound_only(path, head)
-        if sound is not None:
-            raise DataError(f"sound alone, no video ({sound})", path)
-        raise DataError(
-            "not a video OpenCV can decode (unknown format, truncated or corrupt)", path
-        )
+        raise _not_a_video(path, head, None)
     frames = int(max(0.0, cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0))
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
@@ -154,12 +149,28 @@ def open_video(
     if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
         cap.release()
-        raise DataError(
-            f"video declares no usable frame rate ({fps:g} frames per second; posecbr takes"
-            f" {MIN_FPS:g} to {MAX_VIDEO_FPS:g})",
-            path,
-        )
+        raise _not_a_video(path, head, fps)
     return cap, VideoInfo(path, frames, fps, width, height)
+
+
+def _not_a_video(path: Path, head: bytes, fps: float | None) -> DataError:
+    """Why a file (its first bytes ``head``) is no video to take: OpenCV could not open it
+    (``fps`` None) or it states no frame rate posecbr takes; a sound file says so
+    (:func:`_sound_only`: a song's cover picture is FFmpeg's "video" at 90 kHz)."""
+    sound = _sound_only(path, head)
+    if sound is not None:
+        return DataError(
+            f"sound alone, no video ({sound}{'' if fps is None else ' with a picture'})", path
+        )
+    if fps is None:
+        return DataError(
+            "not a video OpenCV can decode (unknown format, truncated or corrupt)", path
+        )
+    return DataError(
+        f"video declares no usable frame rate ({fps:g} frames per second; posecbr takes"
+        f" {MIN_FPS:g} to {MAX_VIDEO_FPS:g})",
+        path,
+    )
 
 
 def _refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
