@@ -244,13 +244,18 @@ def test_a_self_signed_https_server_is_probed_as_ffmpeg_reads_it(
 
 
 def _with_longer_audio(path: Path, frames: int, audio_s: float) -> Path:
-    """``frames`` grey frames at 30 fps (VP8 in WebM, MJPEG in Matroska) and a silent
-    mono track (Opus, 48 kHz, 20-ms packets) of ``audio_s`` seconds, interleaved by time."""
+    """``frames`` grey frames at 30 fps (VP8 in WebM, MJPEG in Matroska, MPEG-2 in MPEG-TS
+    and a camcorder's M2TS) and a silent mono track (Opus, 48 kHz, 20-ms packets) of
+    ``audio_s`` seconds, interleaved by time."""
     av = pytest.importorskip("av", reason="PyAV writes the videos")
-    out = av.open(str(path), "w")
-    video = out.add_stream("libvpx" if path.suffix == ".webm" else "mjpeg", rate=30)
+    codec = {".webm": "libvpx", ".mkv": "mjpeg"}.get(path.suffix, "mpeg2video")
+    options = {"mpegts_m2ts_mode": "1"} if path.suffix == ".m2ts" else {}
+    out = av.open(
+        str(path), "w", format="mpegts" if codec == "mpeg2video" else None, options=options
+    )
+    video = out.add_stream(codec, rate=30)
     video.width, video.height = 64, 48
-    video.pix_fmt = "yuv420p" if path.suffix == ".webm" else "yuvj420p"
+    video.pix_fmt = "yuvj420p" if codec == "mjpeg" else "yuv420p"
     audio = out.add_stream("libopus", rate=48000)
     chunks = round(audio_s * 48000 / 960)
     v = a = 0
@@ -273,14 +278,15 @@ def _with_longer_audio(path: Path, frames: int, audio_s: float) -> Path:
     return path
 
 
-@pytest.mark.parametrize("name", ["clip.webm", "clip.mkv"])
+@pytest.mark.parametrize("name", ["clip.webm", "clip.mkv", "clip.ts", "clip.m2ts"])
 def test_audio_running_on_after_the_last_frame_is_no_truncation(
     name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A 4-s clip, 120 frames at 30 fps, whose sound runs on to 4.3 s: OpenCV counts the
-    container's duration at 30 fps, round(4.3 x 30) = 129 frames, and the clip was refused
-    as "truncated or corrupt: decoded 120 of 129 frames" (``extract``, ``segment``,
-    ``watch``). Its frames are its 120 packets: all decode, ``extract`` writes 120 poses."""
+    """A 4-s clip, 120 frames at 30 fps, whose sound runs on to 4.3 s (WebM, MKV, MPEG-TS,
+    M2TS: none states its frame count): OpenCV counts the container's duration at 30 fps,
+    round(4.3 x 30) = 129 frames, and the clip was refused as "truncated or corrupt:
+    decoded 120 of 129 frames" (``extract``, ``segment``, ``watch``). Its frames are its
+    120 packets: all decode, ``extract`` writes 120 poses."""
     import cv2
 
     from features.pose_estimation import iter_frames, open_video

@@ -126,7 +126,7 @@ def open_video(
         raise DataError("is a pipe, socket or device, not a video file", path)
     try:
         with open(path, "rb") as fh:
-            head = fh.read(16)
+            head = fh.read(512)  # an MPEG-TS file's first packets: 188 bytes each
             fh.seek(max(0, path.stat().st_size - 64))
             tail = fh.read()
     except OSError as exc:
@@ -145,7 +145,7 @@ def open_video(
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
-    fps, frames = _frames_rate(path, fps, frames, head.startswith(EBML_START))
+    fps, frames = _frames_rate(path, fps, frames, _counted_by_duration(head))
     if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
         cap.release()
@@ -265,16 +265,16 @@ def _matroska_track_types(fh: Any, size: int) -> set[int]:
     return kinds
 
 
-def _frames_rate(path: Path, fps: float, frames: int, matroska: bool) -> tuple[float, int]:
+def _frames_rate(path: Path, fps: float, frames: int, by_duration: bool) -> tuple[float, int]:
     """The frame rate and count OpenCV states for a video (``fps``, ``frames``), or, when
     that rate is above :data:`SUSPECT_FPS` and a clock's ticks rather than a frame rate
     (:func:`own_rate`), the frames' own rate and their number (their packets: not the
     container's duration at that rate, which counts an audio track running on after the
-    video; a WebM cut short is found by :func:`_matroska_end`). A ``matroska`` file (not cut
-    short: :func:`_refuse_cut`) holds no more frames than its packets: OpenCV's count is its
-    duration at the rate, and the duration is its longest track's (audio running on 0.3 s
+    video; a WebM cut short is found by :func:`_matroska_end`). A file whose count OpenCV
+    takes from its duration (``by_duration``: :func:`_counted_by_duration`) holds no more
+    frames than its packets: the duration is its longest track's (sound running on 0.3 s
     after the last frame of a 4-s clip counted 9 frames more than there are)."""
-    if not (matroska and frames) and not (math.isfinite(fps) and fps > SUSPECT_FPS):
+    if not (by_duration and frames) and not (math.isfinite(fps) and fps > SUSPECT_FPS):
         return fps, frames
     got = _packet_times(path)
     if got is None:
@@ -282,7 +282,22 @@ def _frames_rate(path: Path, fps: float, frames: int, matroska: bool) -> tuple[f
     rate = taken_rate(*got)
     if rate != fps:
         return rate, int(got[0].size)
-    return fps, min(frames, int(got[0].size)) if matroska and frames else frames
+    return fps, min(frames, int(got[0].size)) if by_duration and frames else frames
+
+
+def _counted_by_duration(head: bytes) -> bool:
+    """Whether a video (its first bytes ``head``) states no frame count, so that OpenCV
+    counts its duration (its longest track's) at its frame rate, and a cut short file
+    shows otherwise than by that count: Matroska/WebM (its elements state their sizes:
+    :func:`_refuse_cut`) and MPEG-TS (``.ts``, a camcorder's ``.mts``/``.m2ts``: its
+    duration is read from the packets there are, cut short or not). Not MP4/MOV and AVI,
+    which state their frames, nor FLV, whose header states its duration."""
+    if head.startswith(EBML_START):
+        return True
+    return any(
+        len(head) > offset + 2 * step and all(head[offset + k * step] == 0x47 for k in range(3))
+        for offset, step in ((0, 188), (4, 192))  # TS packets; M2TS: a 4-byte stamp first
+    )
 
 
 EBML_START = b"\x1a\x45\xdf\xa3"
