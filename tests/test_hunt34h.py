@@ -141,6 +141,25 @@ class _Guarded(_Quiet):
         super().do_GET()
 
 
+class _Ranged(_Quiet):
+    """Answers range requests (``Range: bytes=N-``), as most web servers do (Python's own
+    does not): FFmpeg then reads an MPEG-TS file's end for its duration."""
+
+    def do_GET(self) -> None:  # noqa: N802 (the base's name)
+        wanted = self.headers.get("Range", "")
+        if not wanted.startswith("bytes="):
+            super().do_GET()
+            return
+        data = Path(self.translate_path(self.path)).read_bytes()
+        first, _, last = wanted.removeprefix("bytes=").partition("-")
+        start, end = int(first or 0), int(last) if last else len(data) - 1
+        self.send_response(206)
+        self.send_header("Content-Range", f"bytes {start}-{end}/{len(data)}")
+        self.send_header("Content-Length", str(end + 1 - start))
+        self.end_headers()
+        self.wfile.write(data[start : end + 1])
+
+
 def _raw_h264(folder: Path, n: int = 50) -> Path:
     """A raw H.264 stream (no container: FFmpeg knows no frame count, takes it at 25 fps)."""
     return _encode(folder / "camera.h264", [40 * k for k in range(n)], "libx264", 25, {})
@@ -351,23 +370,28 @@ def test_a_sound_file_is_refused_as_sound_not_as_damage(
     assert line.endswith(f"({SOUNDS[name][3]})") and "truncated" not in line, line
 
 
+@pytest.mark.parametrize("name", ["clip.webm", "clip.ts"])
 def test_watch_of_a_served_clip_whose_sound_runs_on_reads_it_whole(
-    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    name: str, case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """That WebM clip (120 frames, sound to 4.3 s) served over HTTP: ``watch`` refused it
-    as "truncated or corrupt: decoded 120 of 129 frames", exit 1. Its segment ends within
-    the length the server states: watched whole, 120 frames, 0-4 s, exit 0, as the file
-    here. The same clip cut at half its bytes is still refused ("decoded 54 of 129")."""
-    _with_longer_audio(tmp_path / "clip.webm", 120, 4.3)
-    data = (tmp_path / "clip.webm").read_bytes()
+    """That clip (120 frames, sound to 4.3 s) served over HTTP: ``watch`` refused it as
+    "truncated or corrupt: decoded 120 of 129 frames", exit 1. A WebM whose segment ends
+    within the length the server states, or an MPEG-TS file (its duration read from the
+    packets there are; the server answers range requests, so FFmpeg reads its end):
+    watched whole, 120 frames, 0-4 s, exit 0, as the file here. The WebM cut at half its
+    bytes is still refused ("decoded 54 of 129")."""
+    _with_longer_audio(tmp_path / name, 120, 4.3)
+    data = (tmp_path / "clip.webm").read_bytes() if name == "clip.webm" else b""
     (tmp_path / "cut.webm").write_bytes(data[: len(data) // 2])
-    with _serving(tmp_path) as address:
+    with _serving(tmp_path, _Ranged) as address:
         capsys.readouterr()
-        code = main(["watch", f"{address}/clip.webm", "--db", str(case_base), "--speed", "0"])
+        code = main(["watch", f"{address}/{name}", "--db", str(case_base), "--speed", "0"])
         got = capsys.readouterr()
         assert code == 0, got.err
         segments = [json.loads(line) for line in got.out.splitlines()]
         assert [(s["start_frame"], s["end_frame"], s["end_s"]) for s in segments] == [(0, 120, 4.0)]
+        if name != "clip.webm":
+            return
         url = f"{address}/cut.webm"
         argv = ["watch", url, "--db", str(case_base), "--speed", "0"]
         line = refused(argv, tmp_path, capsys, f"{url}: truncated or corrupt: decoded")

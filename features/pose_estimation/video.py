@@ -969,10 +969,13 @@ def _ffmpeg_verifies_tls() -> bool:
     return True
 
 
-def _served_matroska_whole(url: str, timeout_s: float | None = None) -> bool:
-    """Whether an HTTP(S) URL is a Matroska/WebM file that its server gives whole: its
-    segment states its size and ends within the length the server states (a file cut
-    short on the server states more). Its first bytes only are read."""
+def _served_whole_by_duration(url: str, timeout_s: float | None = None) -> bool:
+    """Whether an HTTP(S) URL is a file whose frame count OpenCV takes from its duration
+    (:func:`_counted_by_duration`) and that its server gives whole, so that fewer frames
+    than that count are no sign of a cut: an MPEG-TS file (its duration comes from the
+    packets there are), or a Matroska/WebM file whose segment states its size and ends
+    within the length the server states (a file cut short on the server states more).
+    Its first bytes only are read."""
     import http.client
     import io
 
@@ -983,7 +986,9 @@ def _served_matroska_whole(url: str, timeout_s: float | None = None) -> bool:
             head = answer.read(4096)
     except (OSError, ValueError, http.client.HTTPException):
         return False
-    if not (head.startswith(EBML_START) and length.isdigit()):
+    if not head.startswith(EBML_START):
+        return _counted_by_duration(head)  # MPEG-TS, or no file counted so
+    if not length.isdigit():
         return False
     fh = io.BytesIO(head)
     try:
@@ -1083,9 +1088,9 @@ def stream_poses(
                 try:
                     check_whole(index, declared, str(source), span, fps)
                 except DataError:
-                    # a Matroska/WebM file whole on the server: its count was its duration
-                    # (its longest track's: sound running on), its frames are what came
-                    if not (served and _served_matroska_whole(str(source), timeout_s)):
+                    # a file whole on the server: its count was its duration (its longest
+                    # track's: sound running on), its frames are what came
+                    if not (served and _served_whole_by_duration(str(source), timeout_s)):
                         raise
                 break
             t = index / fps if fps else read_at - start
