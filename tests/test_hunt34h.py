@@ -423,3 +423,26 @@ def test_a_song_with_a_cover_picture_is_refused_as_sound(
     out.close()
     argv = ["extract", str(song), "--out", str(tmp_path / "poses")]
     refused(argv, tmp_path, capsys, f"{song}: sound alone, no video (an MP3 file with a picture)")
+
+
+def test_watch_of_a_file_url_is_the_file(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``watch file:///.../recording.webm`` (a browser's WebM without a duration: OpenCV
+    knows no frame count) was taken for a camera: timed by the wall clock, and its end
+    "the stream ended after 120 frames (camera or connection lost?)", exit 1. A file URL's
+    file has an end: watched as its path is, the same segments, exit 0."""
+    from features.pose_estimation import served_file_rate
+
+    video = _browser_webm(tmp_path / "recording.webm", live=True)
+    url = f"file://{video}"
+    assert served_file_rate(url, 5.0) == pytest.approx((120 - 1) / 3.985, rel=1e-12)
+    results = []
+    for source in (str(video), url):
+        capsys.readouterr()
+        code = main(["watch", source, "--db", str(case_base), "--speed", "0"])
+        got = capsys.readouterr()
+        results.append((code, got.out))
+        assert code == 0 and "camera or connection lost" not in got.err, got.err
+    assert results[0] == results[1]
+    assert [json.loads(line)["end_frame"] for line in results[1][1].splitlines()] == [120]

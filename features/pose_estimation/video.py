@@ -904,13 +904,17 @@ def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
 def _served_whole(url: str, timeout_s: float | None = None) -> bool:
     """Whether an HTTP(S) URL is a file the server gives whole: it states the file's length
     (a live stream, a camera's, has none: it goes on) and the file is no text (an HLS or DASH
-    playlist, whose own length says nothing of the stream's, is). False for any other URL and
-    for a server that does not answer within ``timeout_s`` (FFmpeg's 30 s when None). Asked
+    playlist, whose own length says nothing of the stream's, is); a ``file://`` URL's file
+    is (:func:`_local_whole`). False for any other URL and for a server that does not
+    answer within ``timeout_s`` (FFmpeg's 30 s when None). Asked
     as FFmpeg asks for the same URL (:func:`_ffmpeg_opener`)."""
     import http.client
     from urllib.parse import urlsplit
 
-    if urlsplit(url).scheme.lower() not in ("http", "https"):
+    scheme = urlsplit(url).scheme.lower()
+    if scheme == "file":
+        return _local_whole(url)
+    if scheme not in ("http", "https"):
         return False
     try:
         opener, bare = _ffmpeg_opener(url)
@@ -921,8 +925,25 @@ def _served_whole(url: str, timeout_s: float | None = None) -> bool:
             head = answer.read(16)
     except (OSError, ValueError, http.client.HTTPException):
         return False
+    return _not_text(head)
+
+
+def _not_text(head: bytes) -> bool:
+    """Whether a file's first bytes are no text (a playlist's are)."""
     text = head.removeprefix(b"\xef\xbb\xbf")  # a playlist may start with UTF-8's mark
     return bool(text) and not all(32 <= b < 127 or b in b"\t\r\n" for b in text)
+
+
+def _local_whole(url: str) -> bool:
+    """Whether a ``file:`` URL names a file on this machine (it has an end, as a file given
+    by its path has) that is no text (a playlist). Its path is what follows ``file:``, as
+    FFmpeg reads it (no percent-escapes decoded)."""
+    path = Path(url[len("file:") :])
+    try:
+        with open(path, "rb") as fh:
+            return path.is_file() and _not_text(fh.read(16))
+    except OSError:
+        return False
 
 
 def _ffmpeg_opener(url: str) -> tuple[Any, str]:
