@@ -446,3 +446,14 @@ def test_watch_of_a_file_url_is_the_file(
         assert code == 0 and "camera or connection lost" not in got.err, got.err
     assert results[0] == results[1]
     assert [json.loads(line)["end_frame"] for line in results[1][1].splitlines()] == [120]
+
+
+def test_watch_of_a_file_url_of_a_cut_webm_is_refused_as_its_path_is(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The browser's WebM cut at half its bytes, watched as ``file://...``: refused as the
+    path is, "truncated Matroska/WebM", one line, exit 1 (it was watched to the cut, or,
+    before, taken for a camera)."""
+    _whole, cut = _whole_and_cut("browser-no-duration", tmp_path)
+    argv = ["watch", f"file://{cut}", "--db", str(case_base), "--speed", "0"]
+    refused(argv, tmp_path, capsys, f"{cut}: truncated Matroska/WebM")

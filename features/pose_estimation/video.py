@@ -1037,9 +1037,14 @@ def _open_source(
 ) -> tuple[cv2.VideoCapture, float | None, int]:
     """:func:`stream_poses`'s source opened: the capture, the frame rate it is timed by (None:
     a live source, the wall clock) and the frame count its container states (0: none; a file
-    served over the network, ``fps`` given, must hold them all, as a file must)."""
+    served over the network, ``fps`` given, must hold them all, as a file must). A
+    ``file:`` URL's file is opened as its path is (:func:`open_video`'s checks: a WebM cut
+    short), the path being what follows ``file:``, as FFmpeg reads it."""
     if _is_path(source):
         cap, info = open_video(source)
+        return cap, info.fps, info.frames
+    if isinstance(source, str) and source.startswith("file:") and fps is not None:
+        cap, info = open_video(source[len("file:") :])
         return cap, info.fps, info.frames
     device = source if isinstance(source, int) else str(source)
     try:
