@@ -454,16 +454,23 @@ def prepare_write(url_or_path: str | Path, *, timeout_s: float = 30.0) -> bool:
     if file is not None:
         check_name_length(file)
     if file is not None and file.is_file():
-        folder = file.resolve().parent
-        if not os.access(folder, os.W_OK | os.X_OK):
-            raise StoreError(
-                f"cannot write the case base file: the folder {folder} is read-only (SQLite "
-                "writes its journal beside it)",
-                file,
-            )
-        if not os.access(file, os.W_OK):
-            raise StoreError("cannot write the case base file: it is read-only", file)
+        check_writable(file)
     return roll_back_interrupted(url_or_path, timeout_s=timeout_s)
+
+
+def check_writable(file: Path) -> None:
+    """Refuse, in one line, an existing SQLite file this process cannot write: the file
+    read-only, or its folder (where SQLite writes its journal, and the ``-wal`` and ``-shm``
+    files of a file still in WAL mode)."""
+    folder = file.resolve().parent
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise StoreError(
+            f"cannot write the case base file: the folder {folder} is read-only (SQLite "
+            "writes its journal beside it)",
+            file,
+        )
+    if not os.access(file, os.W_OK):
+        raise StoreError("cannot write the case base file: it is read-only", file)
 
 
 #: SQLite's extended result code for a read-only connection that met such a journal

@@ -25,7 +25,15 @@ from .models import (
     RepresentationRow,
     SchemaVersion,
 )
-from .store import StoreError, _make_engine, _translate, check_name_length, sqlite_file
+from .store import (
+    StoreError,
+    _make_engine,
+    _translate,
+    check_name_length,
+    check_writable,
+    in_wal_mode,
+    sqlite_file,
+)
 
 _TABLES = (CaseBaseRow, CaseRow, RepresentationRow, MaintenanceRow)
 
@@ -39,25 +47,18 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
         check_name_length(file)
     if file is not None and not file.exists():
         raise StoreError("no such case base file", file)
+    # a file that cannot be written is refused before SQLite opens it to write, when it has
+    # something to convert (before: "unable to open database file", or, for a read-only file
+    # still in WAL mode, "disk I/O error" with -wal and -shm files left beside it)
+    if file is not None and _nothing_to_do_unwritable(file, timeout_s):
+        return SCHEMA_VERSION
     engine, where = _make_engine(url_or_path, timeout_s, readonly=False)
     try:
         with engine.execution_options(posecbr_write=True).begin() as conn:
             found = _schema_version(conn, where)
             if found == SCHEMA_VERSION:
                 return found
-            if found > SCHEMA_VERSION:
-                raise StoreError(
-                    f"the store has schema version {found}, newer than this posecbr "
-                    f"{__version__} knows ({SCHEMA_VERSION}): read it with the posecbr that "
-                    "wrote it",
-                    where,
-                )
-            if found not in UPGRADABLE:
-                raise StoreError(
-                    f"cannot upgrade a store of schema version {found}: posecbr upgrades "
-                    f"versions {', '.join(map(str, UPGRADABLE))}",
-                    where,
-                )
+            _check_upgradable(found, where)
             _from_1(conn)
             return found
     except StoreError:
@@ -66,6 +67,49 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
         raise _translate(exc, where, timeout_s) from None
     finally:
         engine.dispose()
+
+
+def _nothing_to_do_unwritable(file: Path, timeout_s: float) -> bool:
+    """For a SQLite file this process cannot write (the file or its folder read-only): True
+    when it needs no conversion (the current schema, not in WAL mode: the caller returns,
+    having read it read-only); refused in one line when it does. False for a writable file."""
+    try:
+        check_writable(file)
+    except StoreError:
+        if in_wal_mode(file):  # leaving WAL mode writes the file
+            raise
+        engine, where = _make_engine(file, timeout_s, readonly=True)
+        try:
+            with engine.connect() as conn:
+                found = _schema_version(conn, where)
+        except StoreError:
+            raise
+        except Exception as exc:  # a driver error: one line naming the store
+            raise _translate(exc, where, timeout_s) from None
+        finally:
+            engine.dispose()
+        if found != SCHEMA_VERSION:
+            _check_upgradable(found, where)  # a version it could not convert anywhere
+            raise
+        return True
+    return False
+
+
+def _check_upgradable(found: int, where: str) -> None:
+    """Refuse a schema version this posecbr cannot convert (a newer one, an unknown one)."""
+    if found > SCHEMA_VERSION:
+        raise StoreError(
+            f"the store has schema version {found}, newer than this posecbr "
+            f"{__version__} knows ({SCHEMA_VERSION}): read it with the posecbr that "
+            "wrote it",
+            where,
+        )
+    if found not in UPGRADABLE:
+        raise StoreError(
+            f"cannot upgrade a store of schema version {found}: posecbr upgrades "
+            f"versions {', '.join(map(str, UPGRADABLE))}",
+            where,
+        )
 
 
 def _schema_version(conn: Any, where: str) -> int:
