@@ -822,7 +822,8 @@ class CaseStore:
                     found = "none" if row is None else str(row.version)
                     hint = ""
                     if row is not None and row.version in UPGRADABLE:
-                        hint = " (convert it with `posecbr casebase upgrade --db FILE`)"
+                        db = "FILE" if _is_sqlite(self.engine) else "URL"  # not a file
+                        hint = f" (convert it with `posecbr casebase upgrade --db {db}`)"
                     elif row is not None and row.version > SCHEMA_VERSION:
                         hint = " (written by a newer posecbr: read it with that one)"
                     raise StoreError(

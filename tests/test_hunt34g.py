@@ -13,8 +13,10 @@ from pathlib import Path
 
 import pytest
 
+from casebase_store import open_store
 from posecbr.cli import main
 from tests.badinput import read_only_mounts_work
+from tests.test_store_postgres import pg_server, pg_url  # noqa: F401  (fixtures)
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
@@ -106,3 +108,65 @@ def test_upgrade_of_a_current_store_in_a_read_only_folder_still_has_nothing_to_d
     assert done.returncode == 0, done.stderr
     assert done.stdout == f"{db}: already schema version 2, nothing to do\n"
     assert _sha(db) == before and sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]
+
+
+def _v1_on_postgres(url: str, tmp_path: Path) -> None:
+    """The posecbr 0.1 store of tests/fixtures/store_v1.sql on PostgreSQL: posecbr 0.1's
+    tables there were today's without the case bases' uid, version and model (the same
+    SERIAL ids), its rows copied from the SQLite file with their ids."""
+    from sqlalchemy import MetaData, create_engine, text
+
+    open_store(url).close()  # today's tables
+    src = sqlite3.connect(_v1_store(tmp_path / "v1.sqlite", wal=False))
+    src.row_factory = sqlite3.Row
+    engine = create_engine(url)
+    try:
+        with engine.begin() as conn:
+            conn.execute(text("ALTER TABLE case_bases DROP COLUMN uid, DROP COLUMN version, "
+                              "DROP COLUMN model"))  # fmt: skip
+            conn.execute(text("UPDATE posecbr_schema_version SET version = 1"))
+            tables = MetaData()
+            tables.reflect(conn)
+            for name in ("case_bases", "cases", "maintenance_log"):
+                rows = [dict(r) for r in src.execute(f"SELECT * FROM {name}")]  # noqa: S608
+                conn.execute(tables.tables[name].insert(), rows)
+            # posecbr 0.1 took each id from the table's sequence
+            for name in ("case_bases", "cases", "maintenance_log"):
+                conn.execute(text(f"SELECT setval(pg_get_serial_sequence('{name}', 'id'), "
+                                  f"(SELECT MAX(id) FROM {name}))"))  # fmt: skip
+    finally:
+        engine.dispose()
+        src.close()
+
+
+def test_a_store_of_schema_1_on_postgresql_is_refused_then_upgraded_in_place(
+    pg_url: str,  # noqa: F811
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # before: the refusal told a database URL's user to run `posecbr casebase upgrade --db
+    # FILE`; the upgrade itself (ids kept, sequences moved past them) was tested on SQLite only
+    _v1_on_postgres(pg_url, tmp_path)
+    clip = ROOT / "posecbr" / "demo_data" / "uiprmd" / "m01_s03_e01.npz"
+    assert main(["classify", str(clip), "--db", pg_url]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "schema version 1" in err
+    assert err.endswith("(convert it with `posecbr casebase upgrade --db URL`)"), err
+    assert main(["casebase", "upgrade", "--db", pg_url]) == 0
+    assert "converted from schema version 1 to 2" in capsys.readouterr().out
+    store = open_store(pg_url, readonly=True)
+    assert store.load_cases("squats ✓").ids.tolist() == list(range(1, 9))
+    log = store.maintenance_log("squats ✓")
+    assert [(e.action, e.case_id) for e in log] == [("build", None), ("retain", None),
+                                                    ("revise", 6)]  # fmt: skip
+    info = store.get_case_base("squats ✓")
+    assert len(info.uid) == 32 and info.version == 1
+    store.close()
+    assert main(["classify", str(clip), "--db", pg_url, "--json"]) == 0
+    assert '"label": "deep_squat"' in capsys.readouterr().out
+    # a new case takes the id after the highest, never an old one
+    assert main(["classify", str(clip), "--db", pg_url, "--feedback", "deep_squat",
+                 "--novelty", "0", "--benefit", "0"]) == 0  # fmt: skip
+    store = open_store(pg_url, readonly=True)
+    assert store.load_cases("squats ✓").ids.tolist() == list(range(1, 10))
+    store.close()
