@@ -117,8 +117,18 @@ def write_case_matrix(
     NaN or infinity (a case base's features are finite; missing data never becomes a number).
     """
     dest = Path(path)
-    with atomic_path(dest) as tmp:
-        out = np.lib.format.open_memmap(tmp, mode="w+", dtype=np.dtype(dtype), shape=shape)
+    kind = np.dtype(dtype)
+    header = {
+        "descr": np.lib.format.dtype_to_descr(kind),
+        "fortran_order": False,
+        "shape": tuple(int(n) for n in shape),
+    }
+    with atomic_path(dest) as tmp, open(tmp, "wb") as out:
+        # written, not through a memory map: a full disk is then an error of write() ("No
+        # space left on device", a DataError naming the file), where a memory-mapped page
+        # that finds no room killed the process with SIGBUS ("Bus error"), after the change
+        # whose copy this is had committed, its temporary file left behind
+        np.lib.format.write_array_header_1_0(out, header)
         at = 0
         for chunk in chunks:
             c = np.asarray(chunk)
@@ -130,12 +140,10 @@ def write_case_matrix(
                 )
             if not np.isfinite(c).all():
                 raise DataError(f"case matrix rows {at}..{at + len(c) - 1} are not finite", dest)
-            out[at : at + len(c)] = c
+            out.write(np.ascontiguousarray(c, dtype=kind).tobytes())
             at += len(c)
         if at != shape[0]:
             raise DataError(f"case matrix got {at} rows, expected {shape[0]}", dest)
-        out.flush()
-        del out
     return dest
 
 

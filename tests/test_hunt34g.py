@@ -15,7 +15,7 @@ import pytest
 
 from casebase_store import open_store
 from posecbr.cli import main
-from tests.badinput import read_only_mounts_work
+from tests.badinput import read_only_mounts_work, small_case_base
 from tests.test_store_postgres import pg_server, pg_url  # noqa: F401  (fixtures)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -170,3 +170,63 @@ def test_a_store_of_schema_1_on_postgresql_is_refused_then_upgraded_in_place(
     store = open_store(pg_url, readonly=True)
     assert store.load_cases("squats ✓").ids.tolist() == list(range(1, 10))
     store.close()
+
+
+def _tmpfs_mounts_work() -> bool:
+    """Whether this machine can mount a private tmpfs (``unshare -rm``): how a test gives a
+    folder whose disk is full."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        try:
+            script = f"mount -t tmpfs -o size=8k tmpfs {d}"
+            done = subprocess.run(["unshare", "-rm", "sh", "-c", script], capture_output=True)
+        except OSError:
+            return False
+        return done.returncode == 0
+
+
+@pytest.mark.skipif(
+    not _tmpfs_mounts_work(), reason="this machine cannot mount a private tmpfs (unshare -rm)"
+)
+def test_a_full_disk_for_the_matrices_is_a_note_after_the_stored_change_not_a_bus_error(
+    tmp_path: Path,
+) -> None:
+    # before: the matrix was written through a memory map, and a page that found no room on
+    # the disk killed the process with SIGBUS ("Bus error", exit 135) after the feedback had
+    # committed, its temporary file left in the folder; run again, the feedback was stored twice
+    db = small_case_base(tmp_path)
+    store = open_store(db, readonly=True)
+    n_cases = store.count_cases("default")
+    problems = store.load_case_base("default")[1].features
+    store.close()
+    size = problems.size * 8
+    assert size > 3 * 4096  # the matrix needs more pages than the disk below has
+    matrices = db.with_name(db.name + ".matrices")
+    matrices.mkdir()
+    clip = sorted((tmp_path / "train").rglob("*.npz"))[0]
+    label = clip.parent.name
+    code = (
+        "import sys, cbr.stored; cbr.stored.MAPPED_MIN_CASES = 1; "  # every case base mapped
+        "from posecbr.cli import main; sys.exit(main(sys.argv[1:]))"
+    )
+    script = (  # the folder's files are listed before the tmpfs goes with the namespace
+        f'mount -t tmpfs -o size=12k tmpfs {matrices} || exit 99; "$0" -c "$@"; rc=$?; '
+        f'echo "left: $(ls -A {matrices})" >&2; exit $rc'
+    )
+    done = subprocess.run(
+        ["unshare", "-rm", "sh", "-c", script, sys.executable, code, "classify", str(clip),
+         "--feedback", label, "--novelty", "0", "--benefit", "0", "--db", str(db)],
+        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, (done.returncode, done.stderr)
+    notes = [line for line in done.stderr.splitlines() if "No space left on device" in line]
+    assert len(notes) == 1, done.stderr
+    assert notes[0].startswith(f"note: {matrices}/") and notes[0].endswith(
+        "cannot write: No space left on device (the change is stored; commands read its cases "
+        "from the database instead of a memory-mapped copy)"
+    )
+    store = open_store(db, readonly=True)
+    assert store.count_cases("default") == n_cases + 1  # the feedback is stored, once
+    store.close()
+    assert done.stderr.splitlines()[-1] == "left: "  # no temporary file left behind
