@@ -26,6 +26,7 @@ from .models import (
     SchemaVersion,
 )
 from .store import (
+    _PG_INIT_LOCK,
     StoreError,
     _make_engine,
     _translate,
@@ -55,6 +56,11 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
     engine, where = _make_engine(url_or_path, timeout_s, readonly=False)
     try:
         with engine.execution_options(posecbr_write=True).begin() as conn:
+            if conn.dialect.name == "postgresql":
+                # as SQLite's BEGIN IMMEDIATE: two upgrades at once, the second waits for the
+                # first, then finds the store converted (at READ COMMITTED both read version
+                # 1, and the second gave up "locked" or converted the store again)
+                conn.exec_driver_sql(f"SELECT pg_advisory_xact_lock({_PG_INIT_LOCK})")
             found = _schema_version(conn, where)
             if found == SCHEMA_VERSION:
                 return found

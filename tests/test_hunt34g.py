@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from sqlalchemy.engine import make_url
 
 from casebase_store import open_store
 from posecbr.cli import main
@@ -230,3 +231,56 @@ def test_a_full_disk_for_the_matrices_is_a_note_after_the_stored_change_not_a_bu
     assert store.count_cases("default") == n_cases + 1  # the feedback is stored, once
     store.close()
     assert done.stderr.splitlines()[-1] == "left: "  # no temporary file left behind
+
+
+def test_two_upgrades_of_one_postgresql_store_at_once_convert_it_once(
+    pg_url: str,  # noqa: F811
+    tmp_path: Path,
+) -> None:
+    # before: both read schema version 1 at READ COMMITTED; the second, once the first had
+    # committed, converted the converted store again (new identities for its case bases: a
+    # feedback run reading it was refused as "replaced"), or the two deadlocked
+    import threading
+
+    from sqlalchemy import create_engine, text
+
+    from casebase_store.upgrade import upgrade_store
+
+    _v1_on_postgres(pg_url, tmp_path)
+    found: list[object] = []
+
+    def upgrade() -> None:
+        try:
+            found.append(upgrade_store(pg_url))
+        except Exception as exc:  # noqa: BLE001  (what the test reports)
+            found.append(exc)
+
+    engine = create_engine(pg_url)
+    try:
+        with engine.connect() as hold:
+            # both upgrades start while the version table is held: they wait at once
+            hold.execute(text("BEGIN"))
+            hold.execute(text("LOCK TABLE posecbr_schema_version IN ACCESS EXCLUSIVE MODE"))
+            threads = [threading.Thread(target=upgrade) for _ in range(2)]
+            for t in threads:
+                t.start()
+            database = make_url(pg_url).database
+            for _ in range(600):  # until both wait (a lock, the table's or each other's)
+                with engine.connect() as look:  # a view of now, not of hold's transaction
+                    waiting = look.execute(
+                        text("SELECT count(*) FROM pg_stat_activity WHERE datname = :d AND "
+                             "wait_event_type = 'Lock'"), {"d": database},
+                    ).scalar()  # fmt: skip
+                if waiting == 2:
+                    break
+                threading.Event().wait(0.05)
+            assert waiting == 2
+            hold.execute(text("COMMIT"))
+        for t in threads:
+            t.join(120)
+    finally:
+        engine.dispose()
+    assert sorted(map(str, found)) == ["1", "2"], found  # converted once, then nothing to do
+    store = open_store(pg_url, readonly=True)
+    assert store.load_cases("squats ✓").ids.tolist() == list(range(1, 9))
+    store.close()
