@@ -380,11 +380,29 @@ def _sqlite_readonly_url(path: Path) -> URL:
                 "can be written and run `posecbr casebase upgrade --db FILE` there",
                 given,
             )
+        if _wal_frames(path):  # immutable ignores the -wal: its changes would go unseen
+            raise StoreError(
+                f"{path.name}-wal beside it holds changes not yet in the file, and without "
+                f"{path.name}-shm, in a folder that cannot be written, they cannot be read: "
+                "copy the files to a folder that can be written and run `posecbr casebase "
+                "upgrade --db FILE` there",
+                given,
+            )
         params["immutable"] = "1"
     # built, not parsed: SQLAlchemy would undo the quoting, and SQLite would then read a "?",
     # "#" or "%20" of the file's name as the URI's query, fragment or escape (a read of
     # "a?b.sqlite" opened, and created, a file "a")
     return URL.create("sqlite", database=f"file:{quote(str(path.resolve()))}", query=params)
+
+
+def _wal_frames(path: Path) -> bool:
+    """Whether ``path``'s ``-wal`` file holds frames (changes, committed or not, not yet copied
+    into the file): more than its 32-byte header."""
+    wal = path.with_name(path.name + "-wal")
+    try:
+        return wal.is_file() and wal.stat().st_size > 32
+    except OSError:
+        return False
 
 
 #: The first bytes of a rollback journal that holds a transaction (SQLite zeroes or deletes

@@ -284,3 +284,55 @@ def test_two_upgrades_of_one_postgresql_store_at_once_convert_it_once(
     store = open_store(pg_url, readonly=True)
     assert store.load_cases("squats ✓").ids.tolist() == list(range(1, 9))
     store.close()
+
+
+@needs_mounts
+def test_a_wal_files_changes_without_its_shm_in_a_read_only_folder_are_refused_not_ignored(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: the file was opened "immutable", which ignores NAME-wal: a case base whose last
+    # committed change was still in the -wal (its writer killed before a checkpoint, the -shm
+    # not copied along) was read as it was before that change, in silence
+    import shutil
+
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    shutil.copy(small_case_base(tmp_path), db)
+    con = sqlite3.connect(db)
+    assert con.execute("PRAGMA journal_mode = WAL").fetchone() == ("wal",)  # as 0.1 wrote it
+    con.close()
+    # a committed change left in the -wal: the writer exits without closing (no checkpoint)
+    change = (
+        "import os, sqlite3, sys; c = sqlite3.connect(sys.argv[1]); "
+        "c.execute('PRAGMA wal_autocheckpoint = 0'); "
+        "c.execute(\"UPDATE cases SET label = 'relabelled' WHERE id = 1\"); c.commit(); "
+        "os._exit(0)"
+    )
+    subprocess.run([sys.executable, "-c", change, str(db)], check=True, timeout=60)
+    db.with_name("cb.sqlite-shm").unlink()
+    assert db.with_name("cb.sqlite-wal").stat().st_size > 32
+    before = {p.name: _sha(p) for p in folder.iterdir()}
+    script = (
+        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
+        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
+        f'exec "$0" -m posecbr "$@"'
+    )
+    done = subprocess.run(
+        ["unshare", "-rm", "sh", "-c", script, sys.executable, "casebase", "list", "--db",
+         str(db)],
+        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 1, (done.stdout, done.stderr)
+    assert done.stderr.splitlines() == [
+        f"posecbr casebase list: error: {db}: cb.sqlite-wal beside it holds changes not yet in "
+        "the file, and without cb.sqlite-shm, in a folder that cannot be written, they cannot "
+        "be read: copy the files to a folder that can be written and run `posecbr casebase "
+        "upgrade --db FILE` there"
+    ]
+    assert {p.name: _sha(p) for p in folder.iterdir()} == before
+    # what it says to do reads the change
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    capsys.readouterr()
+    assert main(["casebase", "list", "--db", str(db)]) == 0
+    assert capsys.readouterr().out.splitlines()[0].split("\t")[:2] == ["#1", "relabelled"]
