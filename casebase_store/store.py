@@ -380,7 +380,7 @@ def _sqlite_readonly_url(path: Path) -> URL:
                 "can be written and run `posecbr casebase upgrade --db FILE` there",
                 given,
             )
-        if _wal_frames(path):  # immutable ignores the -wal: its changes would go unseen
+        if in_wal_mode(path) and _wal_frames(path):  # immutable ignores the -wal: unseen
             raise StoreError(
                 f"{path.name}-wal beside it holds changes not yet in the file, and without "
                 f"{path.name}-shm, in a folder that cannot be written, they cannot be read: "
