@@ -739,6 +739,14 @@ def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
     text = str(getattr(exc, "orig", None) or exc).strip()
     low = text.lower()
     code = getattr(getattr(exc, "orig", None) or exc, "sqlite_errorcode", None)
+    if code == _SQLITE_READONLY_ROLLBACK and not os.access(where, os.W_OK):
+        # the file itself read-only (its folder writable): no command here can undo it
+        return InterruptedWrite(
+            f"{_INTERRUPTED.format(journal=_journal(Path(where)))}; the file cannot be "
+            "written, so it cannot be rolled back here: make it writable, or copy both files "
+            "to where they can be written, and run `posecbr casebase upgrade --db FILE` there",
+            where,
+        )
     if code == _SQLITE_READONLY_ROLLBACK:  # before "readonly" below: the file can be written
         return InterruptedWrite(
             f"{_INTERRUPTED.format(journal=_journal(Path(where)))}, and a command "

@@ -336,3 +336,38 @@ def test_a_wal_files_changes_without_its_shm_in_a_read_only_folder_are_refused_n
     capsys.readouterr()
     assert main(["casebase", "list", "--db", str(db)]) == 0
     assert capsys.readouterr().out.splitlines()[0].split("\t")[:2] == ["#1", "relabelled"]
+
+
+@needs_mounts
+@pytest.mark.parametrize("action", ["info", "upgrade"])
+def test_a_killed_writers_journal_beside_a_read_only_file_is_not_sent_to_upgrade(
+    tmp_path: Path, action: str
+) -> None:
+    # before: both said "... undo it with `posecbr casebase upgrade --db FILE`", and upgrade
+    # itself said so again: the file read-only (its folder writable), nothing here can undo it
+    import shutil
+
+    from tests.test_hunt32d import _killed_mid_write
+
+    db = tmp_path / "cb.sqlite"
+    shutil.copy(small_case_base(tmp_path / "made"), db)
+    _killed_mid_write(db)
+    before = {p.name: _sha(p) for p in tmp_path.iterdir() if p.is_file()}
+    script = (
+        f"mount --bind {db} {db} && mount -o remount,ro,bind {db} {db} && "
+        f"[ -w {db} ] && exit 99; "  # the file must really be read-only (access(2): EROFS)
+        f'exec "$0" -m posecbr "$@"'
+    )
+    done = subprocess.run(
+        ["unshare", "-rm", "sh", "-c", script, sys.executable, "casebase", action, "--db",
+         str(db)],
+        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.splitlines() == [
+        f"posecbr casebase {action}: error: {db}: its last change was interrupted (the process "
+        f"writing it was killed): {db}-journal holds what to undo; the file cannot be written,"
+        " so it cannot be rolled back here: make it writable, or copy both files to where they"
+        " can be written, and run `posecbr casebase upgrade --db FILE` there"
+    ]
+    assert {p.name: _sha(p) for p in tmp_path.iterdir() if p.is_file()} == before
