@@ -493,6 +493,8 @@ def check_writable(file: Path) -> None:
 
 #: SQLite's extended result code for a read-only connection that met such a journal
 _SQLITE_READONLY_ROLLBACK = 776
+#: SQLite's extended result code for a write(2) that failed (EIO; EFBIG: RLIMIT_FSIZE)
+_SQLITE_IOERR_WRITE = 778
 
 
 def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> tuple[Engine, str]:
@@ -735,10 +737,9 @@ def _looks_like_text(head: bytes) -> bool:
     return bool(text) and all(c.isprintable() or c in "\t\r\n" for c in text)
 
 
-def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
-    text = str(getattr(exc, "orig", None) or exc).strip()
-    low = text.lower()
-    code = getattr(getattr(exc, "orig", None) or exc, "sqlite_errorcode", None)
+def _by_sqlite_code(code: Any, where: str) -> StoreError | None:
+    """The line for a SQLite error its extended result code tells apart (None: read its
+    text)."""
     if code == _SQLITE_READONLY_ROLLBACK and not os.access(where, os.W_OK):
         # the file itself read-only (its folder writable): no command here can undo it
         return InterruptedWrite(
@@ -754,6 +755,22 @@ def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
             " (a command that changes the case base also does)",
             where,
         )
+    if code == _SQLITE_IOERR_WRITE:  # write(2) failed: EIO, or EFBIG past a file size limit
+        return StoreError(
+            "cannot write the database file: disk I/O error (a failing disk, or the file would "
+            "grow past a size limit such as `ulimit -f`)",
+            where,
+        )
+    return None
+
+
+def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
+    text = str(getattr(exc, "orig", None) or exc).strip()
+    low = text.lower()
+    code = getattr(getattr(exc, "orig", None) or exc, "sqlite_errorcode", None)
+    known = _by_sqlite_code(code, where)
+    if known is not None:
+        return known
     if "locked" in low or "busy" in low or "lock timeout" in low:
         return StoreError(
             f"database is locked by another process (gave up after {timeout_s:g} s)", where

@@ -371,3 +371,33 @@ def test_a_killed_writers_journal_beside_a_read_only_file_is_not_sent_to_upgrade
         " can be written, and run `posecbr casebase upgrade --db FILE` there"
     ]
     assert {p.name: _sha(p) for p in tmp_path.iterdir() if p.is_file()} == before
+
+
+def test_a_file_size_limit_reached_in_a_write_is_one_line_saying_so(tmp_path: Path) -> None:
+    # before: "database error: disk I/O error", which named neither the write nor the limit
+    import resource
+    import shutil
+
+    db = tmp_path / "cb.sqlite"
+    shutil.copy(small_case_base(tmp_path / "made"), db)
+    before = _sha(db)
+    size = db.stat().st_size
+    clip = sorted((tmp_path / "made" / "train").rglob("*.npz"))[0]
+
+    def limit() -> None:  # the file may not grow (Python ignores SIGXFSZ: write(2) fails)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (size, size))
+
+    done = subprocess.run(
+        [sys.executable, "-m", "posecbr", "classify", str(clip), "--feedback",
+         clip.parent.name, "--novelty", "0", "--benefit", "0", "--db", str(db)],
+        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300, preexec_fn=limit,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.splitlines() == [
+        f"posecbr classify: error: {db}: cannot write the database file: disk I/O error (a "
+        "failing disk, or the file would grow past a size limit such as `ulimit -f`)"
+    ]
+    assert _sha(db) == before and sorted(p.name for p in tmp_path.iterdir()) == [
+        "cb.sqlite",
+        "made",
+    ]
