@@ -175,7 +175,9 @@ TRUNK_LEVEL_RAD = float(np.radians(60.0))
 when the trunk lies more than this far from the vertical (lying down, a deep bend) they have no
 stable value and count as missing (its inclination still counts)."""
 MEDIAN_S = 0.2
-"""Running median (seconds) before smoothing: drops tracking glitches shorter than 0.1 s."""
+"""Running median (seconds) before smoothing: drops tracking glitches shorter than 0.1 s (at
+the clip's start and end, where its window is cut to the clip's frames, :func:`_running_median`,
+shorter ones)."""
 MAX_FILTER_FPS = 240.0
 """Above this frame rate the running median and the smoothing read every few frames, at
 240-480 fps: the median costs its width at every frame read, and 5 s at 4800 fps (a width
@@ -223,6 +225,20 @@ EASE_SHARE = 0.5
 """The posture at ease tells which end of a movement is rest only when the angles that have
 an at-ease value (:data:`AT_EASE`) carry at least this share of the movement direction's
 squared weight."""
+TURNED_SHARE = 0.5
+"""A far point cut off by the clip's start or end counts beside whole ones when it got three
+quarters as far as they did; once the line has turned at it within the clip (falling back
+from it, but by less than :data:`MIN_EXCURSION_RAD`: still cut off), when it got this share
+as far. A far point's measured height wavers by a few hundredths from one end of the clip to
+the next, so one reached at three quarters as the line got there (counted) came out a hair
+short as the line turned back from it 0.25 s later (not counted) and was whole 0.25 s after
+that (counted): a count going 2, 3, 2, 3 as the clip grew. A far point the line has turned
+at is as far as it will get, and half as far as the whole ones leaves the waver no hold. On
+the joined recordings of UI-PRMD's training subjects s01-s04 (``python -m
+benchmarks.repetition_growth``, their rows only; with the running median cut at the
+clip's ends, :func:`_running_median`) the count went down at 0.79 % of 0.25-s steps with
+three quarters and 0.46 % with a half; never chosen on the held-out subjects, HDM05, CMU or
+the videos."""
 ENDS_S = MIN_PERIOD_S / 2
 """Otherwise the rest end is the one the clip's first and last this many seconds lie nearer
 (0.2 s: half the shortest repetition, so the ends do not reach into its far point, as 5 % of
@@ -440,11 +456,28 @@ def movement_signals(seq: PoseSequence) -> MovementSignals:
     rate = seq.fps / first
     x = _interpolate(raw[:, keep])[::first]
     width = max(1, int(round(MEDIAN_S * rate)) | 1)
-    x = median_filter(x, size=(width, 1), mode="nearest")
+    x = _running_median(x, width)
     x = gaussian_filter1d(x, SMOOTHING_S * rate, axis=0, mode="nearest")[:: step // first]
     unseen = ~np.isfinite(raw[:, keep]).any(axis=1)
     blind = long_runs(unseen, MIN_PERIOD_S * seq.fps)[::step]
     return MovementSignals(x, names, seq.fps / step, step, blind if blind.any() else None)
+
+
+def _running_median(x: np.ndarray, width: int) -> np.ndarray:
+    """The running median of ``x`` ``(n, C)`` over ``width`` samples (odd), each sample's window
+    cut to the samples the clip has: near its start and end the median reads fewer samples,
+    none made up. Padded with the edge sample (scipy's ``nearest``), the last sample's window
+    held more copies of it than of anything else, so a pose model's glitch in the clip's last
+    frame or two stood as a posture (a far point cut off by the end, counted, and gone a frame
+    later when the median read past it; a Kinect knee bent 50 degrees for three frames made
+    a count of UI-PRMD go 4, 5, 4); mirrored, a glitch just before the end is read twice. At
+    30 fps (width 7) a glitch in the last frame is now gone and one in the last two halved."""
+    out = median_filter(x, size=(width, 1), mode="nearest")
+    half, n = width // 2, len(x)
+    for i in range(min(half, n)):
+        out[i] = np.median(x[: i + half + 1], axis=0)
+        out[n - 1 - i] = np.median(x[max(0, n - 1 - i - half) :], axis=0)
+    return np.asarray(out)
 
 
 def _first_step(fps: float, step: int) -> int:
@@ -736,7 +769,7 @@ def _far_points(line: np.ndarray, rest: float, distance: int) -> tuple[np.ndarra
     the far points and how far the line rises to each and falls back from it within the clip
     (``(k, 2)``, :func:`_candidates`)."""
     cand, back = _candidates(line, rest, distance)
-    keep = _reached(line[cand] - rest, back < MIN_EXCURSION_RAD)
+    keep = _reached(line[cand] - rest, back)
     return np.asarray(cand[keep]), back[keep]
 
 
@@ -759,15 +792,20 @@ def _candidates(line: np.ndarray, rest: float, distance: int) -> tuple[np.ndarra
     return np.asarray(cand), np.stack([line[cand] - before, line[cand] - after], axis=1)
 
 
-def _reached(height: np.ndarray, cut: np.ndarray) -> np.ndarray:
-    """Which far points count, of heights ``height`` above rest, cut off at the clip's start
-    or end where ``cut`` ``(k,)`` or ``(k, 2)`` says: every whole one, and one cut off when it
-    got (nearly) as far as the whole ones: three quarters of their median height (all, when
-    none is whole: :func:`_whole_only` judges those)."""
-    whole = ~cut.any(axis=1) if cut.ndim == 2 else ~cut
+def _reached(height: np.ndarray, back: np.ndarray) -> np.ndarray:
+    """Which far points count, of heights ``height`` above rest, the line rising to them and
+    falling back from them by ``back`` ``(k, 2)`` within the clip (:func:`_candidates`; cut
+    off at the clip's start or end below :data:`MIN_EXCURSION_RAD`): every whole one, and one
+    cut off when it got (nearly) as far as the whole ones: three quarters of their median
+    height, or :data:`TURNED_SHARE` of it when the line has turned at it within the clip
+    (all, when none is whole: :func:`_whole_only` judges those)."""
+    cut = back < MIN_EXCURSION_RAD
+    whole = ~cut.any(axis=1)
     if not whole.any():
         return np.ones(len(height), dtype=bool)
-    return np.asarray(whole | (height >= 0.75 * float(np.median(height[whole]))))
+    turned = ~(cut & (back <= 0.0)).any(axis=1)
+    share = np.where(turned, TURNED_SHARE, 0.75)
+    return np.asarray(whole | (height >= share * float(np.median(height[whole]))))
 
 
 def _whole_only(back: np.ndarray, edges: tuple[bool, bool]) -> np.ndarray:
@@ -1126,8 +1164,8 @@ def _alternating_repetitions(
         other[out_other],
         other_back[out_other],
     )
-    keep_one = _reached(line[one], one_back < MIN_EXCURSION_RAD)
-    keep_other = _reached(-line[other], other_back < MIN_EXCURSION_RAD)
+    keep_one = _reached(line[one], one_back)
+    keep_other = _reached(-line[other], other_back)
     one, one_back, other, other_back = (
         one[keep_one],
         one_back[keep_one],
@@ -1149,7 +1187,7 @@ def _alternating_repetitions(
     # sides (a side whose only far point is cut off had none of its own: a single twist
     # that turns back as the clip ends)
     back = np.concatenate([one_back, other_back])
-    reached = _reached(np.abs(line[far]), back < MIN_EXCURSION_RAD)
+    reached = _reached(np.abs(line[far]), back)
     reached[reached] = _whole_only(back[reached], edges)
     order = np.argsort(far[reached], kind="stable")
     far, sides = far[reached][order], sides[reached][order]

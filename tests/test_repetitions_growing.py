@@ -1,0 +1,96 @@
+"""A clip's repetition count as its end moves on: it must not go down (a person watching the
+count, or `watch`'s rolling count, sees 3, 4, 3, 4 as the count taking a repetition back)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from features.errors import DataError
+from features.poses import PoseSequence
+from features.readers.uiprmd import read_uiprmd_vicon
+from features.repetitions import _running_median, count_repetitions
+from tests.bodies import standing, to_sequence
+from tests.test_repetitions import FPS, _bump, _raise_arms
+
+STEP_S = 0.25
+
+
+def _counts(seq: PoseSequence, ends: list[int]) -> list[int]:
+    out = []
+    for end in ends:
+        try:
+            out.append(count_repetitions(seq.slice_frames(0, end)).count)
+        except DataError:  # shorter than a repetition
+            out.append(0)
+    return out
+
+
+def _raises_with_a_glitch(glitch: int, frames: int) -> tuple[PoseSequence, int]:
+    """Three arm raises of 90 degrees (1.2 s each, 0.6 s of standing around each), then 1 s
+    of standing in which the pose model flings both arms up to 150 degrees for ``frames``
+    frames, ``glitch`` frames into it; and the frame where the glitch starts."""
+    rest, rise = int(0.6 * FPS), int(1.2 * FPS)
+    deg = [np.zeros(rest)]
+    for _ in range(3):
+        deg += [90.0 * _bump(rise), np.zeros(rest)]
+    deg.append(np.zeros(int(FPS)))
+    angles = np.concatenate(deg)
+    start = len(angles) - int(FPS) + glitch
+    angles[start : start + frames] = 150.0
+    body = standing()
+    return to_sequence(*[_raise_arms(body, a, a) for a in angles], fps=FPS), start
+
+
+@pytest.mark.parametrize("frames", [1, 2])
+def test_a_glitch_at_the_clips_end_is_no_repetition(frames: int) -> None:
+    """Three raises, counted 3 at every end from before the glitch to after it (frame by
+    frame): before, a glitch of one or two frames at the clip's very end stood through the
+    running median (padded with the last frame, which then filled most of the window) and
+    counted as a fourth repetition cut off by the end, gone a frame or two later: 3, 4, 3."""
+    seq, start = _raises_with_a_glitch(10, frames)
+    counts = _counts(seq, list(range(start - 2, start + 12)))
+    assert counts == [3] * len(counts)
+
+
+def test_the_running_median_reads_only_the_clips_own_samples_at_its_ends() -> None:
+    """Width 7 (0.2 s at 30 fps): the last sample's window cut to the clip holds 4 samples,
+    padded with the last sample it held 7, four of them that sample (a glitch there stood)."""
+    one = np.array([0.0] * 9 + [5.0])[:, None]  # a glitch in the last frame: gone
+    np.testing.assert_allclose(_running_median(one, 7)[:, 0], np.zeros(10))
+    two = np.array([0.0] * 8 + [5.0, 5.0])[:, None]  # in the last two: 0, 0, 5, 5 -> 2.5
+    np.testing.assert_allclose(_running_median(two, 7)[:, 0], [0.0] * 9 + [2.5])
+    np.testing.assert_allclose(_running_median(two[::-1], 7)[:, 0], [2.5] + [0.0] * 9)
+    inside = np.array([0.0] * 4 + [5.0] * 3 + [0.0] * 4)[:, None]
+    np.testing.assert_allclose(_running_median(inside, 7)[:, 0], np.zeros(11))
+
+
+@pytest.fixture(scope="module")
+def vicon_sit_to_stand(shared_data: Path) -> PoseSequence:
+    """UI-PRMD Vicon, subject 2, movement 5 (sitting down and standing up), its first four correct
+    repetitions joined as ``python -m benchmarks.repetitions`` joins them."""
+    from features.joining import join_repetitions
+
+    folder = shared_data / "ui-prmd" / "data" / "Segmented Movements" / "Vicon" / "Positions"
+    files = [folder / f"m05_s02_e{e:02d}_positions.txt.gz" for e in range(1, 5)]
+    if not all(f.is_file() for f in files):
+        pytest.skip("UI-PRMD Vicon positions not in the shared data")
+    return join_repetitions([read_uiprmd_vicon(f) for f in files]).seq
+
+
+def test_the_count_never_goes_down_as_a_real_recordings_end_moves_on(
+    vicon_sit_to_stand: PoseSequence,
+) -> None:
+    """Four real repetitions: counted with the end every 0.25 s from 0.5 s on, the count
+    never goes down, and ends at 4. Before, the third far point, cut off by an end at 4.5 s,
+    counted as it got three quarters as far as the whole ones (2.22 against a bar of 2.20);
+    0.25 s later the line had turned back from it by less than 15 degrees, still cut off,
+    and it came out a hair short (2.20 against 2.21): ..., 2, 3, 2, 3, ... Once the line has
+    turned at a far point, half as far counts."""
+    seq = vicon_sit_to_stand
+    ends = [int(round(t * seq.fps)) for t in np.arange(0.5, seq.duration_s, STEP_S)]
+    counts = _counts(seq, [*ends, seq.n_frames])
+    assert all(b >= a for a, b in zip(counts[:-1], counts[1:], strict=True)), counts
+    assert counts[-1] == 4
