@@ -237,7 +237,8 @@ at is as far as it will get, and half as far as the whole ones leaves the waver 
 the joined recordings of UI-PRMD's training subjects s01-s04 (``python -m
 benchmarks.repetition_growth``, their rows only; with the running median cut at the
 clip's ends, :func:`_running_median`) the count went down at 0.79 % of 0.25-s steps with
-three quarters and 0.46 % with a half; never chosen on the held-out subjects, HDM05, CMU or
+three quarters and 0.46 % with a half, the two values tried (1.05 % before either change);
+never chosen on the held-out subjects, HDM05, CMU or
 the videos."""
 ENDS_S = MIN_PERIOD_S / 2
 """Otherwise the rest end is the one the clip's first and last this many seconds lie nearer
