@@ -45,7 +45,19 @@ training person: the 95 % quantile of held-out known scores) with what it keeps 
   cases (Ledoit-Wolf covariance, per activity);
 - ``dtw``: the DTW 1-NN distance (tslearn) from the window's eight limb angles at 30 Hz to
   the baseline's training windows (``benchmarks.segment_people.dtw_training``) of the
-  movements in the case base.
+  movements in the case base;
+- combinations of the default judge's score and the nearest distance d1, each calibrated on
+  the case base's own held-out scan alone (:func:`held_scan`: the training cases held out
+  by person as the judges hold them out, :func:`cbr.unknown.held_out_activities`; the
+  judge's score and d1 of the held-out known cases, their activity in the case base, and of
+  the held-out novel ones, their activity left out; nothing of the test people):
+  ``tail-max``, the least of the two upper-tail probabilities among the held-out known
+  scores (:func:`tail_p`, a Bonferroni/Sidak union: the more surprising score decides),
+  ``tail-fisher``, Fisher's ``-2 sum log p`` of the two, and ``logistic``, a logistic
+  regression on the logs of the two fit on held-out known against held-out novel cases;
+  each threshold the 95 % quantile of the held-out known cases' own combined scores
+  (:func:`combined_scores`; the case bases refit from the fold's descriptions, made once per
+  fold, :func:`measure_held`, kept in the cache as ``...-MOVEMENT-held``).
 
 Pooled over a dataset's left-out movements with ONE threshold (as one judge would have);
 per movement each with its own. Window level: ``segment`` averages evidence over blocks and
@@ -65,6 +77,7 @@ import pickle  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 from collections.abc import Callable  # noqa: E402
+from functools import cache as cache_once  # noqa: E402
 from functools import partial  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
@@ -101,8 +114,8 @@ the DTW threshold held out by person (each costs a DTW against every training wi
 CACHE_VERSION = 1
 JUDGE = "spread-margin"
 SCORES = ("spread-margin", "margin", "nearest", "lof", "iforest", "ocsvm", "knn5",
-          "mahalanobis", "dtw")  # fmt: skip
-"""The scores, the default judge first."""
+          "mahalanobis", "dtw", "tail-max", "tail-fisher", "logistic")  # fmt: skip
+"""The scores, the default judge first, the combinations (:data:`COMBINED`) last."""
 
 
 # ---------------------------------------------------------------- pure scoring helpers
@@ -286,6 +299,100 @@ def distance_thresholds(cb: Any) -> dict[str, float]:
     return {"nearest": oracle_threshold(known.min(axis=1))}
 
 
+# ---------------------------------------------------------------- combinations
+
+COMBINED = ("tail-max", "tail-fisher", "logistic")
+"""Combinations of the default judge's score and the nearest distance d1 (:data:`PARTS`),
+each calibrated on the case base's held-out scan alone (:func:`held_scan`)."""
+PARTS = (JUDGE, "nearest")
+
+
+def tail_p(held: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The upper-tail probability of every score ``x`` ``(m,)`` among the held-out known
+    scores ``held`` ``(n,)`` (non-empty): ``(1 + #{held >= x}) / (n + 1)``, the smallest
+    ``1 / (n + 1)`` (inf scores above every held one)."""
+    h = np.sort(np.asarray(held, dtype=np.float64))
+    above = len(h) - np.searchsorted(h, np.asarray(x, dtype=np.float64), side="left")
+    return np.asarray((1.0 + above) / (len(h) + 1.0))
+
+
+def tail_fused(held: dict[str, np.ndarray], scores: dict[str, np.ndarray], how: str) -> np.ndarray:
+    """Each part's scores ``scores[name]`` ``(m,)`` as :func:`tail_p` of its held-out known
+    scores ``held[name]``, fused: ``tail-max``, ``-log`` of the least (the most surprising
+    part decides, a Bonferroni/Sidak union); ``tail-fisher``, Fisher's ``-2 sum log p``.
+    Higher = more unknown."""
+    logs = np.stack([np.log(tail_p(held[n], scores[n])) for n in held])
+    if how == "tail-max":
+        return np.asarray(-logs.min(axis=0))
+    if how == "tail-fisher":
+        return np.asarray(-2.0 * logs.sum(axis=0))
+    raise ValueError(f"unknown fusion {how!r}")
+
+
+def _log_features(held: dict[str, np.ndarray], scores: dict[str, np.ndarray]) -> np.ndarray:
+    """``(m, parts)``: the log of each part's scores, clipped into the held-out range widened
+    tenfold (an inf score, a window too still for every case, at the top)."""
+    cols = []
+    for n, h in held.items():
+        f = np.asarray(h, dtype=np.float64)
+        f = f[np.isfinite(f) & (f > 0)]
+        lo, hi = float(f.min()) / 10.0, float(f.max()) * 10.0
+        cols.append(np.log(np.clip(np.nan_to_num(scores[n], posinf=hi), lo, hi)))
+    return np.stack(cols, axis=1)
+
+
+def logistic_fused(held_known: dict[str, np.ndarray], held_novel: dict[str, np.ndarray],
+                   scores: dict[str, np.ndarray]) -> np.ndarray:  # fmt: skip
+    """The log-odds of "novel" of ``scores`` (each part ``(m,)``) by a logistic regression
+    (scikit-learn, classes balanced, features :func:`_log_features` standardised) fit on the
+    case base's held-out cases: known (their activity in) against novel (their activity left
+    out), ``held_known`` / ``held_novel`` each part's scores. Higher = more unknown."""
+    from sklearn.linear_model import LogisticRegression
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+
+    X = np.r_[_log_features(held_known, held_known), _log_features(held_known, held_novel)]
+    y = np.r_[np.zeros(len(next(iter(held_known.values())))),
+              np.ones(len(next(iter(held_novel.values()))))]  # fmt: skip
+    model = make_pipeline(StandardScaler(), LogisticRegression(class_weight="balanced"))
+    model.fit(X, y)
+    return np.asarray(model.decision_function(_log_features(held_known, scores)))
+
+
+def combined_scores(
+    held: dict[str, Any], scores: dict[str, np.ndarray]
+) -> dict[str, tuple[np.ndarray, float]]:
+    """Every combination of :data:`COMBINED` of the windows' ``scores`` (each part's ``(m,)``)
+    with its threshold calibrated on the held-out scan ``held`` (:func:`held_scan`:
+    ``known`` and ``novel`` each part's scores): the :func:`oracle_threshold` (95 %) of the
+    held-out known cases' own combined scores."""
+    k, n = held["known"], held["novel"]
+    out = {}
+    for how in ("tail-max", "tail-fisher"):
+        out[how] = (tail_fused(k, scores, how), oracle_threshold(tail_fused(k, k, how)))
+    out["logistic"] = (logistic_fused(k, n, scores), oracle_threshold(logistic_fused(k, n, k)))
+    return out
+
+
+def held_scan(cb: Any) -> dict[str, Any]:
+    """The case base's held-out scan as the judges read it
+    (:func:`cbr.unknown.held_out_activities`): the default judge's score (over its nearest
+    activity's threshold, the judge calibrated on that scan as ``segment`` calibrates it) and
+    the nearest distance of the held-out known cases (their activity within reach) and novel
+    ones (their activity left out; see :func:`cbr.unknown.known_and_novel`)."""
+    from cbr.unknown import STORED, for_person, held_out_activities, known_and_novel
+
+    held = held_out_activities(cb)
+    judge = STORED[JUDGE].of(cb, held=held)
+    seen, codes, basis, groups = held
+    out: dict[str, Any] = {"basis": basis}
+    for kind, rows in zip(("known", "novel"), known_and_novel(seen, codes), strict=True):
+        mine = for_person(judge, rows.min(axis=1))
+        score = np.array([mine.ratio(r) / mine.threshold(r) for r in rows])  # type: ignore[attr-defined]
+        out[kind] = {JUDGE: score, "nearest": rows.min(axis=1)}
+    return out
+
+
 def dtw_fold(fold: Fold, joined: list[tuple[Any, Group]], recs: dict[str, Any]) -> dict[str, Any]:
     """The DTW distances of a fold, computed once for every left-out movement: from every
     judged test window (``recs``: each recording's window centres in seconds) to every
@@ -392,6 +499,47 @@ def with_dtw(left: dict[str, Any], dtw: dict[str, Any], movement: str) -> dict[s
     return left
 
 
+def with_combined(left: dict[str, Any], held: dict[str, Any]) -> dict[str, Any]:
+    """``left`` (:func:`measure_left_out`) with each recording's :data:`COMBINED` scores and
+    their thresholds, calibrated on its case base's held-out scan ``held``
+    (:func:`held_scan`)."""
+    for r in left["recordings"].values():
+        for name, (score, t) in combined_scores(held, {p: r["scores"][p] for p in PARTS}).items():
+            r["scores"][name] = score
+            left["thresholds"][name] = t
+    left["held_out_cases"] = {k: len(held[k][JUDGE]) for k in ("known", "novel")}
+    return left
+
+
+def fold_described(joined: list[tuple[Any, Group]]) -> tuple[list[Any], list[Any]]:
+    """The fold's training windows (every movement) and each described as
+    :func:`benchmarks.segment_people.fit` describes it (once for every case base of the fold:
+    a case base without a movement is fit on the others' descriptions)."""
+    from cbr.described import describe_clips
+    from cbr.estimator import CaseBaseClassifier
+
+    clips = training_clips(joined)
+    candidates, mirror, sides = CaseBaseClassifier(
+        feature_weights="none", mirror="auto"
+    ).describe_plan()
+    return clips, list(describe_clips([c.seq for c in clips], candidates, mirror, sides))
+
+
+def measure_held(
+    described: Callable[[], tuple[list[Any], list[Any]]], movement: str
+) -> dict[str, Any]:
+    """:func:`held_scan` of the fold's case base without ``movement`` (``described``: the
+    fold's :func:`fold_described`), fit as :func:`benchmarks.segment_people.fit` fits it."""
+    from cbr.estimator import CaseBaseClassifier
+
+    clips, desc = described()
+    keep = [i for i, c in enumerate(clips) if c.label != movement]
+    clf = CaseBaseClassifier(feature_weights="none", mirror="auto").fit_described(
+        [desc[i] for i in keep], [clips[i].label for i in keep]
+    )
+    return {"cases": len(clf.case_base_), **held_scan(clf.case_base_)}
+
+
 def pool(parts: list[tuple[str, dict[str, Any]]]) -> dict[str, Any]:
     """Known and novel windows' scores, evidence and decisions pooled over ``parts`` (left-out
     movement, :func:`measure_left_out` with DTW), and the blocks."""
@@ -492,7 +640,16 @@ def run_dataset(
             )
         first = next(iter(measured.values()))["recordings"]
         dtw = _cached(cache, f"{tag}-dtw", partial(dtw_fold, fold, joined, first))
-        out += [(fold.name, m, with_dtw(v, dtw, m)) for m, v in measured.items()]
+        # the fold's descriptions, made when a held-out scan needs them (once)
+        describe_once = cache_once(partial(fold_described, joined))
+        # the case bases do not depend on --per-person: one scan for every run
+        htag = f"v{CACHE_VERSION}-{dataset}-{fold.name.replace(' ', '_')}-seed{seed}"
+        for m, v in measured.items():
+            held = _cached(cache, f"{htag}-{m}-held", partial(measure_held, describe_once, m))
+            if held["cases"] != v["cases"]:
+                raise RuntimeError(f"{fold.name} without {m}: {held['cases']} cases, not "
+                                   f"{v['cases']} as measured")  # fmt: skip
+            out.append((fold.name, m, with_combined(with_dtw(v, dtw, m), held)))
     return out
 
 
@@ -517,6 +674,8 @@ def print_table(summary: dict[str, Any]) -> None:
     for dataset, s in summary.items():
         p = s["pooled"]
         for name in SCORES:
+            if name == COMBINED[0]:
+                print(f"  {'':4s}combined, {JUDGE} with nearest, calibrated on the held-out scan")
             o = p[name]
             cal = o.get("calibrated")
             tail = f"{cal['known_kept']:18.1%}{cal['novel_unknown']:9.1%}" if cal else ""

@@ -12,11 +12,15 @@ from sklearn.metrics import roc_auc_score
 from benchmarks.unknown_ceiling import (
     auroc,
     called,
+    combined_scores,
     figures,
+    logistic_fused,
     oracle_rate,
     oracle_threshold,
     pure_windows,
     spaced,
+    tail_fused,
+    tail_p,
 )
 
 
@@ -72,3 +76,42 @@ def test_spaced_keeps_the_ends() -> None:
     assert spaced(items, 4) == ["m01", "m04", "m07", "m10"]
     assert spaced(items, None) == items
     assert spaced(items, 12) == items
+
+
+def test_tail_p_counts_the_held_out_scores_at_or_above() -> None:
+    held = np.array([3.0, 1.0, 4.0, 2.0])
+    # (1 + #held >= x) / 5: 0 -> 5/5, 2 -> 4/5 (2, 3, 4), 4.5 and inf -> 1/5
+    assert tail_p(held, np.array([0.0, 2.0, 4.5, np.inf])) == pytest.approx([1, 0.8, 0.2, 0.2])
+
+
+def test_tail_fusions_by_hand() -> None:
+    held = {"a": np.array([1.0, 2.0, 3.0, 4.0]), "b": np.array([10.0, 20.0, 30.0, 40.0])}
+    scores = {"a": np.array([2.0, 4.5]), "b": np.array([45.0, 10.0])}
+    # p of a: 4/5, 1/5; of b: 1/5, 5/5
+    assert tail_fused(held, scores, "tail-max") == pytest.approx([math.log(5), math.log(5)])
+    fisher = [-2 * math.log(4 / 25), -2 * math.log(1 / 5)]
+    assert tail_fused(held, scores, "tail-fisher") == pytest.approx(fisher)
+    with pytest.raises(ValueError, match="fusion"):
+        tail_fused(held, scores, "mean")
+
+
+def test_combined_thresholds_come_from_the_held_out_known_scores() -> None:
+    known = {"a": np.array([1.0, 2.0, 3.0, 4.0]), "b": np.array([10.0, 20.0, 30.0, 40.0])}
+    novel = {"a": np.array([5.0, 6.0, 8.0]), "b": np.array([50.0, 70.0, 90.0])}
+    out = combined_scores(
+        {"known": known, "novel": novel}, {"a": np.array([2.0]), "b": np.array([45.0])}
+    )
+    # held-out known cases against themselves: p 5/5, 4/5, 3/5, 2/5 for both parts; the
+    # 95 % threshold keeps all four: the largest, -log(2/5) (Fisher: -2 * 2 log(2/5))
+    assert out["tail-max"][1] == pytest.approx(math.log(2.5))
+    assert out["tail-fisher"][1] == pytest.approx(-4 * math.log(0.4))
+    assert out["tail-max"][0] == pytest.approx([math.log(5)])  # b's 45 is above every held one
+    assert set(out) == {"tail-max", "tail-fisher", "logistic"}
+
+
+def test_logistic_fusion_orders_windows_by_the_held_out_novel_side() -> None:
+    rng = np.random.default_rng(0)
+    known = {"a": rng.uniform(1, 2, 50), "b": rng.uniform(1, 2, 50)}
+    novel = {"a": rng.uniform(3, 6, 50), "b": rng.uniform(1, 2, 50)}  # only a tells them apart
+    s = logistic_fused(known, novel, {"a": np.array([1.5, 4.0, np.inf]), "b": np.ones(3)})
+    assert s[0] < 0 < s[1] <= s[2]  # known side, novel side; inf at the top of the range
