@@ -1,5 +1,6 @@
 """Ctrl-C held back while worker processes are started (:func:`interrupts_held`), for the
-commands that start them: ``compare --jobs`` and ``--scheduler local:N``."""
+commands that start them: ``compare --jobs`` and ``--scheduler local:N``; and SIGTERM taken as
+Ctrl-C (:func:`sigterm_as_interrupt`), for every command."""
 
 from __future__ import annotations
 
@@ -9,6 +10,67 @@ import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any, NoReturn
+
+#: the exit status of a command stopped by Ctrl-C (128 + SIGINT, as a shell reports it)
+INTERRUPTED_STATUS = 130
+#: the exit status of a command stopped by SIGTERM (128 + SIGTERM)
+TERMINATED_STATUS = 143
+
+# SIGTERM came in this run (the KeyboardInterrupt it raised is said as a termination)
+_TERMINATED: list[int] = []
+
+
+def terminated() -> bool:
+    """Whether the KeyboardInterrupt being handled was raised by SIGTERM (under
+    :func:`sigterm_as_interrupt`, or by :func:`raise_interrupt`), not by Ctrl-C."""
+    return bool(_TERMINATED)
+
+
+def raise_interrupt(signum: int, _frame: Any = None) -> NoReturn:
+    """What Ctrl-C does, for the signal ``signum``: KeyboardInterrupt raised (so every
+    ``finally``, context manager and ``except KeyboardInterrupt`` on the way cleans up: a
+    hidden temporary removed, a transaction rolled back, worker processes stopped); SIGTERM
+    is remembered (:func:`terminated`)."""
+    if signum == signal.SIGTERM:
+        _TERMINATED.append(signum)
+    raise KeyboardInterrupt
+
+
+@contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM (``kill PID``, systemd, ``docker stop``, a program's ``Popen.terminate()``)
+    raises KeyboardInterrupt meanwhile, as Ctrl-C does, instead of killing the process on
+    the spot (which left an output's hidden temporary behind and a ``compare --jobs`` run's
+    worker processes running). Set in the main thread only (the only one a handler can be
+    set from); elsewhere SIGTERM does what it did."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _TERMINATED.clear()
+    previous = signal.signal(signal.SIGTERM, raise_interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+
+
+@contextmanager
+def _sigterm_held() -> Iterator[None]:
+    """A SIGTERM that comes meanwhile is delivered at the end of the block (to the handler
+    there was), not in the middle of starting a worker process, which it left running after
+    this process had ended. Main thread only (elsewhere: nothing held)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came: list[int] = []
+    previous = signal.signal(signal.SIGTERM, lambda n, _: came.append(n))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+        if came:
+            signal.raise_signal(signal.SIGTERM)
 
 
 @contextmanager
@@ -29,7 +91,8 @@ def interrupts_held() -> Iterator[None]:
     handler = signal.signal(signal.SIGINT, lambda n, _: came.append(n)) if main else None
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
-        yield
+        with _sigterm_held():
+            yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, mask)
         if main:  # None: a handler not set from Python, which cannot be set back
@@ -59,7 +122,8 @@ def interrupts_ignored_by_children() -> Iterator[None]:
     try:
         handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
-            yield
+            with _sigterm_held():
+                yield
         finally:
             signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
         came = sentinel is not None and sentinel.poll() is not None

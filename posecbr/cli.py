@@ -18,6 +18,12 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from features.errors import PosecbrError
+from features.interrupts import (
+    INTERRUPTED_STATUS,
+    TERMINATED_STATUS,
+    sigterm_as_interrupt,
+    terminated,
+)
 from features.text import did_you_mean, shown
 from posecbr import __version__, commands
 
@@ -150,15 +156,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     # "posecbr casebase trim": a command with actions is named with its action
     command = " ".join(str(c) for c in (args.command, getattr(args, "action", None)) if c)
     try:
-        return int(args.func(args) or 0)
+        # SIGTERM (kill, systemd, docker stop) stops the command as Ctrl-C does: cleaned up
+        with sigterm_as_interrupt():
+            return int(args.func(args) or 0)
     except PosecbrError as exc:
         # The message quotes the user's files and labels: escaped, it cannot drive the terminal.
         print(f"posecbr {command}: error: {shown(exc)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as exc:  # its text, if any: what was done before (escaped)
         said = f": {shown(exc)}" if str(exc) else ""
+        if terminated():
+            print(f"posecbr {command}: terminated (SIGTERM){said}", file=sys.stderr)
+            return TERMINATED_STATUS
         print(f"posecbr {command}: interrupted{said}", file=sys.stderr)
-        return 130
+        return INTERRUPTED_STATUS
     except BrokenPipeError:
         return 0
     except OSError as exc:

@@ -40,6 +40,7 @@ from typing import Any
 
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import atomic_path, check_output, stdout_gone
+from features.interrupts import raise_interrupt
 from features.text import counted, shown
 from posecbr.arguments import path_arg
 
@@ -295,9 +296,9 @@ def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[threading
         yield stopped
         return
 
-    def interrupted(_signum: int, _frame: Any) -> None:
+    def interrupted(signum: int, _frame: Any) -> None:
         if stopped.is_set():
-            raise KeyboardInterrupt
+            raise_interrupt(signum)  # a second SIGTERM is said as one (exit 143)
         stopped.set()
         if also is not None:
             also.set()
