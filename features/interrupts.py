@@ -4,13 +4,16 @@ Ctrl-C (:func:`sigterm_as_interrupt`), for every command."""
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any, NoReturn
+from typing import Any, NoReturn, TypeVar
+
+R = TypeVar("R")
 
 #: the exit status of a command stopped by Ctrl-C (128 + SIGINT, as a shell reports it)
 INTERRUPTED_STATUS = 130
@@ -56,7 +59,7 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
 
 @contextmanager
-def _sigterm_held() -> Iterator[None]:
+def sigterm_held() -> Iterator[None]:
     """A SIGTERM that comes meanwhile is delivered at the end of the block (to the handler
     there was), not in the middle of starting a worker process, which it left running after
     this process had ended. Main thread only (elsewhere: nothing held)."""
@@ -71,6 +74,52 @@ def _sigterm_held() -> Iterator[None]:
         signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
         if came:
             signal.raise_signal(signal.SIGTERM)
+
+
+def stop_workers(pool: Any) -> None:
+    """Stop a ``concurrent.futures.ProcessPoolExecutor``'s worker processes now (Ctrl-C or
+    SIGTERM reached this process alone): each is sent SIGTERM (a worker started with
+    :func:`worker_ends_on_sigterm` unwinds its task first), and the pool, finding them gone,
+    fails their tasks; then it is shut down, every worker waited for. (Left to the pool's own
+    shutdown, every task queued was run first, the workers writing on after the command was
+    told to stop.)"""
+    for proc in list((pool._processes or {}).values()):
+        proc.terminate()
+    # the pool finds them gone and fails their tasks: its thread done with them, no future is
+    # left to cancel under it (it failed on one cancelled meanwhile)
+    pool.shutdown(wait=True)
+
+
+# whether this worker process is running a task (:func:`run_task`)
+_IN_TASK: list[bool] = [False]
+
+
+def _worker_sigterm(signum: int, _frame: Any) -> None:
+    if _IN_TASK[0]:
+        _IN_TASK[0] = False  # a second SIGTERM ends it at once
+        raise_interrupt(signum)
+    os._exit(TERMINATED_STATUS)
+
+
+def worker_ends_on_sigterm() -> None:
+    """For a worker process's initializer: SIGTERM (:func:`stop_workers`) unwinds the task
+    under way (:func:`run_task`: an output it was writing leaves no hidden temporary), then
+    ends the process; idle, it ends it at once. (Killed on the spot, it left the temporary.)"""
+    signal.signal(signal.SIGTERM, _worker_sigterm)
+
+
+def run_task(fn: Any, *args: Any) -> Any:
+    """``fn(*args)`` in a worker started with :func:`worker_ends_on_sigterm`: a SIGTERM
+    meanwhile unwinds it (every ``finally`` and context manager run), and the worker ends."""
+    _IN_TASK[0] = True
+    try:
+        return fn(*args)
+    except KeyboardInterrupt:
+        if terminated():
+            os._exit(TERMINATED_STATUS)
+        raise
+    finally:
+        _IN_TASK[0] = False
 
 
 @contextmanager
@@ -91,7 +140,7 @@ def interrupts_held() -> Iterator[None]:
     handler = signal.signal(signal.SIGINT, lambda n, _: came.append(n)) if main else None
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
-        with _sigterm_held():
+        with sigterm_held():
             yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, mask)
@@ -122,7 +171,7 @@ def interrupts_ignored_by_children() -> Iterator[None]:
     try:
         handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
-            with _sigterm_held():
+            with sigterm_held():
                 yield
         finally:
             signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)

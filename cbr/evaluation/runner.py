@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any, Generic, TypeVar
 
 from features.errors import PosecbrError
-from features.interrupts import interrupts_held
+from features.interrupts import interrupts_held, stop_workers
 from features.progress import progress
 
 C = TypeVar("C")
@@ -104,12 +104,8 @@ class ProcessRunner(Runner[C]):
                     yield fut.result()
             except BrokenProcessPool:
                 raise PosecbrError(_died(), "--jobs") from None
-            except KeyboardInterrupt:  # Ctrl-C, which reached this process alone: stop them
-                for proc in list((pool._processes or {}).values()):
-                    proc.terminate()
-                # the pool finds them gone and fails their tasks: its thread done with them,
-                # no future is left to cancel under it (it failed on one cancelled meanwhile)
-                pool.shutdown(wait=True)
+            except KeyboardInterrupt:  # Ctrl-C or SIGTERM, which reached this process alone
+                stop_workers(pool)
                 raise
             finally:
                 for fut in futures:

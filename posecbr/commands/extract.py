@@ -25,6 +25,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_not_in_walked_folder, check_output
 from features.formats import VIDEO_SUFFIXES
+from features.interrupts import run_task, sigterm_held, stop_workers, worker_ends_on_sigterm
 from features.progress import progress
 from features.text import counted, shown
 from posecbr.arguments import path_arg
@@ -346,6 +347,7 @@ _ESTIMATOR: Any = None  # one PoseEstimator per process, made on first use (afte
 def _init_worker(threads: int) -> None:
     global _THREADS
     _THREADS = threads
+    worker_ends_on_sigterm()  # stopped, a worker removes the hidden file it was writing
     # Per-clip bars from several processes would garble the terminal; the overall bar stays.
     os.environ["POSECBR_NO_PROGRESS"] = "1"
 
@@ -613,9 +615,15 @@ def _in_processes(jobs: list[Job], options: Options, workers: int) -> list[Outco
         initializer=_init_worker,
         initargs=(threads,),
     ) as pool:
-        futures = [pool.submit(process, job, options) for job in longest_first(jobs)]
-        return [fut.result() for fut in progress(cf.as_completed(futures), "extract",
-                                                 len(futures), "clip")]  # fmt: skip
+        try:
+            with sigterm_held():  # not in the middle of starting a worker
+                futures = [pool.submit(run_task, process, job, options)
+                           for job in longest_first(jobs)]  # fmt: skip
+            return [fut.result() for fut in progress(cf.as_completed(futures), "extract",
+                                                     len(futures), "clip")]  # fmt: skip
+        except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the workers stop, each clip unwound
+            stop_workers(pool)
+            raise
 
 
 def _run_all(jobs: list[Job], options: Options, args: argparse.Namespace) -> list[Outcome]:
