@@ -20,6 +20,7 @@ replaces one of the inputs it was made from.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -116,9 +117,24 @@ def temporary_file(dest: str | Path, suffix: str = ".tmp") -> Path:
     Raises OSError."""
     dest = Path(dest)
     remove_stale_temporaries(dest.parent, dest.name)
-    fd, name = tempfile.mkstemp(prefix=temporary_prefix(dest.name), suffix=suffix, dir=dest.parent)
-    os.close(fd)
-    return Path(name)
+    prefix = temporary_prefix(dest.name)
+    try:
+        fd, name = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=dest.parent)
+        os.close(fd)
+        return Path(name)
+    except (KeyboardInterrupt, SystemExit):
+        _remove_own(dest.parent, prefix, suffix)
+        raise
+
+
+def _remove_own(folder: Path, prefix: str, suffix: str) -> None:
+    """Ctrl-C or SIGTERM came while a temporary was being made, after its file was created
+    but before its name was returned (it was left behind): this process's temporaries of
+    that output are removed (no command writes one output twice at once)."""
+    with contextlib.suppress(OSError):
+        for path in folder.iterdir():
+            if path.name.startswith(prefix) and path.name.endswith(suffix) and path.is_file():
+                path.unlink(missing_ok=True)
 
 
 def staging_folder(folder: str | Path, name: str) -> Path:

@@ -1,0 +1,321 @@
+"""Hunt 34i: SIGTERM (``kill PID``, systemd, ``docker stop``, a supervisor's
+``Popen.terminate()``) killed every command but ``watch`` on the spot (status -15, nothing
+said): an output being written left its hidden temporary, a first ``train`` its half-built
+case base and journal, ``compare --jobs 2``'s and ``extract --workers 2``'s worker processes
+ran on after the command had ended (extract's writing pose files nobody asked for any more).
+SIGTERM now stops a command as Ctrl-C does, cleaned up, with one line ("posecbr segment:
+terminated (SIGTERM)") and status 143 (128 + 15, as Ctrl-C's is 130 = 128 + 2).
+
+Each test runs the command in a process of its own and sends SIGTERM to it alone (not to its
+process group, as a terminal's Ctrl-C is sent), at a moment it waits for (a hidden temporary
+seen, the workers started, a pause inside the transaction), not at a time.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from posecbr.cli import main
+from tests.badinput import ROOT, small_case_base
+from tests.processes import posecbr_process
+
+pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="signals and /proc: Linux")
+
+ENV = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
+SQUATS = ("videos", "squat", "tfjs_pose_squats_pexels4838220.mp4")  # 65 frames at 5 fps
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
+
+
+@pytest.fixture(scope="module")
+def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return small_case_base(tmp_path_factory.mktemp("cb"))
+
+
+def _command(argv: list[str], logs: Path) -> subprocess.Popen[bytes]:
+    """``python -m posecbr ARGV`` in a process group of its own, its output in files (a
+    worker left running would hold a pipe open)."""
+    return subprocess.Popen(
+        [sys.executable, "-m", "posecbr", *argv],
+        cwd=logs,
+        env=ENV,
+        stdout=(logs / "out.txt").open("wb"),
+        stderr=(logs / "err.txt").open("wb"),
+        start_new_session=True,
+    )
+
+
+def _alive(pids: list[int]) -> list[int]:
+    """Those of ``pids`` still running (a zombie has ended)."""
+    out = []
+    for pid in pids:
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except OSError:
+            continue
+        if state != "Z":
+            out.append(pid)
+    return out
+
+
+def _children(pid: int) -> list[int]:
+    """The processes whose parent is ``pid`` (from /proc)."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid and fields[0] != "Z":
+            out.append(int(stat.parent.name))
+    return out
+
+
+def _gone_soon(pids: list[int]) -> list[int]:
+    """``pids`` still running after up to 10 s (an ended process's zombie is reaped by init)."""
+    for _ in range(50):
+        if not _alive(pids):
+            return []
+        time.sleep(0.2)
+    left = _alive(pids)
+    for pid in left:  # not left behind by the test either
+        os.kill(pid, signal.SIGKILL)
+    return left
+
+
+def _hidden(*folders: Path) -> list[str]:
+    return [str(p) for f in folders if f.exists() for p in f.rglob(".*")]
+
+
+def _ended(proc: subprocess.Popen[bytes], logs: Path) -> tuple[int, str, str]:
+    proc.wait(timeout=180)
+    return (
+        proc.returncode,
+        (logs / "err.txt").read_text(),
+        (logs / "out.txt").read_text(),
+    )
+
+
+def test_sigterm_of_segment_writing_an_overlay_leaves_no_temporary(
+    case_base: Path, shared_data: Path, tmp_path: Path
+) -> None:
+    """``segment VIDEO --overlay OUT`` sent SIGTERM while the overlay is being written: the
+    one line, status 143, and the output folder as it was (empty). It was killed, status
+    -15, its 0600 temporary ``.o.mp4.pid...mp4`` left in the folder."""
+    out = tmp_path / "out"
+    out.mkdir()
+    argv = ["segment", str(shared_data.joinpath(*SQUATS)), "--db", str(case_base)]
+    proc = _command([*argv, "--overlay", str(out / "o.mp4")], tmp_path)
+    while not _hidden(out) and proc.poll() is None:
+        time.sleep(0.02)
+    assert _hidden(out), "the overlay was never begun"
+    proc.terminate()
+    assert _ended(proc, tmp_path) == (143, "posecbr segment: terminated (SIGTERM)\n", "")
+    assert list(out.iterdir()) == []
+
+
+def _cases(db: Path) -> tuple[int, str]:
+    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+    try:
+        n = con.execute("SELECT count(*) FROM cases").fetchone()[0]
+        return int(n), str(con.execute("PRAGMA integrity_check").fetchone()[0])
+    finally:
+        con.close()
+
+
+def test_sigterm_inside_a_first_trains_transaction_leaves_nothing(
+    case_base: Path, tmp_path: Path
+) -> None:
+    """A first ``train`` builds its case base under a hidden name: SIGTERM inside its
+    transaction rolls it back and removes that file, the one line, status 143. (Killed, it
+    left the hidden file and its journal, for the next train to remove.)"""
+    folder = tmp_path / "out"
+    folder.mkdir()
+    argv = ["train", str(case_base.parent / "train"), "--db", str(folder / "cb.sqlite"),
+            "--mirror", "off", "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+    proc = posecbr_process(*argv, pause_after="build")
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "PAUSED"
+    assert len(_hidden(folder)) == 2  # the case base being built and its journal
+    proc.terminate()
+    out, err = proc.communicate(timeout=120)
+    assert (proc.returncode, err, out) == (143, "posecbr train: terminated (SIGTERM)\n", "")
+    assert list(folder.iterdir()) == []
+
+
+def test_sigterm_inside_an_appending_trains_transaction_changes_nothing(
+    case_base: Path, tmp_path: Path
+) -> None:
+    """``train --append`` sent SIGTERM inside its transaction: the case base as it was (the
+    same cases, SQLite's integrity check "ok", no journal left to roll back), the one line,
+    status 143; the same run left alone then adds its six clips (9 cases to 15)."""
+    from tests.test_cbr_cli import _write_classes
+
+    more = _write_classes(tmp_path / "more", 2, 6)  # two clips of each activity
+    db = tmp_path / "cb.sqlite"
+    db.write_bytes(case_base.read_bytes())
+    before = db.read_bytes()
+    assert _cases(db) == (9, "ok")  # three activities, three clips each
+    argv = ["train", str(more), "--db", str(db), "--append"]
+    proc = posecbr_process(*argv, pause_after="append")
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "PAUSED"
+    assert (tmp_path / "cb.sqlite-journal").exists()  # the transaction has written
+    proc.terminate()
+    out, err = proc.communicate(timeout=120)
+    assert (proc.returncode, err, out) == (143, "posecbr train: terminated (SIGTERM)\n", "")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite", "more"]  # no journal
+    assert db.read_bytes() == before
+    assert _cases(db) == (9, "ok")
+    whole = subprocess.run([sys.executable, "-m", "posecbr", *argv], env=ENV,
+                           capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert whole.returncode == 0, whole.stderr
+    assert _cases(db) == (15, "ok")
+
+
+def test_sigterm_of_compare_with_workers_ends_them(tmp_path: Path) -> None:
+    """``compare --jobs 2`` sent SIGTERM (to it alone, as ``kill PID`` does) once its two
+    workers run: it stops them and ends with the one line, status 143, no --out folder; no
+    worker is left. (It was killed and its workers ran on, orphaned, holding its output
+    pipes open.)"""
+    out = tmp_path / "o"
+    argv = ["compare", str(DEMO), "--peers", "none", "--jobs", "2", "--out", str(out)]
+    proc = _command([*argv, "--labels", "deep_squat,hurdle_step,sit_to_stand"], tmp_path)
+    workers: list[int] = []
+    while len(workers) < 2 and proc.poll() is None:
+        time.sleep(0.1)
+        workers = [
+            p
+            for p in _children(proc.pid)
+            if b"spawn_main" in Path(f"/proc/{p}/cmdline").read_bytes()
+        ]
+    assert len(workers) == 2, "the workers never started"
+    proc.terminate()
+    got = _ended(proc, tmp_path)
+    assert _gone_soon(workers) == []
+    assert got == (143, "posecbr compare: terminated (SIGTERM)\n", "")
+    assert not out.exists()
+
+
+def test_sigterm_of_extract_with_workers_ends_them_and_their_temporaries(
+    shared_data: Path, tmp_path: Path
+) -> None:
+    """``extract VIDEOS --workers 2 --overlay`` sent SIGTERM once a worker is writing a
+    file: the workers stop, each removing the hidden file it was writing, the one line,
+    status 143, no hidden file anywhere, no worker left. (It was killed; its workers ran on
+    orphaned and wrote the pose files after it had ended; stopped by Ctrl-C it waited for
+    every clip queued.)"""
+    out, overlays = tmp_path / "poses", tmp_path / "overlays"
+    out.mkdir()
+    argv = ["extract", str(shared_data / "videos"), "--out", str(out), "--workers", "2"]
+    proc = _command([*argv, "--overlay", str(overlays)], tmp_path)
+    while not _hidden(out, overlays) and proc.poll() is None:
+        time.sleep(0.02)
+    assert _hidden(out, overlays), "no file was begun"
+    workers = _children(proc.pid)
+    proc.terminate()
+    got = _ended(proc, tmp_path)
+    assert _gone_soon(workers) == []
+    assert got == (143, "posecbr extract: terminated (SIGTERM)\n", "")
+    assert _hidden(out, overlays) == []
+    assert [p for p in out.rglob("*") if p.is_file()] == []  # no clip was finished yet
+
+
+# ---- in this process: the handler and where it is held --------------------------------------
+
+
+def test_a_command_sent_sigterm_says_so_and_exits_143(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """The command's own code unwinds (its ``finally`` runs), the line names SIGTERM, 143;
+    Ctrl-C is still "interrupted", 130; SIGTERM's handler is put back after the command."""
+    import posecbr.commands.describe as describe
+
+    unwound: list[str] = []
+
+    def stopped_by(signum: int) -> object:
+        def run(_args: object) -> int:
+            try:
+                os.kill(os.getpid(), signum)
+                time.sleep(30)  # the signal's handler runs here
+            finally:
+                unwound.append(signal.Signals(signum).name)
+            return 0
+
+        return run
+
+    before = signal.getsignal(signal.SIGTERM)
+    clip = str(DEMO / "m01_s01_e01.npz")
+    monkeypatch.setattr(describe, "run", stopped_by(signal.SIGTERM))
+    capsys.readouterr()
+    assert main(["describe", clip]) == 143
+    assert capsys.readouterr().err == "posecbr describe: terminated (SIGTERM)\n"
+    monkeypatch.setattr(describe, "run", stopped_by(signal.SIGINT))
+    assert main(["describe", clip]) == 130
+    assert capsys.readouterr().err == "posecbr describe: interrupted\n"
+    assert unwound == ["SIGTERM", "SIGINT"]
+    assert signal.getsignal(signal.SIGTERM) is before
+
+
+def test_sigterm_while_workers_start_comes_after_they_have() -> None:
+    """A SIGTERM that comes while worker processes are started is raised once they are all
+    known (raised in the middle of starting one, it left that one running)."""
+    from features.interrupts import sigterm_as_interrupt, sigterm_held, terminated
+
+    steps: list[str] = []
+    with pytest.raises(KeyboardInterrupt), sigterm_as_interrupt():
+        with sigterm_held():
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)
+            steps.append("every worker started")
+        steps.append("not reached")
+    assert steps == ["every worker started"]
+    assert terminated()
+
+
+def test_a_second_sigterm_stops_a_watch_at_once_and_says_sigterm() -> None:
+    """The first SIGTERM ends a watch as the end of its file does (the event set); a second
+    one stops it at once, said as SIGTERM (status 143), not as Ctrl-C."""
+    from features.interrupts import sigterm_as_interrupt, terminated
+    from posecbr.commands.watch import stop_on_interrupt
+
+    assert threading.current_thread() is threading.main_thread()
+    with sigterm_as_interrupt():
+        with pytest.raises(KeyboardInterrupt), stop_on_interrupt() as stop:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)
+            assert stop.is_set() and not terminated()
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(30)
+        assert terminated()
+
+
+def test_an_interrupt_as_a_temporary_is_made_leaves_none(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """Ctrl-C or SIGTERM taken just after the hidden file was created, before its name was
+    returned (in ``tempfile.mkstemp``'s own Python code, where a handler can run): the file
+    was left behind, the atomic write never having begun. (Seen: ``segment --overlay``
+    sent SIGTERM as the overlay's temporary appeared, on a loaded machine.)"""
+    import tempfile
+
+    from features.fileio import atomic_path
+
+    real = tempfile.mkstemp
+
+    def interrupted(*args: object, **kwargs: object) -> tuple[int, str]:
+        fd, name = real(*args, **kwargs)  # type: ignore[call-overload]
+        os.close(fd)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(tempfile, "mkstemp", interrupted)
+    (tmp_path / "other.json").write_text("{}")  # not this output's: kept
+    with pytest.raises(KeyboardInterrupt), atomic_path(tmp_path / "out.json"):
+        pass
+    assert [p.name for p in tmp_path.iterdir()] == ["other.json"]
