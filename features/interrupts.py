@@ -11,9 +11,7 @@ import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any, NoReturn, TypeVar
-
-R = TypeVar("R")
+from typing import Any, NoReturn
 
 #: the exit status of a command stopped by Ctrl-C (128 + SIGINT, as a shell reports it)
 INTERRUPTED_STATUS = 130
@@ -101,25 +99,37 @@ def _worker_sigterm(signum: int, _frame: Any) -> None:
     os._exit(TERMINATED_STATUS)
 
 
+def _quiet_when_stopped(unraisable: Any) -> None:
+    """Once this worker is being stopped, an object whose clean-up fails as the task is
+    unwound (a ``ZipFile`` whose member was being written: "Exception ignored in ...
+    ValueError: Can't close the ZIP file ...") says nothing: the command says one line."""
+    if not _TERMINATED:
+        sys.__unraisablehook__(unraisable)
+
+
 def worker_ends_on_sigterm() -> None:
     """For a worker process's initializer: SIGTERM (:func:`stop_workers`) unwinds the task
     under way (:func:`run_task`: an output it was writing leaves no hidden temporary), then
-    ends the process; idle, it ends it at once. (Killed on the spot, it left the temporary.)"""
+    ends the process; idle, it ends it at once. (Killed on the spot, it left the temporary.)
+    Ctrl-C is left to the command (the terminal sends it to every process of the group),
+    which stops its workers so."""
     signal.signal(signal.SIGTERM, _worker_sigterm)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    sys.unraisablehook = _quiet_when_stopped
 
 
 def run_task(fn: Any, *args: Any) -> Any:
     """``fn(*args)`` in a worker started with :func:`worker_ends_on_sigterm`: a SIGTERM
-    meanwhile unwinds it (every ``finally`` and context manager run), and the worker ends."""
+    meanwhile unwinds it (every ``finally`` and context manager run), and the worker ends
+    there, however the task ended (its interrupt replaced by another error on the way, or
+    turned into a failed clip): not on to the next task queued."""
     _IN_TASK[0] = True
     try:
         return fn(*args)
-    except KeyboardInterrupt:
-        if terminated():
-            os._exit(TERMINATED_STATUS)
-        raise
     finally:
         _IN_TASK[0] = False
+        if _TERMINATED:
+            os._exit(TERMINATED_STATUS)
 
 
 @contextmanager

@@ -26,7 +26,7 @@ import pytest
 
 from posecbr.cli import main
 from tests.badinput import ROOT, small_case_base
-from tests.processes import posecbr_process
+from tests.processes import posecbr_process, terminal_job
 
 pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="signals and /proc: Linux")
 
@@ -227,6 +227,27 @@ def test_sigterm_of_extract_with_workers_ends_them_and_their_temporaries(
     assert [p for p in out.rglob("*") if p.is_file()] == []  # no clip was finished yet
 
 
+def test_ctrl_c_of_extract_with_workers_stops_them_at_once(
+    shared_data: Path, tmp_path: Path
+) -> None:
+    """Ctrl-C in a terminal (SIGINT to the whole process group) of ``extract --workers 2``:
+    the workers' clips are unwound and the command ends, "interrupted", status 130, no pose
+    file written, no process left. (Its pool's shutdown waited for every clip queued: the
+    run went on for 44 s and wrote seven pose files after the Ctrl-C.)"""
+    out = tmp_path / "poses"
+    argv = ["extract", str(shared_data / "videos"), "--out", str(out), "--workers", "2"]
+    proc = terminal_job(argv, tmp_path)
+    while not _hidden(out) and proc.poll() is None:
+        time.sleep(0.02)
+    assert _hidden(out), "no file was begun"
+    workers = _children(proc.pid)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=180)
+    assert (proc.returncode, err.decode()) == (130, "posecbr extract: interrupted\n")
+    assert _gone_soon(workers) == []
+    assert [p for p in out.rglob("*") if p.is_file()] == []
+
+
 # ---- in this process: the handler and where it is held --------------------------------------
 
 
@@ -319,3 +340,43 @@ def test_an_interrupt_as_a_temporary_is_made_leaves_none(
     with pytest.raises(KeyboardInterrupt), atomic_path(tmp_path / "out.json"):
         pass
     assert [p.name for p in tmp_path.iterdir()] == ["other.json"]
+
+
+WORKER_SCRIPT = """
+import concurrent.futures as cf, multiprocessing, os, sys, time
+from features.interrupts import run_task, worker_ends_on_sigterm
+
+def task(path):
+    try:
+        open(path, "w").close()
+        time.sleep(60)
+    except KeyboardInterrupt:
+        return "failed"  # as extract turns a clip's error into a failed clip
+    return "done"
+
+if __name__ == "__main__":
+    folder = sys.argv[1]
+    with cf.ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"),
+                                initializer=worker_ends_on_sigterm) as pool:
+        first = pool.submit(run_task, task, os.path.join(folder, "a"))
+        pool.submit(run_task, task, os.path.join(folder, "b"))
+        while not os.path.exists(os.path.join(folder, "a")):
+            time.sleep(0.02)
+        (worker,) = pool._processes.values()
+        worker.terminate()
+        worker.join(60)
+        print(worker.exitcode, type(first.exception(60)).__name__)
+        print(sorted(os.listdir(folder)))
+"""
+
+
+def test_a_worker_sent_sigterm_ends_after_unwinding_its_task(tmp_path: Path) -> None:
+    """A worker's task that turns the interrupt into a result (a failed clip) still ends the
+    worker, status 143, instead of going on to the next task queued ("b" never begun)."""
+    script = tmp_path / "pool.py"
+    script.write_text(WORKER_SCRIPT)
+    (tmp_path / "work").mkdir()
+    run = subprocess.run([sys.executable, str(script), str(tmp_path / "work")], env=ENV,
+                         capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.splitlines() == ["143 BrokenProcessPool", "['a']"]
