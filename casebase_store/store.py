@@ -34,7 +34,6 @@ import hashlib
 import io
 import json
 import os
-import re
 import sqlite3
 import uuid
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -53,6 +52,7 @@ from sqlalchemy.orm import Session
 
 from features.errors import ConfigError, PosecbrError
 from features.fileio import remove_stale_temporaries, temporary_prefix
+from features.text import hide_passwords
 from features.values import is_number
 from features.version import __version__
 
@@ -518,16 +518,10 @@ def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> t
     return engine, where
 
 
-_PASSWORD = re.compile(r"^([^:/?#]*://[^:/?#@]*:)[^@/]*@")
-
-
-_QUERY_PASSWORD = re.compile(r"([?&]password=)[^&#]*", re.IGNORECASE)
-
-
 def _hide_password(text: str) -> str:
     """``text`` with the password of a URL in it replaced by ``***``, as SQLAlchemy shows a URL
-    it could read, for a URL it could not."""
-    return _QUERY_PASSWORD.sub(r"\1***", _PASSWORD.sub(r"\1***@", text))
+    it could read, for a URL it could not (as every message shows one)."""
+    return hide_passwords(text)
 
 
 def _shown_url(url: URL) -> str:

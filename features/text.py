@@ -33,13 +33,33 @@ def _unsafe(ch: str) -> bool:
     return bool(_UNSAFE.match(ch)) or unicodedata.category(ch) in ("Cf", "Cs", "Co", "Cn")
 
 
+# a URL's password: after "scheme://user:" up to the last "@" before the path (a password
+# typed as it is may hold "@", "?" or "#": hiding more than the password beats showing some)
+_URL_PASSWORD = re.compile(r"([^\s:/?#@]*://[^:/?#@\s]*:)[^/\s]*@")
+# libpq's password given as a URL parameter (postgresql://host/db?password=...)
+# (up to the ": " after a URL a message names)
+_QUERY_PASSWORD = re.compile(r"([?&]password=)[^&#\s]*?(?=:?(?:[&#\s]|$))", re.IGNORECASE)
+
+
+def hide_passwords(text: str) -> str:
+    """``text`` with the password of every URL in it replaced by ``***``, as SQLAlchemy's
+    ``render_as_string(hide_password=True)`` shows a database URL:
+    ``hide_passwords("http://me:secret@host/x.mp4: cannot open")`` is
+    ``"http://me:***@host/x.mp4: cannot open"``."""
+    if "://" not in text:
+        return text  # the common case: no URL
+    return _QUERY_PASSWORD.sub(r"\1***", _URL_PASSWORD.sub(r"\1***@", text))
+
+
 def shown(value: object) -> str:
-    """``str(value)`` with every control, format or unassigned character escaped.
+    """``str(value)`` with every control, format or unassigned character escaped, and the
+    password of a URL in it hidden (:func:`hide_passwords`): every message that names a
+    stream or database URL is printed through it.
 
     Printable text, including non-ASCII letters, is kept as it is: ``shown("squat é")`` is
     ``"squat é"``; ``shown("a\\x1b]0;pwned\\x07")`` is ``"a\\\\x1b]0;pwned\\\\x07"``.
     """
-    text = str(value)
+    text = hide_passwords(str(value))
     if text.isascii() and text.isprintable():
         return text  # the common case, without a per-character pass
     return "".join(_escape(ch) if _unsafe(ch) else ch for ch in text)
@@ -70,7 +90,7 @@ def percent(share: float | None, digits: int = 1) -> str:
     return f"{100 * share:.{digits}f} %"
 
 
-__all__ = ["counted", "did_you_mean", "percent", "shown", "size_words"]
+__all__ = ["counted", "did_you_mean", "hide_passwords", "percent", "shown", "size_words"]
 
 
 def did_you_mean(typed: str, known: Iterable[object]) -> str:

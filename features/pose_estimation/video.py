@@ -43,6 +43,7 @@ from features.errors import DataError  # noqa: E402
 from features.poses import EXTRACTION_VERSION, MIN_FPS, PoseSequence  # noqa: E402
 from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
+from features.text import shown  # noqa: E402
 
 from .model import model_version  # noqa: E402
 from .smoothing import AUX_FILTER, IMAGE_FILTER, VISIBILITY_ALPHA, WORLD_FILTER  # noqa: E402
@@ -728,7 +729,7 @@ def estimate_video(
                 " earlier than the frame before): left out, as watch leaves it out",
             }
         if announce:
-            print(f"note: {vfr_words(path, info.fps, gaps)}", file=sys.stderr)
+            print(f"note: {shown(vfr_words(path, info.fps, gaps))}", file=sys.stderr)
     else:
         missing = [i for i, p in enumerate(person) if not p]
     meta: dict[str, object] = {

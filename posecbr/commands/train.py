@@ -770,7 +770,7 @@ def run(args: argparse.Namespace) -> int:
             _check_asked(args, clips, solutions)
     except ClipsFailed as exc:
         for line in exc.lines:
-            print(f"posecbr train: error: {line}", file=sys.stderr)
+            print(f"posecbr train: error: {shown(line)}", file=sys.stderr)
         raise
     if not clips:
         raise _no_clips(args)

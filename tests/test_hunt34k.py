@@ -1,0 +1,74 @@
+"""Hunt 34k: small defects. A URL's password repeated in a message; a picture given to
+``reps`` called an unknown clip format; an empty class folder a stopped ``extract --workers``
+left; the report's "2 classes of correct"."""
+
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+
+import pytest
+
+from features.text import hide_passwords, shown
+from tests.badinput import refused, small_case_base
+
+
+@pytest.fixture(scope="module")
+def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return small_case_base(tmp_path_factory.mktemp("cb"))
+
+
+def _closed_port() -> int:
+    """A local port nothing listens on (bound, then let go): a connection there is refused."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+# ------------------------------------------------------------------ passwords in URLs
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("http://me:secret@host/x.mp4", "http://me:***@host/x.mp4"),
+        ("rtsp://:pw@cam.local:554/live", "rtsp://:***@cam.local:554/live"),
+        ("https://me:p@ss@host/x.mp4: cannot open", "https://me:***@host/x.mp4: cannot open"),
+        ("postgresql+psycopg://me:s3cret@db/cases", "postgresql+psycopg://me:***@db/cases"),
+        (
+            "postgresql://db/cases?password=s3cret: refused",
+            "postgresql://db/cases?password=***: refused",
+        ),
+        ("see (http://a:b@c/d) and rtsp://x:y@z", "see (http://a:***@c/d) and rtsp://x:***@z"),
+        # not passwords: a port, an "@" in the path, a user without one, no URL at all
+        ("http://host:8080/x@y.mp4", "http://host:8080/x@y.mp4"),
+        ("http://me@host/x.mp4", "http://me@host/x.mp4"),
+        ("squat é: a@b:c@d", "squat é: a@b:c@d"),
+    ],
+)
+def test_shown_hides_the_password_of_every_url(text: str, expected: str) -> None:
+    """Every message is printed through ``shown``: it hid no password, so ``watch
+    http://me:secret@host/x.mp4`` repeated the password in its error line."""
+    assert hide_passwords(text) == expected
+    assert shown(text) == expected
+
+
+def test_watch_of_a_stream_url_with_a_password_hides_it(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``watch`` of a URL that cannot be opened named it with its password in clear."""
+    port = _closed_port()
+    url = f"http://coach:s3cret@127.0.0.1:{port}/x.mp4"
+    line = refused(["watch", url, "--db", str(case_base), "--speed", "0"], tmp_path, capsys,
+                   f"http://coach:***@127.0.0.1:{port}/x.mp4: ")  # fmt: skip
+    assert "s3cret" not in line
+
+
+def test_watch_of_a_stream_url_with_a_password_parameter_hides_it(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    port = _closed_port()
+    url = f"rtsp://127.0.0.1:{port}/live?user=coach&password=s3cret"
+    line = refused(["watch", url, "--db", str(case_base), "--speed", "0"], tmp_path, capsys,
+                   f"rtsp://127.0.0.1:{port}/live?user=coach&password=***: ")  # fmt: skip
+    assert "s3cret" not in line
