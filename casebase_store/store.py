@@ -51,7 +51,7 @@ from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
 from features.errors import ConfigError, PosecbrError
-from features.fileio import remove_stale_temporaries, temporary_prefix
+from features.fileio import PICTURE_WORDS, is_picture, remove_stale_temporaries, temporary_prefix
 from features.text import hide_passwords
 from features.values import is_number
 from features.version import __version__
@@ -694,8 +694,8 @@ def _what_file(where: str) -> str:
         return "a zip archive, not a pose file: --db takes the case base file"
     if _is_video(head):
         return "a video file: --db takes the case base file"
-    if head.startswith((b"\x89PNG\r\n\x1a\n", b"\xff\xd8\xff")):
-        return "a PNG or JPEG picture: --db takes the case base file"
+    if is_picture(head):
+        return f"{PICTURE_WORDS}: --db takes the case base file"
     if _looks_like_text(head):
         return "a text file, such as a labels CSV: --db takes the case base file"
     return "corrupt or not a database"

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import DataError
+from features.fileio import PICTURE_WORDS, file_head, is_picture
 from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 from features.progress import progress
 from features.text import counted
@@ -147,11 +148,13 @@ def load_clip(path: str | Path) -> PoseSequence:
         return read_uiprmd_kinect(path)
     if suffix == ".amc":
         return read_asf_amc(find_asf(path), path)
-    raise DataError(
-        "unknown clip format (expected .npz pose file, .bvh, .amc, UI-PRMD positions file or a"
-        f" video: {', '.join(sorted(VIDEO_SUFFIXES))})",
-        path,
+    expected = (
+        "expected .npz pose file, .bvh, .amc, UI-PRMD positions file or a"
+        f" video: {', '.join(sorted(VIDEO_SUFFIXES))}"
     )
+    if is_picture(file_head(path)):  # a still, as --db given one says: not "unknown format"
+        raise DataError(f"{PICTURE_WORDS}, not a clip ({expected})", path)
+    raise DataError(f"unknown clip format ({expected})", path)
 
 
 def source_video(meta: Mapping[str, Any], pose_path: Path) -> Path | None:

@@ -36,6 +36,24 @@ from typing import Any
 
 from .errors import DataError
 
+#: How a message names a picture given where a clip or a case base belongs (by its first
+#: bytes: :func:`is_picture`).
+PICTURE_WORDS = "a PNG or JPEG picture"
+
+
+def is_picture(head: bytes) -> bool:
+    """Whether a file's first bytes ``head`` are a PNG or JPEG picture's."""
+    return head.startswith((b"\x89PNG\r\n\x1a\n", b"\xff\xd8\xff"))
+
+
+def file_head(path: str | Path, n: int = 512) -> bytes:
+    """The first ``n`` bytes of the file at ``path`` (b"" for one that cannot be read)."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(n)
+    except OSError:
+        return b""
+
 
 def _umask() -> int:
     mask = os.umask(0)

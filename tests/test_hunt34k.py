@@ -72,3 +72,35 @@ def test_watch_of_a_stream_url_with_a_password_parameter_hides_it(
     line = refused(["watch", url, "--db", str(case_base), "--speed", "0"], tmp_path, capsys,
                    f"rtsp://127.0.0.1:{port}/live?user=coach&password=***: ")  # fmt: skip
     assert "s3cret" not in line
+
+
+# ------------------------------------------------------------------ a picture given as a clip
+
+
+def _picture(path: Path) -> Path:
+    import cv2
+    import numpy as np
+
+    assert cv2.imwrite(str(path), np.full((16, 16, 3), 128, np.uint8))
+    return path
+
+
+@pytest.mark.parametrize("name", ["picture.png", "photo.jpg"])
+@pytest.mark.parametrize("command", ["reps", "describe"])
+def test_a_picture_given_as_a_clip_is_said_to_be_one(
+    command: str, name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``reps picture.png`` said "unknown clip format", as of a file of no known kind; it
+    is a picture, as ``--db picture.png`` already says."""
+    picture = _picture(tmp_path / name)
+    line = refused([command, str(picture)], tmp_path, capsys,
+                   f"{picture}: a PNG or JPEG picture, not a clip (expected .npz pose file")  # fmt: skip
+    assert "unknown clip format" not in line
+
+
+def test_a_file_of_no_known_kind_is_still_an_unknown_clip_format(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    other = tmp_path / "notes.png"  # a picture's name, not its bytes
+    other.write_text("not a picture\n")
+    refused(["reps", str(other)], tmp_path, capsys, f"{other}: unknown clip format (expected")
