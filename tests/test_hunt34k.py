@@ -5,6 +5,8 @@ left; the report's "2 classes of correct"."""
 from __future__ import annotations
 
 import socket
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -93,8 +95,8 @@ def test_a_picture_given_as_a_clip_is_said_to_be_one(
     """``reps picture.png`` said "unknown clip format", as of a file of no known kind; it
     is a picture, as ``--db picture.png`` already says."""
     picture = _picture(tmp_path / name)
-    line = refused([command, str(picture)], tmp_path, capsys,
-                   f"{picture}: a PNG or JPEG picture, not a clip (expected .npz pose file")  # fmt: skip
+    said = f"{picture}: a PNG or JPEG picture, not a clip (expected .npz pose file"
+    line = refused([command, str(picture)], tmp_path, capsys, said)
     assert "unknown clip format" not in line
 
 
@@ -104,3 +106,35 @@ def test_a_file_of_no_known_kind_is_still_an_unknown_clip_format(
     other = tmp_path / "notes.png"  # a picture's name, not its bytes
     other.write_text("not a picture\n")
     refused(["reps", str(other)], tmp_path, capsys, f"{other}: unknown clip format (expected")
+
+
+# ------------------------------------------------------------------ extract stopped
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="signals and /proc: Linux")
+def test_a_stopped_extract_with_workers_removes_the_class_folders_it_made_empty(
+    shared_data: Path, tmp_path: Path
+) -> None:
+    """``extract VIDEOS --out poses --workers 2`` sent SIGTERM once a worker is writing a
+    pose file: the worker unwinds its clip, and the class folder it had made for it
+    (``poses/edge/``) was left empty. Now each folder the run made and left empty goes; an
+    empty folder that was there before (a class's, and one of the user's) stays."""
+    from tests.test_hunt34i import _children, _command, _ended, _gone_soon, _hidden
+
+    out = tmp_path / "poses"
+    before = [out / "squat", out / "mine"]  # empty, made by the user before the run
+    for folder in before:
+        folder.mkdir(parents=True)
+    argv = ["extract", str(shared_data / "videos"), "--out", str(out), "--workers", "2"]
+    proc = _command(argv, tmp_path)
+    while not _hidden(out) and proc.poll() is None:
+        time.sleep(0.02)
+    begun = _hidden(out)
+    assert begun, "no file was begun"
+    workers = _children(proc.pid)
+    proc.terminate()
+    got = _ended(proc, tmp_path)
+    assert _gone_soon(workers) == []
+    assert got == (143, "posecbr extract: terminated (SIGTERM)\n", "")
+    left = sorted(p.relative_to(out).as_posix() for p in out.rglob("*"))
+    assert left == ["mine", "squat"], (begun, left)

@@ -662,7 +662,7 @@ def run(args: argparse.Namespace) -> int:
     options = _options(args)
     source: Path = args.input
     jobs = find_jobs(source, args.out, args.overlay)
-    made = _missing_folders(args.out)
+    made = _missing_folders(args.out, jobs)
     status = 1
     try:
         _check_before_work(args, jobs)
@@ -676,17 +676,26 @@ def run(args: argparse.Namespace) -> int:
             _drop_if_empty(made)
 
 
-def _missing_folders(out: Path) -> list[Path]:
-    """``out`` and those of its parents that do not exist yet, deepest first: the folders a
-    run writing into ``out`` makes."""
-    return [p for p in (out, *out.parents) if not p.exists()]
+def _missing_folders(out: Path, jobs: list[Job]) -> list[Path]:
+    """The folders a run writing into ``out`` makes, deepest first: ``out`` and those of its
+    parents that do not exist yet, and the folders of the jobs' pose files and overlays
+    that do not (a class folder ``out/edge``, made by whichever worker writes in it first)."""
+    missing: set[Path] = set()
+    for dest in (out / "_", *(d for j in jobs for d in (j.out, j.overlay) if d is not None)):
+        for folder in dest.parents:
+            if folder in missing or folder.exists():
+                break
+            missing.add(folder)
+    return sorted(missing, key=lambda p: (-len(p.parts), str(p)))
 
 
 def _drop_if_empty(folders: list[Path]) -> None:
-    """Remove the output folders this run made (deepest first) when nothing was written
-    into them (every clip failed, or the run was interrupted): a failed run leaves no trace."""
+    """Remove the output folders this run made (deepest first) that nothing was written
+    into (every clip of theirs failed, or the run was interrupted, a worker's clip unwound
+    in a class folder it had made): a failed run leaves no trace. A folder that existed
+    before the run is never among them."""
     for folder in folders:
         try:
             folder.rmdir()  # only an empty folder goes
         except OSError:
-            return  # not empty (or not a folder): neither are those above it
+            continue  # not empty (or not a folder): nor is any it is in
