@@ -138,3 +138,53 @@ def test_a_stopped_extract_with_workers_removes_the_class_folders_it_made_empty(
     assert got == (143, "posecbr extract: terminated (SIGTERM)\n", "")
     left = sorted(p.relative_to(out).as_posix() for p in out.rglob("*"))
     assert left == ["mine", "squat"], (begun, left)
+
+
+# ------------------------------------------------------------------ the report's first line
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+
+
+def test_the_report_of_a_correctness_comparison_names_its_two_values(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``compare --target correct`` then ``report``: the page began "24 clips, 2 classes of
+    correct"; the two values of the column (true and false in labels.csv) are correct and
+    incorrect repetitions, and it says so."""
+    import json
+
+    from posecbr.cli import main
+
+    run = tmp_path / "run.json"
+    argv = ["compare", str(DEMO), "--labels", "deep_squat,hurdle_step", "--subjects", "s01,s02",
+            "--target", "correct", "--peers", "none", "--no-dad", "--features", "fluents",
+            "--similarities", "euclidean", "--explain", "0", "--json", str(run)]  # fmt: skip
+    assert main(argv) == 0
+    assert sorted(json.loads(run.read_text())["dataset"]["classes"]) == ["correct", "incorrect"]
+    page = tmp_path / "r.html"
+    assert main(["report", str(run), "--out", str(page)]) == 0
+    capsys.readouterr()
+    text = page.read_text()
+    # 2 movements x 2 subjects x 6 clips (3 correct, 3 incorrect each)
+    assert "<p>24 clips, correct and incorrect repetitions (one model per label), " in text
+    assert "classes of" not in text
+
+
+@pytest.mark.parametrize(
+    ("classes", "target", "expected"),
+    [
+        (["correct", "incorrect"], "correct", "correct and incorrect repetitions"),
+        (["false", "true"], "correct", "correct and incorrect repetitions"),
+        (["kinect", "vicon"], "sensor", "<b>sensor</b>: kinect or vicon"),
+        (["no", "yes"], "fallen", "<b>fallen</b>: no or yes"),  # no repetitions to judge
+        (["a", "b", "c"], "grade", "3 classes of <b>grade</b>"),
+        (["squat", "lunge", "plank"], "label", "3 activities"),
+        (["squat", "lunge"], None, "2 activities"),
+    ],
+)
+def test_what_the_report_says_the_clips_were_told_apart_by(
+    classes: list[str], target: str | None, expected: str
+) -> None:
+    from cbr.evaluation.report import _classes_words
+
+    assert _classes_words(classes, target) == expected

@@ -21,10 +21,12 @@ from typing import Any
 
 import numpy as np
 
+from features.datasets import truth_value
 from features.errors import DataError
 from features.fileio import check_output, write_text_atomic
 from features.text import size_words
 
+from ..explain import class_noun
 from .pictures import Drawing, result_pictures
 from .results import CompareResults, MethodResult, Rate, Scores
 from .tables import p_value
@@ -215,6 +217,23 @@ def _explanations(results: CompareResults) -> str:
     )
 
 
+def _classes_words(classes: list[str], target: str | None) -> str:
+    """What the clips were told apart by, as the report's first line says it (HTML): "3
+    activities"; for a two-valued column its values, "correct and incorrect repetitions" or
+    "<b>sensor</b>: kinect or vicon" (it said "2 classes of correct"); else "4 classes of
+    <b>grade</b>"."""
+    k = len(classes)
+    if target in (None, "label"):
+        return e(f"{k} {class_noun(target, k)}")
+    if k == 2:
+        truths = {truth_value(c) for c in classes}
+        repetitions = target == "correct" or set(classes) == {"correct", "incorrect"}
+        if repetitions and truths == {True, False}:  # as label_words says each
+            return "correct and incorrect repetitions"
+        return f"<b>{e(target)}</b>: {e(classes[0])} or {e(classes[1])}"
+    return f"{e(k)} classes of <b>{e(target)}</b>"
+
+
 def _head(results: CompareResults) -> list[str]:
     ds, st, cv, machine = results.dataset, results.settings, results.cv, results.machine
     name = e(Path(ds.source).name)
@@ -227,7 +246,7 @@ def _head(results: CompareResults) -> list[str]:
         f"<title>posecbr compare: {name}</title>",
         f"<style>{_CSS}</style></head><body>",
         f"<h1>Activity recognition comparison: {name}</h1>",
-        f"<p>{e(ds.n_clips)} clips, {e(len(ds.classes))} classes of <b>{e(st['target'])}</b>"
+        f"<p>{e(ds.n_clips)} clips, {_classes_words(ds.classes, st.get('target'))}"
         f"{within}, {e(len(ds.subjects))} subjects; cross-validation <b>{e(cv.scheme)}</b> with "
         f"{e(cv.n_folds)} folds. Best: <b>{e(results.best)}</b>; best interpretable: "
         f"<b>{e(results.best_interpretable)}</b> (bold row).</p>",
