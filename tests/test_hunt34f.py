@@ -18,18 +18,12 @@ import pytest
 
 from features.errors import DataError
 from features.fileio import atomic_path
-from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
+from tests.test_watch import (
+    _watch,
+    case_base,  # noqa: F401 - the fixture: CMU 13_29's windows
+)
 
 SQUATS = ("videos", "squat", "tfjs_pose_squats_pexels4838220.mp4")  # 65 frames at 5 fps
-
-
-def _watch(argv: list[str]) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [sys.executable, "-m", "posecbr", "watch", *argv],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
 
 
 def _frames(video: Path) -> int:
