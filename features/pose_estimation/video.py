@@ -1035,18 +1035,19 @@ def _is_path(source: int | str | Path) -> TypeGuard[str | Path]:
 
 def _open_source(
     source: int | str | Path, fps: float | None, timeout_s: float | None
-) -> tuple[cv2.VideoCapture, float | None, int]:
+) -> tuple[cv2.VideoCapture, float | None, int, bool]:
     """:func:`stream_poses`'s source opened: the capture, the frame rate it is timed by (None:
-    a live source, the wall clock) and the frame count its container states (0: none; a file
-    served over the network, ``fps`` given, must hold them all, as a file must). A
-    ``file:`` URL's file is opened as its path is (:func:`open_video`'s checks: a WebM cut
-    short), the path being what follows ``file:``, as FFmpeg reads it."""
+    a live source, the wall clock), the frame count its container states (0: none; a file
+    served over the network, ``fps`` given, must hold them all, as a file must) and whether
+    it is such a served file. A ``file:`` URL's file is opened as its path is
+    (:func:`open_video`'s checks: a WebM cut short), the path being what follows ``file:``,
+    as FFmpeg reads it, and is no served file (what it lacks is said as for its path)."""
     if _is_path(source):
         cap, info = open_video(source)
-        return cap, info.fps, info.frames
+        return cap, info.fps, info.frames, False
     if isinstance(source, str) and source.startswith("file:") and fps is not None:
         cap, info = open_video(source[len("file:") :])
-        return cap, info.fps, info.frames
+        return cap, info.fps, info.frames, False
     device = source if isinstance(source, int) else str(source)
     try:
         cap = _open_quietly(int(device) if str(device).isdigit() else device, timeout_s)
@@ -1055,14 +1056,14 @@ def _open_source(
     if not cap.isOpened():
         raise DataError("cannot open camera or stream", str(source))
     if fps is None:
-        return cap, None, 0
+        return cap, None, 0, False
     declared = _frame_count(cap)
     stated = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     if declared and math.isfinite(stated) and stated > fps:
         # a clock's ticks, not a frame rate (served_file_rate): the count OpenCV gives is
         # the duration at that rate; at the frames' own rate it is this many
         declared = int(declared * fps / stated)
-    return cap, fps, declared
+    return cap, fps, declared, True
 
 
 def stream_poses(
@@ -1087,8 +1088,7 @@ def stream_poses(
     ``read_at``) and its pose estimated; it may wait (a file played at its own rate) and
     returns False to stop the stream there.
     """
-    cap, fps, declared = _open_source(source, fps, timeout_s)
-    served = fps is not None and not _is_path(source)  # a file served over the network
+    cap, fps, declared, served = _open_source(source, fps, timeout_s)  # served: over a network
     est = estimator or PoseEstimator(smoothing=smoothing)
     est.reset()
     start = time.perf_counter()
