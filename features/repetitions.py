@@ -694,7 +694,7 @@ def _rest_is_high(
     high_posture = x[line >= hi].mean(axis=0)
     free = np.array([n in TWIST_NAMES or n == PELVIS_HEIGHT for n in names])
     high_posture[free] = low_posture[free] = ease[free]
-    # how much nearer ease one end lies than the other, angle by angle (degrees summed): an
+    # how much nearer ease one end lies than the other, angle by angle (radians summed): an
     # angle that stays far from ease at both ends (lying on the side, the lower arm bent under
     # the head) adds nothing, where in the distances' difference it swamped the angles that
     # move and left the ends undecided

@@ -18,7 +18,7 @@ from cbr.similarity import available_measures, get_measure
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
-from features.text import counted, shown
+from features.text import counted, percent, shown
 from posecbr.arguments import check_found, param_value, path_arg
 from posecbr.recordings import (
     add_recording_options,
@@ -943,8 +943,8 @@ def _note_chance(args: argparse.Namespace, result: Any) -> None:
     print(
         shown(
             f"note: held out in turn, the training {CASE_KINDS.get(args.split, 'clip')}s were "
-            f"answered right {100 * accuracy:.0f} % of the time ({right} of {n}), no better "
-            f"than always answering {said} ({100 * share:.0f} %): this case base does not "
+            f"answered right {percent(accuracy, 0)} of the time ({right} of {n}), no better "
+            f"than always answering {said} ({percent(share, 0)}): this case base does not "
             f"tell its "
             f"{class_noun(args.target, 2)} apart (more people, or clips of one movement per "
             "case base, may)"
