@@ -81,6 +81,9 @@ class TrainResult:
     indistinct: list[str] = field(default_factory=list)
     #: ``--append``: the activities added that the case base did not hold when read
     new_labels: list[str] = field(default_factory=list)
+    #: how many training clips (or pieces) of each label were fitted: the ones held out to
+    #: calibrate the confidence, before any editing or mirroring (empty for ``--append``)
+    trained_counts: dict[str, int] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -396,6 +399,7 @@ def store_fitted(
         list(too_short),
         JUDGES[0] in fitted.judges_,
         same_features(cb),
+        trained_counts=_counts([str(v) for v in labels]),
     )
 
 

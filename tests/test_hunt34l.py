@@ -53,3 +53,33 @@ def test_a_file_url_that_decodes_no_frame_is_refused_as_its_path_is(
             f"{source}: truncated or corrupt: decoded 0 of 30 frames",
         )
         assert "server" not in line
+
+
+def test_the_chance_note_counts_the_clips_held_out_not_the_edited_cases(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two people whose correct and incorrect arm raises are each other's (every clip held
+    out by person is answered wrong), 6 correct and 2 incorrect clips each: the commonest
+    class is "correct", 12 of the 16 clips held out, 75 %. With ``--editor cnn`` the note
+    gave the share among the cases the editor kept (10 of 16: "(60 %)"), not among the
+    clips answered."""
+    from features.poses import save_pose
+    from posecbr.cli import main
+    from tests.test_hunt34e import _arm_raises
+
+    rows = ["path,label,subject,correct"]
+    for subject, (good, bad) in (("s1", (40.0, 90.0)), ("s2", (90.0, 40.0))):
+        for truth, top, n in (("true", good, 6), ("false", bad, 2)):
+            for i in range(n):
+                name = f"{subject}_{truth}_{i}.npz"
+                save_pose(_arm_raises(top + 2.0 * i), tmp_path / name)
+                rows.append(f"{name},raise,{subject},{truth}")
+    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
+    argv = ["train", str(tmp_path / "labels.csv"), "--target", "correct", "--editor", "cnn"]
+    assert main([*argv, "--db", str(tmp_path / "cb.sqlite")]) == 0
+    out, err = capsys.readouterr()
+    assert "CNN: 16 -> " in out  # the editor left fewer cases than clips
+    notes = [line for line in err.splitlines() if "no better than" in line]
+    assert len(notes) == 1
+    assert "answered right 0 % of the time (0 of 16)" in notes[0]
+    assert "no better than always answering a correct repetition (75 %)" in notes[0]

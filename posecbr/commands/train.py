@@ -930,7 +930,8 @@ def _note_chance(args: argparse.Namespace, result: Any) -> None:
 
     n = int(result.learned.get("confidence_calibrated_on") or 0)
     accuracy = result.learned.get("held_out_accuracy")
-    counts = result.label_counts
+    # the clips held out, not the cases stored: --editor or --trim changes their shares
+    counts = result.trained_counts
     if args.append or not n or accuracy is None or len(counts) < 2:
         return
     commonest = max(counts, key=lambda k: counts[k])
