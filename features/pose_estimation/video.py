@@ -909,7 +909,6 @@ def _served_whole(url: str, timeout_s: float | None = None) -> bool:
     is (:func:`_local_whole`). False for any other URL and for a server that does not
     answer within ``timeout_s`` (FFmpeg's 30 s when None). Asked
     as FFmpeg asks for the same URL (:func:`_ffmpeg_opener`)."""
-    import http.client
     from urllib.parse import urlsplit
 
     scheme = urlsplit(url).scheme.lower()
@@ -917,16 +916,29 @@ def _served_whole(url: str, timeout_s: float | None = None) -> bool:
         return _local_whole(url)
     if scheme not in ("http", "https"):
         return False
+    answer = _served_start(url, timeout_s, 16)
+    if answer is None:
+        return False
+    status, length, head = answer
+    return status == 200 and length is not None and length > 0 and _not_text(head)
+
+
+def _served_start(
+    url: str, timeout_s: float | None, size: int
+) -> tuple[int, int | None, bytes] | None:
+    """The first ``size`` bytes of the file at an HTTP(S) URL, asked as FFmpeg asks for it
+    (:func:`_ffmpeg_opener`), with the answer's status and the length the server states
+    (None: none); None where the server cannot be asked or does not answer within
+    ``timeout_s`` (FFmpeg's 30 s when None)."""
+    import http.client
+
     try:
         opener, bare = _ffmpeg_opener(url)
         with opener.open(bare, timeout=timeout_s or 30.0) as answer:
             length = (answer.headers.get("Content-Length") or "").strip()
-            if answer.status != 200 or not length.isdigit() or int(length) == 0:
-                return False
-            head = answer.read(16)
+            return answer.status, int(length) if length.isdigit() else None, answer.read(size)
     except (OSError, ValueError, http.client.HTTPException):
-        return False
-    return _not_text(head)
+        return None
 
 
 def _not_text(head: bytes) -> bool:
@@ -998,19 +1010,15 @@ def _served_whole_by_duration(url: str, timeout_s: float | None = None) -> bool:
     packets there are), or a Matroska/WebM file whose segment states its size and ends
     within the length the server states (a file cut short on the server states more).
     Its first bytes only are read."""
-    import http.client
     import io
 
-    try:
-        opener, bare = _ffmpeg_opener(url)
-        with opener.open(bare, timeout=timeout_s or 30.0) as answer:
-            length = (answer.headers.get("Content-Length") or "").strip()
-            head = answer.read(4096)
-    except (OSError, ValueError, http.client.HTTPException):
+    answer = _served_start(url, timeout_s, 4096)
+    if answer is None:
         return False
+    _status, length, head = answer
     if not head.startswith(EBML_START):
         return _counted_by_duration(head)  # MPEG-TS, or no file counted so
-    if not length.isdigit():
+    if length is None:
         return False
     fh = io.BytesIO(head)
     try:
@@ -1023,7 +1031,7 @@ def _served_whole_by_duration(url: str, timeout_s: float | None = None) -> bool:
                 fh.seek(fh.tell() + stated)
     except (EOFError, ValueError):
         return False
-    return fh.tell() + stated <= int(length)
+    return fh.tell() + stated <= length
 
 
 def _is_path(source: int | str | Path) -> TypeGuard[str | Path]:
