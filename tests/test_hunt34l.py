@@ -17,8 +17,8 @@ def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _undecodable_avi(path: Path) -> Path:
-    """An MJPG AVI whose container states 30 frames at 25 fps and whose JPEGs' data is
-    zeroed (300 bytes from each start marker found): it opens, and no frame decodes."""
+    """An MJPG AVI whose container states 30 frames at 25 fps and whose every frame (each
+    ``00dc`` chunk) is zeroed after its JPEG start marker: it opens, and no frame decodes."""
     import cv2
 
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25, (64, 48))
@@ -27,10 +27,15 @@ def _undecodable_avi(path: Path) -> Path:
         writer.write(np.full((48, 64, 3), 3 * k, np.uint8))
     writer.release()
     data = bytearray(path.read_bytes())
-    at = data.find(b"\xff\xd8")
+    chunks = 0
+    at = data.find(b"00dc")
     while at >= 0:
-        data[at + 2 : at + 300] = bytes(298)
-        at = data.find(b"\xff\xd8", at + 300)
+        size = int.from_bytes(data[at + 4 : at + 8], "little")
+        if data[at + 8 : at + 10] == b"\xff\xd8":  # a frame's chunk (not the index's entry)
+            data[at + 10 : at + 8 + size] = bytes(size - 2)
+            chunks += 1
+        at = data.find(b"00dc", at + 4)
+    assert chunks == 30
     path.write_bytes(bytes(data))
     return path
 
