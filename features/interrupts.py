@@ -122,7 +122,11 @@ def run_task(fn: Any, *args: Any) -> Any:
     """``fn(*args)`` in a worker started with :func:`worker_ends_on_sigterm`: a SIGTERM
     meanwhile unwinds it (every ``finally`` and context manager run), and the worker ends
     there, however the task ended (its interrupt replaced by another error on the way, or
-    turned into a failed clip): not on to the next task queued."""
+    turned into a failed clip): not on to the next task queued. One whose SIGTERM came as
+    the task before ended (raised in this ``finally``, which it cut short: the pool took the
+    interrupt for that task's result) ends before beginning this one."""
+    if _TERMINATED:
+        os._exit(TERMINATED_STATUS)
     _IN_TASK[0] = True
     try:
         return fn(*args)

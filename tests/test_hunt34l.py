@@ -88,3 +88,29 @@ def test_the_chance_note_counts_the_clips_held_out_not_the_edited_cases(
     assert len(notes) == 1
     assert "answered right 0 % of the time (0 of 16)" in notes[0]
     assert "no better than always answering a correct repetition (75 %)" in notes[0]
+
+
+def test_a_worker_whose_sigterm_cut_its_last_task_short_begins_no_other() -> None:
+    """A SIGTERM that comes as a task returns, before ``run_task``'s ``finally`` has ended
+    the worker, raises there, cutting that ``finally`` short: the pool took the interrupt as
+    the task's result and handed the worker the next task queued, which it ran whole (the
+    command, stopping its workers, waited for it). That worker, told to stop, now ends
+    (status 143) before beginning it."""
+    import subprocess
+    import sys
+
+    script = (
+        "import features.interrupts as i\n"
+        "i._TERMINATED.append(15)  # as raise_interrupt left it\n"
+        "i.run_task(lambda: print('the next task ran', flush=True))\n"
+    )
+    root = Path(__file__).resolve().parents[1]
+    run = subprocess.run(
+        [sys.executable, "-c", script],
+        cwd=root,
+        env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert (run.returncode, run.stdout) == (143, ""), run.stderr
