@@ -25,7 +25,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_not_in_walked_folder, check_output
 from features.formats import VIDEO_SUFFIXES
-from features.interrupts import run_task, sigterm_held, stop_workers, worker_ends_on_sigterm
+from features.interrupts import interrupts_held, run_task, stop_workers, worker_ends_on_sigterm
 from features.progress import progress
 from features.text import counted, shown
 from posecbr.arguments import path_arg
@@ -616,7 +616,7 @@ def _in_processes(jobs: list[Job], options: Options, workers: int) -> list[Outco
         initargs=(threads,),
     ) as pool:
         try:
-            with sigterm_held():  # not in the middle of starting a worker
+            with interrupts_held():  # Ctrl-C and SIGTERM: not in the middle of starting one
                 futures = [pool.submit(run_task, process, job, options)
                            for job in longest_first(jobs)]  # fmt: skip
             return [fut.result() for fut in progress(cf.as_completed(futures), "extract",

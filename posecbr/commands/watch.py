@@ -130,7 +130,11 @@ def _check(args: argparse.Namespace) -> None:
 
 
 def _check_source(source: str) -> None:
-    """A source that is a file must be a video file there is."""
+    """A source that is a file must be a video file there is, as must the file a ``file://``
+    URL names (refused as its path is: FFmpeg would say only that it cannot open it)."""
+    named = _read_files(source)
+    if named and not _is_file(source) and not Path(named[0]).exists():
+        raise DataError("no such video file", Path(named[0]))
     if not source:  # an unset shell variable: Path("") is the current folder
         raise DataError("the source is empty: name a webcam index, stream URL or video file")
     if _is_file(source) and Path(source).is_dir():
