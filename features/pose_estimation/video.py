@@ -45,12 +45,17 @@ from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
 from features.text import shown  # noqa: E402
 
+from .containers import (  # noqa: E402
+    EBML_START,
+    counted_by_duration,
+    refuse_cut,
+    segment_end,
+    sound_only,
+)
 from .model import model_version  # noqa: E402
 from .smoothing import AUX_FILTER, IMAGE_FILTER, VISIBILITY_ALPHA, WORLD_FILTER  # noqa: E402
 from .tracker import FramePose, PoseEstimator  # noqa: E402
 
-JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
-"""A JPEG file's start-of-image and end-of-image markers."""
 IMAGE_LANDMARK_FIELDS = ("x_px", "y_px", "z_px", "visibility", "presence")
 MAX_VIDEO_FPS = 1000.0
 """The highest frame rate a video may declare (more is a broken header, no camera's)."""
@@ -134,7 +139,7 @@ def open_video(
         raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
     if not head:
         raise DataError("empty file, not a video", path)
-    _refuse_cut(path, head, tail)
+    refuse_cut(path, head, tail)
     try:
         cap = _capture(str(path), decode_threads)
     except cv2.error as exc:
@@ -146,7 +151,7 @@ def open_video(
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
-    fps, frames = _frames_rate(path, fps, frames, _counted_by_duration(head))
+    fps, frames = _frames_rate(path, fps, frames, counted_by_duration(head))
     if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
         cap.release()
@@ -157,8 +162,9 @@ def open_video(
 def _not_a_video(path: Path, head: bytes, fps: float | None) -> DataError:
     """Why a file (its first bytes ``head``) is no video to take: OpenCV could not open it
     (``fps`` None) or it states no frame rate posecbr takes; a sound file says so
-    (:func:`_sound_only`: a song's cover picture is FFmpeg's "video" at 90 kHz)."""
-    sound = _sound_only(path, head)
+    (:func:`.containers.sound_only`: a song's cover picture is FFmpeg's "video" at
+    90 kHz)."""
+    sound = sound_only(path, head)
     if sound is not None:
         return DataError(
             f"sound alone, no video ({sound}{'' if fps is None else ' with a picture'})", path
@@ -174,107 +180,16 @@ def _not_a_video(path: Path, head: bytes, fps: float | None) -> DataError:
     )
 
 
-def _refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
-    """DataError for a file whose first and last bytes (``head``, ``tail``) show it cut
-    short: a JPEG without its end-of-image marker (OpenCV decodes what it has of it and
-    greys the rest), a Matroska/WebM file that ends inside an element (:func:`_matroska_end`:
-    FFmpeg reads the frames before the cut as the whole video when the file states no
-    duration, or no frame rate, as a browser's WebM)."""
-    if head.startswith(JPEG_START) and not tail.rstrip(b"\x00\r\n\t ").endswith(JPEG_END):
-        raise DataError("truncated JPEG (no end-of-image marker)", path)
-    if head.startswith(EBML_START):
-        try:
-            size, end = path.stat().st_size, _matroska_end(path)
-        except OSError as exc:
-            raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
-        if end is not None and end > size:
-            runs = f" that runs to byte {end:,}" if end > size + 1 else "'s header"
-            raise DataError(
-                f"truncated Matroska/WebM: the file ends at byte {size:,}, inside an element{runs}",
-                path,
-            )
-
-
-_SOUND_STARTS = {
-    b"fLaC": "a FLAC file",
-    b"ID3": "an MP3 file",
-    b"\xff\xfb": "an MP3 file",
-    b"\xff\xf3": "an MP3 file",
-    b"\xff\xf2": "an MP3 file",
-    b"\xff\xf1": "an AAC file",
-    b"\xff\xf9": "an AAC file",
-}
-"""The first bytes of audio formats that hold no video, and what they are."""
-_TRACKS, _TRACK_ENTRY, _TRACK_TYPE = 0x1654AE6B, 0xAE, 0x83
-
-
-def _sound_only(path: Path, head: bytes) -> str | None:
-    """What a file OpenCV cannot open as a video is when it holds sound and no video (a
-    WAVE, FLAC, MP3, AAC or Ogg sound file; an MP4/M4A/MOV or Matroska/WebM file whose only
-    tracks are sound), else None (not told apart from damage: not judged)."""
-    import mmap
-
-    for start, kind in _SOUND_STARTS.items():
-        if head.startswith(start):
-            return kind
-    if head.startswith(b"RIFF") and head[8:12] == b"WAVE":
-        return "a WAVE file"
-    try:
-        with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
-            if head.startswith(b"OggS"):  # Theora's, Daala's or a skeleton's header: video
-                video = any(v in data[:4096] for v in (b"\x80theora", b"\x80daala", b"fishead"))
-                return None if video else "an Ogg sound file"
-            if head[4:8] == b"ftyp":  # each track's handler: soun, vide, ...
-                tracks = {data[i + 12 : i + 16] for i in _all(data, b"hdlr")}
-                only = b"soun" in tracks and b"vide" not in tracks
-                return "an MP4 file of sound alone" if only else None
-            if head.startswith(EBML_START):
-                fh.seek(0)
-                only = _matroska_track_types(fh, len(data)) == {2}
-                return "a Matroska/WebM file of sound alone" if only else None
-    except (OSError, ValueError):
-        return None
-    return None
-
-
-def _all(data: Any, word: bytes) -> Iterator[int]:
-    """Where ``word`` occurs in ``data``."""
-    at = data.find(word)
-    while at >= 0:
-        yield at
-        at = data.find(word, at + 1)
-
-
-def _matroska_track_types(fh: Any, size: int) -> set[int]:
-    """The kinds of a Matroska/WebM file's tracks (its TrackType values: 1 video, 2 sound,
-    17 subtitles, ...), read from ``fh`` at its start; empty where they cannot be read."""
-    kinds: set[int] = set()
-    try:
-        while fh.tell() < size:
-            ident, _ = _ebml_number(fh, True)
-            stated, unknown = _ebml_number(fh, False)
-            if ident == _SEGMENT or (ident in (_TRACKS, _TRACK_ENTRY) and not unknown):
-                continue  # step in: the tracks lie inside
-            if unknown or ident == _CLUSTER:
-                return kinds  # the frames: the tracks come before them
-            if ident == _TRACK_TYPE:
-                kinds.add(int.from_bytes(fh.read(stated), "big"))
-            else:
-                fh.seek(fh.tell() + stated)
-    except (EOFError, ValueError):
-        return set()
-    return kinds
-
-
 def _frames_rate(path: Path, fps: float, frames: int, by_duration: bool) -> tuple[float, int]:
     """The frame rate and count OpenCV states for a video (``fps``, ``frames``), or, when
     that rate is above :data:`SUSPECT_FPS` and a clock's ticks rather than a frame rate
     (:func:`own_rate`), the frames' own rate and their number (their packets: not the
     container's duration at that rate, which counts an audio track running on after the
-    video; a WebM cut short is found by :func:`_matroska_end`). A file whose count OpenCV
-    takes from its duration (``by_duration``: :func:`_counted_by_duration`) holds no more
-    frames than its packets: the duration is its longest track's (sound running on 0.3 s
-    after the last frame of a 4-s clip counted 9 frames more than there are)."""
+    video; a WebM cut short is found by :func:`.containers.matroska_end`). A file whose
+    count OpenCV takes from its duration (``by_duration``:
+    :func:`.containers.counted_by_duration`) holds no more frames than its packets: the
+    duration is its longest track's (sound running on 0.3 s after the last frame of a 4-s
+    clip counted 9 frames more than there are)."""
     if not (by_duration and frames) and not (math.isfinite(fps) and fps > SUSPECT_FPS):
         return fps, frames
     got = _packet_times(path)
@@ -284,75 +199,6 @@ def _frames_rate(path: Path, fps: float, frames: int, by_duration: bool) -> tupl
     if rate != fps:
         return rate, int(got[0].size)
     return fps, min(frames, int(got[0].size)) if by_duration and frames else frames
-
-
-def _counted_by_duration(head: bytes) -> bool:
-    """Whether a video (its first bytes ``head``) states no frame count, so that OpenCV
-    counts its duration (its longest track's) at its frame rate, and a cut short file
-    shows otherwise than by that count: Matroska/WebM (its elements state their sizes:
-    :func:`_refuse_cut`) and MPEG-TS (``.ts``, a camcorder's ``.mts``/``.m2ts``: its
-    duration is read from the packets there are, cut short or not). Not MP4/MOV and AVI,
-    which state their frames, nor FLV, whose header states its duration."""
-    if head.startswith(EBML_START):
-        return True
-    return any(
-        len(head) > offset + 2 * step and all(head[offset + k * step] == 0x47 for k in range(3))
-        for offset, step in ((0, 188), (4, 192))  # TS packets; M2TS: a 4-byte stamp first
-    )
-
-
-EBML_START = b"\x1a\x45\xdf\xa3"
-"""The first bytes of a Matroska or WebM file (its EBML header's ID)."""
-_SEGMENT, _CLUSTER = 0x18538067, 0x1F43B675
-
-
-def _ebml_number(fh: Any, keep_marker: bool) -> tuple[int, bool]:
-    """An EBML number (an ID with its length marker kept; a size without it, and
-    whether it is unknown: all ones); raises EOFError where the file ends inside it,
-    ValueError where its first byte is no number's."""
-    first = fh.read(1)
-    if not first:
-        raise EOFError
-    if first[0] == 0:
-        raise ValueError
-    n = 9 - first[0].bit_length()  # the leading zeros say how many bytes follow
-    rest = fh.read(n - 1)
-    if len(rest) < n - 1:
-        raise EOFError
-    value = first[0] if keep_marker else first[0] & ((1 << (8 - n)) - 1)
-    for b in rest:
-        value = (value << 8) | b
-    return value, not keep_marker and value == (1 << (7 * n)) - 1
-
-
-def _matroska_end(path: Path) -> int | None:
-    """Where a Matroska/WebM file's data ends as its elements state it (bytes): the end of
-    its segment when the segment states its size; when it does not (a recording written as
-    it went, as a browser's MediaRecorder writes it), the end of its last element, walked
-    from the start (into clusters that do not state their size either, past the others
-    whole). Beyond the file's size, the file is truncated. None where the walk meets
-    anything it cannot read (bytes that are no element: padding, damage): not judged."""
-    size = path.stat().st_size
-    end = 0
-    with open(path, "rb") as fh:
-        while fh.tell() < size:
-            try:
-                ident, _ = _ebml_number(fh, True)
-                stated, unknown = _ebml_number(fh, False)
-            except EOFError:  # the file ends inside an element's header
-                return size + 1
-            except ValueError:
-                return None
-            if ident == _SEGMENT and not unknown:
-                return fh.tell() + stated
-            if ident in (_SEGMENT, _CLUSTER) and unknown:
-                end = fh.tell()  # its children follow, one by one
-                continue
-            if unknown:
-                return None  # no other element may leave its size open
-            end = fh.tell() + stated
-            fh.seek(end)
-    return end
 
 
 def taken_rate(times: np.ndarray, fps: float) -> float:
@@ -1005,33 +851,21 @@ def _ffmpeg_verifies_tls() -> bool:
 
 def _served_whole_by_duration(url: str, timeout_s: float | None = None) -> bool:
     """Whether an HTTP(S) URL is a file whose frame count OpenCV takes from its duration
-    (:func:`_counted_by_duration`) and that its server gives whole, so that fewer frames
-    than that count are no sign of a cut: an MPEG-TS file (its duration comes from the
+    (:func:`.containers.counted_by_duration`) and that its server gives whole, so that
+    fewer frames than that count are no sign of a cut: an MPEG-TS file (its duration comes from the
     packets there are), or a Matroska/WebM file whose segment states its size and ends
     within the length the server states (a file cut short on the server states more).
     Its first bytes only are read."""
-    import io
-
     answer = _served_start(url, timeout_s, 4096)
     if answer is None:
         return False
     _status, length, head = answer
     if not head.startswith(EBML_START):
-        return _counted_by_duration(head)  # MPEG-TS, or no file counted so
+        return counted_by_duration(head)  # MPEG-TS, or no file counted so
     if length is None:
         return False
-    fh = io.BytesIO(head)
-    try:
-        for expected in (None, _SEGMENT):  # the EBML header, then the segment
-            ident, _ = _ebml_number(fh, True)
-            stated, unknown = _ebml_number(fh, False)
-            if unknown or (expected is not None and ident != expected):
-                return False
-            if expected is None:
-                fh.seek(fh.tell() + stated)
-    except (EOFError, ValueError):
-        return False
-    return fh.tell() + stated <= length
+    end = segment_end(head)
+    return end is not None and end <= length
 
 
 def _is_path(source: int | str | Path) -> TypeGuard[str | Path]:

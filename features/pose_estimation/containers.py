@@ -1,0 +1,197 @@
+"""What a video file's own bytes say before it is decoded: whether it is cut short (a JPEG
+without its end marker, a Matroska/WebM file ending inside an element), whether it holds
+sound alone (WAVE, FLAC, MP3, AAC, Ogg, or an MP4 or Matroska/WebM file of sound tracks
+only), and whether OpenCV counts its frames from its duration (Matroska/WebM, MPEG-TS).
+:mod:`features.pose_estimation.video` asks these before it trusts what OpenCV reports."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from features.errors import DataError
+
+JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
+"""A JPEG file's start-of-image and end-of-image markers."""
+
+
+def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
+    """DataError for a file whose first and last bytes (``head``, ``tail``) show it cut
+    short: a JPEG without its end-of-image marker (OpenCV decodes what it has of it and
+    greys the rest), a Matroska/WebM file that ends inside an element (:func:`matroska_end`:
+    FFmpeg reads the frames before the cut as the whole video when the file states no
+    duration, or no frame rate, as a browser's WebM)."""
+    if head.startswith(JPEG_START) and not tail.rstrip(b"\x00\r\n\t ").endswith(JPEG_END):
+        raise DataError("truncated JPEG (no end-of-image marker)", path)
+    if head.startswith(EBML_START):
+        try:
+            size, end = path.stat().st_size, matroska_end(path)
+        except OSError as exc:
+            raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
+        if end is not None and end > size:
+            runs = f" that runs to byte {end:,}" if end > size + 1 else "'s header"
+            raise DataError(
+                f"truncated Matroska/WebM: the file ends at byte {size:,}, inside an element{runs}",
+                path,
+            )
+
+
+_SOUND_STARTS = {
+    b"fLaC": "a FLAC file",
+    b"ID3": "an MP3 file",
+    b"\xff\xfb": "an MP3 file",
+    b"\xff\xf3": "an MP3 file",
+    b"\xff\xf2": "an MP3 file",
+    b"\xff\xf1": "an AAC file",
+    b"\xff\xf9": "an AAC file",
+}
+"""The first bytes of audio formats that hold no video, and what they are."""
+_TRACKS, _TRACK_ENTRY, _TRACK_TYPE = 0x1654AE6B, 0xAE, 0x83
+
+
+def sound_only(path: Path, head: bytes) -> str | None:
+    """What a file OpenCV cannot open as a video is when it holds sound and no video (a
+    WAVE, FLAC, MP3, AAC or Ogg sound file; an MP4/M4A/MOV or Matroska/WebM file whose only
+    tracks are sound), else None (not told apart from damage: not judged)."""
+    import mmap
+
+    for start, kind in _SOUND_STARTS.items():
+        if head.startswith(start):
+            return kind
+    if head.startswith(b"RIFF") and head[8:12] == b"WAVE":
+        return "a WAVE file"
+    try:
+        with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
+            if head.startswith(b"OggS"):  # Theora's, Daala's or a skeleton's header: video
+                video = any(v in data[:4096] for v in (b"\x80theora", b"\x80daala", b"fishead"))
+                return None if video else "an Ogg sound file"
+            if head[4:8] == b"ftyp":  # each track's handler: soun, vide, ...
+                tracks = {data[i + 12 : i + 16] for i in _all(data, b"hdlr")}
+                only = b"soun" in tracks and b"vide" not in tracks
+                return "an MP4 file of sound alone" if only else None
+            if head.startswith(EBML_START):
+                fh.seek(0)
+                only = _matroska_track_types(fh, len(data)) == {2}
+                return "a Matroska/WebM file of sound alone" if only else None
+    except (OSError, ValueError):
+        return None
+    return None
+
+
+def _all(data: Any, word: bytes) -> Iterator[int]:
+    """Where ``word`` occurs in ``data``."""
+    at = data.find(word)
+    while at >= 0:
+        yield at
+        at = data.find(word, at + 1)
+
+
+def _matroska_track_types(fh: Any, size: int) -> set[int]:
+    """The kinds of a Matroska/WebM file's tracks (its TrackType values: 1 video, 2 sound,
+    17 subtitles, ...), read from ``fh`` at its start; empty where they cannot be read."""
+    kinds: set[int] = set()
+    try:
+        while fh.tell() < size:
+            ident, _ = _ebml_number(fh, True)
+            stated, unknown = _ebml_number(fh, False)
+            if ident == _SEGMENT or (ident in (_TRACKS, _TRACK_ENTRY) and not unknown):
+                continue  # step in: the tracks lie inside
+            if unknown or ident == _CLUSTER:
+                return kinds  # the frames: the tracks come before them
+            if ident == _TRACK_TYPE:
+                kinds.add(int.from_bytes(fh.read(stated), "big"))
+            else:
+                fh.seek(fh.tell() + stated)
+    except (EOFError, ValueError):
+        return set()
+    return kinds
+
+
+def counted_by_duration(head: bytes) -> bool:
+    """Whether a video (its first bytes ``head``) states no frame count, so that OpenCV
+    counts its duration (its longest track's) at its frame rate, and a cut short file
+    shows otherwise than by that count: Matroska/WebM (its elements state their sizes:
+    :func:`refuse_cut`) and MPEG-TS (``.ts``, a camcorder's ``.mts``/``.m2ts``: its
+    duration is read from the packets there are, cut short or not). Not MP4/MOV and AVI,
+    which state their frames, nor FLV, whose header states its duration."""
+    if head.startswith(EBML_START):
+        return True
+    return any(
+        len(head) > offset + 2 * step and all(head[offset + k * step] == 0x47 for k in range(3))
+        for offset, step in ((0, 188), (4, 192))  # TS packets; M2TS: a 4-byte stamp first
+    )
+
+
+EBML_START = b"\x1a\x45\xdf\xa3"
+"""The first bytes of a Matroska or WebM file (its EBML header's ID)."""
+_SEGMENT, _CLUSTER = 0x18538067, 0x1F43B675
+
+
+def _ebml_number(fh: Any, keep_marker: bool) -> tuple[int, bool]:
+    """An EBML number (an ID with its length marker kept; a size without it, and
+    whether it is unknown: all ones); raises EOFError where the file ends inside it,
+    ValueError where its first byte is no number's."""
+    first = fh.read(1)
+    if not first:
+        raise EOFError
+    if first[0] == 0:
+        raise ValueError
+    n = 9 - first[0].bit_length()  # the leading zeros say how many bytes follow
+    rest = fh.read(n - 1)
+    if len(rest) < n - 1:
+        raise EOFError
+    value = first[0] if keep_marker else first[0] & ((1 << (8 - n)) - 1)
+    for b in rest:
+        value = (value << 8) | b
+    return value, not keep_marker and value == (1 << (7 * n)) - 1
+
+
+def matroska_end(path: Path) -> int | None:
+    """Where a Matroska/WebM file's data ends as its elements state it (bytes): the end of
+    its segment when the segment states its size; when it does not (a recording written as
+    it went, as a browser's MediaRecorder writes it), the end of its last element, walked
+    from the start (into clusters that do not state their size either, past the others
+    whole). Beyond the file's size, the file is truncated. None where the walk meets
+    anything it cannot read (bytes that are no element: padding, damage): not judged."""
+    size = path.stat().st_size
+    end = 0
+    with open(path, "rb") as fh:
+        while fh.tell() < size:
+            try:
+                ident, _ = _ebml_number(fh, True)
+                stated, unknown = _ebml_number(fh, False)
+            except EOFError:  # the file ends inside an element's header
+                return size + 1
+            except ValueError:
+                return None
+            if ident == _SEGMENT and not unknown:
+                return fh.tell() + stated
+            if ident in (_SEGMENT, _CLUSTER) and unknown:
+                end = fh.tell()  # its children follow, one by one
+                continue
+            if unknown:
+                return None  # no other element may leave its size open
+            end = fh.tell() + stated
+            fh.seek(end)
+    return end
+
+
+def segment_end(head: bytes) -> int | None:
+    """Where a Matroska/WebM file whose first bytes are ``head`` ends as its segment states
+    (bytes from the file's start), or None when the segment leaves its size open or
+    ``head`` holds no EBML header and segment header."""
+    import io
+
+    fh = io.BytesIO(head)
+    try:
+        for expected in (None, _SEGMENT):  # the EBML header, then the segment
+            ident, _ = _ebml_number(fh, True)
+            stated, unknown = _ebml_number(fh, False)
+            if unknown or (expected is not None and ident != expected):
+                return None
+            if expected is None:
+                fh.seek(fh.tell() + stated)
+    except (EOFError, ValueError):
+        return None
+    return fh.tell() + stated
