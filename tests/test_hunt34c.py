@@ -283,16 +283,16 @@ def test_a_served_raw_h264_stream_is_read_at_its_rate_to_its_end(
 def test_only_a_whole_binary_file_counts_as_served_whole(tmp_path: Path) -> None:
     """A server that states a file's length gives it whole; a playlist (text: its own length
     says nothing of the stream's) or a stream without a length is no file."""
-    from features.pose_estimation.video import _served_whole
+    from features.pose_estimation.served import served_whole
 
     (tmp_path / "clip.bin").write_bytes(b"\x00\x00\x00\x01\x67" + bytes(100))
     (tmp_path / "live.m3u8").write_text("#EXTM3U\n#EXT-X-TARGETDURATION:2\n")
     (tmp_path / "marked.m3u8").write_bytes(b"\xef\xbb\xbf#EXTM3U\n#EXT-X-VERSION:3\n")
     with _serving(tmp_path) as address:
-        assert _served_whole(f"{address}/clip.bin", 5.0)
-        assert not _served_whole(f"{address}/live.m3u8", 5.0)
-        assert not _served_whole(f"{address}/marked.m3u8", 5.0)
-        assert not _served_whole(f"{address}/none.bin", 5.0)
+        assert served_whole(f"{address}/clip.bin", 5.0)
+        assert not served_whole(f"{address}/live.m3u8", 5.0)
+        assert not served_whole(f"{address}/marked.m3u8", 5.0)
+        assert not served_whole(f"{address}/none.bin", 5.0)
     with _serving(tmp_path, _Unsized) as address:
-        assert not _served_whole(f"{address}/clip.bin", 5.0)
-    assert not _served_whole("rtsp://127.0.0.1:1/stream", 5.0)
+        assert not served_whole(f"{address}/clip.bin", 5.0)
+    assert not served_whole("rtsp://127.0.0.1:1/stream", 5.0)

@@ -172,16 +172,16 @@ def test_a_served_file_behind_basic_auth_is_a_file(tmp_path: Path) -> None:
     called the file live (``served_file_rate`` None: watched as a camera). Now the file is
     taken at its 25 fps, as without a password; with a wrong password it is no file."""
     from features.pose_estimation import served_file_rate
-    from features.pose_estimation.video import _served_whole
+    from features.pose_estimation.served import served_whole
 
     _raw_h264(tmp_path)
     with _serving(tmp_path, _Guarded) as address:
         host = address.removeprefix("http://")
         url = f"http://{IN_URL}@{host}/camera.h264"
-        assert _served_whole(url, 5.0)
+        assert served_whole(url, 5.0)
         assert served_file_rate(url, 5.0) == 25.0
-        assert not _served_whole(f"http://coach:wrong@{host}/camera.h264", 5.0)
-        assert not _served_whole(f"{address}/camera.h264", 5.0)  # no credentials: 401
+        assert not served_whole(f"http://coach:wrong@{host}/camera.h264", 5.0)
+        assert not served_whole(f"{address}/camera.h264", 5.0)  # no credentials: 401
 
 
 def test_watch_of_a_served_file_behind_basic_auth_reads_it_to_its_end(
@@ -243,7 +243,7 @@ def test_a_self_signed_https_server_is_probed_as_ffmpeg_reads_it(
     import cv2
 
     from features.pose_estimation import served_file_rate
-    from features.pose_estimation.video import _served_whole
+    from features.pose_estimation.served import served_whole
 
     _raw_h264(tmp_path)
     with _serving_tls(tmp_path, *self_signed) as address:
@@ -251,7 +251,7 @@ def test_a_self_signed_https_server_is_probed_as_ffmpeg_reads_it(
         monkeypatch.delenv("OPENCV_FFMPEG_CAPTURE_OPTIONS", raising=False)
         cap = cv2.VideoCapture(url, cv2.CAP_FFMPEG)
         assert not cap.isOpened()
-        assert not _served_whole(url, 5.0) and served_file_rate(url, 5.0) is None
+        assert not served_whole(url, 5.0) and served_file_rate(url, 5.0) is None
         monkeypatch.setenv("OPENCV_FFMPEG_CAPTURE_OPTIONS", "rw_timeout;5000000|tls_verify;0")
         cap = cv2.VideoCapture(url, cv2.CAP_FFMPEG)
         assert cap.isOpened() and cap.read()[0]

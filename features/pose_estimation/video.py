@@ -46,13 +46,12 @@ from features.skeleton import BLAZEPOSE_33  # noqa: E402
 from features.text import shown  # noqa: E402
 
 from .containers import (  # noqa: E402
-    EBML_START,
     counted_by_duration,
     refuse_cut,
-    segment_end,
     sound_only,
 )
 from .model import model_version  # noqa: E402
+from .served import served_whole, served_whole_by_duration  # noqa: E402
 from .smoothing import AUX_FILTER, IMAGE_FILTER, VISIBILITY_ALPHA, WORLD_FILTER  # noqa: E402
 from .tracker import FramePose, PoseEstimator  # noqa: E402
 
@@ -720,7 +719,7 @@ def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
     a live stream (a camera's) and for one that cannot be opened (:func:`stream_poses`
     reports that). A file is one whose frame count OpenCV knows, or, when it knows none (a
     raw ``.h264`` stream, a browser's WebM without a duration), one an HTTP(S) server gives
-    whole (:func:`_served_whole`). The rate is the one OpenCV states, or, when that is a
+    whole (:func:`.served.served_whole`). The rate is the one OpenCV states, or, when that is a
     clock's ticks (above :data:`SUSPECT_FPS`, more than twice the frames' own), the frames'
     own average rate over their first :data:`RATE_WINDOW_S` seconds (read from the packets,
     not decoded), as :func:`open_video` takes it for a file here. ``timeout_s``: how long
@@ -739,133 +738,13 @@ def served_file_rate(url: str, timeout_s: float | None = None) -> float | None:
         cap.release()
     if not (math.isfinite(fps) and 0 < fps <= MAX_VIDEO_FPS):
         return None
-    if not frames and not _served_whole(url, timeout_s):
+    if not frames and not served_whole(url, timeout_s):
         return None  # a live stream: it has no end to know
     if fps > SUSPECT_FPS:
         got = _packet_times(url, RATE_WINDOW_S, timeout_s)
         if got is not None:
             fps = taken_rate(got[0], fps)
     return fps
-
-
-def _served_whole(url: str, timeout_s: float | None = None) -> bool:
-    """Whether an HTTP(S) URL is a file the server gives whole: it states the file's length
-    (a live stream, a camera's, has none: it goes on) and the file is no text (an HLS or DASH
-    playlist, whose own length says nothing of the stream's, is); a ``file://`` URL's file
-    is (:func:`_local_whole`). False for any other URL and for a server that does not
-    answer within ``timeout_s`` (FFmpeg's 30 s when None). Asked
-    as FFmpeg asks for the same URL (:func:`_ffmpeg_opener`)."""
-    from urllib.parse import urlsplit
-
-    scheme = urlsplit(url).scheme.lower()
-    if scheme == "file":
-        return _local_whole(url)
-    if scheme not in ("http", "https"):
-        return False
-    answer = _served_start(url, timeout_s, 16)
-    if answer is None:
-        return False
-    status, length, head = answer
-    return status == 200 and length is not None and length > 0 and _not_text(head)
-
-
-def _served_start(
-    url: str, timeout_s: float | None, size: int
-) -> tuple[int, int | None, bytes] | None:
-    """The first ``size`` bytes of the file at an HTTP(S) URL, asked as FFmpeg asks for it
-    (:func:`_ffmpeg_opener`), with the answer's status and the length the server states
-    (None: none); None where the server cannot be asked or does not answer within
-    ``timeout_s`` (FFmpeg's 30 s when None)."""
-    import http.client
-
-    try:
-        opener, bare = _ffmpeg_opener(url)
-        with opener.open(bare, timeout=timeout_s or 30.0) as answer:
-            length = (answer.headers.get("Content-Length") or "").strip()
-            return answer.status, int(length) if length.isdigit() else None, answer.read(size)
-    except (OSError, ValueError, http.client.HTTPException):
-        return None
-
-
-def _not_text(head: bytes) -> bool:
-    """Whether a file's first bytes are no text (a playlist's are)."""
-    text = head.removeprefix(b"\xef\xbb\xbf")  # a playlist may start with UTF-8's mark
-    return bool(text) and not all(32 <= b < 127 or b in b"\t\r\n" for b in text)
-
-
-def _local_whole(url: str) -> bool:
-    """Whether a ``file:`` URL names a file on this machine (it has an end, as a file given
-    by its path has) that is no text (a playlist). Its path is what follows ``file:``, as
-    FFmpeg reads it (no percent-escapes decoded)."""
-    path = Path(url[len("file:") :])
-    try:
-        with open(path, "rb") as fh:
-            return path.is_file() and _not_text(fh.read(16))
-    except OSError:
-        return False
-
-
-def _ffmpeg_opener(url: str) -> tuple[Any, str]:
-    """A urllib opener that reads an HTTP(S) URL as FFmpeg (OpenCV's backend) reads it, and
-    the URL it is to open: credentials in the URL (``http://user:pass@host/...``,
-    percent-escapes decoded) are taken out of it (urllib would take ``user:pass@host`` for
-    the host) and given when the server asks for them, Basic or Digest, as FFmpeg gives
-    them. An HTTPS server's certificate is checked, as the FFmpeg OpenCV ships checks it by
-    default (FFmpeg 8: ``tls_verify`` 1; a self-signed server's video does not open), and
-    not when the user has turned FFmpeg's check off (``OPENCV_FFMPEG_CAPTURE_OPTIONS``
-    holding ``tls_verify;0``): the probe accepts the servers FFmpeg reads from."""
-    import ssl
-    import urllib.request
-    from urllib.parse import unquote, urlsplit, urlunsplit
-
-    parts = urlsplit(url)
-    handlers: list[Any] = []
-    if parts.username is not None:
-        host = parts.netloc.rpartition("@")[2]
-        url = urlunsplit(parts._replace(netloc=host))
-        passwords = urllib.request.HTTPPasswordMgrWithDefaultRealm()
-        passwords.add_password(None, url, unquote(parts.username), unquote(parts.password or ""))
-        handlers += [
-            urllib.request.HTTPBasicAuthHandler(passwords),
-            urllib.request.HTTPDigestAuthHandler(passwords),
-        ]
-    if not _ffmpeg_verifies_tls():
-        unchecked = ssl.create_default_context()
-        unchecked.check_hostname = False
-        unchecked.verify_mode = ssl.CERT_NONE
-        handlers.append(urllib.request.HTTPSHandler(context=unchecked))
-    return urllib.request.build_opener(*handlers), url
-
-
-def _ffmpeg_verifies_tls() -> bool:
-    """Whether FFmpeg, opened by OpenCV, checks an HTTPS server's certificate: unless the
-    options OpenCV gives it (``OPENCV_FFMPEG_CAPTURE_OPTIONS``, ``key;value`` pairs joined
-    by ``|``) set ``tls_verify`` to 0."""
-    options = os.environ.get("OPENCV_FFMPEG_CAPTURE_OPTIONS", "")
-    for pair in options.split("|"):
-        key, _, value = pair.partition(";")
-        if key.strip() == "tls_verify":
-            return value.strip() not in ("0", "false")
-    return True
-
-
-def _served_whole_by_duration(url: str, timeout_s: float | None = None) -> bool:
-    """Whether an HTTP(S) URL is a file whose frame count OpenCV takes from its duration
-    (:func:`.containers.counted_by_duration`) and that its server gives whole, so that
-    fewer frames than that count are no sign of a cut: an MPEG-TS file (its duration comes from the
-    packets there are), or a Matroska/WebM file whose segment states its size and ends
-    within the length the server states (a file cut short on the server states more).
-    Its first bytes only are read."""
-    answer = _served_start(url, timeout_s, 4096)
-    if answer is None:
-        return False
-    _status, length, head = answer
-    if not head.startswith(EBML_START):
-        return counted_by_duration(head)  # MPEG-TS, or no file counted so
-    if length is None:
-        return False
-    end = segment_end(head)
-    return end is not None and end <= length
 
 
 def _is_path(source: int | str | Path) -> TypeGuard[str | Path]:
@@ -959,7 +838,7 @@ def stream_poses(
                 except DataError:
                     # a file whole on the server: its count was its duration (its longest
                     # track's: sound running on), its frames are what came
-                    if not (served and _served_whole_by_duration(str(source), timeout_s)):
+                    if not (served and served_whole_by_duration(str(source), timeout_s)):
                         raise
                 break
             t = index / fps if fps else read_at - start
