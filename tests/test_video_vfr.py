@@ -47,11 +47,13 @@ def _write(
     frames: list[np.ndarray],
     rate: int | None = 25,
     codec: str = "libx264",
+    options: dict[str, str] | None = None,
 ) -> Path:
     """A video of RGB ``frames`` with these presentation times (1 ms time base); ``rate``:
-    the nominal rate the stream declares (None: none, as a browser's MediaRecorder writes)."""
+    the nominal rate the stream declares (None: none, as a browser's MediaRecorder writes);
+    ``options``: the container's (``{"live": "1"}``: a WebM written as it goes)."""
     tb = Fraction(1, 1000)
-    out = av.open(str(path), "w")
+    out = av.open(str(path), "w", options=options or {})
     stream = out.add_stream(codec, rate=rate) if rate else out.add_stream(codec)
     h, w = frames[0].shape[:2]
     stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
