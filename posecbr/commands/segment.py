@@ -42,6 +42,7 @@ JUDGES = (
     "held-out",
     "activities",
     "margin-distance",
+    "spread-nearest",
 )
 """cbr.unknown.JUDGES, the default first (not imported: the command line starts light)."""
 
