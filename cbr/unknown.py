@@ -71,7 +71,6 @@ JUDGES = (
     "held-out",
     "activities",
     "margin-distance",
-    "spread-nearest",
 )
 """The judges by name, the default first."""
 FALSE_UNKNOWN = 0.05
@@ -1037,99 +1036,6 @@ class SpreadMargin(ActivityMargin):
         )
 
 
-NEAR_QUANTILES = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1)
-"""The quantiles of the held-out known cases' nearest distances :func:`near_bound` tries as
-:class:`SpreadNearest`'s near bound, the highest first."""
-NEAR_COST = 0.01
-"""The share of the case base's held-out novel cases (their activity left out) that the judge
-calls unknown and :func:`near_bound` may give up: at most this much fewer are called unknown
-with the bound than without."""
-
-
-def near_bound(judge: Judge, known: np.ndarray, novel: np.ndarray) -> float:
-    """:class:`SpreadNearest`'s near bound: the highest quantile (of :data:`NEAR_QUANTILES`)
-    of the held-out known cases' distances to their nearest case (``known`` ``(k,
-    n_classes)``, distances to every activity, as :func:`known_and_novel` gives them) such
-    that ``judge`` calls unknown at most :data:`NEAR_COST` fewer of the held-out novel cases
-    ``novel`` ``(m, n_classes)`` (all of them counted) when those no farther than it are never
-    unknown; 0 (no bound) when none is, or either is empty. The quantile is a sample value
-    (:func:`false_unknown_threshold` at ``1 - q``)."""
-    if not len(known) or not len(novel):
-        return 0.0
-    d_known, d_novel = np.min(known, axis=1), np.min(novel, axis=1)
-    caught = np.array([judge.unlike(n) for n in novel], dtype=bool)
-    for q in NEAR_QUANTILES:
-        near = false_unknown_threshold(d_known, round(1.0 - q, 12))
-        if np.sum(caught & (d_novel <= near)) <= NEAR_COST * len(novel) + 1e-9:
-            return near
-    return 0.0
-
-
-@dataclass(frozen=True)
-class SpreadNearest(SpreadMargin):
-    """:class:`SpreadMargin` bounded by the window's distance to its nearest case
-    (``--unknown spread-nearest``): never unknown at or below ``near``, always beyond
-    ``far``, as :class:`SpreadMargin` judges between. ``far``: the distance at most a share
-    ``false_unknown`` of the case base's held-out known cases lie beyond
-    (:func:`false_unknown_threshold` of their nearest distances); ``near``: the highest
-    quantile of those distances that costs the judge at most :data:`NEAR_COST` of the
-    held-out novel cases it calls unknown (:func:`near_bound`). A window as near a stored
-    case as most held-out known cases lie is familiar, however ambiguous between two
-    activities (a posture two of them share); one farther than nearly every held-out known
-    case is unlike them, however clearly nearer one activity. Only with a case base that
-    holds out people (basis "subject"), as :class:`SpreadMargin`'s spread: how near one
-    person's own held-out cases lie says little of the next person (HDM05, one actor's
-    case base segmenting another, on the 2-s windows: known windows kept 98.4 -> 96.1 %,
-    left-out ones unknown 69.0 -> 74.2 %), so a case base of one person gets neither bound.
-    Both bounds 0 and inf (:class:`SpreadMargin` itself) then, and in a record without
-    them."""
-
-    near: float = 0.0
-    far: float = math.inf
-
-    @classmethod
-    def of(  # type: ignore[override]
-        cls,
-        cb: CaseBase,
-        false_unknown: float = FALSE_UNKNOWN,
-        held: Held | None = None,
-    ) -> SpreadNearest:
-        """Calibrated on ``cb``; ``held`` and DataError as :meth:`SpreadMargin.of`."""
-        held = held if held is not None else held_out_activities(cb)
-        inner = SpreadMargin.of(cb, false_unknown, held=held)
-        fields = {f.name: getattr(inner, f.name) for f in dataclasses.fields(inner)}
-        if held[2] != "subject":  # one person's case base: spread-margin's rule itself
-            return cls(**fields)
-        known, novel = known_and_novel(held[0], held[1])
-        near = near_bound(inner, known, novel)
-        far = false_unknown_threshold(np.min(known, axis=1), false_unknown)
-        return cls(**fields, near=near, far=far)
-
-    def unlike(self, nearest: np.ndarray) -> bool:
-        d1 = float(np.min(nearest))
-        if d1 > self.far:
-            return True
-        return d1 > self.near and super().unlike(nearest)
-
-    def evidence(self, nearest: np.ndarray) -> float:
-        """1 beyond ``far``, 0 at or below ``near``, else :meth:`SpreadMargin.evidence`."""
-        d1 = float(np.min(nearest))
-        if d1 > self.far:
-            return 1.0
-        return 0.0 if d1 <= self.near else super().evidence(nearest)
-
-    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
-        d1 = float(np.min(nearest))
-        if d1 <= self.far:
-            return super().describe(nearest, classes)
-        first, _ = two_nearest(nearest, classes)
-        return (
-            f"like no stored activity: its nearest case ({first}) lies {d1:.3g} away, farther"
-            f" than {self.far:.3g} (beyond which {percent(self.false_unknown, 0)} of the case"
-            " base's held-out cases lie)"
-        )
-
-
 @dataclass(frozen=True)
 class HeldOut:
     """The classifier's stored calibration (:class:`cbr.novelty.NoveltyCalibration`): unknown
@@ -1218,14 +1124,13 @@ STORED: dict[str, type[Calibrated]] = {
     "activities": Familiarity,
     "activity-margin": ActivityMargin,
     "spread-margin": SpreadMargin,
-    "spread-nearest": SpreadNearest,
 }
 """The judges calibrated on the case base, by name: calibrated when a model is stored
 (:func:`calibrate_judges`) and stored with it. (``held-out`` reads the classifier's novelty
 calibration, already stored.)"""
 
 
-AT_FIT = ("margin", "margin-distance", "activity-margin", "spread-margin", "spread-nearest")
+AT_FIT = ("margin", "margin-distance", "activity-margin", "spread-margin")
 """The judges calibrated when a model is stored: the margins, from one held-out scan of the
 case base for at most :data:`MARGIN_SAMPLE` cases (grows linearly with the case base);
 ``spread-margin``'s choice of power, rate and prior adds about 0.05-0.2 s of CPU to it
@@ -1327,10 +1232,6 @@ __all__ = [
     "JUDGES",
     "SPREAD_POWERS",
     "SpreadMargin",
-    "SpreadNearest",
-    "near_bound",
-    "NEAR_COST",
-    "NEAR_QUANTILES",
     "activity_spreads",
     "choose_spread",
     "spread_scores",

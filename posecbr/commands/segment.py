@@ -42,7 +42,6 @@ JUDGES = (
     "held-out",
     "activities",
     "margin-distance",
-    "spread-nearest",
 )
 """cbr.unknown.JUDGES, the default first (not imported: the command line starts light)."""
 
