@@ -6,7 +6,7 @@ threshold held out by person caught only 65.9 %.)
 
 Run: ``python -m benchmarks.unknown_bounds [--datasets ...] [--train-people 1] [--cache
 DIR]`` (at load 12-16 on 2 cores: HDM05 under a minute, its one-actor case bases about 3
-minutes, UI-PRMD Vicon about 2 minutes per left-out movement, Kinect longer; ``--cache
+minutes, UI-PRMD Vicon and Kinect 1-3 minutes per left-out movement; ``--cache
 DIR`` keeps each left-out movement's measurements, so a rerun resumes). Writes
 ``benchmarks/results/unknown_bounds.json`` (``unknown_bounds_1.json`` with
 ``--train-people 1``: case bases of one person, each in turn, as ``segment_people
