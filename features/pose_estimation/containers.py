@@ -52,8 +52,9 @@ _TRACKS, _TRACK_ENTRY, _TRACK_TYPE = 0x1654AE6B, 0xAE, 0x83
 
 def sound_only(path: Path, head: bytes) -> str | None:
     """What a file OpenCV cannot open as a video is when it holds sound and no video (a
-    WAVE, FLAC, MP3, AAC or Ogg sound file; an MP4/M4A/MOV or Matroska/WebM file whose only
-    tracks are sound), else None (not told apart from damage: not judged)."""
+    WAVE, FLAC, MP3, AAC or Ogg sound file, the Ogg with a skeleton or not; an MP4/M4A/MOV
+    or Matroska/WebM file whose only tracks are sound), else None (not told apart from
+    damage: not judged)."""
     import mmap
 
     for start, kind in _SOUND_STARTS.items():
@@ -63,9 +64,8 @@ def sound_only(path: Path, head: bytes) -> str | None:
         return "a WAVE file"
     try:
         with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
-            if head.startswith(b"OggS"):  # Theora's, Daala's or a skeleton's header: video
-                video = any(v in data[:4096] for v in (b"\x80theora", b"\x80daala", b"fishead"))
-                return None if video else "an Ogg sound file"
+            if head.startswith(b"OggS"):
+                return "an Ogg sound file" if _ogg_sound_alone(data) else None
             if head[4:8] == b"ftyp":  # each track's handler: soun, vide, ...
                 tracks = {data[i + 12 : i + 16] for i in _all(data, b"hdlr")}
                 only = b"soun" in tracks and b"vide" not in tracks
@@ -77,6 +77,32 @@ def sound_only(path: Path, head: bytes) -> str | None:
     except (OSError, ValueError):
         return None
     return None
+
+
+_OGG_SOUND = (b"\x01vorbis", b"OpusHead", b"\x7fFLAC", b"Speex   ", b"\x01audio", b"CELT    ")
+"""How the first packet of an Ogg stream of sound starts (Vorbis, Opus, FLAC, Speex, OGM's
+audio, CELT)."""
+_OGG_ASIDE = (b"fishead\x00", b"\x80kate", b"\x01text")
+"""How the first packet of an Ogg stream that is neither sound nor video starts: a skeleton
+(an index of the other streams, which a sound file may carry), subtitles."""
+
+
+def _ogg_sound_alone(data: Any) -> bool:
+    """Whether an Ogg file (its bytes ``data``) holds sound and no video: each stream's
+    first page (flagged as its beginning; all of them come first) starts a stream of sound
+    (:data:`_OGG_SOUND`) or of neither (:data:`_OGG_ASIDE`: a skeleton), and one is sound.
+    A stream of any other kind (Theora, Daala, Dirac, VP8: video) or pages that cannot be
+    read: not judged (False)."""
+    at, kinds = 0, set()
+    while data[at : at + 4] == b"OggS" and at + 27 <= len(data) and data[at + 5] & 0x02:
+        lacing = data[at + 27 : at + 27 + data[at + 26]]
+        first = data[at + 27 + len(lacing) : at + 27 + len(lacing) + 8]
+        if first.startswith(_OGG_SOUND):
+            kinds.add("sound")
+        elif not first.startswith(_OGG_ASIDE):
+            return False
+        at += 27 + len(lacing) + sum(lacing)
+    return kinds == {"sound"}
 
 
 def _all(data: Any, word: bytes) -> Iterator[int]:
