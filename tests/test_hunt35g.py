@@ -4,12 +4,16 @@ frame, a browser's WebM served over HTTP and cut short mid-cluster."""
 
 from __future__ import annotations
 
+import json
 import struct
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from posecbr.cli import main
 from tests.badinput import refused, small_case_base
+from tests.test_hunt34c import _encode, _Quiet, _serving
 from tests.test_hunt34h import _sound
 
 SKELETON = 0x5C5C5C5C
@@ -136,3 +140,221 @@ def test_an_ogg_file_is_sound_by_its_streams_first_packets(
     bare = tmp_path / "bare.ogg"  # without the skeleton, the same
     bare.write_bytes(b"".join(p for p in _ogg_pages(data) if p[14:18] != SKELETON_BYTES))
     assert sound_only(bare, bare.read_bytes()[:512]) == ("an Ogg sound file" if sound else None)
+
+
+# --- a browser's WebM served over HTTP and cut short --------------------------------------
+
+
+def _live_webm(path: Path) -> Path:
+    """A WebM written as it went, as a browser's MediaRecorder writes it (no duration, no
+    frame count for OpenCV to know), 100 VP8 frames at a steady 25 fps."""
+    return _encode(path, [40 * k for k in range(100)], "libvpx", 25, {"live": "1"})
+
+
+def _watched(source: str, case_base: Path, capsys: pytest.CaptureFixture[str]) -> list[dict]:
+    """``watch SOURCE --speed 0``'s segments; it must exit 0."""
+    capsys.readouterr()
+    code = main(["watch", source, "--db", str(case_base), "--speed", "0"])
+    got = capsys.readouterr()
+    assert code == 0, got.err
+    return [json.loads(line) for line in got.out.splitlines()]
+
+
+def test_watch_of_a_served_live_webm_cut_mid_cluster_is_refused_as_truncated(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A WebM without a duration, as a browser's (OpenCV knows no frame count), served whole by
+    Python's own server (its length stated), cut at half its bytes, inside a cluster: it
+    was watched to the cut as the whole file, exit 0. Now refused as the same file here is,
+    the line naming the URL and the same byte where it ends and the element runs on to,
+    exit 1, nothing printed. The whole file is watched whole (100 frames); cut where its
+    last cluster starts, it is a recording stopped there, watched to it, as the file here."""
+    from features.errors import DataError
+    from features.pose_estimation import open_video
+
+    folder = tmp_path / "served"
+    folder.mkdir()
+    data = _live_webm(folder / "whole.webm").read_bytes()
+    (folder / "cut.webm").write_bytes(data[: len(data) // 2])
+    clusters = [i for i in range(len(data)) if data.startswith(b"\x1f\x43\xb6\x75", i)]
+    (folder / "stopped.webm").write_bytes(data[: clusters[-1]])
+    with pytest.raises(DataError) as here:
+        open_video(folder / "cut.webm")
+    said_here = str(here.value).split(": ", 1)[1]  # "truncated Matroska/WebM: the file ..."
+    with _serving(folder, _Quiet) as address:
+        segments = _watched(f"{address}/whole.webm", case_base, capsys)
+        assert segments[-1]["end_frame"] == 100
+        stopped = _watched(f"{address}/stopped.webm", case_base, capsys)
+        assert 0 < stopped[-1]["end_frame"] < 100
+        url = f"{address}/cut.webm"
+        argv = ["watch", url, "--db", str(case_base), "--speed", "0"]
+        served_words = said_here.replace("the file ends", "the served file ends")
+        assert f"ends at byte {len(data) // 2:,}, inside an element that runs to" in served_words
+        refused(argv, tmp_path, capsys, f"{url}: {served_words}")
+
+
+class _Dropping(_Quiet):
+    """States a file's whole length and sends its first half, then hangs up (a connection
+    lost mid-file)."""
+
+    def do_GET(self) -> None:  # noqa: N802 (the base's name)
+        data = Path(self.translate_path(self.path)).read_bytes()
+        self.send_response(200)
+        self.send_header("Content-Type", "video/webm")
+        self.send_header("Content-Length", str(len(data)))
+        self.end_headers()
+        self.wfile.write(data[: len(data) // 2])
+        self.close_connection = True
+
+
+def test_a_served_webm_whose_server_hangs_up_mid_file_is_refused_as_truncated(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """That whole WebM, its length stated, but the server hangs up after half its
+    bytes: the frames before were watched as the whole file, exit 0. Now refused, one line
+    saying how many of the bytes the server stated came."""
+    folder = tmp_path / "served"
+    folder.mkdir()
+    size = _live_webm(folder / "whole.webm").stat().st_size
+    with _serving(folder, _Dropping) as address:
+        url = f"{address}/whole.webm"
+        argv = ["watch", url, "--db", str(case_base), "--speed", "0"]
+        refused(
+            argv,
+            tmp_path,
+            capsys,
+            f"{url}: truncated: the server sent {size // 2:,} of the {size:,} bytes it stated",
+        )
+
+
+# --- FLV: sound running on after the last frame, cut short ---------------------------------
+
+
+def _flv(path: Path, frames: int, sound_s: float) -> Path:
+    """``frames`` grey frames at 30 fps (Sorenson H.263, FLV's own) and silent MP3 sound
+    (44.1 kHz, mono, 1152 samples a packet) of ``sound_s`` seconds, interleaved by time."""
+    av = pytest.importorskip("av", reason="PyAV writes the FLV files")
+    out = av.open(str(path), "w", format="flv")
+    video = out.add_stream("flv", rate=30)
+    video.width, video.height, video.pix_fmt = 64, 48, "yuv420p"
+    sound = out.add_stream("libmp3lame", rate=44100)
+    chunks = round(sound_s * 44100 / 1152)
+    v = a = 0
+    while v < frames or a < chunks:
+        if v < frames and (a >= chunks or v / 30 <= a * 1152 / 44100):
+            picture = np.full((48, 64, 3), (3 * v) % 250, np.uint8)
+            frame = av.VideoFrame.from_ndarray(picture, format="rgb24")
+            frame.pts, v = v, v + 1
+            packets = video.encode(frame)
+        else:
+            chunk = av.AudioFrame.from_ndarray(np.zeros((1, 1152), np.int16), "s16p", "mono")
+            chunk.sample_rate, chunk.pts, a = 44100, a * 1152, a + 1
+            packets = sound.encode(chunk)
+        for packet in packets:
+            out.mux(packet)
+    for stream in (video, sound):
+        for packet in stream.encode():
+            out.mux(packet)
+    out.close()
+    return path
+
+
+def _flv_tags(data: bytes) -> list[tuple[int, int, int]]:
+    """An FLV file's tags as this test reads them: (kind, where the tag ends with the 4
+    bytes after it, time in ms)."""
+    tags, at = [], int.from_bytes(data[5:9], "big") + 4
+    while at + 11 <= len(data):
+        end = at + 11 + int.from_bytes(data[at + 1 : at + 4], "big") + 4
+        tags.append((data[at] & 0x1F, end, int.from_bytes(data[at + 4 : at + 7], "big")))
+        at = end
+    return tags
+
+
+def test_an_flv_whose_sound_runs_on_is_counted_by_its_frames(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 4-s FLV, 120 frames at 30 fps, whose sound runs on to 4.3 s: OpenCV counts the
+    duration its header states at 30 fps, 130 frames, and ``extract`` refused it as
+    "truncated or corrupt: decoded 120 of 130 frames". Its frames are its 120 video
+    packets, as a WebM's are: all decode, ``extract`` writes 120 poses."""
+    import cv2
+
+    from features.pose_estimation import iter_frames, open_video
+    from features.poses import load_pose
+
+    clip = _flv(tmp_path / "clip.flv", 120, 4.3)
+    tags = _flv_tags(clip.read_bytes())
+    assert sum(kind == 9 for kind, _end, _ms in tags) == 120
+    stated = cv2.VideoCapture(str(clip))
+    assert stated.get(cv2.CAP_PROP_FRAME_COUNT) == 130
+    stated.release()
+    cap, info = open_video(clip)
+    cap.release()
+    assert (info.frames, info.fps) == (120, 30.0)
+    assert sum(1 for _ in iter_frames(clip)) == 120
+    out = tmp_path / "poses"
+    assert main(["extract", str(clip), "--out", str(out)]) == 0, capsys.readouterr().err
+    (written,) = out.glob("*.npz")
+    assert load_pose(written).n_frames == 120
+
+
+def _cut_flvs(folder: Path) -> tuple[bytes, dict[str, tuple[Path, str]]]:
+    """The 4.3-s FLV's bytes and two cuts of it with what each is refused as: at half its
+    bytes (inside a tag), and where a tag ends two thirds in (its tags stop short of the
+    4.33 s its header states)."""
+    data = _flv(folder / "whole.flv", 120, 4.3).read_bytes()
+    tags = _flv_tags(data)
+    half = folder / "half.flv"
+    half.write_bytes(data[: len(data) // 2])
+    inside = next(end for _k, end, _ms in tags if end > len(data) // 2) - 4
+    cut_at = next(end for _k, end, _ms in tags if end >= 2 * len(data) // 3)
+    last_ms = max(ms for kind, end, ms in tags if end <= cut_at and kind in (8, 9))
+    boundary = folder / "boundary.flv"
+    boundary.write_bytes(data[:cut_at])
+    return data, {
+        "half": (
+            half,
+            f"truncated FLV: the file ends at byte {len(data) // 2:,}, inside a tag that runs"
+            f" to byte {inside:,}",
+        ),
+        "boundary": (
+            boundary,
+            f"truncated FLV: the file's last packet is at {last_ms / 1000:.2f} s, its header"
+            f" states {130 / 30:.2f} s",
+        ),
+    }
+
+
+@pytest.mark.parametrize("command", ["extract", "watch"])
+def test_an_flv_cut_short_is_refused_as_truncated(
+    command: str, case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """That FLV cut inside a tag or where a tag ends: refused, one line naming the file and
+    where it was cut, exit 1, nothing written, though its frames are now counted by their
+    packets (a cut file's packets are the frames before the cut)."""
+    _data, cuts = _cut_flvs(tmp_path)
+    for path, words in cuts.values():
+        argv = {
+            "extract": ["extract", str(path), "--out", str(tmp_path / "poses")],
+            "watch": ["watch", str(path), "--db", str(case_base), "--speed", "0"],
+        }[command]
+        refused(argv, tmp_path, capsys, f"{path}: {words}")
+
+
+def test_watch_of_a_served_flv_reads_it_whole_and_refuses_it_cut(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The FLV whose sound runs on, served over HTTP: ``watch`` refused it as "truncated or
+    corrupt: decoded 120 of 130 frames", exit 1; now watched whole, 120 frames, 0-4 s.
+    Its cuts served are refused as the files here are, "the served file" named."""
+    folder = tmp_path / "served"
+    folder.mkdir()
+    _data, cuts = _cut_flvs(folder)
+    with _serving(folder, _Quiet) as address:
+        segments = _watched(f"{address}/whole.flv", case_base, capsys)
+        assert [(s["start_frame"], s["end_frame"], s["end_s"]) for s in segments] == [(0, 120, 4.0)]
+        for path, words in cuts.values():
+            url = f"{address}/{path.name}"
+            argv = ["watch", url, "--db", str(case_base), "--speed", "0"]
+            served = words.replace("the file", "the served file")
+            refused(argv, tmp_path, capsys, f"{url}: {served}")

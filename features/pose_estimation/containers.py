@@ -1,11 +1,13 @@
 """What a video file's own bytes say before it is decoded: whether it is cut short (a JPEG
-without its end marker, a Matroska/WebM file ending inside an element), whether it holds
-sound alone (WAVE, FLAC, MP3, AAC, Ogg, or an MP4 or Matroska/WebM file of sound tracks
-only), and whether OpenCV counts its frames from its duration (Matroska/WebM, MPEG-TS).
+without its end marker, a Matroska/WebM or FLV file ending inside an element or a tag),
+whether it holds sound alone (WAVE, FLAC, MP3, AAC, Ogg, or an MP4 or Matroska/WebM file of
+sound tracks only), and whether OpenCV counts its frames from its duration (Matroska/WebM,
+FLV, MPEG-TS).
 :mod:`features.pose_estimation.video` asks these before it trusts what OpenCV reports."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -19,22 +21,96 @@ JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
 def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
     """DataError for a file whose first and last bytes (``head``, ``tail``) show it cut
     short: a JPEG without its end-of-image marker (OpenCV decodes what it has of it and
-    greys the rest), a Matroska/WebM file that ends inside an element (:func:`matroska_end`:
-    FFmpeg reads the frames before the cut as the whole video when the file states no
-    duration, or no frame rate, as a browser's WebM)."""
+    greys the rest), a Matroska/WebM or FLV file that ends inside an element or a tag
+    (:func:`cut_short`)."""
     if head.startswith(JPEG_START) and not tail.rstrip(b"\x00\r\n\t ").endswith(JPEG_END):
         raise DataError("truncated JPEG (no end-of-image marker)", path)
-    if head.startswith(EBML_START):
+    if head.startswith((EBML_START, FLV_START)):
         try:
-            size, end = path.stat().st_size, matroska_end(path)
+            with open(path, "rb") as fh:
+                cut = cut_short(fh, path.stat().st_size, head, "the file")
         except OSError as exc:
             raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
-        if end is not None and end > size:
-            runs = f" that runs to byte {end:,}" if end > size + 1 else "'s header"
-            raise DataError(
-                f"truncated Matroska/WebM: the file ends at byte {size:,}, inside an element{runs}",
-                path,
+        if cut is not None:
+            raise DataError(cut, path)
+
+
+def cut_short(fh: Any, size: int, head: bytes, what: str) -> str | None:
+    """Why a Matroska/WebM or FLV file of ``size`` bytes whose first bytes are ``head``,
+    read from ``fh`` at its start (forward only: ``seek`` ahead, ``read``, ``tell``), is cut
+    short, in words naming it ``what`` ("the file"), or None when it is not or cannot be
+    judged (no such file). Matroska/WebM (:func:`matroska_walk`): it ends inside an
+    element: FFmpeg reads the frames before the cut as the whole video when the file states
+    no duration, or no frame rate, as a browser's WebM. FLV (:func:`flv_end`): it ends
+    inside a tag, or its tags end more than :data:`FLV_SLACK_S` before the duration its
+    header states (cut where a tag ends): its frames are counted by their packets (the
+    sound may run on after the last frame: :func:`counted_by_duration`)."""
+    if head.startswith(EBML_START):
+        end = matroska_walk(fh, size)
+        if end is None or end <= size:
+            return None
+        runs = f" that runs to byte {end:,}" if end > size + 1 else "'s header"
+        return f"truncated Matroska/WebM: {what} ends at byte {size:,}, inside an element{runs}"
+    if head.startswith(FLV_START):
+        walked = flv_end(fh, size)
+        if walked is None:
+            return None
+        end, last_s, stated_s = walked
+        if end > size:
+            return (
+                f"truncated FLV: {what} ends at byte {size:,}, inside a tag that runs to"
+                f" byte {end:,}"
             )
+        if last_s + FLV_SLACK_S < stated_s:
+            return (
+                f"truncated FLV: {what}'s last packet is at {last_s:.2f} s, its header states"
+                f" {stated_s:.2f} s"
+            )
+    return None
+
+
+FLV_START = b"FLV\x01"
+"""The first bytes of an FLV file (its signature and version)."""
+FLV_SLACK_S = 1.0
+"""How far (s) before the duration an FLV file's header states its last packet may lie and
+the file be whole: the last packet's own length (a frame's, a sound packet's) lies within
+it; a file cut where a tag ends, a second or more short, does not."""
+
+
+def flv_end(fh: Any, size: int) -> tuple[int, float, float] | None:
+    """Where an FLV file's tags end as they state their sizes (bytes: beyond ``size``, it
+    ends inside one), the latest time of its sound and video packets (s) and the duration
+    its metadata (``onMetaData``) states (s; 0 when none: a live recording's), walked from
+    its start in ``fh``. None where a tag is of no kind FLV has (damage, padding): not
+    judged. A last tag without the 4 bytes that repeat its size after it is whole."""
+    import struct
+
+    header = fh.read(9)
+    if len(header) < 9:
+        return size + 1, 0.0, 0.0
+    at = int.from_bytes(header[5:9], "big") + 4  # the header, then PreviousTagSize0
+    last_ms, stated = 0, 0.0
+    while at < size:
+        fh.seek(at)
+        tag = fh.read(11)
+        if len(tag) < 11:
+            return at + 11, last_ms / 1000.0, stated
+        kind, length = tag[0] & 0x1F, int.from_bytes(tag[1:4], "big")
+        if kind not in (8, 9, 18):  # sound, video, script data
+            return None
+        if kind == 18 and not stated and length < 1 << 16:
+            data = fh.read(length)
+            found = data.find(b"\x00\x08duration\x00")  # an AMF0 key, then a number
+            if found >= 0 and len(data) >= found + 19:
+                (value,) = struct.unpack(">d", data[found + 11 : found + 19])
+                stated = value if math.isfinite(value) and value > 0 else 0.0
+        else:
+            last_ms = max(last_ms, int.from_bytes(tag[4:7], "big") | tag[7] << 24)
+        end = at + 11 + length
+        if end > size:
+            return end, last_ms / 1000.0, stated
+        at = end + 4
+    return min(at, size), last_ms / 1000.0, stated
 
 
 _SOUND_STARTS = {
@@ -137,11 +213,11 @@ def _matroska_track_types(fh: Any, size: int) -> set[int]:
 def counted_by_duration(head: bytes) -> bool:
     """Whether a video (its first bytes ``head``) states no frame count, so that OpenCV
     counts its duration (its longest track's) at its frame rate, and a cut short file
-    shows otherwise than by that count: Matroska/WebM (its elements state their sizes:
-    :func:`refuse_cut`) and MPEG-TS (``.ts``, a camcorder's ``.mts``/``.m2ts``: its
-    duration is read from the packets there are, cut short or not). Not MP4/MOV and AVI,
-    which state their frames, nor FLV, whose header states its duration."""
-    if head.startswith(EBML_START):
+    shows otherwise than by that count: Matroska/WebM and FLV (their elements and tags state
+    their sizes, an FLV's header its duration: :func:`cut_short`) and MPEG-TS (``.ts``, a
+    camcorder's ``.mts``/``.m2ts``: its duration is read from the packets there are, cut
+    short or not). Not MP4/MOV and AVI, which state their frames."""
+    if head.startswith((EBML_START, FLV_START)):
         return True
     return any(
         len(head) > offset + 2 * step and all(head[offset + k * step] == 0x47 for k in range(3))
@@ -174,32 +250,42 @@ def _ebml_number(fh: Any, keep_marker: bool) -> tuple[int, bool]:
 
 
 def matroska_end(path: Path) -> int | None:
-    """Where a Matroska/WebM file's data ends as its elements state it (bytes): the end of
-    its segment when the segment states its size; when it does not (a recording written as
-    it went, as a browser's MediaRecorder writes it), the end of its last element, walked
-    from the start (into clusters that do not state their size either, past the others
-    whole). Beyond the file's size, the file is truncated. None where the walk meets
-    anything it cannot read (bytes that are no element: padding, damage): not judged."""
-    size = path.stat().st_size
-    end = 0
+    """Where a Matroska/WebM file's data ends as its elements state it (bytes;
+    :func:`matroska_walk` of the file): beyond the file's size, the file is truncated."""
     with open(path, "rb") as fh:
-        while fh.tell() < size:
-            try:
-                ident, _ = _ebml_number(fh, True)
-                stated, unknown = _ebml_number(fh, False)
-            except EOFError:  # the file ends inside an element's header
-                return size + 1
-            except ValueError:
-                return None
-            if ident == _SEGMENT and not unknown:
-                return fh.tell() + stated
-            if ident in (_SEGMENT, _CLUSTER) and unknown:
-                end = fh.tell()  # its children follow, one by one
-                continue
-            if unknown:
-                return None  # no other element may leave its size open
-            end = fh.tell() + stated
+        return matroska_walk(fh, path.stat().st_size)
+
+
+def matroska_walk(fh: Any, size: int) -> int | None:
+    """Where the data of a Matroska/WebM file of ``size`` bytes, read from ``fh`` at its
+    start (forward only), ends as its elements state it (bytes): the end of its segment when
+    the segment states its size; when it does not (a recording written as it went, as a
+    browser's MediaRecorder writes it), the end of its last element, walked from the start
+    (into clusters that do not state their size either, past the others whole). None where
+    the walk meets anything it cannot read (bytes that are no element: padding, damage): not
+    judged."""
+    end = 0
+    while fh.tell() < size:
+        try:
+            ident, _ = _ebml_number(fh, True)
+            stated, unknown = _ebml_number(fh, False)
+        except EOFError:  # the file ends inside an element's header
+            return size + 1
+        except ValueError:
+            return None
+        at = int(fh.tell())  # the element's data
+        if ident == _SEGMENT and not unknown:
+            return at + stated
+        if ident in (_SEGMENT, _CLUSTER) and unknown:
+            end = at  # its children follow, one by one
+            continue
+        if unknown:
+            return None  # no other element may leave its size open
+        end = at + stated
+        if end < size:
             fh.seek(end)
+        else:
+            return end
     return end
 
 

@@ -9,7 +9,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from .containers import EBML_START, counted_by_duration, segment_end
+from .containers import EBML_START, FLV_START, counted_by_duration, cut_short, segment_end
 
 
 def served_whole(url: str, timeout_s: float | None = None) -> bool:
@@ -117,7 +117,8 @@ def served_whole_by_duration(url: str, timeout_s: float | None = None) -> bool:
     """Whether an HTTP(S) URL is a file whose frame count OpenCV takes from its duration
     (:func:`.containers.counted_by_duration`) and that its server gives whole, so that
     fewer frames than that count are no sign of a cut: an MPEG-TS file (its duration comes from the
-    packets there are), or a Matroska/WebM file whose segment states its size and ends
+    packets there are), an FLV file (not cut short: :func:`served_cut`, asked first), or a
+    Matroska/WebM file whose segment states its size and ends
     within the length the server states (a file cut short on the server states more).
     Its first bytes only are read."""
     answer = _served_start(url, timeout_s, 4096)
@@ -130,3 +131,65 @@ def served_whole_by_duration(url: str, timeout_s: float | None = None) -> bool:
         return False
     end = segment_end(head)
     return end is not None and end <= length
+
+
+def served_cut(url: str, timeout_s: float | None = None) -> str | None:
+    """Why a Matroska/WebM or FLV file an HTTP(S) server gives whole is cut short, in one
+    line (:func:`.containers.cut_short`: it ends inside an element or a tag, as a file here
+    is refused for), or None: not cut, no such file, or not to be asked (no length stated,
+    no answer within ``timeout_s``: FFmpeg's 30 s when None). A browser's WebM without a
+    duration states no frame count: its frames before the cut were watched as the whole
+    file. The file is read once more from its start to its end, walked as it comes (no
+    copy kept); a server that sends less than the length it states has cut it too."""
+    import http.client
+
+    try:
+        opener, bare = _ffmpeg_opener(url)
+        with opener.open(bare, timeout=timeout_s or 30.0) as answer:
+            length = (answer.headers.get("Content-Length") or "").strip()
+            head = answer.read(4)
+            if answer.status != 200 or not length.isdigit():
+                return None
+            if not head.startswith((EBML_START, FLV_START)):
+                return None
+            body = _Onward(answer, head, int(length))
+            cut = cut_short(body, int(length), head, "the served file")
+            body.seek(int(length))  # to its end: did all of it come?
+            if body.got < int(length):
+                return (
+                    f"truncated: the server sent {body.got:,} of the {int(length):,} bytes"
+                    " it stated"
+                )
+            return cut
+    except (OSError, ValueError, http.client.HTTPException):
+        return None
+
+
+class _Onward:
+    """An HTTP answer's body (its first bytes ``head`` already read, ``length`` stated) read
+    as a file that is only read onward: ``seek`` ahead reads and drops the bytes between;
+    ``got``: how many bytes came."""
+
+    def __init__(self, answer: Any, head: bytes, length: int) -> None:
+        self.answer, self.buffer, self.at = answer, head, 0
+        self.got, self.length, self.ended = len(head), length, False
+
+    def tell(self) -> int:
+        return self.at
+
+    def read(self, n: int) -> bytes:
+        out = self.buffer[:n]
+        self.buffer = self.buffer[n:]
+        while len(out) < n:
+            more = b"" if self.ended else self.answer.read(min(n - len(out), 1 << 16))
+            if not more:
+                self.ended = True
+                break
+            self.got += len(more)
+            out += more
+        self.at += len(out)
+        return out
+
+    def seek(self, to: int) -> None:
+        while self.at < to and not self.ended:
+            self.read(min(to - self.at, 1 << 16))

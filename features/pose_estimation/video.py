@@ -51,7 +51,7 @@ from .containers import (  # noqa: E402
     sound_only,
 )
 from .model import model_version  # noqa: E402
-from .served import served_whole, served_whole_by_duration  # noqa: E402
+from .served import served_cut, served_whole, served_whole_by_duration  # noqa: E402
 from .smoothing import AUX_FILTER, IMAGE_FILTER, VISIBILITY_ALPHA, WORLD_FILTER  # noqa: E402
 from .tracker import FramePose, PoseEstimator  # noqa: E402
 
@@ -803,8 +803,10 @@ def stream_poses(
     given (a file served over the network: :func:`served_file_rate`). Stops at the end of
     the stream, after ``max_frames``, or when the consumer stops iterating. A file, or a
     file served over the network (``fps`` given), that ends before the frame count its
-    container states raises DataError, as :func:`iter_frames` does. ``timeout_s``: how long
-    a stream URL may take to open (FFmpeg's default: 30 s). ``pace``: called with each
+    container states raises DataError, as :func:`iter_frames` does; so does a served
+    Matroska/WebM or FLV file cut short (:func:`.served.served_cut`), as a file here is.
+    ``timeout_s``: how long a stream URL may take to open (FFmpeg's default: 30 s).
+    ``pace``: called with each
     frame's index and ``video_time_s`` once it is decoded and before it is read (its
     ``read_at``) and its pose estimated; it may wait (a file played at its own rate) and
     returns False to stop the stream there.
@@ -830,6 +832,9 @@ def stream_poses(
             ok, bgr = cap.retrieve() if ok else (False, None)
             read_at = time.perf_counter()
             if not ok or bgr is None:  # read to its end: all of it
+                cut = served_cut(str(source), timeout_s) if served else None
+                if cut is not None:  # a WebM or FLV cut on the server: it ended there
+                    raise DataError(cut, str(source))
                 if served and index == 0 and declared:
                     raise DataError(NONE_SERVED.format(declared), str(source))
                 span = span_s(times, fps) if fps else None
