@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import struct
+import time
 from pathlib import Path
 
 import numpy as np
@@ -225,6 +226,44 @@ def test_a_served_webm_whose_server_hangs_up_mid_file_is_refused_as_truncated(
             capsys,
             f"{url}: truncated: the server sent {size // 2:,} of the {size:,} bytes it stated",
         )
+
+
+class _SlowToProbes(_Quiet):
+    """Gives FFmpeg its files at once, and any other client (the probes, Python's urllib)
+    the first 4,096 bytes at once and the rest 200 bytes at a time, 0.15 s apart."""
+
+    def do_GET(self) -> None:  # noqa: N802 (the base's name)
+        if not self.headers.get("User-Agent", "").startswith("Python-urllib"):
+            super().do_GET()
+            return
+        data = Path(self.translate_path(self.path)).read_bytes()
+        self.send_response(200)
+        self.send_header("Content-Length", str(len(data)))
+        self.end_headers()
+        self.wfile.write(data[:4096])
+        for at in range(4096, len(data), 200):
+            self.wfile.flush()
+            time.sleep(0.15)
+            self.wfile.write(data[at : at + 200])
+
+
+def test_a_served_file_read_again_slowly_at_its_end_is_no_stall(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A served WebM read again at its end for a cut, slowly (its 9 kB over about 4 s; no
+    part more than 0.15 s after the one before), with ``--stall 1.5``: watched whole, exit 0,
+    not "the stream stalled: no frame for 1.5 s" (no frame comes while it is read)."""
+    folder = tmp_path / "served"
+    folder.mkdir()
+    path = _encode(folder / "long.webm", [40 * k for k in range(250)], "libvpx", 25, {"live": "1"})
+    assert path.stat().st_size > 4096 + 200 * 15  # more than 2 s of parts
+    with _serving(folder, _SlowToProbes) as address:
+        capsys.readouterr()
+        url = f"{address}/long.webm"
+        code = main(["watch", url, "--db", str(case_base), "--speed", "0", "--stall", "1.5"])
+        got = capsys.readouterr()
+    assert code == 0, got.err
+    assert [json.loads(line)["end_frame"] for line in got.out.splitlines()][-1] == 250
 
 
 # --- FLV: sound running on after the last frame, cut short ---------------------------------

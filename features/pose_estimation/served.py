@@ -6,6 +6,7 @@ are read (:mod:`features.pose_estimation.containers` reads what they say)."""
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -133,14 +134,17 @@ def served_whole_by_duration(url: str, timeout_s: float | None = None) -> bool:
     return end is not None and end <= length
 
 
-def served_cut(url: str, timeout_s: float | None = None) -> str | None:
+def served_cut(
+    url: str, timeout_s: float | None = None, alive: Callable[[], None] | None = None
+) -> str | None:
     """Why a Matroska/WebM or FLV file an HTTP(S) server gives whole is cut short, in one
     line (:func:`.containers.cut_short`: it ends inside an element or a tag, as a file here
     is refused for), or None: not cut, no such file, or not to be asked (no length stated,
     no answer within ``timeout_s``: FFmpeg's 30 s when None). A browser's WebM without a
     duration states no frame count: its frames before the cut were watched as the whole
     file. The file is read once more from its start to its end, walked as it comes (no
-    copy kept); a server that sends less than the length it states has cut it too."""
+    copy kept); a server that sends less than the length it states has cut it too.
+    ``alive``: called as each part of the file comes (a long file read again is no stall)."""
     import http.client
 
     try:
@@ -152,7 +156,7 @@ def served_cut(url: str, timeout_s: float | None = None) -> str | None:
                 return None
             if not head.startswith((EBML_START, FLV_START)):
                 return None
-            body = _Onward(answer, head, int(length))
+            body = _Onward(answer, head, int(length), alive)
             cut = cut_short(body, int(length), head, "the served file")
             body.seek(int(length))  # to its end: did all of it come?
             if body.got < int(length):
@@ -170,9 +174,12 @@ class _Onward:
     as a file that is only read onward: ``seek`` ahead reads and drops the bytes between;
     ``got``: how many bytes came."""
 
-    def __init__(self, answer: Any, head: bytes, length: int) -> None:
+    def __init__(
+        self, answer: Any, head: bytes, length: int, alive: Callable[[], None] | None
+    ) -> None:
         self.answer, self.buffer, self.at = answer, head, 0
         self.got, self.length, self.ended = len(head), length, False
+        self.alive = alive
 
     def tell(self) -> int:
         return self.at
@@ -187,6 +194,8 @@ class _Onward:
                 break
             self.got += len(more)
             out += more
+            if self.alive is not None:
+                self.alive()
         self.at += len(out)
         return out
 

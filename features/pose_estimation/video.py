@@ -796,6 +796,7 @@ def stream_poses(
     fps: float | None = None,
     timeout_s: float | None = None,
     pace: Callable[[int, float], bool] | None = None,
+    alive: Callable[[], None] | None = None,
 ) -> Iterator[StreamFrame]:
     """Poses frame by frame from a webcam index, a stream URL or a video path.
 
@@ -809,7 +810,8 @@ def stream_poses(
     ``pace``: called with each
     frame's index and ``video_time_s`` once it is decoded and before it is read (its
     ``read_at``) and its pose estimated; it may wait (a file played at its own rate) and
-    returns False to stop the stream there.
+    returns False to stop the stream there. ``alive``: called while a served file is read
+    again at its end (:func:`.served.served_cut`): no frame comes meanwhile.
     """
     cap, fps, declared, served = _open_source(source, fps, timeout_s)  # served: over a network
     est = estimator or PoseEstimator(smoothing=smoothing)
@@ -832,7 +834,7 @@ def stream_poses(
             ok, bgr = cap.retrieve() if ok else (False, None)
             read_at = time.perf_counter()
             if not ok or bgr is None:  # read to its end: all of it
-                cut = served_cut(str(source), timeout_s) if served else None
+                cut = served_cut(str(source), timeout_s, alive) if served else None
                 if cut is not None:  # a WebM or FLV cut on the server: it ended there
                     raise DataError(cut, str(source))
                 if served and index == 0 and declared:

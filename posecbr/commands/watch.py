@@ -203,13 +203,27 @@ class Pacer:
         return not self.stop.wait(max(0.0, self.until - now))
 
 
+class Alive:
+    """When the stream last showed it was still at work between frames (a served file read
+    again at its end: ``stream_poses``'s ``alive``), ``time.perf_counter()``; calling it
+    stamps now. Until ``--stall`` seconds after it, the stream is not stalled."""
+
+    def __init__(self) -> None:
+        self.at = 0.0
+
+    def __call__(self) -> None:
+        self.at = time.perf_counter()
+
+
 class _Reader:
     """A stream's frames read in a thread into a small queue of (kind, item): ("frame", f),
     then ("end", None) or ("error", exc). :meth:`close` stops it (and the ``pacer`` holding
     the stream back, if any) and waits up to :data:`JOIN_S` for the frame in hand."""
 
-    def __init__(self, frames: Iterator[Any], pacer: Pacer | None = None) -> None:
-        self.frames, self.pacer = frames, pacer
+    def __init__(
+        self, frames: Iterator[Any], pacer: Pacer | None = None, alive: Alive | None = None
+    ) -> None:
+        self.frames, self.pacer, self.alive = frames, pacer, alive
         self.box: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=8)
         self.stop = threading.Event()
         self.thread = threading.Thread(target=self._read, name="posecbr-watch-reader", daemon=True)
@@ -241,10 +255,15 @@ class _Reader:
     def get(self, stall_s: float, where: str) -> tuple[str, Any]:
         """The next item; DataError naming ``where`` when none comes for ``stall_s`` seconds
         beyond the time the frame in hand is due (a file's frames held back by the pacer are
-        not a stall, however long the gap between two of them)."""
+        not a stall, however long the gap between two of them) and the stream's last sign of
+        work (:class:`Alive`)."""
         asked = time.perf_counter()
         while True:
-            quiet_since = max(asked, self.pacer.until if self.pacer is not None else 0.0)
+            quiet_since = max(
+                asked,
+                self.pacer.until if self.pacer is not None else 0.0,
+                self.alive.at if self.alive is not None else 0.0,
+            )
             left = quiet_since + stall_s - time.perf_counter()
             if left <= 0:
                 raise DataError(f"the stream stalled: no frame for {stall_s:g} s", where)
@@ -261,15 +280,19 @@ class _Reader:
 
 
 def frames_in_background(
-    frames: Iterator[Any], stall_s: float, pacer: Pacer | None = None, where: str = "stream"
+    frames: Iterator[Any],
+    stall_s: float,
+    pacer: Pacer | None = None,
+    where: str = "stream",
+    alive: Alive | None = None,
 ) -> Generator[Any, None, None]:
     """The stream's frames, read in a thread (:class:`_Reader`); ``pacer``: the one that
     holds ``frames`` back (a file played at its own rate, as a camera delivers), stopped
     with the reader. Raises DataError naming ``where`` (the source) when no frame arrives
-    for ``stall_s`` seconds (beyond the frame's due time). Closed (or ended), it stops the
-    reader and waits for it: a thread left inside OpenCV or onnxruntime while Python shuts
-    down aborts the process (exit 134)."""
-    reader = _Reader(frames, pacer)
+    for ``stall_s`` seconds (beyond the frame's due time and ``alive``'s stamp). Closed (or
+    ended), it stops the reader and waits for it: a thread left inside OpenCV or onnxruntime
+    while Python shuts down aborts the process (exit 134)."""
+    reader = _Reader(frames, pacer, alive)
     try:
         while True:
             kind, item = reader.get(stall_s, where)
@@ -335,10 +358,16 @@ def run(args: argparse.Namespace) -> int:
         fps = None if isinstance(source, int) else served_file_rate(source, args.stall)
     is_file = fps is not None
     pacer = Pacer(fps, args.speed) if fps and args.speed > 0 else None
+    alive = Alive()  # a served file read again at its end for a cut: no stall
     poses = stream_poses(
-        source, max_frames=args.max_frames, fps=fps, timeout_s=args.stall, pace=pacer
+        source,
+        max_frames=args.max_frames,
+        fps=fps,
+        timeout_s=args.stall,
+        pace=pacer,
+        alive=alive,
     )
-    frames = frames_in_background(poses, args.stall, pacer, args.source)
+    frames = frames_in_background(poses, args.stall, pacer, args.source, alive)
     watcher = Watcher(clf, judge, args, fps)
     try:
         with (
