@@ -266,6 +266,33 @@ def test_a_served_file_read_again_slowly_at_its_end_is_no_stall(
     assert [json.loads(line)["end_frame"] for line in got.out.splitlines()][-1] == 250
 
 
+def test_a_pose_model_slow_to_load_is_no_stall(
+    case_base: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The pose model taking longer to load than ``--stall`` (each of its two parts 1 s here;
+    on a busy machine it took more than 8 s): ``watch`` of a whole file said "the stream
+    stalled: no frame for 0.5 s", exit 1 (and the process could abort at exit, a thread still
+    loading the model). The model is loaded before the stall clock runs: watched whole."""
+    import features.pose_estimation.tracker as tracker
+
+    loading = tracker.make_session
+
+    def slow(*args: object, **kwargs: object) -> object:
+        time.sleep(1.0)
+        return loading(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(tracker, "make_session", slow)
+    video = _live_webm(tmp_path / "clip.webm")
+    capsys.readouterr()
+    code = main(["watch", str(video), "--db", str(case_base), "--speed", "0", "--stall", "0.5"])
+    got = capsys.readouterr()
+    assert code == 0, got.err
+    assert [json.loads(line)["end_frame"] for line in got.out.splitlines()][-1] == 100
+
+
 # --- FLV: sound running on after the last frame, cut short ---------------------------------
 
 

@@ -339,7 +339,12 @@ def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[threading
 
 
 def run(args: argparse.Namespace) -> int:
-    from features.pose_estimation import open_video, served_file_rate, stream_poses
+    from features.pose_estimation import (
+        PoseEstimator,
+        open_video,
+        served_file_rate,
+        stream_poses,
+    )
     from features.pose_estimation.overlay import check_encoded, check_mp4_size
 
     from .segment import judge_named, load_stored
@@ -359,8 +364,12 @@ def run(args: argparse.Namespace) -> int:
     is_file = fps is not None
     pacer = Pacer(fps, args.speed) if fps and args.speed > 0 else None
     alive = Alive()  # a served file read again at its end for a cut: no stall
+    # the pose model loaded here, before the stall clock runs: loading it (seconds on a slow
+    # or busy machine) is no stall of the stream
+    estimator = PoseEstimator(smoothing=True)
     poses = stream_poses(
         source,
+        estimator=estimator,
         max_frames=args.max_frames,
         fps=fps,
         timeout_s=args.stall,
