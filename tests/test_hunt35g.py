@@ -424,3 +424,25 @@ def test_watch_of_a_served_flv_reads_it_whole_and_refuses_it_cut(
             argv = ["watch", url, "--db", str(case_base), "--speed", "0"]
             served = words.replace("the file", "the served file")
             refused(argv, tmp_path, capsys, f"{url}: {served}")
+
+
+def test_an_flv_is_a_video_to_every_command_that_takes_one(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``extract clip.flv`` read it, but ``segment clip.flv`` (and ``describe``, ``classify``)
+    said "unknown clip format (expected ... a video: .3gp, ... .wmv)", and ``extract`` of a
+    folder of FLV files "no videos or images found". Now the folder's FLV is extracted (its
+    120 frames) and ``segment`` takes it as a video (its grey frames hold nobody to follow)."""
+    from features.poses import load_pose
+
+    folder = tmp_path / "videos"
+    folder.mkdir()
+    clip = _flv(folder / "clip.flv", 120, 4.0)
+    out = tmp_path / "poses"
+    assert main(["extract", str(folder), "--out", str(out)]) == 0, capsys.readouterr().err
+    (written,) = out.glob("*.npz")
+    assert load_pose(written).n_frames == 120
+    capsys.readouterr()
+    main(["segment", str(clip), "--db", str(case_base)])
+    err = capsys.readouterr().err
+    assert "unknown clip format" not in err and "no person in view" in err, err
