@@ -446,3 +446,61 @@ def test_an_flv_is_a_video_to_every_command_that_takes_one(
     main(["segment", str(clip), "--db", str(case_base)])
     err = capsys.readouterr().err
     assert "unknown clip format" not in err and "no person in view" in err, err
+
+
+# --- FLV and MPEG-TS files of sound alone ----------------------------------------------------
+
+SOUND_ONLY = {
+    # file name: (container, codec, sample format, samples a packet, what the line calls it);
+    # the M2TS (a Blu-ray's layout) holds AC-3: its other sound is "private data", not judged
+    "radio.flv": ("flv", "libmp3lame", "s16p", 1152, "an FLV file of sound alone"),
+    "radio.ts": ("mpegts", "libmp3lame", "s16p", 1152, "an MPEG-TS file of sound alone"),
+    "radio-aac.ts": ("mpegts", "aac", "fltp", 1024, "an MPEG-TS file of sound alone"),
+    "radio.m2ts": ("mpegts", "ac3", "fltp", 1536, "an MPEG-TS file of sound alone"),
+}
+
+
+def _sound_in(path: Path) -> Path:
+    """About a second of silence (44.1 kHz, mono) in the container the table names."""
+    av = pytest.importorskip("av", reason="PyAV writes the sound files")
+    container, codec, fmt, n, _kind = SOUND_ONLY[path.name]
+    options = {"mpegts_m2ts_mode": "1"} if path.suffix == ".m2ts" else {}
+    out = av.open(str(path), "w", format=container, options=options)
+    stream = out.add_stream(codec, rate=44100)
+    dtype = np.int16 if fmt.startswith("s16") else np.float32
+    for k in range(44100 // n):
+        frame = av.AudioFrame.from_ndarray(np.zeros((1, n), dtype), format=fmt, layout="mono")
+        frame.sample_rate, frame.pts = 44100, k * n
+        for packet in stream.encode(frame):
+            out.mux(packet)
+    for packet in stream.encode():
+        out.mux(packet)
+    out.close()
+    return path
+
+
+@pytest.mark.parametrize("name", list(SOUND_ONLY))
+def test_an_flv_or_mpeg_ts_of_sound_alone_is_refused_as_sound(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An FLV or MPEG-TS (M2TS) file holding sound alone (a radio recording) given to
+    ``extract``: it said "not a video OpenCV can decode (unknown format, truncated or
+    corrupt)", as the Ogg with a skeleton did. Now "sound alone, no video (an FLV file of
+    sound alone)", one line, exit 1, nothing written."""
+    sound = _sound_in(tmp_path / name)
+    argv = ["extract", str(sound), "--out", str(tmp_path / "poses")]
+    line = refused(argv, tmp_path, capsys, f"{sound}: sound alone, no video")
+    assert line.endswith(f"({SOUND_ONLY[name][4]})"), line
+
+
+def test_an_flv_or_mpeg_ts_with_video_is_not_sound(tmp_path: Path) -> None:
+    """Their videos (FLV with MP3 sound; MPEG-TS of MPEG-2 video) are not called sound."""
+    from features.pose_estimation.containers import sound_only
+
+    flv = _flv(tmp_path / "clip.flv", 30, 1.0)
+    pytest.importorskip("av")
+    from tests.test_hunt34h import _with_longer_audio
+
+    ts = _with_longer_audio(tmp_path / "clip.ts", 30, 1.0)
+    for path in (flv, ts):
+        assert sound_only(path, path.read_bytes()[:512]) is None

@@ -128,8 +128,8 @@ _TRACKS, _TRACK_ENTRY, _TRACK_TYPE = 0x1654AE6B, 0xAE, 0x83
 
 def sound_only(path: Path, head: bytes) -> str | None:
     """What a file OpenCV cannot open as a video is when it holds sound and no video (a
-    WAVE, FLAC, MP3, AAC or Ogg sound file, the Ogg with a skeleton or not; an MP4/M4A/MOV
-    or Matroska/WebM file whose only tracks are sound), else None (not told apart from
+    WAVE, FLAC, MP3, AAC or Ogg sound file, the Ogg with a skeleton or not; an MP4/M4A/MOV,
+    Matroska/WebM, FLV or MPEG-TS file whose only tracks are sound), else None (not told apart from
     damage: not judged)."""
     import mmap
 
@@ -150,6 +150,12 @@ def sound_only(path: Path, head: bytes) -> str | None:
                 fh.seek(0)
                 only = _matroska_track_types(fh, len(data)) == {2}
                 return "a Matroska/WebM file of sound alone" if only else None
+            if head.startswith(FLV_START):
+                return "an FLV file of sound alone" if _flv_sound_alone(data) else None
+            if counted_by_duration(head):  # MPEG-TS (Matroska and FLV are asked above)
+                types = _ts_stream_types(data[:_TS_LOOK])
+                only = bool(types) and types <= _TS_SOUND
+                return "an MPEG-TS file of sound alone" if only else None
     except (OSError, ValueError):
         return None
     return None
@@ -179,6 +185,65 @@ def _ogg_sound_alone(data: Any) -> bool:
             return False
         at += 27 + len(lacing) + sum(lacing)
     return kinds == {"sound"}
+
+
+def _flv_sound_alone(data: Any) -> bool:
+    """Whether an FLV file (its bytes ``data``) holds sound and no video: its header says it
+    has no video and its first tags (up to :data:`_FLV_LOOK` of them) are sound or script
+    data, one of them sound."""
+    if len(data) < 13 or data[4] & 0x01:
+        return False
+    at, kinds = int.from_bytes(data[5:9], "big") + 4, set()
+    for _ in range(_FLV_LOOK):
+        if at + 11 > len(data):
+            break
+        kinds.add(data[at] & 0x1F)
+        at += 11 + int.from_bytes(data[at + 1 : at + 4], "big") + 4
+    return 8 in kinds and kinds <= {8, 18}
+
+
+_FLV_LOOK = 64
+"""How many of an FLV file's first tags :func:`_flv_sound_alone` reads."""
+_TS_LOOK = 1 << 16
+"""How much of an MPEG-TS file's start (bytes) :func:`_ts_stream_types` reads for its
+programs' tables (written first, and every tenth of a second or so)."""
+_TS_SOUND = frozenset({0x03, 0x04, 0x0F, 0x11, 0x1C, 0x81, 0x87})
+"""The MPEG-TS stream types of sound: MPEG-1 and -2 audio, AAC (ADTS, LATM, raw), AC-3,
+E-AC-3. Private data (0x06: DVB's AC-3, Opus, subtitles...) is not judged."""
+
+
+def _ts_stream_types(data: Any) -> set[int]:
+    """The stream types an MPEG-TS file's program tables (its PAT, then each PMT) list, read
+    from its first bytes ``data`` (188-byte packets, or M2TS's 192); empty where none is
+    found whole in one packet."""
+    step, start = (192, 4) if data[4:5] == b"\x47" and data[:1] != b"\x47" else (188, 0)
+    tables: dict[int, bytes] = {}
+    for at in range(start, len(data) - 187, step):
+        packet = data[at : at + 188]
+        if packet[0] != 0x47 or not packet[1] & 0x40:  # no sync, or no section starts here
+            continue
+        pid = (packet[1] & 0x1F) << 8 | packet[2]
+        body = 4 + (1 + packet[4] if packet[3] & 0x20 else 0)  # past an adaptation field
+        if body >= 188:
+            continue
+        section = packet[body + 1 + packet[body] :]  # past the pointer field
+        if len(section) >= 3 and pid not in tables:
+            tables[pid] = bytes(section[: 3 + ((section[1] & 0x0F) << 8 | section[2])])
+    pat = tables.get(0, b"")
+    if len(pat) < 12 or pat[0] != 0:
+        return set()
+    types: set[int] = set()
+    for i in range(8, len(pat) - 4, 4):
+        if pat[i : i + 2] == b"\x00\x00":  # the network's table, no program
+            continue
+        pmt = tables.get((pat[i + 2] & 0x1F) << 8 | pat[i + 3], b"")
+        if len(pmt) < 16 or pmt[0] != 2:
+            return set()
+        j = 12 + ((pmt[10] & 0x0F) << 8 | pmt[11])  # past the program's descriptors
+        while j + 5 <= len(pmt) - 4:  # each stream: its type, PID and descriptors
+            types.add(pmt[j])
+            j += 5 + ((pmt[j + 3] & 0x0F) << 8 | pmt[j + 4])
+    return types
 
 
 def _all(data: Any, word: bytes) -> Iterator[int]:
