@@ -38,6 +38,17 @@ def piece_name(source: str, frames: Sequence[int] | None, origin: str | None = N
     return f"{source} frames {frames[0]}-{frames[1] - 1}" + (f" of {origin}" if origin else "")
 
 
+def piece_fields(frames: Sequence[int] | None) -> dict[str, Any]:
+    """The JSON fields of a clip that is a piece of its file (``classify --json``): its frames
+    as ``start_frame`` and ``end_frame`` (end exclusive), the names ``reps``, ``segment`` and
+    ``describe`` give a stretch, and as ``frames`` ``[start, end]``, the name kept from before
+    (elsewhere ``frames`` is a count); none for a whole file."""
+    if frames is None:
+        return {}
+    start, end = int(frames[0]), int(frames[1])
+    return {"frames": [start, end], "start_frame": start, "end_frame": end}
+
+
 def frame_array(frames: Sequence[tuple[int | None, int | None]]) -> np.ndarray:
     """``(n, 2)`` the frame ranges ``frames`` (start, end exclusive), ``(-1, -1)`` where not
     known."""

@@ -25,7 +25,7 @@ from features.poses import PoseSequence
 from features.progress import progress
 from features.text import shown
 
-from .casebase import frames_of, piece_name, skeleton_of, subject_of
+from .casebase import frames_of, piece_fields, piece_name, skeleton_of, subject_of
 from .estimator import CaseBaseClassifier, Solved, too_short, unusable
 from .explain import Explanation
 from .retain import RetainDecision, decide_retention, record_retention
@@ -67,8 +67,7 @@ class Classification:
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"clip": self.source}
-        if self.frames is not None:
-            out["frames"] = list(self.frames)
+        out.update(piece_fields(self.frames))
         if self.frames is not None and self.origin:
             out["origin"] = self.origin  # the recording whose frames ``frames`` counts
         if self.made_from:
@@ -213,7 +212,7 @@ def summarise(results: Sequence[Classification], target: str = "label") -> dict[
         "recall": recall,
         "wrong": [
             {"clip": r.source, "label": r.label, "true_label": r.true_label}
-            | ({} if r.frames is None else {"frames": list(r.frames)})
+            | piece_fields(r.frames)
             | ({"origin": r.origin} if r.frames is not None and r.origin else {})
             for r in labelled
             if r.true_label != r.label

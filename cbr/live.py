@@ -102,9 +102,10 @@ class LiveSegment:
         return {
             **fields,
             "unknown": unknown_reason(self.label, self.explanation),
-            "repetitions": self.repetitions,
+            "repetitions": self.repetitions,  # the count: kept (reps: the list)
             "explanation": self.explanation,
             "novelty": novelty,
+            "count": self.repetitions,  # as reps --json names its count
         }
 
 

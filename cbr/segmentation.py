@@ -164,10 +164,11 @@ class Segment:
         return {
             **span_fields(self.start_frame, self.end_frame, self.label, self.confidence, fps),
             "unknown": unknown_reason(self.label, self.explanation),
-            "repetitions": len(self.repetitions),
+            "repetitions": len(self.repetitions),  # the count: kept (reps: the list)
             "explanation": self.explanation,
             "novelty": round(self.novelty, 3) if math.isfinite(self.novelty) else None,
             "repetition_frames": [[r.start_frame, r.end_frame] for r in self.repetitions],
+            "count": len(self.repetitions),  # as reps --json names its count
         }
 
 

@@ -286,11 +286,11 @@ class RepetitionCount:
     """The repetitions of a clip.
 
     period_s: the movement's full cycle (None when it does not repeat); periodicity: the
-    autocorrelation at that period (1 = exact repetition); alternating: one repetition per
-    side; moving: the joint angles (or the hips' height) that carry the movement, most first;
-    partial: no repetition is whole, but the movement reached a far point cut off by the
-    clip's start or end (part of one repetition: the way down of a squat), which does not
-    count (:func:`_whole_only`).
+    autocorrelation at that period (1 = exact repetition; ``to_dict``: None without a period);
+    alternating: one repetition per side; moving: the joint angles (or the hips' height) that
+    carry the movement, most first; partial: no repetition is whole, but the movement reached a
+    far point cut off by the clip's start or end (part of one repetition: the way down of a
+    squat), which does not count (:func:`_whole_only`).
     """
 
     repetitions: tuple[Repetition, ...]
@@ -311,7 +311,8 @@ class RepetitionCount:
             "count": self.count,
             "repetitions": [r.to_dict(self.fps) for r in self.repetitions],
             "period_s": None if self.period_s is None else round(self.period_s, 3),
-            "periodicity": round(self.periodicity, 3),
+            # at no period (nothing repeats) there is no autocorrelation to give: null, not 0
+            "periodicity": None if self.period_s is None else round(self.periodicity, 3),
             "alternating": self.alternating,
             "moving": list(self.moving),
             "partial": self.partial,

@@ -106,8 +106,15 @@ class DADResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (NaN scores become None); the clip is ``clip``, as in ``classify`` and
-        ``reps``, and ``source``, the name it had first."""
-        out = {"clip": self.source, **asdict(self)}
+        ``reps``, and ``source``, the name it had first; ``frames`` its frame count after
+        ``fps``, as ``describe``, ``reps`` and ``segment`` give it (``duration_s`` is that count
+        over ``fps``)."""
+        fields = asdict(self)
+        out: dict[str, Any] = {"clip": self.source}
+        for key, value in fields.items():
+            out[key] = value
+            if key == "fps":
+                out["frames"] = int(round(self.duration_s * self.fps))
         for act in out["activities"]:
             if not np.isfinite(act["score"]):
                 act["score"] = None

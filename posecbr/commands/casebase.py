@@ -383,7 +383,9 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
             "active": bool(a.active[i]),
             "subject": a.subjects[i],
             "source": a.sources[i],
-            "frames": list(a.frame_ranges[i]),
+            "frames": list(a.frame_ranges[i]),  # [start, end]: kept; elsewhere a count
+            "start_frame": a.frame_ranges[i][0],
+            "end_frame": a.frame_ranges[i][1],
         }
         for i in range(len(a.ids))
     ]

@@ -6,12 +6,13 @@ its activities, judged by the case base's own calibration), with its start and e
 and frames, a confidence, the number of repetitions and a short explanation. A case base of
 windows (``posecbr train ... --split windows``) matches how the recording's windows are cut.
 
-``--json`` prints ``{"recording", "fps", "frames", "segments": [{"start_s", "end_s", "start_frame",
-"end_frame", "label" (null when unknown), "confidence", "unknown" (why, or null),
-"repetitions", "explanation", "novelty", "repetition_frames"}]}`` (a list of those for
-several recordings; end frames exclusive); ``--plot`` draws the segments
-over the fluent timeline; ``--overlay`` writes a video recording with the stick figure, the
-current activity and its repetition count on every frame (as ``extract --overlay`` does).
+``--json`` prints ``{"recording", "fps", "frames", "segments": [{"start_s", "end_s",
+"start_frame", "end_frame", "label" (null when unknown), "confidence", "unknown" (why, or null),
+"repetitions", "explanation", "novelty", "repetition_frames", "count"}]}`` (a list of those for
+several recordings; end frames exclusive; ``count``: the number of repetitions, as
+``reps --json`` names it, and as ``repetitions`` gives it, kept from before); ``--plot`` draws the
+segments over the fluent timeline; ``--overlay`` writes a video recording with the stick figure,
+the current activity and its repetition count on every frame (as ``extract --overlay`` does).
 """
 
 from __future__ import annotations

@@ -11,7 +11,8 @@ fluents that hold now are drawn on the frames (``--out video.mp4`` writes them, 
 ``--show`` opens a window where OpenCV has one).
 One JSON line per finished segment goes to stdout, as it finishes (``start_s``, ``end_s``,
 ``start_frame``, ``end_frame``, ``label``, null when unknown, ``confidence``, ``unknown``,
-``repetitions``, ``explanation``, ``novelty``, as ``posecbr segment --json`` gives them). At
+``repetitions``, ``explanation``, ``novelty``, ``count`` (the number of repetitions, as
+``repetitions`` gives it too), as ``posecbr segment --json`` gives them). At
 the end the latency from reading a frame to having its label is printed on stderr (median,
 95th percentile, worst).
 

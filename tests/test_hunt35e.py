@@ -1,0 +1,139 @@
+"""A machine user's walk through every ``--json``: the same concept under the same key
+(a stretch of frames as ``start_frame``/``end_frame``, a repetition count as ``count``),
+values that are not known ``null``, checked against values worked out independently."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from features.poses import save_pose
+from posecbr.cli import main
+from tests.badinput import small_case_base
+from tests.moves import clip
+
+
+def strict(text: str) -> Any:
+    """``text`` parsed as strict JSON: NaN, Infinity and -Infinity refused."""
+
+    def refuse(token: str) -> object:
+        raise ValueError(f"not strict JSON: {token}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+@pytest.fixture(scope="module")
+def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return small_case_base(tmp_path_factory.mktemp("cb"))
+
+
+def test_classify_json_gives_a_piece_start_frame_and_end_frame(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A clip that is a piece of its file (a labels CSV's start,end) was given as
+    ``"frames": [start, end]``, where every other command's ``frames`` is a count: it now
+    also has ``start_frame`` and ``end_frame`` (end exclusive), as reps, segment and describe
+    name a stretch, in the results and in the summary's wrong clips; ``frames`` is kept. A
+    whole file has none of the three."""
+    rec = save_pose(clip("squat", 10.0), tmp_path / "squat.npz")  # 300 frames
+    csv = tmp_path / "pieces.csv"
+    # no activity of the case base is a squat: both pieces are answered wrong
+    csv.write_text("path,label,start,end\nsquat.npz,squat,30,150\nsquat.npz,squat,150,291\n")
+    assert main(["classify", str(csv), "--db", str(case_base), "--json"]) == 0
+    doc = strict(capsys.readouterr().out)
+    pieces = [(30, 150), (150, 291)]  # the rows written above
+    got = [(r["start_frame"], r["end_frame"]) for r in doc["results"]]
+    assert got == pieces
+    assert [r["frames"] for r in doc["results"]] == [list(p) for p in pieces]  # kept
+    wrong = doc["summary"]["wrong"]
+    assert [(w["start_frame"], w["end_frame"], w["frames"]) for w in wrong] == [
+        (a, b, [a, b]) for a, b in pieces
+    ]
+    assert main(["classify", str(rec), "--db", str(case_base), "--json"]) == 0
+    whole = strict(capsys.readouterr().out)["results"][0]
+    assert not {"frames", "start_frame", "end_frame"} & set(whole), whole
+
+
+def test_casebase_list_json_gives_each_case_start_frame_and_end_frame(
+    case_base: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``casebase list --json`` gave each case's frames in its recording as ``"frames":
+    [start, end]`` alone: ``start_frame`` and ``end_frame`` now, ``frames`` kept. The small
+    case base holds whole clips: each case is frames 0 to its file's frame count, read here
+    from the file itself."""
+    assert main(["casebase", "list", "--db", str(case_base), "--json"]) == 0
+    cases = strict(capsys.readouterr().out)["cases"]
+    assert len(cases) == 9
+    for c in cases:
+        with np.load(c["source"]) as z:
+            n = int(z["positions"].shape[0])
+        assert (c["start_frame"], c["end_frame"], c["frames"]) == (0, n, [0, n]), c
+
+
+def test_segment_json_names_each_segment_count_as_reps_does(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``reps --json`` names the repetition count ``count`` (its ``repetitions``: the list);
+    a segment of ``segment --json`` had the count only as ``repetitions``. Each segment now
+    has ``count`` too (``repetitions`` kept, the same number). Ten seconds of squats of
+    2.5 s each, by construction (tests.moves): 4, in either command."""
+    rec = save_pose(clip("squat", 10.0), tmp_path / "squat.npz")
+    assert main(["segment", str(rec), "--db", str(case_base), "--json"]) == 0
+    segments = strict(capsys.readouterr().out)["segments"]
+    assert sum(s["count"] for s in segments) == 4, segments
+    for s in segments:
+        assert s["count"] == s["repetitions"] == len(s["repetition_frames"]), s
+    assert main(["reps", str(rec), "--json"]) == 0
+    reps = strict(capsys.readouterr().out)
+    assert reps["count"] == len(reps["repetitions"]) == 4
+
+
+def test_watch_lines_name_the_count_as_segment_does() -> None:
+    """``watch``'s lines are ``segment``'s segments as they finish: ``count`` beside the
+    ``repetitions`` kept."""
+    from cbr.live import LiveSegment
+
+    line = LiveSegment(0, 75, "squat", 0.9, 2, "two squats", 0.5).to_dict(25.0)
+    assert (line["count"], line["repetitions"]) == (2, 2)
+    assert (line["start_s"], line["end_s"]) == (0.0, 3.0)  # 75 frames at 25 fps
+
+
+def test_reps_json_says_null_for_the_periodicity_of_no_period(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A clip that does not repeat (someone standing still) has no period (``period_s``
+    null), so no autocorrelation at it: ``periodicity`` was 0.0, a measured "not periodic at
+    all", and is null now. The squats repeat every 2.5 s (by construction), their
+    periodicity a number."""
+    still = save_pose(clip("still", 3.0), tmp_path / "still.npz")
+    assert main(["reps", str(still), "--json"]) == 0
+    doc = strict(capsys.readouterr().out)
+    assert (doc["count"], doc["period_s"], doc["periodicity"]) == (0, None, None)
+    squats = save_pose(clip("squat", 10.0), tmp_path / "squat.npz")
+    assert main(["reps", str(squats), "--json"]) == 0
+    doc = strict(capsys.readouterr().out)
+    assert doc["period_s"] == pytest.approx(2.5, abs=0.1)
+    assert 0.0 < doc["periodicity"] <= 1.0
+
+
+def test_dad_json_gives_the_frame_count_as_the_other_commands_do(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``describe``, ``reps`` and ``segment`` give a clip's frame count as ``frames`` beside
+    ``fps``; ``dad --json`` gave only ``duration_s``. It gives ``frames`` too: 300 for ten
+    seconds at 30 fps (by construction), the same for a clip too short to judge (3 frames),
+    whose document is printed with exit 1."""
+    rec = save_pose(clip("squat", 10.0), tmp_path / "squat.npz")
+    assert main(["dad", str(rec), "--json"]) == 0
+    doc = strict(capsys.readouterr().out)
+    assert (doc["fps"], doc["frames"], doc["duration_s"]) == (30.0, 300, pytest.approx(10.0))
+    assert list(doc)[:7] == ["clip", "source", "status", "message", "fps", "frames",
+                             "duration_s"]  # fmt: skip
+    short = save_pose(clip("squat", 0.1), tmp_path / "short.npz")
+    assert main(["dad", str(short), "--json"]) == 1
+    doc = strict(capsys.readouterr().out)
+    assert (doc["status"], doc["frames"]) == ("not enough data", 3)
