@@ -137,3 +137,50 @@ def test_dad_json_gives_the_frame_count_as_the_other_commands_do(
     assert main(["dad", str(short), "--json"]) == 1
     doc = strict(capsys.readouterr().out)
     assert (doc["status"], doc["frames"]) == ("not enough data", 3)
+
+
+def test_compare_results_give_each_piece_of_a_file_its_frames(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``compare --json FILE`` named every piece of a file (a labels CSV's ``start,end``
+    rows) by the file's name alone, in ``clips`` and ``explanations``: two squats cut from
+    one recording could not be told apart. Each piece now has ``start_frame`` and
+    ``end_frame``, as ``classify --json`` gives them (the rows written here), and ``report``
+    reads the file back."""
+    rows = ["path,label,subject,start,end"]
+    for subject in ("s1", "s2", "s3"):
+        for move in ("squat", "arm_abduction", "knee_lift"):
+            name = f"{subject}_{move}.npz"
+            save_pose(clip(move, 10.0), tmp_path / name)  # 300 frames
+            rows += [f"{name},{move},{subject},0,150", f"{name},{move},{subject},150,300"]
+    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
+    results = tmp_path / "results.json"
+    argv = ["compare", str(tmp_path / "labels.csv"), "--similarities", "euclidean",
+            "--features", "fluents", "--no-dad", "--peers", "none", "--explain", "0",
+            "--json", str(results)]  # fmt: skip
+    assert main(argv) == 0, capsys.readouterr().err
+    doc = strict(results.read_text())
+    got = {(c["clip"], c["start_frame"], c["end_frame"], c["label"]) for c in doc["clips"]}
+    want = set()
+    for row in rows[1:]:
+        path, label, _, start, end = row.split(",")
+        want.add((path, int(start), int(end), label))
+    assert got == want and len(doc["clips"]) == 18
+    capsys.readouterr()
+    assert main(["report", str(results), "--out", str(tmp_path / "report.html")]) == 0
+
+
+def test_compare_explanations_keep_the_frames_of_a_piece_when_read_back() -> None:
+    """An explained piece's frames survive the results file (``posecbr report`` reads it)
+    and name it for people, end inclusive, as classify names a piece; a whole file has no
+    frames, as files written before."""
+    from cbr.evaluation.results import ExplainedClip, Reader
+
+    piece = ExplainedClip("a.npz", "s1", "squat", "squat", "lunge", "cbr", "why", None, (30, 90))
+    d = piece.to_dict()
+    assert (d["start_frame"], d["end_frame"]) == (30, 90)
+    back = ExplainedClip.read(Reader("results.json"), strict(json.dumps(d)), "explanations[0]")
+    assert back == piece and back.name == "a.npz frames 30-89"
+    whole = ExplainedClip("a.npz", "s1", "squat", "squat", "lunge", "cbr", "why").to_dict()
+    assert "start_frame" not in whole
+    assert ExplainedClip.read(Reader("r.json"), whole, "e").frames is None

@@ -189,7 +189,9 @@ def _dataset(data: Prepared, source: str) -> DatasetSummary:
 
 def _clips(data: Prepared) -> list[ClipInfo]:
     return [
-        ClipInfo(data.ids[i], str(data.labels[i]), data.subjects[i], str(data.y[i]))
+        ClipInfo(
+            data.ids[i], str(data.labels[i]), data.subjects[i], str(data.y[i]), data.frames_of(i)
+        )
         for i in range(len(data.y))
     ]
 

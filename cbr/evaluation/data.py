@@ -24,7 +24,9 @@ class Prepared:
 
     seqs ``(n,)`` pose sequences; ids ``(n,)`` clip names; y ``(n,)`` target values (str);
     subjects ``(n,)`` (None when unknown); labels ``(n,)`` activity labels; within ``(n,)``
-    the per-model group (or None); classes: sorted target values.
+    the per-model group (or None); classes: sorted target values; frames ``(n,)``: a clip's
+    frames in its file (start, end exclusive) when it is a piece of it (a labels CSV's
+    ``start,end``), else None (empty: none known).
     """
 
     seqs: list[PoseSequence]
@@ -35,6 +37,19 @@ class Prepared:
     within: np.ndarray | None
     classes: list[str]
     notes: list[str] = field(default_factory=list)
+    frames: list[tuple[int, int] | None] = field(default_factory=list)
+
+    def frames_of(self, i: int) -> tuple[int, int] | None:
+        """Clip ``i``'s frames in its file when it is a piece of it, else None."""
+        return self.frames[i] if i < len(self.frames) else None
+
+
+def clip_frames(clip: Clip) -> tuple[int, int] | None:
+    """A clip's frames in its file (start, end exclusive) when it is a piece of it, as
+    ``classify`` tells one (its ``frame_offset``), else None."""
+    from ..casebase import frames_of
+
+    return frames_of(clip.seq) if "frame_offset" in clip.seq.metadata else None
 
 
 def clip_id(clip: Clip, i: int) -> str:
@@ -140,6 +155,7 @@ def prepare(clips: Sequence[Clip], settings: CompareSettings, source: str = "dat
         within=None if within is None else within[idx],
         classes=classes,
         notes=nobody + ([_single_clip_note(single)] if single else []),
+        frames=[clip_frames(clips[i]) for i in idx],
     )
 
 

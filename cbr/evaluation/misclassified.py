@@ -74,6 +74,7 @@ def _entry(
         method=method,
         text=text,
         explanation=explanation,
+        frames=data.frames_of(i),
     )
 
 

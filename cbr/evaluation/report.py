@@ -210,7 +210,7 @@ def _explanations(results: CompareResults) -> str:
     if not results.explanations:
         return "<p>No misclassified clip to explain (or no case-base configuration ran).</p>"
     return "\n".join(
-        f"<div class='expl'><b>{e(x.clip)}</b> (subject {e(x.subject)}): "
+        f"<div class='expl'><b>{e(x.name)}</b> (subject {e(x.subject)}): "
         f"true <b>{e(x.true)}</b>, predicted <b>{e(x.predicted)}</b> by "
         f"{e(x.method)}<br>{e(x.text).replace(chr(10), '<br>')}</div>"
         for x in results.explanations

@@ -365,20 +365,40 @@ class CVSummary:
         )
 
 
+def _piece(frames: tuple[int, int] | None) -> dict[str, Any]:
+    """A piece of a file's frames as ``classify --json`` gives them (end exclusive); none for
+    a whole file."""
+    return {} if frames is None else {"start_frame": frames[0], "end_frame": frames[1]}
+
+
+def _read_piece(r: Reader, d: dict[str, Any], where: str) -> tuple[int, int] | None:
+    """The frames :func:`_piece` wrote, or None (a whole file, or a file written before)."""
+    start = r.get(d, "start_frame", where, "int", optional=True)
+    end = r.get(d, "end_frame", where, "int", optional=True)
+    if start is None and end is None:
+        return None
+    if start is None or end is None or not 0 <= start < end:
+        r.fail(f"{where}.start_frame", "and end_frame must be frames 0 <= start < end, together")
+    return int(start), int(end)
+
+
 @dataclass(frozen=True)
 class ClipInfo:
-    """One clip compared: its name, activity, subject and target value."""
+    """One clip compared: its name, activity, subject and target value; ``frames`` its
+    frames in its file (start, end exclusive) when it is a piece of it."""
 
     id: str
     label: str
     subject: str | None
     target: str
+    frames: tuple[int, int] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         # "clip" as the explanations below, classify and reps name it; "id" kept (its first name)
         return {
             "id": self.id,
             "clip": self.id,
+            **_piece(self.frames),
             "label": self.label,
             "subject": self.subject,
             "target": self.target,
@@ -391,13 +411,14 @@ class ClipInfo:
             r.get(d, "label", where, "str"),
             r.get(d, "subject", where, "str", optional=True),
             r.get(d, "target", where, "str"),
+            _read_piece(r, d, where),
         )
 
 
 @dataclass(frozen=True)
 class ExplainedClip:
     """Why a method got one clip wrong, in words (``explanation``: the case-base
-    explanation's own record, None for DAD)."""
+    explanation's own record, None for DAD; ``frames``: as :class:`ClipInfo`'s)."""
 
     clip: str
     subject: str | None
@@ -407,10 +428,19 @@ class ExplainedClip:
     method: str
     text: str
     explanation: dict[str, Any] | None = None
+    frames: tuple[int, int] | None = None
+
+    @property
+    def name(self) -> str:
+        """The clip for people: a piece of a file named with its frames (end inclusive)."""
+        from ..casebase import piece_name
+
+        return piece_name(self.clip, self.frames)
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
             "clip": self.clip,
+            **_piece(self.frames),
             "subject": self.subject,
             "activity": self.activity,
             "true": self.true,
@@ -434,6 +464,7 @@ class ExplainedClip:
             r.get(d, "method", where, "str"),
             r.get(d, "text", where, "str"),
             r.get(d, "explanation", where, "dict", optional=True),
+            _read_piece(r, d, where),
         )
 
 

@@ -345,7 +345,7 @@ def _print_explanations(explained: list[Any]) -> None:
     under a line naming the clip, its true label and the answer."""
 
     for e in explained:
-        print(f"\n{shown(e.clip)}: {shown(e.true)}, answered {shown(e.predicted)} by {e.method}")
+        print(f"\n{shown(e.name)}: {shown(e.true)}, answered {shown(e.predicted)} by {e.method}")
         for line in e.text.splitlines():
             print(f"  {shown(line)}")
 
