@@ -184,3 +184,39 @@ def test_compare_explanations_keep_the_frames_of_a_piece_when_read_back() -> Non
     whole = ExplainedClip("a.npz", "s1", "squat", "squat", "lunge", "cbr", "why").to_dict()
     assert "start_frame" not in whole
     assert ExplainedClip.read(Reader("r.json"), whole, "e").frames is None
+
+
+@pytest.mark.parametrize(("editor", "method"), [("renn", "RENN"), ("novelty-benefit", None)])
+def test_casebase_trim_json_names_the_editor_as_the_option_does(
+    case_base: Path, capsys: pytest.CaptureFixture[str], editor: str, method: str | None
+) -> None:
+    """``casebase trim --editor cnn --json`` said ``"method": "CNN"`` (``renn``: "RENN"), a
+    spelling ``--editor`` refuses, and, unlike info, list and upgrade, not which store and
+    case base it trimmed: ``editor`` as the option spells it, ``db`` and ``case_base`` now
+    (``method`` kept)."""
+    argv = ["casebase", "trim", "--db", str(case_base), "--json", "--dry-run",
+            "--editor", editor]  # fmt: skip
+    assert main(argv) == 0
+    doc = strict(capsys.readouterr().out)
+    assert (doc["db"], doc["case_base"], doc["editor"]) == (str(case_base), "default", editor)
+    assert doc["method"] == (method or editor)
+    assert doc["size_before"] == 9 and doc["dry_run"] is True and doc["changed"] is False
+
+
+def test_casebase_export_json_says_which_case_base(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``casebase export --json`` said where it wrote and how many cases, not which store
+    and case base it read, which info, list and upgrade say: ``db`` and ``case_base`` now.
+    Its ``cases``: the 9 clips the small case base was trained from (3 activities x 3)."""
+    out = tmp_path / "cases.npz"
+    assert main(["casebase", "export", "--db", str(case_base), "--out", str(out), "--json"]) == 0
+    doc = strict(capsys.readouterr().out)
+    assert (doc["db"], doc["case_base"], doc["out"], doc["cases"]) == (
+        str(case_base),
+        "default",
+        str(out),
+        9,
+    )
+    with np.load(out) as z:
+        assert len(z["labels"]) == 9

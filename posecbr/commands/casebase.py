@@ -459,7 +459,13 @@ def _export(store: CaseStore, args: argparse.Namespace) -> int:
     }
     with atomic_path(out) as tmp, open(tmp, "wb") as fh:
         np.savez_compressed(fh, **arrays)
-    msg = {"out": str(out), "cases": int(len(a.ids)), "problem_shape": list(a.features.shape[1:])}
+    msg = {
+        "db": store.where,  # as info, list and upgrade say which store, and list which case base
+        "case_base": name,
+        "out": str(out),
+        "cases": int(len(a.ids)),
+        "problem_shape": list(a.features.shape[1:]),
+    }
     if args.json:
         _emit(msg)
     else:
@@ -547,6 +553,9 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
         finally:
             writer.close()
     doc = {
+        "db": store.where,  # as info, list and upgrade say which store, and list which case base
+        "case_base": name,
+        "editor": args.editor,  # as --editor spells it ("method" kept: "CNN" for cnn)
         "method": report.method,
         "size_before": report.size_before,
         "size_after": report.size_after,
