@@ -220,3 +220,49 @@ def test_casebase_export_json_says_which_case_base(
     )
     with np.load(out) as z:
         assert len(z["labels"]) == 9
+
+
+def test_segment_json_names_the_picture_it_drew_as_describe_and_reps_do(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``describe --json --plot`` and ``reps --json --plot`` name the picture (``plot``);
+    ``segment --json --plot`` did not, and with several recordings a machine had to work out
+    the name of each one's picture in the folder. Each recording's document now names it."""
+    a = save_pose(clip("squat", 4.0), tmp_path / "a" / "squat.npz")
+    b = save_pose(clip("squat", 4.0), tmp_path / "b" / "squat.npz")
+    picture = tmp_path / "one.png"
+    assert main(["segment", str(a), "--db", str(case_base), "--json", "--plot", str(picture)]) == 0
+    doc = strict(capsys.readouterr().out)
+    assert doc["plot"] == str(picture) and picture.is_file()
+    folder = tmp_path / "pictures"
+    folder.mkdir()
+    argv = ["segment", str(a), str(b), "--db", str(case_base), "--json", "--plot", str(folder)]
+    assert main(argv) == 0
+    docs = strict(capsys.readouterr().out)
+    # two recordings named alike: the second's picture numbered (plot_targets)
+    assert [d["plot"] for d in docs] == [str(folder / "squat.png"), str(folder / "squat_2.png")]
+    assert sorted(p.name for p in folder.iterdir()) == ["squat.png", "squat_2.png"]
+    assert main(["segment", str(a), "--db", str(case_base), "--json"]) == 0
+    assert "plot" not in strict(capsys.readouterr().out)
+
+
+def test_segment_json_names_the_overlay_it_wrote(
+    case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--overlay`` likewise: the video written (the 65 frames of the squat video, counted
+    by OpenCV) is named in the document."""
+    import cv2
+
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    out = tmp_path / "seen.mp4"
+    argv = ["segment", str(video), "--db", str(case_base), "--json", "--overlay", str(out)]
+    assert main(argv) == 0
+    doc = strict(capsys.readouterr().out)
+    assert doc["overlay"] == str(out) and "plot" not in doc
+    cap = cv2.VideoCapture(str(video))
+    n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+    cap.release()
+    assert doc["frames"] == n == 65
+    cap = cv2.VideoCapture(str(out))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == n
+    cap.release()

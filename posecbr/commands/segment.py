@@ -10,7 +10,8 @@ windows (``posecbr train ... --split windows``) matches how the recording's wind
 "start_frame", "end_frame", "label" (null when unknown), "confidence", "unknown" (why, or null),
 "repetitions", "explanation", "novelty", "repetition_frames", "count"}]}`` (a list of those for
 several recordings; end frames exclusive; ``count``: the number of repetitions, as
-``reps --json`` names it, and as ``repetitions`` gives it, kept from before); ``--plot`` draws the
+``reps --json`` names it, and as ``repetitions`` gives it, kept from before; ``"plot"`` and
+``"overlay"``: the files written, when asked for); ``--plot`` draws the
 segments over the fluent timeline; ``--overlay`` writes a video recording with the stick figure,
 the current activity and its repetition count on every frame (as ``extract --overlay`` does).
 """
@@ -206,13 +207,24 @@ def run(args: argparse.Namespace) -> int:
             _overlay(path, video, result, args.overlay)
     docs = [result for _, _, result in done]
     if args.json:
-        out = [r.to_dict() for r in docs]
+        out = [_document(r, target, args.overlay) for r, target in zip(docs, targets, strict=True)]
         json.dump(out[0] if len(out) == 1 else out, sys.stdout, indent=1, ensure_ascii=False)
         print()
         return 0
     for result in docs:
         _print(result)
     return 0
+
+
+def _document(result: Any, plot: Path | None, overlay: Path | None) -> dict[str, Any]:
+    """One recording's ``--json`` document, with the files written for it named, as
+    ``describe`` and ``reps`` name their picture."""
+    doc: dict[str, Any] = result.to_dict()
+    if plot is not None:
+        doc["plot"] = str(plot)
+    if overlay is not None:
+        doc["overlay"] = str(overlay)
+    return doc
 
 
 def _read(path: Path, args: argparse.Namespace) -> tuple[Any, Any]:
