@@ -207,6 +207,7 @@ class Contrast:
             "label": self.label,
             "case_id": self.case_id,
             "source": self.source,
+            "mirrored": self.source.endswith(MIRRORED),  # as each neighbour's
             "distance": self.distance,
             "changes": [c.to_dict() for c in self.changes],
             "valid": self.valid,
@@ -792,6 +793,8 @@ def _nearest(cb: CaseBase, solved: Solved) -> _Nearest:
             "label": str(retrieval.labels[p]),
             "distance": float(retrieval.distances[p]),
             "source": cb.sources[int(retrieval.indices[p])],
+            # whether the case is its clip's mirror image: ``source`` then ends " (mirrored)"
+            "mirrored": cb.sources[int(retrieval.indices[p])].endswith(MIRRORED),
         }
         for p in keep
     )

@@ -266,3 +266,33 @@ def test_segment_json_names_the_overlay_it_wrote(
     cap = cv2.VideoCapture(str(out))
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == n
     cap.release()
+
+
+def test_json_says_which_cases_are_mirror_images(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A case that is its clip's mirror image was told only by its ``source`` ending in
+    " (mirrored)", which is then no file's name: ``casebase list --json`` and each of
+    ``classify --json``'s neighbours and its contrast case now say ``mirrored``. Trained with
+    ``--mirror augment``, each of the 9 clips is a case, and a mirror-image case unless it
+    is its own mirror image (both arms alike)."""
+    from tests.test_cbr_cli import _write_classes
+
+    data = _write_classes(tmp_path / "train", 3, 5)
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(data), "--db", str(db), "--mirror", "augment",
+            "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+    assert main(argv) == 0
+    capsys.readouterr()
+    assert main(["casebase", "list", "--db", str(db), "--json"]) == 0
+    cases = strict(capsys.readouterr().out)["cases"]
+    clips = sorted(str(p) for p in data.rglob("*.npz"))
+    assert len(clips) == 9 and len(cases) > 9
+    assert sorted(c["source"] for c in cases if not c["mirrored"]) == clips
+    images = [c["source"] for c in cases if c["mirrored"]]
+    assert len(images) == len(cases) - 9
+    assert all(i.endswith(" (mirrored)") and i.removesuffix(" (mirrored)") in clips for i in images)
+    assert main(["classify", clips[0], "--db", str(db), "--json"]) == 0
+    result = strict(capsys.readouterr().out)["results"][0]
+    for case in [*result["neighbours"], result["contrast"]]:
+        assert case["mirrored"] == case["source"].endswith(" (mirrored)"), case

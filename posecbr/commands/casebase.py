@@ -373,6 +373,8 @@ def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, A
 
 
 def _list(store: CaseStore, args: argparse.Namespace) -> int:
+    from cbr.explain import MIRRORED
+
     name = store.choose(args.name)
     a = store.load_cases(name, include_inactive=args.all)
     rows: list[dict[str, Any]] = [
@@ -383,6 +385,8 @@ def _list(store: CaseStore, args: argparse.Namespace) -> int:
             "active": bool(a.active[i]),
             "subject": a.subjects[i],
             "source": a.sources[i],
+            # the case is its clip's mirror image: ``source`` then ends " (mirrored)"
+            "mirrored": a.sources[i].endswith(MIRRORED),
             "frames": list(a.frame_ranges[i]),  # [start, end]: kept; elsewhere a count
             "start_frame": a.frame_ranges[i][0],
             "end_frame": a.frame_ranges[i][1],
