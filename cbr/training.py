@@ -116,14 +116,25 @@ def describe(seq: PoseSequence, plan: Plan) -> DescribedClip:
 
 
 def no_target_value(clip: Any, target: str) -> DataError:
-    """The error for a clip without a value of the ``target`` column: the columns it has,
-    and the one meant when ``target`` is a mistyped one of them."""
+    """The error for a clip without a value of the ``target`` column: the columns it has a
+    value of, and the one meant when ``target`` is a mistyped one of them. A clip without a
+    label (a pose file ``extract`` made of one video, given alone) is told where a label
+    comes from, not offered the column it lacks."""
     from features.text import did_you_mean
 
-    columns = ["label", "subject", *sorted(clip.extras)]
+    if target == "label":
+        return DataError(
+            "no label: its metadata has none (give it in a labels CSV, path,label, or put"
+            " the file in a folder named after its activity)",
+            clip.seq.source,
+        )
+    columns = [
+        *(c for c, v in (("label", clip.label), ("subject", clip.subject)) if v),
+        *sorted(clip.extras),
+    ]
     return DataError(
-        f"no value for --target {target!r} (columns: {', '.join(columns)})"
-        + did_you_mean(target, columns),
+        f"no value for --target {target!r} (columns: {', '.join(columns) or 'none'})"
+        + did_you_mean(target, [c for c in columns if c != target]),
         clip.seq.source,
     )
 
