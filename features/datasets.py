@@ -425,16 +425,68 @@ def check_not_nested(folder: Path, files: Callable[[Path], list[Path]]) -> None:
         )
 
 
+def check_no_extracted_twin(files: list[Path]) -> None:
+    """Refuse a folder's clip ``files`` that hold a video and a pose file ``posecbr extract``
+    made of it (its metadata names the video and, when it records one, the video's
+    SHA-256): the one recording would be read twice, two cases of one take (each the
+    other's "held-out" neighbour, so the confidence is calibrated on copies) or two clips
+    counted. A pose file of another video of the same name (its SHA-256 differs) is no
+    twin; one that cannot be read is left to be refused as the clip it is."""
+    videos = {p.name: p for p in files if _suffix(p) in VIDEO_SUFFIXES}
+    if not videos:
+        return
+    from features.errors import PosecbrError
+    from features.poses import pose_file_metadata
+
+    for f in files:
+        if _suffix(f) not in POSE_SUFFIXES:
+            continue
+        try:
+            meta = pose_file_metadata(f)
+        except PosecbrError:
+            continue
+        source = meta.get("source_video", meta.get("made_from"))
+        video = (
+            videos.get(Path(source.replace("\\", "/")).name) if isinstance(source, str) else None
+        )
+        if video is None or not _same_content(video, meta.get("video_sha256")):
+            continue
+        raise DataError(
+            f"{f.name} holds the poses of the video {video.name} beside it (made by posecbr"
+            " extract): the one recording would be read twice; keep the video or its pose"
+            " file in this folder, not both",
+            f.parent,
+        )
+
+
+def _same_content(video: Path, sha256: Any) -> bool:
+    """Whether ``video``'s bytes have the SHA-256 ``sha256`` (True when none is recorded)."""
+    import hashlib
+
+    if not isinstance(sha256, str):
+        return True
+    digest = hashlib.sha256()
+    try:
+        with open(video, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+    except OSError:
+        return True  # refused as it is read
+    return digest.hexdigest() == sha256
+
+
 def _class_folder_entries(path: Path) -> list[_Entry]:
     entries = []
     for d in sorted(p for p in path.iterdir() if p.is_dir() and not p.name.startswith(".")):
         check_not_nested(d, clip_files)
+        check_no_extracted_twin(clip_files(d))
         for f in clip_files(d):
             entries.append(_Entry(lambda f=f: load_clip(f), d.name, None, {}, f.name, f))  # type: ignore[misc]
     return entries
 
 
 def _pose_folder_entries(path: Path) -> list[_Entry]:
+    check_no_extracted_twin(clip_files(path))
     return [
         _Entry(lambda f=f: load_clip(f), None, None, {}, f.name, f)  # type: ignore[misc]
         for f in clip_files(path)

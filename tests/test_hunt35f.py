@@ -52,3 +52,71 @@ def test_train_target_missing_lists_only_the_columns_the_clip_has(
         "clip.npz: no value for --target 'correct' (columns: label, extraction_version,",
     )  # fmt: skip
     assert "subject" not in line
+
+
+def _tiny_video(path: Path, seed: int = 0) -> Path:
+    """A few MJPG frames (no person: only the file's bytes matter here)."""
+    import cv2
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    out = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (32, 32))
+    for _ in range(4):
+        out.write(rng.integers(0, 255, (32, 32, 3), dtype=np.uint8))
+    out.release()
+    return path
+
+
+def _twin_folder(tmp_path: Path, sha_of: Path | None = None) -> Path:
+    """data/squat/take.avi beside data/squat/take.npz, the pose file as `posecbr extract
+    videos/ --out videos/squat/` writes it (its metadata names the video, relative to the
+    folder extract ran in, with the video's SHA-256), and data/lunge/other.npz."""
+    import hashlib
+
+    data = tmp_path / "data"
+    (data / "squat").mkdir(parents=True)
+    (data / "lunge").mkdir()
+    video = _tiny_video(data / "squat" / "take.avi")
+    sha = hashlib.sha256((sha_of or video).read_bytes()).hexdigest()
+    meta = {**_EXTRACTED, "source_video": "videos/squat/take.avi", "made_from": "take.avi"}
+    good_pose_file(data / "squat" / "take.npz", frames=60, label="squat", video_sha256=sha,
+                   **{k: v for k, v in meta.items()})  # fmt: skip
+    good_pose_file(data / "lunge" / "other.npz", frames=60, label="lunge")
+    return data
+
+
+@pytest.mark.parametrize("command", ["train", "compare", "classify"])
+def test_a_video_and_its_own_pose_file_in_one_folder_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str
+) -> None:
+    """A class folder holding a video and the pose file extract made of it (extracted
+    into the videos' folder, or copied there) was read as two clips of one recording:
+    `train` stored two cases of one take and calibrated the confidence on them, each the
+    other's held-out neighbour ("calibrated on 2 leave-one-recording-out training clips
+    (their accuracy 100.0 %)", the unlike-the-cases threshold "beyond 1.00x"), and
+    `classify` answered and counted the take twice."""
+    data = _twin_folder(tmp_path)
+    if command == "classify":
+        small_case_base(tmp_path)
+        capsys.readouterr()
+    argv = {
+        "train": ["train", str(data), "--db", str(tmp_path / "cb.sqlite")],
+        "compare": ["compare", str(data)],
+        "classify": ["classify", str(data / "squat"), "--db", str(tmp_path / "cb.sqlite")],
+    }[command]
+    refused(argv, tmp_path, capsys,
+            "data/squat: take.npz holds the poses of the video take.avi beside it",
+            "read twice", "not both")  # fmt: skip
+
+
+def test_a_pose_file_of_another_video_of_the_same_name_is_no_twin(tmp_path: Path) -> None:
+    """A pose file made from another video that had the same name (its recorded SHA-256
+    differs: a phone's IMG_0001.MOV of another day) is a recording of its own."""
+    from features.datasets import check_no_extracted_twin, clip_files
+
+    other = _tiny_video(tmp_path / "other_day.avi", seed=1)
+    data = _twin_folder(tmp_path, sha_of=other)
+    check_no_extracted_twin(clip_files(data / "squat"))  # no error
+    (data / "squat" / "take.avi").write_bytes(other.read_bytes())  # now it is that video
+    with pytest.raises(Exception, match="holds the poses of the video take.avi"):
+        check_no_extracted_twin(clip_files(data / "squat"))

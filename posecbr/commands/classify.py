@@ -93,6 +93,7 @@ def load_inputs(
     from cbr.training import check_listed_once
     from features.datasets import (
         Clip,
+        check_no_extracted_twin,
         clip_files,
         clip_target,
         detect_kind,
@@ -119,6 +120,7 @@ def load_inputs(
             out.append((seq, clip_target(of_file(seq), target)))
         elif kind == "pose_folder":
             # may hold unlabelled clips: read them one by one
+            check_no_extracted_twin(clip_files(path))
             for f in clip_files(path):
                 seq = load_clip(f)
                 out.append((seq, clip_target(of_file(seq), target)))
