@@ -120,3 +120,45 @@ def test_a_pose_file_of_another_video_of_the_same_name_is_no_twin(tmp_path: Path
     (data / "squat" / "take.avi").write_bytes(other.read_bytes())  # now it is that video
     with pytest.raises(Exception, match="holds the poses of the video take.avi"):
         check_no_extracted_twin(clip_files(data / "squat"))
+
+
+def test_extract_overlay_of_up_to_date_pose_files_does_not_count_them_extracted(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Rerun with `--overlay` after the pose files were made, `extract` drew the overlays
+    from the stored landmarks and left the pose files as they were, but said "2 extracted,
+    0 up to date" (and, for one video, "done: clip.npz"): the pose model had not run."""
+    import hashlib
+
+    from posecbr.cli import main
+    from tests.test_hunt31c import _grey_video
+
+    videos, poses = tmp_path / "videos", tmp_path / "poses"
+    _grey_video(videos / "squat" / "a.avi")
+    _grey_video(videos / "lunge" / "b.avi", frames=5)
+    assert main(["extract", str(videos), "--out", str(poses)]) == 0
+    assert "2 extracted, 0 up to date, 0 failed" in capsys.readouterr().out
+    files = sorted(poses.rglob("*.npz"))
+    before = [hashlib.sha256(f.read_bytes()).hexdigest() for f in files]
+    overlays = tmp_path / "overlays"
+    assert main(["extract", str(videos), "--out", str(poses), "--overlay", str(overlays)]) == 0
+    out = capsys.readouterr().out
+    assert (
+        out.strip()
+        == f"0 extracted, 2 up to date (2 overlays drawn from them), 0 failed -> {poses}"
+    )
+    assert [hashlib.sha256(f.read_bytes()).hexdigest() for f in files] == before
+    assert (overlays / "squat" / "a.mp4").is_file() and (overlays / "lunge" / "b.mp4").is_file()
+    # one video: its pose file skipped, its overlay written
+    one, pose = tmp_path / "one.mp4", tmp_path / "a.npz"
+    video = videos / "squat" / "a.avi"
+    assert main(["extract", str(video), "--out", str(pose)]) == 0
+    assert capsys.readouterr().out.startswith("done: ")
+    kept = hashlib.sha256(pose.read_bytes()).hexdigest()
+    assert main(["extract", str(video), "--out", str(pose), "--overlay", str(one)]) == 0
+    printed = capsys.readouterr()
+    assert printed.out == (
+        f"skipped: {pose} (up to date, 4 frames, 4 without a person; its overlay drawn)\n"
+    )
+    assert printed.err == f"overlay written to {one}\n" and one.is_file()
+    assert hashlib.sha256(pose.read_bytes()).hexdigest() == kept

@@ -62,7 +62,10 @@ class Options:
     fluents: bool = True
 
 
-Outcome = tuple[str, Path, str]  # (status "done", "skipped" or "failed", pose file, detail)
+Outcome = tuple[
+    str, Path, str
+]  # (status "done", "skipped", "drawn" or "failed", pose file, detail)
+# "drawn": the pose file was up to date, its overlay alone was drawn (from the stored landmarks)
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -426,7 +429,8 @@ def _estimate(job: Job, options: Options, key: dict[str, Any], digest: str) -> t
 
 
 def process(job: Job, options: Options) -> Outcome:
-    """Extract one clip. Returns (status, path, detail); status "done", "skipped" or "failed"."""
+    """Extract one clip. Returns (status, path, detail); status "done", "skipped", "drawn"
+    (the pose file up to date, its missing overlay drawn from it) or "failed"."""
     import numpy as np
 
     from features.pose_estimation import open_video
@@ -469,6 +473,8 @@ def process(job: Job, options: Options) -> Outcome:
             )
         n_missing = int(np.isnan(seq.positions).all(axis=(1, 2)).sum())
         detail = f"{counted(seq.n_frames, 'frame')}, {n_missing} without a person{vfr_note}"
+        if up_to_date:
+            return "drawn", job.out, f"up to date, {detail}; its overlay drawn"
         return "done", job.out, f"{detail}; {STALE_VFR}" if stale else detail
     except PosecbrError as exc:
         return "failed", job.out, str(exc)
@@ -595,8 +601,8 @@ def _run_single(job: Job, options: Options) -> int:
     status, path, detail = process(job, options)
     if status == "failed":
         raise PosecbrError(detail)
-    print(f"{status}: {shown(path)} ({shown(detail)})")
-    if status == "done" and job.overlay is not None:  # as segment --overlay says it
+    print(f"{'skipped' if status == 'drawn' else status}: {shown(path)} ({shown(detail)})")
+    if status in ("done", "drawn") and job.overlay is not None:  # as segment --overlay says it
         print(f"overlay written to {shown(job.overlay)}", file=sys.stderr)
     return 0
 
@@ -645,9 +651,11 @@ def _summary(results: list[Outcome], out: Path) -> int:
     for _, _, detail in failed:
         print(f"posecbr extract: error: {shown(detail)}", file=sys.stderr)
     done = sum(r[0] == "done" for r in results)
-    skipped = sum(r[0] == "skipped" for r in results)
+    drawn = sum(r[0] == "drawn" for r in results)
+    skipped = sum(r[0] == "skipped" for r in results) + drawn
+    overlays = f" ({counted(drawn, 'overlay')} drawn from them)" if drawn else ""
     print(
-        f"{done} extracted, {skipped} up to date, {len(failed)} failed -> {shown(out)}",
+        f"{done} extracted, {skipped} up to date{overlays}, {len(failed)} failed -> {shown(out)}",
         file=sys.stderr if failed else sys.stdout,
     )
     return 1 if failed else 0
