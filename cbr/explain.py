@@ -948,10 +948,22 @@ def _differences(r: _Reading, contrast: Contrast | None, cb: CaseBase) -> list[d
     o = r.view.of(cb.problems[contrast.position][None])[0]
     spread = np.maximum(r.prof.within, 1e-9)
     gap = np.where(r.readable & r.known, (np.abs(r.x - o) / spread) ** 2 * r.importance, 0.0)
-    out = []
-    for j in _best_per_feature(r, gap, SHORT_ITEMS, 1e-12):
+    out: list[dict[str, Any]] = []
+    taken: set[int] = set()
+    for j in np.argsort(-gap, kind="stable"):
+        if not gap[j] >= 1e-12 or len(out) == SHORT_ITEMS:
+            break
+        f = int(r.view.feature[j])
+        if f in taken:
+            continue
         here, unit = r.unit(j)
-        out.append({"feature": r.words(j), "here": here, "there": r.value(j, o[j]), "unit": unit})
+        there = r.value(j, o[j])
+        # a state no case of either label holds differs by a hair, which the cases' tiny
+        # spread magnifies: "mean confidence 0.00 here, 0.00 there" is no difference to show
+        if said(here, unit) == said(there, unit):
+            continue
+        taken.add(f)
+        out.append({"feature": r.words(j), "here": here, "there": there, "unit": unit})
     return out
 
 
