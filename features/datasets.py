@@ -427,14 +427,32 @@ def check_not_nested(folder: Path, files: Callable[[Path], list[Path]]) -> None:
 
 def check_no_extracted_twin(files: list[Path]) -> None:
     """Refuse a folder's clip ``files`` that hold a video and a pose file ``posecbr extract``
-    made of it (its metadata names the video and, when it records one, the video's
-    SHA-256): the one recording would be read twice, two cases of one take (each the
-    other's "held-out" neighbour, so the confidence is calibrated on copies) or two clips
-    counted. A pose file of another video of the same name (its SHA-256 differs) is no
-    twin; one that cannot be read is left to be refused as the clip it is."""
-    videos = {p.name: p for p in files if _suffix(p) in VIDEO_SUFFIXES}
+    made of it (:func:`extracted_twin`): the one recording would be read twice, two cases of
+    one take (each the other's "held-out" neighbour, so the confidence is calibrated on
+    copies) or two clips counted."""
+    twin = extracted_twin(files)
+    if twin is not None:
+        pose, video = twin
+        raise DataError(
+            f"{pose.name} holds the poses of the video {video.name} beside it (made by posecbr"
+            " extract): the one recording would be read twice; keep the video or its pose"
+            " file in this folder, not both",
+            pose.parent,
+        )
+
+
+def extracted_twin(files: list[Path]) -> tuple[Path, Path] | None:
+    """The first pose file of ``files`` that ``posecbr extract`` made of a video among them,
+    with that video, or None: its metadata names a video of that name (``source_video``)
+    and, when it records one, the video's SHA-256 matches. A pose file of another video of
+    the same name (its SHA-256 differs) is no twin; one that cannot be read is left to be
+    refused as the clip it is."""
+    videos: dict[str, list[Path]] = {}
+    for p in files:
+        if _suffix(p) in VIDEO_SUFFIXES:
+            videos.setdefault(p.name, []).append(p)
     if not videos:
-        return
+        return None
     from features.errors import PosecbrError
     from features.poses import pose_file_metadata
 
@@ -446,17 +464,11 @@ def check_no_extracted_twin(files: list[Path]) -> None:
         except PosecbrError:
             continue
         source = meta.get("source_video", meta.get("made_from"))
-        video = (
-            videos.get(Path(source.replace("\\", "/")).name) if isinstance(source, str) else None
-        )
-        if video is None or not _same_content(video, meta.get("video_sha256")):
-            continue
-        raise DataError(
-            f"{f.name} holds the poses of the video {video.name} beside it (made by posecbr"
-            " extract): the one recording would be read twice; keep the video or its pose"
-            " file in this folder, not both",
-            f.parent,
-        )
+        named = Path(source.replace("\\", "/")).name if isinstance(source, str) else ""
+        for video in videos.get(named, []):
+            if _same_content(video, meta.get("video_sha256")):
+                return f, video
+    return None
 
 
 def _same_content(video: Path, sha256: Any) -> bool:
@@ -669,9 +681,27 @@ def _frame_range(
     return start, end
 
 
+def _check_csv_twins(records: list[dict[str, Any]], csv_path: Path) -> None:
+    """Refuse a labels CSV whose rows name, whole, a video and the pose file ``extract`` made
+    of it (:func:`extracted_twin`): the one recording would be read twice."""
+    whole = [r for r in records if r["track"] is None and r["start"] is None]
+    twin = extracted_twin([r["path"] for r in whole])
+    if twin is not None:
+        line = {r["path"]: r["line"] for r in whole}
+        pose, video = twin
+        raise DataError(
+            f"line {line[pose]}: {pose.name} holds the poses of the video {video.name} of line"
+            f" {line[video]} (made by posecbr extract): the one recording would be read twice;"
+            " list the video or its pose file, not both",
+            csv_path,
+        )
+
+
 def _csv_entries(csv_path: Path) -> list[_Entry]:
     entries = []
-    for rec in read_labels_csv(csv_path):
+    records = read_labels_csv(csv_path)
+    _check_csv_twins(records, csv_path)
+    for rec in records:
         if rec["track"] is not None:
             entries.append(_track_entry(rec))
             continue

@@ -109,6 +109,23 @@ def test_a_video_and_its_own_pose_file_in_one_folder_are_refused(
             "read twice", "not both")  # fmt: skip
 
 
+def test_a_labels_csv_listing_a_video_and_its_own_pose_file_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The same through a labels CSV typed by hand: rows for take.avi and for the take.npz
+    extract made of it trained two cases of one take."""
+    _twin_folder(tmp_path)
+    labels = tmp_path / "labels.csv"
+    labels.write_text(
+        "\ufeffpath,label\r\ndata/squat/take.avi,squat\r\ndata/lunge/other.npz,lunge\r\n"
+        "data/squat/take.npz,squat\r\n\r\n",
+        encoding="utf-8",
+    )
+    refused(["train", str(labels), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
+            "labels.csv: line 4: take.npz holds the poses of the video take.avi of line 2",
+            "read twice")  # fmt: skip
+
+
 def test_a_pose_file_of_another_video_of_the_same_name_is_no_twin(tmp_path: Path) -> None:
     """A pose file made from another video that had the same name (its recorded SHA-256
     differs: a phone's IMG_0001.MOV of another day) is a recording of its own."""
