@@ -216,3 +216,31 @@ def test_verbose_differences_from_the_other_label_are_differences_a_reader_can_s
         values = re.search(r"(-?\d+(?:\.\d+)?)[^\d]*? here, (-?\d+(?:\.\d+)?)", item)
         assert values is not None, item
         assert values.group(1) != values.group(2), item
+
+
+def test_extract_of_a_labels_csv_whose_end_is_past_the_video_names_the_csv_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A labels CSV typed by hand with an end frame past its video named the video alone
+    ("clip.avi: end frame 10 is past the video's 4 frames"): which row of which CSV said
+    so was left to find. It now says where: "... end frame 10 (as labels.csv, line 3 gives
+    it) is past the video's 4 frames"; the other row's pose file is written, whole."""
+    from posecbr.cli import main
+    from tests.test_hunt31c import _grey_video
+
+    _grey_video(tmp_path / "videos" / "a.avi")
+    _grey_video(tmp_path / "videos" / "b.avi")
+    labels = tmp_path / "labels.csv"
+    labels.write_text(
+        "\ufeffpath,label,start,end\r\nvideos/a.avi,squat,0,4\r\nvideos/b.avi,lunge,1,10\r\n\r\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "poses"
+    assert main(["extract", str(labels), "--out", str(out)]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err == [
+        f"posecbr extract: error: {tmp_path / 'videos' / 'b.avi'}: end frame 10 (as labels.csv,"
+        " line 3 gives it) is past the video's 4 frames",
+        f"1 extracted, 0 up to date, 1 failed -> {out}",
+    ]
+    assert sorted(p.name for p in out.rglob("*") if p.is_file()) == ["a_0-4.npz"]

@@ -51,6 +51,7 @@ class Job:
     end: int | None = None
     extras: dict[str, Any] = field(default_factory=dict)
     overlay: Path | None = None
+    listed: str | None = None  # where a labels CSV lists it ("labels.csv, line 3")
 
 
 @dataclass(frozen=True)
@@ -150,6 +151,7 @@ def _csv_jobs(csv_path: Path, out: Path) -> list[Job]:
                 start=rec["start"],
                 end=rec["end"],
                 extras=dict(rec["extras"]),
+                listed=f"{csv_path.name}, line {rec['line']}",
             )
         )
     if not jobs:
@@ -414,8 +416,10 @@ def _estimate(job: Job, options: Options, key: dict[str, Any], digest: str) -> t
     seq, image_lm, video_frames = vp.sequence, vp.image_landmarks, vp.video_frames
     if job.start is not None and job.end is not None:
         if job.end > seq.n_frames:
+            listed = f" (as {job.listed} gives it)" if job.listed else ""
             raise DataError(
-                f"end frame {job.end} is past the video's {seq.n_frames} frames", job.video
+                f"end frame {job.end}{listed} is past the video's {seq.n_frames} frames",
+                job.video,
             )
         seq = seq.slice_frames(job.start, job.end)
         image_lm = image_lm[job.start : job.end]
