@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from .casebase import CaseBase, overlapping
-from .reuse import EXACT, Weights, vote
+from .reuse import EXACT, Weights, class_balance, vote
 
 #: bins of the expected calibration error (equal width over [0, 1], as Guo et al. 2017)
 ECE_BINS = 10
@@ -112,14 +112,17 @@ def held_out(
     weights: Weights = "distance",
     neighbours: int = NEIGHBOURS,
     frames: tuple[np.ndarray, np.ndarray] | None = None,
+    balanced: bool = False,
 ) -> HeldOut:
     """Each query ``(q, *problem_shape)`` (true label ``labels[i]``, group ``groups[i]``)
     classified by the ``k`` nearest cases of other groups (``case_groups`` ``(n_cases,)``),
     voting as the classifier does (:func:`cbr.reuse.vote`), with its ``max(k, neighbours)``
-    nearest such cases for the soft vote. ``frames``: the queries' and the cases' frame
-    ranges in their one recording, ``(q, 2)`` and ``(n_cases, 2)`` (start, end; -1 where not
-    known): the cases whose frames overlap a query's are held out with it too (windows cut
-    from one recording every 0.5 s overlap their neighbours, near copies of them)."""
+    nearest such cases for the soft vote (``balanced``: each class's votes divided by its
+    share of ``cb``'s cases, :func:`cbr.reuse.class_balance`). ``frames``: the queries' and
+    the cases' frame ranges in their one recording, ``(q, 2)`` and ``(n_cases, 2)`` (start,
+    end; -1 where not known): the cases whose frames overlap a query's are held out with it
+    too (windows cut from one recording every 0.5 s overlap their neighbours, near copies of
+    them)."""
     classes, codes = np.unique(cb.labels.astype(str), return_inverse=True)
     measure, index = cb.measure, cb.index
     q, wide = len(queries), max(int(k), int(neighbours))
@@ -136,7 +139,8 @@ def held_out(
         d = np.where(out, np.inf, d)
         top = np.argsort(d, kind="stable")[:wide]
         dist[i, : len(top)], code[i, : len(top)] = d[top], codes[top]
-    return held_out_votes(dist, code, classes, labels, int(k), weights, held)
+    balance = class_balance(cb.labels, classes) if balanced else None
+    return held_out_votes(dist, code, classes, labels, int(k), weights, held, balance)
 
 
 def held_out_votes(
@@ -147,6 +151,7 @@ def held_out_votes(
     k: int,
     weights: Weights = "distance",
     held: np.ndarray | None = None,
+    balance: np.ndarray | None = None,
 ) -> HeldOut:
     """:class:`HeldOut` of clips whose nearest held-out cases are ``distances`` ``(q, K)``
     (nearest first) of class codes ``codes`` ``(q, K)`` into ``classes`` ``(C,)`` (sorted
@@ -154,7 +159,7 @@ def held_out_votes(
     case has gets code -1 (its answers are all wrong), and so does a clip whose label no case
     it was held out against has (``held`` ``(q,)`` False: :func:`held_elsewhere`)."""
     labels = np.asarray(labels).astype(str)
-    proba = vote(distances[:, :k], codes[:, :k], len(classes), weights)
+    proba = vote(distances[:, :k], codes[:, :k], len(classes), weights, balance)
     win = np.argmax(proba, axis=1)
     at = np.clip(np.searchsorted(classes, labels), 0, len(classes) - 1)
     truth = np.where(classes[at] == labels, at, -1)

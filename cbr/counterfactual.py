@@ -26,7 +26,7 @@ import numpy as np
 
 from .casebase import CaseBase
 from .profiles import View, view_of
-from .reuse import Weights, vote
+from .reuse import Weights, class_balance, vote
 from .weights import MIRROR_FLAG
 
 #: nearest cases of the wanted label tried as guides
@@ -184,7 +184,9 @@ class _Vectors:
     one plus ``delta[:, f]``, so the vote after each possible change is computed for all
     features at once (the classifier's own vote, :func:`cbr.reuse.vote`)."""
 
-    def __init__(self, cb: CaseBase, view: View, q: np.ndarray, k: int, weights: Weights):
+    def __init__(
+        self, cb: CaseBase, view: View, q: np.ndarray, k: int, weights: Weights, balanced: bool
+    ):
         mult = getattr(cb.measure, "multiplier", None)
         centre = getattr(cb.measure, "centre", None)
         D = cb.problems.shape[1]
@@ -194,6 +196,7 @@ class _Vectors:
         self.q = q - shift
         self.view, self.k, self.weights = view, min(int(k), len(cb)), weights
         self.classes, self.codes = np.unique(cb.labels.astype(str), return_inverse=True)
+        self.balance = class_balance(cb.labels, self.classes) if balanced else None
         self.d2 = np.asarray(((self.C - self.q) ** 2) @ w, dtype=np.float64)
         # one column per feature: a weighted indicator of the view's columns, so a feature's
         # sum over columns is one matrix product
@@ -219,7 +222,7 @@ class _Vectors:
         k = self.k
         top = np.argpartition(d2, k - 1, axis=0)[:k] if k < len(d2) else np.argsort(d2, axis=0)
         d = np.sqrt(np.maximum(np.take_along_axis(d2, top, axis=0), 0.0)).T
-        proba = vote(d, self.codes[top].T, len(self.classes), self.weights)
+        proba = vote(d, self.codes[top].T, len(self.classes), self.weights, self.balance)
         others = np.delete(proba, target, axis=1).max(axis=1)
         return np.asarray(proba[:, target] - others, dtype=np.float64)
 
@@ -274,16 +277,18 @@ def counterfactual(
     answer: Answer,
     k: int = 5,
     weights: Weights = "distance",
+    balanced: bool = False,
 ) -> Counterfactual:
     """The sparsest valid counterfactual of problem ``values`` toward ``label`` over the
     :data:`GUIDES` (sequences: :data:`SEQUENCE_GUIDES`) nearest real cases of ``label``.
     ``answer`` classifies a problem as the classifier does (its retrieve and reuse: the final
     check); ``k`` and ``weights`` are its vote, which the search of vector problems under
-    euclidean distance follows exactly."""
+    euclidean distance follows exactly (``balanced``: each class's votes divided by its share
+    of the cases, :func:`cbr.reuse.class_balance`)."""
     view = view_of(cb)
     q = np.asarray(values, dtype=np.float64)
     exact = (
-        _Vectors(cb, view, q, k, weights)
+        _Vectors(cb, view, q, k, weights, balanced)
         if q.ndim == 1 and getattr(cb.measure, "name", "") == "euclidean"
         else None
     )

@@ -100,7 +100,7 @@ from .problem import (
 )
 from .retrieve import Retrieval, retrieve, retrieve_many
 from .reuse import WEIGHTINGS as VOTE_WEIGHTINGS
-from .reuse import Solution, reuse, solutions
+from .reuse import Solution, class_balance, reuse, solutions
 from .similarity import SimilarityMeasure, get_measure
 from .weights import MIRROR_FLAG, WEIGHTINGS
 
@@ -237,6 +237,8 @@ class _Choice:
 
 #: training clips classified held out to calibrate (vector problems: a full scan costs little)
 MAX_CALIBRATION_VECTORS = 2000
+#: the class weightings of the vote (``class_weight``)
+CLASS_WEIGHTS = ("balanced", "none")
 
 
 def _one_recording_frames(
@@ -274,6 +276,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     similarity: a registered measure name (``"euclidean"``, ``"dtw"``, ``"signature"``, ...).
     k: number of retrieved cases.
     weights: ``"distance"`` (1/d vote) or ``"uniform"``.
+    class_weight: ``"balanced"`` (each class's votes divided by its share of the cases:
+      :func:`cbr.reuse.class_balance`; a case base of 50 correct and 10 incorrect repetitions
+      does not answer "correct" by numbers alone) or ``"none"`` (every case votes alike).
     length: frames a fluent sequence is resampled to.
     states: fluent states (group name or list of machine names), see ``FeatureConfig``.
     similarity_params: parameters of the measure (e.g. ``{"band": 0.1}`` for dtw).
@@ -307,6 +312,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         similarity: str = "euclidean",
         k: int = 5,
         weights: str = "distance",
+        class_weight: str = "balanced",
         length: int = 32,
         states: str | Sequence[str] = "angles",
         similarity_params: dict[str, Any] | None = None,
@@ -323,6 +329,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.similarity = similarity
         self.k = k
         self.weights = weights
+        self.class_weight = class_weight
         self.length = length
         self.states = states
         self.similarity_params = similarity_params
@@ -375,6 +382,18 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             raise ConfigError(
                 f"weights must be 'distance' or 'uniform', got {self.weights!r}", "weights"
             )
+        if self.class_weight not in CLASS_WEIGHTS:
+            raise ConfigError(
+                f"class_weight must be 'balanced' or 'none', got {self.class_weight!r}",
+                "class_weight",
+            )
+
+    def _balance(self, case_labels: np.ndarray, classes: np.ndarray) -> np.ndarray | None:
+        """The vote factor of every class of ``classes`` given the voting cases' labels
+        (:func:`cbr.reuse.class_balance`), None when ``class_weight`` is "none"."""
+        if self.class_weight == "none":
+            return None
+        return class_balance(case_labels, classes)
 
     def _check_params(self) -> None:
         self._check_vote()
@@ -764,6 +783,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             int(self.k),
             self.weights,  # type: ignore[arg-type]
             frames=None if frames is None else (frames[0][query_clip][pick], frames[1]),
+            balanced=self.class_weight == "balanced",
         )
         skeletons = tuple(sorted({c.skeleton for c in clips}))
         # every training clip's summary against the feature ranges and the nearest clip of
@@ -894,6 +914,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             k,
             self.weights,  # type: ignore[arg-type]
             held_elsewhere(labels[pick][ok], folds[ok], labels[pick], folds),
+            self._balance(labels[pick], classes),
         )
 
     def _edit(self, cb: CaseBase) -> MaintenanceReport | None:
@@ -956,7 +977,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         distances = np.stack([w.distances for w in retrieved])
         codes = np.array([[code[str(lab)] for lab in w.labels] for w in retrieved],
                          dtype=np.int64).reshape(distances.shape)  # fmt: skip
-        voted = solutions(distances[:, :k], codes[:, :k], labels, self.weights)  # type: ignore[arg-type]
+        balance = self._balance(self.case_base_.labels, labels)
+        voted = solutions(distances[:, :k], codes[:, :k], labels, self.weights, balance)  # type: ignore[arg-type]
         scores = self.confidence_.scores(
             distances, codes, len(labels), [code[s.label] for s in voted],
             [s.vote_share for s in voted],
@@ -1005,6 +1027,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             unlike_ratio=self.novelty_.unlike_ratio,
             k=int(self.k),
             weights=self.weights,  # type: ignore[arg-type]
+            balanced=self.class_weight == "balanced",
             counterfactual_search=counterfactual,
             confidence=self.confidence_.words,
         )
@@ -1018,7 +1041,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         r = retrieve(self.case_base_, np.asarray(values), int(self.k))
         classes = self._class_labels()
         self._check_known(r.labels, set(classes.tolist()))
-        return reuse(r, classes, self.weights).label  # type: ignore[arg-type]
+        balance = self._balance(self.case_base_.labels, classes)
+        return reuse(r, classes, self.weights, balance).label  # type: ignore[arg-type]
 
     def refresh(self) -> None:
         """Follow changes to ``case_base_`` (revised or retained cases): the classes are the

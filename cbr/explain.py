@@ -734,13 +734,15 @@ def explain(
     unlike_ratio: float | None = None,
     k: int = 5,
     weights: Weights = "distance",
+    balanced: bool = False,
     counterfactual_search: bool = True,
     confidence: str,
 ) -> Explanation:
     """Explain one classification (:meth:`cbr.estimator.CaseBaseClassifier.solve`);
     ``answer`` classifies a problem the way the classifier does (to check counterfactuals);
     ``target`` the column the labels come from ("correct": repetition words); ``k`` and
-    ``weights`` the classifier's vote (the counterfactual search follows it);
+    ``weights`` the classifier's vote, ``balanced`` whether it divides each class's votes by
+    its share of the cases (the counterfactual search follows it);
     ``counterfactual_search`` False leaves the counterfactual out (callers that need the
     neighbours only: it costs a few retrievals per feature changed); ``confidence`` what the
     confidence is (:attr:`cbr.calibration.ConfidenceCalibration.words`), for the verbose
@@ -752,7 +754,9 @@ def explain(
     contrast = (
         None
         if near.other is None
-        else _contrast(cb, r, problem, near.other, answer, k, weights, counterfactual_search)
+        else _contrast(
+            cb, r, problem, near.other, answer, k, weights, counterfactual_search, balanced
+        )
     )
     lines = _short(cb, solved, target, outside, why, near.own, contrast)
     retrieval = solved.retrieval
@@ -853,6 +857,7 @@ def _contrast(
     k: int,
     weights: Weights,
     search: bool = True,
+    balanced: bool = False,
 ) -> Contrast:
     """The nearest case of another label (``other``: position, distance) and the checked
     counterfactual toward its label (``search`` False: none)."""
@@ -861,7 +866,7 @@ def _contrast(
     other_label = str(cb.labels[pos])
     if not search:
         return Contrast(other_label, int(cb.ids[pos]), cb.sources[pos], float(dist), position=pos)
-    cf = counterfactual(cb, np.asarray(problem.values), other_label, answer, k, weights)
+    cf = counterfactual(cb, np.asarray(problem.values), other_label, answer, k, weights, balanced)
     changes = [] if cf.guide is None else change_claims(r, cf, cb.problems[cf.guide])
     return Contrast(
         other_label, int(cb.ids[pos]), cb.sources[pos], float(dist), tuple(changes), cf.valid,

@@ -409,6 +409,9 @@ def _params(
     """The estimator's parameters: stored ones, or (a case base from before models were stored)
     the ones its configuration implies."""
     params = dict(model.get("params") or {})
+    if params and "class_weight" not in params:
+        # stored before the vote was class-balanced: it votes as it was calibrated
+        params["class_weight"] = "none"
     if not params:
         params = {
             "features": config.level,
