@@ -218,7 +218,9 @@ class ConfidenceCalibration:
     right: knots ``x`` (scores) and ``y`` (probabilities); ``basis`` how the training clips
     were held out, ``n`` how many; ``accuracy`` their held-out accuracy. The score is the
     answer's :func:`soft_vote` over the ``neighbours`` nearest cases at ``temperature``, or,
-    with ``neighbours`` 0 (calibrations stored before the soft vote), its vote share."""
+    with ``neighbours`` 0 (calibrations stored before the soft vote), its vote share.
+    ``balanced_accuracy``: the mean over the classes of their held-out clips' recall (known
+    at fit, not stored: NaN when read back)."""
 
     x: tuple[float, ...]
     y: tuple[float, ...]
@@ -227,6 +229,7 @@ class ConfidenceCalibration:
     accuracy: float
     temperature: float = 1.0
     neighbours: int = 0
+    balanced_accuracy: float = float("nan")
 
     @property
     def words(self) -> str:
@@ -353,7 +356,11 @@ def calibrate_soft(h: HeldOut, n_classes: int, basis: str,
     temperature = fit_temperature(d, c, h.truth, n_classes)
     score = soft_vote(d, c, n_classes, temperature)[np.arange(len(h.answer)), h.answer]
     cal = calibrate_confidence(score, h.right, basis)
-    return dataclasses.replace(cal, temperature=temperature, neighbours=n)
+    truth, right = np.asarray(h.truth), np.asarray(h.right, dtype=bool)
+    balanced = float(np.mean([right[truth == t].mean() for t in np.unique(truth)]))
+    return dataclasses.replace(
+        cal, temperature=temperature, neighbours=n, balanced_accuracy=balanced
+    )
 
 
 def expected_calibration_error(

@@ -267,6 +267,13 @@ def _learned(clf: CaseBaseClassifier) -> dict[str, Any]:
         "confidence_calibrated_on": int(clf.confidence_.n),
         # the share of those clips answered right (None when none could be held out)
         "held_out_accuracy": float(clf.confidence_.accuracy) if clf.confidence_.n else None,
+        # the mean of each class's share answered right (the vote is class-balanced: always
+        # answering one class scores one over the classes)
+        "held_out_balanced_accuracy": (
+            float(clf.confidence_.balanced_accuracy)
+            if clf.confidence_.n and np.isfinite(clf.confidence_.balanced_accuracy)
+            else None
+        ),
     }
 
 

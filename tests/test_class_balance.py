@@ -148,3 +148,53 @@ def test_real_side_lunges_few_incorrect_no_longer_all_correct(shared_data: Path)
     assert np.mean(plain == "correct") >= 0.9
     assert np.mean(balanced[truth == "incorrect"] == "incorrect") >= 0.5
     assert balanced_accuracy(balanced) >= balanced_accuracy(plain) + 0.15
+
+
+def _note(capsys: pytest.CaptureFixture[str], accuracy: float, balanced: float | None) -> str:
+    from argparse import Namespace
+    from types import SimpleNamespace
+
+    from posecbr.commands.train import _note_chance
+
+    learned = {
+        "confidence_calibrated_on": 60,
+        "held_out_accuracy": accuracy,
+        "held_out_balanced_accuracy": balanced,
+    }
+    result = SimpleNamespace(learned=learned, trained_counts={"correct": 50, "incorrect": 10})
+    _note_chance(Namespace(append=False, split="clips", target="correct"), result)
+    return capsys.readouterr().err
+
+
+def test_train_judges_an_imbalanced_case_base_by_each_class_found(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """50 correct and 10 incorrect training clips, held out by subject: a balanced vote that
+    finds 80 % of each class is right 80 % of the time, below the 83 % (50 of 60) of always
+    answering "correct", and was noted as no better than a guess; judged by the mean of the
+    classes' recalls (80 % against one of two, 50 %) it is not."""
+    assert _note(capsys, 0.8, 0.8) == ""
+    said = _note(capsys, 0.7, 0.45)
+    assert said == (
+        "note: held out in turn, the training clips of each class were answered right 45 % "
+        "of the time on average, no better than always answering one of the 2 (50 %): this "
+        "case base does not tell its classes apart (more people, or clips of one movement per "
+        "case base, may)\n"
+    )
+    # without the classes' recalls (a case base stored before): the plain rule
+    assert "no better than always answering a correct repetition (83 %)" in _note(capsys, 0.8, None)
+
+
+def test_the_calibration_keeps_the_held_out_classes_mean_recall() -> None:
+    from cbr.calibration import HeldOut, calibrate_soft
+
+    # three clips of class 0 answered right, one of class 1 answered wrong (as class 0):
+    # accuracy 3/4, the classes' recalls 1 and 0: mean 1/2
+    d = np.array([[1.0, 2.0], [1.0, 3.0], [2.0, 2.5], [1.0, 1.5]])
+    codes = np.array([[0, 1], [0, 1], [0, 1], [0, 1]])
+    truth = np.array([0, 0, 0, 1])
+    answer = np.zeros(4, dtype=np.int64)
+    h = HeldOut(d[:, 0], np.full(4, 0.6), answer == truth, answer, d, codes, truth, 1)
+    cal = calibrate_soft(h, 2, "test")
+    assert cal.accuracy == pytest.approx(0.75)
+    assert cal.balanced_accuracy == pytest.approx(0.5)

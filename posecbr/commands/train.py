@@ -934,6 +934,27 @@ def _note_chance(args: argparse.Namespace, result: Any) -> None:
     counts = result.trained_counts
     if args.append or not n or accuracy is None or len(counts) < 2:
         return
+    balanced = result.learned.get("held_out_balanced_accuracy")
+    if balanced is not None and len(set(counts.values())) > 1:
+        # classes of unequal counts, a class-balanced vote: judged by the mean of each class's
+        # share answered right, which always answering one class scores one over the classes
+        # (50 correct and 10 incorrect: 83 % for always "correct" by plain accuracy, which a
+        # balanced vote that finds the incorrect ones may not beat)
+        chance = 1 / len(counts)
+        if balanced > chance:
+            return
+        print(
+            shown(
+                f"note: held out in turn, the training {CASE_KINDS.get(args.split, 'clip')}s "
+                f"of each {class_noun(args.target)} were answered right {percent(balanced, 0)}"
+                f" of the time on average, no better than always answering one of the "
+                f"{len(counts)} ({percent(chance, 0)}): this case base does not tell its "
+                f"{class_noun(args.target, 2)} apart (more people, or clips of one movement "
+                "per case base, may)"
+            ),
+            file=sys.stderr,
+        )
+        return
     commonest = max(counts, key=lambda k: counts[k])
     share = counts[commonest] / sum(counts.values())
     if accuracy > share:
