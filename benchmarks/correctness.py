@@ -11,16 +11,17 @@ people, 10 correct and 10 incorrect each: 60 per movement) classified. Two train
   (50 correct against 10 incorrect cases), the way a physiotherapist's recordings lean.
 
 Each fitted case base answers twice, its vote class-balanced (each class's votes divided by
-its share of the cases, the default) and not (``class_weight="none"``, the vote before): the
-cases, feature weights and side handling are the same, only the vote differs. Figures:
+its share of the cases: what ``train --target`` and ``compare --target`` use for a column other
+than the activity) and not (``class_weight="none"``, the vote before): the cases, feature
+weights and side handling are the same, only the vote differs. Figures:
 balanced accuracy (the mean of the two recalls; the commonest-class rate of the held-out
 repetitions is 50 %), and the share of answers "correct" (an all-"correct" case base shows
 100 %), per movement and configuration (fluents under euclidean, dtw and signature; QMPs
 under euclidean).
 
 The activity (movement, action) check: leave-one-subject-out accuracy of fluents/euclidean,
-balanced against not, on UI-PRMD Kinect and Vicon movements and HDM05 actions (Vicon's s03
-has 9 repetitions a movement, HDM05's actions 8-24 clips: a balanced vote can move them).
+balanced against not, on UI-PRMD Kinect and Vicon movements and HDM05 actions (HDM05's
+actions have 9-36 clips: a balanced vote can move them; activities keep the plain vote).
 
 Prints the tables and writes ``benchmarks/results/correctness.json`` with machine and versions.
 

@@ -276,9 +276,12 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     similarity: a registered measure name (``"euclidean"``, ``"dtw"``, ``"signature"``, ...).
     k: number of retrieved cases.
     weights: ``"distance"`` (1/d vote) or ``"uniform"``.
-    class_weight: ``"balanced"`` (each class's votes divided by its share of the cases:
-      :func:`cbr.reuse.class_balance`; a case base of 50 correct and 10 incorrect repetitions
-      does not answer "correct" by numbers alone) or ``"none"`` (every case votes alike).
+    class_weight: ``"none"`` (every case votes alike: the classes' counts act as their prior,
+      as an activity's share of the recordings is) or ``"balanced"`` (each class's votes
+      divided by its share of the cases, :func:`cbr.reuse.class_balance`: a case base of 50
+      correct and 10 incorrect repetitions does not answer "correct" by numbers alone; what
+      ``posecbr train --target`` and ``compare --target`` use for a column other than the
+      activity).
     length: frames a fluent sequence is resampled to.
     states: fluent states (group name or list of machine names), see ``FeatureConfig``.
     similarity_params: parameters of the measure (e.g. ``{"band": 0.1}`` for dtw).
@@ -312,7 +315,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         similarity: str = "euclidean",
         k: int = 5,
         weights: str = "distance",
-        class_weight: str = "balanced",
+        class_weight: str = "none",
         length: int = 32,
         states: str | Sequence[str] = "angles",
         similarity_params: dict[str, Any] | None = None,

@@ -1,6 +1,7 @@
-"""The class-balanced vote (``CaseBaseClassifier(class_weight="balanced")``, the default): a case
-base of many correct and few incorrect repetitions answered "correct" by numbers alone; now each
-class's votes are divided by its share of the cases. Votes worked out by hand."""
+"""The class-balanced vote (``CaseBaseClassifier(class_weight="balanced")``, what ``train
+--target`` and ``compare --target`` use for a column other than the activity): a case base of
+many correct and few incorrect repetitions answered "correct" by numbers alone; now each class's
+votes are divided by its share of the cases. Votes worked out by hand."""
 
 from __future__ import annotations
 
@@ -73,11 +74,12 @@ def squats() -> CaseBaseClassifier:
     """Ten deep squats labelled correct (depth 0.90-0.99), two shallow ones incorrect."""
     X = [squat_clip(0.9 + 0.01 * n, source=f"deep {n}") for n in range(10)]
     X += [squat_clip(d, source=f"shallow {d}") for d in (0.3, 0.35)]
-    return CaseBaseClassifier().fit(X, ["correct"] * 10 + ["incorrect"] * 2)
+    clf = CaseBaseClassifier(class_weight="balanced")
+    return clf.fit(X, ["correct"] * 10 + ["incorrect"] * 2)
 
 
-def test_the_classifier_votes_balanced_by_default(squats: CaseBaseClassifier) -> None:
-    assert squats.class_weight == "balanced"
+def test_the_classifier_votes_balanced_when_asked(squats: CaseBaseClassifier) -> None:
+    assert CaseBaseClassifier().class_weight == "none"  # activities vote as they occur
     # a half-deep squat: its two nearest cases are the shallow (incorrect) ones, the next three
     # deep ones, a little further: 1/d alone says correct, balanced (factors 6/10 and 6/2)
     # incorrect
@@ -135,9 +137,8 @@ def test_real_side_lunges_few_incorrect_no_longer_all_correct(shared_data: Path)
     ]
     test = [c for c in clips if c.subject in {"s06", "s07", "s08"}]
     truth = np.array([clip_target(c, "correct") for c in test])
-    clf = CaseBaseClassifier().fit(
-        [c.seq for c in train], [clip_target(c, "correct") for c in train]
-    )
+    clf = CaseBaseClassifier(class_weight="balanced")
+    clf.fit([c.seq for c in train], [clip_target(c, "correct") for c in train])
 
     def balanced_accuracy(answers: np.ndarray) -> float:
         return float(np.mean([np.mean(answers[truth == k] == k) for k in ("correct", "incorrect")]))
@@ -198,3 +199,44 @@ def test_the_calibration_keeps_the_held_out_classes_mean_recall() -> None:
     cal = calibrate_soft(h, 2, "test")
     assert cal.accuracy == pytest.approx(0.75)
     assert cal.balanced_accuracy == pytest.approx(0.5)
+
+
+@pytest.mark.parametrize("target", ["correct", None])
+def test_train_votes_a_repetition_check_balanced_and_activities_as_they_occur(
+    tmp_path: Path, target: str | None
+) -> None:
+    from casebase_store import open_store
+    from cbr.stored import load_classifier
+    from features.poses import save_pose
+    from posecbr.cli import main
+
+    rows = ["path,label,subject,correct"]
+    for subject in ("s1", "s2"):
+        for n in range(3):
+            for truth, depth in (("true", 0.9 + 0.02 * n), ("false", 0.4 + 0.02 * n)):
+                name = f"{subject}_{truth}_{n}.npz"
+                save_pose(squat_clip(depth, source=name), tmp_path / name)
+                rows.append(f"{name},{'squat' if truth == 'true' else 'lunge'},{subject},{truth}")
+    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(tmp_path / "labels.csv"), "--db", str(db)]
+    assert main(argv + (["--target", target] if target else [])) == 0
+    store = open_store(str(db), readonly=True)
+    try:
+        clf = load_classifier(store, "default").classifier
+    finally:
+        store.close()
+    assert clf.class_weight == ("balanced" if target else "none")
+
+
+def test_compare_votes_another_column_balanced_unless_told() -> None:
+    from cbr.evaluation.methods import _cbr_methods
+    from cbr.evaluation.settings import CompareSettings
+
+    def weights(**kw: object) -> set[str]:
+        settings = CompareSettings(peers=(), dad=False, **kw)  # type: ignore[arg-type]
+        return {m.params["class_weight"] for m in _cbr_methods(settings)}
+
+    assert weights() == {"none"}
+    assert weights(target="correct") == {"balanced"}
+    assert weights(target="correct", cbr_params={"class_weight": "none"}) == {"none"}

@@ -35,6 +35,8 @@ def _cbr_methods(settings: CompareSettings) -> list[Method]:
                 "similarity": sim,
                 "k": int(settings.k),
                 "trim": settings.trim,
+                # as posecbr train: another column than the activity votes class-balanced
+                "class_weight": "none" if settings.target == "label" else "balanced",
                 **settings.cbr_params,
             },
         )

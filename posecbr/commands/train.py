@@ -237,6 +237,10 @@ def _estimator(args: argparse.Namespace) -> Any:
         positions=not args.no_positions,
         trim=args.trim,
         editor=args.editor,
+        # a repetition check (--target correct): what was recorded, not how often each class
+        # occurs, sets its counts (many correct repetitions, few incorrect), so each class's
+        # votes count by its share of the cases; activities vote as they occur
+        class_weight="none" if args.target == "label" else "balanced",
     )
     try:  # bad --states / --length / -k: one line before any clip is read
         estimator.wanted_config()
