@@ -8,7 +8,7 @@ import pytest
 
 # benchmarks that take no options: `python -m benchmarks.<name> --help` ran the whole
 # benchmark (ceiling: about 4 minutes) and overwrote its results file
-NO_OPTIONS = ("segment_cuts", "segment_live", "ceiling", "inner_sample")
+NO_OPTIONS = ("segment_cuts", "segment_live", "ceiling", "inner_sample", "correctness")
 
 
 @pytest.mark.parametrize("name", NO_OPTIONS)
