@@ -67,7 +67,9 @@ def test_the_chance_note_counts_the_clips_held_out_not_the_edited_cases(
     out by person is answered wrong), 6 correct and 2 incorrect clips each: the commonest
     class is "correct", 12 of the 16 clips held out, 75 %. With ``--editor cnn`` the note
     gave the share among the cases the editor kept (10 of 16: "(60 %)"), not among the
-    clips answered."""
+    clips answered. The counts are unequal (12 against 4), so a repetition check's vote is
+    class-balanced and the note compares the classes' mean held-out recall (0 %) with one
+    over the classes (50 %) instead."""
     from features.poses import save_pose
     from posecbr.cli import main
     from tests.test_hunt34e import _arm_raises
@@ -86,8 +88,8 @@ def test_the_chance_note_counts_the_clips_held_out_not_the_edited_cases(
     assert "CNN: 16 -> " in out  # the editor left fewer cases than clips
     notes = [line for line in err.splitlines() if "no better than" in line]
     assert len(notes) == 1
-    assert "answered right 0 % of the time (0 of 16)" in notes[0]
-    assert "no better than always answering a correct repetition (75 %)" in notes[0]
+    assert "clips of each class were answered right 0 % of the time on average" in notes[0]
+    assert "no better than always answering one of the 2 (50 %)" in notes[0]
 
 
 def test_a_worker_whose_sigterm_cut_its_last_task_short_begins_no_other() -> None:
