@@ -25,7 +25,7 @@ plain vote; UI-PRMD's movements have equal counts, where the two votes are the s
 
 Prints the tables and writes ``benchmarks/results/correctness.json`` with machine and versions.
 
-    python -m benchmarks.correctness    # about 25 min on 2 cores at load 15-19
+    python -m benchmarks.correctness    # about 15 min on 2 cores (907 s at load 16-17)
 """
 
 from __future__ import annotations
