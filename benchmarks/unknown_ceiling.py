@@ -3,15 +3,16 @@ judges: is the gap to issue 14's goal (left-out blocks called unknown >= 80 %, s
 right >= 95 %) the judge's or the features'?
 
 Run: ``python -m benchmarks.unknown_ceiling [--datasets ...] [--left-out N] [--per-person N]
-[--cache DIR]`` (at load 10-16 on 2 cores: HDM05 about 4 minutes, 10 with ``--per-person
-3``; UI-PRMD Vicon and Kinect 3-4 minutes per left-out movement, most of it fitting each
-case base, and a few minutes of DTW per fold; ``--left-out N`` keeps N of a fold's
+[--cache DIR] [--smooth-jitter]`` (at load 10-16 on 2 cores: HDM05 about 4 minutes, 10 with
+``--per-person 3``; UI-PRMD Vicon and Kinect 3-4 minutes per left-out movement, most of it
+fitting each case base, and a few minutes of DTW per fold; ``--left-out N`` keeps N of a fold's
 movements, evenly spaced in sorted order, and the results name the movements measured;
 ``--per-person N``: segment_people's, more test recordings per person; ``--cache DIR``
 keeps each left-out movement's and each fold's DTW measurements, so an interrupted run
 resumes and a run of several datasets reuses single runs'). Writes
 ``benchmarks/results/unknown_ceiling.json`` (``unknown_ceiling_perN.json`` with
-``--per-person N``).
+``--per-person N``; ``..._smoothed.json`` with ``--smooth-jitter``: every file's joints
+smoothed as their own jitter asks, :func:`features.jitter.smooth_jitter`).
 
 The folds, recordings, readers and case bases are :mod:`benchmarks.segment_people`'s (one
 recording per held-out person, seed 0): each movement of the test recordings left out of the
@@ -620,17 +621,37 @@ def spaced(items: list[str], n: int | None) -> list[str]:
     return [items[int(i)] for i in np.linspace(0, len(items) - 1, n).round().astype(int)]
 
 
+class SmoothedReader(Reader):
+    """:class:`benchmarks.segment_people.Reader` with every repetition file's joints smoothed
+    as their own jitter asks (:func:`features.jitter.smooth_jitter`), before joining: training
+    and test alike (``--smooth-jitter``)."""
+
+    def __call__(self, group: Group, path: Path) -> Any:
+        from features.jitter import smooth_jitter
+
+        if path not in self.cache:
+            self.cache[path] = smooth_jitter(super().__call__(group, path))
+        return self.cache[path]
+
+
 def run_dataset(
-    dataset: str, left_out: int | None, cache: Path | None, per_person: int = 1, seed: int = 0
+    dataset: str,
+    left_out: int | None,
+    cache: Path | None,
+    per_person: int = 1,
+    seed: int = 0,
+    smooth: bool = False,
 ) -> list[tuple[str, str, dict[str, Any]]]:
-    """``(fold, movement, measured)`` for every fold of ``dataset`` and each movement left out."""
+    """``(fold, movement, measured)`` for every fold of ``dataset`` and each movement left out
+    (``smooth``: every file read through :class:`SmoothedReader`)."""
     from features.progress import progress
 
-    read = Reader()
+    read = SmoothedReader() if smooth else Reader()
     out = []
     for fold in folds(dataset, per_person, seed, read):
         tag = f"v{CACHE_VERSION}-{dataset}-{fold.name.replace(' ', '_')}-seed{seed}"
         tag += f"-per{per_person}" if per_person != 1 else ""
+        tag += "-smoothed" if smooth else ""
         joined = joined_training(fold.train, read)
         movements = spaced(sorted({m for r in fold.recordings for m in r.movements}), left_out)
         measured = {}
@@ -644,6 +665,7 @@ def run_dataset(
         describe_once = cache_once(partial(fold_described, joined))
         # the case bases do not depend on --per-person: one scan for every run
         htag = f"v{CACHE_VERSION}-{dataset}-{fold.name.replace(' ', '_')}-seed{seed}"
+        htag += "-smoothed" if smooth else ""
         for m, v in measured.items():
             held = _cached(cache, f"{htag}-{m}-held", partial(measure_held, describe_once, m))
             if held["cases"] != v["cases"]:
@@ -718,6 +740,12 @@ def main(argv: list[str] | None = None) -> int:
         metavar="DIR",
         help="keep each fold's measurements here (a rerun resumes)",
     )
+    parser.add_argument(
+        "--smooth-jitter",
+        action="store_true",
+        help="smooth every joint as its own measured jitter asks (features.jitter), training "
+        "and test alike; writes unknown_ceiling_smoothed.json",
+    )
     args = parser.parse_args(argv)
     if args.left_out is not None and args.left_out < 1:
         parser.error(f"--left-out must be at least 1, got {args.left_out}")
@@ -733,7 +761,9 @@ def main(argv: list[str] | None = None) -> int:
     summary: dict[str, Any] = {}
     for dataset in args.datasets:
         t0 = time.perf_counter()
-        measured = run_dataset(dataset, args.left_out, args.cache, args.per_person)
+        measured = run_dataset(
+            dataset, args.left_out, args.cache, args.per_person, smooth=args.smooth_jitter
+        )
         summary[dataset] = {**dataset_summary(measured), "wall_s": time.perf_counter() - t0,
                             "left_out": sorted({m for _, m, _ in measured})}  # fmt: skip
         print_table({dataset: summary[dataset]})
@@ -743,7 +773,8 @@ def main(argv: list[str] | None = None) -> int:
         "command": "python -m benchmarks.unknown_ceiling --datasets "
         + " ".join(args.datasets)
         + (f" --left-out {args.left_out}" if args.left_out else "")
-        + (f" --per-person {args.per_person}" if args.per_person != 1 else ""),
+        + (f" --per-person {args.per_person}" if args.per_person != 1 else "")
+        + (" --smooth-jitter" if args.smooth_jitter else ""),
         "note": "window level, as cbr.unknown's judges see each window; oracle: the threshold "
         "read from the test windows themselves, the lowest keeping >= 95 % of known windows "
         "known; calibrated: from the case base alone (held out by training person)",
@@ -759,6 +790,8 @@ def main(argv: list[str] | None = None) -> int:
     out = RESULTS
     if args.per_person != 1:
         out = RESULTS.with_name(f"unknown_ceiling_per{args.per_person}.json")
+    if args.smooth_jitter:
+        out = out.with_name(f"{out.stem}_smoothed.json")
     write_json(result, out)
     print(f"\nwrote {out.relative_to(ROOT)}")
     return 0

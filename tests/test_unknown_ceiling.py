@@ -115,3 +115,26 @@ def test_logistic_fusion_orders_windows_by_the_held_out_novel_side() -> None:
     novel = {"a": rng.uniform(3, 6, 50), "b": rng.uniform(1, 2, 50)}  # only a tells them apart
     s = logistic_fused(known, novel, {"a": np.array([1.5, 4.0, np.inf]), "b": np.ones(3)})
     assert s[0] < 0 < s[1] <= s[2]  # known side, novel side; inf at the top of the range
+
+
+def test_smoothed_reader_smooths_each_file_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    # --smooth-jitter: every file read is features.jitter.smooth_jitter's of it, made once
+    from pathlib import Path
+
+    import benchmarks.segment_people as sp
+    from benchmarks.repetitions import Group
+    from benchmarks.unknown_ceiling import SmoothedReader
+    from features.jitter import smooth_jitter
+    from features.poses import BLAZEPOSE_33, PoseSequence
+
+    pos = np.repeat(np.arange(99, dtype=np.float64).reshape(1, 33, 3) / 100.0, 60, axis=0)
+    pos[:, 15, 0] += 0.01 * (-1.0) ** np.arange(60)  # 1 cm of jitter on the left wrist
+    raw = PoseSequence(pos, BLAZEPOSE_33, 30.0)
+    reads = []
+    monkeypatch.setattr(sp, "read_one", lambda g, p: reads.append(p) or raw)
+    read = SmoothedReader()
+    group = Group("ui-prmd-kinect", "s01", "m01", (Path("a"),))
+    got = read(group, Path("a"))
+    assert np.array_equal(got.positions, smooth_jitter(raw).positions)
+    assert not np.array_equal(got.positions, raw.positions)
+    assert read(group, Path("a")) is got and reads == [Path("a")]
