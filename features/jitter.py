@@ -78,7 +78,7 @@ def smooth_jitter(
     x = np.array(seq.positions, dtype=np.float64)
     for j in np.flatnonzero(g):
         col = x[:, j]  # (frames, 3)
-        present = np.isfinite(col).all(axis=1)
+        present: np.ndarray = np.asarray(np.isfinite(col).all(axis=1))
         weight = gaussian_filter1d(present.astype(np.float64), g[j], mode="nearest")
         total = gaussian_filter1d(np.where(present[:, None], col, 0.0), g[j], axis=0,
                                   mode="nearest")  # fmt: skip
