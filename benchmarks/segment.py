@@ -85,7 +85,7 @@ class Recording:
 
 
 def load_recordings() -> dict[str, Recording]:
-    from features.datasets import frame_labels, read_label_track
+    from features.label_tracks import frame_labels, read_label_track
     from features.readers.asfamc import read_asf_amc
 
     names = {str(k): v for k, v in CODES.items()}
@@ -104,8 +104,9 @@ def training_clips(
     recs: list[Recording], leave_out: str | None = None, cases: str = CASES[0]
 ) -> list[Any]:
     """The labelled stretches of ``recs`` cut into windows or repetitions (``train --split``)."""
-    from features.datasets import Clip, labelled_stretches
+    from features.datasets import Clip
     from features.derived import stretch
+    from features.label_tracks import labelled_stretches
     from features.repetitions import split_repetitions, split_windows
 
     clips = []

@@ -167,8 +167,8 @@ def cmu_case_base() -> tuple[Any, list[tuple[Any, str]]]:
     """The README example's classifier of all three CMU 13 recordings, and their labelled
     stretches ``(seq, label)`` for the DTW baseline's training windows."""
     from benchmarks.segment import RECORDINGS, fit, load_recordings, training_clips
-    from features.datasets import labelled_stretches
     from features.derived import stretch
+    from features.label_tracks import labelled_stretches
 
     recs = load_recordings()
     clf = fit(training_clips([recs[n] for n in RECORDINGS]))

@@ -890,7 +890,7 @@ def counted_segments(
 
 def _frames_of(a: int, b: int, fps: float, n_frames: int) -> tuple[int, int]:
     """Frames [start, end) of blocks [a, b): a block's first frame is the first whose time
-    lies in it, as a label file's blocks are read (:func:`features.datasets.frame_labels`)."""
+    lies in it, as a label file's blocks are read (:func:`features.label_tracks.frame_labels`)."""
     per_block = fps * BLOCK_S
     return _first_frame(a, per_block), min(n_frames, _first_frame(b, per_block))
 

@@ -280,6 +280,17 @@ def _names_an_open_stream(out: Path) -> bool:
     return False
 
 
+def path_exists(path: Path, lead: str = "", where: Path | None = None) -> bool:
+    """Whether ``path`` exists; a path the system cannot even look up (too long, a NUL
+    character) is a DataError naming ``where`` (default: the path), its message after
+    ``lead``."""
+    try:
+        return path.exists()
+    except (OSError, ValueError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise DataError(f"{lead}cannot use the path ({reason})", where or path) from None
+
+
 def check_lookup(path: Path, what: str) -> None:
     """A DataError naming ``path`` when the system cannot even look it up (a file name over
     255 bytes): asked whether it is a folder, Python raises there, a traceback."""

@@ -10,7 +10,7 @@ import pytest
 from sqlalchemy.engine import make_url
 
 from cbr.segmentation import BLOCK_S, _frames_of
-from features.datasets import frame_labels
+from features.label_tracks import frame_labels
 from tests.badinput import refused
 from tests.test_store_postgres import pg_server as pg_server  # noqa: F401  (fixture)
 from tests.test_store_postgres import pg_url as pg_url  # noqa: F401  (fixture)

@@ -182,7 +182,7 @@ def test_a_labels_csv_names_where_it_looked_for_a_relative_path(
 def test_a_label_file_too_long_for_a_one_frame_recording_counts_in_words() -> None:
     """A label file of 24 for a recording of one frame read "... do not fit the recording
     one.amc: 1 frames at 120 fps": a count of one is singular, as the verb of one label is."""
-    from features.datasets import frame_labels
+    from features.label_tracks import frame_labels
 
     with pytest.raises(DataError, match=r"3 labels \(one per frame\) do not fit the recording"
                        r" one.amc: 1 frame at 120 fps need 1 or 2 "):  # fmt: skip
@@ -235,7 +235,7 @@ def test_label_codes_not_named_say_what_the_names_file_names(tmp_path: Path) -> 
     """A names file written "1: JumpJack" names the code "1:": the label file's codes 1 and
     2 were "not in the label names", of a file the user sees naming 1 and 2. The codes it
     does name are shown."""
-    from features.datasets import read_label_names, read_label_track
+    from features.label_tracks import read_label_names, read_label_track
 
     (tmp_path / "names.txt").write_text("1: JumpJack\n2: Jog\n")
     (tmp_path / "track.txt").write_text("1 1 2 2\n")

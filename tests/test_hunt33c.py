@@ -231,7 +231,7 @@ def test_a_label_file_may_hold_comments_as_a_label_names_file_may(
     frame) do not fit the recording rec.npz: 60 frames at 30 fps need 60 or 61"), or with
     comments in the right number shifted every label. Now a comment is a comment there too;
     with a BOM, CRLF line ends, tabs and blank lines at the end."""
-    from features.datasets import read_label_track
+    from features.label_tracks import read_label_track
 
     track = tmp_path / "labels.txt"
     body = (
@@ -443,8 +443,8 @@ def test_a_label_block_too_short_to_count_is_refused_not_a_traceback(tmp_path: P
     ended in "OverflowError: cannot convert float infinity to integer"; now a DataError
     naming the label file. A block longer than the recording needs one label, said as
     "need 1" (it said "need 0 or 1"), and a file on one line gets no hint about its lines."""
-    from features.datasets import frame_labels
     from features.errors import DataError
+    from features.label_tracks import frame_labels
 
     with pytest.raises(DataError, match="too short for 60 frames at 30 fps") as info:
         frame_labels(["a", "b"], 60, 30.0, 1e-320, "labels.txt")
@@ -508,7 +508,7 @@ def test_a_hash_inside_a_label_is_part_of_it_not_a_comment(tmp_path: Path) -> No
     """A comment starts at a ``#`` that begins a word; ``take#2`` (inside a word) is a label
     whole, in a label file and in a label names file. The comment rule cut it to ``take``
     without a word, so takes 1 and 2 became one activity."""
-    from features.datasets import read_label_names, read_label_track
+    from features.label_tracks import read_label_names, read_label_track
 
     track = tmp_path / "labels.txt"
     track.write_text("take#1 take#1 # first take\ntake#2,take#2,#second\n")

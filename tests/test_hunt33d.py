@@ -178,7 +178,8 @@ def _windows_classifier(
     """The classifier ``train --split windows`` makes of 13_29's and 13_30's labelled
     stretches (and ``extra`` clips)."""
     from cbr.estimator import CaseBaseClassifier
-    from features.datasets import Clip, LabelTrack, split_by_track
+    from features.datasets import Clip, split_by_track
+    from features.label_tracks import LabelTrack
     from features.repetitions import split_windows
 
     names = tmp_path / "names.txt"

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from features.datasets import read_label_track
 from features.errors import DataError
+from features.label_tracks import read_label_track
 from features.poses import save_pose
 from tests.badinput import refused, standing_clip
 

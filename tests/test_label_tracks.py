@@ -10,16 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from features.datasets import (
+from features.datasets import iter_recording, load_dataset
+from features.errors import DataError
+from features.label_tracks import (
     LabelTrack,
     frame_labels,
-    iter_recording,
     labelled_stretches,
-    load_dataset,
     read_label_names,
     read_label_track,
 )
-from features.errors import DataError
 from features.poses import PoseSequence, save_pose
 from features.readers.asfamc import read_asf_amc
 from features.repetitions import count_repetitions, split_repetitions

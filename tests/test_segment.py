@@ -40,14 +40,9 @@ from cbr.segmentation import (
 )
 from cbr.unknown import ActivityMargin, Margin
 from features.body import mirrored, moves_left_more
-from features.datasets import (
-    Clip,
-    LabelTrack,
-    frame_labels,
-    read_label_names,
-    read_label_track,
-)
+from features.datasets import Clip
 from features.derived import stretch
+from features.label_tracks import LabelTrack, frame_labels, read_label_names, read_label_track
 from features.poses import PoseSequence, save_pose
 from features.readers.asfamc import read_asf_amc
 from features.repetitions import Repetition, movement_signals, split_windows

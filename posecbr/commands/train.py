@@ -308,7 +308,8 @@ def _check_append(args: argparse.Namespace) -> None:
 def _recording_clips(args: argparse.Namespace, activities: list[str] | None) -> list[Any]:
     """The labelled stretches of one recording (``--frame-labels``), read as ``segment``
     reads it (``--asf``, ``--fps``)."""
-    from features.datasets import LabelTrack, recording_clips
+    from features.datasets import recording_clips
+    from features.label_tracks import LabelTrack
 
     track = LabelTrack(args.frame_labels, args.label_block, args.label_names)
     seq = load_recording(args.data, args.asf, args.fps)
@@ -558,7 +559,7 @@ def _note_shared_names(args: argparse.Namespace, path: Path) -> None:
     or a slip of the pen). Said with the other notes, once the training is done."""
     from collections import defaultdict
 
-    from features.datasets import read_label_names
+    from features.label_tracks import read_label_names
 
     codes: dict[str, list[str]] = defaultdict(list)
     for code, name in read_label_names(path).items():
@@ -594,7 +595,7 @@ def _read_frame_labels(args: argparse.Namespace) -> None:
     """Read the ``--frame-labels`` file (and its names) before the recording: a malformed or
     empty label file is one error at once, not after the recording is decoded (a video's
     poses estimated). Whether its count fits the recording is checked once that is read."""
-    from features.datasets import read_label_names, read_label_track
+    from features.label_tracks import read_label_names, read_label_track
 
     names = read_label_names(args.label_names) if args.label_names is not None else None
     read_label_track(args.frame_labels, names)

@@ -1,0 +1,295 @@
+"""Recordings labelled over time: label files (one label per frame, or per block of seconds,
+as in cmu-mocap6/truelabels), the files naming their codes, and the label of every frame.
+
+- :class:`LabelTrack`: how a recording is labelled (label file, block length, names file);
+- :func:`read_label_track`, :func:`read_label_names`: the files read, refusing what would put
+  labels on the wrong frames (a table of times, a header line, NUL characters, another
+  encoding) with one line naming the file;
+- :func:`frame_labels`: the label of every frame, the count fitted to the recording;
+- :func:`labelled_stretches`: runs of one label.
+
+How a labels CSV names a track and cuts a recording by it is :mod:`features.datasets`'.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from features.errors import DataError
+from features.fileio import path_exists
+from features.text import counted
+
+
+@dataclass(frozen=True)
+class LabelTrack:
+    """How a recording is labelled over time: the label file, the seconds each label covers
+    (None: one label per frame) and an optional file naming the codes."""
+
+    path: Path
+    block_s: float | None = None
+    names: Path | None = None
+
+    def __post_init__(self) -> None:
+        if self.block_s is not None and not (np.isfinite(self.block_s) and self.block_s > 0):
+            raise DataError(
+                f"the label block must be a finite number of seconds > 0, got {self.block_s!r}",
+                self.path,
+            )
+
+
+def _read_label_text(path: Path, what: str) -> str:
+    """The text of a label or label names file (a BOM dropped); one DataError naming the file
+    otherwise, as every other input says it: a folder, a missing file, a pipe ("the label file
+    is a folder, not a file", not Python's "[Errno 21] Is a directory"), or a file in another
+    encoding (a Windows code page) by the line and byte of its first character that is not
+    UTF-8, as a labels CSV's is."""
+    if not path_exists(path):
+        raise DataError(f"no such {what}", path)
+    if path.is_dir():
+        raise DataError(f"the {what} is a folder, not a file", path)
+    _refuse_a_pipe(path, f"a {what}")
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise DataError(f"cannot read the {what} ({exc.strerror or exc})", path) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+            raise DataError("UTF-16 text (its byte order mark): save it as UTF-8", path) from None
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise DataError(
+            f"not UTF-8 text ({exc.reason} at byte {exc.start}, line {line}): save it as UTF-8",
+            path,
+        ) from None
+
+
+def _refuse_a_pipe(path: Path, what: str) -> None:
+    """Refuse a pipe, socket or device (reading a pipe waits for a writer that may never
+    come); a folder or a missing file is refused by the read, naming the reason."""
+    if path_exists(path) and not path.is_file() and not path.is_dir():
+        raise DataError(f"is a pipe, socket or device, not {what}", path)
+
+
+_COMMENT = re.compile(r"(?:^|(?<=[\s,]))#.*")
+
+
+def _uncommented(line: str) -> str:
+    """``line`` without its comment: from a ``#`` that begins a word (at the line's start,
+    or after a space, tab or comma) to the end; a ``#`` inside a label (``take#2``) is part
+    of it."""
+    return _COMMENT.sub("", line)
+
+
+def read_label_names(path: str | Path) -> dict[str, str]:
+    """Names of label codes: one ``code name`` pair per line (space, tab or comma between;
+    ``#`` starts a comment). Raises DataError naming the file and line."""
+    path = Path(path)
+    text = _read_label_text(path, "label names file")
+    _refuse_nul(text, path)
+    names: dict[str, str] = {}
+    for line_no, raw in enumerate(text.splitlines(), start=1):
+        line = _uncommented(raw).strip()
+        if not line:
+            continue
+        parts = re.split(r"[\s,]+", line, maxsplit=1)
+        if len(parts) != 2 or not parts[1].strip():
+            raise DataError(f"line {line_no}: expected 'code name', got {raw.strip()!r}", path)
+        if parts[0] in names:
+            raise DataError(f"line {line_no}: code {parts[0]!r} named twice", path)
+        names[parts[0]] = parts[1].strip()
+    if not names:
+        raise DataError("no label names in it", path)
+    return names
+
+
+def _code_order(code: str) -> tuple[int, int, str]:
+    """How label codes are listed: whole numbers by value (2 before 10), then the rest as
+    text."""
+    number = code.isascii() and code.isdigit()
+    return (0, int(code), code) if number else (1, 0, code)
+
+
+def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> list[str]:
+    """The labels of a label file in order: tokens separated by spaces, tabs, commas or line
+    ends (as in cmu-mocap6/truelabels; ``#`` starts a comment, as in a label names file),
+    each mapped through ``names`` when given. Raises DataError for an empty or unreadable
+    file or a code ``names`` does not name."""
+    path = Path(path)
+    raw = _read_label_text(path, "label file")
+    _refuse_nul(raw, path)
+    text = "\n".join(_uncommented(line) for line in raw.splitlines())
+    tokens = [t for t in re.split(r"[\s,]+", text) if t]
+    if not tokens:
+        raise DataError("the label file holds no labels", path)
+    _refuse_a_table(text, path)
+    _refuse_a_header(text, tokens, path)
+    if names is None:
+        return tokens
+    unknown = sorted({t for t in tokens if t not in names}, key=_code_order)
+    if unknown:
+        held = ", ".join(list(names)[:5]) + (", ..." if len(names) > 5 else "")
+        raise DataError(
+            f"label code(s) {', '.join(unknown[:5])} not in the label names (which name {held})",
+            path,
+        )
+    return [names[t] for t in tokens]
+
+
+def _refuse_nul(text: str, path: Path) -> None:
+    """Refuse a label file or label names file holding a NUL character (stored with each
+    case, and no store holds one, as in a labels CSV), naming its line and the word of the
+    line it is in. Text of NULs every other character is UTF-16 read as UTF-8: said so."""
+    at = text.find("\x00")
+    if at < 0:
+        return
+    line_start = text.rfind("\n", 0, at) + 1
+    line_no = text.count("\n", 0, at) + 1
+    line = text[line_start:].split("\n", 1)[0]
+    words = list(re.finditer(r"[^\s,]+", line))  # a NUL is neither space nor comma
+    word_no, word = next(
+        (i, m.group()) for i, m in enumerate(words, 1) if m.end() > at - line_start
+    )
+    utf16 = text.count("\x00") * 3 >= len(text)
+    raise DataError(
+        f"line {line_no}, word {word_no}: {word[:80]!r} contains a NUL character"
+        + (" (UTF-16 text? save the file as UTF-8)" if utf16 else " (a case base cannot store it)"),
+        path,
+    )
+
+
+def _refuse_a_table(text: str, path: Path) -> None:
+    """Refuse a label file that is a table whose first column counts up (``time,label`` or
+    ``frame label`` per line, a header line allowed): read as labels, its times would be
+    labels too, and the count would not fit the recording for a reason the file does not
+    show. A label file holds the labels alone, one per frame or block."""
+    rows = [re.split(r"[\s,]+", line.strip()) for line in text.splitlines() if line.strip()]
+    body = rows[1:] if rows and not _numbers(rows[0][:1]) else rows
+    widths = {len(r) for r in body}
+    if len(body) < 2 or len(widths) != 1 or widths == {1}:
+        return
+    first = _numbers([r[0] for r in body])
+    labels = {t for r in body for t in r[1:]}
+    # a column of times takes a new value on every line; labels repeat (a label file wrapped
+    # one activity per line, "1 1 1 / 2 2 2 / 3 3 3", has as many lines as labels)
+    if first is not None and bool(np.all(np.diff(first) > 0)) and len(body) > 2 * len(labels):
+        raise DataError(
+            f"the label file is a table of {widths.pop()} columns whose first counts up (times"
+            " or frames?); it takes the labels alone, one per frame or per block"
+            " (--label-block), separated by spaces, commas or line ends",
+            path,
+        )
+
+
+#: the names a column of labels is given (``pandas.Series.to_csv`` writes one on top)
+_HEADER_WORDS = frozenset(
+    "label labels activity activities action actions class classes code codes target y"
+    " annotation annotations gesture gestures category".split()
+)
+
+
+def _refuse_a_header(text: str, tokens: list[str], path: Path) -> None:
+    """Refuse a label file whose first line is a column's name alone (``label``, as pandas
+    writes a column out, over numeric codes or a label each line): read as the first label,
+    it would shift every label one frame or block later, and pass when the frames fill the
+    last block exactly. A word alone on the first line, nowhere else in the file, that is a
+    column's usual name or the only word among numbers."""
+    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), "")
+    head = tokens[0]
+    if first != head or len(tokens) < 3 or head in tokens[1:]:
+        return
+    numbers = _numbers(tokens[1:]) is not None and _numbers([head]) is None
+    if not numbers and head.casefold() not in _HEADER_WORDS:
+        return
+    raise DataError(
+        f"line 1: {head[:40]!r} looks like a column's name, not a label"
+        f" ({'the others are numbers' if numbers else 'it is nowhere else in the file'}); a"
+        " label file takes the labels alone, one per frame or block: remove that line",
+        path,
+    )
+
+
+def _numbers(tokens: list[str]) -> np.ndarray | None:
+    """``tokens`` as numbers, or None when one is not a number."""
+    try:
+        return np.array([float(t) for t in tokens])
+    except ValueError:
+        return None
+
+
+def frame_labels(
+    labels: list[str],
+    n_frames: int,
+    fps: float,
+    block_s: float | None,
+    where: str | Path,
+    recording: str = "",
+) -> np.ndarray:
+    """The label of every frame, ``(n_frames,)`` objects, from one label per frame
+    (``block_s`` None) or one per ``block_s`` seconds (label t covers [t, t+1) x block_s).
+
+    The count must fit the recording: one label per block, the last block possibly partial;
+    one more label is accepted when the frames fill the last block exactly (a label for the
+    recording's end time as well as its start: the cmu-mocap6 label files were made that
+    way), so a file of one label per frame may hold one more than there are frames, and no
+    more. Otherwise DataError naming the file (and ``recording``, the name of the recording
+    it was given for, when known: one label file may be named for several): a different
+    count means another frame rate or block length, and labels would land on the wrong
+    frames."""
+    per_block = 1.0 if block_s is None else block_s * fps
+    blocks = n_frames / per_block if per_block > 0 else float("inf")
+    if not np.isfinite(blocks):  # a block of 1e-320 s: more blocks than a number holds
+        raise DataError(
+            f"a label block of {block_s:g} s is too short for {counted(n_frames, 'frame')} at"
+            f" {fps:g} fps (more blocks than can be counted)",
+            where,
+        )
+    # a recording of any frames needs a label, however long the block
+    low = max(int(np.ceil(blocks - 1e-9)), min(n_frames, 1))
+    high = int(np.floor(blocks + 1e-9)) + 1
+    if not low <= len(labels) <= high:
+        unit = "frame" if block_s is None else f"{block_s:g} s"
+        need = str(low) if low == high else f"{low} or {high}"
+        raise DataError(
+            f"{counted(len(labels), 'label')} (one per {unit})"
+            f" {'does' if len(labels) == 1 else 'do'} not fit the recording"
+            f"{' ' + recording if recording else ''}: {counted(n_frames, 'frame')} at {fps:g}"
+            f" fps need {need}{_why_not_fit(where, low, high, len(labels))}",
+            where,
+        )
+    block = np.floor(np.arange(n_frames) / per_block + 1e-9).astype(np.int64)
+    return np.asarray(labels, dtype=object)[np.minimum(block, len(labels) - 1)]
+
+
+def _why_not_fit(where: str | Path, low: int, high: int, n_labels: int) -> str:
+    """What likely made a label file's count not fit: labels written one per line with
+    spaces in them ("sit down", read as two labels) when its lines would fit, else another
+    frame rate or block length."""
+    try:
+        text = Path(where).read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError, ValueError):
+        text = ""
+    lines = [_uncommented(ln).strip() for ln in text.splitlines()]
+    lines = [ln for ln in lines if ln]
+    spaced = next((ln for ln in lines if len(re.split(r"[\s,]+", ln)) > 1), None)
+    if spaced is None or len(lines) < 2 or not low <= len(lines) <= high or len(lines) >= n_labels:
+        return " (another frame rate or label block?)"
+    parts = re.split(r"[\s,]+", spaced)
+    return (
+        f": its {len(lines)} lines would, and a line such as {spaced[:40]!r} is"
+        f" {len(parts)} labels (labels are separated by spaces, tabs and commas: write"
+        f" {'_'.join(parts)[:40]})"
+    )
+
+
+def labelled_stretches(frame_label: np.ndarray) -> list[tuple[int, int, str]]:
+    """Runs of one label: ``(start, end, label)`` frames, end exclusive, in order."""
+    n = len(frame_label)
+    change = np.flatnonzero(frame_label[1:] != frame_label[:-1]) + 1
+    starts = np.r_[0, change]
+    ends = np.r_[change, n]
+    return [(int(a), int(b), str(frame_label[a])) for a, b in zip(starts, ends, strict=True)]
