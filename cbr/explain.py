@@ -222,11 +222,13 @@ class Contrast:
 @dataclass(frozen=True)
 class Explanation:
     """One clip's explanation: the answer (``label``, calibrated ``confidence``,
-    ``vote_share``), the retrieved cases one per clip (``neighbours``), the fluent states (or
-    QMPs) shared with the similar cases and not (``matched``, ``not_seen``, ``only_here``;
-    "(at times)" when held under half the clip), the nearest case of another label with the checked
-    counterfactual (``contrast``), the four-line ``text``, the ``verbose`` text, every
-    statement as a :class:`Claim` and whether the clip was compared as its mirror image."""
+    ``vote_share``), the retrieved cases one per clip (``neighbours``: ``case_id``, -1 for a
+    case not stored, ``position`` in the case base, ``label``, ``distance``, ``source``), the
+    fluent states (or QMPs) shared with the similar cases and not (``matched``,
+    ``not_seen``, ``only_here``; "(at times)" when held under half the clip), the nearest case
+    of another label with the checked counterfactual (``contrast``), the four-line ``text``,
+    the ``verbose`` text, every statement as a :class:`Claim` and whether the clip was
+    compared as its mirror image."""
 
     label: str
     confidence: float
@@ -688,9 +690,13 @@ def distinct_neighbours(cb: CaseBase, retrieval: Retrieval) -> list[int]:
     return keep
 
 
-def _short_source(source: str) -> str:
+def _short_source(source: str, position: int | None = None) -> str:
+    """The file name of a case's clip; a clip given as arrays (the Python API: no source) is
+    named by the case's ``position`` in the case base (``case 3``: ``case_base_`` row 3)."""
     mirrored = source.endswith(MIRRORED)
-    name = Path(clip_of(source)).name or "?"
+    name = Path(clip_of(source)).name
+    if not name:
+        name = "?" if position is None else f"case {position}"
     return name + (MIRRORED if mirrored else "")
 
 
@@ -794,6 +800,7 @@ def _nearest(cb: CaseBase, solved: Solved) -> _Nearest:
     neighbours = tuple(
         {
             "case_id": int(retrieval.case_ids[p]),
+            "position": int(retrieval.indices[p]),
             "label": str(retrieval.labels[p]),
             "distance": float(retrieval.distances[p]),
             "source": cb.sources[int(retrieval.indices[p])],
@@ -936,11 +943,13 @@ def _count(n: int, noun: str) -> str:
 
 def _case_ref(cb: CaseBase, i: int, names: int) -> str:
     """``#5 (m01_s01_e03.npz)`` (``names`` 2) or ``#5`` (1); a case not stored (no id) is
-    named by its clip."""
+    named by its clip, or by its position (``case 3``) when its clip was given as arrays."""
     assert cb.ids is not None
     if int(cb.ids[i]) < 0:
-        return _short_source(cb.sources[i])
-    where = f" ({_short_source(cb.sources[i])})" if names == 2 else ""
+        return _short_source(cb.sources[i], i)
+    # a stored case of a clip given as arrays has no file to name: its id alone
+    named = names == 2 and bool(clip_of(cb.sources[i]))
+    where = f" ({_short_source(cb.sources[i])})" if named else ""
     return f"#{int(cb.ids[i])}{where}"
 
 
@@ -994,8 +1003,8 @@ def _verbose(
     )
     flag = "" if unlike_ratio is None else f"; flagged beyond {unlike_ratio:.2f}x"
     out.append(f"Nearest case at {solved.novelty:.2f}x the usual held-out distance{flag}.")
-    for n in neighbours:  # a case not stored has no id
-        case = f"case #{n['case_id']} " if n["case_id"] >= 0 else "case "
+    for n in neighbours:  # a case not stored has no id: its position in the case base
+        case = f"case #{n['case_id']} " if n["case_id"] >= 0 else f"case {n['position']} "
         out.append(f"  {case}{n['label']}  distance {n['distance']:.4g}  {n['source']}")
     if solved.problem.mirrored:
         out.append("The clip moves its left side more: it was compared as its mirror image "
@@ -1028,7 +1037,7 @@ def _verbose_contrast(
     out: list[str] = []
     out.append(
         f"Nearest other label: {contrast.label}"
-        + (f" case #{contrast.case_id}" if contrast.case_id >= 0 else "")
+        + (f" case #{contrast.case_id}" if contrast.case_id >= 0 else f" case {contrast.position}")
         + f" (distance {contrast.distance:.3g}) {contrast.source}."
     )
     if differences:
@@ -1049,7 +1058,7 @@ def _verbose_contrast(
             + (
                 f"case #{contrast.guide_case_id}"
                 if (contrast.guide_case_id or -1) >= 0
-                else _short_source(contrast.guide_source)
+                else _short_source(contrast.guide_source, contrast.guide)
             )
             + f"; {status}; plausibility "
             f"{contrast.plausibility:.2f}x the usual distance between {contrast.label} "

@@ -1,0 +1,83 @@
+"""A robot engineer's walkthrough of the Python API (hunt 35h): clips given as arrays from
+the engineer's own pose tracker, no file behind them."""
+
+from __future__ import annotations
+
+import csv
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cbr.estimator import CaseBaseClassifier
+from cbr.stored import load_classifier
+from cbr.training import train
+from casebase_store import open_store
+from features.poses import PoseSequence, load_pose
+from features.skeleton import BLAZEPOSE_33
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+ACTIVITIES = ("deep_squat", "hurdle_step", "standing_shoulder_abduction")
+
+
+@pytest.fixture(scope="module")
+def arrays() -> tuple[list[PoseSequence], list[str]]:
+    """Every third clip of three demo activities, as a tracker's arrays: no source, no
+    metadata (what ``PoseSequence(array, names, fps)`` of a user's own numbers is)."""
+    with open(DEMO / "labels.csv", newline="") as f:
+        rows = [r for r in csv.DictReader(f) if r["label"] in ACTIVITIES][::3]
+    xyz = [load_pose(DEMO / r["path"]).to_canonical().positions for r in rows]
+    return [PoseSequence(a, BLAZEPOSE_33, 30.0) for a in xyz], [r["label"] for r in rows]
+
+
+@pytest.fixture(scope="module")
+def in_memory(arrays: tuple[list[PoseSequence], list[str]]) -> CaseBaseClassifier:
+    X, y = arrays
+    return CaseBaseClassifier(k=3, mirror=False).fit(X, y)
+
+
+def test_an_explanation_names_a_case_of_arrays_by_its_position_not_a_question_mark(
+    arrays: tuple[list[PoseSequence], list[str]], in_memory: CaseBaseClassifier
+) -> None:
+    """Fitted from arrays, every case's source is empty: the explanation said "Nearest case
+    of this label ?; of another label ?." Now a case is named by its row of ``case_base_``. A
+    training clip's nearest case of its own label is itself (distance 0 but for the float32
+    search's rounding): clip i is case i (no mirror images, no trimming: one case per clip,
+    in order)."""
+    X, y = arrays
+    cb = in_memory.case_base_
+    assert list(in_memory.case_origin_) == list(range(len(X)))
+    for i in (0, 4, len(X) - 1):
+        exp = in_memory.explain([X[i]])[0]
+        assert "?" not in exp.text, exp.text
+        near = re.search(r"Nearest case of this label case (\d+); of another label case (\d+)\.",
+                         exp.text)  # fmt: skip
+        assert near is not None, exp.text
+        assert int(near.group(1)) == i
+        other = int(near.group(2))
+        assert str(cb.labels[other]) != y[i]
+        assert exp.contrast is not None and exp.contrast.position == other
+        # the neighbours say where they are in the case base, as the contrast does
+        first = exp.neighbours[0]
+        assert first["case_id"] == -1 and first["position"] == i and first["distance"] < 0.1
+        for n in exp.neighbours:
+            assert str(cb.labels[n["position"]]) == n["label"]
+        assert f"\n  case {i} {y[i]}  distance " in exp.verbose
+
+
+def test_a_stored_case_of_arrays_is_named_by_its_id_alone(
+    arrays: tuple[list[PoseSequence], list[str]], tmp_path: Path
+) -> None:
+    """Stored, such a case was "#1 (?)"; now "#1": there is no file to name."""
+    X, y = arrays
+    db = tmp_path / "cb.sqlite"
+    train(db, "default", X, y, CaseBaseClassifier(k=3, mirror=False))
+    with open_store(db, create=False, readonly=True) as store:
+        clf = load_classifier(store, "default").classifier
+    exp = clf.explain([X[0]])[0]
+    assert "?" not in exp.text, exp.text
+    near = re.search(r"Nearest case of this label #(\d+); of another label #(\d+)\.", exp.text)
+    assert near is not None, exp.text
+    assert exp.neighbours[0]["case_id"] == int(near.group(1))
+    assert exp.neighbours[0]["distance"] < 0.1
