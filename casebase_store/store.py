@@ -510,7 +510,7 @@ def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> t
             f"the database driver for {url.drivername} is not installed: {exc}{hint}", where
         ) from None
     except (ArgumentError, SQLAlchemyError) as exc:
-        raise StoreError(f"cannot use database URL ({exc})", where) from None
+        raise StoreError(f"cannot use database URL ({exc}){_scheme_hint(url)}", where) from None
     if _is_sqlite(engine):
         _configure_sqlite(engine, timeout_s, readonly)
     elif engine.dialect.name == "postgresql":
@@ -542,6 +542,19 @@ def shown_db(url_or_path: str | Path) -> str:
         return _shown_url(make_url(text))
     except (ArgumentError, ValueError):
         return _hide_password(text)
+
+
+def _scheme_hint(url: URL) -> str:
+    """What a URL SQLAlchemy has no dialect for was likely meant to say: ``postgres://``
+    (Heroku's and many a ``DATABASE_URL``'s spelling, which SQLAlchemy 1.4 dropped) is
+    ``postgresql://``; a scheme in capitals (``SQLITE:///cb.sqlite``) is read as written."""
+    scheme = url.drivername
+    backend, plus, driver = scheme.lower().partition("+")
+    if backend == "postgres":
+        return f": write postgresql{plus}{driver}:// (SQLAlchemy's name), not {scheme}://"
+    if scheme != scheme.lower():
+        return f": write the scheme in lower case, {scheme.lower()}://"
+    return ""
 
 
 def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:

@@ -7,15 +7,15 @@ import csv
 import re
 from pathlib import Path
 
-import numpy as np
 import pytest
 
+from casebase_store import StoreError, open_store
 from cbr.estimator import CaseBaseClassifier
 from cbr.stored import load_classifier
 from cbr.training import train
-from casebase_store import open_store
 from features.poses import PoseSequence, load_pose
 from features.skeleton import BLAZEPOSE_33
+from tests.badinput import refused
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 ACTIVITIES = ("deep_squat", "hurdle_step", "standing_shoulder_abduction")
@@ -81,3 +81,38 @@ def test_a_stored_case_of_arrays_is_named_by_its_id_alone(
     assert near is not None, exp.text
     assert exp.neighbours[0]["case_id"] == int(near.group(1))
     assert exp.neighbours[0]["distance"] < 0.1
+
+
+@pytest.mark.parametrize(
+    ("url", "hint"),
+    [
+        (
+            "postgres://robot@localhost:1/poses",
+            "write postgresql:// (SQLAlchemy's name), not postgres://",
+        ),
+        (
+            "postgres+psycopg://robot@localhost:1/poses",
+            "write postgresql+psycopg:// (SQLAlchemy's name), not postgres+psycopg://",
+        ),
+        ("SQLITE:///cb.sqlite", "write the scheme in lower case, sqlite://"),
+        ("Postgresql://robot@localhost:1/poses", "write the scheme in lower case, postgresql://"),
+    ],
+)
+def test_a_database_url_sqlalchemy_has_no_dialect_for_says_what_to_write(
+    url: str,
+    hint: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``postgres://`` (a DATABASE_URL as Heroku and many a container write it; SQLAlchemy
+    1.4 dropped the name) was "cannot use database URL (Can't load plugin:
+    sqlalchemy.dialects:postgres)" and nothing more; a scheme in capitals the same. Now the
+    one line says what to write, from Python and from the command alike; nothing is made."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(StoreError, match="cannot use database URL") as info:
+        open_store(url)
+    assert str(info.value).endswith(hint)
+    assert info.value.source is not None and "://" in info.value.source
+    refused(["casebase", "info", "--db", url], tmp_path, capsys, hint)
+    assert list(tmp_path.iterdir()) == []
