@@ -59,11 +59,10 @@ from .segmentation import (
     window_still,
 )
 from .unknown import (
-    JUDGES,
     Judge,
     activity_codes,
+    default_judge,
     for_person,
-    judge_of,
     tell_unknown,
     unknown_evidence,
 )
@@ -276,7 +275,7 @@ class LiveSegmenter:
         check_judge(judge)
         self.clf, self.source = clf, source
         self.fps = float(fps)
-        self.judge = judge if judge is not None else judge_of(clf, JUDGES[0])
+        self.judge = judge if judge is not None else default_judge(clf)
         self.classes = [str(c) for c in clf.classes_]
         self.codes = activity_codes(clf.case_base_.labels, self.classes)
         self.movement, self.least = least_movement(clf)  # as offline: too still for any

@@ -79,14 +79,13 @@ from .explain import Explanation
 from .problem import FeatureConfig, warm
 from .reuse import vote
 from .unknown import (
-    JUDGES,
     Familiarity,
     HeldOut,
     Judge,
     Margin,
     activity_codes,
+    default_judge,
     for_person,
-    judge_of,
     per_activity,
     tell_unknown,
     unknown_evidence,
@@ -1129,7 +1128,7 @@ def segment(
     number, NotFittedError for an unfitted ``clf``."""
     _check_call(clf, recording, chunk_frames)
     check_judge(judge)
-    judge = judge or judge_of(clf, JUDGES[0])
+    judge = judge or default_judge(clf)
     return finish(clf, solve_recording(clf, recording, k, chunk_frames), judge)
 
 

@@ -265,21 +265,26 @@ def _margins(nearest: np.ndarray) -> np.ndarray:
     return np.where(apart, two[:, 0] / np.where(apart, two[:, 1], 1.0), 1.0)
 
 
+HELD_OUT_ADVICE = "use --unknown held-out"
+"""What a refusal to calibrate a margin judge advises the commands' user; a Python caller
+given the default judge is told the call instead (:func:`default_judge`)."""
+
+
 def _check_margin_calibration(cb: CaseBase) -> None:
     """DataError when a case base has fewer than three activities (a held-out activity leaves
     one to compare with)."""
     if len(set(np.asarray(cb.labels).astype(str).tolist())) < 3:
         raise DataError(
             "fewer than three activities to calibrate the margin between the two nearest on"
-            " (use --unknown held-out, or train with three or more)",
+            f" ({HELD_OUT_ADVICE}, or train with three or more)",
             "case base",
         )
 
 
 def _no_apart() -> DataError:
     return DataError(
-        "no activity has cases apart from each other to calibrate the margin on (use "
-        "--unknown held-out, or train with --split windows and two or more recordings of an "
+        f"no activity has cases apart from each other to calibrate the margin on ("
+        f"{HELD_OUT_ADVICE}, or train with --split windows and two or more recordings of an "
         "activity)",
         "case base",
     )
@@ -1225,8 +1230,26 @@ def judge_of(clf: Any, name: str) -> Judge:
     return STORED[name].of(clf.case_base_)  # type: ignore[return-value]
 
 
+def default_judge(clf: Any) -> Judge:
+    """The judge :func:`cbr.segmentation.segment` and :class:`cbr.live.LiveSegmenter` use when
+    given none: :func:`judge_of` ``clf``'s ``spread-margin`` (:data:`JUDGES` [0]). A case base
+    it cannot be calibrated on (fewer than three activities, or none with cases apart) is
+    refused with the DataError :func:`judge_of` raises, advising the Python call that judges
+    it instead (``judge=judge_of(clf, "held-out")``) where the commands' words advise
+    ``--unknown held-out``."""
+    try:
+        return judge_of(clf, JUDGES[0])
+    except DataError as exc:
+        if HELD_OUT_ADVICE not in exc.message:
+            raise
+        advice = 'pass judge=cbr.unknown.judge_of(clf, "held-out")'
+        raise DataError(exc.message.replace(HELD_OUT_ADVICE, advice), exc.source) from None
+
+
 __all__ = [
     "ACTIVITY_PRIOR",
+    "HELD_OUT_ADVICE",
+    "default_judge",
     "AT_FIT",
     "ActivityMargin",
     "JUDGES",

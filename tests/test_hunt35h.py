@@ -7,12 +7,17 @@ import csv
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from casebase_store import StoreError, open_store
 from cbr.estimator import CaseBaseClassifier
+from cbr.live import LiveSegmenter
+from cbr.segmentation import segment
 from cbr.stored import load_classifier
 from cbr.training import train
+from cbr.unknown import judge_of
+from features.errors import DataError
 from features.poses import PoseSequence, load_pose
 from features.skeleton import BLAZEPOSE_33
 from tests.badinput import refused
@@ -116,3 +121,37 @@ def test_a_database_url_sqlalchemy_has_no_dialect_for_says_what_to_write(
     assert info.value.source is not None and "://" in info.value.source
     refused(["casebase", "info", "--db", url], tmp_path, capsys, hint)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture(scope="module")
+def two_activities(
+    arrays: tuple[list[PoseSequence], list[str]],
+) -> tuple[CaseBaseClassifier, PoseSequence]:
+    """A classifier of two activities (a robot's "squat" or "hurdle step") and a recording of
+    four of its squats, as arrays."""
+    X, y = arrays
+    keep = [i for i, label in enumerate(y) if label != "standing_shoulder_abduction"]
+    clf = CaseBaseClassifier(k=3).fit([X[i] for i in keep], [y[i] for i in keep])
+    squats = [X[i].positions for i in keep if y[i] == "deep_squat"][:4]
+    return clf, PoseSequence(np.concatenate(squats), BLAZEPOSE_33, 30.0)
+
+
+def test_segmenting_with_two_activities_by_default_says_the_python_call_that_judges_it(
+    two_activities: tuple[CaseBaseClassifier, PoseSequence],
+) -> None:
+    """``segment(clf, rec)`` and ``LiveSegmenter(clf, fps)`` of a case base of two activities
+    refused it advising "use --unknown held-out", an option of a command the Python caller
+    never ran. Now the same DataError says the call; made as it says, both work."""
+    clf, rec = two_activities
+    call = 'pass judge=cbr.unknown.judge_of(clf, "held-out")'
+    for make in (lambda: segment(clf, rec), lambda: LiveSegmenter(clf, rec.fps)):
+        with pytest.raises(DataError, match="fewer than three activities") as info:
+            make()
+        assert call in str(info.value) and "--unknown" not in str(info.value)
+        assert info.value.source == "case base"
+    judge = judge_of(clf, "held-out")
+    done = segment(clf, rec, judge)
+    assert done.segments[0].start_frame == 0 and done.segments[-1].end_frame == rec.n_frames
+    live = LiveSegmenter(clf, rec.fps, judge)
+    finished = [s for frame in rec.positions for s in live.push(frame)] + live.finish()
+    assert finished[0].start_frame == 0 and finished[-1].end_frame == rec.n_frames
