@@ -96,6 +96,8 @@ class LiveSegment:
     novelty: float = math.nan
 
     def to_dict(self, fps: float) -> dict[str, Any]:
+        """The segment as one of ``watch``'s JSON lines; ``fps``: the stream's frames per
+        second (``start_s``, ``end_s``)."""
         fields = span_fields(self.start_frame, self.end_frame, self.label, self.confidence, fps)
         novelty = round(self.novelty, 3) if math.isfinite(self.novelty) else None
         return {
@@ -231,10 +233,12 @@ class LiveSegmenter:
     """Push frames, read the rolling label; finished segments come out of :meth:`push`.
 
     ``clf``: a fitted :class:`~cbr.estimator.CaseBaseClassifier`; ``fps``: the stream's frame
-    rate; ``judge``: what says a window is unlike the case base (:mod:`cbr.unknown`; the margin
-    between the two nearest activities times how far the window lies in the nearest one's own
-    spread, against that activity's own threshold, ``spread-margin``, calibrated on the case
-    base, when None); ``source``: the stream's name in errors (a camera, a URL, a file).
+    rate, frames per second (segments are in frames counted from the first pushed, 0;
+    ``to_dict(fps)`` adds seconds); ``judge``: what says a window is unlike the case base
+    (:mod:`cbr.unknown`; the margin between the two nearest activities times how far the
+    window lies in the nearest one's own spread, against that activity's own threshold,
+    ``spread-margin``, calibrated on the case base, when None); ``source``: the stream's name
+    in errors (a camera, a URL, a file).
 
     As offline, in two passes, each an online Viterbi (:class:`_Forward`: a hop is settled
     when the best paths into every state agree on it, so the settled hops are those the
@@ -370,7 +374,15 @@ class LiveSegmenter:
     def push(self, world: np.ndarray, confidence: np.ndarray | None = None) -> list[LiveSegment]:
         """Add one frame ``(33, 3)`` (NaN where the person is not seen) and, from a pose
         model, its joints' confidence ``(33,)`` (visibility: the repetitions leave out a joint
-        below 0.5 as ``segment`` does, :func:`features.repetitions.counted_angles`). Returns
+        below 0.5 as ``segment`` does, :func:`features.repetitions.counted_angles`).
+
+        ``world`` is a :class:`~features.poses.PoseSequence`'s positions for one frame: the
+        joints of :data:`features.skeleton.BLAZEPOSE_33` in that order, in metres, in a
+        right-handed frame with y up (gravity along -y). Another tracker's joints are put in
+        that order by ``PoseSequence(xyz, names, fps).to_canonical()``; a z-up frame (ROS's)
+        must be turned first, ``(x, y, z)`` to ``(x, z, -y)``: read as it is, an upright torso
+        is one tilted forward. Frames are taken as evenly spaced at the ``fps`` given: push
+        every one. Returns
         the segments that this frame settled as finished (usually none). A copy is kept; a
         frame that is not one (another skeleton's joints, an infinite coordinate) is refused
         with :class:`features.errors.InputError`, nothing kept."""

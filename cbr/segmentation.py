@@ -160,6 +160,8 @@ class Segment:
     novelty: float
 
     def to_dict(self, fps: float) -> dict[str, Any]:
+        """The segment as ``segment --json`` gives it; ``fps``: the recording's frames per
+        second (``start_s``, ``end_s``; :attr:`Segmentation.fps`)."""
         return {
             **span_fields(self.start_frame, self.end_frame, self.label, self.confidence, fps),
             "unknown": unknown_reason(self.label, self.explanation),

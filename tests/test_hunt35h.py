@@ -18,6 +18,7 @@ from cbr.stored import load_classifier
 from cbr.training import train
 from cbr.unknown import judge_of
 from features.errors import DataError
+from features.fluents import evaluate
 from features.poses import PoseSequence, load_pose
 from features.skeleton import BLAZEPOSE_33
 from tests.badinput import refused
@@ -155,3 +156,26 @@ def test_segmenting_with_two_activities_by_default_says_the_python_call_that_jud
     live = LiveSegmenter(clf, rec.fps, judge)
     finished = [s for frame in rec.positions for s in live.push(frame)] + live.finish()
     assert finished[0].start_frame == 0 and finished[-1].end_frame == rec.n_frames
+
+
+def test_live_push_says_the_frame_it_takes_and_how_a_z_up_frame_is_turned() -> None:
+    """``LiveSegmenter.push`` said "one frame (33, 3)" alone: not which joints in which order,
+    nor metres, nor y up. A robot engineer's z-up (ROS) frames were read as given, every
+    upright torso as one tilted forward, nothing said. The docstring now says the frame, and
+    the turn it gives, ``(x, y, z)`` to ``(x, z, -y)``, gives back the y-up fluents exactly."""
+    doc = LiveSegmenter.push.__doc__ or ""
+    for words in ("BLAZEPOSE_33", "metres", "y up", "``(x, y, z)`` to ``(x, z, -y)``"):
+        assert words in " ".join(doc.split()), words
+    upright = load_pose(DEMO / "m01_s01_e01.npz").to_canonical().positions
+    y_up = evaluate(PoseSequence(upright, BLAZEPOSE_33, 30.0))
+    x, y, z = upright[..., 0], upright[..., 1], upright[..., 2]
+    z_up = np.stack([x, -z, y], axis=-1)  # ROS: the same person, gravity along -z
+    as_given = evaluate(PoseSequence(z_up, BLAZEPOSE_33, 30.0))
+    turned = np.stack([z_up[..., 0], z_up[..., 2], -z_up[..., 1]], axis=-1)
+    assert np.allclose(turned, upright, equal_nan=True)
+    column = y_up.state_names.index("torso_tilted_forward.tilted_forward")
+    start = slice(0, 10)  # a deep squat starts standing
+    assert np.nanmean(y_up.confidence[start, column]) < 0.1
+    assert np.nanmean(as_given.confidence[start, column]) > 0.9
+    again = evaluate(PoseSequence(turned, BLAZEPOSE_33, 30.0))
+    assert np.allclose(again.confidence, y_up.confidence, equal_nan=True, atol=1e-9)
