@@ -57,6 +57,7 @@ from typing import Any, Protocol, TypeVar
 
 import numpy as np
 
+from features.body import MIRRORED
 from features.errors import ConfigError, DataError
 from features.text import percent
 
@@ -169,10 +170,19 @@ def held_out_basis(cb: CaseBase) -> tuple[str, np.ndarray]:
     case ``(n,)``: by subject when all cases name one and two or more are named (with an
     activity done by two of them); else by source recording when an activity comes from two
     or more recordings; else by time (the cases of its own recording that overlap it are left
-    out: repeated movements of one recording, the best the case base can do)."""
+    out: repeated movements of one recording, the best the case base can do).
+
+    A case without a source (a clip given as arrays, :class:`features.poses.PoseSequence` of
+    a tracker's numbers, or its mirror image) is a recording of its own, as the classifier's
+    own calibration counts it: taken as one recording together, every such clip overlapped
+    every other (each starts at frame 0), so none had a case left to compare with and the
+    default judge could not be calibrated on a case base of them."""
     labels = np.asarray(cb.labels).astype(str)
     subjects = [s or "" for s in cb.subjects]
-    sources = [s or "" for s in cb.sources]
+    sources = [
+        s if s.removesuffix(MIRRORED) else f"\0case {i} (no source)"
+        for i, s in enumerate(s or "" for s in cb.sources)
+    ]
     for basis, groups in (("subject", subjects), ("recording", sources)):
         g = np.array(groups, dtype=object)
         if basis == "subject" and "" in set(groups):

@@ -18,7 +18,7 @@ from cbr.live import LiveSegmenter
 from cbr.segmentation import segment
 from cbr.stored import load_classifier
 from cbr.training import train
-from cbr.unknown import judge_of
+from cbr.unknown import held_out_basis, judge_of
 from features.errors import DataError
 from features.fluents import evaluate
 from features.poses import PoseSequence, load_pose
@@ -224,3 +224,31 @@ def test_the_readme_example_of_a_trackers_arrays_runs_as_written(
     for w in workers:
         w.join()
     assert halves[0] == expected[0::2] and halves[1] == expected[1::2]
+
+
+def test_the_default_judge_calibrates_on_clips_given_as_arrays_as_on_files(
+    arrays: tuple[list[PoseSequence], list[str]], tmp_path: Path
+) -> None:
+    """Fitted from arrays (no source), every clip was taken for a stretch of one recording,
+    all starting at frame 0 and so overlapping each other: holding one out left out every
+    case, and the default judge refused a case base of three activities, nine clips each
+    ("no activity has cases apart from each other ... (use --unknown held-out ...)"), so
+    ``segment`` and ``LiveSegmenter`` refused it and ``train`` stored it without its judges.
+    Now such a clip is a recording of its own: the judge is the one calibrated on the same
+    clips each read from a file of its own."""
+    X, y = arrays
+    files = [
+        PoseSequence(s.positions, BLAZEPOSE_33, s.fps, source=f"rec{i}.npz")
+        for i, s in enumerate(X)
+    ]
+    bare = CaseBaseClassifier(k=3).fit(X, y)
+    named = CaseBaseClassifier(k=3).fit(files, y)
+    basis, groups = held_out_basis(bare.case_base_)
+    assert basis == "recording" and len(set(groups.tolist())) == len(X)
+    want = judge_of(named, "spread-margin").to_dict()  # type: ignore[attr-defined]
+    assert judge_of(bare, "spread-margin").to_dict() == want  # type: ignore[attr-defined]
+    recording = PoseSequence(np.concatenate([s.positions for s in X[:6]]), BLAZEPOSE_33, 30.0)
+    done = segment(bare, recording)
+    assert done.segments[-1].end_frame == recording.n_frames
+    stored = train(tmp_path / "cb.sqlite", "default", X, y, CaseBaseClassifier(k=3))
+    assert stored.judges_unknown
