@@ -10,6 +10,7 @@ fitted in memory.
 
 from __future__ import annotations
 
+import math
 import re
 import sys
 from collections.abc import Iterator
@@ -109,22 +110,49 @@ def model_document(
     judges = getattr(clf, "judges_", None)
     if judges:
         doc["judges"] = judges_document(judges, 1)
-    numbered = _numbered_classes(clf.classes_)
-    if numbered is not None:
-        doc["classes"] = numbered
+    typed = _typed_classes(clf.classes_)
+    if typed is not None:
+        doc["classes"] = typed
     return doc
 
 
-def _numbered_classes(classes: np.ndarray) -> list[int] | None:
-    """``classes`` as a list of whole numbers when they all are (labels fitted as numbers,
-    which the store keeps as text): read back, the classifier answers with the numbers, in
-    their order ("10" sorts before "9" as text). None for any other labels."""
+def _typed_classes(classes: np.ndarray) -> list[int] | list[bool] | list[float] | None:
+    """``classes`` as a list of whole numbers, of true/false values or of other numbers when
+    they all are one of these (labels fitted as such, which the store keeps as text): read
+    back, the classifier answers with them, in their order ("10" sorts before "9" as text),
+    and scores against them. None for any other labels (text)."""
     values = np.asarray(classes)
-    if values.dtype.kind in "iu" or (
-        values.dtype == object
-        and all(isinstance(v, int | np.integer) and not isinstance(v, bool) for v in values)
-    ):
+    kinds = {values.dtype.kind} if values.dtype != object else {_kind(v) for v in values}
+    if kinds == {"b"}:
+        return [bool(v) for v in values]
+    if kinds <= {"i", "u"}:
         return [int(v) for v in values]
+    if kinds == {"f"} and all(math.isfinite(float(v)) for v in values):
+        return [float(v) for v in values]
+    return None
+
+
+def _kind(value: Any) -> str:
+    """The numpy kind of one label: ``b`` true/false, ``i`` whole number, ``f`` other number,
+    ``O`` anything else."""
+    if isinstance(value, bool | np.bool_):
+        return "b"
+    if isinstance(value, int | np.integer):
+        return "i"
+    if isinstance(value, float | np.floating):
+        return "f"
+    return "O"
+
+
+def _stored_classes(model: dict[str, Any]) -> np.ndarray | None:
+    """The classes :func:`_typed_classes` stored, as fitted; None when none were or they are
+    not all of one of its kinds."""
+    stored = model.get("classes")
+    if not isinstance(stored, list) or not stored:
+        return None
+    kinds = {type(v) for v in stored}
+    if kinds in ({int}, {bool}, {float}):
+        return np.asarray(stored)
     return None
 
 
@@ -460,9 +488,9 @@ def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
     clf.novelty_ = _novelty(model, cb, name, store.where)
     clf.confidence_ = _confidence(model, name, store.where)
     clf.judges_ = _judges(model, info.version, name, store.where)
-    numbered = model.get("classes")
-    if isinstance(numbered, list) and all(type(v) is int for v in numbered):
-        clf.classes_ = np.asarray(numbered)  # kept by refresh while the cases' labels match
+    typed = _stored_classes(model)
+    if typed is not None:
+        clf.classes_ = typed  # kept by refresh while the cases' labels match
     clf.refresh()
     target = str(model.get("target", "label"))
     cases = model.get("cases")

@@ -308,13 +308,13 @@ def train(
     ``"repetitions"`` or ``"windows"``, as ``train --split`` cut them). Clips that show no
     person are skipped and named."""
     _check_name(name)
-    text = [str(v) for v in check_labels(labels, len(clips))]
+    check_labels(labels, len(clips))
     plan = fit_plan(estimator)
     described = [
         describe(s, plan) for s in progress(clips, desc="features", total=len(clips), unit="clip")
     ]
     return train_described(
-        db, name, described, text, estimator, target=target, cases=cases, replace=replace
+        db, name, described, labels, estimator, target=target, cases=cases, replace=replace
     )
 
 
@@ -329,9 +329,14 @@ def train_described(
     cases: str = "clips",
     replace: bool = False,
 ) -> TrainResult:
-    """:func:`train` on clips already reduced by :func:`fit_plan` (:func:`describe_entries`)."""
+    """:func:`train` on clips already reduced by :func:`fit_plan` (:func:`describe_entries`).
+
+    The classifier is fitted on ``labels`` as given, so its classes keep their type (whole
+    numbers, true/false, other numbers: stored with the model, and answered as such once it
+    is loaded back); the cases hold them as text."""
     _check_name(name)
     text = [str(v) for v in check_labels(labels, len(clips))]
+    given = list(np.asarray(labels, dtype=object))
     keep, skipped, too_short = usable(clips)
     if len({text[i] for i in keep}) == 1 < len(set(text)):
         raise _one_left(clips, text, keep, target)
@@ -339,7 +344,7 @@ def train_described(
     if not clips:
         raise _no_case("learn from")
     _check_unique(clips, "training set")
-    fitted: CaseBaseClassifier = clone(estimator).fit_described(clips, text)
+    fitted: CaseBaseClassifier = clone(estimator).fit_described(clips, [given[i] for i in keep])
     _check_trimmed(fitted)
     return store_fitted(
         db,

@@ -8,6 +8,7 @@ import pickle
 import re
 import threading
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -252,3 +253,35 @@ def test_the_default_judge_calibrates_on_clips_given_as_arrays_as_on_files(
     assert done.segments[-1].end_frame == recording.n_frames
     stored = train(tmp_path / "cb.sqlite", "default", X, y, CaseBaseClassifier(k=3))
     assert stored.judges_unknown
+
+
+@pytest.mark.parametrize(
+    ("code", "kind"),
+    [
+        ({"deep_squat": True, "hurdle_step": False, "standing_shoulder_abduction": False}, "b"),
+        ({"deep_squat": 10, "hurdle_step": 2, "standing_shoulder_abduction": 9}, "i"),
+        ({"deep_squat": 1.0, "hurdle_step": 2.0, "standing_shoulder_abduction": 10.0}, "f"),
+    ],
+)
+def test_a_model_trained_on_labels_that_are_not_text_answers_with_them_once_loaded(
+    arrays: tuple[list[PoseSequence], list[str]], tmp_path: Path, code: dict[str, Any], kind: str
+) -> None:
+    """A robot's labels are often numbers or true/false ("was the squat correct"). Trained
+    with ``cbr.training.train`` the classifier was fitted on their text, and loaded back it
+    answered "True" (or "10", "10.0"), not True: ``score(X, y)`` raised scikit-learn's "Mix of
+    label input types (string and number)" where the classifier fitted in memory scored 1.0.
+    (Whole numbers came back as numbers from ``store_fitted`` only.) Now the loaded model's
+    classes are the labels as given, in their order, and it answers as the one fitted in
+    memory does."""
+    X, names = arrays
+    y = [code[n] for n in names]
+    in_memory = CaseBaseClassifier(k=3).fit(X, y)
+    train(tmp_path / "cb.sqlite", "default", X, y, CaseBaseClassifier(k=3))
+    with open_store(tmp_path / "cb.sqlite", create=False, readonly=True) as store:
+        loaded = load_classifier(store, "default").classifier
+    assert loaded.classes_.tolist() == sorted(set(y))
+    assert loaded.classes_.dtype.kind == kind
+    answers = loaded.predict(X)
+    assert answers.tolist() == in_memory.predict(X).tolist()
+    assert all(type(a) is type(y[0]) for a in answers.tolist())
+    assert loaded.score(X, y) == in_memory.score(X, y) > 0.9
