@@ -94,3 +94,39 @@ def test_the_count_never_goes_down_as_a_real_recordings_end_moves_on(
     counts = _counts(seq, [*ends, seq.n_frames])
     assert all(b >= a for a, b in zip(counts[:-1], counts[1:], strict=True)), counts
     assert counts[-1] == 4
+
+
+def _small_swings_then_wide(period_s: float = 1.0) -> PoseSequence:
+    """Both arms swung up and down sideways with a period of ``period_s``: two small swings
+    held high (abduction 95 <-> 135 degrees), then three wide ones (25 <-> 135), the centre
+    and the size changing over the half period after the second small swing's low point;
+    0.5 s held still before and after. Far points (arms highest) at 1.0, 2.0, 3.0, 4.0 and
+    5.0 s: five repetitions by construction."""
+    t = np.arange(-0.5 * period_s, 4.5 * period_s, 1 / FPS)
+    ramp = np.clip((t - 1.5 * period_s) / (0.5 * period_s), 0.0, 1.0)
+    centre = 115.0 + (80.0 - 115.0) * ramp
+    size = 20.0 + (55.0 - 20.0) * ramp
+    deg = centre + size * np.cos(2 * np.pi * t / period_s)
+    hold = int(0.5 * FPS)
+    deg = np.concatenate([np.full(hold, deg[0]), deg, np.full(hold, deg[-1])])
+    body = standing()
+    return to_sequence(*[_raise_arms(body, d, d) for d in deg], fps=FPS)
+
+
+def test_small_first_repetitions_stay_counted_once_wide_ones_follow() -> None:
+    """Two small swings held high, then three wide ones: counted with the end every 0.25 s,
+    the count never goes down and ends at 5, each far point where the arms are highest.
+    Before, a small swing's return (40 degrees) was measured against its height above the
+    clip's rest level, the line's lowest 5 %, which the wide swings' low points took down to
+    25 degrees: 40 against 0.4 x (135 - 25) = 44, short, and the first swing was dropped at
+    3.75 s (3, 2, 3: 13_29's small arm circles went 3, 2 as the large ones came). Now its
+    height is taken above the lowest of the line within a period of it (95 degrees: 40
+    against 16)."""
+    seq = _small_swings_then_wide()
+    ends = [int(round(t * FPS)) for t in np.arange(0.5, seq.duration_s, STEP_S)]
+    counts = _counts(seq, [*ends, seq.n_frames])
+    assert all(b >= a for a, b in zip(counts[:-1], counts[1:], strict=True)), counts
+    result = count_repetitions(seq)
+    assert result.count == 5
+    peaks = np.array([r.peak_frame for r in result.repetitions]) / FPS
+    np.testing.assert_allclose(peaks, [1.0, 2.0, 3.0, 4.0, 5.0], atol=2 / FPS)
