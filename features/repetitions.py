@@ -741,7 +741,7 @@ def _ends_samples(n: int, fps: float) -> int:
     return min(n // 2, max(1, int(round(ENDS_S * fps))))
 
 
-def _held_change(x: np.ndarray, line: np.ndarray, fps: float) -> bool:
+def _held_change(x: np.ndarray, line: np.ndarray, fps: float, peak: int) -> bool:
     """Whether the clip ``x`` ``(n, C)`` goes from one end of its movement ``line`` ``(n,)``
     to the other and holds still there: its first :data:`ENDS_S` seconds' posture lies nearer
     one end's posture (the mean posture where the line lies at that end, :func:`_end_levels`)
@@ -752,7 +752,10 @@ def _held_change(x: np.ndarray, line: np.ndarray, fps: float) -> bool:
     way there, none being smaller or quicker. A clip with one far point that does so went
     out once and stayed (getting into a side plank and holding it), or left a posture held
     from its start: a change of posture, not a repetition cut off by the clip's end or start
-    (which is still under way there)."""
+    (which is still under way there). Unless the line had come back from the far point
+    ``peak`` by :data:`MIN_EXCURSION_RAD` before it stopped (:func:`_returned_before_hold`):
+    that is a repetition paused on its way back (sitting a moment after sitting down), no
+    posture held; a side plank's sag comes during the hold."""
     lo, hi = _end_levels(line)
     low, high = x[line <= lo].mean(axis=0), x[line >= hi].mean(axis=0)
     k = _ends_samples(len(line), fps)
@@ -763,11 +766,25 @@ def _held_change(x: np.ndarray, line: np.ndarray, fps: float) -> bool:
     m = min(len(line) - 1, max(1, int(round(MIN_PERIOD_S * fps))))
     still_start = float(np.abs(np.diff(line[: m + 1])).sum()) < MIN_EXCURSION_RAD
     still_end = float(np.abs(np.diff(line[-m - 1 :])).sum()) < MIN_EXCURSION_RAD
-    return (sides[0] < 0 < sides[1] and still_end) or (sides[0] > 0 > sides[1] and still_start)
+    held_end = still_end and not _returned_before_hold(line, peak, m)
+    held_start = still_start and not _returned_before_hold(line[::-1], len(line) - 1 - peak, m)
+    return (sides[0] < 0 < sides[1] and held_end) or (sides[0] > 0 > sides[1] and held_start)
+
+
+def _returned_before_hold(line: np.ndarray, peak: int, m: int) -> bool:
+    """Whether ``line`` ``(n,)`` falls back from its far point ``peak`` by
+    :data:`MIN_EXCURSION_RAD` before the still stretch it ends in begins: after the last
+    ``m`` samples (:data:`MIN_PERIOD_S`) in which it moves that far in all. A far point within
+    the still stretch (reached while holding, or as the line stopped) has not."""
+    moved = np.convolve(np.abs(np.diff(line)), np.ones(m), mode="valid") >= MIN_EXCURSION_RAD
+    hold = int(np.flatnonzero(moved)[-1]) + m if moved.any() else 0
+    if peak >= hold:
+        return False
+    return bool(line[peak] - line[peak : hold + 1].min() >= MIN_EXCURSION_RAD)
 
 
 def _far_points(
-    line: np.ndarray, rest: float, distance: int, reach: int | None = None
+    line: np.ndarray, rest: float, distance: int, reach: int | None = None, still: int = 1
 ) -> tuple[np.ndarray, np.ndarray]:
     """Samples where ``line`` reaches a far point: peaks that stand out by at least
     :data:`SUBSTANTIAL` of the typical repetition (the median prominence of the candidates) and by
@@ -780,14 +797,15 @@ def _far_points(
     the far points and how far the line rises to each and falls back from it within the clip
     (``(k, 2)``, :func:`_candidates`). ``reach``: a far point's height is taken above the
     lowest of the line around it (:func:`_floors`, within ``reach`` samples), or above
-    ``rest`` when that is higher or ``reach`` is None."""
-    cand, back = _candidates(line, rest, distance, reach)
+    ``rest`` when that is higher or ``reach`` is None; ``still``: samples of
+    :data:`MIN_PERIOD_S`."""
+    cand, back = _candidates(line, rest, distance, reach, still)
     keep = _reached(line[cand] - rest, back)
     return np.asarray(cand[keep]), back[keep]
 
 
 def _candidates(
-    line: np.ndarray, rest: float, distance: int, reach: int | None = None
+    line: np.ndarray, rest: float, distance: int, reach: int | None = None, still: int = 1
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`_far_points` before the cut-off ones are judged: the samples, and how far the
     line rises to each from its lowest since the clip's start and falls back from it to its
@@ -801,7 +819,7 @@ def _candidates(
     prom = props["prominences"]
     height = padded[cand] - rest
     if reach is not None:
-        height = padded[cand] - np.maximum(rest, _floors(line, cand - 1, reach))
+        height = padded[cand] - np.maximum(rest, _floors(line, cand - 1, reach, rest, still))
     keep = (prom >= SUBSTANTIAL * float(np.median(prom))) & (prom >= RETURN_SHARE * height)
     cand = cand[keep] - 1
     before = np.minimum.accumulate(line)[cand]
@@ -809,13 +827,24 @@ def _candidates(
     return np.asarray(cand), np.stack([line[cand] - before, line[cand] - after], axis=1)
 
 
-def _floors(line: np.ndarray, peaks: np.ndarray, reach: int) -> np.ndarray:
+def _floors(line: np.ndarray, peaks: np.ndarray, reach: int, rest: float, still: int) -> np.ndarray:
     """Per peak of ``line`` ``(n,)`` (samples ``peaks``, ascending), the lowest of the line
-    from the peak before it to the peak after it (the clip's start and end for the first
-    and last) and within ``reach`` samples of it: the low points of its own repetition."""
+    from the peak before it to the peak after it and within ``reach`` samples of it: the low
+    points of its own repetition. Before the first peak and after the last, ``rest`` unless
+    the line is still at the clip's start (or end): moving less than
+    :data:`MIN_EXCURSION_RAD` in all over its first (last) ``still`` samples. A clip cut
+    while the line falls from its last far point does not show how far it falls (padded
+    with the rest level, as :func:`_candidates` pads it): a sit-to-stand's second dip of
+    the knees, on the way up, is no repetition of its own whatever the clip's end."""
+    n = len(line)
     lowest = minimum_filter1d(line, size=2 * max(1, reach) + 1, mode="nearest")[peaks]
-    bounds = np.concatenate([[0], peaks, [len(line) - 1]])
+    bounds = np.concatenate([[0], peaks, [n - 1]])
     span = np.array([line[a : b + 1].min() for a, b in zip(bounds[:-2], bounds[2:], strict=True)])
+    m = min(n - 1, max(1, still))
+    if float(np.abs(np.diff(line[: m + 1])).sum()) >= MIN_EXCURSION_RAD:
+        span[0] = min(float(span[0]), rest)
+    if float(np.abs(np.diff(line[-m - 1 :])).sum()) >= MIN_EXCURSION_RAD:
+        span[-1] = min(float(span[-1]), rest)
     return np.asarray(np.minimum(lowest, span))
 
 
@@ -991,13 +1020,14 @@ def count_in_signals(
         distance = int(0.5 * (clear or MIN_PERIOD_S) * sig.fps)
         reach = int(period * sig.fps) if period else len(line)
         rest = float(np.percentile(line, 5))
-        far, back = _far_points(line, rest, distance, reach)
+        still = int(round(MIN_PERIOD_S * sig.fps))
+        far, back = _far_points(line, rest, distance, reach, still)
         above = _above_rest(recorded, far, reach)
         far, back = far[above], back[above]
         whole = _whole_only(back, edges)
         partial = bool(len(far)) and not whole.any()  # part of one repetition, none whole
         far = np.unique(_in_view(far[whole], sig.blind))
-        if all(edges) and len(far) == 1 and _held_change(x, recorded, sig.fps):
+        if all(edges) and len(far) == 1 and _held_change(x, recorded, sig.fps, int(far[0])):
             far = far[:0]  # got into a posture once and held it: no repetition
         spans = _bounds(line, far, reach) if len(far) else []
     spans = _seen_spans(spans, far, sig.blind)

@@ -201,6 +201,37 @@ def test_getting_into_a_held_posture_once_is_no_repetition(reverse: bool) -> Non
     assert count_repetitions(seq, recording_edges=False).count == 1
 
 
+def _raised_settled_and_paused(pause_s: float) -> PoseSequence:
+    """Standing 0.6 s, both arms raised sideways to 100 degrees over 0.8 s, brought back to 75
+    degrees over 0.4 s, held there ``pause_s`` seconds, lowered over 0.8 s, 0.6 s of standing
+    (each move eased): one repetition, far point at 1.4 s, paused on its way back."""
+
+    def ease(a: float, b: float, s: float) -> np.ndarray:
+        return a + (b - a) * 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, int(round(s * FPS)))))
+
+    rest = np.zeros(int(0.6 * FPS))
+    deg = np.concatenate([rest, ease(0, 100, 0.8), ease(100, 75, 0.4),
+                          np.full(int(pause_s * FPS), 75.0), ease(75, 0, 0.8), rest])  # fmt: skip
+    body = standing()
+    return to_sequence(*(_raise_arms(body, a, a) for a in deg), fps=FPS)
+
+
+@pytest.mark.parametrize("pause_s", [0.6, 2.0])
+def test_a_pause_on_the_way_back_is_no_posture_held(pause_s: float) -> None:
+    """Arms raised to 100 degrees, brought 25 degrees back and paused there: counted with the
+    end every 0.1 s from the moment they are 15 degrees back (1.7 s), the count stays 1
+    through the pause and after. Before, a clip ending 0.4 s into the pause read as a
+    posture got into and held (the side plank's rule: one far point, the end still near the
+    far end) and counted 0, then 1 again once the arms moved on. The far point was left by
+    more than a repetition's return before the line stopped: a repetition paused."""
+    seq = _raised_settled_and_paused(pause_s)
+    ends = range(int(round(1.7 * FPS)), seq.n_frames + 1, 3)
+    counts = [count_repetitions(seq.slice_frames(0, e)).count for e in ends]
+    assert counts == [1] * len(counts), counts
+    peak = count_repetitions(seq).repetitions[0].peak_frame
+    assert abs(peak - 1.4 * FPS) <= 2
+
+
 def test_standing_still_with_jitter_has_no_repetition() -> None:
     seq = _movement([])  # 0.6 s of rest only: too short, so build a longer hold
     body = standing()
