@@ -72,6 +72,7 @@ JUDGES = (
     "held-out",
     "activities",
     "margin-distance",
+    "spread-far",
 )
 """The judges by name, the default first."""
 FALSE_UNKNOWN = 0.05
@@ -1052,6 +1053,61 @@ class SpreadMargin(ActivityMargin):
 
 
 @dataclass(frozen=True)
+class SpreadFar(SpreadMargin):
+    """:class:`SpreadMargin` with a far bound on the window's distance to its nearest case
+    (``--unknown spread-far``): unknown when ``d1`` lies beyond ``far``, as
+    :class:`SpreadMargin` judges at or below it. ``far``: the nearest distance that at most
+    a share ``false_unknown`` of the case base's held-out known cases exceed
+    (:func:`false_unknown_threshold` of their distances to their nearest case, from the same
+    held-out scan as the thresholds). A window farther from every case than nearly every
+    held-out known case lies is unlike them, however clearly nearer one activity than the
+    next (a margin judge sees only the ratio). With a case base of one person the bound is
+    read the same way and the judge, as :class:`ActivityMargin`, sees the distances less the
+    person offset (:func:`for_person`): the bound is compared with those. ``far`` inf (the
+    judge is :class:`SpreadMargin`) in a record without it or when no held-out case is
+    known."""
+
+    far: float = math.inf
+
+    @classmethod
+    def of(  # type: ignore[override]
+        cls,
+        cb: CaseBase,
+        false_unknown: float = FALSE_UNKNOWN,
+        held: Held | None = None,
+    ) -> SpreadFar:
+        """Calibrated on ``cb``; ``held`` and DataError as :meth:`SpreadMargin.of`."""
+        held = held if held is not None else held_out_activities(cb)
+        inner = SpreadMargin.of(cb, false_unknown, held=held)
+        fields = {f.name: getattr(inner, f.name) for f in dataclasses.fields(inner)}
+        known, _ = known_and_novel(held[0], held[1])
+        if not len(known):
+            return cls(**fields)
+        return cls(**fields, far=false_unknown_threshold(np.min(known, axis=1), false_unknown))
+
+    def beyond(self, nearest: np.ndarray) -> bool:
+        """Whether the window's nearest distance lies beyond ``far``."""
+        return float(np.min(nearest)) > self.far
+
+    def unlike(self, nearest: np.ndarray) -> bool:
+        return self.beyond(nearest) or super().unlike(nearest)
+
+    def evidence(self, nearest: np.ndarray) -> float:
+        """1 beyond ``far``, else :meth:`SpreadMargin.evidence`."""
+        return 1.0 if self.beyond(nearest) else super().evidence(nearest)
+
+    def describe(self, nearest: np.ndarray, classes: Sequence[str]) -> str:
+        if not self.beyond(nearest) or super().unlike(nearest):
+            return super().describe(nearest, classes)
+        first, _ = two_nearest(nearest, classes)
+        return (
+            f"like no stored activity: its nearest case ({first}) lies"
+            f" {float(np.min(nearest)):.3g} away, farther than {self.far:.3g} (which"
+            f" {percent(self.false_unknown, 0)} of the case base's held-out cases exceed)"
+        )
+
+
+@dataclass(frozen=True)
 class HeldOut:
     """The classifier's stored calibration (:class:`cbr.novelty.NoveltyCalibration`): unknown
     when the nearest case lies farther than held-out training clips nearly ever do."""
@@ -1139,13 +1195,14 @@ STORED: dict[str, type[Calibrated]] = {
     "activities": Familiarity,
     "activity-margin": ActivityMargin,
     "spread-margin": SpreadMargin,
+    "spread-far": SpreadFar,
 }
 """The judges calibrated on the case base, by name: calibrated when a model is stored
 (:func:`calibrate_judges`) and stored with it. (``held-out`` reads the classifier's novelty
 calibration, already stored.)"""
 
 
-AT_FIT = ("margin", "margin-distance", "activity-margin", "spread-margin")
+AT_FIT = ("margin", "margin-distance", "activity-margin", "spread-margin", "spread-far")
 """The judges calibrated when a model is stored: the margins, from one held-out scan of the
 case base for at most :data:`MARGIN_SAMPLE` cases (grows linearly with the case base);
 ``spread-margin``'s choice of power, rate and prior adds about 0.05-0.2 s of CPU to it
@@ -1265,6 +1322,7 @@ __all__ = [
     "JUDGES",
     "SPREAD_POWERS",
     "SpreadMargin",
+    "SpreadFar",
     "activity_spreads",
     "choose_spread",
     "spread_scores",

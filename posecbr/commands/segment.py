@@ -44,6 +44,7 @@ JUDGES = (
     "held-out",
     "activities",
     "margin-distance",
+    "spread-far",
 )
 """cbr.unknown.JUDGES, the default first (not imported: the command line starts light)."""
 
