@@ -1078,12 +1078,18 @@ class SpreadFar(SpreadMargin):
     ) -> SpreadFar:
         """Calibrated on ``cb``; ``held`` and DataError as :meth:`SpreadMargin.of`."""
         held = held if held is not None else held_out_activities(cb)
-        inner = SpreadMargin.of(cb, false_unknown, held=held)
+        return cls.bounding(SpreadMargin.of(cb, false_unknown, held=held), held)
+
+    @classmethod
+    def bounding(cls, inner: SpreadMargin, held: Held) -> SpreadFar:
+        """``inner`` (calibrated on the held-out scan ``held``) with the far bound read from
+        that scan at its budget ``false_unknown``."""
         fields = {f.name: getattr(inner, f.name) for f in dataclasses.fields(inner)}
         known, _ = known_and_novel(held[0], held[1])
         if not len(known):
             return cls(**fields)
-        return cls(**fields, far=false_unknown_threshold(np.min(known, axis=1), false_unknown))
+        far = false_unknown_threshold(np.min(known, axis=1), inner.false_unknown)
+        return cls(**fields, far=far)
 
     def beyond(self, nearest: np.ndarray) -> bool:
         """Whether the window's nearest distance lies beyond ``far``."""
@@ -1206,7 +1212,8 @@ AT_FIT = ("margin", "margin-distance", "activity-margin", "spread-margin", "spre
 """The judges calibrated when a model is stored: the margins, from one held-out scan of the
 case base for at most :data:`MARGIN_SAMPLE` cases (grows linearly with the case base);
 ``spread-margin``'s choice of power, rate and prior adds about 0.05-0.2 s of CPU to it
-(:func:`inner_grid`; UI-PRMD case bases of 120 to 4,252 cases).
+(:func:`inner_grid`; UI-PRMD case bases of 120 to 4,252 cases); ``spread-far`` takes
+``spread-margin``'s and the held-out cases' nearest distances (:meth:`SpreadFar.bounding`).
 ``activities`` measures every case against every other (grows with the square: 4 s of CPU
 on 4,252 cases, hours on the 100,000 of a 50,000-clip training set) and is calibrated when
 asked for, as before."""
@@ -1221,6 +1228,10 @@ def calibrate_judges(cb: CaseBase, names: Sequence[str] = tuple(STORED)) -> dict
     held = held_out_activities(cb) if three and set(AT_FIT) & set(names) else None
     out: dict[str, Calibrated] = {}
     for name in names:
+        inner = out.get("spread-margin")
+        if name == "spread-far" and isinstance(inner, SpreadMargin) and held is not None:
+            out[name] = SpreadFar.bounding(inner, held)  # one choice of the spread, not two
+            continue
         try:
             out[name] = STORED[name].of(cb, held=held)
         except DataError:

@@ -108,6 +108,7 @@ def test_spread_far_calibrated_on_two_people_by_hand() -> None:
     assert for_person(judge, np.full(20, 3.0)) is judge
     # calibrated with the others from one held-out scan, and stored at fit
     assert calibrate_judges(cb)["spread-far"] == judge
+    assert calibrate_judges(cb, ["spread-far"]) == {"spread-far": judge}
 
 
 def test_spread_far_with_one_person_compares_the_distances_less_the_offset() -> None:
