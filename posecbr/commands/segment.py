@@ -87,7 +87,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "beyond one threshold for all activities (margin), farther from its nearest case than "
         "held-out training clips lie (held-out, the flag classify gives), as far as the case "
         "base's activities lie from each other (activities), or the margin alone or a smaller "
-        "margin with a far nearest case, sharing the 5 %% (margin-distance)",
+        "margin with a far nearest case, sharing the 5 %% (margin-distance), or spread-margin "
+        "or a nearest case farther than 5 %% of those lie (spread-far)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
