@@ -34,6 +34,11 @@ The judges, each calibrated on the case base itself, never on what is being segm
   distance of its held-out known cases), to a power chosen on the held-out cases with the
   rate and the prior; per-activity thresholds as :class:`ActivityMargin`'s. With a case base
   of one person it is :class:`ActivityMargin`.
+- :class:`SpreadFar` (``--unknown spread-far``): :class:`SpreadMargin`, or unknown when the
+  window's nearest case lies farther than all but :data:`FALSE_UNKNOWN` of the held-out
+  known cases' do (not the default: on people not in the case base it caught more of
+  UI-PRMD Kinect's left-out blocks for 1.4 points of its seen ones, and none more of
+  HDM05's; README, "The far bound as a judge").
 - With a case base of one person (held out by recording or by time, not by person), the two
   margin judges also have a floor (:func:`one_person_floor`) and see each recording's
   distances less how much farther its person lies from every case than the case base's own
