@@ -29,7 +29,7 @@ from features.pose_estimation.video import (
     outside_frame,
     resample_to_grid,
 )
-from features.poses import load_pose, load_pose_arrays
+from features.poses import EXTRACTION_VERSION, load_pose, load_pose_arrays
 from posecbr.cli import main
 from posecbr.commands.watch import Regrid
 
@@ -498,7 +498,7 @@ def test_a_pose_file_of_a_variable_rate_video_from_older_code_is_extracted_again
     out = tmp_path / "poses"
     pose_file = out / "lunge_vfr.npz"
     assert main(["extract", str(vfr_mkv), "--out", str(out)]) == 0
-    assert load_pose(pose_file).metadata["extraction_version"] == 2
+    assert load_pose(pose_file).metadata["extraction_version"] == EXTRACTION_VERSION
     for older in (("extraction_version", "variable_frame_rate"), ("extraction_version",)):
         _as_older(pose_file, *older)
         capsys.readouterr()
@@ -506,7 +506,7 @@ def test_a_pose_file_of_a_variable_rate_video_from_older_code_is_extracted_again
         line = capsys.readouterr().out.strip()
         assert line.startswith(f"done: {pose_file}") and line.endswith(f"; {STALE_VFR})")
         seq = load_pose(pose_file)
-        assert seq.metadata["extraction_version"] == 2 and seq.n_frames == 16
+        assert seq.metadata["extraction_version"] == EXTRACTION_VERSION and seq.n_frames == 16
         assert seq.metadata["variable_frame_rate"]["resampled_to_fps"] == 25.0
         assert main(["extract", str(vfr_mkv), "--out", str(out)]) == 0  # now up to date
         assert "up to date" in capsys.readouterr().out
@@ -728,7 +728,7 @@ def test_a_pose_file_of_a_newer_extraction_is_not_called_older(
     (or none) is older."""
     from features.datasets import load_clip
     from features.pose_estimation.video import older_vfr_extraction
-    from features.poses import EXTRACTION_VERSION, PoseSequence, save_pose
+    from features.poses import PoseSequence, save_pose
     from features.skeleton import BLAZEPOSE_33
 
     meta = {"pose_model": "blazepose", "variable_frame_rate": {"resampled_to_fps": 25.0}}

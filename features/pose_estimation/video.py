@@ -66,6 +66,18 @@ VFR_TOLERANCE = 0.25
 """How far (in frame intervals at the declared rate) a frame's presentation time may lie from
 ``index / fps`` and the video still count as constant-rate: timestamp rounding and a phone's
 jitter of a millisecond or two stay well inside it; a dropped or doubled frame does not."""
+MAX_BRIDGE_S = 0.25
+"""The longest time (s) between two decoded frames that resampling bridges by linear
+interpolation; at a low declared rate, :data:`BRIDGE_FRAMES` frame intervals if longer
+(:func:`bridge_limit_s`). A phone's frames come 20 to 100 ms apart, and a dropped frame or two
+leaves 70 to 100 ms at 30 fps: a body moves little and smoothly in that, so the grid times
+between are inferred. A quarter of a second is already a good part of a repetition (a squat
+takes one to three seconds), and over a longer stretch without frames (a stream that dropped
+them, a jump in the timestamps) the motion cannot be inferred: the grid times inside it stay
+missing (NaN), as a frame without a person is."""
+BRIDGE_FRAMES = 3
+"""At a low declared rate, three frame intervals are bridged however long (a 4 fps video's
+frames are 0.25 s apart: one dropped frame is bridged)."""
 
 
 @dataclass(frozen=True)
@@ -402,7 +414,8 @@ def older_vfr_extraction(meta: Mapping[str, Any], video: str | Path) -> bool:
     variable-frame-rate video, by extraction code older than today's
     (:data:`EXTRACTION_VERSION`): its poses differ from what extracting the video now gives.
     A file of the current version, or of a newer posecbr's, is not; one of an older version
-    or none (written before the version was) is when its metadata says it was resampled; one
+    or none (written before the version was) is when its metadata says it was resampled
+    (version 2: when its frames lay further apart than is bridged now, :func:`bridge_limit_s`); one
     without the version that does not say so (the oldest code did not notice a variable
     rate) is when the video's frame times, read from its packets (milliseconds, no decoding),
     stray from its declared rate. A constant-rate video's pose file never is: its poses are
@@ -410,9 +423,23 @@ def older_vfr_extraction(meta: Mapping[str, Any], video: str | Path) -> bool:
     version = meta.get("extraction_version")
     if isinstance(version, int | float) and version >= EXTRACTION_VERSION:
         return False  # today's, or a newer posecbr's: not older
-    if "variable_frame_rate" in meta:
+    vfr = meta.get("variable_frame_rate")
+    if isinstance(version, int | float) and version >= 2 and isinstance(vfr, Mapping):
+        return _blended_a_gap(vfr)  # version 2 differs only where it blended across a gap
+    if vfr is not None:
         return True
     return version is None and variable_rate(video)
+
+
+def _blended_a_gap(vfr: Mapping[str, Any]) -> bool:
+    """Whether a version-2 pose file's resampling record (``variable_frame_rate``) shows
+    frames further apart than today's extraction bridges (:func:`bridge_limit_s`): version 2
+    blended across them. True when the record cannot tell."""
+    try:
+        longest = float(vfr["frame_interval_s"]["max"])
+        return longest > bridge_limit_s(float(vfr["resampled_to_fps"]))
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        return True
 
 
 def blend(left: Any, right: Any, w: Any) -> Any:
@@ -423,16 +450,26 @@ def blend(left: Any, right: Any, w: Any) -> Any:
     return np.where(w <= 1e-9, left, np.where(w >= 1.0 - 1e-9, right, mixed))
 
 
-def resample_to_grid(
-    times: np.ndarray, values: np.ndarray, fps: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """``values`` (frames first) sampled at ``times`` (s, strictly increasing), put on the
-    uniform grid ``times[0] + k / fps``, as ``watch`` puts them as the frames come: the frames
-    before the first that :func:`strays` lie on the grid and are taken as they are; every grid
-    time from there to the last frame's is the linear interpolation between the decoded frames
-    just before and just after it (a grid time on a frame takes that frame's value). A value
-    missing (NaN) in either neighbour stays missing. Returns (the grid values, the index of
-    the frame at or before each grid time)."""
+def bridge_limit_s(fps: float) -> float:
+    """The longest time (s) between two decoded frames that resampling to ``fps`` bridges:
+    :data:`MAX_BRIDGE_S`, or :data:`BRIDGE_FRAMES` frame intervals if longer."""
+    return max(MAX_BRIDGE_S, BRIDGE_FRAMES / fps)
+
+
+def bridged_weight(elapsed_s: Any, left_s: Any, right_s: Any, fps: float) -> Any:
+    """How far grid time ``elapsed_s`` lies from the decoded frame at ``left_s`` to the one
+    at ``right_s`` (0: on the left frame, 1: on the right one); NaN (the values there stay
+    missing, :func:`blend`) strictly between two frames more than :func:`bridge_limit_s`
+    apart: no frame there to infer the motion from."""
+    span = np.asarray(right_s) - np.asarray(left_s)
+    w = (np.asarray(elapsed_s) - left_s) / span
+    inside = (w > 1e-9) & (w < 1.0 - 1e-9)
+    return np.where(inside & (span > bridge_limit_s(fps)), np.nan, w)
+
+
+def _grid_weights(times: np.ndarray, fps: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where :func:`resample_to_grid` reads each grid time: (the frame before, its
+    :func:`bridged_weight` to the frame after, the frame at or before it)."""
     tau = np.asarray(times, dtype=np.float64) - times[0]
     stray = np.flatnonzero(strays(tau, np.arange(tau.size), fps))
     s = int(stray[0]) if stray.size else tau.size  # frames 0 .. s-1: on the grid
@@ -441,9 +478,34 @@ def resample_to_grid(
     before = np.concatenate([np.arange(s), np.searchsorted(tau, grid, side="right") - 1])
     j = np.clip(before, 0, tau.size - 2)
     t = np.concatenate([tau[:s], grid])  # an on-grid frame: at its own time, weight 0
-    w = (t - tau[j]) / (tau[j + 1] - tau[j])
+    return j, bridged_weight(t, tau[j], tau[j + 1], fps), before
+
+
+def resample_to_grid(
+    times: np.ndarray, values: np.ndarray, fps: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``values`` (frames first) sampled at ``times`` (s, strictly increasing), put on the
+    uniform grid ``times[0] + k / fps``, as ``watch`` puts them as the frames come: the frames
+    before the first that :func:`strays` lie on the grid and are taken as they are; every grid
+    time from there to the last frame's is the linear interpolation between the decoded frames
+    just before and just after it (a grid time on a frame takes that frame's value). A value
+    missing (NaN) in either neighbour stays missing, and so does every value at a grid time
+    between two frames more than :func:`bridge_limit_s` apart (a gap in the video: no motion
+    is made up for it). Returns (the grid values, the index of the frame at or before each
+    grid time)."""
+    j, w, before = _grid_weights(times, fps)
     w = w.reshape((-1,) + (1,) * (values.ndim - 1))
     return blend(values[j], values[j + 1], w), before
+
+
+def unbridged_gaps(times: np.ndarray, fps: float) -> tuple[list[tuple[float, float]], np.ndarray]:
+    """The gaps :func:`resample_to_grid` leaves missing in frames at ``times`` (s, strictly
+    increasing, the first at 0): the (start, end) times (s) of each two frames more than
+    :func:`bridge_limit_s` apart, and the grid rows inside them ``(rows,)`` bool."""
+    tau = np.asarray(times, dtype=np.float64)
+    _j, w, _before = _grid_weights(tau, fps)
+    far = np.flatnonzero(np.diff(tau) > bridge_limit_s(fps))
+    return [(float(tau[i]), float(tau[i + 1])) for i in far], np.isnan(w)
 
 
 def resample_timed(
@@ -555,26 +617,9 @@ def estimate_video(
         positions, image_lm = both[:, :, :3], both[:, :, 3:]
         person_on_grid = ~np.isnan(resample_timed(elapsed, nobody, info.fps)[0])
         missing = np.flatnonzero(~person_on_grid).tolist()
-        gaps = np.diff(elapsed[timed])
-        vfr = {
-            "resampled_to_fps": info.fps,
-            "decoded_frames": int(elapsed.size),
-            "frame_interval_s": {
-                "min": round(float(gaps.min()), 6),
-                "max": round(float(gaps.max()), 6),
-            },
-            "method": "linear interpolation between the decoded frames around each grid time;"
-            " missing in either stays missing",
-        }
-        if timed.size < elapsed.size:
-            untimed = np.setdiff1d(np.arange(elapsed.size), timed)
-            vfr["frames_left_out"] = {
-                "frames": untimed.tolist(),
-                "why": "no time of its own after the frames strayed (missing, repeated or"
-                " earlier than the frame before): left out, as watch leaves it out",
-            }
+        vfr, gaps, holes = _resampling_record(elapsed, timed, info.fps)
         if announce:
-            print(f"note: {shown(vfr_words(path, info.fps, gaps))}", file=sys.stderr)
+            print(f"note: {shown(vfr_words(path, info.fps, gaps, holes))}", file=sys.stderr)
     else:
         missing = [i for i, p in enumerate(person) if not p]
     meta: dict[str, object] = {
@@ -606,12 +651,95 @@ def estimate_video(
     return VideoPoses(seq, image_lm, tuple(missing), info, video_frames)
 
 
-def vfr_words(path: str | Path, fps: float, gaps: np.ndarray) -> str:
-    """The one line that tells a user a video was resampled (``gaps``: its frame intervals)."""
-    return (
+def _resampling_record(
+    elapsed: np.ndarray, timed: np.ndarray, fps: float
+) -> tuple[dict[str, object], np.ndarray, list[tuple[float, float]]]:
+    """How :func:`estimate_video` resampled frames at ``elapsed`` (s; ``timed``: those with a
+    time), for the metadata's ``variable_frame_rate``; with the frame intervals and the gaps
+    left missing (:func:`unbridged_gaps`), for the note."""
+    gaps = np.diff(elapsed[timed])
+    holes, unbridged = unbridged_gaps(elapsed[timed], fps)
+    vfr = {
+        "resampled_to_fps": fps,
+        "decoded_frames": int(elapsed.size),
+        "frame_interval_s": {
+            "min": round(float(gaps.min()), 6),
+            "max": round(float(gaps.max()), 6),
+        },
+        "method": "linear interpolation between the decoded frames around each grid time;"
+        " missing in either stays missing; none between frames more than"
+        f" {bridge_limit_s(fps):g} s apart (a gap: missing)",
+    }
+    if holes:
+        rows = np.flatnonzero(unbridged)
+        vfr["gaps_left_missing"] = {
+            "longer_than_s": round(bridge_limit_s(fps), 6),
+            "gaps": [_gap_record(a, b, rows, fps) for a, b in holes],
+            "n_rows": int(rows.size),
+            "why": "no decoded frame in between: the motion there cannot be inferred, so"
+            " the grid times inside are missing (NaN), not interpolated",
+        }
+    if timed.size < elapsed.size:
+        untimed = np.setdiff1d(np.arange(elapsed.size), timed)
+        vfr["frames_left_out"] = {
+            "frames": untimed.tolist(),
+            "why": "no time of its own after the frames strayed (missing, repeated or"
+            " earlier than the frame before): left out, as watch leaves it out",
+        }
+    return vfr, gaps, holes
+
+
+def _gap_record(start: float, end: float, rows: np.ndarray, fps: float) -> dict[str, object]:
+    """A gap's entry in a pose file's ``gaps_left_missing``: its start and end (s, the frames
+    either side, from the first frame), its length and the grid rows inside it left missing
+    (first, and one past the last; None when the gap holds no grid time)."""
+    inside = rows[(rows / fps > start) & (rows / fps < end)]
+    return {
+        "start_s": round(start, 6),
+        "end_s": round(end, 6),
+        "seconds": round(end - start, 6),
+        "rows": [int(inside[0]), int(inside[-1]) + 1] if inside.size else None,
+    }
+
+
+def recorded_gaps(meta: Mapping[str, Any]) -> list[tuple[float, float, int, int]]:
+    """The gaps left missing that a pose file's metadata records (``gaps_left_missing``):
+    (start, end: s; the first row inside and one past the last) each; none when it records
+    none, or none it can read."""
+    vfr = meta.get("variable_frame_rate")
+    record = vfr.get("gaps_left_missing") if isinstance(vfr, Mapping) else None
+    out = []
+    for gap in record.get("gaps", []) if isinstance(record, Mapping) else []:
+        try:
+            rows = gap["rows"] or (0, 0)
+            out.append((float(gap["start_s"]), float(gap["end_s"]), int(rows[0]), int(rows[1])))
+        except (KeyError, TypeError, ValueError, IndexError):
+            continue
+    return out
+
+
+def gap_words(holes: list[tuple[float, float]]) -> str:
+    """``holes`` (start, end: s) said in a few words: "3.0 s without frames at 2.0-5.0 s left
+    missing"; of several, the longest and how many."""
+    if not holes:
+        return ""
+    start, end = max(holes, key=lambda h: h[1] - h[0])
+    words = f"{end - start:.1f} s without frames at {start:.1f}-{end:.1f} s"
+    if len(holes) > 1:
+        words = f"{len(holes)} gaps without frames (the longest {words})"
+    return f"{words} left missing"
+
+
+def vfr_words(
+    path: str | Path, fps: float, gaps: np.ndarray, holes: list[tuple[float, float]] | None = None
+) -> str:
+    """The one line that tells a user a video was resampled (``gaps``: its frame intervals;
+    ``holes``: the gaps left missing, :func:`unbridged_gaps`)."""
+    line = (
         f"{path}: variable frame rate (frames {gaps.min() * 1000:.0f} to"
         f" {gaps.max() * 1000:.0f} ms apart): poses resampled to {fps:g} fps"
     )
+    return f"{line}; {gap_words(holes)}" if holes else line
 
 
 def _smoothing_meta() -> dict[str, object]:

@@ -439,7 +439,7 @@ def process(job: Job, options: Options) -> Outcome:
 
     from features.pose_estimation import open_video
     from features.pose_estimation.overlay import check_mp4_size, write_overlay
-    from features.pose_estimation.video import older_vfr_extraction
+    from features.pose_estimation.video import gap_words, older_vfr_extraction, recorded_gaps
     from features.poses import load_pose, load_pose_arrays
 
     try:
@@ -461,9 +461,12 @@ def process(job: Job, options: Options) -> Outcome:
             image_lm, video_frames = stored["image_landmarks"], stored.get("video_frames")
         else:
             seq, image_lm, video_frames = _estimate(job, options, key, digest)
+        holes = recorded_gaps(seq.metadata)
         vfr_note = (
             "" if video_frames is None else f"; variable frame rate: resampled to {seq.fps:g} fps"
         )
+        if holes:
+            vfr_note += f"; {gap_words([(a, b) for a, b, _r0, _r1 in holes])}"
         if job.overlay is not None:
             words = _fluent_words(seq) if options.fluents else None
             write_overlay(
@@ -475,7 +478,10 @@ def process(job: Job, options: Options) -> Outcome:
                 frame_offset=job.start or 0,
                 video_frames=video_frames,
             )
-        n_missing = int(np.isnan(seq.positions).all(axis=(1, 2)).sum())
+        nobody = np.isnan(seq.positions).all(axis=(1, 2))
+        for _a, _b, first, end in holes:
+            nobody[first:end] = False  # no frame there at all, not a frame without a person
+        n_missing = int(nobody.sum())
         detail = f"{counted(seq.n_frames, 'frame')}, {n_missing} without a person{vfr_note}"
         if up_to_date:
             return "drawn", job.out, f"up to date, {detail}; its overlay drawn"

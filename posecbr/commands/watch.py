@@ -602,7 +602,10 @@ class Regrid:
     source: no times), each frame is passed as it is. From the first frame that strays (a
     variable frame rate: see :mod:`features.pose_estimation.video`), the poses are put on the
     grid k / fps as the frames come, each grid time linearly between the frames around it
-    (a joint missing in either stays missing), and the user is told once on stderr."""
+    (a joint missing in either stays missing; every joint missing between two frames further
+    apart than :func:`features.pose_estimation.video.bridge_limit_s`: a gap in the video, no
+    motion made up for it, as ``extract`` leaves it), and the user is told once on stderr,
+    and once more at each such gap."""
 
     def __init__(self, fps: float, source: str) -> None:
         self.fps, self.source = fps, source
@@ -617,7 +620,7 @@ class Regrid:
 
         import numpy as np
 
-        from features.pose_estimation.video import blend, strays
+        from features.pose_estimation.video import blend, bridged_weight, gap_words, strays
 
         t = frame.video_time_s
         if not self.resampling:
@@ -635,13 +638,18 @@ class Regrid:
         if prev is None or not math.isfinite(t) or t <= prev.video_time_s:
             return []  # no time to place it by
         out = []
+        start = prev.video_time_s
+        left_missing = 0
         while self.k / self.fps <= t + 1e-9:
-            w = (self.k / self.fps - prev.video_time_s) / (t - prev.video_time_s)
+            w = bridged_weight(self.k / self.fps, start, t, self.fps)
+            left_missing += bool(np.isnan(w))
             world = blend(prev.seen_world, frame.seen_world, w)
             vis = blend(np.asarray(prev.visibility), np.asarray(frame.visibility), w)
             out.append((world, vis, frame if w >= 1.0 - 1e-9 else prev))
             self.k += 1
         self.prev = frame
+        if left_missing:
+            print(f"note: {self.source}: {gap_words([(start, t)])}", file=sys.stderr)
         return out
 
 

@@ -1,0 +1,209 @@
+"""A gap in a video's frame times (a phone or a stream that dropped frames, a jump in an
+MPEG-TS clock) stays missing: the grid times inside it are NaN in ``extract``, ``watch`` and
+every command that reads a video, not blended across the gap as made-up motion. Frames a
+normal variable rate puts 20 to 100 ms apart are still blended (test_video_vfr.py).
+
+The videos are written with PyAV at presentation times chosen here: the real lunge frames of
+test_video_vfr.py, lossless (FFV1 in Matroska) where two files must decode the same, H.264 in
+MPEG-TS as a stream with a jump in its clock comes.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from features.pose_estimation import PoseEstimator, estimate_video, iter_frames, stream_poses
+from features.pose_estimation.video import older_vfr_extraction, outside_frame, resample_to_grid
+from features.poses import EXTRACTION_VERSION, load_pose, load_pose_arrays, save_pose
+from posecbr.cli import main
+from posecbr.commands.extract import STALE_VFR
+from posecbr.commands.watch import Regrid
+from tests.test_video_vfr import LEFT_HIP, _frame, _write, people  # noqa: F401 (a fixture)
+
+# 12 lunge frames at 25 fps (40 ms), but 1 s from the sixth (200 ms) to the seventh (1.2 s)
+GAP_MS = [40 * k for k in range(6)] + [1200 + 40 * k for k in range(6)]
+# the grid at 25 fps: 0 to 1.4 s, 36 rows; rows 6 to 29 (0.24 to 1.16 s) lie inside the gap
+GAP_ROWS = list(range(6, 30))
+OPTIONS = {"smoothing": False, "tracking": False, "progress_bar": False}
+
+
+def test_the_bridge_limit_is_a_quarter_second_or_three_frames() -> None:
+    from features.pose_estimation.video import bridge_limit_s
+
+    assert bridge_limit_s(25.0) == 0.25
+    assert bridge_limit_s(30.0) == 0.25
+    assert bridge_limit_s(4.0) == 0.75  # three frame intervals at 4 fps
+
+
+def test_resample_to_grid_leaves_a_gap_missing_and_blends_a_normal_interval() -> None:
+    """Frames at 0, 0.1, 0.15, 0.4 (0.25 s after: bridged), 1.0 (0.6 s after: a gap) and
+    1.1 s of a 10 fps file. 0.2 and 0.3 s blend 0.15 and 0.4 s as before (0.2, 0.6 of the
+    way); 0.5 to 0.9 s lie inside the gap: missing; 1.0 and 1.1 s are the frames."""
+    times = np.array([0.0, 0.1, 0.15, 0.4, 1.0, 1.1])
+    values = np.array([0.0, 2.0, 4.0, 9.0, 20.0, 30.0])
+    grid, before = resample_to_grid(times, values, 10.0)
+    nan = np.nan
+    expected = [0.0, 2.0, 0.8 * 4 + 0.2 * 9, 0.4 * 4 + 0.6 * 9, 9.0]
+    expected += [nan] * 5 + [20.0, 30.0]
+    np.testing.assert_allclose(grid, expected, rtol=0, atol=1e-12)
+    assert before.tolist() == [0, 1, 2, 2, 3, 3, 3, 3, 3, 3, 4, 5]
+    from features.pose_estimation.video import unbridged_gaps
+
+    holes, rows = unbridged_gaps(times, 10.0)
+    assert holes == [(0.4, 1.0)]
+    assert np.flatnonzero(rows).tolist() == [5, 6, 7, 8, 9]
+
+
+def test_watch_leaves_the_same_gap_missing_as_the_frames_come(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``watch`` (Regrid) of the frames above pushes the same grid values, the gap's as
+    missing joints with missing visibility, and says the gap once, as it passes it."""
+    times = [0.0, 0.1, 0.15, 0.4, 1.0, 1.1]
+    values = [0.0, 2.0, 4.0, 9.0, 20.0, 30.0]
+    live = Regrid(10.0, "phone.ts")
+    steps = [live.take(_frame(i, t, np.full((33, 3), values[i]))) for i, t in enumerate(times)]
+    pushed = [(w, vis, shown.index) for step in steps for w, vis, shown in step]
+    assert len(pushed) == 12
+    for k in range(5, 10):
+        world, vis, shown = pushed[k]
+        assert np.isnan(world).all() and np.isnan(vis).all() and shown == 3
+    assert [float(w[0, 0]) for w, _v, _s in pushed[10:]] == [20.0, 30.0]
+    assert float(pushed[3][0][0, 0]) == pytest.approx(0.4 * 4 + 0.6 * 9, abs=1e-12)
+    err = capsys.readouterr().err.splitlines()
+    assert err[1:] == ["note: phone.ts: 0.6 s without frames at 0.4-1.0 s left missing"]
+
+
+@pytest.fixture(scope="module")
+def gap_ts(people: list[np.ndarray], tmp_path_factory: pytest.TempPathFactory) -> Path:  # noqa: F811
+    return _write(tmp_path_factory.mktemp("gap") / "jump.ts", GAP_MS, people[:12])
+
+
+def _per_frame(path: Path) -> np.ndarray:
+    """Each decoded frame's world landmarks as estimate_video keeps them (a joint outside the
+    picture missing), the model run on each frame alone."""
+    est = PoseEstimator(smoothing=False, tracking=False)
+    world = []
+    for rgb in iter_frames(path):
+        pose = est.process(rgb)
+        w = pose.world.copy()
+        w[outside_frame(pose.image, rgb.shape[1], rgb.shape[0])] = np.nan
+        world.append(w)
+    return np.array(world)
+
+
+def test_a_gap_stays_missing_and_the_frames_around_it_are_their_own_poses(
+    people: list[np.ndarray],  # noqa: F811
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The 12 frames losslessly, with the 1-s jump and at a constant 25 fps: with the jump,
+    36 rows whose 24 inside the gap are all missing (they had been blended from the frames
+    at 0.2 and 1.2 s: a made-up second of motion) and the 12 others the constant-rate copy's
+    poses, bit for bit. The metadata and the one-line note say where the gap was."""
+    jump = _write(tmp_path / "jump.mkv", GAP_MS, people[:12], codec="ffv1")
+    even = _write(tmp_path / "even.mkv", [40 * k for k in range(12)], people[:12], codec="ffv1")
+    want = estimate_video(even, **OPTIONS).sequence.positions
+    capsys.readouterr()
+    got = estimate_video(jump, **OPTIONS)
+    seq = got.sequence
+    assert seq.n_frames == 36 and seq.fps == 25.0
+    assert np.isnan(seq.positions[GAP_ROWS]).all()
+    assert np.isnan(got.image_landmarks[GAP_ROWS]).all()
+    np.testing.assert_array_equal(seq.positions[:6], want[:6])
+    np.testing.assert_array_equal(seq.positions[30:], want[6:])
+    assert np.isfinite(want[:, LEFT_HIP]).all()  # a person in each frame: the NaN is the gap's
+    assert got.video_frames is not None
+    assert got.video_frames[GAP_ROWS].tolist() == [5] * 24  # the overlay holds the last frame
+    gaps = seq.metadata["variable_frame_rate"]["gaps_left_missing"]
+    assert gaps["longer_than_s"] == 0.25 and gaps["n_rows"] == 24
+    assert gaps["gaps"] == [{"start_s": 0.2, "end_s": 1.2, "seconds": 1.0, "rows": [6, 30]}]
+    assert seq.metadata["missing_frames"] == GAP_ROWS
+    err = capsys.readouterr().err.splitlines()
+    assert err == [
+        f"note: {jump}: variable frame rate (frames 40 to 1000 ms apart): poses resampled"
+        " to 25 fps; 1.0 s without frames at 0.2-1.2 s left missing"
+    ]
+
+
+def test_a_normal_variable_rate_is_still_blended(
+    people: list[np.ndarray],  # noqa: F811
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Frames 20 to 100 ms apart (a phone's): no gap, every grid time blended from the
+    frames around it as before (row 3, 120 ms: a quarter of the way from 100 to 180 ms;
+    row 9, 360 ms: 0.6 of the way from 300 to 400 ms, the frames' own poses), nothing said
+    of gaps, nothing recorded."""
+    pts = [0, 20, 100, 180, 220, 260, 300, 400, 440, 520, 540, 620]
+    path = _write(tmp_path / "phone.mkv", pts, people[:12], codec="ffv1")
+    got = estimate_video(path, **OPTIONS)
+    hip = _per_frame(path)[:, LEFT_HIP]
+    assert np.isfinite(hip).all()
+    seq = got.sequence
+    assert seq.n_frames == 16 and not np.isnan(seq.positions[:, LEFT_HIP]).any()
+    np.testing.assert_allclose(seq.positions[3, LEFT_HIP], 0.75 * hip[2] + 0.25 * hip[3])
+    np.testing.assert_allclose(seq.positions[9, LEFT_HIP], 0.4 * hip[6] + 0.6 * hip[7])
+    assert "gaps_left_missing" not in seq.metadata["variable_frame_rate"]
+    assert "without frames" not in capsys.readouterr().err
+
+
+def test_extract_and_watch_agree_frame_for_frame_across_a_gap(gap_ts: Path) -> None:
+    """The MPEG-TS with its 1-s jump: ``watch``'s poses (stream_poses, then Regrid) equal
+    ``extract``'s row for row, the gap's rows missing in both."""
+    offline = estimate_video(gap_ts, announce=False, **OPTIONS).sequence.positions
+    live = Regrid(25.0, str(gap_ts))
+    est = PoseEstimator(smoothing=False, tracking=False)
+    pushed = [w for f in stream_poses(gap_ts, estimator=est) for w, _v, _s in live.take(f)]
+    assert len(pushed) == offline.shape[0] == 36
+    np.testing.assert_array_equal(np.array(pushed), offline)
+    assert np.isnan(offline[GAP_ROWS]).all()
+    frames = _per_frame(gap_ts)
+    np.testing.assert_array_equal(offline[:6], frames[:6])
+    np.testing.assert_array_equal(offline[30:], frames[6:])
+
+
+def test_extract_of_an_mpeg_ts_with_a_jump_writes_the_gap_missing(
+    gap_ts: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``extract``'s line for the clip: the 24 rows in the gap are no frames "without a
+    person" (it had said "24 without a person"); the gap is said."""
+    out = tmp_path / "poses"
+    assert main(["extract", str(gap_ts), "--out", str(out)]) == 0
+    printed = capsys.readouterr()
+    assert printed.out == (
+        f"done: {out / 'jump.npz'} (36 frames, 0 without a person; variable frame rate:"
+        " resampled to 25 fps; 1.0 s without frames at 0.2-1.2 s left missing)\n"
+    )
+    pose_file = out / "jump.npz"
+    seq = load_pose(pose_file)
+    assert seq.n_frames == 36
+    assert np.isnan(seq.positions[GAP_ROWS]).all()
+    assert not np.isnan(seq.positions[[0, 5, 30, 35], LEFT_HIP]).any()
+    assert load_pose_arrays(pose_file)["video_frames"][GAP_ROWS].tolist() == [5] * 24
+    json.loads(json.dumps(seq.metadata))  # plain JSON
+    # as version 2 left it (the gap blended, no record of it): extracted again, said so
+    vfr = {k: v for k, v in seq.metadata["variable_frame_rate"].items() if "gaps" not in k}
+    meta = {**seq.metadata, "extraction_version": 2, "variable_frame_rate": vfr}
+    image = load_pose_arrays(pose_file)["image_landmarks"]
+    save_pose(replace(seq, metadata=meta), pose_file, extra_arrays={"image_landmarks": image})
+    capsys.readouterr()
+    assert main(["extract", str(gap_ts), "--out", str(out)]) == 0
+    assert capsys.readouterr().out.rstrip().endswith(f"left missing; {STALE_VFR})")
+    assert load_pose(pose_file).metadata["extraction_version"] == EXTRACTION_VERSION
+
+
+def test_a_version_2_pose_file_is_older_only_where_it_blended_across_a_gap() -> None:
+    """Version 2 blended every grid time: its poses differ from today's only when its frames
+    lay further apart than is bridged now (its record's longest interval says so)."""
+    meta = {"pose_model": "blazepose", "extraction_version": 2}
+    phone = {"resampled_to_fps": 25.0, "frame_interval_s": {"min": 0.02, "max": 0.1}}
+    jump = {"resampled_to_fps": 25.0, "frame_interval_s": {"min": 0.04, "max": 1.0}}
+    assert not older_vfr_extraction({**meta, "variable_frame_rate": phone}, "x")
+    assert older_vfr_extraction({**meta, "variable_frame_rate": jump}, "x")
+    assert older_vfr_extraction({**meta, "variable_frame_rate": {"resampled_to_fps": 25}}, "x")
