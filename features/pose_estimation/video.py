@@ -13,7 +13,9 @@ timestamp). When some frame lies more than :data:`VFR_TOLERANCE` of a frame inte
 than twice the frames' own, their average rate instead: :func:`own_rate`),
 :func:`estimate_video` puts the poses from there on on a uniform grid at that rate by linear
 interpolation between the two decoded frames around each grid time
-(:func:`resample_to_grid`), as ``watch`` does while the frames come. A constant-rate video is
+(:func:`resample_to_grid`), as ``watch`` does while the frames come; a grid time between two
+frames more than :func:`bridge_limit_s` apart (a gap: frames dropped, a jump in the clock)
+stays missing, no motion made up for it. A constant-rate video is
 left as it was decoded; so is one whose frames carry no times to trust (:class:`FrameClock`).
 Once the frames have strayed, a frame whose time is missing, repeated or earlier than the
 frame's before is left out of the grid and the others are resampled (:func:`clocked_times`),
