@@ -39,7 +39,6 @@ from .segmentation import (
     MAX_WINDOW_S,
     MIN_SEGMENT_S,
     MIN_WINDOW_S,
-    NOBODY,
     PERIOD_SPAN_S,
     SPAN_HOP_S,
     STILL_TEXT,
@@ -50,6 +49,7 @@ from .segmentation import (
     keep_whole,
     least_movement,
     log_votes,
+    nobody_explanation,
     period_outliers,
     periods_in_span,
     segment,
@@ -340,6 +340,8 @@ class LiveSegmenter:
         # frames without the torso: [first, end)
         self.blind_from: int | None = None  # the first frame of the run in progress
         self.blind_hop = 0.0  # the centre of the last hop seen as nobody
+        self.absent: list[list[int]] = []  # the runs [first, end) of frames in a gap of
+        # the video (push's absent): a stretch with nobody in view mostly of them has no frames
         self.held: list[float] = []  # the evidence of unknown of the unknown hops after a
         # stretch with nobody in view, not yet a second long (they may join it)
 
@@ -371,10 +373,15 @@ class LiveSegmenter:
         """Every one of the latest windows votes every activity alike (nobody in view)."""
         return all(np.ptp(v) == 0.0 for v, _ in self.latest_votes)
 
-    def push(self, world: np.ndarray, confidence: np.ndarray | None = None) -> list[LiveSegment]:
+    def push(
+        self, world: np.ndarray, confidence: np.ndarray | None = None, absent: bool = False
+    ) -> list[LiveSegment]:
         """Add one frame ``(33, 3)`` (NaN where the person is not seen) and, from a pose
         model, its joints' confidence ``(33,)`` (visibility: the repetitions leave out a joint
-        below 0.5 as ``segment`` does, :func:`features.repetitions.counted_angles`).
+        below 0.5 as ``segment`` does, :func:`features.repetitions.counted_angles`); ``absent``:
+        the frame lies in a gap of the video, no frame there at all (its joints missing: a
+        stretch with nobody in view that is mostly such frames says "no frames in the video",
+        as ``segment`` says it).
 
         ``world`` is a :class:`~features.poses.PoseSequence`'s positions for one frame: the
         joints of :data:`features.skeleton.BLAZEPOSE_33` in that order, in metres, in a
@@ -382,11 +389,15 @@ class LiveSegmenter:
         that order by ``PoseSequence(xyz, names, fps).to_canonical()``; a z-up frame (ROS's)
         must be turned first, ``(x, y, z)`` to ``(x, z, -y)``: read as it is, an upright torso
         is one tilted forward. Frames are taken as evenly spaced at the ``fps`` given: push
-        every one. Returns
-        the segments that this frame settled as finished (usually none). A copy is kept; a
-        frame that is not one (another skeleton's joints, an infinite coordinate) is refused
-        with :class:`features.errors.InputError`, nothing kept."""
+        every one. Returns the segments that this frame settled as finished (usually none). A
+        copy is kept; a frame that is not one (another skeleton's joints, an infinite
+        coordinate) is refused with :class:`features.errors.InputError`, nothing kept."""
         frame, seen = self._checked(world, confidence)
+        if absent:  # runs [first, end) of frames in a gap
+            if self.absent and self.absent[-1][1] == self.n:
+                self.absent[-1][1] += 1
+            else:
+                self.absent.append([self.n, self.n + 1])
         self.frames.append(frame)
         self.seen_by.append(seen)
         self._look(frame)
@@ -760,7 +771,10 @@ class LiveSegmenter:
         if state == self.nobody:
             if cut:  # no movement turns at its end
                 self.turn = False
-            return LiveSegment(start, end, None, 1.0, 0, NOBODY)
+            absent = np.zeros(end - start, dtype=bool)
+            for first, stop in self.absent:
+                absent[max(first, start) - start : max(min(stop, end), start) - start] = True
+            return LiveSegment(start, end, None, 1.0, 0, nobody_explanation(absent))
         first = max(start, end - int(MAX_SEGMENT_S * self.fps), self.offset)
         found: tuple[Repetition, ...] = ()
         if end > first:

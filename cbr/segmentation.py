@@ -62,7 +62,7 @@ from features.body import long_runs, no_person, torso_rows, torso_share
 from features.derived import forget, movement_signals_of, stretch
 from features.errors import ConfigError, DataError, InputError
 from features.fluents import DEFAULT_TABLE, history_frames
-from features.poses import PoseSequence
+from features.poses import PoseSequence, gap_rows
 from features.progress import progress
 from features.repetitions import (
     MIN_PERIOD_S,
@@ -112,6 +112,10 @@ of the repetition windows it overlaps is no clean period of one movement (the co
 cut for an outlier): it does not vote (:func:`period_outliers`)."""
 MIN_SEGMENT_S = 1.0
 NOBODY = "nobody in view"  # the explanation of a stretch in which no frame shows the person
+NO_FRAMES = "no frames in the video"
+"""The explanation of a stretch with nobody in view that is mostly a gap in the video's frames
+(no frame there at all, :func:`features.poses.gap_rows`: its poses left missing), not frames
+that show nobody."""
 SWITCH_ODDS = 2.0
 """A change of activity needs MIN_SEGMENT_S of blocks voting SWITCH_ODDS to 1 for it."""
 
@@ -138,11 +142,19 @@ STILL_TEXT = (
 
 
 def unknown_reason(label: str | None, explanation: str) -> str | None:
-    """Why a stretch is unknown, for machines: :data:`NOBODY` (no frame shows the person) or
-    :data:`UNLIKE` (seen, but like no activity of the case base); None when it has a label."""
+    """Why a stretch is unknown, for machines: :data:`NOBODY` (no frame shows the person),
+    :data:`NO_FRAMES` (the video has no frames there) or :data:`UNLIKE` (seen, but like no
+    activity of the case base); None when it has a label."""
     if label is not None:
         return None
-    return NOBODY if explanation == NOBODY else UNLIKE
+    return explanation if explanation in (NOBODY, NO_FRAMES) else UNLIKE
+
+
+def nobody_explanation(absent: np.ndarray) -> str:
+    """Why a stretch with nobody in view is unknown, ``absent`` ``(frames,)`` bool its frames
+    inside a gap of the video (:func:`features.poses.gap_rows`): :data:`NO_FRAMES` when most
+    of them are, :data:`NOBODY` otherwise."""
+    return NO_FRAMES if 2 * int(np.count_nonzero(absent)) > len(absent) else NOBODY
 
 
 @dataclass(frozen=True)
@@ -944,9 +956,11 @@ def _nobody_absorbs_slivers(path: np.ndarray, n_classes: int) -> np.ndarray:
 
 
 def _nobody_segment(rec: PoseSequence, a: int, b: int) -> Segment:
-    """Blocks [a, b), in which nobody is in view, as an unknown segment that says so."""
+    """Blocks [a, b), in which nobody is in view, as an unknown segment that says so (or,
+    mostly a gap in the video's frames, that it has no frames there)."""
     start, end = _frames_of(a, b, rec.fps, rec.n_frames)
-    return Segment(start, end, None, 1.0, (), NOBODY, float("nan"))
+    why = nobody_explanation(gap_rows(rec)[start:end])
+    return Segment(start, end, None, 1.0, (), why, float("nan"))
 
 
 @dataclass(frozen=True)
@@ -1173,6 +1187,8 @@ __all__ = [
     "place_changes",
     "finish",
     "nobody_blocks",
+    "nobody_explanation",
+    "NO_FRAMES",
     "segment",
     "solve_recording",
 ]

@@ -330,6 +330,36 @@ class PoseSequence:
         return replace(self, metadata=meta)
 
 
+def recorded_gaps(meta: Mapping[str, Any]) -> list[tuple[float, float, int, int]]:
+    """The gaps left missing that a pose file's metadata records (``gaps_left_missing``):
+    (start, end: s; the first row inside and one past the last) each; none when it records
+    none, or none it can read."""
+    vfr = meta.get("variable_frame_rate")
+    record = vfr.get("gaps_left_missing") if isinstance(vfr, Mapping) else None
+    out = []
+    for gap in record.get("gaps", []) if isinstance(record, Mapping) else []:
+        try:
+            rows = gap["rows"] or (0, 0)
+            out.append((float(gap["start_s"]), float(gap["end_s"]), int(rows[0]), int(rows[1])))
+        except (KeyError, TypeError, ValueError, IndexError):
+            continue
+    return out
+
+
+def gap_rows(seq: PoseSequence) -> np.ndarray:
+    """``(n_frames,)`` bool: the frames of ``seq`` inside a gap of its video left missing
+    (:func:`recorded_gaps`: no decoded frame there at all, not a frame without a person), its
+    ``frame_offset`` (a slice of the extracted video) taken off the recorded rows."""
+    out = np.zeros(seq.n_frames, dtype=bool)
+    try:
+        offset = int(seq.metadata.get("frame_offset", 0))
+    except (TypeError, ValueError):
+        offset = 0
+    for _start, _end, first, end in recorded_gaps(seq.metadata):
+        out[max(0, first - offset) : max(0, end - offset)] = True
+    return out
+
+
 def _skeleton(name: Any, where: str | None) -> str:
     """A known skeleton's name, as the project spells it ("Kinect_V2" is ``kinect_v2``);
     PoseFileError for any other."""

@@ -24,11 +24,13 @@ from posecbr.cli import main
 from posecbr.commands.extract import STALE_VFR
 from posecbr.commands.watch import Regrid
 from tests.test_video_vfr import LEFT_HIP, _frame, _write, people  # noqa: F401 (a fixture)
+from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
 # 12 lunge frames at 25 fps (40 ms), but 1 s from the sixth (200 ms) to the seventh (1.2 s)
 GAP_MS = [40 * k for k in range(6)] + [1200 + 40 * k for k in range(6)]
 # the grid at 25 fps: 0 to 1.4 s, 36 rows; rows 6 to 29 (0.24 to 1.16 s) lie inside the gap
 GAP_ROWS = list(range(6, 30))
+LUNGE_NAME = "fit_reverse_lunge_pexels8233047.mp4"
 OPTIONS = {"smoothing": False, "tracking": False, "progress_bar": False}
 
 
@@ -207,3 +209,72 @@ def test_a_version_2_pose_file_is_older_only_where_it_blended_across_a_gap() -> 
     assert not older_vfr_extraction({**meta, "variable_frame_rate": phone}, "x")
     assert older_vfr_extraction({**meta, "variable_frame_rate": jump}, "x")
     assert older_vfr_extraction({**meta, "variable_frame_rate": {"resampled_to_fps": 25}}, "x")
+
+
+def test_a_stretch_mostly_without_frames_is_no_frames_not_nobody_in_view() -> None:
+    """The reason a stretch with nobody in view is unknown: "no frames in the video" when
+    most of its frames lie in a recorded gap; a pose file cut from the video (its
+    ``frame_offset``) has the gap's rows where they fall in it."""
+    from cbr.segmentation import NO_FRAMES, NOBODY, nobody_explanation, unknown_reason
+    from features.poses import PoseSequence, gap_rows
+    from features.skeleton import BLAZEPOSE_33
+
+    assert nobody_explanation(np.array([True, True, False])) == NO_FRAMES
+    assert nobody_explanation(np.array([True, False])) == NOBODY
+    assert unknown_reason(None, NO_FRAMES) == "no frames in the video"
+    assert unknown_reason(None, NOBODY) == "nobody in view"
+    assert unknown_reason("squat", NO_FRAMES) is None
+    gap = {"start_s": 0.2, "end_s": 1.2, "seconds": 1.0, "rows": [6, 30]}
+    meta = {"variable_frame_rate": {"gaps_left_missing": {"gaps": [gap]}}}
+    seq = PoseSequence(np.zeros((36, 33, 3)), BLAZEPOSE_33, 25.0, metadata=meta)
+    assert np.flatnonzero(gap_rows(seq)).tolist() == GAP_ROWS
+    assert np.flatnonzero(gap_rows(seq.slice_frames(10, 32))).tolist() == list(range(20))
+    assert not gap_rows(seq.slice_frames(30, None)).any()
+
+
+@pytest.fixture(scope="module")
+def lunge_jump(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The whole reverse lunge (250 frames, 10 s at 25 fps) at a quarter size, its clock
+    jumping 3 s after frame 124 (4.96 s): the second half from 8.0 s, 13 s in all."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(shared_data / "videos" / "lunge" / LUNGE_NAME))
+    frames = []
+    while True:
+        ok, bgr = cap.read()
+        if not ok:
+            break
+        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
+        frames.append(np.ascontiguousarray(small[:, :, ::-1]))
+    cap.release()
+    pts = [40 * k + (3000 if k >= 125 else 0) for k in range(len(frames))]
+    return _write(tmp_path_factory.mktemp("jump") / "lunge_jump.mts", pts, frames)
+
+
+def test_segment_and_watch_agree_across_a_gap_and_call_it_no_frames(
+    case_base: Path,  # noqa: F811
+    lunge_jump: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The lunge with a 3-s jump in its clock (an MPEG-TS, ``.mts``): ``segment`` and
+    ``watch`` give the same segments; the gap (rows 126 to 199, 5.0 to 8.0 s) lies in one
+    segment of its own, unknown because the video has no frames there ("no frames in the
+    video", counted 0), where it was blended motion; each says the gap once."""
+    assert main(["segment", str(lunge_jump), "--db", str(case_base), "--json"]) == 0
+    printed = capsys.readouterr()
+    offline = json.loads(printed.out)["segments"]
+    assert printed.err.count("3.0 s without frames at 5.0-8.0 s left missing") == 1
+    assert main(["watch", str(lunge_jump), "--db", str(case_base), "--speed", "0"]) == 0
+    printed = capsys.readouterr()
+    watched = [json.loads(line) for line in printed.out.splitlines()]
+    assert printed.err.count("3.0 s without frames at 5.0-8.0 s left missing") == 1
+    keys = ("start_frame", "end_frame", "label", "repetitions", "unknown")
+    assert [tuple(d[k] for k in keys) for d in watched] == [
+        tuple(d[k] for k in keys) for d in offline
+    ]
+    gaps = [d for d in offline if d["unknown"] == "no frames in the video"]
+    assert len(gaps) == 1 and gaps[0]["repetitions"] == 0
+    assert gaps[0]["start_frame"] <= 126 and gaps[0]["end_frame"] >= 200
+    assert gaps[0]["explanation"] == "no frames in the video"
+    assert not any(d["unknown"] == "nobody in view" for d in offline)
+    assert offline[-1]["end_frame"] == 325  # 13 s at 25 fps

@@ -704,22 +704,6 @@ def _gap_record(start: float, end: float, rows: np.ndarray, fps: float) -> dict[
     }
 
 
-def recorded_gaps(meta: Mapping[str, Any]) -> list[tuple[float, float, int, int]]:
-    """The gaps left missing that a pose file's metadata records (``gaps_left_missing``):
-    (start, end: s; the first row inside and one past the last) each; none when it records
-    none, or none it can read."""
-    vfr = meta.get("variable_frame_rate")
-    record = vfr.get("gaps_left_missing") if isinstance(vfr, Mapping) else None
-    out = []
-    for gap in record.get("gaps", []) if isinstance(record, Mapping) else []:
-        try:
-            rows = gap["rows"] or (0, 0)
-            out.append((float(gap["start_s"]), float(gap["end_s"]), int(rows[0]), int(rows[1])))
-        except (KeyError, TypeError, ValueError, IndexError):
-            continue
-    return out
-
-
 def gap_words(holes: list[tuple[float, float]]) -> str:
     """``holes`` (start, end: s) said in a few words: "3.0 s without frames at 2.0-5.0 s left
     missing"; of several, the longest and how many."""

@@ -439,8 +439,8 @@ def process(job: Job, options: Options) -> Outcome:
 
     from features.pose_estimation import open_video
     from features.pose_estimation.overlay import check_mp4_size, write_overlay
-    from features.pose_estimation.video import gap_words, older_vfr_extraction, recorded_gaps
-    from features.poses import load_pose, load_pose_arrays
+    from features.pose_estimation.video import gap_words, older_vfr_extraction
+    from features.poses import gap_rows, load_pose, load_pose_arrays, recorded_gaps
 
     try:
         digest = sha256_file(job.video)
@@ -478,9 +478,8 @@ def process(job: Job, options: Options) -> Outcome:
                 frame_offset=job.start or 0,
                 video_frames=video_frames,
             )
-        nobody = np.isnan(seq.positions).all(axis=(1, 2))
-        for _a, _b, first, end in holes:
-            nobody[first:end] = False  # no frame there at all, not a frame without a person
+        # a row inside a gap has no frame at all, not a frame without a person
+        nobody = np.isnan(seq.positions).all(axis=(1, 2)) & ~gap_rows(seq)
         n_missing = int(nobody.sum())
         detail = f"{counted(seq.n_frames, 'frame')}, {n_missing} without a person{vfr_note}"
         if up_to_date:

@@ -273,12 +273,13 @@ def _print(result: Any) -> None:
 
 
 def _shown(segment: Any) -> str:
-    """What a segment is called on pictures: its activity, "nobody in view", or unknown."""
-    from cbr.segmentation import NOBODY
+    """What a segment is called on pictures: its activity, "nobody in view", "no frames in
+    the video", or unknown."""
+    from cbr.segmentation import NO_FRAMES, NOBODY
 
     if segment.label is not None:
         return str(segment.label)
-    return NOBODY if segment.explanation == NOBODY else "unknown"
+    return segment.explanation if segment.explanation in (NOBODY, NO_FRAMES) else "unknown"
 
 
 def _bands(result: Any) -> list[Any]:

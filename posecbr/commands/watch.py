@@ -484,8 +484,9 @@ class Watcher:
             )
 
     def _take(self, frame: Any) -> None:
-        for world, visibility, shown_frame in self._grid.take(frame):
-            finished = self.live.push(world, visibility)
+        taken = self._grid.take(frame)
+        for (world, visibility, shown_frame), absent in zip(taken, self._grid.absent, strict=True):
+            finished = self.live.push(world, visibility, absent)
             self.n += 1
             for segment in finished:
                 self._emit(segment)
@@ -604,14 +605,15 @@ class Regrid:
     grid k / fps as the frames come, each grid time linearly between the frames around it
     (a joint missing in either stays missing; every joint missing between two frames further
     apart than :func:`features.pose_estimation.video.bridge_limit_s`: a gap in the video, no
-    motion made up for it, as ``extract`` leaves it), and the user is told once on stderr,
-    and once more at each such gap."""
+    motion made up for it, as ``extract`` leaves it; :attr:`absent` says which), and the user
+    is told once on stderr, and once more at each such gap."""
 
     def __init__(self, fps: float, source: str) -> None:
         self.fps, self.source = fps, source
         self.resampling = False
         self.k = 0  # the next grid frame
         self.prev: Any = None  # the last frame taken
+        self.absent: list[bool] = []  # of the grid times the last take gave: inside a gap
 
     def take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """(world, visibility, the frame on screen then) for each grid time up to this
@@ -623,9 +625,11 @@ class Regrid:
         from features.pose_estimation.video import blend, bridged_weight, gap_words, strays
 
         t = frame.video_time_s
+        self.absent = []
         if not self.resampling:
             if not strays(t, frame.index, self.fps):
                 self.prev, self.k = frame, frame.index + 1
+                self.absent = [False]
                 return [(frame.seen_world, frame.visibility, frame)]
             self.resampling = True
             print(
@@ -639,16 +643,15 @@ class Regrid:
             return []  # no time to place it by
         out = []
         start = prev.video_time_s
-        left_missing = 0
         while self.k / self.fps <= t + 1e-9:
             w = bridged_weight(self.k / self.fps, start, t, self.fps)
-            left_missing += bool(np.isnan(w))
+            self.absent.append(bool(np.isnan(w)))
             world = blend(prev.seen_world, frame.seen_world, w)
             vis = blend(np.asarray(prev.visibility), np.asarray(frame.visibility), w)
             out.append((world, vis, frame if w >= 1.0 - 1e-9 else prev))
             self.k += 1
         self.prev = frame
-        if left_missing:
+        if any(self.absent):
             print(f"note: {self.source}: {gap_words([(start, t)])}", file=sys.stderr)
         return out
 
