@@ -7,7 +7,8 @@ and frames, a confidence, the number of repetitions and a short explanation. A c
 windows (``posecbr train ... --split windows``) matches how the recording's windows are cut.
 
 ``--json`` prints ``{"recording", "fps", "frames", "segments": [{"start_s", "end_s",
-"start_frame", "end_frame", "label" (null when unknown), "confidence", "unknown" (why, or null),
+"start_frame", "end_frame", "label" (null when unknown), "confidence", "unknown" (why: "nobody
+in view", "no frames in the video", "unlike every activity"; null when labelled),
 "repetitions", "explanation", "novelty", "repetition_frames", "count"}]}`` (a list of those for
 several recordings; end frames exclusive; ``count``: the number of repetitions, as
 ``reps --json`` names it, and as ``repetitions`` gives it, kept from before; ``"plot"`` and
