@@ -257,7 +257,7 @@ def test_segment_and_watch_agree_across_a_gap_and_call_it_no_frames(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     """The lunge with a 3-s jump in its clock (an MPEG-TS, ``.mts``): ``segment`` and
-    ``watch`` give the same segments; the gap (rows 126 to 199, 5.0 to 8.0 s) lies in one
+    ``watch`` give the same segments; the gap (rows 125 to 199, 5.0 to 8.0 s) lies in one
     segment of its own, unknown because the video has no frames there ("no frames in the
     video", counted 0), where it was blended motion; each says the gap once."""
     assert main(["segment", str(lunge_jump), "--db", str(case_base), "--json"]) == 0
@@ -274,7 +274,24 @@ def test_segment_and_watch_agree_across_a_gap_and_call_it_no_frames(
     ]
     gaps = [d for d in offline if d["unknown"] == "no frames in the video"]
     assert len(gaps) == 1 and gaps[0]["repetitions"] == 0
-    assert gaps[0]["start_frame"] <= 126 and gaps[0]["end_frame"] >= 200
+    assert gaps[0]["start_frame"] <= 125 and gaps[0]["end_frame"] >= 200
     assert gaps[0]["explanation"] == "no frames in the video"
     assert not any(d["unknown"] == "nobody in view" for d in offline)
     assert offline[-1]["end_frame"] == 325  # 13 s at 25 fps
+
+
+def test_reps_and_classify_of_a_video_with_a_gap_do_not_count_through_it(
+    case_base: Path,  # noqa: F811
+    lunge_jump: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``reps`` of the lunge with its 3-s jump: no repetition runs across the gap (rows 125
+    to 199: one had run from 1.92 to 10.60 s, through 3 s of blended motion); ``classify``
+    of it answers, exit 0."""
+    assert main(["reps", str(lunge_jump), "--json"]) == 0
+    found = json.loads(capsys.readouterr().out)
+    assert found["count"] >= 1
+    for rep in found["repetitions"]:
+        assert rep["end_frame"] <= 125 or rep["start_frame"] >= 200, rep
+    assert main(["classify", str(lunge_jump), "--db", str(case_base), "--json"]) == 0
+    assert "without frames at 5.0-8.0 s" in capsys.readouterr().err
