@@ -30,6 +30,7 @@ free-form curve).
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -219,8 +220,8 @@ class ConfidenceCalibration:
     were held out, ``n`` how many; ``accuracy`` their held-out accuracy. The score is the
     answer's :func:`soft_vote` over the ``neighbours`` nearest cases at ``temperature``, or,
     with ``neighbours`` 0 (calibrations stored before the soft vote), its vote share.
-    ``balanced_accuracy``: the mean over the classes of their held-out clips' recall (known
-    at fit, not stored: NaN when read back)."""
+    ``balanced_accuracy``: the mean over the classes of their held-out clips' recall (NaN
+    when unknown: none held out, or a case base stored before it was)."""
 
     x: tuple[float, ...]
     y: tuple[float, ...]
@@ -270,7 +271,10 @@ class ConfidenceCalibration:
     def to_dict(self) -> dict[str, Any]:
         return {"x": list(self.x), "y": list(self.y), "basis": self.basis, "n": self.n,
                 "accuracy": self.accuracy, "temperature": self.temperature,
-                "neighbours": self.neighbours}  # fmt: skip
+                "neighbours": self.neighbours,
+                "balanced_accuracy": (
+                    self.balanced_accuracy if math.isfinite(self.balanced_accuracy) else None
+                )}  # fmt: skip
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> ConfidenceCalibration:
@@ -281,8 +285,14 @@ class ConfidenceCalibration:
         temperature, neighbours = float(d.get("temperature", 1.0)), int(d.get("neighbours", 0))
         if not temperature > 0 or neighbours < 0:
             raise ValueError("the soft vote needs a positive temperature and neighbourhood")
-        return cls(x, y, str(d["basis"]), int(d["n"]), float(d["accuracy"]), temperature,
+        read = cls(x, y, str(d["basis"]), int(d["n"]), float(d["accuracy"]), temperature,
                    neighbours)  # fmt: skip
+        balanced = d.get("balanced_accuracy")  # none: unknown, or stored before it was
+        return (
+            read
+            if balanced is None
+            else dataclasses.replace(read, balanced_accuracy=float(balanced))
+        )
 
 
 #: no calibration: the confidence is the vote share (case bases stored before calibration)
