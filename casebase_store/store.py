@@ -3,7 +3,7 @@
 Open a store with :func:`open_store` (a SQLite file path, or any SQLAlchemy URL). Every user
 action is one transaction::
 
-    store = open_store("cb.sqlite")
+    store = open_store("cb.sqlite", create=True)  # a new file; without: it must exist
     with store.transaction() as tx:          # BEGIN IMMEDIATE on SQLite
         cb = tx.create_case_base("squats", feature_config, names, words, {"name": "dtw"})
         tx.add_cases(cb, cases)
@@ -82,7 +82,7 @@ class StoreError(PosecbrError):
 
 
 class EmptyStore(StoreError):
-    """A database without a case base store in it yet (``open_store(create=False)``): the
+    """A database without a case base store in it yet (``open_store`` without ``create``): the
     first write creates one."""
 
 
@@ -1441,14 +1441,17 @@ def _check_timeout(timeout_s: Any) -> None:
 def open_store(
     url_or_path: str | Path,
     *,
-    create: bool = True,
+    create: bool = False,
     readonly: bool = False,
     timeout_s: float = 30.0,
 ) -> CaseStore:
     """Open (and, if ``create``, initialise) a case base store.
 
     ``url_or_path``: a file path (SQLite) or any SQLAlchemy URL (``postgresql://...``).
-    ``create=False``: the store must exist (a missing SQLite file is an error, never created).
+    By default the store must exist: a missing SQLite file is a :class:`StoreError` naming it
+    (nothing is created: a mistyped path to read leaves no empty file behind), an empty
+    database an :class:`EmptyStore`. ``create=True``, to write: creates the file and the
+    tables when there are none.
     ``readonly``: for commands that only read: nothing is written, and a case base file in a
     read-only folder can be read. Raises :class:`StoreError` naming the file for a corrupt,
     locked, foreign or other-version database.
@@ -1496,7 +1499,7 @@ def write_store(
     if file is not None:  # the temporaries of killed first writes (named for their process)
         remove_stale_temporaries(file.parent, file.name)
     if file is None or file.exists():
-        store = open_store(url_or_path, timeout_s=timeout_s)
+        store = open_store(url_or_path, create=True, timeout_s=timeout_s)
         try:
             with store.transaction() as tx:
                 return action(tx)
@@ -1505,7 +1508,7 @@ def write_store(
     tmp = file.with_name(f"{temporary_prefix(file.name)}{uuid.uuid4().hex[:8]}.new")
     try:
         try:
-            store = open_store(tmp, timeout_s=timeout_s)
+            store = open_store(tmp, create=True, timeout_s=timeout_s)
             try:
                 with store.transaction() as tx:
                     result = action(tx)

@@ -126,7 +126,7 @@ def test_trim_drops_near_duplicates_first() -> None:
 
 
 def test_revision_and_retention_are_logged_in_one_transaction(tmp_path: Path) -> None:
-    store = open_store(tmp_path / "cb.sqlite")
+    store = open_store(tmp_path / "cb.sqlite", create=True)
     cb = _line([0.0, 4.0, 10.0], ["a", "a", "b"])
     with store.transaction() as tx:
         info = tx.create_case_base(

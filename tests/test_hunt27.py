@@ -57,7 +57,7 @@ def test_a_postgresql_session_ended_mid_transaction_says_the_connection_was_lost
 
     from casebase_store import StoreError, open_store
 
-    store = open_store(pg_url)
+    store = open_store(pg_url, create=True)
     other = create_engine(pg_url, isolation_level="AUTOCOMMIT")
     try:
         with pytest.raises(StoreError) as err, store.transaction() as tx:

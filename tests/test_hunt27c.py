@@ -176,7 +176,7 @@ class _Holder(threading.Thread):
 
     def run(self) -> None:
         try:
-            with open_store(self.url) as store, store.transaction() as tx:
+            with open_store(self.url, create=True) as store, store.transaction() as tx:
                 state = self.first(tx)
                 self.ready.set()
                 deadline = time.monotonic() + 60
@@ -470,7 +470,7 @@ def test_case_bases_and_labels_come_in_one_order_on_every_backend(
     labels = ["apple", "Squat", "_walk", "Zebra"]
     seen = []
     for db in (str(tmp_path / "cb.sqlite"), pg_icu_url):
-        with open_store(db) as store:
+        with open_store(db, create=True) as store:
             with store.transaction() as tx:
                 for name in ("apple2", "Beta"):
                     cb = tx.create_case_base(name, {"level": "x"}, ["a"], ["a"], {"name": "e"})

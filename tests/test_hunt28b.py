@@ -300,7 +300,7 @@ def test_trim_never_drops_an_activity_and_leaves_a_one_case_base_alone() -> None
 def test_relabelling_a_case_trimmed_meanwhile_is_refused_as_stale(tmp_path: Path) -> None:
     """Before: moving a trimmed case was refused (StaleCaseError: the caller reads again),
     but relabelling one was written to the inactive case, and the feedback was lost."""
-    store = open_store(tmp_path / "cb.sqlite")
+    store = open_store(tmp_path / "cb.sqlite", create=True)
     cb = _line([0.0, 4.0, 10.0], ["a", "a", "b"])
     with store.transaction() as tx:
         info = tx.create_case_base("x", {"level": "fluents"}, ["x"], ["x"], {"name": "euclidean"})

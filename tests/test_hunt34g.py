@@ -117,7 +117,7 @@ def _v1_on_postgres(url: str, tmp_path: Path) -> None:
     SERIAL ids), its rows copied from the SQLite file with their ids."""
     from sqlalchemy import MetaData, create_engine, text
 
-    open_store(url).close()  # today's tables
+    open_store(url, create=True).close()  # today's tables
     src = sqlite3.connect(_v1_store(tmp_path / "v1.sqlite", wal=False))
     src.row_factory = sqlite3.Row
     engine = create_engine(url)

@@ -130,7 +130,7 @@ def _awkward_features(n: int) -> np.ndarray:
 def test_bulk_round_trip_is_bit_identical(db: str) -> None:
     n = 1203  # more than two of the store's 500-row flushes
     feats = _awkward_features(n)
-    store = open_store(db)
+    store = open_store(db, create=True)
     try:
         with store.transaction() as tx:
             cb = tx.create_case_base(
@@ -195,7 +195,7 @@ def test_bulk_round_trip_is_bit_identical(db: str) -> None:
 
 
 def test_text_a_stricter_server_would_refuse_is_refused_alike(db: str) -> None:
-    store = open_store(db)
+    store = open_store(db, create=True)
     try:
         with pytest.raises(StoreError, match="case base name is 201 characters long"):
             with store.transaction() as tx:
@@ -245,7 +245,7 @@ def test_two_clients_creating_the_tables_at_once(pg_url: str) -> None:
 
     def client() -> None:
         try:
-            open_store(pg_url).close()
+            open_store(pg_url, create=True).close()
         except BaseException as exc:  # reported by the main thread below
             errors[threading.current_thread().name] = exc
 
@@ -304,7 +304,7 @@ def test_write_blocked_by_a_lock_fails_as_locked(pg_url: str) -> None:
 
 
 def test_revise_retain_and_the_maintenance_log(db: str) -> None:
-    store = open_store(db)
+    store = open_store(db, create=True)
     try:
         with store.transaction() as tx:
             cb = tx.create_case_base(
@@ -419,7 +419,7 @@ def test_cli_gives_the_same_answers_on_postgres_as_on_sqlite(
 
 
 def test_two_processes_retaining_200_each_lose_nothing(pg_url: str, tmp_path: Path) -> None:
-    store = open_store(pg_url)
+    store = open_store(pg_url, create=True)
     with store.transaction() as tx:
         cb = tx.create_case_base(
             "shared", {"level": "fluents"}, ["a", "b"], ["a", "b"], {"name": "euclidean"}

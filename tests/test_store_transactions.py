@@ -31,7 +31,7 @@ def _run_py(code: str, *args: str) -> subprocess.Popen[str]:
 
 
 def _new_base(path: Path, name: str, n: int) -> None:
-    store = open_store(path)
+    store = open_store(path, create=True)
     with store.transaction() as tx:
         cb = tx.create_case_base(name, {"level": "fluents"}, ["a", "b"], ["a", "b"], {"name": "x"})
         tx.add_cases(cb, [NewCase(f"l{i % 3}", np.full((4, 2), i, np.float32)) for i in range(n)])
@@ -40,7 +40,7 @@ def _new_base(path: Path, name: str, n: int) -> None:
 
 def test_round_trip_keeps_labels_with_quotes_and_unicode(tmp_path: Path) -> None:
     labels = ['squat "deep"', "l'arc", "Kniebeuge – tief ✓", "腕立て伏せ", "a,b;c\nd"]
-    store = open_store(tmp_path / "cb.sqlite")
+    store = open_store(tmp_path / "cb.sqlite", create=True)
     with store.transaction() as tx:
         cb = tx.create_case_base("ünï 'base'", {"level": "fluents"}, ["x"], ["x"], {"name": "dtw"})
         tx.add_cases(cb, [NewCase(lab, np.eye(3) * i) for i, lab in enumerate(labels)])
@@ -54,7 +54,7 @@ def test_round_trip_keeps_labels_with_quotes_and_unicode(tmp_path: Path) -> None
 KILLED_TRAIN = """
 import sys, time, numpy as np
 from casebase_store import NewCase, open_store
-store = open_store(sys.argv[1])
+store = open_store(sys.argv[1], create=True)
 def cases():
     for i in range(3000):
         if i == 2600:
@@ -120,7 +120,7 @@ print("OK", flush=True)
 
 def test_two_processes_retaining_200_each_end_with_400_more(tmp_path: Path) -> None:
     db = tmp_path / "cb.sqlite"
-    store = open_store(db)
+    store = open_store(db, create=True)
     with store.transaction() as tx:
         cb = tx.create_case_base(
             "shared", {"level": "fluents"}, ["a", "b"], ["a", "b"], {"name": "euclidean"}
@@ -203,7 +203,7 @@ def test_locked_database_reports_locked_and_names_the_file(tmp_path: Path) -> No
 
 
 def test_failed_action_rolls_back_everything(tmp_path: Path) -> None:
-    store = open_store(tmp_path / "cb.sqlite")
+    store = open_store(tmp_path / "cb.sqlite", create=True)
     with pytest.raises(StoreError, match="unknown case origin"):
         with store.transaction() as tx:
             cb = tx.create_case_base("x", {"level": "fluents"}, ["a"], ["a"], {"name": "dtw"})
