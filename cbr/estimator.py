@@ -558,6 +558,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         # the unknown judges calibrated on cb (cbr.unknown): filled when the model is stored
         # (cbr.stored); until then judge_of calibrates them on demand
         self.judges_: dict[str, Any] = {}
+        # the column the labels come from: unknown when fitted here (the labels' own words);
+        # a loaded model's is the one it was stored with (cbr.stored), e.g. "correct"
+        self.target_: str | None = None
         self.feature_names_ = cb.names
         self.feature_weights_ = cases.weights
         self.side_ = choice.side
@@ -1014,14 +1017,18 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
 
     def explain(self, X: Any, target: str | None = None) -> list[Explanation]:
         """An explanation in words for every clip in ``X`` (``target``: the column the labels
-        come from; ``"correct"`` reads them as correct / incorrect repetitions)."""
+        come from; ``"correct"`` reads them as correct / incorrect repetitions; None: the
+        column the classifier was trained to predict, ``target_``)."""
         return [self.explain_solved(s, target) for s in self.solve(X)]
 
     def explain_solved(
         self, solved: Solved, target: str | None = None, counterfactual: bool = True
     ) -> Explanation:
         """The explanation of one :meth:`solve` result (``counterfactual`` False: without the
-        counterfactual search, for callers that need the neighbours only)."""
+        counterfactual search, for callers that need the neighbours only; ``target`` as
+        :meth:`explain`'s)."""
+        if target is None:  # a model pickled before target_ was kept has none
+            target = getattr(self, "target_", None)
         return explain(
             self.case_base_,
             solved,

@@ -493,6 +493,7 @@ def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
         clf.classes_ = typed  # kept by refresh while the cases' labels match
     clf.refresh()
     target = str(model.get("target", "label"))
+    clf.target_ = target  # explain()'s words without a target= given: "a correct repetition"
     cases = model.get("cases")
     return StoredClassifier(
         name, info.uid, info.version, target, clf, info, None if cases is None else str(cases)

@@ -5,12 +5,14 @@ repetition check explained itself in its plain labels ("true", "false")."""
 from __future__ import annotations
 
 import csv
+import re
 from pathlib import Path
 
 import pytest
 
 from casebase_store import EmptyStore, StoreError, open_store, write_store
 from cbr.estimator import CaseBaseClassifier
+from cbr.stored import load_classifier
 from cbr.training import train
 from features.poses import PoseSequence, load_pose
 from tests.badinput import refused
@@ -113,3 +115,46 @@ def test_training_from_python_still_creates_the_file(stored_check: Path) -> None
     with open_store(stored_check, readonly=True) as store:
         assert [cb.name for cb in store.list_case_bases()] == ["squat"]
         assert store.count_cases("squat") == 18
+
+
+# ------------------------------------------------------- a loaded model's stored target
+
+
+def test_a_loaded_repetition_check_explains_in_its_stored_targets_words(
+    squats: tuple[list[PoseSequence], list[str]], stored_check: Path
+) -> None:
+    """Loaded, a case base trained with ``target="correct"`` explained "true, confidence 0.97
+    ... To be false, 2 changes" (its labels as stored) unless ``explain(X,
+    target="correct")`` was given; now the stored
+    target is the default: "a correct repetition" / "an incorrect repetition", as
+    ``posecbr classify`` says."""
+    X, _ = squats
+    with open_store(stored_check, readonly=True) as store:
+        stored = load_classifier(store, "squat")
+    clf = stored.classifier
+    assert stored.target == "correct"
+    answers = [str(v) for v in clf.predict(X[:4])]
+    assert set(answers) <= {"true", "false"}
+    for i, (exp, answer) in enumerate(zip(clf.explain(X[:4]), answers, strict=True)):
+        words = "a correct repetition" if answer == "true" else "an incorrect repetition"
+        assert words in exp.text, exp.text
+        assert not re.search(r"\b(true|false)\b", exp.text), exp.text
+        assert exp.text == clf.explain([X[i]], target="correct")[0].text
+    assert clf.target_ == "correct"
+    # a target given still wins: the plain labels when asked for
+    plain = clf.explain(X[:1], target="label")[0].text
+    assert "repetition" not in plain
+    assert re.search(r"\b(true|false)\b", plain), plain
+
+
+def test_a_model_fitted_in_memory_has_no_target_and_its_words_are_unchanged(
+    squats: tuple[list[PoseSequence], list[str]],
+) -> None:
+    """Fitted here, the classifier does not know what its labels are: ``target_`` is None and
+    ``explain`` says what it said before (the labels as given)."""
+    X, y = squats
+    clf = CaseBaseClassifier(k=3, mirror=False).fit(X, y)
+    assert clf.target_ is None
+    assert clf.explain(X[:1])[0].text == clf.explain(X[:1], target="label")[0].text
+    del clf.target_  # a model pickled before target_ was kept
+    assert clf.explain(X[:1])[0].text == clf.explain(X[:1], target="label")[0].text
