@@ -100,21 +100,20 @@ def test_the_commands_still_refuse_a_missing_database_as_before(
     assert not missing.exists()
 
 
-def test_classify_still_refuses_a_missing_database_as_before(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["classify", str(DEMO / "m01_s01_e01.npz")],
+        ["segment", str(DEMO / "m01_s01_e01.npz")],
+        ["train", str(DEMO), "--append"],
+    ],
+)
+def test_the_commands_reading_clips_still_refuse_a_missing_database_as_before(
+    argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     missing = tmp_path / "nosuch.sqlite"
-    clip = DEMO / "m01_s01_e01.npz"
-    refused(["classify", str(clip), "--db", str(missing)], tmp_path, capsys,
-            f"{missing}: no such case base file")  # fmt: skip
+    refused([*argv, "--db", str(missing)], tmp_path, capsys, f"{missing}: no such case base file")
     assert not missing.exists()
-
-
-def test_training_from_python_still_creates_the_file(stored_check: Path) -> None:
-    """``cbr.training.train`` writes: a path that does not exist yet becomes the store."""
-    with open_store(stored_check, readonly=True) as store:
-        assert [cb.name for cb in store.list_case_bases()] == ["squat"]
-        assert store.count_cases("squat") == 18
 
 
 # ------------------------------------------------------- a loaded model's stored target
