@@ -116,6 +116,13 @@ def test_the_commands_reading_clips_still_refuse_a_missing_database_as_before(
     assert not missing.exists()
 
 
+def test_training_from_python_still_creates_the_file(stored_check: Path) -> None:
+    """``cbr.training.train`` writes: a path that does not exist yet becomes the store."""
+    with open_store(stored_check, readonly=True) as store:
+        assert [cb.name for cb in store.list_case_bases()] == ["squat"]
+        assert store.count_cases("squat") == 18
+
+
 # ------------------------------------------------------- a loaded model's stored target
 
 
