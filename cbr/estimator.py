@@ -258,6 +258,39 @@ def _one_recording_frames(
     return ranges, frame_array(cb.frames)
 
 
+def _pieces_frames(
+    clips: Sequence[DescribedClip], sources: np.ndarray, clip: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The training clips' and the cases' frame ranges, ``(n_clips, 2)`` and ``(n_cases, 2)``
+    (``clip`` ``(n_cases,)``: the clip each case is of), each recording moved to frame
+    numbers of its own so that a piece overlaps only pieces of its own recording, when every
+    clip is a piece of a named recording, each starting at a frame of its own in it, and
+    some recording was cut into two pieces or more; else None."""
+    names = [str(s) for s in sources.tolist()]
+    starts = [c.frames[0] for c in clips]
+    if set(names) & {"", "None"} or None in starts:
+        return None
+    if len(set(zip(names, starts, strict=True))) != len(clips) or len(set(names)) == len(clips):
+        return None
+    ranges = np.array([c.frames for c in clips], dtype=np.int64)
+    index = {name: i for i, name in enumerate(sorted(set(names)))}
+    span = int(ranges.max()) + 1
+    moved = ranges + (np.array([index[v] for v in names], dtype=np.int64) * span)[:, None]
+    return moved, moved[clip]
+
+
+def _recording_blocks(ranges: np.ndarray, sources: np.ndarray) -> np.ndarray:
+    """Each clip's time block ``(n,)`` within its own recording (:func:`_time_blocks` of each
+    recording's pieces, frame ranges ``ranges`` ``(n, 2)``): block b of every recording is
+    held out together, and every recording keeps its other stretches as cases."""
+    out = np.empty(len(ranges), dtype=object)
+    names = np.asarray([str(s) for s in sources.tolist()], dtype=object)
+    for name in set(names.tolist()):
+        mine = np.flatnonzero(names == name)
+        out[mine] = _time_blocks(ranges[mine])
+    return out
+
+
 def _time_blocks(ranges: np.ndarray) -> np.ndarray:
     """Each clip's time block ``(n,)``: the clips (pieces of one recording, frame ranges
     ``ranges`` ``(n, 2)``) by start frame, dealt into :data:`~cbr.novelty.RANGE_FOLDS` runs
@@ -791,6 +824,26 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             frames=None if frames is None else (frames[0][query_clip][pick], frames[1]),
             balanced=self.class_weight == "balanced",
         )
+        # every recording the only one of its activities: held out by recording, each clip is
+        # of an activity the case base then lacks, and the flag's threshold would be set by
+        # how unlike the activities are (nothing a new clip of an unseen exercise exceeds);
+        # the pieces of one recording that do not overlap in time stand in, for the flag alone
+        # (the confidence stays the vote share: near copies of one take answer every piece)
+        alone = basis == "leave-one-recording-out" and not held_elsewhere(
+            labels, sources[query_clip], cb.labels, sources[clip]).any()  # fmt: skip
+        pieces = _pieces_frames(clips, sources, clip) if alone else None
+        flag_nearest, flag_pick = h.nearest, pick
+        if pieces is not None:
+            piece_h = held_out(cb, queries[pick], labels[pick],
+                               np.arange(n, dtype=object)[query_clip][pick],
+                               np.asarray(clip, dtype=object), int(self.k),
+                               self.weights,  # type: ignore[arg-type]
+                               frames=(pieces[0][query_clip][pick], pieces[1]))  # fmt: skip
+            # a piece whose every other case of its activity overlaps it in time has none to
+            # stand in: its nearest case is another activity's, no distance of a known one
+            own = piece_h.truth >= 0
+            keep = own if own.any() else np.ones(len(own), dtype=bool)
+            flag_nearest, flag_pick = piece_h.nearest[keep], pick[keep]
         skeletons = tuple(sorted({c.skeleton for c in clips}))
         # every training clip's summary against the feature ranges and the nearest clip of
         # the others (cheap: no scan of the measure), then one statistic of the three and the
@@ -798,6 +851,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         group_of = np.asarray(groups, dtype=object)
         if frames is not None:
             group_of = _time_blocks(frames[0])
+        elif pieces is not None:
+            group_of = _recording_blocks(pieces[0], sources)
         clip_labels = np.empty(n, dtype=object)
         clip_labels[query_clip] = labels
         cases_d, case_clip, image, queries_d, config = self._summaries(
@@ -812,11 +867,12 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         spread = None if ranges is None else fit_activities(
             cases_d[~image], group_of[plain], clip_labels[plain], queries_d, group_of[query_clip]
         )  # fmt: skip
-        novelty = from_distances(h.nearest, basis, UNLIKE_QUANTILE, skeletons)
+        flag_basis = basis if pieces is None else "leave-overlapping-out"
+        novelty = from_distances(flag_nearest, flag_basis, UNLIKE_QUANTILE, skeletons)
         if ranges is not None and near is not None:
             (found, outside), (neighbours, neighbour, near_labels) = ranges, near
-            novelty = combined_calibration(novelty, h.nearest, found, outside, neighbours,
-                                           neighbour, near_labels, pick,
+            novelty = combined_calibration(novelty, flag_nearest, found, outside, neighbours,
+                                           neighbour, near_labels, flag_pick,
                                            activities=spread)  # fmt: skip
         elif ranges is not None:
             novelty = dataclasses.replace(novelty, features=ranges[0])
