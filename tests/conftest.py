@@ -3,6 +3,8 @@ from __future__ import annotations
 import os
 import resource
 import signal
+import socket
+import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -67,3 +69,25 @@ def file_size_limit() -> Iterator[Callable[[int], None]]:
     finally:
         resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
         signal.signal(signal.SIGXFSZ, handler)
+
+
+@pytest.fixture
+def silent_server() -> Iterator[str]:
+    """A URL on this machine whose server accepts connections and never sends a byte."""
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+    held: list[socket.socket] = []
+
+    def accept() -> None:
+        while True:
+            try:
+                held.append(server.accept()[0])
+            except OSError:  # closed: the test is over
+                return
+
+    threading.Thread(target=accept, daemon=True).start()
+    yield f"http://127.0.0.1:{server.getsockname()[1]}/live.mp4"
+    server.close()
+    for conn in held:
+        conn.close()

@@ -8,10 +8,7 @@ Tiny synthetic videos (OpenCV writes them) keep each case to a few seconds.
 
 from __future__ import annotations
 
-import socket
-import threading
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -72,28 +69,6 @@ def test_watch_a_camera_index_too_large_for_opencv_is_one_line(
     captured = capsys.readouterr()
     assert _one_line(captured.err) == f"posecbr watch: error: {index}: cannot open camera or stream"
     assert captured.out == "" and list(tmp_path.iterdir()) == []
-
-
-@pytest.fixture
-def silent_server() -> Iterator[str]:
-    """A URL on this machine whose server accepts connections and never sends a byte."""
-    server = socket.socket()
-    server.bind(("127.0.0.1", 0))
-    server.listen(8)
-    held: list[socket.socket] = []
-
-    def accept() -> None:
-        while True:
-            try:
-                held.append(server.accept()[0])
-            except OSError:  # closed: the test is over
-                return
-
-    threading.Thread(target=accept, daemon=True).start()
-    yield f"http://127.0.0.1:{server.getsockname()[1]}/live.mp4"
-    server.close()
-    for conn in held:
-        conn.close()
 
 
 def test_watch_a_server_that_never_answers_gives_up_after_the_stall(

@@ -462,19 +462,21 @@ def _watch(argv: list[str]) -> subprocess.Popen[str]:
 
 
 def test_a_watch_that_stalls_exits_with_one_line_not_an_abort(
-    case_base: Path, shared_data: Path, tmp_path: Path
+    case_base: Path, silent_server: str, tmp_path: Path
 ) -> None:
-    """A real process: no frame within 0.05 s (the pose model loads first): the stall is
-    reported in one line naming the source, exit 1, no video. (The reader thread was left
-    inside onnxruntime as Python shut down: "terminate called without an active exception",
-    exit 134.)"""
-    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    """A real process watching a server that accepts and never sends a frame, ``--stall
+    0.5``: the stall is reported in one line naming the source, exit 1, no video. (The reader
+    thread was left inside onnxruntime as Python shut down: "terminate called without an
+    active exception", exit 134. It stalled then on a file while the pose model loaded; the
+    model now loads before the stall clock runs, so a real stall stands in.)"""
     out = tmp_path / "out.mp4"
-    run = _watch([str(video), "--db", str(case_base), "--stall", "0.05", "--out", str(out)])
+    run = _watch([silent_server, "--db", str(case_base), "--stall", "0.5", "--out", str(out)])
     stdout, stderr = run.communicate(timeout=120)
     assert run.returncode == 1, stderr
-    assert stderr == f"posecbr watch: error: {video}: the stream stalled: no frame for 0.05 s\n"
-    assert list(tmp_path.iterdir()) == []
+    assert (
+        stderr == f"posecbr watch: error: {silent_server}: the stream stalled: no frame for 0.5 s\n"
+    )
+    assert stdout == "" and list(tmp_path.iterdir()) == []
 
 
 def test_ctrl_c_ends_a_watch_as_the_end_of_the_stream_does(
