@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
@@ -15,15 +14,7 @@ from features.poses import save_pose
 from posecbr.cli import main
 from tests.badinput import small_case_base
 from tests.moves import clip
-
-
-def strict(text: str) -> Any:
-    """``text`` parsed as strict JSON: NaN, Infinity and -Infinity refused."""
-
-    def refuse(token: str) -> object:
-        raise ValueError(f"not strict JSON: {token}")
-
-    return json.loads(text, parse_constant=refuse)
+from tests.test_json_hunt import strict
 
 
 @pytest.fixture(scope="module")
