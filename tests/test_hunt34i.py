@@ -378,6 +378,10 @@ if __name__ == "__main__":
         (worker,) = pool._processes.values()
         worker.terminate()
         worker.join(60)
+        # The pool's own thread may reap the worker first; its status then lands a moment later.
+        deadline = time.monotonic() + 30
+        while worker.exitcode is None and time.monotonic() < deadline:
+            time.sleep(0.02)
         print(worker.exitcode, type(first.exception(60)).__name__)
         print(sorted(os.listdir(folder)))
 """
