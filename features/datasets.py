@@ -45,6 +45,7 @@ import numpy as np
 
 from features.errors import DataError
 from features.fileio import PICTURE_WORDS, file_head, is_picture, path_exists
+from features.formats import SHOWN_VIDEO_SUFFIXES, TS_SUFFIX, is_mpeg_ts
 from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 from features.progress import progress
 
@@ -67,9 +68,12 @@ from .readers.uiprmd import (
     uiprmd_sensor,
 )
 
-VIDEO_SUFFIXES = frozenset(VIDEO_SUFFIX_ORDER)
+#: a file named as a clip with one of these suffixes is read as a video (``.ts`` among them)
+VIDEO_SUFFIXES = frozenset(SHOWN_VIDEO_SUFFIXES)
 POSE_SUFFIXES = frozenset({".npz"})
-CLIP_SUFFIXES = POSE_SUFFIXES | VIDEO_SUFFIXES | {".bvh"}
+#: what a folder is searched for as clips; a ``.ts`` file too when it is MPEG-TS inside
+#: (:func:`features.formats.is_mpeg_ts`: not a TypeScript source)
+CLIP_SUFFIXES = POSE_SUFFIXES | frozenset(VIDEO_SUFFIX_ORDER) | {".bvh"}
 
 CSV_REQUIRED = ("path", "label")
 _CSV_COLUMNS = ("path", "label", "subject", "start", "end")  # any other column is an extra
@@ -228,12 +232,15 @@ def _amc_files(path: Path) -> list[Path]:
 
 def clip_files(folder: Path) -> list[Path]:
     """The clip files of ``folder`` (not its subfolders), in name order: files whose suffix
-    is in :data:`CLIP_SUFFIXES`, not hidden (``._clip.npz``, macOS's resource fork on a
-    copied disk, is no clip); what every command reads from a folder of clips."""
+    is in :data:`CLIP_SUFFIXES`, or ``.ts`` with MPEG-TS inside (a TypeScript source is no
+    clip), not hidden (``._clip.npz``, macOS's resource fork on a copied disk, is no clip);
+    what every command reads from a folder of clips."""
     return sorted(
         p
         for p in folder.iterdir()
-        if p.is_file() and _suffix(p) in CLIP_SUFFIXES and not p.name.startswith(".")
+        if p.is_file()
+        and not p.name.startswith(".")
+        and (_suffix(p) in CLIP_SUFFIXES or (_suffix(p) == TS_SUFFIX and is_mpeg_ts(p)))
     )
 
 

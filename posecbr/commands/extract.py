@@ -24,7 +24,7 @@ from typing import Any
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_not_in_walked_folder, check_output
-from features.formats import VIDEO_SUFFIXES
+from features.formats import SHOWN_VIDEO_SUFFIXES, is_video_in_folder
 from features.interrupts import interrupts_held, run_task, stop_workers, worker_ends_on_sigterm
 from features.progress import progress
 from features.text import counted, shown
@@ -125,11 +125,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _videos_in(folder: Path) -> list[Path]:
-    """The videos and still images in ``folder`` (not its subfolders), by name."""
-    kinds = VIDEO_SUFFIXES + IMAGE_SUFFIXES
+    """The videos and still images in ``folder`` (not its subfolders), by name: a ``.ts``
+    file only when it is MPEG-TS inside (not a TypeScript source)."""
     return sorted(
         p for p in folder.iterdir()
-        if p.is_file() and p.suffix.lower() in kinds and not p.name.startswith(".")
+        if p.is_file() and not p.name.startswith(".")
+        and (p.suffix.lower() in IMAGE_SUFFIXES or is_video_in_folder(p))
     )  # fmt: skip
 
 
@@ -190,7 +191,7 @@ def _folder_jobs(source: Path, out: Path) -> list[Job]:
     jobs += [Job(video=v, out=out / f"{v.stem}.npz") for v in _videos_in(source)]
     if not jobs:
         raise DataError(
-            f"no videos or images found ({', '.join(VIDEO_SUFFIXES + IMAGE_SUFFIXES)}),"
+            f"no videos or images found ({', '.join(SHOWN_VIDEO_SUFFIXES + IMAGE_SUFFIXES)}),"
             " directly or one subfolder per class",
             source,
         )
@@ -572,7 +573,7 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
         # of overlays for several clips is made, with the class folders inside)
         check_output(args.overlay, inputs=[args.input], what="overlay")
     elif args.overlay is not None and not args.overlay.is_dir():
-        if args.overlay.suffix.lower() in VIDEO_SUFFIXES:
+        if args.overlay.suffix.lower() in SHOWN_VIDEO_SUFFIXES:
             raise DataError(
                 "for a folder or labels CSV, --overlay names the folder for the overlay "
                 "videos, not one video file",
