@@ -363,6 +363,21 @@ class LiveSegmenter:
         will be a segment of its own, "nobody in view")."""
         return self.blind_from is not None and self.n - self.blind_from >= self.least_blind
 
+    @property
+    def nobody_reason(self) -> str:
+        """What the stretch with nobody in view in progress (:attr:`nobody_in_view`) is
+        called, as its segment will be: "no frames in the video" when most of its frames lie
+        in a gap of the video (push's ``absent``), "nobody in view" otherwise."""
+        start = self.n if self.blind_from is None else self.blind_from
+        return nobody_explanation(self._absent_in(start, self.n))
+
+    def _absent_in(self, start: int, end: int) -> np.ndarray:
+        """``(end - start,)`` bool: which of frames [start, end) lie in a gap of the video."""
+        absent = np.zeros(end - start, dtype=bool)
+        for first, stop in self.absent:
+            absent[max(first, start) - start : max(min(stop, end), start) - start] = True
+        return absent
+
     def _unlike_now(self) -> float:
         """The mean evidence of unknown of the latest windows that lie in the stretch in
         progress (all the latest when none does)."""
@@ -771,10 +786,9 @@ class LiveSegmenter:
         if state == self.nobody:
             if cut:  # no movement turns at its end
                 self.turn = False
-            absent = np.zeros(end - start, dtype=bool)
-            for first, stop in self.absent:
-                absent[max(first, start) - start : max(min(stop, end), start) - start] = True
-            return LiveSegment(start, end, None, 1.0, 0, nobody_explanation(absent))
+            return LiveSegment(
+                start, end, None, 1.0, 0, nobody_explanation(self._absent_in(start, end))
+            )
         first = max(start, end - int(MAX_SEGMENT_S * self.fps), self.offset)
         found: tuple[Repetition, ...] = ()
         if end > first:

@@ -4,12 +4,15 @@
   ``segment``, ``classify`` and ``train`` (``extract`` and ``watch`` read it); in a folder it
   was passed over. Now a named ``.ts`` is a video, and one in a folder is when it is MPEG-TS
   inside (a TypeScript source beside the clips is not).
+- ``watch --out`` drew "nobody in view" over the frames of a gap in the video (a stretch
+  with no frames), which ``segment`` and ``watch`` itself call "no frames in the video".
 
 The videos are written here with PyAV: MPEG-2 in MPEG-TS (grey frames, nobody in view).
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -18,9 +21,12 @@ import pytest
 from features.datasets import clip_files
 from posecbr.cli import main
 from tests.badinput import refused
+from tests.test_video_vfr import _write
+from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
 av = pytest.importorskip("av", reason="PyAV writes the videos")
 
+LUNGE_NAME = "fit_reverse_lunge_pexels8233047.mp4"
 TYPESCRIPT = 'const greeting: string = "hi";\nexport default greeting;\n'
 
 
@@ -74,3 +80,55 @@ def test_a_ts_file_in_a_folder_is_a_clip_only_when_it_is_mpeg_ts(
     assert main(["extract", str(folder), "--out", str(tmp_path / "poses")]) == 0
     assert "1 extracted, 0 up to date, 0 failed" in capsys.readouterr().out
     assert sorted(p.name for p in (tmp_path / "poses").iterdir()) == ["clip.npz"]
+
+
+@pytest.fixture(scope="module")
+def lunge_gap(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The reverse lunge's first 120 frames at a quarter size, 25 fps, lossless (FFV1 in
+    Matroska: each run decodes the same), its clock jumping 3 s after frame 59 (2.36 s): the
+    frames 60 on from 5.4 s. Grid rows 60 to 134 (2.4 to 5.36 s) lie in the gap."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(shared_data / "videos" / "lunge" / LUNGE_NAME))
+    frames = []
+    while len(frames) < 120:
+        ok, bgr = cap.read()
+        assert ok
+        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
+        frames.append(np.ascontiguousarray(small[:, :, ::-1]))
+    cap.release()
+    pts = [40 * k + (3000 if k >= 60 else 0) for k in range(len(frames))]
+    return _write(tmp_path_factory.mktemp("gap") / "lunge_gap.mkv", pts, frames, codec="ffv1")
+
+
+def test_watch_draws_no_frames_not_nobody_in_view_inside_a_gap(
+    case_base: Path,  # noqa: F811
+    lunge_gap: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Each grid row drawn by ``watch --out``: rows 60 to 134 (the gap) say "no frames in the
+    video", as the segment of the gap printed does; no row says "nobody in view" (a person
+    is in every frame of the video). Before, the gap's rows said "nobody in view" from a
+    second into it."""
+    from features.pose_estimation import overlay
+
+    drawn: list[list[str]] = []
+    real = overlay.draw_pose
+
+    def draw_pose(bgr: np.ndarray, landmarks: np.ndarray, words: list[str] = ()) -> np.ndarray:
+        drawn.append(list(words))
+        return real(bgr, landmarks, words)
+
+    monkeypatch.setattr(overlay, "draw_pose", draw_pose)
+    out = tmp_path / "seen.mp4"
+    argv = ["watch", str(lunge_gap), "--db", str(case_base), "--speed", "0", "--out", str(out)]
+    assert main(argv) == 0
+    printed = capsys.readouterr()
+    assert out.is_file() and len(drawn) == 195  # 0 to 7.76 s at 25 fps
+    firsts = [words[0] if words else "" for words in drawn]
+    assert firsts[60:135] == ["no frames in the video"] * 75
+    assert "nobody in view" not in firsts
+    segments = [json.loads(line) for line in printed.out.splitlines()]
+    assert any(s["unknown"] == "no frames in the video" for s in segments)

@@ -490,7 +490,7 @@ class Watcher:
             self.n += 1
             for segment in finished:
                 self._emit(segment)
-            self._draw(shown_frame)
+            self._draw(shown_frame, absent)
         if frame.read_at == frame.read_at:  # not NaN: the source said when it read the frame
             self.latency.append(time.perf_counter() - frame.read_at)
 
@@ -509,23 +509,29 @@ class Watcher:
                 file=sys.stderr,
             )
 
-    def _draw(self, frame: Any) -> None:
+    def _draw(self, frame: Any, absent: bool = False) -> None:
+        """Draw ``frame`` (the one on screen at the grid time just pushed) with the label;
+        ``absent``: that time lies in a gap of the video (no frame of its own: the frame
+        before the gap stays on screen), which the label says, as ``segment`` calls such a
+        stretch, not "nobody in view"."""
         if self.args.out is None and not self.args.show:
             return
         import cv2
         import numpy as np
 
-        from cbr.segmentation import NOBODY
+        from cbr.segmentation import NO_FRAMES, NOBODY
         from features.pose_estimation.overlay import draw_pose
 
         bgr = cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR)
         current = self.live.current()
         label = self.live.label or ("unknown" if current is not None else "...")
         words = [label, f"repetitions: {current.repetitions if current else 0}"]
-        if self.live.nobody_in_view:  # not unknown: no movement to be like anything
-            words[0] = NOBODY
-            if np.isnan(frame.pose.image[:, :2]).all():  # draw_pose says "no person"
-                words = words[1:]
+        if absent:
+            words[0] = NO_FRAMES
+        elif self.live.nobody_in_view:  # not unknown: no movement to be like anything
+            words[0] = self.live.nobody_reason  # the gap just passed, or nobody in view
+            if words[0] == NOBODY and np.isnan(frame.pose.image[:, :2]).all():
+                words = words[1:]  # draw_pose says "no person"
         draw_pose(bgr, frame.pose.image, words + self._fluents())
         if self.args.out is not None:
             self._write(bgr)
