@@ -6,6 +6,9 @@
   inside (a TypeScript source beside the clips is not).
 - ``watch --out`` drew "nobody in view" over the frames of a gap in the video (a stretch
   with no frames), which ``segment`` and ``watch`` itself call "no frames in the video".
+- A variable-rate video whose frame times went back (a frame stamped far ahead of the
+  others, a clock reset) lost every frame after that place until the times passed the
+  frame's again; now only the frame where they went back is left out, with a note.
 
 The videos are written here with PyAV: MPEG-2 in MPEG-TS (grey frames, nobody in view).
 """
@@ -21,7 +24,7 @@ import pytest
 from features.datasets import clip_files
 from posecbr.cli import main
 from tests.badinput import refused
-from tests.test_video_vfr import _write
+from tests.test_video_vfr import _write, people  # noqa: F401 (a fixture)
 from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
 av = pytest.importorskip("av", reason="PyAV writes the videos")
@@ -132,3 +135,113 @@ def test_watch_draws_no_frames_not_nobody_in_view_inside_a_gap(
     assert "nobody in view" not in firsts
     segments = [json.loads(line) for line in printed.out.splitlines()]
     assert any(s["unknown"] == "no frames in the video" for s in segments)
+
+
+def test_the_clock_going_back_loses_one_frame_not_every_later_one() -> None:
+    """Frame times (s) of a 25 fps file that strays at 0.02 s. A frame stamped far ahead
+    (0.9 s, then 0.4 s on): the frame at 0.4 s is left out and the later ones run on from
+    0.9 s, each one interval (0.04 s) on from the left-out frame's place: 0.44 s is 0.98 s.
+    A clock reset to 0 after 0.4 s: 0.04 s is 0.48 s. A single frame out of order (0.35 s
+    between 0.4 and 0.5 s) is left out alone, as before. ``watch`` (FrameClock, then Regrid)
+    puts the same values on the grid as ``extract`` (resample_timed). Before, every frame
+    after the one that went back had no time: left out."""
+    from features.pose_estimation.video import FrameClock, clocked_times, resample_timed
+    from posecbr.commands.watch import Regrid
+    from tests.test_video_vfr import _frame
+
+    ahead = [0.0, 0.02, 0.1, 0.18, 0.9, 0.4, 0.44, 0.52]
+    elapsed, strayed = clocked_times(ahead, 25.0)
+    assert strayed
+    np.testing.assert_allclose(elapsed, [0, 0.02, 0.1, 0.18, 0.9, np.nan, 0.98, 1.06], atol=1e-9)
+    reset = [0.0, 0.02, 0.1, 0.18, 0.22, 0.26, 0.3, 0.38, 0.4, 0.0, 0.04, 0.08]
+    elapsed, _ = clocked_times(reset, 25.0)
+    want = [0, 0.02, 0.1, 0.18, 0.22, 0.26, 0.3, 0.38, 0.4, np.nan, 0.48, 0.52]
+    np.testing.assert_allclose(elapsed, want, atol=1e-9)
+    clock = FrameClock(25.0)
+    for i, t in enumerate(reset):
+        clock.take(i, t)
+    assert clock.went_back == [(9, 0.4, 0.0)]
+    once = [0.0, 0.1, 0.25, 0.4, 0.35, 0.5]
+    elapsed, _ = clocked_times(once, 10.0)
+    np.testing.assert_allclose(elapsed, [0, 0.1, 0.25, 0.4, np.nan, 0.5], atol=1e-9)
+    # the values are the times themselves (as run on): the grid is the time at each row
+    values = np.array([0.0, 0.02, 0.1, 0.18, 0.9, -1.0, 0.98, 1.06])
+    elapsed, _ = clocked_times(ahead, 25.0)
+    grid, shown = resample_timed(elapsed, values, 25.0)
+    assert grid.shape == (27,)  # 0 to 1.04 s (1.06 s lies between rows)
+    on = np.isfinite(grid)
+    # rows 5 to 22 (0.2 to 0.88 s) lie between 0.18 and 0.9 s: a gap, missing
+    assert np.flatnonzero(~on).tolist() == list(range(5, 23))
+    np.testing.assert_allclose(grid[on], (np.arange(27) / 25.0)[on], atol=1e-9)
+    assert shown[-1] == 6  # 1.04 s: the frame stamped 0.44 s (0.98 s) on screen
+    live, clock = Regrid(25.0, "phone.mkv"), FrameClock(25.0)
+    worlds = [np.full((33, 3), v) for v in values]
+    steps = [live.take(_frame(i, clock.take(i, t), worlds[i])) for i, t in enumerate(ahead)]
+    pushed = np.array([float(w[0, 0]) for step in steps for w, _vis, _shown in step])
+    np.testing.assert_allclose(pushed, grid, atol=1e-12)
+
+
+def _write_out_of_order(path: Path, pts_ms: list[int], frames: list[np.ndarray]) -> Path:
+    """Lossless (FFV1 in Matroska) ``frames`` at these presentation times (ms), in order or
+    not: each packet's decoding time is its index (ms), always increasing, as the muxer needs,
+    and its presentation time is set after encoding (Matroska stores that one alone)."""
+    from fractions import Fraction
+
+    tb = Fraction(1, 1000)
+    out = av.open(str(path), "w")
+    stream = out.add_stream("ffv1", rate=25)
+    h, w = frames[0].shape[:2]
+    stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
+    stream.time_base = stream.codec_context.time_base = tb
+    for k, rgb in enumerate(frames):
+        frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
+        frame.pts, frame.time_base = k, tb
+        for packet in stream.encode(frame):
+            packet.dts, packet.pts = packet.pts, pts_ms[packet.pts]
+            out.mux(packet)
+    for packet in stream.encode():
+        packet.dts, packet.pts = packet.pts, pts_ms[packet.pts]
+        out.mux(packet)
+    out.close()
+    return path
+
+
+def test_a_video_with_a_frame_stamped_far_ahead_keeps_the_frames_after_it(
+    people: list[np.ndarray],  # noqa: F811
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The 13 variable-rate lunge frames, the ninth stamped 0.9 s where 0.38 s and 0.4 s lie
+    either side of it: the frame at 0.4 s is left out, the three after it run on from 0.9 s
+    (0.98, 1.06, 1.08 s): 28 rows at 25 fps (0 to 1.08 s), the last the last frame's pose.
+    Before: 23 rows (0 to 0.9 s), the last four frames left out."""
+    from features.pose_estimation import PoseEstimator, estimate_video
+    from features.pose_estimation.video import iter_timed_frames
+
+    pts_ms = [0, 20, 100, 180, 220, 260, 300, 380, 900, 400, 440, 520, 540]
+    path = _write_out_of_order(tmp_path / "ahead.mkv", pts_ms, people)
+    decoded = list(iter_timed_frames(path))
+    assert [round(t * 1000) for _rgb, t in decoded] == pts_ms
+    got = estimate_video(path, smoothing=False, tracking=False, progress_bar=False)
+    assert got.sequence.n_frames == 28
+    assert got.video_frames is not None and got.video_frames.tolist()[-1] == 12
+    raw = PoseEstimator(smoothing=False, tracking=False).process(decoded[12][0])
+    assert raw.person  # the lunge: a person in each frame
+    np.testing.assert_allclose(got.image_landmarks[-1], raw.image, atol=1e-6)
+    vfr = got.sequence.metadata["variable_frame_rate"]
+    assert vfr["frames_left_out"]["frames"] == [9]
+    assert vfr["clock_went_back"]["frames"] == [9]
+    note = (
+        f"note: {path}: the frame times go back at frame 9 (0.400 s after 0.900 s): frame 9"
+        " left out, the frames after it timed on from the one before it"
+    )
+    assert note in capsys.readouterr().err.splitlines()
+    # watch: the same rows, frame for frame, and the same note as the frame comes
+    from features.pose_estimation import stream_poses
+    from posecbr.commands.watch import Regrid
+
+    live = Regrid(25.0, str(path))
+    est = PoseEstimator(smoothing=False, tracking=False)
+    pushed = [w for f in stream_poses(path, estimator=est) for w, _v, _s in live.take(f)]
+    np.testing.assert_array_equal(np.array(pushed), got.sequence.positions)
+    assert capsys.readouterr().err.count(note) == 1

@@ -19,7 +19,10 @@ stays missing, no motion made up for it. A constant-rate video is
 left as it was decoded; so is one whose frames carry no times to trust (:class:`FrameClock`).
 Once the frames have strayed, a frame whose time is missing, repeated or earlier than the
 frame's before is left out of the grid and the others are resampled (:func:`clocked_times`),
-as ``watch`` does: ``segment`` and ``watch`` of one video see the same poses.
+as ``watch`` does: ``segment`` and ``watch`` of one video see the same poses. Where the
+times go back and run on from there (a clock reset, a frame stamped far ahead), the frames
+after the one that went back are timed on from the last frame taken, with a note
+(:class:`FrameClock`), not left out until the times pass it again.
 """
 
 from __future__ import annotations
@@ -303,27 +306,47 @@ class FrameClock:
     then on every frame's time is NaN, so the file is taken as constant-rate (as
     :func:`usable_times` decides for the whole file), not as frames that all stray from the
     grid at time 0. Once the frames have strayed (a variable rate), such a frame alone has
-    no time (NaN)."""
+    no time (NaN); when the next frame's time is again not after the last one taken but
+    after that frame's, the clock went back there (a recording's clock reset, a frame stamped
+    far ahead of the others): the times from there on are taken as running on from the last
+    frame taken, the frame where it went back one interval (``1 / fps``) after it, so every
+    later frame keeps a time (before, all of them were left out until the times passed the
+    last one taken again). :attr:`went_back` lists each such place: (the frame where the clock
+    went back, the time of the frame taken before it, its own time; s, as decoded)."""
 
     def __init__(self, fps: float) -> None:
         self.fps = fps
         self.first = self.last = float("nan")
         self.trusted = True
         self.on_grid = True
+        self.offset = 0.0  # added to the decoded times once the clock went back (s)
+        self.last_raw = float("nan")  # the decoded time of the last frame taken
+        self.behind: tuple[int, float] | None = None  # the frame just left out for its
+        # time not after the last one's (strayed): its index and decoded time
+        self.went_back: list[tuple[int, float, float]] = []
 
     def take(self, index: int, time_s: float) -> float:
         """Frame ``index``'s time (s) from the first frame's; NaN when it has none to trust."""
         if index == 0:
-            self.first = self.last = time_s
+            self.first = self.last = self.last_raw = time_s
             self.trusted = math.isfinite(time_s)
             return 0.0 if self.trusted else float("nan")
         if not self.trusted:
             return float("nan")
-        if not (math.isfinite(time_s) and time_s > self.last):
-            self.trusted = not self.on_grid
-            return float("nan")
-        self.last = time_s
-        elapsed = time_s - self.first
+        if not (math.isfinite(time_s) and time_s + self.offset > self.last):
+            if self.on_grid or not math.isfinite(time_s):
+                self.trusted = not self.on_grid
+                return float("nan")
+            behind = self.behind
+            if behind is None or behind[0] != index - 1 or time_s <= behind[1]:
+                self.behind = (index, time_s)  # a frame out of order, or the clock went back
+                return float("nan")
+            # the frame before went back and this one runs on from it: the clock went back
+            self.went_back.append((behind[0], self.last_raw, behind[1]))
+            self.offset = self.last + 1.0 / self.fps - behind[1]
+        self.behind = None
+        self.last, self.last_raw = time_s + self.offset, time_s
+        elapsed = self.last - self.first
         self.on_grid = self.on_grid and not strays(elapsed, index, self.fps)
         return elapsed
 
@@ -619,9 +642,11 @@ def estimate_video(
         positions, image_lm = both[:, :, :3], both[:, :, 3:]
         person_on_grid = ~np.isnan(resample_timed(elapsed, nobody, info.fps)[0])
         missing = np.flatnonzero(~person_on_grid).tolist()
-        vfr, gaps, holes = _resampling_record(elapsed, timed, info.fps)
-        if announce:
-            print(f"note: {shown(vfr_words(path, info.fps, gaps, holes))}", file=sys.stderr)
+        vfr, gaps, holes = _resampling_record(elapsed, timed, info.fps, clock.went_back)
+        notes = [vfr_words(path, info.fps, gaps, holes)]
+        notes += [went_back_words(path, clock.went_back)] if clock.went_back else []
+        for words in notes if announce else []:
+            print(f"note: {shown(words)}", file=sys.stderr)
     else:
         missing = [i for i, p in enumerate(person) if not p]
     meta: dict[str, object] = {
@@ -654,11 +679,15 @@ def estimate_video(
 
 
 def _resampling_record(
-    elapsed: np.ndarray, timed: np.ndarray, fps: float
+    elapsed: np.ndarray,
+    timed: np.ndarray,
+    fps: float,
+    went_back: list[tuple[int, float, float]] | None = None,
 ) -> tuple[dict[str, object], np.ndarray, list[tuple[float, float]]]:
     """How :func:`estimate_video` resampled frames at ``elapsed`` (s; ``timed``: those with a
-    time), for the metadata's ``variable_frame_rate``; with the frame intervals and the gaps
-    left missing (:func:`unbridged_gaps`), for the note."""
+    time; ``went_back``: where the frame times went back, :attr:`FrameClock.went_back`), for
+    the metadata's ``variable_frame_rate``; with the frame intervals and the gaps left missing
+    (:func:`unbridged_gaps`), for the note."""
     gaps = np.diff(elapsed[timed])
     holes, unbridged = unbridged_gaps(elapsed[timed], fps)
     vfr = {
@@ -687,6 +716,13 @@ def _resampling_record(
             "frames": untimed.tolist(),
             "why": "no time of its own after the frames strayed (missing, repeated or"
             " earlier than the frame before): left out, as watch leaves it out",
+        }
+    if went_back:
+        vfr["clock_went_back"] = {
+            "frames": [frame for frame, _before, _at in went_back],
+            "why": "a frame's time earlier than the frame's before, and the next frame's"
+            " running on from it (a clock reset, or a frame stamped far ahead): that frame"
+            " left out, the later ones timed on from the frame before it",
         }
     return vfr, gaps, holes
 
@@ -726,6 +762,17 @@ def vfr_words(
         f" {gaps.max() * 1000:.0f} ms apart): poses resampled to {fps:g} fps"
     )
     return f"{line}; {gap_words(holes)}" if holes else line
+
+
+def went_back_words(path: str | Path, went_back: list[tuple[int, float, float]]) -> str:
+    """The line that tells a user a video's frame times went back (:attr:`FrameClock.went_back`:
+    the first place, and how many there were)."""
+    frame, before, at = went_back[0]
+    line = (
+        f"{path}: the frame times go back at frame {frame} ({at:.3f} s after {before:.3f} s):"
+        f" frame {frame} left out, the frames after it timed on from the one before it"
+    )
+    return f"{line} ({len(went_back)} such places)" if len(went_back) > 1 else line
 
 
 def _smoothing_meta() -> dict[str, object]:
@@ -942,7 +989,11 @@ def stream_poses(
             video_t = float("nan")
             if ok and fps:
                 times.append(frame_time_s(cap))
+                went_back = len(clock.went_back)
                 video_t = clock.take(index, times[-1])
+                if len(clock.went_back) > went_back:  # said as it comes, as a gap is
+                    words = went_back_words(str(source), clock.went_back[-1:])
+                    print(f"note: {shown(words)}", file=sys.stderr)
             if ok and pace is not None and not pace(index, video_t):
                 break
             ok, bgr = cap.retrieve() if ok else (False, None)
