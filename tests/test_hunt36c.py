@@ -9,6 +9,8 @@
 - A variable-rate video whose frame times went back (a frame stamped far ahead of the
   others, a clock reset) lost every frame after that place until the times passed the
   frame's again; now only the frame where they went back is left out, with a note.
+- A looped video of exact copies of one repetition: ``reps`` counts one repetition per loop
+  and puts each in its own loop (checked: it did so before too; these tests hold it).
 
 The videos are written here with PyAV: MPEG-2 in MPEG-TS (grey frames, nobody in view).
 """
@@ -245,3 +247,84 @@ def test_a_video_with_a_frame_stamped_far_ahead_keeps_the_frames_after_it(
     pushed = [w for f in stream_poses(path, estimator=est) for w, _v, _s in live.take(f)]
     np.testing.assert_array_equal(np.array(pushed), got.sequence.positions)
     assert capsys.readouterr().err.count(note) == 1
+
+
+SQUAT = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+LOOP = 25  # the squat video's second repetition: frames 25 to 49 (5 s at 5 fps)
+
+
+@pytest.fixture(scope="module")
+def squat_loops(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[int, Path]:
+    """The squat video's second repetition (rest, down, up, rest) at half size, looped once
+    and four times: MJPG AVIs at the video's 5 fps (each decodes the same every run)."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(shared_data / SQUAT))
+    frames = []
+    while True:
+        ok, bgr = cap.read()
+        if not ok:
+            break
+        frames.append(cv2.resize(bgr, (bgr.shape[1] // 2, bgr.shape[0] // 2)))
+    cap.release()
+    one = frames[LOOP : 2 * LOOP]
+    folder = tmp_path_factory.mktemp("loops")
+    videos = {}
+    for n in (1, 4):
+        videos[n] = folder / f"loop{n}.avi"
+        h, w = one[0].shape[:2]
+        writer = cv2.VideoWriter(str(videos[n]), cv2.VideoWriter.fourcc(*"MJPG"), 5.0, (w, h))
+        for bgr in one * n:
+            writer.write(bgr)
+        writer.release()
+    return videos
+
+
+def test_reps_of_a_looped_video_counts_one_repetition_per_loop(
+    squat_loops: dict[int, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The repetition alone: one, its far point at some frame p. Looped four times: four,
+    the k-th's far point at 25 k + p (within a frame: the pose model's tracking carries
+    over from loop to loop), each within its own loop give or take the rest either side
+    (5 frames), none overlapping."""
+    assert main(["reps", str(squat_loops[1]), "--json"]) == 0
+    alone = json.loads(capsys.readouterr().out)["repetitions"]
+    assert len(alone) == 1
+    p = alone[0]["peak_frame"]
+    assert main(["reps", str(squat_loops[4]), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    reps = got["repetitions"]
+    assert got["count"] == len(reps) == 4
+    for k, rep in enumerate(reps):
+        assert abs(rep["peak_frame"] - (LOOP * k + p)) <= 1, (k, rep)
+        assert LOOP * k - 5 <= rep["start_frame"] < rep["peak_frame"] < rep["end_frame"]
+        assert rep["end_frame"] <= LOOP * (k + 1) + 5, (k, rep)
+    assert all(a["end_frame"] <= b["start_frame"] for a, b in zip(reps, reps[1:], strict=False))
+
+
+def test_reps_of_exact_copies_of_one_repetition_cut_at_the_seams(
+    squat_loops: dict[int, Path],
+) -> None:
+    """The poses of the repetition alone, repeated six times exactly (no pose model between
+    the copies): six repetitions, the k-th's far point at 25 k + p, the ones between two
+    others from seam to seam (25 k to 25 (k + 1))."""
+    import dataclasses
+
+    from features.datasets import load_clip
+    from features.repetitions import count_repetitions
+
+    one = load_clip(squat_loops[1])
+    p = count_repetitions(one).repetitions[0].peak_frame
+    assert one.confidence is not None
+    six = dataclasses.replace(
+        one,
+        positions=np.concatenate([one.positions] * 6),
+        confidence=np.concatenate([one.confidence] * 6),
+        metadata={},
+    )
+    reps = count_repetitions(six).repetitions
+    assert len(reps) == 6
+    assert [r.peak_frame for r in reps] == [LOOP * k + p for k in range(6)]
+    assert [(r.start_frame, r.end_frame) for r in reps[1:-1]] == [
+        (LOOP * k, LOOP * (k + 1)) for k in range(1, 5)
+    ]
