@@ -166,6 +166,12 @@ def test_the_clock_going_back_loses_one_frame_not_every_later_one() -> None:
     once = [0.0, 0.1, 0.25, 0.4, 0.35, 0.5]
     elapsed, _ = clocked_times(once, 10.0)
     np.testing.assert_allclose(elapsed, [0, 0.1, 0.25, 0.4, np.nan, 0.5], atol=1e-9)
+    # two frames out of order, 40 ms back (less than a bridged gap, 0.25 s): left out, the
+    # times not shifted
+    small = [0.0, 0.02, 0.1, 0.18, 0.4, 0.36, 0.37, 0.42]
+    elapsed, _ = clocked_times(small, 25.0)
+    want = [0, 0.02, 0.1, 0.18, 0.4, np.nan, np.nan, 0.42]
+    np.testing.assert_allclose(elapsed, want, atol=1e-9)
     # the values are the times themselves (as run on): the grid is the time at each row
     values = np.array([0.0, 0.02, 0.1, 0.18, 0.9, -1.0, 0.98, 1.06])
     elapsed, _ = clocked_times(ahead, 25.0)

@@ -306,13 +306,16 @@ class FrameClock:
     then on every frame's time is NaN, so the file is taken as constant-rate (as
     :func:`usable_times` decides for the whole file), not as frames that all stray from the
     grid at time 0. Once the frames have strayed (a variable rate), such a frame alone has
-    no time (NaN); when the next frame's time is again not after the last one taken but
-    after that frame's, the clock went back there (a recording's clock reset, a frame stamped
-    far ahead of the others): the times from there on are taken as running on from the last
-    frame taken, the frame where it went back one interval (``1 / fps``) after it, so every
-    later frame keeps a time (before, all of them were left out until the times passed the
-    last one taken again). :attr:`went_back` lists each such place: (the frame where the clock
-    went back, the time of the frame taken before it, its own time; s, as decoded)."""
+    no time (NaN); when that frame lies more than :func:`bridge_limit_s` before the last one
+    taken and the next frame's time is again not after the last one taken but after that
+    frame's, the clock went back there (a recording's clock reset, a frame stamped far ahead
+    of the others): the times from there on are taken as running on from the last frame
+    taken, the frame where it went back one interval (``1 / fps``) after it, so every later
+    frame keeps a time (before, all of them were left out until the times passed the last
+    one taken again). Frames out of order by less than that are left out until the times
+    pass the last one taken (no more than a bridged stretch of them), the times unshifted.
+    :attr:`went_back` lists each place the clock went back: (the frame where it did, the
+    time of the frame taken before it, its own time; s, as decoded)."""
 
     def __init__(self, fps: float) -> None:
         self.fps = fps
@@ -338,8 +341,13 @@ class FrameClock:
                 self.trusted = not self.on_grid
                 return float("nan")
             behind = self.behind
-            if behind is None or behind[0] != index - 1 or time_s <= behind[1]:
-                self.behind = (index, time_s)  # a frame out of order, or the clock went back
+            if (
+                behind is None
+                or behind[0] != index - 1
+                or time_s <= behind[1]
+                or self.last_raw - behind[1] <= bridge_limit_s(self.fps)
+            ):  # a frame out of order, a few (no longer than a gap bridged), or the clock
+                self.behind = (index, time_s)  # went back: the next frame tells
                 return float("nan")
             # the frame before went back and this one runs on from it: the clock went back
             self.went_back.append((behind[0], self.last_raw, behind[1]))
