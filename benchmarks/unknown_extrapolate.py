@@ -1,0 +1,369 @@
+"""Does the default unknown judge's held-out scan, corrected for the one person fewer it
+measures against, catch more left-out movements on people not in the case base? (Issue 14.)
+
+The judges are calibrated on the case base's held-out scan (:func:`cbr.unknown.
+held_out_activities`): each training person's cases against the case base without that
+person, so against ONE PERSON FEWER than a new person meets; their cases lie farther from
+the rest than a new person's known windows lie from the case base (``benchmarks.
+unknown_bounds``). Here the scan is also taken per other person (:func:`people_scan`): how
+near each held-out case lies to every activity of each other training person, from which a
+scan leaving out a second person too is read, and the change from that one (P-2 people) to
+the ordinary one (P-1) is carried on to P (:func:`extrapolated`, :func:`median_scaled`).
+
+Run: ``python -m benchmarks.unknown_extrapolate [--datasets ...] [--train-people 1] [--cache
+DIR]``; writes ``benchmarks/results/unknown_extrapolate.json`` (``unknown_extrapolate_1.json``
+with ``--train-people 1``, where every rule is the default judge: a case base of one person
+has no second person to leave out). The folds, windows and tallies are those of
+:mod:`benchmarks.unknown_bounds` (known windows kept / left-out windows unknown, pooled over
+the left-out movements). The rules, each fixed before its figures on the test windows were
+looked at, each a corrected scan the default judge (``spread-margin``: rate, prior, power,
+spreads and thresholds) is calibrated on as it is on the ordinary one:
+
+- ``jackknife``: every held-out case's distance to every activity, ``X1`` (the nearest
+  other person's), moved as ``log D = log X1 - gamma * delta``: ``delta = (log X2 - log X1)
+  / n`` is how much leaving out one more of the ``n`` other people who did the activity
+  raises ``log X1`` on average (``X2`` the second-nearest person's), ``gamma = (n - 1) / (n
+  + 1)`` carries it on to one person more if ``E[log d]`` goes as ``c + b / n``;
+- ``same step``: ``gamma = 1``, the change from P-2 to P-1 people taken as the change from
+  P-1 to P;
+- ``median ratio``: every distance times the ratio of the held-out known cases' median
+  nearest distance to their median nearest distance with a second person left out (each in
+  turn, pooled): the margins stay, the spreads shrink;
+- each also with ``spread-far``'s far bound read from the corrected scan (``... + far``);
+  ``spread-far`` (uncorrected) for comparison.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import time  # noqa: E402
+from functools import partial  # noqa: E402
+from pathlib import Path  # noqa: E402
+from types import SimpleNamespace  # noqa: E402
+from typing import Any  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from benchmarks import write_json  # noqa: E402
+from benchmarks._common import one_thread_machine, versions  # noqa: E402
+from benchmarks.repetitions import HDM05, UIPRMD, Group  # noqa: E402
+from benchmarks.segment_people import DATASETS, Fold, Reader, folds, joined_training  # noqa: E402
+from benchmarks.unknown_ceiling import _cached  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results" / "unknown_extrapolate.json"
+CORRECTIONS = ("jackknife", "same step", "median ratio")
+RULES = ("spread-margin", "spread-far",
+         *(f"{c}{far}" for far in ("", " + far") for c in CORRECTIONS))  # fmt: skip
+
+
+# ---------------------------------------------------------------- the scan per person
+
+
+def people_scan(cb: Any, sample: int | None = None, seed: int = 0) -> tuple[Any, np.ndarray]:
+    """The held-out scan :func:`cbr.unknown.held_out_activities` makes (the same cases) and,
+    for each held-out case, its distance to the nearest case of every activity done by each
+    person ``(n, n_people, n_classes)``: inf for the case's own person (held out) and where
+    the person did not do the activity. People are the case base's subjects, in sorted
+    order; the second array is empty ``(n, 0, n_classes)`` when the scan does not hold out
+    people (basis not "subject"). Its minimum over people is the scan's own distances."""
+    from cbr.unknown import MARGIN_SAMPLE, activity_codes, held_out_activities, per_activity
+
+    sample = MARGIN_SAMPLE if sample is None else sample
+    held = held_out_activities(cb, sample, seed)
+    seen, codes, basis, groups = held
+    if basis != "subject":
+        return held, np.zeros((len(seen), 0, seen.shape[1]))
+    everyone = np.array([s or "" for s in cb.subjects], dtype=object)
+    people = sorted(set(everyone.tolist()))
+    labels = np.asarray(cb.labels).astype(str)
+    classes = sorted(set(labels.tolist()))
+    all_codes = activity_codes(labels, classes)
+    index, reps = cb.index, cb.reps
+    real = _held_rows(cb, sample, seed)
+    out = np.full((len(real), len(people), len(classes)), np.inf)
+    for row, i in enumerate(real.tolist()):
+        d = cb.measure.distances(reps[i], index)
+        for k, p in enumerate(people):
+            if p != everyone[i]:
+                out[row, k] = per_activity(np.where(everyone == p, d, np.inf), all_codes,
+                                           len(classes))  # fmt: skip
+    return held, out
+
+
+def _held_rows(cb: Any, sample: int, seed: int) -> np.ndarray:
+    """The cases :func:`cbr.unknown.held_out_activities` holds out (its sample)."""
+    from cbr.weights import MIRROR_FLAG
+
+    real = np.arange(len(cb))
+    if cb.names and cb.names[-1] == MIRROR_FLAG:
+        real = real[np.asarray(cb.problems)[:, -1] == 0]
+    if len(real) > sample:
+        real = np.sort(np.random.default_rng(seed).choice(real, sample, replace=False))
+    return real
+
+
+def _steps(people: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(X1, delta, n)`` each ``(n_cases, n_classes)`` of a per-person scan ``(n_cases,
+    n_people, n_classes)``: the nearest person's distance, the mean rise of ``log X1`` when
+    one of the ``n`` people who did the activity is left out too (``(log X2 - log X1) / n``;
+    0 where ``n < 2``, ``X1`` is 0 or ``X2`` inf) and ``n``."""
+    ranked = np.sort(people, axis=1)
+    x1, x2 = ranked[:, 0, :], ranked[:, 1, :]
+    n = np.isfinite(people).sum(axis=1)
+    ok = (n >= 2) & (x1 > 0.0) & np.isfinite(x2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        delta = np.where(ok, (np.log(np.where(ok, x2, 1.0)) - np.log(np.where(ok, x1, 1.0)))
+                         / np.maximum(n, 1), 0.0)  # fmt: skip
+    return x1, delta, n
+
+
+def extrapolated(people: np.ndarray, correction: str) -> np.ndarray:
+    """The scan's distances ``(n_cases, n_classes)`` carried on to one person more, from the
+    per-person scan ``people`` (:func:`people_scan`): ``X1 * exp(-gamma * delta)``
+    (:func:`_steps`), ``gamma`` ``(n - 1) / (n + 1)`` for "jackknife", 1 for "same step"."""
+    x1, delta, n = _steps(people)
+    if correction == "jackknife":
+        gamma = (n - 1.0) / np.maximum(n + 1.0, 1.0)
+    elif correction == "same step":
+        gamma = np.ones_like(delta)
+    else:
+        raise ValueError(f"unknown correction {correction!r}")
+    return np.asarray(x1 * np.exp(-gamma * delta))
+
+
+def second_left_out(rows: np.ndarray) -> np.ndarray:
+    """The nearest distance of every held-out case of the per-person scan ``rows``
+    ``(n_cases, n_people, n_classes)`` with each other person (one the case is measured
+    against) left out too, in turn, pooled (the finite ones)."""
+    fewer = []
+    for k in range(rows.shape[1]):
+        there = np.isfinite(rows[:, k, :]).any(axis=1)
+        others = np.delete(rows, k, axis=1).min(axis=(1, 2))
+        fewer.append(others[there & np.isfinite(others)])
+    return np.concatenate(fewer) if fewer else np.zeros(0)
+
+
+def median_ratio(people: np.ndarray, codes: np.ndarray) -> float:
+    """The held-out known cases' (:func:`cbr.unknown.known_rows` of the scan, the minimum of
+    ``people`` over people) median nearest distance over their median nearest distance with
+    each other person left out in turn too (pooled; a person whose leaving leaves a case no
+    activity is not counted); 1 when either is not positive or there is no such case."""
+    from cbr.unknown import known_rows
+
+    seen = people.min(axis=1) if people.shape[1] else np.zeros((len(people), 0))
+    if not people.shape[1] or not len(people):
+        return 1.0
+    keep = known_rows(seen, codes)
+    d1 = seen[keep].min(axis=1)
+    pooled = second_left_out(people[keep])
+    if not len(d1) or not len(pooled):
+        return 1.0
+    a, b = float(np.median(d1)), float(np.median(pooled))
+    return a / b if a > 0.0 and b > 0.0 else 1.0
+
+
+def corrected(held: Any, people: np.ndarray, correction: str) -> Any:
+    """The held-out scan ``held`` with its distances corrected by ``correction`` (of
+    :data:`CORRECTIONS`); ``held`` itself when it does not hold out people."""
+    seen, codes, basis, groups = held
+    if basis != "subject" or not people.shape[1]:
+        return held
+    if correction == "median ratio":
+        fixed = seen * median_ratio(people, codes)
+    else:
+        fixed = extrapolated(people, correction)
+    return fixed, codes, basis, groups
+
+
+def judges(labels: Any, held: Any, people: np.ndarray) -> dict[str, Any]:
+    """Every rule of :data:`RULES` but the first two's judge, calibrated on its corrected
+    scan; ``labels`` the case base's (the margin judges need three activities)."""
+    from cbr.unknown import SpreadFar, SpreadMargin
+
+    cb = SimpleNamespace(labels=labels)
+    out: dict[str, Any] = {}
+    for c in CORRECTIONS:
+        fixed = corrected(held, people, c)
+        inner = SpreadMargin.of(cb, held=fixed)  # type: ignore[arg-type]
+        out[c] = inner
+        out[f"{c} + far"] = SpreadFar.bounding(inner, fixed)
+    return out
+
+
+# ---------------------------------------------------------------- measuring
+
+
+def measure(fold: Fold, joined: list[tuple[Any, Group]], movement: str) -> dict[str, Any]:
+    """:func:`benchmarks.unknown_bounds.measure` (made here: the case base is needed) and the
+    per-person scan of the case base (:func:`people_scan`) with its labels."""
+    from benchmarks.segment_people import fit, training_clips
+    from benchmarks.unknown_bounds import JUDGE
+    from benchmarks.segment import judge_named
+    from benchmarks.unknown_ceiling import pure_windows
+    from cbr.segmentation import solve_recording
+
+    clf = fit(training_clips(joined, leave_out=movement))
+    recs = {}
+    for rec in fold.recordings:
+        done = solve_recording(clf, rec.seq, chunk_frames=0)
+        counted = [float(np.min(w.nearest)) for w, out in
+                   zip(done.windows, done.outliers.tolist(), strict=True) if not out]  # fmt: skip
+        windows = [w for w in done.windows if not w.repetition]
+        spans = np.array([(w.start, w.stop) for w in windows], dtype=np.int64)
+        recs[rec.name] = {
+            "nearest": np.stack([w.nearest for w in windows]),
+            "still": np.array([w.still for w in windows], dtype=bool),
+            "movements": pure_windows(rec, spans, rec.seq.fps),
+            "counted_d1": np.array(counted),
+        }
+    judge = judge_named(clf, JUDGE)
+    held, people = people_scan(clf.case_base_)
+    return {"cases": len(clf.case_base_), "judge": judge, "held": held, "people": people,
+            "labels": np.asarray(clf.case_base_.labels).astype(str), "recordings": recs}  # fmt: skip
+
+
+def decide(movement: str, measured: dict[str, Any]) -> dict[str, np.ndarray]:
+    """Per rule of :data:`RULES`: the tally ``[known kept, known, novel unknown, novel]`` of
+    one left-out movement's case base (``measured``: :func:`measure`)."""
+    from cbr.unknown import SpreadFar, for_person
+
+    judge, held = measured["judge"], measured["held"]
+    rules: dict[str, Any] = {"spread-margin": judge,
+                             "spread-far": SpreadFar.bounding(judge, held)}  # fmt: skip
+    rules.update(judges(measured["labels"], held, measured["people"]))
+    out = {rule: np.zeros(4, dtype=np.int64) for rule in RULES}
+    for r in measured["recordings"].values():
+        is_novel = np.array([m == movement for m in r["movements"]], dtype=bool)
+        is_known = np.array([m is not None and m != movement for m in r["movements"]], dtype=bool)
+        for rule, j in rules.items():
+            mine = for_person(j, r["counted_d1"])
+            u = np.array([s or mine.unlike(n) for s, n in zip(r["still"], r["nearest"],
+                                                                strict=True)], dtype=bool)  # fmt: skip
+            out[rule] += [int(np.sum(~u[is_known])), int(is_known.sum()),
+                          int(np.sum(u[is_novel])), int(is_novel.sum())]  # fmt: skip
+    return out
+
+
+def quantiles(measured: dict[str, Any], movement: str) -> dict[str, float]:
+    """The diagnostic: the 95 % quantile of the nearest distance of the held-out known cases
+    with a second person left out too (pooled), of the scan's (P-1), of each correction's,
+    and of the test people's known windows (P)."""
+    from cbr.unknown import false_unknown_threshold, known_rows
+
+    held, people = measured["held"], measured["people"]
+    seen, codes = held[0], held[1]
+    keep = known_rows(seen, codes)
+    out = {"scan": false_unknown_threshold(seen[keep].min(axis=1))}
+    if people.shape[1]:
+        pooled = second_left_out(people[keep])
+        if len(pooled):
+            out["second person left out"] = false_unknown_threshold(pooled)
+        for c in CORRECTIONS:
+            fixed = corrected(held, people, c)[0]
+            out[c] = false_unknown_threshold(fixed[keep].min(axis=1))
+    d1 = [r["nearest"].min(axis=1)[np.array([m is not None and m != movement
+                                             for m in r["movements"]], dtype=bool)]
+          for r in measured["recordings"].values()]  # fmt: skip
+    out["test known windows"] = false_unknown_threshold(np.concatenate(d1))
+    return out
+
+
+def run_dataset(
+    dataset: str, cache: Path | None, train_people: int | None = None
+) -> list[tuple[str, str, dict[str, Any]]]:
+    """``(fold, movement, measured)`` for every fold of ``dataset`` and each movement left
+    out (``train_people``: case bases of that many people, each in turn)."""
+    from features.progress import progress
+
+    read = Reader()
+    out = []
+    for fold in folds(dataset, 1, 0, read, train_people, bool(train_people)):
+        tag = f"people-{dataset}-{fold.name.replace(' ', '_').replace(',', '')}"
+        joined = joined_training(fold.train, read)
+        movements = sorted({m for r in fold.recordings for m in r.movements})
+        for m in progress(movements, f"{dataset} {fold.name}: left out", unit="movement"):
+            out.append((fold.name, m, _cached(cache, f"{tag}-{m}",
+                                              partial(measure, fold, joined, m))))  # fmt: skip
+    return out
+
+
+def summarise(measured: list[tuple[str, str, dict[str, Any]]]) -> dict[str, Any]:
+    """Per rule, pooled over the left-out movements: known windows kept, novel ones unknown;
+    and per case base the diagnostic quantiles (:func:`quantiles`) and the median ratio."""
+    tally = {rule: np.zeros(4, dtype=np.int64) for rule in RULES}
+    cases = []
+    for fold, movement, m in measured:
+        for rule, t in decide(movement, m).items():
+            tally[rule] += t
+        cases.append({"fold": fold, "left_out": movement, "cases": m["cases"],
+                      "basis": m["held"][2], "people": int(m["people"].shape[1]),
+                      "median_ratio": median_ratio(m["people"], m["held"][1]),
+                      "d1_q95": quantiles(m, movement)})  # fmt: skip
+    rules = {rule: {"known_windows": int(t[1]), "novel_windows": int(t[3]),
+                    "known_kept": float(t[0]) / max(1, int(t[1])),
+                    "novel_unknown": float(t[2]) / max(1, int(t[3]))}
+             for rule, t in tally.items()}  # fmt: skip
+    return {"rules": rules, "case_bases": cases}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.unknown_extrapolate",
+                                     description=__doc__.split("\n\n")[0])  # fmt: skip
+    parser.add_argument("--datasets", nargs="+", choices=DATASETS, default=list(DATASETS))
+    parser.add_argument("--train-people", type=int, default=None, metavar="N",
+                        help="case bases of N training people, each in turn")  # fmt: skip
+    parser.add_argument("--cache", type=Path, default=None, metavar="DIR",
+                        help="keep each left-out movement's measurements here")  # fmt: skip
+    parser.add_argument("--out", type=Path, default=None, metavar="JSON",
+                        help="write here instead of benchmarks/results/")  # fmt: skip
+    args = parser.parse_args(argv)
+    if args.train_people is not None and args.train_people < 1:
+        parser.error(f"--train-people must be at least 1, got {args.train_people}")
+    if not UIPRMD.is_dir() or not HDM05.is_dir():
+        print(f"no ui-prmd or hdm05 data under {UIPRMD.parents[1]}: nothing to measure")
+        return 1
+    import numba
+
+    numba.set_num_threads(1)
+    load_at_start = [round(x, 2) for x in os.getloadavg()]
+    summary: dict[str, Any] = {}
+    for dataset in args.datasets:
+        t0 = time.perf_counter()
+        summary[dataset] = summarise(run_dataset(dataset, args.cache, args.train_people))
+        summary[dataset]["wall_s"] = time.perf_counter() - t0
+        print(f"\n{dataset}: known windows kept / left-out windows unknown")
+        for rule, r in summary[dataset]["rules"].items():
+            counts = f"({r['known_windows']} known, {r['novel_windows']} left-out windows)"
+            print(f"  {rule:24s}{r['known_kept']:8.1%}{r['novel_unknown']:8.1%}   {counts}")
+    result = {
+        "benchmark": "unknown_extrapolate",
+        "command": "python -m benchmarks.unknown_extrapolate --datasets "
+        + " ".join(args.datasets)
+        + (f" --train-people {args.train_people}" if args.train_people else ""),
+        "note": "window level, people not in the case base; the default judge calibrated on "
+        "its held-out scan corrected for the one person fewer it measures against",
+        "machine": one_thread_machine(),
+        "load_average_at_start": load_at_start,
+        "versions": versions("posecbr", "numpy", "scipy", "scikit-learn", "numba"),
+        "summary": summary,
+    }
+    if args.cache is not None:
+        result["cache"] = (
+            "measurements read from --cache where a run had made them: wall_s is this run's"
+        )
+    out = args.out or RESULTS
+    if args.train_people and args.out is None:
+        out = RESULTS.with_name(f"unknown_extrapolate_{args.train_people}.json")
+    write_json(result, out)
+    print(f"\nwrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
