@@ -202,9 +202,9 @@ def judges(labels: Any, held: Any, people: np.ndarray) -> dict[str, Any]:
 def measure(fold: Fold, joined: list[tuple[Any, Group]], movement: str) -> dict[str, Any]:
     """:func:`benchmarks.unknown_bounds.measure` (made here: the case base is needed) and the
     per-person scan of the case base (:func:`people_scan`) with its labels."""
+    from benchmarks.segment import judge_named
     from benchmarks.segment_people import fit, training_clips
     from benchmarks.unknown_bounds import JUDGE
-    from benchmarks.segment import judge_named
     from benchmarks.unknown_ceiling import pure_windows
     from cbr.segmentation import solve_recording
 
@@ -224,8 +224,9 @@ def measure(fold: Fold, joined: list[tuple[Any, Group]], movement: str) -> dict[
         }
     judge = judge_named(clf, JUDGE)
     held, people = people_scan(clf.case_base_)
+    labels = np.asarray(clf.case_base_.labels).astype(str)
     return {"cases": len(clf.case_base_), "judge": judge, "held": held, "people": people,
-            "labels": np.asarray(clf.case_base_.labels).astype(str), "recordings": recs}  # fmt: skip
+            "labels": labels, "recordings": recs}  # fmt: skip
 
 
 def decide(movement: str, measured: dict[str, Any]) -> dict[str, np.ndarray]:
@@ -243,8 +244,8 @@ def decide(movement: str, measured: dict[str, Any]) -> dict[str, np.ndarray]:
         is_known = np.array([m is not None and m != movement for m in r["movements"]], dtype=bool)
         for rule, j in rules.items():
             mine = for_person(j, r["counted_d1"])
-            u = np.array([s or mine.unlike(n) for s, n in zip(r["still"], r["nearest"],
-                                                                strict=True)], dtype=bool)  # fmt: skip
+            pairs = zip(r["still"], r["nearest"], strict=True)
+            u = np.array([s or mine.unlike(n) for s, n in pairs], dtype=bool)
             out[rule] += [int(np.sum(~u[is_known])), int(is_known.sum()),
                           int(np.sum(u[is_novel])), int(is_novel.sum())]  # fmt: skip
     return out
