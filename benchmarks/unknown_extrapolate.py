@@ -29,6 +29,12 @@ spreads and thresholds) is calibrated on as it is on the ordinary one:
 - ``median ratio``: every distance times the ratio of the held-out known cases' median
   nearest distance to their median nearest distance with a second person left out (each in
   turn, pooled): the margins stay, the spreads shrink;
+- ``one more person``: each person's distance to an activity taken as an independent draw
+  from one distribution per activity and kind (the activity's own held-out cases, the
+  others'), an entry of the scan the least of ``n`` people's, moved to where the least of
+  ``n + 1`` would lie at the same survival (:func:`one_more_person`): defined with one other
+  person too, as in HDM05's folds of two training people, where the three above change
+  nothing (``n`` 1: no second person to leave out);
 - each also with ``spread-far``'s far bound read from the corrected scan (``... + far``);
   ``spread-far`` (uncorrected) for comparison.
 """
@@ -57,7 +63,7 @@ from benchmarks.unknown_ceiling import _cached  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "unknown_extrapolate.json"
-CORRECTIONS = ("jackknife", "same step", "median ratio")
+CORRECTIONS = ("jackknife", "same step", "median ratio", "one more person")
 RULES = ("spread-margin", "spread-far",
          *(f"{c}{far}" for far in ("", " + far") for c in CORRECTIONS))  # fmt: skip
 
@@ -168,6 +174,31 @@ def median_ratio(people: np.ndarray, codes: np.ndarray) -> float:
     return a / b if a > 0.0 and b > 0.0 else 1.0
 
 
+def one_more_person(seen: np.ndarray, codes: np.ndarray, people: np.ndarray) -> np.ndarray:
+    """The scan's distances ``seen`` ``(n_cases, n_classes)`` (held-out cases of activities
+    ``codes``) as the least of one person more: each person's distance to an activity taken
+    as an independent draw from one distribution per column and kind (own: the column's
+    activity's held-out cases; cross: the others'), an entry the least of its ``n`` people's
+    (``people``, :func:`people_scan`), whose survival ``S ** n`` becomes ``S ** (n + 1)`` for
+    one person more. Each finite entry at ``F = (rank - 0.5) / m`` in its pool of ``m`` is
+    moved to the pool's quantile ``1 - (1 - F) ** (n / (n + 1))``. Works with one other
+    person (``n`` 1); an entry without a person (``n`` 0) stays."""
+    out = seen.astype(np.float64, copy=True)
+    n = np.isfinite(people).sum(axis=1)
+    for a in range(seen.shape[1]):
+        for kind in (codes == a, codes != a):
+            rows = kind & np.isfinite(seen[:, a]) & (n[:, a] >= 1)
+            pool = seen[rows, a]
+            if not len(pool):
+                continue
+            order = np.argsort(pool, kind="stable")
+            f = np.empty(len(pool))
+            f[order] = (np.arange(len(pool)) + 0.5) / len(pool)
+            e = n[rows, a] / (n[rows, a] + 1.0)
+            out[rows, a] = np.quantile(pool, 1.0 - (1.0 - f) ** e)
+    return out
+
+
 def corrected(held: Any, people: np.ndarray, correction: str) -> Any:
     """The held-out scan ``held`` with its distances corrected by ``correction`` (of
     :data:`CORRECTIONS`); ``held`` itself when it does not hold out people."""
@@ -176,6 +207,8 @@ def corrected(held: Any, people: np.ndarray, correction: str) -> Any:
         return held
     if correction == "median ratio":
         fixed = seen * median_ratio(people, codes)
+    elif correction == "one more person":
+        fixed = one_more_person(seen, codes, people)
     else:
         fixed = extrapolated(people, correction)
     return fixed, codes, basis, groups

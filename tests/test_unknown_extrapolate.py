@@ -13,6 +13,7 @@ from benchmarks.unknown_extrapolate import (
     extrapolated,
     judges,
     median_ratio,
+    one_more_person,
     people_scan,
     second_left_out,
 )
@@ -109,3 +110,18 @@ def test_judges_on_the_corrected_scan() -> None:
     np.testing.assert_allclose(made["median ratio"].spreads, np.array(plain.spreads) * k)
     far = SpreadFar.bounding(plain, held).far
     assert made["median ratio + far"].far == pytest.approx(far * k)
+
+
+def test_one_more_person_by_hand() -> None:
+    """Four held-out cases of activity 0, each measured against one other person (n 1): own
+    distances 1, 2, 3, 4 (F 1/8, 3/8, 5/8, 7/8), cross distances 10, 20, 30, 40. The least of
+    two people's at the same survival: the quantile 1 - sqrt(1 - F) of the pool, read
+    linearly (1 + 3 q; 10 + 30 q). Against no person (n 0) an entry stays."""
+    seen = np.array([[1.0, 10.0], [2.0, 20.0], [3.0, 30.0], [4.0, 40.0]])
+    people = np.stack([np.full_like(seen, INF), seen], axis=1)
+    q = 1.0 - np.sqrt(1.0 - np.array([1, 3, 5, 7]) / 8.0)
+    moved = one_more_person(seen, np.zeros(4, dtype=int), people)
+    np.testing.assert_allclose(moved[:, 0], 1.0 + 3.0 * q)
+    np.testing.assert_allclose(moved[:, 1], 10.0 + 30.0 * q)
+    alone = np.full((4, 2, 2), INF)
+    np.testing.assert_array_equal(one_more_person(seen, np.zeros(4, dtype=int), alone), seen)
