@@ -35,6 +35,9 @@ spreads and thresholds) is calibrated on as it is on the ordinary one:
   ``n + 1`` would lie at the same survival (:func:`one_more_person`): defined with one other
   person too, as in HDM05's folds of two training people, where the three above change
   nothing (``n`` 1: no second person to leave out);
+- ``chosen``: the correction (or none) the case base itself picks, each training person in
+  turn standing in for a new person against the case base of the others
+  (:func:`choose_correction`; fixed after the four above were seen, before its own figures);
 - each also with ``spread-far``'s far bound read from the corrected scan (``... + far``);
   ``spread-far`` (uncorrected) for comparison.
 """
@@ -65,7 +68,10 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "unknown_extrapolate.json"
 CORRECTIONS = ("jackknife", "same step", "median ratio", "one more person")
 RULES = ("spread-margin", "spread-far",
-         *(f"{c}{far}" for far in ("", " + far") for c in CORRECTIONS))  # fmt: skip
+         *(f"{c}{far}" for far in ("", " + far") for c in (*CORRECTIONS, "chosen")))  # fmt: skip
+CHOICE_SLACK = 0.01
+"""How many fewer of the stand-in new people's known cases (a share) a correction may keep
+than the uncorrected judge when :func:`choose_correction` chooses it."""
 
 
 # ---------------------------------------------------------------- the scan per person
@@ -203,7 +209,7 @@ def corrected(held: Any, people: np.ndarray, correction: str) -> Any:
     """The held-out scan ``held`` with its distances corrected by ``correction`` (of
     :data:`CORRECTIONS`); ``held`` itself when it does not hold out people."""
     seen, codes, basis, groups = held
-    if basis != "subject" or not people.shape[1]:
+    if basis != "subject" or not people.shape[1] or correction == "none":
         return held
     if correction == "median ratio":
         fixed = seen * median_ratio(people, codes)
@@ -214,6 +220,46 @@ def corrected(held: Any, people: np.ndarray, correction: str) -> Any:
     return fixed, codes, basis, groups
 
 
+def choose_correction(labels: Any, held: Any, people: np.ndarray) -> tuple[str, dict[str, Any]]:
+    """The correction (of ``none`` and :data:`CORRECTIONS`) the case base itself says to use,
+    and each one's tally ``[known kept, known, novel unknown, novel]``: each training person
+    in turn stands in for a new person, the case base without them calibrated on its own
+    scan (the other rows without that person's column: one person fewer still) so corrected,
+    their held-out cases (their rows of the scan) judged, known (:func:`cbr.unknown.
+    known_rows`) and novel (their own activity gone, :func:`cbr.unknown.known_and_novel`),
+    pooled. The one that calls most novel cases unknown while keeping known ones within
+    :data:`CHOICE_SLACK` of ``none``'s (a tie: the first, ``none`` first). ``none`` without
+    three people to stand in for (or when a stand-in's case base cannot be calibrated)."""
+    from cbr.unknown import SpreadMargin, known_and_novel
+    from features.errors import DataError
+
+    seen, codes, basis, groups = held
+    names = sorted(set(groups.tolist()))
+    candidates = ("none", *CORRECTIONS)
+    tally = {c: np.zeros(4, dtype=np.int64) for c in candidates}
+    if basis != "subject" or people.shape[1] < 3 or len(names) != people.shape[1]:
+        return "none", {}
+    cb = SimpleNamespace(labels=labels)
+    for k, name in enumerate(names):
+        mine = groups == name
+        rest = np.delete(people[~mine], k, axis=1)
+        sub = (rest.min(axis=1), codes[~mine], "subject", groups[~mine])
+        known, novel = known_and_novel(seen[mine], codes[mine])
+        try:
+            made = {c: SpreadMargin.of(cb, held=sub if c == "none" else corrected(sub, rest, c))  # type: ignore[arg-type]
+                    for c in candidates}  # fmt: skip
+        except DataError:
+            return "none", {}
+        for c, j in made.items():
+            unknown_known = sum(bool(j.unlike(r)) for r in known)
+            tally[c] += [len(known) - unknown_known, len(known),
+                         sum(bool(j.unlike(r)) for r in novel), len(novel)]  # fmt: skip
+    share = {c: (t[0] / max(t[1], 1), t[2] / max(t[3], 1)) for c, t in tally.items()}
+    within = [c for c in candidates if share[c][0] >= share["none"][0] - CHOICE_SLACK - 1e-12]
+    best = max(within, key=lambda c: (share[c][1], -candidates.index(c)))
+    return best, {c: t.tolist() for c, t in tally.items()}
+
+
 def judges(labels: Any, held: Any, people: np.ndarray) -> dict[str, Any]:
     """Every rule of :data:`RULES` but the first two's judge, calibrated on its corrected
     scan; ``labels`` the case base's (the margin judges need three activities)."""
@@ -221,8 +267,9 @@ def judges(labels: Any, held: Any, people: np.ndarray) -> dict[str, Any]:
 
     cb = SimpleNamespace(labels=labels)
     out: dict[str, Any] = {}
-    for c in CORRECTIONS:
-        fixed = corrected(held, people, c)
+    chosen, _ = choose_correction(labels, held, people)
+    for c in (*CORRECTIONS, "chosen"):
+        fixed = corrected(held, people, chosen) if c == "chosen" else corrected(held, people, c)
         inner = SpreadMargin.of(cb, held=fixed)  # type: ignore[arg-type]
         out[c] = inner
         out[f"{c} + far"] = SpreadFar.bounding(inner, fixed)
@@ -338,6 +385,7 @@ def summarise(measured: list[tuple[str, str, dict[str, Any]]]) -> dict[str, Any]
         cases.append({"fold": fold, "left_out": movement, "cases": m["cases"],
                       "basis": m["held"][2], "people": int(m["people"].shape[1]),
                       "median_ratio": median_ratio(m["people"], m["held"][1]),
+                      "chosen": choose_correction(m["labels"], m["held"], m["people"]),
                       "d1_q95": quantiles(m, movement)})  # fmt: skip
     rules = {rule: {"known_windows": int(t[1]), "novel_windows": int(t[3]),
                     "known_kept": float(t[0]) / max(1, int(t[1])),

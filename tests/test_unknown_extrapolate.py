@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from benchmarks.unknown_extrapolate import (
+    choose_correction,
     corrected,
     extrapolated,
     judges,
@@ -125,3 +126,21 @@ def test_one_more_person_by_hand() -> None:
     np.testing.assert_allclose(moved[:, 1], 10.0 + 30.0 * q)
     alone = np.full((4, 2, 2), INF)
     np.testing.assert_array_equal(one_more_person(seen, np.zeros(4, dtype=int), alone), seen)
+
+
+def test_choose_correction_needs_three_people_to_stand_in() -> None:
+    """Each training person stands in for a new one against a case base of the others, which
+    must itself hold out people: with three (p, q, r) every correction is tallied over all
+    nine held-out cases, known (all nine: own activity and another within reach) and novel
+    (own activity gone: the other two remain, all nine), and the choice is one of them; with
+    two people (as HDM05's folds) or a scan held out by time, none and no tally."""
+    cb = _three_people()
+    held, people = people_scan(cb)
+    chosen, tally = choose_correction(cb.labels, held, people)
+    assert chosen in ("none", "jackknife", "same step", "median ratio", "one more person")
+    assert set(tally) == {"none", "jackknife", "same step", "median ratio", "one more person"}
+    assert all(t[1] == 9 and t[3] == 9 for t in tally.values())
+    two = (held[0][:6], held[1][:6], "subject", held[3][:6])
+    assert choose_correction(cb.labels, two, people[:6, :2]) == ("none", {})
+    by_time = (held[0], held[1], "time", held[3])
+    assert choose_correction(cb.labels, by_time, np.zeros((9, 0, 3))) == ("none", {})
