@@ -233,6 +233,13 @@ class ConfidenceCalibration:
     balanced_accuracy: float = float("nan")
 
     @property
+    def calibrated(self) -> bool:
+        """Whether the confidence is calibrated: False for :data:`UNCALIBRATED` (no training
+        clip could be held out, or a model stored before calibrations), whose confidence is
+        the raw vote share."""
+        return bool(self.x)
+
+    @property
     def words(self) -> str:
         """What the confidence is, as the verbose explanation says it."""
         if not self.x:  # UNCALIBRATED: no training clip could be held out, or stored before

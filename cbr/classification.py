@@ -191,7 +191,9 @@ def summarise(results: Sequence[Classification], target: str = "label") -> dict[
     """What a run of :func:`classify_clips` comes to: clips, classified, the clips unlike the
     stored cases and the unclassifiable ones; with true labels, the accuracy, the recall per
     class (``{label: {"right", "clips", "recall"}}``), the mean confidence (what the
-    accuracy should be if the confidences are probabilities) and the wrong clips."""
+    accuracy should be if the confidences are probabilities; ``confidence_calibrated`` False
+    when they are vote shares the case base could not calibrate, None when no clip was
+    classified) and the wrong clips."""
     done = [r for r in results if r.solved is not None]
     labelled = [r for r in done if r.true_label is not None]
     right = [r for r in labelled if r.true_label == r.label]
@@ -201,6 +203,8 @@ def summarise(results: Sequence[Classification], target: str = "label") -> dict[
         hits = sum(r.label == lab for r in mine)
         recall[lab] = {"right": hits, "clips": len(mine), "recall": hits / len(mine)}
     conf = [r.solved.solution.confidence for r in labelled if r.solved is not None]
+    explained = [r.explanation for r in done if r.explanation is not None]
+    calibrated = all(e.confidence_calibrated for e in explained) if explained else None
     return {
         "target": target,
         "clips": len(results),
@@ -209,17 +213,31 @@ def summarise(results: Sequence[Classification], target: str = "label") -> dict[
         "right": len(right),
         "accuracy": len(right) / len(labelled) if labelled else None,
         "expected_accuracy": float(np.mean(conf)) if conf else None,
+        "confidence_calibrated": calibrated,
         "recall": recall,
         "wrong": [
-            {"clip": r.source, "label": r.label, "true_label": r.true_label}
-            | piece_fields(r.frames)
-            | ({"origin": r.origin} if r.frames is not None and r.origin else {})
+            {"clip": r.source, "label": r.label, "true_label": r.true_label} | _piece(r)
             for r in labelled
             if r.true_label != r.label
         ],
-        "unlike_cases": [r.source for r in done if r.solved is not None and r.solved.unlike_cases],
-        "unclassifiable": [r.source for r in results if r.solved is None],
+        "unlike_cases": [
+            {"clip": r.source} | _piece(r)
+            for r in done
+            if r.solved is not None and r.solved.unlike_cases
+        ],
+        "unclassifiable": [{"clip": r.source} | _piece(r) for r in results if r.solved is None],
     }
+
+
+def _piece(r: Classification) -> dict[str, Any]:
+    """What names the clip ``r`` in the summary's lists beside its file (``clip``): when it is
+    a piece of the file (a labels CSV's ``start,end`` row), its frames as the clip's own JSON
+    gives them (:func:`cbr.casebase.piece_fields`), and ``origin`` the recording they count in
+    when the file was cut from one; nothing for a whole file."""
+    out = piece_fields(r.frames)
+    if r.frames is not None and r.origin:
+        out["origin"] = r.origin
+    return out
 
 
 def check_feedback_label(

@@ -1096,6 +1096,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             balanced=self.class_weight == "balanced",
             counterfactual_search=counterfactual,
             confidence=self.confidence_.words,
+            calibrated=self.confidence_.calibrated,
         )
 
     def answer(self, values: np.ndarray) -> str:

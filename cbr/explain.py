@@ -39,6 +39,7 @@ import numpy as np
 from features.body import swap_side
 from features.datasets import truth_value
 
+from .calibration import UNCALIBRATED
 from .casebase import CaseBase
 from .counterfactual import MAX_CHANGES, Counterfactual, counterfactual
 from .problem import ANGLE_PREFIX, POSITION_PREFIX, Problem
@@ -222,8 +223,10 @@ class Contrast:
 @dataclass(frozen=True)
 class Explanation:
     """One clip's explanation: the answer (``label``, calibrated ``confidence``,
-    ``vote_share``), the retrieved cases one per clip (``neighbours``: ``case_id``, -1 for a
-    case not stored, ``position`` in the case base, ``label``, ``distance``, ``source``), the
+    ``vote_share``; ``confidence_calibrated`` False when the case base could not calibrate
+    it and the confidence is the vote share), the retrieved cases one per clip
+    (``neighbours``: ``case_id``, -1 for a case not stored, ``position`` in the case base,
+    ``label``, ``distance``, ``source``), the
     fluent states (or QMPs) shared with the similar cases and not (``matched``,
     ``not_seen``, ``only_here``; "(at times)" when held under half the clip), the nearest case
     of another label with the checked counterfactual (``contrast``), the four-line ``text``,
@@ -245,11 +248,13 @@ class Explanation:
     # for the few features that set the clip apart from the nearest case of the other label:
     # {"feature", "here", "there", "unit"} in the feature's own units
     differences: tuple[dict[str, Any], ...] = ()
+    confidence_calibrated: bool = True
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "label": self.label,
             "confidence": self.confidence,
+            "confidence_calibrated": self.confidence_calibrated,
             "vote_share": self.vote_share,
             "neighbours": list(self.neighbours),
             "matched": list(self.matched),
@@ -743,6 +748,7 @@ def explain(
     balanced: bool = False,
     counterfactual_search: bool = True,
     confidence: str,
+    calibrated: bool = True,
 ) -> Explanation:
     """Explain one classification (:meth:`cbr.estimator.CaseBaseClassifier.solve`);
     ``answer`` classifies a problem the way the classifier does (to check counterfactuals);
@@ -752,7 +758,8 @@ def explain(
     ``counterfactual_search`` False leaves the counterfactual out (callers that need the
     neighbours only: it costs a few retrievals per feature changed); ``confidence`` what the
     confidence is (:attr:`cbr.calibration.ConfidenceCalibration.words`), for the verbose
-    lines."""
+    lines; ``calibrated`` False: it is the vote share, not calibrated, and the first line says
+    so."""
     problem, label = solved.problem, solved.solution.label
     r = read(cb, problem)
     near = _nearest(cb, solved)
@@ -764,7 +771,7 @@ def explain(
             cb, r, problem, near.other, answer, k, weights, counterfactual_search, balanced
         )
     )
-    lines = _short(cb, solved, target, outside, why, near.own, contrast)
+    lines = _short(cb, solved, target, outside, why, near.own, contrast, calibrated)
     retrieval = solved.retrieval
     win = retrieval.indices[retrieval.labels.astype(str) == label]
     presence_ = presence_claims(r, label, win if len(win) else retrieval.indices)
@@ -772,8 +779,9 @@ def explain(
     verbose = _verbose(lines, solved, near.neighbours, *presence_, contrast, differences,
                        unlike_ratio, confidence)  # fmt: skip
     return _explanation(
-        solved, near, (*outside, *why), presence_, contrast, lines, verbose, differences
-    )
+        solved, near, (*outside, *why), presence_, contrast, lines, verbose, differences,
+        calibrated,
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -833,6 +841,7 @@ def _explanation(
     lines: list[str],
     verbose: str,
     differences: list[dict[str, Any]],
+    calibrated: bool = True,
 ) -> Explanation:
     """The explanation's record: every statement also kept as a claim (``reasons``: the
     "outside" and "why" claims)."""
@@ -852,6 +861,7 @@ def _explanation(
         vote_share=float(solved.solution.vote_share),
         mirrored=bool(solved.problem.mirrored),
         differences=tuple(differences),
+        confidence_calibrated=bool(calibrated),
     )
 
 
@@ -890,15 +900,14 @@ def _short(
     why: list[Claim],
     own: int | None,
     contrast: Contrast | None,
+    calibrated: bool = True,
 ) -> list[str]:
     """The default text's lines, shortened (fewer changes shown, fewer reasons, no file
-    names, no nearest cases or ranges) until they fit :data:`MAX_TEXT` characters."""
+    names, no nearest cases or ranges) until they fit :data:`MAX_TEXT` characters; the
+    confidence said to be the vote share when it is not ``calibrated``."""
     label = solved.solution.label
     name = label_words(label, target)
-    head = f"{name}, confidence {solved.solution.confidence:.2f}"
-    head += unlike_words(solved)
-    if solved.torso_share < 0.5:
-        head += f"; person seen in {100 * solved.torso_share:.0f} % of the frames"
+    head = _head(solved, name, calibrated)
     # fewer changes shown, fewer reasons, no file names, then no case names or ranges at all
     levels = ((3, 3, 2), (3, 1, 2), (2, 1, 2), (2, 1, 1), (1, 1, 1), (1, 1, 0))
     for items, shown, names in levels:
@@ -924,6 +933,19 @@ def _short(
         if len("\n".join(lines)) <= MAX_TEXT:
             break
     return lines
+
+
+def _head(solved: Solved, name: str, calibrated: bool) -> str:
+    """The first line: the answer (``name``), its confidence (said to be the vote share when
+    not ``calibrated``: no probability, the case base had nothing to calibrate it on), the
+    flag, and how little of the clip showed the person when under half."""
+    head = f"{name}, confidence {solved.solution.confidence:.2f}"
+    if not calibrated:
+        head += f" ({UNCALIBRATED.words})"
+    head += unlike_words(solved)
+    if solved.torso_share < 0.5:
+        head += f"; person seen in {100 * solved.torso_share:.0f} % of the frames"
+    return head
 
 
 def unlike_words(solved: Solved) -> str:

@@ -494,7 +494,10 @@ def _print_summary(s: dict[str, Any], target: str, results: list[Any]) -> None:
         )
         print(f"recall per class: {recall}")
         if s["expected_accuracy"] is not None:
-            print(f"mean confidence: {s['expected_accuracy']:.3f}")
+            plain = (
+                " (vote shares, not calibrated)" if s.get("confidence_calibrated") is False else ""
+            )
+            print(f"mean confidence: {s['expected_accuracy']:.3f}{plain}")
     for w in s["wrong"]:
         clip = piece_name(w["clip"], w.get("frames"), w.get("origin"))
         print(f"wrong: {shown(clip)}: {said(w['label'])}, true {said(w['true_label'])}")
