@@ -72,7 +72,11 @@ How (all channels at once, no per-frame loops):
    where the movement leaves rest and the last ends where it returns to rest: where the
    line lies within :data:`LEAVE_SHARE` of the peak's height above the low point before the
    first peak and after the last (a lone repetition between two rests, whose flat, noisy
-   low point lies anywhere in the rest, does not take the rest in). A recording with one
+   low point lies anywhere in the rest, does not take the rest in), the low point sought
+   within a period of the peak, or, for the one repetition of a whole recording, anywhere
+   in it (one far point repeats nothing: a period read from a wobble or a pose model's
+   left-right flicker, 0.44 s in a 10-s video of one slow lunge, cut its repetition to the
+   0.52 s around the flicker, though the lunge went on down and up for 5 s). A recording with one
    far point that starts at one end of the movement and ends at the other, held still
    there, got into a posture once (a side plank) and has none (:func:`_held_change`).
 
@@ -1029,7 +1033,11 @@ def count_in_signals(
         far = np.unique(_in_view(far[whole], sig.blind))
         if all(edges) and len(far) == 1 and _held_change(x, recorded, sig.fps, int(far[0])):
             far = far[:0]  # got into a posture once and held it: no repetition
-        spans = _bounds(line, far, reach) if len(far) else []
+        # a lone repetition of a whole recording runs from where the movement leaves rest to
+        # where it returns, however far from its far point: one far point repeats nothing, and
+        # a period read then (from a wobble, a pose model's flicker) bounds no repetition
+        lone = len(far) == 1 and all(edges)
+        spans = _bounds(line, far, len(line) if lone else reach) if len(far) else []
     spans = _seen_spans(spans, far, sig.blind)
     reps = [
         Repetition(

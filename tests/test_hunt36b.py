@@ -1,6 +1,7 @@
 """Hunt 36b: ``classify`` says when its confidence is the vote share, not calibrated (a case
 base with nothing to hold out); the summary's ``unlike_cases`` name the pieces of a file,
-not the file."""
+not the file; the one repetition of a slow lunge runs down and up again, not the half
+second of a pose model's left-right flicker."""
 
 from __future__ import annotations
 
@@ -13,9 +14,11 @@ from typing import Any
 import numpy as np
 import pytest
 
+from features.datasets import Clip
 from features.poses import PoseSequence, save_pose
+from features.repetitions import count_repetitions, split_repetitions
 from posecbr.cli import main
-from tests.bodies import squat_clip
+from tests.bodies import rot_x, rotate, squat_clip, standing, to_sequence
 
 UNCALIBRATED = "(the vote share, not calibrated)"
 
@@ -162,3 +165,81 @@ def test_unlike_cases_name_the_pieces_of_a_file(
     # a whole file: its name alone
     whole = _json(["classify", str(f), "--db", str(db)], capsys)["summary"]
     assert whole["unlike_cases"] == [{"clip": str(f)}]
+
+
+FPS = 30.0
+LEG = ("knee", "ankle", "heel", "foot_index")
+
+
+def _lunge(depth: float) -> dict[str, np.ndarray]:
+    """A split-stance lunge ``depth`` of the way down (0: standing): the left thigh 80
+    degrees forward and the left shin back under it (front knee at 100 degrees), the right
+    thigh 20 degrees back and the right knee bent 80 degrees."""
+    b = standing()
+    out = rotate(b, tuple(f"left_{j}" for j in LEG), rot_x(80 * depth), b["left_hip"])
+    out = rotate(out, tuple(f"left_{j}" for j in LEG[1:]), rot_x(-80 * depth), out["left_knee"])
+    out = rotate(out, tuple(f"right_{j}" for j in LEG), rot_x(-20 * depth), b["right_hip"])
+    return rotate(out, tuple(f"right_{j}" for j in LEG[1:]), rot_x(-80 * depth), out["right_knee"])
+
+
+def _swapped(body: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The legs as a pose model swaps them in a side view: each leg joint takes the other
+    leg's height and depth (the sides' widths kept)."""
+    out = dict(body)
+    for j in LEG:
+        left, right = body[f"left_{j}"], body[f"right_{j}"]
+        out[f"left_{j}"] = np.array([left[0], right[1], right[2]])
+        out[f"right_{j}"] = np.array([right[0], left[1], left[2]])
+    return out
+
+
+def _ease(a: float, b: float, s: float) -> np.ndarray:
+    return a + (b - a) * 0.5 * (1 - np.cos(np.linspace(0.0, np.pi, int(round(s * FPS)))))
+
+
+def _slow_lunge(flicker: int) -> PoseSequence:
+    """The bundled reverse-lunge video's course, built by hand (30 fps): half way down at the
+    start, down by 1.0 s, held down to 3.5 s, up by 5.5 s, standing to 7.0 s, then 40 % of
+    the way down again as the clip ends (8.5 s). From 0.9 to 1.7 s the legs are swapped in
+    runs of ``flicker`` frames every other run (0: never), as the pose model swapped them
+    in the video."""
+    depth = np.concatenate([_ease(0.5, 1.0, 1.0), np.ones(int(2.5 * FPS)), _ease(1.0, 0.0, 2.0),
+                            np.zeros(int(1.5 * FPS)), _ease(0.0, 0.4, 1.5)])  # fmt: skip
+    frames = [_lunge(d) for d in depth]
+    a, b = int(0.9 * FPS), int(1.7 * FPS)
+    for f in range(a, b) if flicker else ():
+        if (f - a) // flicker % 2 == 0:
+            frames[f] = _swapped(frames[f])
+    return to_sequence(*frames, fps=FPS)
+
+
+@pytest.mark.parametrize("flicker", [0, 2, 3, 4])
+def test_the_one_slow_lunge_runs_down_and_up_again(flicker: int) -> None:
+    """One slow lunge (down by 1.0 s, held to 3.5 s, up by 5.5 s): one repetition from the
+    clip's start to near the end of the way up, 4.8-5.5 s (where the line comes within a
+    tenth of the way of standing), its far point in the hold, and the case that ``train
+    --split repetitions`` stores is that stretch. With the legs swapped back and forth at
+    0.9-1.7 s, a period of under a second was read from the flicker and cut the repetition
+    to it: 2.53-2.57 s (runs of 4 frames), 1.63-3.47 s (2), 1.77-3.27 s (3)."""
+    seq = _slow_lunge(flicker)
+    (rep,) = count_repetitions(seq).repetitions
+    assert rep.start_frame <= 1.0 * FPS, rep
+    assert 4.8 * FPS <= rep.end_frame <= 5.5 * FPS, rep
+    assert 1.0 * FPS <= rep.peak_frame <= 3.5 * FPS, rep
+    split = split_repetitions([Clip(seq, "lunge", None)])
+    (case,) = split.clips
+    assert split.kept_whole == 0 and case.seq.n_frames == rep.end_frame - rep.start_frame
+
+
+def test_the_bundled_slow_lunge_video_is_one_repetition_down_and_up(
+    shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The bundled reverse lunge (counted by hand, tests/fixtures/repetition_counts.json:
+    one slow lunge, lowest 1.5-3.6 s): ``reps`` gave 1 repetition of 0.80-1.32 s, the
+    half second in which the pose model swapped her legs, and ``train --split
+    repetitions`` stored that as the lunge's case. Now it holds her lowest stretch and the
+    way up (by eye: rising at 5.0 s, upright from about 6 s, lowering again after 8 s)."""
+    video = shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
+    doc = _json(["reps", str(video)], capsys)
+    (rep,) = doc["repetitions"]
+    assert rep["start_s"] <= 1.5 and 5.0 <= rep["end_s"] <= 8.0, rep
