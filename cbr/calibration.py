@@ -103,6 +103,17 @@ def _count(keys: np.ndarray, values: np.ndarray) -> np.ndarray:
     return np.asarray(np.where(names[at] == keys, counts[at], 0))
 
 
+@dataclass(frozen=True)
+class HoldOut:
+    """One way to hold the cases out of a query's neighbours (:func:`held_out`): the queries'
+    groups ``(q,)``, the cases' ``(n_cases,)`` and, optionally, the queries' and the cases'
+    frame ranges (the cases overlapping a query's frames held out with it too)."""
+
+    groups: np.ndarray
+    case_groups: np.ndarray
+    frames: tuple[np.ndarray, np.ndarray] | None = None
+
+
 def held_out(
     cb: CaseBase,
     queries: np.ndarray,
@@ -124,24 +135,45 @@ def held_out(
     end; -1 where not known): the cases whose frames overlap a query's are held out with it
     too (windows cut from one recording every 0.5 s overlap their neighbours, near copies of
     them)."""
+    way = HoldOut(groups, case_groups, frames)
+    return held_out_ways(cb, queries, labels, [way], k, weights, neighbours, balanced)[0]
+
+
+def held_out_ways(
+    cb: CaseBase,
+    queries: np.ndarray,
+    labels: np.ndarray,
+    ways: Sequence[HoldOut],
+    k: int,
+    weights: Weights = "distance",
+    neighbours: int = NEIGHBOURS,
+    balanced: bool = False,
+) -> list[HeldOut]:
+    """:func:`held_out` of the same queries held out in each of several ``ways``, one
+    :class:`HeldOut` per way, from one scan of the case base per query (the scan is the
+    work: its distances do not depend on what is held out)."""
     classes, codes = np.unique(cb.labels.astype(str), return_inverse=True)
     measure, index = cb.measure, cb.index
     q, wide = len(queries), max(int(k), int(neighbours))
-    dist = np.full((q, wide), np.inf)
-    code = np.zeros((q, wide), dtype=np.int64)
-    held = held_elsewhere(labels, groups, cb.labels, case_groups)
+    dist = [np.full((q, wide), np.inf) for _ in ways]
+    code = [np.zeros((q, wide), dtype=np.int64) for _ in ways]
+    held = [held_elsewhere(labels, w.groups, cb.labels, w.case_groups) for w in ways]
     case_labels = cb.labels.astype(str)
     for i, p in enumerate(queries):  # one full scan per query: the measure's array work
         d = measure.distances(measure.represent_query(p), index)
-        out = case_groups == groups[i]
-        if frames is not None:
-            out = out | overlapping(frames[0][i], frames[1])
-            held[i] = bool(np.any(~out & (case_labels == str(labels[i]))))
-        d = np.where(out, np.inf, d)
-        top = np.argsort(d, kind="stable")[:wide]
-        dist[i, : len(top)], code[i, : len(top)] = d[top], codes[top]
+        for w, way in enumerate(ways):
+            out = way.case_groups == way.groups[i]
+            if way.frames is not None:
+                out = out | overlapping(way.frames[0][i], way.frames[1])
+                held[w][i] = bool(np.any(~out & (case_labels == str(labels[i]))))
+            mine = np.where(out, np.inf, d)
+            top = np.argsort(mine, kind="stable")[:wide]
+            dist[w][i, : len(top)], code[w][i, : len(top)] = mine[top], codes[top]
     balance = class_balance(cb.labels, classes) if balanced else None
-    return held_out_votes(dist, code, classes, labels, int(k), weights, held, balance)
+    return [
+        held_out_votes(dist[w], code[w], classes, labels, int(k), weights, held[w], balance)
+        for w in range(len(ways))
+    ]
 
 
 def held_out_votes(

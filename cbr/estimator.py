@@ -52,10 +52,11 @@ from .calibration import (
     NEIGHBOURS,
     ConfidenceCalibration,
     HeldOut,
+    HoldOut,
     calibrate_soft,
     held_elsewhere,
-    held_out,
     held_out_votes,
+    held_out_ways,
 )
 from .casebase import CaseBase, frame_array, skeleton_of
 from .described import DescribedClip, describe_clips
@@ -813,32 +814,38 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         # a full scan per clip: every clip of vector problems, a sample of sequences
         size = MAX_CALIBRATION_VECTORS if queries.ndim == 2 else CALIBRATION_SAMPLE
         pick = sample(len(queries), size)
-        h = held_out(
-            cb,
-            queries[pick],
-            labels[pick],
-            np.asarray(groups, dtype=object)[pick],
-            np.asarray(case_groups, dtype=object),
-            int(self.k),
-            self.weights,  # type: ignore[arg-type]
-            frames=None if frames is None else (frames[0][query_clip][pick], frames[1]),
-            balanced=self.class_weight == "balanced",
-        )
+        ways = [
+            HoldOut(
+                np.asarray(groups, dtype=object)[pick],
+                np.asarray(case_groups, dtype=object),
+                None if frames is None else (frames[0][query_clip][pick], frames[1]),
+            )
+        ]
         # every recording the only one of its activities: held out by recording, each clip is
         # of an activity the case base then lacks, and the flag's threshold would be set by
         # how unlike the activities are (nothing a new clip of an unseen exercise exceeds);
         # the pieces of one recording that do not overlap in time stand in, for the flag alone
-        # (the confidence stays the vote share: near copies of one take answer every piece)
+        # (the confidence stays the vote share: near copies of one take answer every piece),
+        # held out in the same scan
         alone = basis == "leave-one-recording-out" and not held_elsewhere(
             labels, sources[query_clip], cb.labels, sources[clip]).any()  # fmt: skip
         pieces = _pieces_frames(clips, sources, clip) if alone else None
-        flag_nearest, flag_pick = h.nearest, pick
         if pieces is not None:
-            piece_h = held_out(cb, queries[pick], labels[pick],
-                               np.arange(n, dtype=object)[query_clip][pick],
-                               np.asarray(clip, dtype=object), int(self.k),
-                               self.weights,  # type: ignore[arg-type]
-                               frames=(pieces[0][query_clip][pick], pieces[1]))  # fmt: skip
+            ways.append(HoldOut(np.arange(n, dtype=object)[query_clip][pick],
+                                np.asarray(clip, dtype=object),
+                                (pieces[0][query_clip][pick], pieces[1])))  # fmt: skip
+        h, *piece = held_out_ways(
+            cb,
+            queries[pick],
+            labels[pick],
+            ways,
+            int(self.k),
+            self.weights,  # type: ignore[arg-type]
+            balanced=self.class_weight == "balanced",
+        )
+        flag_nearest, flag_pick = h.nearest, pick
+        if piece:
+            (piece_h,) = piece
             # a piece whose every other case of its activity overlaps it in time has none to
             # stand in: its nearest case is another activity's, no distance of a known one
             own = piece_h.truth >= 0

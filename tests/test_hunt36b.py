@@ -243,3 +243,36 @@ def test_the_bundled_slow_lunge_video_is_one_repetition_down_and_up(
     doc = _json(["reps", str(video)], capsys)
     (rep,) = doc["repetitions"]
     assert rep["start_s"] <= 1.5 and 5.0 <= rep["end_s"] <= 8.0, rep
+
+
+def test_holding_out_two_ways_in_one_scan_gives_each_way_alone() -> None:
+    """The calibration's two passes for one recording per activity (by recording; by piece,
+    overlapping pieces with it) from one scan of the cases per query: each the same as
+    :func:`held_out` of that way alone. Six cases on a line (the windows of
+    test_calibration_soft): x = 0, 0.1, 0.2 (overlapping windows), 1.0, 1.1 of A, 5.0 of B."""
+    from cbr.calibration import HoldOut, held_out, held_out_ways
+    from cbr.casebase import CaseBase
+    from cbr.problem import FeatureConfig
+    from cbr.similarity import Euclidean
+
+    xs = [0.0, 0.1, 0.2, 1.0, 1.1, 5.0]
+    spans = [(0, 240), (60, 300), (120, 360), (600, 840), (900, 1140), (1200, 1440)]
+    p = np.array([[x, 0.0] for x in xs])
+    labels = np.array(["A"] * 5 + ["B"], dtype=object)
+    cb = CaseBase(FeatureConfig(), Euclidean(exact=True), p, labels, ("x", "y"), ("x", "y"),
+                  frames=tuple(spans))  # fmt: skip
+    frames = np.array(spans)
+    recording = HoldOut(np.array(["a"] * 6, dtype=object)[:4],
+                        np.array(["a"] * 5 + ["b"], dtype=object))  # fmt: skip
+    piece = HoldOut(np.arange(4).astype(object), np.arange(6).astype(object), (frames[:4], frames))
+    both = held_out_ways(cb, p[:4], labels[:4], [recording, piece], k=2)
+    for way, got in zip((recording, piece), both, strict=True):
+        alone = held_out(cb, p[:4], labels[:4], way.groups, way.case_groups, k=2,
+                         frames=way.frames)  # fmt: skip
+        for field in ("nearest", "share", "right", "answer", "distances", "codes", "truth"):
+            np.testing.assert_array_equal(getattr(got, field), getattr(alone, field))
+    # worked out by hand: by recording, every A is held out and B (5.0) is nearest; by
+    # piece, 0, 0.1 and 0.2 overlap each other and keep 1.0 nearest; 1.0 keeps 1.1
+    np.testing.assert_allclose(both[0].nearest, [5.0, 4.9, 4.8, 4.0])
+    np.testing.assert_allclose(both[1].nearest, [1.0, 0.9, 0.8, 0.1])
+    assert both[0].truth.tolist() == [-1] * 4 and both[1].right.tolist() == [True] * 4
