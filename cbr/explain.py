@@ -226,12 +226,11 @@ class Explanation:
     ``vote_share``; ``confidence_calibrated`` False when the case base could not calibrate
     it and the confidence is the vote share), the retrieved cases one per clip
     (``neighbours``: ``case_id``, -1 for a case not stored, ``position`` in the case base,
-    ``label``, ``distance``, ``source``), the
-    fluent states (or QMPs) shared with the similar cases and not (``matched``,
-    ``not_seen``, ``only_here``; "(at times)" when held under half the clip), the nearest case
-    of another label with the checked counterfactual (``contrast``), the four-line ``text``,
-    the ``verbose`` text, every statement as a :class:`Claim` and whether the clip was
-    compared as its mirror image."""
+    ``label``, ``distance``, ``source``), the fluent states (or QMPs) shared with the similar
+    cases and not (``matched``, ``not_seen``, ``only_here``; "(at times)" when held under half
+    the clip), the nearest case of another label with the checked counterfactual
+    (``contrast``), the four-line ``text``, the ``verbose`` text, every statement as a
+    :class:`Claim` and whether the clip was compared as its mirror image."""
 
     label: str
     confidence: float
