@@ -199,123 +199,26 @@ def resampled_columns(
     length: int,
     chunk: int,
     mirror: bool = False,
-    how: str = "area",
 ) -> np.ndarray:
     """``(length, n_columns)``: the columns of ``plan`` for ``seq`` (its mirror image with
     ``mirror``), gaps filled along time (a column never defined: ``fills``), resampled to
-    ``length`` frames (``how``: ``"area"`` or ``"linear"``); computed ``chunk`` frames at a
-    time. Equal to ``resample(fill_nan_time(columns), length, how)`` of the whole clip's
-    columns."""
+    ``length`` frames; computed ``chunk`` frames at a time. Equal to
+    ``resample(fill_nan_time(columns), length)`` of the whole clip's columns."""
     from .problem import resample_points
 
-    frame = _position_frame(seq, chunk, mirror) if len(plan.position_cols) else None
-    pieces = (
-        _piece_columns(mirrored(piece) if mirror else piece, skip, plan, frame)
-        for skip, piece in _pieces(seq, chunk, history_frames(DEFAULT_TABLE, seq.fps))
-    )
-    if how == "area":
-        means = AreaColumns(seq.n_frames, length, fills)
-        for cols in pieces:
-            means.feed(cols)
-        return means.values()
     i, w = resample_points(seq.n_frames, length)
     at = np.unique(np.concatenate([i, i + 1]))
     sampled = SampledColumns(at, fills)
+    frame = _position_frame(seq, chunk, mirror) if len(plan.position_cols) else None
     start = 0
-    for cols in pieces:
+    for skip, piece in _pieces(seq, chunk, history_frames(DEFAULT_TABLE, seq.fps)):
+        cols = _piece_columns(mirrored(piece) if mirror else piece, skip, plan, frame)
         sampled.feed(start, cols)
         start += cols.shape[0]
     x = sampled.values()
     lo, hi = x[np.searchsorted(at, i)], x[np.searchsorted(at, i + 1)]
     out: np.ndarray = lo * (1.0 - w) + hi * w
     return out
-
-
-class AreaColumns:
-    """The area resampling to ``length`` rows (:func:`cbr.problem.resample`) of ``(frames, n)``
-    columns whose gaps are filled along time as :func:`cbr.problem.fill_nan_time` fills them,
-    from consecutive pieces of the columns fed in order: memory ``(length, n)``.
-
-    Each row is the integral of the filled columns over its time, divided by that time. A
-    piece adds the integral of its frames from its first to its last defined frame of each
-    column (the gaps between them filled within the piece); a gap still open at the piece's
-    end waits for the next defined frame, and is added in one go when that comes (the line
-    between the two frames integrates in closed form), or, at the end, at the last value.
-    """
-
-    def __init__(self, frames: int, length: int, fills: np.ndarray) -> None:
-        from .problem import area_bounds
-
-        self.frames, self.length = int(frames), int(length)
-        k, part = area_bounds(self.frames, self.length)
-        self.bounds = k + part  # (length + 1,) in frames from the start
-        self.fills = np.asarray(fills, dtype=np.float64)
-        n = len(self.fills)
-        self.sums = np.zeros((self.length, n))
-        self.start = 0
-        self.last_t = np.full(n, -1, dtype=np.int64)  # the last defined frame fed so far
-        self.last_v = np.full(n, np.nan)
-
-    def _overlap(self, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For frames ``lo[c]`` to ``hi[c]`` (exclusive) of each of some columns: the time
-        each row shares with them ``(length, c)`` and the integral over that time of the
-        frame index (frame ``t`` covering ``[t, t + 1)``), both in frames."""
-        u = np.clip(self.bounds[:-1, None], lo, hi)
-        v = np.clip(self.bounds[1:, None], lo, hi)
-
-        def index_integral(p: np.ndarray) -> np.ndarray:
-            whole = np.floor(p)
-            out: np.ndarray = whole * (whole - 1) / 2 + whole * (p - whole)
-            return out
-
-        return v - u, index_integral(v) - index_integral(u)
-
-    def _close(self, cols: np.ndarray, q: np.ndarray, qv: np.ndarray) -> None:
-        """Add the gaps of ``cols`` before their next defined frame ``q`` (value ``qv``): on
-        the line from the last defined frame before them, or ``qv`` held when none."""
-        pt, pv = self.last_t[cols], self.last_v[cols]
-        share, index = self._overlap(pt + 1, q)
-        before = pt >= 0
-        slope = np.where(before, (qv - pv) / np.where(before, q - pt, 1), 0.0)
-        base = np.where(before, pv, qv)
-        self.sums[:, cols] += base * share + slope * (index - pt * share)
-
-    def feed(self, x: np.ndarray) -> None:
-        """The next piece: the next ``len(x)`` frames of the columns, ``(m, n)``."""
-        from .problem import _filled
-
-        m, start = x.shape[0], self.start
-        self.start += m
-        valid = ~np.isnan(x)
-        has = np.flatnonzero(valid.any(axis=0))
-        if not len(has):
-            return
-        v = valid[:, has]
-        first = np.argmax(v, axis=0)
-        last = m - 1 - np.argmax(v[::-1], axis=0)
-        self._close(has, start + first, x[first, has])
-        t = np.arange(m)[:, None]
-        inside = (t >= first) & (t <= last)
-        filled = np.where(inside, _filled(x[:, has], v, np.zeros(len(has))), 0.0)
-        # the integral of the piece from frame 0 to every bound within it
-        run = np.concatenate([np.zeros((1, len(has))), np.cumsum(filled, axis=0)])
-        p = np.clip(self.bounds - start, 0, m)
-        k = np.minimum(np.floor(p).astype(np.int64), m)
-        upto = run[k] + (p - k)[:, None] * filled[np.minimum(k, m - 1)]
-        self.sums[:, has] += upto[1:] - upto[:-1]
-        self.last_t[has] = start + last
-        self.last_v[has] = x[last, has]
-
-    def values(self) -> np.ndarray:
-        """``(length, n)`` once every piece is fed: a gap with no defined frame after it
-        holds the last defined value; a column never defined is its fill."""
-        seen = np.flatnonzero(self.last_t >= 0)
-        share, _ = self._overlap(self.last_t[seen] + 1, np.full(len(seen), self.frames))
-        self.sums[:, seen] += self.last_v[seen] * share
-        out: np.ndarray = self.sums * (self.length / self.frames)
-        never = self.last_t < 0
-        out[:, never] = self.fills[never]
-        return out
 
 
 class SampledColumns:

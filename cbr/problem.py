@@ -65,15 +65,9 @@ _LATER_OPTIONS = {
     "side": "as_recorded",
     "phases": 0,
     "positions": False,
-    "resampling": "linear",
 }
 POSITION_PREFIX = "pos:"
 SIDE_MODES = ("as_recorded", "canonical")
-#: how a clip's columns become ``length`` frames: ``"area"`` averages each output frame over
-#: the stretch of the clip it stands for (a short peak counts the same at any frame rate);
-#: ``"linear"`` reads the clip at ``length`` evenly spaced instants, what case bases stored
-#: before area resampling keep (their configuration has no ``resampling`` key)
-RESAMPLINGS = ("area", "linear")
 #: the longest resampled sequence (frames): far beyond any useful length, short of memory trouble
 MAX_LENGTH = 4096
 
@@ -101,10 +95,6 @@ class FeatureConfig:
     side: ``"as_recorded"``, or ``"canonical"``: a clip that moves its left limbs more than its
       right ones is described by its mirror image (:func:`mirrored`), so a movement done with
       the left arm is compared with the right-arm cases (:func:`moves_left_more`).
-    resampling: ``"area"``: each of the ``length`` frames is the mean of the stretch of the
-      clip it stands for (:func:`resample`), so a clip gives the same problem at any frame
-      rate; ``"linear"``: read at ``length`` evenly spaced instants, between frames linearly
-      (the only way before; a stored configuration without the key reads as this).
     """
 
     level: Level = "fluents"
@@ -118,7 +108,6 @@ class FeatureConfig:
     side: str = "as_recorded"
     phases: int = 0
     positions: bool = False
-    resampling: str = "area"
 
     def __post_init__(self) -> None:
         if self.level not in ("fluents", "qmp"):
@@ -156,12 +145,6 @@ class FeatureConfig:
                 f"{self.phases!r}",
                 "phases",
             )
-        if self.resampling not in RESAMPLINGS:
-            raise ConfigError(
-                f"resampling must be one of {', '.join(RESAMPLINGS)}, got {self.resampling!r}"
-                f"{did_you_mean(str(self.resampling), RESAMPLINGS)}",
-                "resampling",
-            )
         if self.side not in SIDE_MODES:
             raise ConfigError(
                 f"side must be one of {', '.join(SIDE_MODES)}, got {self.side!r}", "side"
@@ -186,9 +169,6 @@ class FeatureConfig:
         if bad:
             raise ConfigError(f"unknown feature configuration keys: {', '.join(bad)}", "features")
         d = dict(d)
-        # written before area resampling: its cases were read at evenly spaced instants, and
-        # every clip compared with them is read so (no case base has to be trained again)
-        d.setdefault("resampling", "linear")
         if isinstance(d.get("states"), list):
             d["states"] = tuple(d["states"])
         return cls(**d)
@@ -413,57 +393,14 @@ def _filled(x: np.ndarray, ok: np.ndarray, fills: np.ndarray) -> np.ndarray:
     return out
 
 
-def resample(x: np.ndarray, length: int, how: str = "area") -> np.ndarray:
-    """``(frames, n)`` resampled to ``(length, n)`` over normalised time.
-
-    ``"area"``: frame ``j`` of ``frames`` stands for the time ``[j, j + 1) / frames`` of the
-    clip and output row ``r`` for ``[r, r + 1) / length``; row ``r`` is the mean of the input
-    over its time (each frame weighted by the share of that time it covers). A peak one
-    frame long at 30 fps and two frames long at 60 fps give the same rows: what a row says
-    does not depend on which frames the recording happened to have. Where a row's whole time
-    is NaN it is NaN; elsewhere NaN frames are left out of its mean. ``"linear"``: the input
-    read at ``length`` evenly spaced instants from the first frame to the last, linearly
-    between frames (:func:`resample_points`), which a short peak can fall between."""
+def resample(x: np.ndarray, length: int) -> np.ndarray:
+    """Linear resampling of ``(frames, n)`` to ``(length, n)`` over normalised time."""
     frames = x.shape[0]
     if frames == 1:
         return np.repeat(x, length, axis=0)
-    if how == "linear":
-        i, w = resample_points(frames, length)
-        out: np.ndarray = x[i] * (1.0 - w) + x[i + 1] * w
-        return out
-    missing = np.isnan(x)
-    if not missing.any():
-        return _area_means(x, length)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        sums = _area_means(np.where(missing, 0.0, x), length)
-        share = _area_means((~missing).astype(np.float64), length)
-        means: np.ndarray = np.where(share > 0, sums / share, np.nan)
-    return means
-
-
-def _area_means(x: np.ndarray, length: int) -> np.ndarray:
-    """Area resampling (:func:`resample`) of ``(frames, n)`` without NaN: from the running
-    sum of the frames, each row's integral over its time is a difference of two points of it
-    (a row's time ends part-way into a frame when ``length`` does not divide ``frames``)."""
-    k, part = area_bounds(x.shape[0], length)
-    run = np.concatenate([np.zeros((1,) + x.shape[1:]), np.cumsum(x, axis=0)])
-    # the integral from frame 0 to each bound: whole frames, then a share of the next one
-    upto = run[k] + part[:, None] * x[np.minimum(k, x.shape[0] - 1)]
-    out: np.ndarray = (upto[1:] - upto[:-1]) * (length / x.shape[0])
+    i, w = resample_points(frames, length)
+    out: np.ndarray = x[i] * (1.0 - w) + x[i + 1] * w
     return out
-
-
-@lru_cache(maxsize=256)
-def area_bounds(frames: int, length: int) -> tuple[np.ndarray, np.ndarray]:
-    """Where the ``length + 1`` bounds of the rows of :func:`resample`'s area resampling fall
-    in a clip of ``frames`` frames: bound ``r`` is ``r * frames / length`` frames from the
-    start, ``k[r]`` whole frames and ``part[r]`` of the next, ``(length + 1,)`` each (exact:
-    whole numbers divided). Kept per size (read-only)."""
-    at = np.arange(length + 1, dtype=np.int64) * frames
-    k, part = at // length, (at % length) / length
-    k.setflags(write=False)
-    part.setflags(write=False)
-    return k, part
 
 
 @lru_cache(maxsize=256)
@@ -618,9 +555,7 @@ def _fluent_problem(seq: PoseSequence, config: FeatureConfig, chunk: int, mirror
     fills = _column_fills(plan, float(config.fill))
     unseen: frozenset[str] = frozenset()  # known of a clip computed whole
     if chunk:
-        values = long_clip.resampled_columns(
-            seq, plan, fills, int(config.length), chunk, mirror, str(config.resampling)
-        )
+        values = long_clip.resampled_columns(seq, plan, fills, int(config.length), chunk, mirror)
     else:
         planes = arm_planes(seq) if plan.arm_planes else None
         positions = body_positions(seq) if len(plan.position_cols) else None
@@ -633,7 +568,7 @@ def _fluent_problem(seq: PoseSequence, config: FeatureConfig, chunk: int, mirror
             planes,
             positions,
         )
-        values = resample(fill_nan_time(columns, fills), int(config.length), str(config.resampling))
+        values = resample(fill_nan_time(columns, fills), int(config.length))
         never = np.isnan(columns).all(axis=0) if len(columns) else np.zeros(len(states), bool)
         unseen = frozenset(s for s, n in zip(states, never, strict=True) if n)
     if config.summary:

@@ -276,4 +276,4 @@ def test_resampling_points_are_kept_read_only() -> None:
     with pytest.raises(ValueError):
         i[0] = 1  # so no caller can change what the next one reads
     x = np.arange(10.0).reshape(5, 2)
-    np.testing.assert_allclose(resample(x, 3, "linear"), [[0, 1], [4, 5], [8, 9]])
+    np.testing.assert_allclose(resample(x, 3), [[0, 1], [4, 5], [8, 9]])

@@ -48,7 +48,7 @@ def angle_series(seq: PoseSequence, length: int) -> np.ndarray:
     from ..problem import fill_nan_time, resample
 
     def compute(s: PoseSequence) -> np.ndarray:
-        return resample(fill_nan_time(_limb_angles(s), 0.0), int(length), "linear")
+        return resample(fill_nan_time(_limb_angles(s), 0.0), int(length))
 
     return derived(seq, f"limb angles/{int(length)}", compute)
 
