@@ -1,0 +1,166 @@
+"""Frame-rate dependence: do the same clips get the same answers at a lower frame rate?
+
+A case base is trained at the recordings' own rate, and its held-out clips are classified at
+that rate and again at a half and a quarter of it (every 2nd / 4th frame kept, the frame rate
+divided accordingly: what a camera at that rate would have recorded). Counted: how many
+answers change against the native rate's, and the accuracy at each rate.
+
+- UI-PRMD Vicon (100 Hz; correct repetitions only), movement, subjects s03, s07, s08 held out;
+- UI-PRMD Kinect (30 Hz), movement, the same subjects held out;
+- UI-PRMD Kinect, correct vs incorrect, one case base per movement (class-balanced vote, as
+  ``train --target correct``), the same subjects held out;
+- HDM05 (120 Hz), actions, each actor held out once.
+
+Configurations: fluents under euclidean (clip summaries) and dtw (sequences), QMPs under
+euclidean (``--quick``: HDM05 alone).
+
+Measured 2026-12-06 (before this benchmark existed, the same protocol; 600 Kinect clips):
+Kinect movement fluents/euclidean 7 / 14 answers changed at 1/2 / 1/4 rate, dtw 3 / 10;
+Kinect correct-vs-incorrect fluents/euclidean 47 / 64, dtw 23 / 40; Vicon and HDM05 0 for
+fluents/euclidean and dtw; QMPs HDM05 3 / 5, Vicon 0 / 1. Resampling each clip's columns by
+area (each of the 32 frames the mean of its stretch, instead of read at 32 instants) did not
+lower them (Kinect movement 9 / 19 and 9 / 13): at a lower rate the motion states' confidences
+differ (Kinect jitter weighs less over a longer frame interval), not the resampling.
+
+Prints the table and writes ``benchmarks/results/frame_rate.json`` with machine and versions.
+
+    python -m benchmarks.frame_rate           # about an hour on 2 cores under load 10-15
+    python -m benchmarks.frame_rate --quick
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from benchmarks import write_json
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
+RESULTS = Path(__file__).resolve().parent / "results" / "frame_rate.json"
+
+HELD_OUT = ("s03", "s07", "s08")
+RATES = (1, 2, 4)  # keep every k-th frame
+CONFIGS = (
+    ("fluents", "euclidean"),
+    ("fluents", "dtw"),
+    ("qmp", "euclidean"),
+)
+#: (task, dataset folder, sensor, target)
+TASKS = (
+    ("ui-prmd vicon movement", "ui-prmd", "vicon", "label"),
+    ("ui-prmd kinect movement", "ui-prmd", "kinect", "label"),
+    ("ui-prmd kinect correct", "ui-prmd", "kinect", "correct"),
+    ("hdm05 action", "hdm05", "", "label"),
+)
+QUICK_TASKS = (TASKS[3],)
+
+
+def decimated(seq: Any, k: int) -> Any:
+    """``seq`` with every ``k``-th frame, at a ``k``-th of its frame rate."""
+    if k == 1:
+        return seq
+    conf = None if seq.confidence is None else seq.confidence[::k]
+    return dataclasses.replace(seq, positions=seq.positions[::k], confidence=conf,
+                               fps=seq.fps / k)  # fmt: skip
+
+
+def _folds(clips: list[Any], folder: str) -> list[tuple[str, ...]]:
+    if folder == "hdm05":  # three actors: each held out once
+        return [(s,) for s in sorted({str(c.subject) for c in clips})]
+    return [HELD_OUT]
+
+
+def run_task(
+    clips: list[Any], folder: str, target: str, level: str, similarity: str
+) -> dict[str, Any]:
+    """Train at the native rate on all but the held-out subjects, classify the held-out
+    clips at every rate of :data:`RATES`: accuracy per rate and answers changed."""
+    from cbr.estimator import CaseBaseClassifier
+
+    truth: list[str] = []
+    answers: dict[int, list[str]] = {k: [] for k in RATES}
+    per_movement = target != "label"
+    groups = sorted({c.label for c in clips}) if per_movement else [None]
+
+    def solution(c: Any) -> str:
+        return str(c.extras[target]) if per_movement else str(c.label)
+
+    for held in _folds(clips, folder):
+        for group in groups:
+            mine = [c for c in clips if group in (None, c.label)]
+            train = [c for c in mine if c.subject not in held]
+            test = [c for c in mine if c.subject in held]
+            est = CaseBaseClassifier(
+                features=level,
+                similarity=similarity,
+                class_weight="balanced" if per_movement else "none",
+            )
+            est.fit([c.seq for c in train], [solution(c) for c in train])
+            truth += [solution(c) for c in test]
+            for k in RATES:
+                answers[k] += [str(a) for a in est.predict([decimated(c.seq, k) for c in test])]
+    y = np.array(truth)
+    got = {k: np.array(v) for k, v in answers.items()}
+    return {
+        "clips": len(y),
+        "accuracy": {str(k): float((got[k] == y).mean()) for k in RATES},
+        "changed": {str(k): int((got[k] != got[1]).sum()) for k in RATES[1:]},
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(
+        prog="python -m benchmarks.frame_rate",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    ap.add_argument("--quick", action="store_true", help="HDM05 alone")
+    args = ap.parse_args(argv)
+    from cbr.evaluation.machine import machine_info
+    from features.datasets import load_dataset
+
+    start = time.perf_counter()
+    rows = []
+    print("| task | configuration | clips | accuracy 1 / 1/2 / 1/4 rate | answers changed at 1/2, "
+          "1/4 |")  # fmt: skip
+    print("| --- | --- | ---: | --- | --- |")
+    for task, folder, sensor, target in QUICK_TASKS if args.quick else TASKS:
+        kwargs = {"sensor": sensor} if sensor else {}
+        clips = load_dataset(SHARED / folder, **kwargs)
+        for level, similarity in CONFIGS:
+            row = run_task(clips, folder, target, level, similarity)
+            row.update(task=task, configuration=f"{level}/{similarity}")
+            rows.append(row)
+            acc = " / ".join(f"{100 * row['accuracy'][str(k)]:.1f}" for k in RATES)
+            changed = ", ".join(str(row["changed"][str(k)]) for k in RATES[1:])
+            print(f"| {task} | {level}/{similarity} | {row['clips']} | {acc} % | {changed} |",
+                  flush=True)  # fmt: skip
+    doc = {
+        "benchmark": "frame_rate",
+        "machine": machine_info(),
+        "protocol": {
+            "rates": "native, every 2nd frame at half the rate, every 4th at a quarter",
+            "held_out_subjects": list(HELD_OUT),
+            "hdm05": "each actor held out once",
+            "quick": bool(args.quick),
+        },
+        "rows": rows,
+        "seconds": round(time.perf_counter() - start, 1),
+        "load_average": list(os.getloadavg()),
+    }
+    out = RESULTS.with_name("frame_rate_quick.json") if args.quick else RESULTS
+    write_json(doc, out)
+    print(f"\nwritten to {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
