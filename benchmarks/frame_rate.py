@@ -14,17 +14,18 @@ answers change against the native rate's, and the accuracy at each rate.
 Configurations: fluents under euclidean (clip summaries) and dtw (sequences), QMPs under
 euclidean (``--quick``: HDM05 alone).
 
-Measured 2026-12-06 (before this benchmark existed, the same protocol; 600 Kinect clips):
-Kinect movement fluents/euclidean 7 / 14 answers changed at 1/2 / 1/4 rate, dtw 3 / 10;
-Kinect correct-vs-incorrect fluents/euclidean 47 / 64, dtw 23 / 40; Vicon and HDM05 0 for
-fluents/euclidean and dtw; QMPs HDM05 3 / 5, Vicon 0 / 1. Resampling each clip's columns by
-area (each of the 32 frames the mean of its stretch, instead of read at 32 instants) did not
-lower them (Kinect movement 9 / 19 and 9 / 13): at a lower rate the motion states' confidences
-differ (Kinect jitter weighs less over a longer frame interval), not the resampling.
+First run (2026-12-06, ``benchmarks/results/frame_rate.json``): answers changed at 1/2 and 1/4
+rate, of 600 Kinect clips: movement fluents/euclidean 7 and 14, dtw 3 and 10, QMPs 25 and 86;
+correct vs incorrect 47 and 64, 23 and 40, 32 and 115; Vicon (290) and HDM05 (189) none for
+fluents/euclidean and dtw, QMPs 0 and 1, 3 and 5. Resampling each clip's columns by area
+(each of the 32 frames the mean of its stretch of the clip, instead of the clip read at 32
+instants) did not lower the fluent counts (Kinect movement 9 and 19, 9 and 13; correct 40 and
+70, 25 and 41): at a lower rate the motion states' confidences differ (a clip's fluent summary
+moved about 3 times as far as without the motion states), not what resampling reads.
 
 Prints the table and writes ``benchmarks/results/frame_rate.json`` with machine and versions.
 
-    python -m benchmarks.frame_rate           # about an hour on 2 cores under load 10-15
+    python -m benchmarks.frame_rate           # 653 s on 2 cores at load 4-10 (longer loaded)
     python -m benchmarks.frame_rate --quick
 """
 
