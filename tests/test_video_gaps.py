@@ -303,3 +303,76 @@ def test_reps_and_classify_of_a_video_with_a_gap_do_not_count_through_it(
         assert rep["end_frame"] <= 125 or rep["start_frame"] >= 200, rep
     assert main(["classify", str(lunge_jump), "--db", str(case_base), "--json"]) == 0
     assert "without frames at 5.0-8.0 s" in capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def lunge_gap_mkv(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The reverse lunge's first 100 frames at a quarter size, lossless (FFV1 in Matroska: the
+    same poses each run), its clock jumping 2 s after frame 49 (1.96 s): frames 50 to 99 at
+    4.0 to 5.96 s, 6 s in all; grid rows 50 to 99 (2.0 to 3.96 s) lie inside the gap."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(shared_data / "videos" / "lunge" / LUNGE_NAME))
+    frames = []
+    while len(frames) < 100:
+        ok, bgr = cap.read()
+        assert ok
+        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
+        frames.append(np.ascontiguousarray(small[:, :, ::-1]))
+    cap.release()
+    pts = [40 * k + (2000 if k >= 50 else 0) for k in range(100)]
+    folder = tmp_path_factory.mktemp("gap_mkv")
+    return _write(folder / "lunge_gap.mkv", pts, frames, codec="ffv1")
+
+
+def _drawn_words(monkeypatch: pytest.MonkeyPatch) -> list[list[str]]:
+    """Filled as overlays are written: per frame drawn, the texts written on it, in order."""
+    import features.pose_estimation.overlay as overlay
+
+    drawn: list[list[str]] = []
+    draw_pose, write = overlay.draw_pose, overlay._write
+
+    def drawing(*args: object, **kwargs: object) -> object:
+        drawn.append([])
+        return draw_pose(*args, **kwargs)  # type: ignore[arg-type]
+
+    def writing(bgr: np.ndarray, text: str, org: tuple[int, int], scale: float) -> None:
+        drawn[-1].append(text)
+        write(bgr, text, org, scale)
+
+    monkeypatch.setattr(overlay, "draw_pose", drawing)
+    monkeypatch.setattr(overlay, "_write", writing)
+    return drawn
+
+
+def test_the_overlays_say_no_frames_in_a_gap_not_no_person(
+    case_base: Path,  # noqa: F811
+    lunge_gap_mkv: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``segment --overlay`` of the lunge with its 2-s gap: the 50 frames of the gap (rows 50
+    to 99) say "no frames in the video" and the count, as ``watch --out`` draws them, where
+    they said "no person" above it; ``extract --overlay`` says the same there. The person is
+    in every frame of the video: "no person" is drawn nowhere."""
+    drawn = _drawn_words(monkeypatch)
+    out = tmp_path / "segment.mp4"
+    argv = ["segment", str(lunge_gap_mkv), "--db", str(case_base), "--json", "--overlay"]
+    assert main([*argv, str(out)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    gap = [s for s in doc["segments"] if s["unknown"] == "no frames in the video"]
+    assert [(s["start_frame"], s["end_frame"]) for s in gap] == [(50, 100)]
+    assert len(drawn) == doc["frames"] == 150 and out.is_file()
+    for row in range(50, 100):
+        assert drawn[row] == ["no frames in the video", "repetitions: 0"], row
+    assert not any("no person" in words for words in drawn)
+    assert all(drawn[row][0] != "no frames in the video" for row in [*range(50), *range(100, 150)])
+    drawn.clear()
+    video = tmp_path / "overlay.mp4"
+    assert main(["extract", str(lunge_gap_mkv), "--out", str(tmp_path / "poses"),
+                 "--overlay", str(video)]) == 0  # fmt: skip
+    assert len(drawn) == 150 and video.is_file()
+    assert all(drawn[row][0] == "no frames in the video" for row in range(50, 100))
+    assert not any("no person" in words for words in drawn)
+    assert not any("no frames in the video" in drawn[row] for row in [*range(50), *range(100, 150)])

@@ -27,6 +27,12 @@ POSE_CONNECTIONS: tuple[tuple[int, int], ...] = (
 _LEFT = {1, 2, 3, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31}
 _RIGHT = {4, 5, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30, 32}
 _COLOURS = {"left": (0, 140, 255), "right": (255, 128, 0), "centre": (255, 255, 255)}
+NO_PERSON = "no person"
+"""Said on a frame in which the model found no one."""
+NO_FRAMES = "no frames in the video"
+"""Said on a grid time inside a gap of the video's frames (none decoded there: the frame before
+the gap stays on screen), as ``segment`` and ``watch`` call such a stretch
+(``cbr.segmentation.NO_FRAMES``), not "no person"."""
 
 
 def _colour(i: int, j: int) -> tuple[int, int, int]:
@@ -42,11 +48,12 @@ def draw_pose(
     image_landmarks: np.ndarray,
     words: Sequence[str] = (),
     min_visibility: float = 0.5,
+    nobody: str = NO_PERSON,
 ) -> np.ndarray:
     """Draw one frame's landmarks ``(33, 5)`` (x px, y px, z, visibility, presence) in place.
 
     Bones with an end below ``min_visibility`` are drawn thin and grey (guessed, not seen);
-    ``words`` are written in the top-left corner.
+    ``words`` are written in the top-left corner, after ``nobody`` when no landmark is there.
     """
     h, w = bgr.shape[:2]
     thick = max(2, round(min(h, w) / 240))
@@ -64,7 +71,7 @@ def draw_pose(
             if vis[k] >= min_visibility:
                 cv2.circle(bgr, tuple(map(int, xy[k])), thick + 1, (0, 0, 255), -1, cv2.LINE_AA)
     else:
-        words = ["no person", *words]
+        words = [nobody, *words]
     scale = max(0.6, min(h, w) / 600)
     for n, text in enumerate(words):
         _write(bgr, text, (12, int((n + 1) * 30 * scale)), scale)
@@ -155,6 +162,7 @@ def write_overlay(
     words: Sequence[Sequence[str]] | None = None,
     frame_offset: int = 0,
     video_frames: np.ndarray | None = None,
+    gaps: np.ndarray | None = None,
 ) -> Path:
     """Write ``video_path`` with the stick figure drawn as an MP4 (``mp4v``) at ``out_path``.
 
@@ -163,13 +171,14 @@ def write_overlay(
     :attr:`~features.pose_estimation.video.VideoPoses.video_frames`), frame
     ``video_frames[i]`` does (a frame may carry several rows, or none), so the overlay plays
     at ``fps`` in step with the video. words: per row, phrases to print (e.g. the fluents
-    that hold).
+    that hold). gaps: per row, whether it lies inside a gap of the video's frames
+    (:func:`features.poses.gap_rows`): such a row says :data:`NO_FRAMES`, not "no person".
     """
     out = Path(out_path)
     rows = None if video_frames is None else np.asarray(video_frames, dtype=np.int64)
     # The temporary name ends in .mp4: OpenCV picks the container by the file name.
     with atomic_path(out, suffix=".mp4") as tmp:
-        _encode(video_path, image_landmarks, tmp, out, fps, words, frame_offset, rows)
+        _encode(video_path, image_landmarks, tmp, out, fps, words, frame_offset, rows, gaps)
     return out
 
 
@@ -182,6 +191,7 @@ def _encode(
     words: Sequence[Sequence[str]] | None,
     frame_offset: int,
     video_frames: np.ndarray | None = None,
+    gaps: np.ndarray | None = None,
 ) -> None:
     """The frames of ``video_path`` with the stick figure drawn, encoded into ``tmp``
     (``out`` names the overlay in messages); see :func:`write_overlay`."""
@@ -207,7 +217,8 @@ def _encode(
                     writer = cv2.VideoWriter(str(tmp), fourcc, fps, (w, h))
                     if not writer.isOpened():
                         raise DataError("cannot encode an MP4 overlay here", out)
-                draw_pose(bgr, image_landmarks[i], words[i] if words is not None else ())
+                said = words[i] if words is not None else ()
+                _draw_row(bgr, image_landmarks[i], said, gaps is not None and bool(gaps[i]))
                 writer.write(bgr)
                 written += 1
             first = stop
@@ -217,6 +228,15 @@ def _encode(
         if writer is not None:
             writer.release()
     check_encoded(tmp, written, out)
+
+
+def _draw_row(bgr: np.ndarray, landmarks: np.ndarray, words: Sequence[str], gap: bool) -> None:
+    """One row of the overlay drawn; ``gap``: it lies inside a gap of the video's frames (no
+    frame there, not a frame without a person), said :data:`NO_FRAMES` once."""
+    if gap:
+        draw_pose(bgr, landmarks, [w for w in words if w != NO_FRAMES], nobody=NO_FRAMES)
+    else:
+        draw_pose(bgr, landmarks, words)
 
 
 def check_encoded(path: Path, frames: int, out: Path) -> None:

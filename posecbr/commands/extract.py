@@ -478,6 +478,7 @@ def process(job: Job, options: Options) -> Outcome:
                 words,
                 frame_offset=job.start or 0,
                 video_frames=video_frames,
+                gaps=gap_rows(seq),  # no frames there: said so, not "no person"
             )
         # a row inside a gap has no frame at all, not a frame without a person
         nobody = np.isnan(seq.positions).all(axis=(1, 2)) & ~gap_rows(seq)

@@ -306,11 +306,16 @@ def _plot(rec: Any, result: Any, path: Path, name: str) -> None:
     )
 
 
-def frame_words(result: Any) -> list[list[str]]:
+def frame_words(result: Any, gaps: Any = None) -> list[list[str]]:
     """Per frame: the current activity (or unknown, or nobody in view) and how many of its
     repetitions are done: a repetition counts from its last frame (ends are exclusive; one
-    that runs to its segment's end is done within the segment, as ``segment`` counts it)."""
+    that runs to its segment's end is done within the segment, as ``segment`` counts it).
+    ``gaps``: per frame, whether it lies inside a gap of the video's frames
+    (:func:`features.poses.gap_rows`): such a frame says "no frames in the video" in place of
+    the activity, as ``watch`` draws it."""
     import numpy as np
+
+    from cbr.segmentation import NO_FRAMES
 
     words: list[list[str]] = [[] for _ in range(result.n_frames)]
     for s in result.segments:
@@ -319,7 +324,8 @@ def frame_words(result: Any) -> list[list[str]]:
         frames = np.arange(s.start_frame, s.end_frame)
         done = np.searchsorted(ends, frames, side="right")
         for f, n in zip(frames.tolist(), done.tolist(), strict=True):
-            words[f] = [label, f"repetitions: {n}"]
+            shown_label = NO_FRAMES if gaps is not None and gaps[f] else label
+            words[f] = [shown_label, f"repetitions: {n}"]
     return words
 
 
@@ -347,13 +353,16 @@ def load_stored(db: str, name: str | None) -> Any:
 
 def _overlay(path: Path, video: Any, result: Any, out: Path) -> None:
     from features.pose_estimation.overlay import write_overlay
+    from features.poses import gap_rows
 
+    gaps = gap_rows(video.sequence)  # no frames there: said so, not "no person"
     write_overlay(
         path,
         video.image_landmarks,
         out,
         result.fps,
-        frame_words(result),
+        frame_words(result, gaps),
         video_frames=video.video_frames,
+        gaps=gaps,
     )
     print(f"overlay written to {shown(out)}", file=sys.stderr)
