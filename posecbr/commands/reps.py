@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from features.fileio import check_output
-from features.text import shown
+from features.text import counted, shown
 from posecbr.arguments import path_arg
 from posecbr.recordings import add_recording_options, check_asf, load_recording, note_low_rate
 
@@ -129,7 +129,7 @@ def _plot(seq: object, result: object, path: Path, name: str) -> None:
     plot_timeline(
         timeline_of(seq),  # type: ignore[arg-type]
         path,
-        title=f"{name}: {result.count} repetitions over the fluent timeline",
+        title=f"{name}: {counted(result.count, 'repetition')} over the fluent timeline",
         bands=bands,
         band_title="repetitions",
     )
