@@ -35,3 +35,32 @@ def test_the_reps_picture_says_1_repetition_not_1_repetitions(
     assert capsys.readouterr().out.startswith(f"{clip}: 1 repetition (")
     assert titles == ["m01_s01_e01.npz: 1 repetition over the fluent timeline"]
     assert picture.is_file()
+
+
+def test_the_segment_table_keeps_its_columns_in_line_past_a_long_activity(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``segment``'s table of a video with a gap: "(no frames in the video)" (24 characters)
+    and an activity named "standing_shoulder_internal_external_rotation" (UI-PRMD's, 44) ran
+    into the confidence column, 20 characters wide, so "conf" and "reps" stood over nothing.
+    Each row's confidence and count now end where their headings do."""
+    from cbr.segmentation import NO_FRAMES, Segment, Segmentation
+    from posecbr.commands.segment import _print
+
+    long = "standing_shoulder_internal_external_rotation"
+    segments = (
+        Segment(0, 50, "squat", 0.91, (), "3 of the 5 most similar cases are squat", None),
+        Segment(50, 100, None, 1.0, (), NO_FRAMES, None),
+        Segment(100, 150, long, 0.5, (), f"5 of the 5 most similar cases are {long}", None),
+    )
+    _print(Segmentation("gap.mkv", 25.0, 150, segments, ()))
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "gap.mkv: 150 frames at 25 fps (6.00 s), 3 segments"
+    head = lines[1]
+    rows = [line for line in lines[2:] if line[:10].strip()]  # not an explanation
+    assert len(rows) == 3
+    conf_end, reps_end = head.index("conf") + 4, head.index("reps") + 4
+    for row, conf in zip(rows, ("0.91", "1.00", "0.50"), strict=True):
+        assert row[conf_end - 4 : conf_end] == conf, row
+        assert row[reps_end - 1 : reps_end] == "0" and len(row) == reps_end, row
+    assert "(no frames in the video)" in rows[1] and long in rows[2]

@@ -259,15 +259,19 @@ def _print(result: Any) -> None:
         f"{shown(result.recording)}: {result.n_frames} frames at {fps:g} fps "
         f"({result.n_frames / fps:.2f} s), {counted(len(result.segments), 'segment')}"
     )
+    labels = [shown(s.label) if s.label is not None else f"({_shown(s)})" for s in result.segments]
+    # as wide as the longest (an activity's long name, "(no frames in the video)"): the
+    # columns after it stay in line
+    wide = max([20, *(len(label) for label in labels)])
     print(
-        f"  {'start s':>8}  {'end s':>7}  {'frames':>12}  {'activity':<20} {'conf':>5}  {'reps':>4}"
+        f"  {'start s':>8}  {'end s':>7}  {'frames':>12}  {'activity':<{wide}} {'conf':>5}"
+        f"  {'reps':>4}"
     )
-    for s in result.segments:
+    for s, label in zip(result.segments, labels, strict=True):
         frames = f"{s.start_frame}-{s.end_frame - 1}"
-        label = shown(s.label) if s.label is not None else f"({_shown(s)})"
         print(
             f"  {s.start_frame / fps:8.2f}  {s.end_frame / fps:7.2f}  {frames:>12}  "
-            f"{label:<20} {s.confidence:5.2f}  {len(s.repetitions):>4}"
+            f"{label:<{wide}} {s.confidence:5.2f}  {len(s.repetitions):>4}"
         )
         if s.explanation and s.explanation != _shown(s):
             print(f"  {'':8}  {'':7}  {'':12}  {shown(s.explanation)}")
