@@ -62,14 +62,13 @@ def _one_error_line(capsys: pytest.CaptureFixture[str], command: str) -> str:
 
 
 @pytest.fixture(scope="module")
-def compared(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, dict[str, str]]:
+def compared(
+    swapped_compare: tuple[Path, Path, dict[str, str]],
+) -> tuple[Path, Path, dict[str, str]]:
     """One `compare --out` on the swapped clips: the labels file, the results folder, and the
-    snapshot of the data folder taken before the run."""
-    root = tmp_path_factory.mktemp("swapped")
-    labels = _swapped_data(root / "data")
-    before = snapshot(root / "data")
-    assert main(["compare", str(labels), *FAST, "--out", str(root / "out")]) == 0
-    return labels, root / "out", before
+    snapshot of the data folder taken before the run (made once in the session, for
+    tests/test_hunt22b.py too: tests/conftest.py)."""
+    return swapped_compare
 
 
 def test_a_method_at_100_and_one_at_0_percent_completes_with_every_picture(

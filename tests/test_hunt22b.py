@@ -44,16 +44,10 @@ def test_report_on_a_results_file_of_gigabytes_is_refused_before_reading_it(
 
 
 @pytest.fixture(scope="module")
-def compared_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """One ``compare --out`` on ten demo clips: its results folder (results.json,
-    results.csv, the pictures)."""
-    from posecbr.cli import main
-    from tests.test_compare_bad_input import FAST, _swapped_data
-
-    root = tmp_path_factory.mktemp("compared")
-    labels = _swapped_data(root / "data")
-    assert main(["compare", str(labels), *FAST, "--no-dad", "--out", str(root / "out")]) == 0
-    return root / "out"
+def compared_folder(swapped_compare: tuple[Path, Path, dict[str, str]]) -> Path:
+    """One ``compare --out`` on ten demo clips (tests/test_compare_bad_input.py's, made once
+    in the session): its results folder (results.json, results.csv, the pictures)."""
+    return swapped_compare[1]
 
 
 def test_the_report_command_compare_suggests_can_be_run_again(
