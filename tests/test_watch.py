@@ -25,12 +25,11 @@ from features.pose_estimation.tracker import FramePose
 from features.readers.asfamc import read_asf_amc
 from posecbr.cli import main
 from tests.badinput import snapshot
+from tests.once import made_once
 
 
-@pytest.fixture(scope="module")
-def case_base(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Windows of CMU 13_29 (six exercises), trained by the command."""
-    folder = tmp_path_factory.mktemp("cb")
+def _cmu_13_29_windows(folder: Path, shared_data: Path) -> Path:
+    """Windows of CMU 13_29 (six exercises), trained by the command into ``folder``."""
     names = folder / "names.txt"
     names.write_text("1 JumpJack\n3 Squat\n4 KneeRaise\n5 ArmCircle\n6 Twist\n10 ToeTouch\n")
     from features.poses import save_pose
@@ -46,6 +45,18 @@ def case_base(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Pa
             "--label-names", str(names), "--split", "windows", "--db", str(db)]  # fmt: skip
     assert main(argv) == 0
     return db
+
+
+@pytest.fixture(scope="module")
+def case_base(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Windows of CMU 13_29 (six exercises), trained by the command: made once in the
+    session for this module, tests/test_hunt34f.py and tests/test_video_gaps.py, which only
+    read it (or copy it)."""
+    return made_once(
+        tmp_path_factory,
+        "cmu-13-29-windows",
+        lambda folder: _cmu_13_29_windows(folder, shared_data),
+    )
 
 
 def test_watch_a_real_video(
