@@ -15,6 +15,7 @@ import pytest
 from features.poses import load_pose, save_pose
 from posecbr.cli import main
 from tests.bodies import squat_clip
+from tests.once import made_once
 
 KINDS = {"deep": (0.9, 1.0, "true"), "shallow": (0.45, 0.55, "false")}
 
@@ -41,20 +42,34 @@ def _write(root: Path, subjects: tuple[str, ...], per: int, seed: int) -> Path:
     return root / "labels.csv"
 
 
-@pytest.fixture(scope="module")
-def data(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
-    base = tmp_path_factory.mktemp("squats")
-    return _write(base / "train", ("s1", "s2", "s3"), 3, 1), _write(base / "test", ("s9",), 2, 2)
-
-
-@pytest.fixture(scope="module")
-def stores(data: tuple[Path, Path], tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
-    train, _ = data
-    base = tmp_path_factory.mktemp("stores")
+def _data_and_stores(base: Path) -> tuple[tuple[Path, Path], dict[str, str]]:
+    train, test = (
+        _write(base / "train", ("s1", "s2", "s3"), 3, 1),
+        _write(base / "test", ("s9",), 2, 2),
+    )
     label, correct = str(base / "label.sqlite"), str(base / "correct.sqlite")
     assert main(["train", str(train), "--db", label]) == 0
     assert main(["train", str(train), "--db", correct, "--target", "correct"]) == 0
-    return {"label": label, "correct": correct}
+    return (train, test), {"label": label, "correct": correct}
+
+
+@pytest.fixture(scope="module")
+def data_and_stores(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> tuple[tuple[Path, Path], dict[str, str]]:
+    """The training and test folders and the two case bases trained on the first, made once
+    in the session (not once in each worker): the tests only read them."""
+    return made_once(tmp_path_factory, "classify-output", _data_and_stores)
+
+
+@pytest.fixture(scope="module")
+def data(data_and_stores: tuple[tuple[Path, Path], dict[str, str]]) -> tuple[Path, Path]:
+    return data_and_stores[0]
+
+
+@pytest.fixture(scope="module")
+def stores(data_and_stores: tuple[tuple[Path, Path], dict[str, str]]) -> dict[str, str]:
+    return data_and_stores[1]
 
 
 def test_four_lines_per_clip_and_a_summary(

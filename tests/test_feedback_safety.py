@@ -20,6 +20,7 @@ from cbr.stored import load_classifier
 from features.poses import PoseSequence, load_pose, save_pose
 from posecbr.cli import main
 from tests.badinput import read_only_mounts_work
+from tests.once import made_once
 from tests.postgres import empty_postgres
 from tests.processes import posecbr_process as _posecbr
 
@@ -34,10 +35,15 @@ def _sha(path: Path) -> str:
 
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A case base of two subjects' clips (fluents, euclidean), to copy per test."""
-    db = tmp_path_factory.mktemp("cb") / "cb.sqlite"
-    assert main(["train", str(LABELS), "--db", str(db), "--subjects", "s01,s02"]) == 0
-    return db
+    """A case base of two subjects' clips (fluents, euclidean), to copy per test (made once
+    in the session, not once in each worker)."""
+
+    def make(folder: Path) -> Path:
+        db = folder / "cb.sqlite"
+        assert main(["train", str(LABELS), "--db", str(db), "--subjects", "s01,s02"]) == 0
+        return db
+
+    return made_once(tmp_path_factory, "feedback-safety-trained", make)
 
 
 def _copy(src: Path, dst: Path) -> Path:

@@ -19,6 +19,7 @@ from features.joining import join_repetitions
 from features.poses import PoseSequence
 from features.readers.asfamc import read_asf_amc
 from features.repetitions import split_windows
+from tests.once import made_once
 
 MOVES = (
     "squat1Reps",
@@ -39,10 +40,17 @@ def _takes(root: Path, actor: str, move: str) -> list[PoseSequence]:
 
 
 @pytest.fixture(scope="module")
-def bd_and_bk(shared_data: Path) -> tuple[CaseBaseClassifier, PoseSequence, np.ndarray]:
+def bd_and_bk(
+    shared_data: Path, tmp_path_factory: pytest.TempPathFactory
+) -> tuple[CaseBaseClassifier, PoseSequence, np.ndarray]:
     """The classifier ``train --split windows`` makes from bd's repetitions (each movement's
     joined into one clip), and bk's first three repetitions of every movement joined in
-    order, with the movement of each 0.1-s block's centre frame."""
+    order, with the movement of each 0.1-s block's centre frame. Made once in the session
+    (each worker reads its own copy), not once in each worker that runs a test of it."""
+    return made_once(tmp_path_factory, "bd-and-bk", lambda _: _bd_and_bk(shared_data))
+
+
+def _bd_and_bk(shared_data: Path) -> tuple[CaseBaseClassifier, PoseSequence, np.ndarray]:
     root = shared_data / "hdm05" / "train"
     clips = []
     for move in MOVES:
