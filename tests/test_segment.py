@@ -50,6 +50,7 @@ from posecbr.cli import main
 from tests.badinput import refused
 from tests.bodies import to_sequence
 from tests.moves import MOVES, clip
+from tests.once import made_once
 
 NAMES = "1 JumpJack\n2 Jog\n3 Squat\n4 KneeRaise\n5 ArmCircle\n6 Twist\n10 ToeTouchOneHand\n"
 
@@ -231,13 +232,21 @@ def test_synthetic_recording_changes_within_a_quarter_second() -> None:
     assert set(finish(clf, done, _AlwaysUnknown()).blocks) == {None}
 
 
-@pytest.fixture(scope="module")
-def recordings(shared_data: Path) -> dict[str, PoseSequence]:
+def _cmu(shared_data: Path) -> dict[str, PoseSequence]:
     asf = shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf"
     return {
         t: read_asf_amc(asf, shared_data / "cmu-mocap6" / "amc" / f"{t}.amc")
         for t in ("13_29", "13_30", "13_31")
     }
+
+
+@pytest.fixture(scope="module")
+def recordings(
+    shared_data: Path, tmp_path_factory: pytest.TempPathFactory
+) -> dict[str, PoseSequence]:
+    """CMU 13_29, 13_30 and 13_31, read once in the session (each module of each worker gets
+    its own copy)."""
+    return made_once(tmp_path_factory, "cmu-13-29-31", lambda _: _cmu(shared_data))
 
 
 @pytest.fixture(scope="module")
@@ -272,10 +281,18 @@ def _fit(clips: list[Clip]) -> CaseBaseClassifier:
 
 @pytest.fixture(scope="module")
 def classifier(
-    recordings: dict[str, PoseSequence], shared_data: Path, names: Path
+    recordings: dict[str, PoseSequence],
+    shared_data: Path,
+    names: Path,
+    tmp_path_factory: pytest.TempPathFactory,
 ) -> CaseBaseClassifier:
-    """Windows of 13_29 and 13_31 (every exercise of 13_30 is among them)."""
-    return _fit(_stretches(recordings, shared_data, names, ("13_29", "13_31")))
+    """Windows of 13_29 and 13_31 (every exercise of 13_30 is among them), fitted once in the
+    session (each worker gets its own copy)."""
+    return made_once(
+        tmp_path_factory,
+        "segment-classifier",
+        lambda _: _fit(_stretches(recordings, shared_data, names, ("13_29", "13_31"))),
+    )
 
 
 def test_two_exercises_joined_at_a_known_frame(
@@ -567,8 +584,18 @@ def case_base(
     names: Path,
     tmp_path_factory: pytest.TempPathFactory,
 ) -> Path:
-    """``posecbr train recordings.csv --split windows`` on 13_29 and 13_31."""
-    folder = tmp_path_factory.mktemp("cb")
+    """``posecbr train recordings.csv --split windows`` on 13_29 and 13_31, made once in the
+    session (the tests only read it)."""
+    return made_once(
+        tmp_path_factory,
+        "segment-case-base",
+        lambda folder: _case_base(folder, recordings, shared_data, names),
+    )
+
+
+def _case_base(
+    folder: Path, recordings: dict[str, PoseSequence], shared_data: Path, names: Path
+) -> Path:
     rows = ["path,label_file,label_block_s,label_names,subject"]
     for t in ("13_29", "13_31"):
         pose = save_pose(recordings[t], folder / f"{t}.npz")
