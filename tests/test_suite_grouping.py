@@ -23,3 +23,37 @@ def test_a_grouped_test_is_scheduled_by_its_group(request: pytest.FixtureRequest
     assert request.node.nodeid.endswith("@suite-grouping"), (
         "pytest-xdist did not group this test (is pytest at a version it does not support?)"
     )
+
+
+def test_made_once_makes_once_and_a_failed_make_is_tried_again(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> None:
+    """``made_once`` (tests/once.py): the second ask reads what the first made (an equal copy,
+    ``make`` not run again); a ``make`` that raised left nothing, and the next ask makes it."""
+    from pathlib import Path
+
+    from tests.once import made_once
+
+    name = f"suite-grouping-{os.getpid()}"
+    calls: list[Path] = []
+
+    def make(folder: Path) -> dict[str, object]:
+        calls.append(folder)
+        (folder / "made.txt").write_text("made")
+        return {"path": folder / "made.txt", "n": [1, 2]}
+
+    first = made_once(tmp_path_factory, name, make)
+    second = made_once(tmp_path_factory, name, make)
+    assert len(calls) == 1 and second == first and second is not first
+    assert first["path"].read_text() == "made"
+
+    def broken(folder: Path) -> int:
+        (folder / "half.txt").write_text("half")
+        raise RuntimeError("make failed")
+
+    with pytest.raises(RuntimeError, match="make failed"):
+        made_once(tmp_path_factory, name + "-broken", broken)
+    assert (
+        made_once(tmp_path_factory, name + "-broken", lambda folder: len(list(folder.iterdir())))
+        == 0
+    )
