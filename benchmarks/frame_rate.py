@@ -23,6 +23,26 @@ instants) did not lower the fluent counts (Kinect movement 9 and 19, 9 and 13; c
 70, 25 and 41): at a lower rate the motion states' confidences differ (a clip's fluent summary
 moved about 3 times as far as without the motion states), not what resampling reads.
 
+Why the motion states differ (issue 36h): eq. 5 multiplies the confidences of five Δs, so one
+small Δ pulls "moving" down, and a lower rate has smaller jitter in its Δs. An angle moving
+1.5·π/72 a frame at 30 fps with ±0.5·π/72 of jitter alternating frame by frame has Δs of 2.5
+and 0.5·π/72 (confidences 1 and 0.031; "moving" 0.073 and 0.005, frame by frame); every 2nd
+(or 4th) frame carries the same jitter, so at 15 and 7.5 fps each Δ (a reference interval's
+share of a frame's change) is 1.5·π/72 (0.969) and "moving" 0.931. White jitter of σ a frame
+gives Δ a spread of σ√2 at the reference rate, σ√2/2 at a half and σ√2/4 at a quarter. The
+53-frame s07 scaption clip (m10 e07) is this case: its left upper arm's Δs at 30 fps run
+-2.3, -0.56, -2.6, -1.76, -1.32, -3.48, -0.26, -1.92 (·π/72), at 15 fps -1.1 to -2.5;
+"moving outward" peaks at 0.51 at 30 fps, 1.0 at 15 fps. SPEC fixes Δθ_t = θ_t − θ_{t−1} at
+the reference rate and leaves open only how Δ is taken at another rate, where no choice puts
+the jitter back (interpolating and rescaling give the same Δs), so it is not changed. Tried
+outside SPEC in a scratch copy (``results/frame_rate_motion_baseline2.json``): Δ over two
+reference intervals, halved ((θ_t − θ_{t−2})/2 at 30 fps, the same spread as at 15 fps). Kinect
+clip summaries moved by RMS 0.027 / 0.043 between native and 1/2 / 1/4 rate (0.035 / 0.050
+with SPEC's Δ); answers changed at 1/2, 1/4: movement euclidean 7, 14 -> 4, 10, dtw 3, 10 -> 9,
+14, correct 47, 64 -> 14, 32 and 23, 40 -> 14, 29; native accuracy 96.5 -> 96.3, 82.7 -> 84.7,
+81.0 -> 82.3, 66.7 -> 68.0 %; Vicon and HDM05 none changed, accuracy the same (Vicon dtw
+85.5 -> 85.9). Not adopted: outside SPEC, and dtw's movement answers changed more.
+
 Prints the table and writes ``benchmarks/results/frame_rate.json`` with machine and versions.
 
     python -m benchmarks.frame_rate           # 653 s on 2 cores at load 4-10 (longer loaded)
