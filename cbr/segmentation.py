@@ -816,14 +816,19 @@ def told(clf: Any, solved: Any, label: str) -> str:
 
 
 def _repetitions(
-    sig: MovementSignals, start: int, end: int, n_frames: int | None = None
+    sig: MovementSignals,
+    start: int,
+    end: int,
+    n_frames: int | None = None,
+    settled: tuple[bool, bool] = (False, False),
 ) -> tuple[Repetition, ...]:
     """The repetitions within frames [start, end) of the recording whose signals are ``sig``
     (counted on the recording's own smoothed signals: no edge effects at the cut). Given the
     recording's ``n_frames``, a segment at its start or end has no repetition there that is
     only part of one when none of its repetitions is whole (the way down of a squat as the
     recording ends: :func:`features.repetitions.count_in_signals`); one at a cut is left to
-    :func:`keep_whole`."""
+    :func:`keep_whole`. ``settled``: whether the segment's start, and its end, are cuts at
+    which no movement turns (:func:`counted_segments`)."""
     last = n_frames is not None and end >= n_frames
     a, b = start // sig.step, max(start // sig.step + 1, end // sig.step)
     if last:  # to the recording's last sample, as reps reads it (a far point there counts)
@@ -833,8 +838,9 @@ def _repetitions(
     part = sig.part(a, b)
     edges = (start == 0 and n_frames is not None, last)
     found = count_in_signals(
-        part, min((b - a) * sig.step, end - a * sig.step), sig.fps * sig.step, edges
-    ).repetitions
+        part, min((b - a) * sig.step, end - a * sig.step), sig.fps * sig.step, edges,
+        settled=settled,
+    ).repetitions  # fmt: skip
     off = a * sig.step
     return tuple(  # the first sample may begin up to a step before ``start``: cut there
         Repetition(
@@ -891,13 +897,24 @@ def counted_segments(
 ) -> list[tuple[Repetition, ...]]:
     """The repetitions of every segment, frames ``bounds`` [start, end) in order covering the
     recording's ``n_frames``, each counted on its own frames (:func:`_repetitions`), each
-    repetition in one segment (:func:`keep_whole`)."""
+    repetition in one segment (:func:`keep_whole`).
+
+    A cut next to a segment with no far point at all is, for a posture got into and held
+    still up to it, as the recording's end: nothing comes back beyond it, the posture is held
+    on (a side plank held through a change of label the classifier saw in the hold), and the
+    segment has no repetition, as ``reps`` on the whole recording has none
+    (:func:`features.repetitions.count_in_signals`' ``settled``); before, the way into the
+    plank counted 1 in the segment, 0 in ``reps``."""
+    raw = [_repetitions(sig, start, end, n_frames) for start, end in bounds]
     out = []
     turn = False  # the segment before had a far point at its end (the cut)
-    for start, end in bounds:
-        reps = _repetitions(sig, start, end, n_frames)
+    for i, (start, end) in enumerate(bounds):
+        reps = raw[i]
+        settled = (i > 0 and not raw[i - 1], i + 1 < len(bounds) and not raw[i + 1])
+        if len(reps) == 1 and any(settled):
+            reps = _repetitions(sig, start, end, n_frames, settled)
         out.append(keep_whole(reps, start, end, sig.step, turn, end < n_frames))
-        turn = at_cut(reps, start, end, sig.step)[1]
+        turn = at_cut(raw[i], start, end, sig.step)[1]
     return out
 
 

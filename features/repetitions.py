@@ -301,7 +301,8 @@ class RepetitionCount:
     """The repetitions of a clip.
 
     period_s: the movement's full cycle (None when it does not repeat); periodicity: the
-    autocorrelation at that period (1 = exact repetition; ``to_dict``: None without a period);
+    autocorrelation at that period (1 = exact repetition); ``to_dict`` gives both as None
+    without a period or without a repetition counted (:attr:`repeated_period_s`);
     alternating: one repetition per side; moving: the joint angles (or the hips' height) that
     carry the movement, most first; partial: no repetition is whole, but the movement reached a
     far point cut off by the clip's start or end (part of one repetition: the way down of a
@@ -321,13 +322,21 @@ class RepetitionCount:
     def count(self) -> int:
         return len(self.repetitions)
 
+    @property
+    def repeated_period_s(self) -> float | None:
+        """The period to tell a user: ``period_s`` when a repetition was counted, else None
+        (a period read from a wobble or the pose model's jitter in a posture held is not the
+        period of anything repeated: ``reps`` said "0 repetitions (period 0.40 s)")."""
+        return self.period_s if self.count else None
+
     def to_dict(self) -> dict[str, Any]:
+        period = self.repeated_period_s
         return {
             "count": self.count,
             "repetitions": [r.to_dict(self.fps) for r in self.repetitions],
-            "period_s": None if self.period_s is None else round(self.period_s, 3),
+            "period_s": None if period is None else round(period, 3),
             # at no period (nothing repeats) there is no autocorrelation to give: null, not 0
-            "periodicity": None if self.period_s is None else round(self.periodicity, 3),
+            "periodicity": None if period is None else round(self.periodicity, 3),
             "alternating": self.alternating,
             "moving": list(self.moving),
             "partial": self.partial,
@@ -996,6 +1005,7 @@ def count_in_signals(
     fps: float,
     recording_edges: bool | tuple[bool, bool] = True,
     clear_alternation: bool = False,
+    settled: tuple[bool, bool] = (False, False),
 ) -> RepetitionCount:
     """:func:`count_repetitions` on already prepared signals (of a clip of ``n_frames``;
     ``recording_edges`` as there, or a pair: whether the clip's start, and its end, are the
@@ -1006,7 +1016,11 @@ def count_in_signals(
     straddle a change of exercise (segmentation's search for whole periods in fixed spans,
     :func:`cbr.segmentation.periods_in_span`: a twist's last turn and a jog's first steps are
     no period); False, the default: wherever it repeats more than noise would, for a stretch
-    of one exercise whose ends may hold a little of the next (:func:`_alternating_repetitions`)."""
+    of one exercise whose ends may hold a little of the next (:func:`_alternating_repetitions`).
+    ``settled``: whether the clip's start, and its end, where they are not the recording's,
+    are cuts beyond which nothing turns (the piece of a longer recording beyond shows no far
+    point): a posture got into and held still up to such a cut is held on beyond it, and is
+    judged as at the recording's end (:func:`_held_change`)."""
     x = sig.values
     edges = (
         (recording_edges, recording_edges)
@@ -1035,7 +1049,8 @@ def count_in_signals(
         whole = _whole_only(back, edges)
         partial = bool(len(far)) and not whole.any()  # part of one repetition, none whole
         far = np.unique(_in_view(far[whole], sig.blind))
-        if all(edges) and len(far) == 1 and _held_change(x, recorded, sig.fps, int(far[0])):
+        held = all(e or s for e, s in zip(edges, settled, strict=True))
+        if held and len(far) == 1 and _held_change(x, recorded, sig.fps, int(far[0])):
             far = far[:0]  # got into a posture once and held it: no repetition
         # a lone repetition of a whole recording runs from where the movement leaves rest to
         # where it returns, however far from its far point: one far point repeats nothing, and

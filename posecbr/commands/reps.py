@@ -98,8 +98,8 @@ def _print(clip: Path, fps: float, result: object) -> None:
     how = []
     if result.alternating:
         how.append("alternating sides")
-    if result.period_s is not None:
-        how.append(f"period {result.period_s:.2f} s")
+    if result.repeated_period_s is not None:  # none without a repetition, as --json
+        how.append(f"period {result.repeated_period_s:.2f} s")
     if result.moving:
         how.append("moving " + ", ".join(m.replace("_", " ") for m in result.moving))
     plural = "" if result.count == 1 else "s"

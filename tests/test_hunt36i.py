@@ -1,0 +1,80 @@
+"""Hunt 36i: ``segment``'s per-segment repetitions against ``reps``' whole-clip count and the
+hand counts (tests/fixtures/repetition_counts.json) on the bundled videos."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from cbr.segmentation import counted_segments
+from features.pose_estimation import estimate_video
+from features.poses import PoseSequence
+from features.repetitions import movement_signals
+from posecbr.cli import main
+from tests.test_repetitions import _arms_raised_and_held
+
+FIXTURE = Path(__file__).parent / "fixtures" / "repetition_counts.json"
+
+
+def _hand(name: str) -> dict[str, Any]:
+    clips = json.loads(FIXTURE.read_text())["clips"]
+    return next(c for c in clips if c["source"].endswith(name))
+
+
+def _video(shared_data: Path, name: str) -> PoseSequence:
+    found = estimate_video(shared_data / "videos" / name, progress_bar=False)
+    return found.sequence.to_canonical()
+
+
+def _segment_counts(seq: PoseSequence, cuts_s: list[float]) -> list[int]:
+    """The repetitions of each segment of ``seq`` cut at ``cuts_s`` seconds, as ``segment``
+    counts them (:func:`cbr.segmentation.counted_segments`)."""
+    edges = [0, *(int(round(t * seq.fps)) for t in cuts_s), seq.n_frames]
+    bounds = list(zip(edges[:-1], edges[1:], strict=True))
+    return [len(r) for r in counted_segments(movement_signals(seq), bounds, seq.n_frames)]
+
+
+@pytest.mark.parametrize("cut_s", [3.0, 4.5])
+def test_a_posture_held_across_a_cut_is_no_repetition(cut_s: float) -> None:
+    """Arms raised once and held still to the end (no repetition by construction), cut into
+    two segments inside the hold: neither counts one, as the whole clip counts none. Before,
+    the first segment counted the way up as a repetition (its end was a cut, so the
+    posture-held rule was not applied)."""
+    assert _segment_counts(_arms_raised_and_held(), [cut_s]) == [0, 0]
+
+
+def test_the_side_plank_video_has_no_repetition_in_its_segments(shared_data: Path) -> None:
+    """The bundled side plank (held from 1.4 s to the end: 0 by hand), cut where ``segment``
+    with the README's workout case base cut it (6.20 s): 0 and 0. Before: 1 in the first
+    segment (frames 48-69, the way into the plank), where ``reps`` says 0."""
+    name = "side_plank/fit_side_plank_pexels6023266.mp4"
+    seq = _video(shared_data, name)
+    counts = _segment_counts(seq, [6.2])
+    assert sum(counts) == _hand(name)["count"] == 0, counts
+
+
+def test_reps_gives_no_period_when_nothing_repeated(
+    shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The side plank, 0 repetitions by hand: ``reps`` said "0 repetitions (period 0.40 s;
+    moving left armpit)", and ``--json`` gave ``"period_s": 0.4, "periodicity": 0.29``, a
+    period of nothing counted (read from the jitter of the hold). Now neither gives one; the
+    squats of the 5-fps video (3 by hand) keep theirs."""
+    plank = shared_data / "videos" / "side_plank" / "fit_side_plank_pexels6023266.mp4"
+    assert main(["reps", str(plank)]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.endswith("0 repetitions (moving left armpit)"), line
+    assert "period" not in line
+    assert main(["reps", str(plank), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert (doc["count"], doc["period_s"], doc["periodicity"]) == (
+        _hand(plank.name)["count"],
+        None,
+        None,
+    )
+    squats = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    assert main(["reps", str(squats)]) == 0
+    assert " 3 repetitions (period " in capsys.readouterr().out
