@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from cbr.segmentation import counted_segments
@@ -15,6 +16,9 @@ from features.poses import PoseSequence
 from features.repetitions import movement_signals
 from posecbr.cli import main
 from tests.test_repetitions import _arms_raised_and_held
+from tests.test_video_gaps import LUNGE_NAME, _drawn_words
+from tests.test_video_vfr import _write
+from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
 FIXTURE = Path(__file__).parent / "fixtures" / "repetition_counts.json"
 
@@ -78,3 +82,56 @@ def test_reps_gives_no_period_when_nothing_repeated(
     squats = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
     assert main(["reps", str(squats)]) == 0
     assert " 3 repetitions (period " in capsys.readouterr().out
+
+
+@pytest.fixture(scope="module")
+def lunge_nobody(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The reverse lunge's first 150 frames at a quarter size, lossless (FFV1 in Matroska: the
+    same poses each run), frames 50 to 99 (2.0 to 3.96 s) grey: nobody in view there."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(shared_data / "videos" / "lunge" / LUNGE_NAME))
+    frames = []
+    while len(frames) < 150:
+        ok, bgr = cap.read()
+        assert ok
+        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
+        frames.append(np.ascontiguousarray(small[:, :, ::-1]))
+    cap.release()
+    for k in range(50, 100):
+        frames[k] = np.full_like(frames[k], 128)
+    folder = tmp_path_factory.mktemp("nobody_mkv")
+    return _write(folder / "lunge_nobody.mkv", [40 * k for k in range(150)], frames, codec="ffv1")
+
+
+def test_segment_and_watch_draw_nobody_in_view_on_one_line(
+    case_base: Path,  # noqa: F811
+    lunge_nobody: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The frames with nobody in view (50 to 99, grey by construction): ``segment --overlay``
+    drew two lines saying the same, "no person" (the stick figure's absence) and "nobody in
+    view" (the segment's name), where ``watch --out`` drew "no person" alone. Both draw the
+    same one line now, then the count."""
+    drawn = _drawn_words(monkeypatch)
+    out = tmp_path / "segment.mp4"
+    argv = ["segment", str(lunge_nobody), "--db", str(case_base), "--json", "--overlay"]
+    assert main([*argv, str(out)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    nobody = [s for s in doc["segments"] if s["unknown"] == "nobody in view"]
+    assert [(s["start_frame"], s["end_frame"]) for s in nobody] == [(50, 100)]
+    assert len(drawn) == doc["frames"] == 150 and out.is_file()
+    segment_rows = drawn[50:100]
+    drawn.clear()
+    out = tmp_path / "watch.mp4"
+    argv = ["watch", str(lunge_nobody), "--db", str(case_base), "--speed", "0", "--out"]
+    assert main([*argv, str(out)]) == 0
+    assert len(drawn) == 150 and out.is_file()
+    # watch learns of nobody in view as the frames come: from its first second on, it says so
+    watch_rows = drawn[50:100]
+    for seg, live in zip(segment_rows, watch_rows, strict=True):
+        assert seg[:2] == ["no person", "repetitions: 0"], seg
+        assert "nobody in view" not in seg
+        assert live[0] == "no person" and "nobody in view" not in live, live

@@ -310,16 +310,19 @@ def _plot(rec: Any, result: Any, path: Path, name: str) -> None:
     )
 
 
-def frame_words(result: Any, gaps: Any = None) -> list[list[str]]:
+def frame_words(result: Any, gaps: Any = None, unseen: Any = None) -> list[list[str]]:
     """Per frame: the current activity (or unknown, or nobody in view) and how many of its
     repetitions are done: a repetition counts from its last frame (ends are exclusive; one
     that runs to its segment's end is done within the segment, as ``segment`` counts it).
     ``gaps``: per frame, whether it lies inside a gap of the video's frames
     (:func:`features.poses.gap_rows`): such a frame says "no frames in the video" in place of
-    the activity, as ``watch`` draws it."""
+    the activity, as ``watch`` draws it. ``unseen``: per frame, whether no landmark is there
+    to draw: in a stretch with nobody in view such a frame says "no person" alone (the
+    overlay writes it where the stick figure would be), as ``watch`` draws it, not "nobody
+    in view" below it as well."""
     import numpy as np
 
-    from cbr.segmentation import NO_FRAMES
+    from cbr.segmentation import NO_FRAMES, NOBODY
 
     words: list[list[str]] = [[] for _ in range(result.n_frames)]
     for s in result.segments:
@@ -330,6 +333,8 @@ def frame_words(result: Any, gaps: Any = None) -> list[list[str]]:
         for f, n in zip(frames.tolist(), done.tolist(), strict=True):
             shown_label = NO_FRAMES if gaps is not None and gaps[f] else label
             words[f] = [shown_label, f"repetitions: {n}"]
+            if shown_label == NOBODY and unseen is not None and unseen[f]:
+                words[f] = words[f][1:]  # draw_pose says "no person"
     return words
 
 
@@ -356,6 +361,8 @@ def load_stored(db: str, name: str | None) -> Any:
 
 
 def _overlay(path: Path, video: Any, result: Any, out: Path) -> None:
+    import numpy as np
+
     from features.pose_estimation.overlay import write_overlay
     from features.poses import gap_rows
 
@@ -365,7 +372,7 @@ def _overlay(path: Path, video: Any, result: Any, out: Path) -> None:
         video.image_landmarks,
         out,
         result.fps,
-        frame_words(result, gaps),
+        frame_words(result, gaps, np.isnan(video.image_landmarks[..., :2]).all(axis=(1, 2))),
         video_frames=video.video_frames,
         gaps=gaps,
     )
