@@ -253,12 +253,15 @@ def training_clips(joined: list[tuple[Any, Group]], leave_out: str | None = None
     return split_windows(clips).clips
 
 
-def fit(clips: list[Any], mirror: str = "auto") -> Any:
+def fit(
+    clips: list[Any], mirror: str = "auto", feature_weights: str = "none", **params: Any
+) -> Any:
     """The classifier ``posecbr train --split windows [--mirror MIRROR]`` makes (feature
-    weights none)."""
+    weights none unless ``feature_weights``; further :class:`cbr.estimator.CaseBaseClassifier`
+    ``params``, as ``velocity=True``)."""
     from cbr.estimator import CaseBaseClassifier
 
-    return CaseBaseClassifier(feature_weights="none", mirror=mirror).fit(
+    return CaseBaseClassifier(feature_weights=feature_weights, mirror=mirror, **params).fit(
         [c.seq for c in clips], [c.label for c in clips]
     )
 

@@ -78,6 +78,7 @@ import pickle  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 from collections.abc import Callable  # noqa: E402
+from dataclasses import dataclass  # noqa: E402
 from functools import cache as cache_once  # noqa: E402
 from functools import partial  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -112,11 +113,34 @@ sample when there are more)."""
 DTW_HELD_OUT_SAMPLE = 400
 """Training windows (a seeded sample) whose DTW 1-NN distance to other people's windows sets
 the DTW threshold held out by person (each costs a DTW against every training window)."""
-CACHE_VERSION = 1
+CACHE_VERSION = 2
+"""2: each window's voted activity kept (the known windows' seen accuracy)."""
 JUDGE = "spread-margin"
 SCORES = ("spread-margin", "margin", "nearest", "lof", "iforest", "ocsvm", "knn5",
           "mahalanobis", "dtw", "tail-max", "tail-fisher", "logistic")  # fmt: skip
 """The scores, the default judge first, the combinations (:data:`COMBINED`) last."""
+
+
+@dataclass(frozen=True)
+class Variant:
+    """Options of the case bases measured (``--feature-weights``, ``--velocity``): the
+    default is :func:`benchmarks.segment_people.fit`'s, ``posecbr train --split windows``'s."""
+
+    feature_weights: str = "none"
+    velocity: bool = False
+
+    def params(self) -> dict[str, Any]:
+        """The :class:`cbr.estimator.CaseBaseClassifier` parameters of the variant."""
+        out: dict[str, Any] = {"feature_weights": self.feature_weights}
+        if self.velocity:
+            out["velocity"] = True
+        return out
+
+    def suffix(self) -> str:
+        """``""`` for the default; else what names its results and cache entries."""
+        return ("_fisher" if self.feature_weights == "fisher" else "") + (
+            "_velocity" if self.velocity else ""
+        )
 
 
 # ---------------------------------------------------------------- pure scoring helpers
@@ -426,25 +450,34 @@ def dtw_fold(fold: Fold, joined: list[tuple[Any, Group]], recs: dict[str, Any]) 
             "train": cdist_dtw(X[sample], X)}  # fmt: skip
 
 
-def measure_left_out(fold: Fold, joined: list[tuple[Any, Group]], movement: str) -> dict[str, Any]:
-    """With ``movement`` left out of the fold's case base: for every test recording, its
-    judged windows' spans, movements and scores, and the blocks ``segment`` calls unknown;
-    the calibrated thresholds."""
+def measure_left_out(
+    fold: Fold,
+    joined: list[tuple[Any, Group]],
+    movement: str,
+    variant: Variant | None = None,
+    judge_only: bool = False,
+) -> dict[str, Any]:
+    """With ``movement`` left out of the fold's case base (fit with ``variant``'s options):
+    for every test recording, its judged windows' spans, movements, voted activities and
+    scores, and the blocks ``segment`` calls unknown; the calibrated thresholds
+    (``judge_only``: without the scikit-learn peers)."""
     from benchmarks.segment import judge_named
     from cbr.segmentation import finish, solve_recording
     from cbr.unknown import for_person, unknown_evidence
 
-    clf = fit(training_clips(joined, leave_out=movement))
+    clf = fit(training_clips(joined, leave_out=movement), **(variant or Variant()).params())
     cb = clf.case_base_
+    classes = np.array([str(c) for c in clf.classes_], dtype=object)
     judge = judge_named(clf, JUDGE)
     margin_judge = judge_named(clf, "margin")
     X, real = case_vectors(cb)
     y = np.asarray(cb.labels).astype(str)
     people = np.array([s or "" for s in cb.subjects], dtype=object)
-    peers = Peers(X, y)
+    peers = None if judge_only else Peers(X, y)
     thresholds: dict[str, float] = {JUDGE: 1.0, "margin": float(margin_judge.threshold)}
     thresholds.update(distance_thresholds(cb))
-    thresholds.update(peer_thresholds(X, y, people, real))
+    if not judge_only:
+        thresholds.update(peer_thresholds(X, y, people, real))
     recs: dict[str, Any] = {}
     for rec in fold.recordings:
         done = solve_recording(clf, rec.seq, chunk_frames=0)
@@ -461,12 +494,14 @@ def measure_left_out(fold: Fold, joined: list[tuple[Any, Group]], movement: str)
             JUDGE: np.where(still, np.inf, score),
             "margin": np.where(two[:, 1] > 0, two[:, 0] / np.maximum(two[:, 1], 1e-300), 1.0),
             "nearest": two[:, 0],
-            **peers.scores(query_vectors(cb, [w.solved for w in windows])),
         }
+        if peers is not None:
+            scores.update(peers.scores(query_vectors(cb, [w.solved for w in windows])))
         blocks = np.array(finish(clf, done, judge).blocks[: len(rec.blocks)], dtype=object)
         truth = rec.blocks[: len(blocks)]
         recs[rec.name] = {
             "movements": pure_windows(rec, spans, rec.seq.fps),
+            "voted": classes[np.argmax(np.stack([w.vote for w in windows]), axis=1)],
             "centres_s": spans.mean(axis=1) / rec.seq.fps,
             "scores": scores,
             "evidence": np.array(
@@ -512,48 +547,64 @@ def with_combined(left: dict[str, Any], held: dict[str, Any]) -> dict[str, Any]:
     return left
 
 
-def fold_described(joined: list[tuple[Any, Group]]) -> tuple[list[Any], list[Any]]:
+def fold_described(
+    joined: list[tuple[Any, Group]], variant: Variant | None = None
+) -> tuple[list[Any], list[Any]]:
     """The fold's training windows (every movement) and each described as
-    :func:`benchmarks.segment_people.fit` describes it (once for every case base of the fold:
-    a case base without a movement is fit on the others' descriptions)."""
+    :func:`benchmarks.segment_people.fit` describes it with ``variant``'s options (once for
+    every case base of the fold: a case base without a movement is fit on the others'
+    descriptions)."""
     from cbr.described import describe_clips
     from cbr.estimator import CaseBaseClassifier
 
     clips = training_clips(joined)
     candidates, mirror, sides = CaseBaseClassifier(
-        feature_weights="none", mirror="auto"
+        mirror="auto", **(variant or Variant()).params()
     ).describe_plan()
     return clips, list(describe_clips([c.seq for c in clips], candidates, mirror, sides))
 
 
 def measure_held(
-    described: Callable[[], tuple[list[Any], list[Any]]], movement: str
+    described: Callable[[], tuple[list[Any], list[Any]]],
+    movement: str,
+    variant: Variant | None = None,
 ) -> dict[str, Any]:
     """:func:`held_scan` of the fold's case base without ``movement`` (``described``: the
-    fold's :func:`fold_described`), fit as :func:`benchmarks.segment_people.fit` fits it."""
+    fold's :func:`fold_described`), fit as :func:`benchmarks.segment_people.fit` fits it with
+    ``variant``'s options."""
     from cbr.estimator import CaseBaseClassifier
 
     clips, desc = described()
     keep = [i for i, c in enumerate(clips) if c.label != movement]
-    clf = CaseBaseClassifier(feature_weights="none", mirror="auto").fit_described(
+    clf = CaseBaseClassifier(mirror="auto", **(variant or Variant()).params()).fit_described(
         [desc[i] for i in keep], [clips[i].label for i in keep]
     )
     return {"cases": len(clf.case_base_), **held_scan(clf.case_base_)}
 
 
+def scores_in(parts: list[tuple[str, dict[str, Any]]]) -> tuple[str, ...]:
+    """The :data:`SCORES` every recording of ``parts`` has (all but a ``--judge-only`` run's
+    peers, DTW and combinations)."""
+    have = [set(r["scores"]) for _, left in parts for r in left["recordings"].values()]
+    return tuple(s for s in SCORES if all(s in h for h in have))
+
+
 def pool(parts: list[tuple[str, dict[str, Any]]]) -> dict[str, Any]:
     """Known and novel windows' scores, evidence and decisions pooled over ``parts`` (left-out
     movement, :func:`measure_left_out` with DTW), and the blocks."""
-    known: dict[str, list[np.ndarray]] = {s: [] for s in SCORES + ("evidence", "unlike")}
-    novel: dict[str, list[np.ndarray]] = {s: [] for s in SCORES + ("evidence", "unlike")}
+    names = scores_in(parts) + ("evidence", "unlike")
+    known: dict[str, list[np.ndarray]] = {s: [] for s in names}
+    novel: dict[str, list[np.ndarray]] = {s: [] for s in names}
     mixed = 0
     blocks = np.zeros(4, dtype=np.int64)
+    right: list[np.ndarray] = []
     for movement, left in parts:
         for r in left["recordings"].values():
             m = r["movements"]
             mixed += int(sum(v is None for v in m))
             is_novel = np.array([v == movement for v in m], dtype=bool)
             is_known = np.array([v is not None and v != movement for v in m], dtype=bool)
+            right.append(np.asarray(r["voted"] == m, dtype=bool)[is_known])
             for s in known:
                 values = r["scores"][s] if s in r["scores"] else r[s]
                 known[s].append(np.asarray(values)[is_known])
@@ -565,6 +616,7 @@ def pool(parts: list[tuple[str, dict[str, Any]]]) -> dict[str, Any]:
         "novel": {s: np.concatenate(v) for s, v in novel.items()},
         "mixed_windows": mixed,
         "blocks": blocks,
+        "known_voted_right": np.concatenate(right) if right else np.zeros(0, dtype=bool),
     }
 
 
@@ -577,8 +629,12 @@ def summarise(parts: list[tuple[str, dict[str, Any]]]) -> dict[str, Any]:
         "known_windows": len(k[JUDGE]),
         "novel_windows": len(n[JUDGE]),
         "windows_across_a_change_left_out": p["mixed_windows"],
+        # seen accuracy at window level: known windows whose k-NN vote names their movement
+        "known_windows_voted_right": float(np.mean(p["known_voted_right"]))
+        if len(p["known_voted_right"])
+        else float("nan"),
     }
-    for s in SCORES:
+    for s in scores_in(parts):
         out[s] = figures(k[s], n[s], None)
         kept, caught = _calibrated_shares(parts, s)
         if kept is not None:
@@ -641,33 +697,46 @@ def run_dataset(
     per_person: int = 1,
     seed: int = 0,
     smooth: bool = False,
+    variant: Variant | None = None,
+    judge_only: bool = False,
 ) -> list[tuple[str, str, dict[str, Any]]]:
     """``(fold, movement, measured)`` for every fold of ``dataset`` and each movement left out
-    (``smooth``: every file read through :class:`SmoothedReader`)."""
+    (``smooth``: every file read through :class:`SmoothedReader`; ``variant``: the case
+    bases' options; ``judge_only``: the default judge, ``margin`` and ``nearest`` alone, no
+    peers, DTW or combinations)."""
     from features.progress import progress
 
+    variant = variant or Variant()
     read = SmoothedReader() if smooth else Reader()
     out = []
     for fold in folds(dataset, per_person, seed, read):
-        tag = f"v{CACHE_VERSION}-{dataset}-{fold.name.replace(' ', '_')}-seed{seed}"
-        tag += f"-per{per_person}" if per_person != 1 else ""
+        base = f"v{CACHE_VERSION}-{dataset}-{fold.name.replace(' ', '_')}-seed{seed}"
+        tag = base + (f"-per{per_person}" if per_person != 1 else "")
         tag += "-smoothed" if smooth else ""
+        dtw_tag = tag  # the DTW distances do not depend on the case base's options
+        tag += variant.suffix().replace("_", "-") + ("-judge" if judge_only else "")
         joined = joined_training(fold.train, read)
         movements = spaced(sorted({m for r in fold.recordings for m in r.movements}), left_out)
         measured = {}
         for movement in progress(movements, f"{dataset} {fold.name}: left out", unit="movement"):
             measured[movement] = _cached(
-                cache, f"{tag}-{movement}", partial(measure_left_out, fold, joined, movement)
+                cache,
+                f"{tag}-{movement}",
+                partial(measure_left_out, fold, joined, movement, variant, judge_only),
             )
+        if judge_only:
+            out += [(fold.name, m, v) for m, v in measured.items()]
+            continue
         first = next(iter(measured.values()))["recordings"]
-        dtw = _cached(cache, f"{tag}-dtw", partial(dtw_fold, fold, joined, first))
+        dtw = _cached(cache, f"{dtw_tag}-dtw", partial(dtw_fold, fold, joined, first))
         # the fold's descriptions, made when a held-out scan needs them (once)
-        describe_once = cache_once(partial(fold_described, joined))
+        describe_once = cache_once(partial(fold_described, joined, variant))
         # the case bases do not depend on --per-person: one scan for every run
-        htag = f"v{CACHE_VERSION}-{dataset}-{fold.name.replace(' ', '_')}-seed{seed}"
-        htag += "-smoothed" if smooth else ""
+        htag = base + ("-smoothed" if smooth else "") + variant.suffix().replace("_", "-")
         for m, v in measured.items():
-            held = _cached(cache, f"{htag}-{m}-held", partial(measure_held, describe_once, m))
+            held = _cached(
+                cache, f"{htag}-{m}-held", partial(measure_held, describe_once, m, variant)
+            )
             if held["cases"] != v["cases"]:
                 raise RuntimeError(f"{fold.name} without {m}: {held['cases']} cases, not "
                                    f"{v['cases']} as measured")  # fmt: skip
@@ -685,7 +754,9 @@ def dataset_summary(measured: list[tuple[str, str, dict[str, Any]]]) -> dict[str
         "pooled": summarise(parts),
         "per_movement": per,
         "cases": sorted({v["cases"] for _, _, v in measured}),
-        "dtw_held_out_windows": sorted({v["dtw_held_out_windows"] for _, _, v in measured}),
+        "dtw_held_out_windows": sorted(
+            {v["dtw_held_out_windows"] for _, _, v in measured if "dtw_held_out_windows" in v}
+        ),
     }
 
 
@@ -695,7 +766,8 @@ def print_table(summary: dict[str, Any]) -> None:
           f"{'calibrated: kept':>18s}{'unknown':>9s}")  # fmt: skip
     for dataset, s in summary.items():
         p = s["pooled"]
-        for name in SCORES:
+        names = [n for n in SCORES if n in p]
+        for name in names:
             if name == COMBINED[0]:
                 print(f"  {'':4s}combined, {JUDGE} with nearest, calibrated on the held-out scan")
             o = p[name]
@@ -712,11 +784,11 @@ def print_table(summary: dict[str, Any]) -> None:
             f"  {dataset + ', segment blocks':42s}{'':7s}{'':13s}"
             f"{e['known_blocks_not_unknown']:18.1%}{e['novel_blocks_unknown']:9.1%}"
         )
-        print(f"  {'':4s}per movement, AUROC " + " / ".join(SCORES))
+        print(f"  {dataset + ', known windows voted right':42s}{'':7s}{'':13s}"
+              f"{p['known_windows_voted_right']:18.1%}")  # fmt: skip
+        print(f"  {'':4s}per movement, AUROC " + " / ".join(names))
         for movement, o in s["per_movement"].items():
-            print(
-                f"  {'':4s}{movement[:29]:30s}" + " ".join(f"{o[n]['auroc']:.2f}" for n in SCORES)
-            )
+            print(f"  {'':4s}{movement[:29]:30s}" + " ".join(f"{o[n]['auroc']:.2f}" for n in names))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -746,6 +818,26 @@ def main(argv: list[str] | None = None) -> int:
         help="smooth every joint as its own measured jitter asks (features.jitter), training "
         "and test alike; writes unknown_ceiling_smoothed.json",
     )
+    parser.add_argument(
+        "--feature-weights",
+        choices=("none", "fisher"),
+        default="none",
+        help="the case bases' feature weights (default none, as train --split windows); "
+        "fisher: each column weighted by its between- over within-activity variance on the "
+        "case base; writes unknown_ceiling_fisher.json",
+    )
+    parser.add_argument(
+        "--velocity",
+        action="store_true",
+        help="the case bases' problems also summarise every column's rate of change "
+        "(train --velocity); writes unknown_ceiling_velocity.json",
+    )
+    parser.add_argument(
+        "--judge-only",
+        action="store_true",
+        help="only the default judge, margin and nearest (no scikit-learn peers, DTW or "
+        "combinations: a quick screen); writes ..._judge.json",
+    )
     args = parser.parse_args(argv)
     if args.left_out is not None and args.left_out < 1:
         parser.error(f"--left-out must be at least 1, got {args.left_out}")
@@ -758,11 +850,18 @@ def main(argv: list[str] | None = None) -> int:
 
     numba.set_num_threads(1)
     load_at_start = [round(x, 2) for x in os.getloadavg()]
+    variant = Variant(args.feature_weights, args.velocity)
     summary: dict[str, Any] = {}
     for dataset in args.datasets:
         t0 = time.perf_counter()
         measured = run_dataset(
-            dataset, args.left_out, args.cache, args.per_person, smooth=args.smooth_jitter
+            dataset,
+            args.left_out,
+            args.cache,
+            args.per_person,
+            smooth=args.smooth_jitter,
+            variant=variant,
+            judge_only=args.judge_only,
         )
         summary[dataset] = {**dataset_summary(measured), "wall_s": time.perf_counter() - t0,
                             "left_out": sorted({m for _, m, _ in measured})}  # fmt: skip
@@ -774,7 +873,10 @@ def main(argv: list[str] | None = None) -> int:
         + " ".join(args.datasets)
         + (f" --left-out {args.left_out}" if args.left_out else "")
         + (f" --per-person {args.per_person}" if args.per_person != 1 else "")
-        + (" --smooth-jitter" if args.smooth_jitter else ""),
+        + (" --smooth-jitter" if args.smooth_jitter else "")
+        + (f" --feature-weights {args.feature_weights}" if args.feature_weights != "none" else "")
+        + (" --velocity" if args.velocity else "")
+        + (" --judge-only" if args.judge_only else ""),
         "note": "window level, as cbr.unknown's judges see each window; oracle: the threshold "
         "read from the test windows themselves, the lowest keeping >= 95 % of known windows "
         "known; calibrated: from the case base alone (held out by training person)",
@@ -792,6 +894,7 @@ def main(argv: list[str] | None = None) -> int:
         out = RESULTS.with_name(f"unknown_ceiling_per{args.per_person}.json")
     if args.smooth_jitter:
         out = out.with_name(f"{out.stem}_smoothed.json")
+    out = out.with_name(f"{out.stem}{variant.suffix()}{'_judge' if args.judge_only else ''}.json")
     write_json(result, out)
     print(f"\nwrote {out.relative_to(ROOT)}")
     return 0
