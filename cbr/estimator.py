@@ -341,6 +341,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     phases: with clip summaries, also the mean of every feature over each of this many equal
       stretches of the clip ("left knee angle (middle third)"); ``"auto"``: three or none,
       chosen like ``mirror``.
+    velocity: with clip summaries, also the statistics of every feature's rate of change
+      ("left knee angle rate of change (highest)"); off by default.
     """
 
     def __init__(
@@ -361,6 +363,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         phases: int | str = "auto",
         positions: bool = True,
         editor: str | None = None,
+        velocity: bool = False,
     ) -> None:
         self.features = features
         self.similarity = similarity
@@ -378,6 +381,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         self.phases = phases
         self.positions = positions
         self.editor = editor
+        self.velocity = velocity
 
     # -- parameters
 
@@ -396,6 +400,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             angles=bool(self.angles) and fluents,
             positions=bool(self.positions) and fluents,
             summary=self._summary(),
+            velocity=bool(self.velocity) and self._summary(),
             # "auto": computed with the phases, which fit may then drop
             phases=(self._auto_phases() if self.phases == "auto" else int(self.phases))
             if self._summary()
@@ -441,6 +446,8 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
                 f"{did_you_mean(str(self.editor), EDITORS)}",
                 "editor",
             )
+        if not isinstance(self.velocity, bool | np.bool_):
+            raise ConfigError(f"velocity must be True or False, got {self.velocity!r}", "velocity")
         if self.summary != "auto" and not isinstance(self.summary, bool | np.bool_):
             raise ConfigError(
                 f"summary must be True, False or 'auto', got {self.summary!r}", "summary"

@@ -42,7 +42,7 @@ from features.datasets import truth_value
 from .calibration import UNCALIBRATED
 from .casebase import CaseBase
 from .counterfactual import MAX_CHANGES, Counterfactual, counterfactual
-from .problem import ANGLE_PREFIX, POSITION_PREFIX, Problem
+from .problem import ANGLE_PREFIX, POSITION_PREFIX, RATE_PREFIX, Problem
 from .profiles import Profiles, View, profiles_of, view_of
 from .retrieve import Retrieval, nearest_of_other_label
 from .reuse import Weights
@@ -100,6 +100,8 @@ def quantity(name: str, value: float) -> tuple[float, str]:
     confidence, not as a share of the time), its lowest and highest values are confidences,
     its variation a plain number."""
     base, _, stat = name.partition("@")
+    if stat.startswith(RATE_PREFIX):
+        return float(value), ""  # a rate of change per clip length: a plain number
     if base.startswith(ANGLE_PREFIX):
         return float(value) * 180.0, "degrees"
     if base.startswith(POSITION_PREFIX):

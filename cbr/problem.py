@@ -13,7 +13,9 @@ Options of the fluent level: ``angles`` adds the named joint angles of the state
 like the confidences) as further columns ``"angle:left_knee"``; ``summary`` describes the clip by
 per-column statistics instead of the sequence: the mean (for a fluent state, about the share of
 the clip it holds), the lowest and highest value and the standard deviation, a
-``(4 * n_columns,)`` vector (statistic-major) for vector measures such as euclidean.
+``(4 * n_columns,)`` vector (statistic-major) for vector measures such as euclidean; with
+``velocity`` the same four statistics of every column's rate of change follow (its change
+from one resampled frame to the next, per clip length: a 2-s window's change per window).
 :func:`mirrored` gives the left-right mirror image of a clip (for mirror-augmented case bases).
 
 Which states are used is decided once, when the case base is built (:func:`resolve_config`):
@@ -57,6 +59,8 @@ STATE_GROUPS = ("angles", "instantaneous", "all")
 ANGLE_PREFIX = "angle:"
 SUMMARY_STATS = ("mean", "min", "max", "std")
 _STAT_WORDS = {"mean": "", "min": " (lowest)", "max": " (highest)", "std": " (variation)"}
+RATE_PREFIX = "rate_"
+"""The statistics of a column's rate of change are named ``@rate_mean``, ``@rate_min``, ..."""
 # options added after the first stored case bases: left out of to_dict() while off, so the
 # configuration hash of every existing case base stays the same
 _LATER_OPTIONS = {
@@ -65,6 +69,7 @@ _LATER_OPTIONS = {
     "side": "as_recorded",
     "phases": 0,
     "positions": False,
+    "velocity": False,
 }
 POSITION_PREFIX = "pos:"
 SIDE_MODES = ("as_recorded", "canonical")
@@ -92,6 +97,8 @@ class FeatureConfig:
       stretches of the clip ("left knee angle (middle third)"); 0: none.
     positions: also use the positions of the limb joints in the person's own frame at the
       start of the clip (:func:`body_positions`: "left wrist height", in torso lengths).
+    velocity: with ``summary``, also the statistics of every column's rate of change
+      ("left knee angle rate of change (highest)"), before the phase means.
     side: ``"as_recorded"``, or ``"canonical"``: a clip that moves its left limbs more than its
       right ones is described by its mirror image (:func:`mirrored`), so a movement done with
       the left arm is compared with the right-arm cases (:func:`moves_left_more`).
@@ -108,6 +115,7 @@ class FeatureConfig:
     side: str = "as_recorded"
     phases: int = 0
     positions: bool = False
+    velocity: bool = False
 
     def __post_init__(self) -> None:
         if self.level not in ("fluents", "qmp"):
@@ -145,9 +153,19 @@ class FeatureConfig:
                 f"{self.phases!r}",
                 "phases",
             )
+        self._check_velocity()
         if self.side not in SIDE_MODES:
             raise ConfigError(
                 f"side must be one of {', '.join(SIDE_MODES)}, got {self.side!r}", "side"
+            )
+
+    def _check_velocity(self) -> None:
+        if not isinstance(self.velocity, bool | np.bool_):
+            raise ConfigError(f"velocity must be true or false, got {self.velocity!r}", "velocity")
+        if self.velocity and not (self.summary and self.level == "fluents"):
+            raise ConfigError(
+                "velocity (rates of change) needs fluent-level clip summaries (summary=True)",
+                "velocity",
             )
 
     @property
@@ -185,7 +203,8 @@ class FeatureConfig:
         )
         if self.summary:
             ph = f" and {self.phases} phases" if self.phases else ""
-            return f"fluents ({n}{extra}, summarised over {self.length} frames{ph})"
+            rate = " with rates of change" if self.velocity else ""
+            return f"fluents ({n}{extra}, summarised{rate} over {self.length} frames{ph})"
         return f"fluents ({n}{extra}, resampled to {self.length} frames)"
 
 
@@ -352,7 +371,7 @@ def column_index(config: FeatureConfig, candidates: FeatureConfig) -> np.ndarray
     if not config.summary:
         return cols
     n = len(candidates.states)
-    blocks = len(SUMMARY_STATS) + int(config.phases)
+    blocks = len(SUMMARY_STATS) * (2 if config.velocity else 1) + int(config.phases)
     return np.concatenate([b * n + cols for b in range(blocks)])
 
 
@@ -572,7 +591,7 @@ def _fluent_problem(seq: PoseSequence, config: FeatureConfig, chunk: int, mirror
         never = np.isnan(columns).all(axis=0) if len(columns) else np.zeros(len(states), bool)
         unseen = frozenset(s for s, n in zip(states, never, strict=True) if n)
     if config.summary:
-        problem = summarise(values, states, plan.words, int(config.phases))
+        problem = summarise(values, states, plan.words, int(config.phases), bool(config.velocity))
         return dataclasses.replace(problem, unseen=unseen)
     return Problem(values, states, plan.words, "fluents", unseen=unseen)
 
@@ -629,7 +648,7 @@ def phase_words(phases: int) -> tuple[str, ...]:
 
 @lru_cache(maxsize=64)
 def summary_columns(
-    names: tuple[str, ...], words: tuple[str, ...], phases: int = 0
+    names: tuple[str, ...], words: tuple[str, ...], phases: int = 0, velocity: bool = False
 ) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """Names and words of the columns :func:`summarise` gives (the same for every clip of a
     case base, so built once)."""
@@ -642,6 +661,13 @@ def summary_columns(
         for st in SUMMARY_STATS
         for n, w in zip(names, words, strict=True)
     ]
+    if velocity:
+        out_names += [f"{n}@{RATE_PREFIX}{st}" for st in SUMMARY_STATS for n in names]
+        out_words += [
+            f"{w} rate of change{_STAT_WORDS[st] or ' (mean)'}"
+            for st in SUMMARY_STATS
+            for w in words
+        ]
     for i, said in enumerate(phase_words(phases) if phases else ()):
         out_names += [f"{n}@phase{i + 1}" for n in names]
         out_words += [f"{w} ({said})" for w in words]
@@ -649,19 +675,30 @@ def summary_columns(
 
 
 def summarise(
-    values: np.ndarray, names: tuple[str, ...], words: tuple[str, ...], phases: int = 0
+    values: np.ndarray,
+    names: tuple[str, ...],
+    words: tuple[str, ...],
+    phases: int = 0,
+    velocity: bool = False,
 ) -> Problem:
     """Per-column statistics of a ``(frames, n)`` sequence: a ``(4 * n,)`` vector, statistic-
-    major (all means, then lowest, highest, standard deviation), then with ``phases`` > 0 the
-    mean over each of that many equal stretches of the frames (``phases * n`` more). Column
-    names get ``@mean``, ``@min``, ..., ``@phase1``...; the words of the means are the plain
-    feature words (for a fluent state the mean confidence is about the share of the clip it
-    holds)."""
+    major (all means, then lowest, highest, standard deviation); with ``velocity`` the same
+    four of the rate of change ``(frames - 1) * diff(values)`` (the change per clip length of
+    each step of the resampled frames; ``4 * n`` more, ``@rate_mean``...); then with ``phases``
+    > 0 the mean over each of that many equal stretches of the frames (``phases * n`` more).
+    Column names get ``@mean``, ``@min``, ..., ``@phase1``...; the words of the means are the
+    plain feature words (for a fluent state the mean confidence is about the share of the clip
+    it holds)."""
     stats = [values.mean(axis=0), values.min(axis=0), values.max(axis=0), values.std(axis=0)]
+    if velocity:
+        if len(values) < 2:
+            raise DataError("a rate of change needs at least two frames", "velocity")
+        rate = np.diff(values, axis=0) * (len(values) - 1)
+        stats += [rate.mean(axis=0), rate.min(axis=0), rate.max(axis=0), rate.std(axis=0)]
     stats += (
         [part.mean(axis=0) for part in np.array_split(values, phases, axis=0)] if phases else []
     )
-    out_names, out_words = summary_columns(names, words, phases)
+    out_names, out_words = summary_columns(names, words, phases, velocity)
     return Problem(np.concatenate(stats), out_names, out_words, "fluents")
 
 
@@ -674,5 +711,5 @@ def problem_columns(config: FeatureConfig) -> tuple[tuple[str, ...], tuple[str, 
     names, words, _ = state_columns()
     plan_words = _column_plan(states, tuple(names), tuple(words)).words
     if config.summary:
-        return summary_columns(states, plan_words, int(config.phases))
+        return summary_columns(states, plan_words, int(config.phases), bool(config.velocity))
     return states, plan_words
