@@ -138,3 +138,53 @@ def test_smoothed_reader_smooths_each_file_once(monkeypatch: pytest.MonkeyPatch)
     assert np.array_equal(got.positions, smooth_jitter(raw).positions)
     assert not np.array_equal(got.positions, raw.positions)
     assert read(group, Path("a")) is got and reads == [Path("a")]
+
+
+def _recording(movements: list[str | None], voted: list[str], judge: list[float]) -> dict:
+    """A measured recording as :func:`benchmarks.unknown_ceiling.measure_left_out` keeps it,
+    with only the scores a ``--judge-only`` run has."""
+    n = len(movements)
+    score = np.array(judge, dtype=float)
+    return {
+        "movements": np.array(movements, dtype=object),
+        "voted": np.array(voted, dtype=object),
+        "scores": {"spread-margin": score, "margin": score / 2, "nearest": score * 3},
+        "evidence": score / 10,
+        "unlike": score > 1.0,
+        "blocks_novel": 0,
+        "blocks_novel_unknown": 0,
+        "blocks_known": 0,
+        "blocks_known_unknown": 0,
+        "centres_s": np.arange(n, dtype=float),
+    }
+
+
+def test_a_judge_only_run_is_summarised_with_the_known_windows_voted_accuracy() -> None:
+    from benchmarks.unknown_ceiling import scores_in, summarise
+
+    # "b" left out: windows of a and c are known; the window across a change (None) counts
+    # in neither; of the three known windows (a, a, c) two are voted their own movement
+    rec = _recording(["a", "a", "b", "b", None, "c"], ["a", "c", "a", "c", "a", "c"],
+                     [0.5, 0.9, 2.0, 1.5, 3.0, 0.7])  # fmt: skip
+    left = {"recordings": {"s05-1": rec}, "thresholds": {"spread-margin": 1.0}}
+    parts = [("b", left)]
+    assert scores_in(parts) == ("spread-margin", "margin", "nearest")
+    out = summarise(parts)
+    assert out["known_windows_voted_right"] == pytest.approx(2 / 3)
+    assert out["known_windows"] == 3 and out["novel_windows"] == 2
+    assert out["windows_across_a_change_left_out"] == 1
+    # known 0.5, 0.9, 0.7 lie below both novel ones: AUROC 1, every novel window above the
+    # oracle threshold (0.9, the highest known: 3 of 3 at 95 %)
+    assert out["spread-margin"]["auroc"] == 1.0
+    assert out["spread-margin"]["oracle_unknown_at_95_known"] == 1.0
+    assert out["spread-margin"]["calibrated"] == {"known_kept": 1.0, "novel_unknown": 1.0}
+    assert "lof" not in out and "dtw" not in out and "tail-fisher" not in out
+
+
+def test_variants_name_their_options_results_and_cache() -> None:
+    from benchmarks.unknown_ceiling import Variant
+
+    assert Variant().params() == {"feature_weights": "none"} and Variant().suffix() == ""
+    both = Variant("fisher", True)
+    assert both.params() == {"feature_weights": "fisher", "velocity": True}
+    assert both.suffix() == "_fisher_velocity"
