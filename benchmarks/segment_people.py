@@ -2,11 +2,14 @@
 classifier in the same run.
 
 Run: ``python -m benchmarks.segment_people [--datasets ...] [--per-person N] [--seed S]
-[--train-people N [--rotate]] [--mirror SIDE]`` (``--train-people 1``: case bases of one
-person, as one of CMU subject 13 alone, the first training person's; written to
+[--train-people N [--rotate]] [--mirror SIDE] [--feature-weights fisher]``
+(``--train-people 1``: case bases of one person, as one of CMU subject 13 alone, the first
+training person's; written to
 ``segment_people_1.json``; ``--rotate``: each training person's in turn, every recording
 segmented by each, pooled, ``segment_people_1_rotate.json``; ``--mirror``: their side
-handling, as ``train --mirror``, written to ``segment_people[_N]_SIDE.json``)
+handling, as ``train --mirror``, written to ``segment_people[_N]_SIDE.json``;
+``--feature-weights fisher``: Fisher-weighted case bases, as ``train --split windows
+--feature-weights fisher``, written to ``segment_people[...]_fisher.json``)
 (about 19 minutes of wall clock at load 6-10 on 2 cores, most of it the DTW baseline and
 the case bases of UI-PRMD Kinect; each window is solved once and finished by every judge;
 one core: BLAS, OpenMP and numba threads pinned to 1; ``--datasets hdm05`` alone takes about
@@ -355,15 +358,18 @@ def dtw(X: np.ndarray, y: np.ndarray, rec: Recording) -> dict[str, Any]:
     }
 
 
-def run_fold(fold: Fold, read: Reader, mirror: str = "auto") -> dict[str, Any]:
+def run_fold(
+    fold: Fold, read: Reader, mirror: str = "auto", feature_weights: str = "none"
+) -> dict[str, Any]:
     """Seen accuracy and boundaries (ours per judge, DTW), and the unknown share of every
-    movement left out in turn, per judge."""
+    movement left out in turn, per judge (the case bases' side handling ``mirror`` and
+    ``feature_weights``, as ``train``'s options)."""
     from cbr.problem import warm
     from features.progress import progress
 
     joined = joined_training(fold.train, read)
     t0 = time.perf_counter()
-    clf = fit(training_clips(joined), mirror)
+    clf = fit(training_clips(joined), mirror, feature_weights)
     fit_s = time.perf_counter() - t0
     judges = {name: judge_named(clf, name) for name in JUDGES}
     X, y = dtw_training([(seq, g.movement) for seq, g in joined])
@@ -385,7 +391,7 @@ def run_fold(fold: Fold, read: Reader, mirror: str = "auto") -> dict[str, Any]:
         for name, o in ours(clf, rec, judges).items():
             row[name] = {k: v for k, v in o.items() if k != "pred"}
         recs.append(row)
-    unknown = run_unknown(fold, joined, mirror)
+    unknown = run_unknown(fold, joined, mirror, feature_weights)
     return {
         "fold": fold.name,
         "cases": len(clf.case_base_),
@@ -397,7 +403,10 @@ def run_fold(fold: Fold, read: Reader, mirror: str = "auto") -> dict[str, Any]:
 
 
 def run_unknown(
-    fold: Fold, joined: list[tuple[Any, Group]], mirror: str = "auto"
+    fold: Fold,
+    joined: list[tuple[Any, Group]],
+    mirror: str = "auto",
+    feature_weights: str = "none",
 ) -> dict[str, Any]:
     """Each movement of the test recordings left out of the case base in turn: per judge,
     its blocks in the recordings that contain it, and how many were called unknown."""
@@ -407,7 +416,7 @@ def run_unknown(
     movements = sorted({m for r in fold.recordings for m in r.movements})
     out: dict[str, Any] = {}
     for movement in progress(movements, f"{fold.dataset} {fold.name}: left out", unit="movement"):
-        clf = fit(training_clips(joined, leave_out=movement), mirror)
+        clf = fit(training_clips(joined, leave_out=movement), mirror, feature_weights)
         judges = {name: judge_named(clf, name) for name in JUDGES}
         counts = {name: [0, 0] for name in JUDGES}
         for rec in fold.recordings:
@@ -499,6 +508,13 @@ def main(argv: list[str] | None = None) -> int:
         help="the case bases' side handling, as train's --mirror (given: results go to "
         "segment_people[_N]_MIRROR.json)",
     )
+    parser.add_argument(
+        "--feature-weights",
+        choices=("none", "fisher"),
+        default="none",
+        help="the case bases' feature weights, as train's --feature-weights (default none, "
+        "as train --split windows; fisher: results go to segment_people[_N]_fisher.json)",
+    )
     args = parser.parse_args(argv)
     if args.rotate and not args.train_people:
         parser.error("--rotate needs --train-people N")
@@ -515,7 +531,7 @@ def main(argv: list[str] | None = None) -> int:
         read = Reader()
         t0 = time.perf_counter()
         chosen = folds(dataset, args.per_person, args.seed, read, args.train_people, args.rotate)
-        done = [run_fold(f, read, args.mirror) for f in chosen]
+        done = [run_fold(f, read, args.mirror, args.feature_weights) for f in chosen]
         results[dataset] = done
         summary[dataset] = {**summarise(done), "wall_s": time.perf_counter() - t0}
         print_table({dataset: summary[dataset]})
@@ -527,7 +543,8 @@ def main(argv: list[str] | None = None) -> int:
         + f" --per-person {args.per_person} --seed {args.seed}"
         + (f" --train-people {args.train_people}" if args.train_people else "")
         + (" --rotate" if args.rotate else "")
-        + (f" --mirror {args.mirror}" if args.mirror != "auto" else ""),
+        + (f" --mirror {args.mirror}" if args.mirror != "auto" else "")
+        + (f" --feature-weights {args.feature_weights}" if args.feature_weights != "none" else ""),
         "note": "joined real single repetitions of people not in the case base: the joins "
         "(0.1 s of blending) and the rest at each repetition's ends differ from a real session",
         "machine": one_thread_machine(),
@@ -543,6 +560,8 @@ def main(argv: list[str] | None = None) -> int:
         out = out.with_name(f"{out.stem}_rotate.json")
     if args.mirror != "auto":
         out = out.with_name(f"{out.stem}_{args.mirror}.json")
+    if args.feature_weights != "none":
+        out = out.with_name(f"{out.stem}_{args.feature_weights}.json")
     write_json(result, out)
     print(f"\nwrote {out.relative_to(ROOT)}")
     return 0
