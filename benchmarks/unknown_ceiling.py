@@ -3,7 +3,8 @@ judges: is the gap to issue 14's goal (left-out blocks called unknown >= 80 %, s
 right >= 95 %) the judge's or the features'?
 
 Run: ``python -m benchmarks.unknown_ceiling [--datasets ...] [--left-out N] [--per-person N]
-[--cache DIR] [--smooth-jitter]`` (at load 10-16 on 2 cores: HDM05 about 4 minutes, 10 with
+[--cache DIR] [--smooth-jitter] [--feature-weights fisher] [--velocity] [--judge-only]``
+(at load 10-16 on 2 cores: HDM05 about 4 minutes, 10 with
 ``--per-person 3``; UI-PRMD Vicon and Kinect 3-4 minutes per left-out movement, most of it
 fitting each case base, and a few minutes of DTW per fold; ``--left-out N`` keeps N of a fold's
 movements, evenly spaced in sorted order, and the results name the movements measured;
@@ -13,6 +14,14 @@ resumes and a run of several datasets reuses single runs'). Writes
 ``benchmarks/results/unknown_ceiling.json`` (``unknown_ceiling_perN.json`` with
 ``--per-person N``; ``..._smoothed.json`` with ``--smooth-jitter``: every file's joints
 smoothed as their own jitter asks, :func:`features.jitter.smooth_jitter`).
+``--feature-weights fisher``: the case bases weight every column by its between- over
+within-activity variance on the case base (:func:`cbr.weights.fisher_ratio`; ``train
+--feature-weights fisher``), ``..._fisher.json``; ``--velocity``: their problems also hold
+the statistics of every column's rate of change (``CaseBaseClassifier(velocity=True)``),
+``..._velocity.json``; ``--judge-only``: a quick screen, the default judge, ``margin`` and
+``nearest`` alone (no scikit-learn peers, DTW or combinations), ``..._judge.json``. Every
+run also gives the known windows' seen accuracy: the share whose k-NN vote names their own
+movement (with the case base that lacks the left-out one).
 
 The folds, recordings, readers and case bases are :mod:`benchmarks.segment_people`'s (one
 recording per held-out person, seed 0): each movement of the test recordings left out of the
