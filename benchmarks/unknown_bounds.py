@@ -51,6 +51,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
 import argparse  # noqa: E402
 import math  # noqa: E402
 import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
 from dataclasses import dataclass  # noqa: E402
 from functools import partial  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -261,20 +262,25 @@ def decide(movement: str, measured: dict[str, Any]) -> dict[str, np.ndarray]:
 
 
 def run_dataset(
-    dataset: str, cache: Path | None, train_people: int | None = None
+    dataset: str,
+    cache: Path | None,
+    train_people: int | None = None,
+    measure: Callable[[Fold, list[tuple[Any, Group]], str], dict[str, Any]] = measure,
+    tag: str = "full",
 ) -> list[tuple[str, str, dict[str, Any]]]:
-    """``(fold, movement, measured)`` for every fold of ``dataset`` and each movement left
-    out (``train_people``: case bases of that many people, each in turn)."""
+    """``(fold, movement, measure(fold, joined, movement))`` for every fold of ``dataset`` and
+    each movement left out (``train_people``: case bases of that many people, each in turn),
+    kept in ``cache`` under ``tag``."""
     from features.progress import progress
 
     read = Reader()
     out = []
     for fold in folds(dataset, 1, 0, read, train_people, bool(train_people)):
-        tag = f"full-{dataset}-{fold.name.replace(' ', '_').replace(',', '')}"
+        key = f"{tag}-{dataset}-{fold.name.replace(' ', '_').replace(',', '')}"
         joined = joined_training(fold.train, read)
         movements = sorted({m for r in fold.recordings for m in r.movements})
         for m in progress(movements, f"{dataset} {fold.name}: left out", unit="movement"):
-            out.append((fold.name, m, _cached(cache, f"{tag}-{m}",
+            out.append((fold.name, m, _cached(cache, f"{key}-{m}",
                                               partial(measure, fold, joined, m))))  # fmt: skip
     return out
 
@@ -290,21 +296,40 @@ def summarise(measured: list[tuple[str, str, dict[str, Any]]]) -> dict[str, Any]
         near, far = bounds(m["judge"], m["held"])
         cases.append({"fold": fold, "left_out": movement, "cases": m["cases"],
                       "basis": m["held"][2], "near": near, "far": far})  # fmt: skip
-    rules = {rule: {"known_windows": int(t[1]), "novel_windows": int(t[3]),
-                    "known_kept": float(t[0]) / max(1, int(t[1])),
-                    "novel_unknown": float(t[2]) / max(1, int(t[3]))}
-             for rule, t in tally.items()}  # fmt: skip
-    return {"rules": rules, "case_bases": cases}
+    return {"rules": rule_shares(tally), "case_bases": cases}
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.unknown_bounds",
-                                     description=__doc__.split("\n\n")[0])  # fmt: skip
+def rule_shares(tally: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
+    """Per rule, from its ``(known kept, known, novel unknown, novel)`` window counts: the
+    counts and the two shares."""
+    return {rule: {"known_windows": int(t[1]), "novel_windows": int(t[3]),
+                   "known_kept": float(t[0]) / max(1, int(t[1])),
+                   "novel_unknown": float(t[2]) / max(1, int(t[3]))}
+            for rule, t in tally.items()}  # fmt: skip
+
+
+def rules_main(
+    argv: list[str] | None,
+    name: str,
+    doc: str,
+    note: str,
+    run: Callable[[str, Path | None, int | None], list[tuple[str, str, dict[str, Any]]]],
+    summarise: Callable[[list[tuple[str, str, dict[str, Any]]]], dict[str, Any]],
+    results: Path,
+) -> int:
+    """The command of a window-level benchmark of unknown rules (``python -m benchmarks.NAME``,
+    described by the first paragraph of ``doc``): ``run`` measures each dataset, ``summarise``
+    gives each rule's shares; the table is printed and the JSON written to ``results``
+    (``NAME_N.json`` with ``--train-people N``)."""
+    parser = argparse.ArgumentParser(prog=f"python -m benchmarks.{name}",
+                                     description=doc.split("\n\n")[0])  # fmt: skip
     parser.add_argument("--datasets", nargs="+", choices=DATASETS, default=list(DATASETS))
     parser.add_argument("--train-people", type=int, default=None, metavar="N",
                         help="case bases of N training people, each in turn")  # fmt: skip
     parser.add_argument("--cache", type=Path, default=None, metavar="DIR",
                         help="keep each left-out movement's measurements here")  # fmt: skip
+    parser.add_argument("--out", type=Path, default=None, metavar="JSON",
+                        help="write here instead of benchmarks/results/")  # fmt: skip
     args = parser.parse_args(argv)
     if args.train_people is not None and args.train_people < 1:
         parser.error(f"--train-people must be at least 1, got {args.train_people}")
@@ -318,19 +343,18 @@ def main(argv: list[str] | None = None) -> int:
     summary: dict[str, Any] = {}
     for dataset in args.datasets:
         t0 = time.perf_counter()
-        summary[dataset] = summarise(run_dataset(dataset, args.cache, args.train_people))
+        summary[dataset] = summarise(run(dataset, args.cache, args.train_people))
         summary[dataset]["wall_s"] = time.perf_counter() - t0
         print(f"\n{dataset}: known windows kept / left-out windows unknown")
         for rule, r in summary[dataset]["rules"].items():
             counts = f"({r['known_windows']} known, {r['novel_windows']} left-out windows)"
             print(f"  {rule:24s}{r['known_kept']:8.1%}{r['novel_unknown']:8.1%}   {counts}")
     result = {
-        "benchmark": "unknown_bounds",
-        "command": "python -m benchmarks.unknown_bounds --datasets "
+        "benchmark": name,
+        "command": f"python -m benchmarks.{name} --datasets "
         + " ".join(args.datasets)
         + (f" --train-people {args.train_people}" if args.train_people else ""),
-        "note": "window level, people not in the case base; every rule calibrated on the case "
-        "base's held-out scan alone",
+        "note": note,
         "machine": one_thread_machine(),
         "load_average_at_start": load_at_start,
         "versions": versions("posecbr", "numpy", "scipy", "scikit-learn", "numba"),
@@ -340,12 +364,25 @@ def main(argv: list[str] | None = None) -> int:
         result["cache"] = (
             "measurements read from --cache where a run had made them: wall_s is this run's"
         )
-    out = RESULTS
-    if args.train_people:
-        out = RESULTS.with_name(f"unknown_bounds_{args.train_people}.json")
+    out = args.out or results
+    if args.train_people and args.out is None:
+        out = results.with_name(f"{name}_{args.train_people}.json")
     write_json(result, out)
-    print(f"\nwrote {out.relative_to(ROOT)}")
+    print(f"\nwrote {out}")
     return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    return rules_main(
+        argv,
+        "unknown_bounds",
+        __doc__ or "",
+        "window level, people not in the case base; every rule calibrated on the case "
+        "base's held-out scan alone",
+        run_dataset,
+        summarise,
+        RESULTS,
+    )
 
 
 if __name__ == "__main__":

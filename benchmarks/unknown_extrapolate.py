@@ -49,20 +49,15 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
     os.environ[_var] = "1"
 
-import argparse  # noqa: E402
-import time  # noqa: E402
-from functools import partial  # noqa: E402
 from pathlib import Path  # noqa: E402
 from types import SimpleNamespace  # noqa: E402
 from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from benchmarks import write_json  # noqa: E402
-from benchmarks._common import one_thread_machine, versions  # noqa: E402
-from benchmarks.repetitions import HDM05, UIPRMD, Group  # noqa: E402
-from benchmarks.segment_people import DATASETS, Fold, Reader, folds, joined_training  # noqa: E402
-from benchmarks.unknown_ceiling import _cached  # noqa: E402
+from benchmarks import unknown_bounds  # noqa: E402
+from benchmarks.repetitions import Group  # noqa: E402
+from benchmarks.segment_people import Fold  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "unknown_extrapolate.json"
@@ -360,18 +355,7 @@ def run_dataset(
 ) -> list[tuple[str, str, dict[str, Any]]]:
     """``(fold, movement, measured)`` for every fold of ``dataset`` and each movement left
     out (``train_people``: case bases of that many people, each in turn)."""
-    from features.progress import progress
-
-    read = Reader()
-    out = []
-    for fold in folds(dataset, 1, 0, read, train_people, bool(train_people)):
-        tag = f"people-{dataset}-{fold.name.replace(' ', '_').replace(',', '')}"
-        joined = joined_training(fold.train, read)
-        movements = sorted({m for r in fold.recordings for m in r.movements})
-        for m in progress(movements, f"{dataset} {fold.name}: left out", unit="movement"):
-            out.append((fold.name, m, _cached(cache, f"{tag}-{m}",
-                                              partial(measure, fold, joined, m))))  # fmt: skip
-    return out
+    return unknown_bounds.run_dataset(dataset, cache, train_people, measure, "people")
 
 
 def summarise(measured: list[tuple[str, str, dict[str, Any]]]) -> dict[str, Any]:
@@ -387,64 +371,20 @@ def summarise(measured: list[tuple[str, str, dict[str, Any]]]) -> dict[str, Any]
                       "median_ratio": median_ratio(m["people"], m["held"][1]),
                       "chosen": choose_correction(m["labels"], m["held"], m["people"]),
                       "d1_q95": quantiles(m, movement)})  # fmt: skip
-    rules = {rule: {"known_windows": int(t[1]), "novel_windows": int(t[3]),
-                    "known_kept": float(t[0]) / max(1, int(t[1])),
-                    "novel_unknown": float(t[2]) / max(1, int(t[3]))}
-             for rule, t in tally.items()}  # fmt: skip
-    return {"rules": rules, "case_bases": cases}
+    return {"rules": unknown_bounds.rule_shares(tally), "case_bases": cases}
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.unknown_extrapolate",
-                                     description=__doc__.split("\n\n")[0])  # fmt: skip
-    parser.add_argument("--datasets", nargs="+", choices=DATASETS, default=list(DATASETS))
-    parser.add_argument("--train-people", type=int, default=None, metavar="N",
-                        help="case bases of N training people, each in turn")  # fmt: skip
-    parser.add_argument("--cache", type=Path, default=None, metavar="DIR",
-                        help="keep each left-out movement's measurements here")  # fmt: skip
-    parser.add_argument("--out", type=Path, default=None, metavar="JSON",
-                        help="write here instead of benchmarks/results/")  # fmt: skip
-    args = parser.parse_args(argv)
-    if args.train_people is not None and args.train_people < 1:
-        parser.error(f"--train-people must be at least 1, got {args.train_people}")
-    if not UIPRMD.is_dir() or not HDM05.is_dir():
-        print(f"no ui-prmd or hdm05 data under {UIPRMD.parents[1]}: nothing to measure")
-        return 1
-    import numba
-
-    numba.set_num_threads(1)
-    load_at_start = [round(x, 2) for x in os.getloadavg()]
-    summary: dict[str, Any] = {}
-    for dataset in args.datasets:
-        t0 = time.perf_counter()
-        summary[dataset] = summarise(run_dataset(dataset, args.cache, args.train_people))
-        summary[dataset]["wall_s"] = time.perf_counter() - t0
-        print(f"\n{dataset}: known windows kept / left-out windows unknown")
-        for rule, r in summary[dataset]["rules"].items():
-            counts = f"({r['known_windows']} known, {r['novel_windows']} left-out windows)"
-            print(f"  {rule:24s}{r['known_kept']:8.1%}{r['novel_unknown']:8.1%}   {counts}")
-    result = {
-        "benchmark": "unknown_extrapolate",
-        "command": "python -m benchmarks.unknown_extrapolate --datasets "
-        + " ".join(args.datasets)
-        + (f" --train-people {args.train_people}" if args.train_people else ""),
-        "note": "window level, people not in the case base; the default judge calibrated on "
-        "its held-out scan corrected for the one person fewer it measures against",
-        "machine": one_thread_machine(),
-        "load_average_at_start": load_at_start,
-        "versions": versions("posecbr", "numpy", "scipy", "scikit-learn", "numba"),
-        "summary": summary,
-    }
-    if args.cache is not None:
-        result["cache"] = (
-            "measurements read from --cache where a run had made them: wall_s is this run's"
-        )
-    out = args.out or RESULTS
-    if args.train_people and args.out is None:
-        out = RESULTS.with_name(f"unknown_extrapolate_{args.train_people}.json")
-    write_json(result, out)
-    print(f"\nwrote {out}")
-    return 0
+    return unknown_bounds.rules_main(
+        argv,
+        "unknown_extrapolate",
+        __doc__ or "",
+        "window level, people not in the case base; the default judge calibrated on its "
+        "held-out scan corrected for the one person fewer it measures against",
+        run_dataset,
+        summarise,
+        RESULTS,
+    )
 
 
 if __name__ == "__main__":
