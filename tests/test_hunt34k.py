@@ -137,7 +137,12 @@ def test_a_stopped_extract_with_workers_removes_the_class_folders_it_made_empty(
     assert _gone_soon(workers) == []
     assert got == (143, "posecbr extract: terminated (SIGTERM)\n", "")
     left = sorted(p.relative_to(out).as_posix() for p in out.rglob("*"))
-    assert left == ["mine", "squat"], (begun, left)
+    # a clip another worker finished before the stop keeps its pose file (under load the first
+    # file begun can be missed by the polling, and the stop comes a clip or two later)
+    assert not [p for p in left if any(part.startswith(".") for part in p.split("/"))], left
+    assert all(p.endswith(".npz") for p in left if "/" in p), left
+    empty = [p for p in left if (out / p).is_dir() and not any((out / p).iterdir())]
+    assert empty == ["mine", "squat"], (begun, left)
 
 
 # ------------------------------------------------------------------ the report's first line
