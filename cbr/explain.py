@@ -47,6 +47,8 @@ from .profiles import Profiles, View, profiles_of, view_of
 from .retrieve import Retrieval, nearest_of_other_label
 from .reuse import Weights
 from .weights import MIRROR_FLAG
+from .words import MIRRORED as MIRRORED
+from .words import class_noun as class_noun
 
 if TYPE_CHECKING:
     from .estimator import Solved
@@ -62,7 +64,6 @@ MAX_TEXT = 400
 MIN_EVIDENCE = float(np.log(4.0))
 #: features named on the "why" line and changes shown on the counterfactual line at most
 SHORT_ITEMS = 3
-MIRRORED = " (mirrored)"
 
 
 def presence(values: np.ndarray) -> np.ndarray:
@@ -146,15 +147,6 @@ def label_words(label: str, target: str | None = None, article: bool = True) -> 
             words = "correct repetition" if truth else "incorrect repetition"
             return (("a " if truth else "an ") + words) if article else words
     return label
-
-
-def class_noun(target: str | None, n: int = 1) -> str:
-    """What a case base's solutions are called, ``n`` of them: activities when it predicts the
-    activity label (``target`` "label" or None), classes when it predicts another column
-    (``correct``: correct and incorrect repetitions are no activities)."""
-    if target in (None, "label"):
-        return "activity" if n == 1 else "activities"
-    return "class" if n == 1 else "classes"
 
 
 @dataclass(frozen=True)

@@ -46,10 +46,7 @@ from features.text import percent
 from .casebase import CaseBase, frame_array
 from .retrieve import retrieve
 from .reuse import Weights, decide, vote
-
-DROPPED = ": dropped"
-"""How the maintenance log's entry of each case a trim dropped ends (after the editor's name);
-the trim itself is one entry more."""
+from .words import DROPPED as DROPPED
 
 
 @dataclass(frozen=True)

@@ -45,11 +45,10 @@ from .problem import FeatureConfig
 from .similarity import SimilarityMeasure, get_measure
 from .unknown import AT_FIT, Calibrated, calibrate_judges, judges_from_dict, judges_to_dict
 from .weights import MIRROR_FLAG, FeatureWeights
+from .words import CASE_KINDS as CASE_KINDS
 
 #: bump when the model document changes meaning
 MODEL_FORMAT = 1
-#: what a case is (the model document's ``cases``, ``train --split``), and one of them
-CASE_KINDS = {"clips": "clip", "repetitions": "repetition", "windows": "window"}
 
 
 @dataclass

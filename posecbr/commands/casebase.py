@@ -172,7 +172,7 @@ def _history(log: list[Any]) -> dict[str, Any]:
     """How often each maintenance action ran, in the order they first ran (``maintenance``:
     a trim once, however many cases it dropped; a clip retained once, one not retained not
     at all), with the cases trims dropped and the feedback clips not retained."""
-    from cbr.maintenance import DROPPED
+    from cbr.words import DROPPED
 
     runs: Counter[str] = Counter()
     dropped = not_retained = 0
@@ -202,7 +202,7 @@ def _print_info(d: dict[str, Any]) -> None:
     feats = d["features"]
     states = feats.get("states")
     n_states = len(states) if isinstance(states, list) else states
-    from cbr.explain import class_noun
+    from cbr.words import class_noun
 
     n = len(d["labels"])
     print(
@@ -251,7 +251,7 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
     pieces = str(m.get("cases") or "clips")
     since = f" (at training: {SINCE})" if changed else ""
     if m.get("k") is not None:
-        from cbr.stored import CASE_KINDS
+        from cbr.words import CASE_KINDS
 
         kind = CASE_KINDS.get(m.get("cases") or "")
         each = f", a case per {kind}" if kind else ""
@@ -287,7 +287,7 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
         when = "" if j["current"] else " (the cases changed since: calibrated at run time)"
         print(f"  unknown judges stored: {', '.join(sorted(j['calibrated'] or {}))}{when}")
     elif m.get("k") is not None:
-        from cbr.explain import class_noun
+        from cbr.words import class_noun
 
         print(
             f"  unknown judges: none (fewer than three {class_noun(m.get('target'), 3)}: segment"
@@ -373,7 +373,7 @@ def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, A
 
 
 def _list(store: CaseStore, args: argparse.Namespace) -> int:
-    from cbr.explain import MIRRORED
+    from cbr.words import MIRRORED
 
     name = store.choose(args.name)
     a = store.load_cases(name, include_inactive=args.all)
@@ -576,7 +576,7 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     else:
         print(report.summary() + _unchanged(args.dry_run, dropped))
         if report.distribution_shift is not None:
-            from cbr.explain import class_noun
+            from cbr.words import class_noun
 
             print(
                 f"  largest per-{class_noun(stored.target)} mean shift:"
