@@ -15,13 +15,17 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
 
 from features.version import __version__
 
 ROOT = Path(__file__).resolve().parents[1]
 CLIP = ROOT / "posecbr" / "demo_data" / "uiprmd" / "m01_s01_e01.npz"
 # numpy too: the parser needs none of them (about 0.1 s of the 0.3 s aimed at for --help)
-HEAVY = ("sklearn", "scipy", "numba", "sqlalchemy", "matplotlib", "cv2", "onnxruntime", "numpy")
+HEAVY = (
+    "sklearn", "scipy", "numba", "sqlalchemy", "matplotlib", "cv2", "onnxruntime", "numpy",
+    "pandas",
+)  # fmt: skip
 MARK = "loaded-modules:"
 # The names of the registered commands, from the parser itself (argparse keeps them in the
 # subparsers action's choices).
@@ -122,6 +126,72 @@ def test_describe_of_a_long_clip_uses_the_compiled_kernels(tmp_path: Path) -> No
     # the same spans as the numpy reference gives
     reference = evaluate(seq, backend="numpy")
     assert doc["runs"] == runs_to_json(state_runs(reference, 0.8, 5, False), seq.fps)
+
+
+def test_reps_of_a_short_clip_loads_no_compiled_kernel(tmp_path: Path) -> None:
+    """reps of one short clip: its joint angles by the numpy reference, as describe's; the
+    same repetitions as counted with numba's kernels (the library's default) here."""
+    from features.datasets import load_clip
+    from features.repetitions import count_repetitions
+
+    out, loaded = _run(
+        f"from posecbr.cli import main\nassert main(['reps', {str(CLIP)!r}, '--json']) == 0",
+        tmp_path,
+    )
+    doc = json.loads(out)
+    # the deep squat goes down once: frames 11-66, deepest at 45 (30 fps)
+    assert doc["count"] == 1
+    assert [(r["start_frame"], r["end_frame"], r["peak_frame"]) for r in doc["repetitions"]] == [
+        (11, 67, 45)
+    ]
+    expected = count_repetitions(load_clip(CLIP).to_canonical()).to_dict()
+    assert {k: doc[k] for k in expected} == json.loads(json.dumps(expected))
+    # scipy's filters count; no numba, case base, estimator, plot or video
+    assert loaded == {"numpy", "scipy"}
+
+
+@pytest.fixture(scope="module")
+def small_db(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from posecbr.cli import main
+
+    db = tmp_path_factory.mktemp("cb") / "cb.sqlite"
+    labels = CLIP.parent / "labels.csv"
+    argv = ["train", str(labels), "--db", str(db), "--subjects", "s01",
+            "--labels", "deep_squat,standing_shoulder_abduction"]  # fmt: skip
+    assert main(argv) == 0
+    return db
+
+
+@pytest.mark.parametrize("json_output", [False, True])
+def test_casebase_list_loads_no_scipy_or_estimator(
+    small_db: Path, tmp_path: Path, json_output: bool
+) -> None:
+    """Listing a store needs the store (SQLAlchemy, numpy), not the classifier's modules."""
+    argv = ["casebase", "list", "--db", str(small_db), *(["--json"] if json_output else [])]
+    out, loaded = _run(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
+    # s01's 6 clips (3 correct, 3 incorrect) of each of the two activities
+    if json_output:
+        cases = json.loads(out)["cases"]
+        labels = sorted(c["label"] for c in cases)
+        assert labels == ["deep_squat"] * 6 + ["standing_shoulder_abduction"] * 6
+        assert [c["case_id"] for c in cases] == list(range(1, 13))
+    else:
+        lines = out.splitlines()
+        assert [line.split("\t")[0] for line in lines] == [f"#{i}" for i in range(1, 13)]
+        assert lines[0].split("\t")[1:4] == ["deep_squat", "trained", "s01"]
+    assert loaded == {"numpy", "sqlalchemy"}
+
+
+@pytest.mark.parametrize("json_output", [False, True])
+def test_casebase_info_loads_no_estimator(
+    small_db: Path, tmp_path: Path, json_output: bool
+) -> None:
+    """info reads the stored model document; it does not load the classifier (scikit-learn,
+    pandas) to say what it holds."""
+    argv = ["casebase", "info", "--db", str(small_db), *(["--json"] if json_output else [])]
+    out, loaded = _run(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
+    assert "deep_squat" in out
+    assert not loaded & {"sklearn", "pandas", "numba", "matplotlib", "cv2", "onnxruntime"}
 
 
 def _subcommand(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentParser:

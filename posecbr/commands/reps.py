@@ -80,13 +80,22 @@ def _count(seq: Any) -> Any:
     """:func:`features.repetitions.count_repetitions` of ``seq``; a recording longer than
     :data:`cbr.long_clip.CHUNK_FRAMES` has its joint angles computed that many frames at a
     time, as ``segment`` reads it (the same counts in the memory of one piece: before, a
-    42-minute recording at 120 fps took 1 GB, a million frames would take 3)."""
+    42-minute recording at 120 fps took 1 GB, a million frames would take 3). A clip under
+    :data:`posecbr.commands.describe.NUMPY_BELOW_FRAMES` frames has them computed by the numpy
+    reference, as ``describe`` does."""
     from cbr import long_clip
+    from features.derived import derived
     from features.repetitions import count_in_signals, count_repetitions
+    from features.signals import state_signals
+    from posecbr.commands.describe import NUMPY_BELOW_FRAMES
 
     rec = seq.to_canonical()
     chunk = long_clip.chunk_for(rec, None)
     if not chunk:
+        if rec.n_frames < NUMPY_BELOW_FRAMES:
+            # as describe: a short clip's joint angles by the numpy reference (the same to
+            #1e-15), sooner than numba loads its compiled kernels (0.03 s against 0.5 s)
+            derived(rec, "signals", lambda s: state_signals(s.to_canonical(), backend="numpy"))
         return count_repetitions(rec)
     return count_in_signals(long_clip.movement_signals(rec, chunk), rec.n_frames, rec.fps)
 
