@@ -93,8 +93,8 @@ def _count(seq: Any) -> Any:
     chunk = long_clip.chunk_for(rec, None)
     if not chunk:
         if rec.n_frames < NUMPY_BELOW_FRAMES:
-            # as describe: a short clip's joint angles by the numpy reference (the same to
-            #1e-15), sooner than numba loads its compiled kernels (0.03 s against 0.5 s)
+            # as describe: a short clip's joint angles by the numpy reference (the same
+            # within 1e-15), sooner than numba loads its compiled kernels (0.03 s vs 0.5 s)
             derived(rec, "signals", lambda s: state_signals(s.to_canonical(), backend="numpy"))
         return count_repetitions(rec)
     return count_in_signals(long_clip.movement_signals(rec, chunk), rec.n_frames, rec.fps)
