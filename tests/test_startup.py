@@ -150,6 +150,27 @@ def test_reps_of_a_short_clip_loads_no_compiled_kernel(tmp_path: Path) -> None:
     assert loaded == {"numpy", "scipy"}
 
 
+def test_dad_loads_no_estimator(tmp_path: Path) -> None:
+    """dad of a clip runs the detector; DAD's scikit-learn face (DADClassifier) is not loaded."""
+    from cbr.dad import detect
+    from features.datasets import load_clip
+    from features.qmp.add import load_add
+
+    argv = ["dad", str(CLIP), "--json"]
+    out, loaded = _run(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
+    doc = json.loads(out)
+    assert doc["status"] == "ok"
+    assert doc == json.loads(json.dumps(detect(load_clip(CLIP), load_add()).to_dict()))
+    assert not loaded & {"sklearn", "pandas", "sqlalchemy", "matplotlib", "cv2", "onnxruntime"}
+
+
+def test_dad_classifier_is_still_importable_from_the_package() -> None:
+    from cbr.dad import DADClassifier
+    from cbr.dad.classifier import DADClassifier as defined
+
+    assert DADClassifier is defined
+
+
 @pytest.fixture(scope="module")
 def small_db(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from posecbr.cli import main

@@ -7,13 +7,18 @@
   ``detect_signals``, ``DADConfig``);
 - :mod:`cbr.dad.classifier`: ``DADClassifier``, the scikit-learn face of DAD.
 
-It depends on :mod:`features` only; the CBR core never imports it.
+It depends on :mod:`features` only; the CBR core never imports it. ``DADClassifier`` is
+imported on first use: ``posecbr dad`` (which calls :func:`detect`) loads no scikit-learn.
 """
 
-from .classifier import DADClassifier
+from typing import TYPE_CHECKING, Any
+
 from .detection import DADConfig, detect, detect_signals
 from .matching import ordered_match
 from .outcome import NOT_ENOUGH_DATA, ActivityScore, DADResult, QMPOutcome
+
+if TYPE_CHECKING:
+    from .classifier import DADClassifier
 
 __all__ = [
     "NOT_ENOUGH_DATA",
@@ -26,3 +31,11 @@ __all__ = [
     "detect_signals",
     "ordered_match",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name == "DADClassifier":
+        from .classifier import DADClassifier
+
+        return DADClassifier
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
