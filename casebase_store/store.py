@@ -306,6 +306,17 @@ class MaintenanceEntry:
     at: datetime
 
 
+def check_width(info: CaseBaseInfo, width: int, where: str) -> None:
+    """The case base names as many feature columns as its cases have (``width``), or is
+    damaged: a StoreError naming both."""
+    if len(info.feature_names) and width != len(info.feature_names):
+        raise StoreError(
+            f"case base {info.name!r} is damaged: its cases have {width} "
+            f"feature columns but the case base names {len(info.feature_names)}",
+            where,
+        )
+
+
 # ----------------------------------------------------------------------------- engine
 
 

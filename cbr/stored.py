@@ -28,6 +28,7 @@ from casebase_store import (
     StoreTransaction,
     sqlite_file,
 )
+from casebase_store import check_width as check_width  # defined here before
 from casebase_store.case_matrix import (
     cached_case_matrix,
     case_matrix_files,
@@ -388,17 +389,6 @@ def _read(
     if mapped is None:
         info, arrays = store.load_case_base(name)
     return info, arrays, mapped
-
-
-def check_width(info: CaseBaseInfo, width: int, where: str) -> None:
-    """The case base names as many feature columns as its cases have (``width``), or is
-    damaged: a StoreError naming both."""
-    if len(info.feature_names) and width != len(info.feature_names):
-        raise StoreError(
-            f"case base {info.name!r} is damaged: its cases have {width} "
-            f"feature columns but the case base names {len(info.feature_names)}",
-            where,
-        )
 
 
 def _case_base(

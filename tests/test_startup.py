@@ -215,6 +215,26 @@ def test_casebase_info_loads_no_estimator(
     assert not loaded & {"sklearn", "pandas", "numba", "matplotlib", "cv2", "onnxruntime"}
 
 
+def test_casebase_export_loads_no_scipy_or_estimator(small_db: Path, tmp_path: Path) -> None:
+    """export checks the case base's width with the store's own check, not the classifier's
+    module (which loads scikit-learn, pandas and SciPy)."""
+    out_file = tmp_path / "cases.npz"
+    argv = ["casebase", "export", "--db", str(small_db), "--out", str(out_file), "--json"]
+    out, loaded = _run(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
+    assert json.loads(out)["cases"] == 12
+    with np.load(out_file) as z:
+        assert sorted(z["labels"]) == ["deep_squat"] * 6 + ["standing_shoulder_abduction"] * 6
+        assert list(z["case_ids"]) == list(range(1, 13))
+    assert loaded == {"numpy", "sqlalchemy"}
+
+
+def test_check_width_is_still_importable_from_cbr_stored() -> None:
+    from casebase_store import check_width
+    from cbr.stored import check_width as before
+
+    assert before is check_width
+
+
 def _subcommand(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentParser:
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     found: argparse.ArgumentParser = sub.choices[name]

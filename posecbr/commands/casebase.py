@@ -441,7 +441,7 @@ def _frames(ranges: tuple[tuple[int | None, int | None], ...]) -> Any:
 def _export(store: CaseStore, args: argparse.Namespace) -> int:
     import numpy as np
 
-    from cbr.stored import check_width
+    from casebase_store import check_width
 
     out = _export_path(args)
     name = store.choose(args.name)
