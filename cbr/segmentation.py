@@ -848,6 +848,7 @@ def _repetitions(
             min(end, r.end_frame + off),
             max(start, r.peak_frame + off),
             r.side,
+            r.held,
         )
         for r in found
     )
@@ -869,6 +870,7 @@ def keep_whole(
     tolerance: int,
     after_turn: bool,
     cut_end: bool,
+    held: bool = False,
 ) -> tuple[Repetition, ...]:
     """``reps`` of a segment, frames [start, end), with those whose far point is only where the
     recording was cut into segments left out: a repetition counts for the one segment that
@@ -882,8 +884,11 @@ def keep_whole(
     where the next segment counts it; one at the start is kept only when the segment before
     had one at that same cut (``after_turn``: the movement turns at the cut itself: one
     repetition, counted once, by the segment after). ``tolerance``: frames per sample of the
-    counter's signals."""
+    counter's signals. ``held``: the last far point is held up to the cut, and on beyond it
+    in the next segment (:func:`counted_segments`): it is at the cut, wherever along the hold
+    its peak sample lies."""
     first, last = at_cut(reps, start, end, tolerance)
+    last = last or held
     out = list(reps)
     if cut_end and last:
         out = out[:-1]
@@ -904,18 +909,62 @@ def counted_segments(
     on (a side plank held through a change of label the classifier saw in the hold), and the
     segment has no repetition, as ``reps`` on the whole recording has none
     (:func:`features.repetitions.count_in_signals`' ``settled``); before, the way into the
-    plank counted 1 in the segment, 0 in ``reps``."""
+    plank counted 1 in the segment, 0 in ``reps``.
+
+    A far point held on across a cut (a squat held at the bottom through a change of label
+    the classifier saw in the hold; :func:`_held_across`), through any segments between that
+    find no far point at all (a fragment all hold), is at the cut: counted once, by the
+    segment where the movement comes back, and no segment beside the hold is settled. Before,
+    each segment's far point lay mid-way along its part of the hold, neither at the cut, and
+    the squat counted in both (a fragment all hold between them: in neither)."""
     raw = [_repetitions(sig, start, end, n_frames) for start, end in bounds]
+    # whether the last far point of each segment is held on, through any segments with none
+    # (all hold), to the first of the next segment that has one (:func:`_held_across`)
+    after = [next((j for j in range(i + 1, len(raw)) if raw[j]), None) for i in range(len(raw))]
+    held_on = [
+        j is not None and _held_across(raw[i], raw[j], bounds[j], sig.step)
+        for i, j in enumerate(after)
+    ]
     out = []
     turn = False  # the segment before had a far point at its end (the cut)
+    holding = False  # a far point held on from a segment before, through this one
     for i, (start, end) in enumerate(bounds):
         reps = raw[i]
-        settled = (i > 0 and not raw[i - 1], i + 1 < len(bounds) and not raw[i + 1])
+        settled = (
+            i > 0 and not raw[i - 1] and not holding,
+            i + 1 < len(bounds) and not raw[i + 1] and not held_on[i],
+        )
         if len(reps) == 1 and any(settled):
             reps = _repetitions(sig, start, end, n_frames, settled)
-        out.append(keep_whole(reps, start, end, sig.step, turn, end < n_frames))
-        turn = at_cut(raw[i], start, end, sig.step)[1]
+        out.append(keep_whole(reps, start, end, sig.step, turn, end < n_frames, held_on[i]))
+        if raw[i]:
+            turn = at_cut(raw[i], start, end, sig.step)[1] or held_on[i]
+            holding = held_on[i]
+        elif not holding:
+            turn = False
     return out
+
+
+def _held_across(
+    before: Sequence[Repetition],
+    after: Sequence[Repetition],
+    second: tuple[int, int],
+    tolerance: int,
+) -> bool:
+    """Whether the last of ``before`` (the repetitions of one segment) and the first of
+    ``after`` (of the next segment that has any, frames ``second``; those between found no
+    far point) are one far point held across the cut
+    between them: the movement falls back from the one by less than
+    :data:`features.repetitions.MIN_EXCURSION_RAD` up to the cut, and rises to the other by
+    less than that from it (:attr:`features.repetitions.Repetition.held`; or has its far
+    point at the cut, :func:`at_cut`). A squat held at the bottom, or an arm held raised,
+    through a change of label the classifier saw in the hold: each segment's far point lies
+    mid-way along its part of the hold, neither at the cut, and the repetition counted in
+    both. Both sides must hold it: the line dips by less than that between the two, no far
+    point of its own on either side."""
+    if not before or not after:
+        return False
+    return before[-1].held[1] and (after[0].held[0] or at_cut(after, *second, tolerance)[0])
 
 
 def _frames_of(a: int, b: int, fps: float, n_frames: int) -> tuple[int, int]:

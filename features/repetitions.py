@@ -284,6 +284,13 @@ class Repetition:
     end_frame: int
     peak_frame: int
     side: str | None = None
+    held: tuple[bool, bool] = dataclasses.field(default=(False, False), compare=False)
+    """Whether the movement as recorded rises to the far point by less than
+    :data:`MIN_EXCURSION_RAD` from the clip's start, and falls back from it by less than that
+    to the clip's end: the far point is held (or still being reached) up to the clip's start
+    or end, however far from it the peak sample lies in a still hold (found by the count of
+    one movement, not of an alternating one). A piece of a longer recording beyond such an end
+    holds the same far point (:func:`cbr.segmentation.counted_segments`)."""
 
     def to_dict(self, fps: float) -> dict[str, Any]:
         return {
@@ -1032,6 +1039,7 @@ def count_in_signals(
     )
     partial = False
     alternating = sides is not None
+    ends_held = [(False, False)] * len(far)  # an alternating movement's: not judged
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
     if sides is None:
         period, strength, direction = _periodic_direction(x, period, sig.fps)
@@ -1057,6 +1065,7 @@ def count_in_signals(
         # a period read then (from a wobble, a pose model's flicker) bounds no repetition
         lone = len(far) == 1 and all(edges)
         spans = _bounds(line, far, len(line) if lone else reach) if len(far) else []
+        ends_held = _held_to_ends(recorded, far)
     spans = _seen_spans(spans, far, sig.blind)
     reps = [
         Repetition(
@@ -1064,6 +1073,7 @@ def count_in_signals(
             end_frame=int(min(n_frames, b * sig.step)),
             peak_frame=int(min(n_frames - 1, p * sig.step)),
             side=None if sides is None else str(sides[i]),
+            held=ends_held[i],
         )
         for i, ((a, b), p) in enumerate(zip(spans, far, strict=True))
     ]
@@ -1076,6 +1086,20 @@ def count_in_signals(
     return RepetitionCount(
         tuple(reps), fps, n_frames, period, strength, bool(alternating), moving, partial
     )
+
+
+def _held_to_ends(recorded: np.ndarray, far: np.ndarray) -> list[tuple[bool, bool]]:
+    """Per far point of ``far`` (samples of ``recorded`` ``(n,)``, the movement as recorded),
+    whether the line rises to it by less than :data:`MIN_EXCURSION_RAD` from its lowest since
+    the clip's start, and falls back from it by less than that to its lowest until the clip's
+    end (:attr:`Repetition.held`): a posture held at the far point is a plateau, whose peak
+    sample lies anywhere in it."""
+    rise = recorded[far] - np.minimum.accumulate(recorded)[far]
+    fall = recorded[far] - np.minimum.accumulate(recorded[::-1])[::-1][far]
+    return [
+        (bool(r < MIN_EXCURSION_RAD), bool(f < MIN_EXCURSION_RAD))
+        for r, f in zip(rise, fall, strict=True)
+    ]
 
 
 def _periodic_direction(
