@@ -6,11 +6,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import cbr.segmentation as seg
 from cbr.segmentation import counted_segments
+from features.datasets import Clip
 from features.poses import PoseSequence
 from features.repetitions import count_repetitions, movement_signals
 from tests.bodies import squat_pose, to_sequence
+from tests.moves import clip
 from tests.test_repetitions import FPS, _arms_raised_and_held
+from tests.test_segment import _fit, _NeverUnknown
 
 REST_S, MOVE_S, HOLD_S = 0.6, 0.8, 3.0
 HOLD_FROM_S = REST_S + MOVE_S  # the hold: 1.4 s to 4.4 s
@@ -76,3 +80,27 @@ def test_two_held_squats_cut_at_rest_and_in_the_second_hold() -> None:
     assert count_repetitions(seq).count == 2
     assert _counts(seq, [3.5]) == [1, 1]
     assert _counts(seq, [5.1]) == [1, 1]
+
+
+def test_segment_counts_a_squat_held_across_its_change_of_label_once(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The whole ``segment`` path (windows solved by a case base of synthetic squats and arm
+    abductions, decoded, counted, given as ``--json`` gives them), the squat held 3 s and the
+    decoded labels made to change 1.5 s into the hold (block 29: frame 87 of 174), as a
+    classifier that saw something else in the hold would: two segments, counts 0 and 1
+    (before: 1 and 1, two repetitions where the recording holds one)."""
+    names = ("squat", "arm_abduction")
+    clf = _fit([Clip(clip(n).with_metadata(label=n, subject="s"), n, "s", {}) for n in names])
+    decoded = seg.decode_activities
+    cut_block = int(round((HOLD_FROM_S + 1.5) / seg.BLOCK_S))
+
+    def change_in_the_hold(*args: object, **kwargs: object) -> tuple[np.ndarray, np.ndarray]:
+        votes, path = decoded(*args, **kwargs)  # type: ignore[arg-type]
+        path[:cut_block], path[cut_block:] = 0, 1
+        return votes, path
+
+    monkeypatch.setattr(seg, "decode_activities", change_in_the_hold)
+    doc = seg.segment(clf, _held_squats(), _NeverUnknown()).to_dict()
+    spans = [(s["start_frame"], s["end_frame"], s["count"]) for s in doc["segments"]]
+    assert spans == [(0, 87, 0), (87, 174, 1)]
