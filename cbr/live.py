@@ -327,6 +327,7 @@ class LiveSegmenter:
         # their evidence of unknown), and how many
         self.last_centre = 0.0  # of the last hop pass 2 settled
         self.turn = False  # the last finished segment had a far point at its end
+        self.holding = False  # and held it up to its end: the segment after counts it
         self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
         self.judged: list[_Judged] = []  # the windows over the segments not yet finished
         # whose frames are kept: what explains a finished segment
@@ -778,14 +779,20 @@ class LiveSegmenter:
         """Frames [start, end) as a segment of ``state`` (an activity, or n_classes: unknown;
         :meth:`_confidence`); ``cut``: it ends where another begins (a finished segment: its
         repetitions are counted as :func:`cbr.segmentation.keep_whole` says, and the next one
-        learns whether the movement turned at the cut). Repetitions are counted over at most
+        learns whether the movement turned at the cut; a last far point held up to the cut,
+        the movement within :data:`features.repetitions.MIN_EXCURSION_RAD` of it, is left to
+        the next segment, where the movement comes back: a squat held at the bottom through
+        a change of label counts once, as :func:`cbr.segmentation.counted_segments` counts
+        it, though the segment is finished before the next is seen; one held to the
+        stream's end counts in neither, as ``reps`` counts only the way down). Repetitions
+        are counted over at most
         its last :data:`MAX_SEGMENT_S` seconds, of the frames still kept; a segment whose
         frames never show anybody is unknown, whatever the tie between its windows' evidence
         (every activity alike, known as likely as not) fell to. Nobody in view (``state``
         n_classes + 1): unknown, told so, counted 0, as offline."""
         if state == self.nobody:
             if cut:  # no movement turns at its end
-                self.turn = False
+                self.turn = self.holding = False
             return LiveSegment(
                 start, end, None, 1.0, 0, nobody_explanation(self._absent_in(start, end))
             )
@@ -805,9 +812,15 @@ class LiveSegmenter:
         confidence = self._confidence(state)
         reps = tuple(_shifted(r, first) for r in found)
         turn = self.turn and first == start
-        kept = keep_whole(reps, first, end, self.step, turn, cut)
-        if cut:
-            self.turn = at_cut(reps, first, end, self.step)[1]
+        # the last far point held up to the cut (a squat held at the bottom through a change
+        # of label): the movement comes back beyond it, where the next segment counts it
+        held = cut and bool(reps) and reps[-1].held[1]
+        kept = keep_whole(reps, first, end, self.step, turn, cut, held)
+        if cut and reps:
+            self.turn = at_cut(reps, first, end, self.step)[1] or held
+            self.holding = held
+        elif cut and not self.holding:  # held on through a segment all hold, else no turn
+            self.turn = False
         label = None if state == self.unknown else self.classes[state]
         text, novelty = self._explain(start, end, state) if explained else ("", math.nan)
         return LiveSegment(start, end, label, float(confidence), len(kept), text, novelty)
