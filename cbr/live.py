@@ -328,6 +328,7 @@ class LiveSegmenter:
         self.last_centre = 0.0  # of the last hop pass 2 settled
         self.turn = False  # the last finished segment had a far point at its end
         self.holding = False  # and held it up to its end: the segment after counts it
+        self.ended = False  # the stream has ended (finish)
         self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
         self.judged: list[_Judged] = []  # the windows over the segments not yet finished
         # whose frames are kept: what explains a finished segment
@@ -780,12 +781,11 @@ class LiveSegmenter:
         :meth:`_confidence`); ``cut``: it ends where another begins (a finished segment: its
         repetitions are counted as :func:`cbr.segmentation.keep_whole` says, and the next one
         learns whether the movement turned at the cut; a last far point held up to the cut,
-        the movement within :data:`features.repetitions.MIN_EXCURSION_RAD` of it, is left to
-        the next segment, where the movement comes back: a squat held at the bottom through
-        a change of label counts once, as :func:`cbr.segmentation.counted_segments` counts
-        it, though the segment is finished before the next is seen; one held to the
-        stream's end counts in neither, as ``reps`` counts only the way down). Repetitions
-        are counted over at most
+        the movement within :data:`features.repetitions.MIN_EXCURSION_RAD` of it, and on in
+        the frames already pushed beyond it (:meth:`_held_beyond`), is left to the next
+        segment, where the movement comes back: a squat held at the bottom through a change
+        of label counts once, as :func:`cbr.segmentation.counted_segments` counts it, though
+        the segment is finished before the next one is). Repetitions are counted over at most
         its last :data:`MAX_SEGMENT_S` seconds, of the frames still kept; a segment whose
         frames never show anybody is unknown, whatever the tie between its windows' evidence
         (every activity alike, known as likely as not) fell to. Nobody in view (``state``
@@ -814,7 +814,7 @@ class LiveSegmenter:
         turn = self.turn and first == start
         # the last far point held up to the cut (a squat held at the bottom through a change
         # of label): the movement comes back beyond it, where the next segment counts it
-        held = cut and bool(reps) and reps[-1].held[1]
+        held = cut and bool(reps) and reps[-1].held[1] and self._held_beyond(end)
         kept = keep_whole(reps, first, end, self.step, turn, cut, held)
         if cut and reps:
             self.turn = at_cut(reps, first, end, self.step)[1] or held
@@ -824,6 +824,23 @@ class LiveSegmenter:
         label = None if state == self.unknown else self.classes[state]
         text, novelty = self._explain(start, end, state) if explained else ("", math.nan)
         return LiveSegment(start, end, label, float(confidence), len(kept), text, novelty)
+
+    def _held_beyond(self, cut: int) -> bool:
+        """Whether the frames pushed after ``cut`` (the end of a segment being finished: the
+        stream runs on past it by the decoders' delay) begin in the hold of a far point: the
+        first repetition counted on them has its far point at their start, or the movement
+        rises to it by less than :data:`features.repetitions.MIN_EXCURSION_RAD` from there
+        (:attr:`features.repetitions.Repetition.held`), as
+        :func:`cbr.segmentation.counted_segments` asks of the segment after. None counted
+        (the stream ended still in the hold): the segment keeps its repetition, as there."""
+        if self.n - cut < 2:
+            return False
+        beyond = self._sequence(cut, min(self.n, cut + int(MAX_SEGMENT_S * self.fps)))
+        try:
+            after = count_repetitions(beyond, recording_edges=(False, self.ended)).repetitions
+        except DataError:  # too short, or nobody in view
+            return False
+        return bool(after) and (after[0].held[0] or after[0].peak_frame < self.step)
 
     def current(self) -> LiveSegment | None:
         """The segment in progress, labelled with the rolling label; its confidence and
@@ -844,6 +861,7 @@ class LiveSegmenter:
         segmented as that segments such a recording."""
         if self.state is None:
             return self._short_stream()
+        self.ended = True
         out = self._settle(np.array(self.forward.settle(final=True), dtype=np.int64))
         assert self.settled is not None
         out += self._pass(math.inf, self.n, final=True)

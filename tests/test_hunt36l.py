@@ -11,8 +11,7 @@ import pytest
 
 from features.poses import PoseSequence
 from features.repetitions import count_repetitions
-from tests.bodies import squat_pose, to_sequence
-from tests.test_hunt36j import HOLD_FROM_S, _eased, _held_squats
+from tests.test_hunt36j import HOLD_FROM_S, _held_squats
 from tests.test_live import _Scripted
 from tests.test_repetitions import FPS, _arms_raised_and_held
 
@@ -91,13 +90,20 @@ def test_two_held_squats_cut_in_the_second_hold() -> None:
     assert [r for *_, r in _watched(seq, (105,))] == [1, 1]
 
 
-def test_a_squat_held_to_the_end_of_the_stream_counts_none() -> None:
-    """Standing 0.6 s, down over 0.8 s, held at the bottom 5 s to the stream's end, the label
-    changing in the hold (frame 100): the squat never comes back, no repetition, as the whole
-    recording counts it (0, only the way down); before, 1 in the first segment."""
-    depth = np.concatenate([np.zeros(18), _eased(24), np.ones(150)])
-    seq = to_sequence(*(squat_pose(d) for d in depth), fps=FPS)
-    assert count_repetitions(seq).count == 0
-    segments = _watched(seq, (100,), pad_s=0.0)
-    assert len(segments) == 2 and 42 < segments[0][1] < 192
-    assert [r for *_, r in segments] == [0, 0]
+def test_a_segment_finished_while_the_stream_runs_on_leaves_the_held_squat_to_the_next() -> None:
+    """The held squat, the label changing 1.5 s into the hold (frame 87), then 20 s more of
+    standing: the first segment is finished, and its line printed, while the stream runs on
+    (the decoders settle the change some seconds after it), on what has been pushed by then:
+    0, and the segment after counts the squat (1). Before, 1 and 1."""
+    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
+    live = _Changing(clf, FPS, judge=SimpleNamespace())
+    live.changes = (87,)
+    seq = _held_squats()
+    frames = np.concatenate([seq.positions, np.repeat(seq.positions[-1:], int(20 * FPS), 0)])
+    pushed = []
+    for frame in frames:
+        pushed += live.push(frame)
+    (first,) = pushed
+    assert HOLD[0] < first.end_frame < HOLD[1] and first.repetitions == 0
+    (last,) = live.finish()
+    assert last.start_frame == first.end_frame and last.repetitions == 1
