@@ -186,10 +186,21 @@ def measure(fold: Fold, joined: list[tuple[Any, Group]], movement: str) -> dict[
     held-out scan and, per test recording, every non-repetition window's distances to every
     activity, stillness and movement, and every counted window's d1 (the person offset's)."""
     from benchmarks.segment import judge_named
-    from cbr.segmentation import solve_recording
     from cbr.unknown import held_out_activities
 
     clf = fit(training_clips(joined, leave_out=movement))
+    recs = recordings_measured(clf, fold)
+    judge = judge_named(clf, JUDGE)
+    held = held_out_activities(clf.case_base_)
+    return {"cases": len(clf.case_base_), "judge": judge, "held": held, "recordings": recs}
+
+
+def recordings_measured(clf: Any, fold: Fold) -> dict[str, dict[str, np.ndarray]]:
+    """Per test recording of ``fold``, segmented by ``clf``: every non-repetition window's
+    distances to every activity (``nearest``), whether it is still, the movements it holds,
+    and every counted window's d1 (``counted_d1``)."""
+    from cbr.segmentation import solve_recording
+
     recs = {}
     for rec in fold.recordings:
         done = solve_recording(clf, rec.seq, chunk_frames=0)
@@ -203,9 +214,7 @@ def measure(fold: Fold, joined: list[tuple[Any, Group]], movement: str) -> dict[
             "movements": pure_windows(rec, spans, rec.seq.fps),
             "counted_d1": np.array(counted),
         }
-    judge = judge_named(clf, JUDGE)
-    held = held_out_activities(clf.case_base_)
-    return {"cases": len(clf.case_base_), "judge": judge, "held": held, "recordings": recs}
+    return recs
 
 
 def judge_scores(judge: Any, rows: np.ndarray) -> np.ndarray:

@@ -279,24 +279,10 @@ def measure(fold: Fold, joined: list[tuple[Any, Group]], movement: str) -> dict[
     per-person scan of the case base (:func:`people_scan`) with its labels."""
     from benchmarks.segment import judge_named
     from benchmarks.segment_people import fit, training_clips
-    from benchmarks.unknown_bounds import JUDGE
-    from benchmarks.unknown_ceiling import pure_windows
-    from cbr.segmentation import solve_recording
+    from benchmarks.unknown_bounds import JUDGE, recordings_measured
 
     clf = fit(training_clips(joined, leave_out=movement))
-    recs = {}
-    for rec in fold.recordings:
-        done = solve_recording(clf, rec.seq, chunk_frames=0)
-        counted = [float(np.min(w.nearest)) for w, out in
-                   zip(done.windows, done.outliers.tolist(), strict=True) if not out]  # fmt: skip
-        windows = [w for w in done.windows if not w.repetition]
-        spans = np.array([(w.start, w.stop) for w in windows], dtype=np.int64)
-        recs[rec.name] = {
-            "nearest": np.stack([w.nearest for w in windows]),
-            "still": np.array([w.still for w in windows], dtype=bool),
-            "movements": pure_windows(rec, spans, rec.seq.fps),
-            "counted_d1": np.array(counted),
-        }
+    recs = recordings_measured(clf, fold)
     judge = judge_named(clf, JUDGE)
     held, people = people_scan(clf.case_base_)
     labels = np.asarray(clf.case_base_.labels).astype(str)

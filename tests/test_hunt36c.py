@@ -26,12 +26,12 @@ import pytest
 from features.datasets import clip_files
 from posecbr.cli import main
 from tests.badinput import refused
+from tests.test_video_gaps import lunge_frames
 from tests.test_video_vfr import _write, people  # noqa: F401 (a fixture)
 from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
 av = pytest.importorskip("av", reason="PyAV writes the videos")
 
-LUNGE_NAME = "fit_reverse_lunge_pexels8233047.mp4"
 TYPESCRIPT = 'const greeting: string = "hi";\nexport default greeting;\n'
 
 
@@ -92,16 +92,7 @@ def lunge_gap(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Pa
     """The reverse lunge's first 120 frames at a quarter size, 25 fps, lossless (FFV1 in
     Matroska: each run decodes the same), its clock jumping 3 s after frame 59 (2.36 s): the
     frames 60 on from 5.4 s. Grid rows 60 to 134 (2.4 to 5.36 s) lie in the gap."""
-    import cv2
-
-    cap = cv2.VideoCapture(str(shared_data / "videos" / "lunge" / LUNGE_NAME))
-    frames = []
-    while len(frames) < 120:
-        ok, bgr = cap.read()
-        assert ok
-        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
-        frames.append(np.ascontiguousarray(small[:, :, ::-1]))
-    cap.release()
+    frames = lunge_frames(shared_data, 120)
     pts = [40 * k + (3000 if k >= 60 else 0) for k in range(len(frames))]
     return _write(tmp_path_factory.mktemp("gap") / "lunge_gap.mkv", pts, frames, codec="ffv1")
 

@@ -16,7 +16,7 @@ from features.poses import PoseSequence
 from features.repetitions import movement_signals
 from posecbr.cli import main
 from tests.test_repetitions import _arms_raised_and_held
-from tests.test_video_gaps import LUNGE_NAME, _drawn_words
+from tests.test_video_gaps import _drawn_words, lunge_frames
 from tests.test_video_vfr import _write
 from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
@@ -88,16 +88,7 @@ def test_reps_gives_no_period_when_nothing_repeated(
 def lunge_nobody(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The reverse lunge's first 150 frames at a quarter size, lossless (FFV1 in Matroska: the
     same poses each run), frames 50 to 99 (2.0 to 3.96 s) grey: nobody in view there."""
-    import cv2
-
-    cap = cv2.VideoCapture(str(shared_data / "videos" / "lunge" / LUNGE_NAME))
-    frames = []
-    while len(frames) < 150:
-        ok, bgr = cap.read()
-        assert ok
-        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
-        frames.append(np.ascontiguousarray(small[:, :, ::-1]))
-    cap.release()
+    frames = lunge_frames(shared_data, 150)
     for k in range(50, 100):
         frames[k] = np.full_like(frames[k], 128)
     folder = tmp_path_factory.mktemp("nobody_mkv")

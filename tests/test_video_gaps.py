@@ -232,21 +232,29 @@ def test_a_stretch_mostly_without_frames_is_no_frames_not_nobody_in_view() -> No
     assert not gap_rows(seq.slice_frames(30, None)).any()
 
 
-@pytest.fixture(scope="module")
-def lunge_jump(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The whole reverse lunge (250 frames, 10 s at 25 fps) at a quarter size, its clock
-    jumping 3 s after frame 124 (4.96 s): the second half from 8.0 s, 13 s in all."""
+def lunge_frames(shared_data: Path, n: int | None = None) -> list[np.ndarray]:
+    """The bundled reverse lunge's first ``n`` frames (all 250: None), RGB, at a quarter of
+    its size."""
     import cv2
 
     cap = cv2.VideoCapture(str(shared_data / "videos" / "lunge" / LUNGE_NAME))
     frames = []
-    while True:
+    while n is None or len(frames) < n:
         ok, bgr = cap.read()
         if not ok:
+            assert n is None, f"the lunge has fewer than {n} frames"
             break
         small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
         frames.append(np.ascontiguousarray(small[:, :, ::-1]))
     cap.release()
+    return frames
+
+
+@pytest.fixture(scope="module")
+def lunge_jump(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The whole reverse lunge (250 frames, 10 s at 25 fps) at a quarter size, its clock
+    jumping 3 s after frame 124 (4.96 s): the second half from 8.0 s, 13 s in all."""
+    frames = lunge_frames(shared_data)
     pts = [40 * k + (3000 if k >= 125 else 0) for k in range(len(frames))]
     return _write(tmp_path_factory.mktemp("jump") / "lunge_jump.mts", pts, frames)
 
@@ -310,16 +318,7 @@ def lunge_gap_mkv(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -
     """The reverse lunge's first 100 frames at a quarter size, lossless (FFV1 in Matroska: the
     same poses each run), its clock jumping 2 s after frame 49 (1.96 s): frames 50 to 99 at
     4.0 to 5.96 s, 6 s in all; grid rows 50 to 99 (2.0 to 3.96 s) lie inside the gap."""
-    import cv2
-
-    cap = cv2.VideoCapture(str(shared_data / "videos" / "lunge" / LUNGE_NAME))
-    frames = []
-    while len(frames) < 100:
-        ok, bgr = cap.read()
-        assert ok
-        small = cv2.resize(bgr, (bgr.shape[1] // 8 * 2, bgr.shape[0] // 8 * 2))
-        frames.append(np.ascontiguousarray(small[:, :, ::-1]))
-    cap.release()
+    frames = lunge_frames(shared_data, 100)
     pts = [40 * k + (2000 if k >= 50 else 0) for k in range(100)]
     folder = tmp_path_factory.mktemp("gap_mkv")
     return _write(folder / "lunge_gap.mkv", pts, frames, codec="ffv1")
