@@ -13,6 +13,13 @@ from typing import Any
 from features.errors import ConfigError, DataError
 from posecbr.arguments import path_arg
 
+# A command evaluating one clip in a new process (describe, reps): below this many frames the
+# numpy reference computes the fluents and joint angles sooner than numba loads its compiled
+# kernels (measured for the whole describe command: 73 frames 0.3 s vs 0.7 s of CPU, 5000
+# frames 0.72 s vs 0.81 s, 10000 frames 1.04 s vs 0.93 s). Both give the same confidences
+# (tests/test_fluents_fast.py).
+NUMPY_BELOW_FRAMES = 5000
+
 
 def add_recording_options(p: argparse.ArgumentParser) -> None:
     """``--asf`` and ``--fps`` for recordings that need them."""

@@ -13,17 +13,12 @@ from features.errors import DataError, PosecbrError
 from features.fileio import check_output
 from features.text import counted, shown
 from posecbr.arguments import path_arg
+from posecbr.recordings import NUMPY_BELOW_FRAMES
 
 if TYPE_CHECKING:
     from features.fluents import Backend, FluentResult
     from features.poses import PoseSequence
     from features.timeline import Run, Timeline
-
-# describe evaluates one clip in a new process: below this many frames the numpy reference
-# computes the fluents sooner than numba loads its compiled kernels (measured for the whole
-# command: 73 frames 0.3 s vs 0.7 s of CPU, 5000 frames 0.72 s vs 0.81 s, 10000 frames 1.04 s
-# vs 0.93 s). Both give the same confidences (tests/test_fluents_fast.py).
-NUMPY_BELOW_FRAMES = 5000
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -21,7 +21,13 @@ from typing import Any
 from features.fileio import check_output
 from features.text import counted, shown
 from posecbr.arguments import path_arg
-from posecbr.recordings import add_recording_options, check_asf, load_recording, note_low_rate
+from posecbr.recordings import (
+    NUMPY_BELOW_FRAMES,
+    add_recording_options,
+    check_asf,
+    load_recording,
+    note_low_rate,
+)
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -81,13 +87,12 @@ def _count(seq: Any) -> Any:
     :data:`cbr.long_clip.CHUNK_FRAMES` has its joint angles computed that many frames at a
     time, as ``segment`` reads it (the same counts in the memory of one piece: before, a
     42-minute recording at 120 fps took 1 GB, a million frames would take 3). A clip under
-    :data:`posecbr.commands.describe.NUMPY_BELOW_FRAMES` frames has them computed by the numpy
+    :data:`posecbr.recordings.NUMPY_BELOW_FRAMES` frames has them computed by the numpy
     reference, as ``describe`` does."""
     from cbr import long_clip
     from features.derived import derived
     from features.repetitions import count_in_signals, count_repetitions
     from features.signals import state_signals
-    from posecbr.commands.describe import NUMPY_BELOW_FRAMES
 
     rec = seq.to_canonical()
     chunk = long_clip.chunk_for(rec, None)
