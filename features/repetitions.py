@@ -97,8 +97,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.fft import next_fast_len
-from scipy.ndimage import gaussian_filter1d, median_filter, minimum_filter1d, uniform_filter1d
 
 from .body import long_runs
 from .datasets import Clip
@@ -474,6 +472,10 @@ def movement_signals(seq: PoseSequence) -> MovementSignals:
     """The counted angles of ``seq`` (positions ``(frames, joints, 3)``) ready for counting.
 
     Raises DataError when no angle is available in enough frames (no person in view)."""
+    # SciPy in the functions that use it: importing this module (as cbr.problem does, for
+    # every command that reads a case base) loads none
+    from scipy.ndimage import gaussian_filter1d
+
     raw = counted_angles(seq)
     finite = np.isfinite(raw)
     there = _followed(finite, seq.fps).sum(axis=0)
@@ -505,6 +507,8 @@ def _running_median(x: np.ndarray, width: int) -> np.ndarray:
     later when the median read past it; a Kinect knee bent 50 degrees for three frames made
     a count of UI-PRMD go 4, 5, 4); mirrored, a glitch just before the end is read twice. At
     30 fps (width 7) a glitch in the last frame is now gone and one in the last two halved."""
+    from scipy.ndimage import median_filter
+
     out = median_filter(x, size=(width, 1), mode="nearest")
     half, n = width // 2, len(x)
     for i in range(min(half, n)):
@@ -607,6 +611,8 @@ def _interpolate(x: np.ndarray) -> np.ndarray:
 def _lagged_products(x: np.ndarray) -> np.ndarray:
     """Per channel, the products of the centred ``x`` ``(n, channels)`` with itself at every
     lag, averaged over the frames each lag overlaps: ``(n, channels)``."""
+    from scipy.fft import next_fast_len
+
     n = len(x)
     xc = x - x.mean(axis=0)
     size = next_fast_len(2 * n)
@@ -860,6 +866,8 @@ def _floors(line: np.ndarray, peaks: np.ndarray, reach: int, rest: float, still:
     while the line falls from its last far point does not show how far it falls (padded
     with the rest level, as :func:`_candidates` pads it): a sit-to-stand's second dip of
     the knees, on the way up, is no repetition of its own whatever the clip's end."""
+    from scipy.ndimage import minimum_filter1d
+
     n = len(line)
     lowest = minimum_filter1d(line, size=2 * max(1, reach) + 1, mode="nearest")[peaks]
     bounds = np.concatenate([[0], peaks, [n - 1]])
@@ -1128,6 +1136,8 @@ def _above_rest(line: np.ndarray, far: np.ndarray, reach: int) -> np.ndarray:
     point, so a line that drifts over the clip keeps its shallower repetitions."""
     if not len(far):
         return np.zeros(0, dtype=bool)
+    from scipy.ndimage import minimum_filter1d
+
     lowest = minimum_filter1d(line, size=2 * max(1, reach) + 1, mode="nearest")
     height = line[far] - lowest[far]
     return np.asarray(height >= STILL_SHARE * float(np.median(height)))
@@ -1157,6 +1167,8 @@ def _about_running_mean(line: np.ndarray, period: float | None, fps: float) -> n
     if period is None:
         return line
     size = max(1, int(period * fps))
+    from scipy.ndimage import uniform_filter1d
+
     return np.asarray(line - uniform_filter1d(line, size, axis=0, mode="nearest"))
 
 

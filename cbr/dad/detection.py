@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import ConfigError
-from features.fluents import state_signals
+from features.fluents import Backend, state_signals
 from features.poses import PoseSequence
 from features.qmp import QMPConfig, fit_signals, sliding_windows
 from features.qmp.add import ADD, Activity, CriteriaResult, evaluate_criteria, load_add
@@ -148,17 +148,21 @@ def detect(
     seq: PoseSequence,
     add: ADD | str | Path | None = None,
     config: DADConfig | None = None,
+    backend: Backend = "numba",
 ) -> DADResult:
     """Run DAD on one pose sequence ``(frames, joints, 3)``; see :class:`DADResult`.
 
     add: a loaded :class:`ADD`, a path to an ADD file, or None for the shipped database.
+    backend: how the state signals are computed (:func:`features.signals.state_signals`):
+    numba's compiled pass (the default) or the numpy reference, which a short clip in a new
+    process gets sooner than numba loads its kernels (the same signals within 1e-15).
     """
     cfg = config or DADConfig()
     db = add if isinstance(add, ADD) else load_add(add)
     duration = seq.positions.shape[0] / seq.fps
     if duration < cfg.min_duration_s:
         return _unjudged(seq.source, seq.fps, duration, db, _too_short(duration, cfg))
-    signals = state_signals(seq)
+    signals = state_signals(seq, backend=backend)
     return detect_signals(signals.values, signals.names, seq.fps, db, cfg, source=seq.source)
 
 

@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.ndimage import binary_erosion
 
 from features.errors import ConfigError
 
@@ -457,6 +456,10 @@ def _usable(
     """Which windows of each signal have data enough (``ok_data``) and which of those are
     motionless (``flat``), ``(W, S)`` each. filled: ``(frames, S)`` signals after short gaps
     are filled; idx: ``(W, F)`` the frames of every window."""
+    # here, not at the top: importing the QMP package (as cbr.problem does for every command
+    # that reads a case base) loads no SciPy until a fit runs
+    from scipy.ndimage import binary_erosion
+
     finite = np.isfinite(filled)
     # The whole clip is differentiated once. Frames within half a smoothing window of a
     # remaining gap would see the placeholder zeros, so they count as missing too.

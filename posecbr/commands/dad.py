@@ -12,11 +12,15 @@ import json
 import math
 import sys
 from collections.abc import Iterator
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from features.errors import PosecbrError
 from features.text import counted, percent, shown
 from posecbr.arguments import path_arg
+from posecbr.recordings import NUMPY_BELOW_FRAMES
+
+if TYPE_CHECKING:
+    from features.fluents import Backend
 
 MAX_SECONDS = 3600.0  # a window of an hour is no single movement
 
@@ -71,7 +75,10 @@ def run(args: argparse.Namespace) -> int:
     config = _windows(args.window, args.step)
     add = load_add(args.add)
     seq = load_clip(args.posefile)
-    result = detect(seq, add, config)
+    # as describe: a short clip's state signals by the numpy reference, sooner than numba
+    # loads its compiled kernels
+    backend: Backend = "numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba"
+    result = detect(seq, add, config, backend=backend)
     if args.json:  # the document says why, for a clip DAD cannot judge too
         json.dump(result.to_dict(), sys.stdout, indent=2)
         sys.stdout.write("\n")
