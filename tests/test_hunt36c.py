@@ -8,7 +8,8 @@
   with no frames), which ``segment`` and ``watch`` itself call "no frames in the video".
 - A variable-rate video whose frame times went back (a frame stamped far ahead of the
   others, a clock reset) lost every frame after that place until the times passed the
-  frame's again; now only the frame where they went back is left out, with a note.
+  frame's again; now only the frame where they went back is left out, with a note (a single
+  frame stamped far ahead is now left out itself: tests/test_hunt37c.py).
 - A looped video of exact copies of one repetition: ``reps`` counts one repetition per loop
   and puts each in its own loop (checked: it did so before too; these tests hold it).
 
@@ -131,21 +132,17 @@ def test_watch_draws_no_frames_not_nobody_in_view_inside_a_gap(
 
 
 def test_the_clock_going_back_loses_one_frame_not_every_later_one() -> None:
-    """Frame times (s) of a 25 fps file that strays at 0.02 s. A frame stamped far ahead
-    (0.9 s, then 0.4 s on): the frame at 0.4 s is left out and the later ones run on from
-    0.9 s, each one interval (0.04 s) on from the left-out frame's place: 0.44 s is 0.98 s.
-    A clock reset to 0 after 0.4 s: 0.04 s is 0.48 s. A single frame out of order (0.35 s
-    between 0.4 and 0.5 s) is left out alone, as before. ``watch`` (FrameClock, then Regrid)
-    puts the same values on the grid as ``extract`` (resample_timed). Before, every frame
-    after the one that went back had no time: left out."""
+    """Frame times (s) of a 25 fps file that strays at 0.02 s. A clock reset to 0 after
+    0.4 s: the frame at 0 s is left out and the later ones run on from 0.4 s, each one
+    interval (0.04 s) on from the left-out frame's place: 0.04 s is 0.48 s. A single frame
+    out of order (0.35 s between 0.4 and 0.5 s) is left out alone, as before. ``watch``
+    (FrameClock, then Regrid) puts the same values on the grid as ``extract``
+    (resample_timed). Before, every frame after the one that went back had no time: left
+    out. (A single frame stamped far ahead: tests/test_hunt37c.py.)"""
     from features.pose_estimation.video import FrameClock, clocked_times, resample_timed
     from posecbr.commands.watch import Regrid
     from tests.test_video_vfr import _frame
 
-    ahead = [0.0, 0.02, 0.1, 0.18, 0.9, 0.4, 0.44, 0.52]
-    elapsed, strayed = clocked_times(ahead, 25.0)
-    assert strayed
-    np.testing.assert_allclose(elapsed, [0, 0.02, 0.1, 0.18, 0.9, np.nan, 0.98, 1.06], atol=1e-9)
     reset = [0.0, 0.02, 0.1, 0.18, 0.22, 0.26, 0.3, 0.38, 0.4, 0.0, 0.04, 0.08]
     elapsed, _ = clocked_times(reset, 25.0)
     want = [0, 0.02, 0.1, 0.18, 0.22, 0.26, 0.3, 0.38, 0.4, np.nan, 0.48, 0.52]
@@ -164,18 +161,15 @@ def test_the_clock_going_back_loses_one_frame_not_every_later_one() -> None:
     want = [0, 0.02, 0.1, 0.18, 0.4, np.nan, np.nan, 0.42]
     np.testing.assert_allclose(elapsed, want, atol=1e-9)
     # the values are the times themselves (as run on): the grid is the time at each row
-    values = np.array([0.0, 0.02, 0.1, 0.18, 0.9, -1.0, 0.98, 1.06])
-    elapsed, _ = clocked_times(ahead, 25.0)
+    values = np.array([0.0, 0.02, 0.1, 0.18, 0.22, 0.26, 0.3, 0.38, 0.4, -1.0, 0.48, 0.52])
+    elapsed, _ = clocked_times(reset, 25.0)
     grid, shown = resample_timed(elapsed, values, 25.0)
-    assert grid.shape == (27,)  # 0 to 1.04 s (1.06 s lies between rows)
-    on = np.isfinite(grid)
-    # rows 5 to 22 (0.2 to 0.88 s) lie between 0.18 and 0.9 s: a gap, missing
-    assert np.flatnonzero(~on).tolist() == list(range(5, 23))
-    np.testing.assert_allclose(grid[on], (np.arange(27) / 25.0)[on], atol=1e-9)
-    assert shown[-1] == 6  # 1.04 s: the frame stamped 0.44 s (0.98 s) on screen
+    assert grid.shape == (14,)  # 0 to 0.52 s
+    np.testing.assert_allclose(grid, np.arange(14) / 25.0, atol=1e-9)
+    assert shown[-1] == 11  # 0.52 s: the frame stamped 0.08 s (0.52 s) on screen
     live, clock = Regrid(25.0, "phone.mkv"), FrameClock(25.0)
     worlds = [np.full((33, 3), v) for v in values]
-    steps = [live.take(_frame(i, clock.take(i, t), worlds[i])) for i, t in enumerate(ahead)]
+    steps = [live.take(_frame(i, clock.take(i, t), worlds[i])) for i, t in enumerate(reset)]
     pushed = np.array([float(w[0, 0]) for step in steps for w, _vis, _shown in step])
     np.testing.assert_allclose(pushed, grid, atol=1e-12)
 
@@ -203,47 +197,6 @@ def _write_out_of_order(path: Path, pts_ms: list[int], frames: list[np.ndarray])
         out.mux(packet)
     out.close()
     return path
-
-
-def test_a_video_with_a_frame_stamped_far_ahead_keeps_the_frames_after_it(
-    people: list[np.ndarray],  # noqa: F811
-    tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
-) -> None:
-    """The 13 variable-rate lunge frames, the ninth stamped 0.9 s where 0.38 s and 0.4 s lie
-    either side of it: the frame at 0.4 s is left out, the three after it run on from 0.9 s
-    (0.98, 1.06, 1.08 s): 28 rows at 25 fps (0 to 1.08 s), the last the last frame's pose.
-    Before: 23 rows (0 to 0.9 s), the last four frames left out."""
-    from features.pose_estimation import PoseEstimator, estimate_video
-    from features.pose_estimation.video import iter_timed_frames
-
-    pts_ms = [0, 20, 100, 180, 220, 260, 300, 380, 900, 400, 440, 520, 540]
-    path = _write_out_of_order(tmp_path / "ahead.mkv", pts_ms, people)
-    decoded = list(iter_timed_frames(path))
-    assert [round(t * 1000) for _rgb, t in decoded] == pts_ms
-    got = estimate_video(path, smoothing=False, tracking=False, progress_bar=False)
-    assert got.sequence.n_frames == 28
-    assert got.video_frames is not None and got.video_frames.tolist()[-1] == 12
-    raw = PoseEstimator(smoothing=False, tracking=False).process(decoded[12][0])
-    assert raw.person  # the lunge: a person in each frame
-    np.testing.assert_allclose(got.image_landmarks[-1], raw.image, atol=1e-6)
-    vfr = got.sequence.metadata["variable_frame_rate"]
-    assert vfr["frames_left_out"]["frames"] == [9]
-    assert vfr["clock_went_back"]["frames"] == [9]
-    note = (
-        f"note: {path}: the frame times go back at frame 9 (0.400 s after 0.900 s): frame 9"
-        " left out, the frames after it timed on from the one before it"
-    )
-    assert note in capsys.readouterr().err.splitlines()
-    # watch: the same rows, frame for frame, and the same note as the frame comes
-    from features.pose_estimation import stream_poses
-    from posecbr.commands.watch import Regrid
-
-    live = Regrid(25.0, str(path))
-    est = PoseEstimator(smoothing=False, tracking=False)
-    pushed = [w for f in stream_poses(path, estimator=est) for w, _v, _s in live.take(f)]
-    np.testing.assert_array_equal(np.array(pushed), got.sequence.positions)
-    assert capsys.readouterr().err.count(note) == 1
 
 
 SQUAT = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"

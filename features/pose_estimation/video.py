@@ -20,13 +20,15 @@ left as it was decoded; so is one whose frames carry no times to trust (:class:`
 Once the frames have strayed, a frame whose time is missing, repeated or earlier than the
 frame's before is left out of the grid and the others are resampled (:func:`clocked_times`),
 as ``watch`` does: ``segment`` and ``watch`` of one video see the same poses. Where the
-times go back and run on from there (a clock reset, a frame stamped far ahead), the frames
-after the one that went back are timed on from the last frame taken, with a note
-(:class:`FrameClock`), not left out until the times pass it again.
+times go back and run on from there (a clock reset), the frames after the one that went
+back are timed on from the last frame taken, with a note (:class:`FrameClock`), not left
+out until the times pass it again; a single frame stamped far ahead of the frames either
+side is left out alone (timed by its place in a constant-rate video).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import sys
@@ -308,14 +310,23 @@ class FrameClock:
     grid at time 0. Once the frames have strayed (a variable rate), such a frame alone has
     no time (NaN); when that frame lies more than :func:`bridge_limit_s` before the last one
     taken and the next frame's time is again not after the last one taken but after that
-    frame's, the clock went back there (a recording's clock reset, a frame stamped far ahead
-    of the others): the times from there on are taken as running on from the last frame
+    frame's, the clock went back there (a recording's clock reset, frames in a row stamped
+    far ahead of the others): the times from there on are taken as running on from the last frame
     taken, the frame where it went back one interval (``1 / fps``) after it, so every later
     frame keeps a time (before, all of them were left out until the times passed the last
     one taken again). Frames out of order by less than that are left out until the times
     pass the last one taken (no more than a bridged stretch of them), the times unshifted.
     :attr:`went_back` lists each place the clock went back: (the frame where it did, the
-    time of the frame taken before it, its own time; s, as decoded)."""
+    time of the frame taken before it, its own time; s, as decoded).
+
+    A single frame stamped far ahead (more than :func:`bridge_limit_s` after the last one
+    taken, the next frame's time between the two: :meth:`needs_next` says when the next
+    frame's time is wanted) is the one out of place: once the frames have strayed it alone
+    has no time (left out), the frames after it keep their own; while they lie on the grid
+    it is timed by its place, ``index / fps``, and they stay on the grid. Before, it was
+    taken, the next frame left out as the place the clock went back and the later frames
+    timed on from the stamp ahead. :attr:`ahead` lists them: (the frame, the time of the
+    frame taken before it, its own time, the next frame's time; s, as decoded)."""
 
     def __init__(self, fps: float) -> None:
         self.fps = fps
@@ -327,15 +338,41 @@ class FrameClock:
         self.behind: tuple[int, float] | None = None  # the frame just left out for its
         # time not after the last one's (strayed): its index and decoded time
         self.went_back: list[tuple[int, float, float]] = []
+        self.ahead: list[tuple[int, float, float, float]] = []
 
-    def take(self, index: int, time_s: float) -> float:
-        """Frame ``index``'s time (s) from the first frame's; NaN when it has none to trust."""
+    def needs_next(self, index: int, time_s: float) -> bool:
+        """Whether frame ``index``'s time (decoded, s) lies so far after the last one taken
+        (beyond a bridged gap) that the next frame's tells whether it was stamped ahead."""
+        return (
+            index > 0
+            and self.trusted
+            and math.isfinite(time_s)
+            and time_s + self.offset - self.last > bridge_limit_s(self.fps)
+        )
+
+    def take(self, index: int, time_s: float, next_s: float = float("nan")) -> float:
+        """Frame ``index``'s time (s) from the first frame's; NaN when it has none to trust.
+        ``next_s``: the next frame's decoded time, where :meth:`needs_next` wants it (NaN:
+        none, the last frame)."""
         if index == 0:
             self.first = self.last = self.last_raw = time_s
             self.trusted = math.isfinite(time_s)
             return 0.0 if self.trusted else float("nan")
         if not self.trusted:
             return float("nan")
+        if (
+            self.needs_next(index, time_s)
+            and math.isfinite(next_s)
+            and self.last < next_s + self.offset < time_s + self.offset
+        ):  # stamped far ahead of the frames either side: the one out of place
+            self.ahead.append((index, self.last_raw, time_s, next_s))
+            if not self.on_grid:
+                return float("nan")
+            elapsed = index / self.fps  # on the grid: its place; the last one taken
+            self.last = self.first + elapsed
+            self.last_raw = self.last - self.offset
+            self.behind = None
+            return elapsed
         if not (math.isfinite(time_s) and time_s + self.offset > self.last):
             if self.on_grid or not math.isfinite(time_s):
                 self.trusted = not self.on_grid
@@ -374,8 +411,9 @@ def clocked_times(times: np.ndarray | list[float], fps: float) -> tuple[np.ndarr
     repeated or earlier than the last one's has none (NaN) and the others keep theirs; before
     that, such a time means the file has none to trust (all NaN after it, not strayed)."""
     clock = FrameClock(fps)
-    elapsed = np.asarray([clock.take(i, float(t)) for i, t in enumerate(times)], np.float64)
-    return elapsed, not clock.on_grid
+    after = [float(t) for t in times[1:]] + [float("nan")]
+    elapsed = [clock.take(i, float(t), after[i]) for i, t in enumerate(times)]
+    return np.asarray(elapsed, np.float64), not clock.on_grid
 
 
 def _packet_times(
@@ -623,10 +661,16 @@ def estimate_video(
     if progress_bar:
         frames = progress(frames, desc=path.name, total=total, unit="frame")
     clock = FrameClock(info.fps)  # the filters get index / fps until the frames stray
-    for i, (rgb, t) in enumerate(frames):
-        if max_frames is not None and i >= max_frames:
+    pairs = iter(frames)
+    coming = next(pairs, None)  # the next frame read: its time tells of a frame stamped ahead
+    for i in itertools.count():
+        if coming is None or (max_frames is not None and i >= max_frames):
             break
-        times.append(clock.take(i, t))  # as watch takes it: NaN where it has none to trust
+        rgb, t = coming
+        coming = next(pairs, None)
+        more = coming is not None and (max_frames is None or i + 1 < max_frames)
+        # as watch takes it: NaN where it has none to trust
+        times.append(clock.take(i, t, coming[1] if more and coming is not None else math.nan))
         pose = est.process(rgb, clock.filter_time(i, times[-1]))
         world.append(pose.world)
         image.append(pose.image)
@@ -650,13 +694,18 @@ def estimate_video(
         positions, image_lm = both[:, :, :3], both[:, :, 3:]
         person_on_grid = ~np.isnan(resample_timed(elapsed, nobody, info.fps)[0])
         missing = np.flatnonzero(~person_on_grid).tolist()
-        vfr, gaps, holes = _resampling_record(elapsed, timed, info.fps, clock.went_back)
+        vfr, gaps, holes = _resampling_record(
+            elapsed, timed, info.fps, clock.went_back, clock.ahead
+        )
         notes = [vfr_words(path, info.fps, gaps, holes)]
         notes += [went_back_words(path, clock.went_back)] if clock.went_back else []
+        notes += [ahead_words(path, clock.ahead, True)] if clock.ahead else []
         for words in notes if announce else []:
             print(f"note: {shown(words)}", file=sys.stderr)
     else:
         missing = [i for i, p in enumerate(person) if not p]
+        if clock.ahead and announce:  # on the grid: timed by their places
+            print(f"note: {shown(ahead_words(path, clock.ahead, False))}", file=sys.stderr)
     meta: dict[str, object] = {
         "source_video": str(path),
         "video_fps": info.fps,
@@ -691,6 +740,7 @@ def _resampling_record(
     timed: np.ndarray,
     fps: float,
     went_back: list[tuple[int, float, float]] | None = None,
+    ahead: list[tuple[int, float, float, float]] | None = None,
 ) -> tuple[dict[str, object], np.ndarray, list[tuple[float, float]]]:
     """How :func:`estimate_video` resampled frames at ``elapsed`` (s; ``timed``: those with a
     time; ``went_back``: where the frame times went back, :attr:`FrameClock.went_back`), for
@@ -722,15 +772,23 @@ def _resampling_record(
         untimed = np.setdiff1d(np.arange(elapsed.size), timed)
         vfr["frames_left_out"] = {
             "frames": untimed.tolist(),
-            "why": "no time of its own after the frames strayed (missing, repeated or"
-            " earlier than the frame before): left out, as watch leaves it out",
+            "why": "no time of its own after the frames strayed (missing, repeated,"
+            " earlier than the frame before or stamped far ahead of the frames either"
+            " side): left out, as watch leaves it out",
         }
     if went_back:
         vfr["clock_went_back"] = {
             "frames": [frame for frame, _before, _at in went_back],
             "why": "a frame's time earlier than the frame's before, and the next frame's"
-            " running on from it (a clock reset, or a frame stamped far ahead): that frame"
+            " running on from it (a clock reset, or frames in a row stamped far ahead): that frame"
             " left out, the later ones timed on from the frame before it",
+        }
+    if ahead:
+        vfr["stamped_ahead"] = {
+            "frames": [frame for frame, _before, _at, _after in ahead],
+            "why": "a frame's time far after the frame's before (more than a bridged gap) and"
+            " the next frame's between the two: that frame alone out of place, left out,"
+            " the later ones keep their own times",
         }
     return vfr, gaps, holes
 
@@ -781,6 +839,22 @@ def went_back_words(path: str | Path, went_back: list[tuple[int, float, float]])
         f" frame {frame} left out, the frames after it timed on from the one before it"
     )
     return f"{line} ({len(went_back)} such places)" if len(went_back) > 1 else line
+
+
+def ahead_words(
+    path: str | Path, ahead: list[tuple[int, float, float, float]], strayed: bool
+) -> str:
+    """The line that tells a user a frame of a video was stamped far ahead of the frames
+    either side (:attr:`FrameClock.ahead`: the first, and how many there were); ``strayed``:
+    the frames had strayed from the grid (the frame is left out), else it is timed by its
+    place in the file."""
+    frame, before, at, after = ahead[0]
+    what = f"frame {frame} left out" if strayed else f"frame {frame} timed by its place"
+    line = (
+        f"{path}: frame {frame} is stamped {at:.3f} s, far ahead of the frames either side"
+        f" ({before:.3f} and {after:.3f} s): {what}, the frames after it keep their times"
+    )
+    return f"{line} ({len(ahead)} such frames)" if len(ahead) > 1 else line
 
 
 def _smoothing_meta() -> dict[str, object]:
@@ -956,6 +1030,40 @@ def _open_source(
     return cap, fps, declared, True
 
 
+def _grab(cap: Any, fps: float | None) -> tuple[bool, float]:
+    """The next frame grabbed (demuxed and decoded): whether there is one, and its time (s,
+    as decoded; NaN for a live source, timed by the wall clock)."""
+    ok = bool(cap.grab())
+    return ok, frame_time_s(cap) if ok and fps else math.nan
+
+
+def _clocked(
+    cap: Any, clock: FrameClock, index: int, time_s: float, more: bool, source: Any
+) -> tuple[bool, Any, float, tuple[bool, float] | None]:
+    """Frame ``index`` (grabbed, decoded at ``time_s``) timed by ``clock`` as
+    :func:`stream_poses` takes it, its notes said as they come. A frame far ahead of the last
+    one (:meth:`FrameClock.needs_next`) is read first and the next one grabbed for its time,
+    as :func:`estimate_video` reads it (``more``: a next frame may be read): (whether this
+    frame is there, its image when read already, its time, the next frame grabbed: whether
+    it is there and its time)."""
+    ok, bgr, grabbed, next_t = True, None, None, math.nan
+    if more and clock.needs_next(index, time_s):
+        ok, bgr = cap.retrieve()
+        if ok and bgr is not None:
+            there = bool(cap.grab())  # False: the file ends after this frame
+            next_t = frame_time_s(cap) if there else math.nan
+            grabbed = (there, next_t)
+    went_back, ahead = len(clock.went_back), len(clock.ahead)
+    video_t = clock.take(index, time_s, next_t)
+    if len(clock.went_back) > went_back:  # said as it comes, as a gap is
+        words = went_back_words(str(source), clock.went_back[-1:])
+        print(f"note: {shown(words)}", file=sys.stderr)
+    if len(clock.ahead) > ahead:
+        words = ahead_words(str(source), clock.ahead[-1:], not clock.on_grid)
+        print(f"note: {shown(words)}", file=sys.stderr)
+    return bool(ok), bgr, video_t, grabbed
+
+
 def stream_poses(
     source: int | str | Path,
     *,
@@ -989,22 +1097,21 @@ def stream_poses(
     index = 0
     times: list[float] = []  # a file's frame times (s), as the decoder gives them
     clock = FrameClock(fps or 1.0)
+    grabbed: tuple[bool, float] | None = None  # the next frame, grabbed to time this one
     try:
         while max_frames is None or index < max_frames:
             # grabbed (demuxed and decoded), then timed, paced and only then taken: a paced
             # frame is read when it is due, as a camera would deliver it
-            ok = cap.grab()
-            video_t = float("nan")
+            ok, raw_t = grabbed or _grab(cap, fps)
+            video_t, bgr, grabbed = float("nan"), None, None
             if ok and fps:
-                times.append(frame_time_s(cap))
-                went_back = len(clock.went_back)
-                video_t = clock.take(index, times[-1])
-                if len(clock.went_back) > went_back:  # said as it comes, as a gap is
-                    words = went_back_words(str(source), clock.went_back[-1:])
-                    print(f"note: {shown(words)}", file=sys.stderr)
+                times.append(raw_t)
+                more = max_frames is None or index + 1 < max_frames
+                ok, bgr, video_t, grabbed = _clocked(cap, clock, index, raw_t, more, source)
             if ok and pace is not None and not pace(index, video_t):
                 break
-            ok, bgr = cap.retrieve() if ok else (False, None)
+            if bgr is None:
+                ok, bgr = cap.retrieve() if ok else (False, None)
             read_at = time.perf_counter()
             if not ok or bgr is None:  # read to its end: all of it
                 cut = served_cut(str(source), timeout_s, alive) if served else None
