@@ -133,3 +133,42 @@ def test_a_video_with_a_frame_stamped_far_ahead_loses_that_frame_alone(
     pushed = [w for f in frames for w, _v, _s in live.take(f)]
     np.testing.assert_array_equal(np.array(pushed), got.sequence.positions)
     assert capsys.readouterr().err.count(note) == 1
+
+
+def test_a_constant_rate_video_with_one_frame_stamped_far_ahead_loses_nothing(
+    people: list[np.ndarray],  # noqa: F811
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The 13 lunge frames 40 ms apart (25 fps), the sixth stamped 5 s: it is timed by its
+    place (0.2 s) and the file stays constant-rate: 13 poses, each frame's own, no
+    resampling. Before: resampled, frame 6 (0.24 s) left out and the later ones timed on
+    from 5 s: 133 rows, 120 of them (0.2 to 4.96 s) a gap."""
+    pytest.importorskip("av", reason="PyAV writes the video")
+    from features.pose_estimation import PoseEstimator, estimate_video, stream_poses
+    from features.pose_estimation.video import iter_timed_frames
+    from posecbr.commands.watch import Regrid
+    from tests.test_hunt36c import _write_out_of_order
+
+    pts_ms = [40 * k for k in range(13)]
+    pts_ms[5] = 5000
+    path = _write_out_of_order(tmp_path / "one_ahead.mkv", pts_ms, people)
+    got = estimate_video(path, smoothing=False, tracking=False, progress_bar=False)
+    assert got.sequence.n_frames == 13
+    assert got.video_frames is None
+    assert "variable_frame_rate" not in got.sequence.metadata
+    decoded = [rgb for rgb, _t in iter_timed_frames(path)]
+    raw = PoseEstimator(smoothing=False, tracking=False).process(decoded[5])
+    np.testing.assert_allclose(got.image_landmarks[5], raw.image, atol=1e-6)
+    note = (
+        f"note: {path}: frame 5 is stamped 5.000 s, far ahead of the frames either side"
+        " (0.160 and 0.240 s): frame 5 timed by its place, the frames after it keep their"
+        " times"
+    )
+    assert note in capsys.readouterr().err.splitlines()
+    live = Regrid(25.0, str(path))
+    frames = list(stream_poses(path, estimator=PoseEstimator(smoothing=False, tracking=False)))
+    assert [f.video_time_s for f in frames] == pytest.approx([k / 25 for k in range(13)])
+    pushed = [w for f in frames for w, _v, _s in live.take(f)]
+    np.testing.assert_array_equal(np.array(pushed), got.sequence.positions)
+    assert capsys.readouterr().err.count(note) == 1
