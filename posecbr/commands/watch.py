@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import atomic_path, check_output, stdout_gone
+from features.fileio import PICTURE_WORDS, atomic_path, check_output, stdout_gone
 from features.interrupts import raise_interrupt
 from features.text import counted, shown
 from posecbr.arguments import path_arg
@@ -149,6 +149,29 @@ def _check_source(source: str) -> None:
             "watch plays videos, cameras and streams; segment this recording with posecbr segment",
             source,
         )
+    if _is_file(source) and _is_still(Path(source)):
+        # OpenCV plays a still as a one-frame stream: the pose model was loaded and run, and
+        # the watch ended "after 1 frame (0.04 s)", as if a video had been cut short
+        raise DataError(
+            f"{PICTURE_WORDS}, not a video: watch plays videos, cameras and streams"
+            " (posecbr extract reads a picture)",
+            source,
+        )
+
+
+def _is_still(path: Path) -> bool:
+    """Whether the file at ``path`` is a still picture: named as one (``.jpg``, ``.png``,
+    ...), or a PNG or JPEG by its first bytes and not named as a video (a motion-JPEG video
+    begins as a JPEG does)."""
+    from features.fileio import file_head, is_picture
+    from features.formats import SHOWN_VIDEO_SUFFIXES
+
+    from .extract import IMAGE_SUFFIXES
+
+    suffix = path.suffix.lower()
+    if suffix in IMAGE_SUFFIXES:
+        return True
+    return suffix not in SHOWN_VIDEO_SUFFIXES and is_picture(file_head(path))
 
 
 def _has_windows() -> bool:
