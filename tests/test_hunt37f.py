@@ -37,3 +37,31 @@ def test_watch_refuses_a_still_picture_as_a_picture(
     db.write_bytes(b"not opened: refused before")
     refused(["watch", str(photo), "--db", str(db), "--out", str(tmp_path / "w.mp4")],
             tmp_path, capsys, f"{photo}: a PNG or JPEG picture, not a video")  # fmt: skip
+
+
+def test_train_split_repetitions_calls_a_clip_too_short_for_one_a_clip(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A clip of 0.2 s among clips of arm movements, cut into repetitions: stderr said "1 clip
+    without a repetition kept whole", then stdout "skipped 1 repetition shorter than one
+    movement can be (0.4 s): short.npz (lasts 0.20 s)": it is the clip, kept whole (a clip
+    shorter than one repetition can be has none), that is skipped."""
+    from features.poses import load_pose
+    from posecbr.cli import main
+    from tests.badinput import good_pose_file
+    from tests.test_cbr_cli import _write_classes
+
+    data = _write_classes(tmp_path / "train", 3, 3)
+    first = sorted(p for p in data.iterdir() if p.is_dir())[0]
+    short = good_pose_file(first / "short.npz", frames=6)
+    seconds = load_pose(short).n_frames / load_pose(short).fps
+    assert f"{seconds:.2f}" == "0.20"
+    capsys.readouterr()
+    code = main(["train", str(data), "--db", str(tmp_path / "cb.sqlite"), "--split",
+                 "repetitions", "--mirror", "off", "--feature-weights", "none",
+                 "--phases", "0"])  # fmt: skip
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "1 clip without a repetition kept whole" in err
+    assert f"skipped 1 clip shorter than one movement can be (0.4 s): {short} (lasts 0.20 s)" in out
+    assert "repetition shorter" not in out

@@ -11,6 +11,7 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Collection
 from pathlib import Path
 from typing import Any
 
@@ -348,6 +349,7 @@ def _repetitions(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
     from features.repetitions import split_repetitions
 
     split = split_repetitions(clips)
+    args.kept_whole = {c.seq.source for c in split.clips if "repetition" not in c.extras}
     whole = (
         f"; {counted(split.kept_whole, 'clip')} without a repetition kept whole"
         if split.kept_whole
@@ -745,6 +747,7 @@ def run(args: argparse.Namespace) -> int:
     )
 
     args.notes = []
+    args.kept_whole = set()  # --split repetitions: the clips with none, kept whole
     _check_options(args)
     split_defaulted = args.split is None and not args.append
     if str(args.db).strip():  # a writer: refused where it cannot write, before any work
@@ -793,14 +796,20 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _skipped(nobody: list[str], short: list[str], split: str) -> str:
+def _skipped(
+    nobody: list[str], short: list[str], split: str, kept_whole: Collection[str] = ()
+) -> str:
     """The pieces that show no person, by their file (a recording cut into windows has many:
     each file once, with how many of its pieces), and those shorter than one movement can be
     (:func:`cbr.training.usable` names them with their length). Cut into repetitions, a
     piece that shows no person is a clip kept whole: repetitions are found where the person
-    is seen."""
+    is seen; so is a short one from a clip in ``kept_whole`` (a clip shorter than one
+    repetition can be has none: it was said to be "kept whole", not a repetition)."""
     from features.repetitions import MIN_PERIOD_S
 
+    whole = [n for n in short if n.rsplit(" (lasts ", 1)[0] in kept_whole]
+    cut = [n for n in short if n not in whole]
+    shorter = f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"
     lines = [
         _listed(names, kind, why)
         for names, kind, why in (
@@ -809,7 +818,8 @@ def _skipped(nobody: list[str], short: list[str], split: str) -> str:
                 "clips" if split == "repetitions" else split,
                 "that shows no person" if len(nobody) == 1 else "that show no person",
             ),
-            (short, split, f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"),
+            (whole, "clips", shorter),
+            (cut, split, shorter),
         )
         if names
     ]
@@ -1015,7 +1025,7 @@ def _report(args: argparse.Namespace, result: Any) -> None:
     from features.text import shown
 
     if result.skipped or result.too_short:
-        print(_skipped(result.skipped, result.too_short, args.split))
+        print(_skipped(result.skipped, result.too_short, args.split, args.kept_whole))
     from cbr.explain import class_noun
 
     n = len(result.label_counts)
