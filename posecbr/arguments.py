@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 from collections.abc import Collection, Iterable
 from pathlib import Path
@@ -11,13 +12,33 @@ from typing import Any
 
 from features.errors import ConfigError
 
+#: a URL's scheme and "://" (two letters at least: not a drive letter)
+_URL = re.compile(r"[A-Za-z][A-Za-z0-9+.-]+://")
+
 
 def path_arg(text: str) -> Path:
     """A file or folder argument. An empty one (``posecbr describe "$CLIP"`` with CLIP unset)
-    is refused: ``Path("")`` is the current folder, which nobody named."""
+    is refused: ``Path("")`` is the current folder, which nobody named. So is a URL: as a
+    path its "//" became "/" (``http:/me:secret@host/x.mp4``), and the file of that name
+    was not found, said with the password shown (the messages hide a URL's password, not
+    a path's)."""
     if not text:
         raise argparse.ArgumentTypeError("is an empty path (an unset variable?)")
+    if is_url(text):
+        raise argparse.ArgumentTypeError(f"{text} {NOT_A_PATH}")
     return Path(text)
+
+
+#: what a URL given for a file is told
+NOT_A_PATH = (
+    "is a URL, not a path on this machine (posecbr watch plays a stream; the other commands"
+    " read and write files)"
+)
+
+
+def is_url(text: str) -> bool:
+    """Whether ``text`` begins as a URL does (``http://``, ``rtsp://``, ``file://``)."""
+    return bool(_URL.match(text))
 
 
 #: the largest whole number a ``--param`` value may be: past it no float (nor a C long, which

@@ -65,3 +65,44 @@ def test_train_split_repetitions_calls_a_clip_too_short_for_one_a_clip(
     assert "1 clip without a repetition kept whole" in err
     assert f"skipped 1 clip shorter than one movement can be (0.4 s): {short} (lasts 0.20 s)" in out
     assert "repetition shorter" not in out
+
+
+URL = "http://coach:s3cret@127.0.0.1:9/squats.mp4"
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["segment", URL, "--db", "cb.sqlite", "--json"],
+        ["reps", URL, "--json"],
+        ["reps", "rtsp://coach:s3cret@cam.local/live", "--plot", "r.png"],
+        ["train", URL, "--frame-labels", "labels.txt", "--label-block", "0.1", "--db", "cb.sqlite"],
+        ["describe", URL],
+        ["segment", "clip.npz", "--db", "cb.sqlite", "--plot", URL + ".png"],
+    ],
+)
+def test_a_url_given_for_a_file_is_named_as_a_url_with_its_password_hidden(
+    argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``segment http://coach:s3cret@host/squats.mp4`` (a stream, which only ``watch`` plays)
+    said "http:/coach:s3cret@host/squats.mp4: no such file": the URL read as a path (its "//"
+    one "/"), the password shown. Now a usage error naming the URL, the password hidden."""
+    from posecbr.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    captured = capsys.readouterr()
+    assert stop.value.code == 2 and captured.out == ""
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and "s3cret" not in captured.err, captured.err
+    assert "://coach:***@" in lines[0] and "is a URL, not a path on this machine" in lines[0]
+
+
+def test_extract_names_a_url_as_a_url_with_its_password_hidden(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``extract https://coach:s3cret@host/x.mp4`` said "https:/coach:s3cret@host/x.mp4: no
+    such file or folder"."""
+    refused(["extract", "https" + URL[4:], "--out", str(tmp_path / "x.npz")], tmp_path, capsys,
+            "https://coach:***@127.0.0.1:9/squats.mp4: is a URL, not a path")  # fmt: skip
+    assert "s3cret" not in str(list(tmp_path.iterdir()))

@@ -28,7 +28,7 @@ from features.formats import SHOWN_VIDEO_SUFFIXES, is_video_in_folder
 from features.interrupts import interrupts_held, run_task, stop_workers, worker_ends_on_sigterm
 from features.progress import progress
 from features.text import counted, shown
-from posecbr.arguments import path_arg
+from posecbr.arguments import NOT_A_PATH, is_url, path_arg
 
 # FFmpeg prints decoder complaints straight to stderr; the user should get posecbr's one line.
 # OpenCV reads this once, when it first opens a video, so it is set as early as possible.
@@ -677,6 +677,8 @@ def run(args: argparse.Namespace) -> int:
         raise DataError(
             "the input is an empty path: name a video, still image, folder or labels CSV"
         )
+    if is_url(args.input):  # as a path "//" became "/": a file not found, its password shown
+        raise DataError(NOT_A_PATH, args.input)
     args.input = Path(args.input)
     options = _options(args)
     source: Path = args.input
