@@ -643,7 +643,14 @@ def _clip_path(path: str, line_no: int, csv_path: Path) -> Path:
 def _no_such_file(value: str, looked_for: Path, csv_path: Path) -> str:
     """What a labels CSV's missing file is, in words; a relative path says where it was
     looked for (from the CSV's folder, not the working folder), and a path written with
-    Windows' backslashes between folders says so when the file is there with slashes."""
+    Windows' backslashes between folders says so when the file is there with slashes. A URL
+    is said to be one: the path looked for (``http:/me:secret@host/x.mp4``) would show its
+    password, which messages hide only in a URL."""
+    if re.match(r"[A-Za-z][A-Za-z0-9+.-]+://", value):
+        return (
+            f"{value[:200]} is a URL, not a file (a labels CSV names files on this machine;"
+            " posecbr watch plays a stream)"
+        )
     if "\\" in value:
         slashed = value.replace("\\", "/")
         there = Path(slashed) if Path(slashed).is_absolute() else csv_path.parent / slashed

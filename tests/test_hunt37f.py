@@ -106,3 +106,19 @@ def test_extract_names_a_url_as_a_url_with_its_password_hidden(
     refused(["extract", "https" + URL[4:], "--out", str(tmp_path / "x.npz")], tmp_path, capsys,
             "https://coach:***@127.0.0.1:9/squats.mp4: is a URL, not a path")  # fmt: skip
     assert "s3cret" not in str(list(tmp_path.iterdir()))
+
+
+def test_a_labels_csv_naming_a_url_says_so_with_its_password_hidden(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A labels CSV row ``http://coach:s3cret@host/squats.mp4,squat``: "no such file
+    http://coach:***@... (looked for http:/coach:s3cret@host/squats.mp4: paths are from the
+    CSV's folder)", the password shown in the path looked for."""
+    from tests.badinput import good_pose_file
+
+    good_pose_file(tmp_path / "lunge.npz")
+    csv = tmp_path / "labels.csv"
+    csv.write_text(f"path,label\n{URL},squat\nlunge.npz,lunge\n", encoding="utf-8")
+    said = f"{csv}: line 2: http://coach:***@127.0.0.1:9/squats.mp4 is a URL, not a file"
+    line = refused(["train", str(csv), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys, said)
+    assert "s3cret" not in line
