@@ -439,10 +439,14 @@ def plot_timeline(
     max_rows: int = 60,
     bands: Sequence[Band] = (),
     band_title: str = "",
+    band_keys: Sequence[str] = (),
 ) -> Path:
     """A fluent timeline: one row per state that holds at some time, shaded by confidence (a
     long clip's frames averaged into up to :data:`PLOT_COLUMNS` columns); with ``bands``, a
-    strip above it marks stretches of time (activities, repetitions). Written atomically, in
+    strip above it marks stretches of time (activities, repetitions), each key in its colour
+    of :func:`band_colours` (``band_keys``: every key in the order that fixes their colours, a
+    case base's activities, so an activity has one colour in every picture of that case
+    base). Written atomically, in
     the format of the file's suffix (a suffix matplotlib does not know: :func:`picture_format`
     refuses it)."""
     import matplotlib
@@ -461,7 +465,7 @@ def plot_timeline(
             2, 1, figsize=(11, height), dpi=110, sharex=True,
             gridspec_kw={"height_ratios": [0.8, height - 0.8]},
         )  # fmt: skip
-        placed = _draw_bands(top, bands, band_title)
+        placed = _draw_bands(top, bands, band_title, band_keys)
     else:
         fig, ax = plt.subplots(figsize=(11, height), dpi=110)
     if len(rows):
@@ -503,16 +507,36 @@ def plot_timeline(
     return out
 
 
-def _draw_bands(ax: Any, bands: Sequence[Band], title: str) -> list[tuple[Any, Band]]:
-    """Coloured spans with their text on an axis of their own; each text with its band."""
+def band_colours(bands: Sequence[Band], keys: Sequence[str] = ()) -> dict[str, Any]:
+    """The colour of every key of ``bands``: its place in ``keys`` (the keys of ``bands``
+    not among them after those, sorted) in :func:`band_palette`. Before, the keys of one
+    picture were numbered among themselves: of two recordings segmented by one case base,
+    jumping jacks were blue beside squats and orange beside incline push-ups, and the eighth
+    activity of a picture was tab10's grey, read as the grey of unknown."""
+    given = list(dict.fromkeys(keys))
+    rest = sorted({b.key for b in bands if b.key is not None} - set(given))
+    palette = band_palette()
+    return {k: palette[i % len(palette)] for i, k in enumerate(given + rest)}
+
+
+def band_palette() -> list[tuple[float, float, float, float]]:
+    """The colours of bands: matplotlib's tab10, then tab20's lighter shades, with no grey
+    (grey is unknown's): 18 colours, and a 19th key takes the first again."""
     import matplotlib.pyplot as plt
 
-    keys = sorted({b.key for b in bands if b.key is not None})
-    palette = plt.get_cmap("tab10")
-    colour = {k: palette(i % 10) for i, k in enumerate(keys)}
+    dark = [plt.get_cmap("tab10")(i) for i in range(10) if i != 7]
+    light = [plt.get_cmap("tab20")(i) for i in range(1, 20, 2) if i != 15]
+    return dark + light
+
+
+def _draw_bands(
+    ax: Any, bands: Sequence[Band], title: str, keys: Sequence[str] = ()
+) -> list[tuple[Any, Band]]:
+    """Coloured spans with their text on an axis of their own; each text with its band."""
+    colour = band_colours(bands, keys)
     placed = []
     for b in bands:
-        c = colour.get(b.key, (0.75, 0.75, 0.75, 1.0)) if b.key is not None else "0.8"
+        c = colour[b.key] if b.key is not None else "0.8"
         ax.axvspan(b.start_s, b.end_s, ymin=0.05, ymax=0.95, color=c, alpha=0.8, lw=0.5,
                    ec="white")  # fmt: skip
         text = ax.text(0.5 * (b.start_s + b.end_s), 0.5, b.text, ha="center", va="center",

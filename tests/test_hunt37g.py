@@ -4,8 +4,12 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+
+from tests.moves import clip
 
 
 @pytest.mark.parametrize(("width", "height"), [(640, 480), (1920, 1080), (720, 1280)])
@@ -31,3 +35,95 @@ def test_overlay_text_outline_lies_around_its_letters(width: int, height: int) -
     assert 0 <= dark.max() - light.max() <= stroke + 2, (dark.max(), light.max())
     assert 0 <= light.min() - dark.min() <= stroke + 2, (dark.min(), light.min())
     assert frame[:, :, 0].shape == (height, width)  # drawn in place, nothing outside
+
+
+def _band_colours(monkeypatch: pytest.MonkeyPatch, draw: object) -> list[list[tuple]]:
+    """Calls ``draw()`` and gives, per band strip drawn, each band's (text, RGB) in order."""
+    import features.timeline as timeline
+
+    strips: list[list[tuple]] = []
+    real = timeline._draw_bands
+
+    def recording(ax: object, bands: object, *args: object) -> object:
+        placed = real(ax, bands, *args)  # type: ignore[arg-type]
+        spans = [p for p in ax.patches]  # type: ignore[attr-defined]
+        strips.append(
+            [(b.text, tuple(round(c, 3) for c in s.get_facecolor()[:3])) for s, (_, b) in
+             zip(spans, placed, strict=True)]
+        )  # fmt: skip
+        return placed
+
+    monkeypatch.setattr(timeline, "_draw_bands", recording)
+    draw()  # type: ignore[operator]
+    return strips
+
+
+def _segmented(labels: list[str | None], fps: float = 10.0) -> object:
+    """A segment result of 2-s segments labelled ``labels`` (None: unknown), one repetition
+    each, as ``segment --plot`` reads it."""
+    from types import SimpleNamespace
+
+    segments = [
+        SimpleNamespace(
+            start_frame=20 * i, end_frame=20 * (i + 1), label=label,
+            explanation="unlike every activity", repetitions=[object()],
+        )
+        for i, label in enumerate(labels)
+    ]  # fmt: skip
+    return SimpleNamespace(fps=fps, segments=segments, n_frames=20 * len(labels))
+
+
+def test_an_activity_has_one_colour_in_every_timeline_of_a_case_base(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``segment --plot`` numbered the activities of each picture among themselves: of two
+    recordings segmented by one case base, jumping jacks were tab10's first colour beside
+    squats and its second beside incline push-ups. Now each activity takes its place among
+    the case base's activities: jumping_jack, third of four, is tab10's third colour in
+    both pictures, squat the fourth, and unknown stays light grey."""
+    from posecbr.commands import segment
+
+    rec = clip("squat", seconds=8.0, fps=10.0)
+    activities = ["glute_bridge", "incline_pushup", "jumping_jack", "squat"]
+    first = _segmented(["jumping_jack", "squat", None, "squat"])
+    second = _segmented(["incline_pushup", "jumping_jack", "jumping_jack", None])
+    strips = _band_colours(
+        monkeypatch,
+        lambda: [
+            segment._plot(rec, first, tmp_path / "a.png", "a", activities),
+            segment._plot(rec, second, tmp_path / "b.png", "b", activities),
+        ],
+    )
+    tab10 = [tuple(round(c, 3) for c in TAB10[i]) for i in range(4)]
+    grey = (0.8, 0.8, 0.8)
+    assert [c for _, c in strips[0]] == [tab10[2], tab10[3], grey, tab10[3]]
+    assert [c for _, c in strips[1]] == [tab10[1], tab10[2], tab10[2], grey]
+    assert [t for t, _ in strips[1]] == ["incline_pushup x1", "jumping_jack x1",
+                                         "jumping_jack x1", "unknown x1"]  # fmt: skip
+
+
+def test_no_activity_is_drawn_in_the_grey_of_unknown(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The eighth activity of a picture took tab10's eighth colour, a mid grey, next to the
+    light grey of unknown stretches: twelve activities (CMU's exercises) in one timeline,
+    and none of their bands is grey (red, green and blue within 0.05 of one another); the
+    twelve are twelve colours."""
+    from features.timeline import Band, plot_timeline
+
+    rec = clip("squat", seconds=12.0, fps=10.0)
+    names = [f"activity {k:02d}" for k in range(12)]
+    bands = [Band(k, k + 1, name, name) for k, name in enumerate(names)]
+    strips = _band_colours(monkeypatch, lambda: plot_timeline(rec, tmp_path / "t.png", bands=bands))
+    colours = [c for _, c in strips[0]]
+    assert all(max(c) - min(c) > 0.05 for c in colours), colours
+    assert len(set(colours)) == 12
+
+
+TAB10 = [
+    (0.12156862745098039, 0.4666666666666667, 0.7058823529411765),
+    (1.0, 0.4980392156862745, 0.054901960784313725),
+    (0.17254901960784313, 0.6274509803921569, 0.17254901960784313),
+    (0.8392156862745098, 0.15294117647058825, 0.1568627450980392),
+]
+"""matplotlib's tab10, its first four colours (#1f77b4, #ff7f0e, #2ca02c, #d62728)."""

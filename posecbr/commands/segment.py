@@ -23,6 +23,7 @@ import argparse
 import dataclasses
 import json
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -204,7 +205,7 @@ def run(args: argparse.Namespace) -> int:
         targets = list(plot_targets(args.plot, args.recordings))
     for (rec, video, result), path, target in zip(done, args.recordings, targets, strict=True):
         if target is not None:
-            _plot(rec, result, target, path.name)
+            _plot(rec, result, target, path.name, [str(c) for c in clf.classes_])
             print(f"timeline written to {shown(target)}", file=sys.stderr)
         if args.overlay is not None:
             _overlay(path, video, result, args.overlay)
@@ -297,7 +298,9 @@ def _bands(result: Any) -> list[Any]:
     ]
 
 
-def _plot(rec: Any, result: Any, path: Path, name: str) -> None:
+def _plot(rec: Any, result: Any, path: Path, name: str, activities: Sequence[str] = ()) -> None:
+    """The timeline picture of ``result``; ``activities``: the case base's, in the order that
+    gives each its colour (one colour per activity in every picture of one case base)."""
     from features.timeline import plot_timeline, timeline_of
 
     plot_timeline(
@@ -307,6 +310,7 @@ def _plot(rec: Any, result: Any, path: Path, name: str) -> None:
         bands=_bands(result),
         band_title="activity",
         max_rows=30,
+        band_keys=activities,
     )
 
 
