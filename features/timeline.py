@@ -489,12 +489,14 @@ def plot_timeline(
         ax.set_yticks([])
     ax.set_xlim(0, tl.n_frames / tl.fps)
     ax.set_xlabel("time (s)")
-    (top if bands else ax).set_title(
+    heading = (top if bands else ax).set_title(
         title or "fluent timeline (shade = confidence; grey = unknown; orange labels = motion)",
         fontsize=10,
     )
     ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()
+    if fit_title(heading):
+        fig.tight_layout()  # room for its lines
     if bands:
         fit_texts(top, placed)
     out = Path(path)
@@ -563,6 +565,31 @@ def fit_texts(ax: Any, placed: Sequence[tuple[Any, Band]]) -> None:
                 break
         else:
             text.set_visible(False)
+
+
+def fit_title(title: Any) -> bool:
+    """The title ``title`` (its figure laid out) kept within the figure: broken at spaces
+    into as few lines as fit, a word too long for any line (a file name) broken within
+    itself; True when it was broken. Before, a long file name ran the title off the picture:
+    "...tuesday_morning.npz: activities and repetition counts over the fluent timeline
+    (grey = u"."""
+    fig = title.figure
+    renderer = fig.canvas.get_renderer()
+    whole = title.get_text()
+
+    def fits() -> bool:
+        box = title.get_window_extent(renderer)
+        return bool(box.x0 >= 0 and box.x1 <= fig.bbox.width)
+
+    if fits():
+        return False
+    for lines in range(2, 6):
+        for hard in (False, True):
+            width = math.ceil(len(whole) / lines)
+            title.set_text("\n".join(textwrap.wrap(whole, width, break_long_words=hard)))
+            if fits():
+                return True
+    return True
 
 
 def _in_lines(text: str, lines: int) -> str:

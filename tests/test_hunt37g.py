@@ -127,3 +127,23 @@ TAB10 = [
     (0.8392156862745098, 0.15294117647058825, 0.1568627450980392),
 ]
 """matplotlib's tab10, its first four colours (#1f77b4, #ff7f0e, #2ca02c, #d62728)."""
+
+
+@pytest.mark.parametrize("with_bands", [True, False])
+def test_a_long_title_stays_within_the_picture(tmp_path: Path, with_bands: bool) -> None:
+    """``segment --plot`` titles a picture with the recording's name and what it shows; a
+    name of 70-odd characters ran the title off the right edge ("...(grey = u"). Now the
+    title is broken into lines: no dark pixel lies within 8 pixels of the picture's left or
+    right edge, where before the title's letters ran to it."""
+    from PIL import Image
+
+    from features.timeline import Band, plot_timeline
+
+    rec = clip("squat", seconds=4.0, fps=10.0)
+    name = "subject13_trial31_warmup_session_recorded_in_the_lab_on_a_tuesday_morning.npz"
+    title = f"{name}: activities and repetition counts over the fluent timeline (grey = unknown)"
+    bands = [Band(0.0, 2.0, "squat x1", "squat"), Band(2.0, 4.0, "unknown x1")]
+    path = plot_timeline(rec, tmp_path / "t.png", title=title, bands=bands if with_bands else ())
+    image = np.asarray(Image.open(path).convert("L"), dtype=int)
+    edges = np.concatenate([image[:, :8], image[:, -8:]], axis=1)
+    assert edges.min() > 200, np.argwhere(edges <= 200)[:5]
