@@ -404,13 +404,17 @@ def runs_to_json(runs: list[Run], fps: float) -> list[dict[str, Any]]:
 
 @dataclass(frozen=True)
 class Band:
-    """A stretch of time drawn above a timeline: seconds ``start_s`` to ``end_s``, its text and
-    a colour key (bands with the same key share a colour; None: grey, for "unknown")."""
+    """A stretch of time drawn above a timeline: seconds ``start_s`` to ``end_s``, its text, a
+    colour key (bands with the same key share a colour; None: grey, for "unknown") and a
+    moment marked within it."""
 
     start_s: float
     end_s: float
     text: str
     key: str | None = None
+    mark_s: float | None = None
+    """A moment within the band marked by a small black triangle at its foot (a
+    repetition's far point), or None."""
 
 
 def picture_format(path: str | Path) -> str:
@@ -446,9 +450,9 @@ def plot_timeline(
     strip above it marks stretches of time (activities, repetitions), each key in its colour
     of :func:`band_colours` (``band_keys``: every key in the order that fixes their colours, a
     case base's activities, so an activity has one colour in every picture of that case
-    base). Written atomically, in
-    the format of the file's suffix (a suffix matplotlib does not know: :func:`picture_format`
-    refuses it)."""
+    base). ``title`` is followed by what the shades and colours mean (:func:`_key`). Written
+    atomically, in the format of the file's suffix (a suffix matplotlib does not know:
+    :func:`picture_format` refuses it)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -490,8 +494,7 @@ def plot_timeline(
     ax.set_xlim(0, tl.n_frames / tl.fps)
     ax.set_xlabel("time (s)")
     heading = (top if bands else ax).set_title(
-        title or "fluent timeline (shade = confidence; grey = unknown; orange labels = motion)",
-        fontsize=10,
+        f"{title or 'fluent timeline'} ({'; '.join(_key(tl, rows))})", fontsize=10
     )
     ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()
@@ -544,6 +547,11 @@ def _draw_bands(
         text = ax.text(0.5 * (b.start_s + b.end_s), 0.5, b.text, ha="center", va="center",
                        fontsize=7, clip_on=True)  # fmt: skip
         placed.append((text, b))
+    marks = [b.mark_s for b in bands if b.mark_s is not None]
+    if marks:  # at the strip's foot, below the texts
+        ax.plot(marks, [0.13] * len(marks), ls="none", marker="^", ms=5, color="black",
+                clip_on=True, gid="band marks")  # fmt: skip
+    ax.set_ylim(0, 1)
     ax.set_yticks([])
     ax.set_ylabel(title, fontsize=8, rotation=0, ha="right", va="center")
     return placed
@@ -565,6 +573,17 @@ def fit_texts(ax: Any, placed: Sequence[tuple[Any, Band]]) -> None:
                 break
         else:
             text.set_visible(False)
+
+
+def _key(tl: Timeline, rows: np.ndarray) -> list[str]:
+    """What the shades and colours of a timeline picture mean, for its title: "orange labels
+    = motion" only when a motion state's row is drawn. Before, a picture given a title of its
+    own (``segment``'s, ``reps``', ``describe``'s: the recording's name) lost the key of the
+    untitled picture: ``reps --plot`` of CMU 13_31 drew 19 row labels in orange, unexplained."""
+    key = ["shade = confidence", "grey = unknown"]
+    if any(tl.layout.temporal[i] for i in rows):
+        key.append("orange labels = motion")
+    return key
 
 
 def fit_title(title: Any) -> bool:

@@ -33,7 +33,8 @@ def test_the_reps_picture_says_1_repetition_not_1_repetitions(
     picture = tmp_path / "reps.png"
     assert main(["reps", str(clip), "--plot", str(picture)]) == 0
     assert capsys.readouterr().out.startswith(f"{clip}: 1 repetition (")
-    assert titles == ["m01_s01_e01.npz: 1 repetition over the fluent timeline"]
+    # (the far point's mark named after the count since hunt 37g)
+    assert titles == ["m01_s01_e01.npz: 1 repetition (\u25b2 far point) over the fluent timeline"]
     assert picture.is_file()
 
 

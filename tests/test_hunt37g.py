@@ -147,3 +147,84 @@ def test_a_long_title_stays_within_the_picture(tmp_path: Path, with_bands: bool)
     image = np.asarray(Image.open(path).convert("L"), dtype=int)
     edges = np.concatenate([image[:, :8], image[:, -8:]], axis=1)
     assert edges.min() > 200, np.argwhere(edges <= 200)[:5]
+
+
+def _drawn_title(monkeypatch: pytest.MonkeyPatch, draw: object) -> tuple[str, list[str]]:
+    """Calls ``draw()`` (one timeline picture) and gives its title, on one line, and the
+    colours of its row labels, as the figure is saved."""
+    import matplotlib.colors as mcolors
+    from matplotlib.figure import Figure
+
+    seen: list[tuple[str, list[str]]] = []
+    real = Figure.savefig
+
+    def saving(fig: Figure, *args: object, **kwargs: object) -> object:
+        titles = [a.get_title() for a in fig.axes if a.get_title()]
+        colours = [mcolors.to_hex(t.get_color()) for a in fig.axes for t in a.get_yticklabels()]
+        seen.append((titles[0].replace("\n", " "), colours))
+        return real(fig, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Figure, "savefig", saving)
+    draw()  # type: ignore[operator]
+    return seen[0]
+
+
+def test_a_titled_timeline_says_what_its_orange_labels_and_grey_mean(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``reps --plot`` (and ``describe --plot``, titled with the clip's name) drew the rows of
+    motion states with orange labels and unknown stretches grey, and only the untitled
+    picture said what orange and grey mean. The squat's timeline, titled as ``reps`` titles
+    it, has orange row labels (#b35900), and its title says "orange labels = motion" and
+    "grey = unknown"."""
+    from posecbr.commands import reps
+
+    rec = clip("squat", seconds=6.0, fps=30.0)
+    result = reps._count(rec)
+    assert result.count >= 2
+    title, colours = _drawn_title(
+        monkeypatch, lambda: reps._plot(rec, result, tmp_path / "r.png", "squat.npz")
+    )
+    assert "#b35900" in colours
+    assert title.startswith("squat.npz: ")
+    assert "orange labels = motion" in title and "grey = unknown" in title, title
+
+
+def test_reps_plot_marks_each_far_point_where_reps_json_puts_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``reps`` gives each repetition's start, far point and end, and ``--plot`` drew the
+    starts and ends only. Now a triangle marks each far point in the repetitions' strip: one
+    per repetition, at ``peak_frame / fps`` of the ``--json`` output, each within its band;
+    the title says what the triangle is."""
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+    from posecbr.commands import reps
+
+    rec = clip("squat", seconds=6.0, fps=30.0)
+    result = reps._count(rec)
+    doc = result.to_dict()["repetitions"]
+    assert len(doc) >= 2
+    marks: list[np.ndarray] = []
+    titles: list[str] = []
+    real = Figure.savefig
+
+    def saving(fig: Figure, *args: object, **kwargs: object) -> object:
+        for a in fig.axes:
+            marks.extend(
+                np.asarray(line.get_xdata(), dtype=float)
+                for line in a.get_lines()
+                if isinstance(line, Line2D) and line.get_marker() == "^"
+            )
+            titles.append(a.get_title())
+        return real(fig, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Figure, "savefig", saving)
+    reps._plot(rec, result, tmp_path / "r.png", "squat.npz")
+    drawn = np.sort(np.concatenate(marks)) if marks else np.array([])
+    expected = np.array([r["peak_frame"] / 30.0 for r in doc])
+    np.testing.assert_allclose(drawn, expected)
+    for x, r in zip(drawn, doc, strict=True):
+        assert r["start_frame"] / 30.0 <= x < r["end_frame"] / 30.0
+    assert any("\u25b2 far point" in t for t in titles), titles

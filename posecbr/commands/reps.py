@@ -137,13 +137,20 @@ def _plot(seq: object, result: object, path: Path, name: str) -> None:
     assert isinstance(result, RepetitionCount)
     fps = result.fps
     bands = [
-        Band(r.start_frame / fps, r.end_frame / fps, str(i), r.side or ("odd" if i % 2 else "even"))
+        Band(
+            r.start_frame / fps,
+            r.end_frame / fps,
+            str(i),
+            r.side or ("odd" if i % 2 else "even"),
+            mark_s=r.peak_frame / fps,
+        )  # fmt: skip
         for i, r in enumerate(result.repetitions, start=1)
     ]
     plot_timeline(
         timeline_of(seq),  # type: ignore[arg-type]
         path,
-        title=f"{name}: {counted(result.count, 'repetition')} over the fluent timeline",
+        title=f"{name}: {counted(result.count, 'repetition')} (\u25b2 far point) over the"
+        " fluent timeline",
         bands=bands,
         band_title="repetitions",
     )

@@ -306,7 +306,7 @@ def _plot(rec: Any, result: Any, path: Path, name: str, activities: Sequence[str
     plot_timeline(
         timeline_of(rec),
         path,
-        title=f"{name}: activities and repetition counts over the fluent timeline (grey = unknown)",
+        title=f"{name}: activities and repetition counts over the fluent timeline",
         bands=_bands(result),
         band_title="activity",
         max_rows=30,
