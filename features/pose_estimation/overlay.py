@@ -85,18 +85,27 @@ def _write(bgr: np.ndarray, text: str, org: tuple[int, int], scale: float) -> No
     thicker the stroke: the black outline, drawn 4 pixels thick, ran ahead of the 1-pixel
     white letters, "repetitions: 1" read as a smudge with the fill 17 pixels short of the
     outline at 1920x1080; and it has ASCII only, "élévation" came out with "?".)"""
-    outline, fill, ascent = _masks(text, round(19 * scale))
+    keep, add, ascent = _layers(text, round(19 * scale))
     top, left = org[1] - ascent, org[0]
     h, w = bgr.shape[:2]
     y0, x0 = max(0, top), max(0, left)
-    y1, x1 = min(h, top + fill.shape[0]), min(w, left + fill.shape[1])
+    y1, x1 = min(h, top + keep.shape[0]), min(w, left + keep.shape[1])
     if y1 <= y0 or x1 <= x0:
         return
-    region: np.ndarray = bgr[y0:y1, x0:x1].astype(np.float32)
-    for mask, value in ((outline, 0.0), (fill, 255.0)):
-        a = mask[y0 - top : y1 - top, x0 - left : x1 - left, None]
-        region = region * (1.0 - a) + value * a
+    cut = (slice(y0 - top, y1 - top), slice(x0 - left, x1 - left))
+    region = bgr[y0:y1, x0:x1] * keep[cut] + add[cut]
     bgr[y0:y1, x0:x1] = np.round(region).astype(bgr.dtype)
+
+
+@functools.lru_cache(maxsize=256)
+def _layers(text: str, size: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`_masks` as one blend, ``pixel * keep + add`` ``(height, width, 1)``: the black
+    outline laid over the frame, then the white letters over both (one pass per word and
+    frame, as a stream draws its label and fluent words on every frame)."""
+    outline, fill, ascent = _masks(text, size)
+    keep = ((1.0 - outline) * (1.0 - fill))[:, :, None].astype(np.float32)
+    add = (255.0 * fill)[:, :, None].astype(np.float32)
+    return keep, add, ascent
 
 
 @functools.lru_cache(maxsize=256)
