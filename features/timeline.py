@@ -444,13 +444,16 @@ def plot_timeline(
     bands: Sequence[Band] = (),
     band_title: str = "",
     band_keys: Sequence[str] = (),
+    band_legend: bool = False,
 ) -> Path:
     """A fluent timeline: one row per state that holds at some time, shaded by confidence (a
     long clip's frames averaged into up to :data:`PLOT_COLUMNS` columns); with ``bands``, a
     strip above it marks stretches of time (activities, repetitions), each key in its colour
     of :func:`band_colours` (``band_keys``: every key in the order that fixes their colours, a
     case base's activities, so an activity has one colour in every picture of that case
-    base). ``title`` is followed by what the shades and colours mean (:func:`_key`). Written
+    base); ``band_legend``: when a band is too narrow for its text, a legend beside the strip
+    names every key's colour. ``title`` is followed by what the shades and colours mean
+    (:func:`_key`). Written
     atomically, in the format of the file's suffix (a suffix matplotlib does not know:
     :func:`picture_format` refuses it)."""
     import matplotlib
@@ -502,6 +505,9 @@ def plot_timeline(
         fig.tight_layout()  # room for its lines
     if bands:
         fit_texts(top, placed)
+        if band_legend and _legend(top, placed, band_keys):
+            fig.tight_layout()  # room for it, the bands narrower: their texts fitted again
+            fit_texts(top, placed)
     out = Path(path)
     fmt = picture_format(out)
     try:
@@ -564,6 +570,7 @@ def fit_texts(ax: Any, placed: Sequence[tuple[Any, Band]]) -> None:
     other)."""
     renderer = ax.figure.canvas.get_renderer()
     for text, band in placed:
+        text.set_visible(True)
         left, right = ax.transData.transform([(band.start_s, 0.0), (band.end_s, 0.0)])[:, 0]
         tries = [(_in_lines(band.text, lines), size) for lines in (1, 2, 3) for size in (7, 6)]
         for words, size in tries:
@@ -573,6 +580,25 @@ def fit_texts(ax: Any, placed: Sequence[tuple[Any, Band]]) -> None:
                 break
         else:
             text.set_visible(False)
+
+
+def _legend(ax: Any, placed: Sequence[tuple[Any, Band]], keys: Sequence[str]) -> bool:
+    """A legend of the keys' colours beside the band strip ``ax`` when the text of a band
+    with a key is hidden (:func:`fit_texts`: too narrow for it); True when drawn. Before, a
+    long recording's short segments were bands of colour with nothing to tell which
+    activity each colour is: in 5 minutes, a segment under about 10 s lost its name."""
+    from matplotlib.patches import Patch
+
+    if all(text.get_visible() or band.key is None for text, band in placed):
+        return False
+    drawn = [b for _, b in placed]
+    colour = band_colours(drawn, keys)
+    shown_keys = {b.key for b in drawn}
+    handles = [Patch(color=c, alpha=0.8, label=k) for k, c in colour.items() if k in shown_keys]
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.005, 1.05), fontsize=7,
+              frameon=False, ncol=max(1, math.ceil(len(handles) / 5)), borderaxespad=0.0,
+              handlelength=1.2, labelspacing=0.2)  # fmt: skip
+    return True
 
 
 def _key(tl: Timeline, rows: np.ndarray) -> list[str]:
