@@ -15,7 +15,7 @@ import textwrap
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -444,17 +444,17 @@ def plot_timeline(
     bands: Sequence[Band] = (),
     band_title: str = "",
     band_keys: Sequence[str] = (),
-    band_legend: bool = False,
+    band_legend: Literal["never", "hidden", "always"] = "never",
 ) -> Path:
     """A fluent timeline: one row per state that holds at some time, shaded by confidence (a
     long clip's frames averaged into up to :data:`PLOT_COLUMNS` columns); with ``bands``, a
     strip above it marks stretches of time (activities, repetitions), each key in its colour
     of :func:`band_colours` (``band_keys``: every key in the order that fixes their colours, a
     case base's activities, so an activity has one colour in every picture of that case
-    base); ``band_legend``: when a band is too narrow for its text, a legend beside the strip
-    names every key's colour. ``title`` is followed by what the shades and colours mean
-    (:func:`_key`). Written
-    atomically, in the format of the file's suffix (a suffix matplotlib does not know:
+    base); ``band_legend``: a legend beside the strip names every key's colour, "always" or
+    when a band is too narrow for its text ("hidden"). ``title`` is followed by what the
+    shades and colours mean (:func:`_key`). Written atomically, in the format of the file's
+    suffix (a suffix matplotlib does not know:
     :func:`picture_format` refuses it)."""
     import matplotlib
 
@@ -505,7 +505,7 @@ def plot_timeline(
         fig.tight_layout()  # room for its lines
     if bands:
         fit_texts(top, placed)
-        if band_legend and _legend(top, placed, band_keys):
+        if band_legend != "never" and _legend(top, placed, band_keys, band_legend == "always"):
             fig.tight_layout()  # room for it, the bands narrower: their texts fitted again
             fit_texts(top, placed)
     out = Path(path)
@@ -582,14 +582,18 @@ def fit_texts(ax: Any, placed: Sequence[tuple[Any, Band]]) -> None:
             text.set_visible(False)
 
 
-def _legend(ax: Any, placed: Sequence[tuple[Any, Band]], keys: Sequence[str]) -> bool:
+def _legend(
+    ax: Any, placed: Sequence[tuple[Any, Band]], keys: Sequence[str], always: bool = False
+) -> bool:
     """A legend of the keys' colours beside the band strip ``ax`` when the text of a band
-    with a key is hidden (:func:`fit_texts`: too narrow for it); True when drawn. Before, a
+    with a key is hidden (:func:`fit_texts`: too narrow for it), or ``always``; True when
+    drawn. Before, a
     long recording's short segments were bands of colour with nothing to tell which
     activity each colour is: in 5 minutes, a segment under about 10 s lost its name."""
     from matplotlib.patches import Patch
 
-    if all(text.get_visible() or band.key is None for text, band in placed):
+    hidden = not all(text.get_visible() or band.key is None for text, band in placed)
+    if not (always or hidden) or all(band.key is None for _, band in placed):
         return False
     drawn = [b for _, b in placed]
     colour = band_colours(drawn, keys)

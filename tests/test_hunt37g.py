@@ -270,3 +270,43 @@ def test_a_long_recordings_timeline_names_the_colours_its_bands_cannot(
     assert seen["legend"] == [
         (name, colour_of[name]) for name in ("incline_pushup", "jumping_jack", "squat")
     ]
+
+
+def test_reps_plot_of_alternating_sides_names_the_side_of_each_colour(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``reps`` of jogging: the repetitions alternate sides, and ``--plot`` coloured each
+    band by its side, blue and orange, without saying which is which. Now a legend names
+    them: "left" and "right", each swatch the colour of the bands of the repetitions
+    ``reps --json`` gives that side."""
+    import matplotlib.colors as mcolors
+    from matplotlib.figure import Figure
+
+    from posecbr.commands import reps
+
+    rec = clip("jog", seconds=8.0, fps=30.0)
+    result = reps._count(rec)
+    sides = [r["side"] for r in result.to_dict()["repetitions"]]
+    assert set(sides) == {"left", "right"}
+    seen: dict[str, object] = {}
+    real = Figure.savefig
+
+    def saving(fig: Figure, *args: object, **kwargs: object) -> object:
+        top = fig.axes[0]
+        legend = top.get_legend()
+        seen["legend"] = (
+            None
+            if legend is None
+            else [
+                (t.get_text(), mcolors.to_hex(h.get_facecolor(), keep_alpha=False))
+                for t, h in zip(legend.get_texts(), legend.legend_handles, strict=True)
+            ]
+        )
+        seen["bands"] = [mcolors.to_hex(p.get_facecolor(), keep_alpha=False) for p in top.patches]
+        return real(fig, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Figure, "savefig", saving)
+    reps._plot(rec, result, tmp_path / "r.png", "jog.npz")
+    colour_of = dict(zip(sides, seen["bands"], strict=True))  # type: ignore[call-overload]
+    assert colour_of["left"] != colour_of["right"]
+    assert seen["legend"] == [("left", colour_of["left"]), ("right", colour_of["right"])]

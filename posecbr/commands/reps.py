@@ -153,4 +153,6 @@ def _plot(seq: object, result: object, path: Path, name: str) -> None:
         " fluent timeline",
         bands=bands,
         band_title="repetitions",
+        # the colours are the sides: named (odd and even ones need no legend)
+        band_legend="always" if any(r.side for r in result.repetitions) else "never",
     )

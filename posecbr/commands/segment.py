@@ -311,7 +311,7 @@ def _plot(rec: Any, result: Any, path: Path, name: str, activities: Sequence[str
         band_title="activity",
         max_rows=30,
         band_keys=activities,
-        band_legend=True,
+        band_legend="hidden",
     )
 
 
