@@ -307,7 +307,7 @@ class RepetitionCount:
 
     period_s: the movement's full cycle (None when it does not repeat); periodicity: the
     autocorrelation at that period (1 = exact repetition); ``to_dict`` gives both as None
-    without a period or without a repetition counted (:attr:`repeated_period_s`);
+    without a period or with fewer than two repetitions counted (:attr:`repeated_period_s`);
     alternating: one repetition per side; moving: the joint angles (or the hips' height) that
     carry the movement, most first; partial: no repetition is whole, but the movement reached a
     far point cut off by the clip's start or end (part of one repetition: the way down of a
@@ -329,10 +329,13 @@ class RepetitionCount:
 
     @property
     def repeated_period_s(self) -> float | None:
-        """The period to tell a user: ``period_s`` when a repetition was counted, else None
-        (a period read from a wobble or the pose model's jitter in a posture held is not the
-        period of anything repeated: ``reps`` said "0 repetitions (period 0.40 s)")."""
-        return self.period_s if self.count else None
+        """The period to tell a user: ``period_s`` when at least two repetitions were
+        counted, else None (a period read from a wobble or the pose model's jitter in a
+        posture held is not the period of anything repeated: ``reps`` said "0 repetitions
+        (period 0.40 s)"; nor is one beside a lone repetition, which repeats nothing: the
+        bundled slow reverse lunge, one repetition of 0.20-6.04 s, read "1 repetition
+        (period 0.44 s)")."""
+        return self.period_s if self.count >= 2 else None
 
     def to_dict(self) -> dict[str, Any]:
         period = self.repeated_period_s

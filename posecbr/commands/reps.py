@@ -112,7 +112,7 @@ def _print(clip: Path, fps: float, result: object) -> None:
     how = []
     if result.alternating:
         how.append("alternating sides")
-    if result.repeated_period_s is not None:  # none without a repetition, as --json
+    if result.repeated_period_s is not None:  # none below two repetitions, as --json
         how.append(f"period {result.repeated_period_s:.2f} s")
     if result.moving:
         how.append("moving " + ", ".join(m.replace("_", " ") for m in result.moving))

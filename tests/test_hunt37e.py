@@ -1,0 +1,36 @@
+"""Hunt 37e: a physiotherapist's first hour with their own videos (extract, train a case base
+of repetitions, classify, segment, reps, watch): what read wrong or could not be done."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from features.repetitions import count_repetitions
+from posecbr.cli import main
+from tests.test_repetitions import _movement
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+
+
+def test_reps_gives_no_period_beside_one_repetition(capsys: pytest.CaptureFixture[str]) -> None:
+    """A UI-PRMD file holds one repetition by the data set's design (one episode each). On
+    m01_s02_e02 ``reps`` said "1 repetition (period 0.80 s; ...)" and ``--json`` gave
+    ``"period_s": 0.8``: one far point repeats nothing, and the 0.80 s (read from the
+    autocorrelation's first weak peak, periodicity 0.06) is not even the repetition's own
+    length, frames 12-63 (1.73 s). Now neither gives a period; two arm raises of designed
+    period 1.8 s (1.2 s up and down, 0.6 s of rest) keep theirs."""
+    clip = DEMO / "m01_s02_e02.npz"
+    assert main(["reps", str(clip)]) == 0
+    head = capsys.readouterr().out.splitlines()[0]
+    assert head.startswith(f"{clip}: 1 repetition ("), head
+    assert "period" not in head
+    assert main(["reps", str(clip), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert (doc["count"], doc["period_s"], doc["periodicity"]) == (1, None, None)
+    two = count_repetitions(_movement(["both"] * 2))
+    assert two.count == 2
+    assert two.repeated_period_s == pytest.approx(1.8, abs=0.1)
+    assert two.to_dict()["period_s"] == pytest.approx(1.8, abs=0.1)
