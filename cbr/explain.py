@@ -1013,7 +1013,8 @@ def _verbose(
     out = list(lines)
     n_label = sum(n["label"] == label for n in neighbours)
     out.append(
-        f"Vote: {n_label} of the {len(neighbours)} most similar clips are {label} (vote share "
+        f"Vote: {n_label} of the {len(neighbours)} most similar clips"
+        f" {'is' if n_label == 1 else 'are'} {label} (vote share "
         f"{share:.2f}; the confidence is {confidence})."
     )
     flag = "" if unlike_ratio is None else f"; flagged beyond {unlike_ratio:.2f}x"

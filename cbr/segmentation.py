@@ -809,7 +809,8 @@ def told(clf: Any, solved: Any, label: str) -> str:
     how many of its most similar cases are of it, and the fluents it matched them on."""
     e: Explanation = clf.explain_solved(solved, counterfactual=False)
     agree = sum(str(n["label"]) == label for n in e.neighbours)
-    text = f"{agree} of the {len(e.neighbours)} most similar cases are {label}"
+    verb = "is" if agree == 1 else "are"  # "1 of the 5 most similar cases is lunge"
+    text = f"{agree} of the {len(e.neighbours)} most similar cases {verb} {label}"
     if e.matched:
         text += "; matched: " + ", ".join(e.matched[:3])
     return text

@@ -3,11 +3,15 @@ of repetitions, classify, segment, reps, watch): what read wrong or could not be
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
 import pytest
 
+from cbr.estimator import CaseBaseClassifier
+from cbr.segmentation import told
+from features.poses import load_pose
 from features.repetitions import count_repetitions
 from posecbr.cli import main
 from tests.test_repetitions import _movement
@@ -34,3 +38,24 @@ def test_reps_gives_no_period_beside_one_repetition(capsys: pytest.CaptureFixtur
     assert two.count == 2
     assert two.repeated_period_s == pytest.approx(1.8, abs=0.1)
     assert two.to_dict()["period_s"] == pytest.approx(1.8, abs=0.1)
+
+
+def test_one_similar_case_of_the_answer_is_said_in_the_singular() -> None:
+    """One deep squat among four hurdle steps, k = 5: the squat itself has that one squat
+    nearest (its own copy) and the four hurdle steps after it, and wins the distance vote.
+    ``classify --verbose`` said "Vote: 1 of the 5 most similar clips are deep_squat" and
+    ``segment``/``watch`` explained a segment "1 of the 5 most similar cases are lunge"
+    (seen on a joined video of the bundled exercises); now "is", and "are" for four."""
+    with open(DEMO / "labels.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    squats = [r for r in rows if r["label"] == "deep_squat"]
+    steps = [r for r in rows if r["label"] == "hurdle_step"][:4]
+    X = [load_pose(DEMO / r["path"]) for r in [squats[0], *steps]]
+    clf = CaseBaseClassifier(k=5).fit(X, ["deep_squat"] + ["hurdle_step"] * 4)
+    verbose = clf.explain([X[0]])[0].verbose
+    assert "Vote: 1 of the 5 most similar clips is deep_squat (" in verbose, verbose
+    solved = clf.solve([X[0]])[0]
+    assert told(clf, solved, "deep_squat").startswith("1 of the 5 most similar cases is deep_squat")
+    assert told(clf, solved, "hurdle_step").startswith(
+        "4 of the 5 most similar cases are hurdle_step"
+    )
