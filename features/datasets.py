@@ -517,17 +517,18 @@ def _parse_bool(value: str) -> Any:
     return value
 
 
-def read_labels_csv(csv_path: str | Path) -> list[dict[str, Any]]:
+def read_labels_csv(csv_path: str | Path, unlabelled: bool = False) -> list[dict[str, Any]]:
     """Rows of a labels CSV as dicts: path (resolved), label, subject, start, end, extras.
 
     Header row required with at least ``path`` and ``label``. Raises DataError naming the
-    file and line for a malformed row or a missing clip file.
+    file and line for a malformed row or a missing clip file, or for an empty label unless
+    ``unlabelled`` (clips to classify, not to train on: pieces of a new recording).
     """
     csv_path = Path(csv_path)
     rows = _csv_rows(csv_path)
     header = _csv_header(rows[0], csv_path)
     records = (
-        _csv_record(header, row, line_no, csv_path)
+        _csv_record(header, row, line_no, csv_path, unlabelled)
         for line_no, row in enumerate(rows[1:], start=2)
         if row and any(c.strip() for c in row)  # blank rows are skipped
     )
@@ -588,8 +589,11 @@ def _csv_header(row: list[str], csv_path: Path) -> list[str]:
     return header
 
 
-def _csv_record(header: list[str], row: list[str], line_no: int, csv_path: Path) -> dict[str, Any]:
-    """One data row as the record :func:`read_labels_csv` returns."""
+def _csv_record(
+    header: list[str], row: list[str], line_no: int, csv_path: Path, unlabelled: bool = False
+) -> dict[str, Any]:
+    """One data row as the record :func:`read_labels_csv` returns (an empty label refused
+    unless ``unlabelled``)."""
     if len(row) != len(header):
         raise DataError(
             f"line {line_no}: {len(row)} fields, the header has {len(header)}", csv_path
@@ -605,7 +609,7 @@ def _csv_record(header: list[str], row: list[str], line_no: int, csv_path: Path)
     if not rec["path"]:
         raise DataError(f"line {line_no}: empty path", csv_path)
     track = _track_columns(rec, csv_path, line_no)
-    if not rec.get("label") and track is None:
+    if not rec.get("label") and track is None and not unlabelled:
         raise DataError(f"line {line_no}: empty label", csv_path)
     clip = _clip_path(rec["path"], line_no, csv_path)
     start, end = _frame_range(rec, line_no, csv_path)
@@ -707,9 +711,11 @@ def _check_csv_twins(records: list[dict[str, Any]], csv_path: Path) -> None:
         )
 
 
-def _csv_entries(csv_path: Path) -> list[_Entry]:
+def _csv_entries(csv_path: Path, unlabelled: bool = False) -> list[_Entry]:
+    """The clips a labels CSV lists; a row with an empty label (``unlabelled`` only) has the
+    label its pose file's metadata gives, or none."""
     entries = []
-    records = read_labels_csv(csv_path)
+    records = read_labels_csv(csv_path, unlabelled)
     _check_csv_twins(records, csv_path)
     for rec in records:
         if rec["track"] is not None:
@@ -729,7 +735,14 @@ def _csv_entries(csv_path: Path) -> list[_Entry]:
             return seq
 
         entries.append(
-            _Entry(load, rec["label"], rec["subject"], rec["extras"], rec["path"].name, rec["path"])
+            _Entry(
+                load,
+                rec["label"] or None,
+                rec["subject"],
+                rec["extras"],
+                rec["path"].name,
+                rec["path"],
+            )
         )
     return entries
 
@@ -841,11 +854,11 @@ def recording_clips(
         yield Clip(seq=part, label=label, subject=subject, extras={})
 
 
-def _entries(path: Path, kind: str, sensor: str) -> list[_Entry]:
+def _entries(path: Path, kind: str, sensor: str, unlabelled: bool = False) -> list[_Entry]:
     if kind == "uiprmd":
         return _uiprmd_entries(path, sensor)
     if kind == "csv":
-        return _csv_entries(path if path.is_file() else path / "labels.csv")
+        return _csv_entries(path if path.is_file() else path / "labels.csv", unlabelled)
     if kind == "asf_amc":
         return _asf_amc_entries(path)
     if kind == "class_folders":
@@ -921,6 +934,7 @@ class DatasetEntry:
     episodes: Collection[int] | None = None
     correct: bool | None = None
     fps: float | None = None  # the frame rate that replaces the file's, None: the file's
+    unlabelled: bool = False  # a labels CSV's row may leave its label empty (to classify)
 
     @property
     def name(self) -> str:
@@ -945,7 +959,7 @@ class DatasetEntry:
             subject = e.subject if e.subject is not None else meta_subject
             extras = {**meta_extras, **e.extras}
             if label is None:
-                if self.kind != "pose_file":
+                if self.kind != "pose_file" and not (self.unlabelled and self.kind == "csv"):
                     raise DataError(
                         "no label: its metadata has none (put it in a labels CSV)", seq.source
                     )
@@ -966,6 +980,7 @@ def dataset_entries(
     episodes: Collection[int] | None = None,
     correct: bool | None = None,
     fps: float | None = None,
+    unlabelled: bool = False,
 ) -> list[DatasetEntry]:
     """The clips of the dataset at ``path`` that may pass the filters (those of
     :func:`iter_dataset`), found from names alone: nothing is decoded yet. The label file
@@ -974,12 +989,14 @@ def dataset_entries(
     one label file named for two recordings of different lengths, a malformed one, or an
     AMC file with no skeleton beside it is refused before the first file is worked on.
     ``fps``: the frame rate of every clip, in place of the files' own (None: their own);
-    a label file in seconds is laid over the frames at that rate."""
+    a label file in seconds is laid over the frames at that rate. ``unlabelled``: a labels
+    CSV's rows may leave the label empty (clips to classify: the pose file's own label, or
+    none)."""
     path = Path(path)
     kind = detect_kind(path)
     kept = [
-        DatasetEntry(e, kind, labels, subjects, movements, episodes, correct, fps)
-        for e in _entries(path, kind, sensor)
+        DatasetEntry(e, kind, labels, subjects, movements, episodes, correct, fps, unlabelled)
+        for e in _entries(path, kind, sensor, unlabelled)
         if _keep(e.label, e.subject, e.extras, labels, subjects, movements, episodes, correct)
     ]
     listed: dict[Path, list[Path]] = {}  # each folder of AMC files listed once
@@ -1006,6 +1023,7 @@ def iter_dataset(
     correct: bool | None = None,
     limit: int | None = None,
     fps: float | None = None,
+    unlabelled: bool = False,
 ) -> Iterator[Clip]:
     """Labelled clips of the dataset at ``path`` (kind detected by :func:`detect_kind`).
 
@@ -1013,12 +1031,13 @@ def iter_dataset(
     "m01"), ``episodes`` (UI-PRMD episode / HDM05 take), ``correct``; ``limit`` caps the
     number of clips; ``fps`` replaces every clip's frame rate before a recording labelled
     over time is cut by its label file. Clips are read one at a time, with a progress bar. A
-    clip without a label (a pose file whose metadata has none) raises DataError naming it.
+    clip without a label (a pose file whose metadata has none) raises DataError naming it,
+    unless ``unlabelled`` and it is a labels CSV's row (:func:`dataset_entries`).
     """
     path = Path(path)
     entries = dataset_entries(path, sensor=sensor, labels=labels, subjects=subjects,
                               movements=movements, episodes=episodes, correct=correct,
-                              fps=fps)  # fmt: skip
+                              fps=fps, unlabelled=unlabelled)  # fmt: skip
     if limit is not None and entries and entries[0].kind not in ("class_folders", "pose_folder"):
         # Everything these filters test is known from the names; the folder kinds learn the
         # subject only from the file, so they stop after ``limit`` clips instead.

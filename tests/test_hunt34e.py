@@ -188,8 +188,8 @@ def test_classify_notes_clips_of_several_repetitions_against_a_case_base_of_one_
     assert notes == [
         "note: case base 'default' holds a case per repetition and 1 clip holds several "
         "(three.npz: 3): each gets one answer here; to classify each repetition, give them "
-        "as rows path,label,start,end of a labels CSV (posecbr reps CLIP --json: each one's "
-        "start_frame and end_frame)"
+        "as rows path,label,start,end of a labels CSV (a label may be left empty; posecbr reps "
+        "CLIP --json: each one's start_frame and end_frame)"
     ]
     assert main(["classify", str(one), "--db", str(db), "-q"]) == 0
     assert "per repetition" not in capsys.readouterr().err

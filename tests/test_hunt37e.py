@@ -11,9 +11,10 @@ import pytest
 
 from cbr.estimator import CaseBaseClassifier
 from cbr.segmentation import told
-from features.poses import load_pose
+from features.poses import PoseSequence, load_pose, save_pose
 from features.repetitions import count_repetitions
 from posecbr.cli import main
+from tests.badinput import refused
 from tests.test_repetitions import _movement
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
@@ -58,4 +59,47 @@ def test_one_similar_case_of_the_answer_is_said_in_the_singular() -> None:
     assert told(clf, solved, "deep_squat").startswith("1 of the 5 most similar cases is deep_squat")
     assert told(clf, solved, "hurdle_step").startswith(
         "4 of the 5 most similar cases are hurdle_step"
+    )
+
+
+def test_classify_takes_a_labels_csv_row_left_unlabelled(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``classify``'s note for a clip of several repetitions says to give them "as rows
+    path,label,start,end of a labels CSV", but a new patient's video has no label, and a
+    row with an empty one was refused ("line 2: empty label"): a label had to be made up,
+    then counted wrong. Now a row may leave it empty: the clip is classified and checked
+    against its pose file's own label when it holds one (m01_s01_e02, a deep squat), else
+    not at all. ``train`` still refuses the row, in one line, writing nothing."""
+    with open(DEMO / "labels.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    train_rows = [r for r in rows if r["label"] == "deep_squat"][6:12:2]
+    train_rows += [r for r in rows if r["label"] == "hurdle_step"][:6:2]
+    lines = ["path,label"] + [f"{DEMO / r['path']},{r['label']}" for r in train_rows]
+    (tmp_path / "train.csv").write_text("\n".join(lines) + "\n")
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(tmp_path / "train.csv"), "--db", str(db)]) == 0
+    capsys.readouterr()
+    squat = load_pose(DEMO / "m01_s02_e01.npz")
+    new = save_pose(
+        PoseSequence(squat.positions, squat.joint_names, squat.fps), tmp_path / "new.npz"
+    )
+    assert load_pose(new).label is None  # a clip nobody labelled
+    (tmp_path / "pieces.csv").write_text(
+        "path,label,start,end\n"
+        f"new.npz,,0,40\n"
+        f"new.npz,,30,{squat.n_frames}\n"
+        f"{DEMO / 'm01_s01_e02.npz'},,0,60\n"
+    )
+    assert main(["classify", str(tmp_path / "pieces.csv"), "--db", str(db), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    got = [(r["start_frame"], r["end_frame"], r.get("true_label")) for r in doc["results"]]
+    assert got == [(0, 40, None), (30, squat.n_frames, None), (0, 60, "deep_squat")]
+    assert all(r["label"] in ("deep_squat", "hurdle_step") for r in doc["results"])
+    assert (doc["summary"]["clips"], doc["summary"]["labelled"]) == (3, 1)
+    refused(
+        ["train", str(tmp_path / "pieces.csv"), "--db", str(tmp_path / "x.sqlite")],
+        tmp_path,
+        capsys,
+        "pieces.csv: line 2: empty label",
     )

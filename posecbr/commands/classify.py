@@ -127,7 +127,11 @@ def load_inputs(
         else:
             clips = list(
                 iter_dataset(
-                    path, sensor=sensor, subjects=subjects, progress_desc=f"loading {path.name}"
+                    path,
+                    sensor=sensor,
+                    subjects=subjects,
+                    progress_desc=f"loading {path.name}",
+                    unlabelled=True,  # a row left unlabelled: classified, not checked
                 )
             )
             # as train: a clip listed twice in one labels CSV would count twice
@@ -233,8 +237,8 @@ def _note_repeated_clips(name: str, clips: list[Any]) -> None:
         f"note: case base {name!r} holds a case per repetition and "
         f"{counted(len(several), 'clip')} {'holds' if len(several) == 1 else 'hold'} several "
         f"({named}{more}): each gets one answer here; to classify each repetition, give them "
-        "as rows path,label,start,end of a labels CSV (posecbr reps CLIP --json: each "
-        "one's start_frame and end_frame)",
+        "as rows path,label,start,end of a labels CSV (a label may be left empty; posecbr "
+        "reps CLIP --json: each one's start_frame and end_frame)",
         file=sys.stderr,
     )
 
