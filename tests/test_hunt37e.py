@@ -15,6 +15,7 @@ from features.poses import PoseSequence, load_pose, save_pose
 from features.repetitions import count_repetitions
 from posecbr.cli import main
 from tests.badinput import refused
+from tests.test_hunt34e import _raises
 from tests.test_repetitions import _movement
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
@@ -103,3 +104,36 @@ def test_classify_takes_a_labels_csv_row_left_unlabelled(
         capsys,
         "pieces.csv: line 2: empty label",
     )
+
+
+def test_the_repetition_note_names_pieces_of_a_file_with_their_frames(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two pieces of one file, each of three arm raises by construction, classified from a
+    labels CSV against a case base of repetitions: the note said "2 clips hold several
+    (six.npz: 3, six.npz: 3)", one name for two clips; it names each piece with its frames
+    now, as the clip's own lines and the summary do (end inclusive)."""
+    rows = ["path,label,subject"]
+    for subject in ("s1", "s2"):
+        for label, top in (("high", 90.0), ("low", 40.0)):
+            name = f"{subject}_{label}.npz"
+            save_pose(_raises(top + (5.0 if subject == "s2" else 0.0), 2), tmp_path / name)
+            rows.append(f"{name},{label},{subject}")
+    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(tmp_path / "labels.csv"), "--db", str(db), "--split", "repetitions"]
+    assert main(argv) == 0
+    rest = 15  # 0.5 s of standing before, between and after the raises (_raises)
+    each = _raises(85.0, 1).n_frames - rest  # one raise and the rest after it
+    save_pose(_raises(85.0, 6), tmp_path / "six.npz")
+    half = rest + 3 * each  # the first three raises and their rests
+    (tmp_path / "pieces.csv").write_text(
+        "path,label,start,end\n"
+        f"six.npz,high,0,{half}\nsix.npz,high,{half - rest},{rest + 6 * each}\n"
+    )
+    capsys.readouterr()
+    assert main(["classify", str(tmp_path / "pieces.csv"), "--db", str(db), "-q"]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "per repetition" in line]
+    assert len(notes) == 1
+    first, second = f"six.npz frames 0-{half - 1}", f"six.npz frames {half - rest}-{6 * each + 14}"
+    assert f"2 clips hold several ({first}: 3, {second}: 3)" in notes[0], notes[0]

@@ -217,6 +217,7 @@ def _note_repeated_clips(name: str, clips: list[Any]) -> None:
     """Note, on stderr, clips of several repetitions classified against a case base of
     single repetitions (``train --split repetitions``): each gets one answer, its
     repetitions' summary held against cases of one; how to classify each instead."""
+    from cbr.casebase import frames_of, piece_name
     from features.errors import DataError
     from features.repetitions import count_repetitions
     from features.text import shown
@@ -227,11 +228,12 @@ def _note_repeated_clips(name: str, clips: list[Any]) -> None:
             n = count_repetitions(clip).count
         except DataError:  # too short to count, nobody seen: classify says what it can
             continue
-        if n > 1:
-            several.append((clip.source or "a clip", n))
+        if n > 1:  # a piece of its file (a labels CSV's start,end row) named with its frames
+            piece = frames_of(clip) if "frame_offset" in clip.metadata else None
+            several.append((piece_name(Path(clip.source or "a clip").name, piece), n))
     if not several:
         return
-    named = ", ".join(f"{shown(Path(src).name)}: {n}" for src, n in several[:3])
+    named = ", ".join(f"{shown(src)}: {n}" for src, n in several[:3])
     more = f" and {len(several) - 3} more" if len(several) > 3 else ""
     print(
         f"note: case base {name!r} holds a case per repetition and "
