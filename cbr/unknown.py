@@ -624,9 +624,10 @@ class Offset:
         text = self.judge.describe(self.less(nearest), classes)
         if self.offset <= 0.0:
             return text
+        # "every distance less 2" read as "every distance below 2": say what was done
         return text + (
-            f"; every distance less {self.offset:.3g}, how much farther this person lies"
-            " from every case than the case base's own"
+            f"; each distance taken {self.offset:.3g} shorter first: this person lies that"
+            " much farther from every case than the case base's own held-out cases"
         )
 
 

@@ -478,7 +478,7 @@ def test_a_person_farther_from_every_case_is_measured_and_taken_off() -> None:
     w = np.array([6.0, 10.0, 20.0])
     assert judge.unlike(w) and not person.unlike(w)
     assert person.ratio(w) == pytest.approx(3 / 7)
-    assert "every distance less 3" in person.describe(w, ["a", "b", "c"])
+    assert "each distance taken 3 shorter first" in person.describe(w, ["a", "b", "c"])
     assert for_person(judge, np.full(24, 0.5)).offset == 0.0  # type: ignore[attr-defined]
     # held out by person, the held-out cases already lie as far as a new person: no offset
     people = Margin.of(_two_recordings(people=True))
