@@ -129,12 +129,15 @@ def said(value: float, unit: str) -> str:
 
 def _span(low: float, high: float, unit: str) -> str:
     """A range in a unit: 45–80°, 0.20–0.60 (mean confidences; torso lengths, said with the
-    value); one value when both ends read alike (159°, not 159–159°)."""
+    value); one value when both ends read alike (159°, not 159–159°); "-0.85 to -0.84" when
+    an end is negative ("-0.85–-0.84" read as a double minus)."""
     if unit == "degrees":
         a, b = f"{low:.0f}", f"{high:.0f}"
         return f"{a}°" if a == b else f"{a}–{b}°"
     a, b = f"{low:.2f}", f"{high:.2f}"
-    return a if a == b else f"{a}–{b}"
+    if a == b:
+        return a
+    return f"{a} to {b}" if a.startswith("-") or b.startswith("-") else f"{a}–{b}"
 
 
 def label_words(label: str, target: str | None = None, article: bool = True) -> str:

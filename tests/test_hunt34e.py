@@ -82,11 +82,11 @@ def test_a_sideways_position_is_said_the_way_it_points() -> None:
     # either side of the mid-hip, a height, a variation: as computed
     assert (
         _claim_text(claim("right knee to the left", -0.05, -0.1, 0.02), "its cases")
-        == "right knee to the left -0.05 torso lengths (its cases: -0.10–0.02)"
+        == "right knee to the left -0.05 torso lengths (its cases: -0.10 to 0.02)"
     )
     assert (
         _claim_text(claim("left wrist height", -0.5, -0.6, -0.4), "its cases")
-        == "left wrist height -0.50 torso lengths (its cases: -0.60–-0.40)"
+        == "left wrist height -0.50 torso lengths (its cases: -0.60 to -0.40)"
     )
     change = Claim("change", "c", "f", "right knee to the left", -0.43, "torso lengths", -0.15)
     assert _change_text(change) == "right knee to the right 0.43 → 0.15 torso lengths"

@@ -137,3 +137,18 @@ def test_the_repetition_note_names_pieces_of_a_file_with_their_frames(
     assert len(notes) == 1
     first, second = f"six.npz frames 0-{half - 1}", f"six.npz frames {half - rest}-{6 * each + 14}"
     assert f"2 clips hold several ({first}: 3, {second}: 3)" in notes[0], notes[0]
+
+
+def test_a_range_with_a_negative_end_is_said_with_to() -> None:
+    """The jumping jacks classified against the bundled exercises: "right knee height
+    (lowest) -0.85 torso lengths (its cases: -0.85–-0.84)", the dash and the minus sign side
+    by side. A range with a negative end reads "-0.85 to -0.84" now; others as before."""
+    from cbr.explain import Claim, _claim_text
+
+    knee = Claim("why", "c", "f", "right knee height (lowest)", -0.85, "torso lengths",
+                 low=-0.852, high=-0.84)  # fmt: skip
+    assert _claim_text(knee, "its cases") == (
+        "right knee height (lowest) -0.85 torso lengths (its cases: -0.85 to -0.84)"
+    )
+    nose = Claim("why", "c", "f", "nose height", 1.30, "torso lengths", low=1.28, high=1.31)
+    assert _claim_text(nose, "its cases") == "nose height 1.30 torso lengths (its cases: 1.28–1.31)"
