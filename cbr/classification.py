@@ -81,10 +81,12 @@ class Classification:
             out["torso_share"] = self.solved.torso_share
         else:
             out.update(label=None, unclassifiable=self.unclassifiable)
-        if self.true_label is not None:
-            out["true_label"] = self.true_label
-            # an unclassifiable clip is not judged (the summary counts it as not labelled)
-            out["correct"] = None if self.solved is None else self.true_label == self.label
+        # null when the clip has no label, so every record holds both keys (a script reading
+        # r["true_label"] failed on the first unlabelled clip, the key absent)
+        out["true_label"] = self.true_label
+        # an unclassifiable clip is not judged (the summary counts it as not labelled)
+        judged = self.true_label is not None and self.solved is not None
+        out["correct"] = self.true_label == self.label if judged else None
         if self.revision is not None:
             r = self.revision
             out["revision"] = {

@@ -94,7 +94,7 @@ def test_classify_takes_a_labels_csv_row_left_unlabelled(
     )
     assert main(["classify", str(tmp_path / "pieces.csv"), "--db", str(db), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    got = [(r["start_frame"], r["end_frame"], r.get("true_label")) for r in doc["results"]]
+    got = [(r["start_frame"], r["end_frame"], r["true_label"]) for r in doc["results"]]
     assert got == [(0, 40, None), (30, squat.n_frames, None), (0, 60, "deep_squat")]
     assert all(r["label"] in ("deep_squat", "hurdle_step") for r in doc["results"])
     assert (doc["summary"]["clips"], doc["summary"]["labelled"]) == (3, 1)
@@ -152,3 +152,32 @@ def test_a_range_with_a_negative_end_is_said_with_to() -> None:
     )
     nose = Claim("why", "c", "f", "nose height", 1.30, "torso lengths", low=1.28, high=1.31)
     assert _claim_text(nose, "its cases") == "nose height 1.30 torso lengths (its cases: 1.28–1.31)"
+
+
+def test_classify_json_names_true_label_and_correct_for_every_clip(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A script reading ``classify --json`` takes ``r["true_label"]`` and ``r["correct"]``
+    of each record; both were absent from an unlabelled clip's record (a new video's pose
+    file, no label in it), so the script failed on the first such clip with a KeyError.
+    Both are in every record now: null when the clip has no label; the labelled clip's as
+    before (m01_s01_e02 is a deep squat by its file's label)."""
+    with open(DEMO / "labels.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    train_rows = [r for r in rows if r["label"] == "deep_squat"][6:12:2]
+    train_rows += [r for r in rows if r["label"] == "hurdle_step"][:6:2]
+    lines = ["path,label"] + [f"{DEMO / r['path']},{r['label']}" for r in train_rows]
+    (tmp_path / "train.csv").write_text("\n".join(lines) + "\n")
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(tmp_path / "train.csv"), "--db", str(db)]) == 0
+    squat = load_pose(DEMO / "m01_s02_e01.npz")
+    new = save_pose(
+        PoseSequence(squat.positions, squat.joint_names, squat.fps), tmp_path / "new.npz"
+    )
+    capsys.readouterr()
+    labelled = DEMO / "m01_s01_e02.npz"
+    assert main(["classify", str(new), str(labelled), "--db", str(db), "--json"]) == 0
+    first, second = json.loads(capsys.readouterr().out)["results"]
+    assert (first["true_label"], first["correct"]) == (None, None)
+    assert second["true_label"] == "deep_squat"
+    assert second["correct"] == (second["label"] == "deep_squat")
