@@ -181,3 +181,28 @@ def test_classify_json_names_true_label_and_correct_for_every_clip(
     assert (first["true_label"], first["correct"]) == (None, None)
     assert second["true_label"] == "deep_squat"
     assert second["correct"] == (second["label"] == "deep_squat")
+
+
+def test_casebase_info_says_the_summary_features_flag_nothing_with_few_clips(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Six training clips (three deep squats, three hurdle steps): too few held-out clips to
+    tell a 1-in-50 one, so only the distance flags a clip unlike the stored cases (README:
+    below 49 held-out clips). ``casebase info`` said the clip is also flagged when "its
+    summary features ... less usual than 100.0 % of held-out clips' (one statistic of all the
+    scores: 2 % of held-out clips flagged)", a rule that flags nothing. It says so now."""
+    with open(DEMO / "labels.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    train_rows = [r for r in rows if r["label"] == "deep_squat"][6:12:2]
+    train_rows += [r for r in rows if r["label"] == "hurdle_step"][:6:2]
+    lines = ["path,label"] + [f"{DEMO / r['path']},{r['label']}" for r in train_rows]
+    (tmp_path / "train.csv").write_text("\n".join(lines) + "\n")
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(tmp_path / "train.csv"), "--db", str(db)]) == 0
+    capsys.readouterr()
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "unlike the stored" in x)
+    assert "less usual than" not in line, line
+    assert line.endswith(
+        "; its summary features flag no clip: 6 held-out clips are too few to tell a 1-in-50 one"
+    ), line

@@ -266,8 +266,20 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
         sensors = u.get("skeletons") or []
         rule = f", or recorded with a skeleton other than {', '.join(sensors)}" if sensors else ""
         f, c = u.get("features"), u.get("combined")
+        n_held = int((c or {}).get("scores", {}).get("summary", 0))
+        few = (
+            f": {n_held} held-out {pieces} are too few to tell a 1-in-{round(1 / c['budget'])} one"
+            if c and c["budget"] * (n_held + 1) < 1.0
+            else ""
+        )
+        # a threshold of 0 flags nothing (too few held-out clips: cbr.novelty.combine);
+        # "less usual than 100.0 % of held-out clips' (... 2 % flagged)" said otherwise
+        none = bool(f and c and c["threshold"] <= 0.0)
+        tail = f"; its summary features flag no clip{few}" if none else ""
         feats = (
-            f", or its summary features (outside the cases' ranges, far from every training "
+            ""
+            if none
+            else f", or its summary features (outside the cases' ranges, far from every training "
             f"clip) less usual than {percent(1 - c['threshold'])} of held-out clips' (one "
             f"statistic of all the scores: {percent(c['budget'], 0)} of held-out clips flagged)"
             if f and c
@@ -280,7 +292,7 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
             f"  unlike the stored cases beyond {u['unlike_ratio']:.2f}x the usual held-out "
             f"distance ({percent(u['quantile'])} of {u['basis']} training {pieces} lie within)"
             f"{feats}"
-            f"{rule}{since}"
+            f"{rule}{tail}{since}"
         )
     if m.get("unknown_judges"):
         j = m["unknown_judges"]
