@@ -14,7 +14,7 @@ from cbr.segmentation import told
 from features.poses import PoseSequence, load_pose, save_pose
 from features.repetitions import count_repetitions
 from posecbr.cli import main
-from tests.badinput import refused
+from tests.badinput import refused, standing_clip
 from tests.test_hunt34e import _raises
 from tests.test_repetitions import _movement
 
@@ -206,3 +206,28 @@ def test_casebase_info_says_the_summary_features_flag_nothing_with_few_clips(
     assert line.endswith(
         "; its summary features flag no clip: 6 held-out clips are too few to tell a 1-in-50 one"
     ), line
+
+
+def test_train_names_the_clips_without_a_repetition(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two clips of two arm raises each per label, and one of a person standing still (no
+    repetition by construction), trained ``--split repetitions``: ``train`` said "cut 4
+    clips into 8 repetitions; 1 clip without a repetition kept whole" without saying which,
+    so a physiotherapist could not tell which exercise video found none (a held side plank,
+    or one the tracker lost). It names it now."""
+    rows = ["path,label"]
+    for k, (label, top) in enumerate(
+        (("high", 90.0), ("low", 40.0), ("high", 95.0), ("low", 45.0))
+    ):
+        save_pose(_raises(top, 2), tmp_path / f"{label}{k}.npz")
+        rows.append(f"{label}{k}.npz,{label}")
+    save_pose(standing_clip(60), tmp_path / "still.npz")
+    rows.append("still.npz,low")
+    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
+    argv = ["train", str(tmp_path / "labels.csv"), "--db", str(tmp_path / "cb.sqlite")]
+    assert main([*argv, "--split", "repetitions"]) == 0
+    err = capsys.readouterr().err
+    assert (
+        "cut 4 clips into 8 repetitions; 1 clip without a repetition kept whole (still.npz)" in err
+    ), err

@@ -349,9 +349,14 @@ def _repetitions(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
     from features.repetitions import split_repetitions
 
     split = split_repetitions(clips)
-    args.kept_whole = {c.seq.source for c in split.clips if "repetition" not in c.extras}
-    whole = (
+    given = {id(c) for c in clips}  # a clip kept whole is passed on as it came
+    whole_clips = [c for c in split.clips if id(c) in given]
+    args.kept_whole = {c.seq.source for c in whole_clips}
+    kept = [shown(Path(c.seq.source or "a clip").name) for c in whole_clips]
+    more = f" and {len(kept) - 3} more" if len(kept) > 3 else ""
+    whole = (  # named: which exercise video found no repetition is for the user to check
         f"; {counted(split.kept_whole, 'clip')} without a repetition kept whole"
+        f" ({', '.join(kept[:3])}{more})"
         if split.kept_whole
         else ""
     )
