@@ -1016,7 +1016,7 @@ def _verbose(
     out = list(lines)
     n_label = sum(n["label"] == label for n in neighbours)
     out.append(
-        f"Vote: {n_label} of the {len(neighbours)} most similar clips"
+        f"Vote: {n_label} of the {len(neighbours)} most similar cases"
         f" {'is' if n_label == 1 else 'are'} {label} (vote share "
         f"{share:.2f}; the confidence is {confidence})."
     )

@@ -47,7 +47,9 @@ def test_one_similar_case_of_the_answer_is_said_in_the_singular() -> None:
     nearest (its own copy) and the four hurdle steps after it, and wins the distance vote.
     ``classify --verbose`` said "Vote: 1 of the 5 most similar clips are deep_squat" and
     ``segment``/``watch`` explained a segment "1 of the 5 most similar cases are lunge"
-    (seen on a joined video of the bundled exercises); now "is", and "are" for four."""
+    (seen on a joined video of the bundled exercises); now "is", and "are" for four. The
+    vote's line says "cases", as the lines under it list them ("case #3 ..."), and as
+    ``segment`` says: a case may be a repetition or a window, not a clip."""
     with open(DEMO / "labels.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     squats = [r for r in rows if r["label"] == "deep_squat"]
@@ -55,7 +57,7 @@ def test_one_similar_case_of_the_answer_is_said_in_the_singular() -> None:
     X = [load_pose(DEMO / r["path"]) for r in [squats[0], *steps]]
     clf = CaseBaseClassifier(k=5).fit(X, ["deep_squat"] + ["hurdle_step"] * 4)
     verbose = clf.explain([X[0]])[0].verbose
-    assert "Vote: 1 of the 5 most similar clips is deep_squat (" in verbose, verbose
+    assert "Vote: 1 of the 5 most similar cases is deep_squat (" in verbose, verbose
     solved = clf.solve([X[0]])[0]
     assert told(clf, solved, "deep_squat").startswith("1 of the 5 most similar cases is deep_squat")
     assert told(clf, solved, "hurdle_step").startswith(
