@@ -618,7 +618,7 @@ class LiveSegmenter:
         if joins and boundary - self.seen_start < self.least_blind:
             self.seen = seen
             return []
-        done = [self._segment(self.seen_start, boundary, self.seen, True)]
+        done = [self._segment(self.seen_start, boundary, self.seen, True, lost=seen == self.nobody)]
         self.seen, self.seen_start, self.seen_sum, self.held = seen, boundary, [0.0, 0.0], []
         return done
 
@@ -775,7 +775,13 @@ class LiveSegmenter:
         return float(self.votes[-1][state]) if self.votes else 0.0
 
     def _segment(
-        self, start: int, end: int, state: int, cut: bool, explained: bool = True
+        self,
+        start: int,
+        end: int,
+        state: int,
+        cut: bool,
+        explained: bool = True,
+        lost: bool = False,
     ) -> LiveSegment:
         """Frames [start, end) as a segment of ``state`` (an activity, or n_classes: unknown;
         :meth:`_confidence`); ``cut``: it ends where another begins (a finished segment: its
@@ -789,7 +795,10 @@ class LiveSegmenter:
         its last :data:`MAX_SEGMENT_S` seconds, of the frames still kept; a segment whose
         frames never show anybody is unknown, whatever the tie between its windows' evidence
         (every activity alike, known as likely as not) fell to. Nobody in view (``state``
-        n_classes + 1): unknown, told so, counted 0, as offline."""
+        n_classes + 1): unknown, told so, counted 0, as offline; ``lost``: the segment after
+        this one is nobody in view, and a far point at the cut (the person lost from view
+        before coming back) is this segment's, as :func:`cbr.segmentation.counted_segments`
+        keeps it."""
         if state == self.nobody:
             if cut:  # no movement turns at its end
                 self.turn = self.holding = False
@@ -814,8 +823,8 @@ class LiveSegmenter:
         turn = self.turn and first == start
         # the last far point held up to the cut (a squat held at the bottom through a change
         # of label): the movement comes back beyond it, where the next segment counts it
-        held = cut and bool(reps) and reps[-1].held[1] and self._held_beyond(end)
-        kept = keep_whole(reps, first, end, self.step, turn, cut, held)
+        held = cut and not lost and bool(reps) and self._held_beyond(end, reps[-1])
+        kept = keep_whole(reps, first, end, self.step, turn, cut and not lost, held)
         if cut and reps:
             self.turn = at_cut(reps, first, end, self.step)[1] or held
             self.holding = held
@@ -825,22 +834,31 @@ class LiveSegmenter:
         text, novelty = self._explain(start, end, state) if explained else ("", math.nan)
         return LiveSegment(start, end, label, float(confidence), len(kept), text, novelty)
 
-    def _held_beyond(self, cut: int) -> bool:
+    def _held_beyond(self, cut: int, last: Repetition) -> bool:
         """Whether the frames pushed after ``cut`` (the end of a segment being finished: the
-        stream runs on past it by the decoders' delay) begin in the hold of a far point: the
-        first repetition counted on them has its far point at their start, or the movement
-        rises to it by less than :data:`features.repetitions.MIN_EXCURSION_RAD` from there
-        (:attr:`features.repetitions.Repetition.held`), as
-        :func:`cbr.segmentation.counted_segments` asks of the segment after. None counted
-        (the stream ended still in the hold): the segment keeps its repetition, as there."""
-        if self.n - cut < 2:
+        stream runs on past it by the decoders' delay) begin in the hold of ``last``, the
+        segment's last far point, held up to the cut
+        (:attr:`features.repetitions.Repetition.held`): the first repetition counted on them
+        has its far point at their start, or the movement rises to it by less than
+        :data:`features.repetitions.MIN_EXCURSION_RAD` from there; or whether, ``last`` not
+        come back by the cut (:attr:`features.repetitions.Repetition.unreturned`), they rise
+        to a far point of their own without coming back from the cut either (a shallow dip
+        across the cut, one repetition); as :func:`cbr.segmentation.counted_segments` asks of
+        the segment after. None counted (the stream ended still in the hold): the segment
+        keeps its repetition, as there."""
+        if self.n - cut < 2 or not (last.held[1] or last.unreturned[1]):
             return False
         beyond = self._sequence(cut, min(self.n, cut + int(MAX_SEGMENT_S * self.fps)))
         try:
             after = count_repetitions(beyond, recording_edges=(False, self.ended)).repetitions
         except DataError:  # too short, or nobody in view
             return False
-        return bool(after) and (after[0].held[0] or after[0].peak_frame < self.step)
+        if not after:
+            return False
+        at_start = after[0].peak_frame < self.step
+        if last.unreturned[1] and after[0].unreturned[0] and not at_start:
+            return True  # a shallow dip between two far points of one repetition
+        return last.held[1] and (after[0].held[0] or at_start)
 
     def current(self) -> LiveSegment | None:
         """The segment in progress, labelled with the rolling label; its confidence and

@@ -850,6 +850,7 @@ def _repetitions(
             max(start, r.peak_frame + off),
             r.side,
             r.held,
+            r.unreturned,
         )
         for r in found
     )
@@ -899,7 +900,10 @@ def keep_whole(
 
 
 def counted_segments(
-    sig: MovementSignals, bounds: Sequence[tuple[int, int]], n_frames: int
+    sig: MovementSignals,
+    bounds: Sequence[tuple[int, int]],
+    n_frames: int,
+    unseen: Sequence[bool] = (),
 ) -> list[tuple[Repetition, ...]]:
     """The repetitions of every segment, frames ``bounds`` [start, end) in order covering the
     recording's ``n_frames``, each counted on its own frames (:func:`_repetitions`), each
@@ -917,11 +921,31 @@ def counted_segments(
     find no far point at all (a fragment all hold), is at the cut: counted once, by the
     segment where the movement comes back, and no segment beside the hold is settled. Before,
     each segment's far point lay mid-way along its part of the hold, neither at the cut, and
-    the squat counted in both (a fragment all hold between them: in neither)."""
-    raw = [_repetitions(sig, start, end, n_frames) for start, end in bounds]
+    the squat counted in both (a fragment all hold between them: in neither). So is a
+    shallow dip across a cut between two far points of one repetition, neither side come
+    back to rest by it (:attr:`features.repetitions.Repetition.unreturned`; a squat that
+    rises 20 degrees at the knees before the cut and sinks again after it): before, counted
+    in both segments when either side turned back by :data:`MIN_EXCURSION_RAD` or more.
+
+    ``unseen``: per segment, whether nobody is in view in it (counted 0): the movement of the
+    segment before goes on out of sight, and that segment keeps a repetition whose far point
+    is at the cut (the person went down into a squat and was lost from view before coming
+    up), nothing it got into is held on across the cut, and no far point is held through the
+    stretch. Before, the squat was left to the stretch, which counts none, or taken for a
+    posture got into and held, and lost."""
+    blind = [bool(u) for u in unseen] + [False] * (len(bounds) - len(unseen))
+    raw = [
+        () if b else _repetitions(sig, start, end, n_frames)
+        for (start, end), b in zip(bounds, blind, strict=True)
+    ]
     # whether the last far point of each segment is held on, through any segments with none
-    # (all hold), to the first of the next segment that has one (:func:`_held_across`)
-    after = [next((j for j in range(i + 1, len(raw)) if raw[j]), None) for i in range(len(raw))]
+    # (all hold), to the first of the next segment that has one (:func:`_held_across`); not
+    # through a stretch with nobody in view
+    after = [
+        next((j for j in range(i + 1, len(raw)) if raw[j] or blind[j]), None)
+        for i in range(len(raw))
+    ]
+    after = [None if j is None or blind[j] else j for j in after]
     held_on = [
         j is not None and _held_across(raw[i], raw[j], bounds[j], sig.step)
         for i, j in enumerate(after)
@@ -931,13 +955,15 @@ def counted_segments(
     holding = False  # a far point held on from a segment before, through this one
     for i, (start, end) in enumerate(bounds):
         reps = raw[i]
+        lost = i + 1 < len(bounds) and blind[i + 1]  # the person goes out of view at the end
         settled = (
             i > 0 and not raw[i - 1] and not holding,
-            i + 1 < len(bounds) and not raw[i + 1] and not held_on[i],
+            i + 1 < len(bounds) and not raw[i + 1] and not held_on[i] and not lost,
         )
         if len(reps) == 1 and any(settled):
             reps = _repetitions(sig, start, end, n_frames, settled)
-        out.append(keep_whole(reps, start, end, sig.step, turn, end < n_frames, held_on[i]))
+        cut = end < n_frames and not lost
+        out.append(keep_whole(reps, start, end, sig.step, turn, cut, held_on[i]))
         if raw[i]:
             turn = at_cut(raw[i], start, end, sig.step)[1] or held_on[i]
             holding = held_on[i]
@@ -965,7 +991,10 @@ def _held_across(
     point of its own on either side."""
     if not before or not after:
         return False
-    return before[-1].held[1] and (after[0].held[0] or at_cut(after, *second, tolerance)[0])
+    at_start = at_cut(after, *second, tolerance)[0]
+    if before[-1].unreturned[1] and after[0].unreturned[0] and not at_start:
+        return True  # a shallow dip between two far points of one repetition
+    return before[-1].held[1] and (after[0].held[0] or at_start)
 
 
 def _frames_of(a: int, b: int, fps: float, n_frames: int) -> tuple[int, int]:
@@ -1169,7 +1198,7 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     path[nobody_blocks(rec, len(path))] = n_classes + 1
     runs = _runs(_nobody_absorbs_slivers(path, n_classes))
     bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]
-    reps = counted_segments(done.sig, bounds, rec.n_frames)
+    reps = counted_segments(done.sig, bounds, rec.n_frames, [s > n_classes for *_, s in runs])
     pieces = _LastPiece()
     segments = tuple(
         _nobody_segment(rec, a, b)

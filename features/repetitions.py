@@ -289,6 +289,14 @@ class Repetition:
     or end, however far from it the peak sample lies in a still hold (found by the count of
     one movement, not of an alternating one). A piece of a longer recording beyond such an end
     holds the same far point (:func:`cbr.segmentation.counted_segments`)."""
+    unreturned: tuple[bool, bool] = dataclasses.field(default=(False, False), compare=False)
+    """Whether the movement as recorded rises to the far point from the clip's start, and
+    falls back from it to the clip's end, by less than :data:`RETURN_SHARE` of the far
+    point's height (at least :data:`MIN_EXCURSION_RAD`; as :attr:`held`, otherwise): the
+    repetition has not come back to rest by that end, as the return rule of :func:`_far_points`
+    asks. Two such ends facing one another across a cut, each with a far point of its own
+    (a squat held at the bottom that rises a little before the cut and sinks again after
+    it), are one repetition (:func:`cbr.segmentation.counted_segments`)."""
 
     def to_dict(self, fps: float) -> dict[str, Any]:
         return {
@@ -1051,6 +1059,7 @@ def count_in_signals(
     partial = False
     alternating = sides is not None
     ends_held = [(False, False)] * len(far)  # an alternating movement's: not judged
+    ends_open = ends_held
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
     if sides is None:
         period, strength, direction = _periodic_direction(x, period, sig.fps)
@@ -1077,6 +1086,7 @@ def count_in_signals(
         lone = len(far) == 1 and all(edges)
         spans = _bounds(line, far, len(line) if lone else reach) if len(far) else []
         ends_held = _held_to_ends(recorded, far)
+        ends_open = _held_to_ends(recorded, far, RETURN_SHARE)
     spans = _seen_spans(spans, far, sig.blind)
     reps = [
         Repetition(
@@ -1085,6 +1095,7 @@ def count_in_signals(
             peak_frame=int(min(n_frames - 1, p * sig.step)),
             side=None if sides is None else str(sides[i]),
             held=ends_held[i],
+            unreturned=ends_open[i],
         )
         for i, ((a, b), p) in enumerate(zip(spans, far, strict=True))
     ]
@@ -1099,18 +1110,20 @@ def count_in_signals(
     )
 
 
-def _held_to_ends(recorded: np.ndarray, far: np.ndarray) -> list[tuple[bool, bool]]:
+def _held_to_ends(
+    recorded: np.ndarray, far: np.ndarray, share: float = 0.0
+) -> list[tuple[bool, bool]]:
     """Per far point of ``far`` (samples of ``recorded`` ``(n,)``, the movement as recorded),
     whether the line rises to it by less than :data:`MIN_EXCURSION_RAD` from its lowest since
     the clip's start, and falls back from it by less than that to its lowest until the clip's
     end (:attr:`Repetition.held`): a posture held at the far point is a plateau, whose peak
-    sample lies anywhere in it."""
+    sample lies anywhere in it. ``share``: by less than that share of the far point's height
+    (the larger of the two) where that is more (:attr:`Repetition.unreturned`, at
+    :data:`RETURN_SHARE`)."""
     rise = recorded[far] - np.minimum.accumulate(recorded)[far]
     fall = recorded[far] - np.minimum.accumulate(recorded[::-1])[::-1][far]
-    return [
-        (bool(r < MIN_EXCURSION_RAD), bool(f < MIN_EXCURSION_RAD))
-        for r, f in zip(rise, fall, strict=True)
-    ]
+    short = np.maximum(MIN_EXCURSION_RAD, share * np.maximum(rise, fall))
+    return [(bool(r < s), bool(f < s)) for r, f, s in zip(rise, fall, short, strict=True)]
 
 
 def _periodic_direction(
