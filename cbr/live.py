@@ -842,8 +842,9 @@ class LiveSegmenter:
         has its far point at their start, or the movement rises to it by less than
         :data:`features.repetitions.MIN_EXCURSION_RAD` from there; or whether, ``last`` not
         come back by the cut (:attr:`features.repetitions.Repetition.unreturned`), they rise
-        to a far point of their own without coming back from the cut either (a shallow dip
-        across the cut, one repetition); as :func:`cbr.segmentation.counted_segments` asks of
+        to a far point of their own without coming back from the cut either, and the two
+        repetitions' frames together hold one far point (a shallow dip across the cut, one
+        repetition); as :func:`cbr.segmentation.counted_segments` asks of
         the segment after. None counted (the stream ended still in the hold): the segment
         keeps its repetition, as there."""
         if self.n - cut < 2 or not (last.held[1] or last.unreturned[1]):
@@ -857,7 +858,12 @@ class LiveSegmenter:
             return False
         at_start = after[0].peak_frame < self.step
         if last.unreturned[1] and after[0].unreturned[0] and not at_start:
-            return True  # a shallow dip between two far points of one repetition
+            # a shallow dip: the two repetitions' frames together hold one far point
+            both = self._sequence(last.start_frame, cut + after[0].end_frame)
+            try:
+                return count_repetitions(both, recording_edges=False).count == 1
+            except DataError:
+                return False
         return last.held[1] and (after[0].held[0] or at_start)
 
     def current(self) -> LiveSegment | None:

@@ -947,8 +947,7 @@ def counted_segments(
     ]
     after = [None if j is None or blind[j] else j for j in after]
     held_on = [
-        j is not None and _held_across(raw[i], raw[j], bounds[j], sig.step)
-        for i, j in enumerate(after)
+        j is not None and _held_across(raw[i], raw[j], bounds[j], sig) for i, j in enumerate(after)
     ]
     out = []
     turn = False  # the segment before had a far point at its end (the cut)
@@ -976,7 +975,7 @@ def _held_across(
     before: Sequence[Repetition],
     after: Sequence[Repetition],
     second: tuple[int, int],
-    tolerance: int,
+    sig: MovementSignals,
 ) -> bool:
     """Whether the last of ``before`` (the repetitions of one segment) and the first of
     ``after`` (of the next segment that has any, frames ``second``; those between found no
@@ -988,13 +987,20 @@ def _held_across(
     through a change of label the classifier saw in the hold: each segment's far point lies
     mid-way along its part of the hold, neither at the cut, and the repetition counted in
     both. Both sides must hold it: the line dips by less than that between the two, no far
-    point of its own on either side."""
+    point of its own on either side.
+
+    Or a shallow dip between them: neither side comes back by the cut
+    (:attr:`features.repetitions.Repetition.unreturned`), the one after rises to a far point
+    of its own (not at the cut), and the two repetitions' frames together, counted as one
+    stretch of the recording (each segment's movement line is its own: the next exercise's
+    may barely show the last one's return), hold one far point, not two."""
     if not before or not after:
         return False
-    at_start = at_cut(after, *second, tolerance)[0]
-    if before[-1].unreturned[1] and after[0].unreturned[0] and not at_start:
-        return True  # a shallow dip between two far points of one repetition
-    return before[-1].held[1] and (after[0].held[0] or at_start)
+    last, first = before[-1], after[0]
+    at_start = at_cut(after, *second, sig.step)[0]
+    if last.unreturned[1] and first.unreturned[0] and not at_start:
+        return len(_repetitions(sig, last.start_frame, first.end_frame)) == 1
+    return last.held[1] and (first.held[0] or at_start)
 
 
 def _frames_of(a: int, b: int, fps: float, n_frames: int) -> tuple[int, int]:
