@@ -17,7 +17,8 @@ How (all channels at once, no per-frame loops):
    above the floor in trunk lengths, :func:`pelvis_height`, for the whole body going up and
    down), missing where the
    camera does not see their joints,
-   gaps interpolated, cleaned of tracking glitches (running median, :data:`MEDIAN_S`),
+   gaps interpolated, cleaned of tracking glitches (those of a few frames that jump away
+   and back, :func:`_drop_glitches`; then a running median, :data:`MEDIAN_S`),
    smoothed (Gaussian, :data:`SMOOTHING_S`) and analysed at about :data:`ANALYSIS_FPS`; a
    far point (step 5) in a stretch of at least :data:`MIN_PERIOD_S` in which no frame shows
    the person lies where the person was last or next seen (the values there are filled in: a
@@ -180,9 +181,16 @@ TRUNK_LEVEL_RAD = float(np.radians(60.0))
 when the trunk lies more than this far from the vertical (lying down, a deep bend) they have no
 stable value and count as missing (its inclination still counts)."""
 MEDIAN_S = 0.2
-"""Running median (seconds) before smoothing: drops tracking glitches shorter than 0.1 s (at
+"""Running median (seconds) before smoothing (after :func:`_drop_glitches`, which puts back
+longer ones that jump): drops tracking glitches shorter than 0.1 s (at
 the clip's start and end, where its window is cut to the clip's frames, :func:`_running_median`,
 shorter ones)."""
+JUMP_SHARE = 0.75
+"""A pose model's glitch that outlasts the running median (:func:`_drop_glitches`) jumps
+away from the posture around it and back, each jump (from one sample to the next) carrying
+at least this share of its farthest: a movement gets there over several samples (a hurdle
+step's knee, straightening by 30 degrees a frame, 6 of UI-PRMD's Kinect repetitions counted
+7 with half)."""
 MAX_FILTER_FPS = 240.0
 """Above this frame rate the running median and the smoothing read every few frames, at
 240-480 fps: the median costs its width at every frame read, and 5 s at 4800 fps (a width
@@ -502,7 +510,7 @@ def movement_signals(seq: PoseSequence) -> MovementSignals:
     rate = seq.fps / first
     x = _interpolate(raw[:, keep])[::first]
     width = max(1, int(round(MEDIAN_S * rate)) | 1)
-    x = _running_median(x, width)
+    x = _running_median(_drop_glitches(x, rate, width // 2 + 1), width)
     x = gaussian_filter1d(x, SMOOTHING_S * rate, axis=0, mode="nearest")[:: step // first]
     unseen = ~np.isfinite(raw[:, keep]).any(axis=1)
     blind = long_runs(unseen, MIN_PERIOD_S * seq.fps)[::step]
@@ -526,6 +534,45 @@ def _running_median(x: np.ndarray, width: int) -> np.ndarray:
         out[i] = np.median(x[: i + half + 1], axis=0)
         out[n - 1 - i] = np.median(x[max(0, n - 1 - i - half) :], axis=0)
     return np.asarray(out)
+
+
+def _drop_glitches(x: np.ndarray, rate: float, shortest: int) -> np.ndarray:
+    """``x`` ``(n, C)`` sampled at ``rate`` with a pose model's glitches put back that the
+    running median (:data:`MEDIAN_S`) leaves: a run of at least ``shortest`` samples but
+    shorter than half the shortest repetition (:data:`MIN_PERIOD_S`) in which an angle jumps
+    away from the posture around it and back, each jump a sample apart (a lunge's legs
+    swapped by the pose model for a few frames while she holds it still). Flagged where the
+    angle lies away from its running median over twice that length by
+    :data:`MIN_EXCURSION_RAD` and by more than 3 robust deviations of the window (Hampel's
+    filter: a movement, whose samples spread over the window, is not), the run's first and
+    last sample each at least :data:`JUMP_SHARE` of its farthest from the sample beside it (a
+    kick's knee straightens and bends again as quickly, over several samples); such a run
+    takes the median's values. Shorter runs are left to the running median, as before. Only
+    the angles that jump that far somewhere are filtered (none, mostly: the medians cost
+    their width at every sample)."""
+    longest = int(np.ceil(0.5 * MIN_PERIOD_S * rate)) - 1
+    width = 2 * longest + 1
+    if longest < max(1, shortest) or len(x) < width:
+        return x
+    cols = np.flatnonzero((np.abs(np.diff(x, axis=0)) > JUMP_SHARE * MIN_EXCURSION_RAD).any(axis=0))
+    if not len(cols):
+        return x
+    part = x[:, cols]
+    centre = _running_median(part, width)
+    dev = part - centre
+    spread = 1.4826 * _running_median(np.abs(dev), width)
+    flagged = np.abs(dev) > np.maximum(3.0 * spread, MIN_EXCURSION_RAD)
+    out = x.copy()
+    for k, j in enumerate(cols):
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], flagged[:, k].astype(np.int8), [0]])))
+        for a, b in zip(edges[::2], edges[1::2], strict=True):
+            if not shortest <= b - a <= longest or a == 0 or b == len(x):
+                continue
+            far = float(np.abs(dev[a:b, k]).max())
+            jumps = abs(x[a, j] - x[a - 1, j]), abs(x[b, j] - x[b - 1, j])
+            if min(jumps) >= JUMP_SHARE * far:
+                out[a:b, j] = centre[a:b, k]
+    return out
 
 
 def _first_step(fps: float, step: int) -> int:
