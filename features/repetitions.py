@@ -1109,7 +1109,7 @@ def count_in_signals(
     ends_open = ends_held
     period, strength = find_period(np.diff(x, axis=0), sig.fps)
     if sides is None:
-        period, strength, direction = _periodic_direction(x, period, sig.fps)
+        period, strength, direction = _periodic_direction(x, period, strength, sig.fps)
         recorded = _movement_line(x, sig.names, direction, sig.fps)
         # a slow change of posture (stepping into place, drifting) is no repetition
         line = _steady(recorded, period, strength, sig.fps)
@@ -1174,20 +1174,39 @@ def _held_to_ends(
 
 
 def _periodic_direction(
-    x: np.ndarray, period: float | None, fps: float
+    x: np.ndarray, period: float | None, strength: float, fps: float
 ) -> tuple[float | None, float, np.ndarray]:
     """The period, its autocorrelation and the movement direction ``(C,)`` of ``x`` ``(n, C)``
     with every angle weighted by its periodic energy rather than its variance: its deviations
     scaled by the square root of :func:`periodic_share` at the ``period`` first found, so
     that an angle that jitters (a Kinect joint barely moving) or changes once does not pull
     the period or the direction. The direction is mapped back to the angles unweighted, so
-    that the movement keeps its size in radians."""
-    w = np.sqrt(periodic_share(np.diff(x, axis=0), period, fps))
+    that the movement keeps its size in radians.
+
+    A first period whose autocorrelation ``strength`` is below what noise reaches by chance
+    (:func:`_chance_correlation`) tells jitter from movement no better than chance, and its
+    shares may weigh out the angle that moves most. Then, when the posture moves farther
+    along the angles' own direction (unweighted, :func:`movement_direction`) than along the
+    weighted one by at least :data:`MIN_EXCURSION_RAD` (the weighting left out as much
+    movement as a repetition needs; :func:`_span`), that direction is the movement's, with
+    the first period: in a stretch of side-lying leg raises too short for their 5.5-s
+    period to show, the period first found, 1.76 s (autocorrelation 0.006), gave the raised
+    leg no weight and the arm under the head all (18 degrees against 52 along the angles'
+    own direction), and the leg's two raises counted 1. A held side plank's wobble moves
+    about as far either way (13 and 16 degrees) and keeps its weighted direction."""
+    v = np.diff(x, axis=0)
+    w = np.sqrt(periodic_share(v, period, fps))
     weighted = x.mean(axis=0) + (x - x.mean(axis=0)) * w
-    period, strength = find_period(np.diff(weighted, axis=0), fps)
+    found, found_strength = find_period(np.diff(weighted, axis=0), fps)
     d = movement_direction(weighted) * w
     norm = float(np.linalg.norm(d))
-    return period, strength, d / norm if norm > 0 else movement_direction(x)
+    d = d / norm if norm > 0 else movement_direction(x)
+    if period is not None and strength < _chance_correlation(len(v)):
+        plain = movement_direction(x)
+        centred = x - x.mean(axis=0)
+        if _span(centred @ plain) >= _span(centred @ d) + MIN_EXCURSION_RAD:
+            return period, strength, plain
+    return found, found_strength, d
 
 
 def _above_rest(line: np.ndarray, far: np.ndarray, reach: int) -> np.ndarray:
