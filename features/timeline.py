@@ -530,6 +530,11 @@ def band_colours(bands: Sequence[Band], keys: Sequence[str] = ()) -> dict[str, A
     return {k: palette[i % len(palette)] for i, k in enumerate(given + rest)}
 
 
+UNKNOWN_COLOUR = "0.8"
+"""The colour of a band with no key (unknown, nobody in view): a light grey, no key's (the
+overlays box an unknown stretch's word in it too)."""
+
+
 def band_palette() -> list[tuple[float, float, float, float]]:
     """The colours of bands: matplotlib's tab10, then tab20's lighter shades, with no grey
     (grey is unknown's): 18 colours, and a 19th key takes the first again."""
@@ -547,7 +552,7 @@ def _draw_bands(
     colour = band_colours(bands, keys)
     placed = []
     for b in bands:
-        c = colour[b.key] if b.key is not None else "0.8"
+        c = colour[b.key] if b.key is not None else UNKNOWN_COLOUR
         ax.axvspan(b.start_s, b.end_s, ymin=0.05, ymax=0.95, color=c, alpha=0.8, lw=0.5,
                    ec="white")  # fmt: skip
         text = ax.text(0.5 * (b.start_s + b.end_s), 0.5, b.text, ha="center", va="center",

@@ -4,8 +4,10 @@ to check. Written to a temporary name and renamed, so no half-written file is le
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -53,7 +55,9 @@ def draw_pose(
     """Draw one frame's landmarks ``(33, 5)`` (x px, y px, z, visibility, presence) in place.
 
     Bones with an end below ``min_visibility`` are drawn thin and grey (guessed, not seen);
-    ``words`` are written in the top-left corner, after ``nobody`` when no landmark is there.
+    ``words`` are written in the top-left corner, after ``nobody`` when no landmark is there:
+    white outlined in black, a :class:`Label` on a box of its colour; a word too wide for
+    the frame broken into lines (:func:`_lines`), a line that would run off its foot left out.
     """
     h, w = bgr.shape[:2]
     thick = max(2, round(min(h, w) / 240))
@@ -73,9 +77,88 @@ def draw_pose(
     else:
         words = [nobody, *words]
     scale = max(0.6, min(h, w) / 600)
-    for n, text in enumerate(words):
-        _write(bgr, text, (12, int((n + 1) * 30 * scale)), scale)
+    size = round(19 * scale)
+    left = min(12, w // 20)
+    room = w - 2 * left  # as wide a margin on the right: no word runs past the edge
+    n = 0
+    for word in words:
+        for line, line_size in _lines(str(word), size, room):
+            baseline = int((n + 1) * 30 * scale)
+            outline, _fill, ascent = _masks(line, line_size)
+            if baseline - ascent + outline.shape[0] > h:
+                return bgr  # below the frame's foot: left out, not drawn cut
+            text = Label(line, word.colour) if isinstance(word, Label) else line
+            _write(bgr, text, (left, baseline), line_size / 19)
+            n += 1
     return bgr
+
+
+class Label(str):
+    """A word drawn on a box of its own colour (``colour``: RGB, 0-255), its letters black or
+    white, whichever stands out more on it: ``segment --overlay`` and ``watch --out`` write
+    the activity so, in its colour of ``segment --plot``'s bands (unknown grey), and the box
+    keeps it legible on light and dark frames alike. Compares and prints as its text."""
+
+    colour: tuple[int, int, int]
+
+    def __new__(cls, text: str, colour: Sequence[int]) -> Label:
+        label = super().__new__(cls, text)
+        label.colour = (int(colour[0]), int(colour[1]), int(colour[2]))
+        return label
+
+
+@functools.lru_cache(maxsize=256)
+def _lines(text: str, size: int, room: int) -> tuple[tuple[str, int], ...]:
+    """``text`` as lines of at most ``room`` pixels, each with its font size: whole when it
+    fits at ``size``; else broken after spaces, underscores and hyphens (UI-PRMD's
+    "standing_shoulder_internal_external_rotation", 44 letters, ran past the right edge of
+    frames narrower than about 260 pixels); a piece still too wide is written smaller (down
+    to :data:`_SMALLEST` pixels), and cut short with "…" when even that is too wide."""
+    if _width(text, size) <= room:
+        return ((text, size),)
+    pieces = re.findall(r"[^ _-]*[_-]| *[^ _-]+| +", text)
+    lines: list[str] = []
+    for piece in pieces:
+        joined = lines[-1] + piece if lines else piece
+        if lines and _width(joined.rstrip(), size) <= room:
+            lines[-1] = joined
+        else:
+            lines.append(piece.lstrip() if lines else piece)
+    out = []
+    for line in (part.rstrip() for part in lines):
+        if not line:
+            continue
+        fitted = size
+        while fitted > _SMALLEST and _width(line, fitted) > room:
+            fitted -= 1
+        while len(line) > 1 and _width(line, fitted) > room:
+            line = line[:-2] + "…" if len(line) > 2 else line[:1]
+        if _width(line, fitted) <= room:
+            out.append((line, fitted))
+    return tuple(out)
+
+
+_SMALLEST = 8
+"""The smallest font size (pixels) a word is shrunk to so that it fits its frame."""
+
+
+def _width(text: str, size: int) -> int:
+    """The width in pixels of ``text`` drawn at ``size`` (:func:`_masks`' columns)."""
+    return int(_font(size).getlength(text)) + 2 * _stroke(size) + 2
+
+
+def _stroke(size: int) -> int:
+    """The width of the outline around letters of ``size`` pixels."""
+    return max(1, round(size / 10))
+
+
+@functools.lru_cache(maxsize=64)
+def _font(size: int) -> Any:
+    """DejaVu Sans at ``size`` pixels, as Pillow draws it."""
+    import matplotlib
+    from PIL import ImageFont
+
+    return ImageFont.truetype(str(Path(matplotlib.get_data_path()) / _FONT), size)
 
 
 def _write(bgr: np.ndarray, text: str, org: tuple[int, int], scale: float) -> None:
@@ -84,17 +167,53 @@ def _write(bgr: np.ndarray, text: str, org: tuple[int, int], scale: float) -> No
     they line up letter by letter. (OpenCV's own font advanced its letters further the
     thicker the stroke: the black outline, drawn 4 pixels thick, ran ahead of the 1-pixel
     white letters, "repetitions: 1" read as a smudge with the fill 17 pixels short of the
-    outline at 1920x1080; and it has ASCII only, "élévation" came out with "?".)"""
-    keep, add, ascent = _layers(text, round(19 * scale))
+    outline at 1920x1080; and it has ASCII only, "élévation" came out with "?".) A
+    :class:`Label` is written on a box of its colour instead."""
+    size = round(19 * scale)
+    if isinstance(text, Label):
+        box, ascent = _boxed(str(text), size, text.colour)
+        _paste(bgr, org, ascent, box.shape[:2], lambda _region, cut: box[cut])
+        return
+    keep, add, ascent = _layers(text, size)
+    _paste(bgr, org, ascent, keep.shape[:2], lambda region, cut: region * keep[cut] + add[cut])
+
+
+def _paste(
+    bgr: np.ndarray, org: tuple[int, int], ascent: int, shape: tuple[int, ...], blend: Any
+) -> None:
+    """``blend(region, cut)`` written over the part within ``bgr`` of a text's rectangle of
+    ``shape``, its baseline starting at ``org``; ``cut``: that part's rows and columns in the
+    rectangle."""
     top, left = org[1] - ascent, org[0]
     h, w = bgr.shape[:2]
     y0, x0 = max(0, top), max(0, left)
-    y1, x1 = min(h, top + keep.shape[0]), min(w, left + keep.shape[1])
+    y1, x1 = min(h, top + shape[0]), min(w, left + shape[1])
     if y1 <= y0 or x1 <= x0:
         return
     cut = (slice(y0 - top, y1 - top), slice(x0 - left, x1 - left))
-    region = bgr[y0:y1, x0:x1] * keep[cut] + add[cut]
+    region = blend(bgr[y0:y1, x0:x1], cut)
     bgr[y0:y1, x0:x1] = np.round(region).astype(bgr.dtype)
+
+
+@functools.lru_cache(maxsize=256)
+def _boxed(text: str, size: int, colour: tuple[int, int, int]) -> tuple[np.ndarray, int]:
+    """``text`` at ``size`` on a box of ``colour`` (RGB) the size of its :func:`_masks`, as
+    BGR ``(height, width, 3)``, and the baseline's row in it: the letters black or white,
+    whichever contrasts more with the box (WCAG's ratio of relative luminances)."""
+    _outline, fill, ascent = _masks(text, size)
+    lum = _luminance(colour)
+    ink = 0.0 if (lum + 0.05) / 0.05 >= 1.05 / (lum + 0.05) else 255.0
+    box = np.empty((*fill.shape, 3), dtype=np.float32)
+    box[:] = colour[::-1]
+    box = box * (1.0 - fill[:, :, None]) + ink * fill[:, :, None]
+    return np.round(box).astype(np.uint8), ascent
+
+
+def _luminance(rgb: tuple[int, int, int]) -> float:
+    """WCAG's relative luminance of an sRGB colour (0-255)."""
+    c = np.asarray(rgb, dtype=float) / 255.0
+    c = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return float(0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2])
 
 
 @functools.lru_cache(maxsize=256)
@@ -113,13 +232,12 @@ def _masks(text: str, size: int) -> tuple[np.ndarray, np.ndarray, int]:
     """The outline and the fill of ``text`` in DejaVu Sans at ``size`` pixels, as coverage
     ``(height, width)`` in [0, 1], and the baseline's row in them; drawn once per text and
     size (a stream's labels and fluent words repeat)."""
-    import matplotlib
-    from PIL import Image, ImageDraw, ImageFont
+    from PIL import Image, ImageDraw
 
-    font = ImageFont.truetype(str(Path(matplotlib.get_data_path()) / _FONT), size)
-    stroke = max(1, round(size / 10))
+    font = _font(size)
+    stroke = _stroke(size)
     ascent, descent = font.getmetrics()
-    width = int(font.getlength(text)) + 2 * stroke + 2
+    width = _width(text, size)
     height = ascent + descent + 2 * stroke
     out = []
     for wide in (stroke, 0):

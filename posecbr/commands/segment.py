@@ -23,7 +23,7 @@ import argparse
 import dataclasses
 import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -208,7 +208,7 @@ def run(args: argparse.Namespace) -> int:
             _plot(rec, result, target, path.name, [str(c) for c in clf.classes_])
             print(f"timeline written to {shown(target)}", file=sys.stderr)
         if args.overlay is not None:
-            _overlay(path, video, result, args.overlay)
+            _overlay(path, video, result, args.overlay, [str(c) for c in clf.classes_])
     docs = [result for _, _, result in done]
     if args.json:
         out = [_document(r, target, args.overlay) for r, target in zip(docs, targets, strict=True)]
@@ -315,7 +315,23 @@ def _plot(rec: Any, result: Any, path: Path, name: str, activities: Sequence[str
     )
 
 
-def frame_words(result: Any, gaps: Any = None, unseen: Any = None) -> list[list[str]]:
+def overlay_label(text: str, key: str | None, colours: Mapping[str, Any]) -> str:
+    """``text`` as the overlays write an activity: on a box of ``key``'s colour in ``segment
+    --plot`` (``colours``: :func:`features.timeline.band_colours`, the case base's activities
+    in order), the plot's light grey when no activity is known (unknown, nobody in view, no
+    frames). Before, every label was white: an unknown stretch looked like any activity."""
+    from matplotlib.colors import to_rgb
+
+    from features.pose_estimation.overlay import Label
+    from features.timeline import UNKNOWN_COLOUR
+
+    colour = colours.get(key, UNKNOWN_COLOUR) if key is not None else UNKNOWN_COLOUR
+    return Label(text, tuple(round(255 * c) for c in to_rgb(colour)))
+
+
+def frame_words(
+    result: Any, gaps: Any = None, unseen: Any = None, activities: Sequence[str] = ()
+) -> list[list[str]]:
     """Per frame: the current activity (or unknown, or nobody in view) and how many of its
     repetitions are done: a repetition counts from its last frame (ends are exclusive; one
     that runs to its segment's end is done within the segment, as ``segment`` counts it).
@@ -324,19 +340,23 @@ def frame_words(result: Any, gaps: Any = None, unseen: Any = None) -> list[list[
     the activity, as ``watch`` draws it. ``unseen``: per frame, whether no landmark is there
     to draw: in a stretch with nobody in view such a frame says "no person" alone (the
     overlay writes it where the stick figure would be), as ``watch`` draws it, not "nobody
-    in view" below it as well."""
+    in view" below it as well. The activity is an :func:`overlay_label`, coloured as
+    ``segment --plot`` colours it (``activities``: the case base's, in order)."""
     import numpy as np
 
     from cbr.segmentation import NO_FRAMES, NOBODY
+    from features.timeline import band_colours
 
+    colours = band_colours(_bands(result), activities)
     words: list[list[str]] = [[] for _ in range(result.n_frames)]
+    gap_word = overlay_label(NO_FRAMES, None, colours)
     for s in result.segments:
-        label = _shown(s)
+        label = overlay_label(_shown(s), s.label, colours)
         ends = np.sort([r.end_frame - 1 for r in s.repetitions]).astype(np.int64)
         frames = np.arange(s.start_frame, s.end_frame)
         done = np.searchsorted(ends, frames, side="right")
         for f, n in zip(frames.tolist(), done.tolist(), strict=True):
-            shown_label = NO_FRAMES if gaps is not None and gaps[f] else label
+            shown_label = gap_word if gaps is not None and gaps[f] else label
             words[f] = [shown_label, f"repetitions: {n}"]
             if shown_label == NOBODY and unseen is not None and unseen[f]:
                 words[f] = words[f][1:]  # draw_pose says "no person"
@@ -365,7 +385,11 @@ def load_stored(db: str, name: str | None) -> Any:
         store.close()
 
 
-def _overlay(path: Path, video: Any, result: Any, out: Path) -> None:
+def _overlay(
+    path: Path, video: Any, result: Any, out: Path, activities: Sequence[str] = ()
+) -> None:
+    """The overlay video of ``result``; ``activities``: the case base's, in the order that
+    gives each its colour, as in ``segment --plot``."""
     import numpy as np
 
     from features.pose_estimation.overlay import write_overlay
@@ -377,7 +401,9 @@ def _overlay(path: Path, video: Any, result: Any, out: Path) -> None:
         video.image_landmarks,
         out,
         result.fps,
-        frame_words(result, gaps, np.isnan(video.image_landmarks[..., :2]).all(axis=(1, 2))),
+        frame_words(
+            result, gaps, np.isnan(video.image_landmarks[..., :2]).all(axis=(1, 2)), activities
+        ),
         video_frames=video.video_frames,
         gaps=gaps,
     )

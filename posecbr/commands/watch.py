@@ -45,7 +45,7 @@ from features.interrupts import raise_interrupt
 from features.text import counted, shown
 from posecbr.arguments import path_arg
 
-from .segment import JUDGES
+from .segment import JUDGES, overlay_label
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -453,6 +453,7 @@ class Watcher:
         self.emitted = 0  # segments printed
         self.stdout_gone = False  # the reader of the printed segments has gone: stop
         self.latency: list[float] = []
+        self.colours: dict[str, Any] | None = None  # each activity's, once drawn
         self.n = 0
         self.started = time.perf_counter()
 
@@ -548,11 +549,16 @@ class Watcher:
         bgr = cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR)
         current = self.live.current()
         label = self.live.label or ("unknown" if current is not None else "...")
-        words = [label, f"repetitions: {current.repetitions if current else 0}"]
+        key = self.live.label  # the activity, coloured as segment --plot colours it
         if absent:
-            words[0] = NO_FRAMES
+            label, key = NO_FRAMES, None
         elif self.live.nobody_in_view:  # not unknown: no movement to be like anything
-            words[0] = self.live.nobody_reason  # the gap just passed, or nobody in view
+            label, key = self.live.nobody_reason, None  # the gap just passed, or nobody in view
+        words = [
+            overlay_label(label, key, self._colours()),
+            f"repetitions: {current.repetitions if current else 0}",
+        ]
+        if not absent and self.live.nobody_in_view:
             if words[0] == NOBODY and np.isnan(frame.pose.image[:, :2]).all():
                 words = words[1:]  # draw_pose says "no person"
         draw_pose(bgr, frame.pose.image, words + self._fluents())
@@ -560,6 +566,15 @@ class Watcher:
             self._write(bgr)
         if self.args.show:
             self._show(bgr)
+
+    def _colours(self) -> dict[str, Any]:
+        """Each activity's colour, by its place among the case base's (as ``segment --plot``
+        and ``segment --overlay`` colour it)."""
+        if self.colours is None:
+            from features.timeline import band_colours
+
+            self.colours = band_colours([], [str(c) for c in self.clf.classes_])
+        return self.colours
 
     def _fluents(self, top: int = 3) -> list[str]:
         """The fluent states that hold in the latest frame (most confident first)."""
