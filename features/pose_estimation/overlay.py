@@ -199,14 +199,18 @@ def _paste(
 def _boxed(text: str, size: int, colour: tuple[int, int, int]) -> tuple[np.ndarray, int]:
     """``text`` at ``size`` on a box of ``colour`` (RGB) the size of its :func:`_masks`, as
     BGR ``(height, width, 3)``, and the baseline's row in it: the letters black or white,
-    whichever contrasts more with the box (WCAG's ratio of relative luminances)."""
+    whichever contrasts more with the box (WCAG's ratio of relative luminances); edged in
+    black, so a light box (unknown's grey) keeps its shape on a light frame."""
     _outline, fill, ascent = _masks(text, size)
     lum = _luminance(colour)
     ink = 0.0 if (lum + 0.05) / 0.05 >= 1.05 / (lum + 0.05) else 255.0
     box = np.empty((*fill.shape, 3), dtype=np.float32)
     box[:] = colour[::-1]
     box = box * (1.0 - fill[:, :, None]) + ink * fill[:, :, None]
-    return np.round(box).astype(np.uint8), ascent
+    edged = np.zeros_like(box)
+    edge = max(1, size // 20)
+    edged[edge:-edge, edge:-edge] = box[edge:-edge, edge:-edge]
+    return np.round(edged).astype(np.uint8), ascent
 
 
 def _luminance(rgb: tuple[int, int, int]) -> float:
