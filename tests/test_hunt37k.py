@@ -34,7 +34,8 @@ def _away() -> np.ndarray:
 
 def _label_box(frame: np.ndarray) -> tuple[tuple[int, int, int], np.ndarray]:
     """The commonest colour (RGB) in the middle of the first line's first letters in
-    ``frame`` (BGR), and the rectangle of ``frame`` that colour spans around them (the box)."""
+    ``frame`` (BGR), and the rectangle of ``frame`` that colour spans around them (the box),
+    which a black line surrounds."""
     h, w = frame.shape[:2]
     scale = max(0.6, min(h, w) / 600)
     core = frame[int(12 * scale) : int(26 * scale), 14:44]  # within "squat" or "unknown"
@@ -43,7 +44,11 @@ def _label_box(frame: np.ndarray) -> tuple[tuple[int, int, int], np.ndarray]:
     b, g, r = (int(v) for v in mode)
     line = frame[: int(40 * scale)]
     rows, cols = np.nonzero((line == mode).all(axis=2))
-    return (r, g, b), line[rows.min() : rows.max() + 1, cols.min() : cols.max() + 1]
+    top, bottom, left, right = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
+    edge = np.concatenate([line[top - 1, left:right], line[bottom, left:right],
+                           line[top:bottom, left - 1], line[top:bottom, right]])  # fmt: skip
+    assert (edge == 0).all()  # edged in black: a light box keeps its shape on a light frame
+    return (r, g, b), line[top:bottom, left:right]
 
 
 def _contrast(a: tuple[int, int, int], b: tuple[int, int, int]) -> float:
