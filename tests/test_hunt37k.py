@@ -42,6 +42,7 @@ def _label_box(frame: np.ndarray) -> tuple[tuple[int, int, int], np.ndarray]:
     colours, counts = np.unique(core.reshape(-1, 3), axis=0, return_counts=True)
     mode = colours[np.argmax(counts)]
     b, g, r = (int(v) for v in mode)
+    assert (r, g, b) != tuple(int(v) for v in frame[0, -1]), "no box: the frame's own colour"
     line = frame[: int(40 * scale)]
     rows, cols = np.nonzero((line == mode).all(axis=2))
     top, bottom, left, right = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
