@@ -21,6 +21,7 @@ right-handed (determinant +1), origin at the hip centre, metres.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -146,7 +147,8 @@ class PoseEstimator:
         return found[int(np.argmin(dist))]
 
     def process(self, rgb: np.ndarray, time_s: float | None = None) -> FramePose:
-        """One RGB uint8 frame ``(h, w, 3)`` taken at ``time_s`` seconds (default: 30 fps)."""
+        """One RGB uint8 frame ``(h, w, 3)`` taken at ``time_s`` seconds (default: 30 fps; NaN:
+        a frame with no time, its pose not smoothed and the filters left as they were)."""
         if time_s is None:
             time_s = self._frame / 30.0
         self._frame += 1
@@ -175,7 +177,8 @@ class PoseEstimator:
         image = raw.image[:NUM_POSE].copy()
         world = raw.world[:NUM_POSE].copy()
         aux = raw.image[NUM_POSE : NUM_POSE + 2, :3].copy()
-        if self.smoothing:
+        if self.smoothing and math.isfinite(time_s):  # NaN: a frame left out for its time,
+            # passed through unsmoothed, the filters untouched
             # Speed is measured in body sizes: the object scale is the unscaled ROI side.
             object_scale = 2.0 * float(np.hypot(*(aux[1, :2] - aux[0, :2])))
             value_scale = 1.0 / object_scale if object_scale > 1e-6 else 1.0

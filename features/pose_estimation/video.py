@@ -397,8 +397,13 @@ class FrameClock:
 
     def filter_time(self, index: int, elapsed_s: float) -> float:
         """The time the temporal filters get for a frame: ``index / fps`` while the frames lie
-        on the grid (or have no usable time), its own time once they stray."""
-        if self.on_grid or not math.isfinite(elapsed_s):
+        on the grid (or have no usable time), its own time once they stray; NaN for a frame
+        left out for its time once they have strayed (the estimator passes its pose through
+        unsmoothed, the filters untouched: the frames after it are smoothed as they would be
+        without it). Before, such a frame got ``index / fps``: where that lay after the
+        frames' own times, the filters took it and passed the frames after it through
+        unsmoothed until their times passed it."""
+        if self.on_grid:
             return index / self.fps
         return elapsed_s
 
