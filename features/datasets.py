@@ -52,10 +52,12 @@ from features.progress import progress
 from .handedness import right_handed
 from .label_tracks import (
     LabelTrack,
+    code_order,
     frame_labels,
     labelled_stretches,
     read_label_names,
     read_label_track,
+    track_labels,
 )
 from .poses import EXTRACTION_VERSION, PoseSequence, load_pose, pose_file_length
 from .readers.asfamc import hdm05_metadata, read_asf_amc
@@ -104,6 +106,7 @@ class _Entry:
     # what can be checked before the file is read (a recording's label file), given the
     # frame rate that replaces the file's (None: the file's own)
     check: Callable[[float | None], None] | None = None
+    track: LabelTrack | None = None  # a recording labelled over time: its label file
 
 
 def _suffix(path: Path) -> str:
@@ -835,6 +838,7 @@ def _track_entry(rec: dict[str, Any]) -> _Entry:
         rec["path"],
         pieces=lambda seq: split_by_track(seq, track),
         check=lambda fps: check_track(rec["path"], track, fps),
+        track=track,
     )
 
 
@@ -1009,6 +1013,29 @@ def dataset_entries(
         if d.entry.check is not None:
             d.entry.check(fps)
     return kept
+
+
+def dataset_labels(path: str | Path, *, sensor: str = "kinect") -> list[str]:
+    """The labels the clips of the dataset at ``path`` have, each once, as a user is told
+    them (whole-number codes by value, then the rest as text), found without decoding a
+    clip: from names and labels CSVs, a recording's label file (its codes, or their names),
+    a pose file's metadata. A clip whose label only reading it tells (a video, a BVH file
+    in a folder of pose files) adds none. For the refusal of a ``--labels`` entry no clip
+    has: the labels the user can give."""
+    from .poses import pose_file_metadata
+
+    path = Path(path)
+    kind = detect_kind(path)
+    found: set[str] = set()
+    for e in _entries(path, kind, sensor):
+        if e.track is not None:
+            found.update(track_labels(e.track))
+        elif e.label is not None:
+            found.add(e.label)
+        elif _suffix(e.path) in POSE_SUFFIXES:
+            label = pose_file_metadata(e.path).get("label")
+            found.update([] if label is None else [str(label)])
+    return sorted(found, key=code_order)
 
 
 def iter_dataset(

@@ -107,7 +107,7 @@ def read_label_names(path: str | Path) -> dict[str, str]:
     return names
 
 
-def _code_order(code: str) -> tuple[int, int, str]:
+def code_order(code: str) -> tuple[int, int, str]:
     """How label codes are listed: whole numbers by value (2 before 10), then the rest as
     text."""
     number = code.isascii() and code.isdigit()
@@ -130,7 +130,7 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     _refuse_a_header(text, tokens, path)
     if names is None:
         return tokens
-    unknown = sorted({t for t in tokens if t not in names}, key=_code_order)
+    unknown = sorted({t for t in tokens if t not in names}, key=code_order)
     if unknown:
         held = ", ".join(list(names)[:5]) + (", ..." if len(names) > 5 else "")
         raise DataError(
@@ -219,6 +219,14 @@ def _numbers(tokens: list[str]) -> np.ndarray | None:
         return np.array([float(t) for t in tokens])
     except ValueError:
         return None
+
+
+def track_labels(track: LabelTrack) -> list[str]:
+    """The labels a recording's label file holds (through its names file, if any), each
+    once, codes in :func:`code_order`: what its labelled stretches can be
+    labelled. DataError as :func:`read_label_track`."""
+    names = read_label_names(track.names) if track.names is not None else None
+    return sorted(set(read_label_track(track.path, names)), key=code_order)
 
 
 def frame_labels(

@@ -6,7 +6,7 @@ import argparse
 import json
 import re
 import sys
-from collections.abc import Collection, Iterable
+from collections.abc import Callable, Collection, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -74,11 +74,46 @@ def param_value(key: str, raw: str) -> Any:
     return value
 
 
-def check_found(found: Iterable[Any], asked: Collection[str] | None, flag: str, what: str) -> None:
+def check_found(
+    found: Iterable[Any],
+    asked: Collection[str] | None,
+    flag: str,
+    what: str,
+    data: str | Path | None = None,
+    held: Callable[[], Sequence[str]] | None = None,
+) -> None:
     """Refuse a ``--labels`` or ``--subjects`` entry (``asked``) that none of the clips' values
     ``found`` is (mistyped): the work on the others alone would be taken for the one asked
-    for. ``what`` says what a clip is to have it ("labelled", "of subject")."""
+    for. ``what`` says what a clip is to have it ("labelled", "of subject"); ``data``: where
+    the clips are from (DATA); ``held``: called on a refusal alone, the values the data hold
+    (the clips ``found`` are filtered already), named so the user sees what to give."""
     have = {str(v) for v in found if v is not None}
     missing = sorted(set(asked or ()) - have)
     if missing:
-        raise ConfigError(f"no clip {what} {', '.join(repr(m) for m in missing)} in the data", flag)
+        where = "the data" if data is None else str(data)
+        values = list(held()) if held is not None else []
+        unknown = [m for m in missing if m not in values]
+        if values and not unknown:  # there, but the other filters leave them out
+            listed = ", ".join(repr(m) for m in missing)
+            raise ConfigError(f"no clip {what} {listed} in {where} passes the other filters", flag)
+        text = f"no clip {what} {', '.join(repr(m) for m in unknown or missing)} in {where}"
+        raise ConfigError(text + held_words(values, what), flag)
+
+
+HELD_SHOWN = 10  # values named on a refusal; "and N more" for the rest
+
+
+def held_words(values: Sequence[str], what: str) -> str:
+    """``: its labels are 1, 3 and 5`` (at most :data:`HELD_SHOWN` named, then "and N more")
+    for :func:`check_found`'s refusal; whole-number labels alone are codes a label names file
+    names. Empty for no values (nothing to say)."""
+    if not values:
+        return ""
+    noun = "labels" if what == "labelled" else "subjects"
+    named = [repr(v) if not v or v != v.strip() or "," in v else v for v in values]
+    if len(named) > HELD_SHOWN:
+        named = [*named[:HELD_SHOWN], f"{len(values) - HELD_SHOWN} more"]
+    listed = named[0] if len(named) == 1 else f"{', '.join(named[:-1])} and {named[-1]}"
+    text = f": its {noun} are {listed}" if len(values) > 1 else f": its {noun[:-1]} is {listed}"
+    codes = noun == "labels" and all(v.isascii() and v.isdigit() for v in values)
+    return text + (" (codes: --label-names or a label_names column names them)" if codes else "")

@@ -148,7 +148,7 @@ def parse_params(items: list[str]) -> dict[str, Any]:
 def _load(args: argparse.Namespace) -> list[Any]:
     from cbr.casebase import frames_of
     from cbr.training import check_listed_once
-    from features.datasets import load_dataset
+    from features.datasets import dataset_labels, load_dataset
 
     if not args.data.exists():
         raise DataError("no such dataset (file or folder)", args.data)
@@ -165,7 +165,8 @@ def _load(args: argparse.Namespace) -> list[Any]:
     # one copy could be a training case of the other
     check_listed_once([(c.seq.source, *frames_of(c.seq)) for c in clips], str(args.data),
                       "it would be tested twice, or be a training case of itself")  # fmt: skip
-    check_found([c.label for c in clips], kw.get("labels"), "--labels", "labelled")
+    check_found([c.label for c in clips], kw.get("labels"), "--labels", "labelled", args.data,
+                lambda: dataset_labels(args.data, sensor=kw["sensor"]))  # fmt: skip
     check_found([c.subject for c in clips], kw.get("subjects"), "--subjects", "of subject")
     return clips
 

@@ -417,7 +417,8 @@ def _clips(args: argparse.Namespace) -> list[Any]:
             progress_desc="loading clips",
         )
     )
-    check_found([c.label for c in clips], activities, "--labels", "labelled")
+    check_found([c.label for c in clips], activities, "--labels", "labelled", args.data,
+                lambda: _held_labels(args))  # fmt: skip
     check_found([c.subject for c in clips], subjects, "--subjects", "of subject")
     stretches = bool(clips) and not args.frame_labels and args.over_time
     if stretches:  # a labels CSV's recordings: its flickers left out as --frame-labels' are
@@ -441,10 +442,22 @@ def _check_asked(args: argparse.Namespace, clips: list[Any], solutions: list[str
     anything is stored: a case base of the others alone was trained without a word. The
     labels are the solutions when the case base predicts them (``--target label``)."""
     if args.labels and args.target == "label":
-        check_found(solutions, [s.strip() for s in args.labels.split(",")], "--labels", "labelled")
+        asked = [s.strip() for s in args.labels.split(",")]
+        check_found(solutions, asked, "--labels", "labelled", args.data, lambda: _held_labels(args))
     if args.subjects:
         asked = [s.strip() for s in args.subjects.split(",")]
         check_found([c.subject for c in clips], asked, "--subjects", "of subject")
+
+
+def _held_labels(args: argparse.Namespace) -> list[str]:
+    """The labels DATA's clips have, found without decoding one (a ``--labels`` entry none
+    has is refused naming them): ``--frame-labels``' file's, else the dataset's."""
+    from features.datasets import dataset_labels
+    from features.label_tracks import LabelTrack, track_labels
+
+    if args.frame_labels:
+        return track_labels(LabelTrack(args.frame_labels, args.label_block, args.label_names))
+    return dataset_labels(args.data, sensor=args.sensor)
 
 
 def _no_clips(args: argparse.Namespace, stretches: bool = False) -> DataError:
@@ -517,6 +530,9 @@ def _entries(args: argparse.Namespace) -> list[Any]:
     activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
     entries = dataset_entries(args.data, sensor=args.sensor, subjects=subjects, labels=activities)
     if not entries:
+        if activities:  # a label no clip has, named with those the clips have (else the
+            held = _held_labels(args)  # other filters left them all out: said below)
+            check_found(held, activities, "--labels", "labelled", args.data, lambda: held)
         raise _no_clips(args)
     return entries
 
