@@ -169,3 +169,131 @@ def test_a_label_the_subjects_leave_out_is_said_so(
             str(tmp_path / "cb.sqlite")]  # fmt: skip
     line = refused(argv, tmp_path, capsys)
     assert line.endswith(f"--labels: no clip labelled 'walk' in {csv} passes the other filters")
+
+
+# Frames in a row stamped far ahead (a video's frame times 0.37, 5.0, 5.04, 0.41 ...) were
+# taken as a clock reset: both kept, the frame after them (0.41 s) lost as the place the
+# clock went back and every later one timed on from 5.04 s. Now a run of up to a bridged
+# gap's frames (6 at 25 fps) whose next frame comes back between the last one taken and the
+# run is left out, the later frames kept at their own times, in extract and watch alike.
+
+RUN = [0.0, 0.02, 0.1, 0.18, 0.26, 0.33, 0.37, 5.0, 5.04, 0.41, 0.45, 0.49]
+
+
+def test_two_frames_stamped_far_ahead_are_left_out_and_the_next_kept() -> None:
+    """By hand at 25 fps (strayed at 0.02 s): 5.0 and 5.04 s lie far after 0.37 s and 0.41 s
+    comes back between: frames 7 and 8 left out, 0.41, 0.45, 0.49 s their own. Before: 5.0
+    and 5.04 kept, 0.41 left out, 0.45 and 0.49 at 5.04 + 0.04 + 0.04 = 5.12 and 5.16 s."""
+    from features.pose_estimation.video import FrameClock, clocked_times
+
+    elapsed, strayed = clocked_times(RUN, 25.0)
+    assert strayed
+    want = [0.0, 0.02, 0.1, 0.18, 0.26, 0.33, 0.37, np.nan, np.nan, 0.41, 0.45, 0.49]
+    np.testing.assert_allclose(elapsed, want, atol=1e-9)
+    clock = FrameClock(25.0)
+    for i, t in enumerate(RUN):  # as watch: the next times read only as many as wanted
+        clock.take(i, t, RUN[i + 1 : i + 1 + clock.needs_next(i, t)])
+    assert clock.ahead == [(7, 0.37, 5.0, 0.41), (8, 0.37, 5.04, 0.41)]
+    assert clock.went_back == []
+
+
+def _run_of(n: int) -> tuple[list[float], list[float]]:
+    """At 25 fps, ``n`` frames from 5.0 s every 40 ms after 0.18 s, then 0.22 and 0.26 s:
+    the times, and what they are when the run is left out."""
+    run = [5.0 + 0.04 * k for k in range(n)]
+    return [0.0, 0.02, 0.1, 0.18, *run, 0.22, 0.26], [
+        0.0,
+        0.02,
+        0.1,
+        0.18,
+        *[np.nan] * n,
+        0.22,
+        0.26,
+    ]
+
+
+@pytest.mark.parametrize(
+    ("times", "want", "strays"),
+    [
+        # on the grid, two stamped 5 s ahead: each timed by its place, the file on the grid
+        # (before: strayed, 0.2 s left out, 0.24 s at 5.12 s)
+        ([0.0, 0.04, 0.08, 5.0, 5.04, 0.2, 0.24], [0.0, 0.04, 0.08, 0.12, 0.16, 0.2, 0.24], False),
+        # six in a row (a bridged gap's frames at 25 fps: 0.25 s): left out
+        (*_run_of(6), True),
+        # seven: more than the run looked through (a stretch of the recording itself): the
+        # clock went back, as before: all seven kept, 0.22 s left out, 0.26 s one interval
+        # on from 5.24 s plus its 0.04 s after 0.22 s (5.32 s)
+        (
+            _run_of(7)[0],
+            [0.0, 0.02, 0.1, 0.18, 5.0, 5.04, 5.08, 5.12, 5.16, 5.2, 5.24, np.nan, 5.32],
+            True,
+        ),
+        # a clock reset after a gap: the times come back before the last one taken (0.1 <
+        # 0.18 s), the gap's frames kept and the later ones timed on, as before
+        (
+            [0.0, 0.02, 0.1, 0.18, 5.0, 5.04, 0.1, 0.14],
+            [0.0, 0.02, 0.1, 0.18, 5.0, 5.04, np.nan, 5.12],
+            True,
+        ),
+        # a gap that never comes back: all kept, as before
+        ([0.0, 0.02, 0.1, 0.18, 5.0, 5.04, 5.08], [0.0, 0.02, 0.1, 0.18, 5.0, 5.04, 5.08], True),
+    ],
+)
+def test_a_run_stamped_ahead_against_a_clock_reset_and_a_gap(
+    times: list[float], want: list[float], strays: bool
+) -> None:
+    from features.pose_estimation.video import clocked_times
+
+    elapsed, strayed = clocked_times(times, 25.0)
+    assert strayed is strays
+    np.testing.assert_allclose(elapsed, want, atol=1e-9)
+
+
+def test_a_video_with_two_frames_stamped_far_ahead_loses_those_two_alone(
+    people: list[np.ndarray],  # noqa: F811
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The 13 variable-rate lunge frames (lossless), the ninth and tenth stamped 0.9 and
+    0.94 s between 0.38 and 0.4 s: frames 8 and 9 left out, the others at their own times:
+    14 rows at 25 fps (0 to 0.52 s), the last frame 12's pose (0.52 s). Before: frame 10
+    (0.4 s) left out, 11 and 12 at 1.02 and 1.1 s: 28 rows. ``watch`` (stream_poses, then
+    Regrid) pushes the same rows and every frame is read once, in order."""
+    pytest.importorskip("av", reason="PyAV writes the video")
+    from features.pose_estimation import PoseEstimator, estimate_video, stream_poses
+    from features.pose_estimation.video import iter_timed_frames
+    from posecbr.commands.watch import Regrid
+    from tests.test_hunt36c import _write_out_of_order
+
+    pts_ms = [0, 20, 100, 180, 220, 260, 300, 380, 900, 940, 400, 440, 520]
+    path = _write_out_of_order(tmp_path / "ahead2.mkv", pts_ms, people)
+    decoded = list(iter_timed_frames(path))
+    assert [round(t * 1000) for _rgb, t in decoded] == pts_ms
+    got = estimate_video(path, smoothing=False, tracking=False, progress_bar=False)
+    assert got.sequence.n_frames == 14
+    assert got.video_frames is not None
+    shown = got.video_frames.tolist()
+    assert shown[-1] == 12 and 8 not in shown and 9 not in shown
+    raw = PoseEstimator(smoothing=False, tracking=False).process(decoded[12][0])
+    assert raw.person
+    np.testing.assert_allclose(got.image_landmarks[-1], raw.image, atol=1e-6)
+    vfr = got.sequence.metadata["variable_frame_rate"]
+    assert vfr["frames_left_out"]["frames"] == [8, 9]
+    assert vfr["stamped_ahead"]["frames"] == [8, 9]
+    assert "clock_went_back" not in vfr
+    err = capsys.readouterr().err
+    assert "frame 8 is stamped 0.900 s, far ahead of the frames either side (0.380 and" in err
+    live = Regrid(25.0, str(path))
+    frames = list(stream_poses(path, estimator=PoseEstimator(smoothing=False, tracking=False)))
+    assert [f.index for f in frames] == list(range(13))
+    np.testing.assert_allclose(
+        [f.video_time_s for f in frames],
+        [0, 0.02, 0.1, 0.18, 0.22, 0.26, 0.3, 0.38, np.nan, np.nan, 0.4, 0.44, 0.52],
+        atol=1e-9,
+    )
+    for f in frames:  # each frame's own image, though two were read ahead of their turn
+        np.testing.assert_array_equal(f.rgb, decoded[f.index][0])
+    pushed = [w for f in frames for w, _v, _s in live.take(f)]
+    np.testing.assert_array_equal(np.array(pushed), got.sequence.positions)
+    err = capsys.readouterr().err
+    assert "frame 9 is stamped 0.940 s" in err and "clock" not in err

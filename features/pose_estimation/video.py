@@ -22,18 +22,20 @@ frame's before is left out of the grid and the others are resampled (:func:`cloc
 as ``watch`` does: ``segment`` and ``watch`` of one video see the same poses. Where the
 times go back and run on from there (a clock reset), the frames after the one that went
 back are timed on from the last frame taken, with a note (:class:`FrameClock`), not left
-out until the times pass it again; a single frame stamped far ahead of the frames either
-side is left out alone (timed by its place in a constant-rate video).
+out until the times pass it again; a frame stamped far ahead of the frames either side, or
+a few in a row (no more than a bridged gap holds), is left out alone (timed by its place in
+a constant-rate video).
 """
 
 from __future__ import annotations
 
+import collections
 import itertools
 import math
 import os
 import sys
 import time
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -310,23 +312,29 @@ class FrameClock:
     grid at time 0. Once the frames have strayed (a variable rate), such a frame alone has
     no time (NaN); when that frame lies more than :func:`bridge_limit_s` before the last one
     taken and the next frame's time is again not after the last one taken but after that
-    frame's, the clock went back there (a recording's clock reset, frames in a row stamped
-    far ahead of the others): the times from there on are taken as running on from the last frame
-    taken, the frame where it went back one interval (``1 / fps``) after it, so every later
-    frame keeps a time (before, all of them were left out until the times passed the last
-    one taken again). Frames out of order by less than that are left out until the times
-    pass the last one taken (no more than a bridged stretch of them), the times unshifted.
-    :attr:`went_back` lists each place the clock went back: (the frame where it did, the
-    time of the frame taken before it, its own time; s, as decoded).
+    frame's, the clock went back there (a recording's clock reset, more frames in a row
+    stamped far ahead of the others than :attr:`run`): the times from there on are taken as
+    running on from the last frame taken, the frame where it went back one interval
+    (``1 / fps``) after it, so every later frame keeps a time (before, all of them were left
+    out until the times passed the last one taken again). Frames out of order by less than
+    that are left out until the times pass the last one taken (no more than a bridged
+    stretch of them), the times unshifted. :attr:`went_back` lists each place the clock
+    went back: (the frame where it did, the time of the frame taken before it, its own
+    time; s, as decoded).
 
-    A single frame stamped far ahead (more than :func:`bridge_limit_s` after the last one
-    taken, the next frame's time between the two: :meth:`needs_next` says when the next
-    frame's time is wanted) is the one out of place: once the frames have strayed it alone
-    has no time (left out), the frames after it keep their own; while they lie on the grid
-    it is timed by its place, ``index / fps``, and they stay on the grid. Before, it was
-    taken, the next frame left out as the place the clock went back and the later frames
-    timed on from the stamp ahead. :attr:`ahead` lists them: (the frame, the time of the
-    frame taken before it, its own time, the next frame's time; s, as decoded)."""
+    A frame stamped far ahead (more than :func:`bridge_limit_s` after the last one taken),
+    alone or with up to :attr:`run` in a row in all, each far ahead, when the frame after
+    them comes back between the last one taken and it (:meth:`needs_next` says how many of
+    the next frames' times are wanted), is out of place: once the frames have strayed it
+    has no time (left out), the frames after the run keep their own; while they lie on the
+    grid it is timed by its place, ``index / fps``, and they stay on the grid. Before, a
+    single frame was taken, the next frame left out as the place the clock went back and
+    the later frames timed on from the stamp ahead; so were two or more in a row (0.37,
+    5.0, 5.04, 0.41 s: 5.0 and 5.04 kept, 0.41 lost, the later ones timed on from 5.04).
+    Without looking that far ahead a run cannot be told from a gap or a clock reset: the
+    times after it are what tells. :attr:`ahead` lists them: (the frame, the time of the
+    frame taken before it, its own time, the time of the frame that came back; s, as
+    decoded)."""
 
     def __init__(self, fps: float) -> None:
         self.fps = fps
@@ -340,32 +348,57 @@ class FrameClock:
         self.went_back: list[tuple[int, float, float]] = []
         self.ahead: list[tuple[int, float, float, float]] = []
 
-    def needs_next(self, index: int, time_s: float) -> bool:
-        """Whether frame ``index``'s time (decoded, s) lies so far after the last one taken
-        (beyond a bridged gap) that the next frame's tells whether it was stamped ahead."""
-        return (
+    @property
+    def run(self) -> int:
+        """The most frames in a row taken as stamped far ahead (:meth:`needs_next`): those of
+        a bridged gap (:func:`bridge_limit_s`, at least one: 6 at 25 fps, 7 at 30). Left out,
+        such a run leaves a hole resampling still bridges; a longer run is a stretch of the
+        recording itself whose clock then went back (a reset), as before."""
+        return max(1, int(bridge_limit_s(self.fps) * self.fps + 1e-9))
+
+    def needs_next(self, index: int, time_s: float) -> int:
+        """How many of the next frames' times (decoded, s) :meth:`take` wants for frame
+        ``index`` (:attr:`run`), 0 for none: whether its time lies so far after the last one
+        taken (beyond a bridged gap) that the frames after it tell whether it (and any far
+        ahead after it) was stamped ahead."""
+        far = (
             index > 0
             and self.trusted
             and math.isfinite(time_s)
             and time_s + self.offset - self.last > bridge_limit_s(self.fps)
         )
+        return self.run if far else 0
 
-    def take(self, index: int, time_s: float, next_s: float = float("nan")) -> float:
+    def _comes_back(self, time_s: float, coming: Sequence[float]) -> float:
+        """The first of the next frames' times (``coming``, decoded) between the last one
+        taken and ``time_s``, after none but frames far ahead too (beyond a bridged gap
+        after the last one taken); NaN where there is none among :attr:`run` of them."""
+        for t in coming[: self.run]:
+            if not math.isfinite(t):
+                break
+            if self.last < t + self.offset < time_s + self.offset:
+                return t
+            if t + self.offset - self.last <= bridge_limit_s(self.fps):
+                break
+        return float("nan")
+
+    def take(
+        self, index: int, time_s: float, coming: float | Sequence[float] = float("nan")
+    ) -> float:
         """Frame ``index``'s time (s) from the first frame's; NaN when it has none to trust.
-        ``next_s``: the next frame's decoded time, where :meth:`needs_next` wants it (NaN:
-        none, the last frame)."""
+        ``coming``: the next frames' decoded times (as many as :meth:`needs_next` wants; one
+        as a number; NaN or none: the last frame)."""
         if index == 0:
             self.first = self.last = self.last_raw = time_s
             self.trusted = math.isfinite(time_s)
             return 0.0 if self.trusted else float("nan")
         if not self.trusted:
             return float("nan")
-        if (
-            self.needs_next(index, time_s)
-            and math.isfinite(next_s)
-            and self.last < next_s + self.offset < time_s + self.offset
-        ):  # stamped far ahead of the frames either side: the one out of place
-            self.ahead.append((index, self.last_raw, time_s, next_s))
+        following = [coming] if isinstance(coming, (int, float)) else list(coming)
+        back = self._comes_back(time_s, following) if self.needs_next(index, time_s) else math.nan
+        if math.isfinite(back):  # stamped far ahead of the frames either side (alone or with
+            # the few after it): out of place
+            self.ahead.append((index, self.last_raw, time_s, back))
             if not self.on_grid:
                 return float("nan")
             elapsed = index / self.fps  # on the grid: its place; the last one taken
@@ -416,8 +449,8 @@ def clocked_times(times: np.ndarray | list[float], fps: float) -> tuple[np.ndarr
     repeated or earlier than the last one's has none (NaN) and the others keep theirs; before
     that, such a time means the file has none to trust (all NaN after it, not strayed)."""
     clock = FrameClock(fps)
-    after = [float(t) for t in times[1:]] + [float("nan")]
-    elapsed = [clock.take(i, float(t), after[i]) for i, t in enumerate(times)]
+    decoded = [float(t) for t in times]
+    elapsed = [clock.take(i, t, decoded[i + 1 : i + 1 + clock.run]) for i, t in enumerate(decoded)]
     return np.asarray(elapsed, np.float64), not clock.on_grid
 
 
@@ -623,6 +656,32 @@ def outside_frame(image_landmarks: np.ndarray, width: int, height: int) -> np.nd
         return (x < 0) | (y < 0) | (x >= width) | (y >= height)
 
 
+def _room(clock: FrameClock, index: int, max_frames: int | None) -> int:
+    """How many frames after frame ``index`` may be read to time it (:attr:`FrameClock.run`,
+    no further than ``max_frames``)."""
+    return clock.run if max_frames is None else min(clock.run, max_frames - index - 1)
+
+
+def _looking_ahead(
+    frames: Iterable[tuple[np.ndarray, float]], clock: FrameClock, max_frames: int | None
+) -> Iterator[tuple[int, np.ndarray, float, list[float]]]:
+    """Each frame (its index, image and decoded time, at most ``max_frames``) with the next
+    frames' times ``clock`` wants to time it (:meth:`FrameClock.needs_next`: a frame far
+    ahead of the last one taken), those frames read ahead and given in their turn. Take each
+    frame before the next is asked for."""
+    pairs = iter(frames)
+    ahead: collections.deque[tuple[np.ndarray, float]] = collections.deque()
+    for i in itertools.count() if max_frames is None else range(max_frames):
+        read = ahead.popleft() if ahead else next(pairs, None)
+        if read is None:
+            return
+        rgb, t = read
+        wanted = min(clock.needs_next(i, t), _room(clock, i, max_frames))
+        while len(ahead) < wanted and (more := next(pairs, None)) is not None:
+            ahead.append(more)
+        yield i, rgb, t, [at for _rgb, at in list(ahead)[:wanted]]
+
+
 def estimate_video(
     video_path: str | Path,
     *,
@@ -666,16 +725,8 @@ def estimate_video(
     if progress_bar:
         frames = progress(frames, desc=path.name, total=total, unit="frame")
     clock = FrameClock(info.fps)  # the filters get index / fps until the frames stray
-    pairs = iter(frames)
-    coming = next(pairs, None)  # the next frame read: its time tells of a frame stamped ahead
-    for i in itertools.count():
-        if coming is None or (max_frames is not None and i >= max_frames):
-            break
-        rgb, t = coming
-        coming = next(pairs, None)
-        more = coming is not None and (max_frames is None or i + 1 < max_frames)
-        # as watch takes it: NaN where it has none to trust
-        times.append(clock.take(i, t, coming[1] if more and coming is not None else math.nan))
+    for i, rgb, t, coming in _looking_ahead(frames, clock, max_frames):
+        times.append(clock.take(i, t, coming))  # as watch takes it: NaN where it has none
         pose = est.process(rgb, clock.filter_time(i, times[-1]))
         world.append(pose.world)
         image.append(pose.image)
@@ -785,15 +836,17 @@ def _resampling_record(
         vfr["clock_went_back"] = {
             "frames": [frame for frame, _before, _at in went_back],
             "why": "a frame's time earlier than the frame's before, and the next frame's"
-            " running on from it (a clock reset, or frames in a row stamped far ahead): that frame"
-            " left out, the later ones timed on from the frame before it",
+            " running on from it (a clock reset, or more frames in a row stamped far ahead"
+            " than a bridged gap holds): that frame left out, the later ones timed on from"
+            " the frame before it",
         }
     if ahead:
         vfr["stamped_ahead"] = {
             "frames": [frame for frame, _before, _at, _after in ahead],
-            "why": "a frame's time far after the frame's before (more than a bridged gap) and"
-            " the next frame's between the two: that frame alone out of place, left out,"
-            " the later ones keep their own times",
+            "why": "a frame's time far after the frame's before (more than a bridged gap), alone"
+            " or a few in a row (no more than a bridged gap holds), and the next frame's"
+            " between the two: those frames alone out of place, left out, the later ones keep"
+            " their own times",
         }
     return vfr, gaps, holes
 
@@ -1035,38 +1088,68 @@ def _open_source(
     return cap, fps, declared, True
 
 
-def _grab(cap: Any, fps: float | None) -> tuple[bool, float]:
-    """The next frame grabbed (demuxed and decoded): whether there is one, and its time (s,
-    as decoded; NaN for a live source, timed by the wall clock)."""
+def _grab(cap: Any, fps: float | None) -> tuple[bool, None, float]:
+    """The next frame grabbed (demuxed and decoded), not read: whether there is one, no
+    image yet, and its time (s, as decoded; NaN for a live source, timed by the wall
+    clock)."""
     ok = bool(cap.grab())
-    return ok, frame_time_s(cap) if ok and fps else math.nan
+    return ok, None, frame_time_s(cap) if ok and fps else math.nan
+
+
+def _read_ahead(
+    cap: Any, queue: collections.deque[tuple[bool, Any, float]], wanted: int
+) -> list[float]:
+    """The next ``wanted`` frames' decoded times (s), those not read yet read (grabbed and
+    retrieved, in order) into ``queue`` (whether each is there, its image, its time), up to
+    the end of the file."""
+    while len(queue) < wanted and not (queue and not queue[-1][0]):
+        ok = bool(cap.grab())
+        t = frame_time_s(cap) if ok else math.nan
+        bgr = None
+        if ok:
+            ok, bgr = cap.retrieve()
+            ok = bool(ok) and bgr is not None
+        queue.append((ok, bgr, t))
+    times = []
+    for ok, _bgr, t in list(queue)[:wanted]:
+        if not ok:
+            break
+        times.append(t)
+    return times
 
 
 def _clocked(
-    cap: Any, clock: FrameClock, index: int, time_s: float, more: bool, source: Any
-) -> tuple[bool, Any, float, tuple[bool, float] | None]:
-    """Frame ``index`` (grabbed, decoded at ``time_s``) timed by ``clock`` as
-    :func:`stream_poses` takes it, its notes said as they come. A frame far ahead of the last
-    one (:meth:`FrameClock.needs_next`) is read first and the next one grabbed for its time,
-    as :func:`estimate_video` reads it (``more``: a next frame may be read): (whether this
-    frame is there, its image when read already, its time, the next frame grabbed: whether
-    it is there and its time)."""
-    ok, bgr, grabbed, next_t = True, None, None, math.nan
-    if more and clock.needs_next(index, time_s):
-        ok, bgr = cap.retrieve()
-        if ok and bgr is not None:
-            there = bool(cap.grab())  # False: the file ends after this frame
-            next_t = frame_time_s(cap) if there else math.nan
-            grabbed = (there, next_t)
+    cap: Any,
+    clock: FrameClock,
+    frame: tuple[int, float, Any],
+    room: int,
+    queue: collections.deque[tuple[bool, Any, float]],
+    source: Any,
+) -> tuple[bool, Any, float]:
+    """A frame (its index, decoded time and image: None when grabbed, not read yet) timed by
+    ``clock`` as :func:`stream_poses` takes it, its notes said as they come. A frame far
+    ahead of the last one (:meth:`FrameClock.needs_next`) is read first and the next ones
+    (as many as the clock wants, at most ``room``) read into ``queue`` for their times, as
+    :func:`estimate_video` reads them: (whether this frame is there, its image when read
+    already, its time)."""
+    index, time_s, bgr = frame
+    ok, coming = True, []
+    wanted = min(clock.needs_next(index, time_s), room)
+    if wanted > 0:
+        if bgr is None:  # read before the next frame is grabbed
+            ok, bgr = cap.retrieve()
+            ok = bool(ok) and bgr is not None
+        if ok:
+            coming = _read_ahead(cap, queue, wanted)
     went_back, ahead = len(clock.went_back), len(clock.ahead)
-    video_t = clock.take(index, time_s, next_t)
+    video_t = clock.take(index, time_s, coming)
     if len(clock.went_back) > went_back:  # said as it comes, as a gap is
         words = went_back_words(str(source), clock.went_back[-1:])
         print(f"note: {shown(words)}", file=sys.stderr)
     if len(clock.ahead) > ahead:
         words = ahead_words(str(source), clock.ahead[-1:], not clock.on_grid)
         print(f"note: {shown(words)}", file=sys.stderr)
-    return bool(ok), bgr, video_t, grabbed
+    return bool(ok), bgr, video_t
 
 
 def stream_poses(
@@ -1102,17 +1185,19 @@ def stream_poses(
     index = 0
     times: list[float] = []  # a file's frame times (s), as the decoder gives them
     clock = FrameClock(fps or 1.0)
-    grabbed: tuple[bool, float] | None = None  # the next frame, grabbed to time this one
+    # the next frames, read to time a frame far ahead of the last (whether each is there,
+    # its image, its time)
+    queue: collections.deque[tuple[bool, Any, float]] = collections.deque()
     try:
         while max_frames is None or index < max_frames:
             # grabbed (demuxed and decoded), then timed, paced and only then taken: a paced
             # frame is read when it is due, as a camera would deliver it
-            ok, raw_t = grabbed or _grab(cap, fps)
-            video_t, bgr, grabbed = float("nan"), None, None
+            ok, bgr, raw_t = queue.popleft() if queue else _grab(cap, fps)
+            video_t = float("nan")
             if ok and fps:
                 times.append(raw_t)
-                more = max_frames is None or index + 1 < max_frames
-                ok, bgr, video_t, grabbed = _clocked(cap, clock, index, raw_t, more, source)
+                room = _room(clock, index, max_frames)
+                ok, bgr, video_t = _clocked(cap, clock, (index, raw_t, bgr), room, queue, source)
             if ok and pace is not None and not pace(index, video_t):
                 break
             if bgr is None:
