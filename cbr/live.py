@@ -408,7 +408,15 @@ class LiveSegmenter:
         is one tilted forward. Frames are taken as evenly spaced at the ``fps`` given: push
         every one. Returns the segments that this frame settled as finished (usually none). A
         copy is kept; a frame that is not one (another skeleton's joints, an infinite
-        coordinate) is refused with :class:`features.errors.InputError`, nothing kept."""
+        coordinate) is refused with :class:`features.errors.InputError`, nothing kept; so is
+        any frame after :meth:`finish` (the stream has ended: a new one needs a new
+        segmenter)."""
+        if self.ended:
+            raise InputError(
+                f"frame {self.n}: the stream has ended (finish() was called): a new stream "
+                "needs a new LiveSegmenter",
+                self.source,
+            )
         frame, seen = self._checked(world, confidence)
         if absent:  # runs [first, end) of frames in a gap
             if self.absent and self.absent[-1][1] == self.n:
@@ -432,9 +440,14 @@ class LiveSegmenter:
         joints = len(BLAZEPOSE_33)
         for value, shape, what in ((world, (joints, 3), "positions"),
                                    (confidence, (joints,), "confidence")):  # fmt: skip
-            if value is not None and np.shape(value) != shape:
+            got: object
+            try:
+                got = None if value is None else np.shape(value)
+            except ValueError:  # rows of different lengths
+                got = "rows of different lengths"
+            if got is not None and got != shape:
                 raise InputError(
-                    f"frame {self.n}: {what} must have shape {shape}, got {np.shape(value)}",
+                    f"frame {self.n}: {what} must have shape {shape}, got {got}",
                     self.source,
                 )
         conf = None if confidence is None else np.asarray(confidence)[None]
@@ -882,10 +895,13 @@ class LiveSegmenter:
         """The segments not yet finished, at the end of the stream (the last one ends there);
         a stream that ended before its first window (:data:`DEFAULT_WINDOW_S`) but lasted
         the shortest window :func:`cbr.segmentation.segment` takes (:data:`MIN_WINDOW_S`) is
-        segmented as that segments such a recording."""
+        segmented as that segments such a recording. Called again, it returns none: the
+        stream's segments have all been given."""
+        if self.ended:
+            return []
+        self.ended = True
         if self.state is None:
             return self._short_stream()
-        self.ended = True
         out = self._settle(np.array(self.forward.settle(final=True), dtype=np.int64))
         assert self.settled is not None
         out += self._pass(math.inf, self.n, final=True)

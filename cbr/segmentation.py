@@ -73,6 +73,7 @@ from features.repetitions import (
     RepetitionCount,
     count_in_signals,
 )
+from features.values import is_number
 
 from . import long_clip
 from .explain import Explanation
@@ -123,7 +124,10 @@ SWITCH_ODDS = 2.0
 def span_fields(start_frame: int, end_frame: int, label: str | None, confidence: float,
                 fps: float) -> dict[str, Any]:  # fmt: skip
     """The JSON fields every labelled stretch has (``segment --json``, ``watch``'s lines):
-    start and end in seconds and frames, the label (None: unknown) and its confidence."""
+    start and end in seconds and frames, the label (None: unknown) and its confidence.
+    ``fps`` other than a finite number > 0 is refused (InputError) naming it."""
+    if not (is_number(fps) and math.isfinite(fps) and fps > 0):
+        raise InputError(f"fps must be the frame rate, a number > 0, got {fps!r}", "to_dict")
     return {
         "start_s": round(start_frame / fps, 3),
         "end_s": round(end_frame / fps, 3),

@@ -1,0 +1,143 @@
+"""A robot engineer streaming a tracker's frames through the Python API (hunt 37l): the
+stream's end, a frame after it, a frame that is not a frame, and a segment's JSON."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from cbr.estimator import CaseBaseClassifier
+from cbr.live import LiveSegment, LiveSegmenter
+from cbr.segmentation import Segment, segment
+from cbr.unknown import judge_of
+from features.errors import InputError
+from features.poses import PoseSequence, load_pose
+from features.skeleton import BLAZEPOSE_33
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+ACTIVITIES = ("deep_squat", "hurdle_step", "standing_shoulder_abduction")
+
+
+class _Scripted(LiveSegmenter):
+    """The live segmenter with each window's vote set by where it lies: activity "a" for a
+    window centred before frame 300, "b" after (no classifier behind it)."""
+
+    def _vote(self, n: int) -> tuple[np.ndarray, float]:
+        return np.eye(2)[int(n - self.window / 2 >= 300)], 0.0
+
+    def _repetition_windows(self, n: int) -> None:
+        """The fixed windows only (the frames are noise: nothing repeats)."""
+
+
+def _scripted(source: str = "stream") -> _Scripted:
+    labels = np.array(["a", "b"])
+    clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
+    return _Scripted(clf, 30.0, judge=SimpleNamespace(), source=source)
+
+
+def test_finish_called_twice_gives_the_last_segment_once() -> None:
+    """20 s at 30 fps, "a" then "b" from 10 s: the stream's segments are "a" and "b", the
+    second ending at frame 600; a second finish() has no segment left to give (it gave the
+    last one, "b", again)."""
+    live = _scripted()
+    rng = np.random.default_rng(0)
+    segments: list[LiveSegment] = []
+    for _ in range(600):
+        segments += live.push(rng.normal(size=(33, 3)))
+    segments += live.finish()
+    assert [s.label for s in segments] == ["a", "b"]
+    assert segments[-1].end_frame == 600
+    assert live.finish() == []
+
+
+def test_a_frame_pushed_after_finish_is_refused_saying_the_stream_ended() -> None:
+    """A frame after the stream's end was taken, and the next finish() gave the last
+    segment again one frame longer (frames 300-601 of a 600-frame stream); now it is refused
+    (InputError naming the stream), nothing kept, and nothing more is finished."""
+    live = _scripted("camera 0")
+    rng = np.random.default_rng(1)
+    for _ in range(600):
+        live.push(rng.normal(size=(33, 3)))
+    live.finish()
+    with pytest.raises(InputError, match=r"^camera 0: frame 600: the stream has ended \(finish"):
+        live.push(rng.normal(size=(33, 3)))
+    assert live.n == 600
+    assert live.finish() == []
+
+
+@pytest.fixture(scope="module")
+def clf_and_squat() -> tuple[CaseBaseClassifier, PoseSequence]:
+    """A classifier of three demo activities (every third clip, as a tracker's arrays) and
+    1.5 s of a squat clip left out of it: a stream shorter than the first 2-s window."""
+    with open(DEMO / "labels.csv", newline="") as f:
+        rows = [r for r in csv.DictReader(f) if r["label"] in ACTIVITIES]
+    train = rows[::3]
+    xyz = [load_pose(DEMO / r["path"]).to_canonical().positions for r in train]
+    X = [PoseSequence(a, BLAZEPOSE_33, 30.0) for a in xyz]
+    clf = CaseBaseClassifier(k=3, mirror=False).fit(X, [r["label"] for r in train])
+    squat = next(r for r in rows[1::3] if r["label"] == "deep_squat")
+    short = load_pose(DEMO / squat["path"]).to_canonical().positions[:45]
+    return clf, PoseSequence(short, BLAZEPOSE_33, 30.0)
+
+
+def test_finish_twice_on_a_stream_shorter_than_a_window_gives_its_segments_once(
+    clf_and_squat: tuple[CaseBaseClassifier, PoseSequence],
+) -> None:
+    """A 1.5-s stream is segmented at its end as segment() segments the same 45 frames; a
+    second finish() gave those segments all over again, and a frame pushed after was taken
+    (a third finish() segmented 46 frames)."""
+    clf, short = clf_and_squat
+    judge = judge_of(clf, "spread-margin")
+    offline = segment(clf, short, judge).segments
+    live = LiveSegmenter(clf, 30.0, judge)
+    for frame in short.positions:
+        assert live.push(frame) == []
+    first = live.finish()
+    assert [(s.start_frame, s.end_frame, s.label) for s in first] == [
+        (s.start_frame, s.end_frame, s.label) for s in offline
+    ]
+    assert first[-1].end_frame == 45
+    assert live.finish() == []
+    with pytest.raises(InputError, match="the stream has ended"):
+        live.push(short.positions[0])
+
+
+def test_a_frame_of_rows_of_different_lengths_is_refused_naming_the_frame() -> None:
+    """A tracker's frame as nested lists with one joint of two numbers: numpy's "setting an
+    array element with a sequence" came out; now the one line of any misshapen frame, naming
+    the stream and the frame, nothing kept."""
+    live = _scripted("tracker")
+    live.push(np.zeros((33, 3)).tolist())  # lists of the right shape are a frame
+    ragged = [[0.0, 0.0, 0.0]] * 32 + [[0.0, 0.0]]
+    with pytest.raises(InputError, match=r"^tracker: frame 1: positions must have shape"):
+        live.push(ragged)
+    with pytest.raises(InputError, match=r"^tracker: frame 1: confidence must have shape"):
+        live.push(np.zeros((33, 3)), [[1.0]] * 32 + [[1.0, 1.0]])
+    assert live.n == 1
+
+
+@pytest.mark.parametrize("fps", [0, -30.0, None, float("nan"), "30"])
+def test_to_dict_without_a_frame_rate_is_refused_in_one_line(fps: object) -> None:
+    """``to_dict(fps)`` of a live or an offline segment: 0 gave a ZeroDivisionError, None a
+    TypeError, NaN seconds of NaN; now an InputError saying fps must be a number > 0."""
+    live = LiveSegment(0, 60, "a", 0.9, 1)
+    offline = Segment(0, 60, "a", 0.9, (), "", 0.5)
+    for seg in (live, offline):
+        with pytest.raises(InputError, match=r"^to_dict: fps must be the frame rate"):
+            seg.to_dict(fps)  # type: ignore[arg-type]
+
+
+def test_to_dict_gives_seconds_at_the_frame_rate_given() -> None:
+    """Frames 45-105 at 30 fps are 1.5-3.5 s; at 15 fps 3.0-7.0 s."""
+    seg = LiveSegment(45, 105, "a", 0.91234, 2)
+    assert {k: seg.to_dict(30)[k] for k in ("start_s", "end_s", "confidence", "count")} == {
+        "start_s": 1.5,
+        "end_s": 3.5,
+        "confidence": 0.912,
+        "count": 2,
+    }
+    assert (seg.to_dict(15.0)["start_s"], seg.to_dict(15.0)["end_s"]) == (3.0, 7.0)
