@@ -757,8 +757,16 @@ class LiveSegmenter:
         return told(self.clf, solved, self.classes[state]), novelty
 
     def recent(self, frames: int) -> PoseSequence:
-        """The last ``frames`` frames pushed, as a clip."""
-        return self._sequence(max(self.offset, self.n - frames), self.n)
+        """The last ``frames`` frames pushed, as a clip (fewer when the older ones are no
+        longer kept). ``frames`` not a whole number > 0, or no frame pushed yet, is refused
+        (InputError) saying so."""
+        if not (
+            is_number(frames) and math.isfinite(frames) and frames == int(frames) and frames > 0
+        ):
+            raise InputError(f"recent needs a number of frames > 0, got {frames!r}", self.source)
+        if not self.n:
+            raise InputError("recent: no frame has been pushed yet", self.source)
+        return self._sequence(max(self.offset, self.n - int(frames)), self.n)
 
     def _sequence(self, a: int, b: int) -> PoseSequence:
         """Stream frames [a, b) as a clip (``a`` >= :attr:`offset`: frames not yet dropped)."""

@@ -61,6 +61,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar
 
 import numpy as np
+from sklearn.exceptions import NotFittedError
 
 from features.body import MIRRORED
 from features.errors import ConfigError, DataError
@@ -1302,9 +1303,15 @@ def judge_of(clf: Any, name: str) -> Judge:
     """The judge called ``name`` (:data:`JUDGES`) for the fitted classifier ``clf``: the one
     stored with it (``clf.judges_``, calibrated when it was stored on the cases it holds)
     when there is one, else calibrated now on its case base (a model stored before judges
-    were, or after its cases changed, or one fitted in memory)."""
+    were, or after its cases changed, or one fitted in memory). An unfitted ``clf`` is
+    refused with scikit-learn's ``NotFittedError``."""
     if name not in JUDGES:
         raise ConfigError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "--unknown")
+    if getattr(clf, "case_base_", None) is None:
+        raise NotFittedError(
+            f"This {type(clf).__name__} instance is not fitted yet: fit it (or load a stored "
+            "one) before judging with it"
+        )
     stored = getattr(clf, "judges_", None) or {}
     if name in stored:
         judge: Judge = stored[name]

@@ -141,3 +141,39 @@ def test_to_dict_gives_seconds_at_the_frame_rate_given() -> None:
         "count": 2,
     }
     assert (seg.to_dict(15.0)["start_s"], seg.to_dict(15.0)["end_s"]) == (3.0, 7.0)
+
+
+def test_judge_of_an_unfitted_classifier_says_it_is_not_fitted() -> None:
+    """``judge_of(CaseBaseClassifier(), ...)`` raised AttributeError "'CaseBaseClassifier'
+    object has no attribute 'case_base_'"; now scikit-learn's NotFittedError, as segment and
+    LiveSegmenter give for it."""
+    from sklearn.exceptions import NotFittedError
+
+    for name in ("spread-margin", "held-out", "margin"):
+        with pytest.raises(NotFittedError, match="not fitted yet"):
+            judge_of(CaseBaseClassifier(), name)
+
+
+@pytest.mark.parametrize("frames", [0, -5, 2.5, "10", float("inf")])
+def test_recent_of_no_frames_says_so_not_that_frames_are_no_longer_kept(frames: object) -> None:
+    """``recent(0)`` on a stream of 100 frames said "stream frames 100-100 are no longer kept
+    (from 0)", ``recent(-5)`` "frames 105-100": every frame is kept. Now the number asked
+    for is named as what is wrong."""
+    live = _scripted("tracker")
+    for _ in range(100):
+        live.push(np.zeros((33, 3)))
+    with pytest.raises(InputError, match=r"^tracker: recent needs a number of frames > 0"):
+        live.recent(frames)  # type: ignore[arg-type]
+
+
+def test_recent_before_any_frame_says_none_was_pushed() -> None:
+    """Before the first frame, "stream frames 0-0 are no longer kept"; now "no frame has been
+    pushed yet". After 100 frames, recent(10) is the last 10 as pushed, recent(1000) all 100."""
+    live = _scripted()
+    with pytest.raises(InputError, match="no frame has been pushed yet"):
+        live.recent(10)
+    frames = np.arange(100 * 33 * 3, dtype=float).reshape(100, 33, 3) / 1e4
+    for f in frames:
+        live.push(f)
+    assert np.array_equal(live.recent(10).positions, frames[90:])
+    assert live.recent(1000).positions.shape == (100, 33, 3)
