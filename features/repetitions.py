@@ -102,7 +102,7 @@ import numpy as np
 from .body import long_runs
 from .datasets import Clip
 from .derived import signals_of, stretch
-from .errors import DataError
+from .errors import DataError, InputError
 from .geometry import WORLD_UP, angle_between, body_frame, unit
 from .poses import PoseSequence
 from .signals import ANGLE_SIGNALS
@@ -1061,7 +1061,15 @@ def count_repetitions(
     recording (a segment), whose far point at a cut is handed to the piece beyond it
     (:func:`cbr.segmentation.keep_whole`) and must stay; or a pair, for the clip's start and
     its end (:func:`count_in_signals`). Raises DataError when the clip is
-    shorter than one repetition could be (:data:`MIN_PERIOD_S`) or shows no person."""
+    shorter than one repetition could be (:data:`MIN_PERIOD_S`) or shows no person, and
+    InputError when ``seq`` is not a PoseSequence (an array: ``PoseSequence(xyz, names,
+    fps)`` makes one)."""
+    if not isinstance(seq, PoseSequence):
+        raise InputError(
+            f"a PoseSequence is expected, got {type(seq).__name__} (PoseSequence(xyz, names,"
+            " fps) makes one of an array)",
+            "seq",
+        )
     if seq.duration_s < MIN_PERIOD_S:
         raise DataError(
             f"the clip lasts {seq.duration_s:.2f} s, shorter than one repetition can be"

@@ -177,3 +177,13 @@ def test_recent_before_any_frame_says_none_was_pushed() -> None:
         live.push(f)
     assert np.array_equal(live.recent(10).positions, frames[90:])
     assert live.recent(1000).positions.shape == (100, 33, 3)
+
+
+def test_counting_repetitions_of_an_array_says_a_pose_sequence_is_expected() -> None:
+    """``count_repetitions(xyz)`` of a tracker's ``(frames, 33, 3)`` array raised
+    AttributeError "'numpy.ndarray' object has no attribute 'duration_s'"; now InputError
+    naming what it takes and how to make one."""
+    from features.repetitions import count_repetitions
+
+    with pytest.raises(InputError, match=r"^seq: a PoseSequence is expected, got ndarray"):
+        count_repetitions(np.zeros((60, 33, 3)))  # type: ignore[arg-type]
