@@ -276,7 +276,7 @@ class LiveSegmenter:
             )
         if not (is_number(fps) and math.isfinite(fps) and fps > 0):
             raise InputError(f"the stream needs a frame rate > 0, got {fps!r}", source)
-        check_judge(judge)
+        check_judge(judge, clf.classes_)
         self.clf, self.source = clf, source
         self.fps = float(fps)
         self.judge = judge if judge is not None else default_judge(clf)

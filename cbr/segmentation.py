@@ -1099,13 +1099,24 @@ def _check_call(clf: Any, recording: Any, chunk_frames: Any) -> None:
         )
 
 
-def check_judge(judge: Any) -> None:
+def check_judge(judge: Any, classes: Sequence[Any] | None = None) -> None:
     """Refuse a judge given by its name (:func:`cbr.unknown.judge_of` makes the judge of a
-    name): it would be found not to be one only when the first window is judged."""
+    name): it would be found not to be one only when the first window is judged; and a judge
+    with a threshold per activity calibrated on a case base of another number of activities
+    than ``classes`` (the classifier's: another classifier's judge), which would fail deep
+    in the first window judged (or read another activity's threshold)."""
     if isinstance(judge, str):
         raise InputError(
             f"judge must be None or a judge of cbr.unknown (judge_of(clf, {judge!r})), not its"
             " name",
+            "judge",
+        )
+    per = getattr(judge, "thresholds", None)
+    if classes is not None and isinstance(per, tuple) and len(per) != len(classes):
+        raise InputError(
+            f"the judge was calibrated on a case base of {len(per)} activities, the classifier"
+            f" has {len(classes)}: another classifier's judge (judge_of(clf, name) makes this"
+            " classifier's)",
             "judge",
         )
 
@@ -1245,11 +1256,12 @@ def segment(
     at once; None: in pieces of :data:`cbr.long_clip.CHUNK_FRAMES` for a longer recording.
     Raises DataError for a recording shorter than one window or without a person, and for a
     case base the judge cannot be calibrated on; InputError for a ``recording`` that is not a
-    PoseSequence or a ``judge`` given by its name (:func:`cbr.unknown.judge_of` makes
-    the judge), ConfigError for a negative ``chunk_frames`` or a ``k`` that is not a whole
-    number, NotFittedError for an unfitted ``clf``."""
+    PoseSequence, a ``judge`` given by its name (:func:`cbr.unknown.judge_of` makes the
+    judge) or one of another classifier (its activities more or fewer), ConfigError for a
+    negative ``chunk_frames`` or a ``k`` that is not a whole number, NotFittedError for an
+    unfitted ``clf``."""
     _check_call(clf, recording, chunk_frames)
-    check_judge(judge)
+    check_judge(judge, clf.classes_)
     judge = judge or default_judge(clf)
     return finish(clf, solve_recording(clf, recording, k, chunk_frames), judge)
 

@@ -187,3 +187,24 @@ def test_counting_repetitions_of_an_array_says_a_pose_sequence_is_expected() -> 
 
     with pytest.raises(InputError, match=r"^seq: a PoseSequence is expected, got ndarray"):
         count_repetitions(np.zeros((60, 33, 3)))  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("activities", [2, 5])
+def test_another_classifiers_judge_is_refused_naming_both_counts(
+    clf_and_squat: tuple[CaseBaseClassifier, PoseSequence], activities: int
+) -> None:
+    """A judge with a threshold per activity calibrated on a case base of 2 (or 5)
+    activities, given to a classifier of 3: segment and LiveSegmenter read another
+    activity's threshold, or raised IndexError "tuple index out of range" at the first window
+    nearest an activity beyond the judge's; now InputError naming both counts, before any
+    frame."""
+    from cbr.unknown import ActivityMargin
+
+    clf, short = clf_and_squat
+    other = ActivityMargin((0.9,) * activities, 0.9, "subject", 10)
+    words = rf"^judge: the judge was calibrated on a case base of {activities} activities, the"
+    with pytest.raises(InputError, match=words + r" classifier has 3"):
+        segment(clf, short, other)
+    with pytest.raises(InputError, match=words):
+        LiveSegmenter(clf, 30.0, other)
+    LiveSegmenter(clf, 30.0, ActivityMargin((0.9,) * 3, 0.9, "subject", 10))  # its own count
