@@ -438,6 +438,12 @@ class LiveSegmenter:
         is not, before anything is kept: a window would read it seconds later, and every
         window after it."""
         joints = len(BLAZEPOSE_33)
+        if world is None:  # a tracker's "nobody found", or a dropped frame
+            raise InputError(
+                f"frame {self.n}: positions are None: push a frame of NaN "
+                "(np.full((33, 3), np.nan)) where nobody is seen, absent=True where no frame came",
+                self.source,
+            )
         for value, shape, what in ((world, (joints, 3), "positions"),
                                    (confidence, (joints,), "confidence")):  # fmt: skip
             got: object

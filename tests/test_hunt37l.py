@@ -208,3 +208,15 @@ def test_another_classifiers_judge_is_refused_naming_both_counts(
     with pytest.raises(InputError, match=words):
         LiveSegmenter(clf, 30.0, other)
     LiveSegmenter(clf, 30.0, ActivityMargin((0.9,) * 3, 0.9, "subject", 10))  # its own count
+
+
+def test_a_frame_of_none_says_what_to_push_for_nobody_or_no_frame() -> None:
+    """A tracker that found nobody, or dropped a frame, gives None: pushing it said
+    "positions must be real numbers, got Python objects"; now it says to push NaN (nobody
+    seen) or NaN with absent=True (no frame), nothing kept; and that frame is taken."""
+    live = _scripted("robot")
+    with pytest.raises(InputError, match=r"^robot: frame 0: positions are None: push a frame"):
+        live.push(None)  # type: ignore[arg-type]
+    assert live.n == 0
+    live.push(np.full((33, 3), np.nan), absent=True)
+    assert live.n == 1 and live.absent == [[0, 1]]
