@@ -29,7 +29,7 @@ from sklearn.exceptions import NotFittedError
 
 from features.body import TORSO_JOINTS, torso_seen, torso_share
 from features.errors import DataError, InputError, PoseFileError
-from features.poses import PoseSequence
+from features.poses import MAX_FPS, MIN_FPS, PoseSequence
 from features.repetitions import ANALYSIS_FPS, Repetition, count_repetitions, movement_signals
 from features.skeleton import BLAZEPOSE_33
 from features.values import is_number
@@ -276,6 +276,12 @@ class LiveSegmenter:
             )
         if not (is_number(fps) and math.isfinite(fps) and fps > 0):
             raise InputError(f"the stream needs a frame rate > 0, got {fps!r}", source)
+        if not MIN_FPS <= fps <= MAX_FPS:  # as a pose file's: every frame would be refused
+            raise InputError(
+                f"the stream needs a frame rate between {MIN_FPS:g} and {MAX_FPS:g} frames per"
+                f" second, got {fps:g}",
+                source,
+            )
         check_judge(judge, clf.classes_)
         self.clf, self.source = clf, source
         self.fps = float(fps)

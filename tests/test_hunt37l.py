@@ -220,3 +220,18 @@ def test_a_frame_of_none_says_what_to_push_for_nobody_or_no_frame() -> None:
     assert live.n == 0
     live.push(np.full((33, 3), np.nan), absent=True)
     assert live.n == 1 and live.absent == [[0, 1]]
+
+
+@pytest.mark.parametrize("fps", [0.001, 1e-6, 20_000.0])
+def test_a_frame_rate_no_pose_file_takes_is_refused_when_the_segmenter_is_made(
+    fps: float,
+) -> None:
+    """``LiveSegmenter(clf, 0.001)`` was made, and then every frame pushed was refused ("frame
+    0: fps must be between 0.01 and 10000 frames per second"); now the segmenter is refused
+    saying so, and the limits themselves are taken."""
+    labels = np.array(["a", "b"])
+    clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
+    with pytest.raises(InputError, match=r"^cam: the stream needs a frame rate between 0.01 and"):
+        _Scripted(clf, fps, judge=SimpleNamespace(), source="cam")
+    for ok in (0.01, 10_000.0):
+        _Scripted(clf, ok, judge=SimpleNamespace()).push(np.zeros((33, 3)))
