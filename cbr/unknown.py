@@ -1315,10 +1315,31 @@ def judge_of(clf: Any, name: str) -> Judge:
     stored = getattr(clf, "judges_", None) or {}
     if name in stored:
         judge: Judge = stored[name]
-        return judge
+        return in_class_order(judge, clf)
     if name == "held-out":
         return HeldOut(clf.novelty_)
-    return STORED[name].of(clf.case_base_)  # type: ignore[return-value]
+    return in_class_order(STORED[name].of(clf.case_base_), clf)  # type: ignore[arg-type]
+
+
+def in_class_order(judge: Judge, clf: Any) -> Judge:
+    """``judge`` with its values per activity (:class:`ActivityMargin`'s thresholds, budget
+    thresholds and spreads: calibrated in the order of the case base's labels sorted as text,
+    :func:`held_out_activities`) in the order of ``clf.classes_``, the order of the columns
+    of the distances it is given (:func:`cbr.segmentation.segment`). They differ for labels
+    fitted as numbers (``classes_`` 2, 10; as text "10" < "2")."""
+    if not isinstance(judge, ActivityMargin):
+        return judge
+    mine = [str(c) for c in clf.classes_]
+    theirs = sorted(set(np.asarray(clf.case_base_.labels).astype(str).tolist()))
+    if mine == theirs or sorted(mine) != theirs:
+        return judge  # in order already, or not of these activities (check_judge says so)
+    order = [theirs.index(c) for c in mine]
+    fields: dict[str, Any] = {}
+    for f in ("thresholds", "budget_thresholds", "spreads"):
+        values = getattr(judge, f, ())
+        if values:
+            fields[f] = tuple(values[i] for i in order)
+    return dataclasses.replace(judge, **fields)
 
 
 def default_judge(clf: Any) -> Judge:

@@ -235,3 +235,33 @@ def test_a_frame_rate_no_pose_file_takes_is_refused_when_the_segmenter_is_made(
         _Scripted(clf, fps, judge=SimpleNamespace(), source="cam")
     for ok in (0.01, 10_000.0):
         _Scripted(clf, ok, judge=SimpleNamespace()).push(np.zeros((33, 3)))
+
+
+def test_a_judge_of_labels_fitted_as_numbers_reads_each_activitys_own_threshold() -> None:
+    """Labels fitted as numbers, 2 and 10: ``classes_`` is [2, 10] and the distances a judge
+    is given have their columns in that order, but the judges are calibrated in the labels'
+    order as text, "10" before "2". The stored judge's threshold of "10" is 0.5 and of "2"
+    0.9: a window nearest activity 2 was judged against 0.5 (activity 10's), its spread
+    and budget threshold too. Now against 0.9, 3.0 and 0.8; text labels keep their order."""
+    from cbr.unknown import SpreadMargin
+
+    stored = SpreadMargin(
+        (0.5, 0.9), 0.7, "subject", 10, budget_thresholds=(0.4, 0.8), spreads=(1.0, 3.0)
+    )
+    labels = np.array(["2", "10", "2", "10"], dtype=object)
+    numbers = SimpleNamespace(
+        classes_=np.array([2, 10]),
+        case_base_=SimpleNamespace(labels=labels),
+        judges_={"spread-margin": stored},
+    )
+    judge = judge_of(numbers, "spread-margin")
+    assert judge.thresholds == (0.9, 0.5)  # type: ignore[attr-defined]
+    assert judge.budget_thresholds == (0.8, 0.4)  # type: ignore[attr-defined]
+    assert judge.spreads == (3.0, 1.0)  # type: ignore[attr-defined]
+    assert judge.threshold(np.array([1.0, 5.0])) == 0.9  # type: ignore[attr-defined]
+    text = SimpleNamespace(
+        classes_=np.array(["10", "2"]),
+        case_base_=SimpleNamespace(labels=labels),
+        judges_={"spread-margin": stored},
+    )
+    assert judge_of(text, "spread-margin") is stored
