@@ -829,7 +829,9 @@ def _ends_samples(n: int, fps: float) -> int:
     return min(n // 2, max(1, int(round(ENDS_S * fps))))
 
 
-def _held_change(x: np.ndarray, line: np.ndarray, fps: float, peak: int) -> bool:
+def _held_change(
+    x: np.ndarray, line: np.ndarray, fps: float, peak: int, ends: tuple[bool, bool] = (True, True)
+) -> bool:
     """Whether the clip ``x`` ``(n, C)`` goes from one end of its movement ``line`` ``(n,)``
     to the other and holds still there: its first :data:`ENDS_S` seconds' posture lies nearer
     one end's posture (the mean posture where the line lies at that end, :func:`_end_levels`)
@@ -843,7 +845,15 @@ def _held_change(x: np.ndarray, line: np.ndarray, fps: float, peak: int) -> bool
     (which is still under way there). Unless the line had come back from the far point
     ``peak`` by :data:`MIN_EXCURSION_RAD` before it stopped (:func:`_returned_before_hold`):
     that is a repetition paused on its way back (sitting a moment after sitting down), no
-    posture held; a side plank's sag comes during the hold."""
+    posture held; a side plank's sag comes during the hold.
+
+    ``ends``: whether the clip's start, and its end, may be read as a posture's (the
+    recording's, or a cut beyond which nothing turns): a posture got into and held needs
+    its end, one held from the start and left needs its start. The other end may be a cut
+    into the recording (a segment): the posture at a cut is judged by where it lies, as at
+    the recording's start (a side plank got into after the exercise before it and held to
+    the recording's end; before, its segment counted 1 while ``reps`` on the plank alone
+    counted 0)."""
     lo, hi = _end_levels(line)
     low, high = x[line <= lo].mean(axis=0), x[line >= hi].mean(axis=0)
     k = _ends_samples(len(line), fps)
@@ -856,7 +866,9 @@ def _held_change(x: np.ndarray, line: np.ndarray, fps: float, peak: int) -> bool
     still_end = float(np.abs(np.diff(line[-m - 1 :])).sum()) < MIN_EXCURSION_RAD
     held_end = still_end and not _returned_before_hold(line, peak, m)
     held_start = still_start and not _returned_before_hold(line[::-1], len(line) - 1 - peak, m)
-    return (sides[0] < 0 < sides[1] and held_end) or (sides[0] > 0 > sides[1] and held_start)
+    into = ends[1] and sides[0] < 0 < sides[1] and held_end
+    left = ends[0] and sides[0] > 0 > sides[1] and held_start
+    return into or left
 
 
 def _returned_before_hold(line: np.ndarray, peak: int, m: int) -> bool:
@@ -1132,8 +1144,10 @@ def count_in_signals(
         whole = _whole_only(back, edges)
         partial = bool(len(far)) and not whole.any()  # part of one repetition, none whole
         far = np.unique(_in_view(far[whole], sig.blind))
-        held = all(e or s for e, s in zip(edges, settled, strict=True))
-        if held and len(far) == 1 and _held_change(x, recorded, sig.fps, int(far[0])):
+        # each end judged on its own: a posture got into after a cut and held to the
+        # recording's end is no repetition, as one got into after the recording's start
+        ends = (edges[0] or settled[0], edges[1] or settled[1])
+        if len(far) == 1 and _held_change(x, recorded, sig.fps, int(far[0]), ends):
             far = far[:0]  # got into a posture once and held it: no repetition
         # a lone repetition of a whole recording runs from where the movement leaves rest to
         # where it returns, however far from its far point: one far point repeats nothing, and
