@@ -874,9 +874,16 @@ def _held_change(
 def _returned_before_hold(line: np.ndarray, peak: int, m: int) -> bool:
     """Whether ``line`` ``(n,)`` falls back from its far point ``peak`` by
     :data:`MIN_EXCURSION_RAD` before the still stretch it ends in begins: after the last
-    ``m`` samples (:data:`MIN_PERIOD_S`) in which it moves that far in all. A far point within
-    the still stretch (reached while holding, or as the line stopped) has not."""
-    moved = np.convolve(np.abs(np.diff(line)), np.ones(m), mode="valid") >= MIN_EXCURSION_RAD
+    ``m`` samples (:data:`MIN_PERIOD_S`) over which it spans that far (its highest less its
+    lowest). A far point within the still stretch (reached while holding, or as the line
+    stopped) has not. Spans, not movement in all: a wobble out and back within the hold
+    moves twice its size (a side plank's, re-encoded in a joined video: 11 degrees down and
+    up again in 0.4 s, 17 in all, read as the hold's start 0.4 s before the end, and the
+    sag before it as a return: 1 repetition, the clip alone 0)."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    windows = sliding_window_view(line, min(len(line), m + 1))
+    moved = windows.max(axis=1) - windows.min(axis=1) >= MIN_EXCURSION_RAD
     hold = int(np.flatnonzero(moved)[-1]) + m if moved.any() else 0
     if peak >= hold:
         return False

@@ -18,7 +18,18 @@ SQUATS_END_S = 2 * (MOVE_S + MOVE_S + REST_S) + REST_S  # 0.6 s standing, two sq
 SAG_S, STILL_S = 3.0, 1.0
 
 
-def _squats_then_arms_held(sag: float) -> PoseSequence:
+def _arms_held(sag: float, wobble: float = 0.0) -> np.ndarray:
+    """Both arms' angle (degrees) per frame: raised sideways to 90 degrees over 0.8 s, held
+    4 s sinking ``sag`` degrees over its first 3 s, still over the last 1 s; with ``wobble``,
+    0.3 s into that last second they dip that much over 0.2 s and come back over 0.2 s."""
+    move, wob = int(MOVE_S * FPS), int(0.2 * FPS)
+    still = np.full(int(STILL_S * FPS), 90.0 - sag)
+    at = int(0.3 * FPS)
+    still[at : at + 2 * wob] -= wobble * np.concatenate([_eased(wob), _eased(wob)[::-1]])
+    return np.concatenate([90.0 * _eased(move), 90.0 - sag * _eased(int(SAG_S * FPS)), still])
+
+
+def _squats_then_arms_held(sag: float, wobble: float = 0.0) -> PoseSequence:
     """Standing 0.6 s, two squats (down over 0.8 s to knees at 50 degrees, up over 0.8 s,
     0.6 s standing: 5.0 s in all); then, standing, both arms raised sideways to 90 degrees
     over 0.8 s and held for 4 s, sinking ``sag`` degrees over its first 3 s (a side plank's
@@ -26,10 +37,7 @@ def _squats_then_arms_held(sag: float) -> PoseSequence:
     rest, move = int(REST_S * FPS), int(MOVE_S * FPS)
     depth = np.concatenate([np.zeros(rest), *[[*_eased(move), *_eased(move)[::-1],
                                                *np.zeros(rest)] for _ in range(2)]])  # fmt: skip
-    arms = np.concatenate([
-        90.0 * _eased(move), 90.0 - sag * _eased(int(SAG_S * FPS)),
-        np.full(int(STILL_S * FPS), 90.0 - sag),
-    ])  # fmt: skip
+    arms = _arms_held(sag, wobble)
     frames = [squat_pose(d) for d in depth]
     frames += [_raise_arms(squat_pose(0.0), a, a) for a in arms]
     return to_sequence(*frames, fps=FPS)
@@ -73,3 +81,20 @@ def test_a_repetition_after_a_cut_still_counts() -> None:
     tail = to_sequence(*(_raise_arms(squat_pose(0.0), a, a) for a in arms), fps=FPS)
     both = PoseSequence(np.concatenate([seq.positions[:cut], tail.positions]), seq.joint_names, FPS)
     assert _counts(both, [SQUATS_END_S]) == [2, 1]
+
+
+def test_a_wobble_in_the_hold_is_no_return_from_the_far_point() -> None:
+    """Arms raised to 90 degrees and held sagging 25 degrees, as above, with a wobble near
+    the end: both arms dip 12 degrees and come back within 0.4 s (the movement line, about
+    one arm's angle, moves some 20 degrees in all over 0.4 s there, smoothed: more than
+    MIN_EXCURSION_RAD's 15, but spans 12, less), then 0.3 s still. By hand no repetition:
+    the arms went out once and stayed. Before, 1: the hold was read as starting after the
+    wobble, and the 25 degrees of sag before it as the far point's return (a re-encoded
+    side plank in a joined video: `segment` and `reps` on it counted 1, the original clip
+    0). Alone and after the squats' cut: 0; the squats 2."""
+    arms = _arms_held(25.0, wobble=12.0)
+    body = squat_pose(0.0)
+    rest = [body] * int(REST_S * FPS)
+    alone = to_sequence(*rest, *(_raise_arms(body, a, a) for a in arms), fps=FPS)
+    assert count_repetitions(alone).count == 0
+    assert _counts(_squats_then_arms_held(25.0, wobble=12.0), [SQUATS_END_S]) == [2, 0]
