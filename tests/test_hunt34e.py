@@ -163,13 +163,9 @@ def _raises(top_deg: float, times: int) -> PoseSequence:
     return PoseSequence(np.concatenate(parts), one.joint_names, one.fps)
 
 
-def test_classify_notes_clips_of_several_repetitions_against_a_case_base_of_one_each(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """A case base trained with --split repetitions holds one repetition per case; a video
-    of three squats classified against it got one answer for the three with nothing said
-    (the README's note covered case bases of windows only). Now a note names the clip and
-    its count, and says how to classify each repetition."""
+def raises_case_base(tmp_path: Path) -> Path:
+    """A case base of repetitions, ``train --split repetitions`` of four clips of two arm
+    raises each: "high" (90 degrees) and "low" (40), by two subjects (s2 5 degrees higher)."""
     rows = ["path,label,subject"]
     for subject in ("s1", "s2"):
         for label, top in (("high", 90.0), ("low", 40.0)):
@@ -180,6 +176,17 @@ def test_classify_notes_clips_of_several_repetitions_against_a_case_base_of_one_
     db = tmp_path / "cb.sqlite"
     argv = ["train", str(tmp_path / "labels.csv"), "--db", str(db), "--split", "repetitions"]
     assert main(argv) == 0
+    return db
+
+
+def test_classify_notes_clips_of_several_repetitions_against_a_case_base_of_one_each(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A case base trained with --split repetitions holds one repetition per case; a video
+    of three squats classified against it got one answer for the three with nothing said
+    (the README's note covered case bases of windows only). Now a note names the clip and
+    its count, and says how to classify each repetition."""
+    db = raises_case_base(tmp_path)
     assert "cut 4 clips into 8 repetitions" in capsys.readouterr().err
     three = save_pose(_raises(85.0, 3), tmp_path / "three.npz")
     one = save_pose(_raises(85.0, 1), tmp_path / "one.npz")

@@ -15,7 +15,7 @@ from features.poses import PoseSequence, load_pose, save_pose
 from features.repetitions import count_repetitions
 from posecbr.cli import main
 from tests.badinput import refused, standing_clip
-from tests.test_hunt34e import _raises
+from tests.test_hunt34e import _raises, raises_case_base
 from tests.test_repetitions import _movement
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
@@ -65,6 +65,19 @@ def test_one_similar_case_of_the_answer_is_said_in_the_singular() -> None:
     )
 
 
+def _six_clip_case_base(tmp_path: Path) -> Path:
+    """A case base of six bundled demo clips: three deep squats and three hurdle steps."""
+    with open(DEMO / "labels.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    train_rows = [r for r in rows if r["label"] == "deep_squat"][6:12:2]
+    train_rows += [r for r in rows if r["label"] == "hurdle_step"][:6:2]
+    lines = ["path,label"] + [f"{DEMO / r['path']},{r['label']}" for r in train_rows]
+    (tmp_path / "train.csv").write_text("\n".join(lines) + "\n")
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(tmp_path / "train.csv"), "--db", str(db)]) == 0
+    return db
+
+
 def test_classify_takes_a_labels_csv_row_left_unlabelled(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -74,14 +87,7 @@ def test_classify_takes_a_labels_csv_row_left_unlabelled(
     then counted wrong. Now a row may leave it empty: the clip is classified and checked
     against its pose file's own label when it holds one (m01_s01_e02, a deep squat), else
     not at all. ``train`` still refuses the row, in one line, writing nothing."""
-    with open(DEMO / "labels.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
-    train_rows = [r for r in rows if r["label"] == "deep_squat"][6:12:2]
-    train_rows += [r for r in rows if r["label"] == "hurdle_step"][:6:2]
-    lines = ["path,label"] + [f"{DEMO / r['path']},{r['label']}" for r in train_rows]
-    (tmp_path / "train.csv").write_text("\n".join(lines) + "\n")
-    db = tmp_path / "cb.sqlite"
-    assert main(["train", str(tmp_path / "train.csv"), "--db", str(db)]) == 0
+    db = _six_clip_case_base(tmp_path)
     capsys.readouterr()
     squat = load_pose(DEMO / "m01_s02_e01.npz")
     new = save_pose(
@@ -115,16 +121,7 @@ def test_the_repetition_note_names_pieces_of_a_file_with_their_frames(
     labels CSV against a case base of repetitions: the note said "2 clips hold several
     (six.npz: 3, six.npz: 3)", one name for two clips; it names each piece with its frames
     now, as the clip's own lines and the summary do (end inclusive)."""
-    rows = ["path,label,subject"]
-    for subject in ("s1", "s2"):
-        for label, top in (("high", 90.0), ("low", 40.0)):
-            name = f"{subject}_{label}.npz"
-            save_pose(_raises(top + (5.0 if subject == "s2" else 0.0), 2), tmp_path / name)
-            rows.append(f"{name},{label},{subject}")
-    (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
-    db = tmp_path / "cb.sqlite"
-    argv = ["train", str(tmp_path / "labels.csv"), "--db", str(db), "--split", "repetitions"]
-    assert main(argv) == 0
+    db = raises_case_base(tmp_path)
     rest = 15  # 0.5 s of standing before, between and after the raises (_raises)
     each = _raises(85.0, 1).n_frames - rest  # one raise and the rest after it
     save_pose(_raises(85.0, 6), tmp_path / "six.npz")
@@ -164,14 +161,7 @@ def test_classify_json_names_true_label_and_correct_for_every_clip(
     file, no label in it), so the script failed on the first such clip with a KeyError.
     Both are in every record now: null when the clip has no label; the labelled clip's as
     before (m01_s01_e02 is a deep squat by its file's label)."""
-    with open(DEMO / "labels.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
-    train_rows = [r for r in rows if r["label"] == "deep_squat"][6:12:2]
-    train_rows += [r for r in rows if r["label"] == "hurdle_step"][:6:2]
-    lines = ["path,label"] + [f"{DEMO / r['path']},{r['label']}" for r in train_rows]
-    (tmp_path / "train.csv").write_text("\n".join(lines) + "\n")
-    db = tmp_path / "cb.sqlite"
-    assert main(["train", str(tmp_path / "train.csv"), "--db", str(db)]) == 0
+    db = _six_clip_case_base(tmp_path)
     squat = load_pose(DEMO / "m01_s02_e01.npz")
     new = save_pose(
         PoseSequence(squat.positions, squat.joint_names, squat.fps), tmp_path / "new.npz"
@@ -193,14 +183,7 @@ def test_casebase_info_says_the_summary_features_flag_nothing_with_few_clips(
     below 49 held-out clips). ``casebase info`` said the clip is also flagged when "its
     summary features ... less usual than 100.0 % of held-out clips' (one statistic of all the
     scores: 2 % of held-out clips flagged)", a rule that flags nothing. It says so now."""
-    with open(DEMO / "labels.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
-    train_rows = [r for r in rows if r["label"] == "deep_squat"][6:12:2]
-    train_rows += [r for r in rows if r["label"] == "hurdle_step"][:6:2]
-    lines = ["path,label"] + [f"{DEMO / r['path']},{r['label']}" for r in train_rows]
-    (tmp_path / "train.csv").write_text("\n".join(lines) + "\n")
-    db = tmp_path / "cb.sqlite"
-    assert main(["train", str(tmp_path / "train.csv"), "--db", str(db)]) == 0
+    db = _six_clip_case_base(tmp_path)
     capsys.readouterr()
     assert main(["casebase", "info", "--db", str(db)]) == 0
     line = next(x for x in capsys.readouterr().out.splitlines() if "unlike the stored" in x)

@@ -230,21 +230,13 @@ def test_reps_plot_marks_each_far_point_where_reps_json_puts_it(
     assert any("\u25b2 far point" in t for t in titles), titles
 
 
-def test_a_long_recordings_timeline_names_the_colours_its_bands_cannot(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """``segment --plot`` of a long recording: each segment's band too narrow for its name
-    (2 s of 120), so the strip was bands of colour with nothing saying which activity a
-    colour is. Now a legend beside the strip names each activity drawn, in the case base's
-    order, its swatch the colour of that activity's bands; unknown (grey) is not in it."""
+def _strip_drawn(monkeypatch: pytest.MonkeyPatch) -> dict[str, object]:
+    """What the next picture saved draws in its top axes, filled in as it is saved: its
+    legend's (text, swatch colour) pairs (None without one), its bands' colours and how many
+    of its texts are hidden."""
     import matplotlib.colors as mcolors
     from matplotlib.figure import Figure
 
-    from posecbr.commands import segment
-
-    rec = clip("squat", seconds=120.0, fps=10.0)
-    activities = ["glute_bridge", "incline_pushup", "jumping_jack", "squat"]
-    drawn = ["squat", "jumping_jack", None, "incline_pushup"] * 15
     seen: dict[str, object] = {}
     real = Figure.savefig
 
@@ -264,6 +256,22 @@ def test_a_long_recordings_timeline_names_the_colours_its_bands_cannot(
         return real(fig, *args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(Figure, "savefig", saving)
+    return seen
+
+
+def test_a_long_recordings_timeline_names_the_colours_its_bands_cannot(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``segment --plot`` of a long recording: each segment's band too narrow for its name
+    (2 s of 120), so the strip was bands of colour with nothing saying which activity a
+    colour is. Now a legend beside the strip names each activity drawn, in the case base's
+    order, its swatch the colour of that activity's bands; unknown (grey) is not in it."""
+    from posecbr.commands import segment
+
+    rec = clip("squat", seconds=120.0, fps=10.0)
+    activities = ["glute_bridge", "incline_pushup", "jumping_jack", "squat"]
+    drawn = ["squat", "jumping_jack", None, "incline_pushup"] * 15
+    seen = _strip_drawn(monkeypatch)
     segment._plot(rec, _segmented(drawn), tmp_path / "t.png", "long.npz", activities)
     assert seen["hidden"] == 60  # 2 s of 120 in about 900 pixels: no name fits
     colour_of = dict(zip(drawn, seen["bands"], strict=True))  # type: ignore[call-overload]
@@ -279,33 +287,13 @@ def test_reps_plot_of_alternating_sides_names_the_side_of_each_colour(
     band by its side, blue and orange, without saying which is which. Now a legend names
     them: "left" and "right", each swatch the colour of the bands of the repetitions
     ``reps --json`` gives that side."""
-    import matplotlib.colors as mcolors
-    from matplotlib.figure import Figure
-
     from posecbr.commands import reps
 
     rec = clip("jog", seconds=8.0, fps=30.0)
     result = reps._count(rec)
     sides = [r["side"] for r in result.to_dict()["repetitions"]]
     assert set(sides) == {"left", "right"}
-    seen: dict[str, object] = {}
-    real = Figure.savefig
-
-    def saving(fig: Figure, *args: object, **kwargs: object) -> object:
-        top = fig.axes[0]
-        legend = top.get_legend()
-        seen["legend"] = (
-            None
-            if legend is None
-            else [
-                (t.get_text(), mcolors.to_hex(h.get_facecolor(), keep_alpha=False))
-                for t, h in zip(legend.get_texts(), legend.legend_handles, strict=True)
-            ]
-        )
-        seen["bands"] = [mcolors.to_hex(p.get_facecolor(), keep_alpha=False) for p in top.patches]
-        return real(fig, *args, **kwargs)  # type: ignore[arg-type]
-
-    monkeypatch.setattr(Figure, "savefig", saving)
+    seen = _strip_drawn(monkeypatch)
     reps._plot(rec, result, tmp_path / "r.png", "jog.npz")
     colour_of = dict(zip(sides, seen["bands"], strict=True))  # type: ignore[call-overload]
     assert colour_of["left"] != colour_of["right"]
