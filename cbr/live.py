@@ -416,12 +416,16 @@ class LiveSegmenter:
         copy is kept; a frame that is not one (another skeleton's joints, an infinite
         coordinate) is refused with :class:`features.errors.InputError`, nothing kept; so is
         any frame after :meth:`finish` (the stream has ended: a new one needs a new
-        segmenter)."""
+        segmenter), and an ``absent`` that is not True or False."""
         if self.ended:
             raise InputError(
                 f"frame {self.n}: the stream has ended (finish() was called): a new stream "
                 "needs a new LiveSegmenter",
                 self.source,
+            )
+        if not isinstance(absent, bool | np.bool_):  # "no" was taken as True
+            raise InputError(
+                f"frame {self.n}: absent must be True or False, got {absent!r}", self.source
             )
         frame, seen = self._checked(world, confidence)
         if absent:  # runs [first, end) of frames in a gap
