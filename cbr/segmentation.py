@@ -73,6 +73,7 @@ from features.repetitions import (
     RepetitionCount,
     count_in_signals,
 )
+from features.text import shown
 from features.values import is_number
 
 from . import long_clip
@@ -1104,7 +1105,10 @@ def check_judge(judge: Any, classes: Sequence[Any] | None = None) -> None:
     name): it would be found not to be one only when the first window is judged; and a judge
     with a threshold per activity calibrated on a case base of another number of activities
     than ``classes`` (the classifier's: another classifier's judge), which would fail deep
-    in the first window judged (or read another activity's threshold)."""
+    in the first window judged (or read another activity's threshold), or, when the judge
+    names its activities (:attr:`cbr.unknown.ActivityMargin.activities`), on others than
+    ``classes`` or in another order (as many: each window judged against another
+    activity's threshold)."""
     if isinstance(judge, str):
         raise InputError(
             f"judge must be None or a judge of cbr.unknown (judge_of(clf, {judge!r})), not its"
@@ -1119,6 +1123,27 @@ def check_judge(judge: Any, classes: Sequence[Any] | None = None) -> None:
             " classifier's)",
             "judge",
         )
+    names = getattr(judge, "activities", None)
+    mine = [str(c) for c in classes] if classes is not None else []
+    if classes is not None and isinstance(names, tuple) and names and list(names) != mine:
+        raise InputError(
+            f"the judge was calibrated on the activities {_activity_list(names)}, the"
+            f" classifier's are {_activity_list(mine)}: another classifier's judge"
+            " (judge_of(clf, name) makes this classifier's)",
+            "judge",
+        )
+
+
+ACTIVITIES_SHOWN = 6
+"""Activities named in :func:`check_judge`'s refusal, then "and N more"."""
+
+
+def _activity_list(names: Sequence[str]) -> str:
+    """``a, b, c`` of the activities ``names`` in their order, at most
+    :data:`ACTIVITIES_SHOWN` of them, then "and N more"."""
+    listed = ", ".join(shown(n) for n in names[:ACTIVITIES_SHOWN])
+    more = len(names) - ACTIVITIES_SHOWN
+    return listed + (f" and {more} more" if more > 0 else "")
 
 
 def check_segmentable(recording: PoseSequence) -> None:
@@ -1257,7 +1282,8 @@ def segment(
     Raises DataError for a recording shorter than one window or without a person, and for a
     case base the judge cannot be calibrated on; InputError for a ``recording`` that is not a
     PoseSequence, a ``judge`` given by its name (:func:`cbr.unknown.judge_of` makes the
-    judge) or one of another classifier (its activities more or fewer), ConfigError for a
+    judge) or one of another classifier (other activities, or theirs in another order),
+    ConfigError for a
     negative ``chunk_frames`` or a ``k`` that is not a whole number, NotFittedError for an
     unfitted ``clf``."""
     _check_call(clf, recording, chunk_frames)

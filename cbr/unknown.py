@@ -215,13 +215,19 @@ Held = tuple[np.ndarray, np.ndarray, str, np.ndarray]
 """What :func:`held_out_activities` measures: distances, activities, basis and groups."""
 
 
+def calibration_order(cb: Any) -> tuple[str, ...]:
+    """The activities of the case base ``cb`` (anything with ``labels``) in the order the
+    judges are calibrated in: its labels as text, sorted (:func:`held_out_activities`)."""
+    return tuple(sorted(set(np.asarray(cb.labels).astype(str).tolist())))
+
+
 def held_out_activities(cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0) -> Held:
     """Training cases held out (:func:`held_out_basis`) as a new recording is: each one's
     distance to the nearest case of every activity that is left ``(n, n_classes)`` (inf
     where none is), each one's activity ``(n,)`` (its index among the sorted labels), the
     basis and each one's group ``(n,)`` (its subject or recording). A seeded sample of at
     most ``sample`` real cases (not mirror images) is held out, each against all cases."""
-    classes = sorted(set(np.asarray(cb.labels).astype(str).tolist()))
+    classes = list(calibration_order(cb))
     codes = activity_codes(cb.labels, classes)
     basis, groups = held_out_basis(cb)
     index = cb.index  # builds the representations
@@ -316,8 +322,8 @@ class Calibrated:
     ``watch`` read it instead of scanning the case base each run. Generic over the fields: a
     new field (with a default, which a record stored before it takes) or a new judge (one
     line in :data:`STORED`) needs no code here. Fields are ``float`` (>= 0, not NaN; +inf is
-    written ``"inf"``: JSON has none), ``int`` (>= 0), ``str`` or ``tuple[float, ...]`` (a
-    list of such numbers)."""
+    written ``"inf"``: JSON has none), ``int`` (>= 0), ``str``, ``tuple[float, ...]`` (a
+    list of such numbers) or ``tuple[str, ...]`` (a list of texts)."""
 
     @classmethod
     def of(cls: type[_C], cb: CaseBase, *, held: Held | None = None) -> _C:
@@ -377,10 +383,12 @@ def _field(name: str, kind: Any, value: Any) -> Any:
         if isinstance(value, str) and value:
             return value
         raise ValueError(f"field {name!r} must be a non-empty text, got {value!r}")
-    if kind == tuple[float, ...]:
+    if typing.get_origin(kind) is tuple:  # tuple[float, ...], tuple[str, ...]
+        (item, _) = typing.get_args(kind)
         if isinstance(value, list):
-            return tuple(_field(name, float, v) for v in value)
-        raise ValueError(f"field {name!r} must be a list of numbers >= 0, got {value!r}")
+            return tuple(_field(name, item, v) for v in value)
+        words = "numbers >= 0" if item is float else "texts"
+        raise ValueError(f"field {name!r} must be a list of {words}, got {value!r}")
     raise ValueError(f"field {name!r} is of a type that is not stored ({kind!r})")
 
 
@@ -820,7 +828,12 @@ class ActivityMargin(Calibrated):
     (:meth:`evidence`); empty in a record stored before (its evidence all or nothing).
     ``floor``: when the case base cannot hold out a person, no threshold (nor budget
     threshold) lies below it (:func:`one_person_floor`); 0 otherwise, and in a record stored
-    before it. ``reach``: as :class:`Margin`'s."""
+    before it. ``reach``: as :class:`Margin`'s. ``activities``: the names (as text) of the
+    activities the values per activity are of, in their order (the case base's labels sorted
+    as text when calibrated; the classifier's class order once :func:`judge_of` gives it), so
+    that another classifier's judge is refused (:func:`cbr.segmentation.check_judge`); empty
+    in a record stored before it (:func:`judge_of` names them: a stored judge was calibrated
+    on the classifier's own cases)."""
 
     thresholds: tuple[float, ...]
     pooled: float
@@ -832,13 +845,15 @@ class ActivityMargin(Calibrated):
     budget_thresholds: tuple[float, ...] = ()
     floor: float = 0.0
     reach: float = math.inf
+    activities: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        if self.budget_thresholds and len(self.budget_thresholds) != len(self.thresholds):
-            raise ValueError(
-                f"field 'budget_thresholds' has {len(self.budget_thresholds)} values for"
-                f" {len(self.thresholds)} activities"
-            )
+        for name in ("budget_thresholds", "activities"):
+            values = getattr(self, name)
+            if values and len(values) != len(self.thresholds):
+                raise ValueError(
+                    f"field {name!r} has {len(values)} values for {len(self.thresholds)} activities"
+                )
 
     @classmethod
     def of(
@@ -872,7 +887,7 @@ class ActivityMargin(Calibrated):
         per, budget = np.maximum(per, floor), np.maximum(budget, floor)
         known_n, reach = int(right.sum()), person_reach(known, basis)
         return cls(tuple(per.tolist()), pooled, basis, known_n, false_unknown, prior, rate,
-                   tuple(budget.tolist()), floor, reach)  # fmt: skip
+                   tuple(budget.tolist()), floor, reach, calibration_order(cb))  # fmt: skip
 
     def threshold(self, nearest: np.ndarray) -> float:
         """The threshold of the window's nearest activity."""
@@ -1034,8 +1049,8 @@ class SpreadMargin(ActivityMargin):
         per, pooled = activity_thresholds(scores, codes[right], n_classes, rate, prior)
         budget, _ = activity_thresholds(scores, codes[right], n_classes, false_unknown, prior)
         return cls(tuple(per.tolist()), pooled, basis, int(right.sum()), false_unknown, prior,
-                   rate, tuple(budget.tolist()), 0.0, math.inf, tuple(spreads.tolist()),
-                   power)  # fmt: skip
+                   rate, tuple(budget.tolist()), 0.0, math.inf, calibration_order(cb),
+                   tuple(spreads.tolist()), power)  # fmt: skip
 
     def ratio(self, nearest: np.ndarray) -> float:
         """The score: the margin times the nearest distance in spreads of the nearest
@@ -1325,17 +1340,20 @@ def in_class_order(judge: Judge, clf: Any) -> Judge:
     """``judge`` with its values per activity (:class:`ActivityMargin`'s thresholds, budget
     thresholds and spreads: calibrated in the order of the case base's labels sorted as text,
     :func:`held_out_activities`) in the order of ``clf.classes_``, the order of the columns
-    of the distances it is given (:func:`cbr.segmentation.segment`). They differ for labels
-    fitted as numbers (``classes_`` 2, 10; as text "10" < "2")."""
+    of the distances it is given (:func:`cbr.segmentation.segment`), its ``activities`` with
+    them. They differ for labels fitted as numbers (``classes_`` 2, 10; as text "10" < "2").
+    A judge stored without its activities' names (before they were stored) is named from
+    ``clf``'s case base, which it was calibrated on."""
     if not isinstance(judge, ActivityMargin):
         return judge
-    mine = [str(c) for c in clf.classes_]
-    theirs = sorted(set(np.asarray(clf.case_base_.labels).astype(str).tolist()))
-    if mine == theirs or sorted(mine) != theirs:
+    if not judge.activities:
+        judge = dataclasses.replace(judge, activities=calibration_order(clf.case_base_))
+    mine, theirs = [str(c) for c in clf.classes_], list(judge.activities)
+    if mine == theirs or sorted(mine) != sorted(theirs):
         return judge  # in order already, or not of these activities (check_judge says so)
     order = [theirs.index(c) for c in mine]
     fields: dict[str, Any] = {}
-    for f in ("thresholds", "budget_thresholds", "spreads"):
+    for f in ("thresholds", "budget_thresholds", "spreads", "activities"):
         values = getattr(judge, f, ())
         if values:
             fields[f] = tuple(values[i] for i in order)
@@ -1399,6 +1417,7 @@ __all__ = [
     "joint_thresholds",
     "known_and_novel",
     "calibration_margins",
+    "calibration_order",
     "equal_error_threshold",
     "false_unknown_threshold",
     "FALSE_UNKNOWN",

@@ -264,4 +264,7 @@ def test_a_judge_of_labels_fitted_as_numbers_reads_each_activitys_own_threshold(
         case_base_=SimpleNamespace(labels=labels),
         judges_={"spread-margin": stored},
     )
-    assert judge_of(text, "spread-margin") is stored
+    # stored before judges named their activities: named from the case base, order kept
+    kept = judge_of(text, "spread-margin")
+    assert kept.thresholds == stored.thresholds  # type: ignore[attr-defined]
+    assert kept.activities == ("10", "2")  # type: ignore[attr-defined]

@@ -3,14 +3,21 @@ non-bool ``absent`` pushed to the live segmenter, and ``--subjects`` no clip has
 
 from __future__ import annotations
 
+import csv
+from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 import pytest
 
+from cbr.estimator import CaseBaseClassifier
 from cbr.live import LiveSegmenter
+from cbr.segmentation import segment
+from cbr.unknown import judge_of
 from features.errors import InputError
+from features.poses import PoseSequence, load_pose
+from features.skeleton import BLAZEPOSE_33
 
 
 class _Scripted(LiveSegmenter):
@@ -41,3 +48,102 @@ def test_an_absent_that_is_not_true_or_false_is_refused_naming_it(absent: Any) -
     for ok in (False, True, np.bool_(True), np.bool_(False)):
         live.push(np.zeros((33, 3)), absent=ok)  # type: ignore[arg-type]
     assert live.n == 4 and live.absent == [[1, 3]]
+
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+MINE = ("deep_squat", "hurdle_step", "standing_shoulder_abduction")
+THEIRS = ("deep_squat", "inline_lunge", "side_lunge")
+
+
+def _fitted(activities: tuple[str, ...]) -> CaseBaseClassifier:
+    """A classifier of three demo activities, every third clip, as a tracker's arrays."""
+    with open(DEMO / "labels.csv", newline="") as f:
+        rows = [r for r in csv.DictReader(f) if r["label"] in activities][::3]
+    X = [PoseSequence(load_pose(DEMO / r["path"]).to_canonical().positions, BLAZEPOSE_33, 30.0)
+         for r in rows]  # fmt: skip
+    return CaseBaseClassifier(k=3, mirror=False).fit(X, [r["label"] for r in rows])
+
+
+@pytest.fixture(scope="module")
+def two() -> tuple[CaseBaseClassifier, CaseBaseClassifier, PoseSequence]:
+    """Two classifiers of three activities each, not the same ones, and 3 s of a squat."""
+    squat = load_pose(DEMO / "m01_s01_e01.npz").to_canonical().positions[:90]
+    return _fitted(MINE), _fitted(THEIRS), PoseSequence(squat, BLAZEPOSE_33, 30.0)
+
+
+@pytest.mark.parametrize("name", ["spread-margin", "activity-margin", "spread-far"])
+def test_another_classifiers_judge_of_as_many_activities_is_refused_naming_both(
+    two: tuple[CaseBaseClassifier, CaseBaseClassifier, PoseSequence], name: str
+) -> None:
+    """The judge of a classifier of deep_squat, hurdle_step and standing_shoulder_abduction
+    given to one of deep_squat, inline_lunge and side_lunge: as many activities, so it was
+    taken, hurdle_step's threshold read for inline_lunge's windows; now segment and
+    LiveSegmenter refuse it naming both lists, and take the classifier's own judge."""
+    mine, theirs, squat = two
+    judge = judge_of(mine, name)
+    words = (
+        r"^judge: the judge was calibrated on the activities deep_squat, hurdle_step,"
+        r" standing_shoulder_abduction, the classifier's are deep_squat, inline_lunge,"
+        r" side_lunge: another classifier's judge \(judge_of\(clf, name\) makes"
+    )
+    with pytest.raises(InputError, match=words):
+        segment(theirs, squat, judge)
+    with pytest.raises(InputError, match=words):
+        LiveSegmenter(theirs, 30.0, judge)
+    assert judge.activities == MINE  # type: ignore[attr-defined]
+    own = judge_of(theirs, name)
+    assert own.activities == THEIRS  # type: ignore[attr-defined]
+    assert segment(theirs, squat, own).segments
+    LiveSegmenter(theirs, 30.0, own)
+
+
+def test_a_judge_of_the_same_activities_in_another_order_is_refused() -> None:
+    """A judge whose thresholds are of "10" then "2" (text labels) given to a classifier of
+    labels fitted as numbers, 2 then 10: the same count, each window nearest 2 was judged
+    against 10's threshold; now refused naming both orders."""
+    from cbr.unknown import ActivityMargin
+
+    labels = np.array([2, 10])
+    clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
+    judge = ActivityMargin((0.5, 0.9), 0.7, "subject", 10, activities=("10", "2"))
+    with pytest.raises(InputError, match=r"activities 10, 2, the classifier's are 2, 10: "):
+        _Scripted(clf, 30.0, judge=judge)
+    _Scripted(clf, 30.0, judge=ActivityMargin((0.9, 0.5), 0.7, "subject", 10,
+                                              activities=("2", "10")))  # fmt: skip
+
+
+def test_a_long_activity_list_is_shortened() -> None:
+    """Eight activities each side: six named, then "and 2 more"."""
+    from cbr.segmentation import check_judge
+    from cbr.unknown import ActivityMargin
+
+    names = tuple(f"a{i}" for i in range(8))
+    judge = ActivityMargin((0.5,) * 8, 0.7, "subject", 10, activities=names)
+    with pytest.raises(InputError) as err:
+        check_judge(judge, [f"b{i}" for i in range(8)])
+    assert str(err.value.message) == (
+        "the judge was calibrated on the activities a0, a1, a2, a3, a4, a5 and 2 more, the"
+        " classifier's are b0, b1, b2, b3, b4, b5 and 2 more: another classifier's judge"
+        " (judge_of(clf, name) makes this classifier's)"
+    )
+
+
+def test_a_model_stored_with_named_judges_reads_them_back(tmp_path: Path) -> None:
+    """A stored model's judges keep their activities' names; a record stored before them
+    (no "activities") still loads, is named from the model's own case base by judge_of
+    (it was calibrated on it), and segments as the named one does."""
+    from cbr.unknown import SpreadMargin, judges_from_dict, judges_to_dict
+
+    clf = _fitted(MINE)
+    named = judge_of(clf, "spread-margin")
+    record = judges_to_dict({"spread-margin": named})  # type: ignore[dict-item]
+    assert record["spread-margin"]["activities"] == list(MINE)
+    assert judges_from_dict(record)["spread-margin"] == named
+    del record["spread-margin"]["activities"]  # as stored before the names were
+    old = judges_from_dict(record)["spread-margin"]
+    assert isinstance(old, SpreadMargin) and old.activities == ()
+    clf.judges_ = {"spread-margin": old}
+    again = judge_of(clf, "spread-margin")
+    assert again == named
+    squat = load_pose(DEMO / "m01_s01_e01.npz").to_canonical()
+    assert segment(clf, squat, old).segments == segment(clf, squat, again).segments
