@@ -1022,19 +1022,33 @@ def dataset_labels(path: str | Path, *, sensor: str = "kinect") -> list[str]:
     a pose file's metadata. A clip whose label only reading it tells (a video, a BVH file
     in a folder of pose files) adds none. For the refusal of a ``--labels`` entry no clip
     has: the labels the user can give."""
+    return _dataset_values(path, "label", sensor)
+
+
+def dataset_subjects(path: str | Path, *, sensor: str = "kinect") -> list[str]:
+    """The subjects the clips of the dataset at ``path`` have, each once, found as
+    :func:`dataset_labels` finds the labels (names, labels CSVs, a pose file's metadata;
+    none from a clip whose subject only reading it tells). For the refusal of a
+    ``--subjects`` entry no clip has."""
+    return _dataset_values(path, "subject", sensor)
+
+
+def _dataset_values(path: str | Path, field: str, sensor: str) -> list[str]:
+    """:func:`dataset_labels` (``field`` "label") or :func:`dataset_subjects` ("subject")."""
     from .poses import pose_file_metadata
 
     path = Path(path)
     kind = detect_kind(path)
     found: set[str] = set()
     for e in _entries(path, kind, sensor):
-        if e.track is not None:
+        value = getattr(e, field)
+        if field == "label" and e.track is not None:
             found.update(track_labels(e.track))
-        elif e.label is not None:
-            found.add(e.label)
+        elif value is not None:
+            found.add(str(value))
         elif _suffix(e.path) in POSE_SUFFIXES:
-            label = pose_file_metadata(e.path).get("label")
-            found.update([] if label is None else [str(label)])
+            stored = pose_file_metadata(e.path).get(field)
+            found.update([] if stored is None else [str(stored)])
     return sorted(found, key=code_order)
 
 

@@ -18,6 +18,7 @@ from cbr.unknown import judge_of
 from features.errors import InputError
 from features.poses import PoseSequence, load_pose
 from features.skeleton import BLAZEPOSE_33
+from tests.badinput import good_pose_file, refused
 
 
 class _Scripted(LiveSegmenter):
@@ -147,3 +148,80 @@ def test_a_model_stored_with_named_judges_reads_them_back(tmp_path: Path) -> Non
     assert again == named
     squat = load_pose(DEMO / "m01_s01_e01.npz").to_canonical()
     assert segment(clf, squat, old).segments == segment(clf, squat, again).segments
+
+
+# ``train``/``compare --subjects X`` where no clip is of subject X said "no clip of subject
+# 'X' in the data" and no more; now, as for --labels (hunt 37j), the refusal names the data
+# and the subjects its clips have, or says the other filters leave that subject out.
+
+
+def _csv(folder: Path, clips: list[tuple[str, str]]) -> Path:
+    rows = ["path,label,subject"]
+    for k, (label, subject) in enumerate(clips):
+        good_pose_file(folder / f"c{k}.npz", frames=30)
+        rows.append(f"c{k}.npz,{label},{subject}")
+    csv_path = folder / "labels.csv"
+    csv_path.write_text("\n".join(rows) + "\n")
+    return csv_path
+
+
+def test_train_of_a_subject_no_clip_has_names_the_subjects_of_the_data(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The demo's clips are of s01, s02 and s03; --subjects s09 (none read: refused before
+    any clip is described)."""
+    argv = ["train", str(DEMO), "--subjects", "s09", "--db", str(tmp_path / "cb.sqlite")]
+    line = refused(argv, tmp_path, capsys)
+    assert line == (
+        f"posecbr train: error: --subjects: no clip of subject 's09' in {DEMO}: its subjects"
+        " are s01, s02 and s03"
+    )
+
+
+def test_train_of_a_mistyped_subject_beside_a_right_one_names_the_subjects(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """s01 has clips, "s1" none: refused after the clips are read, naming s01 and s02."""
+    data = _csv(tmp_path, [("run", "s01"), ("walk", "s01"), ("run", "s02"), ("walk", "s02")])
+    argv = ["train", str(data), "--subjects", "s01,s1", "--db", str(tmp_path / "cb.sqlite")]
+    line = refused(argv, tmp_path, capsys)
+    assert line.endswith(f"--subjects: no clip of subject 's1' in {data}: its subjects are s01"
+                         " and s02")  # fmt: skip
+
+
+def test_a_subject_the_labels_leave_out_is_said_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """s02 is a subject of the CSV's clips, but not of a run clip: said as left out by the
+    other filters, not as missing from the data."""
+    data = _csv(tmp_path, [("run", "s01"), ("run", "s01"), ("walk", "s02"), ("walk", "s02")])
+    argv = ["train", str(data), "--labels", "run", "--subjects", "s01,s02", "--db",
+            str(tmp_path / "cb.sqlite")]  # fmt: skip
+    line = refused(argv, tmp_path, capsys)
+    assert line.endswith(f"--subjects: no clip of subject 's02' in {data} passes the other"
+                         " filters")  # fmt: skip
+
+
+def test_a_pose_folder_names_the_subjects_of_its_files_metadata(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Pose files whose metadata holds their subjects (ann, cy), read without decoding."""
+    data = tmp_path / "poses"
+    for k, subject in enumerate(["cy", "ann", "cy"]):
+        good_pose_file(data / f"c{k}.npz", frames=30, label="walk", subject=subject)
+    argv = ["train", str(data), "--subjects", "bob", "--db", str(tmp_path / "cb.sqlite")]
+    line = refused(argv, tmp_path, capsys)
+    assert line.endswith(f"no clip of subject 'bob' in {data}: its subjects are ann and cy")
+
+
+def test_compare_names_the_subjects_the_data_have(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """compare of the demo's squats, s01 and a mistyped "s9"."""
+    argv = ["compare", str(DEMO), "--labels", "deep_squat", "--subjects", "s01,s9", "--json",
+            str(tmp_path / "r.json")]  # fmt: skip
+    line = refused(argv, tmp_path, capsys)
+    assert line == (
+        f"posecbr compare: error: --subjects: no clip of subject 's9' in {DEMO}: its subjects"
+        " are s01, s02 and s03"
+    )

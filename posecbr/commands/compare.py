@@ -148,7 +148,7 @@ def parse_params(items: list[str]) -> dict[str, Any]:
 def _load(args: argparse.Namespace) -> list[Any]:
     from cbr.casebase import frames_of
     from cbr.training import check_listed_once
-    from features.datasets import dataset_labels, load_dataset
+    from features.datasets import dataset_labels, dataset_subjects, load_dataset
 
     if not args.data.exists():
         raise DataError("no such dataset (file or folder)", args.data)
@@ -167,7 +167,8 @@ def _load(args: argparse.Namespace) -> list[Any]:
                       "it would be tested twice, or be a training case of itself")  # fmt: skip
     check_found([c.label for c in clips], kw.get("labels"), "--labels", "labelled", args.data,
                 lambda: dataset_labels(args.data, sensor=kw["sensor"]))  # fmt: skip
-    check_found([c.subject for c in clips], kw.get("subjects"), "--subjects", "of subject")
+    check_found([c.subject for c in clips], kw.get("subjects"), "--subjects", "of subject",
+                args.data, lambda: dataset_subjects(args.data, sensor=kw["sensor"]))  # fmt: skip
     return clips
 
 

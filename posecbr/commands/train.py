@@ -419,7 +419,8 @@ def _clips(args: argparse.Namespace) -> list[Any]:
     )
     check_found([c.label for c in clips], activities, "--labels", "labelled", args.data,
                 lambda: _held_labels(args))  # fmt: skip
-    check_found([c.subject for c in clips], subjects, "--subjects", "of subject")
+    check_found([c.subject for c in clips], subjects, "--subjects", "of subject", args.data,
+                lambda: _held_subjects(args))  # fmt: skip
     stretches = bool(clips) and not args.frame_labels and args.over_time
     if stretches:  # a labels CSV's recordings: its flickers left out as --frame-labels' are
         clips = _long_enough(args, clips)
@@ -446,7 +447,8 @@ def _check_asked(args: argparse.Namespace, clips: list[Any], solutions: list[str
         check_found(solutions, asked, "--labels", "labelled", args.data, lambda: _held_labels(args))
     if args.subjects:
         asked = [s.strip() for s in args.subjects.split(",")]
-        check_found([c.subject for c in clips], asked, "--subjects", "of subject")
+        check_found([c.subject for c in clips], asked, "--subjects", "of subject", args.data,
+                    lambda: _held_subjects(args))  # fmt: skip
 
 
 def _held_labels(args: argparse.Namespace) -> list[str]:
@@ -458,6 +460,14 @@ def _held_labels(args: argparse.Namespace) -> list[str]:
     if args.frame_labels:
         return track_labels(LabelTrack(args.frame_labels, args.label_block, args.label_names))
     return dataset_labels(args.data, sensor=args.sensor)
+
+
+def _held_subjects(args: argparse.Namespace) -> list[str]:
+    """The subjects DATA's clips have, found without decoding one (a ``--subjects`` entry
+    none has is refused naming them; ``--frame-labels`` takes no ``--subjects``)."""
+    from features.datasets import dataset_subjects
+
+    return dataset_subjects(args.data, sensor=args.sensor)
 
 
 def _no_clips(args: argparse.Namespace, stretches: bool = False) -> DataError:
@@ -533,6 +543,9 @@ def _entries(args: argparse.Namespace) -> list[Any]:
         if activities:  # a label no clip has, named with those the clips have (else the
             held = _held_labels(args)  # other filters left them all out: said below)
             check_found(held, activities, "--labels", "labelled", args.data, lambda: held)
+        if subjects:  # as for a label
+            people = _held_subjects(args)
+            check_found(people, subjects, "--subjects", "of subject", args.data, lambda: people)
         raise _no_clips(args)
     return entries
 
