@@ -97,6 +97,17 @@ class StaleCaseError(StoreError):
     trimmed by another process): nothing was written; reload and decide again."""
 
 
+@dataclass(frozen=True)
+class Seen:
+    """What a command that replaces case base ``name`` saw of it before its long work (the
+    training): its identity and version, or (``uid`` None) that there was none. The replace
+    is refused when the case base is no longer so: cases another process added, trimmed or
+    revised meanwhile, or a case base it created or replaced meanwhile, would be lost."""
+
+    uid: str | None = None
+    version: int | None = None
+
+
 # ----------------------------------------------------------------------------- arrays
 
 
@@ -1222,14 +1233,18 @@ class StoreTransaction:
         *,
         model: Mapping[str, Any] | None = None,
         replace: bool = False,
+        seen: Seen | None = None,
     ) -> CaseBaseInfo:
         """A new, empty case base with a new identity; ``replace`` drops an existing one of
-        that name first (its cases and history go with it)."""
+        that name first (its cases and history go with it). ``seen``: what the caller read of
+        it before (:class:`Seen`); the one there now must be that very one, as it was."""
         s = self.session
         check_case_base_name(name, self.store.where)
         self._lock(name)  # another process creating or replacing it meanwhile: after it
         with self.store._dates(f"case base {name!r} is damaged: its created_at is not a date"):
             old = s.scalar(select(CaseBaseRow).where(CaseBaseRow.name == name))
+        if replace and seen is not None:
+            self._check_seen(name, old, seen)
         if old is not None:
             if not replace:
                 raise StoreError(
@@ -1264,6 +1279,30 @@ class StoreTransaction:
         s.flush()
         self._created.add(row.id)
         return self.store._info(s, row)
+
+    def _check_seen(self, name: str, old: CaseBaseRow | None, seen: Seen) -> None:
+        """Refuse to replace ``old`` (case base ``name`` now) unless it is what was ``seen``
+        (one deleted meanwhile loses nothing: it is created anew)."""
+        again = "nothing was written (run the command again to replace it as it is now)"
+        if old is None:
+            return
+        if seen.uid is None:
+            raise StaleCaseError(
+                f"case base {name!r} was created by another process since this command "
+                f"started; {again}",
+                self.store.where,
+            )
+        if old.uid != seen.uid:
+            raise StaleCaseError(
+                f"case base {name!r} was replaced by another process since it was read; {again}",
+                self.store.where,
+            )
+        if old.version != seen.version:
+            raise StaleCaseError(
+                f"case base {name!r} was changed by another process since it was read (version "
+                f"{seen.version}, now {old.version}); {again}",
+                self.store.where,
+            )
 
     def set_model(self, cb: CaseBaseInfo, model: Mapping[str, Any]) -> None:
         """Replace the fitted model of ``cb`` (what fit learned besides the cases)."""

@@ -27,6 +27,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from casebase_store import (
     CaseBaseInfo,
+    Seen,
     StoreError,
     StoreTransaction,
     check_case_base_name,
@@ -328,8 +329,11 @@ def train_described(
     target: str = "label",
     cases: str = "clips",
     replace: bool = False,
+    seen: Seen | None = None,
 ) -> TrainResult:
     """:func:`train` on clips already reduced by :func:`fit_plan` (:func:`describe_entries`).
+    ``seen``: what was read of case base ``name`` before the clips were (``replace``
+    refuses to drop one changed since, :meth:`StoreTransaction.create_case_base`).
 
     The classifier is fitted on ``labels`` as given, so its classes keep their type (whole
     numbers, true/false, other numbers: stored with the model, and answered as such once it
@@ -354,6 +358,7 @@ def train_described(
         target=target,
         cases=cases,
         replace=replace,
+        seen=seen,
         skipped=skipped,
         too_short=too_short,
     )
@@ -381,11 +386,13 @@ def store_fitted(
     target: str = "label",
     cases: str = "clips",
     replace: bool = False,
+    seen: Seen | None = None,
     skipped: Sequence[str] = (),
     too_short: Sequence[str] = (),
 ) -> TrainResult:
     """Store the fitted classifier as case base ``name`` in ``db`` in one transaction
-    (``labels``: its training clips' solutions, for the summary)."""
+    (``labels``: its training clips' solutions, for the summary; ``seen``: what was read of
+    ``name`` before the fit, checked by a ``replace``)."""
     check_is_fitted(fitted, "case_base_")
     cb = to_store(fitted)
     calibrate_stored_judges(fitted)
@@ -399,6 +406,7 @@ def store_fitted(
             fitted.measure_.params(),
             model=model_document(fitted, target, cases),
             replace=replace,
+            seen=seen,
         )
         records = progress(case_records(cb), desc="storing", total=len(cb), unit="case")
         ids = np.asarray(tx.add_cases(info, records))

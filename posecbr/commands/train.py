@@ -559,12 +559,15 @@ def _check_new_store(args: argparse.Namespace) -> None:
     from casebase_store import (
         EMPTY_DB,
         EmptyStore,
+        Seen,
         StoreError,
         check_store_file,
         open_store,
         sqlite_file,
     )
 
+    # what --replace will replace: none, unless one is read below (checked when it is stored)
+    args.seen = Seen() if args.replace else None
     if not str(args.db).strip():
         raise StoreError(EMPTY_DB, "--db")
     file = sqlite_file(args.db)
@@ -585,6 +588,9 @@ def _check_new_store(args: argparse.Namespace) -> None:
                 " --replace it or --append to it)",
                 store.where,
             )
+        if args.replace and store.has_case_base(args.name):
+            info = store.get_case_base(args.name)
+            args.seen = Seen(info.uid, info.version)
     finally:
         store.close()
 
@@ -823,7 +829,7 @@ def run(args: argparse.Namespace) -> int:
         _check_k(args, clips)
         result = train_described(args.db, args.name, clips, solutions, estimator,
                                  target=args.target, cases=args.split,
-                                 replace=args.replace)  # fmt: skip
+                                 replace=args.replace, seen=args.seen)  # fmt: skip
     for text in args.notes:
         print(text, file=sys.stderr)
     _report(args, result)
