@@ -4,7 +4,11 @@ replaced or created while it trained."""
 
 from __future__ import annotations
 
+import os
+import signal
 import sqlite3
+import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -175,3 +179,51 @@ def test_replace_on_postgresql_keeps_what_was_appended_meanwhile(
     )
     uid2, version2, ids2, _ = _state(url, "default")
     assert (uid2, version2) == (uid, 2) and ids2[:60] == ids and len(ids2) == 62
+
+
+_PAUSED_IN_MATRICES = """
+import sys, time
+import cbr.stored as stored
+def paused(*a, **kw):
+    print("PAUSED", flush=True)
+    time.sleep(120)
+stored.write_matrices = paused
+from posecbr.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.parametrize(
+    ("sig", "status", "said"),
+    [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated (SIGTERM)")],
+)
+def test_a_trim_interrupted_after_it_committed_says_it_is_stored(
+    trained: str, sig: signal.Signals, status: int, said: str
+) -> None:
+    """Before: Ctrl-C while the committed trim wrote its matrices (a large case base's)
+    said "posecbr casebase trim: interrupted" alone, read as a trim not made: run again, it
+    trimmed a second time. Now the line says the trim is stored, and how far."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
+    argv = ["casebase", "trim", "--db", trained, "--editor", "novelty-benefit", "--keep", "0.5"]
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _PAUSED_IN_MATRICES, *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "PAUSED"
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == status
+    # 10 activities of 6 clips each, half of each kept
+    assert err.strip() == (
+        f"posecbr casebase trim: {said}: the trim was stored before it (60 -> 30 cases: "
+        "casebase info shows it); run again, it would trim the case base again"
+    )
+    store = open_store(trained, readonly=True)
+    try:
+        assert store.count_cases("default") == 30
+        assert [e.action for e in store.maintenance_log("default")].count("trim") == 31
+    finally:
+        store.close()

@@ -6,6 +6,8 @@ import argparse
 import json
 import sys
 from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -565,9 +567,39 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
                 info = tx.expect(name, stored.uid, stored.version)
                 record_trim(tx, info, report)
                 judges_after_change(tx, info, judges)
-            write_matrices(writer, name)
+            with _stored_before(report.size_before, report.size_after):
+                write_matrices(writer, name)
         finally:
             writer.close()
+    with _stored_before(report.size_before, report.size_after, dropped and not args.dry_run):
+        return _trim_said(args, store, name, report, stored.target, dropped)
+
+
+@contextmanager
+def _stored_before(before: int, after: int, stored: bool = True) -> Iterator[None]:
+    """Work after the trim committed (a large case base's matrices, the report): Ctrl-C or
+    SIGTERM there says the trim is stored. Said "interrupted" alone, it was taken for a trim
+    not made, and run again trimmed the case base a second time."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        if not stored:
+            raise
+        raise KeyboardInterrupt(
+            f"the trim was stored before it ({before} -> {after} cases: casebase info shows "
+            "it); run again, it would trim the case base again"
+        ) from None
+
+
+def _trim_said(
+    args: argparse.Namespace,
+    store: CaseStore,
+    name: str,
+    report: Any,
+    target: str,
+    dropped: bool,
+) -> int:
+    """The trim's report: one line (``--json``: a record)."""
     doc = {
         "db": store.where,  # as info, list and upgrade say which store, and list which case base
         "case_base": name,
@@ -591,7 +623,7 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
             from cbr.words import class_noun
 
             print(
-                f"  largest per-{class_noun(stored.target)} mean shift:"
+                f"  largest per-{class_noun(target)} mean shift:"
                 f" {report.distribution_shift:.3f} "
                 "pooled standard deviations"
             )
