@@ -16,7 +16,8 @@ same fit either way.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -416,7 +417,30 @@ def store_fitted(
             record_trim(tx, info, fitted.maintenance_, ids)
 
     write_store(db, write)
-    _refresh_matrices(db, name)
+    with _stored_before(f"case base {name!r} was stored before it ({len(cb)} cases)"):
+        _refresh_matrices(db, name)
+        return _fitted_result(name, fitted, cb, labels, skipped, too_short)
+
+
+@contextmanager
+def _stored_before(done: str) -> Iterator[None]:
+    """Work after a change committed (a large case base's matrices, the summary's counts):
+    Ctrl-C or SIGTERM there says the change is stored (``done``), not "interrupted" alone,
+    which reads as a change not made."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        raise KeyboardInterrupt(done) from None
+
+
+def _fitted_result(
+    name: str,
+    fitted: CaseBaseClassifier,
+    cb: CaseBase,
+    labels: Sequence[str],
+    skipped: Sequence[str],
+    too_short: Sequence[str],
+) -> TrainResult:
     return TrainResult(
         name,
         len(cb),
@@ -658,13 +682,27 @@ def append_described(
                 reps = cb.measure.represent(cb.problems)
                 tx.put_representations(kind, {int(c): reps[i] for i, c in enumerate(ids)})
             tx.log(info, "append", reason=f"{len(cb)} cases from {len(clips)} clips")
-        write_matrices(store, name)
-        total = store.count_cases(name)
+        with _stored_before(f"the {len(cb)} cases were added to {name!r} before it"):
+            write_matrices(store, name)
+            total = store.count_cases(name)
     finally:
         store.close()
+    with _stored_before(f"the {len(cb)} cases were added to {name!r} before it"):
+        return _appended_result(name, cb, total, text, plan, skipped, too_short)
+
+
+def _appended_result(
+    name: str,
+    cb: CaseBase,
+    total: int,
+    text: Sequence[str],
+    plan: Plan,
+    skipped: Sequence[str],
+    too_short: Sequence[str],
+) -> TrainResult:
     return TrainResult(
         name, len(cb), total, _counts([str(v) for v in cb.labels]), cb.config, cb.measure.name,
-        None, {}, skipped, too_short,
+        None, {}, list(skipped), list(too_short),
         indistinct=same_features(cb), new_labels=sorted(set(text) - set(plan.known)),
     )  # fmt: skip
 

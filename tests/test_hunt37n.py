@@ -227,3 +227,46 @@ def test_a_trim_interrupted_after_it_committed_says_it_is_stored(
         assert [e.action for e in store.maintenance_log("default")].count("trim") == 31
     finally:
         store.close()
+
+
+_PAUSED_IN_TRAINING_MATRICES = _PAUSED_IN_MATRICES.replace(
+    "import cbr.stored as stored", "import cbr.training as stored"
+)
+
+
+@pytest.mark.parametrize(
+    ("more", "sig", "said"),
+    [
+        (
+            ["--subjects", "s02", "--labels", "deep_squat", "--append"],
+            signal.SIGINT,
+            "interrupted: the 6 cases were added to 'default' before it",
+        ),
+        (
+            ["--subjects", "s02", "--name", "other"],
+            signal.SIGTERM,
+            "terminated (SIGTERM): case base 'other' was stored before it (60 cases)",
+        ),
+    ],
+    ids=["append", "build"],
+)
+def test_a_train_stopped_after_it_committed_says_what_is_stored(
+    trained: str, more: list[str], sig: signal.Signals, said: str
+) -> None:
+    """Before: "posecbr train: interrupted" alone, after the cases were stored."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
+    argv = ["train", str(LABELS), "--db", trained, *more]
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _PAUSED_IN_TRAINING_MATRICES, *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "PAUSED"
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == (130 if sig == signal.SIGINT else 143)
+    assert err.strip().splitlines()[-1] == f"posecbr train: {said}"
+    name = "other" if "other" in more else "default"
+    assert len(_state(trained, name)[2]) == (60 if name == "other" else 66)
