@@ -193,6 +193,23 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
+def _stopped_when_paused(script: str, argv: list[str], sig: signal.Signals) -> tuple[int, str]:
+    """``posecbr argv`` run by ``script`` (which prints PAUSED where it holds the command),
+    sent ``sig`` there: its exit status and stderr."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script, *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "PAUSED"
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    return proc.returncode, err
+
+
 @pytest.mark.parametrize(
     ("sig", "status", "said"),
     [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated (SIGTERM)")],
@@ -203,19 +220,9 @@ def test_a_trim_interrupted_after_it_committed_says_it_is_stored(
     """Before: Ctrl-C while the committed trim wrote its matrices (a large case base's)
     said "posecbr casebase trim: interrupted" alone, read as a trim not made: run again, it
     trimmed a second time. Now the line says the trim is stored, and how far."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
     argv = ["casebase", "trim", "--db", trained, "--editor", "novelty-benefit", "--keep", "0.5"]
-    proc = subprocess.Popen(
-        [sys.executable, "-c", _PAUSED_IN_MATRICES, *argv],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
-    assert proc.stdout is not None and proc.stdout.readline().strip() == "PAUSED"
-    proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == status
+    returncode, err = _stopped_when_paused(_PAUSED_IN_MATRICES, argv, sig)
+    assert returncode == status
     # 10 activities of 6 clips each, half of each kept
     assert err.strip() == (
         f"posecbr casebase trim: {said}: the trim was stored before it (60 -> 30 cases: "
@@ -254,19 +261,9 @@ def test_a_train_stopped_after_it_committed_says_what_is_stored(
     trained: str, more: list[str], sig: signal.Signals, said: str
 ) -> None:
     """Before: "posecbr train: interrupted" alone, after the cases were stored."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
     argv = ["train", str(LABELS), "--db", trained, *more]
-    proc = subprocess.Popen(
-        [sys.executable, "-c", _PAUSED_IN_TRAINING_MATRICES, *argv],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
-    assert proc.stdout is not None and proc.stdout.readline().strip() == "PAUSED"
-    proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == (130 if sig == signal.SIGINT else 143)
+    returncode, err = _stopped_when_paused(_PAUSED_IN_TRAINING_MATRICES, argv, sig)
+    assert returncode == (130 if sig == signal.SIGINT else 143)
     assert err.strip().splitlines()[-1] == f"posecbr train: {said}"
     name = "other" if "other" in more else "default"
     assert len(_state(trained, name)[2]) == (60 if name == "other" else 66)
