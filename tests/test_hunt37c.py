@@ -12,6 +12,7 @@ frames come, then Regrid) alike.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -19,6 +20,36 @@ import pytest
 from tests.test_video_vfr import people  # noqa: F401 (a fixture)
 
 AHEAD = [0.0, 0.02, 0.1, 0.18, 0.9, 0.4, 0.44, 0.52]  # 25 fps, strayed at 0.02 s
+
+
+def stamped_video(
+    folder: Path, name: str, pts_ms: list[int], frames: list[np.ndarray]
+) -> tuple[Path, list[tuple[np.ndarray, float]], Any]:
+    """The lunge ``frames`` written losslessly at ``pts_ms`` (their times checked as decoded)
+    and extracted (no smoothing, no tracking): the video, its decoded frames and times, and
+    the extraction."""
+    pytest.importorskip("av", reason="PyAV writes the video")
+    from features.pose_estimation import estimate_video
+    from features.pose_estimation.video import iter_timed_frames
+    from tests.test_hunt36c import _write_out_of_order
+
+    path = _write_out_of_order(folder / name, pts_ms, frames)
+    decoded = list(iter_timed_frames(path))
+    assert [round(t * 1000) for _rgb, t in decoded] == pts_ms
+    return path, decoded, estimate_video(path, smoothing=False, tracking=False, progress_bar=False)
+
+
+def watched(path: Path, extracted: Any) -> list[Any]:
+    """``watch``'s frames of ``path`` (stream_poses, no smoothing, no tracking), the rows
+    Regrid pushes of them checked equal to ``extracted``'s rows."""
+    from features.pose_estimation import PoseEstimator, stream_poses
+    from posecbr.commands.watch import Regrid
+
+    live = Regrid(25.0, str(path))
+    frames = list(stream_poses(path, estimator=PoseEstimator(smoothing=False, tracking=False)))
+    pushed = [w for f in frames for w, _v, _s in live.take(f)]
+    np.testing.assert_array_equal(np.array(pushed), extracted.sequence.positions)
+    return frames
 
 
 def test_a_frame_stamped_far_ahead_is_left_out_and_the_next_kept() -> None:
@@ -100,17 +131,10 @@ def test_a_video_with_a_frame_stamped_far_ahead_loses_that_frame_alone(
     at 25 fps (0 to 0.52 s), the last frame 11's pose (0.52 s; frame 12 at 0.54 s lies
     after the last row). Before: frame 9 (0.4 s) left out, the three after it at 0.98, 1.06
     and 1.08 s: 28 rows. ``watch`` pushes the same rows and says the same note once."""
-    pytest.importorskip("av", reason="PyAV writes the video")
-    from features.pose_estimation import PoseEstimator, estimate_video, stream_poses
-    from features.pose_estimation.video import iter_timed_frames
-    from posecbr.commands.watch import Regrid
-    from tests.test_hunt36c import _write_out_of_order
+    from features.pose_estimation import PoseEstimator
 
     pts_ms = [0, 20, 100, 180, 220, 260, 300, 380, 900, 400, 440, 520, 540]
-    path = _write_out_of_order(tmp_path / "ahead.mkv", pts_ms, people)
-    decoded = list(iter_timed_frames(path))
-    assert [round(t * 1000) for _rgb, t in decoded] == pts_ms
-    got = estimate_video(path, smoothing=False, tracking=False, progress_bar=False)
+    path, decoded, got = stamped_video(tmp_path, "ahead.mkv", pts_ms, people)
     assert got.sequence.n_frames == 14
     assert got.video_frames is not None
     assert got.video_frames.tolist()[-1] == 11 and 8 not in got.video_frames.tolist()
@@ -126,12 +150,8 @@ def test_a_video_with_a_frame_stamped_far_ahead_loses_that_frame_alone(
         " (0.380 and 0.400 s): frame 8 left out, the frames after it keep their times"
     )
     assert note in capsys.readouterr().err.splitlines()
-    live = Regrid(25.0, str(path))
-    est = PoseEstimator(smoothing=False, tracking=False)
-    frames = list(stream_poses(path, estimator=est))
+    frames = watched(path, got)
     assert [f.index for f in frames] == list(range(13))  # every frame read, in order
-    pushed = [w for f in frames for w, _v, _s in live.take(f)]
-    np.testing.assert_array_equal(np.array(pushed), got.sequence.positions)
     assert capsys.readouterr().err.count(note) == 1
 
 
@@ -145,9 +165,8 @@ def test_a_constant_rate_video_with_one_frame_stamped_far_ahead_loses_nothing(
     resampling. Before: resampled, frame 6 (0.24 s) left out and the later ones timed on
     from 5 s: 133 rows, 120 of them (0.2 to 4.96 s) a gap."""
     pytest.importorskip("av", reason="PyAV writes the video")
-    from features.pose_estimation import PoseEstimator, estimate_video, stream_poses
+    from features.pose_estimation import PoseEstimator, estimate_video
     from features.pose_estimation.video import iter_timed_frames
-    from posecbr.commands.watch import Regrid
     from tests.test_hunt36c import _write_out_of_order
 
     pts_ms = [40 * k for k in range(13)]
@@ -166,9 +185,6 @@ def test_a_constant_rate_video_with_one_frame_stamped_far_ahead_loses_nothing(
         " times"
     )
     assert note in capsys.readouterr().err.splitlines()
-    live = Regrid(25.0, str(path))
-    frames = list(stream_poses(path, estimator=PoseEstimator(smoothing=False, tracking=False)))
+    frames = watched(path, got)
     assert [f.video_time_s for f in frames] == pytest.approx([k / 25 for k in range(13)])
-    pushed = [w for f in frames for w, _v, _s in live.take(f)]
-    np.testing.assert_array_equal(np.array(pushed), got.sequence.positions)
     assert capsys.readouterr().err.count(note) == 1
