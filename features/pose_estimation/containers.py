@@ -1,5 +1,6 @@
 """What a video file's own bytes say before it is decoded: whether it is cut short (a JPEG
-without its end marker, a Matroska/WebM or FLV file ending inside an element or a tag),
+without its end marker, a Matroska/WebM or FLV file ending inside an element or a tag, an
+MP4/MOV file ending inside a box),
 whether it holds sound alone (WAVE, FLAC, MP3, AAC, Ogg, or an MP4 or Matroska/WebM file of
 sound tracks only), and whether OpenCV counts its frames from its duration (Matroska/WebM,
 FLV, MPEG-TS).
@@ -22,9 +23,23 @@ def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
     """DataError for a file whose first and last bytes (``head``, ``tail``) show it cut
     short: a JPEG without its end-of-image marker (OpenCV decodes what it has of it and
     greys the rest), a Matroska/WebM or FLV file that ends inside an element or a tag
-    (:func:`cut_short`)."""
+    (:func:`cut_short`), an MP4/MOV file that ends inside a box (:func:`mp4_walk`: FFmpeg
+    decodes what it has of the last frames, or reads none when the index at the end is
+    missing)."""
     if head.startswith(JPEG_START) and not tail.rstrip(b"\x00\r\n\t ").endswith(JPEG_END):
         raise DataError("truncated JPEG (no end-of-image marker)", path)
+    if is_mp4(head):
+        try:
+            size = path.stat().st_size
+            with open(path, "rb") as fh:
+                end = mp4_walk(fh, size)
+        except OSError as exc:
+            raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
+        if end is not None and end > size:
+            runs = f" that runs to byte {end:,}" if end > size + 1 else "'s header"
+            raise DataError(
+                f"truncated MP4/MOV: the file ends at byte {size:,}, inside a box{runs}", path
+            )
     if head.startswith((EBML_START, FLV_START)):
         try:
             with open(path, "rb") as fh:
@@ -67,6 +82,53 @@ def cut_short(fh: Any, size: int, head: bytes, what: str) -> str | None:
                 f" {stated_s:.2f} s"
             )
     return None
+
+
+MP4_BOXES = (b"ftyp", b"moov", b"mdat", b"free", b"skip", b"wide", b"pnot")
+"""The boxes an MP4/MOV (ISO base media, QuickTime) file begins with: its fifth to eighth
+bytes name one of them."""
+MP4_TOP_BOXES = frozenset(
+    (*MP4_BOXES, b"moof", b"mfra", b"sidx", b"ssix", b"styp", b"prft", b"emsg", b"pdin")
+    + (b"uuid", b"meta", b"udta", b"junk")
+)
+"""The boxes :func:`mp4_walk` knows at an MP4/MOV file's top level; anything else there (a
+phone maker's trailer after the last box) is not judged."""
+
+
+def is_mp4(head: bytes) -> bool:
+    """Whether a file whose first bytes are ``head`` is an MP4/MOV file (ISO base media:
+    MP4, MOV, 3GP, M4V): its first box is one of :data:`MP4_BOXES`."""
+    return len(head) >= 8 and head[4:8] in MP4_BOXES and int.from_bytes(head[:4], "big") != 0
+
+
+def mp4_walk(fh: Any, size: int) -> int | None:
+    """Where the top-level boxes of an MP4/MOV file of ``size`` bytes, read from ``fh`` at
+    its start, end as their headers state (bytes): beyond ``size``, the file is cut short
+    (``size + 1``: it ends inside a box's header). A box stating size 0 runs to the file's
+    end. None where the walk meets bytes that are no box header (a name not of printable
+    letters, a size shorter than its header: padding, damage) or a box not of
+    :data:`MP4_TOP_BOXES` (a maker's trailer): not judged."""
+    at = 0
+    while at < size:
+        fh.seek(at)
+        header = fh.read(8)
+        if len(header) < 8:
+            return None if not header.strip(b"\x00") else size + 1
+        stated, kind = int.from_bytes(header[:4], "big"), header[4:8]
+        if kind not in MP4_TOP_BOXES:
+            return None
+        length = 8
+        if stated == 1:  # a 64-bit size follows the name
+            large = fh.read(8)
+            if len(large) < 8:
+                return size + 1
+            stated, length = int.from_bytes(large, "big"), 16
+        elif stated == 0:
+            return size
+        if stated < length:
+            return None
+        at += stated
+    return at
 
 
 FLV_START = b"FLV\x01"
