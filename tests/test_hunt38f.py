@@ -96,13 +96,14 @@ def test_an_mp4_cut_before_its_index_is_refused_as_cut(
 def test_whole_mp4_files_open_as_before(tmp_path: Path) -> None:
     """Whole files, index first or last, and one with a maker's trailer after its last box
     (bytes that are no box: not judged), open with their 12 frames."""
-    from features.pose_estimation.containers import mp4_walk
+    from features.pose_estimation.containers import mp4_timeless_frames, mp4_walk
 
     for name, faststart in (("first.mp4", True), ("last.mp4", False)):
         path = _mjpg_mp4(tmp_path / name, faststart)
         size = path.stat().st_size
         with open(path, "rb") as fh:
             assert mp4_walk(fh, size) == size
+            assert mp4_timeless_frames(fh, size) is None  # 12 frames of 512 ticks each
         cap, info = open_video(path)
         cap.release()
         assert info.frames == FRAMES
@@ -113,3 +114,33 @@ def test_whole_mp4_files_open_as_before(tmp_path: Path) -> None:
     cap, info = open_video(trailer)
     cap.release()
     assert info.frames == FRAMES
+
+
+def test_an_mp4_whose_frames_have_no_duration_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A zero frame-rate header: the MP4's time-to-sample table gives every frame a duration
+    of 0. FFmpeg makes up a rate for it (here 2.08 fps, each frame as long as the whole
+    0.48-s clip, its last stamped at 0 s; 12.25 fps of a 25 fps H.264 clip, its frames all
+    at 0 s), and ``reps`` and ``extract`` read it at that rate (``reps`` with a note that at
+    2.08 fps repetitions may be miscounted). Now it is refused as a video without a usable
+    frame rate; the same file with its durations is read as before."""
+    whole = _mjpg_mp4(tmp_path / "whole.mp4", faststart=False).read_bytes()
+    at, stated = _box_at(whole, b"stts")
+    entries = int.from_bytes(whole[at + 12 : at + 16], "big")
+    assert entries == 1 and int.from_bytes(whole[at + 16 : at + 20], "big") == FRAMES
+    zero = bytearray(whole)
+    zero[at + 20 : at + 24] = bytes(4)  # the one entry's duration: 0
+    folder = tmp_path / "in"
+    folder.mkdir()
+    clip = folder / "clip.mp4"
+    clip.write_bytes(bytes(zero))
+    why = (
+        f"{clip}: video declares no usable frame rate (its header gives its {FRAMES} frames"
+        " no duration)"
+    )
+    refused(["reps", str(clip)], folder, capsys, why)
+    refused(["extract", str(clip), "--out", str(folder / "poses")], folder, capsys, why)
+    cap, info = open_video(tmp_path / "whole.mp4")
+    cap.release()
+    assert (info.frames, info.fps) == (FRAMES, 25.0)

@@ -9,9 +9,11 @@ FLV, MPEG-TS).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from features.errors import DataError
 
@@ -129,6 +131,92 @@ def mp4_walk(fh: Any, size: int) -> int | None:
             return None
         at += stated
     return at
+
+
+MOOV_LIMIT = 256 << 20
+"""The largest MP4/MOV index (moov box, bytes) :func:`mp4_timeless_frames` reads: an hour
+at 60 fps states some megabytes."""
+
+
+def _mp4_boxes(data: bytes, start: int, end: int) -> Iterator[tuple[bytes, int, int]]:
+    """The boxes in ``data[start:end]``: each one's name and where its body starts and ends;
+    stops at one whose size does not fit."""
+    at = start
+    while at + 8 <= end:
+        stated, kind, length = int.from_bytes(data[at : at + 4], "big"), data[at + 4 : at + 8], 8
+        if stated == 1 and at + 16 <= end:
+            stated, length = int.from_bytes(data[at + 8 : at + 16], "big"), 16
+        elif stated == 0:
+            stated = end - at
+        if stated < length or at + stated > end:
+            return
+        yield kind, at + length, at + stated
+        at += stated
+
+
+def _mp4_child(data: bytes, start: int, end: int, path: Sequence[bytes]) -> tuple[int, int]:
+    """Where the body of the first box along ``path`` (names, one per level) inside
+    ``data[start:end]`` starts and ends; (0, 0) when there is none."""
+    for name in path:
+        for kind, body, stop in _mp4_boxes(data, start, end):
+            if kind == name:
+                start, end = body, stop
+                break
+        else:
+            return 0, 0
+    return start, end
+
+
+def _mp4_moov(fh: Any, size: int) -> bytes | None:
+    """The body of an MP4/MOV file's index (its top-level moov box), read from ``fh``; None
+    when a box before it is not of :data:`MP4_TOP_BOXES`, it is larger than
+    :data:`MOOV_LIMIT` or there is none."""
+    at = 0
+    while at + 8 <= size:
+        fh.seek(at)
+        header = fh.read(16)
+        stated, kind, length = int.from_bytes(header[:4], "big"), header[4:8], 8
+        if stated == 1 and len(header) == 16:
+            stated, length = int.from_bytes(header[8:16], "big"), 16
+        elif stated == 0:
+            stated = size - at
+        if stated < length or kind not in MP4_TOP_BOXES:
+            return None
+        if kind == b"moov":
+            if stated > MOOV_LIMIT:
+                return None
+            fh.seek(at + length)
+            return bytes(fh.read(stated - length))
+        at += stated
+    return None
+
+
+def mp4_timeless_frames(fh: Any, size: int) -> int | None:
+    """How many frames the video track of an MP4/MOV file of ``size`` bytes, read from
+    ``fh``, holds when its time-to-sample table (stts) gives them all a duration of 0: a
+    header stating no frame rate (FFmpeg makes one up: 12.25 fps for a 25 fps H.264 clip,
+    2.08 for an MJPG one, each frame as long as the whole clip); None when it gives them
+    time, holds one frame or none (a fragmented file's frames are in its fragments), or its
+    index cannot be read."""
+    moov = _mp4_moov(fh, size)
+    if moov is None:
+        return None
+    for kind, body, stop in _mp4_boxes(moov, 0, len(moov)):
+        if kind != b"trak":
+            continue
+        hdlr, hdlr_end = _mp4_child(moov, body, stop, (b"mdia", b"hdlr"))
+        if hdlr_end < hdlr + 12 or moov[hdlr + 8 : hdlr + 12] != b"vide":
+            continue  # no video: its subtype follows its version, flags and component type
+        start, end = _mp4_child(moov, body, stop, (b"mdia", b"minf", b"stbl", b"stts"))
+        if end - start < 8:
+            continue
+        entries = min(int.from_bytes(moov[start + 4 : start + 8], "big"), (end - start - 8) // 8)
+        table = np.frombuffer(moov, ">u4", 2 * entries, start + 8)
+        counts, durations = table[0::2].astype(np.int64), table[1::2].astype(np.int64)
+        frames = int(counts.sum())
+        if frames > 1 and not int((counts * durations).sum()):
+            return frames
+    return None
 
 
 FLV_START = b"FLV\x01"

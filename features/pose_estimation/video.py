@@ -56,6 +56,8 @@ from features.text import shown  # noqa: E402
 
 from .containers import (  # noqa: E402
     counted_by_duration,
+    is_mp4,
+    mp4_timeless_frames,
     refuse_cut,
     sound_only,
 )
@@ -176,7 +178,24 @@ def open_video(
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
         cap.release()
         raise _not_a_video(path, head, fps)
+    timeless = _timeless_frames(path) if is_mp4(head) else None
+    if timeless is not None:
+        cap.release()
+        raise DataError(
+            f"video declares no usable frame rate (its header gives its {timeless} frames"
+            " no duration)",
+            path,
+        )
     return cap, VideoInfo(path, frames, fps, width, height)
+
+
+def _timeless_frames(path: Path) -> int | None:
+    """:func:`.containers.mp4_timeless_frames` of an MP4/MOV file."""
+    try:
+        with open(path, "rb") as fh:
+            return mp4_timeless_frames(fh, path.stat().st_size)
+    except OSError as exc:
+        raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
 
 
 def _not_a_video(path: Path, head: bytes, fps: float | None) -> DataError:
