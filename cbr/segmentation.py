@@ -845,7 +845,7 @@ def _repetitions(
     edges = (start == 0 and n_frames is not None, last)
     found = count_in_signals(
         part, min((b - a) * sig.step, end - a * sig.step), sig.fps * sig.step, edges,
-        settled=settled,
+        settled=settled, past_noise=True,
     ).repetitions  # fmt: skip
     off = a * sig.step
     return tuple(  # the first sample may begin up to a step before ``start``: cut there
