@@ -45,7 +45,17 @@ from typing import Any, TypeVar
 from urllib.parse import quote
 
 import numpy as np
-from sqlalchemy import Engine, create_engine, delete, event, func, inspect, select, update
+from sqlalchemy import (
+    Engine,
+    create_engine,
+    delete,
+    event,
+    func,
+    inspect,
+    select,
+    update,
+)
+from sqlalchemy import text as sql_text
 from sqlalchemy.engine import URL, Connection, make_url
 from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
@@ -317,6 +327,22 @@ class MaintenanceEntry:
     at: datetime
 
 
+@dataclass(frozen=True)
+class WholeCaseBase:
+    """Everything one case base is, as its store holds it, for copying it to another store
+    exactly (:meth:`CaseStore.read_whole`, :meth:`StoreTransaction.copy_case_base`): its
+    description, its columns as stored (the configuration, names and model as their JSON
+    text, byte for byte), every case, in use or trimmed, by id (its problem as its stored
+    ``.npy`` bytes), the cached representations of its cases and its maintenance log, in
+    order. Dates are UTC."""
+
+    info: CaseBaseInfo
+    columns: dict[str, Any]
+    cases: tuple[dict[str, Any], ...]
+    representations: tuple[dict[str, Any], ...]
+    log: tuple[dict[str, Any], ...]
+
+
 def check_width(info: CaseBaseInfo, width: int, where: str) -> None:
     """The case base names as many feature columns as its cases have (``width``), or is
     damaged: a StoreError naming both."""
@@ -359,6 +385,29 @@ def store_files(url_or_path: str | Path) -> list[Path]:
     if file is None:
         return []
     return [file.with_name(file.name + j) for j in ("", "-journal", "-wal", "-shm")]
+
+
+def same_store(a: str | Path, b: str | Path) -> bool:
+    """Whether two ``--db`` values name one store: one SQLite file (the same file, however
+    named: a link, ``./``, a ``sqlite:///`` URL), or one database of one server (backend,
+    host, port and database alike; the driver and the user may differ)."""
+    fa, fb = sqlite_file(a), sqlite_file(b)
+    if fa is not None or fb is not None:
+        if fa is None or fb is None:
+            return False
+        try:
+            return os.path.samefile(fa, fb)
+        except OSError:  # one of them not there (yet)
+            return fa.resolve() == fb.resolve()
+    try:
+        ua, ub = make_url(str(a)), make_url(str(b))
+    except (ArgumentError, ValueError):
+        return str(a) == str(b)
+
+    def key(u: URL) -> tuple[Any, ...]:
+        return (u.get_backend_name(), (u.host or "").lower(), u.port, u.database)
+
+    return key(ua) == key(ub)
 
 
 def in_wal_mode(path: Path) -> bool:
@@ -1080,6 +1129,75 @@ class CaseStore:
                 for r in rows
             ]
 
+    def read_whole(self, name: str) -> WholeCaseBase:
+        """Case base ``name`` whole (:class:`WholeCaseBase`), read from one snapshot and checked
+        as a command reading it would (its JSON, every problem and cached representation, its
+        dates; its log naming only its own cases): damage is a StoreError here, never copied."""
+        with self._read() as s:
+            row = self._row(s, name)
+            info = self._info(s, row)
+            damaged = f"case base {name!r} is damaged: a date in it is not a date"
+            with self._dates(damaged):
+                cases = [
+                    dict(r)
+                    for r in s.execute(
+                        select(CaseRow.__table__)
+                        .where(CaseRow.case_base_id == row.id)
+                        .order_by(CaseRow.id)
+                    ).mappings()
+                ]
+                log = [
+                    dict(r)
+                    for r in s.execute(
+                        select(MaintenanceRow.__table__)
+                        .where(MaintenanceRow.case_base_id == row.id)
+                        .order_by(MaintenanceRow.id)
+                    ).mappings()
+                ]
+            reps = [
+                dict(r)
+                for r in s.execute(
+                    select(
+                        RepresentationRow.case_id, RepresentationRow.kind, RepresentationRow.data
+                    )
+                    .join(CaseRow, CaseRow.id == RepresentationRow.case_id)
+                    .where(CaseRow.case_base_id == row.id)
+                    .order_by(RepresentationRow.id)
+                ).mappings()
+            ]
+            columns = {
+                c: getattr(row, c)
+                for c in (
+                    "version",
+                    "feature_config",
+                    "feature_hash",
+                    "feature_names",
+                    "feature_words",
+                    "similarity_config",
+                    "model",
+                    "code_version",
+                )
+            }
+            columns["created_at"] = _utc(row.created_at)
+        problems = self._stack_features(row, [_Blob(c["id"], c["features"]) for c in cases])
+        if cases:
+            check_width(info, problems.shape[-1], self.where)
+        for r in reps:
+            decode_array(r["data"], f"cached {r['kind']} of case {r['case_id']}", self.where)
+        ids = {int(c["id"]) for c in cases}
+        for e in log:
+            if e["case_id"] is not None and int(e["case_id"]) not in ids:
+                raise StoreError(
+                    f"case base {name!r} is damaged: its maintenance log names case "
+                    f"{e['case_id']}, which is not one of its cases",
+                    self.where,
+                )
+        for c in cases:
+            c["created_at"], c["updated_at"] = _utc(c["created_at"]), _utc(c["updated_at"])
+        for e in log:
+            e["at"] = _utc(e["at"])
+        return WholeCaseBase(info, columns, tuple(cases), tuple(reps), tuple(log))
+
     def count_cases(self, name: str, *, include_inactive: bool = False) -> int:
         with self._read() as s:
             cb = self._row(s, name)
@@ -1145,6 +1263,14 @@ class CaseStore:
             if not isinstance(getattr(info, key), kind):
                 raise StoreError(f"the {key} of case base {r.name!r} is not an object", self.where)
         return info
+
+
+@dataclass(frozen=True)
+class _Blob:
+    """A case's id and stored problem, as :meth:`CaseStore._stack_features` reads them."""
+
+    id: int
+    features: bytes
 
 
 class StoreTransaction:
@@ -1304,6 +1430,87 @@ class StoreTransaction:
                 self.store.where,
             )
 
+    def copy_case_base(self, whole: WholeCaseBase, name: str) -> tuple[CaseBaseInfo, list[int]]:
+        """Write the case base ``whole`` (read from this or another store by
+        :meth:`CaseStore.read_whole`) here as ``name``, exactly: its configuration, model and
+        version, every case (in use or trimmed) in order with its problem's bytes, its cached
+        representations and its maintenance log with their dates. It gets an identity of its
+        own (a copy is a case base of its own: a change to one is none to the other). Its cases
+        keep their ids when no id of this store's was ever as high as its lowest (a store made
+        for it, or of later cases): what commands print (``#12``) then reads the same. Else
+        they are numbered after this store's, in the same order, and the log with them.
+        Returns the copy's description and its cases' ids, in the order of ``whole.cases``. A
+        case base of that name here already is refused (nothing written)."""
+        s, where = self.session, self.store.where
+        check_case_base_name(name, where)
+        self._lock(name)
+        if self.has_case_base(name):
+            raise StoreError(
+                f"a case base named {name!r} is here already: nothing was copied (name the "
+                "copy with --as)",
+                where,
+            )
+        postgres = s.get_bind().dialect.name == "postgresql"
+        if postgres:  # no other writer takes a case id until this commits (see _highest_id)
+            s.execute(sql_text("LOCK TABLE cases IN SHARE ROW EXCLUSIVE MODE"))
+        ids = [int(c["id"]) for c in whole.cases]
+        keep = not ids or ids[0] > self._highest_case_id(postgres)
+        row = CaseBaseRow(uid=uuid.uuid4().hex, name=name, **whole.columns)
+        s.add(row)
+        s.flush()
+        self._created.add(row.id)  # created here: its version is the one copied
+        skip = ("id", "case_base_id")
+        rows = []
+        for c in whole.cases:
+            new = CaseRow(case_base_id=row.id, **{k: v for k, v in c.items() if k not in skip})
+            if keep:
+                new.id = int(c["id"])
+            s.add(new)
+            rows.append(new)
+            if len(rows) % 500 == 0:
+                s.flush()
+        s.flush()
+        moved = {old: int(r.id) for old, r in zip(ids, rows, strict=True)}
+        if keep and ids and postgres:  # explicit ids do not move the sequence
+            s.execute(
+                sql_text("SELECT setval(pg_get_serial_sequence('cases', 'id'), :top)"),
+                {"top": max(ids)},
+            )
+        s.add_all(
+            RepresentationRow(case_id=moved[int(r["case_id"])], kind=r["kind"], data=r["data"])
+            for r in whole.representations
+        )
+        s.flush()
+        info = self.store._info(s, row)
+        for e in whole.log:
+            case_id = e["case_id"]
+            self.log(
+                info,
+                e["action"],
+                case_id=None if case_id is None else moved[int(case_id)],
+                novelty=e["novelty"],
+                benefit=e["benefit"],
+                reason=e["reason"],
+                at=e["at"],
+            )
+        s.flush()
+        return info, [moved[i] for i in ids]
+
+    def _highest_case_id(self, postgres: bool) -> int:
+        """The highest case id this store ever gave (0: none): its cases' and the sequence's
+        (SQLite's ``sqlite_sequence``, PostgreSQL's), which remember ids of cases gone."""
+        s = self.session
+        top = int(s.scalar(select(func.max(CaseRow.id))) or 0)
+        if postgres:
+            seq = s.scalar(
+                sql_text(
+                    "SELECT pg_sequence_last_value(pg_get_serial_sequence('cases', 'id')::regclass)"
+                )
+            )
+        else:
+            seq = s.scalar(sql_text("SELECT seq FROM sqlite_sequence WHERE name = 'cases'"))
+        return max(top, int(seq or 0))
+
     def set_model(self, cb: CaseBaseInfo, model: Mapping[str, Any]) -> None:
         """Replace the fitted model of ``cb`` (what fit learned besides the cases)."""
         _check_document(model, "model", self.store.where)
@@ -1462,7 +1669,10 @@ class StoreTransaction:
         novelty: float | None = None,
         benefit: float | None = None,
         reason: str = "",
+        at: datetime | None = None,
     ) -> None:
+        """One entry of ``cb``'s maintenance log (``at``: when; now unless given, as by a
+        copy of a case base, whose log keeps its dates)."""
         self.session.add(
             MaintenanceRow(
                 case_base_id=cb.id,
@@ -1471,6 +1681,7 @@ class StoreTransaction:
                 novelty=None if novelty is None else float(novelty),
                 benefit=None if benefit is None else float(benefit),
                 reason=_as_stored(reason),
+                **({} if at is None else {"at": at}),
             )
         )
 

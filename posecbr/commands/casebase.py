@@ -1,4 +1,5 @@
-"""``posecbr casebase info|list|export|trim --db cb.sqlite``: inspect and maintain a store."""
+"""``posecbr casebase info|list|export|copy|trim --db cb.sqlite``: inspect and maintain a
+store."""
 
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ if TYPE_CHECKING:
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "casebase",
-        help="inspect, export and trim case bases",
+        help="inspect, export, copy and trim case bases",
         description="Inspect, export and maintain the case bases in a store.",
     )
     act = p.add_subparsers(dest="action", metavar="ACTION", required=True)
@@ -41,6 +42,28 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     q = act.add_parser("export", help="write the cases (problems, labels, provenance) to .npz")
     common(q)
     q.add_argument("--out", required=True, type=path_arg, help="output .npz file")
+    q = act.add_parser(
+        "copy",
+        help="copy a case base whole to another store, or under another name",
+        description="Copy a case base whole (its configuration and fitted model, every case "
+        "in use or trimmed with its labels and provenance, its history) to another store in "
+        "one transaction: classify and segment answer on the copy as on the case base. The "
+        "store it is read from is opened read-only.",
+    )
+    common(q)
+    q.add_argument(
+        "--to",
+        required=True,
+        help="the store to copy it to: a case base file (SQLite; made when there is none) or "
+        "SQLAlchemy URL",
+    )
+    q.add_argument(
+        "--as",
+        dest="as_name",
+        default=None,
+        metavar="NAME",
+        help="the copy's name (default: the case base's own)",
+    )
     q = act.add_parser("trim", help="run a maintenance editor and deactivate dropped cases")
     common(q)
     q.add_argument(
@@ -83,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.action == "upgrade":
         return _upgrade(args)
+    if args.action == "copy":
+        return _copy(args)
     if args.action == "export":
         _check_export(args)  # before the store is opened: a refusal touches nothing
     if args.action == "trim" and not args.dry_run:  # a writer: one that cannot is refused
@@ -137,6 +162,105 @@ def _upgrade(args: argparse.Namespace) -> int:
     elif not rolled_back:
         print(f"{shown(shown_db(args.db))}: already schema version {SCHEMA_VERSION}, nothing to do")
     return 0
+
+
+def _copy(args: argparse.Namespace) -> int:
+    """Case base ``--name`` of ``--db`` written whole to ``--to`` as ``--as``, in one
+    transaction of the store written (a new case base file appears only when complete); the
+    store read is opened read-only. Refused in one line, nothing written, when the store read
+    cannot be (missing, damaged, locked), when ``--to`` holds a case base of that name, or
+    names the very case base."""
+    from casebase_store import (
+        EMPTY_DB,
+        StoreError,
+        check_case_base_name,
+        open_store,
+        prepare_write,
+        same_store,
+        shown_db,
+        write_store,
+    )
+
+    if not str(args.to).strip():
+        raise StoreError(EMPTY_DB, "--to")
+    if args.as_name is not None:
+        check_case_base_name(args.as_name, "--as")
+    store = open_store(args.db, create=False, readonly=True)
+    try:
+        name = store.choose(args.name)
+        new = name if args.as_name is None else args.as_name
+        if new == name and same_store(args.db, args.to):
+            raise StoreError(
+                f"--to names the store case base {name!r} is in: that is the case base "
+                "itself (copy it to another store, or under another name with --as)",
+                store.where,
+            )
+        whole = store.read_whole(name)
+        source = store.where
+    finally:
+        store.close()
+    prepare_write(args.to)  # a store that cannot be written is refused before any write
+    info, ids = write_store(args.to, lambda tx: tx.copy_case_base(whole, new))
+    old = [int(c["id"]) for c in whole.cases]
+    trimmed = sum(not c["active"] for c in whole.cases)
+    with _copied(info.name):
+        _copy_matrices(args.to, new)
+    in_use = len(old) - trimmed
+    doc: dict[str, Any] = {
+        "db": source,
+        "case_base": name,
+        "to": shown_db(args.to),
+        "as": new,
+        "cases": in_use,
+        "trimmed_cases": trimmed,
+        "representations": len(whole.representations),
+        "history": len(whole.log),
+        "version": info.version,
+        "case_ids_kept": ids == old,
+    }
+    if args.json:
+        _emit(doc)
+        return 0
+    ids_said = (
+        "case ids kept"
+        if ids == old
+        else f"case ids numbered after the store's own (#{old[0]}-#{old[-1]} are "
+        f"#{ids[0]}-#{ids[-1]} there)"
+    )
+    print(
+        f"copied case base {shown(repr(name))} of {shown(source)} to {shown(doc['to'])}"
+        f"{'' if new == name else f' as {shown(repr(new))}'}: "
+        f"{counted(in_use, 'case')} in use, {trimmed} trimmed, "
+        f"{len(whole.log)} history {'entry' if len(whole.log) == 1 else 'entries'}; {ids_said}"
+    )
+    return 0
+
+
+def _copy_matrices(to: str, name: str) -> None:
+    """The memory-mapped matrices of a large copy in a SQLite file, as every command that
+    changes a case base writes them (nothing for a small one or another backend)."""
+    from casebase_store import open_store, sqlite_file
+    from cbr.stored import write_matrices
+
+    if sqlite_file(to) is None:
+        return
+    writer = open_store(to, create=False)
+    try:
+        write_matrices(writer, name)
+    finally:
+        writer.close()
+
+
+@contextmanager
+def _copied(name: str) -> Iterator[None]:
+    """Work after the copy committed: Ctrl-C or SIGTERM there says the copy is stored (run
+    again, it would be refused: the name is taken)."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        raise KeyboardInterrupt(
+            f"the copy {name!r} was stored before it (casebase info --db shows it)"
+        ) from None
 
 
 def _info(store: CaseStore, args: argparse.Namespace) -> int:
