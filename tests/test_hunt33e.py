@@ -308,7 +308,7 @@ def test_every_command_help_says_what_the_command_does(
     # the usage and the options alone
     commands = [
         ["thresholds"],
-        *[["casebase", a] for a in ("info", "list", "export", "trim", "upgrade")],
+        *[["casebase", a] for a in ("info", "list", "export", "copy", "trim", "upgrade")],
     ]
     for argv in commands:
         with pytest.raises(SystemExit):
