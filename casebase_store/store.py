@@ -1179,9 +1179,7 @@ class CaseStore:
                 )
             }
             columns["created_at"] = _utc(row.created_at)
-        problems = self._stack_features(row, [_Blob(c["id"], c["features"]) for c in cases])
-        if cases:
-            check_width(info, problems.shape[-1], self.where)
+        self._check_problems(info, cases)
         for r in reps:
             decode_array(r["data"], f"cached {r['kind']} of case {r['case_id']}", self.where)
         ids = {int(c["id"]) for c in cases}
@@ -1197,6 +1195,28 @@ class CaseStore:
         for e in log:
             e["at"] = _utc(e["at"])
         return WholeCaseBase(info, columns, tuple(cases), tuple(reps), tuple(log))
+
+    def _check_problems(self, info: CaseBaseInfo, cases: Sequence[Mapping[str, Any]]) -> None:
+        """Every case's stored problem reads as :meth:`_stack_features` reads them (one shape,
+        numbers, as many columns as the case base names), one at a time: a copy of a large case
+        base holds its bytes, not a stacked float64 matrix beside them."""
+        shapes: set[tuple[int, ...]] = set()
+        for c in cases:
+            a = decode_array(c["features"], f"features of case {c['id']}", self.where)
+            if not np.issubdtype(a.dtype, np.floating):
+                raise StoreError(
+                    f"case base {info.name!r} is damaged: non-numeric features", self.where
+                )
+            shapes.add(a.shape)
+        if len(shapes) > 1:
+            raise StoreError(
+                f"case base {info.name!r} is damaged: its cases have features of different "
+                f"shapes ({', '.join(str(sh) for sh in sorted(shapes)[:3])})",
+                self.where,
+            )
+        if shapes:
+            (shape,) = shapes
+            check_width(info, shape[-1] if shape else 1, self.where)
 
     def count_cases(self, name: str, *, include_inactive: bool = False) -> int:
         with self._read() as s:
@@ -1263,14 +1283,6 @@ class CaseStore:
             if not isinstance(getattr(info, key), kind):
                 raise StoreError(f"the {key} of case base {r.name!r} is not an object", self.where)
         return info
-
-
-@dataclass(frozen=True)
-class _Blob:
-    """A case's id and stored problem, as :meth:`CaseStore._stack_features` reads them."""
-
-    id: int
-    features: bytes
 
 
 class StoreTransaction:

@@ -384,3 +384,29 @@ def test_a_large_copy_in_a_file_gets_its_matrices(
         for kind in ("problems", "representations")
     ]
     assert not (source.parent / "src.sqlite.matrices").exists()  # the source: read alone
+
+
+@pytest.mark.parametrize(
+    ("problems", "said"),
+    [
+        ([np.zeros((1, 2)), np.zeros((1, 3))], "features of different shapes"),
+        ([np.array([["a", "b"]])], "non-numeric features"),
+        ([np.zeros((1, 3))], "its cases have 3 feature columns but the case base names 2"),
+    ],
+)
+def test_a_damaged_case_base_is_not_copied(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], problems: list[np.ndarray], said: str
+) -> None:
+    """Damage a command reading the case base would meet is refused before anything is
+    written, not carried to the other store."""
+    db = tmp_path / "cb.sqlite"
+    store = open_store(db, create=True)
+    try:
+        with store.transaction() as tx:
+            cb = tx.create_case_base("x", {"level": "fluents"}, ["f0", "f1"], ["f 0", "f 1"],
+                                     {"name": "euclidean"})  # fmt: skip
+            tx.add_cases(cb, [casebase_store.NewCase("l", p) for p in problems])
+    finally:
+        store.close()
+    refused(["casebase", "copy", "--db", str(db), "--to", str(tmp_path / "new.sqlite")],
+            tmp_path, capsys, "cb.sqlite", "case base 'x' is damaged", said)  # fmt: skip
