@@ -35,6 +35,12 @@ import numpy as np
 from features.errors import DataError
 from features.fileio import atomic_path
 
+#: a case base at least this large (in cases) stored in a SQLite file keeps its problems and
+#: representations as memory-mapped matrices beside the file: every process maps one copy
+#: (the page cache's) instead of decoding and stacking its own from SQL (``cbr.stored``
+#: writes them; here, so that a command can tell a case base needs none without loading it)
+MAPPED_MIN_CASES = 20_000
+
 _SAFE = re.compile(r"[^A-Za-z0-9_.=-]+")
 
 

@@ -26,6 +26,7 @@ from casebase_store import (
     NewCase,
     StoreError,
     StoreTransaction,
+    case_matrix,
     sqlite_file,
 )
 from casebase_store import check_width as check_width  # defined here before
@@ -265,9 +266,8 @@ def _representations(
 
 
 #: a case base at least this large (in cases) stored in a SQLite file keeps its problems and
-#: representations as memory-mapped matrices beside the file: every process maps one copy
-#: (the page cache's) instead of decoding and stacking its own from SQL
-MAPPED_MIN_CASES = 20_000
+#: representations as memory-mapped matrices beside the file (the store's figure)
+MAPPED_MIN_CASES = case_matrix.MAPPED_MIN_CASES
 _MATRICES = ("problems", "representations")
 
 

@@ -371,6 +371,7 @@ def test_a_large_copy_in_a_file_gets_its_matrices(
     import cbr.stored as stored_module
 
     monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 10)  # "large": the source's 30
+    monkeypatch.setattr(casebase_store.case_matrix, "MAPPED_MIN_CASES", 10)
     dst = tmp_path / "dst.sqlite"
     _run(capsys, "casebase", "copy", "--db", str(source), "--to", str(dst))
     store = open_store(dst, readonly=True)
@@ -410,3 +411,14 @@ def test_a_damaged_case_base_is_not_copied(
         store.close()
     refused(["casebase", "copy", "--db", str(db), "--to", str(tmp_path / "new.sqlite")],
             tmp_path, capsys, "cb.sqlite", "case base 'x' is damaged", said)  # fmt: skip
+
+
+def test_a_small_copy_loads_no_classifier(source: Path, tmp_path: Path) -> None:
+    """Copying reads and writes the store: a case base too small for matrices loads neither
+    scikit-learn nor SciPy (before: cbr.stored was imported to ask, 3 of the copy's 4 s)."""
+    from tests.test_startup import _run as probe
+
+    argv = ["casebase", "copy", "--db", str(source), "--to", str(tmp_path / "c.sqlite"), "--json"]
+    out, loaded = probe(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
+    assert json.loads(out)["case_ids_kept"] is True
+    assert loaded == {"numpy", "sqlalchemy"}

@@ -204,7 +204,7 @@ def _copy(args: argparse.Namespace) -> int:
     old = [int(c["id"]) for c in whole.cases]
     trimmed = sum(not c["active"] for c in whole.cases)
     with _copied(info.name):
-        _copy_matrices(args.to, new)
+        _copy_matrices(args.to, new, len(old) - trimmed)
     in_use = len(old) - trimmed
     doc: dict[str, Any] = {
         "db": source,
@@ -236,14 +236,16 @@ def _copy(args: argparse.Namespace) -> int:
     return 0
 
 
-def _copy_matrices(to: str, name: str) -> None:
+def _copy_matrices(to: str, name: str, in_use: int) -> None:
     """The memory-mapped matrices of a large copy in a SQLite file, as every command that
-    changes a case base writes them (nothing for a small one or another backend)."""
-    from casebase_store import open_store, sqlite_file
+    changes a case base writes them (nothing for a small one, ``in_use`` cases, or another
+    backend: the classifier's modules are then not even loaded)."""
+    from casebase_store import case_matrix, open_store, sqlite_file
+
+    if sqlite_file(to) is None or in_use < case_matrix.MAPPED_MIN_CASES:
+        return
     from cbr.stored import write_matrices
 
-    if sqlite_file(to) is None:
-        return
     writer = open_store(to, create=False)
     try:
         write_matrices(writer, name)
