@@ -1463,7 +1463,7 @@ class StoreTransaction:
                 where,
             )
         postgres = s.get_bind().dialect.name == "postgresql"
-        if postgres:  # no other writer takes a case id until this commits (see _highest_id)
+        if postgres:  # no other writer takes a case id until this commits (_highest_case_id)
             s.execute(sql_text("LOCK TABLE cases IN SHARE ROW EXCLUSIVE MODE"))
         ids = [int(c["id"]) for c in whole.cases]
         keep = not ids or ids[0] > self._highest_case_id(postgres)
