@@ -45,7 +45,7 @@ from .estimator import CaseBaseClassifier
 from .novelty import NoveltyCalibration, calibrate
 from .problem import FeatureConfig
 from .similarity import SimilarityMeasure, get_measure
-from .unknown import AT_FIT, Calibrated, calibrate_judges, judges_from_dict, judges_to_dict
+from .unknown import AT_FIT, Calibrated, calibrate_judges, judges_apart, judges_from_dict
 from .weights import MIRROR_FLAG, FeatureWeights
 from .words import CASE_KINDS as CASE_KINDS
 
@@ -159,8 +159,22 @@ def _stored_classes(model: dict[str, Any]) -> np.ndarray | None:
 
 def judges_document(judges: dict[str, Calibrated], version: int) -> dict[str, Any]:
     """The model document's ``judges``: the calibrated unknown judges and the version of the
-    case base they were calibrated on (a judge of another version is stale: not read)."""
-    return {"case_base_version": version, "calibrated": judges_to_dict(judges)}
+    case base they were calibrated on (a judge of another version is stale: not read). The
+    fields a judge gained once judges were stored (``activities``) are kept apart from its
+    record, in ``added_fields`` (:func:`cbr.unknown.judges_apart`): a posecbr older than them
+    reads the records and ignores the rest (it refuses a record with a field it does not know,
+    "unknown field 'activities'", and reads nothing of the document but
+    ``case_base_version`` and ``calibrated``)."""
+    records, apart = judges_apart(judges)
+    doc: dict[str, Any] = {"case_base_version": version, "calibrated": records}
+    if apart:
+        doc[ADDED_FIELDS] = apart
+    return doc
+
+
+ADDED_FIELDS = "added_fields"
+"""The key of the judges' fields kept apart from their records in the model document's
+``judges`` (:func:`judges_document`)."""
 
 
 def calibrate_stored_judges(clf: CaseBaseClassifier) -> None:
@@ -539,7 +553,7 @@ def _judges(model: dict[str, Any], version: int, name: str, where: str) -> dict[
         stamp = stored["case_base_version"]
         if isinstance(stamp, bool) or not isinstance(stamp, int):
             raise ValueError(f"case_base_version must be a whole number, got {stamp!r}")
-        judges = judges_from_dict(stored["calibrated"])
+        judges = judges_from_dict(stored["calibrated"], stored.get(ADDED_FIELDS))
     except (KeyError, TypeError, ValueError) as exc:
         raise _damaged(name, "unknown judge calibration", exc, where) from None
     return judges if stamp == version else {}

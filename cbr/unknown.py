@@ -323,7 +323,13 @@ class Calibrated:
     new field (with a default, which a record stored before it takes) or a new judge (one
     line in :data:`STORED`) needs no code here. Fields are ``float`` (>= 0, not NaN; +inf is
     written ``"inf"``: JSON has none), ``int`` (>= 0), ``str``, ``tuple[float, ...]`` (a
-    list of such numbers) or ``tuple[str, ...]`` (a list of texts)."""
+    list of such numbers) or ``tuple[str, ...]`` (a list of texts).
+
+    A field added once posecbr stored judges, which a reader that does not know it can do
+    without, is marked ``metadata={ADDED: True}``: it is stored apart from the record
+    (:func:`judges_apart`), where an older posecbr does not look (its reader refuses a record
+    with a field it does not know: "unknown field 'activities'"), and a field stored apart
+    that this reader does not know (a newer posecbr's) is ignored (:meth:`from_dict`)."""
 
     @classmethod
     def of(cls: type[_C], cb: CaseBase, *, held: Held | None = None) -> _C:
@@ -338,16 +344,19 @@ class Calibrated:
         }
 
     @classmethod
-    def from_dict(cls: type[_C], d: Mapping[str, Any]) -> _C:
-        """The judge :meth:`to_dict` wrote. ValueError naming the field for a record that is
-        not one: an unknown field, a missing one without a default, a wrong type, a negative
-        or NaN number."""
+    def from_dict(cls: type[_C], d: Mapping[str, Any], added: Any = None) -> _C:
+        """The judge :meth:`to_dict` wrote (``d``), with the fields stored apart from it
+        (``added``: :func:`judges_apart`; a field of it this reader does not know, a newer
+        posecbr's, is ignored). ValueError naming the field for a record that is not one: an
+        unknown field in ``d``, a missing one without a default, a wrong type, a negative or
+        NaN number, a field stored both in ``d`` and apart or apart though not marked so."""
         if not isinstance(d, Mapping):
             raise ValueError(f"a stored judge must be a record of fields, got {d!r}")
         fields = {f.name: f for f in dataclasses.fields(typing.cast(Any, cls))}
         extra = sorted(set(d) - set(fields))
         if extra:
             raise ValueError(f"unknown field {extra[0]!r}")
+        d = {**d, **_added_known(cls, fields, d, added)}
         types = typing.get_type_hints(cls)
         values = {}
         for name, f in fields.items():
@@ -356,6 +365,37 @@ class Calibrated:
             elif f.default is dataclasses.MISSING:
                 raise ValueError(f"field {name!r} is missing")
         return cls(**values)
+
+
+ADDED = "added"
+"""The metadata key marking a judge's field stored apart from its record
+(:class:`Calibrated`)."""
+
+
+def added_fields(cls: Any) -> tuple[str, ...]:
+    """The fields of the judge (or judge class) ``cls`` stored apart from its record (marked
+    :data:`ADDED`), in their order."""
+    return tuple(f.name for f in dataclasses.fields(cls) if f.metadata.get(ADDED))
+
+
+def _added_known(
+    cls: Any, fields: Mapping[str, Any], d: Mapping[str, Any], added: Any
+) -> dict[str, Any]:
+    """The fields stored apart (``added``) that ``cls`` knows, checked against its record
+    ``d`` (:meth:`Calibrated.from_dict`); the others, a newer posecbr's, left out."""
+    if added is None:
+        return {}
+    if not isinstance(added, Mapping):
+        raise ValueError(f"the fields stored apart must be a record of fields, got {added!r}")
+    apart = set(added_fields(cls))
+    out = {}
+    for name in sorted(set(added) & set(fields)):
+        if name in d:
+            raise ValueError(f"field {name!r} is stored twice (in the record and apart)")
+        if name not in apart:
+            raise ValueError(f"field {name!r} is stored apart, where it is not kept")
+        out[name] = added[name]
+    return out
 
 
 def _plain(value: Any) -> Any:
@@ -845,7 +885,7 @@ class ActivityMargin(Calibrated):
     budget_thresholds: tuple[float, ...] = ()
     floor: float = 0.0
     reach: float = math.inf
-    activities: tuple[str, ...] = ()
+    activities: tuple[str, ...] = dataclasses.field(default=(), metadata={ADDED: True})
 
     def __post_init__(self) -> None:
         for name in ("budget_thresholds", "activities"):
@@ -1266,17 +1306,44 @@ def judges_to_dict(judges: Mapping[str, Calibrated]) -> dict[str, dict[str, Any]
     return {name: judge.to_dict() for name, judge in judges.items()}
 
 
-def judges_from_dict(d: Mapping[str, Any]) -> dict[str, Calibrated]:
-    """The judges :func:`judges_to_dict` wrote. ValueError naming the judge and the field for
-    a record that is not one (an unknown judge's name included)."""
+def judges_apart(
+    judges: Mapping[str, Calibrated],
+) -> tuple[dict[str, dict[str, Any]], dict[str, dict[str, Any]]]:
+    """The calibrated judges as JSON-ready records by name (:func:`judges_to_dict`) without
+    the fields marked :data:`ADDED`, and those fields by name (judges with none left out):
+    what a posecbr stores, so that one older than such a field reads the records (it refuses
+    a field it does not know) and ignores the rest. :func:`judges_from_dict` joins them."""
+    records: dict[str, dict[str, Any]] = {}
+    apart: dict[str, dict[str, Any]] = {}
+    for name, judge in judges.items():
+        record = judge.to_dict()
+        moved = {f: record.pop(f) for f in added_fields(judge) if f in record}
+        records[name] = record
+        if moved:
+            apart[name] = moved
+    return records, apart
+
+
+def judges_from_dict(d: Mapping[str, Any], added: Any = None) -> dict[str, Calibrated]:
+    """The judges :func:`judges_to_dict` wrote (``d``), or :func:`judges_apart` (``d`` its
+    records, ``added`` the fields stored apart). ValueError naming the judge and the field
+    for a record that is not one (an unknown judge's name included), and for fields stored
+    apart of a judge that is not stored."""
     if not isinstance(d, Mapping):
         raise ValueError(f"the stored judges must be a record by name, got {d!r}")
+    if added is None:
+        added = {}
+    if not isinstance(added, Mapping):
+        raise ValueError(f"the judges' fields stored apart must be a record by name, got {added!r}")
+    strays = sorted(str(n) for n in set(added) - set(d))
+    if strays:
+        raise ValueError(f"fields stored apart for the judge {strays[0]!r}, which is not stored")
     out: dict[str, Calibrated] = {}
     for name, record in d.items():
         if name not in STORED:
             raise ValueError(f"unknown judge {name!r}")
         try:
-            out[name] = STORED[name].from_dict(record)
+            out[name] = STORED[name].from_dict(record, added.get(name))
         except ValueError as exc:
             raise ValueError(f"{name}: {exc.args[0]}") from None
     return out
@@ -1392,6 +1459,9 @@ __all__ = [
     "STORED",
     "Calibrated",
     "calibrate_judges",
+    "ADDED",
+    "added_fields",
+    "judges_apart",
     "judges_from_dict",
     "judges_to_dict",
     "MARGIN_SAMPLE",

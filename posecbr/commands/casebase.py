@@ -316,13 +316,22 @@ def _history(log: list[Any]) -> dict[str, Any]:
 
 def _judges_summary(i: CaseBaseInfo) -> dict[str, Any]:
     """The unknown judges stored with the model (``segment --unknown``), each with its
-    fields, and whether they hold for the cases as they are now (``current``: else
-    ``segment`` calibrates at run time)."""
+    fields (those stored apart from its record, ``activities``, with them:
+    :func:`cbr.stored.judges_document`), and whether they hold for the cases as they are now
+    (``current``: else ``segment`` calibrates at run time)."""
     stored = i.model.get("judges")
     if not isinstance(stored, dict):
         return {}
     current = stored.get("case_base_version") == i.version
-    return {"unknown_judges": {"current": current, "calibrated": stored.get("calibrated")}}
+    calibrated, apart = stored.get("calibrated"), stored.get("added_fields")
+    if isinstance(calibrated, dict) and isinstance(apart, dict):
+        calibrated = {
+            name: {**record, **apart[name]}
+            if isinstance(record, dict) and isinstance(apart.get(name), dict)
+            else record
+            for name, record in calibrated.items()
+        }
+    return {"unknown_judges": {"current": current, "calibrated": calibrated}}
 
 
 def _print_info(d: dict[str, Any]) -> None:
