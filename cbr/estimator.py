@@ -320,7 +320,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     states: fluent states (group name or list of machine names), see ``FeatureConfig``.
     similarity_params: parameters of the measure (e.g. ``{"band": 0.1}`` for dtw).
     trim: fraction of each activity's cases kept by novelty/benefit trimming at fit time (None:
-      keep all).
+      keep all); with another ``editor``, which decides how many cases it keeps, fit refuses it.
     editor: the maintenance editor run at fit time (:mod:`cbr.maintenance`):
       ``"novelty-benefit"`` (keeps ``trim`` of each activity, 0.7 when ``trim`` is None),
       ``"cnn"``, ``"renn"``, ``"icf"``; None: novelty-benefit when ``trim`` is set, else none.
@@ -474,6 +474,17 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
             )
         self._feature_config()  # length, states, phases: FeatureConfig's own checks
 
+    def _check_trim_editor(self) -> None:
+        """Refuse, at fit, a ``trim`` with an ``editor`` other than novelty-benefit: the share
+        kept is novelty-benefit's, the others decide how many cases they keep (it was
+        ignored). Not in :meth:`_check_params`: a model stored with both loads as it did."""
+        if self.trim is not None and self.editor not in (None, "novelty-benefit"):
+            raise ConfigError(
+                f"trim goes with editor='novelty-benefit' (the share of each activity it keeps);"
+                f" editor={self.editor!r} decides how many cases it keeps, got trim={self.trim!r}",
+                "trim",
+            )
+
     def _check_kinds(self) -> None:
         """Refuse ``trim``, ``angles``, ``positions`` and ``similarity_params`` of the wrong
         kind (``bool("no")`` is true; True is no fraction; ``**"band=0.1"`` a TypeError)."""
@@ -528,6 +539,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         the candidate columns, whether the mirror images are needed, whether the favoured
         side is. Refuses parameters that cannot work together before any clip is read."""
         self._check_params()
+        self._check_trim_editor()
         measure = self._measure()
         vectors = self.features == "qmp" or self._summary()
         if self.feature_weights not in ("auto", "none") and not self._selectable(vectors, measure):
@@ -560,6 +572,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         """:meth:`fit` on clips already described by :func:`cbr.described.describe_clip` with
         :meth:`describe_plan` (in this process or on a cluster's workers): the same model."""
         self._check_params()
+        self._check_trim_editor()
         labels, classes = self._check_training_set(clips, y)
         measure = self._measure()
         subjects = np.array([c.subject or "" for c in clips], dtype=object)

@@ -370,10 +370,11 @@ def _check_trimmed(fitted: CaseBaseClassifier) -> None:
     (k), as ``casebase trim`` refuses it: every answer would be the vote of all its cases."""
     report = fitted.maintenance_
     if report is not None and report.size_after < int(fitted.k):
+        shares = fitted.editor in (None, "novelty-benefit")  # --trim is its share kept
+        how = "keep more with --trim" if shares else f"another --editor than {fitted.editor}"
         raise DataError(
             f"trimming would leave {report.size_after} cases, fewer than the {int(fitted.k)}"
-            " the case base votes with (k): nothing stored (keep more with --trim, or give a"
-            " smaller -k)",
+            f" the case base votes with (k): nothing stored ({how}, or give a smaller -k)",
             "training set",
         )
 

@@ -220,3 +220,64 @@ def test_judges_apart_and_back() -> None:
     without = {k: v for k, v in records["activity-margin"].items() if k != "pooled"}
     with pytest.raises(ValueError, match="field 'pooled' is stored apart, where it is not kept"):
         judges_from_dict({"activity-margin": without}, {"activity-margin": {"pooled": 0.7}})
+
+
+# ``train --trim 0.5 --editor cnn`` took --trim and ignored it (the share kept is
+# novelty-benefit's: CNN, RENN and ICF decide how many cases they keep), where ``casebase
+# trim --keep`` with those editors is refused; and a CNN that kept fewer cases than k was
+# refused advising "keep more with --trim", which changes nothing for it.
+
+
+def test_train_refuses_trim_with_an_editor_that_decides_how_many_it_keeps(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["train", str(DEMO / "labels.csv"), "--db", str(tmp_path / "cb.sqlite"),
+            "--editor", "cnn", "--trim", "0.5"]  # fmt: skip
+    line = refused(argv, tmp_path, capsys)
+    assert line == (
+        "posecbr train: error: --trim: goes with --editor novelty-benefit; cnn decides how"
+        " many cases it keeps"
+    )
+
+
+def test_fit_refuses_trim_with_another_editor_and_a_stored_model_with_both_loads(
+    trained: Path, tmp_path: Path
+) -> None:
+    """In Python the same at fit (before any clip is read); a model stored with both (they
+    were taken) still loads, its parameters as they were."""
+    from cbr.estimator import CaseBaseClassifier
+    from features.errors import ConfigError
+    from features.poses import load_pose
+
+    X = [load_pose(DEMO / f"m0{m}_s01_e01.npz") for m in (1, 4, 6)]
+    with pytest.raises(ConfigError) as err:
+        CaseBaseClassifier(trim=0.5, editor="renn").fit(X, ["a", "b", "c"])
+    assert err.value.message == (
+        "trim goes with editor='novelty-benefit' (the share of each activity it keeps);"
+        " editor='renn' decides how many cases it keeps, got trim=0.5"
+    )
+    model = _model(trained)
+    model["params"] = {**model["params"], "trim": 0.5, "editor": "cnn"}
+    db = _copy(trained, tmp_path / "cb.sqlite")
+    _set_model(db, model)
+    store = open_store(db, create=False, readonly=True)
+    try:
+        clf = load_classifier(store, "default").classifier
+    finally:
+        store.close()
+    assert (clf.trim, clf.editor) == (0.5, "cnn")
+
+
+def test_an_editor_that_keeps_fewer_than_k_is_refused_naming_what_helps(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """CNN on the demo's squats, side lunges and shoulder abductions of s01 and s02 keeps
+    3 cases, fewer than k = 5."""
+    argv = ["train", str(DEMO / "labels.csv"), "--db", str(tmp_path / "cb.sqlite"),
+            "--subjects", "s01,s02", "--labels", SEEN, "--editor", "cnn"]  # fmt: skip
+    line = refused(argv, tmp_path, capsys)
+    assert line == (
+        "posecbr train: error: training set: trimming would leave 3 cases, fewer than the 5"
+        " the case base votes with (k): nothing stored (another --editor than cnn, or give a"
+        " smaller -k)"
+    )

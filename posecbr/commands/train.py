@@ -223,6 +223,11 @@ def _estimator(args: argparse.Namespace) -> Any:
         )
     if args.trim is not None and not 0.0 < args.trim <= 1.0:
         raise ConfigError(f"must be in (0, 1], got {args.trim}", "--trim")
+    if args.trim is not None and args.editor not in (None, "novelty-benefit"):
+        raise ConfigError(  # as casebase trim's --keep: it was ignored
+            f"goes with --editor novelty-benefit; {args.editor} decides how many cases it keeps",
+            "--trim",
+        )
     _check_fluent_options(args, o["features"], measure.name)
     estimator = CaseBaseClassifier(
         features=o["features"],
