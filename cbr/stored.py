@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import re
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -49,7 +49,9 @@ from .unknown import AT_FIT, Calibrated, calibrate_judges, judges_apart, judges_
 from .weights import MIRROR_FLAG, FeatureWeights
 from .words import CASE_KINDS as CASE_KINDS
 
-#: bump when the model document changes meaning
+#: bump when the model document changes meaning: a posecbr that reads up to a lower format
+#: refuses the model (:func:`check_format`). A field an older reader may ignore needs no bump
+#: (a new top-level key; a judge's field stored apart, :func:`judges_document`).
 MODEL_FORMAT = 1
 
 
@@ -456,10 +458,25 @@ def _params(
             for k, v in params.items() if k in known}  # fmt: skip
 
 
+def check_format(model: Mapping[str, Any], name: str, where: str) -> None:
+    """StoreError when the model document of case base ``name`` is of a later format than
+    :data:`MODEL_FORMAT` (stored by a newer posecbr whose model means what this one cannot
+    read: answering from it would answer otherwise than it). A model without a format, or of
+    this one or an earlier, is read."""
+    stored = model.get("format")
+    if isinstance(stored, int) and not isinstance(stored, bool) and stored > MODEL_FORMAT:
+        raise StoreError(
+            f"case base {name!r} was stored by a newer posecbr (model format {stored}); this"
+            f" one reads up to format {MODEL_FORMAT}: upgrade posecbr to read it",
+            where,
+        )
+
+
 def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
     """The fitted classifier stored as case base ``name`` (its active cases); a large case base
     maps its matrices from beside the database when they are there (:func:`write_matrices`)."""
     info, arrays, mapped = _read(store, name)
+    check_format(info.model, name, store.where)
     config = _config(info, store.where)
     cb = _case_base(store, info, arrays, config, mapped)
     model = info.model

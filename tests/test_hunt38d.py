@@ -281,3 +281,29 @@ def test_an_editor_that_keeps_fewer_than_k_is_refused_naming_what_helps(
         " the case base votes with (k): nothing stored (another --editor than cnn, or give a"
         " smaller -k)"
     )
+
+
+# The model document carries a format (MODEL_FORMAT) that nothing read: a model a later
+# posecbr stores in a format whose meaning changed would have been read as this one's.
+
+
+def test_a_model_of_a_later_format_is_refused_saying_so(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from cbr.stored import MODEL_FORMAT
+
+    assert _model(trained)["format"] == MODEL_FORMAT == 1
+    root = tmp_path / "db"
+    root.mkdir()
+    db = _copy(trained, root / "cb.sqlite")
+    _set_model(db, {**_model(trained), "format": 2})
+    clip = str(DEMO / "m01_s03_e01.npz")
+    line = refused(["classify", clip, "--db", str(db)], root, capsys)
+    assert line == (
+        f"posecbr classify: error: {db}: case base 'default' was stored by a newer posecbr"
+        " (model format 2); this one reads up to format 1: upgrade posecbr to read it"
+    )
+    # without a format (stored before it was written) or of this one: read
+    for model in ({k: v for k, v in _model(trained).items() if k != "format"}, _model(trained)):
+        _set_model(db, model)
+        assert _judges(db) == _judges(trained)
