@@ -39,14 +39,7 @@ ACTIVITIES = ["deep_squat", "side_lunge", "standing_shoulder_abduction"]  # sort
 
 pytestmark = pytest.mark.xdist_group("hunt38d")  # one trained case base for the module
 
-#: The fields of each stored judge's record that posecbr at 9e02354 reads, by hand from its
-#: cbr/unknown.py (the dataclass fields of each class in STORED; Calibrated.from_dict refuses
-#: any other: "unknown field ..."):
-#: Margin: threshold, basis, known, novel, false_unknown, floor, reach;
-#: MarginDistance: margin, joint_margin, joint_distance, basis, known, false_unknown;
-#: ActivityMargin: thresholds, pooled, basis, known, false_unknown, prior, rate,
-#: budget_thresholds, floor, reach; SpreadMargin: those and spreads, power; SpreadFar: those
-#: of SpreadMargin and far.
+#: The fields 9e02354 reads of each stored judge's record (listed in the test below).
 _ACTIVITY = {"thresholds", "pooled", "basis", "known", "false_unknown", "prior", "rate",
              "budget_thresholds", "floor", "reach"}  # fmt: skip
 OLD_FIELDS = {
@@ -100,10 +93,23 @@ def _judges(db: Path) -> dict[str, Any]:
 
 
 def test_the_stored_judges_have_only_the_fields_an_older_posecbr_reads(trained: Path) -> None:
-    """Each stored judge's record has exactly the fields 9e02354 accepted (OLD_FIELDS, listed
-    by hand from its code); the judges' document holds beside its two keys only
-    ``added_fields``, which that reader does not look at, with the activities in the
-    classifier's class order (sorted as text)."""
+    """Each stored judge's record has exactly the fields posecbr at 9e02354 accepted, listed
+    by hand from its cbr/unknown.py (the dataclass fields of each class in STORED;
+    Calibrated.from_dict refuses any other, "unknown field ..."):
+
+    - margin (Margin): threshold, basis, known, novel, false_unknown, floor, reach;
+    - margin-distance (MarginDistance): margin, joint_margin, joint_distance, basis, known,
+      false_unknown;
+    - activity-margin (ActivityMargin): thresholds, pooled, basis, known, false_unknown,
+      prior, rate, budget_thresholds, floor, reach;
+    - spread-margin (SpreadMargin): those of ActivityMargin, spreads, power;
+    - spread-far (SpreadFar): those of SpreadMargin, far.
+
+    Of the model's ``judges`` its cbr/stored.py reads ``case_base_version`` and
+    ``calibrated`` (``stored[...]``), nothing else; of the model itself only the keys it
+    names (``model.get``). The judges' document holds beside those two keys only
+    ``added_fields``, with the activities in the classifier's class order (sorted as
+    text)."""
     judges = _model(trained)["judges"]
     assert set(judges) == OLD_JUDGES_KEYS | {"added_fields"}
     records = judges["calibrated"]
