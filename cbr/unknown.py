@@ -1326,18 +1326,16 @@ def judges_apart(
 
 def judges_from_dict(d: Mapping[str, Any], added: Any = None) -> dict[str, Calibrated]:
     """The judges :func:`judges_to_dict` wrote (``d``), or :func:`judges_apart` (``d`` its
-    records, ``added`` the fields stored apart). ValueError naming the judge and the field
-    for a record that is not one (an unknown judge's name included), and for fields stored
-    apart of a judge that is not stored."""
+    records, ``added`` the fields stored apart: those of a judge not in ``d``, as those a
+    judge does not know, are what a reader may do without, and are left out). ValueError
+    naming the judge and the field for a record that is not one (an unknown judge's name
+    included)."""
     if not isinstance(d, Mapping):
         raise ValueError(f"the stored judges must be a record by name, got {d!r}")
     if added is None:
         added = {}
     if not isinstance(added, Mapping):
         raise ValueError(f"the judges' fields stored apart must be a record by name, got {added!r}")
-    strays = sorted(str(n) for n in set(added) - set(d))
-    if strays:
-        raise ValueError(f"fields stored apart for the judge {strays[0]!r}, which is not stored")
     out: dict[str, Calibrated] = {}
     for name, record in d.items():
         if name not in STORED:
