@@ -30,7 +30,13 @@ from sklearn.exceptions import NotFittedError
 from features.body import TORSO_JOINTS, torso_seen, torso_share
 from features.errors import DataError, InputError, PoseFileError
 from features.poses import MAX_FPS, MIN_FPS, PoseSequence
-from features.repetitions import ANALYSIS_FPS, Repetition, count_repetitions, movement_signals
+from features.repetitions import (
+    ANALYSIS_FPS,
+    Repetition,
+    count_in_signals,
+    count_repetitions,
+    movement_signals,
+)
 from features.skeleton import BLAZEPOSE_33
 from features.values import is_number
 
@@ -334,6 +340,9 @@ class LiveSegmenter:
         self.last_centre = 0.0  # of the last hop pass 2 settled
         self.turn = False  # the last finished segment had a far point at its end
         self.holding = False  # and held it up to its end: the segment after counts it
+        self.passed_on = 0  # a far point held on past the end of the segments finished,
+        # nothing come back yet, that counts if the stream ends still in the hold (0: a
+        # posture got into and held, :meth:`_still_beyond`)
         self.ended = False  # the stream has ended (finish)
         self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
         self.judged: list[_Judged] = []  # the windows over the segments not yet finished
@@ -861,15 +870,24 @@ class LiveSegmenter:
         # the last far point held up to the cut (a squat held at the bottom through a change
         # of label): the movement comes back beyond it, where the next segment counts it
         held = cut and not lost and bool(reps) and self._held_beyond(end, reps[-1])
+        passed_on = 0
+        if cut and not lost and reps and not held and self._still_beyond(end, reps[-1]):
+            reps, held, passed_on = self._held_on(clip, edges, first, reps)
         kept = keep_whole(reps, first, end, self.step, turn, cut and not lost, held)
         if cut and reps:
             self.turn = at_cut(reps, first, end, self.step)[1] or held
             self.holding = held
+            self.passed_on = passed_on
         elif cut and not self.holding:  # held on through a segment all hold, else no turn
             self.turn = False
+        count = len(kept)
+        if not cut and explained and self.holding and not reps:
+            # the stream ended still in a hold passed on from a segment before: its far
+            # point counts here, as it would have there had the stream ended sooner
+            count += self.passed_on
         label = None if state == self.unknown else self.classes[state]
         text, novelty = self._explain(start, end, state) if explained else ("", math.nan)
-        return LiveSegment(start, end, label, float(confidence), len(kept), text, novelty)
+        return LiveSegment(start, end, label, float(confidence), count, text, novelty)
 
     def _held_beyond(self, cut: int, last: Repetition) -> bool:
         """Whether the frames pushed after ``cut`` (the end of a segment being finished: the
@@ -902,6 +920,46 @@ class LiveSegmenter:
             except DataError:
                 return False
         return last.held[1] and (after[0].held[0] or at_start)
+
+    def _still_beyond(self, cut: int, last: Repetition) -> bool:
+        """Whether ``last``, the last far point of a segment being finished at ``cut``, is
+        held up to the cut (:attr:`features.repetitions.Repetition.held`) and the frames
+        pushed beyond it hold no far point: nothing has come back from it yet (a squat held
+        at the bottom through a change of label, on to the frames pushed; to the stream's
+        end once it has ended)."""
+        if self.n - cut < 2 or not last.held[1]:
+            return False
+        beyond = self._sequence(cut, min(self.n, cut + int(MAX_SEGMENT_S * self.fps)))
+        try:
+            after = count_repetitions(beyond, recording_edges=(False, self.ended))
+        except DataError:  # too short, or nobody in view
+            return False
+        return not after.repetitions
+
+    def _held_on(
+        self,
+        clip: PoseSequence,
+        edges: tuple[bool, bool],
+        first: int,
+        reps: tuple[Repetition, ...],
+    ) -> tuple[tuple[Repetition, ...], bool, int]:
+        """A segment being finished, frames of ``clip`` (from ``first``, counted with
+        ``edges``: ``reps``), whose last far point is held on past its end and nothing has
+        come back in the frames pushed beyond (:meth:`_still_beyond`): as
+        :func:`cbr.segmentation.counted_segments` counts a segment beside one with no far
+        point, the cut is as a recording's end beyond which nothing turns, and one far point
+        got into and held still up to it is no repetition. Once the stream has ended that is
+        the segment's count; while it runs on, the body may yet come back, and the far point
+        is left to the segment after, which counts it where the movement comes back (or, the
+        stream ending still in the hold, counts what this one would have). Returns the
+        segment's repetitions, whether its last far point is left to the segment after, and
+        how many that counts if the stream ends in the hold."""
+        sig = movement_signals(clip)
+        found = count_in_signals(sig, clip.n_frames, clip.fps, edges, settled=(False, True))
+        settled = tuple(_shifted(r, first) for r in found.repetitions)
+        if self.ended:
+            return settled, False, 0
+        return reps, True, len(settled) - len(reps) + 1
 
     def current(self) -> LiveSegment | None:
         """The segment in progress, labelled with the rolling label; its confidence and
