@@ -987,13 +987,38 @@ class LiveSegmenter:
         out = self._settle(np.array(self.forward.settle(final=True), dtype=np.int64))
         assert self.settled is not None
         out += self._pass(math.inf, self.n, final=True)
+        out += self._lost_at_end()
         assert self.seen is not None
-        held = self.held  # a second or more seen after nobody in view, no hop followed of
-        if self.seen == self.nobody and self.n - self._blind_end() >= self.least_blind:
-            tail = self.unknown if self.label is None else int(self.state)  # it: as now
-            out += self._change(self._blind_end(), tail)
-            self.seen_sum = [sum(held), float(len(held))] if tail == self.unknown else [0.0, 0.0]
+        held = self.held  # seen after nobody in view, no hop followed of it
+        tail = self.unknown if self.label is None else int(self.state)  # it: as now
+        end = self._blind_end()
+        if self.seen == self.nobody and end < self.n:
+            # a second or more seen again; or less, labelled, as offline (an unknown
+            # sliver under a second joins the stretch)
+            if self.n - end >= self.least_blind or tail != self.unknown:
+                out += self._change(end, tail)
+                self.seen_sum = (
+                    [sum(held), float(len(held))] if tail == self.unknown else [0.0, 0.0]
+                )
         return [*out, self._segment(self.seen_start, self.n, self.seen, False)]
+
+    def _lost_at_end(self) -> list[LiveSegment]:
+        """At the end of the stream, a stretch of :data:`MIN_SEGMENT_S` or more with nobody in
+        view that began in the segment in progress and no hop reached (a hop's evidence is
+        of the middle of its windows, a second behind the stream: the person lost for the
+        last second or two): the segment is finished where the person was lost, keeping a
+        far point there (the stretch is a segment of its own, counted 0), as offline
+        (:func:`cbr.segmentation.nobody_blocks`). Before, the stretch stayed in the segment,
+        and a squat lost from view at the bottom as the stream ended counted none."""
+        runs = list(self.blind)
+        if self.blind_from is not None and self.n - self.blind_from >= self.least_blind:
+            runs.append((self.blind_from, self.n))
+        late = [r for r in runs if r[0] > self.seen_start]
+        if self.seen is None or self.seen == self.nobody or not late:
+            return []
+        first = late[0][0]
+        self.blind_hop = float(first)  # where the stretch lies (:meth:`_blind_end`)
+        return self._change(first, self.nobody)
 
     def _short_stream(self) -> list[LiveSegment]:
         if self.offset or not self.n or self.n < MIN_WINDOW_S * self.fps:

@@ -1,19 +1,25 @@
-"""Hunt 38b: ``watch`` (the live segmenter) and ``segment`` count the end of a stream alike: a
+"""Hunt 38b: ``watch`` (the live segmenter) and ``segment`` treat the end of a stream alike: a
 squat that goes down and is held at the bottom, through a change of label, until the
 recording ends (or for longer than ``watch`` waits before finishing the segment before the
-change)."""
+change); a stream that ends with nobody in view, or just after the person is seen again."""
 
 from __future__ import annotations
+
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+import cbr.segmentation as seg
+from features.datasets import Clip
 from features.poses import PoseSequence
 from features.repetitions import count_repetitions
 from tests.bodies import squat_pose, to_sequence
+from tests.moves import clip
 from tests.test_hunt36j import MOVE_S, REST_S, _counts, _eased
-from tests.test_hunt36l import _watched
+from tests.test_hunt36l import LABELS, _Changing, _watched
 from tests.test_repetitions import FPS
+from tests.test_segment import _fit, _NeverUnknown
 
 
 def _squats_then_held(squats: int, hold_s: float, back: bool) -> tuple[PoseSequence, int]:
@@ -91,3 +97,92 @@ def test_squats_then_one_held_to_the_end_add_up_alike() -> None:
     assert count_repetitions(seq).count == 3
     watched, offline = _both(seq, hold + int(0.9 * FPS), 0.0)
     assert offline == [3, 0] and watched == [2, 1]
+
+
+def _lost_to_the_end(squats: int, down: bool, blind_s: float, after_s: float) -> PoseSequence:
+    """Standing 2.5 s, ``squats`` squats, then (``down``) down once more over 0.8 s and held
+    0.5 s at the bottom; then ``blind_s`` seconds in which no joint is seen (the person out of
+    view), then ``after_s`` seconds standing again, to the end of the stream."""
+    rest, move = int(REST_S * FPS), int(MOVE_S * FPS)
+    parts = [np.zeros(int(2.5 * FPS))]
+    for _ in range(squats):
+        parts += [_eased(move), _eased(move)[::-1], np.zeros(rest)]
+    if down:
+        parts += [_eased(move), np.ones(int(0.5 * FPS))]
+    seen = np.concatenate(parts)
+    depth = np.concatenate([seen, np.zeros(int(blind_s * FPS) + int(after_s * FPS))])
+    seq = to_sequence(*(squat_pose(d) for d in depth), fps=FPS)
+    positions = seq.positions.copy()
+    positions[len(seen) : len(seen) + int(blind_s * FPS)] = np.nan
+    return PoseSequence(positions, seq.joint_names, FPS)
+
+
+def _streamed(seq: PoseSequence) -> list[tuple[int, int, str | None, int]]:
+    """(start_frame, end_frame, label, repetitions) of each segment ``watch`` gives ``seq``,
+    one label throughout ("a"), the stream ending with its last frame."""
+    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
+    live = _Changing(clf, seq.fps, judge=SimpleNamespace())
+    out = []
+    for frame in seq.positions:
+        out += live.push(frame)
+    out += live.finish()
+    return [(s.start_frame, s.end_frame, s.label, s.repetitions) for s in out]
+
+
+@pytest.fixture(scope="module")
+def squat_or_arms() -> object:
+    """A case base of the synthetic squat and arm abduction (tests/test_hunt37b.py's)."""
+    names = ("squat", "arm_abduction")
+    return _fit([Clip(clip(n).with_metadata(label=n, subject="s"), n, "s", {}) for n in names])
+
+
+def _offline(clf: object, seq: PoseSequence) -> list[tuple[int, int, str | None, int]]:
+    found = seg.segment(clf, seq, _NeverUnknown()).segments
+    return [(s.start_frame, s.end_frame, s.label, len(s.repetitions)) for s in found]
+
+
+@pytest.mark.parametrize("blind_s", [1.0, 1.5])
+@pytest.mark.parametrize(("squats", "down"), [(0, True), (2, True), (2, False)])
+def test_a_stream_ending_with_nobody_in_view_ends_with_a_nobody_segment(
+    squat_or_arms: object, squats: int, down: bool, blind_s: float
+) -> None:
+    """``squats`` squats, then (``down``) down into one more and lost from view at the bottom
+    0.5 s later, nobody in view for the last 1 or 1.5 s of the stream. By hand: ``squats``
+    repetitions, and one more for the squat lost at the bottom (README: the segment before
+    nobody in view keeps a far point where the person was lost, in ``watch`` as in
+    ``segment``); the last 1-1.5 s with nobody in view a segment of its own (at least 1 s),
+    counted 0. ``segment`` gives that; ``watch`` now too. Before, ``watch`` kept the stretch
+    in the segment (no hop's evidence, a second behind the stream, reached it) and the squat
+    lost at the bottom counted 0 (a far point cut off by the end of the stream)."""
+    seq = _lost_to_the_end(squats, down, blind_s, 0.0)
+    lost = seq.n_frames - int(blind_s * FPS)
+    want = squats + down
+    offline = _offline(squat_or_arms, seq)
+    assert offline[-1] == (lost, seq.n_frames, None, 0)
+    assert sum(r for *_, r in offline) == want
+    watched = _streamed(seq)
+    assert watched[-1] == (lost, seq.n_frames, None, 0)
+    assert [r for *_, r in watched] == [want, 0]
+
+
+@pytest.mark.parametrize("after_s", [0.1, 0.5])
+def test_a_stream_ending_just_after_the_person_is_seen_again(
+    squat_or_arms: object, after_s: float
+) -> None:
+    """Two squats, nobody in view for 1.5 s, then the person standing again for the last 0.1
+    or 0.5 s: three segments in ``segment`` and now in ``watch``: the squats (2), nobody in
+    view (0), the person seen again (0, labelled). Before, ``watch`` gave the squats' segment
+    to the end, or (0.5 s) made the stretch with nobody in view run on to the end."""
+    seq = _lost_to_the_end(2, False, 1.5, after_s)
+    lost = seq.n_frames - int(after_s * FPS) - int(1.5 * FPS)
+    back = lost + int(1.5 * FPS)
+    offline = _offline(squat_or_arms, seq)
+    nobody = [s for s in offline if s[2] is None]
+    assert nobody == [(lost, back, None, 0)]
+    assert offline[-1][:2] == (back, seq.n_frames) and offline[-1][2] is not None
+    assert sum(r for *_, r in offline) == 2
+    assert _streamed(seq) == [
+        (0, lost, "a", 2),
+        (lost, back, None, 0),
+        (back, seq.n_frames, "a", 0),
+    ]
