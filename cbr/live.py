@@ -900,8 +900,8 @@ class LiveSegmenter:
         to a far point of their own without coming back from the cut either, and the two
         repetitions' frames together hold one far point (a shallow dip across the cut, one
         repetition); as :func:`cbr.segmentation.counted_segments` asks of
-        the segment after. None counted (the stream ended still in the hold): the segment
-        keeps its repetition, as there."""
+        the segment after. None counted (the body still in the hold): :meth:`_still_beyond`
+        and :meth:`_held_on` say what the segment keeps."""
         if self.n - cut < 2 or not (last.held[1] or last.unreturned[1]):
             return False
         beyond = self._sequence(cut, min(self.n, cut + int(MAX_SEGMENT_S * self.fps)))
