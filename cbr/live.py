@@ -725,6 +725,17 @@ class LiveSegmenter:
         self.judged = kept  # of the segments not finished, over frames still kept
         followed = self.blind_hop if self.seen == self.nobody else self.last_centre
         self.blind = [run for run in self.blind if run[1] > followed]  # hops still to follow
+        # the gaps of the video: read only for a segment with nobody in view, which begins
+        # no earlier than the segment in progress, the run without the torso in progress or
+        # one still to follow, or the frames still kept (every later change lies after those)
+        starts = [self.offset, *(a for a, _ in self.blind)]
+        if self.seen == self.nobody:
+            starts.append(self.seen_start)
+        if self.blind_from is not None:
+            starts.append(self.blind_from)
+        needed = min(starts) - self.longest
+        while self.absent and self.absent[0][1] <= needed:
+            del self.absent[0]
 
     def _vote(self, n: int) -> tuple[np.ndarray, float]:
         """The last window's vote over the activities ``(n_classes,)`` (its nearest case's)

@@ -297,8 +297,16 @@ class PoseSequence:
             index[target] = i
         if unknown:
             also = f" nor {self.skeleton} joint names" if own else ""
+            # another skeleton's own names (a Kinect's by its SDK): say how to declare it
+            hint = "".join(
+                f' (these are {name} joint names: give skeleton="{name}")'
+                for name, (joints, _) in SKELETON_JOINTS.items()
+                if name != self.skeleton and set(unknown) <= set(joints)
+            )
             raise PoseFileError(
-                f"joint names are not BlazePose landmark names{also}: " + ", ".join(unknown[:5]),
+                f"joint names are not BlazePose landmark names{also}: "
+                + ", ".join(unknown[:5])
+                + hint,
                 self.source or None,
             )
         # NaN (positions) and unknown (confidence) for the joints the file lacks

@@ -1,0 +1,92 @@
+"""Hunt 38e: a robotics engineer's loop over the Python API, their own tracker's frames
+(dropped frames, joints lost, nobody in view) pushed for a long time, and a Kinect
+skeleton named by its own joints."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from cbr.live import MAX_SEGMENT_S, LiveSegment, LiveSegmenter
+from cbr.segmentation import NO_FRAMES, NOBODY
+from features.body import torso_share
+from features.errors import PoseFileError
+from features.poses import PoseSequence
+from features.skeleton import BLAZEPOSE_33, KINECT_V2_JOINTS
+
+
+class _Seen(LiveSegmenter):
+    """Activity "a" in every window that shows the person, every activity alike where none
+    does (as the real segmenter votes there); no classifier behind it."""
+
+    def _vote(self, n: int) -> tuple[np.ndarray, float]:
+        if torso_share(self._sequence(n - self.window, n)) == 0.0:
+            return np.full(2, 0.5), 0.5
+        return np.eye(2)[0], 0.0
+
+    def _repetition_windows(self, n: int) -> None:
+        """The fixed windows only (the frames are noise: nothing repeats)."""
+
+
+def _seen() -> _Seen:
+    labels = np.array(["a", "b"])
+    clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
+    return _Seen(clf, 30.0, judge=SimpleNamespace(), source="robot")
+
+
+def test_dropped_frames_over_a_long_stream_are_not_all_remembered() -> None:
+    """10 minutes at 30 fps with every tenth frame dropped (pushed NaN, absent=True): 1,800
+    gaps, each remembered to the end (the list grew by 3 a second, and every stretch with
+    nobody in view read it whole). Only those the frames kept could still need stay: at
+    most one in ten of MAX_SEGMENT_S of frames, two windows, a hop and the longest window.
+    A 3-s gap of the video after it is still told as no frames, and 3 s out of view as
+    nobody in view."""
+    live = _seen()
+    rng = np.random.default_rng(0)
+    gone = np.full((33, 3), np.nan)
+    segments: list[LiveSegment] = []
+    for i in range(10 * 60 * 30):
+        dropped = i % 10 == 9
+        segments += live.push(gone if dropped else rng.normal(size=(33, 3)), absent=dropped)
+    kept = MAX_SEGMENT_S * 30 + 2 * live.window + live.hop + live.longest
+    assert len(live.absent) <= kept / 10 + 1 < 1800
+    for frames, absent in ((90, True), (60, False), (90, False), (60, False)):
+        for _ in range(frames):
+            seen = absent or (frames == 90 and not absent)
+            segments += live.push(gone if seen else rng.normal(size=(33, 3)), absent=absent)
+    segments += live.finish()
+    told = [(s.label, s.explanation) for s in segments]
+    assert told == [("a", told[0][1]), (None, NO_FRAMES), ("a", told[2][1]), (None, NOBODY),
+                    ("a", told[4][1])]  # fmt: skip
+    assert abs(segments[1].start_frame - 18000) <= 1 and abs(segments[1].end_frame - 18090) <= 1
+    assert abs(segments[3].start_frame - 18150) <= 1 and abs(segments[3].end_frame - 18240) <= 1
+
+
+def test_a_kinect_skeleton_named_by_its_joints_is_told_how_to_declare_it() -> None:
+    """README: another tracker's joints by name, ``PoseSequence(xyz, names, fps)
+    .to_canonical()``. Kinect v2's 25 SDK names were refused as "not BlazePose landmark
+    names: SpineBase, ..." and no more; the refusal now says they are kinect_v2's and how to
+    say so, and so declared the frame maps: Kinect joint j at (j, 2j, 3j) cm puts
+    ShoulderLeft (4) at BlazePose's left_shoulder and WristRight (10) at right_wrist."""
+    xyz = np.arange(25)[None, :, None] * np.array([0.01, 0.02, 0.03])
+    said = (
+        r"names: SpineBase, SpineMid, Neck, Head, ShoulderLeft "
+        r'\(these are kinect_v2 joint names: give skeleton="kinect_v2"\)$'
+    )
+    with pytest.raises(PoseFileError, match=said):
+        PoseSequence(xyz, KINECT_V2_JOINTS, 30.0).to_canonical()
+    frame = PoseSequence(xyz, KINECT_V2_JOINTS, 30.0, skeleton="kinect_v2").to_canonical()
+    np.testing.assert_allclose(frame.positions[0, BLAZEPOSE_33.index("left_shoulder")],
+                               [0.04, 0.08, 0.12])  # fmt: skip
+    np.testing.assert_allclose(frame.positions[0, BLAZEPOSE_33.index("right_wrist")],
+                               [0.10, 0.20, 0.30])  # fmt: skip
+
+
+def test_names_of_no_known_skeleton_get_no_hint() -> None:
+    """A name that is no skeleton's (a typo beside Kinect's) is refused as before, naming
+    no skeleton it is not."""
+    names = ("SpineBase", "Shoulderleft")
+    with pytest.raises(PoseFileError, match=r"names: SpineBase, Shoulderleft$"):
+        PoseSequence(np.zeros((1, 2, 3)), names, 30.0).to_canonical()
