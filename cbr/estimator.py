@@ -106,29 +106,34 @@ from .similarity import SimilarityMeasure, get_measure
 from .weights import MIRROR_FLAG, WEIGHTINGS
 
 
-def as_sequences(X: Any, where: str = "X") -> list[PoseSequence]:
+def as_sequences(X: Any, where: str = "X", name: str = "X") -> list[PoseSequence]:
     """``X`` as a list of PoseSequence (a list, tuple or 1-D object array); anything else is an
     :class:`features.errors.InputError` (the ``ValueError`` scikit-learn users catch) naming
-    what was given."""
+    what was given (``name``: what the caller calls ``X``, as :func:`cbr.training.train`'s
+    ``clips``)."""
     if isinstance(X, PoseSequence):
-        raise InputError("X must be a sequence of PoseSequence, got a single PoseSequence", where)
+        raise InputError(
+            f"{name} must be a sequence of PoseSequence, got a single PoseSequence", where
+        )
     if isinstance(X, np.ndarray) and X.dtype != object:
         raise InputError(
-            f"X must be a sequence of PoseSequence, got a {X.dtype} array of shape {X.shape}",
+            f"{name} must be a sequence of PoseSequence, got a {X.dtype} array of shape {X.shape}",
             where,
         )
     if isinstance(X, str | bytes) or not hasattr(X, "__iter__"):
-        raise InputError(f"X must be a sequence of PoseSequence, got {type(X).__name__}", where)
+        raise InputError(
+            f"{name} must be a sequence of PoseSequence, got {type(X).__name__}", where
+        )
     if isinstance(X, np.ndarray) and X.ndim != 1:  # flattened, a (2, 3) table was six clips
         raise InputError(
-            f"X must be a sequence of PoseSequence, got an object array of shape {X.shape}"
+            f"{name} must be a sequence of PoseSequence, got an object array of shape {X.shape}"
             " (one dimension: a clip each)",
             where,
         )
     items = list(X)
     for i, s in enumerate(items):
         if not isinstance(s, PoseSequence):
-            raise InputError(f"X[{i}] is a {type(s).__name__}, not a PoseSequence", where)
+            raise InputError(f"{name}[{i}] is a {type(s).__name__}, not a PoseSequence", where)
     return items
 
 

@@ -37,14 +37,14 @@ from casebase_store import (
 )
 from features.cluster import connect, gather, map_outcomes
 from features.datasets import DatasetEntry, clip_target
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError, InputError
 from features.poses import PoseSequence
 from features.progress import progress
 from features.text import counted
 
 from .casebase import CaseBase, piece_name, subject_of
 from .described import DescribedClip, describe_case, describe_clip
-from .estimator import CaseBaseClassifier, check_labels
+from .estimator import CaseBaseClassifier, as_sequences, check_labels
 from .maintenance import MaintenanceReport, record_trim
 from .problem import FeatureConfig
 from .stored import (
@@ -57,6 +57,7 @@ from .stored import (
 )
 from .stored import stored_case_base as to_store
 from .unknown import JUDGES
+from .words import CASE_KINDS
 
 
 @dataclass(frozen=True)
@@ -294,6 +295,26 @@ def _check_name(name: Any) -> None:
     check_case_base_name(name, "--name")
 
 
+def _check_what(estimator: Any, target: Any, cases: Any) -> None:
+    """Refuse, before any clip is read, an ``estimator`` that is no CaseBaseClassifier (the
+    class itself, not one made of it, or None), a ``target`` that is no column's name and a
+    ``cases`` that is none of :data:`cbr.words.CASE_KINDS`: stored as given, every later
+    summary of the case base would call its cases by it ("18 held-out frames")."""
+    if not isinstance(estimator, CaseBaseClassifier):
+        got = (
+            "the class itself: give one, CaseBaseClassifier()"
+            if estimator is CaseBaseClassifier
+            else type(estimator).__name__
+        )
+        raise InputError(f"a CaseBaseClassifier is expected, got {got}", "estimator")
+    if not isinstance(target, str) or not target.strip():
+        raise InputError(f"target must be the name of a column, got {target!r}", "target")
+    if not isinstance(cases, str) or cases not in CASE_KINDS:
+        raise InputError(
+            f"cases must be one of {', '.join(map(repr, CASE_KINDS))}, got {cases!r}", "cases"
+        )
+
+
 def train(
     db: str | Path,
     name: str,
@@ -307,10 +328,15 @@ def train(
 ) -> TrainResult:
     """Fit ``estimator`` on the usable ``clips`` and store it as case base ``name`` in ``db``
     (a SQLite file or SQLAlchemy URL), recording what each clip is (``cases``: ``"clips"``,
-    ``"repetitions"`` or ``"windows"``, as ``train --split`` cut them). Clips that show no
-    person are skipped and named."""
+    ``"repetitions"`` or ``"windows"``, as ``train --split`` cut them) and what its label is
+    (``target``: the column's name, as ``train --target``). Clips that show no person are
+    skipped and named. ``clips`` that are not PoseSequences, an ``estimator`` that is not a
+    :class:`~cbr.estimator.CaseBaseClassifier`, a ``cases`` or ``target`` of another kind:
+    :class:`features.errors.InputError`, before any clip is read."""
     _check_name(name)
+    clips = as_sequences(clips, "clips", "clips")
     check_labels(labels, len(clips))
+    _check_what(estimator, target, cases)
     plan = fit_plan(estimator)
     described = [
         describe(s, plan) for s in progress(clips, desc="features", total=len(clips), unit="clip")
@@ -340,6 +366,7 @@ def train_described(
     numbers, true/false, other numbers: stored with the model, and answered as such once it
     is loaded back); the cases hold them as text."""
     _check_name(name)
+    _check_what(estimator, target, cases)
     text = [str(v) for v in check_labels(labels, len(clips))]
     given = list(np.asarray(labels, dtype=object))
     keep, skipped, too_short = usable(clips)

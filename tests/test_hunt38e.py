@@ -4,17 +4,25 @@ skeleton named by its own joints."""
 
 from __future__ import annotations
 
+import csv
+from pathlib import Path
 from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 import pytest
 
+from cbr.estimator import CaseBaseClassifier
 from cbr.live import MAX_SEGMENT_S, LiveSegment, LiveSegmenter
 from cbr.segmentation import NO_FRAMES, NOBODY
+from cbr.training import train
 from features.body import torso_share
-from features.errors import PoseFileError
-from features.poses import PoseSequence
+from features.errors import InputError, PoseFileError
+from features.poses import PoseSequence, load_pose
 from features.skeleton import BLAZEPOSE_33, KINECT_V2_JOINTS
+from tests.badinput import assert_unchanged, snapshot
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 
 class _Seen(LiveSegmenter):
@@ -90,3 +98,66 @@ def test_names_of_no_known_skeleton_get_no_hint() -> None:
     names = ("SpineBase", "Shoulderleft")
     with pytest.raises(PoseFileError, match=r"names: SpineBase, Shoulderleft$"):
         PoseSequence(np.zeros((1, 2, 3)), names, 30.0).to_canonical()
+
+
+def _demo_clips() -> tuple[list[PoseSequence], list[str]]:
+    """Six demo clips of two activities as a tracker's arrays (three people)."""
+    with open(DEMO / "labels.csv", newline="") as f:
+        rows = [r for r in csv.DictReader(f) if r["movement"] in ("m01", "m02")]
+    rows = [r for r in rows if r["correct"] == "true" and r["episode"] == "1"]
+    clips = [
+        PoseSequence(
+            load_pose(DEMO / r["path"]).to_canonical().positions,
+            BLAZEPOSE_33,
+            30.0,
+            metadata={"subject": r["subject"]},
+        )
+        for r in rows
+    ]
+    return clips, [r["label"] for r in rows]
+
+
+@pytest.mark.parametrize(
+    ("change", "said"),
+    [
+        ({"cases": "frames"}, "cases: cases must be one of 'clips', 'repetitions', 'windows', "
+         "got 'frames'"),
+        ({"cases": None}, "cases: cases must be one of"),
+        ({"target": 3}, "target: target must be the name of a column, got 3"),
+        ({"target": " "}, "target: target must be the name of a column, got ' '"),
+        ({"estimator": CaseBaseClassifier}, "estimator: a CaseBaseClassifier is expected, got "
+         "the class itself: give one, CaseBaseClassifier()"),
+        ({"estimator": None}, "estimator: a CaseBaseClassifier is expected, got NoneType"),
+        ({"clips": "first"}, "clips: clips[0] is a ndarray, not a PoseSequence"),
+    ],
+)  # fmt: skip
+def test_train_refuses_what_no_case_base_could_be_stored_with(
+    tmp_path: Path, change: dict[str, Any], said: str
+) -> None:
+    """``cbr.training.train(..., cases="frames")`` stored the case base as holding "frames"
+    (`casebase info` then said "18 held-out frames are too few"), ``target=3`` one that
+    "predicts 3"; the class CaseBaseClassifier for an instance, None, or a tracker's array
+    among the clips, stopped in a TypeError or AttributeError from inside ("unhashable type:
+    'numpy.ndarray'"). Each is refused with InputError naming the argument, before any clip
+    is read, and no store file is made."""
+    clips, labels = _demo_clips()
+    args: dict[str, Any] = {"estimator": CaseBaseClassifier(), "target": "label"}
+    args["cases"] = "clips"
+    args.update(change)
+    if args.pop("clips", None) == "first":
+        clips = [clips[0].positions, *clips[1:]]
+    before = snapshot(tmp_path)
+    with pytest.raises(InputError) as got:
+        train(tmp_path / "robot.sqlite", "default", clips, labels, **args)
+    assert str(got.value).startswith(said)
+    assert_unchanged(tmp_path, before)
+
+
+def test_train_takes_the_clips_from_a_generator(tmp_path: Path) -> None:
+    """``clips`` read as they come (a generator) stopped in "object of type 'generator' has
+    no len()"; now the case base stored holds the same six cases, of the same labels, as
+    from a list."""
+    clips, labels = _demo_clips()
+    done = train(tmp_path / "robot.sqlite", "default", (c for c in clips), labels,
+                 CaseBaseClassifier(mirror="off", feature_weights="fisher", phases=0))  # fmt: skip
+    assert (done.n_cases, done.label_counts) == (6, {"deep_squat": 3, "hurdle_step": 3})
