@@ -418,7 +418,8 @@ class LiveSegmenter:
         ``world`` is a :class:`~features.poses.PoseSequence`'s positions for one frame: the
         joints of :data:`features.skeleton.BLAZEPOSE_33` in that order, in metres, in a
         right-handed frame with y up (gravity along -y). Another tracker's joints are put in
-        that order by ``PoseSequence(xyz, names, fps).to_canonical()``; a z-up frame (ROS's)
+        that order by ``PoseSequence(xyz, names, fps).to_canonical()`` (a Kinect v2's by its
+        SDK's names with ``skeleton="kinect_v2"``); a z-up frame (ROS's)
         must be turned first, ``(x, y, z)`` to ``(x, z, -y)``: read as it is, an upright torso
         is one tilted forward. Frames are taken as evenly spaced at the ``fps`` given: push
         every one. Returns the segments that this frame settled as finished (usually none). A
@@ -988,8 +989,10 @@ class LiveSegmenter:
         """The segments not yet finished, at the end of the stream (the last one ends there);
         a stream that ended before its first window (:data:`DEFAULT_WINDOW_S`) but lasted
         the shortest window :func:`cbr.segmentation.segment` takes (:data:`MIN_WINDOW_S`) is
-        segmented as that segments such a recording. Called again, it returns none: the
-        stream's segments have all been given."""
+        segmented as that segments such a recording (so such a stream that shows nobody is
+        refused as ``segment`` refuses it: DataError, "no person in view in enough frames";
+        a longer one ends with a segment with nobody in view). Called again, it returns none:
+        the stream's segments have all been given."""
         if self.ended:
             return []
         self.ended = True
