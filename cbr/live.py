@@ -28,6 +28,7 @@ import numpy as np
 from sklearn.exceptions import NotFittedError
 
 from features.body import TORSO_JOINTS, torso_seen, torso_share
+from features.derived import stretch
 from features.errors import DataError, InputError, PoseFileError
 from features.poses import MAX_FPS, MIN_FPS, PoseSequence
 from features.repetitions import (
@@ -40,6 +41,7 @@ from features.repetitions import (
 from features.skeleton import BLAZEPOSE_33
 from features.values import is_number
 
+from .problem import warm
 from .segmentation import (
     DEFAULT_WINDOW_S,
     MAX_WINDOW_S,
@@ -698,7 +700,7 @@ class LiveSegmenter:
         ]
         self.found = {f for f in self.found if f[1] > n - 2 * self.span} | set(new)
         self.period_votes = [w for w in self.period_votes if w[1] > n - 2 * self.span]
-        clips = [self._sequence(b, c) for b, c in new]
+        clips = [self._with_context(b, c) for b, c in new]
         shown = [(w, clip) for w, clip in zip(new, clips, strict=True) if torso_share(clip) > 0]
         if not shown:
             return
@@ -745,11 +747,25 @@ class LiveSegmenter:
         window not unlike every activity votes for one (:func:`_mean_vote`), as offline
         (:func:`cbr.segmentation.decode_activities`): one like none, across a change of
         movement or of one the case base lacks, is nearest to whichever lies least far."""
-        window = self._sequence(n - self.window, n)
+        window = self._with_context(n - self.window, n)
         if torso_share(window) == 0.0:  # no person: no evidence either way
             return np.full(self.unknown, 1.0 / self.unknown), 0.5
         solved = self.clf.solve([window], flag=False)[0]
         return self._judged(solved, n - self.window, n)  # the judge: unknown
+
+    def _with_context(self, a: int, b: int) -> PoseSequence:
+        """Stream frames [a, b) as a clip whose motion states keep up to a window of the
+        frames before ``a`` as context (:func:`features.derived.stretch`), as a window cut
+        from a recording (``segment``) or a training clip (``train --split windows``) keeps
+        them: cut cold, a window that begins part-way through a movement read its first
+        frames as still."""
+        first = max(self.offset, a - self.window)
+        if first == a:
+            return self._sequence(a, b)
+        whole = self._sequence(first, b)
+        config = self.clf.feature_config_
+        warm(whole, config.level, mirror=config.side == "canonical")
+        return stretch(whole, a - first, b - first)
 
     def _judged(self, solved: Any, start: int, stop: int) -> tuple[np.ndarray, float]:
         """A solved window's (frames [start, stop)) vote for its nearest case's activity

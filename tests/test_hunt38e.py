@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from cbr.estimator import CaseBaseClassifier
-from cbr.live import MAX_SEGMENT_S, LiveSegment, LiveSegmenter
-from cbr.segmentation import NO_FRAMES, NOBODY
+from cbr.live import MAX_SEGMENT_S, LiveSegment, LiveSegmenter, activity_distances
+from cbr.segmentation import NO_FRAMES, NOBODY, solve_recording
 from cbr.training import train
 from features.body import torso_share
 from features.errors import InputError, PoseFileError
@@ -161,3 +161,45 @@ def test_train_takes_the_clips_from_a_generator(tmp_path: Path) -> None:
     done = train(tmp_path / "robot.sqlite", "default", (c for c in clips), labels,
                  CaseBaseClassifier(mirror="off", feature_weights="fisher", phases=0))  # fmt: skip
     assert (done.n_cases, done.label_counts) == (6, {"deep_squat": 3, "hurdle_step": 3})
+
+
+class _Logged(LiveSegmenter):
+    """The live segmenter keeping every window it judged: (start, stop) -> the distance to
+    the nearest case of each activity."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.log: dict[tuple[int, int], np.ndarray] = {}
+
+    def _judged(self, solved: Any, start: int, stop: int) -> tuple[np.ndarray, float]:
+        self.log[(start, stop)] = activity_distances(self.clf, solved, self.codes)
+        return super()._judged(solved, start, stop)
+
+
+def test_a_live_window_that_begins_part_way_through_a_movement_is_read_as_segment_reads_it() -> (
+    None
+):
+    """Nine demo clips of three activities one after another, streamed: each window was
+    read from its own frames alone, so one that begins part-way through a squat had its first
+    frames' motion states read cold (the window of frames 11-73 lay 48.0 from its nearest
+    squat case; cut from the recording, as ``segment`` and ``train --split windows`` cut
+    them, 9.8). Now a window keeps the frames before it as context: every window both
+    judge lies as far from each activity as ``segment``'s window of the same frames."""
+    clips, labels = _demo_clips()
+    with open(DEMO / "labels.csv", newline="") as f:
+        rows = [r for r in csv.DictReader(f) if r["movement"] == "m07"]
+    rows = [r for r in rows if r["correct"] == "true" and r["episode"] == "1"]
+    clips += [PoseSequence(load_pose(DEMO / r["path"]).to_canonical().positions, BLAZEPOSE_33,
+                           30.0, metadata={"subject": r["subject"]}) for r in rows]  # fmt: skip
+    labels += [r["label"] for r in rows]
+    clf = CaseBaseClassifier(mirror="off", feature_weights="fisher", phases=0).fit(clips, labels)
+    stream = PoseSequence(np.concatenate([c.positions for c in clips]), BLAZEPOSE_33, 30.0)
+    live = _Logged(clf, 30.0)
+    for frame in stream.positions:
+        live.push(frame)
+    live.finish()
+    offline = {(w.start, w.stop): w.nearest for w in solve_recording(clf, stream).windows}
+    both = sorted(live.log.keys() & offline.keys())
+    assert len(both) >= 5
+    for key in both:
+        np.testing.assert_allclose(live.log[key], offline[key], rtol=1e-6, err_msg=str(key))
