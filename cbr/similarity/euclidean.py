@@ -976,9 +976,10 @@ class Euclidean(SimilarityMeasure):
     ) -> tuple[np.ndarray, np.ndarray]:
         """The k nearest of each query ``(m, D)``: indices and distances ``(m, k)``.
 
-        One matrix product per block of queries (BLAS, all its threads) unless the index
-        prunes well (then query by query), with the rounding error of the product bounded so
-        the neighbours are exactly :meth:`nearest`'s."""
+        One matrix product per block of queries (BLAS: all its threads for a large product,
+        one for a small one, :func:`_product`) unless the index prunes well (then query by
+        query), with the rounding error of the product bounded so the neighbours are exactly
+        :meth:`nearest`'s."""
         queries = np.asarray(query_reps, dtype=np.float64).reshape(len(query_reps), -1)
         if isinstance(index, _EuclideanIndex):
             _check_width(queries.shape[1], index)
@@ -999,7 +1000,7 @@ class Euclidean(SimilarityMeasure):
         block = max(1, min(256, (1 << 26) // (4 * n)))  # <= 64 MB of products at a time
         q32s = queries.astype(np.float32)
         for a in range(1, len(queries), block):
-            prods = q32s[a : a + block] @ index.rows.T  # (block, n)
+            prods = _product(q32s[a : a + block], index.rows)  # (block, n)
             for j in range(len(prods)):
                 q32, q_sq = self._query(queries[a + j])
                 out_i[a + j], out_d[a + j] = _select_from_products(
@@ -1044,7 +1045,8 @@ def _blas_pools() -> list[Any]:
 def _matvec_one_thread(rows: np.ndarray, q32: np.ndarray) -> np.ndarray:
     """``rows @ q32`` by BLAS on one thread: a query is memory-bound, and BLAS threads on a
     busy machine were measured 40-300x slower (thread hand-off). The library's own thread
-    setters (a microsecond each), not ``threadpool_limits`` (~0.1 ms a call, measured)."""
+    setters (a microsecond each), not ``threadpool_limits`` (~0.1 ms a call, measured). Any
+    product ``a @ b`` (:func:`_product`'s small ones too)."""
     pools = _blas_pools()
     before = [p.get_num_threads() for p in pools]
     for p, t in zip(pools, before, strict=True):
@@ -1057,6 +1059,26 @@ def _matvec_one_thread(rows: np.ndarray, q32: np.ndarray) -> np.ndarray:
         for p, t in zip(pools, before, strict=True):
             if t != 1:
                 p.set_num_threads(t)
+
+
+SMALL_PRODUCT = 1 << 28
+"""Multiply-adds up to which a block of queries' product runs on one BLAS thread
+(:func:`_product`): about 10-20 ms on one core. A recording's windows are solved 32 at a
+time, so against a case base of hundreds of windows each product is 10-100 M multiply-adds;
+on this 2-core machine at load 7, 32 x 500 x 5600 took 476 ms on two BLAS threads against
+27 ms on one (each thread waits for a time slice at every hand-off), 256 x 2000 x 212 70 ms
+against 1.5 ms. Larger products (10^4 cases and up, every row of the README's tables) keep
+all of BLAS's threads, which pay there on a quiet machine."""
+
+
+def _product(queries: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``queries @ rows.T`` ``(m, n)`` float32: on one BLAS thread when it is at most
+    :data:`SMALL_PRODUCT` multiply-adds, else on all of them. The number of threads does not
+    change the neighbours: every candidate's distance is computed again by the row kernel."""
+    if queries.shape[0] * rows.shape[0] * rows.shape[1] <= SMALL_PRODUCT:
+        return _matvec_one_thread(queries, rows.T)
+    product: np.ndarray = queries @ rows.T
+    return product
 
 
 def _plain_search(
