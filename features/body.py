@@ -222,8 +222,22 @@ def positions_in_frame(
     origin, axes, torso = frame
     joints = np.take(p, _POSITION_INDEX, axis=1)  # a new array: shifted in place
     joints -= origin
-    # one (frames * joints, 3) product, not one small product per frame
-    return np.asarray((joints.reshape(-1, 3) @ axes.T / torso).reshape(p.shape[0], -1))
+    # one (frames * joints, 3) product per block of frames, not one small product per frame
+    rows = joints.reshape(-1, 3)
+    out = np.empty_like(rows)
+    step = _PRODUCT_FRAMES * len(_POSITION_INDEX)
+    for a in range(0, len(rows), step):
+        np.matmul(rows[a : a + step], axes.T, out=out[a : a + step])
+    out /= torso
+    return out.reshape(p.shape[0], -1)
+
+
+_PRODUCT_FRAMES = 1024
+"""Frames of :func:`positions_in_frame`'s product at a time. BLAS (OpenBLAS, as numpy ships
+it) hands a product of more than 2^18 multiply-adds to all its threads, and a 3 x 3 rotation
+of a 20,000-frame piece's joints split that way took 630 ms on a busy 2-core machine against
+42 ms on one thread (a 10-minute recording at 120 fps computes four such pieces twice). The
+blocks stay under that size; each row's product is the same arithmetic either way."""
 
 
 _POSITION_INDEX = np.array([JOINT_INDEX[j] for j in POSITION_JOINTS])
