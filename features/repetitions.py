@@ -525,10 +525,19 @@ def _running_median(x: np.ndarray, width: int) -> np.ndarray:
     frame or two stood as a posture (a far point cut off by the end, counted, and gone a frame
     later when the median read past it; a Kinect knee bent 50 degrees for three frames made
     a count of UI-PRMD go 4, 5, 4); mirrored, a glitch just before the end is read twice. At
-    30 fps (width 7) a glitch in the last frame is now gone and one in the last two halved."""
+    30 fps (width 7) a glitch in the last frame is now gone and one in the last two halved.
+
+    Column by column: SciPy's one-dimensional running median keeps its window sorted from
+    sample to sample, where a ``(width, 1)`` filter over the whole array selects each median
+    anew (the same medians, 6-12x the time: 3 s of a 10-minute recording at 120 fps)."""
     from scipy.ndimage import median_filter
 
-    out = median_filter(x, size=(width, 1), mode="nearest")
+    if np.isfinite(x).all():  # NaN sorts differently in the two (the callers give none)
+        out = np.empty_like(x)
+        for j in range(x.shape[1]):
+            out[:, j] = median_filter(x[:, j], size=width, mode="nearest")
+    else:
+        out = median_filter(x, size=(width, 1), mode="nearest")
     half, n = width // 2, len(x)
     for i in range(min(half, n)):
         out[i] = np.median(x[: i + half + 1], axis=0)
