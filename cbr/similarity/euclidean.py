@@ -70,6 +70,7 @@ from typing import Any
 import numba
 import numpy as np
 
+from features.blas import blas_pools
 from features.errors import ConfigError, InputError
 
 from .base import SimilarityMeasure, check_weighting, check_whole, register_measure, weighted
@@ -1011,7 +1012,6 @@ class Euclidean(SimilarityMeasure):
 
 _ALL = np.zeros(0, dtype=np.int64)
 _BLAS_MIN = 1 << 20  # rows x dims from which BLAS's matrix-vector product beats the row kernel
-_BLAS: list[Any] | None = None  # threadpoolctl's BLAS handles, found on first use
 
 
 def _nibbles_prune(index: _EuclideanIndex) -> bool:
@@ -1031,15 +1031,7 @@ def _error(gamma: float, q_sq: float) -> float:
 
 def _blas_pools() -> list[Any]:
     """threadpoolctl's handles of the loaded BLAS libraries (found once; none without it)."""
-    global _BLAS
-    if _BLAS is None:
-        try:  # installed with scikit-learn
-            from threadpoolctl import ThreadpoolController
-
-            _BLAS = [c for c in ThreadpoolController().lib_controllers if c.user_api == "blas"]
-        except ImportError:  # pragma: no cover
-            _BLAS = []
-    return list(_BLAS)
+    return blas_pools()
 
 
 def _matvec_one_thread(rows: np.ndarray, q32: np.ndarray) -> np.ndarray:
