@@ -226,3 +226,29 @@ def test_a_long_recordings_movement_direction_is_found_on_one_blas_thread(
     short = reps.movement_direction(x[:300])
     assert fake.set_to == []
     assert abs(float(short @ along)) > 0.99
+
+
+def test_the_pose_models_are_loaded_once_per_process_for_every_estimator(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``posecbr train`` of a folder of videos made a PoseEstimator per video, each loading
+    and optimising both BlazePose models again; now they share one session per model."""
+    pytest.importorskip("onnxruntime")
+    from features.pose_estimation import PoseEstimator, model
+
+    made: list[str] = []
+    real = model.ort.InferenceSession
+
+    def counted(path: str, **kw: Any) -> Any:
+        made.append(path)
+        return real(path, **kw)
+
+    monkeypatch.setattr(model, "_SESSIONS", {}, raising=False)
+    monkeypatch.setattr(model.ort, "InferenceSession", counted)
+    first, second = PoseEstimator(threads=1), PoseEstimator(threads=1)
+    assert sorted(made) == sorted([str(model.DETECTOR_PATH), str(model.LANDMARK_PATH)])
+    assert first._detector is second._detector and first._landmarker is second._landmarker
+    # another thread count is another session; the estimators' own state stays their own
+    PoseEstimator(threads=2)
+    assert len(made) == 4
+    assert first._image_filter is not second._image_filter

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import threading
 from functools import lru_cache
 from pathlib import Path
 
@@ -40,7 +41,8 @@ def default_threads() -> int:
 
 
 def make_session(path: Path, threads: int | None = None) -> ort.InferenceSession:
-    """An onnxruntime CPU session for one of the models.
+    """An onnxruntime CPU session for one of the models, made once per process for each
+    model and thread count (:data:`_SESSIONS`).
 
     ``session.intra_op.allow_spinning = "0"``: the detector and landmark sessions alternate on
     the same cores; with spinning threads each session's idle pool burns the cores the other
@@ -48,8 +50,27 @@ def make_session(path: Path, threads: int | None = None) -> ort.InferenceSession
     """
     if not path.exists():
         raise ConfigError("BlazePose model missing (reinstall posecbr)", path)
+    n = threads or default_threads()
+    key = (str(path), n, os.getpid())
+    with _SESSIONS_LOCK:
+        if key not in _SESSIONS:
+            _SESSIONS[key] = _new_session(path, n)
+        return _SESSIONS[key]
+
+
+_SESSIONS: dict[tuple[str, int, int], ort.InferenceSession] = {}
+"""The sessions made so far. A session holds no state between runs (the estimator's track and
+filters are its own) and onnxruntime runs one from several threads at once, so every
+:class:`~features.pose_estimation.PoseEstimator` of a process shares them: before, each video
+of a training folder (``posecbr train VIDEOS``, one estimator per video) loaded and optimised
+both models again, 0.2-0.5 s a video. Keyed by the process too: a forked worker (``extract
+--workers``) makes its own, as a session's thread pool does not survive a fork."""
+_SESSIONS_LOCK = threading.Lock()
+
+
+def _new_session(path: Path, threads: int) -> ort.InferenceSession:
     opts = ort.SessionOptions()
-    opts.intra_op_num_threads = threads or default_threads()
+    opts.intra_op_num_threads = threads
     opts.inter_op_num_threads = 1
     opts.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
     opts.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
