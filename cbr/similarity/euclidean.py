@@ -1059,8 +1059,9 @@ SMALL_PRODUCT = 1 << 28
 time, so against a case base of hundreds of windows each product is 10-100 M multiply-adds;
 on this 2-core machine at load 7, 32 x 500 x 5600 took 476 ms on two BLAS threads against
 27 ms on one (each thread waits for a time slice at every hand-off), 256 x 2000 x 212 70 ms
-against 1.5 ms. Larger products (10^4 cases and up, every row of the README's tables) keep
-all of BLAS's threads, which pay there on a quiet machine."""
+against 1.5 ms. Larger products keep all of BLAS's threads, which pay there on a quiet
+machine (the README's retrieval figures were measured with BLAS pinned to one thread: they
+do not move)."""
 
 
 def _product(queries: np.ndarray, rows: np.ndarray) -> np.ndarray:
