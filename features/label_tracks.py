@@ -126,18 +126,40 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     tokens = [t for t in re.split(r"[\s,]+", text) if t]
     if not tokens:
         raise DataError("the label file holds no labels", path)
+    _refuse_semicolons(text, path)
     _refuse_a_table(text, path)
     _refuse_a_header(text, tokens, path)
     if names is None:
         return tokens
     unknown = sorted({t for t in tokens if t not in names}, key=code_order)
     if unknown:
-        held = ", ".join(list(names)[:5]) + (", ..." if len(names) > 5 else "")
+        held = ", ".join(_short(c) for c in list(names)[:5]) + (", ..." if len(names) > 5 else "")
+        listed = ", ".join(_short(c) for c in unknown[:5]) + (", ..." if len(unknown) > 5 else "")
         raise DataError(
-            f"label code(s) {', '.join(unknown[:5])} not in the label names (which name {held})",
+            f"label code(s) {listed} not in the label names (which name {held})",
             path,
         )
     return [names[t] for t in tokens]
+
+
+def _short(code: str) -> str:
+    """A label code as an error line shows it: its first 40 characters."""
+    return code if len(code) <= 40 else code[:40] + "..."
+
+
+def _refuse_semicolons(text: str, path: Path) -> None:
+    """Refuse a label file whose labels are separated by semicolons (``1;1;6;6``, as a
+    spreadsheet saves a row in many locales), naming its first line holding one: read as
+    one label per line, its count would not fit the recording for a reason the file does
+    not show, or its codes would be no code of the names file (the whole line named as one
+    code). A label file separates its labels by spaces, tabs, commas or line ends."""
+    for line_no, line in enumerate(text.splitlines(), start=1):
+        if ";" in line:
+            raise DataError(
+                f"line {line_no}: labels separated by ';' ({line.strip()[:40]!r}); a label"
+                " file separates its labels by spaces, tabs, commas or line ends",
+                path,
+            )
 
 
 def _refuse_nul(text: str, path: Path) -> None:
