@@ -33,6 +33,7 @@ Each :class:`Clip` holds a canonical sequence (33 BlazePose joints) whose metada
 from __future__ import annotations
 
 import csv
+import math
 import os
 import re
 import sys
@@ -285,6 +286,59 @@ def labelled_over_time(path: str | Path) -> bool:
         return False
     csv_path = path if path.is_file() else path / "labels.csv"
     return any(rec["track"] is not None for rec in read_labels_csv(csv_path))
+
+
+def check_no_overlaps(path: str | Path, labels: Collection[str] | None = None) -> None:
+    """Refuse a labels CSV two of whose rows give frames of one file different labels: rows
+    ``start,end`` that overlap, or a row of a whole file and a row of a stretch of it (rows of
+    one label may overlap; a stretch listed twice is refused by the training). Only rows with
+    a label in ``labels`` are compared when it is given (the others are not trained on); rows
+    naming a label file are not. Anything but a labels CSV passes. DataError naming the CSV
+    and both lines, read from the rows alone (no clip is read)."""
+    path = Path(path)
+    if detect_kind(path) != "csv":
+        return
+    csv_path = path if path.is_file() else path / "labels.csv"
+    by_file: dict[Path, list[dict[str, Any]]] = {}
+    for rec in read_labels_csv(csv_path):
+        if rec["track"] is None and (labels is None or rec["label"] in labels):
+            by_file.setdefault(rec["path"].resolve(), []).append(rec)
+    for rows in by_file.values():
+        reach: dict[str, dict[str, Any]] = {}  # each label's row reaching farthest so far
+        for rec in sorted(rows, key=lambda r: (_span(r)[0], r["line"])):
+            start, end = _span(rec)
+            other = max(
+                (r for lab, r in reach.items() if lab != rec["label"] and _span(r)[1] > start),
+                key=lambda r: _span(r)[1],
+                default=None,
+            )
+            if other is not None:
+                raise DataError(_overlap(other, rec), csv_path)
+            if rec["label"] not in reach or _span(reach[rec["label"]])[1] < end:
+                reach[rec["label"]] = rec
+
+
+def _span(rec: dict[str, Any]) -> tuple[float, float]:
+    """A row's frames ``[start, end)``; a whole file's from 0 to infinity."""
+    return (0, math.inf) if rec["start"] is None else (rec["start"], rec["end"])
+
+
+def _overlap(a: dict[str, Any], b: dict[str, Any]) -> str:
+    """Why rows ``a`` and ``b`` (``a`` starting first, or the whole file) cannot both be."""
+
+    def shown(rec: dict[str, Any]) -> str:
+        frames = "whole" if rec["start"] is None else f"frames {rec['start']},{rec['end']}"
+        return f"{frames} ({rec['label']!r})"
+
+    first, second = sorted((a, b), key=lambda r: r["line"])
+    lo, hi = max(_span(a)[0], _span(b)[0]), min(_span(a)[1], _span(b)[1])
+    shared = "its frames" if math.isinf(hi) else f"frames {lo:g}-{hi - 1:g}"
+    ranged = a["start"] is not None and b["start"] is not None
+    return (
+        f"lines {first['line']} and {second['line']} give {b['path'].name} {shown(first)}"
+        f" and {shown(second)}: {shared} would be cases of two activities"
+        + (" (end is exclusive: rows 0,300 and 300,600 meet)" if ranged else "")
+    )
 
 
 def _uiprmd_entries(path: Path, sensor: str) -> list[_Entry]:
@@ -1141,6 +1195,7 @@ __all__ = [
     "Clip",
     "clip_files",
     "LabelTrack",
+    "check_no_overlaps",
     "check_track",
     "frame_labels",
     "iter_recording",

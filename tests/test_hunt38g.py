@@ -54,3 +54,54 @@ def test_codes_not_named_are_shown_cut_short(tmp_path: Path) -> None:
     assert str(err.value).endswith(
         f"label code(s) {shown} not in the label names (which name 1)"
     ), str(err.value)
+
+
+def _rows_csv(folder: Path, *rows: str) -> Path:
+    """A labels CSV path,label,start,end of ``rows`` over rec.npz (60 frames standing) and
+    other.npz (60 frames)."""
+    good_pose_file(folder / "rec.npz", frames=60)
+    good_pose_file(folder / "other.npz", frames=60)
+    csv = folder / "labels.csv"
+    csv.write_text("path,label,start,end\n" + "".join(r + "\n" for r in rows), encoding="utf-8")
+    return csv
+
+
+@pytest.mark.parametrize(
+    ("rows", "needle"),
+    [
+        (["rec.npz,squat,0,30", "rec.npz,lunge,20,50"],
+         "lines 2 and 3 give rec.npz frames 0,30 ('squat') and frames 20,50 ('lunge'):"
+         " frames 20-29 would be cases of two activities (end is exclusive"),
+        # listed out of order, a row of the same label between: still found, lines as listed
+        (["other.npz,squat,0,60", "rec.npz,lunge,40,60", "rec.npz,squat,0,20",
+          "rec.npz,squat,10,45"],
+         "lines 3 and 5 give rec.npz frames 40,60 ('lunge') and frames 10,45 ('squat'):"
+         " frames 40-44 would be cases of two activities"),
+        (["rec.npz,squat,,", "rec.npz,lunge,10,40"],
+         "lines 2 and 3 give rec.npz whole ('squat') and frames 10,40 ('lunge'): frames 10-39"
+         " would be cases of two activities"),
+    ],
+    ids=["two rows", "unsorted", "whole and a stretch"],
+)  # fmt: skip
+def test_train_refuses_rows_giving_frames_two_labels(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], rows: list[str], needle: str
+) -> None:
+    """Rows start,end of one file that overlap with different labels were trained: the frames
+    they share became cases of both activities, nothing said (a row listed twice whole was
+    refused, after every clip was described). Now refused before any clip is read, naming
+    both lines and the frames they share (end exclusive, as the CSV's)."""
+    csv = _rows_csv(tmp_path, *rows)
+    for extra in ([], ["--split", "windows"], ["--split", "repetitions"]):
+        refused(["train", str(csv), "--db", str(tmp_path / "cb.sqlite"), *extra], tmp_path,
+                capsys, f"{csv}: {needle}")  # fmt: skip
+
+
+def test_rows_that_meet_or_share_a_label_or_are_left_out_are_no_overlap(tmp_path: Path) -> None:
+    from features.datasets import check_no_overlaps
+
+    csv = _rows_csv(tmp_path, "rec.npz,squat,0,30", "rec.npz,lunge,30,60",
+                    "rec.npz,squat,0,20", "other.npz,lunge,0,60", "other.npz,jog,0,10")  # fmt: skip
+    with pytest.raises(DataError, match="lines 5 and 6 give other.npz"):
+        check_no_overlaps(csv)
+    check_no_overlaps(csv, ["squat", "lunge"])  # jog left out by --labels: nothing shared
+    check_no_overlaps(tmp_path / "rec.npz")  # not a labels CSV

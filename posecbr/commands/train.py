@@ -648,6 +648,16 @@ def _read_frame_labels(args: argparse.Namespace) -> None:
     read_label_track(args.frame_labels, names)
 
 
+def _check_overlaps(args: argparse.Namespace) -> None:
+    """Refuse, before any clip is read, a labels CSV giving frames of one file two labels
+    (rows whose start,end overlap; among the --labels asked for)."""
+    from features.datasets import check_no_overlaps
+
+    if args.frame_labels is None:
+        activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
+        check_no_overlaps(args.data, activities)
+
+
 def _over_time(args: argparse.Namespace) -> bool:
     """Whether DATA is recordings labelled over time: ``--frame-labels``, or a labels CSV with
     a ``label_file`` (read once, after the store is checked)."""
@@ -804,11 +814,13 @@ def run(args: argparse.Namespace) -> int:
         )
         args.over_time = _over_time(args)
         _note_csv_names(args)
+        _check_overlaps(args)
     else:
         args.target = args.target or "label"
         _check_new_store(args)
         args.over_time = _over_time(args)
         _note_csv_names(args)
+        _check_overlaps(args)
         args.split = args.split or _default_split(args)
         estimator = _estimator(args)
         plan = fit_plan(estimator)
