@@ -291,18 +291,28 @@ def labelled_over_time(path: str | Path) -> bool:
 def check_no_overlaps(path: str | Path, labels: Collection[str] | None = None) -> None:
     """Refuse a labels CSV two of whose rows give frames of one file different labels: rows
     ``start,end`` that overlap, or a row of a whole file and a row of a stretch of it (rows of
-    one label may overlap; a stretch listed twice is refused by the training). Only rows with
-    a label in ``labels`` are compared when it is given (the others are not trained on); rows
-    naming a label file are not. Anything but a labels CSV passes. DataError naming the CSV
+    one label may overlap; a stretch listed twice is refused by the training), or a row
+    naming a label file (which labels every frame) and another row of the same file. Only
+    rows with a label in ``labels`` are compared when it is given (the others are not trained
+    on; a label file's rows always are). Anything but a labels CSV passes. DataError naming the CSV
     and both lines, read from the rows alone (no clip is read)."""
     path = Path(path)
     if detect_kind(path) != "csv":
         return
     csv_path = path if path.is_file() else path / "labels.csv"
     by_file: dict[Path, list[dict[str, Any]]] = {}
+    tracked: dict[Path, dict[str, Any]] = {}
     for rec in read_labels_csv(csv_path):
-        if rec["track"] is None and (labels is None or rec["label"] in labels):
-            by_file.setdefault(rec["path"].resolve(), []).append(rec)
+        key = rec["path"].resolve()
+        if rec["track"] is None and labels is not None and rec["label"] not in labels:
+            continue
+        if key in tracked or (rec["track"] is not None and key in by_file):
+            first = tracked.get(key) or by_file[key][0]
+            raise DataError(_tracked_twice(first, rec), csv_path)
+        if rec["track"] is not None:
+            tracked[key] = rec
+        else:
+            by_file.setdefault(key, []).append(rec)
     for rows in by_file.values():
         reach: dict[str, dict[str, Any]] = {}  # each label's row reaching farthest so far
         for rec in sorted(rows, key=lambda r: (_span(r)[0], r["line"])):
@@ -316,6 +326,23 @@ def check_no_overlaps(path: str | Path, labels: Collection[str] | None = None) -
                 raise DataError(_overlap(other, rec), csv_path)
             if rec["label"] not in reach or _span(reach[rec["label"]])[1] < end:
                 reach[rec["label"]] = rec
+
+
+def _tracked_twice(a: dict[str, Any], b: dict[str, Any]) -> str:
+    """Why a row naming a label file and a later row of the same file cannot both be."""
+    track = a if a["track"] is not None else b
+
+    def shown(rec: dict[str, Any]) -> str:
+        if rec["track"] is not None:
+            return f"label file {rec['track'].path.name}"
+        frames = "whole" if rec["start"] is None else f"frames {rec['start']},{rec['end']}"
+        return f"{frames} ({rec['label']!r})"
+
+    return (
+        f"lines {a['line']} and {b['line']} both give frames of {b['path'].name}"
+        f" ({shown(a)}; {shown(b)}): line {track['line']} labels all of it over time, so they"
+        " would be cases twice; list the recording once"
+    )
 
 
 def _span(rec: dict[str, Any]) -> tuple[float, float]:

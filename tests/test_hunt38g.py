@@ -105,3 +105,36 @@ def test_rows_that_meet_or_share_a_label_or_are_left_out_are_no_overlap(tmp_path
         check_no_overlaps(csv)
     check_no_overlaps(csv, ["squat", "lunge"])  # jog left out by --labels: nothing shared
     check_no_overlaps(tmp_path / "rec.npz")  # not a labels CSV
+
+
+@pytest.mark.parametrize(
+    ("rows", "needle"),
+    [
+        (["rec.npz,,track.txt,0.1,,,", "rec.npz,squat,,,,0,40"],
+         "lines 2 and 3 both give frames of rec.npz (label file track.txt; frames 0,40"
+         " ('squat')): line 2 labels all of it over time"),
+        (["rec.npz,squat,,,,,", "other.npz,lunge,,,,,", "rec.npz,,track.txt,0.1,,,"],
+         "lines 2 and 4 both give frames of rec.npz (whole ('squat'); label file track.txt):"
+         " line 4 labels all of it over time"),
+        (["rec.npz,,track.txt,0.1,,,", "rec.npz,,track.txt,0.1,,,"],
+         "lines 2 and 3 both give frames of rec.npz (label file track.txt; label file"
+         " track.txt)"),
+    ],
+    ids=["a stretch after", "the whole file before", "twice"],
+)  # fmt: skip
+def test_train_refuses_a_recording_labelled_over_time_listed_again(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], rows: list[str], needle: str
+) -> None:
+    """A row naming a label file labels every frame of its recording: another row of the
+    same recording (a stretch with a label, the whole file) was trained as well, its frames
+    cases twice, nothing said; the row listed twice was refused only after every clip was
+    described, as "training set: rec.npz frames 0-29 is listed twice", no line named."""
+    good_pose_file(tmp_path / "rec.npz", frames=60)
+    good_pose_file(tmp_path / "other.npz", frames=60)
+    (tmp_path / "track.txt").write_text("squat " * 10 + "lunge " * 10, encoding="utf-8")
+    csv = tmp_path / "labels.csv"
+    csv.write_text("path,label,label_file,label_block_s,label_names,start,end\n"
+                   + "".join(r + "\n" for r in rows), encoding="utf-8")  # fmt: skip
+    refused(["train", str(csv), "--db", str(tmp_path / "cb.sqlite"), "--split", "clips"],
+            tmp_path, capsys, f"{csv}: {needle}",
+            "would be cases twice; list the recording once")  # fmt: skip
