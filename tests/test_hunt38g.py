@@ -138,3 +138,20 @@ def test_train_refuses_a_recording_labelled_over_time_listed_again(
     refused(["train", str(csv), "--db", str(tmp_path / "cb.sqlite"), "--split", "clips"],
             tmp_path, capsys, f"{csv}: {needle}",
             "would be cases twice; list the recording once")  # fmt: skip
+
+
+def test_compare_refuses_rows_giving_frames_two_labels(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """As train: two subjects, each a recording of two labelled stretches that overlap by 10
+    frames, were cross-validated, the shared frames a case of each activity."""
+    rows = []
+    for subject in ("s01", "s02"):
+        good_pose_file(tmp_path / f"{subject}.npz", frames=60)
+        rows += [f"{subject}.npz,squat,{subject},0,30", f"{subject}.npz,lunge,{subject},20,60"]
+    csv = tmp_path / "labels.csv"
+    csv.write_text("path,label,subject,start,end\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    refused(["compare", str(csv), "--similarities", "euclidean", "--features", "fluents",
+             "--peers", "none", "--no-dad", "--k", "1"], tmp_path, capsys,
+            f"{csv}: lines 2 and 3 give s01.npz frames 0,30 ('squat') and frames 20,60"
+            " ('lunge'): frames 20-29 would be cases of two activities")  # fmt: skip

@@ -366,7 +366,7 @@ def run(args: argparse.Namespace) -> int:
     from cbr.evaluation.methods import check_cbr_params
     from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
     from cbr.evaluation.tables import format_table
-    from features.datasets import labelled_over_time
+    from features.datasets import check_no_overlaps, labelled_over_time
 
     check_scheduler(args.scheduler)
     settings = _settings(args)
@@ -375,6 +375,8 @@ def run(args: argparse.Namespace) -> int:
     check_outputs(outputs, [args.data])
     if outputs:  # clips --labels/--subjects leave out are the data's too
         check_outputs(outputs, _dataset_files(args))
+    # rows giving frames two labels: refused before any clip is read, as train refuses them
+    check_no_overlaps(args.data, set(_names(args.labels)) if args.labels else None)
     clips = _load(args)
     check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
     run_ = run_compare(clips, settings, source=str(args.data))
