@@ -288,14 +288,18 @@ def labelled_over_time(path: str | Path) -> bool:
     return any(rec["track"] is not None for rec in read_labels_csv(csv_path))
 
 
-def check_no_overlaps(path: str | Path, labels: Collection[str] | None = None) -> None:
+def check_no_overlaps(
+    path: str | Path, labels: Collection[str] | None = None, twice: bool = False
+) -> None:
     """Refuse a labels CSV two of whose rows give frames of one file different labels: rows
     ``start,end`` that overlap, or a row of a whole file and a row of a stretch of it (rows of
     one label may overlap; a stretch listed twice is refused by the training), or a row
     naming a label file (which labels every frame) and another row of the same file. Only
     rows with a label in ``labels`` are compared when it is given (the others are not trained
-    on; a label file's rows always are). Anything but a labels CSV passes. DataError naming the CSV
-    and both lines, read from the rows alone (no clip is read)."""
+    on; a label file's rows always are). ``twice``: also two rows of the same stretch (the
+    same file's same ``start,end``, or the whole file twice) of one label. Anything but a
+    labels CSV passes. DataError naming the CSV and both lines, read from the rows alone (no
+    clip is read)."""
     path = Path(path)
     if detect_kind(path) != "csv":
         return
@@ -314,18 +318,35 @@ def check_no_overlaps(path: str | Path, labels: Collection[str] | None = None) -
         else:
             by_file.setdefault(key, []).append(rec)
     for rows in by_file.values():
-        reach: dict[str, dict[str, Any]] = {}  # each label's row reaching farthest so far
-        for rec in sorted(rows, key=lambda r: (_span(r)[0], r["line"])):
-            start, end = _span(rec)
-            other = max(
-                (r for lab, r in reach.items() if lab != rec["label"] and _span(r)[1] > start),
-                key=lambda r: _span(r)[1],
-                default=None,
-            )
-            if other is not None:
-                raise DataError(_overlap(other, rec), csv_path)
-            if rec["label"] not in reach or _span(reach[rec["label"]])[1] < end:
-                reach[rec["label"]] = rec
+        if twice:
+            _check_listed_once(rows, csv_path)
+        _check_one_label(rows, csv_path)
+
+
+def _check_listed_once(rows: list[dict[str, Any]], csv_path: Path) -> None:
+    """Refuse two of ``rows`` (of one file) of the same stretch and label."""
+    listed: dict[tuple[float, float], dict[str, Any]] = {}
+    for rec in rows:
+        first = listed.setdefault(_span(rec), rec)
+        if first is not rec and first["label"] == rec["label"]:
+            raise DataError(_listed_twice(first, rec), csv_path)
+
+
+def _check_one_label(rows: list[dict[str, Any]], csv_path: Path) -> None:
+    """Refuse two of ``rows`` (of one file) that share frames and differ in label: a sweep
+    in order of start, keeping each label's row that reaches farthest."""
+    reach: dict[str, dict[str, Any]] = {}
+    for rec in sorted(rows, key=lambda r: (_span(r)[0], r["line"])):
+        start, end = _span(rec)
+        other = max(
+            (r for lab, r in reach.items() if lab != rec["label"] and _span(r)[1] > start),
+            key=lambda r: _span(r)[1],
+            default=None,
+        )
+        if other is not None:
+            raise DataError(_overlap(other, rec), csv_path)
+        if rec["label"] not in reach or _span(reach[rec["label"]])[1] < end:
+            reach[rec["label"]] = rec
 
 
 def _tracked_twice(a: dict[str, Any], b: dict[str, Any]) -> str:
@@ -342,6 +363,15 @@ def _tracked_twice(a: dict[str, Any], b: dict[str, Any]) -> str:
         f"lines {a['line']} and {b['line']} both give frames of {b['path'].name}"
         f" ({shown(a)}; {shown(b)}): line {track['line']} labels all of it over time, so they"
         " would be cases twice; list the recording once"
+    )
+
+
+def _listed_twice(a: dict[str, Any], b: dict[str, Any]) -> str:
+    """Why two rows of the same stretch and label cannot both be."""
+    frames = "whole" if a["start"] is None else f"frames {a['start']},{a['end']}"
+    return (
+        f"lines {a['line']} and {b['line']} both give {b['path'].name} {frames}"
+        f" ({a['label']!r}): the one stretch would be written twice; list it once"
     )
 
 

@@ -155,3 +155,38 @@ def test_compare_refuses_rows_giving_frames_two_labels(
              "--peers", "none", "--no-dad", "--k", "1"], tmp_path, capsys,
             f"{csv}: lines 2 and 3 give s01.npz frames 0,30 ('squat') and frames 20,60"
             " ('lunge'): frames 20-29 would be cases of two activities")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("rows", "needle"),
+    [
+        (["rec.npz,squat,0,30", "rec.npz,squat,0,30"],
+         "lines 2 and 3 both give rec.npz frames 0,30 ('squat'): the one stretch would be"
+         " written twice; list it once"),
+        (["rec.npz,squat,,", "other.npz,squat,,", "rec.npz,squat,,"],
+         "lines 2 and 4 both give rec.npz whole ('squat'): the one stretch would be written"
+         " twice"),
+        (["rec.npz,squat,0,30", "rec.npz,lunge,20,50"],
+         "lines 2 and 3 give rec.npz frames 0,30 ('squat') and frames 20,50 ('lunge'):"
+         " frames 20-29 would be cases of two activities"),
+    ],
+    ids=["a stretch twice", "a file twice", "overlapping labels"],
+)  # fmt: skip
+def test_convert_refuses_a_stretch_twice_or_frames_of_two_labels(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], rows: list[str], needle: str
+) -> None:
+    """convert wrote a stretch listed twice as two pose files (rec.npz, rec_2.npz), and rows
+    giving frames two labels as they were: `train` of the folder then took each twice, or
+    the shared frames as two activities, without a word (`train` of the CSV itself refuses
+    them). Now refused before any clip is read, the output folder not made."""
+    csv = _rows_csv(tmp_path, *rows)
+    refused(["convert", str(csv), "--out", str(tmp_path / "out")], tmp_path, capsys,
+            f"{csv}: {needle}")  # fmt: skip
+
+
+def test_convert_keeps_stretches_of_one_label_that_overlap(tmp_path: Path) -> None:
+    from posecbr.cli import main
+
+    csv = _rows_csv(tmp_path, "rec.npz,squat,0,30", "rec.npz,squat,10,40", "rec.npz,lunge,40,60")
+    assert main(["convert", str(csv), "--out", str(tmp_path / "out")]) == 0
+    assert len(list((tmp_path / "out").glob("*.npz"))) == 3

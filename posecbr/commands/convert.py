@@ -256,6 +256,7 @@ def _check_args(args: argparse.Namespace) -> None:
     _check_one_file_options(args)
     _check_folder_options(args)
     _check_columns(src)
+    _check_overlaps(args)
     args.sensor = sensor_for(args.sensor, [src])
 
 
@@ -326,6 +327,19 @@ def _check_columns(src: Path) -> None:
                 f" itself ({what}); rename the column",
                 csv_path,
             )
+
+
+def _check_overlaps(args: argparse.Namespace) -> None:
+    """Refuse a labels CSV listing one stretch twice or giving frames of one file two labels
+    (:func:`features.datasets.check_no_overlaps`), before any clip is read: the pose files
+    written would be the same frames twice, which ``train`` of the folder cannot tell (it
+    refuses such rows of the CSV itself)."""
+    from features.datasets import check_no_overlaps
+
+    src: Path = args.source
+    if not (src.is_file() and src.suffix.lower() in (".bvh", ".amc")):
+        labels = [s.strip() for s in args.labels.split(",")] if args.labels else None
+        check_no_overlaps(src, labels, twice=True)
 
 
 def _clips(args: argparse.Namespace) -> Iterator[tuple[Clip, str]]:
