@@ -389,7 +389,7 @@ def _overlap(a: dict[str, Any], b: dict[str, Any]) -> str:
 
     first, second = sorted((a, b), key=lambda r: r["line"])
     lo, hi = max(_span(a)[0], _span(b)[0]), min(_span(a)[1], _span(b)[1])
-    shared = "its frames" if math.isinf(hi) else f"frames {lo:g}-{hi - 1:g}"
+    shared = "its frames" if math.isinf(hi) else f"frames {int(lo)}-{int(hi) - 1}"
     ranged = a["start"] is not None and b["start"] is not None
     return (
         f"lines {first['line']} and {second['line']} give {b['path'].name} {shown(first)}"

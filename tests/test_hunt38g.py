@@ -105,6 +105,11 @@ def test_rows_that_meet_or_share_a_label_or_are_left_out_are_no_overlap(tmp_path
         check_no_overlaps(csv)
     check_no_overlaps(csv, ["squat", "lunge"])  # jog left out by --labels: nothing shared
     check_no_overlaps(tmp_path / "rec.npz")  # not a labels CSV
+    # frame numbers in full, however large (they were formatted as 1.23457e+06)
+    csv.write_text("path,label,start,end\nrec.npz,squat,1234000,1234568\n"
+                   "rec.npz,lunge,1234567,1300000\n", encoding="utf-8")  # fmt: skip
+    with pytest.raises(DataError, match="frames 1234567-1234567 would be cases"):
+        check_no_overlaps(csv)
 
 
 @pytest.mark.parametrize(
