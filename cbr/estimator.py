@@ -150,15 +150,15 @@ def _missing(v: Any) -> bool:
         return False
 
 
-def check_labels(y: Any, n: int) -> np.ndarray:
+def check_labels(y: Any, n: int, name: str = "y") -> np.ndarray:
     """``y`` as ``(n,)`` labels (str); None, NaN, NaT, pandas' NA and empty labels are refused
-    (:class:`features.errors.InputError`)."""
+    (:class:`features.errors.InputError`; ``name``: what the caller calls ``y``)."""
     y_arr = np.asarray(y, dtype=object)
     if y_arr.ndim != 1 or len(y_arr) != n:
-        raise InputError(f"{n} clips but y has shape {y_arr.shape}", "y")
+        raise InputError(f"{n} clips but {name} has shape {y_arr.shape}", name)
     for i, v in enumerate(y_arr):
         if _missing(v) or str(v).strip() == "":
-            raise InputError(f"y[{i}] is {v!r}: every clip needs a label", "y")
+            raise InputError(f"{name}[{i}] is {v!r}: every clip needs a label", name)
     return np.array([str(v) for v in y_arr], dtype=object)
 
 

@@ -346,6 +346,149 @@ def train(
     )
 
 
+def _check_split(split: Any) -> str:
+    """``split`` one of :data:`features.repetitions.SPLITS`, else an InputError naming it."""
+    from features.repetitions import SPLITS
+
+    if not isinstance(split, str) or split not in SPLITS:
+        raise InputError(
+            f"split must be one of {', '.join(map(repr, SPLITS))}, got {split!r}", "split"
+        )
+    return split
+
+
+def cut(
+    clips: Sequence[PoseSequence], labels: Sequence[Any], split: str
+) -> tuple[list[PoseSequence], list[Any]]:
+    """``clips`` cut into the cases ``posecbr train --split`` makes of them (the same
+    :func:`features.repetitions.cut_clips`), each piece with its clip's label as given:
+    ``split="windows"``, the 2-s windows every 0.5 s that ``segment`` and ``watch`` classify
+    (the case base for long recordings and live use; a clip shorter than a window stays
+    whole), ``"repetitions"``, each repetition found (a clip with none stays whole), or
+    ``"clips"``, each whole. Each piece is a :class:`PoseSequence` sharing its clip's frames,
+    its ``frames`` where it lies in the clip. Give the result to :func:`train` with
+    ``cases=split`` (for windows with ``CaseBaseClassifier(feature_weights="none")``, as
+    ``train --split windows``). Bad ``clips``, ``labels`` or ``split``:
+    :class:`features.errors.InputError` naming the argument."""
+    from features.datasets import Clip
+    from features.repetitions import cut_clips
+
+    seqs = as_sequences(clips, "clips", "clips")
+    check_labels(labels, len(seqs), "labels")
+    _check_split(split)
+    out: list[PoseSequence] = []
+    out_labels: list[Any] = []
+    for seq, label in zip(seqs, np.asarray(labels, dtype=object), strict=True):
+        pieces = cut_clips([Clip(seq, str(label), subject_of(seq), {})], split).clips
+        out += [c.seq for c in pieces]
+        out_labels += [label] * len(pieces)
+    return out, out_labels
+
+
+def _given_labels(frame_labels: Any, names: dict[str, str] | None) -> list[str]:
+    """Labels given in memory (one per frame or block) as text, each through ``names``: text
+    or whole numbers (as a label file's codes), else an InputError naming ``frame_labels``."""
+    if isinstance(frame_labels, bytes) or not hasattr(frame_labels, "__iter__"):
+        raise InputError(
+            "frame_labels must be a label file's path or a sequence of labels (one per frame or"
+            f" block), got {type(frame_labels).__name__}",
+            "frame_labels",
+        )
+    values = np.asarray(list(frame_labels), dtype=object)
+    if values.ndim != 1:
+        raise InputError(
+            f"frame_labels must be one label per frame or block, got shape {values.shape}",
+            "frame_labels",
+        )
+    out = []
+    for i, v in enumerate(values):
+        whole = isinstance(v, int | np.integer) and not isinstance(v, bool | np.bool_)
+        if not (whole or isinstance(v, str)) or not str(v).strip() or "\x00" in str(v):
+            raise InputError(
+                f"frame_labels[{i}] is {v!r}: a label is text or a whole number (a code)",
+                "frame_labels",
+            )
+        out.append(str(v).strip())
+    if names is not None:
+        unknown = sorted({v for v in out if v not in names})
+        if unknown:
+            raise InputError(
+                f"label code(s) {', '.join(unknown[:5])} not in the label names", "frame_labels"
+            )
+        out = [names[v] for v in out]
+    return out
+
+
+def _label_names(names: Any) -> dict[str, str] | None:
+    """``names``: None, a label names file (read as ``--label-names``) or a mapping of code to
+    name; anything else is an InputError naming it."""
+    from features.label_tracks import read_label_names
+
+    if names is None:
+        return None
+    if isinstance(names, str | Path):
+        return read_label_names(names)
+    if isinstance(names, dict):
+        return {str(k): str(v) for k, v in names.items()}
+    raise InputError(
+        f"names must be a label names file or a dict of code to name, got {type(names).__name__}",
+        "names",
+    )
+
+
+def cut_recording(
+    recording: PoseSequence,
+    frame_labels: str | Path | Sequence[Any],
+    split: str = "windows",
+    *,
+    block_s: float | None = None,
+    names: str | Path | dict[str, str] | None = None,
+) -> tuple[list[PoseSequence], list[str]]:
+    """The cases ``posecbr train RECORDING --frame-labels FILE`` makes of one recording
+    labelled over time: its labelled stretches (``frame_labels``: a label file, as
+    ``--frame-labels``, or the labels in memory, text or whole-number codes; one per frame,
+    or one per ``block_s`` seconds as ``--label-block``; ``names`` maps codes to names, a
+    file as ``--label-names`` or a dict), those shorter than the shortest repetition
+    (:data:`features.repetitions.MIN_PERIOD_S`: a label that flickers) left out, each cut as
+    :func:`cut` cuts (``split``: ``"windows"`` by default, as ``train`` of such a recording).
+    Returns the pieces and their labels, to give to :func:`train` with ``cases=split``.
+    Bad arguments are an :class:`features.errors.InputError` naming the argument; a label
+    file that cannot be read or whose count does not fit the recording, a DataError naming
+    it, as the command says it."""
+    from features.datasets import split_by_labels, stretch_clips
+    from features.label_tracks import read_label_track
+    from features.repetitions import MIN_PERIOD_S, cut_clips, long_enough
+
+    if not isinstance(recording, PoseSequence):
+        raise InputError(
+            f"recording must be a PoseSequence, got {type(recording).__name__}", "recording"
+        )
+    _check_split(split)
+    if block_s is not None and (
+        isinstance(block_s, bool)
+        or not isinstance(block_s, int | float | np.integer | np.floating)
+        or not (np.isfinite(block_s) and block_s > 0)
+    ):
+        raise InputError(f"block_s must be a finite number of seconds > 0, got {block_s!r}",
+                         "block_s")  # fmt: skip
+    block = None if block_s is None else float(block_s)
+    mapping = _label_names(names)
+    if isinstance(frame_labels, str | Path):
+        path = Path(frame_labels)
+        stretches = split_by_labels(recording, read_label_track(path, mapping), block, path)
+    else:
+        given = _given_labels(frame_labels, mapping)
+        try:
+            stretches = split_by_labels(recording, given, block, "frame_labels")
+        except DataError as exc:
+            raise InputError(exc.message, "frame_labels") from None
+    kept, _ = long_enough(list(stretch_clips(stretches, subject_of(recording))))
+    if not kept:
+        raise InputError(f"no labelled stretch of {MIN_PERIOD_S:g} s or more", "frame_labels")
+    pieces = cut_clips(kept, split).clips
+    return [c.seq for c in pieces], [c.label for c in pieces]
+
+
 def train_described(
     db: str | Path,
     name: str,

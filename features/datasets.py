@@ -37,7 +37,7 @@ import math
 import os
 import re
 import sys
-from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -915,12 +915,22 @@ def _track_columns(rec: dict[str, str], csv_path: Path, line_no: int) -> LabelTr
 def split_by_track(seq: PoseSequence, track: LabelTrack) -> list[tuple[PoseSequence, str]]:
     """One clip per labelled stretch of the recording ``seq``, with its label (frames shared
     with the recording, :func:`features.derived.stretch`)."""
-    from .derived import stretch
-
     names = read_label_names(track.names) if track.names is not None else None
     labels = read_label_track(track.path, names)
+    return split_by_labels(seq, labels, track.block_s, track.path)
+
+
+def split_by_labels(
+    seq: PoseSequence, labels: Sequence[str], block_s: float | None, where: str | Path
+) -> list[tuple[PoseSequence, str]]:
+    """One clip per labelled stretch of the recording ``seq`` labelled by ``labels`` (one per
+    frame, or one per ``block_s`` seconds; a count that does not fit is a DataError naming
+    ``where``), with its label (frames shared with the recording,
+    :func:`features.derived.stretch`)."""
+    from .derived import stretch
+
     recording = Path(seq.source).name if seq.source else ""
-    per_frame = frame_labels(labels, seq.n_frames, seq.fps, track.block_s, track.path, recording)
+    per_frame = frame_labels(list(labels), seq.n_frames, seq.fps, block_s, where, recording)
     return [(stretch(seq, a, b), lab) for a, b, lab in labelled_stretches(per_frame)]
 
 
@@ -964,7 +974,15 @@ def recording_clips(
     seq: PoseSequence, track: LabelTrack, subject: str | None = None
 ) -> Iterator[Clip]:
     """The labelled stretches of the recording ``seq`` as clips."""
-    for part, label in split_by_track(seq, track):
+    return stretch_clips(split_by_track(seq, track), subject)
+
+
+def stretch_clips(
+    stretches: Iterable[tuple[PoseSequence, str]], subject: str | None = None
+) -> Iterator[Clip]:
+    """Labelled stretches (:func:`split_by_track`, :func:`split_by_labels`) as clips of
+    ``subject``, each with its label in its metadata."""
+    for part, label in stretches:
         part = part.with_metadata(label=label, subject=subject)
         yield Clip(seq=part, label=label, subject=subject, extras={})
 
@@ -1260,6 +1278,9 @@ __all__ = [
     "read_label_names",
     "read_label_track",
     "split_by_track",
+    "split_by_labels",
+    "recording_clips",
+    "stretch_clips",
     "DatasetEntry",
     "clip_column",
     "clip_target",

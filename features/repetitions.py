@@ -1497,6 +1497,10 @@ __all__ = [
     "WINDOW_S",
     "split_repetitions",
     "split_windows",
+    "SPLITS",
+    "Cut",
+    "cut_clips",
+    "long_enough",
     "TWIST_NAMES",
     "upper_arm_turn",
     "PELVIS_HEIGHT",
@@ -1588,3 +1592,47 @@ def _window_starts(n_frames: int, length: int, hop: float) -> list[int]:
         return []
     count = int(np.floor((n_frames - length) / hop + 1e-9)) + 1
     return sorted({int(round(k * hop)) for k in range(count)})
+
+
+SPLITS = ("clips", "repetitions", "windows")
+"""What a training clip can be cut into (``posecbr train --split``): kept whole, its
+repetitions (:func:`split_repetitions`) or its windows (:func:`split_windows`)."""
+
+
+@dataclass(frozen=True)
+class Cut:
+    """Clips cut as ``posecbr train --split`` cuts them (:func:`cut_clips`): the cases' clips,
+    and the clips given that stayed whole (no repetition found, or shorter than a window)."""
+
+    clips: list[Clip]
+    kept_whole: list[Clip]
+
+
+def cut_clips(clips: Sequence[Clip], split: str) -> Cut:
+    """Every clip cut into ``split`` (one of :data:`SPLITS`): ``"clips"`` keeps each whole,
+    ``"repetitions"`` cuts it into its repetitions, ``"windows"`` into the 2-s windows every
+    0.5 s that ``posecbr segment`` and ``watch`` classify. The one cutting ``posecbr train
+    --split`` and :func:`cbr.training.cut` do."""
+    if split == "clips":
+        return Cut(list(clips), [])
+    if split == "repetitions":
+        pieces = split_repetitions(clips).clips
+    elif split == "windows":
+        pieces = split_windows(clips).clips
+    else:
+        raise ValueError(f"split must be one of {', '.join(map(repr, SPLITS))}, got {split!r}")
+    given = {id(c) for c in clips}  # a clip kept whole is passed on as it came
+    return Cut(pieces, [c for c in pieces if id(c) in given])
+
+
+def long_enough(clips: Sequence[Clip]) -> tuple[list[Clip], list[Clip]]:
+    """The labelled stretches of recordings labelled over time that last at least the
+    shortest repetition (:data:`MIN_PERIOD_S`), and the others: a label that flickers for a
+    few frames would each become a case of next to nothing (one frame labelled otherwise:
+    an activity of one one-frame case). ``posecbr train`` and
+    :func:`cbr.training.cut_recording` leave those out."""
+    ok = [c.seq.n_frames >= MIN_PERIOD_S * c.seq.fps for c in clips]
+    return (
+        [c for c, keep in zip(clips, ok, strict=True) if keep],
+        [c for c, keep in zip(clips, ok, strict=True) if not keep],
+    )

@@ -331,13 +331,11 @@ def _note(args: argparse.Namespace, text: str) -> None:
 
 def _long_enough(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
     """The labelled stretches that last at least the shortest repetition
-    (:data:`features.repetitions.MIN_PERIOD_S`); the others, a label that flickers for a few
-    frames, would each become a case of next to nothing (one frame labelled otherwise: an
-    activity of one one-frame case). Those left out are said on stderr."""
-    from features.repetitions import MIN_PERIOD_S
+    (:func:`features.repetitions.long_enough`, as :func:`cbr.training.cut_recording` keeps
+    them); those left out are said on stderr."""
+    from features.repetitions import MIN_PERIOD_S, long_enough
 
-    long = [c.seq.n_frames >= MIN_PERIOD_S * c.seq.fps for c in clips]
-    short = [c for c, ok in zip(clips, long, strict=True) if not ok]
+    kept, short = long_enough(clips)
     if short:
         labels = ", ".join(sorted({shown(c.label) for c in short}))
         stretches = "stretch" if len(short) == 1 else "stretches"
@@ -346,57 +344,48 @@ def _long_enough(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
             f"left out {len(short)} labelled {stretches} shorter than {MIN_PERIOD_S:g} s"
             f" ({labels})",
         )
-    return [c for c, ok in zip(clips, long, strict=True) if ok]
+    return kept
 
 
-def _repetitions(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
-    """``--split repetitions``: every clip cut into its repetitions (said on stderr)."""
-    from features.repetitions import split_repetitions
+def _cut(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
+    """``--split repetitions`` / ``windows``: every clip cut as
+    :func:`features.repetitions.cut_clips` cuts it (as :func:`cbr.training.cut` does), said
+    on stderr."""
+    from features.repetitions import WINDOW_HOP_S, WINDOW_S, cut_clips
 
-    split = split_repetitions(clips)
-    given = {id(c) for c in clips}  # a clip kept whole is passed on as it came
-    whole_clips = [c for c in split.clips if id(c) in given]
-    args.kept_whole = {c.seq.source for c in whole_clips}
-    kept = [shown(Path(c.seq.source or "a clip").name) for c in whole_clips]
-    more = f" and {len(kept) - 3} more" if len(kept) > 3 else ""
-    whole = (  # named: which exercise video found no repetition is for the user to check
-        f"; {counted(split.kept_whole, 'clip')} without a repetition kept whole"
-        f" ({', '.join(kept[:3])}{more})"
-        if split.kept_whole
-        else ""
-    )
-    n_reps = len(split.clips) - split.kept_whole
-    n_cut = len(clips) - split.kept_whole
-    if not n_cut:
-        _note(args, f"kept {counted(len(clips), 'clip')} whole: no repetition found in any")
-        return split.clips
-    pieces = f"{counted(n_cut, 'clip')} into {counted(n_reps, 'repetition')}"
-    _note(args, f"cut {pieces}{whole}")
-    return split.clips
-
-
-def _windows(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
-    """``--split windows``: every clip cut into the windows segment classifies (on stderr)."""
-    from features.repetitions import WINDOW_HOP_S, WINDOW_S, split_windows
-
-    split = split_windows(clips)
-    whole = (
-        f"; {counted(split.kept_whole, 'clip')} shorter than a window kept whole"
-        if split.kept_whole
-        else ""
-    )
-    n_windows = len(split.clips) - split.kept_whole
-    n_cut = len(clips) - split.kept_whole
+    cut = cut_clips(clips, args.split)
+    n_cut = len(clips) - len(cut.kept_whole)
+    n_pieces = len(cut.clips) - len(cut.kept_whole)
+    if args.split == "repetitions":
+        args.kept_whole = {c.seq.source for c in cut.kept_whole}
+        if not n_cut:
+            _note(args, f"kept {counted(len(clips), 'clip')} whole: no repetition found in any")
+            return cut.clips
+        kept = [shown(Path(c.seq.source or "a clip").name) for c in cut.kept_whole]
+        more = f" and {len(kept) - 3} more" if len(kept) > 3 else ""
+        whole = (  # named: which exercise video found no repetition is for the user to check
+            f"; {counted(len(kept), 'clip')} without a repetition kept whole"
+            f" ({', '.join(kept[:3])}{more})"
+            if kept
+            else ""
+        )
+        _note(args, f"cut {counted(n_cut, 'clip')} into {counted(n_pieces, 'repetition')}{whole}")
+        return cut.clips
     if not n_cut:
         _note(args, f"kept {counted(len(clips), 'clip')} whole: each shorter than a window "
                     f"of {WINDOW_S:g} s")  # fmt: skip
-        return split.clips
+        return cut.clips
+    whole = (
+        f"; {counted(len(cut.kept_whole), 'clip')} shorter than a window kept whole"
+        if cut.kept_whole
+        else ""
+    )
     _note(
         args,
-        f"cut {counted(n_cut, 'clip')} into {counted(n_windows, 'window')} of "
+        f"cut {counted(n_cut, 'clip')} into {counted(n_pieces, 'window')} of "
         f"{WINDOW_S:g} s every {WINDOW_HOP_S:g} s{whole}",
     )
-    return split.clips
+    return cut.clips
 
 
 def _in_memory(args: argparse.Namespace) -> bool:
@@ -434,10 +423,8 @@ def _clips(args: argparse.Namespace) -> list[Any]:
 
         values = [clip_target(c, args.target) for c in clips]
         _one_activity(args, [v for v in values if v is not None])
-    if args.split == "repetitions" and clips:
-        clips = _repetitions(args, clips)
-    elif args.split == "windows" and clips:
-        clips = _windows(args, clips)
+    if args.split in ("repetitions", "windows") and clips:
+        clips = _cut(args, clips)
     if not clips:
         raise _no_clips(args, stretches)
     return clips
