@@ -39,9 +39,11 @@ def recordings(
     return made_once(tmp_path_factory, "cmu-13-29-31", lambda _: _cmu(shared_data))
 
 
-def _cases(db: Path) -> tuple[list[str], list[tuple[int, int]], bytes, CaseBaseClassifier]:
+def _cases(
+    db: Path, name: str = "default"
+) -> tuple[list[str], list[tuple[int, int]], bytes, CaseBaseClassifier]:
     with open_store(db, readonly=True) as store:
-        clf = load_classifier(store, "default").classifier
+        clf = load_classifier(store, name).classifier
     cb = clf.case_base_
     labels = [str(v) for v in cb.labels]
     frames = [(int(a), int(b)) for a, b in cb.frames]
@@ -68,16 +70,26 @@ def _windows_of(codes: list[str], n_frames: int) -> list[tuple[str, tuple[int, i
     return out
 
 
+def _readme_block(first: str) -> str:
+    """The README's ```python block holding the line ``first``, as written."""
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    at = text.index(first)
+    start = text.rindex("```python\n", 0, at) + len("```python\n")
+    return text[start : text.index("```", at)]
+
+
 def test_a_recording_cut_in_python_stores_the_cases_train_stores(
     recordings: dict[str, PoseSequence],
     shared_data: Path,
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """CMU 13_29 with its 0.1-s labels: ``posecbr train --frame-labels`` (windows, the
     default) and ``cut_recording`` + ``train(cases="windows")`` store the same cases (count,
-    labels, frame spans, problem bytes), those the label file says, and ``segment`` of
-    13_30 answers the same with either case base."""
+    labels, frame spans, problem bytes), those the label file says, as does the README's
+    example with the labels per frame in memory, and ``segment`` of 13_30 answers the same
+    with either case base."""
     rec = save_pose(recordings["13_29"], tmp_path / "13_29.npz")
     labels = shared_data / "cmu-mocap6" / "truelabels" / "13_29.txt"
     names = tmp_path / "names.txt"
@@ -103,6 +115,20 @@ def test_a_recording_cut_in_python_stores_the_cases_train_stores(
                           names={int(k): v for k, v in CODES.items()})  # fmt: skip
     assert again[1] == solutions
     assert [p.metadata["frame_offset"] for p in again[0]] == [a for _, (a, _) in expected]
+
+    # the README's example as written, the labels per frame in memory (named already)
+    per_frame = [
+        CODES[codes[min(f // 12, len(codes) - 1)]] for f in range(recordings["13_29"].n_frames)
+    ]
+    monkeypatch.chdir(tmp_path)
+    names_in: dict[str, object] = {
+        "seq": load_clip(rec),
+        "per_frame_labels": per_frame,
+        "CaseBaseClassifier": CaseBaseClassifier,
+        "train": train,
+    }
+    exec(_readme_block("pieces, piece_labels = cut_recording("), names_in)
+    assert _cases(tmp_path / "robot.sqlite", "live")[:3] == command[:3]
 
     other = save_pose(recordings["13_30"], tmp_path / "13_30.npz")
     docs, tables = [], []
