@@ -332,7 +332,9 @@ def train(
     (``target``: the column's name, as ``train --target``). Clips that show no person are
     skipped and named. ``clips`` that are not PoseSequences, an ``estimator`` that is not a
     :class:`~cbr.estimator.CaseBaseClassifier`, a ``cases`` or ``target`` of another kind:
-    :class:`features.errors.InputError`, before any clip is read."""
+    :class:`features.errors.InputError`, before any clip is read. ``cases`` records what
+    the clips are, it cuts nothing: :func:`cut` and :func:`cut_recording` cut them as
+    ``train --split`` does (windows for ``segment`` and ``watch``)."""
     _check_name(name)
     clips = as_sequences(clips, "clips", "clips")
     check_labels(labels, len(clips))
