@@ -298,9 +298,12 @@ def frame_labels(
 def _why_not_fit(where: str | Path, low: int, high: int, n_labels: int) -> str:
     """What likely made a label file's count not fit: labels written one per line with
     spaces in them ("sit down", read as two labels) when its lines would fit, else another
-    frame rate or block length."""
+    frame rate or block length. Labels given in memory (``where`` text, not a path) have no
+    lines to read."""
+    if not isinstance(where, Path):
+        return " (another frame rate or label block?)"
     try:
-        text = Path(where).read_text(encoding="utf-8-sig")
+        text = where.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError, ValueError):
         text = ""
     lines = [_uncommented(ln).strip() for ln in text.splitlines()]

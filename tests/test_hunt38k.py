@@ -230,3 +230,21 @@ def test_bad_arguments_are_input_errors_naming_them(
     assert err.value.source == argument, err.value
     assert str(err.value).startswith(f"{argument}: ")
     assert not db.exists()
+
+
+def test_labels_in_memory_that_do_not_fit_read_no_file_of_their_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """400 labels for a recording of 342 frames at 30 fps, which needs 342 or 343: the refusal
+    gives the count's likely reason from the labels alone. A file named ``frame_labels`` in
+    the working folder, 342 lines of which one has a space (the "labels with spaces" reason
+    a label FILE gets), is not the caller's labels, and is not read: before, the message
+    said "its 342 lines would", of that unrelated file."""
+    monkeypatch.chdir(tmp_path)
+    Path("frame_labels").write_text("sit down\n" + "a\n" * 341, encoding="utf-8")
+    with pytest.raises(InputError) as err:
+        cut_recording(_movement(["both"] * 6), ["a"] * 400)
+    assert err.value.source == "frame_labels"
+    assert "400 labels" in str(err.value) and "need 342 or 343" in str(err.value)
+    assert str(err.value).endswith("(another frame rate or label block?)"), err.value
+    assert "lines" not in str(err.value)
