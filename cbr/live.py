@@ -33,9 +33,9 @@ from features.errors import DataError, InputError, PoseFileError
 from features.poses import MAX_FPS, MIN_FPS, PoseSequence
 from features.repetitions import (
     ANALYSIS_FPS,
+    MIN_PERIOD_S,
     Repetition,
-    count_in_signals,
-    count_repetitions,
+    RepetitionCount,
     movement_signals,
 )
 from features.skeleton import BLAZEPOSE_33
@@ -54,6 +54,7 @@ from .segmentation import (
     activity_distances,
     at_cut,
     check_judge,
+    count_in_segment,
     keep_whole,
     least_movement,
     log_votes,
@@ -889,7 +890,7 @@ class LiveSegmenter:
             # (cbr.segmentation._repetitions): part of one repetition there is none
             edges = (first == 0, not cut and explained)
             try:
-                found = count_repetitions(clip, recording_edges=edges).repetitions
+                found = _counted(clip, edges).repetitions
             except DataError:  # too short, or nobody in view
                 pass
         confidence = self._confidence(state)
@@ -934,7 +935,7 @@ class LiveSegmenter:
             return False
         beyond = self._sequence(cut, min(self.n, cut + int(MAX_SEGMENT_S * self.fps)))
         try:
-            after = count_repetitions(beyond, recording_edges=(False, self.ended)).repetitions
+            after = _counted(beyond, (False, self.ended)).repetitions
         except DataError:  # too short, or nobody in view
             return False
         if not after:
@@ -944,7 +945,7 @@ class LiveSegmenter:
             # a shallow dip: the two repetitions' frames together hold one far point
             both = self._sequence(last.start_frame, cut + after[0].end_frame)
             try:
-                return count_repetitions(both, recording_edges=False).count == 1
+                return _counted(both, (False, False)).count == 1
             except DataError:
                 return False
         return last.held[1] and (after[0].held[0] or at_start)
@@ -959,7 +960,7 @@ class LiveSegmenter:
             return False
         beyond = self._sequence(cut, min(self.n, cut + int(MAX_SEGMENT_S * self.fps)))
         try:
-            after = count_repetitions(beyond, recording_edges=(False, self.ended))
+            after = _counted(beyond, (False, self.ended))
         except DataError:  # too short, or nobody in view
             return False
         return not after.repetitions
@@ -982,8 +983,7 @@ class LiveSegmenter:
         stream ending still in the hold, counts what this one would have). Returns the
         segment's repetitions, whether its last far point is left to the segment after, and
         how many that counts if the stream ends in the hold."""
-        sig = movement_signals(clip)
-        found = count_in_signals(sig, clip.n_frames, clip.fps, edges, settled=(False, True))
+        found = _counted(clip, edges, settled=(False, True))
         settled = tuple(_shifted(r, first) for r in found.repetitions)
         if self.ended:
             return settled, False, 0
@@ -1059,6 +1059,25 @@ class LiveSegmenter:
                         s.explanation, s.novelty)
             for s in found.segments
         ]  # fmt: skip
+
+
+def _counted(
+    clip: PoseSequence, edges: tuple[bool, bool], settled: tuple[bool, bool] = (False, False)
+) -> RepetitionCount:
+    """The repetitions of ``clip``, stream frames counted as a segment of their own, as
+    ``segment`` counts each of its segments (:func:`cbr.segmentation.count_in_segment`: read
+    past a period of noise; before, as ``reps`` counts a clip, and the bundled side-lying leg
+    raises cut where ``segment`` cuts them counted 1 in ``watch``, 2 in ``segment``);
+    ``edges``, ``settled`` as there. Raises DataError when the clip is shorter than one
+    repetition could be or shows nobody, as
+    :func:`features.repetitions.count_repetitions`."""
+    if clip.duration_s < MIN_PERIOD_S:
+        raise DataError(
+            f"the clip lasts {clip.duration_s:.2f} s, shorter than one repetition can be"
+            f" ({MIN_PERIOD_S:g} s)",
+            clip.source or None,
+        )
+    return count_in_segment(movement_signals(clip), clip.n_frames, clip.fps, edges, settled)
 
 
 def warm_up(clf: Any, judge: Judge | None = None, fps: float = 30.0) -> None:

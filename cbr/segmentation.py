@@ -821,6 +821,22 @@ def told(clf: Any, solved: Any, label: str) -> str:
     return text
 
 
+def count_in_segment(
+    sig: MovementSignals,
+    n_frames: int,
+    fps: float,
+    edges: tuple[bool, bool],
+    settled: tuple[bool, bool] = (False, False),
+) -> RepetitionCount:
+    """The repetitions of a segment, of ``n_frames`` frames at ``fps``, whose movement signals
+    are ``sig``: :func:`features.repetitions.count_in_signals` read past a period of noise
+    (``past_noise``: hunt 38c), the rule of a segment's count, not of the windows classified
+    nor of ``reps``; ``edges``, ``settled`` as there. ``segment`` counts each segment with it
+    (:func:`_repetitions`) and ``watch`` each of its own (:mod:`cbr.live`), so that the two,
+    cut alike, count alike."""
+    return count_in_signals(sig, n_frames, fps, edges, settled=settled, past_noise=True)
+
+
 def _repetitions(
     sig: MovementSignals,
     start: int,
@@ -843,10 +859,9 @@ def _repetitions(
         return ()
     part = sig.part(a, b)
     edges = (start == 0 and n_frames is not None, last)
-    found = count_in_signals(
-        part, min((b - a) * sig.step, end - a * sig.step), sig.fps * sig.step, edges,
-        settled=settled, past_noise=True,
-    ).repetitions  # fmt: skip
+    found = count_in_segment(
+        part, min((b - a) * sig.step, end - a * sig.step), sig.fps * sig.step, edges, settled
+    ).repetitions
     off = a * sig.step
     return tuple(  # the first sample may begin up to a step before ``start``: cut there
         Repetition(
@@ -1302,6 +1317,7 @@ __all__ = [
     "check_judge",
     "check_k",
     "check_segmentable",
+    "count_in_segment",
     "Segment",
     "Segmentation",
     "SolvedRecording",

@@ -1,0 +1,46 @@
+"""Hunt 38i: ``watch`` (the live segmenter) counts each segment as ``segment`` counts it,
+reading past a period of noise (hunt 38c, :func:`cbr.segmentation.count_in_segment`): the
+bundled side-lying leg raises cut where ``segment`` cuts them count 2 in ``watch`` too."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+
+from features.poses import PoseSequence
+from tests.test_hunt36i import _hand, _segment_counts, _video
+from tests.test_hunt36l import LABELS, _Changing
+
+LEG_RAISE = "side_lying_leg_raise/fit_lateral_leg_raise_pexels6974513.mp4"
+CUT = 43  # frame 43, 1.72 s: where segment with the README's workout case base cuts it
+
+
+def _streamed(seq: PoseSequence, change: int) -> list[tuple[int, int, int]]:
+    """(start_frame, end_frame, repetitions) of each segment ``watch`` gives ``seq``, pushed
+    frame by frame with its joints' confidence as ``watch`` pushes a video's, the label
+    changing at frame ``change``."""
+    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
+    live = _Changing(clf, seq.fps, judge=SimpleNamespace())
+    live.changes = (change,)
+    assert seq.confidence is not None
+    out = []
+    for frame, seen in zip(seq.positions, seq.confidence, strict=True):
+        out += live.push(frame, seen)
+    out += live.finish()
+    return [(s.start_frame, s.end_frame, s.repetitions) for s in out]
+
+
+def test_watch_counts_the_leg_raise_segment_as_segment_does(shared_data: Path) -> None:
+    """The bundled side-lying leg raises (leg up 2.2-4.8 s and from 8.4 s to the end, watched:
+    2 by hand), streamed through ``watch`` with the label changing at 1.72 s (where
+    ``segment`` with the README's workout case base cuts them); ``watch`` places the change
+    at 1.60 s (frame 40). Its segments count 0 and 2, as ``segment`` cut where ``watch`` cut
+    counts them. Before: 0 and 1, the segment after the cut read along the arm under the
+    head (a period of noise gave the raised leg no weight), where ``segment`` reads past it."""
+    seq = _video(shared_data, LEG_RAISE)
+    hand = _hand(LEG_RAISE)["count"]
+    watched = _streamed(seq, CUT)
+    assert len(watched) == 2
+    (a, cut, first), (cut_too, end, second) = watched
+    assert a == 0 and cut == cut_too == 40 and end == seq.n_frames
+    assert _segment_counts(seq, [cut / seq.fps]) == [first, second] == [0, hand] == [0, 2]
