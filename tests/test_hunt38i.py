@@ -7,9 +7,14 @@ from __future__ import annotations
 from pathlib import Path
 from types import SimpleNamespace
 
+import pytest
+
 from features.poses import PoseSequence
+from features.repetitions import count_repetitions
 from tests.test_hunt36i import _hand, _segment_counts, _video
 from tests.test_hunt36l import LABELS, _Changing
+from tests.test_hunt38b import _squats_then_held
+from tests.test_repetitions import FPS
 
 LEG_RAISE = "side_lying_leg_raise/fit_lateral_leg_raise_pexels6974513.mp4"
 CUT = 43  # frame 43, 1.72 s: where segment with the README's workout case base cuts it
@@ -44,3 +49,24 @@ def test_watch_counts_the_leg_raise_segment_as_segment_does(shared_data: Path) -
     (a, cut, first), (cut_too, end, second) = watched
     assert a == 0 and cut == cut_too == 40 and end == seq.n_frames
     assert _segment_counts(seq, [cut / seq.fps]) == [first, second] == [0, hand] == [0, 2]
+
+
+@pytest.mark.parametrize(("squats", "hold_s"), [(1, 6.0), (2, 12.0), (2, 20.0)])
+def test_a_squat_held_long_at_the_bottom_and_up_again_counts(squats: int, hold_s: float) -> None:
+    """``squats`` squats (0.6 s standing, down 0.8 s, up 0.8 s, each 2.2 s), then down once
+    more, held at the bottom ``hold_s`` seconds and up again, standing 0.6 s: by hand
+    ``squats`` + 1 (README: a repetition is a far point the movement falls back from on both
+    sides; one held, then come back from, is one, as the bundled slow reverse lunge, down,
+    held low and up again). The held squat runs from the way down to where the body is
+    back up: down from frame 18 + 66 x ``squats``, up by 24 frames after its hold. Before:
+    ``squats``, the hold, longer than two of the squats' 2.2-s periods, measured from its own
+    level and taken for a still stretch at rest."""
+    seq, hold = _squats_then_held(squats, hold_s, back=True)
+    end = hold + int(hold_s * FPS) + 24  # back up
+    counted = count_repetitions(seq)
+    assert counted.count == squats + 1
+    last = counted.repetitions[-1]
+    assert hold <= last.peak_frame < hold + int(hold_s * FPS)
+    assert last.start_frame <= hold - 24 + 3 and end - 6 <= last.end_frame <= end
+    for i, r in enumerate(counted.repetitions[:-1]):  # each squat's bottom: frame 42 + 66 i
+        assert abs(r.peak_frame - (42 + 66 * i)) <= 2
