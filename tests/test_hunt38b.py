@@ -72,16 +72,14 @@ def test_a_squat_held_at_the_bottom_to_the_end_counts_none_in_watch_as_in_segmen
 @pytest.mark.parametrize("squats", [0, 2])
 def test_a_squat_held_longer_than_watch_waits_counts_once(squats: int) -> None:
     """``squats`` squats, then one held at the bottom 12 s and up again: ``squats`` + 1
-    repetitions by hand (``reps`` on the whole of it: 1 with no squat before; 2 with two,
-    the long hold at the bottom taken for rest, a matter of the counter, not of the end of
-    a stream). The label changing 0.9 s into the hold, ``watch``
+    repetitions by hand, as ``reps`` on the whole of it counts (with two: 2 before hunt 38i,
+    the long hold at the bottom taken for rest). The label changing 0.9 s into the hold, ``watch``
     finishes the segment before the change while the hold goes on (the frames it has been
     sent beyond the cut hold no far point yet): the held squat is the segment after's, where
     the body comes back, as ``segment`` counts it: ``squats`` and 1 (before: ``squats`` + 1
     and 1, the held squat counted twice)."""
     seq, hold = _squats_then_held(squats, 12.0, back=True)
-    if not squats:
-        assert count_repetitions(seq).count == 1
+    assert count_repetitions(seq).count == squats + 1
     watched, offline = _both(seq, hold + int(0.9 * FPS), 2.0)
     assert watched == offline == [squats, 1]
 
