@@ -1135,6 +1135,64 @@ def count_repetitions(
     return count_in_signals(sig, seq.n_frames, seq.fps, recording_edges)
 
 
+def person_jumps(seq: PoseSequence) -> list[int]:
+    """The frames at which ``seq``'s pose jumped to another person, as its pose file's
+    metadata records them (``person_jumps``, :func:`features.pose_estimation.video.person_jumps`;
+    inside the clip, ascending; none when it records none it can read)."""
+    record = seq.metadata.get("person_jumps")
+    frames = record.get("frames") if isinstance(record, dict) else None
+    if not isinstance(frames, list):
+        return []
+    offset = seq.metadata.get("frame_offset", 0)
+    offset = offset if isinstance(offset, int) else 0
+    inside = {f - offset for f in frames if isinstance(f, int) and not isinstance(f, bool)}
+    return sorted(f for f in inside if 0 < f < seq.n_frames)
+
+
+def count_apart(seq: PoseSequence, cuts: Sequence[int]) -> RepetitionCount:
+    """The repetitions of ``seq`` counted apart on either side of each of frames ``cuts``
+    (the pose jumped there to another person, :func:`person_jumps`), each piece as a clip of
+    its own (:func:`count_repetitions`: a repetition cut off at a cut counts only beside a
+    whole one; a piece shorter than :data:`MIN_PERIOD_S` or showing nobody has none), the
+    frames numbered in ``seq``. The jump is no movement: counted as one clip, two people's
+    postures either side of it read as one going from one to the other. The period is none
+    (each piece has its own); moving: the pieces' angles, first seen first."""
+    bounds = [0, *sorted({c for c in cuts if 0 < c < seq.n_frames}), seq.n_frames]
+    reps: list[Repetition] = []
+    moving: list[str] = []
+    partial = alternating = False
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        if (b - a) / seq.fps < MIN_PERIOD_S:
+            continue
+        piece = dataclasses.replace(seq, positions=seq.positions[a:b], confidence=(
+            None if seq.confidence is None else seq.confidence[a:b]
+        ))  # fmt: skip
+        try:
+            found = count_repetitions(piece)
+        except DataError:  # nobody in view in the piece
+            continue
+        reps += [
+            dataclasses.replace(
+                r, start_frame=r.start_frame + a, end_frame=r.end_frame + a,
+                peak_frame=r.peak_frame + a,
+            )
+            for r in found.repetitions
+        ]  # fmt: skip
+        moving += [m for m in found.moving if m not in moving]
+        partial |= found.partial
+        alternating |= found.alternating and bool(found.repetitions)
+    return RepetitionCount(
+        repetitions=tuple(reps),
+        fps=seq.fps,
+        n_frames=seq.n_frames,
+        period_s=None,
+        periodicity=0.0,
+        alternating=alternating,
+        moving=tuple(moving),
+        partial=partial and not reps,
+    )
+
+
 def count_in_signals(
     sig: MovementSignals,
     n_frames: int,

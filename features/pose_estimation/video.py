@@ -91,6 +91,48 @@ BRIDGE_FRAMES = 3
 frames are 0.25 s apart: one dropped frame is bridged)."""
 
 
+JUMP_TORSOS = 1.0
+"""The hip centre moving more than this many torso lengths (shoulder centre to hip centre in
+the image, the larger of the two frames') from one frame to the next is no movement of one
+body: the pose jumped to someone else (the person tracked walked out while another was in
+view, or a cut in the video). At :data:`JUMP_TORSOS_PER_S` times the frame interval if
+more (a 5-fps video's frames are 0.2 s apart)."""
+JUMP_TORSOS_PER_S = 8.0
+"""The fastest a body's hips move across the image in an exercise video, in torso lengths a
+second (about 4 m/s: a jumping jack's hips move one to two, a jog's on the spot less)."""
+
+
+def person_jumps(image_lm: np.ndarray, fps: float) -> list[int]:
+    """The frames (ascending) at which the pose jumped to another person: the hip centre of
+    image landmarks ``image_lm`` ``(frames, 33, >=2)`` (px, NaN where nobody is in view)
+    farther from the frame before's than :data:`JUMP_TORSOS` torso lengths (or
+    :data:`JUMP_TORSOS_PER_S` a second), both frames showing the person. A frame after
+    frames with nobody in view is none: who comes back into view after a gap is not judged."""
+    xy = np.asarray(image_lm, dtype=float)[:, :, :2]
+    if len(xy) < 2:
+        return []
+    hips = (xy[:, 23] + xy[:, 24]) / 2.0
+    shoulders = (xy[:, 11] + xy[:, 12]) / 2.0
+    torso = np.linalg.norm(shoulders - hips, axis=1)
+    step = np.linalg.norm(np.diff(hips, axis=0), axis=1)
+    limit = max(JUMP_TORSOS, JUMP_TORSOS_PER_S / fps) * np.fmax(torso[:-1], torso[1:])
+    with np.errstate(invalid="ignore"):
+        jumped = step > limit  # NaN (nobody in view on either side): no jump
+    return (np.flatnonzero(jumped) + 1).tolist()
+
+
+def jump_words(path: str | Path, jumps: Sequence[int], fps: float) -> str:
+    """The line that tells a user the pose jumped to another person (the first place, and
+    how many there were)."""
+    frame = jumps[0]
+    line = (
+        f"{path}: the pose jumps to another person at frame {frame} ({frame / fps:.2f} s:"
+        f" the hips moved more than {JUMP_TORSOS:g} torso length between two frames);"
+        " repetitions are counted apart on either side"
+    )
+    return f"{line} ({len(jumps)} such jumps)" if len(jumps) > 1 else line
+
+
 @dataclass(frozen=True)
 class VideoInfo:
     """What the container declares: frame count (0 if unknown), fps, width, height."""
@@ -781,6 +823,9 @@ def estimate_video(
         missing = [i for i, p in enumerate(person) if not p]
         if clock.ahead and announce:  # on the grid: timed by their places
             print(f"note: {shown(ahead_words(path, clock.ahead, False))}", file=sys.stderr)
+    jumps = person_jumps(image_lm, info.fps)
+    if jumps and announce:
+        print(f"note: {shown(jump_words(path, jumps, info.fps))}", file=sys.stderr)
     meta: dict[str, object] = {
         "source_video": str(path),
         "video_fps": info.fps,
@@ -798,6 +843,14 @@ def estimate_video(
     }
     if vfr is not None:
         meta["variable_frame_rate"] = vfr
+    if jumps:
+        meta["person_jumps"] = {
+            "frames": jumps,
+            "why": "the hip centre moved more than"
+            f" {JUMP_TORSOS:g} torso length (or {JUMP_TORSOS_PER_S:g} a second) from the"
+            " frame before: the pose jumped to another person; repetitions are counted"
+            " apart on either side, as at a cut",
+        }
     meta.update(metadata or {})
     seq = PoseSequence(
         positions=positions,

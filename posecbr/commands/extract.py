@@ -442,6 +442,7 @@ def process(job: Job, options: Options) -> Outcome:
     from features.pose_estimation.overlay import check_mp4_size, write_overlay
     from features.pose_estimation.video import gap_words, older_vfr_extraction
     from features.poses import gap_rows, load_pose, load_pose_arrays, recorded_gaps
+    from features.repetitions import person_jumps
 
     try:
         digest = sha256_file(job.video)
@@ -468,6 +469,11 @@ def process(job: Job, options: Options) -> Outcome:
         )
         if holes:
             vfr_note += f"; {gap_words([(a, b) for a, b, _r0, _r1 in holes])}"
+        jumps = person_jumps(seq)
+        if jumps:  # the tracked person left and the model took someone else in view
+            where = ", ".join(f"{f} ({f / seq.fps:.2f} s)" for f in jumps[:3])
+            more = f" and {len(jumps) - 3} more" if len(jumps) > 3 else ""
+            vfr_note += f"; the pose jumps to another person at frame {where}{more}"
         if job.overlay is not None:
             words = _fluent_words(seq) if options.fluents else None
             write_overlay(

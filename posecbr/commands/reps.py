@@ -91,10 +91,13 @@ def _count(seq: Any) -> Any:
     reference, as ``describe`` does."""
     from cbr import long_clip
     from features.derived import derived
-    from features.repetitions import count_in_signals, count_repetitions
+    from features.repetitions import count_apart, count_in_signals, count_repetitions, person_jumps
     from features.signals import state_signals
 
     rec = seq.to_canonical()
+    jumps = person_jumps(rec)
+    if jumps:  # the pose jumped to another person: no movement, counted as at a cut
+        return count_apart(rec, jumps)
     chunk = long_clip.chunk_for(rec, None)
     if not chunk:
         if rec.n_frames < NUMPY_BELOW_FRAMES:

@@ -1,0 +1,115 @@
+"""The pose jumping to another person: the tracked person walks out while someone else is in
+view, and the single-person model takes the other one on the next frame (hunt 38r).
+
+``extract`` records the frame in the pose file (``person_jumps``) and says so in the clip's
+line; ``reps`` counts apart on either side of it, as at a cut, so the jump from one person's
+posture to the other's is no movement. Before, nothing said the pose had changed person, and
+a repetition ran across the jump (frames 15-130 of the video below, the jump at 125).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from features.poses import load_pose
+from posecbr.cli import main
+
+LUNGE = Path("videos") / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
+LEG_RAISE = Path("videos") / "side_lying_leg_raise" / "fit_lateral_leg_raise_pexels6974513.mp4"
+LEAVES = 125  # the lunging woman's last frame is 124; from 125 only the other one is in view
+
+
+def _landmarks(hips_x: list[float], torso: float = 100.0) -> np.ndarray:
+    """Image landmarks ``(frames, 33, 5)`` with the hip centre at ``hips_x`` (y 300 px, NaN:
+    nobody in view) and the shoulders ``torso`` px above it."""
+    im = np.full((len(hips_x), 33, 5), np.nan)
+    for i, x in enumerate(hips_x):
+        if np.isnan(x):
+            continue
+        im[i, :, :] = 1.0
+        im[i, [23, 24], 0], im[i, [23, 24], 1] = [x - 20, x + 20], 300.0
+        im[i, [11, 12], 0], im[i, [11, 12], 1] = [x - 25, x + 25], 300.0 - torso
+    return im
+
+
+def test_a_jump_of_more_than_a_torso_length_between_two_frames_is_another_person() -> None:
+    from features.pose_estimation.video import person_jumps
+
+    # torso 100 px: at 25 fps the limit is 1 torso length (8/25 = 0.32 is less), 100 px
+    hips = [100.0, 130.0, 229.0, 331.0, 331.0, np.nan, 900.0, 905.0]
+    # steps: 30, 99 (no), 102 (a jump, frame 3), 0, then nobody, then after the gap: none
+    assert person_jumps(_landmarks(hips), 25.0) == [3]
+    # at 5 fps the frames are 0.2 s apart: 8 torso lengths a second is 1.6 of them, 160 px
+    assert person_jumps(_landmarks([100.0, 250.0, 420.0]), 5.0) == [2]
+    assert person_jumps(_landmarks([100.0]), 25.0) == []
+
+
+def _leave_video(shared_data: Path, out: Path, frames: int = 175) -> Path:
+    """The lunge (left half, at half size) until frame 125, then black; the side-lying leg
+    raise (right half) from frame 50 on: both in view for 3 s, then only the second. MJPG:
+    no codec's run-to-run noise."""
+    def read(rel: Path) -> list[np.ndarray]:
+        cap = cv2.VideoCapture(str(shared_data / rel))
+        got = []
+        while len(got) < frames:
+            ok, bgr = cap.read()
+            assert ok
+            got.append(cv2.resize(bgr, (480, 270)))
+        cap.release()
+        return got
+
+    left, right = read(LUNGE), read(LEG_RAISE)
+    black = np.zeros_like(left[0])
+    writer = cv2.VideoWriter(str(out), cv2.VideoWriter.fourcc(*"MJPG"), 25, (960, 270))
+    for i in range(frames):
+        writer.write(np.hstack([left[i] if i < LEAVES else black, right[i] if i >= 50 else black]))
+    writer.release()
+    return out
+
+
+@pytest.fixture(scope="module")
+def extracted(
+    shared_data: Path, tmp_path_factory: pytest.TempPathFactory
+) -> tuple[Path, str]:
+    folder = tmp_path_factory.mktemp("jump")
+    video = _leave_video(shared_data, folder / "leaves.avi")
+    pose = folder / "leaves.npz"
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main(["extract", str(video), "--out", str(pose)]) == 0
+    return pose, buf.getvalue()
+
+
+def test_extract_records_and_says_where_the_pose_jumped(extracted: tuple[Path, str]) -> None:
+    pose, said = extracted
+    seq = load_pose(pose)
+    assert seq.metadata["person_jumps"]["frames"] == [LEAVES]
+    assert seq.metadata["missing_frames"] == []  # taken at once: no frame without a person
+    assert "the pose jumps to another person at frame 125 (5.00 s)" in said
+
+
+def test_reps_counts_apart_on_either_side_of_the_jump(
+    extracted: tuple[Path, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    pose, _said = extracted
+    capsys.readouterr()
+    assert main(["reps", str(pose), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    # no repetition runs across the jump: one person's posture going to the other's is none
+    for r in doc["repetitions"]:
+        assert r["end_frame"] <= LEAVES or r["start_frame"] >= LEAVES, r
+    # the lunge's one slow repetition (lowest 1.5-3.6 s: frames 38-90) is counted before the
+    # jump; after it the leg raise's 5-7 s hold no far point (leg up 2.2-4.8 s, and from 8.4 s)
+    peaks = [r["peak_frame"] for r in doc["repetitions"]]
+    assert any(38 <= p <= 90 for p in peaks), peaks
+    assert all(p < LEAVES for p in peaks), peaks
+    # read as one clip, the two people's postures made an alternating movement of 0.56 s
+    assert not doc["alternating"]
+    assert doc["period_s"] is None  # each side has its own
