@@ -72,6 +72,7 @@ from features.repetitions import (
     Repetition,
     RepetitionCount,
     count_in_signals,
+    person_jumps,
 )
 from features.text import shown
 from features.values import is_number
@@ -919,6 +920,35 @@ def keep_whole(
     return tuple(out)
 
 
+def counted_apart(
+    sig: MovementSignals,
+    bounds: Sequence[tuple[int, int]],
+    n_frames: int,
+    unseen: Sequence[bool],
+    jumps: Sequence[int],
+) -> list[tuple[Repetition, ...]]:
+    """:func:`counted_segments` with every segment also cut at the frames ``jumps`` (where
+    the pose jumped to another person, :func:`features.repetitions.person_jumps`), as at a
+    change of segment, and each segment's pieces' repetitions joined back into it: the jump
+    from one person's posture to the other's is no movement, as ``reps`` counts it. Before, a
+    repetition ran on across the jump (a jumping jack of one person ending in another's)."""
+    pieces: list[tuple[int, int]] = []
+    owner: list[int] = []
+    blind: list[bool] = []
+    for k, ((a, b), u) in enumerate(zip(bounds, unseen, strict=True)):
+        cuts = [a, *sorted({j for j in jumps if a < j < b}), b]
+        for x, y in zip(cuts[:-1], cuts[1:], strict=True):
+            pieces.append((x, y))
+            owner.append(k)
+            blind.append(u)
+    if len(pieces) == len(bounds):
+        return counted_segments(sig, bounds, n_frames, unseen)
+    out: list[tuple[Repetition, ...]] = [() for _ in bounds]
+    for k, found in zip(owner, counted_segments(sig, pieces, n_frames, blind), strict=True):
+        out[k] += found
+    return out
+
+
 def counted_segments(
     sig: MovementSignals,
     bounds: Sequence[tuple[int, int]],
@@ -1259,7 +1289,9 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     path[nobody_blocks(rec, len(path))] = n_classes + 1
     runs = _runs(_nobody_absorbs_slivers(path, n_classes))
     bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]
-    reps = counted_segments(done.sig, bounds, rec.n_frames, [s > n_classes for *_, s in runs])
+    reps = counted_apart(
+        done.sig, bounds, rec.n_frames, [s > n_classes for *_, s in runs], person_jumps(rec)
+    )
     pieces = _LastPiece()
     segments = tuple(
         _nobody_segment(rec, a, b)

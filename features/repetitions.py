@@ -1155,12 +1155,14 @@ def count_apart(seq: PoseSequence, cuts: Sequence[int]) -> RepetitionCount:
     its own (:func:`count_repetitions`: a repetition cut off at a cut counts only beside a
     whole one; a piece shorter than :data:`MIN_PERIOD_S` or showing nobody has none), the
     frames numbered in ``seq``. The jump is no movement: counted as one clip, two people's
-    postures either side of it read as one going from one to the other. The period is none
-    (each piece has its own); moving: the pieces' angles, first seen first."""
+    postures either side of it read as one going from one to the other. The period (and its
+    periodicity) is that of the piece with the most repetitions (the first of those);
+    moving: the pieces' angles, first seen first."""
     bounds = [0, *sorted({c for c in cuts if 0 < c < seq.n_frames}), seq.n_frames]
     reps: list[Repetition] = []
     moving: list[str] = []
     partial = alternating = False
+    period: tuple[int, float | None, float] = (0, None, 0.0)
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         if (b - a) / seq.fps < MIN_PERIOD_S:
             continue
@@ -1181,12 +1183,14 @@ def count_apart(seq: PoseSequence, cuts: Sequence[int]) -> RepetitionCount:
         moving += [m for m in found.moving if m not in moving]
         partial |= found.partial
         alternating |= found.alternating and bool(found.repetitions)
+        if found.count > period[0]:
+            period = (found.count, found.period_s, found.periodicity)
     return RepetitionCount(
         repetitions=tuple(reps),
         fps=seq.fps,
         n_frames=seq.n_frames,
-        period_s=None,
-        periodicity=0.0,
+        period_s=period[1],
+        periodicity=period[2],
         alternating=alternating,
         moving=tuple(moving),
         partial=partial and not reps,

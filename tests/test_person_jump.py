@@ -23,6 +23,7 @@ from posecbr.cli import main
 
 LUNGE = Path("videos") / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
 LEG_RAISE = Path("videos") / "side_lying_leg_raise" / "fit_lateral_leg_raise_pexels6974513.mp4"
+JUMPING_JACKS = Path("videos") / "edge" / "jumping_jack_legs_cropped_pexels5034331.mp4"
 LEAVES = 125  # the lunging woman's last frame is 124; from 125 only the other one is in view
 
 
@@ -55,6 +56,7 @@ def _leave_video(shared_data: Path, out: Path, frames: int = 175) -> Path:
     """The lunge (left half, at half size) until frame 125, then black; the side-lying leg
     raise (right half) from frame 50 on: both in view for 3 s, then only the second. MJPG:
     no codec's run-to-run noise."""
+
     def read(rel: Path) -> list[np.ndarray]:
         cap = cv2.VideoCapture(str(shared_data / rel))
         got = []
@@ -75,9 +77,7 @@ def _leave_video(shared_data: Path, out: Path, frames: int = 175) -> Path:
 
 
 @pytest.fixture(scope="module")
-def extracted(
-    shared_data: Path, tmp_path_factory: pytest.TempPathFactory
-) -> tuple[Path, str]:
+def extracted(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     folder = tmp_path_factory.mktemp("jump")
     video = _leave_video(shared_data, folder / "leaves.avi")
     pose = folder / "leaves.npz"
@@ -112,4 +112,81 @@ def test_reps_counts_apart_on_either_side_of_the_jump(
     assert all(p < LEAVES for p in peaks), peaks
     # read as one clip, the two people's postures made an alternating movement of 0.56 s
     assert not doc["alternating"]
-    assert doc["period_s"] is None  # each side has its own
+
+
+@pytest.fixture(scope="module")
+def jacks(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
+    """The cropped jumping jacks (11 by hand: arms up at 0.9, 1.8, ..., 9.3 and 10.2 s,
+    tests/fixtures/repetition_counts.json) on the left until frame 150 (5.0 s), and again on
+    the right from frame 60, 14 frames (0.47 s) further on in the clip, to the clip's end:
+    the pose file and the rate."""
+    cap = cv2.VideoCapture(str(shared_data / JUMPING_JACKS))
+    fps = cap.get(cv2.CAP_PROP_FPS)
+    frames = []
+    while True:
+        ok, bgr = cap.read()
+        if not ok:
+            break
+        frames.append(cv2.resize(bgr, (640, 360)))
+    cap.release()
+    assert len(frames) == 308
+    folder = tmp_path_factory.mktemp("jacks")
+    video, pose = folder / "jacks.avi", folder / "jacks.npz"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter.fourcc(*"MJPG"), fps, (1280, 360))
+    black = np.zeros_like(frames[0])
+    for i in range(len(frames) - 14):
+        left = frames[i] if i < 150 else black
+        writer.write(np.hstack([left, frames[i + 14] if i >= 60 else black]))
+    writer.release()
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["extract", str(video), "--out", str(pose)]) == 0
+    assert load_pose(pose).metadata["person_jumps"]["frames"] == [150]
+    return pose, fps
+
+
+# By hand: the left's 5 arm raises up to 4.5 s, then the right's at 5.5, 6.45, 7.4, 8.35, 9.3
+# and 10.2 s of the clip, 0.47 s earlier here.
+JACKS_BY_HAND = [0.9, 1.8, 2.7, 3.6, 4.5, 5.03, 5.98, 6.93, 7.88, 8.83, 9.73]
+
+
+def _as_by_hand(spans: list[tuple[int, int, int]], fps: float) -> None:
+    """Repetitions (start, end, far point: frames) of :func:`jacks`: 11, none across the
+    jump at frame 150, the far points within 0.2 s of :data:`JACKS_BY_HAND`."""
+    assert len(spans) == 11
+    for a, b, _far in spans:
+        assert b <= 150 or a >= 150, (a, b)
+    far = [f / fps for _a, _b, f in spans]
+    assert np.abs(np.array(far) - JACKS_BY_HAND).max() < 0.2, far
+
+
+def test_reps_of_jumping_jacks_across_a_jump_are_as_counted_by_hand(
+    jacks: tuple[Path, float], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before, the fifth repetition ran on across the jump (frames 146-164, its far point at
+    5.11 s)."""
+    pose, fps = jacks
+    capsys.readouterr()
+    assert main(["reps", str(pose), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["count"] == 11
+    _as_by_hand(
+        [(r["start_frame"], r["end_frame"], r["peak_frame"]) for r in doc["repetitions"]], fps
+    )
+
+
+def test_segment_counts_a_segment_apart_on_either_side_of_a_jump(jacks: tuple[Path, float]) -> None:
+    """``segment``'s count of a segment across the jump (one segment: the same movement on
+    both sides), as ``reps``'. Before, frames 146-165 were one repetition."""
+    from cbr.segmentation import counted_apart, counted_segments
+    from features.repetitions import movement_signals
+
+    pose, fps = jacks
+    seq = load_pose(pose).to_canonical()
+    sig = movement_signals(seq)
+    n = seq.n_frames
+    reps = counted_apart(sig, [(0, n)], n, [False], [150])[0]
+    _as_by_hand([(r.start_frame, r.end_frame, r.peak_frame) for r in reps], fps)
+    # without a jump it is counted_segments' count, unchanged
+    assert counted_apart(sig, [(0, 100), (100, n)], n, [False, False], []) == counted_segments(
+        sig, [(0, 100), (100, n)], n
+    )

@@ -823,9 +823,7 @@ def estimate_video(
         missing = [i for i, p in enumerate(person) if not p]
         if clock.ahead and announce:  # on the grid: timed by their places
             print(f"note: {shown(ahead_words(path, clock.ahead, False))}", file=sys.stderr)
-    jumps = person_jumps(image_lm, info.fps)
-    if jumps and announce:
-        print(f"note: {shown(jump_words(path, jumps, info.fps))}", file=sys.stderr)
+    jumps = _jump_record(path, image_lm, info.fps, announce)
     meta: dict[str, object] = {
         "source_video": str(path),
         "video_fps": info.fps,
@@ -843,14 +841,8 @@ def estimate_video(
     }
     if vfr is not None:
         meta["variable_frame_rate"] = vfr
-    if jumps:
-        meta["person_jumps"] = {
-            "frames": jumps,
-            "why": "the hip centre moved more than"
-            f" {JUMP_TORSOS:g} torso length (or {JUMP_TORSOS_PER_S:g} a second) from the"
-            " frame before: the pose jumped to another person; repetitions are counted"
-            " apart on either side, as at a cut",
-        }
+    if jumps is not None:
+        meta["person_jumps"] = jumps
     meta.update(metadata or {})
     seq = PoseSequence(
         positions=positions,
@@ -861,6 +853,24 @@ def estimate_video(
         metadata=meta,
     )
     return VideoPoses(seq, image_lm, tuple(missing), info, video_frames)
+
+
+def _jump_record(
+    path: Path, image_lm: np.ndarray, fps: float, announce: bool
+) -> dict[str, object] | None:
+    """The metadata's ``person_jumps`` of a video's image landmarks (:func:`person_jumps`;
+    None without a jump), said in one line on stderr when ``announce``."""
+    jumps = person_jumps(image_lm, fps)
+    if not jumps:
+        return None
+    if announce:
+        print(f"note: {shown(jump_words(path, jumps, fps))}", file=sys.stderr)
+    return {
+        "frames": jumps,
+        "why": f"the hip centre moved more than {JUMP_TORSOS:g} torso length (or"
+        f" {JUMP_TORSOS_PER_S:g} a second) from the frame before: the pose jumped to another"
+        " person; repetitions are counted apart on either side, as at a cut",
+    }
 
 
 def _resampling_record(
