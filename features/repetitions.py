@@ -93,7 +93,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -1149,11 +1149,16 @@ def person_jumps(seq: PoseSequence) -> list[int]:
     return sorted(f for f in inside if 0 < f < seq.n_frames)
 
 
-def count_apart(seq: PoseSequence, cuts: Sequence[int]) -> RepetitionCount:
+def count_apart(
+    seq: PoseSequence,
+    cuts: Sequence[int],
+    count: Callable[[PoseSequence], RepetitionCount] | None = None,
+) -> RepetitionCount:
     """The repetitions of ``seq`` counted apart on either side of each of frames ``cuts``
     (the pose jumped there to another person, :func:`person_jumps`), each piece as a clip of
-    its own (:func:`count_repetitions`: a repetition cut off at a cut counts only beside a
-    whole one; a piece shorter than :data:`MIN_PERIOD_S` or showing nobody has none), the
+    its own (by ``count``, default :func:`count_repetitions`: a repetition cut off at a cut
+    counts only beside a whole one; a piece shorter than :data:`MIN_PERIOD_S` or showing
+    nobody has none), the
     frames numbered in ``seq``. The jump is no movement: counted as one clip, two people's
     postures either side of it read as one going from one to the other. The period (and its
     periodicity) is that of the piece with the most repetitions (the first of those);
@@ -1170,7 +1175,7 @@ def count_apart(seq: PoseSequence, cuts: Sequence[int]) -> RepetitionCount:
             None if seq.confidence is None else seq.confidence[a:b]
         ))  # fmt: skip
         try:
-            found = count_repetitions(piece)
+            found = (count or count_repetitions)(piece)
         except DataError:  # nobody in view in the piece
             continue
         reps += [

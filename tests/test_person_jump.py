@@ -190,3 +190,24 @@ def test_segment_counts_a_segment_apart_on_either_side_of_a_jump(jacks: tuple[Pa
     assert counted_apart(sig, [(0, 100), (100, n)], n, [False, False], []) == counted_segments(
         sig, [(0, 100), (100, n)], n
     )
+
+
+def test_jumps_are_read_in_a_piece_of_the_recording_by_its_own_frames() -> None:
+    """A labels CSV's start,end row (``slice_frames``) keeps the whole video's record: the
+    jumps at frames 30 and 80 of it are at 10 and 60 of frames 20-100, and none of them in
+    frames 40-80 (a jump at the piece's first frame is no jump inside it)."""
+    from features.poses import PoseSequence
+    from features.repetitions import person_jumps as recorded
+    from features.skeleton import BLAZEPOSE_33
+
+    seq = PoseSequence(
+        np.zeros((120, 33, 3)),
+        BLAZEPOSE_33,
+        25.0,
+        metadata={"person_jumps": {"frames": [30, 80]}},
+    )
+    assert recorded(seq) == [30, 80]
+    assert recorded(seq.slice_frames(20, 100)) == [10, 60]
+    assert recorded(seq.slice_frames(80, 120)) == []
+    assert recorded(seq.slice_frames(40, 80)) == []
+    assert recorded(seq.with_metadata(person_jumps={"frames": "30"})) == []  # unreadable: none

@@ -83,7 +83,19 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _count(seq: Any) -> Any:
-    """:func:`features.repetitions.count_repetitions` of ``seq``; a recording longer than
+    """The repetitions of ``seq`` (:func:`_count_one`), counted apart on either side of each
+    frame where the pose jumped to another person (:func:`features.repetitions.count_apart`)."""
+    from features.repetitions import count_apart, person_jumps
+
+    rec = seq.to_canonical()
+    jumps = person_jumps(rec)
+    if jumps:  # the pose jumped to another person: no movement, counted as at a cut
+        return count_apart(rec, jumps, _count_one)
+    return _count_one(rec)
+
+
+def _count_one(rec: Any) -> Any:
+    """:func:`features.repetitions.count_repetitions` of canonical ``rec``; a recording longer than
     :data:`cbr.long_clip.CHUNK_FRAMES` has its joint angles computed that many frames at a
     time, as ``segment`` reads it (the same counts in the memory of one piece: before, a
     42-minute recording at 120 fps took 1 GB, a million frames would take 3). A clip under
@@ -91,13 +103,9 @@ def _count(seq: Any) -> Any:
     reference, as ``describe`` does."""
     from cbr import long_clip
     from features.derived import derived
-    from features.repetitions import count_apart, count_in_signals, count_repetitions, person_jumps
+    from features.repetitions import count_in_signals, count_repetitions
     from features.signals import state_signals
 
-    rec = seq.to_canonical()
-    jumps = person_jumps(rec)
-    if jumps:  # the pose jumped to another person: no movement, counted as at a cut
-        return count_apart(rec, jumps)
     chunk = long_clip.chunk_for(rec, None)
     if not chunk:
         if rec.n_frames < NUMPY_BELOW_FRAMES:
