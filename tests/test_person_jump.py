@@ -211,3 +211,18 @@ def test_jumps_are_read_in_a_piece_of_the_recording_by_its_own_frames() -> None:
     assert recorded(seq.slice_frames(80, 120)) == []
     assert recorded(seq.slice_frames(40, 80)) == []
     assert recorded(seq.with_metadata(person_jumps={"frames": "30"})) == []  # unreadable: none
+
+
+def test_the_note_names_the_first_jump_the_limit_and_how_many() -> None:
+    from features.pose_estimation.video import jump_words
+
+    one = jump_words("a.mp4", [125], 25.0)
+    assert one == (
+        "a.mp4: the pose jumps to another person at frame 125 (5.00 s: the hips moved more"
+        " than 1 torso length between two frames); repetitions are counted apart on either side"
+    )
+    # at 5 fps the frames are 0.2 s apart: 8 torso lengths a second is 1.6 of them
+    assert "frame 10 (2.00 s: the hips moved more than 1.6 torso length" in jump_words(
+        "a.mp4", [10, 30], 5.0
+    )
+    assert jump_words("a.mp4", [10, 30], 5.0).endswith(" (2 such jumps)")

@@ -125,9 +125,10 @@ def jump_words(path: str | Path, jumps: Sequence[int], fps: float) -> str:
     """The line that tells a user the pose jumped to another person (the first place, and
     how many there were)."""
     frame = jumps[0]
+    limit = max(JUMP_TORSOS, JUMP_TORSOS_PER_S / fps)
     line = (
         f"{path}: the pose jumps to another person at frame {frame} ({frame / fps:.2f} s:"
-        f" the hips moved more than {JUMP_TORSOS:g} torso length between two frames);"
+        f" the hips moved more than {limit:.2g} torso length between two frames);"
         " repetitions are counted apart on either side"
     )
     return f"{line} ({len(jumps)} such jumps)" if len(jumps) > 1 else line
