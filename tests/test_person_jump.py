@@ -20,6 +20,7 @@ import pytest
 
 from features.poses import load_pose
 from posecbr.cli import main
+from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
 LUNGE = Path("videos") / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
 LEG_RAISE = Path("videos") / "side_lying_leg_raise" / "fit_lateral_leg_raise_pexels6974513.mp4"
@@ -80,7 +81,7 @@ def _leave_video(shared_data: Path, out: Path, frames: int = 175) -> Path:
 def extracted(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     folder = tmp_path_factory.mktemp("jump")
     video = _leave_video(shared_data, folder / "leaves.avi")
-    pose = folder / "leaves.npz"
+    pose = folder / "leaves.npz"  # beside leaves.avi
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
         assert main(["extract", str(video), "--out", str(pose)]) == 0
@@ -226,3 +227,22 @@ def test_the_note_names_the_first_jump_the_limit_and_how_many() -> None:
         "a.mp4", [10, 30], 5.0
     )
     assert jump_words("a.mp4", [10, 30], 5.0).endswith(" (2 such jumps)")
+
+
+def test_watch_says_where_the_pose_jumps(
+    extracted: tuple[Path, str],
+    case_base: Path,  # noqa: F811
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``watch`` of the video says where the pose went over to the other person, as
+    ``extract`` does (it counts on across the jump, and says so). Before, nothing."""
+    video = extracted[0].with_suffix(".avi")
+    capsys.readouterr()
+    assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 0
+    err = capsys.readouterr().err
+    notes = [line for line in err.splitlines() if "jumps to another person" in line]
+    assert notes == [
+        f"note: {video}: the pose jumps to another person at frame 125 (5.00 s: the hips moved"
+        " more than 1 torso length between two frames); watch counts on across it (extract,"
+        " then reps or segment, count apart)"
+    ]

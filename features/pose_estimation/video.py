@@ -121,15 +121,19 @@ def person_jumps(image_lm: np.ndarray, fps: float) -> list[int]:
     return (np.flatnonzero(jumped) + 1).tolist()
 
 
-def jump_words(path: str | Path, jumps: Sequence[int], fps: float) -> str:
+def jump_words(
+    path: str | Path,
+    jumps: Sequence[int],
+    fps: float,
+    after: str = "repetitions are counted apart on either side",
+) -> str:
     """The line that tells a user the pose jumped to another person (the first place, and
-    how many there were)."""
+    how many there were), and ``after`` it what comes of it."""
     frame = jumps[0]
     limit = max(JUMP_TORSOS, JUMP_TORSOS_PER_S / fps)
     line = (
         f"{path}: the pose jumps to another person at frame {frame} ({frame / fps:.2f} s:"
-        f" the hips moved more than {limit:.2g} torso length between two frames);"
-        " repetitions are counted apart on either side"
+        f" the hips moved more than {limit:.2g} torso length between two frames); {after}"
     )
     return f"{line} ({len(jumps)} such jumps)" if len(jumps) > 1 else line
 

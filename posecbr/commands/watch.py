@@ -456,6 +456,7 @@ class Watcher:
         self.colours: dict[str, Any] | None = None  # each activity's, once drawn
         self.n = 0
         self.started = time.perf_counter()
+        self._last_image: Any = None  # the image landmarks of the frame before (pose jumps)
 
     def warm_up(self) -> None:
         """Run the segmenter's work once on a made-up figure before the stream starts
@@ -508,6 +509,7 @@ class Watcher:
             )
 
     def _take(self, frame: Any) -> None:
+        self._note_jump(frame)
         taken = self._grid.take(frame)
         for (world, visibility, shown_frame), absent in zip(taken, self._grid.absent, strict=True):
             finished = self.live.push(world, visibility, absent)
@@ -517,6 +519,25 @@ class Watcher:
             self._draw(shown_frame, absent)
         if frame.read_at == frame.read_at:  # not NaN: the source said when it read the frame
             self.latency.append(time.perf_counter() - frame.read_at)
+
+    def _note_jump(self, frame: Any) -> None:
+        """Say on stderr where the pose jumps to another person from the frame before
+        (:func:`features.pose_estimation.video.person_jumps`: the person followed left the
+        picture while another was in view), as ``extract`` says it; ``watch`` counts on across
+        it."""
+        import numpy as np
+
+        from features.pose_estimation.video import jump_words, person_jumps
+
+        image = np.asarray(frame.pose.image)
+        before, self._last_image = self._last_image, image
+        if before is None or not person_jumps(np.stack([before, image]), self.fps or 30.0):
+            return
+        words = jump_words(
+            self.args.source, [frame.index], self.fps or 30.0,
+            "watch counts on across it (extract, then reps or segment, count apart)",
+        )  # fmt: skip
+        print(f"note: {shown(words)}", file=sys.stderr)
 
     def _emit(self, segment: Any) -> None:
         self.emitted += 1
