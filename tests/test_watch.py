@@ -130,6 +130,33 @@ def test_segment_the_same_video_counts_each_squat_once(
     assert all(s["confidence"] > 0.0 for s in segments if s["label"] is None), segments
 
 
+def test_the_readme_quotes_the_segments_of_the_squat_video(
+    case_base: Path, shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """README ("Live") quotes what `segment` makes of the 5-fps squat video with this case
+    base, by the default judge and by the margin judge; it said five segments counting
+    0 + 1 + 1 + 0 + 1 and, by the margin judge, three counting 2 + 0 + 1, which the code had
+    not given since ff44302 (4 December: repetitions bounded where the movement leaves and
+    returns to rest, which moved the repetition windows; hunt 38v). What it gives is written
+    here from a run of the command and read back from the README."""
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    found = {}
+    for judge in ("spread-margin", "margin"):
+        capsys.readouterr()
+        argv = ["segment", str(video), "--db", str(case_base), "--json", "--unknown", judge]
+        assert main(argv) == 0
+        segments = json.loads(capsys.readouterr().out)["segments"]
+        found[judge] = [(s["label"], s["repetitions"]) for s in segments]
+    assert found["spread-margin"] == [("KneeRaise", 2), (None, 0), ("Squat", 1)]
+    assert found["margin"] == [("KneeRaise", 2), ("Squat", 1)]
+    readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text().split())
+    assert (
+        "`segment` on the same video, counted on the recording's own signals: three segments "
+        "(knee raise, unknown, squat) counting 2 + 0 + 1 = 3 (by the margin judge, two "
+        "segments, knee raise and squat, counting 2 + 1 = 3;"
+    ) in readme
+
+
 def test_watch_sees_the_joints_that_segment_sees(
     case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
