@@ -165,10 +165,22 @@ def _load(args: argparse.Namespace) -> list[Any]:
     # one copy could be a training case of the other
     check_listed_once([(c.seq.source, *frames_of(c.seq)) for c in clips], str(args.data),
                       "it would be tested twice, or be a training case of itself")  # fmt: skip
-    check_found([c.label for c in clips], kw.get("labels"), "--labels", "labelled", args.data,
-                lambda: dataset_labels(args.data, sensor=kw["sensor"]))  # fmt: skip
-    check_found([c.subject for c in clips], kw.get("subjects"), "--subjects", "of subject",
-                args.data, lambda: dataset_subjects(args.data, sensor=kw["sensor"]))  # fmt: skip
+    asked = [
+        ([c.label for c in clips], kw.get("labels"), "--labels", "labelled",
+         lambda: dataset_labels(args.data, sensor=kw["sensor"])),
+        ([c.subject for c in clips], kw.get("subjects"), "--subjects", "of subject",
+         lambda: dataset_subjects(args.data, sensor=kw["sensor"])),
+    ]  # fmt: skip
+    # first a value the data has nowhere (mistyped), whichever flag names it: a subject no
+    # clip has left no clip of the labels asked, and was blamed on --labels ("passes the
+    # other filters"), as train does not
+    for found, values, flag, what, held in asked:
+        have = {str(v) for v in found if v is not None}
+        if values and set(values) - have:
+            data_has = list(held())
+            check_found(data_has, values, flag, what, args.data, lambda h=data_has: h)
+    for found, values, flag, what, held in asked:  # there, but the other filter leaves them out
+        check_found(found, values, flag, what, args.data, held)
     return clips
 
 
