@@ -38,3 +38,42 @@ def test_compare_names_a_label_the_data_lack_though_a_subject_is_also_wrong(
             "--json", str(tmp_path / "r.json")]  # fmt: skip
     line = refused(argv, tmp_path, capsys)
     assert f"--labels: no clip labelled 'nope' in {DEMO}: its labels are deep_squat," in line
+
+
+# `compare --peers minirocket` without sktime or aeon ran its minutes and printed a table
+# without the one peer asked for ("minirocket skipped: ..."). Named in --peers, a peer that
+# cannot run is now refused before any clip is read; not given, it is skipped with a note.
+
+
+@pytest.mark.parametrize("peers", ["minirocket", "dtw-knn,minirocket"])
+def test_a_peer_asked_for_that_cannot_run_is_refused_before_the_run(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    peers: str,
+) -> None:
+    import cbr.evaluation.methods as methods
+
+    monkeypatch.setattr(methods, "minirocket_backend", lambda: None)  # neither installed
+    argv = ["compare", str(DEMO), "--peers", peers, "--json", str(tmp_path / "r.json")]
+    line = refused(argv, tmp_path, capsys)
+    assert line == (
+        "posecbr compare: error: --peers: minirocket cannot run here: MiniRocket needs sktime"
+        " or aeon, neither is installed (pip install -e '.[compare]' installs sktime)"
+    )
+
+
+def test_peers_not_given_are_every_peer_and_one_that_cannot_run_is_not_refused(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import cbr.evaluation.methods as methods
+    from posecbr.cli import build_parser
+    from posecbr.commands.compare import _settings, check_peers_can_run
+
+    monkeypatch.setattr(methods, "minirocket_backend", lambda: None)
+    args = build_parser().parse_args(["compare", str(DEMO)])
+    settings = _settings(args)
+    assert settings.peers == ("dtw-knn", "minirocket")
+    check_peers_can_run(args, settings)  # skipped later, with a note, as before
+    args = build_parser().parse_args(["compare", str(DEMO), "--peers", "none"])
+    assert _settings(args).peers == ()

@@ -73,10 +73,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--no-dad", action="store_true", help="leave out the DAD baseline")
     p.add_argument(
         "--peers",
-        default="dtw-knn,minirocket",
+        default=None,
         metavar="LIST",
         help="peer classifiers: dtw-knn (tslearn), minirocket (needs sktime or "
-        "aeon; skipped with a note otherwise); default: both; 'none' for no peers",
+        "aeon: named here without them, refused before the run); default: both, "
+        "minirocket skipped with a note when it cannot run; 'none' for no peers",
     )
     p.add_argument(
         "--k", type=int, default=5, help="cases retrieved by the case-base classifier (5)"
@@ -195,6 +196,29 @@ def _dataset_files(args: argparse.Namespace) -> list[str | Path]:
     return [*dataset_files(args.data, sensor=sensor_for(args.sensor, [args.data]))]
 
 
+def _peers(given: str | None) -> tuple[str, ...]:
+    """The peers ``--peers`` names (``None``: not given, every peer)."""
+    from cbr.evaluation.settings import PEERS
+
+    if given is None:
+        return tuple(PEERS)
+    return () if given.strip().lower() == "none" else _names(given)
+
+
+def check_peers_can_run(args: argparse.Namespace, settings: Any) -> None:
+    """Refuse, before any clip is read, a peer ``--peers`` names that cannot run here
+    (MiniRocket without sktime or aeon): the run would take its minutes and leave out the
+    method asked for in a note. Not given, the peers that cannot run are skipped so."""
+    from cbr.evaluation.methods import methods_for, why_unavailable
+
+    if args.peers is None:
+        return
+    for method in methods_for(settings):
+        why = why_unavailable(method, [], settings.target) if method.kind == "peer" else None
+        if why:
+            raise ConfigError(f"{method.name} cannot run here: {why}", "--peers")
+
+
 def _settings(args: argparse.Namespace) -> Any:
     from cbr.evaluation.settings import CompareSettings
 
@@ -205,7 +229,7 @@ def _settings(args: argparse.Namespace) -> Any:
         similarities=_names(args.similarities),
         features=_names(args.features),
         dad=not args.no_dad,
-        peers=() if args.peers.strip().lower() == "none" else _names(args.peers),
+        peers=_peers(args.peers),
         k=args.k,
         trim=args.trim,
         cbr_params=parse_params(args.param),
@@ -383,6 +407,7 @@ def run(args: argparse.Namespace) -> int:
     check_scheduler(args.scheduler)
     settings = _settings(args)
     check_cbr_params(settings)
+    check_peers_can_run(args, settings)
     outputs = _outputs(args)
     check_outputs(outputs, [args.data])
     if outputs:  # clips --labels/--subjects leave out are the data's too
