@@ -9,10 +9,14 @@ data have nowhere is named first, whichever flag gave it, with the values the da
 
 from __future__ import annotations
 
+import csv
+import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from posecbr.cli import main
 from tests.badinput import refused
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
@@ -77,3 +81,41 @@ def test_peers_not_given_are_every_peer_and_one_that_cannot_run_is_not_refused(
     check_peers_can_run(args, settings)  # skipped later, with a note, as before
     args = build_parser().parse_args(["compare", str(DEMO), "--peers", "none"])
     assert _settings(args).peers == ()
+
+
+# `compare --target correct` prints the accuracy per movement under its table (README: "from
+# 64 % on the inline lunge to 93 % on scaption: compare prints the accuracy per movement"),
+# but its --csv (and --out's results.csv) had no such column, nor which method the McNemar
+# p-values test against: a paper's table made from the CSV lost both. Now each row has
+# accuracy:GROUP and mcnemar_vs.
+
+
+def test_csv_holds_the_accuracy_per_movement_the_table_prints(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out_json, out_csv = tmp_path / "c.json", tmp_path / "c.csv"
+    rc = main([
+        "compare", str(DEMO), "--labels", "deep_squat,hurdle_step", "--target", "correct",
+        "--similarities", "euclidean", "--features", "fluents", "--peers", "dtw-knn",
+        "--explain", "0", "--json", str(out_json), "--csv", str(out_csv),
+    ])  # fmt: skip
+    assert rc == 0
+    printed = capsys.readouterr().out
+    with open(DEMO / "labels.csv", newline="") as fh:
+        movement_of = {Path(r["path"]).name: r["label"] for r in csv.DictReader(fh)}
+    res = json.loads(out_json.read_text())
+    movement = np.array([movement_of[c["clip"]] for c in res["clips"]])
+    target = np.array([c["target"] for c in res["clips"]])
+    with open(out_csv, newline="") as fh:
+        rows = {r["method"]: r for r in csv.DictReader(fh)}
+    scored = [m for m in res["methods"] if m["status"] == "ok"]
+    assert {m["name"] for m in scored} == {"cbr fluents/euclidean", "dtw-knn"}
+    for i, m in enumerate(scored):  # the table's columns: the scored methods in order
+        hit = np.array(m["predictions"]) == target
+        row = rows[m["name"]]
+        for g in ("deep_squat", "hurdle_step"):  # 18 clips each: 3 subjects x 6
+            assert (movement == g).sum() == 18
+            assert float(row[f"accuracy:{g}"]) == pytest.approx(hit[movement == g].mean(), abs=1e-6)
+            line = next(x for x in printed.splitlines() if x.startswith(g + " "))
+            assert line.split()[1 + i] == f"{100 * float(row[f'accuracy:{g}']):.1f}"
+        assert row["mcnemar_vs"] == res["best"]

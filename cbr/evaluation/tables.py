@@ -84,14 +84,19 @@ def _figures(s: Scores, classes: list[str]) -> dict[str, Any]:
         "predict_s": round(s.predict_s, 4),
         "case_base_size": s.case_base_size,
         "mcnemar_p": None if s.mcnemar is None else s.mcnemar.p,
+        "mcnemar_vs": None if s.mcnemar is None else s.mcnemar.versus,
     }
     row.update({f"recall:{c}": round(s.per_class[c].value, 6) for c in classes})
+    # the accuracy per model group the table prints under it (per movement with --target)
+    row.update({f"accuracy:{g}": round(r.value, 6) for g, r in s.per_group.items()})
     return row
 
 
 def csv_rows(results: CompareResults) -> list[dict[str, Any]]:
-    """One row per method: the table's figures plus per-class recall (``message`` for one
-    that did not run)."""
+    """One row per method: the table's figures (``mcnemar_vs``: the best method, tested
+    against), per-class recall (``recall:CLASS``) and, with model groups, the accuracy per
+    group printed under the table (``accuracy:GROUP``); ``message`` for one that did not
+    run."""
     rows = []
     for m in results.methods:
         row: dict[str, Any] = {
