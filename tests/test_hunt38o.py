@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from posecbr.cli import main
-from tests.badinput import refused
+from tests.badinput import good_pose_file, refused
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
@@ -119,3 +119,40 @@ def test_csv_holds_the_accuracy_per_movement_the_table_prints(
             line = next(x for x in printed.splitlines() if x.startswith(g + " "))
             assert line.split()[1 + i] == f"{100 * float(row[f'accuracy:{g}']):.1f}"
         assert row["mcnemar_vs"] == res["best"]
+
+
+# `compare --cv loso` on one subject (or on clips without one) ran stratified k-fold over
+# clips with a note and exit 0: figures of the same person in training and test, from a run
+# whose command line says leave-one-subject-out. Asked for by name, it is now refused before
+# the run; the default (no --cv) still falls back with a note (test_compare_cli).
+
+
+def test_loso_asked_for_on_one_subject_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["compare", str(DEMO), "--subjects", "s01", "--cv", "loso", "--json",
+            str(tmp_path / "r.json")]  # fmt: skip
+    line = refused(argv, tmp_path, capsys)
+    assert line == (
+        f"posecbr compare: error: --cv: leave-one-subject-out is impossible in {DEMO}: only"
+        " one subject (s01); --cv kfold cross-validates over clips (the same person can be in"
+        " training and test)"
+    )
+
+
+def test_loso_asked_for_on_clips_without_subjects_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A labels CSV with no subject column: 4 clips, none with a subject."""
+    data = tmp_path / "data"
+    data.mkdir()
+    rows = ["path,label"]
+    for k in range(4):  # a person standing, 2 s at 30 fps, with no subject
+        good_pose_file(data / f"c{k}.npz", frames=60)
+        rows.append(f"c{k}.npz,{'squat' if k < 2 else 'lunge'}")
+    (data / "labels.csv").write_text("\n".join(rows) + "\n")
+    argv = ["compare", str(data / "labels.csv"), "--cv", "loso", "--json",
+            str(tmp_path / "r.json")]  # fmt: skip
+    line = refused(argv, tmp_path, capsys)
+    assert line.endswith(": 4 clips have no subject; --cv kfold cross-validates over clips"
+                         " (the same person can be in training and test)")  # fmt: skip

@@ -4,6 +4,7 @@ asked for or when subjects cannot be left out."""
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -16,25 +17,29 @@ from .settings import CompareSettings
 _OPTIMISTIC = "(optimistic: {} in training and test)"
 
 
-def _loso_fallback(subjects: list[str | None], k: int) -> str | None:
-    """Why leave-one-subject-out is impossible for these clips (None if it is possible)."""
+def loso_impossible(subjects: Sequence[str | None]) -> str | None:
+    """Why leave-one-subject-out is impossible for clips of these subjects ("only one
+    subject (s01)", "18 clips have no subject"; None if it is possible)."""
     unknown = sum(s is None for s in subjects)
     distinct = sorted({s for s in subjects if s is not None})
-    fallback = f"falling back to stratified {k}-fold cross-validation over clips "
     if unknown:
-        return (
-            f"{counted(unknown, 'clip')} {'has' if unknown == 1 else 'have'} no subject, "
-            "so leave-one-subject-out is impossible; "
-            + fallback
-            + _OPTIMISTIC.format("a person can be")
-        )
+        return f"{counted(unknown, 'clip')} {'has' if unknown == 1 else 'have'} no subject"
     if len(distinct) < 2:
-        return (
-            f"only one subject ({distinct[0]}), so leave-one-subject-out is impossible; "
-            + fallback
-            + _OPTIMISTIC.format("the same person is")
-        )
+        return f"only one subject ({distinct[0]})" if distinct else "no clip"
     return None
+
+
+def _loso_fallback(subjects: list[str | None], k: int) -> str | None:
+    """Why leave-one-subject-out is impossible for these clips, and the fallback (None if it
+    is possible)."""
+    why = loso_impossible(subjects)
+    if why is None:
+        return None
+    person = "a person can be" if any(s is None for s in subjects) else "the same person is"
+    return (
+        f"{why}, so leave-one-subject-out is impossible; falling back to stratified {k}-fold"
+        f" cross-validation over clips {_OPTIMISTIC.format(person)}"
+    )
 
 
 def _by_subject(subjects: list[str | None]) -> np.ndarray:

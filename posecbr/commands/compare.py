@@ -53,9 +53,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--cv",
         choices=("loso", "kfold"),
-        default="loso",
+        default=None,
         help="leave-one-subject-out (default; falls back to stratified k-fold, with a "
-        "note, when there is a single subject) or stratified k-fold over clips",
+        "note, when there is a single subject, and is refused then when asked for by "
+        "--cv loso) or stratified k-fold over clips",
     )
     p.add_argument("--folds", type=int, default=5, metavar="K", help="folds for kfold (5)")
     p.add_argument(
@@ -219,12 +220,30 @@ def check_peers_can_run(args: argparse.Namespace, settings: Any) -> None:
             raise ConfigError(f"{method.name} cannot run here: {why}", "--peers")
 
 
+def check_loso_possible(args: argparse.Namespace, clips: list[Any]) -> None:
+    """Refuse ``--cv loso`` asked for by name on clips it cannot hold out by subject (one
+    subject, or clips without one): the run fell back to k-fold over clips, whose figures
+    (the same person in training and test) pass for a person's never seen. Not given, the
+    fallback is taken and said in a note."""
+    from cbr.evaluation.folds import loso_impossible
+
+    if args.cv != "loso":
+        return
+    why = loso_impossible([c.subject for c in clips])
+    if why is not None:
+        raise ConfigError(
+            f"leave-one-subject-out is impossible in {args.data}: {why}; --cv kfold"
+            " cross-validates over clips (the same person can be in training and test)",
+            "--cv",
+        )
+
+
 def _settings(args: argparse.Namespace) -> Any:
     from cbr.evaluation.settings import CompareSettings
 
     return CompareSettings(
         target=args.target,
-        cv=args.cv,
+        cv=args.cv or "loso",
         folds=args.folds,
         similarities=_names(args.similarities),
         features=_names(args.features),
@@ -415,6 +434,7 @@ def run(args: argparse.Namespace) -> int:
     # rows giving frames two labels: refused before any clip is read, as train refuses them
     check_no_overlaps(args.data, set(_names(args.labels)) if args.labels else None)
     clips = _load(args)
+    check_loso_possible(args, clips)
     check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
     run_ = run_compare(clips, settings, source=str(args.data))
     results = run_.results
