@@ -156,3 +156,26 @@ def test_loso_asked_for_on_clips_without_subjects_is_refused(
     line = refused(argv, tmp_path, capsys)
     assert line.endswith(": 4 clips have no subject; --cv kfold cross-validates over clips"
                          " (the same person can be in training and test)")  # fmt: skip
+
+
+# `posecbr dad` of a long recording (CMU 13_31: seven exercises in 25 s) ranked seven
+# activities at 100 %, none of them its exercises, "tied with" six others, and said nothing
+# of why: every activity's QMPs are sought in order across all the clip's windows. A clip
+# longer than 10 s now gets a note saying DAD gives it one answer, and what segments it.
+
+
+@pytest.mark.parametrize(("seconds", "noted"), [(11.0, True), (9.0, False)])
+def test_dad_notes_a_clip_longer_than_ten_seconds(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], seconds: float, noted: bool
+) -> None:
+    clip = good_pose_file(tmp_path / "long.npz", frames=int(seconds * 30))  # 30 fps
+    assert main(["dad", str(clip)]) == 0
+    captured = capsys.readouterr()
+    assert captured.out.startswith(f"long.npz: {seconds:.1f} s, ")
+    note = (
+        f"note: long.npz lasts {seconds:.1f} s, longer than 10 s: DAD gives the whole clip one"
+        " answer, each activity's QMPs sought in order across all its windows, so a recording"
+        " of several activities can meet many in full; posecbr segment labels each activity"
+        " of a long recording (with a case base)\n"
+    )
+    assert captured.err == (note if noted else "")

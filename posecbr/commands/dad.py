@@ -24,6 +24,10 @@ if TYPE_CHECKING:
 
 MAX_SECONDS = 3600.0  # a window of an hour is no single movement
 
+LONG_CLIP_S = 10.0
+"""A clip longer than this is noted: DAD gives it one answer, as ``classify`` notes a clip
+longer than 10 s against a case base of windows (no UI-PRMD or HDM05 clip lasts so long)."""
+
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
@@ -84,12 +88,30 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write("\n")
     if result.status != "ok":  # too short, nobody in it: nothing asked for could be done
         raise PosecbrError(f"{result.status}: {result.message}", args.posefile)
+    if result.duration_s > LONG_CLIP_S:
+        _note_long_clip(args.posefile.name, result.duration_s)
     if args.json:
         return 0
     # Every line quotes the clip's name and the ADD's words: printed escaped.
     for line in _text_lines(args, result, config):
         print(shown(line))
     return 0
+
+
+def _note_long_clip(name: str, seconds: float) -> None:
+    """Note, on stderr, that a long clip gets one answer: its activities' QMPs are sought in
+    order across all its windows, so a recording of several exercises meets many activities
+    in full (CMU 13_31, seven exercises in 25 s: seven activities at 100 %, none of its
+    own)."""
+    print(
+        shown(
+            f"note: {name} lasts {seconds:.1f} s, longer than {LONG_CLIP_S:g} s: DAD gives the"
+            " whole clip one answer, each activity's QMPs sought in order across all its"
+            " windows, so a recording of several activities can meet many in full; posecbr"
+            " segment labels each activity of a long recording (with a case base)"
+        ),
+        file=sys.stderr,
+    )
 
 
 def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[str]:
