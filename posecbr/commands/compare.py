@@ -7,6 +7,7 @@ import argparse
 import os
 import shlex
 import sys
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -167,11 +168,17 @@ def _load(args: argparse.Namespace) -> list[Any]:
     # one copy could be a training case of the other
     check_listed_once([(c.seq.source, *frames_of(c.seq)) for c in clips], str(args.data),
                       "it would be tested twice, or be a training case of itself")  # fmt: skip
-    asked = [
-        ([c.label for c in clips], kw.get("labels"), "--labels", "labelled",
-         lambda: dataset_labels(args.data, sensor=kw["sensor"])),
+
+    def held_labels() -> Sequence[str]:
+        return list(dataset_labels(args.data, sensor=kw["sensor"]))
+
+    def held_subjects() -> Sequence[str]:
+        return list(dataset_subjects(args.data, sensor=kw["sensor"]))
+
+    asked: list[tuple[list[Any], set[str] | None, str, str, Callable[[], Sequence[str]]]] = [
+        ([c.label for c in clips], kw.get("labels"), "--labels", "labelled", held_labels),
         ([c.subject for c in clips], kw.get("subjects"), "--subjects", "of subject",
-         lambda: dataset_subjects(args.data, sensor=kw["sensor"])),
+         held_subjects),
     ]  # fmt: skip
     # first a value the data has nowhere (mistyped), whichever flag names it: a subject no
     # clip has left no clip of the labels asked, and was blamed on --labels ("passes the
@@ -180,7 +187,7 @@ def _load(args: argparse.Namespace) -> list[Any]:
         have = {str(v) for v in found if v is not None}
         if values and set(values) - have:
             data_has = list(held())
-            check_found(data_has, values, flag, what, args.data, lambda h=data_has: h)
+            check_found(data_has, values, flag, what, args.data, data_has.copy)
     for found, values, flag, what, held in asked:  # there, but the other filter leaves them out
         check_found(found, values, flag, what, args.data, held)
     return clips
