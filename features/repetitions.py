@@ -63,7 +63,9 @@ How (all channels at once, no per-frame loops):
    (a far point reached again after a shallow dip is the same repetition; rest is the
    lowest of the line around the far point, from the far points next to it and within a
    period of it, :func:`_floors`, not of the whole clip: small arm circles held high keep
-   their count once wide ones reach lower), that rise above
+   their count once wide ones reach lower; two far points between which the line as
+   recorded does not come back toward rest by :data:`HOLD_SHARE` of their height are one,
+   :func:`_one_hold`: a squat held at the bottom longer than the period), that rise above
    the lowest of the line as recorded within a period of them by :data:`STILL_SHARE` of
    the typical rise (the middle of a long rest between repetitions does not), at least
    half a period apart when the movement repeats clearly (:data:`CLEAR_PERIODICITY`; a
@@ -221,6 +223,11 @@ lowest of the line within a period of it: the middle of a long rest between repe
 by nothing but noise. Far below :data:`SUBSTANTIAL`: a shallow repetition among deep ones
 rises little (the shallowest of the training subjects' joined clips, an incorrect side lunge
 of s04 in UI-PRMD Kinect, 0.24 of the median; at 0.3 it was dropped)."""
+
+HOLD_SHARE = RETURN_SHARE
+"""Two neighbouring far points are one (:func:`_one_hold`) when the movement as recorded
+does not come back toward rest between them by this share of their rise: the return rule
+of :data:`RETURN_SHARE`, on the line as recorded."""
 
 LEAVE_SHARE = 0.1
 """The first repetition starts at the last sample before its peak, and the last ends at the
@@ -1261,6 +1268,11 @@ def count_in_signals(
         whole = _whole_only(back, edges)
         partial = bool(len(far)) and not whole.any()  # part of one repetition, none whole
         far = np.unique(_in_view(far[whole], sig.blind))
+        # far points with the line as recorded held at the far level between them (a squat
+        # held at the bottom, whose hold's two ends stand out about the running mean) are one
+        groups = _one_hold(recorded, far, reach) if held else [[i] for i in range(len(far))]
+        every = far
+        far = np.array([_held_peak(recorded, far[g]) for g in groups], dtype=far.dtype)
         # each end judged on its own: a posture got into after a cut and held to the
         # recording's end is no repetition, as one got into after the recording's start
         ends = (edges[0] or settled[0], edges[1] or settled[1])
@@ -1270,7 +1282,8 @@ def count_in_signals(
         # where it returns, however far from its far point: one far point repeats nothing, and
         # a period read then (from a wobble, a pose model's flicker) bounds no repetition
         lone = len(far) == 1 and all(edges)
-        spans = _bounds(line, far, len(line) if lone else reach, held) if len(far) else []
+        spans = _bounds(line, every, len(line) if lone else reach, held) if len(far) else []
+        spans = [(spans[g[0]][0], spans[g[-1]][1]) for g in groups] if len(far) else []
         ends_held = _held_to_ends(recorded, far)
         ends_open = _held_to_ends(recorded, far, RETURN_SHARE)
     spans = _seen_spans(spans, far, sig.blind)
@@ -1383,13 +1396,54 @@ def _above_rest(line: np.ndarray, far: np.ndarray, reach: int, held: bool = True
     13_31 moved and its blocks right fell from 92.5 to 86.9 % (``benchmarks.segment_live``)."""
     if not len(far):
         return np.zeros(0, dtype=bool)
+    height = _rises(line, far, reach, held)
+    return np.asarray(height >= STILL_SHARE * float(np.median(height)))
+
+
+def _one_hold(line: np.ndarray, far: np.ndarray, reach: int) -> list[list[int]]:
+    """The far points ``far`` (ascending samples of ``line`` ``(n,)``, the movement as
+    recorded) grouped into those of one repetition: runs of neighbours between which the line
+    does not come back toward rest by :data:`HOLD_SHARE` of the lesser one's rise (above the
+    lowest of the line within ``reach`` samples of its hold, as :func:`_above_rest` measures
+    it), from the lower of the two. A squat held at the bottom longer than the period is one
+    far point as recorded; about the running mean (:func:`_steady`) its hold sags in the
+    middle and its two ends stand out as two far points: three squats and a fourth held 2 s
+    or more at the bottom and up again counted 5. Measured against the recording's own
+    movement, not a fixed angle: a shallow movement's repetitions come back by few degrees."""
+    if not len(far):
+        return []
+    rise = _rises(line, far, reach)
+    groups = [[0]]
+    for i in range(1, len(far)):
+        p, q = int(far[i - 1]), int(far[i])
+        level = min(float(line[p]), float(line[q]))
+        dip = level - float(line[p : q + 1].min())
+        if dip < HOLD_SHARE * min(float(rise[i - 1]), float(rise[i])):
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    return groups
+
+
+def _held_peak(line: np.ndarray, far: np.ndarray) -> int:
+    """The far point of a group of far points ``far`` (ascending samples of ``line`` ``(n,)``,
+    the movement as recorded) that are one (:func:`_one_hold`): where the line is highest from
+    the first to the last (in a hold, its first sample at the hold's level), the one far point
+    of a group of one."""
+    a, b = int(far[0]), int(far[-1])
+    return a + int(np.argmax(line[a : b + 1]))
+
+
+def _rises(line: np.ndarray, far: np.ndarray, reach: int, held: bool = True) -> np.ndarray:
+    """How far ``line`` ``(n,)`` rises to each far point of ``far`` from its lowest within
+    ``reach`` samples of the far point's hold (:func:`_hold`; of the far point itself when not
+    ``held``): :func:`_above_rest`'s measure."""
     reach = max(1, reach)
     lowest = np.empty(len(far))
     for i, p in enumerate(far):
         a, b = _hold(line, int(p)) if held else (int(p), int(p))
         lowest[i] = line[max(0, a - reach) : b + reach + 1].min()
-    height = line[far] - lowest
-    return np.asarray(height >= STILL_SHARE * float(np.median(height)))
+    return np.asarray(line[far] - lowest)
 
 
 def _hold(line: np.ndarray, peak: int) -> tuple[int, int]:
