@@ -85,6 +85,8 @@ class Recording:
 
 
 def load_recordings() -> dict[str, Recording]:
+    from cbr.evaluation.segments import truth_blocks
+    from cbr.segmentation import BLOCK_S
     from features.label_tracks import frame_labels, read_label_track
     from features.readers.asfamc import read_asf_amc
 
@@ -95,8 +97,7 @@ def load_recordings() -> dict[str, Recording]:
         seq = read_asf_amc(asf, DATA / "cmu-mocap6" / "amc" / f"{name}.amc")
         labels = read_label_track(DATA / "cmu-mocap6" / "truelabels" / f"{name}.txt", names)
         per_frame = frame_labels(labels, seq.n_frames, seq.fps, 0.1, name)
-        block = int(round(0.1 * seq.fps))
-        out[name] = Recording(name, seq, per_frame[::block])
+        out[name] = Recording(name, seq, truth_blocks(per_frame, seq.fps, BLOCK_S))
     return out
 
 
@@ -175,8 +176,9 @@ def bench_ours(
 ) -> tuple[dict[str, Any], Callable[[], Any]]:
     """The figures of segmenting ``test`` with a case base of the other recordings, by every
     judge, and the call to time (the default judge's segmentation)."""
+    from cbr.evaluation.segments import score_segmentation
     from cbr.problem import warm
-    from cbr.segmentation import segment
+    from cbr.segmentation import BLOCK_S, segment
     from features.derived import movement_signals_of
 
     train = [recs[n] for n in RECORDINGS if n != test]
@@ -190,17 +192,15 @@ def bench_ours(
     for name in JUDGES:
         judge = judge_named(clf, name)
         result = segment(clf, rec.seq, judge)
-        pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
-        truth = rec.blocks[: len(pred)]
+        # scored as `posecbr segment --truth` scores: every exercise of the test recording is
+        # in the other two, so every block is of a label the case base has
+        scores = score_segmentation(result, rec.blocks, clf.classes_, BLOCK_S)
         fps = rec.seq.fps
-        found = np.array([s.start_frame / fps for s in result.segments[1:]])
-        true_b = (np.flatnonzero(truth[1:] != truth[:-1]) + 1) * 0.1
-        errors = [float(np.min(np.abs(found - b))) if len(found) else float("inf") for b in true_b]
         out[name] = {
-            "blocks": len(truth),
-            "block_accuracy": float(np.mean(pred == truth)),
-            "blocks_called_unknown": float(np.mean([p is None for p in pred])),
-            "boundary_errors_s": errors,
+            "blocks": scores.blocks,
+            "block_accuracy": scores.seen_accuracy,
+            "blocks_called_unknown": scores.called_unknown / scores.blocks,
+            "boundary_errors_s": list(scores.boundary_errors_s),
             "segments": [s.to_dict(fps) for s in result.segments],
             "windows": result.windows,
         }
@@ -212,7 +212,8 @@ def bench_ours(
 def bench_unknown(recs: dict[str, Recording], test: str, cases: str) -> dict[str, dict[str, float]]:
     """Each exercise of ``test`` left out of the case base in turn: share of its blocks called
     unknown, per judge."""
-    from cbr.segmentation import finish, solve_recording
+    from cbr.evaluation.segments import score_segmentation
+    from cbr.segmentation import BLOCK_S, finish, solve_recording
 
     train = [recs[n] for n in RECORDINGS if n != test]
     rec = recs[test]
@@ -222,9 +223,11 @@ def bench_unknown(recs: dict[str, Recording], test: str, cases: str) -> dict[str
         done = solve_recording(clf, rec.seq)  # solved once, finished by every judge
         for name in JUDGES:
             result = finish(clf, done, judge_named(clf, name))
-            pred = np.array(result.blocks[: len(rec.blocks)], dtype=object)
-            mine = rec.blocks[: len(pred)] == exercise
-            out[name][str(exercise)] = float(np.mean([p is None for p in pred[mine]]))
+            # the left-out exercise's blocks are those of the label the case base lacks
+            scores = score_segmentation(result, rec.blocks, clf.classes_, BLOCK_S)
+            share = scores.unseen_called_unknown
+            assert scores.unseen_labels == (str(exercise),) and share is not None
+            out[name][str(exercise)] = share
     return out
 
 
