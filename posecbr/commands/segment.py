@@ -12,9 +12,22 @@ in view", "no frames in the video", "unlike every activity"; null when labelled)
 "repetitions", "explanation", "novelty", "repetition_frames", "count"}]}`` (a list of those for
 several recordings; end frames exclusive; ``count``: the number of repetitions, as
 ``reps --json`` names it, and as ``repetitions`` gives it, kept from before; ``"plot"`` and
-``"overlay"``: the files written, when asked for); ``--plot`` draws the
+``"overlay"``: the files written, when asked for; ``"scores"``: with ``--truth``, below);
+``--plot`` draws the
 segments over the fluent timeline; ``--overlay`` writes a video recording with the stick figure,
 the current activity and its repetition count on every frame (as ``extract --overlay`` does).
+
+``--truth LABELS`` scores the segmentation against a label file of the recording (one per
+recording, in order), read as ``train --frame-labels`` reads one (one label per frame, or per
+``--label-block`` seconds, codes named by ``--label-names``), over its 0.1-s blocks: the share of
+blocks of activities the case base has that got their label (a block called unknown counts
+wrong), the share of blocks of labels it lacks that were called unknown, and each labelled
+change's distance to the nearest segment boundary (median), as ``python -m benchmarks.segment``
+scores them (:func:`cbr.evaluation.segments.score_segmentation`). ``--json`` gives them as
+``"scores": {"truth", "blocks", "block_s", "seen_blocks", "seen_right", "seen_accuracy",
+"unseen_labels", "unseen_blocks", "unseen_called_unknown", "unseen_unknown_share",
+"blocks_called_unknown", "boundary_errors_s", "median_boundary_error_s"}`` (a share of no
+blocks, and a distance when no segment boundary was found: null).
 """
 
 from __future__ import annotations
@@ -22,6 +35,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -92,6 +106,22 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "margin with a far nearest case, sharing the 5 %% (margin-distance), or spread-margin "
         "or a nearest case farther than 5 %% of those lie (spread-far)",
     )
+    p.add_argument(
+        "--truth",
+        type=path_arg,
+        nargs="+",
+        action="extend",
+        metavar="LABELS",
+        help="score the segments against the recording's true labels: a label file as train"
+        " --frame-labels reads (one label per frame, or per --label-block seconds); several"
+        " recordings: one file each, in their order",
+    )
+    p.add_argument(
+        "--label-block", type=float, metavar="SECONDS", help="seconds per label of --truth"
+    )
+    p.add_argument(
+        "--label-names", type=path_arg, metavar="FILE", help="'code name' per line, for --truth"
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
         "--plot",
@@ -114,9 +144,61 @@ def _inputs_given(args: argparse.Namespace) -> None:
     is read."""
     check_fps(args.fps)
     check_asf(args.asf, args.recordings)
+    _truth_options(args)
     for path in args.recordings:
         if not path.exists():
             raise DataError("no such file", path)
+
+
+def _truth_options(args: argparse.Namespace) -> None:
+    """Refuse ``--label-block`` / ``--label-names`` without ``--truth``, a block that is no
+    length, and a count of label files other than the recordings'."""
+    for option, value in (("--label-block", args.label_block), ("--label-names", args.label_names)):
+        if value is not None and args.truth is None:
+            raise ConfigError("goes with --truth (the label files it reads)", option)
+    block = args.label_block
+    if block is not None and not (math.isfinite(block) and block > 0):
+        raise ConfigError(f"must be a finite number of seconds > 0, got {block:g}", "--label-block")
+    if args.truth is not None and len(args.truth) != len(args.recordings):
+        raise ConfigError(
+            f"{counted(len(args.truth), 'label file')} for"
+            f" {counted(len(args.recordings), 'recording')}: --truth takes one per recording,"
+            " in their order",
+            "--truth",
+        )
+
+
+def _read_truths(args: argparse.Namespace) -> list[list[str]] | None:
+    """The labels of every ``--truth`` file (through ``--label-names``), read as ``train
+    --frame-labels`` reads one, before any recording is read: a malformed file is one error
+    at once, not after a video's poses are estimated."""
+    from features.label_tracks import read_label_names, read_label_track
+
+    if args.truth is None:
+        return None
+    names = read_label_names(args.label_names) if args.label_names is not None else None
+    return [read_label_track(path, names) for path in args.truth]
+
+
+def _fitted_truths(
+    args: argparse.Namespace, labels: list[list[str]] | None, recs: list[Any]
+) -> list[Any]:
+    """Every recording's true label per :data:`cbr.segmentation.BLOCK_S` block (None without
+    ``--truth``); a label file whose count does not fit its recording is refused naming it,
+    before any recording is segmented."""
+    if labels is None:
+        return [None] * len(recs)
+    from cbr.evaluation.segments import truth_blocks
+    from cbr.segmentation import BLOCK_S
+    from features.label_tracks import frame_labels
+
+    out = []
+    for track, rec, path, recording in zip(labels, recs, args.truth, args.recordings, strict=True):
+        per_frame = frame_labels(
+            track, rec.n_frames, rec.fps, args.label_block, path, recording=shown(recording)
+        )
+        out.append(truth_blocks(per_frame, rec.fps, BLOCK_S))
+    return out
 
 
 def _outputs(args: argparse.Namespace) -> None:
@@ -151,7 +233,8 @@ def _inputs(args: argparse.Namespace) -> list[Path]:
     from casebase_store import store_files
 
     asf = [args.asf] if args.asf is not None else []
-    return [*args.recordings, *store_files(args.db), *asf]
+    truth = [*(args.truth or []), *([args.label_names] if args.label_names is not None else [])]
+    return [*args.recordings, *store_files(args.db), *asf, *truth]
 
 
 def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
@@ -188,17 +271,23 @@ def run(args: argparse.Namespace) -> int:
     clf = load_stored(args.db, args.name)
     check_k(clf, args.k)  # before any recording is read (a video's poses take seconds)
     judge = judge_named(clf, args.unknown, args.db)
+    labels = _read_truths(args)
     # every recording read and checked before any is segmented (a bad one among several is
     # refused before the work on the others), and segmented before any picture is drawn (it
     # leaves no picture of the others behind)
     read = [_read(path, args) for path in args.recordings]
     for rec, _ in read:
         check_segmentable(rec)
+    truths = _fitted_truths(args, labels, [rec for rec, _ in read])
     for rec, _ in read:
         note_low_rate(rec)
     done = [
         (rec, video, _named(segment(clf, rec, judge, k=args.k), path))
         for (rec, video), path in zip(read, args.recordings, strict=True)
+    ]
+    scores = [
+        _scores(result, truth, clf.classes_) if truth is not None else None
+        for (_, _, result), truth in zip(done, truths, strict=True)
     ]
     targets: list[Path | None] = [None] * len(done)
     if args.plot is not None:
@@ -210,25 +299,76 @@ def run(args: argparse.Namespace) -> int:
         if args.overlay is not None:
             _overlay(path, video, result, args.overlay, [str(c) for c in clf.classes_])
     docs = [result for _, _, result in done]
+    truth_files: list[Path | None] = list(args.truth) if args.truth else [None] * len(docs)
     if args.json:
-        out = [_document(r, target, args.overlay) for r, target in zip(docs, targets, strict=True)]
+        out = [
+            _document(r, target, args.overlay, score, truth)
+            for r, target, score, truth in zip(docs, targets, scores, truth_files, strict=True)
+        ]
         json.dump(out[0] if len(out) == 1 else out, sys.stdout, indent=1, ensure_ascii=False)
         print()
         return 0
-    for result in docs:
+    for result, score, truth in zip(docs, scores, truth_files, strict=True):
         _print(result)
+        if score is not None and truth is not None:
+            _print_scores(score, truth)
     return 0
 
 
-def _document(result: Any, plot: Path | None, overlay: Path | None) -> dict[str, Any]:
+def _scores(result: Any, truth: Any, classes: Any) -> Any:
+    from cbr.evaluation.segments import score_segmentation
+    from cbr.segmentation import BLOCK_S
+
+    return score_segmentation(result, truth, [str(c) for c in classes], BLOCK_S)
+
+
+def _document(
+    result: Any,
+    plot: Path | None,
+    overlay: Path | None,
+    scores: Any = None,
+    truth: Path | None = None,
+) -> dict[str, Any]:
     """One recording's ``--json`` document, with the files written for it named, as
-    ``describe`` and ``reps`` name their picture."""
+    ``describe`` and ``reps`` name their picture, and its ``--truth`` scores."""
     doc: dict[str, Any] = result.to_dict()
     if plot is not None:
         doc["plot"] = str(plot)
     if overlay is not None:
         doc["overlay"] = str(overlay)
+    if scores is not None:
+        doc["scores"] = {"truth": str(truth), **scores.to_dict()}
     return doc
+
+
+def _share(part: int, whole: int, what: str) -> str:
+    return f"{part} of {whole} blocks {what} ({100 * part / whole:.1f} %)"
+
+
+def _print_scores(scores: Any, truth: Path) -> None:
+    """The ``--truth`` scores, under the segments."""
+    print(f"  against {shown(truth)}: {counted(scores.blocks, 'block')} of {scores.block_s:g} s")
+    if scores.seen_blocks:
+        right = _share(scores.seen_right, scores.seen_blocks, "labelled right")
+        print(f"    labels the case base has: {right}")
+    else:
+        print("    labels the case base has: none in the truth")
+    if scores.unseen_blocks:
+        lacks = ", ".join(shown(label) for label in scores.unseen_labels)
+        unknown = _share(scores.unseen_unknown, scores.unseen_blocks, "called unknown")
+        print(f"    labels it lacks ({lacks}): {unknown}")
+    else:
+        print("    labels it lacks: none in the truth")
+    errors = scores.boundary_errors_s
+    if not errors:
+        print("    labelled changes: none")
+    elif not math.isfinite(max(errors)):
+        print(f"    labelled changes: {len(errors)}; no segment boundary found")
+    else:
+        print(
+            f"    labelled changes: {len(errors)}, the nearest segment boundary a median"
+            f" {scores.median_boundary_error_s:.2f} s away (at most {max(errors):.2f} s)"
+        )
 
 
 def _read(path: Path, args: argparse.Namespace) -> tuple[Any, Any]:
