@@ -64,3 +64,12 @@ def test_the_mocap_example_segments_the_third_recording_as_labelled(
         if line.strip() and line.strip() != "...":
             assert line.rstrip() in printed, line
     assert "recordings labelled over time: a case per window" in proc.stderr
+    # "How to score your own": the third recording scored against its label file, as shown
+    score, scored = _blocks("**How to score your own.**")
+    proc = subprocess.run(["bash", "-e", "-c", "D=../shared/data/cmu-mocap6\n" + score],
+                          cwd=work, capture_output=True, text=True, timeout=300,
+                          env=env)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    for line in scored.splitlines():
+        if line.strip() and line.strip() != "...":
+            assert line.rstrip() in proc.stdout, line
