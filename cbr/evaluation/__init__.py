@@ -13,6 +13,8 @@ One job per module:
 - :mod:`~cbr.evaluation.runner`: where tasks run (in-process, or spawned worker processes);
 - :mod:`~cbr.evaluation.stats`: Wilson, McNemar, macro-F1 and its bootstrap interval;
 - :mod:`~cbr.evaluation.scoring`: predictions to ``Scores``, the best methods, McNemar;
+- :mod:`~cbr.evaluation.segments`: a segmentation scored against labels over time
+  (``posecbr segment --truth``, ``benchmarks.segment``);
 - :mod:`~cbr.evaluation.results`: the typed results and their JSON (``to_dict``/``from_dict``);
 - :mod:`~cbr.evaluation.compare`: ``run_compare``, the steps above in order;
 - :mod:`~cbr.evaluation.misclassified`: explanations of clips got wrong (case base, DAD);
