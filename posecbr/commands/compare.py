@@ -81,8 +81,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "aeon: named here without them, refused before the run); default: both, "
         "minirocket skipped with a note when it cannot run; 'none' for no peers",
     )
-    p.add_argument(
-        "--k", type=int, default=5, help="cases retrieved by the case-base classifier (5)"
+    p.add_argument(  # -k as train, classify, segment and casebase trim spell it
+        "-k", "--k", type=int, default=5, help="cases retrieved by the case-base classifier (5)"
     )
     p.add_argument(
         "--trim",
