@@ -3,6 +3,8 @@ each command says it did.
 
 - ``compare -k 3`` was refused ("unrecognized arguments: -k 3") where ``train``,
   ``classify``, ``segment`` and ``casebase trim`` take ``-k``: compare now takes it too.
+- worker processes are ``compare --jobs`` and ``extract --workers``: each now takes the
+  other's name as well.
 """
 
 from __future__ import annotations
@@ -12,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from posecbr.cli import main
+from posecbr.cli import build_parser, main
+from tests.badinput import refused
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
@@ -30,3 +33,24 @@ def test_compare_takes_k_as_the_other_commands_spell_it(
     ]  # fmt: skip
     assert main(argv) == 0, capsys.readouterr().err
     assert json.loads(out.read_text())["settings"]["k"] == 1
+
+
+def test_extract_takes_jobs_as_compare_spells_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``extract --jobs 0`` was "unrecognized arguments" (exit 2); it is ``--workers``, checked
+    as such (the video is never opened: its bytes need not be one)."""
+    video = tmp_path / "squat.mp4"
+    video.write_bytes(b"not decoded")
+    argv = ["extract", str(video), "--out", str(tmp_path / "poses"), "--jobs", "0"]
+    refused(argv, tmp_path, capsys, "--workers (--jobs) must be at least 1, got 0")
+    args = build_parser().parse_args(["extract", str(video), "--out", "p", "--jobs", "3"])
+    assert args.workers == 3
+
+
+def test_compare_takes_workers_as_extract_spells_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    refused(["compare", str(DEMO), "--workers", "0"], tmp_path, capsys,
+            "--jobs: jobs must be at least 1, got 0")  # fmt: skip
+    assert build_parser().parse_args(["compare", str(DEMO), "--workers", "2"]).jobs == 2

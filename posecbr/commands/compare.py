@@ -105,6 +105,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--subjects", default=None, metavar="LIST", help="only these subjects")
     p.add_argument(
         "--jobs",
+        "--workers",  # as extract's worker processes are asked for
+        dest="jobs",
         type=int,
         default=1,
         metavar="N",

@@ -89,6 +89,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument(
         "--workers",
+        "--jobs",  # as compare's worker processes are asked for
+        dest="workers",
         type=int,
         default=1,
         metavar="N",
@@ -554,7 +556,7 @@ def _check_outputs(jobs: list[Job]) -> None:
 def _options(args: argparse.Namespace) -> Options:
     """The extraction options the arguments ask for (after checking --workers, --scheduler)."""
     if args.workers < 1:
-        raise PosecbrError(f"--workers must be at least 1, got {args.workers}")
+        raise PosecbrError(f"--workers (--jobs) must be at least 1, got {args.workers}")
     check_scheduler(args.scheduler)
     return Options(
         smoothing=not args.no_smoothing,
