@@ -5,6 +5,8 @@ each command says it did.
   ``classify``, ``segment`` and ``casebase trim`` take ``-k``: compare now takes it too.
 - worker processes are ``compare --jobs`` and ``extract --workers``: each now takes the
   other's name as well.
+- the video with the stick figure drawn is ``segment --overlay`` and ``extract --overlay``,
+  but ``watch --out``: watch now takes ``--overlay`` too.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from posecbr.cli import build_parser, main
-from tests.badinput import refused
+from tests.badinput import refused, small_case_base
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
@@ -54,3 +56,21 @@ def test_compare_takes_workers_as_extract_spells_it(
     refused(["compare", str(DEMO), "--workers", "0"], tmp_path, capsys,
             "--jobs: jobs must be at least 1, got 0")  # fmt: skip
     assert build_parser().parse_args(["compare", str(DEMO), "--workers", "2"]).jobs == 2
+
+
+@pytest.fixture(scope="module")
+def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return small_case_base(tmp_path_factory.mktemp("cb"))
+
+
+def test_watch_takes_overlay_as_segment_and_extract_name_it(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``watch --overlay V`` was "unrecognized arguments"; it is ``--out V``: refused over
+    the video watched as ``--out`` is, before the video is read."""
+    video = tmp_path / "squat.mp4"
+    video.write_bytes(b"not decoded")
+    argv = ["watch", str(video), "--db", str(case_base), "--overlay", str(video)]
+    refused(argv, tmp_path, capsys, "the output video would overwrite an input")
+    args = build_parser().parse_args(["watch", "0", "--db", "cb", "--overlay", "w.mp4"])
+    assert args.out == Path("w.mp4")

@@ -58,7 +58,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("source", help="webcam index (0), stream URL or video file")
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.add_argument("--name", default=None, help="case base name (default: the only one)")
-    p.add_argument("--out", type=path_arg, metavar="VIDEO.mp4", help="write the annotated frames")
+    p.add_argument(
+        "--out",
+        "--overlay",  # as segment and extract name the video with the stick figure drawn
+        dest="out",
+        type=path_arg,
+        metavar="VIDEO.mp4",
+        help="write the annotated frames (--overlay: the same, as segment and extract name it)",
+    )
     p.add_argument("--show", action="store_true", help="show the annotated frames in a window")
     p.add_argument(
         "--speed",
