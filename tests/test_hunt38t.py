@@ -7,11 +7,14 @@ each command says it did.
   other's name as well.
 - the video with the stick figure drawn is ``segment --overlay`` and ``extract --overlay``,
   but ``watch --out``: watch now takes ``--overlay`` too.
+- ``casebase trim`` said the editor's figures but not which case base of which store it
+  changed: it now says so, as ``casebase export`` and ``copy`` say where they wrote.
 """
 
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
@@ -74,3 +77,33 @@ def test_watch_takes_overlay_as_segment_and_extract_name_it(
     refused(argv, tmp_path, capsys, "the output video would overwrite an input")
     args = build_parser().parse_args(["watch", "0", "--db", "cb", "--overlay", "w.mp4"])
     assert args.out == Path("w.mp4")
+
+
+def _cases_in_use(db: Path, capsys: pytest.CaptureFixture[str]) -> int:
+    capsys.readouterr()
+    assert main(["casebase", "info", "--db", str(db), "--json"]) == 0
+    return int(json.loads(capsys.readouterr().out)["case_bases"][0]["cases"])
+
+
+def test_trim_says_which_case_base_of_which_store_it_changed(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``casebase trim`` printed the editor's figures alone, the same words as ``--dry-run``
+    but for its note: not the store it wrote nor that cases were deactivated there. A dry
+    run and a trim that drops nothing still say nothing of the kind."""
+    db = tmp_path / "cb.sqlite"
+    shutil.copy(case_base, db)
+    before = _cases_in_use(db, capsys)
+    assert main(["casebase", "trim", "--db", str(db), "--dry-run"]) == 0
+    assert "deactivated" not in capsys.readouterr().out
+    assert main(["casebase", "trim", "--db", str(db), "--keep", "0.5"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    after = _cases_in_use(db, capsys)
+    assert after < before
+    gone = before - after
+    said = f"  case base 'default' in {db}: {gone} case{'s' * (gone != 1)} deactivated"
+    assert out[1] == said + " (casebase list --all lists them)", out
+    capsys.readouterr()
+    assert main(["casebase", "list", "--db", str(db), "--all", "--json"]) == 0
+    cases = json.loads(capsys.readouterr().out)["cases"]
+    assert sum(not c["active"] for c in cases) == gone

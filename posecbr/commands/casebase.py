@@ -754,6 +754,12 @@ def _trim_said(
         _emit(doc)
     else:
         print(report.summary() + _unchanged(args.dry_run, dropped))
+        if dropped and not args.dry_run:  # where the change went, as export and copy say
+            gone = report.size_before - report.size_after
+            print(
+                f"  case base {shown(repr(name))} in {shown(store.where)}:"
+                f" {counted(gone, 'case')} deactivated (casebase list --all lists them)"
+            )
         if report.distribution_shift is not None:
             from cbr.words import class_noun
 
