@@ -65,6 +65,18 @@ class Parser(argparse.ArgumentParser):
         return ""
 
 
+#: what ``posecbr --help`` says of every command: its options' help, exit status, progress
+EPILOG = (
+    "`posecbr COMMAND --help` lists a command's options. Exit status: 0 done; 1 a problem "
+    "with the input, the data or an option's value, said in one line (a Python traceback, "
+    "also 1, is a bug in posecbr); 2 a command line that cannot be read (a mistyped command "
+    "or option, a missing argument, a number that is none; no command: this help); "
+    f"{INTERRUPTED_STATUS} stopped by Ctrl-C, {TERMINATED_STATUS} by SIGTERM (watch ends as "
+    "at the end of its stream: 0). Progress bars show on a terminal; POSECBR_NO_PROGRESS=1 "
+    "turns them off."
+)
+
+
 def plain_text(doc: str) -> str:
     """A docstring as a terminal shows it: ``x`` as `x`, :mod:`features.repetitions` (any
     Sphinx role) as features.repetitions, a role's ~ dropped."""
@@ -76,6 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="posecbr",
         description="Interpretable human activity recognition: poses -> fluents and QMPs -> CBR.",
+        epilog=EPILOG,
     )
     parser.add_argument("--version", action="version", version=f"posecbr {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")

@@ -9,17 +9,23 @@ each command says it did.
   but ``watch --out``: watch now takes ``--overlay`` too.
 - ``casebase trim`` said the editor's figures but not which case base of which store it
   changed: it now says so, as ``casebase export`` and ``copy`` say where they wrote.
+- ``posecbr --help`` now says what each exit status means and how progress bars are turned
+  off (``POSECBR_NO_PROGRESS``), which neither it nor README said.
 """
 
 from __future__ import annotations
 
+import io
 import json
 import shutil
+import sys
 from pathlib import Path
 
 import pytest
 
+from features.progress import progress_enabled
 from posecbr.cli import build_parser, main
+from posecbr.commands import thresholds
 from tests.badinput import refused, small_case_base
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -107,3 +113,42 @@ def test_trim_says_which_case_base_of_which_store_it_changed(
     assert main(["casebase", "list", "--db", str(db), "--all", "--json"]) == 0
     cases = json.loads(capsys.readouterr().out)["cases"]
     assert sum(not c["active"] for c in cases) == gone
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_help_says_the_exit_statuses_and_each_is_what_a_command_gives(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``posecbr --help`` said nothing of exit statuses nor of turning progress bars off
+    (README neither): each status it now names is the one the case gives."""
+    with pytest.raises(SystemExit) as stop:
+        main(["--help"])
+    assert stop.value.code == 0
+    text = " ".join(capsys.readouterr().out.split())
+    for said in ("Exit status: 0 done; 1 a problem with the input",
+                 "2 a command line that cannot be read", "130 stopped by Ctrl-C",
+                 "143 by SIGTERM", "POSECBR_NO_PROGRESS=1 turns them off"):  # fmt: skip
+        assert said in text, said
+    assert main(["describe", str(tmp_path / "none.npz")]) == 1  # a problem with the input
+    assert main(["classify", str(DEMO), "--db", "x", "--top", "-1"]) == 1  # an option's value
+    for argv in (["describe", "--min-confidence", "high", "x.npz"], ["descibe"], ["describe"]):
+        with pytest.raises(SystemExit) as stop:
+            main(argv)
+        assert stop.value.code == 2, argv
+    assert main([]) == 2  # no command: the help
+    assert "Exit status" in capsys.readouterr().out
+
+    def stopped(args: object) -> int:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(thresholds, "run", stopped)
+    assert main(["thresholds"]) == 130
+    monkeypatch.setattr(sys, "stderr", _Terminal())
+    monkeypatch.delenv("POSECBR_NO_PROGRESS", raising=False)
+    assert progress_enabled()
+    monkeypatch.setenv("POSECBR_NO_PROGRESS", "1")
+    assert not progress_enabled()
