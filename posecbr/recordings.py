@@ -93,6 +93,17 @@ def load_recording(path: Path, asf: Path | None = None, fps: float | None = None
     return seq.to_canonical()
 
 
+def load_clip_as_asked(path: Path, asf: Path | None, fps: float | None) -> Any:
+    """The clip at ``path`` as ``describe`` and ``dad`` read it: as every clip is read
+    (:func:`features.datasets.load_clip`), or, given ``--asf`` or ``--fps``, as
+    :func:`load_recording` reads a recording with them."""
+    from features.datasets import load_clip
+
+    if asf is None and fps is None:
+        return load_clip(path)
+    return load_recording(path, asf, fps)
+
+
 def note_low_rate(seq: Any) -> None:
     """Say on stderr when the recording ``seq``'s frame rate is too low to follow every
     movement a repetition can be: one repeating in less than two frames' time (the shortest,

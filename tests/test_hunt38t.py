@@ -11,6 +11,7 @@ each command says it did.
   changed: it now says so, as ``casebase export`` and ``copy`` say where they wrote.
 - ``posecbr --help`` now says what each exit status means and how progress bars are turned
   off (``POSECBR_NO_PROGRESS``), which neither it nor README said.
+- ``describe`` and ``dad`` now take ``--fps`` and ``--asf`` as ``reps`` and ``segment`` do.
 """
 
 from __future__ import annotations
@@ -152,3 +153,28 @@ def test_help_says_the_exit_statuses_and_each_is_what_a_command_gives(
     assert progress_enabled()
     monkeypatch.setenv("POSECBR_NO_PROGRESS", "1")
     assert not progress_enabled()
+
+
+def test_describe_and_dad_take_the_rate_and_skeleton_as_reps_and_segment_do(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``describe`` and ``dad`` read an AMC file (120 fps assumed) or any clip at the rate its
+    file gives, with no ``--fps`` or ``--asf`` to say otherwise, which ``reps``,
+    ``segment`` and ``train`` take: a clip filmed at 60 fps was judged in windows of twice
+    its time. Both now take them: the demo clip (73 frames at 30 fps) read at 60 fps lasts
+    73/60 s."""
+    clip = DEMO / "m01_s01_e01.npz"
+    capsys.readouterr()
+    assert main(["describe", str(clip), "--fps", "60", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert (doc["fps"], doc["frames"]) == (60.0, 73)
+    assert main(["describe", str(clip), "--fps", "60"]) == 0
+    assert capsys.readouterr().out.startswith(f"{clip}: 73 frames at 60 fps (1.2 s)")
+    assert main(["dad", str(clip), "--fps", "60", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["fps"] == 60.0 and doc["duration_s"] == pytest.approx(73 / 60)
+    for command in ("describe", "dad"):
+        refused([command, str(clip), "--asf", str(tmp_path / "s.asf")], tmp_path, capsys,
+                "--asf: goes with an AMC recording, not m01_s01_e01.npz")  # fmt: skip
+        refused([command, str(clip), "--fps", "0"], tmp_path, capsys,
+                "--fps: must be a frame rate in [0.01, 10000], got 0")  # fmt: skip

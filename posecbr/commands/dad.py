@@ -17,7 +17,12 @@ from typing import TYPE_CHECKING, Any
 from features.errors import PosecbrError
 from features.text import counted, percent, shown
 from posecbr.arguments import path_arg
-from posecbr.recordings import NUMPY_BELOW_FRAMES
+from posecbr.recordings import (
+    NUMPY_BELOW_FRAMES,
+    add_recording_options,
+    check_asf,
+    load_clip_as_asked,
+)
 
 if TYPE_CHECKING:
     from features.fluents import Backend
@@ -38,6 +43,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "were met and which were not.",
     )
     p.add_argument("posefile", type=path_arg, help="pose file (.npz) or a clip the loaders read")
+    add_recording_options(p)  # as reps and segment read an AMC file or a rate given
     p.add_argument(
         "--add",
         type=path_arg,
@@ -71,14 +77,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from cbr.dad import detect
-    from features.datasets import load_clip
     from features.qmp.add import load_add
 
     if args.top < 0:
         raise PosecbrError(f"--top must be >= 0, got {args.top}")
     config = _windows(args.window, args.step)
+    check_asf(args.asf, [args.posefile])
     add = load_add(args.add)
-    seq = load_clip(args.posefile)
+    seq = load_clip_as_asked(args.posefile, args.asf, args.fps)
     # as describe: a short clip's state signals by the numpy reference, sooner than numba
     # loads its compiled kernels
     backend: Backend = "numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba"

@@ -13,7 +13,12 @@ from features.errors import DataError, PosecbrError
 from features.fileio import check_output
 from features.text import counted, shown
 from posecbr.arguments import path_arg
-from posecbr.recordings import NUMPY_BELOW_FRAMES
+from posecbr.recordings import (
+    NUMPY_BELOW_FRAMES,
+    add_recording_options,
+    check_asf,
+    load_clip_as_asked,
+)
 
 if TYPE_CHECKING:
     from features.fluents import Backend, FluentResult
@@ -30,6 +35,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "frame by frame.",
     )
     p.add_argument("posefile", type=path_arg, help="pose file (.npz) or a clip the loaders read")
+    add_recording_options(p)  # as reps and segment read an AMC file or a rate given
     p.add_argument(
         "--min-confidence",
         type=float,
@@ -95,8 +101,9 @@ def _check_args(args: argparse.Namespace) -> None:
         raise PosecbrError(f"--min-run must be at least 1 frame, got {args.min_run}")
     if args.min_run is not None and args.per_frame:
         raise PosecbrError("--min-run drops short spans; --per-frame shows every frame, not spans")
+    check_asf(args.asf, [args.posefile])
     if args.plot is not None:
-        inputs = [args.posefile] + ([args.thresholds] if args.thresholds else [])
+        inputs = [args.posefile, *[f for f in (args.thresholds, args.asf) if f is not None]]
         check_output(args.plot, inputs=inputs, what="picture")
         from features.timeline import picture_format
 
@@ -161,13 +168,12 @@ class _Spool:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from features.datasets import load_clip
     from features.fluents import DEFAULT_TABLE, FluentTable, evaluate
     from features.timeline import describe_clip, plot_timeline
 
     _check_args(args)
     table = FluentTable.from_file(args.thresholds) if args.thresholds else DEFAULT_TABLE
-    seq = load_clip(args.posefile)
+    seq = load_clip_as_asked(args.posefile, args.asf, args.fps)
     if np.isnan(seq.positions).all():  # as classify, dad, reps and segment refuse it
         raise DataError(
             "shows no person (every joint missing in every frame): nothing to describe",
