@@ -12,6 +12,7 @@ each command says it did.
 - ``posecbr --help`` now says what each exit status means and how progress bars are turned
   off (``POSECBR_NO_PROGRESS``), which neither it nor README said.
 - ``describe`` and ``dad`` now take ``--fps`` and ``--asf`` as ``reps`` and ``segment`` do.
+- ``classify`` now takes ``--labels`` beside ``--subjects``, as ``train`` and ``compare`` do.
 """
 
 from __future__ import annotations
@@ -178,3 +179,27 @@ def test_describe_and_dad_take_the_rate_and_skeleton_as_reps_and_segment_do(
                 "--asf: goes with an AMC recording, not m01_s01_e01.npz")  # fmt: skip
         refused([command, str(clip), "--fps", "0"], tmp_path, capsys,
                 "--fps: must be a frame rate in [0.01, 10000], got 0")  # fmt: skip
+
+
+def test_classify_takes_labels_as_train_and_compare_do(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``classify DATASET --labels deep_squat`` was "unrecognized arguments" where it took
+    ``--subjects`` and ``train`` and ``compare`` take both: the activities chosen now are
+    the clips classified (the demo's labels.csv: those rows of subject s02)."""
+    rows = [r.split(",") for r in (DEMO / "labels.csv").read_text().splitlines()[1:]]
+    wanted = {"deep_squat", "side_lunge"}
+    expected = sorted(str(DEMO / r[0]) for r in rows if r[1] in wanted and r[2] == "s02")
+    assert len(expected) == 12
+    capsys.readouterr()
+    argv = ["classify", str(DEMO), "--db", str(case_base), "--json",
+            "--labels", "deep_squat, side_lunge", "--subjects", "s02"]  # fmt: skip
+    assert main(argv) == 0
+    results = json.loads(capsys.readouterr().out)["results"]
+    assert sorted(r["clip"] for r in results) == expected
+    assert {r["true_label"] for r in results} == wanted
+    refused(["classify", str(DEMO), "--db", str(case_base), "--labels", "deep_squt"],
+            tmp_path, capsys, "--labels: no clip labelled 'deep_squt' in the clips given")  # fmt: skip
+    refused(["classify", str(DEMO / "m01_s01_e01.npz"), "--db", str(case_base), "--labels",
+             "deep_squat"], tmp_path, capsys,
+            "--labels: filters the clips of a labels CSV or dataset, and none is given")  # fmt: skip

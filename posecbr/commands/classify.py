@@ -75,6 +75,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     add_sensor_option(p)
     p.add_argument("--subjects", help="datasets: only these subjects, comma-separated")
+    p.add_argument(  # as train and compare choose activities
+        "--labels", help="datasets: only these activities, comma-separated (e.g. deep_squat)"
+    )
     p.add_argument(
         "--target",
         default=None,
@@ -85,10 +88,15 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def load_inputs(
-    paths: list[Path], sensor: str, subjects: list[str] | None = None, target: str = "label"
+    paths: list[Path],
+    sensor: str,
+    subjects: list[str] | None = None,
+    target: str = "label",
+    labels: list[str] | None = None,
 ) -> list[tuple[PoseSequence, str | None]]:
     """Every clip named by ``paths`` with its value of ``target`` (the label, or another
-    column such as ``correct``) when the input carries one."""
+    column such as ``correct``) when the input carries one; of a labels CSV or dataset, those
+    of ``subjects`` and ``labels`` (activities) alone."""
     from cbr.casebase import frames_of
     from cbr.training import check_listed_once
     from features.datasets import (
@@ -106,14 +114,16 @@ def load_inputs(
         return Clip(seq=seq, label=seq.label or "", subject=subject, extras={})
 
     kinds = [detect_kind(path) for path in paths]
-    if subjects is not None and all(k in ("pose_file", "pose_folder") for k in kinds):
-        raise ConfigError(
-            "filters the clips of a labels CSV or dataset, and none is given (pose files are "
-            "classified as given)",
-            "--subjects",
-        )
+    for flag, asked in (("--subjects", subjects), ("--labels", labels)):
+        if asked is not None and all(k in ("pose_file", "pose_folder") for k in kinds):
+            raise ConfigError(
+                "filters the clips of a labels CSV or dataset, and none is given (pose files "
+                "are classified as given)",
+                flag,
+            )
     out: list[tuple[PoseSequence, str | None]] = []
     seen: set[str | None] = set()  # the subjects of the clips the filter kept
+    seen_labels: set[str] = set()  # and their labels
     for path, kind in zip(paths, kinds, strict=True):
         if kind == "pose_file":
             seq = load_clip(path)
@@ -130,6 +140,7 @@ def load_inputs(
                     path,
                     sensor=sensor,
                     subjects=subjects,
+                    labels=labels,
                     progress_desc=f"loading {path.name}",
                     unlabelled=True,  # a row left unlabelled: classified, not checked
                 )
@@ -140,7 +151,9 @@ def load_inputs(
             for clip in clips:
                 out.append((clip.seq, clip_target(clip, target)))
                 seen.add(clip.subject)
+                seen_labels.add(clip.label)
     _check_subjects_found(subjects, seen)  # before "no clips found": the filter said why
+    _check_found(labels, seen_labels, "labelled", "--labels")
     if not out:
         raise DataError("no clips found", " ".join(str(p) for p in paths))
     return out
@@ -149,11 +162,15 @@ def load_inputs(
 def _check_subjects_found(subjects: list[str] | None, seen: set[str | None]) -> None:
     """Refuse a ``--subjects`` entry no clip has (mistyped, or a stray comma's empty one):
     the clips of the others alone would be classified and counted as if all had been."""
-    missing = [s for s in subjects or () if s not in seen]
+    _check_found(subjects, seen, "of subject", "--subjects")
+
+
+def _check_found(asked: list[str] | None, seen: set[Any], what: str, flag: str) -> None:
+    """Refuse an entry of ``asked`` (``--subjects``, ``--labels``) no clip ``seen`` has."""
+    missing = [s for s in asked or () if s not in seen]
     if missing:
         raise ConfigError(
-            f"no clip of subject {', '.join(repr(s) for s in missing)} in the clips given",
-            "--subjects",
+            f"no clip {what} {', '.join(repr(s) for s in missing)} in the clips given", flag
         )
 
 
@@ -301,7 +318,9 @@ def run(args: argparse.Namespace) -> int:
         if args.feedback is not None:
             check_feedback_cases(stored)
         subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
-        inputs = load_inputs(args.clips, sensor_for(args.sensor, args.clips), subjects, target)
+        labels = [s.strip() for s in args.labels.split(",")] if args.labels else None
+        sensor = sensor_for(args.sensor, args.clips)
+        inputs = load_inputs(args.clips, sensor, subjects, target, labels)
         clips, truths = [s for s, _ in inputs], [t for _, t in inputs]
         if args.feedback is None:
             results = classify_clips(stored, clips, truths, target)
