@@ -198,8 +198,8 @@ def test_classify_takes_labels_as_train_and_compare_do(
     results = json.loads(capsys.readouterr().out)["results"]
     assert sorted(r["clip"] for r in results) == expected
     assert {r["true_label"] for r in results} == wanted
-    refused(["classify", str(DEMO), "--db", str(case_base), "--labels", "deep_squt"],
-            tmp_path, capsys, "--labels: no clip labelled 'deep_squt' in the clips given")  # fmt: skip
-    refused(["classify", str(DEMO / "m01_s01_e01.npz"), "--db", str(case_base), "--labels",
-             "deep_squat"], tmp_path, capsys,
-            "--labels: filters the clips of a labels CSV or dataset, and none is given")  # fmt: skip
+    argv = ["classify", str(DEMO), "--db", str(case_base), "--labels", "deep_squt"]
+    refused(argv, tmp_path, capsys, "--labels: no clip labelled 'deep_squt' in the clips given")
+    argv[1] = str(DEMO / "m01_s01_e01.npz")
+    argv[-1] = "deep_squat"
+    refused(argv, tmp_path, capsys, "--labels: filters the clips of a labels CSV or dataset")
