@@ -13,10 +13,12 @@ each command says it did.
   off (``POSECBR_NO_PROGRESS``), which neither it nor README said.
 - ``describe`` and ``dad`` now take ``--fps`` and ``--asf`` as ``reps`` and ``segment`` do.
 - ``classify`` now takes ``--labels`` beside ``--subjects``, as ``train`` and ``compare`` do.
+- ``posecbr thresholds`` now names ``describe``, the one command its file is given to.
 """
 
 from __future__ import annotations
 
+import argparse
 import io
 import json
 import shutil
@@ -203,3 +205,32 @@ def test_classify_takes_labels_as_train_and_compare_do(
     argv[1] = str(DEMO / "m01_s01_e01.npz")
     argv[-1] = "deep_squat"
     refused(argv, tmp_path, capsys, "--labels: filters the clips of a labels CSV or dataset")
+
+
+def _parsers() -> dict[str, argparse.ArgumentParser]:
+    """Every command's and action's parser, by its name ("casebase trim")."""
+    found: dict[str, argparse.ArgumentParser] = {}
+
+    def walk(parser: argparse.ArgumentParser, name: str) -> None:
+        found[name] = parser
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for child, sub in action.choices.items():
+                    walk(sub, f"{name} {child}".strip())
+
+    walk(build_parser(), "")
+    return found
+
+
+def test_thresholds_names_the_command_its_file_is_given_to(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``posecbr thresholds`` said "edit it and pass --thresholds FILE" without the command:
+    ``train``, ``classify`` and ``segment`` refuse ``--thresholds``; ``describe`` alone takes
+    it, and the help now says so."""
+    parsers = _parsers()
+    takes = sorted(n for n, p in parsers.items() if "--thresholds" in p._option_string_actions)
+    assert takes == ["describe"]
+    with pytest.raises(SystemExit):
+        main(["thresholds", "--help"])
+    assert "pass it to describe --thresholds FILE" in " ".join(capsys.readouterr().out.split())

@@ -41,7 +41,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     q.add_argument("--all", action="store_true", help="include trimmed cases")
     q = act.add_parser("export", help="write the cases (problems, labels, provenance) to .npz")
     common(q)
-    q.add_argument("--out", required=True, type=path_arg, help="output .npz file")
+    q.add_argument(
+        "--out", required=True, type=path_arg, metavar="FILE.npz", help="output .npz file"
+    )
     q = act.add_parser(
         "copy",
         help="copy a case base whole to another store, or under another name",

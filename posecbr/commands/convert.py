@@ -49,7 +49,9 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("source", type=path_arg, help="dataset folder, .amc, .bvh, labels CSV, ...")
-    p.add_argument("--out", type=path_arg, required=True, help="output folder (created)")
+    p.add_argument(
+        "--out", type=path_arg, required=True, metavar="DIR", help="output folder (created)"
+    )
     add_sensor_option(p)
     p.add_argument("--asf", type=path_arg, help="skeleton for a single .amc (default: beside it)")
     p.add_argument("--subjects", help="comma list, e.g. s01,s02 (UI-PRMD) or bd,dg (HDM05)")

@@ -55,6 +55,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--out",
         type=path_arg,
         default=Path("demo-output"),
+        metavar="DIR",
         help="output folder (default demo-output)",
     )
     p.add_argument(

@@ -12,7 +12,8 @@ from posecbr.arguments import path_arg
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "thresholds",
-        help="print the fluent thresholds table as JSON (edit it and pass --thresholds FILE)",
+        help="print the fluent thresholds table as JSON (edit it and pass it to describe "
+        "--thresholds FILE)",
     )
     p.add_argument(
         "--from",
