@@ -14,6 +14,8 @@ each command says it did.
 - ``describe`` and ``dad`` now take ``--fps`` and ``--asf`` as ``reps`` and ``segment`` do.
 - ``classify`` now takes ``--labels`` beside ``--subjects``, as ``train`` and ``compare`` do.
 - ``posecbr thresholds`` now names ``describe``, the one command its file is given to.
+- ``classify --feedback`` now says what it stored in which case base of which store (with
+  ``--quiet`` it said nothing of it).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from features.progress import progress_enabled
 from posecbr.cli import build_parser, main
 from posecbr.commands import thresholds
 from tests.badinput import refused, small_case_base
+from tests.test_cbr_cli import _write_classes
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
@@ -234,3 +237,39 @@ def test_thresholds_names_the_command_its_file_is_given_to(
     with pytest.raises(SystemExit):
         main(["thresholds", "--help"])
     assert "pass it to describe --thresholds FILE" in " ".join(capsys.readouterr().out.split())
+
+
+def _maintenance(db: Path, capsys: pytest.CaptureFixture[str]) -> dict[str, int]:
+    capsys.readouterr()
+    assert main(["casebase", "info", "--db", str(db), "--json"]) == 0
+    return dict(json.loads(capsys.readouterr().out)["case_bases"][0]["maintenance"])
+
+
+def test_classify_feedback_says_what_it_stored_where(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``classify --feedback LABEL --quiet`` changed the case base and said nothing of it (the
+    clips' "feedback:" lines are not printed with --quiet), nor, without it, which store it
+    wrote: a closing line now says how many clips were retained and cases revised in which
+    case base of which store, the counts the case base's history then holds."""
+    db = tmp_path / "cb.sqlite"
+    shutil.copy(case_base, db)
+    clips = _write_classes(tmp_path / "new", 1, 12)
+    label = sorted(p.name for p in clips.iterdir())[0]
+    clip = next((clips / label).iterdir())
+    runs = [["--novelty", "0", "--benefit", "0", "--quiet"], ["--quiet"], []]
+    for extra in runs:  # retained (every novelty passes 0); then the same clip: revised
+        before = _maintenance(db, capsys)
+        argv = ["classify", str(clip), "--db", str(db), "--feedback", label, *extra]
+        assert main(argv) == 0
+        last = capsys.readouterr().out.splitlines()[-1]
+        after = _maintenance(db, capsys)
+        retained = after.get("retain", 0) - before.get("retain", 0)
+        revised = after.get("revise", 0) - before.get("revise", 0)
+        assert retained + revised == 1
+        assert last == (
+            f"feedback stored in case base 'default' of {db}: {retained} clip"
+            f"{'s' * (retained != 1)} retained as new cases, {revised} case"
+            f"{'s' * (revised != 1)} revised"
+        )
+    assert after["retain"] == 1 and after["revise"] == 2

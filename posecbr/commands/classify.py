@@ -464,6 +464,21 @@ def _print(
         for r in results:
             _print_one(r, args, target)
     _print_summary(summary, target, results)
+    if args.feedback is not None:  # where it went, as every command that writes says
+        _print_stored(where, name, results)
+
+
+def _print_stored(where: str, name: str, results: list[Any]) -> None:
+    """The line saying what the feedback changed in which case base of which store (--quiet
+    too: the clips' own feedback lines are not printed then)."""
+    from features.text import shown
+
+    retained = sum(r.retention is not None and r.retention.retained for r in results)
+    revised = sum(r.revision is not None and r.revision.case_id >= 0 for r in results)
+    print(
+        f"feedback stored in case base {shown(repr(name))} of {shown(where)}: "
+        f"{counted(retained, 'clip')} retained as new cases, {counted(revised, 'case')} revised"
+    )
 
 
 def _print_one(r: Any, args: argparse.Namespace, target: str) -> None:
