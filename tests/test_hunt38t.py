@@ -273,3 +273,14 @@ def test_classify_feedback_says_what_it_stored_where(
             f"{'s' * (revised != 1)} revised"
         )
     assert after["retain"] == 1 and after["revise"] == 2
+
+
+@pytest.mark.parametrize("names", [("-k", "--k"), ("--jobs", "--workers")])
+def test_every_command_taking_one_spelling_takes_the_other(names: tuple[str, ...]) -> None:
+    """The same idea under one set of names in every command: a command that takes one of
+    ``names`` takes each, for the same setting."""
+    for command, parser in _parsers().items():
+        given = [n for n in names if n in parser._option_string_actions]
+        if given:
+            actions = {id(parser._option_string_actions.get(n)) for n in names}
+            assert given == list(names) and len(actions) == 1, (command, given)
