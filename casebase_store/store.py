@@ -1138,22 +1138,8 @@ class CaseStore:
             info = self._info(s, row)
             damaged = f"case base {name!r} is damaged: a date in it is not a date"
             with self._dates(damaged):
-                cases = [
-                    dict(r)
-                    for r in s.execute(
-                        select(CaseRow.__table__)
-                        .where(CaseRow.case_base_id == row.id)
-                        .order_by(CaseRow.id)
-                    ).mappings()
-                ]
-                log = [
-                    dict(r)
-                    for r in s.execute(
-                        select(MaintenanceRow.__table__)
-                        .where(MaintenanceRow.case_base_id == row.id)
-                        .order_by(MaintenanceRow.id)
-                    ).mappings()
-                ]
+                cases = _rows_of(s, CaseRow, row.id)
+                log = _rows_of(s, MaintenanceRow, row.id)
             reps = [
                 dict(r)
                 for r in s.execute(
@@ -1804,3 +1790,16 @@ def write_store(
             # a read-only file system refuses even to unlink what was never created
             with suppress(OSError):
                 Path(f"{tmp}{suffix}").unlink(missing_ok=True)
+
+
+def _rows_of(
+    s: Session, table: type[CaseRow] | type[MaintenanceRow], case_base_id: int
+) -> list[dict[str, Any]]:
+    """Every row of ``table`` (cases or the maintenance log) of one case base, whole, in the
+    order they were written."""
+    return [
+        dict(r)
+        for r in s.execute(
+            select(table.__table__).where(table.case_base_id == case_base_id).order_by(table.id)
+        ).mappings()
+    ]

@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 
 import cbr.similarity.euclidean as euclidean
+import features.blas
 from cbr.similarity import Euclidean
 from features import body
 from features import repetitions as reps
@@ -56,7 +57,7 @@ def _brute(cases: np.ndarray, queries: np.ndarray, k: int) -> tuple[np.ndarray, 
 @pytest.fixture
 def pool(monkeypatch: pytest.MonkeyPatch) -> _Pool:
     fake = _Pool()
-    monkeypatch.setattr(euclidean, "_blas_pools", lambda: [fake])
+    monkeypatch.setattr(features.blas, "_POOLS", [fake])
     return fake
 
 
@@ -210,7 +211,6 @@ def test_the_running_median_equals_scipys_whole_array_filter_on_moving_angles() 
 def test_a_long_recordings_movement_direction_is_found_on_one_blas_thread(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    import features.blas
 
     fake = _Pool()
     monkeypatch.setattr(features.blas, "_POOLS", [fake])

@@ -70,7 +70,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from features.blas import blas_pools
+from features.blas import one_blas_thread
 from features.errors import ConfigError, InputError
 
 from .base import SimilarityMeasure, check_weighting, check_whole, register_measure, weighted
@@ -1029,28 +1029,13 @@ def _error(gamma: float, q_sq: float) -> float:
     return 4.0 * gamma * math.sqrt(q_sq) * 1.01 + 1e-9
 
 
-def _blas_pools() -> list[Any]:
-    """threadpoolctl's handles of the loaded BLAS libraries (found once; none without it)."""
-    return blas_pools()
-
-
 def _matvec_one_thread(rows: np.ndarray, q32: np.ndarray) -> np.ndarray:
-    """``rows @ q32`` by BLAS on one thread: a query is memory-bound, and BLAS threads on a
-    busy machine were measured 40-300x slower (thread hand-off). The library's own thread
-    setters (a microsecond each), not ``threadpool_limits`` (~0.1 ms a call, measured). Any
-    product ``a @ b`` (:func:`_product`'s small ones too)."""
-    pools = _blas_pools()
-    before = [p.get_num_threads() for p in pools]
-    for p, t in zip(pools, before, strict=True):
-        if t != 1:
-            p.set_num_threads(1)
-    try:
+    """``rows @ q32`` by BLAS on one thread (:func:`features.blas.one_blas_thread`): a query
+    is memory-bound, and BLAS threads on a busy machine were measured 40-300x slower (thread
+    hand-off). Any product ``a @ b`` (:func:`_product`'s small ones too)."""
+    with one_blas_thread():
         product: np.ndarray = rows @ q32
-        return product
-    finally:
-        for p, t in zip(pools, before, strict=True):
-            if t != 1:
-                p.set_num_threads(t)
+    return product
 
 
 SMALL_PRODUCT = 1 << 28
