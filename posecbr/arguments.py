@@ -100,6 +100,27 @@ def check_found(
         raise ConfigError(text + held_words(values, what), flag)
 
 
+#: one filter's check for :func:`check_each_found`: the values of the clips the filters kept,
+#: the entries asked for, the flag, what a clip is to have one, the values the data hold
+Asked = tuple[Iterable[Any], Collection[str] | None, str, str, Callable[[], Sequence[str]]]
+
+
+def check_each_found(asked: Sequence[Asked], data: str | Path | None = None) -> None:
+    """:func:`check_found` of each filter (``--labels``, ``--subjects``) in ``asked``, a value
+    the data hold nowhere (mistyped) first, whichever flag names it, with the values the
+    data hold: a subject no clip has left no clip of the labels asked, and was blamed on
+    ``--labels`` ("passes the other filters"). Then a value there that the other filter
+    leaves out."""
+    checks = [(list(found), values, flag, what, held) for found, values, flag, what, held in asked]
+    for found, values, flag, what, held in checks:
+        have = {str(v) for v in found if v is not None}
+        if values and set(values) - have:
+            data_has = list(held())
+            check_found(data_has, values, flag, what, data, data_has.copy)
+    for found, values, flag, what, held in checks:
+        check_found(found, values, flag, what, data, held)
+
+
 HELD_SHOWN = 10  # values named on a refusal; "and N more" for the rest
 
 

@@ -403,5 +403,6 @@ def test_classify_subjects_matching_no_clip_names_the_filter(
     csv.write_text("path,label,subject\nc0.npz,stand,s01\nc1.npz,stand,s02\n")
     db = small_case_base(tmp_path / "cb")
     capsys.readouterr()  # what training it printed
-    refused(["classify", str(csv), "--db", str(db), "--subjects", "s09"], tmp_path, capsys,
-            "error: --subjects: no clip of subject 's09' in the clips given")  # fmt: skip
+    # with the subjects the data have, as train and compare name them (hunt 38z)
+    line = f"error: --subjects: no clip of subject 's09' in {csv}: its subjects are s01 and s02"
+    refused(["classify", str(csv), "--db", str(db), "--subjects", "s09"], tmp_path, capsys, line)

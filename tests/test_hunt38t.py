@@ -204,7 +204,8 @@ def test_classify_takes_labels_as_train_and_compare_do(
     assert sorted(r["clip"] for r in results) == expected
     assert {r["true_label"] for r in results} == wanted
     argv = ["classify", str(DEMO), "--db", str(case_base), "--labels", "deep_squt"]
-    refused(argv, tmp_path, capsys, "--labels: no clip labelled 'deep_squt' in the clips given")
+    # named with the labels the data have, as train and compare name them (hunt 38z)
+    refused(argv, tmp_path, capsys, f"--labels: no clip labelled 'deep_squt' in {DEMO}: its labels")
     argv[1] = str(DEMO / "m01_s01_e01.npz")
     argv[-1] = "deep_squat"
     refused(argv, tmp_path, capsys, "--labels: filters the clips of a labels CSV or dataset")

@@ -9,12 +9,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
 from features.text import counted, did_you_mean, percent
-from posecbr.arguments import path_arg
+from posecbr.arguments import check_each_found, path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
 if TYPE_CHECKING:
@@ -87,6 +88,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.set_defaults(func=run)
 
 
+FILES = ("pose_file", "pose_folder")  # kinds of input classified as given, not filtered
+
+
 def load_inputs(
     paths: list[Path],
     sensor: str,
@@ -115,7 +119,7 @@ def load_inputs(
 
     kinds = [detect_kind(path) for path in paths]
     for flag, asked in (("--subjects", subjects), ("--labels", labels)):
-        if asked is not None and all(k in ("pose_file", "pose_folder") for k in kinds):
+        if asked is not None and all(k in FILES for k in kinds):
             raise ConfigError(
                 "filters the clips of a labels CSV or dataset, and none is given (pose files "
                 "are classified as given)",
@@ -152,26 +156,39 @@ def load_inputs(
                 out.append((clip.seq, clip_target(clip, target)))
                 seen.add(clip.subject)
                 seen_labels.add(clip.label)
-    _check_subjects_found(subjects, seen)  # before "no clips found": the filter said why
-    _check_found(labels, seen_labels, "labelled", "--labels")
+    datasets = [p for p, k in zip(paths, kinds, strict=True) if k not in FILES]
+    # before "no clips found": the filter said why
+    _check_asked(datasets, sensor, (subjects, seen), (labels, seen_labels))
     if not out:
         raise DataError("no clips found", " ".join(str(p) for p in paths))
     return out
 
 
-def _check_subjects_found(subjects: list[str] | None, seen: set[str | None]) -> None:
-    """Refuse a ``--subjects`` entry no clip has (mistyped, or a stray comma's empty one):
-    the clips of the others alone would be classified and counted as if all had been."""
-    _check_found(subjects, seen, "of subject", "--subjects")
+def _check_asked(
+    datasets: list[Path],
+    sensor: str,
+    subjects: tuple[list[str] | None, set[str | None]],
+    labels: tuple[list[str] | None, set[str]],
+) -> None:
+    """Refuse a ``--subjects`` or ``--labels`` entry (each with the values of the clips the
+    filters kept) no clip has (mistyped, or a stray comma's empty one): the clips of the
+    others alone would be classified and counted as if all had been. Named with the values
+    the ``datasets`` hold, as train and compare name them."""
+    from features.datasets import dataset_labels, dataset_subjects
+    from features.label_tracks import code_order
 
-
-def _check_found(asked: list[str] | None, seen: set[Any], what: str, flag: str) -> None:
-    """Refuse an entry of ``asked`` (``--subjects``, ``--labels``) no clip ``seen`` has."""
-    missing = [s for s in asked or () if s not in seen]
-    if missing:
-        raise ConfigError(
-            f"no clip {what} {', '.join(repr(s) for s in missing)} in the clips given", flag
+    def held(values: Callable[..., list[str]]) -> Callable[[], list[str]]:
+        return lambda: sorted(
+            {v for p in datasets for v in values(p, sensor=sensor)}, key=code_order
         )
+
+    check_each_found(
+        [
+            (subjects[1], subjects[0], "--subjects", "of subject", held(dataset_subjects)),
+            (labels[1], labels[0], "--labels", "labelled", held(dataset_labels)),
+        ],
+        datasets[0] if len(datasets) == 1 else "the clips given",
+    )
 
 
 def _check_args(args: argparse.Namespace) -> None:

@@ -7,7 +7,7 @@ import argparse
 import os
 import shlex
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -16,7 +16,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, stdout_gone, write_json_atomic
 from features.text import shown
-from posecbr.arguments import check_found, param_value, path_arg
+from posecbr.arguments import check_each_found, param_value, path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
 
@@ -177,21 +177,14 @@ def _load(args: argparse.Namespace) -> list[Any]:
     def held_subjects() -> Sequence[str]:
         return list(dataset_subjects(args.data, sensor=kw["sensor"]))
 
-    asked: list[tuple[list[Any], set[str] | None, str, str, Callable[[], Sequence[str]]]] = [
-        ([c.label for c in clips], kw.get("labels"), "--labels", "labelled", held_labels),
-        ([c.subject for c in clips], kw.get("subjects"), "--subjects", "of subject",
-         held_subjects),
-    ]  # fmt: skip
-    # first a value the data has nowhere (mistyped), whichever flag names it: a subject no
-    # clip has left no clip of the labels asked, and was blamed on --labels ("passes the
-    # other filters"), as train does not
-    for found, values, flag, what, held in asked:
-        have = {str(v) for v in found if v is not None}
-        if values and set(values) - have:
-            data_has = list(held())
-            check_found(data_has, values, flag, what, args.data, data_has.copy)
-    for found, values, flag, what, held in asked:  # there, but the other filter leaves them out
-        check_found(found, values, flag, what, args.data, held)
+    check_each_found(
+        [
+            ([c.label for c in clips], kw.get("labels"), "--labels", "labelled", held_labels),
+            ([c.subject for c in clips], kw.get("subjects"), "--subjects", "of subject",
+             held_subjects),
+        ],
+        args.data,
+    )  # fmt: skip
     return clips
 
 
