@@ -93,3 +93,44 @@ def test_classify_of_two_datasets_names_the_subjects_of_both(
     assert line.endswith(
         f"--subjects: no clip of subject 's04' in {first} passes the other filters"
     )
+
+
+# `posecbr train RECORDING --frame-labels FILE` stored every stretch with no subject, though
+# the pose file named its person (metadata subject), where `cbr.training.cut_recording` and
+# a labels CSV's label_file row keep it: the command called recording_clips without one (an
+# omission of 84ea090, which refuses --subjects because the stretches are "one person's").
+# Both paths now store the recording's subject.
+
+
+def test_train_frame_labels_keeps_the_subject_the_pose_file_names(tmp_path: Path) -> None:
+    """Four arm raises at 30 fps (0.6 s rest, then 1.2 s up and down and 0.6 s rest each: 234
+    frames), the first 120 frames "raise_a", the other 114 "raise_b", in a pose file of
+    subject p07: both paths store the 2-s windows (60 frames) every 0.5 s (15) that fit in
+    each stretch, 5 and 4, and each of p07."""
+    from casebase_store import open_store
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import cut_recording, train
+    from features.datasets import load_clip
+    from features.poses import save_pose
+    from posecbr.cli import main
+    from tests.test_repetitions import _movement
+
+    seq = _movement(["both"] * 4)
+    assert seq.n_frames == 234
+    rec = save_pose(seq.with_metadata(subject="p07"), tmp_path / "rec.npz")
+    labels = tmp_path / "labels.txt"
+    labels.write_text("\n".join(["raise_a"] * 120 + ["raise_b"] * 114) + "\n")
+    by_command, by_python = tmp_path / "command.sqlite", tmp_path / "python.sqlite"
+    assert main(["train", str(rec), "--frame-labels", str(labels), "--db", str(by_command)]) == 0
+    pieces, solutions = cut_recording(load_clip(rec), labels)
+    train(by_python, "default", pieces, solutions, CaseBaseClassifier(feature_weights="none"),
+          cases="windows")  # fmt: skip
+    stored, problems = [], []
+    for db in (by_command, by_python):
+        with open_store(db, readonly=True) as store:
+            cases = store.load_cases("default")
+        stored.append((list(cases.labels), list(cases.frame_ranges), list(cases.subjects)))
+        problems.append(cases.features.tobytes())
+    assert stored[0] == stored[1] and problems[0] == problems[1]
+    windows = [(a, a + 60) for a in range(0, 61, 15)] + [(a, a + 60) for a in range(120, 175, 15)]
+    assert stored[0] == (["raise_a"] * 5 + ["raise_b"] * 4, windows, ["p07"] * 9)

@@ -313,13 +313,17 @@ def _check_append(args: argparse.Namespace) -> None:
 
 def _recording_clips(args: argparse.Namespace, activities: list[str] | None) -> list[Any]:
     """The labelled stretches of one recording (``--frame-labels``), read as ``segment``
-    reads it (``--asf``, ``--fps``)."""
+    reads it (``--asf``, ``--fps``), each of the person its metadata names (a pose file's
+    subject, an HDM05 name's actor), as a labels CSV's recording and
+    :func:`cbr.training.cut_recording` keep it."""
+    from cbr.casebase import subject_of
     from features.datasets import recording_clips
     from features.label_tracks import LabelTrack
 
     track = LabelTrack(args.frame_labels, args.label_block, args.label_names)
     seq = load_recording(args.data, args.asf, args.fps)
-    clips = [c for c in recording_clips(seq, track) if not activities or c.label in activities]
+    stretches = recording_clips(seq, track, subject_of(seq))
+    clips = [c for c in stretches if not activities or c.label in activities]
     return _long_enough(args, clips)
 
 
