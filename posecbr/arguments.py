@@ -131,10 +131,21 @@ def held_words(values: Sequence[str], what: str) -> str:
     if not values:
         return ""
     noun = "labels" if what == "labelled" else "subjects"
+    many = len(values) > 1
+    text = f": its {noun if many else noun[:-1]} {'are' if many else 'is'} {listed(values)}"
+    codes = noun == "labels" and whole_numbers(values)
+    return text + (" (codes: --label-names or a label_names column names them)" if codes else "")
+
+
+def listed(values: Sequence[str]) -> str:
+    """``1, 3 and 5``: at most :data:`HELD_SHOWN` values named, then "and N more"; a value
+    that is empty, has spaces about it or holds a comma quoted."""
     named = [repr(v) if not v or v != v.strip() or "," in v else v for v in values]
     if len(named) > HELD_SHOWN:
         named = [*named[:HELD_SHOWN], f"{len(values) - HELD_SHOWN} more"]
-    listed = named[0] if len(named) == 1 else f"{', '.join(named[:-1])} and {named[-1]}"
-    text = f": its {noun} are {listed}" if len(values) > 1 else f": its {noun[:-1]} is {listed}"
-    codes = noun == "labels" and all(v.isascii() and v.isdigit() for v in values)
-    return text + (" (codes: --label-names or a label_names column names them)" if codes else "")
+    return named[0] if len(named) == 1 else f"{', '.join(named[:-1])} and {named[-1]}"
+
+
+def whole_numbers(values: Iterable[str]) -> bool:
+    """Whether every value is a whole number (codes a label names file names): ``"6"``."""
+    return all(v.isascii() and v.isdigit() for v in values)

@@ -117,7 +117,9 @@ def test_segment_scores_a_label_the_case_base_lacks_per_frame(
     capsys.readouterr()
     argv = ["segment", str(rec), "--db", str(case_base), "--truth", str(truth_file), "--json"]
     assert main(argv) == 0
-    doc = json.loads(capsys.readouterr().out)
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)
+    assert "note:" not in captured.err  # the case base has six of its labels (hunt 38z)
     scores = doc["scores"]
     assert main(argv[:-1]) == 0
     text = capsys.readouterr().out
@@ -133,6 +135,58 @@ def test_segment_scores_a_label_the_case_base_lacks_per_frame(
         f"labels it lacks (Skipping): {unseen_unknown} of {unseen} blocks called unknown"
         f" ({100 * unseen_unknown / unseen:.1f} %)"
     )
+
+
+ACTIVITIES = "ArmCircle, Jog, JumpJack, KneeRaise, Squat, ToeTouchOneHand and Twist"  # KNOWN
+
+
+def test_segment_truth_of_codes_without_names_is_noted(
+    recordings: dict[str, PoseSequence],  # noqa: F811
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """13_30's label file read without ``--label-names`` holds codes 1, 2, 3, 4 and 6, none
+    an activity of the case base: every block was scored as a label the case base lacks
+    without a word. One note on stderr now names the case base's activities and, the labels
+    being whole numbers, ``--label-names``; the scores are what they were (worked out by
+    hand: no block seen, every one of a label it lacks)."""
+    rec = save_pose(recordings["13_30"], tmp_path / "13_30.npz")
+    truth_file = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
+    capsys.readouterr()
+    argv = ["segment", str(rec), "--db", str(case_base), "--truth", str(truth_file)]
+    argv += ["--label-block", "0.1"]
+    assert main([*argv, "--json"]) == 0
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)
+    codes = _labels(truth_file)
+    assert len(codes) == 206
+    seen, _, unseen, unseen_unknown, errors = _by_hand(doc["segments"], codes, KNOWN)
+    scores = doc["scores"]
+    assert (seen, unseen) == (0, 206)
+    assert (scores["seen_blocks"], scores["seen_right"], scores["seen_accuracy"]) == (0, 0, None)
+    assert (scores["unseen_labels"], scores["unseen_blocks"]) == (["1", "2", "3", "4", "6"], 206)
+    assert scores["unseen_called_unknown"] == unseen_unknown
+    assert scores["boundary_errors_s"] == pytest.approx(errors)
+    note = (
+        f"note: {truth_file}: none of its labels (1, 2, 3, 4 and 6) is an activity of the case"
+        f" base ({ACTIVITIES}): every block is scored as a label it lacks; if they are codes,"
+        " --label-names FILE names them"
+    )
+    assert captured.err.splitlines() == [note]
+    assert main(argv) == 0  # the text: the same note
+    captured = capsys.readouterr()
+    assert captured.err.splitlines() == [note]
+    assert "labels the case base has: none in the truth" in captured.out
+    # labels by name, none the case base's: noted, without --label-names
+    words = tmp_path / "walk.txt"
+    words.write_text("Walk\n" * 1233 + "Run\n" * 1232, encoding="utf-8")  # one per frame
+    assert main(["segment", str(rec), "--db", str(case_base), "--truth", str(words)]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        f"note: {words}: none of its labels (Run and Walk) is an activity of the case base"
+        f" ({ACTIVITIES}): every block is scored as a label it lacks"
+    ]
 
 
 def _setup(recs: dict[str, PoseSequence], shared_data: Path, root: Path) -> tuple[Path, Path]:

@@ -27,7 +27,8 @@ scores them (:func:`cbr.evaluation.segments.score_segmentation`). ``--json`` giv
 ``"scores": {"truth", "blocks", "block_s", "seen_blocks", "seen_right", "seen_accuracy",
 "unseen_labels", "unseen_blocks", "unseen_called_unknown", "unseen_unknown_share",
 "blocks_called_unknown", "boundary_errors_s", "median_boundary_error_s"}`` (a share of no
-blocks, and a distance when no segment boundary was found: null).
+blocks, and a distance when no segment boundary was found: null). A label file with no label
+of the case base's is noted on stderr (codes without ``--label-names``?).
 """
 
 from __future__ import annotations
@@ -285,10 +286,7 @@ def run(args: argparse.Namespace) -> int:
         (rec, video, _named(segment(clf, rec, judge, k=args.k), path))
         for (rec, video), path in zip(read, args.recordings, strict=True)
     ]
-    scores = [
-        _scores(result, truth, clf.classes_) if truth is not None else None
-        for (_, _, result), truth in zip(done, truths, strict=True)
-    ]
+    scores = _all_scores(args, [result for _, _, result in done], truths, clf.classes_)
     targets: list[Path | None] = [None] * len(done)
     if args.plot is not None:
         targets = list(plot_targets(args.plot, args.recordings))
@@ -315,11 +313,44 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _all_scores(
+    args: argparse.Namespace, results: list[Any], truths: list[Any], classes: Any
+) -> list[Any]:
+    """Each recording's ``--truth`` scores (None without), a truth with no label of the case
+    base's noted on stderr."""
+    scores = [
+        _scores(result, truth, classes) if truth is not None else None
+        for result, truth in zip(results, truths, strict=True)
+    ]
+    for score, truth_file in zip(scores, args.truth or [], strict=False):
+        _note_none_known(score, truth_file, [str(c) for c in classes], args.label_names)
+    return scores
+
+
 def _scores(result: Any, truth: Any, classes: Any) -> Any:
     from cbr.evaluation.segments import score_segmentation
     from cbr.segmentation import BLOCK_S
 
     return score_segmentation(result, truth, [str(c) for c in classes], BLOCK_S)
+
+
+def _note_none_known(scores: Any, truth: Path, activities: list[str], names: Path | None) -> None:
+    """Say on stderr when none of the ``truth`` file's labels is one of the case base's
+    ``activities``: every block is then scored as a label the case base lacks, which a
+    label file of codes read without its names (``--label-names``) gives without a word."""
+    from features.label_tracks import code_order
+    from posecbr.arguments import listed, whole_numbers
+
+    if scores.seen_blocks or not scores.blocks:
+        return
+    labels = sorted(scores.unseen_labels, key=code_order)  # 1, 2, 10: as a user counts them
+    text = (
+        f"note: {shown(truth)}: none of its labels ({listed(labels)}) is an activity of the"
+        f" case base ({listed(activities)}): every block is scored as a label it lacks"
+    )
+    if names is None and whole_numbers(labels):
+        text += "; if they are codes, --label-names FILE names them"
+    print(text, file=sys.stderr)
 
 
 def _document(
