@@ -364,6 +364,10 @@ class LiveSegmenter:
         # the video (push's absent): a stretch with nobody in view mostly of them has no frames
         self.held: list[float] = []  # the evidence of unknown of the unknown hops after a
         # stretch with nobody in view, not yet a second long (they may join it)
+        # the pose jumping to another person (push's image landmarks):
+        self.image_before: np.ndarray | None = None  # the last frame's hip and torso (px)
+        self.jumps: list[int] = []  # the frames, still kept, where the pose jumped
+        self.jumped = False  # the pose jumped at the last frame pushed
 
     def _penalty(self) -> float:
         """The log-odds a change costs: :data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS`."""
@@ -409,14 +413,24 @@ class LiveSegmenter:
         return all(np.ptp(v) == 0.0 for v, _ in self.latest_votes)
 
     def push(
-        self, world: np.ndarray, confidence: np.ndarray | None = None, absent: bool = False
+        self,
+        world: np.ndarray,
+        confidence: np.ndarray | None = None,
+        absent: bool = False,
+        image: np.ndarray | None = None,
     ) -> list[LiveSegment]:
         """Add one frame ``(33, 3)`` (NaN where the person is not seen) and, from a pose
         model, its joints' confidence ``(33,)`` (visibility: the repetitions leave out a joint
         below 0.5 as ``segment`` does, :func:`features.repetitions.counted_angles`); ``absent``:
         the frame lies in a gap of the video, no frame there at all (its joints missing: a
         stretch with nobody in view that is mostly such frames says "no frames in the video",
-        as ``segment`` says it).
+        as ``segment`` says it); ``image``: the frame's image landmarks ``(33, >=2)`` (x, y in
+        px, NaN where nobody is seen, as a pose model gives them): where the hip centre moves
+        farther from the frame before's than a torso length (or 8 a second at low rates:
+        :func:`features.pose_estimation.video.person_jumps`, as ``extract`` records it), the
+        pose jumped to another person (:attr:`jumped`), and repetitions are counted apart on
+        either side of that frame, as ``segment`` counts them (the segment goes on across
+        it); without ``image`` no jump is seen.
 
         ``world`` is a :class:`~features.poses.PoseSequence`'s positions for one frame: the
         joints of :data:`features.skeleton.BLAZEPOSE_33` in that order, in metres, in a
@@ -441,6 +455,8 @@ class LiveSegmenter:
                 f"frame {self.n}: absent must be True or False, got {absent!r}", self.source
             )
         frame, seen = self._checked(world, confidence)
+        hips = self._hips(image)
+        self._follow_person(hips)
         if absent:  # runs [first, end) of frames in a gap
             if self.absent and self.absent[-1][1] == self.n:
                 self.absent[-1][1] += 1
@@ -485,6 +501,38 @@ class LiveSegmenter:
         except PoseFileError as exc:
             raise InputError(f"frame {self.n}: {exc.message}", self.source) from None
         return one.positions[0], None if one.confidence is None else one.confidence[0]
+
+    def _hips(self, image: Any) -> np.ndarray | None:
+        """``image``, push's image landmarks of frame :attr:`n`, as a float array ``(33, 2)``
+        (x, y), or None; InputError naming the stream and the frame for one that is not,
+        before anything is kept."""
+        if image is None:
+            return None
+        try:
+            xy = np.array(image, dtype=float)
+        except (TypeError, ValueError):  # rows of different lengths, or not numbers
+            xy = np.empty(0)
+        if xy.ndim != 2 or xy.shape[0] != len(BLAZEPOSE_33) or xy.shape[1] < 2:
+            got = xy.shape if xy.size else "no array of numbers"
+            raise InputError(
+                f"frame {self.n}: image landmarks must have shape (33, 2) or more columns"
+                f" (x, y in px), got {got}",
+                self.source,
+            )
+        return xy[:, :2]
+
+    def _follow_person(self, hips: np.ndarray | None) -> None:
+        """Whether the pose jumped to another person at frame :attr:`n` (image landmarks
+        ``hips``, or None: no jump seen), by
+        :func:`features.pose_estimation.video.person_jumps` over it and the frame before."""
+        before, self.image_before = self.image_before, hips
+        self.jumped = False
+        if before is not None and hips is not None:
+            from features.pose_estimation.video import person_jumps
+
+            self.jumped = bool(person_jumps(np.stack([before, hips]), self.fps))
+        if self.jumped:
+            self.jumps.append(self.n)
 
     def _look(self, frame: np.ndarray) -> None:
         """Follow the runs of frames without the torso with frame :attr:`n`, ``frame``."""
@@ -721,6 +769,7 @@ class LiveSegmenter:
         if drop > self.window:
             del self.frames[:drop], self.seen_by[:drop]
             self.offset += drop
+            self.jumps = [j for j in self.jumps if j > self.offset]
         settled = len(self.hop_centres) - len(self.forward.back)
         old = sum(f <= self.passed for f in self.hop_centres[: max(0, settled - 1)])
         if old:  # hops passed to pass 2 (the last settled kept: _between)
@@ -881,27 +930,26 @@ class LiveSegmenter:
                 start, end, None, 1.0, 0, nobody_explanation(self._absent_in(start, end))
             )
         first = max(start, end - int(MAX_SEGMENT_S * self.fps), self.offset)
-        found: tuple[Repetition, ...] = ()
+        reps: tuple[Repetition, ...] = ()
+        # the stream's own start and (once finished) end are the recording's, as offline
+        # (cbr.segmentation._repetitions): part of one repetition there is none
+        edges = (first == 0, not cut and explained)
         if end > first:
             clip = self._sequence(first, end)
             if torso_share(clip) == 0.0:
                 state = self.unknown
-            # the stream's own start and (once finished) end are the recording's, as offline
-            # (cbr.segmentation._repetitions): part of one repetition there is none
-            edges = (first == 0, not cut and explained)
             try:
-                found = _counted(clip, edges).repetitions
+                reps = self._count_apart(first, end, edges, clip=clip)
             except DataError:  # too short, or nobody in view
                 pass
         confidence = self._confidence(state)
-        reps = tuple(_shifted(r, first) for r in found)
         turn = self.turn and first == start
         # the last far point held up to the cut (a squat held at the bottom through a change
         # of label): the movement comes back beyond it, where the next segment counts it
         held = cut and not lost and bool(reps) and self._held_beyond(end, reps[-1])
         passed_on = 0
         if cut and not lost and reps and not held and self._still_beyond(end, reps[-1]):
-            reps, held, passed_on = self._held_on(clip, edges, first, reps)
+            reps, held, passed_on = self._held_on(first, end, edges, reps)
         kept = keep_whole(reps, first, end, self.step, turn, cut and not lost, held)
         if cut and reps:
             self.turn = at_cut(reps, first, end, self.step)[1] or held
@@ -918,6 +966,64 @@ class LiveSegmenter:
         text, novelty = self._explain(start, end, state) if explained else ("", math.nan)
         return LiveSegment(start, end, label, float(confidence), count, text, novelty)
 
+    def _count_apart(
+        self,
+        first: int,
+        end: int,
+        edges: tuple[bool, bool],
+        settled: tuple[bool, bool] = (False, False),
+        clip: PoseSequence | None = None,
+    ) -> tuple[Repetition, ...]:
+        """The repetitions of stream frames [first, end) (``clip``, when made already;
+        :func:`_counted`, ``edges`` and ``settled`` of those frames' start and end), in stream
+        frames, counted apart on
+        either side of each frame where the pose jumped to another person (:attr:`jumps`), as
+        :func:`cbr.segmentation.counted_apart` counts a segment across one: each piece as a
+        segment of its own (DataError: none), a far point at the jump left to the piece after
+        unless the movement turns there on both sides (:func:`cbr.segmentation.keep_whole`),
+        a piece beside one with no far point settled at that jump; the jump from one
+        person's posture to the other's is no movement. Before, a repetition ran on across
+        it. Without a jump in them: :func:`_counted` of the frames (DataError raised)."""
+        cuts = [first, *(j for j in self.jumps if first < j < end), end]
+        if len(cuts) == 2:
+            whole = self._sequence(first, end) if clip is None else clip
+            found = _counted(whole, edges, settled).repetitions
+            return tuple(_shifted(r, first) for r in found)
+        pieces = list(zip(cuts[:-1], cuts[1:], strict=True))
+        last = len(pieces) - 1
+
+        def count(k: int, inner: tuple[bool, bool]) -> tuple[Repetition, ...]:
+            a, b = pieces[k]
+            outer = (edges[0] and k == 0, edges[1] and k == last)
+            still = (settled[0] if k == 0 else inner[0], settled[1] if k == last else inner[1])
+            try:
+                found = _counted(self._sequence(a, b), outer, still).repetitions
+            except DataError:  # too short, or nobody in view
+                return ()
+            return tuple(_shifted(r, a) for r in found)
+
+        raw = [count(k, (False, False)) for k in range(len(pieces))]
+        out: list[Repetition] = []
+        turn = False  # the piece before had a far point at the jump
+        for k, (a, b) in enumerate(pieces):
+            reps = raw[k]
+            inner = (k > 0 and not raw[k - 1], k < last and not raw[k + 1])
+            if len(reps) == 1 and any(inner):
+                reps = count(k, inner)
+            # the frames' own start and end: as the segment's (_segment's keep_whole)
+            out += keep_whole(reps, a, b, self.step, turn or k == 0, k < last)
+            turn = bool(raw[k]) and at_cut(raw[k], a, b, self.step)[1]
+        return tuple(out)
+
+    def _beyond(self, cut: int) -> PoseSequence:
+        """The frames pushed after ``cut`` (up to :data:`MAX_SEGMENT_S` of them), up to the
+        next frame where the pose jumped to another person: another person's are not the
+        movement's going on."""
+        stop = min(
+            [self.n, cut + int(MAX_SEGMENT_S * self.fps), *(j for j in self.jumps if j > cut)]
+        )
+        return self._sequence(cut, stop)
+
     def _held_beyond(self, cut: int, last: Repetition) -> bool:
         """Whether the frames pushed after ``cut`` (the end of a segment being finished: the
         stream runs on past it by the decoders' delay) begin in the hold of ``last``, the
@@ -933,7 +1039,7 @@ class LiveSegmenter:
         and :meth:`_held_on` say what the segment keeps."""
         if self.n - cut < 2 or not (last.held[1] or last.unreturned[1]):
             return False
-        beyond = self._sequence(cut, min(self.n, cut + int(MAX_SEGMENT_S * self.fps)))
+        beyond = self._beyond(cut)
         try:
             after = _counted(beyond, (False, self.ended)).repetitions
         except DataError:  # too short, or nobody in view
@@ -958,7 +1064,7 @@ class LiveSegmenter:
         end once it has ended)."""
         if self.n - cut < 2 or not last.held[1]:
             return False
-        beyond = self._sequence(cut, min(self.n, cut + int(MAX_SEGMENT_S * self.fps)))
+        beyond = self._beyond(cut)
         try:
             after = _counted(beyond, (False, self.ended))
         except DataError:  # too short, or nobody in view
@@ -967,13 +1073,13 @@ class LiveSegmenter:
 
     def _held_on(
         self,
-        clip: PoseSequence,
-        edges: tuple[bool, bool],
         first: int,
+        end: int,
+        edges: tuple[bool, bool],
         reps: tuple[Repetition, ...],
     ) -> tuple[tuple[Repetition, ...], bool, int]:
-        """A segment being finished, frames of ``clip`` (from ``first``, counted with
-        ``edges``: ``reps``), whose last far point is held on past its end and nothing has
+        """A segment being finished, frames [first, end) (counted with ``edges``: ``reps``,
+        :meth:`_count_apart`), whose last far point is held on past its end and nothing has
         come back in the frames pushed beyond (:meth:`_still_beyond`): as
         :func:`cbr.segmentation.counted_segments` counts a segment beside one with no far
         point, the cut is as a recording's end beyond which nothing turns, and one far point
@@ -983,8 +1089,7 @@ class LiveSegmenter:
         stream ending still in the hold, counts what this one would have). Returns the
         segment's repetitions, whether its last far point is left to the segment after, and
         how many that counts if the stream ends in the hold."""
-        found = _counted(clip, edges, settled=(False, True))
-        settled = tuple(_shifted(r, first) for r in found.repetitions)
+        settled = self._count_apart(first, end, edges, settled=(False, True))
         if self.ended:
             return settled, False, 0
         return reps, True, len(settled) - len(reps) + 1
@@ -1053,7 +1158,9 @@ class LiveSegmenter:
     def _short_stream(self) -> list[LiveSegment]:
         if self.offset or not self.n or self.n < MIN_WINDOW_S * self.fps:
             return []
-        found = segment(self.clf, self._sequence(0, self.n), self.judge)
+        jumps = {"frames": list(self.jumps)}  # counted apart, as segment reads a pose file's
+        found = segment(self.clf, self._sequence(0, self.n).with_metadata(person_jumps=jumps),
+                        self.judge)  # fmt: skip
         return [
             LiveSegment(s.start_frame, s.end_frame, s.label, s.confidence, len(s.repetitions),
                         s.explanation, s.novelty)

@@ -235,7 +235,8 @@ def test_watch_says_where_the_pose_jumps(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     """``watch`` of the video says where the pose went over to the other person, as
-    ``extract`` does (it counts on across the jump, and says so). Before, nothing."""
+    ``extract`` does, in its words (it counts apart on either side since hunt 38y:
+    tests/test_watch_jump.py). Before, nothing."""
     video = extracted[0].with_suffix(".avi")
     capsys.readouterr()
     assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 0
@@ -243,6 +244,6 @@ def test_watch_says_where_the_pose_jumps(
     notes = [line for line in err.splitlines() if "jumps to another person" in line]
     assert notes == [
         f"note: {video}: the pose jumps to another person at frame 125 (5.00 s: the hips moved"
-        " more than 1 torso length between two frames); watch counts on across it (extract,"
-        " then reps or segment, count apart)"
+        " more than 1 torso length between two frames); repetitions are counted apart on"
+        " either side"
     ]

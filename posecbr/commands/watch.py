@@ -463,7 +463,6 @@ class Watcher:
         self.colours: dict[str, Any] | None = None  # each activity's, once drawn
         self.n = 0
         self.started = time.perf_counter()
-        self._last_image: Any = None  # the image landmarks of the frame before (pose jumps)
 
     def warm_up(self) -> None:
         """Run the segmenter's work once on a made-up figure before the stream starts
@@ -516,10 +515,12 @@ class Watcher:
             )
 
     def _take(self, frame: Any) -> None:
-        self._note_jump(frame)
         taken = self._grid.take(frame)
-        for (world, visibility, shown_frame), absent in zip(taken, self._grid.absent, strict=True):
-            finished = self.live.push(world, visibility, absent)
+        grid = zip(taken, self._grid.absent, self._grid.images, strict=True)
+        for (world, visibility, shown_frame), absent, image in grid:
+            finished = self.live.push(world, visibility, absent, image)
+            if self.live.jumped:
+                self._note_jump()
             self.n += 1
             for segment in finished:
                 self._emit(segment)
@@ -527,23 +528,16 @@ class Watcher:
         if frame.read_at == frame.read_at:  # not NaN: the source said when it read the frame
             self.latency.append(time.perf_counter() - frame.read_at)
 
-    def _note_jump(self, frame: Any) -> None:
-        """Say on stderr where the pose jumps to another person from the frame before
-        (:func:`features.pose_estimation.video.person_jumps`: the person followed left the
-        picture while another was in view), as ``extract`` says it; ``watch`` counts on across
-        it."""
-        import numpy as np
+    def _note_jump(self) -> None:
+        """Say on stderr that the pose jumped to another person at the frame just pushed
+        (the segmenter saw it: :attr:`cbr.live.LiveSegmenter.jumped`, by
+        :func:`features.pose_estimation.video.person_jumps`: the person followed left the
+        picture while another was in view), as ``extract`` says it, frames counted as
+        ``extract`` counts them (on the grid of a variable frame rate's); repetitions are
+        counted apart on either side of it, as ``segment`` counts them."""
+        from features.pose_estimation.video import jump_words
 
-        from features.pose_estimation.video import jump_words, person_jumps
-
-        image = np.asarray(frame.pose.image)
-        before, self._last_image = self._last_image, image
-        if before is None or not person_jumps(np.stack([before, image]), self.fps or 30.0):
-            return
-        words = jump_words(
-            self.args.source, [frame.index], self.fps or 30.0,
-            "watch counts on across it (extract, then reps or segment, count apart)",
-        )  # fmt: skip
+        words = jump_words(self.args.source, [self.n], self.live.fps)
         print(f"note: {shown(words)}", file=sys.stderr)
 
     def _emit(self, segment: Any) -> None:
@@ -686,6 +680,7 @@ class Regrid:
         self.k = 0  # the next grid frame
         self.prev: Any = None  # the last frame taken
         self.absent: list[bool] = []  # of the grid times the last take gave: inside a gap
+        self.images: list[Any] = []  # and their image landmarks (the pose's jumps)
 
     def take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """(world, visibility, the frame on screen then) for each grid time up to this
@@ -697,11 +692,11 @@ class Regrid:
         from features.pose_estimation.video import blend, bridged_weight, gap_words, strays
 
         t = frame.video_time_s
-        self.absent = []
+        self.absent, self.images = [], []
         if not self.resampling:
             if not strays(t, frame.index, self.fps):
                 self.prev, self.k = frame, frame.index + 1
-                self.absent = [False]
+                self.absent, self.images = [False], [_image(frame)]
                 return [(frame.seen_world, frame.visibility, frame)]
             self.resampling = True
             print(
@@ -720,12 +715,24 @@ class Regrid:
             self.absent.append(bool(np.isnan(w)))
             world = blend(prev.seen_world, frame.seen_world, w)
             vis = blend(np.asarray(prev.visibility), np.asarray(frame.visibility), w)
+            image = _image(prev), _image(frame)
+            self.images.append(None if any(i is None for i in image) else blend(*image, w))
             out.append((world, vis, frame if w >= 1.0 - 1e-9 else prev))
             self.k += 1
         self.prev = frame
         if any(self.absent):
             print(f"note: {self.source}: {gap_words([(start, t)])}", file=sys.stderr)
         return out
+
+
+def _image(frame: Any) -> Any:
+    """A frame's image landmarks ``(33, 5)`` (px), or None when it has none (a made-up
+    frame)."""
+    import numpy as np
+
+    pose = getattr(frame, "pose", None)
+    image = getattr(pose, "image", None)
+    return None if image is None else np.asarray(image, dtype=float)
 
 
 def _frame_rate(frames: list[Any]) -> float | None:
