@@ -839,27 +839,44 @@ def count_in_segment(
 
 
 def _repetitions(
-    sig: MovementSignals,
+    sig: MovementSignals | _Apart,
     start: int,
     end: int,
     n_frames: int | None = None,
     settled: tuple[bool, bool] = (False, False),
 ) -> tuple[Repetition, ...]:
     """The repetitions within frames [start, end) of the recording whose signals are ``sig``
-    (counted on the recording's own smoothed signals: no edge effects at the cut). Given the
+    (counted on the recording's own smoothed signals: no edge effects at the cut; each side
+    of a jump of the pose to another person on its own side's, :class:`_Apart`). Given the
     recording's ``n_frames``, a segment at its start or end has no repetition there that is
     only part of one when none of its repetitions is whole (the way down of a squat as the
     recording ends: :func:`features.repetitions.count_in_signals`); one at a cut is left to
     :func:`keep_whole`. ``settled``: whether the segment's start, and its end, are cuts at
     which no movement turns (:func:`counted_segments`)."""
+    if isinstance(sig, _Apart):
+        return sig.repetitions(start, end, n_frames, settled)
     last = n_frames is not None and end >= n_frames
+    edges = (start == 0 and n_frames is not None, last)
+    return _repetitions_in(sig, start, end, last, edges, settled)
+
+
+def _repetitions_in(
+    sig: MovementSignals,
+    start: int,
+    end: int,
+    to_end: bool,
+    edges: tuple[bool, bool],
+    settled: tuple[bool, bool],
+) -> tuple[Repetition, ...]:
+    """:func:`_repetitions` of frames [start, end) of the frames ``sig`` are the signals of,
+    read to their last sample when ``to_end``; ``edges``: whether the start, and the end,
+    are the recording's."""
     a, b = start // sig.step, max(start // sig.step + 1, end // sig.step)
-    if last:  # to the recording's last sample, as reps reads it (a far point there counts)
+    if to_end:  # to the recording's last sample, as reps reads it (a far point there counts)
         b = max(b, len(sig.values))
     if (b - a) / sig.fps < MIN_PERIOD_S:
         return ()
     part = sig.part(a, b)
-    edges = (start == 0 and n_frames is not None, last)
     found = count_in_segment(
         part, min((b - a) * sig.step, end - a * sig.step), sig.fps * sig.step, edges, settled
     ).repetitions
@@ -875,6 +892,55 @@ def _repetitions(
         )
         for r in found
     )
+
+
+@dataclass(frozen=True)
+class _Apart:
+    """The movement signals of a recording computed apart on either side of each frame
+    where the pose jumped to another person (:func:`counted_apart`): ``cuts``, 0, the jumps
+    and the recording's frame count; ``sides``, the signals of the frames between each two
+    (None: too short for a repetition, or nobody in view); ``step``, the recording's frames
+    per sample. The running median and smoothing of one person's angles do not read the
+    other's, as they read nothing beyond a recording's ends."""
+
+    cuts: tuple[int, ...]
+    sides: tuple[MovementSignals | None, ...]
+    step: int
+
+    def repetitions(
+        self, start: int, end: int, n_frames: int | None, settled: tuple[bool, bool]
+    ) -> tuple[Repetition, ...]:
+        """:func:`_repetitions` of frames [start, end), each side's frames on its own side's
+        signals (a jump is a cut, not the recording's start or end)."""
+        out: tuple[Repetition, ...] = ()
+        for p, q, side in zip(self.cuts[:-1], self.cuts[1:], self.sides, strict=True):
+            a, b = max(start, p), min(end, q)
+            if a >= b or side is None:
+                continue
+            edges = (a == 0 and n_frames is not None, n_frames is not None and b >= n_frames)
+            still = (settled[0] and a == start, settled[1] and b == end)
+            found = _repetitions_in(side, a - p, b - p, b >= q, edges, still)
+            out += tuple(_shifted(r, p) for r in found)
+        return out
+
+
+def _shifted(r: Repetition, by: int) -> Repetition:
+    return Repetition(
+        r.start_frame + by, r.end_frame + by, r.peak_frame + by, r.side, r.held, r.unreturned
+    )
+
+
+def _side_signals(rec: PoseSequence, start: int, end: int) -> MovementSignals | None:
+    """The movement signals of frames [start, end) of ``rec`` alone, as of a recording of
+    their own (None: too short for a repetition, or nobody in view)."""
+    piece = rec.slice_frames(start, end)
+    if piece.duration_s < MIN_PERIOD_S:
+        return None
+    chunk = long_clip.chunk_for(piece, None)
+    try:
+        return long_clip.movement_signals(piece, chunk) if chunk else movement_signals_of(piece)
+    except DataError:  # nobody in view
+        return None
 
 
 def at_cut(reps: Sequence[Repetition], start: int, end: int, tolerance: int) -> tuple[bool, bool]:
@@ -926,31 +992,43 @@ def counted_apart(
     n_frames: int,
     unseen: Sequence[bool],
     jumps: Sequence[int],
+    rec: PoseSequence,
 ) -> list[tuple[Repetition, ...]]:
     """:func:`counted_segments` with every segment also cut at the frames ``jumps`` (where
     the pose jumped to another person, :func:`features.repetitions.person_jumps`), as at a
     change of segment, and each segment's pieces' repetitions joined back into it: the jump
     from one person's posture to the other's is no movement, as ``reps`` counts it. Before, a
-    repetition ran on across the jump (a jumping jack of one person ending in another's)."""
+    repetition ran on across the jump (a jumping jack of one person ending in another's).
+
+    ``sig``: the movement signals of the recording ``rec`` (of ``n_frames``), read where it
+    has no jump; with one, each side's are computed from its own frames of ``rec``
+    (:class:`_Apart`), as ``watch`` counts each (:meth:`cbr.live.LiveSegmenter._count_apart`).
+    Before, they were the whole recording's, whose running median and smoothing read across
+    the jump and mixed the two people's postures: the jumping jacks cut with the first
+    person's arms still rising and taken on with the second's coming down counted one more
+    in ``segment`` than in ``watch``, ``reps`` and by hand."""
+    cuts = [0, *sorted({j for j in jumps if 0 < j < n_frames}), n_frames]
+    if len(cuts) == 2:
+        return counted_segments(sig, bounds, n_frames, unseen)
+    sides = tuple(_side_signals(rec, p, q) for p, q in zip(cuts[:-1], cuts[1:], strict=True))
+    apart = _Apart(tuple(cuts), sides, sig.step)
     pieces: list[tuple[int, int]] = []
     owner: list[int] = []
     blind: list[bool] = []
     for k, ((a, b), u) in enumerate(zip(bounds, unseen, strict=True)):
-        cuts = [a, *sorted({j for j in jumps if a < j < b}), b]
-        for x, y in zip(cuts[:-1], cuts[1:], strict=True):
+        inside = [a, *(j for j in cuts[1:-1] if a < j < b), b]
+        for x, y in zip(inside[:-1], inside[1:], strict=True):
             pieces.append((x, y))
             owner.append(k)
             blind.append(u)
-    if len(pieces) == len(bounds):
-        return counted_segments(sig, bounds, n_frames, unseen)
     out: list[tuple[Repetition, ...]] = [() for _ in bounds]
-    for k, found in zip(owner, counted_segments(sig, pieces, n_frames, blind), strict=True):
+    for k, found in zip(owner, counted_segments(apart, pieces, n_frames, blind), strict=True):
         out[k] += found
     return out
 
 
 def counted_segments(
-    sig: MovementSignals,
+    sig: MovementSignals | _Apart,
     bounds: Sequence[tuple[int, int]],
     n_frames: int,
     unseen: Sequence[bool] = (),
@@ -1025,7 +1103,7 @@ def _held_across(
     before: Sequence[Repetition],
     after: Sequence[Repetition],
     second: tuple[int, int],
-    sig: MovementSignals,
+    sig: MovementSignals | _Apart,
 ) -> bool:
     """Whether the last of ``before`` (the repetitions of one segment) and the first of
     ``after`` (of the next segment that has any, frames ``second``; those between found no
@@ -1289,9 +1367,8 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     path[nobody_blocks(rec, len(path))] = n_classes + 1
     runs = _runs(_nobody_absorbs_slivers(path, n_classes))
     bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]
-    reps = counted_apart(
-        done.sig, bounds, rec.n_frames, [s > n_classes for *_, s in runs], person_jumps(rec)
-    )
+    unseen = [s > n_classes for *_, s in runs]
+    reps = counted_apart(done.sig, bounds, rec.n_frames, unseen, person_jumps(rec), rec)
     pieces = _LastPiece()
     segments = tuple(
         _nobody_segment(rec, a, b)

@@ -185,12 +185,62 @@ def test_segment_counts_a_segment_apart_on_either_side_of_a_jump(jacks: tuple[Pa
     seq = load_pose(pose).to_canonical()
     sig = movement_signals(seq)
     n = seq.n_frames
-    reps = counted_apart(sig, [(0, n)], n, [False], [150])[0]
+    reps = counted_apart(sig, [(0, n)], n, [False], [150], seq)[0]
     _as_by_hand([(r.start_frame, r.end_frame, r.peak_frame) for r in reps], fps)
     # without a jump it is counted_segments' count, unchanged
-    assert counted_apart(sig, [(0, 100), (100, n)], n, [False, False], []) == counted_segments(
+    assert counted_apart(sig, [(0, 100), (100, n)], n, [False, False], [], seq) == counted_segments(
         sig, [(0, 100), (100, n)], n
     )
+
+
+@pytest.mark.parametrize(("cut", "on"), [(126, 155), (130, 155), (132, 161), (134, 158)])
+def test_segment_and_reps_count_jacks_cut_between_two_far_points_as_by_hand(
+    jacks: tuple[Path, float],
+    case_base: Path,  # noqa: F811
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    cut: int,
+    on: int,
+) -> None:
+    """:func:`jacks` cut at frame ``cut`` (126-134: the left person's arms still rising to
+    their fifth far point, at 4.5 s, frame 135) and taken on at ``on`` (155-161: the right
+    one's coming down from theirs, 5.5 s of the clip, 0.47 s earlier here: frame 151), the
+    jump recorded at the cut. By the hand count's rule (a repetition cut off counts when its
+    far point is in the clip) 4 + 5 = 9: arms up at 0.9, 1.8, 2.7 and 3.6 s, then at 6.45,
+    7.4, 8.35, 9.3 and 10.2 s of the clip, 0.47 s and the frames cut out earlier. ``segment``
+    counts 9, as ``reps`` and ``watch`` (tests/test_watch_jump.py) do, none across the jump.
+    Before, ``segment`` counted 10: its signals were smoothed across the jump, and the two
+    people's arms read as one more far point just after it (frames 128-132)."""
+    from features.poses import PoseSequence, save_pose
+
+    pose, fps = jacks
+    whole = load_pose(pose)
+    keep = np.r_[0:cut, on : whole.n_frames]
+    assert whole.confidence is not None
+    seq = PoseSequence(
+        whole.positions[keep],
+        whole.joint_names,
+        whole.fps,
+        confidence=whole.confidence[keep],
+        metadata={"person_jumps": {"frames": [cut]}},
+    )
+    path = save_pose(seq, tmp_path / f"cut{cut}_{on}.npz")
+    gone = (on - cut) / fps
+    # the left one's first four, the right one's last five (JACKS_BY_HAND: already 0.47 s
+    # earlier), less the frames cut out
+    by_hand = np.array(JACKS_BY_HAND[:4] + [t - gone for t in JACKS_BY_HAND[6:]])
+    capsys.readouterr()
+    assert main(["segment", str(path), "--db", str(case_base), "--json"]) == 0
+    segments = json.loads(capsys.readouterr().out)["segments"]
+    assert [s["label"] for s in segments] == ["JumpJack"]
+    assert sum(s["count"] for s in segments) == 9
+    for a, b in segments[0]["repetition_frames"]:
+        assert b <= cut or a >= cut, (a, b)
+    assert main(["reps", str(path), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["count"] == 9
+    far = np.array([r["peak_frame"] for r in doc["repetitions"]]) / fps
+    assert np.abs(far - by_hand).max() < 0.2, (far, by_hand)
 
 
 def test_jumps_are_read_in_a_piece_of_the_recording_by_its_own_frames() -> None:
