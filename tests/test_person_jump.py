@@ -193,7 +193,10 @@ def test_segment_counts_a_segment_apart_on_either_side_of_a_jump(jacks: tuple[Pa
     )
 
 
-@pytest.mark.parametrize(("cut", "on"), [(126, 155), (130, 155), (132, 161), (134, 158)])
+@pytest.mark.parametrize(
+    ("cut", "on", "by_hand"),
+    [(126, 155, 9), (130, 155, 9), (132, 161, 9), (134, 158, 9), (140, 172, 10)],
+)
 def test_segment_and_reps_count_jacks_cut_between_two_far_points_as_by_hand(
     jacks: tuple[Path, float],
     case_base: Path,  # noqa: F811
@@ -201,6 +204,7 @@ def test_segment_and_reps_count_jacks_cut_between_two_far_points_as_by_hand(
     capsys: pytest.CaptureFixture[str],
     cut: int,
     on: int,
+    by_hand: int,
 ) -> None:
     """:func:`jacks` cut at frame ``cut`` (126-134: the left person's arms still rising to
     their fifth far point, at 4.5 s, frame 135) and taken on at ``on`` (155-161: the right
@@ -210,7 +214,9 @@ def test_segment_and_reps_count_jacks_cut_between_two_far_points_as_by_hand(
     7.4, 8.35, 9.3 and 10.2 s of the clip, 0.47 s and the frames cut out earlier. ``segment``
     counts 9, as ``reps`` and ``watch`` (tests/test_watch_jump.py) do, none across the jump.
     Before, ``segment`` counted 10: its signals were smoothed across the jump, and the two
-    people's arms read as one more far point just after it (frames 128-132)."""
+    people's arms read as one more far point just after it (frames 128-132). Cut at 140,
+    after the left one's fifth, and taken on at 172, before the right one's second (frame
+    179): 5 + 5 = 10, where ``segment`` counted 9 before."""
     from features.poses import PoseSequence, save_pose
 
     pose, fps = jacks
@@ -226,21 +232,23 @@ def test_segment_and_reps_count_jacks_cut_between_two_far_points_as_by_hand(
     )
     path = save_pose(seq, tmp_path / f"cut{cut}_{on}.npz")
     gone = (on - cut) / fps
-    # the left one's first four, the right one's last five (JACKS_BY_HAND: already 0.47 s
-    # earlier), less the frames cut out
-    by_hand = np.array(JACKS_BY_HAND[:4] + [t - gone for t in JACKS_BY_HAND[6:]])
+    # the left one's far points before the cut, the right one's from where it is taken on
+    # (JACKS_BY_HAND: already 0.47 s earlier), less the frames cut out
+    kept = [t for t in JACKS_BY_HAND[:5] if t < cut / fps]
+    kept += [t - gone for t in JACKS_BY_HAND[5:] if t >= on / fps]
+    assert len(kept) == by_hand
     capsys.readouterr()
     assert main(["segment", str(path), "--db", str(case_base), "--json"]) == 0
     segments = json.loads(capsys.readouterr().out)["segments"]
     assert [s["label"] for s in segments] == ["JumpJack"]
-    assert sum(s["count"] for s in segments) == 9
+    assert sum(s["count"] for s in segments) == by_hand
     for a, b in segments[0]["repetition_frames"]:
         assert b <= cut or a >= cut, (a, b)
     assert main(["reps", str(path), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert doc["count"] == 9
+    assert doc["count"] == by_hand
     far = np.array([r["peak_frame"] for r in doc["repetitions"]]) / fps
-    assert np.abs(far - by_hand).max() < 0.2, (far, by_hand)
+    assert np.abs(far - kept).max() < 0.2, (far, kept)
 
 
 def test_jumps_are_read_in_a_piece_of_the_recording_by_its_own_frames() -> None:
