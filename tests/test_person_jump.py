@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 import pytest
 
-from features.poses import load_pose
+from features.poses import PoseSequence, load_pose
 from posecbr.cli import main
 from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
@@ -193,6 +193,22 @@ def test_segment_counts_a_segment_apart_on_either_side_of_a_jump(jacks: tuple[Pa
     )
 
 
+def jacks_cut(pose: Path, cut: int, on: int) -> tuple[PoseSequence, np.ndarray]:
+    """The jumping jacks pose file ``pose`` with frames [cut, on) cut out, the jump recorded
+    at ``cut`` as extract records one, and the kept frames' indices."""
+    whole = load_pose(pose)
+    keep = np.r_[0:cut, on : whole.n_frames]
+    assert whole.confidence is not None
+    seq = PoseSequence(
+        whole.positions[keep],
+        whole.joint_names,
+        whole.fps,
+        confidence=whole.confidence[keep],
+        metadata={"person_jumps": {"frames": [cut]}},
+    )
+    return seq, keep
+
+
 @pytest.mark.parametrize(
     ("cut", "on", "by_hand"),
     [(126, 155, 9), (130, 155, 9), (132, 161, 9), (134, 158, 9), (140, 172, 10)],
@@ -217,19 +233,10 @@ def test_segment_and_reps_count_jacks_cut_between_two_far_points_as_by_hand(
     people's arms read as one more far point just after it (frames 128-132). Cut at 140,
     after the left one's fifth, and taken on at 172, before the right one's second (frame
     179): 5 + 5 = 10, where ``segment`` counted 9 before."""
-    from features.poses import PoseSequence, save_pose
+    from features.poses import save_pose
 
     pose, fps = jacks
-    whole = load_pose(pose)
-    keep = np.r_[0:cut, on : whole.n_frames]
-    assert whole.confidence is not None
-    seq = PoseSequence(
-        whole.positions[keep],
-        whole.joint_names,
-        whole.fps,
-        confidence=whole.confidence[keep],
-        metadata={"person_jumps": {"frames": [cut]}},
-    )
+    seq, _ = jacks_cut(pose, cut, on)
     path = save_pose(seq, tmp_path / f"cut{cut}_{on}.npz")
     gone = (on - cut) / fps
     # the left one's far points before the cut, the right one's from where it is taken on

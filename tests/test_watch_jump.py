@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 
 from features.errors import InputError
-from features.poses import PoseSequence, load_pose, load_pose_arrays, save_pose
+from features.poses import PoseSequence, load_pose_arrays, save_pose
 from posecbr.cli import main
-from tests.test_person_jump import _landmarks, jacks  # noqa: F401 (a fixture)
+from tests.test_person_jump import _landmarks, jacks, jacks_cut  # noqa: F401 (a fixture)
 from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
 
@@ -120,18 +120,9 @@ def test_watch_counts_apart_at_a_jump_as_segment_and_by_hand(
     10: the left one's arms rising and the right one's falling were one repetition across the
     jump. Uncut (the jump at 150), 11 by hand, 11 in both."""
     pose, _fps = jacks
-    whole = load_pose(pose)
     image = load_pose_arrays(pose)["image_landmarks"]
     for cut, on, by_hand in [(130, 158, 9), (150, 150, 11)]:
-        keep = np.r_[0:cut, on : whole.n_frames]
-        assert whole.confidence is not None
-        seq = PoseSequence(
-            whole.positions[keep],
-            whole.joint_names,
-            whole.fps,
-            confidence=whole.confidence[keep],
-            metadata={"person_jumps": {"frames": [cut]}},
-        )
+        seq, keep = jacks_cut(pose, cut, on)
         live = _streamed(clf, seq, image[keep])
         offline = _segmented(save_pose(seq, tmp_path / f"cut{cut}.npz"), case_base)
         assert sum(s.repetitions for s in live) == by_hand, (cut, live)
