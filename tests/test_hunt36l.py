@@ -31,17 +31,27 @@ class _Changing(_Scripted):
         return np.eye(2)[sum(centre >= c for c in self.changes) % 2], 0.0
 
 
+def _live_segments(
+    frames: np.ndarray, fps: float, changes: tuple[int, ...] = (), seen: np.ndarray | None = None
+) -> list:
+    """The segments ``watch``'s live segmenter gives ``frames`` pushed one by one (with their
+    joints' confidence ``seen``, as ``watch`` pushes a video's), one label ("a") throughout
+    but for changes at ``changes``, the stream ending with the last frame."""
+    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
+    live = _Changing(clf, fps, judge=SimpleNamespace())
+    live.changes = changes
+    out = []
+    for i, frame in enumerate(frames):
+        out += live.push(frame) if seen is None else live.push(frame, seen[i])
+    out += live.finish()
+    return out
+
+
 def _watched(seq: PoseSequence, changes: tuple[int, ...], pad_s: float = PAD_S) -> list:
     """(start_frame, end_frame, repetitions) of each segment ``watch`` gives ``seq`` (its last
     frame held ``pad_s`` more), the label changing at ``changes``."""
-    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
-    live = _Changing(clf, seq.fps, judge=SimpleNamespace())
-    live.changes = changes
     frames = np.concatenate([seq.positions, np.repeat(seq.positions[-1:], int(pad_s * seq.fps), 0)])
-    out = []
-    for frame in frames:
-        out += live.push(frame)
-    out += live.finish()
+    out = _live_segments(frames, seq.fps, changes)
     return [(s.start_frame, s.end_frame, s.repetitions) for s in out]
 
 

@@ -4,8 +4,6 @@ change of label, and a squat the person is lost from view in before coming up.""
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 
@@ -16,7 +14,7 @@ from features.repetitions import count_repetitions
 from tests.bodies import squat_pose, to_sequence
 from tests.moves import clip
 from tests.test_hunt36j import MOVE_S, REST_S, _counts, _eased
-from tests.test_hunt36l import LABELS, _Changing, _watched
+from tests.test_hunt36l import _live_segments, _watched
 from tests.test_repetitions import FPS
 from tests.test_segment import _fit, _NeverUnknown
 
@@ -112,11 +110,6 @@ def test_watch_keeps_a_squat_lost_from_view_at_the_bottom(hold_s: float) -> None
     nobody in view 0, standing again 0. Before: 0 at 0 and 0.3 s (left to the segment with
     nobody in view)."""
     seq, lost = _lost_in_a_squat(hold_s)
-    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
-    live = _Changing(clf, seq.fps, judge=SimpleNamespace())
-    out = []
-    for frame in seq.positions:
-        out += live.push(frame)
-    out += live.finish()
+    out = _live_segments(seq.positions, seq.fps)
     got = [(s.start_frame, s.label, s.repetitions) for s in out]
     assert got == [(0, "a", 1), (lost, None, 0), (lost + int(1.5 * FPS), "a", 0)]

@@ -5,8 +5,6 @@ change); a stream that ends with nobody in view, or just after the person is see
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 
@@ -17,7 +15,7 @@ from features.repetitions import count_repetitions
 from tests.bodies import squat_pose, to_sequence
 from tests.moves import clip
 from tests.test_hunt36j import MOVE_S, REST_S, _counts, _eased
-from tests.test_hunt36l import LABELS, _Changing, _watched
+from tests.test_hunt36l import _live_segments, _watched
 from tests.test_repetitions import FPS
 from tests.test_segment import _fit, _NeverUnknown
 
@@ -118,12 +116,7 @@ def _lost_to_the_end(squats: int, down: bool, blind_s: float, after_s: float) ->
 def _streamed(seq: PoseSequence) -> list[tuple[int, int, str | None, int]]:
     """(start_frame, end_frame, label, repetitions) of each segment ``watch`` gives ``seq``,
     one label throughout ("a"), the stream ending with its last frame."""
-    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
-    live = _Changing(clf, seq.fps, judge=SimpleNamespace())
-    out = []
-    for frame in seq.positions:
-        out += live.push(frame)
-    out += live.finish()
+    out = _live_segments(seq.positions, seq.fps)
     return [(s.start_frame, s.end_frame, s.label, s.repetitions) for s in out]
 
 

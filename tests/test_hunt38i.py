@@ -5,14 +5,13 @@ bundled side-lying leg raises cut where ``segment`` cuts them count 2 in ``watch
 from __future__ import annotations
 
 from pathlib import Path
-from types import SimpleNamespace
 
 import pytest
 
 from features.poses import PoseSequence
 from features.repetitions import count_repetitions
 from tests.test_hunt36i import _hand, _segment_counts, _video
-from tests.test_hunt36l import LABELS, _Changing
+from tests.test_hunt36l import _live_segments
 from tests.test_hunt38b import _squats_then_held
 from tests.test_repetitions import FPS
 
@@ -24,14 +23,8 @@ def _streamed(seq: PoseSequence, change: int) -> list[tuple[int, int, int]]:
     """(start_frame, end_frame, repetitions) of each segment ``watch`` gives ``seq``, pushed
     frame by frame with its joints' confidence as ``watch`` pushes a video's, the label
     changing at frame ``change``."""
-    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
-    live = _Changing(clf, seq.fps, judge=SimpleNamespace())
-    live.changes = (change,)
     assert seq.confidence is not None
-    out = []
-    for frame, seen in zip(seq.positions, seq.confidence, strict=True):
-        out += live.push(frame, seen)
-    out += live.finish()
+    out = _live_segments(seq.positions, seq.fps, (change,), seq.confidence)
     return [(s.start_frame, s.end_frame, s.repetitions) for s in out]
 
 
