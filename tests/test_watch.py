@@ -671,10 +671,7 @@ def test_watch_and_segment_agree_on_a_variable_frame_rate_video(
     """The reverse lunge of the test above re-timed at irregular intervals (gaps of 30, 50,
     40, 60 and 20 ms, 40 on average: the 25 fps it declares): both resample it to 25 fps
     (``watch`` as the frames come), so both give the same segments and repetitions; each
-    says once that it resampled. Both had timed the frames as evenly spaced, silently. (PyAV's
-    x264 does not give the same bits each run, so the labels may vary from run to run; the
-    agreement must hold whatever they are: it failed once in CI while extraction still blended
-    the frames before the first off-grid one.)"""
+    says once that it resampled. Both had timed the frames as evenly spaced, silently."""
     pytest.importorskip("av", reason="PyAV writes the variable-frame-rate video")
     video, _ = _lunge_h264(shared_data, tmp_path / "lunge_vfr.mkv", (30, 50, 40, 60, 20))
     capsys.readouterr()
@@ -786,9 +783,11 @@ def test_a_served_mp4_that_gives_no_frame_says_why(
 def _lunge_h264(
     shared_data: Path, video: Path, gaps_ms: tuple[int, ...], container: str | None = None
 ) -> tuple[Path, int]:
-    """The reverse lunge video at a quarter of its size, written as H.264 by PyAV with its
-    frames ``gaps_ms`` apart in turn (1-ms time base; 25 fps declared), in ``container``
-    (None: by the file name); and its number of frames."""
+    """The reverse lunge video at a quarter of its size, written as lossless H.264 by PyAV
+    with its frames ``gaps_ms`` apart in turn (1-ms time base; 25 fps declared), in
+    ``container`` (None: by the file name); and its number of frames. Lossless (``qp`` 0)
+    so that every run decodes to the same pixels: lossy x264 did not, and the poses, labels
+    and counts varied from run to run."""
     from fractions import Fraction
 
     import av
@@ -799,6 +798,7 @@ def _lunge_h264(
     )
     out = av.open(str(video), "w", format=container)
     stream = out.add_stream("libx264", rate=25)
+    stream.codec_context.options = {"qp": "0"}
     tb = Fraction(1, 1000)
     stream.time_base = stream.codec_context.time_base = tb
     t, k = 0, 0
