@@ -111,7 +111,9 @@ def person_jumps(image_lm: np.ndarray, fps: float) -> list[int]:
     nor a cut between two people in one spot. Body proportions from the world landmarks do
     not tell people apart (hunt 39g, the bundled videos: bone-length ratios averaged over
     0.5 s differ between people by less, at the 10th percentile, than within one person at
-    the 99th; BlazePose fits much the same body to everyone)."""
+    the 99th; BlazePose fits much the same body to everyone). Nor does clothing colour
+    (hunt 39i: median Lab colour of torso and thigh patches over 0.5 s varies up to 21 within
+    one person, as lighting and pose change, and three people wear black)."""
     xy = np.asarray(image_lm, dtype=float)[:, :, :2]
     if len(xy) < 2:
         return []
