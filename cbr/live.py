@@ -42,6 +42,7 @@ from features.skeleton import BLAZEPOSE_33
 from features.values import is_number
 
 from .problem import warm
+from .reuse import vote as share_votes
 from .segmentation import (
     DEFAULT_WINDOW_S,
     MAX_WINDOW_S,
@@ -54,6 +55,7 @@ from .segmentation import (
     activity_distances,
     at_cut,
     check_judge,
+    check_k,
     count_in_segment,
     keep_whole,
     least_movement,
@@ -247,7 +249,10 @@ class LiveSegmenter:
     (:mod:`cbr.unknown`; the margin between the two nearest activities times how far the
     window lies in the nearest one's own spread, against that activity's own threshold,
     ``spread-margin``, calibrated on the case base, when None); ``source``: the stream's name
-    in errors (a camera, a URL, a file).
+    in errors (a camera, a URL, a file); ``k``: a window votes with its k nearest cases,
+    weighted by distance (1, the default: its nearest), as ``segment -k`` votes offline
+    (:func:`cbr.segmentation.segment`'s ``k``: from 1 to the classifier's own k, else
+    ConfigError); the judge of unknown reads each activity's nearest case whatever ``k``.
 
     As offline, in two passes, each an online Viterbi (:class:`_Forward`: a hop is settled
     when the best paths into every state agree on it, so the settled hops are those the
@@ -276,13 +281,21 @@ class LiveSegmenter:
     """
 
     def __init__(
-        self, clf: Any, fps: float, judge: Judge | None = None, source: str = "stream"
+        self,
+        clf: Any,
+        fps: float,
+        judge: Judge | None = None,
+        source: str = "stream",
+        k: int = 1,
     ) -> None:
         if getattr(clf, "case_base_", None) is None:
             raise NotFittedError(
                 f"This {type(clf).__name__} instance is not fitted yet: fit it (or load a "
                 "stored one) before streaming to it"
             )
+        if not (type(k) is int and k == 1):  # 1, the default, any classifier retrieves
+            check_k(clf, k)
+        self.k = int(k)
         if not (is_number(fps) and math.isfinite(fps) and fps > 0):
             raise InputError(f"the stream needs a frame rate > 0, got {fps!r}", source)
         if not MIN_FPS <= fps <= MAX_FPS:  # as a pose file's: every frame would be refused
@@ -823,9 +836,13 @@ class LiveSegmenter:
         the judge of the person as the windows so far show them:
         :func:`cbr.unknown.for_person`); kept to explain the segment it lies in
         (:meth:`_explain`)."""
-        vote = np.zeros(self.unknown)
-        activity = self.classes.index(str(solved.retrieval.labels[0]))
-        vote[activity] = 1.0
+        # its k nearest cases' votes, weighted by distance, as offline
+        # (cbr.segmentation._nearest_votes); k = 1: its nearest case's activity alone
+        nearest_k = np.asarray(solved.retrieval.indices[: self.k])
+        distances = np.asarray(solved.retrieval.distances[: self.k], dtype=float)
+        vote = share_votes(distances[None], self.codes[nearest_k][None], self.unknown, "distance")
+        vote = np.asarray(vote[0], dtype=float)
+        activity = int(np.argmax(vote))
         nearest = activity_distances(self.clf, solved, self.codes)
         if np.isfinite(np.min(nearest)):
             self.near.append(float(np.min(nearest)))
@@ -1187,14 +1204,14 @@ def _counted(
     return count_in_segment(movement_signals(clip), clip.n_frames, clip.fps, edges, settled)
 
 
-def warm_up(clf: Any, judge: Judge | None = None, fps: float = 30.0) -> None:
+def warm_up(clf: Any, judge: Judge | None = None, fps: float = 30.0, k: int = 1) -> None:
     """Stream a made-up figure moving to and fro through a segmenter of ``clf`` that is then
     dropped: a stream's first decisions (solving and judging a window, finding its periods,
     counting repetitions) load compiled kernels, about 0.4 s, which would otherwise hold up
     the first frames of the real stream and those queued behind them."""
     rng = np.random.default_rng(0)
     figure, sway = rng.normal(size=(2, len(BLAZEPOSE_33), 3))
-    seg = LiveSegmenter(clf, fps, judge)
+    seg = LiveSegmenter(clf, fps, judge, k=k)
     t = np.arange(seg.window + seg.span) / fps
     for phase in np.sin(2.0 * np.pi * t / 2.0):  # one repetition every 2 s
         seg.push(figure + 0.1 * phase * sway)

@@ -82,6 +82,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument("--max-frames", type=int, help="stop after this many frames")
     p.add_argument(
+        "-k",
+        "--k",
+        type=int,
+        default=1,
+        help="each window votes with its k nearest cases, as in posecbr segment (default 1; at"
+        " most the case base's k, which `posecbr casebase info` shows)",
+    )
+    p.add_argument(
         "--unknown",
         choices=JUDGES,
         default=JUDGES[0],
@@ -123,6 +131,8 @@ def _check(args: argparse.Namespace) -> None:
             f"must be > 0 seconds and at most {MAX_STALL_S:g} (a day), got {args.stall:g}",
             "--stall",
         )
+    if args.k < 1:  # as segment refuses it, before the case base is read
+        raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     if args.max_frames is not None and args.max_frames < 1:
         raise ConfigError(f"must be >= 1, got {args.max_frames}", "--max-frames")
     if args.out is not None:
@@ -370,6 +380,7 @@ def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[threading
 
 
 def run(args: argparse.Namespace) -> int:
+    from cbr.segmentation import check_k
     from features.pose_estimation import (
         PoseEstimator,
         open_video,
@@ -382,6 +393,7 @@ def run(args: argparse.Namespace) -> int:
 
     _check(args)
     clf = load_stored(args.db, args.name)
+    check_k(clf, args.k)  # before the pose model is loaded or the stream opened
     judge = judge_named(clf, args.unknown, args.db)
     source: Any = int(args.source) if args.source.isdigit() else args.source
     if _is_file(args.source):
@@ -472,7 +484,7 @@ class Watcher:
         from cbr.live import warm_up
 
         try:
-            warm_up(self.clf, self.judge)
+            warm_up(self.clf, self.judge, k=self.args.k)
         except DataError:  # a figure this case base cannot describe: the stream warms it
             pass
         self.started = time.perf_counter()  # frames per second: of the stream alone
@@ -499,7 +511,9 @@ class Watcher:
                     self.fps = _frame_rate(waiting)
                     if self.fps is None:
                         continue
-                self.live = LiveSegmenter(self.clf, self.fps, self.judge, self.args.source)
+                self.live = LiveSegmenter(
+                    self.clf, self.fps, self.judge, self.args.source, k=self.args.k
+                )
                 self._grid = Regrid(self.fps, self.args.source)
                 for early in waiting[:-1]:
                     self._take(early)

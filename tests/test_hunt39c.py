@@ -1,0 +1,116 @@
+"""Hunt 39c: the command line. ``watch -k`` (the neighbours a window votes with, as
+``segment -k``); ``segment --truth`` that swallowed the recordings after it; an internal error
+said as a bug with its own exit status; options named alike across the commands."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import features.pose_estimation as pose_estimation
+from features.pose_estimation import StreamFrame
+from features.pose_estimation.tracker import FramePose
+from features.poses import save_pose
+from features.readers.asfamc import read_asf_amc
+from posecbr.cli import main
+from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
+
+FPS = 30.0
+
+
+def _13_30(shared_data: Path) -> Any:
+    """CMU 13_30 (another take of the exercises the case base holds), every 4th frame of its
+    120 fps: 30 fps, as a camera would deliver it."""
+    seq = read_asf_amc(
+        shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
+        shared_data / "cmu-mocap6" / "amc" / "13_30.amc",
+    )
+    return dataclasses.replace(seq, positions=seq.positions[::4], fps=FPS, confidence=None)
+
+
+def _camera(world: np.ndarray) -> Any:
+    """A stand-in for ``stream_poses``: the frames ``world`` as a camera delivers them."""
+
+    def stream(source: Any, **kwargs: Any) -> Iterator[StreamFrame]:
+        for i, joints in enumerate(world):
+            image = np.full((33, 5), np.nan)
+            image[:, 3] = 1.0  # every joint seen (mocap)
+            pose = FramePose(image, joints, True, False, 1.0, None)
+            rgb = np.zeros((48, 64, 3), dtype=np.uint8)
+            yield StreamFrame(i, i / FPS, pose, rgb, time.perf_counter())
+
+    return stream
+
+
+def _no_stream(source: Any, **kwargs: Any) -> Iterator[StreamFrame]:
+    raise AssertionError("the stream was opened: the option was not refused before")
+
+
+def test_watch_k_votes_as_segment_k_does(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``watch -k 5`` lets a window's 5 nearest cases vote (weighted by distance), as
+    ``segment -k 5`` does: the same activities, in the same order, as ``segment`` finds in
+    the same poses with the same k; and k is heard (the first segment, jumping jacks, is less
+    sure with 5 voters than with its nearest case alone, in both). ``watch`` had no -k:
+    "unrecognized arguments"."""
+    seq = _13_30(shared_data)
+    pose = save_pose(seq, tmp_path / "13_30.npz")
+    monkeypatch.setattr(pose_estimation, "stream_poses", _camera(seq.positions))
+    found: dict[tuple[str, int], list[dict[str, Any]]] = {}
+    capsys.readouterr()
+    for k in (1, 5):
+        assert main(["segment", str(pose), "--db", str(case_base), "-k", str(k), "--json"]) == 0
+        found["segment", k] = json.loads(capsys.readouterr().out)["segments"]
+        argv = ["watch", "0", "--db", str(case_base), "-k", str(k), "--max-frames", "617"]
+        assert main(argv) == 0, capsys.readouterr().err
+        found["watch", k] = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    # the exercises of 13_30 in its order (its label file: jumping jacks, twists, knee
+    # raises, squats), then a stretch like no activity of 13_29's
+    expected = ["JumpJack", "Twist", "KneeRaise", "Squat", "KneeRaise", None]
+    for (command, k), segments in found.items():
+        assert [s["label"] for s in segments] == expected, (command, k, segments)
+        assert segments[-1]["end_frame"] == 617
+    for command in ("segment", "watch"):
+        one, five = found[command, 1][0]["confidence"], found[command, 5][0]["confidence"]
+        assert five < one - 0.05, (command, one, five)
+
+
+@pytest.mark.parametrize(
+    ("k", "said"),
+    [
+        ("0", "-k: must be >= 1, got 0"),
+        ("6", "-k: must be from 1 to the case base's k (5, the nearest cases a window retrieves)"),
+    ],
+)
+def test_watch_refuses_a_k_as_segment_does(
+    case_base: Path,  # noqa: F811
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    k: str,
+    said: str,
+) -> None:
+    """A k below 1 or past the case base's own (5) is refused by ``watch`` in the words
+    ``segment`` refuses it, before the stream is opened."""
+    monkeypatch.setattr(pose_estimation, "stream_poses", _no_stream)
+    pose = tmp_path / "p.npz"
+    pose.write_bytes(b"")
+    capsys.readouterr()
+    assert main(["watch", "0", "--db", str(case_base), "-k", k]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("posecbr watch: error: ") and err.count("\n") == 1, err
+    assert said in err, err
+    assert main(["segment", str(pose), "--db", str(case_base), "-k", k]) == 1
+    assert said in capsys.readouterr().err
