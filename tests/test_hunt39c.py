@@ -114,3 +114,73 @@ def test_watch_refuses_a_k_as_segment_does(
     assert said in err, err
     assert main(["segment", str(pose), "--db", str(case_base), "-k", k]) == 1
     assert said in capsys.readouterr().err
+
+
+def _13_31(shared_data: Path) -> Any:
+    """CMU 13_31 as :func:`_13_30` gives 13_30: 30 fps."""
+    seq = read_asf_amc(
+        shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
+        shared_data / "cmu-mocap6" / "amc" / "13_31.amc",
+    )
+    return dataclasses.replace(seq, positions=seq.positions[::4], fps=FPS, confidence=None)
+
+
+def _scored(argv: list[str], capsys: pytest.CaptureFixture[str]) -> Any:
+    capsys.readouterr()
+    code = main(argv)
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    return json.loads(captured.out)
+
+
+def test_segment_truth_takes_no_recording_after_it(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``segment --truth L.txt REC.npz --db CB`` read REC.npz as a second label file (argparse
+    then found no recording: exit 2), and ``segment A --truth LA B --truth LB`` refused "3
+    label files for 1 recording". A file named as a recording after ``--truth`` is a
+    recording: each form gives what the README's forms give (``REC --truth L``, ``A B
+    --truth LA LB``), scores and all."""
+    a = save_pose(_13_30(shared_data), tmp_path / "13_30.npz")
+    b = save_pose(_13_31(shared_data), tmp_path / "13_31.npz")
+    la, lb = (shared_data / "cmu-mocap6" / "truelabels" / f"{r}.txt" for r in ("13_30", "13_31"))
+    names = tmp_path / "names.txt"
+    names.write_text("1 JumpJack\n2 Jog\n3 Squat\n4 KneeRaise\n5 ArmCircle\n6 Twist\n10 ToeTouch\n")
+    tail = ["--db", str(case_base), "--label-block", "0.1", "--label-names", str(names), "--json"]
+    one = _scored(["segment", str(a), "--truth", str(la), *tail], capsys)
+    assert one["scores"]["truth"] == str(la) and one["scores"]["blocks"] == 206
+    assert _scored(["segment", "--truth", str(la), str(a), *tail], capsys) == one
+    both = _scored(["segment", str(a), str(b), "--truth", str(la), str(lb), *tail], capsys)
+    assert [d["recording"] for d in both] == [str(a), str(b)]
+    assert [d["scores"]["truth"] for d in both] == [str(la), str(lb)]
+    assert both[0] == one
+    alike = ["segment", str(a), "--truth", str(la), str(b), "--truth", str(lb), *tail]
+    assert _scored(alike, capsys) == both
+
+
+def test_segment_truth_of_a_recording_alone_is_refused_as_unreadable(
+    case_base: Path,  # noqa: F811
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``--truth REC.npz`` names no label file, and a command line whose every file is a
+    label file names no recording: each one line, exit 2 (a command line that cannot be
+    read), nothing read or written."""
+    rec = tmp_path / "rec.npz"
+    rec.write_bytes(b"")
+    labels = tmp_path / "labels.txt"
+    labels.write_text("1\n")
+    for argv, said in (
+        (["--truth", str(rec)], f"argument --truth: {rec} is named as a recording, not a label"),
+        (["--truth", str(labels)], "the following arguments are required: RECORDING"),
+    ):
+        capsys.readouterr()
+        with pytest.raises(SystemExit) as exit_:
+            main(["segment", *argv, "--db", str(case_base)])
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2 and err.count("\n") == 1, err
+        assert err.startswith("posecbr segment: error: ") and said in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["labels.txt", "rec.npz"]

@@ -44,6 +44,7 @@ from typing import Any
 
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, unique_name
+from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
 from posecbr.arguments import path_arg
 from posecbr.recordings import (
@@ -71,11 +72,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "segment",
         help="label every stretch of long recordings with an activity or unknown, and count",
         description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=_Formatter,
     )
     p.add_argument(
         "recordings",
-        nargs="+",
+        nargs="*",  # a recording may come after --truth (_Truth): checked given in run
+        action=_Recordings,
+        default=[],
         type=path_arg,
         metavar="RECORDING",
         help="pose file, video, BVH, .amc",
@@ -111,11 +114,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--truth",
         type=path_arg,
         nargs="+",
-        action="extend",
+        action=_Truth,
         metavar="LABELS",
         help="score the segments against the recording's true labels: a label file as train"
         " --frame-labels reads (one label per frame, or per --label-block seconds); several"
-        " recordings: one file each, in their order",
+        " recordings: one file each, in their order (--truth a.txt b.txt, or --truth a.txt"
+        " --truth b.txt); a file named as a recording (.npz, .bvh, .amc, a video) after it is"
+        " a recording, not a label file",
     )
     p.add_argument(
         "--label-block", type=float, metavar="SECONDS", help="seconds per label of --truth"
@@ -137,7 +142,64 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         metavar="OUT.mp4",
         help="a video recording with the stick figure, activity and count drawn",
     )
-    p.set_defaults(func=run)
+    p.set_defaults(func=_given(p))
+
+
+#: what a file named as a recording ends in: never a label file (text), so one after
+#: ``--truth`` is a recording (``segment --truth L.txt REC.npz``), not read as labels
+RECORDING_SUFFIXES = frozenset({".npz", ".bvh", ".amc", *SHOWN_VIDEO_SUFFIXES})
+
+
+class _Recordings(argparse.Action):
+    """RECORDING...: added to those already given after ``--truth`` (:class:`_Truth`), in the
+    order of the command line."""
+
+    def __call__(
+        self, _parser: Any, namespace: argparse.Namespace, values: Any, _option: Any = None
+    ) -> None:
+        setattr(namespace, self.dest, [*getattr(namespace, self.dest), *values])
+
+
+class _Truth(argparse.Action):
+    """``--truth LABELS...`` (repeatable): the label files, and any file after it named as a
+    recording (:data:`RECORDING_SUFFIXES`) given back to the recordings. It took every name
+    after it: ``segment --truth L.txt REC.npz --db CB`` read REC.npz as a label file."""
+
+    def __call__(
+        self, _parser: Any, namespace: argparse.Namespace, values: Any, _option: Any = None
+    ) -> None:
+        truth = list(namespace.truth or [])
+        for path in values:
+            if path.suffix.lower() in RECORDING_SUFFIXES:
+                namespace.recordings = [*namespace.recordings, path]
+            else:
+                truth.append(path)
+        if len(truth) == len(namespace.truth or []):  # every name after it a recording
+            raise argparse.ArgumentError(
+                self, f"{values[0]} is named as a recording, not a label file: give LABELS"
+            )
+        namespace.truth = truth
+
+
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    """The usage says RECORDING is needed (it is ``nargs="*"`` to argparse: see :class:`_Truth`)."""
+
+    def _format_args(self, action: argparse.Action, default_metavar: str) -> str:
+        if action.dest == "recordings":
+            return "RECORDING [RECORDING ...]"
+        return super()._format_args(action, default_metavar)
+
+
+def _given(parser: argparse.ArgumentParser) -> Any:
+    """:func:`run`, after the check argparse made when RECORDING was ``nargs="+"``: a command
+    line without a recording is refused as one that cannot be read (exit 2)."""
+
+    def given(args: argparse.Namespace) -> int:
+        if not args.recordings:
+            parser.error("the following arguments are required: RECORDING")
+        return run(args)
+
+    return given
 
 
 def _inputs_given(args: argparse.Namespace) -> None:
