@@ -65,15 +65,37 @@ class Parser(argparse.ArgumentParser):
         return ""
 
 
+#: the exit status of an internal error, a bug in posecbr rather than a problem with what it
+#: was given: sysexits.h's EX_SOFTWARE ("an internal software error has been detected")
+BUG_STATUS = 70
+
+#: the environment variable that prints an internal error's traceback on stderr
+DEBUG_VARIABLE = "POSECBR_DEBUG"
+
 #: what ``posecbr --help`` says of every command: its options' help, exit status, progress
 EPILOG = (
     "`posecbr COMMAND --help` lists a command's options. Exit status: 0 done; 1 a problem "
-    "with the input, the data or an option's value, said in one line (a Python traceback, "
-    "also 1, is a bug in posecbr); 2 a command line that cannot be read (a mistyped command "
+    "with the input, the data, an option's value or the system (a full disk, a file it may "
+    "not write), said in one line; 2 a command line that cannot be read (a mistyped command "
     "or option, a missing argument, a number that is none; no command: this help); "
+    f"{BUG_STATUS} an internal error, a bug in posecbr: one line naming the file its "
+    f"traceback was written to ({DEBUG_VARIABLE}=1 prints it instead); "
     f"{INTERRUPTED_STATUS} stopped by Ctrl-C, {TERMINATED_STATUS} by SIGTERM (watch ends as "
     "at the end of its stream: 0). Progress bars show on a terminal; POSECBR_NO_PROGRESS=1 "
     "turns them off."
+)
+
+#: errors of the system, not of posecbr: said in one line, exit 1, as a problem with the
+#: input is (a disk full as an output is written, a folder it may not write in)
+SYSTEM_ERRNOS = frozenset(
+    {
+        errno.ENOSPC,
+        getattr(errno, "EDQUOT", errno.ENOSPC),
+        errno.EACCES,
+        errno.EPERM,
+        errno.EROFS,
+        errno.EIO,
+    }
 )
 
 
@@ -185,11 +207,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         return INTERRUPTED_STATUS
     except BrokenPipeError:
         return 0
-    except OSError as exc:
-        # a path the system cannot look up (a file name over 255 bytes), met by whichever
-        # check asks about it first: refused before anything is written, so said as one
-        if exc.errno != errno.ENAMETOOLONG:
-            raise
+    except (OSError, MemoryError) as exc:
+        return system_error(command, exc)
+    except Exception as exc:  # a bug: one line and the traceback in a file, not a raw one
+        return internal_error(command, exc)
+
+
+def system_error(command: str, exc: OSError | MemoryError) -> int:
+    """The system's refusal (a path it cannot look up, a full disk, a file posecbr may not
+    write, memory run out) said in one line, exit 1, as a problem with the input; another
+    OSError is a bug (:func:`internal_error`). A path over 255 bytes is met by whichever check
+    asks about it first: refused before anything is written. The outputs are written
+    atomically and the stores in transactions: a disk full halfway leaves none half-done."""
+    if isinstance(exc, MemoryError):  # a recording or dataset too large for this machine
+        print(f"posecbr {command}: error: out of memory", file=sys.stderr)
+        return 1
+    if exc.errno == errno.ENAMETOOLONG:
         where = exc.filename if exc.filename is not None else "a path"
         print(
             f"posecbr {command}: error: {shown(str(where)[:200])}: cannot use the path"
@@ -197,6 +230,39 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+    if exc.errno in SYSTEM_ERRNOS:
+        where = f"{shown(str(exc.filename))}: " if exc.filename is not None else ""
+        print(f"posecbr {command}: error: {where}{exc.strerror}", file=sys.stderr)
+        return 1
+    return internal_error(command, exc)
+
+
+def internal_error(command: str, exc: BaseException) -> int:
+    """Say that ``exc``, raised by ``posecbr command``, is a bug in posecbr, in one line on
+    stderr with where its traceback was written (a file in the temporary folder), or with
+    the traceback itself when ``POSECBR_DEBUG=1``; :data:`BUG_STATUS`. Before, Python printed
+    the traceback and the exit status was 1, as for a problem with the input."""
+    import os
+    import tempfile
+    import traceback
+
+    told = f"{type(exc).__name__}: {shown(str(exc))[:300]}".rstrip(": ")
+    head = f"posecbr {command}: internal error, a bug in posecbr ({told})"
+    text = "".join(traceback.format_exception(exc))
+    if os.environ.get(DEBUG_VARIABLE, "") not in ("", "0"):
+        print(text, end="", file=sys.stderr)
+        print(head, file=sys.stderr)
+        return BUG_STATUS
+    try:
+        fd, name = tempfile.mkstemp(prefix="posecbr-bug-", suffix=".txt")
+        with os.fdopen(fd, "w", encoding="utf-8", errors="backslashreplace") as f:
+            f.write(f"posecbr {__version__} {command}\n{text}")
+    except OSError:
+        where = f"{DEBUG_VARIABLE}=1 prints the traceback"
+    else:
+        where = f"traceback in {shown(name)}; {DEBUG_VARIABLE}=1 prints it"
+    print(f"{head}; {where}; please report it", file=sys.stderr)
+    return BUG_STATUS
 
 
 if __name__ == "__main__":

@@ -184,3 +184,150 @@ def test_segment_truth_of_a_recording_alone_is_refused_as_unreadable(
         assert exit_.value.code == 2 and err.count("\n") == 1, err
         assert err.startswith("posecbr segment: error: ") and said in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["labels.txt", "rec.npz"]
+
+
+def _boom(*args: Any, **kwargs: Any) -> None:
+    raise RuntimeError("boom deep inside")
+
+
+def test_an_internal_error_is_said_as_a_bug_with_its_own_status_writing_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A bug deep inside ``train`` (the store's log, the last write of its transaction,
+    raising): exit 70 (sysexits' EX_SOFTWARE; it was 1, as a problem with the input, with a
+    raw traceback), one line saying it is a bug in posecbr and naming the file the traceback
+    was written to, and the case base as it was (the transaction rolled back)."""
+    import tempfile
+
+    import casebase_store.store
+    from tests.badinput import small_case_base, snapshot
+
+    db = small_case_base(tmp_path)
+    data = tmp_path / "train"
+    before = snapshot(tmp_path)
+    crashes = tmp_path / "tmp"
+    crashes.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(crashes))
+    monkeypatch.delenv("POSECBR_DEBUG", raising=False)
+    monkeypatch.setattr(casebase_store.store.StoreTransaction, "log", _boom)
+    capsys.readouterr()
+    argv = ["train", str(data), "--db", str(db), "--name", "second", "--mirror", "off",
+            "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+    assert main(argv) == 70
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1 and "Traceback" not in captured.err, captured.err
+    line = captured.err.strip()
+    assert line.startswith("posecbr train: internal error, a bug in posecbr (RuntimeError: boom")
+    (written,) = crashes.iterdir()
+    assert f"traceback in {written};" in line and "POSECBR_DEBUG=1 prints it" in line, line
+    text = written.read_text()
+    assert "Traceback (most recent call last)" in text and "RuntimeError: boom deep inside" in text
+    assert "in _boom" in text
+    monkeypatch.undo()  # the store as it was: one case base, not "second"
+    assert [k for k in snapshot(tmp_path) if not k.startswith("tmp")] == list(before)
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    names = [line.split(":")[0] for line in capsys.readouterr().out.splitlines()]
+    assert "default" in names and "second" not in names, names
+
+
+def test_posecbr_debug_prints_the_traceback(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``POSECBR_DEBUG=1``: the traceback on stderr, then the line; no file written."""
+    import tempfile
+
+    import features.fluents
+    from tests.badinput import good_pose_file
+
+    pose = good_pose_file(tmp_path / "clip.npz")
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setenv("POSECBR_DEBUG", "1")
+    monkeypatch.setattr(features.fluents, "evaluate", _boom)
+    capsys.readouterr()
+    assert main(["describe", str(pose)]) == 70
+    err = capsys.readouterr().err
+    assert err.startswith("Traceback (most recent call last)"), err
+    assert err.strip().splitlines()[-1] == (
+        "posecbr describe: internal error, a bug in posecbr (RuntimeError: boom deep inside)"
+    )
+    assert [p.name for p in tmp_path.iterdir()] == ["clip.npz"]
+
+
+def test_an_internal_error_in_a_process_exits_70(tmp_path: Path) -> None:
+    """The same in a real process (``sys.exit(main())``, as the console script runs it)."""
+    import os
+    import subprocess
+    import sys
+
+    from tests.badinput import ROOT, good_pose_file
+
+    pose = good_pose_file(tmp_path / "clip.npz")
+    code = (
+        "import sys, features.fluents as f\n"
+        "def boom(*a, **k): raise ZeroDivisionError('deep')\n"
+        "f.evaluate = boom\n"
+        "from posecbr.cli import main\n"
+        f"sys.exit(main(['describe', {str(pose)!r}]))\n"
+    )
+    env = {**os.environ, "TMPDIR": str(tmp_path), "PYTHONPATH": str(ROOT)}
+    env.pop("POSECBR_DEBUG", None)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert proc.returncode == 70, proc.stderr
+    assert proc.stdout == "" and proc.stderr.count("\n") == 1, proc.stderr
+    assert "internal error, a bug in posecbr (ZeroDivisionError: deep)" in proc.stderr
+    (written,) = tmp_path.glob("posecbr-bug-*.txt")
+    assert "ZeroDivisionError: deep" in written.read_text()
+
+
+def test_the_exit_statuses_are_listed_alike_in_help_and_readme(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``posecbr --help`` and the README name 70, the status of an internal error."""
+    from tests.badinput import ROOT
+
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    said = " ".join(capsys.readouterr().out.split())
+    assert "70 an internal error, a bug in posecbr" in said, said
+    assert "POSECBR_DEBUG=1" in said
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert "70 an internal error, a bug in posecbr" in readme
+
+
+@pytest.mark.parametrize(
+    ("error", "status", "said"),
+    [
+        (OSError(28, "No space left on device", "out.png"), 1, "error: out.png: No space left"),
+        (PermissionError(13, "Permission denied", "cb.sqlite"), 1, "error: cb.sqlite: Permission"),
+        (MemoryError(), 1, "error: out of memory"),
+        (OSError(9, "Bad file descriptor"), 70, "a bug in posecbr (OSError: [Errno 9] Bad file"),
+    ],
+)
+def test_the_system_failing_is_no_bug(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    error: BaseException,
+    status: int,
+    said: str,
+) -> None:
+    """A full disk, a file posecbr may not write, memory run out: the system's refusal, said
+    in one line, exit 1 (they were raw tracebacks); another OSError is a bug (exit 70)."""
+    import tempfile
+
+    import features.fluents
+    from tests.badinput import good_pose_file
+
+    pose = good_pose_file(tmp_path / "clip.npz")
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.delenv("POSECBR_DEBUG", raising=False)
+
+    def fail(*args: Any, **kwargs: Any) -> None:
+        raise error
+
+    monkeypatch.setattr(features.fluents, "evaluate", fail)
+    capsys.readouterr()
+    assert main(["describe", str(pose)]) == status
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("posecbr describe: "), err
+    assert said in err, err
