@@ -331,3 +331,39 @@ def test_the_system_failing_is_no_bug(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("posecbr describe: "), err
     assert said in err, err
+
+
+def test_thresholds_takes_the_file_by_describes_name_and_json(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``describe --thresholds FILE`` takes the overrides that ``thresholds --from FILE``
+    checks: ``thresholds --thresholds FILE`` was "unrecognized arguments", as was ``thresholds
+    --json`` (its table is JSON: taken, changing nothing)."""
+    overrides = tmp_path / "mine.json"
+    overrides.write_text('{"epsilon": 0.002}\n')
+    capsys.readouterr()
+    assert main(["thresholds", "--from", str(overrides)]) == 0
+    table = json.loads(capsys.readouterr().out)
+    assert table["epsilon"] == 0.002
+    assert main(["thresholds", "--thresholds", str(overrides)]) == 0
+    assert json.loads(capsys.readouterr().out) == table
+    assert main(["thresholds", "--json", "--thresholds", str(overrides)]) == 0
+    assert json.loads(capsys.readouterr().out) == table
+
+
+def test_watch_takes_json_as_segment_does(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``watch --json`` (as ``segment --json``): its JSON lines, as without it; it was
+    "unrecognized arguments: --json"."""
+    world = _13_30(shared_data).positions[:120]
+    monkeypatch.setattr(pose_estimation, "stream_poses", _camera(world))
+    lines = {}
+    for extra in ([], ["--json"]):
+        capsys.readouterr()
+        assert main(["watch", "0", "--db", str(case_base), "--max-frames", "120", *extra]) == 0
+        lines[bool(extra)] = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert lines[True] == lines[False] and lines[True][-1]["end_frame"] == 120

@@ -17,10 +17,18 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument(
         "--from",
+        "--thresholds",  # as describe names the file of overrides
         dest="source",
         type=path_arg,
         metavar="FILE",
-        help="show the table after the overrides in FILE (validates FILE)",
+        help="show the table after the overrides in FILE (validates FILE; --thresholds FILE:"
+        " the same, as describe names it)",
+    )
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help="the table is JSON already (taken, as the other commands take it, and changes"
+        " nothing)",
     )
     p.set_defaults(func=run)
 

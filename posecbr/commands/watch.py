@@ -82,6 +82,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument("--max-frames", type=int, help="stop after this many frames")
     p.add_argument(
+        "--json",
+        action="store_true",
+        help="the segments are JSON lines already, one per finished segment (taken, as"
+        " segment takes it, and changes nothing)",
+    )
+    p.add_argument(
         "-k",
         "--k",
         type=int,
