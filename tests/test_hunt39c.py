@@ -367,3 +367,34 @@ def test_watch_takes_json_as_segment_does(
         assert main(["watch", "0", "--db", str(case_base), "--max-frames", "120", *extra]) == 0
         lines[bool(extra)] = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert lines[True] == lines[False] and lines[True][-1]["end_frame"] == 120
+
+
+def test_every_option_of_every_command_is_in_the_readme() -> None:
+    """Each option ``posecbr COMMAND --help`` lists is named in the README (by one of its
+    spellings): eleven were not (``classify --novelty``/``--benefit``, ``compare
+    --folds``/``--similarities``, ``convert --float32``, ``demo --data``, ``describe
+    --min-confidence``, ``extract --detect-every-frame``, ``train --no-summary``, ``watch
+    --show``/``--max-frames``)."""
+    import argparse
+    import re
+
+    from posecbr.cli import build_parser
+    from tests.badinput import ROOT
+
+    readme = (ROOT / "README.md").read_text()
+    missing = []
+
+    def walk(name: str, parser: argparse.ArgumentParser) -> None:
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for child, sub in action.choices.items():
+                    walk(f"{name} {child}", sub)
+            elif action.option_strings and "--help" not in action.option_strings:
+                named = [
+                    re.search(re.escape(o) + r"(?![\w-])", readme) for o in action.option_strings
+                ]
+                if not any(named):
+                    missing.append(f"{name} {'/'.join(action.option_strings)}")
+
+    walk("posecbr", build_parser())
+    assert missing == [], missing

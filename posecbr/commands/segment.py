@@ -18,10 +18,12 @@ segments over the fluent timeline; ``--overlay`` writes a video recording with t
 the current activity and its repetition count on every frame (as ``extract --overlay`` does).
 
 ``--truth LABELS`` scores the segmentation against a label file of the recording (one per
-recording, in order), read as ``train --frame-labels`` reads one (one label per frame, or per
-``--label-block`` seconds, codes named by ``--label-names``), over its 0.1-s blocks: the share of
-blocks of activities the case base has that got their label (a block called unknown counts
-wrong), the share of blocks of labels it lacks that were called unknown, and each labelled
+recording, in order: ``--truth a.txt b.txt``, or ``--truth`` once per file; a file named as
+a recording after it, ``.npz``, ``.bvh``, ``.amc`` or a video, is a recording), read as
+``train --frame-labels`` reads one (one label per frame, or per ``--label-block`` seconds,
+codes named by ``--label-names``), over its 0.1-s blocks: the share of blocks of activities
+the case base has that got their label (a block called unknown counts wrong), the share of
+blocks of labels it lacks that were called unknown, and each labelled
 change's distance to the nearest segment boundary (median), as ``python -m benchmarks.segment``
 scores them (:func:`cbr.evaluation.segments.score_segmentation`). ``--json`` gives them as
 ``"scores": {"truth", "blocks", "block_s", "seen_blocks", "seen_right", "seen_accuracy",
