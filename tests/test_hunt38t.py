@@ -234,7 +234,8 @@ def test_thresholds_names_the_command_its_file_is_given_to(
     it, and the help now says so."""
     parsers = _parsers()
     takes = sorted(n for n, p in parsers.items() if "--thresholds" in p._option_string_actions)
-    assert takes == ["describe"]
+    # and thresholds, which shows the table with the file's overrides (--from; hunt 39c)
+    assert takes == ["describe", "thresholds"]
     with pytest.raises(SystemExit):
         main(["thresholds", "--help"])
     assert "pass it to describe --thresholds FILE" in " ".join(capsys.readouterr().out.split())
