@@ -100,15 +100,17 @@ def test_class_folders_and_csv_carry_labels(clip: Path, tmp_path: Path, shared_d
     other = load_pose(out / "other" / "b.npz")
     assert other.label == "other" and other.n_frames == 6
 
+    # A stretch and the whole video of one label (under two labels, they are refused: the
+    # frames 2-6 would be poses of two activities; tests/test_hunt39b.py)
     csv_path = tmp_path / "labels.csv"
     csv_path.write_text(
-        f"path,label,subject,start,end\n{clip},deep_squat,s01,2,7\n{clip},squat_all,s02,,\n"
+        f"path,label,subject,start,end\n{clip},deep_squat,s01,2,7\n{clip},deep_squat,s02,,\n"
     )
     out2 = tmp_path / "out2"
     assert main(["extract", str(csv_path), "--out", str(out2)]) == 0
     part = load_pose(out2 / "deep_squat" / "squat8_2-7.npz")
     assert (part.label, part.metadata["subject"], part.n_frames) == ("deep_squat", "s01", 5)
-    whole = load_pose(out2 / "squat_all" / "squat8.npz")
+    whole = load_pose(out2 / "deep_squat" / "squat8.npz")
     assert whole.n_frames == 8 and whole.metadata["subject"] == "s02"
     # The slice is the same frames as the whole clip's frames 2..6.
     np.testing.assert_allclose(part.positions, whole.positions[2:7])

@@ -247,13 +247,19 @@ def _check_not_recording(clip: Path, listed_in: Path | None = None) -> None:
 
 def _listed_jobs(source: Path, out: Path) -> list[Job]:
     """The clips of a labels CSV (``source``, or its labels.csv) or of a folder of videos;
-    a recording listed is refused."""
+    a recording listed is refused, and so are rows giving frames of one video two labels
+    (:func:`features.datasets.check_no_overlaps`, as ``train``, ``compare`` and ``convert``
+    refuse them): the pose files written would be those frames under two labels, which a
+    ``train`` of the folder cannot tell and a ``train`` of the CSV refuses."""
+    from features.datasets import check_no_overlaps
+
     csv_path = source if source.is_file() else source / "labels.csv"
     if not csv_path.is_file():
         return _folder_jobs(source, out)
     jobs = _csv_jobs(csv_path, out)
     for job in jobs:
         _check_not_recording(job.video, csv_path)
+    check_no_overlaps(csv_path)
     return jobs
 
 
