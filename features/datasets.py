@@ -53,6 +53,7 @@ from features.progress import progress
 from .handedness import right_handed
 from .label_tracks import (
     LabelTrack,
+    check_count,
     code_order,
     frame_labels,
     labelled_stretches,
@@ -936,16 +937,44 @@ def split_by_labels(
 
 def check_track(path: Path, track: LabelTrack, fps: float | None = None) -> None:
     """What can be checked of a recording labelled over time before it is read: its label
-    file (and names) read, and, for a pose file, the count fitted to its frames (the
-    header's frame count and rate, or ``fps`` when given,
-    :func:`features.poses.pose_file_length`; other formats are checked once read).
-    DataError naming the label file, as :func:`split_by_track`."""
+    file (and names) read, and the count fitted to its frames where they are known
+    (:func:`check_fits_before_read`). DataError naming the label file, as
+    :func:`split_by_track`."""
     names = read_label_names(track.names) if track.names is not None else None
     labels = read_label_track(track.path, names)
+    check_fits_before_read(path, len(labels), track.block_s, track.path, path.name, fps)
+
+
+def check_fits_before_read(
+    path: Path,
+    n_labels: int,
+    block_s: float | None,
+    where: str | Path,
+    recording: str = "",
+    fps: float | None = None,
+) -> None:
+    """Refuse ``n_labels`` labels (one per frame, or per ``block_s`` seconds) that do not fit
+    the recording ``path`` where its frames are known before it is read, in the words
+    :func:`frame_labels` gives once it is (naming ``where`` and ``recording``): a pose
+    file's (the header's frame count and rate, :func:`features.poses.pose_file_length`),
+    and a constant-rate video's (its container's count and rate,
+    :func:`features.pose_estimation.video.frames_before_decoding`: the pose model not run
+    for minutes first). ``fps``: the rate it is read at (``--fps``). Other recordings (a
+    variable-frame-rate video, mocap) are checked once read."""
     if _suffix(path) in POSE_SUFFIXES:
         n_frames, rate = pose_file_length(path)
-        rate = rate if fps is None else fps
-        frame_labels(labels, n_frames, rate, track.block_s, track.path, path.name)
+        check_count(n_labels, (n_frames, n_frames), rate if fps is None else fps, block_s,
+                    where, recording)  # fmt: skip
+    elif _suffix(path) in VIDEO_SUFFIXES:
+        try:
+            from features.pose_estimation.video import frames_before_decoding
+        except ImportError:
+            return  # no pose estimator: refused as such when read
+        known = frames_before_decoding(path)
+        if known is not None:
+            fewest, most, rate = known
+            check_count(n_labels, (fewest, most), rate if fps is None else fps, block_s,
+                        where, recording)  # fmt: skip
 
 
 def _track_entry(rec: dict[str, Any]) -> _Entry:
@@ -1271,6 +1300,7 @@ __all__ = [
     "clip_files",
     "LabelTrack",
     "check_no_overlaps",
+    "check_fits_before_read",
     "check_track",
     "frame_labels",
     "iter_recording",

@@ -270,6 +270,39 @@ def frame_labels(
     it was given for, when known: one label file may be named for several): a different
     count means another frame rate or block length, and labels would land on the wrong
     frames."""
+    low, high = _fitting(n_frames, fps, block_s, where)
+    if not low <= len(labels) <= high:
+        raise _not_fitting(len(labels), n_frames, fps, block_s, where, recording)
+    per_block = 1.0 if block_s is None else block_s * fps
+    block = np.floor(np.arange(n_frames) / per_block + 1e-9).astype(np.int64)
+    return np.asarray(labels, dtype=object)[np.minimum(block, len(labels) - 1)]
+
+
+def check_count(
+    n_labels: int,
+    frames: tuple[int, int],
+    fps: float,
+    block_s: float | None,
+    where: str | Path,
+    recording: str = "",
+) -> None:
+    """Refuse, before a recording is read, ``n_labels`` labels that fit none of the frame
+    counts ``frames`` (fewest, most) it can be read with at ``fps``, as :func:`frame_labels`
+    refuses them for the most (the count its file states); a count that fits one of them
+    is left for :func:`frame_labels` to judge once it is read."""
+    fewest, most = frames
+    for n_frames in range(most, fewest - 1, -1):
+        low, high = _fitting(n_frames, fps, block_s, where)
+        if low <= n_labels <= high:
+            return
+    raise _not_fitting(n_labels, most, fps, block_s, where, recording)
+
+
+def _fitting(
+    n_frames: int, fps: float, block_s: float | None, where: str | Path
+) -> tuple[int, int]:
+    """The fewest and most labels that fit ``n_frames`` frames at ``fps`` (see
+    :func:`frame_labels`); DataError naming ``where`` for a block too short to count."""
     per_block = 1.0 if block_s is None else block_s * fps
     blocks = n_frames / per_block if per_block > 0 else float("inf")
     if not np.isfinite(blocks):  # a block of 1e-320 s: more blocks than a number holds
@@ -281,18 +314,28 @@ def frame_labels(
     # a recording of any frames needs a label, however long the block
     low = max(int(np.ceil(blocks - 1e-9)), min(n_frames, 1))
     high = int(np.floor(blocks + 1e-9)) + 1
-    if not low <= len(labels) <= high:
-        unit = "frame" if block_s is None else f"{block_s:g} s"
-        need = str(low) if low == high else f"{low} or {high}"
-        raise DataError(
-            f"{counted(len(labels), 'label')} (one per {unit})"
-            f" {'does' if len(labels) == 1 else 'do'} not fit the recording"
-            f"{' ' + recording if recording else ''}: {counted(n_frames, 'frame')} at {fps:g}"
-            f" fps need {need}{_why_not_fit(where, low, high, len(labels))}",
-            where,
-        )
-    block = np.floor(np.arange(n_frames) / per_block + 1e-9).astype(np.int64)
-    return np.asarray(labels, dtype=object)[np.minimum(block, len(labels) - 1)]
+    return low, high
+
+
+def _not_fitting(
+    n_labels: int,
+    n_frames: int,
+    fps: float,
+    block_s: float | None,
+    where: str | Path,
+    recording: str,
+) -> DataError:
+    """Why ``n_labels`` labels do not fit ``n_frames`` frames at ``fps``, naming ``where``."""
+    low, high = _fitting(n_frames, fps, block_s, where)
+    unit = "frame" if block_s is None else f"{block_s:g} s"
+    need = str(low) if low == high else f"{low} or {high}"
+    return DataError(
+        f"{counted(n_labels, 'label')} (one per {unit})"
+        f" {'does' if n_labels == 1 else 'do'} not fit the recording"
+        f"{' ' + recording if recording else ''}: {counted(n_frames, 'frame')} at {fps:g}"
+        f" fps need {need}{_why_not_fit(where, low, high, n_labels)}",
+        where,
+    )
 
 
 def _why_not_fit(where: str | Path, low: int, high: int, n_labels: int) -> str:

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.badinput import refused
+from posecbr.cli import main
+from tests.badinput import refused, small_case_base
 
 SQUAT = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"  # 65 frames, 5 fps
 
@@ -57,3 +58,129 @@ def test_extract_takes_overlapping_rows_of_one_label(
     csv.write_text(f"path,label,start,end\n{video},squat,0,30\n{video},squat,20,50\n")
     jobs = find_jobs(csv, tmp_path / "poses", None)
     assert [(j.label, j.start, j.end) for j in jobs] == [("squat", 0, 30), ("squat", 20, 50)]
+
+
+# ------------------------------------------- a label count that does not fit a video, at once
+
+
+class _ModelRan(Exception):
+    """Raised in place of the pose model: a test that sees it knows the model would run."""
+
+
+@pytest.fixture
+def no_model(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The pose model made to fail at once, as the estimator is made: a refusal that comes
+    from the label count came before it."""
+    import features.pose_estimation.video as video
+
+    def made(*_args: object, **_kwargs: object) -> None:
+        raise _ModelRan
+
+    monkeypatch.setattr(video, "PoseEstimator", made)
+
+
+def _labels(path: Path, n: int) -> Path:
+    path.write_text(" ".join(["squat"] * (n // 2) + ["stand"] * (n - n // 2)) + "\n")
+    return path
+
+
+def test_frames_known_before_decoding_a_constant_rate_video(shared_data: Path) -> None:
+    """The squat video: 65 frames at 5 fps, its container says and its packets bear out (as
+    OpenCV counts them by decoding); 2 fewer decoded would still be whole (check_whole)."""
+    import cv2
+
+    from features.pose_estimation.video import frames_before_decoding
+
+    cap = cv2.VideoCapture(str(shared_data / SQUAT))
+    decoded = 0
+    while cap.grab():
+        decoded += 1
+    cap.release()
+    assert decoded == 65
+    assert frames_before_decoding(shared_data / SQUAT) == (63, 65, 5.0)
+
+
+def test_train_refuses_a_count_that_does_not_fit_a_video_before_the_model_runs(
+    tmp_path: Path, shared_data: Path, capsys: pytest.CaptureFixture[str], no_model: None
+) -> None:
+    """13 labels, one a second, given without --label-block: read one per frame they do not
+    fit the squat video's 65 frames (65 or 66 needed). The refusal came after the pose model
+    had run over the whole video (minutes for a long one); now at once, in the same words."""
+    labels = _labels(tmp_path / "labels.txt", 13)
+    video = shared_data / SQUAT
+    refused(["train", str(video), "--frame-labels", str(labels), "--db",
+             str(tmp_path / "cb.sqlite")], tmp_path, capsys,
+            f"{labels}: 13 labels (one per frame) do not fit the recording"
+            " tfjs_pose_squats_pexels4838220.mp4: 65 frames at 5 fps need 65 or 66")  # fmt: skip
+    # with --label-block 1 they fit (13 s): the video is read, the model run
+    with pytest.raises(_ModelRan):
+        main(["train", str(video), "--frame-labels", str(labels), "--label-block", "1",
+              "--db", str(tmp_path / "cb.sqlite")])  # fmt: skip
+
+
+@pytest.mark.parametrize("n", [63, 64, 65, 66])
+def test_a_count_a_whole_decoding_could_fit_is_left_for_the_read(
+    tmp_path: Path, shared_data: Path, n: int, no_model: None
+) -> None:
+    """65 frames stated: a decoding of 63 or 64 would still be whole, so 63 to 66 labels are
+    not refused before the video is read (frame_labels judges them on the frames decoded)."""
+    labels = _labels(tmp_path / "labels.txt", n)
+    with pytest.raises(_ModelRan):
+        main(["train", str(shared_data / SQUAT), "--frame-labels", str(labels),
+              "--db", str(tmp_path / "cb.sqlite")])  # fmt: skip
+
+
+def test_a_variable_rate_video_is_checked_once_read(tmp_path: Path, no_model: None) -> None:
+    """Frames 20 to 80 ms apart in a 25-fps stream: resampled to a grid whose frame count
+    is known once decoded, so no count is trusted from the container and the model runs."""
+    av = pytest.importorskip("av")
+    from fractions import Fraction
+
+    import numpy as np
+
+    from features.pose_estimation.video import frames_before_decoding
+
+    path = tmp_path / "vfr.mkv"
+    out = av.open(str(path), "w")
+    stream = out.add_stream("mjpeg", rate=25)
+    stream.width, stream.height, stream.pix_fmt = 64, 48, "yuvj420p"
+    tb = Fraction(1, 1000)
+    stream.time_base = stream.codec_context.time_base = tb
+    for k, t in enumerate([0, 20, 100, 180, 220, 260, 300, 380, 400, 440, 520, 540, 620]):
+        frame = av.VideoFrame.from_ndarray(np.full((48, 64, 3), 8 * k, np.uint8), format="rgb24")
+        frame.pts, frame.time_base = t, tb
+        for packet in stream.encode(frame):
+            out.mux(packet)
+    for packet in stream.encode():
+        out.mux(packet)
+    out.close()
+    assert frames_before_decoding(path) is None
+    labels = _labels(tmp_path / "labels.txt", 3)
+    with pytest.raises(_ModelRan):
+        main(["train", str(path), "--frame-labels", str(labels), "--db",
+              str(tmp_path / "cb.sqlite")])  # fmt: skip
+
+
+def test_segment_truth_refuses_a_count_that_does_not_fit_a_video_before_the_model_runs(
+    tmp_path: Path, shared_data: Path, capsys: pytest.CaptureFixture[str], no_model: None
+) -> None:
+    db = small_case_base(tmp_path / "cb")
+    capsys.readouterr()  # the training's report
+    labels = _labels(tmp_path / "labels.txt", 13)
+    video = shared_data / SQUAT
+    refused(["segment", str(video), "--db", str(db), "--truth", str(labels)], tmp_path, capsys,
+            f"{labels}: 13 labels (one per frame) do not fit the recording {video}: 65 frames"
+            " at 5 fps need 65 or 66")  # fmt: skip
+
+
+def test_train_csv_label_file_of_a_video_is_refused_before_the_model_runs(
+    tmp_path: Path, shared_data: Path, capsys: pytest.CaptureFixture[str], no_model: None
+) -> None:
+    """A labels CSV's label_file row of a video: its count fitted to the video's container
+    before any clip is read, as a pose file's was."""
+    labels = _labels(tmp_path / "labels.txt", 13)
+    csv = tmp_path / "recordings.csv"
+    csv.write_text(f"path,label_file\n{shared_data / SQUAT},{labels}\n", encoding="utf-8")
+    refused(["train", str(csv), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
+            f"{labels}: 13 labels (one per frame) do not fit the recording"
+            " tfjs_pose_squats_pexels4838220.mp4: 65 frames at 5 fps need 65 or 66")  # fmt: skip

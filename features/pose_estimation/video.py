@@ -714,11 +714,39 @@ def check_whole(
     and the declared ``fps``, frames that cover the container's duration (``declared / fps``,
     the same slack) are whole however few: a variable rate has fewer frames than an estimate
     at the declared rate gives."""
-    slack = max(2, math.ceil(0.01 * declared))
+    slack = whole_slack(declared)
     if declared > 0 and count + slack < declared:
         if span is not None and fps and span * fps + slack >= declared:
             return
         raise DataError(f"truncated or corrupt: decoded {count} of {declared} frames", where)
+
+
+def whole_slack(declared: int) -> int:
+    """How many frames fewer than the ``declared`` count a video may decode and still be
+    whole (:func:`check_whole`): containers that estimate their count are off by a few."""
+    return max(2, math.ceil(0.01 * declared))
+
+
+def frames_before_decoding(path: str | Path) -> tuple[int, int, float] | None:
+    """The fewest and most rows :func:`estimate_video` can give a video, and their rate,
+    known from its container without decoding a frame (its packets: milliseconds where
+    the pose model takes minutes): for a video whose packets give their times, as many as
+    the count OpenCV states, and whose times keep to its rate (constant rate: the rows are
+    the decoded frames, none resampled), the count less :func:`whole_slack` (fewer is
+    refused as truncated) to the count. None when that cannot be trusted: a variable frame
+    rate (the rows are a grid known once the frames are decoded), a count the container
+    only estimates that its packets do not bear out, no packets to read, or no video."""
+    try:
+        cap, info = open_video(path)
+    except DataError:
+        return None  # refused, in its own words, when it is read
+    cap.release()
+    got = _packet_times(path)
+    if got is None or info.frames <= 0 or got[0].size != info.frames:
+        return None
+    if clocked_times(got[0], info.fps)[1]:
+        return None  # strayed: resampled to a grid when decoded
+    return max(0, info.frames - whole_slack(info.frames)), info.frames, info.fps
 
 
 def outside_frame(image_landmarks: np.ndarray, width: int, height: int) -> np.ndarray:

@@ -245,6 +245,21 @@ def _read_truths(args: argparse.Namespace) -> list[list[str]] | None:
     return [read_label_track(path, names) for path in args.truth]
 
 
+def _check_truths_fit(args: argparse.Namespace, labels: list[list[str]] | None) -> None:
+    """Refuse a ``--truth`` file whose count does not fit its recording where the frames are
+    known before the recording is read (a pose file's header, a constant-rate video's
+    container: :func:`features.datasets.check_fits_before_read`), before a video's poses are
+    estimated; the others are checked once read (:func:`_fitted_truths`)."""
+    from features.datasets import check_fits_before_read
+
+    for track, path, recording in zip(
+        labels or [], args.truth or [], args.recordings, strict=False
+    ):
+        check_fits_before_read(
+            recording, len(track), args.label_block, path, shown(recording), args.fps
+        )
+
+
 def _fitted_truths(
     args: argparse.Namespace, labels: list[list[str]] | None, recs: list[Any]
 ) -> list[Any]:
@@ -337,6 +352,7 @@ def run(args: argparse.Namespace) -> int:
     check_k(clf, args.k)  # before any recording is read (a video's poses take seconds)
     judge = judge_named(clf, args.unknown, args.db)
     labels = _read_truths(args)
+    _check_truths_fit(args, labels)
     # every recording read and checked before any is segmented (a bad one among several is
     # refused before the work on the others), and segmented before any picture is drawn (it
     # leaves no picture of the others behind)

@@ -632,11 +632,14 @@ def _note_csv_names(args: argparse.Namespace) -> None:
 def _read_frame_labels(args: argparse.Namespace) -> None:
     """Read the ``--frame-labels`` file (and its names) before the recording: a malformed or
     empty label file is one error at once, not after the recording is decoded (a video's
-    poses estimated). Whether its count fits the recording is checked once that is read."""
-    from features.label_tracks import read_label_names, read_label_track
+    poses estimated); so is a count that does not fit a pose file's or a constant-rate
+    video's frames (:func:`features.datasets.check_track`). Other recordings' counts are
+    checked once read."""
+    from features.datasets import check_track
+    from features.label_tracks import LabelTrack
 
-    names = read_label_names(args.label_names) if args.label_names is not None else None
-    read_label_track(args.frame_labels, names)
+    track = LabelTrack(args.frame_labels, args.label_block, args.label_names)
+    check_track(Path(args.data), track, args.fps)
 
 
 def _check_overlaps(args: argparse.Namespace) -> None:
@@ -782,6 +785,9 @@ def _check_options(args: argparse.Namespace) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    args.notes = []
+    args.kept_whole = set()  # --split repetitions: the clips with none, kept whole
+    _check_options(args)  # before the training's imports (seconds): a bad option at once
     from casebase_store import prepare_write
     from cbr.training import (
         ClipsFailed,
@@ -792,9 +798,6 @@ def run(args: argparse.Namespace) -> int:
         train_described,
     )
 
-    args.notes = []
-    args.kept_whole = set()  # --split repetitions: the clips with none, kept whole
-    _check_options(args)
     split_defaulted = args.split is None and not args.append
     if str(args.db).strip():  # a writer: refused where it cannot write, before any work
         prepare_write(args.db)
