@@ -57,7 +57,7 @@ def _read_label_text(path: Path, what: str) -> str:
     except OSError as exc:
         raise DataError(f"cannot read the {what} ({exc.strerror or exc})", path) from None
     try:
-        return data.decode("utf-8-sig")
+        text = data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         if data.startswith((b"\xff\xfe", b"\xfe\xff")):
             raise DataError("UTF-16 text (its byte order mark): save it as UTF-8", path) from None
@@ -66,6 +66,15 @@ def _read_label_text(path: Path, what: str) -> str:
             f"not UTF-8 text ({exc.reason} at byte {exc.start}, line {line}): save it as UTF-8",
             path,
         ) from None
+    at = text.find("\ufeff")
+    if at >= 0:  # a byte order mark inside: files joined together (cat a.txt b.txt)
+        raise DataError(
+            f"line {text.count(chr(10), 0, at) + 1}: a byte order mark (U+FEFF, unseen) inside"
+            f" the {what}, where a file saved with one begins: files joined together? It would"
+            " be read as part of a label; remove it",
+            path,
+        )
+    return text
 
 
 def _refuse_a_pipe(path: Path, what: str) -> None:
@@ -136,10 +145,41 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
         held = ", ".join(_short(c) for c in list(names)[:5]) + (", ..." if len(names) > 5 else "")
         listed = ", ".join(_short(c) for c in unknown[:5]) + (", ..." if len(unknown) > 5 else "")
         raise DataError(
-            f"label code(s) {listed} not in the label names (which name {held})",
+            f"line {_first_line(text, set(unknown))}: label code(s) {listed} not in the label"
+            f" names (which name {held}){_written_otherwise(unknown, names)}",
             path,
         )
     return [names[t] for t in tokens]
+
+
+def _first_line(text: str, codes: set[str]) -> int:
+    """The line of ``text`` (comments gone) where one of ``codes`` first stands."""
+    return next(
+        n
+        for n, line in enumerate(text.splitlines(), start=1)
+        if codes.intersection(re.split(r"[\s,]+", line))
+    )
+
+
+def _written_otherwise(unknown: list[str], names: dict[str, str]) -> str:
+    """When the codes not named are numbers the names file names written otherwise (``1.0``
+    or ``01`` for ``1``, as a spreadsheet or pandas writes whole numbers), which: the codes
+    are matched as written."""
+    named = {value: code for code in names if (value := _number(code)) is not None}
+    same = [(u, named[v]) for u in unknown if (v := _number(u)) is not None and v in named]
+    if not same:
+        return ""
+    shown = ", ".join(f"{_short(u)} for {_short(c)}" for u, c in same[:3])
+    return f": the same numbers written otherwise ({shown}); write them as the names file does"
+
+
+def _number(code: str) -> float | None:
+    """``code`` as a finite number, or None."""
+    try:
+        value = float(code)
+    except ValueError:
+        return None
+    return value if np.isfinite(value) else None
 
 
 def _short(code: str) -> str:

@@ -68,8 +68,8 @@ def test_one_label_file_for_two_recordings_is_refused_before_either_is_described
     ("text", "problem"),
     [
         ("", "the label file holds no labels"),
-        ("1 1 1 1 1 1 x\n", "label code(s) x not in the label names"),
-        ("\ufeff1,1\r\n1,1\r\n2,2\r\n", "label code(s) 2 not in the label names"),
+        ("1 1 1 1 1 1 x\n", "line 1: label code(s) x not in the label names"),
+        ("\ufeff1,1\r\n1,1\r\n2,2\r\n", "line 3: label code(s) 2 not in the label names"),
     ],
 )
 def test_a_later_recordings_malformed_label_file_is_refused_first(

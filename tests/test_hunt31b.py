@@ -240,6 +240,6 @@ def test_label_codes_not_named_say_what_the_names_file_names(tmp_path: Path) -> 
     (tmp_path / "names.txt").write_text("1: JumpJack\n2: Jog\n")
     (tmp_path / "track.txt").write_text("1 1 2 2\n")
     names = read_label_names(tmp_path / "names.txt")
-    with pytest.raises(DataError, match=r"track.txt: label code\(s\) 1, 2 not in the label"
+    with pytest.raises(DataError, match=r"track.txt: line 1: label code\(s\) 1, 2 not in the label"
                        r" names \(which name 1:, 2:\)$"):  # fmt: skip
         read_label_track(tmp_path / "track.txt", names)

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from posecbr.cli import main
-from tests.badinput import refused, small_case_base
+from tests.badinput import good_pose_file, refused, small_case_base
 
 SQUAT = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"  # 65 frames, 5 fps
 
@@ -184,3 +184,93 @@ def test_train_csv_label_file_of_a_video_is_refused_before_the_model_runs(
     refused(["train", str(csv), "--db", str(tmp_path / "cb.sqlite")], tmp_path, capsys,
             f"{labels}: 13 labels (one per frame) do not fit the recording"
             " tfjs_pose_squats_pexels4838220.mp4: 65 frames at 5 fps need 65 or 66")  # fmt: skip
+
+
+# ---------------------------------------------------- label files: the line of the mistake
+
+NAMES = "1 squat\n2 lunge\n"
+
+
+def _train_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str,
+                   names: str, *needles: str) -> None:  # fmt: skip
+    """``train rec.npz --frame-labels labels.txt --label-names names.txt`` (12 frames)
+    refused in one line naming the file, nothing written."""
+    rec = good_pose_file(tmp_path / "rec.npz", frames=12)
+    (tmp_path / "labels.txt").write_text(text, encoding="utf-8")
+    (tmp_path / "names.txt").write_text(names, encoding="utf-8")
+    refused(["train", str(rec), "--frame-labels", str(tmp_path / "labels.txt"),
+             "--label-names", str(tmp_path / "names.txt"), "--db",
+             str(tmp_path / "cb.sqlite")], tmp_path, capsys, *needles)  # fmt: skip
+
+
+def test_a_code_the_names_file_lacks_is_refused_naming_its_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Code 7 first stands on line 4 (of 12 labels, 3 a line): the line was not named, and
+    in a file of thousands the user could not find it."""
+    _train_refused(tmp_path, capsys, "1 1 1\n1 1 1\n2 2 2 # lunge\n2 2 7\n", NAMES,
+                   f"{tmp_path / 'labels.txt'}: line 4: label code(s) 7 not in the label"
+                   " names (which name 1, 2)")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("text", "shown"),
+    [("1.0\n" * 6 + "2.0\n" * 6, "1.0 for 1, 2.0 for 2"), ("01\n" * 6 + "02\n" * 6,
+      "01 for 1, 02 for 2")],
+    ids=["decimals", "leading zeros"],
+)  # fmt: skip
+def test_codes_written_as_other_numbers_are_said_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, shown: str
+) -> None:
+    """Codes 1.0 and 2.0 (pandas writes a column of whole numbers with a NaN so), or 01 and
+    02, for the names file's 1 and 2: refused as before, now saying they are its numbers
+    written otherwise (the user saw only "1.0, 2.0 not in the label names (which name 1,
+    2)")."""
+    _train_refused(tmp_path, capsys, text, NAMES,
+                   f"{tmp_path / 'labels.txt'}: line 1: label code(s)",
+                   f"the same numbers written otherwise ({shown}); write them as the names"
+                   " file does")  # fmt: skip
+
+
+@pytest.mark.parametrize("which", ["labels", "names"])
+def test_a_byte_order_mark_inside_a_label_file_is_refused_naming_its_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], which: str
+) -> None:
+    """Two files saved with a byte order mark joined together (``cat a.txt b.txt``) leave
+    one at the start of the second's first line: read as part of a label it made activity
+    "\\ufeff2" beside "2" (without names, trained under a name that looks like 2), or a code
+    the names file named "\\ufeff2"."""
+    bom = "\ufeff"
+    text = f"{bom}1 1 1 1 1 1\n{bom}2 2 2 2 2 2\n" if which == "labels" else "1 " * 6 + "2 " * 6
+    names = NAMES if which == "labels" else f"{bom}1 squat\n{bom}2 lunge\n"
+    what = "label file" if which == "labels" else "label names file"
+    _train_refused(tmp_path, capsys, text, names,
+                   f"{which}.txt: line 2: a byte order mark (U+FEFF, unseen) inside the {what}",
+                   "files joined together?")  # fmt: skip
+
+
+def test_segment_truth_names_the_line_of_a_code_not_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = small_case_base(tmp_path / "cb")
+    capsys.readouterr()
+    rec = good_pose_file(tmp_path / "rec.npz", frames=12)
+    (tmp_path / "truth.txt").write_text("1 1 1 1 1 1\n1 1 1 1 1 9\n", encoding="utf-8")
+    (tmp_path / "names.txt").write_text(NAMES, encoding="utf-8")
+    refused(["segment", str(rec), "--db", str(db), "--truth", str(tmp_path / "truth.txt"),
+             "--label-names", str(tmp_path / "names.txt")], tmp_path, capsys,
+            "truth.txt: line 2: label code(s) 9 not in the label names")  # fmt: skip
+
+
+def test_labels_written_in_other_ways_read_the_same(tmp_path: Path) -> None:
+    """Blank lines, CRLF line ends, a byte order mark at the start and comments change
+    nothing (as before)."""
+    from features.label_tracks import read_label_names, read_label_track
+
+    plain, odd = tmp_path / "plain.txt", tmp_path / "odd.txt"
+    plain.write_text("1 1 2 2\n", encoding="utf-8")
+    odd.write_bytes(b"\xef\xbb\xbf1\r\n\r\n1 # one\r\n  \r\n2,2\r\n\r\n")
+    names = tmp_path / "names.txt"
+    names.write_bytes(b"\xef\xbb\xbf1 squat\r\n\r\n2\tlunge\r\n")
+    assert read_label_track(odd, read_label_names(names)) == ["squat"] * 2 + ["lunge"] * 2
+    assert read_label_track(odd) == read_label_track(plain)
