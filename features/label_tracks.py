@@ -136,6 +136,7 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     if not tokens:
         raise DataError("the label file holds no labels", path)
     _refuse_semicolons(text, path)
+    _refuse_a_labels_csv(text, path)
     _refuse_a_table(text, path)
     _refuse_a_header(text, tokens, path)
     if names is None:
@@ -222,6 +223,21 @@ def _refuse_nul(text: str, path: Path) -> None:
         + (" (UTF-16 text? save the file as UTF-8)" if utf16 else " (a case base cannot store it)"),
         path,
     )
+
+
+def _refuse_a_labels_csv(text: str, path: Path) -> None:
+    """Refuse a labels CSV given for a label file (its header ``path,label`` or
+    ``path,label_file`` on the first line): read as labels, its paths and labels were one
+    label each, refused as a count that does not fit "(another frame rate or label
+    block?)", or, fitting by chance, trained as activities named after its paths."""
+    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), "")
+    words = {w.casefold() for w in re.split(r"[\s,]+", first)}
+    if "path" in words and words & {"label", "label_file"}:
+        raise DataError(
+            f"line 1: {first[:40]!r} is a labels CSV's header, and this a labels CSV, not a"
+            " label file: a label file takes the labels alone, one per frame or block",
+            path,
+        )
 
 
 def _refuse_a_table(text: str, path: Path) -> None:

@@ -274,3 +274,19 @@ def test_labels_written_in_other_ways_read_the_same(tmp_path: Path) -> None:
     names.write_bytes(b"\xef\xbb\xbf1 squat\r\n\r\n2\tlunge\r\n")
     assert read_label_track(odd, read_label_names(names)) == ["squat"] * 2 + ["lunge"] * 2
     assert read_label_track(odd) == read_label_track(plain)
+
+
+@pytest.mark.parametrize("header", ["path,label,subject", "path,label_file,label_block_s"])
+def test_a_labels_csv_given_for_a_label_file_is_refused_as_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], header: str
+) -> None:
+    """The recordings' labels CSV given to --frame-labels: its 12 cells were read as 12
+    labels, which fit the 12 frames ('path', 'label', ... trained as activities), and
+    another count was refused blaming "another frame rate or label block"."""
+    rec = good_pose_file(tmp_path / "rec.npz", frames=12)
+    csv = tmp_path / "labels.csv"
+    row = "rec.npz,squat,s01" if "subject" in header else "rec.npz,track.txt,0.1"
+    csv.write_text("\n".join([header, row, row, row]) + "\n", encoding="utf-8")
+    refused(["train", str(rec), "--frame-labels", str(csv), "--db", str(tmp_path / "cb.sqlite")],
+            tmp_path, capsys, f"{csv}: line 1: {header!r} is a labels CSV's header, and this a"
+            " labels CSV, not a label file")  # fmt: skip
