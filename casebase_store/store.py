@@ -728,9 +728,12 @@ def _configure_sqlite(engine: Engine, timeout_s: float, readonly: bool) -> None:
         cur.execute("PRAGMA foreign_keys = ON")
         if not readonly:  # the journal mode is a property of the file: readers leave it
             # a rollback journal, not WAL: a reader then needs no side files, so reading
-            # creates nothing and works in a read-only folder (stores written in WAL mode by
-            # posecbr 0.1 are converted by their first writer)
-            cur.execute("PRAGMA journal_mode = DELETE")
+            # creates nothing and works in a read-only folder. A store written in WAL mode by
+            # posecbr 0.1 is converted by its first writer, once a write of it has committed
+            # (leave_wal_mode): converting it here, on connecting, changed the file of a
+            # command then refused (an old schema, a name taken), which must change nothing
+            if not in_wal_mode(Path(str(engine.url.database))):
+                cur.execute("PRAGMA journal_mode = DELETE")
             cur.execute("PRAGMA synchronous = FULL")
         cur.close()
 
@@ -738,6 +741,28 @@ def _configure_sqlite(engine: Engine, timeout_s: float, readonly: bool) -> None:
     def _on_begin(conn: Connection) -> None:
         write = conn.get_execution_options().get("posecbr_write", False)
         conn.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
+
+
+def leave_wal_mode(engine: Engine) -> bool:
+    """Convert the SQLite file of the writer ``engine`` from WAL mode (as posecbr 0.1 left its
+    stores) to a rollback journal, for readers that then need no side files; returns whether
+    it did. Run after a write committed, outside any transaction: a command refused before
+    (an old schema, a name taken) leaves the file as it was. Another process holding the file
+    open makes it wait (the busy timeout), then give up: the next writer converts it."""
+    if not _is_sqlite(engine) or not in_wal_mode(Path(str(engine.url.database))):
+        return False
+    raw = engine.raw_connection()  # the driver's connection: no BEGIN around the PRAGMA
+    try:
+        cur = raw.cursor()
+        try:
+            cur.execute("PRAGMA journal_mode = DELETE")
+            return str(cur.fetchone()[0]).lower() == "delete"
+        finally:
+            cur.close()
+    except sqlite3.Error:  # busy: left in WAL mode, which the next writer converts
+        return False
+    finally:
+        raw.close()
 
 
 def _configure_postgresql(engine: Engine, timeout_s: float, readonly: bool) -> None:
@@ -922,6 +947,7 @@ class CaseStore:
                 tx = StoreTransaction(self, session)
                 yield tx
                 tx._bump_versions()
+        leave_wal_mode(self.engine)  # posecbr 0.1's WAL mode, once a write has committed
 
     @contextmanager
     def _read(self) -> Iterator[Session]:

@@ -33,6 +33,7 @@ from .store import (
     check_name_length,
     check_writable,
     in_wal_mode,
+    leave_wal_mode,
     sqlite_file,
 )
 
@@ -62,11 +63,11 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
                 # 1, and the second gave up "locked" or converted the store again)
                 conn.exec_driver_sql(f"SELECT pg_advisory_xact_lock({_PG_INIT_LOCK})")
             found = _schema_version(conn, where)
-            if found == SCHEMA_VERSION:
-                return found
-            _check_upgradable(found, where)
-            _from_1(conn)
-            return found
+            if found != SCHEMA_VERSION:
+                _check_upgradable(found, where)  # refused: the file as it was, WAL mode too
+                _from_1(conn)
+        leave_wal_mode(engine)  # posecbr 0.1's WAL mode, once the store reads as current
+        return found
     except StoreError:
         raise
     except Exception as exc:  # a driver error of any backend: one line naming the store

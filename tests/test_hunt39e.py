@@ -1,0 +1,160 @@
+"""Store and compare faults found by hunt 39e: a refused writer that changed the file it
+refused (posecbr 0.1's WAL mode left before the schema was checked)."""
+
+from __future__ import annotations
+
+import hashlib
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from posecbr.cli import main
+from tests.badinput import refused, snapshot
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
+LABELS = DEMO / "labels.csv"
+CLIP = DEMO / "m01_s03_e01.npz"
+V1_SQL = Path(__file__).with_name("fixtures") / "store_v1.sql"
+
+
+def _md5(path: Path) -> str:
+    return hashlib.md5(path.read_bytes()).hexdigest()
+
+
+def _wal(db: Path) -> Path:
+    """``db`` put in WAL mode, as posecbr 0.1 left its stores (no -wal or -shm after)."""
+    con = sqlite3.connect(db)
+    assert con.execute("PRAGMA journal_mode = WAL").fetchone() == ("wal",)
+    con.close()
+    assert sorted(p.name for p in db.parent.iterdir() if p.name.startswith(db.name)) == [db.name]
+    return db
+
+
+def _header_modes(db: Path) -> bytes:
+    """Bytes 18 and 19 of a SQLite file: 2, 2 in WAL mode, 1, 1 with a rollback journal."""
+    return db.read_bytes()[18:20]
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    db = tmp_path_factory.mktemp("cb") / "cb.sqlite"
+    argv = ["train", str(LABELS), "--db", str(db), "--subjects", "s01",
+            "--labels", "deep_squat,sit_to_stand", "--mirror", "off"]  # fmt: skip
+    assert main(argv) == 0
+    return db
+
+
+def _v1_wal(folder: Path) -> Path:
+    db = folder / "old.sqlite"
+    con = sqlite3.connect(db)
+    con.executescript(V1_SQL.read_text(encoding="utf-8"))
+    con.close()
+    return _wal(db)
+
+
+def _writers_of(db: Path, source: Path) -> list[list[str]]:
+    return [
+        ["casebase", "copy", "--db", str(source), "--to", str(db)],
+        ["casebase", "copy", "--db", str(source), "--to", str(db), "--as", "other"],
+        [
+            "train",
+            str(LABELS),
+            "--db",
+            str(db),
+            "--subjects",
+            "s01",
+            "--labels",
+            "deep_squat,sit_to_stand",
+            "--mirror",
+            "off",
+            "--name",
+            "other",
+        ],  # fmt: skip
+        [
+            "train",
+            str(LABELS),
+            "--db",
+            str(db),
+            "--subjects",
+            "s02",
+            "--labels",
+            "deep_squat,sit_to_stand",
+            "--append",
+        ],  # fmt: skip
+    ]
+
+
+@pytest.mark.parametrize("which", range(4))
+def test_a_writer_refusing_a_posecbr_0_1_store_in_wal_mode_leaves_it_byte_identical(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], which: int
+) -> None:
+    # before: `casebase copy --to OLD.sqlite` set the file's journal mode on connecting, then
+    # refused its schema version: OLD.sqlite was no longer in WAL mode, its bytes changed
+    folder = tmp_path / "old"
+    folder.mkdir()
+    db = _v1_wal(folder)
+    before = _md5(db)
+    refused(_writers_of(db, trained)[which], folder, capsys, "casebase upgrade --db FILE")
+    assert _md5(db) == before and _header_modes(db) == b"\x02\x02"
+    assert sorted(p.name for p in folder.iterdir()) == ["old.sqlite"]
+
+
+def test_upgrade_refusing_a_newer_store_in_wal_mode_leaves_it_byte_identical(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: the journal mode was converted, then the schema version 99 refused
+    folder = tmp_path / "new"
+    folder.mkdir()
+    db = _v1_wal(folder)
+    con = sqlite3.connect(db)
+    con.execute("UPDATE posecbr_schema_version SET version = 99")
+    con.commit()
+    con.close()
+    assert _header_modes(db) == b"\x02\x02"
+    before = _md5(db)
+    refused(["casebase", "upgrade", "--db", str(db)], folder, capsys, "schema version 99")
+    assert _md5(db) == before and sorted(p.name for p in folder.iterdir()) == ["old.sqlite"]
+
+
+def test_a_copy_refused_for_a_name_taken_leaves_a_current_store_in_wal_mode_as_it_was(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: the copy converted the file to a rollback journal, then found 'default' there
+    folder = tmp_path / "to"
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    _wal(db)
+    before = _md5(db)
+    argv = ["casebase", "copy", "--db", str(trained), "--to", str(db)]
+    refused(argv, folder, capsys, "a case base named 'default' is here already")
+    assert _md5(db) == before and _header_modes(db) == b"\x02\x02"
+    # a copy that is made converts it (readers then need no side files), and says nothing
+    assert main([*argv, "--as", "other"]) == 0
+    assert "as 'other'" in capsys.readouterr().out
+    assert _header_modes(db) == b"\x01\x01"
+    assert sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]
+    before = snapshot(folder)
+    assert main(["classify", str(CLIP), "--db", str(db), "--name", "other"]) == 0
+    assert snapshot(folder) == before
+
+
+@pytest.mark.parametrize("which", range(3))
+def test_a_reader_of_a_current_store_in_wal_mode_writes_nothing(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], which: int
+) -> None:
+    folder = tmp_path / "cb"
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    _wal(db)
+    before = _md5(db)
+    argv = [
+        ["classify", str(CLIP), "--db", str(db)],
+        ["segment", str(CLIP), "--db", str(db), "--unknown", "held-out"],
+        ["casebase", "list", "--db", str(db)],
+    ][which]
+    refused(argv, folder, capsys, "WAL mode", "posecbr casebase upgrade --db FILE")
+    assert _md5(db) == before and snapshot(folder) == {"cb.sqlite": snapshot(folder)["cb.sqlite"]}
