@@ -1,10 +1,17 @@
 """Store and compare faults found by hunt 39e: a refused writer that changed the file it
-refused (posecbr 0.1's WAL mode left before the schema was checked)."""
+refused (posecbr 0.1's WAL mode left before the schema was checked); a comparison
+interrupted while drawing its pictures, whose results file named none of those drawn."""
 
 from __future__ import annotations
 
 import hashlib
+import json
+import os
+import signal
 import sqlite3
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -158,3 +165,81 @@ def test_a_reader_of_a_current_store_in_wal_mode_writes_nothing(
     ][which]
     refused(argv, folder, capsys, "WAL mode", "posecbr casebase upgrade --db FILE")
     assert _md5(db) == before and snapshot(folder) == {"cb.sqlite": snapshot(folder)["cb.sqlite"]}
+
+
+#: ``python -m posecbr`` whose second picture written (accuracy, then a confusion matrix) is
+#: followed by a marker file and a long wait: an interrupt then comes once it is on disk,
+#: before the command has named it
+SLOW_SECOND_PICTURE = """
+import os, sys, time
+from pathlib import Path
+import cbr.evaluation.pictures as pictures
+real, drawn = pictures._save, []
+def save(fig, path):
+    out = real(fig, path)
+    drawn.append(path)
+    if len(drawn) == 2:
+        Path(os.environ["MARK"]).write_text(str(path))
+        time.sleep(600)
+    return out
+pictures._save = save
+from posecbr.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+COMPARE = ["compare", str(DEMO), "--subjects", "s01", "--labels",
+           "deep_squat,sit_to_stand,standing_shoulder_abduction", "--folds", "3",
+           "--similarities", "euclidean", "--features", "fluents", "--no-dad", "--peers",
+           "none", "--explain", "0"]  # fmt: skip
+
+
+def _pngs(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if p.suffix == ".png")
+
+
+def test_compare_interrupted_while_drawing_names_exactly_the_pictures_on_disk(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: results.json, written before the pictures, named none; the two drawn lay beside
+    # it unnamed, and the earlier run's timelines and prevalence, no longer named by any
+    # results file, were never removed
+    out = tmp_path / "o"
+    assert main([*COMPARE, "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert _pngs(out) == ["accuracy.png", "confusion_cbr_fluents_euclidean.png",
+                          "prevalence.png", "timeline_00.png", "timeline_01.png",
+                          "timeline_02.png"]  # fmt: skip
+    mark = tmp_path / "mark"
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1", "MARK": str(mark)}
+    proc = subprocess.Popen(
+        [sys.executable, "-c", SLOW_SECOND_PICTURE, *COMPARE, "--out", str(out)],
+        cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 600
+        while not mark.exists() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert mark.exists(), proc.communicate(timeout=60)
+        proc.send_signal(signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, stderr
+    assert stderr.splitlines()[-1] == (
+        f"posecbr compare: interrupted: results in {out}, with the 1 picture drawn before it;"
+        " the rest were not drawn"
+    )
+    assert "Traceback" not in stderr
+    # the confusion matrix, written but not yet named when the interrupt came, is removed (a
+    # picture of the earlier run under the name would be stale); so are the earlier run's
+    # pictures not drawn again, which no results file names any more
+    assert sorted(p.name for p in out.iterdir()) == ["accuracy.png", "results.csv", "results.json"]
+    doc = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    assert doc["pictures"] == {"accuracy": "accuracy.png"}
+    assert "interrupted while drawing the pictures: 1 drawn" in " ".join(doc["notes"])
+    # the report shows the one picture named, and draws none of the others
+    assert main(["report", str(out), "--out", str(tmp_path / "r.html")]) == 0
+    html = (tmp_path / "r.html").read_text(encoding="utf-8")
+    assert html.count('<img src="data:image/png;base64,') == 1
+    assert (out / "accuracy.png").read_bytes().startswith(b"\x89PNG")

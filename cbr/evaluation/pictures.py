@@ -196,15 +196,21 @@ class Drawing:
         self.failures: list[str] = []
         self._lacking: dict[str, None] = {}  # the characters, in the order met
         self._lacking_line: int | None = None  # where their line is in failures
+        #: the file of the picture being drawn (None between pictures): an interrupt that
+        #: came after it was written, before its caller named it, leaves it unnamed
+        self.drawing: Path | None = None
 
-    def attempt(self, name: str, draw: Callable[[], T]) -> T | None:
+    def attempt(self, name: str, draw: Callable[[], T], path: Path | None = None) -> T | None:
+        """``draw()``, which writes the picture ``path`` (if any); None when it failed."""
         result: T | None = None
+        self.drawing = path
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             try:
                 result = draw()
             except Exception as exc:  # any library error: the results matter more than it
                 self.failures.append(f"picture {name} failed: {exc}")
+        self.drawing = None  # not on an interrupt (KeyboardInterrupt is no Exception)
         for w in caught:  # every other warning as it would have been
             if not self._no_glyph(w):
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
@@ -230,20 +236,25 @@ class Drawing:
         return True
 
 
-def result_pictures(results: CompareResults, out_dir: str | Path, drawing: Drawing) -> Pictures:
+def result_pictures(
+    results: CompareResults, out_dir: str | Path, drawing: Drawing, into: Pictures | None = None
+) -> Pictures:
     """The pictures that need only the results (accuracy, confusion matrices), into
-    ``out_dir``; names relative to it."""
+    ``out_dir``; names relative to it. Each is named in ``into`` (a new one when None) as soon
+    as it is on disk: a run interrupted meanwhile names those drawn."""
     out = Path(out_dir)
-    pics = Pictures()
+    pics = Pictures() if into is None else into
     if not results.scored():
         return pics
-    acc = drawing.attempt("accuracy", lambda: plot_accuracy(results, out / "accuracy.png"))
+    acc = drawing.attempt(
+        "accuracy", lambda: plot_accuracy(results, out / "accuracy.png"), out / "accuracy.png"
+    )
     pics.accuracy = None if acc is None else acc.name
     classes = results.dataset.classes
     for m, s in confusion_methods(results):
         dest = out / f"confusion_{safe_name(m.name)}.png"
         drawn = drawing.attempt(
-            f"confusion {m.name}", partial(plot_confusion, m.name, s, classes, dest)
+            f"confusion {m.name}", partial(plot_confusion, m.name, s, classes, dest), dest
         )
         if drawn is not None:
             pics.confusion.append(ConfusionPicture(m.name, drawn.name))
@@ -260,27 +271,33 @@ def _timeline(act: str, seq: Any, path: Path) -> TimelinePicture:
 
 
 def data_pictures(
-    run: CompareRun, out_dir: str | Path, trim: float | None, drawing: Drawing
+    run: CompareRun,
+    out_dir: str | Path,
+    trim: float | None,
+    drawing: Drawing,
+    into: Pictures | None = None,
 ) -> Pictures:
     """The pictures that need the clips and an estimator, into ``out_dir``: feature
     prevalence (initial vs trimmed case base; also stored in ``run.results.prevalence``) and
-    one fluent timeline per activity."""
+    one fluent timeline per activity. Each is named in ``into`` (a new one when None) as soon
+    as it is on disk."""
     from .prevalence import prevalence
 
     out = Path(out_dir)
-    pics = Pictures()
+    pics = Pictures() if into is None else into
     keep = trim if trim is not None and trim < 1.0 else 0.5
     prev = drawing.attempt("prevalence", lambda: prevalence(run, trim=keep))
     if prev is not None:
         run.results.prevalence = prev
-        drawn = drawing.attempt("prevalence", lambda: plot_prevalence(prev, out / "prevalence.png"))
+        dest = out / "prevalence.png"
+        drawn = drawing.attempt("prevalence", partial(plot_prevalence, prev, dest), dest)
         pics.prevalence = None if drawn is None else drawn.name
     examples = example_clips(run.data)
     for i, (act, seq) in enumerate(
         progress(examples.items(), "timelines", total=len(examples), unit="clip")
     ):
         path = out / f"timeline_{i:02d}.png"
-        timeline = drawing.attempt(f"timeline {act}", partial(_timeline, act, seq, path))
+        timeline = drawing.attempt(f"timeline {act}", partial(_timeline, act, seq, path), path)
         if timeline is not None:
             pics.timelines.append(timeline)
     return pics

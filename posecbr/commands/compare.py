@@ -357,12 +357,18 @@ def _draw_pictures(run_: Any, out: Path, trim: float | None) -> None:
     """Every picture into ``out``, one at a time; one that fails is a note and a line on
     stderr, never the end of the run."""
     from cbr.evaluation.pictures import Drawing, data_pictures, result_pictures
+    from cbr.evaluation.results import Pictures
 
     drawing = Drawing()
-    pics = result_pictures(run_.results, out, drawing)
-    more = data_pictures(run_, out, trim, drawing)
-    pics.prevalence, pics.timelines = more.prevalence, more.timelines
-    run_.results.pictures = pics
+    # named as each is drawn: a run interrupted meanwhile names those on disk (_interrupted)
+    run_.results.pictures = pics = Pictures()
+    try:
+        result_pictures(run_.results, out, drawing, into=pics)
+        data_pictures(run_, out, trim, drawing, into=pics)
+    except KeyboardInterrupt:  # the picture being drawn may be on disk, not yet named: gone
+        if drawing.drawing is not None and drawing.drawing.name not in pics.files():
+            drawing.drawing.unlink(missing_ok=True)
+        raise
     for line in drawing.failures:
         print(shown(line), file=sys.stderr)  # a label's character it names, escaped
     run_.results.notes += drawing.failures
@@ -397,6 +403,41 @@ def _remove_stale(out: Path, earlier: list[str], drawn: list[str]) -> None:
             if fh.read(len(PNG_MAGIC)) != PNG_MAGIC:
                 continue
         path.unlink(missing_ok=True)
+
+
+def _pictures(
+    run_: Any, args: argparse.Namespace, outputs: list[Output], earlier: list[str]
+) -> None:
+    """The pictures into ``--out``, then the results file again, naming them; the earlier
+    run's pictures not drawn again removed."""
+    results = run_.results
+    try:
+        _draw_pictures(run_, args.out, args.trim)
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM while drawing: the results are whole
+        raise KeyboardInterrupt(_interrupted(results, outputs, args.out, earlier)) from None
+    _remove_stale(args.out, earlier, results.pictures.files())
+    # the JSON again, now naming the pictures (the CSV holds no pictures)
+    _write_results(results, [o for o in outputs if o.format == "json"], args.out)
+
+
+def _interrupted(results: Any, outputs: list[Output], out: Path, earlier: list[str]) -> str:
+    """After an interrupt while the pictures were drawn: the results file names the pictures
+    drawn (before: none, while they lay in ``out``), those of an earlier run not drawn again
+    are removed (as a whole run removes them: no results file names them any more); returns
+    what is said after "interrupted". Keeping the drawn pictures, not removing them: each is
+    whole (written under a temporary name, then renamed), and ``posecbr report`` shows those
+    a results file names."""
+    drawn = results.pictures.files()
+    _remove_stale(out, earlier, drawn)
+    results.notes.append(
+        f"interrupted while drawing the pictures: {len(drawn)} drawn, the rest not (run the "
+        "comparison again for them)"
+    )
+    _write_results(results, [o for o in outputs if o.format == "json"], out)
+    return (
+        f"results in {out}, with the {len(drawn)} picture{'s' * (len(drawn) != 1)} drawn before"
+        " it; the rest were not drawn"
+    )
 
 
 def _print_explanations(explained: list[Any]) -> None:
@@ -461,10 +502,7 @@ def run(args: argparse.Namespace) -> int:
         if given:  # the files named by --json / --csv, as every command's "written to"
             print(f"{what} written to {shown(given)}", file=sys.stderr)
     if args.out:
-        _draw_pictures(run_, args.out, args.trim)
-        _remove_stale(args.out, earlier, results.pictures.files())
-        # the JSON again, now naming the pictures (the CSV holds no pictures)
-        _write_results(results, [o for o in outputs if o.format == "json"], args.out)
+        _pictures(run_, args, outputs, earlier)
         # the command as it can be pasted into a shell: a folder named with a space quoted
         out, report = shlex.quote(str(args.out)), shlex.quote(str(args.out / "report.html"))
         said = f"results and pictures in {args.out}; report: posecbr report {out} --out {report}"
