@@ -756,7 +756,8 @@ def leave_wal_mode(engine: Engine) -> bool:
         cur = raw.cursor()
         try:
             cur.execute("PRAGMA journal_mode = DELETE")
-            return str(cur.fetchone()[0]).lower() == "delete"
+            row = cur.fetchone()
+            return row is not None and str(row[0]).lower() == "delete"
         finally:
             cur.close()
     except sqlite3.Error:  # busy: left in WAL mode, which the next writer converts
