@@ -243,3 +243,71 @@ def test_compare_interrupted_while_drawing_names_exactly_the_pictures_on_disk(
     html = (tmp_path / "r.html").read_text(encoding="utf-8")
     assert html.count('<img src="data:image/png;base64,') == 1
     assert (out / "accuracy.png").read_bytes().startswith(b"\x89PNG")
+
+
+SQUAT_MP4 = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+
+
+@pytest.fixture(scope="module")
+def three(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A case base of three UI-PRMD movements (enough to judge unknown), for watch."""
+    db = tmp_path_factory.mktemp("cb3") / "cb.sqlite"
+    argv = ["train", str(LABELS), "--db", str(db), "--subjects", "s01", "--mirror", "off",
+            "--labels", "deep_squat,sit_to_stand,standing_shoulder_abduction"]  # fmt: skip
+    assert main(argv) == 0
+    return db
+
+
+def _fast_start(src: Path, dest: Path) -> bytes:
+    """``src``'s frames remuxed (not encoded again) with the index first, as a web page's
+    "fast start" MP4: the frames' box (mdat) is its last and runs to its end."""
+    import av
+
+    with (
+        av.open(str(src)) as inp,
+        av.open(str(dest), "w", options={"movflags": "+faststart"}) as out,
+    ):
+        video = inp.streams.video[0]
+        stream = out.add_stream_from_template(video)
+        for packet in inp.demux(video):
+            if packet.dts is not None:
+                packet.stream = stream
+                out.mux(packet)
+    data = dest.read_bytes()
+    mdat = data.index(b"mdat") - 4
+    assert data.index(b"moov") < mdat and mdat + int.from_bytes(
+        data[mdat : mdat + 4], "big"
+    ) == len(data)
+    return data
+
+
+def test_watch_of_a_served_mp4_cut_short_says_it_was_cut(
+    three: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: cut 300 bytes short (inside its last frame) it was watched as whole, 64 frames,
+    # exit 0; cut before its index (at its end) "cannot open camera or stream"; a file here
+    # cut so is refused as "truncated MP4/MOV" (hunt 38f)
+    pytest.importorskip("av")
+    from tests.test_watch import _serving
+
+    whole = (shared_data / SQUAT_MP4).read_bytes()  # its index (moov) last: 508,341 bytes
+    folder = tmp_path / "served"
+    folder.mkdir()
+    fast = _fast_start(shared_data / SQUAT_MP4, tmp_path / "fast.mp4")
+    (folder / "fast.mp4").write_bytes(fast)
+    (folder / "last_frame.mp4").write_bytes(fast[:-300])
+    (folder / "no_index.mp4").write_bytes(whole[:-500])
+    with _serving(folder) as url:
+        argv = ["--db", str(three), "--speed", "0", "--unknown", "held-out"]
+        assert main(["watch", f"{url}/fast.mp4", *argv]) == 0  # whole: as before
+        assert "watched 65 frames" in capsys.readouterr().err
+        assert main(["watch", f"{url}/last_frame.mp4", *argv]) == 1
+        err = capsys.readouterr().err.splitlines()
+        assert err[-1] == (
+            f"posecbr watch: error: {url}/last_frame.mp4: truncated MP4/MOV: the served file "
+            f"ends at byte {len(fast) - 300:,}, inside a box that runs to byte {len(fast):,}"
+        )
+        refused(["watch", f"{url}/no_index.mp4", *argv], folder, capsys,
+                f"{url}/no_index.mp4: truncated MP4/MOV: the served file ends at byte "
+                f"{len(whole) - 500:,}, inside a box that runs to byte {len(whole):,}")  # fmt: skip
+

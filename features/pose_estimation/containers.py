@@ -53,15 +53,22 @@ def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
 
 
 def cut_short(fh: Any, size: int, head: bytes, what: str) -> str | None:
-    """Why a Matroska/WebM or FLV file of ``size`` bytes whose first bytes are ``head``,
+    """Why an MP4/MOV, Matroska/WebM or FLV file of ``size`` bytes whose first bytes are ``head``,
     read from ``fh`` at its start (forward only: ``seek`` ahead, ``read``, ``tell``), is cut
     short, in words naming it ``what`` ("the file"), or None when it is not or cannot be
-    judged (no such file). Matroska/WebM (:func:`matroska_walk`): it ends inside an
+    judged (no such file). MP4/MOV (:func:`mp4_walk`): it ends inside a box: FFmpeg decodes
+    what it has of the last frame as whole. Matroska/WebM (:func:`matroska_walk`): it ends inside an
     element: FFmpeg reads the frames before the cut as the whole video when the file states
     no duration, or no frame rate, as a browser's WebM. FLV (:func:`flv_end`): it ends
     inside a tag, or its tags end more than :data:`FLV_SLACK_S` before the duration its
     header states (cut where a tag ends): its frames are counted by their packets (the
     sound may run on after the last frame: :func:`counted_by_duration`)."""
+    if is_mp4(head):  # a served MP4/MOV file (a file here: refuse_cut)
+        end = mp4_walk(fh, size)
+        if end is None or end <= size:
+            return None
+        runs = f" that runs to byte {end:,}" if end > size + 1 else "'s header"
+        return f"truncated MP4/MOV: {what} ends at byte {size:,}, inside a box{runs}"
     if head.startswith(EBML_START):
         end = matroska_walk(fh, size)
         if end is None or end <= size:

@@ -10,7 +10,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from .containers import EBML_START, FLV_START, counted_by_duration, cut_short, segment_end
+from .containers import (
+    EBML_START,
+    FLV_START,
+    counted_by_duration,
+    cut_short,
+    is_mp4,
+    segment_end,
+)
 
 
 def served_whole(url: str, timeout_s: float | None = None) -> bool:
@@ -137,13 +144,14 @@ def served_whole_by_duration(url: str, timeout_s: float | None = None) -> bool:
 def served_cut(
     url: str, timeout_s: float | None = None, alive: Callable[[], None] | None = None
 ) -> str | None:
-    """Why a Matroska/WebM or FLV file an HTTP(S) server gives whole is cut short, in one
-    line (:func:`.containers.cut_short`: it ends inside an element or a tag, as a file here
-    is refused for), or None: not cut, no such file, or not to be asked (no length stated,
-    no answer within ``timeout_s``: FFmpeg's 30 s when None). A browser's WebM without a
-    duration states no frame count: its frames before the cut were watched as the whole
-    file. The file is read once more from its start to its end, walked as it comes (no
-    copy kept); a server that sends less than the length it states has cut it too.
+    """Why an MP4/MOV, Matroska/WebM or FLV file an HTTP(S) server gives whole is cut short,
+    in one line (:func:`.containers.cut_short`: it ends inside a box, an element or a tag, as
+    a file here is refused for; an MP4 cut inside its last frame decodes as whole, one cut
+    before its index, at its end, does not open), or None: not cut, no such file, or not to
+    be asked (no length stated, no answer within ``timeout_s``: FFmpeg's 30 s when None). A
+    browser's WebM without a duration states no frame count: its frames before the cut were
+    watched as the whole file. The file is read once more from its start to its end, walked
+    as it comes (no copy kept); a server that sends less than the length it states has cut it too.
     ``alive``: called as each part of the file comes (a long file read again is no stall)."""
     import http.client
 
@@ -151,10 +159,10 @@ def served_cut(
         opener, bare = _ffmpeg_opener(url)
         with opener.open(bare, timeout=timeout_s or 30.0) as answer:
             length = (answer.headers.get("Content-Length") or "").strip()
-            head = answer.read(4)
+            head = answer.read(8)  # an MP4/MOV file's first box's size and name
             if answer.status != 200 or not length.isdigit():
                 return None
-            if not head.startswith((EBML_START, FLV_START)):
+            if not (head.startswith((EBML_START, FLV_START)) or is_mp4(head)):
                 return None
             body = _Onward(answer, head, int(length), alive)
             cut = cut_short(body, int(length), head, "the served file")

@@ -1197,7 +1197,9 @@ def _open_source(
     except (cv2.error, OverflowError):  # an index too large for OpenCV (a C int)
         raise DataError("cannot open camera or stream", str(source)) from None
     if not cap.isOpened():
-        raise DataError("cannot open camera or stream", str(source))
+        # a file the server gives whole, cut before its index (an MP4's, at its end): said so
+        cut = served_cut(str(device), timeout_s) if _served_url(device) else None
+        raise DataError(cut or "cannot open camera or stream", str(source))
     if fps is None:
         return cap, None, 0, False
     declared = _frame_count(cap)
@@ -1207,6 +1209,11 @@ def _open_source(
         # the duration at that rate; at the frames' own rate it is this many
         declared = int(declared * fps / stated)
     return cap, fps, declared, True
+
+
+def _served_url(device: int | str) -> bool:
+    """Whether a source that is not a path is an HTTP(S) URL (a server may give a file)."""
+    return isinstance(device, str) and device.lower().startswith(("http://", "https://"))
 
 
 def _grab(cap: Any, fps: float | None) -> tuple[bool, None, float]:
@@ -1291,7 +1298,8 @@ def stream_poses(
     the stream, after ``max_frames``, or when the consumer stops iterating. A file, or a
     file served over the network (``fps`` given), that ends before the frame count its
     container states raises DataError, as :func:`iter_frames` does; so does a served
-    Matroska/WebM or FLV file cut short (:func:`.served.served_cut`), as a file here is.
+    MP4/MOV, Matroska/WebM or FLV file cut short (:func:`.served.served_cut`), as a file here
+    is (one that does not open: said so in place of "cannot open").
     ``timeout_s``: how long a stream URL may take to open (FFmpeg's default: 30 s).
     ``pace``: called with each
     frame's index and ``video_time_s`` once it is decoded and before it is read (its
@@ -1326,7 +1334,7 @@ def stream_poses(
             read_at = time.perf_counter()
             if not ok or bgr is None:  # read to its end: all of it
                 cut = served_cut(str(source), timeout_s, alive) if served else None
-                if cut is not None:  # a WebM or FLV cut on the server: it ended there
+                if cut is not None:  # an MP4, WebM or FLV cut on the server: it ended there
                     raise DataError(cut, str(source))
                 if served and index == 0 and declared:
                     raise DataError(NONE_SERVED.format(declared), str(source))
