@@ -66,7 +66,17 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
             if found != SCHEMA_VERSION:
                 _check_upgradable(found, where)  # refused: the file as it was, WAL mode too
                 _from_1(conn)
-        leave_wal_mode(engine)  # posecbr 0.1's WAL mode, once the store reads as current
+        # posecbr 0.1's WAL mode, once the store reads as current; another process holding
+        # the file open keeps it there (before: "nothing to do", the file still in WAL mode)
+        if not leave_wal_mode(engine) and file is not None and in_wal_mode(file):
+            done = f"converted from schema version {found} to {SCHEMA_VERSION}, but " * (
+                found != SCHEMA_VERSION
+            )
+            raise StoreError(
+                f"{done}the file is still in WAL mode: another process is reading or writing"
+                " it; run `posecbr casebase upgrade --db FILE` again once it has closed it",
+                where,
+            )
         return found
     except StoreError:
         raise

@@ -311,3 +311,44 @@ def test_watch_of_a_served_mp4_cut_short_says_it_was_cut(
                 f"{url}/no_index.mp4: truncated MP4/MOV: the served file ends at byte "
                 f"{len(whole) - 500:,}, inside a box that runs to byte {len(whole):,}")  # fmt: skip
 
+
+def test_upgrade_that_cannot_leave_wal_mode_says_so(
+    trained: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # another process reading the file keeps it in WAL mode: once WAL mode was left after
+    # the schema check, upgrade said "already schema version 2, nothing to do" (exit 0) and
+    # every reader went on sending the user to it (before: "database is locked")
+    import functools
+
+    import casebase_store
+
+    monkeypatch.setattr(casebase_store, "upgrade_store",
+                        functools.partial(casebase_store.upgrade_store, timeout_s=0.3))  # fmt: skip
+    folder = tmp_path / "cb"
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    _wal(db)
+    holder = sqlite3.connect(db, isolation_level=None)
+    try:
+        holder.execute("BEGIN")
+        assert holder.execute("SELECT count(*) FROM case_bases").fetchone() == (1,)
+        assert main(["casebase", "upgrade", "--db", str(db)]) == 1
+        captured = capsys.readouterr()
+        assert captured.out == "" and captured.err == (
+            f"posecbr casebase upgrade: error: {db}: the file is still in WAL mode: another "
+            "process is reading or writing it; run `posecbr casebase upgrade --db FILE` again "
+            "once it has closed it\n"
+        )
+    finally:
+        holder.execute("ROLLBACK")
+        holder.close()
+    assert _header_modes(db) == b"\x02\x02"
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    assert capsys.readouterr().out == f"{db}: converted from WAL mode to a rollback journal\n"
+    assert _header_modes(db) == b"\x01\x01" and sorted(p.name for p in folder.iterdir()) == [
+        "cb.sqlite"
+    ]
