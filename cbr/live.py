@@ -1100,15 +1100,15 @@ class LiveSegmenter:
         come back in the frames pushed beyond (:meth:`_still_beyond`): as
         :func:`cbr.segmentation.counted_segments` counts a segment beside one with no far
         point, the cut is as a recording's end beyond which nothing turns, and one far point
-        got into and held still up to it is no repetition. Once the stream has ended that is
-        the segment's count; while it runs on, the body may yet come back, and the far point
-        is left to the segment after, which counts it where the movement comes back (or, the
-        stream ending still in the hold, counts what this one would have). Returns the
+        got into and held still up to it is no repetition. The far point is left to the
+        segment after, which counts it where the movement comes back or, the stream ending
+        still in the hold, counts what this one would have, as ``segment`` counts it
+        (:func:`cbr.segmentation.counted_segments`); so too once the stream has ended (before,
+        the segment then kept it: two squats and a third held 8 s at the bottom to the end,
+        cut in the hold, counted 3 and 0 where a longer hold counted 2 and 1). Returns the
         segment's repetitions, whether its last far point is left to the segment after, and
         how many that counts if the stream ends in the hold."""
         settled = self._count_apart(first, end, edges, settled=(False, True))
-        if self.ended:
-            return settled, False, 0
         return reps, True, len(settled) - len(reps) + 1
 
     def current(self) -> LiveSegment | None:

@@ -52,7 +52,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -1096,6 +1096,38 @@ def counted_segments(
             holding = held_on[i]
         elif not holding:
             turn = False
+    return _held_to_the_end(out, raw, bounds, blind)
+
+
+def _held_to_the_end(
+    out: list[tuple[Repetition, ...]],
+    raw: Sequence[tuple[Repetition, ...]],
+    bounds: Sequence[tuple[int, int]],
+    blind: Sequence[bool],
+) -> list[tuple[Repetition, ...]]:
+    """:func:`counted_segments`' ``out`` with a segment's last far point held up to its end
+    (:attr:`features.repetitions.Repetition.held`) and on to the recording's end, nothing
+    come back (no far point in any segment after it, nobody in view in none), that the
+    segment keeps as a repetition (beside whole ones: one got into and held alone is none),
+    counted by the last segment, where the recording ends in the hold, as a far point held
+    across a cut is counted by the segment where the body comes back: two squats and a
+    third held at the bottom to the end, the label changing in the hold, count 2 and 1
+    (were 3 and 0; ``watch``, which finishes the first segment while the hold goes on,
+    counted 2 and 1). ``raw``: each segment's repetitions counted alone; ``blind``: nobody in
+    view in it."""
+    for i in range(len(bounds) - 1):
+        if any(raw[j] or blind[j] for j in range(i + 1, len(bounds))):
+            continue
+        if not (raw[i] and raw[i][-1].held[1] and out[i]):
+            break
+        kept = out[i][-1]
+        if kept.peak_frame != raw[i][-1].peak_frame:  # left out: a posture got into
+            break
+        start = bounds[-1][0]
+        at = replace(kept, start_frame=max(kept.start_frame, start),
+                     peak_frame=max(kept.peak_frame, start), end_frame=bounds[-1][1])  # fmt: skip
+        out = [*out[:i], out[i][:-1], *out[i + 1 : -1], (*out[-1], at)]
+        break
     return out
 
 
