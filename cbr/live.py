@@ -141,6 +141,11 @@ class _Judged:
         return 0.5 * (self.start + self.stop)
 
 
+_Window = tuple[int, int, float, "_Judged | None"]
+"""A window over the stretch in progress: frames [start, stop), its evidence of unknown as
+judged when it was solved, and the window as judged (None: it showed nobody)."""
+
+
 @dataclass
 class _Forward:
     """The decoder's forward pass over hops (Viterbi; ``cost[i, j]``: of going from state i
@@ -267,8 +272,10 @@ class LiveSegmenter:
        no window can still change their evidence (:meth:`_final_until`): a hop's evidence is
        the mean evidence of unknown (:func:`cbr.unknown.unknown_evidence`, graded by the
        default judge; with one person's case base, of the distances less how much farther
-       the person lies from every case, as the windows so far tell:
-       :func:`cbr.unknown.for_person`) of the windows inside its stretch over it (fixed and
+       the person lies from every case, as the windows up to then tell,
+       :func:`cbr.unknown.for_person`: each window judged again when the hop is passed, not
+       as the first windows of the stream told, which took a movement the case base lacks
+       for a far person) of the windows inside its stretch over it (fixed and
        repetition windows, those whose period disagrees with their neighbours' left out:
        :func:`cbr.segmentation.period_outliers`; a window across a change of activity is like
        neither side, whether both are known or not; over none, the last evidence carries
@@ -326,9 +333,10 @@ class LiveSegmenter:
         self.hops = 0  # hops decided
         self.cover = max(1, math.ceil(self.window / self.hop))  # windows over one stretch
         self.latest_votes: list[tuple[np.ndarray, float]] = []
-        self.windows: list[tuple[int, int, float]] = []  # (start, stop, evidence of unknown)
-        # of the windows that start in the stretch in progress and may still count
-        self.periods: list[tuple[int, int, float]] = []  # the same of its repetition windows
+        self.windows: list[_Window] = []  # (start, stop, evidence of unknown as judged then,
+        # the window as judged: None when it shows nobody) of the windows that start in the
+        # stretch in progress and may still count
+        self.periods: list[_Window] = []  # the same of its repetition windows
         self.period_votes: list[tuple[int, int, np.ndarray]] = []  # (start, stop, vote) of
         # the recent repetition windows not unlike every activity
         self.found: set[tuple[int, int]] = set()  # the recent periods (each solved once)
@@ -418,8 +426,8 @@ class LiveSegmenter:
     def _unlike_now(self) -> float:
         """The mean evidence of unknown of the latest windows that lie in the stretch in
         progress (all the latest when none does)."""
-        latest = self.windows[-self.cover :] or [(0, 0, v[1]) for v in self.latest_votes]
-        return float(np.mean([u for *_, u in latest])) if latest else 0.0
+        latest = [w[2] for w in self.windows[-self.cover :]] or [v[1] for v in self.latest_votes]
+        return float(np.mean(latest)) if latest else 0.0
 
     def _nobody_now(self) -> bool:
         """Every one of the latest windows votes every activity alike (nobody in view)."""
@@ -568,7 +576,7 @@ class LiveSegmenter:
     def _decide(self, n: int) -> list[LiveSegment]:
         vote = self._vote(n)
         self.latest_votes = [*self.latest_votes[1 - self.cover :], vote]
-        self.windows.append((n - self.window, n, vote[1]))
+        self.windows.append((n - self.window, n, vote[1], self._last_judged(n - self.window, n)))
         if self.hops % self.span_every == 0:  # spans end where offline's do: a window, then
             self._repetition_windows(n)  # every SPAN_HOP_S
         self.hops += 1
@@ -628,11 +636,18 @@ class LiveSegmenter:
         """For hops at ``centres`` (in order): the mean evidence of unknown of the windows
         inside frames [start, end) over each; a hop none covers carries the last covered
         one's (the first: that of the hop before, :attr:`carried`)."""
-        spans = np.array([(a, b) for a, b, _ in self.periods], dtype=np.int64).reshape(-1, 2)
+        spans = np.array([w[:2] for w in self.periods], dtype=np.int64).reshape(-1, 2)
         odd = period_outliers(spans, np.ones(len(spans), dtype=bool), self.step)
         periods = [w for w, out in zip(self.periods, odd.tolist(), strict=True) if not out]
+        # each window judged by the person as the windows by now show them, as offline
+        # judges every window by the whole recording's (cbr.segmentation.finish)
+        judge = for_person(self.judge, np.array(self.near))
         inside = np.array(
-            [w for w in self.windows + periods if w[0] >= start and w[1] <= end]
+            [
+                (w[0], w[1], self._rejudged(w, judge))
+                for w in self.windows + periods
+                if w[0] >= start and w[1] <= end
+            ]
         ).reshape(-1, 3)
         over = (inside[None, :, 0] <= centres[:, None]) & (centres[:, None] < inside[None, :, 1])
         n_over = over.sum(axis=1)
@@ -643,6 +658,15 @@ class LiveSegmenter:
                 self.carried = float(mean[k])
             out[k] = self.carried
         return out
+
+    @staticmethod
+    def _rejudged(window: _Window, judge: Judge) -> float:
+        """``window``'s evidence of unknown by ``judge`` (:func:`cbr.unknown.unknown_evidence`;
+        1.0 when too still for any activity); as judged then when it showed nobody."""
+        one = window[3]
+        if one is None:
+            return window[2]
+        return 1.0 if one.still else unknown_evidence(judge, one.nearest)
 
     def _pass(self, until: float, end: int, final: bool = False) -> list[LiveSegment]:
         """Pass the settled hops of the stretch in progress not passed yet, up to centre
@@ -769,7 +793,7 @@ class LiveSegmenter:
         solved = self.clf.solve([clip for _, clip in shown], flag=False)
         for ((b, c), _), one in zip(shown, solved, strict=True):
             vote, far = self._judged(one, b, c)
-            self.periods.append((b, c, far))
+            self.periods.append((b, c, far, self.judged[-1]))
             if far < 1.0:
                 self.period_votes.append((b, c, vote))
 
@@ -815,6 +839,12 @@ class LiveSegmenter:
             return np.full(self.unknown, 1.0 / self.unknown), 0.5
         solved = self.clf.solve([window], flag=False)[0]
         return self._judged(solved, n - self.window, n)  # the judge: unknown
+
+    def _last_judged(self, start: int, stop: int) -> _Judged | None:
+        """The window of frames [start, stop) just judged (:meth:`_judged`), or None: it
+        showed nobody, and was not."""
+        last = self.judged[-1] if self.judged else None
+        return last if last is not None and (last.start, last.stop) == (start, stop) else None
 
     def _with_context(self, a: int, b: int) -> PoseSequence:
         """Stream frames [a, b) as a clip whose motion states keep up to a window of the
