@@ -529,12 +529,20 @@ def test_extract_of_a_folder_notes_each_pose_file_extracted_again(
     (videos / "lunge").mkdir(parents=True)
     for name in ("a.mkv", "b.mkv"):
         shutil.copy(vfr_mkv, videos / "lunge" / name)
-    assert main(["extract", str(videos), "--out", str(out)]) == 0
-    _as_older(out / "lunge" / "a.npz", "extraction_version", "variable_frame_rate")
     capsys.readouterr()
     assert main(["extract", str(videos), "--out", str(out)]) == 0
+    # a run of several clips prints no clip's line: each resampled one is told in a note
+    # (hunt 39h: before, nothing said so)
+    resampled = "variable frame rate: resampled to 25 fps"
+    assert capsys.readouterr().err.splitlines() == [
+        f"note: {out / 'lunge' / name}: {resampled}" for name in ("a.npz", "b.npz")
+    ]
+    _as_older(out / "lunge" / "a.npz", "extraction_version", "variable_frame_rate")
+    assert main(["extract", str(videos), "--out", str(out)]) == 0
     printed = capsys.readouterr()
-    assert printed.err.splitlines() == [f"note: {out / 'lunge' / 'a.npz'}: {STALE_VFR}"]
+    assert printed.err.splitlines() == [
+        f"note: {out / 'lunge' / 'a.npz'}: {resampled}; {STALE_VFR}"
+    ]
     assert printed.out.strip().endswith(f"1 extracted, 1 up to date, 0 failed -> {out}")
 
 

@@ -667,12 +667,26 @@ def _run_all(jobs: list[Job], options: Options, args: argparse.Namespace) -> lis
     return _in_processes(jobs, options, workers)
 
 
+def _remarks(status: str, detail: str) -> list[str]:
+    """What a clip's line says beyond its counts (``process``'s detail): a variable frame
+    rate resampled, a gap left missing, the pose jumping to another person, a stale pose file
+    extracted again. A single video's line says them; a run of several clips prints none."""
+    parts = detail.split("; ")
+    if status == "done":
+        return parts[1:]
+    if status == "drawn":  # "up to date, COUNTS; ...; its overlay drawn"
+        return parts[1:-1]
+    return []
+
+
 def _summary(results: list[Outcome], out: Path) -> int:
-    """One line per failed clip and the counts; the exit status (1 if any clip failed)."""
+    """A note per clip its line would say more of (:func:`_remarks`), one line per failed
+    clip and the counts; the exit status (1 if any clip failed)."""
     failed = [r for r in results if r[0] == "failed"]
     for status, path, detail in results:
-        if status == "done" and detail.endswith(STALE_VFR):
-            print(f"note: {shown(path)}: {STALE_VFR}", file=sys.stderr)
+        remarks = _remarks(status, detail)
+        if remarks:  # a run of several prints no clip's line: what it would say, said here
+            print(f"note: {shown(path)}: {'; '.join(remarks)}", file=sys.stderr)
     for _, _, detail in failed:
         print(f"posecbr extract: error: {shown(detail)}", file=sys.stderr)
     done = sum(r[0] == "done" for r in results)
