@@ -47,5 +47,11 @@ def test_the_workout_example_prints_what_the_readme_shows(
     for line in shown.splitlines():
         if line.strip():
             assert line.rstrip() in printed, line
+    # and every note segment prints is shown (hunt 39h: the pose jumping to another person at
+    # the cut from the jumping jacks to the squats was printed, not shown)
+    notes = [ln for ln in proc.stderr.splitlines() if ln.startswith("note: workout/workout.mp4")]
+    assert notes, proc.stderr
+    for note in notes:
+        assert note in shown.splitlines(), note
     assert (tmp_path / "timeline.png").stat().st_size > 0
     assert (tmp_path / "seen.mp4").stat().st_size > 0
