@@ -59,3 +59,55 @@ def test_the_notes_of_a_run_of_several_clips_are_their_lines_remarks(
         printed.out.strip()
         == "1 extracted, 2 up to date (1 overlay drawn from them), 0 failed -> p"
     )
+
+
+def _grey_video(path: Path, frames: int = 5) -> Path:
+    """A few grey frames (MJPG: no codec's run-to-run noise): a video nobody is in."""
+    import cv2
+    import numpy as np
+
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), 25, (64, 48))
+    for _ in range(frames):
+        writer.write(np.full((48, 64, 3), 128, np.uint8))
+    writer.release()
+    return path
+
+
+@pytest.mark.parametrize("out", ["out.mp4", "clip.avi", "still.png"])
+def test_extract_refuses_an_out_that_names_a_video_or_picture(
+    out: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``extract clip.avi --out out.mp4`` made a folder named out.mp4 holding clip.npz, and
+    ``--out clip.avi``, the input itself, was refused as "output is not a folder": a video
+    was meant, which is --overlay's. Refused in one line naming --out, nothing made."""
+    from tests.badinput import refused
+
+    _grey_video(tmp_path / "clip.avi")
+    line = refused(
+        ["extract", str(tmp_path / "clip.avi"), "--out", str(tmp_path / out)],
+        tmp_path,
+        capsys,
+        f"{tmp_path / out}: --out names the folder for the pose files or, for one video, its "
+        ".npz pose file, not a video or picture (--overlay writes a video",
+    )
+    assert "output is not a folder" not in line
+    # a folder or labels CSV alike
+    (tmp_path / "videos" / "grey").mkdir(parents=True)
+    _grey_video(tmp_path / "videos" / "grey" / "a.avi")
+    refused(
+        ["extract", str(tmp_path / "videos"), "--out", str(tmp_path / out)],
+        tmp_path,
+        capsys,
+        "--out names the folder for the pose files",
+    )
+
+
+def test_extract_into_an_existing_folder_named_like_a_video_is_taken(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A folder that exists is a folder, whatever its name says."""
+    _grey_video(tmp_path / "clip.avi")
+    (tmp_path / "poses.mp4").mkdir()
+    assert main(["extract", str(tmp_path / "clip.avi"), "--out", str(tmp_path / "poses.mp4")]) == 0
+    assert (tmp_path / "poses.mp4" / "clip.npz").is_file()
+    assert capsys.readouterr().out.startswith(f"done: {tmp_path / 'poses.mp4' / 'clip.npz'}")

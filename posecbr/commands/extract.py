@@ -206,6 +206,14 @@ def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
         raise DataError("no such file or folder", source)
     if not source.is_file() and not source.is_dir():
         raise DataError("is a pipe, socket or device, not a video, folder or labels CSV", source)
+    if out.suffix.lower() in (*SHOWN_VIDEO_SUFFIXES, *IMAGE_SUFFIXES) and not out.is_dir():
+        # made a folder named out.mp4 holding the pose file (or, the input video named,
+        # "output is not a folder"): a video was meant, which is --overlay's
+        raise DataError(
+            "--out names the folder for the pose files or, for one video, its .npz pose"
+            " file, not a video or picture (--overlay writes a video of the stick figure)",
+            out,
+        )
     if source.is_file() and source.suffix.lower() != ".csv":
         _check_not_recording(source)
         name = out if _names_pose_file(out) else out / f"{source.stem}.npz"
