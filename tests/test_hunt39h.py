@@ -4,6 +4,8 @@
 video's line says beyond its frames (the pose jumping to another person, a variable frame rate
 resampled, a gap left missing) was said nowhere, though README says ``extract`` tells it. Each
 such clip now gets a note on stderr, in the clip line's words.
+
+``extract clip.mp4 --out out.mp4`` made a folder named out.mp4: such an ``--out`` is refused.
 """
 
 from __future__ import annotations
