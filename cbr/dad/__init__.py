@@ -5,6 +5,8 @@
 - :mod:`cbr.dad.matching`: the heaviest chain of QMPs detected in order (``ordered_match``);
 - :mod:`cbr.dad.detection`: windows, QMP criteria and activity scores (``detect``,
   ``detect_signals``, ``DADConfig``);
+- :mod:`cbr.dad.names`: which of a dataset's class names an activity stands for
+  (``class_of_activity``, ``label_key``: case, spaces, underscores and hyphens ignored);
 - :mod:`cbr.dad.classifier`: ``DADClassifier``, the scikit-learn face of DAD.
 
 It depends on :mod:`features` only; the CBR core never imports it. ``DADClassifier`` is
@@ -15,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from .detection import DADConfig, detect, detect_signals
 from .matching import ordered_match
+from .names import class_of_activity, label_key, stands_for
 from .outcome import NOT_ENOUGH_DATA, ActivityScore, DADResult, QMPOutcome
 
 if TYPE_CHECKING:
@@ -27,9 +30,12 @@ __all__ = [
     "DADConfig",
     "DADResult",
     "QMPOutcome",
+    "class_of_activity",
     "detect",
     "detect_signals",
+    "label_key",
     "ordered_match",
+    "stands_for",
 ]
 
 

@@ -19,6 +19,7 @@ from features.poses import PoseSequence
 from features.qmp.add import ADD, load_add
 
 from .detection import DADConfig, default_step, detect
+from .names import class_of_activity
 
 _NEEDS = "X must be a sequence (list, tuple or 1-D object array) of PoseSequence"
 
@@ -86,7 +87,10 @@ def _as_list(y: Any) -> Any:
 class DADClassifier(ClassifierMixin, BaseEstimator):
     """DAD with the scikit-learn classifier contract (X: a sequence of PoseSequence).
 
-    ``fit`` learns nothing but ``classes_`` (DAD needs no training data); ``predict`` maps the
+    ``fit`` learns nothing but ``classes_`` (DAD needs no training data) and which class each
+    ADD activity stands for, names matched ignoring case, spaces, underscores and hyphens
+    (CMU's "Squat" is the ADD's "squat"; two classes one activity cannot tell apart are
+    refused, see :func:`~cbr.dad.names.class_of_activity`); ``predict`` maps the
     top-ranked ADD activity among those standing for a known class to that class (activities
     for other datasets' labels are ignored); a clip DAD cannot judge ("not enough data") gets
     the first class, except a clip that shows no person (no frame with a torso) or has a single
@@ -127,21 +131,19 @@ class DADClassifier(ClassifierMixin, BaseEstimator):
         self.config_ = DADConfig(window_s=self.window_s, step_s=step)
         self.add_ = self.add if isinstance(self.add, ADD) else load_add(self.add)
         self.classes_ = np.unique(labels)
+        # which class each activity scores for, names matched as a user reads them
+        self.activity_class_ = class_of_activity(self.add_, self.classes_.tolist())
         return self
 
     def _class_scores(self, seq: PoseSequence) -> np.ndarray:
         result = detect(seq, self.add_, self.config_)
-        classes = [str(c) for c in self.classes_]
-        scores = np.full(len(classes), -1.0)
+        scores = np.full(len(self.classes_), -1.0)
         for rank, act in enumerate(result.activities):
-            if not np.isfinite(act.score):
+            i = self.activity_class_.get(act.activity)
+            if i is None or not np.isfinite(act.score):
                 continue
             # The rank breaks ties between equal ratios (more matched weight ranks first).
-            key = act.score - 1e-6 * rank
-            for label in act.labels:
-                if label in classes:
-                    i = classes.index(label)
-                    scores[i] = max(scores[i], key)
+            scores[i] = max(scores[i], act.score - 1e-6 * rank)
         return scores
 
     def decision_function(self, X: Sequence[PoseSequence]) -> np.ndarray:

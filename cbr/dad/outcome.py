@@ -101,8 +101,11 @@ class DADResult:
         return top
 
     def activity_for(self, label: str) -> ActivityScore | None:
-        """The best-ranked activity that stands for ``label`` (None if the ADD has none)."""
-        return next((a for a in self.activities if label in a.labels), None)
+        """The best-ranked activity that stands for ``label`` (None if the ADD has none),
+        names matched ignoring case, spaces, underscores and hyphens ("Squat": "squat")."""
+        from .names import stands_for
+
+        return next((a for a in self.activities if stands_for(a.labels, label)), None)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (NaN scores become None); the clip is ``clip``, as in ``classify`` and

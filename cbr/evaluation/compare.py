@@ -37,7 +37,7 @@ from ..similarity import get_measure
 from .data import Prepared, prepare
 from .folds import make_folds, unseen_class_notes
 from .machine import machine_info
-from .methods import Method, add_labels, methods_for, why_unavailable
+from .methods import Method, add_covers, methods_for, why_unavailable
 from .results import ClipInfo, CompareResults, CVSummary, DatasetSummary, MethodResult
 from .runner import make_runner
 from .scoring import best_methods, score, with_mcnemar
@@ -113,7 +113,8 @@ def _qmp_note(settings: CompareSettings) -> list[str]:
 
 
 def _dad_note(data: Prepared) -> list[str]:
-    uncovered = [c for c in data.classes if c not in add_labels()]
+    covered = add_covers(data.classes)
+    uncovered = [c for c in data.classes if c not in covered]
     if not uncovered:
         return []
     return [

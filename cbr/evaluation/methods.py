@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from features.errors import ConfigError
+from features.errors import ConfigError, InputError
 
 from ..similarity import get_measure
 from .peers import DTWKNNPeer, MiniRocketPeer, minirocket_backend
@@ -101,14 +101,31 @@ def add_labels() -> set[str]:
     return {lab for act in load_add().activities.values() for lab in act.labels}
 
 
+def add_covers(classes: list[str]) -> list[str]:
+    """The ``classes`` the shipped ADD has an activity for, names matched as DAD matches them
+    (case, spaces, underscores and hyphens ignored: CMU's "Squat" is the ADD's "squat")."""
+    from ..dad import label_key
+
+    keys = {label_key(lab) for lab in add_labels()}
+    return [c for c in classes if label_key(c) in keys]
+
+
 def why_unavailable(method: Method, classes: list[str], target: str) -> str | None:
     """Why ``method`` cannot run on a comparison of ``classes`` of ``target`` (None if it
     can)."""
     if method.kind == "dad":
         if target != "label":
             return f"DAD recognises activities from its ADD rules; it does not predict {target!r}"
-        if not set(classes) & add_labels():
+        if not add_covers(classes):
             return "the ADD describes none of this dataset's activities"
+        from features.qmp.add import load_add
+
+        from ..dad import class_of_activity
+
+        try:
+            class_of_activity(load_add(), classes)
+        except InputError as exc:
+            return exc.message
     if method.name == "minirocket" and minirocket_backend() is None:
         return (
             "MiniRocket needs sktime or aeon, neither is installed "
