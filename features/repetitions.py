@@ -65,7 +65,10 @@ How (all channels at once, no per-frame loops):
    period of it, :func:`_floors`, not of the whole clip: small arm circles held high keep
    their count once wide ones reach lower; two far points between which the line as
    recorded does not come back toward rest by :data:`HOLD_SHARE` of their height are one,
-   :func:`_one_hold`: a squat held at the bottom longer than the period), that rise above
+   :func:`_one_hold`: a squat held at the bottom longer than the period; so are two between
+   which the whole posture does not come back toward rest by that share of the way it went
+   out to either, :func:`_posture_stays_out`: a front kick's two knee bends, the hip raised
+   between them), that rise above
    the lowest of the line as recorded within a period of them by :data:`STILL_SHARE` of
    the typical rise (the middle of a long rest between repetitions does not), at least
    half a period apart when the movement repeats clearly (:data:`CLEAR_PERIODICITY`; a
@@ -227,7 +230,14 @@ of s04 in UI-PRMD Kinect, 0.24 of the median; at 0.3 it was dropped)."""
 HOLD_SHARE = RETURN_SHARE
 """Two neighbouring far points are one (:func:`_one_hold`) when the movement as recorded
 does not come back toward rest between them by this share of their rise: the return rule
-of :data:`RETURN_SHARE`, on the line as recorded."""
+of :data:`RETURN_SHARE`, on the line as recorded; or when the posture does not come back
+by this share of the way it went out to either (:func:`_posture_stays_out`): the line is
+one direction of the posture, and a dip along it while the rest of the body stays out is no
+return. The posture is the counted angles each weighted by its part in the direction the
+body moves back and forth along most, unweighted by periodic energy
+(:func:`movement_direction`): the kick's hip, which the line's periodic weighting can leave
+out, takes part; an arm held otherwise from one take to the next (a change made once)
+does not."""
 
 LEAVE_SHARE = 0.1
 """The first repetition starts at the last sample before its peak, and the last ends at the
@@ -1270,7 +1280,11 @@ def count_in_signals(
         far = np.unique(_in_view(far[whole], sig.blind))
         # far points with the line as recorded held at the far level between them (a squat
         # held at the bottom, whose hold's two ends stand out about the running mean) are one
-        groups = _one_hold(recorded, far, reach) if held else [[i] for i in range(len(far))]
+        groups = (
+            _one_hold(recorded, far, reach, x * np.abs(movement_direction(x)))
+            if held
+            else [[i] for i in range(len(far))]
+        )
         every = far
         far = np.array([_held_peak(recorded, far[g]) for g in groups], dtype=far.dtype)
         # each end judged on its own: a posture got into after a cut and held to the
@@ -1400,7 +1414,9 @@ def _above_rest(line: np.ndarray, far: np.ndarray, reach: int, held: bool = True
     return np.asarray(height >= STILL_SHARE * float(np.median(height)))
 
 
-def _one_hold(line: np.ndarray, far: np.ndarray, reach: int) -> list[list[int]]:
+def _one_hold(
+    line: np.ndarray, far: np.ndarray, reach: int, posture: np.ndarray | None = None
+) -> list[list[int]]:
     """The far points ``far`` (ascending samples of ``line`` ``(n,)``, the movement as
     recorded) grouped into those of one repetition: runs of neighbours between which the line
     does not come back toward rest by :data:`HOLD_SHARE` of the lesser one's rise (above the
@@ -1409,7 +1425,11 @@ def _one_hold(line: np.ndarray, far: np.ndarray, reach: int) -> list[list[int]]:
     far point as recorded; about the running mean (:func:`_steady`) its hold sags in the
     middle and its two ends stand out as two far points: three squats and a fourth held 2 s
     or more at the bottom and up again counted 5. Measured against the recording's own
-    movement, not a fixed angle: a shallow movement's repetitions come back by few degrees."""
+    movement, not a fixed angle: a shallow movement's repetitions come back by few degrees.
+    Given the ``posture`` ``(n, C)`` the line was read from (weighted, :data:`HOLD_SHARE`),
+    neighbours between which the posture does not come back toward rest
+    (:func:`_posture_stays_out`, rest the line's lowest since the far point before, or
+    ``reach`` samples) are one as well."""
     if not len(far):
         return []
     rise = _rises(line, far, reach)
@@ -1418,11 +1438,47 @@ def _one_hold(line: np.ndarray, far: np.ndarray, reach: int) -> list[list[int]]:
         p, q = int(far[i - 1]), int(far[i])
         level = min(float(line[p]), float(line[q]))
         dip = level - float(line[p : q + 1].min())
-        if dip < HOLD_SHARE * min(float(rise[i - 1]), float(rise[i])):
+        if dip < HOLD_SHARE * min(float(rise[i - 1]), float(rise[i])) or (
+            posture is not None
+            and _posture_stays_out(line, posture, p, q, int(far[i - 2]) if i > 1 else p - reach)
+        ):
             groups[-1].append(i)
         else:
             groups.append([i])
     return groups
+
+
+def _posture_stays_out(line: np.ndarray, x: np.ndarray, p: int, q: int, since: int) -> bool:
+    """Whether the posture ``x`` ``(n, C)`` does not come back toward rest between the far
+    points ``p`` < ``q`` of ``line`` ``(n,)`` (the movement as recorded) by
+    :data:`HOLD_SHARE` of the way it went out to either. Rest is the posture the pair left
+    from: at the lowest of the line from sample ``since`` (the far point before ``p``, or a
+    period before it) to ``p``. Where the line between them falls as low as that, the
+    movement came back. Otherwise a far point's excursion is the posture there less rest,
+    and the way back at a sample the share of that excursion the posture there no longer
+    holds (its projection on the excursion); when no sample between them came back from
+    both, the pair is one excursion of the whole posture, however far the line dipped (a
+    front kick: the knee bends to lift the leg, straightens half for the kick and bends
+    again to bring it back while the hip stays raised; read along the knee alone, two
+    repetitions: HDM05 bd's six kicks counted 6, 5, 3 at 4.5, 4.75 and 5 s, 3 by hand).
+    ``x`` is weighted as :data:`HOLD_SHARE` says, so that an angle changed once (an arm held
+    otherwise in the next take) is no excursion; rest is sought before the pair, not
+    anywhere within a period, so that small swings held high before wide ones keep their
+    own rest."""
+    start = max(0, min(since, p))
+    rest_at = start + int(np.argmin(line[start : p + 1]))
+    if q - p < 2 or float(line[p + 1 : q].min()) <= float(line[rest_at]):
+        return q - p < 2
+    rest = x[rest_at]
+    between = x[p + 1 : q] - rest
+    back = np.ones(len(between))
+    for far in (p, q):
+        out = x[far] - rest
+        size = float(out @ out)
+        if size <= 0.0:
+            return False
+        back = np.minimum(back, 1.0 - between @ out / size)
+    return bool(back.max() < HOLD_SHARE)
 
 
 def _held_peak(line: np.ndarray, far: np.ndarray) -> int:

@@ -130,3 +130,62 @@ def test_small_first_repetitions_stay_counted_once_wide_ones_follow() -> None:
     assert result.count == 5
     peaks = np.array([r.peak_frame for r in result.repetitions]) / FPS
     np.testing.assert_allclose(peaks, [1.0, 2.0, 3.0, 4.0, 5.0], atol=2 / FPS)
+
+
+# HDM05 bd's six front kicks as `python -m benchmarks.repetition_growth` joins them (its seed
+# 0 draw); the left hip's flexion peaks, read off its angle trace, are the kicks: 6 by hand
+KICK_TAKES = ("006", "003", "001", "002", "005", "004")
+KICK_HIP_PEAKS_S = (0.80, 2.63, 4.03, 5.73, 7.90, 9.47)
+
+
+@pytest.fixture(scope="module")
+def six_front_kicks(shared_data: Path) -> PoseSequence:
+    from features.joining import join_repetitions
+    from features.readers.asfamc import read_asf_amc
+
+    folder = shared_data / "hdm05" / "train" / "6"
+    takes = [
+        read_asf_amc(folder / "HDM_bd.asf", folder / f"HDM_bd_kickLFront1Reps_{t}_120.amc")
+        for t in KICK_TAKES
+    ]
+    return join_repetitions(takes).seq
+
+
+def test_front_kicks_count_once_each_as_the_recording_grows(
+    six_front_kicks: PoseSequence,
+) -> None:
+    """A front kick bends the knee twice (the leg lifted, then brought back, the knee half
+    straight for the kick between) while the hip stays raised. Before, where the movement
+    line leaned on the knee alone, each bend counted: 6, 5, 3 at 4.5, 4.75 and 5 s (3 kicks
+    by then) and 7, 4 at 5.5 and 5.75 s. Now the posture, not the line, must come back toward
+    rest between two far points: from 1.25 s on (the first kick's leg back down) the count
+    is the kicks whose hip peak the clip holds, or one more for a kick under way (its peak
+    within 0.5 s), and never goes down; the whole recording counts 6. (At 0.75 and 1 s, the
+    first kick's two bends alone, the count is 2, as before: not this rule's.)"""
+    seq = six_front_kicks
+    times = np.arange(1.25, seq.duration_s, STEP_S)
+    counts = _counts(seq, [int(round(t * seq.fps)) for t in times])
+    peaks = np.asarray(KICK_HIP_PEAKS_S)
+    for t, c in zip(times, counts, strict=True):
+        done, under_way = int((peaks <= t).sum()), int((peaks <= t + 0.5).sum())
+        assert done <= c <= under_way, (round(float(t), 2), c, counts)
+    assert all(b >= a for a, b in zip(counts[:-1], counts[1:], strict=True)), counts
+    assert count_repetitions(seq).count == 6
+
+
+def test_a_far_point_pair_is_one_when_the_posture_stays_out_between() -> None:
+    """Two angles, knee and hip (radians, rest 0): the knee goes out to 1.2 twice with a dip
+    to 0.6 between, the hip out to 1.4 once across both; along the knee alone the dip is half
+    the height (a return, by the line), but the posture at the dip still holds most of either
+    far point's excursion: one. With the hip back at rest at the dip: two."""
+    from features.repetitions import _posture_stays_out
+
+    knee = np.array([0.0, 0.6, 1.2, 0.6, 1.2, 0.6, 0.0])
+    hip_up = np.array([0.0, 0.7, 1.2, 1.4, 1.2, 0.7, 0.0])
+    hip_down = np.array([0.0, 0.5, 1.0, 0.0, 1.0, 0.5, 0.0])
+    # far points at samples 2 and 4, the line the knee; rest (its lowest before) at sample 0
+    assert _posture_stays_out(knee, np.c_[knee, hip_up], 2, 4, 0)
+    assert not _posture_stays_out(knee, np.c_[knee, hip_down], 2, 4, 0)
+    # the line falling back to rest's level between them is a return, whatever the posture
+    dip = np.array([0.0, 0.6, 1.2, 0.0, 1.2, 0.6, 0.0])
+    assert not _posture_stays_out(dip, np.c_[dip, hip_up], 2, 4, 0)
