@@ -253,7 +253,8 @@ def lunge_frames(shared_data: Path, n: int | None = None) -> list[np.ndarray]:
 @pytest.fixture(scope="module")
 def lunge_jump(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The whole reverse lunge (250 frames, 10 s at 25 fps) at a quarter size, its clock
-    jumping 3 s after frame 124 (4.96 s): the second half from 8.0 s, 13 s in all."""
+    jumping 3 s after frame 124 (4.96 s): the second half from 8.0 s, 13 s in all. Lossless
+    H.264 (``_write``): the same poses each run."""
     frames = lunge_frames(shared_data)
     pts = [40 * k + (3000 if k >= 125 else 0) for k in range(len(frames))]
     return _write(tmp_path_factory.mktemp("jump") / "lunge_jump.mts", pts, frames)
@@ -277,9 +278,7 @@ def test_segment_and_watch_agree_across_a_gap_and_call_it_no_frames(
     watched = [json.loads(line) for line in printed.out.splitlines()]
     assert printed.err.count("3.0 s without frames at 5.0-8.0 s left missing") == 1
     # the stretches around the gap may differ where the labels waver (watch decides as the
-    # frames come, segment on the whole; by design), and whether they waver hangs on the
-    # x264 encoding of the fixture, which is not the same from run to run: the gap's own
-    # segment is compared
+    # frames come, segment on the whole; by design): the gap's own segment is compared
     keys = ("start_frame", "end_frame", "label", "repetitions", "unknown")
     gap_of = [
         [tuple(d[k] for k in keys) for d in found if d["unknown"] == "no frames in the video"]
@@ -302,7 +301,7 @@ def test_reps_and_classify_of_a_video_with_a_gap_do_not_count_through_it(
 ) -> None:
     """``reps`` of the lunge with its 3-s jump: no repetition runs across the gap (rows 125
     to 199; by hand, the blended gap once gave one from 1.92 to 10.60 s, through 3 s of
-    made-up motion, though not every x264 encoding of the file does); ``classify`` of it
+    made-up motion, though not every lossy encoding of the file did); ``classify`` of it
     answers, exit 0, and says the gap."""
     assert main(["reps", str(lunge_jump), "--json"]) == 0
     found = json.loads(capsys.readouterr().out)

@@ -51,10 +51,15 @@ def _write(
 ) -> Path:
     """A video of RGB ``frames`` with these presentation times (1 ms time base); ``rate``:
     the nominal rate the stream declares (None: none, as a browser's MediaRecorder writes);
-    ``options``: the container's (``{"live": "1"}``: a WebM written as it goes)."""
+    ``options``: the container's (``{"live": "1"}``: a WebM written as it goes). H.264 is
+    lossless (``qp`` 0): lossy x264 decodes to different pixels from run to run (measured:
+    4 encodings of the same frames, 4 different decodings), and with them the poses, the
+    labels and the counts a test asserts."""
     tb = Fraction(1, 1000)
     out = av.open(str(path), "w", options=options or {})
     stream = out.add_stream(codec, rate=rate) if rate else out.add_stream(codec)
+    if codec == "libx264":
+        stream.codec_context.options = {"qp": "0"}
     h, w = frames[0].shape[:2]
     stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
     stream.time_base = tb
