@@ -408,19 +408,21 @@ def test_the_pacer_counts_each_due_time_from_the_first_frame() -> None:
 def test_a_long_gap_in_a_paced_file_is_not_a_stall() -> None:
     """A variable-rate file may have a gap longer than ``--stall`` between two frames (a
     screen recording of nothing moving): waiting for the frame's time is not a stalled
-    stream. Frames due 0.3 s apart, a stall of 0.1 s: all three come, no error (the reader
-    had given up after the stall time whatever the wait was for)."""
+    stream. Frames due 1.5 s apart, a stall of 1 s: all three come, no error (the reader
+    had given up after the stall time whatever the wait was for). The stall leaves the
+    reader thread a second to be scheduled after a frame is due: with 0.1 s (frames 0.3 s
+    apart) it stalled by chance on a busy machine, 4 runs of 40 on one core at load 16."""
     from posecbr.commands.watch import Pacer, frames_in_background
 
     pacer = Pacer(10.0, 1.0)
 
     def frames() -> Iterator[int]:
         for i in range(3):
-            if not pacer(i, 0.3 * i):
+            if not pacer(i, 1.5 * i):
                 return
             yield i
 
-    assert list(frames_in_background(frames(), 0.1, pacer, "screen.mkv")) == [0, 1, 2]
+    assert list(frames_in_background(frames(), 1.0, pacer, "screen.mkv")) == [0, 1, 2]
 
 
 def test_a_stream_that_stalls_after_its_due_time_is_still_a_stall() -> None:
