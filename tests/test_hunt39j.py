@@ -33,3 +33,29 @@ def test_the_h264_test_videos_decode_to_the_same_pixels_every_run(
         folder.mkdir()
         decoded = np.array(list(iter_frames(_write(folder / name, times, people))))
         np.testing.assert_array_equal(decoded, reference)
+
+
+def test_a_frame_waiting_when_the_watch_looks_late_is_taken_not_called_a_stall(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``watch``'s thread taking the frames woken after the stall time (a busy machine: seen
+    waking 3.4 s after asking, for a 1.5-s stall) with a frame waiting: it takes the frame.
+    It said "the stream stalled: no frame for 1 s" although the frame had come in time. With
+    nothing waiting, late, it is a stall as before. The clock here jumps 10 s at each look,
+    so every look is late."""
+    import itertools
+    from types import SimpleNamespace
+
+    from features.errors import DataError
+    from posecbr.commands import watch
+
+    reader = watch._Reader(iter(["frame 0"]))
+    reader.thread.join(30)  # the frame and the end are in the box
+    assert not reader.thread.is_alive()
+    ticks = itertools.count(0.0, 10.0)
+    monkeypatch.setattr(watch, "time", SimpleNamespace(perf_counter=lambda: next(ticks)))
+    assert reader.get(1.0, "camera") == ("frame", "frame 0")
+    assert reader.get(1.0, "camera") == ("end", None)
+    with pytest.raises(DataError, match="camera: the stream stalled: no frame for 1 s"):
+        reader.get(1.0, "camera")
+    reader.close()

@@ -303,7 +303,8 @@ class _Reader:
         """The next item; DataError naming ``where`` when none comes for ``stall_s`` seconds
         beyond the time the frame in hand is due (a file's frames held back by the pacer are
         not a stall, however long the gap between two of them) and the stream's last sign of
-        work (:class:`Alive`)."""
+        work (:class:`Alive`). A frame already waiting is taken however late this thread
+        looks (a busy machine may wake it after the stall time: the stream did not stall)."""
         asked = time.perf_counter()
         while True:
             quiet_since = max(
@@ -313,7 +314,12 @@ class _Reader:
             )
             left = quiet_since + stall_s - time.perf_counter()
             if left <= 0:
-                raise DataError(f"the stream stalled: no frame for {stall_s:g} s", where)
+                try:
+                    return self.box.get_nowait()
+                except queue.Empty:
+                    raise DataError(
+                        f"the stream stalled: no frame for {stall_s:g} s", where
+                    ) from None
             try:
                 return self.box.get(timeout=left)
             except queue.Empty:
