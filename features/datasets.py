@@ -33,6 +33,7 @@ Each :class:`Clip` holds a canonical sequence (33 BlazePose joints) whose metada
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 import re
@@ -59,6 +60,7 @@ from .label_tracks import (
     labelled_stretches,
     read_label_names,
     read_label_track,
+    refuse_inner_bom,
     track_labels,
 )
 from .poses import EXTRACTION_VERSION, PoseSequence, load_pose, pose_file_length
@@ -658,14 +660,18 @@ def _csv_rows(csv_path: Path) -> list[list[str]]:
     rows: list[list[str]] = []
     try:
         with csv_path.open(newline="", encoding="utf-8-sig") as fh:
-            reader = csv.reader(fh, strict=True)
-            try:
-                rows.extend(reader)
-            except csv.Error as exc:
-                # an unclosed quote runs to the end of the file: name the row it opened on
-                raise DataError(f"line {len(rows) + 1}: malformed CSV ({exc})", csv_path) from None
+            text = fh.read()
     except UnicodeDecodeError as exc:
         raise DataError(f"not UTF-8 text ({exc.reason} at byte {exc.start})", csv_path) from None
+    # two labels CSVs joined (cat a.csv b.csv), the second saved with a byte order mark: it
+    # would begin a path or label unseen ("no such file \ufeffrec2.npz")
+    refuse_inner_bom(text, "labels CSV", csv_path, "a path or label")
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
+    try:
+        rows.extend(reader)
+    except csv.Error as exc:
+        # an unclosed quote runs to the end of the file: name the row it opened on
+        raise DataError(f"line {len(rows) + 1}: malformed CSV ({exc})", csv_path) from None
     if not rows:
         raise DataError(
             "empty CSV: a header row path,label[,subject][,start,end] is required", csv_path

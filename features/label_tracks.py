@@ -66,15 +66,22 @@ def _read_label_text(path: Path, what: str) -> str:
             f"not UTF-8 text ({exc.reason} at byte {exc.start}, line {line}): save it as UTF-8",
             path,
         ) from None
+    refuse_inner_bom(text, what, path)
+    return text
+
+
+def refuse_inner_bom(text: str, what: str, path: Path, part: str = "a label") -> None:
+    """Refuse a byte order mark inside ``text`` (one at its start already dropped), by the
+    line it stands on: files each saved with one and joined together (``cat a.txt b.txt``),
+    where it would be read, unseen, as part of ``part``."""
     at = text.find("\ufeff")
-    if at >= 0:  # a byte order mark inside: files joined together (cat a.txt b.txt)
+    if at >= 0:
         raise DataError(
             f"line {text.count(chr(10), 0, at) + 1}: a byte order mark (U+FEFF, unseen) inside"
             f" the {what}, where a file saved with one begins: files joined together? It would"
-            " be read as part of a label; remove it",
+            f" be read as part of {part}; remove it",
             path,
         )
-    return text
 
 
 def _refuse_a_pipe(path: Path, what: str) -> None:
