@@ -3,9 +3,11 @@
 One pose file per clip (``DIR/<stem>.npz``, or ``DIR/<label>/<stem>.npz`` for labelled
 datasets) holding the world landmarks (canonical frame, fps from the video), visibility as
 confidence, the image landmarks (``extra_image_landmarks``), the label/subject and the
-frames with no person. Outputs whose video content (sha256), model version and options are
-unchanged are skipped. Every file is written under a temporary name and renamed
-(features.fileio).
+frames with no person. A labels CSV row naming a ``label_file`` (a recording labelled over
+time) keeps its recording whole (``DIR/<stem>.npz``), its label file copied beside it, and
+``DIR/labels.csv`` names every pose file with its label file, as ``train`` reads the CSV.
+Outputs whose video content (sha256), model version and options are unchanged are skipped.
+Every file is written under a temporary name and renamed (features.fileio).
 """
 
 from __future__ import annotations
@@ -52,6 +54,7 @@ class Job:
     extras: dict[str, Any] = field(default_factory=dict)
     overlay: Path | None = None
     listed: str | None = None  # where a labels CSV lists it ("labels.csv, line 3")
+    track: Any = None  # a recording labelled over time: its LabelTrack (label_file row)
 
 
 @dataclass(frozen=True)
@@ -76,7 +79,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         description="Run BlazePose (full) on every frame and write one pose file per clip. "
         "INPUT is a video or still image, a folder of them, a folder with one subfolder per "
         "class (label = subfolder name), or a labels CSV path,label[,subject][,start,end] "
-        "(start/end: frame indices, end exclusive). Up-to-date outputs are skipped.",
+        "(start/end: frame indices, end exclusive); a row naming a label_file keeps its recording "
+        "whole, its label file beside it and OUT/labels.csv naming both, as train reads the "
+        "CSV. Up-to-date outputs are skipped.",
     )
     # a str, not a Path: Path("") is the current folder, which an empty argument is not
     p.add_argument("input", metavar="INPUT", help="video, folder or labels CSV")
@@ -145,11 +150,15 @@ def _csv_jobs(csv_path: Path, out: Path) -> list[Job]:
         stem = video.stem
         if rec["start"] is not None:
             stem += f"_{rec['start']}-{rec['end']}"
+        # a recording labelled over time (label_file): whole, beside labels.csv, which names
+        # its label file as the CSV did (:func:`write_listing`); no one label to file it under
+        track = rec["track"]
         jobs.append(
             Job(
                 video=video,
-                out=out / _safe(rec["label"]) / f"{stem}.npz",
-                label=rec["label"],
+                out=out / f"{stem}.npz" if track else out / _safe(rec["label"]) / f"{stem}.npz",
+                label=None if track else rec["label"],
+                track=track,
                 subject=rec["subject"],
                 start=rec["start"],
                 end=rec["end"],
@@ -259,7 +268,7 @@ def _listed_jobs(source: Path, out: Path) -> list[Job]:
     (:func:`features.datasets.check_no_overlaps`, as ``train``, ``compare`` and ``convert``
     refuse them): the pose files written would be those frames under two labels, which a
     ``train`` of the folder cannot tell and a ``train`` of the CSV refuses."""
-    from features.datasets import check_no_overlaps
+    from features.datasets import check_no_overlaps, check_track
 
     csv_path = source if source.is_file() else source / "labels.csv"
     if not csv_path.is_file():
@@ -268,7 +277,150 @@ def _listed_jobs(source: Path, out: Path) -> list[Job]:
     for job in jobs:
         _check_not_recording(job.video, csv_path)
     check_no_overlaps(csv_path)
+    for job in jobs:  # a label file that does not fit its video: before the model runs
+        if job.track is not None:
+            check_track(job.video, job.track)
     return jobs
+
+
+# ---- recordings labelled over time: labels.csv ---------------------------------------------
+
+
+@dataclass(frozen=True)
+class Listing:
+    """The labels.csv written into ``--out`` when a labels CSV has rows naming a label file:
+    every pose file of the CSV, each recording labelled over time with a copy of its label
+    file (and names file) beside it, so that ``train OUT`` reads what ``train CSV`` reads.
+    ``copies``: where each label or names file goes (source -> file in ``--out``)."""
+
+    path: Path
+    copies: dict[Path, Path]
+    extras: list[str]
+
+
+def plan_listing(csv_source: Path, out: Path, jobs: list[Job]) -> Listing | None:
+    """The labels.csv to write for ``jobs`` (None when no row names a label file); refused,
+    before any work, where it would hide or replace what ``--out`` holds: pose files (or an
+    earlier labels.csv's rows) it would not list, which ``train OUT`` would then leave out,
+    or the labels CSV being read itself."""
+    if not any(job.track is not None for job in jobs):
+        return None
+    listing = out / "labels.csv"
+    read = csv_source if csv_source.is_file() else csv_source / "labels.csv"
+    if listing.exists() and listing.resolve() == read.resolve():
+        raise DataError(
+            "is the labels CSV being read, and extract writes a labels.csv there naming the"
+            " pose files and label files (rows with a label_file); choose another --out",
+            listing,
+        )
+    copies = _label_file_copies(out, jobs)
+    ours = {p.resolve() for p in (*(job.out for job in jobs), *copies.values())}
+    there = [*out.glob("*.npz"), *out.glob("*/*.npz")] if out.is_dir() else []
+    there += _listed_in(listing)
+    other = sorted({str(p.relative_to(out)) if p.is_relative_to(out) else str(p)
+                    for p in there if p.resolve() not in ours})  # fmt: skip
+    if other:
+        more = f" and {len(other) - 3} more" if len(other) > 3 else ""
+        raise DataError(
+            f"holds pose files this labels CSV does not list ({', '.join(other[:3])}{more}):"
+            " the labels.csv written for its recordings labelled over time would leave them"
+            " out of a train of the folder; choose another --out",
+            out,
+        )
+    for dest in copies.values():
+        check_output(dest, inputs=[job.video for job in jobs], what="label file")
+    extras = list(dict.fromkeys(k for job in jobs for k in job.extras))
+    return Listing(listing, copies, extras)
+
+
+def _label_file_copies(out: Path, jobs: list[Job]) -> dict[Path, Path]:
+    """Where each label file and names file the jobs' rows name goes in ``out``: its own
+    name, or ``<stem>_2<suffix>``... when a pose file, labels.csv or another file copied
+    takes it; one inside ``out`` already stays where it is."""
+    taken = {job.out.name.lower() for job in jobs if job.out.parent == out}
+    taken.add("labels.csv")
+    copies: dict[Path, Path] = {}
+    for job in jobs:
+        if job.track is None:
+            continue
+        for src in (job.track.path, job.track.names):
+            if src is None or src in copies:
+                continue
+            if src.resolve().is_relative_to(out.resolve()):  # there already: named as it is
+                copies[src] = src
+                continue
+            name, k = src.name, 2
+            while name.lower() in taken:
+                name, k = f"{src.stem}_{k}{src.suffix}", k + 1
+            taken.add(name.lower())
+            copies[src] = out / name
+    return copies
+
+
+def _listed_in(listing: Path) -> list[Path]:
+    """The files an existing labels.csv in ``--out`` names (none when unreadable)."""
+    import csv
+
+    try:
+        with listing.open(newline="", encoding="utf-8-sig") as fh:
+            rows = list(csv.DictReader(fh))
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return []
+    return [
+        listing.parent / r["path"] for r in rows if isinstance(r.get("path"), str) and r["path"]
+    ]
+
+
+def write_listing(listing: Listing, out: Path, jobs: list[Job], written: set[Path]) -> None:
+    """Copy the label files and write labels.csv naming the pose files ``written`` (a clip
+    that failed is not listed), paths relative to ``out``, as ``train`` reads them."""
+    import csv
+    import io
+
+    from features.fileio import write_bytes_atomic, write_text_atomic
+
+    for src, dest in listing.copies.items():
+        if dest != src:
+            try:
+                write_bytes_atomic(dest, src.read_bytes())
+            except OSError as exc:
+                raise DataError(
+                    f"cannot copy the label file ({exc.strerror or exc})", src
+                ) from None
+    header = ["path", "label", "subject", "label_file", "label_block_s", "label_names"]
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow([*header, *listing.extras])
+    for job in jobs:
+        if job.out not in written:
+            continue
+        track = job.track
+        cells = [job.out.relative_to(out).as_posix(), job.label or "", job.subject or ""]
+        if track is None:
+            cells += ["", "", ""]
+        else:
+            cells += [
+                _relative(listing.copies[track.path], out),
+                "" if track.block_s is None else repr(track.block_s),
+                "" if track.names is None else _relative(listing.copies[track.names], out),
+            ]
+        cells += [_cell(job.extras.get(k)) for k in listing.extras]
+        writer.writerow(cells)
+    write_text_atomic(listing.path, text.getvalue())
+
+
+def _relative(path: Path, out: Path) -> str:
+    """``path`` (inside ``out``) as labels.csv names it, from ``out``."""
+    return path.resolve().relative_to(out.resolve()).as_posix()
+
+
+def _cell(value: Any) -> str:
+    """An extra column's value as a labels CSV spells it (read back as it was)."""
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
 
 
 def _shown_job(job: Job) -> str:
@@ -725,8 +877,20 @@ def run(args: argparse.Namespace) -> int:
         _check_before_work(args, jobs)
         if len(jobs) == 1 and source.is_file() and source.suffix.lower() != ".csv":
             status = _run_single(jobs[0], options)
-        else:
-            status = _summary(_run_all(jobs, options, args), args.out)
+            return status
+        listing = plan_listing(source, args.out, jobs)
+        results = _run_all(jobs, options, args)
+        if listing is not None:
+            written = {path for st, path, _ in results if st != "failed"}
+            if written:
+                write_listing(listing, args.out, jobs, written)
+        status = _summary(results, args.out)
+        if listing is not None and written:
+            print(
+                f"wrote {shown(listing.path)}: the recordings labelled over time whole, each"
+                " with its label file (train reads the folder as the labels CSV)",
+                file=sys.stderr,
+            )
         return status
     finally:
         if status != 0:
