@@ -63,7 +63,7 @@ def test_extract_takes_overlapping_rows_of_one_label(
 # ------------------------------------------- a label count that does not fit a video, at once
 
 
-class _ModelRan(Exception):
+class _ModelRan(BaseException):
     """Raised in place of the pose model: a test that sees it knows the model would run."""
 
 
