@@ -14,6 +14,7 @@ from casebase_store import open_store
 from posecbr.cli import main
 from tests.postgres import empty_postgres
 from tests.processes import posecbr_process
+from tests.test_feedback_safety import trained  # noqa: F401 (a fixture)
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
@@ -30,12 +31,14 @@ def _clips_of(labels: str, subject: str) -> list[str]:
 
 
 @pytest.fixture(params=["sqlite", "postgresql"])
-def db_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
-    """A case base of subjects s01 and s02 (120 cases) on each backend."""
+def db_url(request: pytest.FixtureRequest, trained: Path, tmp_path: Path) -> str:  # noqa: F811
+    """A case base of subjects s01 and s02 (120 cases) on each backend: on SQLite a copy of
+    the one tests/test_feedback_safety.py trains by the same command (made once)."""
     if request.param == "sqlite":
-        url = str(tmp_path / "cb.sqlite")
-    else:
-        url = empty_postgres()
+        db = tmp_path / "cb.sqlite"
+        db.write_bytes(trained.read_bytes())
+        return str(db)
+    url = empty_postgres()
     assert main(["train", str(LABELS), "--db", url, "--subjects", "s01,s02"]) == 0
     return url
 

@@ -106,9 +106,30 @@ def test_watch_a_street_with_nobody_in_view(
         (0, 120, None, "nobody in view", 0, "nobody in view")]  # fmt: skip
 
 
+def _squat_segments(
+    factory: pytest.TempPathFactory, case_base: Path, shared_data: Path, judge: str
+) -> list[dict[str, Any]]:
+    """The segments ``posecbr segment --json`` gives the squat video by ``judge``: made once
+    in the session (two tests read the margin judge's)."""
+
+    def make(folder: Path) -> list[dict[str, Any]]:
+        import contextlib
+        import io
+
+        video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+        argv = ["segment", str(video), "--db", str(case_base), "--json", "--unknown", judge]
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+            assert main(argv) == 0
+        segments: list[dict[str, Any]] = json.loads(out.getvalue())["segments"]
+        return segments
+
+    return made_once(factory, f"squat-segments-{judge}", make)
+
+
 @pytest.mark.parametrize("judge", ["activity-margin", "margin"])
 def test_segment_the_same_video_counts_each_squat_once(
-    case_base: Path, shared_data: Path, capsys: pytest.CaptureFixture[str], judge: str
+    case_base: Path, shared_data: Path, judge: str, tmp_path_factory: pytest.TempPathFactory
 ) -> None:
     """The offline segmentation of the video above, by the default judge and by the margin
     (which leaves its windows wavering as above: several segments): its segments each last
@@ -116,11 +137,7 @@ def test_segment_the_same_video_counts_each_squat_once(
     and hold the three squats once between them."""
     from cbr.segmentation import MIN_SEGMENT_S
 
-    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
-    capsys.readouterr()
-    argv = ["segment", str(video), "--db", str(case_base), "--json", "--unknown", judge]
-    assert main(argv) == 0
-    segments = json.loads(capsys.readouterr().out)["segments"]
+    segments = _squat_segments(tmp_path_factory, case_base, shared_data, judge)
     assert judge != "margin" or len(segments) > 1, segments  # the wavering
     assert all(s["end_s"] - s["start_s"] >= MIN_SEGMENT_S for s in segments), segments
     assert sum(s["repetitions"] for s in segments) == 3, segments
@@ -131,7 +148,7 @@ def test_segment_the_same_video_counts_each_squat_once(
 
 
 def test_the_readme_quotes_the_segments_of_the_squat_video(
-    case_base: Path, shared_data: Path, capsys: pytest.CaptureFixture[str]
+    case_base: Path, shared_data: Path, tmp_path_factory: pytest.TempPathFactory
 ) -> None:
     """README ("Live") quotes what `segment` makes of the 5-fps squat video with this case
     base, by the default judge and by the margin judge; it said five segments counting
@@ -139,13 +156,9 @@ def test_the_readme_quotes_the_segments_of_the_squat_video(
     not given since ff44302 (4 December: repetitions bounded where the movement leaves and
     returns to rest, which moved the repetition windows; hunt 38v). What it gives is written
     here from a run of the command and read back from the README."""
-    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
     found = {}
     for judge in ("spread-margin", "margin"):
-        capsys.readouterr()
-        argv = ["segment", str(video), "--db", str(case_base), "--json", "--unknown", judge]
-        assert main(argv) == 0
-        segments = json.loads(capsys.readouterr().out)["segments"]
+        segments = _squat_segments(tmp_path_factory, case_base, shared_data, judge)
         found[judge] = [(s["label"], s["repetitions"]) for s in segments]
     assert found["spread-margin"] == [("KneeRaise", 2), (None, 0), ("Squat", 1)]
     assert found["margin"] == [("KneeRaise", 2), ("Squat", 1)]
@@ -697,9 +710,11 @@ def test_watch_a_raw_stream_without_frame_times(
     frame times (OpenCV gives 0 ms for each), so it is played at the 25 fps it declares,
     every frame watched. It had been called a variable frame rate at frame 1 ("frame 1 is
     at 0.000 s, not 0.040 s") and every frame after the first dropped: "the stream ended
-    after 1 frame", exit 1."""
+    after 1 frame", exit 1. The lunge's first 100 frames (4 s, two windows' worth) will do:
+    the pose model's time is the test's."""
     pytest.importorskip("av", reason="PyAV writes the raw stream")
-    video, k = _lunge_h264(shared_data, tmp_path / "lunge.h264", (40,), container="h264")
+    video, k = _lunge_h264(shared_data, tmp_path / "lunge.h264", (40,), "h264", frames=100)
+    assert k == 100
     capsys.readouterr()
     assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 0
     printed = capsys.readouterr()
@@ -780,13 +795,17 @@ def test_a_served_mp4_that_gives_no_frame_says_why(
 
 
 def _lunge_h264(
-    shared_data: Path, video: Path, gaps_ms: tuple[int, ...], container: str | None = None
+    shared_data: Path,
+    video: Path,
+    gaps_ms: tuple[int, ...],
+    container: str | None = None,
+    frames: int | None = None,
 ) -> tuple[Path, int]:
-    """The reverse lunge video at a quarter of its size, written as lossless H.264 by PyAV
-    with its frames ``gaps_ms`` apart in turn (1-ms time base; 25 fps declared), in
-    ``container`` (None: by the file name); and its number of frames. Lossless (``qp`` 0)
-    so that every run decodes to the same pixels: lossy x264 did not, and the poses, labels
-    and counts varied from run to run."""
+    """The reverse lunge video at a quarter of its size (its first ``frames``; None: all
+    250), written as lossless H.264 by PyAV with its frames ``gaps_ms`` apart in turn (1-ms
+    time base; 25 fps declared), in ``container`` (None: by the file name); and its number
+    of frames. Lossless (``qp`` 0) so that every run decodes to the same pixels: lossy x264
+    did not, and the poses, labels and counts varied from run to run."""
     from fractions import Fraction
 
     import av
@@ -801,7 +820,7 @@ def _lunge_h264(
     tb = Fraction(1, 1000)
     stream.time_base = stream.codec_context.time_base = tb
     t, k = 0, 0
-    while True:
+    while frames is None or k < frames:
         ok, bgr = src.read()
         if not ok:
             break
