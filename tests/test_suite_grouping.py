@@ -9,6 +9,7 @@ test by appending ``@group`` to its node id; under pytest 9.2 that stopped takin
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 
@@ -30,7 +31,6 @@ def test_made_once_makes_once_and_a_failed_make_is_tried_again(
 ) -> None:
     """``made_once`` (tests/once.py): the second ask reads what the first made (an equal copy,
     ``make`` not run again); a ``make`` that raised left nothing, and the next ask makes it."""
-    from pathlib import Path
 
     from tests.once import made_once
 
@@ -57,3 +57,16 @@ def test_made_once_makes_once_and_a_failed_make_is_tried_again(
         made_once(tmp_path_factory, name + "-broken", lambda folder: len(list(folder.iterdir())))
         == 0
     )
+
+
+def test_the_suite_and_the_processes_it_starts_write_compiled_modules(tmp_path: Path) -> None:
+    """PYTHONDONTWRITEBYTECODE (set on the machine CI runs on) no longer reaches the suite's
+    processes: a command a test starts writes the ``.pyc`` of a module it imports (beside
+    it, in ``__pycache__``), and this process writes them too."""
+    import subprocess
+    import sys
+
+    assert "PYTHONDONTWRITEBYTECODE" not in os.environ and not sys.dont_write_bytecode
+    (tmp_path / "probe_module.py").write_text("X = 1\n", encoding="utf-8")
+    subprocess.run([sys.executable, "-c", "import probe_module"], cwd=tmp_path, check=True)
+    assert [p.name.split(".")[0] for p in (tmp_path / "__pycache__").iterdir()] == ["probe_module"]
