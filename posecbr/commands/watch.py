@@ -401,10 +401,11 @@ def run(args: argparse.Namespace) -> int:
     )
     from features.pose_estimation.overlay import check_encoded, check_mp4_size
 
-    from .segment import judge_named, load_stored
+    from .segment import judge_named, load_case_base, note_not_windows
 
     _check(args)
-    clf = load_stored(args.db, args.name)
+    stored = load_case_base(args.db, args.name)
+    clf = stored.classifier
     check_k(clf, args.k)  # before the pose model is loaded or the stream opened
     judge = judge_named(clf, args.unknown, args.db)
     source: Any = int(args.source) if args.source.isdigit() else args.source
@@ -417,6 +418,7 @@ def run(args: argparse.Namespace) -> int:
     else:  # a file served over the network is played as a file is
         fps = None if isinstance(source, int) else served_file_rate(source, args.stall)
     is_file = fps is not None
+    note_not_windows(stored, args.db, "watch")  # once the source is found, before it is read
     pacer = Pacer(fps, args.speed) if fps and args.speed > 0 else None
     alive = Alive()  # a served file read again at its end for a cut: no stall
     # the pose model loaded here, before the stall clock runs: loading it (seconds on a slow
