@@ -4,7 +4,9 @@ many times (:mod:`cbr.segmentation`, with the classifier ``posecbr train`` store
 Every stretch of the recording gets an activity of the case base or "unknown" (like none of
 its activities, judged by the case base's own calibration), with its start and end in seconds
 and frames, a confidence, the number of repetitions and a short explanation. A case base of
-windows (``posecbr train ... --split windows``) matches how the recording's windows are cut.
+windows (``posecbr train ... --split windows``) matches how the recording's windows are cut;
+one whose model says its cases are whole clips or repetitions is noted once on stderr
+(:func:`note_not_windows`, which ``watch`` says too).
 
 ``--json`` prints ``{"recording", "fps", "frames", "segments": [{"start_s", "end_s",
 "start_frame", "end_frame", "label" (null when unknown), "confidence", "unknown" (why: "nobody
