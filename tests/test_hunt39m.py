@@ -29,6 +29,7 @@ import features.pose_estimation as pose_estimation
 from features.pose_estimation import StreamFrame
 from features.pose_estimation.tracker import FramePose
 from posecbr.cli import main
+from tests.badinput import refused
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
@@ -189,3 +190,12 @@ def test_watch_notes_a_case_base_of_whole_clips_once(
         assert got[0].endswith(f"posecbr train DATA --db {db} --name NAME --split windows")
     lines = [json.loads(line) for line in captured.out.splitlines()]
     assert [(d["start_frame"], d["end_frame"], d["label"]) for d in lines] == [(0, 90, None)]
+
+
+def test_watch_of_a_source_that_gives_no_frame_is_refused_in_one_line(
+    stores: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The note is said once the stream gives frames: a camera that cannot be opened against
+    a case base of whole clips is the one line of its refusal, as against windows."""
+    refused(["watch", "2147483648", "--db", str(stores["clips"])], tmp_path, capsys,
+            "2147483648: cannot open camera or stream")  # fmt: skip

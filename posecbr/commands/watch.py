@@ -34,7 +34,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Generator, Iterator
+from collections.abc import Callable, Generator, Iterator
 from contextlib import closing, contextmanager
 from pathlib import Path
 from typing import Any
@@ -418,7 +418,6 @@ def run(args: argparse.Namespace) -> int:
     else:  # a file served over the network is played as a file is
         fps = None if isinstance(source, int) else served_file_rate(source, args.stall)
     is_file = fps is not None
-    note_not_windows(stored, args.db, "watch")  # once the source is found, before it is read
     pacer = Pacer(fps, args.speed) if fps and args.speed > 0 else None
     alive = Alive()  # a served file read again at its end for a cut: no stall
     # the pose model loaded here, before the stall clock runs: loading it (seconds on a slow
@@ -435,6 +434,9 @@ def run(args: argparse.Namespace) -> int:
     )
     frames = frames_in_background(poses, args.stall, pacer, args.source, alive)
     watcher = Watcher(clf, judge, args, fps)
+    # said once the stream gives frames: a source that cannot be opened, or gives none, is
+    # refused in one line
+    watcher.started_note = lambda: note_not_windows(stored, args.db, "watch")
     try:
         with (
             _video_output(args.out) as video,
@@ -489,6 +491,7 @@ class Watcher:
         self.colours: dict[str, Any] | None = None  # each activity's, once drawn
         self.n = 0
         self.started = time.perf_counter()
+        self.started_note: Callable[[], None] = lambda: None  # said as the segmenter starts
 
     def warm_up(self) -> None:
         """Run the segmenter's work once on a made-up figure before the stream starts
@@ -525,6 +528,7 @@ class Watcher:
                     self.fps = _frame_rate(waiting)
                     if self.fps is None:
                         continue
+                self.started_note()
                 self.live = LiveSegmenter(
                     self.clf, self.fps, self.judge, self.args.source, k=self.args.k
                 )
