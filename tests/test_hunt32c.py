@@ -65,7 +65,9 @@ def test_segment_says_where_its_picture_went(
     assert main(["segment", str(clip), "--db", str(db), "--json", "--plot", str(plot)]) == 0
     out, err = capsys.readouterr()
     assert json.loads(out)["recording"] == str(clip)
-    assert err == f"timeline written to {plot}\n"
+    # then the note of its case base of whole clips (hunt 39m)
+    assert err.splitlines()[0] == f"timeline written to {plot}"
+    assert [line.split(":")[0] for line in err.splitlines()[1:]] == ["note"]
     assert plot.stat().st_size > 0
 
 

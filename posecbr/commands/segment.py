@@ -363,7 +363,6 @@ def run(args: argparse.Namespace) -> int:
     for rec, _ in read:
         check_segmentable(rec)
     truths = _fitted_truths(args, labels, [rec for rec, _ in read])
-    note_not_windows(stored, args.db, "segment")  # once, for every recording
     for rec, _ in read:
         note_low_rate(rec)
     done = [
@@ -380,6 +379,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"timeline written to {shown(target)}", file=sys.stderr)
         if args.overlay is not None:
             _overlay(path, video, result, args.overlay, [str(c) for c in clf.classes_])
+    # once, for every recording, when all is done (interrupted or refused on the way: one line)
+    note_not_windows(stored, args.db, "segment")
     docs = [result for _, _, result in done]
     truth_files: list[Path | None] = list(args.truth) if args.truth else [None] * len(docs)
     if args.json:

@@ -34,7 +34,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Generator, Iterator
+from collections.abc import Generator, Iterator
 from contextlib import closing, contextmanager
 from pathlib import Path
 from typing import Any
@@ -434,9 +434,6 @@ def run(args: argparse.Namespace) -> int:
     )
     frames = frames_in_background(poses, args.stall, pacer, args.source, alive)
     watcher = Watcher(clf, judge, args, fps)
-    # said once the stream gives frames: a source that cannot be opened, or gives none, is
-    # refused in one line
-    watcher.started_note = lambda: note_not_windows(stored, args.db, "watch")
     try:
         with (
             _video_output(args.out) as video,
@@ -454,6 +451,9 @@ def run(args: argparse.Namespace) -> int:
             watcher.close()
         if args.out is not None:  # on stderr, as every "written to": stdout holds the segments
             print(f"video written to {shown(args.out)}", file=sys.stderr)
+        # at the end of a watch that went well: a stream refused on the way (cut short,
+        # stalled) is one line
+        note_not_windows(stored, args.db, "watch")
     except _NoFrameDrawn:
         pass  # stopped before the first frame: no video, not an empty one
     return 0
@@ -491,7 +491,6 @@ class Watcher:
         self.colours: dict[str, Any] | None = None  # each activity's, once drawn
         self.n = 0
         self.started = time.perf_counter()
-        self.started_note: Callable[[], None] = lambda: None  # said as the segmenter starts
 
     def warm_up(self) -> None:
         """Run the segmenter's work once on a made-up figure before the stream starts
@@ -528,7 +527,6 @@ class Watcher:
                     self.fps = _frame_rate(waiting)
                     if self.fps is None:
                         continue
-                self.started_note()
                 self.live = LiveSegmenter(
                     self.clf, self.fps, self.judge, self.args.source, k=self.args.k
                 )
