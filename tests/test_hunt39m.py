@@ -195,7 +195,7 @@ def test_watch_notes_a_case_base_of_whole_clips_once(
 def test_watch_of_a_source_that_gives_no_frame_is_refused_in_one_line(
     stores: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """The note is said once the stream gives frames: a camera that cannot be opened against
-    a case base of whole clips is the one line of its refusal, as against windows."""
+    """The note is said once the work is done: a camera that cannot be opened against a case
+    base of whole clips is the one line of its refusal, as against windows."""
     refused(["watch", "2147483648", "--db", str(stores["clips"])], tmp_path, capsys,
             "2147483648: cannot open camera or stream")  # fmt: skip
