@@ -133,27 +133,11 @@ def test_a_count_a_whole_decoding_could_fit_is_left_for_the_read(
 def test_a_variable_rate_video_is_checked_once_read(tmp_path: Path, no_model: None) -> None:
     """Frames 20 to 80 ms apart in a 25-fps stream: resampled to a grid whose frame count
     is known once decoded, so no count is trusted from the container and the model runs."""
-    av = pytest.importorskip("av")
-    from fractions import Fraction
-
-    import numpy as np
-
+    pytest.importorskip("av", reason="PyAV writes the variable-frame-rate video")
     from features.pose_estimation.video import frames_before_decoding
+    from tests.test_video_vfr import PTS_MS, _grey, _write
 
-    path = tmp_path / "vfr.mkv"
-    out = av.open(str(path), "w")
-    stream = out.add_stream("mjpeg", rate=25)
-    stream.width, stream.height, stream.pix_fmt = 64, 48, "yuvj420p"
-    tb = Fraction(1, 1000)
-    stream.time_base = stream.codec_context.time_base = tb
-    for k, t in enumerate([0, 20, 100, 180, 220, 260, 300, 380, 400, 440, 520, 540, 620]):
-        frame = av.VideoFrame.from_ndarray(np.full((48, 64, 3), 8 * k, np.uint8), format="rgb24")
-        frame.pts, frame.time_base = t, tb
-        for packet in stream.encode(frame):
-            out.mux(packet)
-    for packet in stream.encode():
-        out.mux(packet)
-    out.close()
+    path = _write(tmp_path / "vfr.mkv", PTS_MS, _grey(len(PTS_MS)))
     assert frames_before_decoding(path) is None
     labels = _labels(tmp_path / "labels.txt", 3)
     with pytest.raises(_ModelRan):
