@@ -523,6 +523,30 @@ def _listed_before(labels: Path) -> tuple[list[dict[str, Any]], list[str]]:
     return rows, list(columns)
 
 
+def _check_not_hidden(out: Path) -> None:
+    """Refuse an output folder holding pose files and no labels.csv (an earlier ``extract``
+    or ``convert`` of one clip, class folders of pose files): the labels.csv written would
+    list this conversion's clips alone, and ``train OUT``, which reads it and walks nothing,
+    would leave those out unsaid. A folder with a labels.csv is added to (its rows kept)."""
+    if not out.is_dir() or (out / "labels.csv").exists():
+        return
+    there = sorted(
+        p.relative_to(out).as_posix()
+        for p in (*out.glob("*.npz"), *out.glob("*/*.npz"))
+        if not any(part.startswith(".") for part in p.relative_to(out).parts)
+    )
+    if there:
+        more = f" and {len(there) - 3} more" if len(there) > 3 else ""
+        raise DataError(
+            f"holds {counted(len(there), 'pose file')} and no labels.csv"
+            f" ({', '.join(there[:3])}{more}): the labels.csv written would list this"
+            " conversion's clips alone, and train of the folder would leave those out;"
+            " list them in a labels.csv there first (path,label), which convert adds to,"
+            " or choose another --out",
+            out,
+        )
+
+
 def _filled(value: Any) -> bool:
     """Whether a labels.csv cell holds something (csv.DictReader gives a list for the cells
     past the header's columns, None for those missing)."""
@@ -552,6 +576,7 @@ def run(args: argparse.Namespace) -> int:
     if out.is_dir():
         check_output(out / "labels.csv", inputs=inputs, what="labels file")
     before, header = _listed_before(out / "labels.csv")
+    _check_not_hidden(out)
     # Clips and labels.csv are staged first: a bad clip halfway leaves the output folder as it
     # was; labels.csv, which names the clips, is moved in last.
     with staged_folder(out, last={"labels.csv"}) as stage:

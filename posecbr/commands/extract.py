@@ -763,6 +763,32 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
     _check_outputs(jobs)
     _check_not_read_again(args, single)
     _check_out_dir(args.out)
+    _check_not_hidden(args.out, jobs)
+
+
+def _check_not_hidden(out: Path, jobs: list[Job]) -> None:
+    """Refuse, before any work, pose files written into a folder whose ``labels.csv`` does
+    not list them: ``train OUT`` reads that labels.csv alone (an earlier ``extract`` of rows
+    naming label files, ``convert``, or the user's) and would leave them out unsaid. Whose
+    file it is cannot be told from the file, and a hand-written one is never rewritten, so
+    none is: the user adds the rows, or extracts elsewhere. A run whose own rows name label
+    files writes labels.csv itself (:func:`plan_listing` refuses what it would hide)."""
+    listing = out / "labels.csv"
+    if any(job.track is not None for job in jobs) or not listing.is_file():
+        return
+    listed = {p.resolve() for p in _listed_in(listing)}
+    new = [job.out for job in jobs if job.out.resolve() not in listed]
+    if not new:
+        return
+    names = [p.relative_to(out).as_posix() if p.is_relative_to(out) else str(p) for p in new]
+    more = f" and {len(names) - 3} more" if len(names) > 3 else ""
+    raise DataError(
+        f"lists the pose files train of {shown(out)} reads, and not the"
+        f" {counted(len(new), 'pose file')} this extract would write there"
+        f" ({', '.join(names[:3])}{more}): train would leave them out; add a row for each"
+        " to it (path,label[,subject]) before extracting, or choose another --out",
+        listing,
+    )
 
 
 def _check_not_read_again(args: argparse.Namespace, single: bool) -> None:
