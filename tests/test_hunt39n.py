@@ -29,15 +29,15 @@ def _out_with_listing(tmp_path: Path, *rows: str) -> Path:
     return out
 
 
-@pytest.mark.parametrize("given", ["folder", "csv", "video"])
+@pytest.mark.parametrize("given", ["folder", "csv", "video", "pose file"])
 def test_extract_into_a_folder_whose_labels_csv_would_not_list_its_pose_files_is_refused(
     tmp_path: Path, shared_data: Path, capsys: pytest.CaptureFixture[str], given: str
 ) -> None:
-    """``extract videos/ --out OUT`` (or a labels CSV without label files, or one video)
-    after an extract had written OUT/labels.csv: the new pose files went into OUT/squat/,
-    which ``train OUT`` never looks at (it reads labels.csv), so they were silently left out
-    of training. Refused before the model runs, naming labels.csv, a few files and the
-    count, nothing written."""
+    """``extract videos/ --out OUT`` (or a labels CSV without label files, one video, or
+    one video with ``--out OUT/new.npz``) after an extract had written OUT/labels.csv: the
+    new pose files went into OUT/squat/ (or OUT), which ``train OUT`` never looks at (it
+    reads labels.csv), so they were silently left out of training. Refused before the model
+    runs, naming labels.csv, a few files and the count, nothing written."""
     out = _out_with_listing(tmp_path)
     videos = tmp_path / "videos" / "squat"
     videos.mkdir(parents=True)
@@ -51,8 +51,10 @@ def test_extract_into_a_folder_whose_labels_csv_would_not_list_its_pose_files_is
                     "(squat/v1.npz, squat/v2.npz, squat/v3.npz and 1 more)"]),
         "csv": (csv, ["1 pose file this extract would write there (squat/v1.npz)"]),
         "video": (videos / "v1.mp4", ["1 pose file this extract would write there (v1.npz)"]),
+        "pose file": (videos / "v1.mp4", ["1 pose file this extract would write there (new.npz)"]),
     }[given]  # fmt: skip
-    refused(["extract", str(source), "--out", str(out)], tmp_path, capsys,
+    dest = out / "new.npz" if given == "pose file" else out  # --out names the pose file itself
+    refused(["extract", str(source), "--out", str(dest)], tmp_path, capsys,
             f"{out / 'labels.csv'}: lists the pose files train of {out} reads",
             *needles, "train would leave them out",
             "add a row for each to it (path,label[,subject]) before extracting",

@@ -757,6 +757,7 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
     if single and jobs[0].out == args.out:  # --out names the pose file itself
         check_output(args.out, inputs=[args.input], what="pose file")  # one file: as --overlay
         _check_outputs(jobs)
+        _check_not_hidden(args.out.parent, jobs)
         return
     if args.out.exists() and not args.out.is_dir():
         raise DataError("output is not a folder", args.out)
