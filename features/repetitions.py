@@ -1280,10 +1280,10 @@ def count_in_signals(
         far = np.unique(_in_view(far[whole], sig.blind))
         # far points with the line as recorded held at the far level between them (a squat
         # held at the bottom, whose hold's two ends stand out about the running mean) are one
+        # (the posture's direction only where two far points could be one: an SVD saved)
+        posture = x * np.abs(movement_direction(x)) if held and len(far) > 1 else None
         groups = (
-            _one_hold(recorded, far, reach, x * np.abs(movement_direction(x)))
-            if held
-            else [[i] for i in range(len(far))]
+            _one_hold(recorded, far, reach, posture) if held else [[i] for i in range(len(far))]
         )
         every = far
         far = np.array([_held_peak(recorded, far[g]) for g in groups], dtype=far.dtype)
