@@ -13,7 +13,7 @@ from __future__ import annotations
 import difflib
 import re
 import unicodedata
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 # C0 and C1 controls and DEL, the Unicode line/paragraph separators, and every format
 # character (bidirectional overrides and isolates, zero-width joiners, the BOM, ...).
@@ -78,6 +78,13 @@ def counted(n: int, noun: str) -> str:
     """``n`` and the noun, plural unless ``n`` is 1: ``"1 frame"``, ``"5 frames"`` (nouns with
     a plain -s plural)."""
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+def first_few(names: Sequence[str], n: int = 3) -> str:
+    """The first ``n`` of ``names`` joined by commas, and how many more: ``"a, b, c and 2
+    more"`` (a refusal or note naming a few of many files)."""
+    more = f" and {len(names) - n} more" if len(names) > n else ""
+    return ", ".join(names[:n]) + more
 
 
 def percent(share: float | None, digits: int = 1) -> str:

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
-from features.text import counted, did_you_mean, percent
+from features.text import counted, did_you_mean, first_few, percent
 from posecbr.arguments import check_each_found, path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
@@ -267,12 +267,11 @@ def _note_repeated_clips(name: str, clips: list[Any]) -> None:
             several.append((piece_name(Path(clip.source or "a clip").name, piece), n))
     if not several:
         return
-    named = ", ".join(f"{shown(src)}: {n}" for src, n in several[:3])
-    more = f" and {len(several) - 3} more" if len(several) > 3 else ""
+    named = first_few([f"{shown(src)}: {n}" for src, n in several])
     print(
         f"note: case base {name!r} holds a case per repetition and "
         f"{counted(len(several), 'clip')} {'holds' if len(several) == 1 else 'hold'} several "
-        f"({named}{more}): each gets one answer here; to classify each repetition, give them "
+        f"({named}): each gets one answer here; to classify each repetition, give them "
         "as rows path,label,start,end of a labels CSV (a label may be left empty; posecbr "
         "reps CLIP --json: each one's start_frame and end_frame)",
         file=sys.stderr,

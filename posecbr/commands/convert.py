@@ -33,7 +33,7 @@ from features.fileio import (
     unique_name,
     write_text_atomic,
 )
-from features.text import counted, shown
+from features.text import counted, first_few, shown
 from posecbr.arguments import path_arg
 from posecbr.recordings import add_sensor_option, check_fps, sensor_for
 
@@ -536,10 +536,9 @@ def _check_not_hidden(out: Path) -> None:
         if not any(part.startswith(".") for part in p.relative_to(out).parts)
     )
     if there:
-        more = f" and {len(there) - 3} more" if len(there) > 3 else ""
         raise DataError(
             f"holds {counted(len(there), 'pose file')} and no labels.csv"
-            f" ({', '.join(there[:3])}{more}): the labels.csv written would list this"
+            f" ({first_few(there)}): the labels.csv written would list this"
             " conversion's clips alone, and train of the folder would leave those out;"
             " list them in a labels.csv there first (path,label), which convert adds to,"
             " or choose another --out",

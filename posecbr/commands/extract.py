@@ -29,7 +29,7 @@ from features.fileio import check_not_in_walked_folder, check_output
 from features.formats import SHOWN_VIDEO_SUFFIXES, is_video_in_folder
 from features.interrupts import interrupts_held, run_task, stop_workers, worker_ends_on_sigterm
 from features.progress import progress
-from features.text import counted, shown
+from features.text import counted, first_few, shown
 from posecbr.arguments import NOT_A_PATH, is_url, path_arg
 
 # FFmpeg prints decoder complaints straight to stderr; the user should get posecbr's one line.
@@ -320,9 +320,8 @@ def plan_listing(csv_source: Path, out: Path, jobs: list[Job]) -> Listing | None
     other = sorted({str(p.relative_to(out)) if p.is_relative_to(out) else str(p)
                     for p in there if p.resolve() not in ours})  # fmt: skip
     if other:
-        more = f" and {len(other) - 3} more" if len(other) > 3 else ""
         raise DataError(
-            f"holds pose files this labels CSV does not list ({', '.join(other[:3])}{more}):"
+            f"holds pose files this labels CSV does not list ({first_few(other)}):"
             " the labels.csv written for its recordings labelled over time would leave them"
             " out of a train of the folder; choose another --out",
             out,
@@ -639,9 +638,8 @@ def process(job: Job, options: Options) -> Outcome:
             vfr_note += f"; {gap_words([(a, b) for a, b, _r0, _r1 in holes])}"
         jumps = person_jumps(seq)
         if jumps:  # the tracked person left and the model took someone else in view
-            where = ", ".join(f"{f} ({f / seq.fps:.2f} s)" for f in jumps[:3])
-            more = f" and {len(jumps) - 3} more" if len(jumps) > 3 else ""
-            vfr_note += f"; the pose jumps to another person at frame {where}{more}"
+            where = first_few([f"{f} ({f / seq.fps:.2f} s)" for f in jumps])
+            vfr_note += f"; the pose jumps to another person at frame {where}"
         if job.overlay is not None:
             words = _fluent_words(seq) if options.fluents else None
             write_overlay(
@@ -782,11 +780,10 @@ def _check_not_hidden(out: Path, jobs: list[Job]) -> None:
     if not new:
         return
     names = [p.relative_to(out).as_posix() if p.is_relative_to(out) else str(p) for p in new]
-    more = f" and {len(names) - 3} more" if len(names) > 3 else ""
     raise DataError(
         f"lists the pose files train of {shown(out)} reads, and not the"
         f" {counted(len(new), 'pose file')} this extract would write there"
-        f" ({', '.join(names[:3])}{more}): train would leave them out; add a row for each"
+        f" ({first_few(names)}): train would leave them out; add a row for each"
         " to it (path,label[,subject]) before extracting, or choose another --out",
         listing,
     )

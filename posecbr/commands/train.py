@@ -19,7 +19,7 @@ from cbr.similarity import available_measures, get_measure
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
-from features.text import counted, percent, shown
+from features.text import counted, first_few, percent, shown
 from posecbr.arguments import check_found, param_value, path_arg
 from posecbr.recordings import (
     add_recording_options,
@@ -366,10 +366,8 @@ def _cut(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
             _note(args, f"kept {counted(len(clips), 'clip')} whole: no repetition found in any")
             return cut.clips
         kept = [shown(Path(c.seq.source or "a clip").name) for c in cut.kept_whole]
-        more = f" and {len(kept) - 3} more" if len(kept) > 3 else ""
         whole = (  # named: which exercise video found no repetition is for the user to check
-            f"; {counted(len(kept), 'clip')} without a repetition kept whole"
-            f" ({', '.join(kept[:3])}{more})"
+            f"; {counted(len(kept), 'clip')} without a repetition kept whole ({first_few(kept)})"
             if kept
             else ""
         )
