@@ -3,8 +3,8 @@
 Found by hunt 39h: ``posecbr segment`` (and ``watch``) against a case base trained with a
 case per clip (``train`` without ``--split``) or per repetition (``--split repetitions``)
 said nothing of it, though they classify 2-s windows and README measures a case base of
-windows segmenting far better (CMU subject 13: 33-60 % of a recording's 0.1-s blocks right
-with a case per labelled stretch, 94-98 % with a case per window). The model has recorded
+windows segmenting far better (CMU subject 13: 33-61 % of a recording's 0.1-s blocks right
+with a case per labelled stretch, 94-99 % with a case per window). The model has recorded
 what its cases are since ``train --split`` (``"cases"``: ``"clips"``, ``"repetitions"``,
 ``"windows"``); now one note on stderr, once per command however many recordings, names
 the case base, what its cases are and the command that trains windows. A case base of
@@ -100,8 +100,8 @@ def test_segment_of_two_recordings_against_whole_clips_notes_it_once(
     captured = capsys.readouterr()
     assert _notes(captured.err) == [
         f"note: case base 'clips' of {db} holds a case per clip: segment classifies 2-s "
-        "windows of a recording, not whole clips (CMU subject 13: 33-60 % of a recording's "
-        "0.1-s blocks segmented right, against 94-98 % with a case per window); to train a "
+        "windows of a recording, not whole clips (CMU subject 13: 33-61 % of a recording's "
+        "0.1-s blocks segmented right, against 94-99 % with a case per window); to train a "
         f"case base of windows: posecbr train DATA --db {db} --name NAME --split windows"
     ]
     for path in RECORDINGS:  # both recordings segmented, the note said for neither alone
