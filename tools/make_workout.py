@@ -20,6 +20,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from features.errors import DataError
+from features.pose_estimation.video import open_video
+
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data")) / "videos"
 SIZE, FPS = (960, 540), 25.0
@@ -67,10 +70,31 @@ def _write(path: Path, frames: list[np.ndarray], fps: float) -> float:
     return len(frames) * repeat / FPS
 
 
+def _unreadable() -> str | None:
+    """The first source clip that is missing or does not decode, said in one line; None when
+    every one gives a frame."""
+    for name, _, _ in PARTS:
+        path = DATA / name
+        if not path.is_file():
+            return (
+                f"{path}: no such file (the clips are read from ../shared/data/videos beside"
+                " the repository, or from $POSECBR_SHARED_DATA/videos)"
+            )
+        try:  # posecbr's own check: one line, FFmpeg's complaints kept off stderr
+            open_video(path)[0].release()
+        except DataError as exc:
+            return str(exc)
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("out", type=Path, help="output folder")
     args = parser.parse_args(argv)
+    problem = _unreadable()
+    if problem:  # before anything is written: a 0-s workout and empty training videos
+        print(f"make_workout.py: error: {problem}", file=sys.stderr)
+        return 1
     args.out.mkdir(parents=True, exist_ok=True)
     workout: list[np.ndarray] = []
     truth = ["label,start_s,end_s"]
