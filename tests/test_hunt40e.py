@@ -15,6 +15,9 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
+
+from cbr.evaluation.segments import score_segmentation
 
 ROOT = Path(__file__).resolve().parents[1]
 # the four clips tools/make_workout.py joins, as its PARTS name them (README "Long recordings")
@@ -64,3 +67,12 @@ def test_make_workout_with_a_clip_that_does_not_decode_refuses_naming_it(
         " truncated or corrupt)"
     ], proc.stderr
     assert not out.exists()
+
+
+def test_labels_the_case_base_lacks_are_listed_as_a_user_counts_them() -> None:
+    # six 0.1-s blocks at 10 fps, all called unknown, one segment; the truth's codes 2, 10
+    # and 1, none an activity of the case base
+    result = SimpleNamespace(blocks=[None] * 6, fps=10.0, segments=[SimpleNamespace(start_frame=0)])
+    scores = score_segmentation(result, ["2", "2", "10", "10", "1", "1"], ["Squat"], 0.1)
+    assert scores.unseen_labels == ("1", "2", "10")
+    assert scores.unseen_blocks == 6 and scores.unseen_unknown == 6

@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from features.label_tracks import code_order
+
 
 def truth_blocks(per_frame: np.ndarray, fps: float, block_s: float) -> np.ndarray:
     """``(n_blocks,)``: the label of each ``block_s`` block of a recording labelled frame by
@@ -106,7 +108,8 @@ def score_segmentation(
         block_s=block_s,
         seen_blocks=int(seen.sum()),
         seen_right=int(np.sum((pred == truth) & seen)),
-        unseen_labels=tuple(sorted({str(t) for t in truth[~seen]})),
+        # 1, 2, 10: as a user counts codes (the note on none known lists them so too)
+        unseen_labels=tuple(sorted({str(t) for t in truth[~seen]}, key=code_order)),
         unseen_blocks=int((~seen).sum()),
         unseen_unknown=int(np.sum(unknown & ~seen)),
         called_unknown=int(unknown.sum()),

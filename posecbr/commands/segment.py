@@ -423,12 +423,11 @@ def _note_none_known(scores: Any, truth: Path, activities: list[str], names: Pat
     """Say on stderr when none of the ``truth`` file's labels is one of the case base's
     ``activities``: every block is then scored as a label the case base lacks, which a
     label file of codes read without its names (``--label-names``) gives without a word."""
-    from features.label_tracks import code_order
     from posecbr.arguments import listed, whole_numbers
 
     if scores.seen_blocks or not scores.blocks:
         return
-    labels = sorted(scores.unseen_labels, key=code_order)  # 1, 2, 10: as a user counts them
+    labels = list(scores.unseen_labels)  # 1, 2, 10: as a user counts them
     text = (
         f"note: {shown(truth)}: none of its labels ({listed(labels)}) is an activity of the"
         f" case base ({listed(activities)}): every block is scored as a label it lacks"
