@@ -15,7 +15,7 @@ import pkgutil
 import re
 import sys
 from collections.abc import Sequence
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from features.errors import PosecbrError
 from features.interrupts import (
@@ -31,7 +31,14 @@ from posecbr import __version__, commands
 class Parser(argparse.ArgumentParser):
     """argparse's parser (its subcommands' too) with a usage error in one line: the error
     and where the usage is, not the usage itself (a command's is many lines). The error
-    quotes the user's arguments: escaped, they cannot break the line or drive the terminal."""
+    quotes the user's arguments: escaped, they cannot break the line or drive the terminal.
+    No option may be abbreviated (``--tru`` for ``--truth``): a new option sharing the
+    prefix would change what an old command line means, and a typo would land on another
+    option; a subcommand's parser is of this class, and so refuses them too."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         guess = self._guess(message)

@@ -1,0 +1,185 @@
+"""Hunt 40c: the command line's small inconsistencies. An option abbreviated (``segment --tru
+F`` taken as ``--truth F``) is refused; ``-k`` is said in the same words by every command
+that votes with the nearest cases, as it means the same in each; ``train FOLDER`` says which
+pose files there its labels.csv does not list (left out)."""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from posecbr.cli import build_parser, main
+from tests.badinput import ROOT, assert_unchanged, good_pose_file, snapshot
+
+
+def _parsers() -> list[tuple[list[str], argparse.ArgumentParser]]:
+    """Every parser of the command line with the words that reach it: ``posecbr``'s, each
+    command's and each ``casebase`` action's."""
+    found: list[tuple[list[str], argparse.ArgumentParser]] = []
+
+    def walk(words: list[str], parser: argparse.ArgumentParser) -> None:
+        found.append((words, parser))
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, child in action.choices.items():
+                    walk([*words, name], child)
+
+    walk([], build_parser())
+    return found
+
+
+def _required(parser: argparse.ArgumentParser) -> list[str]:
+    """Words that give ``parser`` what it requires (a positional, ``--db``, an action), so
+    that an option given before them is judged alone."""
+    words: list[str] = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            if action.required:  # casebase: its first action, and what that requires
+                name, child = next(iter(action.choices.items()))
+                words += [name, *_required(child)]
+            continue
+        if not action.option_strings and action.nargs in (None, "+", 1):
+            words.append(str(next(iter(action.choices))) if action.choices else "a.npz")
+        elif action.option_strings and action.required:
+            words += [action.option_strings[0], "x"]
+    return words
+
+
+def _abbreviations() -> list[tuple[list[str], str, str]]:
+    """(the words to a parser, a long option of it, that option less its last letter) for
+    every long option of every parser whose shortened spelling is no option of its own."""
+    out = []
+    for words, parser in _parsers():
+        options = {o for a in parser._actions for o in a.option_strings}
+        for option in sorted(o for o in options if o.startswith("--") and len(o) >= 4):
+            if option[:-1] not in options:
+                out.append((words, option, option[:-1]))
+    return out
+
+
+def test_an_abbreviated_option_is_refused_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``segment REC --db CB --tru F`` was taken as ``--truth F`` (argparse takes any unique
+    prefix of an option): a later option sharing the prefix would change what the command
+    line means, a typo lands on another option. Refused as a mistyped option is: exit 2, one
+    line naming it and the option meant, nothing read or written."""
+    pose = good_pose_file(tmp_path / "rec.npz", frames=30)
+    truth = tmp_path / "rec.txt"
+    truth.write_text("1\n" * 30, encoding="utf-8")
+    before = snapshot(tmp_path)
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as stop:
+        main(["segment", str(pose), "--db", str(tmp_path / "cb.sqlite"), "--tru", str(truth)])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert err.startswith("posecbr segment: error: unrecognized arguments: --tru"), err
+    assert "(did you mean '--truth'?); see posecbr segment --help" in err, err
+    assert_unchanged(tmp_path, before)
+
+
+@pytest.mark.parametrize(
+    ("argv", "typed", "meant"),
+    [
+        (["--vers"], "--vers", "--version"),
+        (["casebase", "info", "--db", "x", "--js"], "--js", "--json"),
+        (["classify", "a.npz", "--db", "x", "--verb"], "--verb", "--verbose"),
+        (["train", "d", "--db", "x", "--feature-weight=fisher"], "--feature-weight", None),
+    ],
+)
+def test_no_level_of_the_command_line_takes_a_prefix(
+    capsys: pytest.CaptureFixture[str], argv: list[str], typed: str, meant: str | None
+) -> None:
+    """``posecbr``'s own parser, a command's and a ``casebase`` action's alike (the form
+    ``--option=value`` too): exit 2 naming the word typed."""
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "unrecognized arguments: " + typed in err, err
+    if meant is not None:
+        assert f"(did you mean '{meant}'?)" in err, err
+
+
+def test_every_long_option_of_every_parser_is_taken_whole_and_not_shortened() -> None:
+    """Each long option of ``posecbr``, every command and every ``casebase`` action, less its
+    last letter, is left unrecognised (the command line then refuses it), and written whole
+    it is taken: no option answers to a prefix any more, and none is lost."""
+    parser = build_parser()
+    taken_by_prefix = []
+    for words, own in _parsers():
+        required = _required(own)
+        _, unknown = parser.parse_known_args([*words, *required])
+        assert unknown == [], (words, required, unknown)
+    for words, option, short in _abbreviations():
+        required = _required(dict((tuple(w), p) for w, p in _parsers())[tuple(words)])
+        try:
+            _, unknown = parser.parse_known_args([*words, short, *required])
+        except SystemExit:  # taken as the option, then short of its value or ambiguous
+            unknown = []
+        if unknown != [short]:
+            taken_by_prefix.append(f"{' '.join(['posecbr', *words])} {short} ({option})")
+    assert taken_by_prefix == [], taken_by_prefix
+    assert len(_abbreviations()) > 150  # every command's options were tried
+
+
+def _table_rows() -> dict[str, str]:
+    """The README's command table: each command's row."""
+    rows = {}
+    for line in (ROOT / "README.md").read_text(encoding="utf-8").splitlines():
+        found = re.match(r"\| `posecbr (\w+)", line)
+        if found:
+            rows[found.group(1)] = line
+    return rows
+
+
+#: an option a row of the table names as another command's ("train the case base with
+#: `--split windows`" in segment's row): the command that takes it
+OTHER_COMMANDS = {("segment", "--split"): "train"}
+
+
+def test_every_long_option_the_readme_table_names_is_taken_whole() -> None:
+    """Each ``--option`` the README's command table gives a command is one that command (or,
+    for ``casebase``, one of its actions) takes spelt as written: with prefixes refused, a
+    shortened spelling in the README would now be refused."""
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    rows = _table_rows()
+    assert set(rows) == set(commands.choices), set(commands.choices) ^ set(rows)
+    not_taken = []
+    for command, row in rows.items():
+        for option in sorted(set(re.findall(r"(?<![\w-])--[a-z][\w-]*", row))):
+            owner = OTHER_COMMANDS.get((command, option), command)
+            words = [
+                [owner, *w] for w, _ in _parsers_of(commands.choices[owner])
+            ]  # a casebase action's options too
+            if not any(_takes(parser, w, option) for w in words):
+                not_taken.append(f"{command}: {option}")
+    assert not_taken == [], not_taken
+
+
+def _parsers_of(parser: argparse.ArgumentParser) -> list[tuple[list[str], argparse.ArgumentParser]]:
+    """``parser`` itself (no words) and the parsers of its actions, with their names."""
+    out: list[tuple[list[str], argparse.ArgumentParser]] = [([], parser)]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            out += [([name], child) for name, child in action.choices.items()]
+    return out
+
+
+def _takes(parser: argparse.ArgumentParser, words: list[str], option: str) -> bool:
+    """Whether ``posecbr WORDS... OPTION`` parses with OPTION taken (given a value when it
+    takes one), what the parser at ``words`` requires given."""
+    own = dict((tuple(w), p) for w, p in _parsers())[tuple(words)]
+    action = next((a for a in own._actions if option in a.option_strings), None)
+    if action is None:
+        return False
+    value = [] if action.nargs == 0 else [str(next(iter(action.choices))) if action.choices
+                                          else "1"]  # fmt: skip
+    _, unknown = parser.parse_known_args([*words, option, *value, *_required(own)])
+    return unknown == []
