@@ -291,6 +291,27 @@ def labelled_over_time(path: str | Path) -> bool:
     return any(rec["track"] is not None for rec in read_labels_csv(csv_path))
 
 
+def unlisted_pose_files(folder: str | Path) -> list[str]:
+    """The pose files in ``folder`` and its subfolders (one level: class folders) that its
+    labels.csv does not list, as paths relative to it in name order: a dataset read through
+    that labels.csv (``train FOLDER``) leaves them out. Hidden files and folders are none.
+    Empty for a folder :func:`detect_kind` reads otherwise than by its labels.csv (a UI-PRMD
+    root) or a labels CSV given as a file (whose rows the user chose); DataError as
+    :func:`read_labels_csv` gives it."""
+    folder = Path(folder)
+    if not folder.is_dir() or detect_kind(folder) != "csv":
+        return []
+    listed = {Path(rec["path"]).resolve() for rec in read_labels_csv(folder / "labels.csv")}
+    there = [
+        p
+        for p in (*folder.glob("*"), *folder.glob("*/*"))
+        if _suffix(p) in POSE_SUFFIXES
+        and not any(part.startswith(".") for part in p.relative_to(folder).parts)
+        and p.is_file()
+    ]
+    return sorted(p.relative_to(folder).as_posix() for p in there if p.resolve() not in listed)
+
+
 def check_no_overlaps(
     path: str | Path, labels: Collection[str] | None = None, twice: bool = False
 ) -> None:
@@ -1317,6 +1338,7 @@ __all__ = [
     "split_by_labels",
     "recording_clips",
     "stretch_clips",
+    "unlisted_pose_files",
     "DatasetEntry",
     "clip_column",
     "clip_target",

@@ -183,3 +183,73 @@ def _takes(parser: argparse.ArgumentParser, words: list[str], option: str) -> bo
                                           else "1"]  # fmt: skip
     _, unknown = parser.parse_known_args([*words, option, *value, *_required(own)])
     return unknown == []
+
+
+def _folder_of_classes(root: Path) -> list[str]:
+    """Two synthetic arm movements of each of three activities in class folders ``a``,
+    ``b``, ``c`` of ``root``: their paths relative to it, in name order."""
+    from features.poses import save_pose
+    from tests.test_cbr_clips import ACTIVITIES, arm_dataset
+
+    folder = dict(zip(ACTIVITIES, "abc", strict=True))
+    X, y = arm_dataset(2, 7)
+    for i, (seq, label) in enumerate(zip(X, y, strict=True)):
+        save_pose(seq, root / folder[str(label)] / f"clip{i}.npz")
+    return sorted(p.relative_to(root).as_posix() for p in root.glob("*/*.npz"))
+
+
+def _listing(root: Path, paths: list[str]) -> None:
+    rows = "".join(f"{p},{p.split('/')[0]}\n" for p in paths)
+    (root / "labels.csv").write_text("path,label\n" + rows, encoding="utf-8")
+
+
+TRAIN = ["--mirror", "off", "--feature-weights", "none", "--phases", "0", "-k", "1"]
+
+
+def test_train_of_a_folder_says_the_pose_files_its_labels_csv_does_not_list(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A labels.csv copied into a folder of class folders lists four of its six clips, and a
+    seventh pose file lies beside it: ``train FOLDER`` reads labels.csv alone and left the
+    three out in silence. It trains on the four (as before) and says, once, how many were
+    left out, the first three by name and how to include them; a hidden file is none."""
+    from casebase_store import open_store
+    from cbr.stored import load_classifier
+
+    data = tmp_path / "data"
+    clips = _folder_of_classes(data)  # a/clip0, a/clip3, b/clip1, b/clip4, c/clip2, c/clip5
+    listed = [c for c in clips if c not in ("a/clip3.npz", "c/clip5.npz")]
+    _listing(data, listed)
+    good_pose_file(data / "extra.npz", frames=12)
+    good_pose_file(data / ".hidden" / "old.npz", frames=12)
+    good_pose_file(data / "b" / "._clip1.npz", frames=12)
+    db = tmp_path / "cb.sqlite"
+    capsys.readouterr()
+    assert main(["train", str(data), "--db", str(db), *TRAIN]) == 0
+    err = capsys.readouterr().err
+    notes = [line for line in err.splitlines() if "does not list" in line]
+    assert notes == [
+        f"note: {data / 'labels.csv'} does not list 3 pose files in {data} (a/clip3.npz,"
+        " c/clip5.npz, extra.npz): train reads it alone and left them out; add a row for"
+        " each to it (path,label[,subject]) to train with them"
+    ], err
+    with open_store(db, readonly=True) as store:
+        cb = load_classifier(store, "default").classifier.case_base_
+    assert len(cb) == 4
+
+
+def test_train_of_a_folder_whose_labels_csv_lists_every_pose_file_notes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Every pose file listed (or the labels CSV named as a file, whose rows the user chose):
+    no such note."""
+    data = tmp_path / "data"
+    clips = _folder_of_classes(data)
+    _listing(data, clips)
+    capsys.readouterr()
+    assert main(["train", str(data), "--db", str(tmp_path / "one.sqlite"), *TRAIN]) == 0
+    assert "does not list" not in capsys.readouterr().err
+    _listing(data, clips[:4])
+    assert main(["train", str(data / "labels.csv"), "--db", str(tmp_path / "two.sqlite"),
+                 *TRAIN]) == 0  # fmt: skip
+    assert "does not list" not in capsys.readouterr().err

@@ -627,6 +627,28 @@ def _note_csv_names(args: argparse.Namespace) -> None:
         _note_shared_names(args, names)
 
 
+def _note_unlisted(args: argparse.Namespace) -> None:
+    """A note naming a few of the pose files in DATA, a folder read through its labels.csv,
+    that labels.csv does not list (copied in by hand beside the listed ones): the training
+    leaves them out (it reads labels.csv and walks nothing), which it did in silence.
+    ``extract`` and ``convert`` refuse to make such a folder; one made by hand is trained as
+    its labels.csv says, and said."""
+    from features.datasets import unlisted_pose_files
+
+    if args.frame_labels is not None:
+        return
+    unlisted = unlisted_pose_files(args.data)
+    if unlisted:
+        listing = Path(args.data) / "labels.csv"
+        _note(
+            args,
+            f"note: {shown(listing)} does not list {counted(len(unlisted), 'pose file')} in"
+            f" {shown(args.data)} ({shown(first_few(unlisted))}): train reads it alone and"
+            " left them out; add a row for each to it (path,label[,subject]) to train with"
+            " them",
+        )
+
+
 def _read_frame_labels(args: argparse.Namespace) -> None:
     """Read the ``--frame-labels`` file (and its names) before the recording: a malformed or
     empty label file is one error at once, not after the recording is decoded (a video's
@@ -806,12 +828,14 @@ def run(args: argparse.Namespace) -> int:
         )
         args.over_time = _over_time(args)
         _note_csv_names(args)
+        _note_unlisted(args)
         _check_overlaps(args)
     else:
         args.target = args.target or "label"
         _check_new_store(args)
         args.over_time = _over_time(args)
         _note_csv_names(args)
+        _note_unlisted(args)
         _check_overlaps(args)
         args.split = args.split or _default_split(args)
         estimator = _estimator(args)
