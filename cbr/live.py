@@ -42,7 +42,6 @@ from features.skeleton import BLAZEPOSE_33
 from features.values import is_number
 
 from .problem import warm
-from .reuse import vote as share_votes
 from .segmentation import (
     DEFAULT_WINDOW_S,
     MAX_WINDOW_S,
@@ -67,6 +66,7 @@ from .segmentation import (
     span_fields,
     told,
     unknown_reason,
+    votes_as,
     window_still,
 )
 from .unknown import (
@@ -254,10 +254,11 @@ class LiveSegmenter:
     (:mod:`cbr.unknown`; the margin between the two nearest activities times how far the
     window lies in the nearest one's own spread, against that activity's own threshold,
     ``spread-margin``, calibrated on the case base, when None); ``source``: the stream's name
-    in errors (a camera, a URL, a file); ``k``: a window votes with its k nearest cases,
-    weighted by distance (1, the default: its nearest), as ``segment -k`` votes offline
-    (:func:`cbr.segmentation.segment`'s ``k``: from 1 to the classifier's own k, else
-    ConfigError); the judge of unknown reads each activity's nearest case whatever ``k``.
+    in errors (a camera, a URL, a file); ``k``: a window's k nearest cases vote, as the
+    classifier votes (:func:`cbr.segmentation.votes_as`; 1, the default: its nearest), as
+    ``segment -k`` votes offline (:func:`cbr.segmentation.segment`'s ``k``: from 1 to the
+    classifier's own k, else ConfigError); the judge of unknown reads each activity's nearest
+    case whatever ``k``.
 
     As offline, in two passes, each an online Viterbi (:class:`_Forward`: a hop is settled
     when the best paths into every state agree on it, so the settled hops are those the
@@ -866,12 +867,11 @@ class LiveSegmenter:
         the judge of the person as the windows so far show them:
         :func:`cbr.unknown.for_person`); kept to explain the segment it lies in
         (:meth:`_explain`)."""
-        # its k nearest cases' votes, weighted by distance, as offline
-        # (cbr.segmentation._nearest_votes); k = 1: its nearest case's activity alone
+        # its k nearest cases' votes, as the classifier votes and as offline
+        # (cbr.segmentation.votes_as); k = 1: its nearest case's activity alone
         nearest_k = np.asarray(solved.retrieval.indices[: self.k])
         distances = np.asarray(solved.retrieval.distances[: self.k], dtype=float)
-        vote = share_votes(distances[None], self.codes[nearest_k][None], self.unknown, "distance")
-        vote = np.asarray(vote[0], dtype=float)
+        vote = np.asarray(votes_as(self.clf, distances[None], self.codes[nearest_k][None])[0])
         activity = int(np.argmax(vote))
         nearest = activity_distances(self.clf, solved, self.codes)
         if np.isfinite(np.min(nearest)):

@@ -80,7 +80,7 @@ from features.values import is_number
 from . import long_clip
 from .explain import Explanation
 from .problem import FeatureConfig, warm
-from .reuse import vote
+from .reuse import class_balance, vote
 from .unknown import (
     Familiarity,
     HeldOut,
@@ -311,12 +311,27 @@ def _periods(count: RepetitionCount) -> list[tuple[int, int]]:
     return [(a.start_frame, b.end_frame) for a, b in zip(reps[:-1], reps[1:], strict=True)]
 
 
-def _nearest_votes(solved: Sequence[Any], codes: np.ndarray, n_classes: int, k: int) -> np.ndarray:
-    """Vote shares of each solved window's ``k`` nearest retrieved cases (distance-weighted),
-    ``(windows, n_classes)``; ``codes``: every case's activity (:func:`activity_codes`)."""
+def _nearest_votes(clf: Any, solved: Sequence[Any], codes: np.ndarray, k: int) -> np.ndarray:
+    """Vote shares of each solved window's ``k`` nearest retrieved cases, ``(windows,
+    n_classes)``, as ``clf`` votes (:func:`votes_as`); ``codes``: every case's activity
+    (:func:`activity_codes`)."""
     distances = np.stack([s.retrieval.distances[:k] for s in solved])
     nearest = np.stack([s.retrieval.indices[:k] for s in solved])
-    return vote(distances, codes[nearest], n_classes, "distance")
+    return votes_as(clf, distances, codes[nearest])
+
+
+def votes_as(clf: Any, distances: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """Vote shares ``(q, n_classes)`` of ``q`` rows of nearest cases (their ``distances`` and
+    activity ``codes``, ``(q, k)``) as the fitted classifier ``clf`` votes over a clip: by its
+    ``weights`` (1/distance, the default) and its class balance (``class_weight``). So a
+    window's k nearest cases (``segment -k``, ``watch -k``) vote as ``classify -k`` lets a
+    clip's; they voted by 1/distance whatever the classifier's weights, without its balance
+    (a case base of ``train --target correct``)."""
+    classes = clf.classes_
+    balance = None
+    if clf.class_weight == "balanced":
+        balance = class_balance(clf.case_base_.labels, classes)
+    return vote(distances, codes, len(classes), clf.weights, balance)
 
 
 def activity_distances(clf: Any, solved: Any, codes: np.ndarray | None = None) -> np.ndarray:
@@ -430,7 +445,7 @@ def _solve_windows(
 
     def flush() -> None:
         solved = clf.solve([b[1] for b in batch], flag=False)
-        shares = _nearest_votes(solved, codes, len(classes), k)
+        shares = _nearest_votes(clf, solved, codes, k)
         for (i, _, piece), one, votes in zip(batch, solved, shares, strict=True):
             w = windows[i]
             nearest = activity_distances(clf, one, codes)
@@ -1430,11 +1445,12 @@ def segment(
     ``judge``: what makes a stretch unknown (:mod:`cbr.unknown`): the margin between the two
     nearest activities times how far the window lies in the nearest one's own spread,
     against that activity's own threshold (``spread-margin``), calibrated on
-    ``clf.case_base_``, when None; ``k``: a window votes
-    with its k nearest cases (1: its nearest; the votes of successive windows are pooled over
-    time); ``chunk_frames``: what the frames yield is computed that many frames at a time
-    (:func:`_cut_in_pieces`; the same segments in bounded memory), 0: for the whole recording
-    at once; None: in pieces of :data:`cbr.long_clip.CHUNK_FRAMES` for a longer recording.
+    ``clf.case_base_``, when None; ``k``: a window's k nearest cases vote, as ``clf`` votes
+    over a clip with k = ``k`` (:func:`votes_as`; 1: its nearest; the votes of successive
+    windows are pooled over time); ``chunk_frames``: what the frames yield is computed that
+    many frames at a time (:func:`_cut_in_pieces`; the same segments in bounded memory), 0:
+    for the whole recording at once; None: in pieces of :data:`cbr.long_clip.CHUNK_FRAMES`
+    for a longer recording.
     Raises DataError for a recording shorter than one window or without a person, and for a
     case base the judge cannot be calibrated on; InputError for a ``recording`` that is not a
     PoseSequence, a ``judge`` given by its name (:func:`cbr.unknown.judge_of` makes the
@@ -1478,6 +1494,7 @@ __all__ = [
     "movement_columns",
     "movement_of",
     "too_still",
+    "votes_as",
     "window_still",
     "STILL_MOVEMENT_SHARE",
     "STILL_CASE_MOVEMENT",

@@ -12,6 +12,17 @@ from typing import Any
 
 from features.errors import ConfigError
 
+#: what ``-k N`` means in every command that votes with the nearest cases (train, classify,
+#: compare, segment, watch): one meaning for one letter, said in the same words; what differs
+#: is the default and the most it may be (``segment -k N`` votes among the case base's own k)
+K_VOTES = "the N nearest cases vote, each weighed by 1/distance"
+
+
+def add_k_option(p: argparse.ArgumentParser, default: int | None, said: str) -> None:
+    """``-k N`` (also ``--k N``): :data:`K_VOTES`, then ``said`` (where, the default)."""
+    p.add_argument("-k", "--k", type=int, default=default, metavar="N", help=f"{K_VOTES}{said}")
+
+
 #: a URL's scheme and "://" (two letters at least: not a drive letter)
 _URL = re.compile(r"[A-Za-z][A-Za-z0-9+.-]+://")
 

@@ -6,14 +6,17 @@ pose files there its labels.csv does not list (left out)."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from posecbr.cli import build_parser, main
 from tests.badinput import ROOT, assert_unchanged, good_pose_file, snapshot
+from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
 
 
 def _parsers() -> list[tuple[list[str], argparse.ArgumentParser]]:
@@ -253,3 +256,110 @@ def test_train_of_a_folder_whose_labels_csv_lists_every_pose_file_notes_nothing(
     assert main(["train", str(data / "labels.csv"), "--db", str(tmp_path / "two.sqlite"),
                  *TRAIN]) == 0  # fmt: skip
     assert "does not list" not in capsys.readouterr().err
+
+
+def _case_base_13_29(db: Path) -> Any:
+    """The classifier stored in ``db`` (the fixture's: CMU 13_29's windows, k = 5)."""
+    from casebase_store import open_store
+    from cbr.stored import load_classifier
+
+    with open_store(db, readonly=True) as store:
+        return load_classifier(store, "default").classifier
+
+
+@pytest.mark.parametrize("vote", ["as trained", "uniform, balanced"])
+def test_segment_k_votes_in_a_window_as_classify_k_in_that_window_as_a_clip(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    vote: str,
+) -> None:
+    """``segment -k N`` and ``classify -k N`` mean one thing, said in the same words: the N
+    nearest cases vote. Each window of a recording (CMU 13_30, 30 fps, against a case base of
+    13_29's windows with k = 5) gets, for N = 1, 3, 5, the vote shares the classifier gives
+    that window as a clip with k = N, as trained (1/distance) and under a classifier that
+    votes uniformly with its classes balanced (as ``train --target correct`` stores it);
+    under the latter the windows voted by 1/distance without the balance before. The shares
+    of one window are worked out by hand too: a count of each activity among its N nearest
+    cases, times the mean count of the activities' cases over its own."""
+    from cbr.segmentation import solve_recording
+    from features.derived import stretch
+    from tests.test_hunt39c import _13_30
+
+    clf = _case_base_13_29(case_base)
+    if vote != "as trained":
+        clf.set_params(weights="uniform", class_weight="balanced")
+    rec = dataclasses.replace(_13_30(shared_data), positions=_13_30(shared_data).positions[:240])
+    assert int(clf.k) == 5
+    classes = [str(c) for c in clf.classes_]
+    counts = np.array([np.sum(clf.case_base_.labels.astype(str) == c) for c in classes])
+    assert len(set(counts.tolist())) > 1  # the balance is heard: the activities' counts differ
+    for n in (1, 3, 5):
+        clf.set_params(k=5)
+        done = solve_recording(clf, rec, k=n, chunk_frames=0)
+        assert len(done.windows) >= 4
+        clf.set_params(k=n)
+        for w in done.windows:
+            clip = clf.solve([stretch(done.rec, w.start, w.stop)], flag=False)[0]
+            np.testing.assert_allclose(w.vote, clip.solution.proba, atol=1e-12)
+        if vote != "as trained":  # by hand, the last window
+            near = [str(v) for v in done.windows[-1].solved.retrieval.labels[:n]]
+            shares = np.array([near.count(c) for c in classes]) * counts.mean() / counts
+            np.testing.assert_allclose(done.windows[-1].vote, shares / shares.sum())
+
+
+def test_every_command_says_k_in_the_same_words(capsys: pytest.CaptureFixture[str]) -> None:
+    """``-k N`` of train, classify, compare, segment and watch: "the N nearest cases vote",
+    with its default; it was "retrieved cases" in three and "each window votes with its k
+    nearest cases" in two, as though the letter meant two things."""
+    said = {}
+    for command in ("train", "classify", "compare", "segment", "watch"):
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        text = " ".join(capsys.readouterr().out.split())
+        found = re.search(r"-k N, --k N (.*?\))", text)
+        assert found, (command, text)
+        said[command] = found.group(1)
+    for words in said.values():
+        assert words.startswith("the N nearest cases vote, each weighed by 1/distance"), words
+    assert "(default 5)" in said["train"] and "(default 5)" in said["compare"]
+    assert "(default: the case base's own, train -k" in said["classify"]
+    for command in ("segment", "watch"):
+        assert "in each window" in said[command], said[command]
+        assert "(default 1; at most the case base's own k" in said[command], said[command]
+
+
+def test_watch_k_votes_in_a_window_as_the_classifier_votes(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``watch -k 3`` (:class:`cbr.live.LiveSegmenter` with ``k=3``) under a classifier that
+    votes uniformly with its classes balanced: each window's vote is worked out by hand from
+    its 3 nearest cases (a count of each activity, times the mean count of the activities'
+    cases over its own), as ``classify -k 3`` and ``segment -k 3`` vote; it voted by
+    1/distance without the balance before."""
+    from cbr.live import LiveSegmenter
+    from tests.test_hunt39c import _13_30
+
+    clf = _case_base_13_29(case_base)
+    clf.set_params(weights="uniform", class_weight="balanced")
+    classes = [str(c) for c in clf.classes_]
+    counts = np.array([np.sum(clf.case_base_.labels.astype(str) == c) for c in classes])
+    cast: list[tuple[Any, np.ndarray]] = []
+    judged = LiveSegmenter._judged
+
+    def spy(self: Any, solved: Any, start: int, stop: int) -> tuple[np.ndarray, float]:
+        vote, far = judged(self, solved, start, stop)
+        cast.append((solved, vote))
+        return vote, far
+
+    monkeypatch.setattr(LiveSegmenter, "_judged", spy)
+    live = LiveSegmenter(clf, 30.0, k=3)
+    for frame in _13_30(shared_data).to_canonical().positions[:240]:
+        live.push(frame)
+    live.finish()
+    assert len(cast) >= 4
+    for solved, vote in cast:
+        near = [str(v) for v in solved.retrieval.labels[:3]]
+        shares = np.array([near.count(c) for c in classes]) * counts.mean() / counts
+        np.testing.assert_allclose(vote, shares / shares.sum())

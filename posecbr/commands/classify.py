@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError
 from features.text import counted, did_you_mean, first_few, percent
-from posecbr.arguments import check_each_found, path_arg
+from posecbr.arguments import add_k_option, check_each_found, path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
 if TYPE_CHECKING:
@@ -34,9 +34,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.add_argument("--name", default=None, help="case base name (default: the only one)")
-    p.add_argument(
-        "-k", "--k", type=int, default=None, help="retrieved cases (default: as trained)"
-    )
+    add_k_option(p, None, " (default: the case base's own, train -k; at most its cases)")
     p.add_argument(
         "-v",
         "--verbose",

@@ -16,7 +16,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, stdout_gone, write_json_atomic
 from features.text import shown
-from posecbr.arguments import check_each_found, param_value, path_arg
+from posecbr.arguments import add_k_option, check_each_found, param_value, path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
 
 
@@ -81,9 +81,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "aeon: named here without them, refused before the run); default: both, "
         "minirocket skipped with a note when it cannot run; 'none' for no peers",
     )
-    p.add_argument(  # -k as train, classify, segment and casebase trim spell it
-        "-k", "--k", type=int, default=5, help="cases retrieved by the case-base classifier (5)"
-    )
+    add_k_option(p, 5, " in the case-base classifier (default 5), as train -k")
     p.add_argument(
         "--trim",
         type=float,

@@ -50,7 +50,7 @@ from features.errors import ConfigError, DataError
 from features.fileio import check_output, unique_name
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
-from posecbr.arguments import path_arg
+from posecbr.arguments import add_k_option, path_arg
 from posecbr.recordings import (
     add_recording_options,
     check_asf,
@@ -90,13 +90,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.add_argument("--name", default=None, help="case base name (default: the only one)")
     add_recording_options(p)
-    p.add_argument(
-        "-k",
-        "--k",
-        type=int,
-        default=1,
-        help="each window votes with its k nearest cases (default 1; at most the case base's"
-        " k, which `posecbr casebase info` shows and the explanations count)",
+    add_k_option(
+        p,
+        1,
+        " in each window, as classify -k N in a clip (default 1; at most the case base's own"
+        " k, the nearest cases a window retrieves, which `posecbr casebase info` shows and"
+        " the explanations count)",
     )
     p.add_argument(
         "--unknown",

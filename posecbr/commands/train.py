@@ -20,7 +20,7 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.text import counted, first_few, percent, shown
-from posecbr.arguments import check_found, param_value, path_arg
+from posecbr.arguments import add_k_option, check_found, param_value, path_arg
 from posecbr.recordings import (
     add_recording_options,
     add_sensor_option,
@@ -127,7 +127,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         action="store_true",
         help="euclidean on the resampled fluent sequence instead of per-feature clip summaries",
     )
-    p.add_argument("-k", "--k", type=int, default=None, help="retrieved cases (5)")
+    add_k_option(p, None, " (default 5), kept with the case base: classify's default")
     p.add_argument("--subjects", help="only these subjects, comma-separated (e.g. s01,s02)")
     p.add_argument("--labels", help="only these activities, comma-separated (e.g. deep_squat)")
     p.add_argument(

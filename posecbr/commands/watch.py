@@ -43,7 +43,7 @@ from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import PICTURE_WORDS, atomic_path, check_output, stdout_gone
 from features.interrupts import raise_interrupt
 from features.text import counted, shown
-from posecbr.arguments import path_arg
+from posecbr.arguments import add_k_option, path_arg
 
 from .segment import JUDGES, overlay_label
 
@@ -87,13 +87,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="the segments are JSON lines already, one per finished segment (taken, as"
         " segment takes it, and changes nothing)",
     )
-    p.add_argument(
-        "-k",
-        "--k",
-        type=int,
-        default=1,
-        help="each window votes with its k nearest cases, as in posecbr segment (default 1; at"
-        " most the case base's k, which `posecbr casebase info` shows)",
+    add_k_option(
+        p,
+        1,
+        " in each window, as segment -k N (default 1; at most the case base's own k, which"
+        " `posecbr casebase info` shows)",
     )
     p.add_argument(
         "--unknown",
