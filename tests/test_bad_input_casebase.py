@@ -177,7 +177,7 @@ def test_a_damaged_case_base_is_one_line_and_stays_as_it_is(
             ["classify", str(CLIP), "--benefit", "-1", "--feedback", "deep_squat"],
             "benefit threshold must be in [0, 1]",
         ),  # fmt: skip
-        (["classify", str(CLIP), "--top", "-1"], "--top: must be >= 0, got -1"),
+        (["classify", str(CLIP), "--top", "-1"], "--top: must be >= 1, got -1"),
         (["classify", str(CLIP), "-k", "0"], "-k: must be >= 1, got 0"),
         (["classify", str(CLIP), "--new-label"], "--new-label: goes with --feedback LABEL"),
         # accepted and ignored before

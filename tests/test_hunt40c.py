@@ -363,3 +363,52 @@ def test_watch_k_votes_in_a_window_as_the_classifier_votes(
         near = [str(v) for v in solved.retrieval.labels[:3]]
         shares = np.array([near.count(c) for c in classes]) * counts.mean() / counts
         np.testing.assert_allclose(vote, shares / shares.sum())
+
+
+DEMO_CLIP = ROOT / "posecbr" / "demo_data" / "uiprmd" / "m09_s03_e03.npz"
+
+
+def test_classify_top_0_is_refused_where_dad_top_0_is_every_activity(
+    case_base: Path,  # noqa: F811
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``--top 0`` listed no similar case in ``classify --verbose`` and details every activity
+    in ``dad``: one option, opposite meanings for one value. ``classify`` refuses 0 in one
+    line (as it does a negative one), saying how to list every case, rather than change what
+    an old command line means; ``--top 2`` lists two as before."""
+    from tests.badinput import refused
+
+    argv = ["classify", str(DEMO_CLIP), "--db", str(case_base), "--verbose"]
+    refused([*argv, "--top", "0"], tmp_path, capsys,
+            "posecbr classify: error: --top: must be >= 1, got 0: leave it out to list every"
+            " similar case (0 listed none, where dad --top 0 details every activity)")  # fmt: skip
+    assert main([*argv, "--top", "2"]) == 0
+    listed = [line for line in capsys.readouterr().out.splitlines() if line.startswith("    case ")]
+    assert len(listed) == 2, listed
+
+
+def test_dad_top_with_json_is_refused_as_classify_refuses_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``dad --json --top 3`` printed every activity, the option ignored without a word, where
+    ``classify --json --top`` is refused (its document holds every case): refused alike, in
+    one line, nothing printed. ``dad --json`` alone and ``dad --top 0`` are as before."""
+    import json
+
+    from tests.badinput import refused
+
+    refused(["dad", str(DEMO_CLIP), "--json", "--top", "3"], tmp_path, capsys,
+            "posecbr dad: error: --top: goes without --json (its document holds every"
+            " activity)")  # fmt: skip
+    assert main(["dad", str(DEMO_CLIP), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert main(["dad", str(DEMO_CLIP), "--top", "0"]) == 0
+    every = capsys.readouterr().out
+    assert main(["dad", str(DEMO_CLIP)]) == 0
+    default = capsys.readouterr().out
+    assert len(doc["activities"]) > 5
+    for text, detailed in ((every, len(doc["activities"])), (default, 5)):
+        heads = [line for line in text.splitlines() if "weight in order" in line or
+                 ": not scored:" in line]  # fmt: skip
+        assert len(heads) == detailed, text

@@ -46,7 +46,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "-q", "--quiet", action="store_true", help="the closing summary alone, no clip by clip"
     )
     p.add_argument(
-        "--top", type=int, default=None, help="with --verbose: similar cases to list (default all)"
+        "--top", type=int, default=None, help="with --verbose: similar cases to list, 1 or more (default all)"
     )
     p.add_argument(
         "--feedback",
@@ -192,8 +192,12 @@ def _check_asked(
 def _check_args(args: argparse.Namespace) -> None:
     if args.k is not None and args.k < 1:
         raise ConfigError(f"must be >= 1, got {args.k}", "-k")
-    if args.top is not None and args.top < 0:
-        raise ConfigError(f"must be >= 0, got {args.top}", "--top")
+    if args.top is not None and args.top < 1:  # 0 listed none, where dad --top 0 is all
+        raise ConfigError(
+            f"must be >= 1, got {args.top}: leave it out to list every similar case (0 listed"
+            " none, where dad --top 0 details every activity)",
+            "--top",
+        )
     for flag, given in (("--new-label", args.new_label), ("--novelty", args.novelty is not None),
                         ("--benefit", args.benefit is not None)):  # fmt: skip
         if given and args.feedback is None:

@@ -14,7 +14,7 @@ import sys
 from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
-from features.errors import PosecbrError
+from features.errors import ConfigError, PosecbrError
 from features.text import counted, percent, shown
 from posecbr.arguments import path_arg
 from posecbr.recordings import (
@@ -28,6 +28,9 @@ if TYPE_CHECKING:
     from features.fluents import Backend
 
 MAX_SECONDS = 3600.0  # a window of an hour is no single movement
+
+TOP = 5
+"""The activities the text output details when ``--top`` is left out."""
 
 LONG_CLIP_S = 10.0
 """A clip longer than this is noted: DAD gives it one answer, as ``classify`` notes a clip
@@ -67,9 +70,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--top",
         type=int,
-        default=5,
+        default=None,
         metavar="N",
-        help="activities to detail in the text output (default 5; 0 = all)",
+        help=f"activities to detail in the text output (default {TOP}; 0 = all)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=run)
@@ -79,8 +82,10 @@ def run(args: argparse.Namespace) -> int:
     from cbr.dad import detect
     from features.qmp.add import load_add
 
-    if args.top < 0:
+    if args.top is not None and args.top < 0:
         raise PosecbrError(f"--top must be >= 0, got {args.top}")
+    if args.top is not None and args.json:  # as classify refuses it: it was ignored
+        raise ConfigError("goes without --json (its document holds every activity)", "--top")
     config = _windows(args.window, args.step)
     check_asf(args.asf, [args.posefile])
     add = load_add(args.add)
@@ -141,7 +146,8 @@ def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[
     for i, act in enumerate(result.activities, 1):
         score = f"{percent(act.score, 0):>5}" if act.score == act.score else "   - "
         yield f"  {i:2d}. {score}  {act.words}  [{', '.join(act.labels)}]"
-    detail = result.activities if args.top == 0 else result.activities[: args.top]
+    top = TOP if args.top is None else args.top
+    detail = result.activities if top == 0 else result.activities[:top]
     mark = {"met": "+", "not met": "-", "out of order": "~", "not observable": "?"}
     for act in detail:
         yield ""
