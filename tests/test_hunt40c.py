@@ -412,3 +412,36 @@ def test_dad_top_with_json_is_refused_as_classify_refuses_it(
         heads = [line for line in text.splitlines() if "weight in order" in line or
                  ": not scored:" in line]  # fmt: skip
         assert len(heads) == detailed, text
+
+
+def test_compare_param_of_a_similarity_says_how_compare_takes_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``train --similarity dtw --param band=0.2`` sets the similarity's band; ``compare
+    --param`` sets the classifier's parameters, so ``compare --param band=0.2`` is refused,
+    and now says which similarity band belongs to and how compare takes it; the way it says
+    is accepted (a parameter of the classifier, checked as compare checks it). A key of no
+    similarity gets no such words."""
+    from cbr.evaluation.methods import check_cbr_params
+    from cbr.evaluation.settings import CompareSettings
+    from tests.badinput import refused
+
+    data = ROOT / "posecbr" / "demo_data" / "uiprmd"
+    out = tmp_path / "out"
+    refused(["compare", str(data), "--param", "band=0.2", "--out", str(out)], tmp_path, capsys,
+            "--param: unknown case-base parameter(s) band",
+            "(band is a parameter of the dtw similarity, as train --param takes it; here"
+            " --param similarity_params='{\"band\": VALUE}' with --similarities dtw)")  # fmt: skip
+    line = refused(["compare", str(data), "--param", "bogus=1", "--out", str(out)], tmp_path,
+                   capsys, "--param: unknown case-base parameter(s) bogus")  # fmt: skip
+    assert line.endswith("velocity, weights)") and "as train --param" not in line, line
+    settings = CompareSettings(
+        similarities=("dtw",), cbr_params={"similarity_params": {"band": 0.2}}
+    )
+    check_cbr_params(settings)  # refused had band not been dtw's: "has no parameter"
+    with pytest.raises(Exception, match="no parameter band"):
+        check_cbr_params(
+            CompareSettings(
+                similarities=("euclidean",), cbr_params={"similarity_params": {"band": 0.2}}
+            )  # fmt: skip
+        )

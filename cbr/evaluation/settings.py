@@ -125,7 +125,8 @@ class CompareSettings:
         if bad:
             raise ConfigError(
                 f"unknown case-base parameter(s) {', '.join(bad)} "
-                f"(known: {', '.join(sorted(known))}){did_you_mean(bad[0], known)}",
+                f"(known: {', '.join(sorted(known))})"
+                f"{did_you_mean(bad[0], known) or similarity_words(bad[0])}",
                 "--param",
             )
 
@@ -141,3 +142,29 @@ class CompareSettings:
         d = dataclasses.asdict(self)
         d["within"] = self.within_column
         return d
+
+
+def similarity_words(key: str) -> str:
+    """For a ``compare --param KEY=...`` that no case-base parameter is but a similarity
+    measure's is (``band``, which ``train --param`` sets): how compare takes it, " (band is a
+    parameter of the dtw similarity, as train --param takes it; here --param
+    similarity_params='{"band": VALUE}' with --similarities dtw)"; empty when no measure has
+    it. One option name, two meanings: compare's ``--param`` sets the classifier's
+    parameters, of every similarity compared, train's the one similarity's."""
+    from cbr.similarity import available_measures, get_measure
+
+    owners = []
+    for name in available_measures():
+        try:
+            fields = {f.name for f in dataclasses.fields(get_measure(name))}
+        except ConfigError:  # a registered measure that cannot be made without parameters
+            continue
+        if key in fields:
+            owners.append(name)
+    if not owners:
+        return ""
+    return (
+        f" ({key} is a parameter of the {' and '.join(owners)} similarit"
+        f"{'y' if len(owners) == 1 else 'ies'}, as train --param takes it; here --param"
+        f" similarity_params='{{\"{key}\": VALUE}}' with --similarities {','.join(owners)})"
+    )
