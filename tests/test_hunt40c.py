@@ -445,3 +445,48 @@ def test_compare_param_of_a_similarity_says_how_compare_takes_it(
                 similarities=("euclidean",), cbr_params={"similarity_params": {"band": 0.2}}
             )  # fmt: skip
         )
+
+
+DEMO_LABELS = ROOT / "posecbr" / "demo_data" / "uiprmd" / "labels.csv"
+
+
+@pytest.mark.parametrize(
+    ("options", "said"),
+    [
+        (["--labels", "deep_squat,bogus"], "--labels: no clip labelled 'bogus' in"),
+        (["--labels", "bogus"], "--labels: no clip labelled 'bogus' in"),
+        (["--subjects", "s01,s99", "--limit", "2"], "--subjects: no clip of subject 's99' in"),
+    ],
+)
+def test_convert_refuses_a_label_or_subject_no_clip_has_as_train_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], options: list[str], said: str
+) -> None:
+    """``convert --labels deep_squat,bogus`` converted the deep squats alone without a word
+    (and ``--labels bogus`` said the CSV "holds no clip to convert"), where ``train``,
+    ``compare`` and ``classify`` refuse an entry no clip has, naming those the data hold: so
+    does convert, nothing written (with ``--limit``, checked against every clip of the
+    data). The demo's labels.csv holds subjects s01, s02 and s03."""
+    from tests.badinput import refused
+
+    out = tmp_path / "out"
+    line = refused(["convert", str(DEMO_LABELS), "--out", str(out), *options], tmp_path, capsys,
+                   f"posecbr convert: error: {said} {DEMO_LABELS}: its ")  # fmt: skip
+    assert (
+        ("deep_squat, hurdle_step" in line)
+        if "labels" in said
+        else line.endswith("its subjects are s01, s02 and s03")
+    ), line
+    assert not out.exists()
+
+
+def test_convert_of_labels_and_subjects_the_data_hold_goes_ahead(tmp_path: Path) -> None:
+    """Entries every one of which a clip has: converted as before (the limit reached before
+    a clip of s02 was, s02 is still one the data hold)."""
+    from features.datasets import read_labels_csv
+
+    out = tmp_path / "out"
+    argv = ["convert", str(DEMO_LABELS), "--out", str(out), "--labels", "deep_squat",
+            "--subjects", "s01,s02", "--limit", "1"]  # fmt: skip
+    assert main(argv) == 0
+    rows = read_labels_csv(out / "labels.csv")
+    assert [(r["label"], r["subject"]) for r in rows] == [("deep_squat", "s01")]

@@ -34,7 +34,7 @@ from features.fileio import (
     write_text_atomic,
 )
 from features.text import counted, first_few, shown
-from posecbr.arguments import path_arg
+from posecbr.arguments import check_each_found, path_arg
 from posecbr.recordings import add_sensor_option, check_fps, sensor_for
 
 if TYPE_CHECKING:
@@ -418,12 +418,40 @@ def _write_clips(
         written.append(
             {**extras, "path": path.name, "label": clip.label, "subject": clip.subject or ""}
         )
+    _check_asked(args, written)
     if not written:
-        filters = ("subjects", "movements", "episodes", "correct", "incorrect")
+        filters = ("subjects", "labels", "movements", "episodes", "correct", "incorrect")
         if any(getattr(args, f, None) for f in filters):
             raise DataError("no clips matched (check the filters)", args.source)
         raise DataError("holds no clip to convert", args.source)
     return written, rates
+
+
+def _check_asked(args: argparse.Namespace, written: list[dict[str, Any]]) -> None:
+    """Refuse a ``--labels`` or ``--subjects`` entry no clip converted has (mistyped), naming
+    those the data hold, as ``train``, ``compare`` and ``classify`` refuse it: the clips of
+    the others alone were converted without a word (``--labels deep_squat,bogus``), and one
+    entry alone was "holds no clip to convert". Checked once every clip is staged, before
+    any is moved into --out; when ``--limit`` stopped the conversion, against every clip of
+    the data (one past the limit may have it)."""
+    from features.datasets import dataset_labels, dataset_subjects
+
+    limited = args.limit is not None and len(written) >= args.limit
+    asked = []
+    for flag, given, key, what, held_by in (
+        ("--labels", args.labels, "label", "labelled", dataset_labels),
+        ("--subjects", args.subjects, "subject", "of subject", dataset_subjects),
+    ):
+        values = _csv_list(given)
+        if values is None:
+            continue
+
+        def held(held_by: Any = held_by) -> list[str]:
+            return list(held_by(args.source, sensor=args.sensor))
+
+        found = held() if limited else [row[key] for row in written]
+        asked.append((found, sorted(values), flag, what, held))
+    check_each_found(asked, args.source)
 
 
 def _same_origin(a: str, b: str) -> bool:
