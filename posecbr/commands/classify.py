@@ -46,7 +46,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "-q", "--quiet", action="store_true", help="the closing summary alone, no clip by clip"
     )
     p.add_argument(
-        "--top", type=int, default=None, help="with --verbose: similar cases to list, 1 or more (default all)"
+        "--top",
+        type=int,
+        default=None,
+        help="with --verbose: similar cases to list, 1 or more (default all)",
     )
     p.add_argument(
         "--feedback",
