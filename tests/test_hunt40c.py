@@ -490,3 +490,28 @@ def test_convert_of_labels_and_subjects_the_data_hold_goes_ahead(tmp_path: Path)
     assert main(argv) == 0
     rows = read_labels_csv(out / "labels.csv")
     assert [(r["label"], r["subject"]) for r in rows] == [("deep_squat", "s01")]
+
+
+def test_train_append_without_name_adds_to_the_stores_only_case_base(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``train MORE --db CB --append`` where CB holds one case base, named x: added to x, as
+    ``classify``, ``segment`` and ``watch`` take the store's only one without ``--name``;
+    it was refused ("no case base named 'default' (case bases here: x)")."""
+    from casebase_store import open_store
+    from cbr.stored import load_classifier
+
+    data = tmp_path / "data"
+    clips = _folder_of_classes(data)
+    for name, part in (("first.csv", clips[:4]), ("more.csv", clips[4:])):
+        rows = "".join(f"{p},{p.split('/')[0]}\n" for p in part)
+        (data / name).write_text("path,label\n" + rows, encoding="utf-8")
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(data / "first.csv"), "--db", str(db), "--name", "x", *TRAIN]) == 0
+    capsys.readouterr()
+    assert main(["train", str(data / "more.csv"), "--db", str(db), "--append"]) == 0, (
+        capsys.readouterr().err
+    )
+    with open_store(db, readonly=True) as store:
+        assert [cb.name for cb in store.list_case_bases()] == ["x"]
+        assert len(load_classifier(store, "x").classifier.case_base_) == 6

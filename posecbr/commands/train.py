@@ -52,6 +52,10 @@ def _phases(value: str) -> int | str:
         raise ConfigError(msg, "--phases") from None
 
 
+#: the name of a case base ``train`` makes when ``--name`` is left out
+DEFAULT_NAME = "default"
+
+
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "train",
@@ -62,7 +66,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("data", type=path_arg, help="dataset folder, labels CSV or pose file folder")
     p.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     p.add_argument(
-        "--name", default="default", help="case base name in the store (default: default)"
+        "--name",
+        default=None,
+        help=f"case base name in the store (default: {DEFAULT_NAME}; with --append, {DEFAULT_NAME}"
+        " or else the store's only one, as classify, segment and watch take it)",
     )
     p.add_argument(
         "--features", choices=("fluents", "qmp"), default=None, help="feature level (fluents)"
@@ -764,14 +771,41 @@ def _check_one_recording(args: argparse.Namespace) -> None:
         )
 
 
-def _check_options(args: argparse.Namespace) -> None:
-    """Refuse options that cannot work together, in one line, before any clip is read."""
-    if not args.name.strip():
+def _append_name(args: argparse.Namespace) -> str:
+    """The case base ``--append`` adds to: ``--name``, else the one named
+    :data:`DEFAULT_NAME`, else the store's only one, as ``classify``, ``segment`` and
+    ``watch`` take it (``--append`` to a store holding one case base named otherwise was
+    refused: "no case base named 'default'"). With several and none of that name, or none,
+    :data:`DEFAULT_NAME`: the append refuses it naming those the store holds."""
+    from casebase_store import open_store
+
+    if args.name is not None:
+        return str(args.name)
+    store = open_store(args.db, create=False, readonly=True)
+    try:
+        names = [cb.name for cb in store.list_case_bases()]
+    finally:
+        store.close()
+    return names[0] if len(names) == 1 else DEFAULT_NAME
+
+
+def _check_name(args: argparse.Namespace) -> None:
+    """``--name``: :data:`DEFAULT_NAME` for a new case base when left out (``--append``'s
+    is found once the store is open, :func:`_append_name`); an empty one refused, and a new
+    one no store can hold, before training."""
+    if args.name is None and not args.append:
+        args.name = DEFAULT_NAME
+    if args.name is not None and not args.name.strip():
         raise ConfigError("the case base name is empty", "--name")
-    if not args.append:  # a new case base's: one no store can hold is refused before training
+    if not args.append:
         from casebase_store import check_case_base_name
 
         check_case_base_name(args.name, "--name")
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse options that cannot work together, in one line, before any clip is read."""
+    _check_name(args)
     in_csv = "a labels CSV gives it in its label_block_s or label_names column"
     converted = "the one recording it labels; convert a dataset's recordings first: "
     converted += "posecbr convert --asf --fps"
@@ -823,6 +857,7 @@ def run(args: argparse.Namespace) -> int:
         prepare_write(args.db)
     if args.append:
         _check_append(args)
+        args.name = _append_name(args)
         plan, uid, args.split, args.target = append_plan(
             args.db, args.name, args.target, args.split
         )
