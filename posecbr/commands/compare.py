@@ -81,7 +81,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "aeon: named here without them, refused before the run); default: both, "
         "minirocket skipped with a note when it cannot run; 'none' for no peers",
     )
-    add_k_option(p, 5, " in the case-base classifier (default 5), as train -k")
+    add_k_option(p, 5, ", in the case-base classifier (default 5), as train -k")
     p.add_argument(
         "--trim",
         type=float,

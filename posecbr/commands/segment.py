@@ -93,7 +93,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     add_k_option(
         p,
         1,
-        " in each window, as classify -k N in a clip (default 1; at most the case base's own"
+        ", in each window, as classify -k N in a clip (default 1; at most the case base's own"
         " k, the nearest cases a window retrieves, which `posecbr casebase info` shows and"
         " the explanations count)",
     )

@@ -90,7 +90,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     add_k_option(
         p,
         1,
-        " in each window, as segment -k N (default 1; at most the case base's own k, which"
+        ", in each window, as segment -k N (default 1; at most the case base's own k, which"
         " `posecbr casebase info` shows)",
     )
     p.add_argument(
