@@ -247,6 +247,15 @@ def _apart(cb: CaseBase, dist: np.ndarray) -> np.ndarray:
     return np.where(twins, np.inf, dist) if twins.any() else dist
 
 
+def _editing(cb: CaseBase, method: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What an editor (CNN, RENN, ICF) works on, for a case base not empty: the distances
+    between all cases ``(n, n)``, the same with each case's mirror image out of reach
+    (:func:`_apart`), the twin groups ``(n,)`` and the labels as text ``(n,)``."""
+    cb.check_not_empty()
+    dist = pairwise_distances(cb, desc=method)
+    return dist, _apart(cb, dist), twin_groups(cb), cb.labels.astype(str)
+
+
 def keep_every_activity(
     cb: CaseBase, kept: np.ndarray, dist: np.ndarray | None
 ) -> tuple[np.ndarray, tuple[str, ...]]:
@@ -358,11 +367,7 @@ def cnn(
 ) -> MaintenanceReport:
     """Hart's condensed nearest neighbour: a subset that classifies every case right by 1-NN
     (a case is judged without its mirror image, and added with it)."""
-    cb.check_not_empty()
-    dist = pairwise_distances(cb, desc="CNN")
-    apart = _apart(cb, dist)
-    groups = twin_groups(cb)
-    labels = cb.labels.astype(str)
+    dist, apart, groups, labels = _editing(cb, "CNN")
     kept = np.zeros(len(cb), dtype=bool)
     for lab in np.unique(labels):
         kept[groups == groups[np.flatnonzero(labels == lab)[0]]] = True
@@ -400,10 +405,7 @@ def renn(
     eval_set: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> MaintenanceReport:
     """Repeated edited nearest neighbour: drop cases their k nearest misclassify, until stable."""
-    cb.check_not_empty()
-    dist = pairwise_distances(cb, desc="RENN")
-    apart, groups = _apart(cb, dist), twin_groups(cb)
-    labels = cb.labels.astype(str)
+    dist, apart, groups, labels = _editing(cb, "RENN")
     kept = np.ones(len(cb), dtype=bool)
     while True:
         new = _enn_pass(apart, labels, kept, k, groups)
@@ -421,10 +423,7 @@ def icf(
     eval_set: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> MaintenanceReport:
     """Iterative case filtering (Brighton & Mellish 2002)."""
-    cb.check_not_empty()
-    dist = pairwise_distances(cb, desc="ICF")
-    apart, groups = _apart(cb, dist), twin_groups(cb)
-    labels = cb.labels.astype(str)
+    dist, apart, groups, labels = _editing(cb, "ICF")
     kept = _enn_pass(apart, labels, np.ones(len(cb), dtype=bool), k, groups)
     if not kept.any():
         kept = np.ones(len(cb), dtype=bool)
