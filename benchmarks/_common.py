@@ -118,6 +118,15 @@ def side_by_side(
     return {n: 1000 * statistics.median(times[n]) for n in names}, answers
 
 
+def identical_neighbours(answers: dict[str, Any], want: Any) -> dict[str, int]:
+    """For each method of ``answers`` (its neighbours of every query, in query order), how many
+    queries it answered with exactly the neighbours of ``want``, in the same order."""
+    return {
+        name: sum(bool(np.array_equal(a, w)) for a, w in zip(got, want, strict=True))
+        for name, got in answers.items()
+    }
+
+
 def median_ms(fn: Callable[[], Any], repeats: int) -> float:
     """Median ms of ``repeats`` calls of ``fn`` after one warm-up."""
     fn()

@@ -160,10 +160,7 @@ def run_one(kind: str, index_cases: Any, cases: np.ndarray, queries: np.ndarray,
     ms, answers = C.side_by_side(methods, len(queries), rounds)
     brute = DTW(radius=RADIUS, jobs=2)
     want = [smallest_k(brute.distances(r, index_cases), K)[0] for r in reps[2]]
-    identical = {
-        name: sum(bool(np.array_equal(a, w)) for a, w in zip(got, want, strict=True))
-        for name, got in answers.items()
-    }
+    identical = C.identical_neighbours(answers, want)
     return {
         "kind": kind,
         "cases": n,

@@ -111,10 +111,7 @@ def run_one(n: int, dims: int, n_queries: int, rng: np.random.Generator) -> dict
             "8-bit": round(float(eight.codes.pruning[0]), 6),
         },
         "ms_per_query": {k: round(v, 3) for k, v in ms.items()},
-        "queries_with_identical_neighbours": {
-            name: sum(bool(np.array_equal(a, w)) for a, w in zip(got, want, strict=True))
-            for name, got in answers.items()
-        },
+        "queries_with_identical_neighbours": C.identical_neighbours(answers, want),
         "load_avg": [load_before, C.load()],
     }
 

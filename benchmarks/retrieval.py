@@ -123,13 +123,7 @@ def run_one(kind: str, cases: np.ndarray, queries: np.ndarray, storage: str) -> 
     ms["faiss_flat_batch"] = C.median_ms(lambda: peer_fa.search(q32, K), 3) / len(queries)
     want = answers["posecbr_plain"]
     batch_i = m.nearest_many(batch_reps, pruned, K)[0]
-    identical = {
-        name: sum(bool(np.array_equal(a, w)) for a, w in zip(got, want, strict=True))
-        for name, got in answers.items()
-    }
-    identical["posecbr_batch"] = sum(
-        bool(np.array_equal(a, w)) for a, w in zip(batch_i, want, strict=True)
-    )
+    identical = C.identical_neighbours({**answers, "posecbr_batch": batch_i}, want)
     row = {
         "kind": kind,
         "cases": n,
