@@ -20,6 +20,7 @@ import pytest
 
 from posecbr.cli import main
 from tests.badinput import refused, small_case_base
+from tests.media import mux_frames_and_silence, silence_file
 from tests.test_hunt34c import (
     BROWSER_PTS_MS,
     _browser_webm,
@@ -276,24 +277,7 @@ def _with_longer_audio(path: Path, frames: int, audio_s: float) -> Path:
     video.width, video.height = 64, 48
     video.pix_fmt = "yuvj420p" if codec == "mjpeg" else "yuv420p"
     audio = out.add_stream("libopus", rate=48000)
-    chunks = round(audio_s * 48000 / 960)
-    v = a = 0
-    while v < frames or a < chunks:
-        if v < frames and (a >= chunks or v / 30 <= a * 960 / 48000):
-            picture = np.full((48, 64, 3), (3 * v) % 250, np.uint8)
-            frame = av.VideoFrame.from_ndarray(picture, format="rgb24")
-            frame.pts, v = v, v + 1
-            packets = video.encode(frame)
-        else:
-            sound = av.AudioFrame.from_ndarray(np.zeros((1, 960), np.float32), "flt", "mono")
-            sound.sample_rate, sound.pts, a = 48000, a * 960, a + 1
-            packets = audio.encode(sound)
-        for packet in packets:
-            out.mux(packet)
-    for stream in (video, audio):
-        for packet in stream.encode():
-            out.mux(packet)
-    out.close()
+    mux_frames_and_silence(out, video, audio, frames, audio_s, "flt", 960)
     return path
 
 
@@ -340,20 +324,9 @@ SOUNDS = {
 
 def _sound(path: Path) -> Path:
     """One second of silence (48 kHz, mono) in the format the file name says."""
-    av = pytest.importorskip("av", reason="PyAV writes the sound files")
+    pytest.importorskip("av", reason="PyAV writes the sound files")
     codec, fmt, n, _kind = SOUNDS[path.name]
-    out = av.open(str(path), "w")
-    stream = out.add_stream(codec, rate=48000)
-    dtype = np.int16 if fmt.startswith("s16") else np.float32
-    for k in range(48000 // n):
-        frame = av.AudioFrame.from_ndarray(np.zeros((1, n), dtype), format=fmt, layout="mono")
-        frame.sample_rate, frame.pts = 48000, k * n
-        for packet in stream.encode(frame):
-            out.mux(packet)
-    for packet in stream.encode():
-        out.mux(packet)
-    out.close()
-    return path
+    return silence_file(path, codec, fmt, n, 48000)
 
 
 @pytest.mark.parametrize("name", list(SOUNDS))

@@ -9,11 +9,11 @@ import struct
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from posecbr.cli import main
 from tests.badinput import refused, small_case_base
+from tests.media import mux_frames_and_silence, silence_file
 from tests.test_hunt34c import _encode, _Quiet, _serving
 from tests.test_hunt34h import _sound
 
@@ -319,24 +319,7 @@ def _flv(path: Path, frames: int, sound_s: float) -> Path:
     video = out.add_stream("flv", rate=30)
     video.width, video.height, video.pix_fmt = 64, 48, "yuv420p"
     sound = out.add_stream("libmp3lame", rate=44100)
-    chunks = round(sound_s * 44100 / 1152)
-    v = a = 0
-    while v < frames or a < chunks:
-        if v < frames and (a >= chunks or v / 30 <= a * 1152 / 44100):
-            picture = np.full((48, 64, 3), (3 * v) % 250, np.uint8)
-            frame = av.VideoFrame.from_ndarray(picture, format="rgb24")
-            frame.pts, v = v, v + 1
-            packets = video.encode(frame)
-        else:
-            chunk = av.AudioFrame.from_ndarray(np.zeros((1, 1152), np.int16), "s16p", "mono")
-            chunk.sample_rate, chunk.pts, a = 44100, a * 1152, a + 1
-            packets = sound.encode(chunk)
-        for packet in packets:
-            out.mux(packet)
-    for stream in (video, sound):
-        for packet in stream.encode():
-            out.mux(packet)
-    out.close()
+    mux_frames_and_silence(out, video, sound, frames, sound_s, "s16p", 1152)
     return path
 
 
@@ -477,21 +460,9 @@ SOUND_ONLY = {
 
 def _sound_in(path: Path) -> Path:
     """About a second of silence (44.1 kHz, mono) in the container the table names."""
-    av = pytest.importorskip("av", reason="PyAV writes the sound files")
+    pytest.importorskip("av", reason="PyAV writes the sound files")
     container, codec, fmt, n, _kind = SOUND_ONLY[path.name]
-    options = {"mpegts_m2ts_mode": "1"} if path.suffix == ".m2ts" else {}
-    out = av.open(str(path), "w", format=container, options=options)
-    stream = out.add_stream(codec, rate=44100)
-    dtype = np.int16 if fmt.startswith("s16") else np.float32
-    for k in range(44100 // n):
-        frame = av.AudioFrame.from_ndarray(np.zeros((1, n), dtype), format=fmt, layout="mono")
-        frame.sample_rate, frame.pts = 44100, k * n
-        for packet in stream.encode(frame):
-            out.mux(packet)
-    for packet in stream.encode():
-        out.mux(packet)
-    out.close()
-    return path
+    return silence_file(path, codec, fmt, n, 44100, container)
 
 
 @pytest.mark.parametrize("name", list(SOUND_ONLY))
