@@ -37,7 +37,7 @@ import argparse  # noqa: E402
 import re  # noqa: E402
 import time  # noqa: E402
 from collections import defaultdict  # noqa: E402
-from collections.abc import Callable, Iterator  # noqa: E402
+from collections.abc import Callable, Collection, Iterator  # noqa: E402
 from dataclasses import dataclass  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
@@ -92,13 +92,14 @@ def uiprmd_groups(sensor: str) -> list[Group]:
     return [Group(name, s, m, tuple(f)) for (s, m), f in sorted(found.items())]
 
 
-def hdm05_groups() -> list[Group]:
-    """HDM05 one-repetition clips by actor and action."""
+def hdm05_groups(actions: Collection[str] = HDM05_ACTIONS) -> list[Group]:
+    """HDM05 clips of ``actions`` (by default the one-repetition ones,
+    :data:`HDM05_ACTIONS`) by actor and action."""
     found: dict[tuple[str, str], list[Path]] = defaultdict(list)
     pattern = re.compile(r"HDM_([a-z]+)_([A-Za-z0-9]+)_\d+_120\.amc$", re.IGNORECASE)
     for path in sorted(HDM05.glob("*/HDM_*")):
         m = pattern.match(path.name)
-        if m and m.group(2) in HDM05_ACTIONS:
+        if m and m.group(2) in actions:
             found[(m.group(1), m.group(2))].append(path)
     return [Group("hdm05", a, m, tuple(f)) for (a, m), f in sorted(found.items())]
 

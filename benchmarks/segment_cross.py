@@ -39,7 +39,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
-import re  # noqa: E402
 import time  # noqa: E402
 from collections import Counter, defaultdict  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -49,15 +48,14 @@ import numpy as np  # noqa: E402
 
 from benchmarks import write_json  # noqa: E402
 from benchmarks._common import one_thread_machine, versions  # noqa: E402
-from benchmarks.repetitions import HDM05, UIPRMD, Group, uiprmd_groups  # noqa: E402
+from benchmarks.repetitions import HDM05, UIPRMD, Group, hdm05_groups, uiprmd_groups  # noqa: E402
 from benchmarks.segment import JUDGES, judge_named  # noqa: E402
 from benchmarks.segment_people import (  # noqa: E402
-    K_RANGE,
     MOVEMENTS_RANGE,
     Reader,
     Recording,
-    block_labels,
     dtw_training,
+    joined_recording,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -101,17 +99,6 @@ def expected(dataset: str, movement: str) -> str:
     return EXPECTED["hdm05" if dataset == "hdm05" else "ui-prmd"][movement]
 
 
-def hdm05_groups() -> list[Group]:
-    """HDM05 clips of every action of :data:`EXPECTED` by actor and action."""
-    found: dict[tuple[str, str], list[Path]] = defaultdict(list)
-    pattern = re.compile(r"HDM_([a-z]+)_([A-Za-z0-9]+)_\d+_120\.amc$", re.IGNORECASE)
-    for path in sorted(HDM05.glob("*/HDM_*")):
-        m = pattern.match(path.name)
-        if m and m.group(2) in EXPECTED["hdm05"]:
-            found[(m.group(1), m.group(2))].append(path)
-    return [Group("hdm05", a, m, tuple(f)) for (a, m), f in sorted(found.items())]
-
-
 def recordings(
     groups: list[Group],
     rng: np.random.Generator,
@@ -124,8 +111,6 @@ def recordings(
     movements CMU 13 did (:data:`EXPECTED`) are not among them; each recording holds 2-3 of
     the others and one of those, taken in turn, at a random place (its repetitions drawn
     anew): every recording is of a CMU exercise and others, as the open question's are."""
-    from features.joining import join_repetitions
-
     by_person: dict[str, list[Group]] = defaultdict(list)
     for g in groups:
         by_person[g.person].append(g)
@@ -146,20 +131,8 @@ def recordings(
         for r, part in enumerate(parts if seen else []):
             part.insert(int(rng.integers(len(part) + 1)), seen[r % len(seen)])
         for r, chosen in enumerate(parts):
-            reps, labels = [], []
-            for g in chosen:
-                k = min(int(rng.integers(K_RANGE[0], K_RANGE[1] + 1)), len(g.files))
-                for i in rng.choice(len(g.files), size=k, replace=False):
-                    reps.append(read(g, g.files[int(i)]))
-                    labels.append(g.movement)
-            joined = join_repetitions(reps, labels=labels)
-            assert joined.labels is not None
             name = f"{person}-{round_}.{r + 1}"
-            seq = joined.seq.with_metadata(source=name)
-            jump = float(joined.jumps_m.max()) if len(joined.jumps_m) else 0.0
-            blocks = block_labels(joined.labels, seq.fps)
-            movements = tuple(g.movement for g in chosen)
-            out.append(Recording(name, person, seq, blocks, movements, jump))
+            out.append(joined_recording(name, person, chosen, rng, read))
     return out
 
 
@@ -315,7 +288,7 @@ def main(argv: list[str] | None = None) -> int:
     for dataset in args.datasets:
         read = Reader()
         groups = (
-            hdm05_groups()
+            hdm05_groups(EXPECTED["hdm05"])
             if dataset == "hdm05"
             else uiprmd_groups(dataset.split("-")[-1].capitalize())
         )

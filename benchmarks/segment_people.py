@@ -60,7 +60,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
-import re  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 from collections import defaultdict  # noqa: E402
@@ -79,6 +78,7 @@ from benchmarks.repetitions import (  # noqa: E402
     TRAIN_SUBJECTS,
     UIPRMD,
     Group,
+    hdm05_groups,
     read_one,
     uiprmd_groups,
 )
@@ -118,17 +118,6 @@ class Fold:
     recordings: list[Recording]
 
 
-def hdm05_groups() -> list[Group]:
-    """HDM05 one-repetition clips of :data:`HDM05_MOVEMENTS` by actor and action."""
-    found: dict[tuple[str, str], list[Path]] = defaultdict(list)
-    pattern = re.compile(r"HDM_([a-z]+)_([A-Za-z0-9]+)_\d+_120\.amc$", re.IGNORECASE)
-    for path in sorted(HDM05.glob("*/HDM_*")):
-        m = pattern.match(path.name)
-        if m and m.group(2) in HDM05_MOVEMENTS:
-            found[(m.group(1), m.group(2))].append(path)
-    return [Group("hdm05", a, m, tuple(f)) for (a, m), f in sorted(found.items())]
-
-
 class Reader:
     """Reads each repetition file once."""
 
@@ -155,8 +144,6 @@ def test_recordings(
 ) -> list[Recording]:
     """``per_person`` joined recordings of every person of ``groups``: 3-4 movements in a
     random order, K (3-6, at most as many as recorded) random repetitions of each."""
-    from features.joining import join_repetitions
-
     by_person: dict[str, list[Group]] = defaultdict(list)
     for g in groups:
         by_person[g.person].append(g)
@@ -165,27 +152,30 @@ def test_recordings(
         for r in range(per_person):
             n_moves = int(rng.integers(MOVEMENTS_RANGE[0], MOVEMENTS_RANGE[1] + 1))
             chosen = [mine[int(i)] for i in rng.choice(len(mine), size=n_moves, replace=False)]
-            reps, labels = [], []
-            for g in chosen:
-                k = min(int(rng.integers(K_RANGE[0], K_RANGE[1] + 1)), len(g.files))
-                for i in rng.choice(len(g.files), size=k, replace=False):
-                    reps.append(read(g, g.files[int(i)]))
-                    labels.append(g.movement)
-            joined = join_repetitions(reps, labels=labels)
-            assert joined.labels is not None
-            seq = joined.seq.with_metadata(source=f"{person}-{r + 1}")
-            jump = float(joined.jumps_m.max()) if len(joined.jumps_m) else 0.0
-            out.append(
-                Recording(
-                    f"{person}-{r + 1}",
-                    person,
-                    seq,
-                    block_labels(joined.labels, seq.fps),
-                    tuple(g.movement for g in chosen),
-                    jump,
-                )
-            )
+            out.append(joined_recording(f"{person}-{r + 1}", person, chosen, rng, read))
     return out
+
+
+def joined_recording(
+    name: str, person: str, chosen: list[Group], rng: np.random.Generator, read: Reader
+) -> Recording:
+    """The recording ``name`` of ``person``: K (3-6, at most as many as recorded) random
+    repetitions of each movement of ``chosen`` in turn, joined
+    (:func:`features.joining.join_repetitions`)."""
+    from features.joining import join_repetitions
+
+    reps, labels = [], []
+    for g in chosen:
+        k = min(int(rng.integers(K_RANGE[0], K_RANGE[1] + 1)), len(g.files))
+        for i in rng.choice(len(g.files), size=k, replace=False):
+            reps.append(read(g, g.files[int(i)]))
+            labels.append(g.movement)
+    joined = join_repetitions(reps, labels=labels)
+    assert joined.labels is not None
+    seq = joined.seq.with_metadata(source=name)
+    jump = float(joined.jumps_m.max()) if len(joined.jumps_m) else 0.0
+    blocks = block_labels(joined.labels, seq.fps)
+    return Recording(name, person, seq, blocks, tuple(g.movement for g in chosen), jump)
 
 
 def folds(
@@ -202,7 +192,7 @@ def folds(
     in turn (1: each training person alone), the same recordings segmented by each."""
     rng = np.random.default_rng(seed)
     if dataset == "hdm05":
-        groups = hdm05_groups()
+        groups = hdm05_groups(HDM05_MOVEMENTS)
         for actor in HDM05_ACTORS:
             test = test_recordings([g for g in groups if g.person == actor], per_person, rng, read)
             for train in _people([g for g in groups if g.person != actor], train_people, rotate):
