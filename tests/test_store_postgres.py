@@ -35,7 +35,12 @@ from posecbr.cli import main
 from tests.processes import posecbr_process
 from tests.test_cbr_cli import _cli, _write_classes
 from tests.test_cbr_cli import dataset as dataset  # noqa: F401  (module-scoped fixture)
-from tests.test_store_transactions import CONCURRENT_RETAIN, KILLED_TRAIN, _new_base, _run_py
+from tests.test_store_transactions import (
+    KILLED_TRAIN,
+    _new_base,
+    _run_py,
+    retained_by_two_processes,
+)
 
 PG_ENV = "POSECBR_TEST_POSTGRES_URL"
 
@@ -419,22 +424,7 @@ def test_cli_gives_the_same_answers_on_postgres_as_on_sqlite(
 
 
 def test_two_processes_retaining_200_each_lose_nothing(pg_url: str, tmp_path: Path) -> None:
-    store = open_store(pg_url, create=True)
-    with store.transaction() as tx:
-        cb = tx.create_case_base(
-            "shared", {"level": "fluents"}, ["a", "b"], ["a", "b"], {"name": "euclidean"}
-        )
-        tx.add_cases(cb, [NewCase(f"l{i % 2}", np.full((4, 2), i, np.float32)) for i in range(4)])
-    go = tmp_path / "go"
-    procs = [_run_py(CONCURRENT_RETAIN, pg_url, tag, str(go)) for tag in ("1", "2")]
-    time.sleep(1.5)  # both have imported and loaded the case base: start together
-    go.touch()
-    for p in procs:
-        out, err = p.communicate(timeout=120)
-        assert out.strip() == "OK", err
-    assert store.count_cases("shared") == 4 + 400
-    counts = store.get_case_base("shared").label_counts
-    assert counts["p1"] == 200 and counts["p2"] == 200
+    store = retained_by_two_processes(pg_url, tmp_path)
     log = store.maintenance_log("shared")
     assert sum(e.action == "retain" for e in log) == 400
     assert len({e.case_id for e in log}) == 400  # each logged retention names its own case

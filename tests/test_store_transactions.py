@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from casebase_store import NewCase, StoreError, open_store
+from casebase_store import CaseStore, NewCase, StoreError, open_store
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -118,16 +118,18 @@ print("OK", flush=True)
 """
 
 
-def test_two_processes_retaining_200_each_end_with_400_more(tmp_path: Path) -> None:
-    db = tmp_path / "cb.sqlite"
-    store = open_store(db, create=True)
+def retained_by_two_processes(url: str, tmp_path: Path) -> CaseStore:
+    """The store at ``url`` with a case base "shared" of 4 cases, into which two processes
+    started together (:data:`CONCURRENT_RETAIN`) have each retained 200 cases: checked that
+    both said OK and that all 400 cases and labels are there."""
+    store = open_store(url, create=True)
     with store.transaction() as tx:
         cb = tx.create_case_base(
             "shared", {"level": "fluents"}, ["a", "b"], ["a", "b"], {"name": "euclidean"}
         )
         tx.add_cases(cb, [NewCase(f"l{i % 2}", np.full((4, 2), i, np.float32)) for i in range(4)])
     go = tmp_path / "go"
-    procs = [_run_py(CONCURRENT_RETAIN, str(db), tag, str(go)) for tag in ("1", "2")]
+    procs = [_run_py(CONCURRENT_RETAIN, url, tag, str(go)) for tag in ("1", "2")]
     time.sleep(1.5)  # both have imported and loaded the case base: start together
     go.touch()
     for p in procs:
@@ -136,6 +138,11 @@ def test_two_processes_retaining_200_each_end_with_400_more(tmp_path: Path) -> N
     assert store.count_cases("shared") == 4 + 400
     counts = store.get_case_base("shared").label_counts
     assert counts["p1"] == 200 and counts["p2"] == 200
+    return store
+
+
+def test_two_processes_retaining_200_each_end_with_400_more(tmp_path: Path) -> None:
+    store = retained_by_two_processes(str(tmp_path / "cb.sqlite"), tmp_path)
     assert sum(e.action == "retain" for e in store.maintenance_log("shared")) == 400
 
 
