@@ -152,6 +152,29 @@ def read_only_mounts_work() -> bool:
         return done.returncode == 0
 
 
+def posecbr_on_read_only_mount(
+    target: Path, argv: list[str], writable: Path | None = None
+) -> subprocess.CompletedProcess[str]:
+    """``python -m posecbr argv`` in a child process with ``target`` (a folder or a file) on a
+    private read-only mount, which not even root can write to (:func:`read_only_mounts_work`).
+    Exit 99 without running it when the mount is not really read-only: a file could be made
+    in the folder ``target``, or, given ``writable``, that file is writable (access(2))."""
+    really = (
+        f"touch {target}/probe 2>/dev/null && exit 99; "
+        if writable is None
+        else f"[ -w {writable} ] && exit 99; "
+    )
+    script = (
+        f"mount --bind {target} {target} && mount -o remount,ro,bind {target} {target} && "
+        f'{really}exec "$0" -m posecbr "$@"'
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
+    return subprocess.run(
+        ["unshare", "-rm", "sh", "-c", script, sys.executable, *argv],
+        cwd=ROOT, env=env, capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+
+
 def too_wide_video(path: Path, frames: int) -> Path:
     """An MJPG AVI of ``frames`` grey frames 8192 x 16 pixels (one pixel wider than an MP4
     frame can be; nobody in view)."""

@@ -6,10 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import sqlite3
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +16,7 @@ from casebase_store import open_store
 from cbr.stored import load_classifier
 from features.poses import PoseSequence, load_pose, save_pose
 from posecbr.cli import main
-from tests.badinput import read_only_mounts_work
+from tests.badinput import posecbr_on_read_only_mount, read_only_mounts_work
 from tests.once import made_once
 from tests.postgres import empty_postgres
 from tests.processes import posecbr_process as _posecbr
@@ -379,15 +376,7 @@ def test_a_case_base_in_a_read_only_folder_can_be_read(
         con.close()
     before = _sha(db)
     clip = DEMO / "m01_s03_e01.npz"
-    script = (
-        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
-        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
-        f"exec {sys.executable} -m posecbr classify {clip} --db {db} --json"
-    )
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
-    done = subprocess.run(
-        ["unshare", "-rm", "sh", "-c", script], capture_output=True, text=True, env=env, timeout=300
-    )
+    done = posecbr_on_read_only_mount(folder, ["classify", str(clip), "--db", str(db), "--json"])
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["results"][0]["label"] == "deep_squat"
     assert _sha(db) == before and sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]

@@ -17,7 +17,12 @@ import pytest
 
 from casebase_store import NewCase, open_store, write_store
 from posecbr.cli import main
-from tests.badinput import read_only_mounts_work, refused, small_case_base
+from tests.badinput import (
+    posecbr_on_read_only_mount,
+    read_only_mounts_work,
+    refused,
+    small_case_base,
+)
 from tests.processes import posecbr_process
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -203,16 +208,7 @@ def test_a_killed_writers_journal_in_a_read_only_folder_is_refused_not_ignored(
     db = folder / "cb.sqlite"
     shutil.copy(small, db)
     _killed_mid_write(db)
-    script = (
-        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
-        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
-        f'exec "$0" -m posecbr "$@"'
-    )
-    done = subprocess.run(
-        ["unshare", "-rm", "sh", "-c", script, sys.executable, "casebase", "info", "--db",
-         str(db)],
-        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    done = posecbr_on_read_only_mount(folder, ["casebase", "info", "--db", str(db)])
     assert done.returncode == 1, done.stderr
     assert done.stderr.splitlines() == [
         f"posecbr casebase info: error: {db}: its last change was interrupted (the process "
@@ -308,15 +304,7 @@ def test_a_writer_in_a_read_only_folder_is_refused_before_its_work(
         "feedback": ["classify", str(clip), "--feedback", clip.parent.name],
         "append": ["train", str(clip.parent), "--append"],
     }[command]
-    script = (
-        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
-        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
-        f'exec "$0" -m posecbr "$@"'
-    )
-    done = subprocess.run(
-        ["unshare", "-rm", "sh", "-c", script, sys.executable, *argv, "--db", str(db)],
-        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    done = posecbr_on_read_only_mount(folder, [*argv, "--db", str(db)])
     assert done.returncode == 1, done.stderr
     name = {"trim": "casebase trim", "feedback": "classify", "append": "train"}[command]
     assert done.stderr.splitlines() == [

@@ -16,7 +16,7 @@ from sqlalchemy.engine import make_url
 
 from casebase_store import open_store
 from posecbr.cli import main
-from tests.badinput import read_only_mounts_work, small_case_base
+from tests.badinput import posecbr_on_read_only_mount, read_only_mounts_work, small_case_base
 from tests.test_store_postgres import pg_server, pg_url  # noqa: F401  (fixtures)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -48,16 +48,7 @@ def _upgrade_read_only(db: Path, what: str) -> subprocess.CompletedProcess[str]:
     """``posecbr casebase upgrade --db db`` with ``what`` ("folder": db's folder, "file": db
     alone) on a private read-only mount, which not even root can write to."""
     target = db.parent if what == "folder" else db
-    script = (
-        f"mount --bind {target} {target} && mount -o remount,ro,bind {target} {target} && "
-        f"[ -w {db} ] && exit 99; "  # the file must really be read-only (access(2): EROFS)
-        f'exec "$0" -m posecbr "$@"'
-    )
-    return subprocess.run(
-        ["unshare", "-rm", "sh", "-c", script, sys.executable, "casebase", "upgrade", "--db",
-         str(db)],
-        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    return posecbr_on_read_only_mount(target, ["casebase", "upgrade", "--db", str(db)], db)
 
 
 @needs_mounts
@@ -313,16 +304,7 @@ def test_a_wal_files_changes_without_its_shm_in_a_read_only_folder_are_refused_n
     db.with_name("cb.sqlite-shm").unlink()
     assert db.with_name("cb.sqlite-wal").stat().st_size > 32
     before = {p.name: _sha(p) for p in folder.iterdir()}
-    script = (
-        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
-        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
-        f'exec "$0" -m posecbr "$@"'
-    )
-    done = subprocess.run(
-        ["unshare", "-rm", "sh", "-c", script, sys.executable, "casebase", "list", "--db",
-         str(db)],
-        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    done = posecbr_on_read_only_mount(folder, ["casebase", "list", "--db", str(db)])
     assert done.returncode == 1, (done.stdout, done.stderr)
     assert done.stderr.splitlines() == [
         f"posecbr casebase list: error: {db}: cb.sqlite-wal beside it holds changes not yet in "
@@ -353,16 +335,7 @@ def test_a_killed_writers_journal_beside_a_read_only_file_is_not_sent_to_upgrade
     shutil.copy(small_case_base(tmp_path / "made"), db)
     _killed_mid_write(db)
     before = {p.name: _sha(p) for p in tmp_path.iterdir() if p.is_file()}
-    script = (
-        f"mount --bind {db} {db} && mount -o remount,ro,bind {db} {db} && "
-        f"[ -w {db} ] && exit 99; "  # the file must really be read-only (access(2): EROFS)
-        f'exec "$0" -m posecbr "$@"'
-    )
-    done = subprocess.run(
-        ["unshare", "-rm", "sh", "-c", script, sys.executable, "casebase", action, "--db",
-         str(db)],
-        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    done = posecbr_on_read_only_mount(db, ["casebase", action, "--db", str(db)], db)
     assert done.returncode == 1, done.stderr
     assert done.stderr.splitlines() == [
         f"posecbr casebase {action}: error: {db}: its last change was interrupted (the process "

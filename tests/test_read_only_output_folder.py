@@ -4,38 +4,24 @@ configuration and then failed to write its results."""
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from features.poses import save_pose
-from tests.badinput import read_only_mounts_work, snapshot, standing_clip
+from tests.badinput import (
+    posecbr_on_read_only_mount,
+    read_only_mounts_work,
+    snapshot,
+    standing_clip,
+)
 
-ROOT = Path(__file__).resolve().parents[1]
-ENV = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
 FAST = ["--similarities", "euclidean", "--features", "fluents", "--peers", "none", "--no-dad"]
 
 pytestmark = pytest.mark.skipif(
     not read_only_mounts_work(),
     reason="this machine cannot make a private read-only mount (unshare -rm, mount)",
 )
-
-
-def _in_read_only(folder: Path, argv: list[str]) -> subprocess.CompletedProcess[str]:
-    """``posecbr argv`` with ``folder`` mounted read-only for it alone (root ignores file
-    modes; a read-only mount binds it too)."""
-    script = (
-        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
-        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
-        f'exec "$0" -m posecbr "$@"'
-    )
-    return subprocess.run(
-        ["unshare", "-rm", "sh", "-c", script, sys.executable, *argv],
-        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +44,9 @@ def test_compare_into_a_read_only_folder_is_refused_before_it_cross_validates(
     folder = tmp_path / "ro"
     folder.mkdir()
     inputs = snapshot(data)
-    done = _in_read_only(folder, ["compare", str(data), *FAST, option, str(folder / name)])
+    done = posecbr_on_read_only_mount(
+        folder, ["compare", str(data), *FAST, option, str(folder / name)]
+    )
     assert snapshot(data) == inputs  # the clips and labels read are as they were
     assert done.returncode == 1, done.stderr
     lines = done.stderr.strip().splitlines()
@@ -74,7 +62,9 @@ def test_describe_plot_into_a_read_only_folder_is_refused(tmp_path: Path) -> Non
     folder = tmp_path / "ro"
     folder.mkdir()
     before = clip.read_bytes()
-    done = _in_read_only(folder, ["describe", str(clip), "--plot", str(folder / "t.png")])
+    done = posecbr_on_read_only_mount(
+        folder, ["describe", str(clip), "--plot", str(folder / "t.png")]
+    )
     assert clip.read_bytes() == before
     assert done.returncode == 1, done.stderr
     lines = done.stderr.strip().splitlines()

@@ -19,7 +19,12 @@ from casebase_store import open_store
 from cbr.similarity import get_measure
 from features.poses import load_pose, save_pose
 from posecbr.cli import main
-from tests.badinput import read_only_mounts_work, refused, small_case_base
+from tests.badinput import (
+    posecbr_on_read_only_mount,
+    read_only_mounts_work,
+    refused,
+    small_case_base,
+)
 from tests.processes import posecbr_process
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -127,15 +132,7 @@ def test_a_first_train_into_a_read_only_folder_names_the_file_asked_for(
     db = folder / "cb.sqlite"
     argv = ["train", str(small.parent / "train"), "--db", str(db), "--mirror", "off",
             "--feature-weights", "none", "--phases", "0"]  # fmt: skip
-    script = (
-        f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder} && "
-        f"touch {folder}/probe 2>/dev/null && exit 99; "  # the folder must really be read-only
-        f'exec "$0" -m posecbr "$@"'
-    )
-    done = subprocess.run(
-        ["unshare", "-rm", "sh", "-c", script, sys.executable, *argv],
-        cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    done = posecbr_on_read_only_mount(folder, argv)
     assert done.returncode == 1, done.stderr
     assert done.stderr.splitlines() == [
         f"posecbr train: error: {db}: cannot write the case base file: the folder {folder} is "
