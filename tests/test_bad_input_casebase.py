@@ -288,6 +288,22 @@ def test_a_store_of_a_schema_it_cannot_read_or_upgrade_says_which(
     assert _sha(db) == before
 
 
+def assert_upgraded_store_v1(db: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """The case base of tests/fixtures/store_v1.sql in ``db`` (a file or a URL) after
+    ``casebase upgrade``: every case and log entry keeps its id, the case base has a uid and
+    version 1, and ``classify`` reads it (the demo squat: deep_squat)."""
+    store = open_store(db, readonly=True)
+    assert store.load_cases("squats ✓").ids.tolist() == list(range(1, 9))
+    log = store.maintenance_log("squats ✓")
+    assert [(e.action, e.case_id) for e in log] == [("build", None), ("retain", None),
+                                                    ("revise", 6)]  # fmt: skip
+    info = store.get_case_base("squats ✓")
+    assert len(info.uid) == 32 and info.version == 1
+    store.close()
+    assert main(["classify", str(CLIP), "--db", db, "--json"]) == 0
+    assert '"label": "deep_squat"' in capsys.readouterr().out
+
+
 def test_a_store_of_schema_1_is_refused_then_upgraded_in_place(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -303,17 +319,7 @@ def test_a_store_of_schema_1_is_refused_then_upgraded_in_place(
     assert _sha(db) == before
     assert main(["casebase", "upgrade", "--db", str(db)]) == 0
     assert "converted from schema version 1 to 2" in capsys.readouterr().out
-    store = open_store(db, readonly=True)
-    cases = store.load_cases("squats ✓")
-    assert cases.ids.tolist() == list(range(1, 9))  # every case keeps its id
-    log = store.maintenance_log("squats ✓")
-    assert [(e.action, e.case_id) for e in log] == [("build", None), ("retain", None),
-                                                    ("revise", 6)]  # fmt: skip
-    info = store.get_case_base("squats ✓")
-    assert len(info.uid) == 32 and info.version == 1
-    store.close()
-    assert main(["classify", str(CLIP), "--db", str(db), "--json"]) == 0
-    assert '"label": "deep_squat"' in capsys.readouterr().out
+    assert_upgraded_store_v1(str(db), capsys)
     assert main(["casebase", "upgrade", "--db", str(db)]) == 0
     assert "already schema version 2" in capsys.readouterr().out
     # new cases never take an old id

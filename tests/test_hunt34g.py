@@ -17,6 +17,7 @@ from sqlalchemy.engine import make_url
 from casebase_store import open_store
 from posecbr.cli import main
 from tests.badinput import posecbr_on_read_only_mount, read_only_mounts_work, small_case_base
+from tests.test_bad_input_casebase import assert_upgraded_store_v1
 from tests.test_store_postgres import pg_server, pg_url  # noqa: F401  (fixtures)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -146,16 +147,7 @@ def test_a_store_of_schema_1_on_postgresql_is_refused_then_upgraded_in_place(
     assert err.endswith("(convert it with `posecbr casebase upgrade --db URL`)"), err
     assert main(["casebase", "upgrade", "--db", pg_url]) == 0
     assert "converted from schema version 1 to 2" in capsys.readouterr().out
-    store = open_store(pg_url, readonly=True)
-    assert store.load_cases("squats ✓").ids.tolist() == list(range(1, 9))
-    log = store.maintenance_log("squats ✓")
-    assert [(e.action, e.case_id) for e in log] == [("build", None), ("retain", None),
-                                                    ("revise", 6)]  # fmt: skip
-    info = store.get_case_base("squats ✓")
-    assert len(info.uid) == 32 and info.version == 1
-    store.close()
-    assert main(["classify", str(clip), "--db", pg_url, "--json"]) == 0
-    assert '"label": "deep_squat"' in capsys.readouterr().out
+    assert_upgraded_store_v1(pg_url, capsys)  # every case keeps its id
     # a new case takes the id after the highest, never an old one
     assert main(["classify", str(clip), "--db", pg_url, "--feedback", "deep_squat",
                  "--novelty", "0", "--benefit", "0"]) == 0  # fmt: skip
