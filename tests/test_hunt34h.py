@@ -290,15 +290,23 @@ def test_audio_running_on_after_the_last_frame_is_no_truncation(
     round(4.3 x 30) = 129 frames, and the clip was refused as "truncated or corrupt:
     decoded 120 of 129 frames" (``extract``, ``segment``, ``watch``). Its frames are its
     120 packets: all decode, ``extract`` writes 120 poses."""
+    clip = _with_longer_audio(tmp_path / name, 120, 4.3)
+    assert_read_by_its_120_frames(clip, 129, tmp_path, capsys)  # 129: the duration's count
+
+
+def assert_read_by_its_120_frames(
+    clip: Path, stated: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``clip`` (120 frames at 30 fps) of which OpenCV states ``stated`` frames: opened as 120
+    at 30 fps, all 120 decode, and ``extract`` writes 120 poses."""
     import cv2
 
     from features.pose_estimation import iter_frames, open_video
     from features.poses import load_pose
 
-    clip = _with_longer_audio(tmp_path / name, 120, 4.3)
-    stated = cv2.VideoCapture(str(clip))
-    assert stated.get(cv2.CAP_PROP_FRAME_COUNT) == 129  # the duration's count
-    stated.release()
+    said = cv2.VideoCapture(str(clip))
+    assert said.get(cv2.CAP_PROP_FRAME_COUNT) == stated
+    said.release()
     cap, info = open_video(clip)
     cap.release()
     assert (info.frames, info.fps) == (120, 30.0)

@@ -15,7 +15,7 @@ from posecbr.cli import main
 from tests.badinput import refused, small_case_base
 from tests.media import mux_frames_and_silence, silence_file
 from tests.test_hunt34c import _encode, _Quiet, _serving
-from tests.test_hunt34h import _sound
+from tests.test_hunt34h import _sound, assert_read_by_its_120_frames
 
 SKELETON = 0x5C5C5C5C
 """The skeleton stream's serial number."""
@@ -341,25 +341,10 @@ def test_an_flv_whose_sound_runs_on_is_counted_by_its_frames(
     duration its header states at 30 fps, 130 frames, and ``extract`` refused it as
     "truncated or corrupt: decoded 120 of 130 frames". Its frames are its 120 video
     packets, as a WebM's are: all decode, ``extract`` writes 120 poses."""
-    import cv2
-
-    from features.pose_estimation import iter_frames, open_video
-    from features.poses import load_pose
-
     clip = _flv(tmp_path / "clip.flv", 120, 4.3)
     tags = _flv_tags(clip.read_bytes())
     assert sum(kind == 9 for kind, _end, _ms in tags) == 120
-    stated = cv2.VideoCapture(str(clip))
-    assert stated.get(cv2.CAP_PROP_FRAME_COUNT) == 130
-    stated.release()
-    cap, info = open_video(clip)
-    cap.release()
-    assert (info.frames, info.fps) == (120, 30.0)
-    assert sum(1 for _ in iter_frames(clip)) == 120
-    out = tmp_path / "poses"
-    assert main(["extract", str(clip), "--out", str(out)]) == 0, capsys.readouterr().err
-    (written,) = out.glob("*.npz")
-    assert load_pose(written).n_frames == 120
+    assert_read_by_its_120_frames(clip, 130, tmp_path, capsys)
 
 
 def _cut_flvs(folder: Path) -> tuple[bytes, dict[str, tuple[Path, str]]]:
