@@ -175,6 +175,39 @@ def posecbr_on_read_only_mount(
     )  # fmt: skip
 
 
+LEG_BVH_HIERARCHY = """HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT LeftUpLeg
+  {
+    OFFSET 10 0 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT LeftLeg
+    {
+      OFFSET 0 -40 0
+      CHANNELS 3 Zrotation Xrotation Yrotation
+      End Site
+      {
+        OFFSET 0 -40 0
+      }
+    }
+  }
+}
+"""
+"""A hand-made BVH skeleton of one left leg (lengths in the file's unit): the root Hips with
+position and rotation channels, LeftUpLeg 10 along +x from it, LeftLeg (the knee) 40 below
+that and the foot's end site 40 below the knee."""
+
+
+def leg_bvh(frame_time: str, *frames: str) -> str:
+    """A BVH file of :data:`LEG_BVH_HIERARCHY` whose motion is ``frames`` (one line of 12
+    channel values a frame), ``frame_time`` as its Frame Time line writes it."""
+    motion = "".join(f"{line}\n" for line in frames)
+    return f"{LEG_BVH_HIERARCHY}MOTION\nFrames: {len(frames)}\nFrame Time: {frame_time}\n{motion}"
+
+
 def too_wide_video(path: Path, frames: int) -> Path:
     """An MJPG AVI of ``frames`` grey frames 8192 x 16 pixels (one pixel wider than an MP4
     frame can be; nobody in view)."""

@@ -14,34 +14,16 @@ import pytest
 from features.datasets import read_labels_csv
 from features.poses import load_pose
 from posecbr.cli import main
-from tests.badinput import good_pose_file, pose_file, refused, refused_in_process, snapshot
+from tests.badinput import (
+    good_pose_file,
+    leg_bvh,
+    pose_file,
+    refused,
+    refused_in_process,
+    snapshot,
+)
 
-BVH = """HIERARCHY
-ROOT Hips
-{
-  OFFSET 0 0 0
-  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
-  JOINT LeftUpLeg
-  {
-    OFFSET 10 0 0
-    CHANNELS 3 Zrotation Xrotation Yrotation
-    JOINT LeftLeg
-    {
-      OFFSET 0 -40 0
-      CHANNELS 3 Zrotation Xrotation Yrotation
-      End Site
-      {
-        OFFSET 0 -40 0
-      }
-    }
-  }
-}
-MOTION
-Frames: 2
-Frame Time: 0.0333333
-0 90 0 0 0 0 0 0 0 10 20 0
-0 90 0 0 0 0 0 0 0 30 40 0
-"""
+BVH = leg_bvh("0.0333333", "0 90 0 0 0 0 0 0 0 10 20 0", "0 90 0 0 0 0 0 0 0 30 40 0")
 
 
 def _clips(folder: Path) -> None:

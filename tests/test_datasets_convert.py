@@ -13,34 +13,9 @@ from features.poses import load_pose
 from features.readers.uiprmd import read_uiprmd_kinect
 from posecbr.cli import main
 from posecbr.commands.convert import parse_ranges
+from tests.badinput import leg_bvh
 
-BVH = """HIERARCHY
-ROOT Hips
-{
-  OFFSET 0 0 0
-  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
-  JOINT LeftUpLeg
-  {
-    OFFSET 10 0 0
-    CHANNELS 3 Zrotation Xrotation Yrotation
-    JOINT LeftLeg
-    {
-      OFFSET 0 -40 0
-      CHANNELS 3 Zrotation Xrotation Yrotation
-      End Site
-      {
-        OFFSET 0 -40 0
-      }
-    }
-  }
-}
-MOTION
-Frames: 3
-Frame Time: 0.02
-0 90 0 0 0 0 0 0 0 0 0 0
-0 90 0 0 0 0 0 0 0 0 0 0
-0 90 0 0 0 0 0 0 0 0 0 0
-"""
+BVH = leg_bvh("0.02", *["0 90 0 0 0 0 0 0 0 0 0 0"] * 3)
 
 
 def test_parse_ranges() -> None:
