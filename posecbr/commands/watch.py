@@ -13,8 +13,12 @@ One JSON line per finished segment goes to stdout, as it finishes (``start_s``, 
 ``start_frame``, ``end_frame``, ``label``, null when unknown, ``confidence``, ``unknown``,
 ``repetitions``, ``explanation``, ``novelty``, ``count`` (the number of repetitions, as
 ``repetitions`` gives it too), as ``posecbr segment --json`` gives them). At
-the end the latency from reading a frame to having its label is printed on stderr (median,
-95th percentile, worst).
+the end the latency from a frame's coming to having its label is printed on stderr (median,
+95th percentile, worst): a file's frame played at its own rate comes when it is due, as a
+camera would deliver it, however late the watch reads it; a live source's when it is read.
+A live source that sends no frame for longer than a quarter second and resumes (before
+``--stall``) has the time between left missing ("no frames in the video"), as ``extract``
+leaves a gap in a video, and said so on stderr.
 
 Ctrl-C or SIGTERM (``kill``, a supervisor's stop) ends the watch as the end of a file does
 (the frame in hand is finished, the last segment printed, the ``--out`` video written, exit
@@ -27,6 +31,7 @@ non-zero exit; the ``--out`` video is then not written (no half-written file).
 from __future__ import annotations
 
 import argparse
+import collections
 import json
 import math
 import queue
@@ -234,6 +239,11 @@ class Pacer:
         self.started: float | None = None
         self.until = 0.0
         self.timed: tuple[int, float] | None = None  # the last frame with a time, and it
+        # (index, until) of the latest frames paced, for :meth:`due_at`: more than the
+        # reader's queue and the frame in hand hold; paced in the reader's thread, read in
+        # the watch's
+        self.dues: collections.deque[tuple[int, float]] = collections.deque(maxlen=64)
+        self._dues_lock = threading.Lock()
 
     def __call__(self, index: int, video_time_s: float) -> bool:
         now = time.perf_counter()
@@ -245,7 +255,15 @@ class Pacer:
         elif self.timed is not None:  # no time of its own: a frame interval after the last
             t = self.timed[1] + (index - self.timed[0]) / self.fps
         self.until = self.started + due_s(index, t, self.fps, self.speed)
+        with self._dues_lock:
+            self.dues.append((index, self.until))
         return not self.stop.wait(max(0.0, self.until - now))
+
+    def due_at(self, index: int) -> float | None:
+        """When frame ``index`` was due (``time.perf_counter()``: when a camera would have
+        delivered it), None when it is not among the latest frames paced."""
+        with self._dues_lock:
+            return next((until for i, until in reversed(self.dues) if i == index), None)
 
 
 class Alive:
@@ -432,6 +450,7 @@ def run(args: argparse.Namespace) -> int:
     )
     frames = frames_in_background(poses, args.stall, pacer, args.source, alive)
     watcher = Watcher(clf, judge, args, fps)
+    watcher.pacer = pacer
     try:
         with (
             _video_output(args.out) as video,
@@ -486,6 +505,7 @@ class Watcher:
         self.emitted = 0  # segments printed
         self.stdout_gone = False  # the reader of the printed segments has gone: stop
         self.latency: list[float] = []
+        self.pacer: Pacer | None = None  # a file's, played at its own rate: when frames are due
         self.colours: dict[str, Any] | None = None  # each activity's, once drawn
         self.n = 0
         self.started = time.perf_counter()
@@ -553,8 +573,20 @@ class Watcher:
             for segment in finished:
                 self._emit(segment)
             self._draw(shown_frame, absent)
-        if frame.read_at == frame.read_at:  # not NaN: the source said when it read the frame
-            self.latency.append(time.perf_counter() - frame.read_at)
+        since = self._since(frame)
+        if since == since:  # not NaN: the source said when it read the frame
+            self.latency.append(time.perf_counter() - since)
+
+    def _since(self, frame: Any) -> float:
+        """When ``frame`` came, from which its latency runs: a file's frame played at its
+        own rate was due at its time (:meth:`Pacer.due_at`), as a camera delivers it, though
+        it was read later when the watch fell behind (the frames before it still in the
+        queue: from its read, 250 frames of a 30-fps video watched at 12.5 frames/s said a
+        median of 71 ms, each label coming up to 11 s after its frame); else when it was read
+        (NaN: not said)."""
+        due = self.pacer.due_at(frame.index) if self.pacer is not None else None
+        read_at = float(frame.read_at)
+        return read_at if due is None else min(due, read_at)
 
     def _note_jump(self) -> None:
         """Say on stderr that the pose jumped to another person at the frame just pushed
@@ -694,7 +726,8 @@ class Watcher:
 class Regrid:
     """A file's frames as the live segmenter takes them: evenly spaced at ``fps``. While the
     frames' own times (``video_time_s``) lie at index / fps (a constant rate, or a live
-    source: no times), each frame is passed as it is. From the first frame that strays (a
+    source: no times), each frame is passed as it is (a live source's stalls left missing:
+    :meth:`_stalled`). From the first frame that strays (a
     variable frame rate: see :mod:`features.pose_estimation.video`), the poses are put on the
     grid k / fps as the frames come, each grid time linearly between the frames around it
     (a joint missing in either stays missing; every joint missing between two frames further
@@ -707,6 +740,7 @@ class Regrid:
         self.resampling = False
         self.k = 0  # the next grid frame
         self.prev: Any = None  # the last frame taken
+        self.first_s = math.nan  # the first frame's time_s (a live source's: the wall clock's)
         self.absent: list[bool] = []  # of the grid times the last take gave: inside a gap
         self.images: list[Any] = []  # and their image landmarks (the pose's jumps)
 
@@ -721,6 +755,14 @@ class Regrid:
 
         t = frame.video_time_s
         self.absent, self.images = [], []
+        if self.prev is None:
+            self.first_s = frame.time_s
+        if not self.resampling and not math.isfinite(t):  # a live source, or no frame times
+            out = self._stalled(frame)
+            self.prev, self.k = frame, self.k + len(out) + 1
+            self.absent, self.images = [True] * len(out) + [False], [None] * len(out)
+            self.images.append(_image(frame))
+            return [*out, (frame.seen_world, frame.visibility, frame)]
         if not self.resampling:
             if not strays(t, frame.index, self.fps):
                 self.prev, self.k = frame, frame.index + 1
@@ -751,6 +793,33 @@ class Regrid:
         if any(self.absent):
             print(f"note: {self.source}: {gap_words([(start, t)])}", file=sys.stderr)
         return out
+
+    def _stalled(self, frame: Any) -> list[tuple[Any, Any, Any]]:
+        """The grid times a live source sent no frame for before ``frame``, each (missing
+        world, missing visibility, the frame before on screen), said on stderr: a stream
+        that stalled (a camera's or a network's hiccup shorter than ``--stall``) and resumed,
+        its frames more than :func:`features.pose_estimation.video.bridge_limit_s` apart by
+        their times (``time_s``: the wall clock's for a live source; index / fps, never a
+        gap, for a file without frame times), as ``extract`` leaves a gap in a video's
+        frames. No more than the frames pushed lag the wall clock (frames that came in a burst
+        after a stall, ahead of it, are not counted missing twice). Before, the frames either
+        side were joined as if none were missing: the segments after a stall were timed
+        early by its length and a movement ran across it."""
+        import numpy as np
+
+        from features.pose_estimation.video import bridge_limit_s, gap_words
+
+        prev = self.prev
+        if prev is None or not frame.time_s - prev.time_s > bridge_limit_s(self.fps):
+            return []
+        between = round((frame.time_s - prev.time_s) * self.fps) - 1
+        behind = round((frame.time_s - self.first_s) * self.fps) - self.k
+        missing = max(0, min(between, behind))
+        if missing:
+            words = gap_words([(prev.time_s - self.first_s, frame.time_s - self.first_s)])
+            print(f"note: {self.source}: the stream stalled: {words}", file=sys.stderr)
+        nan = np.full((len(frame.visibility),), np.nan)
+        return [(np.full_like(frame.seen_world, np.nan), nan, prev)] * missing
 
 
 def _image(frame: Any) -> Any:
