@@ -1,5 +1,5 @@
-"""``watch`` live (hunt 40h): its latency counted from when a file's frame was due, and a
-live stream that stalls and resumes.
+"""``watch`` live (hunt 40h): its latency counted from when a file's frame was due, a live
+stream that stalls and resumes, and a live stream's rate measured over a wait.
 
 - A file played at its own rate stands in for a camera: each frame is held until its time
   (:class:`posecbr.commands.watch.Pacer`). The latency printed ran from when the reader
@@ -9,11 +9,14 @@ live stream that stalls and resumes.
 - A live source (camera, ``rtsp://``) that sent no frame for 3 s, shorter than ``--stall``,
   then resumed: the frames either side were joined as if none were missing, so every later
   segment was timed 3 s early and the movement ran across the stall.
+- A live source's frame rate, measured over its first second, counted a wait in it as frame
+  time: a webcam slow to send its second frame was taken for 13 fps instead of 30.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import time
 from collections.abc import Iterator
@@ -164,3 +167,42 @@ def test_a_live_stream_with_jittered_frame_times_has_no_stall(
     assert segments[-1]["end_frame"] == 300
     assert "no frames in the video" not in {s["unknown"] for s in segments}
     assert "stalled" not in err and "watched 300 frames" in err
+
+
+def test_a_webcam_slow_to_send_its_second_frame_is_measured_at_its_rate(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A webcam's first frame, then none for 0.6 s (warming up), then 30 a second: its rate
+    is 30 fps, the 0.6 s without frames left missing as a stall is (17 frames: 0.6 s at 30
+    fps, less the one that ends it), the stream 10.57 s long by its clock (0.6 s, then 299
+    intervals of 1/30 s). It was measured over its first second as 13 frames in 1.0 s, 13
+    fps, and every segment timed 2.3 times too long (the stream "23.6 s")."""
+    times = np.concatenate([[0.0], 0.6 + np.arange(299) / FPS])
+    segments, err = _watched(
+        case_base, monkeypatch, capsys, _stream(shared_data, times, np.zeros(300, int)), 300
+    )
+    assert segments[-1]["end_frame"] == 300 + 17
+    assert segments[-1]["end_s"] == pytest.approx(0.6 + 299 / FPS, abs=1e-3)
+    assert "0.6 s without frames at 0.0-0.6 s left missing" in err
+
+
+def test_a_live_rate_leaves_out_the_intervals_no_frame_was_sent_in() -> None:
+    """The rate over the first second of intervals: 30 fps by hand, with a 0.6-s wait
+    after the first frame, or a 0.5-s stall in the middle, left out; under a second of
+    intervals sent: not yet known."""
+    from posecbr.commands.watch import _frame_rate
+
+    def frames(times: np.ndarray) -> list[StreamFrame]:
+        return [dataclasses.replace(_frame(i, 0.0), time_s=float(t)) for i, t in enumerate(times)]
+
+    steady = np.arange(40) / FPS  # 39 intervals: 1.3 s
+    assert _frame_rate(frames(steady)) == pytest.approx(30.0)
+    waited = np.concatenate([[0.0], 0.6 + steady])
+    assert _frame_rate(frames(waited)) == pytest.approx(30.0)
+    stalled = np.concatenate([steady[:15], steady[15:] + 0.5])
+    assert _frame_rate(frames(stalled)) == pytest.approx(30.0)
+    # 19 intervals sent, 0.63 s, and the wait: not yet known (it was: 20 / 1.23 s)
+    assert _frame_rate(frames(np.concatenate([[0.0], 0.6 + steady[:20]]))) is None
