@@ -36,6 +36,7 @@ import json
 import os
 import sqlite3
 import uuid
+import weakref
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
@@ -530,7 +531,7 @@ def roll_back_interrupted(url_or_path: str | Path, *, timeout_s: float = 30.0) -
             if not (readonly and code == _SQLITE_READONLY_ROLLBACK):
                 raise _translate(exc, where, timeout_s) from None
         finally:
-            engine.dispose()
+            dispose(engine)
     return False
 
 
@@ -584,6 +585,8 @@ def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> t
         raise StoreError(f"cannot use database URL ({exc}){_scheme_hint(url)}", where) from None
     if _is_sqlite(engine):
         _configure_sqlite(engine, timeout_s, readonly)
+        if not readonly:
+            _hold_wal(engine, timeout_s, where)
     elif engine.dialect.name == "postgresql":
         _configure_postgresql(engine, timeout_s, readonly)
     return engine, where
@@ -743,12 +746,59 @@ def _configure_sqlite(engine: Engine, timeout_s: float, readonly: bool) -> None:
         conn.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
 
 
+#: Writer engines on a file in WAL mode with its ``-wal`` file beside it, and the read-only
+#: connection to the file :func:`_hold_wal` holds open for each
+_WAL_GUARDS: weakref.WeakKeyDictionary[Engine, sqlite3.Connection] = weakref.WeakKeyDictionary()
+
+
+def _hold_wal(engine: Engine, timeout_s: float, where: str) -> None:
+    """For the writer ``engine`` of a file in WAL mode (as posecbr 0.1 left its stores) whose
+    ``-wal`` file is there: hold a read-only connection to the file open until the writer's
+    connections have closed (:func:`dispose`). SQLite's last connection to close such a file
+    copies the ``-wal`` file's changes into it and deletes the ``-wal`` and ``-shm`` files (a
+    checkpoint): a command refused after opening the store (a name taken, a schema it cannot
+    convert) changed the file's bytes. The writer's connections then close while another is
+    open, which keeps them from it, and a read-only one cannot checkpoint. The first write
+    that commits lets it go to leave WAL mode (:func:`leave_wal_mode`). Without a ``-wal``
+    file the writer's close deletes the two it created and changes nothing."""
+    file = Path(str(engine.url.database)).resolve()
+    if not in_wal_mode(file) or not file.with_name(file.name + "-wal").exists():
+        return
+    url = f"file:{quote(str(file))}?mode=ro"
+    try:
+        guard = sqlite3.connect(url, uri=True, timeout=timeout_s, isolation_level=None)
+    except sqlite3.Error as exc:
+        raise _translate(exc, where, timeout_s) from None
+    try:
+        guard.execute("SELECT count(*) FROM sqlite_master").fetchone()
+    except sqlite3.Error as exc:
+        guard.close()
+        raise _translate(exc, where, timeout_s) from None
+    _WAL_GUARDS[engine] = guard
+
+
+def _let_wal_go(engine: Engine) -> None:
+    """Close the read-only connection :func:`_hold_wal` holds for ``engine``, if any."""
+    guard = _WAL_GUARDS.pop(engine, None)
+    if guard is not None:
+        guard.close()
+
+
+def dispose(engine: Engine) -> None:
+    """Close ``engine``'s connections, then the read-only one :func:`_hold_wal` may hold for
+    it (in this order: the writer's connections close while it is open, so a refused writer
+    leaves a file in WAL mode and its ``-wal`` file as they were)."""
+    engine.dispose()
+    _let_wal_go(engine)
+
+
 def leave_wal_mode(engine: Engine) -> bool:
     """Convert the SQLite file of the writer ``engine`` from WAL mode (as posecbr 0.1 left its
     stores) to a rollback journal, for readers that then need no side files; returns whether
     it did. Run after a write committed, outside any transaction: a command refused before
     (an old schema, a name taken) leaves the file as it was. Another process holding the file
     open makes it wait (the busy timeout), then give up: the next writer converts it."""
+    _let_wal_go(engine)  # a write has committed: the file changes now, as it should
     if not _is_sqlite(engine) or not in_wal_mode(Path(str(engine.url.database))):
         return False
     raw = engine.raw_connection()  # the driver's connection: no BEGIN around the PRAGMA
@@ -1001,7 +1051,7 @@ class CaseStore:
 
     def close(self) -> None:
         """Release the store's connections (the engine's pool); the store is not used after."""
-        self.engine.dispose()
+        dispose(self.engine)
 
     def __enter__(self) -> CaseStore:
         return self
@@ -1759,7 +1809,7 @@ def open_store(
     try:
         store._init_schema(create and not readonly)
     except BaseException:
-        engine.dispose()
+        dispose(engine)
         raise
     return store
 

@@ -32,6 +32,7 @@ from .store import (
     _translate,
     check_name_length,
     check_writable,
+    dispose,
     in_wal_mode,
     leave_wal_mode,
     sqlite_file,
@@ -83,7 +84,7 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
     except Exception as exc:  # a driver error of any backend: one line naming the store
         raise _translate(exc, where, timeout_s) from None
     finally:
-        engine.dispose()
+        dispose(engine)
 
 
 def _nothing_to_do_unwritable(file: Path, timeout_s: float) -> bool:

@@ -148,6 +148,110 @@ def test_a_copy_refused_for_a_name_taken_leaves_a_current_store_in_wal_mode_as_i
     assert snapshot(folder) == before
 
 
+def _changes_in_wal(db: Path, *, shm: bool) -> dict[str, str]:
+    """``db`` (in WAL mode) with a committed change (case 1 relabelled) still in its -wal file,
+    as a posecbr 0.1 writer killed before a checkpoint left it, with or without the -shm file
+    (SQLite's index of the -wal, rebuilt from it). Returns the md5 of the file and its -wal."""
+    change = (
+        "import os, sqlite3, sys; c = sqlite3.connect(sys.argv[1]); "
+        "c.execute('PRAGMA wal_autocheckpoint = 0'); "
+        "c.execute(\"UPDATE cases SET label = 'relabelled' WHERE id = 1\"); c.commit(); "
+        "os._exit(0)"
+    )
+    subprocess.run([sys.executable, "-c", change, str(db)], check=True, timeout=60)
+    wal = db.with_name(db.name + "-wal")
+    assert wal.stat().st_size > 32 and _header_modes(db) == b"\x02\x02"
+    if not shm:
+        db.with_name(db.name + "-shm").unlink()
+    return {"file": _md5(db), "wal": _md5(wal)}
+
+
+def _refused_keeping_the_wal(
+    argv: list[str], db: Path, md5: dict[str, str], capsys: pytest.CaptureFixture[str], needle: str
+) -> None:
+    """``posecbr argv`` refused in one line holding ``needle``, the file and its -wal file
+    byte-identical (the change still in the -wal, not copied into the file), a -shm file there
+    kept (its bytes are SQLite's to rewrite). Where there was none, a writer that opened the
+    file leaves the one SQLite made: only the close that copies the -wal into the file (what
+    a refusal must not do) deletes it."""
+    shm = db.with_name(db.name + "-shm")
+    had_shm = shm.exists()
+    assert main(argv) == 1
+    captured = capsys.readouterr()
+    assert captured.out == "" and len(captured.err.splitlines()) == 1, captured.err
+    assert needle in captured.err
+    wal = db.with_name(db.name + "-wal")
+    assert {"file": _md5(db), "wal": _md5(wal)} == md5
+    left = {p.name for p in db.parent.iterdir()}
+    if had_shm:
+        assert left == {db.name, wal.name, shm.name}
+    else:
+        assert left - {shm.name} == {db.name, wal.name}
+
+
+def _label_of_case_1(db: Path) -> str:
+    con = sqlite3.connect(db)
+    try:
+        return str(con.execute("SELECT label FROM cases WHERE id = 1").fetchone()[0])
+    finally:
+        con.close()
+
+
+@pytest.mark.parametrize("shm", [True, False], ids=["shm", "no-shm"])
+@pytest.mark.parametrize("which", range(4))
+def test_a_writer_refusing_a_0_1_store_with_changes_in_its_wal_leaves_file_and_wal_as_they_were(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], which: int, shm: bool
+) -> None:
+    # before: `casebase copy --to OLD.sqlite` refused its schema version, and its connection's
+    # close (the last one) copied the -wal's change into OLD.sqlite and deleted the -wal and
+    # -shm: the file's bytes changed
+    folder = tmp_path / "old"
+    folder.mkdir()
+    db = _v1_wal(folder)
+    md5 = _changes_in_wal(db, shm=shm)
+    _refused_keeping_the_wal(_writers_of(db, trained)[which], db, md5, capsys, "upgrade")
+    # nothing lost: the upgrade it names reads the change, and converts the file
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    capsys.readouterr()
+    assert _label_of_case_1(db) == "relabelled" and _header_modes(db) == b"\x01\x01"
+    assert sorted(p.name for p in folder.iterdir()) == ["old.sqlite"]
+
+
+def test_a_copy_refused_for_a_name_taken_keeps_a_current_stores_changes_in_its_wal(
+    trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: the refused copy's close checkpointed cb.sqlite (its bytes changed, -wal and
+    # -shm deleted)
+    folder = tmp_path / "to"
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    md5 = _changes_in_wal(_wal(db), shm=True)
+    argv = ["casebase", "copy", "--db", str(trained), "--to", str(db)]
+    _refused_keeping_the_wal(argv, db, md5, capsys, "a case base named 'default' is here")
+    # a copy that is made commits, then converts the file with the change in it
+    assert main([*argv, "--as", "other"]) == 0
+    assert "as 'other'" in capsys.readouterr().out
+    assert _label_of_case_1(db) == "relabelled" and _header_modes(db) == b"\x01\x01"
+    assert sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]
+
+
+def test_upgrade_refusing_a_newer_store_keeps_the_changes_in_its_wal(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: the refusal was right, but its close copied the -wal's change into the file
+    folder = tmp_path / "new"
+    folder.mkdir()
+    db = _v1_wal(folder)
+    con = sqlite3.connect(db)
+    con.execute("UPDATE posecbr_schema_version SET version = 99")
+    con.commit()
+    con.close()
+    md5 = _changes_in_wal(db, shm=True)
+    argv = ["casebase", "upgrade", "--db", str(db)]
+    _refused_keeping_the_wal(argv, db, md5, capsys, "schema version 99")
+
+
 @pytest.mark.parametrize("which", range(3))
 def test_a_reader_of_a_current_store_in_wal_mode_writes_nothing(
     trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], which: int
