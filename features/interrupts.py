@@ -1,6 +1,7 @@
 """Ctrl-C held back while worker processes are started (:func:`interrupts_held`), for the
-commands that start them: ``compare --jobs`` and ``--scheduler local:N``; and SIGTERM taken as
-Ctrl-C (:func:`sigterm_as_interrupt`), for every command."""
+commands that start them: ``compare --jobs`` and ``--scheduler local:N``, and while files that
+belong together are written (``compare``'s results files); and SIGTERM taken as Ctrl-C
+(:func:`sigterm_as_interrupt`), for every command."""
 
 from __future__ import annotations
 

@@ -349,6 +349,77 @@ def test_compare_interrupted_while_drawing_names_exactly_the_pictures_on_disk(
     assert (out / "accuracy.png").read_bytes().startswith(b"\x89PNG")
 
 
+#: ``python -m posecbr`` that sends itself SIGINT (as Ctrl-C does) at a known point of the
+#: first write of compare's results: WHERE=rename as results.json is put in place (written
+#: under its temporary name), WHERE=csv between results.json and results.csv
+SIGINT_IN_FIRST_WRITE = """
+import os, signal, sys
+import cbr.evaluation.tables as tables
+where, real_replace, real_csv = os.environ["WHERE"], os.replace, tables.write_csv
+sent = []
+def interrupt(here):
+    if where == here and not sent:  # once: the first write's
+        sent.append(here)
+        os.kill(os.getpid(), signal.SIGINT)
+def replace(src, dst):
+    if str(dst).endswith("results.json"):
+        interrupt("rename")
+    return real_replace(src, dst)
+def write_csv(rows, path):
+    interrupt("csv")
+    return real_csv(rows, path)
+os.replace, tables.write_csv = replace, write_csv
+from posecbr.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.parametrize("earlier", [False, True], ids=["new-folder", "earlier-run"])
+@pytest.mark.parametrize("where", ["rename", "csv"])
+def test_compare_interrupted_in_its_first_write_leaves_whole_results_and_a_rerun_clean(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], where: str, earlier: bool
+) -> None:
+    # before: Ctrl-C between results.json and results.csv left the new JSON (two activities)
+    # beside the earlier run's table (three) and its six pictures, named by no results file
+    # (a rerun could not tell them stale: timeline_02.png, an activity no longer compared,
+    # stayed for good); in a new folder, Ctrl-C as results.json was put in place left the
+    # folder empty. Each time "posecbr compare: interrupted", nothing said of the files.
+    out = tmp_path / "o"
+    two = COMPARE[:]
+    two[two.index("--labels") + 1] = "deep_squat,sit_to_stand"
+    if earlier:  # three activities: three timelines
+        assert main([*COMPARE, "--out", str(out)]) == 0
+        capsys.readouterr()
+        assert "timeline_02.png" in _pngs(out)
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1", "WHERE": where}
+    done = subprocess.run(
+        [sys.executable, "-c", SIGINT_IN_FIRST_WRITE, *two, "--out", str(out)],
+        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 130, done.stderr
+    assert "Traceback" not in done.stderr
+    assert done.stderr.splitlines()[-1] == (
+        f"posecbr compare: interrupted: results in {out}, with the 0 pictures drawn before it;"
+        " the rest were not drawn"
+    )
+    # the new run's results, whole: both files, of the two activities compared, no picture
+    assert sorted(p.name for p in out.iterdir()) == ["results.csv", "results.json"]
+    doc = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    assert doc["dataset"]["classes"] == ["deep_squat", "sit_to_stand"] and doc["pictures"] == {}
+    header = (out / "results.csv").read_text(encoding="utf-8").splitlines()[0].split(",")
+    assert [c for c in header if c.startswith("recall:")] == [
+        "recall:deep_squat",
+        "recall:sit_to_stand",
+    ]
+    # a rerun draws its pictures beside them, and nothing else is there
+    assert main([*two, "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert sorted(p.name for p in out.iterdir()) == [
+        "accuracy.png", "confusion_cbr_fluents_euclidean.png", "prevalence.png",
+        "results.csv", "results.json", "timeline_00.png", "timeline_01.png",
+    ]  # fmt: skip
+
+
 SQUAT_MP4 = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
 
 

@@ -15,6 +15,7 @@ from typing import Any
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, stdout_gone, write_json_atomic
+from features.interrupts import interrupts_held
 from features.text import shown
 from posecbr.arguments import add_k_option, check_each_found, param_value, path_arg
 from posecbr.recordings import add_sensor_option, sensor_for
@@ -403,19 +404,37 @@ def _remove_stale(out: Path, earlier: list[str], drawn: list[str]) -> None:
         path.unlink(missing_ok=True)
 
 
-def _pictures(
+def _write_outputs(
     run_: Any, args: argparse.Namespace, outputs: list[Output], earlier: list[str]
 ) -> None:
-    """The pictures into ``--out``, then the results file again, naming them; the earlier
-    run's pictures not drawn again removed."""
+    """The results files; with ``--out`` (made first) the pictures into it, then the results
+    file again, naming them, the earlier run's pictures not drawn again removed.
+
+    The results files are all whole before any picture is drawn: Ctrl-C or SIGTERM while
+    they are written is held until every one is (before: one between results.json and
+    results.csv left the new JSON beside the earlier run's table; in a new ``--out`` folder,
+    one while results.json was written left the folder empty), then said as one while the
+    pictures are drawn (:func:`_interrupted`)."""
     results = run_.results
     try:
-        _draw_pictures(run_, args.out, args.trim)
-    except KeyboardInterrupt:  # Ctrl-C or SIGTERM while drawing: the results are whole
-        raise KeyboardInterrupt(_interrupted(results, outputs, args.out, earlier)) from None
-    _remove_stale(args.out, earlier, results.pictures.files())
-    # the JSON again, now naming the pictures (the CSV holds no pictures)
-    _write_results(results, [o for o in outputs if o.format == "json"], args.out)
+        with interrupts_held():
+            if args.out:
+                args.out.mkdir(exist_ok=True)
+            _write_results(results, outputs)
+        for given, what in ((args.json, "results"), (args.csv, "results table")):
+            if given:  # the files named by --json / --csv, as every command's "written to"
+                print(f"{what} written to {shown(given)}", file=sys.stderr)
+        if args.out:
+            _draw_pictures(run_, args.out, args.trim)
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the results are whole
+        if args.out:
+            raise KeyboardInterrupt(_interrupted(results, outputs, args.out, earlier)) from None
+        written = " and ".join(shown(str(o.path)) for o in outputs)
+        raise KeyboardInterrupt(f"results written to {written}" if outputs else "") from None
+    if args.out:
+        _remove_stale(args.out, earlier, results.pictures.files())
+        # the JSON again, now naming the pictures (the CSV holds no pictures)
+        _write_results(results, [o for o in outputs if o.format == "json"], args.out)
 
 
 def _interrupted(results: Any, outputs: list[Output], out: Path, earlier: list[str]) -> str:
@@ -492,15 +511,9 @@ def run(args: argparse.Namespace) -> int:
         _print_explanations(results.explanations)
     except BrokenPipeError:  # the reader stopped reading (`| head`): the files are still written
         stdout_gone()
-    if args.out:
-        args.out.mkdir(exist_ok=True)
     earlier = _earlier_pictures(args.out) if args.out else []  # before results.json is new
-    _write_results(results, outputs)  # the results are safe before any picture is drawn
-    for given, what in ((args.json, "results"), (args.csv, "results table")):
-        if given:  # the files named by --json / --csv, as every command's "written to"
-            print(f"{what} written to {shown(given)}", file=sys.stderr)
+    _write_outputs(run_, args, outputs, earlier)
     if args.out:
-        _pictures(run_, args, outputs, earlier)
         # the command as it can be pasted into a shell: a folder named with a space quoted
         out, report = shlex.quote(str(args.out)), shlex.quote(str(args.out / "report.html"))
         said = f"results and pictures in {args.out}; report: posecbr report {out} --out {report}"
