@@ -351,7 +351,8 @@ def test_compare_interrupted_while_drawing_names_exactly_the_pictures_on_disk(
 
 #: ``python -m posecbr`` that sends itself SIGINT (as Ctrl-C does) at a known point of the
 #: first write of compare's results: WHERE=rename as results.json is put in place (written
-#: under its temporary name), WHERE=csv between results.json and results.csv
+#: under its temporary name), WHERE=csv between results.json and results.csv; or at its last
+#: (WHERE=last: as results.json naming the pictures drawn is put in place)
 SIGINT_IN_FIRST_WRITE = """
 import os, signal, sys
 import cbr.evaluation.tables as tables
@@ -361,9 +362,11 @@ def interrupt(here):
     if where == here and not sent:  # once: the first write's
         sent.append(here)
         os.kill(os.getpid(), signal.SIGINT)
+renamed = []
 def replace(src, dst):
     if str(dst).endswith("results.json"):
-        interrupt("rename")
+        renamed.append(dst)
+        interrupt("rename" if len(renamed) == 1 else "last")
     return real_replace(src, dst)
 def write_csv(rows, path):
     interrupt("csv")
@@ -418,6 +421,37 @@ def test_compare_interrupted_in_its_first_write_leaves_whole_results_and_a_rerun
         "accuracy.png", "confusion_cbr_fluents_euclidean.png", "prevalence.png",
         "results.csv", "results.json", "timeline_00.png", "timeline_01.png",
     ]  # fmt: skip
+
+
+def test_compare_interrupted_as_it_names_its_pictures_names_every_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: Ctrl-C as results.json was written again to name the pictures left all five
+    # drawn and none named (results.json as first written: "pictures": {}), said as
+    # "interrupted" alone; `report` then showed none of them
+    out = tmp_path / "o"
+    two = COMPARE[:]
+    two[two.index("--labels") + 1] = "deep_squat,sit_to_stand"
+    assert main([*COMPARE, "--out", str(out)]) == 0  # three activities: three timelines
+    capsys.readouterr()
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1", "WHERE": "last"}
+    done = subprocess.run(
+        [sys.executable, "-c", SIGINT_IN_FIRST_WRITE, *two, "--out", str(out)],
+        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 130, done.stderr
+    assert "Traceback" not in done.stderr
+    assert done.stderr.splitlines()[-1] == (
+        f"posecbr compare: interrupted: results in {out}, with the 5 pictures drawn before it:"
+        " all of them"
+    )
+    drawn = ["accuracy.png", "confusion_cbr_fluents_euclidean.png", "prevalence.png",
+             "timeline_00.png", "timeline_01.png"]  # fmt: skip
+    assert _pngs(out) == drawn
+    pics = json.loads((out / "results.json").read_text(encoding="utf-8"))["pictures"]
+    named = [pics["accuracy"], pics["prevalence"]]
+    named += [c["file"] for c in pics["confusion"]] + [t["file"] for t in pics["timelines"]]
+    assert sorted(named) == drawn
 
 
 SQUAT_MP4 = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"

@@ -432,9 +432,23 @@ def _write_outputs(
         written = " and ".join(shown(str(o.path)) for o in outputs)
         raise KeyboardInterrupt(f"results written to {written}" if outputs else "") from None
     if args.out:
-        _remove_stale(args.out, earlier, results.pictures.files())
-        # the JSON again, now naming the pictures (the CSV holds no pictures)
-        _write_results(results, [o for o in outputs if o.format == "json"], args.out)
+        _name_pictures(results, outputs, args.out, earlier)
+
+
+def _name_pictures(results: Any, outputs: list[Output], out: Path, earlier: list[str]) -> None:
+    """Once every picture is drawn: the earlier run's not drawn again removed, and the JSON
+    written again, naming the pictures (the CSV holds none). Ctrl-C or SIGTERM meanwhile is
+    held until both are done (before: one there left every picture drawn but none named, and
+    said "interrupted" alone), then said."""
+    try:
+        with interrupts_held():
+            _remove_stale(out, earlier, results.pictures.files())
+            _write_results(results, [o for o in outputs if o.format == "json"], out)
+    except KeyboardInterrupt:
+        n = len(results.pictures.files())
+        raise KeyboardInterrupt(
+            f"results in {out}, with the {n} picture{'s' * (n != 1)} drawn before it: all of them"
+        ) from None
 
 
 def _interrupted(results: Any, outputs: list[Output], out: Path, earlier: list[str]) -> str:
