@@ -3,7 +3,8 @@ judges: is the gap to issue 14's goal (left-out blocks called unknown >= 80 %, s
 right >= 95 %) the judge's or the features'?
 
 Run: ``python -m benchmarks.unknown_ceiling [--datasets ...] [--left-out N] [--per-person N]
-[--cache DIR] [--smooth-jitter] [--feature-weights fisher] [--velocity] [--judge-only]``
+[--cache DIR] [--smooth-jitter] [--feature-weights fisher] [--velocity] [--judge-only]
+[--signature-paths angles|positions] [--signature-depth N] [--signature-no-lead-lag]``
 (at load 10-16 on 2 cores: HDM05 about 4 minutes, 10 with
 ``--per-person 3``; UI-PRMD Vicon and Kinect 3-4 minutes per left-out movement, most of it
 fitting each case base, and a few minutes of DTW per fold; ``--left-out N`` keeps N of a fold's
@@ -18,8 +19,9 @@ smoothed as their own jitter asks, :func:`features.jitter.smooth_jitter`).
 within-activity variance on the case base (:func:`cbr.weights.fisher_ratio`; ``train
 --feature-weights fisher``), ``..._fisher.json``; ``--velocity``: their problems also hold
 the statistics of every column's rate of change (``CaseBaseClassifier(velocity=True)``),
-``..._velocity.json``; ``--judge-only``: a quick screen, the default judge, ``margin`` and
-``nearest`` alone (no scikit-learn peers, DTW or combinations), ``..._judge.json``. Every
+``..._velocity.json``; ``--judge-only``: a quick screen, the default judge, ``margin``,
+``nearest`` and the signature scores alone (no scikit-learn peers, DTW or combinations),
+``..._judge.json``. Every
 run also gives the known windows' seen accuracy: the share whose k-NN vote names their own
 movement (with the case base that lacks the left-out one).
 
@@ -58,6 +60,17 @@ training person: the 95 % quantile of held-out known scores) with what it keeps 
 - ``dtw``: the DTW 1-NN distance (tslearn) from the window's eight limb angles at 30 Hz to
   the baseline's training windows (``benchmarks.segment_people.dtw_training``) of the
   movements in the case base;
+- ``sig-nearest``, ``sig-margin``, ``sig-lof``: the same 2-s windows as paths (the eight limb
+  angles at 30 Hz, or with ``--signature-paths positions`` the body-frame positions of the
+  elbows, wrists, knees and ankles), every channel standardised on the case base's windows,
+  from the origin, time added and lead-lagged, as log-signatures (iisignature, depth 2;
+  ``--signature-depth``, ``--signature-no-lead-lag``), every term standardised on the case
+  base's windows (:class:`SigSpec`, :class:`SigScores`); against the training windows of
+  the movements in the case base (cut as the DTW baseline's): the nearest distance, the
+  margin d1/d2 (d2 the nearest of another activity) and LocalOutlierFactor; calibrated held
+  out by training person (:func:`sig_held`). ``judge+sig-fisher``: the default judge's score
+  and ``sig-nearest`` combined as ``tail-fisher`` combines it with d1 (oracle figures only).
+  A non-default representation writes ``..._sig-PATHS-dDEPTH[-nolag].json``;
 - combinations of the default judge's score and the nearest distance d1, each calibrated on
   the case base's own held-out scan alone (:func:`held_scan`: the training cases held out
   by person as the judges hold them out, :func:`cbr.unknown.held_out_activities`; the
@@ -128,7 +141,8 @@ CACHE_VERSION = 2
 """2: each window's voted activity kept (the known windows' seen accuracy)."""
 JUDGE = "spread-margin"
 SCORES = ("spread-margin", "margin", "nearest", "lof", "iforest", "ocsvm", "knn5",
-          "mahalanobis", "dtw", "tail-max", "tail-fisher", "logistic")  # fmt: skip
+          "mahalanobis", "dtw", "sig-nearest", "sig-margin", "sig-lof", "tail-max",
+          "tail-fisher", "logistic", "judge+sig-fisher")  # fmt: skip
 """The scores, the default judge first, the combinations (:data:`COMBINED`) last."""
 
 
@@ -333,6 +347,196 @@ def distance_thresholds(cb: Any) -> dict[str, float]:
     seen, codes, _, _ = held_out_activities(cb)
     known = seen[known_rows(seen, codes)]
     return {"nearest": oracle_threshold(known.min(axis=1))}
+
+
+# ---------------------------------------------------------------- path signatures
+
+SIGNATURE_SCORES = ("sig-nearest", "sig-margin", "sig-lof")
+"""Novelty scores on the windows' log-signatures (:class:`SigScores`)."""
+SIG_FISHER = "judge+sig-fisher"
+"""Fisher's ``-2 sum log p`` of the default judge's score and ``sig-nearest``, each p its
+upper tail among its own held-out known scores (oracle figures only: the two held-out scans
+are of different windows, so no joint held-out distribution sets a threshold)."""
+MAX_SIG_TERMS = 6000
+"""The most log-signature terms a window may have (memory: a case base's few thousand
+windows by this many terms, and their distances)."""
+SIG_LIMB_JOINTS = tuple(f"{s}_{j}" for j in ("elbow", "wrist", "knee", "ankle")
+                        for s in ("left", "right"))  # fmt: skip
+"""The joints whose body-frame positions make the ``positions`` paths (24 channels)."""
+
+
+@dataclass(frozen=True)
+class SigSpec:
+    """The window representation of :data:`SIGNATURE_SCORES`: each 2-s window's path
+    (``angles``: the DTW baseline's eight limb angles; ``positions``: :data:`SIG_LIMB_JOINTS`
+    in the body frame, torso lengths, :func:`features.body.body_positions`) at 30 Hz, every
+    channel standardised on the case base's windows, started from the origin (basepoint: the
+    signature then sees where the path lies, not only how it moves), time added, lead-lag
+    (``lead_lag``), then its log-signature to ``depth``, every term standardised on the case
+    base's windows."""
+
+    paths: str = "angles"
+    depth: int = 2
+    lead_lag: bool = True
+
+    def terms(self) -> int:
+        """How many terms each window's log-signature has."""
+        import iisignature
+
+        channels = (8 if self.paths == "angles" else 3 * len(SIG_LIMB_JOINTS)) * (
+            2 if self.lead_lag else 1
+        )
+        return int(iisignature.logsiglength(channels + 1, self.depth))
+
+    def suffix(self) -> str:
+        """``""`` for the default; else what names its results."""
+        if self == SigSpec():
+            return ""
+        return f"_sig-{self.paths}-d{self.depth}" + ("" if self.lead_lag else "-nolag")
+
+
+def sig_channels(seq: Any, paths: str) -> np.ndarray:
+    """A sequence's path channels at about 30 Hz, gaps interpolated, ``(n, d)``: the eight
+    limb angles, or the body-frame positions of :data:`SIG_LIMB_JOINTS`."""
+    from benchmarks.segment import DTW_FPS
+    from benchmarks.segment_people import _angles
+    from cbr.problem import fill_nan_time
+    from features.body import body_positions, position_names
+
+    if paths == "angles":
+        return _angles(seq)
+    if paths != "positions":
+        raise ValueError(f"unknown signature paths {paths!r}")
+    names = position_names()
+    cols = [names.index(f"{j}.{a}") for j in SIG_LIMB_JOINTS for a in ("left", "height", "forward")]
+    step = max(1, int(round(seq.fps / DTW_FPS)))
+    return np.asarray(fill_nan_time(body_positions(seq)[:, cols], 0.0)[::step])
+
+
+def sig_fold(
+    fold: Fold, joined: list[tuple[Any, Group]], recs: dict[str, Any], paths: str
+) -> dict[str, Any]:
+    """The fold's windows as paths, once for every left-out movement: the training clips' 2-s
+    windows every 0.5 s (as :func:`benchmarks.segment_people.dtw_training` cuts them) with
+    their movement and person, and every judged test window (``recs``: each recording's
+    window centres in seconds)."""
+    from benchmarks.segment import DTW_FPS, DTW_TRAIN_HOP_S, DTW_WINDOW_S
+    from benchmarks.segment_people import _windows
+
+    width = int(DTW_WINDOW_S * DTW_FPS)
+    Xs, ys, ps = [], [], []
+    for seq, g in joined:
+        a = sig_channels(seq, paths)
+        if len(a) < width:
+            continue
+        centres_s = np.arange(DTW_WINDOW_S / 2, len(a) / DTW_FPS - DTW_WINDOW_S / 2 + 1e-9,
+                              DTW_TRAIN_HOP_S)  # fmt: skip
+        Xs.append(_windows(a, centres_s * DTW_FPS))
+        ys.append(np.full(len(centres_s), g.movement, dtype=object))
+        ps.append(np.full(len(centres_s), g.person, dtype=object))
+    test = {
+        rec.name: _windows(sig_channels(rec.seq, paths), recs[rec.name]["centres_s"] * DTW_FPS)
+        for rec in fold.recordings
+    }
+    return {"X": np.concatenate(Xs), "y": np.concatenate(ys), "people": np.concatenate(ps),
+            "test": test}  # fmt: skip
+
+
+def log_signatures(windows: np.ndarray, spec: SigSpec) -> np.ndarray:
+    """The log-signatures ``(n, k)`` of ``windows`` ``(n, L, d)`` (already standardised)
+    started from the origin, time added and (``spec.lead_lag``) lead-lagged, to
+    ``spec.depth`` (iisignature)."""
+    import iisignature
+
+    from cbr.similarity.signature import augment
+
+    path = augment(windows, time=True, lead_lag_=spec.lead_lag, basepoint=True)
+    prepared = iisignature.prepare(path.shape[2], spec.depth)
+    return np.asarray(iisignature.logsig(np.ascontiguousarray(path), prepared), dtype=np.float64)
+
+
+def nearest_and_margin(d: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """From distances ``d`` ``(m, n)`` of m windows to n cases of activities ``y`` ``(n,)``
+    (at least two activities): the nearest distance d1 and the margin d1/d2, d2 the nearest
+    case of any other activity than the nearest case's (1 when d2 is 0)."""
+    per = np.stack([d[:, y == a].min(axis=1) for a in np.unique(y)], axis=1)
+    two = np.sort(per, axis=1)[:, :2]
+    return two[:, 0], np.where(two[:, 1] > 0, two[:, 0] / np.maximum(two[:, 1], 1e-300), 1.0)
+
+
+class SigScores:
+    """:data:`SIGNATURE_SCORES` against case windows ``X`` ``(n, L, d)`` of activities
+    ``y``: the channels standardised on ``X``, each window's :func:`log_signatures`, every
+    term standardised on the cases'; :meth:`scores` higher = more unknown."""
+
+    def __init__(self, X: np.ndarray, y: np.ndarray, spec: SigSpec) -> None:
+        from sklearn.neighbors import LocalOutlierFactor
+        from sklearn.preprocessing import StandardScaler
+
+        self.spec = spec
+        flat = X.reshape(-1, X.shape[2])
+        self.mean = flat.mean(axis=0)
+        self.std = np.where(flat.std(axis=0) > 0, flat.std(axis=0), 1.0)
+        sig = log_signatures((X - self.mean) / self.std, spec)
+        self.scaler = StandardScaler().fit(sig)
+        self.Z = self.scaler.transform(sig)
+        self.y = np.asarray(y)
+        self.lof = LocalOutlierFactor(n_neighbors=20, novelty=True).fit(self.Z)
+
+    def scores(self, X: np.ndarray) -> dict[str, np.ndarray]:
+        from scipy.spatial.distance import cdist
+
+        Z = self.scaler.transform(log_signatures((X - self.mean) / self.std, self.spec))
+        d1, margin = nearest_and_margin(cdist(Z, self.Z), self.y)
+        return {"sig-nearest": d1, "sig-margin": margin, "sig-lof": -self.lof.score_samples(Z)}
+
+
+def sig_held(
+    X: np.ndarray, y: np.ndarray, people: np.ndarray, spec: SigSpec
+) -> dict[str, np.ndarray]:
+    """Every :data:`SIGNATURE_SCORES` of the case windows held out by person: each training
+    person's windows (a seeded sample of at most :data:`HELD_OUT_SAMPLE`) scored against the
+    others' (:class:`SigScores` fit on them alone)."""
+    rng = np.random.default_rng(0)
+    held: dict[str, list[np.ndarray]] = {n: [] for n in SIGNATURE_SCORES}
+    for person in np.unique(people):
+        mine = np.flatnonzero(people == person)
+        rest = people != person
+        if not len(mine) or len(np.unique(y[rest])) < 2:
+            continue
+        if len(mine) > HELD_OUT_SAMPLE:
+            mine = np.sort(rng.choice(mine, HELD_OUT_SAMPLE, replace=False))
+        for name, s in SigScores(X[rest], y[rest], spec).scores(X[mine]).items():
+            held[name].append(s)
+    return {n: np.concatenate(v) for n, v in held.items() if v}
+
+
+def with_signature(
+    left: dict[str, Any],
+    sig: dict[str, Any],
+    movement: str,
+    spec: SigSpec,
+    held: dict[str, Any] | None,
+) -> dict[str, Any]:
+    """``left`` (:func:`measure_left_out`) with each recording's :data:`SIGNATURE_SCORES`
+    against the fold's training windows (``sig``, :func:`sig_fold`) of the movements but
+    ``movement``, their thresholds held out by person (:func:`sig_held`: the 95 % quantile),
+    and with the judge's held-out scan ``held`` (:func:`held_scan`) :data:`SIG_FISHER`."""
+    keep = sig["y"] != movement
+    X, y, people = sig["X"][keep], sig["y"][keep].astype(str), sig["people"][keep]
+    model = SigScores(X, y, spec)
+    scan = sig_held(X, y, people, spec)
+    for name, s in scan.items():
+        left["thresholds"][name] = oracle_threshold(s)
+    for name, r in left["recordings"].items():
+        scores = model.scores(sig["test"][name])
+        r["scores"].update(scores)
+        if held is not None:
+            tails = {JUDGE: held["known"][JUDGE], "sig-nearest": scan["sig-nearest"]}
+            parts = {JUDGE: r["scores"][JUDGE], "sig-nearest": scores["sig-nearest"]}
+            r["scores"][SIG_FISHER] = tail_fused(tails, parts, "tail-fisher")
+    left["sig_cases"] = int(len(X))
+    return left
 
 
 # ---------------------------------------------------------------- combinations
@@ -710,14 +914,17 @@ def run_dataset(
     smooth: bool = False,
     variant: Variant | None = None,
     judge_only: bool = False,
+    spec: SigSpec | None = None,
 ) -> list[tuple[str, str, dict[str, Any]]]:
     """``(fold, movement, measured)`` for every fold of ``dataset`` and each movement left out
     (``smooth``: every file read through :class:`SmoothedReader`; ``variant``: the case
-    bases' options; ``judge_only``: the default judge, ``margin`` and ``nearest`` alone, no
-    peers, DTW or combinations)."""
+    bases' options; ``judge_only``: the default judge, ``margin``, ``nearest`` and the
+    signature scores alone, no peers, DTW or combinations; ``spec``: the signature scores'
+    window representation)."""
     from features.progress import progress
 
     variant = variant or Variant()
+    spec = spec or SigSpec()
     read = SmoothedReader() if smooth else Reader()
     out = []
     for fold in folds(dataset, per_person, seed, read):
@@ -735,10 +942,12 @@ def run_dataset(
                 f"{tag}-{movement}",
                 partial(measure_left_out, fold, joined, movement, variant, judge_only),
             )
-        if judge_only:
-            out += [(fold.name, m, v) for m, v in measured.items()]
-            continue
         first = next(iter(measured.values()))["recordings"]
+        sig = sig_fold(fold, joined, first, spec.paths)
+        if judge_only:
+            out += [(fold.name, m, with_signature(v, sig, m, spec, None))
+                    for m, v in measured.items()]  # fmt: skip
+            continue
         dtw = _cached(cache, f"{dtw_tag}-dtw", partial(dtw_fold, fold, joined, first))
         # the fold's descriptions, made when a held-out scan needs them (once)
         describe_once = cache_once(partial(fold_described, joined, variant))
@@ -751,7 +960,8 @@ def run_dataset(
             if held["cases"] != v["cases"]:
                 raise RuntimeError(f"{fold.name} without {m}: {held['cases']} cases, not "
                                    f"{v['cases']} as measured")  # fmt: skip
-            out.append((fold.name, m, with_combined(with_dtw(v, dtw, m), held)))
+            v = with_combined(with_dtw(v, dtw, m), held)
+            out.append((fold.name, m, with_signature(v, sig, m, spec, held)))
     return out
 
 
@@ -781,6 +991,8 @@ def print_table(summary: dict[str, Any]) -> None:
         for name in names:
             if name == COMBINED[0]:
                 print(f"  {'':4s}combined, {JUDGE} with nearest, calibrated on the held-out scan")
+            if name == SIG_FISHER:
+                print(f"  {'':4s}combined, {JUDGE} with sig-nearest (oracle only)")
             o = p[name]
             cal = o.get("calibrated")
             tail = f"{cal['known_kept']:18.1%}{cal['novel_unknown']:9.1%}" if cal else ""
@@ -846,8 +1058,27 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--judge-only",
         action="store_true",
-        help="only the default judge, margin and nearest (no scikit-learn peers, DTW or "
-        "combinations: a quick screen); writes ..._judge.json",
+        help="only the default judge, margin, nearest and the signature scores (no "
+        "scikit-learn peers, DTW or combinations: a quick screen); writes ..._judge.json",
+    )
+    parser.add_argument(
+        "--signature-paths",
+        choices=("angles", "positions"),
+        default="angles",
+        help="the signature scores' paths: the eight limb angles (default) or the body-frame "
+        "positions of the elbows, wrists, knees and ankles",
+    )
+    parser.add_argument(
+        "--signature-depth",
+        type=int,
+        choices=(2, 3, 4),
+        default=2,
+        help="the log-signature's depth (default 2)",
+    )
+    parser.add_argument(
+        "--signature-no-lead-lag",
+        action="store_true",
+        help="the signature paths without the lead-lag transform (time and basepoint only)",
     )
     args = parser.parse_args(argv)
     if args.left_out is not None and args.left_out < 1:
@@ -862,6 +1093,12 @@ def main(argv: list[str] | None = None) -> int:
     numba.set_num_threads(1)
     load_at_start = [round(x, 2) for x in os.getloadavg()]
     variant = Variant(args.feature_weights, args.velocity)
+    spec = SigSpec(args.signature_paths, args.signature_depth, not args.signature_no_lead_lag)
+    if spec.terms() > MAX_SIG_TERMS:
+        parser.error(
+            f"{spec.terms():,} log-signature terms a window with these --signature options; "
+            f"at most {MAX_SIG_TERMS:,} (a lower depth or no lead-lag)"
+        )
     summary: dict[str, Any] = {}
     for dataset in args.datasets:
         t0 = time.perf_counter()
@@ -873,6 +1110,7 @@ def main(argv: list[str] | None = None) -> int:
             smooth=args.smooth_jitter,
             variant=variant,
             judge_only=args.judge_only,
+            spec=spec,
         )
         summary[dataset] = {**dataset_summary(measured), "wall_s": time.perf_counter() - t0,
                             "left_out": sorted({m for _, m, _ in measured})}  # fmt: skip
@@ -887,7 +1125,10 @@ def main(argv: list[str] | None = None) -> int:
         + (" --smooth-jitter" if args.smooth_jitter else "")
         + (f" --feature-weights {args.feature_weights}" if args.feature_weights != "none" else "")
         + (" --velocity" if args.velocity else "")
-        + (" --judge-only" if args.judge_only else ""),
+        + (" --judge-only" if args.judge_only else "")
+        + (f" --signature-paths {spec.paths}" if spec.paths != "angles" else "")
+        + (f" --signature-depth {spec.depth}" if spec.depth != 2 else "")
+        + (" --signature-no-lead-lag" if not spec.lead_lag else ""),
         "note": "window level, as cbr.unknown's judges see each window; oracle: the threshold "
         "read from the test windows themselves, the lowest keeping >= 95 % of known windows "
         "known; calibrated: from the case base alone (held out by training person)",
@@ -905,7 +1146,8 @@ def main(argv: list[str] | None = None) -> int:
         out = RESULTS.with_name(f"unknown_ceiling_per{args.per_person}.json")
     if args.smooth_jitter:
         out = out.with_name(f"{out.stem}_smoothed.json")
-    out = out.with_name(f"{out.stem}{variant.suffix()}{'_judge' if args.judge_only else ''}.json")
+    judge = "_judge" if args.judge_only else ""
+    out = out.with_name(f"{out.stem}{variant.suffix()}{judge}{spec.suffix()}.json")
     write_json(result, out)
     print(f"\nwrote {out.relative_to(ROOT)}")
     return 0
