@@ -16,7 +16,14 @@ from typing import TYPE_CHECKING, Any
 from features.errors import ConfigError, DataError
 from features.text import counted, did_you_mean, first_few, percent
 from posecbr.arguments import add_k_option, check_each_found, path_arg
-from posecbr.recordings import add_sensor_option, sensor_for
+from posecbr.recordings import (
+    add_recording_options,
+    add_sensor_option,
+    check_asf,
+    check_fps,
+    load_clip_as_asked,
+    sensor_for,
+)
 
 if TYPE_CHECKING:
     from casebase_store import CaseStore
@@ -75,6 +82,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="with --feedback: retain benefit threshold (0.2)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    add_recording_options(p)  # as train, segment and describe read an AMC file or a rate given
     add_sensor_option(p)
     p.add_argument("--subjects", help="datasets: only these subjects, comma-separated")
     p.add_argument(  # as train and compare choose activities
@@ -98,10 +106,13 @@ def load_inputs(
     subjects: list[str] | None = None,
     target: str = "label",
     labels: list[str] | None = None,
+    asf: Path | None = None,
+    fps: float | None = None,
 ) -> list[tuple[PoseSequence, str | None]]:
     """Every clip named by ``paths`` with its value of ``target`` (the label, or another
     column such as ``correct``) when the input carries one; of a labels CSV or dataset, those
-    of ``subjects`` and ``labels`` (activities) alone."""
+    of ``subjects`` and ``labels`` (activities) alone. A clip file is read with ``asf`` (an
+    AMC file's skeleton) and at ``fps`` when given, as ``segment`` reads a recording."""
     from cbr.casebase import frames_of
     from cbr.training import check_listed_once
     from features.datasets import (
@@ -119,6 +130,7 @@ def load_inputs(
         return Clip(seq=seq, label=seq.label or "", subject=subject, extras={})
 
     kinds = [detect_kind(path) for path in paths]
+    _check_files_alone(paths, kinds, asf, fps)
     for flag, asked in (("--subjects", subjects), ("--labels", labels)):
         if asked is not None and all(k in FILES for k in kinds):
             raise ConfigError(
@@ -131,7 +143,7 @@ def load_inputs(
     seen_labels: set[str] = set()  # and their labels
     for path, kind in zip(paths, kinds, strict=True):
         if kind == "pose_file":
-            seq = load_clip(path)
+            seq = load_clip_as_asked(path, asf, fps)
             out.append((seq, clip_target(of_file(seq), target)))
         elif kind == "pose_folder":
             # may hold unlabelled clips: read them one by one
@@ -165,6 +177,23 @@ def load_inputs(
     return out
 
 
+def _check_files_alone(
+    paths: list[Path], kinds: list[str], asf: Path | None, fps: float | None
+) -> None:
+    """Refuse ``--asf`` and ``--fps`` with a folder or labels CSV among the clips: they say
+    how one recording file is read, as ``train --frame-labels`` takes them for its one
+    recording; a dataset's clips would each be read otherwise."""
+    for flag, value in (("--asf", asf), ("--fps", fps)):
+        for path, kind in zip(paths, kinds, strict=True):
+            if value is not None and kind != "pose_file":
+                raise ConfigError(
+                    f"goes with clip files, not the {'folder' if path.is_dir() else 'dataset'}"
+                    f" {path.name} (convert a dataset's recordings first: posecbr convert"
+                    " --asf --fps)",
+                    flag,
+                )
+
+
 def _check_asked(
     datasets: list[Path],
     sensor: str,
@@ -193,6 +222,8 @@ def _check_asked(
 
 
 def _check_args(args: argparse.Namespace) -> None:
+    check_fps(args.fps)
+    check_asf(args.asf, args.clips)
     if args.k is not None and args.k < 1:
         raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     if args.top is not None and args.top < 1:  # 0 listed none, where dad --top 0 is all
@@ -341,7 +372,7 @@ def run(args: argparse.Namespace) -> int:
         subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
         labels = [s.strip() for s in args.labels.split(",")] if args.labels else None
         sensor = sensor_for(args.sensor, args.clips)
-        inputs = load_inputs(args.clips, sensor, subjects, target, labels)
+        inputs = load_inputs(args.clips, sensor, subjects, target, labels, args.asf, args.fps)
         clips, truths = [s for s, _ in inputs], [t for _, t in inputs]
         if args.feedback is None:
             results = classify_clips(stored, clips, truths, target)
