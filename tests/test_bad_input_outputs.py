@@ -39,10 +39,10 @@ def test_describe_plot_is_checked_before_the_run(
 @pytest.mark.parametrize(
     ("flags", "needle"),
     [
-        (["--min-run", "0"], "--min-run must be at least 1 frame, got 0"),
-        (["--min-confidence", "0"], "--min-confidence must be in (0, 1], got 0.0"),
-        (["--min-confidence", "nan"], "--min-confidence must be in (0, 1], got nan"),
-        (["--min-confidence", "1.5"], "--min-confidence must be in (0, 1], got 1.5"),
+        (["--min-run", "0"], "--min-run: must be at least 1 frame, got 0"),
+        (["--min-confidence", "0"], "--min-confidence: must be in (0, 1], got 0.0"),
+        (["--min-confidence", "nan"], "--min-confidence: must be in (0, 1], got nan"),
+        (["--min-confidence", "1.5"], "--min-confidence: must be in (0, 1], got 1.5"),
     ],
 )
 def test_bad_describe_arguments_are_one_line(
@@ -105,7 +105,7 @@ def test_extract_outputs_that_would_overwrite_a_video_are_refused_before_the_mod
     refused(["extract", str(videos), "--out", str(tmp_path / "poses"), "--overlay", str(videos)],
             tmp_path, capsys, "the overlay would overwrite an input")  # fmt: skip
     refused(["extract", str(video), "--out", str(tmp_path / "poses"), "--workers", "0"],
-            tmp_path, capsys, "--workers (--jobs) must be at least 1, got 0")  # fmt: skip
+            tmp_path, capsys, "--workers (--jobs): must be at least 1, got 0")  # fmt: skip
     refused(["extract", str(tmp_path / "none.mp4"), "--out", str(tmp_path / "poses")],
             tmp_path, capsys, "no such file or folder")  # fmt: skip
 

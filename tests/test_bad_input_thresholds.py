@@ -241,10 +241,10 @@ def test_bad_add_is_one_clear_line(
 @pytest.mark.parametrize(
     ("flags", "needle"),
     [
-        (["--window", "0"], "--window must be in (0, 3600] seconds, got 0.0"),
-        (["--window", "1e9"], "--window must be in (0, 3600] seconds"),
-        (["--step", "nan"], "--step must be in (0, 3600] seconds, got nan"),
-        (["--top", "-1"], "--top must be >= 0, got -1"),
+        (["--window", "0"], "--window: must be in (0, 3600] seconds, got 0.0"),
+        (["--window", "1e9"], "--window: must be in (0, 3600] seconds"),
+        (["--step", "nan"], "--step: must be in (0, 3600] seconds, got nan"),
+        (["--top", "-1"], "--top: must be >= 0, got -1"),
     ],
 )
 def test_bad_dad_arguments_are_one_line(

@@ -331,7 +331,7 @@ def test_describe_refuses_min_run_with_per_frame(
     assert capsys.readouterr().out.count("\nframe ") == 20
     assert main(["describe", str(clip), "--min-run", "10"]) == 0
     assert main(["describe", str(clip), "--min-run", "0"]) == 1
-    assert "--min-run must be at least 1 frame" in capsys.readouterr().err
+    assert "--min-run: must be at least 1 frame" in capsys.readouterr().err
 
 
 # ----------------------------------------------------------------- train's note

@@ -68,7 +68,7 @@ def test_too_short_clip_says_not_enough_data(
     assert json.loads(capsys.readouterr().out)["status"] == "not enough data"
     assert main(["dad", str(tmp_path / "absent.npz"), "--window", "0.1"]) == 1
     assert capsys.readouterr().err == (
-        "posecbr dad: error: --window must be at least 0.5 s, the shortest stretch DAD judges, "
+        "posecbr dad: error: --window: must be at least 0.5 s, the shortest stretch DAD judges, "
         "got 0.1\n"
     )
     assert path.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == [

@@ -188,7 +188,7 @@ def test_dad_step_longer_than_the_window_is_refused(
 
     clip = good_pose_file(tmp_path / "still.npz", frames=120)
     refused(["dad", str(clip), "--window", "1", "--step", "3"], tmp_path, capsys,
-            "--step (3 s) must not be longer than --window (1 s)")  # fmt: skip
+            "--step: must not be longer than --window (1 s), got 3 s")  # fmt: skip
     with pytest.raises(ConfigError, match="longer than window_s"):
         DADConfig(window_s=1.0, step_s=3.0)
     assert DADConfig(window_s=2.0, step_s=2.0).step_s == 2.0  # windows end to end: all judged

@@ -61,7 +61,7 @@ def test_extract_takes_jobs_as_compare_spells_it(
     video = tmp_path / "squat.mp4"
     video.write_bytes(b"not decoded")
     argv = ["extract", str(video), "--out", str(tmp_path / "poses"), "--jobs", "0"]
-    refused(argv, tmp_path, capsys, "--workers (--jobs) must be at least 1, got 0")
+    refused(argv, tmp_path, capsys, "--workers (--jobs): must be at least 1, got 0")
     args = build_parser().parse_args(["extract", str(video), "--out", "p", "--jobs", "3"])
     assert args.workers == 3
 

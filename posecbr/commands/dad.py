@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     from features.qmp.add import load_add
 
     if args.top is not None and args.top < 0:
-        raise PosecbrError(f"--top must be >= 0, got {args.top}")
+        raise ConfigError(f"must be >= 0, got {args.top}", "--top")
     if args.top is not None and args.json:  # as classify refuses it: it was ignored
         raise ConfigError("goes without --json (its document holds every activity)", "--top")
     config = _windows(args.window, args.step)
@@ -177,16 +177,17 @@ def _windows(window: float, step: float | None) -> Any:
     step = default_step(window) if step is None else step
     for flag, value in (("--window", window), ("--step", step)):
         if not (math.isfinite(value) and 0 < value <= MAX_SECONDS):
-            raise PosecbrError(f"{flag} must be in (0, {MAX_SECONDS:g}] seconds, got {value}")
+            raise ConfigError(f"must be in (0, {MAX_SECONDS:g}] seconds, got {value}", flag)
     shortest = DADConfig().min_duration_s
     if window < shortest:  # every window would be too short to judge
-        raise PosecbrError(
-            f"--window must be at least {shortest:g} s, the shortest stretch DAD judges, got "
-            f"{window:g}"
+        raise ConfigError(
+            f"must be at least {shortest:g} s, the shortest stretch DAD judges, got {window:g}",
+            "--window",
         )
     if step > window:  # windows every --step: what lies between two is in none
-        raise PosecbrError(
-            f"--step ({step:g} s) must not be longer than --window ({window:g} s): "
-            "the clip between two windows would be judged by none"
+        raise ConfigError(
+            f"must not be longer than --window ({window:g} s), got {step:g} s: the clip"
+            " between two windows would be judged by none",
+            "--step",
         )
     return DADConfig(window_s=window, step_s=step)

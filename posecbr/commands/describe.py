@@ -9,7 +9,7 @@ import sys
 import tempfile
 from typing import TYPE_CHECKING, Any, TextIO
 
-from features.errors import DataError, PosecbrError
+from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.text import counted, shown
 from posecbr.arguments import path_arg
@@ -96,11 +96,13 @@ def _min_run(args: argparse.Namespace, fps: float) -> int:
 def _check_args(args: argparse.Namespace) -> None:
     """Everything about the arguments that can be refused before any work."""
     if not 0.0 < args.min_confidence <= 1.0:
-        raise PosecbrError(f"--min-confidence must be in (0, 1], got {args.min_confidence}")
+        raise ConfigError(f"must be in (0, 1], got {args.min_confidence}", "--min-confidence")
     if args.min_run is not None and args.min_run < 1:
-        raise PosecbrError(f"--min-run must be at least 1 frame, got {args.min_run}")
+        raise ConfigError(f"must be at least 1 frame, got {args.min_run}", "--min-run")
     if args.min_run is not None and args.per_frame:
-        raise PosecbrError("--min-run drops short spans; --per-frame shows every frame, not spans")
+        raise ConfigError(
+            "drops short spans; --per-frame shows every frame, not spans", "--min-run"
+        )
     check_asf(args.asf, [args.posefile])
     if args.plot is not None:
         inputs = [args.posefile, *[f for f in (args.thresholds, args.asf) if f is not None]]

@@ -720,7 +720,7 @@ def _check_outputs(jobs: list[Job]) -> None:
 def _options(args: argparse.Namespace) -> Options:
     """The extraction options the arguments ask for (after checking --workers, --scheduler)."""
     if args.workers < 1:
-        raise PosecbrError(f"--workers (--jobs) must be at least 1, got {args.workers}")
+        raise ConfigError(f"must be at least 1, got {args.workers}", "--workers (--jobs)")
     check_scheduler(args.scheduler)
     return Options(
         smoothing=not args.no_smoothing,
