@@ -24,12 +24,16 @@ NUMPY_BELOW_FRAMES = 5000
 def add_recording_options(p: argparse.ArgumentParser) -> None:
     """``--asf`` and ``--fps`` for recordings that need them."""
     p.add_argument(
-        "--asf", type=path_arg, help="skeleton of an .amc recording (default: beside it)"
+        "--asf",
+        type=path_arg,
+        metavar="FILE.asf",
+        help="skeleton of an .amc recording (default: the one beside it)",
     )
     p.add_argument(
         "--fps",
         type=float,
-        help="frame rate of the recording (default: from the file; AMC files carry none: 120)",
+        help="frame rate of the recording, frames per second (default: the file's; an AMC file"
+        " carries none: the rate its HDM05 name states, else 120)",
     )
 
 

@@ -5,13 +5,17 @@ without converting it first."""
 
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from posecbr.cli import main
+from cbr.classification import FeedbackSettings
+from cbr.estimator import CaseBaseClassifier
+from posecbr.cli import build_parser, main
+from posecbr.recordings import load_recording
 from tests.once import made_once
 
 NAMES = ["1 JumpJack", "2 Jog", "3 Squat", "4 KneeRaise", "5 ArmCircle", "6 Twist"]
@@ -122,3 +126,68 @@ def test_asf_and_fps_are_checked_as_the_other_commands_check_them(
     err = capsys.readouterr().err
     assert "--fps: goes with clip files, not the folder rec" in err
     assert len(err.strip().splitlines()) == 1
+
+
+def _parsers() -> dict[str, argparse.ArgumentParser]:
+    """Every command's parser by its name (``casebase trim`` for a subcommand's)."""
+    found: dict[str, argparse.ArgumentParser] = {}
+
+    def walk(name: str, parser: argparse.ArgumentParser) -> None:
+        found[name] = parser
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for child, sub in action.choices.items():
+                    walk(f"{name} {child}".strip(), sub)
+
+    walk("", build_parser())
+    return found
+
+
+def test_every_usage_line_fits_an_80_column_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
+    """segment's and watch's usage lines ran to 120 and 118 columns: ``--unknown`` listed its
+    seven rules there; they are named in its help."""
+    monkeypatch.setenv("COLUMNS", "80")
+    long = {
+        name: max(len(line) for line in parser.format_usage().splitlines())
+        for name, parser in _parsers().items()
+    }
+    assert {name: n for name, n in long.items() if n > 80} == {}
+
+
+def _help(command: str, option: str) -> str:
+    (action,) = [a for a in _parsers()[command]._actions if option in a.option_strings]
+    return " ".join(str(action.help).split())
+
+
+@pytest.mark.parametrize(
+    ("command", "option", "said"),
+    [
+        ("classify", "--novelty", f"(default {FeedbackSettings().novelty_threshold:g})"),
+        ("classify", "--benefit", f"(default {FeedbackSettings().benefit_threshold:g})"),
+        ("train", "--length", f"(default {CaseBaseClassifier().length})"),
+        ("train", "--features", f"(default {CaseBaseClassifier().features})"),
+        ("casebase trim", "--keep", "(default 0.7)"),
+        ("train", "--label-block", "(default: one label per frame)"),
+        ("segment", "--label-block", "(default: one label per frame)"),
+        ("watch", "--max-frames", "(default: no limit)"),
+        ("convert", "--limit", "(default: no limit)"),
+        ("classify", "--subjects", "(default all)"),
+        ("classify", "--fps", "frames per second"),
+        ("segment", "--fps", "the rate its HDM05 name states, else 120"),
+    ],
+)
+def test_an_options_help_says_its_default_and_unit(command: str, option: str, said: str) -> None:
+    """The defaults said are the code's own (the estimator's, the feedback settings'; 0.7 is
+    what ``casebase trim`` keeps of each activity when ``--keep`` is left out)."""
+    assert said in _help(command, option)
+
+
+def test_an_hdm05_name_states_the_rate_fps_defaults_to(shared_data: Path, tmp_path: Path) -> None:
+    """What ``--fps``'s help says of its default: an HDM05 take named ``..._120.amc`` is read
+    at 120 fps, the same take named ``..._60.amc`` at 60."""
+    take = shared_data / "hdm05" / "train" / "3" / "HDM_bd_grabHighR_001_120.amc"
+    asf = take.parent / "HDM_bd.asf"
+    renamed = tmp_path / "HDM_bd_grabHighR_001_60.amc"
+    renamed.write_bytes(take.read_bytes())
+    assert load_recording(take, asf).fps == 120.0
+    assert load_recording(renamed, asf).fps == 60.0

@@ -79,7 +79,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--keep",
         type=float,
         default=None,
-        help="novelty-benefit: fraction of each activity to keep (0.7)",
+        help="novelty-benefit: fraction of each activity to keep (default 0.7)",
     )
     q.add_argument(
         "-k",

@@ -56,6 +56,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--top",
         type=int,
         default=None,
+        metavar="N",
         help="with --verbose: similar cases to list, 1 or more (default all)",
     )
     p.add_argument(
@@ -73,20 +74,23 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--novelty",
         type=float,
         default=None,
-        help="with --feedback: retain novelty threshold (0.5)",
+        help="with --feedback: retain novelty threshold (default 0.5)",
     )
     p.add_argument(
         "--benefit",
         type=float,
         default=None,
-        help="with --feedback: retain benefit threshold (0.2)",
+        help="with --feedback: retain benefit threshold (default 0.2)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     add_recording_options(p)  # as train, segment and describe read an AMC file or a rate given
     add_sensor_option(p)
-    p.add_argument("--subjects", help="datasets: only these subjects, comma-separated")
+    p.add_argument(
+        "--subjects", help="datasets: only these subjects, comma-separated (default all)"
+    )
     p.add_argument(  # as train and compare choose activities
-        "--labels", help="datasets: only these activities, comma-separated (e.g. deep_squat)"
+        "--labels",
+        help="datasets: only these activities, comma-separated, e.g. deep_squat (default all)",
     )
     p.add_argument(
         "--target",

@@ -53,19 +53,29 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--out", type=path_arg, required=True, metavar="DIR", help="output folder (created)"
     )
     add_sensor_option(p)
-    p.add_argument("--asf", type=path_arg, help="skeleton for a single .amc (default: beside it)")
-    p.add_argument("--subjects", help="comma list, e.g. s01,s02 (UI-PRMD) or bd,dg (HDM05)")
-    p.add_argument("--movements", help="UI-PRMD movements, e.g. m01,m07")
-    p.add_argument("--labels", help="comma list of labels to keep")
-    p.add_argument("--episodes", help="episodes/takes, e.g. 1-3 or 1,4,7-9")
+    p.add_argument(
+        "--asf",
+        type=path_arg,
+        metavar="FILE.asf",
+        help="skeleton for a single .amc (default: the one beside it)",
+    )
+    p.add_argument(
+        "--subjects", help="comma list, e.g. s01,s02 (UI-PRMD) or bd,dg (HDM05) (default all)"
+    )
+    p.add_argument("--movements", help="UI-PRMD movements, e.g. m01,m07 (default all)")
+    p.add_argument("--labels", help="comma list of labels to keep (default all)")
+    p.add_argument("--episodes", help="episodes/takes, e.g. 1-3 or 1,4,7-9 (default all)")
     p.add_argument("--correct", action="store_true", help="only correct repetitions (UI-PRMD)")
     p.add_argument("--incorrect", action="store_true", help="only incorrect repetitions (UI-PRMD)")
-    p.add_argument("--limit", type=int, help="at most this many clips")
+    p.add_argument(
+        "--limit", type=int, metavar="N", help="at most this many clips (default: no limit)"
+    )
     p.add_argument(
         "--fps",
         type=float,
         help="frame rate of the source (frames per second), for every clip; default: from the"
-        " files (AMC files carry none: 120, the CMU and HDM05 rate)",
+        " files (an AMC file carries none: the rate its HDM05 name states, else 120, the CMU"
+        " and HDM05 rate)",
     )
     p.add_argument(
         "--float32",

@@ -101,6 +101,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--unknown",
         choices=JUDGES,
         default=JUDGES[0],
+        metavar="RULE",
         help="what makes a stretch unknown: its nearest activity is hardly nearer than the "
         "next, times how far the window lies from that activity in its own spread, beyond "
         "that activity's own threshold, from its rightly named training cases held out of "
@@ -126,7 +127,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         " a recording, not a label file",
     )
     p.add_argument(
-        "--label-block", type=float, metavar="SECONDS", help="seconds per label of --truth"
+        "--label-block",
+        type=float,
+        metavar="SECONDS",
+        help="seconds per label of --truth (default: one label per frame)",
     )
     p.add_argument(
         "--label-names", type=path_arg, metavar="FILE", help="'code name' per line, for --truth"

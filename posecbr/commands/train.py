@@ -72,7 +72,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         " or else the store's only one, as classify, segment and watch take it)",
     )
     p.add_argument(
-        "--features", choices=("fluents", "qmp"), default=None, help="feature level (fluents)"
+        "--features",
+        choices=("fluents", "qmp"),
+        default=None,
+        help="feature level (default fluents)",
     )
     p.add_argument(
         "--similarity",
@@ -85,7 +88,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         metavar="KEY=VALUE",
         help="similarity parameter, e.g. --similarity dtw --param band=0.2 (repeatable)",
     )
-    p.add_argument("--length", type=int, default=None, help="frames per fluent sequence (32)")
+    p.add_argument(
+        "--length", type=int, default=None, help="frames per fluent sequence (default 32)"
+    )
     p.add_argument(
         "--states",
         default=None,
@@ -135,8 +140,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="euclidean on the resampled fluent sequence instead of per-feature clip summaries",
     )
     add_k_option(p, None, " (default 5), kept with the case base: classify's default")
-    p.add_argument("--subjects", help="only these subjects, comma-separated (e.g. s01,s02)")
-    p.add_argument("--labels", help="only these activities, comma-separated (e.g. deep_squat)")
+    p.add_argument(
+        "--subjects", help="only these subjects, comma-separated, e.g. s01,s02 (default all)"
+    )
+    p.add_argument(
+        "--labels", help="only these activities, comma-separated, e.g. deep_squat (default all)"
+    )
     p.add_argument(
         "--target",
         default=None,
@@ -165,7 +174,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--label-block seconds; each labelled stretch becomes a clip (several recordings: a "
         "labels CSV with a label_file column)",
     )
-    p.add_argument("--label-block", type=float, metavar="SECONDS", help="seconds per label")
+    p.add_argument(
+        "--label-block",
+        type=float,
+        metavar="SECONDS",
+        help="seconds per label (default: one label per frame)",
+    )
     p.add_argument("--label-names", type=path_arg, metavar="FILE", help="'code name' per line")
     add_recording_options(p)
     g = p.add_mutually_exclusive_group()

@@ -76,6 +76,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--speed",
         type=float,
         default=1.0,
+        metavar="X",
         help="a video file plays at this multiple of its own rate (default 1; 0: as fast as "
         "possible)",
     )
@@ -83,9 +84,15 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--stall",
         type=float,
         default=5.0,
+        metavar="SECONDS",
         help="seconds without a frame before giving up (default 5)",
     )
-    p.add_argument("--max-frames", type=int, help="stop after this many frames")
+    p.add_argument(
+        "--max-frames",
+        type=int,
+        metavar="N",
+        help="stop after this many frames (default: no limit)",
+    )
     p.add_argument(
         "--json",
         action="store_true",
@@ -102,7 +109,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--unknown",
         choices=JUDGES,
         default=JUDGES[0],
-        help="what makes a stretch unknown, as in posecbr segment (default spread-margin)",
+        metavar="RULE",
+        help=f"what makes a stretch unknown, as in posecbr segment: {', '.join(JUDGES)}"
+        " (default spread-margin)",
     )
     p.set_defaults(func=run)
 
