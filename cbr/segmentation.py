@@ -1331,6 +1331,7 @@ def check_segmentable(recording: PoseSequence) -> None:
     is not cut in pieces. A command given several recordings refuses a bad one so before it
     segments any."""
     rec = recording.to_canonical()
+    _check_duration(rec.n_frames, rec.fps, rec.source)
     chunk = long_clip.chunk_for(rec, None)
     if chunk:
         long_clip.movement_signals(rec, chunk)
@@ -1338,7 +1339,6 @@ def check_segmentable(recording: PoseSequence) -> None:
         movement_signals_of(rec)
     # the windows are not cut here: finding the periods in them took 3 s of a long recording's
     # run, done again when it is segmented
-    _check_duration(rec.n_frames, rec.fps, rec.source)
     _check_person(rec)
 
 

@@ -671,10 +671,12 @@ def _unseen(confidence: np.ndarray | None) -> np.ndarray:
 
 def _followed(finite: np.ndarray, fps: float) -> np.ndarray:
     """``(frames, n)``: where each angle (``finite``: where it was computed) is seen or lies
-    in a gap of at most :data:`MAX_FILLED_GAP_S` (at least one frame)."""
+    in a gap of at most :data:`MAX_FILLED_GAP_S` (at least one frame). An angle seen in no
+    frame is followed in none: a clip shorter than that gap is not one gap to fill, there
+    being no value to fill it from."""
     longest = max(1, int(round(MAX_FILLED_GAP_S * fps)))
     out = finite.copy()
-    for j in np.flatnonzero(~finite.all(axis=0)):
+    for j in np.flatnonzero(~finite.all(axis=0) & finite.any(axis=0)):
         out[:, j] |= ~long_runs(~finite[:, j], longest + 1)
     return out
 
