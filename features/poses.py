@@ -52,6 +52,11 @@ from .skeleton import (
 MAX_COORDINATE_M = 1e4
 MIN_FPS = 0.01
 MAX_FPS = 10_000.0
+# The frames a clip's metadata places it at in its recording (frame_offset, and the frames
+# after it) end by 2**53: the whole numbers float64 and JSON readers hold exactly (9e15
+# frames, 9,500 years at 30 fps); beyond, the frames stored with its cases (64-bit integers)
+# overflowed.
+MAX_FRAME_INDEX = 2**53
 
 EXTRACTION_VERSION = 3
 """How ``features.pose_estimation.estimate_video`` turns a video's frames into poses, written
@@ -230,6 +235,12 @@ class PoseSequence:
         if isinstance(offset, bool) or not isinstance(offset, int) or offset < 0:
             raise PoseFileError(
                 f"metadata frame_offset must be a whole number >= 0, got {offset!r}", where
+            )
+        if offset + pos.shape[0] > MAX_FRAME_INDEX:
+            raise PoseFileError(
+                f"metadata frame_offset {offset:.3g} puts the clip's frames past {MAX_FRAME_INDEX}"
+                " (2**53), which no recording reaches",
+                where,
             )
 
     @property

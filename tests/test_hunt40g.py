@@ -12,18 +12,21 @@ was as long as one window.
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from features.errors import DataError
-from features.poses import save_pose
+from features.errors import DataError, PoseFileError
+from features.poses import load_pose, save_pose
 from features.repetitions import movement_signals
 from features.skeleton import JOINT_INDEX
-from tests.badinput import refused, small_case_base
+from tests.badinput import pose_file, refused, small_case_base
 from tests.bodies import rot_x, rotate, standing, to_sequence
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 
 @pytest.fixture(scope="module")
@@ -67,3 +70,38 @@ def test_an_angle_seen_in_no_frame_is_not_followed() -> None:
 def test_no_angle_seen_in_any_frame_is_no_person() -> None:
     with pytest.raises(DataError, match="no person in view"):
         movement_signals(_bending(12, 240.0, tuple(JOINT_INDEX)))
+
+
+def _with_offset(src: Path, dest: Path, offset: int) -> Path:
+    """A copy of the pose file ``src`` whose metadata says it starts at frame ``offset``."""
+    arrays = dict(np.load(src, allow_pickle=False))
+    meta = json.loads(str(arrays["metadata"]))
+    arrays["metadata"] = np.array(json.dumps({**meta, "frame_offset": offset}))
+    np.savez(dest, **arrays)
+    return dest
+
+
+@pytest.mark.parametrize("offset", [2**53, 2**63 - 1, 10**30])
+def test_a_frame_offset_no_recording_reaches_is_refused_as_the_file_is_read(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], offset: int
+) -> None:
+    # a frame_offset past 2**53 (what JSON readers and float64 hold exactly) was read, and
+    # `train --split repetitions` then held the pieces' frames as 64-bit integers: exit 70,
+    # "OverflowError: Python int too large to convert to C long"
+    clips = [_with_offset(DEMO / f"m01_s0{s}_e01.npz", tmp_path / f"squat{s}.npz", offset)
+             for s in (1, 2)]  # fmt: skip
+    rows = [f"{c.name},deep_squat,s0{s}" for s, c in zip((1, 2), clips, strict=True)]
+    rows += [f"{DEMO}/m07_s0{s}_e01.npz,standing_shoulder_abduction,s0{s}" for s in (1, 2)]
+    csv = tmp_path / "labels.csv"
+    csv.write_text("path,label,subject\n" + "\n".join(rows) + "\n")
+    db = tmp_path / "cb.sqlite"
+    refused(["train", str(csv), "--db", str(db), "--split", "repetitions"], tmp_path, capsys,
+            str(clips[0]), "frame_offset", f"{offset:.3g}")  # fmt: skip
+    with pytest.raises(PoseFileError, match="frame_offset"):
+        load_pose(clips[0])
+
+
+def test_the_largest_frame_offset_is_read(tmp_path: Path) -> None:
+    clip = tmp_path / "clip.npz"
+    pose_file(clip, metadata=json.dumps({"frame_offset": 2**53 - 8}))  # 8 frames: up to 2**53
+    assert load_pose(clip).metadata["frame_offset"] == 2**53 - 8
