@@ -105,3 +105,21 @@ def test_the_largest_frame_offset_is_read(tmp_path: Path) -> None:
     clip = tmp_path / "clip.npz"
     pose_file(clip, metadata=json.dumps({"frame_offset": 2**53 - 8}))  # 8 frames: up to 2**53
     assert load_pose(clip).metadata["frame_offset"] == 2**53 - 8
+
+
+def test_one_activity_left_after_short_stretches_says_the_others_were_too_short(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # a recording labelled 'squat' throughout but for two flickers of 'lunge' and 'raise'
+    # (each 3 frames, 0.1 s, under the shortest repetition, 0.4 s): the flickers are left
+    # out, and the refusal said "only one activity ('squat')" of a file holding three
+    rec = save_pose(_bending(90, 30.0, ()), tmp_path / "rec.npz")
+    labels = ["squat"] * 90
+    labels[30:33] = ["lunge"] * 3
+    labels[60:63] = ["raise"] * 3
+    track = tmp_path / "labels.txt"
+    track.write_text("\n".join(labels) + "\n")
+    db = tmp_path / "cb.sqlite"
+    line = refused(["train", str(rec), "--frame-labels", str(track), "--db", str(db)],
+                   tmp_path, capsys, "only one activity ('squat')")  # fmt: skip
+    assert "(the stretches labelled lunge, raise are all shorter than 0.4 s: left out)" in line

@@ -361,6 +361,7 @@ def _long_enough(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
     from features.repetitions import MIN_PERIOD_S, long_enough
 
     kept, short = long_enough(clips)
+    args.short_only = sorted({shown(c.label) for c in short} - {shown(c.label) for c in kept})
     if short:
         labels = ", ".join(sorted({shown(c.label) for c in short}))
         stretches = "stretch" if len(short) == 1 else "stretches"
@@ -522,11 +523,20 @@ def _check_k(args: argparse.Namespace, clips: list[Any]) -> None:
 
 def _one_activity(args: argparse.Namespace, solutions: list[str]) -> None:
     """A new case base needs two activities: refused naming DATA, before any fitting."""
+    from features.repetitions import MIN_PERIOD_S
+
     values = sorted(set(solutions))
     if len(values) == 1:
+        short = getattr(args, "short_only", [])  # labels whose every stretch was left out
+        why = (
+            f" (the stretches labelled {first_few(short)} are all shorter than"
+            f" {MIN_PERIOD_S:g} s: left out)"
+            if short and args.target == "label"
+            else ""
+        )
         raise DataError(
             f"the training data hold only one {'activity' if args.target == 'label' else 'value'}"
-            f" ({shown(repr(values[0]))}); a classifier needs at least two",
+            f" ({shown(repr(values[0]))}); a classifier needs at least two{why}",
             str(args.data),
         )
 
