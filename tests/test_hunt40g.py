@@ -13,6 +13,9 @@ was as long as one window.
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -23,10 +26,10 @@ from features.errors import DataError, PoseFileError
 from features.poses import load_pose, save_pose
 from features.repetitions import movement_signals
 from features.skeleton import JOINT_INDEX
-from tests.badinput import pose_file, refused, small_case_base
+from tests.badinput import ROOT, pose_file, refused, small_case_base
 from tests.bodies import rot_x, rotate, standing, to_sequence
 
-DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 
 
 @pytest.fixture(scope="module")
@@ -123,3 +126,42 @@ def test_one_activity_left_after_short_stretches_says_the_others_were_too_short(
     line = refused(["train", str(rec), "--frame-labels", str(track), "--db", str(db)],
                    tmp_path, capsys, "only one activity ('squat')")  # fmt: skip
     assert "(the stretches labelled lunge, raise are all shorter than 0.4 s: left out)" in line
+
+
+def _refused_in_time(argv: list[str], root: Path, *needles: str) -> str:
+    """``posecbr argv`` in its own process: refused in one line (exit 1) within a minute,
+    nothing added under ``root`` (its files not read: one is a pipe). A process still running
+    then is killed: a reader that opened a pipe waits for a writer that never comes (Ctrl-C
+    did not stop it)."""
+    before = sorted(root.rglob("*"))
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-m", "posecbr", *argv],
+            cwd=ROOT,
+            env={**os.environ, "POSECBR_NO_PROGRESS": "1"},
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"posecbr {' '.join(argv)} still waiting after 60 s")
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 1, (proc.returncode, proc.stderr[-2000:])
+    assert len(lines) == 1, proc.stderr
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])
+    assert sorted(root.rglob("*")) == before
+    return lines[0]
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes on this system")
+@pytest.mark.parametrize("where", ["--asf", "beside"])
+def test_a_skeleton_that_is_a_pipe_is_refused_not_waited_on(tmp_path: Path, where: str) -> None:
+    # `reps take.amc --asf pipe.asf` (or the only .asf beside it a named pipe) opened the pipe
+    # to read the skeleton and waited for a writer, for ever
+    take = tmp_path / "take.amc"
+    take.write_text(":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 0 0 0 0 0\n")
+    pipe = tmp_path / "skeleton.asf"
+    os.mkfifo(pipe)
+    argv = ["reps", str(take), *(["--asf", str(pipe)] if where == "--asf" else [])]
+    _refused_in_time(argv, tmp_path, str(pipe), "is a pipe, socket or device, not a file")
