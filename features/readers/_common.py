@@ -17,6 +17,17 @@ from ..poses import MAX_BYTES_ENV, read_limits
 from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
 
 
+def _check_file(path: Path) -> None:
+    """A DataError naming ``path`` unless it is a file to read: missing, a folder, or a pipe,
+    socket or device (opened, a pipe waits for a writer that may never come)."""
+    if not path.exists():
+        raise DataError("no such file", path)
+    if path.is_dir():
+        raise DataError("is a folder, not a file", path)
+    if not path.is_file():
+        raise DataError("is a pipe, socket or device, not a file", path)
+
+
 def read_text(path: Path) -> str:
     """The text of ``path`` (gzip when it ends in ``.gz``), latin-1 tolerant, newlines unified,
     without a UTF-8 byte order mark; UTF-16 when it starts with a UTF-16 byte order mark.
@@ -26,12 +37,7 @@ def read_text(path: Path) -> str:
     ``--asf``, or the one beside an AMC file), unreadable, a truncated gzip, or larger
     (decompressed) than the reading limit of :func:`features.poses.read_limits`.
     """
-    if not path.exists():
-        raise DataError("no such file", path)
-    if path.is_dir():
-        raise DataError("is a folder, not a file", path)
-    if not path.is_file():
-        raise DataError("is a pipe, socket or device, not a file", path)
+    _check_file(path)
     _, limit = read_limits()
     too_big = DataError(
         f"holds more than {size_words(limit)} of text (raise the limit with {MAX_BYTES_ENV}=BYTES)",
