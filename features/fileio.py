@@ -8,6 +8,8 @@ replaces one of the inputs it was made from.
   cases of that;
 - :func:`staged_folder`: several files into one folder as one write (all of them, or the
   folder as it was);
+- :func:`write_together`: several files, in one folder or not, as one write (all of them,
+  or each as it was); :func:`replace_together`, the renames that end it;
 - :func:`check_output`: before any work starts, refuse an output path that is a folder, lies in
   a folder that does not exist, or is one of the inputs;
 - :func:`temporary_file`, :func:`staging_folder`: the hidden temporaries those writers use,
@@ -29,12 +31,12 @@ import shutil
 import socket
 import sys
 import tempfile
-from collections.abc import Collection, Iterable, Iterator
+from collections.abc import Callable, Collection, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from .errors import DataError
+from .errors import DataError, PosecbrError
 
 #: How a message names a picture given where a clip or a case base belongs (by its first
 #: bytes: :func:`is_picture`).
@@ -219,14 +221,135 @@ def write_json_atomic(path: str | Path, obj: Any, *, indent: int | None = 1) -> 
     return write_text_atomic(path, text + "\n")
 
 
+def _set_aside(dest: Path) -> tuple[Path | None, bool]:
+    """A hidden second name for the file at ``dest``, to put it back with (``None`` when
+    there is no file), and whether the file was moved to it: it is a hard link, or where the
+    file system has none (FAT, some network shares) the file itself, renamed."""
+    if not os.path.lexists(dest):
+        return None, False
+    aside = temporary_file(dest, ".old")  # a stale one (a writer killed) only a link: removed
+    aside.unlink()
+    try:
+        os.link(dest, aside, follow_symlinks=False)
+    except OSError:  # the earlier file itself: under a name no later writer removes as stale
+        fd, name = tempfile.mkstemp(
+            prefix=f".{temporary_name(dest.name)}.earlier.", dir=dest.parent
+        )
+        os.close(fd)
+        os.replace(dest, name)
+        return Path(name), True
+    return aside, False
+
+
+def _nothing_written(
+    n: int, earlier: Sequence[Path], lost: Sequence[Path] = (), asides: Sequence[Path] = ()
+) -> str:
+    """What a write of ``n`` files as one that failed says after its reason; ``lost``: the
+    earlier files that could not be put back, left under the hidden names ``asides``."""
+    said = "not written" if n == 1 else f"none of the {n} files written"
+    kept = [p for p in earlier if p not in lost]
+    if kept:
+        said += (
+            f" (the earlier {_names(kept)} kept as {'they were' if len(kept) > 1 else 'it was'})"
+        )
+    if lost:
+        said += f"; the earlier {_names(lost)} could not be put back: left as {_names(asides)}"
+    return said
+
+
+def replace_together(moves: Sequence[tuple[Path, Path]]) -> None:
+    """Rename each staged file onto its destination (``(staged, destination)`` pairs) as one.
+    When a rename fails (or Ctrl-C comes), those done are undone: each destination back to
+    its earlier file, or gone when it had none. A failure is raised as a DataError naming
+    the destination, saying nothing was written, and naming any earlier file that could not
+    be put back (it stays under its hidden name)."""
+    earlier = [dest for _, dest in moves if os.path.lexists(dest)]
+    done: list[tuple[Path, Path | None]] = []  # each destination replaced, its earlier file
+    dest = moves[0][1] if moves else Path()
+    try:
+        for staged, dest in moves:
+            aside, moved = _set_aside(dest)
+            try:
+                os.replace(staged, dest)
+            except BaseException:
+                if moved:  # the destination is gone: its earlier file goes back
+                    done.append((dest, aside))
+                elif aside is not None:  # a link: the destination is still the earlier file
+                    aside.unlink(missing_ok=True)
+                raise
+            done.append((dest, aside))
+    except OSError as exc:
+        lost = _put_back(done)
+        why = _nothing_written(len(moves), earlier, [d for d, _ in lost], [a for _, a in lost])
+        said = f"cannot write: {exc.strerror or exc}; {why}"
+        raise DataError(said, dest) from None
+    except BaseException:
+        _put_back(done)
+        raise
+    for _, aside in done:
+        if aside is not None:
+            with contextlib.suppress(OSError):
+                aside.unlink()
+
+
+def _put_back(done: list[tuple[Path, Path | None]]) -> list[tuple[Path, Path]]:
+    """Each destination of ``done`` as it was before its rename; returns those that could
+    not be, each with the hidden name its earlier file is left under."""
+    failed = []
+    for dest, aside in reversed(done):
+        try:
+            if aside is None:
+                dest.unlink(missing_ok=True)
+            else:
+                os.replace(aside, dest)
+        except OSError:
+            if aside is not None:
+                failed.append((dest, aside))
+    return failed
+
+
+def _names(paths: Sequence[Path]) -> str:
+    """``paths`` as a message lists them: by name when they share a folder."""
+    one_folder = len({p.parent for p in paths}) == 1
+    names = [p.name if one_folder else str(p) for p in paths]
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def write_together(files: Sequence[tuple[Path, Callable[[Path], object]]]) -> None:
+    """Several files written as one: each by its function, given a hidden temporary beside
+    the file (:func:`temporary_file`), then all renamed into place together
+    (:func:`replace_together`). A failure anywhere (a disk full, a write refused, an I/O
+    error) leaves every file as it was, its earlier version or none, and raises one
+    DataError naming the file that failed and saying so; Ctrl-C leaves them so too."""
+    staged: list[tuple[Path, Path]] = []
+    try:
+        for dest, write in files:
+            try:
+                _refuse_special(dest, "output")
+                staged.append((temporary_file(dest), dest))
+                write(staged[-1][0])
+                os.chmod(staged[-1][0], 0o666 & ~_umask())  # as atomic_path's
+            except (OSError, PosecbrError) as exc:
+                why = exc.message if isinstance(exc, PosecbrError) else None
+                why = why or f"cannot write: {getattr(exc, 'strerror', None) or exc}"
+                earlier = [d for d, _ in files if os.path.lexists(d)]
+                raise DataError(f"{why}; {_nothing_written(len(files), earlier)}", dest) from None
+        replace_together(staged)
+    finally:
+        for tmp, _ in staged:
+            with contextlib.suppress(OSError):
+                tmp.unlink(missing_ok=True)
+
+
 @contextmanager
 def staged_folder(folder: str | Path, *, last: Collection[str] = ()) -> Iterator[Path]:
     """A hidden staging folder inside ``folder`` (made if need be) to write several files as one.
 
     When the block ends normally each file written in the staging folder (flat, no subfolders)
     is moved into ``folder`` under its name, those named in ``last`` after the others (an index
-    that names the rest). On an error the staging folder is removed, and ``folder`` too if the
-    block made it: ``folder`` is left as it was.
+    that names the rest); a move that fails puts back those done (:func:`replace_together`).
+    On an error the staging folder is removed, and ``folder`` too if the block made it:
+    ``folder`` is left as it was.
     """
     out = Path(folder)
     created = not out.exists()
@@ -238,8 +361,8 @@ def staged_folder(folder: str | Path, *, last: Collection[str] = ()) -> Iterator
     try:
         yield stage
         staged = sorted(stage.iterdir(), key=lambda p: (p.name in last, p.name))
-        for path in staged:
-            os.replace(path, out / path.name)
+        # one rename failing puts back those done: the folder's earlier files, not half new
+        replace_together([(path, out / path.name) for path in staged])
         stage.rmdir()
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)

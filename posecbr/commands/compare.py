@@ -4,17 +4,18 @@ classifiers on a labelled dataset and print the table (JSON, CSV and pictures on
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import shlex
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from features.cluster import SCHEDULER_HELP, check_scheduler
-from features.errors import ConfigError, DataError
-from features.fileio import check_output, stdout_gone, write_json_atomic
+from features.errors import ConfigError, DataError, PosecbrError
+from features.fileio import check_output, stdout_gone, write_json_atomic, write_together
 from features.interrupts import interrupts_held
 from features.text import shown
 from posecbr.arguments import add_k_option, check_each_found, param_value, path_arg
@@ -338,18 +339,22 @@ def _pictures_seen_from(pictures: Any, results_file: Path, out: Path) -> Any:
 
 
 def _write_results(results: Any, outputs: list[Output], out: Path | None = None) -> None:
-    """The results as JSON and CSV to every output asked for (each written atomically); a
-    JSON file names the pictures drawn into ``out`` from its own folder."""
+    """The results as JSON and CSV to every output asked for, as one write: each staged
+    under a temporary name beside it, then all renamed into place (before, each was written
+    in turn: a disk full or a write refused on results.csv left the new results.json beside
+    the earlier run's table); a failure leaves every one as it was. A JSON file names the
+    pictures drawn into ``out`` from its own folder."""
     from cbr.evaluation.tables import csv_rows, write_csv
 
-    for o in outputs:
-        if o.format == "json":
-            doc = results.to_dict()
-            if out is not None:
-                doc["pictures"] = _pictures_seen_from(results.pictures, o.path, out).to_dict()
-            write_json_atomic(o.path, doc)
-        else:
-            write_csv(csv_rows(results), o.path)
+    def writer(o: Output) -> Callable[[Path], object]:
+        if o.format == "csv":
+            return lambda path: write_csv(csv_rows(results), path)
+        doc = results.to_dict()
+        if out is not None:
+            doc["pictures"] = _pictures_seen_from(results.pictures, o.path, out).to_dict()
+        return lambda path: write_json_atomic(path, doc)
+
+    write_together([(o.path, writer(o)) for o in outputs])
 
 
 def _draw_pictures(run_: Any, out: Path, trim: float | None) -> None:
@@ -378,7 +383,6 @@ def _earlier_pictures(out: Path) -> list[str]:
     there is none, or it cannot be read): those this run does not draw again are removed
     after it has drawn its own (:func:`_remove_stale`)."""
     from cbr.evaluation.report import load_results
-    from features.errors import PosecbrError
 
     if not (out / "results.json").is_file():
         return []
@@ -418,9 +422,7 @@ def _write_outputs(
     results = run_.results
     try:
         with interrupts_held():
-            if args.out:
-                args.out.mkdir(exist_ok=True)
-            _write_results(results, outputs)
+            _write_first(results, outputs, args.out)
         for given, what in ((args.json, "results"), (args.csv, "results table")):
             if given:  # the files named by --json / --csv, as every command's "written to"
                 print(f"{what} written to {shown(given)}", file=sys.stderr)
@@ -433,6 +435,21 @@ def _write_outputs(
         raise KeyboardInterrupt(f"results written to {written}" if outputs else "") from None
     if args.out:
         _name_pictures(results, outputs, args.out, earlier)
+
+
+def _write_first(results: Any, outputs: list[Output], out: Path | None) -> None:
+    """The results files, before any picture, with ``--out`` made first; when they cannot be
+    written (each left as it was) an ``--out`` folder made for them is removed again."""
+    made = out is not None and not out.exists()
+    if out is not None:
+        out.mkdir(exist_ok=True)
+    try:
+        _write_results(results, outputs)
+    except PosecbrError:
+        if out is not None and made:
+            with contextlib.suppress(OSError):
+                out.rmdir()  # empty: nothing was written in it
+        raise
 
 
 def _name_pictures(results: Any, outputs: list[Output], out: Path, earlier: list[str]) -> None:

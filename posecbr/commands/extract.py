@@ -19,6 +19,7 @@ import os
 import sys
 import tempfile
 import zipfile
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -372,20 +373,42 @@ def _listed_in(listing: Path) -> list[Path]:
 
 def write_listing(listing: Listing, out: Path, jobs: list[Job], written: set[Path]) -> None:
     """Copy the label files and write labels.csv naming the pose files ``written`` (a clip
-    that failed is not listed), paths relative to ``out``, as ``train`` reads them."""
-    import csv
-    import io
+    that failed is not listed), paths relative to ``out``, as ``train`` reads them: the
+    copies and labels.csv as one write (before, each in turn: a disk full at labels.csv
+    left the new label files under the earlier labels.csv)."""
+    from features.fileio import write_together
 
-    from features.fileio import write_bytes_atomic, write_text_atomic
-
+    files: list[tuple[Path, Callable[[Path], object]]] = []
     for src, dest in listing.copies.items():
         if dest != src:
             try:
-                write_bytes_atomic(dest, src.read_bytes())
+                data = src.read_bytes()
             except OSError as exc:
                 raise DataError(
                     f"cannot copy the label file ({exc.strerror or exc})", src
                 ) from None
+            files.append((dest, _writer_of(data)))
+    text = _listing_text(listing, out, jobs, written)
+    files.append((listing.path, lambda path: path.write_text(text, encoding="utf-8", newline="")))
+    try:
+        write_together(files)
+    except DataError as exc:  # the pose files are written, each whole
+        raise DataError(
+            f"{exc.message}; the pose files are written (extract them again to list them)",
+            exc.source,
+        ) from None
+
+
+def _writer_of(data: bytes) -> Callable[[Path], object]:
+    """What writes ``data`` to the path it is given."""
+    return lambda path: path.write_bytes(data)
+
+
+def _listing_text(listing: Listing, out: Path, jobs: list[Job], written: set[Path]) -> str:
+    """labels.csv's text: a row per pose file ``written``."""
+    import csv
+    import io
+
     header = ["path", "label", "subject", "label_file", "label_block_s", "label_names"]
     text = io.StringIO()
     writer = csv.writer(text, lineterminator="\n")
@@ -405,7 +428,7 @@ def write_listing(listing: Listing, out: Path, jobs: list[Job], written: set[Pat
             ]
         cells += [_cell(job.extras.get(k)) for k in listing.extras]
         writer.writerow(cells)
-    write_text_atomic(listing.path, text.getvalue())
+    return text.getvalue()
 
 
 def _relative(path: Path, out: Path) -> str:
