@@ -857,7 +857,7 @@ class LiveSegmenter:
             self.near.append((stop, float(np.min(nearest))))
         ends, near = np.array([e for e, _ in self.near]), np.array([d for _, d in self.near])
         judge = person_judges(self.judge, near, ends, np.array([stop]))[0]
-        # as offline (cbr.segmentation._solve_windows): too still for any activity, unknown
+        # as offline (cbr.segmentation._solve_distinct): too still for any activity, unknown
         still = window_still(solved, self.movement, self.least)
         self.judged.append(
             _Judged(start, stop, activity, judge.ratio(nearest), nearest, judge, still)
