@@ -108,17 +108,24 @@ def test_a_writer_refusing_a_posecbr_0_1_store_in_wal_mode_leaves_it_byte_identi
     assert sorted(p.name for p in folder.iterdir()) == ["old.sqlite"]
 
 
-def test_upgrade_refusing_a_newer_store_in_wal_mode_leaves_it_byte_identical(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    # before: the journal mode was converted, then the schema version 99 refused
-    folder = tmp_path / "new"
+def _newer_wal(folder: Path) -> Path:
+    """A posecbr 0.1 store in WAL mode in ``folder`` (made), its schema version set to 99 (a
+    store of a newer posecbr)."""
     folder.mkdir()
     db = _v1_wal(folder)
     con = sqlite3.connect(db)
     con.execute("UPDATE posecbr_schema_version SET version = 99")
     con.commit()
     con.close()
+    return db
+
+
+def test_upgrade_refusing_a_newer_store_in_wal_mode_leaves_it_byte_identical(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # before: the journal mode was converted, then the schema version 99 refused
+    folder = tmp_path / "new"
+    db = _newer_wal(folder)
     assert _header_modes(db) == b"\x02\x02"
     before = _md5(db)
     refused(["casebase", "upgrade", "--db", str(db)], folder, capsys, "schema version 99")
@@ -241,12 +248,7 @@ def test_upgrade_refusing_a_newer_store_keeps_the_changes_in_its_wal(
 ) -> None:
     # before: the refusal was right, but its close copied the -wal's change into the file
     folder = tmp_path / "new"
-    folder.mkdir()
-    db = _v1_wal(folder)
-    con = sqlite3.connect(db)
-    con.execute("UPDATE posecbr_schema_version SET version = 99")
-    con.commit()
-    con.close()
+    db = _newer_wal(folder)
     md5 = _changes_in_wal(db, shm=True)
     argv = ["casebase", "upgrade", "--db", str(db)]
     _refused_keeping_the_wal(argv, db, md5, capsys, "schema version 99")
