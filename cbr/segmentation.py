@@ -60,7 +60,7 @@ from typing import Any
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
-from features.body import long_runs, no_person, torso_rows, torso_share
+from features.body import check_person, long_runs, torso_rows, torso_share
 from features.derived import forget, movement_signals_of, stretch
 from features.errors import ConfigError, DataError, InputError
 from features.fluents import DEFAULT_TABLE, history_frames
@@ -1359,15 +1359,7 @@ def check_segmentable(recording: PoseSequence) -> None:
         movement_signals_of(rec)
     # the windows are not cut here: finding the periods in them took 3 s of a long recording's
     # run, done again when it is segmented
-    _check_person(rec)
-
-
-def _check_person(rec: PoseSequence) -> None:
-    """Refuse a recording no frame of which shows the torso (its movement can still be
-    followed, e.g. a pose at micrometre scale, whose shoulders the body frame cannot tell
-    apart): every stretch would be nobody in view."""
-    if torso_share(rec) == 0.0:
-        raise DataError(f"{no_person(rec)}: nothing to segment", rec.source or None)
+    check_person(rec, "segment")  # every stretch would be nobody in view
 
 
 def check_k(clf: Any, k: Any) -> None:
@@ -1397,7 +1389,7 @@ def solve_recording(
     chunk = long_clip.chunk_for(rec, chunk_frames)
     sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals_of(rec)
     windows = windows_of(sig, rec.n_frames, rec.fps, rec.source)
-    _check_person(rec)
+    check_person(rec, "segment")  # every stretch would be nobody in view
     config = clf.feature_config_
     if not chunk:
         warm(rec, config.level, mirror=config.side == "canonical")

@@ -16,6 +16,7 @@ from functools import cache
 import numpy as np
 
 from .derived import derived, signals_of
+from .errors import DataError
 from .geometry import (
     MIN_LINK_M,
     WORLD_UP,
@@ -328,3 +329,14 @@ def no_person(seq: PoseSequence) -> str:
             " other in every frame: positions must be metres)"
         )
     return "shows no person (no frame with a torso)"
+
+
+def check_person(seq: PoseSequence, nothing_to: str) -> None:
+    """Refuse ``seq`` (a DataError naming its source) when no frame of it shows the person:
+    the torso, without which no angle or position has a body frame (:func:`torso_share` 0;
+    :func:`no_person` says why). The one check ``segment`` and ``reps`` make of a recording
+    (before, ``reps`` counted one with no hips from an elbow, one with no shoulders from the
+    knees, one at micrometre scale from the hips' height, where ``segment`` refused it);
+    ``nothing_to``: what the refusal says cannot be done ("segment", "count")."""
+    if torso_share(seq) == 0.0:
+        raise DataError(f"{no_person(seq)}: nothing to {nothing_to}", seq.source or None)

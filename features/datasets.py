@@ -482,7 +482,7 @@ def find_asf(amc: Path, beside: Sequence[Path] | None = None) -> Path:
         others = [p for p in asfs if re.fullmatch(pattern, p.name.lower())]
         asfs = [p for p in asfs if p not in others]
         if not asfs and others:
-            raise DataError(
+            raise NoSkeletonError(
                 f"no {own if own[0].isdigit() else own.replace('hdm_', 'HDM_')} (the skeleton of"
                 f" subject {subject}) beside it; {others[0].name} is another subject's",
                 amc,
@@ -490,14 +490,32 @@ def find_asf(amc: Path, beside: Sequence[Path] | None = None) -> Path:
     if len(asfs) == 1:
         return asfs[0]
     if not asfs:
-        raise DataError(
-            "no .asf skeleton file beside it (put the subject's .asf there, or convert the"
-            " file alone: posecbr convert FILE.amc --asf SKELETON.asf)",
-            amc,
-        )
-    raise DataError(
+        raise NoSkeletonError("no .asf skeleton file beside it", amc, put_there=True)
+    raise NoSkeletonError(
         f"{len(asfs)} .asf files beside it and none named for its actor: cannot pick one", amc
     )
+
+
+class NoSkeletonError(DataError):
+    """:func:`find_asf` found no skeleton to give an AMC file. The message says how to give
+    one to ``convert`` (what the takes of a dataset folder need: no command takes a skeleton
+    for them); a command that takes one (``--asf``) for the file it reads says that instead
+    (:meth:`naming`)."""
+
+    def __init__(self, problem: str, amc: Path, put_there: bool = False) -> None:
+        self.problem = problem
+        self.put_there = put_there
+        super().__init__(
+            self._with("convert the file alone: posecbr convert FILE.amc --asf SKELETON.asf"), amc
+        )
+
+    def _with(self, remedy: str) -> str:
+        there = "put the subject's .asf there, or " if self.put_there else ""
+        return f"{self.problem} ({there}{remedy})"
+
+    def naming(self, option: str) -> DataError:
+        """The same refusal for a command whose ``option`` (``--asf``) names the skeleton."""
+        return DataError(self._with(f"give it: {option} FILE.asf"), self.source)
 
 
 def _asf_subject(amc: Path) -> tuple[str | None, str, str]:
@@ -1352,6 +1370,7 @@ __all__ = [
     "dataset_entries",
     "detect_kind",
     "find_asf",
+    "NoSkeletonError",
     "iter_dataset",
     "load_clip",
     "load_dataset",

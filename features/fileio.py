@@ -242,27 +242,31 @@ def _set_aside(dest: Path) -> tuple[Path | None, bool]:
 
 
 def _nothing_written(
-    n: int, earlier: Sequence[Path], lost: Sequence[Path] = (), asides: Sequence[Path] = ()
+    n: int,
+    earlier: Sequence[Path],
+    lost: Sequence[Path] = (),
+    asides: Sequence[Path] = (),
+    before: str = "the earlier",
 ) -> str:
     """What a write of ``n`` files as one that failed says after its reason; ``lost``: the
-    earlier files that could not be put back, left under the hidden names ``asides``."""
+    earlier files that could not be put back, left under the hidden names ``asides``;
+    ``before``: what the files there before are called."""
     said = "not written" if n == 1 else f"none of the {n} files written"
     kept = [p for p in earlier if p not in lost]
     if kept:
-        said += (
-            f" (the earlier {_names(kept)} kept as {'they were' if len(kept) > 1 else 'it was'})"
-        )
+        said += f" ({before} {_names(kept)} kept as {'they were' if len(kept) > 1 else 'it was'})"
     if lost:
-        said += f"; the earlier {_names(lost)} could not be put back: left as {_names(asides)}"
+        said += f"; {before} {_names(lost)} could not be put back: left as {_names(asides)}"
     return said
 
 
-def replace_together(moves: Sequence[tuple[Path, Path]]) -> None:
+def replace_together(moves: Sequence[tuple[Path, Path]], before: str = "the earlier") -> None:
     """Rename each staged file onto its destination (``(staged, destination)`` pairs) as one.
     When a rename fails (or Ctrl-C comes), those done are undone: each destination back to
     its earlier file, or gone when it had none. A failure is raised as a DataError naming
     the destination, saying nothing was written, and naming any earlier file that could not
-    be put back (it stays under its hidden name)."""
+    be put back (it stays under its hidden name); ``before``: what the files there before
+    are called in it (the earlier ones, unless the caller wrote them itself)."""
     earlier = [dest for _, dest in moves if os.path.lexists(dest)]
     done: list[tuple[Path, Path | None]] = []  # each destination replaced, its earlier file
     dest = moves[0][1] if moves else Path()
@@ -280,7 +284,8 @@ def replace_together(moves: Sequence[tuple[Path, Path]]) -> None:
             done.append((dest, aside))
     except OSError as exc:
         lost = _put_back(done)
-        why = _nothing_written(len(moves), earlier, [d for d, _ in lost], [a for _, a in lost])
+        lost_, asides = [d for d, _ in lost], [a for _, a in lost]
+        why = _nothing_written(len(moves), earlier, lost_, asides, before)
         said = f"cannot write: {exc.strerror or exc}; {why}"
         raise DataError(said, dest) from None
     except BaseException:
@@ -315,12 +320,15 @@ def _names(paths: Sequence[Path]) -> str:
     return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
 
 
-def write_together(files: Sequence[tuple[Path, Callable[[Path], object]]]) -> None:
+def write_together(
+    files: Sequence[tuple[Path, Callable[[Path], object]]], before: str = "the earlier"
+) -> None:
     """Several files written as one: each by its function, given a hidden temporary beside
     the file (:func:`temporary_file`), then all renamed into place together
     (:func:`replace_together`). A failure anywhere (a disk full, a write refused, an I/O
     error) leaves every file as it was, its earlier version or none, and raises one
-    DataError naming the file that failed and saying so; Ctrl-C leaves them so too."""
+    DataError naming the file that failed and saying so (``before``: what it calls the files
+    there before); Ctrl-C leaves them so too."""
     staged: list[tuple[Path, Path]] = []
     try:
         for dest, write in files:
@@ -333,8 +341,9 @@ def write_together(files: Sequence[tuple[Path, Callable[[Path], object]]]) -> No
                 why = exc.message if isinstance(exc, PosecbrError) else None
                 why = why or f"cannot write: {getattr(exc, 'strerror', None) or exc}"
                 earlier = [d for d, _ in files if os.path.lexists(d)]
-                raise DataError(f"{why}; {_nothing_written(len(files), earlier)}", dest) from None
-        replace_together(staged)
+                said = _nothing_written(len(files), earlier, before=before)
+                raise DataError(f"{why}; {said}", dest) from None
+        replace_together(staged, before)
     finally:
         for tmp, _ in staged:
             with contextlib.suppress(OSError):

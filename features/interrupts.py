@@ -29,14 +29,15 @@ def terminated() -> bool:
     return bool(_TERMINATED)
 
 
-def raise_interrupt(signum: int, _frame: Any = None) -> NoReturn:
+def raise_interrupt(signum: int, _frame: Any = None, said: str = "") -> NoReturn:
     """What Ctrl-C does, for the signal ``signum``: KeyboardInterrupt raised (so every
     ``finally``, context manager and ``except KeyboardInterrupt`` on the way cleans up: a
     hidden temporary removed, a transaction rolled back, worker processes stopped); SIGTERM
-    is remembered (:func:`terminated`)."""
+    is remembered (:func:`terminated`). ``said``: what the command says after
+    "interrupted" (what was done before)."""
     if signum == signal.SIGTERM:
         _TERMINATED.append(signum)
-    raise KeyboardInterrupt
+    raise KeyboardInterrupt(said) if said else KeyboardInterrupt
 
 
 @contextmanager

@@ -104,7 +104,7 @@ from typing import Any
 
 import numpy as np
 
-from .body import long_runs
+from .body import check_person, long_runs
 from .datasets import Clip
 from .derived import signals_of, stretch
 from .errors import DataError, InputError
@@ -1150,6 +1150,7 @@ def count_repetitions(
             f" ({MIN_PERIOD_S:g} s)",
             seq.source or None,
         )
+    check_person(seq, "count")
     sig = movement_signals(seq)
     return count_in_signals(sig, seq.n_frames, seq.fps, recording_edges)
 

@@ -78,7 +78,6 @@ def check_asf(asf: Path | None, recordings: list[Path]) -> None:
 
 def load_recording(path: Path, asf: Path | None = None, fps: float | None = None) -> Any:
     """The recording at ``path`` as a canonical PoseSequence (frame rate ``fps`` if given)."""
-    from features.datasets import load_clip
     from features.readers.asfamc import read_asf_amc
 
     check_fps(fps)
@@ -89,7 +88,7 @@ def load_recording(path: Path, asf: Path | None = None, fps: float | None = None
     if path.suffix.lower() == ".amc" and asf is not None:
         seq = read_asf_amc(asf, path, fps=fps)
     else:
-        seq = load_clip(path)
+        seq = load_clip_naming_asf(path)
     # messages name the file the user gave (a pose file remembers the clip it came from)
     seq = dataclasses.replace(seq, source=str(path))
     if fps is not None:
@@ -101,11 +100,21 @@ def load_clip_as_asked(path: Path, asf: Path | None, fps: float | None) -> Any:
     """The clip at ``path`` as ``describe`` and ``dad`` read it: as every clip is read
     (:func:`features.datasets.load_clip`), or, given ``--asf`` or ``--fps``, as
     :func:`load_recording` reads a recording with them."""
-    from features.datasets import load_clip
-
     if asf is None and fps is None:
-        return load_clip(path)
+        return load_clip_naming_asf(path)
     return load_recording(path, asf, fps)
+
+
+def load_clip_naming_asf(path: Path) -> Any:
+    """:func:`features.datasets.load_clip` for a command that takes ``--asf``: an AMC file
+    with no skeleton to be found beside it is refused with the way to give it one here
+    (``--asf FILE.asf``), not with ``convert``'s."""
+    from features.datasets import NoSkeletonError, load_clip
+
+    try:
+        return load_clip(path)
+    except NoSkeletonError as e:
+        raise e.naming("--asf") from None
 
 
 def note_low_rate(seq: Any) -> None:

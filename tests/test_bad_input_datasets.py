@@ -251,8 +251,8 @@ READER_CASES: list[tuple[str, Callable[[Path], Path], str]] = [
      "bone 'lfemur' has 1 values, the skeleton says 3"),
     ("AMC without its ASF",
      lambda d: (d.mkdir(), (d / "walk.amc").write_text(AMC), d / "walk.amc")[-1],
-     "no .asf skeleton file beside it (put the subject's .asf there, or convert the file alone:"
-     " posecbr convert FILE.amc --asf SKELETON.asf)"),
+     "no .asf skeleton file beside it (put the subject's .asf there, or give it: --asf"
+     " FILE.asf)"),
     ("AMC between two ASF files",
      lambda d: (_asf_amc(d, ASF, AMC), (d / "other.asf").write_text(ASF), d / "walk.amc")[-1],
      "2 .asf files beside it and none named for its actor"),

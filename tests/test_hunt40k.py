@@ -174,6 +174,9 @@ def _help(command: str, option: str) -> str:
         ("classify", "--subjects", "(default all)"),
         ("classify", "--fps", "frames per second"),
         ("segment", "--fps", "the rate its HDM05 name states, else 120"),
+        ("compare", "--folds", "(default 5)"),
+        ("compare", "--seed", "(default 0)"),
+        ("compare", "--explain", "(default 5)"),
     ],
 )
 def test_an_options_help_says_its_default_and_unit(command: str, option: str, said: str) -> None:

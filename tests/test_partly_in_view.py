@@ -68,7 +68,7 @@ def test_nobody_at_all_is_still_refused(squats: PoseSequence) -> None:
     from features.errors import DataError
 
     nobody = replace(squats, positions=np.full_like(squats.positions, np.nan), confidence=None)
-    with pytest.raises(DataError, match="no person in view"):
+    with pytest.raises(DataError, match=r"shows no person \(no frame with a torso\)"):
         count_repetitions(nobody)
 
 

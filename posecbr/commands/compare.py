@@ -61,7 +61,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "note, when there is a single subject, and is refused then when asked for by "
         "--cv loso) or stratified k-fold over clips",
     )
-    p.add_argument("--folds", type=int, default=5, metavar="K", help="folds for kfold (5)")
+    p.add_argument("--folds", type=int, default=5, metavar="K", help="folds for kfold (default 5)")
     p.add_argument(
         "--similarities",
         default="euclidean,dtw,signature",
@@ -113,13 +113,15 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="worker processes for the folds (default 1: all in this process)",
     )
     p.add_argument("--scheduler", metavar="ADDRESS|local:N", help=SCHEDULER_HELP)
-    p.add_argument("--seed", type=int, default=0, help="seed for k-fold, bootstrap, MiniRocket (0)")
+    p.add_argument(
+        "--seed", type=int, default=0, help="seed for k-fold, bootstrap, MiniRocket (default 0)"
+    )
     p.add_argument(
         "--explain",
         type=int,
         default=5,
         metavar="N",
-        help="explain N misclassified clips of the best case-base configuration (5)",
+        help="explain N misclassified clips of the best case-base configuration (default 5)",
     )
     p.add_argument(
         "--json",
@@ -338,12 +340,15 @@ def _pictures_seen_from(pictures: Any, results_file: Path, out: Path) -> Any:
     return pictures.under(rel) if is_inside_name(rel) else Pictures()
 
 
-def _write_results(results: Any, outputs: list[Output], out: Path | None = None) -> None:
+def _write_results(
+    results: Any, outputs: list[Output], out: Path | None = None, before: str = "the earlier"
+) -> None:
     """The results as JSON and CSV to every output asked for, as one write: each staged
     under a temporary name beside it, then all renamed into place (before, each was written
     in turn: a disk full or a write refused on results.csv left the new results.json beside
-    the earlier run's table); a failure leaves every one as it was. A JSON file names the
-    pictures drawn into ``out`` from its own folder."""
+    the earlier run's table); a failure leaves every one as it was (``before``: what the
+    refusal calls them). A JSON file names the pictures drawn into ``out`` from its own
+    folder."""
     from cbr.evaluation.tables import csv_rows, write_csv
 
     def writer(o: Output) -> Callable[[Path], object]:
@@ -354,7 +359,7 @@ def _write_results(results: Any, outputs: list[Output], out: Path | None = None)
             doc["pictures"] = _pictures_seen_from(results.pictures, o.path, out).to_dict()
         return lambda path: write_json_atomic(path, doc)
 
-    write_together([(o.path, writer(o)) for o in outputs])
+    write_together([(o.path, writer(o)) for o in outputs], before)
 
 
 def _draw_pictures(run_: Any, out: Path, trim: float | None) -> None:
@@ -456,13 +461,19 @@ def _name_pictures(results: Any, outputs: list[Output], out: Path, earlier: list
     """Once every picture is drawn: the earlier run's not drawn again removed, and the JSON
     written again, naming the pictures (the CSV holds none). Ctrl-C or SIGTERM meanwhile is
     held until both are done (before: one there left every picture drawn but none named, and
-    said "interrupted" alone), then said."""
+    said "interrupted" alone), then said. A JSON file that cannot be written again is left
+    as this run first wrote it, naming no picture, and is refused saying so (before: "the
+    earlier results.json kept", as if the earlier run's were)."""
+    n = len(results.pictures.files())
     try:
         with interrupts_held():
             _remove_stale(out, earlier, results.pictures.files())
-            _write_results(results, [o for o in outputs if o.format == "json"], out)
+            json_outputs = [o for o in outputs if o.format == "json"]
+            _write_results(results, json_outputs, out, "this run's")
+    except DataError as e:
+        drawn = f"the {n} picture{'s' * (n != 1)} drawn into {out}"
+        raise DataError(f"{e.message}; no results file names {drawn}", e.source) from None
     except KeyboardInterrupt:
-        n = len(results.pictures.files())
         raise KeyboardInterrupt(
             f"results in {out}, with the {n} picture{'s' * (n != 1)} drawn before it: all of them"
         ) from None

@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from features.body import check_person
 from features.fileio import check_output
 from features.text import counted, shown
 from posecbr.arguments import path_arg
@@ -59,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
 
         picture_format(args.plot)
     seq = load_recording(args.clip, args.asf, args.fps)
+    check_person(seq, "count")  # as segment refuses it: a long one is not counted whole
     note_low_rate(seq)
     result = _count(seq)
     if result.partial:

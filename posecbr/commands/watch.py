@@ -389,14 +389,26 @@ def frames_in_background(
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
+class Stop(threading.Event):
+    """Set when the user stops a watch; ``signum``: the signal that stopped it."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.signum: int = signal.SIGINT
+
+    def stop(self, signum: int) -> None:
+        self.signum = signum
+        self.set()
+
+
 @contextmanager
-def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[threading.Event]:
+def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[Stop]:
     """Ctrl-C (SIGINT) or SIGTERM sets the event instead of raising: the watch ends after
     the frame in hand, as at the end of a file; a second one raises KeyboardInterrupt at
     once. ``also`` is set with it (a :class:`Pacer`'s stop: a file held back until a frame's
     time, however far off, ends there). Outside the main thread (where no signal handler can
     be set) the event is never set."""
-    stopped = threading.Event()
+    stopped = Stop()
     if threading.current_thread() is not threading.main_thread():
         yield stopped
         return
@@ -404,7 +416,7 @@ def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[threading
     def interrupted(signum: int, _frame: Any) -> None:
         if stopped.is_set():
             raise_interrupt(signum)  # a second SIGTERM is said as one (exit 143)
-        stopped.set()
+        stopped.stop(signum)
         if also is not None:
             also.set()
 
@@ -470,11 +482,11 @@ def run(args: argparse.Namespace) -> int:
             watcher.warm_up()
             watcher.watch(frames, is_file, stop)
             if video is not None and watcher.writer is None:
-                watcher.close()  # nothing watched: says so, exit 1, as without --out
+                watcher.close(stop)  # nothing watched: says so, as without --out
                 raise _NoFrameDrawn
             if video is not None:
                 check_encoded(video, watcher.drawn, args.out)
-            watcher.close()
+            watcher.close(stop)
         if args.out is not None:  # on stderr, as every "written to": stdout holds the segments
             print(f"video written to {shown(args.out)}", file=sys.stderr)
         # at the end of a watch that went well: a stream refused on the way (cut short,
@@ -705,8 +717,10 @@ class Watcher:
         except cv2.error:
             raise PosecbrError("this OpenCV has no window support: use --out video.mp4") from None
 
-    def close(self) -> None:
-        """The end of the stream: the last segment and the latency."""
+    def close(self, stop: Stop) -> None:
+        """The end of the stream: the last segment and the latency. With no segment given,
+        refused: as the stream ending (exit 1), or as the user stopping it (``stop`` set:
+        interrupted, exit 130, or 143 for SIGTERM), not blamed on the stream."""
         import numpy as np
 
         for segment in self.live.finish() if self.live is not None else []:
@@ -715,11 +729,13 @@ class Watcher:
             from cbr.segmentation import MIN_WINDOW_S
 
             seconds = f" ({self.n / self.fps:.2f} s)" if self.fps else ""
-            raise DataError(
-                f"the stream ended after {counted(self.n, 'frame')}{seconds}, before the"
-                f" shortest window ({MIN_WINDOW_S:g} s) of it was seen: no segment to give",
-                self.args.source,
+            said = (
+                f"after {counted(self.n, 'frame')}{seconds}, before the shortest window"
+                f" ({MIN_WINDOW_S:g} s) of the stream was seen: no segment to give"
             )
+            if stop.is_set():
+                raise_interrupt(stop.signum, said=f"{self.args.source}: stopped {said}")
+            raise DataError(f"the stream ended {said}", self.args.source)
         if self.latency:
             ms = np.asarray(self.latency) * 1000.0
             wall = time.perf_counter() - self.started
