@@ -62,7 +62,7 @@ def test_a_named_ts_video_is_read_as_a_video(
 
     video = _grey_ts(tmp_path / "clip.ts")
     assert load_clip(video).n_frames == 12
-    refused(["reps", str(video)], tmp_path, capsys, f"{video}: no person in view")
+    refused(["reps", str(video)], tmp_path, capsys, f"{video}: shows no person")
     source = tmp_path / "app.ts"
     source.write_text(TYPESCRIPT)
     refused(["reps", str(source)], tmp_path, capsys, f"{source}: not a video")

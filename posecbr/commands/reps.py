@@ -18,7 +18,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from features.body import check_person
 from features.fileio import check_output
 from features.text import counted, shown
 from posecbr.arguments import path_arg
@@ -51,6 +50,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from features.body import check_person
+
     check_asf(args.asf, [args.clip])
     if args.plot is not None:
         check_output(
