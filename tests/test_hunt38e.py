@@ -171,9 +171,9 @@ class _Logged(LiveSegmenter):
         super().__init__(*args, **kwargs)
         self.log: dict[tuple[int, int], np.ndarray] = {}
 
-    def _judged(self, solved: Any, start: int, stop: int, fixed: bool) -> tuple[np.ndarray, float]:
+    def _judged(self, solved: Any, start: int, stop: int) -> tuple[np.ndarray, float]:
         self.log[(start, stop)] = activity_distances(self.clf, solved, self.codes)
-        return super()._judged(solved, start, stop, fixed=fixed)
+        return super()._judged(solved, start, stop)
 
 
 def test_a_live_window_that_begins_part_way_through_a_movement_is_read_as_segment_reads_it() -> (

@@ -348,8 +348,8 @@ def test_watch_k_votes_in_a_window_as_the_classifier_votes(
     cast: list[tuple[Any, np.ndarray]] = []
     judged = LiveSegmenter._judged
 
-    def spy(self: Any, solved: Any, start: int, stop: int, fixed: bool) -> tuple[np.ndarray, float]:
-        vote, far = judged(self, solved, start, stop, fixed=fixed)
+    def spy(self: Any, solved: Any, start: int, stop: int) -> tuple[np.ndarray, float]:
+        vote, far = judged(self, solved, start, stop)
         cast.append((solved, vote))
         return vote, far
 
