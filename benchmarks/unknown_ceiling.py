@@ -41,15 +41,13 @@ windows themselves, the lowest that keeps >= 95 % of the known windows known
 where the score has one, the threshold calibrated from the case base alone (held out by
 training person: the 95 % quantile of held-out known scores) with what it keeps and calls.
 
-- ``spread-margin``: the default judge (as ``segment`` saw it before hunt 40a,
-  :func:`cbr.unknown.for_person` of each whole recording; ``segment`` now judges each window
-  by the windows that end by its own end, :func:`cbr.unknown.person_judges`): its score over
-  its nearest activity's threshold (1 = its own threshold; a window too still for every
-  case, ``cbr.segmentation.too_still``, counts as inf), its graded evidence
-  (:func:`cbr.unknown.unknown_evidence`, what ``segment`` averages over blocks) and its plain
-  decisions (:meth:`unlike`); also the blocks ``segment`` then calls unknown
-  (:func:`cbr.segmentation.finish`), to tie the windows to ``benchmarks.segment_people``'s
-  table;
+- ``spread-margin``: the default judge (as ``segment`` sees it, :func:`cbr.unknown.for_person`
+  per recording): its score over its nearest activity's threshold (1 = its own threshold;
+  a window too still for every case, ``cbr.segmentation.too_still``, counts as inf), its
+  graded evidence (:func:`cbr.unknown.unknown_evidence`, what ``segment`` averages over
+  blocks) and its plain decisions (:meth:`unlike`); also the blocks ``segment`` then calls
+  unknown (:func:`cbr.segmentation.finish`), to tie the windows to
+  ``benchmarks.segment_people``'s table;
 - ``margin`` d1/d2 (calibrated: the ``margin`` judge's pooled threshold) and ``nearest``
   d1, the distance to the nearest case;
 - peers from scikit-learn fit on the case base's own window vectors (the measure's

@@ -70,11 +70,10 @@ from .segmentation import (
     window_still,
 )
 from .unknown import (
-    PERSON_WINDOWS,
     Judge,
     activity_codes,
     default_judge,
-    person_judges,
+    for_person,
     tell_unknown,
     unknown_evidence,
 )
@@ -83,6 +82,9 @@ HOP_S = 0.5
 """The rolling label is decided every this many seconds of stream."""
 MAX_SEGMENT_S = 120.0
 """Repetitions are counted over at most the last this many seconds of a segment."""
+PERSON_WINDOWS = 1200
+"""How far the stream's person lies from every case (:func:`cbr.unknown.for_person`) is read
+from at most this many of the latest windows (10 minutes of fixed windows)."""
 MAX_UNSETTLED_S = 30.0
 """A hop the decoder has not settled after this many seconds of stream is settled on the path
 best now (the best paths into the states may never agree: when every state is equally
@@ -123,7 +125,7 @@ class LiveSegment:
 class _Judged:
     """A window the segmenter solved: frames [start, stop), its nearest activity, the
     judge's ratio, its distance to the nearest case of every activity and the judge it was
-    judged by (that of the person as seen by its end: :func:`cbr.unknown.person_judges`); still:
+    judged by (that of the person as seen by then: :func:`cbr.unknown.for_person`); still:
     it moves too little to be any activity (:func:`cbr.segmentation.too_still`)."""
 
     start: int
@@ -139,9 +141,9 @@ class _Judged:
         return 0.5 * (self.start + self.stop)
 
 
-_Window = tuple[int, int, float]
-"""A window over the stretch in progress: frames [start, stop) and its evidence of unknown,
-judged once, when it was solved."""
+_Window = tuple[int, int, float, "_Judged | None"]
+"""A window over the stretch in progress: frames [start, stop), its evidence of unknown as
+judged when it was solved, and the window as judged (None: it showed nobody)."""
 
 
 @dataclass
@@ -271,10 +273,10 @@ class LiveSegmenter:
        no window can still change their evidence (:meth:`_final_until`): a hop's evidence is
        the mean evidence of unknown (:func:`cbr.unknown.unknown_evidence`, graded by the
        default judge; with one person's case base, of the distances less how much farther
-       the person lies from every case, as the fixed windows that end by the window's own
-       end tell, :func:`cbr.unknown.person_judges`: the rule ``segment`` judges by, so a
-       window is judged once, when it is solved, as ``segment`` judges it) of the windows
-       inside its stretch over it (fixed and
+       the person lies from every case, as the windows up to then tell,
+       :func:`cbr.unknown.for_person`: each window judged again when the hop is passed, not
+       as the first windows of the stream told, which took a movement the case base lacks
+       for a far person) of the windows inside its stretch over it (fixed and
        repetition windows, those whose period disagrees with their neighbours' left out:
        :func:`cbr.segmentation.period_outliers`; a window across a change of activity is like
        neither side, whether both are known or not; over none, the last evidence carries
@@ -332,8 +334,9 @@ class LiveSegmenter:
         self.hops = 0  # hops decided
         self.cover = max(1, math.ceil(self.window / self.hop))  # windows over one stretch
         self.latest_votes: list[tuple[np.ndarray, float]] = []
-        self.windows: list[_Window] = []  # (start, stop, evidence of unknown) of the windows
-        # that start in the stretch in progress and may still count
+        self.windows: list[_Window] = []  # (start, stop, evidence of unknown as judged then,
+        # the window as judged: None when it shows nobody) of the windows that start in the
+        # stretch in progress and may still count
         self.periods: list[_Window] = []  # the same of its repetition windows
         self.period_votes: list[tuple[int, int, np.ndarray]] = []  # (start, stop, vote) of
         # the recent repetition windows not unlike every activity
@@ -369,11 +372,8 @@ class LiveSegmenter:
         self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
         self.judged: list[_Judged] = []  # the windows over the segments not yet finished
         # whose frames are kept: what explains a finished segment
-        self.near: deque[tuple[int, float]] = deque(
-            maxlen=PERSON_WINDOWS + self.span // self.hop + 1
-        )  # (end, distance to the nearest case) of the latest fixed windows at a finite
-        # distance: how far the person lies, for those and for the repetition windows that
-        # end up to a span before the last (cbr.unknown.person_judges)
+        self.near: deque[float] = deque(maxlen=PERSON_WINDOWS)  # the latest windows'
+        # distances to their nearest case: how far the person lies
         # nobody in view (a segment of its own, as offline: cbr.segmentation.nobody_blocks):
         self.nobody = self.unknown + 1  # its label seen
         self.torso = [BLAZEPOSE_33.index(j) for j in TORSO_JOINTS]
@@ -577,7 +577,7 @@ class LiveSegmenter:
     def _decide(self, n: int) -> list[LiveSegment]:
         vote = self._vote(n)
         self.latest_votes = [*self.latest_votes[1 - self.cover :], vote]
-        self.windows.append((n - self.window, n, vote[1]))
+        self.windows.append((n - self.window, n, vote[1], self._last_judged(n - self.window, n)))
         if self.hops % self.span_every == 0:  # spans end where offline's do: a window, then
             self._repetition_windows(n)  # every SPAN_HOP_S
         self.hops += 1
@@ -640,8 +640,15 @@ class LiveSegmenter:
         spans = np.array([w[:2] for w in self.periods], dtype=np.int64).reshape(-1, 2)
         odd = period_outliers(spans, np.ones(len(spans), dtype=bool), self.step)
         periods = [w for w, out in zip(self.periods, odd.tolist(), strict=True) if not out]
+        # each window judged by the person as the windows by now show them, as offline
+        # judges every window by the whole recording's (cbr.segmentation.finish)
+        judge = for_person(self.judge, np.array(self.near))
         inside = np.array(
-            [w for w in self.windows + periods if w[0] >= start and w[1] <= end]
+            [
+                (w[0], w[1], self._rejudged(w, judge))
+                for w in self.windows + periods
+                if w[0] >= start and w[1] <= end
+            ]
         ).reshape(-1, 3)
         over = (inside[None, :, 0] <= centres[:, None]) & (centres[:, None] < inside[None, :, 1])
         n_over = over.sum(axis=1)
@@ -652,6 +659,15 @@ class LiveSegmenter:
                 self.carried = float(mean[k])
             out[k] = self.carried
         return out
+
+    @staticmethod
+    def _rejudged(window: _Window, judge: Judge) -> float:
+        """``window``'s evidence of unknown by ``judge`` (:func:`cbr.unknown.unknown_evidence`;
+        1.0 when too still for any activity); as judged then when it showed nobody."""
+        one = window[3]
+        if one is None:
+            return window[2]
+        return 1.0 if one.still else unknown_evidence(judge, one.nearest)
 
     def _pass(self, until: float, end: int, final: bool = False) -> list[LiveSegment]:
         """Pass the settled hops of the stretch in progress not passed yet, up to centre
@@ -777,8 +793,8 @@ class LiveSegmenter:
             return
         solved = self.clf.solve([clip for _, clip in shown], flag=False)
         for ((b, c), _), one in zip(shown, solved, strict=True):
-            vote, far = self._judged(one, b, c, fixed=False)
-            self.periods.append((b, c, far))
+            vote, far = self._judged(one, b, c)
+            self.periods.append((b, c, far, self.judged[-1]))
             if far < 1.0:
                 self.period_votes.append((b, c, vote))
 
@@ -823,7 +839,13 @@ class LiveSegmenter:
         if torso_share(window) == 0.0:  # no person: no evidence either way
             return np.full(self.unknown, 1.0 / self.unknown), 0.5
         solved = self.clf.solve([window], flag=False)[0]
-        return self._judged(solved, n - self.window, n, fixed=True)  # the judge: unknown
+        return self._judged(solved, n - self.window, n)  # the judge: unknown
+
+    def _last_judged(self, start: int, stop: int) -> _Judged | None:
+        """The window of frames [start, stop) just judged (:meth:`_judged`), or None: it
+        showed nobody, and was not."""
+        last = self.judged[-1] if self.judged else None
+        return last if last is not None and (last.start, last.stop) == (start, stop) else None
 
     def _with_context(self, a: int, b: int) -> PoseSequence:
         """Stream frames [a, b) as a clip whose motion states keep up to a window of the
@@ -839,12 +861,11 @@ class LiveSegmenter:
         warm(whole, config.level, mirror=config.side == "canonical")
         return stretch(whole, a - first, b - first)
 
-    def _judged(self, solved: Any, start: int, stop: int, fixed: bool) -> tuple[np.ndarray, float]:
-        """A solved window's (frames [start, stop); ``fixed``: a fixed window, else a
-        repetition window) vote for its nearest case's activity ``(n_classes,)`` and its
-        evidence of unknown (:func:`cbr.unknown.unknown_evidence`, by the judge of the person
-        as the fixed windows that end by ``stop`` show them, as ``segment`` judges it:
-        :func:`cbr.unknown.person_judges`); kept to explain the segment it lies in
+    def _judged(self, solved: Any, start: int, stop: int) -> tuple[np.ndarray, float]:
+        """A solved window's (frames [start, stop)) vote for its nearest case's activity
+        ``(n_classes,)`` and its evidence of unknown (:func:`cbr.unknown.unknown_evidence`, by
+        the judge of the person as the windows so far show them:
+        :func:`cbr.unknown.for_person`); kept to explain the segment it lies in
         (:meth:`_explain`)."""
         # its k nearest cases' votes, as the classifier votes and as offline
         # (cbr.segmentation.votes_as); k = 1: its nearest case's activity alone
@@ -853,10 +874,9 @@ class LiveSegmenter:
         vote = np.asarray(votes_as(self.clf, distances[None], self.codes[nearest_k][None])[0])
         activity = int(np.argmax(vote))
         nearest = activity_distances(self.clf, solved, self.codes)
-        if fixed and np.isfinite(np.min(nearest)):
-            self.near.append((stop, float(np.min(nearest))))
-        ends, near = np.array([e for e, _ in self.near]), np.array([d for _, d in self.near])
-        judge = person_judges(self.judge, near, ends, np.array([stop]))[0]
+        if np.isfinite(np.min(nearest)):
+            self.near.append(float(np.min(nearest)))
+        judge = for_person(self.judge, np.array(self.near))
         # as offline (cbr.segmentation._solve_distinct): too still for any activity, unknown
         still = window_still(solved, self.movement, self.least)
         self.judged.append(

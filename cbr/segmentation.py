@@ -33,9 +33,7 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    between its two nearest activities against the nearest one's own threshold, calibrated on
    the case base; graded between the budget's threshold and the judge's own,
    :func:`cbr.unknown.unknown_evidence`; with one person's case base, of the distances less
-   how much farther the recording's person lies from every case as the fixed windows that
-   end by the window's own end show them, :func:`cbr.unknown.person_judges`, as ``watch``
-   judges it),
+   how much farther the recording's person lies from every case, :func:`cbr.unknown.for_person`),
    and known/unknown is
    decoded from the windows that lie within one decoded activity (a window across a change
    of activity is like neither side, whether both are known or not; a block none of them
@@ -90,8 +88,8 @@ from .unknown import (
     Margin,
     activity_codes,
     default_judge,
+    for_person,
     per_activity,
-    person_judges,
     tell_unknown,
     unknown_evidence,
 )
@@ -229,15 +227,10 @@ class _Solved:
     repetition: bool = False
     piece: tuple[int, int] | None = None  # in pieces: solved is None, solved again from these
     still: bool = False  # moves too little to be any activity of the case base (too_still)
-    judge: Judge | None = None  # what judges it: the person as seen by its end (finish)
 
     @property
     def centre(self) -> float:
         return 0.5 * (self.start + self.stop)
-
-    def judged_by(self, judge: Judge) -> Judge:
-        """Its own judge (:func:`cbr.unknown.person_judges`), ``judge`` when it has none."""
-        return judge if self.judge is None else self.judge
 
 
 @dataclass(frozen=True)
@@ -812,8 +805,7 @@ def unknown_shares(
     if not judged:
         return np.zeros(len(path))
     evidence = np.array(
-        [1.0 if w.still else unknown_evidence(w.judged_by(judge), w.nearest) for w in judged],
-        dtype=np.float64,
+        [1.0 if w.still else unknown_evidence(judge, w.nearest) for w in judged], dtype=np.float64
     )
     return block_evidence(judged, evidence, n_frames, fps)
 
@@ -842,12 +834,12 @@ def _explain_segment(
     n_classes = len(clf.classes_)
     if not inside:
         return "", float("nan")
-    ratio = float(np.median([w.judged_by(judge).ratio(w.nearest) for w in inside]))
+    ratio = float(np.median([judge.ratio(w.nearest) for w in inside]))
     if state == n_classes and sum(w.still for w in inside) > len(inside) / 2:
         return STILL_TEXT, ratio
     if state == n_classes:
         return tell_unknown(
-            [(w.judged_by(judge), w.nearest) for w in inside], [str(c) for c in clf.classes_]
+            [(judge, w.nearest) for w in inside], [str(c) for c in clf.classes_]
         ), ratio
     w = max(inside, key=lambda s: s.vote[state])
     return told(clf, _solved(clf, rec, w, pieces), str(clf.classes_[state])), ratio
@@ -1418,20 +1410,12 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     """Steps 4-7 of the module docstring: the activities of ``done`` (:func:`solve_recording`
     with ``clf``) decoded from the windows ``judge`` finds like an activity
     (:func:`decode_activities`), the stretches unlike every activity of the case base made
-    unknown, and every segment counted and explained. Every window is judged by the
-    recording's person as the fixed windows that end by its own end show them
-    (:func:`cbr.unknown.person_judges`, as ``watch`` judges it when it is solved)."""
-    rec, n_classes = done.rec, len(clf.classes_)
-    fixed = [w for w in done.windows if not w.repetition]
-    judges = person_judges(
-        judge,
-        np.array([np.min(w.nearest) for w in fixed]),
-        np.array([w.stop for w in fixed]),
-        np.array([w.stop for w in done.windows]),
-    )
-    solved = [replace(w, judge=j) for w, j in zip(done.windows, judges, strict=True)]
+    unknown, and every segment counted and explained. The judge sees the recording's person
+    (:func:`cbr.unknown.for_person`, from the windows but the period outliers)."""
+    rec, solved, n_classes = done.rec, list(done.windows), len(clf.classes_)
     counted = [w for w, out in zip(solved, done.outliers.tolist(), strict=True) if not out]
-    unlike = np.array([w.still or w.judged_by(judge).unlike(w.nearest) for w in solved])
+    judge = for_person(judge, np.array([np.min(w.nearest) for w in counted]))
+    unlike = np.array([w.still or judge.unlike(w.nearest) for w in solved], dtype=bool)
     votes, path = decode_activities(solved, done.outliers, unlike, rec.n_frames, rec.fps,
                                     n_classes)  # fmt: skip
     evidence = within_runs(solved, rec.fps, path).tolist()

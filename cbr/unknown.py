@@ -42,10 +42,8 @@ The judges, each calibrated on the case base itself, never on what is being segm
 - With a case base of one person (held out by recording or by time, not by person), the two
   margin judges also have a floor (:func:`one_person_floor`) and see each recording's
   distances less how much farther its person lies from every case than the case base's own
-  held-out cases (:func:`for_person`, :class:`Offset`; each window by the windows that end by
-  its own end, in ``segment`` and ``watch`` alike: :func:`person_judges`): a threshold read
-  from one person cannot know how far the next one lies, but the recording's nearest
-  windows can tell.
+  held-out cases (:func:`for_person`, :class:`Offset`): a threshold read from one person
+  cannot know how far the next one lies, but the recording's nearest windows can tell.
 - :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
   score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
   case lies farther than held-out training clips nearly ever do.
@@ -692,37 +690,6 @@ def for_person(judge: Judge, nearest: np.ndarray) -> Judge:
     return Offset(judge, person_offset(nearest, judge.reach))
 
 
-PERSON_WINDOWS = 1200
-"""How far a recording's person lies from every case is read from at most this many of the
-latest fixed windows (10 minutes at one every half second): :func:`person_judges`."""
-
-
-def person_judges(
-    judge: Judge, nearest: np.ndarray, ends: np.ndarray, until: np.ndarray
-) -> list[Judge]:
-    """The judge of every window (:func:`for_person`), the one rule ``segment`` and ``watch``
-    share: window ``i`` is judged by the person as the fixed windows that end by frame
-    ``until[i]`` (its own end) show them, at most the latest :data:`PERSON_WINDOWS` of those
-    whose distance is finite; ``nearest`` ``(m,)``: the fixed windows' distances to their
-    nearest case, ``ends`` ``(m,)``: the frames they end at. What a stream has seen when a
-    window is solved, so the live decoder judges every window as ``segment`` does, and never
-    again (before, ``segment`` read the whole recording and ``watch`` judged each window again
-    by the windows seen when its hop was decided: a recording's first windows could be known
-    to one and unknown to the other). Any judge but a margin judge with a ``reach`` is
-    every window's as it is."""
-    if not isinstance(judge, Margin | ActivityMargin) or math.isinf(judge.reach):
-        return [judge] * len(until)
-    d, e = np.asarray(nearest, dtype=np.float64), np.asarray(ends, dtype=np.float64)
-    finite = np.isfinite(d)
-    order = np.argsort(e[finite], kind="stable")
-    d, e = d[finite][order], e[finite][order]
-    seen = np.searchsorted(e, np.asarray(until, dtype=np.float64), side="right")
-    made: dict[int, Judge] = {}
-    for k in np.unique(seen).tolist():  # over the fixed windows' ends: one judge each
-        made[k] = Offset(judge, person_offset(d[max(0, k - PERSON_WINDOWS) : k], judge.reach))
-    return [made[k] for k in seen.tolist()]
-
-
 def activity_thresholds(
     margins: np.ndarray, activities: np.ndarray, n_classes: int, rate: float, prior: float
 ) -> tuple[np.ndarray, float]:
@@ -1158,7 +1125,7 @@ class SpreadFar(SpreadMargin):
     held-out known case lies is unlike them, however clearly nearer one activity than the
     next (a margin judge sees only the ratio). With a case base of one person the bound is
     read the same way and the judge, as :class:`ActivityMargin`, sees the distances less the
-    person offset (:func:`person_judges`): the bound is compared with those. ``far`` inf (the
+    person offset (:func:`for_person`): the bound is compared with those. ``far`` inf (the
     judge is :class:`SpreadMargin`) in a record without it or when no held-out case is
     known."""
 
@@ -1503,8 +1470,6 @@ __all__ = [
     "MarginDistance",
     "Offset",
     "PERSON_PRIOR",
-    "PERSON_WINDOWS",
-    "person_judges",
     "PERSON_QUANTILE",
     "for_person",
     "person_offset",
