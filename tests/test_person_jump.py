@@ -133,10 +133,10 @@ def test_reps_counts_apart_on_either_side_of_the_jump(
     # read as one clip, the two people's postures made an alternating movement of 0.56 s
     assert not doc["alternating"]
     # The lunge's one slow repetition (lowest 1.5-3.6 s: frames 38-90, back up by 5-6 s) is
-    # not asserted counted: whether her last frames before leaving at 5.0 s read near enough
-    # the start to close a repetition moved with onnxruntime 1.32 and OpenCV 5.1 (counted 1
-    # before, 0 since, "part-way"; 1 again since the track starts from a settled region,
-    # which reads her first frames' knees as at full size, not bent to 60-100 degrees).
+    # not asserted counted: the pose model reads this half-size woman's knees bent (71-75
+    # degrees, 144 at full size) in the clip's first frames, and whether her last frames
+    # before leaving at 5.0 s read near enough the start to close a repetition moved with
+    # onnxruntime 1.32 and OpenCV 5.1 (counted 1 before, 0 since, "part-way").
 
 
 @pytest.fixture(scope="module")

@@ -31,10 +31,6 @@ NUM_POSE = 33
 HEATMAP_KERNEL = 9
 MIN_HEATMAP_CONFIDENCE = 0.5
 ROI_SCALE = 1.25
-HEATMAP_SIZE = 64
-# Passes of the landmark model on a detection's frame at most (each ~10-20 ms of CPU): a ROI
-# tilted by 70 degrees took 11 to settle; a detection that is good settles in one or two.
-MAX_SETTLE_PASSES = 16
 
 
 @dataclass(frozen=True)
@@ -72,18 +68,6 @@ def roi_from_points(p0: np.ndarray, p1: np.ndarray) -> Roi:
     rotation = _normalize_radians(math.pi / 2.0 - math.atan2(-dy, dx))
     size = 2.0 * math.hypot(dx, dy) * ROI_SCALE
     return Roi(float(p0[0]), float(p0[1]), size, rotation)
-
-
-def settled(old: Roi, new: Roi) -> bool:
-    """``new`` within what the landmark model resolves of ``old``: centre and side moved, and
-    the crop's edge midpoints turned, by less than one heatmap cell (1/64 of the side)."""
-    cell = old.size / HEATMAP_SIZE
-    turn = abs(_normalize_radians(new.rotation - old.rotation)) * old.size / 2.0
-    return bool(
-        math.hypot(new.cx - old.cx, new.cy - old.cy) < cell
-        and abs(new.size - old.size) < cell
-        and turn < cell
-    )
 
 
 @lru_cache(maxsize=4)

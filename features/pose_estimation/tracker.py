@@ -9,11 +9,6 @@
    auxiliary landmarks when tracking). If its person probability drops below
    ``min_tracking_confidence`` the track is dropped and the detector runs again on the SAME
    frame (MediaPipe waits for the next frame; re-detecting at once loses fewer frames).
-   When tracking, a detection's ROI is settled on its own frame before the track starts:
-   the landmark model runs again on the ROI its auxiliary landmarks give until that ROI
-   moves by less than one heatmap cell (MediaPipe starts the track from the detection's ROI,
-   which for a small person can be tilted and too large: the first second then reads a body
-   tilted and bent, see :meth:`PoseEstimator.settled_landmarks`).
 3. Smoothing (``smoothing=True``): One Euro filters on image landmarks, world landmarks and
    the ROI's auxiliary landmarks and a low-pass on visibility, with MediaPipe's parameters
    (:mod:`features.pose_estimation.smoothing`). Filters restart after a frame with no person.
@@ -143,30 +138,6 @@ class PoseEstimator:
         outs = self._landmarker.run(self._lm_out, {self._lm_in: tensor})
         return lmk.decode(outs[0], outs[1], outs[2], outs[3], roi)
 
-    def settled_landmarks(self, rgb: np.ndarray, roi: lmk.Roi) -> lmk.RawLandmarks:
-        """The landmark model on a detection's ``roi``, then on the ROI its own auxiliary
-        landmarks give, again, until that ROI stops moving (:func:`landmarks.settled`).
-
-        A detection's alignment points are coarse for a small person (the detector sees the
-        whole frame at 224 x 224): its ROI may be tilted and too large, and the landmark model
-        run on such a crop reads a body tilted and bent the crop's way. The tracking loop would
-        correct it frame by frame, slowed by the heavily smoothed auxiliary landmarks (about a
-        second, on a still picture too); here it is done on the detection's own frame.
-        Only a detection the landmark model confirms (person probability from
-        ``min_tracking_confidence``) is settled, and a pass whose probability falls below it
-        is not taken: settling finds no person the model did not see in the detection's ROI.
-        """
-        raw = self.landmarks(rgb, roi)
-        for _ in range(lmk.MAX_SETTLE_PASSES if raw.flag >= self.min_tracking_confidence else 0):
-            nxt = lmk.roi_from_points(raw.image[NUM_POSE, :2], raw.image[NUM_POSE + 1, :2])
-            if lmk.settled(roi, nxt):
-                break
-            again = self.landmarks(rgb, nxt)
-            if again.flag < self.min_tracking_confidence:
-                break
-            roi, raw = nxt, again
-        return raw
-
     def _pick(self, found: list[det.Detection]) -> det.Detection | None:
         if not found:
             return None
@@ -194,12 +165,7 @@ class PoseEstimator:
             detected = True
             best = self._pick(self.detect(rgb))
             if best is not None:
-                roi = lmk.roi_from_points(best.keypoints[0], best.keypoints[1])
-                # tracking: the track starts from the settled ROI; detector every frame:
-                # MediaPipe's static image mode, as it is
-                raw = (
-                    self.settled_landmarks(rgb, roi) if self.tracking else self.landmarks(rgb, roi)
-                )
+                raw = self.landmarks(rgb, lmk.roi_from_points(best.keypoints[0], best.keypoints[1]))
                 score = raw.flag
                 if raw.flag < self.min_tracking_confidence:
                     raw = None
