@@ -72,7 +72,8 @@ class TrainResult:
     n_active: int
     label_counts: dict[str, int]
     config: FeatureConfig
-    similarity: str
+    #: the similarity measure as stored with the case base (:meth:`SimilarityMeasure.params`)
+    similarity: dict[str, Any]
     maintenance: MaintenanceReport | None
     learned: dict[str, Any]
     skipped: list[str] = field(default_factory=list)
@@ -620,7 +621,7 @@ def _fitted_result(
         len(fitted.case_base_),
         _counts([str(v) for v in fitted.case_base_.labels]),  # its cases, as counted above
         fitted.feature_config_,
-        fitted.measure_.name,
+        fitted.measure_.params(),
         fitted.maintenance_,
         _learned(fitted),
         list(skipped),
@@ -874,7 +875,7 @@ def _appended_result(
     too_short: Sequence[str],
 ) -> TrainResult:
     return TrainResult(
-        name, len(cb), total, _counts([str(v) for v in cb.labels]), cb.config, cb.measure.name,
+        name, len(cb), total, _counts([str(v) for v in cb.labels]), cb.config, cb.measure.params(),
         None, {}, list(skipped), list(too_short),
         indistinct=same_features(cb), new_labels=sorted(set(text) - set(plan.known)),
     )  # fmt: skip

@@ -1133,7 +1133,7 @@ def _summary(args: argparse.Namespace, result: Any) -> dict[str, Any]:
         "active_cases": result.n_active,
         "split": args.split,  # what a case is: a clip, a repetition or a window
         "labels": result.label_counts,
-        "features": result.config.describe(),
+        "features": result.config.to_dict(),  # as casebase info --json gives them
         "similarity": result.similarity,
         "learned": result.learned,
         "skipped": result.skipped + result.too_short,
@@ -1171,7 +1171,7 @@ def _report(args: argparse.Namespace, result: Any) -> None:
         f"case base {shown(repr(result.name))} in {shown(summary['db'])}: {result.n_active} cases"
         f" {made}"
     )
-    print(f"  features: {result.config.describe()}; similarity: {result.similarity}")
+    print(f"  features: {result.config.describe()}; similarity: {result.similarity['name']}")
     learned = result.learned
     if learned:
         chosen = f"  side handling: {learned['side']}; feature weights: "
