@@ -331,6 +331,13 @@ def no_person(seq: PoseSequence) -> str:
     return "shows no person (no frame with a torso)"
 
 
+def torso_missing(seq: PoseSequence) -> list[str]:
+    """The :data:`TORSO_JOINTS` of ``seq`` missing in every frame (a skeleton without hips,
+    a pose model that never found the shoulders), in order."""
+    seen = np.isfinite(seq.to_canonical().joints(TORSO_JOINTS)).all(axis=-1).any(axis=0)
+    return [j for j, s in zip(TORSO_JOINTS, seen, strict=True) if not s]
+
+
 def check_person(seq: PoseSequence, nothing_to: str) -> None:
     """Refuse ``seq`` (a DataError naming its source) when no frame of it shows the person:
     the torso, without which no angle or position has a body frame (:func:`torso_share` 0;

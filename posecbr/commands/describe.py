@@ -21,6 +21,8 @@ from posecbr.recordings import (
 )
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from features.fluents import Backend, FluentResult
     from features.poses import PoseSequence
     from features.timeline import Run, Timeline
@@ -32,7 +34,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="describe a pose file's posture in words, in spans of frames or frame by frame",
         description="Print when each fluent state holds (confidence >= --min-confidence): "
         "spans of frames in order of their start, states with the same span on one line; or "
-        "frame by frame.",
+        "frame by frame. A fluent whose joints the clip lacks in every frame is listed as "
+        "unavailable. A clip no frame of which shows the torso (both shoulders and both hips, "
+        "which place the body frame) is described by the states that need none (an elbow, "
+        "a knee without the shoulders, near pairs), after a line naming the torso joints "
+        'missing (--json: "no_torso", null when it is seen); one of which nothing can be '
+        "described, or at micrometre scale (not metres), is refused.",
     )
     p.add_argument("posefile", type=path_arg, help="pose file (.npz) or a clip the loaders read")
     add_recording_options(p)  # as reps and segment read an AMC file or a rate given
@@ -131,6 +138,32 @@ def _header(args: argparse.Namespace, seq: PoseSequence) -> None:
           f" ({seq.duration_s:.1f} s){label}; each state with its confidence, 0-1")  # fmt: skip
 
 
+def _missing_torso(seq: PoseSequence, where: Path) -> str | None:
+    """None when some frame of ``seq`` shows the torso; else the torso joints it lacks in
+    every frame, in words ("left hip, right hip"): what needs no body frame (an elbow, a knee
+    without its shoulders, the near pairs) is still described, as the SPEC has a fluent
+    whose joints a skeleton lacks reported unavailable, the others kept. A clip with every
+    torso joint seen but no torso (at micrometre scale, or the four never in one frame) is
+    refused as ``reps`` and ``segment`` refuse it: its states would be wrong, not missing."""
+    from features.body import no_person, torso_missing, torso_share
+
+    if torso_share(seq) > 0.0:
+        return None
+    gone = torso_missing(seq)
+    if not gone:
+        raise DataError(f"{no_person(seq)}: nothing to describe", where)
+    return ", ".join(j.replace("_", " ") for j in gone)
+
+
+def _no_torso_line(missing: str) -> str:
+    """The line saying what a clip without a torso is described by (``missing``: the torso
+    joints it lacks, :func:`_missing_torso`)."""
+    return (
+        f"no torso ({missing} missing in every frame): no body frame, so only the states that"
+        " need none are described (classify, reps and segment refuse the clip)"
+    )
+
+
 def _unavailable_line(missing: list[str]) -> str:
     near = [m for m in missing if m.startswith("near:")]
     other = [m.replace("_", " ") for m in missing if not m.startswith("near:")]
@@ -181,6 +214,7 @@ def run(args: argparse.Namespace) -> int:
             "shows no person (every joint missing in every frame): nothing to describe",
             args.posefile,
         )
+    missing = _missing_torso(seq, args.posefile)
     backend: Backend = "numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba"
     spool = None
     if args.per_frame:  # the state names and words, from the first frame
@@ -191,14 +225,21 @@ def run(args: argparse.Namespace) -> int:
     tl = describe_clip(
         seq, table, args.min_confidence, min_run, args.all, per_frame=spool, backend=backend
     )
+    if missing is not None and len(tl.unavailable()) == len(table.specs):
+        raise DataError(
+            f"shows no person ({missing} missing in every frame): nothing to describe",
+            args.posefile,
+        )
     if args.plot:
         plot_timeline(tl, args.plot, args.min_confidence, title=args.posefile.name)
         # on stderr, as every command's "written to": stdout holds only the answer (--json)
         print(f"timeline written to {shown(args.plot)}", file=sys.stderr)
     if args.json:
-        _print_json(args, seq, tl, spool)
+        _print_json(args, seq, tl, spool, missing)
         return 0
     _header(args, seq)
+    if missing is not None:
+        print(_no_torso_line(missing))
     if tl.unavailable():
         print(_unavailable_line(tl.unavailable()))
     if spool is not None:
@@ -209,7 +250,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print_json(
-    args: argparse.Namespace, seq: PoseSequence, tl: Timeline, spool: _Spool | None
+    args: argparse.Namespace,
+    seq: PoseSequence,
+    tl: Timeline,
+    spool: _Spool | None,
+    missing: str | None,
 ) -> None:
     from features.timeline import runs_to_json
 
@@ -220,6 +265,8 @@ def _print_json(
         "frames": seq.n_frames,
         "min_confidence": args.min_confidence,
         "unavailable": tl.unavailable(),
+        # null, or the torso joints missing in every frame: only what needs no body frame
+        "no_torso": missing,
         "runs": runs_to_json(tl.runs, seq.fps),
     }
     if args.plot:
