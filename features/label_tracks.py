@@ -329,7 +329,10 @@ def frame_labels(
     one more label is accepted when the frames fill the last block exactly (a label for the
     recording's end time as well as its start: the cmu-mocap6 label files were made that
     way), so a file of one label per frame may hold one more than there are frames, and no
-    more. Otherwise DataError naming the file (and ``recording``, the name of the recording
+    more. Labels are per time: they must reach the last frame's time, not the end of its
+    frame, so a recording thinned below one frame per block (CMU at 2 fps, 0.1-s labels made
+    at 120 fps) takes the labels of its whole length, whose end lies within its last frame's
+    time. Otherwise DataError naming the file (and ``recording``, the name of the recording
     it was given for, when known: one label file may be named for several): a different
     count means another frame rate or block length, and labels would land on the wrong
     frames."""
@@ -374,8 +377,14 @@ def _fitting(
             f" {fps:g} fps (more blocks than can be counted)",
             where,
         )
-    # a recording of any frames needs a label, however long the block
-    low = max(int(np.ceil(blocks - 1e-9)), min(n_frames, 1))
+    # labels are per time: they must reach the last frame's time ((n - 1) / fps), which at a
+    # rate below one frame per block (a recording thinned to 2 fps, 0.1-s labels) lies up to
+    # a frame's time before the frames' end (n / fps): a label file made at the full rate
+    # ends between the two. With a whole number of frames a block (one label per frame,
+    # 0.1 s at 30 or 120 fps) this is ceil(n / per_block), as before; with 2.5 (25 fps) it
+    # may be one fewer. A recording of any frames needs a label, however long the block.
+    last = (n_frames - 1) / per_block
+    low = max(int(np.floor(last + 1e-9)) + 1, min(n_frames, 1)) if n_frames else 0
     high = int(np.floor(blocks + 1e-9)) + 1
     return low, high
 
@@ -391,7 +400,9 @@ def _not_fitting(
     """Why ``n_labels`` labels do not fit ``n_frames`` frames at ``fps``, naming ``where``."""
     low, high = _fitting(n_frames, fps, block_s, where)
     unit = "frame" if block_s is None else f"{block_s:g} s"
-    need = str(low) if low == high else f"{low} or {high}"
+    need = (
+        str(low) if low == high else f"{low} or {high}" if high == low + 1 else f"{low} to {high}"
+    )
     return DataError(
         f"{counted(n_labels, 'label')} (one per {unit})"
         f" {'does' if n_labels == 1 else 'do'} not fit the recording"

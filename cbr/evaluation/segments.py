@@ -3,7 +3,9 @@
 
 - :func:`truth_blocks`: the true label of every :data:`cbr.segmentation.BLOCK_S` block, from
   one label per frame (a block's label is that of its first frame, as a label file's blocks
-  are read);
+  are read, or below 10 fps, where a block may hold no frame, that of the frame before it);
+- :func:`label_blocks`: the same from one label per fixed time (``--label-block``), read at
+  each block's time whatever the recording's frame rate;
 - :func:`score_segmentation`: the figures: the share of blocks of labels the case base has
   that got their label (a block called unknown counts wrong), the share of blocks of labels
   it lacks that were called unknown, and each labelled change's distance to the nearest
@@ -13,7 +15,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,8 +30,30 @@ def truth_blocks(per_frame: np.ndarray, fps: float, block_s: float) -> np.ndarra
     lies in it), as many blocks as :func:`cbr.segmentation.segment` gives."""
     per_block = fps * block_s
     n_blocks = int(math.ceil(len(per_frame) / per_block - 1e-9))
-    first = np.ceil(np.arange(n_blocks) * per_block - 1e-9).astype(np.int64)
-    out: np.ndarray = np.asarray(per_frame, dtype=object)[np.minimum(first, len(per_frame) - 1)]
+    start = np.arange(n_blocks) * per_block  # each block's start, in frames
+    first = np.ceil(start - 1e-9)
+    # below 10 fps a block may hold no frame: the frame before it holds its time
+    first = np.where(first < start + per_block - 1e-9, first, np.floor(start + 1e-9))
+    index = np.minimum(first.astype(np.int64), len(per_frame) - 1)
+    out: np.ndarray = np.asarray(per_frame, dtype=object)[index]
+    return out
+
+
+def label_blocks(
+    labels: Sequence[str], label_s: float, n_frames: int, fps: float, block_s: float
+) -> np.ndarray:
+    """``(n_blocks,)``: the label of each ``block_s`` block of a recording of ``n_frames`` at
+    ``fps`` from one label per ``label_s`` seconds (``labels``, checked to fit it:
+    :func:`features.label_tracks.frame_labels`): the one whose time holds the block's start.
+    Labels are per time, so a recording thinned to 2 fps is scored on the same blocks as at
+    120 fps, not on the blocks its frames fall in; as many blocks as
+    :func:`cbr.segmentation.segment` gives, but none past the labels' end (at a low rate the
+    last frame's time may lie up to a frame before the frames' end)."""
+    n_blocks = int(math.ceil(n_frames / (fps * block_s) - 1e-9))
+    labelled = int(math.ceil(len(labels) * label_s / block_s - 1e-9))
+    starts = np.arange(min(n_blocks, labelled)) * block_s
+    index = np.minimum(np.floor(starts / label_s + 1e-9).astype(np.int64), len(labels) - 1)
+    out: np.ndarray = np.asarray(labels, dtype=object)[index]
     return out
 
 

@@ -23,11 +23,15 @@ the current activity and its repetition count on every frame (as ``extract --ove
 recording, in order: ``--truth a.txt b.txt``, or ``--truth`` once per file; a file named as
 a recording after it, ``.npz``, ``.bvh``, ``.amc`` or a video, is a recording), read as
 ``train --frame-labels`` reads one (one label per frame, or per ``--label-block`` seconds,
-codes named by ``--label-names``), over its 0.1-s blocks: the share of blocks of activities
-the case base has that got their label (a block called unknown counts wrong), the share of
-blocks of labels it lacks that were called unknown, and each labelled
-change's distance to the nearest segment boundary (median), as ``python -m benchmarks.segment``
-scores them (:func:`cbr.evaluation.segments.score_segmentation`). ``--json`` gives them as
+codes named by ``--label-names``), over its 0.1-s blocks. Labels of ``--label-block`` seconds
+are per time: each block takes the label at its own time, so a recording thinned to a few
+frames a second (``--fps 2``) is scored on the same blocks as at its full rate, the labels
+fitting it when they reach its last frame's time (a file cut short is refused). The figures:
+the share of blocks of activities the case base has that got their label (a block called
+unknown counts wrong), the share of blocks of labels it lacks that were called unknown, and
+each labelled change's distance to the nearest segment boundary (median), as ``python -m
+benchmarks.segment`` scores them (:func:`cbr.evaluation.segments.score_segmentation`).
+``--json`` gives them as
 ``"scores": {"truth", "blocks", "block_s", "seen_blocks", "seen_right", "seen_accuracy",
 "unseen_labels", "unseen_blocks", "unseen_called_unknown", "unseen_unknown_share",
 "blocks_called_unknown", "boundary_errors_s", "median_boundary_error_s"}`` (a share of no
@@ -130,7 +134,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--label-block",
         type=float,
         metavar="SECONDS",
-        help="seconds per label of --truth (default: one label per frame)",
+        help="seconds per label of --truth (default: one label per frame); labels per time fit"
+        " the recording at any frame rate (thinned to 2 fps, --fps 2)",
     )
     p.add_argument(
         "--label-names", type=path_arg, metavar="FILE", help="'code name' per line, for --truth"
@@ -273,7 +278,7 @@ def _fitted_truths(
     before any recording is segmented."""
     if labels is None:
         return [None] * len(recs)
-    from cbr.evaluation.segments import truth_blocks
+    from cbr.evaluation.segments import label_blocks, truth_blocks
     from cbr.segmentation import BLOCK_S
     from features.label_tracks import frame_labels
 
@@ -282,7 +287,10 @@ def _fitted_truths(
         per_frame = frame_labels(
             track, rec.n_frames, rec.fps, args.label_block, path, recording=shown(recording)
         )
-        out.append(truth_blocks(per_frame, rec.fps, BLOCK_S))
+        if args.label_block is None:  # one label per frame
+            out.append(truth_blocks(per_frame, rec.fps, BLOCK_S))
+        else:  # one per time: read at each block's time, whatever the frame rate
+            out.append(label_blocks(track, args.label_block, rec.n_frames, rec.fps, BLOCK_S))
     return out
 
 
