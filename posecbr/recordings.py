@@ -32,8 +32,10 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--fps",
         type=float,
-        help="frame rate of the recording, frames per second (default: the file's; an AMC file"
-        " carries none: the rate its HDM05 name states, else 120)",
+        help="frame rate of the recording, frames per second: the rate its frames were taken"
+        " at, not a resampling (a recording thinned to every 60th frame of 120 fps: --fps 2;"
+        " default: the file's; an AMC file carries none: the rate its HDM05 name states, else"
+        " 120)",
     )
 
 

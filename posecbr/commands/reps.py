@@ -3,11 +3,16 @@ repetition starts and ends (:mod:`features.repetitions`).
 
 A repetition is one excursion from the rest posture to the far point of the movement and back
 (a squat: down and up); a movement that alternates sides (knee raises, twists, jogging steps)
-has one repetition per side. ``--json`` gives ``{"clip", "fps", "count", "repetitions":
-[{"start_frame", "end_frame", "start_s", "end_s", "peak_frame", "side"}], ...}`` (end frames
-exclusive; ``"partial": true`` when no repetition is whole but part of one is there, which
-does not count: a clip of the way down of a squat counts 0, with a note on stderr);
-``--plot`` draws the repetitions over the clip's fluent timeline.
+has one repetition per side. ``--json`` gives ``{"clip", "fps", "frames", "count",
+"repetitions": [{"start_frame", "end_frame", "start_s", "end_s", "peak_frame", "side"}],
+"period_s", "periodicity", "alternating", "moving", "partial"}`` (end frames exclusive;
+``"partial": true`` when no repetition is whole but part of one is there, which does not
+count: a clip of the way down of a squat counts 0, with a note on stderr); ``--plot`` draws
+the repetitions over the clip's fluent timeline.
+
+A clip no frame of which shows the person (the torso: both shoulders and both hips) is
+refused, as ``segment`` refuses it; below 5 fps a note on stderr says that a movement
+repeating within two frames is not followed (its repetitions may be miscounted).
 """
 
 from __future__ import annotations
