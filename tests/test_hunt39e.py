@@ -132,24 +132,35 @@ def test_upgrade_refusing_a_newer_store_in_wal_mode_leaves_it_byte_identical(
     assert _md5(db) == before and sorted(p.name for p in folder.iterdir()) == ["old.sqlite"]
 
 
+def _current_wal(trained: Path, folder: Path) -> Path:
+    """A copy of the current store ``trained`` in ``folder`` (made), put in WAL mode."""
+    folder.mkdir()
+    db = folder / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    return _wal(db)
+
+
+def _copied_as_other(argv: list[str], db: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``argv``, a ``casebase copy --to db`` refused for the name taken, run again ``--as
+    other``: made and said, ``db`` converted to a rollback journal, nothing left beside it."""
+    assert main([*argv, "--as", "other"]) == 0
+    assert "as 'other'" in capsys.readouterr().out
+    assert _header_modes(db) == b"\x01\x01"
+    assert sorted(p.name for p in db.parent.iterdir()) == [db.name]
+
+
 def test_a_copy_refused_for_a_name_taken_leaves_a_current_store_in_wal_mode_as_it_was(
     trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # before: the copy converted the file to a rollback journal, then found 'default' there
     folder = tmp_path / "to"
-    folder.mkdir()
-    db = folder / "cb.sqlite"
-    db.write_bytes(trained.read_bytes())
-    _wal(db)
+    db = _current_wal(trained, folder)
     before = _md5(db)
     argv = ["casebase", "copy", "--db", str(trained), "--to", str(db)]
     refused(argv, folder, capsys, "a case base named 'default' is here already")
     assert _md5(db) == before and _header_modes(db) == b"\x02\x02"
     # a copy that is made converts it (readers then need no side files), and says nothing
-    assert main([*argv, "--as", "other"]) == 0
-    assert "as 'other'" in capsys.readouterr().out
-    assert _header_modes(db) == b"\x01\x01"
-    assert sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]
+    _copied_as_other(argv, db, capsys)
     before = snapshot(folder)
     assert main(["classify", str(CLIP), "--db", str(db), "--name", "other"]) == 0
     assert snapshot(folder) == before
@@ -229,18 +240,13 @@ def test_a_copy_refused_for_a_name_taken_keeps_a_current_stores_changes_in_its_w
 ) -> None:
     # before: the refused copy's close checkpointed cb.sqlite (its bytes changed, -wal and
     # -shm deleted)
-    folder = tmp_path / "to"
-    folder.mkdir()
-    db = folder / "cb.sqlite"
-    db.write_bytes(trained.read_bytes())
-    md5 = _changes_in_wal(_wal(db), shm=True)
+    db = _current_wal(trained, tmp_path / "to")
+    md5 = _changes_in_wal(db, shm=True)
     argv = ["casebase", "copy", "--db", str(trained), "--to", str(db)]
     _refused_keeping_the_wal(argv, db, md5, capsys, "a case base named 'default' is here")
     # a copy that is made commits, then converts the file with the change in it
-    assert main([*argv, "--as", "other"]) == 0
-    assert "as 'other'" in capsys.readouterr().out
-    assert _label_of_case_1(db) == "relabelled" and _header_modes(db) == b"\x01\x01"
-    assert sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]
+    _copied_as_other(argv, db, capsys)
+    assert _label_of_case_1(db) == "relabelled"
 
 
 def test_upgrade_refusing_a_newer_store_keeps_the_changes_in_its_wal(
@@ -259,10 +265,7 @@ def test_a_reader_of_a_current_store_in_wal_mode_writes_nothing(
     trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], which: int
 ) -> None:
     folder = tmp_path / "cb"
-    folder.mkdir()
-    db = folder / "cb.sqlite"
-    db.write_bytes(trained.read_bytes())
-    _wal(db)
+    db = _current_wal(trained, folder)
     before = _md5(db)
     argv = [
         ["classify", str(CLIP), "--db", str(db)],
@@ -539,10 +542,7 @@ def test_upgrade_that_cannot_leave_wal_mode_says_so(
     monkeypatch.setattr(casebase_store, "upgrade_store",
                         functools.partial(casebase_store.upgrade_store, timeout_s=0.3))  # fmt: skip
     folder = tmp_path / "cb"
-    folder.mkdir()
-    db = folder / "cb.sqlite"
-    db.write_bytes(trained.read_bytes())
-    _wal(db)
+    db = _current_wal(trained, folder)
     holder = sqlite3.connect(db, isolation_level=None)
     try:
         holder.execute("BEGIN")
