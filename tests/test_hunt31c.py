@@ -32,7 +32,7 @@ import pytest
 
 from features.poses import save_pose
 from posecbr.cli import main
-from tests.badinput import refused, standing_clip
+from tests.badinput import refused, snapshot, standing_clip
 from tests.test_cbr_clips import arm_dataset
 from tests.test_json_hunt import strict
 
@@ -255,6 +255,29 @@ def test_info_of_an_uncalibrated_case_base_appended_to_says_the_cases_changed_si
     )
 
 
+def watch_stops_before_its_first_window(
+    db: Path,
+    folder: Path,
+    capsys: pytest.CaptureFixture[str],
+    status: int,
+    said: str,
+    options: list[str],
+) -> None:
+    """``watch`` of a grey clip made in ``folder``, with ``options``, stopped at its start
+    (how: the caller's patch of ``watch.stop_on_interrupt``): exit ``status``, one line saying
+    it was ``said`` before the shortest window, and nothing in ``folder`` written or changed
+    (an ``--out`` there included). Shared with hunt 40o."""
+    video = _grey_video(folder / "clip.avi")
+    before = snapshot(folder)
+    capsys.readouterr()
+    assert main(["watch", str(video), "--db", str(db), "--speed", "0", *options]) == status
+    assert capsys.readouterr().err.splitlines() == [
+        f"posecbr watch: {said}: {video}: stopped after 0 frames (0.00 s), before the shortest"
+        " window (1 s) of the stream was seen: no segment to give"
+    ]
+    assert snapshot(folder) == before
+
+
 @pytest.mark.parametrize("out", [False, True])
 def test_watch_stopped_before_its_first_frame_says_so_with_or_without_out(
     tmp_path: Path,
@@ -271,7 +294,7 @@ def test_watch_stopped_before_its_first_frame_says_so_with_or_without_out(
     from threading import Event
 
     import posecbr.commands.watch as watch
-    from tests.badinput import small_case_base, snapshot
+    from tests.badinput import small_case_base
 
     @contextmanager
     def stopped(also: Event | None = None) -> Any:
@@ -281,16 +304,8 @@ def test_watch_stopped_before_its_first_frame_says_so_with_or_without_out(
 
     monkeypatch.setattr(watch, "stop_on_interrupt", stopped)
     db = small_case_base(tmp_path / "cb")
-    video = _grey_video(tmp_path / "in" / "clip.avi")
-    argv = ["watch", str(video), "--db", str(db), "--speed", "0"]
-    before = snapshot(tmp_path / "in")
-    capsys.readouterr()
-    assert main([*argv, "--out", str(tmp_path / "in" / "seen.mp4")] if out else argv) == 130
-    assert capsys.readouterr().err.splitlines() == [
-        f"posecbr watch: interrupted: {video}: stopped after 0 frames (0.00 s), before the"
-        " shortest window (1 s) of the stream was seen: no segment to give"
-    ]
-    assert snapshot(tmp_path / "in") == before
+    options = ["--out", str(tmp_path / "in" / "seen.mp4")] if out else []
+    watch_stops_before_its_first_window(db, tmp_path / "in", capsys, 130, "interrupted", options)
 
 
 def test_phone_and_camcorder_videos_in_class_folders_are_read(

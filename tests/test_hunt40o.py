@@ -27,7 +27,8 @@ from features.poses import save_pose
 from features.repetitions import count_repetitions
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import build_parser, main
-from tests.badinput import refused, small_case_base, snapshot
+from tests.badinput import refused, small_case_base
+from tests.test_hunt31c import watch_stops_before_its_first_window
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
@@ -154,18 +155,6 @@ def test_compare_second_results_json_refused_says_this_runs_file_is_kept(
 # ---- 4. watch stopped before its first window ------------------------------------------------
 
 
-def _grey_video(path: Path, frames: int = 4) -> Path:
-    """A small MJPG AVI of grey frames (nobody in view)."""
-    import cv2
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), 10.0, (32, 32))
-    for k in range(frames):
-        writer.write(np.full((32, 32, 3), 10 * k, np.uint8))
-    writer.release()
-    return path
-
-
 @pytest.mark.parametrize(
     ("signum", "status", "said"),
     [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated (SIGTERM)")],
@@ -194,15 +183,7 @@ def test_watch_stopped_by_a_signal_before_its_first_window_says_so(
             yield stop
 
     monkeypatch.setattr(watch, "stop_on_interrupt", signalled)
-    video = _grey_video(tmp_path / "in" / "clip.avi")
-    before = snapshot(tmp_path / "in")
-    capsys.readouterr()
-    assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == status
-    assert capsys.readouterr().err.splitlines() == [
-        f"posecbr watch: {said}: {video}: stopped after 0 frames (0.00 s), before the shortest"
-        " window (1 s) of the stream was seen: no segment to give"
-    ]
-    assert snapshot(tmp_path / "in") == before
+    watch_stops_before_its_first_window(case_base, tmp_path / "in", capsys, status, said, [])
 
 
 # ---- 5. reps and segment: one check of the person --------------------------------------------
