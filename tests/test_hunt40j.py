@@ -10,6 +10,7 @@ import errno
 import hashlib
 import os
 import shutil
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -71,25 +72,37 @@ def _refuse_renaming(monkeypatch: pytest.MonkeyPatch, name: str) -> None:
     monkeypatch.setattr(os, "replace", replace)
 
 
+def _compare_refused(
+    refuse: Callable[[pytest.MonkeyPatch, str], None],
+    out: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> str:
+    """The comparison of two activities into ``out``, results.csv refused by ``refuse``:
+    exit 1; returns the last line it said."""
+    capsys.readouterr()
+    refuse(monkeypatch, "results.csv")
+    assert main([*TWO, "--out", str(out)]) == 1
+    return capsys.readouterr().err.splitlines()[-1]
+
+
 @pytest.mark.parametrize("refuse", [_refuse_making, _refuse_renaming], ids=["enospc", "eio"])
 def test_compare_results_csv_refused_keeps_the_earlier_run_whole(
     tmp_path: Path,
     earlier: Path,
     capsys: pytest.CaptureFixture[str],
     monkeypatch: pytest.MonkeyPatch,
-    refuse: object,
+    refuse: Callable[[pytest.MonkeyPatch, str], None],
 ) -> None:
     # before: exit 1, "o/results.csv: cannot write: ...", and results.json of the two
     # activities beside results.csv and the six pictures of the earlier run of three
     out = tmp_path / "o"
     shutil.copytree(earlier, out)
     before = _digests(out)
-    capsys.readouterr()
-    refuse(monkeypatch, "results.csv")  # type: ignore[operator]
-    assert main([*TWO, "--out", str(out)]) == 1
+    said = _compare_refused(refuse, out, capsys, monkeypatch)
     assert _digests(out) == before  # no hidden temporary left either
     why = "No space left on device" if refuse is _refuse_making else "Input/output error"
-    assert capsys.readouterr().err.splitlines()[-1] == (
+    assert said == (
         f"posecbr compare: error: {out / 'results.csv'}: cannot write: {why}; none of the 2 files"
         " written (the earlier results.json and results.csv kept as they were)"
     )
@@ -100,10 +113,9 @@ def test_compare_results_csv_refused_in_a_new_folder_leaves_no_folder(
 ) -> None:
     # before: the new folder held results.json alone, a table said nowhere to be missing
     out = tmp_path / "o"
-    _refuse_making(monkeypatch, "results.csv")
-    assert main([*TWO, "--out", str(out)]) == 1
+    said = _compare_refused(_refuse_making, out, capsys, monkeypatch)
     assert sorted(p.name for p in tmp_path.iterdir()) == []
-    assert capsys.readouterr().err.splitlines()[-1] == (
+    assert said == (
         f"posecbr compare: error: {out / 'results.csv'}: cannot write: No space left on"
         " device; none of the 2 files written"
     )
