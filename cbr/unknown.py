@@ -68,19 +68,10 @@ from features.errors import ConfigError, DataError
 from features.text import percent
 
 from .casebase import CaseBase, frame_array, overlapping
+from .judges import JUDGES
 from .novelty import NoveltyCalibration
 from .weights import MIRROR_FLAG
 
-JUDGES = (
-    "spread-margin",
-    "activity-margin",
-    "margin",
-    "held-out",
-    "activities",
-    "margin-distance",
-    "spread-far",
-)
-"""The judges by name, the default first."""
 FALSE_UNKNOWN = 0.05
 """The share of held-out training cases of a known activity the margin judge may call
 unknown: its threshold is their margins' ``1 - FALSE_UNKNOWN`` quantile."""

@@ -284,8 +284,8 @@ def test_editor_choices_written_out_are_the_maintenance_editors() -> None:
 
 
 def test_unknown_choices_written_out_are_the_judges() -> None:
-    """segment and watch write the judges out (building the parser loads no numpy); the
-    default is the first, as in cbr.unknown."""
+    """segment and watch offer the judges (from cbr.judges: building the parser loads no
+    numpy); the default is the first, as in cbr.unknown."""
     from cbr.unknown import JUDGES
     from posecbr.cli import build_parser
 

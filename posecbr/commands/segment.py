@@ -50,6 +50,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from cbr.judges import JUDGES
 from features.errors import ConfigError, DataError
 from features.fileio import check_output, unique_name
 from features.formats import SHOWN_VIDEO_SUFFIXES
@@ -62,17 +63,6 @@ from posecbr.recordings import (
     load_recording,
     note_low_rate,
 )
-
-JUDGES = (
-    "spread-margin",
-    "activity-margin",
-    "margin",
-    "held-out",
-    "activities",
-    "margin-distance",
-    "spread-far",
-)
-"""cbr.unknown.JUDGES, the default first (not imported: the command line starts light)."""
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

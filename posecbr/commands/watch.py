@@ -44,13 +44,14 @@ from contextlib import closing, contextmanager
 from pathlib import Path
 from typing import Any
 
+from cbr.judges import JUDGES
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import PICTURE_WORDS, atomic_path, check_output, stdout_gone
 from features.interrupts import raise_interrupt
 from features.text import counted, shown
 from posecbr.arguments import add_k_option, path_arg
 
-from .segment import JUDGES, overlay_label
+from .segment import overlay_label
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
