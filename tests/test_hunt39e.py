@@ -382,6 +382,24 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
+TWO = [*COMPARE]
+TWO[TWO.index("--labels") + 1] = "deep_squat,sit_to_stand"
+
+
+def _interrupted_in_first_write(where: str, out: Path) -> str:
+    """``compare`` of two activities into ``out``, SIGINT sent at ``where`` (as
+    SIGINT_IN_FIRST_WRITE says), run from ``out``'s folder: exit 130, no traceback; returns
+    the last line it said."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1", "WHERE": where}
+    done = subprocess.run(
+        [sys.executable, "-c", SIGINT_IN_FIRST_WRITE, *TWO, "--out", str(out)],
+        cwd=out.parent, env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 130, done.stderr
+    assert "Traceback" not in done.stderr
+    return done.stderr.splitlines()[-1]
+
+
 @pytest.mark.parametrize("earlier", [False, True], ids=["new-folder", "earlier-run"])
 @pytest.mark.parametrize("where", ["rename", "csv"])
 def test_compare_interrupted_in_its_first_write_leaves_whole_results_and_a_rerun_clean(
@@ -393,20 +411,11 @@ def test_compare_interrupted_in_its_first_write_leaves_whole_results_and_a_rerun
     # stayed for good); in a new folder, Ctrl-C as results.json was put in place left the
     # folder empty. Each time "posecbr compare: interrupted", nothing said of the files.
     out = tmp_path / "o"
-    two = COMPARE[:]
-    two[two.index("--labels") + 1] = "deep_squat,sit_to_stand"
     if earlier:  # three activities: three timelines
         assert main([*COMPARE, "--out", str(out)]) == 0
         capsys.readouterr()
         assert "timeline_02.png" in _pngs(out)
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1", "WHERE": where}
-    done = subprocess.run(
-        [sys.executable, "-c", SIGINT_IN_FIRST_WRITE, *two, "--out", str(out)],
-        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600,
-    )  # fmt: skip
-    assert done.returncode == 130, done.stderr
-    assert "Traceback" not in done.stderr
-    assert done.stderr.splitlines()[-1] == (
+    assert _interrupted_in_first_write(where, out) == (
         f"posecbr compare: interrupted: results in {out}, with the 0 pictures drawn before it;"
         " the rest were not drawn"
     )
@@ -420,7 +429,7 @@ def test_compare_interrupted_in_its_first_write_leaves_whole_results_and_a_rerun
         "recall:sit_to_stand",
     ]
     # a rerun draws its pictures beside them, and nothing else is there
-    assert main([*two, "--out", str(out)]) == 0
+    assert main([*TWO, "--out", str(out)]) == 0
     capsys.readouterr()
     assert sorted(p.name for p in out.iterdir()) == [
         "accuracy.png", "confusion_cbr_fluents_euclidean.png", "prevalence.png",
@@ -435,18 +444,9 @@ def test_compare_interrupted_as_it_names_its_pictures_names_every_one(
     # drawn and none named (results.json as first written: "pictures": {}), said as
     # "interrupted" alone; `report` then showed none of them
     out = tmp_path / "o"
-    two = COMPARE[:]
-    two[two.index("--labels") + 1] = "deep_squat,sit_to_stand"
     assert main([*COMPARE, "--out", str(out)]) == 0  # three activities: three timelines
     capsys.readouterr()
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1", "WHERE": "last"}
-    done = subprocess.run(
-        [sys.executable, "-c", SIGINT_IN_FIRST_WRITE, *two, "--out", str(out)],
-        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600,
-    )  # fmt: skip
-    assert done.returncode == 130, done.stderr
-    assert "Traceback" not in done.stderr
-    assert done.stderr.splitlines()[-1] == (
+    assert _interrupted_in_first_write("last", out) == (
         f"posecbr compare: interrupted: results in {out}, with the 5 pictures drawn before it:"
         " all of them"
     )
