@@ -79,7 +79,13 @@ def people_scan(cb: Any, sample: int | None = None, seed: int = 0) -> tuple[Any,
     the person did not do the activity. People are the case base's subjects, in sorted
     order; the second array is empty ``(n, 0, n_classes)`` when the scan does not hold out
     people (basis not "subject"). Its minimum over people is the scan's own distances."""
-    from cbr.unknown import MARGIN_SAMPLE, activity_codes, held_out_activities, per_activity
+    from cbr.unknown import (
+        MARGIN_SAMPLE,
+        activity_codes,
+        held_out_activities,
+        held_out_rows,
+        per_activity,
+    )
 
     sample = MARGIN_SAMPLE if sample is None else sample
     held = held_out_activities(cb, sample, seed)
@@ -92,7 +98,7 @@ def people_scan(cb: Any, sample: int | None = None, seed: int = 0) -> tuple[Any,
     classes = sorted(set(labels.tolist()))
     all_codes = activity_codes(labels, classes)
     index, reps = cb.index, cb.reps
-    real = _held_rows(cb, sample, seed)
+    real = held_out_rows(cb, sample, seed)
     out = np.full((len(real), len(people), len(classes)), np.inf)
     for row, i in enumerate(real.tolist()):
         d = cb.measure.distances(reps[i], index)
@@ -101,18 +107,6 @@ def people_scan(cb: Any, sample: int | None = None, seed: int = 0) -> tuple[Any,
                 out[row, k] = per_activity(np.where(everyone == p, d, np.inf), all_codes,
                                            len(classes))  # fmt: skip
     return held, out
-
-
-def _held_rows(cb: Any, sample: int, seed: int) -> np.ndarray:
-    """The cases :func:`cbr.unknown.held_out_activities` holds out (its sample)."""
-    from cbr.weights import MIRROR_FLAG
-
-    real = np.arange(len(cb))
-    if cb.names and cb.names[-1] == MIRROR_FLAG:
-        real = real[np.asarray(cb.problems)[:, -1] == 0]
-    if len(real) > sample:
-        real = np.sort(np.random.default_rng(seed).choice(real, sample, replace=False))
-    return real
 
 
 def _steps(people: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

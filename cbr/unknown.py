@@ -212,6 +212,17 @@ def calibration_order(cb: Any) -> tuple[str, ...]:
     return tuple(sorted(set(np.asarray(cb.labels).astype(str).tolist())))
 
 
+def held_out_rows(cb: Any, sample: int = MARGIN_SAMPLE, seed: int = 0) -> np.ndarray:
+    """The positions of the cases :func:`held_out_activities` holds out ``(m,)``, sorted: the
+    real cases of ``cb`` (not mirror images), a seeded sample of ``sample`` when more."""
+    real = np.arange(len(cb))
+    if cb.names and cb.names[-1] == MIRROR_FLAG:
+        real = real[np.asarray(cb.problems)[:, -1] == 0]
+    if len(real) > sample:
+        real = np.sort(np.random.default_rng(seed).choice(real, sample, replace=False))
+    return real
+
+
 def held_out_activities(cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0) -> Held:
     """Training cases held out (:func:`held_out_basis`) as a new recording is: each one's
     distance to the nearest case of every activity that is left ``(n, n_classes)`` (inf
@@ -224,11 +235,7 @@ def held_out_activities(cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0
     index = cb.index  # builds the representations
     reps = cb.reps
     assert reps is not None
-    real = np.arange(len(cb))
-    if cb.names and cb.names[-1] == MIRROR_FLAG:
-        real = real[np.asarray(cb.problems)[:, -1] == 0]
-    if len(real) > sample:
-        real = np.sort(np.random.default_rng(seed).choice(real, sample, replace=False))
+    real = held_out_rows(cb, sample, seed)
     seen = np.full((len(real), len(classes)), np.inf)
     for row, i in enumerate(real.tolist()):  # one scan of the case base per held-out case
         d = cb.measure.distances(reps[i], index)
@@ -1473,6 +1480,7 @@ __all__ = [
     "RATE_SHARES",
     "known_rows",
     "held_out_activities",
+    "held_out_rows",
     "joint_thresholds",
     "known_and_novel",
     "calibration_margins",
