@@ -18,6 +18,7 @@ from casebase_store import open_store
 from posecbr.cli import main
 from tests.badinput import posecbr_on_read_only_mount, read_only_mounts_work, small_case_base
 from tests.test_bad_input_casebase import assert_upgraded_store_v1
+from tests.test_hunt39e import _changes_in_wal, _wal
 from tests.test_store_postgres import pg_server, pg_url  # noqa: F401  (fixtures)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -282,19 +283,9 @@ def test_a_wal_files_changes_without_its_shm_in_a_read_only_folder_are_refused_n
     folder.mkdir()
     db = folder / "cb.sqlite"
     shutil.copy(small_case_base(tmp_path), db)
-    con = sqlite3.connect(db)
-    assert con.execute("PRAGMA journal_mode = WAL").fetchone() == ("wal",)  # as 0.1 wrote it
-    con.close()
-    # a committed change left in the -wal: the writer exits without closing (no checkpoint)
-    change = (
-        "import os, sqlite3, sys; c = sqlite3.connect(sys.argv[1]); "
-        "c.execute('PRAGMA wal_autocheckpoint = 0'); "
-        "c.execute(\"UPDATE cases SET label = 'relabelled' WHERE id = 1\"); c.commit(); "
-        "os._exit(0)"
-    )
-    subprocess.run([sys.executable, "-c", change, str(db)], check=True, timeout=60)
-    db.with_name("cb.sqlite-shm").unlink()
-    assert db.with_name("cb.sqlite-wal").stat().st_size > 32
+    # in WAL mode as 0.1 wrote it, a committed change left in the -wal (the writer exited
+    # without closing: no checkpoint), the -shm gone
+    _changes_in_wal(_wal(db), shm=False)
     before = {p.name: _sha(p) for p in folder.iterdir()}
     done = posecbr_on_read_only_mount(folder, ["casebase", "list", "--db", str(db)])
     assert done.returncode == 1, (done.stdout, done.stderr)
