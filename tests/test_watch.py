@@ -81,8 +81,9 @@ def test_watch_a_real_video(
         assert a["end_frame"] == b["start_frame"]
     assert {line["label"] for line in lines} <= {"Squat", "KneeRaise", None}, lines
     # three squats by hand (tests/fixtures/repetition_counts.json); segments shorter than a
-    # squat each count the squat they cut, so some are counted twice (offline, counted on
-    # the recording's own signals, they are not: below)
+    # squat each count the squat they cut, so one may be counted twice (the README quotes
+    # four segments adding to 3, and six adding to 4 before; offline, counted on the
+    # recording's own signals, none is: below)
     assert sum(line["repetitions"] for line in lines) >= 3
     assert "latency frame to label: median" in captured.err
     cap = cv2.VideoCapture(str(out))
