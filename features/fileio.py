@@ -390,11 +390,52 @@ def unique_name(stem: str, taken: set[str]) -> str:
     return name
 
 
-def _same_file(a: Path, b: Path) -> bool:
+def _identity(path: Path) -> tuple[Path, tuple[int, int] | None] | None:
+    """``path`` resolved, and the device and inode of the file it names (None for a file
+    that is not there); None if the system cannot resolve it (an input so named is never
+    the output's file)."""
     try:
-        return a.resolve() == b.resolve() or (a.exists() and b.exists() and a.samefile(b))
+        resolved = path.resolve()
     except OSError:
-        return False
+        return None
+    try:
+        st = path.stat()
+    except OSError:
+        return resolved, None
+    return resolved, (st.st_dev, st.st_ino)
+
+
+class ReadFiles:
+    """What a command reads (:func:`_read_from` of every input), each file resolved and
+    looked up once: :func:`check_output` asks of every output whether it is one of them,
+    and a command with many outputs and many inputs (``convert`` of a corpus: each clip's
+    pose file against every file of the source) asks in constant time, not one look-up of
+    every input per output. Two paths are one file when they resolve to the same path or,
+    both there, are the same file on one device (a hard link)."""
+
+    def __init__(self, inputs: Iterable[str | Path]) -> None:
+        self._by_path: dict[Path, tuple[int, Path]] = {}
+        self._by_file: dict[tuple[int, int], tuple[int, Path]] = {}
+        reads = (read for src in inputs for read in _read_from(Path(src)))
+        for order, read in enumerate(reads):
+            found = _identity(read)
+            if found is None:
+                continue
+            resolved, file_id = found
+            self._by_path.setdefault(resolved, (order, read))
+            if file_id is not None:
+                self._by_file.setdefault(file_id, (order, read))
+
+    def overwritten_by(self, out: Path) -> Path | None:
+        """The first input (in the order read) that writing ``out`` would overwrite."""
+        found = _identity(out)
+        if found is None:
+            return None
+        resolved, file_id = found
+        by_file = None if file_id is None else self._by_file.get(file_id)
+        hits = [self._by_path.get(resolved), by_file]
+        first = min((h for h in hits if h is not None), default=None)
+        return None if first is None else first[1]
 
 
 def _names_an_open_stream(out: Path) -> bool:
@@ -510,7 +551,7 @@ def check_not_in_walked_folder(
 def check_output(
     path: str | Path,
     *,
-    inputs: Iterable[str | Path] = (),
+    inputs: Iterable[str | Path] | ReadFiles = (),
     what: str = "output",
     must_not_exist: bool = False,
     make_parents: bool = False,
@@ -522,8 +563,8 @@ def check_output(
     exist (unless ``make_parents``: the writer creates it, so only a file in its way is
     refused); a file in a folder this process cannot write (a read-only mount: found before
     the work, not when the result is written); one of ``inputs`` or, of a folder among them,
-    its ``labels.csv`` (an output never overwrites an input); an existing file when
-    ``must_not_exist``.
+    its ``labels.csv`` (an output never overwrites an input; a :class:`ReadFiles` made once
+    serves many outputs); an existing file when ``must_not_exist``.
     """
     out = Path(path)
     check_lookup(out, what)
@@ -539,10 +580,9 @@ def check_output(
     folder = next((p for p in out.parents if p.exists()), None)
     if folder is not None and folder.is_dir() and not os.access(folder, os.W_OK | os.X_OK):
         raise DataError(f"cannot write the {what}: the folder {folder} is read-only", out)
-    for src in inputs:
-        for read in _read_from(Path(src)):
-            if _same_file(out, read):
-                raise DataError(f"the {what} would overwrite an input ({read})", out)
+    read = (inputs if isinstance(inputs, ReadFiles) else ReadFiles(inputs)).overwritten_by(out)
+    if read is not None:
+        raise DataError(f"the {what} would overwrite an input ({read})", out)
     if must_not_exist and out.exists():
         raise DataError(f"the {what} already exists", out)
     return out

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 from features.errors import DataError
 from features.fileio import (
+    ReadFiles,
     check_not_in_walked_folder,
     check_output,
     staged_folder,
@@ -398,7 +399,7 @@ Rates = dict[tuple[float, str], int]  # clips written per (frame rate, where it 
 
 
 def _write_clips(
-    args: argparse.Namespace, stage: Path, inputs: list[Path]
+    args: argparse.Namespace, stage: Path, inputs: ReadFiles
 ) -> tuple[list[dict[str, Any]], Rates]:
     """Each clip as a pose file in ``stage``; the rows of labels.csv and the frame rates."""
     from features.poses import save_pose
@@ -610,14 +611,15 @@ def run(args: argparse.Namespace) -> int:
     inputs = _inputs(args)
     _check_no_overwrite(out, inputs)
     _check_not_in_source(args)
+    reads = ReadFiles(inputs)  # looked up once, not once per clip written
     if out.is_dir():
-        check_output(out / "labels.csv", inputs=inputs, what="labels file")
+        check_output(out / "labels.csv", inputs=reads, what="labels file")
     before, header = _listed_before(out / "labels.csv")
     _check_not_hidden(out)
     # Clips and labels.csv are staged first: a bad clip halfway leaves the output folder as it
     # was; labels.csv, which names the clips, is moved in last.
     with staged_folder(out, last={"labels.csv"}) as stage:
-        written, rates = _write_clips(args, stage, inputs)
+        written, rates = _write_clips(args, stage, reads)
         rows = _merged(before, written)
         write_text_atomic(stage / "labels.csv", _labels_csv(rows, header))
     kept = len(rows) - len(written)

@@ -26,7 +26,7 @@ from typing import Any
 
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import check_not_in_walked_folder, check_output
+from features.fileio import ReadFiles, check_not_in_walked_folder, check_output
 from features.formats import SHOWN_VIDEO_SUFFIXES, is_video_in_folder
 from features.interrupts import interrupts_held, run_task, stop_workers, worker_ends_on_sigterm
 from features.progress import progress
@@ -733,7 +733,7 @@ def _check_out_dir(out: Path) -> None:
 
 def _check_outputs(jobs: list[Job]) -> None:
     """No pose file or overlay may be one of the videos (or a folder): refused before any work."""
-    videos = [job.video for job in jobs]
+    videos = ReadFiles([job.video for job in jobs])  # looked up once, not once per output
     for job in jobs:
         check_output(job.out, inputs=videos, what="pose file", make_parents=True)
         if job.overlay is not None:
