@@ -4,6 +4,7 @@ emptied of posecbr's tables, for tests that run on SQLite and PostgreSQL alike."
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 
@@ -44,4 +45,16 @@ def empty_postgres() -> str:
         for table in TABLES:
             conn.execute(text(f"DROP TABLE IF EXISTS {table} CASCADE"))
     engine.dispose()
+    return url
+
+
+def postgres_copy_of(db: Path) -> str:
+    """:func:`empty_postgres` holding a copy of the case base in the SQLite file ``db``
+    (``casebase copy``: its configuration, model, cases and history, in one transaction), for
+    tests that train the same case base on both backends: the clips are read and described
+    once, for the SQLite file, not again for the server."""
+    from posecbr.cli import main
+
+    url = empty_postgres()
+    assert main(["casebase", "copy", "--db", str(db), "--to", url]) == 0
     return url

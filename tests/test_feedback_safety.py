@@ -18,7 +18,7 @@ from features.poses import PoseSequence, load_pose, save_pose
 from posecbr.cli import main
 from tests.badinput import posecbr_on_read_only_mount, read_only_mounts_work
 from tests.once import made_once
-from tests.postgres import empty_postgres
+from tests.postgres import postgres_copy_of
 from tests.processes import posecbr_process as _posecbr
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -52,9 +52,7 @@ def _copy(src: Path, dst: Path) -> Path:
 def db_url(request: pytest.FixtureRequest, trained: Path, tmp_path: Path) -> str:
     if request.param == "sqlite":
         return str(_copy(trained, tmp_path / "cb.sqlite"))
-    url = empty_postgres()
-    assert main(["train", str(LABELS), "--db", url, "--subjects", "s01,s02"]) == 0
-    return url
+    return postgres_copy_of(trained)
 
 
 def test_two_writers_revising_one_case_all_take_effect(db_url: str) -> None:

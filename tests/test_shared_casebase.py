@@ -11,8 +11,7 @@ from pathlib import Path
 import pytest
 
 from casebase_store import open_store
-from posecbr.cli import main
-from tests.postgres import empty_postgres
+from tests.postgres import postgres_copy_of
 from tests.processes import posecbr_process
 from tests.test_feedback_safety import trained  # noqa: F401 (a fixture)
 
@@ -32,15 +31,13 @@ def _clips_of(labels: str, subject: str) -> list[str]:
 
 @pytest.fixture(params=["sqlite", "postgresql"])
 def db_url(request: pytest.FixtureRequest, trained: Path, tmp_path: Path) -> str:  # noqa: F811
-    """A case base of subjects s01 and s02 (120 cases) on each backend: on SQLite a copy of
-    the one tests/test_feedback_safety.py trains by the same command (made once)."""
+    """A case base of subjects s01 and s02 (120 cases) on each backend: a copy of the one
+    tests/test_feedback_safety.py trains (made once; on PostgreSQL by ``casebase copy``)."""
     if request.param == "sqlite":
         db = tmp_path / "cb.sqlite"
         db.write_bytes(trained.read_bytes())
         return str(db)
-    url = empty_postgres()
-    assert main(["train", str(LABELS), "--db", url, "--subjects", "s01,s02"]) == 0
-    return url
+    return postgres_copy_of(trained)
 
 
 def _state(url: str) -> tuple[int, list[int], list[str], list[str], list[str]]:
