@@ -82,6 +82,33 @@ def swapped_compare(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Pat
     return made_once(tmp_path_factory, "swapped-compare", make)
 
 
+@pytest.fixture(scope="session")
+def compared_slice(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One ``compare`` on 54 real clips of the demo subset (3 movements x 3 subjects x 6,
+    ``tests/test_compare_cli.py``'s SLICE), fluents by euclidean and dtw, DAD, two
+    explanations: the folder holding ``r.json``, ``r.csv`` and the ``--out`` folder ``o``.
+    Read (or copied) by tests/test_compare_cli.py and tests/test_report_chromium.py."""
+
+    def make(root: Path) -> Path:
+        from posecbr.cli import main
+        from tests.test_compare_cli import DEMO, SLICE
+
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("POSECBR_NO_PROGRESS", "1")
+            rc = main([
+                "compare", str(DEMO), "--labels", SLICE, "--similarities", "euclidean,dtw",
+                # The tslearn peer is left out: its numba kernels compile for ~30 s in every
+                # new process (tslearn does not cache them), too slow for the suite.
+                "--features", "fluents", "--peers", "none", "--explain", "2",
+                "--json", str(root / "r.json"), "--csv", str(root / "r.csv"),
+                "--out", str(root / "o"),
+            ])  # fmt: skip
+        assert rc == 0
+        return root
+
+    return made_once(tmp_path_factory, "compare-slice", make)
+
+
 @pytest.fixture(autouse=True)
 def _no_progress_bars(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("POSECBR_NO_PROGRESS", "1")

@@ -27,23 +27,10 @@ SLICE = "deep_squat,sit_to_stand,standing_shoulder_abduction"
 
 
 @pytest.fixture(scope="module")
-def run_slice(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
-    """One comparison on 54 clips (3 movements x 3 subjects x 6), reused by several tests."""
-    out = tmp_path_factory.mktemp("compare")
-    mp = pytest.MonkeyPatch()
-    mp.setenv("POSECBR_NO_PROGRESS", "1")
-    try:
-        rc = main([
-            "compare", str(DEMO), "--labels", SLICE, "--similarities", "euclidean,dtw",
-            # The tslearn peer is left out: its numba kernels compile for ~30 s in every new
-            # process (tslearn does not cache them), too slow for the suite.
-            "--features", "fluents", "--peers", "none", "--explain", "2",
-            "--json", str(out / "r.json"), "--csv", str(out / "r.csv"), "--out", str(out / "o"),
-        ])  # fmt: skip
-    finally:
-        mp.undo()
-    assert rc == 0
-    return out, ""
+def run_slice(compared_slice: Path) -> tuple[Path, str]:
+    """One comparison on 54 clips (3 movements x 3 subjects x 6), reused by several tests
+    (made once in the session, for tests/test_report_chromium.py too: tests/conftest.py)."""
+    return compared_slice, ""
 
 
 def _labels() -> dict[str, dict[str, str]]:

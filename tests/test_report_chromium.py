@@ -15,7 +15,6 @@ import pytest
 from posecbr.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 ARTIFACTS = ROOT / "tests" / "artifacts"
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 FLAGS = [
@@ -57,19 +56,15 @@ def _chromium(tmp: Path, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 @pytest.fixture(scope="module")
-def report(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
-    out = tmp_path_factory.mktemp("report")
-    mp = pytest.MonkeyPatch()
-    mp.setenv("POSECBR_NO_PROGRESS", "1")
-    try:
-        assert main([
-            "compare", str(DEMO), "--labels", "deep_squat,sit_to_stand,standing_shoulder_abduction",
-            "--similarities", "euclidean", "--features", "fluents", "--peers", "none",
-            "--explain", "2", "--out", str(out),
-        ]) == 0  # fmt: skip
+def report(compared_slice: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
+    """The report of a comparison on 54 real clips (tests/conftest.py, shared with
+    tests/test_compare_cli.py: three movements, fluents by euclidean and dtw, DAD, two
+    explanations), made from a copy of its results folder."""
+    out = tmp_path_factory.mktemp("report") / "o"
+    shutil.copytree(compared_slice / "o", out)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("POSECBR_NO_PROGRESS", "1")
         assert main(["report", str(out), "--out", str(out / "report.html")]) == 0
-    finally:
-        mp.undo()
     return out / "report.html", json.loads((out / "results.json").read_text())
 
 
