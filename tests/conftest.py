@@ -36,12 +36,24 @@ def _write_bytecode() -> None:
         sys.dont_write_bytecode = False
 
 
+def _ctrl_c_as_in_a_terminal() -> None:
+    """Ctrl-C (SIGINT) raises KeyboardInterrupt in this process, and is not ignored by the
+    processes it starts (xdist's workers, the commands the tests run), as for a job in the
+    foreground of a terminal, which the tests that send it rely on. A shell without job
+    control (a script, ``bash -c``) starts a background job (``pytest ... &``) with SIGINT
+    ignored, and an ignored signal stays ignored in Python and in every process started from
+    it: there a SIGINT did nothing, and such a test failed (``describe`` sent SIGINT exited 0,
+    not 130)."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def pytest_configure(config: pytest.Config) -> None:
-    """Before the xdist workers start, :func:`_write_bytecode`, and numba's kernels are
-    compiled once, in two processes at a time (``tests/_kernels.py``): otherwise every
-    worker, every Dask worker and every command a test starts before a cache is written
-    compiles them again (about 50 s of CPU each, cold). Not in a worker, nor without workers
-    (``-n 0``: the one process compiles)."""
+    """Before the xdist workers start, :func:`_ctrl_c_as_in_a_terminal`,
+    :func:`_write_bytecode`, and numba's kernels are compiled once, in two processes at a
+    time (``tests/_kernels.py``): otherwise every worker, every Dask worker and every command
+    a test starts before a cache is written compiles them again (about 50 s of CPU each,
+    cold). Not in a worker, nor without workers (``-n 0``: the one process compiles)."""
+    _ctrl_c_as_in_a_terminal()
     _write_bytecode()
     if os.environ.get("PYTEST_XDIST_WORKER") or not config.getoption("numprocesses", None):
         return
