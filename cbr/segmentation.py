@@ -1158,6 +1158,7 @@ def counted_segments(
         () if b else _repetitions(sig, start, end, n_frames)
         for (start, end), b in zip(bounds, blind, strict=True)
     ]
+    raw = [_beside_whole(sig, raw, bounds, blind, i, n_frames) for i in range(len(raw))]
     # whether the last far point of each segment is held on, through any segments with none
     # (all hold), to the first of the next segment that has one (:func:`_held_across`); not
     # through a stretch with nobody in view
@@ -1189,6 +1190,51 @@ def counted_segments(
         elif not holding:
             turn = False
     return _held_to_the_end(out, raw, bounds, blind)
+
+
+def _beside_whole(
+    sig: MovementSignals | _Apart,
+    raw: Sequence[tuple[Repetition, ...]],
+    bounds: Sequence[tuple[int, int]],
+    blind: Sequence[bool],
+    i: int,
+    n_frames: int,
+) -> tuple[Repetition, ...]:
+    """Segment ``i``'s repetitions counted alone (``raw[i]``), with a far point cut off at
+    the recording's start or end judged beside the repetitions of the segment across its
+    cut, as ``reps`` judges it beside the recording's whole ones: a far point cut off there
+    counts only beside a whole one, when it got nearly as far
+    (:func:`features.repetitions.count_in_signals`). A segment at the recording's edge with
+    no whole repetition of its own (the last jumping jack of a recording, caught mid-way,
+    cut from the jacks before it; the first bridge, held as the recording starts, cut from
+    the bridges after it) had nothing to measure it against and dropped it, which the
+    recording counted whole keeps: the count depended on where the cut fell. So the frames
+    from the nearest repetition of the segment across the cut to the recording's edge are
+    counted as one stretch (each segment's own movement line barely shows the other's), and
+    the far point that stretch keeps cut off at the edge (:attr:`Repetition.held` there: the
+    line falls back from it by less than :data:`features.repetitions.MIN_EXCURSION_RAD`),
+    lying in this segment past its cut and in none of its own repetitions, is added.
+    Nothing for a segment with a whole repetition of its own (it was judged beside that),
+    nor beside a segment with none or with nobody in view."""
+    start, end = bounds[i]
+    own = raw[i]
+    if blind[i] or any(not any(r.held) for r in own):
+        return own
+    at_end = end >= n_frames and i > 0 and bool(raw[i - 1]) and not blind[i - 1]
+    at_start = start == 0 and i + 1 < len(bounds) and bool(raw[i + 1]) and not blind[i + 1]
+    if at_end:
+        found = _repetitions(sig, raw[i - 1][-1].start_frame, n_frames, n_frames)
+        edge = [r for r in found if r.held[1] and r.peak_frame >= start + sig.step][-1:]
+    elif at_start:
+        found = _repetitions(sig, 0, raw[i + 1][0].end_frame, n_frames)
+        edge = [r for r in found if r.held[0] and r.peak_frame < end - sig.step][:1]
+    else:
+        return own
+    if not edge or any(r.start_frame <= edge[0].peak_frame < r.end_frame for r in own):
+        return own
+    clipped = replace(edge[0], start_frame=max(start, edge[0].start_frame),
+                      end_frame=min(end, edge[0].end_frame))  # fmt: skip
+    return tuple(sorted((*own, clipped), key=lambda r: r.peak_frame))
 
 
 def _held_to_the_end(

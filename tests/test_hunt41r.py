@@ -1,0 +1,62 @@
+"""Hunt 41r: a repetition cut off at the recording's start or end counts in a segment as the
+whole recording counts it, wherever the cut before (or after) it falls: judged beside the
+repetitions of the segment across the cut (:func:`cbr.segmentation._beside_whole`)."""
+
+from __future__ import annotations
+
+import pytest
+
+from features.poses import PoseSequence
+from features.repetitions import count_repetitions
+from tests.test_hunt36j import _counts
+from tests.test_hunt38b import _squats_then_held
+from tests.test_repetitions import FPS
+
+DOWN = 24  # 0.8 s down (and up) at 30 fps
+REST = 18  # 0.6 s standing before each squat
+
+
+def _reversed(seq: PoseSequence) -> PoseSequence:
+    return PoseSequence(seq.positions[::-1].copy(), seq.joint_names, seq.fps)
+
+
+@pytest.mark.parametrize(("squats", "hold_s"), [(2, 0.3), (3, 0.5)])
+@pytest.mark.parametrize("before_s", [0.1, 0.3, 0.5])
+def test_the_last_squat_cut_off_by_the_end_counts_after_a_cut_at_rest(
+    squats: int, hold_s: float, before_s: float
+) -> None:
+    """By construction: ``squats`` squats (knees 180 -> 50 -> 180 degrees), standing 0.6 s,
+    then down the whole way once more and the recording ends ``hold_s`` s later at the
+    bottom: ``squats`` whole repetitions and one cut off by the end as deep as they are,
+    which ``reps`` counts beside them (README, "a far point cut off by the end counts beside
+    whole ones"): ``squats`` + 1. Cut in the standing before that last way down (``before_s``
+    before it starts), the segments count ``squats`` and 1. Before: ``squats`` and 0, the
+    segment after the cut holding no whole repetition to measure it against."""
+    seq, hold = _squats_then_held(squats, hold_s, back=False)
+    assert count_repetitions(seq).count == squats + 1
+    cut = hold - DOWN - int(round(before_s * FPS))
+    assert hold - DOWN - REST < cut < hold - DOWN  # in the standing
+    assert _counts(seq, [cut / FPS]) == [squats, 1]
+
+
+@pytest.mark.parametrize("after_s", [0.1, 0.3, 0.5])
+def test_the_first_squat_cut_off_by_the_start_counts_before_a_cut_at_rest(after_s: float) -> None:
+    """The same recording played backwards (two squats and the way down, 0.5 s at the
+    bottom): it starts at the bottom 0.5 s, rises the whole way and stands 0.6 s, then
+    squats twice; ``reps`` counts 3. Cut in the standing after the first rise (``after_s``
+    after it ends): 1 and 2. Before: 0 and 2."""
+    seq, _ = _squats_then_held(2, 0.5, back=False)
+    back = _reversed(seq)
+    assert count_repetitions(back).count == 3
+    up = int(0.5 * FPS) + DOWN  # the first rise ends here
+    cut = up + int(round(after_s * FPS))
+    assert up < cut < up + REST
+    assert _counts(back, [cut / FPS]) == [1, 2]
+
+
+def test_a_posture_got_into_and_held_after_a_cut_stays_none() -> None:
+    """Two squats, then down once more and held 20 s to the end, cut 0.9 s into the hold:
+    2 and 1 (tests/test_hunt38b.py), unchanged: the segment after the cut had the held
+    squat already (a far point held across the cut, :func:`cbr.segmentation._held_across`)."""
+    seq, hold = _squats_then_held(2, 20.0, back=False)
+    assert _counts(seq, [(hold + int(0.9 * FPS)) / FPS]) == [2, 1]
