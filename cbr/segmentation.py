@@ -1189,7 +1189,36 @@ def counted_segments(
             holding = held_on[i]
         elif not holding:
             turn = False
+    out = _held_into_the_end(sig, out, raw, bounds, held_on, after, n_frames)
     return _held_to_the_end(out, raw, bounds, blind)
+
+
+def _held_into_the_end(
+    sig: MovementSignals | _Apart,
+    out: list[tuple[Repetition, ...]],
+    raw: Sequence[tuple[Repetition, ...]],
+    bounds: Sequence[tuple[int, int]],
+    held_on: Sequence[bool],
+    after: Sequence[int | None],
+    n_frames: int,
+) -> list[tuple[Repetition, ...]]:
+    """:func:`counted_segments`' ``out`` without the far point held across a cut into the
+    last segment (the way into a posture in one segment, the hold in the last, to the
+    recording's end) when the frames from the first repetition of the segment it was got
+    into in to the recording's end, counted as one stretch, hold no repetition: a posture
+    got into and held (:func:`features.repetitions.count_in_signals`), no repetition, as
+    ``reps`` counts the recording. Neither segment alone holds both the way in and the
+    still end that rule reads, and the last counted the far point it was handed wherever
+    its line sagged by :data:`features.repetitions.MIN_EXCURSION_RAD` in the hold (the
+    bundled side plank, whose supporting shoulder sinks 16 degrees, cut in its hold)."""
+    last = len(bounds) - 1
+    if bounds[-1][1] < n_frames or not out[last]:
+        return out
+    for k in range(last):
+        if held_on[k] and after[k] == last:
+            if not _repetitions(sig, raw[k][0].start_frame, n_frames, n_frames):
+                return [*out[:last], out[last][1:]]
+    return out
 
 
 def _beside_whole(

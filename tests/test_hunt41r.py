@@ -1,16 +1,20 @@
 """Hunt 41r: a repetition cut off at the recording's start or end counts in a segment as the
 whole recording counts it, wherever the cut before (or after) it falls: judged beside the
-repetitions of the segment across the cut (:func:`cbr.segmentation._beside_whole`)."""
+repetitions of the segment across the cut (:func:`cbr.segmentation._beside_whole`); a posture
+got into in one segment and held to the end in the last counts none there
+(:func:`cbr.segmentation._held_into_the_end`)."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from features.poses import PoseSequence
 from features.repetitions import count_repetitions
+from tests.bodies import standing, to_sequence
 from tests.test_hunt36j import _counts
 from tests.test_hunt38b import _squats_then_held
-from tests.test_repetitions import FPS
+from tests.test_repetitions import FPS, _raise_arms
 
 DOWN = 24  # 0.8 s down (and up) at 30 fps
 REST = 18  # 0.6 s standing before each squat
@@ -60,3 +64,35 @@ def test_a_posture_got_into_and_held_after_a_cut_stays_none() -> None:
     squat already (a far point held across the cut, :func:`cbr.segmentation._held_across`)."""
     seq, hold = _squats_then_held(2, 20.0, back=False)
     assert _counts(seq, [(hold + int(0.9 * FPS)) / FPS]) == [2, 1]
+
+
+def _arms_raised_sagging() -> PoseSequence:
+    """Standing 0.6 s, both arms raised sideways to 90 degrees over 0.8 s (eased), held 0.5 s,
+    sinking steadily to 70 degrees over 3 s, then held still 1.5 s to the end (6.4 s)."""
+    rest, move = int(0.6 * FPS), int(0.8 * FPS)
+    up = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, move)))
+    sag = 90.0 - 20.0 * np.linspace(0.0, 1.0, int(3.0 * FPS))
+    degrees = np.concatenate(
+        [
+            np.zeros(rest),
+            90.0 * up,
+            np.full(int(0.5 * FPS), 90.0),
+            sag,
+            np.full(int(1.5 * FPS), 70.0),
+        ]
+    )
+    body = standing()
+    return to_sequence(*(_raise_arms(body, a, a) for a in degrees), fps=FPS)
+
+
+@pytest.mark.parametrize("cut_s", [1.6, 2.0, 2.5, 3.0])
+def test_a_posture_got_into_and_held_sagging_counts_none_cut_in_its_hold(cut_s: float) -> None:
+    """By construction the arms go up once and never come back down: a posture got into and
+    held (the 20-degree sag comes during the hold, which ends still), no repetition;
+    ``reps`` counts 0. Cut in the hold (0.2 to 1.6 s after the arms are up, before the sag
+    ends), the segments count 0 and 0. Before: 0 and 1, the way up handed across the cut to
+    the segment after, whose line falls 20 degrees from it (the bundled side plank, its
+    shoulder sinking 16 degrees, cut in its hold: 1 at 135 of 195 cuts)."""
+    seq = _arms_raised_sagging()
+    assert count_repetitions(seq).count == 0
+    assert _counts(seq, [cut_s]) == [0, 0]
