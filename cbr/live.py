@@ -368,6 +368,7 @@ class LiveSegmenter:
         self.passed_on = 0  # a far point held on past the end of the segments finished,
         # nothing come back yet, that counts if the stream ends still in the hold (0: a
         # posture got into and held, :meth:`_still_beyond`)
+        self.held_from = 0  # the first repetition's first frame of the segment that held it
         self.ended = False  # the stream has ended (finish)
         self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
         self.judged: list[_Judged] = []  # the windows over the segments not yet finished
@@ -1002,8 +1003,10 @@ class LiveSegmenter:
             self.turn = at_cut(reps, first, end, self.step)[1] or held
             self.holding = held
             self.passed_on = passed_on
+            self.held_from = reps[0].start_frame
         elif cut and not self.holding:  # held on through a segment all hold, else no turn
             self.turn = False
+        kept = self._unless_got_into(kept, end, not cut and explained)
         count = len(kept)
         if not cut and explained and self.holding and not reps:
             # the stream ended still in a hold passed on from a segment before: its far
@@ -1117,6 +1120,24 @@ class LiveSegmenter:
         except DataError:  # too short, or nobody in view
             return False
         return not after.repetitions
+
+    def _unless_got_into(
+        self, kept: tuple[Repetition, ...], end: int, last: bool
+    ) -> tuple[Repetition, ...]:
+        """``kept``, the repetitions of a segment ending at ``end`` (``last``: the stream's
+        last, the stream ended), without the far point held on into it when that was a
+        posture got into and held: the stream frames from the first repetition of the
+        segment that held it (:attr:`held_from`, while kept) to the end, counted as one
+        stretch, hold none, as :func:`cbr.segmentation.counted_segments` judges it
+        (:func:`cbr.segmentation._held_into_the_end`: the bundled side plank, cut in its
+        hold, counted 1 where the stream as a whole counts 0)."""
+        if not (last and self.holding and kept) or self.held_from < self.offset:
+            return kept
+        try:
+            found = self._count_apart(self.held_from, end, (self.held_from == 0, True))
+        except DataError:  # too short, or nobody in view
+            return kept
+        return kept if found else kept[1:]
 
     def _held_on(
         self,

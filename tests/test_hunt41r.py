@@ -13,6 +13,7 @@ from features.poses import PoseSequence
 from features.repetitions import count_repetitions
 from tests.bodies import standing, to_sequence
 from tests.test_hunt36j import _counts
+from tests.test_hunt36l import _watched
 from tests.test_hunt38b import _squats_then_held
 from tests.test_repetitions import FPS, _raise_arms
 
@@ -96,3 +97,15 @@ def test_a_posture_got_into_and_held_sagging_counts_none_cut_in_its_hold(cut_s: 
     seq = _arms_raised_sagging()
     assert count_repetitions(seq).count == 0
     assert _counts(seq, [cut_s]) == [0, 0]
+
+
+@pytest.mark.parametrize("cut_s", [1.6, 2.5])
+def test_watch_counts_the_posture_got_into_and_held_none_as_segment(cut_s: float) -> None:
+    """The same arms, streamed to ``watch`` with the label changing at ``cut_s``: two
+    segments, 0 and 0, as ``segment`` counts them (:meth:`cbr.live.LiveSegmenter._got_into`).
+    Before: 0 and 1, the way up held on past the first segment's end and counted by the
+    last, whose line falls 20 degrees from it."""
+    watched = _watched(_arms_raised_sagging(), (int(cut_s * FPS),), pad_s=0.0)
+    assert len(watched) == 2
+    assert 42 < watched[0][1] < 147  # cut in the hold: arms up at 1.4 s, the sag ends at 4.9 s
+    assert [r for *_, r in watched] == [0, 0]
