@@ -56,6 +56,7 @@ from .segmentation import (
     check_judge,
     check_k,
     count_in_segment,
+    cut_off_beside,
     keep_whole,
     least_movement,
     log_votes,
@@ -67,6 +68,7 @@ from .segmentation import (
     told,
     unknown_reason,
     votes_as,
+    whole_in,
     window_still,
 )
 from .unknown import (
@@ -369,6 +371,9 @@ class LiveSegmenter:
         # nothing come back yet, that counts if the stream ends still in the hold (0: a
         # posture got into and held, :meth:`_still_beyond`)
         self.held_from = 0  # the first repetition's first frame of the segment that held it
+        self.beside: int | None = None  # the last repetition's first frame of the last
+        # segment finished (None: it had none, or nobody was in view): what the stream's last
+        # segment is judged beside when the stream ends (:meth:`_beside_whole`)
         self.ended = False  # the stream has ended (finish)
         self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
         self.judged: list[_Judged] = []  # the windows over the segments not yet finished
@@ -800,8 +805,12 @@ class LiveSegmenter:
                 self.period_votes.append((b, c, vote))
 
     def _trim(self) -> None:
-        """Forget frames and hops no segment in progress or decision can need."""
+        """Forget frames and hops no segment in progress or decision can need (nor the
+        stream's end: the frames from the last repetition of the segment finished last,
+        :meth:`_beside_whole`)."""
         begun = min(self.seen_start, self.stretch_start)
+        if self.beside is not None:
+            begun = min(begun, self.beside)
         keep_from = max(begun, self.n - int(MAX_SEGMENT_S * self.fps)) - self.window
         keep_from = min(keep_from, self.n - self.span)  # the next span's frames
         drop = keep_from - self.offset
@@ -974,6 +983,7 @@ class LiveSegmenter:
         if state == self.nobody:
             if cut:  # no movement turns at its end
                 self.turn = self.holding = False
+                self.beside = None
             return LiveSegment(
                 start, end, None, 1.0, 0, nobody_explanation(self._absent_in(start, end))
             )
@@ -990,6 +1000,8 @@ class LiveSegmenter:
                 reps = self._count_apart(first, end, edges, clip=clip)
             except DataError:  # too short, or nobody in view
                 pass
+        if not cut and explained:  # the stream's last segment, the stream ended
+            reps = self._beside_whole(start, end, reps)
         confidence = self._confidence(state)
         turn = self.turn and first == start
         # the last far point held up to the cut (a squat held at the bottom through a change
@@ -999,13 +1011,8 @@ class LiveSegmenter:
         if cut and not lost and reps and not held and self._still_beyond(end, reps[-1]):
             reps, held, passed_on = self._held_on(first, end, edges, reps)
         kept = keep_whole(reps, first, end, self.step, turn, cut and not lost, held)
-        if cut and reps:
-            self.turn = at_cut(reps, first, end, self.step)[1] or held
-            self.holding = held
-            self.passed_on = passed_on
-            self.held_from = reps[0].start_frame
-        elif cut and not self.holding:  # held on through a segment all hold, else no turn
-            self.turn = False
+        if cut:
+            self._finished(reps, first, end, held, passed_on)
         kept = self._unless_got_into(kept, end, not cut and explained)
         count = len(kept)
         if not cut and explained and self.holding and not reps:
@@ -1015,6 +1022,24 @@ class LiveSegmenter:
         label = None if state == self.unknown else self.classes[state]
         text, novelty = self._explain(start, end, state) if explained else ("", math.nan)
         return LiveSegment(start, end, label, float(confidence), count, text, novelty)
+
+    def _finished(
+        self, reps: tuple[Repetition, ...], first: int, end: int, held: bool, passed_on: int
+    ) -> None:
+        """What a segment finished at the cut ``end`` (its repetitions ``reps``, counted on
+        frames [first, end); ``held``, ``passed_on``: its last far point left to the segment
+        after, and what that counts if the stream ends in the hold, :meth:`_held_on`) leaves
+        the segments after it: whether the movement turned at the cut and the far point is
+        held on, the frames the one that holds it was got into from, and the last
+        repetition the stream's last segment is judged beside (:meth:`_beside_whole`)."""
+        self.beside = reps[-1].start_frame if reps else None
+        if reps:
+            self.turn = at_cut(reps, first, end, self.step)[1] or held
+            self.holding = held
+            self.passed_on = passed_on
+            self.held_from = reps[0].start_frame
+        elif not self.holding:  # held on through a segment all hold, else no turn
+            self.turn = False
 
     def _count_apart(
         self,
@@ -1120,6 +1145,31 @@ class LiveSegmenter:
         except DataError:  # too short, or nobody in view
             return False
         return not after.repetitions
+
+    def _beside_whole(
+        self, start: int, end: int, reps: tuple[Repetition, ...]
+    ) -> tuple[Repetition, ...]:
+        """``reps``, the repetitions of the stream's last segment, frames [start, end), the
+        stream ended, with a far point cut off by the end judged beside the last repetition
+        of the segment finished before (:attr:`beside`, while kept), as
+        :func:`cbr.segmentation.counted_segments` judges one cut off by the recording's end
+        (its ``_beside_whole``): a segment with no whole repetition of its own has nothing to
+        measure a far point cut off at its end against and drops it, so the stream frames
+        from that repetition to the end are counted as one stretch, and the far point they
+        keep cut off at the end, lying in this segment, is added
+        (:func:`cbr.segmentation.cut_off_beside`).
+        Before, dropped: squats, a change of label in the standing after them, and the
+        stream ending on the way down of one more, counted 2 and 0 where ``segment`` counts
+        2 and 1. Nothing beside a segment with none or with nobody in view, nor for a
+        segment with a whole repetition of its own."""
+        before = self.beside
+        if before is None or before < self.offset or whole_in(reps):
+            return reps
+        try:
+            found = self._count_apart(before, end, (before == 0, True))
+        except DataError:  # too short, or nobody in view
+            return reps
+        return cut_off_beside(reps, found, (start, end), self.step, at_end=True)
 
     def _unless_got_into(
         self, kept: tuple[Repetition, ...], end: int, last: bool

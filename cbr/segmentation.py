@@ -1247,20 +1247,49 @@ def _beside_whole(
     nor beside a segment with none or with nobody in view."""
     start, end = bounds[i]
     own = raw[i]
-    if blind[i] or any(not any(r.held) for r in own):
+    if blind[i] or whole_in(own):
         return own
     at_end = end >= n_frames and i > 0 and bool(raw[i - 1]) and not blind[i - 1]
     at_start = start == 0 and i + 1 < len(bounds) and bool(raw[i + 1]) and not blind[i + 1]
     if at_end:
         found = _repetitions(sig, raw[i - 1][-1].start_frame, n_frames, n_frames)
-        edge = [r for r in found if r.held[1] and r.peak_frame >= start + sig.step][-1:]
     elif at_start:
         found = _repetitions(sig, 0, raw[i + 1][0].end_frame, n_frames)
-        edge = [r for r in found if r.held[0] and r.peak_frame < end - sig.step][:1]
     else:
         return own
+    return cut_off_beside(own, found, (start, end), sig.step, at_end)
+
+
+def whole_in(reps: Sequence[Repetition]) -> bool:
+    """Whether any of ``reps`` (of one stretch) is whole: its far point held up to neither
+    end of the stretch (:attr:`Repetition.held`). Beside one, a far point cut off at the
+    recording's start or end counts when it got nearly as far
+    (:func:`features.repetitions.count_in_signals`)."""
+    return any(not any(r.held) for r in reps)
+
+
+def cut_off_beside(
+    own: Sequence[Repetition],
+    found: Sequence[Repetition],
+    bounds: tuple[int, int],
+    step: int,
+    at_end: bool,
+) -> tuple[Repetition, ...]:
+    """``own``, the repetitions of a segment, frames ``bounds`` [start, end), at the
+    recording's end (``at_end``) or start, with the far point cut off there that ``found``
+    keeps (the repetitions of the frames from the nearest repetition of the segment across
+    its cut to that edge, counted as one stretch; :attr:`Repetition.held` at the edge),
+    when it lies in this segment, past its cut by ``step`` frames (one sample of the
+    counter's signals), and in none of ``own``: the part of it in the segment added.
+    :func:`_beside_whole` (``segment``) and :meth:`cbr.live.LiveSegmenter._beside_whole`
+    (``watch``, at the stream's end) judge it so."""
+    start, end = bounds
+    if at_end:
+        edge = [r for r in found if r.held[1] and r.peak_frame >= start + step][-1:]
+    else:
+        edge = [r for r in found if r.held[0] and r.peak_frame < end - step][:1]
     if not edge or any(r.start_frame <= edge[0].peak_frame < r.end_frame for r in own):
-        return own
+        return tuple(own)
     clipped = replace(edge[0], start_frame=max(start, edge[0].start_frame),
                       end_frame=min(end, edge[0].end_frame))  # fmt: skip
     return tuple(sorted((*own, clipped), key=lambda r: r.peak_frame))
@@ -1619,6 +1648,8 @@ __all__ = [
     "check_k",
     "check_segmentable",
     "count_in_segment",
+    "cut_off_beside",
+    "whole_in",
     "Segment",
     "Segmentation",
     "SolvedRecording",
