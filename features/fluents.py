@@ -34,7 +34,7 @@ import numpy as np
 from features.errors import ConfigError, DataError
 
 from .config import read_config
-from .poses import MAX_FPS, MIN_FPS, PoseSequence
+from .poses import MAX_FPS, MIN_FPS, PoseSequence, expect_sequence
 from .signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals, near_pairs, state_signals
 
 __all__ = [
@@ -811,6 +811,7 @@ def evaluate(
     (each state's series contiguous), the reference's float64; they agree within 1e-6, with
     the same NaN and the same exact 0 and 1.
     """
+    expect_sequence(seq)
     table = table or DEFAULT_TABLE
     sig = signals if signals is not None else state_signals(seq, backend)
     prep = _prepare(table)

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from features.errors import ConfigError, PoseFileError
+from features.errors import ConfigError, InputError, PoseFileError
 from features.fileio import atomic_path
 from features.text import size_words
 
@@ -379,6 +379,19 @@ def gap_rows(seq: PoseSequence) -> np.ndarray:
     return out
 
 
+def expect_sequence(seq: Any, name: str = "seq") -> PoseSequence:
+    """``seq`` when it is a :class:`PoseSequence`; anything else (an array of positions, a
+    list of clips) is an :class:`~features.errors.InputError` naming the argument ``name``
+    and saying how to make one, not an AttributeError from inside the computation."""
+    if not isinstance(seq, PoseSequence):
+        raise InputError(
+            f"a PoseSequence is expected, got {type(seq).__name__} (PoseSequence(xyz, names,"
+            " fps) makes one of an array)",
+            name,
+        )
+    return seq
+
+
 def _skeleton(name: Any, where: str | None) -> str:
     """A known skeleton's name, as the project spells it ("Kinect_V2" is ``kinect_v2``);
     PoseFileError for any other."""
@@ -601,6 +614,18 @@ def check_archive(path: Path, keys: Sequence[str] | None = None) -> None:
 
 
 _POSE_KEYS = ("positions", "joint_names", "fps", "confidence", "skeleton", "metadata")
+
+
+def holds_poses(path: str | Path) -> bool:
+    """Whether ``path`` is an archive holding a pose file's ``positions`` (read from its zip
+    directory alone): a recording that an output of another kind must not replace."""
+    try:
+        if not Path(path).is_file() or not zipfile.is_zipfile(path):
+            return False
+        with zipfile.ZipFile(path) as zf:
+            return _member(zf, set(zf.namelist()), "positions") is not None
+    except _READ_ERRORS:
+        return False
 
 
 def _text_array(value: np.ndarray, what: str, path: Path) -> np.ndarray:

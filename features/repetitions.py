@@ -107,9 +107,9 @@ import numpy as np
 from .body import check_person, long_runs
 from .datasets import Clip
 from .derived import signals_of, stretch
-from .errors import DataError, InputError
+from .errors import DataError
 from .geometry import WORLD_UP, angle_between, body_frame, unit
-from .poses import PoseSequence
+from .poses import PoseSequence, expect_sequence
 from .signals import ANGLE_SIGNALS
 from .skeleton import JOINT_INDEX
 
@@ -1138,12 +1138,7 @@ def count_repetitions(
     shorter than one repetition could be (:data:`MIN_PERIOD_S`) or shows no person, and
     InputError when ``seq`` is not a PoseSequence (an array: ``PoseSequence(xyz, names,
     fps)`` makes one)."""
-    if not isinstance(seq, PoseSequence):
-        raise InputError(
-            f"a PoseSequence is expected, got {type(seq).__name__} (PoseSequence(xyz, names,"
-            " fps) makes one of an array)",
-            "seq",
-        )
+    expect_sequence(seq)
     if seq.duration_s < MIN_PERIOD_S:
         raise DataError(
             f"the clip lasts {seq.duration_s:.2f} s, shorter than one repetition can be"

@@ -16,7 +16,7 @@ import numpy as np
 from features.errors import ConfigError
 
 from .geometry import MIN_LINK_M, angle_between, body_frame, joint_angle, norm, project
-from .poses import PoseSequence
+from .poses import PoseSequence, expect_sequence
 from .skeleton import JOINT_INDEX
 
 SIDES = ("left", "right")
@@ -185,7 +185,7 @@ def state_signals(seq: PoseSequence, backend: Literal["numba", "numpy"] = "numba
     (:func:`features._fluent_kernels.state_signal_values`), ``"numpy"`` the whole-array
     reference built from :mod:`features.geometry`.
     """
-    p = seq.to_canonical().positions
+    p = expect_sequence(seq).to_canonical().positions
     if backend == "numba":
         from ._fluent_kernels import state_signal_values
 

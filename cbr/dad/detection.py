@@ -24,7 +24,7 @@ import numpy as np
 
 from features.errors import ConfigError
 from features.fluents import Backend, state_signals
-from features.poses import PoseSequence
+from features.poses import PoseSequence, expect_sequence
 from features.qmp import QMPConfig, fit_signals, sliding_windows
 from features.qmp.add import ADD, Activity, CriteriaResult, evaluate_criteria, load_add
 from features.text import percent
@@ -157,6 +157,7 @@ def detect(
     numba's compiled pass (the default) or the numpy reference, which a short clip in a new
     process gets sooner than numba loads its kernels (the same signals within 1e-15).
     """
+    expect_sequence(seq)
     cfg = config or DADConfig()
     db = add if isinstance(add, ADD) else load_add(add)
     duration = seq.positions.shape[0] / seq.fps

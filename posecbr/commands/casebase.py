@@ -573,11 +573,20 @@ def _export_path(args: argparse.Namespace) -> Path:
 
 
 def _check_export(args: argparse.Namespace) -> None:
-    """The export file is not a folder and never the store's files (the database, its
-    journals): ``--db X.npz --out X.npz`` would replace the case base by its export."""
+    """The export file is not a folder, never the store's files (the database, its
+    journals: ``--db X.npz --out X.npz`` would replace the case base by its export) and never
+    a pose file (``--out poses/squat.npz`` replaced a recording, as likely one its own cases
+    were taken from, by the cases' features)."""
     from casebase_store import store_files
+    from features.poses import holds_poses
 
-    check_output(_export_path(args), inputs=store_files(args.db), what="export file")
+    out = check_output(_export_path(args), inputs=store_files(args.db), what="export file")
+    if holds_poses(out):
+        raise DataError(
+            "is a pose file: the export would replace that recording by the cases' features"
+            " (name another file)",
+            out,
+        )
 
 
 def _frames(ranges: tuple[tuple[int | None, int | None], ...]) -> Any:
