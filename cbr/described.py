@@ -18,14 +18,17 @@ the clip is read: in this process, clip after clip, or on the workers of a Dask 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import math
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from features.body import mirror_source, moves_left_more, torso_share
 from features.derived import forget, is_cached
+from features.errors import InputError
 from features.poses import PoseSequence
 
 from . import long_clip
@@ -47,7 +50,9 @@ class DescribedClip:
     ``source``, ``subject``, ``frames`` (start, end) and ``skeleton``; summary: the clip's
     fluent summary over the candidate columns of :data:`cbr.novelty.DESCRIPTION` (what the
     "unlike the stored cases" feature score judges; None when the problem is a fluent summary
-    itself) and summary_available which of them it has.
+    itself) and summary_available which of them it has; columns: the :func:`columns_key` of
+    the candidates it was described over ("" when unknown: a record made by hand, or before
+    the key was kept), checked by :func:`check_described`.
     """
 
     values: np.ndarray
@@ -64,6 +69,7 @@ class DescribedClip:
     summary: np.ndarray | None = None
     summary_available: np.ndarray | None = None
     duration_s: float = math.inf
+    columns: str = ""
 
     @property
     def mirror_source(self) -> str:
@@ -84,7 +90,8 @@ def describe_clip(
         if share == 0.0:  # no person: nothing to compute, the fit refuses or skips it
             empty = np.zeros(0)
             return DescribedClip(empty, None, None, empty.astype(bool), share,
-                                 *_provenance(seq), duration_s=seq.duration_s)  # fmt: skip
+                                 *_provenance(seq), duration_s=seq.duration_s,
+                                 columns=columns_key(candidates))  # fmt: skip
         plain = candidates if candidates.side == "as_recorded" else _as_recorded(candidates)
         # a long clip is described a piece at a time (cbr.long_clip): problem, mirror image,
         # favoured side and available columns, none of them over the whole clip at once
@@ -101,11 +108,45 @@ def describe_clip(
             names, words = _interned(problem.names), _interned(problem.words)
         return DescribedClip(
             problem.values, image, left, has, share, *_provenance(seq), names, words,
-            *_summary(seq, plain), duration_s=seq.duration_s,
+            *_summary(seq, plain), duration_s=seq.duration_s, columns=columns_key(candidates),
         )  # fmt: skip
     finally:
         if not keep:
             forget(seq)
+
+
+def columns_key(candidates: FeatureConfig) -> str:
+    """A short key of the candidate columns ``candidates`` names, the same in every process
+    (a description made on a cluster's worker is checked by it against the fit's plan)."""
+    text = json.dumps(candidates.to_dict(), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+
+
+def check_described(
+    clips: Sequence[object], candidates: FeatureConfig, mirror: bool, sides: bool
+) -> None:
+    """Refuse, as an :class:`~features.errors.InputError` naming ``clips[i]``, a record that is
+    no :class:`DescribedClip` or was described for another fit's plan (other candidate
+    columns, or without the mirror image or favoured side this one chooses with): its values
+    would be read as columns they are not, a model fitted silently wrong or a raw error."""
+    key = columns_key(candidates)
+    how = "describe them with this estimator's plan, cbr.training.fit_plan(estimator)"
+    for i, c in enumerate(clips):
+        if not isinstance(c, DescribedClip):
+            raise InputError(
+                f"clips[{i}] is a {type(c).__name__}, not a DescribedClip: {how}", "clips"
+            )
+        if c.torso_share == 0.0:  # no person: described as nothing, refused by the fit
+            continue
+        if c.columns and c.columns != key:
+            why = "over other feature columns than this estimator's"
+        elif mirror and c.mirror is None:
+            why = "without its mirror image, which this estimator needs"
+        elif sides and c.left is None:
+            why = "without the side it moves more, which this estimator needs"
+        else:
+            continue
+        raise InputError(f"clips[{i}] was described {why}: {how}", "clips")
 
 
 def _summary(

@@ -59,7 +59,7 @@ from .calibration import (
     held_out_ways,
 )
 from .casebase import CaseBase, frame_array, skeleton_of
-from .described import DescribedClip, describe_clips
+from .described import DescribedClip, check_described, describe_clips
 from .explain import Explanation, explain
 from .fitting import (
     AUTO_PHASES,
@@ -575,9 +575,9 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
 
     def fit_described(self, clips: Sequence[DescribedClip], y: Any) -> CaseBaseClassifier:
         """:meth:`fit` on clips already described by :func:`cbr.described.describe_clip` with
-        :meth:`describe_plan` (in this process or on a cluster's workers): the same model."""
-        self._check_params()
-        self._check_trim_editor()
+        :meth:`describe_plan` (in this process or on a cluster's workers): the same model.
+        Records described for another plan are refused (:func:`cbr.described.check_described`)."""
+        check_described(clips, *self.describe_plan())
         labels, classes = self._check_training_set(clips, y)
         measure = self._measure()
         subjects = np.array([c.subject or "" for c in clips], dtype=object)

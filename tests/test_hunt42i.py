@@ -78,3 +78,66 @@ def test_the_functions_reading_one_clip_refuse_an_array_naming_the_argument(
             f"seq: a PoseSequence is expected, got {kind} (PoseSequence(xyz, names, fps) makes"
             " one of an array)"
         )
+
+
+@pytest.fixture(scope="module")
+def demo_clips() -> tuple[list[Any], list[str]]:
+    """Two subjects' deep squats and sit-to-stands of the bundled demo (24 clips)."""
+    from features.datasets import load_dataset
+
+    demo = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+    clips = load_dataset(demo, subjects={"s01", "s02"}, labels={"deep_squat", "sit_to_stand"})
+    return [c.seq for c in clips], [c.label for c in clips]
+
+
+@pytest.mark.parametrize(
+    "params",
+    [
+        {"length": 16},
+        {"angles": False},
+        {"velocity": True},
+        {"features": "qmp"},
+        {"similarity": "dtw"},
+    ],  # fmt: skip
+    ids=["length", "angles", "velocity", "qmp", "dtw"],
+)
+def test_fit_described_refuses_clips_described_for_another_estimator(
+    demo_clips: tuple[list[Any], list[str]], params: dict[str, Any]
+) -> None:
+    """The README offers ``fit_described`` "on records made anywhere"; records described once
+    with the default plan and fitted with other parameters (a search over them) were read as
+    the columns of the other configuration. ``length=16``, ``qmp`` and ``dtw`` fitted
+    silently (on 40 demo clips of s01 and s02, every third, ``length=16`` answered 10 of s03's 60
+    clips otherwise than ``fit`` of the same clips, its cases of 1,183 columns where
+    ``fit``'s have 676); ``angles=False`` and ``velocity=True`` raised ValueError and
+    IndexError from inside. Each is refused naming the record and the call that describes it
+    right."""
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import describe, fit_plan
+
+    X, y = demo_clips
+    described = [describe(s, fit_plan(CaseBaseClassifier())) for s in X]
+    with pytest.raises(InputError, match=r"clips\[0\] was described over other feature columns"):
+        CaseBaseClassifier(**params).fit_described(described, y)
+
+
+def test_fit_described_refuses_clips_without_what_its_side_handling_needs(
+    demo_clips: tuple[list[Any], list[str]],
+) -> None:
+    """Records described without mirror images (``mirror="off"``) given to an estimator that
+    adds them as cases, and a clip given undescribed, are refused by name; records of the
+    estimator's own plan fit the model ``fit`` fits."""
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import describe, fit_plan
+
+    X, y = demo_clips
+    plain = CaseBaseClassifier(mirror="off", feature_weights="none")
+    described = [describe(s, fit_plan(plain)) for s in X]
+    augment = CaseBaseClassifier(mirror="augment", feature_weights="none")
+    with pytest.raises(InputError, match=r"clips\[0\] was described without its mirror image"):
+        augment.fit_described(described, y)
+    with pytest.raises(InputError, match=r"clips\[1\] is a PoseSequence, not a DescribedClip"):
+        plain.fit_described([described[0], X[1]], y[:2])
+    ours = plain.fit_described(described, y).case_base_.problems
+    np.testing.assert_array_equal(ours, CaseBaseClassifier(**plain.get_params()).fit(X, y)
+                                  .case_base_.problems)  # fmt: skip
