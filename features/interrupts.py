@@ -153,15 +153,17 @@ def interrupts_held() -> Iterator[None]:
         return
     came: list[int] = []
     main = threading.current_thread() is threading.main_thread()  # where handlers are set
-    handler = signal.signal(signal.SIGINT, lambda n, _: came.append(n)) if main else None
-    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        with sigterm_held():
+    # SIGTERM held outermost: raised once the mask and SIGINT's handler are back (raised as
+    # its handler was put back, before them, it left Ctrl-C blocked in a caller that goes on)
+    with sigterm_held():
+        handler = signal.signal(signal.SIGINT, lambda n, _: came.append(n)) if main else None
+        mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
             yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
-        if main:  # None: a handler not set from Python, which cannot be set back
-            signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+            if main:  # None: a handler not set from Python, which cannot be set back
+                signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
     if came:
         raise KeyboardInterrupt
 
@@ -183,20 +185,21 @@ def interrupts_ignored_by_children() -> Iterator[None]:
     if not (hasattr(signal, "pthread_sigmask") and main):  # Windows: no POSIX signals
         yield
         return
-    sentinel = _sentinel()
-    try:
-        handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # SIGTERM held outermost: raised once SIGINT's handler is back and the sentinel ended
+    with sigterm_held():
+        sentinel = _sentinel()
         try:
-            with sigterm_held():
+            handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+            try:
                 yield
+            finally:
+                signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
+            came = sentinel is not None and sentinel.poll() is not None
         finally:
-            signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
-        came = sentinel is not None and sentinel.poll() is not None
-    finally:
-        if sentinel is not None:
-            if sentinel.poll() is None:
-                sentinel.kill()
-            sentinel.wait()
+            if sentinel is not None:
+                if sentinel.poll() is None:
+                    sentinel.kill()
+                sentinel.wait()
     if came:
         raise KeyboardInterrupt
 
