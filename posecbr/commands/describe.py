@@ -155,6 +155,15 @@ def _missing_torso(seq: PoseSequence, where: Path) -> str | None:
     return ", ".join(j.replace("_", " ") for j in gone)
 
 
+def _nothing_to_describe(missing: str, where: Path) -> DataError:
+    """The refusal of a clip that shows no person: ``missing`` (in words, "every joint" or
+    the torso joints :func:`_missing_torso` names) is missing in every frame, and no state
+    is left to describe."""
+    return DataError(
+        f"shows no person ({missing} missing in every frame): nothing to describe", where
+    )
+
+
 def _no_torso_line(missing: str) -> str:
     """The line saying what a clip without a torso is described by (``missing``: the torso
     joints it lacks, :func:`_missing_torso`)."""
@@ -210,10 +219,7 @@ def run(args: argparse.Namespace) -> int:
     table = FluentTable.from_file(args.thresholds) if args.thresholds else DEFAULT_TABLE
     seq = load_clip_as_asked(args.posefile, args.asf, args.fps)
     if np.isnan(seq.positions).all():  # as classify, dad, reps and segment refuse it
-        raise DataError(
-            "shows no person (every joint missing in every frame): nothing to describe",
-            args.posefile,
-        )
+        raise _nothing_to_describe("every joint", args.posefile)
     missing = _missing_torso(seq, args.posefile)
     backend: Backend = "numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba"
     spool = None
@@ -226,10 +232,7 @@ def run(args: argparse.Namespace) -> int:
         seq, table, args.min_confidence, min_run, args.all, per_frame=spool, backend=backend
     )
     if missing is not None and len(tl.unavailable()) == len(table.specs):
-        raise DataError(
-            f"shows no person ({missing} missing in every frame): nothing to describe",
-            args.posefile,
-        )
+        raise _nothing_to_describe(missing, args.posefile)
     if args.plot:
         plot_timeline(tl, args.plot, args.min_confidence, title=args.posefile.name)
         # on stderr, as every command's "written to": stdout holds only the answer (--json)
