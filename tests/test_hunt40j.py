@@ -59,17 +59,26 @@ def _refuse_making(monkeypatch: pytest.MonkeyPatch, name: str) -> None:
     monkeypatch.setattr(fileio, "temporary_file", temporary_file)
 
 
-def _refuse_renaming(monkeypatch: pytest.MonkeyPatch, name: str) -> None:
-    """An I/O error as a file is first renamed to ``name`` (the rename is refused once)."""
+def _refuse_renaming(monkeypatch: pytest.MonkeyPatch, name: str, once: bool = True) -> None:
+    """An I/O error as a file is first renamed to ``name`` (``once`` False: every time)."""
     real, refused = os.replace, []
 
     def replace(src: str | Path, dst: str | Path) -> None:
-        if Path(dst).name == name and not refused:
+        if Path(dst).name == name and not (once and refused):
             refused.append(dst)
             raise EIO
         real(src, dst)
 
     monkeypatch.setattr(os, "replace", replace)
+
+
+def _no_hard_links(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A file system without hard links (FAT): ``os.link`` refused (EPERM)."""
+
+    def link(*args: object, **kwargs: object) -> None:
+        raise OSError(errno.EPERM, os.strerror(errno.EPERM))
+
+    monkeypatch.setattr(os, "link", link)
 
 
 def _compare_refused(
@@ -157,11 +166,7 @@ def test_replace_together_puts_back_without_hard_links(
     for n in ("x", "y"):
         (tmp_path / n).write_text(f"old {n}", encoding="utf-8")
         (tmp_path / f"new_{n}").write_text(f"new {n}", encoding="utf-8")
-
-    def link(*args: object, **kwargs: object) -> None:
-        raise OSError(errno.EPERM, os.strerror(errno.EPERM))
-
-    monkeypatch.setattr(os, "link", link)
+    _no_hard_links(monkeypatch)
     _refuse_renaming(monkeypatch, "y")
     moves = [(tmp_path / "new_x", tmp_path / "x"), (tmp_path / "new_y", tmp_path / "y")]
     with pytest.raises(DataError, match="cannot write: Input/output error"):
@@ -233,18 +238,8 @@ def test_an_earlier_file_that_cannot_be_put_back_is_named_where_it_is(
     # cannot go back; the message names the hidden file holding it
     (tmp_path / "y").write_text("old y", encoding="utf-8")
     (tmp_path / "new_y").write_text("new y", encoding="utf-8")
-    real = os.replace
-
-    def link(*args: object, **kwargs: object) -> None:
-        raise OSError(errno.EPERM, os.strerror(errno.EPERM))
-
-    def replace(src: str | Path, dst: str | Path) -> None:
-        if Path(dst).name == "y":
-            raise EIO
-        real(src, dst)
-
-    monkeypatch.setattr(os, "link", link)
-    monkeypatch.setattr(os, "replace", replace)
+    _no_hard_links(monkeypatch)
+    _refuse_renaming(monkeypatch, "y", once=False)
     with pytest.raises(DataError) as err:
         replace_together([(tmp_path / "new_y", tmp_path / "y")])
     (aside,) = [p for p in tmp_path.iterdir() if p.name.startswith(".y.")]
