@@ -502,7 +502,7 @@ def test_watch_of_a_served_mp4_cut_short_says_it_was_cut(
     # exit 0; cut before its index (at its end) "cannot open camera or stream"; a file here
     # cut so is refused as "truncated MP4/MOV" (hunt 38f)
     pytest.importorskip("av")
-    from tests.test_watch import _serving
+    from tests.test_hunt34c import _serving
 
     whole = (shared_data / SQUAT_MP4).read_bytes()  # its index (moov) last: 508,341 bytes
     folder = tmp_path / "served"

@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import functools
-import http.server
 import json
 import signal
 import subprocess
@@ -12,7 +10,6 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +23,7 @@ from features.readers.asfamc import read_asf_amc
 from posecbr.cli import main
 from tests.badinput import snapshot
 from tests.once import made_once
+from tests.test_hunt34c import _Quiet, _serving
 
 
 def _cmu_13_29_windows(folder: Path, shared_data: Path) -> Path:
@@ -406,29 +404,6 @@ def test_a_stream_that_never_shows_anybody_is_one_unknown_segment(case_base: Pat
     ] == [(0, 90, None, 0, "nobody in view")]
 
 
-class _Quiet(http.server.SimpleHTTPRequestHandler):
-    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 (the base's name)
-        """No request lines on stderr."""
-
-
-class _QuietServer(http.server.ThreadingHTTPServer):
-    def handle_error(self, request: Any, client_address: Any) -> None:
-        """No traceback on stderr when the client hangs up (watch stops reading)."""
-
-
-@contextmanager
-def _serving(folder: Path) -> Iterator[str]:
-    """The address of ``folder`` served over HTTP on this machine while the block runs."""
-    handler = functools.partial(_Quiet, directory=str(folder))
-    server = _QuietServer(("127.0.0.1", 0), handler)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
-    try:
-        yield f"http://127.0.0.1:{server.server_address[1]}"
-    finally:
-        server.shutdown()
-        server.server_close()
-
-
 @pytest.fixture
 def served(shared_data: Path) -> Iterator[str]:
     """The address of ../shared/data/media served over HTTP on this machine (a stream URL)."""
@@ -780,15 +755,9 @@ def test_a_served_mp4_that_gives_no_frame_says_why(
         " MOV files) and the server does not answer range requests (python -m http.server"
         " does not)\n"
     )
-    handler = functools.partial(_Ranges, directory=str(tmp_path))
-    server = _QuietServer(("127.0.0.1", 0), handler)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
-    try:
-        url = f"http://127.0.0.1:{server.server_address[1]}/noise.mp4"
+    with _serving(tmp_path, _Ranges) as address:
+        url = f"{address}/noise.mp4"
         assert main(["watch", url, "--db", str(case_base), "--speed", "0"]) == 0
-    finally:
-        server.shutdown()
-        server.server_close()
     lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert [(d["start_frame"], d["end_frame"], d["explanation"]) for d in lines] == [
         (0, 75, "nobody in view")
