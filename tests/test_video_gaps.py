@@ -17,13 +17,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from features.pose_estimation import PoseEstimator, estimate_video, iter_frames, stream_poses
-from features.pose_estimation.video import older_vfr_extraction, outside_frame, resample_to_grid
+from features.pose_estimation import PoseEstimator, estimate_video, stream_poses
+from features.pose_estimation.video import older_vfr_extraction, resample_to_grid
 from features.poses import EXTRACTION_VERSION, load_pose, load_pose_arrays, save_pose
 from posecbr.cli import main
 from posecbr.commands.extract import STALE_VFR
 from posecbr.commands.watch import Regrid
-from tests.test_video_vfr import LEFT_HIP, _frame, _write, people  # noqa: F401 (a fixture)
+from tests.test_video_vfr import (  # noqa: F401 (people: a fixture)
+    LEFT_HIP,
+    _frame,
+    _per_frame,
+    _write,
+    people,
+)
 from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
 # 12 lunge frames at 25 fps (40 ms), but 1 s from the sixth (200 ms) to the seventh (1.2 s)
@@ -86,19 +92,6 @@ def gap_ts(people: list[np.ndarray], tmp_path_factory: pytest.TempPathFactory) -
     return _write(tmp_path_factory.mktemp("gap") / "jump.ts", GAP_MS, people[:12])
 
 
-def _per_frame(path: Path) -> np.ndarray:
-    """Each decoded frame's world landmarks as estimate_video keeps them (a joint outside the
-    picture missing), the model run on each frame alone."""
-    est = PoseEstimator(smoothing=False, tracking=False)
-    world = []
-    for rgb in iter_frames(path):
-        pose = est.process(rgb)
-        w = pose.world.copy()
-        w[outside_frame(pose.image, rgb.shape[1], rgb.shape[0])] = np.nan
-        world.append(w)
-    return np.array(world)
-
-
 def test_a_gap_stays_missing_and_the_frames_around_it_are_their_own_poses(
     people: list[np.ndarray],  # noqa: F811
     tmp_path: Path,
@@ -145,7 +138,7 @@ def test_a_normal_variable_rate_is_still_blended(
     pts = [0, 20, 100, 180, 220, 260, 300, 400, 440, 520, 540, 620]
     path = _write(tmp_path / "phone.mkv", pts, people[:12], codec="ffv1")
     got = estimate_video(path, **OPTIONS)
-    hip = _per_frame(path)[:, LEFT_HIP]
+    hip = _per_frame(path, tracking=False)[:, LEFT_HIP]
     assert np.isfinite(hip).all()
     seq = got.sequence
     assert seq.n_frames == 16 and not np.isnan(seq.positions[:, LEFT_HIP]).any()
@@ -165,7 +158,7 @@ def test_extract_and_watch_agree_frame_for_frame_across_a_gap(gap_ts: Path) -> N
     assert len(pushed) == offline.shape[0] == 36
     np.testing.assert_array_equal(np.array(pushed), offline)
     assert np.isnan(offline[GAP_ROWS]).all()
-    frames = _per_frame(gap_ts)
+    frames = _per_frame(gap_ts, tracking=False)
     np.testing.assert_array_equal(offline[:6], frames[:6])
     np.testing.assert_array_equal(offline[30:], frames[6:])
 

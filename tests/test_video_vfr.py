@@ -77,6 +77,20 @@ def _write(
     return path
 
 
+def _per_frame(path: Path, tracking: bool) -> np.ndarray:
+    """Each decoded frame's world landmarks as estimate_video keeps them (a joint outside the
+    picture missing), unsmoothed; ``tracking``: the ROI from the frame before (False: the
+    model run on each frame alone)."""
+    est = PoseEstimator(smoothing=False, tracking=tracking)
+    world = []
+    for rgb in iter_frames(path):
+        pose = est.process(rgb)
+        w = pose.world.copy()
+        w[outside_frame(pose.image, rgb.shape[1], rgb.shape[0])] = np.nan
+        world.append(w)
+    return np.array(world)
+
+
 def _grey(n: int) -> list[np.ndarray]:
     return [np.full((48, 64, 3), 8 * k, np.uint8) for k in range(n)]
 
@@ -211,14 +225,7 @@ def test_a_variable_rate_video_is_resampled_to_its_declared_rate(
     assert vp.image_landmarks.shape == (16, 33, 5)
     # grid 120 ms lies between the frames at 100 and 180 ms (0.25 of the way);
     # grid 400 ms is the frame at 400 ms itself
-    raw = PoseEstimator(smoothing=False)
-    world = []
-    for rgb in iter_frames(vfr_mkv):
-        pose = raw.process(rgb)
-        w = pose.world.copy()
-        w[outside_frame(pose.image, rgb.shape[1], rgb.shape[0])] = np.nan
-        world.append(w)
-    hip = np.array(world)[:, LEFT_HIP]
+    hip = _per_frame(vfr_mkv, tracking=True)[:, LEFT_HIP]
     assert np.isfinite(hip).all()
     np.testing.assert_allclose(seq.positions[3, LEFT_HIP], 0.75 * hip[2] + 0.25 * hip[3])
     np.testing.assert_array_equal(seq.positions[10, LEFT_HIP], hip[8])
