@@ -7,6 +7,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import signal
 import sqlite3
 import subprocess
@@ -18,6 +19,7 @@ import pytest
 
 from posecbr.cli import main
 from tests.badinput import refused, snapshot
+from tests.once import made_once
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
@@ -306,15 +308,32 @@ def _pngs(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir() if p.suffix == ".png")
 
 
+@pytest.fixture(scope="module")
+def earlier_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The --out folder of one ``COMPARE`` (three activities: six pictures, three of them
+    timelines), made once in the session; each test copies it as the earlier run its own
+    comparison writes over (compare names no folder in its files: a copy is that run)."""
+
+    def make(folder: Path) -> Path:
+        out = folder / "o"
+        assert main([*COMPARE, "--out", str(out)]) == 0
+        return out
+
+    return made_once(tmp_path_factory, "hunt39e-compare-three", make)
+
+
+def _earlier_run_in(earlier_run: Path, out: Path) -> None:
+    shutil.copytree(earlier_run, out)
+
+
 def test_compare_interrupted_while_drawing_names_exactly_the_pictures_on_disk(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    earlier_run: Path, tmp_path: Path
 ) -> None:
     # before: results.json, written before the pictures, named none; the two drawn lay beside
     # it unnamed, and the earlier run's timelines and prevalence, no longer named by any
     # results file, were never removed
     out = tmp_path / "o"
-    assert main([*COMPARE, "--out", str(out)]) == 0
-    capsys.readouterr()
+    _earlier_run_in(earlier_run, out)
     assert _pngs(out) == ["accuracy.png", "confusion_cbr_fluents_euclidean.png",
                           "prevalence.png", "timeline_00.png", "timeline_01.png",
                           "timeline_02.png"]  # fmt: skip
@@ -403,7 +422,11 @@ def _interrupted_in_first_write(where: str, out: Path) -> str:
 @pytest.mark.parametrize("earlier", [False, True], ids=["new-folder", "earlier-run"])
 @pytest.mark.parametrize("where", ["rename", "csv"])
 def test_compare_interrupted_in_its_first_write_leaves_whole_results_and_a_rerun_clean(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], where: str, earlier: bool
+    earlier_run: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    where: str,
+    earlier: bool,
 ) -> None:
     # before: Ctrl-C between results.json and results.csv left the new JSON (two activities)
     # beside the earlier run's table (three) and its six pictures, named by no results file
@@ -412,8 +435,7 @@ def test_compare_interrupted_in_its_first_write_leaves_whole_results_and_a_rerun
     # folder empty. Each time "posecbr compare: interrupted", nothing said of the files.
     out = tmp_path / "o"
     if earlier:  # three activities: three timelines
-        assert main([*COMPARE, "--out", str(out)]) == 0
-        capsys.readouterr()
+        _earlier_run_in(earlier_run, out)
         assert "timeline_02.png" in _pngs(out)
     assert _interrupted_in_first_write(where, out) == (
         f"posecbr compare: interrupted: results in {out}, with the 0 pictures drawn before it;"
@@ -438,14 +460,13 @@ def test_compare_interrupted_in_its_first_write_leaves_whole_results_and_a_rerun
 
 
 def test_compare_interrupted_as_it_names_its_pictures_names_every_one(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    earlier_run: Path, tmp_path: Path
 ) -> None:
     # before: Ctrl-C as results.json was written again to name the pictures left all five
     # drawn and none named (results.json as first written: "pictures": {}), said as
     # "interrupted" alone; `report` then showed none of them
     out = tmp_path / "o"
-    assert main([*COMPARE, "--out", str(out)]) == 0  # three activities: three timelines
-    capsys.readouterr()
+    _earlier_run_in(earlier_run, out)  # three activities: three timelines
     assert _interrupted_in_first_write("last", out) == (
         f"posecbr compare: interrupted: results in {out}, with the 5 pictures drawn before it:"
         " all of them"
