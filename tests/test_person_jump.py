@@ -22,6 +22,7 @@ import pytest
 
 from features.poses import PoseSequence, load_pose, save_pose
 from posecbr.cli import main
+from tests.once import made_once
 from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
 LUNGE = Path("videos") / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
@@ -81,13 +82,19 @@ def _leave_video(shared_data: Path, out: Path, frames: int = 175) -> Path:
 
 @pytest.fixture(scope="module")
 def extracted(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
-    folder = tmp_path_factory.mktemp("jump")
-    video = _leave_video(shared_data, folder / "leaves.avi")
-    pose = folder / "leaves.npz"  # beside leaves.avi
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        assert main(["extract", str(video), "--out", str(pose)]) == 0
-    return pose, buf.getvalue()
+    """The video of one person leaving while another is in view, ``leaves.avi``, and
+    ``extract``'s pose file beside it with what it said: made once in the session (the tests
+    only read them)."""
+
+    def make(folder: Path) -> tuple[Path, str]:
+        video = _leave_video(shared_data, folder / "leaves.avi")
+        pose = folder / "leaves.npz"  # beside leaves.avi
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            assert main(["extract", str(video), "--out", str(pose)]) == 0
+        return pose, buf.getvalue()
+
+    return made_once(tmp_path_factory, "person-jump-leaves", make)
 
 
 def test_extract_records_and_says_where_the_pose_jumped(extracted: tuple[Path, str]) -> None:
@@ -144,7 +151,12 @@ def jacks(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[
     """The cropped jumping jacks (11 by hand: arms up at 0.9, 1.8, ..., 9.3 and 10.2 s,
     tests/fixtures/repetition_counts.json) on the left until frame 150 (5.0 s), and again on
     the right from frame 60, 14 frames (0.47 s) further on in the clip, to the clip's end:
-    the pose file and the rate."""
+    the pose file and the rate. Made once in the session (this module and
+    tests/test_watch_jump.py only read them)."""
+    return made_once(tmp_path_factory, "person-jump-jacks", lambda f: _jacks(shared_data, f))
+
+
+def _jacks(shared_data: Path, folder: Path) -> tuple[Path, float]:
     cap = cv2.VideoCapture(str(shared_data / JUMPING_JACKS))
     fps = cap.get(cv2.CAP_PROP_FPS)
     frames = []
@@ -155,7 +167,6 @@ def jacks(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[
         frames.append(cv2.resize(bgr, (640, 360)))
     cap.release()
     assert len(frames) == 308
-    folder = tmp_path_factory.mktemp("jacks")
     video, pose = folder / "jacks.avi", folder / "jacks.npz"
     writer = cv2.VideoWriter(str(video), cv2.VideoWriter.fourcc(*"MJPG"), fps, (1280, 360))
     black = np.zeros_like(frames[0])
