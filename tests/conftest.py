@@ -121,6 +121,24 @@ def compared_slice(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return made_once(tmp_path_factory, "compare-slice", make)
 
 
+@pytest.fixture(scope="session")
+def compared_three(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The ``--out`` folder of one ``compare`` of three activities of the demo's subject s01
+    (``tests/test_hunt40j.py``'s THREE: three folds, fluents by euclidean, no DAD, peers or
+    explanations; six pictures), made once in the session. tests/test_hunt39e.py and
+    tests/test_hunt40j.py copy it as the earlier run their own comparison writes over (compare
+    names no folder in its files: a copy is that run)."""
+
+    def make(root: Path) -> Path:
+        from posecbr.cli import main
+        from tests.test_hunt40j import THREE
+
+        assert main([*THREE, "--out", str(root / "o")]) == 0
+        return root / "o"
+
+    return made_once(tmp_path_factory, "compare-three", make)
+
+
 @pytest.fixture(autouse=True)
 def _no_progress_bars(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("POSECBR_NO_PROGRESS", "1")

@@ -19,7 +19,6 @@ import pytest
 
 from posecbr.cli import main
 from tests.badinput import refused, snapshot
-from tests.once import made_once
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
@@ -308,18 +307,15 @@ def _pngs(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir() if p.suffix == ".png")
 
 
-@pytest.fixture(scope="module")
-def earlier_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+@pytest.fixture
+def earlier_run(compared_three: Path) -> Path:
     """The --out folder of one ``COMPARE`` (three activities: six pictures, three of them
-    timelines), made once in the session; each test copies it as the earlier run its own
-    comparison writes over (compare names no folder in its files: a copy is that run)."""
+    timelines), made once in the session (tests/conftest.py); each test copies it as the
+    earlier run its own comparison writes over."""
+    from tests.test_hunt40j import THREE
 
-    def make(folder: Path) -> Path:
-        out = folder / "o"
-        assert main([*COMPARE, "--out", str(out)]) == 0
-        return out
-
-    return made_once(tmp_path_factory, "hunt39e-compare-three", make)
+    assert THREE == COMPARE  # the comparison made once is this module's
+    return compared_three
 
 
 def _earlier_run_in(earlier_run: Path, out: Path) -> None:

@@ -39,12 +39,11 @@ def _digests(folder: Path) -> dict[str, str]:
     return {p.name: hashlib.md5(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
 
 
-@pytest.fixture(scope="module")
-def earlier(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The --out folder of an earlier comparison of three activities (six pictures)."""
-    out = tmp_path_factory.mktemp("earlier") / "o"
-    assert main([*THREE, "--out", str(out)]) == 0
-    return out
+@pytest.fixture
+def earlier(compared_three: Path) -> Path:
+    """The --out folder of an earlier comparison of three activities (six pictures): THREE's,
+    made once in the session (tests/conftest.py), to copy."""
+    return compared_three
 
 
 def _refuse_making(monkeypatch: pytest.MonkeyPatch, name: str) -> None:
