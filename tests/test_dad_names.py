@@ -16,6 +16,7 @@ from features.errors import InputError
 from features.poses import PoseSequence
 from features.qmp.add import load_add
 from features.readers.asfamc import read_asf_amc
+from tests.once import made_once
 
 # cmu-mocap6/README.md: the codes 1-12 of truelabels, in order
 CMU_NAMES = ("JumpJack Jog Squat KneeRaise ArmCircle Twist SideReach Box UpDown ToeTouchOneHand "
@@ -35,9 +36,13 @@ def _stretches(rec: PoseSequence, codes: list[int]) -> list[tuple[PoseSequence, 
 
 
 @pytest.fixture(scope="module")
-def cmu_squats_and_jacks(shared_data: Path) -> list[Clip]:
+def cmu_squats_and_jacks(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> list[Clip]:
     """CMU 13_29's and 13_30's squat and jumping-jack stretches (two of each), labelled with
-    CMU's own names."""
+    CMU's own names: read once in the run (the tests only read them)."""
+    return made_once(tmp_path_factory, "dad-names-cmu", lambda _: _squats_and_jacks(shared_data))
+
+
+def _squats_and_jacks(shared_data: Path) -> list[Clip]:
     asf = shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf"
     clips = []
     for take in ("13_29", "13_30"):

@@ -9,6 +9,7 @@ import pytest
 
 from cbr.dad import DADClassifier, detect
 from features.datasets import Clip, iter_dataset
+from tests.once import made_once
 
 UIPRMD = {
     "deep_squat", "hurdle_step", "inline_lunge", "side_lunge", "sit_to_stand",
@@ -23,14 +24,23 @@ HDM05 = {
 }  # fmt: skip
 
 
+# read once in the run (the tests only read them), not once per worker
 @pytest.fixture(scope="module")
-def uiprmd_episode4(shared_data: Path) -> list[Clip]:
-    return list(iter_dataset(shared_data / "ui-prmd", episodes={4}, correct=True))
+def uiprmd_episode4(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> list[Clip]:
+    root = shared_data / "ui-prmd"
+    return made_once(
+        tmp_path_factory, "dad-uiprmd-episode4",
+        lambda _: list(iter_dataset(root, episodes={4}, correct=True)),
+    )  # fmt: skip
 
 
 @pytest.fixture(scope="module")
-def deep_squats(shared_data: Path) -> list[Clip]:
-    return list(iter_dataset(shared_data / "ui-prmd", movements={"m01"}, episodes={4, 5}))
+def deep_squats(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> list[Clip]:
+    root = shared_data / "ui-prmd"
+    return made_once(
+        tmp_path_factory, "dad-uiprmd-deep-squats",
+        lambda _: list(iter_dataset(root, movements={"m01"}, episodes={4, 5})),
+    )  # fmt: skip
 
 
 def _top_among(result_activities: tuple, labels: set[str]) -> str | None:

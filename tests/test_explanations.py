@@ -20,6 +20,7 @@ from cbr.explain import MAX_TEXT, Claim, Explanation, clip_of, label_words
 from cbr.profiles import view_of
 from features.poses import PoseSequence
 from tests.bodies import squat_clip
+from tests.once import made_once
 
 DEPTHS = {"deep": (0.9, 1.0), "shallow": (0.45, 0.55)}
 #: the joints depth moves: the knees and hips, and the torso, whose lean grows with depth;
@@ -50,16 +51,22 @@ def _squats(labels: dict[str, str], seed: int = 0) -> tuple[list[PoseSequence], 
     return X, y
 
 
-@pytest.fixture(scope="module")
-def squats() -> CaseBaseClassifier:
-    X, y = _squats({"deep": "deep squat", "shallow": "shallow squat"})
+def _fitted(labels: dict[str, str]) -> CaseBaseClassifier:
+    X, y = _squats(labels)
     return CaseBaseClassifier().fit(X, y)
 
 
+# made once in the run (the tests only explain with them), not once per worker
 @pytest.fixture(scope="module")
-def repetitions() -> CaseBaseClassifier:
-    X, y = _squats({"deep": "correct", "shallow": "incorrect"})
-    return CaseBaseClassifier().fit(X, y)
+def squats(tmp_path_factory: pytest.TempPathFactory) -> CaseBaseClassifier:
+    labels = {"deep": "deep squat", "shallow": "shallow squat"}
+    return made_once(tmp_path_factory, "explanations-squats", lambda _: _fitted(labels))
+
+
+@pytest.fixture(scope="module")
+def repetitions(tmp_path_factory: pytest.TempPathFactory) -> CaseBaseClassifier:
+    labels = {"deep": "correct", "shallow": "incorrect"}
+    return made_once(tmp_path_factory, "explanations-repetitions", lambda _: _fitted(labels))
 
 
 def _made_shallower() -> PoseSequence:

@@ -21,15 +21,23 @@ from features.readers.uiprmd import read_uiprmd_vicon
 from features.repetitions import count_repetitions, movement_signals
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
+from tests.once import made_once
 
 CMU_FPS = 120
 
 
 @pytest.fixture(scope="module")
-def cmu_13_29(shared_data: Path) -> PoseSequence:
+def cmu_13_29(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> PoseSequence:
+    """CMU 13_29, read once in the run (the tests only read it)."""
+    return made_once(
+        tmp_path_factory, "hunt33d-cmu-13-29", lambda _: _read_cmu(shared_data, "13_29")
+    )
+
+
+def _read_cmu(shared_data: Path, take: str) -> PoseSequence:
     return read_asf_amc(
         shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
-        shared_data / "cmu-mocap6" / "amc" / "13_29.amc",
+        shared_data / "cmu-mocap6" / "amc" / f"{take}.amc",
     )
 
 
@@ -166,10 +174,13 @@ def _still(seq: PoseSequence, frame: int, seconds: float, seed: int) -> np.ndarr
 
 
 @pytest.fixture(scope="module")
-def cmu(shared_data: Path) -> dict[str, PoseSequence]:
-    asf = shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf"
-    return {t: read_asf_amc(asf, shared_data / "cmu-mocap6" / "amc" / f"{t}.amc")
-            for t in ("13_29", "13_30", "13_31")}  # fmt: skip
+def cmu(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[str, PoseSequence]:
+    """CMU 13_29, 13_30 and 13_31, read once in the run (the tests only read them)."""
+
+    def read(_: Path) -> dict[str, PoseSequence]:
+        return {t: _read_cmu(shared_data, t) for t in ("13_29", "13_30", "13_31")}
+
+    return made_once(tmp_path_factory, "hunt33d-cmu", read)
 
 
 def _windows_classifier(
