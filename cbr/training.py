@@ -88,6 +88,8 @@ class TrainResult:
     #: how many training clips (or pieces) of each label were fitted: the ones held out to
     #: calibrate the confidence, before any editing or mirroring (empty for ``--append``)
     trained_counts: dict[str, int] = field(default_factory=dict)
+    #: the labels given whose every clip was skipped (:func:`usable`): no case holds them
+    lost_labels: list[str] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -257,6 +259,13 @@ def usable(clips: Sequence[DescribedClip]) -> tuple[list[int], list[str], list[s
             short[i] = f"{name} (lasts {c.duration_s:.2f} s)"
     keep = [i for i in range(len(clips)) if i not in nobody and i not in short]
     return keep, list(nobody.values()), list(short.values())
+
+
+def lost_labels(labels: Sequence[str], keep: Sequence[int]) -> list[str]:
+    """The ``labels`` (one per clip) none of whose clips is among those kept (``keep``,
+    :func:`usable`): every clip of them shows no person or is too short, and no case will
+    hold them."""
+    return sorted(set(labels) - {labels[i] for i in keep})
 
 
 def _learned(clf: CaseBaseClassifier) -> dict[str, Any]:
@@ -518,6 +527,7 @@ def train_described(
     keep, skipped, too_short = usable(clips)
     if len({text[i] for i in keep}) == 1 < len(set(text)):
         raise _one_left(clips, text, keep, target)
+    lost = lost_labels(text, keep)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise _no_case("learn from")
@@ -535,6 +545,7 @@ def train_described(
         seen=seen,
         skipped=skipped,
         too_short=too_short,
+        lost=lost,
     )
 
 
@@ -564,6 +575,7 @@ def store_fitted(
     seen: Seen | None = None,
     skipped: Sequence[str] = (),
     too_short: Sequence[str] = (),
+    lost: Sequence[str] = (),
 ) -> TrainResult:
     """Store the fitted classifier as case base ``name`` in ``db`` in one transaction
     (``labels``: its training clips' solutions, for the summary; ``seen``: what was read of
@@ -593,7 +605,7 @@ def store_fitted(
     write_store(db, write)
     with _stored_before(f"case base {name!r} was stored before it ({len(cb)} cases)"):
         _refresh_matrices(db, name)
-        return _fitted_result(name, fitted, cb, labels, skipped, too_short)
+        return _fitted_result(name, fitted, cb, labels, skipped, too_short, lost)
 
 
 @contextmanager
@@ -614,6 +626,7 @@ def _fitted_result(
     labels: Sequence[str],
     skipped: Sequence[str],
     too_short: Sequence[str],
+    lost: Sequence[str] = (),
 ) -> TrainResult:
     return TrainResult(
         name,
@@ -629,6 +642,7 @@ def _fitted_result(
         JUDGES[0] in fitted.judges_,
         same_features(cb),
         trained_counts=_counts([str(v) for v in labels]),
+        lost_labels=list(lost),
     )
 
 
@@ -826,6 +840,7 @@ def append_described(
     (ids from the database, never reused), so none is lost or duplicated."""
     text = [str(v) for v in check_labels(labels, len(clips))]
     keep, skipped, too_short = usable(clips)
+    lost = lost_labels(text, keep)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     if not clips:
         raise _no_case("add")
@@ -862,7 +877,7 @@ def append_described(
     finally:
         store.close()
     with _stored_before(f"the {len(cb)} cases were added to {name!r} before it"):
-        return _appended_result(name, cb, total, text, plan, skipped, too_short)
+        return _appended_result(name, cb, total, text, plan, skipped, too_short, lost)
 
 
 def _appended_result(
@@ -873,11 +888,13 @@ def _appended_result(
     plan: Plan,
     skipped: Sequence[str],
     too_short: Sequence[str],
+    lost: Sequence[str] = (),
 ) -> TrainResult:
     return TrainResult(
         name, len(cb), total, _counts([str(v) for v in cb.labels]), cb.config, cb.measure.params(),
         None, {}, list(skipped), list(too_short),
         indistinct=same_features(cb), new_labels=sorted(set(text) - set(plan.known)),
+        lost_labels=list(lost),
     )  # fmt: skip
 
 

@@ -958,6 +958,14 @@ def _skipped(
     return "\n".join(lines)
 
 
+def _lost(labels: list[str], noun: str) -> str:
+    """The line naming the ``labels`` (activities, or another target's classes: ``noun``)
+    every clip of which was skipped: the case base holds no case of them."""
+    them = "it" if len(labels) == 1 else "them"
+    names = ", ".join(shown(repr(v)) for v in labels)
+    return f"no case of the {noun} {names}: every piece of {them} was skipped, as said above"
+
+
 def _listed(sources: list[str], split: str, why: str) -> str:
     from collections import Counter
 
@@ -1142,6 +1150,8 @@ def _summary(args: argparse.Namespace, result: Any) -> dict[str, Any]:
         summary["trim"] = result.maintenance.summary()
     if result.indistinct:
         summary["indistinct"] = result.indistinct
+    if result.lost_labels:
+        summary["no_case"] = result.lost_labels  # every clip of them skipped
     if args.append:
         summary["new_labels"] = result.new_labels
     return summary
@@ -1154,11 +1164,13 @@ def _report(args: argparse.Namespace, result: Any) -> None:
         json.dump(summary, sys.stdout, indent=2, ensure_ascii=False)
         print()
         return
+    from cbr.explain import class_noun
     from features.text import shown
 
     if result.skipped or result.too_short:
         print(_skipped(result.skipped, result.too_short, args.split, args.kept_whole))
-    from cbr.explain import class_noun
+    if result.lost_labels:
+        print(_lost(result.lost_labels, class_noun(args.target, len(result.lost_labels))))
 
     n = len(result.label_counts)
     activities = f"{n} {class_noun(args.target, n)}"  # classes of another --target
