@@ -38,8 +38,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from sklearn.base import BaseEstimator, ClassifierMixin
-from sklearn.utils.validation import check_is_fitted
 
 from features.body import no_person, torso_share
 from features.errors import ConfigError, DataError, InputError
@@ -60,6 +58,7 @@ from .calibration import (
 )
 from .casebase import CaseBase, frame_array, skeleton_of
 from .described import DescribedClip, check_described, describe_clips
+from .estimator_protocol import Classifier, check_fitted
 from .explain import Explanation, explain
 from .fitting import (
     AUTO_PHASES,
@@ -308,7 +307,7 @@ def _time_blocks(ranges: np.ndarray) -> np.ndarray:
     return np.asarray(rank * min(RANGE_FOLDS, n) // max(n, 1), dtype=object)
 
 
-class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
+class CaseBaseClassifier(Classifier):
     """k-nearest-case classifier over qualitative posture features.
 
     features: ``"fluents"`` or ``"qmp"`` (feature level).
@@ -1026,7 +1025,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
 
     def problems(self, X: Any) -> list[Problem]:
         """The problem of every clip in ``X`` under the fitted configuration."""
-        check_is_fitted(self, "case_base_")
+        check_fitted(self, "case_base_")
         return [self.case_base_.problem_of(s) for s in as_sequences(X)]
 
     def _class_labels(self) -> np.ndarray:
@@ -1042,7 +1041,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
         ``flag`` False: the "unlike the stored cases" flag is not judged (``unlike_cases``
         False, no reason, no description), for callers with a judge of their own (segmenting
         a recording judges its stretches by :mod:`cbr.unknown`) that would pay for it unused."""
-        check_is_fitted(self, "case_base_")
+        check_fitted(self, "case_base_")
         self._check_vote()
         self.case_base_.check_not_empty("case_base_")
         seqs = as_sequences(X)
@@ -1134,7 +1133,7 @@ class CaseBaseClassifier(ClassifierMixin, BaseEstimator):
     def answer(self, values: np.ndarray) -> str:
         """The label the classifier gives a problem ``values`` (retrieve and reuse, as
         :meth:`solve` does): how counterfactuals are checked."""
-        check_is_fitted(self, "case_base_")
+        check_fitted(self, "case_base_")
         self._check_vote()
         self.case_base_.check_not_empty("case_base_")
         r = retrieve(self.case_base_, np.asarray(values), int(self.k))

@@ -25,7 +25,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from sklearn.exceptions import NotFittedError
 
 from features.body import TORSO_JOINTS, torso_seen, torso_share
 from features.derived import stretch
@@ -41,6 +40,7 @@ from features.repetitions import (
 from features.skeleton import BLAZEPOSE_33
 from features.values import is_number
 
+from .estimator_protocol import not_fitted
 from .problem import warm
 from .segmentation import (
     DEFAULT_WINDOW_S,
@@ -299,10 +299,7 @@ class LiveSegmenter:
         k: int = 1,
     ) -> None:
         if getattr(clf, "case_base_", None) is None:
-            raise NotFittedError(
-                f"This {type(clf).__name__} instance is not fitted yet: fit it (or load a "
-                "stored one) before streaming to it"
-            )
+            raise not_fitted(clf, "fit it (or load a stored one) before streaming to it")
         if not (type(k) is int and k == 1):  # 1, the default, any classifier retrieves
             check_k(clf, k)
         self.k = int(k)

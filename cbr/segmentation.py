@@ -56,7 +56,6 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
-from sklearn.utils.validation import check_is_fitted
 
 from features.body import check_person, long_runs, torso_rows, torso_share
 from features.derived import forget, movement_signals_of, stretch
@@ -78,6 +77,7 @@ from features.text import shown
 from features.values import is_number
 
 from . import long_clip
+from .estimator_protocol import check_fitted
 from .explain import Explanation
 from .problem import FeatureConfig, warm
 from .reuse import class_balance, vote
@@ -1436,7 +1436,7 @@ class SolvedRecording:
 def _check_call(clf: Any, recording: Any, chunk_frames: Any) -> None:
     """Refuse an unfitted ``clf`` (NotFittedError, as its ``predict`` does), a ``recording``
     that is not a PoseSequence and a ``chunk_frames`` that is not None or a whole number >= 0."""
-    check_is_fitted(clf, "case_base_")
+    check_fitted(clf, "case_base_")
     clf.case_base_.check_not_empty("case_base_")
     if not isinstance(recording, PoseSequence):
         raise InputError(f"a PoseSequence is expected, got {type(recording).__name__}", "recording")

@@ -23,8 +23,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from sklearn.base import clone
-from sklearn.utils.validation import check_is_fitted
 
 from casebase_store import (
     CaseBaseInfo,
@@ -45,6 +43,7 @@ from features.text import counted
 from .casebase import CaseBase, piece_name, subject_of
 from .described import DescribedClip, describe_case, describe_clip
 from .estimator import CaseBaseClassifier, as_sequences, check_labels
+from .estimator_protocol import check_fitted, unfitted_copy
 from .maintenance import MaintenanceReport, record_trim
 from .problem import FeatureConfig
 from .stored import (
@@ -532,7 +531,9 @@ def train_described(
     if not clips:
         raise _no_case("learn from")
     _check_unique(clips, "training set")
-    fitted: CaseBaseClassifier = clone(estimator).fit_described(clips, [given[i] for i in keep])
+    fitted: CaseBaseClassifier = unfitted_copy(estimator).fit_described(
+        clips, [given[i] for i in keep]
+    )
     _check_trimmed(fitted)
     return store_fitted(
         db,
@@ -580,7 +581,7 @@ def store_fitted(
     """Store the fitted classifier as case base ``name`` in ``db`` in one transaction
     (``labels``: its training clips' solutions, for the summary; ``seen``: what was read of
     ``name`` before the fit, checked by a ``replace``)."""
-    check_is_fitted(fitted, "case_base_")
+    check_fitted(fitted, "case_base_")
     cb = to_store(fitted)
     calibrate_stored_judges(fitted)
 

@@ -61,13 +61,13 @@ from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar
 
 import numpy as np
-from sklearn.exceptions import NotFittedError
 
 from features.body import MIRRORED
 from features.errors import ConfigError, DataError
 from features.text import percent
 
 from .casebase import CaseBase, frame_array, overlapping
+from .estimator_protocol import not_fitted
 from .judges import JUDGES
 from .novelty import NoveltyCalibration
 from .weights import MIRROR_FLAG
@@ -1386,10 +1386,7 @@ def judge_of(clf: Any, name: str) -> Judge:
     if name not in JUDGES:
         raise ConfigError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "--unknown")
     if getattr(clf, "case_base_", None) is None:
-        raise NotFittedError(
-            f"This {type(clf).__name__} instance is not fitted yet: fit it (or load a stored "
-            "one) before judging with it"
-        )
+        raise not_fitted(clf, "fit it (or load a stored one) before judging with it")
     stored = getattr(clf, "judges_", None) or {}
     if name in stored:
         judge: Judge = stored[name]

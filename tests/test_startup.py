@@ -296,3 +296,61 @@ def test_unknown_choices_written_out_are_the_judges() -> None:
         ]
         assert unknown.choices is not None and tuple(unknown.choices) == JUDGES
         assert unknown.default == JUDGES[0]
+
+
+# scikit-learn's algorithms (and the pandas and SciPy statistics it imports) serve `compare`
+# alone: the classifiers follow its estimator protocol without importing it
+# (cbr.estimator_protocol), so the commands that train or classify do not load it
+NOT_FOR_CLASSIFYING = {"sklearn", "pandas"}
+
+
+def test_train_loads_no_scikit_learn(tmp_path: Path) -> None:
+    from casebase_store import open_store
+    from cbr.stored import load_classifier
+
+    db = tmp_path / "trained.sqlite"
+    argv = ["train", str(CLIP.parent / "labels.csv"), "--db", str(db), "--subjects", "s01",
+            "--labels", "deep_squat,standing_shoulder_abduction"]  # fmt: skip
+    _, loaded = _run(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
+    assert loaded.isdisjoint(NOT_FOR_CLASSIFYING), loaded
+    store = open_store(db, readonly=True)
+    try:
+        clf = load_classifier(store, "default").classifier
+    finally:
+        store.close()
+    # s01's 6 clips (3 correct, 3 incorrect) of each of the two activities
+    assert sorted(clf.case_base_.labels) == ["deep_squat"] * 6 + ["standing_shoulder_abduction"] * 6
+
+
+def test_classify_loads_no_scikit_learn(small_db: Path, tmp_path: Path) -> None:
+    argv = ["classify", str(CLIP), "--db", str(small_db), "--json"]
+    out, loaded = _run(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
+    assert loaded.isdisjoint(NOT_FOR_CLASSIFYING), loaded
+    (result,) = json.loads(out)["results"]
+    # the deep squat is one of the case base's own clips: its nearest case is itself
+    assert result["label"] == "deep_squat"
+    assert result["neighbours"][0]["distance"] == 0.0
+
+
+def test_segment_loads_no_scikit_learn(small_db: Path, tmp_path: Path) -> None:
+    # two activities are too few to calibrate the default judge on: the held-out one
+    argv = ["segment", str(CLIP), "--db", str(small_db), "--unknown", "held-out", "--json"]
+    out, loaded = _run(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
+    assert loaded.isdisjoint(NOT_FOR_CLASSIFYING), loaded
+    doc = json.loads(out)
+    segments = doc["segments"]
+    assert doc["frames"] == 73 and segments[0]["start_frame"] == 0
+    assert segments[-1]["end_frame"] == 73
+    # the deep squat goes down once (frames 11-66)
+    assert sum(s["repetitions"] for s in segments) == 1
+
+
+def test_watch_loads_no_scikit_learn(small_db: Path, shared_data: Path, tmp_path: Path) -> None:
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    argv = ["watch", str(video), "--db", str(small_db), "--unknown", "held-out", "--speed", "0"]
+    out, loaded = _run(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
+    assert loaded.isdisjoint(NOT_FOR_CLASSIFYING), loaded
+    lines = [json.loads(line) for line in out.splitlines()]
+    assert lines[0]["start_frame"] == 0 and lines[-1]["end_frame"] == 65
+    # three squats by hand (tests/fixtures/repetition_counts.json)
+    assert sum(line["repetitions"] for line in lines) == 3

@@ -9,15 +9,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from sklearn.base import BaseEstimator, ClassifierMixin
-from sklearn.utils.multiclass import check_classification_targets
-from sklearn.utils.validation import check_is_fitted
 
 from features.body import no_person, torso_share
 from features.errors import InputError
 from features.poses import PoseSequence
 from features.qmp.add import ADD, load_add
 
+from ..estimator_protocol import Classifier, check_fitted
 from .detection import DADConfig, default_step, detect
 from .names import class_of_activity
 
@@ -67,6 +65,8 @@ def class_labels(y: Any, n_clips: int) -> np.ndarray:
     if values.dtype == object:
         # a list of labels: in numpy's own type (ints stay ints), as scikit-learn reads y
         values = np.asarray(values.tolist())
+    from sklearn.utils.multiclass import check_classification_targets  # fit alone needs it
+
     try:
         check_classification_targets(values)
     except ValueError as exc:  # a continuous or multi-output target
@@ -84,7 +84,7 @@ def _as_list(y: Any) -> Any:
     return list(y) if hasattr(y, "__iter__") and not isinstance(y, str | bytes) else y
 
 
-class DADClassifier(ClassifierMixin, BaseEstimator):
+class DADClassifier(Classifier):
     """DAD with the scikit-learn classifier contract (X: a sequence of PoseSequence).
 
     ``fit`` learns nothing but ``classes_`` (DAD needs no training data) and which class each
@@ -148,7 +148,7 @@ class DADClassifier(ClassifierMixin, BaseEstimator):
 
     def decision_function(self, X: Sequence[PoseSequence]) -> np.ndarray:
         """Best activity score per class, ``(n_clips, n_classes)``; -1 where no activity."""
-        check_is_fitted(self, "classes_")
+        check_fitted(self, "classes_")
         seqs = pose_sequences(X)
         for i, seq in enumerate(seqs):
             self._check_judgeable(seq, seq.source or f"X[{i}]")
