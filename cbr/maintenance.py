@@ -34,9 +34,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.stats import rankdata
 
 from casebase_store import CaseBaseInfo, StoreTransaction
 from features.body import MIRRORED
@@ -231,6 +228,10 @@ def twin_groups(cb: CaseBase, twins: np.ndarray | None = None) -> np.ndarray:
     pairs = twins & (labels[:, None] == labels[None, :])
     if not pairs.any():
         return np.arange(len(cb))
+    # imported here: classifying imports this module but edits no case base
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+
     _, groups = connected_components(csr_matrix(pairs), directed=False)
     return np.asarray(groups)
 
@@ -329,6 +330,8 @@ def trim_novelty_benefit(
     """Keep ``keep`` (a fraction) of every activity's cases, dropping the least novel and
     least beneficial first; a case and its mirror image are one unit, ranked by their mean
     rank, and ``keep`` is of the activity's units."""
+    from scipy.stats import rankdata  # imported here, as twin_groups imports SciPy's graphs
+
     cb.check_not_empty()
     dist = pairwise_distances(cb, desc="trim")
     nov, ben = novelty_benefit(cb, k, dist)
