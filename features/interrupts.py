@@ -59,19 +59,24 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
 
 @contextmanager
-def sigterm_held() -> Iterator[None]:
+def sigterm_held(then: Any = None) -> Iterator[Any]:
     """A SIGTERM that comes meanwhile is delivered at the end of the block (to the handler
-    there was), not in the middle of starting a worker process, which it left running after
-    this process had ended. Main thread only (elsewhere: nothing held)."""
+    there was, or ``then`` when given: the handler SIGTERM is left with), not in the middle
+    of starting a worker process, which it left running after this process had ended, nor
+    between setting or putting back the handlers of SIGINT and SIGTERM. Yields the handler
+    SIGTERM had before (``SIG_DFL`` for one not set from Python). Main thread only
+    (elsewhere: nothing held, nothing set)."""
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield None
         return
     came: list[int] = []
     previous = signal.signal(signal.SIGTERM, lambda n, _: came.append(n))
+    if previous is None:  # a handler not set from Python, which cannot be set back
+        previous = signal.SIG_DFL
     try:
-        yield
+        yield previous
     finally:
-        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+        signal.signal(signal.SIGTERM, previous if then is None else then)
         if came:
             signal.raise_signal(signal.SIGTERM)
 

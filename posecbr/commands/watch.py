@@ -47,7 +47,7 @@ from typing import Any
 from cbr.judges import JUDGES
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import PICTURE_WORDS, atomic_path, check_output, stdout_gone
-from features.interrupts import raise_interrupt
+from features.interrupts import raise_interrupt, sigterm_held
 from features.text import counted, shown
 from posecbr.arguments import add_k_option, path_arg
 
@@ -384,12 +384,6 @@ def frames_in_background(
         reader.close()
 
 
-#: the signals that end a watch as the end of the stream does: Ctrl-C, and the polite stop
-#: a supervisor sends (systemd, ``docker stop``, ``kill PID``, a program's
-#: ``Popen.terminate()``)
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
-
-
 class Stop(threading.Event):
     """Set when the user stops a watch; ``signum``: the signal that stopped it."""
 
@@ -404,11 +398,12 @@ class Stop(threading.Event):
 
 @contextmanager
 def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[Stop]:
-    """Ctrl-C (SIGINT) or SIGTERM sets the event instead of raising: the watch ends after
-    the frame in hand, as at the end of a file; a second one raises KeyboardInterrupt at
-    once. ``also`` is set with it (a :class:`Pacer`'s stop: a file held back until a frame's
-    time, however far off, ends there). Outside the main thread (where no signal handler can
-    be set) the event is never set."""
+    """Ctrl-C (SIGINT) or SIGTERM (the polite stop a supervisor sends: systemd, ``docker
+    stop``, ``kill PID``, a program's ``Popen.terminate()``) sets the event instead of
+    raising: the watch ends after the frame in hand, as at the end of a file; a second one
+    raises KeyboardInterrupt at once. ``also`` is set with it (a :class:`Pacer`'s stop: a
+    file held back until a frame's time, however far off, ends there). Outside the main
+    thread (where no signal handler can be set) the event is never set."""
     stopped = Stop()
     if threading.current_thread() is not threading.main_thread():
         yield stopped
@@ -421,12 +416,16 @@ def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[Stop]:
         if also is not None:
             also.set()
 
-    previous = {signum: signal.signal(signum, interrupted) for signum in STOP_SIGNALS}
+    # set and put back with SIGTERM held: one that came between setting (or putting back)
+    # the two handlers raised KeyboardInterrupt with SIGINT's still the watch's, for good
+    with sigterm_held(then=interrupted) as sigterm_before:
+        sigint_before = signal.signal(signal.SIGINT, interrupted)
     try:
         yield stopped
     finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+        # SIGTERM's handler is put back as the hold ends, even after a Ctrl-C in the block
+        with sigterm_held(then=sigterm_before):
+            signal.signal(signal.SIGINT, signal.SIG_DFL if sigint_before is None else sigint_before)
 
 
 def run(args: argparse.Namespace) -> int:

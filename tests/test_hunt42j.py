@@ -1,0 +1,112 @@
+"""Hunt 42j: ``watch``'s handlers for Ctrl-C and SIGTERM
+(:func:`posecbr.commands.watch.stop_on_interrupt`) set and put back as one: a SIGTERM that came
+between setting the two left SIGINT's handler the watch's for an in-process caller (its first
+Ctrl-C after only set an event nobody read), and a signal between putting them back left one
+of them unrestored or was lost."""
+
+from __future__ import annotations
+
+import signal
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import pytest
+
+from features.interrupts import raise_interrupt, sigterm_as_interrupt, terminated
+from posecbr.commands.watch import stop_on_interrupt
+from tests.test_hunt42g import _sigterm_first
+
+
+@pytest.fixture(autouse=True)
+def _handlers_put_back() -> Iterator[None]:
+    """SIGINT's and SIGTERM's handlers as they were after each test, whatever the code under
+    test left."""
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    yield
+    for signum, handler in handlers.items():
+        signal.signal(signum, handler)
+
+
+def _the_watchs(handler: Any) -> bool:
+    return getattr(handler, "__qualname__", "").startswith("stop_on_interrupt.")
+
+
+def test_sigterm_as_the_handlers_are_set_stops_the_watch(monkeypatch: pytest.MonkeyPatch) -> None:
+    """SIGTERM just before the watch's SIGTERM handler is set (SIGINT's already is): taken
+    once both are set, as the watch's stop (said as SIGTERM); both handlers back after. It
+    raised KeyboardInterrupt before the block, and SIGINT's handler stayed the watch's."""
+    sigint_before = signal.getsignal(signal.SIGINT)
+    with sigterm_as_interrupt():
+        with monkeypatch.context() as patched:
+            patched.setattr(
+                signal,
+                "signal",
+                _sigterm_first(signal.signal, lambda s, h: s == signal.SIGTERM and _the_watchs(h)),
+            )
+            try:
+                with stop_on_interrupt() as stop:
+                    assert _the_watchs(signal.getsignal(signal.SIGINT))
+                    assert stop.is_set() and stop.signum == signal.SIGTERM
+            except KeyboardInterrupt:
+                pytest.fail("the SIGTERM raised KeyboardInterrupt as the watch began")
+        assert signal.getsignal(signal.SIGTERM) is raise_interrupt
+    assert signal.getsignal(signal.SIGINT) is sigint_before
+
+
+def test_sigterm_as_the_handlers_are_put_back_reaches_the_caller(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """SIGTERM just before SIGINT's handler is put back (the watch over): raised once both are
+    back, to the caller's SIGTERM handler. It went to the watch's handler, which took it as a
+    stop nobody would read: lost."""
+    sigint_before = signal.getsignal(signal.SIGINT)
+    with sigterm_as_interrupt():
+        with monkeypatch.context() as patched:
+            patched.setattr(
+                signal,
+                "signal",
+                _sigterm_first(
+                    signal.signal, lambda s, h: s == signal.SIGINT and h is sigint_before
+                ),
+            )
+            with pytest.raises(KeyboardInterrupt), stop_on_interrupt() as stop:
+                pass
+        assert terminated() and not stop.is_set()
+        assert signal.getsignal(signal.SIGTERM) is raise_interrupt
+    assert signal.getsignal(signal.SIGINT) is sigint_before
+
+
+def _ctrl_c_after(real: Callable[..., Any], when: Callable[..., bool]) -> Callable[..., Any]:
+    """``real``, this thread sent SIGINT just after it has done its work when ``when(*args)``
+    (a Ctrl-C that came at the next bytecode boundary)."""
+
+    def ctrl_c_after(*args: Any) -> Any:
+        done = real(*args)
+        if when(*args):
+            signal.raise_signal(signal.SIGINT)
+        return done
+
+    return ctrl_c_after
+
+
+def test_ctrl_c_as_the_handlers_are_put_back_leaves_sigterms_back(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Ctrl-C just after SIGINT's handler is put back (the caller's: it raises
+    KeyboardInterrupt): SIGTERM's handler is put back too. It was put back after SIGINT's,
+    so never, and stayed the watch's."""
+    sigint_before = signal.getsignal(signal.SIGINT)
+    with sigterm_as_interrupt():
+        with monkeypatch.context() as patched:
+            patched.setattr(
+                signal,
+                "signal",
+                _ctrl_c_after(
+                    signal.signal, lambda s, h: s == signal.SIGINT and h is sigint_before
+                ),
+            )
+            with pytest.raises(KeyboardInterrupt), stop_on_interrupt():
+                pass
+        assert not terminated()
+        assert signal.getsignal(signal.SIGTERM) is raise_interrupt
+    assert signal.getsignal(signal.SIGINT) is sigint_before
