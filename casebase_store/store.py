@@ -62,7 +62,13 @@ from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
 from features.errors import ConfigError, PosecbrError
-from features.fileio import PICTURE_WORDS, is_picture, remove_stale_temporaries, temporary_prefix
+from features.fileio import (
+    SQLITE_MAGIC,
+    binary_kind,
+    file_head,
+    remove_stale_temporaries,
+    temporary_prefix,
+)
 from features.text import hide_passwords
 from features.values import is_number
 from features.version import __version__
@@ -90,6 +96,28 @@ _PG_NAME_LOCKS = 0x706F7365  # "pose"
 
 class StoreError(PosecbrError):
     """The case base store cannot be opened, read or written (names the database)."""
+
+
+class NotADatabase(StoreError):
+    """A file that is no SQLite database; ``looks_like``: what it looks like it is (a pose
+    file, a picture, ...), or None. The store does not know where its path came from: the
+    command line says which option takes the case base (:meth:`taken_by`)."""
+
+    def __init__(self, looks_like: str | None, where: str) -> None:
+        self.looks_like = looks_like
+        super().__init__(
+            f"not a readable SQLite database ({looks_like or 'corrupt or not a database'})", where
+        )
+
+    def taken_by(self, option: str) -> NotADatabase:
+        """The same refusal saying that ``option`` takes the case base file (the file given
+        to it looks like something else: the two files swapped); itself when it looks like
+        nothing known."""
+        if self.looks_like is None or self.source is None:
+            return self
+        said = NotADatabase(f"{self.looks_like}: {option} takes the case base file", self.source)
+        said.looks_like = self.looks_like
+        return said
 
 
 class EmptyStore(StoreError):
@@ -839,45 +867,17 @@ _LOST_WORDS = (
 )
 
 
-def _what_file(where: str) -> str:
+def _what_file(where: str) -> str | None:
     """What a file that is no SQLite database looks like it is, for the one line that refuses
-    it: an input given as ``--db`` (``classify cb.sqlite --db clip.npz``, the two swapped) is
-    said so."""
-    try:
-        with open(where, "rb") as f:
-            head = f.read(512)
-    except OSError:
-        return "corrupt or not a database"
-    if head.startswith(b"\x93NUMPY") or _first_zip_member(head).endswith(b".npy"):
-        return "a NumPy file, such as a pose file: --db takes the case base file"
-    if head.startswith(b"PK\x03\x04"):  # a .zip, an .xlsx spreadsheet: no arrays in it
-        return "a zip archive, not a pose file: --db takes the case base file"
-    if _is_video(head):
-        return "a video file: --db takes the case base file"
-    if is_picture(head):
-        return f"{PICTURE_WORDS}: --db takes the case base file"
+    it (an input given where the case base goes, the two swapped); None when nothing known."""
+    head = file_head(where)
+    if head.startswith(SQLITE_MAGIC):  # a damaged database: no other kind of file
+        return None
+    if (kind := binary_kind(head)) is not None:
+        return kind
     if _looks_like_text(head):
-        return "a text file, such as a labels CSV: --db takes the case base file"
-    return "corrupt or not a database"
-
-
-def _is_video(head: bytes) -> bool:
-    """Whether a file's first bytes ``head`` are a video's: MP4 or QuickTime (an ``ftyp``
-    box first), AVI (RIFF ... AVI) or Matroska/WebM (its EBML signature)."""
-    return (
-        head[4:8] == b"ftyp"
-        or (head.startswith(b"RIFF") and head[8:12] == b"AVI ")
-        or head.startswith(b"\x1a\x45\xdf\xa3")
-    )
-
-
-def _first_zip_member(head: bytes) -> bytes:
-    """The name of the first member of a zip file whose first bytes are ``head``, from its
-    local file header (the name's length at bytes 26-27, the name from byte 30); b"" for
-    what is not a zip. A .npz (a pose file) is a zip of ``<array>.npy`` members."""
-    if not head.startswith(b"PK\x03\x04") or len(head) < 30:
-        return b""
-    return head[30 : 30 + int.from_bytes(head[26:28], "little")]
+        return "a text file, such as a labels CSV"
+    return None
 
 
 def _looks_like_text(head: bytes) -> bool:
@@ -930,7 +930,7 @@ def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
             f"database is locked by another process (gave up after {timeout_s:g} s)", where
         )
     if "not a database" in low or "malformed" in low or "disk image" in low:
-        return StoreError(f"not a readable SQLite database ({_what_file(where)})", where)
+        return NotADatabase(_what_file(where), where)
     if "unable to open" in low or "readonly" in low or "read-only" in low:
         return StoreError(f"cannot open or write the database ({text})", where)
     if "no such table" in low or ("relation" in low and "does not exist" in low):

@@ -48,6 +48,47 @@ def is_picture(head: bytes) -> bool:
     return head.startswith((b"\x89PNG\r\n\x1a\n", b"\xff\xd8\xff"))
 
 
+#: The first bytes of every SQLite database file (a case base).
+SQLITE_MAGIC = b"SQLite format 3\x00"
+
+
+def binary_kind(head: bytes) -> str | None:
+    """What a file whose first bytes are ``head`` is, when it is a binary file a user could
+    give in the place of another (a case base, a pose file, a zip archive, a video, a
+    picture): words for the one line refusing it ("a NumPy file, such as a pose file"); None
+    for any other file."""
+    if head.startswith(SQLITE_MAGIC):
+        return "a SQLite database, such as a case base"
+    if head.startswith(b"\x93NUMPY") or _first_zip_member(head).endswith(b".npy"):
+        return "a NumPy file, such as a pose file"
+    if head.startswith(b"PK\x03\x04"):  # a .zip, an .xlsx spreadsheet: no arrays in it
+        return "a zip archive, not a pose file"
+    if _is_video(head):
+        return "a video file"
+    if is_picture(head):
+        return PICTURE_WORDS
+    return None
+
+
+def _is_video(head: bytes) -> bool:
+    """Whether a file's first bytes ``head`` are a video's: MP4 or QuickTime (an ``ftyp``
+    box first), AVI (RIFF ... AVI) or Matroska/WebM (its EBML signature)."""
+    return (
+        head[4:8] == b"ftyp"
+        or (head.startswith(b"RIFF") and head[8:12] == b"AVI ")
+        or head.startswith(b"\x1a\x45\xdf\xa3")
+    )
+
+
+def _first_zip_member(head: bytes) -> bytes:
+    """The name of the first member of a zip file whose first bytes are ``head``, from its
+    local file header (the name's length at bytes 26-27, the name from byte 30); b"" for
+    what is not a zip. A .npz (a pose file) is a zip of ``<array>.npy`` members."""
+    if not head.startswith(b"PK\x03\x04") or len(head) < 30:
+        return b""
+    return head[30 : 30 + int.from_bytes(head[26:28], "little")]
+
+
 def file_head(path: str | Path, n: int = 512) -> bytes:
     """The first ``n`` bytes of the file at ``path`` (b"" for one that cannot be read)."""
     try:

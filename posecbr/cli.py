@@ -183,6 +183,23 @@ def _belongs(unknown: list[str], command: argparse.ArgumentParser) -> str:
     return ""
 
 
+def _said_for(
+    exc: PosecbrError, args: argparse.Namespace, command: argparse.ArgumentParser
+) -> PosecbrError:
+    """``exc`` as the command says it: a file that is no case base, given to an option
+    (``--db``, ``casebase copy --to``), is said with the option that takes the case base
+    file (the store does not know the command line)."""
+    from casebase_store import NotADatabase
+
+    if not isinstance(exc, NotADatabase) or exc.source is None:
+        return exc
+    for action in command._actions:
+        given = getattr(args, action.dest, None)
+        if action.option_strings and isinstance(given, str) and given == exc.source:
+            return exc.taken_by(max(action.option_strings, key=len))
+    return exc
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args, unknown = parser.parse_known_args(argv)
@@ -203,7 +220,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return int(args.func(args) or 0)
     except PosecbrError as exc:
         # The message quotes the user's files and labels: escaped, it cannot drive the terminal.
-        print(f"posecbr {command}: error: {shown(exc)}", file=sys.stderr)
+        print(f"posecbr {command}: error: {shown(_said_for(exc, args, own))}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as exc:  # its text, if any: what was done before (escaped)
         said = f": {shown(exc)}" if str(exc) else ""

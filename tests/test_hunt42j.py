@@ -2,12 +2,14 @@
 (:func:`posecbr.commands.watch.stop_on_interrupt`) set and put back as one: a SIGTERM that came
 between setting the two left SIGINT's handler the watch's for an in-process caller (its first
 Ctrl-C after only set an event nobody read), and a signal between putting them back left one
-of them unrestored or was lost."""
+of them unrestored or was lost. A file that is no SQLite database is said with the option
+it was given to (``casebase copy --to``), or none (``open_store``), not always ``--db``."""
 
 from __future__ import annotations
 
 import signal
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -110,3 +112,34 @@ def test_ctrl_c_as_the_handlers_are_put_back_leaves_sigterms_back(
         assert not terminated()
         assert signal.getsignal(signal.SIGTERM) is raise_interrupt
     assert signal.getsignal(signal.SIGINT) is sigint_before
+
+
+def test_a_pose_file_given_to_copy_to_is_said_as_given_to_to(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``casebase copy --to clip.npz`` (a pose file where the copy goes): the line names
+    ``--to`` as the option that takes the case base file; it named ``--db``, which was given
+    the right file."""
+    from tests.badinput import good_pose_file, refused, small_case_base
+
+    db = small_case_base(tmp_path)
+    clip = good_pose_file(tmp_path / "victim.npz")
+    capsys.readouterr()  # what train said
+    line = refused(["casebase", "copy", "--db", str(db), "--to", str(clip)], tmp_path, capsys,
+                   "victim.npz: not a readable SQLite database (a NumPy file, such as a pose"
+                   " file: --to takes the case base file)")  # fmt: skip
+    assert "--db" not in line
+
+
+def test_open_store_of_a_pose_file_names_no_option(tmp_path: Path) -> None:
+    """``casebase_store.open_store`` given a pose file (a Python caller: no command line)
+    says what the file is and nothing of ``--db``."""
+    from casebase_store import StoreError, open_store
+    from tests.badinput import good_pose_file
+
+    clip = good_pose_file(tmp_path / "clip.npz")
+    with pytest.raises(StoreError) as caught:
+        open_store(clip)
+    assert str(caught.value) == (
+        f"{clip}: not a readable SQLite database (a NumPy file, such as a pose file)"
+    )
