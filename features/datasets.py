@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import DataError
-from features.fileio import PICTURE_WORDS, file_head, is_picture, path_exists
+from features.fileio import PICTURE_WORDS, binary_kind, file_head, is_picture, path_exists
 from features.formats import SHOWN_VIDEO_SUFFIXES, TS_SUFFIX, is_mpeg_ts
 from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 from features.progress import progress
@@ -701,6 +701,8 @@ def _csv_rows(csv_path: Path) -> list[list[str]]:
         with csv_path.open(newline="", encoding="utf-8-sig") as fh:
             text = fh.read()
     except UnicodeDecodeError as exc:
+        if (kind := binary_kind(file_head(csv_path))) is not None:  # a case base given as one
+            raise DataError(f"is {kind}, not a labels CSV", csv_path) from None
         raise DataError(f"not UTF-8 text ({exc.reason} at byte {exc.start})", csv_path) from None
     # two labels CSVs joined (cat a.csv b.csv), the second saved with a byte order mark: it
     # would begin a path or label unseen ("no such file \ufeffrec2.npz")

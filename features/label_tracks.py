@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from features.errors import DataError
-from features.fileio import path_exists
+from features.fileio import binary_kind, path_exists
 from features.text import counted
 
 
@@ -59,6 +59,8 @@ def _read_label_text(path: Path, what: str) -> str:
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
+        if (kind := binary_kind(data[:512])) is not None:  # a case base given as --truth
+            raise DataError(f"is {kind}, not a {what}", path) from None
         if data.startswith((b"\xff\xfe", b"\xfe\xff")):
             raise DataError("UTF-16 text (its byte order mark): save it as UTF-8", path) from None
         line = data.count(b"\n", 0, exc.start) + 1

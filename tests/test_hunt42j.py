@@ -3,7 +3,10 @@
 between setting the two left SIGINT's handler the watch's for an in-process caller (its first
 Ctrl-C after only set an event nobody read), and a signal between putting them back left one
 of them unrestored or was lost. A file that is no SQLite database is said with the option
-it was given to (``casebase copy --to``), or none (``open_store``), not always ``--db``."""
+it was given to (``casebase copy --to``), or none (``open_store``), not always ``--db``. A
+case base, pose file or picture given where a text file goes (``report``, ``segment
+--truth``, a labels CSV, the labels.csv in ``convert``'s folder) is said as what it is, not in
+the codec's words."""
 
 from __future__ import annotations
 
@@ -12,6 +15,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from features.interrupts import raise_interrupt, sigterm_as_interrupt, terminated
@@ -143,3 +147,112 @@ def test_open_store_of_a_pose_file_names_no_option(tmp_path: Path) -> None:
     assert str(caught.value) == (
         f"{clip}: not a readable SQLite database (a NumPy file, such as a pose file)"
     )
+
+
+def _sqlite_file(path: Path) -> Path:
+    """A real SQLite database at ``path`` (a table, a row): what a case base file is."""
+    import sqlite3
+
+    con = sqlite3.connect(path)
+    with con:
+        con.execute("CREATE TABLE cases (x)")
+        con.execute("INSERT INTO cases VALUES (1)")
+    con.close()
+    return path
+
+
+def _png(path: Path) -> Path:
+    """A real PNG picture at ``path`` (4 x 4, drawn by matplotlib)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.imsave(path, np.zeros((4, 4)))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("given", "said"),
+    [
+        ("cb.sqlite", "a SQLite database, such as a case base"),
+        ("clip.npz", "a NumPy file, such as a pose file"),
+        ("plot.png", "a PNG or JPEG picture"),
+    ],
+)
+def test_report_given_a_binary_file_says_what_it_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], given: str, said: str
+) -> None:
+    """``report cb.sqlite`` (a case base where compare's results go): one line saying what
+    the file is and what report takes. It printed the codec's "'utf-8' codec can't decode
+    byte ..."."""
+    from tests.badinput import good_pose_file, refused
+
+    path = tmp_path / given
+    {"cb.sqlite": _sqlite_file, "clip.npz": good_pose_file, "plot.png": _png}[given](path)
+    line = refused(["report", str(path), "--out", str(tmp_path / "report.html")], tmp_path,
+                   capsys, f"{given}: is {said}, not a results file (report takes a compare"
+                   " --out folder or its results JSON file)")  # fmt: skip
+    assert "codec" not in line
+
+
+def test_report_given_other_non_text_says_where_it_stops_being_text(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A results file with a byte that is no UTF-8 (0xff, never in UTF-8) at byte 2: said by
+    its byte, not in the codec's words."""
+    from tests.badinput import refused
+
+    path = tmp_path / "results.json"
+    path.write_bytes(b'{"\xff": 1}')
+    line = refused(["report", str(path), "--out", str(tmp_path / "report.html")], tmp_path,
+                   capsys, "results.json: not a JSON results file (not UTF-8 text: invalid"
+                   " start byte at byte 2)")  # fmt: skip
+    assert "codec" not in line
+
+
+def test_segment_truth_given_a_case_base_says_what_it_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``segment rec.npz --db cb.sqlite --truth cb.sqlite``: the case base is no label file,
+    said so; it was "not UTF-8 text (...): save it as UTF-8", which it cannot be."""
+    from tests.badinput import good_pose_file, refused, small_case_base
+
+    db = small_case_base(tmp_path / "cb")
+    capsys.readouterr()
+    rec = good_pose_file(tmp_path / "rec.npz", frames=12)
+    line = refused(["segment", str(rec), "--db", str(db), "--truth", str(db)], tmp_path,
+                   capsys, "cb.sqlite: is a SQLite database, such as a case base, not a label"
+                   " file")  # fmt: skip
+    assert "save it as UTF-8" not in line
+
+
+def test_compare_given_a_case_base_as_its_labels_csv_says_what_it_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``compare labels.csv`` where labels.csv is a SQLite database (a case base saved under
+    the wrong name): said as one, not as "not UTF-8 text (invalid continuation byte ...)"."""
+    from tests.badinput import refused
+
+    labels = _sqlite_file(tmp_path / "labels.csv")
+    refused(["compare", str(labels), "--out", str(tmp_path / "out")], tmp_path, capsys,
+            "labels.csv: is a SQLite database, such as a case base, not a labels CSV")  # fmt: skip
+
+
+def test_convert_into_a_folder_whose_labels_csv_is_a_case_base_says_so(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``convert ... --out DIR`` where DIR/labels.csv is a SQLite database: one line saying
+    what it is; it printed the codec's "'utf-8' codec can't decode byte ...". The folder as it
+    was."""
+    from tests.badinput import refused
+
+    asf = shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf"
+    amc = shared_data / "cmu-mocap6" / "amc" / "13_30.amc"
+    out = tmp_path / "out"
+    out.mkdir()
+    _sqlite_file(out / "labels.csv")
+    line = refused(["convert", str(amc), "--asf", str(asf), "--out", str(out)], out, capsys,
+                   "labels.csv: cannot read the labels file already there (it is a SQLite"
+                   " database, such as a case base)")  # fmt: skip
+    assert "codec" not in line

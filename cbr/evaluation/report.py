@@ -23,7 +23,7 @@ import numpy as np
 
 from features.datasets import truth_value
 from features.errors import DataError
-from features.fileio import check_output, write_text_atomic
+from features.fileio import binary_kind, check_output, file_head, write_text_atomic
 from features.text import size_words
 
 from ..explain import class_noun
@@ -65,6 +65,19 @@ def _pct(x: float | None) -> str:
 MAX_RESULTS_BYTES = 1024**3
 
 
+def _not_text(path: Path, exc: UnicodeDecodeError) -> str:
+    """Why a results file that is no UTF-8 text is refused: what it is when it is one of the
+    files a user has beside it (a case base, a pose file, a picture), else where it stops
+    being text; never the codec's own words."""
+    kind = binary_kind(file_head(path))
+    if kind is not None:
+        return (
+            f"is {kind}, not a results file (report takes a compare --out folder or its"
+            " results JSON file)"
+        )
+    return f"not a JSON results file (not UTF-8 text: {exc.reason} at byte {exc.start})"
+
+
 def load_results(path: str | Path) -> tuple[CompareResults, Path]:
     """A compare results file (or a folder holding ``results.json``), checked, and its path."""
     p = Path(path)
@@ -85,7 +98,9 @@ def load_results(path: str | Path) -> tuple[CompareResults, Path]:
         )
     try:
         doc = json.loads(p.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError as exc:
+        raise DataError(_not_text(p, exc), p) from None
+    except json.JSONDecodeError as exc:
         raise DataError(f"not a JSON results file ({exc})", p) from None
     except ValueError:  # a whole number of more digits than Python reads
         raise DataError(

@@ -28,8 +28,10 @@ from typing import TYPE_CHECKING, Any
 from features.errors import DataError
 from features.fileio import (
     ReadFiles,
+    binary_kind,
     check_not_in_walked_folder,
     check_output,
+    file_head,
     staged_folder,
     unique_name,
     write_text_atomic,
@@ -546,7 +548,11 @@ def _listed_before(labels: Path) -> tuple[list[dict[str, Any]], list[str]]:
             # skips them, and they are neither counted as kept nor written back
             rows = [dict(row) for row in reader if any(_filled(v) for v in row.values())]
             columns = reader.fieldnames or []
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+    except UnicodeDecodeError as exc:
+        kind = binary_kind(file_head(labels))
+        said = f"it is {kind}" if kind else f"not UTF-8 text: {exc.reason} at byte {exc.start}"
+        raise DataError(f"cannot read the labels file already there ({said})", labels) from None
+    except (OSError, csv.Error) as exc:
         raise DataError(f"cannot read the labels file already there ({exc})", labels) from None
     if "path" not in (c.strip().lower() for c in columns):
         raise DataError("the labels file already there has no 'path' column", labels)
