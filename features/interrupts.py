@@ -99,11 +99,38 @@ def stop_workers(pool: Any) -> None:
 _IN_TASK: list[bool] = [False]
 
 
+# how long a worker unwinding its task after SIGTERM may go on once SIGTERM comes again
+UNWIND_GRACE_S = 10.0
+
+
 def _worker_sigterm(signum: int, _frame: Any) -> None:
     if _IN_TASK[0]:
-        _IN_TASK[0] = False  # a second SIGTERM ends it at once
+        _IN_TASK[0] = False
         raise_interrupt(signum)
+    if _TERMINATED:
+        # unwinding the task the first SIGTERM stopped: the pool sends SIGTERM again to every
+        # worker left once one has ended (its "broken" state), which ended this one on the
+        # spot, before its task's clean-up had removed the output's hidden temporary; the
+        # clean-up now finishes (the task's end ends the worker: run_task), one stuck in it
+        # ends after UNWIND_GRACE_S
+        _end_later()
+        return
     os._exit(TERMINATED_STATUS)
+
+
+# whether the timer of _end_later is running
+_ENDING: list[bool] = [False]
+
+
+def _end_later() -> None:
+    """End this worker UNWIND_GRACE_S from the first call (a daemon timer; later calls add
+    none)."""
+    if _ENDING[0]:
+        return
+    _ENDING[0] = True
+    timer = threading.Timer(UNWIND_GRACE_S, os._exit, args=(TERMINATED_STATUS,))
+    timer.daemon = True
+    timer.start()
 
 
 def _quiet_when_stopped(unraisable: Any) -> None:
@@ -118,6 +145,7 @@ def worker_ends_on_sigterm() -> None:
     """For a worker process's initializer: SIGTERM (:func:`stop_workers`) unwinds the task
     under way (:func:`run_task`: an output it was writing leaves no hidden temporary), then
     ends the process; idle, it ends it at once. (Killed on the spot, it left the temporary.)
+    SIGTERM again while it unwinds lets the unwinding finish, for UNWIND_GRACE_S at most.
     Ctrl-C is left to the command (the terminal sends it to every process of the group),
     which stops its workers so."""
     signal.signal(signal.SIGTERM, _worker_sigterm)
