@@ -58,7 +58,7 @@ from .calibration import (
 )
 from .casebase import CaseBase, frame_array, skeleton_of
 from .described import DescribedClip, check_described, describe_clips
-from .estimator_protocol import Classifier, check_fitted
+from .estimator_protocol import Classifier, check_fitted, parameters_checked
 from .explain import Explanation, explain
 from .fitting import (
     AUTO_PHASES,
@@ -419,6 +419,7 @@ class CaseBaseClassifier(Classifier):
             return AUTO_PHASES if int(length) >= AUTO_PHASES else 0
         return AUTO_PHASES  # not a length: FeatureConfig refuses it
 
+    @parameters_checked
     def _check_vote(self) -> None:
         """Refuse a ``k`` or ``weights`` the vote cannot use: checked by fit, and again by
         every classification (``set_params(k=...)`` after fit, as ``classify -k`` votes)."""
@@ -441,6 +442,7 @@ class CaseBaseClassifier(Classifier):
             return None
         return class_balance(case_labels, classes)
 
+    @parameters_checked
     def _check_params(self) -> None:
         self._check_vote()
         self._check_kinds()
@@ -478,6 +480,7 @@ class CaseBaseClassifier(Classifier):
             )
         self._feature_config()  # length, states, phases: FeatureConfig's own checks
 
+    @parameters_checked
     def _check_trim_editor(self) -> None:
         """Refuse, at fit, a ``trim`` with an ``editor`` other than novelty-benefit: the share
         kept is novelty-benefit's, the others decide how many cases they keep (it was
@@ -538,6 +541,7 @@ class CaseBaseClassifier(Classifier):
 
     # -- fit, step by step
 
+    @parameters_checked
     def describe_plan(self) -> tuple[FeatureConfig, bool, bool]:
         """How :meth:`fit` describes each training clip (:func:`cbr.described.describe_clip`):
         the candidate columns, whether the mirror images are needed, whether the favoured

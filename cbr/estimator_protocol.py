@@ -14,13 +14,15 @@ tags (asked for by scikit-learn itself, loaded already) and ``NotFittedError``, 
 from __future__ import annotations
 
 import copy
+import functools
 import inspect
 import math
+from collections.abc import Callable
 from typing import Any, TypeVar
 
 import numpy as np
 
-from features.errors import InputError
+from features.errors import ConfigError, InputError, ParameterError
 
 #: how wide ``repr`` lays out the parameters before it wraps, as scikit-learn's repr does
 REPR_WIDTH = 80
@@ -114,6 +116,27 @@ def _laid_out(name: str, items: list[str]) -> str:
         else:
             line += piece if line.endswith("(") else " " + piece
     return "\n".join([*lines, line])
+
+
+Checked = TypeVar("Checked", bound=Callable[..., Any])
+
+
+def parameters_checked(check: Checked) -> Checked:
+    """``check`` (a method that refuses parameters) raising :class:`ParameterError`, a
+    ``ValueError`` as scikit-learn's estimators raise for a parameter they cannot use, for
+    any :class:`ConfigError` under it (the feature configuration's and the similarity
+    registry's own checks among them); the message and what it names unchanged."""
+
+    @functools.wraps(check)
+    def checked(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return check(*args, **kwargs)
+        except ParameterError:
+            raise
+        except ConfigError as exc:
+            raise ParameterError(exc.message, exc.source) from exc
+
+    return checked  # type: ignore[return-value]
 
 
 def accuracy(truth: Any, predicted: np.ndarray, sample_weight: Any = None) -> float:

@@ -30,6 +30,12 @@ class ConfigError(PosecbrError):
     """A configuration or data table (thresholds, ADD) is malformed."""
 
 
+class ParameterError(ConfigError, ValueError):
+    """A parameter of an estimator it cannot use (``k=0``, ``trim=2``, an unknown
+    similarity): a :class:`ConfigError` for the command line, and the ``ValueError``
+    scikit-learn's estimators raise for one, which its users catch."""
+
+
 class InputError(DataError, ValueError):
     """Arguments of a Python call (an estimator's ``X`` or ``y``) of the wrong kind: a
     :class:`DataError` for the command line, and the ``ValueError`` scikit-learn users catch."""
