@@ -387,13 +387,19 @@ if __name__ == "__main__":
 """
 
 
-def test_a_worker_sent_sigterm_ends_after_unwinding_its_task(tmp_path: Path) -> None:
-    """A worker's task that turns the interrupt into a result (a failed clip) still ends the
-    worker, status 143, instead of going on to the next task queued ("b" never begun)."""
+def pool_script_lines(text: str, tmp_path: Path) -> list[str]:
+    """The lines printed by the script ``text`` (a process pool whose tasks write into the
+    folder it is given) run in a new interpreter; it must exit 0."""
     script = tmp_path / "pool.py"
-    script.write_text(WORKER_SCRIPT)
+    script.write_text(text)
     (tmp_path / "work").mkdir()
     run = subprocess.run([sys.executable, str(script), str(tmp_path / "work")], env=ENV,
                          capture_output=True, text=True, timeout=120)  # fmt: skip
     assert run.returncode == 0, run.stderr
-    assert run.stdout.splitlines() == ["143 BrokenProcessPool", "['a']"]
+    return run.stdout.splitlines()
+
+
+def test_a_worker_sent_sigterm_ends_after_unwinding_its_task(tmp_path: Path) -> None:
+    """A worker's task that turns the interrupt into a result (a failed clip) still ends the
+    worker, status 143, instead of going on to the next task queued ("b" never begun)."""
+    assert pool_script_lines(WORKER_SCRIPT, tmp_path) == ["143 BrokenProcessPool", "['a']"]

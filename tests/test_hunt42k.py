@@ -9,11 +9,9 @@ and then, under load (tests/test_hunt34i.py's Ctrl-C test, 1 run in 9).
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
-from tests.test_hunt34i import ENV
+from tests.test_hunt34i import pool_script_lines
 
 SCRIPT = """
 import concurrent.futures as cf, multiprocessing, os, sys, time
@@ -45,10 +43,4 @@ def test_a_worker_sent_sigterm_twice_still_removes_what_it_was_writing(tmp_path:
     """Both workers end with status 143 (128 + SIGTERM) and neither leaves its file: the slow
     one's clean-up (3 s) outlasts the quick one's end, after which the pool's own SIGTERM
     reaches it; before, that SIGTERM ended it with its file left."""
-    script = tmp_path / "pool.py"
-    script.write_text(SCRIPT)
-    (tmp_path / "work").mkdir()
-    run = subprocess.run([sys.executable, str(script), str(tmp_path / "work")], env=ENV,
-                         capture_output=True, text=True, timeout=120)  # fmt: skip
-    assert run.returncode == 0, run.stderr
-    assert run.stdout.splitlines() == ["[143, 143] []"]
+    assert pool_script_lines(SCRIPT, tmp_path) == ["[143, 143] []"]
