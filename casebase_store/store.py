@@ -450,7 +450,7 @@ def in_wal_mode(path: Path) -> bool:
             head = fh.read(20)
     except OSError:  # also a name longer than the file system allows
         return False
-    return head[:16] == b"SQLite format 3\x00" and 2 in head[18:20]
+    return head.startswith(SQLITE_MAGIC) and 2 in head[18:20]
 
 
 def _sqlite_readonly_url(path: Path) -> URL:

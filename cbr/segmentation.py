@@ -61,7 +61,7 @@ from features.body import check_person, long_runs, torso_rows, torso_share
 from features.derived import forget, movement_signals_of, stretch
 from features.errors import ConfigError, DataError, InputError
 from features.fluents import DEFAULT_TABLE, history_frames
-from features.poses import PoseSequence, gap_rows
+from features.poses import PoseSequence, expect_sequence, gap_rows
 from features.progress import progress
 from features.repetitions import (
     MIN_PERIOD_S,
@@ -1438,8 +1438,7 @@ def _check_call(clf: Any, recording: Any, chunk_frames: Any) -> None:
     that is not a PoseSequence and a ``chunk_frames`` that is not None or a whole number >= 0."""
     check_fitted(clf, "case_base_")
     clf.case_base_.check_not_empty("case_base_")
-    if not isinstance(recording, PoseSequence):
-        raise InputError(f"a PoseSequence is expected, got {type(recording).__name__}", "recording")
+    expect_sequence(recording, "recording")
     if chunk_frames is not None and (
         isinstance(chunk_frames, bool)
         or not isinstance(chunk_frames, int | np.integer)
