@@ -123,6 +123,7 @@ def atomic_path(
     except OSError as exc:
         raise DataError(f"cannot write: {exc.strerror or exc}", dest) from None
     try:
+        _UNFINISHED.add(tmp)
         yield tmp
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; outputs are ordinary files
         os.replace(tmp, dest)
@@ -132,6 +133,20 @@ def atomic_path(
         raise DataError(f"cannot write: {exc.strerror or exc}", dest) from None
     finally:
         tmp.unlink(missing_ok=True)
+        _UNFINISHED.discard(tmp)
+
+
+# the temporaries of atomic_path and write_together being written in this process
+_UNFINISHED: set[Path] = set()
+
+
+def remove_unfinished_temporaries() -> None:
+    """Remove the hidden temporaries this process is writing (:func:`atomic_path`,
+    :func:`write_together`), for a process about to end without unwinding their writers: a
+    worker whose task, told to stop, did not stop in time (:mod:`features.interrupts`)."""
+    for tmp in list(_UNFINISHED):
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
 
 
 def stdout_gone() -> None:
@@ -376,6 +391,7 @@ def write_together(
             try:
                 _refuse_special(dest, "output")
                 staged.append((temporary_file(dest), dest))
+                _UNFINISHED.add(staged[-1][0])
                 write(staged[-1][0])
                 os.chmod(staged[-1][0], 0o666 & ~_umask())  # as atomic_path's
             except (OSError, PosecbrError) as exc:
@@ -389,6 +405,7 @@ def write_together(
         for tmp, _ in staged:
             with contextlib.suppress(OSError):
                 tmp.unlink(missing_ok=True)
+            _UNFINISHED.discard(tmp)
 
 
 @contextmanager

@@ -14,6 +14,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any, NoReturn
 
+from .fileio import remove_unfinished_temporaries
+
 #: the exit status of a command stopped by Ctrl-C (128 + SIGINT, as a shell reports it)
 INTERRUPTED_STATUS = 130
 #: the exit status of a command stopped by SIGTERM (128 + SIGTERM)
@@ -99,22 +101,32 @@ def stop_workers(pool: Any) -> None:
 _IN_TASK: list[bool] = [False]
 
 
-# how long a worker unwinding its task after SIGTERM may go on once SIGTERM comes again
+# how long a worker's task may take to unwind after SIGTERM
 UNWIND_GRACE_S = 10.0
 
 
 def _worker_sigterm(signum: int, _frame: Any) -> None:
-    if _IN_TASK[0]:
-        _IN_TASK[0] = False
-        raise_interrupt(signum)
     if _TERMINATED:
         # unwinding the task the first SIGTERM stopped: the pool sends SIGTERM again to every
         # worker left once one has ended (its "broken" state), which ended this one on the
         # spot, before its task's clean-up had removed the output's hidden temporary; the
-        # clean-up now finishes (the task's end ends the worker: run_task), one stuck in it
-        # ends after UNWIND_GRACE_S
-        _end_later()
+        # clean-up now finishes (the task's end ends the worker: run_task)
         return
+    if not _IN_TASK[0]:
+        _end_worker()
+    # first, so that a SIGTERM coming in what follows (the handler run again inside this one)
+    # finds the task being stopped, not this worker idle
+    _TERMINATED.append(signum)
+    # the task has UNWIND_GRACE_S to unwind: its interrupt can be lost (raised inside a
+    # finaliser, where Python only prints it) and the task go on
+    _end_later()
+    raise KeyboardInterrupt
+
+
+def _end_worker() -> NoReturn:
+    """End this worker now, as stopped by SIGTERM, its outputs' hidden temporaries removed
+    (a task cut short by the end has not removed them)."""
+    remove_unfinished_temporaries()
     os._exit(TERMINATED_STATUS)
 
 
@@ -123,12 +135,12 @@ _ENDING: list[bool] = [False]
 
 
 def _end_later() -> None:
-    """End this worker UNWIND_GRACE_S from the first call (a daemon timer; later calls add
-    none)."""
+    """End this worker (:func:`_end_worker`) UNWIND_GRACE_S from the first call (a daemon
+    timer; later calls add none)."""
     if _ENDING[0]:
         return
     _ENDING[0] = True
-    timer = threading.Timer(UNWIND_GRACE_S, os._exit, args=(TERMINATED_STATUS,))
+    timer = threading.Timer(UNWIND_GRACE_S, _end_worker)
     timer.daemon = True
     timer.start()
 
@@ -145,7 +157,8 @@ def worker_ends_on_sigterm() -> None:
     """For a worker process's initializer: SIGTERM (:func:`stop_workers`) unwinds the task
     under way (:func:`run_task`: an output it was writing leaves no hidden temporary), then
     ends the process; idle, it ends it at once. (Killed on the spot, it left the temporary.)
-    SIGTERM again while it unwinds lets the unwinding finish, for UNWIND_GRACE_S at most.
+    SIGTERM again while it unwinds lets the unwinding finish; a task not unwound after
+    UNWIND_GRACE_S (its interrupt lost) ends there, the temporaries it was writing removed.
     Ctrl-C is left to the command (the terminal sends it to every process of the group),
     which stops its workers so."""
     signal.signal(signal.SIGTERM, _worker_sigterm)
@@ -161,14 +174,14 @@ def run_task(fn: Any, *args: Any) -> Any:
     the task before ended (raised in this ``finally``, which it cut short: the pool took the
     interrupt for that task's result) ends before beginning this one."""
     if _TERMINATED:
-        os._exit(TERMINATED_STATUS)
+        _end_worker()
     _IN_TASK[0] = True
     try:
         return fn(*args)
     finally:
         _IN_TASK[0] = False
         if _TERMINATED:
-            os._exit(TERMINATED_STATUS)
+            _end_worker()
 
 
 @contextmanager
