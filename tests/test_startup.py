@@ -360,3 +360,20 @@ def test_watch_loads_no_scikit_learn(small_db: Path, shared_data: Path, tmp_path
     assert lines[0]["start_frame"] == 0 and lines[-1]["end_frame"] == 65
     # three squats by hand (tests/fixtures/repetition_counts.json)
     assert sum(line["repetitions"] for line in lines) == 3
+
+
+@pytest.mark.parametrize("given", ["folder", "json"])
+def test_report_loads_no_scikit_learn(compared_three: Path, tmp_path: Path, given: str) -> None:
+    """report draws its page from compare's results (a --json file's missing pictures too,
+    by matplotlib); it loaded scikit-learn, pandas and SciPy all the same (the pictures module
+    imported the comparison's, its methods among them, for a type)."""
+    results = compared_three if given == "folder" else compared_three / "results.json"
+    page = tmp_path / "report.html"
+    argv = ["report", str(results), "--out", str(page)]
+    _, loaded = _run(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
+    assert loaded.isdisjoint(NOT_FOR_CLASSIFYING | {"scipy"}), loaded
+    text = page.read_text(encoding="utf-8")
+    assert "cbr fluents/euclidean" in text  # THREE's one method
+    # compare --out drew the accuracy and the confusion matrix; the pictures of a --json file
+    # are drawn again from the results
+    assert text.count('<img src="data:image/png;base64,') >= 2

@@ -12,7 +12,7 @@ import warnings
 from collections.abc import Callable, Sequence
 from functools import partial
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -20,7 +20,6 @@ from features.errors import DataError
 from features.fileio import atomic_path
 from features.progress import progress
 
-from .compare import CompareRun
 from .data import example_clips
 from .results import (
     CompareResults,
@@ -31,6 +30,10 @@ from .results import (
     Scores,
     TimelinePicture,
 )
+
+if TYPE_CHECKING:  # a type alone: the comparison's modules (its methods, scikit-learn's
+    # estimators among them) are not for report, which draws from the results
+    from .compare import CompareRun
 
 T = TypeVar("T")
 
