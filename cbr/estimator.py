@@ -3,7 +3,8 @@
 ``X`` is a sequence (list or 1-D object array) of :class:`features.poses.PoseSequence`; ``y``
 the activity labels. ``__init__`` only stores its parameters; ``fit`` extracts the problems,
 builds (and optionally trims) the case base; learned state ends with ``_``. Bad ``X`` or ``y``
-(not clips, empty, a missing label, one activity, a clip with no person) is refused with
+(not clips, empty, a missing label, one activity, a clip with no person or shorter than one
+movement can be, which ``predict`` refuses too) is refused with
 :class:`features.errors.InputError`, the ``ValueError`` scikit-learn users catch.
 
 Learned at fit time from the training clips only (so cross-validation stays honest):
@@ -177,17 +178,25 @@ def unusable(seqs: Sequence[PoseSequence]) -> list[int]:
     return [i for i, s in enumerate(seqs) if torso_share(s) == 0.0]
 
 
-def too_short(clip: PoseSequence) -> str | None:
-    """Why ``clip`` is too short to classify (None when it is not): it lasts less than one
-    movement can (:data:`features.repetitions.MIN_PERIOD_S`); a single frame, or a few, show
-    a posture, and a classifier of movements answers it with confidence all the same."""
+def too_short(clip: PoseSequence, what: str = "classify") -> str | None:
+    """Why ``clip`` is too short to classify, or to learn from (``what``), None when it is
+    not: it lasts less than one movement can (:data:`features.repetitions.MIN_PERIOD_S`); a
+    single frame, or a few, show a posture, and a classifier of movements answers it with
+    confidence all the same."""
+    return _shorter_than_a_movement(clip.duration_s, clip.n_frames, what)
+
+
+def _shorter_than_a_movement(duration_s: float, frames: int | None, what: str) -> str | None:
+    """:func:`too_short`'s words for a clip of ``duration_s`` seconds and ``frames`` frames
+    (None: not known, as of a clip described elsewhere)."""
     from features.repetitions import MIN_PERIOD_S
 
-    if clip.duration_s >= MIN_PERIOD_S:
+    if duration_s >= MIN_PERIOD_S:
         return None
+    counted_frames = "" if frames is None else f" ({counted(frames, 'frame')})"
     return (
-        f"lasts {clip.duration_s:.2f} s ({clip.n_frames} frame{'s' if clip.n_frames != 1 else ''}),"
-        f" shorter than one movement can be ({MIN_PERIOD_S:g} s): nothing to classify"
+        f"lasts {duration_s:.2f} s{counted_frames}, shorter than one movement can be"
+        f" ({MIN_PERIOD_S:g} s): nothing to {what}"
     )
 
 
@@ -567,12 +576,20 @@ class CaseBaseClassifier(Classifier):
         handling and the weighting are chosen by leave-one-subject-out cross-validation inside
         the training clips (``selection_`` holds the scores); the test clips of an outer
         cross-validation never take part. Each clip is reduced to what the fit needs of it as
-        it is read (:mod:`cbr.described`): memory grows by kilobytes per clip.
+        it is read (:mod:`cbr.described`): memory grows by kilobytes per clip. A clip
+        :meth:`solve` would refuse as too short (:func:`too_short`) is refused here (an
+        :class:`~features.errors.InputError` naming it) before any clip is described: no
+        case is made of what could not be classified (``cbr.training.train`` skips it, naming
+        it, as ``posecbr train`` does).
         """
         candidates, mirror, sides = self.describe_plan()
         seqs = as_sequences(X)
         if len(seqs) == 0:
             raise InputError("the training set is empty", "X")
+        for i, seq in enumerate(seqs):  # before the clips are described: as solve refuses it
+            why = too_short(seq, "learn from")
+            if why is not None:
+                raise InputError(why, seq.source or f"X[{i}]")
         clips = progress(seqs, desc="features", total=len(seqs), unit="clip")
         return self.fit_described(list(describe_clips(clips, candidates, mirror, sides)), y)
 
@@ -659,6 +676,10 @@ class CaseBaseClassifier(Classifier):
                 f"no person (no frame with a torso): {names}{' ...' if len(bad) > 5 else ''}",
                 "X",
             )
+        for i, c in enumerate(clips):  # a case of it would answer what solve refuses to ask
+            why = _shorter_than_a_movement(c.duration_s, None, "learn from")
+            if why is not None:
+                raise InputError(why, c.source or f"X[{i}]")
         if len(np.unique(labels)) < 2:
             raise InputError(
                 f"the training set has only one activity ({labels[0]!r}); a classifier needs "

@@ -338,8 +338,9 @@ def train(
     """Fit ``estimator`` on the usable ``clips`` and store it as case base ``name`` in ``db``
     (a SQLite file or SQLAlchemy URL), recording what each clip is (``cases``: ``"clips"``,
     ``"repetitions"`` or ``"windows"``, as ``train --split`` cut them) and what its label is
-    (``target``: the column's name, as ``train --target``). Clips that show no person are
-    skipped and named. ``clips`` that are not PoseSequences, an ``estimator`` that is not a
+    (``target``: the column's name, as ``train --target``). Clips that show no person, or
+    last less than one movement can (which ``fit`` refuses), are skipped and named.
+    ``clips`` that are not PoseSequences, an ``estimator`` that is not a
     :class:`~cbr.estimator.CaseBaseClassifier`, a ``cases`` or ``target`` of another kind:
     :class:`features.errors.InputError`, before any clip is read. ``cases`` records what
     the clips are, it cuts nothing: :func:`cut` and :func:`cut_recording` cut them as
