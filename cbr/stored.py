@@ -96,6 +96,7 @@ def model_document(
     doc = {
         "format": MODEL_FORMAT,
         "params": _jsonable(clf.get_params()),
+        "tuples": _tuples(clf.get_params()),
         "target": target,
         "cases": cases,
         "side": clf.side_,
@@ -117,6 +118,12 @@ def model_document(
     if typed is not None:
         doc["classes"] = typed
     return doc
+
+
+def _tuples(params: Mapping[str, Any]) -> list[str]:
+    """The names of the parameters given as tuples, which JSON keeps as lists: read back as
+    tuples, and the others as lists, ``get_params`` gives what ``__init__`` was given."""
+    return sorted(name for name, value in params.items() if isinstance(value, tuple))
 
 
 def _typed_classes(classes: np.ndarray) -> list[int] | list[bool] | list[float] | None:
@@ -454,7 +461,10 @@ def _params(
             "phases": config.phases,
         }
     known = set(CaseBaseClassifier().get_params())
-    return {k: (tuple(v) if k == "states" and isinstance(v, list) else v)
+    # stored before the tuples were named: states was read back as a tuple
+    named = model.get("tuples", ["states"])
+    tuples = {str(v) for v in named} if isinstance(named, list) else set()
+    return {k: (tuple(v) if k in tuples and isinstance(v, list) else v)
             for k, v in params.items() if k in known}  # fmt: skip
 
 

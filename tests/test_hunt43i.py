@@ -1,16 +1,21 @@
 """Session 43 (i): ``CaseBaseClassifier.fit`` refuses a clip too short to classify, as
-``predict`` does. (``report`` loading no scikit-learn: tests/test_startup.py.)"""
+``predict`` does; a stored classifier gives back ``states`` as it was given (list or tuple).
+(``report`` loading no scikit-learn: tests/test_startup.py.)"""
 
 from __future__ import annotations
 
 import dataclasses
+import sqlite3
 from pathlib import Path
 
 import numpy as np
 import pytest
+from sklearn.base import clone
 
+from casebase_store import open_store
 from cbr.described import describe_clips
 from cbr.estimator import CaseBaseClassifier
+from cbr.stored import load_classifier
 from cbr.training import train
 from features.errors import InputError
 from features.poses import PoseSequence
@@ -86,3 +91,54 @@ def test_train_still_skips_a_short_clip_naming_it(
     short, _ = _six_frames(X[2])
     result = train(tmp_path / "cb.sqlite", "default", [*X, short], [*y, y[2]], _small())
     assert result.too_short == [f"arm_2.npz (lasts {6 / X[2].fps:.2f} s)"]
+
+
+ARM_STATES = ["left_arm_bent.bent", "left_arm_bent.straight", "right_arm_bent.bent",
+              "right_arm_bent.straight"]  # fmt: skip
+
+
+@pytest.mark.parametrize("kind", [list, tuple])
+def test_states_come_back_as_given_from_the_store(
+    clips: tuple[list[PoseSequence], np.ndarray], tmp_path: Path, kind: type
+) -> None:
+    """``get_params()["states"]`` is the object ``__init__`` was given, in a clone too, and
+    of the same type once the classifier is stored and loaded back (JSON keeps both as a
+    list). Before: a list came back from the store as a tuple, unequal to the list given
+    (``["a"] != ("a",)``), and ``clone`` of the loaded classifier kept the tuple."""
+    X, y = clips
+    states = kind(ARM_STATES)
+    clf = CaseBaseClassifier(states=states, k=3, feature_weights="none", mirror="off")
+    assert clf.get_params()["states"] is states
+    assert type(clone(clf).get_params()["states"]) is kind
+    assert clone(clf).get_params()["states"] == states
+    train(tmp_path / "cb.sqlite", "default", X, y, clf)
+    store = open_store(tmp_path / "cb.sqlite", readonly=True)
+    try:
+        loaded = load_classifier(store, "default").classifier
+    finally:
+        store.close()
+    got = loaded.get_params()["states"]
+    assert type(got) is kind and got == states
+    again = clone(loaded).get_params()["states"]
+    assert type(again) is kind and again == states
+    assert loaded.get_params() == clf.get_params()
+
+
+def test_a_model_stored_before_reads_states_back_as_a_tuple(
+    clips: tuple[list[PoseSequence], np.ndarray], tmp_path: Path
+) -> None:
+    """A model document without ``"tuples"`` (stored by an earlier posecbr) reads a list of
+    states back as a tuple, as every earlier posecbr did."""
+    X, y = clips
+    db = tmp_path / "cb.sqlite"
+    clf = CaseBaseClassifier(states=list(ARM_STATES), k=3, feature_weights="none", mirror="off")
+    train(db, "default", X, y, clf)
+    with sqlite3.connect(db) as con:
+        con.execute("UPDATE case_bases SET model = json_remove(model, '$.tuples')")
+    con.close()
+    store = open_store(db, readonly=True)
+    try:
+        loaded = load_classifier(store, "default").classifier
+    finally:
+        store.close()
+    assert loaded.get_params()["states"] == tuple(ARM_STATES)
