@@ -32,9 +32,12 @@ How (all channels at once, no per-frame loops):
 3. alternation (:func:`side_parts`): the deviations from the left-right symmetric mean
    posture split into what both sides do alike and what one side does against the other
    (:func:`mirror_angles`); the movement alternates when the second spans at least half as
-   much as the first, the left and the right limbs move about equally (within a factor of
-   two: a one-legged kick does not alternate), in all and in the limbs that carry the
-   side-against-side movement (a kick whose arms swing to balance neither), the body goes
+   much as the first (an angle whose twin's joint is never seen is not shown to move against
+   it, and counts with the first), the left and the right limbs move about equally (within
+   a factor of two: a one-legged kick does not alternate), in all and in the limbs that
+   carry the side-against-side movement (a kick whose arms swing to balance neither),
+   compared only where both sides are seen (:func:`_twinned`; with no limb seen on both
+   sides the movement is not taken to alternate), the body goes
    out to both sides about equally far, and what one side does at its far points is the
    other's movement mirrored
    (:data:`ALTERNATION_MIN`: a kick answered by the other arm's swing is not) (the spans and
@@ -1544,7 +1547,14 @@ def _about_running_mean(line: np.ndarray, period: float | None, fps: float) -> n
 def _both_sides_move(spans: np.ndarray, names: tuple[str, ...]) -> bool:
     """Whether the left and the right limbs move about equally (within a factor of two, as
     for the reach of the two sides): the summed robust spans ``(C,)`` of the left angles
-    against those of the right. The trunk's angles belong to both sides."""
+    against those of the right. The trunk's angles belong to both sides. False when no
+    limb's angle is there (``names`` holds only twins: :func:`_twinned`): the sides have
+    nothing to be compared by, and an alternation not shown is not claimed (the left knee
+    unseen in a side view that never shows the right arm left only a pose model's wobble of
+    the trunk's twist, 25 degrees, to alternate: one lunge counted 5; a twist with no limb
+    seen on both sides now counts the turns to one side only, the smaller error)."""
+    if not any(n.startswith(("left_", "right_")) for n in names):
+        return False
     left = sum(s for s, n in zip(spans, names, strict=True) if not n.startswith("right_"))
     right = sum(s for s, n in zip(spans, names, strict=True) if not n.startswith("left_"))
     return bool(min(left, right) >= 0.5 * max(left, right))
@@ -1600,6 +1610,15 @@ def _sides_mirror(
 OTHER_SIDE = {"left": "right", "right": "left"}
 
 
+def _twinned(names: tuple[str, ...]) -> np.ndarray:
+    """``(len(names),)`` True where an angle's left-right mirror twin is among ``names`` (the
+    trunk's angles and the hips' height are their own twins). An angle whose twin is missing
+    (its joint unseen throughout: the left knee, and with it the left knee and hip angles)
+    has nothing to be compared with on the other side."""
+    present = set(names)
+    return np.array([_swap(n) in present for n in names])
+
+
 def _alternating_repetitions(
     x: np.ndarray,
     names: tuple[str, ...],
@@ -1614,7 +1633,13 @@ def _alternating_repetitions(
     direction and the side of each far point (:func:`_sides`); None when the movement does
     not alternate (and the rest empty). ``blind``: the samples where nobody is seen
     (:func:`_in_view`); ``clear_alternation`` as for :func:`count_in_signals`; ``edges``:
-    whether the clip's start and its end are the recording's (:func:`_whole_only`)."""
+    whether the clip's start and its end are the recording's (:func:`_whole_only`).
+
+    An angle whose mirror twin is not among ``names`` (its joint never seen) is its own twin
+    in :func:`side_parts`: all its movement counts with what both sides do alike, none with
+    what one does against the other, as it is not shown to; the two sides' limbs are compared
+    (and the side of each far point told) on the angles whose twins are there
+    (:func:`_twinned`)."""
     sym, anti = side_parts(x, names)
     none: tuple[list[tuple[int, int]], np.ndarray, np.ndarray, np.ndarray | None] = (
         [],
@@ -1637,8 +1662,12 @@ def _alternating_repetitions(
         _about_running_mean(alike, repeating, fps)
     ):
         return none  # mostly both sides alike (a squat, a jumping jack)
-    extent = np.percentile(x, 95, axis=0) - np.percentile(x, 5, axis=0)  # robust spans
-    if not _both_sides_move(extent, names) or not _limbs_alike(extent, names, direction):
+    # left against right only where both are seen: an angle whose twin is missing throughout
+    # (its joint unseen) is no limb standing by, nor one leading
+    both = _twinned(names)
+    twins = tuple(n for n, b in zip(names, both, strict=True) if b)
+    extent = np.percentile(x[:, both], 95, axis=0) - np.percentile(x[:, both], 5, axis=0)
+    if not _both_sides_move(extent, twins) or not _limbs_alike(extent, twins, direction[both]):
         return none  # one limb moves, the other stands by (a kick, a one-arm raise)
     # a full period holds one repetition per side
     distance = int(0.25 * (period or 2 * MIN_PERIOD_S) * fps)
@@ -1669,7 +1698,7 @@ def _alternating_repetitions(
     reach_other = float(np.median(-line[other]))
     if min(reach_one, reach_other) < 0.5 * max(reach_one, reach_other):
         return none  # one side goes out far, the other barely: not alternating
-    first = _sides(x, names, one, other, direction)
+    first = _sides(x[:, both], twins, one, other, direction[both])
     far = np.concatenate([one, other])
     sides = np.array([first] * len(one) + [OTHER_SIDE[first]] * len(other))
     # and a far point cut off at the clip's start or end, against the whole ones of both
