@@ -10,7 +10,6 @@ from __future__ import annotations
 import dataclasses
 import json
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
@@ -105,13 +104,6 @@ def unseen(seq: PoseSequence, joints: tuple[str, ...]) -> list[PoseSequence]:
     mask[np.arange(len(joints)), [JOINT_INDEX[j] for j in joints]] = True
     positions = np.where(mask[:, None, :, None], np.nan, canonical.positions[None])
     return [dataclasses.replace(canonical, positions=p) for p in positions]
-
-
-def _count(seq: PoseSequence) -> Any:
-    try:
-        return count_repetitions(seq)
-    except DataError as error:
-        return error
 
 
 def test_each_joint_unseen_throughout_real_clips(known: list[Known]) -> None:
