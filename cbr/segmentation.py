@@ -962,13 +962,18 @@ def _repetitions_in(
 ) -> tuple[Repetition, ...]:
     """:func:`_repetitions` of frames [start, end) of the frames ``sig`` are the signals of,
     read to their last sample when ``to_end``; ``edges``: whether the start, and the end,
-    are the recording's."""
+    are the recording's. Counted on the angles a clip of those frames alone is counted on
+    (:meth:`features.repetitions.MovementSignals.alone`; none followed: no repetition):
+    before, an arm joint missing throughout a jog but seen elsewhere in the recording was
+    filled in across it, an arm held still, and the jog's 7 steps counted 2-5 (alone: 6)."""
     a, b = start // sig.step, max(start // sig.step + 1, end // sig.step)
     if to_end:  # to the recording's last sample, as reps reads it (a far point there counts)
         b = max(b, len(sig.values))
     if (b - a) / sig.fps < MIN_PERIOD_S:
         return ()
-    part = sig.part(a, b)
+    part = sig.alone(a, b)
+    if part is None:
+        return ()
     found = count_in_segment(
         part, min((b - a) * sig.step, end - a * sig.step), sig.fps * sig.step, edges, settled
     ).repetitions

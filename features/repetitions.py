@@ -419,11 +419,51 @@ class MovementSignals:
     # (n,) True in a stretch of at least MIN_PERIOD_S in which no frame shows the person (the
     # values there are filled in, not measured); None: none such
     blind: np.ndarray | None = None
+    # (n, channels) of the ``step`` frames of each sample, in how many each angle was
+    # followed (seen, or in a gap short enough to fill: _followed); (n,) in how many any
+    # counted angle was seen (the person shown); None: followed wherever shown
+    followed: np.ndarray | None = None
+    shown: np.ndarray | None = None
 
     def part(self, a: int, b: int) -> MovementSignals:
         """Samples [a, b) of these signals."""
-        blind = None if self.blind is None else self.blind[a:b]
-        return dataclasses.replace(self, values=self.values[a:b], blind=blind)
+        return dataclasses.replace(
+            self,
+            values=self.values[a:b],
+            blind=None if self.blind is None else self.blind[a:b],
+            followed=None if self.followed is None else self.followed[a:b],
+            shown=None if self.shown is None else self.shown[a:b],
+        )
+
+    def alone(self, a: int, b: int) -> MovementSignals | None:
+        """Samples [a, b) of these signals with the angles a clip of their frames alone would
+        count (:func:`movement_signals`): an angle followed in fewer than
+        :data:`MIN_VALID_SHARE` of the frames there that show the person is left out (and
+        with it, :func:`_twinned`, its twin from comparing the sides); None when none is
+        left. The signals of a whole recording keep an angle its joint is seen for in most
+        of the recording, filled in across a stretch where it is missing throughout: a piece
+        of that stretch read it as a limb held still."""
+        part = self.part(a, b)
+        if part.followed is None or part.shown is None:
+            return part
+        keep = _kept(part.followed.sum(axis=0), int(part.shown.sum()))
+        if not keep.any():
+            return None
+        if keep.all():
+            return part
+        return dataclasses.replace(
+            part,
+            values=part.values[:, keep],
+            names=tuple(n for n, k in zip(part.names, keep, strict=True) if k),
+            followed=part.followed[:, keep],
+        )
+
+
+def _kept(there: np.ndarray, shown: int) -> np.ndarray:
+    """``(channels,)`` whether each angle, followed in ``there`` ``(channels,)`` frames of
+    the ``shown`` that show the person, takes part: followed somewhere, and in at least
+    :data:`MIN_VALID_SHARE` of those."""
+    return np.asarray((there > 0) & (there >= MIN_VALID_SHARE * shown))
 
 
 def counted_angles(seq: PoseSequence) -> np.ndarray:
@@ -517,8 +557,9 @@ def movement_signals(seq: PoseSequence) -> MovementSignals:
 
     raw = counted_angles(seq)
     finite = np.isfinite(raw)
-    there = _followed(finite, seq.fps).sum(axis=0)
-    keep = (there > 0) & (there >= MIN_VALID_SHARE * finite.any(axis=1).sum())
+    followed = _followed(finite, seq.fps)
+    shown = finite.any(axis=1)
+    keep = _kept(followed.sum(axis=0), int(shown.sum()))
     if not keep.any():
         raise DataError(
             "no person in view in enough frames to follow a movement (joint angles missing)",
@@ -534,7 +575,16 @@ def movement_signals(seq: PoseSequence) -> MovementSignals:
     x = gaussian_filter1d(x, SMOOTHING_S * rate, axis=0, mode="nearest")[:: step // first]
     unseen = ~np.isfinite(raw[:, keep]).any(axis=1)
     blind = long_runs(unseen, MIN_PERIOD_S * seq.fps)[::step]
-    return MovementSignals(x, names, seq.fps / step, step, blind if blind.any() else None)
+    samples = np.arange(0, seq.n_frames, step)  # sample i: frames [i step, (i + 1) step)
+    return MovementSignals(
+        x,
+        names,
+        seq.fps / step,
+        step,
+        blind if blind.any() else None,
+        np.add.reduceat(followed[:, keep], samples, axis=0, dtype=np.int32),
+        np.add.reduceat(shown, samples, dtype=np.int32),
+    )
 
 
 def _running_median(x: np.ndarray, width: int) -> np.ndarray:
