@@ -272,13 +272,18 @@ def _check_duration(n_frames: int, fps: float, where: str = "") -> float:
 
 def _repetition_bounds(sig: MovementSignals, n_frames: int, fps: float) -> list[tuple[int, int]]:
     """Frame ranges of the periods found whole in the spans, each once: a repetition, or for a
-    movement that alternates sides two neighbouring ones (a step with each leg)."""
+    movement that alternates sides two neighbouring ones (a step with each leg). Each span on
+    the angles a clip of its frames alone takes (:meth:`MovementSignals.alone`), as ``watch``
+    reads its spans: an arm joint missing throughout 13_31's jog, filled in from the rest of
+    the recording as an arm held still, made windows of 1.6-2.8 s of its 0.75-s strides."""
     span = int(PERIOD_SPAN_S * sig.fps)
     hop = max(1, int(SPAN_HOP_S * sig.fps))
     found: set[tuple[int, int]] = set()
     starts = range(0, max(1, len(sig.values) - span + hop), hop)
     for a in progress(starts, "finding repetitions", len(starts), "span", leave=False):
-        part = sig.part(a, a + span)
+        part = sig.alone(a, a + span)
+        if part is None:  # no angle followed in enough of its frames
+            continue
         for first, last in periods_in_span(part, fps):
             found.add((a * sig.step + first, min(n_frames, a * sig.step + last)))
     return sorted(found)
