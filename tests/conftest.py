@@ -139,6 +139,32 @@ def compared_three(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return made_once(tmp_path_factory, "compare-three", make)
 
 
+@pytest.fixture(scope="session")
+def compared_small(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
+    """One ``compare`` of 24 demo clips (tests/test_hunt31e.py's SMALL: two movements of two
+    subjects, fluents by euclidean alone, no DAD, peers or explanations) with ``--json
+    run.json --out run``, made once in the session: the folder holding both, and what the
+    command printed. tests/test_hunt31e.py copies the folder (a results file beside its
+    pictures' folder), tests/test_hunt32c.py reads the results and the printed table."""
+
+    def make(root: Path) -> tuple[Path, str]:
+        import contextlib
+        import io
+
+        from posecbr.cli import main
+        from tests.test_hunt31e import DEMO, SMALL
+
+        printed = io.StringIO()
+        argv = ["compare", str(DEMO), *SMALL, "--json", str(root / "run.json")]
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("POSECBR_NO_PROGRESS", "1")
+            with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(io.StringIO()):
+                assert main([*argv, "--out", str(root / "run")]) == 0
+        return root, printed.getvalue()
+
+    return made_once(tmp_path_factory, "compare-small", make)
+
+
 @pytest.fixture(autouse=True)
 def _no_progress_bars(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("POSECBR_NO_PROGRESS", "1")

@@ -14,6 +14,7 @@ import io
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -71,17 +72,18 @@ def _inlined(page: str) -> list[bytes]:
 
 
 def test_report_of_a_json_beside_the_out_folder_shows_that_runs_pictures(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], compared_small: tuple[Path, str]
 ) -> None:
     """``compare --json run.json --out run``: run.json named its pictures as the folder
     run/ holds them ("timeline_00.png"), but ``report run.json`` reads them from run.json's
     own folder: it left out the prevalence and timelines of the run, and inlined a
-    timeline_00.png of another run lying beside run.json, captioned as this run's."""
+    timeline_00.png of another run lying beside run.json, captioned as this run's. (The run
+    is a copy of tests/conftest.py's compared_small, that command made once.)"""
     decoy = tmp_path / "timeline_00.png"
     decoy.write_bytes((ROOT / "docs" / "workout_timeline.png").read_bytes())
     run = tmp_path / "run"
-    argv = ["compare", str(DEMO), *SMALL, "--json", str(tmp_path / "run.json"), "--out", str(run)]
-    assert main(argv) == 0
+    shutil.copytree(compared_small[0] / "run", run)
+    shutil.copy(compared_small[0] / "run.json", tmp_path / "run.json")
     doc = json.loads((tmp_path / "run.json").read_text())
     assert doc["pictures"]["timelines"][0]["file"] == "run/timeline_00.png"
     assert doc["pictures"]["accuracy"] == "run/accuracy.png"
@@ -372,15 +374,15 @@ def test_compare_says_qmp_is_not_compared_when_no_measure_takes_it(
 
 
 def test_compare_into_an_earlier_runs_folder_leaves_none_of_its_pictures(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], compared_slice: Path
 ) -> None:
     """``compare --out DIR`` over the folder of an earlier comparison: the earlier run's
     pictures this one did not draw (DAD's confusion matrix, a third activity's timeline)
-    stayed beside the new results as if they were this run's."""
+    stayed beside the new results as if they were this run's. The earlier run is a copy of
+    the session's comparison of three activities with DAD (tests/conftest.py
+    compared_slice: compare names no folder in its files, so a copy is that run)."""
     out = tmp_path / "o"
-    three = ["--labels", "deep_squat,hurdle_step,sit_to_stand", "--out", str(out)]
-    first = [a for a in SMALL if a != "--no-dad"]
-    assert main(["compare", str(DEMO), *first, *three]) == 0
+    shutil.copytree(compared_slice / "o", out)
     assert (out / "confusion_dad.png").is_file() and (out / "timeline_02.png").is_file()
     (out / "mine.png").write_bytes((out / "timeline_02.png").read_bytes())  # not compare's
     assert main(["compare", str(DEMO), *SMALL, "--out", str(out)]) == 0

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import re
 from pathlib import Path
@@ -14,20 +12,16 @@ from cbr.evaluation.results import CompareResults
 from cbr.evaluation.tables import format_table
 from posecbr.cli import main
 from tests.badinput import small_case_base
-from tests.test_hunt31e import DEMO, SMALL
+from tests.test_hunt31e import DEMO
 
 
 @pytest.fixture(scope="module")
-def one_configuration(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, object], str]:
+def one_configuration(compared_small: tuple[Path, str]) -> tuple[dict[str, object], str]:
     """`posecbr demo --quick`'s comparison, smaller: fluents/euclidean alone, which is then
-    the best interpretable method and marked " *"."""
-    out = tmp_path_factory.mktemp("one_configuration") / "r.json"
-    printed = io.StringIO()
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("POSECBR_NO_PROGRESS", "1")
-        with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(io.StringIO()):
-            assert main(["compare", str(DEMO), *SMALL, "--json", str(out)]) == 0
-    return json.loads(Path(out).read_text()), printed.getvalue()
+    the best interpretable method and marked " *" (tests/conftest.py compared_small, made
+    once in the session)."""
+    folder, printed = compared_small
+    return json.loads((folder / "run.json").read_text()), printed
 
 
 def test_compare_table_keeps_a_marked_long_name_in_its_column(
