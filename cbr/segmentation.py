@@ -274,8 +274,8 @@ def _repetition_bounds(sig: MovementSignals, n_frames: int, fps: float) -> list[
     """Frame ranges of the periods found whole in the spans, each once: a repetition, or for a
     movement that alternates sides two neighbouring ones (a step with each leg). Each span on
     the angles a clip of its frames alone takes (:meth:`MovementSignals.alone`), as ``watch``
-    reads its spans: an arm joint missing throughout 13_31's jog, filled in from the rest of
-    the recording as an arm held still, made windows of 1.6-2.8 s of its 0.75-s strides."""
+    reads its spans: an arm joint missing throughout a jog but seen elsewhere in the
+    recording, filled in across it as an arm held still, made windows of two to four strides."""
     span = int(PERIOD_SPAN_S * sig.fps)
     hop = max(1, int(SPAN_HOP_S * sig.fps))
     found: set[tuple[int, int]] = set()
@@ -970,7 +970,7 @@ def _repetitions_in(
     are the recording's. Counted on the angles a clip of those frames alone is counted on
     (:meth:`features.repetitions.MovementSignals.alone`; none followed: no repetition):
     before, an arm joint missing throughout a jog but seen elsewhere in the recording was
-    filled in across it, an arm held still, and the jog's 7 steps counted 2-5 (alone: 6)."""
+    filled in across it, an arm held still, and the jog's steps were undercounted."""
     a, b = start // sig.step, max(start // sig.step + 1, end // sig.step)
     if to_end:  # to the recording's last sample, as reps reads it (a far point there counts)
         b = max(b, len(sig.values))
