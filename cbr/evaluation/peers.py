@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.util
 import sys
+import uuid
 import warnings
 from collections.abc import Sequence
 from typing import Any
@@ -69,9 +70,22 @@ def cache_tslearn_kernels() -> int:
             cache = getattr(value, "_cache", None)
             if (isinstance(value, Dispatcher) and value.__module__ == name
                     and type(cache).__name__ == "NullCache"):  # fmt: skip
+                _name_for_every_process(value)
                 value.enable_caching()
                 newly += 1
     return newly
+
+
+def _name_for_every_process(kernel: Any) -> None:
+    """Give tslearn's ``kernel`` the same identity in every process: its module and name.
+    numba finds a kernel in its cache by a hash of its code and of the values it closes over,
+    and tslearn's DTW and mask kernels close over other kernels, which pickle with a random
+    id drawn anew in each process (``Dispatcher._uuid``): every new process missed the cache,
+    compiled the DTW again (~2.5 s of CPU) and added one more copy to the cache. An id
+    already drawn (the kernel pickled before) is kept."""
+    if getattr(kernel, "_MemoMixin__uuid", None) is None:
+        qualname = f"{kernel.py_func.__module__}.{kernel.py_func.__qualname__}"
+        kernel._set_uuid(str(uuid.uuid5(uuid.NAMESPACE_URL, f"numba-kernel:{qualname}")))
 
 
 class DTWKNNPeer(ClassifierMixin, BaseEstimator):
