@@ -109,8 +109,8 @@ def compared_slice(tmp_path_factory: pytest.TempPathFactory) -> Path:
             mp.setenv("POSECBR_NO_PROGRESS", "1")
             rc = main([
                 "compare", str(DEMO), "--labels", SLICE, "--similarities", "euclidean,dtw",
-                # The tslearn peer is left out: its numba kernels compile for ~30 s in every
-                # new process (tslearn does not cache them), too slow for the suite.
+                # The tslearn peer is left out: tests/test_compare_peers.py checks it, here
+                # its DTW 1-NN would only add to the suite's time.
                 "--features", "fluents", "--peers", "none", "--explain", "2",
                 "--json", str(root / "r.json"), "--csv", str(root / "r.csv"),
                 "--out", str(root / "o"),

@@ -4,8 +4,9 @@ data (the suite runs no other benchmark; ``python -m benchmarks NAME`` runs any 
 ``compare --quick`` takes about a minute on the whole demo subset (180 clips); this runs its
 ``main`` on the correct repetitions of two movements of it (18 clips of three subjects: three
 leave-one-subject-out folds), its results written under ``tmp_path``, never into
-``benchmarks/results``. Most of its ~15 s is the tslearn peer's numba kernels compiling (tslearn
-does not cache them): kept, since the peer is what the benchmark's ratios are measured against.
+``benchmarks/results``. The tslearn peer is kept, since it is what the benchmark's ratios are
+measured against; its numba kernels are loaded from numba's cache, not compiled again
+(``cbr.evaluation.peers.cache_tslearn_kernels``, warmed by ``tests/_kernels.py``).
 """
 
 from __future__ import annotations
