@@ -82,10 +82,12 @@ def _name_for_every_process(kernel: Any) -> None:
     and tslearn's DTW and mask kernels close over other kernels, which pickle with a random
     id drawn anew in each process (``Dispatcher._uuid``): every new process missed the cache,
     compiled the DTW again (~2.5 s of CPU) and added one more copy to the cache. An id
-    already drawn (the kernel pickled before) is kept."""
-    if getattr(kernel, "_MemoMixin__uuid", None) is None:
+    already drawn (the kernel pickled before) is kept; a numba without ``_set_uuid`` (a
+    private method) leaves the kernel as it is."""
+    set_uuid = getattr(kernel, "_set_uuid", None)
+    if set_uuid is not None and getattr(kernel, "_MemoMixin__uuid", None) is None:
         qualname = f"{kernel.py_func.__module__}.{kernel.py_func.__qualname__}"
-        kernel._set_uuid(str(uuid.uuid5(uuid.NAMESPACE_URL, f"numba-kernel:{qualname}")))
+        set_uuid(str(uuid.uuid5(uuid.NAMESPACE_URL, f"numba-kernel:{qualname}")))
 
 
 class DTWKNNPeer(ClassifierMixin, BaseEstimator):
