@@ -112,6 +112,7 @@ from .datasets import Clip
 from .derived import signals_of, stretch
 from .errors import DataError
 from .geometry import WORLD_UP, angle_between, body_frame, unit
+from .leg_swaps import SWAP_JOINTS, swapped_legs
 from .poses import PoseSequence, expect_sequence
 from .signals import ANGLE_SIGNALS
 from .skeleton import JOINT_INDEX
@@ -469,7 +470,9 @@ def _kept(there: np.ndarray, shown: int) -> np.ndarray:
 def counted_angles(seq: PoseSequence) -> np.ndarray:
     """The :data:`COUNTED_ANGLES` of ``seq`` (positions ``(frames, joints, 3)``), radians,
     ``(frames, len(COUNTED_ANGLES))``; NaN where undefined: the trunk's bend, side bend and
-    twist while it lies far from the vertical, and angles on joints the camera does not see."""
+    twist while it lies far from the vertical, angles on joints the camera does not see, and
+    angles on the legs and hips where the pose model swapped the legs
+    (:func:`features.leg_swaps.swapped_legs`)."""
     sig = signals_of(seq)
     canonical = seq.to_canonical()
     p = canonical.positions
@@ -489,6 +492,8 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
     raw[lying[:, None] & torso[None, :]] = np.nan
     if canonical.confidence is not None:
         raw[_unseen(canonical.confidence)] = np.nan
+    swapped = swapped_legs(p, seq.fps, MIN_EXCURSION_RAD, MIN_PERIOD_S, MEDIAN_S)
+    raw[swapped[:, None] & _ON_LEGS[None, :]] = np.nan
     return raw
 
 
@@ -708,6 +713,11 @@ _ANGLE_JOINTS: dict[str, tuple[str, ...]] = {
     **{f"{s}_upper_arm_turn": (*(f"{s}_{j}" for j in _ARM), *_TRUNK) for s in ("left", "right")},
     PELVIS_HEIGHT: (*_TRUNK, "left_ankle", "right_ankle"),
 }
+
+
+_ON_LEGS = np.array([bool(SWAP_JOINTS.intersection(_ANGLE_JOINTS[n])) for n in COUNTED_ANGLES])
+"""Which of :data:`COUNTED_ANGLES` rest on a joint a swap of the legs moves
+(:data:`features.leg_swaps.SWAP_JOINTS`): missing where the pose model swapped the legs."""
 
 
 def _unseen(confidence: np.ndarray | None) -> np.ndarray:

@@ -7,10 +7,14 @@ import socket
 import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from tests.once import made_once
+
+if TYPE_CHECKING:
+    from features.poses import PoseSequence
 
 # The suite runs one process per core (pytest-xdist), and the commands and workers the tests
 # start are more processes. A BLAS or OpenMP pool of every core in each of them oversubscribes
@@ -74,6 +78,21 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"real data folder {SHARED_DATA} is not on this machine")
     return SHARED_DATA
+
+
+@pytest.fixture(scope="session")
+def lunge_poses(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> PoseSequence:
+    """The bundled reverse-lunge video's poses (250 frames at 25 fps, as ``extract`` finds
+    them), estimated once in the session: about a minute of the pose model's CPU time.
+    Read by tests/test_leg_swaps.py and tests/test_repetitions_unseen.py."""
+
+    def make(root: Path) -> PoseSequence:
+        from features.pose_estimation import estimate_video
+
+        video = shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
+        return estimate_video(video, progress_bar=False).sequence
+
+    return made_once(tmp_path_factory, "lunge-poses", make)
 
 
 @pytest.fixture(scope="session")
