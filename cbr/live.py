@@ -233,6 +233,17 @@ def _shifted(rep: Repetition, frames: int) -> Repetition:
 
 
 @dataclass(frozen=True)
+class _HeldBack:
+    """The stream's first segment, finished and held back (:meth:`LiveSegmenter._hold`):
+    ``segment`` as it would be given now, ``own`` its repetitions counted alone (none whole),
+    ``held`` its last far point left to the segment after (:func:`cbr.segmentation.keep_whole`)."""
+
+    segment: LiveSegment
+    own: tuple[Repetition, ...]
+    held: bool
+
+
+@dataclass(frozen=True)
 class _Hop:
     """A settled hop whose evidence of unknown is final, for the known/unknown decoder: the
     frame its evidence is of (``centre``), its ``activity``, the share of its windows voting
@@ -285,9 +296,12 @@ class LiveSegmenter:
        on); every change of the label seen costs the same, and a change of activity under
        unknown is not seen and costs nothing.
 
-    A segment is finished when the label seen (an activity, or unknown) settles on a change.
-    Memory is bounded: windows, hops and frames are kept only while a segment or a decision
-    can still need them.
+    A segment is finished when the label seen (an activity, or unknown) settles on a change;
+    the stream's first, when it has no whole repetition of its own, is given once the first
+    repetition of the segment after it is known (:meth:`_judge_early`, :meth:`_judge_held`:
+    a far point cut off by the stream's start is judged beside it, as offline), still before
+    every later segment. Memory is bounded: windows, hops and frames are kept only while a
+    segment or a decision can still need them.
     """
 
     def __init__(
@@ -371,6 +385,9 @@ class LiveSegmenter:
         self.beside: int | None = None  # the last repetition's first frame of the last
         # segment finished (None: it had none, or nobody was in view): what the stream's last
         # segment is judged beside when the stream ends (:meth:`_beside_whole`)
+        self.waiting: _HeldBack | None = None  # the stream's first segment, held back until
+        # the first repetition of the segment after it is known (:meth:`_hold`)
+        self.released: list[LiveSegment] = []  # it, judged, not yet given
         self.ended = False  # the stream has ended (finish)
         self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
         self.judged: list[_Judged] = []  # the windows over the segments not yet finished
@@ -595,6 +612,7 @@ class LiveSegmenter:
         self.state = self.forward.step(log_votes(nearest))
         states = self.forward.settle(most=self.most)
         finished = self._settle(np.array(states, dtype=np.int64))
+        finished += self._judge_early()
         self._trim()
         return finished
 
@@ -749,9 +767,66 @@ class LiveSegmenter:
         if joins and boundary - self.seen_start < self.least_blind:
             self.seen = seen
             return []
-        done = [self._segment(self.seen_start, boundary, self.seen, True, lost=seen == self.nobody)]
+        lost = seen == self.nobody
+        done = self._given(self._segment(self.seen_start, boundary, self.seen, True, lost=lost))
         self.seen, self.seen_start, self.seen_sum, self.held = seen, boundary, [0.0, 0.0], []
         return done
+
+    def _given(self, segment: LiveSegment) -> list[LiveSegment]:
+        """The segments to give now that ``segment`` is finished: the stream's first segment,
+        held back and judged since (:attr:`released`), then ``segment``, unless it is that
+        first segment, held back (:meth:`_segment`)."""
+        out, self.released = self.released, []
+        if self.waiting is not None and self.waiting.segment is segment:
+            return out
+        return [*out, segment]
+
+    def _judge_early(self) -> list[LiveSegment]:
+        """The stream's first segment, held back, judged and given once the first repetition
+        of the segment after it has come back (counted on the frames pushed since its cut:
+        its end known), or once that segment has gone on :data:`MAX_UNSETTLED_S` (on what
+        it holds then: the delay is bounded); else nothing yet. The segment after it being
+        finished, or the stream ending, judges it too (:meth:`_segment`)."""
+        if self.waiting is None:
+            return []
+        cut = self.waiting.segment.end_frame
+        try:
+            after = self._count_apart(cut, self.n, (False, False))
+        except DataError:  # too short yet, or nobody in view
+            after = ()
+        back = bool(after) and not (after[0].held[1] or after[0].unreturned[1])
+        if not back and self.n - cut < MAX_UNSETTLED_S * self.fps:
+            return []
+        self._judge_held(after)
+        out, self.released = self.released, []
+        return out
+
+    def _judge_held(self, after: tuple[Repetition, ...]) -> None:
+        """Judge the stream's first segment, held back (:attr:`waiting`; no whole repetition
+        of its own), beside ``after``, the repetitions of the segment after it, and release
+        it (:attr:`released`): as :func:`cbr.segmentation.counted_segments` judges a far
+        point cut off at the recording's start (its ``_beside_whole``), the stream frames
+        from the start to the end of the first of ``after`` are counted as one stretch, and
+        the far point they keep cut off at the start, lying in the first segment, counts
+        there (:func:`cbr.segmentation.cut_off_beside`). Before, dropped: ``watch`` finished
+        the first segment before it saw the next, and the bundled glute bridge, held as the
+        stream starts, counted 0 there where ``segment`` and the hand count 1."""
+        held, self.waiting = self.waiting, None
+        assert held is not None
+        segment, end = held.segment, held.segment.end_frame
+        found: tuple[Repetition, ...] = ()
+        if after and self.offset == 0:
+            try:
+                found = self._count_apart(0, after[0].end_frame, (True, False))
+            except DataError:  # too short, or nobody in view
+                found = ()
+        reps = cut_off_beside(held.own, found, (0, end), self.step, at_end=False)
+        if len(reps) > len(held.own):
+            kept = keep_whole(reps, 0, end, self.step, False, True, held.held)
+            segment = dataclasses.replace(segment, repetitions=len(kept))
+            if not held.own:  # what the stream's last segment is judged beside
+                self.beside = reps[-1].start_frame
+        self.released.append(segment)
 
     def _after_nobody(self, hop: _Hop) -> list[LiveSegment]:
         """An unknown hop after nobody in view: held (:attr:`held`) while the unknown stretch
@@ -806,6 +881,8 @@ class LiveSegmenter:
         stream's end: the frames from the last repetition of the segment finished last,
         :meth:`_beside_whole`)."""
         begun = min(self.seen_start, self.stretch_start)
+        if self.waiting is not None:  # the first segment, held back: from the stream's start
+            begun = 0
         if self.beside is not None:
             begun = min(begun, self.beside)
         keep_from = max(begun, self.n - int(MAX_SEGMENT_S * self.fps)) - self.window
@@ -997,6 +1074,7 @@ class LiveSegmenter:
                 reps = self._count_apart(first, end, edges, clip=clip)
             except DataError:  # too short, or nobody in view
                 pass
+        self._judge_after(start, reps, cut or explained)
         if not cut and explained:  # the stream's last segment, the stream ended
             reps = self._beside_whole(start, end, reps)
         confidence = self._confidence(state)
@@ -1018,7 +1096,33 @@ class LiveSegmenter:
             count += self.passed_on
         label = None if state == self.unknown else self.classes[state]
         text, novelty = self._explain(start, end, state) if explained else ("", math.nan)
-        return LiveSegment(start, end, label, float(confidence), count, text, novelty)
+        out = LiveSegment(start, end, label, float(confidence), count, text, novelty)
+        self._hold(out, first, reps, held, cut and not lost)
+        return out
+
+    def _hold(
+        self,
+        segment: LiveSegment,
+        first: int,
+        reps: tuple[Repetition, ...],
+        held: bool,
+        finished: bool,
+    ) -> None:
+        """Hold ``segment`` back (:attr:`waiting`) when it is the stream's first, being
+        ``finished`` at a cut with a segment after it that shows somebody, counted from the
+        stream's first frame (``first``), and none of ``reps``, its repetitions, is whole: a
+        far point cut off by the start is judged beside the segment after it
+        (:meth:`_judge_held`); ``held``: its last far point is left to that segment."""
+        if finished and first == 0 and not whole_in(reps):
+            self.waiting = _HeldBack(segment, reps, held)
+
+    def _judge_after(self, start: int, reps: tuple[Repetition, ...], given: bool) -> None:
+        """When the segment starting at ``start`` (its repetitions ``reps``) is the one after
+        the stream's first, held back, and is being given (``given``: finished, or the
+        stream's last once it has ended), judge that first one beside it
+        (:meth:`_judge_held`)."""
+        if given and self.waiting is not None and start == self.waiting.segment.end_frame:
+            self._judge_held(reps)
 
     def _finished(
         self, reps: tuple[Repetition, ...], first: int, end: int, held: bool, passed_on: int
@@ -1250,7 +1354,7 @@ class LiveSegmenter:
                 self.seen_sum = (
                     [sum(held), float(len(held))] if tail == self.unknown else [0.0, 0.0]
                 )
-        return [*out, self._segment(self.seen_start, self.n, self.seen, False)]
+        return [*out, *self._given(self._segment(self.seen_start, self.n, self.seen, False))]
 
     def _lost_at_end(self) -> list[LiveSegment]:
         """At the end of the stream, a stretch of :data:`MIN_SEGMENT_S` or more with nobody in

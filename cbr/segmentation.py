@@ -1291,8 +1291,9 @@ def cut_off_beside(
     its cut to that edge, counted as one stretch; :attr:`Repetition.held` at the edge),
     when it lies in this segment, past its cut by ``step`` frames (one sample of the
     counter's signals), and in none of ``own``: the part of it in the segment added.
-    :func:`_beside_whole` (``segment``) and :meth:`cbr.live.LiveSegmenter._beside_whole`
-    (``watch``, at the stream's end) judge it so."""
+    :func:`_beside_whole` (``segment``), :meth:`cbr.live.LiveSegmenter._beside_whole`
+    (``watch``, at the stream's end) and :meth:`cbr.live.LiveSegmenter._judge_held` (at its
+    start) judge it so."""
     start, end = bounds
     if at_end:
         edge = [r for r in found if r.held[1] and r.peak_frame >= start + step][-1:]

@@ -12,8 +12,12 @@ fluents that hold now are drawn on the frames (``--out video.mp4`` writes them, 
 One JSON line per finished segment goes to stdout, as it finishes (``start_s``, ``end_s``,
 ``start_frame``, ``end_frame``, ``label``, null when unknown, ``confidence``, ``unknown``,
 ``repetitions``, ``explanation``, ``novelty``, ``count`` (the number of repetitions, as
-``repetitions`` gives it too), as ``posecbr segment --json`` gives them). At
-the end the latency from a frame's coming to having its label is printed on stderr (median,
+``repetitions`` gives it too), as ``posecbr segment --json`` gives them); a segment's line
+comes once the decoders have settled it, seconds after its end, and the first segment's,
+when it has no whole repetition of its own, once the first repetition after it is known
+(:meth:`cbr.live.LiveSegmenter._judge_held`). At
+the end the latency from a frame's coming to having its rolling label (drawn on the frame,
+not the JSON lines) is printed on stderr (median,
 95th percentile, worst): a file's frame played at its own rate comes when it is due, as a
 camera would deliver it, however late the watch reads it; a live source's when it is read.
 A live source that sends no frame for longer than a quarter second and resumes (before

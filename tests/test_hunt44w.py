@@ -1,0 +1,128 @@
+"""Hunt 44w: ``watch`` judges a repetition cut off by the stream's start beside the first
+repetition of the segment after the first, as ``segment`` judges one cut off by the
+recording's start (:func:`cbr.segmentation._beside_whole`;
+:meth:`cbr.live.LiveSegmenter._judge_held`): the first segment's line is held back until
+that repetition is known, and the two agree on the first segment's count."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from features.pose_estimation import estimate_video
+from features.poses import PoseSequence
+from features.repetitions import count_repetitions
+from tests.bodies import squat_pose, to_sequence
+from tests.test_hunt36j import MOVE_S, REST_S, _counts, _eased
+from tests.test_hunt36l import LABELS, _Changing
+from tests.test_hunt38b import _both
+from tests.test_repetitions import FPS
+
+
+def _up_then_squats(depth: float, stand_s: float, squats: int) -> tuple[PoseSequence, int]:
+    """The stream starting at the bottom of a squat ``depth`` of the way down (knees at
+    180 - 130 ``depth`` degrees), held there 0.5 s, up over 0.8 s, standing ``stand_s`` s,
+    then ``squats`` squats (down over 0.8 s to knees at 50 degrees, up over 0.8 s, standing
+    0.6 s after each). Returns it and the first frame of the standing after the way up."""
+    rest, move = int(REST_S * FPS), int(MOVE_S * FPS)
+    parts = [np.full(int(0.5 * FPS), depth), depth * _eased(move)[::-1]]
+    standing_from = sum(len(p) for p in parts)
+    parts.append(np.zeros(int(stand_s * FPS)))
+    for _ in range(squats):
+        parts += [_eased(move), _eased(move)[::-1], np.zeros(rest)]
+    return to_sequence(*(squat_pose(d) for d in np.concatenate(parts)), fps=FPS), standing_from
+
+
+@pytest.mark.parametrize("squats", [2, 3])
+@pytest.mark.parametrize(("stand_s", "into_s"), [(2.0, 0.3), (3.0, 1.0)])
+def test_watch_counts_the_squat_cut_off_by_the_start_as_segment(
+    squats: int, stand_s: float, into_s: float
+) -> None:
+    """By construction the stream starts at the bottom of a squat as deep as the ``squats``
+    whole ones after it: cut off by the start, it counts beside them (README, "a far point
+    cut off by the clip's start or end counts beside a whole one": three quarters of their
+    depth or more), and ``reps`` counts ``squats`` + 1. The label changing ``into_s`` s into
+    the standing after the way up, ``watch`` counts 1 and ``squats``, as ``segment`` cut
+    where ``watch`` cut. Before: 0 and ``squats``, the first segment finished before the
+    next was seen, with no whole repetition to measure its far point against (checked:
+    fails on the code before)."""
+    seq, standing_from = _up_then_squats(1.0, stand_s, squats)
+    assert count_repetitions(seq).count == squats + 1
+    watched, offline = _both(seq, standing_from + int(into_s * FPS), 2.0)
+    assert len(watched) == 2
+    assert watched == offline == [1, squats]
+
+
+def test_watch_leaves_out_a_way_up_from_less_than_half_as_deep_as_segment() -> None:
+    """The same starting at 0.4 of the whole squats' depth (knees at 128 degrees: 52 of
+    their 130 degrees of bend, less than half): ``reps`` counts the 2 whole squats alone, and
+    ``watch`` and ``segment`` 0 and 2: the stretch judged beside the segment after keeps no
+    far point at the start."""
+    seq, standing_from = _up_then_squats(0.4, 3.0, 2)
+    assert count_repetitions(seq).count == 2
+    watched, offline = _both(seq, standing_from + int(1.0 * FPS), 2.0)
+    assert watched == offline == [0, 2]
+
+
+def test_the_first_line_waits_for_the_next_segments_first_repetition() -> None:
+    """8 s of standing after the way up, the label changing 0.3 s into it: ``watch``
+    finishes the first segment while the standing goes on (about 9.5 s into the stream),
+    before any repetition of the segment after it. Its line is held back until the first
+    squat after the standing has come back (by construction at frame 39 + 240 + 48 = 327,
+    10.9 s), then given while the stream goes on (not at its end), counting 1 as ``segment``
+    does (before: given at once, counting 0; checked)."""
+    seq, standing_from = _up_then_squats(1.0, 8.0, 2)
+    back = standing_from + int(8.0 * FPS) + 2 * int(MOVE_S * FPS)
+    frames = np.concatenate([seq.positions, np.repeat(seq.positions[-1:], int(2.0 * FPS), 0)])
+    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
+    live = _Changing(clf, FPS, judge=SimpleNamespace())
+    live.changes = (standing_from + int(0.3 * FPS),)
+    given = []
+    for i, frame in enumerate(frames):
+        given += [(i + 1, s) for s in live.push(frame)]
+    assert given, "the first segment is given before the stream ends"
+    at, first = given[0]
+    assert first.start_frame == 0
+    assert back <= at < len(frames)
+    offline = _counts(PoseSequence(frames, seq.joint_names, FPS), [first.end_frame / FPS])
+    assert first.repetitions == offline[0] == 1
+
+
+@pytest.fixture(scope="module")
+def squats(shared_data: Path) -> PoseSequence:
+    """The bundled squat video's poses (BlazePose, as ``extract`` reads them; 65 frames at
+    5 fps)."""
+    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    return estimate_video(video, progress_bar=False).sequence.to_canonical()
+
+
+@pytest.mark.parametrize("into_s", [1.5, 2.5])
+def test_watch_counts_a_real_squat_cut_off_by_the_start_as_segment(
+    squats: PoseSequence, into_s: float
+) -> None:
+    """The bundled squat video, three squats by hand, their bottoms at 2.0, 6.8 and
+    12.0-12.8 s (tests/test_repetitions.py), streamed from frame 10 (2.0 s: the stream starts
+    at the bottom of the first), the label changing ``into_s`` s in (before the second
+    squat's way down): the first segment holds the first squat's way up, cut off by the
+    start, 1 by hand, and 1 as ``segment`` counts it cut where ``watch`` cut; the stream 3,
+    as ``reps`` and the hand count it. Before: 0 (checked: fails on the code before)."""
+    assert squats.fps == 5.0
+    start = 10
+    stream = squats.slice_frames(start, squats.n_frames)
+    assert count_repetitions(stream).count == 3
+    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
+    live = _Changing(clf, squats.fps, judge=SimpleNamespace())
+    live.changes = (int(into_s * squats.fps),)
+    assert stream.confidence is not None
+    streamed = []
+    for frame, seen in zip(stream.positions, stream.confidence, strict=True):
+        streamed += live.push(frame, seen)
+    streamed += live.finish()
+    assert len(streamed) == 2
+    cut = streamed[0].end_frame
+    assert cut < (5.2 - 2.0) * squats.fps  # before the second squat's way down
+    offline = _counts(stream, [cut / squats.fps])
+    assert [s.repetitions for s in streamed] == offline == [1, 2]
