@@ -2,7 +2,9 @@
 repetition of the segment after the first, as ``segment`` judges one cut off by the
 recording's start (:func:`cbr.segmentation._beside_whole`;
 :meth:`cbr.live.LiveSegmenter._judge_held`): the first segment's line is held back until
-that repetition is known, and the two agree on the first segment's count."""
+that repetition is known, and the two agree on the first segment's count. Also: the
+windows' sums over each block, made without a loop over the windows, are the sums added in
+the windows' order, to the last bit (:func:`cbr.segmentation._block_sums`)."""
 
 from __future__ import annotations
 
