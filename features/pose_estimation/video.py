@@ -222,6 +222,7 @@ def open_video(
     if not cap.isOpened():
         cap.release()
         raise _not_a_video(path, head, None)
+    refuse_text(cap, path)
     frames = int(max(0.0, cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0))
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
@@ -240,6 +241,25 @@ def open_video(
             path,
         )
     return cap, VideoInfo(path, frames, fps, width, height)
+
+
+TEXT_CODECS = frozenset({"ansi"})
+"""The codecs (OpenCV's ``CAP_PROP_FOURCC``, as FFmpeg names them) in which FFmpeg plays a
+text file as a video: its ``tty`` demuxer takes a ``.txt`` (``.nfo``, ``.asc``, ...) file, or
+one served under such a name, and draws its characters as frames, 25 a second."""
+
+
+def refuse_text(cap: cv2.VideoCapture, source: str | Path) -> None:
+    """Refuse an opened capture whose "video" is a text file drawn as frames
+    (:data:`TEXT_CODECS`): a label file given to ``watch`` for its video played as 3 frames
+    of digits and ended "before the shortest window"; a longer one was watched to its end,
+    "nobody in view", exit 0."""
+    tag = int(cap.get(cv2.CAP_PROP_FOURCC) or 0) & 0xFFFFFFFF
+    if tag.to_bytes(4, "little").decode("latin-1").strip() in TEXT_CODECS:
+        cap.release()
+        raise DataError(
+            "a text file, not a video (FFmpeg would draw its characters as frames)", source
+        )
 
 
 def _timeless_frames(path: Path) -> int | None:
@@ -1111,8 +1131,12 @@ def _open_quietly(device: int | str, timeout_s: float | None = None) -> cv2.Vide
     with _quiet_opencv():
         if isinstance(device, str) and timeout_s is not None:
             ms = max(1, round(timeout_s * 1000))
-            return cv2.VideoCapture(device, cv2.CAP_ANY, [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, ms])
-        return cv2.VideoCapture(device)
+            cap = cv2.VideoCapture(device, cv2.CAP_ANY, [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, ms])
+        else:
+            cap = cv2.VideoCapture(device)
+    if cap.isOpened():
+        refuse_text(cap, str(device))
+    return cap
 
 
 def _frame_count(cap: cv2.VideoCapture) -> int:
