@@ -270,6 +270,34 @@ def _refuse_a_table(text: str, path: Path) -> None:
             " (--label-block), separated by spaces, commas or line ends",
             path,
         )
+    _refuse_intervals(rows, path)
+
+
+def _refuse_intervals(rows: list[list[str]], path: Path) -> None:
+    """Refuse a label file that is a table of labelled stretches (``label,start_s,end_s`` per
+    line, as ``tools/make_workout.py`` writes its truth, a header allowed): a column of words
+    beside a column of numbers that counts up (times or frames). Read as labels, its words
+    and times were labels alike, and the count was refused as another frame rate or block.
+    Labels alone, however wrapped, have no column of words beside one of numbers."""
+    body = rows[1:] if rows and not _any_number(rows[0]) else rows
+    widths = {len(r) for r in body}
+    if len(body) < 2 or len(widths) != 1 or widths == {1}:
+        return
+    columns = [list(c) for c in zip(*body, strict=True)]
+    words = [c for c in columns if not _any_number(c)]
+    times = [v for c in columns if (v := _numbers(c)) is not None and np.all(np.diff(v) > 0)]
+    if words and times:
+        raise DataError(
+            f"the label file is a table of {widths.pop()} columns, labels beside numbers that"
+            " count up (stretches: label, start, end?); it takes the labels alone, one per"
+            " frame or per block (--label-block), separated by spaces, commas or line ends",
+            path,
+        )
+
+
+def _any_number(tokens: list[str]) -> bool:
+    """Whether one of ``tokens`` is a number."""
+    return any(_numbers([t]) is not None for t in tokens)
 
 
 #: the names a column of labels is given (``pandas.Series.to_csv`` writes one on top)

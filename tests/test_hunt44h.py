@@ -7,8 +7,10 @@ from pathlib import Path
 import pytest
 
 from features.errors import DataError
+from features.label_tracks import read_label_track
 from features.pose_estimation.video import open_video
-from tests.badinput import refused, small_case_base
+from features.poses import save_pose
+from tests.badinput import refused, small_case_base, standing_clip
 from tests.test_hunt34c import _serving
 
 
@@ -53,3 +55,40 @@ def test_watch_refuses_a_label_file_served_over_http(
         url = f"{address}/13_31.txt"
         refused(["watch", url, "--db", str(case_base), "--speed", "0"], tmp_path, capsys,
                 url, "a text file, not a video")  # fmt: skip
+
+
+# the truth tools/make_workout.py writes beside its workout (its four parts, seconds)
+WORKOUT_TRUTH = (
+    "label,start_s,end_s\njumping_jack,0.00,5.00\nsquat,5.00,12.80\n"
+    "incline_pushup,12.80,17.80\nglute_bridge,17.80,21.48\n"
+)
+
+
+@pytest.mark.parametrize("header", [True, False])
+def test_segment_truth_refuses_a_table_of_stretches_saying_so(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], header: bool
+) -> None:
+    """Read as labels, the 15 words and times of the table (12 without its header) were
+    refused as "15 labels (one per frame) do not fit ... (another frame rate or label
+    block?)", though the frame rate and the block were right and the file is no list of
+    labels."""
+    truth = tmp_path / "workout_truth.csv"
+    text = WORKOUT_TRUTH if header else WORKOUT_TRUTH.split("\n", 1)[1]
+    truth.write_text(text, encoding="utf-8")
+    rec = save_pose(standing_clip(60), tmp_path / "rec.npz")
+    line = refused(["segment", str(rec), "--db", str(case_base), "--truth", str(truth)],
+                   tmp_path, capsys, str(truth), "a table of 3 columns")  # fmt: skip
+    assert "frame rate" not in line
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "squat squat\nlunge lunge\nsquat squat\n",  # words wrapped, no number beside them
+        "1 squat\n1 squat\n2 lunge\n",  # a number that does not count up
+    ],
+)
+def test_labels_alone_are_no_table_of_stretches(tmp_path: Path, text: str) -> None:
+    path = tmp_path / "labels.txt"
+    path.write_text(text, encoding="utf-8")
+    assert read_label_track(path) == text.split()
