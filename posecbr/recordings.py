@@ -119,33 +119,34 @@ def load_clip_naming_asf(path: Path) -> Any:
         raise e.naming("--asf") from None
 
 
-def note_low_rate(seq: Any) -> None:
-    """Say on stderr when the recording ``seq``'s frame rate is too low to follow every
-    movement a repetition can be: one repeating in less than two frames' time (the shortest,
-    :data:`features.repetitions.MIN_PERIOD_S`, needs 5 fps) is seen as a slower one or not at
-    all. CMU 13_31 read at 2 fps counted 2 of its 7 jogging steps, and 3 of 4 knee raises,
-    without a word.
+def note_low_rate(source: Any, fps: float) -> None:
+    """Say on stderr when the frame rate ``fps`` of the recording or video ``source`` is too
+    low to follow every movement a repetition can be: one repeating in less than two frames'
+    time (the shortest, :data:`features.repetitions.MIN_PERIOD_S`, needs 5 fps) is seen as a
+    slower one or not at all (a mocap recording of jogging read at 2 fps counted 2 of its 7
+    steps without a word). ``segment`` and ``reps`` say it, and ``watch`` of a video before it
+    plays.
 
     Below 10 fps (:func:`glitch_free_fps`), though followed, a one-frame glitch of the pose
     model is not told from a quick repetition's far point: the counts are noted as well.
     Every k-th frame kept (four phases each), the 8 hand-counted bundled videos were counted
     exactly in 100 % of their copies at 15 fps, 97 % at 10, 86 % at 8, 76 % at 6 and 5; the
-    28 mocap clips of known count of ``tests/test_repetitions_unseen.py``, which no pose
-    model's glitch touches, in 92, 88, 87, 96 and 89 % (91 % at 30 fps)."""
+    28 mocap clips of known count of the repetition tests, which no pose model's glitch
+    touches, in 92, 88, 87, 96 and 89 % (91 % at 30 fps)."""
     from features.repetitions import MIN_PERIOD_S
     from features.text import shown
 
-    shortest = 2.0 / seq.fps
+    shortest = 2.0 / fps
     if shortest > MIN_PERIOD_S + 1e-9:
         print(
-            f"note: {shown(seq.source)}: at {seq.fps:g} fps a movement that repeats within"
+            f"note: {shown(source)}: at {fps:g} fps a movement that repeats within"
             f" {shortest:.2g} s (two frames) is not followed: its repetitions may be"
             f" miscounted (the shortest, {MIN_PERIOD_S:g} s, needs {2.0 / MIN_PERIOD_S:g} fps)",
             file=sys.stderr,
         )
-    elif seq.fps < glitch_free_fps() - 1e-9:
+    elif fps < glitch_free_fps() - 1e-9:
         print(
-            f"note: {shown(seq.source)}: at {seq.fps:g} fps a one-frame glitch of the pose"
+            f"note: {shown(source)}: at {fps:g} fps a one-frame glitch of the pose"
             " model is not told from a quick repetition's far point (the shortest repetition,"
             f" {MIN_PERIOD_S:g} s, stays out there {MIN_PERIOD_S / 2:g} s: two frames need"
             f" {glitch_free_fps():g} fps): its repetitions may be miscounted",
@@ -159,10 +160,10 @@ def glitch_free_fps() -> float:
     one-frame glitch while the far half of the shortest repetition
     (:data:`features.repetitions.MIN_PERIOD_S` / 2, 0.2 s) holds the two frames the median
     keeps: 10 fps. Below it a median of three frames flattens the quickest repetitions (at
-    8 fps CMU 13_31's jogging steps counted 6 of 7 in three of four phases, 7 at 10 fps),
-    and none (below 7.5 fps, where the median's 0.2 s holds one frame) leaves the pose
-    model's glitches as they are (the bundled reverse lunge at 6.25 fps: 2-4 repetitions of
-    its one in three of four phases)."""
+    8 fps a mocap recording's jogging steps counted 6 of 7 in three of four phases, 7 at 10
+    fps), and none (below 7.5 fps, where the median's 0.2 s holds one frame) leaves the pose
+    model's glitches as they are (a video of one reverse lunge at 6.25 fps: 2-4 repetitions
+    in three of four phases)."""
     from features.repetitions import MEDIAN_S, MIN_PERIOD_S
 
     return max(2.0 / MEDIAN_S, 4.0 / MIN_PERIOD_S)

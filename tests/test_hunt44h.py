@@ -4,14 +4,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from features.errors import DataError
 from features.label_tracks import read_label_track
 from features.pose_estimation.video import open_video
 from features.poses import save_pose
+from posecbr.cli import main
 from tests.badinput import refused, small_case_base, standing_clip
 from tests.test_hunt34c import _serving
+from tests.test_video_vfr import _write
 
 
 @pytest.fixture(scope="module")
@@ -92,3 +95,20 @@ def test_labels_alone_are_no_table_of_stretches(tmp_path: Path, text: str) -> No
     path = tmp_path / "labels.txt"
     path.write_text(text, encoding="utf-8")
     assert read_label_track(path) == text.split()
+
+
+def test_watch_of_a_video_at_2_fps_says_what_segment_says_of_it(
+    case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """At 2 fps a movement repeating within 1 s (two frames) is not followed: ``segment``
+    and ``reps`` say so of a video at that rate; ``watch`` played it and counted its
+    repetitions without a word. An empty scene, 8 frames (lossless)."""
+    scene = np.zeros((120, 160, 3), np.uint8)
+    scene[:, :, 1] = np.arange(160, dtype=np.uint8)  # a plain green ramp: nobody in view
+    video = _write(tmp_path / "slow.mp4", [i * 500 for i in range(8)], [scene] * 8, rate=2)
+    assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 0
+    err = capsys.readouterr().err
+    assert (
+        f"note: {video}: at 2 fps a movement that repeats within 1 s (two frames) is not"
+        " followed: its repetitions may be miscounted (the shortest, 0.4 s, needs 5 fps)"
+    ) in err

@@ -54,6 +54,7 @@ from features.fileio import PICTURE_WORDS, atomic_path, check_output, stdout_gon
 from features.interrupts import raise_interrupt, sigterm_held
 from features.text import counted, shown
 from posecbr.arguments import add_k_option, path_arg
+from posecbr.recordings import note_low_rate
 
 from .segment import overlay_label
 
@@ -458,6 +459,8 @@ def run(args: argparse.Namespace) -> int:
         fps: float | None = info.fps
     else:  # a file served over the network is played as a file is
         fps = None if isinstance(source, int) else served_file_rate(source, args.stall)
+    if fps is not None:  # as segment and reps say it of the same video
+        note_low_rate(args.source, fps)
     is_file = fps is not None
     pacer = Pacer(fps, args.speed) if fps and args.speed > 0 else None
     alive = Alive()  # a served file read again at its end for a cut: no stall
