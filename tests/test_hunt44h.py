@@ -112,3 +112,13 @@ def test_watch_of_a_video_at_2_fps_says_what_segment_says_of_it(
         f"note: {video}: at 2 fps a movement that repeats within 1 s (two frames) is not"
         " followed: its repetitions may be miscounted (the shortest, 0.4 s, needs 5 fps)"
     ) in err
+
+
+def test_extract_refuses_a_label_file_given_for_a_video(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``extract 13_31.txt --out poses`` wrote poses/13_31.npz, 3 frames "without a person",
+    exit 0: the same text drawn as frames."""
+    labels = _label_file(shared_data, tmp_path)
+    refused(["extract", str(labels), "--out", str(tmp_path / "poses")], tmp_path, capsys,
+            str(labels), "a text file, not a video")  # fmt: skip
