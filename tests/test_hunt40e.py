@@ -76,3 +76,15 @@ def test_labels_the_case_base_lacks_are_listed_as_a_user_counts_them() -> None:
     scores = score_segmentation(result, ["2", "2", "10", "10", "1", "1"], ["Squat"], 0.1)
     assert scores.unseen_labels == ("1", "2", "10")
     assert scores.unseen_blocks == 6 and scores.unseen_unknown == 6
+
+
+def test_boundary_errors_are_free_of_rounding_noise() -> None:
+    """A segment starting at frame 51 of a 30-fps recording starts at 1.7 s, where the labels
+    change after 17 blocks of 0.1 s: 0 s off, which ``--json`` gave as 2.2e-16 (51 / 30 and
+    17 * 0.1 differ in the last bit); frame 57 is 0.2 s from 1.7 s, given as 0.19999999999999973."""
+    truth = ["a"] * 17 + ["b"] * 17
+    for frame, error in ((51, 0.0), (57, 0.2)):
+        result = SimpleNamespace(blocks=truth, fps=30.0,
+                                 segments=[SimpleNamespace(start_frame=0),
+                                           SimpleNamespace(start_frame=frame)])  # fmt: skip
+        assert score_segmentation(result, truth, ["a", "b"], 0.1).boundary_errors_s == (error,)

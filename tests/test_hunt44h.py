@@ -122,3 +122,20 @@ def test_extract_refuses_a_label_file_given_for_a_video(
     labels = _label_file(shared_data, tmp_path)
     refused(["extract", str(labels), "--out", str(tmp_path / "poses")], tmp_path, capsys,
             str(labels), "a text file, not a video")  # fmt: skip
+
+
+def test_watch_plays_a_file_url_without_slashes_as_the_file(
+    case_base: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    """FFmpeg opens ``file:clip.mp4`` as the path after ``file:``; ``watch file:clip.mp4``
+    said "no such video file" of a file there is. It is played as ``clip.mp4`` is (the same
+    note, exit 0); ``file:`` of a file there is not is refused naming the path."""
+    scene = np.zeros((120, 160, 3), np.uint8)
+    scene[:, :, 1] = np.arange(160, dtype=np.uint8)
+    _write(tmp_path / "slow.mp4", [i * 500 for i in range(8)], [scene] * 8, rate=2)
+    monkeypatch.chdir(tmp_path)
+    assert main(["watch", "file:slow.mp4", "--db", str(case_base), "--speed", "0"]) == 0
+    assert "note: slow.mp4: at 2 fps a movement that repeats within 1 s" in capsys.readouterr().err
+    refused(["watch", "file:gone.mp4", "--db", str(case_base), "--speed", "0"], tmp_path, capsys,
+            "gone.mp4", "no such video file")  # fmt: skip

@@ -126,7 +126,9 @@ def score_segmentation(
     fps = result.fps
     found = np.array([s.start_frame / fps for s in result.segments[1:]])
     changes = (np.flatnonzero(truth[1:] != truth[:-1]) + 1) * block_s
-    errors = [float(np.min(np.abs(found - b))) if len(found) else float("inf") for b in changes]
+    # to the nanosecond: a boundary on a labelled change is 0, not 2.2e-16 s of rounding
+    errors = [round(float(np.min(np.abs(found - b))), 9) if len(found) else float("inf")
+              for b in changes]  # fmt: skip
     return SegmentationScores(
         blocks=len(truth),
         block_s=block_s,

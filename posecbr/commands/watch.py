@@ -126,6 +126,15 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 RECORDING_SUFFIXES = frozenset({".npz", ".bvh", ".amc"})
 
 
+def _as_path(source: str) -> str:
+    """``file:clip.mp4`` (a ``file:`` URL without ``//``, which FFmpeg opens as the path after
+    it) as the path ``clip.mp4``, so that it is checked and played as that file is; any other
+    source as it is (``file://`` URLs are played as the network streams they name are)."""
+    if source.startswith("file:") and not source.startswith("file://"):
+        return source.removeprefix("file:")
+    return source
+
+
 def _is_file(source: str) -> bool:
     return "://" not in source and not source.isdigit()
 
@@ -445,6 +454,7 @@ def run(args: argparse.Namespace) -> int:
 
     from .segment import judge_named, load_case_base, note_not_windows
 
+    args.source = _as_path(args.source)
     _check(args)
     stored = load_case_base(args.db, args.name)
     clf = stored.classifier
