@@ -111,7 +111,7 @@ from .body import check_person, long_runs
 from .datasets import Clip
 from .derived import signals_of, stretch
 from .errors import DataError
-from .geometry import WORLD_UP, angle_between, body_frame, unit
+from .geometry import WORLD_UP, angle_between, body_frame, joint_angle, unit
 from .leg_swaps import SWAP_JOINTS, swapped_legs
 from .poses import PoseSequence, expect_sequence
 from .signals import ANGLE_SIGNALS
@@ -159,6 +159,29 @@ PELVIS_HEIGHT = "pelvis_height"
 TWIST_NAMES: tuple[str, ...] = ("left_upper_arm_turn", "right_upper_arm_turn")
 """The forearms' sideways direction across the upper arms (:func:`upper_arm_turn`): how far the
 upper arm has turned about its own axis with the elbow bent."""
+LIMB_LINES: dict[str, tuple[str, tuple[str, str, str]]] = {
+    **{
+        f"{s}_arm_line": (f"{s}_armpit", (f"{s}_wrist", f"{s}_shoulder", f"{s}_hip"))
+        for s in ("left", "right")
+    },
+    **{
+        f"{s}_leg_line": (f"{s}_hip", (f"{s}_ankle", f"{s}_hip", f"{s}_shoulder"))
+        for s in ("left", "right")
+    },
+}
+"""A limb's line from its root to its end, as the angle at the root between it and the trunk
+(the points of :func:`features.geometry.joint_angle`), and the angle it stands in for: the
+armpit's read through the wrist, the hip's through the ankle. With the limb's middle joint
+(the elbow, the knee) missing, the angles that rest on it take no part and the limb's
+movement was read nowhere, though its root and end are seen: a one-arm abduction with that
+arm's elbow missing counted 0. A line takes part where the angle it stands in for does not
+(:data:`MIN_VALID_SHARE`) and the line does; the other side's does not, its own angles being
+read, so the line has no twin and takes no part in comparing the sides (:func:`_twinned`:
+with both legs' lines compared, a side view's reverse lunge with a knee missing was taken for
+alternating on its trunk's wobble again, 5 repetitions for 1). The line folds the middle
+joint's bend and the limb's turn about its own axis into one direction, and so has no end
+nearer ease (:func:`_rest_is_high`; read with one, UI-PRMD's shoulder rotations with the
+elbow missing counted their rest plateaus, 7 of 6 and 6 of 5)."""
 COUNTED_ANGLES: tuple[str, ...] = (
     tuple(
         f"{side}_{joint}"
@@ -168,13 +191,15 @@ COUNTED_ANGLES: tuple[str, ...] = (
     + ("trunk_inclination", "torso_sagittal", "torso_frontal", "torso_transverse")
     + TWIST_NAMES
     + (PELVIS_HEIGHT,)
+    + tuple(LIMB_LINES)
 )
 """The angles repetitions are read from: the eight limb joint angles (defined in every
 posture), the trunk's inclination from the vertical, and its bend, side bend and twist, and
 the forearms' sideways direction across the upper arms (:func:`upper_arm_turn`: the turn of the
 upper arm about its own axis, shoulder internal and external rotation, which no joint angle
 sees), and the hips' height above the floor in trunk lengths (:func:`pelvis_height`: the
-whole body going up and down, a hop with still arms and straight legs). The limb plane angles
+whole body going up and down, a hop with still arms and straight legs), and, for a limb whose
+middle joint is missing, its line from root to end (:data:`LIMB_LINES`). The limb plane angles
 are left out: a limb's projection on a plane it is nearly
 perpendicular to has no stable direction. The shank across the thigh (the thigh's turn) was
 tried and left out: it did no better on UI-PRMD's training subjects."""
@@ -472,7 +497,8 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
     ``(frames, len(COUNTED_ANGLES))``; NaN where undefined: the trunk's bend, side bend and
     twist while it lies far from the vertical, angles on joints the camera does not see, and
     angles on the legs and hips where the pose model swapped the legs
-    (:func:`features.leg_swaps.swapped_legs`)."""
+    (:func:`features.leg_swaps.swapped_legs`), and the :data:`LIMB_LINES` that stand in for no
+    angle (:func:`_idle_lines`)."""
     sig = signals_of(seq)
     canonical = seq.to_canonical()
     p = canonical.positions
@@ -484,6 +510,9 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
         **dict(zip(TWIST_NAMES, upper_arm_turn(p).T, strict=True)),
         "trunk_inclination": inclination,
         PELVIS_HEIGHT: pelvis_height(p),
+        **{
+            n: joint_angle(*(p[:, JOINT_INDEX[j]] for j in js)) for n, (_, js) in LIMB_LINES.items()
+        },
     }
     raw = np.stack([extra[n] if n in extra else sig.column(n) for n in COUNTED_ANGLES], axis=1)
     with np.errstate(invalid="ignore"):
@@ -494,7 +523,18 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
         raw[_unseen(canonical.confidence)] = np.nan
     swapped = swapped_legs(p, seq.fps, MIN_EXCURSION_RAD, MIN_PERIOD_S, MEDIAN_S)
     raw[swapped[:, None] & _ON_LEGS[None, :]] = np.nan
+    raw[:, _idle_lines(np.isfinite(raw), seq.fps)] = np.nan
     return raw
+
+
+def _idle_lines(finite: np.ndarray, fps: float) -> list[int]:
+    """The columns of :data:`COUNTED_ANGLES` of the :data:`LIMB_LINES` that take no part,
+    from where each angle was computed, ``finite`` ``(frames, len(COUNTED_ANGLES))``: a line
+    takes part where its angle does not and the line does (:func:`_kept`)."""
+    kept = _kept(_followed(finite, fps).sum(axis=0), int(finite.any(axis=1).sum()))
+    index = {n: i for i, n in enumerate(COUNTED_ANGLES)}
+    used = {n for n, (angle, _) in LIMB_LINES.items() if kept[index[n]] and not kept[index[angle]]}
+    return [index[n] for n in LIMB_LINES if n not in used]
 
 
 def _swing(frm: np.ndarray, to: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -712,6 +752,7 @@ _ANGLE_JOINTS: dict[str, tuple[str, ...]] = {
     **{n: _TRUNK for n in COUNTED_ANGLES if n.startswith(("trunk_", "torso_"))},
     **{f"{s}_upper_arm_turn": (*(f"{s}_{j}" for j in _ARM), *_TRUNK) for s in ("left", "right")},
     PELVIS_HEIGHT: (*_TRUNK, "left_ankle", "right_ankle"),
+    **{n: js for n, (_, js) in LIMB_LINES.items()},
 }
 
 
@@ -882,8 +923,9 @@ def _rest_is_high(
     back, are no rest; standing at ease would name the bridge, whose hips straighten); else
     the end nearer :data:`AT_EASE`, when the angles that have an at-ease value carry at least
     :data:`EASE_SHARE` of the movement (the upper arm's turn has no side nearer ease, the hips'
-    height no value at ease common to all bodies: a movement mostly along them, a shoulder
-    turning in and out, is not told by the elbow's small part in it) and one end lies nearer
+    height no value at ease common to all bodies, a limb's line, :data:`LIMB_LINES`, folds
+    the limb's turn in: a movement mostly along them, a shoulder turning in and out, is not told
+    by the elbow's small part in it) and one end lies nearer
     it by :data:`MIN_EXCURSION_RAD`, summed angle by angle (an angle as far from ease at both
     ends adds nothing); otherwise the end
     the clip's first and last :data:`ENDS_S` seconds lie nearer (an exercise starts and ends
@@ -892,7 +934,7 @@ def _rest_is_high(
     lo, hi = _end_levels(line)
     low_posture = x[line <= lo].mean(axis=0)
     high_posture = x[line >= hi].mean(axis=0)
-    free = np.array([n in TWIST_NAMES or n == PELVIS_HEIGHT for n in names])
+    free = np.array([n in TWIST_NAMES or n == PELVIS_HEIGHT or n in LIMB_LINES for n in names])
     high_posture[free] = low_posture[free] = ease[free]
     # how much nearer ease one end lies than the other, angle by angle (radians summed): an
     # angle that stays far from ease at both ends (lying on the side, the lower arm bent under
