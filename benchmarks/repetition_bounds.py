@@ -16,8 +16,8 @@ recordings come without one), in two ways:
 
 - ``clip``: the moved stretch as a clip of its own (:func:`features.repetitions.count_repetitions`,
   as ``posecbr reps`` and the hand-count benchmark count);
-- ``segment``: as ``posecbr segment`` counts a segment of the recording, each piece on the
-  signals of its own frames, each repetition in the one piece that holds where it turns
+- ``segment``: as ``posecbr segment`` counts a segment of the recording, on the recording's
+  signals, each repetition in the one piece that holds where it turns
   (:func:`cbr.segmentation.counted_segments` over the pieces before, the stretch, after).
 
 Reported per stretch and pooled: the share of moved counts equal to the unmoved one, their
@@ -108,9 +108,9 @@ def _scores(rows: list[dict[str, Any]], way: str) -> dict[str, float]:
 def count_moved(shifts: list[float]) -> list[dict[str, Any]]:
     """Every hand-counted CMU stretch, with every skeleton, counted both ways with its start
     and end moved by every pair of ``shifts`` (seconds)."""
-    from cbr.segmentation import counted_segments, own_frames
+    from cbr.segmentation import counted_segments
     from features.readers.asfamc import read_asf_amc
-    from features.repetitions import MIN_PERIOD_S, count_repetitions
+    from features.repetitions import MIN_PERIOD_S, count_repetitions, movement_signals
 
     clips = [c for c in json.loads(FIXTURE.read_text(encoding="utf-8"))["clips"]
              if c["source"].endswith(".amc")]  # fmt: skip
@@ -120,7 +120,7 @@ def count_moved(shifts: list[float]) -> list[dict[str, Any]]:
         for c in clips:
             if c["source"] not in recs:
                 seq = read_asf_amc(DATA / asf, DATA / c["source"])
-                recs[c["source"]] = (seq, own_frames(seq.to_canonical()))
+                recs[c["source"]] = (seq, movement_signals(seq))
             seq, sig = recs[c["source"]]
             n, recording = seq.n_frames, Path(c["source"]).stem
             for ds, de in ((ds, de) for ds in shifts for de in shifts):

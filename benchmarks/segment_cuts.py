@@ -60,8 +60,9 @@ def _scores(diffs: list[int]) -> dict[str, float] | None:
 
 def main(argv: list[str] | None = None) -> int:
     no_options("segment_cuts", __doc__, argv)
-    from cbr.segmentation import counted_segments, own_frames
+    from cbr.segmentation import counted_segments
     from features.readers.asfamc import read_asf_amc
+    from features.repetitions import movement_signals
 
     clips = [c for c in json.loads(FIXTURE.read_text(encoding="utf-8"))["clips"]
              if c["source"].endswith(".amc")]  # fmt: skip
@@ -72,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
         if c["source"] not in cache:
             cache[c["source"]] = read_asf_amc(DATA / c["asf"], DATA / c["source"])
         seq = cache[c["source"]].slice_frames(c["start_frame"], c["end_frame"]).to_canonical()
-        n, sig = seq.n_frames, own_frames(seq)
+        n, sig = seq.n_frames, movement_signals(seq)
         whole = len(counted_segments(sig, [(0, n)], n)[0])
         row: dict[str, Any] = {"source": c["source"], "activity": c["activity"], "hand": c["count"],
                                "whole": whole}  # fmt: skip

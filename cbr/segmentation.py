@@ -42,10 +42,9 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    activity left between an unknown stretch and the next change); a stretch of at least
    :data:`MIN_SEGMENT_S` in which no frame shows the person is an unknown segment of its
    own, "nobody in view" (:func:`nobody_blocks`);
-7. each segment is counted on its own frames, as a clip of them is
-   (:func:`features.repetitions.count_repetitions`; :class:`_Own`), each repetition in the
-   one segment that holds where its movement turns (:func:`keep_whole`, :func:`_unclaimed`),
-   and explained by its most confident window.
+7. each segment is counted (:func:`features.repetitions.count_repetitions`), each
+   repetition in the one segment that holds where its movement turns (:func:`keep_whole`,
+   :func:`_unclaimed`), and explained by its most confident window.
 """
 
 from __future__ import annotations
@@ -65,7 +64,6 @@ from features.fluents import DEFAULT_TABLE, history_frames
 from features.poses import PoseSequence, expect_sequence, gap_rows
 from features.progress import progress
 from features.repetitions import (
-    ANALYSIS_FPS,
     MIN_PERIOD_S,
     WINDOW_HOP_S,
     WINDOW_S,
@@ -946,79 +944,94 @@ def count_in_segment(
 
 
 def _repetitions(
-    sig: _Own,
+    sig: MovementSignals | _Apart,
     start: int,
     end: int,
     n_frames: int | None = None,
     settled: tuple[bool, bool] = (False, False),
 ) -> tuple[Repetition, ...]:
-    """The repetitions within frames [start, end) of the recording ``sig`` holds, counted on
-    the movement signals of those frames alone (:class:`_Own`). Given the recording's
-    ``n_frames``, a segment at its start or end has no repetition there that is only part
-    of one when none of its repetitions is whole (the way down of a squat as the recording
-    ends: :func:`features.repetitions.count_in_signals`); one at a cut is left to
+    """The repetitions within frames [start, end) of the recording whose signals are ``sig``
+    (counted on the recording's own smoothed signals: no edge effects at the cut; each side
+    of a jump of the pose to another person on its own side's, :class:`_Apart`). Given the
+    recording's ``n_frames``, a segment at its start or end has no repetition there that is
+    only part of one when none of its repetitions is whole (the way down of a squat as the
+    recording ends: :func:`features.repetitions.count_in_signals`); one at a cut is left to
     :func:`keep_whole`. ``settled``: whether the segment's start, and its end, are cuts at
     which no movement turns (:func:`counted_segments`)."""
-    return sig.repetitions(start, end, n_frames, settled)
+    if isinstance(sig, _Apart):
+        return sig.repetitions(start, end, n_frames, settled)
+    last = n_frames is not None and end >= n_frames
+    edges = (start == 0 and n_frames is not None, last)
+    return _repetitions_in(sig, start, end, last, edges, settled)
+
+
+def _repetitions_in(
+    sig: MovementSignals,
+    start: int,
+    end: int,
+    to_end: bool,
+    edges: tuple[bool, bool],
+    settled: tuple[bool, bool],
+) -> tuple[Repetition, ...]:
+    """:func:`_repetitions` of frames [start, end) of the frames ``sig`` are the signals of,
+    read to their last sample when ``to_end``; ``edges``: whether the start, and the end,
+    are the recording's. Counted on the angles a clip of those frames alone is counted on
+    (:meth:`features.repetitions.MovementSignals.alone`; none followed: no repetition):
+    before, an arm joint missing throughout a jog but seen elsewhere in the recording was
+    filled in across it, an arm held still, and the jog's steps were undercounted."""
+    a, b = start // sig.step, max(start // sig.step + 1, end // sig.step)
+    if to_end:  # to the recording's last sample, as reps reads it (a far point there counts)
+        b = max(b, len(sig.values))
+    if (b - a) / sig.fps < MIN_PERIOD_S:
+        return ()
+    part = sig.alone(a, b)
+    if part is None:
+        return ()
+    found = count_in_segment(
+        part, min((b - a) * sig.step, end - a * sig.step), sig.fps * sig.step, edges, settled
+    ).repetitions
+    off = a * sig.step
+    return tuple(  # the first sample may begin up to a step before ``start``: cut there
+        Repetition(
+            max(start, r.start_frame + off),
+            min(end, r.end_frame + off),
+            max(start, r.peak_frame + off),
+            r.side,
+            r.held,
+            r.unreturned,
+        )
+        for r in found
+    )
 
 
 @dataclass(frozen=True)
-class _Own:
-    """A recording ``rec`` whose stretches are each counted on the movement signals of their
-    own frames (:func:`_side_signals`), as a clip of those frames alone is counted (``reps``)
-    and as ``watch`` counts each of its segments (:func:`cbr.live._counted`); a stretch
-    across a frame of ``cuts`` (0, the frames where the pose jumped to another person, and
-    the recording's frame count) is counted apart on either side of it, a jump being a cut,
-    not the recording's start or end. The running median and smoothing of a stretch's
-    angles read nothing beyond its ends, as they read nothing beyond a recording's.
+class _Apart:
+    """The movement signals of a recording computed apart on either side of each frame
+    where the pose jumped to another person (:func:`counted_apart`): ``cuts``, 0, the jumps
+    and the recording's frame count; ``sides``, the signals of the frames between each two
+    (None: too short for a repetition, or nobody in view); ``step``, the recording's frames
+    per sample. The running median and smoothing of one person's angles do not read the
+    other's, as they read nothing beyond a recording's ends."""
 
-    Before, a segment was counted on the signals of the whole recording cut at its bounds,
-    whose running median and smoothing had read the neighbouring segment's frames: near a
-    cut its line was not that of its own frames, pulled towards the next exercise's
-    posture, and the far points found there, their frames and heights, were not a clip's
-    of the same frames; and one person's running median read the other's across a jump."""
-
-    rec: PoseSequence
     cuts: tuple[int, ...]
-    signals: dict[tuple[int, int], MovementSignals | None] = field(
-        default_factory=dict, compare=False, repr=False
-    )
-
-    @property
-    def step(self) -> int:
-        """Frames per sample of the counted signals, as
-        :func:`features.repetitions.movement_signals` samples them."""
-        return max(1, int(round(self.rec.fps / ANALYSIS_FPS)))
-
-    def own(self, a: int, b: int) -> MovementSignals | None:
-        """The movement signals of frames [a, b) alone (:func:`_side_signals`), computed once."""
-        if (a, b) not in self.signals:
-            self.signals[(a, b)] = _side_signals(self.rec, a, b)
-        return self.signals[(a, b)]
+    sides: tuple[MovementSignals | None, ...]
+    step: int
 
     def repetitions(
         self, start: int, end: int, n_frames: int | None, settled: tuple[bool, bool]
     ) -> tuple[Repetition, ...]:
-        """:func:`_repetitions` of frames [start, end), each side of a jump on its own."""
+        """:func:`_repetitions` of frames [start, end), each side's frames on its own side's
+        signals (a jump is a cut, not the recording's start or end)."""
         out: tuple[Repetition, ...] = ()
-        for p, q in zip(self.cuts[:-1], self.cuts[1:], strict=True):
+        for p, q, side in zip(self.cuts[:-1], self.cuts[1:], self.sides, strict=True):
             a, b = max(start, p), min(end, q)
-            sig = self.own(a, b) if a < b else None
-            if sig is None:
+            if a >= b or side is None:
                 continue
             edges = (a == 0 and n_frames is not None, n_frames is not None and b >= n_frames)
             still = (settled[0] and a == start, settled[1] and b == end)
-            found = count_in_segment(sig, b - a, self.rec.fps, edges, still).repetitions
-            out += tuple(_shifted(r, a) for r in found)
+            found = _repetitions_in(side, a - p, b - p, b >= q, edges, still)
+            out += tuple(_shifted(r, p) for r in found)
         return out
-
-
-def own_frames(rec: PoseSequence, jumps: Sequence[int] = ()) -> _Own:
-    """``rec`` (positions ``(frames, joints, 3)``) as :func:`counted_segments` counts it: each
-    stretch on its own frames' movement signals, apart on either side of each of frames
-    ``jumps`` (:class:`_Own`)."""
-    n = rec.n_frames
-    return _Own(rec, (0, *sorted({j for j in jumps if 0 < j < n}), n))
 
 
 def _shifted(r: Repetition, by: int) -> Repetition:
@@ -1029,10 +1042,8 @@ def _shifted(r: Repetition, by: int) -> Repetition:
 
 def _side_signals(rec: PoseSequence, start: int, end: int) -> MovementSignals | None:
     """The movement signals of frames [start, end) of ``rec`` alone, as of a recording of
-    their own (None: too short for a repetition, or nobody in view), reading the joint
-    angles computed for the whole recording where it has them
-    (:func:`features.derived.stretch`)."""
-    piece = stretch(rec, start, end)
+    their own (None: too short for a repetition, or nobody in view)."""
+    piece = rec.slice_frames(start, end)
     if piece.duration_s < MIN_PERIOD_S:
         return None
     chunk = long_clip.chunk_for(piece, None)
@@ -1086,47 +1097,57 @@ def keep_whole(
 
 
 def counted_apart(
-    rec: PoseSequence,
+    sig: MovementSignals,
     bounds: Sequence[tuple[int, int]],
+    n_frames: int,
     unseen: Sequence[bool],
     jumps: Sequence[int],
+    rec: PoseSequence,
 ) -> list[tuple[Repetition, ...]]:
-    """:func:`counted_segments` of the recording ``rec`` with every segment also cut at the
-    frames ``jumps`` (where the pose jumped to another person,
-    :func:`features.repetitions.person_jumps`), as at a change of segment, and each
-    segment's pieces' repetitions joined back into it: the jump from one person's posture to
-    the other's is no movement, as ``reps`` counts it. Before, a repetition ran on across the
-    jump (a jumping jack of one person ending in another's). Each side of a jump is counted
-    on its own frames' signals (:class:`_Own`), as ``watch`` counts each
-    (:meth:`cbr.live.LiveSegmenter._count_apart`)."""
-    own = own_frames(rec, jumps)
+    """:func:`counted_segments` with every segment also cut at the frames ``jumps`` (where
+    the pose jumped to another person, :func:`features.repetitions.person_jumps`), as at a
+    change of segment, and each segment's pieces' repetitions joined back into it: the jump
+    from one person's posture to the other's is no movement, as ``reps`` counts it. Before, a
+    repetition ran on across the jump (a jumping jack of one person ending in another's).
+
+    ``sig``: the movement signals of the recording ``rec`` (of ``n_frames``), read where it
+    has no jump; with one, each side's are computed from its own frames of ``rec``
+    (:class:`_Apart`), as ``watch`` counts each (:meth:`cbr.live.LiveSegmenter._count_apart`).
+    Before, they were the whole recording's, whose running median and smoothing read across
+    the jump and mixed the two people's postures: the jumping jacks cut with the first
+    person's arms still rising and taken on with the second's coming down counted one more
+    in ``segment`` than in ``watch``, ``reps`` and by hand."""
+    cuts = [0, *sorted({j for j in jumps if 0 < j < n_frames}), n_frames]
+    if len(cuts) == 2:
+        return counted_segments(sig, bounds, n_frames, unseen)
+    sides = tuple(_side_signals(rec, p, q) for p, q in zip(cuts[:-1], cuts[1:], strict=True))
+    apart = _Apart(tuple(cuts), sides, sig.step)
     pieces: list[tuple[int, int]] = []
     owner: list[int] = []
     blind: list[bool] = []
     for k, ((a, b), u) in enumerate(zip(bounds, unseen, strict=True)):
-        inside = [a, *(j for j in own.cuts[1:-1] if a < j < b), b]
+        inside = [a, *(j for j in cuts[1:-1] if a < j < b), b]
         for x, y in zip(inside[:-1], inside[1:], strict=True):
             pieces.append((x, y))
             owner.append(k)
             blind.append(u)
     out: list[tuple[Repetition, ...]] = [() for _ in bounds]
-    for k, found in zip(owner, counted_segments(own, pieces, rec.n_frames, blind), strict=True):
+    for k, found in zip(owner, counted_segments(apart, pieces, n_frames, blind), strict=True):
         out[k] += found
     return out
 
 
 def counted_segments(
-    rec: PoseSequence | _Own,
+    sig: MovementSignals | _Apart,
     bounds: Sequence[tuple[int, int]],
     n_frames: int,
     unseen: Sequence[bool] = (),
 ) -> list[tuple[Repetition, ...]]:
     """The repetitions of every segment, frames ``bounds`` [start, end) in order covering the
-    recording ``rec`` of ``n_frames`` (positions ``(frames, joints, 3)``, or as
-    :func:`own_frames` makes it), each counted on the movement signals of its own frames
-    (:func:`_repetitions`), each repetition in one segment (:func:`keep_whole`); a far point
-    cut off at a cut that the segment across it does not take is kept where the movement
-    turns within the segment (:func:`_unclaimed`), as a clip of its frames keeps it.
+    recording's ``n_frames``, each counted on its own frames (:func:`_repetitions`), each
+    repetition in one segment (:func:`keep_whole`); a far point cut off at a cut that the
+    segment across it does not take is kept where the movement turns within the segment
+    (:func:`_unclaimed`), as a clip of the segment's frames keeps it.
 
     A cut next to a segment with no far point at all is, for a posture got into and held
     still up to it, as the recording's end: nothing comes back beyond it, the posture is held
@@ -1152,7 +1173,6 @@ def counted_segments(
     up), nothing it got into is held on across the cut, and no far point is held through the
     stretch. Before, the squat was left to the stretch, which counts none, or taken for a
     posture got into and held, and lost."""
-    sig = rec if isinstance(rec, _Own) else own_frames(rec)
     blind = [bool(u) for u in unseen] + [False] * (len(bounds) - len(unseen))
     raw = [
         () if b else _repetitions(sig, start, end, n_frames)
@@ -1195,7 +1215,7 @@ def counted_segments(
 
 
 def _unclaimed(
-    sig: _Own,
+    sig: MovementSignals | _Apart,
     raw: Sequence[tuple[Repetition, ...]],
     bounds: Sequence[tuple[int, int]],
     blind: Sequence[bool],
@@ -1213,10 +1233,9 @@ def _unclaimed(
 
     :func:`keep_whole` hands a far point at a cut to the segment that has one at the same
     cut; each segment's count reads its own movement, and the next exercise's rarely shows
-    the last one's. Before, a far point at a cut that only one side showed was dropped: the
-    arms high at the start of a movement that begins there, or a last repetition turning
-    just before the cut, counted in neither segment, though a clip of either's frames
-    counts it."""
+    the last one's. Before, a far point at a cut that only one side showed was dropped: a
+    last repetition turning just before the cut, or a first just after it, counted in
+    neither segment, though a clip of the segment's frames counts it."""
     step = sig.step
     cuts = [at_cut(r, a, b, step) for r, (a, b) in zip(raw, bounds, strict=True)]
     out = []
@@ -1231,7 +1250,11 @@ def _unclaimed(
 
 
 def _turns_inside(
-    sig: _Own, reps: Sequence[Repetition], bounds: tuple[int, int], at_end: bool, n_frames: int
+    sig: MovementSignals | _Apart,
+    reps: Sequence[Repetition],
+    bounds: tuple[int, int],
+    at_end: bool,
+    n_frames: int,
 ) -> bool:
     """Whether the far point of ``reps`` (a segment's repetitions, frames ``bounds``) at the
     segment's end (``at_end``) or start is where the movement turns within the segment: the
@@ -1258,7 +1281,7 @@ def _turns_inside(
 
 
 def _held_into_the_end(
-    sig: _Own,
+    sig: MovementSignals | _Apart,
     out: list[tuple[Repetition, ...]],
     raw: Sequence[tuple[Repetition, ...]],
     bounds: Sequence[tuple[int, int]],
@@ -1286,7 +1309,7 @@ def _held_into_the_end(
 
 
 def _beside_whole(
-    sig: _Own,
+    sig: MovementSignals | _Apart,
     raw: Sequence[tuple[Repetition, ...]],
     bounds: Sequence[tuple[int, int]],
     blind: Sequence[bool],
@@ -1396,7 +1419,7 @@ def _held_across(
     before: Sequence[Repetition],
     after: Sequence[Repetition],
     second: tuple[int, int],
-    sig: _Own,
+    sig: MovementSignals | _Apart,
 ) -> bool:
     """Whether the last of ``before`` (the repetitions of one segment) and the first of
     ``after`` (of the next segment that has any, frames ``second``; those between found no
@@ -1652,7 +1675,7 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     runs = _runs(_nobody_absorbs_slivers(path, n_classes))
     bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]
     unseen = [s > n_classes for *_, s in runs]
-    reps = counted_apart(rec, bounds, unseen, person_jumps(rec))
+    reps = counted_apart(done.sig, bounds, rec.n_frames, unseen, person_jumps(rec), rec)
     pieces = _LastPiece()
     segments = tuple(
         _nobody_segment(rec, a, b)

@@ -18,7 +18,7 @@ from features.geometry import angle_between
 from features.poses import PoseSequence, save_pose
 from features.readers.asfamc import read_asf_amc
 from features.readers.uiprmd import read_uiprmd_vicon
-from features.repetitions import count_repetitions
+from features.repetitions import count_repetitions, movement_signals
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
 from tests.once import made_once
@@ -131,7 +131,8 @@ def test_segment_counts_no_repetition_in_half_a_squat(cmu_13_29: PoseSequence) -
     none (before: 1); a whole squat is one."""
     for b_s, count in ((33.3, 0), (34.8, 1)):
         seq = _cut(cmu_13_29, 31.7, b_s).to_canonical()
-        (reps,) = counted_segments(seq, [(0, seq.n_frames)], seq.n_frames)
+        sig = movement_signals(seq)
+        (reps,) = counted_segments(sig, [(0, seq.n_frames)], seq.n_frames)
         assert len(reps) == count, b_s
 
 
@@ -297,7 +298,7 @@ def test_segment_counts_a_recording_of_one_segment_as_reps_does(
     8.7 s on; before, 3 at 8.65 and 8.7 s, 2 from 8.75 to 8.9 s, 3 again from 9.0 s.)"""
     seq = _cut(cmu_13_29, a_s, b_s).to_canonical()
     whole = count_repetitions(seq).count
-    (reps,) = counted_segments(seq, [(0, seq.n_frames)], seq.n_frames)
+    (reps,) = counted_segments(movement_signals(seq), [(0, seq.n_frames)], seq.n_frames)
     assert len(reps) == whole
     if a_s == 3.9:
         assert whole == 3  # twists at 5.1, 6.75 and 8.6 s by hand

@@ -13,6 +13,7 @@ import pytest
 from cbr.segmentation import counted_segments
 from features.pose_estimation import estimate_video
 from features.poses import PoseSequence
+from features.repetitions import movement_signals
 from posecbr.cli import main
 from tests.test_repetitions import _arms_raised_and_held
 from tests.test_video_gaps import _drawn_words, lunge_frames
@@ -37,7 +38,7 @@ def _segment_counts(seq: PoseSequence, cuts_s: list[float]) -> list[int]:
     counts them (:func:`cbr.segmentation.counted_segments`)."""
     edges = [0, *(int(round(t * seq.fps)) for t in cuts_s), seq.n_frames]
     bounds = list(zip(edges[:-1], edges[1:], strict=True))
-    return [len(r) for r in counted_segments(seq, bounds, seq.n_frames)]
+    return [len(r) for r in counted_segments(movement_signals(seq), bounds, seq.n_frames)]
 
 
 @pytest.mark.parametrize("cut_s", [3.0, 4.5])

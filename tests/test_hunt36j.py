@@ -10,7 +10,7 @@ import cbr.segmentation as seg
 from cbr.segmentation import counted_segments
 from features.datasets import Clip
 from features.poses import PoseSequence
-from features.repetitions import count_repetitions
+from features.repetitions import count_repetitions, movement_signals
 from tests.bodies import squat_pose, to_sequence
 from tests.moves import clip
 from tests.test_repetitions import FPS, _arms_raised_and_held
@@ -40,7 +40,7 @@ def _counts(seq: PoseSequence, cuts_s: list[float]) -> list[int]:
     them (:func:`cbr.segmentation.counted_segments`, which its ``finish`` calls)."""
     edges = [0, *(int(round(t * seq.fps)) for t in cuts_s), seq.n_frames]
     bounds = list(zip(edges[:-1], edges[1:], strict=True))
-    return [len(r) for r in counted_segments(seq, bounds, seq.n_frames)]
+    return [len(r) for r in counted_segments(movement_signals(seq), bounds, seq.n_frames)]
 
 
 CLIPS = {

@@ -29,7 +29,7 @@ def test_the_leg_raise_segment_counts_both_raises(shared_data: Path) -> None:
     assert _segment_counts(seq, []) == [hand] == [2]
     assert _segment_counts(seq, [CUT / seq.fps]) == [0, hand]
     bounds = [(0, CUT), (CUT, seq.n_frames)]
-    _, after = counted_segments(seq, bounds, seq.n_frames)
+    _, after = counted_segments(movement_signals(seq), bounds, seq.n_frames)
     peaks = [r.peak_frame / seq.fps for r in after]
     assert 2.2 <= peaks[0] <= 4.8 and 8.4 <= peaks[1] <= 10.0, peaks
     assert count_repetitions(seq).count == hand

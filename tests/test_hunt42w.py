@@ -13,7 +13,7 @@ import pytest
 from cbr.segmentation import counted_segments
 from features.pose_estimation import estimate_video
 from features.poses import PoseSequence
-from features.repetitions import count_repetitions
+from features.repetitions import count_repetitions, movement_signals
 from tests.bodies import squat_pose, to_sequence
 from tests.test_hunt36j import MOVE_S, REST_S, _eased
 from tests.test_hunt36l import _live_segments
@@ -98,6 +98,6 @@ def test_watch_counts_a_real_bridge_cut_off_by_the_end_as_segment(
     cut = streamed[0].end_frame
     assert 1.1 * 25 < cut < 2.8 * 25
     piece = bridges.slice_frames(0, end)
-    offline = counted_segments(piece, [(0, cut), (cut, end)], end)
+    offline = counted_segments(movement_signals(piece), [(0, cut), (cut, end)], end)
     assert streamed[-1].repetitions == len(offline[-1]) == 2
     assert streamed[0].repetitions == len(offline[0]) == 1

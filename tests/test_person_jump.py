@@ -214,15 +214,17 @@ def test_segment_counts_a_segment_apart_on_either_side_of_a_jump(jacks: tuple[Pa
     """``segment``'s count of a segment across the jump (one segment: the same movement on
     both sides), as ``reps``'. Before, frames 146-165 were one repetition."""
     from cbr.segmentation import counted_apart, counted_segments
+    from features.repetitions import movement_signals
 
     pose, fps = jacks
     seq = load_pose(pose).to_canonical()
+    sig = movement_signals(seq)
     n = seq.n_frames
-    reps = counted_apart(seq, [(0, n)], [False], [150])[0]
+    reps = counted_apart(sig, [(0, n)], n, [False], [150], seq)[0]
     _as_by_hand([(r.start_frame, r.end_frame, r.peak_frame) for r in reps], fps)
     # without a jump it is counted_segments' count, unchanged
-    assert counted_apart(seq, [(0, 100), (100, n)], [False, False], []) == counted_segments(
-        seq, [(0, 100), (100, n)], n
+    assert counted_apart(sig, [(0, 100), (100, n)], n, [False, False], [], seq) == counted_segments(
+        sig, [(0, 100), (100, n)], n
     )
 
 

@@ -25,6 +25,7 @@ from features.repetitions import (
     count_in_signals,
     count_repetitions,
     mirror_angles,
+    movement_signals,
     pelvis_height,
 )
 from features.skeleton import JOINT_INDEX
@@ -790,13 +791,14 @@ def test_far_points_of_a_video_lie_where_a_person_was_seen(shared_data: Path) ->
     nearest = np.abs(peaks[:, None] - seen[None, :]).min(axis=1)
     assert (nearest <= 0.4 * seq.fps).all()
     assert peaks.min() >= seen.min()
-    # cut into pieces as segments are (each counted on its own frames' signals): in every
-    # piece the repetitions follow one another without overlap, each holding its far point
-    # (they overlapped, one of them over a repetition of one frame, with 15-s pieces)
+    # cut into pieces as segments are (each counted on the recording's own signals): in
+    # every piece the repetitions follow one another without overlap, each holding its far
+    # point (they overlapped, one of them over a repetition of one frame, with 15-s pieces)
+    sig = movement_signals(seq)
     for length in (100, 150, 200):
         edges = [*range(0, seq.n_frames, length), seq.n_frames]
         bounds = list(zip(edges[:-1], edges[1:], strict=True))
-        for (a, b), reps in zip(bounds, counted_segments(seq, bounds, seq.n_frames), strict=True):
+        for (a, b), reps in zip(bounds, counted_segments(sig, bounds, seq.n_frames), strict=True):
             ends = [a, *(r.end_frame for r in reps)]
             for r, before in zip(reps, ends, strict=False):
                 assert before <= r.start_frame <= r.peak_frame < r.end_frame <= b, (a, b, reps)

@@ -137,7 +137,7 @@ def test_a_fragment_across_a_change_counts_no_repetition_twice(
     a = len(squat) + int(offset_s * 120)
     b = a + int(length_s * 120)
     bounds = [(0, a), (a, b), (b, seq.n_frames)]
-    counts = [len(r) for r in counted_segments(seq, bounds, seq.n_frames)]
+    counts = [len(r) for r in counted_segments(movement_signals(seq), bounds, seq.n_frames)]
     assert sum(counts) == 6, counts
     assert counts[0] == 2, counts
 

@@ -59,7 +59,7 @@ def test_a_segment_with_an_arm_joint_unseen_counts_as_the_clip_alone(
     for activity, least in (("Jog", 6), ("Twist", 2)):
         a, b = hand[activity]["start_frame"], hand[activity]["end_frame"]
         seq = _without(rec, joint, a, b)
-        piece = counted_segments(seq, [(a, b)], seq.n_frames)[0]
+        piece = counted_segments(movement_signals(seq), [(a, b)], seq.n_frames)[0]
         clip = seq.slice_frames(a, b)
         alone = count_in_segment(
             movement_signals(clip), clip.n_frames, clip.fps, (a == 0, b >= seq.n_frames)
