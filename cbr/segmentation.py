@@ -615,8 +615,8 @@ def _block_sums(
     summed per block by ``np.bincount``, which adds them in that order, as a loop over the
     windows adding each to its run did (the same sums to the last bit: a difference array
     summed by ``cumsum`` adds and takes away in another order, and a tie between two
-    activities' votes could fall the other way). 3-5x faster than that loop on CMU 13_29's
-    windows, 2-7x on an hour of them."""
+    activities' votes could fall the other way). 3-5x faster than that loop on a 2-minute mocap
+    recording's windows, 2-7x on an hour of them."""
     centres = (np.arange(n_blocks) + 0.5) * BLOCK_S * fps  # in frames
     first = np.searchsorted(centres, [w.start for w in solved], side="left")
     end = np.searchsorted(centres, [w.stop for w in solved], side="left")
