@@ -376,7 +376,9 @@ def cut(
     :func:`features.repetitions.cut_clips`), each piece with its clip's label as given:
     ``split="windows"``, the 2-s windows every 0.5 s that ``segment`` and ``watch`` classify
     (the case base for long recordings and live use; a clip shorter than a window stays
-    whole), ``"repetitions"``, each repetition found (a clip with none stays whole), or
+    whole), ``"repetitions"``, each repetition found (of a movement that alternates sides in turns
+    shorter than one repetition can be, a jog, each left-and-right cycle,
+    :func:`features.repetitions.case_spans`; a clip with none stays whole), or
     ``"clips"``, each whole. Each piece is a :class:`PoseSequence` sharing its clip's frames,
     its ``frames`` where it lies in the clip. Give the result to :func:`train` with
     ``cases=split`` (for windows with ``CaseBaseClassifier(feature_weights="none")``, as

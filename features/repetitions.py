@@ -93,7 +93,8 @@ The period also comes out of the QMP fits (:mod:`features.qmp`: SINDy with a per
 signal); the autocorrelation is used here because it reads all angles together and needs no
 window length, and the tests check that both agree.
 
-Cases for a case base: :func:`split_repetitions` cuts clips into their repetitions,
+Cases for a case base: :func:`split_repetitions` cuts clips into their repetitions (a jog's
+steps, too short alone, into whole left-and-right cycles, :func:`case_spans`),
 :func:`split_windows` into the fixed windows ``posecbr segment`` classifies.
 """
 
@@ -1839,6 +1840,7 @@ __all__ = [
     "WINDOW_HOP_S",
     "WINDOW_S",
     "split_repetitions",
+    "case_spans",
     "split_windows",
     "SPLITS",
     "Cut",
@@ -1865,32 +1867,74 @@ __all__ = [
 @dataclass(frozen=True)
 class Split:
     """Clips cut into their repetitions (or windows): the new clips, and how many of the
-    originals had no repetition (or were too short for one) and stayed whole."""
+    originals had no repetition (or were too short for one) and stayed whole; ``cycles``:
+    how many of the new clips are left-and-right cycles of a movement that alternates sides
+    (:func:`case_spans`), two turns or more, not one repetition."""
 
     clips: list[Clip]
     kept_whole: int
+    cycles: int = 0
 
 
 def split_repetitions(clips: Sequence[Clip]) -> Split:
-    """Every clip cut into its repetitions (:func:`count_repetitions`), each a clip of its own
-    with the clip's label, subject and extras (plus ``repetition``: 1, 2, ...); the frames and
-    what was computed for them are shared with the clip (:func:`features.derived.stretch`).
-    A clip without a repetition stays whole."""
+    """Every clip cut into its repetitions (:func:`count_repetitions`), those of a movement
+    that alternates sides in turns too short alone (a jog's steps) in whole left-and-right
+    cycles (:func:`case_spans`), each a clip of
+    its own with the clip's label, subject and extras (plus ``repetition``: 1, 2, ..., the
+    piece's place in the clip); the frames and what was computed for them are shared with
+    the clip (:func:`features.derived.stretch`). A clip without a repetition stays whole."""
     out: list[Clip] = []
-    whole = 0
+    whole = cycles = 0
     for clip in clips:
         try:
-            reps = count_repetitions(clip.seq).repetitions
+            count: RepetitionCount | None = count_repetitions(clip.seq)
         except DataError:
-            reps = ()
-        if not reps:
+            count = None
+        spans = case_spans(count) if count is not None else []
+        if not spans:
             out.append(clip)
             whole += 1
             continue
-        for k, r in enumerate(reps, start=1):
-            part = stretch(clip.seq, r.start_frame, r.end_frame).with_metadata(repetition=k)
+        cycles += sum(turns > 1 for _, _, turns in spans)
+        for k, (a, b, _) in enumerate(spans, start=1):
+            part = stretch(clip.seq, a, b).with_metadata(repetition=k)
             out.append(dataclasses.replace(clip, seq=part, extras={**clip.extras, "repetition": k}))
-    return Split(out, whole)
+    return Split(out, whole, cycles)
+
+
+def case_spans(count: RepetitionCount) -> list[tuple[int, int, int]]:
+    """The pieces ``train --split repetitions`` makes of a clip counted ``count``: frames
+    ``[start, end)`` and how many repetitions each holds. One per repetition; but a movement
+    that alternates sides (one repetition per side's turn) whose turns are shorter than one
+    repetition can be (their median under :data:`MIN_PERIOD_S`: a jog's steps, 0.3-0.4 s)
+    is cut in whole left-and-right cycles, a turn and the next together: the shortest period
+    bounds the movement's full cycle, not one side's half of it, and a single step could be
+    no case (nor a clip ``classify`` takes). Turns pair in order where one ends as the next
+    begins (not across a stretch that shows nobody, :func:`_seen_spans`); a turn left over
+    at the end of such a run is a piece of its own when it lasts :data:`MIN_PERIOD_S` or
+    more, else joined to the cycle before it (a run of one turn stays one piece, however
+    short). Slower alternating movements (knee raises, twists: turns of 1-2 s) keep a case
+    per turn, each a whole excursion and back, as ``reps`` counts them."""
+    reps = [(r.start_frame, r.end_frame) for r in count.repetitions]
+    shortest = MIN_PERIOD_S * count.fps
+    if not (count.alternating and reps) or np.median([b - a for a, b in reps]) >= shortest:
+        return [(a, b, 1) for a, b in reps]
+    runs: list[list[tuple[int, int]]] = []
+    for a, b in reps:
+        if runs and runs[-1][-1][1] == a:
+            runs[-1].append((a, b))
+        else:
+            runs.append([(a, b)])
+    out: list[tuple[int, int, int]] = []
+    for run in runs:
+        pieces = [(run[i][0], run[min(i + 1, len(run) - 1)][1], len(run[i : i + 2]))
+                  for i in range(0, len(run), 2)]  # fmt: skip
+        last = pieces[-1]
+        if len(pieces) > 1 and last[2] == 1 and last[1] - last[0] < shortest:
+            before = pieces[-2]
+            pieces[-2:] = [(before[0], last[1], before[2] + 1)]
+        out += pieces
+    return out
 
 
 WINDOW_S = 2.0
@@ -1945,27 +1989,30 @@ repetitions (:func:`split_repetitions`) or its windows (:func:`split_windows`)."
 @dataclass(frozen=True)
 class Cut:
     """Clips cut as ``posecbr train --split`` cuts them (:func:`cut_clips`): the cases' clips,
-    and the clips given that stayed whole (no repetition found, or shorter than a window)."""
+    and the clips given that stayed whole (no repetition found, or shorter than a window);
+    ``cycles``: how many cases are left-and-right cycles (:attr:`Split.cycles`)."""
 
     clips: list[Clip]
     kept_whole: list[Clip]
+    cycles: int = 0
 
 
 def cut_clips(clips: Sequence[Clip], split: str) -> Cut:
     """Every clip cut into ``split`` (one of :data:`SPLITS`): ``"clips"`` keeps each whole,
-    ``"repetitions"`` cuts it into its repetitions, ``"windows"`` into the 2-s windows every
+    ``"repetitions"`` cuts it into its repetitions (a jog's steps, too short alone, into whole
+    left-and-right cycles, :func:`case_spans`), ``"windows"`` into the 2-s windows every
     0.5 s that ``posecbr segment`` and ``watch`` classify. The one cutting ``posecbr train
     --split`` and :func:`cbr.training.cut` do."""
     if split == "clips":
         return Cut(list(clips), [])
     if split == "repetitions":
-        pieces = split_repetitions(clips).clips
+        cut = split_repetitions(clips)
     elif split == "windows":
-        pieces = split_windows(clips).clips
+        cut = split_windows(clips)
     else:
         raise ValueError(f"split must be one of {', '.join(map(repr, SPLITS))}, got {split!r}")
     given = {id(c) for c in clips}  # a clip kept whole is passed on as it came
-    return Cut(pieces, [c for c in pieces if id(c) in given])
+    return Cut(cut.clips, [c for c in cut.clips if id(c) in given], cut.cycles)
 
 
 def long_enough(clips: Sequence[Clip]) -> tuple[list[Clip], list[Clip]]:

@@ -129,8 +129,13 @@ def test_split_repetitions_gives_each_repetition_as_a_clip(
     labels = shared_data / "cmu-mocap6" / "truelabels" / "13_30.txt"
     clips = list(iter_recording(recording, LabelTrack(labels, 0.1, _names(tmp_path))))
     split = split_repetitions(clips)
-    expected = [count_repetitions(c.seq).count for c in clips]
+    counts = [count_repetitions(c.seq) for c in clips]
     assert split.kept_whole == 0
+    # the jog's steps (0.30-0.40 s each) in left-and-right cycles, two to a clip; the twist's
+    # and knee raises' turns (1-2 s) one to a clip, as every other repetition
+    assert [r.alternating for r in counts] == [False, True, True, False, True]
+    expected = [(r.count + 1) // 2 if c.label == "Jog" else r.count
+                for c, r in zip(clips, counts, strict=True)]  # fmt: skip
     assert len(split.clips) == sum(expected)
     squats = [c for c in split.clips if c.label == "Squat"]
     assert len(squats) == 2  # two squats by hand (tests/fixtures/repetition_counts.json)

@@ -290,21 +290,23 @@ def _note_long_clips(name: str, clips: list[Any]) -> None:
 def _note_repeated_clips(name: str, clips: list[Any]) -> None:
     """Note, on stderr, clips of several repetitions classified against a case base of
     single repetitions (``train --split repetitions``): each gets one answer, its
-    repetitions' summary held against cases of one; how to classify each instead."""
+    repetitions' summary held against cases of one; how to classify each instead. A clip is
+    of several when ``train`` would cut it into several cases (one left-and-right cycle of a
+    movement that alternates sides is one case, :func:`features.repetitions.case_spans`)."""
     from cbr.casebase import frames_of, piece_name
     from features.errors import DataError
-    from features.repetitions import count_repetitions
+    from features.repetitions import case_spans, count_repetitions
     from features.text import shown
 
     several: list[tuple[str, int]] = []
     for clip in clips:
         try:
-            n = count_repetitions(clip).count
+            count = count_repetitions(clip)
         except DataError:  # too short to count, nobody seen: classify says what it can
             continue
-        if n > 1:  # a piece of its file (a labels CSV's start,end row) named with its frames
-            piece = frames_of(clip) if "frame_offset" in clip.metadata else None
-            several.append((piece_name(Path(clip.source or "a clip").name, piece), n))
+        if len(case_spans(count)) > 1:  # a piece of its file (a labels CSV's start,end row)
+            piece = frames_of(clip) if "frame_offset" in clip.metadata else None  # its frames
+            several.append((piece_name(Path(clip.source or "a clip").name, piece), count.count))
     if not several:
         return
     named = first_few([f"{shown(src)}: {n}" for src, n in several])

@@ -393,7 +393,9 @@ def _cut(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
             if kept
             else ""
         )
-        _note(args, f"cut {counted(n_cut, 'clip')} into {counted(n_pieces, 'repetition')}{whole}")
+        _note(
+            args, f"cut {counted(n_cut, 'clip')} into {_repetitions(n_pieces, cut.cycles)}{whole}"
+        )
         return cut.clips
     if not n_cut:
         _note(args, f"kept {counted(len(clips), 'clip')} whole: each shorter than a window "
@@ -410,6 +412,17 @@ def _cut(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
         f"{WINDOW_S:g} s every {WINDOW_HOP_S:g} s{whole}",
     )
     return cut.clips
+
+
+def _repetitions(n_pieces: int, cycles: int) -> str:
+    """``n_pieces`` cut into repetitions, ``cycles`` of them left-and-right cycles of a
+    movement that alternates sides (:func:`features.repetitions.case_spans`), in words."""
+    if not cycles:
+        return counted(n_pieces, "repetition")
+    return (
+        f"{counted(n_pieces, 'case')}: {counted(n_pieces - cycles, 'repetition')} and"
+        f" {counted(cycles, 'left-and-right cycle')} of a movement that alternates sides"
+    )
 
 
 def _in_memory(args: argparse.Namespace) -> bool:
