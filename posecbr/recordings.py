@@ -119,7 +119,7 @@ def load_clip_naming_asf(path: Path) -> Any:
         raise e.naming("--asf") from None
 
 
-def note_low_rate(source: Any, fps: float) -> None:
+def note_low_rate(source: Any, fps: float, estimated: bool) -> None:
     """Say on stderr when the frame rate ``fps`` of the recording or video ``source`` is too
     low to follow every movement a repetition can be: one repeating in less than two frames'
     time (the shortest, :data:`features.repetitions.MIN_PERIOD_S`, needs 5 fps) is seen as a
@@ -127,13 +127,16 @@ def note_low_rate(source: Any, fps: float) -> None:
     steps without a word). ``segment`` and ``reps`` say it, and ``watch`` of a video before it
     plays.
 
-    Below 10 fps (:func:`glitch_free_fps`), though followed, a one-frame glitch of the pose
-    model is not told from a quick repetition's far point: the counts are noted as well.
-    Every k-th frame kept (four phases each), the 8 hand-counted bundled videos were counted
-    exactly in 100 % of their copies at 15 fps, 97 % at 10, 86 % at 8, 76 % at 6 and 5; the
-    28 mocap clips of known count of the repetition tests, which no pose model's glitch
-    touches, in 92, 88, 87, 96 and 89 % (91 % at 30 fps)."""
-    from features.repetitions import MIN_PERIOD_S
+    Below 10 fps (:func:`features.repetitions.glitch_free_fps`), though followed, a quick
+    repetition's far point is held for less than the two frames a running median of three
+    keeps: where the counter reads one (:func:`features.repetitions.median_width`: always
+    for poses a pose model ``estimated``, whose one-frame glitches it drops; for others,
+    motion capture, from 7.5 fps), the counts are noted as well. Every k-th frame kept (four
+    phases each), the 8 hand-counted bundled videos were counted exactly in 100 % of their
+    copies at 15 fps, 89 % at 8, 88 % at 6 and 86 % at 5; the 28 mocap clips of known count
+    of the repetition tests in 92, 89 and 86 % at 15, 10 and 8 fps, 98 and 93 % at 6 and 5
+    with no median and no glitch to drop (91 % at 30 fps): not noted."""
+    from features.repetitions import MIN_PERIOD_S, glitch_free_fps, median_width
     from features.text import shown
 
     shortest = 2.0 / fps
@@ -144,26 +147,12 @@ def note_low_rate(source: Any, fps: float) -> None:
             f" miscounted (the shortest, {MIN_PERIOD_S:g} s, needs {2.0 / MIN_PERIOD_S:g} fps)",
             file=sys.stderr,
         )
-    elif fps < glitch_free_fps() - 1e-9:
+    elif fps < glitch_free_fps() - 1e-9 and median_width(fps, estimated) > 1:
         print(
-            f"note: {shown(source)}: at {fps:g} fps a one-frame glitch of the pose"
-            " model is not told from a quick repetition's far point (the shortest repetition,"
-            f" {MIN_PERIOD_S:g} s, stays out there {MIN_PERIOD_S / 2:g} s: two frames need"
-            f" {glitch_free_fps():g} fps): its repetitions may be miscounted",
+            f"note: {shown(source)}: at {fps:g} fps the running median of three frames that"
+            " drops a one-frame glitch of a pose model drops a quick repetition's far point"
+            f" as well (the shortest repetition, {MIN_PERIOD_S:g} s, stays out there"
+            f" {MIN_PERIOD_S / 2:g} s: two frames need {glitch_free_fps():g} fps): its"
+            " repetitions may be miscounted",
             file=sys.stderr,
         )
-
-
-def glitch_free_fps() -> float:
-    """The lowest frame rate at which the counter's running median
-    (:data:`features.repetitions.MEDIAN_S`, 0.2 s) takes the three frames that drop a
-    one-frame glitch while the far half of the shortest repetition
-    (:data:`features.repetitions.MIN_PERIOD_S` / 2, 0.2 s) holds the two frames the median
-    keeps: 10 fps. Below it a median of three frames flattens the quickest repetitions (at
-    8 fps a mocap recording's jogging steps counted 6 of 7 in three of four phases, 7 at 10
-    fps), and none (below 7.5 fps, where the median's 0.2 s holds one frame) leaves the pose
-    model's glitches as they are (a video of one reverse lunge at 6.25 fps: 2-4 repetitions
-    in three of four phases)."""
-    from features.repetitions import MEDIAN_S, MIN_PERIOD_S
-
-    return max(2.0 / MEDIAN_S, 4.0 / MIN_PERIOD_S)

@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
         picture_format(args.plot)
     seq = load_recording(args.clip, args.asf, args.fps)
     check_person(seq, "count")  # as segment refuses it: a long one is not counted whole
-    note_low_rate(seq.source, seq.fps)
+    note_low_rate(seq.source, seq.fps, seq.confidence is not None)
     result = _count(seq)
     if result.partial:
         print(

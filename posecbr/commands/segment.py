@@ -365,7 +365,7 @@ def run(args: argparse.Namespace) -> int:
         check_segmentable(rec)
     truths = _fitted_truths(args, labels, [rec for rec, _ in read])
     for rec, _ in read:
-        note_low_rate(rec.source, rec.fps)
+        note_low_rate(rec.source, rec.fps, rec.confidence is not None)
     done = [
         (rec, video, _named(segment(clf, rec, judge, k=args.k), path))
         for (rec, video), path in zip(read, args.recordings, strict=True)

@@ -470,7 +470,7 @@ def run(args: argparse.Namespace) -> int:
     else:  # a file served over the network is played as a file is
         fps = None if isinstance(source, int) else served_file_rate(source, args.stall)
     if fps is not None:  # as segment and reps say it of the same video
-        note_low_rate(args.source, fps)
+        note_low_rate(args.source, fps, True)  # its poses the pose model's
     is_file = fps is not None
     pacer = Pacer(fps, args.speed) if fps and args.speed > 0 else None
     alive = Alive()  # a served file read again at its end for a cut: no stall
