@@ -80,7 +80,7 @@ def test_the_low_rate_note_where_the_median_reads_three_frames(
         if confidence:
             seq = dataclasses.replace(seq, confidence=np.ones(seq.positions.shape[:2]))
         path = save_pose(seq, tmp_path / f"still_{fps}.npz")
-        main(["reps", str(path)])
+        assert main(["reps", str(path)]) == 0
         err = capsys.readouterr().err
         notes = [line for line in err.splitlines() if line.startswith("note:")]
         noted[fps] = GLITCH_RATE_NOTE.format(path=path, fps=fps) in notes
