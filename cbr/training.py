@@ -205,38 +205,48 @@ class ClipsFailed(DataError):
         )
 
 
-def _no_case(what: str) -> DataError:
-    """No clip can be a case (:func:`usable`): ``what`` there is then nothing to do."""
+def _unusable_why(clips: Sequence[DescribedClip]) -> str:
+    """Why none of ``clips`` can be a case (:func:`usable`), in the words of ``train``'s
+    "skipped" lines: no frame shows the person's torso, or it lasts less than one movement
+    can (a piece of ``--split repetitions`` or ``windows``, a clip shorter than a window kept
+    whole), or some one and some the other."""
     from features.repetitions import MIN_PERIOD_S
 
-    return DataError(
-        f"no clip shows a person's torso (both shoulders and hips) for as long as one movement"
-        f" can last ({MIN_PERIOD_S:g} s):"
-        f" nothing to {what}",
-        "training set",
-    )
+    nobody = {c.torso_share == 0.0 for c in clips}
+    no_torso = "shows no person's torso (both shoulders and hips)"
+    short = f"is shorter than one movement can be ({MIN_PERIOD_S:g} s)"
+    if nobody == {True}:
+        return no_torso
+    if nobody == {False}:
+        return short
+    return f"{no_torso} or {short}"
+
+
+def _no_case(clips: Sequence[DescribedClip], what: str) -> DataError:
+    """No clip can be a case (:func:`usable`): ``what`` there is then nothing to do; the error
+    says why (:func:`_unusable_why`)."""
+    return DataError(f"every clip {_unusable_why(clips)}: nothing to {what}", "training set")
 
 
 def _one_left(
     clips: Sequence[DescribedClip], labels: Sequence[str], keep: Sequence[int], target: str
 ) -> DataError:
     """Of two or more activities (``labels`` of ``clips``), only one is left in the clips
-    :func:`usable` keeps (positions ``keep``): the error names the others and their clips."""
-    from features.repetitions import MIN_PERIOD_S
-
+    :func:`usable` keeps (positions ``keep``): the error names the others, why their clips
+    are no case (:func:`_unusable_why`) and the clips."""
     from .explain import class_noun
 
     left = labels[keep[0]]
     lost = sorted(set(labels) - {left})
+    gone = [i for i, label in enumerate(labels) if label in lost]
     dropped = list(  # each file once: a recording cut into windows is many clips
-        dict.fromkeys(c.source or f"clip {i}" for i, c in enumerate(clips) if labels[i] in lost)
+        dict.fromkeys(clips[i].source or f"clip {i}" for i in gone)
     )
     more = " ..." if len(dropped) > 5 else ""
     return DataError(
         f"only one {class_noun(target)} ({left!r}) is left to learn from, a classifier needs "
-        f"two or more: every clip of {', '.join(repr(v) for v in lost)} shows no person's "
-        f"torso for as long as one movement can last ({MIN_PERIOD_S:g} s): "
-        f"{', '.join(dropped[:5])}{more}",
+        f"two or more: every clip of {', '.join(repr(v) for v in lost)} "
+        f"{_unusable_why([clips[i] for i in gone])}: {', '.join(dropped[:5])}{more}",
         "training set",
     )
 
@@ -529,10 +539,10 @@ def train_described(
     keep, skipped, too_short = usable(clips)
     if len({text[i] for i in keep}) == 1 < len(set(text)):
         raise _one_left(clips, text, keep, target)
+    if not keep:
+        raise _no_case(clips, "learn from")
     lost = lost_labels(text, keep)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
-    if not clips:
-        raise _no_case("learn from")
     _check_unique(clips, "training set")
     fitted: CaseBaseClassifier = unfitted_copy(estimator).fit_described(
         clips, [given[i] for i in keep]
@@ -844,10 +854,10 @@ def append_described(
     (ids from the database, never reused), so none is lost or duplicated."""
     text = [str(v) for v in check_labels(labels, len(clips))]
     keep, skipped, too_short = usable(clips)
+    if not keep:
+        raise _no_case(clips, "add")
     lost = lost_labels(text, keep)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
-    if not clips:
-        raise _no_case("add")
     columns = plan.casebase
     assert columns is not None
     cb = CaseBase(

@@ -153,8 +153,8 @@ def test_train_names_the_class_whose_every_clip_shows_nobody(
     )
     assert line == (
         "posecbr train: error: training set: only one activity ('a0') is left to learn from, a "
-        "classifier needs two or more: every clip of 'walk' shows no person's torso for as "
-        f"long as one movement can last (0.4 s): {data / 'walk' / 'empty.npz'}"
+        "classifier needs two or more: every clip of 'walk' shows no person's torso (both "
+        f"shoulders and hips): {data / 'walk' / 'empty.npz'}"
     )
 
 
