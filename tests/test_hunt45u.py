@@ -2,6 +2,10 @@
 
 1. ``train`` said every clip of an activity "shows no person's torso" when its clips (or the
    pieces ``--split`` cut) were only shorter than one movement can last (``MIN_PERIOD_S``).
+2. ``classify`` of a jog against a case base of repetitions told the user to classify each
+   repetition as a labels CSV row from ``reps --json``: a jog's repetition is one step,
+   0.3 s, which ``classify`` refuses as too short; ``train --split repetitions`` cuts such a
+   movement in left-and-right cycles, and the note now says to give those.
 """
 
 from __future__ import annotations
@@ -80,3 +84,49 @@ def test_train_of_clips_all_too_short_or_unseen_names_both_reasons(
         "posecbr train: error: training set: every clip is shorter than one movement can be "
         "(0.4 s): nothing to learn from"
     )
+
+
+def test_classify_note_on_a_jog_says_rows_of_cycles_which_classify_takes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The jog of tests/test_hunt44j.py (each step 9 frames, 0.3 s, at 30 fps) trained with
+    --split repetitions beside a squat clip; a jog of ten steps classified whole. The note
+    names its 10 repetitions in 5 cycles and says to give a row per cycle, from one step's
+    start_frame to the next one's end_frame: rows made so from ``reps --json`` are each
+    classified (jog), where rows of single steps, as the old note said, are each refused as
+    shorter than one movement can be."""
+    import json
+
+    from posecbr.cli import main
+    from tests.test_hunt44j import _jog
+
+    save_pose(_jog(8), tmp_path / "jog.npz")
+    save_pose(clip("squat", 6.0, FPS), tmp_path / "squat.npz")
+    (tmp_path / "train.csv").write_text("path,label\njog.npz,jog\nsquat.npz,squat\n")
+    db = str(tmp_path / "cb.sqlite")
+    assert main(["train", str(tmp_path / "train.csv"), "--split", "repetitions", "--db", db]) == 0
+    query = save_pose(_jog(10), tmp_path / "query.npz")
+    capsys.readouterr()
+    assert main(["classify", str(query), "--db", db, "-q"]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "per repetition" in line]
+    assert len(notes) == 1
+    assert "(query.npz: 10 in 5 left-and-right cycles)" in notes[0]
+    assert (
+        "one row per left-and-right cycle, from the start_frame of one to the end_frame of "
+        "the next" in notes[0]
+    )
+    assert main(["reps", str(query), "--json"]) == 0
+    reps = json.loads(capsys.readouterr().out)["repetitions"]
+    frames = [(r["start_frame"], r["end_frame"]) for r in reps]
+    # the steps, built so; the last ends with the clip (its frame 90 is the jog's last)
+    assert frames == [(9 * k, 9 * k + 9) for k in range(9)] + [(81, 91)]
+    cycles = [(frames[i][0], frames[i + 1][1]) for i in range(0, 10, 2)]
+    rows = "".join(f"query.npz,,{a},{b}\n" for a, b in cycles)
+    (tmp_path / "cycles.csv").write_text("path,label,start,end\n" + rows)
+    assert main(["classify", str(tmp_path / "cycles.csv"), "--db", db, "--json"]) == 0
+    answers = json.loads(capsys.readouterr().out)
+    assert [a["label"] for a in answers["results"]] == ["jog"] * 5
+    steps = "".join(f"query.npz,,{a},{b}\n" for a, b in frames[:2])
+    (tmp_path / "steps.csv").write_text("path,label,start,end\n" + steps)
+    assert main(["classify", str(tmp_path / "steps.csv"), "--db", db]) == 1
+    assert "shorter than one movement can be (0.4 s)" in capsys.readouterr().out

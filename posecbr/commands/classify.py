@@ -292,30 +292,46 @@ def _note_repeated_clips(name: str, clips: list[Any]) -> None:
     single repetitions (``train --split repetitions``): each gets one answer, its
     repetitions' summary held against cases of one; how to classify each instead. A clip is
     of several when ``train`` would cut it into several cases (one left-and-right cycle of a
-    movement that alternates sides is one case, :func:`features.repetitions.case_spans`)."""
+    movement that alternates sides is one case, :func:`features.repetitions.case_spans`):
+    such a clip's rows are its cycles, a repetition alone (one step of a jog) being shorter
+    than ``classify`` takes."""
     from cbr.casebase import frames_of, piece_name
     from features.errors import DataError
-    from features.repetitions import case_spans, count_repetitions
+    from features.repetitions import MIN_PERIOD_S, case_spans, count_repetitions
     from features.text import shown
 
-    several: list[tuple[str, int]] = []
+    several: list[str] = []
+    cycled: list[str] = []
     for clip in clips:
         try:
             count = count_repetitions(clip)
         except DataError:  # too short to count, nobody seen: classify says what it can
             continue
-        if len(case_spans(count)) > 1:  # a piece of its file (a labels CSV's start,end row)
+        spans = case_spans(count)
+        if len(spans) > 1:  # a piece of its file (a labels CSV's start,end row)
             piece = frames_of(clip) if "frame_offset" in clip.metadata else None  # its frames
-            several.append((piece_name(Path(clip.source or "a clip").name, piece), count.count))
+            src = shown(piece_name(Path(clip.source or "a clip").name, piece))
+            cycles = sum(n > 1 for _, _, n in spans)
+            several.append(f"{src}: {count.count}" + (f" in {cycles} left-and-right cycles"
+                                                       if cycles else ""))  # fmt: skip
+            if cycles:
+                cycled.append(src)
     if not several:
         return
-    named = first_few([f"{shown(src)}: {n}" for src, n in several])
+    pairs = (
+        f"; of a movement that alternates sides in repetitions shorter than {MIN_PERIOD_S:g} s"
+        f" ({first_few(cycled)}), one row per left-and-right cycle, from the start_frame of"
+        " one to the end_frame of the next, as train cuts them: one alone is too short to"
+        " classify"
+        if cycled
+        else ""
+    )
     print(
         f"note: case base {name!r} holds a case per repetition and "
         f"{counted(len(several), 'clip')} {'holds' if len(several) == 1 else 'hold'} several "
-        f"({named}): each gets one answer here; to classify each repetition, give them "
-        "as rows path,label,start,end of a labels CSV (a label may be left empty; posecbr "
-        "reps CLIP --json: each one's start_frame and end_frame)",
+        f"({first_few(several)}): each gets one answer here; to classify each repetition, "
+        "give them as rows path,label,start,end of a labels CSV (a label may be left empty; "
+        f"posecbr reps CLIP --json: each one's start_frame and end_frame{pairs})",
         file=sys.stderr,
     )
 
