@@ -1025,7 +1025,7 @@ def _alike_labels(labels: Any) -> list[list[str]]:
 
 def _notes(args: argparse.Namespace, result: Any) -> None:
     """What the user should know of the case base stored, on stderr: activities spelt two
-    ways, cases nothing tells apart, and a case base of windows segment cannot judge unknown
+    ways, cases nothing tells apart, and a case base segment cannot judge unknown
     with. Activities are called classes when the case base predicts another column
     (``--target correct``)."""
     import unicodedata
@@ -1074,11 +1074,16 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
             file=sys.stderr,
         )
     _note_chance(args, result)
-    if not args.append and args.split == "windows" and not result.judges_unknown:
+    if not args.append and not result.judges_unknown:
+        # said whatever a case is (the refusal came as a surprise in segment for a case base
+        # of clips or repetitions): segment and watch refuse it by default
+        from cbr.stored import CASE_KINDS
+
         why = (
             f"fewer than three {class_noun(args.target, 3)}"
             if len(result.label_counts) < 3
-            else f"no {class_noun(args.target)} with windows apart from each other"
+            else f"no {class_noun(args.target)} with {CASE_KINDS.get(args.split, 'clip')}s apart"
+            " from each other"
         )
         print(
             f"note: segment and watch cannot tell stretches unlike every {class_noun(args.target)}"
