@@ -503,12 +503,22 @@ def _names_an_open_stream(out: Path) -> bool:
     the link itself (``/dev/stdout`` made an ordinary file for every process of the machine)."""
     p = Path(os.path.abspath(out))
     for _ in range(40):  # the kernel's own limit on links followed
-        if Path(os.path.realpath(p.parent)).parts[:2] == ("/", "proc"):
-            return True
+        parent = Path(os.path.realpath(p.parent))
+        if parent.parts[:2] == ("/", "proc"):
+            return parent.name == "fd"  # /proc/<pid>/fd/N; elsewhere in /proc no stream
         if not p.is_symlink():
             return False
         p = Path(os.path.abspath(p.parent / os.readlink(p)))
     return False
+
+
+def _kernel_folder(out: Path) -> str | None:
+    """``/proc`` or ``/sys`` when ``out`` (its folder resolved) lies in one: file systems the
+    kernel makes up, in which no file can be made, whatever the permissions say (root's
+    check passed: ``segment --plot /proc/x.png`` was called standard output, and ``/sys``
+    failed only once the work was done)."""
+    top = Path(os.path.realpath(Path(os.path.abspath(out)).parent)).parts[:2]
+    return top[1] if len(top) == 2 and top[0] == "/" and top[1] in ("proc", "sys") else None
 
 
 def path_exists(path: Path, lead: str = "", where: Path | None = None) -> bool:
@@ -541,6 +551,13 @@ def _refuse_special(out: Path, what: str) -> None:
     if _names_an_open_stream(out):
         raise DataError(
             f"names standard output or another open stream, not a file: name a file for the {what}",
+            out,
+        )
+    kernel = _kernel_folder(out)
+    if kernel is not None:
+        raise DataError(
+            f"cannot write the {what}: /{kernel} is the kernel's view of the system, where no"
+            " file can be made; name a file elsewhere",
             out,
         )
     if out.exists() and not out.is_file():

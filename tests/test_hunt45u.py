@@ -10,6 +10,10 @@
    held-out`` only for a case base of windows: of clips or repetitions it said nothing, and
    ``segment`` then refused it. Said for every kind of case (the refusal is kept: the
    default judge is what the README documents, and the advice works).
+4. An output in ``/proc`` (``segment --plot /proc/x.png``) was refused as naming "standard
+   output or another open stream": only ``/proc/<pid>/fd/N`` is one; the rest of ``/proc``
+   and ``/sys`` are the kernel's, where no file can be made (root's permission check passes:
+   ``/sys`` failed only after the work).
 """
 
 from __future__ import annotations
@@ -162,3 +166,39 @@ def test_train_of_two_activities_says_segment_needs_held_out_whatever_a_case_is(
     assert "--unknown held-out" in capsys.readouterr().err
     assert main(["segment", rec, "--db", db, "--unknown", "held-out", "--json"]) == 0
 
+
+@pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="needs Linux's /proc")
+@pytest.mark.parametrize(
+    ("command", "out", "what"),
+    [
+        ("segment", "/proc/x.png", "picture"),
+        ("reps", "/sys/x.png", "picture"),
+        ("segment", "/proc/self/x.mp4", "overlay"),
+    ],
+)
+def test_an_output_in_the_kernels_folders_is_refused_as_such_before_any_work(
+    command: str, out: str, what: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rec = save_pose(clip("squat", 3.0, FPS), tmp_path / "rec.npz")
+    option = "--overlay" if what == "overlay" else "--plot"
+    db = ["--db", str(tmp_path / "none.sqlite")] if command == "segment" else []
+    line = refused([command, str(rec), *db, option, out], tmp_path, capsys)
+    top = out.split("/")[1]
+    assert line == (
+        f"posecbr {command}: error: {out}: cannot write the {what}: /{top} is the kernel's view "
+        "of the system, where no file can be made; name a file elsewhere"
+    )
+    assert not Path(out).exists()
+
+
+@pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="needs Linux's /proc")
+def test_a_name_of_standard_output_is_still_refused_as_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rec = save_pose(clip("squat", 3.0, FPS), tmp_path / "rec.npz")
+    for out in ("/dev/stdout", "/proc/self/fd/1"):
+        line = refused(["reps", str(rec), "--plot", out], tmp_path, capsys)
+        assert line == (
+            f"posecbr reps: error: {out}: names standard output or another open stream, not a "
+            "file: name a file for the picture"
+        )
