@@ -160,3 +160,17 @@ def listed(values: Sequence[str]) -> str:
 def whole_numbers(values: Iterable[str]) -> bool:
     """Whether every value is a whole number (codes a label names file names): ``"6"``."""
     return all(v.isascii() and v.isdigit() for v in values)
+
+
+def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
+    """Where each recording's picture goes: ``plot`` itself, or in the folder ``plot`` one
+    ``<name>.png`` per recording, a name that two recordings share (``a/13_30.npz``,
+    ``b/13_30.npz``) numbered from the second on (``13_30_2.png``), as ``convert`` names
+    pose files: no picture overwrites another. ``segment``, ``reps`` and ``describe`` take
+    ``--plot`` so, as ``extract --out`` takes a folder or, for one video, a file name."""
+    from features.fileio import unique_name
+
+    if not plot.is_dir():
+        return [plot]
+    taken: set[str] = set()
+    return [plot / f"{unique_name(path.stem, taken)}.png" for path in recordings]

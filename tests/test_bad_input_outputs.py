@@ -21,7 +21,9 @@ def test_describe_plot_is_checked_before_the_run(
     clip = good_pose_file(tmp_path / "clip.npz")
     thresholds = tmp_path / "t.toml"
     thresholds.write_text("window = 5\n")
-    (tmp_path / "pics").mkdir()
+    # a folder given holds the picture, <clip>.png, as segment --plot's: here that is a folder
+    (tmp_path / "pics" / "clip.png").mkdir(parents=True)
+    (tmp_path / "pics" / "bad.png").mkdir()
     describe = ["describe", str(clip), "--thresholds", str(thresholds), "--plot"]
     refused([*describe, str(tmp_path / "pics")], tmp_path, capsys,
             "the picture is a folder, not a file")  # fmt: skip

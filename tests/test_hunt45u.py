@@ -14,6 +14,8 @@
    output or another open stream": only ``/proc/<pid>/fd/N`` is one; the rest of ``/proc``
    and ``/sys`` are the kernel's, where no file can be made (root's permission check passes:
    ``/sys`` failed only after the work).
+5. ``segment --plot DIR`` wrote DIR/<recording>.png where ``reps`` and ``describe`` refused
+   a folder: they now write DIR/<clip>.png too.
 """
 
 from __future__ import annotations
@@ -202,3 +204,28 @@ def test_a_name_of_standard_output_is_still_refused_as_one(
             f"posecbr reps: error: {out}: names standard output or another open stream, not a "
             "file: name a file for the picture"
         )
+
+
+@pytest.mark.parametrize("command", ["reps", "describe"])
+def test_plot_into_a_folder_writes_the_clips_picture_there_as_segment_does(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``segment --plot DIR`` writes DIR/<recording>.png (the README: a folder, one .png per
+    recording), as ``extract --out DIR`` writes DIR/<video>.npz for one video; ``reps`` and
+    ``describe`` refused a folder ("the picture is a folder, not a file"). Now each writes
+    DIR/<clip>.png, a PNG, and names it (``--json``: ``"plot"``)."""
+    import json
+
+    from posecbr.cli import main
+
+    rec = save_pose(clip("squat", 3.0, FPS), tmp_path / "squats.npz")
+    pics = tmp_path / "pics"
+    pics.mkdir()
+    capsys.readouterr()
+    assert main([command, str(rec), "--plot", str(pics), "--json"]) == 0
+    captured = capsys.readouterr()
+    picture = pics / "squats.png"
+    assert json.loads(captured.out)["plot"] == str(picture)
+    assert f"written to {picture}" in captured.err
+    assert sorted(pics.iterdir()) == [picture]
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.text import counted, shown
-from posecbr.arguments import path_arg
+from posecbr.arguments import path_arg, plot_targets
 from posecbr.recordings import (
     NUMPY_BELOW_FRAMES,
     add_recording_options,
@@ -75,7 +75,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--plot",
         type=path_arg,
         metavar="PICTURE",
-        help="write a fluent timeline picture (.png, .svg, .pdf: by the name)",
+        help="write a fluent timeline picture (.png, .svg, .pdf: by the name; a folder:"
+        " <clip>.png in it, as segment --plot)",
     )
     p.set_defaults(func=run)
 
@@ -112,6 +113,7 @@ def _check_args(args: argparse.Namespace) -> None:
         )
     check_asf(args.asf, [args.posefile])
     if args.plot is not None:
+        args.plot = plot_targets(args.plot, [args.posefile])[0]  # a folder: <clip>.png in it
         inputs = [args.posefile, *[f for f in (args.thresholds, args.asf) if f is not None]]
         check_output(args.plot, inputs=inputs, what="picture")
         from features.timeline import picture_format

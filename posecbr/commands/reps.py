@@ -25,7 +25,7 @@ from typing import Any
 
 from features.fileio import check_output
 from features.text import counted, shown
-from posecbr.arguments import path_arg
+from posecbr.arguments import path_arg, plot_targets
 from posecbr.recordings import (
     NUMPY_BELOW_FRAMES,
     add_recording_options,
@@ -49,7 +49,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--plot",
         type=path_arg,
         metavar="PICTURE",
-        help="repetitions over the fluent timeline (.png, .svg, .pdf: by the name)",
+        help="repetitions over the fluent timeline (.png, .svg, .pdf: by the name; a folder:"
+        " <clip>.png in it, as segment --plot)",
     )
     p.set_defaults(func=run)
 
@@ -59,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
 
     check_asf(args.asf, [args.clip])
     if args.plot is not None:
+        args.plot = plot_targets(args.plot, [args.clip])[0]  # a folder: <clip>.png in it
         check_output(
             args.plot, inputs=[args.clip, *([args.asf] if args.asf else [])], what="picture"
         )

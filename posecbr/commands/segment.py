@@ -52,10 +52,10 @@ from typing import Any
 
 from cbr.judges import JUDGES
 from features.errors import ConfigError, DataError
-from features.fileio import check_output, unique_name
+from features.fileio import check_output
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
-from posecbr.arguments import add_k_option, path_arg
+from posecbr.arguments import add_k_option, path_arg, plot_targets
 from posecbr.recordings import (
     add_recording_options,
     check_asf,
@@ -318,17 +318,6 @@ def _inputs(args: argparse.Namespace) -> list[Path]:
     asf = [args.asf] if args.asf is not None else []
     truth = [*(args.truth or []), *([args.label_names] if args.label_names is not None else [])]
     return [*args.recordings, *store_files(args.db), *asf, *truth]
-
-
-def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
-    """Where each recording's picture goes: ``plot`` itself, or in the folder ``plot`` one
-    ``<name>.png`` per recording, a name that two recordings share (``a/13_30.npz``,
-    ``b/13_30.npz``) numbered from the second on (``13_30_2.png``), as ``convert`` names
-    pose files: no picture overwrites another."""
-    if not plot.is_dir():
-        return [plot]
-    taken: set[str] = set()
-    return [plot / f"{unique_name(path.stem, taken)}.png" for path in recordings]
 
 
 def judge_named(clf: Any, name: str, db: str) -> Any:
