@@ -102,12 +102,17 @@ def test_watch_of_a_video_at_2_fps_says_what_segment_says_of_it(
 ) -> None:
     """At 2 fps a movement repeating within 1 s (two frames) is not followed: ``segment``
     and ``reps`` say so of a video at that rate; ``watch`` played it and counted its
-    repetitions without a word. An empty scene, 8 frames (lossless)."""
+    repetitions without a word. An empty scene, 8 frames (lossless): refused at its end as
+    having nobody in view (tests/test_hunt45u.py), after the note."""
     scene = np.zeros((120, 160, 3), np.uint8)
     scene[:, :, 1] = np.arange(160, dtype=np.uint8)  # a plain green ramp: nobody in view
     video = _write(tmp_path / "slow.mp4", [i * 500 for i in range(8)], [scene] * 8, rate=2)
-    assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 0
+    assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 1
     err = capsys.readouterr().err
+    assert err.endswith(
+        f"{video}: the stream ended after 8 frames (4.00 s)"
+        " with nobody in view in any of them: no activity to label\n"
+    )
     assert (
         f"note: {video}: at 2 fps a movement that repeats within 1 s (two frames) is not"
         " followed: its repetitions may be miscounted (the shortest, 0.4 s, needs 5 fps)"
@@ -130,12 +135,18 @@ def test_watch_plays_a_file_url_without_slashes_as_the_file(
 ) -> None:  # fmt: skip
     """FFmpeg opens ``file:clip.mp4`` as the path after ``file:``; ``watch file:clip.mp4``
     said "no such video file" of a file there is. It is played as ``clip.mp4`` is (the same
-    note, exit 0); ``file:`` of a file there is not is refused naming the path."""
+    note; its grey frames refused at the end as having nobody in view, as ``slow.mp4``
+    is); ``file:`` of a file there is not is refused naming the path."""
     scene = np.zeros((120, 160, 3), np.uint8)
     scene[:, :, 1] = np.arange(160, dtype=np.uint8)
     _write(tmp_path / "slow.mp4", [i * 500 for i in range(8)], [scene] * 8, rate=2)
     monkeypatch.chdir(tmp_path)
-    assert main(["watch", "file:slow.mp4", "--db", str(case_base), "--speed", "0"]) == 0
-    assert "note: slow.mp4: at 2 fps a movement that repeats within 1 s" in capsys.readouterr().err
+    assert main(["watch", "file:slow.mp4", "--db", str(case_base), "--speed", "0"]) == 1
+    err = capsys.readouterr().err
+    assert "note: slow.mp4: at 2 fps a movement that repeats within 1 s" in err
+    assert err.endswith(
+        "slow.mp4: the stream ended after 8 frames (4.00 s)"
+        " with nobody in view in any of them: no activity to label\n"
+    )
     refused(["watch", "file:gone.mp4", "--db", str(case_base), "--speed", "0"], tmp_path, capsys,
             "gone.mp4", "no such video file")  # fmt: skip

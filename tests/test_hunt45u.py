@@ -16,6 +16,11 @@
    ``/sys`` failed only after the work).
 5. ``segment --plot DIR`` wrote DIR/<recording>.png where ``reps`` and ``describe`` refused
    a folder: they now write DIR/<clip>.png too.
+6. ``watch`` of a video with nobody in view in any frame printed one "nobody in view"
+   segment, exit 0, where ``segment`` and ``reps`` refuse the same file (README, Bad input:
+   a recording with no person is bad input). It now refuses it at its end in one line, exit
+   1, no ``--out`` video (its segment still printed as it finished, as every segment is); a
+   camera watching an empty room still reports nobody in view (no bad input there).
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ from features.poses import save_pose
 from features.repetitions import MIN_PERIOD_S
 from tests.badinput import refused
 from tests.moves import clip
+from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
 
 FPS = 30.0
 
@@ -229,3 +235,37 @@ def test_plot_into_a_folder_writes_the_clips_picture_there_as_segment_does(
     assert f"written to {picture}" in captured.err
     assert sorted(pics.iterdir()) == [picture]
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_watch_of_a_video_nobody_is_in_refuses_it_as_segment_does(
+    case_base: Path,  # noqa: F811 - the fixture imported above
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A lossless video of 40 plain grey frames at 10 fps (4 s): no person in any. Before,
+    ``watch`` printed one segment "nobody in view" over the 40 frames and exited 0."""
+    from tests.test_video_vfr import _write
+
+    frames = [np.full((120, 160, 3), 90, np.uint8) for _ in range(40)]
+    video = _write(tmp_path / "empty.mp4", [100 * k for k in range(40)], frames, rate=10)
+    line = refused(["segment", str(video), "--db", str(case_base)], tmp_path, capsys)
+    assert line.startswith(f"posecbr segment: error: {video}: no person in view")
+    import json
+
+    from posecbr.cli import main
+    from tests.badinput import assert_unchanged, snapshot
+
+    out = tmp_path / "seen.mp4"
+    before = snapshot(tmp_path)
+    argv = ["watch", str(video), "--db", str(case_base), "--speed", "0", "--out", str(out)]
+    assert main(argv) == 1
+    captured = capsys.readouterr()
+    assert captured.err == (
+        f"posecbr watch: error: {video}: the stream ended after 40 frames (4.00 s) with nobody"
+        " in view in any of them: no activity to label\n"
+    )
+    segments = [json.loads(line) for line in captured.out.splitlines()]
+    assert [(s["start_frame"], s["end_frame"], s["unknown"]) for s in segments] == [
+        (0, 40, "nobody in view")
+    ]
+    assert_unchanged(tmp_path, before)  # no video, no temporary

@@ -94,12 +94,18 @@ def test_watch_a_street_with_nobody_in_view(
 ) -> None:
     """vtest.avi's first 12 s, a street in which BlazePose finds no one (its people are too
     small: ../shared/data/README.md): one segment, unknown, told "nobody in view", counted 0,
-    over every frame watched."""
+    over every frame watched, printed as it finished; then the video is refused, exit 1, as
+    segment refuses a recording with nobody in it (tests/test_hunt45u.py; it exited 0)."""
     video = shared_data / "media" / "vtest.avi"
     capsys.readouterr()
     assert main(["watch", str(video), "--db", str(case_base), "--max-frames", "120",
-                 "--speed", "0"]) == 0  # fmt: skip
-    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+                 "--speed", "0"]) == 1  # fmt: skip
+    captured = capsys.readouterr()
+    assert captured.err.endswith(
+        f"{video}: the stream ended after 120 frames (12.00 s)"
+        " with nobody in view in any of them: no activity to label\n"
+    )
+    lines = [json.loads(line) for line in captured.out.splitlines()]
     assert [(d["start_frame"], d["end_frame"], d["label"], d["unknown"], d["repetitions"],
              d["explanation"]) for d in lines] == [
         (0, 120, None, "nobody in view", 0, "nobody in view")]  # fmt: skip
@@ -421,7 +427,7 @@ def test_watch_a_stream_url(
     capsys.readouterr()
     url = f"{served}/vtest.avi"
     argv = ["watch", url, "--db", str(case_base), "--max-frames", "120", "--speed", "0"]
-    assert main(argv) == 0
+    assert main(argv) == 1  # nobody in view in any frame: refused at the end, as segment does
     lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     got = [
         (d["start_frame"], d["end_frame"], d["end_s"], d["label"], d["explanation"]) for d in lines
@@ -757,7 +763,7 @@ def test_a_served_mp4_that_gives_no_frame_says_why(
     )
     with _serving(tmp_path, _Ranges) as address:
         url = f"{address}/noise.mp4"
-        assert main(["watch", url, "--db", str(case_base), "--speed", "0"]) == 0
+        assert main(["watch", url, "--db", str(case_base), "--speed", "0"]) == 1  # nobody
     lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert [(d["start_frame"], d["end_frame"], d["explanation"]) for d in lines] == [
         (0, 75, "nobody in view")

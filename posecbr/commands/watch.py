@@ -541,6 +541,8 @@ class Watcher:
         self.video: Path | None = None  # where the drawn frames go (a temporary file)
         self.drawn = 0  # frames written to it
         self.emitted = 0  # segments printed
+        self.seen = False  # a segment printed saw the person (not nobody in view throughout)
+        self.is_file = False  # a video file (here or served), not a camera or live stream
         self.stdout_gone = False  # the reader of the printed segments has gone: stop
         self.latency: list[float] = []
         self.pacer: Pacer | None = None  # a file's, played at its own rate: when frames are due
@@ -564,6 +566,7 @@ class Watcher:
     def watch(self, frames: Iterator[Any], is_file: bool, stop: threading.Event) -> None:
         """:meth:`follow` until the stream ends or the user stops it (``stop``: Ctrl-C); the
         video writer is released either way."""
+        self.is_file = is_file
         try:
             self.follow(frames, is_file, stop)
         finally:
@@ -639,7 +642,10 @@ class Watcher:
         print(f"note: {shown(words)}", file=sys.stderr)
 
     def _emit(self, segment: Any) -> None:
+        from cbr.segmentation import NO_FRAMES, NOBODY
+
         self.emitted += 1
+        self.seen = self.seen or segment.explanation not in (NOBODY, NO_FRAMES)
         if self.stdout_gone:
             return
         try:
@@ -735,21 +741,33 @@ class Watcher:
             raise PosecbrError("this OpenCV has no window support: use --out video.mp4") from None
 
     def close(self, stop: Stop) -> None:
-        """The end of the stream: the last segment and the latency. With no segment given,
+        """The end of the stream: the last segment and the latency. With no segment given, or
+        a video file (here or served) with nobody in view in any frame (as ``segment`` and
+        ``reps`` refuse it; its segments printed, as every segment is when it finishes),
         refused: as the stream ending (exit 1), or as the user stopping it (``stop`` set:
         interrupted, exit 130, or 143 for SIGTERM), not blamed on the stream."""
         import numpy as np
 
+        from cbr.segmentation import MIN_WINDOW_S
+
         for segment in self.live.finish() if self.live is not None else []:
             self._emit(segment)
+        seconds = f" ({self.n / self.fps:.2f} s)" if self.fps else ""
+        said = None
         if not self.emitted:  # as segment refuses a recording shorter than a window
-            from cbr.segmentation import MIN_WINDOW_S
-
-            seconds = f" ({self.n / self.fps:.2f} s)" if self.fps else ""
             said = (
                 f"after {counted(self.n, 'frame')}{seconds}, before the shortest window"
                 f" ({MIN_WINDOW_S:g} s) of the stream was seen: no segment to give"
             )
+        elif self.is_file and not self.seen:
+            # a video with nobody in it, as segment and reps refuse it (a camera watching an
+            # empty room is no bad input: its segments say nobody in view); its segments
+            # were printed as they finished, as every segment is
+            said = (
+                f"after {counted(self.n, 'frame')}{seconds} with nobody in view in any of them:"
+                " no activity to label"
+            )
+        if said is not None:
             if stop.is_set():
                 raise_interrupt(stop.signum, said=f"{self.args.source}: stopped {said}")
             raise DataError(f"the stream ended {said}", self.args.source)
