@@ -31,23 +31,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from features.poses import save_pose
+from features.poses import PoseSequence, save_pose
 from features.repetitions import MIN_PERIOD_S
 from tests.badinput import refused
 from tests.moves import clip
 from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
 
 FPS = 30.0
+SHORT_S = 9 / FPS
+"""A clip shorter than one movement can last: 9 frames at 30 fps (0.3 s)."""
 
 
-def _short(name: str) -> float:
-    """Seconds of a clip of ``name`` shorter than one movement can last: 9 frames at 30 fps."""
-    seconds = 9 / FPS
-    assert seconds < MIN_PERIOD_S
-    return seconds
-
-
-def _nobody(seconds: float):  # type: ignore[no-untyped-def]
+def _nobody(seconds: float) -> PoseSequence:
     """A squat clip of ``seconds`` whose every joint is missing (nobody in view)."""
     seq = clip("squat", seconds, FPS)
     return dataclasses.replace(seq, positions=np.full_like(seq.positions, np.nan))
@@ -61,10 +56,11 @@ def test_train_says_an_activity_whose_clips_are_too_short_is_short_not_unseen(
     every frame: the jacks are no case because they are short (kept whole by ``--split
     repetitions`` and ``windows``: shorter than a repetition or a window). Before, the
     refusal said every clip of them "shows no person's torso"."""
+    assert SHORT_S < MIN_PERIOD_S
     data = tmp_path / "data"
     for k in range(2):
         save_pose(clip("squat", 2.0, FPS), data / "squat" / f"s{k}.npz")
-        save_pose(clip("jumping_jack", _short("jumping_jack"), FPS), data / "jack" / f"j{k}.npz")
+        save_pose(clip("jumping_jack", SHORT_S, FPS), data / "jack" / f"j{k}.npz")
     line = refused(
         ["train", str(data), "--db", str(tmp_path / "cb.sqlite"), "--split", split],
         tmp_path,
@@ -85,7 +81,7 @@ def test_train_of_clips_all_too_short_or_unseen_names_both_reasons(
     the two reasons, both named; the second too short as well: that reason alone (before,
     both said no clip "shows a person's torso for as long as one movement can last")."""
     data = tmp_path / "data"
-    save_pose(clip("squat", _short("squat"), FPS), data / "squat" / "short.npz")
+    save_pose(clip("squat", SHORT_S, FPS), data / "squat" / "short.npz")
     save_pose(_nobody(2.0), data / "jack" / "empty.npz")
     db = str(tmp_path / "cb.sqlite")
     line = refused(["train", str(data), "--db", db], tmp_path, capsys)
@@ -94,7 +90,7 @@ def test_train_of_clips_all_too_short_or_unseen_names_both_reasons(
         "shoulders and hips) or is shorter than one movement can be (0.4 s): nothing to "
         "learn from"
     )
-    save_pose(clip("jumping_jack", _short("jumping_jack"), FPS), data / "jack" / "empty.npz")
+    save_pose(clip("jumping_jack", SHORT_S, FPS), data / "jack" / "empty.npz")
     line = refused(["train", str(data), "--db", db], tmp_path, capsys)
     assert line == (
         "posecbr train: error: training set: every clip is shorter than one movement can be "
