@@ -182,7 +182,9 @@ with both legs' lines compared, a side view's reverse lunge with a knee missing 
 alternating on its trunk's wobble again, 5 repetitions for 1). The line folds the middle
 joint's bend and the limb's turn about its own axis into one direction, and so has no end
 nearer ease (:func:`_rest_is_high`; read with one, UI-PRMD's shoulder rotations with the
-elbow missing counted their rest plateaus, 7 of 6 and 6 of 5)."""
+elbow missing counted their rest plateaus, 7 of 6 and 6 of 5). A knee missing is placed
+where its hip and ankle fix it (:func:`_placed_knees`) and the leg's own angles are read:
+its line is read only when no knee is seen to measure the thigh and shank by."""
 COUNTED_ANGLES: tuple[str, ...] = (
     tuple(
         f"{side}_{joint}"
@@ -499,9 +501,12 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
     twist while it lies far from the vertical, angles on joints the camera does not see, and
     angles on the legs and hips where the pose model swapped the legs
     (:func:`features.leg_swaps.swapped_legs`), and the :data:`LIMB_LINES` that stand in for no
-    angle (:func:`_idle_lines`)."""
-    sig = signals_of(seq)
+    angle (:func:`_idle_lines`). A knee missing is placed from its hip and ankle first
+    (:func:`_placed_knees`)."""
     canonical = seq.to_canonical()
+    placed = _placed_knees(canonical)
+    sig = signals_of(seq if placed is canonical else placed)  # cached for the clip as it is
+    canonical = placed
     p = canonical.positions
     neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])
     mid_hip = 0.5 * (p[:, JOINT_INDEX["left_hip"]] + p[:, JOINT_INDEX["right_hip"]])
@@ -526,6 +531,50 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
     raw[swapped[:, None] & _ON_LEGS[None, :]] = np.nan
     raw[:, _idle_lines(np.isfinite(raw), seq.fps)] = np.nan
     return raw
+
+
+_LEG = {
+    s: tuple(JOINT_INDEX[f"{s}_{j}"] for j in ("hip", "knee", "ankle")) for s in ("left", "right")
+}
+
+
+def _placed_knees(canonical: PoseSequence) -> PoseSequence:
+    """``canonical`` (on the canonical skeleton) with each knee missing where its hip and
+    ankle are seen put where the knee's hinge puts it, seen as far as the smaller of the hip's
+    and the ankle's confidence; as it is when no knee is to be placed (none missing there, or
+    no thigh and shank seen to measure).
+
+    The thigh and the shank are as long as the clip's median over both legs (a body is as long
+    on the left as on the right); the knee lies at those lengths from the hip and the ankle
+    (their distance fixes the knee's bend, by the law of cosines) and ahead of the line from
+    hip to ankle, towards the chest's forward direction (a knee bends only backwards, the
+    shank folding behind the thigh). The knee's and the hip's angles are then read as where
+    the knee is seen, and take part in comparing the sides: the line from hip to ankle
+    (:data:`LIMB_LINES`) stood in for the hip's angle alone, and hardly turns when the thigh
+    rises and the shank hangs under it (CMU 13_31's knee raises counted 3 of 4 with a knee
+    missing, its seven jogging steps 2)."""
+    p = canonical.positions
+    hip, knee, ankle = (p[:, [_LEG["left"][i], _LEG["right"][i]]] for i in range(3))
+    place = np.isnan(knee).any(axis=2) & np.isfinite(hip - ankle).all(axis=2)
+    thigh, shank = np.linalg.norm(knee - hip, axis=2), np.linalg.norm(ankle - knee, axis=2)
+    if not place.any() or not (np.isfinite(thigh).any() and np.isfinite(shank).any()):
+        return canonical
+    thigh, shank = float(np.nanmedian(thigh)), float(np.nanmedian(shank))
+    reach = np.linalg.norm(ankle - hip, axis=2, keepdims=True)
+    along = unit(ankle - hip)
+    forward = body_frame(p).forward[:, None, :]
+    ahead = unit(forward - np.sum(forward * along, axis=2, keepdims=True) * along)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cos = np.clip((thigh**2 + reach**2 - shank**2) / (2 * thigh * reach), -1.0, 1.0)
+    placed = hip + thigh * (cos * along + np.sqrt(1.0 - cos**2) * ahead)
+    positions = p.copy()
+    confidence = None if canonical.confidence is None else canonical.confidence.copy()
+    for side, (h, k, a) in enumerate(_LEG.values()):
+        at = place[:, side]
+        positions[at, k] = placed[at, side]
+        if confidence is not None:
+            confidence[at, k] = np.minimum(confidence[at, h], confidence[at, a])
+    return dataclasses.replace(canonical, positions=positions, confidence=confidence)
 
 
 def _idle_lines(finite: np.ndarray, fps: float) -> list[int]:
