@@ -551,8 +551,8 @@ def _placed_knees(canonical: PoseSequence) -> PoseSequence:
     shank folding behind the thigh). The knee's and the hip's angles are then read as where
     the knee is seen, and take part in comparing the sides: the line from hip to ankle
     (:data:`LIMB_LINES`) stood in for the hip's angle alone, and hardly turns when the thigh
-    rises and the shank hangs under it (CMU 13_31's knee raises counted 3 of 4 with a knee
-    missing, its seven jogging steps 2)."""
+    rises and the shank hangs under it (knee raises and jogging steps were missed with a
+    knee missing)."""
     p = canonical.positions
     hip, knee, ankle = (p[:, [_LEG["left"][i], _LEG["right"][i]]] for i in range(3))
     place = np.isnan(knee).any(axis=2) & np.isfinite(hip - ankle).all(axis=2)

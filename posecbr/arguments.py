@@ -164,8 +164,8 @@ def whole_numbers(values: Iterable[str]) -> bool:
 
 def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
     """Where each recording's picture goes: ``plot`` itself, or in the folder ``plot`` one
-    ``<name>.png`` per recording, a name that two recordings share (``a/13_30.npz``,
-    ``b/13_30.npz``) numbered from the second on (``13_30_2.png``), as ``convert`` names
+    ``<name>.png`` per recording, a name that two recordings share (``a/rec.npz``,
+    ``b/rec.npz``) numbered from the second on (``rec_2.png``), as ``convert`` names
     pose files: no picture overwrites another. ``segment``, ``reps`` and ``describe`` take
     ``--plot`` so, as ``extract --out`` takes a folder or, for one video, a file name."""
     from features.fileio import unique_name
