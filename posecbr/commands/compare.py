@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import shlex
 import sys
@@ -290,6 +291,36 @@ def _check_out_folder(out: Path, data: Path) -> None:
             " clips; choose another folder",
             out,
         )
+    _check_results_are_ours(out)
+
+
+def _is_compare_results(path: Path) -> bool:
+    """Whether ``path`` is a results file ``compare`` wrote (its ``kind``), of any version."""
+    from cbr.evaluation.report import MAX_RESULTS_BYTES
+    from cbr.evaluation.results import KIND
+
+    try:
+        if not path.is_file() or path.stat().st_size > MAX_RESULTS_BYTES:
+            return False
+        doc = json.loads(path.read_bytes())
+    except (OSError, ValueError, RecursionError):  # unreadable, not JSON (nor UTF-8)
+        return False
+    return isinstance(doc, dict) and doc.get("kind") == KIND
+
+
+def _check_results_are_ours(out: Path) -> None:
+    """Refuse an ``--out`` folder whose ``results.json`` or ``results.csv`` an earlier
+    ``compare`` did not write (another tool's, the user's own): a run replaces its own
+    results there, never someone else's file of the same name (it did, silently)."""
+    ours = _is_compare_results(out / "results.json")
+    for name in ("results.json", "results.csv"):
+        path = out / name
+        if (path.exists() or path.is_symlink()) and not ours:
+            raise DataError(
+                f"holds {name}, not written by posecbr compare, which would replace it:"
+                " choose another --out",
+                out,
+            )
 
 
 def _outputs(args: argparse.Namespace) -> list[Output]:
