@@ -25,3 +25,16 @@ def test_compare_out_keeps_a_results_file_it_did_not_write(
     refused([*THREE, "--out", str(out)], tmp_path, capsys,
             str(out), f"holds {name}, not written by posecbr compare")  # fmt: skip
     assert (out / name).read_text() == content
+
+
+def test_demo_data_given_as_its_labels_csv_is_told_to_give_the_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``demo --data data/labels.csv`` said "demo data not found (expected labels.csv)" of
+    the very labels.csv it had been given."""
+    labels = tmp_path / "data" / "labels.csv"
+    labels.parent.mkdir()
+    labels.write_text("path,label,subject\n")
+    refused(["demo", "--data", str(labels), "--out", str(tmp_path / "o")], tmp_path, capsys,
+            f"{labels}: is a file: --data takes the folder holding the demo's labels.csv: give"
+            f" its folder, {labels.parent}")  # fmt: skip

@@ -186,6 +186,11 @@ def _check_data(data: Path) -> None:
     demo describes ``m01_s01_e01.npz``, trains on subjects s01 and s02 and classifies s03."""
     from features.datasets import read_labels_csv
 
+    if data.is_file():  # the labels CSV itself, say: "expected labels.csv" puzzled
+        folder = f": give its folder, {data.parent}" if data.name == "labels.csv" else ""
+        raise PosecbrError(
+            f"is a file: --data takes the folder holding the demo's labels.csv{folder}", data
+        )
     if not (data / "labels.csv").is_file():
         raise PosecbrError("demo data not found (expected labels.csv)", data)
     subjects = {str(r["subject"]) for r in read_labels_csv(data / "labels.csv")}
