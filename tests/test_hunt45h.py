@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 
+from posecbr.cli import main
 from tests.badinput import refused
 from tests.test_hunt40j import THREE
 
@@ -38,3 +39,22 @@ def test_demo_data_given_as_its_labels_csv_is_told_to_give_the_folder(
     refused(["demo", "--data", str(labels), "--out", str(tmp_path / "o")], tmp_path, capsys,
             f"{labels}: is a file: --data takes the folder holding the demo's labels.csv: give"
             f" its folder, {labels.parent}")  # fmt: skip
+
+
+def test_compare_where_no_method_could_be_scored_exits_1_writing_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Every method failed (here the one case-base configuration: --trim 0.05 keeps one case
+    of each of three activities in each fold, fewer than the 5 it votes with) and compare
+    exited 0, writing results that measured nothing; train --trim refuses such a case base."""
+    out, json_file = tmp_path / "out", tmp_path / "r.json"
+    code = main([*THREE, "--trim", "0.05", "--out", str(out), "--json", str(json_file)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1
+    failed = [line for line in err if line.startswith("note: cbr fluents/euclidean failed: ")]
+    assert len(failed) == 1 and "trimming kept 3 of 12 cases, fewer than the 5" in failed[0], err
+    assert err[-1] == (
+        f"posecbr compare: error: {THREE[1]}: no method could be scored: every one failed or"
+        " was skipped (the notes say why); no results written"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

@@ -584,6 +584,12 @@ def run(args: argparse.Namespace) -> int:
         _print_explanations(results.explanations)
     except BrokenPipeError:  # the reader stopped reading (`| head`): the files are still written
         stdout_gone()
+    if results.best is None:  # each row failed or was skipped: nothing measured to write
+        raise DataError(
+            "no method could be scored: every one failed or was skipped (the notes say why);"
+            " no results written",
+            args.data,
+        )
     earlier = _earlier_pictures(args.out) if args.out else []  # before results.json is new
     _write_outputs(run_, args, outputs, earlier)
     if args.out:
