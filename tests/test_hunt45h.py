@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from posecbr.cli import main
-from tests.badinput import refused
+from tests.badinput import ROOT, refused
 from tests.test_hunt40j import THREE
 
 
@@ -58,3 +62,36 @@ def test_compare_where_no_method_could_be_scored_exits_1_writing_nothing(
         " was skipped (the notes say why); no results written"
     )
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_python_m_posecbr_exits_with_its_status_after_an_interrupt_escaped_an_eval(
+    tmp_path: Path,
+) -> None:
+    """CPython run with ``-m`` ends itself by SIGINT at exit, whatever status ``sys.exit``
+    was given, once a KeyboardInterrupt escaped an ``exec``/``eval`` of a string, even one
+    caught: SIGTERM landing while a dataclass was made at import said "terminated (SIGTERM)"
+    and exited 130, not 143 (1 run in 14 of ``compare`` sent SIGTERM 3-12 s in). Here the
+    interrupt escapes an ``exec`` once the modules are imported (an import's ``exec`` would
+    clear the mark), then posecbr's ``__main__`` runs ``thresholds``: exit 0, not SIGINT."""
+    (tmp_path / "escaped_then_posecbr.py").write_text(
+        "import contextlib, io, runpy, sys\n"
+        "from posecbr.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main(['thresholds'])  # every module it needs imported first\n"
+        "try:\n"
+        "    exec('raise KeyboardInterrupt')\n"
+        "except KeyboardInterrupt:\n"
+        "    pass\n"
+        "sys.argv = ['posecbr', 'thresholds']\n"
+        "runpy.run_module('posecbr', run_name='__main__')\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-m", "escaped_then_posecbr"],
+        cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, (proc.returncode, proc.stderr)
+    assert json.loads(proc.stdout)["window"] == 5  # the table, printed whole (5 frames)
