@@ -10,8 +10,9 @@ from pathlib import Path
 
 import pytest
 
+from features.poses import save_pose
 from posecbr.cli import main
-from tests.badinput import ROOT, refused
+from tests.badinput import ROOT, refused, small_case_base, standing_clip
 from tests.test_hunt40j import THREE
 
 
@@ -95,3 +96,24 @@ def test_python_m_posecbr_exits_with_its_status_after_an_interrupt_escaped_an_ev
     )
     assert proc.returncode == 0, (proc.returncode, proc.stderr)
     assert json.loads(proc.stdout)["window"] == 5  # the table, printed whole (5 frames)
+
+
+def test_classify_quiet_says_why_a_clip_was_unclassifiable(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``classify --quiet`` of clips none of which could be classified ended "no clip could
+    be classified (1 clip, each unclassifiable: see above)" above a summary naming the clip
+    alone: the reason, on the clip's own line, is left out by --quiet. The summary's line
+    now gives it."""
+    db = small_case_base(tmp_path)
+    capsys.readouterr()  # train's output
+    clip = tmp_path / "one.npz"
+    save_pose(standing_clip(1), clip)  # one frame at 30 fps: 0.03 s, below a movement's 0.4 s
+    code = main(["classify", str(clip), "--db", str(db), "--quiet"])
+    out, err = capsys.readouterr()
+    assert code == 1
+    assert err.endswith("(1 clip, each unclassifiable: see above)\n")
+    assert (
+        f"unclassifiable: {clip} (lasts 0.03 s (1 frame), shorter than one movement can be"
+        " (0.4 s): nothing to classify)"
+    ) in out.splitlines()

@@ -620,4 +620,5 @@ def _print_summary(s: dict[str, Any], target: str, results: list[Any]) -> None:
         print(f"unlike the stored cases: {shown(r.name)}")
     for r in results:
         if r.solved is None:
-            print(f"unclassifiable: {shown(r.name)}")
+            # why, as the clip's own line says it: under --quiet the summary is all there is
+            print(f"unclassifiable: {shown(r.name)} ({shown(r.unclassifiable)})")
