@@ -84,6 +84,9 @@ class TrainResult:
     indistinct: list[str] = field(default_factory=list)
     #: ``--append``: the activities added that the case base did not hold when read
     new_labels: list[str] = field(default_factory=list)
+    #: those of ``new_labels`` that are the file name of one of their clips (a pose file
+    #: converted alone is labelled so: a name, not an activity, likely)
+    file_named_labels: list[str] = field(default_factory=list)
     #: how many training clips (or pieces) of each label were fitted: the ones held out to
     #: calibrate the confidence, before any editing or mirroring (empty for ``--append``)
     trained_counts: dict[str, int] = field(default_factory=dict)
@@ -904,12 +907,24 @@ def _appended_result(
     too_short: Sequence[str],
     lost: Sequence[str] = (),
 ) -> TrainResult:
+    new = sorted(set(text) - set(plan.known))
     return TrainResult(
         name, len(cb), total, _counts([str(v) for v in cb.labels]), cb.config, cb.measure.params(),
         None, {}, list(skipped), list(too_short),
-        indistinct=same_features(cb), new_labels=sorted(set(text) - set(plan.known)),
-        lost_labels=list(lost),
+        indistinct=same_features(cb), new_labels=new,
+        file_named_labels=_file_named(cb, new), lost_labels=list(lost),
     )  # fmt: skip
+
+
+def _file_named(cb: CaseBase, labels: Sequence[str]) -> list[str]:
+    """The ``labels`` that are the file name (without its ending) of one of their cases'
+    clips (a mirror image's source ends in " (mirrored)")."""
+    named = {
+        str(label)
+        for label, source in zip(cb.labels, cb.sources, strict=True)
+        if Path(source.removesuffix(" (mirrored)")).stem == str(label)
+    }
+    return sorted(named & set(labels))
 
 
 def _refresh_matrices(db: str | Path, name: str) -> None:

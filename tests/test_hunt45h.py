@@ -117,3 +117,23 @@ def test_classify_quiet_says_why_a_clip_was_unclassifiable(
         f"unclassifiable: {clip} (lasts 0.03 s (1 frame), shorter than one movement can be"
         " (0.4 s): nothing to classify)"
     ) in out.splitlines()
+
+
+def test_append_says_a_new_label_is_a_file_name_only_when_it_is_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``train --append`` ended its note on new activities "(a pose file converted alone is
+    labelled with its name)" whatever they were: also for a labels CSV's own activity, no
+    file's name. The hint is now given for the labels that are their clip's file name."""
+    db = small_case_base(tmp_path)
+    for name in ("13_31", "take"):
+        save_pose(standing_clip(20), tmp_path / f"{name}.npz")  # 0.67 s at 30 fps
+    csv = tmp_path / "more.csv"
+    csv.write_text("path,label\n13_31.npz,13_31\ntake.npz,plank\n")
+    capsys.readouterr()  # train's output
+    assert main(["train", str(csv), "--db", str(db), "--append"]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "added as new" in line]
+    assert notes == [
+        "note: 2 activities the case base did not hold, added as new: 13_31, plank (13_31: the"
+        " name of its file, as a pose file converted alone is labelled)"
+    ]

@@ -1057,8 +1057,7 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
         print(
             shown(
                 f"note: {n} {class_noun(args.target, n)} the case base did not hold, added as "
-                f"new: {', '.join(result.new_labels)} (a pose file converted alone is labelled "
-                "with its name)"
+                f"new: {', '.join(result.new_labels)}{_named_by_file(result.file_named_labels)}"
             ),
             file=sys.stderr,
         )
@@ -1091,6 +1090,16 @@ def _notes(args: argparse.Namespace, result: Any) -> None:
             f" base ({why}) by default: run them with --unknown held-out",
             file=sys.stderr,
         )
+
+
+def _named_by_file(labels: list[str]) -> str:
+    """Why a new label may be no activity: it is the name of its clip's file, as a pose file
+    converted alone is labelled ("" when none is: a labels CSV's or folder's activity)."""
+    if not labels:
+        return ""
+    return (
+        f" ({', '.join(labels)}: the name of its file, as a pose file converted alone is labelled)"
+    )
 
 
 def _note_chance(args: argparse.Namespace, result: Any) -> None:
