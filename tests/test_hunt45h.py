@@ -137,3 +137,13 @@ def test_append_says_a_new_label_is_a_file_name_only_when_it_is_one(
         "note: 2 activities the case base did not hold, added as new: 13_31, plank (13_31: the"
         " name of its file, as a pose file converted alone is labelled)"
     ]
+
+
+def test_compare_refuses_folds_with_leave_one_subject_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``compare --cv loso --folds 3`` ran leave-one-subject-out (as many folds as subjects)
+    and said nothing of the --folds it ignored."""
+    argv = ["compare", str(THREE[1]), "--cv", "loso", "--folds", "3", "--json",
+            str(tmp_path / "r.json")]  # fmt: skip
+    refused(argv, tmp_path, capsys, "posecbr compare: error: --folds: goes with --cv kfold")

@@ -62,7 +62,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "note, when there is a single subject, and is refused then when asked for by "
         "--cv loso) or stratified k-fold over clips",
     )
-    p.add_argument("--folds", type=int, default=5, metavar="K", help="folds for kfold (default 5)")
+    p.add_argument(
+        "--folds",
+        type=int,
+        default=None,
+        metavar="K",
+        help="folds for kfold, also the k-fold a dataset of one subject falls back to "
+        "(default 5); refused with --cv loso, whose folds are the subjects",
+    )
     p.add_argument(
         "--similarities",
         default="euclidean,dtw,signature",
@@ -225,6 +232,17 @@ def check_peers_can_run(args: argparse.Namespace, settings: Any) -> None:
             raise ConfigError(f"{method.name} cannot run here: {why}", "--peers")
 
 
+def check_folds_given_with_kfold(args: argparse.Namespace) -> None:
+    """Refuse ``--folds`` with ``--cv loso``: its folds are the subjects, and the k-fold a
+    dataset of one subject falls back to is refused by name (it was ignored in silence)."""
+    if args.cv == "loso" and args.folds is not None:
+        raise ConfigError(
+            "goes with --cv kfold (or with no --cv, for the k-fold a dataset of one subject"
+            " falls back to); --cv loso holds out one subject per fold",
+            "--folds",
+        )
+
+
 def check_loso_possible(args: argparse.Namespace, clips: list[Any]) -> None:
     """Refuse ``--cv loso`` asked for by name on clips it cannot hold out by subject (one
     subject, or clips without one): the run fell back to k-fold over clips, whose figures
@@ -249,7 +267,7 @@ def _settings(args: argparse.Namespace) -> Any:
     return CompareSettings(
         target=args.target,
         cv=args.cv or "loso",
-        folds=args.folds,
+        folds=5 if args.folds is None else args.folds,
         similarities=_names(args.similarities),
         features=_names(args.features),
         dad=not args.no_dad,
@@ -557,6 +575,7 @@ def run(args: argparse.Namespace) -> int:
     from features.datasets import check_no_overlaps, labelled_over_time
 
     check_scheduler(args.scheduler)
+    check_folds_given_with_kfold(args)
     settings = _settings(args)
     check_cbr_params(settings)
     check_peers_can_run(args, settings)
