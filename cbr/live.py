@@ -12,8 +12,10 @@ change), not whenever the rolling label turns (the label of a stream whose windo
 between two activities turns often; the best path through them does not), and a change is
 placed where the evidence of the hops on either side is of (the mean centre of the windows
 each averages), not where the window that decided it ends. Its repetitions are counted on
-its frames, each repetition in the one segment that holds where its movement turns
-(:func:`cbr.segmentation.keep_whole`).
+its frames as ``segment`` counts a segment cut there (the signals read the frames kept either
+side too, :meth:`LiveSegmenter._in_context`), each repetition in the one segment that holds
+where its movement turns (:func:`cbr.segmentation.keep_whole`,
+:func:`cbr.segmentation.unclaimed`).
 """
 
 from __future__ import annotations
@@ -21,8 +23,9 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -34,7 +37,6 @@ from features.repetitions import (
     ANALYSIS_FPS,
     MIN_PERIOD_S,
     Repetition,
-    RepetitionCount,
     movement_signals,
 )
 from features.skeleton import BLAZEPOSE_33
@@ -55,7 +57,6 @@ from .segmentation import (
     at_cut,
     check_judge,
     check_k,
-    count_in_segment,
     cut_off_beside,
     keep_whole,
     least_movement,
@@ -63,9 +64,11 @@ from .segmentation import (
     nobody_explanation,
     period_outliers,
     periods_in_span,
+    repetitions_in,
     segment,
     span_fields,
     told,
+    unclaimed,
     unknown_reason,
     votes_as,
     whole_in,
@@ -87,6 +90,13 @@ MAX_SEGMENT_S = 120.0
 PERSON_WINDOWS = 1200
 """How far the stream's person lies from every case (:func:`cbr.unknown.for_person`) is read
 from at most this many of the latest windows (10 minutes of fixed windows)."""
+CONTEXT_S = 1.0
+"""Repetitions of stream frames are counted on movement signals computed over up to this many
+seconds of the frames kept either side of them as well (:meth:`LiveSegmenter._in_context`):
+more than the signals' filters read (:func:`features.repetitions.movement_signals`: a running
+median 0.1 s either side, a pose model's glitch up to 0.2 s long, a Gaussian of 0.08 s to
+four sigma, 0.32 s), so that inside the frames each sample is what the whole stream's signals
+give there, as ``segment`` counts a segment on the whole recording's."""
 MAX_UNSETTLED_S = 30.0
 """A hop the decoder has not settled after this many seconds of stream is settled on the path
 best now (the best paths into the states may never agree: when every state is equally
@@ -243,6 +253,39 @@ class _HeldBack:
     held: bool
 
 
+class _Cut(NamedTuple):
+    """The last segment finished at a cut, as :func:`cbr.segmentation.unclaimed` reads the
+    segment before: its repetitions counted alone (``raw``), frames [start, end) they were
+    counted on, whether nobody is in view in it (``blind``) and whether its last far point
+    is held on across its end (``held``)."""
+
+    raw: tuple[Repetition, ...]
+    bounds: tuple[int, int]
+    blind: bool
+    held: bool
+
+
+@dataclass(frozen=True)
+class _Kept:
+    """The stream's frames still kept, counted as :func:`cbr.segmentation.unclaimed` counts
+    a recording's frames (:class:`cbr.segmentation.Counter`): ``count`` gives the
+    repetitions of frames [start, end) with ``settled`` (:meth:`LiveSegmenter._count_kept`)."""
+
+    step: int
+    count: Callable[[int, int, tuple[bool, bool]], tuple[Repetition, ...]]
+
+    def repetitions(
+        self,
+        start: int,
+        end: int,
+        n_frames: int | None,  # noqa: ARG002 (the stream's end: once it has ended)
+        settled: tuple[bool, bool],
+    ) -> tuple[Repetition, ...]:
+        """The repetitions of stream frames [start, end) (of those still kept; the stream's
+        end is the recording's once it has ended, whatever ``n_frames``)."""
+        return self.count(start, end, settled)
+
+
 @dataclass(frozen=True)
 class _Hop:
     """A settled hop whose evidence of unknown is final, for the known/unknown decoder: the
@@ -382,6 +425,7 @@ class LiveSegmenter:
         # nothing come back yet, that counts if the stream ends still in the hold (0: a
         # posture got into and held, :meth:`_still_beyond`)
         self.held_from = 0  # the first repetition's first frame of the segment that held it
+        self.last_cut: _Cut | None = None  # the last segment finished (:meth:`_mine`)
         self.beside: int | None = None  # the last repetition's first frame of the last
         # segment finished (None: it had none, or nobody was in view): what the stream's last
         # segment is judged beside when the stream ends (:meth:`_beside_whole`)
@@ -824,8 +868,6 @@ class LiveSegmenter:
         if len(reps) > len(held.own):
             kept = keep_whole(reps, 0, end, self.step, False, True, held.held)
             segment = dataclasses.replace(segment, repetitions=len(kept))
-            if not held.own:  # what the stream's last segment is judged beside
-                self.beside = reps[-1].start_frame
         self.released.append(segment)
 
     def _after_nobody(self, hop: _Hop) -> list[LiveSegment]:
@@ -1058,6 +1100,7 @@ class LiveSegmenter:
             if cut:  # no movement turns at its end
                 self.turn = self.holding = False
                 self.beside = None
+                self.last_cut = _Cut((), (start, end), True, False)
             return LiveSegment(
                 start, end, None, 1.0, 0, nobody_explanation(self._absent_in(start, end))
             )
@@ -1071,7 +1114,7 @@ class LiveSegmenter:
             if torso_share(clip) == 0.0:
                 state = self.unknown
             try:
-                reps = self._count_apart(first, end, edges, clip=clip)
+                reps = self._count_apart(first, end, edges)
             except DataError:  # too short, or nobody in view
                 pass
         self._judge_after(start, reps, cut or explained)
@@ -1085,7 +1128,10 @@ class LiveSegmenter:
         passed_on = 0
         if cut and not lost and reps and not held and self._still_beyond(end, reps[-1]):
             reps, held, passed_on = self._held_on(first, end, edges, reps)
-        kept = keep_whole(reps, first, end, self.step, turn, cut and not lost, held)
+        mine = self._mine(start, first, end, reps, held, cut and not lost)
+        counted = self._after_still(start, first, end, edges, reps)
+        kept = keep_whole(counted, first, end, self.step, turn or mine[0],
+                          cut and not lost and not mine[1], held)  # fmt: skip
         if cut:
             self._finished(reps, first, end, held, passed_on)
         kept = self._unless_got_into(kept, end, not cut and explained)
@@ -1134,6 +1180,7 @@ class LiveSegmenter:
         held on, the frames the one that holds it was got into from, and the last
         repetition the stream's last segment is judged beside (:meth:`_beside_whole`)."""
         self.beside = reps[-1].start_frame if reps else None
+        self.last_cut = _Cut(reps, (first, end), False, held)
         if reps:
             self.turn = at_cut(reps, first, end, self.step)[1] or held
             self.holding = held
@@ -1142,29 +1189,106 @@ class LiveSegmenter:
         elif not self.holding:  # held on through a segment all hold, else no turn
             self.turn = False
 
+    def _after_still(
+        self,
+        start: int,
+        first: int,
+        end: int,
+        edges: tuple[bool, bool],
+        reps: tuple[Repetition, ...],
+    ) -> tuple[Repetition, ...]:
+        """``reps``, the one repetition of the segment of frames [start, end) (counted on
+        frames [first, end) with ``edges``), counted again with its start settled when the
+        segment finished before it (:attr:`last_cut`) has no far point at all and none is held
+        on through it: that cut is as the recording's start, nothing turns there, and one far
+        point got into and held is no repetition
+        (:func:`features.repetitions.count_in_signals`' ``settled``), as
+        :func:`cbr.segmentation.counted_segments` counts a segment after one with none.
+        Before, counted: the bundled side plank, its label changing before the plank is got
+        into, counted 1 in ``watch``'s segment after the change, 0 in ``segment``'s and by
+        ``reps``. Other ``reps`` as they are."""
+        prior = self.last_cut
+        if len(reps) != 1 or first != start or prior is None or prior.bounds[1] != start:
+            return reps
+        if prior.raw or self.holding:
+            return reps
+        try:
+            return self._count_apart(first, end, edges, (True, False))
+        except DataError:  # too short, or nobody in view
+            return reps
+
+    def _mine(
+        self,
+        start: int,
+        first: int,
+        end: int,
+        reps: tuple[Repetition, ...],
+        held: bool,
+        cut: bool,
+    ) -> tuple[bool, bool]:
+        """Whether the segment of frames [start, end) (its repetitions ``reps``, counted on
+        frames [first, end); ``held``: its last far point is left to the segment after;
+        ``cut``: it is finished at a cut the person stays in view across) keeps a far point
+        at its start, and one at its end, that the segment across that cut does not take, as
+        ``segment`` keeps it (:func:`cbr.segmentation.unclaimed`, asked of the segment
+        finished before, :attr:`last_cut`, and of the frames pushed beyond the cut, counted
+        alone, as the segment after as far as it has come). Before, dropped by both: the
+        last repetition of an exercise turning just before the label changed counted in
+        neither segment."""
+        if not reps:
+            return False, False
+        at_start, at_end = at_cut(reps, first, end, self.step)
+        prior = self.last_cut
+        before = at_start and first == start and prior is not None and prior.bounds[1] == start
+        after = at_end and cut and self.n > end
+        if not (before or after):
+            return False, False
+        kept = _Kept(self.step, self._count_kept)
+        raw, bounds, blind, held_on = [reps], [(first, end)], [False], [held]
+        if before:
+            assert prior is not None
+            raw, bounds = [prior.raw, *raw], [prior.bounds, *bounds]
+            blind, held_on = [prior.blind, *blind], [prior.held, *held_on]
+        if after:
+            raw.append(self._count_kept(end, self.n, (False, False)))
+            bounds.append((end, self.n))
+            blind.append(False)
+            held_on.append(False)
+        return unclaimed(kept, raw, bounds, blind, held_on, self.n)[int(before)]
+
+    def _count_kept(
+        self, start: int, end: int, settled: tuple[bool, bool]
+    ) -> tuple[Repetition, ...]:
+        """:meth:`_count_apart` of the stream frames [start, end) still kept (none: no
+        repetition), the stream's start and, once it has ended, its end as a recording's."""
+        first, stop = max(start, self.offset), min(end, self.n)
+        if stop <= first:
+            return ()
+        try:
+            return self._count_apart(first, stop, (first == 0, self.ended and stop >= self.n),
+                                     settled)  # fmt: skip
+        except DataError:  # too short, or nobody in view
+            return ()
+
     def _count_apart(
         self,
         first: int,
         end: int,
         edges: tuple[bool, bool],
         settled: tuple[bool, bool] = (False, False),
-        clip: PoseSequence | None = None,
     ) -> tuple[Repetition, ...]:
-        """The repetitions of stream frames [first, end) (``clip``, when made already;
-        :func:`_counted`, ``edges`` and ``settled`` of those frames' start and end), in stream
-        frames, counted apart on
+        """The repetitions of stream frames [first, end) (:meth:`_in_context`, ``edges`` and
+        ``settled`` of those frames' start and end), in stream frames, counted apart on
         either side of each frame where the pose jumped to another person (:attr:`jumps`), as
         :func:`cbr.segmentation.counted_apart` counts a segment across one: each piece as a
         segment of its own (DataError: none), a far point at the jump left to the piece after
         unless the movement turns there on both sides (:func:`cbr.segmentation.keep_whole`),
         a piece beside one with no far point settled at that jump; the jump from one
         person's posture to the other's is no movement. Before, a repetition ran on across
-        it. Without a jump in them: :func:`_counted` of the frames (DataError raised)."""
+        it. Without a jump in them: :meth:`_in_context` of the frames (DataError raised)."""
         cuts = [first, *(j for j in self.jumps if first < j < end), end]
         if len(cuts) == 2:
-            whole = self._sequence(first, end) if clip is None else clip
-            found = _counted(whole, edges, settled).repetitions
-            return tuple(_shifted(r, first) for r in found)
+            return self._in_context(first, end, edges, settled)
         pieces = list(zip(cuts[:-1], cuts[1:], strict=True))
         last = len(pieces) - 1
 
@@ -1173,10 +1297,9 @@ class LiveSegmenter:
             outer = (edges[0] and k == 0, edges[1] and k == last)
             still = (settled[0] if k == 0 else inner[0], settled[1] if k == last else inner[1])
             try:
-                found = _counted(self._sequence(a, b), outer, still).repetitions
+                return self._in_context(a, b, outer, still)
             except DataError:  # too short, or nobody in view
                 return ()
-            return tuple(_shifted(r, a) for r in found)
 
         raw = [count(k, (False, False)) for k in range(len(pieces))]
         out: list[Repetition] = []
@@ -1191,14 +1314,40 @@ class LiveSegmenter:
             turn = bool(raw[k]) and at_cut(raw[k], a, b, self.step)[1]
         return tuple(out)
 
-    def _beyond(self, cut: int) -> PoseSequence:
-        """The frames pushed after ``cut`` (up to :data:`MAX_SEGMENT_S` of them), up to the
-        next frame where the pose jumped to another person: another person's are not the
-        movement's going on."""
+    def _in_context(
+        self, first: int, end: int, edges: tuple[bool, bool], settled: tuple[bool, bool]
+    ) -> tuple[Repetition, ...]:
+        """The repetitions of stream frames [first, end), in stream frames, counted as
+        ``segment`` counts a segment (:func:`cbr.segmentation.repetitions_in`; ``edges``,
+        ``settled`` as there): on the movement signals of those frames and of up to
+        :data:`CONTEXT_S` of the frames kept either side (none across a frame where the pose
+        jumped to another person), which the running median and smoothing read across the
+        frames' ends as a whole recording's signals do at a cut. Before, on the frames' own
+        signals, which bend at their ends: a far point at a cut lay a sample off where
+        ``segment`` found it, and the two gave it to different segments. DataError: the
+        frames are shorter than one repetition can be (:data:`MIN_PERIOD_S`), or show
+        nobody."""
+        if end - first < MIN_PERIOD_S * self.fps:
+            raise DataError(f"stream frames {first}-{end} are shorter than one repetition can be"
+                            f" ({MIN_PERIOD_S:g} s)", self.source)  # fmt: skip
+        reach = int(math.ceil(CONTEXT_S * self.fps))
+        lo = max([self.offset, first - reach, *(j for j in self.jumps if j <= first)])
+        lo = min(first, -(-lo // self.step) * self.step)  # on the stream's samples
+        hi = min([self.n, end + reach, *(j for j in self.jumps if j >= end)])
+        sig = movement_signals(self._sequence(lo, hi))
+        to_end = self.ended and end >= self.n
+        found = repetitions_in(sig, first - lo, end - lo, to_end, edges, settled)
+        return tuple(_shifted(r, lo) for r in found)
+
+    def _beyond(self, cut: int) -> tuple[Repetition, ...]:
+        """The repetitions of the frames pushed after ``cut`` (up to :data:`MAX_SEGMENT_S` of
+        them), up to the next frame where the pose jumped to another person (another
+        person's are not the movement's going on), counted as the segment after the cut
+        (:meth:`_in_context`; the stream's end as a recording's once it has ended)."""
         stop = min(
             [self.n, cut + int(MAX_SEGMENT_S * self.fps), *(j for j in self.jumps if j > cut)]
         )
-        return self._sequence(cut, stop)
+        return self._in_context(cut, stop, (False, self.ended), (False, False))
 
     def _held_beyond(self, cut: int, last: Repetition) -> bool:
         """Whether the frames pushed after ``cut`` (the end of a segment being finished: the
@@ -1215,21 +1364,20 @@ class LiveSegmenter:
         and :meth:`_held_on` say what the segment keeps."""
         if self.n - cut < 2 or not (last.held[1] or last.unreturned[1]):
             return False
-        beyond = self._beyond(cut)
         try:
-            after = _counted(beyond, (False, self.ended)).repetitions
+            after = self._beyond(cut)
         except DataError:  # too short, or nobody in view
             return False
         if not after:
             return False
-        at_start = after[0].peak_frame < self.step
+        at_start = after[0].peak_frame < cut + self.step
         if last.unreturned[1] and after[0].unreturned[0] and not at_start:
             # a shallow dip: the two repetitions' frames together hold one far point
-            both = self._sequence(last.start_frame, cut + after[0].end_frame)
             try:
-                return _counted(both, (False, False)).count == 1
+                both = self._count_apart(last.start_frame, after[0].end_frame, (False, False))
             except DataError:
                 return False
+            return len(both) == 1
         return last.held[1] and (after[0].held[0] or at_start)
 
     def _still_beyond(self, cut: int, last: Repetition) -> bool:
@@ -1240,12 +1388,10 @@ class LiveSegmenter:
         end once it has ended)."""
         if self.n - cut < 2 or not last.held[1]:
             return False
-        beyond = self._beyond(cut)
         try:
-            after = _counted(beyond, (False, self.ended))
+            return not self._beyond(cut)
         except DataError:  # too short, or nobody in view
             return False
-        return not after.repetitions
 
     def _beside_whole(
         self, start: int, end: int, reps: tuple[Repetition, ...]
@@ -1385,25 +1531,6 @@ class LiveSegmenter:
                         s.explanation, s.novelty)
             for s in found.segments
         ]  # fmt: skip
-
-
-def _counted(
-    clip: PoseSequence, edges: tuple[bool, bool], settled: tuple[bool, bool] = (False, False)
-) -> RepetitionCount:
-    """The repetitions of ``clip``, stream frames counted as a segment of their own, as
-    ``segment`` counts each of its segments (:func:`cbr.segmentation.count_in_segment`: read
-    past a period of noise; before, as ``reps`` counts a clip, and the bundled side-lying leg
-    raises cut where ``segment`` cuts them counted 1 in ``watch``, 2 in ``segment``);
-    ``edges``, ``settled`` as there. Raises DataError when the clip is shorter than one
-    repetition could be or shows nobody, as
-    :func:`features.repetitions.count_repetitions`."""
-    if clip.duration_s < MIN_PERIOD_S:
-        raise DataError(
-            f"the clip lasts {clip.duration_s:.2f} s, shorter than one repetition can be"
-            f" ({MIN_PERIOD_S:g} s)",
-            clip.source or None,
-        )
-    return count_in_segment(movement_signals(clip), clip.n_frames, clip.fps, edges, settled)
 
 
 def warm_up(clf: Any, judge: Judge | None = None, fps: float = 30.0, k: int = 1) -> None:

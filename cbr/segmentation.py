@@ -44,7 +44,7 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    own, "nobody in view" (:func:`nobody_blocks`);
 7. each segment is counted (:func:`features.repetitions.count_repetitions`), each
    repetition in the one segment that holds where its movement turns (:func:`keep_whole`,
-   :func:`_unclaimed`), and explained by its most confident window.
+   :func:`unclaimed`), and explained by its most confident window.
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ import math
 import warnings
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -943,8 +943,26 @@ def count_in_segment(
     return count_in_signals(sig, n_frames, fps, edges, settled=settled, past_noise=True)
 
 
+class Counter(Protocol):
+    """What counts the repetitions of a recording's frames other than its movement signals
+    (:func:`_repetitions`): :class:`_Apart` (a recording cut where the pose jumped to another
+    person) and the frames of ``watch``'s stream still kept (:class:`cbr.live.LiveSegmenter`),
+    which :func:`unclaimed` reads as it reads a recording's."""
+
+    @property
+    def step(self) -> int:
+        """Frames per sample of the counter's signals."""
+        ...
+
+    def repetitions(
+        self, start: int, end: int, n_frames: int | None, settled: tuple[bool, bool]
+    ) -> tuple[Repetition, ...]:
+        """:func:`_repetitions` of frames [start, end)."""
+        ...
+
+
 def _repetitions(
-    sig: MovementSignals | _Apart,
+    sig: MovementSignals | Counter,
     start: int,
     end: int,
     n_frames: int | None = None,
@@ -958,14 +976,14 @@ def _repetitions(
     recording ends: :func:`features.repetitions.count_in_signals`); one at a cut is left to
     :func:`keep_whole`. ``settled``: whether the segment's start, and its end, are cuts at
     which no movement turns (:func:`counted_segments`)."""
-    if isinstance(sig, _Apart):
+    if not isinstance(sig, MovementSignals):
         return sig.repetitions(start, end, n_frames, settled)
     last = n_frames is not None and end >= n_frames
     edges = (start == 0 and n_frames is not None, last)
-    return _repetitions_in(sig, start, end, last, edges, settled)
+    return repetitions_in(sig, start, end, last, edges, settled)
 
 
-def _repetitions_in(
+def repetitions_in(
     sig: MovementSignals,
     start: int,
     end: int,
@@ -1029,7 +1047,7 @@ class _Apart:
                 continue
             edges = (a == 0 and n_frames is not None, n_frames is not None and b >= n_frames)
             still = (settled[0] and a == start, settled[1] and b == end)
-            found = _repetitions_in(side, a - p, b - p, b >= q, edges, still)
+            found = repetitions_in(side, a - p, b - p, b >= q, edges, still)
             out += tuple(_shifted(r, p) for r in found)
         return out
 
@@ -1147,7 +1165,7 @@ def counted_segments(
     recording's ``n_frames``, each counted on its own frames (:func:`_repetitions`), each
     repetition in one segment (:func:`keep_whole`); a far point cut off at a cut that the
     segment across it does not take is kept where the movement turns within the segment
-    (:func:`_unclaimed`), as a clip of the segment's frames keeps it.
+    (:func:`unclaimed`), as a clip of the segment's frames keeps it.
 
     A cut next to a segment with no far point at all is, for a posture got into and held
     still up to it, as the recording's end: nothing comes back beyond it, the posture is held
@@ -1190,7 +1208,7 @@ def counted_segments(
     held_on = [
         j is not None and _held_across(raw[i], raw[j], bounds[j], sig) for i, j in enumerate(after)
     ]
-    mine = _unclaimed(sig, raw, bounds, blind, held_on, n_frames)
+    mine = unclaimed(sig, raw, bounds, blind, held_on, n_frames)
     out = []
     turn = False  # the segment before had a far point at its end (the cut)
     holding = False  # a far point held on from a segment before, through this one
@@ -1214,8 +1232,8 @@ def counted_segments(
     return _held_to_the_end(out, raw, bounds, blind)
 
 
-def _unclaimed(
-    sig: MovementSignals | _Apart,
+def unclaimed(
+    sig: MovementSignals | Counter,
     raw: Sequence[tuple[Repetition, ...]],
     bounds: Sequence[tuple[int, int]],
     blind: Sequence[bool],
@@ -1235,7 +1253,9 @@ def _unclaimed(
     cut; each segment's count reads its own movement, and the next exercise's rarely shows
     the last one's. Before, a far point at a cut that only one side showed was dropped: a
     last repetition turning just before the cut, or a first just after it, counted in
-    neither segment, though a clip of the segment's frames counts it."""
+    neither segment, though a clip of the segment's frames counts it. ``watch`` asks the same
+    of each segment it finishes, ``sig`` its stream's frames (:class:`Counter`), the
+    segment after being the frames pushed beyond the cut (:meth:`cbr.live.LiveSegmenter._mine`)."""
     step = sig.step
     cuts = [at_cut(r, a, b, step) for r, (a, b) in zip(raw, bounds, strict=True)]
     out = []
@@ -1250,7 +1270,7 @@ def _unclaimed(
 
 
 def _turns_inside(
-    sig: MovementSignals | _Apart,
+    sig: MovementSignals | Counter,
     reps: Sequence[Repetition],
     bounds: tuple[int, int],
     at_end: bool,

@@ -1,6 +1,6 @@
 """A segment's repetitions counted as a clip of its frames is counted: a far point cut off at a
 cut that only this side of the cut shows is kept where the movement turns within the segment
-(:func:`cbr.segmentation._unclaimed`). CMU subject 13, cut at its labelled changes, against
+(:func:`cbr.segmentation.unclaimed`). CMU subject 13, cut at its labelled changes, against
 the hand counts of tests/fixtures/repetition_counts.json."""
 
 from __future__ import annotations
