@@ -328,6 +328,23 @@ class StoredCase:
 
 
 @dataclass(frozen=True)
+class SourcedCase:
+    """One case with its provenance, as :meth:`StoreTransaction.cases_named` finds it."""
+
+    id: int
+    source: str
+    frame_start: int | None
+    frame_end: int | None
+    features: np.ndarray
+
+
+def _file_name(source: str) -> str:
+    """A case source's file name: what follows its last ``/`` or ``\\`` (a source stored
+    on Windows is split alike), a mirror image's " (mirrored)" kept."""
+    return source.replace("\\", "/").rpartition("/")[2]
+
+
+@dataclass(frozen=True)
 class CaseArrays:
     """All (active) cases of a case base as arrays; row ``i`` of each is case ``ids[i]``.
 
@@ -1649,6 +1666,39 @@ class StoreTransaction:
             for case_id, source, a, b in self.session.execute(q):
                 for name in given[source]:
                     out.setdefault((name, a, b), int(case_id))
+        return out
+
+    def cases_named(self, cb: CaseBaseInfo, names: Iterable[str]) -> dict[str, list[SourcedCase]]:
+        """The active cases of ``cb`` whose source's file name (what follows its last ``/`` or
+        ``\\``: :func:`_file_name`) is the file name of one of ``names``, by that name as
+        given, each list by id: the cases a clip may duplicate when the source it was stored
+        under was written from another working folder and no longer resolves."""
+        given: dict[str, set[str]] = {}
+        for name in names:
+            given.setdefault(_file_name(_as_stored(name)), set()).add(name)
+        q = (
+            select(CaseRow.id, CaseRow.source, CaseRow.frame_start, CaseRow.frame_end)
+            .where(CaseRow.case_base_id == cb.id, CaseRow.active.is_(True))
+            .order_by(CaseRow.id)
+        )
+        found = [r for r in self.session.execute(q) if _file_name(r.source) in given]
+        blobs: dict[int, bytes] = {}
+        for i in range(0, len(found), 500):  # bounded IN lists
+            ids = [int(r.id) for r in found[i : i + 500]]
+            q2 = select(CaseRow.id, CaseRow.features).where(CaseRow.id.in_(ids))
+            blobs.update((int(k), v) for k, v in self.session.execute(q2))
+        out: dict[str, list[SourcedCase]] = {}
+        for r in found:
+            what = f"features of case {r.id}"
+            case = SourcedCase(
+                int(r.id),
+                r.source,
+                r.frame_start,
+                r.frame_end,
+                decode_array(blobs[int(r.id)], what, self.store.where).astype(np.float64),
+            )
+            for name in given[_file_name(r.source)]:
+                out.setdefault(name, []).append(case)
         return out
 
     def _case_row(self, cb: CaseBaseInfo, case_id: int, lock: bool) -> CaseRow:

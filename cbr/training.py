@@ -817,7 +817,9 @@ def _check_new(
     """Refuse an append of a stretch the case base already holds (the same file's same
     frames: appended before), in the transaction that would add it. A file is the same
     however its path is written (relative or absolute, through a link): each clip's source
-    is looked for as given, resolved, and resolved relative to the working folder."""
+    is looked for as given, resolved, and resolved relative to the working folder; and a
+    case stored under a path written from another working folder (which no longer
+    resolves) is the clip when its file name, frames and features are the clip's."""
     names = {c.source: _spellings(c.source) for c in clips if c.source}
     stored = tx.cases_from(info, [n for spelt in names.values() for n in spelt])
     for clip in clips:
@@ -829,6 +831,48 @@ def _check_new(
                     f"{stored[(name, a, b)]} of {info.name!r} (added before?): nothing added",
                     where,
                 )
+    _check_new_content(tx, info, clips, where)
+
+
+#: features within this of a stored case's (relative and absolute) are the same
+#: computation on the same poses: floating-point rounding (another summation order) moves
+#: them by some 1e-13; the poses of another recording move them by far more
+SAME_CONTENT_TOLERANCE = 1e-9
+
+
+def _check_new_content(
+    tx: StoreTransaction, info: CaseBaseInfo, clips: Sequence[DescribedClip], where: str
+) -> None:
+    """Refuse an append of a clip whose file name, frames and features are a stored case's
+    (the same clip, stored under a path that no longer resolves, such as one relative to
+    another working folder): its case would vote twice. A case stored without its frames
+    (before they were kept) is compared by its file name and features."""
+    named = tx.cases_named(info, [c.source for c in clips if c.source])
+    for clip in clips:
+        _, a, b = _provenance(clip)
+        for case in named.get(clip.source, ()):
+            frames = (case.frame_start, case.frame_end)
+            if frames in ((a, b), (None, None)) and _same_values(clip.values, case.features):
+                raise StoreError(
+                    f"{_shown_frames((clip.source, a, b))} is already case {case.id} of "
+                    f"{info.name!r}, stored as {_shown_frames((case.source, *frames))} (the same "
+                    "file name, frames and features: added before from another folder?): "
+                    "nothing added",
+                    where,
+                )
+
+
+def _same_values(values: np.ndarray, stored: np.ndarray) -> bool:
+    """Whether a clip's problem is a stored case's, up to rounding (missing alike)."""
+    return values.shape == stored.shape and bool(
+        np.allclose(
+            values,
+            stored,
+            rtol=SAME_CONTENT_TOLERANCE,
+            atol=SAME_CONTENT_TOLERANCE,
+            equal_nan=True,
+        )
+    )
 
 
 def _spellings(source: str) -> tuple[str, ...]:
