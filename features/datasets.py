@@ -1238,6 +1238,18 @@ def dataset_subjects(path: str | Path, *, sensor: str = "kinect") -> list[str]:
     return _dataset_values(path, "subject", sensor)
 
 
+def dataset_columns(path: str | Path, *, sensor: str = "kinect") -> list[str]:
+    """The columns the clips of the dataset at ``path`` may have a value of (label, subject,
+    a labels CSV's other columns, UI-PRMD's movement, episode and correct, ...), found from
+    names and labels CSVs alone, as :func:`dataset_labels` finds the labels (a pose file's
+    metadata is not read): the names a mistyped ``--target`` is likely to have meant."""
+    path = Path(path)
+    found = {"label", "subject"}
+    for e in _entries(path, detect_kind(path), sensor, unlabelled=True):
+        found.update(str(k) for k in e.extras)
+    return sorted(found)
+
+
 def _dataset_values(path: str | Path, field: str, sensor: str) -> list[str]:
     """:func:`dataset_labels` (``field`` "label") or :func:`dataset_subjects` ("subject")."""
     from .poses import pose_file_metadata

@@ -1,4 +1,5 @@
-"""Session 45's hunt: ``train --append`` of clips stored from another working folder."""
+"""Session 45's hunt: ``train --append`` of clips stored from another working folder, and
+``classify --target`` mistyped for a column the clips have."""
 
 from __future__ import annotations
 
@@ -89,6 +90,25 @@ def test_append_from_another_folder_of_clips_already_stored_is_refused(
                         "--append")  # fmt: skip
     assert code == 0, err
     assert _count(db) == 7
+
+
+def test_classify_mistyped_target_guesses_the_clips_column(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``classify data.csv --target corect`` against a case base of labels said "train a case
+    base with --target corect" with no guess, though the labels CSV has a ``correct``
+    column; ``correct`` is guessed now (the case base's own target was the only guess)."""
+    folder = _write_classes(tmp_path / "data", 2, 5)
+    csv_path = _labels_csv(folder, {"correct": "true"})
+    db = tmp_path / "cb.sqlite"
+    assert _cli(capsys, "train", str(csv_path), "--db", str(db))[0] == 0
+    code, out, err = _cli(capsys, "classify", str(csv_path), "--db", str(db), "--target", "corect")
+    assert code == 1 and err.count("\n") == 1 and out == "", err
+    assert "case base 'default' predicts 'label'" in err
+    assert err.rstrip().endswith("(did you mean 'correct'?)"), err
+    # nothing close among the columns: no guess
+    code, _, err = _cli(capsys, "classify", str(csv_path), "--db", str(db), "--target", "speed")
+    assert code == 1 and "did you mean" not in err, err
 
 
 def test_store_finds_the_cases_of_a_file_name_under_any_folder(tmp_path: Path) -> None:

@@ -10,10 +10,11 @@ import argparse
 import json
 import sys
 from collections.abc import Callable
+from contextlib import suppress
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError, PosecbrError
 from features.text import counted, did_you_mean, first_few, percent
 from posecbr.arguments import add_k_option, check_each_found, path_arg
 from posecbr.recordings import (
@@ -348,6 +349,20 @@ def _open_reader(args: argparse.Namespace) -> CaseStore:
     return open_store(args.db, create=False, readonly=True)
 
 
+def _input_columns(args: argparse.Namespace) -> list[str]:
+    """The columns the clips to classify may have a value of, found from names and labels
+    CSVs alone (:func:`features.datasets.dataset_columns`), for a mistyped ``--target``'s
+    guess; none of an input that cannot be listed (what is wrong with it is told when it is
+    read)."""
+    from features.datasets import dataset_columns
+
+    found: set[str] = set()
+    for path in args.clips:
+        with suppress(PosecbrError, OSError):
+            found.update(dataset_columns(path, sensor=args.sensor or "kinect"))
+    return sorted(found)
+
+
 def run(args: argparse.Namespace) -> int:
     from cbr.classification import (
         FeedbackSettings,
@@ -386,7 +401,7 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError(
                 f"case base {name!r} predicts {stored.target!r}; to check clips against "
                 f"{target!r}, train a case base with --target {target}"
-                + did_you_mean(target, [stored.target]),
+                + did_you_mean(target, [stored.target, *_input_columns(args)]),
                 "--target",
             )
         if args.feedback is not None:
