@@ -81,18 +81,31 @@ def shared_data() -> Path:
 
 
 @pytest.fixture(scope="session")
-def lunge_poses(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> PoseSequence:
+def bundled_poses(
+    shared_data: Path, tmp_path_factory: pytest.TempPathFactory
+) -> Callable[[str], PoseSequence]:
+    """``bundled_poses("squat/tfjs_pose_squats_pexels4838220.mp4")``: the poses of that video
+    of ``../shared/data/videos`` as ``extract`` finds them (``estimate_video``, defaults),
+    estimated once in the whole session (each estimate is 1-4 s of the pose model's CPU
+    time, and several files read the same videos). A fresh copy at each call."""
+
+    def poses(name: str) -> PoseSequence:
+        def make(root: Path) -> PoseSequence:
+            from features.pose_estimation import estimate_video
+
+            return estimate_video(shared_data / "videos" / name, progress_bar=False).sequence
+
+        return made_once(tmp_path_factory, "poses-" + name.replace("/", "-"), make)
+
+    return poses
+
+
+@pytest.fixture(scope="session")
+def lunge_poses(bundled_poses: Callable[[str], PoseSequence]) -> PoseSequence:
     """The bundled reverse-lunge video's poses (250 frames at 25 fps, as ``extract`` finds
     them), estimated once in the session: about a minute of the pose model's CPU time.
     Read by tests/test_leg_swaps.py and tests/test_repetitions_unseen.py."""
-
-    def make(root: Path) -> PoseSequence:
-        from features.pose_estimation import estimate_video
-
-        video = shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
-        return estimate_video(video, progress_bar=False).sequence
-
-    return made_once(tmp_path_factory, "lunge-poses", make)
+    return bundled_poses("lunge/fit_reverse_lunge_pexels8233047.mp4")
 
 
 @pytest.fixture(scope="session")

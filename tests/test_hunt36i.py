@@ -4,6 +4,7 @@ hand counts (tests/fixtures/repetition_counts.json) on the bundled videos."""
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -11,7 +12,6 @@ import numpy as np
 import pytest
 
 from cbr.segmentation import counted_segments
-from features.pose_estimation import estimate_video
 from features.poses import PoseSequence
 from features.repetitions import movement_signals
 from posecbr.cli import main
@@ -28,9 +28,9 @@ def _hand(name: str) -> dict[str, Any]:
     return next(c for c in clips if c["source"].endswith(name))
 
 
-def _video(shared_data: Path, name: str) -> PoseSequence:
-    found = estimate_video(shared_data / "videos" / name, progress_bar=False)
-    return found.sequence.to_canonical()
+def _video(bundled_poses: Callable[[str], PoseSequence], name: str) -> PoseSequence:
+    """The poses of the bundled video ``name`` (estimated once in the session), canonical."""
+    return bundled_poses(name).to_canonical()
 
 
 def _segment_counts(seq: PoseSequence, cuts_s: list[float]) -> list[int]:
@@ -50,12 +50,14 @@ def test_a_posture_held_across_a_cut_is_no_repetition(cut_s: float) -> None:
     assert _segment_counts(_arms_raised_and_held(), [cut_s]) == [0, 0]
 
 
-def test_the_side_plank_video_has_no_repetition_in_its_segments(shared_data: Path) -> None:
+def test_the_side_plank_video_has_no_repetition_in_its_segments(
+    bundled_poses: Callable[[str], PoseSequence],
+) -> None:
     """The bundled side plank (held from 1.4 s to the end: 0 by hand), cut where ``segment``
     with the README's workout case base cut it (6.20 s): 0 and 0. Before: 1 in the first
     segment (frames 48-69, the way into the plank), where ``reps`` says 0."""
     name = "side_plank/fit_side_plank_pexels6023266.mp4"
-    seq = _video(shared_data, name)
+    seq = _video(bundled_poses, name)
     counts = _segment_counts(seq, [6.2])
     assert sum(counts) == _hand(name)["count"] == 0, counts
 

@@ -4,7 +4,7 @@ bundled side-lying leg raises cut where ``segment`` cuts them count 2 in ``watch
 
 from __future__ import annotations
 
-from pathlib import Path
+from collections.abc import Callable
 
 import pytest
 
@@ -28,14 +28,16 @@ def _streamed(seq: PoseSequence, change: int) -> list[tuple[int, int, int]]:
     return [(s.start_frame, s.end_frame, s.repetitions) for s in out]
 
 
-def test_watch_counts_the_leg_raise_segment_as_segment_does(shared_data: Path) -> None:
+def test_watch_counts_the_leg_raise_segment_as_segment_does(
+    bundled_poses: Callable[[str], PoseSequence],
+) -> None:
     """The bundled side-lying leg raises (leg up 2.2-4.8 s and from 8.4 s to the end, watched:
     2 by hand), streamed through ``watch`` with the label changing at 1.72 s (where
     ``segment`` with the README's workout case base cuts them); ``watch`` places the change
     at 1.60 s (frame 40). Its segments count 0 and 2, as ``segment`` cut where ``watch`` cut
     counts them. Before: 0 and 1, the segment after the cut read along the arm under the
     head (a period of noise gave the raised leg no weight), where ``segment`` reads past it."""
-    seq = _video(shared_data, LEG_RAISE)
+    seq = _video(bundled_poses, LEG_RAISE)
     hand = _hand(LEG_RAISE)["count"]
     watched = _streamed(seq, CUT)
     assert len(watched) == 2

@@ -5,13 +5,12 @@ recording's end since hunt 41r (:func:`cbr.segmentation._beside_whole`;
 
 from __future__ import annotations
 
-from pathlib import Path
+from collections.abc import Callable
 
 import numpy as np
 import pytest
 
 from cbr.segmentation import counted_segments
-from features.pose_estimation import estimate_video
 from features.poses import PoseSequence
 from features.repetitions import count_repetitions, movement_signals
 from tests.bodies import squat_pose, to_sequence
@@ -71,10 +70,9 @@ def test_watch_leaves_out_a_way_down_half_as_deep_as_segment() -> None:
 
 
 @pytest.fixture(scope="module")
-def bridges(shared_data: Path) -> PoseSequence:
+def bridges(bundled_poses: Callable[[str], PoseSequence]) -> PoseSequence:
     """The bundled glute bridge video's poses (BlazePose, as ``extract`` reads them)."""
-    video = shared_data / "videos" / "glute_bridge" / "fit_glute_bridge_pexels6525487.mp4"
-    return estimate_video(video, progress_bar=False).sequence.to_canonical()
+    return bundled_poses("glute_bridge/fit_glute_bridge_pexels6525487.mp4").to_canonical()
 
 
 @pytest.mark.parametrize("end", [153, 163])

@@ -8,14 +8,13 @@ the windows' order, to the last bit (:func:`cbr.segmentation._block_sums`)."""
 
 from __future__ import annotations
 
-from pathlib import Path
+from collections.abc import Callable
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from cbr.segmentation import _block_sums, _Solved, block_votes
-from features.pose_estimation import estimate_video
 from features.poses import PoseSequence
 from features.repetitions import count_repetitions
 from tests.bodies import squat_pose, to_sequence
@@ -95,11 +94,10 @@ def test_the_first_line_waits_for_the_next_segments_first_repetition() -> None:
 
 
 @pytest.fixture(scope="module")
-def squats(shared_data: Path) -> PoseSequence:
+def squats(bundled_poses: Callable[[str], PoseSequence]) -> PoseSequence:
     """The bundled squat video's poses (BlazePose, as ``extract`` reads them; 65 frames at
     5 fps)."""
-    video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
-    return estimate_video(video, progress_bar=False).sequence.to_canonical()
+    return bundled_poses("squat/tfjs_pose_squats_pexels4838220.mp4").to_canonical()
 
 
 @pytest.mark.parametrize("into_s", [1.5, 2.5])
