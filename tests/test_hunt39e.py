@@ -14,6 +14,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -369,50 +370,52 @@ def test_compare_interrupted_while_drawing_names_exactly_the_pictures_on_disk(
     assert (out / "accuracy.png").read_bytes().startswith(b"\x89PNG")
 
 
-#: ``python -m posecbr`` that sends itself SIGINT (as Ctrl-C does) at a known point of the
-#: first write of compare's results: WHERE=rename as results.json is put in place (written
-#: under its temporary name), WHERE=csv between results.json and results.csv; or at its last
-#: (WHERE=last: as results.json naming the pictures drawn is put in place)
-SIGINT_IN_FIRST_WRITE = """
-import os, signal, sys
-import cbr.evaluation.tables as tables
-where, real_replace, real_csv = os.environ["WHERE"], os.replace, tables.write_csv
-sent = []
-def interrupt(here):
-    if where == here and not sent:  # once: the first write's
-        sent.append(here)
-        os.kill(os.getpid(), signal.SIGINT)
-renamed = []
-def replace(src, dst):
-    if str(dst).endswith("results.json"):
-        renamed.append(dst)
-        interrupt("rename" if len(renamed) == 1 else "last")
-    return real_replace(src, dst)
-def write_csv(rows, path):
-    interrupt("csv")
-    return real_csv(rows, path)
-os.replace, tables.write_csv = replace, write_csv
-from posecbr.cli import main
-sys.exit(main(sys.argv[1:]))
-"""
-
-
 TWO = [*COMPARE]
 TWO[TWO.index("--labels") + 1] = "deep_squat,sit_to_stand"
 
 
-def _interrupted_in_first_write(where: str, out: Path) -> str:
-    """``compare`` of two activities into ``out``, SIGINT sent at ``where`` (as
-    SIGINT_IN_FIRST_WRITE says), run from ``out``'s folder: exit 130, no traceback; returns
-    the last line it said."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1", "WHERE": where}
-    done = subprocess.run(
-        [sys.executable, "-c", SIGINT_IN_FIRST_WRITE, *TWO, "--out", str(out)],
-        cwd=out.parent, env=env, capture_output=True, text=True, timeout=600,
-    )  # fmt: skip
-    assert done.returncode == 130, done.stderr
-    assert "Traceback" not in done.stderr
-    return done.stderr.splitlines()[-1]
+def _interrupted_in_first_write(where: str, out: Path, capsys: pytest.CaptureFixture[str]) -> str:
+    """``compare`` of two activities into ``out``, run in this process from ``out``'s folder,
+    sending itself SIGINT (as Ctrl-C does) at a known point of the first write of its
+    results: ``where`` "rename" as results.json is put in place (written under its
+    temporary name), "csv" between results.json and results.csv, "last" as results.json
+    naming the pictures drawn is put in place. Exit 130, no traceback; returns the last line
+    it said."""
+    import cbr.evaluation.tables as tables
+
+    real_replace, real_csv = os.replace, tables.write_csv
+    sent: list[str] = []
+    renamed: list[str] = []
+
+    def interrupt(here: str) -> None:
+        if where == here and not sent:  # once: the first write's
+            sent.append(here)
+            os.kill(os.getpid(), signal.SIGINT)
+
+    def replace(src: Any, dst: Any) -> None:
+        if str(dst).endswith("results.json"):
+            renamed.append(str(dst))
+            interrupt("rename" if len(renamed) == 1 else "last")
+        real_replace(src, dst)
+
+    def write_csv(rows: Any, path: Any) -> Any:
+        interrupt("csv")
+        return real_csv(rows, path)
+
+    capsys.readouterr()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(os, "replace", replace)
+        mp.setattr(tables, "write_csv", write_csv)
+        mp.chdir(out.parent)
+        try:
+            code = main([*TWO, "--out", str(out)])
+        except KeyboardInterrupt:
+            pytest.fail("the interrupt escaped compare")
+    err = capsys.readouterr().err
+    assert sent == [where], sent
+    assert code == 130, err
+    assert "Traceback" not in err
+    return err.splitlines()[-1]
 
 
 @pytest.mark.parametrize("earlier", [False, True], ids=["new-folder", "earlier-run"])
@@ -433,7 +436,7 @@ def test_compare_interrupted_in_its_first_write_leaves_whole_results_and_a_rerun
     if earlier:  # three activities: three timelines
         _earlier_run_in(earlier_run, out)
         assert "timeline_02.png" in _pngs(out)
-    assert _interrupted_in_first_write(where, out) == (
+    assert _interrupted_in_first_write(where, out, capsys) == (
         f"posecbr compare: interrupted: results in {out}, with the 0 pictures drawn before it;"
         " the rest were not drawn"
     )
@@ -456,14 +459,14 @@ def test_compare_interrupted_in_its_first_write_leaves_whole_results_and_a_rerun
 
 
 def test_compare_interrupted_as_it_names_its_pictures_names_every_one(
-    earlier_run: Path, tmp_path: Path
+    earlier_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # before: Ctrl-C as results.json was written again to name the pictures left all five
     # drawn and none named (results.json as first written: "pictures": {}), said as
     # "interrupted" alone; `report` then showed none of them
     out = tmp_path / "o"
     _earlier_run_in(earlier_run, out)  # three activities: three timelines
-    assert _interrupted_in_first_write("last", out) == (
+    assert _interrupted_in_first_write("last", out, capsys) == (
         f"posecbr compare: interrupted: results in {out}, with the 5 pictures drawn before it:"
         " all of them"
     )
