@@ -5,6 +5,7 @@ replaced or created while it trained."""
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import sqlite3
 import subprocess
@@ -20,6 +21,7 @@ from cbr.estimator import CaseBaseClassifier
 from cbr.training import append
 from features.poses import load_pose
 from posecbr.cli import main
+from tests.once import made_once
 from tests.postgres import empty_postgres
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -86,10 +88,19 @@ def _refused_replace(db: str, capsys: pytest.CaptureFixture[str], *more: str) ->
 
 
 @pytest.fixture
-def trained(tmp_path: Path) -> str:
-    db = str(tmp_path / "cb.sqlite")
-    assert _train(db, "s01") == 0
-    return db
+def trained(tmp_path: Path, tmp_path_factory: pytest.TempPathFactory) -> str:
+    """A case base of subject s01 trained by the command, made once in the session: each
+    test gets its own copy of the file (they change it)."""
+
+    def make(folder: Path) -> Path:
+        made = folder / "cb.sqlite"
+        assert _train(str(made), "s01") == 0
+        assert sorted(p.name for p in folder.iterdir()) == ["cb.sqlite"]  # one file to copy
+        return made
+
+    db = tmp_path / "cb.sqlite"
+    shutil.copyfile(made_once(tmp_path_factory, "hunt37n-s01", make), db)
+    return str(db)
 
 
 def test_replace_keeps_cases_another_process_appended_while_it_trained(
