@@ -44,6 +44,9 @@ def search() -> None:
     queries = np.stack([m.represent_query(rng.random(40)) for _ in range(4)])
     m.nearest(queries[0], index, 5)
     m.nearest_many(queries, index, 5)
+    small = m.build_index(rng.random((30, 40)).astype(np.float32))  # a small case base's
+    m.nearest(queries[0], small, 5)  # plain pass
+    m.distances(queries[0], small)
     d = DTW(radius=3)
     x = rng.random((50, 32, 6))
     d.nearest(d.represent_query(x[0]), d.build_index(d.represent(x)), 3)

@@ -1,8 +1,7 @@
 """The package as a user gets it: build the wheel, install it into a new environment, run the
 demo from an empty folder with the installed code.
 
-How, within the suite's time budget (about 45 s here, most of it the demo and numba compiling
-the installed kernels afresh):
+How, within the suite's time budget (about 45 s here, most of it the demo):
 
 - the wheel is built from a copy of the checkout (``pip wheel --no-deps --no-build-isolation
   --no-index``: the build tools of this environment, nothing downloaded, nothing written into
@@ -12,7 +11,10 @@ the installed kernels afresh):
   added as plain path entries by a ``.pth`` file. Plain entries run no ``.pth`` file of their
   own, so the editable install's finder (which maps the packages to the checkout) is not
   there: the code that runs is the wheel's, and each test checks where it lies. A test checks
-  that those site-packages satisfy every requirement the wheel declares.
+  that those site-packages satisfy every requirement the wheel declares;
+- numba's kernels, compiled once by the suite from the checkout's sources, are copied beside
+  the installed modules (the same sources), so the demo loads them instead of compiling them
+  again; a kernel the suite has not compiled yet is compiled by the demo.
 """
 
 from __future__ import annotations
@@ -101,10 +103,38 @@ def _new_env(base: Path, wheel: Path) -> Installed:
     return Installed(wheel, env, site_packages, run_env)
 
 
+def _numba_caches_of_the_checkout(site_packages: Path) -> int:
+    """numba's cached kernels of the checkout (``__pycache__/*.nbi``, ``*.nbc``, written by
+    the suite's first compile, ``tests/_kernels.py``) copied beside the installed modules
+    they were compiled from, each installed module given its checkout twin's modification
+    time (numba keys a cache by its source file's time and size): the demo loads the
+    kernels instead of compiling them again from the same source (about 11 s of CPU). Only
+    where the installed file is byte for byte the checkout's. Returns the files copied."""
+    copied = 0
+    for pkg in PACKAGES:
+        for cache in sorted((ROOT / pkg).rglob("__pycache__")):
+            kernels = sorted(cache.glob("*.nb[ic]"))
+            if not kernels:
+                continue
+            source_dir = cache.parent.relative_to(ROOT)
+            for source in (ROOT / source_dir).glob("*.py"):
+                twin = site_packages / source_dir / source.name
+                if twin.is_file() and twin.read_bytes() == source.read_bytes():
+                    st = source.stat()
+                    os.utime(twin, ns=(st.st_atime_ns, st.st_mtime_ns))
+            (site_packages / source_dir / "__pycache__").mkdir(exist_ok=True)
+            for kernel in kernels:
+                shutil.copy2(kernel, site_packages / source_dir / "__pycache__" / kernel.name)
+                copied += 1
+    return copied
+
+
 @pytest.fixture(scope="module")
 def installed(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Installed]:
     base = tmp_path_factory.mktemp("wheel")
-    yield _new_env(base, _build_wheel(base))
+    env = _new_env(base, _build_wheel(base))
+    _numba_caches_of_the_checkout(env.site_packages)
+    yield env
     shutil.rmtree(base, ignore_errors=True)  # ~40 MB of wheel, copy and install
 
 
