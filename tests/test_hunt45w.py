@@ -9,12 +9,11 @@ are tests/fixtures/repetition_counts.json's."""
 
 from __future__ import annotations
 
-from pathlib import Path
+from collections.abc import Callable
 from types import SimpleNamespace
 
 import pytest
 
-from features.pose_estimation import estimate_video
 from features.poses import PoseSequence
 from tests.test_hunt36j import _counts
 from tests.test_hunt36l import LABELS, _Changing
@@ -42,20 +41,16 @@ def _both(seq: PoseSequence, change_s: float) -> tuple[list[int], list[int]]:
     return [r for *_, r in watched], offline
 
 
-def _poses(shared_data: Path, path: str) -> PoseSequence:
-    return estimate_video(shared_data / "videos" / path, progress_bar=False).sequence.to_canonical()
-
-
 @pytest.fixture(scope="module")
-def bridge(shared_data: Path) -> PoseSequence:
+def bridge(bundled_poses: Callable[[str], PoseSequence]) -> PoseSequence:
     """The bundled glute bridge video's poses (167 frames at 25 fps)."""
-    return _poses(shared_data, "glute_bridge/fit_glute_bridge_pexels6525487.mp4")
+    return bundled_poses("glute_bridge/fit_glute_bridge_pexels6525487.mp4").to_canonical()
 
 
 @pytest.fixture(scope="module")
-def plank(shared_data: Path) -> PoseSequence:
+def plank(bundled_poses: Callable[[str], PoseSequence]) -> PoseSequence:
     """The bundled side plank video's poses (215 frames at 25 fps)."""
-    return _poses(shared_data, "side_plank/fit_side_plank_pexels6023266.mp4")
+    return bundled_poses("side_plank/fit_side_plank_pexels6023266.mp4").to_canonical()
 
 
 def test_watch_keeps_a_far_point_the_segment_after_the_cut_does_not_take(
@@ -105,7 +100,9 @@ def test_watch_settles_the_start_of_a_segment_after_one_with_no_far_point(
     assert watched == offline == [0, 0]
 
 
-def test_the_last_segment_is_judged_beside_a_whole_repetition_only(shared_data: Path) -> None:
+def test_the_last_segment_is_judged_beside_a_whole_repetition_only(
+    bundled_poses: Callable[[str], PoseSequence],
+) -> None:
     """The bundled two people's chair squats streamed to frame 180 (7.5 s at 24 fps), the
     label changing 2.5 s before the end: ``watch`` cuts at frame 108, and ``segment`` cut
     there counts 1 and 1. The first segment holds no far point of its own (the one it counts
@@ -114,7 +111,7 @@ def test_the_last_segment_is_judged_beside_a_whole_repetition_only(shared_data: 
     as ``segment`` judges it (:func:`cbr.segmentation._beside_whole`: the segment across
     the cut's own repetitions). Before, ``watch`` judged it beside the first segment's
     cut-off far point and counted 1 and 2 (checked: fails on the old code)."""
-    seq = _poses(shared_data, "edge/chair_squat_two_people_pexels4838146.mp4")
+    seq = bundled_poses("edge/chair_squat_two_people_pexels4838146.mp4").to_canonical()
     assert seq.fps == 24.0
     watched, offline = _both(seq.slice_frames(0, 180), 180 / 24.0 - 2.5)
     assert watched == offline == [1, 1]
