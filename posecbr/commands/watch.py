@@ -548,6 +548,7 @@ class Watcher:
         self.pacer: Pacer | None = None  # a file's, played at its own rate: when frames are due
         self.colours: dict[str, Any] | None = None  # each activity's, once drawn
         self.n = 0
+        self.read = 0  # frames the source gave (before the grid of a variable rate's)
         self.started = time.perf_counter()
 
     def warm_up(self) -> None:
@@ -580,6 +581,7 @@ class Watcher:
         for frame in frames:
             if stop.is_set() or self.stdout_gone:
                 break  # the user stopped watching: finish what was seen
+            self.read += 1
             if self.live is None:
                 if self.fps is None:
                     waiting.append(frame)
@@ -597,11 +599,23 @@ class Watcher:
             return
         if self.n == 0 and not stop.is_set():
             raise DataError("the stream gave no frame", self.args.source)
-        if not is_file and self.args.max_frames is None and not stop.is_set():
+        if not is_file and not self.limited and not stop.is_set():
             raise DataError(
                 f"the stream ended after {counted(self.n, 'frame')} (camera or connection lost?)",
                 self.args.source,
             )
+
+    @property
+    def limited(self) -> bool:
+        """The user's ``--max-frames`` stopped the watch: the source gave that many frames
+        (it may have had more)."""
+        return self.args.max_frames is not None and self.read >= self.args.max_frames
+
+    def _ended(self) -> str:
+        """What stopped the stream: the user's ``--max-frames``, or its end."""
+        if self.limited:
+            return f"--max-frames {self.args.max_frames} stopped the watch"
+        return "the stream ended"
 
     def _take(self, frame: Any) -> None:
         taken = self._grid.take(frame)
@@ -742,10 +756,13 @@ class Watcher:
 
     def close(self, stop: Stop) -> None:
         """The end of the stream: the last segment and the latency. With no segment given, or
-        a video file (here or served) with nobody in view in any frame (as ``segment`` and
-        ``reps`` refuse it; its segments printed, as every segment is when it finishes),
-        refused: as the stream ending (exit 1), or as the user stopping it (``stop`` set:
-        interrupted, exit 130, or 143 for SIGTERM), not blamed on the stream."""
+        a video file (here or served) watched to its end with nobody in view in any frame (as
+        ``segment`` and ``reps`` refuse it; its segments printed, as every segment is when it
+        finishes), refused: as the stream ending or ``--max-frames`` stopping it (exit 1), or
+        as the user stopping it (``stop`` set: interrupted, exit 130, or 143 for SIGTERM),
+        not blamed on the stream. A video stopped by ``--max-frames`` with nobody seen is not
+        refused (the rest of it was not watched: the person may come later, as a camera
+        watching an empty room may see one): a note says so."""
         import numpy as np
 
         from cbr.segmentation import MIN_WINDOW_S
@@ -759,7 +776,7 @@ class Watcher:
                 f"after {counted(self.n, 'frame')}{seconds}, before the shortest window"
                 f" ({MIN_WINDOW_S:g} s) of the stream was seen: no segment to give"
             )
-        elif self.is_file and not self.seen:
+        elif self.is_file and not self.seen and not self.limited:
             # a video with nobody in it, as segment and reps refuse it (a camera watching an
             # empty room is no bad input: its segments say nobody in view); its segments
             # were printed as they finished, as every segment is
@@ -770,7 +787,14 @@ class Watcher:
         if said is not None:
             if stop.is_set():
                 raise_interrupt(stop.signum, said=f"{self.args.source}: stopped {said}")
-            raise DataError(f"the stream ended {said}", self.args.source)
+            raise DataError(f"{self._ended()} {said}", self.args.source)
+        if self.is_file and not self.seen:
+            print(
+                f"note: {shown(self.args.source)}: nobody in view in the"
+                f" {counted(self.n, 'frame')}{seconds} watched ({self._ended()}: the video's"
+                " frames after them, if any, were not watched)",
+                file=sys.stderr,
+            )
         if self.latency:
             ms = np.asarray(self.latency) * 1000.0
             wall = time.perf_counter() - self.started

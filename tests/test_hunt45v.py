@@ -1,0 +1,116 @@
+"""Hunt 45v: small defects left by this session's usability fixes (tests/test_hunt45u.py).
+
+1. ``watch`` of a video with nobody in view, stopped by ``--max-frames`` (the user's own
+   limit) before the video's end, was refused as "the stream ended after N frames ... with
+   nobody in view in any of them": the stream had not ended, and the frames after the limit
+   were never watched (the person may come later, as to a camera watching an empty room,
+   which is not refused). It now ends with exit 0 and a note saying that ``--max-frames``
+   stopped it; a watch stopped by the limit before the first window says so in its refusal;
+   a camera lost before the limit is said to be lost (it ended with exit 0 in silence).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import features.pose_estimation as pose_estimation
+from features.pose_estimation import StreamFrame
+from features.pose_estimation.tracker import FramePose
+from posecbr.cli import main
+from tests.badinput import refused
+from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
+
+
+def _grey_video(path: Path, frames: int) -> Path:
+    """A lossless video of ``frames`` plain grey frames at 10 fps: nobody in any."""
+    from tests.test_video_vfr import _write
+
+    grey = [np.full((120, 160, 3), 90, np.uint8) for _ in range(frames)]
+    return _write(path, [100 * k for k in range(frames)], grey, rate=10)
+
+
+def test_watch_stopped_by_max_frames_with_nobody_seen_is_not_refused(
+    case_base: Path,  # noqa: F811 - the fixture imported above
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """40 grey frames at 10 fps watched with ``--max-frames 30``: one segment, nobody in
+    view, frames 0-30; exit 0, and a note that the limit stopped the watch. Before: exit 1,
+    "the stream ended after 30 frames (3.00 s) with nobody in view in any of them"."""
+    video = _grey_video(tmp_path / "empty.mp4", 40)
+    capsys.readouterr()
+    argv = ["watch", str(video), "--db", str(case_base), "--speed", "0", "--max-frames", "30"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    segments = [json.loads(line) for line in captured.out.splitlines()]
+    assert [(s["start_frame"], s["end_frame"], s["unknown"]) for s in segments] == [
+        (0, 30, "nobody in view")
+    ]
+    assert (
+        f"note: {video}: nobody in view in the 30 frames (3.00 s) watched (--max-frames 30"
+        " stopped the watch: the video's frames after them, if any, were not watched)\n"
+    ) in captured.err
+    assert "error" not in captured.err and "stream ended" not in captured.err
+
+
+def test_watch_stopped_by_max_frames_before_a_window_says_the_limit_stopped_it(
+    case_base: Path,  # noqa: F811 - the fixture imported above
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """5 frames at 10 fps (0.5 s) are less than the shortest window (1 s): refused, naming
+    ``--max-frames`` as what stopped the watch (it said "the stream ended")."""
+    video = _grey_video(tmp_path / "empty.mp4", 40)
+    argv = ["watch", str(video), "--db", str(case_base), "--speed", "0", "--max-frames", "5"]
+    line = refused(argv, tmp_path, capsys)
+    assert line == (
+        f"posecbr watch: error: {video}: --max-frames 5 stopped the watch after 5 frames"
+        " (0.50 s), before the shortest window (1 s) of the stream was seen: no segment to give"
+    )
+
+
+def _camera(n: int, fps: float = 30.0) -> Any:
+    """A stand-in for ``stream_poses``: a camera that gives ``n`` frames with nobody in view,
+    then none (lost), as tests/test_hunt39m.py's."""
+
+    def stream(source: Any, **kwargs: Any) -> Iterator[StreamFrame]:
+        limit = kwargs.get("max_frames")
+        for i in range(n if limit is None else min(n, limit)):
+            pose = FramePose(
+                np.full((33, 5), np.nan), np.full((33, 3), np.nan), False, False, 0.0, None
+            )
+            rgb = np.zeros((48, 64, 3), dtype=np.uint8)
+            yield StreamFrame(i, i / fps, pose, rgb, time.perf_counter())
+
+    return stream
+
+
+@pytest.mark.parametrize(("given", "code"), [(90, 0), (200, 1)])
+def test_a_camera_lost_before_max_frames_is_said_lost(
+    case_base: Path,  # noqa: F811 - the fixture imported above
+    given: int,
+    code: int,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A camera that gives 90 frames then none: with ``--max-frames 90`` the limit stopped
+    it (exit 0, an empty room is no bad input); with ``--max-frames 200`` it was lost before
+    the limit: "camera or connection lost?", exit 1, as without ``--max-frames`` (before, it
+    ended with exit 0 without a word)."""
+    monkeypatch.setattr(pose_estimation, "stream_poses", _camera(90))
+    capsys.readouterr()
+    assert main(["watch", "0", "--db", str(case_base), "--max-frames", str(given)]) == code
+    captured = capsys.readouterr()
+    lost = "posecbr watch: error: 0: the stream ended after "
+    if code:
+        assert captured.err.startswith(lost), captured.err
+        assert captured.err.endswith(" frames (camera or connection lost?)\n"), captured.err
+    else:
+        assert "error" not in captured.err, captured.err
