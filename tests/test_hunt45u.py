@@ -124,8 +124,8 @@ def test_classify_note_on_a_jog_says_rows_of_cycles_which_classify_takes(
     assert len(notes) == 1
     assert "(query.npz: 10 in 5 left-and-right cycles)" in notes[0]
     assert (
-        "one row per left-and-right cycle, from the start_frame of one to the end_frame of "
-        "the next" in notes[0]
+        'one row per left-and-right cycle, as train cuts them: the "cases" of reps --json'
+        in notes[0]
     )
     assert main(["reps", str(query), "--json"]) == 0
     reps = json.loads(capsys.readouterr().out)["repetitions"]

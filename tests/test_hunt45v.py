@@ -7,6 +7,12 @@
    which is not refused). It now ends with exit 0 and a note saying that ``--max-frames``
    stopped it; a watch stopped by the limit before the first window says so in its refusal;
    a camera lost before the limit is said to be lost (it ended with exit 0 in silence).
+2. ``classify``'s note on a jog (steps shorter than a repetition can be, cut by ``train
+   --split repetitions`` in left-and-right cycles) said to pair ``reps --json``'s rows "from
+   the start_frame of one to the end_frame of the next": of an odd number of steps, the last
+   step was then a row of its own, refused as too short, where ``train`` joins it to the
+   cycle before. ``reps --json`` now gives ``"cases"``, the pieces ``train`` cuts, and the
+   note points at them.
 """
 
 from __future__ import annotations
@@ -114,3 +120,60 @@ def test_a_camera_lost_before_max_frames_is_said_lost(
         assert captured.err.endswith(" frames (camera or connection lost?)\n"), captured.err
     else:
         assert "error" not in captured.err, captured.err
+
+
+def test_classify_note_on_an_odd_jog_gives_rows_that_classify_takes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The hand-built jog of tests/test_hunt44j.py (step k over frames 9k to 9k + 9, 0.3 s
+    at 30 fps) of eight steps beside a squat clip, trained with ``--split repetitions``; a
+    jog of nine steps classified whole. Its cycles by hand: steps 0-1, 2-3, 4-5, and the last
+    three together (the ninth, 0.3 s, shorter than a case may be, joins the cycle before),
+    the last ending with the clip (frame 81 its last): 0-18, 18-36, 36-54, 54-82. Each row
+    classified (jog). Before, ``reps --json`` had no ``"cases"``, and the rows the note
+    described paired 72-82 with nothing: refused as too short."""
+    from features.poses import save_pose
+    from tests.moves import clip
+    from tests.test_hunt44j import _jog
+
+    save_pose(_jog(8), tmp_path / "jog.npz")
+    save_pose(clip("squat", 6.0, 30.0), tmp_path / "squat.npz")
+    (tmp_path / "train.csv").write_text("path,label\njog.npz,jog\nsquat.npz,squat\n")
+    db = str(tmp_path / "cb.sqlite")
+    assert main(["train", str(tmp_path / "train.csv"), "--split", "repetitions", "--db", db]) == 0
+    query = save_pose(_jog(9), tmp_path / "query.npz")
+    capsys.readouterr()
+    assert main(["classify", str(query), "--db", db, "-q"]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "per repetition" in line]
+    assert len(notes) == 1 and "(query.npz: 9 in 4 left-and-right cycles)" in notes[0]
+    assert 'as train cuts them: the "cases" of reps --json' in notes[0]
+    assert main(["reps", str(query), "--json"]) == 0
+    cases = json.loads(capsys.readouterr().out)["cases"]
+    assert [(c["start_frame"], c["end_frame"], c["repetitions"]) for c in cases] == [
+        (0, 18, 2),
+        (18, 36, 2),
+        (36, 54, 2),
+        (54, 82, 3),
+    ]
+    rows = "".join(f"query.npz,,{c['start_frame']},{c['end_frame']}\n" for c in cases)
+    (tmp_path / "cycles.csv").write_text("path,label,start,end\n" + rows)
+    assert main(["classify", str(tmp_path / "cycles.csv"), "--db", db, "--json"]) == 0
+    answers = json.loads(capsys.readouterr().out)
+    assert [a["label"] for a in answers["results"]] == ["jog"] * 4
+
+
+def test_reps_json_cases_of_squats_are_their_repetitions(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A movement that does not alternate sides: ``"cases"`` are its repetitions, one each,
+    with their frames."""
+    from features.poses import save_pose
+    from tests.moves import clip
+
+    rec = save_pose(clip("squat", 6.0, 30.0), tmp_path / "squat.npz")
+    capsys.readouterr()
+    assert main(["reps", str(rec), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    reps = [(r["start_frame"], r["end_frame"], 1) for r in doc["repetitions"]]
+    assert doc["count"] >= 2 and not doc["alternating"]
+    assert [(c["start_frame"], c["end_frame"], c["repetitions"]) for c in doc["cases"]] == reps

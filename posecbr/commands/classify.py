@@ -295,7 +295,8 @@ def _note_repeated_clips(name: str, clips: list[Any]) -> None:
     of several when ``train`` would cut it into several cases (one left-and-right cycle of a
     movement that alternates sides is one case, :func:`features.repetitions.case_spans`):
     such a clip's rows are its cycles, a repetition alone (one step of a jog) being shorter
-    than ``classify`` takes."""
+    than ``classify`` takes: ``reps --json``'s ``"cases"`` gives them as ``train`` cuts them
+    (a short step left over joined to the cycle before)."""
     from cbr.casebase import frames_of, piece_name
     from features.errors import DataError
     from features.repetitions import MIN_PERIOD_S, case_spans, count_repetitions
@@ -321,9 +322,8 @@ def _note_repeated_clips(name: str, clips: list[Any]) -> None:
         return
     pairs = (
         f"; of a movement that alternates sides in repetitions shorter than {MIN_PERIOD_S:g} s"
-        f" ({first_few(cycled)}), one row per left-and-right cycle, from the start_frame of"
-        " one to the end_frame of the next, as train cuts them: one alone is too short to"
-        " classify"
+        f" ({first_few(cycled)}), one row per left-and-right cycle, as train cuts them:"
+        ' the "cases" of reps --json (one step alone is too short to classify)'
         if cycled
         else ""
     )

@@ -5,10 +5,14 @@ A repetition is one excursion from the rest posture to the far point of the move
 (a squat: down and up); a movement that alternates sides (knee raises, twists, jogging steps)
 has one repetition per side. ``--json`` gives ``{"clip", "fps", "frames", "count",
 "repetitions": [{"start_frame", "end_frame", "start_s", "end_s", "peak_frame", "side"}],
-"period_s", "periodicity", "alternating", "moving", "partial"}`` (end frames exclusive;
-``"partial": true`` when no repetition is whole but part of one is there, which does not
-count: a clip of the way down of a squat counts 0, with a note on stderr); ``--plot`` draws
-the repetitions over the clip's fluent timeline.
+"period_s", "periodicity", "alternating", "moving", "partial", "cases": [{"start_frame",
+"end_frame", "repetitions"}]}`` (end frames exclusive; ``"partial": true`` when no
+repetition is whole but part of one is there, which does not count: a clip of the way down
+of a squat counts 0, with a note on stderr; ``"cases"``: the pieces ``train --split
+repetitions`` cuts the clip into, one per repetition, or of a quick movement that alternates
+sides, a jog's steps, whole left-and-right cycles, a short step left over joined to the
+cycle before: rows of a labels CSV that ``classify`` takes); ``--plot`` draws the
+repetitions over the clip's fluent timeline.
 
 A clip no frame of which shows the person (the torso: both shoulders and both hips) is
 refused, as ``segment`` refuses it; below 5 fps a note on stderr says that a movement
@@ -83,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"picture written to {shown(args.plot)}", file=sys.stderr)
     if args.json:
         doc = {"clip": str(args.clip), "fps": seq.fps, "frames": seq.n_frames, **result.to_dict()}
+        doc["cases"] = _cases(result)
         if args.plot is not None:
             doc["plot"] = str(args.plot)
         json.dump(doc, sys.stdout, indent=1)
@@ -90,6 +95,15 @@ def run(args: argparse.Namespace) -> int:
         return 0
     _print(args.clip, seq.fps, result)
     return 0
+
+
+def _cases(result: Any) -> list[dict[str, int]]:
+    """The pieces ``train --split repetitions`` cuts the clip counted ``result`` into
+    (:func:`features.repetitions.case_spans`), as ``--json`` gives them: the rows of a labels
+    CSV that ``classify`` takes one at a time (a jog's step alone is too short)."""
+    from features.repetitions import case_spans
+
+    return [{"start_frame": a, "end_frame": b, "repetitions": n} for a, b, n in case_spans(result)]
 
 
 def _count(seq: Any) -> Any:
