@@ -435,6 +435,50 @@ def picture_format(path: str | Path) -> str:
     return fmt
 
 
+PICTURE_KEY = "posecbr"
+"""The PNG text chunk that says which command drew a picture of which recording
+(:func:`picture_mark`)."""
+
+
+def picture_mark(command: str, recording: str | Path) -> str:
+    """What a PNG picture ``command`` draws of ``recording`` is marked with (its
+    :data:`PICTURE_KEY` text chunk): the command and a digest of the recording's resolved
+    path (not the path itself, which a picture passed on would give away). ``--plot DIR``
+    replaces a picture so marked, drawn before by the same command of the same recording,
+    and refuses any other file at that name (:func:`posecbr.arguments.check_folder_pictures`)."""
+    import hashlib
+
+    where = str(Path(recording).resolve()).encode("utf-8", "surrogateescape")
+    return f"{command} {hashlib.sha256(where).hexdigest()[:16]}"
+
+
+def png_mark(path: Path) -> str | None:
+    """The :data:`PICTURE_KEY` text chunk of the PNG file ``path``: None when it is no PNG,
+    has none, or cannot be read. The chunks before the image data are read, no further."""
+    import struct
+    import zlib
+
+    try:
+        with open(path, "rb") as fh:
+            if fh.read(8) != b"\x89PNG\r\n\x1a\n":
+                return None
+            while True:
+                head = fh.read(8)
+                if len(head) < 8:
+                    return None
+                size, kind = struct.unpack(">I4s", head)
+                if kind in (b"IDAT", b"IEND"):
+                    return None
+                data = fh.read(size + 4)[:size]  # its CRC after it
+                key, _, text = data.partition(b"\0")
+                if kind == b"tEXt" and key == PICTURE_KEY.encode():
+                    return text.decode("latin-1")
+                if kind == b"zTXt" and key == PICTURE_KEY.encode():
+                    return zlib.decompress(text[1:]).decode("latin-1")
+    except (OSError, zlib.error, struct.error):
+        return None
+
+
 def plot_timeline(
     result: FluentResult | Timeline,
     path: str | Path,
@@ -445,6 +489,7 @@ def plot_timeline(
     band_title: str = "",
     band_keys: Sequence[str] = (),
     band_legend: Literal["never", "hidden", "always"] = "never",
+    mark: str | None = None,
 ) -> Path:
     """A fluent timeline: one row per state that holds at some time, shaded by confidence (a
     long clip's frames averaged into up to :data:`PLOT_COLUMNS` columns); with ``bands``, a
@@ -455,7 +500,7 @@ def plot_timeline(
     when a band is too narrow for its text ("hidden"). ``title`` is followed by what the
     shades and colours mean (:func:`_key`). Written atomically, in the format of the file's
     suffix (a suffix matplotlib does not know:
-    :func:`picture_format` refuses it)."""
+    :func:`picture_format` refuses it); a PNG holds ``mark`` (:func:`picture_mark`)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -512,7 +557,8 @@ def plot_timeline(
     fmt = picture_format(out)
     try:
         with atomic_path(out) as tmp:
-            fig.savefig(tmp, format=fmt)
+            marks = {PICTURE_KEY: mark} if mark is not None and fmt == "png" else None
+            fig.savefig(tmp, format=fmt, metadata=marks)
     finally:
         plt.close(fig)
     return out

@@ -10,7 +10,7 @@ from collections.abc import Callable, Collection, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-from features.errors import ConfigError
+from features.errors import ConfigError, DataError
 
 #: what ``-k N`` means in every command that votes with the nearest cases (train, classify,
 #: compare, segment, watch): one meaning for one letter, said in the same words; what differs
@@ -174,3 +174,30 @@ def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
         return [plot]
     taken: set[str] = set()
     return [plot / f"{unique_name(path.stem, taken)}.png" for path in recordings]
+
+
+def check_folder_pictures(
+    plot: Path, targets: list[Path], recordings: list[Path], command: str
+) -> None:
+    """Refuse, before any work, a file already at a name that the folder ``plot``
+    (``--plot DIR``) gives one of ``recordings``' pictures (``targets``,
+    :func:`plot_targets`), unless it is the picture ``command`` drew there of that same
+    recording before (run again: brought up to date): another command's picture, another
+    recording's, or a file of the user's is not replaced in silence, as ``compare --out DIR``
+    refuses a results file it did not write and ``convert --out DIR`` a pose file of another
+    recording. A picture named by the user (``--plot x.png``) is theirs to replace."""
+    from features.text import shown
+    from features.timeline import picture_mark, png_mark
+
+    if not plot.is_dir():
+        return
+    for target, recording in zip(targets, recordings, strict=True):
+        if not (target.exists() or target.is_symlink()):
+            continue
+        if target.is_symlink() or png_mark(target) != picture_mark(command, recording):
+            raise DataError(
+                f"is already there, not a picture posecbr {command} drew of"
+                f" {shown(recording.name)}: --plot {shown(plot)} would replace it; choose"
+                " another folder, or name the picture",
+                target,
+            )

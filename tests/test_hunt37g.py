@@ -90,8 +90,8 @@ def test_an_activity_has_one_colour_in_every_timeline_of_a_case_base(
     strips = _band_colours(
         monkeypatch,
         lambda: [
-            segment._plot(rec, first, tmp_path / "a.png", "a", activities),
-            segment._plot(rec, second, tmp_path / "b.png", "b", activities),
+            segment._plot(rec, first, tmp_path / "a.png", Path("a"), activities),
+            segment._plot(rec, second, tmp_path / "b.png", Path("b"), activities),
         ],
     )
     tab10 = [tuple(round(c, 3) for c in TAB10[i]) for i in range(4)]
@@ -183,7 +183,7 @@ def test_a_titled_timeline_says_what_its_orange_labels_and_grey_mean(
     result = reps._count(rec)
     assert result.count >= 2
     title, colours = _drawn_title(
-        monkeypatch, lambda: reps._plot(rec, result, tmp_path / "r.png", "squat.npz")
+        monkeypatch, lambda: reps._plot(rec, result, tmp_path / "r.png", Path("squat.npz"))
     )
     assert "#b35900" in colours
     assert title.startswith("squat.npz: ")
@@ -221,7 +221,7 @@ def test_reps_plot_marks_each_far_point_where_reps_json_puts_it(
         return real(fig, *args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(Figure, "savefig", saving)
-    reps._plot(rec, result, tmp_path / "r.png", "squat.npz")
+    reps._plot(rec, result, tmp_path / "r.png", Path("squat.npz"))
     drawn = np.sort(np.concatenate(marks)) if marks else np.array([])
     expected = np.array([r["peak_frame"] / 30.0 for r in doc])
     np.testing.assert_allclose(drawn, expected)
@@ -272,7 +272,7 @@ def test_a_long_recordings_timeline_names_the_colours_its_bands_cannot(
     activities = ["glute_bridge", "incline_pushup", "jumping_jack", "squat"]
     drawn = ["squat", "jumping_jack", None, "incline_pushup"] * 15
     seen = _strip_drawn(monkeypatch)
-    segment._plot(rec, _segmented(drawn), tmp_path / "t.png", "long.npz", activities)
+    segment._plot(rec, _segmented(drawn), tmp_path / "t.png", Path("long.npz"), activities)
     assert seen["hidden"] == 60  # 2 s of 120 in about 900 pixels: no name fits
     colour_of = dict(zip(drawn, seen["bands"], strict=True))  # type: ignore[call-overload]
     assert seen["legend"] == [
@@ -294,7 +294,7 @@ def test_reps_plot_of_alternating_sides_names_the_side_of_each_colour(
     sides = [r["side"] for r in result.to_dict()["repetitions"]]
     assert set(sides) == {"left", "right"}
     seen = _strip_drawn(monkeypatch)
-    reps._plot(rec, result, tmp_path / "r.png", "jog.npz")
+    reps._plot(rec, result, tmp_path / "r.png", Path("jog.npz"))
     colour_of = dict(zip(sides, seen["bands"], strict=True))  # type: ignore[call-overload]
     assert colour_of["left"] != colour_of["right"]
     assert seen["legend"] == [("left", colour_of["left"]), ("right", colour_of["right"])]

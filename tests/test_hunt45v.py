@@ -13,6 +13,13 @@
    step was then a row of its own, refused as too short, where ``train`` joins it to the
    cycle before. ``reps --json`` now gives ``"cases"``, the pieces ``train`` cuts, and the
    note points at them.
+3. ``reps``/``segment``/``describe --plot DIR`` replaced a file already at ``DIR/<clip>.png``
+   without a word (another command's picture, another recording's of the same name, the
+   user's own). As ``compare --out DIR`` refuses a results file it did not write and
+   ``convert --out DIR`` a pose file of another recording, each now replaces only the
+   picture it drew there of the same recording before (run again), and refuses any other
+   file, one line, before any work. A PNG it draws holds a text chunk ``posecbr`` saying
+   which command drew it of which recording (``features.timeline.picture_mark``).
 """
 
 from __future__ import annotations
@@ -177,3 +184,77 @@ def test_reps_json_cases_of_squats_are_their_repetitions(
     reps = [(r["start_frame"], r["end_frame"], 1) for r in doc["repetitions"]]
     assert doc["count"] >= 2 and not doc["alternating"]
     assert [(c["start_frame"], c["end_frame"], c["repetitions"]) for c in doc["cases"]] == reps
+
+
+def _squats(folder: Path) -> Path:
+    from features.poses import save_pose
+    from tests.moves import clip
+
+    folder.mkdir(parents=True, exist_ok=True)
+    return save_pose(clip("squat", 3.0, 30.0), folder / "squats.npz")
+
+
+@pytest.mark.parametrize("there", ["describe", "text", "other recording"])
+def test_reps_plot_folder_refuses_a_file_there_it_did_not_draw(
+    there: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """pics/squats.png is already there: ``describe``'s picture of the same clip, a text
+    file of the user's, or ``reps``'s picture of another folder's squats.npz. ``reps
+    squats.npz --plot pics`` refuses it in one line and changes nothing (before: replaced
+    it, exit 0)."""
+    rec = _squats(tmp_path)
+    pics = tmp_path / "pics"
+    pics.mkdir()
+    if there == "describe":
+        assert main(["describe", str(rec), "--plot", str(pics)]) == 0
+    elif there == "text":
+        (pics / "squats.png").write_text("my notes\n")
+    else:
+        assert main(["reps", str(_squats(tmp_path / "other")), "--plot", str(pics)]) == 0
+    capsys.readouterr()
+    line = refused(["reps", str(rec), "--plot", str(pics)], tmp_path, capsys)
+    assert line == (
+        f"posecbr reps: error: {pics / 'squats.png'}: is already there, not a picture posecbr"
+        f" reps drew of squats.npz: --plot {pics} would replace it; choose another folder, or"
+        " name the picture"
+    )
+
+
+def test_segment_plot_folder_refuses_a_picture_reps_drew(
+    case_base: Path,  # noqa: F811 - the fixture imported above
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``segment`` of a clip whose picture ``reps`` drew into the folder: refused, one line,
+    nothing written (before: the repetitions' picture replaced by the segments')."""
+    rec = _squats(tmp_path)
+    pics = tmp_path / "pics"
+    pics.mkdir()
+    assert main(["reps", str(rec), "--plot", str(pics)]) == 0
+    capsys.readouterr()
+    argv = ["segment", str(rec), "--db", str(case_base), "--plot", str(pics)]
+    refused(argv, tmp_path, capsys, "not a picture posecbr segment drew of squats.npz")
+
+
+def test_plot_folder_replaces_the_picture_the_same_command_drew_and_marks_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Run again, ``reps --plot pics`` and ``describe --plot pics`` bring their own picture
+    up to date (exit 0). The mark read by Pillow (a peer PNG reader): the command and the
+    first 16 hex digits of the SHA-256 of the recording's resolved path, worked out here."""
+    import hashlib
+
+    from PIL import Image
+
+    rec = _squats(tmp_path)
+    digest = hashlib.sha256(str(rec.resolve()).encode()).hexdigest()[:16]
+    for command in ("reps", "describe"):
+        pics = tmp_path / command
+        pics.mkdir()
+        for _ in range(2):
+            assert main([command, str(rec), "--plot", str(pics)]) == 0
+            assert f"written to {pics / 'squats.png'}" in capsys.readouterr().err
+        with Image.open(pics / "squats.png") as picture:
+            assert picture.text["posecbr"] == f"{command} {digest}"
+    # a picture the user names is theirs to replace: another command's, as before
+    assert main(["reps", str(rec), "--plot", str(tmp_path / "describe" / "squats.png")]) == 0

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.text import counted, shown
-from posecbr.arguments import path_arg, plot_targets
+from posecbr.arguments import check_folder_pictures, path_arg, plot_targets
 from posecbr.recordings import (
     NUMPY_BELOW_FRAMES,
     add_recording_options,
@@ -113,9 +113,11 @@ def _check_args(args: argparse.Namespace) -> None:
         )
     check_asf(args.asf, [args.posefile])
     if args.plot is not None:
-        args.plot = plot_targets(args.plot, [args.posefile])[0]  # a folder: <clip>.png in it
+        folder = args.plot
+        args.plot = plot_targets(folder, [args.posefile])[0]  # a folder: <clip>.png in it
         inputs = [args.posefile, *[f for f in (args.thresholds, args.asf) if f is not None]]
         check_output(args.plot, inputs=inputs, what="picture")
+        check_folder_pictures(folder, [args.plot], [args.posefile], "describe")
         from features.timeline import picture_format
 
         picture_format(args.plot)
@@ -215,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from features.fluents import DEFAULT_TABLE, FluentTable, evaluate
-    from features.timeline import describe_clip, plot_timeline
+    from features.timeline import describe_clip, picture_mark, plot_timeline
 
     _check_args(args)
     table = FluentTable.from_file(args.thresholds) if args.thresholds else DEFAULT_TABLE
@@ -236,7 +238,8 @@ def run(args: argparse.Namespace) -> int:
     if missing is not None and len(tl.unavailable()) == len(table.specs):
         raise _nothing_to_describe(missing, args.posefile)
     if args.plot:
-        plot_timeline(tl, args.plot, args.min_confidence, title=args.posefile.name)
+        mark = picture_mark("describe", args.posefile)
+        plot_timeline(tl, args.plot, args.min_confidence, title=args.posefile.name, mark=mark)
         # on stderr, as every command's "written to": stdout holds only the answer (--json)
         print(f"timeline written to {shown(args.plot)}", file=sys.stderr)
     if args.json:

@@ -29,7 +29,7 @@ from typing import Any
 
 from features.fileio import check_output
 from features.text import counted, shown
-from posecbr.arguments import path_arg, plot_targets
+from posecbr.arguments import check_folder_pictures, path_arg, plot_targets
 from posecbr.recordings import (
     NUMPY_BELOW_FRAMES,
     add_recording_options,
@@ -64,10 +64,12 @@ def run(args: argparse.Namespace) -> int:
 
     check_asf(args.asf, [args.clip])
     if args.plot is not None:
-        args.plot = plot_targets(args.plot, [args.clip])[0]  # a folder: <clip>.png in it
+        folder = args.plot
+        args.plot = plot_targets(folder, [args.clip])[0]  # a folder: <clip>.png in it
         check_output(
             args.plot, inputs=[args.clip, *([args.asf] if args.asf else [])], what="picture"
         )
+        check_folder_pictures(folder, [args.plot], [args.clip], "reps")
         from features.timeline import picture_format
 
         picture_format(args.plot)
@@ -82,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     if args.plot is not None:
-        _plot(seq, result, args.plot, args.clip.name)
+        _plot(seq, result, args.plot, args.clip)
         # on stderr, as every command's "written to": stdout holds only the answer (--json)
         print(f"picture written to {shown(args.plot)}", file=sys.stderr)
     if args.json:
@@ -165,9 +167,9 @@ def _print(clip: Path, fps: float, result: object) -> None:
         )
 
 
-def _plot(seq: object, result: object, path: Path, name: str) -> None:
+def _plot(seq: object, result: object, path: Path, clip: Path) -> None:
     from features.repetitions import RepetitionCount
-    from features.timeline import Band, plot_timeline, timeline_of
+    from features.timeline import Band, picture_mark, plot_timeline, timeline_of
 
     assert isinstance(result, RepetitionCount)
     fps = result.fps
@@ -184,10 +186,11 @@ def _plot(seq: object, result: object, path: Path, name: str) -> None:
     plot_timeline(
         timeline_of(seq),  # type: ignore[arg-type]
         path,
-        title=f"{name}: {counted(result.count, 'repetition')} (\u25b2 far point) over the"
+        title=f"{clip.name}: {counted(result.count, 'repetition')} (\u25b2 far point) over the"
         " fluent timeline",
         bands=bands,
         band_title="repetitions",
         # the colours are the sides: named (odd and even ones need no legend)
         band_legend="always" if any(r.side for r in result.repetitions) else "never",
+        mark=picture_mark("reps", clip),
     )

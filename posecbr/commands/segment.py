@@ -55,7 +55,7 @@ from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
-from posecbr.arguments import add_k_option, path_arg, plot_targets
+from posecbr.arguments import add_k_option, check_folder_pictures, path_arg, plot_targets
 from posecbr.recordings import (
     add_recording_options,
     check_asf,
@@ -296,8 +296,10 @@ def _outputs(args: argparse.Namespace) -> None:
                 f"{problem}",
                 args.plot,
             )
-        for target in plot_targets(args.plot, args.recordings):
+        targets = plot_targets(args.plot, args.recordings)
+        for target in targets:
             check_output(target, inputs=_inputs(args), what="picture")
+        check_folder_pictures(args.plot, targets, args.recordings, "segment")
         if not args.plot.is_dir():  # a folder's pictures are .png
             from features.timeline import picture_format
 
@@ -365,7 +367,7 @@ def run(args: argparse.Namespace) -> int:
         targets = list(plot_targets(args.plot, args.recordings))
     for (rec, video, result), path, target in zip(done, args.recordings, targets, strict=True):
         if target is not None:
-            _plot(rec, result, target, path.name, [str(c) for c in clf.classes_])
+            _plot(rec, result, target, path, [str(c) for c in clf.classes_])
             print(f"timeline written to {shown(target)}", file=sys.stderr)
         if args.overlay is not None:
             _overlay(path, video, result, args.overlay, [str(c) for c in clf.classes_])
@@ -543,20 +545,24 @@ def _bands(result: Any) -> list[Any]:
     ]
 
 
-def _plot(rec: Any, result: Any, path: Path, name: str, activities: Sequence[str] = ()) -> None:
-    """The timeline picture of ``result``; ``activities``: the case base's, in the order that
-    gives each its colour (one colour per activity in every picture of one case base)."""
-    from features.timeline import plot_timeline, timeline_of
+def _plot(
+    rec: Any, result: Any, path: Path, recording: Path, activities: Sequence[str] = ()
+) -> None:
+    """The timeline picture of ``result`` (of ``recording``); ``activities``: the case base's,
+    in the order that gives each its colour (one colour per activity in every picture of one
+    case base)."""
+    from features.timeline import picture_mark, plot_timeline, timeline_of
 
     plot_timeline(
         timeline_of(rec),
         path,
-        title=f"{name}: activities and repetition counts over the fluent timeline",
+        title=f"{recording.name}: activities and repetition counts over the fluent timeline",
         bands=_bands(result),
         band_title="activity",
         max_rows=30,
         band_keys=activities,
         band_legend="hidden",
+        mark=picture_mark("segment", recording),
     )
 
 
