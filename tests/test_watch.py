@@ -428,8 +428,12 @@ def test_watch_a_stream_url(
     capsys.readouterr()
     url = f"{served}/vtest.avi"
     argv = ["watch", url, "--db", str(case_base), "--max-frames", "120", "--speed", "0"]
-    assert main(argv) == 1  # nobody in view in any frame: refused at the end, as segment does
-    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    # nobody in view in the 120 frames watched: --max-frames stopped it before the video's
+    # end, so not refused (tests/test_hunt45v.py), a note says so
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert f"note: {url}: nobody in view in the 120 frames (12.00 s) watched" in captured.err
+    lines = [json.loads(line) for line in captured.out.splitlines()]
     got = [
         (d["start_frame"], d["end_frame"], d["end_s"], d["label"], d["explanation"]) for d in lines
     ]
@@ -443,8 +447,8 @@ def test_watch_a_stream_shorter_than_a_window_says_so(
     case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """Four frames of the 5-fps squat video (0.8 s; segment takes 1 s or more): no segment
-    can be given, so one line says why, exit 1, and no --out video (it printed nothing,
-    exit 0)."""
+    can be given, so one line says why (--max-frames stopped it: tests/test_hunt45v.py),
+    exit 1, and no --out video (it printed nothing, exit 0)."""
     video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
     out = tmp_path / "out.mp4"
     capsys.readouterr()
@@ -454,7 +458,10 @@ def test_watch_a_stream_shorter_than_a_window_says_so(
     # one line, beside the note that the video's 5 fps may miscount repetitions
     errors = [line for line in captured.err.splitlines() if not line.startswith("note: ")]
     assert captured.out == "" and len(errors) == 1
-    assert "the stream ended after 4 frames (0.80 s), before the shortest window (1 s)" in errors[0]
+    assert (
+        "--max-frames 4 stopped the watch after 4 frames (0.80 s), before the shortest window"
+        " (1 s)" in errors[0]
+    )
     assert list(tmp_path.iterdir()) == []
 
 
