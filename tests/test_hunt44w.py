@@ -21,6 +21,7 @@ from tests.bodies import squat_pose, to_sequence
 from tests.test_hunt36j import MOVE_S, REST_S, _counts, _eased
 from tests.test_hunt36l import LABELS, _Changing
 from tests.test_hunt38b import _both
+from tests.test_hunt45w import _streamed
 from tests.test_repetitions import FPS
 
 
@@ -114,19 +115,12 @@ def test_watch_counts_a_real_squat_cut_off_by_the_start_as_segment(
     start = 10
     stream = squats.slice_frames(start, squats.n_frames)
     assert count_repetitions(stream).count == 3
-    clf = SimpleNamespace(classes_=LABELS, case_base_=SimpleNamespace(labels=LABELS))
-    live = _Changing(clf, squats.fps, judge=SimpleNamespace())
-    live.changes = (int(into_s * squats.fps),)
-    assert stream.confidence is not None
-    streamed = []
-    for frame, seen in zip(stream.positions, stream.confidence, strict=True):
-        streamed += live.push(frame, seen)
-    streamed += live.finish()
+    streamed = _streamed(stream, into_s)
     assert len(streamed) == 2
-    cut = streamed[0].end_frame
+    cut = streamed[0][1]
     assert cut < (5.2 - 2.0) * squats.fps  # before the second squat's way down
     offline = _counts(stream, [cut / squats.fps])
-    assert [s.repetitions for s in streamed] == offline == [1, 2]
+    assert [r for *_, r in streamed] == offline == [1, 2]
 
 
 def test_block_votes_are_the_mean_of_the_windows_over_each_block() -> None:

@@ -98,8 +98,29 @@ def test_train_of_clips_all_too_short_or_unseen_names_both_reasons(
     )
 
 
+@pytest.fixture
+def jog_cases(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A case base trained once in the session with ``--split repetitions`` on the
+    hand-built jog of tests/test_hunt44j.py (eight steps of 9 frames, 0.3 s, at 30 fps)
+    beside a squat clip; the tests only read it."""
+    from posecbr.cli import main
+    from tests.once import made_once
+    from tests.test_hunt44j import _jog
+
+    def make(folder: Path) -> Path:
+        save_pose(_jog(8), folder / "jog.npz")
+        save_pose(clip("squat", 6.0, FPS), folder / "squat.npz")
+        (folder / "train.csv").write_text("path,label\njog.npz,jog\nsquat.npz,squat\n")
+        db = folder / "cb.sqlite"
+        train = ["train", str(folder / "train.csv"), "--split", "repetitions", "--db", str(db)]
+        assert main(train) == 0
+        return db
+
+    return made_once(tmp_path_factory, "jog-cases", make)
+
+
 def test_classify_note_on_a_jog_says_rows_of_cycles_which_classify_takes(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], jog_cases: Path
 ) -> None:
     """The jog of tests/test_hunt44j.py (each step 9 frames, 0.3 s, at 30 fps) trained with
     --split repetitions beside a squat clip; a jog of ten steps classified whole. The note
@@ -112,11 +133,7 @@ def test_classify_note_on_a_jog_says_rows_of_cycles_which_classify_takes(
     from posecbr.cli import main
     from tests.test_hunt44j import _jog
 
-    save_pose(_jog(8), tmp_path / "jog.npz")
-    save_pose(clip("squat", 6.0, FPS), tmp_path / "squat.npz")
-    (tmp_path / "train.csv").write_text("path,label\njog.npz,jog\nsquat.npz,squat\n")
-    db = str(tmp_path / "cb.sqlite")
-    assert main(["train", str(tmp_path / "train.csv"), "--split", "repetitions", "--db", db]) == 0
+    db = str(jog_cases)
     query = save_pose(_jog(10), tmp_path / "query.npz")
     capsys.readouterr()
     assert main(["classify", str(query), "--db", db, "-q"]) == 0

@@ -38,6 +38,7 @@ from features.pose_estimation import StreamFrame
 from features.pose_estimation.tracker import FramePose
 from posecbr.cli import main
 from tests.badinput import refused
+from tests.test_hunt45u import jog_cases  # noqa: F401 - the fixture: a jog's and a squat's
 from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
 
 
@@ -130,7 +131,9 @@ def test_a_camera_lost_before_max_frames_is_said_lost(
 
 
 def test_classify_note_on_an_odd_jog_gives_rows_that_classify_takes(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    jog_cases: Path,  # noqa: F811 - the fixture imported above
 ) -> None:
     """The hand-built jog of tests/test_hunt44j.py (step k over frames 9k to 9k + 9, 0.3 s
     at 30 fps) of eight steps beside a squat clip, trained with ``--split repetitions``; a
@@ -140,14 +143,9 @@ def test_classify_note_on_an_odd_jog_gives_rows_that_classify_takes(
     classified (jog). Before, ``reps --json`` had no ``"cases"``, and the rows the note
     described paired 72-82 with nothing: refused as too short."""
     from features.poses import save_pose
-    from tests.moves import clip
     from tests.test_hunt44j import _jog
 
-    save_pose(_jog(8), tmp_path / "jog.npz")
-    save_pose(clip("squat", 6.0, 30.0), tmp_path / "squat.npz")
-    (tmp_path / "train.csv").write_text("path,label\njog.npz,jog\nsquat.npz,squat\n")
-    db = str(tmp_path / "cb.sqlite")
-    assert main(["train", str(tmp_path / "train.csv"), "--split", "repetitions", "--db", db]) == 0
+    db = str(jog_cases)
     query = save_pose(_jog(9), tmp_path / "query.npz")
     capsys.readouterr()
     assert main(["classify", str(query), "--db", db, "-q"]) == 0
