@@ -103,9 +103,13 @@ def test_a_dataset_folder_of_amc_files_with_no_skeleton_still_names_convert(
 def test_compare_help_says_default_as_every_command_does(
     option: str, dest: str, value: int
 ) -> None:
-    """The default said is the one taken when the option is left out."""
+    """The default said is the one taken when the option is left out (``--folds``: the
+    settings' folds, the option itself left unset so that ``--cv loso`` can refuse it given)."""
+    from posecbr.commands.compare import _settings
+
     parser = build_parser()
-    assert getattr(parser.parse_args(["compare", "data"]), dest) == value
+    args = parser.parse_args(["compare", "data"])
+    assert getattr(_settings(args) if dest == "folds" else args, dest) == value
     (sub,) = [a for a in parser._actions if a.dest == "command"]
     compare = sub.choices["compare"]  # type: ignore[index]
     (action,) = [a for a in compare._actions if option in a.option_strings]
