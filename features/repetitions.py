@@ -552,21 +552,40 @@ def _placed_knees(canonical: PoseSequence) -> PoseSequence:
     the knee is seen, and take part in comparing the sides: the line from hip to ankle
     (:data:`LIMB_LINES`) stood in for the hip's angle alone, and hardly turns when the thigh
     rises and the shank hangs under it (knee raises and jogging steps were missed with a
-    knee missing)."""
+    knee missing).
+
+    Near a straight leg the bend hangs on a few centimetres of the hip-ankle distance (2 cm
+    short of 0.74 m is 27 degrees), and a pose model's legs change length from frame to frame
+    by as much: the distance is taken as longer by twice the standard deviation (robust,
+    from the median absolute deviation) of the seen legs' length, so that what their own
+    jitter makes a straight leg fall short by reads straight (a side plank's straight leg,
+    its knee missing, counted two bends; motion capture's legs keep their length, and their
+    knees are placed as before)."""
     p = canonical.positions
-    hip, knee, ankle = (p[:, [_LEG["left"][i], _LEG["right"][i]]] for i in range(3))
-    place = np.isnan(knee).any(axis=2) & np.isfinite(hip - ankle).all(axis=2)
-    thigh, shank = np.linalg.norm(knee - hip, axis=2), np.linalg.norm(ankle - knee, axis=2)
-    if not place.any() or not (np.isfinite(thigh).any() and np.isfinite(shank).any()):
+    legs = [[_LEG["left"][i], _LEG["right"][i]] for i in range(3)]
+    hip, knee, ankle = (p[:, joints] for joints in legs)
+    seen = np.isfinite(p[:, sum(legs, [])]).all(axis=2)
+    seen_hip, seen_knee, seen_ankle = seen[:, :2], seen[:, 2:4], seen[:, 4:]
+    place = ~seen_knee & np.isfinite(hip - ankle).all(axis=2)
+    whole = seen_hip & seen_knee & seen_ankle
+    thigh, shank = (
+        np.linalg.norm(knee - hip, axis=2)[whole],
+        np.linalg.norm(ankle - knee, axis=2)[whole],
+    )
+    if not place.any() or not whole.any():
         return canonical
-    thigh, shank = float(np.nanmedian(thigh)), float(np.nanmedian(shank))
-    reach = np.linalg.norm(ankle - hip, axis=2, keepdims=True)
+    length = thigh + shank
+    slack = 2.0 * 1.4826 * float(np.median(np.abs(length - np.median(length))))
+    thigh_m, shank_m = float(np.median(thigh)), float(np.median(shank))
+    reach = np.minimum(
+        np.linalg.norm(ankle - hip, axis=2, keepdims=True) + slack, thigh_m + shank_m
+    )
     along = unit(ankle - hip)
     forward = body_frame(p).forward[:, None, :]
     ahead = unit(forward - np.sum(forward * along, axis=2, keepdims=True) * along)
     with np.errstate(invalid="ignore", divide="ignore"):
-        cos = np.clip((thigh**2 + reach**2 - shank**2) / (2 * thigh * reach), -1.0, 1.0)
-    placed = hip + thigh * (cos * along + np.sqrt(1.0 - cos**2) * ahead)
+        cos = np.clip((thigh_m**2 + reach**2 - shank_m**2) / (2 * thigh_m * reach), -1.0, 1.0)
+    placed = hip + thigh_m * (cos * along + np.sqrt(1.0 - cos**2) * ahead)
     positions = p.copy()
     confidence = None if canonical.confidence is None else canonical.confidence.copy()
     for side, (h, k, a) in enumerate(_LEG.values()):
@@ -837,12 +856,17 @@ _ON_LEGS = np.array([bool(SWAP_JOINTS.intersection(_ANGLE_JOINTS[n])) for n in C
 (:data:`features.leg_swaps.SWAP_JOINTS`): missing where the pose model swapped the legs."""
 
 
+SEEN_CONFIDENCE = 0.5
+"""A joint whose confidence (the pose model's visibility) is below this is not seen
+(:func:`_unseen`)."""
+
+
 def _unseen(confidence: np.ndarray | None) -> np.ndarray:
     """``(frames, len(COUNTED_ANGLES))`` True where an angle rests on a joint the camera does
-    not see (visibility below 0.5): the pose model guesses such joints, it does not measure
-    them. ``confidence``: ``(frames, 33)`` on the canonical skeleton."""
+    not see (visibility below :data:`SEEN_CONFIDENCE`): the pose model guesses such joints,
+    it does not measure them. ``confidence``: ``(frames, 33)`` on the canonical skeleton."""
     assert confidence is not None
-    seen = confidence >= 0.5
+    seen = confidence >= SEEN_CONFIDENCE
     cols = [
         np.all(seen[:, [JOINT_INDEX[j] for j in _ANGLE_JOINTS[n]]], axis=1) for n in COUNTED_ANGLES
     ]

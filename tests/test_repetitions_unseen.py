@@ -321,3 +321,35 @@ def test_knee_raises_with_a_knee_unseen_alternate(unseen_as: str) -> None:
     assert result.alternating
     assert [r.peak_frame for r in result.repetitions] == [15 + 30 * k for k in range(6)]
     assert [r.side for r in result.repetitions] == ["left", "right"] * 3
+
+
+def test_a_still_straight_leg_whose_length_wobbles_is_placed_straight() -> None:
+    """A body standing still for 6 s at 30 fps (the figure of tests/bodies.py: thigh and shank
+    0.45 m), its legs' length wobbling as a pose model's does from frame to frame: the left
+    ankle, heel and toes 0.03 sin(2 pi t / 1.5 s) m lower, the right ones as much higher, so
+    the left shank is 0.45 + that long and the right hip-ankle distance 0.9 less that; the
+    right knee missing in every frame. The seen leg's length has a median absolute deviation
+    of 0.03 sin(pi / 4) = 0.0212 m over whole periods, twice the standard deviation it
+    estimates (x 1.4826) is 0.063 m, more than the 0.03 m the right leg ever falls short of
+    the thigh and shank's 0.9 m: the placed right knee is straight (180 degrees) in every
+    frame, and nothing repeats (the mean height of the ankles, the hips' height above them,
+    stays put). Before, the 0.03 m were read as a bend of arccos((2 0.45^2 - 0.87^2) /
+    (2 0.45^2)) = 150.3 degrees at the knee every 1.5 s: 4 repetitions of a body standing
+    still."""
+    body = standing()
+    del body["right_knee"]
+    t = np.arange(180) / FPS
+    wobble = 0.03 * np.sin(2 * np.pi * t / 1.5)
+    feet = ("ankle", "heel", "foot_index")
+
+    def frame(d: float) -> dict[str, np.ndarray]:
+        out = dict(body)
+        for j in feet:
+            out[f"left_{j}"] = body[f"left_{j}"] - np.array([0.0, d, 0.0])
+            out[f"right_{j}"] = body[f"right_{j}"] + np.array([0.0, d, 0.0])
+        return out
+
+    seq = to_sequence(*(frame(d) for d in wobble))
+    knee = np.degrees(counted_angles(seq)[:, COUNTED_ANGLES.index("right_knee")])
+    np.testing.assert_allclose(knee, 180.0, atol=1e-6)
+    assert count_repetitions(seq).count == 0
