@@ -539,10 +539,18 @@ _LEG = {
 
 
 def _placed_knees(canonical: PoseSequence) -> PoseSequence:
-    """``canonical`` (on the canonical skeleton) with each knee missing where its hip and
-    ankle are seen put where the knee's hinge puts it, seen as far as the smaller of the hip's
-    and the ankle's confidence; as it is when no knee is to be placed (none missing there, or
-    no thigh and shank seen to measure).
+    """``canonical`` (on the canonical skeleton) with each knee missing in most of the frames
+    where its hip and ankle are there put where the knee's hinge puts it, in every one of
+    them, seen as far as the smaller of the hip's and the ankle's confidence; as it is when no
+    knee is to be placed (each seen in at least :data:`MIN_VALID_SHARE` of those frames, or no
+    thigh and shank seen to measure).
+
+    A knee is read from one source in a clip: where it is seen in most frames, from the pose
+    model's (its angles missing elsewhere, and filled in as any joint's are); where not, from
+    its hinge alone. The two disagree by the model's own bias, a few degrees to tens, and a
+    knee placed in the frames the model lost it and seen in the others stepped between them
+    (a leg raised sideways, its lower knee missing for 0.6 s of every 2 s: 0 repetitions of 2;
+    a side plank's straight leg: 2 of 0).
 
     The thigh and the shank are as long as the clip's median over both legs (a body is as long
     on the left as on the right); the knee lies at those lengths from the hip and the ankle
@@ -566,7 +574,8 @@ def _placed_knees(canonical: PoseSequence) -> PoseSequence:
     hip, knee, ankle = (p[:, joints] for joints in legs)
     seen = np.isfinite(p[:, sum(legs, [])]).all(axis=2)
     seen_hip, seen_knee, seen_ankle = seen[:, :2], seen[:, 2:4], seen[:, 4:]
-    place = ~seen_knee & np.isfinite(hip - ankle).all(axis=2)
+    ends = np.isfinite(hip - ankle).all(axis=2)
+    place = ends & (seen_knee.sum(axis=0) < MIN_VALID_SHARE * ends.sum(axis=0))
     whole = seen_hip & seen_knee & seen_ankle
     thigh, shank = (
         np.linalg.norm(knee - hip, axis=2)[whole],

@@ -353,3 +353,26 @@ def test_a_still_straight_leg_whose_length_wobbles_is_placed_straight() -> None:
     knee = np.degrees(counted_angles(seq)[:, COUNTED_ANGLES.index("right_knee")])
     np.testing.assert_allclose(knee, 180.0, atol=1e-6)
     assert count_repetitions(seq).count == 0
+
+
+def test_a_knee_seen_in_most_frames_is_not_placed_in_the_others() -> None:
+    """A body standing still for 6 s at 30 fps (the figure of tests/bodies.py), its right knee
+    seen 0.08 m ahead of where it stands (as a pose model may see it, a little bent: thigh and
+    shank sqrt(0.45^2 + 0.08^2) = 0.457 m, the knee's angle 180 - 2 atan(0.08 / 0.45) = 159.8
+    degrees) and missing for the last second of every three. The left leg is straight, 0.45 m
+    a bone; the medians over both legs (the left's 180 frames against the right's 120) are
+    0.45, so the knee's hinge, 0.9 m from hip to ankle, puts it straight: 180 degrees. The
+    knee is seen in most frames: it is read where seen, 159.8 degrees, and missing (to be
+    filled in) where not; nothing repeats. Before, it was placed where missing, and stepped
+    from 159.8 to 180 degrees and back every 3 s: 2 repetitions of a body standing still."""
+    body = standing()
+    body["right_knee"] = body["right_knee"] + np.array([0.0, 0.0, 0.08])
+    gone = dict(body)
+    del gone["right_knee"]
+    missing = np.arange(180) % 90 >= 60
+    seq = to_sequence(*(gone if m else body for m in missing))
+    knee = np.degrees(counted_angles(seq)[:, COUNTED_ANGLES.index("right_knee")])
+    seen_deg = 180.0 - 2 * np.degrees(np.arctan(0.08 / 0.45))
+    np.testing.assert_allclose(knee[~missing], seen_deg, atol=1e-6)
+    assert np.isnan(knee[missing]).all()
+    assert count_repetitions(seq).count == 0
