@@ -562,6 +562,11 @@ def _placed_knees(canonical: PoseSequence) -> PoseSequence:
     rises and the shank hangs under it (knee raises and jogging steps were missed with a
     knee missing).
 
+    A knee the camera does not see (:func:`_unseen`: its confidence below
+    :data:`SEEN_CONFIDENCE`) is placed too, though the pose model wrote a guess for it (its
+    angles are not read from the guess; before, it was neither read nor placed, and the leg
+    read along its line). Only legs seen whole measure the thigh and the shank.
+
     Near a straight leg the bend hangs on a few centimetres of the hip-ankle distance (2 cm
     short of 0.74 m is 27 degrees), and a pose model's legs change length from frame to frame
     by as much: the distance is taken as longer by twice the standard deviation (robust,
@@ -573,6 +578,8 @@ def _placed_knees(canonical: PoseSequence) -> PoseSequence:
     legs = [[_LEG["left"][i], _LEG["right"][i]] for i in range(3)]
     hip, knee, ankle = (p[:, joints] for joints in legs)
     seen = np.isfinite(p[:, sum(legs, [])]).all(axis=2)
+    if canonical.confidence is not None:
+        seen &= canonical.confidence[:, sum(legs, [])] >= SEEN_CONFIDENCE
     seen_hip, seen_knee, seen_ankle = seen[:, :2], seen[:, 2:4], seen[:, 4:]
     ends = np.isfinite(hip - ankle).all(axis=2)
     place = ends & (seen_knee.sum(axis=0) < MIN_VALID_SHARE * ends.sum(axis=0))

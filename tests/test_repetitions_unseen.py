@@ -281,19 +281,22 @@ def _knee_raised(body: dict[str, np.ndarray], side: str, degrees: float) -> dict
     return out
 
 
-@pytest.mark.parametrize("unseen_as", ["missing", "confidence 0"])
+@pytest.mark.parametrize("unseen_as", ["missing", "confidence 0", "faint"])
 def test_knee_raises_with_a_knee_unseen_alternate(unseen_as: str) -> None:
     """Knee raises, left then right, three times each (the thigh 0.45 m raised forward to the
     horizontal and back over 30 frames at 30 fps, the shank hanging under the knee; the figure
     of tests/bodies.py), the right knee missing in every frame (NaN, or written as (0, 0, 0)
-    with confidence 0 as OpenPose writes a joint it did not see). The right knee is placed
+    with confidence 0 as OpenPose writes a joint it did not see, or guessed where it stands
+    at rest, 0.45 m under the hip, with confidence 0.3, as a pose model guesses a joint it
+    does not see: "faint"). The right knee is placed
     from the right hip and ankle, with the left leg's thigh and shank (0.45 m each): the
     right knee's angle is 180 degrees less the raise, and the right hip's, between the thigh
     and the line to the shoulder (0.05 m out, 0.5 m up), arccos(-0.5 cos(raise) /
     sqrt(0.05^2 + 0.5^2)); the right leg's line takes no part. Six raises, sides in turn,
     at the top of each (frame 15 + 30 k), as with the knee seen. Before, the right leg was
     read along its line from hip to ankle alone, with no twin: 3 repetitions (the left
-    raises), not alternating."""
+    raises), not alternating; faint, the right knee's and hip's angles were missing (below
+    the 0.5 that reads a joint as seen) and the knee was not placed: 3, not alternating."""
     body = standing()
     raise_deg = 45.0 * (1 - np.cos(2 * np.pi * np.arange(30) / 30))
     still = np.zeros(30)
@@ -307,9 +310,10 @@ def test_knee_raises_with_a_knee_unseen_alternate(unseen_as: str) -> None:
         positions[:, knee] = np.nan
         seq = dataclasses.replace(seq, positions=positions)
     else:
-        positions[:, knee] = 0.0
+        faint = unseen_as == "faint"
+        positions[:, knee] = body["right_knee"] if faint else 0.0
         confidence = np.ones(positions.shape[:2])
-        confidence[:, knee] = 0.0
+        confidence[:, knee] = 0.3 if faint else 0.0
         seq = dataclasses.replace(seq, positions=positions, confidence=confidence)
     angles = counted_angles(seq)
     column = {n: np.degrees(angles[:, i]) for i, n in enumerate(COUNTED_ANGLES)}
