@@ -539,18 +539,19 @@ _LEG = {
 
 
 def _placed_knees(canonical: PoseSequence) -> PoseSequence:
-    """``canonical`` (on the canonical skeleton) with each knee missing in most of the frames
-    where its hip and ankle are there put where the knee's hinge puts it, in every one of
-    them, seen as far as the smaller of the hip's and the ankle's confidence; as it is when no
-    knee is to be placed (each seen in at least :data:`MIN_VALID_SHARE` of those frames, or no
-    thigh and shank seen to measure).
+    """``canonical`` (on the canonical skeleton) with each knee missing where its hip and
+    ankle are there put where the knee's hinge puts it, seen as far as the smaller of the hip's
+    and the ankle's confidence, and a knee missing in most of those frames put there in every
+    one of them; as it is when no knee is to be placed (none missing there, or no thigh and
+    shank seen to measure).
 
-    A knee is read from one source in a clip: where it is seen in most frames, from the pose
-    model's (its angles missing elsewhere, and filled in as any joint's are); where not, from
-    its hinge alone. The two disagree by the model's own bias, a few degrees to tens, and a
-    knee placed in the frames the model lost it and seen in the others stepped between them
-    (a leg raised sideways, its lower knee missing for 0.6 s of every 2 s: 0 repetitions of 2;
-    a side plank's straight leg: 2 of 0).
+    A knee missing in most frames is read from its hinge alone: its few seen frames disagree
+    with the hinge by the pose model's own bias, a few degrees to tens, and the angles stepped
+    between the two (a leg raised sideways, its lower knee missing for 1.4 s of every 2 s: 0
+    repetitions of 2). A knee seen in most frames (at least :data:`MIN_VALID_SHARE`) is read
+    where seen and placed where not, without the allowance for the legs' jitter below (a
+    recording's knee missing through one exercise only: placed there; left out, the
+    exercise's knee and hip angles were gone, a jog counted 1 of 7).
 
     The thigh and the shank are as long as the clip's median over both legs (a body is as long
     on the left as on the right); the knee lies at those lengths from the hip and the ankle
@@ -573,7 +574,9 @@ def _placed_knees(canonical: PoseSequence) -> PoseSequence:
     from the median absolute deviation) of the seen legs' length, so that what their own
     jitter makes a straight leg fall short by reads straight (a side plank's straight leg,
     its knee missing, counted two bends; motion capture's legs keep their length, and their
-    knees are placed as before)."""
+    knees are placed as before). Only for a knee missing in most frames: the seen frames of
+    one seen in most were read with the jitter as it is, and the placed ones stepped away
+    from them."""
     p = canonical.positions
     legs = [[_LEG["left"][i], _LEG["right"][i]] for i in range(3)]
     hip, knee, ankle = (p[:, joints] for joints in legs)
@@ -582,7 +585,8 @@ def _placed_knees(canonical: PoseSequence) -> PoseSequence:
         seen &= canonical.confidence[:, sum(legs, [])] >= SEEN_CONFIDENCE
     seen_hip, seen_knee, seen_ankle = seen[:, :2], seen[:, 2:4], seen[:, 4:]
     ends = np.isfinite(hip - ankle).all(axis=2)
-    place = ends & (seen_knee.sum(axis=0) < MIN_VALID_SHARE * ends.sum(axis=0))
+    mostly_unseen = seen_knee.sum(axis=0) < MIN_VALID_SHARE * ends.sum(axis=0)
+    place = ends & (~seen_knee | mostly_unseen)
     whole = seen_hip & seen_knee & seen_ankle
     thigh, shank = (
         np.linalg.norm(knee - hip, axis=2)[whole],
@@ -594,7 +598,8 @@ def _placed_knees(canonical: PoseSequence) -> PoseSequence:
     slack = 2.0 * 1.4826 * float(np.median(np.abs(length - np.median(length))))
     thigh_m, shank_m = float(np.median(thigh)), float(np.median(shank))
     reach = np.minimum(
-        np.linalg.norm(ankle - hip, axis=2, keepdims=True) + slack, thigh_m + shank_m
+        np.linalg.norm(ankle - hip, axis=2, keepdims=True) + slack * mostly_unseen[None, :, None],
+        thigh_m + shank_m,
     )
     along = unit(ankle - hip)
     forward = body_frame(p).forward[:, None, :]

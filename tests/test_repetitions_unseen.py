@@ -359,24 +359,52 @@ def test_a_still_straight_leg_whose_length_wobbles_is_placed_straight() -> None:
     assert count_repetitions(seq).count == 0
 
 
-def test_a_knee_seen_in_most_frames_is_not_placed_in_the_others() -> None:
+def test_a_knee_missing_in_most_frames_is_placed_in_every_one() -> None:
     """A body standing still for 6 s at 30 fps (the figure of tests/bodies.py), its right knee
-    seen 0.08 m ahead of where it stands (as a pose model may see it, a little bent: thigh and
-    shank sqrt(0.45^2 + 0.08^2) = 0.457 m, the knee's angle 180 - 2 atan(0.08 / 0.45) = 159.8
-    degrees) and missing for the last second of every three. The left leg is straight, 0.45 m
-    a bone; the medians over both legs (the left's 180 frames against the right's 120) are
-    0.45, so the knee's hinge, 0.9 m from hip to ankle, puts it straight: 180 degrees. The
-    knee is seen in most frames: it is read where seen, 159.8 degrees, and missing (to be
-    filled in) where not; nothing repeats. Before, it was placed where missing, and stepped
-    from 159.8 to 180 degrees and back every 3 s: 2 repetitions of a body standing still."""
+    seen in the first second of every three, 0.08 m ahead of where it stands (as a pose model
+    may see it, a little bent: thigh and shank sqrt(0.45^2 + 0.08^2) = 0.457 m, the knee's
+    angle 180 - 2 atan(0.08 / 0.45) = 159.8 degrees), and missing in the rest. The left leg is
+    straight, 0.45 m a bone; the medians over both legs (the left's 180 frames against the
+    right's 60) are 0.45 and the legs' length has no spread, so the knee's hinge, 0.9 m from
+    hip to ankle, puts the knee straight: 180 degrees, in every frame, the seen ones too
+    (missing in most frames, the knee is read from its hinge alone); nothing repeats. Placed
+    only where missing, the knee stepped from 159.8 to 180 degrees and back every 3 s: 2
+    repetitions of a body standing still."""
     body = standing()
     body["right_knee"] = body["right_knee"] + np.array([0.0, 0.0, 0.08])
     gone = dict(body)
     del gone["right_knee"]
-    missing = np.arange(180) % 90 >= 60
+    missing = np.arange(180) % 90 >= 30
     seq = to_sequence(*(gone if m else body for m in missing))
     knee = np.degrees(counted_angles(seq)[:, COUNTED_ANGLES.index("right_knee")])
-    seen_deg = 180.0 - 2 * np.degrees(np.arctan(0.08 / 0.45))
-    np.testing.assert_allclose(knee[~missing], seen_deg, atol=1e-6)
-    assert np.isnan(knee[missing]).all()
+    np.testing.assert_allclose(knee, 180.0, atol=1e-6)
     assert count_repetitions(seq).count == 0
+
+
+def test_a_knee_seen_in_most_frames_is_placed_where_missing() -> None:
+    """12 s standing still, then knee raises, left then right, three times each (as in
+    test_knee_raises_with_a_knee_unseen_alternate: 30 frames up and down, 30 still, at 30
+    fps), the right knee missing through the raises only, as when a person turns for one
+    exercise of a recording: seen in two thirds of the frames. Where missing it is placed
+    from the right hip and ankle (thigh and shank 0.45 m, as seen): the right knee's angle is
+    180 degrees less the raise there, and the six raises alternate, at the top of each (frame
+    360 + 15 + 30 k). Left out where missing (the knee read from one source, the pose model's,
+    where seen in most frames), the right knee's and hip's angles were gone through the
+    raises: 3 repetitions, not alternating (a recording's jog with a knee missing through it
+    counted 1 of 7)."""
+    body = standing()
+    raise_deg = 45.0 * (1 - np.cos(2 * np.pi * np.arange(30) / 30))
+    still = np.zeros(30)
+    left = np.concatenate([np.zeros(360), *[np.concatenate([raise_deg, still])] * 3])
+    right = np.concatenate([np.zeros(360), *[np.concatenate([still, raise_deg])] * 3])
+    pairs = zip(left, right, strict=True)
+    seq = to_sequence(*(_knee_raised(_knee_raised(body, "left", a), "right", b) for a, b in pairs))
+    positions = seq.positions.copy()
+    positions[360:, JOINT_INDEX["right_knee"]] = np.nan
+    seq = dataclasses.replace(seq, positions=positions)
+    knee = np.degrees(counted_angles(seq)[:, COUNTED_ANGLES.index("right_knee")])
+    np.testing.assert_allclose(knee, 180.0 - right, atol=1e-4)
+    result = count_repetitions(seq)
+    assert result.alternating
+    assert [r.peak_frame for r in result.repetitions] == [375 + 30 * k for k in range(6)]
+    assert [r.side for r in result.repetitions] == ["left", "right"] * 3
