@@ -61,6 +61,7 @@ from features.body import check_person, long_runs, torso_rows, torso_share
 from features.derived import forget, movement_signals_of, stretch
 from features.errors import ConfigError, DataError, InputError
 from features.fluents import DEFAULT_TABLE, history_frames
+from features.jitter import MAD_TO_SD
 from features.poses import PoseSequence, expect_sequence, gap_rows
 from features.progress import progress
 from features.repetitions import (
@@ -586,7 +587,7 @@ def period_outliers(spans: np.ndarray, repetition: np.ndarray, step: int) -> np.
     if len(found) < 3:
         return out
     mad = float(np.median(np.abs(found - np.median(found))))
-    scale = max(1.4826 * mad, step / float(np.median(stop - start)))
+    scale = max(MAD_TO_SD * mad, step / float(np.median(stop - start)))
     out[idx] = np.abs(np.nan_to_num(diff)) > PERIOD_OUTLIER_Z * scale
     return out
 

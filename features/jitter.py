@@ -31,7 +31,9 @@ MAX_S = 0.1
 MIN_FRAMES = 0.3
 """A joint asking for a Gaussian narrower than this many frames is not smoothed."""
 
-_MAD_TO_SD = 1.4826  # 1 / 0.6745: a normal variable's standard deviation from its median |x|
+MAD_TO_SD = 1.4826
+"""A normal variable's standard deviation over its median absolute deviation (1 / 0.6745):
+the robust standard deviation the counter, the segmenter and :func:`joint_jitter` take."""
 
 
 def joint_jitter(positions: np.ndarray) -> np.ndarray:
@@ -47,7 +49,7 @@ def joint_jitter(positions: np.ndarray) -> np.ndarray:
     for j in range(x.shape[1]):
         ok = np.all(np.isfinite(d2[:, j]), axis=1)
         if ok.any():
-            out[j] = float(np.linalg.norm(_MAD_TO_SD * np.median(d2[ok, j], axis=0) / np.sqrt(6)))
+            out[j] = float(np.linalg.norm(MAD_TO_SD * np.median(d2[ok, j], axis=0) / np.sqrt(6)))
     return out
 
 

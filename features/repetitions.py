@@ -113,6 +113,7 @@ from .datasets import Clip
 from .derived import signals_of, stretch
 from .errors import DataError
 from .geometry import WORLD_UP, angle_between, body_frame, joint_angle, unit
+from .jitter import MAD_TO_SD
 from .leg_swaps import SWAP_JOINTS, swapped_legs
 from .poses import PoseSequence, expect_sequence
 from .signals import ANGLE_SIGNALS
@@ -595,7 +596,7 @@ def _placed_knees(canonical: PoseSequence) -> PoseSequence:
     if not place.any() or not whole.any():
         return canonical
     length = thigh + shank
-    slack = 2.0 * 1.4826 * float(np.median(np.abs(length - np.median(length))))
+    slack = 2.0 * MAD_TO_SD * float(np.median(np.abs(length - np.median(length))))
     thigh_m, shank_m = float(np.median(thigh)), float(np.median(shank))
     reach = np.minimum(
         np.linalg.norm(ankle - hip, axis=2, keepdims=True) + slack * mostly_unseen[None, :, None],
@@ -800,7 +801,7 @@ def _drop_glitches(x: np.ndarray, rate: float, shortest: int) -> np.ndarray:
     part = x[:, cols]
     centre = _running_median(part, width)
     dev = part - centre
-    spread = 1.4826 * _running_median(np.abs(dev), width)
+    spread = MAD_TO_SD * _running_median(np.abs(dev), width)
     flagged = np.abs(dev) > np.maximum(3.0 * spread, MIN_EXCURSION_RAD)
     out = x.copy()
     for k, j in enumerate(cols):
