@@ -143,7 +143,7 @@ def _table_rows() -> dict[str, str]:
 
 #: an option a row of the table names as another command's ("train the case base with
 #: `--split windows`" in segment's row): the command that takes it
-OTHER_COMMANDS = {("segment", "--split"): "train"}
+OTHER_COMMANDS = {("segment", "--split"): "train", ("segment", "--out"): "extract"}
 
 
 def test_every_long_option_the_readme_table_names_is_taken_whole() -> None:
