@@ -329,6 +329,7 @@ def plan_listing(csv_source: Path, out: Path, jobs: list[Job]) -> Listing | None
         )
     for dest in copies.values():
         check_output(dest, inputs=[job.video for job in jobs], what="label file")
+    _check_copies_replace_own(copies, listing)
     extras = list(dict.fromkeys(k for job in jobs for k in job.extras))
     return Listing(listing, copies, extras)
 
@@ -357,8 +358,38 @@ def _label_file_copies(out: Path, jobs: list[Job]) -> dict[Path, Path]:
     return copies
 
 
-def _listed_in(listing: Path) -> list[Path]:
-    """The files an existing labels.csv in ``--out`` names (none when unreadable)."""
+def _check_copies_replace_own(copies: dict[Path, Path], listing: Path) -> None:
+    """Refuse, before any work, a label or names file copy (``copies``: source -> place in
+    ``--out``) over a file already there that is neither the same bytes nor a label file
+    the labels.csv there (``listing``, an earlier extract's) names: a file of the user's, or
+    another label file of that name, is not replaced in silence."""
+    listed: set[Path] | None = None
+    for src, dest in copies.items():
+        if dest == src or not (dest.exists() or dest.is_symlink()):
+            continue
+        if listed is None:
+            columns = ("label_file", "label_names")
+            listed = {p.resolve() for p in _listed_in(listing, columns)}
+        if dest.is_symlink() or not (_same_bytes(src, dest) or dest.resolve() in listed):
+            raise DataError(
+                f"is already there, not a label file the labels.csv there names:"
+                f" copying {shown(src.name)} there would replace it; move it away, or"
+                " choose another --out",
+                dest,
+            )
+
+
+def _same_bytes(a: Path, b: Path) -> bool:
+    """Whether the files ``a`` and ``b`` hold the same bytes (False when one is unreadable)."""
+    try:
+        return a.stat().st_size == b.stat().st_size and a.read_bytes() == b.read_bytes()
+    except OSError:
+        return False
+
+
+def _listed_in(listing: Path, columns: tuple[str, ...] = ("path",)) -> list[Path]:
+    """The files an existing labels.csv in ``--out`` names in ``columns`` (none when
+    unreadable)."""
     import csv
 
     try:
@@ -367,7 +398,7 @@ def _listed_in(listing: Path) -> list[Path]:
     except (OSError, UnicodeDecodeError, csv.Error):
         return []
     return [
-        listing.parent / r["path"] for r in rows if isinstance(r.get("path"), str) and r["path"]
+        listing.parent / r[c] for r in rows for c in columns if isinstance(r.get(c), str) and r[c]
     ]
 
 
@@ -783,9 +814,70 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
     if args.out.exists() and not args.out.is_dir():
         raise DataError("output is not a folder", args.out)
     _check_outputs(jobs)
+    _check_not_replaced(jobs, args.out, overlays_named=not single)
     _check_not_read_again(args, single)
     _check_out_dir(args.out)
     _check_not_hidden(args.out, jobs)
+
+
+def _check_not_replaced(jobs: list[Job], out: Path, overlays_named: bool) -> None:
+    """Refuse, before any work, a file already where the folder ``out`` puts a clip's pose
+    file unless it is the pose file ``extract`` made of that same video before (run again,
+    after Ctrl-C or with other options: it is brought up to date): a pose file of another
+    video of the same name (``a/squat.mp4`` extracted, then ``b/squat.mp4``) or a file of
+    the user's is not replaced in silence, as ``convert --out DIR`` refuses a pose file of
+    another recording and ``--plot DIR`` a picture it did not draw. So is an overlay
+    extract names in a folder (``overlays_named``: ``--overlay DIR``) beside no pose file of
+    that video. A file the user named (``--out x.npz``, one video's ``--overlay x.mp4``) is
+    theirs to replace."""
+    digests: dict[Path, str | None] = {}
+    for job in jobs:
+        if _there(job.out):
+            if not _made_of(job.out, job.video, digests):
+                raise DataError(_replaced_words(job, "a pose file", out), job.out)
+        elif overlays_named and job.overlay is not None and _there(job.overlay):
+            raise DataError(_replaced_words(job, "an overlay", out), job.overlay)
+
+
+def _there(path: Path) -> bool:
+    """Whether anything (a file, a folder, a link, a broken link) is at ``path``."""
+    return path.exists() or path.is_symlink()
+
+
+def _made_of(pose: Path, video: Path, digests: dict[Path, str | None]) -> bool:
+    """Whether ``pose`` is a pose file ``extract`` made of ``video`` (not a link): its
+    metadata names this very video file (edited since, or not: a rerun reads no byte of it
+    here) or records the video's SHA-256 (a copy of it, or the folders moved). A video that
+    cannot be read passes (its clip fails, writing nothing); its digest is kept in
+    ``digests`` (a labels CSV lists one video in several rows)."""
+    from features.datasets import source_video
+
+    if pose.is_symlink() or not pose.is_file():
+        return False
+    meta = stored_metadata(pose)
+    if meta is None or "pose_model" not in meta:
+        return False
+    named = source_video(meta, pose)
+    try:
+        if named is not None and named.samefile(video):
+            return True
+    except OSError:
+        pass
+    if video not in digests:
+        try:
+            digests[video] = sha256_file(video)
+        except DataError:
+            digests[video] = None
+    return digests[video] is None or meta.get("video_sha256") == digests[video]
+
+
+def _replaced_words(job: Job, what: str, out: Path) -> str:
+    """The refusal of a file at ``job``'s pose file or overlay (``what``) in ``out``."""
+    return (
+        f"is already there, not {what} posecbr extract made of {shown(job.video.name)}:"
+        f" extracting into {shown(out)} would replace it; move it away, or choose another"
+        f" {'--out' if what == 'a pose file' else '--overlay'}"
+    )
 
 
 def _check_not_hidden(out: Path, jobs: list[Job]) -> None:
