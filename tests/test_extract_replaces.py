@@ -10,23 +10,19 @@ import hashlib
 import json
 from pathlib import Path
 
-import cv2
 import numpy as np
 import pytest
 
 from posecbr.cli import main
 from tests.badinput import good_pose_file, refused
+from tests.test_hunt35f import _tiny_video
 
 
 def _video(path: Path, seed: int) -> Path:
-    """Four 32x32 MJPG frames of noise (no person): each seed gives other bytes."""
+    """Four 32x32 MJPG frames of noise (no person), in a folder made if need be: each seed
+    gives other bytes."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    rng = np.random.default_rng(seed)
-    out = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (32, 32))
-    for _ in range(4):
-        out.write(rng.integers(0, 255, (32, 32, 3), dtype=np.uint8))
-    out.release()
-    return path
+    return _tiny_video(path, seed)
 
 
 def _digest_in(pose: Path) -> str:
