@@ -453,30 +453,19 @@ def picture_mark(command: str, recording: str | Path) -> str:
 
 
 def png_mark(path: Path) -> str | None:
-    """The :data:`PICTURE_KEY` text chunk of the PNG file ``path``: None when it is no PNG,
-    has none, or cannot be read. The chunks before the image data are read, no further."""
-    import struct
-    import zlib
+    """The :data:`PICTURE_KEY` text chunk of the PNG file ``path`` (Pillow reads the chunks
+    before the image data on opening, not the image): None when it is no PNG, has none, or
+    cannot be read."""
+    from PIL import Image
 
     try:
-        with open(path, "rb") as fh:
-            if fh.read(8) != b"\x89PNG\r\n\x1a\n":
+        with Image.open(path) as picture:
+            if picture.format != "PNG":
                 return None
-            while True:
-                head = fh.read(8)
-                if len(head) < 8:
-                    return None
-                size, kind = struct.unpack(">I4s", head)
-                if kind in (b"IDAT", b"IEND"):
-                    return None
-                data = fh.read(size + 4)[:size]  # its CRC after it
-                key, _, text = data.partition(b"\0")
-                if kind == b"tEXt" and key == PICTURE_KEY.encode():
-                    return text.decode("latin-1")
-                if kind == b"zTXt" and key == PICTURE_KEY.encode():
-                    return zlib.decompress(text[1:]).decode("latin-1")
-    except (OSError, zlib.error, struct.error):
+            mark = picture.info.get(PICTURE_KEY)
+    except (OSError, ValueError, Image.DecompressionBombError):
         return None
+    return mark if isinstance(mark, str) else None
 
 
 def plot_timeline(
