@@ -361,7 +361,7 @@ def _long_enough(args: argparse.Namespace, clips: list[Any]) -> list[Any]:
     from features.repetitions import MIN_PERIOD_S, long_enough
 
     kept, short = long_enough(clips)
-    args.short_only = sorted({shown(c.label) for c in short} - {shown(c.label) for c in kept})
+    args.short_only = sorted({c.label for c in short} - {c.label for c in kept})
     if short:
         labels = ", ".join(sorted({shown(c.label) for c in short}))
         stretches = "stretch" if len(short) == 1 else "stretches"
@@ -542,7 +542,7 @@ def _one_activity(args: argparse.Namespace, solutions: list[str]) -> None:
     if len(values) == 1:
         short = getattr(args, "short_only", [])  # labels whose every stretch was left out
         why = (
-            f" (the stretches labelled {first_few(short)} are all shorter than"
+            f" (the stretches labelled {first_few([shown(v) for v in short])} are all shorter than"
             f" {MIN_PERIOD_S:g} s: left out)"
             if short and args.target == "label"
             else ""
@@ -971,6 +971,15 @@ def _skipped(
     return "\n".join(lines)
 
 
+def _no_case(args: argparse.Namespace, result: Any) -> list[str]:
+    """The activities (or another target's classes) this run gave clips of and made no case
+    of: every clip of them skipped in training (``result.lost_labels``), and, of activities,
+    every labelled stretch of them left out before it as shorter than one movement can be
+    (:func:`_long_enough`)."""
+    short = getattr(args, "short_only", []) if args.target == "label" else []
+    return sorted(set(result.lost_labels) | set(short))
+
+
 def _lost(labels: list[str], noun: str) -> str:
     """The line naming the ``labels`` (activities, or another target's classes: ``noun``)
     every clip of which was skipped: the case base holds no case of them."""
@@ -1177,8 +1186,8 @@ def _summary(args: argparse.Namespace, result: Any) -> dict[str, Any]:
         summary["trim"] = result.maintenance.summary()
     if result.indistinct:
         summary["indistinct"] = result.indistinct
-    if result.lost_labels:
-        summary["no_case"] = result.lost_labels  # every clip of them skipped
+    if _no_case(args, result):
+        summary["no_case"] = _no_case(args, result)  # every clip of them skipped
     if args.append:
         summary["new_labels"] = result.new_labels
     return summary
@@ -1196,8 +1205,9 @@ def _report(args: argparse.Namespace, result: Any) -> None:
 
     if result.skipped or result.too_short:
         print(_skipped(result.skipped, result.too_short, args.split, args.kept_whole))
-    if result.lost_labels:
-        print(_lost(result.lost_labels, class_noun(args.target, len(result.lost_labels))))
+    lost = _no_case(args, result)
+    if lost:
+        print(_lost(lost, class_noun(args.target, len(lost))))
 
     n = len(result.label_counts)
     activities = f"{n} {class_noun(args.target, n)}"  # classes of another --target
