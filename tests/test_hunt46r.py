@@ -1,11 +1,16 @@
 """Hunt 46r: the README's "Case bases" and "Long recordings" passages checked against the code.
 
-An activity every labelled stretch of which is shorter than one movement can be (0.4 s) is
+1. An activity every labelled stretch of which is shorter than one movement can be (0.4 s) is
 left out before training and gets no case; README ("Training from long recordings") says
 ``train`` names such an activity beneath the skipped ones ("no case of the activity ...:
 every piece of it was skipped, as said above"; ``--json``: ``no_case``). It did so for
 clips skipped in training, not for stretches of a recording labelled over time left out
-before it: the case base lacked the activity with only the "left out" note on stderr."""
+before it: the case base lacked the activity with only the "left out" note on stderr.
+
+2. ``convert --out DIR`` adds to DIR's labels.csv, "refused in one line when a row of it could
+not be read by ``train``" (README, Commands). Each row was read, but not the rows together: a
+labels.csv listing one pose file twice, or under two labels, was added to (exit 0), and
+``train DIR`` then refused the folder convert had just written."""
 
 from __future__ import annotations
 
@@ -15,6 +20,7 @@ from pathlib import Path
 import pytest
 
 from posecbr.cli import main
+from tests.badinput import refused
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
@@ -38,3 +44,27 @@ def test_train_names_an_activity_whose_every_stretch_was_too_short(
     assert main([*argv, "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["no_case"] == ["flick"] and doc["labels"] == {"reach": 1, "squat": 1}
+
+
+@pytest.mark.parametrize(
+    ("second", "needle"),
+    [("a", "lines 2 and 3 both give m01.npz whole ('a')"),
+     ("b", "lines 2 and 3 give m01.npz whole ('a') and whole ('b')")],
+)  # fmt: skip
+def test_convert_refuses_to_add_to_a_labels_csv_train_would_refuse(
+    second: str, needle: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The out folder's labels.csv lists its one pose file twice: the same stretch and label
+    (train: "listed twice: its cases would vote twice"), or two labels (train: "its frames
+    would be cases of two activities"). Refused naming both lines, nothing written."""
+    source = tmp_path / "source"
+    source.mkdir()
+    (source / "m05.npz").write_bytes((DEMO / "m05_s01_e01.npz").read_bytes())
+    (source / "labels.csv").write_text("path,label\nm05.npz,sit_to_stand\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "m01.npz").write_bytes((DEMO / "m01_s01_e01.npz").read_bytes())
+    (out / "labels.csv").write_text(f"path,label\nm01.npz,a\nm01.npz,{second}\n")
+    refused(["convert", str(source), "--out", str(out)], tmp_path, capsys,
+            f"{out / 'labels.csv'}: the labels file already there cannot be added to", needle,
+            "nothing written")  # fmt: skip

@@ -556,10 +556,11 @@ def _listed_before(labels: Path) -> tuple[list[dict[str, Any]], list[str]]:
         raise DataError(f"cannot read the labels file already there ({exc})", labels) from None
     if "path" not in (c.strip().lower() for c in columns):
         raise DataError("the labels file already there has no 'path' column", labels)
-    from features.datasets import read_labels_csv
+    from features.datasets import check_no_overlaps, read_labels_csv
 
     try:  # every row a clip with its label, as train and classify will read it
         read_labels_csv(labels)
+        check_no_overlaps(labels, twice=True)  # no stretch twice, no frames of two labels
     except DataError as exc:
         raise DataError(
             f"the labels file already there cannot be added to: {exc.message}; nothing written",
