@@ -1119,6 +1119,14 @@ def _keep(
     return not (correct is not None and marked is not None and marked != correct)
 
 
+def _unshadowed(meta: Mapping[str, Any], given: Mapping[str, Any]) -> dict[str, Any]:
+    """The metadata of a clip file that no column ``given`` for it (a labels CSV's) names in
+    any case: the CSV's ``Correct`` overrides the file's ``correct``, as its ``correct``
+    does (:func:`extra` would find the file's, spelt exactly, first)."""
+    names = {k.strip().lower() for k in given}
+    return {k: v for k, v in meta.items() if k.strip().lower() not in names}
+
+
 def extra(extras: Mapping[str, Any], column: str) -> Any:
     """The value of ``column`` among a clip's extras, its name in any case (a labels CSV's
     columns keep their spelling: ``Correct`` is the column ``correct``); None if absent."""
@@ -1166,7 +1174,7 @@ class DatasetEntry:
             meta_label, meta_subject, meta_extras = _from_metadata(seq)
             label = piece_label if piece_label is not None else meta_label
             subject = e.subject if e.subject is not None else meta_subject
-            extras = {**meta_extras, **e.extras}
+            extras = {**_unshadowed(meta_extras, e.extras), **e.extras}
             if label is None:
                 if self.kind != "pose_file" and not (self.unlabelled and self.kind == "csv"):
                     raise DataError(
@@ -1174,6 +1182,7 @@ class DatasetEntry:
                     )
                 label = ""
             if self._keep(label, subject, extras):
+                seq = replace(seq, metadata=_unshadowed(seq.metadata, e.extras))
                 seq = seq.with_metadata(label=label, subject=subject, **extras)
                 out.append(Clip(seq=seq, label=label, subject=subject, extras=extras))
         return out

@@ -10,7 +10,12 @@ before it: the case base lacked the activity with only the "left out" note on st
 2. ``convert --out DIR`` adds to DIR's labels.csv, "refused in one line when a row of it could
 not be read by ``train``" (README, Commands). Each row was read, but not the rows together: a
 labels.csv listing one pose file twice, or under two labels, was added to (exit 0), and
-``train DIR`` then refused the folder convert had just written."""
+``train DIR`` then refused the folder convert had just written.
+
+3. A labels CSV's other columns are "kept with each clip as the file spells it ... ``--target``
+finds it in any case" (README, Commands). A column ``Correct`` beside pose files whose
+metadata holds ``correct`` (UI-PRMD's, converted) lost to the file's: the lookup in any case
+found the file's key, spelt exactly, first, so the CSV's verdicts were ignored."""
 
 from __future__ import annotations
 
@@ -68,3 +73,21 @@ def test_convert_refuses_to_add_to_a_labels_csv_train_would_refuse(
     refused(["convert", str(source), "--out", str(out)], tmp_path, capsys,
             f"{out / 'labels.csv'}: the labels file already there cannot be added to", needle,
             "nothing written")  # fmt: skip
+
+
+def test_a_labels_csv_column_overrides_the_pose_files_own_in_any_case(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two real UI-PRMD deep squats, both correct repetitions by their files' metadata
+    (``correct: true``); the CSV's ``Correct`` calls the first incorrect. Trained on that
+    column, the case base holds one case of each verdict (the old code: both "correct", and
+    train refused the data as holding one value)."""
+    for name in ("m01_s01_e01.npz", "m01_s02_e01.npz"):
+        (tmp_path / name).write_bytes((DEMO / name).read_bytes())
+    csv_path = tmp_path / "labels.csv"
+    csv_path.write_text(
+        "path,label,Correct\nm01_s01_e01.npz,deep_squat,false\nm01_s02_e01.npz,deep_squat,true\n"
+    )
+    argv = ["train", str(csv_path), "--target", "correct", "--db", str(tmp_path / "cb.sqlite")]
+    assert main([*argv, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["labels"] == {"correct": 1, "incorrect": 1}
