@@ -1092,6 +1092,10 @@ class StreamFrame:
     """A file's frame: its presentation time as the decoder gives it, from the first frame's
     (s; NaN for a live source, or when the decoder gives none it can be trusted with:
     :class:`FrameClock`). A variable frame rate shows in it, not in ``time_s``."""
+    last: bool = False
+    """A file's frame at :func:`stream_poses`'s ``max_frames`` that the file ends with (no
+    frame after it: the whole file was read, not cut by the limit); False for every other
+    frame (a live source's: not known)."""
 
     @property
     def seen_world(self) -> np.ndarray:
@@ -1248,6 +1252,14 @@ def _grab(cap: Any, fps: float | None) -> tuple[bool, None, float]:
     return ok, None, frame_time_s(cap) if ok and fps else math.nan
 
 
+def _ends(cap: Any, queue: collections.deque[tuple[bool, Any, float]], fps: float) -> bool:
+    """Whether a file's frame just read is its last: the next frame grabbed (into ``queue``
+    when none was read ahead) is not there."""
+    if not queue:
+        queue.append(_grab(cap, fps))
+    return not queue[0][0]
+
+
 def _read_ahead(
     cap: Any, queue: collections.deque[tuple[bool, Any, float]], wanted: int
 ) -> list[float]:
@@ -1375,7 +1387,8 @@ def stream_poses(
             rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
             # as estimate_video times the filters: index / fps until the frames stray
             at = clock.filter_time(index, video_t) if fps else t
-            yield StreamFrame(index, t, est.process(rgb, at), rgb, read_at, video_t)
+            last = fps is not None and index + 1 == max_frames and _ends(cap, queue, fps)
+            yield StreamFrame(index, t, est.process(rgb, at), rgb, read_at, video_t, last)
             index += 1
     finally:
         cap.release()

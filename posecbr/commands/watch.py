@@ -549,6 +549,7 @@ class Watcher:
         self.colours: dict[str, Any] | None = None  # each activity's, once drawn
         self.n = 0
         self.read = 0  # frames the source gave (before the grid of a variable rate's)
+        self.whole = False  # the last of them was the file's last (at --max-frames: read whole)
         self.started = time.perf_counter()
 
     def warm_up(self) -> None:
@@ -582,6 +583,7 @@ class Watcher:
             if stop.is_set() or self.stdout_gone:
                 break  # the user stopped watching: finish what was seen
             self.read += 1
+            self.whole = frame.last
             if self.live is None:
                 if self.fps is None:
                     waiting.append(frame)
@@ -608,8 +610,9 @@ class Watcher:
     @property
     def limited(self) -> bool:
         """The user's ``--max-frames`` stopped the watch: the source gave that many frames
-        (it may have had more)."""
-        return self.args.max_frames is not None and self.read >= self.args.max_frames
+        and may have had more (a file of exactly that many ended on its own)."""
+        limit = self.args.max_frames
+        return limit is not None and self.read >= limit and not self.whole
 
     def _ended(self) -> str:
         """What stopped the stream: the user's ``--max-frames``, or its end."""
