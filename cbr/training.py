@@ -38,7 +38,7 @@ from features.datasets import DatasetEntry, clip_target
 from features.errors import ConfigError, DataError, InputError
 from features.poses import PoseSequence
 from features.progress import progress
-from features.text import counted
+from features.text import counted, did_you_mean
 
 from .casebase import CaseBase, piece_name, subject_of
 from .described import DescribedClip, describe_case, describe_clip
@@ -128,8 +128,6 @@ def no_target_value(clip: Any, target: str) -> DataError:
     value of, and the one meant when ``target`` is a mistyped one of them. A clip without a
     label (a pose file ``extract`` made of one video, given alone) is told where a label
     comes from, not offered the column it lacks."""
-    from features.text import did_you_mean
-
     if target == "label":
         return DataError(
             "no label: its metadata has none (give it in a labels CSV, path,label, or put"
@@ -729,7 +727,11 @@ def _build_reason(clf: CaseBaseClassifier, n_clips: int, labels: Sequence[str]) 
 
 
 def append_plan(
-    db: str | Path, name: str, target: str | None = None, cases: str | None = None
+    db: str | Path,
+    name: str,
+    target: str | None = None,
+    cases: str | None = None,
+    columns: Sequence[str] = (),
 ) -> tuple[Plan, str, str, str]:
     """The plan of ``--append`` to case base ``name`` (its columns), its identity (``uid``:
     the append is refused if the case base is replaced meanwhile), what the added clips
@@ -737,7 +739,8 @@ def append_plan(
     this was recorded), and what their solution is: the case base's target. ``cases`` or
     ``target`` given otherwise (as :func:`train`'s) is refused: windows added to a case base
     of whole clips would be cases of another kind, labels added to one of correct/incorrect
-    another solution."""
+    another solution; a ``target`` close to the case base's or to one of ``columns`` (the
+    added clips') is guessed as mistyped."""
     store = open_store(db, create=False, readonly=True)
     try:
         stored = load_classifier(store, name)
@@ -746,7 +749,8 @@ def append_plan(
     if target is not None and stored.target != target:
         raise ConfigError(
             f"case base {name!r} predicts {stored.target!r}, not {target!r}: its cases "
-            f"cannot take --target {target}",
+            f"cannot take --target {target}"
+            + did_you_mean(target, [stored.target, *(c for c in columns if c != target)]),
             "--target",
         )
     if cases is not None and stored.cases is not None and stored.cases != cases:

@@ -4,6 +4,8 @@
    as stopped by the limit (exit 0, a note that the frames after them were not watched),
    though the whole video was watched: it is refused as the same video is without
    ``--max-frames`` (README, watch).
+2. ``train DATA --append --target corect`` gave no "did you mean 'correct'?" where ``train``,
+   ``classify`` and ``compare`` without ``--append`` do.
 """
 
 from __future__ import annotations
@@ -60,3 +62,30 @@ def test_watch_max_frames_of_exactly_the_videos_length_refuses_nobody_in_view(
         " stopped the watch: the video's frames after them, if any, were not watched)"
     ) in err
 
+
+def test_train_append_guesses_a_mistyped_target_from_the_datas_columns(
+    case_base: Path,  # noqa: F811 - the fixture imported above
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A labels CSV with a ``correct`` column appended with ``--target corect`` to a case base
+    of labels: refused, now with the guess ``train`` without ``--append`` gives (before:
+    none); ``--target lable``: the case base's own target guessed."""
+    import shutil
+
+    from features.poses import save_pose
+    from tests.badinput import refused
+    from tests.moves import clip
+
+    db = shutil.copy(case_base, tmp_path / "cb.sqlite")
+    save_pose(clip("squat", 2.0, 30.0), tmp_path / "data" / "s.npz")
+    labels = tmp_path / "data" / "train.csv"
+    labels.write_text("path,label,correct\ns.npz,Squat,yes\n")
+    argv = ["train", str(labels), "--db", str(db), "--append", "--target"]
+    line = refused([*argv, "corect"], tmp_path, capsys)
+    assert line == (
+        "posecbr train: error: --target: case base 'default' predicts 'label', not 'corect': "
+        "its cases cannot take --target corect (did you mean 'correct'?)"
+    )
+    line = refused([*argv, "lable"], tmp_path, capsys)
+    assert line.endswith("cannot take --target lable (did you mean 'label'?)")

@@ -17,7 +17,7 @@ from typing import Any
 
 from cbr.similarity import available_measures, get_measure
 from features.cluster import SCHEDULER_HELP, check_scheduler
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_output
 from features.text import counted, first_few, percent, shown
 from posecbr.arguments import add_k_option, check_found, param_value, path_arg
@@ -808,6 +808,19 @@ def _check_one_recording(args: argparse.Namespace) -> None:
         )
 
 
+def _data_columns(args: argparse.Namespace) -> list[str]:
+    """The columns the clips to train on may have a value of, found from names and labels
+    CSVs alone (:func:`features.datasets.dataset_columns`), for a mistyped ``--target``'s
+    guess; none of data that cannot be listed (what is wrong with it is told when it is
+    read)."""
+    from features.datasets import dataset_columns
+
+    try:
+        return dataset_columns(args.data, sensor=args.sensor)
+    except (PosecbrError, OSError):
+        return []
+
+
 def _append_name(args: argparse.Namespace) -> str:
     """The case base ``--append`` adds to: ``--name``, else the one named
     :data:`DEFAULT_NAME`, else the store's only one, as ``classify``, ``segment`` and
@@ -895,8 +908,9 @@ def run(args: argparse.Namespace) -> int:
     if args.append:
         _check_append(args)
         args.name = _append_name(args)
+        columns = _data_columns(args) if args.target is not None else []
         plan, uid, args.split, args.target = append_plan(
-            args.db, args.name, args.target, args.split
+            args.db, args.name, args.target, args.split, columns
         )
         args.over_time = _over_time(args)
         _note_csv_names(args)
