@@ -27,6 +27,7 @@ import numpy as np
 from casebase_store import (
     CaseBaseInfo,
     Seen,
+    SourcedCase,
     StoreError,
     StoreTransaction,
     check_case_base_name,
@@ -847,36 +848,70 @@ SAME_CONTENT_TOLERANCE = 1e-9
 def _check_new_content(
     tx: StoreTransaction, info: CaseBaseInfo, clips: Sequence[DescribedClip], where: str
 ) -> None:
-    """Refuse an append of a clip whose file name, frames and features are a stored case's
-    (the same clip, stored under a path that no longer resolves, such as one relative to
-    another working folder): its case would vote twice. A case stored without its frames
-    (before they were kept) is compared by its file name and features."""
-    named = tx.cases_named(info, [c.source for c in clips if c.source])
-    for clip in clips:
-        _, a, b = _provenance(clip)
-        for case in named.get(clip.source, ()):
-            frames = (case.frame_start, case.frame_end)
-            if frames in ((a, b), (None, None)) and _same_values(clip.values, case.features):
-                raise StoreError(
-                    f"{_shown_frames((clip.source, a, b))} is already case {case.id} of "
-                    f"{info.name!r}, stored as {_shown_frames((case.source, *frames))} (the same "
-                    "file name, frames and features: added before from another folder?): "
-                    "nothing added",
-                    where,
-                )
+    """Refuse an append of a clip whose frames and features are a stored case's, whatever
+    either file is called: the same clip stored under a path that no longer resolves (one
+    relative to another working folder), or a copy of its file under another name; its case
+    would vote twice. A case stored without its frames (before they were kept) is compared
+    by its features. Clips without a source (the Python API's arrays) are not compared."""
+    sourced = [c for c in clips if c.source]
+    if not sourced:
+        return
+    values = np.stack([c.values for c in sourced]).reshape(len(sourced), -1)
+    at: dict[tuple[int | None, int | None], list[int]] = {}
+    for k, clip in enumerate(sourced):
+        at.setdefault(_provenance(clip)[1:], []).append(k)
+    every = list(range(len(sourced)))
+    for chunk in tx.cases_framed(info, at):
+        pairs = [
+            (r, k)
+            for r, case in enumerate(chunk)
+            if case.features.size == values.shape[1]
+            for k in (
+                every
+                if None in (case.frame_start, case.frame_end)
+                else at.get((case.frame_start, case.frame_end), [])
+            )
+        ]
+        if not pairs:
+            continue
+        rows, ks = (np.asarray(p) for p in zip(*pairs, strict=True))
+        stored = np.stack([c.features.reshape(-1) if c.features.size == values.shape[1]
+                           else np.full(values.shape[1], np.inf) for c in chunk])  # fmt: skip
+        like = _close(values[ks, :8], stored[rows, :8]).all(axis=1)  # most differ there
+        rows, ks = rows[like], ks[like]
+        same = _close(values[ks], stored[rows]).all(axis=1)
+        if same.any():
+            first = int(np.argmax(same))
+            raise _repeated(sourced[ks[first]], chunk[rows[first]], info.name, where)
 
 
-def _same_values(values: np.ndarray, stored: np.ndarray) -> bool:
-    """Whether a clip's problem is a stored case's, up to rounding (missing alike)."""
-    return values.shape == stored.shape and bool(
-        np.allclose(
-            values,
-            stored,
-            rtol=SAME_CONTENT_TOLERANCE,
-            atol=SAME_CONTENT_TOLERANCE,
-            equal_nan=True,
-        )
+def _repeated(clip: DescribedClip, case: SourcedCase, name: str, where: str) -> StoreError:
+    """The refusal of ``clip``, which repeats the stored ``case``."""
+    shown = _shown_frames(_provenance(clip))
+    stored = _shown_frames((case.source, case.frame_start, case.frame_end))
+    framed = case.frame_start is not None
+    if _file_name(case.source) == _file_name(clip.source):
+        why = f"the same file name{', frames' * framed} and features: added before from another"
+        why += " folder?"
+    else:
+        why = f"the same {'frames and ' * framed}features under another file name: a copy of"
+        why += " its file?"
+    return StoreError(
+        f"{shown} is already case {case.id} of {name!r}, stored as {stored} ({why}): nothing added",
+        where,
     )
+
+
+def _file_name(source: str) -> str:
+    """A source's file name: what follows its last ``/`` or ``\\`` (a source stored on
+    Windows is split alike)."""
+    return source.replace("\\", "/").rpartition("/")[2]
+
+
+def _close(values: np.ndarray, stored: np.ndarray) -> np.ndarray:
+    """Which of ``values`` are ``stored``'s up to rounding (missing alike)."""
+    tol = SAME_CONTENT_TOLERANCE
+    return np.isclose(values, stored, rtol=tol, atol=tol, equal_nan=True)
 
 
 def _spellings(source: str) -> tuple[str, ...]:

@@ -3,6 +3,7 @@ files, real processes where the point is a process."""
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -16,6 +17,7 @@ import numpy as np
 import pytest
 
 from casebase_store import NewCase, open_store, write_store
+from features.poses import load_pose, save_pose
 from posecbr.cli import main
 from tests.badinput import (
     posecbr_on_read_only_mount,
@@ -150,9 +152,13 @@ def test_a_writer_after_a_killed_one_undoes_its_change_first(
     small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str
 ) -> None:
     clip = sorted((small.parent / "train").rglob("*.npz"))[0]
-    more = tmp_path / "more" / clip.parent.name / "new.npz"  # a clip not in the case base
-    more.parent.mkdir(parents=True)
-    shutil.copy(clip, more)
+    # a clip not in the case base: one of its clips, the nose 5 cm further right
+    seq = load_pose(clip)
+    moved = seq.positions.copy()
+    moved[:, 0, 0] += 0.05
+    save_pose(
+        dataclasses.replace(seq, positions=moved), tmp_path / "more" / clip.parent.name / "new.npz"
+    )
     argv = {
         "trim": ["casebase", "trim", "-k", "1", "--keep", "0.5"],
         "feedback": ["classify", str(clip), "--feedback", clip.parent.name, "--quiet"],

@@ -85,9 +85,18 @@ def test_append_names_an_activity_left_without_a_case(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    """The same recording appended to a case base of it unblanked (13_30 whole): JumpJack
+    """The same recording, its left wrist 1 cm further right (not a copy of the stored stretches:
+    tests/test_hunt46f.py), appended to a case base of it unblanked (13_30 whole): JumpJack
     adds nothing, and --append says so as train does."""
-    rec, labels, names = away
+    import dataclasses
+
+    from features.poses import load_pose
+
+    blanked, labels, names = away
+    seq = load_pose(blanked)
+    moved = seq.positions.copy()
+    moved[:, 15, 0] += 0.01  # the left wrist (the mocap has no nose)
+    rec = save_pose(dataclasses.replace(seq, positions=moved), tmp_path / "away.npz")
     whole = read_asf_amc(
         shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
         shared_data / "cmu-mocap6" / "amc" / "13_30.amc",

@@ -9,7 +9,6 @@ import dataclasses
 import sqlite3
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from casebase_store import open_store
@@ -109,34 +108,3 @@ def test_classify_mistyped_target_guesses_the_clips_column(
     # nothing close among the columns: no guess
     code, _, err = _cli(capsys, "classify", str(csv_path), "--db", str(db), "--target", "speed")
     assert code == 1 and "did you mean" not in err, err
-
-
-def test_store_finds_the_cases_of_a_file_name_under_any_folder(tmp_path: Path) -> None:
-    """``cases_named``: the active cases whose source ends in the file name, however its
-    folders were written (relative, absolute, a Windows path), in id order with their stored
-    features; a trimmed case, another file and a longer name ending alike are not."""
-    from casebase_store import NewCase
-
-    store = open_store(tmp_path / "cb.sqlite", create=True)
-    sources = ["x.npz", "conv1/x.npz", "/data/x.npz", "C:\\data\\x.npz", "y.npz", "xx.npz",
-               "old/x.npz"]  # fmt: skip
-    try:
-        with store.transaction() as tx:
-            info = tx.create_case_base(
-                "default", {"f": 1}, ["a", "b"], ["a", "b"], {"name": "euclidean"}
-            )
-            ids = tx.add_cases(
-                info,
-                [NewCase("l", np.array([i, np.nan]), s, 0, 9) for i, s in enumerate(sources)],
-            )
-            tx.deactivate_cases(info, [ids[-1]])
-        with store.transaction() as tx:
-            info = tx.case_base("default")
-            found = tx.cases_named(info, ["elsewhere/x.npz", "nothing.npz"])
-    finally:
-        store.close()
-    assert list(found) == ["elsewhere/x.npz"]
-    cases = found["elsewhere/x.npz"]
-    assert [c.id for c in cases] == ids[:4] and [c.source for c in cases] == sources[:4]
-    assert [(c.frame_start, c.frame_end) for c in cases] == [(0, 9)] * 4
-    np.testing.assert_array_equal(cases[3].features, [3.0, np.nan])

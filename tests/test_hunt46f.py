@@ -6,6 +6,10 @@
    ``--max-frames`` (README, watch).
 2. ``train DATA --append --target corect`` gave no "did you mean 'correct'?" where ``train``,
    ``classify`` and ``compare`` without ``--append`` do.
+3. ``train --append`` of a byte-identical copy of a stored clip's pose file under another
+   file name stored it twice (the same clip was recognised by its file name, frames and
+   features only): a clip whose frames and features are a stored case's is refused whatever
+   either file is called, naming the case, nothing added.
 """
 
 from __future__ import annotations
@@ -89,3 +93,109 @@ def test_train_append_guesses_a_mistyped_target_from_the_datas_columns(
     )
     line = refused([*argv, "lable"], tmp_path, capsys)
     assert line.endswith("cannot take --target lable (did you mean 'label'?)")
+
+
+@pytest.fixture(scope="module")
+def small_cases(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """tests/badinput.py's small case base (three activities of synthetic arm movements,
+    three clips each, in ``train/<activity>/clipNN.npz`` beside it); tests copy it."""
+    from tests.badinput import small_case_base
+
+    return small_case_base(tmp_path_factory.mktemp("small"))
+
+
+def _case_of(db: Path, source: Path) -> tuple[int, int]:
+    """The id and end frame of the case stored of ``source`` (read with sqlite3)."""
+    import contextlib
+    import sqlite3
+
+    with contextlib.closing(sqlite3.connect(db)) as con:
+        ((case_id, end),) = con.execute(
+            "SELECT id, frame_end FROM cases WHERE source = ?", (str(source),)
+        ).fetchall()
+    return int(case_id), int(end)
+
+
+def test_train_append_of_a_copy_under_another_name_is_refused_naming_the_case(
+    small_cases: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One stored clip's pose file copied byte for byte as ``copy/<activity>/renamed.npz``:
+    its append is refused in one line naming the case it repeats, the case base unchanged
+    (before: added, 9 cases to 10, voting twice); the same with the stored case's frames
+    removed (a case base stored before they were kept); a copy with one joint moved 5 cm in
+    every frame is another clip, added."""
+    import contextlib
+    import dataclasses
+    import shutil
+    import sqlite3
+
+    from features.poses import load_pose, save_pose
+    from posecbr.cli import main
+    from tests.badinput import refused
+
+    db = Path(shutil.copy(small_cases, tmp_path / "cb.sqlite"))
+    original = sorted((small_cases.parent / "train").rglob("*.npz"))[0]
+    copy = tmp_path / "copy" / original.parent.name / "renamed.npz"
+    copy.parent.mkdir(parents=True)
+    shutil.copyfile(original, copy)
+    case_id, end = _case_of(db, original)
+    argv = ["train", str(tmp_path / "copy"), "--db", str(db), "--append"]
+    line = refused(argv, tmp_path, capsys)
+    assert line == (
+        f"posecbr train: error: {db}: {copy} frames 0-{end - 1} is already case {case_id} of "
+        f"'default', stored as {original} frames 0-{end - 1} (the same frames and features "
+        "under another file name: a copy of its file?): nothing added"
+    )
+    with contextlib.closing(sqlite3.connect(db)) as con, con:
+        con.execute("UPDATE cases SET frame_start = NULL, frame_end = NULL")
+    line = refused(argv, tmp_path, capsys)
+    assert line.endswith(
+        f"is already case {case_id} of 'default', stored as {original} (the same features "
+        "under another file name: a copy of its file?): nothing added"
+    )
+    seq = load_pose(copy)
+    moved = seq.positions.copy()
+    moved[:, 0, 0] += 0.05
+    save_pose(dataclasses.replace(seq, positions=moved), copy)
+    assert main(argv) == 0
+    with contextlib.closing(sqlite3.connect(db)) as con:
+        assert con.execute("SELECT COUNT(*) FROM cases").fetchone() == (10,)
+
+
+def test_store_finds_the_cases_of_given_frames_whatever_their_source(tmp_path: Path) -> None:
+    """``cases_framed``: the active cases of the frames asked for, or stored without frames,
+    whatever their source, by id, their features as stored (a missing value missing), 500 a
+    list; a trimmed case and cases of other frames are not."""
+    from casebase_store import NewCase, open_store
+
+    rows = [("x.npz", 0, 9), ("conv1/y.npz", 0, 9), ("y.npz", 0, 20), ("z.npz", None, None),
+            ("w.npz", 5, 9), ("old/x.npz", 0, 9)]  # fmt: skip
+    many = [(f"m{i}.npz", 100, 200) for i in range(501)]
+    store = open_store(tmp_path / "cb.sqlite", create=True)
+    try:
+        with store.transaction() as tx:
+            info = tx.create_case_base(
+                "default", {"f": 1}, ["a", "b"], ["a", "b"], {"name": "euclidean"}
+            )
+            new = [NewCase("l", np.array([i, np.nan]), s, a, b) for i, (s, a, b) in enumerate(rows)]
+            new += [NewCase("l", np.array([i, -i]), s, a, b) for i, (s, a, b) in enumerate(many)]
+            ids = tx.add_cases(info, new)
+            tx.deactivate_cases(info, [ids[5]])
+        with store.transaction() as tx:
+            info = tx.case_base("default")
+            found = list(tx.cases_framed(info, [(0, 9), (1, 9)]))
+            chunks = list(tx.cases_framed(info, [(100, 200)]))
+    finally:
+        store.close()
+    assert len(found) == 1
+    assert [(c.id, c.source, c.frame_start, c.frame_end) for c in found[0]] == [
+        (ids[0], "x.npz", 0, 9),
+        (ids[1], "conv1/y.npz", 0, 9),
+        (ids[3], "z.npz", None, None),
+    ]
+    np.testing.assert_array_equal(found[0][2].features, [3.0, np.nan])
+    assert [len(c) for c in chunks] == [500, 2]  # 501 of those frames and z.npz's
+    cases = [c for chunk in chunks for c in chunk]
+    assert [c.id for c in cases] == sorted([ids[3], *ids[6:]])
+    expected = [[3.0, np.nan]] + [[i, -i] for i in range(501)]
+    np.testing.assert_array_equal(np.stack([c.features for c in cases]), expected)

@@ -3,6 +3,7 @@ one clip per labelled stretch, ``train --split repetitions``, and label files th
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 from pathlib import Path
@@ -19,7 +20,7 @@ from features.label_tracks import (
     read_label_names,
     read_label_track,
 )
-from features.poses import PoseSequence, save_pose
+from features.poses import PoseSequence, load_pose, save_pose
 from features.readers.asfamc import read_asf_amc
 from features.repetitions import count_repetitions, split_repetitions
 from posecbr.cli import main
@@ -190,12 +191,19 @@ def test_train_from_one_recording_with_split_repetitions(
     err = capsys.readouterr().err.splitlines()[-1]
     assert f"{recording} frames " in err and "is already case " in err
     assert err.endswith("(added before?): nothing added") and _sha(db) == stored
-    # without --split, --append cuts as the case base was trained: a copy of the recording
-    # under another name gives as many repetitions again
-    n = _count_cases(db)
+    # so is a copy of it under another name (the same frames and features: tests/test_hunt46f)
     copy = tmp_path / "again.npz"
     copy.write_bytes(recording.read_bytes())
     argv[argv.index(str(recording))] = str(copy)
+    assert main([*argv, "--append"]) == 1
+    assert "a copy of its file?" in capsys.readouterr().err and _sha(db) == stored
+    # without --split, --append cuts as the case base was trained: the recording with its
+    # left wrist 1 cm further right gives as many repetitions again
+    n = _count_cases(db)
+    seq = load_pose(recording)
+    moved = seq.positions.copy()
+    moved[:, 15, 0] += 0.01  # the left wrist (the mocap has no nose)
+    save_pose(dataclasses.replace(seq, positions=moved), copy)
     assert main([*argv, "--append"]) == 0
     assert "cut 5 clips into" in capsys.readouterr().err
     assert _count_cases(db) == 2 * n
