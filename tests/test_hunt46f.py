@@ -10,6 +10,10 @@
    file name stored it twice (the same clip was recognised by its file name, frames and
    features only): a clip whose frames and features are a stored case's is refused whatever
    either file is called, naming the case, nothing added.
+5. ``extract DIR --out P --overlay O`` replaced a file of the user's at an overlay's place
+   ``O/<class>/<video>.mp4`` in silence when the video's pose file was in P (a rerun with
+   ``--force`` or other options): overlays now carry a mark (an MP4 ``uuid`` box), and a
+   file there without the mark of that video is refused before any work.
 """
 
 from __future__ import annotations
@@ -199,3 +203,47 @@ def test_store_finds_the_cases_of_given_frames_whatever_their_source(tmp_path: P
     assert [c.id for c in cases] == sorted([ids[3], *ids[6:]])
     expected = [[3.0, np.nan]] + [[i, -i] for i in range(501)]
     np.testing.assert_array_equal(np.stack([c.features for c in cases]), expected)
+
+
+def test_extract_overlay_folder_refuses_a_file_it_did_not_draw_and_redraws_its_own(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 12-frame grey video extracted into ``poses`` (no overlay); then, with a video of
+    the user's at its overlay's place in ``ov``, ``--overlay ov --force`` is refused in one
+    line, the file as it was (before: replaced in silence). Moved away, the overlay is
+    drawn: it holds the mark (an MP4 ``uuid`` box: "extract " and the first 16 hex digits of
+    the SHA-256 of the video's resolved path, read here from the file's last box), still
+    reads as 12 frames, and a rerun with ``--force`` replaces it."""
+    import hashlib
+    import struct
+
+    import cv2
+
+    from posecbr.cli import main
+    from tests.badinput import refused
+
+    for folder in ("in", "ov"):
+        (tmp_path / folder / "squat").mkdir(parents=True)
+    video = _grey_video(tmp_path / "in" / "squat" / "clip.mp4", 12)
+    theirs = _grey_video(tmp_path / "ov" / "squat" / "clip.mp4", 15)
+    poses, ov = tmp_path / "poses", tmp_path / "ov"
+    assert main(["extract", str(tmp_path / "in"), "--out", str(poses)]) == 0
+    argv = ["extract", str(tmp_path / "in"), "--out", str(poses), "--overlay", str(ov)]
+    capsys.readouterr()
+    line = refused([*argv, "--force"], tmp_path, capsys)
+    assert line == (
+        f"posecbr extract: error: {theirs}: is already there, not an overlay posecbr extract "
+        f"made of clip.mp4: extracting into {poses} would replace it; move it away, or choose "
+        "another --overlay"
+    )
+    theirs.unlink()
+    assert main([*argv, "--force"]) == 0
+    digest = hashlib.sha256(str(video.resolve()).encode()).hexdigest()[:16]
+    mark = b"extract " + digest.encode()
+    box = struct.pack(">I4s", 8 + 16 + len(mark), b"uuid")
+    marked = box + bytes.fromhex("cab5aa21f4394e688342e23fd7fa5c39") + mark
+    assert theirs.read_bytes().endswith(marked)
+    cap = cv2.VideoCapture(str(theirs))
+    assert cap.get(cv2.CAP_PROP_FRAME_COUNT) == 12
+    cap.release()
+    assert main([*argv, "--force"]) == 0

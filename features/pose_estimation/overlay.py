@@ -4,7 +4,9 @@ to check. Written to a temporary name and renamed, so no half-written file is le
 from __future__ import annotations
 
 import functools
+import os
 import re
+import struct
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -282,6 +284,48 @@ def check_mp4_size(width: int, height: int, out: str | Path, what: str = "overla
         )
 
 
+MARK_UUID = bytes.fromhex("cab5aa21f4394e688342e23fd7fa5c39")
+"""The user type of the MP4 box (ISO/IEC 14496-12 ``uuid``: a user extension, which every
+reader skips) that says which command drew an overlay of which video (:func:`mark_mp4`)."""
+
+
+def mark_mp4(path: Path, mark: str) -> None:
+    """Append to the MP4 file ``path`` a top-level ``uuid`` box of type :data:`MARK_UUID`
+    holding ``mark`` (UTF-8), as a PNG picture holds its text chunk
+    (:func:`features.timeline.picture_mark`): the frames, their index and every player are
+    untouched (OpenCV writes no container metadata)."""
+    data = mark.encode("utf-8")
+    with open(path, "ab") as f:
+        f.write(struct.pack(">I4s", 8 + len(MARK_UUID) + len(data), b"uuid") + MARK_UUID + data)
+
+
+def mp4_mark(path: Path) -> str | None:
+    """The mark :func:`mark_mp4` put in the MP4 file ``path``, found by walking its top-level
+    boxes (their headers alone); None when it has none, is no MP4 (its first box no
+    ``ftyp``) or cannot be read."""
+    try:
+        with open(path, "rb") as f:
+            end, at = os.fstat(f.fileno()).st_size, 0
+            while at + 8 <= end:
+                f.seek(at)
+                size, kind = struct.unpack(">I4s", f.read(8))
+                head = 8
+                if size == 1:  # a 64-bit size follows
+                    (size,), head = struct.unpack(">Q", f.read(8)), 16
+                elif size == 0:  # to the end of the file
+                    size = end - at
+                if (at == 0 and kind != b"ftyp") or size < head:
+                    return None
+                if kind == b"uuid" and 16 <= size - head <= 4096:
+                    body = f.read(size - head)
+                    if body[:16] == MARK_UUID:
+                        return body[16:].decode("utf-8", "replace")
+                at += size
+    except (OSError, struct.error):
+        return None
+    return None
+
+
 def write_overlay(
     video_path: str | Path,
     image_landmarks: np.ndarray,
@@ -291,6 +335,7 @@ def write_overlay(
     frame_offset: int = 0,
     video_frames: np.ndarray | None = None,
     gaps: np.ndarray | None = None,
+    mark: str | None = None,
 ) -> Path:
     """Write ``video_path`` with the stick figure drawn as an MP4 (``mp4v``) at ``out_path``.
 
@@ -301,12 +346,15 @@ def write_overlay(
     at ``fps`` in step with the video. words: per row, phrases to print (e.g. the fluents
     that hold). gaps: per row, whether it lies inside a gap of the video's frames
     (:func:`features.poses.gap_rows`): such a row says :data:`NO_FRAMES`, not "no person".
+    mark: what the overlay is marked with (:func:`mark_mp4`), if anything.
     """
     out = Path(out_path)
     rows = None if video_frames is None else np.asarray(video_frames, dtype=np.int64)
     # The temporary name ends in .mp4: OpenCV picks the container by the file name.
     with atomic_path(out, suffix=".mp4") as tmp:
         _encode(video_path, image_landmarks, tmp, out, fps, words, frame_offset, rows, gaps)
+        if mark is not None:
+            mark_mp4(tmp, mark)
     return out
 
 

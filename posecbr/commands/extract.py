@@ -705,6 +705,7 @@ def process(job: Job, options: Options) -> Outcome:
                 frame_offset=job.start or 0,
                 video_frames=video_frames,
                 gaps=gap_rows(seq),  # no frames there: said so, not "no person"
+                mark=_overlay_mark(job.video),
             )
         # a row inside a gap has no frame at all, not a frame without a person
         nobody = np.isnan(seq.positions).all(axis=(1, 2)) & ~gap_rows(seq)
@@ -826,17 +827,30 @@ def _check_not_replaced(jobs: list[Job], out: Path, overlays_named: bool) -> Non
     after Ctrl-C or with other options: it is brought up to date): a pose file of another
     video of the same name (``a/squat.mp4`` extracted, then ``b/squat.mp4``) or a file of
     the user's is not replaced in silence, as ``convert --out DIR`` refuses a pose file of
-    another recording and ``--plot DIR`` a picture it did not draw. So is an overlay
-    extract names in a folder (``overlays_named``: ``--overlay DIR``) beside no pose file of
-    that video. A file the user named (``--out x.npz``, one video's ``--overlay x.mp4``) is
-    theirs to replace."""
+    another recording and ``--plot DIR`` a picture it did not draw. So is a file where
+    extract names an overlay in a folder (``overlays_named``: ``--overlay DIR``) unless it
+    is the overlay extract drew of that same video (marked so: :func:`_overlay_mark`), the
+    pose file there or not. A file the user named (``--out x.npz``, one video's ``--overlay
+    x.mp4``) is theirs to replace."""
+    from features.pose_estimation.overlay import mp4_mark
+
     digests: dict[Path, str | None] = {}
     for job in jobs:
-        if _there(job.out):
-            if not _made_of(job.out, job.video, digests):
-                raise DataError(_replaced_words(job, "a pose file", out), job.out)
-        elif overlays_named and job.overlay is not None and _there(job.overlay):
-            raise DataError(_replaced_words(job, "an overlay", out), job.overlay)
+        if _there(job.out) and not _made_of(job.out, job.video, digests):
+            raise DataError(_replaced_words(job, "a pose file", out), job.out)
+        if overlays_named and job.overlay is not None and _there(job.overlay):
+            if job.overlay.is_symlink() or mp4_mark(job.overlay) != _overlay_mark(job.video):
+                raise DataError(_replaced_words(job, "an overlay", out), job.overlay)
+
+
+def _overlay_mark(video: Path) -> str:
+    """What an overlay extract draws of ``video`` is marked with
+    (:func:`features.pose_estimation.overlay.mark_mp4`), as a picture ``--plot`` draws is
+    (:func:`features.timeline.picture_mark`): the command and a digest of the video's
+    resolved path."""
+    from features.timeline import picture_mark
+
+    return picture_mark("extract", video)
 
 
 def _there(path: Path) -> bool:
