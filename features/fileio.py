@@ -104,6 +104,13 @@ def _umask() -> int:
     return mask
 
 
+def path_digest(path: str | Path) -> str:
+    """The first 16 hex digits of the SHA-256 of ``path`` resolved: which file it is, from
+    any folder, without the path itself (which a file passed on would give away)."""
+    where = str(Path(path).resolve()).encode("utf-8", "surrogateescape")
+    return hashlib.sha256(where).hexdigest()[:16]
+
+
 @contextmanager
 def atomic_path(
     path: str | Path, *, make_parents: bool = True, suffix: str = ".tmp"

@@ -446,10 +446,9 @@ def picture_mark(command: str, recording: str | Path) -> str:
     path (not the path itself, which a picture passed on would give away). ``--plot DIR``
     replaces a picture so marked, drawn before by the same command of the same recording,
     and refuses any other file at that name (:func:`posecbr.arguments.check_folder_pictures`)."""
-    import hashlib
+    from .fileio import path_digest
 
-    where = str(Path(recording).resolve()).encode("utf-8", "surrogateescape")
-    return f"{command} {hashlib.sha256(where).hexdigest()[:16]}"
+    return f"{command} {path_digest(recording)}"
 
 
 def png_mark(path: Path) -> str | None:

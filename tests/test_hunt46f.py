@@ -14,6 +14,9 @@
    ``O/<class>/<video>.mp4`` in silence when the video's pose file was in P (a rerun with
    ``--force`` or other options): overlays now carry a mark (an MP4 ``uuid`` box), and a
    file there without the mark of that video is refused before any work.
+6. A pose file's relative ``source_video`` was looked up from the current folder: ``extract``
+   run in another folder whose video of that relative path is another video replaced the
+   pose file in silence. Pose files record a digest of the video's resolved path now.
 """
 
 from __future__ import annotations
@@ -247,3 +250,42 @@ def test_extract_overlay_folder_refuses_a_file_it_did_not_draw_and_redraws_its_o
     assert cap.get(cv2.CAP_PROP_FRAME_COUNT) == 12
     cap.release()
     assert main([*argv, "--force"]) == 0
+
+
+def test_extract_from_another_folder_does_not_take_a_pose_file_of_its_video_for_its_own(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``extract videos --out ../poses`` run in d1, then in d2, whose ``videos/squat/clip.mp4``
+    is another video (14 frames, not 12): the pose file's ``source_video`` (relative to d1)
+    named d2's video when looked up from d2, so d1's pose file was replaced in silence.
+    Refused now: the pose file records which file it was made of (a digest of its resolved
+    path). A pose file made before that was recorded (the key removed) is still its own
+    video's from the folder it was made in: up to date."""
+    import dataclasses
+
+    from features.poses import load_pose, save_pose
+    from posecbr.cli import main
+    from tests.badinput import refused
+
+    for folder, frames in (("d1", 12), ("d2", 14)):
+        (tmp_path / folder / "videos" / "squat").mkdir(parents=True)
+        _grey_video(tmp_path / folder / "videos" / "squat" / "clip.mp4", frames)
+    argv = ["extract", "videos", "--out", "../poses"]
+    monkeypatch.chdir(tmp_path / "d1")
+    assert main(argv) == 0
+    monkeypatch.chdir(tmp_path / "d2")
+    capsys.readouterr()
+    line = refused(argv, tmp_path, capsys)
+    assert line == (
+        "posecbr extract: error: ../poses/squat/clip.npz: is already there, not a pose file "
+        "posecbr extract made of clip.mp4: extracting into ../poses would replace it; move it "
+        "away, or choose another --out"
+    )
+    pose = tmp_path / "poses" / "squat" / "clip.npz"
+    seq = load_pose(pose)
+    older = {k: v for k, v in seq.metadata.items() if k != "source_video_digest"}
+    assert len(older) == len(seq.metadata) - 1
+    save_pose(dataclasses.replace(seq, metadata=older), pose)
+    monkeypatch.chdir(tmp_path / "d1")
+    assert main(argv) == 0
+    assert "0 extracted, 1 up to date" in capsys.readouterr().out

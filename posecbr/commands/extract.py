@@ -26,7 +26,7 @@ from typing import Any
 
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import ReadFiles, check_not_in_walked_folder, check_output
+from features.fileio import ReadFiles, check_not_in_walked_folder, check_output, path_digest
 from features.formats import SHOWN_VIDEO_SUFFIXES, is_video_in_folder
 from features.interrupts import interrupts_held, run_task, stop_workers, worker_ends_on_sigterm
 from features.progress import progress
@@ -621,6 +621,7 @@ def _estimate(job: Job, options: Options, key: dict[str, Any], digest: str) -> t
     from features.poses import save_pose
 
     meta: dict[str, Any] = {**job.extras, "extract_key": key, "video_sha256": digest}
+    meta["source_video_digest"] = path_digest(job.video)  # which file, wherever extract ran
     if job.label is not None:
         meta["label"] = job.label
     if job.subject is not None:
@@ -861,7 +862,10 @@ def _there(path: Path) -> bool:
 def _made_of(pose: Path, video: Path, digests: dict[Path, str | None]) -> bool:
     """Whether ``pose`` is a pose file ``extract`` made of ``video`` (not a link): its
     metadata names this very video file (edited since, or not: a rerun reads no byte of it
-    here) or records the video's SHA-256 (a copy of it, or the folders moved). A video that
+    here) or records the video's SHA-256 (a copy of it, or the folders moved). The file is
+    known by the digest of its resolved path (``source_video_digest``); a pose file made
+    before that was kept, by its ``source_video`` looked up from here (a path relative to
+    the folder extract ran in: from another folder it may name another video). A video that
     cannot be read passes (its clip fails, writing nothing); its digest is kept in
     ``digests`` (a labels CSV lists one video in several rows)."""
     from features.datasets import source_video
@@ -871,12 +875,16 @@ def _made_of(pose: Path, video: Path, digests: dict[Path, str | None]) -> bool:
     meta = stored_metadata(pose)
     if meta is None or "pose_model" not in meta:
         return False
-    named = source_video(meta, pose)
-    try:
-        if named is not None and named.samefile(video):
+    if isinstance(meta.get("source_video_digest"), str):
+        if meta["source_video_digest"] == path_digest(video):
             return True
-    except OSError:
-        pass
+    else:
+        named = source_video(meta, pose)
+        try:
+            if named is not None and named.samefile(video):
+                return True
+        except OSError:
+            pass
     if video not in digests:
         try:
             digests[video] = sha256_file(video)
