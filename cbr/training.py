@@ -732,7 +732,7 @@ def append_plan(
     name: str,
     target: str | None = None,
     cases: str | None = None,
-    columns: Sequence[str] = (),
+    data_columns: Sequence[str] = (),
 ) -> tuple[Plan, str, str, str]:
     """The plan of ``--append`` to case base ``name`` (its columns), its identity (``uid``:
     the append is refused if the case base is replaced meanwhile), what the added clips
@@ -740,8 +740,8 @@ def append_plan(
     this was recorded), and what their solution is: the case base's target. ``cases`` or
     ``target`` given otherwise (as :func:`train`'s) is refused: windows added to a case base
     of whole clips would be cases of another kind, labels added to one of correct/incorrect
-    another solution; a ``target`` close to the case base's or to one of ``columns`` (the
-    added clips') is guessed as mistyped."""
+    another solution; a ``target`` close to the case base's or to one of ``data_columns``
+    (the added clips') is guessed as mistyped."""
     store = open_store(db, create=False, readonly=True)
     try:
         stored = load_classifier(store, name)
@@ -751,7 +751,7 @@ def append_plan(
         raise ConfigError(
             f"case base {name!r} predicts {stored.target!r}, not {target!r}: its cases "
             f"cannot take --target {target}"
-            + did_you_mean(target, [stored.target, *(c for c in columns if c != target)]),
+            + did_you_mean(target, [stored.target, *(c for c in data_columns if c != target)]),
             "--target",
         )
     if cases is not None and stored.cases is not None and stored.cases != cases:
@@ -911,7 +911,8 @@ def _file_name(source: str) -> str:
 def _close(values: np.ndarray, stored: np.ndarray) -> np.ndarray:
     """Which of ``values`` are ``stored``'s up to rounding (missing alike)."""
     tol = SAME_CONTENT_TOLERANCE
-    return np.isclose(values, stored, rtol=tol, atol=tol, equal_nan=True)
+    close: np.ndarray = np.isclose(values, stored, rtol=tol, atol=tol, equal_nan=True)
+    return close
 
 
 def _spellings(source: str) -> tuple[str, ...]:
