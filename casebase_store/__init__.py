@@ -35,7 +35,7 @@ from .store import (
     store_files,
     write_store,
 )
-from .upgrade import upgrade_store
+from .upgrade import missing_indexes, upgrade_store
 
 __all__ = [
     "EMPTY_DB",
@@ -71,5 +71,6 @@ __all__ = [
     "sqlite_file",
     "store_files",
     "write_store",
+    "missing_indexes",
     "upgrade_store",
 ]

@@ -18,6 +18,7 @@ from sqlalchemy import (
     DateTime,
     Float,
     ForeignKey,
+    Index,
     Integer,
     LargeBinary,
     String,
@@ -78,7 +79,12 @@ class CaseRow(Base):
     """One case: problem (features) + solution (label) + provenance."""
 
     __tablename__ = "cases"
-    __table_args__ = {"sqlite_autoincrement": True}
+    # the cases of a source, found without reading every case (train --append looks for the
+    # clips it adds among them); a store made before it has none until `casebase upgrade`
+    __table_args__ = (
+        Index("ix_cases_case_base_id_source", "case_base_id", "source"),
+        {"sqlite_autoincrement": True},
+    )
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     case_base_id: Mapped[int] = mapped_column(

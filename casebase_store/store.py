@@ -1671,13 +1671,14 @@ class StoreTransaction:
         wanted = sorted(given)
         out: dict[tuple[str, int | None, int | None], int] = {}
         for i in range(0, len(wanted), 500):  # bounded IN lists
+            # no ORDER BY: SQLite would rather read the cases in id order than use the index
+            # on their sources (ix_cases_case_base_id_source); sorted here
             q = (
                 select(CaseRow.id, CaseRow.source, CaseRow.frame_start, CaseRow.frame_end)
                 .where(CaseRow.case_base_id == cb.id, CaseRow.active.is_(True))
                 .where(CaseRow.source.in_(wanted[i : i + 500]))
-                .order_by(CaseRow.id)
             )
-            for case_id, source, a, b in self.session.execute(q):
+            for case_id, source, a, b in sorted(self.session.execute(q).tuples()):
                 for name in given[source]:
                     out.setdefault((name, a, b), int(case_id))
         return out

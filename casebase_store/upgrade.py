@@ -67,6 +67,7 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
             if found != SCHEMA_VERSION:
                 _check_upgradable(found, where)  # refused: the file as it was, WAL mode too
                 _from_1(conn)
+            _add_indexes(conn)
         # posecbr 0.1's WAL mode, once the store reads as current; another process holding
         # the file open keeps it there (before: "nothing to do", the file still in WAL mode)
         if not leave_wal_mode(engine) and file is not None and in_wal_mode(file):
@@ -83,6 +84,41 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
         raise
     except Exception as exc:  # a driver error of any backend: one line naming the store
         raise _translate(exc, where, timeout_s) from None
+    finally:
+        dispose(engine)
+
+
+def _add_indexes(conn: Any) -> None:
+    """Create the indexes of today's schema that the store lacks (added since it was made)."""
+    for table in _TABLES:
+        for index in table.__table__.indexes:  # type: ignore[attr-defined]
+            index.create(conn, checkfirst=True)
+
+
+def missing_indexes(url_or_path: str | Path, *, timeout_s: float = 30.0) -> list[str]:
+    """The indexes of today's schema that the store lacks (it was made before they were
+    added; :func:`upgrade_store` creates them), read without writing; none when it cannot be
+    read (what is wrong with it is told by the upgrade)."""
+    file = sqlite_file(url_or_path)
+    if file is not None and not file.is_file():
+        return []
+    try:
+        engine, _ = _make_engine(url_or_path, timeout_s, readonly=True)
+    except Exception:  # a driver error of any backend: the upgrade says it
+        return []
+    try:
+        with engine.connect() as conn:
+            look = inspect(conn)
+            tables = set(look.get_table_names())
+            return [
+                str(index.name)
+                for table in _TABLES
+                if table.__tablename__ in tables
+                for index in table.__table__.indexes  # type: ignore[attr-defined]
+                if index.name not in {i["name"] for i in look.get_indexes(table.__tablename__)}
+            ]
+    except Exception:  # a driver error of any backend: the upgrade says it
+        return []
     finally:
         dispose(engine)
 

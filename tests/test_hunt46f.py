@@ -10,6 +10,8 @@
    file name stored it twice (the same clip was recognised by its file name, frames and
    features only): a clip whose frames and features are a stored case's is refused whatever
    either file is called, naming the case, nothing added.
+4. ``cases_from`` read every case (no index on the cases' sources): stores get one; one made
+   before is read as it is and ``casebase upgrade`` adds it.
 5. ``extract DIR --out P --overlay O`` replaced a file of the user's at an overlay's place
    ``O/<class>/<video>.mp4`` in silence when the video's pose file was in P (a rerun with
    ``--force`` or other options): overlays now carry a mark (an MP4 ``uuid`` box), and a
@@ -289,3 +291,48 @@ def test_extract_from_another_folder_does_not_take_a_pose_file_of_its_video_for_
     monkeypatch.chdir(tmp_path / "d1")
     assert main(argv) == 0
     assert "0 extracted, 1 up to date" in capsys.readouterr().out
+
+
+def test_casebase_upgrade_adds_the_index_on_sources_to_a_store_made_before(
+    small_cases: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A store made today holds the index on its cases' sources; one made before (the index
+    dropped) is read as it is (``casebase info`` writes nothing), and ``casebase upgrade``
+    adds it, saying so, no case changed; run again, nothing to do. ``cases_from`` (read by
+    the index, its rows sorted by id here) finds each clip's case, as sqlite3 reads them."""
+    import contextlib
+    import shutil
+    import sqlite3
+
+    from casebase_store import open_store
+    from posecbr.cli import main
+
+    def indexes(db: Path) -> set[str]:
+        with contextlib.closing(sqlite3.connect(db)) as con:
+            rows = con.execute("SELECT name FROM sqlite_master WHERE type = 'index'").fetchall()
+        return {name for (name,) in rows}
+
+    index = "ix_cases_case_base_id_source"
+    assert index in indexes(small_cases)
+    db = Path(shutil.copy(small_cases, tmp_path / "cb.sqlite"))
+    with contextlib.closing(sqlite3.connect(db)) as con, con:
+        con.execute(f"DROP INDEX {index}")
+        cases = con.execute("SELECT id, source, frame_start, frame_end FROM cases").fetchall()
+    before = db.read_bytes()
+    assert main(["casebase", "info", "--db", str(db)]) == 0
+    assert db.read_bytes() == before
+    capsys.readouterr()
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    assert capsys.readouterr().out == (
+        f"{db}: added the index {index} of a newer schema (no case changed)\n"
+    )
+    assert index in indexes(db)
+    assert main(["casebase", "upgrade", "--db", str(db)]) == 0
+    assert capsys.readouterr().out == f"{db}: already schema version 2, nothing to do\n"
+    store = open_store(db)
+    try:
+        with store.transaction() as tx:
+            found = tx.cases_from(tx.case_base("default"), [s for _, s, _, _ in cases])
+    finally:
+        store.close()
+    assert found == {(s, a, b): i for i, s, a, b in cases}

@@ -129,6 +129,7 @@ def _upgrade(args: argparse.Namespace) -> int:
     from casebase_store import (
         SCHEMA_VERSION,
         in_wal_mode,
+        missing_indexes,
         roll_back_interrupted,
         shown_db,
         sqlite_file,
@@ -138,10 +139,12 @@ def _upgrade(args: argparse.Namespace) -> int:
     file = sqlite_file(args.db)
     rolled_back = roll_back_interrupted(args.db)  # a change a killed writer left half-made
     wal = file is not None and in_wal_mode(file)
+    lacking = missing_indexes(args.db)
     found = upgrade_store(args.db)  # a writer: it also leaves WAL mode (posecbr 0.1's)
     journal = wal and file is not None and not in_wal_mode(file)
     converted = [f"from schema version {found} to {SCHEMA_VERSION}"] * (found != SCHEMA_VERSION)
     converted += ["from WAL mode to a rollback journal"] * journal
+    added = [name for name in lacking if name not in missing_indexes(args.db)]
     if args.json:
         _emit(
             {
@@ -150,7 +153,7 @@ def _upgrade(args: argparse.Namespace) -> int:
                 "schema_version": SCHEMA_VERSION,
                 "left_wal_mode": bool(journal),
                 "rolled_back_interrupted_change": rolled_back,
-                "changed": bool(converted) or rolled_back,
+                "changed": bool(converted or added) or rolled_back,
             }
         )
         return 0
@@ -161,7 +164,12 @@ def _upgrade(args: argparse.Namespace) -> int:
         )
     if converted:
         print(f"{shown(shown_db(args.db))}: converted {', and '.join(converted)}")
-    elif not rolled_back:
+    if added:
+        print(
+            f"{shown(shown_db(args.db))}: added the index {', '.join(added)} of a newer"
+            " schema (no case changed)"
+        )
+    if not (converted or added or rolled_back):
         print(f"{shown(shown_db(args.db))}: already schema version {SCHEMA_VERSION}, nothing to do")
     return 0
 
