@@ -4,6 +4,7 @@ not on whole recordings held out (each then an exercise the case base lacks)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -12,6 +13,7 @@ import numpy as np
 import pytest
 
 from cbr.estimator import _pieces_frames, _recording_blocks
+from features.poses import PoseSequence, save_pose
 from posecbr.cli import main
 
 
@@ -62,13 +64,17 @@ def _classified(db: Path, clip: Path, capsys: pytest.CaptureFixture[str]) -> dic
 
 
 def test_one_video_per_exercise_flags_an_exercise_it_never_saw(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], shared_data: Path
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    shared_data: Path,
+    bundled_poses: Callable[[str], PoseSequence],
 ) -> None:
     """Trained on one video each of squat, reverse lunge and glute bridge (cut into 2-s
     windows), 2.4 s of jumping jacks came out "squat, confidence 1.00" without the flag: the
     threshold was set on whole recordings held out, each an exercise the rest lacked, so
     every clip of a new exercise lay nearer than they did (0.8x the usual distance). The
-    training videos themselves stay unflagged."""
+    training videos themselves stay unflagged. Their poses are the session's (as ``extract``
+    finds them: the same case base), the jumping jacks' cut is extracted here."""
     videos = shared_data / "videos"
     trained = {
         "squat": "tfjs_pose_squats_pexels4838220",
@@ -76,14 +82,13 @@ def test_one_video_per_exercise_flags_an_exercise_it_never_saw(
         "glute_bridge": "fit_glute_bridge_pexels6525487",
     }
     jumps = videos / "edge" / "jumping_jack_two_people_pexels8402086.mp4"
-    rows = [f"{videos / folder / name}.mp4,{folder},," for folder, name in trained.items()]
     csv = tmp_path / "labels.csv"
-    csv.write_text("\n".join(["path,label,start,end", *rows, f"{jumps},jumping_jack,0,60"]) + "\n")
+    csv.write_text(f"path,label,start,end\n{jumps},jumping_jack,0,60\n")
     poses, train = tmp_path / "poses", tmp_path / "train"
     assert main(["extract", str(csv), "--out", str(poses)]) == 0
-    train.mkdir()
-    for folder in trained:
-        (poses / folder).rename(train / folder)
+    for folder, name in trained.items():
+        (train / folder).mkdir(parents=True)
+        save_pose(bundled_poses(f"{folder}/{name}.mp4"), train / folder / f"{name}.npz")
     db = tmp_path / "cb.sqlite"
     assert main(["train", str(train), "--db", str(db), "--split", "windows"]) == 0
     (cut,) = (poses / "jumping_jack").glob("*.npz")
