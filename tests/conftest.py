@@ -109,6 +109,30 @@ def lunge_poses(bundled_poses: Callable[[str], PoseSequence]) -> PoseSequence:
 
 
 @pytest.fixture(scope="session")
+def side_plank_reps(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[str, str]:
+    """What ``reps`` of the bundled side-plank video prints, without and with ``--json``
+    (standard output), each run once in the session: tests/test_repetitions.py and
+    tests/test_hunt36i.py read them (each run is the pose model on its 215 frames)."""
+
+    def make(root: Path) -> tuple[str, str]:
+        import contextlib
+        import io
+
+        from posecbr.cli import main
+
+        plank = shared_data / "videos" / "side_plank" / "fit_side_plank_pexels6023266.mp4"
+        printed = []
+        for extra in ([], ["--json"]):
+            out = io.StringIO()
+            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+                assert main(["reps", str(plank), *extra]) == 0
+            printed.append(out.getvalue())
+        return printed[0], printed[1]
+
+    return made_once(tmp_path_factory, "side-plank-reps", make)
+
+
+@pytest.fixture(scope="session")
 def swapped_compare(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, dict[str, str]]:
     """One ``compare --out`` on ten demo clips with their labels swapped
     (``tests/test_compare_bad_input.py``): the labels file, the results folder, and the

@@ -63,21 +63,19 @@ def test_the_side_plank_video_has_no_repetition_in_its_segments(
 
 
 def test_reps_gives_no_period_when_nothing_repeated(
-    shared_data: Path, capsys: pytest.CaptureFixture[str]
+    side_plank_reps: tuple[str, str], shared_data: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The side plank, 0 repetitions by hand: ``reps`` said "0 repetitions (period 0.40 s;
     moving left armpit)", and ``--json`` gave ``"period_s": 0.4, "periodicity": 0.29``, a
     period of nothing counted (read from the jitter of the hold). Now neither gives one; the
     squats of the 5-fps video (3 by hand) keep theirs."""
-    plank = shared_data / "videos" / "side_plank" / "fit_side_plank_pexels6023266.mp4"
-    assert main(["reps", str(plank)]) == 0
-    line = capsys.readouterr().out.strip()
+    text, as_json = side_plank_reps  # reps VIDEO, reps VIDEO --json (conftest.py)
+    line = text.strip()
     assert line.endswith("0 repetitions (moving left armpit)"), line
     assert "period" not in line
-    assert main(["reps", str(plank), "--json"]) == 0
-    doc = json.loads(capsys.readouterr().out)
+    doc = json.loads(as_json)
     assert (doc["count"], doc["period_s"], doc["periodicity"]) == (
-        _hand(plank.name)["count"],
+        _hand("fit_side_plank_pexels6023266.mp4")["count"],
         None,
         None,
     )

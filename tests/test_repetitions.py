@@ -869,18 +869,15 @@ def test_reps_command_on_a_real_side_lying_leg_raise_video(
     assert ((tops >= up - 0.2) & (tops <= down + 0.2)).all(), tops
 
 
-def test_reps_command_on_a_real_side_plank_video(
-    shared_data: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_reps_command_on_a_real_side_plank_video(side_plank_reps: tuple[str, str]) -> None:
     """A person lying on the side gets into a side plank in the first 1.4 s and holds it to
     the end (8.6 s): no repetition by hand. Counted 1 before: the supporting shoulder's angle
     sags from 88 to about 72 degrees over the hold, and the movement line, mostly that angle,
     fell back from its far point at 2.2 s by more than a repetition's return. Now the clip is
     seen to start lying (the movement's rest end) and end in the plank, holding still."""
-    video = shared_data / "videos" / "side_plank" / "fit_side_plank_pexels6023266.mp4"
-    hand = next(c for c in _fixture()["clips"] if c["source"].endswith(video.name))
-    assert main(["reps", str(video), "--json"]) == 0
-    doc = json.loads(capsys.readouterr().out)
+    name = "fit_side_plank_pexels6023266.mp4"  # reps VIDEO --json, run in conftest.py
+    hand = next(c for c in _fixture()["clips"] if c["source"].endswith(name))
+    doc = json.loads(side_plank_reps[1])
     assert doc["count"] == hand["count"] == 0
     assert doc["repetitions"] == []
 
