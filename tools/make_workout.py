@@ -50,6 +50,8 @@ def _frames(path: Path) -> tuple[list[np.ndarray], float]:
 
 def _letterbox(bgr: np.ndarray) -> np.ndarray:
     h, w = bgr.shape[:2]
+    if (w, h) == SIZE:  # already the size: resizing to it would give the same pixels
+        return bgr
     scale = min(SIZE[0] / w, SIZE[1] / h)
     small = cv2.resize(bgr, (int(w * scale), int(h * scale)), interpolation=cv2.INTER_AREA)
     out = np.zeros((SIZE[1], SIZE[0], 3), dtype=np.uint8)
@@ -63,9 +65,12 @@ def _write(path: Path, frames: list[np.ndarray], fps: float) -> float:
     path.parent.mkdir(parents=True, exist_ok=True)
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"mp4v"), FPS, SIZE)
     repeat = max(1, int(round(FPS / fps)))
+    last, boxed = None, None
     for bgr in frames:
+        if bgr is not last:  # a frame repeated (the 5-fps squat clip's) is boxed once
+            last, boxed = bgr, _letterbox(bgr)
         for _ in range(repeat):
-            writer.write(_letterbox(bgr))
+            writer.write(boxed)
     writer.release()
     return len(frames) * repeat / FPS
 
