@@ -119,20 +119,13 @@ def test_a_stopped_extract_with_workers_removes_the_class_folders_it_made_empty(
     pose file: the worker unwinds its clip, and the class folder it had made for it
     (``poses/edge/``) was left empty. Now each folder the run made and left empty goes; an
     empty folder that was there before (a class's, and one of the user's) stays."""
-    from tests.test_hunt34i import _children, _command, _ended, _gone_soon, _hidden, squat_copies
+    from tests.test_hunt34i import _children, _command, _ended, _gone_soon, _hidden
 
     out = tmp_path / "poses"
     before = [out / "squat", out / "mine"]  # empty, made by the user before the run
     for folder in before:
         folder.mkdir(parents=True)
-    argv = [
-        "extract",
-        str(squat_copies(shared_data, tmp_path)),
-        "--out",
-        str(out),
-        "--workers",
-        "2",
-    ]
+    argv = ["extract", str(shared_data / "videos"), "--out", str(out), "--workers", "2"]
     proc = _command(argv, tmp_path)
     while not _hidden(out) and proc.poll() is None:
         time.sleep(0.02)
