@@ -122,11 +122,13 @@ def side_plank_reps(shared_data: Path, tmp_path_factory: pytest.TempPathFactory)
 
         plank = shared_data / "videos" / "side_plank" / "fit_side_plank_pexels6023266.mp4"
         printed = []
-        for extra in ([], ["--json"]):
-            out = io.StringIO()
-            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
-                assert main(["reps", str(plank), *extra]) == 0
-            printed.append(out.getvalue())
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("POSECBR_NO_PROGRESS", "1")
+            for extra in ([], ["--json"]):
+                out = io.StringIO()
+                with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+                    assert main(["reps", str(plank), *extra]) == 0
+                printed.append(out.getvalue())
         return printed[0], printed[1]
 
     return made_once(tmp_path_factory, "side-plank-reps", make)
