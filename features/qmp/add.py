@@ -37,7 +37,7 @@ import math
 from collections.abc import Mapping, Sequence
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, partial
 from pathlib import Path
 from typing import Any, cast
 
@@ -74,11 +74,12 @@ class Condition:
     def signals(self) -> tuple[str, ...]:
         return (self.signal,)
 
-    def describe(self) -> str:
+    def describe(self, extra: int = 0) -> str:
+        """What the test asks, in words; ``extra``: digits beyond the usual three."""
         what = f"{_signal_words(self.signal)} {self.quantity.replace('_', ' ')}"
 
         def shown(v: float) -> str:
-            return shown_value(v, self.signal, self.quantity)
+            return shown_value(v, self.signal, self.quantity, extra)
 
         if self.min is not None and self.max is not None:
             return f"{what} between {shown(self.min)} and {shown(self.max)}"
@@ -185,21 +186,21 @@ def _unit_words(signal: str, quantity: str) -> str:
     return f" {unit}"
 
 
-def _digits(v: float) -> str:
-    """Three significant digits, no exponent below 100,000."""
-    return f"{v:.0f}" if abs(v) >= 100 else f"{v:.3g}"
+def _digits(v: float, extra: int = 0) -> str:
+    """Three significant digits (``extra`` more), no exponent below 100,000."""
+    return f"{v:.{extra}f}" if abs(v) >= 100 else f"{v:.{3 + extra}g}"
 
 
-def shown_value(value: float, signal: str, quantity: str) -> str:
+def shown_value(value: float, signal: str, quantity: str, extra: int = 0) -> str:
     """``value`` of ``quantity`` of ``signal`` in the words and units every other output
     uses: an angle (radians in the ADD) in degrees ("115°", "17.2°/s"), a joint distance in
-    head lengths; the rest as the ADD states it."""
+    head lengths; the rest as the ADD states it. ``extra``: digits beyond the usual three."""
     unit = _unit_words(signal, quantity)
     if unit.startswith(" rad"):
-        return f"{_digits(math.degrees(value))}°{unit[len(' rad') :]}"
+        return f"{_digits(math.degrees(value), extra)}°{unit[len(' rad') :]}"
     if unit.startswith(" hl"):
-        return f"{_digits(value)} head lengths{unit[len(' hl') :]}"
-    return f"{_digits(value)}{unit}"
+        return f"{_digits(value, extra)} head lengths{unit[len(' hl') :]}"
+    return f"{_digits(value, extra)}{unit}"
 
 
 @cache
@@ -567,9 +568,8 @@ def _failure_text(test: Test, values: list[np.ndarray], w: int) -> str:
     if isinstance(test, Condition):
         v = values[0][w]
         if np.isfinite(v):
-            seen = shown_value(float(v), test.signal, test.quantity)
-        else:
-            seen = "no oscillation" if test.quantity in ("period_s", "phase_rad") else "undefined"
+            return _failed_condition(test, float(v))
+        seen = "no oscillation" if test.quantity in ("period_s", "phase_rad") else "undefined"
         return f"{test.describe()} (observed {seen})"
     diff, ratio, amp = values[0][w], values[1][w], values[2][w]
     if not np.isfinite(diff):
@@ -578,6 +578,21 @@ def _failure_text(test: Test, values: list[np.ndarray], w: int) -> str:
         f"{test.describe()} (observed phase gap {math.degrees(diff):.0f}°, period ratio"
         f" {ratio:.2f}, smaller amplitude {shown_value(float(amp), test.signal_a, 'amplitude')})"
     )
+
+
+def _failed_condition(test: Condition, value: float) -> str:
+    """The condition ``value`` failed and ``value``, with as many digits as it takes for the
+    value and the bound it crossed to read differently: "at most 115° (observed 115°)" read
+    as met (the bound 114.6°, the value 114.8°)."""
+    crossed = test.min if test.min is not None and value < test.min else test.max
+    extra = 0
+    while crossed is not None and extra < 4:
+        show = partial(shown_value, signal=test.signal, quantity=test.quantity, extra=extra)
+        if show(value) != show(crossed):
+            break
+        extra += 1
+    seen = shown_value(value, test.signal, test.quantity, extra)
+    return f"{test.describe(extra)} (observed {seen})"
 
 
 def evaluate_criteria(add: ADD, fits: QMPFits) -> CriteriaResult:

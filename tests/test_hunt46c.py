@@ -1,0 +1,46 @@
+"""Hunt 46c: commands used as a new user would (casebase, report, describe, dad, thresholds,
+convert, the library API), each defect's test failing on the code before its fix."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from features.qmp.add import Condition, _failure_text
+from posecbr.cli import main
+
+DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
+
+
+def test_a_failed_condition_reads_failed_however_near_its_bound() -> None:
+    # The squat depth's bound, 2.0 rad = 114.59°, and a knee at 114.8° (2.0036 rad): at three
+    # digits both read "115°", "at most 115° (observed 115°)", a condition met by its words.
+    knee = Condition("right_knee", "mean", max=2.0)
+    assert math.degrees(2.0036) == pytest.approx(114.80, abs=0.005)
+    text = _failure_text(knee, [np.array([2.0036])], 0)
+    assert text == "right knee mean at most 114.6° (observed 114.8°)"
+    # far from it, the usual three digits
+    assert (
+        _failure_text(knee, [np.array([2.5])], 0) == "right knee mean at most 115° (observed 143°)"
+    )
+    low = Condition("torso_sagittal", "min", min=0.7)  # 40.107°
+    assert _failure_text(low, [np.array([0.6995])], 0) == (
+        "torso sagittal min at least 40.11° (observed 40.08°)"
+    )
+
+
+def test_dad_never_shows_a_failed_bound_and_its_value_alike(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # The bundled s02 sit-to-stand: its right armpit's mean, just past the 2.0-rad bound of
+    # "arms kept within about 115 degrees of the torso", read "at most 115° (observed 115°)".
+    assert main(["dad", str(DEMO / "m05_s02_e01_inc.npz"), "--top", "0"]) == 0
+    needs = re.findall(
+        r"needs .* (?:at most|at least) (\S+) \(observed (\S+)\)", capsys.readouterr().out
+    )
+    assert len(needs) > 20
+    assert all(bound != seen for bound, seen in needs), [n for n in needs if n[0] == n[1]]
