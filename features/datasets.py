@@ -1247,6 +1247,13 @@ def dataset_subjects(path: str | Path, *, sensor: str = "kinect") -> list[str]:
     return _dataset_values(path, "subject", sensor)
 
 
+def dataset_movements(path: str | Path, *, sensor: str = "kinect") -> list[str]:
+    """The movements (UI-PRMD's "m01", a labels CSV's ``movement`` column) the clips of the
+    dataset at ``path`` have, each once, found as :func:`dataset_labels` finds the labels.
+    For the refusal of a ``--movements`` entry no clip has."""
+    return _dataset_values(path, "movement", sensor)
+
+
 def dataset_columns(path: str | Path, *, sensor: str = "kinect") -> list[str]:
     """The columns the clips of the dataset at ``path`` may have a value of (label, subject,
     a labels CSV's other columns, UI-PRMD's movement, episode and correct, ...), found from
@@ -1260,14 +1267,15 @@ def dataset_columns(path: str | Path, *, sensor: str = "kinect") -> list[str]:
 
 
 def _dataset_values(path: str | Path, field: str, sensor: str) -> list[str]:
-    """:func:`dataset_labels` (``field`` "label") or :func:`dataset_subjects` ("subject")."""
+    """:func:`dataset_labels` (``field`` "label"), :func:`dataset_subjects` ("subject") or
+    :func:`dataset_movements` ("movement", one of a clip's extras)."""
     from .poses import pose_file_metadata
 
     path = Path(path)
     kind = detect_kind(path)
     found: set[str] = set()
     for e in _entries(path, kind, sensor):
-        value = getattr(e, field)
+        value = getattr(e, field) if field in ("label", "subject") else extra(e.extras, field)
         if field == "label" and e.track is not None:
             found.update(track_labels(e.track))
         elif value is not None:

@@ -141,7 +141,7 @@ def held_words(values: Sequence[str], what: str) -> str:
     names. Empty for no values (nothing to say)."""
     if not values:
         return ""
-    noun = "labels" if what == "labelled" else "subjects"
+    noun = {"labelled": "labels", "of movement": "movements"}.get(what, "subjects")
     many = len(values) > 1
     text = f": its {noun if many else noun[:-1]} {'are' if many else 'is'} {listed(values)}"
     codes = noun == "labels" and whole_numbers(values)

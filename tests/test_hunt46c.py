@@ -12,6 +12,7 @@ import pytest
 
 from features.qmp.add import Condition, _failure_text
 from posecbr.cli import main
+from tests.badinput import refused
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
@@ -44,3 +45,27 @@ def test_dad_never_shows_a_failed_bound_and_its_value_alike(
     )
     assert len(needs) > 20
     assert all(bound != seen for bound, seen in needs), [n for n in needs if n[0] == n[1]]
+
+
+def test_convert_names_the_movements_when_one_asked_is_not_there(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # "m1" for m01: refused as a subject no clip has is, naming the movements there; it was
+    # "no clips matched (check the filters)", and "m01,m7" converted m01 alone in silence.
+    held = "its movements are m01, m02, m03, m04, m05, m06, m07, m08, m09 and m10"
+    out = tmp_path / "out"
+    refused(["convert", str(DEMO), "--out", str(out), "--movements", "m1"], tmp_path, capsys,
+            "--movements: no clip of movement 'm1' in", held)  # fmt: skip
+    argv = ["convert", str(DEMO / "labels.csv"), "--out", str(out), "--subjects", "s01"]
+    refused([*argv, "--movements", "m01,m7"], tmp_path, capsys, "movement 'm7'", held)
+    assert main([*argv, "--movements", "m01,m07"]) == 0  # both there: 12 clips, 6 of each
+    rows = (out / "labels.csv").read_text().splitlines()[1:]
+    assert sorted({r.split(",")[5] for r in rows}) == ["m01", "m07"] and len(rows) == 12
+
+
+def test_convert_uiprmd_movement_typo_named(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["convert", str(shared_data / "ui-prmd"), "--out", str(tmp_path / "o")]
+    refused([*argv, "--movements", "m11", "--subjects", "s01"], tmp_path, capsys,
+            "no clip of movement 'm11'", "m09 and m10")  # fmt: skip

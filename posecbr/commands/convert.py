@@ -441,19 +441,21 @@ def _write_clips(
 
 
 def _check_asked(args: argparse.Namespace, written: list[dict[str, Any]]) -> None:
-    """Refuse a ``--labels`` or ``--subjects`` entry no clip converted has (mistyped), naming
-    those the data hold, as ``train``, ``compare`` and ``classify`` refuse it: the clips of
-    the others alone were converted without a word (``--labels deep_squat,bogus``), and one
-    entry alone was "holds no clip to convert". Checked once every clip is staged, before
-    any is moved into --out; when ``--limit`` stopped the conversion, against every clip of
-    the data (one past the limit may have it)."""
-    from features.datasets import dataset_labels, dataset_subjects
+    """Refuse a ``--labels``, ``--subjects`` or ``--movements`` entry no clip converted has
+    (mistyped), naming those the data hold, as ``train``, ``compare`` and ``classify`` refuse
+    it: the clips of the others alone were converted without a word (``--labels
+    deep_squat,bogus``, ``--movements m01,m7``), and one entry alone was "holds no clip to
+    convert" ("no clips matched (check the filters)" for ``--movements m1``). Checked once
+    every clip is staged, before any is moved into --out; when ``--limit`` stopped the
+    conversion, against every clip of the data (one past the limit may have it)."""
+    from features.datasets import dataset_labels, dataset_movements, dataset_subjects, extra
 
     limited = args.limit is not None and len(written) >= args.limit
     asked = []
     for flag, given, key, what, held_by in (
         ("--labels", args.labels, "label", "labelled", dataset_labels),
         ("--subjects", args.subjects, "subject", "of subject", dataset_subjects),
+        ("--movements", args.movements, "movement", "of movement", dataset_movements),
     ):
         values = _csv_list(given)
         if values is None:
@@ -462,7 +464,7 @@ def _check_asked(args: argparse.Namespace, written: list[dict[str, Any]]) -> Non
         def held(held_by: Any = held_by) -> list[str]:
             return list(held_by(args.source, sensor=args.sensor))
 
-        found = held() if limited else [row[key] for row in written]
+        found = held() if limited else [extra(row, key) for row in written]
         asked.append((found, sorted(values), flag, what, held))
     check_each_found(asked, args.source)
 
