@@ -3,6 +3,7 @@ convert, the library API), each defect's test failing on the code before its fix
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from pathlib import Path
@@ -13,6 +14,7 @@ import pytest
 from features.qmp.add import Condition, _failure_text
 from posecbr.cli import main
 from tests.badinput import refused
+from tests.test_classify_output import data_and_stores  # noqa: F401 (a fixture, made once)
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
@@ -69,3 +71,22 @@ def test_convert_uiprmd_movement_typo_named(
     argv = ["convert", str(shared_data / "ui-prmd"), "--out", str(tmp_path / "o")]
     refused([*argv, "--movements", "m11", "--subjects", "s01"], tmp_path, capsys,
             "no clip of movement 'm11'", "m09 and m10")  # fmt: skip
+
+
+def test_casebase_info_gives_the_phase_means_fit_chose(
+    data_and_stores: tuple[tuple[Path, Path], dict[str, str]],  # noqa: F811
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # Trained with --phases auto (the default): info --json gave the parameter, "auto", beside
+    # the side handling and feature weights fit chose; the classifier uses a number.
+    from casebase_store import open_store
+    from cbr.stored import load_classifier
+
+    db = data_and_stores[1]["label"]
+    with open_store(db, readonly=True) as store:
+        clf = load_classifier(store, "default").classifier
+    assert clf.get_params()["phases"] == "auto" and isinstance(clf.phases_, int)
+    assert main(["casebase", "info", "--db", db, "--json"]) == 0
+    model = json.loads(capsys.readouterr().out)["case_bases"][0]["model"]
+    assert model["phases"] == clf.phases_
+    assert (model["side"], model["feature_weights"]) == (clf.side_, clf.weighting_)

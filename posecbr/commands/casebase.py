@@ -402,9 +402,11 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
 
         kind = CASE_KINDS.get(m.get("cases") or "")
         each = f", a case per {kind}" if kind else ""
+        phases = m.get("phases")
+        means = f"; means over {phases} phases" if isinstance(phases, int) and phases else ""
         print(
             f"  model: predicts {m['target']}{each}; k = {m['k']}, {m['vote']} vote; side handling "
-            f"{m['side']}; feature weights {m['feature_weights']}"
+            f"{m['side']}; feature weights {m['feature_weights']}{means}"
         )
     if m.get("weighted_most"):
         print(f"  weighted most: {shown(', '.join(m['weighted_most']))}")
@@ -519,7 +521,9 @@ def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, A
         "cases": model.get("cases"),
         "side": model.get("side"),
         "feature_weights": model.get("weighting"),
-        "phases": params.get("phases"),
+        # what fit chose, as side and feature_weights (and train --json) give it: the
+        # parameter ("auto") for a model stored before the choice was
+        "phases": model.get("phases", params.get("phases")),
         "unlike_cases": _novelty_summary(model.get("novelty")),
         "confidence": _confidence_summary(model.get("confidence")),
     }
