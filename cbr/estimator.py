@@ -520,7 +520,15 @@ class CaseBaseClassifier(Classifier):
             )
 
     def _measure(self) -> SimilarityMeasure:
-        return get_measure(self.similarity, **(self.similarity_params or {}))
+        """The measure of ``similarity`` with ``similarity_params``; a parameter it has not,
+        or a value it refuses, is an error of ``similarity_params`` (it named ``similarity``
+        or "similarity dtw": the parameter the user gave goes unnamed)."""
+        try:
+            return get_measure(self.similarity, **(self.similarity_params or {}))
+        except ConfigError as exc:
+            if not self.similarity_params or exc.message.startswith("unknown similarity"):
+                raise
+            raise ConfigError(exc.message, "similarity_params") from None
 
     @staticmethod
     def _selectable(vectors: bool, measure: SimilarityMeasure) -> bool:

@@ -90,3 +90,25 @@ def test_casebase_info_gives_the_phase_means_fit_chose(
     model = json.loads(capsys.readouterr().out)["case_bases"][0]["model"]
     assert model["phases"] == clf.phases_
     assert (model["side"], model["feature_weights"]) == (clf.side_, clf.weighting_)
+
+
+def test_a_bad_similarity_parameter_value_is_named_as_the_parameter_given(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # band=-1 came from --param (similarity_params) but was blamed on --similarity (on
+    # "similarity dtw" in Python), the option (parameter) the user had right.
+    from cbr.estimator import CaseBaseClassifier
+    from features.errors import ParameterError
+    from features.poses import load_pose
+
+    argv = ["train", str(DEMO / "labels.csv"), "--db", str(tmp_path / "cb.sqlite")]
+    refused([*argv, "--similarity", "dtw", "--param", "band=-1"], tmp_path, capsys,
+            "error: --param: band must be in [0, 1], got -1")  # fmt: skip
+    refused([*argv, "--similarity", "dwt", "--param", "band=0.2"], tmp_path, capsys,
+            "error: --similarity: unknown similarity 'dwt'")  # fmt: skip
+    clips = [load_pose(DEMO / f"m0{m}_s01_e01.npz") for m in (1, 5)]
+    with pytest.raises(ParameterError) as raised:
+        CaseBaseClassifier(similarity="dtw", similarity_params={"band": -1}).fit(clips, ["a", "b"])
+    assert str(raised.value) == "similarity_params: band must be in [0, 1], got -1"
+    with pytest.raises(ParameterError, match=r"^similarity_params: similarity 'euclidean' has no"):
+        CaseBaseClassifier(similarity_params={"band": 0.2}).fit(clips, ["a", "b"])

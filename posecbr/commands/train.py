@@ -233,9 +233,10 @@ def _estimator(args: argparse.Namespace) -> Any:
     params = parse_params(args.param)
     try:
         measure = get_measure(o["similarity"], **params)
-    except ConfigError as exc:  # the registry names its field; the user gave an option
-        raise ConfigError(exc.message, "--param" if "no parameter" in exc.message
-                          else "--similarity") from None  # fmt: skip
+    except ConfigError as exc:  # the registry names its field; the user gave an option: the
+        # measure's name, or a parameter's name or value (band=-1 was blamed on --similarity)
+        named = exc.message.startswith("unknown similarity") or not params
+        raise ConfigError(exc.message, "--similarity" if named else "--param") from None
     if o["features"] == "qmp" and measure.compares_sequences:
         raise ConfigError(
             f"similarity {measure.name!r} compares sequences; QMP features are "
