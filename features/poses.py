@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from features.errors import ConfigError, InputError, PoseFileError
+from features.errors import ConfigError, DataError, InputError, PoseFileError
 from features.fileio import atomic_path
 from features.text import size_words
 
@@ -626,6 +626,17 @@ def holds_poses(path: str | Path) -> bool:
             return _member(zf, set(zf.namelist()), "positions") is not None
     except _READ_ERRORS:
         return False
+
+
+def check_not_poses(path: str | Path, what: str) -> None:
+    """Refuse ``path`` for an output of another kind (``what``: "report", "JSON output")
+    when it holds a pose file: a recording, as likely one the output was made from, would be
+    replaced by a page or a table (a slip for ``report.html``), as ``casebase export``
+    refuses it."""
+    if holds_poses(path):
+        raise DataError(
+            f"is a pose file: the {what} would replace that recording (name another file)", path
+        )
 
 
 def _text_array(value: np.ndarray, what: str, path: Path) -> np.ndarray:

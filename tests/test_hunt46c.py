@@ -112,3 +112,20 @@ def test_a_bad_similarity_parameter_value_is_named_as_the_parameter_given(
     assert str(raised.value) == "similarity_params: band must be in [0, 1], got -1"
     with pytest.raises(ParameterError, match=r"^similarity_params: similarity 'euclidean' has no"):
         CaseBaseClassifier(similarity_params={"band": 0.2}).fit(clips, ["a", "b"])
+
+
+def test_report_and_compare_refuse_to_write_over_a_pose_file(
+    compared_three: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # `report cmp --out poses/squat.npz` (a slip for report.html) replaced the recording by
+    # an HTML page, exit 0, and `compare --json`/`--csv` one by the results once the run was
+    # done; casebase export refuses such a file, and so do they now, before any work.
+    pose = tmp_path / "m01_s01_e01.npz"
+    pose.write_bytes((DEMO / "m01_s01_e01.npz").read_bytes())
+    refused(["report", str(compared_three), "--out", str(pose)], tmp_path, capsys,
+            f"{pose}: is a pose file: the report would replace that recording")  # fmt: skip
+    for flag in ("--json", "--csv"):
+        refused(["compare", str(DEMO), "--labels", "deep_squat,sit_to_stand", flag, str(pose)],
+                tmp_path, capsys, f"{pose}: is a pose file: the ")  # fmt: skip
+    assert main(["report", str(compared_three), "--out", str(tmp_path / "r.npz")]) == 0
+    assert (tmp_path / "r.npz").read_text().startswith("<!DOCTYPE html>")  # a name, no pose file

@@ -24,6 +24,7 @@ import numpy as np
 from features.datasets import truth_value
 from features.errors import DataError
 from features.fileio import binary_kind, check_output, file_head, write_text_atomic
+from features.poses import check_not_poses
 from features.text import size_words
 
 from ..explain import class_noun
@@ -357,6 +358,7 @@ def write_report(results_path: str | Path, out: str | Path) -> tuple[Path, list[
     table = source.with_name("results.csv")
     kept = [table] if table.is_file() else []
     dest = check_output(out, inputs=[source, *images.values(), *kept], what="report")
+    check_not_poses(dest, "report")
     drawing = Drawing()
     with tempfile.TemporaryDirectory() as tmp:
         if results.pictures.accuracy not in images:

@@ -573,6 +573,7 @@ def run(args: argparse.Namespace) -> int:
     from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
     from cbr.evaluation.tables import format_table
     from features.datasets import check_no_overlaps, labelled_over_time
+    from features.poses import check_not_poses
 
     check_scheduler(args.scheduler)
     check_folds_given_with_kfold(args)
@@ -583,6 +584,8 @@ def run(args: argparse.Namespace) -> int:
     check_outputs(outputs, [args.data])
     if outputs:  # clips --labels/--subjects leave out are the data's too
         check_outputs(outputs, _dataset_files(args))
+    for o in outputs:  # a pose file of other data (one of these is named as an input above)
+        check_not_poses(o.path, o.what)
     # rows giving frames two labels: refused before any clip is read, as train refuses them
     check_no_overlaps(args.data, set(_names(args.labels)) if args.labels else None)
     clips = _load(args)
