@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import ConfigError, DataError, InputError, PoseFileError
-from features.fileio import atomic_path
+from features.fileio import SQLITE_MAGIC, atomic_path, file_head
 from features.text import size_words
 
 from .skeleton import (
@@ -630,12 +630,18 @@ def holds_poses(path: str | Path) -> bool:
 
 def check_not_poses(path: str | Path, what: str) -> None:
     """Refuse ``path`` for an output of another kind (``what``: "report", "JSON output")
-    when it holds a pose file: a recording, as likely one the output was made from, would be
-    replaced by a page or a table (a slip for ``report.html``), as ``casebase export``
-    refuses it."""
+    when it holds a pose file or a SQLite database (a case base store): a recording, as
+    likely one the output was made from, or a case base would be replaced by a page or a
+    table (a slip for ``report.html``), as ``casebase export`` refuses a pose file."""
     if holds_poses(path):
         raise DataError(
             f"is a pose file: the {what} would replace that recording (name another file)", path
+        )
+    if Path(path).is_file() and file_head(path, len(SQLITE_MAGIC)) == SQLITE_MAGIC:
+        raise DataError(
+            f"is a SQLite database (a case base file?): the {what} would replace it (name"
+            " another file)",
+            path,
         )
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import re
+import sqlite3
 from pathlib import Path
 
 import numpy as np
@@ -114,7 +115,7 @@ def test_a_bad_similarity_parameter_value_is_named_as_the_parameter_given(
         CaseBaseClassifier(similarity_params={"band": 0.2}).fit(clips, ["a", "b"])
 
 
-def test_report_and_compare_refuse_to_write_over_a_pose_file(
+def test_report_and_compare_refuse_to_write_over_a_pose_file_or_a_case_base(
     compared_three: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # `report cmp --out poses/squat.npz` (a slip for report.html) replaced the recording by
@@ -127,5 +128,11 @@ def test_report_and_compare_refuse_to_write_over_a_pose_file(
     for flag in ("--json", "--csv"):
         refused(["compare", str(DEMO), "--labels", "deep_squat,sit_to_stand", flag, str(pose)],
                 tmp_path, capsys, f"{pose}: is a pose file: the ")  # fmt: skip
+    store = tmp_path / "cb.sqlite"  # any SQLite database: a case base file, as likely
+    with sqlite3.connect(store) as con:
+        con.execute("CREATE TABLE case_bases (id INTEGER)")
+    refused(["report", str(compared_three), "--out", str(store)], tmp_path, capsys,
+            f"{store}: is a SQLite database (a case base file?): the report would")  # fmt: skip
+    refused(["compare", str(DEMO), "--json", str(store)], tmp_path, capsys, "is a SQLite database")
     assert main(["report", str(compared_three), "--out", str(tmp_path / "r.npz")]) == 0
     assert (tmp_path / "r.npz").read_text().startswith("<!DOCTYPE html>")  # a name, no pose file
