@@ -36,6 +36,7 @@ from features.errors import ConfigError, DataError
 from .config import read_config
 from .poses import MAX_FPS, MIN_FPS, PoseSequence, expect_sequence
 from .signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals, near_pairs, state_signals
+from .text import did_you_mean
 
 __all__ = [
     "CHUNK_FRAMES",
@@ -237,6 +238,9 @@ def parse_value(value: Any, where: str) -> float:
     return out
 
 
+TAU_DELTA = ("tau", "delta")
+"""The keys of a threshold's table."""
+
 MIN_DELTA = 1e-300
 """The smallest ``delta``: ln((1 - ε)/ε) is at most 745 for any ε a float holds, so the
 slope stays finite (a delta of 1e-320 overflowed to an infinite slope, with a RuntimeWarning
@@ -244,8 +248,14 @@ for every command that used the table)."""
 
 
 def _threshold(raw: Any, where: str) -> Threshold:
-    if not isinstance(raw, Mapping) or set(raw) - {"tau", "delta"} or not raw:
+    if not isinstance(raw, Mapping) or not raw:
         raise ConfigError("expected a table with keys tau and/or delta", where)
+    unknown = sorted(set(raw) - {"tau", "delta"})
+    if unknown:  # named: "expected a table with keys tau and/or delta" left 'tua' to find
+        raise ConfigError(
+            f"unknown key {unknown[0]!r} (known: tau, delta){did_you_mean(unknown[0], TAU_DELTA)}",
+            where,
+        )
     tau = parse_value(raw["tau"], f"{where}.tau") if "tau" in raw else math.nan
     delta = parse_value(raw["delta"], f"{where}.delta") if "delta" in raw else math.nan
     if "delta" in raw and delta <= 0:
@@ -350,7 +360,8 @@ def _fluents_named(specs: list[FluentSpec], key: str, params: Any, source: str) 
     parameters are known to be a table of known keys."""
     hits = [i for i, s in enumerate(specs) if key in (s.name, s.family)]
     if not hits:
-        raise ConfigError(f"unknown fluent {key!r}", source)
+        names = dict.fromkeys(n for s in specs for n in (s.family, s.name))
+        raise ConfigError(f"unknown fluent {key!r}{did_you_mean(key, names)}", source)
     if not isinstance(params, Mapping):
         raise ConfigError(f"fluent {key!r}: expected a table", source)
     bad = set(params) - {"lower", "upper", "motion"} - set(_DESCRIPTIVE_KEYS)

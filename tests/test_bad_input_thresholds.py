@@ -144,8 +144,9 @@ CASES: list[tuple[str, str, str | bytes, str]] = [
      "'fluents' must be a table of fluent names"),
     ("a fluent as a number", "t.json", '{"fluents": {"leg_bent": 3}}',
      "fluent 'leg_bent': expected a table"),
+    # it said "expected a table with keys tau and/or delta", leaving 'tao' to be found (46c)
     ("a boundary with an unknown key", "t.toml", "[fluents.leg_bent.lower]\ntao = 1\n",
-     "expected a table with keys tau and/or delta"),
+     "fluents.leg_bent.lower: unknown key 'tao' (known: tau, delta)"),
     ("malformed TOML", "t.toml", "[fluents.leg_bent\n", "not valid TOML"),
     ("malformed JSON", "t.json", '{"window": 5,,}', "not valid JSON"),
     ("a JSON list at the top", "t.json", "[1, 2, 3]",

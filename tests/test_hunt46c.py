@@ -136,3 +136,13 @@ def test_report_and_compare_refuse_to_write_over_a_pose_file_or_a_case_base(
     refused(["compare", str(DEMO), "--json", str(store)], tmp_path, capsys, "is a SQLite database")
     assert main(["report", str(compared_three), "--out", str(tmp_path / "r.npz")]) == 0
     assert (tmp_path / "r.npz").read_text().startswith("<!DOCTYPE html>")  # a name, no pose file
+
+
+def test_a_mistyped_fluent_in_a_thresholds_file_gets_a_guess(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # "unknown fluent 'leg_bnt'" alone, where --similarity dwt and the rest get a guess
+    t = tmp_path / "t.json"
+    t.write_text('{"fluents": {"leg_bnt": {"lower": {"tau": 2.0}}}}')
+    refused(["thresholds", "--from", str(t)], tmp_path, capsys,
+            f"{t}: unknown fluent 'leg_bnt' (did you mean 'leg_bent'?)")  # fmt: skip
