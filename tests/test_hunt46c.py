@@ -146,3 +146,25 @@ def test_a_mistyped_fluent_in_a_thresholds_file_gets_a_guess(
     t.write_text('{"fluents": {"leg_bnt": {"lower": {"tau": 2.0}}}}')
     refused(["thresholds", "--from", str(t)], tmp_path, capsys,
             f"{t}: unknown fluent 'leg_bnt' (did you mean 'leg_bent'?)")  # fmt: skip
+
+
+def test_casebase_info_says_the_vote_is_balanced_by_class(
+    data_and_stores: tuple[tuple[Path, Path], dict[str, str]],  # noqa: F811
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # train --target correct votes each case divided by its class's share of the cases
+    # (class_weight="balanced"); info said "k = 5, distance vote" alone, as of a plain vote.
+    from casebase_store import open_store
+    from cbr.stored import load_classifier
+
+    for target, weight in (("correct", "balanced"), ("label", "none")):
+        db = data_and_stores[1][target]
+        with open_store(db, readonly=True) as store:
+            assert load_classifier(store, "default").classifier.class_weight == weight
+        assert main(["casebase", "info", "--db", db, "--json"]) == 0
+        assert (
+            json.loads(capsys.readouterr().out)["case_bases"][0]["model"]["class_weight"] == weight
+        )
+        assert main(["casebase", "info", "--db", db]) == 0
+        vote = "distance vote, balanced by class;" if weight == "balanced" else "distance vote;"
+        assert f"k = 5, {vote} side handling" in capsys.readouterr().out

@@ -404,9 +404,10 @@ def _print_model(m: dict[str, Any], n_activities: int, changed: bool = False) ->
         each = f", a case per {kind}" if kind else ""
         phases = m.get("phases")
         means = f"; means over {phases} phases" if isinstance(phases, int) and phases else ""
+        balanced = ", balanced by class" if m.get("class_weight") == "balanced" else ""
         print(
-            f"  model: predicts {m['target']}{each}; k = {m['k']}, {m['vote']} vote; side handling "
-            f"{m['side']}; feature weights {m['feature_weights']}{means}"
+            f"  model: predicts {m['target']}{each}; k = {m['k']}, {m['vote']} vote{balanced};"
+            f" side handling {m['side']}; feature weights {m['feature_weights']}{means}"
         )
     if m.get("weighted_most"):
         print(f"  weighted most: {shown(', '.join(m['weighted_most']))}")
@@ -517,6 +518,9 @@ def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, A
     out: dict[str, Any] = {
         "k": params.get("k"),
         "vote": params.get("weights"),
+        # each vote divided by its class's share of the cases (train --target correct); a
+        # model stored before the vote could be balanced votes as it was calibrated: none
+        "class_weight": params.get("class_weight", "none"),
         "target": model.get("target", "label"),
         "cases": model.get("cases"),
         "side": model.get("side"),
