@@ -308,12 +308,17 @@ def _counts(labels: Sequence[str]) -> dict[str, int]:
 
 def _check_name(name: Any) -> None:
     """Refuse a case base name that is not text, empty, or one no store can hold (too long,
-    a NUL), before any clip is read."""
+    a NUL), before any clip is read: an :class:`InputError` naming the argument ``name``, as
+    the other arguments' (it named the command's option, "--name: the case base name is
+    empty"; ``posecbr train`` checks ``--name`` itself)."""
     if not isinstance(name, str):
-        raise ConfigError(f"the case base name must be text, got {name!r}", "--name")
+        raise InputError(f"the case base name must be text, got {name!r}", "name")
     if not name.strip():
-        raise ConfigError("the case base name is empty", "--name")
-    check_case_base_name(name, "--name")
+        raise InputError("the case base name is empty", "name")
+    try:
+        check_case_base_name(name, "name")
+    except StoreError as exc:
+        raise InputError(exc.message, "name") from None
 
 
 def _check_what(estimator: Any, target: Any, cases: Any) -> None:

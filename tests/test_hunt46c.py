@@ -168,3 +168,17 @@ def test_casebase_info_says_the_vote_is_balanced_by_class(
         assert main(["casebase", "info", "--db", db]) == 0
         vote = "distance vote, balanced by class;" if weight == "balanced" else "distance vote;"
         assert f"k = 5, {vote} side handling" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(("name", "why"), [("", "the case base name is empty"),
+                                           ("x\x00y", "contains a NUL character")])  # fmt: skip
+def test_train_in_python_names_its_name_argument(tmp_path: Path, name: str, why: str) -> None:
+    # cbr.training.train(db, "", ...) raised ConfigError("--name: ..."): the command's option,
+    # not the argument, and no ValueError, unlike its other arguments' InputError
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import train
+    from features.errors import InputError
+
+    with pytest.raises(InputError, match=f"^name: .*{why}"):
+        train(tmp_path / "cb.sqlite", name, [], [], CaseBaseClassifier())
+    assert list(tmp_path.iterdir()) == []
