@@ -3,7 +3,7 @@ without its end marker, a Matroska/WebM or FLV file ending inside an element or 
 MP4/MOV file ending inside a box),
 whether it holds sound alone (WAVE, FLAC, MP3, AAC, Ogg, or an MP4 or Matroska/WebM file of
 sound tracks only), and whether OpenCV counts its frames from its duration (Matroska/WebM,
-FLV, MPEG-TS).
+FLV, MPEG-TS), and how a still picture is turned to be seen (its EXIF orientation).
 :mod:`features.pose_estimation.video` asks these before it trusts what OpenCV reports."""
 
 from __future__ import annotations
@@ -19,6 +19,30 @@ from features.errors import DataError
 
 JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
 """A JPEG file's start-of-image and end-of-image markers."""
+EXIF_ORIENTATION = 0x0112
+"""The EXIF tag saying how a picture is turned to be seen: 1 as stored, 2-8 flipped and/or
+turned (6: a quarter turn clockwise, the portrait photo a phone stores sideways)."""
+PICTURE_FORMATS = ("JPEG", "PNG", "TIFF", "WEBP")
+"""The still-picture formats (Pillow's names) whose EXIF orientation is read (a camera's MPO
+file opens as a JPEG)."""
+
+
+def picture_orientation(path: Path) -> int:
+    """The EXIF orientation (1-8) of a still picture: a phone stores a portrait photo as its
+    sensor took it, sideways, and says in this tag how a viewer turns it upright. FFmpeg,
+    and so OpenCV's capture, decodes the picture as stored. 1 for a file that is no picture
+    of :data:`PICTURE_FORMATS` (a video), that has no such tag, or whose tag is no
+    orientation."""
+    from PIL import Image
+
+    Image.init()  # every format Pillow reads here registered (WebP only when built with it)
+    formats = [name for name in PICTURE_FORMATS if name in Image.OPEN]
+    try:
+        with Image.open(path, formats=formats) as picture:
+            value = picture.getexif().get(EXIF_ORIENTATION, 1)
+    except (Image.DecompressionBombError, OSError, SyntaxError, ValueError):
+        return 1  # no picture Pillow reads (a video, a damaged picture): OpenCV's verdict stands
+    return value if isinstance(value, int) and 1 <= value <= 8 else 1
 
 
 def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:

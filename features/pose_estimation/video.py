@@ -58,6 +58,7 @@ from .containers import (  # noqa: E402
     counted_by_duration,
     is_mp4,
     mp4_timeless_frames,
+    picture_orientation,
     refuse_cut,
     sound_only,
 )
@@ -146,13 +147,34 @@ def jump_words(
 
 @dataclass(frozen=True)
 class VideoInfo:
-    """What the container declares: frame count (0 if unknown), fps, width, height."""
+    """What the container declares: frame count (0 if unknown), fps, width, height (of the
+    frames as seen: a still picture turned by its EXIF ``orientation``, :func:`upright`)."""
 
     path: Path
     frames: int
     fps: float
     width: int
     height: int
+    orientation: int = 1
+
+
+def upright(image: np.ndarray, orientation: int) -> np.ndarray:
+    """A still picture decoded as stored, flipped and turned as its EXIF ``orientation``
+    (1-8, :func:`.containers.picture_orientation`) says a viewer shows it: 6, a phone's
+    portrait photo stored sideways, a quarter turn clockwise. A video's frames (1, or a
+    video stream's rotation, which OpenCV applies itself) are given back as they are."""
+    if orientation == 1:
+        return image
+    turned = {
+        2: image[:, ::-1],
+        3: image[::-1, ::-1],
+        4: image[::-1],
+        5: image.swapaxes(0, 1),
+        6: image[::-1].swapaxes(0, 1),
+        7: image[::-1, ::-1].swapaxes(0, 1),
+        8: image[:, ::-1].swapaxes(0, 1),
+    }[orientation]
+    return np.ascontiguousarray(turned)
 
 
 @dataclass(frozen=True)
@@ -225,8 +247,7 @@ def open_video(
     refuse_text(cap, path)
     frames = int(max(0.0, cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0))
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
-    width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
-    height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
+    width, height, orientation = _seen_size(cap, path)
     fps, frames = _frames_rate(path, fps, frames, counted_by_duration(head))
     if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
@@ -240,7 +261,19 @@ def open_video(
             " no duration)",
             path,
         )
-    return cap, VideoInfo(path, frames, fps, width, height)
+    return cap, VideoInfo(path, frames, fps, width, height, orientation)
+
+
+def _seen_size(cap: cv2.VideoCapture, path: Path) -> tuple[int, int, int]:
+    """The width and height of the frames of ``cap`` (of ``path``) as seen, and the EXIF
+    orientation of a still picture (:func:`.containers.picture_orientation`): one turned a
+    quarter is as wide as it is stored high."""
+    width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
+    height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
+    orientation = picture_orientation(path)
+    if orientation >= 5:
+        width, height = height, width
+    return width, height, orientation
 
 
 TEXT_CODECS = frozenset({"ansi"})
@@ -347,7 +380,7 @@ def iter_timed_frames(
                 ok, bgr = cap.read()
                 if not ok or bgr is None:
                     break
-                rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+                rgb = cv2.cvtColor(upright(bgr, info.orientation), cv2.COLOR_BGR2RGB)
             except cv2.error as exc:
                 raise DataError(
                     f"cannot decode frame {count} ({exc.msg or exc})", info.path
@@ -1206,19 +1239,21 @@ def _is_path(source: int | str | Path) -> TypeGuard[str | Path]:
 
 def _open_source(
     source: int | str | Path, fps: float | None, timeout_s: float | None
-) -> tuple[cv2.VideoCapture, float | None, int, bool]:
+) -> tuple[cv2.VideoCapture, float | None, int, bool, int]:
     """:func:`stream_poses`'s source opened: the capture, the frame rate it is timed by (None:
     a live source, the wall clock), the frame count its container states (0: none; a file
-    served over the network, ``fps`` given, must hold them all, as a file must) and whether
-    it is such a served file. A ``file:`` URL's file is opened as its path is
-    (:func:`open_video`'s checks: a WebM cut short), the path being what follows ``file:``,
-    as FFmpeg reads it, and is no served file (what it lacks is said as for its path)."""
+    served over the network, ``fps`` given, must hold them all, as a file must), whether
+    it is such a served file and how its frames are turned to be seen (a still picture's
+    EXIF orientation, :func:`upright`; 1 but for a picture file). A ``file:`` URL's file is
+    opened as its path is (:func:`open_video`'s checks: a WebM cut short), the path being
+    what follows ``file:``, as FFmpeg reads it, and is no served file (what it lacks is said
+    as for its path)."""
     if _is_path(source):
         cap, info = open_video(source)
-        return cap, info.fps, info.frames, False
+        return cap, info.fps, info.frames, False, info.orientation
     if isinstance(source, str) and source.startswith("file:") and fps is not None:
         cap, info = open_video(source[len("file:") :])
-        return cap, info.fps, info.frames, False
+        return cap, info.fps, info.frames, False, info.orientation
     device = source if isinstance(source, int) else str(source)
     try:
         cap = _open_quietly(int(device) if str(device).isdigit() else device, timeout_s)
@@ -1229,14 +1264,14 @@ def _open_source(
         cut = served_cut(str(device), timeout_s) if _served_url(device) else None
         raise DataError(cut or "cannot open camera or stream", str(source))
     if fps is None:
-        return cap, None, 0, False
+        return cap, None, 0, False, 1
     declared = _frame_count(cap)
     stated = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     if declared and math.isfinite(stated) and stated > fps:
         # a clock's ticks, not a frame rate (served_file_rate): the count OpenCV gives is
         # the duration at that rate; at the frames' own rate it is this many
         declared = int(declared * fps / stated)
-    return cap, fps, declared, True
+    return cap, fps, declared, True, 1
 
 
 def _served_url(device: int | str) -> bool:
@@ -1343,7 +1378,8 @@ def stream_poses(
     returns False to stop the stream there. ``alive``: called while a served file is read
     again at its end (:func:`.served.served_cut`): no frame comes meanwhile.
     """
-    cap, fps, declared, served = _open_source(source, fps, timeout_s)  # served: over a network
+    # served: over a network; turn: a still picture's EXIF orientation
+    cap, fps, declared, served, turn = _open_source(source, fps, timeout_s)
     est = estimator or PoseEstimator(smoothing=smoothing)
     est.reset()
     start = time.perf_counter()
@@ -1384,7 +1420,7 @@ def stream_poses(
                         raise
                 break
             t = index / fps if fps else read_at - start
-            rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+            rgb = cv2.cvtColor(upright(bgr, turn), cv2.COLOR_BGR2RGB)
             # as estimate_video times the filters: index / fps until the frames stray
             at = clock.filter_time(index, video_t) if fps else t
             last = fps is not None and index + 1 == max_frames and _ends(cap, queue, fps)

@@ -1,0 +1,91 @@
+"""Pictures and videos as other people's phones and cameras write them (hunt 46v).
+
+A phone stores a portrait photo as its sensor took it, sideways, and says in the EXIF
+orientation tag how a viewer turns it upright. FFmpeg, and so OpenCV's capture, decodes the
+picture as stored: posecbr found the person lying on their side ("torso tilted backward 1.00,
+tilted right 1.00"; the head 5 cm above the hips where it is 63 cm upright). Photos here are
+``../shared/data/media/basketball1.png`` (one person fully in view) saved as a phone saves it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image, ImageOps
+
+from features.pose_estimation import stream_poses
+from features.pose_estimation.video import upright
+from features.poses import load_pose, load_pose_arrays, pose_file_metadata
+from posecbr.cli import main
+
+PHOTO = Path("media") / "basketball1.png"
+NOSE, LEFT_HIP, RIGHT_HIP = 0, 23, 24
+
+
+def _photo(shared_data: Path, path: Path, orientation: int) -> Path:
+    """The photo stored as a camera stores it for EXIF ``orientation`` (1: upright, no tag;
+    6: turned a quarter counter-clockwise, shown a quarter clockwise; 8: the other way), as a
+    JPEG (best quality, no chroma subsampling, so that the turned copies hold the same
+    pixels)."""
+    rgb = np.asarray(Image.open(shared_data / PHOTO).convert("RGB"))
+    stored = {1: rgb, 6: np.rot90(rgb, 1), 8: np.rot90(rgb, -1)}[orientation]
+    picture = Image.fromarray(np.ascontiguousarray(stored))
+    exif = picture.getexif()
+    if orientation != 1:
+        exif[0x0112] = orientation
+    picture.save(path, quality=100, subsampling=0, exif=exif)
+    return path
+
+
+def test_upright_turns_a_picture_as_pillow_shows_it() -> None:
+    """Every EXIF orientation, against Pillow's own ``ImageOps.exif_transpose``."""
+    stored = np.arange(4 * 6 * 3, dtype=np.uint8).reshape(4, 6, 3)
+    for orientation in range(1, 9):
+        picture = Image.fromarray(stored)
+        picture.getexif()[0x0112] = orientation
+        expected = np.asarray(ImageOps.exif_transpose(picture))
+        np.testing.assert_array_equal(upright(stored, orientation), expected, str(orientation))
+
+
+@pytest.fixture(scope="module")
+def extracted(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``extract`` of the photo upright and stored sideways both ways: their pose files."""
+    root = tmp_path_factory.mktemp("exif")
+    (root / "photos").mkdir()
+    for orientation in (1, 6, 8):
+        _photo(shared_data, root / "photos" / f"photo{orientation}.jpg", orientation)
+    assert main(["extract", str(root / "photos"), "--out", str(root / "poses")]) == 0
+    return root
+
+
+@pytest.mark.parametrize("orientation", [6, 8])
+def test_a_sideways_stored_photo_is_read_upright(extracted: Path, orientation: int) -> None:
+    """The photo stored sideways with its orientation tag gives the pose of the upright photo:
+    the person standing (the nose some 0.5 m above the hips, y up), the same landmarks, the
+    size as seen. Before, the picture was read as stored: the person lay on their side."""
+    upright_seq = load_pose(extracted / "poses" / "photo1.npz")
+    turned = extracted / "poses" / f"photo{orientation}.npz"
+    seq = load_pose(turned)
+    hips_y = (seq.positions[0, LEFT_HIP, 1] + seq.positions[0, RIGHT_HIP, 1]) / 2
+    assert seq.positions[0, NOSE, 1] - hips_y > 0.4
+    np.testing.assert_allclose(seq.positions, upright_seq.positions, atol=0.03)
+    image = load_pose_arrays(turned)["image_landmarks"][0, :, :2]
+    first = load_pose_arrays(extracted / "poses" / "photo1.npz")["image_landmarks"][0, :, :2]
+    np.testing.assert_allclose(image, first, atol=3.0)  # pixels of the 640x480 picture
+    assert pose_file_metadata(turned)["video_size"] == [640, 480]
+
+
+def test_watch_reads_a_sideways_stored_photo_upright(extracted: Path) -> None:
+    """``watch``'s reader (stream_poses) turns the photo as ``extract`` does."""
+    frames = list(stream_poses(extracted / "photos" / "photo6.jpg"))
+    assert len(frames) == 1 and frames[0].rgb.shape == (480, 640, 3)
+    seq = load_pose(extracted / "poses" / "photo1.npz")
+    hips = (seq.positions[0, LEFT_HIP] + seq.positions[0, RIGHT_HIP]) / 2
+    pose = frames[0].pose
+    assert pose.person
+    got_hips = (pose.world[LEFT_HIP] + pose.world[RIGHT_HIP]) / 2
+    np.testing.assert_allclose(
+        pose.world[NOSE] - got_hips, seq.positions[0, NOSE] - hips, atol=0.03
+    )
