@@ -19,6 +19,7 @@ from features.pose_estimation import stream_poses
 from features.pose_estimation.video import upright
 from features.poses import load_pose, load_pose_arrays, pose_file_metadata
 from posecbr.cli import main
+from tests.badinput import refused
 
 PHOTO = Path("media") / "basketball1.png"
 NOSE, LEFT_HIP, RIGHT_HIP = 0, 23, 24
@@ -89,3 +90,61 @@ def test_watch_reads_a_sideways_stored_photo_upright(extracted: Path) -> None:
     np.testing.assert_allclose(
         pose.world[NOSE] - got_hips, seq.positions[0, NOSE] - hips, atol=0.03
     )
+
+
+def _mp4(path: Path, frames: int = 4, options: dict[str, str] | None = None) -> Path:
+    """``frames`` grey 64x64 frames at 25 fps, H.264 in MP4 (``options``: the muxer's)."""
+    import av
+
+    out = av.open(str(path), "w", options=options or {})
+    stream = out.add_stream("libx264", rate=25)
+    stream.width, stream.height, stream.pix_fmt = 64, 64, "yuv420p"
+    for _ in range(frames):
+        grey = av.VideoFrame.from_ndarray(np.full((64, 64, 3), 128, np.uint8), format="rgb24")
+        for packet in stream.encode(grey):
+            out.mux(packet)
+    for packet in stream.encode():
+        out.mux(packet)
+    out.close()
+    return path
+
+
+def _emptied(path: Path) -> Path:
+    """The MP4 with its video track's frames taken out of its index, as a camera leaves a
+    recording stopped before its first frame: the entry counts of the time-to-sample,
+    sample-to-chunk and chunk-offset tables and the sample count of the sample-size table
+    set to 0 (each after its box's name and 4 bytes of version and flags)."""
+    data = bytearray(path.read_bytes())
+    for name, field in ((b"stts", 0), (b"stsc", 0), (b"stco", 0), (b"stsz", 4), (b"stss", 0)):
+        at = data.find(name)
+        if at > 0:
+            data[at + 8 + field : at + 12 + field] = bytes(4)
+    path.write_bytes(bytes(data))
+    return path
+
+
+def test_a_video_track_without_frames_is_said_to_be_empty(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An MP4 whose video track holds no frame: one line saying so, exit 1, nothing written.
+    Before: "video declares no usable frame rate (16000 frames per second ...)", FFmpeg's
+    clock for the track taken for a frame rate."""
+    video = _emptied(_mp4(tmp_path / "stopped.mp4"))
+    needle = "stopped.mp4: video has no frames (its video track is empty)"
+    refused(["extract", str(video), "--out", str(tmp_path / "poses")], tmp_path, capsys, needle)
+    refused(["reps", str(video)], tmp_path, capsys, needle)
+
+
+def test_only_an_empty_track_is_judged_empty(tmp_path: Path) -> None:
+    """A whole MP4 and a fragmented one (its frames in fragments, its index's tables empty,
+    as a browser or some phones write it) are not judged empty."""
+    from features.pose_estimation.containers import mp4_empty_video
+
+    whole = _mp4(tmp_path / "whole.mp4")
+    fragmented = _mp4(tmp_path / "frag.mp4", options={"movflags": "frag_keyframe+empty_moov"})
+    emptied = _emptied(_mp4(tmp_path / "emptied.mp4"))
+    judged = {}
+    for path in (whole, fragmented, emptied):
+        with open(path, "rb") as fh:
+            judged[path.name] = mp4_empty_video(fh, path.stat().st_size)
+    assert judged == {"whole.mp4": False, "frag.mp4": False, "emptied.mp4": True}

@@ -222,16 +222,9 @@ def _mp4_moov(fh: Any, size: int) -> bytes | None:
     return None
 
 
-def mp4_timeless_frames(fh: Any, size: int) -> int | None:
-    """How many frames the video track of an MP4/MOV file of ``size`` bytes, read from
-    ``fh``, holds when its time-to-sample table (stts) gives them all a duration of 0: a
-    header stating no frame rate (FFmpeg makes one up: 12.25 fps for a 25 fps H.264 clip,
-    2.08 for an MJPG one, each frame as long as the whole clip); None when it gives them
-    time, holds one frame or none (a fragmented file's frames are in its fragments), or its
-    index cannot be read."""
-    moov = _mp4_moov(fh, size)
-    if moov is None:
-        return None
+def _mp4_video_timing(moov: bytes) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """Each video track's time-to-sample table (stts) in an MP4/MOV index ``moov``: how many
+    frames in a row (counts) last how long (durations, in the track's ticks)."""
     for kind, body, stop in _mp4_boxes(moov, 0, len(moov)):
         if kind != b"trak":
             continue
@@ -243,11 +236,36 @@ def mp4_timeless_frames(fh: Any, size: int) -> int | None:
             continue
         entries = min(int.from_bytes(moov[start + 4 : start + 8], "big"), (end - start - 8) // 8)
         table = np.frombuffer(moov, ">u4", 2 * entries, start + 8)
-        counts, durations = table[0::2].astype(np.int64), table[1::2].astype(np.int64)
+        yield table[0::2].astype(np.int64), table[1::2].astype(np.int64)
+
+
+def mp4_timeless_frames(fh: Any, size: int) -> int | None:
+    """How many frames the video track of an MP4/MOV file of ``size`` bytes, read from
+    ``fh``, holds when its time-to-sample table (stts) gives them all a duration of 0: a
+    header stating no frame rate (FFmpeg makes one up: 12.25 fps for a 25 fps H.264 clip,
+    2.08 for an MJPG one, each frame as long as the whole clip); None when it gives them
+    time, holds one frame or none (a fragmented file's frames are in its fragments), or its
+    index cannot be read."""
+    moov = _mp4_moov(fh, size)
+    if moov is None:
+        return None
+    for counts, durations in _mp4_video_timing(moov):
         frames = int(counts.sum())
         if frames > 1 and not int((counts * durations).sum()):
             return frames
     return None
+
+
+def mp4_empty_video(fh: Any, size: int) -> bool:
+    """Whether an MP4/MOV file of ``size`` bytes, read from ``fh``, has a video track and no
+    frame in any (a recording stopped before its first frame: FFmpeg states its track's
+    clock, such as 16000 ticks a second, as its frame rate). A fragmented file (an ``mvex`` box in
+    its index), whose frames are in its fragments, is not judged (False)."""
+    moov = _mp4_moov(fh, size)
+    if moov is None or _mp4_child(moov, 0, len(moov), (b"mvex",)) != (0, 0):
+        return False
+    tables = list(_mp4_video_timing(moov))
+    return bool(tables) and all(int(counts.sum()) == 0 for counts, _ in tables)
 
 
 FLV_START = b"FLV\x01"

@@ -57,6 +57,7 @@ from features.text import shown  # noqa: E402
 from .containers import (  # noqa: E402
     counted_by_duration,
     is_mp4,
+    mp4_empty_video,
     mp4_timeless_frames,
     picture_orientation,
     refuse_cut,
@@ -304,16 +305,29 @@ def _timeless_frames(path: Path) -> int | None:
         raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
 
 
+def _empty_video(path: Path) -> bool:
+    """:func:`.containers.mp4_empty_video` of an MP4/MOV file."""
+    try:
+        with open(path, "rb") as fh:
+            return mp4_empty_video(fh, path.stat().st_size)
+    except OSError as exc:
+        raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
+
+
 def _not_a_video(path: Path, head: bytes, fps: float | None) -> DataError:
     """Why a file (its first bytes ``head``) is no video to take: OpenCV could not open it
     (``fps`` None) or it states no frame rate posecbr takes; a sound file says so
     (:func:`.containers.sound_only`: a song's cover picture is FFmpeg's "video" at
-    90 kHz)."""
+    90 kHz), and so does an MP4/MOV file whose video track holds no frame
+    (:func:`.containers.mp4_empty_video`: its clock's ticks were taken for its frame
+    rate)."""
     sound = sound_only(path, head)
     if sound is not None:
         return DataError(
             f"sound alone, no video ({sound}{'' if fps is None else ' with a picture'})", path
         )
+    if is_mp4(head) and _empty_video(path):
+        return DataError("video has no frames (its video track is empty)", path)
     if fps is None:
         return DataError(
             "not a video OpenCV can decode (unknown format, truncated or corrupt)", path
