@@ -4,6 +4,7 @@ from .models import SCHEMA_VERSION
 from .store import (
     EMPTY_DB,
     CaseArrays,
+    CaseBaseGone,
     CaseBaseInfo,
     CaseStore,
     EmptyStore,
@@ -41,6 +42,7 @@ __all__ = [
     "EMPTY_DB",
     "SCHEMA_VERSION",
     "CaseArrays",
+    "CaseBaseGone",
     "CaseBaseInfo",
     "CaseStore",
     "EmptyStore",

@@ -131,6 +131,11 @@ class InterruptedWrite(StoreError):
     (:func:`roll_back_interrupted` does)."""
 
 
+class CaseBaseGone(StoreError):
+    """The case base read earlier was replaced or deleted by another process since: nothing
+    was written into what took its place, and what was written into it is gone with it."""
+
+
 class StaleCaseError(StoreError):
     """A case read earlier is no longer as it was (deleted, moved to another case base, or
     trimmed by another process): nothing was written; reload and decide again."""
@@ -1459,14 +1464,14 @@ class StoreTransaction:
         ``name`` wait until this transaction ends: what is checked here stays so."""
         self._lock(name)
         if not self.has_case_base(name):
-            raise StoreError(
+            raise CaseBaseGone(
                 f"case base {name!r} was deleted by another process since it was read; "
                 "nothing was written",
                 self.store.where,
             )
         info = self.case_base(name)
         if info.uid != uid:
-            raise StoreError(
+            raise CaseBaseGone(
                 f"case base {name!r} was replaced by another process since it was read; "
                 "nothing was written (run the command again)",
                 self.store.where,

@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from casebase_store import CaseStore, StaleCaseError, StoreError
-from features.errors import ConfigError, DataError
+from casebase_store import CaseBaseGone, CaseStore, StaleCaseError
+from features.errors import ConfigError, DataError, PosecbrError
 from features.poses import PoseSequence
 from features.progress import progress
 from features.text import shown
@@ -326,6 +326,13 @@ def classify_with_feedback(
             out.append(_feedback(store, stored, clip, truth, target, label, settings, learnt))
     except KeyboardInterrupt:
         raise FeedbackInterrupted(learnt, len(clips)) from None
+    except CaseBaseGone:  # what was stored went with the case base: nothing of it is left
+        raise
+    except PosecbrError as exc:  # the store locked or lost: said alone, the feedback stored
+        # before it was taken for none, and run again its clips were learnt from twice
+        if learnt:
+            exc.add(f"before it, {feedback_stored(learnt, len(clips))}")
+        raise
     write_matrices(store, stored.name)  # a large case base: its matrices follow the change
     return out
 
@@ -362,17 +369,21 @@ class FeedbackInterrupted(KeyboardInterrupt):
     transaction: those before are in the case base, the one under way is not)."""
 
     def __init__(self, learnt: Sequence[str], n_clips: int) -> None:
-        if len(learnt) == n_clips:
-            text = f"the feedback of every clip ({n_clips}) is stored in the case base"
-        elif learnt:
-            text = (
-                f"the feedback of {len(learnt)} of the {n_clips} clips is stored in the case "
-                f"base (the last: {shown(Path(learnt[-1]).name)}); the others' is not"
-            )
-        else:
-            text = "no clip's feedback is stored: the case base is as it was"
-        super().__init__(text)
+        super().__init__(feedback_stored(learnt, n_clips))
         self.learnt = tuple(learnt)
+
+
+def feedback_stored(learnt: Sequence[str], n_clips: int) -> str:
+    """Whose feedback of ``n_clips`` clips is stored: ``learnt``'s (each clip's is one
+    transaction: those before are in the case base, the one under way is not)."""
+    if len(learnt) == n_clips:
+        return f"the feedback of every clip ({n_clips}) is stored in the case base"
+    if learnt:
+        return (
+            f"the feedback of {len(learnt)} of the {n_clips} clips is stored in the case "
+            f"base (the last: {shown(Path(learnt[-1]).name)}); the others' is not"
+        )
+    return "no clip's feedback is stored: the case base is as it was"
 
 
 def _revised(rev: Revision | None) -> bool:
@@ -386,7 +397,7 @@ def _reload(store: CaseStore, stored: StoredClassifier) -> StoredClassifier:
     fresh = load_classifier(store, stored.name)
     fresh.classifier.set_params(k=stored.classifier.k)
     if fresh.uid != stored.uid:
-        raise StoreError(
+        raise CaseBaseGone(
             f"case base {stored.name!r} was replaced by another process while classifying; "
             "nothing more was written",
             store.where,

@@ -1,0 +1,99 @@
+"""Hunt 46d: concurrency and stores. A store error partway through ``classify --feedback``
+says whose feedback it stored before it (each clip's is one transaction): said alone
+("database is locked"), the user ran the command again and the clips learnt before it were
+learnt from twice (a case retained from a clip was moved toward that same clip again)."""
+
+from __future__ import annotations
+
+import sqlite3
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from casebase_store import StoreError, open_store
+from cbr.classification import FeedbackSettings, classify_with_feedback
+from cbr.stored import load_classifier
+from features.poses import PoseSequence, load_pose
+from posecbr.cli import main
+from tests.once import made_once
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
+LABELS = DEMO / "labels.csv"
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """tests/test_feedback_safety.py's case base (two subjects' clips), made once a session."""
+
+    def make(folder: Path) -> Path:
+        db = folder / "cb.sqlite"
+        assert main(["train", str(LABELS), "--db", str(db), "--subjects", "s01,s02"]) == 0
+        return db
+
+    return made_once(tmp_path_factory, "feedback-safety-trained", make)
+
+
+class _LockedAfterFirst(list[PoseSequence]):
+    """Clips whose iteration, once the first clip's feedback is done, has another process's
+    connection take the case base file's exclusive lock (as a writer holding it would)."""
+
+    def __init__(self, clips: list[PoseSequence], db: Path) -> None:
+        super().__init__(clips)
+        self.db = db
+        self.holder: sqlite3.Connection | None = None
+
+    def __iter__(self) -> Iterator[PoseSequence]:
+        for i, clip in enumerate(list.__iter__(self)):
+            if i == 1:
+                self.holder = sqlite3.connect(self.db, isolation_level=None)
+                self.holder.execute("BEGIN EXCLUSIVE")
+            yield clip
+
+
+def test_a_store_error_midway_says_whose_feedback_is_stored(trained: Path, tmp_path: Path) -> None:
+    db = tmp_path / "cb.sqlite"
+    db.write_bytes(trained.read_bytes())
+    paths = [DEMO / "m03_s03_e01.npz", DEMO / "m03_s03_e02.npz"]
+    clips = _LockedAfterFirst([load_pose(p) for p in paths], db)
+    store = open_store(db, timeout_s=0.2)
+    try:
+        stored = load_classifier(store, "default")
+        with pytest.raises(StoreError) as caught:
+            classify_with_feedback(
+                store, stored, clips, "inline_lunge", FeedbackSettings()
+            )  # fmt: skip
+    finally:
+        store.close()
+        assert clips.holder is not None
+        clips.holder.execute("ROLLBACK")
+        clips.holder.close()
+    said = str(caught.value)
+    assert said.startswith(f"{db}: database is locked by another process")
+    assert said.endswith(
+        "before it, the feedback of 1 of the 2 clips is stored in the case base (the last: "
+        "m03_s03_e01.npz); the others' is not"
+    )
+    # the store holds the first clip's feedback and no more: as the same feedback given to
+    # the first clip alone leaves a copy of the case base
+    alone = tmp_path / "alone.sqlite"
+    alone.write_bytes(trained.read_bytes())
+    argv = ["classify", str(paths[0]), "--db", str(alone), "--feedback", "inline_lunge"]
+    assert main([*argv, "--quiet"]) == 0
+    got, want = _state(db), _state(alone)
+    assert got[0] == want[0] and len(got[0]) > 1  # the log's entries after the build
+    np.testing.assert_array_equal(got[1], want[1])  # every case's features, bit for bit
+    assert got[2] == want[2]
+
+
+def _state(db: Path) -> tuple[list[tuple[str, int | None, str]], np.ndarray, list[str]]:
+    """A case base's maintenance log (action, case, reason), features and labels."""
+    reader = open_store(db, readonly=True)
+    try:
+        log = [(e.action, e.case_id, e.reason) for e in reader.maintenance_log("default")]
+        cases = reader.load_cases("default")
+        return log, cases.features, [str(v) for v in cases.labels]
+    finally:
+        reader.close()
