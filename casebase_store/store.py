@@ -34,6 +34,7 @@ import hashlib
 import io
 import json
 import os
+import re
 import sqlite3
 import uuid
 import weakref
@@ -448,10 +449,30 @@ def _is_sqlite(engine: Engine) -> bool:
     return engine.dialect.name == "sqlite"
 
 
+#: the start of a database URL of one of SQLAlchemy's dialects (``postgresql+psycopg:``)
+#: without the ``://`` before its server (a "/" or the ":" missing): a URL mistyped, not a
+#: file's name
+_MISTYPED_URL = re.compile(
+    r"(?i)(?:postgres(?:ql)?|mysql|mariadb|oracle|mssql|sqlite)(?:\+\w+)?(?::(?!//)|//)"
+)
+#: the user and password after it (``me:PASSWORD@host``), to hide the password
+_USER_PASSWORD = re.compile(r"^(/*[^:@/]*:)[^@]*@")
+
+
 def sqlite_file(url_or_path: str | Path) -> Path | None:
-    """The file of a SQLite path or ``sqlite:///`` URL (None: another backend or in memory)."""
+    """The file of a SQLite path or ``sqlite:///`` URL (None: another backend or in memory).
+    A database URL missing the ``//`` before its server (``postgresql:/me:PW@host/db``) that
+    is no file is refused as a mistyped URL, its password hidden: taken for a file's name, it
+    was printed whole in the refusal (or a file of that name made)."""
     text = str(url_or_path)
     if "://" not in text:
+        typo = _MISTYPED_URL.match(text)
+        if typo and not os.path.lexists(text):
+            scheme = typo[0].rstrip(":/")
+            raise StoreError(
+                f'not a database URL ("://" goes after {scheme!r}) nor a case base file',
+                typo[0] + _USER_PASSWORD.sub(r"\1***@", text[typo.end() :]),
+            )
         return Path(text)
     try:
         url = make_url(text)

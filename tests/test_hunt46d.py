@@ -17,6 +17,7 @@ from cbr.classification import FeedbackSettings, classify_with_feedback
 from cbr.stored import load_classifier
 from features.poses import PoseSequence, load_pose
 from posecbr.cli import main
+from tests.badinput import refused
 from tests.once import made_once
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -97,3 +98,26 @@ def _state(db: Path) -> tuple[list[tuple[str, int | None, str]], np.ndarray, lis
         return log, cases.features, [str(v) for v in cases.labels]
     finally:
         reader.close()
+
+
+@pytest.mark.parametrize(
+    ("argv", "db"),
+    [
+        (["classify", str(DEMO / "m01_s01_e01.npz")], "postgresql+psycopg:/me:s3cret@dbhost/cbr"),
+        (["train", str(LABELS)], "postgresql+psycopg:/me:s3cret@dbhost/cbr"),
+        (["train", str(LABELS)], "postgresql:me:s3cret@dbhost"),
+        (["casebase", "info"], "postgresql+psycopg//me:s3cret@dbhost/cbr"),
+    ],
+)
+def test_a_database_url_missing_its_slashes_is_refused_without_its_password(
+    argv: list[str],
+    db: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Taken for a file's name, the URL was printed whole ("no such case base file", "folder
+    does not exist"), password and all, or `train` made a file of that name."""
+    monkeypatch.chdir(tmp_path)
+    line = refused([*argv, "--db", db], tmp_path, capsys, "not a database URL", ":***@dbhost")
+    assert "s3cret" not in line
