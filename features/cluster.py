@@ -157,10 +157,40 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
         # collection there hung the process for good). Collected now, outside any lock.
         gc.collect()
         raise refused
+    with _client_logs_off():
+        try:
+            yield client
+        except Exception as exc:
+            if isinstance(exc, PosecbrError) or not _lost(client, exc):
+                raise
+            raise ConfigError(
+                f"lost the Dask scheduler at {spec} mid-run (it stopped, or the network to it "
+                "failed): run the command again once it is back",
+                "--scheduler",
+            ) from None
+        finally:
+            client.close()
+
+
+def _lost(client: Any, exc: BaseException) -> bool:
+    """Whether ``exc`` comes of the client's connection to its scheduler being lost: a
+    connection closed under it, or any error once the client no longer runs."""
+    return type(exc).__name__ == "CommClosedError" or client.status != "running"
+
+
+@contextmanager
+def _client_logs_off() -> Iterator[None]:
+    """The Dask client's own log off while it runs the command's work and closes: a scheduler
+    lost mid-run is said in one line (:func:`connect`), where the client also printed its
+    tries to reconnect with their tracebacks (the scheduler's and the workers' logs are
+    theirs, where they run)."""
+    log = logging.getLogger("distributed.client")
+    level = log.level
+    log.setLevel(logging.CRITICAL)
     try:
-        yield client
+        yield
     finally:
-        client.close()
+        log.setLevel(level)
 
 
 def _no_logs() -> None:

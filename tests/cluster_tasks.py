@@ -28,3 +28,11 @@ def fail_on_even(x: int) -> int:
 def bookkeeping(dask_worker: Any) -> dict[str, float]:
     """The worker's periodic callbacks and their periods in ms (run on each worker)."""
     return {name: float(pc.callback_time) for name, pc in dask_worker.periodic_callbacks.items()}
+
+
+def slow_square(x: int) -> int:
+    """``x * x``, a tenth of a second later (a unit still running when something happens)."""
+    import time
+
+    time.sleep(0.1)
+    return x * x

@@ -15,6 +15,7 @@ import pytest
 from casebase_store import StoreError, open_store
 from cbr.classification import FeedbackSettings, classify_with_feedback
 from cbr.stored import load_classifier
+from features.errors import ConfigError
 from features.poses import PoseSequence, load_pose
 from posecbr.cli import main
 from tests.badinput import refused
@@ -121,3 +122,33 @@ def test_a_database_url_missing_its_slashes_is_refused_without_its_password(
     monkeypatch.chdir(tmp_path)
     line = refused([*argv, "--db", db], tmp_path, capsys, "not a database URL", ":***@dbhost")
     assert "s3cret" not in line
+
+
+def test_a_scheduler_lost_mid_run_is_said_in_one_line(
+    monkeypatch: pytest.MonkeyPatch, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """A scheduler of the user's (``--scheduler tcp://...``) that stops while the command's
+    units run: a ConfigError naming it, and nothing of Dask's on stderr. Before, the command
+    died of Dask's CommClosedError ("internal error, a bug in posecbr", exit 70) under the
+    client's own tracebacks of its tries to reconnect."""
+    pytest.importorskip("dask.distributed", reason="dask is in the test extra")
+    from features.cluster import connect, map_outcomes
+    from tests.cluster_tasks import slow_square
+
+    # the client tries to reconnect as long as it waits to connect (20 s) before it gives up
+    monkeypatch.setattr("features.cluster.CONNECT_TIMEOUT_S", 5)
+    items = list(range(40))
+    with connect("local:1") as theirs:  # the user's scheduler, as far as the command knows
+        address = str(theirs.scheduler.address)
+        with pytest.raises(ConfigError) as caught, connect(address) as client:
+            done = []
+            for outcome in map_outcomes(client, slow_square, items, [str(i) for i in items]):
+                done.append(outcome.value)
+                if len(done) == 1:
+                    theirs.shutdown()  # the scheduler and its workers stop
+    assert str(caught.value) == (
+        f"--scheduler: lost the Dask scheduler at {address} mid-run (it stopped, or the "
+        "network to it failed): run the command again once it is back"
+    )
+    assert len(done) < len(items)  # it stopped before the units were done
+    assert "distributed.client" not in capfd.readouterr().err
