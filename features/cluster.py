@@ -26,6 +26,7 @@ from concurrent.futures import CancelledError
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
+from urllib.parse import urlsplit
 
 from .errors import ConfigError, PosecbrError
 from .interrupts import interrupts_held, interrupts_ignored_by_children
@@ -149,7 +150,8 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
         # TypeError: a scheme this Dask cannot connect by as set up (tls:// without
         # certificates, ucx:// without UCX)
-        refused = ConfigError(f"cannot reach the Dask scheduler at {spec} ({exc})", "--scheduler")
+        said = _without_password(f"cannot reach the Dask scheduler at {spec} ({exc})", spec)
+        refused = ConfigError(said, "--scheduler")
     if refused is not None:
         # the client that failed to connect is left half-built in a reference cycle, its loop
         # runner started: collected at some later moment, its __del__ closes it and takes
@@ -163,13 +165,25 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
         except Exception as exc:
             if isinstance(exc, PosecbrError) or not _lost(client, exc):
                 raise
-            raise ConfigError(
+            said = (
                 f"lost the Dask scheduler at {spec} mid-run (it stopped, or the network to it "
-                "failed): run the command again once it is back",
-                "--scheduler",
-            ) from None
+                "failed): run the command again once it is back"
+            )
+            raise ConfigError(_without_password(said, spec), "--scheduler") from None
         finally:
             client.close()
+
+
+def _without_password(text: str, spec: str) -> str:
+    """``text`` (words about the scheduler address ``spec``) with the password of
+    ``spec``'s ``user:password@`` replaced by ``***``: Dask repeats the address without its
+    scheme (``invalid address 'me:PW@head:8786'``), and one given without a scheme (Dask's
+    tcp://) is no URL, where no password is looked for."""
+    try:
+        password = urlsplit(spec if "://" in spec else f"tcp://{spec}").password
+    except ValueError:  # a port that is not a number
+        return text
+    return text.replace(f":{password}@", ":***@") if password else text
 
 
 def _lost(client: Any, exc: BaseException) -> bool:

@@ -152,3 +152,15 @@ def test_a_scheduler_lost_mid_run_is_said_in_one_line(
     )
     assert len(done) < len(items)  # it stopped before the units were done
     assert "distributed.client" not in capfd.readouterr().err
+
+
+@pytest.mark.parametrize("scheduler", ["tcp://me:s3cret@127.0.0.1:1", "me:s3cret@127.0.0.1:1"])
+def test_a_scheduler_address_with_a_password_is_refused_without_it(
+    scheduler: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Dask repeats the address without its scheme ("invalid address 'me:s3cret@...'"),
+    which the URL password rule missed; one given without a scheme was no URL to it."""
+    pytest.importorskip("dask.distributed", reason="dask is in the test extra")
+    argv = ["train", str(LABELS), "--db", str(tmp_path / "cb.sqlite"), "--scheduler", scheduler]
+    line = refused(argv, tmp_path, capsys, "cannot reach the Dask scheduler at", "me:***@")
+    assert "s3cret" not in line
