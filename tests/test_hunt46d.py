@@ -164,3 +164,22 @@ def test_a_scheduler_address_with_a_password_is_refused_without_it(
     argv = ["train", str(LABELS), "--db", str(tmp_path / "cb.sqlite"), "--scheduler", scheduler]
     line = refused(argv, tmp_path, capsys, "cannot reach the Dask scheduler at", "me:***@")
     assert "s3cret" not in line
+
+
+def test_a_killed_extract_worker_is_said_in_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`extract --workers 2` whose worker process dies (the kernel's out-of-memory killer,
+    kill -9): one line, exit 1, no folder left (as `compare --jobs` says it). Before: the
+    pool's BrokenProcessPool, "internal error, a bug in posecbr", exit 70."""
+    from tests.cluster_tasks import die
+    from tests.test_hunt35f import _tiny_video
+
+    data = tmp_path / "data"
+    for label in ("squat", "lunge"):
+        (data / label).mkdir(parents=True)
+        _tiny_video(data / label / "take.avi")
+    # each worker runs the task it is sent by name: this one dies running it
+    monkeypatch.setattr("posecbr.commands.extract.run_task", die)
+    argv = ["extract", str(data), "--out", str(tmp_path / "poses"), "--workers", "2"]
+    refused(argv, tmp_path, capsys, "--workers (--jobs): a worker process died")

@@ -957,6 +957,7 @@ def _in_processes(jobs: list[Job], options: Options, workers: int) -> list[Outco
     """Every job on a pool of ``workers`` local processes, each with its share of the cores."""
     import concurrent.futures as cf
     import multiprocessing
+    from concurrent.futures.process import BrokenProcessPool
 
     threads = max(1, (os.cpu_count() or 1) // workers)
     # spawn, not fork: a forked child would inherit onnxruntime's thread pools (and any
@@ -976,6 +977,13 @@ def _in_processes(jobs: list[Job], options: Options, workers: int) -> list[Outco
         except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the workers stop, each clip unwound
             stop_workers(pool)
             raise
+        except BrokenProcessPool:  # killed (out of memory, kill -9): the pool ends
+            raise PosecbrError(
+                "a worker process died (out of memory? try fewer --workers); the pose files "
+                "finished before it are written (extract again: they are skipped as up to "
+                "date)",
+                "--workers (--jobs)",
+            ) from None
 
 
 def _run_all(jobs: list[Job], options: Options, args: argparse.Namespace) -> list[Outcome]:
