@@ -134,7 +134,11 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
                     # serve on 8787 unless told: a free port, so a second cluster (another
                     # command, a notebook's) does not warn that 8787 is taken
                     scheduler_kwargs={"dashboard_address": ":0"},
-                    silence_logs=logging.ERROR,
+                    # posecbr says each unit's failure itself, and runs again those a dead
+                    # worker lost: Dask's ERROR lines about them ("Removing worker ... caused
+                    # the cluster to lose scattered data", "Couldn't gather keys") were
+                    # printed under a run that then succeeded
+                    silence_logs=logging.CRITICAL,
                 )
                 client = dd.Client(cluster)
             yield client
