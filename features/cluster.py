@@ -18,9 +18,11 @@ dask is an optional dependency (``pip install 'posecbr[cluster]'``): without it,
 
 from __future__ import annotations
 
+import difflib
 import gc
 import logging
 import os
+import re
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import CancelledError
 from contextlib import contextmanager, suppress
@@ -90,6 +92,7 @@ def local_workers(spec: str) -> int | None:
     if not spec.startswith(LOCAL_PREFIX):
         if not spec.strip():
             raise ConfigError("the scheduler address is empty", "--scheduler")
+        _refuse_mistyped_local(spec)
         return None
     text = spec[len(LOCAL_PREFIX) :]
     # isdigit() holds for "²", which int() refuses; isdecimal() for what int() reads
@@ -98,6 +101,24 @@ def local_workers(spec: str) -> int | None:
             f"local:N needs a whole number of workers >= 1, got {spec!r}", "--scheduler"
         )
     return int(text)
+
+
+#: a scheduler address that is ``local:N`` mistyped: a word and a number of workers
+_LOCAL_TYPO = re.compile(r"(?P<word>[A-Za-z]{3,8})[:=_ -]?(?P<n>[0-9]{1,3})")
+
+
+def _refuse_mistyped_local(spec: str) -> None:
+    """Refuse ``lokal:2``, ``Local:2``, ``local2``: ``local:N`` mistyped, which Dask reads as
+    the scheduler at host "lokal", port 2, and waited :data:`CONNECT_TIMEOUT_S` seconds for.
+    A word close to "local" with at most 3 digits (a number of workers; no scheduler listens
+    on a port below 1000 unless told, Dask's own is 8786)."""
+    m = _LOCAL_TYPO.fullmatch(spec.strip())
+    if m and difflib.get_close_matches(m["word"].lower(), ["local"], n=1, cutoff=0.75):
+        raise ConfigError(
+            f"{spec!r} is neither local:N nor a scheduler address (did you mean "
+            f"local:{int(m['n'])}?)",
+            "--scheduler",
+        )
 
 
 def check_scheduler(spec: str | None) -> None:

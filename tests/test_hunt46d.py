@@ -183,3 +183,14 @@ def test_a_killed_extract_worker_is_said_in_one_line(
     monkeypatch.setattr("posecbr.commands.extract.run_task", die)
     argv = ["extract", str(data), "--out", str(tmp_path / "poses"), "--workers", "2"]
     refused(argv, tmp_path, capsys, "--workers (--jobs): a worker process died")
+
+
+@pytest.mark.parametrize("scheduler", ["lokal:2", "Local:2", "local2"])
+def test_local_n_mistyped_is_refused_at_once_with_a_suggestion(
+    scheduler: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Dask read it as host "lokal", port 2, and the command waited 20 s to connect, then
+    said it could not reach a scheduler there."""
+    argv = ["train", str(LABELS), "--db", str(tmp_path / "cb.sqlite"), "--scheduler", scheduler]
+    refused(argv, tmp_path, capsys, f"--scheduler: {scheduler!r} is neither local:N nor a "
+            "scheduler address (did you mean local:2?)")  # fmt: skip
