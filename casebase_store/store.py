@@ -420,28 +420,6 @@ def check_width(info: CaseBaseInfo, width: int, where: str) -> None:
         )
 
 
-FLOAT32_MAX = float(np.finfo(np.float32).max)
-"""The largest value a problem may hold: the measures compare problems in float32."""
-
-
-def check_values(name: str, ids: Sequence[int], problems: np.ndarray, where: str) -> None:
-    """Every case's stored problem holds numbers a measure can compare: finite and within
-    float32's range (the measures search in float32), or the case base is damaged (bytes of
-    a problem changed on disk): a StoreError naming the first such case. No case stored by
-    posecbr holds NaN or an infinity (gaps are filled before a problem is made), and every
-    measure refuses one; a damaged problem was blamed on the clip classified ("case rows 25
-    hold NaN or inf ...: fill missing values before comparing"), one clip after another."""
-    flat = problems.reshape(len(problems), -1)
-    ok = (np.abs(flat) <= FLOAT32_MAX).all(axis=1)  # NaN compares False
-    if not ok.all():
-        case = ids[int(np.flatnonzero(~ok)[0])]
-        raise StoreError(
-            f"case base {name!r} is damaged: the problem of case #{case} holds a value that is"
-            " not a finite number a measure can compare (NaN, infinite, or beyond 3.4e38)",
-            where,
-        )
-
-
 # ----------------------------------------------------------------------------- engine
 
 
@@ -1252,9 +1230,7 @@ class CaseStore:
             )
         if not all(np.issubdtype(a.dtype, np.floating) for a in arrays):
             raise StoreError(f"case base {cb.name!r} is damaged: non-numeric features", self.where)
-        stacked = np.stack(arrays).astype(np.float64, copy=False)
-        check_values(cb.name, [r.id for r in rows], stacked, self.where)
-        return stacked
+        return np.stack(arrays).astype(np.float64, copy=False)
 
     def load_representations(self, name: str, kind: str) -> dict[int, np.ndarray]:
         """Cached per-case representations of one ``kind`` (case id -> array)."""
@@ -1351,7 +1327,6 @@ class CaseStore:
                 raise StoreError(
                     f"case base {info.name!r} is damaged: non-numeric features", self.where
                 )
-            check_values(info.name, [c["id"]], a[None], self.where)
             shapes.add(a.shape)
         if len(shapes) > 1:
             raise StoreError(
