@@ -29,15 +29,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.test_hunt45v import _grey_video
 from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
-
-
-def _grey_video(path: Path, frames: int) -> Path:
-    """A lossless video of ``frames`` plain grey frames at 10 fps: nobody in view."""
-    from tests.test_video_vfr import _write
-
-    grey = [np.full((48, 64, 3), 90, np.uint8) for _ in range(frames)]
-    return _write(path, [100 * k for k in range(frames)], grey, rate=10)
 
 
 def test_watch_max_frames_of_exactly_the_videos_length_refuses_nobody_in_view(
