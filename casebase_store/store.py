@@ -662,7 +662,7 @@ def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> t
     try:
         engine = create_engine(url, **_connect_args(url, timeout_s))
     except ImportError as exc:
-        hint = " (pip install 'posecbr[postgres]')" if backend == "postgresql" else ""
+        hint = _driver_hint(url.drivername) if backend == "postgresql" else ""
         raise StoreError(
             f"the database driver for {url.drivername} is not installed: {exc}{hint}", where
         ) from None
@@ -675,6 +675,15 @@ def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> t
     elif engine.dialect.name == "postgresql":
         _configure_postgresql(engine, timeout_s, readonly)
     return engine, where
+
+
+def _driver_hint(drivername: str) -> str:
+    """What installs the missing PostgreSQL driver of ``drivername``: posecbr's extra installs
+    psycopg 3 (``postgresql+psycopg``), not psycopg2 or any other driver."""
+    extra = "pip install 'posecbr[postgres]'"
+    if drivername in ("postgresql", "postgresql+psycopg"):
+        return f" ({extra})"
+    return f" (install that driver, or write the URL as postgresql+psycopg://... after {extra})"
 
 
 def _hide_password(text: str) -> str:

@@ -194,3 +194,24 @@ def test_local_n_mistyped_is_refused_at_once_with_a_suggestion(
     argv = ["train", str(LABELS), "--db", str(tmp_path / "cb.sqlite"), "--scheduler", scheduler]
     refused(argv, tmp_path, capsys, f"--scheduler: {scheduler!r} is neither local:N nor a "
             "scheduler address (did you mean local:2?)")  # fmt: skip
+
+
+def test_a_missing_postgresql_driver_other_than_psycopg_is_not_promised_by_the_extra(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--db postgresql+pg8000://...`` without pg8000 said "(pip install 'posecbr[postgres]')",
+    which installs psycopg 3, not pg8000: the hint now says to install that driver or write
+    the URL for psycopg, the driver the extra installs (and keeps the extra's hint where it
+    is the one missing)."""
+    import importlib.util
+
+    if importlib.util.find_spec("pg8000") is not None:
+        pytest.skip("pg8000 is installed here: nothing is missing to hint at")
+    line = refused(
+        ["casebase", "info", "--db", "postgresql+pg8000://me:PW@localhost/db"],
+        tmp_path,
+        capsys,
+        "the database driver for postgresql+pg8000 is not installed",
+        "install that driver, or write the URL as postgresql+psycopg://",
+    )
+    assert "PW" not in line
