@@ -22,6 +22,7 @@ from features.pose_estimation.tracker import FramePose
 from features.readers.asfamc import read_asf_amc
 from posecbr.cli import main
 from tests.badinput import snapshot
+from tests.empty_scene import empty_scene
 from tests.once import made_once
 from tests.test_hunt34c import _Quiet, _serving
 
@@ -89,27 +90,35 @@ def test_watch_a_real_video(
     cap.release()
 
 
-def test_watch_a_street_with_nobody_in_view(
-    case_base: Path, shared_data: Path, capsys: pytest.CaptureFixture[str]
+@pytest.fixture(scope="module")
+def nobody(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A folder holding empty.mkv, 3 s of a still scene with nobody in it at 10 fps."""
+    folder = tmp_path_factory.mktemp("nobody")
+    empty_scene(folder / "empty.mkv", 30)
+    return folder
+
+
+def test_watch_a_scene_with_nobody_in_view(
+    case_base: Path, nobody: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """vtest.avi's first 12 s, a street in which BlazePose finds no one (its people are too
-    small: ../shared/data/README.md): one segment, unknown, told "nobody in view", counted 0,
-    over every frame watched, printed as it finished; exit 0 with a note: ``--max-frames``
-    stopped the watch before the video's end (tests/test_hunt45v.py; it was refused as a
-    video with nobody in it, "the stream ended", though the rest was not watched)."""
-    video = shared_data / "media" / "vtest.avi"
+    """The first 2 s of a scene with nobody in it: one segment, unknown, told "nobody in
+    view", counted 0, over every frame watched, printed as it finished; exit 0 with a note:
+    ``--max-frames`` stopped the watch before the video's end (tests/test_hunt45v.py; it was
+    refused as a video with nobody in it, "the stream ended", though the rest was not
+    watched)."""
+    video = nobody / "empty.mkv"
     capsys.readouterr()
-    assert main(["watch", str(video), "--db", str(case_base), "--max-frames", "120",
+    assert main(["watch", str(video), "--db", str(case_base), "--max-frames", "20",
                  "--speed", "0"]) == 0  # fmt: skip
     captured = capsys.readouterr()
     assert (
-        f"note: {video}: nobody in view in the 120 frames (12.00 s) watched (--max-frames 120"
+        f"note: {video}: nobody in view in the 20 frames (2.00 s) watched (--max-frames 20"
         " stopped the watch: the video's frames after them, if any, were not watched)\n"
     ) in captured.err
     lines = [json.loads(line) for line in captured.out.splitlines()]
     assert [(d["start_frame"], d["end_frame"], d["label"], d["unknown"], d["repetitions"],
              d["explanation"]) for d in lines] == [
-        (0, 120, None, "nobody in view", 0, "nobody in view")]  # fmt: skip
+        (0, 20, None, "nobody in view", 0, "nobody in view")]  # fmt: skip
 
 
 def _squat_segments(
@@ -412,32 +421,33 @@ def test_a_stream_that_never_shows_anybody_is_one_unknown_segment(case_base: Pat
 
 
 @pytest.fixture
-def served(shared_data: Path) -> Iterator[str]:
-    """The address of ../shared/data/media served over HTTP on this machine (a stream URL)."""
-    with _serving(shared_data / "media") as url:
+def served(nobody: Path) -> Iterator[str]:
+    """The address of a folder holding empty.mkv (a scene with nobody in it, 10 fps) served
+    over HTTP on this machine (a stream URL)."""
+    with _serving(nobody) as url:
         yield url
 
 
 def test_watch_a_stream_url(
     case_base: Path, served: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """vtest.avi served over HTTP, a file whose length OpenCV knows, so timed by its own
-    frame rate (10 fps) as the file is: its first 120 frames are one segment with nobody in
-    view, 0-12 s. A URL with nothing behind it: one line naming it, exit 1. (A URL was taken
-    for a camera index: a traceback.)"""
+    """A scene with nobody in it served over HTTP, a file whose length OpenCV knows, so timed
+    by its own frame rate (10 fps) as the file is: its first 20 frames are one segment with
+    nobody in view, 0-2 s. A URL with nothing behind it: one line naming it, exit 1. (A URL
+    was taken for a camera index: a traceback.)"""
     capsys.readouterr()
-    url = f"{served}/vtest.avi"
-    argv = ["watch", url, "--db", str(case_base), "--max-frames", "120", "--speed", "0"]
-    # nobody in view in the 120 frames watched: --max-frames stopped it before the video's
+    url = f"{served}/empty.mkv"
+    argv = ["watch", url, "--db", str(case_base), "--max-frames", "20", "--speed", "0"]
+    # nobody in view in the 20 frames watched: --max-frames stopped it before the video's
     # end, so not refused (tests/test_hunt45v.py), a note says so
     assert main(argv) == 0
     captured = capsys.readouterr()
-    assert f"note: {url}: nobody in view in the 120 frames (12.00 s) watched" in captured.err
+    assert f"note: {url}: nobody in view in the 20 frames (2.00 s) watched" in captured.err
     lines = [json.loads(line) for line in captured.out.splitlines()]
     got = [
         (d["start_frame"], d["end_frame"], d["end_s"], d["label"], d["explanation"]) for d in lines
     ]
-    assert got == [(0, 120, 12.0, None, "nobody in view")]
+    assert got == [(0, 20, 2.0, None, "nobody in view")]
     assert main(["watch", f"{served}/none.avi", "--db", str(case_base)]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"{served}/none.avi: cannot open camera or stream" in err
