@@ -1,5 +1,10 @@
 """Pictures and videos as other people's phones and cameras write them (hunt 46v).
 
+A person far from the camera, a quarter of a 1920x1080 frame's height (the bundled squat
+clip's picture at 0.28 of its size in a larger frame): the person detector, which sees the
+whole frame shrunk to 224 pixels, found her in none of the 65 frames ("nobody in view",
+`reps` and `segment` refused); it now looks again in tiles of half the frame.
+
 A phone stores a portrait photo as its sensor took it, sideways, and says in the EXIF
 orientation tag how a viewer turns it upright. FFmpeg, and so OpenCV's capture, decodes the
 picture as stored: posecbr found the person lying on their side ("torso tilted backward 1.00,
@@ -11,11 +16,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 from PIL import Image, ImageOps
 
-from features.pose_estimation import stream_poses
+from features.pose_estimation import PoseEstimator, stream_poses
+from features.pose_estimation.detector import tiles
 from features.pose_estimation.video import upright
 from features.poses import load_pose, load_pose_arrays, pose_file_metadata
 from posecbr.cli import main
@@ -148,3 +155,47 @@ def test_only_an_empty_track_is_judged_empty(tmp_path: Path) -> None:
         with open(path, "rb") as fh:
             judged[path.name] = mp4_empty_video(fh, path.stat().st_size)
     assert judged == {"whole.mp4": False, "frag.mp4": False, "emptied.mp4": True}
+
+
+SQUAT = Path("videos") / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+
+
+def test_tiles_are_half_the_frame_overlapping_by_half() -> None:
+    """A 1920x1080 frame: windows of 960 (half its width) every 480 across, and from top
+    and bottom (1080 - 960 = 120 down); a portrait 720x1280: 640 high every 320, 720 - 640
+    = 80 across."""
+    assert tiles(1920, 1080) == [(x, y, 960, 960) for y in (0, 120) for x in (0, 480, 960)]
+    assert tiles(720, 1280) == [(x, y, 640, 640) for y in (0, 320, 640) for x in (0, 80)]
+
+
+def test_no_tiles_over_a_frame_the_detector_sees_whole() -> None:
+    """The detector's input is 224 pixels a side: a 64 x 48 frame, or one 224 wide, is seen
+    at (at least) its own pixels, so no tile is looked at; one pixel wider, 225 x 100, is
+    shrunk, and is looked at in tiles of 113 (half of 225, rounded up), 113 high at most
+    (its height is 100), every 56.5 across: x 0, 56, 112."""
+    assert tiles(64, 48) == tiles(224, 168) == tiles(100, 224) == []
+    assert tiles(225, 100) == [(0, 0, 113, 100), (56, 0, 113, 100), (112, 0, 113, 100)]
+
+
+def test_a_person_small_in_a_large_frame_is_found(shared_data: Path) -> None:
+    """The squat clip's first frame (720x1280) shrunk to 0.28 (a woman some 220 pixels tall)
+    at (1100, 600) of a 1920x1080 frame: she is found, her landmarks where the full-size
+    frame's land once shrunk and moved so (within 3 % of the small picture's height).
+    Before, nobody was found."""
+    cap = cv2.VideoCapture(str(shared_data / SQUAT))
+    ok, bgr = cap.read()
+    cap.release()
+    assert ok
+    rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+    scale, at = 0.28, np.array([1100.0, 600.0])
+    small = cv2.resize(rgb, (round(720 * scale), round(1280 * scale)), interpolation=cv2.INTER_AREA)
+    frame = np.full((1080, 1920, 3), (90, 110, 90), dtype=np.uint8)
+    frame[600 : 600 + small.shape[0], 1100 : 1100 + small.shape[1]] = small
+    est = PoseEstimator()
+    whole = est.process(rgb)
+    est.reset()
+    far = est.process(frame)
+    assert whole.person and far.person
+    body = [0, 11, 12, 23, 24, 25, 26, 27, 28]  # nose, shoulders, hips, knees, ankles
+    expected = whole.image[body, :2] * (small.shape[1] / 720) + at
+    np.testing.assert_allclose(far.image[body, :2], expected, atol=0.03 * small.shape[0])

@@ -27,6 +27,7 @@ from features.pose_estimation import detector as det
 from features.pose_estimation import landmarks as lmk
 from features.pose_estimation.smoothing import OneEuroFilter, OneEuroParams
 from features.skeleton import JOINT_INDEX
+from tests.empty_scene import empty_scene
 
 FIXTURES = Path(__file__).parent / "fixtures"
 REFERENCE = json.loads((FIXTURES / "mediapipe_pose_reference.json").read_text())
@@ -172,12 +173,41 @@ def test_basketball1_person_on_the_left_faces_camera(
 # --- real video ------------------------------------------------------------------------------
 
 
-def test_vtest_has_no_person(shared_data: Path) -> None:
-    vp = estimate_video(shared_data / "media" / "vtest.avi", progress_bar=False, max_frames=30)
-    assert vp.sequence.n_frames == 30
-    assert vp.missing == tuple(range(30))
+def test_a_scene_with_nobody_in_it_has_no_person(tmp_path: Path) -> None:
+    """A still scene with nobody in it (lossless): every frame missing, NaN, none taken for
+    a person, though each is searched again in tiles."""
+    vp = estimate_video(empty_scene(tmp_path / "empty.mkv", 8), progress_bar=False)
+    assert vp.sequence.n_frames == 8
+    assert vp.missing == tuple(range(8))
     assert np.isnan(vp.sequence.positions).all()
-    assert vp.sequence.metadata["n_missing_frames"] == 30
+    assert vp.sequence.metadata["n_missing_frames"] == 8
+
+
+def test_the_pedestrians_of_vtest_are_found_in_tiles(shared_data: Path) -> None:
+    """vtest.avi's first frame (768 x 576), looked at: a man in dark clothes walking left
+    across the road, head at about (660, 250) and feet at about (665, 315), another standing
+    on the left, head at about (268, 230), a third far up the road (no larger than a tile
+    shows well). The detector finds nobody in the whole frame shrunk to 224 pixels; in tiles
+    of half the frame it finds the two nearer men, and the pose lands on the walker."""
+    cap = cv2.VideoCapture(str(shared_data / "media" / "vtest.avi"))
+    ok, bgr = cap.read()
+    cap.release()
+    assert ok
+    rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+    est = PoseEstimator()
+    assert est.detect(rgb) == []
+    heads = np.array([[660.0, 250.0], [268.0, 230.0]])
+    found = est.detect_closer(rgb)
+    boxes = np.array([d.box for d in found])
+    assert len(found) == 2
+    inside = (heads[:, None] >= boxes[None, :, :2]) & (heads[:, None] <= boxes[None, :, 2:])
+    assert inside.all(axis=2).any(axis=1).all()  # each head in a box
+    pose = est.process(rgb)
+    assert pose.person
+    hips = pose.image[[JOINT_INDEX["left_hip"], JOINT_INDEX["right_hip"]], :2].mean(axis=0)
+    ankles = pose.image[[JOINT_INDEX["left_ankle"], JOINT_INDEX["right_ankle"]], :2]
+    assert abs(hips[0] - 662) < 20 and 250 < hips[1] < 310
+    np.testing.assert_allclose(ankles[:, 1], 315, atol=15)
 
 
 def _knee_angles(positions: np.ndarray) -> np.ndarray:

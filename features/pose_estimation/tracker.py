@@ -4,7 +4,9 @@
 
 1. With no track, the detector finds people; the kept detection is the one nearest the
    person last tracked (the best-scoring one when there is none), so a second person in view
-   does not steal the track when it is re-acquired.
+   does not steal the track when it is re-acquired. When it finds nobody in the whole frame,
+   it looks again in overlapping tiles of half the frame's size (``detect_closer``): a person
+   far from the camera is too small for it in the whole frame.
 2. The landmark model runs on the ROI (from the detection, or from the previous frame's
    auxiliary landmarks when tracking). If its person probability drops below
    ``min_tracking_confidence`` the track is dropped and the detector runs again on the SAME
@@ -132,6 +134,15 @@ class PoseEstimator:
             self.min_detection_confidence,
         )
 
+    def detect_closer(self, rgb: np.ndarray) -> list[det.Detection]:
+        """:meth:`detect` on overlapping tiles of the frame (:func:`.detector.tiles`), each
+        person once, best first: a person too small in the whole frame for the detector (far
+        from the camera, or the picture small in a large frame) is found in a tile."""
+        found: list[det.Detection] = []
+        for x, y, w, h in det.tiles(rgb.shape[1], rgb.shape[0]):
+            found += det.shifted(self.detect(rgb[y : y + h, x : x + w]), x, y)
+        return det.distinct(found)
+
     def landmarks(self, rgb: np.ndarray, roi: lmk.Roi) -> lmk.RawLandmarks:
         """The landmark model on ``roi`` of an RGB uint8 frame (no smoothing)."""
         tensor, _ = lmk.crop(rgb, roi)
@@ -163,7 +174,7 @@ class PoseEstimator:
         detected = False
         if raw is None:
             detected = True
-            best = self._pick(self.detect(rgb))
+            best = self._pick(self.detect(rgb) or self.detect_closer(rgb))
             if best is not None:
                 raw = self.landmarks(rgb, lmk.roi_from_points(best.keypoints[0], best.keypoints[1]))
                 score = raw.flag
