@@ -199,3 +199,36 @@ def test_a_person_small_in_a_large_frame_is_found(shared_data: Path) -> None:
     body = [0, 11, 12, 23, 24, 25, 26, 27, 28]  # nose, shoulders, hips, knees, ankles
     expected = whole.image[body, :2] * (small.shape[1] / 720) + at
     np.testing.assert_allclose(far.image[body, :2], expected, atol=0.03 * small.shape[0])
+
+
+class _CountedTiles(PoseEstimator):
+    """A real estimator that counts its tile searches."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.searches = 0
+
+    def detect_closer(self, rgb: np.ndarray) -> list:  # type: ignore[type-arg]
+        self.searches += 1
+        return super().detect_closer(rgb)
+
+
+def test_a_stream_searches_the_tiles_at_most_twice_a_second_while_nobody_is_in_view(
+    tmp_path: Path,
+) -> None:
+    """12 frames of an empty 320x240 scene at 10 fps (0.0-1.1 s): a stream (``watch``) looks
+    in the tiles at 0.0, 0.5 and 1.0 s only, by the frames' own times (six detector runs on
+    every empty frame, 95 ms of CPU, would leave a 30-fps camera behind); a frame processed
+    on its own, as ``extract`` does, is searched every time (4 frames: 4 searches)."""
+    from tests.empty_scene import empty_scene
+
+    video = empty_scene(tmp_path / "empty.mkv", 12, fps=10)
+    est = _CountedTiles()
+    frames = list(stream_poses(video, estimator=est))
+    assert len(frames) == 12 and not any(f.pose.person for f in frames)
+    assert est.searches == 3
+    alone = _CountedTiles()
+    still = frames[0].rgb
+    for k in range(4):
+        assert not alone.process(still, k / 10).person
+    assert alone.searches == 4

@@ -82,9 +82,9 @@ def letterbox(rgb: np.ndarray) -> tuple[np.ndarray, float, float, float]:
 
 ZOOM = 2
 """How much closer :func:`tiles` look than the whole frame: the detector sees the frame
-shrunk to 224 pixels on its longer side, where a small person's face is a few pixels (the
-bundled squat's woman, a quarter of a 1920x1080 frame's height: found in none of 65
-frames); a tile half the frame's longer side shows them twice as large (found in all)."""
+shrunk to 224 pixels on its longer side, where a small person's face is a few pixels (a
+person a quarter of a 1920x1080 frame's height is not found); a tile half the frame's longer
+side shows them twice as large."""
 
 
 def tiles(width: int, height: int) -> list[tuple[int, int, int, int]]:

@@ -114,6 +114,7 @@ class PoseEstimator:
         """Forget the track and the filters (call between unrelated clips)."""
         self._roi: lmk.Roi | None = None
         self._last_centre: np.ndarray | None = None
+        self._closer_at = -math.inf  # the frame time of the last tile search
         self._reset_filters()
 
     def _reset_filters(self) -> None:
@@ -143,6 +144,17 @@ class PoseEstimator:
             found += det.shifted(self.detect(rgb[y : y + h, x : x + w]), x, y)
         return det.distinct(found)
 
+    def _look_closer(self, rgb: np.ndarray, time_s: float, every_s: float) -> list[det.Detection]:
+        """:meth:`detect_closer`, at most once every ``every_s`` seconds of frame time (0: on
+        every frame it is asked for; a frame with no time, NaN, is searched): live, six
+        detector runs on each frame with nobody in view would leave a camera's frames
+        behind."""
+        if every_s > 0 and time_s - self._closer_at < every_s:
+            return []
+        if math.isfinite(time_s):
+            self._closer_at = time_s
+        return self.detect_closer(rgb)
+
     def landmarks(self, rgb: np.ndarray, roi: lmk.Roi) -> lmk.RawLandmarks:
         """The landmark model on ``roi`` of an RGB uint8 frame (no smoothing)."""
         tensor, _ = lmk.crop(rgb, roi)
@@ -157,9 +169,14 @@ class PoseEstimator:
         dist = [float(np.hypot(*(d.keypoints[0] - self._last_centre))) for d in found]
         return found[int(np.argmin(dist))]
 
-    def process(self, rgb: np.ndarray, time_s: float | None = None) -> FramePose:
+    def process(
+        self, rgb: np.ndarray, time_s: float | None = None, *, closer_every_s: float = 0.0
+    ) -> FramePose:
         """One RGB uint8 frame ``(h, w, 3)`` taken at ``time_s`` seconds (default: 30 fps; NaN:
-        a frame with no time, its pose not smoothed and the filters left as they were)."""
+        a frame with no time, its pose not smoothed and the filters left as they were).
+        ``closer_every_s``: with nobody found in the whole frame, the tiles are searched
+        (:meth:`detect_closer`) at most once in that many seconds of frame time (0: every
+        such frame)."""
         if time_s is None:
             time_s = self._frame / 30.0
         self._frame += 1
@@ -174,7 +191,8 @@ class PoseEstimator:
         detected = False
         if raw is None:
             detected = True
-            best = self._pick(self.detect(rgb) or self.detect_closer(rgb))
+            found = self.detect(rgb) or self._look_closer(rgb, time_s, closer_every_s)
+            best = self._pick(found)
             if best is not None:
                 raw = self.landmarks(rgb, lmk.roi_from_points(best.keypoints[0], best.keypoints[1]))
                 score = raw.flag

@@ -1365,6 +1365,15 @@ def _clocked(
     return bool(ok), bgr, video_t
 
 
+STREAM_CLOSER_EVERY_S = 0.5
+"""How often :func:`stream_poses` searches a frame's tiles for a person too small for the
+whole frame (:meth:`.tracker.PoseEstimator.detect_closer`: six detector runs, about six times
+a frame's detection) while nobody is in view: on every such frame a camera's frames would fall
+behind; once in half a second costs a fraction of one core and finds a person who comes into
+view within a quarter of the 2-s window a segment is judged on. Timed by the frames' own
+times, so a file watched gives the same poses however fast the machine."""
+
+
 def stream_poses(
     source: int | str | Path,
     *,
@@ -1438,7 +1447,8 @@ def stream_poses(
             # as estimate_video times the filters: index / fps until the frames stray
             at = clock.filter_time(index, video_t) if fps else t
             last = fps is not None and index + 1 == max_frames and _ends(cap, queue, fps)
-            yield StreamFrame(index, t, est.process(rgb, at), rgb, read_at, video_t, last)
+            pose = est.process(rgb, at, closer_every_s=STREAM_CLOSER_EVERY_S)
+            yield StreamFrame(index, t, pose, rgb, read_at, video_t, last)
             index += 1
     finally:
         cap.release()
