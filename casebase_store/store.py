@@ -435,13 +435,17 @@ _MISTYPED_URL = re.compile(
 )
 #: the user and password after it (``me:PASSWORD@host``), to hide the password
 _USER_PASSWORD = re.compile(r"^(/*[^:@/]*:)[^@]*@")
+#: a database URL with no scheme at all (``me:PASSWORD@host/db``): a user, a colon and a
+#: password before an "@", where a path's first folder is seldom so named
+_SCHEMELESS_URL = re.compile(r"[^:@/\\]+:[^@]*@")
 
 
 def sqlite_file(url_or_path: str | Path) -> Path | None:
     """The file of a SQLite path or ``sqlite:///`` URL (None: another backend or in memory).
     A database URL missing the ``//`` before its server (``postgresql:/me:PW@host/db``) that
     is no file is refused as a mistyped URL, its password hidden: taken for a file's name, it
-    was printed whole in the refusal (or a file of that name made)."""
+    was printed whole in the refusal (or a file of that name made). So is one with no scheme
+    at all (``me:PW@host/db``)."""
     text = str(url_or_path)
     if "://" not in text:
         typo = _MISTYPED_URL.match(text)
@@ -450,6 +454,12 @@ def sqlite_file(url_or_path: str | Path) -> Path | None:
             raise StoreError(
                 f'not a database URL ("://" goes after {scheme!r}) nor a case base file',
                 typo[0] + _USER_PASSWORD.sub(r"\1***@", text[typo.end() :]),
+            )
+        if _SCHEMELESS_URL.match(text) and not os.path.lexists(text):
+            raise StoreError(
+                "looks like a database URL without its scheme (postgresql+psycopg://...),"
+                " and is no case base file",
+                _USER_PASSWORD.sub(r"\1***@", text),
             )
         return Path(text)
     try:
