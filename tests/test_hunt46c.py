@@ -134,8 +134,9 @@ def test_report_and_compare_refuse_to_write_over_a_pose_file_or_a_case_base(
     refused(["report", str(compared_three), "--out", str(store)], tmp_path, capsys,
             f"{store}: is a SQLite database (a case base file?): the report would")  # fmt: skip
     refused(["compare", str(DEMO), "--json", str(store)], tmp_path, capsys, "is a SQLite database")
-    assert main(["report", str(compared_three), "--out", str(tmp_path / "r.npz")]) == 0
-    assert (tmp_path / "r.npz").read_text().startswith("<!DOCTYPE html>")  # a name, no pose file
+    # no pose file there: refused as any name but an HTML page's is (hunt 47c)
+    refused(["report", str(compared_three), "--out", str(tmp_path / "r.npz")], tmp_path, capsys,
+            "r.npz: the report is an HTML page: name it .html or .htm (got '.npz')")  # fmt: skip
 
 
 def test_a_mistyped_fluent_in_a_thresholds_file_gets_a_guess(

@@ -345,11 +345,26 @@ def render_html(results: CompareResults, images: Mapping[str, Path]) -> str:
 # ---------------------------------------------------------------------------- writing
 
 
+#: the suffixes of a file an HTML page is written to
+PAGE_SUFFIXES = (".html", ".htm")
+
+
+def check_page_name(out: Path) -> None:
+    """Refuse a report named as another kind of file (``--out data/labels.csv``): the page
+    replaced the CSV, HTML under a name that says otherwise."""
+    if out.suffix.lower() not in PAGE_SUFFIXES:
+        raise DataError(
+            "the report is an HTML page: name it .html or .htm"
+            f" (got {out.suffix or 'no suffix'!r})",
+            out,
+        )
+
+
 def write_report(results_path: str | Path, out: str | Path) -> tuple[Path, list[str]]:
     """Render the report for a results file to ``out`` (atomically); returns it and the
     pictures that could not be drawn. The results-only pictures (accuracy, confusion
     matrices) missing from the folder (a ``--json``-only run) are drawn into a temporary
-    folder."""
+    folder. ``out`` must end in .html or .htm (:func:`check_page_name`)."""
     results, source = load_results(results_path)
     images = picture_files(results, source)
     # The compare run's own files are kept as they are: the results, their pictures and the
@@ -359,6 +374,7 @@ def write_report(results_path: str | Path, out: str | Path) -> tuple[Path, list[
     kept = [table] if table.is_file() else []
     dest = check_output(out, inputs=[source, *images.values(), *kept], what="report")
     check_not_poses(dest, "report")
+    check_page_name(dest)
     drawing = Drawing()
     with tempfile.TemporaryDirectory() as tmp:
         if results.pictures.accuracy not in images:
