@@ -100,6 +100,15 @@ class DADResult:
             return None
         return top
 
+    @property
+    def tied(self) -> tuple[ActivityScore, ...]:
+        """The activities scored as high as :attr:`best` (none when there is no best match):
+        the clip matches them as well."""
+        best = self.best
+        if best is None:
+            return ()
+        return tuple(a for a in self.activities if a is not best and a.score == best.score)
+
     def activity_for(self, label: str) -> ActivityScore | None:
         """The best-ranked activity that stands for ``label`` (None if the ADD has none),
         names matched ignoring case, spaces, underscores and hyphens ("Squat": "squat")."""
@@ -111,13 +120,17 @@ class DADResult:
         """JSON-ready form (NaN scores become None); the clip is ``clip``, as in ``classify`` and
         ``reps``, and ``source``, the name it had first; ``frames`` its frame count after
         ``fps``, as ``describe``, ``reps`` and ``segment`` give it (``duration_s`` is that count
-        over ``fps``)."""
+        over ``fps``). ``best``: the :attr:`best` match's ``activity`` (None: no match), and
+        ``tied_with`` those scored as high (:attr:`tied`), as the text says them."""
         fields = asdict(self)
         out: dict[str, Any] = {"clip": self.source}
         for key, value in fields.items():
             out[key] = value
             if key == "fps":
                 out["frames"] = int(round(self.duration_s * self.fps))
+            if key == "detected":
+                out["best"] = None if self.best is None else self.best.activity
+                out["tied_with"] = [a.activity for a in self.tied]
         for act in out["activities"]:
             if not np.isfinite(act["score"]):
                 act["score"] = None

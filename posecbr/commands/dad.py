@@ -95,7 +95,8 @@ def run(args: argparse.Namespace) -> int:
     backend: Backend = "numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba"
     result = detect(seq, add, config, backend=backend)
     if args.json:  # the document says why, for a clip DAD cannot judge too
-        json.dump(result.to_dict(), sys.stdout, indent=2)
+        doc = {**result.to_dict(), "window_s": config.window_s, "step_s": config.step_s}
+        json.dump(doc, sys.stdout, indent=2)
         sys.stdout.write("\n")
     if result.status != "ok":  # too short, nobody in it: nothing asked for could be done
         raise PosecbrError(f"{result.status}: {result.message}", args.posefile)
@@ -133,7 +134,7 @@ def _text_lines(args: argparse.Namespace, result: Any, config: Any) -> Iterator[
     )
     best = result.best
     if best is not None:
-        tied = [a.words for a in result.activities if a is not best and a.score == best.score]
+        tied = [a.words for a in result.tied]
         also = f"; tied with {', '.join(tied)}" if tied else ""
         unseen = best.total_weight - best.observable_weight
         seen = f"; {unseen} of its {best.total_weight} weight not observable" if unseen > 0 else ""
