@@ -68,8 +68,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--name",
         default=None,
-        help=f"case base name in the store (default: {DEFAULT_NAME}; with --append, {DEFAULT_NAME}"
-        " or else the store's only one, as classify, segment and watch take it)",
+        help=f"case base name in the store (default: {DEFAULT_NAME}; with --append, the store's"
+        " only one, as classify, segment and watch take it)",
     )
     p.add_argument(
         "--features",
@@ -823,11 +823,11 @@ def _data_columns(args: argparse.Namespace) -> list[str]:
 
 
 def _append_name(args: argparse.Namespace) -> str:
-    """The case base ``--append`` adds to: ``--name``, else the one named
-    :data:`DEFAULT_NAME`, else the store's only one, as ``classify``, ``segment`` and
-    ``watch`` take it (``--append`` to a store holding one case base named otherwise was
-    refused: "no case base named 'default'"). With several and none of that name, or none,
-    :data:`DEFAULT_NAME`: the append refuses it naming those the store holds."""
+    """The case base ``--append`` adds to: ``--name``, else the store's only one, as
+    ``classify``, ``segment`` and ``watch`` take it. A store of several is refused naming
+    them ("choose one with --name"), as they refuse it: the cases went to the one named
+    :data:`DEFAULT_NAME` without a word, whichever the user meant. A store of none: the
+    append refuses :data:`DEFAULT_NAME` (no case base to add to)."""
     from casebase_store import open_store
 
     if args.name is not None:
@@ -835,9 +835,9 @@ def _append_name(args: argparse.Namespace) -> str:
     store = open_store(args.db, create=False, readonly=True)
     try:
         names = [cb.name for cb in store.list_case_bases()]
+        return store.choose(None) if names else DEFAULT_NAME
     finally:
         store.close()
-    return names[0] if len(names) == 1 else DEFAULT_NAME
 
 
 def _check_name(args: argparse.Namespace) -> None:
