@@ -1254,6 +1254,14 @@ def dataset_movements(path: str | Path, *, sensor: str = "kinect") -> list[str]:
     return _dataset_values(path, "movement", sensor)
 
 
+def dataset_episodes(path: str | Path, *, sensor: str = "kinect") -> list[str]:
+    """The episodes (UI-PRMD's episode, an HDM05 take, a labels CSV's ``episode`` or
+    ``take`` column) the clips of the dataset at ``path`` have, each once, in order, found
+    as :func:`dataset_labels` finds the labels. For the refusal of a ``--episodes`` entry no
+    clip has."""
+    return _dataset_values(path, "episode", sensor, "take")
+
+
 def dataset_columns(path: str | Path, *, sensor: str = "kinect") -> list[str]:
     """The columns the clips of the dataset at ``path`` may have a value of (label, subject,
     a labels CSV's other columns, UI-PRMD's movement, episode and correct, ...), found from
@@ -1266,9 +1274,11 @@ def dataset_columns(path: str | Path, *, sensor: str = "kinect") -> list[str]:
     return sorted(found)
 
 
-def _dataset_values(path: str | Path, field: str, sensor: str) -> list[str]:
-    """:func:`dataset_labels` (``field`` "label"), :func:`dataset_subjects` ("subject") or
-    :func:`dataset_movements` ("movement", one of a clip's extras)."""
+def _dataset_values(path: str | Path, field: str, sensor: str, or_else: str = "") -> list[str]:
+    """:func:`dataset_labels` (``field`` "label"), :func:`dataset_subjects` ("subject"),
+    :func:`dataset_movements` ("movement", one of a clip's extras) or
+    :func:`dataset_episodes` ("episode", ``or_else`` "take": a clip's take when it has no
+    episode, as the ``--episodes`` filter reads it)."""
     from .poses import pose_file_metadata
 
     path = Path(path)
@@ -1276,12 +1286,15 @@ def _dataset_values(path: str | Path, field: str, sensor: str) -> list[str]:
     found: set[str] = set()
     for e in _entries(path, kind, sensor):
         value = getattr(e, field) if field in ("label", "subject") else extra(e.extras, field)
+        if value is None and or_else:
+            value = extra(e.extras, or_else)
         if field == "label" and e.track is not None:
             found.update(track_labels(e.track))
         elif value is not None:
             found.add(str(value))
         elif _suffix(e.path) in POSE_SUFFIXES:
-            stored = pose_file_metadata(e.path).get(field)
+            meta = pose_file_metadata(e.path)
+            stored = meta.get(field, meta.get(or_else) if or_else else None)
             found.update([] if stored is None else [str(stored)])
     return sorted(found, key=code_order)
 

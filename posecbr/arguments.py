@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import sys
 from collections.abc import Callable, Collection, Iterable, Sequence
@@ -141,7 +142,8 @@ def held_words(values: Sequence[str], what: str) -> str:
     names. Empty for no values (nothing to say)."""
     if not values:
         return ""
-    noun = {"labelled": "labels", "of movement": "movements"}.get(what, "subjects")
+    nouns = {"labelled": "labels", "of movement": "movements", "of episode": "episodes"}
+    noun = nouns.get(what, "subjects")
     many = len(values) > 1
     text = f": its {noun if many else noun[:-1]} {'are' if many else 'is'} {listed(values)}"
     codes = noun == "labels" and whole_numbers(values)
@@ -162,18 +164,85 @@ def whole_numbers(values: Iterable[str]) -> bool:
     return all(v.isascii() and v.isdigit() for v in values)
 
 
-def plot_targets(plot: Path, recordings: list[Path]) -> list[Path]:
-    """Where each recording's picture goes: ``plot`` itself, or in the folder ``plot`` one
-    ``<name>.png`` per recording, a name that two recordings share (``a/rec.npz``,
-    ``b/rec.npz``) numbered from the second on (``rec_2.png``), as ``convert`` names
-    pose files: no picture overwrites another. ``segment``, ``reps`` and ``describe`` take
-    ``--plot`` so, as ``extract --out`` takes a folder or, for one video, a file name."""
+class PlotOption(argparse.Action):
+    """``--plot``: the path, as :func:`path_arg` reads it, and in ``<dest>_folder`` whether it
+    was written as a folder (ending in "/", which the Path drops): ``--plot figs/`` names a
+    folder, made if it is not there, as ``convert``, ``extract`` and ``compare --out DIR``
+    make theirs (it was refused as no picture's name)."""
+
+    def __call__(
+        self,
+        _parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        _option_string: str | None = None,
+    ) -> None:
+        text = str(values)
+        try:
+            path = path_arg(text)
+        except argparse.ArgumentTypeError as exc:
+            raise argparse.ArgumentError(self, str(exc)) from None
+        setattr(namespace, self.dest, path)
+        setattr(namespace, f"{self.dest}_folder", text.endswith(("/", os.sep)))
+
+
+def add_plot_option(p: argparse.ArgumentParser, said: str) -> None:
+    """``--plot PICTURE`` (:class:`PlotOption`): ``said`` what the picture shows; the help
+    adds how it is named."""
+    p.add_argument(
+        "--plot",
+        action=PlotOption,
+        metavar="PICTURE",
+        help=f"{said} (.png, .svg, .pdf: by the name; a folder, or a name ending in /:"
+        " <recording>.png in it, the folder made if it is not there)",
+    )
+    p.set_defaults(plot_folder=False)
+
+
+def plot_targets(plot: Path, recordings: list[Path], folder: bool = False) -> list[Path]:
+    """Where each recording's picture goes: ``plot`` itself, or in the folder ``plot`` (one
+    there, or ``folder``: one named so, to be made) one ``<name>.png`` per recording, a
+    name that two recordings share (``a/rec.npz``, ``b/rec.npz``) numbered from the second
+    on (``rec_2.png``), as ``convert`` names pose files: no picture overwrites another.
+    ``segment``, ``reps`` and ``describe`` take ``--plot`` so, as ``extract --out`` takes a
+    folder or, for one video, a file name."""
     from features.fileio import unique_name
 
-    if not plot.is_dir():
+    if not (folder or plot.is_dir()):
         return [plot]
     taken: set[str] = set()
     return [plot / f"{unique_name(path.stem, taken)}.png" for path in recordings]
+
+
+def check_plot(
+    plot: Path,
+    folder: bool,
+    recordings: list[Path],
+    inputs: Sequence[Path],
+    command: str,
+) -> list[Path]:
+    """The pictures ``--plot`` names (:func:`plot_targets`), each refused before any work
+    as :func:`features.fileio.check_output` refuses an output (in a folder to be made when
+    ``folder``: a picture named in a missing folder, ``--plot new/x.png``, is refused naming
+    it, as every output file is), and as :func:`check_folder_pictures` and
+    :func:`features.timeline.picture_format` refuse it. A name with no suffix that is no
+    folder is told the trailing "/" that makes it one."""
+    from features.fileio import check_output
+    from features.timeline import picture_format
+
+    targets = plot_targets(plot, recordings, folder)
+    for target in targets:
+        check_output(target, inputs=inputs, what="picture", make_parents=folder)
+    check_folder_pictures(plot, targets, recordings, command)
+    if targets == [plot]:
+        try:
+            picture_format(plot)
+        except DataError as exc:
+            if plot.suffix:
+                raise
+            made = f"; a folder to be made for it is written ending in / ({plot}/)"
+            raise DataError(exc.message + made, plot) from None
+    return targets
 
 
 def check_folder_pictures(

@@ -1086,13 +1086,13 @@ def test_segment_pictures_of_recordings_that_share_a_name_are_all_kept(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     """Two recordings both named 13_30.npz (in two folders) with --plot FOLDER: two pictures,
-    13_30.png and 13_30_2.png (the second overwrote the first). A --plot file name in no
-    picture format: one line, exit 1, nothing written."""
+    13_30.png and 13_30_2.png (the second overwrote the first), in the folder made for them
+    (it was refused as not there; hunt 47c). A --plot file name in no picture format: one
+    line, exit 1, nothing written."""
     part = recordings["13_30"].slice_frames(0, 600)
     a = save_pose(part, tmp_path / "a" / "13_30.npz")
     b = save_pose(recordings["13_30"].slice_frames(600, 1200), tmp_path / "b" / "13_30.npz")
-    plots = tmp_path / "plots"
-    plots.mkdir()
+    plots = tmp_path / "plots"  # not there: made, as convert --out DIR makes its folder
     assert main(["segment", str(a), str(b), "--db", str(case_base), "--plot", str(plots)]) == 0
     assert sorted(p.name for p in plots.iterdir()) == ["13_30.png", "13_30_2.png"]
     assert (plots / "13_30.png").read_bytes() != (plots / "13_30_2.png").read_bytes()
@@ -1103,14 +1103,14 @@ def test_segment_pictures_of_recordings_that_share_a_name_are_all_kept(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "the picture must be a file name ending in a format" in err
     assert not text.exists() and (_sha(a), _sha(case_base)) == before
-    # several recordings and a --plot folder that does not exist: said so (it said "names a
-    # folder" to one who had named a folder)
-    missing = tmp_path / "plots2"
-    assert main(["segment", str(a), str(b), "--db", str(case_base), "--plot", str(missing)]) == 1
+    # several recordings and a --plot that is a file: said so, the file kept
+    notes = tmp_path / "notes.txt"
+    notes.write_text("mine\n", encoding="utf-8")
+    assert main(["segment", str(a), str(b), "--db", str(case_base), "--plot", str(notes)]) == 1
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and f"{missing}: with several recordings --plot names a" in err
-    assert err.rstrip().endswith("this one does not exist") and not missing.exists()
-    assert (_sha(a), _sha(case_base)) == before
+    assert err.count("\n") == 1 and f"{notes}: with several recordings --plot names a" in err
+    assert err.rstrip().endswith("this one is a file")
+    assert (_sha(a), _sha(case_base), notes.read_text()) == (*before, "mine\n")
 
 
 DEMO_CLIP = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"

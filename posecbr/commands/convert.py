@@ -25,7 +25,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from features.errors import DataError
+from features.errors import ConfigError, DataError
 from features.fileio import (
     ReadFiles,
     binary_kind,
@@ -37,7 +37,7 @@ from features.fileio import (
     write_text_atomic,
 )
 from features.text import counted, first_few, shown
-from posecbr.arguments import check_each_found, path_arg
+from posecbr.arguments import check_each_found, held_words, path_arg
 from posecbr.recordings import add_sensor_option, check_fps, sensor_for
 
 if TYPE_CHECKING:
@@ -112,8 +112,10 @@ class Ranges(AbstractSet[int]):
     """Whole numbers given as ranges (``"1-3,5"``); membership without listing them, so
     ``1-1000000000`` costs nothing."""
 
-    def __init__(self, ranges: Iterable[range]) -> None:
+    def __init__(self, ranges: Iterable[range], texts: Iterable[str] = ()) -> None:
         self.ranges = tuple(ranges)
+        #: each range as it was written ("1-3", "5"), for naming one no clip lies in
+        self.texts = tuple(texts) or tuple(f"{r.start}-{r.stop - 1}" for r in self.ranges)
 
     def __contains__(self, value: object) -> bool:
         return any(value in r for r in self.ranges)
@@ -135,6 +137,7 @@ def parse_ranges(value: str | None) -> Ranges | None:
     if value is None:
         return None
     out: list[range] = []
+    texts: list[str] = []
     for part in value.split(","):
         part = part.strip()
         if not part:
@@ -149,7 +152,8 @@ def parse_ranges(value: str | None) -> Ranges | None:
         if b < a:
             raise DataError(f"the range {part!r} runs backwards: write {b}-{a}", "--episodes")
         out.append(range(a, b + 1))
-    return Ranges(out)
+        texts.append(part)
+    return Ranges(out, texts)
 
 
 _RESERVED_COLUMNS = ("path", "label", "subject", "start", "end")
@@ -441,14 +445,21 @@ def _write_clips(
 
 
 def _check_asked(args: argparse.Namespace, written: list[dict[str, Any]]) -> None:
-    """Refuse a ``--labels``, ``--subjects`` or ``--movements`` entry no clip converted has
-    (mistyped), naming those the data hold, as ``train``, ``compare`` and ``classify`` refuse
-    it: the clips of the others alone were converted without a word (``--labels
-    deep_squat,bogus``, ``--movements m01,m7``), and one entry alone was "holds no clip to
-    convert" ("no clips matched (check the filters)" for ``--movements m1``). Checked once
-    every clip is staged, before any is moved into --out; when ``--limit`` stopped the
-    conversion, against every clip of the data (one past the limit may have it)."""
-    from features.datasets import dataset_labels, dataset_movements, dataset_subjects, extra
+    """Refuse a ``--labels``, ``--subjects``, ``--movements`` or ``--episodes`` entry no clip
+    converted has (mistyped), naming those the data hold, as ``train``, ``compare`` and
+    ``classify`` refuse it: the clips of the others alone were converted without a word
+    (``--labels deep_squat,bogus``, ``--movements m01,m7``, ``--episodes 1,99``), and one
+    entry alone was "holds no clip to convert" ("no clips matched (check the filters)" for
+    ``--movements m1``). Checked once every clip is staged, before any is moved into --out;
+    when ``--limit`` stopped the conversion, against every clip of the data (one past the
+    limit may have it)."""
+    from features.datasets import (
+        dataset_episodes,
+        dataset_labels,
+        dataset_movements,
+        dataset_subjects,
+        extra,
+    )
 
     limited = args.limit is not None and len(written) >= args.limit
     asked = []
@@ -466,7 +477,50 @@ def _check_asked(args: argparse.Namespace, written: list[dict[str, Any]]) -> Non
 
         found = held() if limited else [extra(row, key) for row in written]
         asked.append((found, sorted(values), flag, what, held))
+    episodes = parse_ranges(args.episodes)
+    if episodes is None:
+        check_each_found(asked, args.source)
+        return
+    data_has = dataset_episodes(args.source, sensor=args.sensor)
+    _check_episodes(episodes, data_has, args.source)  # held nowhere (mistyped) first
     check_each_found(asked, args.source)
+    converted = data_has if limited else [_episode(row) for row in written]
+    _check_episodes(episodes, converted, args.source, data_has)
+
+
+def _episode(row: dict[str, Any]) -> Any:
+    """A converted clip's episode (UI-PRMD) or take (HDM05), as ``--episodes`` filters them."""
+    from features.datasets import extra
+
+    episode = extra(row, "episode")
+    return extra(row, "take") if episode is None else episode
+
+
+def _check_episodes(
+    episodes: Ranges, found: list[Any], source: Path, held: list[str] | None = None
+) -> None:
+    """Refuse a ``--episodes`` entry (a number or a range) in which none of the episodes
+    ``found`` lies, as :func:`posecbr.arguments.check_found` refuses a ``--subjects`` entry:
+    ``found`` the data's own episodes (``held`` None), naming them; else those of the clips
+    the other filters kept (``held``: the data's), "passes the other filters". A range is a
+    bound: ``1-10`` over episodes 1 to 6 is not refused (1,99 converted episode 1 alone
+    without a word)."""
+    numbers = {int(e) for e in found if e is not None and str(e).strip().isdigit()}
+    missing = [
+        text
+        for text, r in zip(episodes.texts, episodes.ranges, strict=True)
+        if not any(n in r for n in numbers)
+    ]
+    if not missing:
+        return
+    listed_missing = ", ".join(repr(m) for m in missing)
+    if held is not None:
+        raise ConfigError(
+            f"no clip of episode {listed_missing} in {source} passes the other filters",
+            "--episodes",
+        )
+    said = held_words([str(e) for e in found], "of episode") or ": its clips have no episodes"
+    raise ConfigError(f"no clip of episode {listed_missing} in {source}{said}", "--episodes")
 
 
 def _same_origin(a: str, b: str) -> bool:

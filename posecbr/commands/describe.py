@@ -10,9 +10,8 @@ import tempfile
 from typing import TYPE_CHECKING, Any, TextIO
 
 from features.errors import ConfigError, DataError
-from features.fileio import check_output
 from features.text import counted, shown
-from posecbr.arguments import check_folder_pictures, path_arg, plot_targets
+from posecbr.arguments import add_plot_option, check_plot, path_arg
 from posecbr.recordings import (
     NUMPY_BELOW_FRAMES,
     add_recording_options,
@@ -71,13 +70,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="JSON/TOML file overriding fluent thresholds (see `posecbr thresholds`)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument(
-        "--plot",
-        type=path_arg,
-        metavar="PICTURE",
-        help="write a fluent timeline picture (.png, .svg, .pdf: by the name; a folder:"
-        " <clip>.png in it, as segment --plot)",
-    )
+    add_plot_option(p, "write a fluent timeline picture")
     p.set_defaults(func=run)
 
 
@@ -113,14 +106,9 @@ def _check_args(args: argparse.Namespace) -> None:
         )
     check_asf(args.asf, [args.posefile])
     if args.plot is not None:
-        folder = args.plot
-        args.plot = plot_targets(folder, [args.posefile])[0]  # a folder: <clip>.png in it
         inputs = [args.posefile, *[f for f in (args.thresholds, args.asf) if f is not None]]
-        check_output(args.plot, inputs=inputs, what="picture")
-        check_folder_pictures(folder, [args.plot], [args.posefile], "describe")
-        from features.timeline import picture_format
-
-        picture_format(args.plot)
+        # a folder: <clip>.png in it
+        args.plot = check_plot(args.plot, args.plot_folder, [args.posefile], inputs, "describe")[0]
 
 
 NOBODY = "(nobody seen: every joint missing)"

@@ -27,9 +27,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from features.fileio import check_output
 from features.text import counted, shown
-from posecbr.arguments import check_folder_pictures, path_arg, plot_targets
+from posecbr.arguments import add_plot_option, check_plot, path_arg
 from posecbr.recordings import (
     NUMPY_BELOW_FRAMES,
     add_recording_options,
@@ -49,13 +48,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("clip", type=path_arg, help="pose file, video, BVH, .amc or UI-PRMD file")
     add_recording_options(p)
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument(
-        "--plot",
-        type=path_arg,
-        metavar="PICTURE",
-        help="repetitions over the fluent timeline (.png, .svg, .pdf: by the name; a folder:"
-        " <clip>.png in it, as segment --plot)",
-    )
+    add_plot_option(p, "repetitions over the fluent timeline")
     p.set_defaults(func=run)
 
 
@@ -64,15 +57,9 @@ def run(args: argparse.Namespace) -> int:
 
     check_asf(args.asf, [args.clip])
     if args.plot is not None:
-        folder = args.plot
-        args.plot = plot_targets(folder, [args.clip])[0]  # a folder: <clip>.png in it
-        check_output(
-            args.plot, inputs=[args.clip, *([args.asf] if args.asf else [])], what="picture"
-        )
-        check_folder_pictures(folder, [args.plot], [args.clip], "reps")
-        from features.timeline import picture_format
-
-        picture_format(args.plot)
+        inputs = [args.clip, *([args.asf] if args.asf else [])]
+        # a folder: <clip>.png in it
+        args.plot = check_plot(args.plot, args.plot_folder, [args.clip], inputs, "reps")[0]
     seq = load_recording(args.clip, args.asf, args.fps)
     check_person(seq, "count")  # as segment refuses it: a long one is not counted whole
     note_low_rate(seq.source, seq.fps, seq.confidence is not None)

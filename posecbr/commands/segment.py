@@ -55,7 +55,7 @@ from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
-from posecbr.arguments import add_k_option, check_folder_pictures, path_arg, plot_targets
+from posecbr.arguments import add_k_option, add_plot_option, check_plot, path_arg, plot_targets
 from posecbr.recordings import (
     add_recording_options,
     check_asf,
@@ -131,13 +131,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--label-names", type=path_arg, metavar="FILE", help="'code name' per line, for --truth"
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument(
-        "--plot",
-        type=path_arg,
-        metavar="PICTURE",
-        help="segments over the fluent timeline (.png, .svg, .pdf: by the name; several"
-        " recordings: a folder, one .png each)",
-    )
+    add_plot_option(p, "segments over the fluent timeline; several recordings: a folder")
     p.add_argument(
         "--overlay",
         type=path_arg,
@@ -289,21 +283,15 @@ def _outputs(args: argparse.Namespace) -> None:
     if args.k < 1:
         raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     if args.plot is not None:
-        if len(args.recordings) > 1 and not args.plot.is_dir():
-            problem = "is a file" if args.plot.exists() else "does not exist"
-            raise DataError(
-                f"with several recordings --plot names a folder for their pictures; this one "
-                f"{problem}",
-                args.plot,
-            )
-        targets = plot_targets(args.plot, args.recordings)
-        for target in targets:
-            check_output(target, inputs=_inputs(args), what="picture")
-        check_folder_pictures(args.plot, targets, args.recordings, "segment")
-        if not args.plot.is_dir():  # a folder's pictures are .png
-            from features.timeline import picture_format
-
-            picture_format(args.plot)
+        if len(args.recordings) > 1:  # a folder for their pictures, made if not there
+            if args.plot.exists() and not args.plot.is_dir():
+                raise DataError(
+                    "with several recordings --plot names a folder for their pictures; this"
+                    " one is a file",
+                    args.plot,
+                )
+            args.plot_folder = True
+        check_plot(args.plot, args.plot_folder, args.recordings, _inputs(args), "segment")
     if args.overlay is not None:
         if len(args.recordings) > 1:
             raise DataError("--overlay takes one recording", args.overlay)
@@ -364,7 +352,7 @@ def run(args: argparse.Namespace) -> int:
     scores = _all_scores(args, [result for _, _, result in done], truths, clf.classes_)
     targets: list[Path | None] = [None] * len(done)
     if args.plot is not None:
-        targets = list(plot_targets(args.plot, args.recordings))
+        targets = list(plot_targets(args.plot, args.recordings, args.plot_folder))
     for (rec, video, result), path, target in zip(done, args.recordings, targets, strict=True):
         if target is not None:
             _plot(rec, result, target, path, [str(c) for c in clf.classes_])
