@@ -186,15 +186,17 @@ class PlotOption(argparse.Action):
         setattr(namespace, f"{self.dest}_folder", text.endswith(("/", os.sep)))
 
 
-def add_plot_option(p: argparse.ArgumentParser, said: str) -> None:
+def add_plot_option(p: argparse.ArgumentParser, said: str, several: bool = False) -> None:
     """``--plot PICTURE`` (:class:`PlotOption`): ``said`` what the picture shows; the help
-    adds how it is named."""
+    adds how it is named (``several``: the command takes several recordings, whose pictures
+    go in a folder)."""
+    folder = "a folder, a name ending in /" + (" or several recordings" if several else "")
     p.add_argument(
         "--plot",
         action=PlotOption,
         metavar="PICTURE",
-        help=f"{said} (.png, .svg, .pdf: by the name; a folder, or a name ending in /:"
-        " <recording>.png in it, the folder made if it is not there)",
+        help=f"{said} (.png, .svg, .pdf: by the name; {folder}: <recording>.png in it, the"
+        " folder made if it is not there)",
     )
     p.set_defaults(plot_folder=False)
 

@@ -131,7 +131,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--label-names", type=path_arg, metavar="FILE", help="'code name' per line, for --truth"
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    add_plot_option(p, "segments over the fluent timeline; several recordings: a folder")
+    add_plot_option(p, "segments over the fluent timeline", several=True)
     p.add_argument(
         "--overlay",
         type=path_arg,
