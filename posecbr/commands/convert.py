@@ -42,6 +42,7 @@ from posecbr.recordings import add_sensor_option, check_fps, sensor_for
 
 if TYPE_CHECKING:
     from features.datasets import Clip
+    from features.poses import PoseSequence
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -421,7 +422,7 @@ def _write_clips(
         seq = replace(clip.seq, source="").with_metadata(
             origin=_origin(clip.seq.source, args.source)
         )
-        _check_replaces(args.out, f"{name}.npz", str(seq.metadata["origin"]), there)
+        _check_replaces(args.out, f"{name}.npz", seq, there)
         if args.fps is not None:
             seq = replace(seq, fps=float(args.fps)).with_metadata(fps_source="--fps")
         why = str(seq.metadata.get("fps_source", "from the file"))
@@ -531,10 +532,12 @@ def _same_origin(a: str, b: str) -> bool:
     return n > 0 and pa[-n:] == pb[-n:]
 
 
-def _check_replaces(out: Path, file: str, origin: str, there: dict[str, str]) -> None:
-    """Refuse to write ``file`` into ``out`` over another file (``there``: the names in
-    ``out`` by their lower-case spelling): one whose name differs only in case, or a pose
-    file that is not this clip converted before (another recording, same name)."""
+def _check_replaces(out: Path, file: str, seq: PoseSequence, there: dict[str, str]) -> None:
+    """Refuse to write ``file`` (the clip ``seq``) into ``out`` over another file (``there``:
+    the names in ``out`` by their lower-case spelling): one whose name differs only in case,
+    or a pose file that is not this clip converted before (another recording, same name; or
+    another stretch of the same recording: the whole of it where a piece goes, or a piece cut
+    at other frames)."""
     from features.errors import PosecbrError
     from features.poses import load_pose
 
@@ -545,17 +548,36 @@ def _check_replaces(out: Path, file: str, origin: str, there: dict[str, str]) ->
         raise DataError(
             f"differs only in case from {old} already there; choose another --out", out / file
         )
+    origin = str(seq.metadata["origin"])
     try:
-        meta = load_pose(out / file).metadata  # older conversions: made_from, not origin
-        was = str(meta.get("origin") or meta.get("made_from") or "")
+        held: PoseSequence | None = load_pose(out / file)
     except PosecbrError:
-        was = ""
-    if not _same_origin(was, origin):
+        held = None
+    meta = held.metadata if held is not None else {}  # older conversions: made_from
+    was = str(meta.get("origin") or meta.get("made_from") or "")
+    if held is None or not _same_origin(was, origin):
         raise DataError(
             f"already there from another recording ({was or 'not converted from a source'}),"
             f" not from {origin}: converting would overwrite it; choose another --out",
             out / file,
         )
+    if _frames(held) != _frames(seq):
+        raise DataError(
+            f"already there from {origin}, {_frames_words(held)}, where this conversion"
+            f" writes {_frames_words(seq)}: converting would overwrite it; choose another --out",
+            out / file,
+        )
+
+
+def _frames(seq: PoseSequence) -> tuple[int, int]:
+    """The frames of its recording a clip holds: its first and one past its last."""
+    first = int(seq.metadata.get("frame_offset", 0))
+    return first, first + seq.n_frames
+
+
+def _frames_words(seq: PoseSequence) -> str:
+    first, stop = _frames(seq)
+    return f"frames {first}-{stop - 1} of it"
 
 
 def _rate_summary(rates: dict[tuple[float, str], int]) -> list[str]:
