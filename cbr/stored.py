@@ -37,7 +37,7 @@ from casebase_store.case_matrix import (
     open_case_matrix,
 )
 from features.errors import ConfigError, DataError, PosecbrError
-from features.text import shown
+from features.text import first_few, shown
 
 from .calibration import UNCALIBRATED, ConfidenceCalibration
 from .casebase import CaseBase
@@ -426,6 +426,7 @@ def _case_base(
         raise StoreError(f"case base {info.name!r} has no cases", store.where)
     check_width(info, (arrays.features if mapped is None else mapped[0]).shape[-1], store.where)
     problems = arrays.features if mapped is None else mapped[0]
+    check_finite(info.name, problems, arrays.ids, store.where)
     cb = CaseBase(
         config,
         measure,
@@ -441,6 +442,42 @@ def _case_base(
     )
     cb.reps = _representations(store, info, arrays, measure) if mapped is None else mapped[1]
     return cb
+
+
+def check_finite(name: str, problems: np.ndarray, ids: np.ndarray, where: str) -> None:
+    """Refuse case base ``name`` when a stored problem (``problems`` ``(n, ...)``, the cases
+    ``ids``) holds NaN or an infinity: a StoreError naming the case base and those cases.
+    Training never stores one: every problem made of a clip has its gaps filled
+    (:func:`cbr.problem.extract_problem`: a state never seen gets the configured fill, an
+    angle 0.5, a position 0; a QMP not testable is 0), a revision moves a problem toward
+    another such problem, and every measure refuses such a case at each query ("case rows 3
+    hold NaN or inf"). So the case base was changed outside posecbr, and each clip was
+    refused in turn in the measure's words, none naming the case base. Checked with one sum
+    per row (NaN and infinities carry through it); the rows whose sum is not finite are
+    looked at value by value (finite values whose sum overflowed are no damage)."""
+    n = len(problems)
+    if n == 0:
+        return
+    rows = problems.reshape(n, -1)
+    with np.errstate(over="ignore", invalid="ignore"):
+        sums = rows.sum(axis=1)
+    suspect = np.flatnonzero(~np.isfinite(sums))
+    if not len(suspect):
+        return
+    bad = suspect[~np.isfinite(rows[suspect]).all(axis=1)]
+    if not len(bad):
+        return
+    cases = [str(int(ids[i])) for i in bad]
+    if len(cases) == 1:
+        said, them = f"problem of case {cases[0]} holds", "it"
+    else:
+        said, them = f"problems of cases {first_few(cases)} hold", "them"
+    raise StoreError(
+        f"case base {name!r} is damaged: the {said} NaN or an infinity, which training never"
+        f" stores (changed outside posecbr?): no clip can be compared with {them}; train the"
+        " case base again, or use a copy made before",
+        where,
+    )
 
 
 def _params(

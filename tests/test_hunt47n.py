@@ -1,0 +1,106 @@
+"""Hunt 47n: three data-integrity defects of case bases left from the last session.
+
+1. A stored problem changed on disk to hold NaN or an infinity (an UPDATE of its bytes with
+   sqlite3): ``classify`` refused every clip in turn in the similarity measure's words
+   ("euclidean: case rows 3, 4 hold NaN or inf": row numbers, not case ids, no case base
+   named), and ``segment`` said the same once. Training never stores such a value (every
+   problem made of a clip has its gaps filled), so the case base is refused once where
+   ``cbr`` loads it for solving, naming it and the damaged cases.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import shutil
+import sqlite3
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.once import made_once
+
+
+@pytest.fixture(scope="module")
+def small_cases(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """tests/badinput.py's small case base (three activities of synthetic arm movements,
+    three clips each, in ``train/<activity>/clipNN.npz`` beside it), made once in the whole
+    run; tests copy it."""
+    from tests.badinput import small_case_base
+
+    return made_once(tmp_path_factory, "small-case-base", small_case_base)
+
+
+def _ids(db: Path) -> list[int]:
+    """The ids of the cases stored in ``db``, read with sqlite3."""
+    with contextlib.closing(sqlite3.connect(db)) as con:
+        return [int(i) for (i,) in con.execute("SELECT id FROM cases ORDER BY id")]
+
+
+def _set_value(db: Path, case_id: int, index: int, value: float) -> None:
+    """Value ``index`` of case ``case_id``'s stored problem set to ``value``, with sqlite3
+    and numpy's own ``.npy`` writer (as someone editing the file would)."""
+    with contextlib.closing(sqlite3.connect(db)) as con, con:
+        ((blob,),) = con.execute("SELECT features FROM cases WHERE id = ?", (case_id,))
+        problem = np.load(io.BytesIO(blob)).copy()
+        problem.flat[index] = value
+        out = io.BytesIO()
+        np.save(out, problem)
+        con.execute("UPDATE cases SET features = ? WHERE id = ?", (out.getvalue(), case_id))
+
+
+def test_a_case_base_damaged_on_disk_is_refused_once_naming_the_damaged_cases(
+    small_cases: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The second case's problem given a NaN and the last one's a minus infinity (UPDATE with
+    sqlite3): ``classify`` of six clips and ``segment`` of one are refused in one line naming
+    the case base and the two cases by their ids, nothing written (before: each clip
+    "unclassifiable (euclidean: case rows 1, 8 hold NaN or inf ...)", then "no clip could be
+    classified"; ``segment`` the measure's line). One damaged case is named alone."""
+    from tests.badinput import refused
+
+    db = Path(shutil.copy(small_cases, tmp_path / "cb.sqlite"))
+    ids = _ids(db)
+    assert len(ids) == 9
+    _set_value(db, ids[1], 0, np.nan)
+    _set_value(db, ids[-1], 100, -np.inf)
+    train = small_cases.parent / "train"
+    folders = sorted(str(p) for p in train.iterdir())
+    said = (
+        f"{db}: case base 'default' is damaged: the problems of cases {ids[1]}, {ids[-1]} hold "
+        "NaN or an infinity, which training never stores (changed outside posecbr?): no clip "
+        "can be compared with them; train the case base again, or use a copy made before"
+    )
+    line = refused(["classify", *folders[:2], "--db", str(db)], tmp_path, capsys)
+    assert line == f"posecbr classify: error: {said}"
+    clip = sorted(Path(folders[0]).glob("*.npz"))[0]
+    line = refused(["segment", str(clip), "--db", str(db)], tmp_path, capsys)
+    assert line == f"posecbr segment: error: {said}"
+    _set_value(db, ids[-1], 100, 0.25)
+    line = refused(["classify", folders[0], "--db", str(db)], tmp_path, capsys)
+    assert f"the problem of case {ids[1]} holds NaN or an infinity" in line
+    assert line.endswith(
+        "no clip can be compared with it; train the case base again, or use a copy made before"
+    )
+
+
+def test_the_check_refuses_nan_and_infinities_not_large_finite_values() -> None:
+    """``check_finite`` on hand-made problems: values whose row sum overflows (1e308 twice)
+    are finite, no damage; a NaN, an infinity, or both infinities (their sum NaN) are named
+    by case id, in vectors and in sequences ``(n, frames, columns)``."""
+    from casebase_store import StoreError
+    from cbr.stored import check_finite
+
+    ids = np.array([10, 11, 12, 13, 14])
+    fine = np.array([[1e308, 1e308, 0.0], [0.0, 1.0, 2.0], [-1e308, -1e308, 5.0]])
+    check_finite("x", fine, ids[:3], "w")
+    bad = np.array([[1e308, 1e308, 0.0], [np.nan, 0.0, 0.0], [0.0, 1.0, 2.0],
+                    [np.inf, -np.inf, 0.0], [0.0, 0.0, -np.inf]])  # fmt: skip
+    with pytest.raises(StoreError, match=r"the problems of cases 11, 13, 14 hold NaN"):
+        check_finite("x", bad, ids, "w")
+    sequences = np.zeros((2, 3, 2))
+    check_finite("x", sequences, ids[:2], "w")
+    sequences[1, 2, 0] = np.inf
+    with pytest.raises(StoreError, match=r"'x' is damaged: the problem of case 11 holds"):
+        check_finite("x", sequences, ids[:2], "w")
