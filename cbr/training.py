@@ -842,6 +842,7 @@ def _check_new(
                     where,
                 )
     _check_new_content(tx, info, clips, where)
+    _check_copies_within(clips, where)
 
 
 #: features within this of a stored case's (relative and absolute) are the same
@@ -888,6 +889,47 @@ def _check_new_content(
         if same.any():
             first = int(np.argmax(same))
             raise _repeated(sourced[ks[first]], chunk[rows[first]], info.name, where)
+
+
+def _check_copies_within(clips: Sequence[DescribedClip], where: str) -> None:
+    """Refuse an append two clips of which have the same frames and features (within
+    :data:`SAME_CONTENT_TOLERANCE`), whatever their files are called: two copies of one
+    file given together. Appended one after the other, the second is refused as a case
+    already held (:func:`_check_new_content`); given together both were stored, and voted
+    twice. Clips without a source (the Python API's arrays) are not compared.
+
+    Candidates are the clips of the same frames whose projections on one random direction
+    ``w >= 0`` lie within what the tolerance allows (``|a_i - b_i| <= tol (1 + |b_i|)`` in
+    every feature moves the projection by at most ``tol (sum w + |b| . w)``, at most the
+    largest of these), checked feature by feature: one pass over the clips sorted by frames
+    and projection."""
+    sourced = [c for c in clips if c.source]
+    if len(sourced) < 2:
+        return
+    values = np.stack([c.values for c in sourced]).reshape(len(sourced), -1)
+    frames = np.array([c.frames for c in sourced], dtype=np.int64).reshape(-1, 2)
+    w = np.abs(np.random.default_rng(0).normal(size=values.shape[1]))
+    plain = np.where(np.isnan(values), 0.0, values)  # missing matches missing only (_close)
+    proj = plain @ w
+    reach = SAME_CONTENT_TOLERANCE * (w.sum() + float((np.abs(plain) @ w).max())) * 1.01
+    order = np.lexsort((proj, frames[:, 1], frames[:, 0]))
+    for t, i in enumerate(order[:-1]):
+        for j in order[t + 1 :]:
+            if (frames[j] != frames[i]).any() or proj[j] - proj[i] > reach:
+                break
+            if _close(values[j], values[i]).all():
+                first, second = sorted((int(i), int(j)))
+                raise _given_twice(sourced[first], sourced[second], where)
+
+
+def _given_twice(first: DescribedClip, second: DescribedClip, where: str) -> StoreError:
+    """The refusal of an append that gives ``second``, the same clip as ``first``."""
+    return StoreError(
+        f"{_shown_frames(_provenance(second))} has the same frames and features as "
+        f"{_shown_frames(_provenance(first))}, given in this append too (a copy of its file?):"
+        " its case would vote twice; nothing added",
+        where,
+    )
 
 
 def _repeated(clip: DescribedClip, case: SourcedCase, name: str, where: str) -> StoreError:

@@ -6,6 +6,9 @@
    named), and ``segment`` said the same once. Training never stores such a value (every
    problem made of a clip has its gaps filled), so the case base is refused once where
    ``cbr`` loads it for solving, naming it and the damaged cases.
+2. Two copies of one clip under two file names given to ONE ``train --append`` were both
+   stored (given in two appends, the second is refused as a case already held): refused,
+   naming both files, nothing added.
 """
 
 from __future__ import annotations
@@ -104,3 +107,44 @@ def test_the_check_refuses_nan_and_infinities_not_large_finite_values() -> None:
     sequences[1, 2, 0] = np.inf
     with pytest.raises(StoreError, match=r"'x' is damaged: the problem of case 11 holds"):
         check_finite("x", sequences, ids[:2], "w")
+
+
+def test_two_copies_of_one_clip_in_one_append_are_refused_naming_both(
+    small_cases: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A new 2-s squat (60 frames) written as ``add/Squat/a.npz`` and, the same poses, as
+    ``add/Squat/b.npz``: one ``--append`` of both is refused naming both files, nothing
+    added (before: both stored, 9 cases to 11, the clip voting twice); b moved to another
+    activity's folder, the same; with b's left shoulder moved 5 cm in every frame, it is
+    another clip: both added, 11 cases."""
+    import dataclasses
+
+    from features.poses import load_pose, save_pose
+    from posecbr.cli import main
+    from tests.badinput import refused
+    from tests.moves import clip
+
+    db = Path(shutil.copy(small_cases, tmp_path / "cb.sqlite"))
+    data = tmp_path / "add"
+    a, b = data / "Squat" / "a.npz", data / "Squat" / "b.npz"
+    save_pose(clip("squat", 2.0, 30.0), a)
+    shutil.copyfile(a, b)
+    argv = ["train", str(data), "--db", str(db), "--append"]
+    line = refused(argv, tmp_path, capsys)
+    assert line == (
+        f"posecbr train: error: {db}: {b} frames 0-59 has the same frames and features as "
+        f"{a} frames 0-59, given in this append too (a copy of its file?): its case would "
+        "vote twice; nothing added"
+    )
+    other = data / "Lunge" / "b.npz"
+    other.parent.mkdir()
+    b.rename(other)
+    line = refused(argv, tmp_path, capsys)
+    # the class folders in their order: Lunge's clip first, Squat's the copy of it
+    assert f"{db}: {a} frames 0-59 has the same frames and features as {other} frames" in line
+    seq = load_pose(other)
+    moved = seq.positions.copy()
+    moved[:, 11, 0] += 0.05
+    save_pose(dataclasses.replace(seq, positions=moved), other)
+    assert main(argv) == 0
+    assert len(_ids(db)) == 11
