@@ -9,6 +9,10 @@
 2. Two copies of one clip under two file names given to ONE ``train --append`` were both
    stored (given in two appends, the second is refused as a case already held): refused,
    naming both files, nothing added.
+3. A PostgreSQL connection lost right after an append committed (as the cases are counted)
+   said "the connection to the database server was lost" alone: the user ran the append
+   again and was refused as "already held". The line now says the cases were added before
+   it; so does a new case base's when the error comes after it was stored.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ import io
 import shutil
 import sqlite3
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -148,3 +153,121 @@ def test_two_copies_of_one_clip_in_one_append_are_refused_naming_both(
     save_pose(dataclasses.replace(seq, positions=moved), other)
     assert main(argv) == 0
     assert len(_ids(db)) == 11
+
+
+def _connection_lost(store: Any, name: str, *args: Any, **kwargs: Any) -> bool:
+    """In place of ``write_matrices``, the first thing a train or append does after its
+    commit: the driver's error of a connection the server ended, as SQLAlchemy hands it to
+    the store."""
+    import psycopg
+    from sqlalchemy.exc import OperationalError
+
+    with store._errors():
+        raise OperationalError(
+            "SELECT count(cases.id) AS count_1 FROM cases",
+            {},
+            psycopg.OperationalError(
+                "consuming input failed: server closed the connection unexpectedly"
+            ),
+        )
+
+
+@pytest.mark.parametrize("append", [True, False], ids=["append", "build"])
+def test_an_error_after_the_commit_says_the_cases_are_stored(
+    small_cases: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    append: bool,
+) -> None:
+    """The connection lost after the commit (the driver's error where the command writes the
+    matrices and counts the cases): the line says the cases were stored before it and what
+    running again does; they are in the case base (before: the lost connection alone)."""
+    import cbr.training
+    from posecbr.cli import main
+
+    db = Path(shutil.copy(small_cases, tmp_path / "cb.sqlite"))
+    data = small_cases.parent / "train"
+    monkeypatch.setattr(cbr.training, "write_matrices", _connection_lost)
+    if append:
+        from features.poses import save_pose
+        from tests.moves import clip
+
+        save_pose(clip("squat", 2.0, 30.0), tmp_path / "add" / "Squat" / "s.npz")
+        argv = ["train", str(tmp_path / "add"), "--db", str(db), "--append"]
+        done = (
+            "the 1 case was added to 'default' before it: run again, the append is refused "
+            "as held already (casebase info shows them)"
+        )
+    else:
+        argv = ["train", str(data), "--db", str(db), "--name", "other", "--mirror", "off",
+                "--feature-weights", "none", "--phases", "0"]  # fmt: skip
+        done = "case base 'other' was stored before it (9 cases): casebase info shows it"
+    capsys.readouterr()
+    assert main(argv) == 1
+    assert capsys.readouterr().err == (
+        f"posecbr train: error: {db}: the connection to the database server was lost "
+        f"(consuming input failed: server closed the connection unexpectedly); {done}\n"
+    )
+    with contextlib.closing(sqlite3.connect(db)) as con:
+        counts = dict(
+            con.execute(
+                "SELECT b.name, COUNT(*) FROM cases c JOIN case_bases b"
+                " ON c.case_base_id = b.id GROUP BY b.name"
+            ).fetchall()
+        )
+    assert counts == ({"default": 10} if append else {"default": 9, "other": 9})
+
+
+def test_a_postgres_connection_ended_after_an_append_commits_says_the_cases_are_stored(
+    small_cases: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:  # fmt: skip
+    """A real disconnect: on a PostgreSQL copy of the case base, every other session on the
+    server is ended (``pg_terminate_backend``) right after the append committed, before the
+    cases are counted: the line says the connection was lost and that the case was added
+    (before: the first part alone, and run again the append was refused as held already);
+    the case is there, once."""
+    from sqlalchemy import create_engine, text
+
+    import cbr.training
+    from features.poses import save_pose
+    from features.text import shown
+    from posecbr.cli import main
+    from tests.moves import clip
+    from tests.postgres import postgres_copy_of
+
+    url = postgres_copy_of(small_cases)
+    real = cbr.training.write_matrices
+
+    def ended(store: Any, name: str, *args: Any, **kwargs: Any) -> bool:
+        engine = create_engine(url)
+        try:
+            with engine.connect() as con:
+                con.execute(text(
+                    "SELECT pg_terminate_backend(pid) FROM pg_stat_activity"
+                    " WHERE pid <> pg_backend_pid() AND datname = current_database()"
+                ))  # fmt: skip
+        finally:
+            engine.dispose()
+        return bool(real(store, name, *args, **kwargs))
+
+    monkeypatch.setattr(cbr.training, "write_matrices", ended)
+    save_pose(clip("squat", 2.0, 30.0), tmp_path / "add" / "Squat" / "s.npz")
+    capsys.readouterr()
+    assert main(["train", str(tmp_path / "add"), "--db", url, "--append"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(
+        f"posecbr train: error: {shown(url)}: the connection to the database server was lost ("
+    )
+    assert err.endswith(
+        "; the 1 case was added to 'default' before it: run again, the append is refused as"
+        " held already (casebase info shows them)\n"
+    )
+    engine = create_engine(url)
+    try:
+        with engine.connect() as con:
+            sources = con.execute(text("SELECT source FROM cases ORDER BY id")).scalars().all()
+    finally:
+        engine.dispose()
+    assert len(sources) == 10 and sources[-1] == str(tmp_path / "add" / "Squat" / "s.npz")
