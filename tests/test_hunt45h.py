@@ -126,8 +126,8 @@ def test_append_says_a_new_label_is_a_file_name_only_when_it_is_one(
     labelled with its name)" whatever they were: also for a labels CSV's own activity, no
     file's name. The hint is now given for the labels that are their clip's file name."""
     db = small_case_base(tmp_path)
-    for name in ("13_31", "take"):
-        save_pose(standing_clip(20), tmp_path / f"{name}.npz")  # 0.67 s at 30 fps
+    for name, frames in (("13_31", 20), ("take", 21)):  # not one clip twice: refused
+        save_pose(standing_clip(frames), tmp_path / f"{name}.npz")  # 0.7 s at 30 fps
     csv = tmp_path / "more.csv"
     csv.write_text("path,label\n13_31.npz,13_31\ntake.npz,plank\n")
     capsys.readouterr()  # train's output
