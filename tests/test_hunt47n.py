@@ -12,7 +12,8 @@
 3. A PostgreSQL connection lost right after an append committed (as the cases are counted)
    said "the connection to the database server was lost" alone: the user ran the append
    again and was refused as "already held". The line now says the cases were added before
-   it; so does a new case base's when the error comes after it was stored.
+   it; so do a new case base's, a trim's and a copy's when the error comes after their
+   commit.
 """
 
 from __future__ import annotations
@@ -217,6 +218,44 @@ def test_an_error_after_the_commit_says_the_cases_are_stored(
             ).fetchall()
         )
     assert counts == ({"default": 10} if append else {"default": 9, "other": 9})
+
+
+def test_an_error_after_a_trim_or_a_copy_committed_says_it_is_stored(
+    small_cases: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The same error where ``casebase trim`` (keeping 0.6 of each activity's three cases:
+    two, 9 -> 6) and ``casebase copy`` (of a copy large enough for matrices: the least
+    lowered to 5 cases) write the matrices after their commit: the line says the trim (the
+    copy) is stored, and it is (before: the lost connection alone)."""
+    import casebase_store.case_matrix
+    import cbr.stored
+    from posecbr.cli import main
+
+    lost = (
+        "the connection to the database server was lost (consuming input failed: server "
+        "closed the connection unexpectedly)"
+    )
+    db = Path(shutil.copy(small_cases, tmp_path / "cb.sqlite"))
+    monkeypatch.setattr(cbr.stored, "write_matrices", _connection_lost)
+    capsys.readouterr()
+    assert main(["casebase", "trim", "--db", str(db), "--keep", "0.6"]) == 1
+    assert capsys.readouterr().err == (
+        f"posecbr casebase trim: error: {db}: {lost}; the trim was stored before it (9 -> 6 "
+        "cases: casebase info shows it); run again, it would trim the case base again\n"
+    )
+    with contextlib.closing(sqlite3.connect(db)) as con:
+        assert con.execute("SELECT SUM(active) FROM cases").fetchone() == (6,)
+    monkeypatch.setattr(casebase_store.case_matrix, "MAPPED_MIN_CASES", 5)
+    to = tmp_path / "to.sqlite"
+    assert main(["casebase", "copy", "--db", str(db), "--to", str(to)]) == 1
+    assert capsys.readouterr().err == (
+        f"posecbr casebase copy: error: {to}: {lost}; the copy 'default' was stored before it"
+        " (casebase info --db shows it)\n"
+    )
+    assert _ids(to) == _ids(db)
 
 
 def test_a_postgres_connection_ended_after_an_append_commits_says_the_cases_are_stored(

@@ -12,7 +12,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import atomic_path, check_lookup, check_output
 from features.text import counted, percent, shown
 from posecbr.arguments import path_arg
@@ -265,14 +265,17 @@ def _copy_matrices(to: str, name: str, in_use: int) -> None:
 
 @contextmanager
 def _copied(name: str) -> Iterator[None]:
-    """Work after the copy committed: Ctrl-C or SIGTERM there says the copy is stored (run
-    again, it would be refused: the name is taken)."""
+    """Work after the copy committed: Ctrl-C or SIGTERM there, or an error (the store lost
+    or locked as the matrices are written), says the copy is stored (run again, it would be
+    refused: the name is taken)."""
+    done = f"the copy {name!r} was stored before it (casebase info --db shows it)"
     try:
         yield
     except KeyboardInterrupt:
-        raise KeyboardInterrupt(
-            f"the copy {name!r} was stored before it (casebase info --db shows it)"
-        ) from None
+        raise KeyboardInterrupt(done) from None
+    except PosecbrError as exc:
+        exc.add(done)
+        raise
 
 
 def _info(store: CaseStore, args: argparse.Namespace) -> int:
@@ -740,17 +743,23 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
 @contextmanager
 def _stored_before(before: int, after: int, stored: bool = True) -> Iterator[None]:
     """Work after the trim committed (a large case base's matrices, the report): Ctrl-C or
-    SIGTERM there says the trim is stored. Said "interrupted" alone, it was taken for a trim
-    not made, and run again trimmed the case base a second time."""
+    SIGTERM there, or an error (the store lost or locked as the matrices are written), says
+    the trim is stored. Said "interrupted" alone, it was taken for a trim not made, and run
+    again trimmed the case base a second time."""
+    done = (
+        f"the trim was stored before it ({before} -> {after} cases: casebase info shows it);"
+        " run again, it would trim the case base again"
+    )
     try:
         yield
     except KeyboardInterrupt:
         if not stored:
             raise
-        raise KeyboardInterrupt(
-            f"the trim was stored before it ({before} -> {after} cases: casebase info shows "
-            "it); run again, it would trim the case base again"
-        ) from None
+        raise KeyboardInterrupt(done) from None
+    except PosecbrError as exc:
+        if stored:
+            exc.add(done)
+        raise
 
 
 def _trim_said(
