@@ -913,8 +913,8 @@ def _check_copies_within(clips: Sequence[DescribedClip], where: str) -> None:
     Candidates are the clips of the same frames whose projections on one random direction
     ``w >= 0`` lie within what the tolerance allows (``|a_i - b_i| <= tol (1 + |b_i|)`` in
     every feature moves the projection by at most ``tol (sum w + |b| . w)``, at most the
-    largest of these), checked feature by feature: one pass over the clips sorted by frames
-    and projection."""
+    largest of these), checked feature by feature, from the clips whose next one in the order
+    of frames and projection is a candidate."""
     sourced = [c for c in clips if c.source]
     if len(sourced) < 2:
         return
@@ -925,7 +925,11 @@ def _check_copies_within(clips: Sequence[DescribedClip], where: str) -> None:
     proj = plain @ w
     reach = SAME_CONTENT_TOLERANCE * (w.sum() + float((np.abs(plain) @ w).max())) * 1.01
     order = np.lexsort((proj, frames[:, 1], frames[:, 0]))
-    for t, i in enumerate(order[:-1]):
+    # a clip with a copy after it in this order has its next clip within reach too
+    near = (frames[order[1:]] == frames[order[:-1]]).all(axis=1)
+    near &= proj[order[1:]] - proj[order[:-1]] <= reach
+    for t in np.flatnonzero(near):
+        i = order[t]
         for j in order[t + 1 :]:
             if (frames[j] != frames[i]).any() or proj[j] - proj[i] > reach:
                 break
