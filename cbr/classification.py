@@ -324,6 +324,9 @@ def classify_with_feedback(
     try:
         for clip in progress(clips, desc="classifying", total=len(clips), unit="clip"):
             out.append(_feedback(store, stored, clip, truth, target, label, settings, learnt))
+        # a large case base: its matrices follow the change (an error here, after every
+        # clip's feedback committed, says it is stored, as one between the clips does)
+        write_matrices(store, stored.name)
     except KeyboardInterrupt:
         raise FeedbackInterrupted(learnt, len(clips)) from None
     except CaseBaseGone:  # what was stored went with the case base: nothing of it is left
@@ -333,7 +336,6 @@ def classify_with_feedback(
         if learnt:
             exc.add(f"before it, {feedback_stored(learnt, len(clips))}")
         raise
-    write_matrices(store, stored.name)  # a large case base: its matrices follow the change
     return out
 
 

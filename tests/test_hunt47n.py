@@ -258,6 +258,34 @@ def test_an_error_after_a_trim_or_a_copy_committed_says_it_is_stored(
     assert _ids(to) == _ids(db)
 
 
+def test_an_error_after_the_last_feedback_committed_says_it_is_stored(
+    small_cases: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The same error where ``classify --feedback`` writes the matrices after the last clip's
+    feedback committed: the line says every clip's feedback is stored, as it says between
+    two clips, and the history holds its entries (before: the lost connection alone)."""
+    import cbr.classification
+    from posecbr.cli import main
+
+    db = Path(shutil.copy(small_cases, tmp_path / "cb.sqlite"))
+    clip = sorted((small_cases.parent / "train").rglob("*.npz"))[0]
+    monkeypatch.setattr(cbr.classification, "write_matrices", _connection_lost)
+    capsys.readouterr()
+    argv = ["classify", str(clip), "--db", str(db), "--feedback", clip.parent.name]
+    assert main(argv) == 1
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        f"posecbr classify: error: {db}: the connection to the database server was lost "
+        "(consuming input failed: server closed the connection unexpectedly); before it, the "
+        "feedback of every clip (1) is stored in the case base"
+    )
+    with contextlib.closing(sqlite3.connect(db)) as con:
+        actions = [a for (a,) in con.execute("SELECT action FROM maintenance_log ORDER BY id")]
+    assert actions[0] == "build" and actions[1:] and set(actions[1:]) <= {"retain", "revise"}
+
+
 def test_a_postgres_connection_ended_after_an_append_commits_says_the_cases_are_stored(
     small_cases: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
     monkeypatch: pytest.MonkeyPatch,
