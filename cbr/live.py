@@ -781,8 +781,8 @@ class LiveSegmenter:
             if run is not None:
                 seen = self.nobody
             if self.seen is None:
-                self.seen = seen
-            elif self.seen == self.nobody and seen == self.unknown:
+                self.seen = self._first_seen(hop.centre, seen)
+            if self.seen == self.nobody and seen == self.unknown:
                 finished += self._after_nobody(hop)
             elif seen != self.seen:
                 if run is not None:  # nobody from the frame the person was lost
@@ -801,6 +801,21 @@ class LiveSegmenter:
             self.last_centre = hop.centre
         del self.pending[: len(unknown)]
         return finished
+
+    def _first_seen(self, centre: float, seen: int) -> int:
+        """The label seen of the stream's first segment, its first hop (at ``centre``) seen
+        as ``seen``: nobody in view when a stretch of :data:`MIN_SEGMENT_S` or more with
+        nobody in view opens the stream and ends by that hop (which no hop then lies in: the
+        first hop's evidence is of the middle of the first window, a second in, so a lead-in
+        of exactly a second), the hop then following it as one after such a stretch does, as
+        offline (:func:`cbr.segmentation.nobody_blocks`: every block from the first). Before,
+        the lead-in joined the first segment, unknown by its half-empty windows, where
+        ``segment`` gave it as nobody in view."""
+        lead = next((run for run in self.blind if run[1] <= centre), None)
+        if lead is None:
+            return seen
+        self.blind_hop = float(lead[0])  # where the stretch lies (:meth:`_blind_end`)
+        return self.nobody
 
     def _change(self, boundary: int, seen: int) -> list[LiveSegment]:
         """The label seen changes to ``seen`` at frame ``boundary``: the segment in progress
