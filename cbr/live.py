@@ -1490,10 +1490,10 @@ class LiveSegmenter:
         """The segments not yet finished, at the end of the stream (the last one ends there);
         a stream that ended before its first window (:data:`DEFAULT_WINDOW_S`) but lasted
         the shortest window :func:`cbr.segmentation.segment` takes (:data:`MIN_WINDOW_S`) is
-        segmented as that segments such a recording (so such a stream that shows nobody is
-        refused as ``segment`` refuses it: DataError, "no person in view in enough frames";
-        a longer one ends with a segment with nobody in view). Called again, it returns none:
-        the stream's segments have all been given."""
+        segmented as that segments such a recording (DataError where it refuses one), but
+        one that shows nobody in any frame is a segment with nobody in view, as a longer one
+        is (:meth:`_short_stream`). Called again, it returns none: the stream's segments have
+        all been given."""
         if self.ended:
             return []
         self.ended = True
@@ -1536,8 +1536,15 @@ class LiveSegmenter:
         return self._change(first, self.nobody)
 
     def _short_stream(self) -> list[LiveSegment]:
+        """The segments of a stream that ended before its first window (:meth:`finish`): as
+        :func:`cbr.segmentation.segment` segments such a recording, but one in which no frame
+        shows the person is a segment with nobody in view, as such a stretch of a longer
+        stream is (before, refused as ``segment`` refuses a recording without a person: "no
+        person in view in enough frames to follow a movement (joint angles missing)")."""
         if self.offset or not self.n or self.n < MIN_WINDOW_S * self.fps:
             return []
+        if torso_share(self._sequence(0, self.n)) == 0.0:
+            return [self._segment(0, self.n, self.nobody, False)]
         jumps = {"frames": list(self.jumps)}  # counted apart, as segment reads a pose file's
         found = segment(self.clf, self._sequence(0, self.n).with_metadata(person_jumps=jumps),
                         self.judge)  # fmt: skip

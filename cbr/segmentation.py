@@ -1607,12 +1607,13 @@ def _activity_list(names: Sequence[str]) -> str:
 
 def check_segmentable(recording: PoseSequence) -> None:
     """Refuse, with the DataError :func:`segment` would raise, a recording it cannot segment
-    (no person in enough frames to follow a movement, shorter than the shortest window),
-    from its movement signals alone: cheap, and cached for the segmenting when the recording
-    is not cut in pieces. A command given several recordings refuses a bad one so before it
-    segments any."""
+    (shorter than the shortest window, no frame showing the person, no person in enough
+    frames to follow a movement), from its torso and movement signals alone: cheap, and
+    cached for the segmenting when the recording is not cut in pieces. A command given
+    several recordings refuses a bad one so before it segments any."""
     rec = recording.to_canonical()
     _check_duration(rec.n_frames, rec.fps, rec.source)
+    check_person(rec, "segment")  # every stretch would be nobody in view
     chunk = long_clip.chunk_for(rec, None)
     if chunk:
         long_clip.movement_signals(rec, chunk)
@@ -1620,7 +1621,6 @@ def check_segmentable(recording: PoseSequence) -> None:
         movement_signals_of(rec)
     # the windows are not cut here: finding the periods in them took 3 s of a long recording's
     # run, done again when it is segmented
-    check_person(rec, "segment")  # every stretch would be nobody in view
 
 
 def check_k(clf: Any, k: Any) -> None:
@@ -1647,10 +1647,10 @@ def solve_recording(
     _check_call(clf, recording, chunk_frames)
     check_k(clf, k)
     rec = recording.to_canonical()
+    check_person(rec, "segment")  # every stretch would be nobody in view
     chunk = long_clip.chunk_for(rec, chunk_frames)
     sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals_of(rec)
     windows = windows_of(sig, rec.n_frames, rec.fps, rec.source)
-    check_person(rec, "segment")  # every stretch would be nobody in view
     config = clf.feature_config_
     if not chunk:
         warm(rec, config.level, mirror=config.side == "canonical")

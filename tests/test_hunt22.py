@@ -145,7 +145,7 @@ def _spoiled(kind: str, path: Path) -> tuple[Path, str]:
     if kind == "no joints":
         seq = standing_clip(60)
         nan = replace(seq, positions=np.full_like(seq.positions, np.nan), confidence=None)
-        return save_pose(nan, path), "no person in view in enough frames"
+        return save_pose(nan, path), "shows no person (no frame with a torso)"
     positions = standing_clip().positions[:, :, :2]
     return pose_file(path, positions=positions), "positions must have shape (frames, joints, 3)"
 

@@ -438,7 +438,7 @@ def test_an_flv_is_a_video_to_every_command_that_takes_one(
     capsys.readouterr()
     main(["segment", str(clip), "--db", str(case_base)])
     err = capsys.readouterr().err
-    assert "unknown clip format" not in err and "no person in view" in err, err
+    assert "unknown clip format" not in err and "shows no person" in err, err
 
 
 # --- FLV and MPEG-TS files of sound alone ----------------------------------------------------

@@ -262,7 +262,7 @@ def test_watch_of_a_video_nobody_is_in_refuses_it_as_segment_does(
     frames = [np.full((120, 160, 3), 90, np.uint8) for _ in range(40)]
     video = _write(tmp_path / "empty.mp4", [100 * k for k in range(40)], frames, rate=10)
     line = refused(["segment", str(video), "--db", str(case_base)], tmp_path, capsys)
-    assert line.startswith(f"posecbr segment: error: {video}: no person in view")
+    assert line.startswith(f"posecbr segment: error: {video}: shows no person")
     import json
 
     from posecbr.cli import main
