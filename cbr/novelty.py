@@ -44,13 +44,14 @@ from __future__ import annotations
 import base64
 import dataclasses
 import io
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
 
 import numpy as np
+
+from features.nanstats import over_seen
 
 from .casebase import CaseBase
 from .problem import FeatureConfig, candidate_config, column_index, extract_problem
@@ -146,9 +147,8 @@ def summary(values: np.ndarray) -> np.ndarray:
     v = np.asarray(values, dtype=np.float64)
     if v.ndim == 1:
         return v
-    with warnings.catch_warnings():  # a column missing throughout: NaN, as it should
-        warnings.simplefilter("ignore", RuntimeWarning)
-        return np.concatenate([np.nanmean(v, 0), np.nanmin(v, 0), np.nanmax(v, 0), np.nanstd(v, 0)])
+    reductions = (np.nanmean, np.nanmin, np.nanmax, np.nanstd)
+    return np.concatenate([over_seen(f, v, 0) for f in reductions])  # a column missing: NaN
 
 
 def summaries(problems: np.ndarray) -> np.ndarray:
@@ -299,10 +299,9 @@ def ranges_and_held(
     k = int(fold.max()) + 1 if len(fold) else 0
     if k < 2 or len(np.unique(case_fold)) < 2:  # an edited case base may keep one group's
         return None
-    with warnings.catch_warnings():  # a feature no case of the other folds has: NaN, no range
-        warnings.simplefilter("ignore", RuntimeWarning)
-        lo = np.stack([np.nanmin(cases[case_fold != f], axis=0) for f in range(k)])
-        hi = np.stack([np.nanmax(cases[case_fold != f], axis=0) for f in range(k)])
+    # a feature no case of the other folds has: NaN, no range
+    lo = np.stack([over_seen(np.nanmin, cases[case_fold != f], 0) for f in range(k)])
+    hi = np.stack([over_seen(np.nanmax, cases[case_fold != f], 0) for f in range(k)])
     held = outside_share(queries, lo[query_fold], hi[query_fold])
     floor = 1.0 / max(cases.shape[-1], 1)  # one feature's share: no scale of 0
     text = np.asarray([str(v) for v in labels], dtype=object)
@@ -472,10 +471,9 @@ def fit_neighbours(
     if folds is None:
         return None
     case_fold, query_fold = folds
-    with warnings.catch_warnings():  # a feature no case has: NaN centre, no part in distances
-        warnings.simplefilter("ignore", RuntimeWarning)
-        centre = np.nan_to_num(np.nanmean(cases, axis=0))
-        spread = np.nanstd(cases, axis=0)
+    # a feature no case has: NaN centre, no part in distances
+    centre = np.nan_to_num(over_seen(np.nanmean, cases, 0))
+    spread = over_seen(np.nanstd, cases, 0)
     scale = np.where(np.isfinite(spread) & (spread > 1e-9), spread, 1.0)
     labels = np.array([str(v) for v in case_labels], dtype=object)
     found = SummaryNeighbours(centre, scale, np.zeros((0, len(centre))), ())
@@ -562,11 +560,10 @@ def activity_scores(s: np.ndarray, centres: np.ndarray, units: np.ndarray) -> np
 def spread_of(cases: np.ndarray, labels: np.ndarray) -> ActivitySpread:
     """The :class:`ActivitySpread` of ``cases`` ``(m, F)`` of ``labels`` ``(m,)``."""
     names = tuple(sorted({str(v) for v in labels}))
-    with warnings.catch_warnings():  # a feature no case (of an activity) has: NaN
-        warnings.simplefilter("ignore", RuntimeWarning)
-        overall = np.nanstd(cases, axis=0)
-        centres = np.stack([np.nanmean(cases[labels == n], axis=0) for n in names])
-        spread = np.stack([np.nanstd(cases[labels == n], axis=0) for n in names])
+    # a feature no case (of an activity) has: NaN
+    overall = over_seen(np.nanstd, cases, 0)
+    centres = np.stack([over_seen(np.nanmean, cases[labels == n], 0) for n in names])
+    spread = np.stack([over_seen(np.nanstd, cases[labels == n], 0) for n in names])
     units = np.fmax(spread, SPREAD_FLOOR * overall)
     units = np.where(units > 1e-9, units, np.nan)  # constant among all cases: no part
     return ActivitySpread(centres.reshape(len(names), cases.shape[-1]),

@@ -50,7 +50,6 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
@@ -62,6 +61,7 @@ from features.derived import forget, movement_signals_of, stretch
 from features.errors import ConfigError, DataError, InputError
 from features.fluents import DEFAULT_TABLE, history_frames
 from features.jitter import MAD_TO_SD
+from features.nanstats import over_seen
 from features.poses import PoseSequence, expect_sequence, gap_rows
 from features.progress import progress
 from features.repetitions import (
@@ -388,9 +388,8 @@ def movement_of(values: np.ndarray, columns: np.ndarray) -> np.ndarray:
     """How much a clip moves: the mean of its joint angles' standard deviations over it (the
     problem ``values`` ``(F,)`` or ``(n, F)`` at ``columns``, :func:`movement_columns`), in
     units of pi radians; ``()`` or ``(n,)`` (NaN where none is defined)."""
-    with np.errstate(invalid="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # none defined: NaN
-        return np.asarray(np.nanmean(np.asarray(values, dtype=np.float64)[..., columns], axis=-1))
+    # none defined: NaN
+    return over_seen(np.nanmean, np.asarray(values, dtype=np.float64)[..., columns], -1)
 
 
 def least_movement(clf: Any) -> tuple[np.ndarray, float]:

@@ -9,7 +9,6 @@ positions are ``(frames, joints, 3)`` metres, y up, on the canonical skeleton.
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from collections.abc import Callable
 from functools import cache
 
@@ -27,6 +26,7 @@ from .geometry import (
     project,
     unit,
 )
+from .nanstats import over_seen
 from .poses import PoseSequence
 from .skeleton import BLAZEPOSE_33, JOINT_INDEX
 
@@ -272,9 +272,7 @@ def left_moves_more(angles: np.ndarray, names: tuple[str, ...]) -> bool:
     """:func:`moves_left_more` from the angle signals ``(frames, len(names))``."""
     left = [i for i, n in enumerate(names) if n.startswith("left_")]
     right = [names.index("right_" + names[i][len("left_") :]) for i in left]
-    with np.errstate(invalid="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns
-        spread = np.nan_to_num(np.nanstd(angles, axis=0), nan=0.0)
+    spread = np.nan_to_num(over_seen(np.nanstd, angles, 0), nan=0.0)  # all-NaN columns: 0
     return bool(spread[left].sum() > spread[right].sum())
 
 

@@ -101,7 +101,6 @@ steps, too short alone, into whole left-and-right cycles, :func:`case_spans`),
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -115,6 +114,7 @@ from .errors import DataError
 from .geometry import WORLD_UP, angle_between, body_frame, joint_angle, unit
 from .jitter import MAD_TO_SD
 from .leg_swaps import SWAP_JOINTS, swapped_legs
+from .nanstats import over_seen
 from .poses import PoseSequence, expect_sequence
 from .signals import ANGLE_SIGNALS
 from .skeleton import JOINT_INDEX
@@ -676,10 +676,11 @@ def pelvis_height(p: np.ndarray) -> np.ndarray:
     mid_hip = 0.5 * (p[:, JOINT_INDEX["left_hip"]] + p[:, JOINT_INDEX["right_hip"]])
     neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])
     ankles = p[:, [JOINT_INDEX["left_ankle"], JOINT_INDEX["right_ankle"]]] @ WORLD_UP
-    with np.errstate(invalid="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: no person, NaN out
-        floor = np.nanpercentile(np.nanmin(ankles, axis=1), 5)
-        trunk = np.nanmedian(np.linalg.norm(neck - mid_hip, axis=1))
+    # all-NaN: no person, NaN out
+    lower = over_seen(np.nanmin, ankles, 1)
+    floor = over_seen(lambda v, axis: np.nanpercentile(v, 5, axis=axis), lower)
+    trunk = over_seen(np.nanmedian, np.linalg.norm(neck - mid_hip, axis=1))
+    with np.errstate(invalid="ignore", divide="ignore"):
         return np.asarray((mid_hip @ WORLD_UP - floor) / trunk)
 
 

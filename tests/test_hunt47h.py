@@ -1,0 +1,206 @@
+"""posecbr inside someone else's program (hunt 47h).
+
+A fitted model answering from two threads at once must leave the calling program's warning
+filters alone. The features and the novelty calibration silenced numpy's "Mean of empty
+slice" over a column missing throughout with ``warnings.catch_warnings``, which swaps the
+process's one list of filters: one thread leaving the block while another was inside let the
+warning through, and the thread that entered second put back its copy, with "ignore
+RuntimeWarning" in it, for the rest of the caller's program (seen with ``explain`` from four
+threads on the demo UI-PRMD model: once in two runs). Each such reduction is run here in two
+threads in the order that does it (A enters, B enters, A leaves, B leaves), held inside
+numpy's reduction until the other thread is where it should be.
+"""
+
+from __future__ import annotations
+
+import ast
+import threading
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from cbr.novelty import fit_neighbours, ranges_and_held, spread_of, summary
+from cbr.segmentation import movement_of
+from features.body import left_moves_more
+from features.errors import PoseFileError
+from features.poses import PoseSequence
+from features.repetitions import pelvis_height
+from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _interleaved(
+    monkeypatch: pytest.MonkeyPatch, reduction: str, call: Callable[[], Any]
+) -> tuple[list[Any], list[str], bool]:
+    """``call()`` in threads A and B, each held at its first call of ``np.<reduction>``:
+    A enters, B enters, A leaves, then B leaves. Returns both results, the warnings shown
+    meanwhile, and whether the warning filters are as before."""
+    real = getattr(np, reduction)
+    a_in, b_in, a_out = threading.Event(), threading.Event(), threading.Event()
+    held: set[str] = set()
+
+    def holding(*args: Any, **kwargs: Any) -> Any:
+        me = threading.current_thread().name
+        if me not in held:
+            held.add(me)
+            if me == "A":
+                a_in.set()
+                b_in.wait(10)
+            elif me == "B":
+                b_in.set()
+                a_out.wait(10)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(np, reduction, holding)
+    results: dict[str, Any] = {}
+
+    def run(name: str) -> None:
+        try:
+            results[name] = call()
+        except BaseException as exc:  # re-raised in the test's thread
+            results[name] = exc
+        finally:
+            if name == "A":
+                a_out.set()
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        before = list(warnings.filters)
+        a = threading.Thread(target=run, args=("A",), name="A")
+        b = threading.Thread(target=run, args=("B",), name="B")
+        a.start()
+        assert a_in.wait(10), f"np.{reduction} was never called"
+        b.start()
+        a.join(30)
+        b.join(30)
+        same = list(warnings.filters) == before
+    for value in results.values():
+        if isinstance(value, BaseException):
+            raise value
+    return [results["A"], results["B"]], [str(w.message) for w in caught], same
+
+
+NAN = np.nan
+
+
+def test_summary_from_two_threads_keeps_the_callers_warning_filters(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A problem's summary (every solve): mean, lowest, highest and standard deviation per
+    column; a column missing throughout stays NaN, with no warning, from either thread."""
+    v = np.array([[1.0, NAN], [3.0, NAN]])
+    (a, b), shown, same = _interleaved(monkeypatch, "nanmean", lambda: summary(v))
+    want = [2.0, NAN, 1.0, NAN, 3.0, NAN, 1.0, NAN]
+    np.testing.assert_array_equal(a, want)
+    np.testing.assert_array_equal(b, want)
+    assert same, "the caller's warning filters changed"
+    assert shown == []
+
+
+def test_the_side_that_moves_more_from_two_threads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The left knee angle swings by 0.5 (standard deviation); the right one is never seen
+    (0, not NaN, in the comparison): the left side moves more."""
+    angles = np.array([[0.0, NAN], [1.0, NAN]])
+    names = ("left_knee", "right_knee")
+    got, shown, same = _interleaved(monkeypatch, "nanstd", lambda: left_moves_more(angles, names))
+    assert got == [True, True]
+    assert same, "the caller's warning filters changed"
+    assert shown == []
+
+
+def test_pelvis_height_from_two_threads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Hips 1.0 m up, shoulders 1.5 m (a trunk of 0.5 m), ankles 0.1 m up in the first three
+    frames and lost in the fourth: (1.0 - 0.1) / 0.5 = 1.8 trunk lengths above the floor in
+    every frame; the frame without hips is NaN."""
+    p = np.full((5, 33, 3), NAN)
+    for side, x in (("left", 0.1), ("right", -0.1)):
+        p[:4, JOINT_INDEX[f"{side}_hip"]] = (x, 1.0, 0.0)
+        p[:4, JOINT_INDEX[f"{side}_shoulder"]] = (x, 1.5, 0.0)
+        p[:3, JOINT_INDEX[f"{side}_ankle"]] = (x, 0.1, 0.0)
+    got, shown, same = _interleaved(monkeypatch, "nanmin", lambda: pelvis_height(p))
+    for heights in got:
+        np.testing.assert_allclose(heights, [1.8, 1.8, 1.8, 1.8, NAN])
+    assert same, "the caller's warning filters changed"
+    assert shown == []
+
+
+def test_movement_of_windows_from_two_threads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The mean of the columns read: 0.3 for the first window, NaN for one without them."""
+    values = np.array([[0.2, 0.4, 9.0], [NAN, NAN, 9.0]])
+    columns = np.array([0, 1])
+    got, shown, same = _interleaved(monkeypatch, "nanmean", lambda: movement_of(values, columns))
+    for moved in got:
+        np.testing.assert_allclose(moved, [0.3, NAN])
+    assert same, "the caller's warning filters changed"
+    assert shown == []
+
+
+# Four cases of two people and two activities; the second feature no case has.
+CASES = np.array([[0.0, NAN], [2.0, NAN], [4.0, NAN], [8.0, NAN]])
+GROUPS = np.array(["p1", "p1", "p2", "p2"])
+LABELS = np.array(["a", "a", "b", "b"])
+
+
+def test_activity_spread_from_two_threads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Activity a's cases 0 and 2 (mean 1, deviation 1), b's 4 and 8 (mean 6, deviation 2);
+    over all, deviation sqrt(8.75) = 2.96, whose quarter (0.74) is below both: the units
+    are the activities' own deviations. The missing feature: NaN."""
+    got, shown, same = _interleaved(monkeypatch, "nanstd", lambda: spread_of(CASES, LABELS))
+    for spread in got:
+        np.testing.assert_allclose(spread.centres, [[1.0, NAN], [6.0, NAN]])
+        np.testing.assert_allclose(spread.units, [[1.0, NAN], [2.0, NAN]])
+    assert same, "the caller's warning filters changed"
+    assert shown == []
+
+
+def test_summary_neighbours_from_two_threads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Centre 3.5 (the mean of 0, 2, 4, 8) and scale sqrt(8.75); the missing feature takes
+    no part (centre 0, scale 1)."""
+    got, shown, same = _interleaved(
+        monkeypatch, "nanmean", lambda: fit_neighbours(CASES, GROUPS, LABELS, CASES, GROUPS)
+    )
+    for fitted in got:
+        assert fitted is not None
+        np.testing.assert_allclose(fitted[0].centre, [3.5, 0.0])
+        np.testing.assert_allclose(fitted[0].scale, [np.sqrt(8.75), 1.0])
+    assert same, "the caller's warning filters changed"
+    assert shown == []
+
+
+def test_feature_ranges_from_two_threads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two people, two folds: each fold's range is the other person's cases', 0-2 and 4-8;
+    the missing feature has none (NaN)."""
+    got, shown, same = _interleaved(
+        monkeypatch, "nanmin", lambda: ranges_and_held(CASES, GROUPS, CASES, GROUPS, LABELS)
+    )
+    for found in got:
+        assert found is not None
+        ranges = found[0]
+        spans = sorted(zip(ranges.lo[:, 0].tolist(), ranges.hi[:, 0].tolist(), strict=True))
+        assert spans == [(0.0, 2.0), (4.0, 8.0)]
+        assert np.isnan(ranges.lo[:, 1]).all() and np.isnan(ranges.hi[:, 1]).all()
+    assert same, "the caller's warning filters changed"
+    assert shown == []
+
+
+def test_no_module_a_fitted_model_runs_swaps_the_warning_filters() -> None:
+    """features and cbr (but cbr.evaluation, which fits peers and draws pictures in a
+    command's own process) never call ``warnings.catch_warnings``: numpy's reductions over
+    what is seen (features.nanstats) give NaN without a warning instead."""
+    found = []
+    for path in sorted([*(ROOT / "features").rglob("*.py"), *(ROOT / "cbr").rglob("*.py")]):
+        if "evaluation" in path.relative_to(ROOT).parts:
+            continue
+        text = path.read_text(encoding="utf-8")
+        if "catch_warnings" not in text:
+            continue
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, ast.Attribute) and node.attr == "catch_warnings":
+                found.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert found == []
+
