@@ -26,7 +26,7 @@ import os
 import tokenize
 import zipfile
 import zlib
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -97,7 +97,12 @@ def _real_array(value: Any, what: str, where: str | None) -> np.ndarray:
     could still write to (itself or the memory it views) is copied; a read-only one (a slice
     of another sequence's) is kept as it is.
     """
-    arr = np.asarray(value)
+    try:
+        arr = np.asarray(value)
+    except ValueError:  # nested lists of different lengths
+        raise PoseFileError(
+            f"{what} must be an array, got rows of different lengths", where
+        ) from None
     if arr.dtype.kind not in "fiu":
         got = _KIND_WORDS.get(arr.dtype.kind, str(arr.dtype))
         raise PoseFileError(f"{what} must be real numbers, got {got}", where)
@@ -418,6 +423,10 @@ def _joint_names(names: Any, where: str | None) -> tuple[str, ...]:
     (bytes would become ``"b'nose'"`` and match no joint)."""
     if isinstance(names, str | bytes):
         raise PoseFileError("joint_names must be a sequence of names, got one string", where)
+    if not isinstance(names, Iterable):
+        raise PoseFileError(
+            f"joint_names must be a sequence of names, got {type(names).__name__}", where
+        )
     out = []
     for name in names:
         if isinstance(name, bytes):

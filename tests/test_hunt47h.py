@@ -204,3 +204,31 @@ def test_no_module_a_fitted_model_runs_swaps_the_warning_filters() -> None:
                 found.append(f"{path.relative_to(ROOT)}:{node.lineno}")
     assert found == []
 
+
+@pytest.mark.parametrize(
+    ("kwargs", "words"),
+    [
+        ({"joint_names": None}, "joint_names must be a sequence of names, got NoneType"),
+        ({"joint_names": 33}, "joint_names must be a sequence of names, got int"),
+        (
+            {"positions": [[[0.0, 0.0, 0.0]], [[0.0, 0.0]]], "joint_names": ("nose",)},
+            "positions must be an array, got rows of different lengths",
+        ),
+        (
+            {"confidence": [[1.0] * 33, [1.0] * 32]},
+            "confidence must be an array, got rows of different lengths",
+        ),
+    ],
+)
+def test_a_pose_sequence_of_arguments_it_cannot_hold_is_one_clear_error(
+    kwargs: dict[str, Any], words: str
+) -> None:
+    """Another tracker's output put into a PoseSequence wrongly (no joint names, a joint
+    count for the names, nested lists of a frame with a joint short): PoseFileError naming
+    the argument, not numpy's "inhomogeneous shape" ValueError or "'NoneType' object is not
+    iterable"."""
+    args: dict[str, Any] = {"positions": np.zeros((2, 33, 3)), "joint_names": BLAZEPOSE_33}
+    args.update(kwargs)
+    with pytest.raises(PoseFileError) as raised:
+        PoseSequence(fps=30.0, **args)
+    assert str(raised.value) == words
