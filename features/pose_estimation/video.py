@@ -48,7 +48,7 @@ os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from features.errors import DataError  # noqa: E402
+from features.errors import DataError, InputError  # noqa: E402
 from features.poses import EXTRACTION_VERSION, MIN_FPS, PoseSequence  # noqa: E402
 from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
@@ -1268,6 +1268,12 @@ def _open_source(
     if isinstance(source, str) and source.startswith("file:") and fps is not None:
         cap, info = open_video(source[len("file:") :])
         return cap, info.fps, info.frames, False, info.orientation
+    if isinstance(source, bool) or (isinstance(source, int) and source < 0):
+        # OpenCV's "any camera", -1, crashes the process (a segmentation fault) where none is
+        raise InputError(
+            f"a camera index is a whole number from 0 (the first camera), got {source!r}",
+            "source",
+        )
     device = source if isinstance(source, int) else str(source)
     try:
         cap = _open_quietly(int(device) if str(device).isdigit() else device, timeout_s)
@@ -1385,7 +1391,8 @@ def stream_poses(
     pace: Callable[[int, float], bool] | None = None,
     alive: Callable[[], None] | None = None,
 ) -> Iterator[StreamFrame]:
-    """Poses frame by frame from a webcam index, a stream URL or a video path.
+    """Poses frame by frame from a webcam index (from 0; InputError for a negative one or
+    a bool), a stream URL or a video path.
 
     Files are timed by their frame rate; live sources by the wall clock, or by ``fps`` when
     given (a file served over the network: :func:`served_file_rate`). Stops at the end of
