@@ -50,6 +50,7 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
@@ -1566,11 +1567,18 @@ def check_judge(judge: Any, classes: Sequence[Any] | None = None) -> None:
     in the first window judged (or read another activity's threshold), or, when the judge
     names its activities (:attr:`cbr.unknown.ActivityMargin.activities`), on others than
     ``classes`` or in another order (as many: each window judged against another
-    activity's threshold)."""
+    activity's threshold); and a number (a ``k`` or a threshold given in its place), found
+    otherwise to be no judge in the first window judged."""
     if isinstance(judge, str):
         raise InputError(
             f"judge must be None or a judge of cbr.unknown (judge_of(clf, {judge!r})), not its"
             " name",
+            "judge",
+        )
+    if isinstance(judge, numbers.Number | np.bool_):  # k or a threshold in its place
+        raise InputError(
+            "judge must be None or a judge of cbr.unknown (judge_of(clf, 'spread-margin')),"
+            f" got {type(judge).__name__}",
             "judge",
         )
     per = getattr(judge, "thresholds", None)

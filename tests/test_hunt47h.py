@@ -18,15 +18,19 @@ import threading
 import warnings
 from collections.abc import Callable
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 import pytest
 
+from cbr.live import LiveSegmenter
 from cbr.novelty import fit_neighbours, ranges_and_held, spread_of, summary
-from cbr.segmentation import movement_of
+from cbr.segmentation import check_judge, movement_of
 from features.body import left_moves_more
-from features.errors import PoseFileError
+from features.errors import InputError, PoseFileError
+from features.pose_estimation import stream_poses
+from features.pose_estimation import video as video_module
 from features.poses import PoseSequence
 from features.repetitions import pelvis_height
 from features.skeleton import BLAZEPOSE_33, JOINT_INDEX
@@ -231,4 +235,51 @@ def test_a_pose_sequence_of_arguments_it_cannot_hold_is_one_clear_error(
     args.update(kwargs)
     with pytest.raises(PoseFileError) as raised:
         PoseSequence(fps=30.0, **args)
+    assert str(raised.value) == words
+
+
+@pytest.mark.parametrize("camera", [-1, -2, True])
+def test_a_negative_camera_index_is_refused_before_opencv_sees_it(
+    monkeypatch: pytest.MonkeyPatch, camera: int
+) -> None:
+    """``stream_poses(-1)``, OpenCV's old "any camera", killed the caller's process with a
+    segmentation fault (OpenCV 5.1, no camera: ``cv2.VideoCapture(-1)`` alone does it). It is
+    an InputError naming the argument now, and OpenCV is never asked (here a stand-in that
+    records what it is asked, so that the old code fails without crashing the tests)."""
+    asked: list[Any] = []
+
+    class Capture:
+        def __init__(self, *args: Any) -> None:
+            asked.append(args)
+
+        def isOpened(self) -> bool:  # noqa: N802 (OpenCV's name)
+            return False
+
+    monkeypatch.setattr(video_module.cv2, "VideoCapture", Capture)
+    with pytest.raises(InputError) as raised:
+        next(iter(stream_poses(camera)))
+    assert str(raised.value) == (
+        f"source: a camera index is a whole number from 0 (the first camera), got {camera!r}"
+    )
+    assert asked == []
+
+
+@pytest.mark.parametrize("judge", [3, 0.5, np.float64(0.5), True])
+def test_something_that_is_no_judge_is_refused_naming_judge(judge: Any) -> None:
+    """``segment(clf, rec, 3)`` or ``LiveSegmenter(clf, fps, 0.5)`` (the judge's place taken
+    by a number: ``k``, a threshold): an InputError naming ``judge``, not "'int' object has
+    no attribute 'unlike'" from the first window judged (a stream: seconds after it
+    started)."""
+    clf = SimpleNamespace(
+        classes_=np.array(["a", "b"]), case_base_=SimpleNamespace(labels=np.array(["a", "b"]))
+    )
+    words = (
+        "judge: judge must be None or a judge of cbr.unknown (judge_of(clf, 'spread-margin')),"
+        f" got {type(judge).__name__}"
+    )
+    with pytest.raises(InputError) as raised:
+        LiveSegmenter(clf, 30.0, judge)
+    assert str(raised.value) == words
+    with pytest.raises(InputError) as raised:
+        check_judge(judge, clf.classes_)  # what segment() checks its judge with
     assert str(raised.value) == words
