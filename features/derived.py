@@ -44,8 +44,9 @@ def is_cached(seq: PoseSequence, kind: str) -> bool:
 
 
 def forget(seq: PoseSequence) -> None:
-    """Drop everything cached for ``seq``."""
-    for cache in _CACHES.values():
+    """Drop everything cached for ``seq`` (over a copy of the kinds: another thread may
+    compute a kind for the first time meanwhile)."""
+    for cache in list(_CACHES.values()):
         cache.pop(seq, None)
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import ast
 import threading
 import warnings
+import weakref
 from collections.abc import Callable
 from pathlib import Path
 from types import SimpleNamespace
@@ -27,6 +28,7 @@ import pytest
 from cbr.live import LiveSegmenter
 from cbr.novelty import fit_neighbours, ranges_and_held, spread_of, summary
 from cbr.segmentation import check_judge, movement_of
+from features import derived as derived_module
 from features.body import left_moves_more
 from features.errors import InputError, PoseFileError
 from features.pose_estimation import stream_poses
@@ -283,3 +285,40 @@ def test_something_that_is_no_judge_is_refused_naming_judge(judge: Any) -> None:
     with pytest.raises(InputError) as raised:
         check_judge(judge, clf.classes_)  # what segment() checks its judge with
     assert str(raised.value) == words
+
+
+def test_forgetting_a_clip_while_another_thread_computes_a_new_kind(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``fit`` forgets each clip's cached features once described, ``segment`` each piece of
+    a long recording; another thread computing a kind of feature for the first time in the
+    process meanwhile added to the dict of kinds being walked: "dictionary changed size
+    during iteration" in the first. Thread A is held inside :func:`forget` (in a cache of
+    its own, first in the walk) until thread B has computed a new kind."""
+    seq = PoseSequence(np.zeros((2, 1, 3)), ("nose",), 30.0)
+    other = PoseSequence(np.zeros((2, 1, 3)), ("nose",), 30.0)
+    inside, done = threading.Event(), threading.Event()
+
+    class Holding(weakref.WeakKeyDictionary):  # type: ignore[type-arg]
+        def pop(self, key: Any, *default: Any) -> Any:
+            inside.set()
+            done.wait(10)
+            return super().pop(key, *default)
+
+    monkeypatch.setattr(derived_module, "_CACHES", {"held": Holding()})
+    failed: list[BaseException] = []
+
+    def forgetting() -> None:
+        try:
+            derived_module.forget(seq)
+        except BaseException as exc:  # re-raised in the test's thread
+            failed.append(exc)
+
+    a = threading.Thread(target=forgetting)
+    a.start()
+    assert inside.wait(10)
+    assert derived_module.derived(other, "a new kind", lambda s: s.n_frames) == 2
+    done.set()
+    a.join(10)
+    assert failed == []
+    assert set(derived_module._CACHES) == {"held", "a new kind"}
