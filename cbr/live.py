@@ -313,7 +313,7 @@ class LiveSegmenter:
     in errors (a camera, a URL, a file); ``k``: a window's k nearest cases vote, as the
     classifier votes (:func:`cbr.segmentation.votes_as`; 1, the default: its nearest), as
     ``segment -k`` votes offline (:func:`cbr.segmentation.segment`'s ``k``: from 1 to the
-    classifier's own k, else ConfigError); the judge of unknown reads each activity's nearest
+    classifier's own k, else ParameterError); the judge of unknown reads each activity's nearest
     case whatever ``k``.
 
     As offline, in two passes, each an online Viterbi (:class:`_Forward`: a hop is settled

@@ -59,7 +59,7 @@ import numpy as np
 
 from features.body import check_person, long_runs, torso_rows, torso_share
 from features.derived import forget, movement_signals_of, stretch
-from features.errors import ConfigError, DataError, InputError
+from features.errors import DataError, InputError, ParameterError
 from features.fluents import DEFAULT_TABLE, history_frames
 from features.jitter import MAD_TO_SD
 from features.nanstats import over_seen
@@ -1553,7 +1553,7 @@ def _check_call(clf: Any, recording: Any, chunk_frames: Any) -> None:
         or not isinstance(chunk_frames, int | np.integer)
         or chunk_frames < 0
     ):
-        raise ConfigError(
+        raise ParameterError(
             f"chunk_frames must be None or a whole number >= 0, got {chunk_frames!r}",
             "chunk_frames",
         )
@@ -1631,11 +1631,12 @@ def check_segmentable(recording: PoseSequence) -> None:
 
 
 def check_k(clf: Any, k: Any) -> None:
-    """Refuse, with ConfigError, a ``k`` (a window's nearest cases that vote) the fitted
-    classifier ``clf`` does not retrieve: a whole number from 1 to its own k. A command
-    checks it before it reads any recording (before, a video's poses were estimated first)."""
+    """Refuse, with ParameterError (a ConfigError, and the ValueError a Python caller
+    catches), a ``k`` (a window's nearest cases that vote) the fitted classifier ``clf`` does
+    not retrieve: a whole number from 1 to its own k. A command checks it before it reads
+    any recording (before, a video's poses were estimated first)."""
     if isinstance(k, bool) or not isinstance(k, int | np.integer) or not 1 <= k <= int(clf.k):
-        raise ConfigError(
+        raise ParameterError(
             f"must be from 1 to the case base's k ({int(clf.k)}, the nearest cases a window"
             f" retrieves), a whole number, got {k!r}",
             "-k",
@@ -1742,10 +1743,10 @@ def segment(
     Raises DataError for a recording shorter than one window or without a person, and for a
     case base the judge cannot be calibrated on; InputError for a ``recording`` that is not a
     PoseSequence, a ``judge`` given by its name (:func:`cbr.unknown.judge_of` makes the
-    judge) or one of another classifier (other activities, or theirs in another order),
-    ConfigError for a
-    negative ``chunk_frames`` or a ``k`` that is not a whole number, NotFittedError for an
-    unfitted ``clf``."""
+    judge) or as a number, or one of another classifier (other activities, or theirs in
+    another order), ParameterError (a ConfigError and a ValueError) for a negative
+    ``chunk_frames`` or a ``k`` that is not a whole number from 1 to the classifier's,
+    NotFittedError for an unfitted ``clf``."""
     _check_call(clf, recording, chunk_frames)
     check_judge(judge, clf.classes_)
     judge = judge or default_judge(clf)

@@ -14,6 +14,7 @@ numpy's reduction until the other thread is where it should be.
 from __future__ import annotations
 
 import ast
+import re
 import threading
 import warnings
 import weakref
@@ -25,12 +26,13 @@ from typing import Any
 import numpy as np
 import pytest
 
+from cbr.estimator_protocol import Classifier
 from cbr.live import LiveSegmenter
 from cbr.novelty import fit_neighbours, ranges_and_held, spread_of, summary
-from cbr.segmentation import check_judge, movement_of
+from cbr.segmentation import check_judge, check_k, movement_of, segment
 from features import derived as derived_module
 from features.body import left_moves_more
-from features.errors import InputError, PoseFileError
+from features.errors import ConfigError, InputError, PoseFileError
 from features.pose_estimation import stream_poses
 from features.pose_estimation import video as video_module
 from features.poses import PoseSequence
@@ -322,3 +324,44 @@ def test_forgetting_a_clip_while_another_thread_computes_a_new_kind(
     a.join(10)
     assert failed == []
     assert set(derived_module._CACHES) == {"held", "a new kind"}
+
+
+def test_a_k_the_classifier_does_not_retrieve_is_a_value_error_naming_it() -> None:
+    """``segment(clf, rec, k=0)`` and ``LiveSegmenter(clf, fps, k=9)`` with a classifier of
+    k = 5: a ParameterError, the ValueError a Python caller catches (and still the
+    ConfigError the commands print as one line), not a ConfigError alone; so is a negative
+    ``chunk_frames``."""
+    clf = SimpleNamespace(
+        k=5,
+        classes_=np.array(["a", "b"]),
+        case_base_=SimpleNamespace(labels=np.array(["a", "b"])),
+    )
+    words = "-k: must be from 1 to the case base's k (5, the nearest cases a window retrieves)"
+    for k in (0, 6, 2.0):
+        with pytest.raises(ValueError, match=re.escape(words)) as raised:
+            check_k(clf, k)  # what segment() checks its k with
+        assert isinstance(raised.value, ConfigError)
+    with pytest.raises(ValueError, match=re.escape(words)):
+        LiveSegmenter(clf, 30.0, k=9)
+    clf.case_base_.check_not_empty = lambda name: None
+    seq = PoseSequence(np.zeros((60, 33, 3)), BLAZEPOSE_33, 30.0)
+    with pytest.raises(ValueError, match="chunk_frames must be None or a whole number >= 0"):
+        segment(clf, seq, chunk_frames=-1)
+
+
+class _Answers(Classifier):
+    """A classifier that answers "a" then "b", whatever the clips."""
+
+    def predict(self, X: Any) -> np.ndarray:
+        return np.array(["a", "b"], dtype=object)
+
+
+@pytest.mark.parametrize("y", [[["a"], ["b"]], np.array([["a"], ["b"]]), [("a",), ("b",)]])
+def test_score_refuses_labels_given_as_a_column(y: Any) -> None:
+    """Both answers right, the labels given as a column (a one-column table's rows, as
+    ``fit`` refuses them): ``score`` said 0.0, each row compared whole to a label. Now an
+    InputError naming ``y``; the same labels flat score 1.0."""
+    clf = _Answers()
+    assert clf.score([None, None], ["a", "b"]) == 1.0
+    with pytest.raises(InputError, match=r"^y: y must be 1-D, one label per clip: y\[0\] is a "):
+        clf.score([None, None], y)
