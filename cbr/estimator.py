@@ -154,6 +154,10 @@ def check_labels(y: Any, n: int, name: str = "y") -> np.ndarray:
     """``y`` as ``(n,)`` labels (str); None, NaN, NaT, pandas' NA and empty labels are refused
     (:class:`features.errors.InputError`; ``name``: what the caller calls ``y``)."""
     y_arr = np.asarray(y, dtype=object)
+    if y_arr.ndim == 0:  # a generator, a string, None: no labels to count
+        raise InputError(
+            f"{name} must hold one label per clip ({n}), got a {type(y).__name__}", name
+        )
     if y_arr.ndim != 1 or len(y_arr) != n:
         raise InputError(f"{n} clips but {name} has shape {y_arr.shape}", name)
     for i, v in enumerate(y_arr):

@@ -364,7 +364,7 @@ def train(
     ``train --split`` does (windows for ``segment`` and ``watch``)."""
     _check_name(name)
     clips = as_sequences(clips, "clips", "clips")
-    check_labels(labels, len(clips))
+    check_labels(labels, len(clips), "labels")
     _check_what(estimator, target, cases)
     plan = fit_plan(estimator)
     described = [
@@ -541,7 +541,7 @@ def train_described(
     is loaded back); the cases hold them as text."""
     _check_name(name)
     _check_what(estimator, target, cases)
-    text = [str(v) for v in check_labels(labels, len(clips))]
+    text = [str(v) for v in check_labels(labels, len(clips), "labels")]
     given = list(np.asarray(labels, dtype=object))
     keep, skipped, too_short = usable(clips)
     if len({text[i] for i in keep}) == 1 < len(set(text)):
@@ -796,7 +796,7 @@ def append(
     stored configuration (nothing is learned anew), in one transaction checked against the
     case base that was read. ``target``: what ``labels`` are (refused unless the case base's
     own; None: whatever it predicts)."""
-    text = [str(v) for v in check_labels(labels, len(clips))]
+    text = [str(v) for v in check_labels(labels, len(clips), "labels")]
     plan, uid, _, _ = append_plan(db, name, target)
     described = [
         describe(s, plan) for s in progress(clips, desc="features", total=len(clips), unit="clip")
@@ -1002,7 +1002,7 @@ def append_described(
     """:func:`append` on clips already reduced by :func:`append_plan`'s plan. Several
     processes may append to one case base at once: each commits its cases in one transaction
     (ids from the database, never reused), so none is lost or duplicated."""
-    text = [str(v) for v in check_labels(labels, len(clips))]
+    text = [str(v) for v in check_labels(labels, len(clips), "labels")]
     keep, skipped, too_short = usable(clips)
     if not keep:
         raise _no_case(clips, "add")

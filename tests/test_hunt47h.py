@@ -26,10 +26,12 @@ from typing import Any
 import numpy as np
 import pytest
 
+from cbr.estimator import CaseBaseClassifier
 from cbr.estimator_protocol import Classifier
 from cbr.live import LiveSegmenter
 from cbr.novelty import fit_neighbours, ranges_and_held, spread_of, summary
 from cbr.segmentation import check_judge, check_k, movement_of, segment
+from cbr.training import train
 from features import derived as derived_module
 from features.body import left_moves_more
 from features.errors import ConfigError, InputError, PoseFileError
@@ -365,3 +367,19 @@ def test_score_refuses_labels_given_as_a_column(y: Any) -> None:
     assert clf.score([None, None], ["a", "b"]) == 1.0
     with pytest.raises(InputError, match=r"^y: y must be 1-D, one label per clip: y\[0\] is a "):
         clf.score([None, None], y)
+
+
+def test_train_names_its_labels_argument_and_stores_nothing(tmp_path: Path) -> None:
+    """``train(db, name, clips, labels, ...)`` with one label short, or the labels as a
+    generator: an InputError naming ``labels`` (it said ``y``, the estimator's word, which
+    the caller never wrote; a generator was "y has shape ()"), before any clip is read and
+    with no database made."""
+    clips = [PoseSequence(np.zeros((30, 33, 3)), BLAZEPOSE_33, 30.0) for _ in range(2)]
+    db = tmp_path / "robot.sqlite"
+    with pytest.raises(InputError) as raised:
+        train(db, "default", clips, ["squat"], CaseBaseClassifier())
+    assert str(raised.value) == "labels: 2 clips but labels has shape (1,)"
+    with pytest.raises(InputError) as raised:
+        train(db, "default", clips, (v for v in ("a", "b")), CaseBaseClassifier())
+    assert str(raised.value) == "labels: labels must hold one label per clip (2), got a generator"
+    assert list(tmp_path.iterdir()) == []
