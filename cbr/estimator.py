@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Container, Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 from typing import Any
 
@@ -107,7 +108,8 @@ from .weights import MIRROR_FLAG, WEIGHTINGS
 
 
 def as_sequences(X: Any, where: str = "X", name: str = "X") -> list[PoseSequence]:
-    """``X`` as a list of PoseSequence (a list, tuple or 1-D object array); anything else is an
+    """``X`` as a list of PoseSequence (a list, tuple, 1-D object array or other ordered
+    iterable; not a set or a dict, whose order is not the clips'); anything else is an
     :class:`features.errors.InputError` (the ``ValueError`` scikit-learn users catch) naming
     what was given (``name``: what the caller calls ``X``, as :func:`cbr.training.train`'s
     ``clips``)."""
@@ -123,6 +125,13 @@ def as_sequences(X: Any, where: str = "X", name: str = "X") -> list[PoseSequence
     if isinstance(X, str | bytes) or not hasattr(X, "__iter__"):
         raise InputError(
             f"{name} must be a sequence of PoseSequence, got {type(X).__name__}", where
+        )
+    if isinstance(X, AbstractSet | Mapping):  # no order to match the answers or labels to
+        kind = "set" if isinstance(X, AbstractSet) else "mapping"
+        raise InputError(
+            f"{name} must be a sequence of PoseSequence, got a {kind} ({type(X).__name__}):"
+            " its order is not the clips' (a list of them keeps it)",
+            where,
         )
     if isinstance(X, np.ndarray) and X.ndim != 1:  # flattened, a (2, 3) table was six clips
         raise InputError(

@@ -31,7 +31,7 @@ from cbr.estimator_protocol import Classifier
 from cbr.live import LiveSegmenter
 from cbr.novelty import fit_neighbours, ranges_and_held, spread_of, summary
 from cbr.segmentation import check_judge, check_k, movement_of, segment
-from cbr.training import train
+from cbr.training import cut, train
 from features import derived as derived_module
 from features.body import left_moves_more
 from features.errors import ConfigError, InputError, PoseFileError
@@ -383,3 +383,21 @@ def test_train_names_its_labels_argument_and_stores_nothing(tmp_path: Path) -> N
         train(db, "default", clips, (v for v in ("a", "b")), CaseBaseClassifier())
     assert str(raised.value) == "labels: labels must hold one label per clip (2), got a generator"
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("kind", [set, frozenset, dict.fromkeys])
+def test_clips_in_a_set_are_refused_their_order_being_not_the_clips(
+    tmp_path: Path, kind: Callable[[list[PoseSequence]], Any]
+) -> None:
+    """Clips given as a set: ``predict`` answered in the set's order, which is not the order
+    the caller holds the clips in, and ``train`` paired them with the labels in that order
+    (a squat stored as a lunge). An InputError naming the argument now (a dict's keys
+    were refused only as "X[0] is a int" when they were numbers); nothing stored."""
+    clips = [PoseSequence(np.zeros((30, 33, 3)), BLAZEPOSE_33, 30.0) for _ in range(2)]
+    with pytest.raises(InputError, match=r"^clips: clips must be a sequence of PoseSequence"):
+        train(
+            tmp_path / "cb.sqlite", "default", kind(clips), ["squat", "lunge"], CaseBaseClassifier()
+        )
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(InputError, match=r"its order is not the clips'"):
+        cut(kind(clips), ["squat", "lunge"], "windows")
