@@ -56,6 +56,14 @@ def _phases(value: str) -> int | str:
 DEFAULT_NAME = "default"
 
 
+class MeasureNames:
+    """The names of every similarity measure (:func:`cbr.similarity.available_measures`),
+    as argparse puts them in a help text: ``%(measures)s``, looked up when shown."""
+
+    def __str__(self) -> str:
+        return ", ".join(available_measures())
+
+
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "train",
@@ -77,11 +85,15 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         default=None,
         help="feature level (default fluents)",
     )
-    p.add_argument(
+    similarity = p.add_argument(
         "--similarity",
         default=None,
-        help=f"similarity measure: {', '.join(available_measures())} (default euclidean)",
+        help="similarity measure: %(measures)s (default euclidean)",
     )
+    # named when the help is shown: looking up the installed plugins' measures (their entry
+    # points) imports importlib.metadata and reads every installed package's metadata, which
+    # every other command, built with this parser, has no use for
+    similarity.measures = MeasureNames()  # type: ignore[attr-defined]
     p.add_argument(
         "--param",
         action="append",
