@@ -63,14 +63,14 @@ def binary_kind(head: bytes) -> str | None:
         return "a NumPy file, such as a pose file"
     if head.startswith(b"PK\x03\x04"):  # a .zip, an .xlsx spreadsheet: no arrays in it
         return "a zip archive, not a pose file"
-    if _is_video(head):
+    if is_video(head):
         return "a video file"
     if is_picture(head):
         return PICTURE_WORDS
     return None
 
 
-def _is_video(head: bytes) -> bool:
+def is_video(head: bytes) -> bool:
     """Whether a file's first bytes ``head`` are a video's: MP4 or QuickTime (an ``ftyp``
     box first), AVI (RIFF ... AVI) or Matroska/WebM (its EBML signature)."""
     return (

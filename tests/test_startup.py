@@ -398,3 +398,23 @@ def test_report_loads_no_scikit_learn(compared_three: Path, tmp_path: Path, give
     # compare --out drew the accuracy and the confusion matrix; the pictures of a --json file
     # are drawn again from the results
     assert text.count('<img src="data:image/png;base64,') >= 2
+
+
+def test_a_video_is_opened_without_pillow(shared_data: Path, tmp_path: Path) -> None:
+    """extract and watch read a still picture's EXIF orientation with Pillow; a file that
+    starts as a video does (MP4, AVI) is no picture, said without importing Pillow (which
+    loads every format it reads to open one); a picture still goes through Pillow."""
+    videos = [
+        shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4",  # ftyp
+        shared_data / "media" / "vtest.avi",  # RIFF ... AVI
+    ]
+    code = (
+        "from features.pose_estimation.containers import picture_orientation\n"
+        f"print([picture_orientation(p) for p in {[str(v) for v in videos]!r}])"
+    )
+    out, loaded = _run(code, tmp_path, ("PIL",))
+    assert out.strip() == "[1, 1]" and loaded == set()
+    picture = str(shared_data / "media" / "messi5.jpg")
+    code = "from features.pose_estimation.containers import picture_orientation\n"
+    out, loaded = _run(f"{code}print(picture_orientation({picture!r}))", tmp_path, ("PIL",))
+    assert out.strip() == "1" and loaded == {"PIL"}

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import DataError
+from features.fileio import file_head, is_video
 
 JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
 """A JPEG file's start-of-image and end-of-image markers."""
@@ -32,7 +33,10 @@ def picture_orientation(path: Path) -> int:
     sensor took it, sideways, and says in this tag how a viewer turns it upright. FFmpeg,
     and so OpenCV's capture, decodes the picture as stored. 1 for a file that is no picture
     of :data:`PICTURE_FORMATS` (a video), that has no such tag, or whose tag is no
-    orientation."""
+    orientation. A file that starts as a video does (MP4, AVI, Matroska) is none of them,
+    said without importing Pillow, which loads every format it reads to open one."""
+    if is_video(file_head(path, 16)):
+        return 1
     from PIL import Image
 
     Image.init()  # every format Pillow reads here registered (WebP only when built with it)
