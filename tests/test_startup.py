@@ -182,7 +182,8 @@ def test_dad_loads_no_estimator(tmp_path: Path) -> None:
     out, loaded = _run(f"from posecbr.cli import main\nassert main({argv!r}) == 0", tmp_path)
     doc = json.loads(out)
     assert doc["status"] == "ok"
-    assert doc == json.loads(json.dumps(detect(load_clip(CLIP), load_add()).to_dict()))
+    expected = json.loads(json.dumps(detect(load_clip(CLIP), load_add()).to_dict()))
+    assert {k: v for k, v in doc.items() if k not in ("window_s", "step_s")} == expected
     # one short clip: its state signals by the numpy reference (as describe's), the same
     # document as with numba's kernels (the library's default, above); SciPy fits the QMPs
     assert loaded == {"numpy", "scipy"}
