@@ -1030,7 +1030,12 @@ class LiveSegmenter:
         windows), as ``segment`` gives them (:func:`cbr.segmentation.told`), from the windows
         centred in frames [start, end) (those over it when none is): unknown, told by
         :func:`cbr.unknown.tell_unknown`; an activity, by the window whose nearest activity
-        it is most clearly (the least ratio), solved again from its frames."""
+        it is most clearly (the least ratio), solved again from its frames, or when none of
+        them is nearest to it (a segment the decoders' evidence around it gave, a hop or two
+        long), by the one that lies least far from it, as ``segment`` tells such a segment by
+        one of its windows (:func:`cbr.segmentation._explain_segment`). Before, "": the
+        bundled squat clip after 3 s of nobody, each frame twice at 10 fps, had a KneeRaise
+        segment of frames 100-105 explained by nothing."""
         inside = [w for w in self.judged if start <= w.centre < end]
         inside = inside or [w for w in self.judged if w.start < end and w.stop > start]
         if not inside:
@@ -1040,10 +1045,14 @@ class LiveSegmenter:
             return STILL_TEXT, novelty
         if state == self.unknown:
             return tell_unknown([(w.judge, w.nearest) for w in inside], self.classes), novelty
-        telling = [w for w in inside if w.activity == state and w.start >= self.offset]
-        if not telling:
+        kept = [w for w in inside if w.start >= self.offset]  # its frames kept: solved again
+        telling = [w for w in kept if w.activity == state]
+        if telling:
+            w = min(telling, key=lambda t: t.ratio)
+        elif kept:  # none nearest to it: the window that lies least far from it
+            w = min(kept, key=lambda t: float(t.nearest[state]))
+        else:
             return "", novelty
-        w = min(telling, key=lambda t: t.ratio)
         solved = self.clf.solve([self._sequence(w.start, w.stop)], flag=False)[0]
         return told(self.clf, solved, self.classes[state]), novelty
 
