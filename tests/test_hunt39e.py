@@ -12,7 +12,6 @@ import signal
 import sqlite3
 import subprocess
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
@@ -281,23 +280,6 @@ def test_a_reader_of_a_current_store_in_wal_mode_writes_nothing(
 #: ``python -m posecbr`` whose second picture written (accuracy, then a confusion matrix) is
 #: followed by a marker file and a long wait: an interrupt then comes once it is on disk,
 #: before the command has named it
-SLOW_SECOND_PICTURE = """
-import os, sys, time
-from pathlib import Path
-import cbr.evaluation.pictures as pictures
-real, drawn = pictures._save, []
-def save(fig, path):
-    out = real(fig, path)
-    drawn.append(path)
-    if len(drawn) == 2:
-        Path(os.environ["MARK"]).write_text(str(path))
-        time.sleep(600)
-    return out
-pictures._save = save
-from posecbr.cli import main
-sys.exit(main(sys.argv[1:]))
-"""
-
 COMPARE = ["compare", str(DEMO), "--subjects", "s01", "--labels",
            "deep_squat,sit_to_stand,standing_shoulder_abduction", "--folds", "3",
            "--similarities", "euclidean", "--features", "fluents", "--no-dad", "--peers",
@@ -324,33 +306,40 @@ def _earlier_run_in(earlier_run: Path, out: Path) -> None:
 
 
 def test_compare_interrupted_while_drawing_names_exactly_the_pictures_on_disk(
-    earlier_run: Path, tmp_path: Path
+    earlier_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # before: results.json, written before the pictures, named none; the two drawn lay beside
     # it unnamed, and the earlier run's timelines and prevalence, no longer named by any
     # results file, were never removed
+    import cbr.evaluation.pictures as pictures
+
     out = tmp_path / "o"
     _earlier_run_in(earlier_run, out)
     assert _pngs(out) == ["accuracy.png", "confusion_cbr_fluents_euclidean.png",
                           "prevalence.png", "timeline_00.png", "timeline_01.png",
                           "timeline_02.png"]  # fmt: skip
-    mark = tmp_path / "mark"
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1", "MARK": str(mark)}
-    proc = subprocess.Popen(
-        [sys.executable, "-c", SLOW_SECOND_PICTURE, *COMPARE, "--out", str(out)],
-        cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    try:
-        deadline = time.monotonic() + 600
-        while not mark.exists() and proc.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.1)
-        assert mark.exists(), proc.communicate(timeout=60)
-        proc.send_signal(signal.SIGINT)
-        stdout, stderr = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 130, stderr
+    real_save, drawn = pictures._save, []
+
+    def save(fig: Any, path: Any) -> Any:
+        """The picture saved; once the second is on disk, SIGINT to this process (as Ctrl-C
+        sends it), which compare gets before it goes on."""
+        saved = real_save(fig, path)
+        drawn.append(path)
+        if len(drawn) == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+        return saved
+
+    capsys.readouterr()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(pictures, "_save", save)
+        mp.chdir(tmp_path)
+        try:
+            code = main([*COMPARE, "--out", str(out)])
+        except KeyboardInterrupt:
+            pytest.fail("the interrupt escaped compare")
+    stderr = capsys.readouterr().err
+    assert len(drawn) == 2, drawn  # the interrupt came with the second picture
+    assert code == 130, stderr
     assert stderr.splitlines()[-1] == (
         f"posecbr compare: interrupted: results in {out}, with the 1 picture drawn before it;"
         " the rest were not drawn"
