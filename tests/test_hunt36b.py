@@ -232,15 +232,17 @@ def test_the_one_slow_lunge_runs_down_and_up_again(flicker: int) -> None:
 
 
 def test_the_bundled_slow_lunge_video_is_one_repetition_down_and_up(
-    shared_data: Path, capsys: pytest.CaptureFixture[str]
+    lunge_poses: PoseSequence, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The bundled reverse lunge (counted by hand, tests/fixtures/repetition_counts.json:
     one slow lunge, lowest 1.5-3.6 s): ``reps`` gave 1 repetition of 0.80-1.32 s, the
     half second in which the pose model swapped her legs, and ``train --split
     repetitions`` stored that as the lunge's case. Now it holds her lowest stretch and the
-    way up (by eye: rising at 5.0 s, upright from about 6 s, lowering again after 8 s)."""
-    video = shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
-    doc = _json(["reps", str(video)], capsys)
+    way up (by eye: rising at 5.0 s, upright from about 6 s, lowering again after 8 s).
+    ``reps`` of the video's poses as extract finds them (the session's): what ``reps`` of
+    the video gives (the same --json but for the path, checked), without the pose model."""
+    poses = save_pose(lunge_poses, tmp_path / "fit_reverse_lunge_pexels8233047.npz")
+    doc = _json(["reps", str(poses)], capsys)
     (rep,) = doc["repetitions"]
     assert rep["start_s"] <= 1.5 and 5.0 <= rep["end_s"] <= 8.0, rep
 
