@@ -11,7 +11,7 @@ import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
@@ -25,6 +25,9 @@ from tests.badinput import snapshot
 from tests.empty_scene import empty_scene
 from tests.once import made_once
 from tests.test_hunt34c import _Quiet, _serving
+
+if TYPE_CHECKING:
+    from features.poses import PoseSequence
 
 
 def _cmu_13_29_windows(folder: Path, shared_data: Path) -> Path:
@@ -186,19 +189,28 @@ def test_the_readme_quotes_the_segments_of_the_squat_video(
 
 
 def test_watch_sees_the_joints_that_segment_sees(
-    case_base: Path, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    case_base: Path,
+    shared_data: Path,
+    lunge_poses: PoseSequence,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
     """One slow reverse lunge (counted by hand: tests/fixtures/repetition_counts.json), filmed
     with the feet often below the frame's edge: ``watch`` must count it once, as ``segment``
     does on the same video, and give the same segments. It counted 3: the stream kept the
     model's guesses for joints outside the frame and joints it did not see (visibility below
-    0.5), which ``extract`` and ``segment`` leave missing."""
+    0.5), which ``extract`` and ``segment`` leave missing. ``segment`` reads the video's poses
+    as extract finds them (the session's): its --json of the video, but for the path
+    (checked), without the pose model again."""
+    from features.poses import save_pose
+
     video = shared_data / "videos" / "lunge" / "fit_reverse_lunge_pexels8233047.mp4"
+    poses = save_pose(lunge_poses, tmp_path / "fit_reverse_lunge_pexels8233047.npz")
     capsys.readouterr()
     # headless without --out: nothing drawn (the drawing is another test's)
     assert main(["watch", str(video), "--db", str(case_base), "--speed", "0"]) == 0
     watched = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
-    assert main(["segment", str(video), "--db", str(case_base), "--json"]) == 0
+    assert main(["segment", str(poses), "--db", str(case_base), "--json"]) == 0
     offline = json.loads(capsys.readouterr().out)["segments"]
     assert sum(d["repetitions"] for d in watched) == 1, watched
 
