@@ -9,11 +9,12 @@ back."""
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
-from features.poses import save_pose
+from features.poses import PoseSequence, save_pose
 from features.readers.asfamc import read_asf_amc
 from posecbr.cli import main
 
@@ -23,8 +24,14 @@ NAMES = ("JumpJack", "Jog", "Squat", "KneeRaise", "ArmCircle", "Twist", "SideRea
 
 
 def test_cmu_case_base_calls_the_half_jumping_jacks_arm_circles_throughout(
-    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    shared_data: Path,
+    bundled_poses: Callable[[str], PoseSequence],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
+    """``segment`` reads the video's poses as extract finds them, estimated once in the
+    session (tests/test_dad_video.py reads them too): its --json of the video but for the
+    path (checked with this case base), without the pose model again."""
     cmu = tmp_path / "cmu"
     cmu.mkdir()
     (cmu / "names.txt").write_text("".join(f"{i} {n}\n" for i, n in enumerate(NAMES, 1)))
@@ -40,9 +47,10 @@ def test_cmu_case_base_calls_the_half_jumping_jacks_arm_circles_throughout(
     (cmu / "all.csv").write_text("\n".join(rows) + "\n")
     db = tmp_path / "cmu-all.sqlite"
     assert main(["train", str(cmu / "all.csv"), "--db", str(db)]) == 0
-    video = shared_data / "videos" / "edge" / "jumping_jack_two_people_pexels8402086.mp4"
+    video = "edge/jumping_jack_two_people_pexels8402086.mp4"
+    poses = save_pose(bundled_poses(video), tmp_path / "jumping_jack_two_people_pexels8402086.npz")
     capsys.readouterr()
-    assert main(["segment", str(video), "--db", str(db), "--json"]) == 0
+    assert main(["segment", str(poses), "--db", str(db), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     # 250 frames at 25 fps; one segment over all of them, ArmCircle, its 6 arm raises
     # counted (the hand count: arms up at 1.25, 2.9, 4.65, 6.35, 8.2 and 9.9 s)
