@@ -8,6 +8,7 @@ import dataclasses
 import hashlib
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -843,15 +844,29 @@ def test_reps_command_on_a_real_squat_video(
     np.testing.assert_allclose(bottoms, [2.0, 6.8, 12.0], atol=0.7)
 
 
+def _session_poses(
+    bundled_poses: Callable[[str], PoseSequence], name: str, folder: Path
+) -> tuple[Path, Path]:
+    """The bundled video ``name`` and its poses as extract finds them, estimated once in the
+    session, saved in ``folder`` as a pose file: ``reps`` of it gives what ``reps`` of the
+    video gives but for the path (--json of both compared for the glute bridge and the leg
+    raise), without the pose model again (the squat test above runs the video end to end)."""
+    video = Path(name)
+    return video, save_pose(bundled_poses(name), folder / f"{video.stem}.npz")
+
+
 def test_reps_command_on_a_real_glute_bridge_video(
-    shared_data: Path, capsys: pytest.CaptureFixture[str]
+    bundled_poses: Callable[[str], PoseSequence],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
     """A person lying on the back, three glute bridges by hand, the first and last held as the
     clip starts and ends: counted from lying flat, not from the bridge (the hips straighten
     toward standing at ease in it; the two lowerings between the bridges were counted)."""
-    video = shared_data / "videos" / "glute_bridge" / "fit_glute_bridge_pexels6525487.mp4"
+    name = "glute_bridge/fit_glute_bridge_pexels6525487.mp4"
+    video, poses = _session_poses(bundled_poses, name, tmp_path)
     hand = next(c for c in _fixture()["clips"] if c["source"].endswith(video.name))
-    assert main(["reps", str(video), "--json"]) == 0
+    assert main(["reps", str(poses), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["count"] == hand["count"] == 3
     # far points in the hips-up stretches seen by hand, 0.0-1.1 s, 2.8-3.9 s and 5.9-6.6 s,
@@ -862,7 +877,9 @@ def test_reps_command_on_a_real_glute_bridge_video(
 
 
 def test_reps_command_on_a_real_side_lying_leg_raise_video(
-    shared_data: Path, capsys: pytest.CaptureFixture[str]
+    bundled_poses: Callable[[str], PoseSequence],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
     """A person lying on her side raises the top leg twice (by hand: up 2.2-4.8 s and from
     8.4 s to the end): each far point lies where the leg is up. Before, the far points were
@@ -870,11 +887,10 @@ def test_reps_command_on_a_real_side_lying_leg_raise_video(
     at ease throughout (the trunk lying, the lower arm under the head) swamped the two
     ends' distance from ease, so rest was taken from the clip's ends, which lie one down
     and one up."""
-    video = (
-        shared_data / "videos" / "side_lying_leg_raise" / "fit_lateral_leg_raise_pexels6974513.mp4"
-    )
+    name = "side_lying_leg_raise/fit_lateral_leg_raise_pexels6974513.mp4"
+    video, poses = _session_poses(bundled_poses, name, tmp_path)
     hand = next(c for c in _fixture()["clips"] if c["source"].endswith(video.name))
-    assert main(["reps", str(video), "--json"]) == 0
+    assert main(["reps", str(poses), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["count"] == hand["count"] == 2
     tops = np.array([r["peak_frame"] / doc["fps"] for r in doc["repetitions"]])
