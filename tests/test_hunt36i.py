@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from cbr.segmentation import counted_segments
-from features.poses import PoseSequence
+from features.poses import PoseSequence, save_pose
 from features.repetitions import movement_signals
 from posecbr.cli import main
 from tests.test_repetitions import _arms_raised_and_held
@@ -63,12 +63,16 @@ def test_the_side_plank_video_has_no_repetition_in_its_segments(
 
 
 def test_reps_gives_no_period_when_nothing_repeated(
-    side_plank_reps: tuple[str, str], shared_data: Path, capsys: pytest.CaptureFixture[str]
+    side_plank_reps: tuple[str, str],
+    bundled_poses: Callable[[str], PoseSequence],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
     """The side plank, 0 repetitions by hand: ``reps`` said "0 repetitions (period 0.40 s;
     moving left armpit)", and ``--json`` gave ``"period_s": 0.4, "periodicity": 0.29``, a
     period of nothing counted (read from the jitter of the hold). Now neither gives one; the
-    squats of the 5-fps video (3 by hand) keep theirs."""
+    squats of the 5-fps video (3 by hand) keep theirs (``reps`` of its poses as extract
+    finds them, the session's: what ``reps`` of the video gives but for the path, checked)."""
     text, as_json = side_plank_reps  # reps VIDEO, reps VIDEO --json (conftest.py)
     line = text.strip()
     assert line.endswith("0 repetitions (moving left armpit)"), line
@@ -79,7 +83,8 @@ def test_reps_gives_no_period_when_nothing_repeated(
         None,
         None,
     )
-    squats = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    name = "squat/tfjs_pose_squats_pexels4838220.mp4"
+    squats = save_pose(bundled_poses(name), tmp_path / "tfjs_pose_squats_pexels4838220.npz")
     assert main(["reps", str(squats)]) == 0
     assert " 3 repetitions (period " in capsys.readouterr().out
 
