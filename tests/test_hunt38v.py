@@ -4,7 +4,7 @@ jumping jacks of ``jumping_jack_two_people`` came out ArmCircle "with 1.7 s unkn
 4df3570 (the running median cut at the clip's ends, which moved the repetition windows) they
 come out ArmCircle throughout, 6 repetitions, 6 by hand (tests/fixtures/repetition_counts.json).
 The segments are worked out here from a run of the command, and the README's sentence read
-back."""
+back (from docs/measurements.md, where it now lives)."""
 
 from __future__ import annotations
 
@@ -17,8 +17,8 @@ import pytest
 from features.poses import PoseSequence, save_pose
 from features.readers.asfamc import read_asf_amc
 from posecbr.cli import main
+from tests import docs_text
 
-ROOT = Path(__file__).resolve().parents[1]
 NAMES = ("JumpJack", "Jog", "Squat", "KneeRaise", "ArmCircle", "Twist", "SideReach", "Box",
          "UpDown", "ToeTouchOneHand", "SideBend", "ToeTouchTwoHands")  # fmt: skip
 
@@ -57,7 +57,7 @@ def test_cmu_case_base_calls_the_half_jumping_jacks_arm_circles_throughout(
     assert doc["frames"] == 250
     assert [(s["start_frame"], s["end_frame"], s["label"], s["repetitions"])
             for s in doc["segments"]] == [(0, 250, "ArmCircle", 6)]  # fmt: skip
-    readme = " ".join((ROOT / "README.md").read_text().split())
+    readme = " ".join(docs_text().split())
     assert (
         "keep them) come out ArmCircle throughout, 6 repetitions (6 by hand; 1.7 s of them "
         "unknown before the running median was cut at the clip's ends, 6 December)"
