@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import re
 from collections import Counter
+from functools import cache
 from pathlib import Path
 
 from tests import ROOT
@@ -14,13 +15,14 @@ from tests import ROOT
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 
-def _anchors(text: str) -> set[str]:
+@cache
+def _anchors(page: Path) -> set[str]:
     """GitHub's anchors of a page's headings (outside code blocks): lower case, punctuation
     but hyphens and underscores dropped, spaces as hyphens; a repeated one gets -1, -2, ..."""
     seen: Counter[str] = Counter()
     out = set()
     fence = False
-    for line in text.splitlines():
+    for line in page.read_text(encoding="utf-8").splitlines():
         fence ^= line.startswith("```")
         found = None if fence else re.match(r"#{1,6} (.*)", line)
         if found:
@@ -47,7 +49,7 @@ def test_every_link_of_the_readme_and_the_docs_finds_its_file_and_heading() -> N
         for dest, fragment in _links(page):
             if not dest.exists():
                 broken.append(f"{page.name}: {dest.name}: no such file")
-            elif fragment and fragment not in _anchors(dest.read_text(encoding="utf-8")):
+            elif fragment and fragment not in _anchors(dest):
                 broken.append(f"{page.name}: {dest.name}#{fragment}: no such heading")
     assert broken == []
 
