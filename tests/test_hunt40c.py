@@ -492,6 +492,16 @@ def test_convert_of_labels_and_subjects_the_data_hold_goes_ahead(tmp_path: Path)
     assert [(r["label"], r["subject"]) for r in rows] == [("deep_squat", "s01")]
 
 
+def two_label_files(data: Path) -> Path:
+    """``data`` holding the classes' clips (:func:`_folder_of_classes`) and two labels
+    CSVs: first.csv of the first four clips, more.csv of the others."""
+    clips = _folder_of_classes(data)
+    for name, part in (("first.csv", clips[:4]), ("more.csv", clips[4:])):
+        rows = "".join(f"{p},{p.split('/')[0]}\n" for p in part)
+        (data / name).write_text("path,label\n" + rows, encoding="utf-8")
+    return data
+
+
 def test_train_append_without_name_adds_to_the_stores_only_case_base(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -501,11 +511,7 @@ def test_train_append_without_name_adds_to_the_stores_only_case_base(
     from casebase_store import open_store
     from cbr.stored import load_classifier
 
-    data = tmp_path / "data"
-    clips = _folder_of_classes(data)
-    for name, part in (("first.csv", clips[:4]), ("more.csv", clips[4:])):
-        rows = "".join(f"{p},{p.split('/')[0]}\n" for p in part)
-        (data / name).write_text("path,label\n" + rows, encoding="utf-8")
+    data = two_label_files(tmp_path / "data")
     db = tmp_path / "cb.sqlite"
     assert main(["train", str(data / "first.csv"), "--db", str(db), "--name", "x", *TRAIN]) == 0
     capsys.readouterr()

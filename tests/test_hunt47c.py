@@ -84,13 +84,9 @@ def test_train_append_without_name_refuses_a_store_of_several(
 ) -> None:
     """Two case bases of four clips, ``default`` and ``other``; two more clips appended
     without ``--name``: they went to ``default`` without a word."""
-    from tests.test_hunt40c import TRAIN, _folder_of_classes
+    from tests.test_hunt40c import TRAIN, two_label_files
 
-    data = tmp_path / "data"
-    clips = _folder_of_classes(data)
-    for name, part in (("first.csv", clips[:4]), ("more.csv", clips[4:])):
-        rows = "".join(f"{p},{p.split('/')[0]}\n" for p in part)
-        (data / name).write_text("path,label\n" + rows, encoding="utf-8")
+    data = two_label_files(tmp_path / "data")
     db = tmp_path / "cb.sqlite"
     for name in ("default", "other"):
         argv = ["train", str(data / "first.csv"), "--db", str(db), "--name", name, *TRAIN]
