@@ -1632,14 +1632,15 @@ def check_segmentable(recording: PoseSequence) -> None:
 
 def check_k(clf: Any, k: Any) -> None:
     """Refuse, with ParameterError (a ConfigError, and the ValueError a Python caller
-    catches), a ``k`` (a window's nearest cases that vote) the fitted classifier ``clf`` does
-    not retrieve: a whole number from 1 to its own k. A command checks it before it reads
-    any recording (before, a video's poses were estimated first)."""
+    catches) naming the argument ``k``, a ``k`` (a window's nearest cases that vote) the
+    fitted classifier ``clf`` does not retrieve: a whole number from 1 to its own k. A
+    command checks it before it reads any recording (before, a video's poses were estimated
+    first) and says it of its option, ``-k`` (before, a Python caller read that too)."""
     if isinstance(k, bool) or not isinstance(k, int | np.integer) or not 1 <= k <= int(clf.k):
         raise ParameterError(
             f"must be from 1 to the case base's k ({int(clf.k)}, the nearest cases a window"
             f" retrieves), a whole number, got {k!r}",
-            "-k",
+            "k",
         )
 
 

@@ -63,7 +63,7 @@ from typing import Any, Protocol, TypeVar
 import numpy as np
 
 from features.body import MIRRORED
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError, ParameterError
 from features.text import percent
 
 from .casebase import CaseBase, frame_array, overlapping
@@ -1382,9 +1382,11 @@ def judge_of(clf: Any, name: str) -> Judge:
     stored with it (``clf.judges_``, calibrated when it was stored on the cases it holds)
     when there is one, else calibrated now on its case base (a model stored before judges
     were, or after its cases changed, or one fitted in memory). An unfitted ``clf`` is
-    refused with scikit-learn's ``NotFittedError``."""
+    refused with scikit-learn's ``NotFittedError``; a ``name`` not of :data:`JUDGES` with
+    ParameterError (a ConfigError and a ValueError) naming the argument (before, "--unknown",
+    the option of the commands, whose own choices refuse it first)."""
     if name not in JUDGES:
-        raise ConfigError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "--unknown")
+        raise ParameterError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "name")
     if getattr(clf, "case_base_", None) is None:
         raise not_fitted(clf, "fit it (or load a stored one) before judging with it")
     stored = getattr(clf, "judges_", None) or {}

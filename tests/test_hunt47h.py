@@ -338,12 +338,14 @@ def test_a_k_the_classifier_does_not_retrieve_is_a_value_error_naming_it() -> No
         classes_=np.array(["a", "b"]),
         case_base_=SimpleNamespace(labels=np.array(["a", "b"])),
     )
-    words = "-k: must be from 1 to the case base's k (5, the nearest cases a window retrieves)"
-    for k in (0, 6, 2.0):
-        with pytest.raises(ValueError, match=re.escape(words)) as raised:
+    words = "^" + re.escape(
+        "k: must be from 1 to the case base's k (5, the nearest cases a window retrieves)"
+    )
+    for k in (0, 6, 2.0):  # named k, the argument (the commands say -k, their option)
+        with pytest.raises(ValueError, match=words) as raised:
             check_k(clf, k)  # what segment() checks its k with
         assert isinstance(raised.value, ConfigError)
-    with pytest.raises(ValueError, match=re.escape(words)):
+    with pytest.raises(ValueError, match=words):
         LiveSegmenter(clf, 30.0, k=9)
     clf.case_base_.check_not_empty = lambda name: None
     seq = PoseSequence(np.zeros((60, 33, 3)), BLAZEPOSE_33, 30.0)

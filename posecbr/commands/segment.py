@@ -51,7 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from cbr.judges import JUDGES
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError, ParameterError
 from features.fileio import check_output
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
@@ -310,6 +310,17 @@ def _inputs(args: argparse.Namespace) -> list[Path]:
     return [*args.recordings, *store_files(args.db), *asf, *truth]
 
 
+def check_k_option(clf: Any, k: int) -> None:
+    """:func:`cbr.segmentation.check_k` of ``-k``: its refusal names the option typed, where
+    a Python caller's names the argument ``k``."""
+    from cbr.segmentation import check_k
+
+    try:
+        check_k(clf, k)
+    except ParameterError as exc:
+        raise ParameterError(exc.message, "-k") from None
+
+
 def judge_named(clf: Any, name: str, db: str) -> Any:
     """The judge called ``name`` (``--unknown``) of the model stored in ``db``; a case base
     it cannot be calibrated on is refused naming the database."""
@@ -326,13 +337,13 @@ def judge_named(clf: Any, name: str, db: str) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.segmentation import check_k, check_segmentable, segment
+    from cbr.segmentation import check_segmentable, segment
 
     _inputs_given(args)
     _outputs(args)
     stored = load_case_base(args.db, args.name)
     clf = stored.classifier
-    check_k(clf, args.k)  # before any recording is read (a video's poses take seconds)
+    check_k_option(clf, args.k)  # before any recording is read (a video's poses take seconds)
     judge = judge_named(clf, args.unknown, args.db)
     labels = _read_truths(args)
     _check_truths_fit(args, labels)

@@ -443,7 +443,6 @@ def stop_on_interrupt(also: threading.Event | None = None) -> Iterator[Stop]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.segmentation import check_k
     from features.pose_estimation import (
         PoseEstimator,
         open_video,
@@ -452,13 +451,13 @@ def run(args: argparse.Namespace) -> int:
     )
     from features.pose_estimation.overlay import check_encoded, check_mp4_size
 
-    from .segment import judge_named, load_case_base, note_not_windows
+    from .segment import check_k_option, judge_named, load_case_base, note_not_windows
 
     args.source = _as_path(args.source)
     _check(args)
     stored = load_case_base(args.db, args.name)
     clf = stored.classifier
-    check_k(clf, args.k)  # before the pose model is loaded or the stream opened
+    check_k_option(clf, args.k)  # before the pose model is loaded or the stream opened
     judge = judge_named(clf, args.unknown, args.db)
     source: Any = int(args.source) if args.source.isdigit() else args.source
     if _is_file(args.source):
