@@ -1749,6 +1749,7 @@ def segment(
     ``chunk_frames`` or a ``k`` that is not a whole number from 1 to the classifier's,
     NotFittedError for an unfitted ``clf``."""
     _check_call(clf, recording, chunk_frames)
+    check_k(clf, k)  # before the default judge is calibrated (it may refuse the case base)
     check_judge(judge, clf.classes_)
     judge = judge or default_judge(clf)
     return finish(clf, solve_recording(clf, recording, k, chunk_frames), judge)

@@ -1,15 +1,13 @@
-"""Python callers read the argument's name, the commands their option; ``segment`` tells a
-segment by the window ``watch`` tells it by (hunt 47a).
+"""Python callers read the argument's name, the commands their option (hunt 47a).
 
 ``cbr.segmentation.check_k`` (behind ``segment``, ``solve_recording`` and ``LiveSegmenter``)
 named the option ``-k`` and ``cbr.unknown.judge_of`` the option ``--unknown`` to a Python
-caller, who gave neither. ``segment`` explained an activity's segment by the first of its
-windows with the highest vote for it (with k = 1 every window voting for it ties: the
-segment's first), where ``watch`` takes the one whose nearest activity it is most clearly.
+caller, who gave neither.
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -55,6 +53,18 @@ def test_a_python_caller_reads_k_not_the_commands_option(
             call()
         assert str(raised.value).startswith(f"k: {K_WORDS}, a whole number, got 4")
         assert isinstance(raised.value, ConfigError) and raised.value.source == "k"
+
+
+def test_segment_refuses_a_k_before_it_calibrates_the_default_judge(
+    fitted: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+) -> None:
+    """``segment(clf, rec, k=4)`` with no judge, on a classifier of k = 3 whose case base the
+    default judge cannot be calibrated on (one clip per activity): the k is refused, as with a
+    judge given. Before: the case base was, "no activity has cases apart from each other",
+    after calibrating on it, and the bad k went unsaid."""
+    clf, rec, _ = fitted
+    with pytest.raises(ValueError, match=f"^k: {re.escape(K_WORDS)}"):
+        segment(clf, rec, k=4)
 
 
 def test_a_python_caller_reads_the_judges_argument_not_the_commands_option(
