@@ -1723,7 +1723,7 @@ class StoreTransaction:
                 .where(CaseRow.case_base_id == cb.id, CaseRow.active.is_(True))
                 .where(CaseRow.source.in_(wanted[i : i + 500]))
             )
-            for case_id, source, a, b in sorted(self.session.execute(q).tuples()):
+            for case_id, source, a, b in sorted(self.session.execute(q).all(), key=lambda r: r[0]):
                 for name in given[source]:
                     out.setdefault((name, a, b), int(case_id))
         return out
@@ -1743,13 +1743,13 @@ class StoreTransaction:
         )
         found = [
             (int(case_id), source, a, b)
-            for case_id, source, a, b in self.session.execute(q).tuples()
+            for case_id, source, a, b in self.session.execute(q)
             if a is None or b is None or (a, b) in wanted
         ]
         for i in range(0, len(found), 500):  # bounded IN lists, and memory
             rows = found[i : i + 500]
             q2 = select(CaseRow.id, CaseRow.features).where(CaseRow.id.in_([r[0] for r in rows]))
-            blobs = {int(k): v for k, v in self.session.execute(q2).tuples()}
+            blobs = {int(k): v for k, v in self.session.execute(q2)}
             what = [f"features of case {r[0]}" for r in rows]
             arrays = decode_arrays([blobs[r[0]] for r in rows], what, self.store.where)
             yield [SourcedCase(*r, a) for r, a in zip(rows, arrays, strict=True)]
