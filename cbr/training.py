@@ -16,8 +16,7 @@ same fit either way.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,7 +35,8 @@ from casebase_store import (
 )
 from features.cluster import connect, gather, map_outcomes
 from features.datasets import DatasetEntry, clip_target
-from features.errors import ConfigError, DataError, InputError, PosecbrError
+from features.errors import ConfigError, DataError, InputError
+from features.interrupts import stored_before
 from features.poses import PoseSequence
 from features.progress import progress
 from features.text import counted, did_you_mean
@@ -625,26 +625,9 @@ def store_fitted(
 
     write_store(db, write)
     done = f"case base {name!r} was stored before it ({len(cb)} cases)"
-    with _stored_before(done, "casebase info shows it"):
+    with stored_before(done, "casebase info shows it"):
         _refresh_matrices(db, name)
         return _fitted_result(name, fitted, cb, labels, skipped, too_short, lost)
-
-
-@contextmanager
-def _stored_before(done: str, again: str) -> Iterator[None]:
-    """Work after a change committed (a large case base's matrices, the summary's counts):
-    Ctrl-C or SIGTERM there says the change is stored (``done``), not "interrupted" alone,
-    which reads as a change not made; so does an error there (a PostgreSQL connection lost
-    as the cases are counted), with what running the command again would do (``again``).
-    Said alone, "the connection to the database server was lost" read as nothing stored, and
-    run again the append was refused as held already."""
-    try:
-        yield
-    except KeyboardInterrupt:
-        raise KeyboardInterrupt(done) from None
-    except PosecbrError as exc:
-        exc.add(f"{done}: {again}")
-        raise
 
 
 def _added_before(n: int, name: str) -> str:
@@ -1035,12 +1018,12 @@ def append_described(
                 reps = cb.measure.represent(cb.problems)
                 tx.put_representations(kind, {int(c): reps[i] for i, c in enumerate(ids)})
             tx.log(info, "append", reason=f"{len(cb)} cases from {len(clips)} clips")
-        with _stored_before(_added_before(len(cb), name), _APPEND_AGAIN):
+        with stored_before(_added_before(len(cb), name), _APPEND_AGAIN):
             write_matrices(store, name)
             total = store.count_cases(name)
     finally:
         store.close()
-    with _stored_before(_added_before(len(cb), name), _APPEND_AGAIN):
+    with stored_before(_added_before(len(cb), name), _APPEND_AGAIN):
         return _appended_result(name, cb, total, text, plan, skipped, too_short, lost)
 
 

@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any, NoReturn
 
+from .errors import PosecbrError
 from .fileio import remove_unfinished_temporaries
 
 #: the exit status of a command stopped by Ctrl-C (128 + SIGINT, as a shell reports it)
@@ -81,6 +82,27 @@ def sigterm_held(then: Any = None) -> Iterator[Any]:
         signal.signal(signal.SIGTERM, previous if then is None else then)
         if came:
             signal.raise_signal(signal.SIGTERM)
+
+
+@contextmanager
+def stored_before(done: str, again: str = "", stored: bool = True) -> Iterator[None]:
+    """Work after a change committed (a large case base's matrices, a summary's counts):
+    Ctrl-C or SIGTERM there says the change is stored (``done``), not "interrupted" alone,
+    which reads as a change not made (run again, a trim trimmed twice); so does one of
+    posecbr's errors there (the store lost or locked as the matrices are written, a
+    PostgreSQL connection lost as the cases are counted), ``again`` after it when given (what
+    running the command again would do). ``stored`` False: nothing was committed, nothing
+    added."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        if not stored:
+            raise
+        raise KeyboardInterrupt(done) from None
+    except PosecbrError as exc:
+        if stored:
+            exc.add(f"{done}: {again}" if again else done)
+        raise
 
 
 def stop_workers(pool: Any) -> None:

@@ -7,13 +7,12 @@ import argparse
 import json
 import sys
 from collections import Counter
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from features.errors import ConfigError, DataError, PosecbrError
+from features.errors import ConfigError, DataError
 from features.fileio import atomic_path, check_lookup, check_output
+from features.interrupts import stored_before
 from features.text import counted, percent, shown
 from posecbr.arguments import path_arg
 
@@ -213,7 +212,9 @@ def _copy(args: argparse.Namespace) -> int:
     info, ids = write_store(args.to, lambda tx: tx.copy_case_base(whole, new))
     old = [int(c["id"]) for c in whole.cases]
     trimmed = sum(not c["active"] for c in whole.cases)
-    with _copied(info.name):
+    with stored_before(
+        f"the copy {info.name!r} was stored before it (casebase info --db shows it)"
+    ):
         _copy_matrices(args.to, new, len(old) - trimmed)
     in_use = len(old) - trimmed
     doc: dict[str, Any] = {
@@ -261,21 +262,6 @@ def _copy_matrices(to: str, name: str, in_use: int) -> None:
         write_matrices(writer, name)
     finally:
         writer.close()
-
-
-@contextmanager
-def _copied(name: str) -> Iterator[None]:
-    """Work after the copy committed: Ctrl-C or SIGTERM there, or an error (the store lost
-    or locked as the matrices are written), says the copy is stored (run again, it would be
-    refused: the name is taken)."""
-    done = f"the copy {name!r} was stored before it (casebase info --db shows it)"
-    try:
-        yield
-    except KeyboardInterrupt:
-        raise KeyboardInterrupt(done) from None
-    except PosecbrError as exc:
-        exc.add(done)
-        raise
 
 
 def _info(store: CaseStore, args: argparse.Namespace) -> int:
@@ -732,34 +718,24 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
                 info = tx.expect(name, stored.uid, stored.version)
                 record_trim(tx, info, report)
                 judges_after_change(tx, info, judges)
-            with _stored_before(report.size_before, report.size_after):
+            with stored_before(_trim_stored(report.size_before, report.size_after)):
                 write_matrices(writer, name)
         finally:
             writer.close()
-    with _stored_before(report.size_before, report.size_after, dropped and not args.dry_run):
+    with stored_before(
+        _trim_stored(report.size_before, report.size_after), stored=dropped and not args.dry_run
+    ):
         return _trim_said(args, store, name, report, stored.target, dropped)
 
 
-@contextmanager
-def _stored_before(before: int, after: int, stored: bool = True) -> Iterator[None]:
-    """Work after the trim committed (a large case base's matrices, the report): Ctrl-C or
-    SIGTERM there, or an error (the store lost or locked as the matrices are written), says
-    the trim is stored. Said "interrupted" alone, it was taken for a trim not made, and run
-    again trimmed the case base a second time."""
-    done = (
+def _trim_stored(before: int, after: int) -> str:
+    """What a trim stopped after its commit says (:func:`features.interrupts.stored_before`):
+    said "interrupted" alone, it was taken for a trim not made, and run again trimmed the
+    case base a second time."""
+    return (
         f"the trim was stored before it ({before} -> {after} cases: casebase info shows it);"
         " run again, it would trim the case base again"
     )
-    try:
-        yield
-    except KeyboardInterrupt:
-        if not stored:
-            raise
-        raise KeyboardInterrupt(done) from None
-    except PosecbrError as exc:
-        if stored:
-            exc.add(done)
-        raise
 
 
 def _trim_said(
