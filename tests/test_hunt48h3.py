@@ -382,3 +382,12 @@ def test_dad_scores_the_weighted_ratio_of_the_qmps_met_in_order() -> None:
     assert [o.status for o in score.qmps] == [
         "met", "met", "not met", "met", "out of order", "not observable"
     ]  # fmt: skip
+
+
+def test_dad_places_the_qmps_met_in_order_in_windows_in_that_order() -> None:
+    """The windows reported for the QMPs met are in the sequence's order: A (met in windows 0
+    and 2) then B (met in window 1 only) is A in window 0, B in window 1, never A in 2."""
+    from cbr.dad import ordered_match
+
+    met = np.array([[1, 0, 1], [0, 1, 0]], dtype=bool)
+    assert ordered_match(met, [1, 1]) == (2, [0, 1])
