@@ -1872,9 +1872,7 @@ def _check_timeout(timeout_s: Any) -> None:
     """Refuse a ``timeout_s`` that is not a finite number of seconds >= 0 (SQLite turns
     its busy timeout off for a negative one; a bool is no time)."""
     if not (is_number(timeout_s) and 0.0 <= float(timeout_s) < float("inf")):
-        raise ConfigError(
-            f"timeout_s must be a number of seconds >= 0, got {timeout_s!r}", "timeout_s"
-        )
+        raise ConfigError(f"must be a number of seconds >= 0, got {timeout_s!r}", "timeout_s")
 
 
 def open_store(

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from casebase_store import CaseBaseGone, CaseStore, StaleCaseError
-from features.errors import ConfigError, DataError, PosecbrError
+from features.errors import DataError, ParameterError, PosecbrError
 from features.poses import PoseSequence
 from features.progress import progress
 from features.text import shown
@@ -247,20 +247,21 @@ def check_feedback_label(
 ) -> str:
     """The feedback label, refused when empty, or (without ``new_label``) when it is no
     activity of the case base (no class of it, for a case base predicting another ``target``
-    column): a typo must not relabel a trained case or start a class."""
+    column): a typo must not relabel a trained case or start a class. Refused with
+    ParameterError naming the argument ``label`` (``classify`` says ``--feedback``)."""
     from .explain import class_noun
 
     text = str(label).strip()
     noun = class_noun(target)
     if not text:
-        raise ConfigError("the feedback label is empty", "--feedback")
+        raise ParameterError("the feedback label is empty", "label")
     if text not in known and not new_label:
         close = difflib.get_close_matches(text, list(known), n=1)
         hint = f"; did you mean {close[0]!r}? " if close else ". "
-        raise ConfigError(
+        raise ParameterError(
             f"{text!r} is not {'an' if noun[0] in 'aeiou' else 'a'} {noun} of this case base"
             f" (known: {', '.join(known)}){hint}To add a new {noun}, pass --new-label as well",
-            "--feedback",
+            "label",
         )
     return text
 
@@ -268,15 +269,16 @@ def check_feedback_label(
 def check_feedback_cases(stored: StoredClassifier) -> None:
     """Refuse feedback to a case base of repetitions or windows (``train --split``): the clip
     would be retained whole, a case of another kind than every other; ``train --append``
-    cuts it as the case base was cut."""
+    cuts it as the case base was cut. ParameterError naming the argument ``stored``
+    (``classify`` says ``--feedback``)."""
     if stored.cases in (None, "clips"):
         return
-    raise ConfigError(
+    raise ParameterError(
         f"case base {stored.name!r} holds {stored.cases} (trained with --split "
         f"{stored.cases}): feedback would retain the clip whole, a case of another kind; "
         f"add the clip with posecbr train CLIP --append (a pose file carrying its label, or a "
         f"labels CSV), which cuts it into {stored.cases} as the case base was; nothing written",
-        "--feedback",
+        "stored",
     )
 
 
@@ -292,14 +294,12 @@ class FeedbackSettings:
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.novelty_threshold) and self.novelty_threshold >= 0):
-            raise ConfigError(
-                f"the novelty threshold must be a number >= 0, got {self.novelty_threshold!r}",
-                "--novelty",
+            raise ParameterError(
+                f"must be a number >= 0, got {self.novelty_threshold!r}", "novelty_threshold"
             )
         if not (np.isfinite(self.benefit_threshold) and 0 <= self.benefit_threshold <= 1):
-            raise ConfigError(
-                f"the benefit threshold must be in [0, 1], got {self.benefit_threshold!r}",
-                "--benefit",
+            raise ParameterError(
+                f"must be in [0, 1], got {self.benefit_threshold!r}", "benefit_threshold"
             )
 
 

@@ -107,42 +107,38 @@ from .similarity import SimilarityMeasure, get_measure
 from .weights import MIRROR_FLAG, WEIGHTINGS
 
 
-def as_sequences(X: Any, where: str = "X", name: str = "X") -> list[PoseSequence]:
+def as_sequences(X: Any, name: str = "X") -> list[PoseSequence]:
     """``X`` as a list of PoseSequence (a list, tuple, 1-D object array or other ordered
     iterable; not a set or a dict, whose order is not the clips'); anything else is an
     :class:`features.errors.InputError` (the ``ValueError`` scikit-learn users catch) naming
     what was given (``name``: what the caller calls ``X``, as :func:`cbr.training.train`'s
     ``clips``)."""
     if isinstance(X, PoseSequence):
-        raise InputError(
-            f"{name} must be a sequence of PoseSequence, got a single PoseSequence", where
-        )
+        raise InputError("must be a sequence of PoseSequence, got a single PoseSequence", name)
     if isinstance(X, np.ndarray) and X.dtype != object:
         raise InputError(
-            f"{name} must be a sequence of PoseSequence, got a {X.dtype} array of shape {X.shape}",
-            where,
+            f"must be a sequence of PoseSequence, got a {X.dtype} array of shape {X.shape}",
+            name,
         )
     if isinstance(X, str | bytes) or not hasattr(X, "__iter__"):
-        raise InputError(
-            f"{name} must be a sequence of PoseSequence, got {type(X).__name__}", where
-        )
+        raise InputError(f"must be a sequence of PoseSequence, got {type(X).__name__}", name)
     if isinstance(X, AbstractSet | Mapping):  # no order to match the answers or labels to
         kind = "set" if isinstance(X, AbstractSet) else "mapping"
         raise InputError(
-            f"{name} must be a sequence of PoseSequence, got a {kind} ({type(X).__name__}):"
+            f"must be a sequence of PoseSequence, got a {kind} ({type(X).__name__}):"
             " its order is not the clips' (a list of them keeps it)",
-            where,
+            name,
         )
     if isinstance(X, np.ndarray) and X.ndim != 1:  # flattened, a (2, 3) table was six clips
         raise InputError(
-            f"{name} must be a sequence of PoseSequence, got an object array of shape {X.shape}"
+            f"must be a sequence of PoseSequence, got an object array of shape {X.shape}"
             " (one dimension: a clip each)",
-            where,
+            name,
         )
     items = list(X)
     for i, s in enumerate(items):
         if not isinstance(s, PoseSequence):
-            raise InputError(f"{name}[{i}] is a {type(s).__name__}, not a PoseSequence", where)
+            raise InputError(f"{name}[{i}] is a {type(s).__name__}, not a PoseSequence", name)
     return items
 
 
@@ -164,9 +160,7 @@ def check_labels(y: Any, n: int, name: str = "y") -> np.ndarray:
     (:class:`features.errors.InputError`; ``name``: what the caller calls ``y``)."""
     y_arr = np.asarray(y, dtype=object)
     if y_arr.ndim == 0:  # a generator, a string, None: no labels to count
-        raise InputError(
-            f"{name} must hold one label per clip ({n}), got a {type(y).__name__}", name
-        )
+        raise InputError(f"must hold one label per clip ({n}), got a {type(y).__name__}", name)
     if y_arr.ndim != 1 or len(y_arr) != n:
         raise InputError(f"{n} clips but {name} has shape {y_arr.shape}", name)
     for i, v in enumerate(y_arr):
@@ -446,14 +440,12 @@ class CaseBaseClassifier(Classifier):
         """Refuse a ``k`` or ``weights`` the vote cannot use: checked by fit, and again by
         every classification (``set_params(k=...)`` after fit, as ``classify -k`` votes)."""
         if isinstance(self.k, bool) or not isinstance(self.k, int | np.integer) or self.k < 1:
-            raise ConfigError(f"k must be a positive integer, got {self.k!r}", "k")
+            raise ConfigError(f"must be a positive integer, got {self.k!r}", "k")
         if self.weights not in VOTE_WEIGHTINGS:
-            raise ConfigError(
-                f"weights must be 'distance' or 'uniform', got {self.weights!r}", "weights"
-            )
+            raise ConfigError(f"must be 'distance' or 'uniform', got {self.weights!r}", "weights")
         if self.class_weight not in CLASS_WEIGHTS:
             raise ConfigError(
-                f"class_weight must be 'balanced' or 'none', got {self.class_weight!r}",
+                f"must be 'balanced' or 'none', got {self.class_weight!r}",
                 "class_weight",
             )
 
@@ -470,19 +462,17 @@ class CaseBaseClassifier(Classifier):
         self._check_kinds()
         if self.editor is not None and self.editor not in EDITORS:
             raise ConfigError(
-                f"editor must be None or one of {', '.join(EDITORS)}, got {self.editor!r}"
+                f"must be None or one of {', '.join(EDITORS)}, got {self.editor!r}"
                 f"{did_you_mean(str(self.editor), EDITORS)}",
                 "editor",
             )
         if not isinstance(self.velocity, bool | np.bool_):
-            raise ConfigError(f"velocity must be True or False, got {self.velocity!r}", "velocity")
+            raise ConfigError(f"must be True or False, got {self.velocity!r}", "velocity")
         if self.summary != "auto" and not isinstance(self.summary, bool | np.bool_):
-            raise ConfigError(
-                f"summary must be True, False or 'auto', got {self.summary!r}", "summary"
-            )
+            raise ConfigError(f"must be True, False or 'auto', got {self.summary!r}", "summary")
         if not isinstance(self.mirror, bool | np.bool_) and self.mirror not in ("auto", *SIDES):
             raise ConfigError(
-                f"mirror must be True, False, 'auto', {', '.join(repr(s) for s in SIDES)}; "
+                f"must be True, False, 'auto', {', '.join(repr(s) for s in SIDES)}; "
                 f"got {self.mirror!r}{did_you_mean(str(self.mirror), ('auto', *SIDES))}",
                 "mirror",
             )
@@ -492,11 +482,11 @@ class CaseBaseClassifier(Classifier):
             or int(self.phases) < 0
         ):
             raise ConfigError(
-                f"phases must be 'auto' or a whole number >= 0, got {self.phases!r}", "phases"
+                f"must be 'auto' or a whole number >= 0, got {self.phases!r}", "phases"
             )
         if self.feature_weights not in ("auto", *WEIGHTINGS):
             raise ConfigError(
-                f"feature_weights must be 'auto', 'fisher' or 'none', got {self.feature_weights!r}"
+                f"must be 'auto', 'fisher' or 'none', got {self.feature_weights!r}"
                 f"{did_you_mean(str(self.feature_weights), ('auto', *WEIGHTINGS))}",
                 "feature_weights",
             )
@@ -509,7 +499,7 @@ class CaseBaseClassifier(Classifier):
         ignored). Not in :meth:`_check_params`: a model stored with both loads as it did."""
         if self.trim is not None and self.editor not in (None, "novelty-benefit"):
             raise ConfigError(
-                f"trim goes with editor='novelty-benefit' (the share of each activity it keeps);"
+                f"goes with editor='novelty-benefit' (the share of each activity it keeps);"
                 f" editor={self.editor!r} decides how many cases it keeps, got trim={self.trim!r}",
                 "trim",
             )
@@ -519,15 +509,13 @@ class CaseBaseClassifier(Classifier):
         kind (``bool("no")`` is true; True is no fraction; ``**"band=0.1"`` a TypeError)."""
         trim = self.trim
         if trim is not None and not (is_number(trim) and 0.0 < float(trim) <= 1.0):
-            raise ConfigError(f"trim must be in (0, 1], got {trim!r}", "trim")
+            raise ConfigError(f"must be in (0, 1], got {trim!r}", "trim")
         for name in ("angles", "positions"):
             if not isinstance(getattr(self, name), bool | np.bool_):
-                raise ConfigError(
-                    f"{name} must be True or False, got {getattr(self, name)!r}", name
-                )
+                raise ConfigError(f"must be True or False, got {getattr(self, name)!r}", name)
         if self.similarity_params is not None and not isinstance(self.similarity_params, Mapping):
             raise ConfigError(
-                "similarity_params must be None or a dict of the measure's parameters, got "
+                "must be None or a dict of the measure's parameters, got "
                 f"{self.similarity_params!r}",
                 "similarity_params",
             )

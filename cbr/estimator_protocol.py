@@ -146,11 +146,11 @@ def accuracy(truth: Any, predicted: np.ndarray, sample_weight: Any = None) -> fl
     labels = list(truth) if hasattr(truth, "__iter__") and not isinstance(truth, str) else None
     if labels is None or len(labels) != len(predicted):
         given = "no sequence" if labels is None else f"{len(labels)} labels"
-        raise InputError(f"y must hold one label per clip ({len(predicted)}), got {given}", "y")
+        raise InputError(f"must hold one label per clip ({len(predicted)}), got {given}", "y")
     nested = next((i for i, t in enumerate(labels) if np.ndim(t) != 0), None)
     if nested is not None:
         raise InputError(
-            f"y must be 1-D, one label per clip: y[{nested}] is a {type(labels[nested]).__name__}",
+            f"must be 1-D, one label per clip: y[{nested}] is a {type(labels[nested]).__name__}",
             "y",
         )
     right = np.array([bool(t == p) for t, p in zip(labels, predicted.tolist(), strict=True)])

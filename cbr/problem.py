@@ -119,23 +119,20 @@ class FeatureConfig:
 
     def __post_init__(self) -> None:
         if self.level not in ("fluents", "qmp"):
-            raise ConfigError(
-                f"features must be 'fluents' or 'qmp', got {self.level!r}", "features"
-            )
+            raise ConfigError(f"must be 'fluents' or 'qmp', got {self.level!r}", "features")
         if (
             isinstance(self.length, bool)
             or not isinstance(self.length, int | np.integer)
             or not 2 <= int(self.length) <= MAX_LENGTH
         ):
             raise ConfigError(
-                f"length must be a whole number of frames from 2 to {MAX_LENGTH}, got "
-                f"{self.length!r}",
+                f"must be a whole number of frames from 2 to {MAX_LENGTH}, got {self.length!r}",
                 "length",
             )
         if isinstance(self.states, str):
             if self.states not in STATE_GROUPS:
                 raise ConfigError(
-                    f"states must be one of {', '.join(STATE_GROUPS)} or a list of state names,"
+                    f"must be one of {', '.join(STATE_GROUPS)} or a list of state names,"
                     f" got {self.states!r}{did_you_mean(self.states, STATE_GROUPS)}",
                     "states",
                 )
@@ -149,22 +146,19 @@ class FeatureConfig:
             self.length
         ):
             raise ConfigError(
-                f"phases must be a whole number from 0 to length ({self.length}), got "
-                f"{self.phases!r}",
+                f"must be a whole number from 0 to length ({self.length}), got {self.phases!r}",
                 "phases",
             )
         self._check_velocity()
         if self.side not in SIDE_MODES:
-            raise ConfigError(
-                f"side must be one of {', '.join(SIDE_MODES)}, got {self.side!r}", "side"
-            )
+            raise ConfigError(f"must be one of {', '.join(SIDE_MODES)}, got {self.side!r}", "side")
 
     def _check_velocity(self) -> None:
         if not isinstance(self.velocity, bool | np.bool_):
-            raise ConfigError(f"velocity must be true or false, got {self.velocity!r}", "velocity")
+            raise ConfigError(f"must be true or false, got {self.velocity!r}", "velocity")
         if self.velocity and not (self.summary and self.level == "fluents"):
             raise ConfigError(
-                "velocity (rates of change) needs fluent-level clip summaries (summary=True)",
+                "rates of change need fluent-level clip summaries (summary=True)",
                 "velocity",
             )
 

@@ -42,7 +42,7 @@ def novelty(cb: CaseBase, problem: Problem | np.ndarray, scale: float) -> float:
         or not isinstance(scale, numbers.Real)
         or not (math.isfinite(float(scale)) and float(scale) > 0.0)
     ):
-        raise ConfigError(f"scale must be a finite number > 0, got {scale!r}", "scale")
+        raise ConfigError(f"must be a finite number > 0, got {scale!r}", "scale")
     values = problem.values if isinstance(problem, Problem) else problem
     return float(retrieve(cb, values, 1).distances[0]) / scale
 

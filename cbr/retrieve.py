@@ -26,7 +26,7 @@ class Retrieval:
 
 def _check_k(k: int) -> None:
     if isinstance(k, bool) or not isinstance(k, int | np.integer) or k < 1:
-        raise ConfigError(f"k must be a whole number >= 1, got {k!r}", "k")
+        raise ConfigError(f"must be a whole number >= 1, got {k!r}", "k")
 
 
 def retrieve(

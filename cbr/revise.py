@@ -52,7 +52,7 @@ def _check_rate(rate: float) -> None:
         or not isinstance(rate, numbers.Real)
         or not (math.isfinite(float(rate)) and 0.0 < float(rate) <= 1.0)
     ):
-        raise ConfigError(f"rate must be a number in (0, 1], got {rate!r}", "rate")
+        raise ConfigError(f"must be a number in (0, 1], got {rate!r}", "rate")
 
 
 def plan_revision(

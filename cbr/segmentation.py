@@ -1554,7 +1554,7 @@ def _check_call(clf: Any, recording: Any, chunk_frames: Any) -> None:
         or chunk_frames < 0
     ):
         raise ParameterError(
-            f"chunk_frames must be None or a whole number >= 0, got {chunk_frames!r}",
+            f"must be None or a whole number >= 0, got {chunk_frames!r}",
             "chunk_frames",
         )
 
@@ -1571,13 +1571,12 @@ def check_judge(judge: Any, classes: Sequence[Any] | None = None) -> None:
     otherwise to be no judge in the first window judged."""
     if isinstance(judge, str):
         raise InputError(
-            f"judge must be None or a judge of cbr.unknown (judge_of(clf, {judge!r})), not its"
-            " name",
+            f"must be None or a judge of cbr.unknown (judge_of(clf, {judge!r})), not its name",
             "judge",
         )
     if isinstance(judge, numbers.Number | np.bool_):  # k or a threshold in its place
         raise InputError(
-            "judge must be None or a judge of cbr.unknown (judge_of(clf, 'spread-margin')),"
+            "must be None or a judge of cbr.unknown (judge_of(clf, 'spread-margin')),"
             f" got {type(judge).__name__}",
             "judge",
         )

@@ -531,9 +531,7 @@ def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
     try:
         clf._check_params()
     except ConfigError as exc:
-        raise StoreError(
-            f"case base {name!r} has a bad model ({exc.message})", store.where
-        ) from None
+        raise StoreError(f"case base {name!r} has a bad model ({exc})", store.where) from None
     fw = model.get("feature_weights")
     clf.feature_config_ = config
     clf.measure_ = cb.measure

@@ -334,10 +334,10 @@ def _check_what(estimator: Any, target: Any, cases: Any) -> None:
         )
         raise InputError(f"a CaseBaseClassifier is expected, got {got}", "estimator")
     if not isinstance(target, str) or not target.strip():
-        raise InputError(f"target must be the name of a column, got {target!r}", "target")
+        raise InputError(f"must be the name of a column, got {target!r}", "target")
     if not isinstance(cases, str) or cases not in CASE_KINDS:
         raise InputError(
-            f"cases must be one of {', '.join(map(repr, CASE_KINDS))}, got {cases!r}", "cases"
+            f"must be one of {', '.join(map(repr, CASE_KINDS))}, got {cases!r}", "cases"
         )
 
 
@@ -363,7 +363,7 @@ def train(
     the clips are, it cuts nothing: :func:`cut` and :func:`cut_recording` cut them as
     ``train --split`` does (windows for ``segment`` and ``watch``)."""
     _check_name(name)
-    clips = as_sequences(clips, "clips", "clips")
+    clips = as_sequences(clips, "clips")
     check_labels(labels, len(clips), "labels")
     _check_what(estimator, target, cases)
     plan = fit_plan(estimator)
@@ -380,9 +380,7 @@ def _check_split(split: Any) -> str:
     from features.repetitions import SPLITS
 
     if not isinstance(split, str) or split not in SPLITS:
-        raise InputError(
-            f"split must be one of {', '.join(map(repr, SPLITS))}, got {split!r}", "split"
-        )
+        raise InputError(f"must be one of {', '.join(map(repr, SPLITS))}, got {split!r}", "split")
     return split
 
 
@@ -404,7 +402,7 @@ def cut(
     from features.datasets import Clip
     from features.repetitions import cut_clips
 
-    seqs = as_sequences(clips, "clips", "clips")
+    seqs = as_sequences(clips, "clips")
     check_labels(labels, len(seqs), "labels")
     _check_split(split)
     out: list[PoseSequence] = []
@@ -421,14 +419,14 @@ def _given_labels(frame_labels: Any, names: dict[str, str] | None) -> list[str]:
     or whole numbers (as a label file's codes), else an InputError naming ``frame_labels``."""
     if isinstance(frame_labels, bytes) or not hasattr(frame_labels, "__iter__"):
         raise InputError(
-            "frame_labels must be a label file's path or a sequence of labels (one per frame or"
+            "must be a label file's path or a sequence of labels (one per frame or"
             f" block), got {type(frame_labels).__name__}",
             "frame_labels",
         )
     values = np.asarray(list(frame_labels), dtype=object)
     if values.ndim != 1:
         raise InputError(
-            f"frame_labels must be one label per frame or block, got shape {values.shape}",
+            f"must be one label per frame or block, got shape {values.shape}",
             "frame_labels",
         )
     out = []
@@ -462,7 +460,7 @@ def _label_names(names: Any) -> dict[str, str] | None:
     if isinstance(names, dict):
         return {str(k): str(v) for k, v in names.items()}
     raise InputError(
-        f"names must be a label names file or a dict of code to name, got {type(names).__name__}",
+        f"must be a label names file or a dict of code to name, got {type(names).__name__}",
         "names",
     )
 
@@ -491,16 +489,14 @@ def cut_recording(
     from features.repetitions import MIN_PERIOD_S, cut_clips, long_enough
 
     if not isinstance(recording, PoseSequence):
-        raise InputError(
-            f"recording must be a PoseSequence, got {type(recording).__name__}", "recording"
-        )
+        raise InputError(f"must be a PoseSequence, got {type(recording).__name__}", "recording")
     _check_split(split)
     if block_s is not None and (
         isinstance(block_s, bool)
         or not isinstance(block_s, int | float | np.integer | np.floating)
         or not (np.isfinite(block_s) and block_s > 0)
     ):
-        raise InputError(f"block_s must be a finite number of seconds > 0, got {block_s!r}",
+        raise InputError(f"must be a finite number of seconds > 0, got {block_s!r}",
                          "block_s")  # fmt: skip
     block = None if block_s is None else float(block_s)
     mapping = _label_names(names)

@@ -63,7 +63,7 @@ from typing import Any, Protocol, TypeVar
 import numpy as np
 
 from features.body import MIRRORED
-from features.errors import ConfigError, DataError, ParameterError
+from features.errors import DataError, ParameterError
 from features.text import percent
 
 from .casebase import CaseBase, frame_array, overlapping
@@ -139,9 +139,10 @@ def equal_error_threshold(known: np.ndarray, novel: np.ndarray) -> float:
 
 def false_unknown_threshold(known: np.ndarray, rate: float = FALSE_UNKNOWN) -> float:
     """The smallest of the ``known`` values ``(n,)`` (non-empty) that at most a share ``rate``
-    of them exceed: the ``1 - rate`` quantile, taken at a sample value (never between two)."""
+    of them exceed: the ``1 - rate`` quantile, taken at a sample value (never between two).
+    A ``rate`` outside [0, 1) is refused with ParameterError naming it."""
     if not 0.0 <= rate < 1.0:
-        raise ConfigError(f"the false-unknown rate must be in [0, 1), got {rate!r}", "--unknown")
+        raise ParameterError(f"the false-unknown rate must be in [0, 1), got {rate!r}", "rate")
     k = np.sort(np.asarray(known, dtype=np.float64))
     # the first sorted value with at most rate * n values above it
     return float(k[max(0, int(np.ceil(len(k) * (1.0 - rate) - 1e-9)) - 1)])
@@ -729,8 +730,8 @@ def threshold_grid(
     priors = np.array([w[1] for w in weights], dtype=np.float64)
     for rate in rates.tolist():
         if not 0.0 <= rate < 1.0:
-            raise ConfigError(
-                f"the false-unknown rate must be in [0, 1), got {rate!r}", "--unknown"
+            raise ParameterError(
+                f"the false-unknown rate must be in [0, 1), got {rate!r}", "weights"
             )
     margins = np.asarray(margins, dtype=np.float64)
     pooled = np.sort(margins)[_quantile_at(np.array([len(margins)]), rates)[:, 0]]

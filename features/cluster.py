@@ -13,7 +13,8 @@ it is reported as failed). Functions and their arguments travel by pickle (cloud
 they must be importable on the workers and the inputs they name reachable there.
 
 dask is an optional dependency (``pip install 'posecbr[cluster]'``): without it,
-``--scheduler`` is refused with one line.
+``--scheduler`` is refused with one line. Refusals name the Python argument, ``scheduler``
+(a malformed one with ParameterError, a ValueError too); the commands say ``--scheduler``.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 from urllib.parse import urlsplit
 
-from .errors import ConfigError, PosecbrError
+from .errors import ConfigError, ParameterError, PosecbrError
 from .interrupts import interrupts_held, interrupts_ignored_by_children
 from .progress import progress
 
@@ -82,7 +83,7 @@ def _dask() -> Any:
     except ImportError:
         raise ConfigError(
             "needs dask.distributed, which is not installed (pip install 'posecbr[cluster]')",
-            "--scheduler",
+            "scheduler",
         ) from None
     return dd
 
@@ -91,14 +92,14 @@ def local_workers(spec: str) -> int | None:
     """N of ``local:N``; None for a scheduler address. A bad spec is refused."""
     if not spec.startswith(LOCAL_PREFIX):
         if not spec.strip():
-            raise ConfigError("the scheduler address is empty", "--scheduler")
+            raise ParameterError("the scheduler address is empty", "scheduler")
         _refuse_mistyped_local(spec)
         return None
     text = spec[len(LOCAL_PREFIX) :]
     # isdigit() holds for "²", which int() refuses; isdecimal() for what int() reads
     if not text.isdecimal() or int(text) < 1:
-        raise ConfigError(
-            f"local:N needs a whole number of workers >= 1, got {spec!r}", "--scheduler"
+        raise ParameterError(
+            f"local:N needs a whole number of workers >= 1, got {spec!r}", "scheduler"
         )
     return int(text)
 
@@ -114,10 +115,10 @@ def _refuse_mistyped_local(spec: str) -> None:
     on a port below 1000 unless told, Dask's own is 8786)."""
     m = _LOCAL_TYPO.fullmatch(spec.strip())
     if m and difflib.get_close_matches(m["word"].lower(), ["local"], n=1, cutoff=0.75):
-        raise ConfigError(
+        raise ParameterError(
             f"{spec!r} is neither local:N nor a scheduler address (did you mean "
             f"local:{int(m['n'])}?)",
-            "--scheduler",
+            "scheduler",
         )
 
 
@@ -176,7 +177,7 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
         # TypeError: a scheme this Dask cannot connect by as set up (tls:// without
         # certificates, ucx:// without UCX)
         said = _without_password(f"cannot reach the Dask scheduler at {spec} ({exc})", spec)
-        refused = ConfigError(said, "--scheduler")
+        refused = ConfigError(said, "scheduler")
     if refused is not None:
         # the client that failed to connect is left half-built in a reference cycle, its loop
         # runner started: collected at some later moment, its __del__ closes it and takes
@@ -194,7 +195,7 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
                 f"lost the Dask scheduler at {spec} mid-run (it stopped, or the network to it "
                 "failed): run the command again once it is back"
             )
-            raise ConfigError(_without_password(said, spec), "--scheduler") from None
+            raise ConfigError(_without_password(said, spec), "scheduler") from None
         finally:
             client.close()
 

@@ -888,7 +888,7 @@ def evaluate_chunks(
     table = table or DEFAULT_TABLE
     for name, value, least in (("chunk_frames", chunk_frames, 1), ("margin", margin, 0)):
         if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < least:
-            raise ConfigError(f"{name} must be a whole number >= {least}, got {value!r}", name)
+            raise ConfigError(f"must be a whole number >= {least}, got {value!r}", name)
     n = seq.n_frames
     history = history_frames(table, seq.fps)
     for start in range(0, n, chunk_frames):

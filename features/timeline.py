@@ -258,9 +258,9 @@ def _check_options(threshold: float, min_run: int) -> None:
         or not isinstance(threshold, int | float | np.integer | np.floating)
         or not 0.0 < float(threshold) <= 1.0
     ):
-        raise ConfigError(f"threshold must be in (0, 1], got {threshold!r}", "threshold")
+        raise ConfigError(f"must be in (0, 1], got {threshold!r}", "threshold")
     if isinstance(min_run, bool) or not isinstance(min_run, int | np.integer) or min_run < 1:
-        raise ConfigError(f"min_run must be a whole number >= 1, got {min_run!r}", "min_run")
+        raise ConfigError(f"must be a whole number >= 1, got {min_run!r}", "min_run")
 
 
 def describe_clip(

@@ -7,11 +7,12 @@ import json
 import os
 import re
 import sys
-from collections.abc import Callable, Collection, Iterable, Sequence
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from features.errors import ConfigError, DataError
+from features.errors import ConfigError, DataError, PosecbrError
 
 #: what ``-k N`` means in every command that votes with the nearest cases (train, classify,
 #: compare, segment, watch): one meaning for one letter, said in the same words; what differs
@@ -22,6 +23,25 @@ K_VOTES = "the N nearest cases vote, each weighed by 1/distance"
 def add_k_option(p: argparse.ArgumentParser, default: int | None, said: str) -> None:
     """``-k N`` (also ``--k N``): :data:`K_VOTES`, then ``said`` (where, the default)."""
     p.add_argument("-k", "--k", type=int, default=default, metavar="N", help=f"{K_VOTES}{said}")
+
+
+#: what the commands that take ``--scheduler`` (extract, train, compare) call the argument
+SCHEDULER = {"scheduler": "--scheduler"}
+
+
+@contextmanager
+def as_options(options: Mapping[str, str]) -> Iterator[None]:
+    """A refusal inside, of a Python call naming its argument ("folds: must be at least 2"),
+    said of the option of ``options`` (argument: option) that set it ("--folds: must be at
+    least 2"); any other error as it is."""
+    try:
+        yield
+    except PosecbrError as exc:
+        option = options.get(exc.source or "")
+        if option is not None:
+            exc.source = option
+            exc.args = (f"{option}: {exc.message}",)
+        raise
 
 
 #: a URL's scheme and "://" (two letters at least: not a drive letter)

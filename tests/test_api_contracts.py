@@ -86,9 +86,9 @@ def test_retain_refuses_a_scale_that_is_not_a_finite_positive_number(scale: floa
 @pytest.mark.parametrize("k", [0, -1, 1.5, True, "2"])
 def test_retrieve_refuses_k_that_is_not_a_whole_number_of_at_least_one(k: object) -> None:
     cb = _line([0.0, 1.0, 3.0], ["a", "a", "b"])
-    with pytest.raises(ConfigError, match="k must be"):
+    with pytest.raises(ConfigError, match="k: must be"):
         retrieve(cb, np.array([2.0, 0.0]), k)  # type: ignore[arg-type]
-    with pytest.raises(ConfigError, match="k must be"):
+    with pytest.raises(ConfigError, match="k: must be"):
         retrieve_many(cb, [np.array([2.0, 0.0])], k)  # type: ignore[arg-type]
 
 

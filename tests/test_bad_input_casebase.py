@@ -171,11 +171,11 @@ def test_a_damaged_case_base_is_one_line_and_stays_as_it_is(
     [
         (
             ["classify", str(CLIP), "--novelty", "nan", "--feedback", "deep_squat"],
-            "novelty threshold must be a number >= 0",
+            "--novelty: must be a number >= 0, got nan",
         ),  # fmt: skip
         (
             ["classify", str(CLIP), "--benefit", "-1", "--feedback", "deep_squat"],
-            "benefit threshold must be in [0, 1]",
+            "--benefit: must be in [0, 1], got -1.0",
         ),  # fmt: skip
         (["classify", str(CLIP), "--top", "-1"], "--top: must be >= 1, got -1"),
         (["classify", str(CLIP), "-k", "0"], "-k: must be >= 1, got 0"),

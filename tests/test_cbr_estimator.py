@@ -72,11 +72,11 @@ def test_bad_input_gets_clear_errors(data: tuple) -> None:
         CaseBaseClassifier().fit(X[:3], ["a", "b"])
     with pytest.raises(DataError, match=r"X\[1\] is a str"):
         CaseBaseClassifier().fit([X[0], "clip.npz"], ["a", "b"])
-    with pytest.raises(ConfigError, match="k must be a positive integer"):
+    with pytest.raises(ConfigError, match="k: must be a positive integer"):
         CaseBaseClassifier(k=0).fit(X, y)
     with pytest.raises(ConfigError, match="unknown similarity 'cosine'"):
         CaseBaseClassifier(similarity="cosine").fit(X, y)
-    with pytest.raises(ConfigError, match="features must be 'fluents' or 'qmp'"):
+    with pytest.raises(ConfigError, match="features: must be 'fluents' or 'qmp'"):
         CaseBaseClassifier(features="pixels").fit(X, y)
 
 

@@ -232,7 +232,7 @@ def test_bad_options_are_config_errors() -> None:
     X = [_arm_clip("left", "sideways", "s1", np.random.default_rng(0)) for _ in range(2)]
     with pytest.raises(ConfigError, match="feature_weights"):
         CaseBaseClassifier(feature_weights="relief").fit(X, ["a", "b"])
-    with pytest.raises(ConfigError, match="mirror must be"):
+    with pytest.raises(ConfigError, match="mirror: must be"):
         CaseBaseClassifier(mirror="yes").fit(X, ["a", "b"])
     with pytest.raises(ConfigError, match="learned feature weights need vector problems"):
         CaseBaseClassifier(similarity="dtw", feature_weights="fisher").fit(X, ["a", "b"])

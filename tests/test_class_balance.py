@@ -110,7 +110,7 @@ def test_the_explanation_follows_the_balanced_vote(squats: CaseBaseClassifier) -
 
 
 def test_a_bad_class_weight_is_refused() -> None:
-    with pytest.raises(ConfigError, match="class_weight must be 'balanced' or 'none'"):
+    with pytest.raises(ConfigError, match="class_weight: must be 'balanced' or 'none'"):
         CaseBaseClassifier(class_weight="equal").fit([squat_clip(0.9)] * 2, ["a", "b"])
 
 

@@ -109,7 +109,7 @@ def test_quiet_prints_the_summary_alone_and_verbose_everything(
     assert len(clips) == 4  # each clip's similar cases: the two nearest of its five
     assert all(len(re.findall(r"^ +case #\d+ ", c, re.M)) == 2 for c in clips)
     assert main(["classify", str(test), "--db", stores["label"], "--quiet", "--verbose"]) == 1
-    assert "--quiet and --verbose" in capsys.readouterr().err
+    assert "--quiet: excludes --verbose" in capsys.readouterr().err
 
 
 def test_a_repetition_check_reads_its_target_as_words(

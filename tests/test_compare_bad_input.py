@@ -198,7 +198,7 @@ def test_a_json_output_in_the_folder_out_makes_is_written(
     ("option", "message"),
     [
         # a traceback from numpy after the whole cross-validation
-        (["--seed", "-1"], "--seed: seed must be in 0 to 2**32 - 1, got -1"),
+        (["--seed", "-1"], "--seed: must be in 0 to 2**32 - 1, got -1"),
         # clamped: every case voted and the figures changed with the folds' sizes
         (
             ["--k", "7"],

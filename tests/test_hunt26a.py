@@ -145,21 +145,21 @@ def test_segment_and_live_refuse_a_judge_given_by_name(
     segment raised AttributeError ('str' object has no attribute 'unlike') after solving
     every window, and LiveSegmenter took it, to fail the same way at its first window."""
     clf, X = fitted
-    with pytest.raises(InputError, match=r"judge must be .*judge_of\(clf, 'held-out'\)"):
+    with pytest.raises(InputError, match=r"judge: must be .*judge_of\(clf, 'held-out'\)"):
         segment(clf, _recording(X), judge="held-out")  # type: ignore[arg-type]
-    with pytest.raises(InputError, match=r"judge must be .*judge_of\(clf, 'held-out'\)"):
+    with pytest.raises(InputError, match=r"judge: must be .*judge_of\(clf, 'held-out'\)"):
         LiveSegmenter(clf, 30.0, judge="held-out")  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(
     ("params", "message"),
     [
-        ({"angles": "no"}, "angles must be True or False, got 'no'"),
-        ({"positions": None}, "positions must be True or False, got None"),
-        ({"positions": "false"}, "positions must be True or False, got 'false'"),
-        ({"trim": True}, r"trim must be in \(0, 1\], got True"),
-        ({"similarity_params": "band=0.1"}, "similarity_params must be None or a dict"),
-        ({"similarity_params": [("band", 0.1)]}, "similarity_params must be None or a dict"),
+        ({"angles": "no"}, "angles: must be True or False, got 'no'"),
+        ({"positions": None}, "positions: must be True or False, got None"),
+        ({"positions": "false"}, "positions: must be True or False, got 'false'"),
+        ({"trim": True}, r"trim: must be in \(0, 1\], got True"),
+        ({"similarity_params": "band=0.1"}, "similarity_params: must be None or a dict"),
+        ({"similarity_params": [("band", 0.1)]}, "similarity_params: must be None or a dict"),
     ],
 )
 def test_classifier_refuses_parameters_of_the_wrong_kind(params: dict, message: str) -> None:
@@ -232,7 +232,7 @@ def test_open_store_refuses_a_timeout_that_is_not_seconds(tmp_path: Path, timeou
     """Before: "5" and None raised TypeError, NaN ValueError ("cannot convert float NaN to
     integer") and -1 and True were taken (SQLite's busy timeout turned off; one second)."""
     db = tmp_path / "cases.sqlite"
-    with pytest.raises(ConfigError, match="timeout_s must be a number of seconds >= 0, got"):
+    with pytest.raises(ConfigError, match="timeout_s: must be a number of seconds >= 0, got"):
         open_store(db, timeout_s=timeout)  # type: ignore[arg-type]
     assert not db.exists()
 

@@ -116,10 +116,10 @@ def test_demo_replaces_its_own_earlier_outputs(
 @pytest.mark.parametrize(
     ("param", "needle"),
     [
-        ("states=x", "states must be one of"),
-        ("length=1", "length must be a whole number of frames from 2"),
-        ("mirror=maybe", "mirror must be"),
-        ("phases=-1", "phases must be 'auto' or a whole number >= 0"),
+        ("states=x", "states: must be one of"),
+        ("length=1", "length: must be a whole number of frames from 2"),
+        ("mirror=maybe", "mirror: must be"),
+        ("phases=-1", "phases: must be 'auto' or a whole number >= 0"),
     ],
 )
 def test_compare_refuses_a_bad_case_base_parameter_value_before_the_run(

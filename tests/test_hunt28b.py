@@ -248,7 +248,7 @@ def test_a_tie_between_classes_goes_to_the_first_class_and_duplicates_decide_alo
     # k larger than the case base: every case votes; k < 1 refused
     assert len(retrieve(cb, np.array([0.0]), 99).indices) == 4
     for k in (0, -1):
-        with pytest.raises(ConfigError, match="k must be"):
+        with pytest.raises(ConfigError, match="k: must be"):
             retrieve(cb, np.array([0.0]), k)
 
 

@@ -258,8 +258,8 @@ def test_fit_refuses_trim_with_another_editor_and_a_stored_model_with_both_loads
     X = [load_pose(DEMO / f"m0{m}_s01_e01.npz") for m in (1, 4, 6)]
     with pytest.raises(ConfigError) as err:
         CaseBaseClassifier(trim=0.5, editor="renn").fit(X, ["a", "b", "c"])
-    assert err.value.message == (
-        "trim goes with editor='novelty-benefit' (the share of each activity it keeps);"
+    assert str(err.value) == (
+        "trim: goes with editor='novelty-benefit' (the share of each activity it keeps);"
         " editor='renn' decides how many cases it keeps, got trim=0.5"
     )
     model = _model(trained)

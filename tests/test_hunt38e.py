@@ -120,11 +120,11 @@ def _demo_clips() -> tuple[list[PoseSequence], list[str]]:
 @pytest.mark.parametrize(
     ("change", "said"),
     [
-        ({"cases": "frames"}, "cases: cases must be one of 'clips', 'repetitions', 'windows', "
+        ({"cases": "frames"}, "cases: must be one of 'clips', 'repetitions', 'windows', "
          "got 'frames'"),
-        ({"cases": None}, "cases: cases must be one of"),
-        ({"target": 3}, "target: target must be the name of a column, got 3"),
-        ({"target": " "}, "target: target must be the name of a column, got ' '"),
+        ({"cases": None}, "cases: must be one of"),
+        ({"target": 3}, "target: must be the name of a column, got 3"),
+        ({"target": " "}, "target: must be the name of a column, got ' '"),
         ({"estimator": CaseBaseClassifier}, "estimator: a CaseBaseClassifier is expected, got "
          "the class itself: give one, CaseBaseClassifier()"),
         ({"estimator": None}, "estimator: a CaseBaseClassifier is expected, got NoneType"),

@@ -70,7 +70,7 @@ def test_compare_takes_workers_as_extract_spells_it(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     refused(["compare", str(DEMO), "--workers", "0"], tmp_path, capsys,
-            "--jobs: jobs must be at least 1, got 0")  # fmt: skip
+            "--jobs: must be at least 1, got 0")  # fmt: skip
     assert build_parser().parse_args(["compare", str(DEMO), "--workers", "2"]).jobs == 2
 
 

@@ -52,5 +52,5 @@ def test_a_vote_parameter_set_after_fit_is_a_value_error_at_predict(
     X, y = data
     clf = CaseBaseClassifier().fit(X, y)
     clf.set_params(k=0)
-    with pytest.raises(ValueError, match="k must be a positive integer"):
+    with pytest.raises(ValueError, match="k: must be a positive integer"):
         clf.predict(X[:1])

@@ -147,7 +147,7 @@ def test_a_scheduler_lost_mid_run_is_said_in_one_line(
                 if len(done) == 1:
                     theirs.shutdown()  # the scheduler and its workers stop
     assert str(caught.value) == (
-        f"--scheduler: lost the Dask scheduler at {address} mid-run (it stopped, or the "
+        f"scheduler: lost the Dask scheduler at {address} mid-run (it stopped, or the "
         "network to it failed): run the command again once it is back"
     )
     assert len(done) < len(items)  # it stopped before the units were done

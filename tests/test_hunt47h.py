@@ -280,7 +280,7 @@ def test_something_that_is_no_judge_is_refused_naming_judge(judge: Any) -> None:
         classes_=np.array(["a", "b"]), case_base_=SimpleNamespace(labels=np.array(["a", "b"]))
     )
     words = (
-        "judge: judge must be None or a judge of cbr.unknown (judge_of(clf, 'spread-margin')),"
+        "judge: must be None or a judge of cbr.unknown (judge_of(clf, 'spread-margin')),"
         f" got {type(judge).__name__}"
     )
     with pytest.raises(InputError) as raised:
@@ -349,7 +349,7 @@ def test_a_k_the_classifier_does_not_retrieve_is_a_value_error_naming_it() -> No
         LiveSegmenter(clf, 30.0, k=9)
     clf.case_base_.check_not_empty = lambda name: None
     seq = PoseSequence(np.zeros((60, 33, 3)), BLAZEPOSE_33, 30.0)
-    with pytest.raises(ValueError, match="chunk_frames must be None or a whole number >= 0"):
+    with pytest.raises(ValueError, match="^chunk_frames: must be None or a whole number >= 0"):
         segment(clf, seq, chunk_frames=-1)
 
 
@@ -367,7 +367,7 @@ def test_score_refuses_labels_given_as_a_column(y: Any) -> None:
     InputError naming ``y``; the same labels flat score 1.0."""
     clf = _Answers()
     assert clf.score([None, None], ["a", "b"]) == 1.0
-    with pytest.raises(InputError, match=r"^y: y must be 1-D, one label per clip: y\[0\] is a "):
+    with pytest.raises(InputError, match=r"^y: must be 1-D, one label per clip: y\[0\] is a "):
         clf.score([None, None], y)
 
 
@@ -383,7 +383,7 @@ def test_train_names_its_labels_argument_and_stores_nothing(tmp_path: Path) -> N
     assert str(raised.value) == "labels: 2 clips but labels has shape (1,)"
     with pytest.raises(InputError) as raised:
         train(db, "default", clips, (v for v in ("a", "b")), CaseBaseClassifier())
-    assert str(raised.value) == "labels: labels must hold one label per clip (2), got a generator"
+    assert str(raised.value) == "labels: must hold one label per clip (2), got a generator"
     assert list(tmp_path.iterdir()) == []
 
 
@@ -396,7 +396,7 @@ def test_clips_in_a_set_are_refused_their_order_being_not_the_clips(
     (a squat stored as a lunge). An InputError naming the argument now (a dict's keys
     were refused only as "X[0] is a int" when they were numbers); nothing stored."""
     clips = [PoseSequence(np.zeros((30, 33, 3)), BLAZEPOSE_33, 30.0) for _ in range(2)]
-    with pytest.raises(InputError, match=r"^clips: clips must be a sequence of PoseSequence"):
+    with pytest.raises(InputError, match=r"^clips: must be a sequence of PoseSequence"):
         train(
             tmp_path / "cb.sqlite", "default", kind(clips), ["squat", "lunge"], CaseBaseClassifier()
         )

@@ -130,7 +130,7 @@ def test_bad_inputs_and_parameters_are_one_clear_error(clips: tuple) -> None:
     clf = CaseBaseClassifier(k=3).fit(X, y)
     with pytest.raises(DataError, match="no clips to classify"):
         clf.predict([])
-    with pytest.raises(DataError, match="X must be a sequence of PoseSequence"):
+    with pytest.raises(DataError, match="X: must be a sequence of PoseSequence"):
         clf.predict(X[0])
     with pytest.raises(DataError, match=r"X\[0\] is a ndarray"):
         clf.predict([np.zeros((3, 33, 3))])

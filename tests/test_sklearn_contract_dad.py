@@ -285,22 +285,22 @@ def test_bad_x_is_refused(
         DADClassifier().fit(make_x(X), y)
     assert message in str(info.value) and str(info.value).startswith("X: ")
     fitted = DADClassifier().fit(X, y)
-    with pytest.raises(InputError, match="X: X is empty: at least one clip is needed"):
+    with pytest.raises(InputError, match="X: is empty: at least one clip is needed"):
         fitted.predict([])
-    with pytest.raises(InputError, match="X is empty"):
+    with pytest.raises(InputError, match="X: is empty"):
         DADClassifier().fit([], [])
 
 
 @pytest.mark.parametrize(
     ("make_y", "message"),
     [
-        (lambda y: None, "y is None: one label per clip is needed"),
+        (lambda y: None, "y: is None: one label per clip is needed"),
         (lambda y: [*y[:11], None], "y[11] is None: every clip needs a label"),
         (lambda y: [*y[:11], float("nan")], "y[11] is nan: every clip needs a label"),
         (lambda y: np.array([0.5, 1.0] * 6), "Unknown label type: continuous"),
-        (lambda y: y.reshape(-1, 1), "y must be 1-D (one label per clip), got shape (12, 1)"),
+        (lambda y: y.reshape(-1, 1), "y: must be 1-D (one label per clip), got shape (12, 1)"),
         (lambda y: y[:11], "X has 12 clips but y has 11 labels"),
-        (lambda y: [*y[:11], 3], "y mixes label types (number, string)"),
+        (lambda y: [*y[:11], 3], "y: mixes label types (number, string)"),
     ],
     ids=["None", "a None label", "a NaN label", "continuous", "2-D", "too short", "mixed"],
 )

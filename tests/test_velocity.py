@@ -76,12 +76,14 @@ def test_off_leaves_the_stored_configuration_as_it_was() -> None:
 
 
 def test_rates_need_clip_summaries() -> None:
-    with pytest.raises(ConfigError, match="velocity .* needs fluent-level clip summaries"):
+    with pytest.raises(
+        ConfigError, match="^velocity: rates of change need fluent-level clip summaries"
+    ):
         FeatureConfig(velocity=True)
-    with pytest.raises(ConfigError, match="velocity must be"):
+    with pytest.raises(ConfigError, match="velocity: must be"):
         FeatureConfig(summary=True, velocity="yes")  # type: ignore[arg-type]
     X, y = _data({"s1": "right", "s2": "right"}, 1, 0)
-    with pytest.raises(ConfigError, match="velocity must be True or False"):
+    with pytest.raises(ConfigError, match="velocity: must be True or False"):
         CaseBaseClassifier(velocity="yes").fit(X, y)  # type: ignore[arg-type]
 
 

@@ -36,7 +36,7 @@ def pose_sequences(X: Any) -> list[PoseSequence]:
         if not isinstance(s, PoseSequence):
             raise InputError(f"X[{i}] is of type {type(s).__name__}, not a PoseSequence", "X")
     if not items:
-        raise InputError("X is empty: at least one clip is needed", "X")
+        raise InputError("is empty: at least one clip is needed", "X")
     return items
 
 
@@ -48,11 +48,11 @@ def class_labels(y: Any, n_clips: int) -> np.ndarray:
     """``y`` as a 1-D array of ``n_clips`` class labels: not None, no missing (None/NaN)
     label, not a continuous target."""
     if y is None:
-        raise InputError("y is None: one label per clip is needed", "y")
+        raise InputError("is None: one label per clip is needed", "y")
     # object dtype first: numpy would turn a NaN among strings into the string "nan"
     values = y if isinstance(y, np.ndarray) else np.asarray(_as_list(y), dtype=object)
     if values.ndim != 1:
-        raise InputError(f"y must be 1-D (one label per clip), got shape {values.shape}", "y")
+        raise InputError(f"must be 1-D (one label per clip), got shape {values.shape}", "y")
     if len(values) != n_clips:
         raise InputError(f"X has {n_clips} clips but y has {len(values)} labels", "y")
     items = values.tolist()
@@ -61,7 +61,7 @@ def class_labels(y: Any, n_clips: int) -> np.ndarray:
         raise InputError(f"y[{bad}] is {items[bad]!r}: every clip needs a label", "y")
     kinds = sorted({_kind(v) for v in items})
     if values.dtype == object and len(kinds) > 1:
-        raise InputError(f"y mixes label types ({', '.join(kinds)}); use one type", "y")
+        raise InputError(f"mixes label types ({', '.join(kinds)}); use one type", "y")
     if values.dtype == object:
         # a list of labels: in numpy's own type (ints stay ints), as scikit-learn reads y
         values = np.asarray(values.tolist())

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from features.errors import ConfigError, InputError
+from features.errors import ConfigError, InputError, ParameterError
 
 from ..similarity import get_measure
 from .peers import DTWKNNPeer, MiniRocketPeer, minirocket_backend
@@ -49,14 +49,17 @@ def _cbr_methods(settings: CompareSettings) -> list[Method]:
 
 def check_cbr_params(settings: CompareSettings) -> None:
     """Refuse, before any work, case-base parameters (``cbr_params``) that a configuration
-    cannot be built with: every fold of it would fail the same way."""
+    cannot be built with: every fold of it would fail the same way. ParameterError naming
+    ``cbr_params``, the parameter refused and the configuration ("cbr_params: states: must
+    be one of ... (cbr fluents/euclidean)"); ``compare`` says it of ``--param``."""
     from ..estimator import CaseBaseClassifier
 
     for method in _cbr_methods(settings):
         try:
             CaseBaseClassifier(**method.params).describe_plan()  # the measure built too
         except ConfigError as exc:
-            raise ConfigError(f"{exc.message} ({method.name})", "--param") from None
+            said = f"{exc.source}: {exc.message}" if exc.source else exc.message
+            raise ParameterError(f"{said} ({method.name})", "cbr_params") from None
 
 
 def _peer_method(peer: str, settings: CompareSettings) -> Method:

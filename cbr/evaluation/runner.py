@@ -103,7 +103,7 @@ class ProcessRunner(Runner[C]):
                 for fut in progress(as_completed(futures), desc, total=len(futures), unit=unit):
                     yield fut.result()
             except BrokenProcessPool:
-                raise PosecbrError(_died(), "--jobs") from None
+                raise PosecbrError(_died(), "jobs") from None
             except KeyboardInterrupt:  # Ctrl-C or SIGTERM, which reached this process alone
                 stop_workers(pool)
                 raise
@@ -162,7 +162,7 @@ class DaskRunner(Runner[C]):
                                     self.setup, desc=desc, unit=unit)  # fmt: skip
             for o in outcomes:
                 if not o.ok:
-                    raise PosecbrError(f"task {o.name} failed: {o.error}", "--scheduler")
+                    raise PosecbrError(f"task {o.name} failed: {o.error}", "scheduler")
                 yield o.value  # type: ignore[misc]
 
 

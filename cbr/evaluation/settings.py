@@ -6,7 +6,7 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
-from features.errors import ConfigError
+from features.errors import ConfigError, ParameterError
 from features.text import did_you_mean
 
 SIMILARITIES = ("euclidean", "dtw", "signature")
@@ -29,6 +29,9 @@ class CompareSettings:
     frames the peers' angle series are resampled to; jobs: worker processes for the folds;
     scheduler: run the folds on a Dask cluster instead (``local:N`` or a scheduler address);
     bootstrap: resamples for the F1 interval; explain: misclassified clips to explain.
+    A value it cannot run is refused when made, with ParameterError (a ConfigError and a
+    ValueError) naming the field ("folds: must be at least 2, got 1"); ``compare`` says it of
+    its option ("--folds: ...").
     """
 
     target: str = "label"
@@ -56,27 +59,27 @@ class CompareSettings:
 
     def _check_choices(self) -> None:
         if self.cv not in CV_SCHEMES:
-            raise ConfigError(
-                f"cv must be one of {', '.join(CV_SCHEMES)}, got {self.cv!r}"
+            raise ParameterError(
+                f"must be one of {', '.join(CV_SCHEMES)}, got {self.cv!r}"
                 f"{did_you_mean(str(self.cv), CV_SCHEMES)}",
-                "--cv",
+                "cv",
             )
-        for flag, given, known, what in (
-            ("--similarities", self.similarities, SIMILARITIES, "similarity"),
-            ("--features", self.features, FEATURE_LEVELS, "feature level"),
-            ("--peers", self.peers, PEERS, "peer"),
+        for argument, given, known, what in (
+            ("similarities", self.similarities, SIMILARITIES, "similarity"),
+            ("features", self.features, FEATURE_LEVELS, "feature level"),
+            ("peers", self.peers, PEERS, "peer"),
         ):
-            if not given and flag != "--peers":  # no peers is a choice ("none")
-                raise ConfigError(f"no {what} given", flag)
+            if not given and argument != "peers":  # no peers is a choice ("none")
+                raise ParameterError(f"no {what} given", argument)
             for i, name in enumerate(given):
                 if name not in known:
-                    raise ConfigError(
+                    raise ParameterError(
                         f"unknown {what} {name!r} (choose from {', '.join(known)})"
                         f"{did_you_mean(str(name), known)}",
-                        flag,
+                        argument,
                     )
                 if name in given[:i]:  # its rows, pictures and results would be there twice
-                    raise ConfigError(f"{what} {name!r} given twice", flag)
+                    raise ParameterError(f"{what} {name!r} given twice", argument)
         self._check_levels_compared()
 
     def _check_levels_compared(self) -> None:
@@ -87,35 +90,38 @@ class CompareSettings:
         if set(self.features) == {"qmp"} and all(
             get_measure(s).compares_sequences for s in self.similarities
         ):
-            raise ConfigError(
+            raise ParameterError(
                 "qmp features are one vector per clip, compared by euclidean only, which"
-                " --similarities leaves out: nothing would compare them (add euclidean)",
-                "--features",
+                " the similarities compared leave out: nothing would compare them (add"
+                " euclidean)",
+                "features",
             )
 
     def _check_numbers(self) -> None:
         if int(self.folds) < 2:
-            raise ConfigError(f"folds must be at least 2, got {self.folds}", "--folds")
+            raise ParameterError(f"must be at least 2, got {self.folds}", "folds")
         if int(self.k) < 1:
-            raise ConfigError(f"k must be a positive integer, got {self.k}", "--k")
+            raise ParameterError(f"must be a positive integer, got {self.k}", "k")
         if self.trim is not None and not 0.0 < float(self.trim) <= 1.0:
-            raise ConfigError(f"trim must be in (0, 1], got {self.trim}", "--trim")
+            raise ParameterError(f"must be in (0, 1], got {self.trim}", "trim")
         if int(self.jobs) < 1:
-            raise ConfigError(f"jobs must be at least 1, got {self.jobs}", "--jobs")
+            raise ParameterError(f"must be at least 1, got {self.jobs}", "jobs")
         if int(self.jobs) > 1 and self.scheduler is not None:
-            raise ConfigError(
+            raise ParameterError(
                 f"goes with worker processes of this machine; the folds run on the Dask"
                 f" scheduler {self.scheduler} (its workers are the cluster's: local:N for N)",
-                "--jobs",
+                "jobs",
             )
         if int(self.peer_length) < 9:
-            raise ConfigError("peer_length must be at least 9 frames", "peer_length")
+            raise ParameterError(
+                f"must be at least 9 frames, got {self.peer_length}", "peer_length"
+            )
         if int(self.bootstrap) < 1:
-            raise ConfigError(f"bootstrap must be at least 1, got {self.bootstrap}", "bootstrap")
+            raise ParameterError(f"must be at least 1, got {self.bootstrap}", "bootstrap")
         if int(self.explain) < 0:
-            raise ConfigError(f"explain must be 0 or more, got {self.explain}", "--explain")
+            raise ParameterError(f"must be 0 or more, got {self.explain}", "explain")
         if not 0 <= int(self.seed) < 2**32:  # numpy's seeds
-            raise ConfigError(f"seed must be in 0 to 2**32 - 1, got {self.seed}", "--seed")
+            raise ParameterError(f"must be in 0 to 2**32 - 1, got {self.seed}", "seed")
 
     def _check_cbr_params(self) -> None:
         from cbr.estimator import CaseBaseClassifier
@@ -123,11 +129,11 @@ class CompareSettings:
         known = set(CaseBaseClassifier().get_params()) - _SET_PER_METHOD
         bad = sorted(set(self.cbr_params) - known)
         if bad:
-            raise ConfigError(
+            raise ParameterError(
                 f"unknown case-base parameter(s) {', '.join(bad)} "
                 f"(known: {', '.join(sorted(known))})"
                 f"{did_you_mean(bad[0], known) or similarity_words(bad[0])}",
-                "--param",
+                "cbr_params",
             )
 
     @property

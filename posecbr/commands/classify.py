@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError, PosecbrError
 from features.text import counted, did_you_mean, first_few, percent
-from posecbr.arguments import add_k_option, check_each_found, path_arg
+from posecbr.arguments import add_k_option, as_options, check_each_found, path_arg
 from posecbr.recordings import (
     add_recording_options,
     add_sensor_option,
@@ -244,7 +244,7 @@ def _check_args(args: argparse.Namespace) -> None:
     if args.top is not None and not args.verbose:
         raise ConfigError("goes with --verbose (the similar cases it lists)", "--top")
     if args.quiet and args.verbose:
-        raise ConfigError("--quiet and --verbose exclude each other", "--quiet")
+        raise ConfigError("excludes --verbose", "--quiet")
     for flag, given, holds in (("--quiet", args.quiet, "every clip's record"),
                                ("--top", args.top is not None, "every similar case")):  # fmt: skip
         if given and args.json:
@@ -363,6 +363,15 @@ def _input_columns(args: argparse.Namespace) -> list[str]:
     return sorted(found)
 
 
+#: the arguments of cbr.classification's feedback checks as classify's options
+FEEDBACK_OPTIONS = {
+    "novelty_threshold": "--novelty",
+    "benefit_threshold": "--benefit",
+    "label": "--feedback",
+    "stored": "--feedback",
+}
+
+
 def run(args: argparse.Namespace) -> int:
     from cbr.classification import (
         FeedbackSettings,
@@ -374,10 +383,11 @@ def run(args: argparse.Namespace) -> int:
 
     _check_args(args)
     defaults = FeedbackSettings()
-    settings = FeedbackSettings(
-        defaults.novelty_threshold if args.novelty is None else args.novelty,
-        defaults.benefit_threshold if args.benefit is None else args.benefit,
-    )
+    with as_options(FEEDBACK_OPTIONS):
+        settings = FeedbackSettings(
+            defaults.novelty_threshold if args.novelty is None else args.novelty,
+            defaults.benefit_threshold if args.benefit is None else args.benefit,
+        )
     store = _open_reader(args)
     label = None
     try:
@@ -405,7 +415,8 @@ def run(args: argparse.Namespace) -> int:
                 "--target",
             )
         if args.feedback is not None:
-            check_feedback_cases(stored)
+            with as_options(FEEDBACK_OPTIONS):
+                check_feedback_cases(stored)
         subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
         labels = [s.strip() for s in args.labels.split(",")] if args.labels else None
         sensor = sensor_for(args.sensor, args.clips)
@@ -415,7 +426,8 @@ def run(args: argparse.Namespace) -> int:
             results = classify_clips(stored, clips, truths, target)
         else:
             known = sorted(set(stored.classifier.case_base_.labels.tolist()))
-            label = check_feedback_label(args.feedback, known, args.new_label, target)
+            with as_options(FEEDBACK_OPTIONS):
+                label = check_feedback_label(args.feedback, known, args.new_label, target)
     finally:
         store.close()
     gone: list[str] | None = None  # with feedback: the labels it left without a case

@@ -19,7 +19,13 @@ from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_output, stdout_gone, write_json_atomic, write_together
 from features.interrupts import interrupts_held
 from features.text import shown
-from posecbr.arguments import add_k_option, check_each_found, param_value, path_arg
+from posecbr.arguments import (
+    add_k_option,
+    as_options,
+    check_each_found,
+    param_value,
+    path_arg,
+)
 from posecbr.recordings import add_sensor_option, sensor_for
 
 
@@ -259,6 +265,24 @@ def check_loso_possible(args: argparse.Namespace, clips: list[Any]) -> None:
             " cross-validates over clips (the same person can be in training and test)",
             "--cv",
         )
+
+
+#: the arguments of CompareSettings (and of the checks of its values) as compare's options
+OPTIONS = {
+    "cv": "--cv",
+    "folds": "--folds",
+    "similarities": "--similarities",
+    "features": "--features",
+    "peers": "--peers",
+    "k": "--k",
+    "trim": "--trim",
+    "cbr_params": "--param",
+    "jobs": "--jobs",
+    "scheduler": "--scheduler",
+    "seed": "--seed",
+    "explain": "--explain",
+    "within": "--within",
+}
 
 
 def _settings(args: argparse.Namespace) -> Any:
@@ -575,10 +599,11 @@ def run(args: argparse.Namespace) -> int:
     from features.datasets import check_no_overlaps, labelled_over_time
     from features.poses import check_not_poses
 
-    check_scheduler(args.scheduler)
-    check_folds_given_with_kfold(args)
-    settings = _settings(args)
-    check_cbr_params(settings)
+    with as_options(OPTIONS):
+        check_scheduler(args.scheduler)
+        check_folds_given_with_kfold(args)
+        settings = _settings(args)
+        check_cbr_params(settings)
     check_peers_can_run(args, settings)
     outputs = _outputs(args)
     check_outputs(outputs, [args.data])
@@ -591,7 +616,8 @@ def run(args: argparse.Namespace) -> int:
     clips = _load(args)
     check_loso_possible(args, clips)
     check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
-    run_ = run_compare(clips, settings, source=str(args.data))
+    with as_options(OPTIONS):  # a k or --within the folds cannot take, a scheduler lost
+        run_ = run_compare(clips, settings, source=str(args.data))
     results = run_.results
     if labelled_over_time(args.data):
         results.notes.insert(0, STRETCHES_NOTE)

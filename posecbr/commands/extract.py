@@ -31,7 +31,7 @@ from features.formats import SHOWN_VIDEO_SUFFIXES, is_video_in_folder
 from features.interrupts import interrupts_held, run_task, stop_workers, worker_ends_on_sigterm
 from features.progress import progress
 from features.text import counted, first_few, shown
-from posecbr.arguments import NOT_A_PATH, is_url, path_arg
+from posecbr.arguments import NOT_A_PATH, SCHEDULER, as_options, is_url, path_arg
 
 # FFmpeg prints decoder complaints straight to stderr; the user should get posecbr's one line.
 # OpenCV reads this once, when it first opens a video, so it is set as early as possible.
@@ -739,7 +739,7 @@ def _on_cluster(scheduler: str, jobs: list[Job], options: Options) -> list[Outco
 
     jobs = longest_first(jobs)  # Dask starts them in the order they are sent
     results = []
-    with connect(scheduler) as client:
+    with as_options(SCHEDULER), connect(scheduler) as client:
         names = [str(j.video) for j in jobs]
         for o in map_outcomes(client, process_on_worker, jobs, names, options,
                               desc="extract", unit="clip"):  # fmt: skip
@@ -777,7 +777,8 @@ def _options(args: argparse.Namespace) -> Options:
     """The extraction options the arguments ask for (after checking --workers, --scheduler)."""
     if args.workers < 1:
         raise ConfigError(f"must be at least 1, got {args.workers}", "--workers (--jobs)")
-    check_scheduler(args.scheduler)
+    with as_options(SCHEDULER):
+        check_scheduler(args.scheduler)
     return Options(
         smoothing=not args.no_smoothing,
         tracking=not args.detect_every_frame,

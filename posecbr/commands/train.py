@@ -20,7 +20,14 @@ from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_output
 from features.text import counted, first_few, percent, shown
-from posecbr.arguments import add_k_option, check_found, param_value, path_arg
+from posecbr.arguments import (
+    SCHEDULER,
+    add_k_option,
+    as_options,
+    check_found,
+    param_value,
+    path_arg,
+)
 from posecbr.recordings import (
     add_recording_options,
     add_sensor_option,
@@ -304,12 +311,12 @@ PARAMETER_OPTIONS = {
 
 
 def _as_option(exc: ConfigError) -> ConfigError:
-    """A refusal of the estimator's parameter ("states: states must be one of ...") as one
-    of the option typed ("--states: must be one of ...")."""
+    """A refusal of the estimator's parameter ("states: must be one of ...") as one of the
+    option typed ("--states: must be one of ...")."""
     option = PARAMETER_OPTIONS.get(exc.source or "")
     if option is None:
         return exc
-    message = exc.message.removeprefix(f"{exc.source} ")
+    message = exc.message
     if exc.source == "feature_weights" and "vector problems" in message:  # Python's words
         message = (
             "learned feature weights need clip summaries or QMP features under euclidean"
@@ -892,7 +899,8 @@ def _check_options(args: argparse.Namespace) -> None:
         _note_shared_names(args, args.label_names)
     if args.frame_labels is not None:
         _read_frame_labels(args)
-    check_scheduler(args.scheduler)
+    with as_options(SCHEDULER):
+        check_scheduler(args.scheduler)
     if args.scheduler is not None and _in_memory(args):
         raise ConfigError(
             "--frame-labels and --split read DATA in this process; leave out --scheduler "
@@ -946,7 +954,8 @@ def run(args: argparse.Namespace) -> int:
             entries = _entries(args)
             if split_defaulted:
                 _note_cut_stretches(args, entries)
-            clips, solutions = describe_entries(entries, plan, args.target, args.scheduler)
+            with as_options(SCHEDULER):  # it cannot be reached
+                clips, solutions = describe_entries(entries, plan, args.target, args.scheduler)
             _check_asked(args, clips, solutions)
     except ClipsFailed as exc:
         for line in exc.lines:
