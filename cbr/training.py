@@ -547,6 +547,7 @@ def train_described(
     lost = lost_labels(text, keep)
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     _check_unique(clips, "training set")
+    _check_no_copies(clips, text)
     fitted: CaseBaseClassifier = unfitted_copy(estimator).fit_described(
         clips, [given[i] for i in keep]
     )
@@ -833,7 +834,9 @@ def _check_new(
                     where,
                 )
     _check_new_content(tx, info, clips, where)
-    _check_copies_within(clips, where)
+    pair = copies_within(clips)
+    if pair is not None:
+        raise _given_twice(clips[pair[0]], clips[pair[1]], where)
 
 
 #: features within this of a stored case's (relative and absolute) are the same
@@ -882,23 +885,22 @@ def _check_new_content(
             raise _repeated(sourced[ks[first]], chunk[rows[first]], info.name, where)
 
 
-def _check_copies_within(clips: Sequence[DescribedClip], where: str) -> None:
-    """Refuse an append two clips of which have the same frames and features (within
-    :data:`SAME_CONTENT_TOLERANCE`), whatever their files are called: two copies of one
-    file given together. Appended one after the other, the second is refused as a case
-    already held (:func:`_check_new_content`); given together both were stored, and voted
-    twice. Clips without a source (the Python API's arrays) are not compared.
+def copies_within(clips: Sequence[DescribedClip]) -> tuple[int, int] | None:
+    """The first two of ``clips`` (their indices, in order) that have the same frames and
+    features (within :data:`SAME_CONTENT_TOLERANCE`), whatever their files are called: two
+    copies of one file given together; None when no two have. Clips without a source (the
+    Python API's arrays) are not compared.
 
     Candidates are the clips of the same frames whose projections on one random direction
     ``w >= 0`` lie within what the tolerance allows (``|a_i - b_i| <= tol (1 + |b_i|)`` in
     every feature moves the projection by at most ``tol (sum w + |b| . w)``, at most the
     largest of these), checked feature by feature, from the clips whose next one in the order
     of frames and projection is a candidate."""
-    sourced = [c for c in clips if c.source]
-    if len(sourced) < 2:
-        return
-    values = np.stack([c.values for c in sourced]).reshape(len(sourced), -1)
-    frames = np.array([c.frames for c in sourced], dtype=np.int64).reshape(-1, 2)
+    at = [k for k, c in enumerate(clips) if c.source]
+    if len(at) < 2:
+        return None
+    values = np.stack([clips[k].values for k in at]).reshape(len(at), -1)
+    frames = np.array([clips[k].frames for k in at], dtype=np.int64).reshape(-1, 2)
     w = np.abs(np.random.default_rng(0).normal(size=values.shape[1]))
     plain = np.where(np.isnan(values), 0.0, values)  # missing matches missing only (_close)
     proj = plain @ w
@@ -914,7 +916,28 @@ def _check_copies_within(clips: Sequence[DescribedClip], where: str) -> None:
                 break
             if _close(values[j], values[i]).all():
                 first, second = sorted((int(i), int(j)))
-                raise _given_twice(sourced[first], sourced[second], where)
+                return at[first], at[second]
+    return None
+
+
+def _check_no_copies(clips: Sequence[DescribedClip], labels: Sequence[str]) -> None:
+    """Refuse training clips two of which are copies of one clip (:func:`copies_within`), as
+    an append refuses them: with one label its case would vote twice, with two it would be a
+    case of each (one clip labelled two activities). Before, both were stored."""
+    pair = copies_within(clips)
+    if pair is None:
+        return
+    i, j = pair
+    why = (
+        "its case would vote twice"
+        if labels[i] == labels[j]
+        else f"one clip labelled both {labels[i]!r} and {labels[j]!r}"
+    )
+    raise DataError(
+        f"{_shown_frames(_provenance(clips[j]))} has the same frames and features as "
+        f"{_shown_frames(_provenance(clips[i]))} (a copy of its file?): {why}; nothing stored",
+        "training set",
+    )
 
 
 def _given_twice(first: DescribedClip, second: DescribedClip, where: str) -> StoreError:

@@ -132,7 +132,8 @@ def test_train_notes_a_case_base_no_better_than_a_guess(
         for i in range(4):
             for truth, top in (("true", good), ("false", bad)):
                 name = f"{subject}_{truth}_{i}.npz"
-                save_pose(_arm_raises(top + 2.0 * i), tmp_path / name)
+                # s2's a degree higher: no clip a copy of s1's (train refuses copies)
+                save_pose(_arm_raises(top + 2.0 * i + (subject == "s2")), tmp_path / name)
                 rows.append(f"{name},raise,{subject},{truth}")
     (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
     db = tmp_path / "cb.sqlite"

@@ -82,7 +82,9 @@ def _windows(label: str, start: int, stop: int, subject: str) -> list[tuple[Any,
 
 def _recording_csv(tmp_path: Path, shared_data: Path) -> Path:
     """The squat video labelled by hand over 1-s blocks (codes named in a names file: 6 s
-    squat, 7 s rest), beside a copy of it with one stretch labelled by its row."""
+    squat, 7 s rest), beside a copy of it with one stretch labelled by its row (frames 1-20,
+    whose windows start where none of the squat's does: a window of the same frames would be
+    a copy of one labelled squat, which train refuses)."""
     shutil.copy(shared_data / SQUAT, tmp_path / "squat.mp4")
     shutil.copy(shared_data / SQUAT, tmp_path / "squat2.mp4")
     (tmp_path / "truth").mkdir()
@@ -92,7 +94,7 @@ def _recording_csv(tmp_path: Path, shared_data: Path) -> Path:
     csv.write_text(
         "path,label,label_file,label_block_s,label_names,subject,start,end,camera\n"
         "squat.mp4,,truth/squat.txt,1,truth/names.txt,s01,,,front\n"
-        "squat2.mp4,deep,,,,s02,5,25,side\n",
+        "squat2.mp4,deep,,,,s02,1,21,side\n",
         encoding="utf-8",
     )
     return csv
@@ -114,9 +116,9 @@ def test_extract_of_a_recording_labelled_over_time_trains_as_its_labels_csv(
         assert main(["train", str(data), "--db", str(tmp_path / db)]) == 0
     by_csv, problems_csv = _cases(tmp_path / "from_csv.sqlite")
     by_out, problems_out = _cases(tmp_path / "from_out.sqlite")
-    # 1-s blocks at 5 fps: squat frames 0-29, rest 30-64; the deep row frames 5-24
+    # 1-s blocks at 5 fps: squat frames 0-29, rest 30-64; the deep row frames 1-20
     expected = [*_windows("squat", 0, 30, "s01"), *_windows("rest", 30, 65, "s01"),
-                *_windows("deep", 5, 25, "s02")]  # fmt: skip
+                *_windows("deep", 1, 21, "s02")]  # fmt: skip
     assert len(expected) == 9 + 11 + 5
     assert by_csv == expected
     assert by_out == by_csv
@@ -124,14 +126,14 @@ def test_extract_of_a_recording_labelled_over_time_trains_as_its_labels_csv(
 
     assert f"wrote {out / 'labels.csv'}" in err
     assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == [
-        "deep", "deep/squat2_5-25.npz", "labels.csv", "names.txt", "squat.npz", "squat.txt",
+        "deep", "deep/squat2_1-21.npz", "labels.csv", "names.txt", "squat.npz", "squat.txt",
     ]  # fmt: skip
     assert (out / "squat.txt").read_bytes() == (tmp_path / "truth" / "squat.txt").read_bytes()
     assert (out / "names.txt").read_bytes() == (tmp_path / "truth" / "names.txt").read_bytes()
     assert (out / "labels.csv").read_text(encoding="utf-8").splitlines() == [
         "path,label,subject,label_file,label_block_s,label_names,camera",
         "squat.npz,,s01,squat.txt,1.0,names.txt,front",
-        "deep/squat2_5-25.npz,deep,s02,,,,side",
+        "deep/squat2_1-21.npz,deep,s02,,,,side",
     ]
 
     # again: up to date, the model not run, labels.csv and the label files as they were

@@ -171,9 +171,13 @@ def test_train_of_two_activities_says_segment_needs_held_out_whatever_a_case_is(
     from posecbr.cli import main
 
     data = tmp_path / "data"
-    for k in range(2):
-        save_pose(clip("squat", 4.0 + k, FPS), data / "squat" / f"s{k}.npz")
-        save_pose(clip("lunge", 4.0 + k, FPS), data / "lunge" / f"l{k}.npz")
+    for k in range(2):  # the second take's left shoulder 1 cm on: its first repetition is
+        # no copy of the first take's (train refuses copies)
+        for move, name in (("squat", f"squat/s{k}.npz"), ("lunge", f"lunge/l{k}.npz")):
+            seq = clip(move, 4.0 + k, FPS)
+            moved = seq.positions.copy()
+            moved[:, 11, 0] += 0.01 * k
+            save_pose(dataclasses.replace(seq, positions=moved), data / name)
     db = str(tmp_path / "cb.sqlite")
     capsys.readouterr()
     assert main(["train", str(data), "--db", db, "--split", split]) == 0

@@ -5,7 +5,8 @@ name twice (hunt 48e).
 ``cbr.unknown.false_unknown_threshold`` refused a Python caller naming the commands' options
 (``--folds``, ``--feedback``, ``--scheduler``, ``--unknown``), which that caller never typed;
 the commands still say their options. Refusals naming an argument repeated it ("folds: folds
-must be at least 2", "chunk_frames: chunk_frames must be ...", "k: k must be ...").
+must be at least 2", "chunk_frames: chunk_frames must be ...", "k: k must be ..."). Plain
+``train`` of a new case base stored two copies of one clip, which ``train --append`` refuses.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from cbr.unknown import false_unknown_threshold, judge_of
 from features.cluster import check_scheduler
 from features.errors import PosecbrError
 from features.poses import PoseSequence, save_pose
+from posecbr.cli import main
 from tests.badinput import ROOT, refused
 from tests.test_cbr_clips import arm_dataset
 
@@ -163,3 +165,74 @@ def test_no_refusal_says_its_argument_twice(
     assert lines[0] == "chunk_frames: must be None or a whole number >= 0, got -1"
     assert lines[1] == "k: must be a positive integer, got 0"
     assert lines[2].startswith("judge: must be None or a judge of cbr.unknown"), lines[2]
+
+
+# ------------------------------------------------------------- train: two copies of one clip
+
+#: train's options of tests/badinput.py's small case base (nothing learned that needs many)
+QUICK = ["--mirror", "off", "--feature-weights", "none", "--phases", "0"]
+
+
+def _arm_folders(root: Path) -> list[Path]:
+    """Two arm clips of each of three activities in ``root/<activity>/``, each its own
+    random movement; the files, in the order of the class folders."""
+    X, y = arm_dataset(2, seed=5)
+    names = {str(a): f"act{i}" for i, a in enumerate(dict.fromkeys(str(v) for v in y))}
+    for i, (seq, label) in enumerate(zip(X, y, strict=True)):
+        save_pose(seq, root / names[str(label)] / f"clip{i:02d}.npz")
+    return sorted(root.rglob("*.npz"))
+
+
+@pytest.mark.parametrize("folder", ["act1", "act0"])
+def test_train_refuses_two_copies_of_one_clip_naming_both(
+    folder: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A clip of act0 copied byte for byte into act1's folder (one clip labelled two
+    activities) or into act0's own (a case voting twice): plain ``train`` of a new case base
+    refused neither, and stored 7 cases, as ``train --append`` refuses them. Now refused
+    naming both files, nothing written."""
+    data = tmp_path / "data"
+    first = _arm_folders(data)[0]  # act0/clip00.npz
+    copy = data / folder / "copy.npz"
+    copy.write_bytes(first.read_bytes())
+    why = (
+        "one clip labelled both 'act0' and 'act1'"
+        if folder == "act1"
+        else "its case would vote twice"
+    )
+    # the clips in the order of their folders and names: act0/clip00.npz before the copy
+    frames = f"frames 0-{load_frames(first) - 1}"
+    refused(
+        ["train", str(data), "--db", str(tmp_path / "cb.sqlite"), *QUICK],
+        tmp_path,
+        capsys,
+        f"posecbr train: error: training set: {copy} {frames} has the same frames and"
+        f" features as {first} {frames} (a copy of its file?): {why}; nothing stored",
+    )
+
+
+def load_frames(path: Path) -> int:
+    """How many frames the pose file ``path`` holds."""
+    from features.poses import load_pose
+
+    return load_pose(path).n_frames
+
+
+def test_train_keeps_a_clip_that_differs_from_another_by_a_few_centimetres(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Not every likeness is refused: the copy with its left shoulder 2 cm higher in every
+    frame is another clip, trained (7 cases)."""
+    from dataclasses import replace
+
+    from features.poses import load_pose
+
+    data = tmp_path / "data"
+    first = _arm_folders(data)[0]
+    seq = load_pose(first)
+    moved = seq.positions.copy()
+    moved[:, 11, 1] += 0.02
+    save_pose(replace(seq, positions=moved), data / "act1" / "moved.npz")
+    db = tmp_path / "cb.sqlite"
+    assert main(["train", str(data), "--db", str(db), *QUICK]) == 0, capsys.readouterr().err
+    assert "7 cases (7 trained)" in capsys.readouterr().out

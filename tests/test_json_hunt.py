@@ -3,6 +3,7 @@ Infinity), its frames and seconds consistent with the clip, and options at their
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any
@@ -78,18 +79,18 @@ def test_train_at_the_shortest_length_leaves_automatic_phases_out(
 def test_classify_json_says_null_for_the_plausibility_of_no_counterfactual(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A case base of three copies of one standing clip and three of one 3 s squat: a 7.5 s
+    """A case base of three takes of one standing clip and three of one 3 s squat (each
+    take's left shoulder 1 mm from the last's: train refuses copies of one clip): a 7.5 s
     squat finds no change that makes it "still" (``changes`` empty). Its plausibility, the
     changed clip's distance over the usual one, has no changed clip to measure: it was
     printed as the bare token NaN, which strict JSON parsers refuse; now null."""
-    still, squat = clip("still", 3.0), clip("squat", 3.0)
     for i in range(3):
-        save_pose(
-            still.with_metadata(subject=f"p{i}", take=str(i)), tmp_path / "still" / f"s{i}.npz"
-        )
-        save_pose(
-            squat.with_metadata(subject=f"p{i}", take=str(i)), tmp_path / "squat" / f"q{i}.npz"
-        )
+        for move, name in (("still", f"still/s{i}.npz"), ("squat", f"squat/q{i}.npz")):
+            seq = clip(move, 3.0)
+            moved = seq.positions.copy()
+            moved[:, 11, 0] += 0.001 * i
+            take = dataclasses.replace(seq, positions=moved)
+            save_pose(take.with_metadata(subject=f"p{i}", take=str(i)), tmp_path / name)
     db = tmp_path / "cb.sqlite"
     assert main(["train", str(tmp_path), "--db", str(db)]) == 0
     query = save_pose(clip("squat", 7.5), tmp_path / "query.npz")
