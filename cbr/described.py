@@ -52,7 +52,8 @@ class DescribedClip:
     "unlike the stored cases" feature score judges; None when the problem is a fluent summary
     itself) and summary_available which of them it has; columns: the :func:`columns_key` of
     the candidates it was described over ("" when unknown: a record made by hand, or before
-    the key was kept), checked by :func:`check_described`.
+    the key was kept), checked by :func:`check_described`; poses: :func:`poses_digest` of the
+    clip, what tells a copy of a clip from another clip described alike ("" when unknown).
     """
 
     values: np.ndarray
@@ -70,6 +71,7 @@ class DescribedClip:
     summary_available: np.ndarray | None = None
     duration_s: float = math.inf
     columns: str = ""
+    poses: str = ""
 
     @property
     def mirror_source(self) -> str:
@@ -91,7 +93,8 @@ def describe_clip(
             empty = np.zeros(0)
             return DescribedClip(empty, None, None, empty.astype(bool), share,
                                  *_provenance(seq), duration_s=seq.duration_s,
-                                 columns=columns_key(candidates))  # fmt: skip
+                                 columns=columns_key(candidates),
+                                 poses=poses_digest(seq))  # fmt: skip
         plain = candidates if candidates.side == "as_recorded" else _as_recorded(candidates)
         # a long clip is described a piece at a time (cbr.long_clip): problem, mirror image,
         # favoured side and available columns, none of them over the whole clip at once
@@ -109,10 +112,22 @@ def describe_clip(
         return DescribedClip(
             problem.values, image, left, has, share, *_provenance(seq), names, words,
             *_summary(seq, plain), duration_s=seq.duration_s, columns=columns_key(candidates),
+            poses=poses_digest(seq),
         )  # fmt: skip
     finally:
         if not keep:
             forget(seq)
+
+
+def poses_digest(seq: PoseSequence) -> str:
+    """A SHA-256 of ``seq``'s poses: its joints, frame rate, positions and confidences, byte
+    for byte. Two clips of one digest are copies of one clip; two clips described alike need
+    not be (a few columns, or QMP vectors, of two takes can agree)."""
+    digest = hashlib.sha256(json.dumps([list(seq.joint_names), float(seq.fps)]).encode())
+    digest.update(np.ascontiguousarray(seq.positions, dtype=np.float64).tobytes())
+    if seq.confidence is not None:
+        digest.update(np.ascontiguousarray(seq.confidence, dtype=np.float64).tobytes())
+    return digest.hexdigest()
 
 
 def columns_key(candidates: FeatureConfig) -> str:
@@ -196,7 +211,8 @@ def describe_case(seq: PoseSequence, casebase: CaseBase) -> DescribedClip:
     try:
         values = casebase.problem_of(seq).values if share > 0.0 else np.zeros(0)
         return DescribedClip(values, None, None, np.zeros(0, dtype=bool), share,
-                             *_provenance(seq), duration_s=seq.duration_s)  # fmt: skip
+                             *_provenance(seq), duration_s=seq.duration_s,
+                             poses=poses_digest(seq))  # fmt: skip
     finally:
         if not keep:
             forget(seq)

@@ -886,37 +886,19 @@ def _check_new_content(
 
 
 def copies_within(clips: Sequence[DescribedClip]) -> tuple[int, int] | None:
-    """The first two of ``clips`` (their indices, in order) that have the same frames and
-    features (within :data:`SAME_CONTENT_TOLERANCE`), whatever their files are called: two
-    copies of one file given together; None when no two have. Clips without a source (the
-    Python API's arrays) are not compared.
-
-    Candidates are the clips of the same frames whose projections on one random direction
-    ``w >= 0`` lie within what the tolerance allows (``|a_i - b_i| <= tol (1 + |b_i|)`` in
-    every feature moves the projection by at most ``tol (sum w + |b| . w)``, at most the
-    largest of these), checked feature by feature, from the clips whose next one in the order
-    of frames and projection is a candidate."""
-    at = [k for k, c in enumerate(clips) if c.source]
-    if len(at) < 2:
-        return None
-    values = np.stack([clips[k].values for k in at]).reshape(len(at), -1)
-    frames = np.array([clips[k].frames for k in at], dtype=np.int64).reshape(-1, 2)
-    w = np.abs(np.random.default_rng(0).normal(size=values.shape[1]))
-    plain = np.where(np.isnan(values), 0.0, values)  # missing matches missing only (_close)
-    proj = plain @ w
-    reach = SAME_CONTENT_TOLERANCE * (w.sum() + float((np.abs(plain) @ w).max())) * 1.01
-    order = np.lexsort((proj, frames[:, 1], frames[:, 0]))
-    # a clip with a copy after it in this order has its next clip within reach too
-    near = (frames[order[1:]] == frames[order[:-1]]).all(axis=1)
-    near &= proj[order[1:]] - proj[order[:-1]] <= reach
-    for t in np.flatnonzero(near):
-        i = order[t]
-        for j in order[t + 1 :]:
-            if (frames[j] != frames[i]).any() or proj[j] - proj[i] > reach:
-                break
-            if _close(values[j], values[i]).all():
-                first, second = sorted((int(i), int(j)))
-                return at[first], at[second]
+    """The first two of ``clips`` (their indices, in order) that are copies of one clip: the
+    same frames and the same poses byte for byte (:attr:`DescribedClip.poses`), whatever
+    their files are called; None when no two are. Clips whose poses are not known (records
+    made by hand) are not compared; nor are clips merely described alike (a few columns, or
+    QMP vectors, of two takes can agree)."""
+    first: dict[tuple[str, int, int], int] = {}
+    for k, clip in enumerate(clips):
+        if not clip.poses:
+            continue
+        key = (clip.poses, int(clip.frames[0]), int(clip.frames[1]))
+        if key in first:
+            return first[key], k
+        first[key] = k
     return None
 
 
@@ -934,7 +916,7 @@ def _check_no_copies(clips: Sequence[DescribedClip], labels: Sequence[str]) -> N
         else f"one clip labelled both {labels[i]!r} and {labels[j]!r}"
     )
     raise DataError(
-        f"{_shown_frames(_provenance(clips[j]))} has the same frames and features as "
+        f"{_shown_frames(_provenance(clips[j]))} has the same frames and poses as "
         f"{_shown_frames(_provenance(clips[i]))} (a copy of its file?): {why}; nothing stored",
         "training set",
     )
@@ -943,7 +925,7 @@ def _check_no_copies(clips: Sequence[DescribedClip], labels: Sequence[str]) -> N
 def _given_twice(first: DescribedClip, second: DescribedClip, where: str) -> StoreError:
     """The refusal of an append that gives ``second``, the same clip as ``first``."""
     return StoreError(
-        f"{_shown_frames(_provenance(second))} has the same frames and features as "
+        f"{_shown_frames(_provenance(second))} has the same frames and poses as "
         f"{_shown_frames(_provenance(first))}, given in this append too (a copy of its file?):"
         " its case would vote twice; nothing added",
         where,

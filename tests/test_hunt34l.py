@@ -79,7 +79,8 @@ def test_the_chance_note_counts_the_clips_held_out_not_the_edited_cases(
         for truth, top, n in (("true", good, 6), ("false", bad, 2)):
             for i in range(n):
                 name = f"{subject}_{truth}_{i}.npz"
-                save_pose(_arm_raises(top + 2.0 * i), tmp_path / name)
+                # s2's a degree higher: no clip a copy of s1's (train refuses copies)
+                save_pose(_arm_raises(top + 2.0 * i + (subject == "s2")), tmp_path / name)
                 rows.append(f"{name},raise,{subject},{truth}")
     (tmp_path / "labels.csv").write_text("\n".join(rows) + "\n")
     argv = ["train", str(tmp_path / "labels.csv"), "--target", "correct", "--editor", "cnn"]

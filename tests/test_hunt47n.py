@@ -138,7 +138,7 @@ def test_two_copies_of_one_clip_in_one_append_are_refused_naming_both(
     argv = ["train", str(data), "--db", str(db), "--append"]
     line = refused(argv, tmp_path, capsys)
     assert line == (
-        f"posecbr train: error: {db}: {b} frames 0-59 has the same frames and features as "
+        f"posecbr train: error: {db}: {b} frames 0-59 has the same frames and poses as "
         f"{a} frames 0-59, given in this append too (a copy of its file?): its case would "
         "vote twice; nothing added"
     )
@@ -147,7 +147,7 @@ def test_two_copies_of_one_clip_in_one_append_are_refused_naming_both(
     b.rename(other)
     line = refused(argv, tmp_path, capsys)
     # the class folders in their order: Lunge's clip first, Squat's the copy of it
-    assert f"{db}: {a} frames 0-59 has the same frames and features as {other} frames" in line
+    assert f"{db}: {a} frames 0-59 has the same frames and poses as {other} frames" in line
     seq = load_pose(other)
     moved = seq.positions.copy()
     moved[:, 11, 0] += 0.05

@@ -207,7 +207,7 @@ def test_train_refuses_two_copies_of_one_clip_naming_both(
         tmp_path,
         capsys,
         f"posecbr train: error: training set: {copy} {frames} has the same frames and"
-        f" features as {first} {frames} (a copy of its file?): {why}; nothing stored",
+        f" poses as {first} {frames} (a copy of its file?): {why}; nothing stored",
     )
 
 
