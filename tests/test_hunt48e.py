@@ -236,3 +236,31 @@ def test_train_keeps_a_clip_that_differs_from_another_by_a_few_centimetres(
     db = tmp_path / "cb.sqlite"
     assert main(["train", str(data), "--db", str(db), *QUICK]) == 0, capsys.readouterr().err
     assert "7 cases (7 trained)" in capsys.readouterr().out
+
+
+def test_copies_are_told_by_their_poses_not_by_features_alike(
+    fitted: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+) -> None:
+    """Two takes whose features agree (a few states, or QMP vectors: arm_4 and arm_7 of
+    tests/test_hunt43i.py under four states) are no copies; the same poses under another
+    name at the same frames are, at other frames not (a recording repeating itself)."""
+    from dataclasses import replace
+
+    from cbr.described import DescribedClip, poses_digest
+    from cbr.training import copies_within
+
+    _, rec, _ = fitted
+    a, b = (PoseSequence(rec.positions[k : k + 30], rec.joint_names, 30.0) for k in (0, 30))
+    assert poses_digest(a) != poses_digest(b)
+
+    def described(seq: PoseSequence, source: str, frames: tuple[int, int]) -> DescribedClip:
+        values = np.zeros(4)  # described alike, whatever the poses
+        return DescribedClip(values, None, None, np.ones(4, dtype=bool), 1.0, source, None,
+                             frames, "blazepose33", poses=poses_digest(seq))  # fmt: skip
+
+    one, other = described(a, "a.npz", (0, 30)), described(b, "b.npz", (0, 30))
+    copy = described(a, "copy.npz", (0, 30))
+    assert copies_within([one, other]) is None
+    assert copies_within([one, other, copy]) == (0, 2)
+    assert copies_within([one, replace(copy, frames=(30, 60))]) is None
+    assert copies_within([one, replace(copy, poses="")]) is None  # made by hand: not known
