@@ -55,7 +55,8 @@ def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
     greys the rest), a Matroska/WebM or FLV file that ends inside an element or a tag
     (:func:`cut_short`), an MP4/MOV file that ends inside a box (:func:`mp4_walk`: FFmpeg
     decodes what it has of the last frames, or reads none when the index at the end is
-    missing)."""
+    missing) or whose frames have no index at all (:func:`mp4_unindexed`: still being
+    recorded)."""
     if head.startswith(JPEG_START) and not tail.rstrip(b"\x00\r\n\t ").endswith(JPEG_END):
         raise DataError("truncated JPEG (no end-of-image marker)", path)
     if is_mp4(head):
@@ -63,12 +64,19 @@ def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
             size = path.stat().st_size
             with open(path, "rb") as fh:
                 end = mp4_walk(fh, size)
+                unindexed = mp4_unindexed(fh, size)
         except OSError as exc:
             raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
         if end is not None and end > size:
             runs = f" that runs to byte {end:,}" if end > size + 1 else "'s header"
             raise DataError(
                 f"truncated MP4/MOV: the file ends at byte {size:,}, inside a box{runs}", path
+            )
+        if unindexed:
+            raise DataError(
+                "unfinished MP4/MOV: its frames have no index (no moov box): still being"
+                " recorded, or the recording stopped before it was closed",
+                path,
             )
     if head.startswith((EBML_START, FLV_START)):
         try:
@@ -166,6 +174,31 @@ def mp4_walk(fh: Any, size: int) -> int | None:
             return None
         at += stated
     return at
+
+
+def mp4_unindexed(fh: Any, size: int) -> bool:
+    """Whether an MP4/MOV file of ``size`` bytes, read from ``fh``, holds frames (a top-level
+    mdat box) and no index for them (no moov box, nor a fragment's moof, before the walk ends):
+    a recording still being written (its recorder writes the index when it stops, and the
+    frames' box states size 0, or a 64-bit size 0, "to the file's end", until then) or one
+    stopped before it was closed. FFmpeg cannot open it. False where the walk meets bytes
+    :func:`mp4_walk` does not judge."""
+    at, frames = 0, False
+    while at + 8 <= size:
+        fh.seek(at)
+        header = fh.read(16)
+        stated, kind, length = int.from_bytes(header[:4], "big"), header[4:8], 8
+        if kind in (b"moov", b"moof") or kind not in MP4_TOP_BOXES:
+            return False
+        frames = frames or kind == b"mdat"
+        if stated == 1 and len(header) == 16:
+            stated, length = int.from_bytes(header[8:16], "big"), 16
+        if stated == 0:  # runs to the file's end
+            break
+        if stated < length:
+            return False
+        at += stated
+    return frames
 
 
 MOOV_LIMIT = 256 << 20
