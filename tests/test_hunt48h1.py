@@ -6,16 +6,24 @@ recorder writes the index (moov) when it stops, and until then the frames' box s
 0, "to the file's end" (FFmpeg's and PyAV's muxer; a 64-bit size of 0 where the recorder
 reserved one). FFmpeg cannot open it, and every command said "not a video OpenCV can decode
 (unknown format, truncated or corrupt)". Now it says what it is.
+
+`extract` of one video did not say the frame rate it read from it (every second `segment`,
+`reps` and `watch` give is measured by it): now its line does ("390 frames at 29.97 fps").
+
+A portrait video stored sideways with a display matrix, as phones write it, was already read
+upright (OpenCV turns it); no test held it: now one does, both ways a phone turns.
 """
 
 from __future__ import annotations
 
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from features.pose_estimation.video import open_video
+from features.pose_estimation.video import iter_frames, open_video
+from posecbr.cli import main
 from tests.badinput import refused
 from tests.test_hunt38f import FRAMES, _box_at, _mjpg_mp4
 
@@ -85,3 +93,61 @@ def test_finished_and_fragmented_recordings_open_as_before(tmp_path: Path) -> No
         cap.release()
         assert read == FRAMES, path
 
+
+
+def _phone_video(path: Path, frames: list[np.ndarray], rate: Fraction, turn: int = 0) -> Path:
+    """RGB ``frames`` as H.264, lossless (qp 0, no chroma subsampling), at ``rate``; with
+    ``turn`` a display matrix that turns them by that many degrees counter-clockwise to be
+    seen, as a phone held upright stores its portrait frames sideways."""
+    with av.open(str(path), "w") as out:
+        stream = out.add_stream("libx264", rate=rate)
+        stream.codec_context.options = {"qp": "0"}
+        stream.height, stream.width = frames[0].shape[:2]
+        stream.pix_fmt = "yuv444p"
+        if turn:
+            stream.set_display_rotation(turn)
+        for rgb in frames:
+            for packet in stream.encode(av.VideoFrame.from_ndarray(rgb, format="rgb24")):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)
+    return path
+
+
+def test_extract_says_the_frame_rate_it_read_from_the_video(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A phone's "30 fps" is NTSC's 30000/1001 = 29.97003 frames a second: `extract` of one
+    video said "done: x.npz (3 frames, 3 without a person)", the rate it read (and every
+    second `segment` and `reps` give is measured by) said nowhere."""
+    grey = [np.full((64, 96, 3), 60 * k, dtype=np.uint8) for k in range(3)]
+    video = _phone_video(tmp_path / "IMG_0001.mp4", grey, Fraction(30000, 1001))
+    pose = tmp_path / "IMG_0001.npz"
+    assert main(["extract", str(video), "--out", str(pose)]) == 0
+    assert capsys.readouterr().out == f"done: {pose} (3 frames at 29.97 fps, 3 without a person)\n"
+
+
+@pytest.mark.parametrize("turn", [-90, 90])
+@pytest.mark.parametrize("threads", [None, 1])
+def test_a_portrait_phone_video_stored_sideways_is_read_upright(
+    tmp_path: Path, turn: int, threads: int | None
+) -> None:
+    """A portrait frame (taller than wide, bright at its head end, a mark at its top left)
+    stored turned a quarter, with the display matrix that turns it back, is read as the
+    portrait frame: its pixels, and the width and height the pose model's coordinates are
+    judged against (the skeleton upright, not lying on its side). ``threads``: FFmpeg's
+    decoding threads as extract's workers set them (another way of opening the file)."""
+    portrait = np.zeros((64, 48, 3), dtype=np.uint8)
+    portrait[:16] = 200  # the head end
+    portrait[:8, :8] = (255, 0, 0)  # the top left corner
+    stored = np.ascontiguousarray(np.rot90(portrait, 1 if turn < 0 else -1))
+    assert stored.shape == (48, 64, 3)
+    video = _phone_video(tmp_path / f"portrait{turn}.mp4", [stored] * 2, Fraction(30), turn)
+    cap, info = open_video(video, threads)
+    cap.release()
+    assert (info.width, info.height) == (48, 64)
+    seen = list(iter_frames(video, threads))
+    assert len(seen) == 2
+    for rgb in seen:
+        assert rgb.shape == portrait.shape
+        assert np.abs(rgb.astype(int) - portrait).max() <= 2

@@ -22,7 +22,7 @@ import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
@@ -32,6 +32,11 @@ from features.interrupts import interrupts_held, run_task, stop_workers, worker_
 from features.progress import progress
 from features.text import counted, first_few, shown
 from posecbr.arguments import NOT_A_PATH, SCHEDULER, as_options, is_url, path_arg
+
+if TYPE_CHECKING:  # imported where used: start-up
+    import numpy as np
+
+    from features.poses import PoseSequence
 
 # FFmpeg prints decoder complaints straight to stderr; the user should get posecbr's one line.
 # OpenCV reads this once, when it first opens a video, so it is set as early as possible.
@@ -711,12 +716,22 @@ def process(job: Job, options: Options) -> Outcome:
         # a row inside a gap has no frame at all, not a frame without a person
         nobody = np.isnan(seq.positions).all(axis=(1, 2)) & ~gap_rows(seq)
         n_missing = int(nobody.sum())
-        detail = f"{counted(seq.n_frames, 'frame')}, {n_missing} without a person{vfr_note}"
+        detail = f"{_frames_at(seq, video_frames)}, {n_missing} without a person{vfr_note}"
         if up_to_date:
             return "drawn", job.out, f"up to date, {detail}; its overlay drawn"
         return "done", job.out, f"{detail}; {STALE_VFR}" if stale else detail
     except PosecbrError as exc:
         return "failed", job.out, str(exc)
+
+
+def _frames_at(seq: PoseSequence, video_frames: np.ndarray | None) -> str:
+    """A pose file's frames and the rate read from its video ("390 frames at 29.97 fps"); a
+    video resampled (``video_frames``) says its rate in its note instead, and a still
+    picture, one frame, has none to say."""
+    frames = counted(seq.n_frames, "frame")
+    if video_frames is not None or seq.n_frames == 1:
+        return frames
+    return f"{frames} at {seq.fps:g} fps"
 
 
 def process_on_worker(job: Job, options: Options) -> Outcome:
