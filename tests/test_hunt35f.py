@@ -175,8 +175,7 @@ def test_extract_overlay_of_up_to_date_pose_files_does_not_count_them_extracted(
     assert main(["extract", str(video), "--out", str(pose), "--overlay", str(one)]) == 0
     printed = capsys.readouterr()
     assert printed.out == (
-        f"skipped: {pose} (up to date, 4 frames at 10 fps, 4 without a person; its overlay"
-        " drawn)\n"
+        f"skipped: {pose} (up to date, 4 frames at 10 fps, 4 without a person; its overlay drawn)\n"
     )
     assert printed.err == f"overlay written to {one}\n" and one.is_file()
     assert hashlib.sha256(pose.read_bytes()).hexdigest() == kept

@@ -94,7 +94,6 @@ def test_finished_and_fragmented_recordings_open_as_before(tmp_path: Path) -> No
         assert read == FRAMES, path
 
 
-
 def _phone_video(path: Path, frames: list[np.ndarray], rate: Fraction, turn: int = 0) -> Path:
     """RGB ``frames`` as H.264, lossless (qp 0, no chroma subsampling), at ``rate``; with
     ``turn`` a display matrix that turns them by that many degrees counter-clockwise to be
