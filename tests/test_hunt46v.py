@@ -22,7 +22,7 @@ import pytest
 from PIL import Image, ImageOps
 
 from features.pose_estimation import PoseEstimator, stream_poses
-from features.pose_estimation.detector import tiles
+from features.pose_estimation.detector import ZOOM, Detection, tiles
 from features.pose_estimation.video import upright
 from features.poses import load_pose, load_pose_arrays, pose_file_metadata
 from posecbr.cli import main
@@ -208,9 +208,11 @@ class _CountedTiles(PoseEstimator):
         super().__init__()
         self.searches = 0
 
-    def detect_closer(self, rgb: np.ndarray) -> list:  # type: ignore[type-arg]
+    def detect_closer(
+        self, rgb: np.ndarray, zoom: int = ZOOM, part: slice = slice(None)
+    ) -> list[Detection]:
         self.searches += 1
-        return super().detect_closer(rgb)
+        return super().detect_closer(rgb, zoom, part)
 
 
 def test_a_stream_searches_the_tiles_at_most_twice_a_second_while_nobody_is_in_view(

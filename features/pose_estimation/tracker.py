@@ -4,9 +4,10 @@
 
 1. With no track, the detector finds people; the kept detection is the one nearest the
    person last tracked (the best-scoring one when there is none), so a second person in view
-   does not steal the track when it is re-acquired. When it finds nobody in the whole frame,
-   it looks again in overlapping tiles of half the frame's size (``detect_closer``): a person
-   far from the camera is too small for it in the whole frame.
+   does not steal the track when it is re-acquired. When it finds nobody in the whole frame
+   (or the landmark model finds no person where it pointed), it looks again in overlapping
+   tiles of half the frame's size, then of a quarter (``detect_closer``): a person far from
+   the camera is too small for it in the whole frame.
 2. The landmark model runs on the ROI (from the detection, or from the previous frame's
    auxiliary landmarks when tracking). If its person probability drops below
    ``min_tracking_confidence`` the track is dropped and the detector runs again on the SAME
@@ -24,6 +25,7 @@ right-handed (determinant +1), origin at the hip centre, metres.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -114,7 +116,8 @@ class PoseEstimator:
         """Forget the track and the filters (call between unrelated clips)."""
         self._roi: lmk.Roi | None = None
         self._last_centre: np.ndarray | None = None
-        self._closer_at = -math.inf  # the frame time of the last tile search
+        self._closer_at: dict[int, float] = {}  # zoom -> the frame time of its last search
+        self._finer_next = 0  # the next finer tile of a sweep under way (0: none)
         self._reset_filters()
 
     def _reset_filters(self) -> None:
@@ -135,25 +138,58 @@ class PoseEstimator:
             self.min_detection_confidence,
         )
 
-    def detect_closer(self, rgb: np.ndarray) -> list[det.Detection]:
-        """:meth:`detect` on overlapping tiles of the frame (:func:`.detector.tiles`), each
-        person once, best first: a person too small in the whole frame for the detector (far
-        from the camera, or the picture small in a large frame) is found in a tile."""
+    def detect_closer(
+        self, rgb: np.ndarray, zoom: int = det.ZOOM, part: slice = slice(None)
+    ) -> list[det.Detection]:
+        """:meth:`detect` on overlapping tiles of the frame ``zoom`` times smaller than it
+        (:func:`.detector.tiles`; ``part``: those of them), each person once, best first: a
+        person too small in the whole frame for the detector (far from the camera, or the
+        picture small in a large frame) is found in a tile."""
         found: list[det.Detection] = []
-        for x, y, w, h in det.tiles(rgb.shape[1], rgb.shape[0]):
+        for x, y, w, h in det.tiles(rgb.shape[1], rgb.shape[0], zoom)[part]:
             found += det.shifted(self.detect(rgb[y : y + h, x : x + w]), x, y)
         return det.distinct(found)
 
-    def _look_closer(self, rgb: np.ndarray, time_s: float, every_s: float) -> list[det.Detection]:
-        """:meth:`detect_closer`, at most once every ``every_s`` seconds of frame time (0: on
-        every frame it is asked for; a frame with no time, NaN, is searched): live, six
-        detector runs on each frame with nobody in view would leave a camera's frames
-        behind."""
-        if every_s > 0 and time_s - self._closer_at < every_s:
-            return []
+    def _due(self, zoom: int, time_s: float, every_s: float) -> bool:
+        """Whether the tiles of ``zoom`` are due: not searched in the last ``every_s``
+        seconds of frame time (0: always; a frame with no time, NaN, is searched), marked
+        searched now when they are."""
+        if every_s > 0 and time_s - self._closer_at.get(zoom, -math.inf) < every_s:
+            return False
         if math.isfinite(time_s):
-            self._closer_at = time_s
-        return self.detect_closer(rgb)
+            self._closer_at[zoom] = time_s
+        return True
+
+    def _searches(
+        self,
+        rgb: np.ndarray,
+        time_s: float,
+        every_s: tuple[float, float],
+        tiles_per_frame: int | None,
+    ) -> Iterator[list[det.Detection]]:
+        """The detector's finds, search by search, each run only when the one before found
+        no person: the whole frame; the tiles of half its size, at most once in
+        ``every_s[0]`` seconds of frame time; those of a quarter, a sweep of them begun at
+        most once in ``every_s[1]`` and searched at most ``tiles_per_frame`` tiles a frame,
+        those of half counted (None: the whole sweep at once), so that no frame waits for
+        more detector runs than the limit: six on every frame with nobody in view would
+        leave a camera's frames behind, 28-35 an extract's far behind."""
+        yield self.detect(rgb)
+        width, height = rgb.shape[1], rgb.shape[0]
+        budget = math.inf if tiles_per_frame is None else tiles_per_frame
+        half = det.tiles(width, height)
+        if half and self._due(det.ZOOM, time_s, every_s[0]):
+            budget -= len(half)
+            yield self.detect_closer(rgb)
+        finer = det.tiles(width, height, det.FINER_ZOOM)
+        if not finer or budget < 1:
+            return
+        if self._finer_next == 0 and not self._due(det.FINER_ZOOM, time_s, every_s[1]):
+            return
+        start = self._finer_next
+        stop = int(min(len(finer), start + budget))
+        self._finer_next = stop % len(finer)
+        yield self.detect_closer(rgb, det.FINER_ZOOM, slice(start, stop))
 
     def landmarks(self, rgb: np.ndarray, roi: lmk.Roi) -> lmk.RawLandmarks:
         """The landmark model on ``roi`` of an RGB uint8 frame (no smoothing)."""
@@ -170,13 +206,21 @@ class PoseEstimator:
         return found[int(np.argmin(dist))]
 
     def process(
-        self, rgb: np.ndarray, time_s: float | None = None, *, closer_every_s: float = 0.0
+        self,
+        rgb: np.ndarray,
+        time_s: float | None = None,
+        *,
+        closer_every_s: float = 0.0,
+        finer_every_s: float = 0.0,
+        tiles_per_frame: int | None = None,
     ) -> FramePose:
         """One RGB uint8 frame ``(h, w, 3)`` taken at ``time_s`` seconds (default: 30 fps; NaN:
         a frame with no time, its pose not smoothed and the filters left as they were).
-        ``closer_every_s``: with nobody found in the whole frame, the tiles are searched
-        (:meth:`detect_closer`) at most once in that many seconds of frame time (0: every
-        such frame)."""
+        ``closer_every_s``: with nobody found in the whole frame, the tiles of half its size
+        are searched (:meth:`detect_closer`) at most once in that many seconds of frame time
+        (0: every such frame); ``finer_every_s``: with nobody found in those either, the tiles
+        of a quarter (:data:`.detector.FINER_ZOOM`), searched at most ``tiles_per_frame``
+        tiles a frame, both sizes counted (None: all)."""
         if time_s is None:
             time_s = self._frame / 30.0
         self._frame += 1
@@ -191,13 +235,16 @@ class PoseEstimator:
         detected = False
         if raw is None:
             detected = True
-            found = self.detect(rgb) or self._look_closer(rgb, time_s, closer_every_s)
-            best = self._pick(found)
-            if best is not None:
+            every = (closer_every_s, finer_every_s)
+            for found in self._searches(rgb, time_s, every, tiles_per_frame):
+                best = self._pick(found)
+                if best is None:
+                    continue
                 raw = self.landmarks(rgb, lmk.roi_from_points(best.keypoints[0], best.keypoints[1]))
                 score = raw.flag
-                if raw.flag < self.min_tracking_confidence:
-                    raw = None
+                if raw.flag >= self.min_tracking_confidence:
+                    break
+                raw = None
         if raw is None:
             self._roi = None
             self._reset_filters()

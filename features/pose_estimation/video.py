@@ -849,6 +849,16 @@ def _looking_ahead(
         yield i, rgb, t, [at for _rgb, at in list(ahead)[:wanted]]
 
 
+FINER_EVERY_S = 0.2
+"""How often :func:`estimate_video` (``extract``) searches the finer tiles (a quarter of the
+frame, :data:`.detector.FINER_ZOOM`: 28-35 detector runs, some 0.5 s of CPU) while nobody is
+in view, found in neither the whole frame nor the tiles of half: at most once in 0.2 s of
+the video (a still picture's one frame is searched), so that a person far away is found
+within half the shortest movement (0.4 s) of coming into view and then tracked, while a
+stretch with nobody in view costs some 1.7 times what it did (a 640x480 30-fps video: 202-214
+ms of CPU a frame, was 119-124), not 6 times."""
+
+
 def estimate_video(
     video_path: str | Path,
     *,
@@ -894,7 +904,7 @@ def estimate_video(
     clock = FrameClock(info.fps)  # the filters get index / fps until the frames stray
     for i, rgb, t, coming in _looking_ahead(frames, clock, max_frames):
         times.append(clock.take(i, t, coming))  # as watch takes it: NaN where it has none
-        pose = est.process(rgb, clock.filter_time(i, times[-1]))
+        pose = est.process(rgb, clock.filter_time(i, times[-1]), finer_every_s=FINER_EVERY_S)
         world.append(pose.world)
         image.append(pose.image)
         person.append(pose.person)
@@ -1380,6 +1390,20 @@ view within a quarter of the 2-s window a segment is judged on. Timed by the fra
 times, so a file watched gives the same poses however fast the machine."""
 
 
+STREAM_FINER_EVERY_S = 2.0
+"""How often :func:`stream_poses` begins a search of the finer tiles (a quarter of the frame,
+:data:`.detector.FINER_ZOOM`: 28-35 detector runs, some 0.5 s of CPU) while nobody is in
+view, found in neither the whole frame nor the tiles of half: once in a window's length
+(2 s), so that the search costs a camera at 30 fps some 10 ms of CPU a frame on average."""
+
+STREAM_TILES_PER_FRAME = 6
+"""How many tiles :func:`stream_poses` searches in one frame at most, both sizes counted:
+the tiles of half the frame, when due, take all six; the finer tiles' search is spread over
+the frames after (some 5-6 frames), so that no frame waits for more detector runs than
+before (seven with the whole frame's: 0.1 s of CPU; 35 in one frame stalled a watch on a
+loaded machine for over 5 s)."""
+
+
 def stream_poses(
     source: int | str | Path,
     *,
@@ -1454,7 +1478,13 @@ def stream_poses(
             # as estimate_video times the filters: index / fps until the frames stray
             at = clock.filter_time(index, video_t) if fps else t
             last = fps is not None and index + 1 == max_frames and _ends(cap, queue, fps)
-            pose = est.process(rgb, at, closer_every_s=STREAM_CLOSER_EVERY_S)
+            pose = est.process(
+                rgb,
+                at,
+                closer_every_s=STREAM_CLOSER_EVERY_S,
+                finer_every_s=STREAM_FINER_EVERY_S,
+                tiles_per_frame=STREAM_TILES_PER_FRAME,
+            )
             yield StreamFrame(index, t, pose, rgb, read_at, video_t, last)
             index += 1
     finally:
