@@ -46,6 +46,13 @@ class _NoGrid:
         return []
 
 
+class _Kept(list[float]):
+    """The latencies added, each kept."""
+
+    def add(self, seconds: float) -> None:
+        self.append(seconds)
+
+
 def _frame(index: int, read_at: float) -> StreamFrame:
     pose = FramePose(np.full((33, 5), np.nan), np.full((33, 3), np.nan), False, False, 0.0, None)
     return StreamFrame(index, index / 30.0, pose, np.zeros((4, 4, 3), np.uint8), read_at)
@@ -64,6 +71,7 @@ def test_the_latency_of_a_file_played_at_its_rate_runs_from_when_its_frame_was_d
     watcher = Watcher(None, None, argparse.Namespace(), 30.0)
     watcher.pacer = pacer
     watcher._grid = _NoGrid()
+    watcher.latency = _Kept()  # each latency as it is added (the watch tallies them)
     before = time.perf_counter()
     watcher._take(_frame(3, read_at=before))
     after = time.perf_counter()
