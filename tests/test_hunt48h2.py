@@ -11,7 +11,11 @@
 
 from __future__ import annotations
 
+import json
+import os
 import pickle
+import signal
+import threading
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -123,3 +127,61 @@ def test_a_burst_after_a_hold_up_comes_off_the_next_stall_for_seconds() -> None:
             len(out) - 1 for i, t in enumerate(times) if len(out := grid.take(_frame(i, t))) > 1
         ]
         assert stalls == [29, second]
+
+
+@pytest.mark.parametrize("then", ["end", "stall"])
+def test_a_stream_lost_gives_the_segments_of_the_frames_watched(
+    then: str,
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A camera that sends 150 frames (5 s of CMU 13_30's jumping jacks) and then stops, or
+    stalls past ``--stall``: the segments printed cover the 150 frames watched, one after
+    the other from frame 0 (the segment in progress given as at the end of a file), then
+    the one line saying the stream was lost, exit 1. The segment in progress was never
+    printed (here: no line at all), nor was an activity going on when the camera was lost."""
+    monkeypatch.setattr(pose_estimation, "stream_poses", _mocap_stream(shared_data, 150, then))
+    capsys.readouterr()
+    assert main(["watch", "0", "--db", str(case_base), "--stall", "0.5"]) == 1
+    printed = capsys.readouterr()
+    lines = [json.loads(line) for line in printed.out.splitlines()]
+    assert lines and lines[0]["start_frame"] == 0 and lines[-1]["end_frame"] == 150
+    for a, b in zip(lines[:-1], lines[1:], strict=True):
+        assert a["end_frame"] == b["start_frame"]
+    lost = "the stream ended after 150 frames" if then == "end" else "stalled: no frame for 0.5 s"
+    assert printed.err.count("\n") == 1 and lost in printed.err, printed.err
+
+
+def test_sigterm_while_a_camera_sends_nothing_ends_the_watch_there(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A camera that sends 90 frames and then nothing (within ``--stall 20``), and SIGTERM
+    (a supervisor stopping the watch) while it sends nothing: the watch ends there as at the
+    end of a stream, the segments of the 90 frames printed and the latency, exit 0. The
+    wait for a frame went on to the stall time, then said "the stream stalled", exit 1, as
+    if the camera had failed (and a supervisor that kills after a grace period, ``docker
+    stop``'s 10 s, killed it first)."""
+    quiet = threading.Event()
+    camera = _mocap_stream(shared_data, 90, "end")
+
+    def stream(source: Any, **kwargs: Any) -> Any:
+        yield from camera(source, **kwargs)
+        threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGTERM)).start()
+        quiet.wait(60)  # sends nothing
+
+    monkeypatch.setattr(pose_estimation, "stream_poses", stream)
+    capsys.readouterr()
+    try:
+        code = main(["watch", "0", "--db", str(case_base), "--stall", "20"])
+    finally:
+        quiet.set()
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    lines = [json.loads(line) for line in printed.out.splitlines()]
+    assert lines and lines[0]["start_frame"] == 0 and lines[-1]["end_frame"] == 90
+    assert "stalled" not in printed.err and "latency frame to label" in printed.err

@@ -29,7 +29,8 @@ Ctrl-C or SIGTERM (``kill``, a supervisor's stop) ends the watch as the end of a
 0); a second one stops at once, writing nothing. A reader that closes stdout (``| head -1``)
 ends it too, the ``--out`` video written up to there. A stream that stalls (no frame for
 ``--stall`` seconds) or a camera or URL that stops sending is reported in one line, with a
-non-zero exit; the ``--out`` video is then not written (no half-written file).
+non-zero exit, after the segments in progress are printed; the ``--out`` video is then not
+written (no half-written file).
 """
 
 from __future__ import annotations
@@ -235,6 +236,9 @@ def _has_windows() -> bool:
     return True
 
 
+HALT_LOOK_S = 0.1
+"""How often a wait for the stream's next item looks whether the user has stopped the watch."""
+
 JOIN_S = 2.0
 """How long the end of a watch waits for the reader thread to finish the frame it is reading
 (a pose estimate: tens of milliseconds; a stalled network read may never return)."""
@@ -305,12 +309,18 @@ class Alive:
 class _Reader:
     """A stream's frames read in a thread into a small queue of (kind, item): ("frame", f),
     then ("end", None) or ("error", exc). :meth:`close` stops it (and the ``pacer`` holding
-    the stream back, if any) and waits up to :data:`JOIN_S` for the frame in hand."""
+    the stream back, if any) and waits up to :data:`JOIN_S` for the frame in hand. ``halt``
+    set (the user stopped the watch) ends a wait for the next item: the stream ends there."""
 
     def __init__(
-        self, frames: Iterator[Any], pacer: Pacer | None = None, alive: Alive | None = None
+        self,
+        frames: Iterator[Any],
+        pacer: Pacer | None = None,
+        alive: Alive | None = None,
+        halt: threading.Event | None = None,
     ) -> None:
         self.frames, self.pacer, self.alive = frames, pacer, alive
+        self.halt = halt or threading.Event()
         self.box: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=8)
         self.stop = threading.Event()
         self.thread = threading.Thread(target=self._read, name="posecbr-watch-reader", daemon=True)
@@ -344,9 +354,14 @@ class _Reader:
         beyond the time the frame in hand is due (a file's frames held back by the pacer are
         not a stall, however long the gap between two of them) and the stream's last sign of
         work (:class:`Alive`). A frame already waiting is taken however late this thread
-        looks (a busy machine may wake it after the stall time: the stream did not stall)."""
+        looks (a busy machine may wake it after the stall time: the stream did not stall).
+        ``halt`` set ends the wait as the stream's end: a camera or network stream that sent
+        nothing when the user stopped the watch (Ctrl-C, SIGTERM) was waited on to the stall
+        time, then said stalled, exit 1, its video not written."""
         asked = time.perf_counter()
         while True:
+            if self.halt.is_set():
+                return "end", None
             quiet_since = max(
                 asked,
                 self.pacer.until if self.pacer is not None else 0.0,
@@ -357,11 +372,11 @@ class _Reader:
                 try:
                     return self.box.get_nowait()
                 except queue.Empty:
-                    raise DataError(
+                    raise StreamLost(
                         f"the stream stalled: no frame for {stall_s:g} s", where
                     ) from None
             try:
-                return self.box.get(timeout=left)
+                return self.box.get(timeout=min(left, HALT_LOOK_S))
             except queue.Empty:
                 continue
 
@@ -378,14 +393,16 @@ def frames_in_background(
     pacer: Pacer | None = None,
     where: str = "stream",
     alive: Alive | None = None,
+    halt: threading.Event | None = None,
 ) -> Generator[Any, None, None]:
     """The stream's frames, read in a thread (:class:`_Reader`); ``pacer``: the one that
     holds ``frames`` back (a file played at its own rate, as a camera delivers), stopped
     with the reader. Raises DataError naming ``where`` (the source) when no frame arrives
-    for ``stall_s`` seconds (beyond the frame's due time and ``alive``'s stamp). Closed (or
+    for ``stall_s`` seconds (beyond the frame's due time and ``alive``'s stamp); ends when
+    ``halt`` is set (the user stopped it: :func:`stop_on_interrupt`'s ``also``). Closed (or
     ended), it stops the reader and waits for it: a thread left inside OpenCV or onnxruntime
     while Python shuts down aborts the process (exit 134)."""
-    reader = _Reader(frames, pacer, alive)
+    reader = _Reader(frames, pacer, alive, halt)
     try:
         while True:
             kind, item = reader.get(stall_s, where)
@@ -396,6 +413,11 @@ def frames_in_background(
             yield item
     finally:
         reader.close()
+
+
+class StreamLost(DataError):
+    """A stream that stalled past ``--stall``, or a camera or live stream that stopped
+    sending: what was watched of it is given (:meth:`Watcher.watch`) before this is said."""
 
 
 class Stop(threading.Event):
@@ -485,14 +507,15 @@ def run(args: argparse.Namespace) -> int:
         pace=pacer,
         alive=alive,
     )
-    frames = frames_in_background(poses, args.stall, pacer, args.source, alive)
+    halt = pacer.stop if pacer is not None else threading.Event()  # set by Ctrl-C, SIGTERM
+    frames = frames_in_background(poses, args.stall, pacer, args.source, alive, halt)
     watcher = Watcher(clf, judge, args, fps)
     watcher.pacer = pacer
     try:
         with (
             _video_output(args.out) as video,
             closing(frames),
-            stop_on_interrupt(pacer.stop if pacer is not None else None) as stop,
+            stop_on_interrupt(halt) as stop,
         ):
             watcher.video = video
             watcher.warm_up()
@@ -566,10 +589,16 @@ class Watcher:
 
     def watch(self, frames: Iterator[Any], is_file: bool, stop: threading.Event) -> None:
         """:meth:`follow` until the stream ends or the user stops it (``stop``: Ctrl-C); the
-        video writer is released either way."""
+        video writer is released either way. A stream lost (:class:`StreamLost`) has the
+        segments in progress printed first, as at the end of a file: its frames were
+        watched (before, an activity going on when the camera was lost was never said)."""
         self.is_file = is_file
         try:
             self.follow(frames, is_file, stop)
+        except StreamLost:
+            for segment in self.live.finish() if self.live is not None else []:
+                self._emit(segment)
+            raise
         finally:
             if self.writer is not None:
                 self.writer.release()
@@ -601,7 +630,7 @@ class Watcher:
         if self.n == 0 and not stop.is_set():
             raise DataError("the stream gave no frame", self.args.source)
         if not is_file and not self.limited and not stop.is_set():
-            raise DataError(
+            raise StreamLost(
                 f"the stream ended after {counted(self.n, 'frame')} (camera or connection lost?)",
                 self.args.source,
             )
@@ -845,7 +874,7 @@ class Latencies:
         if rank in (0, self.count - 1):
             return self.least if rank == 0 else self.worst
         i = int(np.searchsorted(np.cumsum(self.counts), rank, side="right"))
-        middle = self.LOWEST_S * self.RATIO ** (i - 0.5)
+        middle = self.LOWEST_S * float(self.RATIO ** (i - 0.5))
         return min(max(middle, self.least), self.worst)
 
     def percentile(self, q: float) -> float:
