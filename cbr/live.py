@@ -449,7 +449,8 @@ class LiveSegmenter:
         self.absent: list[list[int]] = []  # the runs [first, end) of frames in a gap of
         # the video (push's absent): a stretch with nobody in view mostly of them has no frames
         self.held: list[float] = []  # the evidence of unknown of the unknown hops after a
-        # stretch with nobody in view, not yet a second long (they may join it)
+        # stretch with nobody in view, not yet a second long (they join it, or the
+        # activity after it)
         # the pose jumping to another person (push's image landmarks):
         self.image_before: np.ndarray | None = None  # the last frame's hip and torso (px)
         self.jumps: list[int] = []  # the frames, still kept, where the pose jumped
@@ -772,8 +773,9 @@ class LiveSegmenter:
         two hops. A hop within a stretch of :data:`MIN_SEGMENT_S` or more with nobody in view
         is seen as nobody, whatever its evidence, and such a stretch is a segment of its own
         from the frame the person is lost to the frame they are seen again (as offline); an
-        unknown stretch of less than :data:`MIN_SEGMENT_S` beside it joins it (its windows,
-        half empty, are like no activity)."""
+        unknown stretch of less than :data:`MIN_SEGMENT_S` after it joins the activity that
+        follows (its windows, half empty, are like no activity), or the stretch when nobody is
+        in view again after it (the person seen for a flicker): :meth:`_after_nobody`."""
         finished = []
         for hop, far in zip(self.pending[: len(unknown)], unknown, strict=True):
             seen = self.unknown if far else hop.activity
@@ -787,7 +789,7 @@ class LiveSegmenter:
             elif seen != self.seen:
                 if run is not None:  # nobody from the frame the person was lost
                     boundary = run[0]
-                elif self.seen == self.nobody and not self.held:  # to where they are seen
+                elif self.seen == self.nobody:  # to where they are seen (held hops: after)
                     boundary = self._blind_end()
                 else:
                     mid = int(round((self.last_centre + hop.centre) / 2))
@@ -819,13 +821,9 @@ class LiveSegmenter:
 
     def _change(self, boundary: int, seen: int) -> list[LiveSegment]:
         """The label seen changes to ``seen`` at frame ``boundary``: the segment in progress
-        is finished there; but an unknown one shorter than :data:`MIN_SEGMENT_S` before
-        nobody in view joins it (one after it: :meth:`_after_nobody`)."""
+        is finished there (an unknown one before nobody in view too, however short: its
+        frames show the person, and the segment before it has been given out)."""
         assert self.seen is not None
-        joins = seen == self.nobody and self.seen == self.unknown
-        if joins and boundary - self.seen_start < self.least_blind:
-            self.seen = seen
-            return []
         lost = seen == self.nobody
         done = self._given(self._segment(self.seen_start, boundary, self.seen, True, lost=lost))
         self.seen, self.seen_start, self.seen_sum, self.held = seen, boundary, [0.0, 0.0], []
@@ -887,8 +885,10 @@ class LiveSegmenter:
 
     def _after_nobody(self, hop: _Hop) -> list[LiveSegment]:
         """An unknown hop after nobody in view: held (:attr:`held`) while the unknown stretch
-        is shorter than :data:`MIN_SEGMENT_S`, then the nobody segment is finished where the
-        person is seen again and the unknown one begins there with the held hops."""
+        is shorter than :data:`MIN_SEGMENT_S` (nobody in view again then: it was a flicker,
+        and the stretch goes on; an activity: it begins where the person is seen again,
+        :meth:`_follow`), then the nobody segment is finished where the person is seen again
+        and the unknown one begins there with the held hops."""
         self.held.append(hop.unlike)
         end = self._blind_end()
         if hop.centre - end < self.least_blind:
@@ -1517,13 +1517,10 @@ class LiveSegmenter:
         tail = self.unknown if self.label is None else int(self.state)  # it: as now
         end = self._blind_end()
         if self.seen == self.nobody and end < self.n:
-            # a second or more seen again; or less, labelled, as offline (an unknown
-            # sliver under a second joins the stretch)
-            if self.n - end >= self.least_blind or tail != self.unknown:
-                out += self._change(end, tail)
-                self.seen_sum = (
-                    [sum(held), float(len(held))] if tail == self.unknown else [0.0, 0.0]
-                )
+            # seen again, however briefly: nobody in view holds only frames without the
+            # person (as offline, an unknown sliver at the end stays unknown)
+            out += self._change(end, tail)
+            self.seen_sum = [sum(held), float(len(held))] if tail == self.unknown else [0.0, 0.0]
         return [*out, *self._given(self._segment(self.seen_start, self.n, self.seen, False))]
 
     def _lost_at_end(self) -> list[LiveSegment]:

@@ -1510,15 +1510,19 @@ def _segment_of(
     return Segment(start, end, label, float(votes[a:b, state].mean()), reps, text, ratio)
 
 
-def _nobody_absorbs_slivers(path: np.ndarray, n_classes: int) -> np.ndarray:
-    """``path`` with each unknown run shorter than :data:`MIN_SEGMENT_S` next to a run of
-    nobody in view (state ``n_classes + 1``) made part of it: the windows at its edge, half
-    empty, are like no activity."""
+def _slivers_beside_nobody(path: np.ndarray, n_classes: int) -> np.ndarray:
+    """``path`` with each unknown run shorter than :data:`MIN_SEGMENT_S` after a run of
+    nobody in view (state ``n_classes + 1``) given to what follows it: nobody in view when
+    it lies between two such runs (the person seen for a flicker), the activity after it
+    when there is one (its windows, half empty, are like no activity: the activity starts
+    where the person is seen again). Nobody in view holds only frames without the person;
+    any other unknown sliver stays unknown (one before nobody in view too: ``watch`` has
+    given the segment before it out by then, :class:`cbr.live.LiveSegmenter`)."""
     runs = _runs(path)
-    for i, (a, b, state) in enumerate(runs):
-        beside = [runs[j][2] for j in (i - 1, i + 1) if 0 <= j < len(runs)]
-        if state == n_classes and (b - a) * BLOCK_S < MIN_SEGMENT_S and n_classes + 1 in beside:
-            path[a:b] = n_classes + 1
+    for i, (a, b, state) in enumerate(runs[1:-1], start=1):
+        before, after = runs[i - 1][2], runs[i + 1][2]
+        if state == n_classes and (b - a) * BLOCK_S < MIN_SEGMENT_S and before == n_classes + 1:
+            path[a:b] = after
     return path
 
 
@@ -1701,7 +1705,7 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     votes = np.column_stack([votes, unknown])  # an unknown segment's: its evidence of unknown
     # nobody in view: unknown, whatever the neighbours', and a segment of its own
     path[nobody_blocks(rec, len(path))] = n_classes + 1
-    runs = _runs(_nobody_absorbs_slivers(path, n_classes))
+    runs = _runs(_slivers_beside_nobody(path, n_classes))
     bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]
     unseen = [s > n_classes for *_, s in runs]
     reps = counted_apart(done.sig, bounds, rec.n_frames, unseen, person_jumps(rec), rec)

@@ -267,16 +267,17 @@ def test_a_stream_that_ends_soon_after_the_person_is_back_ends_nobody_where_they
     assert [x[:3] for x in _away(((300, 885),))][1:] == [(300, 885, None), (885, 900, "a")]
 
 
-def test_unknown_after_nobody_joins_it_when_shorter_than_a_second() -> None:
+def test_unknown_after_nobody_shorter_than_a_second_joins_the_activity_after() -> None:
     """Windows that show the person only in part are unlike every activity (as a half-empty
     window is): the unknown hops just after the stretch out of view (frames 300-450), less
-    than a second of them, join its segment, which then ends where activity 0's hops begin
-    again (465: midway between the last unknown hop and the first of 0); windows unlike every
-    activity centred in the 3 s after it (frames 450-540) are an unknown segment of their
-    own, from the frame the person is seen again."""
+    than a second of them, join the segment of activity 0 that follows, from the frame the
+    person is seen again (450; before, they joined the nobody segment, which ran to 465,
+    midway between the last unknown hop and the first of 0: frames showing the person);
+    windows unlike every activity centred in the 3 s after it (frames 450-540) are an
+    unknown segment of their own, from the frame the person is seen again."""
     joined = _away(((300, 450),), kind=_HalfEmpty)
     longer = _away(((300, 450),), unlike=((450, 540),), kind=_HalfEmpty)
-    assert [(a, b, label) for a, b, label, _ in joined][-2:] == [(300, 465, None), (465, 900, "a")]
+    assert [(a, b, label) for a, b, label, _ in joined][-2:] == [(300, 450, None), (450, 900, "a")]
     assert joined[-2][3] == NOBODY
     assert [(label, text == NOBODY) for *_, label, text in longer][-3:] == [
         (None, True), (None, False), ("a", False)
@@ -285,18 +286,19 @@ def test_unknown_after_nobody_joins_it_when_shorter_than_a_second() -> None:
     assert abs(longer[-2][1] - 540) <= 1.5 * 15
 
 
-def test_unknown_before_nobody_joins_it_when_shorter_than_a_second() -> None:
+def test_unknown_before_nobody_stays_unknown_however_short() -> None:
     """Pass 2's hops followed by hand: activity 0 to the hop at frame 270, one unknown hop
     (285), then hops in a stretch with nobody in view (frames 300-450) and 0 again. The
     unknown stretch, from midway between its hop and the one before (278) to where the
-    person is lost (300), is shorter than a second: it joins the nobody segment; two unknown
-    hops (270, 285: from 262, 38 frames) make an unknown segment of their own."""
+    person is lost (300), shorter than a second, stays an unknown segment of its own (its
+    frames show the person; before, it joined the nobody segment, 278-450), as two unknown
+    hops (270, 285: from 262, 38 frames) do; nobody in view is 300-450 either way."""
     from cbr.live import _Hop
 
     labels = np.array(["a", "b"])
     clf = SimpleNamespace(classes_=labels, case_base_=SimpleNamespace(labels=labels))
     cases = {
-        285: [(0, 278, "a"), (278, 450, None)],
+        285: [(0, 278, "a"), (278, 300, None), (300, 450, None)],
         270: [(0, 262, "a"), (262, 300, None), (300, 450, None)],
     }
     for first_unknown, expected in cases.items():
@@ -308,7 +310,7 @@ def test_unknown_before_nobody_joins_it_when_shorter_than_a_second() -> None:
         unknown = [int(first_unknown <= c < 300) for c in centres]
         finished = live._follow(unknown)
         assert [(s.start_frame, s.end_frame, s.label) for s in finished] == expected
-        assert finished[-1].explanation == NOBODY
+        assert finished[-1].explanation == NOBODY and finished[-2].explanation != NOBODY
 
 
 def test_a_long_stretch_with_nobody_in_view_is_one_segment_in_bounded_memory() -> None:
