@@ -1396,12 +1396,16 @@ STREAM_FINER_EVERY_S = 2.0
 view, found in neither the whole frame nor the tiles of half: once in a window's length
 (2 s), so that the search costs a camera at 30 fps some 10 ms of CPU a frame on average."""
 
-STREAM_TILES_PER_FRAME = 6
+STREAM_TILES_PER_FRAME = 1
 """How many tiles :func:`stream_poses` searches in one frame at most, both sizes counted:
-the tiles of half the frame, when due, take all six; the finer tiles' search is spread over
-the frames after (some 5-6 frames), so that no frame waits for more detector runs than
-before (seven with the whole frame's: 0.1 s of CPU; 35 in one frame stalled a watch on a
-loaded machine for over 5 s)."""
+the tiles of half the frame, when due, take all six (as before the finer tiles); the finer
+tiles' search is spread one a frame over the frames after (35 over a 640x480 frame: 1.2 s at
+30 fps), so that a frame costs at most two detector runs more than the whole frame's: with
+six a frame (a sweep of 5-6 frames, each some 45 ms on two idle cores) a 640x480 30-fps watch
+fell behind over every sweep, its labels' 95th percentile 0.22-0.31 s after their frames
+against 0.06-0.07 s before the finer tiles; one a frame, 0.08-0.13 s (measured on 10 s of an
+empty room then the lunge video, idle machine); 35 in one frame stalled a watch on a loaded
+machine for over 5 s."""
 
 
 def stream_poses(
