@@ -25,7 +25,7 @@ import pytest
 
 from features.fluents import evaluate
 from features.signals import ANGLE_SIGNALS, NEAR_SIGNALS, StateSignals, near_pairs, state_signals
-from tests.bodies import rot_x, rot_y, rot_z, rotate, standing, to_sequence
+from tests.bodies import HEAD, UPPER_BODY, rot_x, rot_y, rot_z, rotate, standing, to_sequence
 
 PI = math.pi
 EPS = 1e-3
@@ -232,12 +232,6 @@ def test_touching_is_within_a_tenth_of_a_raw_unit_inclusive_and_binary(backend: 
 
 NECK = np.array([0.0, 1.5, 0.0])
 HIPS = np.array([0.0, 1.0, 0.0])
-FACE = ("nose", "left_eye_inner", "left_eye", "left_eye_outer", "right_eye_inner", "right_eye",
-        "right_eye_outer", "left_ear", "right_ear", "mouth_left", "mouth_right")  # fmt: skip
-SHOULDERS_UP = FACE + tuple(
-    f"{s}_{j}" for s in ("left", "right")
-    for j in ("shoulder", "elbow", "wrist", "pinky", "index", "thumb")
-)  # fmt: skip
 
 
 def _angle(body: dict[str, np.ndarray], name: str, backend: str) -> float:
@@ -261,15 +255,15 @@ def test_head_and_torso_tilt_angles_by_hand(backend: str) -> None:
     assert _angle(standing(), "neck_sagittal", backend) == pytest.approx(PI / 2)
     assert _angle(standing(), "neck_frontal", backend) == pytest.approx(PI / 2)
     # the head pitched 30 degrees forward about the neck: 60 degrees from forward
-    forward = rotate(standing(), FACE, rot_x(30), NECK)
+    forward = rotate(standing(), HEAD, rot_x(30), NECK)
     assert _angle(forward, "neck_sagittal", backend) == pytest.approx(PI / 3)
     assert _angle(forward, "neck_frontal", backend) == pytest.approx(PI / 2)
     # rolled 20 degrees to the person's left: 70 degrees from left, still 90 from forward
-    left = rotate(standing(), FACE, rot_z(20), NECK)
+    left = rotate(standing(), HEAD, rot_z(20), NECK)
     assert _angle(left, "neck_frontal", backend) == pytest.approx(PI / 2 - PI / 9)
     assert _angle(left, "neck_sagittal", backend) == pytest.approx(PI / 2)
     # the whole upper body leaning 25 degrees to the person's left over the hips
-    lean = rotate(standing(), SHOULDERS_UP, rot_z(25), HIPS)
+    lean = rotate(standing(), UPPER_BODY, rot_z(25), HIPS)
     assert _angle(lean, "torso_frontal", backend) == pytest.approx(PI / 2 - 25 * PI / 180)
     assert _angle(lean, "torso_sagittal", backend) == pytest.approx(PI / 2)
     assert _angle(lean, "neck_frontal", backend) == pytest.approx(PI / 2)  # head moved with it
@@ -280,7 +274,7 @@ def test_head_twist_angle_by_hand(backend: str) -> None:
     # neck -> nose (0, ., 0.10) against neck -> left shoulder (0.20, 0, 0), in the transverse
     # plane: 90 degrees; the head turned 40 degrees to the person's left: 50 degrees
     assert _angle(standing(), "neck_transverse", backend) == pytest.approx(PI / 2)
-    turned = rotate(standing(), FACE, rot_y(40), NECK)
+    turned = rotate(standing(), HEAD, rot_y(40), NECK)
     assert _angle(turned, "neck_transverse", backend) == pytest.approx(PI / 2 - 40 * PI / 180)
 
 
@@ -326,7 +320,7 @@ def test_elbow_knee_armpit_and_hip_use_the_spec_joints(backend: str) -> None:
     assert _angle(body, "left_armpit", backend) == pytest.approx(_by_hand(se, sh))
     # hip: the upper body pitched 30 degrees forward about the hips, the legs straight down:
     # H->K = (0, -0.45, 0), H->S = (-0.05, 0.5, 0) pitched forward
-    bent = rotate(standing(), SHOULDERS_UP, rot_x(30), HIPS)
+    bent = rotate(standing(), UPPER_BODY, rot_x(30), HIPS)
     c30, s30 = math.cos(PI / 6), math.sin(PI / 6)
     hs = np.array([0.05, 0.5 * c30, 0.5 * s30])  # the left side's
     assert _angle(bent, "left_hip", backend) == pytest.approx(
