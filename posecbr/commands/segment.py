@@ -51,11 +51,18 @@ from pathlib import Path
 from typing import Any
 
 from cbr.judges import JUDGES
-from features.errors import ConfigError, DataError, ParameterError
+from features.errors import ConfigError, DataError
 from features.fileio import check_output
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
-from posecbr.arguments import add_k_option, add_plot_option, check_plot, path_arg, plot_targets
+from posecbr.arguments import (
+    add_k_option,
+    add_plot_option,
+    as_options,
+    check_plot,
+    path_arg,
+    plot_targets,
+)
 from posecbr.recordings import (
     add_recording_options,
     check_asf,
@@ -315,10 +322,8 @@ def check_k_option(clf: Any, k: int) -> None:
     a Python caller's names the argument ``k``."""
     from cbr.segmentation import check_k
 
-    try:
+    with as_options({"k": "-k"}):
         check_k(clf, k)
-    except ParameterError as exc:
-        raise ParameterError(exc.message, "-k") from None
 
 
 def judge_named(clf: Any, name: str, db: str) -> Any:
