@@ -14,6 +14,7 @@ import pytest
 from tests.once import made_once
 
 if TYPE_CHECKING:
+    from cbr.estimator import CaseBaseClassifier
     from features.poses import PoseSequence
 
 # The suite runs one process per core (pytest-xdist), and the commands and workers the tests
@@ -78,6 +79,22 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"real data folder {SHARED_DATA} is not on this machine")
     return SHARED_DATA
+
+
+@pytest.fixture(scope="module")
+def arm_k3() -> tuple[CaseBaseClassifier, PoseSequence, list[str]]:
+    """A classifier of k = 3 fitted on three arm clips of each of the synthetic arm
+    movements (``tests.test_cbr_clips.arm_dataset``, seed 3), those clips one after the other
+    as one recording, and their labels."""
+    import numpy as np
+
+    from cbr.estimator import CaseBaseClassifier
+    from features.poses import PoseSequence
+    from tests.test_cbr_clips import arm_dataset
+
+    X, y = arm_dataset(3, seed=3)
+    rec = PoseSequence(np.concatenate([x.positions for x in X]), X[0].joint_names, 30.0)
+    return CaseBaseClassifier(k=3).fit(X, y), rec, [str(v) for v in y]
 
 
 @pytest.fixture(scope="session")

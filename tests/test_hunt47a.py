@@ -10,7 +10,6 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from cbr.estimator import CaseBaseClassifier
@@ -22,26 +21,17 @@ from features.errors import ConfigError
 from features.poses import PoseSequence, save_pose
 from posecbr.cli import main
 from tests.badinput import refused
-from tests.test_cbr_clips import arm_dataset
 
 K_WORDS = "must be from 1 to the case base's k (3, the nearest cases a window retrieves)"
 
 
-@pytest.fixture(scope="module")
-def fitted() -> tuple[CaseBaseClassifier, PoseSequence, list[str]]:
-    """A classifier of k = 3 fitted on three arm clips, and the clips one after the other."""
-    X, y = arm_dataset(3, seed=3)
-    rec = PoseSequence(np.concatenate([x.positions for x in X]), X[0].joint_names, 30.0)
-    return CaseBaseClassifier(k=3).fit(X, y), rec, [str(v) for v in y]
-
-
 def test_a_python_caller_reads_k_not_the_commands_option(
-    fitted: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],
 ) -> None:
     """``segment``, ``solve_recording`` and ``LiveSegmenter`` given k = 4 by a classifier of
     k = 3 name their argument ``k``. Before: "-k: must be from 1 to ...", the commands'
     option, which a Python caller never typed."""
-    clf, rec, _ = fitted
+    clf, rec, _ = arm_k3
     held_out = judge_of(clf, "held-out")
     calls = [
         lambda: segment(clf, rec, judge=held_out, k=4),
@@ -56,24 +46,24 @@ def test_a_python_caller_reads_k_not_the_commands_option(
 
 
 def test_segment_refuses_a_k_before_it_calibrates_the_default_judge(
-    fitted: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],
 ) -> None:
     """``segment(clf, rec, k=4)`` with no judge, on a classifier of k = 3 whose case base the
     default judge cannot be calibrated on (one clip per activity): the k is refused, as with a
     judge given. Before: the case base was, "no activity has cases apart from each other",
     after calibrating on it, and the bad k went unsaid."""
-    clf, rec, _ = fitted
+    clf, rec, _ = arm_k3
     with pytest.raises(ValueError, match=f"^k: {re.escape(K_WORDS)}"):
         segment(clf, rec, k=4)
 
 
 def test_a_python_caller_reads_the_judges_argument_not_the_commands_option(
-    fitted: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],
 ) -> None:
     """``judge_of(clf, "nope")``: refused naming its argument ``name``, a ValueError (a bad
     argument's, as every other of the Python calls) and a ConfigError. Before: a ConfigError
     alone, "--unknown: unknown judge 'nope'"."""
-    clf, _, _ = fitted
+    clf, _, _ = arm_k3
     with pytest.raises(ValueError) as raised:
         judge_of(clf, "nope")
     assert str(raised.value) == f"name: unknown judge 'nope': one of {', '.join(JUDGES)}"
@@ -81,14 +71,14 @@ def test_a_python_caller_reads_the_judges_argument_not_the_commands_option(
 
 
 def test_the_commands_still_say_their_options(
-    fitted: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     """``segment`` and ``watch`` with -k 4 on a case base of k = 3 say "-k: must be from 1
     ...", in one line, before any recording or stream is read; an unknown --unknown is
     refused by the option's own choices, naming it."""
-    clf, rec, labels = fitted
+    clf, rec, labels = arm_k3
     db = tmp_path / "arms.db"
     store_fitted(db, "arms", clf, labels)
     pose = tmp_path / "rec.npz"

@@ -104,20 +104,12 @@ def test_the_feedback_checks_name_their_arguments() -> None:
     )
 
 
-@pytest.fixture(scope="module")
-def fitted() -> tuple[CaseBaseClassifier, PoseSequence, list[str]]:
-    """A classifier of k = 3 fitted on arm clips, and the clips one after the other."""
-    X, y = arm_dataset(3, seed=3)
-    rec = PoseSequence(np.concatenate([x.positions for x in X]), X[0].joint_names, 30.0)
-    return CaseBaseClassifier(k=3).fit(X, y), rec, [str(v) for v in y]
-
-
 def test_classify_still_says_feedback(
-    fitted: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    clf, rec, labels = fitted
+    clf, rec, labels = arm_k3
     db = tmp_path / "arms.db"
     store_fitted(db, "arms", clf, labels)
     pose = tmp_path / "clip.npz"
@@ -152,11 +144,11 @@ def test_a_false_unknown_rate_is_named_as_the_argument() -> None:
 
 
 def test_no_refusal_says_its_argument_twice(
-    fitted: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],
 ) -> None:
     """Before: "chunk_frames: chunk_frames must be None ...", "k: k must be ...", "judge:
     judge must be ...", "y: y is None ...", the name the line starts with said again."""
-    clf, rec, _ = fitted
+    clf, rec, _ = arm_k3
     lines = [
         python_refusal(lambda: segment(clf, rec, judge=judge_of(clf, "held-out"), chunk_frames=-1)),
         python_refusal(lambda: CaseBaseClassifier(k=0).fit([rec], ["a"])),
@@ -239,7 +231,7 @@ def test_train_keeps_a_clip_that_differs_from_another_by_a_few_centimetres(
 
 
 def test_copies_are_told_by_their_poses_not_by_features_alike(
-    fitted: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],
 ) -> None:
     """Two takes whose features agree (a few states, or QMP vectors: arm_4 and arm_7 of
     tests/test_hunt43i.py under four states) are no copies; the same poses under another
@@ -249,7 +241,7 @@ def test_copies_are_told_by_their_poses_not_by_features_alike(
     from cbr.described import DescribedClip, poses_digest
     from cbr.training import copies_within
 
-    _, rec, _ = fitted
+    _, rec, _ = arm_k3
     a, b = (PoseSequence(rec.positions[k : k + 30], rec.joint_names, 30.0) for k in (0, 30))
     assert poses_digest(a) != poses_digest(b)
 
