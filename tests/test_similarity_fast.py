@@ -104,6 +104,39 @@ def test_euclidean_batch_equals_single_queries(
             np.testing.assert_array_equal(many_d[j], one_d)
 
 
+@pytest.mark.parametrize("blas_min", [0, 1 << 40])  # the plain pass by BLAS, or by the kernel
+def test_euclidean_distance_of_a_near_copy_far_from_the_origin_is_exact(
+    blas_min: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Cases near 1000 in every dimension, queries a case itself and a case moved by 0.01 in
+    ten dimensions: the distances are the float64 distances of the float32 values (0.0 for
+    the case itself) by every path. Before, the identity |c|^2 - 2 c.q + |q|^2 with a float32
+    dot product erred by some 2^-24 D |c|^2 = 2e3 in d^2 here: every near distance was noise,
+    and a clip's distance to its own case 0.0 or 0.0022 by the CPU's vector width."""
+    monkeypatch.setattr("cbr.similarity.euclidean._BLAS_MIN", blas_min)
+    rng = np.random.default_rng(11)
+    cases = (1000.0 + rng.random((3000, 200))).astype(np.float32)
+    moved = cases[5].copy()
+    moved[:10] += np.float32(0.01)
+    queries = np.vstack([cases[7], moved]).astype(np.float64)
+    want = [
+        np.sqrt(((cases.astype(np.float64) - q) ** 2).sum(axis=1)) for q in queries
+    ]  # float64 differences of the float32 values
+    assert want[0][7] == 0.0 and 0.03 < want[1][5] < 0.033  # 0.01 sqrt(10), float32-rounded
+    m = Euclidean(prune_min_cases=1000)
+    indexes = [m.build_index(cases), Euclidean(prune_min_cases=10**9).build_index(cases)]
+    for q, w in zip(queries, want, strict=True):
+        qr = m.represent_query(q)
+        np.testing.assert_allclose(m.distances(qr, indexes[1]), w, rtol=1e-12, atol=0)
+        for index in indexes:
+            got_i, got_d = m.nearest(qr, index, 3)
+            np.testing.assert_array_equal(got_i, np.argsort(w, kind="stable")[:3])
+            np.testing.assert_allclose(got_d, np.sort(w)[:3], rtol=1e-12, atol=0)
+    many_i, many_d = m.nearest_many(queries, indexes[0], 1)
+    assert list(many_i[:, 0]) == [7, 5] and many_d[0, 0] == 0.0
+    np.testing.assert_allclose(many_d[1, 0], want[1][5], rtol=1e-12)
+
+
 def test_euclidean_neighbours_equal_scikit_learn_brute_force(
     euclidean_case: tuple[str, np.ndarray, np.ndarray],
 ) -> None:
@@ -117,9 +150,10 @@ def test_euclidean_neighbours_equal_scikit_learn_brute_force(
     m = Euclidean(prune_min_cases=1000)
     got_i, got_d = m.nearest_many(queries, m.build_index(cases), 5)
     np.testing.assert_array_equal(got_i, want_i)
-    # float32 dot products: |error of d^2| <= 2 gamma_D |c| |q| (Higham), gamma_D ~ D 2^-24
-    bound = 2 * 200 * 2.0**-24 * np.linalg.norm(cases, axis=1).max() * np.linalg.norm(q32, axis=1)
-    assert np.all(np.abs(got_d**2 - want_d**2) <= bound[:, None])
+    # both within float64 rounding of the float32 values' distances: scikit-learn's
+    # |c|^2 - 2 c.q + |q|^2 in float64, the measure's squared differences summed in float64
+    scale = np.linalg.norm(cases, axis=1).max() ** 2 + (q32**2).sum(axis=1)
+    assert np.all(np.abs(got_d**2 - want_d**2) <= 1e-12 * scale[:, None])
 
 
 def test_euclidean_neighbours_equal_faiss_flat_index(

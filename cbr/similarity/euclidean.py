@@ -4,9 +4,10 @@ On binary QMP vectors the squared distance is the number of mismatched features,
 nearest cases are the ones with the most matched features.
 
 Every search returns exactly what :meth:`Euclidean.distances` and :func:`smallest_k` give (ties
--> lower case index): one compiled row kernel (:func:`_row_sq`, float32 rows, the identity
-``|c|^2 - 2 c.q + |q|^2``) computes every distance a search returns; the paths differ only in
-which rows they hand it, never in how a row's distance is computed.
+-> lower case index): one compiled row kernel (:func:`_row_sq`, float32 rows, the squared
+differences summed in float64) computes every distance a search returns; the paths differ only
+in which rows they hand it, never in how a row's distance is computed. The bounds that choose
+the rows (BLAS products, codes) are float32's, with their rounding allowed for.
 
 - **Plain pass**: small case bases stream every row through the kernel with the k best kept
   on the fly (:func:`_knn_scan`); from ``2^20`` values, one BLAS matrix-vector product on one
@@ -92,20 +93,26 @@ _U32 = 2.0**-24  # unit roundoff of float32
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True, inline="always")
-def _row_sq(rows: np.ndarray, sq: np.ndarray, i: int, q: np.ndarray, q_sq: float) -> float:
-    """Distance of row ``i`` to ``q`` (float32 dot product), clamped at 0 and square-rooted."""
-    s = np.float32(0.0)
+def _row_sq(rows: np.ndarray, i: int, q: np.ndarray) -> float:
+    """Distance of row ``i`` to ``q``: the squares of the differences summed in float64 (a
+    difference of two float32 values is exact in float64), square-rooted. Within about
+    ``D 2^-53`` of the distance between the float32 row and query, on every CPU. Before, the
+    identity ``|c|^2 - 2 c.q + |q|^2`` with a float32 dot product: its rounding, some
+    ``2^-24 D |c| |q|``, is large against a small distance, and its summation order (how
+    wide the CPU's vectors are) decided it: a clip's distance to its own case was 0.0 on an
+    AVX2 CPU and 0.0022 on an AVX-512 one."""
+    s = 0.0
     for j in range(rows.shape[1]):
-        s += rows[i, j] * q[j]
-    d2 = sq[i] - 2.0 * np.float64(s) + q_sq
-    return math.sqrt(d2) if d2 > 0.0 else 0.0
+        d = np.float64(rows[i, j]) - np.float64(q[j])
+        s += d * d
+    return math.sqrt(s)
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
-def _row_distance(rows: np.ndarray, sq: np.ndarray, i: int, q: np.ndarray, q_sq: float) -> float:
+def _row_distance(rows: np.ndarray, i: int, q: np.ndarray) -> float:
     """:func:`_row_sq` as a function of its own, for callers compiled without fastmath (the
     flags of the code it is inlined into decide its summation order, so its value)."""
-    return _row_sq(rows, sq, i, q, q_sq)
+    return _row_sq(rows, i, q)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -141,17 +148,17 @@ def _insert_any(best_i: np.ndarray, best_d: np.ndarray, i: int, d: float) -> Non
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
-def _all_distances(rows: np.ndarray, sq: np.ndarray, q: np.ndarray, q_sq: float) -> np.ndarray:
+def _all_distances(rows: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Distances from ``q`` ``(D,)`` float32 to every row of ``rows`` ``(n, D)`` float32."""
     out = np.empty(rows.shape[0])
     for i in range(rows.shape[0]):
-        out[i] = _row_sq(rows, sq, i, q, q_sq)
+        out[i] = _row_sq(rows, i, q)
     return out
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
 def _knn_scan(
-    rows: np.ndarray, sq: np.ndarray, q: np.ndarray, q_sq: float, idx: np.ndarray, k: int
+    rows: np.ndarray, q: np.ndarray, idx: np.ndarray, k: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """The k nearest among the rows listed in ``idx`` (increasing), or all rows when ``idx``
     is empty: (indices ``(k,)``, distances ``(k,)``)."""
@@ -159,11 +166,11 @@ def _knn_scan(
     best_d = np.full(k, np.inf)
     if idx.shape[0] == 0:
         for i in range(rows.shape[0]):
-            _insert(best_i, best_d, i, _row_sq(rows, sq, i, q, q_sq))
+            _insert(best_i, best_d, i, _row_sq(rows, i, q))
     else:
         for t in range(idx.shape[0]):
             i = idx[t]
-            _insert(best_i, best_d, i, _row_sq(rows, sq, i, q, q_sq))
+            _insert(best_i, best_d, i, _row_sq(rows, i, q))
     return best_i, best_d
 
 
@@ -348,9 +355,7 @@ def _pca_knn(
     boxes: tuple[np.ndarray, ...],
     query_pca: tuple[np.ndarray, int, float, float],
     rows: np.ndarray,
-    sq: np.ndarray,
     q: np.ndarray,
-    q_sq: float,
     k: int,
     rounding: float,
     scale: float,
@@ -423,7 +428,7 @@ def _pca_knn(
             count += 1
             if count > max_count:
                 return best_i, best_d, -1
-            d = _row_distance(rows, sq, i, q, q_sq)
+            d = _row_distance(rows, i, q)
             if d <= best_d[k - 1]:
                 _insert_any(best_i, best_d, i, d)
                 if best_d[k - 1] < np.inf:
@@ -434,7 +439,7 @@ def _pca_knn(
 @numba.njit(cache=True, nogil=True)
 def _nibble_knn(
     nibbles: tuple[np.ndarray, np.ndarray, float, np.ndarray, float],
-    distance: tuple[np.ndarray, np.ndarray, np.ndarray, float, float],
+    distance: tuple[np.ndarray, np.ndarray, float],
     k: int,
     max_count: int,
     shuffle: bool,
@@ -445,7 +450,7 @@ def _nibble_knn(
 
     ``nibbles`` = (the codes, each case's ``e_x`` ``(n,)`` float32 and the largest, the
     query's tables ``(m 32,)`` uint8, their scale ``s``); ``distance`` = (rows ``(n, D)``
-    float32, their squared norms ``(n,)``, ``q`` ``(D,)`` float32, ``|q|^2``, ``rounding``:
+    float32, ``q`` ``(D,)`` float32, ``rounding``:
     what a row kernel's squared distance may lack of the true one).
 
     Cases are visited in index order, 64 at a time. With ``d_k`` the running k-th kernel
@@ -459,7 +464,7 @@ def _nibble_knn(
     :data:`~cbr.similarity.nibbles.HAS_SHUFFLE`), else the scalar one; both give the same
     sums."""
     codes, errs, top_err, luts, scale = nibbles
-    rows, sq, q, q_sq, rounding = distance
+    rows, q, rounding = distance
     n = len(errs)
     m = luts.shape[0] // 32
     best_i = np.full(k, n, dtype=np.int64)
@@ -488,7 +493,7 @@ def _nibble_knn(
             count += 1
             if count > max_count:
                 return best_i, best_d, -1
-            d = _row_distance(rows, sq, i, q, q_sq)
+            d = _row_distance(rows, i, q)
             if d < best_d[k - 1]:
                 _insert(best_i, best_d, i, d)
                 if best_d[k - 1] < np.inf:
@@ -515,11 +520,13 @@ def _select_from_products(
     the row kernel's; the k-th smallest upper bound is a threshold every true neighbour's lower
     bound is under, and only those rows are re-computed with :func:`_row_sq`."""
     n = prods.shape[0]
+    # the float64 rounding of |c|^2 - 2 c.q + |q|^2, and the row kernel's (_allowance_of)
+    rel = 1e-12 + 2.02 * (rows.shape[1] + 1) * 2.0**-53
     ub_i = np.full(k, -1, dtype=np.int64)
     ub_d = np.full(k, np.inf)
     for i in range(n):
         d2 = sq[i] - 2.0 * np.float64(prods[i]) + q_sq
-        d2 += err * norms[i] + 1e-12 * (sq[i] + q_sq)
+        d2 += err * norms[i] + rel * (sq[i] + q_sq)
         if d2 < ub_d[k - 1]:
             _insert(ub_i, ub_d, i, d2)
     limit = max(ub_d[k - 1], 0.0)
@@ -527,8 +534,8 @@ def _select_from_products(
     best_d = np.full(k, np.inf)
     for i in range(n):
         d2 = sq[i] - 2.0 * np.float64(prods[i]) + q_sq
-        if d2 - err * norms[i] - 1e-12 * (sq[i] + q_sq) <= limit:
-            _insert(best_i, best_d, i, _row_sq(rows, sq, i, q, q_sq))
+        if d2 - err * norms[i] - rel * (sq[i] + q_sq) <= limit:
+            _insert(best_i, best_d, i, _row_sq(rows, i, q))
     return best_i, best_d
 
 
@@ -956,7 +963,7 @@ class Euclidean(SimilarityMeasure):
             exact: np.ndarray = np.sqrt(((index.rows - q) ** 2).sum(axis=1))
             return exact
         q32, q_sq = self._query(query_rep)
-        return _all_distances(index.rows, index.sq_norms, q32, q_sq)
+        return _all_distances(index.rows, q32)
 
     def nearest(self, query_rep: np.ndarray, index: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
         if not isinstance(index, _EuclideanIndex) or self.exact:
@@ -1025,7 +1032,9 @@ def _nibbles_prune(index: _EuclideanIndex) -> bool:
 
 def _error(gamma: float, q_sq: float) -> float:
     """Coefficient ``e`` with ``|product-based d^2 - row-kernel d^2| <= e |c|`` for a float32
-    dot product of D terms (``gamma = D u / (1 - D u)``, Higham's bound on both sides)."""
+    dot product of D terms (``gamma = D u / (1 - D u)``, Higham's bound: twice it for the
+    product's ``2 c.q``, and as much again to spare; the row kernel's own rounding, some
+    ``D 2^-53 (|c| + |q|)^2``, :func:`_select_from_products` adds)."""
     return 4.0 * gamma * math.sqrt(q_sq) * 1.01 + 1e-9
 
 
@@ -1066,7 +1075,7 @@ def _plain_search(
     BLAS matrix-vector product (re-checked within its error bound) for large ones."""
     rows = index.rows
     if rows.size < _BLAS_MIN:
-        return _knn_scan(rows, index.sq_norms, q32, q_sq, _ALL, k)
+        return _knn_scan(rows, q32, _ALL, k)
     n, dims = rows.shape
     gamma = dims * _U32 / (1.0 - dims * _U32)
     prods = _matvec_one_thread(rows, q32)
@@ -1077,14 +1086,13 @@ def _plain_search(
 
 @numba.njit(cache=True, nogil=True)
 def _allowance_of(dims: int, max_norm: float, q_sq: float) -> float:
-    """How far a row kernel's squared distance may be from the true one: twice the float32 dot
-    product's error (Higham: ``gamma_D |c| |q|``, plus ``D 2^-149`` per side for products that
-    underflow), plus the float64 rounding of ``|c|^2 - 2 c.q + |q|^2``."""
-    u = 2.0**-24
-    gamma = dims * u / (1.0 - dims * u)
+    """How far a row kernel's squared distance may be from the true one: its float64 sum of
+    ``D`` exact differences squared is within ``gamma_(D+1) d^2`` of it (Higham, ``u =
+    2^-53``), and ``d <= |c| + |q|``; plus ``D 2^-1074`` for squares that underflow."""
+    u = 2.0**-53
+    gamma = (dims + 1) * u / (1.0 - (dims + 1) * u)
     q_norm = math.sqrt(q_sq)
-    dot = gamma * max_norm * q_norm + 2.0 * dims * 2.0**-149
-    return 2.02 * dot + 1e-15 * (max_norm + q_norm) ** 2
+    return 1.01 * gamma * (max_norm + q_norm) ** 2 + dims * 2.0**-1074
 
 
 @numba.njit(cache=True, nogil=True)
@@ -1107,7 +1115,6 @@ def _codes_query(
     codes: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, np.ndarray],
     boxes: tuple[np.ndarray, ...],
     rows: np.ndarray,
-    sq: np.ndarray,
     q32: np.ndarray,
     q_sq: float,
     k: int,
@@ -1126,7 +1133,7 @@ def _codes_query(
     qc, qc_sq, e_q = _grid_codes(qp, base, steps, weights)
     rounding = _allowance_of(rows.shape[1], max_norm, q_sq)
     return _pca_knn(
-        codes, boxes, (qc, qc_sq, e_q, r_q), rows, sq, q32, q_sq, k, rounding,
+        codes, boxes, (qc, qc_sq, e_q, r_q), rows, q32, k, rounding,
         (top_norm + q_norm) ** 2, max_count,
     )  # fmt: skip
 
@@ -1202,7 +1209,7 @@ def _codes_search(
         max_count = max(k, int(FALLBACK * len(index.rows)))
     grid, kernel, boxes = codes.kernel_args
     out: tuple[np.ndarray, np.ndarray, int] = _codes_query(
-        grid, kernel, boxes, index.rows, index.sq_norms, q32, q_sq, k, index.max_norm, max_count
+        grid, kernel, boxes, index.rows, q32, q_sq, k, index.max_norm, max_count
     )
     return out
 
@@ -1224,7 +1231,7 @@ def _nibbles_search(
     rounding = _allowance_of(index.rows.shape[1], index.max_norm, q_sq)
     out: tuple[np.ndarray, np.ndarray, int] = _nibble_knn(
         (nibbles.codes, nibbles.errs, nibbles.top_err, luts, scale),
-        (index.rows, index.sq_norms, q32, q_sq, rounding),
+        (index.rows, q32, rounding),
         k,
         max_count,
         shuffle,
