@@ -1164,7 +1164,8 @@ class CaseStore:
 
     def choose(self, name: str | None) -> str:
         """``name`` when the store holds it; without a name, the store's only case base (a store
-        of several, or of none, is refused naming them)."""
+        of several, or of none, is refused naming them, and saying to choose one with ``name``:
+        the commands say ``--name``)."""
         if name is not None:
             self.get_case_base(name)  # names the case bases there when absent
             return name
@@ -1173,7 +1174,7 @@ class CaseStore:
             return names[0]
         if names:
             raise StoreError(
-                f"the store holds case bases {listed_names(names)}: choose one with --name",
+                f"the store holds case bases {listed_names(names)}: choose one with `name`",
                 self.where,
             )
         raise StoreError("the store holds no case base (run posecbr train)", self.where)
@@ -1598,7 +1599,7 @@ class StoreTransaction:
         if self.has_case_base(name):
             raise StoreError(
                 f"a case base named {name!r} is here already: nothing was copied (name the "
-                "copy with --as)",
+                "copy with `name`)",
                 where,
             )
         postgres = s.get_bind().dialect.name == "postgresql"
@@ -1865,7 +1866,7 @@ class StoreTransaction:
 
 
 EMPTY_DB = "is empty: name a case base file (SQLite) or a SQLAlchemy URL"
-"""The error of an empty ``--db``."""
+"""The error of an empty case base path (``url_or_path``; the commands' ``--db``)."""
 
 
 def _check_timeout(timeout_s: Any) -> None:
@@ -1891,14 +1892,15 @@ def open_store(
     tables when there are none.
     ``readonly``: for commands that only read: nothing is written, and a case base file in a
     read-only folder can be read. Raises :class:`StoreError` naming the file for a corrupt,
-    locked, foreign or other-version database.
+    locked, foreign or other-version database, naming ``url_or_path`` for an empty one or one
+    of another type (the commands say ``--db``).
     """
     if not isinstance(url_or_path, str | os.PathLike):  # open_store(5) made a file "5"
         raise StoreError(
-            f"a case base is a file path or a SQLAlchemy URL, got {url_or_path!r}", "--db"
+            f"a case base is a file path or a SQLAlchemy URL, got {url_or_path!r}", "url_or_path"
         )
     if not str(url_or_path).strip():
-        raise StoreError(EMPTY_DB, "--db")
+        raise StoreError(EMPTY_DB, "url_or_path")
     _check_timeout(timeout_s)
     file = sqlite_file(url_or_path)
     if file is not None:

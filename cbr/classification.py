@@ -248,7 +248,8 @@ def check_feedback_label(
     """The feedback label, refused when empty, or (without ``new_label``) when it is no
     activity of the case base (no class of it, for a case base predicting another ``target``
     column): a typo must not relabel a trained case or start a class. Refused with
-    ParameterError naming the argument ``label`` (``classify`` says ``--feedback``)."""
+    ParameterError naming the argument ``label`` (``classify`` says ``--feedback``, and
+    ``--new-label`` for ``new_label``)."""
     from .explain import class_noun
 
     text = str(label).strip()
@@ -260,7 +261,8 @@ def check_feedback_label(
         hint = f"; did you mean {close[0]!r}? " if close else ". "
         raise ParameterError(
             f"{text!r} is not {'an' if noun[0] in 'aeiou' else 'a'} {noun} of this case base"
-            f" (known: {', '.join(known)}){hint}To add a new {noun}, pass --new-label as well",
+            f" (known: {', '.join(known)}){hint}To add a new {noun}, pass `new_label=True` as"
+            " well",
             "label",
         )
     return text
@@ -274,10 +276,10 @@ def check_feedback_cases(stored: StoredClassifier) -> None:
     if stored.cases in (None, "clips"):
         return
     raise ParameterError(
-        f"case base {stored.name!r} holds {stored.cases} (trained with --split "
-        f"{stored.cases}): feedback would retain the clip whole, a case of another kind; "
-        f"add the clip with posecbr train CLIP --append (a pose file carrying its label, or a "
-        f"labels CSV), which cuts it into {stored.cases} as the case base was; nothing written",
+        f"case base {stored.name!r} holds {stored.cases} (trained with "
+        f"`cases={stored.cases!r}`): feedback would retain the clip whole, a case of another "
+        f"kind; add the clip with posecbr train CLIP --append (a pose file carrying its label, or"
+        f" a labels CSV), which cuts it into {stored.cases} as the case base was; nothing written",
         "stored",
     )
 

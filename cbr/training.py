@@ -140,7 +140,7 @@ def no_target_value(clip: Any, target: str) -> DataError:
         *sorted(clip.extras),
     ]
     return DataError(
-        f"no value for --target {target!r} (columns: {', '.join(columns) or 'none'})"
+        f"no value for `target` {target!r} (columns: {', '.join(columns) or 'none'})"
         + did_you_mean(target, [c for c in columns if c != target]),
         clip.seq.source,
     )
@@ -572,11 +572,11 @@ def _check_trimmed(fitted: CaseBaseClassifier) -> None:
     (k), as ``casebase trim`` refuses it: every answer would be the vote of all its cases."""
     report = fitted.maintenance_
     if report is not None and report.size_after < int(fitted.k):
-        shares = fitted.editor in (None, "novelty-benefit")  # --trim is its share kept
-        how = "keep more with --trim" if shares else f"another --editor than {fitted.editor}"
+        shares = fitted.editor in (None, "novelty-benefit")  # trim is its share kept
+        how = "keep more with `trim`" if shares else f"another `editor` than {fitted.editor}"
         raise DataError(
             f"trimming would leave {report.size_after} cases, fewer than the {int(fitted.k)}"
-            f" the case base votes with (k): nothing stored ({how}, or give a smaller -k)",
+            f" the case base votes with (k): nothing stored ({how}, or give a smaller `k`)",
             "training set",
         )
 
@@ -738,7 +738,8 @@ def append_plan(
     ``target`` given otherwise (as :func:`train`'s) is refused: windows added to a case base
     of whole clips would be cases of another kind, labels added to one of correct/incorrect
     another solution; a ``target`` close to the case base's or to one of ``data_columns``
-    (the added clips') is guessed as mistyped."""
+    (the added clips') is guessed as mistyped. Refused with ConfigError naming the argument
+    (``target``, ``cases``; ``train --append`` says ``--target``, ``--split``)."""
     store = open_store(db, create=False, readonly=True)
     try:
         stored = load_classifier(store, name)
@@ -747,15 +748,15 @@ def append_plan(
     if target is not None and stored.target != target:
         raise ConfigError(
             f"case base {name!r} predicts {stored.target!r}, not {target!r}: its cases "
-            f"cannot take --target {target}"
+            f"cannot take `target={target!r}`"
             + did_you_mean(target, [stored.target, *(c for c in data_columns if c != target)]),
-            "--target",
+            "target",
         )
     if cases is not None and stored.cases is not None and stored.cases != cases:
         raise ConfigError(
-            f"case base {name!r} holds {stored.cases} (trained with --split {stored.cases}), "
-            f"not {cases}: add to it with --split {stored.cases}",
-            "--split",
+            f"case base {name!r} holds {stored.cases} (trained with `cases={stored.cases!r}`),"
+            f" not {cases}: add to it with `cases={stored.cases!r}`",
+            "cases",
         )
     cb = stored.classifier.case_base_
     columns = CaseBase(cb.config, cb.measure, cb.problems[:0], cb.labels[:0], cb.names, cb.words)

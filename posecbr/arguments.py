@@ -28,19 +28,55 @@ def add_k_option(p: argparse.ArgumentParser, default: int | None, said: str) -> 
 #: what the commands that take ``--scheduler`` (extract, train, compare) call the argument
 SCHEDULER = {"scheduler": "--scheduler"}
 
+#: what the commands that read a case base of a store (``--db``) call the name of the one
+#: chosen (:meth:`casebase_store.CaseStore.choose`)
+NAME = {"name": "--name"}
+
+#: what the commands call the store :func:`casebase_store.open_store` opens
+DB = {"url_or_path": "--db"}
+
+
+#: an argument the library's words name in a sentence, as code: `` `k` ``, `` `k=3` ``,
+#: `` `target='correct'` `` (the name, then ``=`` and its value if given)
+_NAMED = re.compile(r"`([A-Za-z_][A-Za-z0-9_]*)(?:=([^`]*))?`")
+
+
+def said_as_options(text: str, options: Mapping[str, str]) -> str:
+    """``text`` of a library's refusal with each argument of ``options`` (argument: option)
+    it names in a sentence said as the option: `` `trim` `` as ``--trim``, `` `k=6` `` as
+    ``--k 6``, `` `target='corect'` `` as ``--target corect`` (a value's quotes off, as it is
+    typed), `` `new_label=True` `` as ``--new-label`` (a flag). An argument not in
+    ``options`` stays in the library's words."""
+
+    def option(m: re.Match[str]) -> str:
+        said = options.get(m.group(1))
+        if said is None:
+            return m.group(0)
+        value = m.group(2)
+        if value is None or value == "True":
+            return said
+        if len(value) >= 2 and value[0] == value[-1] and value[0] in "'\"":
+            value = value[1:-1]
+        return f"{said} {value}"
+
+    return _NAMED.sub(option, text)
+
 
 @contextmanager
 def as_options(options: Mapping[str, str]) -> Iterator[None]:
     """A refusal inside, of a Python call naming its argument ("folds: must be at least 2"),
     said of the option of ``options`` (argument: option) that set it ("--folds: must be at
-    least 2"); any other error as it is."""
+    least 2"), and each argument its message names (`` `k=6` ``, :func:`said_as_options`)
+    as the option ("give --k 6 or less"); any other error as it is."""
     try:
         yield
     except PosecbrError as exc:
         option = options.get(exc.source or "")
-        if option is not None:
-            exc.source = option
-            exc.args = (f"{option}: {exc.message}",)
+        message = said_as_options(exc.message, options)
+        if option is not None or message != exc.message:
+            exc.source = option or exc.source
+            exc.message = message
+            exc.args = (f"{exc.source}: {message}" if exc.source else message,)
         raise
 
 

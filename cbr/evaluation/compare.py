@@ -82,7 +82,7 @@ def _check_within(data: Prepared, settings: CompareSettings, folds: np.ndarray) 
         raise ConfigError(
             f"every {settings.within_column!r} value's clips lie in one fold, so no model "
             "per value is ever trained on any clip (each is tested when its fold is held "
-            "out); use --cv kfold or another --within",
+            "out); use `cv='kfold'` or another `within`",
             "within",
         )
 
@@ -205,7 +205,7 @@ def _check_k(settings: CompareSettings, folds: np.ndarray) -> None:
     if int(settings.k) > fewest:
         raise ConfigError(
             f"must be at most {fewest}, the training clips of the smallest fold, got "
-            f"{settings.k} (5 unless given): give --k {fewest} or less",
+            f"{settings.k} (5 unless given): give `k={fewest}` or less",
             "k",
         )
 

@@ -63,8 +63,9 @@ def _stratified(data: Prepared, k: int, seed: int) -> tuple[np.ndarray, list[str
     if smallest < k:
         if smallest < 2:
             raise DataError(
-                "a class has a single clip in some group; stratified k-fold is impossible",
-                "--cv kfold",
+                "a class has a single clip in some group; stratified k-fold (`cv='kfold'`) is"
+                " impossible",
+                "cv",
             )
         notes.append(f"the smallest class has {smallest} clips: using {smallest} folds, not {k}")
         k = smallest

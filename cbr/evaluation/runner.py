@@ -122,10 +122,10 @@ def _died() -> str:
     from_script = script is not None and getattr(main, "__spec__", None) is None
     if from_script and Path(str(script)).suffix == ".py":
         return (
-            f"a worker process died: out of memory (try fewer --jobs), or {script} starts"
+            f"a worker process died: out of memory (try fewer `jobs`), or {script} starts"
             ' workers when imported (put its code under `if __name__ == "__main__":`)'
         )
-    return "a worker process died (out of memory?); try fewer --jobs"
+    return "a worker process died (out of memory?); try fewer `jobs`"
 
 
 # The contexts this Dask worker process has run ``setup`` for (kept alive: identity, not id()).

@@ -14,7 +14,7 @@ from features.errors import ConfigError, DataError
 from features.fileio import atomic_path, check_lookup, check_output
 from features.interrupts import stored_before
 from features.text import counted, percent, shown
-from posecbr.arguments import path_arg
+from posecbr.arguments import DB, NAME, as_options, path_arg
 
 if TYPE_CHECKING:
     from casebase_store import CaseBaseInfo, CaseStore
@@ -115,7 +115,8 @@ def run(args: argparse.Namespace) -> int:
         prepare_write(args.db)
     # read-only for trim too: loading fills in nothing (a writable store would store the
     # representations missing from it) and trim may still refuse; it opens the writer itself
-    store = open_store(args.db, create=False, readonly=True)
+    with as_options(DB):
+        store = open_store(args.db, create=False, readonly=True)
     try:
         return {"info": _info, "list": _list, "export": _export, "trim": _trim}[args.action](
             store, args
@@ -194,9 +195,11 @@ def _copy(args: argparse.Namespace) -> int:
         raise StoreError(EMPTY_DB, "--to")
     if args.as_name is not None:
         check_case_base_name(args.as_name, "--as")
-    store = open_store(args.db, create=False, readonly=True)
+    with as_options(DB):
+        store = open_store(args.db, create=False, readonly=True)
     try:
-        name = store.choose(args.name)
+        with as_options(NAME):
+            name = store.choose(args.name)
         new = name if args.as_name is None else args.as_name
         if new == name and same_store(args.db, args.to):
             raise StoreError(
@@ -209,7 +212,8 @@ def _copy(args: argparse.Namespace) -> int:
     finally:
         store.close()
     prepare_write(args.to)  # a store that cannot be written is refused before any write
-    info, ids = write_store(args.to, lambda tx: tx.copy_case_base(whole, new))
+    with as_options({"name": "--as"}):  # the copy's name
+        info, ids = write_store(args.to, lambda tx: tx.copy_case_base(whole, new))
     old = [int(c["id"]) for c in whole.cases]
     trimmed = sum(not c["active"] for c in whole.cases)
     with stored_before(
@@ -531,7 +535,8 @@ def _model_summary(model: dict[str, Any], words: tuple[str, ...]) -> dict[str, A
 def _list(store: CaseStore, args: argparse.Namespace) -> int:
     from cbr.words import MIRRORED
 
-    name = store.choose(args.name)
+    with as_options(NAME):
+        name = store.choose(args.name)
     a = store.load_cases(name, include_inactive=args.all)
     rows: list[dict[str, Any]] = [
         {
@@ -609,7 +614,8 @@ def _export(store: CaseStore, args: argparse.Namespace) -> int:
     from casebase_store import check_width
 
     out = _export_path(args)
-    name = store.choose(args.name)
+    with as_options(NAME):
+        name = store.choose(args.name)
     info, a = store.load_case_base(name)
     if len(a.ids):
         check_width(info, a.features.shape[-1], store.where)
@@ -697,7 +703,8 @@ def _trim(store: CaseStore, args: argparse.Namespace) -> int:
     from cbr.maintenance import record_trim
     from cbr.stored import judges_after_change, load_classifier, recalibrated, write_matrices
 
-    name = store.choose(args.name)
+    with as_options(NAME):
+        name = store.choose(args.name)
     keep = _trim_keep(args)
     stored = load_classifier(store, name)
     clf = stored.classifier

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from features.errors import ConfigError, DataError, PosecbrError
 from features.text import counted, did_you_mean, first_few, percent
-from posecbr.arguments import add_k_option, as_options, check_each_found, path_arg
+from posecbr.arguments import DB, NAME, add_k_option, as_options, check_each_found, path_arg
 from posecbr.recordings import (
     add_recording_options,
     add_sensor_option,
@@ -346,7 +346,8 @@ def _open_reader(args: argparse.Namespace) -> CaseStore:
 
     if args.feedback is not None:
         prepare_write(args.db)
-    return open_store(args.db, create=False, readonly=True)
+    with as_options(DB):
+        return open_store(args.db, create=False, readonly=True)
 
 
 def _input_columns(args: argparse.Namespace) -> list[str]:
@@ -368,7 +369,9 @@ FEEDBACK_OPTIONS = {
     "novelty_threshold": "--novelty",
     "benefit_threshold": "--benefit",
     "label": "--feedback",
+    "new_label": "--new-label",
     "stored": "--feedback",
+    "cases": "--split",  # what train --split made the case base's cases
 }
 
 
@@ -391,7 +394,8 @@ def run(args: argparse.Namespace) -> int:
     store = _open_reader(args)
     label = None
     try:
-        name = store.choose(args.name)
+        with as_options(NAME):
+            name = store.choose(args.name)
         stored = load_classifier(store, name)
         n_cases = len(stored.classifier.case_base_)
         if args.k is not None:

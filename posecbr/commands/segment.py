@@ -56,6 +56,7 @@ from features.fileio import check_output
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
 from posecbr.arguments import (
+    DB,
     add_k_option,
     add_plot_option,
     as_options,
@@ -629,7 +630,8 @@ def load_case_base(db: str, name: str | None) -> Any:
     from casebase_store import open_store
     from cbr.stored import load_classifier
 
-    store = open_store(db, create=False, readonly=True)
+    with as_options(DB):
+        store = open_store(db, create=False, readonly=True)
     try:
         if name is None:
             names = [cb.name for cb in store.list_case_bases()]

@@ -21,12 +21,14 @@ from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_output
 from features.text import counted, first_few, percent, shown
 from posecbr.arguments import (
+    NAME,
     SCHEDULER,
     add_k_option,
     as_options,
     check_found,
     param_value,
     path_arg,
+    said_as_options,
 )
 from posecbr.recordings import (
     add_recording_options,
@@ -295,6 +297,11 @@ def _estimator(args: argparse.Namespace) -> Any:
     except ConfigError as exc:
         raise _as_option(exc) from None
     return estimator
+
+
+#: the arguments of cbr.training's refusals of the clips and of an append, as the options of
+#: `train` that set them
+CLIP_OPTIONS = {**SCHEDULER, "target": "--target", "cases": "--split"}
 
 
 #: the estimator's parameters, as the options of `train` that set them
@@ -584,7 +591,8 @@ def _described_in_memory(args: argparse.Namespace, plan: Any) -> tuple[list[Any]
     for clip in clips:
         value = clip_target(clip, args.target)
         if value is None:
-            raise no_target_value(clip, args.target)
+            with as_options(CLIP_OPTIONS):
+                raise no_target_value(clip, args.target)
         solutions.append(value)
     seqs = progress([c.seq for c in clips], desc="features", total=len(clips), unit="clip")
     return [describe(s, plan) for s in seqs], solutions
@@ -854,7 +862,8 @@ def _append_name(args: argparse.Namespace) -> str:
     store = open_store(args.db, create=False, readonly=True)
     try:
         names = [cb.name for cb in store.list_case_bases()]
-        return store.choose(None) if names else DEFAULT_NAME
+        with as_options(NAME):
+            return store.choose(None) if names else DEFAULT_NAME
     finally:
         store.close()
 
@@ -930,9 +939,10 @@ def run(args: argparse.Namespace) -> int:
         _check_append(args)
         args.name = _append_name(args)
         columns = _data_columns(args) if args.target is not None else []
-        plan, uid, args.split, args.target = append_plan(
-            args.db, args.name, args.target, args.split, columns
-        )
+        with as_options(CLIP_OPTIONS):
+            plan, uid, args.split, args.target = append_plan(
+                args.db, args.name, args.target, args.split, columns
+            )
         args.over_time = _over_time(args)
         _note_csv_names(args)
         _note_unlisted(args)
@@ -954,12 +964,13 @@ def run(args: argparse.Namespace) -> int:
             entries = _entries(args)
             if split_defaulted:
                 _note_cut_stretches(args, entries)
-            with as_options(SCHEDULER):  # it cannot be reached
+            with as_options(CLIP_OPTIONS):  # a clip without a target, a lost scheduler
                 clips, solutions = describe_entries(entries, plan, args.target, args.scheduler)
             _check_asked(args, clips, solutions)
     except ClipsFailed as exc:
         for line in exc.lines:
-            print(f"posecbr train: error: {shown(line)}", file=sys.stderr)
+            said = said_as_options(line, CLIP_OPTIONS)
+            print(f"posecbr train: error: {shown(said)}", file=sys.stderr)
         raise
     if not clips:
         raise _no_clips(args)
@@ -968,9 +979,10 @@ def run(args: argparse.Namespace) -> int:
     else:
         _one_activity(args, solutions)
         _check_k(args, clips)
-        result = train_described(args.db, args.name, clips, solutions, estimator,
-                                 target=args.target, cases=args.split,
-                                 replace=args.replace, seen=args.seen)  # fmt: skip
+        with as_options(PARAMETER_OPTIONS):  # trimmed below k
+            result = train_described(args.db, args.name, clips, solutions, estimator,
+                                     target=args.target, cases=args.split,
+                                     replace=args.replace, seen=args.seen)  # fmt: skip
     for text in args.notes:
         print(text, file=sys.stderr)
     _report(args, result)
