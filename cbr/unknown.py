@@ -287,9 +287,10 @@ def _margins(nearest: np.ndarray) -> np.ndarray:
     return np.where(apart, two[:, 0] / np.where(apart, two[:, 1], 1.0), 1.0)
 
 
-HELD_OUT_ADVICE = "use --unknown held-out"
-"""What a refusal to calibrate a margin judge advises the commands' user; a Python caller
-given the default judge is told the call instead (:func:`default_judge`)."""
+HELD_OUT_ADVICE = "use `name='held-out'`"
+"""What a refusal to calibrate a margin judge advises: :func:`judge_of`'s ``name`` (the
+commands say ``--unknown held-out``); a Python caller given the default judge is told the
+call instead (:func:`default_judge`)."""
 
 
 def _check_margin_calibration(cb: CaseBase) -> None:
@@ -306,8 +307,8 @@ def _check_margin_calibration(cb: CaseBase) -> None:
 def _no_apart() -> DataError:
     return DataError(
         f"no activity has cases apart from each other to calibrate the margin on ("
-        f"{HELD_OUT_ADVICE}, or train with --split windows and two or more recordings of an "
-        "activity)",
+        f"{HELD_OUT_ADVICE}, or train with `cases='windows'` and two or more recordings of an"
+        " activity)",
         "case base",
     )
 
@@ -1428,8 +1429,8 @@ def default_judge(clf: Any) -> Judge:
     given none: :func:`judge_of` ``clf``'s ``spread-margin`` (:data:`JUDGES` [0]). A case base
     it cannot be calibrated on (fewer than three activities, or none with cases apart) is
     refused with the DataError :func:`judge_of` raises, advising the Python call that judges
-    it instead (``judge=judge_of(clf, "held-out")``) where the commands' words advise
-    ``--unknown held-out``."""
+    it instead (``judge=judge_of(clf, "held-out")``) where :func:`judge_of`'s words advise its
+    ``name='held-out'`` (the commands' ``--unknown held-out``)."""
     try:
         return judge_of(clf, JUDGES[0])
     except DataError as exc:

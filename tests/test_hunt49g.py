@@ -117,3 +117,34 @@ def test_a_refusal_of_an_argument_names_it_and_compare_says_the_option(
     assert str(exc) == "url_or_path: is empty: name a case base file (SQLite) or a SQLAlchemy URL"
     refused(["classify", str(names[0]), "--db", ""], tmp_path, capsys,
             "error: --db: is empty: name a case base file")  # fmt: skip
+
+
+def test_a_margin_judge_refused_advises_judge_ofs_name_and_segment_says_unknown(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A case base of two activities cannot calibrate a margin judge: ``judge_of(clf,
+    "spread-margin")`` advises its own ``name='held-out'`` (before: "use --unknown held-out",
+    an option of a command the caller never ran); ``segment`` says "--unknown held-out" as
+    before."""
+    import numpy as np
+
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import store_fitted
+    from cbr.unknown import judge_of
+    from features.poses import PoseSequence, save_pose
+    from tests.test_cbr_clips import arm_dataset
+
+    X, y = arm_dataset(3, seed=3)
+    two = sorted(set(y.tolist()))[:2]
+    keep = [i for i, v in enumerate(y.tolist()) if v in two]
+    clips, labels = [X[i] for i in keep], [str(y[i]) for i in keep]
+    clf = CaseBaseClassifier(k=1).fit(clips, labels)
+    exc = _refusal(lambda: judge_of(clf, "spread-margin"))
+    assert "use `name='held-out'`" in str(exc) and "--" not in str(exc), str(exc)
+
+    db = tmp_path / "two.sqlite"
+    store_fitted(db, "two", clf, labels)
+    rec = save_pose(PoseSequence(np.concatenate([c.positions for c in clips]),
+                                 clips[0].joint_names, 30.0), tmp_path / "r.npz")  # fmt: skip
+    refused(["segment", str(rec), "--db", str(db)], tmp_path, capsys,
+            "fewer than three activities", "(use --unknown held-out, or train with")  # fmt: skip

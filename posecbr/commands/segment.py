@@ -327,6 +327,10 @@ def check_k_option(clf: Any, k: int) -> None:
         check_k(clf, k)
 
 
+#: the arguments :func:`cbr.unknown.judge_of`'s refusals name, as the options that set them
+JUDGE_OPTIONS = {"name": "--unknown", "cases": "--split"}
+
+
 def judge_named(clf: Any, name: str, db: str) -> Any:
     """The judge called ``name`` (``--unknown``) of the model stored in ``db``; a case base
     it cannot be calibrated on is refused naming the database."""
@@ -334,7 +338,8 @@ def judge_named(clf: Any, name: str, db: str) -> Any:
     from cbr.unknown import judge_of
 
     try:
-        return judge_of(clf, name)
+        with as_options(JUDGE_OPTIONS):  # its advice: --unknown held-out, train --split windows
+            return judge_of(clf, name)
     except DataError as exc:
         if exc.source != "case base":
             raise
