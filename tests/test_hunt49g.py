@@ -90,8 +90,8 @@ def test_a_refusal_of_an_argument_names_it_and_compare_says_the_option(
 ) -> None:
     """Stratified folds with a class of one clip in a group: the Python call is refused of
     ``cv`` (before: of "--cv kfold", an option and its value), ``compare`` says "--cv"; and
-    an empty store path is refused of ``url_or_path`` (before: "--db"), ``classify`` says
-    "--db" as before."""
+    an empty store path is refused of ``url_or_path`` (before: "--db"), ``classify`` and
+    ``train --append`` say "--db" as before."""
     from casebase_store import open_store
     from cbr.evaluation.compare import run_compare
     from cbr.evaluation.settings import CompareSettings
@@ -115,8 +115,9 @@ def test_a_refusal_of_an_argument_names_it_and_compare_says_the_option(
 
     exc = _refusal(lambda: open_store(""))
     assert str(exc) == "url_or_path: is empty: name a case base file (SQLite) or a SQLAlchemy URL"
-    refused(["classify", str(names[0]), "--db", ""], tmp_path, capsys,
-            "error: --db: is empty: name a case base file")  # fmt: skip
+    for command in (["classify", str(names[0])], ["train", str(csv), "--append"]):
+        refused([*command, "--db", ""], tmp_path, capsys,
+                "error: --db: is empty: name a case base file")  # fmt: skip
 
 
 def test_a_margin_judge_refused_advises_judge_ofs_name_and_segment_says_unknown(

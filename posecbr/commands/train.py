@@ -21,6 +21,7 @@ from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_output
 from features.text import counted, first_few, percent, shown
 from posecbr.arguments import (
+    DB,
     NAME,
     SCHEDULER,
     add_k_option,
@@ -299,9 +300,9 @@ def _estimator(args: argparse.Namespace) -> Any:
     return estimator
 
 
-#: the arguments of cbr.training's refusals of the clips and of an append, as the options of
-#: `train` that set them
-CLIP_OPTIONS = {**SCHEDULER, "target": "--target", "cases": "--split"}
+#: the arguments of cbr.training's refusals of the clips and of an append (and of the store
+#: it opens), as the options of `train` that set them
+CLIP_OPTIONS = {**SCHEDULER, **DB, "target": "--target", "cases": "--split"}
 
 
 #: the estimator's parameters, as the options of `train` that set them
@@ -859,7 +860,8 @@ def _append_name(args: argparse.Namespace) -> str:
 
     if args.name is not None:
         return str(args.name)
-    store = open_store(args.db, create=False, readonly=True)
+    with as_options(DB):
+        store = open_store(args.db, create=False, readonly=True)
     try:
         names = [cb.name for cb in store.list_case_bases()]
         with as_options(NAME):
