@@ -54,6 +54,7 @@ from features.progress import progress
 from .handedness import right_handed
 from .label_tracks import (
     LabelTrack,
+    assumed_rate,
     check_count,
     code_order,
     frame_labels,
@@ -63,7 +64,7 @@ from .label_tracks import (
     refuse_inner_bom,
     track_labels,
 )
-from .poses import EXTRACTION_VERSION, PoseSequence, load_pose, pose_file_length
+from .poses import EXTRACTION_VERSION, PoseSequence, load_pose, pose_file_length, pose_file_metadata
 from .readers.asfamc import hdm05_metadata, read_asf_amc
 from .readers.bvh import read_bvh
 from .readers.uiprmd import (
@@ -978,7 +979,8 @@ def split_by_labels(
     from .derived import stretch
 
     recording = Path(seq.source).name if seq.source else ""
-    per_frame = frame_labels(list(labels), seq.n_frames, seq.fps, block_s, where, recording)
+    rate = assumed_rate(seq.metadata)
+    per_frame = frame_labels(list(labels), seq.n_frames, seq.fps, block_s, where, recording, rate)
     return [(stretch(seq, a, b), lab) for a, b, lab in labelled_stretches(per_frame)]
 
 
@@ -1010,8 +1012,9 @@ def check_fits_before_read(
     variable-frame-rate video, mocap) are checked once read."""
     if _suffix(path) in POSE_SUFFIXES:
         n_frames, rate = pose_file_length(path)
+        said = assumed_rate(pose_file_metadata(path)) if fps is None else ""
         check_count(n_labels, (n_frames, n_frames), rate if fps is None else fps, block_s,
-                    where, recording)  # fmt: skip
+                    where, recording, said)  # fmt: skip
     elif _suffix(path) in VIDEO_SUFFIXES:
         try:
             from features.pose_estimation.video import frames_before_decoding

@@ -14,8 +14,10 @@ How a labels CSV names a track and cuts a recording by it is :mod:`features.data
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -351,6 +353,7 @@ def frame_labels(
     block_s: float | None,
     where: str | Path,
     recording: str = "",
+    rate: str = "",
 ) -> np.ndarray:
     """The label of every frame, ``(n_frames,)`` objects, from one label per frame
     (``block_s`` None) or one per ``block_s`` seconds (label t covers [t, t+1) x block_s).
@@ -365,13 +368,23 @@ def frame_labels(
     time. Otherwise DataError naming the file (and ``recording``, the name of the recording
     it was given for, when known: one label file may be named for several): a different
     count means another frame rate or block length, and labels would land on the wrong
-    frames."""
+    frames. ``rate``: where ``fps`` came from when it was assumed (:func:`assumed_rate`),
+    said beside it, as the likely reason."""
     low, high = _fitting(n_frames, fps, block_s, where)
     if not low <= len(labels) <= high:
-        raise _not_fitting(len(labels), n_frames, fps, block_s, where, recording)
+        raise _not_fitting(len(labels), n_frames, fps, block_s, where, recording, rate)
     per_block = 1.0 if block_s is None else block_s * fps
     block = np.floor(np.arange(n_frames) / per_block + 1e-9).astype(np.int64)
     return np.asarray(labels, dtype=object)[np.minimum(block, len(labels) - 1)]
+
+
+def assumed_rate(metadata: Mapping[str, Any]) -> str:
+    """Where a recording's frame rate came from when it was assumed, not read or given
+    (``fps_source`` of its metadata: an AMC file, which carries no rate, is read at the CMU
+    and HDM05 rate), else "": a label file that does not fit such a recording was most
+    likely made at its true rate."""
+    source = str(metadata.get("fps_source", ""))
+    return source if source.startswith("assumed") else ""
 
 
 def check_count(
@@ -381,17 +394,18 @@ def check_count(
     block_s: float | None,
     where: str | Path,
     recording: str = "",
+    rate: str = "",
 ) -> None:
     """Refuse, before a recording is read, ``n_labels`` labels that fit none of the frame
     counts ``frames`` (fewest, most) it can be read with at ``fps``, as :func:`frame_labels`
     refuses them for the most (the count its file states); a count that fits one of them
-    is left for :func:`frame_labels` to judge once it is read."""
+    is left for :func:`frame_labels` to judge once it is read. ``rate``: as there."""
     fewest, most = frames
     for n_frames in range(most, fewest - 1, -1):
         low, high = _fitting(n_frames, fps, block_s, where)
         if low <= n_labels <= high:
             return
-    raise _not_fitting(n_labels, most, fps, block_s, where, recording)
+    raise _not_fitting(n_labels, most, fps, block_s, where, recording, rate)
 
 
 def _fitting(
@@ -426,8 +440,10 @@ def _not_fitting(
     block_s: float | None,
     where: str | Path,
     recording: str,
+    rate: str = "",
 ) -> DataError:
-    """Why ``n_labels`` labels do not fit ``n_frames`` frames at ``fps``, naming ``where``."""
+    """Why ``n_labels`` labels do not fit ``n_frames`` frames at ``fps`` (``rate``: where an
+    assumed ``fps`` came from), naming ``where``."""
     low, high = _fitting(n_frames, fps, block_s, where)
     unit = "frame" if block_s is None else f"{block_s:g} s"
     need = (
@@ -437,7 +453,7 @@ def _not_fitting(
         f"{counted(n_labels, 'label')} (one per {unit})"
         f" {'does' if n_labels == 1 else 'do'} not fit the recording"
         f"{' ' + recording if recording else ''}: {counted(n_frames, 'frame')} at {fps:g}"
-        f" fps need {need}{_why_not_fit(where, low, high, n_labels)}",
+        f" fps{f' ({rate})' if rate else ''} need {need}{_why_not_fit(where, low, high, n_labels)}",
         where,
     )
 

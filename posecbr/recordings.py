@@ -93,8 +93,8 @@ def load_recording(path: Path, asf: Path | None = None, fps: float | None = None
         seq = load_clip_naming_asf(path)
     # messages name the file the user gave (a pose file remembers the clip it came from)
     seq = dataclasses.replace(seq, source=str(path))
-    if fps is not None:
-        seq = dataclasses.replace(seq, fps=float(fps))
+    if fps is not None:  # the rate given, not the one a file's reader assumed
+        seq = dataclasses.replace(seq, fps=float(fps)).with_metadata(fps_source="given")
     return seq.to_canonical()
 
 

@@ -128,6 +128,28 @@ def test_asf_and_fps_are_checked_as_the_other_commands_check_them(
     assert len(err.strip().splitlines()) == 1
 
 
+def test_segment_refusing_labels_says_the_rate_an_amc_file_was_read_at_was_assumed(
+    made: tuple[Path, Path, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Hunt 49h: 0.1-s labels made for a recording taken at 60 fps (its 1500 frames 25 s,
+    250 labels) do not fit an AMC file, which carries no rate, read at 120 fps (12.5 s: 125
+    or 126 labels). The refusal said "1500 frames at 120 fps need 125 or 126 (another frame
+    rate or label block?)", the 120 fps taken for the file's; now it says the rate was
+    assumed."""
+    rec, asf, db = made
+    truth = db.parent / "t250.txt"
+    truth.write_text(" ".join(["6"] * 250) + "\n")
+    names = str(db.parent / "names.txt")
+    argv = ["segment", str(rec), "--asf", str(asf), "--db", str(db), "--truth", str(truth),
+            "--label-block", "0.1", "--label-names", names, "--unknown", "held-out"]  # fmt: skip
+    capsys.readouterr()
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and str(truth) in err and "13_31.amc" in err
+    assert "1500 frames at 120 fps (assumed: AMC files carry no rate" in err
+    assert "need 125 or 126" in err
+
+
 def _parsers() -> dict[str, argparse.ArgumentParser]:
     """Every command's parser by its name (``casebase trim`` for a subcommand's)."""
     found: dict[str, argparse.ArgumentParser] = {}

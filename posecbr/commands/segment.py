@@ -272,13 +272,14 @@ def _fitted_truths(
         return [None] * len(recs)
     from cbr.evaluation.segments import label_blocks, truth_blocks
     from cbr.segmentation import BLOCK_S
-    from features.label_tracks import frame_labels
+    from features.label_tracks import assumed_rate, frame_labels
 
     out = []
     for track, rec, path, recording in zip(labels, recs, args.truth, args.recordings, strict=True):
         per_frame = frame_labels(
-            track, rec.n_frames, rec.fps, args.label_block, path, recording=shown(recording)
-        )
+            track, rec.n_frames, rec.fps, args.label_block, path, shown(recording),
+            assumed_rate(rec.metadata),
+        )  # fmt: skip
         if args.label_block is None:  # one label per frame
             out.append(truth_blocks(per_frame, rec.fps, BLOCK_S))
         else:  # one per time: read at each block's time, whatever the frame rate
