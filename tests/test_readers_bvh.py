@@ -152,3 +152,31 @@ def test_malformed_names_file(tmp_path: Path, mutate, message: str) -> None:
     with pytest.raises(DataError, match=message) as info:
         read_bvh(f, unit="cm")
     assert info.value.source == str(f)
+
+
+def test_position_channels_on_every_joint_keep_the_rest_pose_of_the_offsets(
+    tmp_path: Path,
+) -> None:
+    """Hunt 49h: some exporters give every joint position channels as well as rotations,
+    each frame's positions its OFFSET again. The rest pose was read with those channels at
+    0, every joint at its parent's origin: "rest pose has no height: cannot guess the unit",
+    the file refused. Its rest pose is the offsets', and the file reads as the same skeleton
+    with rotation channels alone: the unit guessed alike, the same positions."""
+    frames = [ZERO.format(a=0, b=0), ZERO.format(a=90, b=90)]
+    rotations = tmp_path / "rotations.bvh"
+    rotations.write_text(bvh_text("Zrotation Xrotation Yrotation", frames))
+    six = "CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation"
+    text = bvh_text("Zrotation Xrotation Yrotation", [])
+    text = text.replace("CHANNELS 3 Zrotation Xrotation Yrotation", six)
+    offsets = ["10 0 0", "0 -40 0", "0 -40 0", "0 0 10"]  # LeftUpLeg .. LeftToeBase
+    rows = []
+    for a, b in ((0, 0), (90, 90)):
+        rots = ["0 0 0", f"{a} {b} 0", "0 0 0", "0 0 0"]
+        rows.append(
+            "0 90 0 0 0 0  " + "  ".join(f"{o} {r}" for o, r in zip(offsets, rots, strict=True))
+        )
+    both = tmp_path / "positions.bvh"
+    both.write_text(text.replace("Frames: 0\n", "Frames: 2\n") + "\n".join(rows) + "\n")
+    want, got = read_bvh(rotations), read_bvh(both)
+    assert got.metadata["bvh_unit"] == want.metadata["bvh_unit"]
+    np.testing.assert_allclose(got.positions, want.positions, atol=1e-12)

@@ -9,9 +9,10 @@ position channels when the joint has them; ``R_global = R_global(parent) @ R``.
 
 BVH has no declared units or up axis. ``unit`` may be given (metres per file unit or a name
 in :data:`UNITS`); ``"auto"`` picks the unit that makes the rest-pose height closest to
-1.7 m and records the guess in the metadata (``bvh_unit``). ``up="y"`` (the common case) or
-``"z"``; a z-up file is turned by the cyclic axis permutation (x, y, z) -> (y, z, x), a proper
-rotation, so handedness is kept.
+1.7 m and records the guess in the metadata (``bvh_unit``). The rest pose is the OFFSETs
+with no rotation, a joint's position channels at its offset (:func:`_rest_motion`).
+``up="y"`` (the common case) or ``"z"``; a z-up file is turned by the cyclic axis
+permutation (x, y, z) -> (y, z, x), a proper rotation, so handedness is kept.
 
 Joint names differ between exporters; :data:`BVH_TO_BLAZEPOSE` lists per BlazePose joint the
 BVH names tried in turn (compared in lower case, after any ``prefix:``), each with whether the
@@ -258,6 +259,21 @@ def _forward(joints: list[BvhJoint], motion: np.ndarray) -> tuple[np.ndarray, np
     return pos, ends
 
 
+def _rest_motion(joints: list[BvhJoint], n_chan: int) -> np.ndarray:
+    """The motion values of the rest pose ``(1, n_chan)``: no rotation, and a joint's own
+    OFFSET in any position channels it has (every joint has them in some exporters' files,
+    each frame's positions the offsets again: zeros there put every joint at its parent's
+    origin, a rest pose of no height); the root's position channels at 0."""
+    rest = np.zeros((1, n_chan))
+    col = 0
+    for jt in joints:
+        for k, c in enumerate(jt.channels):
+            if c.endswith("position") and jt.parent >= 0:
+                rest[0, col + k] = jt.offset["xyz".index(c[0])]
+        col += len(jt.channels)
+    return rest
+
+
 def _normalise(name: str) -> str:
     return name.rsplit(":", 1)[-1].lower().replace(" ", "")
 
@@ -283,7 +299,7 @@ def read_bvh(path: str | Path, *, unit: str | float = "auto", up: str = "y") -> 
     motion = _motion(tokens[i + 5 :], n_frames, n_chan, path)
     _check_names(joints, path)
     pos, ends = _forward(joints, motion)
-    rest, rest_ends = _forward(joints, np.zeros((1, n_chan)))
+    rest, rest_ends = _forward(joints, _rest_motion(joints, n_chan))
     pos, ends, rest, rest_ends = _y_up((pos, ends, rest, rest_ends), up, path)
     unit_name, scale = _unit(unit, rest[0], rest_ends[0], path)
     seq = PoseSequence(
