@@ -75,5 +75,21 @@ def test_the_workout_example_prints_what_the_readme_shows(
     assert notes, proc.stderr
     for note in notes:
         assert note in shown.splitlines(), note
+    # the label of every frame, as segment --truth reads a label file (hunt 49h: the truth
+    # CSV alone, a table of stretches, is refused there): each frame's the stretch's it lies
+    # in, one per frame of the workout as segment counts them
+    labels = (tmp_path / "workout" / "workout_labels.txt").read_text().split("\n")
+    assert labels[-1] == "" and len(labels) - 1 == int(
+        re.findall(r": (\d+) frames at 25", printed)[0]
+    )
+    ends = [
+        (float(r["end_s"]), r["label"])
+        for r in csv.DictReader(
+            (tmp_path / "workout" / "workout_truth.csv").read_text().splitlines()
+        )
+    ]
+    assert labels[:-1] == [
+        next(lab for end, lab in ends if i / 25 < end) for i in range(len(labels) - 1)
+    ]
     assert (tmp_path / "timeline.png").stat().st_size > 0
     assert (tmp_path / "seen.mp4").stat().st_size > 0

@@ -8,6 +8,8 @@ base has seen these people, other repetitions of theirs: a demonstration, not a 
 
     python tools/make_workout.py OUT_DIR
     # OUT_DIR/workout.mp4, OUT_DIR/train/<exercise>/<exercise>.mp4, OUT_DIR/workout_truth.csv
+    # (label,start_s,end_s a part) and OUT_DIR/workout_labels.txt (the label of every frame
+    # of workout.mp4, as ``posecbr segment --truth`` reads a label file)
 """
 
 from __future__ import annotations
@@ -103,6 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     workout: list[np.ndarray] = []
     truth = ["label,start_s,end_s"]
+    per_frame: list[str] = []
     t = 0.0
     for name, label, split_s in PARTS:
         frames, fps = _frames(DATA / name)
@@ -112,10 +115,15 @@ def main(argv: list[str] | None = None) -> int:
         workout += [f for f in frames[cut:] for _ in range(repeat)]
         seconds = len(frames[cut:]) * repeat / FPS
         truth.append(f"{label},{t:.2f},{t + seconds:.2f}")
+        per_frame += [label] * (len(frames[cut:]) * repeat)
         t += seconds
     _write(args.out / "workout.mp4", workout, FPS)
     (args.out / "workout_truth.csv").write_text("\n".join(truth) + "\n", encoding="utf-8")
-    print(f"wrote {args.out / 'workout.mp4'} ({t:.1f} s), {args.out / 'train'}/, truth CSV")
+    (args.out / "workout_labels.txt").write_text("\n".join(per_frame) + "\n", encoding="utf-8")
+    print(
+        f"wrote {args.out / 'workout.mp4'} ({t:.1f} s), {args.out / 'train'}/, truth CSV"
+        " and label file"
+    )
     return 0
 
 
