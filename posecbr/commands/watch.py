@@ -29,8 +29,8 @@ Ctrl-C or SIGTERM (``kill``, a supervisor's stop) ends the watch as the end of a
 0); a second one stops at once, writing nothing. A reader that closes stdout (``| head -1``)
 ends it too, the ``--out`` video written up to there. A stream that stalls (no frame for
 ``--stall`` seconds) or a camera or URL that stops sending is reported in one line, with a
-non-zero exit, after the segments in progress are printed; the ``--out`` video is then not
-written (no half-written file).
+non-zero exit, after the segments in progress are printed; the ``--out`` video of the frames
+watched until then is finished and written, as at the end of a file, and the line says so.
 """
 
 from __future__ import annotations
@@ -519,13 +519,20 @@ def run(args: argparse.Namespace) -> int:
         ):
             watcher.video = video
             watcher.warm_up()
-            watcher.watch(frames, is_file, stop)
+            lost = _watched(watcher, frames, is_file, stop)
             if video is not None and watcher.writer is None:
                 watcher.close(stop)  # nothing watched: says so, as without --out
                 raise _NoFrameDrawn
             if video is not None:
                 check_encoded(video, watcher.drawn, args.out)
-            watcher.close(stop)
+            if lost is None:
+                watcher.close(stop)
+        if lost is not None:  # the video finished and in place; the watch did not end as asked
+            lost.add(
+                f"the video of the {counted(watcher.drawn, 'frame')} watched was written to"
+                f" {shown(args.out)}"
+            )
+            raise lost
         if args.out is not None:  # on stderr, as every "written to": stdout holds the segments
             print(f"video written to {shown(args.out)}", file=sys.stderr)
         # at the end of a watch that went well: a stream refused on the way (cut short,
@@ -536,6 +543,21 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _watched(
+    watcher: Watcher, frames: Iterator[Any], is_file: bool, stop: threading.Event
+) -> StreamLost | None:
+    """:meth:`Watcher.watch` the stream; a stream lost after frames were drawn is returned,
+    not raised: their video is finished and written before it is said. Lost before (no
+    video drawn, or none asked for), it is raised."""
+    try:
+        watcher.watch(frames, is_file, stop)
+    except StreamLost as exc:
+        if watcher.writer is None:
+            raise
+        return exc
+    return None
+
+
 class _NoFrameDrawn(Exception):
     """Leaves the ``--out`` video unwritten (the user stopped before the first frame)."""
 
@@ -543,7 +565,9 @@ class _NoFrameDrawn(Exception):
 @contextmanager
 def _video_output(out: Path | None) -> Iterator[Path | None]:
     """A temporary file for the ``--out`` video, renamed to ``out`` when the watch ends well
-    (features.fileio; ending in .mp4: OpenCV picks the container by the file name)."""
+    or its stream is lost after frames were drawn (:func:`run`: their video is finished, not
+    half-written) (features.fileio; ending in .mp4: OpenCV picks the container by the file
+    name)."""
     if out is None:
         yield None
         return
