@@ -16,7 +16,9 @@ replaces one of the inputs it was made from.
   named after their process (``.NAME.pid1234@host.x8k2.tmp``), so that a writer killed
   before it could clean up (``kill -9``, power loss) does not leave them forever: the next
   writer of the same output removes those of processes of this machine that are gone
-  (:func:`remove_stale_temporaries`);
+  (:func:`remove_stale_temporaries`), but for a temporary named as one worth keeping
+  (:data:`PARTIAL`: a copy of a video being written, playable as far as it goes), which it
+  keeps under a visible name and says so;
 - :func:`unique_name`: one output name per input when two inputs share a name.
 """
 
@@ -37,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import DataError, PosecbrError
+from .text import shown
 
 #: How a message names a picture given where a clip or a case base belongs (by its first
 #: bytes: :func:`is_picture`).
@@ -237,11 +240,54 @@ def _alive(pid: int) -> bool:
     return True
 
 
+#: How a temporary worth keeping ends, before its own suffix (``.partial.nut``): a copy of
+#: an output being written that is playable as far as it goes (a video in a container that
+#: needs no index at its end), which a writer killed before it finished (``kill -9``, power
+#: loss) leaves as all there is of its work. The next writer of the output keeps it under
+#: a visible name (:func:`remove_stale_temporaries`); the writer itself removes it as any
+#: temporary when it ends.
+PARTIAL = ".partial"
+
+_PARTIAL_END = re.compile(rf"{re.escape(PARTIAL)}(\.[A-Za-z0-9]{{1,8}})$")
+
+
+def _keep_partial(entry: Path, name: str, pid: int) -> None:
+    """A dead writer's temporary ``entry`` of output ``name`` worth keeping (:data:`PARTIAL`)
+    renamed ``STEM.partial.EXT`` beside it (``STEM.partial-2.EXT``, ... when that is taken:
+    never over another file), said on stderr; left as it is when it cannot be renamed."""
+    ext = _PARTIAL_END.search(entry.name)
+    if ext is None:
+        return
+    stem = temporary_name(Path(name).stem)
+    for i in range(1, 1000):
+        target = entry.parent / f"{stem}{PARTIAL}{'' if i == 1 else f'-{i}'}{ext.group(1)}"
+        try:
+            os.link(entry, target, follow_symlinks=False)  # fails on a file there: not over it
+        except FileExistsError:
+            continue
+        except OSError:  # no hard links on this file system: renamed where no file is
+            if os.path.lexists(target):
+                continue
+            try:
+                os.replace(entry, target)
+            except OSError:
+                return
+        else:
+            entry.unlink(missing_ok=True)
+        print(
+            f"note: {shown(entry.parent / name)}: a writer of it (process {pid}) was killed"
+            f" before it finished: what it had written is kept as {shown(target)}",
+            file=sys.stderr,
+        )
+        return
+
+
 def remove_stale_temporaries(folder: str | Path, name: str) -> int:
     """Remove the hidden temporaries (files or staging folders) for output ``name`` in
     ``folder`` whose writer, a process of this machine, is gone; returns how many. Those of
     live processes (a writer at work) and of other machines (a shared folder: their processes
-    cannot be asked) are kept; so are temporaries named otherwise."""
+    cannot be asked) are kept; so are temporaries named otherwise. A dead writer's file
+    named as one worth keeping (:data:`PARTIAL`) is kept under a visible name, and said."""
     pattern = re.compile(rf"^\.{re.escape(temporary_name(name))}\.pid(\d+)@([A-Za-z0-9-]*)\.")
     host, removed = _host(), 0
     try:
@@ -251,6 +297,9 @@ def remove_stale_temporaries(folder: str | Path, name: str) -> int:
     for entry in entries:
         m = pattern.match(entry.name)
         if m is None or m.group(2) != host or _alive(int(m.group(1))):
+            continue
+        if _PARTIAL_END.search(entry.name) and entry.is_file() and not entry.is_symlink():
+            _keep_partial(entry, name, int(m.group(1)))
             continue
         try:
             if entry.is_dir() and not entry.is_symlink():

@@ -31,6 +31,9 @@ ends it too, the ``--out`` video written up to there. A stream that stalls (no f
 ``--stall`` seconds) or a camera or URL that stops sending is reported in one line, with a
 non-zero exit, after the segments in progress are printed; the ``--out`` video of the frames
 watched until then is finished and written, as at the end of a file, and the line says so.
+Killed (``kill -9``, power loss), a watch leaves a copy of the ``--out`` video that plays up
+to near the kill, which the next writer of the video keeps as ``NAME.partial.nut``
+(:data:`RESCUE_SUFFIX`).
 """
 
 from __future__ import annotations
@@ -51,7 +54,7 @@ from typing import Any
 
 from cbr.judges import JUDGES
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import PICTURE_WORDS, atomic_path, check_output, stdout_gone
+from features.fileio import PARTIAL, PICTURE_WORDS, atomic_path, check_output, stdout_gone
 from features.interrupts import raise_interrupt, sigterm_held
 from features.text import counted, shown
 from posecbr.arguments import add_k_option, path_arg
@@ -540,6 +543,8 @@ def run(args: argparse.Namespace) -> int:
         note_not_windows(stored, args.db, "watch")
     except _NoFrameDrawn:
         pass  # stopped before the first frame: no video, not an empty one
+    finally:  # the video in place (or not to be written): its copy for a kill is not needed
+        watcher.drop_rescue()
     return 0
 
 
@@ -556,6 +561,14 @@ def _watched(
             raise
         return exc
     return None
+
+
+RESCUE_SUFFIX = f"{PARTIAL}.nut"
+"""The ending of the ``--out`` video's rescue copy (:meth:`Watcher._open_rescue`): FFmpeg's
+NUT container, which needs no index at its end (measured, frames killed after 300: an MP4
+opens not at all, Matroska, AVI and ASF with no frame count and no seeking; NUT and MPEG-TS
+give theirs and seek, and OpenCV writes MPEG-TS only after a warning on stderr).
+:data:`features.fileio.PARTIAL` in it: a killed watch's copy is kept, not removed."""
 
 
 class _NoFrameDrawn(Exception):
@@ -585,6 +598,8 @@ class Watcher:
         self._grid: Any = None  # Regrid, made with the segmenter
         self.writer: Any = None
         self.video: Path | None = None  # where the drawn frames go (a temporary file)
+        self.rescue: Any = None  # their copy a kill leaves playable (:meth:`_open_rescue`)
+        self.rescue_path: Path | None = None
         self.drawn = 0  # frames written to it
         self.emitted = 0  # segments printed
         self.seen = False  # a segment printed saw the person (not nobody in view throughout)
@@ -626,6 +641,8 @@ class Watcher:
         finally:
             if self.writer is not None:
                 self.writer.release()
+            if self.rescue is not None:  # kept until the video is in place (:meth:`drop_rescue`)
+                self.rescue.release()
 
     def follow(self, frames: Iterator[Any], is_file: bool, stop: threading.Event) -> None:
         from cbr.live import LiveSegmenter
@@ -797,8 +814,45 @@ class Watcher:
             self.writer = cv2.VideoWriter(str(self.video), fourcc, float(self.fps or 30.0), (w, h))
             if not self.writer.isOpened():
                 raise DataError("cannot encode an MP4 video here", self.args.out)
+            self._open_rescue(fourcc, float(self.fps or 30.0), (w, h))
         self.writer.write(bgr)
+        if self.rescue is not None:
+            self.rescue.write(bgr)
         self.drawn += 1
+
+    def _open_rescue(self, fourcc: int, fps: float, size: tuple[int, int]) -> None:
+        """Start the rescue copy of the drawn frames (:data:`RESCUE_SUFFIX`): a hidden
+        temporary beside ``--out``, in a container that needs no index at its end. The MP4's
+        index (its ``moov`` box) is written when the writer is released, so a watch killed
+        (``kill -9``, power loss) left an MP4 temporary no player opens, and the next writer
+        removed it; the copy plays up to the last of it written, and the next writer of
+        ``--out`` keeps it under a visible name (:func:`features.fileio.remove_stale_temporaries`).
+        Removed when the watch ends however it ends. Without one (it cannot be made here), the
+        watch goes on as before."""
+        import cv2
+
+        from features.fileio import temporary_file
+
+        try:
+            path = temporary_file(self.args.out, RESCUE_SUFFIX)
+        except OSError:
+            return
+        writer = cv2.VideoWriter(str(path), fourcc, fps, size)
+        if not writer.isOpened():
+            path.unlink(missing_ok=True)
+            return
+        self.rescue, self.rescue_path = writer, path
+
+    def drop_rescue(self) -> None:
+        """The watch has ended and the ``--out`` video is in place, or is not to be written:
+        the rescue copy is not needed. (Removed only then: a kill while the finished MP4 is
+        checked, seconds for an hour's video, leaves the copy too.)"""
+        if self.rescue is not None:
+            self.rescue.release()
+            self.rescue = None
+        if self.rescue_path is not None:
+            self.rescue_path.unlink(missing_ok=True)
+            self.rescue_path = None
 
     def _show(self, bgr: Any) -> None:
         import cv2
