@@ -66,6 +66,7 @@ from .segmentation import (
     periods_in_span,
     repetitions_in,
     segment,
+    sighting_width,
     span_fields,
     told,
     unclaimed,
@@ -442,6 +443,13 @@ class LiveSegmenter:
         self.nobody = self.unknown + 1  # its label seen
         self.torso = [BLAZEPOSE_33.index(j) for j in TORSO_JOINTS]
         self.least_blind = MIN_SEGMENT_S * self.fps  # frames: a shorter dropout is not one
+        # whether a frame shows the person: the majority of the frames around it that show
+        # the torso (as offline, sighting_width: a glitch of the pose model is not), known
+        # once the frames after it are pushed
+        self.glitch = sighting_width(self.fps) // 2  # frames either side of it
+        self.sightings: deque[bool] = deque(maxlen=2 * self.glitch + 1)  # the torso seen in
+        # the last frames pushed
+        self.looked = 0  # the frames whose sighting is known
         self.blind: list[tuple[int, int]] = []  # the recent runs of at least that many
         # frames without the torso: [first, end)
         self.blind_from: int | None = None  # the first frame of the run in progress
@@ -471,8 +479,9 @@ class LiveSegmenter:
     @property
     def nobody_in_view(self) -> bool:
         """Nobody has been seen for the last :data:`MIN_SEGMENT_S` or more (a stretch that
-        will be a segment of its own, "nobody in view")."""
-        return self.blind_from is not None and self.n - self.blind_from >= self.least_blind
+        will be a segment of its own, "nobody in view"; a glitch of the pose model aside:
+        known :attr:`glitch` frames late, :meth:`_sighted`)."""
+        return self.blind_from is not None and self.looked - self.blind_from >= self.least_blind
 
     @property
     def nobody_reason(self) -> str:
@@ -622,21 +631,36 @@ class LiveSegmenter:
             self.jumps.append(self.n)
 
     def _look(self, frame: np.ndarray) -> None:
-        """Follow the runs of frames without the torso with frame :attr:`n`, ``frame``."""
-        seen = bool(torso_seen(frame[self.torso]))
+        """Follow the runs of frames without the person with frame :attr:`n`, ``frame``: the
+        sighting of the frame :attr:`glitch` frames back is known now."""
+        self.sightings.append(bool(torso_seen(frame[self.torso])))
+        if self.n + 1 - self.looked > self.glitch:
+            self._sighted(self.n + 1)
+
+    def _sighted(self, end: int) -> None:
+        """Whether frame :attr:`looked` shows the person, the frames up to ``end``
+        (exclusive) pushed: the majority of the frames within :attr:`glitch` of it that show
+        the torso, as :func:`cbr.segmentation.nobody_blocks` reads it
+        (:func:`features.body.majority`: a tie, at the stream's ends, not); and the runs of
+        frames without the person followed with it."""
+        i, first = self.looked, end - len(self.sightings)  # first: the frame sightings[0] is
+        lo, hi = max(0, i - self.glitch), min(end, i + self.glitch + 1)
+        seen = 2 * sum(list(self.sightings)[lo - first : hi - first]) > hi - lo
         if not seen and self.blind_from is None:
-            self.blind_from = self.n
+            self.blind_from = i
         elif seen and self.blind_from is not None:
-            if self.n - self.blind_from >= self.least_blind:
-                self.blind.append((self.blind_from, self.n))
+            if i - self.blind_from >= self.least_blind:
+                self.blind.append((self.blind_from, i))
             self.blind_from = None
+        self.looked += 1
 
     def _blind_run(self, frame: float) -> tuple[int, int] | None:
         """The run of at least :data:`MIN_SEGMENT_S` with nobody in view that holds ``frame``
-        (the run in progress ends, so far, at the last frame pushed), or None."""
+        (the run in progress ends, so far, at the last frame whose sighting is known), or
+        None."""
         runs = list(self.blind)
-        if self.blind_from is not None and self.n - self.blind_from >= self.least_blind:
-            runs.append((self.blind_from, self.n))
+        if self.blind_from is not None and self.looked - self.blind_from >= self.least_blind:
+            runs.append((self.blind_from, self.looked))
         return next(((a, b) for a, b in runs if a <= frame < b), None)
 
     def _decide(self, n: int) -> list[LiveSegment]:
@@ -1506,6 +1530,8 @@ class LiveSegmenter:
         if self.ended:
             return []
         self.ended = True
+        while self.looked < self.n:  # the last frames' sightings, by the frames there are
+            self._sighted(self.n)
         if self.state is None:
             return self._short_stream()
         out = self._settle(np.array(self.forward.settle(final=True), dtype=np.int64))
@@ -1532,8 +1558,8 @@ class LiveSegmenter:
         (:func:`cbr.segmentation.nobody_blocks`). Before, the stretch stayed in the segment,
         and a squat lost from view at the bottom as the stream ended counted none."""
         runs = list(self.blind)
-        if self.blind_from is not None and self.n - self.blind_from >= self.least_blind:
-            runs.append((self.blind_from, self.n))
+        if self.blind_from is not None and self.looked - self.blind_from >= self.least_blind:
+            runs.append((self.blind_from, self.looked))
         late = [r for r in runs if r[0] > self.seen_start]
         if self.seen is None or self.seen == self.nobody or not late:
             return []

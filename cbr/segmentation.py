@@ -40,8 +40,9 @@ How (the fitted :class:`~cbr.estimator.CaseBaseClassifier` does the classifying,
    covers takes its nearest covered neighbours' evidence, :func:`block_evidence`), every
    change of the label seen costing the same (:func:`decode_unknown`: no sliver of an
    activity left between an unknown stretch and the next change); a stretch of at least
-   :data:`MIN_SEGMENT_S` in which no frame shows the person is an unknown segment of its
-   own, "nobody in view" (:func:`nobody_blocks`);
+   :data:`MIN_SEGMENT_S` in which no frame shows the person (a glitch of the pose model
+   aside, :func:`sighting_width`) is an unknown segment of its own, "nobody in view"
+   (:func:`nobody_blocks`);
 7. each segment is counted (:func:`features.repetitions.count_repetitions`), each
    repetition in the one segment that holds where its movement turns (:func:`keep_whole`,
    :func:`unclaimed`), and explained by its most confident window.
@@ -57,7 +58,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from features.body import check_person, long_runs, torso_rows, torso_share
+from features.body import check_person, long_runs, majority, torso_rows, torso_share
 from features.derived import forget, movement_signals_of, stretch
 from features.errors import DataError, InputError, ParameterError
 from features.fluents import DEFAULT_TABLE, history_frames
@@ -73,6 +74,7 @@ from features.repetitions import (
     Repetition,
     RepetitionCount,
     count_in_signals,
+    median_width,
     person_jumps,
 )
 from features.text import shown
@@ -831,11 +833,24 @@ def place_changes(solved: Sequence[_Solved], fps: float, path: np.ndarray) -> np
     return out
 
 
+def sighting_width(fps: float) -> int:
+    """How many frames (odd) at ``fps`` decide whether a frame shows the person
+    (:func:`features.body.majority` of the frames showing the torso): the running median
+    the movement signals read for a pose model's poses
+    (:func:`features.repetitions.median_width`: 0.2 s, at least three frames). The person
+    "seen" for a glitch of the pose model shorter than half of it in a stretch with nobody
+    in view (a false detection) is not, nor is the person missed for one lost from view."""
+    return median_width(fps, True)
+
+
 def nobody_blocks(rec: PoseSequence, n_blocks: int) -> np.ndarray:
     """``(n_blocks,)`` bool: the :data:`BLOCK_S` blocks of ``rec`` whose centre lies in a
-    stretch of at least :data:`MIN_SEGMENT_S` in which no frame shows the person (a segment
-    of its own; a shorter dropout of the pose model is not)."""
-    nobody = long_runs(~torso_rows(rec), MIN_SEGMENT_S * rec.fps)
+    stretch of at least :data:`MIN_SEGMENT_S` in which no frame shows the person
+    (:func:`sighting_width`: nor a glitch of the pose model; a segment of its own, and a
+    shorter dropout of the pose model is not). Before, the person "seen" for two frames
+    1/3 s into 3 s with nobody in view left the 1/3 s before them unknown."""
+    seen = majority(torso_rows(rec), sighting_width(rec.fps))
+    nobody = long_runs(~seen, MIN_SEGMENT_S * rec.fps)
     centres = ((np.arange(n_blocks) + 0.5) * rec.fps * BLOCK_S).astype(int)
     return np.asarray(nobody[np.minimum(centres, rec.n_frames - 1)])
 
@@ -1801,6 +1816,7 @@ __all__ = [
     "place_changes",
     "finish",
     "nobody_blocks",
+    "sighting_width",
     "nobody_explanation",
     "NO_FRAMES",
     "segment",

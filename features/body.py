@@ -297,6 +297,18 @@ def long_runs(mask: np.ndarray, length: float) -> np.ndarray:
     return out
 
 
+def majority(mask: np.ndarray, width: int) -> np.ndarray:
+    """``mask`` ``(n,)`` with each sample the majority of the ``width`` samples (odd) centred
+    on it, the window cut to the samples there are (a tie, at an end: False): a running
+    median of a yes/no signal, which drops its runs shorter than half ``width`` and keeps
+    where a longer run begins and ends."""
+    half = width // 2
+    count = np.concatenate([[0], np.cumsum(mask, dtype=np.int64)])
+    i = np.arange(len(mask))
+    lo, hi = np.maximum(i - half, 0), np.minimum(i + half + 1, len(mask))
+    return np.asarray(2 * (count[hi] - count[lo]) > hi - lo)
+
+
 def torso_rows(seq: PoseSequence) -> np.ndarray:
     """``(frames,)`` whether each frame shows the torso as :func:`torso_share` counts it. Per
     frame, so a stretch of a clip shares its clip's rows (:func:`features.derived.stretch`):
