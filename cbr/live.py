@@ -641,11 +641,13 @@ class LiveSegmenter:
         """Whether frame :attr:`looked` shows the person, the frames up to ``end``
         (exclusive) pushed: the majority of the frames within :attr:`glitch` of it that show
         the torso, as :func:`cbr.segmentation.nobody_blocks` reads it
-        (:func:`features.body.majority`: a tie, at the stream's ends, not); and the runs of
-        frames without the person followed with it."""
+        (:func:`features.body.majority`: nearer the stream's ends, within as many frames on
+        either side as there are on both); and the runs of frames without the person
+        followed with it."""
         i, first = self.looked, end - len(self.sightings)  # first: the frame sightings[0] is
-        lo, hi = max(0, i - self.glitch), min(end, i + self.glitch + 1)
-        seen = 2 * sum(list(self.sightings)[lo - first : hi - first]) > hi - lo
+        half = min(self.glitch, i, end - 1 - i)
+        window = list(self.sightings)[i - half - first : i + half + 1 - first]
+        seen = 2 * sum(window) > len(window)
         if not seen and self.blind_from is None:
             self.blind_from = i
         elif seen and self.blind_from is not None:

@@ -299,14 +299,15 @@ def long_runs(mask: np.ndarray, length: float) -> np.ndarray:
 
 def majority(mask: np.ndarray, width: int) -> np.ndarray:
     """``mask`` ``(n,)`` with each sample the majority of the ``width`` samples (odd) centred
-    on it, the window cut to the samples there are (a tie, at an end: False): a running
-    median of a yes/no signal, which drops its runs shorter than half ``width`` and keeps
-    where a longer run begins and ends."""
-    half = width // 2
+    on it: a running median of a yes/no signal, which drops its runs shorter than half
+    ``width`` and keeps where a longer run begins and ends. Within half ``width`` of an end,
+    of as many samples on either side as there are on both (the first and last sample as
+    they are): with none beyond the end, a short run there cannot be told from the start of
+    a long one."""
     count = np.concatenate([[0], np.cumsum(mask, dtype=np.int64)])
     i = np.arange(len(mask))
-    lo, hi = np.maximum(i - half, 0), np.minimum(i + half + 1, len(mask))
-    return np.asarray(2 * (count[hi] - count[lo]) > hi - lo)
+    half = np.minimum(np.minimum(i, len(mask) - 1 - i), width // 2)
+    return np.asarray(2 * (count[i + half + 1] - count[i - half]) > 2 * half + 1)
 
 
 def torso_rows(seq: PoseSequence) -> np.ndarray:

@@ -24,12 +24,13 @@ from tests.test_segment import classifier, names, recordings  # noqa: F401 - the
 
 
 def test_majority_by_hand() -> None:
-    """Runs shorter than half the width go, longer ones keep their edges; at the ends the
-    window is cut to the samples there are, a tie there False."""
+    """Runs shorter than half the width go, longer ones keep their edges; near the ends the
+    window holds as many samples on either side as there are on both (the first and last
+    sample as they are)."""
     got = majority(np.array([1, 1, 0, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1, 0, 1, 1], bool), 5)
-    assert got.tolist() == [bool(x) for x in [1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1]]
+    assert got.tolist() == [bool(x) for x in [1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1]]
     assert majority(np.array([1, 0, 1, 0, 1, 0], bool), 3).tolist() == [
-        False, True, False, True, False, False
+        True, True, False, True, False, False
     ]  # fmt: skip
 
 
