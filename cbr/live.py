@@ -848,7 +848,7 @@ class LiveSegmenter:
     def _change(self, boundary: int, seen: int) -> list[LiveSegment]:
         """The label seen changes to ``seen`` at frame ``boundary``: the segment in progress
         is finished there (an unknown one before nobody in view too, however short: its
-        frames show the person, and the segment before it has been given out)."""
+        frames show the person, as offline, :func:`cbr.segmentation.finish`)."""
         assert self.seen is not None
         lost = seen == self.nobody
         done = self._given(self._segment(self.seen_start, boundary, self.seen, True, lost=lost))

@@ -1526,17 +1526,22 @@ def _segment_of(
 
 
 def _slivers_beside_nobody(path: np.ndarray, n_classes: int) -> np.ndarray:
-    """``path`` with each unknown run shorter than :data:`MIN_SEGMENT_S` after a run of
-    nobody in view (state ``n_classes + 1``) given to what follows it: nobody in view when
-    it lies between two such runs (the person seen for a flicker), the activity after it
-    when there is one (its windows, half empty, are like no activity: the activity starts
-    where the person is seen again). Nobody in view holds only frames without the person;
-    any other unknown sliver stays unknown (one before nobody in view too: ``watch`` has
-    given the segment before it out by then, :class:`cbr.live.LiveSegmenter`)."""
+    """``path`` with each run shorter than :data:`MIN_SEGMENT_S` after a run of nobody in
+    view (state ``n_classes + 1``), which the decoders left where nobody in view cut a
+    longer one short, given to what follows it: nobody in view when it is unknown and lies
+    between two such runs (the person seen for a flicker), else the segment after it (its
+    windows, half empty, are like no activity, or like the one before: the segment starts
+    where the person is seen again; before, a sliver of an activity stayed, 3 to 6 frames of
+    knee raises between nobody in view and squats). Nobody in view holds only frames without
+    the person; any other sliver stays (an unknown one before nobody in view too: its frames
+    show the person, unlike every activity as they leave, as ``watch`` gives it,
+    :class:`cbr.live.LiveSegmenter`)."""
+    nobody = n_classes + 1
     runs = _runs(path)
     for i, (a, b, state) in enumerate(runs[1:-1], start=1):
         before, after = runs[i - 1][2], runs[i + 1][2]
-        if state == n_classes and (b - a) * BLOCK_S < MIN_SEGMENT_S and before == n_classes + 1:
+        short = (b - a) * BLOCK_S < MIN_SEGMENT_S
+        if short and before == nobody and (after != nobody or state == n_classes):
             path[a:b] = after
     return path
 

@@ -8,7 +8,9 @@ with nobody in view: 3 s with nobody, a glitch at frame 10, was unknown 0-12 and
 view 12-90 in ``segment``; a glitch 10 frames before the person came back started the
 activity there in ``watch``. Now whether a frame shows the person is the majority of the
 frames within the running median of the movement signals around it (0.2 s; at 30 fps 7
-frames: a run of up to 3 frames dropped), in both.
+frames: a run of up to 3 frames dropped), in both. And a sliver of an activity under a
+second after such a stretch (the decoder's run from before it, cut short) joins what
+follows, as an unknown one does: the activity starts where the person is seen again.
 """
 
 from __future__ import annotations
@@ -62,3 +64,50 @@ def test_a_glitch_near_an_edge_of_nobody_in_view_does_not_move_it(
         assert [s.explanation == NOBODY for s in got] == [True, False, True, False]
     assert [len(s.repetitions) for s in offline] == [0, 4, 0, 2]
     assert [s.repetitions for s in watched] == [0, 4, 0, 2]
+
+
+def test_a_sliver_of_an_activity_after_nobody_in_view_joins_what_follows() -> None:
+    """Decoded paths by hand (0.1-s blocks; activities 0 and 1, 2 unknown, 3 nobody): a run
+    of an activity under a second after nobody joins what follows it, as an unknown one
+    does; between two stretches of nobody, before nobody, or at the end, it stays."""
+    from cbr.segmentation import _slivers_beside_nobody
+
+    def given(path: list[int]) -> list[int]:
+        return _slivers_beside_nobody(np.array(path), 2).tolist()
+
+    assert given([3] * 10 + [0] * 2 + [1] * 10) == [3] * 10 + [1] * 12
+    assert given([3] * 10 + [0] * 9 + [2] * 10) == [3] * 10 + [2] * 19
+    assert given([3] * 10 + [0] * 2 + [3] * 10) == [3] * 10 + [0] * 2 + [3] * 10
+    assert given([1] * 10 + [0] * 2 + [3] * 10) == [1] * 10 + [0] * 2 + [3] * 10
+    assert given([3] * 10 + [0] * 2) == [3] * 10 + [0] * 2
+    assert given([3] * 10 + [0] * 10 + [1] * 10) == [3] * 10 + [0] * 10 + [1] * 10
+
+
+def test_the_activity_after_nobody_in_view_starts_where_the_person_is_seen_again(
+    recordings: dict[str, PoseSequence],  # noqa: F811 - the fixture imported above
+    classifier: CaseBaseClassifier,  # noqa: F811
+) -> None:
+    """At 30 fps: 13_30's squats (11.8-16.1 s: frames 0-129), its knee raises (6.7-9.7 s:
+    129-219), the person held still (the knee raises' 90th frame, 219-255), lost for 3 s
+    (255-345), its squats again (345-474): nobody in view exactly 255-345 and the squats
+    from 345, counted 2 as by hand (tests/test_segment.py), in ``segment`` and ``watch``
+    alike. Before, ``segment`` gave 345-351 to the knee raises (the run the decoder found
+    before the stretch, cut short by it)."""
+    from cbr.live import LiveSegmenter
+
+    rec = recordings["13_30"]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)][::4]
+    squat = rec.positions[int(11.8 * 120) : int(16.1 * 120)][::4]
+    still = np.repeat(knee[89:90], 36, axis=0)
+    missing = np.full((90, *knee.shape[1:]), np.nan)
+    pos = np.concatenate([squat, knee[:90], still, missing, squat])
+    rec = PoseSequence(pos, rec.joint_names, 30.0, source="still, away and back")
+    offline = segment(classifier, rec).segments
+    live = LiveSegmenter(classifier, 30.0)
+    watched = [s for frame in rec.positions for s in live.push(frame)] + live.finish()
+    for got in (offline, watched):
+        assert [(s.start_frame, s.end_frame, s.label) for s in got[-2:]] == [
+            (255, 345, None), (345, 474, "Squat")
+        ]  # fmt: skip
+        assert got[-2].explanation == NOBODY
+    assert len(offline[-1].repetitions) == watched[-1].repetitions == 2
