@@ -36,7 +36,7 @@ from .store import (
     store_files,
     write_store,
 )
-from .upgrade import missing_indexes, upgrade_store
+from .upgrade import missing_columns, missing_indexes, upgrade_store
 
 __all__ = [
     "EMPTY_DB",
@@ -73,6 +73,7 @@ __all__ = [
     "sqlite_file",
     "store_files",
     "write_store",
+    "missing_columns",
     "missing_indexes",
     "upgrade_store",
 ]

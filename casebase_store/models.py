@@ -98,6 +98,12 @@ class CaseRow(Base):
     subject: Mapped[str | None] = mapped_column(Text, nullable=True)
     skeleton: Mapped[str | None] = mapped_column(String(64), nullable=True)
     origin: Mapped[str] = mapped_column(String(16), default="trained")  # trained|retained|revised
+    # a SHA-256 of the poses of the clip the case was made of (its mirror image's case too):
+    # what tells a copy of that clip under another file name (train --append). NULL when not
+    # known: a case stored before it was kept, or not made from a clip of train. A store made
+    # before has no such column until `casebase upgrade` adds it (read and written as it is);
+    # deferred: what reads a whole case does not name it
+    poses: Mapped[str | None] = mapped_column(String(64), nullable=True, deferred=True)
     active: Mapped[bool] = mapped_column(default=True)  # False once trimmed (kept for history)
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utcnow)
     updated_at: Mapped[datetime] = mapped_column(

@@ -43,16 +43,18 @@ from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 from urllib.parse import quote
 
 import numpy as np
 from sqlalchemy import (
     Engine,
+    Table,
     create_engine,
     delete,
     event,
     func,
+    insert,
     inspect,
     select,
     update,
@@ -261,6 +263,13 @@ def _check_text(value: str, what: str, where: str, max_len: int | None = None) -
     return value
 
 
+def _check_poses(value: str, where: str) -> str:
+    """A case's poses digest: a SHA-256 as 64 hexadecimal digits (what compares them)."""
+    if not isinstance(value, str) or not re.fullmatch(r"[0-9a-f]{64}", value):
+        raise StoreError(f"a poses digest is 64 hexadecimal digits, got {value!r}", where)
+    return value
+
+
 def _check_utf8(value: str, what: str, where: str, within: str = "") -> None:
     """Refuse text that has no UTF-8 form: a name read from a file or folder whose bytes are
     not UTF-8 (Python keeps them as lone surrogates), which no database driver can send.
@@ -307,7 +316,9 @@ def _as_stored(text: str) -> str:
 
 @dataclass(frozen=True)
 class NewCase:
-    """A case to add: problem ``features`` (any shape, same for the whole case base) + label."""
+    """A case to add: problem ``features`` (any shape, same for the whole case base) + label;
+    ``poses``: a digest of the poses of the clip it was made of (what tells a copy of the clip
+    under another file name), None when not known."""
 
     label: str
     features: np.ndarray
@@ -317,6 +328,7 @@ class NewCase:
     subject: str | None = None
     skeleton: str | None = None
     origin: str = "trained"
+    poses: str | None = None
 
 
 @dataclass(frozen=True)
@@ -355,13 +367,16 @@ class StoredCase:
 
 @dataclass(frozen=True)
 class SourcedCase:
-    """One case with its provenance, as :meth:`StoreTransaction.cases_framed` finds it."""
+    """One case with its provenance, as :meth:`StoreTransaction.cases_framed` finds it;
+    ``poses``: the digest of its clip's poses, None when not known (stored before it was kept,
+    or in a store made before, which has no place for it)."""
 
     id: int
     source: str
     frame_start: int | None
     frame_end: int | None
     features: np.ndarray
+    poses: str | None = None
 
 
 @dataclass(frozen=True)
@@ -1051,6 +1066,9 @@ class CaseStore:
         self.timeout_s = timeout_s
         self.readonly = readonly
         self._write_engine = engine.execution_options(posecbr_write=True)
+        #: whether the cases table has the column of their clips' poses digests (a store made
+        #: before it has none until `casebase upgrade`: read and written as it is)
+        self.keeps_poses = True
 
     # -- plumbing
 
@@ -1105,6 +1123,8 @@ class CaseStore:
                         f"{__version__} reads version {SCHEMA_VERSION}{hint}",
                         self.where,
                     )
+                columns = inspect(self.engine).get_columns(CaseRow.__tablename__)
+                self.keeps_poses = "poses" in {c["name"] for c in columns}
                 return
             if names:
                 raise StoreError(
@@ -1292,7 +1312,7 @@ class CaseStore:
             info = self._info(s, row)
             damaged = f"case base {name!r} is damaged: a date in it is not a date"
             with self._dates(damaged):
-                cases = _rows_of(s, CaseRow, row.id)
+                cases = _rows_of(s, CaseRow, row.id, () if self.keeps_poses else ("poses",))
                 log = _rows_of(s, MaintenanceRow, row.id)
             reps = [
                 dict(r)
@@ -1611,18 +1631,17 @@ class StoreTransaction:
         s.add(row)
         s.flush()
         self._created.add(row.id)  # created here: its version is the one copied
-        skip = ("id", "case_base_id")
-        rows = []
-        for c in whole.cases:
-            new = CaseRow(case_base_id=row.id, **{k: v for k, v in c.items() if k not in skip})
-            if keep:
-                new.id = int(c["id"])
-            s.add(new)
-            rows.append(new)
-            if len(rows) % 500 == 0:
-                s.flush()
-        s.flush()
-        moved = {old: int(r.id) for old, r in zip(ids, rows, strict=True)}
+        skip = ("case_base_id",) if keep else ("id", "case_base_id")
+        rows = [
+            # a case read from a store made before its clip's poses digest was kept has none;
+            # a store made before has no place for it (a case of unknown poses there)
+            {"poses": None, **{k: v for k, v in c.items() if k not in skip}, "case_base_id": row.id}
+            for c in whole.cases
+        ]
+        if not self.store.keeps_poses:
+            for r in rows:
+                del r["poses"]
+        moved = dict(zip(ids, self._insert_cases(rows), strict=True))
         if keep and ids and postgres:  # explicit ids do not move the sequence
             s.execute(
                 sql_text("SELECT setval(pg_get_serial_sequence('cases', 'id'), :top)"),
@@ -1674,36 +1693,52 @@ class StoreTransaction:
         self._changed.add(cb.id)
 
     def add_cases(self, cb: CaseBaseInfo, cases: Iterable[NewCase]) -> list[int]:
-        """Insert cases (streamed: an iterator is consumed inside this transaction)."""
-        rows: list[CaseRow] = []
+        """Insert cases (streamed: an iterator is consumed inside this transaction, 500 at a
+        time). A store made before the cases kept their clips' poses digests stores them
+        without it."""
+        ids: list[int] = []
+        rows: list[dict[str, Any]] = []
+        where = self.store.where
         for c in cases:
             if c.origin not in ORIGINS:
-                raise StoreError(f"unknown case origin {c.origin!r}", self.store.where)
-            where = self.store.where
+                raise StoreError(f"unknown case origin {c.origin!r}", where)
             if c.skeleton is not None:
                 _check_text(c.skeleton, "skeleton name", where, max_len=64)
             _check_text(_as_stored(c.source), "source", where)
             if c.subject is not None:
                 _check_text(c.subject, "subject", where)
-            row = CaseRow(
-                case_base_id=cb.id,
-                label=_check_text(str(c.label), "label", where),
-                features=encode_array(np.asarray(c.features)),
-                source=_as_stored(c.source),
-                frame_start=c.frame_start,
-                frame_end=c.frame_end,
-                subject=c.subject,
-                skeleton=c.skeleton,
-                origin=c.origin,
-            )
-            self.session.add(row)
+            row = {
+                "case_base_id": cb.id,
+                "label": _check_text(str(c.label), "label", where),
+                "features": encode_array(np.asarray(c.features)),
+                "source": _as_stored(c.source),
+                "frame_start": c.frame_start,
+                "frame_end": c.frame_end,
+                "subject": c.subject,
+                "skeleton": c.skeleton,
+                "origin": c.origin,
+            }
+            poses = None if c.poses is None else _check_poses(c.poses, where)
+            if self.store.keeps_poses:
+                row["poses"] = poses
             rows.append(row)
-            if len(rows) % 500 == 0:
-                self.session.flush()
-        self.session.flush()
-        if rows:
+            if len(rows) == 500:
+                ids += self._insert_cases(rows)
+                rows = []
+        ids += self._insert_cases(rows)
+        if ids:
             self._changed.add(cb.id)
-        return [r.id for r in rows]
+        return ids
+
+    def _insert_cases(self, rows: Sequence[Mapping[str, Any]]) -> list[int]:
+        """Insert ``rows`` (dicts of the same columns) into the cases table: their ids, in
+        order. Only the columns given are named (the ORM would name every column of today's
+        schema, those a store made before lacks too)."""
+        if not rows:
+            return []
+        table = cast(Table, CaseRow.__table__)
+        q = insert(table).returning(table.c.id, sort_by_parameter_order=True)
+        return [int(i) for i in self.session.execute(q, list(rows)).scalars()]
 
     def cases_from(
         self, cb: CaseBaseInfo, sources: Iterable[str]
@@ -1734,17 +1769,19 @@ class StoreTransaction:
     ) -> Iterator[list[SourcedCase]]:
         """The active cases of ``cb`` made of one of ``frames`` (first frame, end frame) of
         their source, or stored without their frames (before they were kept), by id, with
-        their features, 500 at a time: the cases a clip of those frames may repeat, whatever
-        its file is called (a copy of a stored clip's file under another name)."""
+        their features and the digest of their clip's poses (None when not known), 500 at a
+        time: the cases a clip of those frames may repeat, whatever its file is called (a copy
+        of a stored clip's file under another name)."""
         wanted = set(frames)
+        poses = CaseRow.poses if self.store.keeps_poses else sql_text("NULL")
         q = (
-            select(CaseRow.id, CaseRow.source, CaseRow.frame_start, CaseRow.frame_end)
+            select(CaseRow.id, CaseRow.source, CaseRow.frame_start, CaseRow.frame_end, poses)
             .where(CaseRow.case_base_id == cb.id, CaseRow.active.is_(True))
             .order_by(CaseRow.id)
         )
         found = [
-            (int(case_id), source, a, b)
-            for case_id, source, a, b in self.session.execute(q)
+            (int(case_id), source, a, b, digest)
+            for case_id, source, a, b, digest in self.session.execute(q)
             if a is None or b is None or (a, b) in wanted
         ]
         for i in range(0, len(found), 500):  # bounded IN lists, and memory
@@ -1753,7 +1790,7 @@ class StoreTransaction:
             blobs = {int(k): v for k, v in self.session.execute(q2)}
             what = [f"features of case {r[0]}" for r in rows]
             arrays = decode_arrays([blobs[r[0]] for r in rows], what, self.store.where)
-            yield [SourcedCase(*r, a) for r, a in zip(rows, arrays, strict=True)]
+            yield [SourcedCase(*r[:4], a, r[4]) for r, a in zip(rows, arrays, strict=True)]
 
     def _case_row(self, cb: CaseBaseInfo, case_id: int, lock: bool) -> CaseRow:
         q = select(CaseRow).where(CaseRow.id == int(case_id))
@@ -1973,13 +2010,18 @@ def write_store(
 
 
 def _rows_of(
-    s: Session, table: type[CaseRow] | type[MaintenanceRow], case_base_id: int
+    s: Session,
+    table: type[CaseRow] | type[MaintenanceRow],
+    case_base_id: int,
+    lacking: Sequence[str] = (),
 ) -> list[dict[str, Any]]:
     """Every row of ``table`` (cases or the maintenance log) of one case base, whole, in the
-    order they were written."""
+    order they were written; ``lacking``: columns of today's schema the store has not (made
+    before they were added)."""
+    columns = [c for c in table.__table__.columns if c.name not in lacking]
     return [
         dict(r)
         for r in s.execute(
-            select(table.__table__).where(table.case_base_id == case_base_id).order_by(table.id)
+            select(*columns).where(table.case_base_id == case_base_id).order_by(table.id)
         ).mappings()
     ]

@@ -4,11 +4,16 @@ Schema 1 -> 2: case bases get an identity (``uid``), a version and an (empty) fi
 ids are never reused from now on (SQLite ``AUTOINCREMENT``). Every row keeps its id, so
 maintenance-log entries still name their cases. A case base from schema 1 has no stored model:
 it is classified with the defaults its configuration implies (see ``cbr.stored``).
+
+Columns and indexes added since without a version of their own (a store made before them is
+read and written as it is: the cases' poses digests, the index on their sources) are added
+by the upgrade too, empty (NULL) for the cases there.
 """
 
 from __future__ import annotations
 
 import uuid
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -67,6 +72,7 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
             if found != SCHEMA_VERSION:
                 _check_upgradable(found, where)  # refused: the file as it was, WAL mode too
                 _from_1(conn)
+            _add_columns(conn)
             _add_indexes(conn)
         # posecbr 0.1's WAL mode, once the store reads as current; another process holding
         # the file open keeps it there (before: "nothing to do", the file still in WAL mode)
@@ -88,6 +94,40 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
         dispose(engine)
 
 
+def _add_columns(conn: Any) -> None:
+    """Add the (nullable) columns of today's schema that the store's tables lack (added since
+    it was made): NULL in every row there."""
+    look = inspect(conn)
+    for table in _TABLES:
+        name = table.__tablename__
+        have = {c["name"] for c in look.get_columns(name)}
+        for column in table.__table__.columns:
+            if column.name not in have:
+                assert column.nullable, column.name  # a column of values would need them
+                quote = conn.dialect.identifier_preparer.quote
+                kind = column.type.compile(dialect=conn.dialect)
+                conn.execute(
+                    text(f"ALTER TABLE {quote(name)} ADD COLUMN {quote(column.name)} {kind}")
+                )
+
+
+def missing_columns(url_or_path: str | Path, *, timeout_s: float = 30.0) -> list[str]:
+    """The columns of today's schema (``table.column``) that the store lacks (it was made
+    before they were added; :func:`upgrade_store` adds them), read without writing; none
+    when it cannot be read (what is wrong with it is told by the upgrade)."""
+    return _missing(url_or_path, timeout_s, _lacking_columns)
+
+
+def _lacking_columns(look: Any, tables: set[str]) -> list[str]:
+    return [
+        f"{table.__tablename__}.{column.name}"
+        for table in _TABLES
+        if table.__tablename__ in tables
+        for column in table.__table__.columns
+        if column.name not in {c["name"] for c in look.get_columns(table.__tablename__)}
+    ]
+
+
 def _add_indexes(conn: Any) -> None:
     """Create the indexes of today's schema that the store lacks (added since it was made)."""
     for table in _TABLES:
@@ -99,6 +139,24 @@ def missing_indexes(url_or_path: str | Path, *, timeout_s: float = 30.0) -> list
     """The indexes of today's schema that the store lacks (it was made before they were
     added; :func:`upgrade_store` creates them), read without writing; none when it cannot be
     read (what is wrong with it is told by the upgrade)."""
+    return _missing(url_or_path, timeout_s, _lacking_indexes)
+
+
+def _lacking_indexes(look: Any, tables: set[str]) -> list[str]:
+    return [
+        str(index.name)
+        for table in _TABLES
+        if table.__tablename__ in tables
+        for index in table.__table__.indexes  # type: ignore[attr-defined]
+        if index.name not in {i["name"] for i in look.get_indexes(table.__tablename__)}
+    ]
+
+
+def _missing(
+    url_or_path: str | Path, timeout_s: float, lacking: Callable[[Any, set[str]], list[str]]
+) -> list[str]:
+    """What ``lacking`` finds missing in the store (its inspector, its tables), read without
+    writing; none when it cannot be read."""
     file = sqlite_file(url_or_path)
     if file is not None and not file.is_file():
         return []
@@ -109,14 +167,7 @@ def missing_indexes(url_or_path: str | Path, *, timeout_s: float = 30.0) -> list
     try:
         with engine.connect() as conn:
             look = inspect(conn)
-            tables = set(look.get_table_names())
-            return [
-                str(index.name)
-                for table in _TABLES
-                if table.__tablename__ in tables
-                for index in table.__table__.indexes  # type: ignore[attr-defined]
-                if index.name not in {i["name"] for i in look.get_indexes(table.__tablename__)}
-            ]
+            return lacking(look, set(look.get_table_names()))
     except Exception:  # a driver error of any backend: the upgrade says it
         return []
     finally:

@@ -76,7 +76,9 @@ class CaseBase:
 
     ``ids``: store ids (``-1`` for cases not stored); provenance per case: ``sources`` (the
     clip), ``subjects``, ``origins`` (trained, retained, revised), ``frames`` (start, end) in
-    the source recording, ``skeletons``; ``names``/``words``: the problem's feature columns.
+    the source recording, ``skeletons``, ``poses`` (the
+    :func:`cbr.described.poses_digest` of the clip it was made of, its mirror image's case
+    too; "" when not known); ``names``/``words``: the problem's feature columns.
     """
 
     config: FeatureConfig
@@ -91,6 +93,7 @@ class CaseBase:
     origins: tuple[str, ...] = ()
     frames: tuple[tuple[int | None, int | None], ...] = ()
     skeletons: tuple[str | None, ...] = ()
+    poses: tuple[str, ...] = ()
     reps: np.ndarray | None = None
     _index: Any = field(default=None, repr=False)
     #: what explanations derive from the cases (label profiles, ...): emptied when they change
@@ -110,6 +113,7 @@ class CaseBase:
         self.origins = tuple(self.origins) or ("trained",) * n
         self.frames = tuple(self.frames) or ((None, None),) * n
         self.skeletons = tuple(self.skeletons) or (None,) * n
+        self.poses = tuple(self.poses) or ("",) * n
 
     def __len__(self) -> int:
         return len(self.labels)
@@ -184,6 +188,7 @@ class CaseBase:
             origins=tuple(self.origins[i] for i in idx),
             frames=tuple(self.frames[i] for i in idx),
             skeletons=tuple(self.skeletons[i] for i in idx),
+            poses=tuple(self.poses[i] for i in idx),
             reps=None if self.reps is None else self.reps[idx],
         )
 
@@ -209,6 +214,7 @@ class CaseBase:
         self.origins += (origin,)
         self.frames += (frames,)
         self.skeletons += (skeleton,)
+        self.poses += ("",)
         if self.reps is not None:
             self.reps = np.concatenate([self.reps, self.measure.represent(self.problems[-1:])])
         self._index = None

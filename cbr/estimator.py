@@ -828,6 +828,7 @@ class CaseBaseClassifier(Classifier):
             subjects=tuple(c.subject for c in of),
             frames=tuple(c.frames for c in of),
             skeletons=tuple(c.skeleton for c in of),
+            poses=tuple(c.poses for c in of),
         )  # fmt: skip
 
     def _calibrate(

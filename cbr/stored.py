@@ -229,6 +229,7 @@ def case_records(cb: CaseBase) -> Iterator[NewCase]:
             subject=cb.subjects[i],
             skeleton=cb.skeletons[i],
             origin=cb.origins[i],
+            poses=cb.poses[i] or None,
         )
 
 

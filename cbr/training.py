@@ -822,7 +822,8 @@ def _check_new(
     however its path is written (relative or absolute, through a link): each clip's source
     is looked for as given, resolved, and resolved relative to the working folder; and a
     case stored under a path written from another working folder (which no longer
-    resolves) is the clip when its file name, frames and features are the clip's."""
+    resolves) is the clip when its file name, frames and poses are the clip's
+    (:func:`_check_new_content`)."""
     names = {c.source: _spellings(c.source) for c in clips if c.source}
     stored = tx.cases_from(info, [n for spelt in names.values() for n in spelt])
     for clip in clips:
@@ -842,22 +843,30 @@ def _check_new(
 
 #: features within this of a stored case's (relative and absolute) are the same
 #: computation on the same poses: floating-point rounding (another summation order) moves
-#: them by some 1e-13; the poses of another recording move them by far more
+#: them by some 1e-13; the poses of another recording move them by far more. What tells a
+#: copy of a case stored without its clip's poses digest (:func:`_check_new_content`)
 SAME_CONTENT_TOLERANCE = 1e-9
 
 
 def _check_new_content(
     tx: StoreTransaction, info: CaseBaseInfo, clips: Sequence[DescribedClip], where: str
 ) -> None:
-    """Refuse an append of a clip whose frames and features are a stored case's, whatever
-    either file is called: the same clip stored under a path that no longer resolves (one
-    relative to another working folder), or a copy of its file under another name; its case
-    would vote twice. A case stored without its frames (before they were kept) is compared
-    by its features. Clips without a source (the Python API's arrays) are not compared."""
+    """Refuse an append of a clip a stored case was made of, whatever either file is called:
+    the same clip stored under a path that no longer resolves (one relative to another
+    working folder), or a copy of its file under another name; its case would vote twice.
+    A case stored with its clip's poses digest (:func:`cbr.described.poses_digest`) is the
+    clip when its frames and poses are the clip's, byte for byte (its features need not be:
+    another posecbr may have computed them; two takes described alike are two clips). One
+    stored without it (before the digest was kept, or in a store made before, which has no
+    place for it; or a clip whose poses are not known) is compared by its frames and
+    features, each within :data:`SAME_CONTENT_TOLERANCE`. A case stored without its frames
+    (before they were kept) is compared by its poses or features alone. Clips without a
+    source (the Python API's arrays) are not compared."""
     sourced = [c for c in clips if c.source]
     if not sourced:
         return
     values = np.stack([c.values for c in sourced]).reshape(len(sourced), -1)
+    digests = np.array([c.poses for c in sourced], dtype=object)
     at: dict[tuple[int | None, int | None], list[int]] = {}
     for k, clip in enumerate(sourced):
         at.setdefault(_provenance(clip)[1:], []).append(k)
@@ -866,7 +875,6 @@ def _check_new_content(
         pairs = [
             (r, k)
             for r, case in enumerate(chunk)
-            if case.features.size == values.shape[1]
             for k in (
                 every
                 if None in (case.frame_start, case.frame_end)
@@ -876,14 +884,22 @@ def _check_new_content(
         if not pairs:
             continue
         rows, ks = (np.asarray(p) for p in zip(*pairs, strict=True))
-        stored = np.stack([c.features.reshape(-1) if c.features.size == values.shape[1]
-                           else np.full(values.shape[1], np.inf) for c in chunk])  # fmt: skip
-        like = _close(values[ks, :8], stored[rows, :8]).all(axis=1)  # most differ there
-        rows, ks = rows[like], ks[like]
-        same = _close(values[ks], stored[rows]).all(axis=1)
+        stored = np.array([c.poses or "" for c in chunk], dtype=object)
+        told = (stored[rows] != "") & (digests[ks] != "")  # both digests known: they decide
+        same = told & (stored[rows] == digests[ks])
+        width = values.shape[1]
+        rest = np.flatnonzero(~told & np.array([chunk[r].features.size == width for r in rows]))
+        if len(rest):
+            features = np.stack([c.features.reshape(-1) if c.features.size == width
+                                 else np.full(width, np.inf) for c in chunk])  # fmt: skip
+            of, by = rows[rest], ks[rest]
+            like = _close(values[by, :8], features[of, :8]).all(axis=1)  # most differ there
+            rest, of, by = rest[like], of[like], by[like]
+            same[rest[_close(values[by], features[of]).all(axis=1)]] = True
         if same.any():
-            first = int(np.argmax(same))
-            raise _repeated(sourced[ks[first]], chunk[rows[first]], info.name, where)
+            first = int(np.argmax(same))  # pairs are in case order: the first case repeated
+            case, clip = chunk[rows[first]], sourced[ks[first]]
+            raise _repeated(clip, case, info.name, where, "poses" if told[first] else "features")
 
 
 def copies_within(clips: Sequence[DescribedClip]) -> tuple[int, int] | None:
@@ -933,16 +949,19 @@ def _given_twice(first: DescribedClip, second: DescribedClip, where: str) -> Sto
     )
 
 
-def _repeated(clip: DescribedClip, case: SourcedCase, name: str, where: str) -> StoreError:
-    """The refusal of ``clip``, which repeats the stored ``case``."""
+def _repeated(
+    clip: DescribedClip, case: SourcedCase, name: str, where: str, told: str
+) -> StoreError:
+    """The refusal of ``clip``, which repeats the stored ``case``, as ``told`` (``"poses"``
+    or ``"features"``)."""
     shown = _shown_frames(_provenance(clip))
     stored = _shown_frames((case.source, case.frame_start, case.frame_end))
     framed = case.frame_start is not None
     if _file_name(case.source) == _file_name(clip.source):
-        why = f"the same file name{', frames' * framed} and features: added before from another"
+        why = f"the same file name{', frames' * framed} and {told}: added before from another"
         why += " folder?"
     else:
-        why = f"the same {'frames and ' * framed}features under another file name: a copy of"
+        why = f"the same {'frames and ' * framed}{told} under another file name: a copy of"
         why += " its file?"
     return StoreError(
         f"{shown} is already case {case.id} of {name!r}, stored as {stored} ({why}): nothing added",
@@ -1006,6 +1025,7 @@ def append_described(
         subjects=tuple(c.subject for c in clips),
         frames=tuple(c.frames for c in clips),
         skeletons=tuple(c.skeleton for c in clips),
+        poses=tuple(c.poses for c in clips),
     )
     _check_unique(clips, "training set")
     store = open_store(db, create=False)

@@ -123,9 +123,9 @@ def test_train_append_of_a_copy_under_another_name_is_refused_naming_the_case(
 ) -> None:
     """One stored clip's pose file copied byte for byte as ``copy/<activity>/renamed.npz``:
     its append is refused in one line naming the case it repeats, the case base unchanged
-    (before: added, 9 cases to 10, voting twice); the same with the stored case's frames
-    removed (a case base stored before they were kept); a copy with one joint moved 5 cm in
-    every frame is another clip, added."""
+    (before: added, 9 cases to 10, voting twice), told by its poses (since hunt 49d: by its
+    features before); the same with the stored case's frames removed (told by its poses
+    alone); a copy with one joint moved 5 cm in every frame is another clip, added."""
     import contextlib
     import dataclasses
     import shutil
@@ -145,14 +145,14 @@ def test_train_append_of_a_copy_under_another_name_is_refused_naming_the_case(
     line = refused(argv, tmp_path, capsys)
     assert line == (
         f"posecbr train: error: {db}: {copy} frames 0-{end - 1} is already case {case_id} of "
-        f"'default', stored as {original} frames 0-{end - 1} (the same frames and features "
+        f"'default', stored as {original} frames 0-{end - 1} (the same frames and poses "
         "under another file name: a copy of its file?): nothing added"
     )
     with contextlib.closing(sqlite3.connect(db)) as con, con:
         con.execute("UPDATE cases SET frame_start = NULL, frame_end = NULL")
     line = refused(argv, tmp_path, capsys)
     assert line.endswith(
-        f"is already case {case_id} of 'default', stored as {original} (the same features "
+        f"is already case {case_id} of 'default', stored as {original} (the same poses "
         "under another file name: a copy of its file?): nothing added"
     )
     seq = load_pose(copy)

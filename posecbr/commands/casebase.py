@@ -129,6 +129,7 @@ def _upgrade(args: argparse.Namespace) -> int:
     from casebase_store import (
         SCHEMA_VERSION,
         in_wal_mode,
+        missing_columns,
         missing_indexes,
         roll_back_interrupted,
         shown_db,
@@ -140,11 +141,15 @@ def _upgrade(args: argparse.Namespace) -> int:
     rolled_back = roll_back_interrupted(args.db)  # a change a killed writer left half-made
     wal = file is not None and in_wal_mode(file)
     lacking = missing_indexes(args.db)
+    lacking_columns = missing_columns(args.db)
     found = upgrade_store(args.db)  # a writer: it also leaves WAL mode (posecbr 0.1's)
     journal = wal and file is not None and not in_wal_mode(file)
     converted = [f"from schema version {found} to {SCHEMA_VERSION}"] * (found != SCHEMA_VERSION)
     converted += ["from WAL mode to a rollback journal"] * journal
-    added = [name for name in lacking if name not in missing_indexes(args.db)]
+    added = [f"the index {name}" for name in lacking if name not in missing_indexes(args.db)]
+    if found == SCHEMA_VERSION:  # a conversion makes today's tables, these columns with them
+        now = missing_columns(args.db)
+        added += [f"the column {name}" for name in lacking_columns if name not in now]
     if args.json:
         _emit(
             {
@@ -166,8 +171,8 @@ def _upgrade(args: argparse.Namespace) -> int:
         print(f"{shown(shown_db(args.db))}: converted {', and '.join(converted)}")
     if added:
         print(
-            f"{shown(shown_db(args.db))}: added the index {', '.join(added)} of a newer"
-            " schema (no case changed)"
+            f"{shown(shown_db(args.db))}: added {' and '.join(added)} of a newer schema (no"
+            " case changed)"
         )
     if not (converted or added or rolled_back):
         print(f"{shown(shown_db(args.db))}: already schema version {SCHEMA_VERSION}, nothing to do")
