@@ -103,8 +103,10 @@ def _emit(doc: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from casebase_store import open_store, prepare_write
+    from casebase_store import EMPTY_DB, StoreError, open_store, prepare_write
 
+    if not str(args.db).strip():  # as open_store says it, before any action reads a path
+        raise StoreError(EMPTY_DB, "--db")
     if args.action == "upgrade":
         return _upgrade(args)
     if args.action == "copy":
