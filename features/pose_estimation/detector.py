@@ -118,6 +118,26 @@ def tiles(width: int, height: int, zoom: int = ZOOM) -> list[tuple[int, int, int
     return [(int(x), int(y), w, h) for y in ys for x in xs]
 
 
+def window_around(width: int, height: int, at: np.ndarray, zoom: int) -> tuple[int, int, int]:
+    """The square window ``(x, y, side)`` of a ``width`` x ``height`` frame the size of its
+    tiles at ``zoom`` (:func:`tiles`; at most the frame's shorter side), centred on ``at``
+    (x, y) and moved in to lie within the frame."""
+    side = min(int(np.ceil(max(width, height) / zoom)), width, height)
+    x = int(np.clip(round(float(at[0]) - side / 2), 0, width - side))
+    y = int(np.clip(round(float(at[1]) - side / 2), 0, height - side))
+    return x, y, side
+
+
+def same_person(found: Detection, others: list[Detection]) -> list[Detection]:
+    """Those of ``others`` that are ``found`` seen again: their boxes overlap its box by more
+    than :data:`MIN_SUPPRESSION_IOU`, as :func:`distinct` and the detector's own merging tell
+    one person seen twice."""
+    if not others:
+        return []
+    overlap = _iou(found.box, np.array([d.box for d in others])) > MIN_SUPPRESSION_IOU
+    return [d for d, same in zip(others, overlap, strict=True) if same]
+
+
 def shifted(found: list[Detection], x: int, y: int) -> list[Detection]:
     """Detections in a window at ``(x, y)`` of a frame, in the frame's pixels."""
     at = np.array([x, y], dtype=float)

@@ -7,7 +7,9 @@
    does not steal the track when it is re-acquired. When it finds nobody in the whole frame
    (or the landmark model finds no person where it pointed), it looks again in overlapping
    tiles of half the frame's size, then of a quarter (``detect_closer``): a person far from
-   the camera is too small for it in the whole frame.
+   the camera is too small for it in the whole frame. A person found only in the tiles of a
+   quarter counts when found again in a window of that size centred on them
+   (``found_again``): 35 such tiles give noise 35 chances to look like a person.
 2. The landmark model runs on the ROI (from the detection, or from the previous frame's
    auxiliary landmarks when tracking). If its person probability drops below
    ``min_tracking_confidence`` the track is dropped and the detector runs again on the SAME
@@ -166,21 +168,22 @@ class PoseEstimator:
         time_s: float,
         every_s: tuple[float, float],
         tiles_per_frame: int | None,
-    ) -> Iterator[list[det.Detection]]:
+    ) -> Iterator[tuple[bool, list[det.Detection]]]:
         """The detector's finds, search by search, each run only when the one before found
-        no person: the whole frame; the tiles of half its size, at most once in
-        ``every_s[0]`` seconds of frame time; those of a quarter, a sweep of them begun at
-        most once in ``every_s[1]`` and searched at most ``tiles_per_frame`` tiles a frame,
-        those of half counted (None: the whole sweep at once), so that no frame waits for
-        more detector runs than the limit: six on every frame with nobody in view would
-        leave a camera's frames behind, 28-35 an extract's far behind."""
-        yield self.detect(rgb)
+        no person, with whether they come from the finer tiles: the whole frame; the tiles
+        of half its size, at most once in ``every_s[0]`` seconds of frame time; those of a
+        quarter, a sweep of them begun at most once in ``every_s[1]`` and searched at most
+        ``tiles_per_frame`` tiles a frame, those of half counted (None: the whole sweep at
+        once), so that no frame waits for more detector runs than the limit: six on every
+        frame with nobody in view would leave a camera's frames behind, 28-35 an extract's
+        far behind."""
+        yield False, self.detect(rgb)
         width, height = rgb.shape[1], rgb.shape[0]
         budget = math.inf if tiles_per_frame is None else tiles_per_frame
         half = det.tiles(width, height)
         if half and self._due(det.ZOOM, time_s, every_s[0]):
             budget -= len(half)
-            yield self.detect_closer(rgb)
+            yield False, self.detect_closer(rgb)
         finer = det.tiles(width, height, det.FINER_ZOOM)
         if not finer or budget < 1:
             return
@@ -189,7 +192,24 @@ class PoseEstimator:
         start = self._finer_next
         stop = int(min(len(finer), start + budget))
         self._finer_next = stop % len(finer)
-        yield self.detect_closer(rgb, det.FINER_ZOOM, slice(start, stop))
+        yield True, self.detect_closer(rgb, det.FINER_ZOOM, slice(start, stop))
+
+    def found_again(self, rgb: np.ndarray, found: det.Detection) -> bool:
+        """Whether a person found in a finer tile is found again at a second look: the
+        detector on a window of the finer tiles' size centred on the find's hip point finds
+        the same person (:func:`.detector.same_person`) and the landmark model sees a person
+        there (its probability at least ``min_tracking_confidence``). The finer tiles look
+        at 35 windows of a 4:3 frame where the whole frame and the tiles of half look at 7,
+        each a chance for a pattern to look like a person to one look; a person stays a
+        person when the window moves, a pattern in noise seldom does."""
+        width, height = rgb.shape[1], rgb.shape[0]
+        x, y, side = det.window_around(width, height, found.keypoints[0], det.FINER_ZOOM)
+        seen = det.shifted(self.detect(rgb[y : y + side, x : x + side]), x, y)
+        for again in det.same_person(found, seen):
+            roi = lmk.roi_from_points(again.keypoints[0], again.keypoints[1])
+            if self.landmarks(rgb, roi).flag >= self.min_tracking_confidence:
+                return True
+        return False
 
     def landmarks(self, rgb: np.ndarray, roi: lmk.Roi) -> lmk.RawLandmarks:
         """The landmark model on ``roi`` of an RGB uint8 frame (no smoothing)."""
@@ -197,13 +217,36 @@ class PoseEstimator:
         outs = self._landmarker.run(self._lm_out, {self._lm_in: tensor})
         return lmk.decode(outs[0], outs[1], outs[2], outs[3], roi)
 
-    def _pick(self, found: list[det.Detection]) -> det.Detection | None:
-        if not found:
-            return None
+    def _ordered(self, found: list[det.Detection]) -> list[det.Detection]:
+        """``found`` nearest the person last tracked first (best first when there is none)."""
         if self._last_centre is None:
-            return found[0]
-        dist = [float(np.hypot(*(d.keypoints[0] - self._last_centre))) for d in found]
-        return found[int(np.argmin(dist))]
+            return found
+        at = self._last_centre
+        return sorted(found, key=lambda d: float(np.hypot(*(d.keypoints[0] - at))))
+
+    def _find(
+        self,
+        rgb: np.ndarray,
+        time_s: float,
+        every_s: tuple[float, float],
+        tiles_per_frame: int | None,
+        score: float,
+    ) -> tuple[lmk.RawLandmarks | None, float]:
+        """The person the searches (:meth:`_searches`) find, if any, and the landmark
+        model's person probability on the last find looked at (``score`` when none). Of each search
+        the find nearest the person last tracked (the best when there is none) is looked
+        at; of the finer tiles' search every find in that order until one is found again
+        (:meth:`found_again`): a pattern in noise may be surer than a small person
+        elsewhere."""
+        for finer, found in self._searches(rgb, time_s, every_s, tiles_per_frame):
+            for best in self._ordered(found)[: None if finer else 1]:
+                raw = self.landmarks(rgb, lmk.roi_from_points(best.keypoints[0], best.keypoints[1]))
+                score = raw.flag
+                if raw.flag >= self.min_tracking_confidence and (
+                    not finer or self.found_again(rgb, best)
+                ):
+                    return raw, score
+        return None, score
 
     def process(
         self,
@@ -232,19 +275,10 @@ class PoseEstimator:
             if raw.flag < self.min_tracking_confidence:
                 raw = None
                 self._reset_filters()
-        detected = False
+        detected = raw is None
         if raw is None:
-            detected = True
             every = (closer_every_s, finer_every_s)
-            for found in self._searches(rgb, time_s, every, tiles_per_frame):
-                best = self._pick(found)
-                if best is None:
-                    continue
-                raw = self.landmarks(rgb, lmk.roi_from_points(best.keypoints[0], best.keypoints[1]))
-                score = raw.flag
-                if raw.flag >= self.min_tracking_confidence:
-                    break
-                raw = None
+            raw, score = self._find(rgb, time_s, every, tiles_per_frame, score)
         if raw is None:
             self._roi = None
             self._reset_filters()
