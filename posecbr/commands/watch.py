@@ -44,6 +44,7 @@ import json
 import math
 import queue
 import signal
+import statistics
 import sys
 import threading
 import time
@@ -656,7 +657,7 @@ class Watcher:
             if self.live is None:
                 if self.fps is None:
                     waiting.append(frame)
-                    self.fps = _frame_rate(waiting)
+                    self.fps = _frame_rate([f.time_s for f in waiting])
                     if self.fps is None:
                         continue
                 self.live = LiveSegmenter(
@@ -963,6 +964,23 @@ class Latencies:
         return below + (at - low) * (above - below)
 
 
+RATE_CHANGE = 0.2
+"""How far off the rate it began with (as a share of it) a live source's rate over its
+latest frames (:data:`CHANGE_WINDOW_S`) must be, for :data:`CHANGE_HOLD_S`, to be taken as
+changed (:meth:`Regrid._rate_changed`): a camera's auto exposure halves it (50 %); jitter of
+20 % on each frame interval moves the rate over 15 of them by some 3 %."""
+CHANGE_WINDOW_S = 0.5
+"""Over how many seconds of a live source's latest frames its rate now is measured
+(:func:`_frame_rate`): a one-off event, a hiccup (a quarter second without a frame; longer
+is a stall, left out) or a burst (frames read at once after the reader was held up), is in
+the window for no longer than it is long."""
+CHANGE_HOLD_S = 0.8
+"""How long (s) a live source's rate must stay off by :data:`RATE_CHANGE` to be taken as
+changed: longer than a one-off hiccup or burst stays off in the window (half a second and
+the hiccup's quarter); a camera that halves its rate is followed by the wall clock some
+1.1 s after (the rate over the window off by a fifth 0.3 s after, then held): 0.55 s of
+movement on the grid, the segments after it timed that much early."""
+
 RATE_SLACK = 0.05
 """How far off a live source's rate, measured over its first second, may be: the frames'
 lead over the clock it keeps (:meth:`Regrid._stalled`) is forgiven at up to this share of the
@@ -972,16 +990,24 @@ held up, is another thing, kept for the next stall for seconds (8 frames at 30 f
 
 
 class Regrid:
-    """A file's frames as the live segmenter takes them: evenly spaced at ``fps``. While the
-    frames' own times (``video_time_s``) lie at index / fps (a constant rate, or a live
-    source: no times), each frame is passed as it is (a live source's stalls left missing:
-    :meth:`_stalled`). From the first frame that strays (a
-    variable frame rate: see :mod:`features.pose_estimation.video`), the poses are put on the
-    grid k / fps as the frames come, each grid time linearly between the frames around it
-    (a joint missing in either stays missing; every joint missing between two frames further
-    apart than :func:`features.pose_estimation.video.bridge_limit_s`: a gap in the video, no
-    motion made up for it, as ``extract`` leaves it; :attr:`absent` says which), and the user
-    is told once on stderr, and once more at each such gap."""
+    """A file's or a live source's frames as the live segmenter takes them: evenly spaced at
+    ``fps``. While the frames' own times (``video_time_s``) lie at index / fps (a constant
+    rate), or a live source's frames come at ``fps`` (the rate measured over its first
+    second), each frame is passed as it is (a live source's stalls left missing:
+    :meth:`_stalled`). From the first frame of a file that strays (a variable frame rate:
+    see :mod:`features.pose_estimation.video`), or once a live source's rate over its latest
+    frames has been off ``fps`` by more than :data:`RATE_CHANGE` for
+    :data:`CHANGE_HOLD_S` (a webcam's auto exposure halving it as the light falls, a
+    network stream's rate sagging: :meth:`_rate_changed`), the poses are put on the grid
+    k / fps as the frames come, by their own times (a live source's: the wall clock's, from
+    the frame it changed at), each grid time linearly between the frames around it (a joint
+    missing in either stays missing; every joint missing between two frames further apart
+    than :func:`features.pose_estimation.video.bridge_limit_s`: a gap in the video, or the
+    stream stalled, no motion made up for it, as ``extract`` leaves it; :attr:`absent` says
+    which), and the user is told once on stderr, and once more at each such gap. Before, a
+    live source's frames were counted at the rate of its first second for good: a camera
+    that fell from 30 to 15 fps had each frame still count 1/30 s, its windows holding 4 s
+    of movement and its segments timed at half the wall clock's speed."""
 
     def __init__(self, fps: float, source: str) -> None:
         self.fps, self.source = fps, source
@@ -992,26 +1018,30 @@ class Regrid:
         self.zero_s = math.nan  # when grid frame 0 was, by the clock stalls are counted by
         self.absent: list[bool] = []  # of the grid times the last take gave: inside a gap
         self.images: list[Any] = []  # and their image landmarks (the pose's jumps)
+        # a live source's latest frame times (s), a second of them: its rate now
+        self.recent: collections.deque[float] = collections.deque()
+        self.off_since = math.nan  # since when (time_s) that rate has been off fps
+        self.by_clock = False  # a live source's frames put on the grid by the wall clock
+        self.origin_s = math.nan  # then: the wall clock's time of grid frame 0
 
     def take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """(world, visibility, the frame on screen then) for each grid time up to this
         frame's."""
-        import math
-
-        import numpy as np
-
-        from features.pose_estimation.video import blend, bridged_weight, gap_words, strays
+        from features.pose_estimation.video import strays
 
         t = frame.video_time_s
         self.absent, self.images = [], []
         if self.prev is None:
             self.first_s = self.zero_s = frame.time_s
-        if not self.resampling and not math.isfinite(t):  # a live source, or no frame times
+        if not (self.resampling or math.isfinite(t)) and not self._rate_changed(frame):
+            # a live source (or a file without frame times) at the rate it began with
             out = self._stalled(frame)
             self.prev, self.k = frame, self.k + len(out) + 1
             self.absent, self.images = [True] * len(out) + [False], [None] * len(out)
             self.images.append(_image(frame))
             return [*out, (frame.seen_world, frame.visibility, frame)]
+        if self.by_clock:  # a live source whose rate changed, at this frame or before
+            return self._resampled(frame, frame.time_s - self.origin_s)
         if not self.resampling:
             if not strays(t, frame.index, self.fps):
                 self.prev, self.k = frame, frame.index + 1
@@ -1024,11 +1054,21 @@ class Regrid:
                 f" {self.fps:g} fps as they come",
                 file=sys.stderr,
             )
+        return self._resampled(frame, t)
+
+    def _resampled(self, frame: Any, t: float) -> list[tuple[Any, Any, Any]]:
+        """:meth:`take` of a frame at ``t`` s on the grid's clock (a file's own time, a live
+        source's wall clock from :attr:`origin_s`) once resampling: the grid times from
+        :attr:`k` up to ``t``, each between the frame before and this one."""
+        import numpy as np
+
+        from features.pose_estimation.video import blend, bridged_weight, gap_words
+
         prev = self.prev
-        if prev is None or not math.isfinite(t) or t <= prev.video_time_s:
+        start = self._grid_s(prev) if prev is not None else math.nan
+        if prev is None or not math.isfinite(t) or t <= start:
             return []  # no time to place it by
         out = []
-        start = prev.video_time_s
         while self.k / self.fps <= t + 1e-9:
             w = bridged_weight(self.k / self.fps, start, t, self.fps)
             self.absent.append(bool(np.isnan(w)))
@@ -1039,9 +1079,48 @@ class Regrid:
             out.append((world, vis, frame if w >= 1.0 - 1e-9 else prev))
             self.k += 1
         self.prev = frame
-        if any(self.absent):
+        if any(self.absent) and not self.by_clock:
             print(f"note: {self.source}: {gap_words([(start, t)])}", file=sys.stderr)
+        elif any(self.absent):  # as :meth:`_stalled` says it, from the first frame
+            words = gap_words([(prev.time_s - self.first_s, frame.time_s - self.first_s)])
+            print(f"note: {self.source}: the stream stalled: {words}", file=sys.stderr)
         return out
+
+    def _grid_s(self, frame: Any) -> float:
+        """When ``frame`` lies on the grid's clock once resampling (s): a file's own time, a
+        live source's wall clock from :attr:`origin_s`."""
+        return float(frame.time_s - self.origin_s if self.by_clock else frame.video_time_s)
+
+    def _rate_changed(self, frame: Any) -> bool:
+        """Whether a live source's frames, from ``frame`` on, are to be put on the grid by the
+        wall clock: its rate over its latest frames (:data:`CHANGE_WINDOW_S`,
+        :func:`_frame_rate` of their times: a stall left out) has been off ``fps`` by more
+        than :data:`RATE_CHANGE` for
+        :data:`CHANGE_HOLD_S` (not a hiccup, nor jitter). Then the grid's clock is set
+        so that ``frame`` lies on the next grid time (:attr:`origin_s`), and the user is
+        told once on stderr, from which rate to which."""
+        recent = self.recent
+        recent.append(frame.time_s)
+        while len(recent) > 2 and recent[1] <= frame.time_s - CHANGE_WINDOW_S:
+            recent.popleft()
+        rate = _frame_rate(list(recent), CHANGE_WINDOW_S)
+        if rate is None or abs(rate / self.fps - 1.0) <= RATE_CHANGE:
+            self.off_since = math.nan
+            return False
+        if not frame.time_s - self.off_since >= CHANGE_HOLD_S:  # NaN: off from now
+            if math.isnan(self.off_since):
+                self.off_since = frame.time_s
+            return False
+        self.resampling = self.by_clock = True
+        self.origin_s = frame.time_s - self.k / self.fps
+        recent.clear()
+        print(
+            f"note: {self.source}: the frame rate changed from {self.fps:.3g} to {rate:.3g} fps"
+            f" at {frame.time_s - self.first_s:.1f} s: poses resampled to {self.fps:.3g} fps by"
+            " the clock as they come",
+            file=sys.stderr,
+        )
+        return True
 
     def _stalled(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """The grid times a live source sent no frame for before ``frame``, each (missing
@@ -1091,10 +1170,12 @@ def _image(frame: Any) -> Any:
     return None if image is None else np.asarray(image, dtype=float)
 
 
-def _frame_rate(frames: list[Any]) -> float | None:
-    """A live source's frame rate from its first second of frame intervals (None: not yet
-    known), an interval longer than :func:`features.pose_estimation.video.bridge_limit_s`
-    at the median interval's rate (three of them, at least a quarter second) left out: no
+def _frame_rate(times: list[float], least_s: float = 1.0) -> float | None:
+    """A live source's frame rate from ``least_s`` seconds of its frames' times (s; its
+    first second, or its latest half second: :meth:`Regrid._rate_changed`), None when they
+    span less (not yet known), an interval longer than
+    :func:`features.pose_estimation.video.bridge_limit_s` at the median interval's rate
+    (three of them, at least a quarter second) left out: no
     frame was sent then (a webcam's wait between its first frame and the next, a stall),
     as :meth:`Regrid._stalled` leaves it missing. Before, a webcam that sent its second
     frame 0.6 s after its first and then 30 a second was measured at 13 fps, and every
@@ -1103,10 +1184,11 @@ def _frame_rate(frames: list[Any]) -> float | None:
 
     from features.pose_estimation.video import BRIDGE_FRAMES, MAX_BRIDGE_S
 
-    gaps = np.diff([f.time_s for f in frames])
+    gaps = np.diff(times)
     if not len(gaps):
         return None
-    sent = gaps[gaps <= max(MAX_BRIDGE_S, BRIDGE_FRAMES * float(np.median(gaps)))]
-    if sent.sum() < 1.0:
+    median = statistics.median(gaps.tolist())  # numpy's takes ten times as long: every frame
+    sent = gaps[gaps <= max(MAX_BRIDGE_S, BRIDGE_FRAMES * median)]
+    if sent.sum() < least_s:
         return None
     return float(len(sent) / sent.sum())

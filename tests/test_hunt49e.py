@@ -1,0 +1,71 @@
+"""Hunt 49e: ``watch`` of a live source whose frame rate changes.
+
+- A live source's rate was measured over its first second and kept for good: a webcam whose
+  auto exposure halves its rate as the light falls (30 to 15 fps) had each frame still
+  count 1/30 s, its windows holding 4 s of movement and its segments timed at half the
+  wall clock's speed. Now, once its rate over the latest half second has stayed off by more
+  than a fifth for 0.8 s, its poses are put on the grid by the wall clock
+  (:meth:`posecbr.commands.watch.Regrid._rate_changed`), said once on stderr.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from posecbr.commands.watch import Regrid
+
+
+def _frame(index: int, time_s: float) -> SimpleNamespace:
+    """A live source's frame read at ``time_s`` (the wall clock's), every coordinate of its
+    pose ``time_s``: a grid time's pose, blended linearly between two frames, is the wall
+    clock's time there."""
+    return SimpleNamespace(
+        index=index,
+        time_s=time_s,
+        video_time_s=float("nan"),
+        seen_world=np.full((33, 3), time_s),
+        visibility=np.ones(33),
+        pose=SimpleNamespace(image=np.zeros((33, 5))),
+    )
+
+
+def test_a_camera_that_halves_its_rate_is_followed_by_the_wall_clock(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A camera at 30 fps (each interval off by up to 20 %, at random) for 10 s, with a
+    one-off hiccup of a quarter second at 5 s, then at 15 fps for 10 s (its auto exposure as
+    the light falls): the frames before the fall are passed one to a grid time, as they
+    come (neither the jitter nor the hiccup is a change of rate); over the last 5 s, the
+    75 frames at 15 fps give 150 grid times, each 1/30 s of the wall clock after the one
+    before (a pose halfway between two frames, blended, at the times between), and the
+    grid, at 30 fps, ends within 1 s of the 20 s the camera ran (the hiccup's quarter
+    second, joined as before, and the 1.1 s or so of frames at the half rate before the
+    change is taken, 0.55 s of movement on the grid). Before, the 75 frames gave 75 grid
+    times 1/15 s apart, and the grid ended at 15 s."""
+    rng = np.random.default_rng(49)
+    times = [0.0]
+    while times[-1] < 10.0 - 1.0 / 30.0:
+        hiccup = 5.0 <= times[-1] < 5.0 + 1.0 / 30.0
+        times.append(times[-1] + (0.25 if hiccup else rng.uniform(0.8, 1.2) / 30.0))
+    fell = len(times)
+    times += [times[-1] + (j + 1) / 15.0 for j in range(150)]
+    grid = Regrid(30.0, "0")
+    values: list[float] = []
+    given: list[int] = []
+    for i, t in enumerate(times):
+        taken = grid.take(_frame(i, t))
+        given.append(len(taken))
+        values += [float(world[0, 0]) for world, _vis, _shown in taken]
+    assert given[:fell] == [1] * fell  # one grid time a frame, the frame's own pose
+    assert values[:fell] == times[:fell]
+    last = values[-150:]
+    assert sum(given[-75:]) == 150
+    np.testing.assert_allclose(np.diff(last), 1.0 / 30.0, atol=1e-9)
+    assert last[-1] == times[-1]
+    assert 19.0 <= len(values) / 30.0 <= times[-1] + 1.0 / 30.0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "note: 0: the frame rate changed from 30 to 15 fps" in err
