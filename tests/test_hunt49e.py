@@ -1,4 +1,5 @@
-"""Hunt 49e: ``watch`` of a live source whose frame rate changes.
+"""Hunt 49e: ``watch`` of a live source whose frame rate changes; an unfinished MP4 served
+over HTTP.
 
 - A live source's rate was measured over its first second and kept for good: a webcam whose
   auto exposure halves its rate as the light falls (30 to 15 fps) had each frame still
@@ -6,16 +7,23 @@
   wall clock's speed. Now, once its rate over the latest half second has stayed off by more
   than a fifth for 0.8 s, its poses are put on the grid by the wall clock
   (:meth:`posecbr.commands.watch.Regrid._rate_changed`), said once on stderr.
+- An MP4 still being recorded (frames, no index), served over HTTP, was "cannot open camera
+  or stream"; a file here is refused as unfinished: so is the served one now.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from features.errors import DataError
+from features.pose_estimation import stream_poses
 from posecbr.commands.watch import Regrid
+from tests.test_hunt34c import _Quiet, _serving, _Unsized
+from tests.test_hunt48h1 import UNFINISHED, _recording
 
 
 def _frame(index: int, time_s: float) -> SimpleNamespace:
@@ -69,3 +77,35 @@ def test_a_camera_that_halves_its_rate_is_followed_by_the_wall_clock(
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert "note: 0: the frame rate changed from 30 to 15 fps" in err
+
+
+class _Growing(_Unsized):
+    """Sends a file under ``/growing/`` as a file still being written is sent (no length
+    stated: its end is the stream's), any other as it is (its length stated)."""
+
+    def do_GET(self) -> None:  # noqa: N802 (the base's name)
+        if self.path.startswith("/growing/"):
+            self.path = self.path.removeprefix("/growing")
+            super().do_GET()
+        else:
+            _Quiet.do_GET(self)
+
+
+def test_an_mp4_still_being_recorded_served_over_http_says_so(tmp_path: Path) -> None:
+    """The 12-frame MP4 as it stood before its recorder wrote the index (tests/test_hunt48h1:
+    its frames' box stating size 0, a 64-bit 0, or its final size), served over HTTP with
+    its length stated and as a file being written is sent (no length: the stream ends where
+    the file does): refused as unfinished, as the file here is, naming the URL (it was
+    "cannot open camera or stream")."""
+    folder = tmp_path / "served"
+    folder.mkdir()
+    for header in ("zero", "large", "sized"):
+        (folder / f"{header}.mp4").write_bytes(_recording(tmp_path, header)[1])
+    words = UNFINISHED.replace("its frames", "the served file's frames")
+    with _serving(folder, _Growing) as address:
+        for sent in ("", "/growing"):
+            for header in ("zero", "large", "sized"):
+                url = f"{address}{sent}/{header}.mp4"
+                with pytest.raises(DataError) as refused:
+                    next(stream_poses(url, timeout_s=5.0))
+                assert str(refused.value) == f"{url}: {words}"

@@ -73,11 +73,7 @@ def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
                 f"truncated MP4/MOV: the file ends at byte {size:,}, inside a box{runs}", path
             )
         if unindexed:
-            raise DataError(
-                "unfinished MP4/MOV: its frames have no index (no moov box): still being"
-                " recorded, or the recording stopped before it was closed",
-                path,
-            )
+            raise DataError(UNFINISHED_MP4.format("its"), path)
     if head.startswith((EBML_START, FLV_START)):
         try:
             with open(path, "rb") as fh:
@@ -88,21 +84,35 @@ def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
             raise DataError(cut, path)
 
 
+UNFINISHED_MP4 = (
+    "unfinished MP4/MOV: {} frames have no index (no moov box): still being recorded, or the"
+    " recording stopped before it was closed"
+)
+"""What an MP4/MOV file whose frames have no index (:func:`mp4_unindexed`) is, its owner
+("its", "the served file's") put in."""
+
+
 def cut_short(fh: Any, size: int, head: bytes, what: str) -> str | None:
     """Why an MP4/MOV, Matroska/WebM or FLV file of ``size`` bytes whose first bytes are ``head``,
     read from ``fh`` at its start (forward only: ``seek`` ahead, ``read``, ``tell``), is cut
-    short, in words naming it ``what`` ("the file"), or None when it is not or cannot be
-    judged (no such file). MP4/MOV (:func:`mp4_walk`): it ends inside a box: FFmpeg decodes
-    what it has of the last frame as whole. Matroska/WebM (:func:`matroska_walk`): it ends inside an
+    short or unfinished, in words naming it ``what`` ("the file"), or None when it is not or
+    cannot be judged (no such file). MP4/MOV (:func:`mp4_walk`): it ends inside a box: FFmpeg
+    decodes what it has of the last frame as whole; or its frames have no index (no moov
+    box, nor a fragment's moof: still being recorded, as :func:`mp4_unindexed` judges a
+    file here): FFmpeg cannot open it. Matroska/WebM (:func:`matroska_walk`): it ends inside an
     element: FFmpeg reads the frames before the cut as the whole video when the file states
     no duration, or no frame rate, as a browser's WebM. FLV (:func:`flv_end`): it ends
     inside a tag, or its tags end more than :data:`FLV_SLACK_S` before the duration its
     header states (cut where a tag ends): its frames are counted by their packets (the
     sound may run on after the last frame: :func:`counted_by_duration`)."""
     if is_mp4(head):  # a served MP4/MOV file (a file here: refuse_cut)
-        end = mp4_walk(fh, size)
-        if end is None or end <= size:
+        kinds: list[bytes] = []
+        end = mp4_walk(fh, size, kinds)
+        if end is None:
             return None
+        if end <= size:
+            unindexed = b"mdat" in kinds and not {b"moov", b"moof"} & set(kinds)
+            return UNFINISHED_MP4.format(f"{what}'s") if unindexed else None
         runs = f" that runs to byte {end:,}" if end > size + 1 else "'s header"
         return f"truncated MP4/MOV: {what} ends at byte {size:,}, inside a box{runs}"
     if head.startswith(EBML_START):
@@ -146,13 +156,14 @@ def is_mp4(head: bytes) -> bool:
     return len(head) >= 8 and head[4:8] in MP4_BOXES and int.from_bytes(head[:4], "big") != 0
 
 
-def mp4_walk(fh: Any, size: int) -> int | None:
+def mp4_walk(fh: Any, size: int, kinds: list[bytes] | None = None) -> int | None:
     """Where the top-level boxes of an MP4/MOV file of ``size`` bytes, read from ``fh`` at
     its start, end as their headers state (bytes): beyond ``size``, the file is cut short
     (``size + 1``: it ends inside a box's header). A box stating size 0 runs to the file's
     end. None where the walk meets bytes that are no box header (a name not of printable
     letters, a size shorter than its header: padding, damage) or a box not of
-    :data:`MP4_TOP_BOXES` (a maker's trailer): not judged."""
+    :data:`MP4_TOP_BOXES` (a maker's trailer): not judged. ``kinds``: each box's name is
+    added to it, as the walk meets it."""
     at = 0
     while at < size:
         fh.seek(at)
@@ -162,13 +173,15 @@ def mp4_walk(fh: Any, size: int) -> int | None:
         stated, kind = int.from_bytes(header[:4], "big"), header[4:8]
         if kind not in MP4_TOP_BOXES:
             return None
+        if kinds is not None:
+            kinds.append(kind)
         length = 8
         if stated == 1:  # a 64-bit size follows the name
             large = fh.read(8)
             if len(large) < 8:
                 return size + 1
             stated, length = int.from_bytes(large, "big"), 16
-        elif stated == 0:
+        if stated == 0:  # to the file's end (a 64-bit 0 too: a recorder reserved one)
             return size
         if stated < length:
             return None
@@ -176,29 +189,41 @@ def mp4_walk(fh: Any, size: int) -> int | None:
     return at
 
 
-def mp4_unindexed(fh: Any, size: int) -> bool:
+UNSIZED_LOOK = 1 << 20
+"""How far into an MP4/MOV stream whose length is not stated (a server's, sending a file as
+it is written) :func:`mp4_unindexed` walks (bytes): the boxes before the frames' take some
+hundred bytes; frames' boxes that end within it and no more (a recording stopped) are
+judged too."""
+
+
+def mp4_unindexed(fh: Any, size: int | None) -> bool:
     """Whether an MP4/MOV file of ``size`` bytes, read from ``fh``, holds frames (a top-level
     mdat box) and no index for them (no moov box, nor a fragment's moof, before the walk ends):
     a recording still being written (its recorder writes the index when it stops, and the
     frames' box states size 0, or a 64-bit size 0, "to the file's end", until then) or one
     stopped before it was closed. FFmpeg cannot open it. False where the walk meets bytes
-    :func:`mp4_walk` does not judge."""
+    :func:`mp4_walk` does not judge. ``size`` None: a stream of no stated length, read
+    onward from ``fh`` (a server's), walked within its first :data:`UNSIZED_LOOK` bytes to
+    a box running to its end or to its end: False when neither comes within them."""
     at, frames = 0, False
-    while at + 8 <= size:
+    while at + 8 <= (UNSIZED_LOOK if size is None else size):
         fh.seek(at)
-        header = fh.read(16)
+        header = fh.read(8)  # then the 64-bit size, if stated: forward only, as it comes
+        if size is None and len(header) < 8:
+            return frames and not header  # the stream ends where the next box would begin
         stated, kind, length = int.from_bytes(header[:4], "big"), header[4:8], 8
         if kind in (b"moov", b"moof") or kind not in MP4_TOP_BOXES:
             return False
         frames = frames or kind == b"mdat"
-        if stated == 1 and len(header) == 16:
-            stated, length = int.from_bytes(header[8:16], "big"), 16
+        large = fh.read(8) if stated == 1 else b""
+        if len(large) == 8:
+            stated, length = int.from_bytes(large, "big"), 16
         if stated == 0:  # runs to the file's end
-            break
+            return frames
         if stated < length:
             return False
         at += stated
-    return frames
+    return frames and size is not None  # not judged: no end within the look
 
 
 MOOV_LIMIT = 256 << 20

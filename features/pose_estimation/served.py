@@ -13,9 +13,11 @@ from typing import Any
 from .containers import (
     EBML_START,
     FLV_START,
+    UNFINISHED_MP4,
     counted_by_duration,
     cut_short,
     is_mp4,
+    mp4_unindexed,
     segment_end,
 )
 
@@ -144,14 +146,17 @@ def served_whole_by_duration(url: str, timeout_s: float | None = None) -> bool:
 def served_cut(
     url: str, timeout_s: float | None = None, alive: Callable[[], None] | None = None
 ) -> str | None:
-    """Why an MP4/MOV, Matroska/WebM or FLV file an HTTP(S) server gives whole is cut short,
-    in one line (:func:`.containers.cut_short`: it ends inside a box, an element or a tag, as
-    a file here is refused for; an MP4 cut inside its last frame decodes as whole, one cut
-    before its index, at its end, does not open), or None: not cut, no such file, or not to
-    be asked (no length stated, no answer within ``timeout_s``: FFmpeg's 30 s when None). A
-    browser's WebM without a duration states no frame count: its frames before the cut were
-    watched as the whole file. The file is read once more from its start to its end, walked
-    as it comes (no copy kept); a server that sends less than the length it states has cut it too.
+    """Why an MP4/MOV, Matroska/WebM or FLV file an HTTP(S) server gives whole is cut short
+    or unfinished, in one line (:func:`.containers.cut_short`: it ends inside a box, an
+    element or a tag, or its frames have no index, as a file here is refused for; an MP4 cut
+    inside its last frame decodes as whole, one cut before its index, at its end, or still
+    being recorded, does not open), or None: not cut, no such file, or not to be asked (no
+    answer within ``timeout_s``: FFmpeg's 30 s when None). A browser's WebM without a
+    duration states no frame count: its frames before the cut were watched as the whole
+    file. The file is read once more from its start to its end, walked as it comes (no copy
+    kept); a server that sends less than the length it states has cut it too. A server that
+    states no length (sending a file as it is written) is asked only whether an MP4/MOV's
+    frames have an index (:func:`.containers.mp4_unindexed`, within the stream's start).
     ``alive``: called as each part of the file comes (a long file read again is no stall)."""
     import http.client
 
@@ -160,8 +165,12 @@ def served_cut(
         with opener.open(bare, timeout=timeout_s or 30.0) as answer:
             length = (answer.headers.get("Content-Length") or "").strip()
             head = answer.read(8)  # an MP4/MOV file's first box's size and name
-            if answer.status != 200 or not length.isdigit():
+            if answer.status != 200:
                 return None
+            if not length.isdigit():  # no end to walk to: an MP4 being recorded, sent so?
+                unsized = _Onward(answer, head, 0, alive)
+                unindexed = is_mp4(head) and mp4_unindexed(unsized, None)
+                return UNFINISHED_MP4.format("the served file's") if unindexed else None
             if not (head.startswith((EBML_START, FLV_START)) or is_mp4(head)):
                 return None
             body = _Onward(answer, head, int(length), alive)
