@@ -9,18 +9,27 @@ over HTTP.
   (:meth:`posecbr.commands.watch.Regrid._rate_changed`), said once on stderr.
 - An MP4 still being recorded (frames, no index), served over HTTP, was "cannot open camera
   or stream"; a file here is refused as unfinished: so is the served one now.
+- SIGTERM sometimes ended a watch with "terminate called without an active exception" (exit
+  134) after its last line: the end of the watch waited 2 s for the reader thread, and on a
+  machine so loaded that a frame took longer, Python shut down with the thread inside
+  onnxruntime. The end of a watch now closes the pose estimator, waiting for the frame in
+  hand, and no frame is begun after (:meth:`PoseEstimator.close`).
 """
 
 from __future__ import annotations
 
+import threading
+import time
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+import features.pose_estimation.tracker as tracker
 from features.errors import DataError
-from features.pose_estimation import stream_poses
+from features.pose_estimation import PoseEstimator, stream_poses
+from posecbr.commands import watch
 from posecbr.commands.watch import Regrid
 from tests.test_hunt34c import _Quiet, _serving, _Unsized
 from tests.test_hunt48h1 import UNFINISHED, _recording
@@ -109,3 +118,44 @@ def test_an_mp4_still_being_recorded_served_over_http_says_so(tmp_path: Path) ->
                 with pytest.raises(DataError) as refused:
                     next(stream_poses(url, timeout_s=5.0))
                 assert str(refused.value) == f"{url}: {words}"
+
+
+def test_the_end_of_a_watch_waits_for_the_pose_model_and_begins_no_frame_after(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A live source read in the watch's reader thread, each frame taking the pose model
+    0.2 s (a machine so loaded that the process gets little of it), the watch ended while a
+    frame is in the model and the reader's join given 0.02 s (2 s, shorter than such a
+    frame): when the end returns, every frame begun is finished (no thread is inside the
+    model as Python shuts down, which aborted the process: "terminate called without an
+    active exception") and none begins after it. Before, the end returned with the frame
+    still in the model, and the reader went on to the next."""
+    stub = SimpleNamespace(name="x")
+    session = SimpleNamespace(get_inputs=lambda: [stub], get_outputs=lambda: [stub])
+    monkeypatch.setattr(tracker, "make_session", lambda *_args: session)
+    estimator = PoseEstimator()
+    log: list[str] = []
+    inside = threading.Event()
+
+    def model(*_args: object) -> tracker.FramePose:
+        log.append("begun")
+        inside.set()
+        time.sleep(0.2)
+        log.append("done")
+        return tracker.FramePose.missing(True)
+
+    monkeypatch.setattr(estimator, "_process", model)
+    monkeypatch.setattr(watch, "JOIN_S", 0.02)
+
+    def camera() -> object:
+        while True:
+            yield estimator.process(np.zeros((8, 8, 3), dtype=np.uint8))
+
+    frames = watch.frames_in_background(camera(), 5.0, model=estimator)
+    next(frames)  # the first frame comes; the second is in the model
+    assert inside.wait(5.0)
+    frames.close()
+    assert log[-1] == "done"
+    ended = len(log)
+    time.sleep(0.1)  # the reader went on at once
+    assert len(log) == ended

@@ -27,6 +27,7 @@ right-handed (determinant +1), origin at the hip centre, metres.
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -79,6 +80,10 @@ class FramePose:
         )
 
 
+class EstimatorClosed(Exception):
+    """:meth:`PoseEstimator.process` after :meth:`PoseEstimator.close`."""
+
+
 class PoseEstimator:
     """Stateful BlazePose (full) estimator; feed frames in order with :meth:`process`.
 
@@ -112,6 +117,8 @@ class PoseEstimator:
         self._aux_filter = OneEuroFilter(AUX_FILTER)
         self._vis_filter = LowPassFilter(VISIBILITY_ALPHA)
         self._frame = 0
+        self._busy = threading.Lock()  # held while process runs the models on a frame
+        self._closed = False
         self.reset()
 
     def reset(self) -> None:
@@ -263,7 +270,32 @@ class PoseEstimator:
         are searched (:meth:`detect_closer`) at most once in that many seconds of frame time
         (0: every such frame); ``finer_every_s``: with nobody found in those either, the tiles
         of a quarter (:data:`.detector.FINER_ZOOM`), searched at most ``tiles_per_frame``
-        tiles a frame, both sizes counted (None: all)."""
+        tiles a frame, both sizes counted (None: all). :class:`EstimatorClosed` once
+        :meth:`close` was called."""
+        with self._busy:
+            if self._closed:
+                raise EstimatorClosed("the pose estimator was closed")
+            return self._process(rgb, time_s, closer_every_s, finer_every_s, tiles_per_frame)
+
+    def close(self, timeout_s: float) -> None:
+        """No frame processed from now on (:meth:`process` raises :class:`EstimatorClosed`),
+        the one another thread is processing finished first (waited for up to
+        ``timeout_s``): a thread left inside onnxruntime as Python shuts down aborts the
+        process ("terminate called without an active exception", exit 134)."""
+        got = self._busy.acquire(timeout=timeout_s)
+        self._closed = True
+        if got:
+            self._busy.release()
+
+    def _process(
+        self,
+        rgb: np.ndarray,
+        time_s: float | None,
+        closer_every_s: float,
+        finer_every_s: float,
+        tiles_per_frame: int | None,
+    ) -> FramePose:
+        """:meth:`process`, the models' lock held."""
         if time_s is None:
             time_s = self._frame / 30.0
         self._frame += 1

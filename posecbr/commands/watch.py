@@ -245,7 +245,16 @@ HALT_LOOK_S = 0.1
 
 JOIN_S = 2.0
 """How long the end of a watch waits for the reader thread to finish the frame it is reading
-(a pose estimate: tens of milliseconds; a stalled network read may never return)."""
+once the pose model is idle (:data:`MODEL_WAIT_S`; a stalled network read may never
+return)."""
+
+MODEL_WAIT_S = 60.0
+"""How long the end of a watch waits for the pose model to finish the frame the reader
+thread gave it (tens of milliseconds on an idle machine; seconds where the process gets
+little of a loaded machine's time): a thread left inside onnxruntime as Python shuts down
+aborts the process ("terminate called without an active exception", exit 134). Waited for
+:data:`JOIN_S` alone, a watch stopped by SIGTERM on a machine so loaded that a frame took
+longer aborted so after its last line."""
 
 
 def due_s(index: int, video_time_s: float, fps: float, speed: float) -> float:
@@ -313,8 +322,11 @@ class Alive:
 class _Reader:
     """A stream's frames read in a thread into a small queue of (kind, item): ("frame", f),
     then ("end", None) or ("error", exc). :meth:`close` stops it (and the ``pacer`` holding
-    the stream back, if any) and waits up to :data:`JOIN_S` for the frame in hand. ``halt``
-    set (the user stopped the watch) ends a wait for the next item: the stream ends there."""
+    the stream back, if any), closes ``model``, the pose estimator the stream runs
+    (:meth:`features.pose_estimation.PoseEstimator.close`: the frame in hand finished, waited
+    for up to :data:`MODEL_WAIT_S`; no frame begun after), and waits up to :data:`JOIN_S`
+    for the thread. ``halt`` set (the user stopped the watch) ends a wait for the next item:
+    the stream ends there."""
 
     def __init__(
         self,
@@ -322,8 +334,9 @@ class _Reader:
         pacer: Pacer | None = None,
         alive: Alive | None = None,
         halt: threading.Event | None = None,
+        model: Any = None,
     ) -> None:
-        self.frames, self.pacer, self.alive = frames, pacer, alive
+        self.frames, self.pacer, self.alive, self.model = frames, pacer, alive, model
         self.halt = halt or threading.Event()
         self.box: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=8)
         self.stop = threading.Event()
@@ -388,6 +401,8 @@ class _Reader:
         self.stop.set()
         if self.pacer is not None:
             self.pacer.stop.set()
+        if self.model is not None:
+            self.model.close(MODEL_WAIT_S)
         self.thread.join(JOIN_S)
 
 
@@ -398,15 +413,17 @@ def frames_in_background(
     where: str = "stream",
     alive: Alive | None = None,
     halt: threading.Event | None = None,
+    model: Any = None,
 ) -> Generator[Any, None, None]:
     """The stream's frames, read in a thread (:class:`_Reader`); ``pacer``: the one that
     holds ``frames`` back (a file played at its own rate, as a camera delivers), stopped
     with the reader. Raises DataError naming ``where`` (the source) when no frame arrives
     for ``stall_s`` seconds (beyond the frame's due time and ``alive``'s stamp); ends when
     ``halt`` is set (the user stopped it: :func:`stop_on_interrupt`'s ``also``). Closed (or
-    ended), it stops the reader and waits for it: a thread left inside OpenCV or onnxruntime
+    ended), it stops the reader and waits for it, and for ``model``, the pose estimator
+    ``frames`` runs (closed: :class:`_Reader`): a thread left inside OpenCV or onnxruntime
     while Python shuts down aborts the process (exit 134)."""
-    reader = _Reader(frames, pacer, alive, halt)
+    reader = _Reader(frames, pacer, alive, halt, model)
     try:
         while True:
             kind, item = reader.get(stall_s, where)
@@ -512,7 +529,7 @@ def run(args: argparse.Namespace) -> int:
         alive=alive,
     )
     halt = pacer.stop if pacer is not None else threading.Event()  # set by Ctrl-C, SIGTERM
-    frames = frames_in_background(poses, args.stall, pacer, args.source, alive, halt)
+    frames = frames_in_background(poses, args.stall, pacer, args.source, alive, halt, estimator)
     watcher = Watcher(clf, judge, args, fps)
     watcher.pacer = pacer
     try:
