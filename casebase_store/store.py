@@ -1123,7 +1123,12 @@ class CaseStore:
                         f"{__version__} reads version {SCHEMA_VERSION}{hint}",
                         self.where,
                     )
-                columns = inspect(self.engine).get_columns(CaseRow.__tablename__)
+                # a store missing its cases table is said so where it is read ("a table is
+                # missing"), not here: SQLAlchemy's NoSuchTableError says only "cases"
+                has_cases = CaseRow.__tablename__ in names
+                columns = (
+                    inspect(self.engine).get_columns(CaseRow.__tablename__) if has_cases else []
+                )
                 self.keeps_poses = "poses" in {c["name"] for c in columns}
                 return
             if names:
