@@ -4,6 +4,7 @@ process (issue 17, item 4); the answers are those of the case base read from SQL
 from __future__ import annotations
 
 import hashlib
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,7 @@ from casebase_store import open_store
 from cbr.stored import load_classifier
 from features.datasets import load_dataset
 from posecbr.cli import main
+from tests.once import made_once
 
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 #: the matrices' file names carry a hash of the exact case base name (its first 12 digits)
@@ -31,14 +33,33 @@ def _is_mapped(a: np.ndarray) -> bool:
     return isinstance(a, np.memmap)
 
 
+@pytest.fixture
+def trained(tmp_path_factory: pytest.TempPathFactory, tmp_path: Path) -> Path:
+    """``train --subjects s01,s02`` with a case base of 50 cases counted large (the demo's
+    120), made once in the session: each test gets its own copy of the database and of the
+    matrices the command wrote beside it."""
+
+    def make(folder: Path) -> Path:
+        db = folder / "cb.sqlite"
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(stored_module, "MAPPED_MIN_CASES", 50)
+            argv = ["train", str(DEMO / "labels.csv"), "--db", str(db), "--subjects", "s01,s02"]
+            assert main(argv) == 0
+        return db
+
+    made = made_once(tmp_path_factory, "mapped-s01-s02", make)
+    db = tmp_path / "cb.sqlite"
+    shutil.copyfile(made, db)
+    matrices = made.name + ".matrices"
+    shutil.copytree(made.with_name(matrices), db.with_name(matrices))
+    return db
+
+
 def test_a_large_case_base_is_mapped_and_answers_as_read_from_sql(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    trained: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 50)  # "large": the demo's 120
-    db = tmp_path / "cb.sqlite"
-    argv = ["train", str(DEMO / "labels.csv"), "--db", str(db), "--subjects", "s01,s02"]
-    assert main(argv) == 0
-    capsys.readouterr()
+    db = trained
     store = open_store(db, readonly=True)
     uid, version = store.get_case_base("default").uid, store.get_case_base("default").version
     assert _matrices(db) == [
@@ -59,12 +80,10 @@ def test_a_large_case_base_is_mapped_and_answers_as_read_from_sql(
 
 
 def test_a_change_maps_the_new_version_and_a_stale_matrix_is_never_read(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    trained: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 50)
-    db = tmp_path / "cb.sqlite"
-    labels = str(DEMO / "labels.csv")
-    assert main(["train", labels, "--db", str(db), "--subjects", "s01,s02"]) == 0
+    db = trained
     clip = str(DEMO / "m01_s03_e01.npz")
     argv = ["classify", clip, "--db", str(db), "--feedback", "deep_squat", "--novelty", "1e9"]
     assert main(argv) == 0  # one revision: version 2, mapped anew

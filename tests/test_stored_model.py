@@ -14,6 +14,7 @@ from cbr.retrieve import retrieve
 from cbr.stored import load_classifier
 from features.datasets import load_dataset
 from posecbr.cli import main
+from tests.test_feedback_safety import trained  # noqa: F401 (a fixture)
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd" / "labels.csv"
@@ -44,12 +45,17 @@ def test_train_and_python_fit_give_identical_answers(
     tmp_path: Path,
     argv: list[str],
     params: dict[str, object],
+    request: pytest.FixtureRequest,
 ) -> None:
     X, y, X_test = demo_split
     if "--labels" in argv:
         X, y = zip(*[(x, v) for x, v in zip(X, y, strict=True) if v in QMP_LABELS], strict=True)
-    db = tmp_path / "cb.sqlite"
-    assert main(["train", str(DEMO), "--db", str(db), "--subjects", "s01,s02", *argv]) == 0
+    if argv:
+        db = tmp_path / "cb.sqlite"
+        assert main(["train", str(DEMO), "--db", str(db), "--subjects", "s01,s02", *argv]) == 0
+    else:  # this command made tests/test_feedback_safety.py's case base (once a session)
+        db = tmp_path / "cb.sqlite"
+        db.write_bytes(request.getfixturevalue("trained").read_bytes())
     store = open_store(db, readonly=True)
     try:
         stored = load_classifier(store, "default").classifier
