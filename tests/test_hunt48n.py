@@ -48,11 +48,16 @@ def test_nobody_in_view_ends_where_the_person_is_seen_again(
     tests/test_segment.py), in ``segment`` and ``watch`` alike; a flicker of the person
     inside the first stretch does not split it. Before, ``segment`` gave nobody in view
     0-111 and ``watch`` 0-105: the knee raises' first half-empty windows, unknown, joined it."""
+    assert_as_expected(classifier, _away_and_back(recordings["13_30"], flicker))
+
+
+def assert_as_expected(clf: CaseBaseClassifier, rec: PoseSequence) -> None:
+    """``segment`` and ``watch``'s segmenter give ``rec`` the segments of :data:`EXPECTED`,
+    nobody in view where it says None, the knee raises counted 4 and the squats 2."""
     from cbr.live import LiveSegmenter
 
-    rec = _away_and_back(recordings["13_30"], flicker)
-    offline = segment(classifier, rec).segments
-    live = LiveSegmenter(classifier, 30.0)
+    offline = segment(clf, rec).segments
+    live = LiveSegmenter(clf, 30.0)
     watched = [s for frame in rec.positions for s in live.push(frame)] + live.finish()
     for got in (offline, watched):
         assert [(s.start_frame, s.end_frame, s.label) for s in got] == EXPECTED

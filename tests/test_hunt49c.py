@@ -21,7 +21,7 @@ from cbr.estimator import CaseBaseClassifier
 from cbr.segmentation import NOBODY, segment
 from features.body import majority
 from features.poses import PoseSequence
-from tests.test_hunt48n import EXPECTED, _away_and_back
+from tests.test_hunt48n import _away_and_back, assert_as_expected
 from tests.test_segment import classifier, names, recordings  # noqa: F401 - the fixtures
 
 
@@ -48,22 +48,12 @@ def test_a_glitch_near_an_edge_of_nobody_in_view_does_not_move_it(
     243-303, counted 4 and 2 (as by hand, tests/test_segment.py), in ``segment`` and
     ``watch`` alike. Before, ``segment`` gave 0-12 unknown, 81-111 unknown and the knee
     raises 111-246, and ``watch`` the knee raises from 80 and the squats from 290."""
-    from cbr.live import LiveSegmenter
-
     rec = _away_and_back(recordings["13_30"], flicker=False)
     pos = rec.positions.copy()
     for first in (10, 80, 250, 290):
         pos[first : first + 2] = pos[90:92]
     pos[150:152] = np.nan
-    rec = PoseSequence(pos, rec.joint_names, 30.0, source="glitches")
-    offline = segment(classifier, rec).segments
-    live = LiveSegmenter(classifier, 30.0)
-    watched = [s for frame in rec.positions for s in live.push(frame)] + live.finish()
-    for got in (offline, watched):
-        assert [(s.start_frame, s.end_frame, s.label) for s in got] == EXPECTED
-        assert [s.explanation == NOBODY for s in got] == [True, False, True, False]
-    assert [len(s.repetitions) for s in offline] == [0, 4, 0, 2]
-    assert [s.repetitions for s in watched] == [0, 4, 0, 2]
+    assert_as_expected(classifier, PoseSequence(pos, rec.joint_names, 30.0, source="glitches"))
 
 
 def test_a_sliver_of_an_activity_after_nobody_in_view_joins_what_follows() -> None:

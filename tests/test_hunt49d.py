@@ -97,6 +97,21 @@ def _copy(takes: Path, tmp_path: Path) -> Path:
     return copy.parent.parent
 
 
+def _assert_refused_by_poses(takes: Path, db: Path, tmp_path: Path) -> None:
+    """Appending a byte copy of ``a.npz`` (:func:`_copy`) is refused as case 2 of ``db`` by
+    its frames and poses, in one line, the store unchanged."""
+    a = takes / "train" / "scaption" / "a.npz"
+    before = db.read_bytes()
+    code, said = _run(["train", str(_copy(takes, tmp_path)), "--db", str(db), "--append"])
+    assert code == 1
+    assert said == (
+        f"posecbr train: error: {db}: {tmp_path}/copy/scaption/renamed.npz frames 0-68 is "
+        f"already case 2 of 'default', stored as {a} frames 0-68 (the same frames and poses "
+        "under another file name: a copy of its file?): nothing added\n"
+    )
+    assert db.read_bytes() == before
+
+
 def test_another_take_described_alike_is_added_and_a_copy_refused_by_its_poses(
     takes: Path, tmp_path: Path
 ) -> None:
@@ -112,15 +127,7 @@ def test_another_take_described_alike_is_added_and_a_copy_refused_by_its_poses(
     a, c = takes / "train" / "scaption" / "a.npz", takes / "other" / "scaption" / "c.npz"
     np.testing.assert_array_equal(_features(db, a), _features(db, c))  # described alike
     assert len(_cases(db)) == 3
-    before = db.read_bytes()
-    code, said = _run(["train", str(_copy(takes, tmp_path)), "--db", str(db), "--append"])
-    assert code == 1
-    assert said == (
-        f"posecbr train: error: {db}: {tmp_path}/copy/scaption/renamed.npz frames 0-68 is "
-        f"already case 2 of 'default', stored as {a} frames 0-68 (the same frames and poses "
-        "under another file name: a copy of its file?): nothing added\n"
-    )
-    assert db.read_bytes() == before
+    _assert_refused_by_poses(takes, db, tmp_path)
 
 
 def test_a_copy_is_refused_by_its_poses_when_the_stored_features_differ_in_the_last_digits(
@@ -140,15 +147,8 @@ def test_a_copy_is_refused_by_its_poses_when_the_stored_features_differ_in_the_l
     np.save(blob, moved)
     with contextlib.closing(sqlite3.connect(db)) as con, con:
         con.execute("UPDATE cases SET features = ? WHERE source = ?", (blob.getvalue(), str(a)))
-    before = db.read_bytes()
-    code, said = _run(["train", str(_copy(takes, tmp_path)), "--db", str(db), "--append"])
-    assert (code, len(_cases(db))) == (1, 2)
-    assert said == (
-        f"posecbr train: error: {db}: {tmp_path}/copy/scaption/renamed.npz frames 0-68 is "
-        f"already case 2 of 'default', stored as {a} frames 0-68 (the same frames and poses "
-        "under another file name: a copy of its file?): nothing added\n"
-    )
-    assert db.read_bytes() == before
+    _assert_refused_by_poses(takes, db, tmp_path)
+    assert len(_cases(db)) == 2
 
 
 def test_a_store_made_before_the_digests_is_read_as_it_is_and_compared_by_features(
