@@ -198,4 +198,4 @@ def test_watch_of_a_source_that_gives_no_frame_is_refused_in_one_line(
     """The note is said once the work is done: a camera that cannot be opened against a case
     base of whole clips is the one line of its refusal, as against windows."""
     refused(["watch", "2147483648", "--db", str(stores["clips"])], tmp_path, capsys,
-            "2147483648: cannot open camera or stream")  # fmt: skip
+            "2147483648: cannot open camera: none at this index")  # fmt: skip

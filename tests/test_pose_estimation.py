@@ -320,7 +320,7 @@ def test_stream_poses_from_a_file_and_a_missing_camera(shared_data: Path) -> Non
     assert [f.time_s for f in got] == [0.0, 0.2, 0.4, 0.6]  # 5 fps file: timed by its rate
     assert all(f.pose.person for f in got)
     assert got[0].rgb.shape == (1280, 720, 3)
-    with pytest.raises(DataError, match="cannot open camera or stream"):
+    with pytest.raises(DataError, match="cannot open camera: none at this index"):
         next(iter(stream_poses(99)))
 
 

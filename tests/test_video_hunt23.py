@@ -67,7 +67,10 @@ def test_watch_a_camera_index_too_large_for_opencv_is_one_line(
     out = tmp_path / "w.mp4"
     assert main(["watch", index, "--db", str(case_base), "--out", str(out)]) == 1
     captured = capsys.readouterr()
-    assert _one_line(captured.err) == f"posecbr watch: error: {index}: cannot open camera or stream"
+    assert _one_line(captured.err) == (
+        f"posecbr watch: error: {index}: cannot open camera: none at this index, or another"
+        " program holds it"
+    )
     assert captured.out == "" and list(tmp_path.iterdir()) == []
 
 

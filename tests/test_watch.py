@@ -478,7 +478,7 @@ def test_watch_a_stream_url(
     assert got == [(0, 20, 2.0, None, "nobody in view")]
     assert main(["watch", f"{served}/none.avi", "--db", str(case_base)]) == 1
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and f"{served}/none.avi: cannot open camera or stream" in err
+    assert err.count("\n") == 1 and f"{served}/none.avi: the server answered HTTP 404" in err
 
 
 def test_watch_a_stream_shorter_than_a_window_says_so(

@@ -186,6 +186,50 @@ def served_cut(
         return None
 
 
+def served_refusal(url: str, timeout_s: float | None = None) -> str | None:
+    """Why the server of an HTTP(S) URL that OpenCV could not open gives no video, in a few
+    words, as it answers FFmpeg's request for the same URL (:func:`_ffmpeg_opener`): an
+    error status ("the server answered HTTP 404 (Not Found)"), no server at its address
+    ("connection refused") or no such host, a certificate FFmpeg would not trust, or a web
+    page or plain text where a video was asked for (an HLS playlist is no such text: "the
+    server gives text/html, not a video"); None
+    when it is none of these or gives no answer within ``timeout_s`` (FFmpeg's 30 s when
+    None)."""
+    import http.client
+    import socket
+    import ssl
+    import urllib.error
+    from http import HTTPStatus
+    from urllib.parse import urlsplit
+
+    host = urlsplit(url).netloc.rpartition("@")[2]
+    try:
+        opener, bare = _ffmpeg_opener(url)
+        with opener.open(bare, timeout=timeout_s or 30.0) as answer:
+            kind = (answer.headers.get("Content-Type") or "").partition(";")[0].strip().lower()
+            head = answer.read(16)
+    except urllib.error.HTTPError as exc:
+        try:
+            phrase = HTTPStatus(exc.code).phrase
+        except ValueError:  # a status HTTP does not define: the server's own words
+            phrase = str(exc.reason)
+        return f"the server answered HTTP {exc.code} ({phrase})"
+    except urllib.error.URLError as exc:
+        reason = exc.reason
+        if isinstance(reason, ConnectionRefusedError):
+            return f"no server answers at {host} (connection refused)"
+        if isinstance(reason, socket.gaierror):
+            return f"no such host: {urlsplit(url).hostname}"
+        if isinstance(reason, ssl.SSLCertVerificationError):
+            return f"the server's certificate is not trusted ({reason.verify_message})"
+        return None
+    except (OSError, ValueError, http.client.HTTPException):
+        return None
+    if kind in ("text/html", "text/plain") and not head.lstrip().startswith(b"#EXTM3U"):
+        return f"the server gives {kind}, not a video"
+    return None
+
+
 class _Onward:
     """An HTTP answer's body (its first bytes ``head`` already read, ``length`` stated) read
     as a file that is only read onward: ``seek`` ahead reads and drops the bytes between;

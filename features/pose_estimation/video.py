@@ -64,7 +64,12 @@ from .containers import (  # noqa: E402
     sound_only,
 )
 from .model import model_version  # noqa: E402
-from .served import served_cut, served_whole, served_whole_by_duration  # noqa: E402
+from .served import (  # noqa: E402
+    served_cut,
+    served_refusal,
+    served_whole,
+    served_whole_by_duration,
+)
 from .smoothing import AUX_FILTER, IMAGE_FILTER, VISIBILITY_ALPHA, WORLD_FILTER  # noqa: E402
 from .tracker import FramePose, PoseEstimator  # noqa: E402
 
@@ -1285,14 +1290,19 @@ def _open_source(
             "source",
         )
     device = source if isinstance(source, int) else str(source)
+    camera = isinstance(device, int) or device.isdigit()
+    not_opened = NO_CAMERA if camera else "cannot open stream"
     try:
-        cap = _open_quietly(int(device) if str(device).isdigit() else device, timeout_s)
+        cap = _open_quietly(int(device) if camera else device, timeout_s)
     except (cv2.error, OverflowError):  # an index too large for OpenCV (a C int)
-        raise DataError("cannot open camera or stream", str(source)) from None
+        raise DataError(not_opened, str(source)) from None
     if not cap.isOpened():
-        # a file the server gives whole, cut before its index (an MP4's, at its end): said so
-        cut = served_cut(str(device), timeout_s) if _served_url(device) else None
-        raise DataError(cut or "cannot open camera or stream", str(source))
+        # a file the server gives whole, cut before its index (an MP4's, at its end), or a
+        # server that gives no video (an error status, no server, a web page): said so
+        why = None
+        if _served_url(device):
+            why = served_cut(str(device), timeout_s) or served_refusal(str(device), timeout_s)
+        raise DataError(why or not_opened, str(source))
     if fps is None:
         return cap, None, 0, False, 1
     declared = _frame_count(cap)
@@ -1302,6 +1312,10 @@ def _open_source(
         # the duration at that rate; at the frames' own rate it is this many
         declared = int(declared * fps / stated)
     return cap, fps, declared, True, 1
+
+
+NO_CAMERA = "cannot open camera: none at this index, or another program holds it"
+"""Why a camera index gave no camera (OpenCV says no more than that it opened none)."""
 
 
 def _served_url(device: int | str) -> bool:
