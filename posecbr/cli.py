@@ -217,7 +217,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         # SIGTERM (kill, systemd, docker stop) stops the command as Ctrl-C does: cleaned up
         with sigterm_as_interrupt():
-            return int(args.func(args) or 0)
+            return _run(args)
     except PosecbrError as exc:
         # The message quotes the user's files and labels: escaped, it cannot drive the terminal.
         print(f"posecbr {command}: error: {shown(_said_for(exc, args, own))}", file=sys.stderr)
@@ -235,6 +235,34 @@ def main(argv: Sequence[str] | None = None) -> int:
         return system_error(command, exc)
     except Exception as exc:  # a bug: one line and the traceback in a file, not a raw one
         return internal_error(command, exc)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run the command; an error raised from the user's stop (:func:`_interrupt_in`) is
+    that stop."""
+    try:
+        return int(args.func(args) or 0)
+    except Exception as exc:  # not one posecbr says: the user's stop, if it was one
+        interrupt = None if isinstance(exc, PosecbrError) else _interrupt_in(exc)
+        if interrupt is None:
+            raise
+        raise interrupt from None
+
+
+def _interrupt_in(exc: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C (or SIGTERM, raised as one) that ``exc`` was raised from, if any: a
+    compiled extension that was being imported when it came turns it into its own error
+    (onnxruntime's, as pybind11 makes every module: ``ImportError: initialization failed``,
+    raised from the KeyboardInterrupt), which was said as a bug in posecbr (exit 70) where
+    the user had stopped the command."""
+    seen: set[int] = set()
+    at: BaseException | None = exc
+    while at is not None and id(at) not in seen:
+        if isinstance(at, KeyboardInterrupt):
+            return at
+        seen.add(id(at))
+        at = at.__cause__ or at.__context__
+    return None
 
 
 def system_error(command: str, exc: OSError | MemoryError) -> int:

@@ -1,15 +1,18 @@
 """``posecbr watch`` of a source that gives no video, said for what it is (hunt 49j): a URL
 whose server answers an error status, gives a web page or text, or is not there, and a
-camera index with no camera behind it. Each was "cannot open camera or stream"."""
+camera index with no camera behind it. Each was "cannot open camera or stream". And a stop
+(SIGTERM, Ctrl-C) that comes as a compiled module is imported, said as the stop it is."""
 
 from __future__ import annotations
 
+import signal
 import socket
 from pathlib import Path
 
 import pytest
 
 from features.errors import DataError
+from features.interrupts import raise_interrupt
 from features.pose_estimation import stream_poses
 from posecbr.cli import main
 from tests.badinput import small_case_base
@@ -54,3 +57,38 @@ def test_a_web_page_no_server_and_no_camera_are_said_so(tmp_path: Path) -> None:
         f"http://{free}/clip.mp4: no server answers at {free} (connection refused)"
     )
     assert _refused(97) == "97: cannot open camera: none at this index, or another program holds it"
+
+
+@pytest.mark.parametrize(
+    ("signum", "said", "status"),
+    [
+        (signal.SIGTERM, "posecbr watch: terminated (SIGTERM)\n", 143),
+        (signal.SIGINT, "posecbr watch: interrupted\n", 130),
+    ],
+    ids=["sigterm", "ctrl-c"],
+)
+def test_a_stop_while_a_compiled_module_is_imported_is_the_stop(
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    signum: int,
+    said: str,
+    status: int,
+) -> None:
+    """SIGTERM 0.6 s into a watch, as onnxruntime was imported: pybind11's module init
+    turns the KeyboardInterrupt it raises into "ImportError: initialization failed" raised
+    from it, and the watch said "internal error, a bug in posecbr" (exit 70). The stop is
+    said as the stop it is: terminated, 143 (Ctrl-C: interrupted, 130), as at any other
+    moment (the import stood in for by raising as pybind11 raises)."""
+    import posecbr.commands.watch as watch
+
+    def importing(_args: object) -> int:
+        try:
+            raise_interrupt(signum)
+        except KeyboardInterrupt as exc:
+            raise ImportError("initialization failed") from exc
+
+    monkeypatch.setattr(watch, "run", importing)
+    capsys.readouterr()
+    assert main(["watch", "0", "--db", "cb.sqlite"]) == status
+    got = capsys.readouterr()
+    assert (got.out, got.err) == ("", said)
