@@ -92,3 +92,17 @@ def test_a_stop_while_a_compiled_module_is_imported_is_the_stop(
     assert main(["watch", "0", "--db", "cb.sqlite"]) == status
     got = capsys.readouterr()
     assert (got.out, got.err) == ("", said)
+
+
+def test_a_negative_camera_index_is_told_where_cameras_are_numbered_from(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``watch -1`` (OpenCV's "any camera"): no file of that name, and no camera index
+    either: cameras are numbered from 0. It said only "-1: no such video file"."""
+    capsys.readouterr()
+    assert main(["watch", "-1", "--db", str(tmp_path / "cb.sqlite")]) == 1
+    got = capsys.readouterr()
+    assert got.err == (
+        "posecbr watch: error: -1: no such video file, and a camera index is a whole number"
+        " from 0 (the first camera)\n"
+    )

@@ -196,6 +196,12 @@ def _check_source(source: str) -> None:
     if _is_file(source) and Path(source).is_dir():
         raise DataError("is a folder, not a video file", source)
     if _is_file(source) and not Path(source).exists():
+        if source.startswith("-") and source[1:].isdigit():  # OpenCV's "any camera", -1
+            raise DataError(
+                "no such video file, and a camera index is a whole number from 0 (the first"
+                " camera)",
+                source,
+            )
         raise DataError("no such video file", source)
     if _is_file(source) and not Path(source).is_file():  # reading a pipe waits for a writer
         raise DataError("is a pipe, socket or device, not a video file", source)
