@@ -15,23 +15,7 @@ from features.errors import DataError
 from features.interrupts import raise_interrupt
 from features.pose_estimation import stream_poses
 from posecbr.cli import main
-from tests.badinput import small_case_base
 from tests.test_hunt34c import _serving
-
-
-def test_watch_a_url_the_server_has_not_says_its_404(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """python -m http.server answers 404 for a file it has not: the watch ends in one line
-    naming the URL and that answer, exit 1, nothing on stdout."""
-    db = small_case_base(tmp_path / "cb")
-    with _serving(tmp_path) as address:
-        url = f"{address}/gone.mp4"
-        capsys.readouterr()
-        assert main(["watch", url, "--db", str(db), "--speed", "0"]) == 1
-    got = capsys.readouterr()
-    assert got.out == ""
-    assert got.err == f"posecbr watch: error: {url}: the server answered HTTP 404 (Not Found)\n"
 
 
 def _refused(source: str | int) -> str:
@@ -40,14 +24,17 @@ def _refused(source: str | int) -> str:
     return str(refused.value)
 
 
-def test_a_web_page_no_server_and_no_camera_are_said_so(tmp_path: Path) -> None:
-    """python -m http.server gives a .txt file as text/plain and a folder as its listing,
-    text/html; no server listens at a port bound and let go ("connection refused", naming
-    the address); a camera index past any camera here has no camera behind it."""
+def test_a_404_a_web_page_no_server_and_no_camera_are_said_so(tmp_path: Path) -> None:
+    """python -m http.server answers 404 for a file it has not, gives a .txt file as
+    text/plain and a folder as its listing, text/html; no server listens at a port bound and
+    let go ("connection refused", naming the address); a camera index past any camera here
+    has no camera behind it. (The command's line for a 404: tests/test_watch.py.)"""
     (tmp_path / "notes.txt").write_text("not a video\n")
     with _serving(tmp_path) as address:
+        gone = _refused(f"{address}/gone.mp4")
         text = _refused(f"{address}/notes.txt")
         listing = _refused(f"{address}/")
+    assert gone == f"{address}/gone.mp4: the server answered HTTP 404 (Not Found)"
     assert text == f"{address}/notes.txt: the server gives text/plain, not a video"
     assert listing == f"{address}/: the server gives text/html, not a video"
     with socket.socket() as s:
