@@ -8,6 +8,7 @@ import os
 import re
 import struct
 from collections.abc import Sequence
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -268,20 +269,169 @@ MIN_MP4_SIDE = 2
 
 def check_mp4_size(width: int, height: int, out: str | Path, what: str = "overlay") -> None:
     """DataError naming ``out`` when frames of ``width`` x ``height`` cannot be encoded as an
-    MP4 (:data:`MIN_MP4_SIDE` to :data:`MAX_MP4_SIDE`): checked before the work, not found
-    when the first frame is."""
+    MP4 (:data:`MIN_MP4_SIDE` to :data:`MAX_MP4_SIDE`, an odd side once padded to even:
+    :func:`even_size`): checked before the work, not found when the first frame is."""
     if width < MIN_MP4_SIDE or height < MIN_MP4_SIDE:
         raise DataError(
             f"cannot encode an MP4 {what} of {width}x{height} frames: MP4 frames are at least"
             f" {MIN_MP4_SIDE} pixels a side",
             out,
         )
-    if width > MAX_MP4_SIDE or height > MAX_MP4_SIDE:
+    if max(even_size(width, height)) > MAX_MP4_SIDE:
+        odd = "" if max(width, height) > MAX_MP4_SIDE else " and even (an odd side padded by one)"
         raise DataError(
             f"cannot encode an MP4 {what} of {width}x{height} frames: MP4 frames are at most"
-            f" {MAX_MP4_SIDE} pixels a side",
+            f" {MAX_MP4_SIDE} pixels a side{odd}",
             out,
         )
+
+
+def even_size(width: int, height: int) -> tuple[int, int]:
+    """The size an MP4 (``mp4v``) takes frames of ``width`` x ``height`` at: each side made even
+    (MPEG-4 part 2 codes 2x2 chroma blocks; OpenCV's writer took a side one pixel shorter,
+    the source's last column or row cut off without a word)."""
+    return width + width % 2, height + height % 2
+
+
+def padding_words(width: int, height: int) -> str:
+    """What an MP4 of frames of ``width`` x ``height`` says of their padding
+    (:func:`pad_even`), "" when they need none."""
+    w, h = even_size(width, height)
+    edges = [
+        e
+        for e, odd in (("column at the right", w > width), ("row at the bottom", h > height))
+        if odd
+    ]
+    if not edges:
+        return ""
+    return (
+        f"{width}x{height} frames written {w}x{h}, a black {' and '.join(edges)} added"
+        " (MP4 frames have even sides)"
+    )
+
+
+def pad_even(bgr: np.ndarray) -> np.ndarray:
+    """``bgr`` with a black column at the right and a row at the bottom where its width or
+    height is odd (:func:`even_size`): every pixel of the source kept where it was, so the
+    drawn landmarks stay on the person."""
+    h, w = bgr.shape[:2]
+    if not (h % 2 or w % 2):
+        return bgr
+    return cv2.copyMakeBorder(bgr, 0, h % 2, 0, w % 2, cv2.BORDER_CONSTANT, value=(0, 0, 0))
+
+
+def mp4_rate(fps: float) -> Fraction:
+    """The frame rate ``fps`` as the fraction it stands for: a video's rate read as a float
+    (30000/1001 is 29.97002997...) given back exactly, the nearest fraction of a denominator
+    up to a million (any two such differ by more than a float's error)."""
+    return Fraction(fps).limit_denominator(1_000_000)
+
+
+def retime_mp4(path: Path, fps: float) -> None:
+    """Give the frames of the MP4 ``path`` that OpenCV wrote at ``fps`` their times at
+    exactly :func:`mp4_rate` of it. OpenCV's writer takes a float and keeps it to a
+    power-of-ten denominator within 0.001 fps: 30000/1001 was written as 2997/100, an
+    overlay drifting 0.036 s an hour from its source. The track's time scale, its frames'
+    durations (one entry of the ``stts`` box) and the durations of ``mvhd``, ``tkhd``,
+    ``elst`` and ``mdhd`` are rewritten in place; the frames are untouched. A file of another
+    layout (several durations, composition offsets, a value too wide for its field) is left
+    as it was written."""
+    rate = mp4_rate(fps)
+    with open(path, "r+b") as f:
+        end, at = os.fstat(f.fileno()).st_size, 0
+        while at + 8 <= end:
+            f.seek(at)
+            size, kind = struct.unpack(">I4s", f.read(8))
+            if size < 8:
+                return
+            if kind == b"moov":
+                f.seek(at)
+                moov = bytearray(f.read(size))
+                if _retimed(moov, rate):
+                    f.seek(at)
+                    f.write(moov)
+                return
+            at += size
+
+
+_CONTAINERS = {b"moov", b"trak", b"edts", b"mdia", b"minf", b"stbl"}
+
+
+def _boxes(data: bytearray, start: int, stop: int) -> dict[bytes, list[int]]:
+    """The offsets of the boxes of ``data[start:stop]`` and of those inside them, by type."""
+    found: dict[bytes, list[int]] = {}
+    at = start
+    while at + 8 <= stop:
+        size, kind = struct.unpack_from(">I4s", data, at)
+        if size < 8 or at + size > stop:
+            break
+        found.setdefault(kind, []).append(at)
+        if kind in _CONTAINERS:
+            for k, v in _boxes(data, at + 8, at + size).items():
+                found.setdefault(k, []).extend(v)
+        at += size
+    return found
+
+
+def _retimed(moov: bytearray, rate: Fraction) -> bool:
+    """``moov`` (one video track) with its frames at ``rate`` (:func:`retime_mp4`); False when
+    it is at that rate already or cannot be rewritten so."""
+    boxes = _boxes(moov, 8, len(moov))
+    if not _plain(moov, boxes):
+        return False
+    mvhd, tkhd, mdhd, stts = (boxes[k][0] for k in (b"mvhd", b"tkhd", b"mdhd", b"stts"))
+    frames, delta = struct.unpack_from(">II", moov, stts + 16)
+    track_scale = _field(moov, mdhd, 20, 28, widens=False)
+    if Fraction(_value(moov, track_scale), delta) == rate:
+        return False
+    media = frames * rate.denominator
+    movie_scale = _value(moov, _field(moov, mvhd, 20, 28, widens=False))
+    movie = round(Fraction(media * movie_scale, rate.numerator))
+    writes = [
+        (track_scale, rate.numerator),
+        (_field(moov, mdhd, 24, 32), media),
+        ((stts + 20, False), rate.denominator),
+        (_field(moov, mvhd, 24, 32), movie),
+        (_field(moov, tkhd, 28, 36), movie),
+        *((_field(moov, elst, 16, 16), movie) for elst in boxes.get(b"elst", [])),
+    ]
+    if any(value >= 2 ** (64 if wide else 32) for (_at, wide), value in writes):
+        return False
+    for (at, wide), value in writes:
+        struct.pack_into(">Q" if wide else ">I", moov, at, value)
+    return True
+
+
+def _plain(moov: bytearray, boxes: dict[bytes, list[int]]) -> bool:
+    """Whether ``moov`` is as OpenCV writes it, which :func:`_retimed` rewrites: one track,
+    every frame of one duration (one ``stts`` entry), no composition offsets (``ctts``), at
+    most one edit, from the first frame."""
+    if any(len(boxes.get(k, [])) != 1 for k in (b"mvhd", b"tkhd", b"mdhd", b"stts")):
+        return False
+    stts = boxes[b"stts"][0]
+    if struct.unpack_from(">I", moov, stts + 12)[0] != 1 or moov[stts + 20 : stts + 24] == bytes(4):
+        return False
+    edits = boxes.get(b"elst", [])
+    if b"ctts" in boxes or len(edits) > 1:
+        return False
+    for elst in edits:  # its start is in the track's time scale: one from the first frame kept
+        wide = moov[elst + 8] == 1
+        start = struct.unpack_from(">q" if wide else ">i", moov, elst + (24 if wide else 20))[0]
+        if struct.unpack_from(">I", moov, elst + 12)[0] != 1 or start > 0:
+            return False
+    return True
+
+
+def _field(moov: bytearray, box: int, v0: int, v1: int, widens: bool = True) -> tuple[int, bool]:
+    """The place in ``moov`` of a field at ``v0`` in a version-0 box at ``box``, ``v1`` in a
+    version-1 box, and whether it is 64 bits wide (a duration in a version-1 box)."""
+    wide = moov[box + 8] == 1
+    return box + (v1 if wide else v0), wide and widens
+
+
+def _value(moov: bytearray, field: tuple[int, bool]) -> int:
+    at, wide = field
+    return int(struct.unpack_from(">Q" if wide else ">I", moov, at)[0])
 
 
 MARK_UUID = bytes.fromhex("cab5aa21f4394e688342e23fd7fa5c39")
@@ -337,7 +487,9 @@ def write_overlay(
     gaps: np.ndarray | None = None,
     mark: str | None = None,
 ) -> Path:
-    """Write ``video_path`` with the stick figure drawn as an MP4 (``mp4v``) at ``out_path``.
+    """Write ``video_path`` with the stick figure drawn as an MP4 (``mp4v``) at ``out_path``,
+    its frames at exactly ``fps`` (:func:`retime_mp4`), an odd side padded to even
+    (:func:`pad_even`; :func:`padding_words` says so).
 
     image_landmarks: ``(frames, 33, 5)``; frame ``frame_offset + i`` of the video gets row i,
     or with ``video_frames`` (a variable-frame-rate video resampled to ``fps``:
@@ -390,12 +542,12 @@ def _encode(
                     h, w = bgr.shape[:2]
                     check_mp4_size(w, h, out)
                     fourcc = cv2.VideoWriter.fourcc(*"mp4v")
-                    writer = cv2.VideoWriter(str(tmp), fourcc, fps, (w, h))
+                    writer = cv2.VideoWriter(str(tmp), fourcc, fps, even_size(w, h))
                     if not writer.isOpened():
                         raise DataError("cannot encode an MP4 overlay here", out)
                 said = words[i] if words is not None else ()
                 _draw_row(bgr, image_landmarks[i], said, gaps is not None and bool(gaps[i]))
-                writer.write(bgr)
+                writer.write(pad_even(bgr))
                 written += 1
             first = stop
         if writer is None:
@@ -403,6 +555,7 @@ def _encode(
     finally:
         if writer is not None:
             writer.release()
+    retime_mp4(tmp, fps)
     check_encoded(tmp, written, out)
 
 

@@ -666,7 +666,7 @@ def process(job: Job, options: Options) -> Outcome:
     import numpy as np
 
     from features.pose_estimation import open_video
-    from features.pose_estimation.overlay import check_mp4_size, write_overlay
+    from features.pose_estimation.overlay import check_mp4_size, padding_words, write_overlay
     from features.pose_estimation.video import gap_words, older_vfr_extraction
     from features.poses import gap_rows, load_pose, load_pose_arrays, recorded_gaps
     from features.repetitions import person_jumps
@@ -680,10 +680,12 @@ def process(job: Job, options: Options) -> Outcome:
         up_to_date = up_to_date and not stale
         if up_to_date and (job.overlay is None or job.overlay.is_file()):
             return "skipped", job.out, "up to date"
+        padded = ""
         if job.overlay is not None:  # before the model runs and the pose file is written
             cap, info = open_video(job.video)
             cap.release()
             check_mp4_size(info.width, info.height, job.overlay)
+            padded = padding_words(info.width, info.height)
         if up_to_date:
             seq = load_pose(job.out)
             stored = load_pose_arrays(job.out)
@@ -713,6 +715,8 @@ def process(job: Job, options: Options) -> Outcome:
                 gaps=gap_rows(seq),  # no frames there: said so, not "no person"
                 mark=_overlay_mark(job.video),
             )
+            if padded:
+                vfr_note += f"; its overlay's {padded}"
         # a row inside a gap has no frame at all, not a frame without a person
         nobody = np.isnan(seq.positions).all(axis=(1, 2)) & ~gap_rows(seq)
         n_missing = int(nobody.sum())
@@ -1014,8 +1018,9 @@ def _run_all(jobs: list[Job], options: Options, args: argparse.Namespace) -> lis
 
 def _remarks(status: str, detail: str) -> list[str]:
     """What a clip's line says beyond its counts (``process``'s detail): a variable frame
-    rate resampled, a gap left missing, the pose jumping to another person, a stale pose file
-    extracted again. A single video's line says them; a run of several clips prints none."""
+    rate resampled, a gap left missing, the pose jumping to another person, the overlay's
+    frames padded to even sides, a stale pose file extracted again. A single video's line
+    says them; a run of several clips prints none."""
     parts = detail.split("; ")
     if status == "done":
         return parts[1:]

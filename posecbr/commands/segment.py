@@ -691,7 +691,7 @@ def _overlay(
     gives each its colour, as in ``segment --plot``."""
     import numpy as np
 
-    from features.pose_estimation.overlay import write_overlay
+    from features.pose_estimation.overlay import padding_words, write_overlay
     from features.poses import gap_rows
 
     gaps = gap_rows(video.sequence)  # no frames there: said so, not "no person"
@@ -706,4 +706,7 @@ def _overlay(
         video_frames=video.video_frames,
         gaps=gaps,
     )
+    padded = padding_words(video.info.width, video.info.height)
+    if padded:
+        print(f"note: {shown(out)}: {padded}", file=sys.stderr)
     print(f"overlay written to {shown(out)}", file=sys.stderr)

@@ -498,7 +498,7 @@ def run(args: argparse.Namespace) -> int:
         served_file_rate,
         stream_poses,
     )
-    from features.pose_estimation.overlay import check_encoded, check_mp4_size
+    from features.pose_estimation.overlay import check_encoded, check_mp4_size, retime_mp4
 
     from .segment import check_k_option, judge_named, load_case_base, note_not_windows
 
@@ -551,6 +551,7 @@ def run(args: argparse.Namespace) -> int:
                 watcher.close(stop)  # nothing watched: says so, as without --out
                 raise _NoFrameDrawn
             if video is not None:
+                retime_mp4(video, float(watcher.fps or 30.0))  # 30000/1001 kept, not 29.97
                 check_encoded(video, watcher.drawn, args.out)
             if lost is None:
                 watcher.close(stop)
@@ -829,16 +830,22 @@ class Watcher:
     def _write(self, bgr: Any) -> None:
         import cv2
 
+        from features.pose_estimation.overlay import pad_even
+
         if self.writer is None:
-            from features.pose_estimation.overlay import check_mp4_size
+            from features.pose_estimation.overlay import check_mp4_size, even_size, padding_words
 
             h, w = bgr.shape[:2]
             check_mp4_size(w, h, self.args.out, "video")
             fourcc = cv2.VideoWriter.fourcc(*"mp4v")
-            self.writer = cv2.VideoWriter(str(self.video), fourcc, float(self.fps or 30.0), (w, h))
+            size = even_size(w, h)  # an odd side padded, not cut by the writer
+            self.writer = cv2.VideoWriter(str(self.video), fourcc, float(self.fps or 30.0), size)
             if not self.writer.isOpened():
                 raise DataError("cannot encode an MP4 video here", self.args.out)
-            self._open_rescue(fourcc, float(self.fps or 30.0), (w, h))
+            self._open_rescue(fourcc, float(self.fps or 30.0), size)
+            if padding_words(w, h):
+                print(f"note: {shown(self.args.out)}: {padding_words(w, h)}", file=sys.stderr)
+        bgr = pad_even(bgr)
         self.writer.write(bgr)
         if self.rescue is not None:
             self.rescue.write(bgr)
