@@ -119,6 +119,27 @@ def load_clip_naming_asf(path: Path) -> Any:
         raise e.naming("--asf") from None
 
 
+def note_assumed_rate(seq: Any) -> None:
+    """Say on stderr when the frame rate of the recording ``seq`` was assumed by the reader of
+    its file, not read from it or given (an AMC file carries none: read at the CMU and HDM05
+    rate, :func:`features.label_tracks.assumed_rate`), as ``convert`` says it: its times,
+    segments and repetitions per second all stand on it, and ``--fps`` gives another.
+    ``segment`` and ``reps`` say it; a pose file keeps the assumption in its metadata, said
+    when ``convert`` wrote it, and not again at every read (a label file that does not fit
+    says it in its refusal)."""
+    from features.datasets import POSE_SUFFIXES
+    from features.label_tracks import assumed_rate
+    from features.text import shown
+
+    why = assumed_rate(seq.metadata)
+    if why and Path(seq.source).suffix.lower() not in POSE_SUFFIXES:
+        print(
+            f"note: {shown(seq.source)}: read at {seq.fps:g} fps ({why}); give its rate with"
+            " --fps if it was recorded at another",
+            file=sys.stderr,
+        )
+
+
 def note_low_rate(source: Any, fps: float, estimated: bool) -> None:
     """Say on stderr when the frame rate ``fps`` of the recording or video ``source`` is too
     low to follow every movement a repetition can be: one repeating in less than two frames'

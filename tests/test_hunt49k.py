@@ -1,4 +1,4 @@
-"""Hunt 49k: overlay videos that were quietly not what was asked.
+"""Hunt 49k: overlay videos that were quietly not what was asked; an AMC file's assumed rate.
 
 - ``segment --overlay``, ``extract --overlay`` and ``watch --out`` of a video with an odd
   width or height wrote frames a pixel smaller (OpenCV's ``mp4v`` writer cuts a side to
@@ -8,6 +8,9 @@
 - A 30000/1001-fps video's overlay was written at 2997/100 (OpenCV keeps a float rate to a
   power-of-ten denominator): 0.0036 s an hour off its source. Its frames now carry the
   source's times exactly (:func:`features.pose_estimation.overlay.retime_mp4`).
+- ``segment`` and ``reps`` of an AMC file (which carries no rate) read it at the assumed
+  120 fps without a word, unless a label file disagreed; they say it now, as ``convert``
+  does, with the way to give another (``--fps``).
 """
 
 from __future__ import annotations
@@ -157,9 +160,46 @@ def test_watch_out_of_an_odd_sized_ntsc_video_keeps_its_size_and_rate(
     assert fps == float(NTSC)
 
 
+ASSUMED = (
+    "read at 120 fps (assumed: AMC files carry no rate, CMU and HDM05 record at 120); give"
+    " its rate with --fps if it was recorded at another"
+)
+
+
 @pytest.fixture(scope="module")
 def amc_head(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """CMU 13_31's first 360 frames (3 s at 120 fps) and the skeleton it is read with."""
     folder = tmp_path_factory.mktemp("hunt49k-amc")
     rec = _head(shared_data / "cmu-mocap6" / "amc" / "13_31.amc", 360, folder / "13_31.amc")
     return rec, shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf"
+
+
+def test_reps_of_an_amc_file_says_its_rate_was_assumed(
+    amc_head: tuple[Path, Path], shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Said once, naming the file; not when the rate is given (``--fps``) or read from an
+    HDM05 name (``..._120``)."""
+    rec, asf = amc_head
+    capsys.readouterr()
+    assert main(["reps", str(rec), "--asf", str(asf)]) == 0
+    assert capsys.readouterr().err == f"note: {rec}: {ASSUMED}\n"
+    assert main(["reps", str(rec), "--asf", str(asf), "--fps", "120"]) == 0
+    assert capsys.readouterr().err == ""
+    named = next((shared_data / "hdm05" / "train" / "1").glob("HDM_bd_*_120.amc"))
+    assert main(["reps", str(named)]) == 0
+    assert "note:" not in capsys.readouterr().err
+
+
+def test_segment_of_an_amc_file_says_its_rate_was_assumed(
+    amc_head: tuple[Path, Path],
+    shared_data: Path,
+    tmp_path_factory: pytest.TempPathFactory,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    rec, asf = amc_head
+    db = made_once(
+        tmp_path_factory, "cmu-13-29-windows", lambda f: _cmu_13_29_windows(f, shared_data)
+    )
+    capsys.readouterr()
+    assert main(["segment", str(rec), "--asf", str(asf), "--db", str(db)]) == 0
+    assert capsys.readouterr().err == f"note: {rec}: {ASSUMED}\n"

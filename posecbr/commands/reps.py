@@ -34,6 +34,7 @@ from posecbr.recordings import (
     add_recording_options,
     check_asf,
     load_recording,
+    note_assumed_rate,
     note_low_rate,
 )
 
@@ -62,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
         args.plot = check_plot(args.plot, args.plot_folder, [args.clip], inputs, "reps")[0]
     seq = load_recording(args.clip, args.asf, args.fps)
     check_person(seq, "count")  # as segment refuses it: a long one is not counted whole
+    note_assumed_rate(seq)
     note_low_rate(seq.source, seq.fps, seq.confidence is not None)
     result = _count(seq)
     if result.partial:

@@ -69,6 +69,7 @@ from posecbr.recordings import (
     check_asf,
     check_fps,
     load_recording,
+    note_assumed_rate,
     note_low_rate,
 )
 
@@ -367,6 +368,7 @@ def run(args: argparse.Namespace) -> int:
         check_segmentable(rec)
     truths = _fitted_truths(args, labels, [rec for rec, _ in read])
     for rec, _ in read:
+        note_assumed_rate(rec)
         note_low_rate(rec.source, rec.fps, rec.confidence is not None)
     done = [
         (rec, video, _named(segment(clf, rec, judge, k=args.k), path))
