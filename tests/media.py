@@ -1,5 +1,6 @@
 """Small sound files and videos with sound, written by PyAV, for the container tests
-(``tests/test_hunt34h.py``, ``tests/test_hunt35g.py``). The callers skip without PyAV."""
+(``tests/test_hunt34h.py``, ``tests/test_hunt35g.py``; the callers skip without PyAV), and a
+video's frames as OpenCV decodes them (:func:`read_frames`)."""
 
 from __future__ import annotations
 
@@ -65,3 +66,19 @@ def mux_frames_and_silence(
         for packet in stream.encode():
             out.mux(packet)
     out.close()
+
+
+def read_frames(path: Path) -> tuple[list[np.ndarray], float]:
+    """Every frame of the video ``path`` as OpenCV decodes it (BGR), and the rate it states."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(path))
+    fps = float(cap.get(cv2.CAP_PROP_FPS))
+    frames = []
+    while True:
+        ok, bgr = cap.read()
+        if not ok:
+            break
+        frames.append(bgr)
+    cap.release()
+    return frames, fps

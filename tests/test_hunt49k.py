@@ -27,6 +27,7 @@ from features.pose_estimation.overlay import check_mp4_size, write_overlay
 from features.readers.asfamc import read_asf_amc
 from posecbr.cli import main
 from posecbr.commands.watch import Watcher
+from tests.media import read_frames
 from tests.once import made_once
 from tests.test_hunt40k import _head
 from tests.test_watch import _cmu_13_29_windows
@@ -59,21 +60,6 @@ def odd_ntsc(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def _frames(path: Path) -> tuple[list[np.ndarray], float]:
-    import cv2
-
-    cap = cv2.VideoCapture(str(path))
-    fps = cap.get(cv2.CAP_PROP_FPS)
-    frames = []
-    while True:
-        ok, bgr = cap.read()
-        if not ok:
-            break
-        frames.append(bgr)
-    cap.release()
-    return frames, fps
-
-
 def _frame_times(path: Path) -> list[Fraction]:
     import av
 
@@ -92,7 +78,7 @@ def test_an_odd_sized_ntsc_overlay_keeps_every_pixel_and_the_source_rate(
     out = tmp_path / "overlay.mp4"
     nobody = np.full((FRAMES, 33, 5), np.nan)
     write_overlay(odd_ntsc, nobody, out, float(NTSC))
-    frames, fps = _frames(out)
+    frames, fps = read_frames(out)
     assert len(frames) == FRAMES
     assert frames[0].shape == (HEIGHT + 1, WIDTH + 1, 3)
     for bgr in frames:  # "no person" is written at the top left: the bottom half read
@@ -154,7 +140,7 @@ def test_watch_out_of_an_odd_sized_ntsc_video_keeps_its_size_and_rate(
         " the bottom added (MP4 frames have even sides)"
     )
     assert err.count(said) == 1, err
-    frames, fps = _frames(out)
+    frames, fps = read_frames(out)
     assert len(frames) == FRAMES and frames[0].shape == (HEIGHT + 1, WIDTH + 1, 3)
     assert frames[-1][HEIGHT // 2 : -2, WIDTH - 1].mean() > EDGE - 25
     assert fps == float(NTSC)

@@ -22,6 +22,7 @@ import pytest
 
 from features.poses import PoseSequence, load_pose, save_pose
 from posecbr.cli import main
+from tests.media import read_frames
 from tests.once import made_once
 from tests.test_watch import case_base  # noqa: F401 (a fixture)
 
@@ -157,15 +158,8 @@ def jacks(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[
 
 
 def _jacks(shared_data: Path, folder: Path) -> tuple[Path, float]:
-    cap = cv2.VideoCapture(str(shared_data / JUMPING_JACKS))
-    fps = cap.get(cv2.CAP_PROP_FPS)
-    frames = []
-    while True:
-        ok, bgr = cap.read()
-        if not ok:
-            break
-        frames.append(cv2.resize(bgr, (640, 360)))
-    cap.release()
+    whole, fps = read_frames(shared_data / JUMPING_JACKS)
+    frames = [cv2.resize(bgr, (640, 360)) for bgr in whole]
     assert len(frames) == 308
     video, pose = folder / "jacks.avi", folder / "jacks.npz"
     writer = cv2.VideoWriter(str(video), cv2.VideoWriter.fourcc(*"MJPG"), fps, (1280, 360))
