@@ -92,9 +92,10 @@ class DADClassifier(Classifier):
     (CMU's "Squat" is the ADD's "squat"; two classes one activity cannot tell apart are
     refused, see :func:`~cbr.dad.names.class_of_activity`); ``predict`` maps the
     top-ranked ADD activity among those standing for a known class to that class (activities
-    for other datasets' labels are ignored); a clip DAD cannot judge ("not enough data") gets
-    the first class, except a clip that shows no person (no frame with a torso) or has a single
-    frame: those are refused with an :class:`~features.errors.InputError` (a ``DataError``), as
+    for other datasets' labels are ignored); a clip DAD cannot judge ("not enough data"), or
+    one where no activity standing for a class could be scored, gets the first class, except
+    a clip that shows no person (no frame with a torso) or has a single frame: those are
+    refused with an :class:`~features.errors.InputError` (a ``DataError``), as
     :class:`~cbr.estimator.CaseBaseClassifier` refuses a clip with no person.
     ``decision_function`` gives each class its best activity's score; ``predict_proba``
     normalises those scores.

@@ -99,7 +99,15 @@ def explain_dad_errors(run: CompareRun, n: int) -> list[ExplainedClip]:
             text = f"DAD could not judge the clip: {res.message}"
         else:
             chosen, wanted = res.activity_for(pred), res.activity_for(true)
-            text = "DAD chose " + (chosen.in_words() if chosen else pred) + "."
+            if chosen is not None and np.isfinite(chosen.score):
+                text = f"DAD chose {chosen.in_words()}."
+            else:  # no class had an activity scored: DADClassifier answers the first class
+                best = res.best
+                text = (
+                    "DAD scored no activity standing for a class compared"
+                    + (f" (its best match, {best.words}, stands for none)" if best else "")
+                    + f", so it answered the first class, {pred}."
+                )
             text += (
                 f"\nThe true activity: {wanted.in_words()}."
                 if wanted

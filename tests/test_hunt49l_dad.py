@@ -1,0 +1,47 @@
+"""Session 49, helper L: ``compare``'s explanations of DAD's errors when DAD scored no class."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cbr.evaluation.compare import run_compare
+from cbr.evaluation.misclassified import explain_dad_errors
+from cbr.evaluation.settings import CompareSettings
+from features.datasets import Clip
+from features.poses import JOINT_INDEX, PoseSequence
+from tests.moves import clip
+
+
+def _without_knees(seq: PoseSequence) -> PoseSequence:
+    pos = seq.positions.copy()
+    pos[:, [JOINT_INDEX["left_knee"], JOINT_INDEX["right_knee"]]] = np.nan
+    return PoseSequence(pos, seq.joint_names, seq.fps, source="squat without knees")
+
+
+def test_dad_answering_its_first_class_for_want_of_any_score_is_not_said_to_choose_it() -> None:
+    """A squat whose knees are missing throughout leaves the ADD's squat too little observable,
+    and "abduction" is no ADD activity: no class gets a score and DADClassifier answers its
+    first class (sorted: "abduction"). Before, the explanation read "DAD chose abduction.",
+    an activity DAD cannot recognise (the notes say so)."""
+    squat = _without_knees(clip("squat", seconds=2.0))
+    raise_arm = clip("arm_abduction", seconds=2.0)
+    clips = [Clip(squat, "squat", "a"), Clip(raise_arm, "abduction", "a")] * 2
+    plain = {"mirror": "off", "feature_weights": "off", "phases": "off"}  # no inner choice
+    settings = CompareSettings(
+        similarities=("euclidean",),
+        features=("fluents",),
+        peers=(),
+        k=1,
+        cbr_params=plain,
+        explain=0,
+        bootstrap=100,
+    )
+    run = run_compare(clips, settings, fold_indices=np.array([0, 0, 1, 1]))
+    dad = run.results.method("dad").scores
+    assert dad is not None and dad.predictions[0] == "abduction"
+    texts = [e.text for e in explain_dad_errors(run, 5) if e.true == "squat"]
+    assert texts and texts[0].startswith("DAD scored no activity standing for a class compared"), (
+        texts
+    )
+    assert texts[0].split("\n")[0].endswith(", so it answered the first class, abduction.")
+    assert "too little observable" in texts[0]  # the true activity says why it scored nothing
