@@ -1,14 +1,20 @@
-"""Session 49, helper L: ``compare``'s explanations of DAD's errors when DAD scored no class."""
+"""Session 49, helper L: ``compare``'s explanations of DAD's errors when DAD scored no class,
+and a ``--param`` the comparison sets itself."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
+import pytest
 
 from cbr.evaluation.compare import run_compare
 from cbr.evaluation.misclassified import explain_dad_errors
 from cbr.evaluation.settings import CompareSettings
 from features.datasets import Clip
+from features.errors import ParameterError
 from features.poses import JOINT_INDEX, PoseSequence
+from posecbr.cli import main
 from tests.moves import clip
 
 
@@ -45,3 +51,30 @@ def test_dad_answering_its_first_class_for_want_of_any_score_is_not_said_to_choo
     )
     assert texts[0].split("\n")[0].endswith(", so it answered the first class, abduction.")
     assert "too little observable" in texts[0]  # the true activity says why it scored nothing
+
+
+def test_a_param_compare_sets_itself_names_the_option_that_sets_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--param k=3`` (or ``similarity=dtw``, ``features=qmp``, ``trim=0.5``), each a
+    CaseBaseClassifier parameter, was "unknown case-base parameter(s) k (known: angles, ...)":
+    the comparison sets those per configuration, from its own options."""
+    for param, option, value in (
+        ("k=3", "--k", "3"),
+        ("similarity=dtw", "--similarities", "dtw"),
+        ("features=qmp", "--features", "qmp"),
+        ("trim=0.5", "--trim", "0.5"),
+    ):
+        key = param.split("=")[0]
+        assert main(["compare", str(tmp_path / "absent"), "--param", param]) == 1
+        assert capsys.readouterr().err == (
+            f"posecbr compare: error: --param: {key} is set for every case-base configuration"
+            f" by {option} (give {option} {value}), not by a parameter\n"
+        )
+    with pytest.raises(ParameterError) as caught:
+        CompareSettings(cbr_params={"k": 3})
+    assert caught.value.source == "cbr_params"
+    assert str(caught.value).startswith(
+        "cbr_params: k is set for every case-base configuration by `k`"
+    )
+    assert list(tmp_path.iterdir()) == []

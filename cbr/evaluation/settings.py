@@ -13,8 +13,9 @@ SIMILARITIES = ("euclidean", "dtw", "signature")
 FEATURE_LEVELS = ("fluents", "qmp")
 PEERS = ("dtw-knn", "minirocket")
 CV_SCHEMES = ("loso", "kfold")
-# Set by the comparison itself for every case-base configuration, so not a --param.
-_SET_PER_METHOD = {"features", "similarity", "k", "trim"}
+# Set by the comparison itself for every case-base configuration, so not a --param: each
+# with the argument that sets it.
+_SET_PER_METHOD = {"features": "features", "similarity": "similarities", "k": "k", "trim": "trim"}
 
 
 @dataclass(frozen=True)
@@ -126,7 +127,14 @@ class CompareSettings:
     def _check_cbr_params(self) -> None:
         from cbr.estimator import CaseBaseClassifier
 
-        known = set(CaseBaseClassifier().get_params()) - _SET_PER_METHOD
+        for key, argument in _SET_PER_METHOD.items():
+            if key in self.cbr_params:  # before: "unknown case-base parameter(s) k"
+                raise ParameterError(
+                    f"{key} is set for every case-base configuration by `{argument}` (give"
+                    f" `{argument}={self.cbr_params[key]!r}`), not by a parameter",
+                    "cbr_params",
+                )
+        known = set(CaseBaseClassifier().get_params()) - set(_SET_PER_METHOD)
         bad = sorted(set(self.cbr_params) - known)
         if bad:
             raise ParameterError(
