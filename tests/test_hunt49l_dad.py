@@ -1,8 +1,10 @@
 """Session 49, helper L: ``compare``'s explanations of DAD's errors when DAD scored no class,
-and a ``--param`` the comparison sets itself."""
+a ``--param`` the comparison sets itself, and ``report``'s pictures named but not there."""
 
 from __future__ import annotations
 
+import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -78,3 +80,30 @@ def test_a_param_compare_sets_itself_names_the_option_that_sets_it(
         "cbr_params: k is set for every case-base configuration by `k`"
     )
     assert list(tmp_path.iterdir()) == []
+
+
+def test_report_says_which_pictures_the_results_name_are_not_there(
+    swapped_compare: tuple[Path, Path, dict[str, str]],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A picture ``results.json`` names that its folder lacks (deleted, or the results file
+    copied alone) was left out of the page without a word; the accuracy picture and the
+    confusion matrices are drawn again from the results, the others cannot be."""
+    folder = tmp_path / "results"
+    shutil.copytree(swapped_compare[1], folder)
+    doc = json.loads((folder / "results.json").read_text())
+    lost = doc["pictures"]["prevalence"]
+    (folder / lost).unlink()
+    page = tmp_path / "report.html"
+    assert main(["report", str(folder), "--out", str(page)]) == 0
+    line = (
+        f"{lost}: named in {folder / 'results.json'} but not in its folder (moved or deleted?):"
+        " the report is without it"
+    )
+    assert capsys.readouterr().err == f"note: {line}\nreport written to {page}\n"
+    html = page.read_text()
+    assert f"<li class='note'>{line}</li>" in html
+    assert html.count("<img ") == len(doc["pictures"]["confusion"]) + 1 + len(
+        doc["pictures"]["timelines"]
+    )  # the accuracy, confusion and timeline pictures, not the prevalence

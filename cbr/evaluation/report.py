@@ -376,12 +376,30 @@ def write_report(results_path: str | Path, out: str | Path) -> tuple[Path, list[
     check_not_poses(dest, "report")
     check_page_name(dest)
     drawing = Drawing()
+    named = results.pictures.files()
     with tempfile.TemporaryDirectory() as tmp:
         if results.pictures.accuracy not in images:
+            redrawn = {results.pictures.accuracy, *(c.file for c in results.pictures.confusion)}
+            named = [name for name in named if name not in redrawn]
             drawn = result_pictures(results, tmp, drawing)
             results.pictures.accuracy = drawn.accuracy
             results.pictures.confusion = drawn.confusion
             images.update({name: Path(tmp) / name for name in drawn.files()})
+        # a picture the results name that is not there (moved, deleted): said on the page
+        # and by the command, not left out unseen
+        lost = _lost_line([name for name in named if name not in images], source)
+        results.notes = [*results.notes, *lost]  # this page's, not written back
         page = render_html(results, images)
     write_text_atomic(dest, page)
-    return dest, drawing.failures
+    return dest, drawing.failures + [f"note: {line}" for line in lost]
+
+
+def _lost_line(lost: list[str], source: Path) -> list[str]:
+    """The line naming the pictures ``source`` names that its folder lacks (none: no line)."""
+    if not lost:
+        return []
+    these = "it" if len(lost) == 1 else "them"
+    return [
+        f"{', '.join(lost)}: named in {source} but not in its folder (moved or deleted?): the"
+        f" report is without {these}"
+    ]
