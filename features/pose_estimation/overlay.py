@@ -331,7 +331,7 @@ def retime_mp4(path: Path, fps: float) -> None:
     """Give the frames of the MP4 ``path`` that OpenCV wrote at ``fps`` their times at
     exactly :func:`mp4_rate` of it. OpenCV's writer takes a float and keeps it to a
     power-of-ten denominator within 0.001 fps: 30000/1001 was written as 2997/100, an
-    overlay drifting 0.036 s an hour from its source. The track's time scale, its frames'
+    overlay drifting 0.0036 s an hour from its source. The track's time scale, its frames'
     durations (one entry of the ``stts`` box) and the durations of ``mvhd``, ``tkhd``,
     ``elst`` and ``mdhd`` are rewritten in place; the frames are untouched. A file of another
     layout (several durations, composition offsets, a value too wide for its field) is left
