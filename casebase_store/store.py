@@ -263,6 +263,13 @@ def _check_text(value: str, what: str, where: str, max_len: int | None = None) -
     return value
 
 
+def _inserted_id(result: Any) -> int:
+    """The id of the one row an insert without RETURNING added."""
+    key = result.inserted_primary_key
+    assert key is not None  # an insert's result has one
+    return int(key[0])
+
+
 def _check_poses(value: str, where: str) -> str:
     """A case's poses digest: a SHA-256 as 64 hexadecimal digits (what compares them)."""
     if not isinstance(value, str) or not re.fullmatch(r"[0-9a-f]{64}", value):
@@ -1742,6 +1749,9 @@ class StoreTransaction:
         if not rows:
             return []
         table = cast(Table, CaseRow.__table__)
+        if not self.session.get_bind().dialect.insert_returning:  # SQLite before 3.35
+            conn = self.session.connection()
+            return [_inserted_id(conn.execute(insert(table).values(**row))) for row in rows]
         q = insert(table).returning(table.c.id, sort_by_parameter_order=True)
         return [int(i) for i in self.session.execute(q, list(rows)).scalars()]
 

@@ -38,3 +38,35 @@ def test_casebase_with_an_empty_db_says_so_and_writes_nothing(
         " or a SQLAlchemy URL"
     )
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("returning", [True, False], ids=["returning", "sqlite-before-3.35"])
+def test_cases_are_stored_with_and_without_insert_returning(
+    returning: bool, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Cases are inserted with RETURNING (their ids in order) where the database has it, and
+    one by one where it has not (SQLite before 3.35, as on Ubuntu 20.04, which SQLAlchemy
+    tells by ``sqlite3.sqlite_version_info``): the same cases, ids 1..n in the order given.
+    Before, nothing could be stored there (SQLAlchemy refuses RETURNING)."""
+    import sqlite3
+
+    import numpy as np
+
+    from casebase_store import NewCase, open_store
+
+    if not returning:
+        monkeypatch.setattr(sqlite3.dbapi2, "sqlite_version_info", (3, 31, 1))
+    new = [NewCase(f"a{i % 2}", np.array([i, 2.0 * i]), f"c{i}.npz", 0, 9) for i in range(6)]
+    with open_store(str(tmp_path / "cb.sqlite"), create=True) as store:
+        assert store.engine.dialect.insert_returning is returning
+        with store.transaction() as tx:
+            info = tx.create_case_base("default", {"f": 1}, ["a", "b"], ["a", "b"],
+                                       {"name": "euclidean"})  # fmt: skip
+            assert tx.add_cases(info, new) == [1, 2, 3, 4, 5, 6]
+        with store.transaction() as tx:
+            found = [
+                c for chunk in tx.cases_framed(tx.case_base("default"), [(0, 9)]) for c in chunk
+            ]
+    assert [(c.id, c.source, list(c.features)) for c in found] == [
+        (i + 1, f"c{i}.npz", [i, 2.0 * i]) for i in range(6)
+    ]
