@@ -176,17 +176,23 @@ def _missing(
 
 def _nothing_to_do_unwritable(file: Path, timeout_s: float) -> bool:
     """For a SQLite file this process cannot write (the file or its folder read-only): True
-    when it needs no conversion (the current schema, not in WAL mode: the caller returns,
-    having read it read-only); refused in one line when it does. False for a writable file."""
+    when it needs no conversion (the current schema with every index and column of today's,
+    not in WAL mode: the caller returns, having read it read-only); refused in one line when
+    it does, naming what the upgrade would add (before: "nothing to do" for a store of the
+    current version lacking an index or a column). False for a writable file."""
     try:
         check_writable(file)
-    except StoreError:
+    except StoreError as refused:
         if in_wal_mode(file):  # leaving WAL mode writes the file
             raise
         engine, where = _make_engine(file, timeout_s, readonly=True)
         try:
             with engine.connect() as conn:
                 found = _schema_version(conn, where)
+                look = inspect(conn)
+                tables = set(look.get_table_names())
+                lacking = [f"the index {n}" for n in _lacking_indexes(look, tables)]
+                lacking += [f"the column {n}" for n in _lacking_columns(look, tables)]
         except StoreError:
             raise
         except Exception as exc:  # a driver error: one line naming the store
@@ -196,6 +202,11 @@ def _nothing_to_do_unwritable(file: Path, timeout_s: float) -> bool:
         if found != SCHEMA_VERSION:
             _check_upgradable(found, where)  # a version it could not convert anywhere
             raise
+        if lacking:  # as the upgrade of a writable file says it added them
+            raise StoreError(
+                f"would add {' and '.join(lacking)} of a newer schema, but {refused.message}",
+                refused.source,
+            ) from None
         return True
     return False
 
