@@ -1779,6 +1779,29 @@ class StoreTransaction:
                     out.setdefault((name, a, b), int(case_id))
         return out
 
+    def case_of_poses(
+        self, cb: CaseBaseInfo, poses: str, frames: tuple[int | None, int | None]
+    ) -> int | None:
+        """The id of the first active case of ``cb`` made of the clip of these ``poses`` (its
+        digest) and ``frames`` (first frame, end frame; a case stored without its frames: of
+        these poses alone), None when there is none: one stored without its digest, and every
+        case of a store made before the digests were kept, is none."""
+        if not self.store.keeps_poses:
+            return None
+        q = (
+            select(CaseRow.id, CaseRow.frame_start, CaseRow.frame_end)
+            .where(
+                CaseRow.case_base_id == cb.id,
+                CaseRow.active.is_(True),
+                CaseRow.poses == _check_poses(poses, self.store.where),
+            )
+            .order_by(CaseRow.id)
+        )
+        for case_id, a, b in self.session.execute(q):
+            if a is None or b is None or (a, b) == tuple(frames):
+                return int(case_id)
+        return None
+
     def cases_framed(
         self, cb: CaseBaseInfo, frames: Iterable[tuple[int | None, int | None]]
     ) -> Iterator[list[SourcedCase]]:

@@ -203,8 +203,10 @@ class CaseBase:
         origin: str = "retained",
         frames: tuple[int | None, int | None] = (None, None),
         skeleton: str | None = None,
+        poses: str = "",
     ) -> None:
-        """Append one case (the search index is rebuilt on next use)."""
+        """Append one case (the search index is rebuilt on next use); ``poses``: the digest of
+        the clip it was made of ("" when not known)."""
         assert self.ids is not None
         self.problems = np.concatenate([self.problems, np.asarray(problem)[None]])
         self.labels = np.append(self.labels, np.array([str(label)], dtype=object))
@@ -214,7 +216,7 @@ class CaseBase:
         self.origins += (origin,)
         self.frames += (frames,)
         self.skeletons += (skeleton,)
-        self.poses += ("",)
+        self.poses += (poses,)
         if self.reps is not None:
             self.reps = np.concatenate([self.reps, self.measure.represent(self.problems[-1:])])
         self._index = None

@@ -26,6 +26,7 @@ from features.progress import progress
 from features.text import shown
 
 from .casebase import frames_of, piece_fields, piece_name, skeleton_of, subject_of
+from .described import poses_digest
 from .estimator import CaseBaseClassifier, Solved, too_short, unusable
 from .explain import Explanation
 from .retain import RetainDecision, decide_retention, record_retention
@@ -315,7 +316,8 @@ def classify_with_feedback(
 ) -> list[Classification]:
     """Classify every clip, then learn from its true ``label`` (checked by
     :func:`check_feedback_label` first): retain it as a new case when it is novel and
-    beneficial (always, for the first clip of a new activity), otherwise revise the case base
+    beneficial (always, for the first clip of a new activity; never when its case is stored
+    already, the same frames and poses: it would vote twice), otherwise revise the case base
     toward it. One transaction per clip. Refused for a case base of repetitions or windows
     (:func:`check_feedback_cases`). Each answer is judged against ``label`` (the user's word,
     whatever label the clip's file carries: it is the one stored)."""
@@ -442,8 +444,16 @@ def _learn(
         rev = plan_revision(
             cb, values, label, rate=settings.rate, relabel_margin=settings.relabel_margin
         )
+    digest = poses_digest(clip)  # what tells a copy of it (train --append)
     with store.transaction() as tx:
         info = tx.expect(stored.name, stored.uid)
+        twin = tx.case_of_poses(info, digest, frames_of(clip)) if dec.retained else None
+        if twin is not None:  # its case would vote twice: revised as a clip not retained is
+            why = f"not retained: the same frames and poses as case #{twin}, stored already"
+            dec = RetainDecision(False, dec.novelty, dec.benefit, why)
+            rev = plan_revision(
+                cb, values, label, rate=settings.rate, relabel_margin=settings.relabel_margin
+            )
         case_id = record_retention(
             tx,
             info,
@@ -454,6 +464,7 @@ def _learn(
             subject=subject_of(clip),
             frames=frames_of(clip),
             skeleton=skeleton_of(clip),
+            poses=digest,
         )
         new = record_revision(tx, info, rev, values) if rev is not None else None
         changed = case_id is not None or _revised(rev)
@@ -469,6 +480,7 @@ def _learn(
             subject=subject_of(clip),
             frames=frames_of(clip),
             skeleton=skeleton_of(clip),
+            poses=digest,
         )
     if rev is not None and rev.action == "relabelled":
         cb.set_label(rev.index, rev.new_label)

@@ -121,8 +121,11 @@ def record_retention(
     subject: str | None = None,
     frames: tuple[int | None, int | None] = (None, None),
     skeleton: str | None = None,
+    poses: str | None = None,
 ) -> int | None:
-    """Inside ``tx``: log the decision (and add the case, if retained); the new case id."""
+    """Inside ``tx``: log the decision (and add the case, if retained); the new case id.
+    ``poses``: the :func:`cbr.described.poses_digest` of the clip the case is made of (what
+    tells a copy of it, ``train --append``), None when not known."""
     case_id = None
     if decision.retained:
         case = NewCase(
@@ -134,6 +137,7 @@ def record_retention(
             subject=subject,
             skeleton=skeleton,
             origin="retained",
+            poses=poses,
         )
         case_id = tx.add_cases(info, [case])[0]
     tx.log(

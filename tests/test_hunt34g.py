@@ -11,6 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from sqlalchemy.engine import make_url
 
@@ -189,8 +190,14 @@ def test_a_full_disk_for_the_matrices_is_a_note_after_the_stored_change_not_a_bu
     assert size > 3 * 4096  # the matrix needs more pages than the disk below has
     matrices = db.with_name(db.name + ".matrices")
     matrices.mkdir()
-    clip = sorted((tmp_path / "train").rglob("*.npz"))[0]
-    label = clip.parent.name
+    stored = sorted((tmp_path / "train").rglob("*.npz"))[0]
+    label = stored.parent.name
+    # a clip no case is made of (a stored clip's case is not retained again): the stored
+    # one without its first frame
+    with np.load(stored, allow_pickle=False) as z:
+        arrays = {k: z[k][1:] if k in ("positions", "confidence") else z[k] for k in z.files}
+    clip = tmp_path / "new.npz"
+    np.savez(clip, **arrays)
     code = (
         "import sys, cbr.stored; cbr.stored.MAPPED_MIN_CASES = 1; "  # every case base mapped
         "from posecbr.cli import main; sys.exit(main(sys.argv[1:]))"
