@@ -42,11 +42,16 @@ _KINECT = {
 def takes(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Three real UI-PRMD Kinect takes as pose files: ``train/scaption/a.npz``,
     ``train/abduction/b.npz`` and the other scaption take ``other/scaption/c.npz``."""
+    return write_takes(shared_data, tmp_path_factory.mktemp("takes"), _KINECT)
+
+
+def write_takes(shared_data: Path, root: Path, takes: dict[str, str]) -> Path:
+    """UI-PRMD Kinect takes (``takes``: the pose file under ``root`` -> the take's name in
+    the data set) written as pose files; ``root``."""
     from features.poses import save_pose
     from features.readers.uiprmd import read_uiprmd_kinect
 
-    root = tmp_path_factory.mktemp("takes")
-    for rel, name in _KINECT.items():
+    for rel, name in takes.items():
         (root / rel).parent.mkdir(parents=True, exist_ok=True)
         inc = "_inc" * name.startswith("Incorrect")
         path = shared_data / "ui-prmd" / "data" / f"{name}_positions{inc}.txt.gz"
@@ -89,25 +94,27 @@ def _features(db: Path, source: Path) -> np.ndarray:
     return np.load(io.BytesIO(blob))
 
 
-def _copy(takes: Path, tmp_path: Path) -> Path:
-    """``a.npz`` copied byte for byte as ``copy/scaption/renamed.npz``: the folder to append."""
+def _copy(takes: Path, tmp_path: Path, of: str = "train/scaption/a.npz") -> Path:
+    """Take ``of`` copied byte for byte as ``copy/scaption/renamed.npz``: the folder to
+    append."""
     copy = tmp_path / "copy" / "scaption" / "renamed.npz"
     copy.parent.mkdir(parents=True)
-    shutil.copyfile(takes / "train" / "scaption" / "a.npz", copy)
+    shutil.copyfile(takes / of, copy)
     return copy.parent.parent
 
 
-def _assert_refused_by_poses(takes: Path, db: Path, tmp_path: Path) -> None:
-    """Appending a byte copy of ``a.npz`` (:func:`_copy`) is refused as case 2 of ``db`` by
-    its frames and poses, in one line, the store unchanged."""
-    a = takes / "train" / "scaption" / "a.npz"
+def assert_refused_by_poses(
+    takes: Path, db: Path, tmp_path: Path, of: str = "train/scaption/a.npz", case: int = 2
+) -> None:
+    """Appending a byte copy of take ``of`` (:func:`_copy`) is refused as case ``case`` of
+    ``db`` by its frames and poses, in one line, the store unchanged."""
     before = db.read_bytes()
-    code, said = _run(["train", str(_copy(takes, tmp_path)), "--db", str(db), "--append"])
+    code, said = _run(["train", str(_copy(takes, tmp_path, of)), "--db", str(db), "--append"])
     assert code == 1
     assert said == (
         f"posecbr train: error: {db}: {tmp_path}/copy/scaption/renamed.npz frames 0-68 is "
-        f"already case 2 of 'default', stored as {a} frames 0-68 (the same frames and poses "
-        "under another file name: a copy of its file?): nothing added\n"
+        f"already case {case} of 'default', stored as {takes / of} frames 0-68 (the same"
+        " frames and poses under another file name: a copy of its file?): nothing added\n"
     )
     assert db.read_bytes() == before
 
@@ -127,7 +134,7 @@ def test_another_take_described_alike_is_added_and_a_copy_refused_by_its_poses(
     a, c = takes / "train" / "scaption" / "a.npz", takes / "other" / "scaption" / "c.npz"
     np.testing.assert_array_equal(_features(db, a), _features(db, c))  # described alike
     assert len(_cases(db)) == 3
-    _assert_refused_by_poses(takes, db, tmp_path)
+    assert_refused_by_poses(takes, db, tmp_path)
 
 
 def test_a_copy_is_refused_by_its_poses_when_the_stored_features_differ_in_the_last_digits(
@@ -147,7 +154,7 @@ def test_a_copy_is_refused_by_its_poses_when_the_stored_features_differ_in_the_l
     np.save(blob, moved)
     with contextlib.closing(sqlite3.connect(db)) as con, con:
         con.execute("UPDATE cases SET features = ? WHERE source = ?", (blob.getvalue(), str(a)))
-    _assert_refused_by_poses(takes, db, tmp_path)
+    assert_refused_by_poses(takes, db, tmp_path)
     assert len(_cases(db)) == 2
 
 

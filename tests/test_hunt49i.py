@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import io
 import json
 import shutil
 import sqlite3
@@ -27,6 +26,7 @@ import numpy as np
 import pytest
 
 from tests.badinput import posecbr_on_read_only_mount, read_only_mounts_work
+from tests.test_hunt49d import _run, assert_refused_by_poses, write_takes
 
 #: two takes of a standing shoulder scaption, 69 frames each (s01 incorrect, s02 correct),
 #: whose binary QMP vectors are the same; a shoulder abduction and a deep squat to train on
@@ -41,25 +41,7 @@ _KINECT = {
 @pytest.fixture(scope="module")
 def takes(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The real UI-PRMD Kinect takes of :data:`_KINECT` as pose files."""
-    from features.poses import save_pose
-    from features.readers.uiprmd import read_uiprmd_kinect
-
-    root = tmp_path_factory.mktemp("takes")
-    for rel, name in _KINECT.items():
-        (root / rel).parent.mkdir(parents=True, exist_ok=True)
-        inc = "_inc" * name.startswith("Incorrect")
-        path = shared_data / "ui-prmd" / "data" / f"{name}_positions{inc}.txt.gz"
-        save_pose(read_uiprmd_kinect(path), root / rel)
-    return root
-
-
-def _run(argv: list[str]) -> tuple[int, str]:
-    from posecbr.cli import main
-
-    said = io.StringIO()
-    with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
-        code = main(argv)
-    return code, said.getvalue()
+    return write_takes(shared_data, tmp_path_factory.mktemp("takes"), _KINECT)
 
 
 @pytest.fixture(scope="module")
@@ -112,18 +94,7 @@ def test_a_retained_case_keeps_its_poses_digest_and_train_append_tells_its_copy_
     assert code == 0, said
     c = takes / "other" / "scaption" / "c.npz"
     assert [r[2] for r in _cases(db)][2:] == [str(a), str(c)]
-    copy = tmp_path / "copy" / "scaption" / "renamed.npz"
-    copy.parent.mkdir(parents=True)
-    shutil.copyfile(a, copy)
-    before = db.read_bytes()
-    code, said = _run(["train", str(copy.parent.parent), "--db", str(db), "--append"])
-    assert code == 1
-    assert said == (
-        f"posecbr train: error: {db}: {copy} frames 0-68 is already case 3 of 'default', "
-        f"stored as {a} frames 0-68 (the same frames and poses under another file name: a "
-        "copy of its file?): nothing added\n"
-    )
-    assert db.read_bytes() == before
+    assert_refused_by_poses(takes, db, tmp_path, "feedback/scaption/a.npz", case=3)
 
 
 def test_feedback_on_a_clip_whose_case_is_stored_retains_no_second_case(
