@@ -70,3 +70,46 @@ def test_cases_are_stored_with_and_without_insert_returning(
     assert [(c.id, c.source, list(c.features)) for c in found] == [
         (i + 1, f"c{i}.npz", [i, 2.0 * i]) for i in range(6)
     ]
+
+
+def test_ctrl_c_while_the_console_script_imports_the_command_line_is_the_stop() -> None:
+    """The console script's entry (``posecbr.console:run``) with Ctrl-C arriving while
+    ``posecbr.cli`` is imported (a KeyboardInterrupt raised inside the import, as Python's
+    SIGINT handler raises it there): one line, exit 130. Before, ``posecbr.cli:main`` was the
+    entry, and the import ran in the script itself: Python's traceback, ended by SIGINT."""
+    import subprocess
+    import sys
+
+    script = (
+        "import sys\n"
+        "class Interrupted:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'posecbr.cli':\n"
+        "            raise KeyboardInterrupt\n"
+        "sys.meta_path.insert(0, Interrupted())\n"
+        "from posecbr.console import run\n"
+        "run()\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60
+    )
+    assert (proc.returncode, proc.stderr, proc.stdout) == (130, "posecbr: interrupted\n", "")
+
+
+def test_the_console_script_runs_the_command_line() -> None:
+    """``pyproject.toml``'s one console command is ``posecbr.console:run``, which gives
+    ``posecbr.cli.main``'s status as the process's."""
+    import subprocess
+    import sys
+    import tomllib
+
+    with open(Path(__file__).resolve().parents[1] / "pyproject.toml", "rb") as f:
+        assert tomllib.load(f)["project"]["scripts"] == {"posecbr": "posecbr.console:run"}
+    script = (
+        "import sys\nsys.argv = ['posecbr', 'no-such-command']\n"
+        "from posecbr.console import run\nrun()\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60
+    )
+    assert proc.returncode == 2 and "invalid choice: 'no-such-command'" in proc.stderr
