@@ -1008,8 +1008,9 @@ CHANGE_HOLD_S = 0.8
 """How long (s) a live source's rate must stay off by :data:`RATE_CHANGE` to be taken as
 changed: longer than a one-off hiccup or burst stays off in the window (half a second and
 the hiccup's quarter); a camera that halves its rate is followed by the wall clock some
-1.1 s after (the rate over the window off by a fifth 0.3 s after, then held): 0.55 s of
-movement on the grid, the segments after it timed that much early."""
+1.1 s after (the rate over the window off by a fifth 0.3 s after, then held): its frames in
+between, one to a grid time at the old rate, fell 0.55 s behind the clock, and that many grid
+times are then left missing (:meth:`Regrid._rate_changed`)."""
 
 RATE_SLACK = 0.05
 """How far off a live source's rate, measured over its first second, may be: the frames'
@@ -1026,11 +1027,12 @@ class Regrid:
     second), each frame is passed as it is (a live source's stalls left missing:
     :meth:`_stalled`). From the first frame of a file that strays (a variable frame rate:
     see :mod:`features.pose_estimation.video`), or once a live source's rate over its latest
-    frames has been off ``fps`` by more than :data:`RATE_CHANGE` for
-    :data:`CHANGE_HOLD_S` (a webcam's auto exposure halving it as the light falls, a
-    network stream's rate sagging: :meth:`_rate_changed`), the poses are put on the grid
-    k / fps as the frames come, by their own times (a live source's: the wall clock's, from
-    the frame it changed at), each grid time linearly between the frames around it (a joint
+    frames has been off ``fps`` by more than :data:`RATE_CHANGE` for :data:`CHANGE_HOLD_S`
+    (a webcam's auto exposure halving it as the light falls, a network stream's rate
+    sagging: :meth:`_rate_changed`), the poses are put on the grid k / fps as the frames
+    come, by their own times (a live source's: the wall clock's, from the window its rate
+    was first off in: the grid times its frames fell behind the clock by meanwhile are left
+    missing, :meth:`_behind`), each grid time linearly between the frames around it (a joint
     missing in either stays missing; every joint missing between two frames further apart
     than :func:`features.pose_estimation.video.bridge_limit_s`: a gap in the video, or the
     stream stalled, no motion made up for it, as ``extract`` leaves it; :attr:`absent` says
@@ -1048,9 +1050,11 @@ class Regrid:
         self.zero_s = math.nan  # when grid frame 0 was, by the clock stalls are counted by
         self.absent: list[bool] = []  # of the grid times the last take gave: inside a gap
         self.images: list[Any] = []  # and their image landmarks (the pose's jumps)
-        # a live source's latest frame times (s), a second of them: its rate now
-        self.recent: collections.deque[float] = collections.deque()
+        # a live source's latest frames (time_s, grid frame), half a second of them: its rate
+        self.recent: collections.deque[tuple[float, int]] = collections.deque()
         self.off_since = math.nan  # since when (time_s) that rate has been off fps
+        self.off_from = (math.nan, 0)  # then: the window's first frame (time_s, grid frame)
+        self.owed = 0  # grid times the frames fell behind the clock by, left missing
         self.by_clock = False  # a live source's frames put on the grid by the wall clock
         self.origin_s = math.nan  # then: the wall clock's time of grid frame 0
 
@@ -1066,12 +1070,14 @@ class Regrid:
         if not (self.resampling or math.isfinite(t)) and not self._rate_changed(frame):
             # a live source (or a file without frame times) at the rate it began with
             out = self._stalled(frame)
+            if self.recent:  # the grid frame it lies on, after those left missing
+                self.recent[-1] = (frame.time_s, self.k + len(out))
             self.prev, self.k = frame, self.k + len(out) + 1
             self.absent, self.images = [True] * len(out) + [False], [None] * len(out)
             self.images.append(_image(frame))
             return [*out, (frame.seen_world, frame.visibility, frame)]
         if self.by_clock:  # a live source whose rate changed, at this frame or before
-            return self._resampled(frame, frame.time_s - self.origin_s)
+            return self._behind(frame) + self._resampled(frame, frame.time_s - self.origin_s)
         if not self.resampling:
             if not strays(t, frame.index, self.fps):
                 self.prev, self.k = frame, frame.index + 1
@@ -1098,10 +1104,10 @@ class Regrid:
         start = self._grid_s(prev) if prev is not None else math.nan
         if prev is None or not math.isfinite(t) or t <= start:
             return []  # no time to place it by
-        out = []
+        out, gap = [], []
         while self.k / self.fps <= t + 1e-9:
             w = bridged_weight(self.k / self.fps, start, t, self.fps)
-            self.absent.append(bool(np.isnan(w)))
+            gap.append(bool(np.isnan(w)))
             world = blend(prev.seen_world, frame.seen_world, w)
             vis = blend(np.asarray(prev.visibility), np.asarray(frame.visibility), w)
             image = _image(prev), _image(frame)
@@ -1109,12 +1115,27 @@ class Regrid:
             out.append((world, vis, frame if w >= 1.0 - 1e-9 else prev))
             self.k += 1
         self.prev = frame
-        if any(self.absent) and not self.by_clock:
+        self.absent += gap
+        if any(gap) and not self.by_clock:
             print(f"note: {self.source}: {gap_words([(start, t)])}", file=sys.stderr)
-        elif any(self.absent):  # as :meth:`_stalled` says it, from the first frame
+        elif any(gap):  # as :meth:`_stalled` says it, from the first frame
             words = gap_words([(prev.time_s - self.first_s, frame.time_s - self.first_s)])
             print(f"note: {self.source}: the stream stalled: {words}", file=sys.stderr)
         return out
+
+    def _behind(self, frame: Any) -> list[tuple[Any, Any, Any]]:
+        """The grid times a live source's frames fell behind the wall clock by before its
+        change of rate was taken (:attr:`owed`, :meth:`_rate_changed`), each (missing world,
+        missing visibility, the frame before on screen): their poses were given early, one
+        to a grid time at the old rate, and are not given twice."""
+        import numpy as np
+
+        owed, self.owed = self.owed, 0
+        self.k += owed
+        self.absent += [True] * owed
+        self.images += [None] * owed
+        nan = np.full((len(frame.visibility),), np.nan)
+        return [(np.full_like(frame.seen_world, np.nan), nan, self.prev)] * owed
 
     def _grid_s(self, frame: Any) -> float:
         """When ``frame`` lies on the grid's clock once resampling (s): a file's own time, a
@@ -1126,28 +1147,43 @@ class Regrid:
         wall clock: its rate over its latest frames (:data:`CHANGE_WINDOW_S`,
         :func:`_frame_rate` of their times: a stall left out) has been off ``fps`` by more
         than :data:`RATE_CHANGE` for
-        :data:`CHANGE_HOLD_S` (not a hiccup, nor jitter). Then the grid's clock is set
-        so that ``frame`` lies on the next grid time (:attr:`origin_s`), and the user is
-        told once on stderr, from which rate to which."""
+        :data:`CHANGE_HOLD_S` (not a hiccup, nor jitter). Then the grid's clock
+        (:attr:`origin_s`) is the wall clock from the first frame of the window the rate was
+        first off in (before the change: on the grid as it came), and the grid times the
+        frames since, one to a grid time at the old rate, fell behind it by (:attr:`owed`)
+        are left missing (:meth:`_behind`): their poses were given early, and a grid time
+        given is final. The user is told once on stderr, from which rate to which and how
+        many grid times are missing. Before, the grid's clock was set so that ``frame`` lay
+        on the next grid time: a camera that halved its rate had every grid time after the
+        change 0.55 s early by the wall clock."""
         recent = self.recent
-        recent.append(frame.time_s)
-        while len(recent) > 2 and recent[1] <= frame.time_s - CHANGE_WINDOW_S:
+        recent.append((frame.time_s, self.k))
+        while len(recent) > 2 and recent[1][0] <= frame.time_s - CHANGE_WINDOW_S:
             recent.popleft()
-        rate = _frame_rate(list(recent), CHANGE_WINDOW_S)
+        rate = _frame_rate([time_s for time_s, _k in recent], CHANGE_WINDOW_S)
         if rate is None or abs(rate / self.fps - 1.0) <= RATE_CHANGE:
             self.off_since = math.nan
             return False
         if not frame.time_s - self.off_since >= CHANGE_HOLD_S:  # NaN: off from now
             if math.isnan(self.off_since):
-                self.off_since = frame.time_s
+                self.off_since, self.off_from = frame.time_s, recent[0]
             return False
         self.resampling = self.by_clock = True
-        self.origin_s = frame.time_s - self.k / self.fps
+        from_s, from_k = self.off_from
+        self.origin_s = min(from_s - from_k / self.fps, frame.time_s - self.k / self.fps)
+        lag_s = self.prev.time_s - self.origin_s  # the frame before's wall-clock grid time
+        self.owed = max(0, math.floor(lag_s * self.fps + 1e-9) + 1 - self.k)
         recent.clear()
+        behind = ""
+        if self.owed:  # the frames before, counted at the old rate, fell behind the clock
+            behind = (
+                f" ({counted(self.owed, 'frame')}, {self.owed / self.fps:.2f} s, left missing:"
+                " the frames before, counted at the old rate, fell that far behind the clock)"
+            )
         print(
             f"note: {self.source}: the frame rate changed from {self.fps:.3g} to {rate:.3g} fps"
             f" at {frame.time_s - self.first_s:.1f} s: poses resampled to {self.fps:.3g} fps by"
-            " the clock as they come",
+            f" the clock as they come{behind}",
             file=sys.stderr,
         )
         return True
