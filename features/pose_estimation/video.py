@@ -1449,9 +1449,29 @@ def stream_poses(
     ``read_at``) and its pose estimated; it may wait (a file played at its own rate) and
     returns False to stop the stream there. ``alive``: called while a served file is read
     again at its end (:func:`.served.served_cut`): no frame comes meanwhile.
+
+    The source is opened when this is called, not at the first frame asked for: a camera,
+    URL or file that cannot be opened is refused here (DataError, InputError), before the
+    caller's own preparations for the frames (``posecbr watch``'s warm-up: a mistyped URL
+    was said seconds late).
     """
     # served: over a network; turn: a still picture's EXIF orientation
-    cap, fps, declared, served, turn = _open_source(source, fps, timeout_s)
+    opened = _open_source(source, fps, timeout_s)
+    return _streamed(source, opened, smoothing, max_frames, estimator, timeout_s, pace, alive)
+
+
+def _streamed(
+    source: int | str | Path,
+    opened: tuple[cv2.VideoCapture, float | None, int, bool, int],
+    smoothing: bool,
+    max_frames: int | None,
+    estimator: PoseEstimator | None,
+    timeout_s: float | None,
+    pace: Callable[[int, float], bool] | None,
+    alive: Callable[[], None] | None,
+) -> Iterator[StreamFrame]:
+    """:func:`stream_poses`'s frames from its source ``opened`` (:func:`_open_source`)."""
+    cap, fps, declared, served, turn = opened
     est = estimator or PoseEstimator(smoothing=smoothing)
     est.reset()
     start = time.perf_counter()

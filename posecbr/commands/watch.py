@@ -525,6 +525,7 @@ def run(args: argparse.Namespace) -> int:
     # the pose model loaded here, before the stall clock runs: loading it (seconds on a slow
     # or busy machine) is no stall of the stream
     estimator = PoseEstimator(smoothing=True)
+    # the source opened here, before the warm-up: one that cannot be is said without its wait
     poses = stream_poses(
         source,
         estimator=estimator,
