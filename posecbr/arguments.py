@@ -220,11 +220,13 @@ def whole_numbers(values: Iterable[str]) -> bool:
     return all(v.isascii() and v.isdigit() for v in values)
 
 
-class PlotOption(argparse.Action):
-    """``--plot``: the path, as :func:`path_arg` reads it, and in ``<dest>_folder`` whether it
-    was written as a folder (ending in "/", which the Path drops): ``--plot figs/`` names a
-    folder, made if it is not there, as ``convert``, ``extract`` and ``compare --out DIR``
-    make theirs (it was refused as no picture's name)."""
+class PathOption(argparse.Action):
+    """A path option (``--plot``, an ``--overlay`` or ``--out`` video): the path, as
+    :func:`path_arg` reads it, and in ``<dest>_folder`` whether it was written as a folder
+    (ending in "/", which the Path drops): ``--plot figs/`` names a folder, made if it is not
+    there, as ``convert``, ``extract`` and ``compare --out DIR`` make theirs (it was refused
+    as no picture's name); ``--overlay clips/`` is told it names a folder
+    (:func:`check_mp4_name`), not that it lacks ".mp4"."""
 
     def __call__(
         self,
@@ -243,18 +245,34 @@ class PlotOption(argparse.Action):
 
 
 def add_plot_option(p: argparse.ArgumentParser, said: str, several: bool = False) -> None:
-    """``--plot PICTURE`` (:class:`PlotOption`): ``said`` what the picture shows; the help
+    """``--plot PICTURE`` (:class:`PathOption`): ``said`` what the picture shows; the help
     adds how it is named (``several``: the command takes several recordings, whose pictures
     go in a folder)."""
     folder = "a folder, a name ending in /" + (" or several recordings" if several else "")
     p.add_argument(
         "--plot",
-        action=PlotOption,
+        action=PathOption,
         metavar="PICTURE",
         help=f"{said} (.png, .svg, .pdf: by the name; {folder}: <recording>.png in it, the"
         " folder made if it is not there)",
     )
     p.set_defaults(plot_folder=False)
+
+
+def check_mp4_name(video: Path, folder: bool, what: str) -> None:
+    """Refuse, naming it, a video to be written (``what``: "overlay", "output video") that is
+    not named as an MP4 file: one that is a folder, or is written as one (``folder``: ending
+    in "/", :class:`PathOption`), is told to name the file in it (it was told only that it
+    must be an .mp4 file name, as if its suffix were the mistake)."""
+    if video.is_dir():
+        raise DataError(f"the {what} is a folder: name the .mp4 file to write in it", video)
+    if folder:
+        raise DataError(
+            f"the {what} is named as a folder (ending in /): name the .mp4 file to write in it",
+            f"{video}{os.sep}",
+        )
+    if video.suffix.lower() != ".mp4":
+        raise DataError(f"the {what} must be an .mp4 file name", video)
 
 
 def plot_targets(plot: Path, recordings: list[Path], folder: bool = False) -> list[Path]:

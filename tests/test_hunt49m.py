@@ -1,5 +1,6 @@
 """``posecbr watch`` of a URL or camera that cannot be opened says so before the segmenter's
-warm-up (hunt 49m: a mistyped URL cost 0.5-3 s before its one line)."""
+warm-up (hunt 49m: a mistyped URL cost 0.5-3 s before its one line), and a ``watch --out`` or
+``segment --overlay`` that names a folder is told so (it was told the name must end in .mp4)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from posecbr.cli import main
-from tests.badinput import small_case_base
+from tests.badinput import good_pose_file, refused, small_case_base
 from tests.test_hunt34c import _serving
 
 
@@ -51,3 +52,35 @@ def test_a_source_that_cannot_be_opened_is_refused_before_the_warm_up(
     assert warmed == []
     if source == "camera":
         assert opened == [97]
+
+
+@pytest.mark.parametrize(
+    ("command", "option", "what"),
+    [("watch", "--out", "output video"), ("segment", "--overlay", "overlay")],
+)
+def test_a_video_to_write_named_as_a_folder_is_told_to_name_the_file(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    command: str,
+    option: str,
+    what: str,
+) -> None:
+    """An existing folder, with or without its "/", and a name ending in "/" that is no
+    folder yet: each one line naming it, nothing written, where each was told that the
+    video must be an .mp4 file name."""
+    (tmp_path / "clips").mkdir()
+    recording = str(good_pose_file(tmp_path / "rec.npz"))
+    source = ["watch", recording] if command == "watch" else ["segment", recording]
+    argv = [*source, "--db", str(tmp_path / "cb.sqlite"), option]
+    folder = tmp_path / "clips"
+    for named in (str(folder), f"{folder}/"):
+        line = refused([*argv, named], tmp_path, capsys)
+        assert line == (
+            f"posecbr {command}: error: {folder}: the {what} is a folder: name the .mp4 file"
+            " to write in it"
+        )
+    line = refused([*argv, f"{tmp_path}/new/"], tmp_path, capsys)
+    assert line == (
+        f"posecbr {command}: error: {tmp_path}/new/: the {what} is named as a folder (ending"
+        " in /): name the .mp4 file to write in it"
+    )

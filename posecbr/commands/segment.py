@@ -57,9 +57,11 @@ from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
 from posecbr.arguments import (
     DB,
+    PathOption,
     add_k_option,
     add_plot_option,
     as_options,
+    check_mp4_name,
     check_plot,
     path_arg,
     plot_targets,
@@ -143,11 +145,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     add_plot_option(p, "segments over the fluent timeline", several=True)
     p.add_argument(
         "--overlay",
-        type=path_arg,
+        action=PathOption,
         metavar="OUT.mp4",
         help="a video recording with the stick figure, activity and count drawn",
     )
-    p.set_defaults(func=_given(p))
+    p.set_defaults(func=_given(p), overlay_folder=False)
 
 
 #: what a file named as a recording ends in: never a label file (text), so one after
@@ -305,8 +307,7 @@ def _outputs(args: argparse.Namespace) -> None:
     if args.overlay is not None:
         if len(args.recordings) > 1:
             raise DataError("--overlay takes one recording", args.overlay)
-        if args.overlay.suffix.lower() != ".mp4":
-            raise DataError("the overlay must be an .mp4 file name", args.overlay)
+        check_mp4_name(args.overlay, args.overlay_folder, "overlay")
         check_output(args.overlay, inputs=_inputs(args), what="overlay")
 
 

@@ -58,7 +58,7 @@ from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import PARTIAL, PICTURE_WORDS, atomic_path, check_output, stdout_gone
 from features.interrupts import raise_interrupt, sigterm_held
 from features.text import counted, shown
-from posecbr.arguments import add_k_option, path_arg
+from posecbr.arguments import PathOption, add_k_option, check_mp4_name
 from posecbr.recordings import note_low_rate
 
 from .segment import overlay_label
@@ -78,7 +78,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--out",
         "--overlay",  # as segment and extract name the video with the stick figure drawn
         dest="out",
-        type=path_arg,
+        action=PathOption,
         metavar="VIDEO.mp4",
         help="write the annotated frames (--overlay: the same, as segment and extract name it)",
     )
@@ -124,7 +124,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help=f"what makes a stretch unknown, as in posecbr segment: {', '.join(JUDGES)}"
         " (default spread-margin)",
     )
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, out_folder=False)
 
 
 #: recordings of poses, not videos: segment reads them
@@ -174,8 +174,7 @@ def _check(args: argparse.Namespace) -> None:
     if args.max_frames is not None and args.max_frames < 1:
         raise ConfigError(f"must be >= 1, got {args.max_frames}", "--max-frames")
     if args.out is not None:
-        if args.out.suffix.lower() != ".mp4":
-            raise DataError("the output video must be an .mp4 file name", args.out)
+        check_mp4_name(args.out, args.out_folder, "output video")
         from casebase_store import store_files
 
         inputs: list[str | Path] = [*_read_files(args.source), *store_files(args.db)]
