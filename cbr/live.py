@@ -632,21 +632,24 @@ class LiveSegmenter:
 
     def _look(self, frame: np.ndarray) -> None:
         """Follow the runs of frames without the person with frame :attr:`n`, ``frame``: the
-        sighting of the frame :attr:`glitch` frames back is known now."""
+        sighting of the frame :attr:`glitch` frames back is known now (of the stream's first
+        :attr:`glitch` frames, when twice as many are pushed: each is read over the first
+        frames of the stream, as offline)."""
         self.sightings.append(bool(torso_seen(frame[self.torso])))
-        if self.n + 1 - self.looked > self.glitch:
-            self._sighted(self.n + 1)
+        end = self.n + 1
+        while end > 2 * self.glitch and end - self.looked > self.glitch:
+            self._sighted(end)
 
     def _sighted(self, end: int) -> None:
         """Whether frame :attr:`looked` shows the person, the frames up to ``end``
         (exclusive) pushed: the majority of the frames within :attr:`glitch` of it that show
         the torso, as :func:`cbr.segmentation.nobody_blocks` reads it
-        (:func:`features.body.majority`: nearer the stream's ends, within as many frames on
-        either side as there are on both); and the runs of frames without the person
-        followed with it."""
+        (:func:`features.body.majority`: nearer the stream's ends, of as many frames nearest
+        that end); and the runs of frames without the person followed with it."""
         i, first = self.looked, end - len(self.sightings)  # first: the frame sightings[0] is
-        half = min(self.glitch, i, end - 1 - i)
-        window = list(self.sightings)[i - half - first : i + half + 1 - first]
+        half = min(self.glitch, (end - 1) // 2)
+        centre = min(max(i, half), end - 1 - half)
+        window = list(self.sightings)[centre - half - first : centre + half + 1 - first]
         seen = 2 * sum(window) > len(window)
         if not seen and self.blind_from is None:
             self.blind_from = i

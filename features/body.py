@@ -301,13 +301,16 @@ def majority(mask: np.ndarray, width: int) -> np.ndarray:
     """``mask`` ``(n,)`` with each sample the majority of the ``width`` samples (odd) centred
     on it: a running median of a yes/no signal, which drops its runs shorter than half
     ``width`` and keeps where a longer run begins and ends. Within half ``width`` of an end,
-    of as many samples on either side as there are on both (the first and last sample as
-    they are): with none beyond the end, a short run there cannot be told from the start of
-    a long one."""
+    the majority of the ``width`` samples nearest that end (of a shorter ``mask``, of the
+    most it holds, an odd number): a run at an end goes or stays by its length as one
+    inside does (before, of as many samples on either side as there were on both, the first
+    and last alone: the pose model "seeing" the person in the first frames of a stretch
+    with nobody in view stayed)."""
+    n = len(mask)
+    half = min(width // 2, (n - 1) // 2)
     count = np.concatenate([[0], np.cumsum(mask, dtype=np.int64)])
-    i = np.arange(len(mask))
-    half = np.minimum(np.minimum(i, len(mask) - 1 - i), width // 2)
-    return np.asarray(2 * (count[i + half + 1] - count[i - half]) > 2 * half + 1)
+    centre = np.clip(np.arange(n), half, n - 1 - half)
+    return np.asarray(2 * (count[centre + half + 1] - count[centre - half]) > 2 * half + 1)
 
 
 def torso_rows(seq: PoseSequence) -> np.ndarray:

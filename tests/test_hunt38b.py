@@ -156,14 +156,16 @@ def test_a_stream_ending_with_nobody_in_view_ends_with_a_nobody_segment(
     assert [r for *_, r in watched] == [want, 0]
 
 
-@pytest.mark.parametrize("after_s", [0.1, 0.5])
+@pytest.mark.parametrize("after_s", [0.2, 0.5])
 def test_a_stream_ending_just_after_the_person_is_seen_again(
     squat_or_arms: object, after_s: float
 ) -> None:
-    """Two squats, nobody in view for 1.5 s, then the person standing again for the last 0.1
+    """Two squats, nobody in view for 1.5 s, then the person standing again for the last 0.2
     or 0.5 s: three segments in ``segment`` and now in ``watch``: the squats (2), nobody in
     view (0), the person seen again (0, labelled). Before, ``watch`` gave the squats' segment
-    to the end, or (0.5 s) made the stretch with nobody in view run on to the end."""
+    to the end, or (0.5 s) made the stretch with nobody in view run on to the end. (The last
+    0.1 s, 3 frames at 30 fps, was here too; since hunt 50c a run that short at an end is a
+    glitch of the pose model, as inside: nobody in view to the end, tests/test_hunt50c.py.)"""
     seq = _lost_to_the_end(2, False, 1.5, after_s)
     lost = seq.n_frames - int(after_s * FPS) - int(1.5 * FPS)
     back = lost + int(1.5 * FPS)

@@ -26,11 +26,12 @@ from tests.test_segment import classifier, names, recordings  # noqa: F401 - the
 
 
 def test_majority_by_hand() -> None:
-    """Runs shorter than half the width go, longer ones keep their edges; near the ends the
-    window holds as many samples on either side as there are on both (the first and last
-    sample as they are)."""
+    """Runs shorter than half the width go, longer ones keep their edges; near the ends a
+    sample is read over the ``width`` samples nearest the end, so a short run there goes
+    as one inside does (hunt 50c: the two leading 1s, under half of 5, go; before, the first
+    sample was read alone and the second over three)."""
     got = majority(np.array([1, 1, 0, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1, 0, 1, 1], bool), 5)
-    assert got.tolist() == [bool(x) for x in [1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1]]
+    assert got.tolist() == [bool(x) for x in [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1]]
     assert majority(np.array([1, 0, 1, 0, 1, 0], bool), 3).tolist() == [
         True, True, False, True, False, False
     ]  # fmt: skip
