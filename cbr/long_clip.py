@@ -24,11 +24,13 @@ import numpy as np
 from features.body import (
     arm_planes,
     left_moves_more,
+    mid_hips,
     mirrored,
     neck_to_hip,
     position_frame,
     positions_in_frame,
     start_frames,
+    start_rows,
 )
 from features.derived import derived, is_cached
 from features.fluents import DEFAULT_TABLE, evaluate, history_frames
@@ -165,16 +167,19 @@ def _position_frame(seq: PoseSequence, chunk: int, mirror: bool) -> PositionFram
         return (mirrored(part) if mirror else part).positions
 
     n = seq.n_frames
-    lengths = np.concatenate(
-        [neck_to_hip(canonical(s, s + chunk)) for s in range(0, n, chunk)]
-    )  # fmt: skip
+    lengths, hips = [], []
+    for s in range(0, n, chunk):
+        part = canonical(s, s + chunk)
+        lengths.append(neck_to_hip(part))
+        hips.append(mid_hips(part))
+    at = start_rows(np.concatenate(hips), start_frames(n))
 
     def level_left() -> np.ndarray:
         return np.concatenate(
             [body_frame(canonical(s, s + chunk)).level_left for s in range(0, n, chunk)]
         )  # fmt: skip
 
-    return position_frame(canonical(0, start_frames(n)), lengths, level_left)
+    return position_frame(canonical(at.start, at.stop), np.concatenate(lengths), level_left)
 
 
 def _piece_columns(

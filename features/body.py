@@ -22,6 +22,7 @@ from .geometry import (
     angle_between,
     body_frame,
     joint_angle,
+    midpoint,
     norm,
     project,
     unit,
@@ -102,7 +103,8 @@ def body_positions(seq: PoseSequence) -> np.ndarray:
     """Positions of :data:`POSITION_JOINTS` in the person's frame at the start of the clip,
     ``(frames, 3 * len(POSITION_JOINTS))``, joint-major, axes :data:`POSITION_AXES`.
 
-    Origin: the mid-hip over the first tenth of the clip (at least 3 frames); axes: "left"
+    Origin: the mid-hip over the first tenth of the clip (at least 3 frames, from the first
+    that shows the hips: :func:`start_rows`); axes: "left"
     along the level left-right line of the body there, "height" straight up, "forward"
     completing a right-handed frame (the way the chest faces); unit: the person's torso length
     (median neck to mid-hip), so people of different sizes compare. How far the hips drop in a
@@ -113,9 +115,20 @@ def body_positions(seq: PoseSequence) -> np.ndarray:
 
 def _body_positions(s: PoseSequence) -> np.ndarray:
     rows = frame_rows(s)
-    k = start_frames(s.n_frames)
-    frame = frame_from(rows[:k, :3], rows[:k, 3:6], rows[:, 6], lambda: rows[:, 3:6])
+    at = start_rows(rows[:, :3], start_frames(s.n_frames))
+    frame = frame_from(rows[at, :3], rows[at, 3:6], rows[:, 6], lambda: rows[:, 3:6])
     return positions_in_frame(s.to_canonical().positions, frame)
+
+
+def start_rows(mid_hip: np.ndarray, k: int) -> slice:
+    """The ``k`` frames that set a clip's :func:`position_frame`, of its mid-hips ``(frames,
+    3)``: from the first in which the hips are seen (from the first frame when none is).
+    Before, the clip's first ``k`` whatever they showed: a clip whose first tenth lacks the
+    person (a window of a recording that starts before the pose model finds them) had no
+    position at all, and was unlike every case."""
+    seen = np.flatnonzero(~np.isnan(mid_hip).any(axis=1))
+    first = int(seen[0]) if len(seen) else 0
+    return slice(first, first + k)
 
 
 def frame_rows(seq: PoseSequence) -> np.ndarray:
@@ -133,7 +146,8 @@ def frame_rows(seq: PoseSequence) -> np.ndarray:
 
 
 def start_frames(frames: int) -> int:
-    """How many frames at the start of a clip set its body frame: a tenth, at least 3."""
+    """How many frames at the start of a clip set its body frame: a tenth, at least 3
+    (from the first that shows the hips, :func:`start_rows`)."""
     return max(3, frames // 10)
 
 
@@ -144,13 +158,20 @@ def neck_to_hip(p: np.ndarray) -> np.ndarray:
     return np.asarray(norm(neck - mid_hip))
 
 
+def mid_hips(p: np.ndarray) -> np.ndarray:
+    """``(frames, 3)`` mid-hip of canonical positions ``(frames, 33, 3)`` (NaN where a hip is
+    missing), as :func:`features.geometry.body_frame` gives it."""
+    return midpoint(p[:, JOINT_INDEX["left_hip"]], p[:, JOINT_INDEX["right_hip"]])
+
+
 def position_frame(
     start: np.ndarray, torso_lengths: np.ndarray, level_left: Callable[[], np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray, float] | None:
     """The frame :func:`body_positions` measures in: origin ``(3,)``, axes ``(3, 3)`` (rows:
     left, height, forward) and unit (the torso length), or None where the clip has none.
 
-    start: the first :func:`start_frames` frames ``(k, 33, 3)``; torso_lengths: every frame's
+    start: the :func:`start_frames` frames from the first that shows the hips ``(k, 33, 3)``
+    (:func:`start_rows`); torso_lengths: every frame's
     :func:`neck_to_hip` ``(frames,)``; level_left: the whole clip's level left directions
     ``(frames, 3)``, asked for only when the start has none (so a long clip can give them a
     piece at a time)."""

@@ -50,3 +50,50 @@ def test_a_glitch_in_the_first_or_last_frames_of_nobody_in_view_is_no_person(
         assert [s.explanation == NOBODY for s in got] == [True, False, True]
     assert [len(s.repetitions) for s in offline] == [0, 4, 0]
     assert [s.repetitions for s in watched] == [0, 4, 0]
+
+
+def test_a_clip_that_starts_without_the_person_has_positions_from_where_they_are_seen(
+    recordings: dict[str, PoseSequence],  # noqa: F811 - the fixture imported above
+) -> None:
+    """13_30's twists at 30 fps, 30 frames, after 3 frames with every joint missing: the
+    positions of those 30 frames are theirs as a clip alone (both set their frame over 3
+    frames, a tenth of 33 or 30 at least 3, from the first showing the hips), and a long
+    clip's frame, read in pieces of 8 frames (the first seen in the second), is the same.
+    Before, the frame was set over the first 3 frames whatever they showed: every position
+    missing, and each window of a recording that starts before the person is seen unlike
+    every case."""
+    from cbr.long_clip import _position_frame
+    from features.body import body_positions, positions_in_frame
+
+    rec = recordings["13_30"]
+    twist = rec.positions[int(1.8 * 120) :][::4][:30]
+    pos = np.concatenate([np.full((3, *twist.shape[1:]), np.nan), twist])
+    late = PoseSequence(pos, rec.joint_names, 30.0, source="late")
+    alone = PoseSequence(twist, rec.joint_names, 30.0, source="alone")
+    got = body_positions(late)
+    assert np.isnan(got[:3]).all()
+    np.testing.assert_allclose(got[3:], body_positions(alone), atol=1e-12)
+    pieces = positions_in_frame(late.to_canonical().positions, _position_frame(late, 8, False))
+    np.testing.assert_allclose(pieces, got, atol=1e-12)
+
+
+def test_a_recording_that_starts_before_the_person_is_seen_is_segmented_from_its_start(
+    recordings: dict[str, PoseSequence],  # noqa: F811 - the fixture imported above
+    classifier: CaseBaseClassifier,  # noqa: F811
+) -> None:
+    """At 30 fps: 0.5 s with every joint missing (the pose model not yet on the person: 15
+    frames, under the second a stretch with nobody in view needs), 13_30's twists (1.8-6.7 s:
+    15-162), its knee raises (6.7-11.8 s: 162-315): the twists from the start, counted 3, and
+    the knee raises 4 (by hand, tests/fixtures/repetition_counts.json). Before, ``segment``
+    gave unknown 0-51 (counted 1, a twist) and the twists 51-156 counted 2: the windows
+    over the first 0.5 s had no positions (their frame set over frames with nobody), unlike
+    every case."""
+    rec = recordings["13_30"]
+    twist = rec.positions[int(1.8 * 120) : int(6.7 * 120)][::4]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)][::4]
+    pos = np.concatenate([np.full((15, *knee.shape[1:]), np.nan), twist, knee])
+    got = segment(classifier, PoseSequence(pos, rec.joint_names, 30.0, source="late")).segments
+    assert [(s.start_frame, s.label, len(s.repetitions)) for s in got] == [
+        (0, "Twist", 3), (got[1].start_frame, "KneeRaise", 4)
+    ]  # fmt: skip
+    assert abs(got[1].start_frame - 162) <= 9  # the change placed within 0.3 s
