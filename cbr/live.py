@@ -812,7 +812,8 @@ class LiveSegmenter:
             if run is not None:
                 seen = self.nobody
             if self.seen is None:
-                self.seen = self._first_seen(hop.centre, seen)
+                own = self.unknown if far else hop.activity
+                self.seen = self._first_seen(hop.centre, seen, run, own)
             if self.seen == self.nobody and seen == self.unknown:
                 finished += self._after_nobody(hop)
             elif seen != self.seen:
@@ -833,7 +834,7 @@ class LiveSegmenter:
         del self.pending[: len(unknown)]
         return finished
 
-    def _first_seen(self, centre: float, seen: int) -> int:
+    def _first_seen(self, centre: float, seen: int, run: tuple[int, int] | None, own: int) -> int:
         """The label seen of the stream's first segment, its first hop (at ``centre``) seen
         as ``seen``: nobody in view when a stretch of :data:`MIN_SEGMENT_S` or more with
         nobody in view opens the stream and ends by that hop (which no hop then lies in: the
@@ -841,7 +842,13 @@ class LiveSegmenter:
         of exactly a second), the hop then following it as one after such a stretch does, as
         offline (:func:`cbr.segmentation.nobody_blocks`: every block from the first). Before,
         the lead-in joined the first segment, unknown by its half-empty windows, where
-        ``segment`` gave it as nobody in view."""
+        ``segment`` gave it as nobody in view. When the hop lies in such a stretch (``run``)
+        that begins after the stream's first frame, the frames before it show the person:
+        the first segment is theirs, seen as the hop's own label ``own`` (its activity, or
+        unknown), as offline the decoder's path gives them, and nobody in view begins where
+        the person is lost (hunt 50c: before, the person's first 0.5 s joined the stretch)."""
+        if run is not None and run[0] > self.seen_start:
+            return own
         lead = next((run for run in self.blind if run[1] <= centre), None)
         if lead is None:
             return seen

@@ -1,4 +1,4 @@
-"""Hunt 50c: a glitch of the pose model within 0.1 s of a recording's start or end.
+"""Hunt 50c: a recording's very start and end.
 
 Whether a frame shows the person is the majority of the 0.2 s around it
 (:func:`features.body.majority`, :func:`cbr.segmentation.sighting_width`); within 0.1 s of
@@ -8,6 +8,12 @@ frames of a stretch with nobody in view stayed seen: "unknown 0-3" before nobody
 in ``segment``, a sliver of some activity in the last 0.1 s in ``segment`` and ``watch``.
 Now such a frame is read over the frames nearest the end, as many as inside: a run at an
 end is dropped or kept, by its length, as one inside is.
+
+A clip's joint positions were measured in a frame set over its first tenth whatever it
+showed: a window of a recording that starts before the pose model finds the person had
+none, and ``segment`` gave the first 0.6-1.7 s unknown; now the frame is set from the first
+frame showing the hips. And ``watch`` gave the person's frames before the stream's first
+second to a stretch with nobody in view after them.
 """
 
 from __future__ import annotations
@@ -97,3 +103,30 @@ def test_a_recording_that_starts_before_the_person_is_seen_is_segmented_from_its
         (0, "Twist", 3), (got[1].start_frame, "KneeRaise", 4)
     ]  # fmt: skip
     assert abs(got[1].start_frame - 162) <= 9  # the change placed within 0.3 s
+
+
+def test_the_person_seen_before_the_first_second_and_then_lost_is_not_nobody_in_view(
+    recordings: dict[str, PoseSequence],  # noqa: F811 - the fixture imported above
+    classifier: CaseBaseClassifier,  # noqa: F811
+) -> None:
+    """At 30 fps: 13_30's squats' first 0.5 s (frames 0-15), 3 s with every joint missing
+    (15-105), its knee raises (6.7-11.8 s: 105-258), by construction: nobody in view exactly
+    15-105, the person's frames before it a segment of their own, and the knee raises from
+    105 counted 4 (by hand), in ``segment`` and ``watch`` alike. Before, ``watch`` gave
+    nobody in view 0-105: its first segment took the label of its first hop, a second in,
+    inside the stretch."""
+    from cbr.live import LiveSegmenter
+
+    rec = recordings["13_30"]
+    squat = rec.positions[int(11.8 * 120) : int(12.3 * 120)][::4]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)][::4]
+    pos = np.concatenate([squat, np.full((90, *knee.shape[1:]), np.nan), knee])
+    rec = PoseSequence(pos, rec.joint_names, 30.0, source="seen, lost, back")
+    offline = segment(classifier, rec).segments
+    live = LiveSegmenter(classifier, 30.0)
+    watched = [s for frame in rec.positions for s in live.push(frame)] + live.finish()
+    for got in (offline, watched):
+        assert [(s.start_frame, s.end_frame) for s in got] == [(0, 15), (15, 105), (105, 258)]
+        assert [s.explanation == NOBODY for s in got] == [False, True, False]
+        assert got[-1].label == "KneeRaise"
+    assert len(offline[-1].repetitions) == watched[-1].repetitions == 4
