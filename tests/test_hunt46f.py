@@ -231,7 +231,7 @@ def test_extract_overlay_folder_refuses_a_file_it_did_not_draw_and_redraws_its_o
     line = refused([*argv, "--force"], tmp_path, capsys)
     assert line == (
         f"posecbr extract: error: {theirs}: is already there, not an overlay posecbr extract "
-        f"made of clip.mp4: extracting into {poses} would replace it; move it away, or choose "
+        f"made of clip.mp4: extracting into {ov} would replace it; move it away, or choose "
         "another --overlay"
     )
     theirs.unlink()

@@ -31,7 +31,15 @@ from features.formats import SHOWN_VIDEO_SUFFIXES, is_video_in_folder
 from features.interrupts import interrupts_held, run_task, stop_workers, worker_ends_on_sigterm
 from features.progress import progress
 from features.text import counted, first_few, shown
-from posecbr.arguments import NOT_A_PATH, SCHEDULER, as_options, is_url, path_arg
+from posecbr.arguments import (
+    NOT_A_PATH,
+    SCHEDULER,
+    PathOption,
+    as_options,
+    check_mp4_name,
+    is_url,
+    path_arg,
+)
 
 if TYPE_CHECKING:  # imported where used: start-up
     import numpy as np
@@ -109,10 +117,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument(
         "--overlay",
-        type=path_arg,
-        metavar="OUT.mp4",
-        help="also write the video with the stick figure (and the fluents that hold) "
-        "drawn on it; for several clips, a folder for one MP4 each",
+        action=PathOption,
+        metavar="OUT.mp4|DIR",
+        help="also write the video with the stick figure (and the fluents that hold) drawn"
+        " on it: for one video an .mp4 file, or a folder (one there, or a name ending in /,"
+        " made if it is not there) for <video>.mp4, as --out; a folder's or labels CSV's"
+        " clips, one <video>.mp4 each in a folder",
     )
     p.add_argument(
         "--no-smoothing",
@@ -131,7 +141,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument("--scheduler", metavar="ADDRESS|local:N", help=SCHEDULER_HELP)
     p.add_argument("--force", action="store_true", help="re-extract even if up to date")
-    p.set_defaults(func=run)  # fmt: skip
+    p.set_defaults(func=run, overlay_folder=False)  # fmt: skip
 
 
 # ---- finding clips ------------------------------------------------------------------------
@@ -215,8 +225,13 @@ def _folder_jobs(source: Path, out: Path) -> list[Job]:
     return jobs
 
 
-def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
-    """The clips ``source`` names, with their output paths (see the command's help)."""
+def find_jobs(
+    source: Path, out: Path, overlay: Path | None, overlay_folder: bool = False
+) -> list[Job]:
+    """The clips ``source`` names, with their output paths (see the command's help). One
+    video's ``overlay`` names its overlay file or, ``overlay_folder`` (a folder there, or a
+    name written ending in "/"), the folder of its ``<stem>.mp4``, as several clips'
+    ``overlay`` names the folder of theirs (and ``out`` the folder of the pose files)."""
     if not source.exists():
         raise DataError("no such file or folder", source)
     if not source.is_file() and not source.is_dir():
@@ -229,9 +244,11 @@ def find_jobs(source: Path, out: Path, overlay: Path | None) -> list[Job]:
             " file, not a video or picture (--overlay writes a video of the stick figure)",
             out,
         )
-    if source.is_file() and source.suffix.lower() != ".csv":
+    if _one_video(source):
         _check_not_recording(source)
         name = out if _names_pose_file(out) else out / f"{source.stem}.npz"
+        if overlay is not None and overlay_folder:
+            overlay = overlay / f"{source.stem}.mp4"
         return [Job(video=source, out=name, overlay=overlay)]
     if _names_pose_file(out):
         raise DataError(
@@ -808,18 +825,23 @@ def _options(args: argparse.Namespace) -> Options:
 
 def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
     """Every output path refused or prepared before the first clip is read."""
-    single = len(jobs) == 1 and args.input.is_file()
+    single = _one_video(args.input)
     if single and args.scheduler is not None:
         raise ConfigError(
             "one video is extracted here, in this process; the cluster takes a folder or "
             "labels CSV of clips",
             "--scheduler",
         )
-    if args.overlay is not None and single:
-        if args.overlay.suffix.lower() != ".mp4":
-            raise DataError("overlay must be an .mp4 file name", args.overlay)
+    if args.overlay is not None and single and not args.overlay_folder:
+        try:
+            check_mp4_name(args.overlay, False, "overlay")
+        except DataError as exc:
+            if args.overlay.suffix:
+                raise
+            made = f"; a folder to be made for it is written ending in / ({args.overlay}/)"
+            raise DataError(exc.message + made, args.overlay) from None
         # one file, as segment --overlay and watch --out: its folder must exist (a folder
-        # of overlays for several clips is made, with the class folders inside)
+        # of overlays is made, with the class folders inside)
         check_output(args.overlay, inputs=[args.input], what="overlay")
     elif args.overlay is not None and not args.overlay.is_dir():
         if args.overlay.suffix.lower() in SHOWN_VIDEO_SUFFIXES:
@@ -828,40 +850,52 @@ def _check_before_work(args: argparse.Namespace, jobs: list[Job]) -> None:
                 "videos, not one video file",
                 args.overlay,
             )
+    # the folder of the overlays: their files are extract's own to replace, not the user's
+    overlays = args.overlay if args.overlay_folder or not single else None
     if single and jobs[0].out == args.out:  # --out names the pose file itself
         check_output(args.out, inputs=[args.input], what="pose file")  # one file: as --overlay
         _check_outputs(jobs)
+        _check_not_replaced(jobs, args.out.parent, overlays, pose_files=False)
         _check_not_hidden(args.out.parent, jobs)
         return
     if args.out.exists() and not args.out.is_dir():
         raise DataError("output is not a folder", args.out)
     _check_outputs(jobs)
-    _check_not_replaced(jobs, args.out, overlays_named=not single)
+    _check_not_replaced(jobs, args.out, overlays)
     _check_not_read_again(args, single)
     _check_out_dir(args.out)
     _check_not_hidden(args.out, jobs)
 
 
-def _check_not_replaced(jobs: list[Job], out: Path, overlays_named: bool) -> None:
+def _one_video(source: Path) -> bool:
+    """Whether ``source`` is one video or picture (its own pose file and overlay names),
+    not a folder or a labels CSV (a folder of each, a CSV of one row too: its overlay named
+    ``ovl.mp4`` made a folder of that name, and ``ovl`` was told to end in .mp4)."""
+    return source.is_file() and source.suffix.lower() != ".csv"
+
+
+def _check_not_replaced(
+    jobs: list[Job], out: Path, overlays: Path | None, pose_files: bool = True
+) -> None:
     """Refuse, before any work, a file already where the folder ``out`` puts a clip's pose
     file unless it is the pose file ``extract`` made of that same video before (run again,
     after Ctrl-C or with other options: it is brought up to date): a pose file of another
     video of the same name (``a/squat.mp4`` extracted, then ``b/squat.mp4``) or a file of
     the user's is not replaced in silence, as ``convert --out DIR`` refuses a pose file of
     another recording and ``--plot DIR`` a picture it did not draw. So is a file where
-    extract names an overlay in a folder (``overlays_named``: ``--overlay DIR``) unless it
+    extract names an overlay in the folder ``overlays`` (``--overlay DIR``) unless it
     is the overlay extract drew of that same video (marked so: :func:`_overlay_mark`), the
-    pose file there or not. A file the user named (``--out x.npz``, one video's ``--overlay
-    x.mp4``) is theirs to replace."""
+    pose file there or not. A file the user named (``--out x.npz``: not ``pose_files``, one
+    video's ``--overlay x.mp4``) is theirs to replace."""
     from features.pose_estimation.overlay import mp4_mark
 
     digests: dict[Path, str | None] = {}
     for job in jobs:
-        if _there(job.out) and not _made_of(job.out, job.video, digests):
+        if pose_files and _there(job.out) and not _made_of(job.out, job.video, digests):
             raise DataError(_replaced_words(job, "a pose file", out), job.out)
-        if overlays_named and job.overlay is not None and _there(job.overlay):
+        if overlays is not None and job.overlay is not None and _there(job.overlay):
             if job.overlay.is_symlink() or mp4_mark(job.overlay) != _overlay_mark(job.video):
-                raise DataError(_replaced_words(job, "an overlay", out), job.overlay)
+                raise DataError(_replaced_words(job, "an overlay", overlays), job.overlay)
 
 
 def _overlay_mark(video: Path) -> str:
@@ -914,7 +948,8 @@ def _made_of(pose: Path, video: Path, digests: dict[Path, str | None]) -> bool:
 
 
 def _replaced_words(job: Job, what: str, out: Path) -> str:
-    """The refusal of a file at ``job``'s pose file or overlay (``what``) in ``out``."""
+    """The refusal of a file at ``job``'s pose file or overlay (``what``) in the folder
+    ``out`` (``--out``'s or ``--overlay``'s)."""
     return (
         f"is already there, not {what} posecbr extract made of {shown(job.video.name)}:"
         f" extracting into {shown(out)} would replace it; move it away, or choose another"
@@ -1060,12 +1095,14 @@ def run(args: argparse.Namespace) -> int:
     args.input = Path(args.input)
     options = _options(args)
     source: Path = args.input
-    jobs = find_jobs(source, args.out, args.overlay)
+    if args.overlay is not None and args.overlay.is_dir():  # a folder there, "/" or not
+        args.overlay_folder = True
+    jobs = find_jobs(source, args.out, args.overlay, args.overlay_folder)
     made = _missing_folders(args.out, jobs)
     status = 1
     try:
         _check_before_work(args, jobs)
-        if len(jobs) == 1 and source.is_file() and source.suffix.lower() != ".csv":
+        if _one_video(source):
             status = _run_single(jobs[0], options)
             return status
         listing = plan_listing(source, args.out, jobs)
