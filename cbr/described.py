@@ -29,6 +29,7 @@ import numpy as np
 from features.body import mirror_source, moves_left_more, torso_share
 from features.derived import forget, is_cached
 from features.errors import InputError
+from features.label_tracks import assumed_rate
 from features.poses import PoseSequence
 
 from . import long_clip
@@ -53,7 +54,10 @@ class DescribedClip:
     itself) and summary_available which of them it has; columns: the :func:`columns_key` of
     the candidates it was described over ("" when unknown: a record made by hand, or before
     the key was kept), checked by :func:`check_described`; poses: :func:`poses_digest` of the
-    clip, what tells a copy of a clip from another clip described alike ("" when unknown).
+    clip, what tells a copy of a clip from another clip described alike ("" when unknown);
+    rate: the frame rate its file's reader assumed and where from
+    (:func:`features.label_tracks.assumed_rate`: an AMC file carries none), None when read
+    from the file or given, for the command to say (a library prints nothing).
     """
 
     values: np.ndarray
@@ -72,6 +76,7 @@ class DescribedClip:
     duration_s: float = math.inf
     columns: str = ""
     poses: str = ""
+    rate: tuple[float, str] | None = None
 
     @property
     def mirror_source(self) -> str:
@@ -94,7 +99,7 @@ def describe_clip(
             return DescribedClip(empty, None, None, empty.astype(bool), share,
                                  *_provenance(seq), duration_s=seq.duration_s,
                                  columns=columns_key(candidates),
-                                 poses=poses_digest(seq))  # fmt: skip
+                                 poses=poses_digest(seq), rate=assumed_fps(seq))  # fmt: skip
         plain = candidates if candidates.side == "as_recorded" else _as_recorded(candidates)
         # a long clip is described a piece at a time (cbr.long_clip): problem, mirror image,
         # favoured side and available columns, none of them over the whole clip at once
@@ -112,7 +117,7 @@ def describe_clip(
         return DescribedClip(
             problem.values, image, left, has, share, *_provenance(seq), names, words,
             *_summary(seq, plain), duration_s=seq.duration_s, columns=columns_key(candidates),
-            poses=poses_digest(seq),
+            poses=poses_digest(seq), rate=assumed_fps(seq),
         )  # fmt: skip
     finally:
         if not keep:
@@ -190,6 +195,13 @@ def _as_recorded(config: FeatureConfig) -> FeatureConfig:
     return dataclasses.replace(config, side="as_recorded")
 
 
+def assumed_fps(seq: PoseSequence) -> tuple[float, str] | None:
+    """``seq``'s frame rate and where it came from when its file's reader assumed it
+    (:func:`features.label_tracks.assumed_rate`), else None."""
+    why = assumed_rate(seq.metadata)
+    return (float(seq.fps), why) if why else None
+
+
 def _provenance(seq: PoseSequence) -> tuple[str, str | None, tuple[int, int], str]:
     return str(seq.source), subject_of(seq), frames_of(seq), skeleton_of(seq)
 
@@ -212,7 +224,7 @@ def describe_case(seq: PoseSequence, casebase: CaseBase) -> DescribedClip:
         values = casebase.problem_of(seq).values if share > 0.0 else np.zeros(0)
         return DescribedClip(values, None, None, np.zeros(0, dtype=bool), share,
                              *_provenance(seq), duration_s=seq.duration_s,
-                             poses=poses_digest(seq))  # fmt: skip
+                             poses=poses_digest(seq), rate=assumed_fps(seq))  # fmt: skip
     finally:
         if not keep:
             forget(seq)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -119,25 +120,74 @@ def load_clip_naming_asf(path: Path) -> Any:
         raise e.naming("--asf") from None
 
 
-def note_assumed_rate(seq: Any) -> None:
-    """Say on stderr when the frame rate of the recording ``seq`` was assumed by the reader of
-    its file, not read from it or given (an AMC file carries none: read at the CMU and HDM05
-    rate, :func:`features.label_tracks.assumed_rate`), as ``convert`` says it: its times,
-    segments and repetitions per second all stand on it, and ``--fps`` gives another.
-    ``segment`` and ``reps`` say it; a pose file keeps the assumption in its metadata, said
-    when ``convert`` wrote it, and not again at every read (a label file that does not fit
-    says it in its refusal)."""
-    from features.datasets import POSE_SUFFIXES
-    from features.label_tracks import assumed_rate
+#: a rate assumed, told how to state it: ``--fps`` (how one recording file is read), or for
+#: a dataset's files, which the commands read as they are, converting them with it
+GIVE_FPS = "--fps"
+
+
+def give_fps_by_converting(data: Any) -> str:
+    """How a dataset ``data``'s recordings are given their frame rate: converted with it
+    (``train``, ``compare`` and ``classify`` take no ``--fps`` for a folder or labels CSV)."""
+    import shlex
+
     from features.text import shown
 
-    why = assumed_rate(seq.metadata)
-    if why and Path(seq.source).suffix.lower() not in POSE_SUFFIXES:
-        print(
-            f"note: {shown(seq.source)}: read at {seq.fps:g} fps ({why}); give its rate with"
-            " --fps if it was recorded at another",
-            file=sys.stderr,
+    named = shown(shlex.quote(str(data)))  # as pasted into a shell
+    return f"posecbr convert {named} --fps N --out DIR (then use its pose files)"
+
+
+#: a recording whose reader assumed its rate: (its source, the rate, where from)
+Assumed = tuple[str, float, str]
+
+
+def assumed_rates(seqs: Iterable[Any]) -> list[Assumed]:
+    """The clips of ``seqs`` (pose sequences) whose reader assumed the frame rate
+    (:func:`features.label_tracks.assumed_rate`), for :func:`assumed_rates_note` (which
+    counts a recording's labelled stretches as the one recording)."""
+    from features.label_tracks import assumed_rate
+
+    return [(str(s.source), float(s.fps), assumed_rate(s.metadata)) for s in seqs
+            if assumed_rate(s.metadata)]  # fmt: skip
+
+
+def assumed_rates_note(found: Iterable[Assumed], how: str = GIVE_FPS) -> str | None:
+    """The note saying that the frame rate of recordings read was assumed by the reader of
+    their files, not read from them or given (an AMC file carries none: read at the CMU and
+    HDM05 rate), as ``convert`` says it: their times, periods, speeds and repetitions per
+    second all stand on it; ``how``: how to give another (``--fps``, or converting a
+    dataset, :func:`give_fps_by_converting`). Once for a command, however many files: one
+    names it, several are counted with one named (a folder of 200 AMC files is one line).
+    A pose file's assumption stays in its metadata, said when ``convert`` wrote it, and
+    not again at every read. None when no rate was assumed."""
+    from features.datasets import POSE_SUFFIXES
+    from features.text import shown
+
+    named: dict[str, tuple[float, str]] = {}
+    for source, fps, why in found:
+        if Path(source).suffix.lower() not in POSE_SUFFIXES:
+            named.setdefault(source, (fps, why))
+    if not named:
+        return None
+    source, (fps, why) = next(iter(named.items()))
+    if len(named) == 1:
+        return (
+            f"note: {shown(source)}: read at {fps:g} fps ({why}); give its rate with {how} if"
+            " it was recorded at another"
         )
+    return (
+        f"note: {len(named)} recordings read at a frame rate assumed, not stated in their"
+        f" files (e.g. {shown(source)}: {fps:g} fps, {why}); give theirs with {how} if they"
+        " were recorded at another"
+    )
+
+
+def note_assumed_rates(found: Iterable[Assumed], how: str = GIVE_FPS) -> None:
+    """Say :func:`assumed_rates_note` on stderr, if anything (``segment``, ``reps``,
+    ``describe``, ``dad``, ``classify`` and ``compare`` say it; ``train`` once it has
+    trained, with its other notes)."""
+    note = assumed_rates_note(found, how)
+    if note is not None:
+        print(note, file=sys.stderr)
 
 
 def note_low_rate(source: Any, fps: float, estimated: bool) -> None:

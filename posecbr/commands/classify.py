@@ -18,11 +18,15 @@ from features.errors import ConfigError, DataError, PosecbrError
 from features.text import counted, did_you_mean, first_few, percent
 from posecbr.arguments import DB, NAME, add_k_option, as_options, check_each_found, path_arg
 from posecbr.recordings import (
+    GIVE_FPS,
     add_recording_options,
     add_sensor_option,
+    assumed_rates,
     check_asf,
     check_fps,
+    give_fps_by_converting,
     load_clip_as_asked,
+    note_assumed_rates,
     sensor_for,
 )
 
@@ -180,6 +184,15 @@ def load_inputs(
     if not out:
         raise DataError("no clips found", " ".join(str(p) for p in paths))
     return out
+
+
+def _how_fps(paths: list[Path]) -> str:
+    """How the clips ``paths`` name are given their frame rate: ``--fps`` for clip files
+    alone (:func:`_check_files_alone`), else by converting the first folder or labels CSV."""
+    from features.datasets import detect_kind
+
+    datasets = [p for p in paths if detect_kind(p) != "pose_file"]
+    return give_fps_by_converting(datasets[0]) if datasets else GIVE_FPS
 
 
 def _check_files_alone(
@@ -438,6 +451,7 @@ def run(args: argparse.Namespace) -> int:
     if label is not None:
         results, gone = _with_feedback(args.db, stored, clips, label, settings, target, known)
     _notes(name, target, stored, clips, results, label is not None)
+    note_assumed_rates(assumed_rates(clips), _how_fps(args.clips))
     _print(args, store.where, name, target, results, gone)
     if all(r.solved is None for r in results):  # nothing the user asked for could be done
         print(

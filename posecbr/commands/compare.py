@@ -26,7 +26,13 @@ from posecbr.arguments import (
     param_value,
     path_arg,
 )
-from posecbr.recordings import add_sensor_option, sensor_for
+from posecbr.recordings import (
+    add_sensor_option,
+    assumed_rates,
+    assumed_rates_note,
+    give_fps_by_converting,
+    sensor_for,
+)
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -614,6 +620,9 @@ def run(args: argparse.Namespace) -> int:
     # rows giving frames two labels: refused before any clip is read, as train refuses them
     check_no_overlaps(args.data, set(_names(args.labels)) if args.labels else None)
     clips = _load(args)
+    # said with the results' notes (a refusal on the way is then the one line it is)
+    rate_note = assumed_rates_note(assumed_rates(c.seq for c in clips),
+                                   give_fps_by_converting(args.data))  # fmt: skip
     check_loso_possible(args, clips)
     check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
     with as_options(OPTIONS):  # a k or --within the folds cannot take, a scheduler lost
@@ -623,6 +632,8 @@ def run(args: argparse.Namespace) -> int:
         results.notes.insert(0, STRETCHES_NOTE)
     results.explanations = explain_errors(run_, settings.explain)
     results.explanations += explain_dad_errors(run_, min(settings.explain, 3))
+    if rate_note is not None:
+        print(rate_note, file=sys.stderr)
     for note in results.notes:
         print(f"note: {shown(note)}", file=sys.stderr)
     try:

@@ -20,8 +20,10 @@ from posecbr.arguments import path_arg
 from posecbr.recordings import (
     NUMPY_BELOW_FRAMES,
     add_recording_options,
+    assumed_rates,
     check_asf,
     load_clip_as_asked,
+    note_assumed_rates,
 )
 
 if TYPE_CHECKING:
@@ -94,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
     # loads its compiled kernels
     backend: Backend = "numpy" if seq.n_frames < NUMPY_BELOW_FRAMES else "numba"
     result = detect(seq, add, config, backend=backend)
+    note_assumed_rates(assumed_rates([seq]))  # its windows, in seconds, stand on it
     if args.json:  # the document says why, for a clip DAD cannot judge too
         doc = {**result.to_dict(), "window_s": config.window_s, "step_s": config.step_s}
         json.dump(doc, sys.stdout, indent=2)

@@ -15,8 +15,10 @@ from posecbr.arguments import add_plot_option, check_plot, path_arg
 from posecbr.recordings import (
     NUMPY_BELOW_FRAMES,
     add_recording_options,
+    assumed_rates,
     check_asf,
     load_clip_as_asked,
+    note_assumed_rates,
 )
 
 if TYPE_CHECKING:
@@ -225,6 +227,7 @@ def run(args: argparse.Namespace) -> int:
     )
     if missing is not None and len(tl.unavailable()) == len(table.specs):
         raise _nothing_to_describe(missing, args.posefile)
+    note_assumed_rates(assumed_rates([seq]))  # its fluents' speeds and runs stand on it
     if args.plot:
         mark = picture_mark("describe", args.posefile)
         plot_timeline(tl, args.plot, args.min_confidence, title=args.posefile.name, mark=mark)

@@ -32,9 +32,10 @@ from posecbr.arguments import add_plot_option, check_plot, path_arg
 from posecbr.recordings import (
     NUMPY_BELOW_FRAMES,
     add_recording_options,
+    assumed_rates,
     check_asf,
     load_recording,
-    note_assumed_rate,
+    note_assumed_rates,
     note_low_rate,
 )
 
@@ -63,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
         args.plot = check_plot(args.plot, args.plot_folder, [args.clip], inputs, "reps")[0]
     seq = load_recording(args.clip, args.asf, args.fps)
     check_person(seq, "count")  # as segment refuses it: a long one is not counted whole
-    note_assumed_rate(seq)
+    note_assumed_rates(assumed_rates([seq]))
     note_low_rate(seq.source, seq.fps, seq.confidence is not None)
     result = _count(seq)
     if result.partial:

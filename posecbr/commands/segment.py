@@ -68,10 +68,11 @@ from posecbr.arguments import (
 )
 from posecbr.recordings import (
     add_recording_options,
+    assumed_rates,
     check_asf,
     check_fps,
     load_recording,
-    note_assumed_rate,
+    note_assumed_rates,
     note_low_rate,
 )
 
@@ -368,8 +369,8 @@ def run(args: argparse.Namespace) -> int:
     for rec, _ in read:
         check_segmentable(rec)
     truths = _fitted_truths(args, labels, [rec for rec, _ in read])
+    note_assumed_rates(assumed_rates(rec for rec, _ in read))  # one line for them all
     for rec, _ in read:
-        note_assumed_rate(rec)
         note_low_rate(rec.source, rec.fps, rec.confidence is not None)
     done = [
         (rec, video, _named(segment(clf, rec, judge, k=args.k), path))

@@ -32,10 +32,13 @@ from posecbr.arguments import (
     said_as_options,
 )
 from posecbr.recordings import (
+    GIVE_FPS,
     add_recording_options,
     add_sensor_option,
+    assumed_rates_note,
     check_asf,
     check_fps,
+    give_fps_by_converting,
     load_recording,
     sensor_for,
 )
@@ -976,6 +979,7 @@ def run(args: argparse.Namespace) -> int:
         raise
     if not clips:
         raise _no_clips(args)
+    _note_assumed_rates(args, clips)
     if args.append:
         result = append_described(args.db, args.name, clips, solutions, plan, uid)
     else:
@@ -989,6 +993,16 @@ def run(args: argparse.Namespace) -> int:
         print(text, file=sys.stderr)
     _report(args, result)
     return 0
+
+
+def _note_assumed_rates(args: argparse.Namespace, clips: list[Any]) -> None:
+    """The clips' recordings read at a rate their reader assumed (an AMC file carries none,
+    :func:`posecbr.recordings.assumed_rates_note`), said with the other notes once trained:
+    given with ``--fps`` for ``--frame-labels``' one recording, else by converting DATA."""
+    how = GIVE_FPS if args.frame_labels else give_fps_by_converting(args.data)
+    note = assumed_rates_note([(c.source, *c.rate) for c in clips if c.rate is not None], how)
+    if note is not None:
+        _note(args, note)
 
 
 def _skipped(
