@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +50,145 @@ def picture_orientation(path: Path) -> int:
     return value if isinstance(value, int) and 1 <= value <= 8 else 1
 
 
+HEIF_STILL_BRANDS = frozenset(
+    (b"mif1", b"mif2", b"heic", b"heix", b"heim", b"heis", b"avif", b"avci", b"vvic")
+)
+"""The ftyp brands of a HEIF file of still pictures (ISO/IEC 23008-12: HEIC, AVIF...): a
+phone's photo. Its pictures are items its top-level meta box indexes, with no moov box: no
+recording left unfinished. An image sequence (msf1, a moov track of pictures) is a video."""
+
+
+def heif_brand(head: bytes) -> str | None:
+    """What a file whose first bytes are ``head`` is when its first box, ftyp, names a brand
+    of :data:`HEIF_STILL_BRANDS` (major or compatible): "HEIC" (HEVC pictures, an iPhone's),
+    "AVIF" (AV1) or "HEIF"; None for any other file."""
+    if len(head) < 16 or head[4:8] != b"ftyp":
+        return None
+    end = min(len(head), int.from_bytes(head[:4], "big"))
+    brands = {head[8:12]} | {head[i : i + 4] for i in range(16, end - 3, 4)}
+    if not brands & HEIF_STILL_BRANDS:
+        return None
+    if brands & {b"heic", b"heix", b"heim", b"heis"}:
+        return "HEIC"
+    return "AVIF" if b"avif" in brands else "HEIF"
+
+
+@dataclass(frozen=True)
+class HeifPicture:
+    """A HEIF file's primary picture (its pitm item), as a viewer shows it: its brand
+    (:func:`heif_brand`), width and height (px, its ispe property, turned by its irot) and
+    how many coded pictures it is made of (a grid's tiles: a phone's photo is 512x512 tiles
+    put together; 1 for a picture coded whole)."""
+
+    brand: str
+    width: int
+    height: int
+    tiles: int
+
+
+HEIF_META_LIMIT = 16 << 20
+"""The largest HEIF meta box (bytes) :func:`heif_picture` reads: a phone's photo's indexes
+its tiles, thumbnail and Exif in some kilobytes."""
+
+
+def heif_picture(fh: Any, size: int, head: bytes) -> HeifPicture | None:
+    """The primary picture of a HEIF file (HEIC, AVIF: :func:`heif_brand` of its first bytes
+    ``head``) of ``size`` bytes, read from ``fh``: the item its pitm box names, its size from
+    its ispe property (a quarter turn by its irot property swaps width and height) and, for a
+    grid, the tiles its dimg reference lists. None for a file that is no HEIF still or whose
+    meta box cannot be read (no pitm, no ispe for it)."""
+    brand = heif_brand(head)
+    if brand is None:
+        return None
+    meta = _top_box(fh, size, b"meta", HEIF_META_LIMIT)
+    if meta is None:
+        return None
+    boxes = {kind: (body, stop) for kind, body, stop in _mp4_boxes(meta, 4, len(meta))}
+    if b"pitm" not in boxes or b"iprp" not in boxes:
+        return None
+    body, _ = boxes[b"pitm"]
+    wide = meta[body] >= 1  # version 1: 32-bit item IDs
+    primary = int.from_bytes(meta[body + 4 : body + (8 if wide else 6)], "big")
+    props = _heif_properties(meta, *boxes[b"iprp"], primary)
+    ispe = props.get(b"ispe")
+    if ispe is None or len(ispe) < 12:
+        return None
+    width, height = int.from_bytes(ispe[4:8], "big"), int.from_bytes(ispe[8:12], "big")
+    irot = props.get(b"irot", b"")
+    if irot and irot[0] & 1:  # a quarter turn, one way or the other
+        width, height = height, width
+    tiles = len(_heif_derived_from(meta, boxes.get(b"iref"), primary)) or 1
+    return HeifPicture(brand, width, height, tiles)
+
+
+def _top_box(fh: Any, size: int, name: bytes, limit: int) -> bytes | None:
+    """The body of the first top-level box ``name`` of an ISO base media file of ``size``
+    bytes, read from ``fh``; None when there is none or it is larger than ``limit``."""
+    at = 0
+    while at + 8 <= size:
+        fh.seek(at)
+        header = fh.read(16)
+        stated, kind, length = int.from_bytes(header[:4], "big"), header[4:8], 8
+        if stated == 1 and len(header) == 16:
+            stated, length = int.from_bytes(header[8:16], "big"), 16
+        elif stated == 0:
+            stated = size - at
+        if stated < length:
+            return None
+        if kind == name:
+            if stated > limit:
+                return None
+            fh.seek(at + length)
+            return bytes(fh.read(stated - length))
+        at += stated
+    return None
+
+
+def _heif_properties(meta: bytes, start: int, end: int, item: int) -> dict[bytes, bytes]:
+    """The properties (name: body) the ipma box in a HEIF meta's iprp box (``meta[start:end]``)
+    associates with ``item``, from its ipco box (numbered from 1)."""
+    ipco, ipma = _mp4_child(meta, start, end, (b"ipco",)), _mp4_child(meta, start, end, (b"ipma",))
+    listed = [(kind, meta[body:stop]) for kind, body, stop in _mp4_boxes(meta, *ipco)]
+    at, stop = ipma
+    if stop - at < 8:
+        return {}
+    version, flags = meta[at], meta[at + 3]
+    id_bytes, index_bytes = (4 if version >= 1 else 2), (2 if flags & 1 else 1)
+    count, at = int.from_bytes(meta[at + 4 : at + 8], "big"), at + 8
+    for _ in range(count):
+        if at + id_bytes + 1 > stop:
+            break
+        owner = int.from_bytes(meta[at : at + id_bytes], "big")
+        n, at = meta[at + id_bytes], at + id_bytes + 1
+        indexes = [
+            int.from_bytes(meta[at + k * index_bytes : at + (k + 1) * index_bytes], "big")
+            & ((1 << (8 * index_bytes - 1)) - 1)  # less the "essential" bit
+            for k in range(n)
+        ]
+        at += n * index_bytes
+        if owner == item:
+            return {listed[i - 1][0]: listed[i - 1][1] for i in indexes if 0 < i <= len(listed)}
+    return {}
+
+
+def _heif_derived_from(meta: bytes, iref: tuple[int, int] | None, item: int) -> list[int]:
+    """The items a HEIF meta's iref box (its body ``meta[start:end]``) says ``item`` is made
+    of (its dimg reference: a grid's tiles, in order); empty when it is made of none."""
+    if iref is None or iref[1] - iref[0] < 4:
+        return []
+    start, end = iref
+    id_bytes = 4 if meta[start] >= 1 else 2
+    for kind, body, stop in _mp4_boxes(meta, start + 4, end):
+        owner = int.from_bytes(meta[body : body + id_bytes], "big")
+        if kind != b"dimg" or owner != item:
+            continue
+        at = body + id_bytes
+        n = int.from_bytes(meta[at : at + 2], "big")
+        ids = meta[at + 2 : min(stop, at + 2 + n * id_bytes)]
+        return [int.from_bytes(ids[k : k + id_bytes], "big") for k in range(0, len(ids), id_bytes)]
+    return []
+
+
 def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
     """DataError for a file whose first and last bytes (``head``, ``tail``) show it cut
     short: a JPEG without its end-of-image marker (OpenCV decodes what it has of it and
@@ -72,7 +212,7 @@ def refuse_cut(path: Path, head: bytes, tail: bytes) -> None:
             raise DataError(
                 f"truncated MP4/MOV: the file ends at byte {size:,}, inside a box{runs}", path
             )
-        if unindexed:
+        if unindexed and heif_brand(head) is None:  # a HEIF photo's index is its meta box
             raise DataError(UNFINISHED_MP4.format("its"), path)
     if head.startswith((EBML_START, FLV_START)):
         try:
@@ -112,6 +252,7 @@ def cut_short(fh: Any, size: int, head: bytes, what: str) -> str | None:
             return None
         if end <= size:
             unindexed = b"mdat" in kinds and not {b"moov", b"moof"} & set(kinds)
+            unindexed = unindexed and heif_brand(head) is None  # a photo: indexed by meta
             return UNFINISHED_MP4.format(f"{what}'s") if unindexed else None
         runs = f" that runs to byte {end:,}" if end > size + 1 else "'s header"
         return f"truncated MP4/MOV: {what} ends at byte {size:,}, inside a box{runs}"

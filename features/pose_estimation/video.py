@@ -56,6 +56,8 @@ from features.text import shown  # noqa: E402
 
 from .containers import (  # noqa: E402
     counted_by_duration,
+    heif_brand,
+    heif_picture,
     is_mp4,
     mp4_empty_video,
     mp4_timeless_frames,
@@ -254,6 +256,7 @@ def open_video(
     frames = int(max(0.0, cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0))
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     width, height, orientation = _seen_size(cap, path)
+    _refuse_part(cap, path, head, width, height)
     fps, frames = _frames_rate(path, fps, frames, counted_by_duration(head))
     if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
@@ -280,6 +283,39 @@ def _seen_size(cap: cv2.VideoCapture, path: Path) -> tuple[int, int, int]:
     if orientation >= 5:
         width, height = height, width
     return width, height, orientation
+
+
+def _refuse_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, height: int) -> None:
+    """Refuse a HEIF photo (HEIC, AVIF: :func:`.containers.heif_picture`) of which OpenCV
+    decodes a ``width`` x ``height`` frame that is not its primary picture: FFmpeg gives each
+    coded picture in the file as a stream of its own and OpenCV reads the first, so of a
+    phone's photo, 512x512 tiles put together, it read the top-left tile alone (the pose
+    model ran on it, nobody or a part of the body found, exit 0)."""
+    if heif_brand(head) is None:
+        return
+    try:
+        with open(path, "rb") as fh:
+            picture = heif_picture(fh, path.stat().st_size, head)
+    except OSError as exc:
+        cap.release()
+        raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
+    if picture is None or (picture.width, picture.height) == (width, height):
+        return
+    cap.release()
+    whole = f"{_a(picture.brand)} picture of {picture.width}x{picture.height}"
+    if picture.tiles > 1:
+        what = (
+            f"{whole} made of {picture.tiles} tiles (as a phone stores a photo), of which"
+            f" OpenCV decodes one alone ({width}x{height})"
+        )
+    else:
+        what = f"{whole} of which OpenCV decodes another picture in the file ({width}x{height})"
+    raise DataError(f"{what}: convert it to JPEG or PNG first", path)
+
+
+def _a(brand: str) -> str:
+    """A HEIF brand's name (:func:`.containers.heif_brand`) with its article: "an AVIF"."""
+    return f"{'an' if brand.startswith('A') else 'a'} {brand}"
 
 
 TEXT_CODECS = frozenset({"ansi"})
@@ -333,6 +369,12 @@ def _not_a_video(path: Path, head: bytes, fps: float | None) -> DataError:
         )
     if is_mp4(head) and _empty_video(path):
         return DataError("video has no frames (its video track is empty)", path)
+    brand = heif_brand(head)
+    if fps is None and brand is not None:
+        return DataError(
+            f"{_a(brand)} picture OpenCV cannot decode: convert it to JPEG or PNG first",
+            path,
+        )
     if fps is None:
         return DataError(
             "not a video OpenCV can decode (unknown format, truncated or corrupt)", path

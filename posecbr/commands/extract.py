@@ -50,7 +50,9 @@ if TYPE_CHECKING:  # imported where used: start-up
 # OpenCV reads this once, when it first opens a video, so it is set as early as possible.
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
-IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp")  # one frame each
+IMAGE_SUFFIXES = (  # one frame each
+    ".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".heic", ".heif", ".avif"
+)  # fmt: skip
 # what is a recording already, not a video: refused by name
 RECORDING_SUFFIXES = {".npz": "a pose file", ".bvh": "a BVH recording", ".amc": "an AMC recording"}
 

@@ -213,8 +213,8 @@ def _check_source(source: str) -> None:
         # OpenCV plays a still as a one-frame stream: the pose model was loaded and run, and
         # the watch ended "after 1 frame (0.04 s)", as if a video had been cut short
         raise DataError(
-            f"{PICTURE_WORDS}, not a video: watch plays videos, cameras and streams"
-            " (posecbr extract reads a picture)",
+            f"{_picture_words(Path(source))}, not a video: watch plays videos, cameras and"
+            " streams (posecbr extract reads a picture)",
             source,
         )
 
@@ -232,6 +232,29 @@ def _is_still(path: Path) -> bool:
     if suffix in IMAGE_SUFFIXES:
         return True
     return suffix not in SHOWN_VIDEO_SUFFIXES and is_picture(file_head(path))
+
+
+def _picture_words(path: Path) -> str:
+    """What a still picture (:func:`_is_still`) is, in a refusal's words: a PNG or JPEG by
+    its first bytes as the other commands say it; any other (a phone's HEIC, AVIF or WebP
+    photo, a TIFF) by the format its name gives."""
+    from features.fileio import file_head, is_picture
+
+    if is_picture(file_head(path)):
+        return PICTURE_WORDS
+    return _PICTURE_KINDS.get(path.suffix.lower(), PICTURE_WORDS)
+
+
+_PICTURE_KINDS = {
+    ".webp": "a WebP picture",
+    ".heic": "a HEIC picture",
+    ".heif": "a HEIF picture",
+    ".avif": "an AVIF picture",
+    ".bmp": "a BMP picture",
+    ".tif": "a TIFF picture",
+    ".tiff": "a TIFF picture",
+}
+"""How :func:`_picture_words` names a still picture that is no PNG or JPEG, by its name."""
 
 
 def _has_windows() -> bool:

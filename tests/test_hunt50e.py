@@ -1,0 +1,208 @@
+"""Phone photos in HEIF files (hunt 50e): HEIC (an iPhone's, many Android phones') and AVIF.
+
+A HEIF file of still pictures is an ISO base media file, as MP4 is: an ftyp box, a meta box
+indexing its pictures, their bytes in an mdat box, and no moov box. posecbr took it for an
+MP4 whose recording stopped before its index was written ("unfinished MP4/MOV: its frames
+have no index (no moov box)"), in ``extract`` and in ``watch``, and ``extract`` of a folder
+passed ``.heic``/``.avif`` photos by. FFmpeg reads such a picture, turned by its irot
+property; but it gives each coded picture in the file as a stream, and a phone stores a photo
+as 512x512 tiles put together (a grid): OpenCV reads the first stream, one tile. Such a
+photo is refused in one line naming it, not posed on its top-left tile.
+
+The files are made here: Pillow codes AVIF (a photo turned by irot, as a phone's stores it
+sideways; each tile of a grid), and :func:`_avif_grid` puts tiles together as a phone does
+(ISO/IEC 23008-12: grid item, dimg references, ispe and av1C properties). Pillow (libavif)
+decodes the grid whole, the reference the test checks the file against.
+"""
+
+from __future__ import annotations
+
+import io
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image, features
+
+from features.poses import load_pose_arrays
+from posecbr.cli import main
+from tests.badinput import refused
+
+pytestmark = pytest.mark.skipif(not features.check("avif"), reason="Pillow without AVIF")
+
+PHOTO = Path("media") / "basketball1.png"
+
+
+def _box(kind: bytes, body: bytes) -> bytes:
+    return struct.pack(">I4s", 8 + len(body), kind) + body
+
+
+def _full(kind: bytes, body: bytes, version: int = 0, flags: int = 0) -> bytes:
+    return _box(kind, struct.pack(">I", version << 24 | flags) + body)
+
+
+def _children(data: bytes) -> dict[bytes, bytes]:
+    """The bodies of the boxes in ``data``, by name (the first of each)."""
+    found: dict[bytes, bytes] = {}
+    at = 0
+    while at + 8 <= len(data):
+        size, kind = struct.unpack(">I4s", data[at : at + 8])
+        found.setdefault(kind, data[at + 8 : at + size])
+        at += size
+    return found
+
+
+def _avif_tile(rgb: np.ndarray) -> tuple[bytes, bytes]:
+    """A picture coded by Pillow as AVIF: its av1C box and its coded bytes (its one item's
+    extent, as its iloc box states it)."""
+    buf = io.BytesIO()
+    Image.fromarray(rgb).save(buf, format="AVIF", quality=90)
+    data = buf.getvalue()
+    meta = _children(_children(data)[b"meta"][4:])
+    config = _children(_children(meta[b"iprp"])[b"ipco"])[b"av1C"]
+    iloc = meta[b"iloc"]
+    offset_n, length_n, base_n = iloc[4] >> 4, iloc[4] & 15, iloc[5] >> 4
+    at = 8 + 2 + 2 + base_n + 2  # item count, item ID, data reference, base offset, extents
+    offset = int.from_bytes(iloc[at : at + offset_n], "big")
+    length = int.from_bytes(iloc[at + offset_n : at + offset_n + length_n], "big")
+    return _box(b"av1C", config), data[offset : offset + length]
+
+
+def _avif_grid(rgb: np.ndarray, tile: int) -> bytes:
+    """``rgb`` as a phone stores a photo: ``tile`` x ``tile`` pictures coded apart (hidden
+    items), a grid item putting them together (rows, columns, the picture's size) the primary
+    item (pitm)."""
+    h, w = rgb.shape[:2]
+    rows, cols = -(-h // tile), -(-w // tile)
+    canvas = np.zeros((rows * tile, cols * tile, 3), np.uint8)
+    canvas[:h, :w] = rgb
+    coded = [
+        _avif_tile(canvas[r * tile : (r + 1) * tile, c * tile : (c + 1) * tile])
+        for r in range(rows)
+        for c in range(cols)
+    ]
+    n, grid = len(coded), len(coded) + 1
+    layout = struct.pack(">BBBBHH", 0, 0, rows - 1, cols - 1, w, h)
+    infe = [_full(b"infe", struct.pack(">HH4s", i + 1, 0, b"av01") + b"\0", 2, 1) for i in range(n)]
+    infe.append(_full(b"infe", struct.pack(">HH4s", grid, 0, b"grid") + b"\0", 2))
+    props = [config for config, _ in coded]
+    props += [
+        _full(b"ispe", struct.pack(">II", tile, tile)),
+        _full(b"ispe", struct.pack(">II", w, h)),
+    ]
+    assoc = [struct.pack(">HBBB", i + 1, 2, 0x80 | (i + 1), n + 1) for i in range(n)]
+    assoc.append(struct.pack(">HBB", grid, 1, n + 2))
+    tiles = struct.pack(">HH", grid, n) + b"".join(struct.pack(">H", i + 1) for i in range(n))
+    lengths = [len(data) for _, data in coded] + [len(layout)]
+
+    def meta(offsets: list[int]) -> bytes:
+        items = b"".join(
+            struct.pack(">HHHII", i + 1, 0, 1, offsets[i], lengths[i]) for i in range(n + 1)
+        )
+        return _full(
+            b"meta",
+            _full(b"hdlr", b"\0\0\0\0pict" + b"\0" * 13)
+            + _full(b"pitm", struct.pack(">H", grid))
+            + _full(b"iloc", struct.pack(">BBH", 0x44, 0, n + 1) + items)
+            + _full(b"iinf", struct.pack(">H", n + 1) + b"".join(infe))
+            + _full(b"iref", _box(b"dimg", tiles))
+            + _box(
+                b"iprp",
+                _box(b"ipco", b"".join(props))
+                + _full(b"ipma", struct.pack(">I", n + 1) + b"".join(assoc)),
+            ),
+        )
+
+    ftyp = _box(b"ftyp", b"avif\0\0\0\0avifmif1miaf")
+    start = len(ftyp) + len(meta([0] * (n + 1))) + 8  # the mdat's body
+    offsets = list(start + np.cumsum([0, *lengths[:-1]]))
+    return ftyp + meta(offsets) + _box(b"mdat", b"".join(d for _, d in coded) + layout)
+
+
+def _sideways_avif(rgb: np.ndarray, path: Path) -> Path:
+    """``rgb`` stored a quarter turn counter-clockwise with an irot property saying a viewer
+    turns it a quarter clockwise (Pillow writes EXIF orientation 6 as one), as a phone
+    stores a portrait photo."""
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    sideways = Image.fromarray(np.ascontiguousarray(np.rot90(rgb, 1)))
+    sideways.save(path, exif=exif, quality=95)
+    return path
+
+
+def test_heif_picture_reads_the_primary_pictures_size_as_shown(tmp_path: Path) -> None:
+    """The irot photo: 30 wide, 20 high as shown (stored 20 x 30), coded whole; the grid:
+    its size and tiles as :func:`_avif_grid` wrote them; an MP4-like ftyp: none."""
+    from features.pose_estimation.containers import heif_picture
+
+    rgb = np.zeros((20, 30, 3), np.uint8)
+    photo = _sideways_avif(rgb, tmp_path / "a.avif")
+    grid = tmp_path / "g.avif"
+    grid.write_bytes(_avif_grid(np.zeros((40, 100, 3), np.uint8), 32))
+    found = []
+    for path in (photo, grid):
+        with open(path, "rb") as fh:
+            found.append(heif_picture(fh, path.stat().st_size, fh.read(64)))
+    assert [(p.brand, p.width, p.height, p.tiles) for p in found if p] == [
+        ("AVIF", 30, 20, 1), ("AVIF", 100, 40, 8)  # 4 columns of 32 by 2 rows
+    ]  # fmt: skip
+    mp4 = _box(b"ftyp", b"isom\0\0\2\0isomiso2avc1mp41") + _box(b"mdat", b"")
+    assert heif_picture(io.BytesIO(mp4), len(mp4), mp4) is None
+
+
+def test_a_phones_avif_photo_stored_sideways_is_posed_as_the_upright_picture(
+    shared_data: Path, tmp_path: Path
+) -> None:
+    """A photo stored sideways with an irot property (Pillow writes EXIF orientation 6 as
+    one), in a folder: extracted, its landmarks those of the upright picture given as a PNG,
+    within the lossy coding's few pixels. Before: passed by in the folder ("no videos or
+    images found"); named, "unfinished MP4/MOV"."""
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    rgb = np.asarray(Image.open(shared_data / PHOTO).convert("RGB"))
+    Image.fromarray(rgb).save(photos / "upright.png")
+    _sideways_avif(rgb, photos / "IMG_0001.AVIF")
+
+    assert main(["extract", str(photos), "--out", str(tmp_path / "out")]) == 0
+    got = load_pose_arrays(tmp_path / "out" / "IMG_0001.npz")["image_landmarks"]
+    expected = load_pose_arrays(tmp_path / "out" / "upright.npz")["image_landmarks"]
+    assert got.shape == expected.shape == (1, 33, 5)
+    body = [0, 11, 12, 23, 24, 25, 26]  # nose, shoulders, hips, knees: well in view
+    assert np.abs(got[0, body, :2] - expected[0, body, :2]).max() < 8.0
+
+
+def test_a_photo_of_tiles_is_refused_not_posed_on_one_tile(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 128x96 picture in 64x64 tiles (2 x 2, as a phone's 4032x3024 photo is 8 x 6 of
+    512): Pillow reads it whole; OpenCV reads one tile. extract says so in one line, nothing
+    written. Before: "unfinished MP4/MOV: its frames have no index"."""
+    rgb = np.asarray(Image.open(shared_data / PHOTO).convert("RGB"))[100:196, 220:348]
+    photo = tmp_path / "IMG_0002.avif"
+    photo.write_bytes(_avif_grid(np.ascontiguousarray(rgb), 64))
+    whole = np.asarray(Image.open(photo).convert("RGB"))
+    assert whole.shape == (96, 128, 3) and np.abs(whole.astype(int) - rgb).mean() < 4
+    refused(
+        ["extract", str(photo), "--out", str(tmp_path / "p.npz")],
+        tmp_path,
+        capsys,
+        f"{photo}: an AVIF picture of 128x96 made of 4 tiles",
+        "OpenCV decodes one alone (64x64)",
+    )
+
+
+@pytest.mark.parametrize(
+    ("name", "words"), [("IMG_0003.avif", "an AVIF picture"), ("photo.webp", "a WebP picture")]
+)
+def test_watch_names_a_phones_photo_as_the_picture_it_is(
+    name: str, words: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: the AVIF was "unfinished MP4/MOV: its frames have no index", the WebP "a PNG
+    or JPEG picture"."""
+    photo = tmp_path / name
+    Image.fromarray(np.full((48, 64, 3), 120, np.uint8)).save(photo)
+    db = tmp_path / "cb.sqlite"
+    db.write_bytes(b"not opened: refused before")
+    refused(["watch", str(photo), "--db", str(db)], tmp_path, capsys,
+            f"{photo}: {words}, not a video")  # fmt: skip
