@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import DataError
-from features.fileio import PICTURE_WORDS, binary_kind, file_head, is_picture, path_exists
+from features.fileio import binary_kind, file_head, path_exists, picture_words
 from features.formats import SHOWN_VIDEO_SUFFIXES, TS_SUFFIX, is_mpeg_ts
 from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 from features.progress import progress
@@ -160,8 +160,9 @@ def load_clip(path: str | Path) -> PoseSequence:
         "expected .npz pose file, .bvh, .amc, UI-PRMD positions file or a"
         f" video: {', '.join(sorted(VIDEO_SUFFIXES))}"
     )
-    if is_picture(file_head(path)):  # a still, as --db given one says: not "unknown format"
-        raise DataError(f"{PICTURE_WORDS}, not a clip ({expected})", path)
+    picture = picture_words(file_head(path))  # a still, as --db given one says it
+    if picture is not None:
+        raise DataError(f"{picture}, not a clip ({expected})", path)
     raise DataError(f"unknown clip format ({expected})", path)
 
 

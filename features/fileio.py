@@ -51,6 +51,45 @@ def is_picture(head: bytes) -> bool:
     return head.startswith((b"\x89PNG\r\n\x1a\n", b"\xff\xd8\xff"))
 
 
+HEIF_STILL_BRANDS = frozenset(
+    (b"mif1", b"mif2", b"heic", b"heix", b"heim", b"heis", b"avif", b"avci", b"vvic")
+)
+"""The ftyp brands of a HEIF file of still pictures (ISO/IEC 23008-12: HEIC, AVIF...): a
+phone's photo. Its pictures are items its top-level meta box indexes, with no moov box: no
+recording left unfinished. An image sequence (msf1, a moov track of pictures) is a video."""
+
+
+def heif_brand(head: bytes) -> str | None:
+    """What a file whose first bytes are ``head`` is when its first box, ftyp, names a brand
+    of :data:`HEIF_STILL_BRANDS` (major or compatible): "HEIC" (HEVC pictures, an iPhone's),
+    "AVIF" (AV1) or "HEIF"; None for any other file."""
+    if len(head) < 16 or head[4:8] != b"ftyp":
+        return None
+    end = min(len(head), int.from_bytes(head[:4], "big"))
+    brands = {head[8:12]} | {head[i : i + 4] for i in range(16, end - 3, 4)}
+    if not brands & HEIF_STILL_BRANDS:
+        return None
+    if brands & {b"heic", b"heix", b"heim", b"heis"}:
+        return "HEIC"
+    return "AVIF" if b"avif" in brands else "HEIF"
+
+
+def picture_words(head: bytes) -> str | None:
+    """What a still picture whose first bytes are ``head`` is, in a refusal's words: a PNG
+    or JPEG as :data:`PICTURE_WORDS`; a phone's WebP, HEIC or AVIF photo (:func:`heif_brand`)
+    or a TIFF by its format; None for anything else."""
+    if is_picture(head):
+        return PICTURE_WORDS
+    if head.startswith(b"RIFF") and head[8:12] == b"WEBP":
+        return "a WebP picture"
+    if head.startswith((b"II*\x00", b"MM\x00*")):
+        return "a TIFF picture"
+    brand = heif_brand(head)
+    if brand is not None:
+        return f"{'an' if brand == 'AVIF' else 'a'} {brand} picture"
+    return None
+
+
 #: The first bytes of every SQLite database file (a case base).
 SQLITE_MAGIC = b"SQLite format 3\x00"
 
@@ -66,10 +105,10 @@ def binary_kind(head: bytes) -> str | None:
         return "a NumPy file, such as a pose file"
     if head.startswith(b"PK\x03\x04"):  # a .zip, an .xlsx spreadsheet: no arrays in it
         return "a zip archive, not a pose file"
+    if (picture := picture_words(head)) is not None:  # before video: a HEIF photo's ftyp
+        return picture
     if is_video(head):
         return "a video file"
-    if is_picture(head):
-        return PICTURE_WORDS
     return None
 
 

@@ -206,3 +206,17 @@ def test_watch_names_a_phones_photo_as_the_picture_it_is(
     db.write_bytes(b"not opened: refused before")
     refused(["watch", str(photo), "--db", str(db)], tmp_path, capsys,
             f"{photo}: {words}, not a video")  # fmt: skip
+
+
+def test_a_phones_photo_given_for_a_clip_or_a_case_base_is_named_as_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: the WebP and AVIF given for a clip were an "unknown clip format", the AVIF
+    given as --db "a video file" (its ftyp box, as an MP4's)."""
+    webp, avif = tmp_path / "photo.webp", tmp_path / "photo.avif"
+    for photo in (webp, avif):
+        Image.fromarray(np.full((48, 64, 3), 120, np.uint8)).save(photo)
+    refused(["describe", str(webp)], tmp_path, capsys, f"{webp}: a WebP picture, not a clip")
+    refused(["describe", str(avif)], tmp_path, capsys, f"{avif}: an AVIF picture, not a clip")
+    refused(["segment", str(webp), "--db", str(avif)], tmp_path, capsys,
+            f"{avif}: not a readable SQLite database (an AVIF picture: --db takes")  # fmt: skip

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import DataError
-from features.fileio import file_head, is_video
+from features.fileio import file_head, heif_brand, is_video
 
 JPEG_START, JPEG_END = b"\xff\xd8\xff", b"\xff\xd9"
 """A JPEG file's start-of-image and end-of-image markers."""
@@ -50,35 +50,12 @@ def picture_orientation(path: Path) -> int:
     return value if isinstance(value, int) and 1 <= value <= 8 else 1
 
 
-HEIF_STILL_BRANDS = frozenset(
-    (b"mif1", b"mif2", b"heic", b"heix", b"heim", b"heis", b"avif", b"avci", b"vvic")
-)
-"""The ftyp brands of a HEIF file of still pictures (ISO/IEC 23008-12: HEIC, AVIF...): a
-phone's photo. Its pictures are items its top-level meta box indexes, with no moov box: no
-recording left unfinished. An image sequence (msf1, a moov track of pictures) is a video."""
-
-
-def heif_brand(head: bytes) -> str | None:
-    """What a file whose first bytes are ``head`` is when its first box, ftyp, names a brand
-    of :data:`HEIF_STILL_BRANDS` (major or compatible): "HEIC" (HEVC pictures, an iPhone's),
-    "AVIF" (AV1) or "HEIF"; None for any other file."""
-    if len(head) < 16 or head[4:8] != b"ftyp":
-        return None
-    end = min(len(head), int.from_bytes(head[:4], "big"))
-    brands = {head[8:12]} | {head[i : i + 4] for i in range(16, end - 3, 4)}
-    if not brands & HEIF_STILL_BRANDS:
-        return None
-    if brands & {b"heic", b"heix", b"heim", b"heis"}:
-        return "HEIC"
-    return "AVIF" if b"avif" in brands else "HEIF"
-
-
 @dataclass(frozen=True)
 class HeifPicture:
     """A HEIF file's primary picture (its pitm item), as a viewer shows it: its brand
-    (:func:`heif_brand`), width and height (px, its ispe property, turned by its irot) and
-    how many coded pictures it is made of (a grid's tiles: a phone's photo is 512x512 tiles
-    put together; 1 for a picture coded whole)."""
+    (:func:`features.fileio.heif_brand`), width and height (px, its ispe property, turned by
+    its irot) and how many coded pictures it is made of (a grid's tiles: a phone's photo is
+    512x512 tiles put together; 1 for a picture coded whole)."""
 
     brand: str
     width: int
@@ -92,11 +69,11 @@ its tiles, thumbnail and Exif in some kilobytes."""
 
 
 def heif_picture(fh: Any, size: int, head: bytes) -> HeifPicture | None:
-    """The primary picture of a HEIF file (HEIC, AVIF: :func:`heif_brand` of its first bytes
-    ``head``) of ``size`` bytes, read from ``fh``: the item its pitm box names, its size from
-    its ispe property (a quarter turn by its irot property swaps width and height) and, for a
-    grid, the tiles its dimg reference lists. None for a file that is no HEIF still or whose
-    meta box cannot be read (no pitm, no ispe for it)."""
+    """The primary picture of a HEIF file (HEIC, AVIF: :func:`features.fileio.heif_brand` of
+    its first bytes ``head``) of ``size`` bytes, read from ``fh``: the item its pitm box
+    names, its size from its ispe property (a quarter turn by its irot property swaps width
+    and height) and, for a grid, the tiles its dimg reference lists. None for a file that is
+    no HEIF still or whose meta box cannot be read (no pitm, no ispe for it)."""
     brand = heif_brand(head)
     if brand is None:
         return None

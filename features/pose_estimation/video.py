@@ -49,6 +49,7 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from features.errors import DataError, InputError  # noqa: E402
+from features.fileio import heif_brand  # noqa: E402
 from features.poses import EXTRACTION_VERSION, MIN_FPS, PoseSequence  # noqa: E402
 from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
@@ -56,7 +57,6 @@ from features.text import shown  # noqa: E402
 
 from .containers import (  # noqa: E402
     counted_by_duration,
-    heif_brand,
     heif_picture,
     is_mp4,
     mp4_empty_video,
@@ -314,7 +314,7 @@ def _refuse_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, hei
 
 
 def _a(brand: str) -> str:
-    """A HEIF brand's name (:func:`.containers.heif_brand`) with its article: "an AVIF"."""
+    """A HEIF brand's name (:func:`features.fileio.heif_brand`) with its article: "an AVIF"."""
     return f"{'an' if brand.startswith('A') else 'a'} {brand}"
 
 

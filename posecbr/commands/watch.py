@@ -55,7 +55,7 @@ from typing import Any
 
 from cbr.judges import JUDGES
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import PARTIAL, PICTURE_WORDS, atomic_path, check_output, stdout_gone
+from features.fileio import PARTIAL, atomic_path, check_output, stdout_gone
 from features.interrupts import raise_interrupt, sigterm_held
 from features.text import counted, shown
 from posecbr.arguments import PathOption, add_k_option, check_mp4_name
@@ -221,9 +221,9 @@ def _check_source(source: str) -> None:
 
 def _is_still(path: Path) -> bool:
     """Whether the file at ``path`` is a still picture: named as one (``.jpg``, ``.png``,
-    ...), or a PNG or JPEG by its first bytes and not named as a video (a motion-JPEG video
-    begins as a JPEG does)."""
-    from features.fileio import file_head, is_picture
+    ``.heic``, ...), or one by its first bytes (:func:`features.fileio.picture_words`) and not
+    named as a video (a motion-JPEG video begins as a JPEG does)."""
+    from features.fileio import file_head, picture_words
     from features.formats import SHOWN_VIDEO_SUFFIXES
 
     from .extract import IMAGE_SUFFIXES
@@ -231,30 +231,16 @@ def _is_still(path: Path) -> bool:
     suffix = path.suffix.lower()
     if suffix in IMAGE_SUFFIXES:
         return True
-    return suffix not in SHOWN_VIDEO_SUFFIXES and is_picture(file_head(path))
+    return suffix not in SHOWN_VIDEO_SUFFIXES and picture_words(file_head(path)) is not None
 
 
 def _picture_words(path: Path) -> str:
-    """What a still picture (:func:`_is_still`) is, in a refusal's words: a PNG or JPEG by
-    its first bytes as the other commands say it; any other (a phone's HEIC, AVIF or WebP
-    photo, a TIFF) by the format its name gives."""
-    from features.fileio import file_head, is_picture
+    """What a still picture (:func:`_is_still`) is, in a refusal's words: by its first bytes
+    (:func:`features.fileio.picture_words`: "a PNG or JPEG picture", "an AVIF picture"), else
+    "a picture" (one named so that holds something else)."""
+    from features.fileio import file_head, picture_words
 
-    if is_picture(file_head(path)):
-        return PICTURE_WORDS
-    return _PICTURE_KINDS.get(path.suffix.lower(), PICTURE_WORDS)
-
-
-_PICTURE_KINDS = {
-    ".webp": "a WebP picture",
-    ".heic": "a HEIC picture",
-    ".heif": "a HEIF picture",
-    ".avif": "an AVIF picture",
-    ".bmp": "a BMP picture",
-    ".tif": "a TIFF picture",
-    ".tiff": "a TIFF picture",
-}
-"""How :func:`_picture_words` names a still picture that is no PNG or JPEG, by its name."""
+    return picture_words(file_head(path)) or "a picture"
 
 
 def _has_windows() -> bool:
