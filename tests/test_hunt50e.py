@@ -1,4 +1,5 @@
-"""Phone photos in HEIF files (hunt 50e): HEIC (an iPhone's, many Android phones') and AVIF.
+"""Phone photos in HEIF files (hunt 50e): HEIC (an iPhone's, many Android phones') and AVIF;
+an MP4 whose first video track is a small preview of the recording in its second.
 
 A HEIF file of still pictures is an ISO base media file, as MP4 is: an ftyp box, a meta box
 indexing its pictures, their bytes in an mdat box, and no moov box. posecbr took it for an
@@ -220,3 +221,48 @@ def test_a_phones_photo_given_for_a_clip_or_a_case_base_is_named_as_one(
     refused(["describe", str(avif)], tmp_path, capsys, f"{avif}: an AVIF picture, not a clip")
     refused(["segment", str(webp), "--db", str(avif)], tmp_path, capsys,
             f"{avif}: not a readable SQLite database (an AVIF picture: --db takes")  # fmt: skip
+
+
+def _two_tracks(path: Path, sizes: list[tuple[int, int]]) -> Path:
+    """An MP4 of two video tracks of 3 frames each (MPEG-4 Part 2, 5 fps), of ``sizes``
+    (width, height) in the order the file lists them."""
+    av = pytest.importorskip("av")
+    out = av.open(str(path), "w")
+    streams = []
+    for width, height in sizes:
+        stream = out.add_stream("mpeg4", rate=5)
+        stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
+        streams.append(stream)
+    for k in range(3):
+        for stream in streams:
+            picture = np.full((stream.height, stream.width, 3), 40 * k, np.uint8)
+            frame = av.VideoFrame.from_ndarray(picture, format="rgb24")
+            frame.pts = k
+            for packet in stream.encode(frame):
+                out.mux(packet)
+    for stream in streams:
+        for packet in stream.encode():
+            out.mux(packet)
+    out.close()
+    return path
+
+
+def test_an_mp4_whose_first_video_track_is_a_preview_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """OpenCV decodes the first video track and can be given no other: of a 64x48 preview
+    ahead of a 320x240 recording it read the preview (the pose model ran on it, the pose file
+    written, exit 0). Now refused in one line naming both. The larger track first is read."""
+    from features.pose_estimation import open_video
+
+    first = open_video(_two_tracks(tmp_path / "big_first.mp4", [(320, 240), (64, 48)]))
+    first[0].release()
+    assert (first[1].width, first[1].height, first[1].frames) == (320, 240, 3)
+    preview = _two_tracks(tmp_path / "preview_first.mp4", [(64, 48), (320, 240)])
+    refused(
+        ["extract", str(preview), "--out", str(tmp_path / "p.npz")],
+        tmp_path,
+        capsys,
+        f"{preview}: holds 2 video tracks, and OpenCV decodes the first alone (64x48, 3 frames),"
+        " not the largest (320x240, 3 frames)",
+    )

@@ -436,6 +436,33 @@ def mp4_timeless_frames(fh: Any, size: int) -> int | None:
     return None
 
 
+def mp4_video_tracks(fh: Any, size: int) -> list[tuple[int, int, int]]:
+    """Each video track of an MP4/MOV file of ``size`` bytes, read from ``fh``, that holds
+    frames, in the order the file lists them (FFmpeg's streams, of which OpenCV decodes the
+    first): its width and height as its track header states them (px, before any turn its
+    display matrix gives) and its frame count (its time-to-sample table's). Empty when its
+    index cannot be read (a fragmented file's frames are in its fragments: none counted)."""
+    moov = _mp4_moov(fh, size) or b""
+    tracks: list[tuple[int, int, int]] = []
+    for kind, body, stop in _mp4_boxes(moov, 0, len(moov)):
+        hdlr, hdlr_end = _mp4_child(moov, body, stop, (b"mdia", b"hdlr"))
+        tkhd, tkhd_end = _mp4_child(moov, body, stop, (b"tkhd",))
+        at = tkhd + (88 if tkhd_end > tkhd and moov[tkhd] == 1 else 76)  # past times, matrix
+        if kind != b"trak" or hdlr_end < hdlr + 12 or moov[hdlr + 8 : hdlr + 12] != b"vide":
+            continue  # no video: its subtype follows its version, flags and component type
+        if tkhd_end < at + 8:
+            continue
+        width, height = (int.from_bytes(moov[at + k : at + k + 4], "big") >> 16 for k in (0, 4))
+        stts, end = _mp4_child(moov, body, stop, (b"mdia", b"minf", b"stbl", b"stts"))
+        entries = min(int.from_bytes(moov[stts + 4 : stts + 8], "big"), (end - stts - 8) // 8)
+        frames = 0
+        if entries > 0:
+            frames = int(np.frombuffer(moov, ">u4", 2 * entries, stts + 8)[0::2].sum())
+        if frames > 0:
+            tracks.append((width, height, frames))
+    return tracks
+
+
 def mp4_empty_video(fh: Any, size: int) -> bool:
     """Whether an MP4/MOV file of ``size`` bytes, read from ``fh``, has a video track and no
     frame in any (a recording stopped before its first frame: FFmpeg states its track's

@@ -61,6 +61,7 @@ from .containers import (  # noqa: E402
     is_mp4,
     mp4_empty_video,
     mp4_timeless_frames,
+    mp4_video_tracks,
     picture_orientation,
     refuse_cut,
     sound_only,
@@ -256,7 +257,7 @@ def open_video(
     frames = int(max(0.0, cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0))
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
     width, height, orientation = _seen_size(cap, path)
-    _refuse_part(cap, path, head, width, height)
+    _refuse_unseen(cap, path, head, width, height)
     fps, frames = _frames_rate(path, fps, frames, counted_by_duration(head))
     if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
@@ -285,14 +286,23 @@ def _seen_size(cap: cv2.VideoCapture, path: Path) -> tuple[int, int, int]:
     return width, height, orientation
 
 
+def _refuse_unseen(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, height: int) -> None:
+    """Refuse an ISO base media file (its first bytes ``head``) of which OpenCV decodes
+    ``width`` x ``height`` frames that are not the picture or recording it holds: a HEIF
+    photo's tile (:func:`_refuse_part`), an MP4/MOV file's lesser video track
+    (:func:`_refuse_lesser_track`)."""
+    if heif_brand(head) is not None:
+        _refuse_part(cap, path, head, width, height)
+    elif is_mp4(head):
+        _refuse_lesser_track(cap, path)
+
+
 def _refuse_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, height: int) -> None:
     """Refuse a HEIF photo (HEIC, AVIF: :func:`.containers.heif_picture`) of which OpenCV
     decodes a ``width`` x ``height`` frame that is not its primary picture: FFmpeg gives each
     coded picture in the file as a stream of its own and OpenCV reads the first, so of a
     phone's photo, 512x512 tiles put together, it read the top-left tile alone (the pose
     model ran on it, nobody or a part of the body found, exit 0)."""
-    if heif_brand(head) is None:
-        return
     try:
         with open(path, "rb") as fh:
             picture = heif_picture(fh, path.stat().st_size, head)
@@ -311,6 +321,31 @@ def _refuse_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, hei
     else:
         what = f"{whole} of which OpenCV decodes another picture in the file ({width}x{height})"
     raise DataError(f"{what}: convert it to JPEG or PNG first", path)
+
+
+def _refuse_lesser_track(cap: cv2.VideoCapture, path: Path) -> None:
+    """Refuse an MP4/MOV file whose first video track (the one OpenCV decodes: it takes
+    FFmpeg's first video stream and can be given no other) is smaller than another
+    (:func:`.containers.mp4_video_tracks`: a picture-in-picture or preview track ahead of the
+    recording). Before, the pose model ran on the first, a 160x120 preview of a 720x1280
+    recording, and the pose file was written, exit 0."""
+    try:
+        with open(path, "rb") as fh:
+            tracks = mp4_video_tracks(fh, path.stat().st_size)
+    except OSError as exc:
+        cap.release()
+        raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
+    largest = max(tracks, key=lambda track: track[0] * track[1], default=None)
+    if largest is None or largest[0] * largest[1] <= tracks[0][0] * tracks[0][1]:
+        return
+    cap.release()
+    (w, h, n), (big_w, big_h, big_n) = tracks[0], largest
+    raise DataError(
+        f"holds {len(tracks)} video tracks, and OpenCV decodes the first alone ({w}x{h},"
+        f" {n} frames), not the largest ({big_w}x{big_h}, {big_n} frames): save that track"
+        " in a file of its own and give that",
+        path,
+    )
 
 
 def _a(brand: str) -> str:
