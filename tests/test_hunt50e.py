@@ -266,3 +266,31 @@ def test_an_mp4_whose_first_video_track_is_a_preview_is_refused(
         f"{preview}: holds 2 video tracks, and OpenCV decodes the first alone (64x48, 3 frames),"
         " not the largest (320x240, 3 frames)",
     )
+
+
+def test_a_live_photos_still_beside_its_video_is_left_out_of_a_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An iPhone's photos copied off it: each live photo a picture and a video of its name
+    (IMG_0001.JPG and IMG_0001.MOV; .HEIC with the phone's default format). Before: the
+    folder was refused, "both would be written to out/IMG_0001.npz" (for .HEIC since it is
+    read). The video is extracted (its 2 frames), the picture left out with a note; a
+    picture alone is extracted."""
+    import cv2
+
+    photos = tmp_path / "DCIM"
+    photos.mkdir()
+    grey = np.full((48, 64, 3), 120, np.uint8)
+    writer = cv2.VideoWriter(
+        str(photos / "IMG_0001.MOV"), cv2.VideoWriter_fourcc(*"mp4v"), 5.0, (64, 48)
+    )
+    for _ in range(2):
+        writer.write(grey)
+    writer.release()
+    for name in ("IMG_0001.JPG", "IMG_0002.JPG"):
+        Image.fromarray(grey).save(photos / name)
+    assert main(["extract", str(photos), "--out", str(tmp_path / "out")]) == 0
+    said = capsys.readouterr().err
+    assert "note: 1 still picture beside a video of the same name left out (IMG_0001.JPG)" in said
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["IMG_0001.npz", "IMG_0002.npz"]
+    assert load_pose_arrays(tmp_path / "out" / "IMG_0001.npz")["image_landmarks"].shape[0] == 2

@@ -151,12 +151,29 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 def _videos_in(folder: Path) -> list[Path]:
     """The videos and still images in ``folder`` (not its subfolders), by name: a ``.ts``
-    file only when it is MPEG-TS inside (not a TypeScript source)."""
+    file only when it is MPEG-TS inside (not a TypeScript source); a still picture beside a
+    video of its name is left out (:func:`_live_stills`)."""
+    found = _clips_in(folder)
+    live = _live_stills(found)
+    return [p for p in found if p not in live]
+
+
+def _clips_in(folder: Path) -> list[Path]:
+    """Every video and still image in ``folder`` (:func:`_videos_in`, no picture left out)."""
     return sorted(
         p for p in folder.iterdir()
         if p.is_file() and not p.name.startswith(".")
         and (p.suffix.lower() in IMAGE_SUFFIXES or is_video_in_folder(p))
     )  # fmt: skip
+
+
+def _live_stills(paths: list[Path]) -> list[Path]:
+    """The still pictures among ``paths`` (of one folder) with a video of the same name
+    beside them: a phone's live photo, the picture and the seconds around it filmed (an
+    iPhone's IMG_0001.HEIC or .JPG and IMG_0001.MOV, copied off the phone together). Both
+    would be written to one pose file; the video holds the moment the picture does."""
+    videos = {p.stem for p in paths if p.suffix.lower() not in IMAGE_SUFFIXES}
+    return [p for p in paths if p.suffix.lower() in IMAGE_SUFFIXES and p.stem in videos]
 
 
 def _csv_jobs(csv_path: Path, out: Path) -> list[Job]:
@@ -218,6 +235,7 @@ def _folder_jobs(source: Path, out: Path) -> list[Job]:
         for v in _videos_in(d)
     ]
     jobs += [Job(video=v, out=out / f"{v.stem}.npz") for v in _videos_in(source)]
+    _note_live_stills([source, *subdirs])
     if not jobs:
         raise DataError(
             f"no videos or images found ({', '.join(SHOWN_VIDEO_SUFFIXES + IMAGE_SUFFIXES)}),"
@@ -225,6 +243,19 @@ def _folder_jobs(source: Path, out: Path) -> list[Job]:
             source,
         )
     return jobs
+
+
+def _note_live_stills(folders: list[Path]) -> None:
+    """Say on stderr which still pictures in ``folders`` are left out as live photos'
+    (:func:`_live_stills`), the first few named."""
+    left = [p for folder in folders for p in _live_stills(_clips_in(folder))]
+    if left:
+        named = first_few([shown(p.name) for p in left])
+        print(
+            f"note: {counted(len(left), 'still picture')} beside a video of the same name left"
+            f" out ({named}): a phone's live photo, whose video is extracted",
+            file=sys.stderr,
+        )
 
 
 def find_jobs(
