@@ -436,30 +436,62 @@ def mp4_timeless_frames(fh: Any, size: int) -> int | None:
     return None
 
 
-def mp4_video_tracks(fh: Any, size: int) -> list[tuple[int, int, int]]:
+@dataclass(frozen=True)
+class VideoTrack:
+    """A video track of an MP4/MOV file: its width and height as its track header states
+    them (px, before the turn its display matrix gives), its frame count (its time-to-sample
+    table's) and how a player turns its frames (:data:`MATRIX_TURNS`: an EXIF orientation)."""
+
+    width: int
+    height: int
+    frames: int
+    turn: int = 1
+
+
+MATRIX_TURNS = {
+    (1, 0, 0, 1): 1,
+    (-1, 0, 0, 1): 2,
+    (-1, 0, 0, -1): 3,
+    (1, 0, 0, -1): 4,
+    (0, 1, 1, 0): 5,
+    (0, 1, -1, 0): 6,
+    (0, -1, -1, 0): 7,
+    (0, -1, 1, 0): 8,
+}
+"""The EXIF orientation (1-8, :func:`.video.upright`) a track header's display matrix gives,
+by the signs of its first four entries (a, b, c, d: a stored pixel x, y is shown at
+a x + c y, b x + d y, shifted): 6 is a quarter turn clockwise (a phone's portrait video
+stored landscape), 2 a mirror (some phones' front camera). A matrix of no quarter turn is
+taken as 1."""
+
+
+def mp4_video_tracks(fh: Any, size: int) -> list[VideoTrack]:
     """Each video track of an MP4/MOV file of ``size`` bytes, read from ``fh``, that holds
-    frames, in the order the file lists them (FFmpeg's streams, of which OpenCV decodes the
-    first): its width and height as its track header states them (px, before any turn its
-    display matrix gives) and its frame count (its time-to-sample table's). Empty when its
-    index cannot be read (a fragmented file's frames are in its fragments: none counted)."""
+    frames (:class:`VideoTrack`), in the order the file lists them (FFmpeg's streams, of
+    which OpenCV decodes the first). Empty when its index cannot be read (a fragmented
+    file's frames are in its fragments: none counted)."""
     moov = _mp4_moov(fh, size) or b""
-    tracks: list[tuple[int, int, int]] = []
+    tracks: list[VideoTrack] = []
     for kind, body, stop in _mp4_boxes(moov, 0, len(moov)):
         hdlr, hdlr_end = _mp4_child(moov, body, stop, (b"mdia", b"hdlr"))
         tkhd, tkhd_end = _mp4_child(moov, body, stop, (b"tkhd",))
-        at = tkhd + (88 if tkhd_end > tkhd and moov[tkhd] == 1 else 76)  # past times, matrix
+        matrix = tkhd + (52 if tkhd_end > tkhd and moov[tkhd] == 1 else 40)  # past the times
         if kind != b"trak" or hdlr_end < hdlr + 12 or moov[hdlr + 8 : hdlr + 12] != b"vide":
             continue  # no video: its subtype follows its version, flags and component type
-        if tkhd_end < at + 8:
+        if tkhd_end < matrix + 44:  # the matrix (9 numbers), then the width and height
             continue
-        width, height = (int.from_bytes(moov[at + k : at + k + 4], "big") >> 16 for k in (0, 4))
+        a, b, _u, c, d = (
+            int(np.sign(round(v / 65536))) for v in np.frombuffer(moov, ">i4", 5, matrix)
+        )
+        width, height = (int.from_bytes(moov[matrix + k : matrix + k + 4], "big") >> 16
+                         for k in (36, 40))  # fmt: skip
         stts, end = _mp4_child(moov, body, stop, (b"mdia", b"minf", b"stbl", b"stts"))
-        entries = min(int.from_bytes(moov[stts + 4 : stts + 8], "big"), (end - stts - 8) // 8)
+        counted = min(int.from_bytes(moov[stts + 4 : stts + 8], "big"), (end - stts - 8) // 8)
         frames = 0
-        if entries > 0:
-            frames = int(np.frombuffer(moov, ">u4", 2 * entries, stts + 8)[0::2].sum())
+        if counted > 0:
+            frames = int(np.frombuffer(moov, ">u4", 2 * counted, stts + 8)[0::2].sum())
         if frames > 0:
-            tracks.append((width, height, frames))
+            tracks.append(VideoTrack(width, height, frames, MATRIX_TURNS.get((a, b, c, d), 1)))
     return tracks
 
 

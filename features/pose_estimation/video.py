@@ -56,6 +56,7 @@ from features.skeleton import BLAZEPOSE_33  # noqa: E402
 from features.text import shown  # noqa: E402
 
 from .containers import (  # noqa: E402
+    VideoTrack,
     counted_by_duration,
     heif_picture,
     is_mp4,
@@ -170,8 +171,9 @@ class VideoInfo:
 def upright(image: np.ndarray, orientation: int) -> np.ndarray:
     """A still picture decoded as stored, flipped and turned as its EXIF ``orientation``
     (1-8, :func:`.containers.picture_orientation`) says a viewer shows it: 6, a phone's
-    portrait photo stored sideways, a quarter turn clockwise. A video's frames (1, or a
-    video stream's rotation, which OpenCV applies itself) are given back as they are."""
+    portrait photo stored sideways, a quarter turn clockwise; a video's frames as its display
+    matrix turns them, less its mirror, where it mirrors them (:data:`UNMIRRORED`). A video's
+    frames otherwise (1: a turn alone OpenCV applies itself) are given back as they are."""
     if orientation == 1:
         return image
     turned = {
@@ -256,8 +258,7 @@ def open_video(
     refuse_text(cap, path)
     frames = int(max(0.0, cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0))
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
-    width, height, orientation = _seen_size(cap, path)
-    _refuse_unseen(cap, path, head, width, height)
+    width, height, orientation = _seen_size(cap, path, head)
     fps, frames = _frames_rate(path, fps, frames, counted_by_duration(head))
     if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
@@ -274,27 +275,51 @@ def open_video(
     return cap, VideoInfo(path, frames, fps, width, height, orientation)
 
 
-def _seen_size(cap: cv2.VideoCapture, path: Path) -> tuple[int, int, int]:
-    """The width and height of the frames of ``cap`` (of ``path``) as seen, and the EXIF
-    orientation of a still picture (:func:`.containers.picture_orientation`): one turned a
-    quarter is as wide as it is stored high."""
+def _seen_size(cap: cv2.VideoCapture, path: Path, head: bytes) -> tuple[int, int, int]:
+    """The width and height of the frames of ``cap`` (of ``path``, whose first bytes are
+    ``head``) as seen, and how posecbr turns them (:func:`upright`): a still picture by its
+    EXIF orientation (:func:`.containers.picture_orientation`), an MP4/MOV video by its
+    display matrix, less its mirror, where it mirrors the frames (:data:`UNMIRRORED`),
+    OpenCV's own turning set off; one turned a quarter is as wide as it is stored high. An
+    MP4/MOV whose first video track is a lesser one is refused
+    (:func:`_refuse_lesser_track`), and so is a HEIF photo of which OpenCV decodes a part
+    (:func:`_refuse_part`)."""
+    orientation = picture_orientation(path)
+    if is_mp4(head) and heif_brand(head) is None:
+        tracks = _video_tracks(cap, path)
+        _refuse_lesser_track(cap, path, tracks)
+        if tracks and tracks[0].turn in UNMIRRORED:
+            cap.set(cv2.CAP_PROP_ORIENTATION_AUTO, 0)
+            orientation = UNMIRRORED[tracks[0].turn]
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
-    orientation = picture_orientation(path)
     if orientation >= 5:
         width, height = height, width
+    if heif_brand(head) is not None:
+        _refuse_part(cap, path, head, width, height)
     return width, height, orientation
 
 
-def _refuse_unseen(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, height: int) -> None:
-    """Refuse an ISO base media file (its first bytes ``head``) of which OpenCV decodes
-    ``width`` x ``height`` frames that are not the picture or recording it holds: a HEIF
-    photo's tile (:func:`_refuse_part`), an MP4/MOV file's lesser video track
-    (:func:`_refuse_lesser_track`)."""
-    if heif_brand(head) is not None:
-        _refuse_part(cap, path, head, width, height)
-    elif is_mp4(head):
-        _refuse_lesser_track(cap, path)
+UNMIRRORED = {2: 1, 4: 3, 5: 6, 7: 8}
+"""The turn (EXIF orientation, :func:`upright`) posecbr gives the frames of a video whose
+display matrix mirrors them (:data:`.containers.MATRIX_TURNS`: some phones' front camera
+shows its recording as a mirror does): the matrix's turn without the mirror, the frames as
+the camera saw the person, upright, their left side on the image's right (a mirrored frame
+would be posed with left and right swapped). OpenCV turns them wrongly: it takes the
+matrix's angle alone (FFmpeg's ``av_display_rotation_get``), so a mirror (2) was a half
+turn, the person upside down; its own turning is set off for them. A turn without a mirror
+OpenCV does right and keeps."""
+
+
+def _video_tracks(cap: cv2.VideoCapture, path: Path) -> list[VideoTrack]:
+    """:func:`.containers.mp4_video_tracks` of an MP4/MOV file (``cap`` released if it
+    cannot be read)."""
+    try:
+        with open(path, "rb") as fh:
+            return mp4_video_tracks(fh, path.stat().st_size)
+    except OSError as exc:
+        cap.release()
+        raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
 
 
 def _refuse_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, height: int) -> None:
@@ -323,27 +348,22 @@ def _refuse_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, hei
     raise DataError(f"{what}: convert it to JPEG or PNG first", path)
 
 
-def _refuse_lesser_track(cap: cv2.VideoCapture, path: Path) -> None:
+def _refuse_lesser_track(cap: cv2.VideoCapture, path: Path, tracks: list[VideoTrack]) -> None:
     """Refuse an MP4/MOV file whose first video track (the one OpenCV decodes: it takes
-    FFmpeg's first video stream and can be given no other) is smaller than another
-    (:func:`.containers.mp4_video_tracks`: a picture-in-picture or preview track ahead of the
-    recording). Before, the pose model ran on the first, a 160x120 preview of a 720x1280
-    recording, and the pose file was written, exit 0."""
-    try:
-        with open(path, "rb") as fh:
-            tracks = mp4_video_tracks(fh, path.stat().st_size)
-    except OSError as exc:
-        cap.release()
-        raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
-    largest = max(tracks, key=lambda track: track[0] * track[1], default=None)
-    if largest is None or largest[0] * largest[1] <= tracks[0][0] * tracks[0][1]:
+    FFmpeg's first video stream and can be given no other) is smaller than another of its
+    ``tracks`` (a picture-in-picture or preview track ahead of the recording). Before, the
+    pose model ran on the first, a 160x120 preview of a 720x1280 recording, and the pose
+    file was written, exit 0."""
+    largest = max(tracks, key=lambda track: track.width * track.height, default=None)
+    if largest is None or largest.width * largest.height <= tracks[0].width * tracks[0].height:
         return
     cap.release()
-    (w, h, n), (big_w, big_h, big_n) = tracks[0], largest
+    first = tracks[0]
     raise DataError(
-        f"holds {len(tracks)} video tracks, and OpenCV decodes the first alone ({w}x{h},"
-        f" {n} frames), not the largest ({big_w}x{big_h}, {big_n} frames): save that track"
-        " in a file of its own and give that",
+        f"holds {len(tracks)} video tracks, and OpenCV decodes the first alone"
+        f" ({first.width}x{first.height}, {first.frames} frames), not the largest"
+        f" ({largest.width}x{largest.height}, {largest.frames} frames): save that track in a"
+        " file of its own and give that",
         path,
     )
 
