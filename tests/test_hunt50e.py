@@ -1,5 +1,7 @@
-"""Phone photos in HEIF files (hunt 50e): HEIC (an iPhone's, many Android phones') and AVIF;
-an MP4 whose first video track is a small preview of the recording in its second.
+"""What a phone gives, as a new user hands it to posecbr (hunt 50e): photos in HEIF files
+(HEIC, an iPhone's and many Android phones', and AVIF) and WebP; an MP4 whose first video
+track is a small preview of the recording in its second; a live photo's picture and video
+side by side in a folder; a video whose display matrix mirrors it (a front camera's).
 
 A HEIF file of still pictures is an ISO base media file, as MP4 is: an ftyp box, a meta box
 indexing its pictures, their bytes in an mdat box, and no moov box. posecbr took it for an
@@ -13,7 +15,9 @@ photo is refused in one line naming it, not posed on its top-left tile.
 The files are made here: Pillow codes AVIF (a photo turned by irot, as a phone's stores it
 sideways; each tile of a grid), and :func:`_avif_grid` puts tiles together as a phone does
 (ISO/IEC 23008-12: grid item, dimg references, ispe and av1C properties). Pillow (libavif)
-decodes the grid whole, the reference the test checks the file against.
+decodes the grid whole, the reference the test checks the file against. The videos are
+written by OpenCV or PyAV (MPEG-4 Part 2), their display matrices set in the track header by
+hand.
 """
 
 from __future__ import annotations
