@@ -1027,6 +1027,22 @@ lead over the clock it keeps (:meth:`Regrid._stalled`) is forgiven at up to this
 time passed. A rate measured from 30 frame intervals that each wander by up to 20 % is off
 by 2 % (one standard deviation); a burst's lead, frames read at once after the reader was
 held up, is another thing, kept for the next stall for seconds (8 frames at 30 fps: 5 s)."""
+RATE_WINDOW_S = 2.0
+"""Over how many seconds of a live source's latest frames its frame interval is measured once
+it follows the wall clock (:meth:`Regrid._placed`, :func:`_interval`): a second at each end
+of a stream that changed its rate once more, half of them after the change."""
+BURST_S = 0.5
+"""How long a pause a live source's frames may come late after, once it follows the wall
+clock, and still be placed a frame interval apart as a burst (frames held up on the way and
+then read at once: a network's jitter; a reader held up by a slow frame) rather than at the
+times they came (:meth:`Regrid._placed`): 4-6 frames at once at 15 fps come after a pause of
+0.27-0.40 s. The frames that come late after a longer pause, or that all still come late a
+pause later, came after a stall, its time left missing."""
+CATCH_UP = 4.0
+"""Over how many times its length the lead a live source's frames ran ahead of the wall clock
+by, before its rate's rise was taken, is made up (:meth:`Regrid._rate_changed`): the grid's
+clock meanwhile at three quarters of the wall clock's speed, the movement a third faster
+than it was made (every frame's pose kept; at the lead's end on the clock)."""
 
 
 class Regrid:
@@ -1038,10 +1054,13 @@ class Regrid:
     see :mod:`features.pose_estimation.video`), or once a live source's rate over its latest
     frames has been off ``fps`` by more than :data:`RATE_CHANGE` for :data:`CHANGE_HOLD_S`
     (a webcam's auto exposure halving it as the light falls, a network stream's rate
-    sagging: :meth:`_rate_changed`), the poses are put on the grid k / fps as the frames
-    come, by their own times (a live source's: the wall clock's, from the window its rate
-    was first off in: the grid times its frames fell behind the clock by meanwhile are left
-    missing, :meth:`_behind`), each grid time linearly between the frames around it (a joint
+    sagging, or rising as the light comes back: :meth:`_rate_changed`), the poses are put on
+    the grid k / fps as the frames come, by their own times (a live source's: the wall
+    clock's, from the window its rate was first off in: the grid times its frames fell
+    behind the clock by meanwhile are left missing, :meth:`_behind`, and a lead they ran
+    ahead of it by is made up over :data:`CATCH_UP` times its length; a burst of frames,
+    held up on the way and read at once, each a frame interval after the one before:
+    :meth:`_placed`), each grid time linearly between the frames around it (a joint
     missing in either stays missing; every joint missing between two frames further apart
     than :func:`features.pose_estimation.video.bridge_limit_s`: a gap in the video, or the
     stream stalled, no motion made up for it, as ``extract`` leaves it; :attr:`absent` says
@@ -1066,6 +1085,14 @@ class Regrid:
         self.owed = 0  # grid times the frames fell behind the clock by, left missing
         self.by_clock = False  # a live source's frames put on the grid by the wall clock
         self.origin_s = math.nan  # then: the wall clock's time of grid frame 0
+        self.placed_s = math.nan  # then: when the last frame taken lies on the grid's clock
+        # a live source's latest frames (time_s, how late each came after its place on the
+        # grid's clock: 0 before it follows the wall clock, which of its frames it is),
+        # :data:`RATE_WINDOW_S` of them (:meth:`_placed`)
+        self.clocked: collections.deque[tuple[float, float, int]] = collections.deque()
+        self.came = 0  # a live source's frames so far
+        self.interval = 1.0 / fps  # its frame interval now (s), once it follows the clock
+        self.ahead = (0.0, 0.0)  # then: how far its grid ran ahead of the clock (s), and since
 
     def take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """(world, visibility, the frame on screen then) for each grid time up to this
@@ -1086,7 +1113,7 @@ class Regrid:
             self.images.append(_image(frame))
             return [*out, (frame.seen_world, frame.visibility, frame)]
         if self.by_clock:  # a live source whose rate changed, at this frame or before
-            return self._behind(frame) + self._resampled(frame, frame.time_s - self.origin_s)
+            return self._behind(frame) + self._resampled(frame, self._placed(frame))
         if not self.resampling:
             if not strays(t, frame.index, self.fps):
                 self.prev, self.k = frame, frame.index + 1
@@ -1110,7 +1137,7 @@ class Regrid:
         from features.pose_estimation.video import blend, bridged_weight, gap_words
 
         prev = self.prev
-        start = self._grid_s(prev) if prev is not None else math.nan
+        start = math.nan if prev is None else self.placed_s if self.by_clock else prev.video_time_s
         if prev is None or not math.isfinite(t) or t <= start:
             return []  # no time to place it by
         out, gap = [], []
@@ -1123,12 +1150,13 @@ class Regrid:
             self.images.append(None if any(i is None for i in image) else blend(*image, w))
             out.append((world, vis, frame if w >= 1.0 - 1e-9 else prev))
             self.k += 1
-        self.prev = frame
+        self.prev, self.placed_s = frame, t
         self.absent += gap
         if any(gap) and not self.by_clock:
             print(f"note: {self.source}: {gap_words([(start, t)])}", file=sys.stderr)
         elif any(gap):  # as :meth:`_stalled` says it, from the first frame
-            words = gap_words([(prev.time_s - self.first_s, frame.time_s - self.first_s)])
+            since = self.origin_s - self.first_s
+            words = gap_words([(start + since, t + since)])
             print(f"note: {self.source}: the stream stalled: {words}", file=sys.stderr)
         return out
 
@@ -1146,10 +1174,46 @@ class Regrid:
         nan = np.full((len(frame.visibility),), np.nan)
         return [(np.full_like(frame.seen_world, np.nan), nan, self.prev)] * owed
 
-    def _grid_s(self, frame: Any) -> float:
-        """When ``frame`` lies on the grid's clock once resampling (s): a file's own time, a
-        live source's wall clock from :attr:`origin_s`."""
-        return float(frame.time_s - self.origin_s if self.by_clock else frame.video_time_s)
+    def _placed(self, frame: Any) -> float:
+        """When a live source's ``frame`` lies on the grid's clock once it follows the wall
+        clock (s from :attr:`origin_s`, plus what is left of a lead to make up,
+        :attr:`ahead`): a frame interval after the frame before (the count's time: the
+        interval over the latest :data:`RATE_WINDOW_S`, :func:`_interval`), never after it came
+        (the wall clock: a rate that rises is followed at once) and not before it by more
+        than the least any frame of the latest :data:`BURST_S` came after its place (the
+        stream's own delay, which a frame that came as soon as any shows). A frame late
+        after a pause is one of a burst, frames held up on the way and then read at once,
+        placed a frame interval after the one before, as the camera took them; a lag that
+        every frame of the latest :data:`BURST_S` has (none comes after a longer pause) is
+        the stream's, a stall: made up at once, the time between left missing as before.
+        Before, each frame lay at the time it came: a burst's frames fell on one grid time,
+        all but the last of them lost."""
+        now = float(frame.time_s)
+        came = now - self.origin_s
+        lead, since = self.ahead
+        if lead > 0:  # the grid's lead over the clock, made up as the clock goes on
+            came += lead * max(0.0, 1.0 - (now - since) / (CATCH_UP * lead))
+        clocked = self.clocked
+        while clocked and clocked[0][0] <= now - RATE_WINDOW_S:
+            clocked.popleft()
+        placed = came
+        if clocked:
+            if len(clocked) > 3:
+                self.interval = _interval(clocked, self.interval)
+            due = self.placed_s + self.interval  # the count's time
+            late = came - due
+            lag = min((c[1] for c in clocked if c[0] > now - BURST_S), default=late)
+            placed = min(came, due + max(0.0, min(late, lag)))
+        self._came(now, came - placed)
+        return placed
+
+    def _came(self, time_s: float, late_s: float) -> None:
+        """Count a live source's frame that came at ``time_s`` (the wall clock's), ``late_s``
+        after its place on the grid's clock, among :attr:`clocked`."""
+        self.came += 1
+        self.clocked.append((time_s, late_s, self.came))
+        while self.clocked[0][0] <= time_s - RATE_WINDOW_S:
+            self.clocked.popleft()
 
     def _rate_changed(self, frame: Any) -> bool:
         """Whether a live source's frames, from ``frame`` on, are to be put on the grid by the
@@ -1161,10 +1225,15 @@ class Regrid:
         first off in (before the change: on the grid as it came), and the grid times the
         frames since, one to a grid time at the old rate, fell behind it by (:attr:`owed`)
         are left missing (:meth:`_behind`): their poses were given early, and a grid time
-        given is final. The user is told once on stderr, from which rate to which and how
-        many grid times are missing. Before, the grid's clock was set so that ``frame`` lay
-        on the next grid time: a camera that halved its rate had every grid time after the
-        change 0.55 s early by the wall clock."""
+        given is final. A rate that rose had them run ahead of it instead, their poses given
+        late: that lead (:attr:`ahead`) is made up over :data:`CATCH_UP` times its length,
+        the frames meanwhile put on the grid by a clock that runs a quarter slower than the
+        wall clock (:meth:`_placed`; none left out). The user is told once on stderr, from
+        which rate to which and how many grid times are missing, or how far ahead the grid
+        is. Before, the grid's clock was set so that ``frame`` lay on the next grid time: a
+        camera that halved its rate had every grid time after the change 0.55 s early by the
+        wall clock, and a stream that doubled its rate from 15 fps had every grid time after
+        it some 1.0 s late, for good."""
         recent = self.recent
         recent.append((frame.time_s, self.k))
         while len(recent) > 2 and recent[1][0] <= frame.time_s - CHANGE_WINDOW_S:
@@ -1172,22 +1241,34 @@ class Regrid:
         rate = _frame_rate([time_s for time_s, _k in recent], CHANGE_WINDOW_S)
         if rate is None or abs(rate / self.fps - 1.0) <= RATE_CHANGE:
             self.off_since = math.nan
+            self._came(frame.time_s, 0.0)  # one to a grid time: at its place
             return False
         if not frame.time_s - self.off_since >= CHANGE_HOLD_S:  # NaN: off from now
             if math.isnan(self.off_since):
                 self.off_since, self.off_from = frame.time_s, recent[0]
+            self._came(frame.time_s, 0.0)
             return False
         self.resampling = self.by_clock = True
         from_s, from_k = self.off_from
-        self.origin_s = min(from_s - from_k / self.fps, frame.time_s - self.k / self.fps)
-        lag_s = self.prev.time_s - self.origin_s  # the frame before's wall-clock grid time
-        self.owed = max(0, math.floor(lag_s * self.fps + 1e-9) + 1 - self.k)
+        self.origin_s = from_s - from_k / self.fps
+        self.placed_s = self.prev.time_s - self.origin_s  # the frame before's, by the clock
+        owed = math.floor(self.placed_s * self.fps + 1e-9) + 1 - self.k
+        self.owed = max(0, owed)
         recent.clear()
         behind = ""
-        if self.owed:  # the frames before, counted at the old rate, fell behind the clock
+        if owed > 0:  # the frames before, counted at the old rate, fell behind the clock
             behind = (
-                f" ({counted(self.owed, 'frame')}, {self.owed / self.fps:.2f} s, left missing:"
+                f" ({counted(owed, 'frame')}, {owed / self.fps:.2f} s, left missing:"
                 " the frames before, counted at the old rate, fell that far behind the clock)"
+            )
+        elif owed < 0:  # they came faster: the grid times they were given ran ahead of it
+            lead = (self.k - 1) / self.fps - self.placed_s
+            self.ahead = (lead, self.prev.time_s)
+            self.placed_s += lead  # the frame before, on the grid where it was given
+            behind = (
+                f" (the grid {lead:.2f} s ahead of the clock, made up over the next"
+                f" {CATCH_UP * lead:.1f} s: the frames before, counted at the old rate, ran"
+                " that far ahead of it)"
             )
         print(
             f"note: {self.source}: the frame rate changed from {self.fps:.3g} to {rate:.3g} fps"
@@ -1233,6 +1314,23 @@ class Regrid:
             print(f"note: {self.source}: the stream stalled: {words}", file=sys.stderr)
         nan = np.full((len(frame.visibility),), np.nan)
         return [(np.full_like(frame.seen_world, np.nan), nan, prev)] * missing
+
+
+def _interval(clocked: collections.deque[tuple[float, float, int]], before: float) -> float:
+    """A live source's frame interval (s) from its latest frames (when each came, how late,
+    which of its frames: :attr:`Regrid.clocked`; four at least): between the frame of the
+    older half that came earliest for its count (by the interval ``before``) and that of the
+    newer half. Frames held up on the way and read at once come late for their count; the
+    last of a burst, or a frame that came on time, does not, and the stream's own delay is
+    the same at both: a burst's frames make a staircase of when they came, its steps' slope
+    the stream's. (A least-squares slope over the staircase was off by up to a fifth over
+    one second and 2-3 % over two, each frame then placed up to 27 ms off.)"""
+    half = len(clocked) // 2
+    older = [clocked[i] for i in range(half)]
+    newer = [clocked[i] for i in range(half, len(clocked))]
+    a = min(older, key=lambda c: c[0] - c[2] * before)
+    b = min(newer, key=lambda c: c[0] - c[2] * before)
+    return (b[0] - a[0]) / (b[2] - a[2])
 
 
 def _image(frame: Any) -> Any:
