@@ -11,6 +11,9 @@ bursts (:class:`posecbr.commands.watch.Regrid`).
   one grid time, all but its last frame lost, and the pause before it was a stall. Its
   frames are now placed a frame interval apart by their count, anchored to the clock
   (``Regrid._placed``); a stall is still left missing.
+- A rate that fell straight into bursts was never taken as a change: the rate over the
+  latest half second left each burst's pause out as a stall. The pauses up to half a second
+  are now counted with their frames (``_frame_rate``'s ``longest_s``).
 """
 
 from __future__ import annotations
@@ -122,3 +125,32 @@ def test_frames_that_come_in_bursts_keep_their_poses_and_a_stall_is_left_missing
     assert between.sum() == 31  # 11.933 to 13.0 s: grid times 359-389
     err = capsys.readouterr().err
     assert err.count("the stream stalled") == 1
+
+
+def test_a_rate_that_falls_into_bursts_is_taken_as_changed(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A camera at 30 fps for 3 s, then at 15 fps with its frames coming in bursts of five
+    from the fall on (each burst read at once when its last frame was taken), every frame's
+    pose the time it was taken: the fall is taken as a change of rate (its rate over the
+    latest half second counts each burst's pause, 0.33 s, with the frames that came at once
+    after it), said once, the pauses before it left missing as stalls (the change is taken
+    some 1.1 s after the fall: no more than three of them said); from 5 s on every frame is
+    on screen at some grid time and each grid time's pose is the camera's at its wall-clock
+    time, none missing. Before, each burst's pause was left out of the rate as a stall and
+    the rest spanned too little to measure: the change was never taken, and every pause to
+    the end was a stall, 27 of them said, a third of the grid times missing."""
+    taken = [j / 30.0 for j in range(90)] + [3.0 + j / 15.0 for j in range(135)]
+    came = list(taken)
+    for start in range(90, len(taken), 5):
+        came[start : start + 5] = [taken[start + 4]] * 5
+    grid = Regrid(30.0, "0")
+    frames = [_frame(i, c, t) for i, (c, t) in enumerate(zip(came, taken, strict=True))]
+    values, shown = _taken(grid, frames)
+    late = [i for i, t in enumerate(taken) if t >= 5.0]
+    assert [i for i in late[:-1] if i in shown] == late[:-1]  # the last: no grid time after
+    on = np.arange(len(values)) >= 5.0 * 30
+    np.testing.assert_allclose(values[on], np.flatnonzero(on) / 30.0, atol=1e-9)
+    err = capsys.readouterr().err
+    assert err.count("the frame rate changed from 30 to") == 1
+    assert err.count("the stream stalled") <= 3

@@ -1011,8 +1011,8 @@ changed (:meth:`Regrid._rate_changed`): a camera's auto exposure halves it (50 %
 CHANGE_WINDOW_S = 0.5
 """Over how many seconds of a live source's latest frames its rate now is measured
 (:func:`_frame_rate`): a one-off event, a hiccup (a quarter second without a frame; longer
-is a stall, left out) or a burst (frames read at once after the reader was held up), is in
-the window for no longer than it is long."""
+than :data:`BURST_S` is a stall, left out) or a burst (frames read at once after the reader
+was held up), is in the window for no longer than it is long."""
 CHANGE_HOLD_S = 0.8
 """How long (s) a live source's rate must stay off by :data:`RATE_CHANGE` to be taken as
 changed: longer than a one-off hiccup or burst stays off in the window (half a second and
@@ -1218,7 +1218,8 @@ class Regrid:
     def _rate_changed(self, frame: Any) -> bool:
         """Whether a live source's frames, from ``frame`` on, are to be put on the grid by the
         wall clock: its rate over its latest frames (:data:`CHANGE_WINDOW_S`,
-        :func:`_frame_rate` of their times: a stall left out) has been off ``fps`` by more
+        :func:`_frame_rate` of their times: an interval longer than :data:`BURST_S`, a
+        stall, left out; a burst's pause counted with its frames) has been off ``fps`` by more
         than :data:`RATE_CHANGE` for
         :data:`CHANGE_HOLD_S` (not a hiccup, nor jitter). Then the grid's clock
         (:attr:`origin_s`) is the wall clock from the first frame of the window the rate was
@@ -1238,7 +1239,7 @@ class Regrid:
         recent.append((frame.time_s, self.k))
         while len(recent) > 2 and recent[1][0] <= frame.time_s - CHANGE_WINDOW_S:
             recent.popleft()
-        rate = _frame_rate([time_s for time_s, _k in recent], CHANGE_WINDOW_S)
+        rate = _frame_rate([time_s for time_s, _k in recent], CHANGE_WINDOW_S, BURST_S)
         if rate is None or abs(rate / self.fps - 1.0) <= RATE_CHANGE:
             self.off_since = math.nan
             self._came(frame.time_s, 0.0)  # one to a grid time: at its place
@@ -1343,7 +1344,9 @@ def _image(frame: Any) -> Any:
     return None if image is None else np.asarray(image, dtype=float)
 
 
-def _frame_rate(times: list[float], least_s: float = 1.0) -> float | None:
+def _frame_rate(
+    times: list[float], least_s: float = 1.0, longest_s: float | None = None
+) -> float | None:
     """A live source's frame rate from ``least_s`` seconds of its frames' times (s; its
     first second, or its latest half second: :meth:`Regrid._rate_changed`), None when they
     span less (not yet known), an interval longer than
@@ -1352,7 +1355,10 @@ def _frame_rate(times: list[float], least_s: float = 1.0) -> float | None:
     frame was sent then (a webcam's wait between its first frame and the next, a stall),
     as :meth:`Regrid._stalled` leaves it missing. Before, a webcam that sent its second
     frame 0.6 s after its first and then 30 a second was measured at 13 fps, and every
-    segment was timed 2.3 times too long."""
+    segment was timed 2.3 times too long. ``longest_s``: the longest interval counted
+    instead (the latest half second's: :data:`BURST_S`, a burst's pause counted with its
+    frames, which came at once: by the median's rule each burst's pause was left out, the
+    rest spanned too little, and a rate that fell into bursts was never measured)."""
     import numpy as np
 
     from features.pose_estimation.video import BRIDGE_FRAMES, MAX_BRIDGE_S
@@ -1360,8 +1366,10 @@ def _frame_rate(times: list[float], least_s: float = 1.0) -> float | None:
     gaps = np.diff(times)
     if not len(gaps):
         return None
-    median = statistics.median(gaps.tolist())  # numpy's takes ten times as long: every frame
-    sent = gaps[gaps <= max(MAX_BRIDGE_S, BRIDGE_FRAMES * median)]
+    if longest_s is None:
+        median = statistics.median(gaps.tolist())  # numpy's: ten times as long, every frame
+        longest_s = max(MAX_BRIDGE_S, BRIDGE_FRAMES * median)
+    sent = gaps[gaps <= longest_s]
     if sent.sum() < least_s:
         return None
     return float(len(sent) / sent.sum())
