@@ -139,9 +139,10 @@ def record_revision(
 
     A move is applied to the case as it is in the store NOW (read and locked in this
     transaction), not to this process's copy: ``p <- p + rate (q - p)`` on the stored ``p``, so
-    concurrent revisions of one case all take effect. A case trimmed meanwhile is neither
-    moved nor relabelled (:class:`StaleCaseError`: the caller reads the cases again). Returns
-    the case's new problem (None when no problem changed)."""
+    concurrent revisions of one case all take effect. A case trimmed or relabelled meanwhile
+    is neither moved nor relabelled (:class:`StaleCaseError`: the caller reads the cases
+    again): the revision was decided on its label as read. Returns the case's new problem
+    (None when no problem changed)."""
     _check_rate(rev.rate)
     new = None
     if rev.action in ("moved", "relabelled") and rev.case_id >= 0:
@@ -151,6 +152,14 @@ def record_revision(
             raise StaleCaseError(
                 f"case {rev.case_id} was trimmed by another process since it was read; "
                 "nothing was written",
+                tx.store.where,
+            )
+        # a case another process relabelled is no longer the one decided on: a move pulled
+        # a case of another activity toward this observation, a relabel undid the other's
+        if current.label != rev.old_label:
+            raise StaleCaseError(
+                f"case {rev.case_id} was relabelled by another process since it was read "
+                f"({rev.old_label!r}, now {current.label!r}); nothing was written",
                 tx.store.where,
             )
         if rev.action == "moved":
