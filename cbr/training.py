@@ -83,7 +83,7 @@ class TrainResult:
     judges_unknown: bool = True
     #: cases whose features equal a case's of another activity (:func:`same_features`)
     indistinct: list[str] = field(default_factory=list)
-    #: ``--append``: the activities added that the case base did not hold when read
+    #: ``--append``: the activities added that the case base did not hold as they were added
     new_labels: list[str] = field(default_factory=list)
     #: those of ``new_labels`` that are the file name of one of their clips (a pose file
     #: converted alone is labelled so: a name, not an activity, likely)
@@ -99,14 +99,12 @@ class TrainResult:
 class Plan:
     """What each training clip is reduced to: for a new fit, the estimator's
     :meth:`~cbr.estimator.CaseBaseClassifier.describe_plan` (``candidates``, ``mirror``,
-    ``sides``); for ``--append``, the stored case base's columns (``casebase``, no cases)
-    and the activities it held when read (``known``)."""
+    ``sides``); for ``--append``, the stored case base's columns (``casebase``, no cases)."""
 
     candidates: FeatureConfig | None = None
     mirror: bool = False
     sides: bool = False
     casebase: CaseBase | None = None
-    known: tuple[str, ...] = ()
 
 
 def fit_plan(estimator: CaseBaseClassifier) -> Plan:
@@ -760,8 +758,7 @@ def append_plan(
         )
     cb = stored.classifier.case_base_
     columns = CaseBase(cb.config, cb.measure, cb.problems[:0], cb.labels[:0], cb.names, cb.words)
-    known = tuple(str(c) for c in stored.classifier.classes_)
-    plan = Plan(casebase=columns, known=known)
+    plan = Plan(casebase=columns)
     return plan, stored.uid, cases or stored.cases or "clips", stored.target
 
 
@@ -1032,6 +1029,7 @@ def append_described(
     try:
         with store.transaction() as tx:
             info = tx.expect(name, uid)
+            held = set(info.label_counts)  # another append may have added some since read
             _check_new(tx, info, clips, store.where)
             ids = np.asarray(tx.add_cases(info, case_records(cb)))
             judges_after_change(tx, info)
@@ -1046,7 +1044,7 @@ def append_described(
     finally:
         store.close()
     with stored_before(_added_before(len(cb), name), _APPEND_AGAIN):
-        return _appended_result(name, cb, total, text, plan, skipped, too_short, lost)
+        return _appended_result(name, cb, total, text, held, skipped, too_short, lost)
 
 
 _APPEND_AGAIN = "run again, the append is refused as held already (casebase info shows them)"
@@ -1057,12 +1055,15 @@ def _appended_result(
     cb: CaseBase,
     total: int,
     text: Sequence[str],
-    plan: Plan,
+    held: set[str],
     skipped: Sequence[str],
     too_short: Sequence[str],
     lost: Sequence[str] = (),
 ) -> TrainResult:
-    new = sorted(set(text) - set(plan.known))
+    """What an append did; ``held``: the activities the case base held as the cases were
+    added (what is new is new then, not when the case base was read: another append may have
+    added an activity meanwhile)."""
+    new = sorted(set(text) - held)
     return TrainResult(
         name, len(cb), total, _counts([str(v) for v in cb.labels]), cb.config, cb.measure.params(),
         None, {}, list(skipped), list(too_short),

@@ -11,6 +11,7 @@ import pytest
 from casebase_store import open_store
 from cbr.classification import classify_with_feedback
 from cbr.stored import load_classifier
+from cbr.training import append, append_described, append_plan, describe
 from features.poses import PoseSequence, load_pose
 from posecbr.cli import main
 from tests.badinput import small_case_base
@@ -56,3 +57,21 @@ def test_a_case_relabelled_by_another_process_is_not_moved_toward_a_clip_of_its_
         assert [e.reason.split(":")[0] for e in log] == ["relabelled"]
     finally:
         store.close()
+
+
+def test_an_activity_another_append_added_meanwhile_is_not_said_to_be_new(
+    tmp_path: Path,
+) -> None:
+    # before: two `train --append` at once of clips of one new activity both said "note: 1
+    # activity the case base did not hold, added as new: ...": the second was told so of
+    # the case base as it read it, though the first had added that activity before its cases
+    db = small_case_base(tmp_path)
+    clips = sorted((tmp_path / "train").rglob("*.npz"))
+    plan, uid, _, _ = append_plan(db, "default")  # the second append reads the case base
+    late = [describe(_without_first_frame(clips[0]), plan)]
+    first = append(db, "default", [_without_first_frame(clips[1])], ["hop"])
+    assert first.new_labels == ["hop"]
+    second = append_described(db, "default", late, ["hop"], plan, uid)
+    assert second.new_labels == []
+    with open_store(db, readonly=True) as store:
+        assert store.get_case_base("default").label_counts["hop"] == 2
