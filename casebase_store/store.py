@@ -549,7 +549,11 @@ def _sqlite_readonly_url(path: Path) -> URL:
     and, opened read-only, cannot remove them again; ``immutable`` there would read without
     locks a file that a writer may be converting or changing. So such a file in a folder that
     can be written is refused before SQLite opens it: ``posecbr casebase upgrade`` (a writer)
-    converts it to a rollback journal once."""
+    converts it to a rollback journal once. A file with a rollback journal needs no side file
+    to be read, in any folder: it is read with SQLite's locks, which wait for a writer still
+    writing it and tell its journal from a killed writer's (read ``immutable``, a writer
+    elsewhere allowed to write the folder was said to be killed, and its changes read
+    half-made)."""
     params = {"mode": "ro", "uri": "true"}
     given, path = path, path.resolve()  # SQLite's side files are beside the file a link names
     shm = path.with_name(path.name + "-shm")
@@ -561,15 +565,8 @@ def _sqlite_readonly_url(path: Path) -> URL:
             "`posecbr casebase upgrade --db FILE`",
             given,
         )
-    if not writable and not shm.exists():
-        if _hot_journal(path):  # immutable reads the file as the killed writer left it
-            raise InterruptedWrite(
-                f"{_INTERRUPTED.format(journal=_journal(path))}; its folder cannot be "
-                "written, so it cannot be rolled back here: copy both files to a folder that "
-                "can be written and run `posecbr casebase upgrade --db FILE` there",
-                given,
-            )
-        if in_wal_mode(path) and _wal_frames(path):  # immutable ignores the -wal: unseen
+    if not writable and not shm.exists() and in_wal_mode(path):
+        if _wal_frames(path):  # immutable ignores the -wal: unseen
             raise StoreError(
                 f"{path.name}-wal beside it holds changes not yet in the file, and without "
                 f"{path.name}-shm, in a folder that cannot be written, they cannot be read: "
@@ -992,6 +989,14 @@ def _looks_like_text(head: bytes) -> bool:
 def _by_sqlite_code(code: Any, where: str) -> StoreError | None:
     """The line for a SQLite error its extended result code tells apart (None: read its
     text)."""
+    folder = _journal(Path(where)).parent  # where the journal is, and would be removed
+    if code == _SQLITE_READONLY_ROLLBACK and not os.access(folder, os.W_OK | os.X_OK):
+        return InterruptedWrite(
+            f"{_INTERRUPTED.format(journal=_journal(Path(where)))}; its folder cannot be "
+            "written, so it cannot be rolled back here: copy both files to a folder that "
+            "can be written and run `posecbr casebase upgrade --db FILE` there",
+            where,
+        )
     if code == _SQLITE_READONLY_ROLLBACK and not os.access(where, os.W_OK):
         # the file itself read-only (its folder writable): no command here can undo it
         return InterruptedWrite(

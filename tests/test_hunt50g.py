@@ -3,6 +3,10 @@ processes where the point is a process."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +18,12 @@ from cbr.stored import load_classifier
 from cbr.training import append, append_described, append_plan, describe
 from features.poses import PoseSequence, load_pose
 from posecbr.cli import main
-from tests.badinput import small_case_base
+from tests.badinput import read_only_mounts_work, small_case_base
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT), "POSECBR_NO_PROGRESS": "1"}
+#: the first bytes of a SQLite rollback journal that holds a transaction
+JOURNAL_MAGIC = bytes.fromhex("d9d505f920a163d7")
 
 
 def _without_first_frame(clip: Path) -> PoseSequence:
@@ -75,3 +84,81 @@ def test_an_activity_another_append_added_meanwhile_is_not_said_to_be_new(
     assert second.new_labels == []
     with open_store(db, readonly=True) as store:
         assert store.get_case_base("default").label_counts["hop"] == 2
+
+
+#: another process inside its write transaction after SQLite wrote changed pages into the
+#: database file (a small page cache spills them), waiting there until the file sys.argv[2]
+#: exists: a writer still writing, whose journal holds what would undo its change, as a
+#: killed writer's does. It trims every case but the first.
+LIVE_WRITER = """
+import os, sqlite3, sys, time
+con = sqlite3.connect(sys.argv[1], isolation_level=None)
+con.execute("PRAGMA cache_size = 2")
+con.execute("BEGIN IMMEDIATE")
+con.execute("UPDATE cases SET active = 0 WHERE id > (SELECT min(id) FROM cases)")
+print("WRITING", flush=True)
+while not os.path.exists(sys.argv[2]):
+    time.sleep(0.01)
+con.execute("COMMIT")
+"""
+
+#: what reads the case base in a private read-only mount of the folder sys.argv[1] (not even
+#: root can write there), once the file sys.argv[3] exists: its active cases, or the error
+READER = """
+import os, sys, time
+from casebase_store import StoreError, open_store
+print("READY", flush=True)
+while not os.path.exists(sys.argv[3]):
+    time.sleep(0.01)
+try:
+    with open_store(sys.argv[2], readonly=True) as store:
+        print(store.count_cases("default"))
+except StoreError as exc:
+    print(exc)
+"""
+
+
+@pytest.mark.skipif(
+    not read_only_mounts_work(),
+    reason="this machine cannot make a private read-only mount (unshare -rm, mount)",
+)
+def test_a_reader_in_a_read_only_folder_waits_for_a_writer_still_writing(tmp_path: Path) -> None:
+    # before: a reader that could not write the folder (another user's, a read-only mount)
+    # opened the file "immutable", with no locks: a writer allowed to write there, caught in
+    # its transaction, was said to be killed ("its last change was interrupted (the process
+    # writing it was killed) ...: copy both files to a folder that can be written"), and a
+    # commit while it read was read half-made
+    folder = tmp_path / "shared"
+    folder.mkdir()
+    db = small_case_base(folder)
+    with open_store(db, readonly=True) as store:
+        n = store.count_cases("default")
+    go, commit = tmp_path / "go", tmp_path / "commit"
+    writer = subprocess.Popen(
+        [sys.executable, "-c", LIVE_WRITER, str(db), str(commit)],
+        env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    mount = f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} {folder}"
+    reader = subprocess.Popen(
+        ["unshare", "-rm", "sh", "-c", f'{mount} && exec "$0" "$@"', sys.executable, "-c",
+         READER, str(folder), str(db), str(go)],
+        env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert writer.stdout is not None and writer.stdout.readline().strip() == "WRITING"
+        # changed pages in the file, what undoes them in its journal (SQLite's header)
+        assert db.with_name("cb.sqlite-journal").read_bytes()[:8] == JOURNAL_MAGIC
+        assert reader.stdout is not None and reader.stdout.readline().strip() == "READY"
+        go.touch()  # the reader opens the file while the writer is in its transaction
+        time.sleep(0.3)
+        commit.touch()
+        out, err = reader.communicate(timeout=60)
+        assert writer.wait(timeout=60) == 0, writer.stderr.read() if writer.stderr else ""
+    finally:
+        for p in (writer, reader):
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+    assert reader.returncode == 0, err
+    assert out.strip() == "1"  # the writer's change, committed: one of the n cases left
+    assert n > 1
