@@ -681,6 +681,8 @@ def check_writable(file: Path) -> None:
 _SQLITE_READONLY_ROLLBACK = 776
 #: SQLite's extended result code for a write(2) that failed (EIO; EFBIG: RLIMIT_FSIZE)
 _SQLITE_IOERR_WRITE = 778
+#: SQLite's result code for a write the disk had no room for (ENOSPC), of the file or journal
+_SQLITE_FULL = 13
 
 
 def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> tuple[Engine, str]:
@@ -1018,6 +1020,12 @@ def _by_sqlite_code(code: Any, where: str) -> StoreError | None:
             "grow past a size limit such as `ulimit -f`)",
             where,
         )
+    if code == _SQLITE_FULL:  # "database or disk is full", said as "database error: ..."
+        return StoreError(
+            "cannot write the database file: the disk is full (no room for the file or the "
+            "journal SQLite writes beside it): free some space and run again",
+            where,
+        )
     return None
 
 
@@ -1099,12 +1107,31 @@ class CaseStore:
         base whose cases it changed gets its version raised by one, in the same commit."""
         if self.readonly:
             raise StoreError("opened read-only: this command does not write", self.where)
-        with self._errors(), Session(self._write_engine, expire_on_commit=False) as session:
-            with session.begin():
-                tx = StoreTransaction(self, session)
-                yield tx
-                tx._bump_versions()
+        try:
+            with self._errors(), Session(self._write_engine, expire_on_commit=False) as session:
+                with session.begin():
+                    tx = StoreTransaction(self, session)
+                    yield tx
+                    tx._bump_versions()
+        except BaseException:
+            self._undo_failed_write()
+            raise
         leave_wal_mode(self.engine)  # posecbr 0.1's WAL mode, once a write has committed
+
+    def _undo_failed_write(self) -> None:
+        """After a write transaction failed: undo what it wrote into a SQLite file. A write
+        that failed partway (the disk full as changed pages spilled into the file) leaves the
+        file half-changed and its journal beside it, for the next connection that may write to
+        undo: readers, which open it read-only, then refused it as a killed writer's. The
+        failed connection is closed first (it holds the journal's changes undone no more)."""
+        if not _is_sqlite(self.engine):
+            return
+        file = Path(str(self.engine.url.database))
+        if not _hot_journal(file):
+            return
+        self.engine.dispose()
+        with suppress(StoreError):  # another process writing now: its journal, not undone
+            roll_back_interrupted(file, timeout_s=min(self.timeout_s, 1.0))
 
     @contextmanager
     def _read(self) -> Iterator[Session]:

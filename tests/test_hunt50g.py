@@ -7,12 +7,13 @@ import os
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from casebase_store import open_store
+from casebase_store import NewCase, StoreError, StoreTransaction, open_store, write_store
 from cbr.classification import classify_with_feedback
 from cbr.stored import load_classifier
 from cbr.training import append, append_described, append_plan, describe
@@ -30,6 +31,12 @@ def _without_first_frame(clip: Path) -> PoseSequence:
     """Another take of ``clip``: its poses from the second frame on (another case)."""
     seq = load_pose(str(clip))
     return seq.slice_frames(1, None)
+
+
+def _one_case(tx: StoreTransaction) -> None:
+    """A case base "cb" of one case of 4,000 features (32 kB)."""
+    cb = tx.create_case_base("cb", {"level": "fluents"}, ["f"], ["f"], {"name": "euclidean"})
+    tx.add_cases(cb, [NewCase("walk", np.zeros(4000))])
 
 
 def test_a_case_relabelled_by_another_process_is_not_moved_toward_a_clip_of_its_old_label(
@@ -162,3 +169,70 @@ def test_a_reader_in_a_read_only_folder_waits_for_a_writer_still_writing(tmp_pat
     assert reader.returncode == 0, err
     assert out.strip() == "1"  # the writer's change, committed: one of the n cases left
     assert n > 1
+
+
+#: in a private tmpfs of 256 kB mounted on the folder sys.argv[1]: a case base file, then an
+#: append of 3.2 MB of cases; what the store says, whether the file is as it was, the folder
+FULL_DISK = """
+import sys
+from pathlib import Path
+import numpy as np
+from casebase_store import NewCase, StoreError, StoreTransaction, open_store, write_store
+db = Path(sys.argv[1]) / "cb.sqlite"
+def one_case(tx):  # as _one_case
+    cb = tx.create_case_base("cb", {"level": "fluents"}, ["f"], ["f"], {"name": "euclidean"})
+    tx.add_cases(cb, [NewCase("walk", np.zeros(4000))])
+write_store(db, one_case)
+before = db.read_bytes()
+try:
+    with open_store(db) as store:
+        store.add_cases("cb", [NewCase("walk", np.zeros(4000)) for _ in range(100)])
+except StoreError as exc:
+    print(exc)
+print(db.read_bytes() == before)
+print(sorted(p.name for p in db.parent.iterdir()))
+"""
+
+
+@pytest.mark.skipif(
+    not read_only_mounts_work(),
+    reason="this machine cannot make a private mount (unshare -rm, mount)",
+)
+def test_a_full_disk_is_said_so_and_the_file_is_left_as_it_was(tmp_path: Path) -> None:
+    # before: "database error: database or disk is full", as any error SQLite gives, and the
+    # file changed, its journal beside it (as past a file size limit, the test above)
+    folder = tmp_path / "small"
+    folder.mkdir()
+    mount = f'mount -t tmpfs -o size=256k tmpfs {folder} || exit 99; exec "$0" "$@"'
+    done = subprocess.run(
+        ["unshare", "-rm", "sh", "-c", mount, sys.executable, "-c", FULL_DISK, str(folder)],
+        env=ENV, capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    if done.returncode == 99:
+        pytest.skip("no tmpfs can be mounted here")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == [
+        f"{folder / 'cb.sqlite'}: cannot write the database file: the disk is full (no room for"
+        " the file or the journal SQLite writes beside it): free some space and run again",
+        "True",
+        "['cb.sqlite']",
+    ]
+
+
+def test_a_write_past_a_file_size_limit_leaves_the_file_as_it_was_for_readers(
+    tmp_path: Path, file_size_limit: Callable[[int], None]
+) -> None:
+    # before: a write that failed partway, once changed pages had spilled into the file, left
+    # the file changed and its journal beside it: every command that only reads then said
+    # "its last change was interrupted (the process writing it was killed) ... undo it with
+    # `posecbr casebase upgrade --db FILE`", of a writer that had said its error and ended
+    db = tmp_path / "cb.sqlite"
+    write_store(db, _one_case)
+    before = db.read_bytes()
+    file_size_limit(200_000)  # the appended cases (3.2 MB) spill past the store's page cache
+    with pytest.raises(StoreError, match="ulimit -f"), open_store(db) as store:
+        store.add_cases("cb", [NewCase("walk", np.zeros(4000)) for _ in range(100)])
+    assert db.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite"]
+    with open_store(db, readonly=True) as store:
+        assert store.count_cases("cb") == 1
