@@ -1316,10 +1316,21 @@ class CaseStore:
             raise StoreError(f"case base {cb.name!r} is damaged: non-numeric features", self.where)
         return np.stack(arrays).astype(np.float64, copy=False)
 
-    def load_representations(self, name: str, kind: str) -> dict[int, np.ndarray]:
-        """Cached per-case representations of one ``kind`` (case id -> array)."""
+    def load_representations(
+        self, name: str, kind: str, *, version: int | None = None
+    ) -> dict[int, np.ndarray]:
+        """Cached per-case representations of one ``kind`` (case id -> array). ``version``:
+        those of the cases of that version of the case base, read before: a case base changed
+        since is :class:`StaleCaseError` (a case revised meanwhile may have the representation
+        of its new problem cached already; read everything again)."""
         with self._read() as s:
             cb = self._row(s, name)
+            if version is not None and cb.version != version:
+                raise StaleCaseError(
+                    f"case base {name!r} was changed by another process while it was read "
+                    f"(version {version}, now {cb.version})",
+                    self.where,
+                )
             q = (
                 select(RepresentationRow.case_id, RepresentationRow.data)
                 .join(CaseRow, CaseRow.id == RepresentationRow.case_id)

@@ -24,6 +24,7 @@ from casebase_store import (
     CaseBaseInfo,
     CaseStore,
     NewCase,
+    StaleCaseError,
     StoreError,
     StoreTransaction,
     case_matrix,
@@ -272,7 +273,7 @@ def _representations(
     kind = measure.cache_kind(tuple(arrays.features.shape[1:]))
     if kind is None:
         return None
-    cached = store.load_representations(info.name, kind)
+    cached = store.load_representations(info.name, kind, version=info.version)
     missing = [i for i, cid in enumerate(arrays.ids) if int(cid) not in cached]
     if missing:
         new = measure.represent(arrays.features[missing])
@@ -523,10 +524,16 @@ def check_format(model: Mapping[str, Any], name: str, where: str) -> None:
 def load_classifier(store: CaseStore, name: str) -> StoredClassifier:
     """The fitted classifier stored as case base ``name`` (its active cases); a large case base
     maps its matrices from beside the database when they are there (:func:`write_matrices`)."""
-    info, arrays, mapped = _read(store, name)
-    check_format(info.model, name, store.where)
-    config = _config(info, store.where)
-    cb = _case_base(store, info, arrays, config, mapped)
+    for tries in range(3):  # the cases and their cached representations of one version
+        info, arrays, mapped = _read(store, name)
+        check_format(info.model, name, store.where)
+        config = _config(info, store.where)
+        try:
+            cb = _case_base(store, info, arrays, config, mapped)
+            break
+        except StaleCaseError:  # changed between the two reads: read it again
+            if tries == 2:
+                raise
     model = info.model
     clf = CaseBaseClassifier(**_params(model, config, cb.measure))
     try:

@@ -9,12 +9,21 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
-from casebase_store import NewCase, StoreError, StoreTransaction, open_store, write_store
+from casebase_store import (
+    CaseStore,
+    NewCase,
+    StoreError,
+    StoreTransaction,
+    open_store,
+    write_store,
+)
 from cbr.classification import classify_with_feedback
+from cbr.similarity import get_measure
 from cbr.stored import load_classifier
 from cbr.training import append, append_described, append_plan, describe
 from features.poses import PoseSequence, load_pose
@@ -177,7 +186,14 @@ FULL_DISK = """
 import sys
 from pathlib import Path
 import numpy as np
-from casebase_store import NewCase, StoreError, StoreTransaction, open_store, write_store
+from casebase_store import (
+    CaseStore,
+    NewCase,
+    StoreError,
+    StoreTransaction,
+    open_store,
+    write_store,
+)
 db = Path(sys.argv[1]) / "cb.sqlite"
 def one_case(tx):  # as _one_case
     cb = tx.create_case_base("cb", {"level": "fluents"}, ["f"], ["f"], {"name": "euclidean"})
@@ -236,3 +252,40 @@ def test_a_write_past_a_file_size_limit_leaves_the_file_as_it_was_for_readers(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cb.sqlite"]
     with open_store(db, readonly=True) as store:
         assert store.count_cases("cb") == 1
+
+
+def test_a_case_revised_between_reading_the_cases_and_their_representations_is_read_again(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # before: a command read the cases, then, in a read of its own, their cached DTW
+    # envelopes: a case revised in between, its new envelopes cached by a third run (a
+    # feedback run reloading), was retrieved with its old problem and its new envelopes (the
+    # lower bound of another problem, which can prune the nearest case)
+    small = small_case_base(tmp_path / "small")
+    db = tmp_path / "cb.sqlite"
+    argv = ["train", str(small.parent / "train"), "--db", str(db), "--similarity", "dtw",
+            "--mirror", "off"]  # fmt: skip
+    assert main(argv) == 0
+    load = CaseStore.load_representations
+    began: list[bool] = []
+
+    def meanwhile(self: CaseStore, name: str, kind: str, **kw: Any) -> dict[int, np.ndarray]:
+        if not began:  # between this run's two reads: another run revises case c (as
+            began.append(True)  # feedback does), a third caches c's new envelopes
+            with open_store(db) as writer:
+                info, cases = writer.load_case_base(name)
+                moved = cases.features[0] + 0.25 * (cases.features[1] - cases.features[0])
+                with writer.transaction() as tx:
+                    tx.update_case(tx.case_base(name), int(cases.ids[0]), features=moved)
+                reps = get_measure(info.similarity).represent(moved[None])
+                with writer.transaction() as tx:
+                    tx.put_representations(kind, {int(cases.ids[0]): reps[0]})
+        return load(self, name, kind, **kw)
+
+    monkeypatch.setattr(CaseStore, "load_representations", meanwhile)
+    with open_store(db, readonly=True) as store:
+        cb = load_classifier(store, "default").classifier.case_base_
+    assert began and cb.reps is not None
+    np.testing.assert_array_equal(cb.reps, cb.measure.represent(cb.problems))
+    assert cb.origins[0] == "revised"  # read again, after the revision
