@@ -648,24 +648,38 @@ def _cut_avi(folder: Path) -> Path:
     return cut
 
 
+def _decoded(path: Path) -> int:
+    """How many frames OpenCV decodes of the video ``path``."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(path))
+    count = 0
+    while cap.read()[0]:
+        count += 1
+    cap.release()
+    return count
+
+
 def test_watch_refuses_a_truncated_video_as_segment_does(
     case_base: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """An MJPG AVI of 60 frames cut to two thirds of its bytes: its index still says 60.
     ``segment`` and ``reps`` refused it ("decoded 40 of 60 frames"); ``watch`` watched what
-    decoded, exit 0, and wrote its --out video."""
+    decoded, exit 0, and wrote its --out video. Refused as they refuse it, one line, exit 1,
+    and the --out video of the frames watched is written, as for a stream that stalls, every
+    frame OpenCV decodes of the cut file in it (hunt 50d; it was dropped)."""
     cut = _cut_avi(tmp_path)
     given = cut.read_bytes()
+    decoded = _decoded(cut)
     out = tmp_path / "out.mp4"
     capsys.readouterr()
     assert main(["watch", str(cut), "--db", str(case_base), "--speed", "0", "--out", str(out)]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "truncated or corrupt: decoded" in err and str(cut) in err
+    assert err.endswith(f"; the video of the {decoded} frames watched was written to {out}\n")
     assert cut.read_bytes() == given
-    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == [
-        "cut.avi",
-        "whole.avi",
-    ]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cut.avi", "out.mp4", "whole.avi"]
+    assert _decoded(out) == decoded
 
 
 def test_watch_refuses_a_truncated_video_served_over_http(
@@ -673,10 +687,12 @@ def test_watch_refuses_a_truncated_video_served_over_http(
 ) -> None:
     """The cut MJPG AVI of the test above, served over HTTP (a file whose frame count OpenCV
     knows, so played as a file): refused as the file is, one line naming the URL, exit 1,
-    no --out video. (A served file was watched to where it broke off, exit 0.)"""
-    _cut_avi(tmp_path)
+    and the --out video of the frames watched written, as the file's is (hunt 50d: there
+    was none). (A served file was watched to where it broke off, exit 0.)"""
+    decoded = _decoded(_cut_avi(tmp_path))
     before = snapshot(tmp_path)
-    out = tmp_path / "out.mp4"
+    out = tmp_path / "out" / "out.mp4"
+    out.parent.mkdir()
     capsys.readouterr()
     with _serving(tmp_path) as address:
         url = f"{address}/cut.avi"
@@ -684,7 +700,10 @@ def test_watch_refuses_a_truncated_video_served_over_http(
         assert main(argv) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"{url}: truncated or corrupt: decoded" in err
-    assert snapshot(tmp_path) == before  # no --out video, the served files as they were
+    assert err.endswith(f"; the video of the {decoded} frames watched was written to {out}\n")
+    assert [p.name for p in out.parent.iterdir()] == ["out.mp4"] and _decoded(out) == decoded
+    after = snapshot(tmp_path)
+    assert {k: v for k, v in after.items() if not k.startswith("out")} == before  # as they were
 
 
 def test_watch_of_a_short_video_with_nobody_in_it_names_the_video(

@@ -432,7 +432,8 @@ def frames_in_background(
     """The stream's frames, read in a thread (:class:`_Reader`); ``pacer``: the one that
     holds ``frames`` back (a file played at its own rate, as a camera delivers), stopped
     with the reader. Raises DataError naming ``where`` (the source) when no frame arrives
-    for ``stall_s`` seconds (beyond the frame's due time and ``alive``'s stamp); ends when
+    for ``stall_s`` seconds (beyond the frame's due time and ``alive``'s stamp), and
+    :class:`SourceRefused` for a DataError of ``frames`` (a file cut short); ends when
     ``halt`` is set (the user stopped it: :func:`stop_on_interrupt`'s ``also``). Closed (or
     ended), it stops the reader and waits for it, and for ``model``, the pose estimator
     ``frames`` runs (closed: :class:`_Reader`): a thread left inside OpenCV or onnxruntime
@@ -444,6 +445,8 @@ def frames_in_background(
             if kind == "end":
                 return
             if kind == "error":
+                if isinstance(item, DataError) and not isinstance(item, StreamLost):
+                    raise SourceRefused(item.message, item.source) from item
                 raise item
             yield item
     finally:
@@ -453,6 +456,13 @@ def frames_in_background(
 class StreamLost(DataError):
     """A stream that stalled past ``--stall``, or a camera or live stream that stopped
     sending: what was watched of it is given (:meth:`Watcher.watch`) before this is said."""
+
+
+class SourceRefused(DataError):
+    """The stream's source refused on the way, after frames came (a file, here or served,
+    cut short or holding fewer frames than its container states): the ``--out`` video of the
+    frames watched is finished and kept, as for a stream lost (:func:`_watched`); the segment
+    in progress is not given (the file is refused, as ``segment`` refuses it whole)."""
 
 
 class Stop(threading.Event):
@@ -584,13 +594,13 @@ def run(args: argparse.Namespace) -> int:
 
 def _watched(
     watcher: Watcher, frames: Iterator[Any], is_file: bool, stop: threading.Event
-) -> StreamLost | None:
-    """:meth:`Watcher.watch` the stream; a stream lost after frames were drawn is returned,
-    not raised: their video is finished and written before it is said. Lost before (no
-    video drawn, or none asked for), it is raised."""
+) -> DataError | None:
+    """:meth:`Watcher.watch` the stream; a stream lost, or refused by its source, after
+    frames were drawn is returned, not raised: their video is finished and written before it
+    is said. Lost before (no video drawn, or none asked for), it is raised."""
     try:
         watcher.watch(frames, is_file, stop)
-    except StreamLost as exc:
+    except (StreamLost, SourceRefused) as exc:
         if watcher.writer is None:
             raise
         return exc
