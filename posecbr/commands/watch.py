@@ -30,10 +30,11 @@ Ctrl-C or SIGTERM (``kill``, a supervisor's stop) ends the watch as the end of a
 ends it too, the ``--out`` video written up to there. A stream that stalls (no frame for
 ``--stall`` seconds) or a camera or URL that stops sending is reported in one line, with a
 non-zero exit, after the segments in progress are printed; the ``--out`` video of the frames
-watched until then is finished and written, as at the end of a file, and the line says so.
-Killed (``kill -9``, power loss), a watch leaves a copy of the ``--out`` video that plays up
-to near the kill, which the next writer of the video keeps as ``NAME.partial.nut``
-(:data:`RESCUE_SUFFIX`).
+watched until then is finished and written, as at the end of a file, and the line says so;
+so is a file refused on the way as cut short (its segment in progress not printed).
+Killed (``kill -9``, power loss), a watch leaves the recording of the ``--out`` video, which
+plays up to the last frame drawn, and which the next writer of the video keeps as
+``NAME.partial.nut`` (:data:`RESCUE_SUFFIX`).
 """
 
 from __future__ import annotations
@@ -570,6 +571,7 @@ def run(args: argparse.Namespace) -> int:
                 watcher.close(stop)  # nothing watched: says so, as without --out
                 raise _NoFrameDrawn
             if video is not None:
+                watcher.writer.to_mp4(video)  # the frames encoded once, copied into the MP4
                 retime_mp4(video, float(watcher.fps or 30.0))  # 30000/1001 kept, not 29.97
                 check_encoded(video, watcher.drawn, args.out)
             if lost is None:
@@ -608,7 +610,8 @@ def _watched(
 
 
 RESCUE_SUFFIX = f"{PARTIAL}.nut"
-"""The ending of the ``--out`` video's rescue copy (:meth:`Watcher._open_rescue`): FFmpeg's
+"""The ending of the ``--out`` video's recording (:meth:`Watcher._write`), its rescue copy
+when the watch is killed: FFmpeg's
 NUT container, which needs no index at its end (measured, frames killed after 300: an MP4
 opens not at all, Matroska, AVI and ASF with no frame count and no seeking; NUT and MPEG-TS
 give theirs and seek, and OpenCV writes MPEG-TS only after a warning on stderr).
@@ -640,10 +643,9 @@ class Watcher:
         self.fps = fps
         self.live: Any = None
         self._grid: Any = None  # Regrid, made with the segmenter
-        self.writer: Any = None
-        self.video: Path | None = None  # where the drawn frames go (a temporary file)
-        self.rescue: Any = None  # their copy a kill leaves playable (:meth:`_open_rescue`)
-        self.rescue_path: Path | None = None
+        self.writer: Any = None  # features.pose_estimation.recording.Recording
+        self.video: Path | None = None  # the MP4 the drawn frames go to (a temporary file)
+        self.rescue_path: Path | None = None  # their recording, which a kill leaves playable
         self.drawn = 0  # frames written to it
         self.emitted = 0  # segments printed
         self.seen = False  # a segment printed saw the person (not nobody in view throughout)
@@ -683,10 +685,8 @@ class Watcher:
                 self._emit(segment)
             raise
         finally:
-            if self.writer is not None:
+            if self.writer is not None:  # kept until the video is in place (:meth:`drop_rescue`)
                 self.writer.release()
-            if self.rescue is not None:  # kept until the video is in place (:meth:`drop_rescue`)
-                self.rescue.release()
 
     def follow(self, frames: Iterator[Any], is_file: bool, stop: threading.Event) -> None:
         from cbr.live import LiveSegmenter
@@ -847,59 +847,45 @@ class Watcher:
         return [result.words[i] for i in best if conf[i] >= 0.8]
 
     def _write(self, bgr: Any) -> None:
-        import cv2
-
+        """Write a drawn frame to the ``--out`` video's recording (:data:`RESCUE_SUFFIX`): a
+        hidden temporary beside ``--out`` in a container that needs no index at its end, each
+        frame's bytes in it when this returns
+        (:class:`features.pose_estimation.recording.Recording`). The MP4's index (its
+        ``moov`` box) is written when its writer is released, so a watch killed (``kill -9``,
+        power loss) left an MP4 temporary no player opens, and the next writer removed it;
+        the recording plays up to the last frame written, and the next writer of ``--out``
+        keeps it under a visible name (:func:`features.fileio.remove_stale_temporaries`). The
+        MP4 is made of its encoded frames when the watch ends (:func:`run`), not encoded
+        again (each frame was encoded twice, to the MP4 and to a copy: 1.2 ms more CPU a
+        640x480 frame); the recording is removed once the video is in place, or is not to be
+        written."""
         from features.pose_estimation.overlay import pad_even
 
         if self.writer is None:
+            from features.fileio import temporary_file
             from features.pose_estimation.overlay import check_mp4_size, even_size, padding_words
+            from features.pose_estimation.recording import Recording
 
             h, w = bgr.shape[:2]
             check_mp4_size(w, h, self.args.out, "video")
-            fourcc = cv2.VideoWriter.fourcc(*"mp4v")
+            try:
+                self.rescue_path = temporary_file(self.args.out, RESCUE_SUFFIX)
+            except OSError as exc:
+                raise DataError(f"cannot write: {exc.strerror or exc}", self.args.out) from None
             size = even_size(w, h)  # an odd side padded, not cut by the writer
-            self.writer = cv2.VideoWriter(str(self.video), fourcc, float(self.fps or 30.0), size)
-            if not self.writer.isOpened():
-                raise DataError("cannot encode an MP4 video here", self.args.out)
-            self._open_rescue(fourcc, float(self.fps or 30.0), size)
+            fps = float(self.fps or 30.0)
+            self.writer = Recording(self.rescue_path, fps, size, str(self.args.out))
             if padding_words(w, h):
                 print(f"note: {shown(self.args.out)}: {padding_words(w, h)}", file=sys.stderr)
-        bgr = pad_even(bgr)
-        self.writer.write(bgr)
-        if self.rescue is not None:
-            self.rescue.write(bgr)
+        self.writer.write(pad_even(bgr))
         self.drawn += 1
-
-    def _open_rescue(self, fourcc: int, fps: float, size: tuple[int, int]) -> None:
-        """Start the rescue copy of the drawn frames (:data:`RESCUE_SUFFIX`): a hidden
-        temporary beside ``--out``, in a container that needs no index at its end. The MP4's
-        index (its ``moov`` box) is written when the writer is released, so a watch killed
-        (``kill -9``, power loss) left an MP4 temporary no player opens, and the next writer
-        removed it; the copy plays up to the last of it written, and the next writer of
-        ``--out`` keeps it under a visible name (:func:`features.fileio.remove_stale_temporaries`).
-        Removed when the watch ends however it ends. Without one (it cannot be made here), the
-        watch goes on as before."""
-        import cv2
-
-        from features.fileio import temporary_file
-
-        try:
-            path = temporary_file(self.args.out, RESCUE_SUFFIX)
-        except OSError:
-            return
-        writer = cv2.VideoWriter(str(path), fourcc, fps, size)
-        if not writer.isOpened():
-            path.unlink(missing_ok=True)
-            return
-        self.rescue, self.rescue_path = writer, path
 
     def drop_rescue(self) -> None:
         """The watch has ended and the ``--out`` video is in place, or is not to be written:
-        the rescue copy is not needed. (Removed only then: a kill while the finished MP4 is
-        checked, seconds for an hour's video, leaves the copy too.)"""
-        if self.rescue is not None:
-            self.rescue.release()
-            self.rescue = None
+        its recording is not needed. (Removed only then: a kill while the MP4 is made of it
+        and checked, seconds for an hour's video, leaves it too.)"""
+        if self.writer is not None:
+            self.writer.release()
         if self.rescue_path is not None:
             self.rescue_path.unlink(missing_ok=True)
             self.rescue_path = None
