@@ -275,19 +275,22 @@ def check_mp4_name(video: Path, folder: bool, what: str) -> None:
         raise DataError(f"the {what} must be an .mp4 file name", video)
 
 
-def plot_targets(plot: Path, recordings: list[Path], folder: bool = False) -> list[Path]:
+def plot_targets(
+    plot: Path, recordings: list[Path], folder: bool = False, suffix: str = ".png"
+) -> list[Path]:
     """Where each recording's picture goes: ``plot`` itself, or in the folder ``plot`` (one
     there, or ``folder``: one named so, to be made) one ``<name>.png`` per recording, a
     name that two recordings share (``a/rec.npz``, ``b/rec.npz``) numbered from the second
     on (``rec_2.png``), as ``convert`` names pose files: no picture overwrites another.
     ``segment``, ``reps`` and ``describe`` take ``--plot`` so, as ``extract --out`` takes a
-    folder or, for one video, a file name."""
+    folder or, for one video, a file name; ``segment --overlay DIR`` names its videos so,
+    ``suffix`` ".mp4"."""
     from features.fileio import unique_name
 
     if not (folder or plot.is_dir()):
         return [plot]
     taken: set[str] = set()
-    return [plot / f"{unique_name(path.stem, taken)}.png" for path in recordings]
+    return [plot / f"{unique_name(path.stem, taken)}{suffix}" for path in recordings]
 
 
 def check_plot(

@@ -1,6 +1,6 @@
 """``posecbr watch`` of a URL or camera that cannot be opened says so before the segmenter's
-warm-up (hunt 49m: a mistyped URL cost 0.5-3 s before its one line), and a ``watch --out`` or
-``segment --overlay`` that names a folder is told so (it was told the name must end in .mp4)."""
+warm-up (hunt 49m: a mistyped URL cost 0.5-3 s before its one line), and a ``watch --out``
+that names a folder is told so (it was told the name must end in .mp4)."""
 
 from __future__ import annotations
 
@@ -54,10 +54,7 @@ def test_a_source_that_cannot_be_opened_is_refused_before_the_warm_up(
         assert opened == [97]
 
 
-@pytest.mark.parametrize(
-    ("command", "option", "what"),
-    [("watch", "--out", "output video"), ("segment", "--overlay", "overlay")],
-)
+@pytest.mark.parametrize(("command", "option", "what"), [("watch", "--out", "output video")])
 def test_a_video_to_write_named_as_a_folder_is_told_to_name_the_file(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
@@ -67,7 +64,9 @@ def test_a_video_to_write_named_as_a_folder_is_told_to_name_the_file(
 ) -> None:
     """An existing folder, with or without its "/", and a name ending in "/" that is no
     folder yet: each one line naming it, nothing written, where each was told that the
-    video must be an .mp4 file name."""
+    video must be an .mp4 file name. (``segment --overlay DIR`` was refused so too: it
+    writes ``DIR/<recording>.mp4`` now, tests/test_hunt50j.py; a camera or URL watched has
+    no name to give its video.)"""
     (tmp_path / "clips").mkdir()
     recording = str(good_pose_file(tmp_path / "rec.npz"))
     source = ["watch", recording] if command == "watch" else ["segment", recording]

@@ -17,7 +17,8 @@ several recordings; end frames exclusive; ``count``: the number of repetitions, 
 ``"overlay"``: the files written, when asked for; ``"scores"``: with ``--truth``, below);
 ``--plot`` draws the
 segments over the fluent timeline; ``--overlay`` writes a video recording with the stick figure,
-the current activity and its repetition count on every frame (as ``extract --overlay`` does).
+the current activity and its repetition count on every frame (as ``extract --overlay`` does):
+an .mp4 file, or a folder (several recordings: one ``<recording>.mp4`` each), as ``--plot``.
 
 ``--truth LABELS`` scores the segmentation against a label file of the recording (one per
 recording, in order: ``--truth a.txt b.txt``, or ``--truth`` once per file; a file named as
@@ -147,8 +148,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--overlay",
         action=PathOption,
-        metavar="OUT.mp4",
-        help="a video recording with the stick figure, activity and count drawn",
+        metavar="OUT.mp4|DIR",
+        help="a video recording with the stick figure, activity and count drawn: an .mp4"
+        " file, or a folder (one there, a name ending in /, or several recordings): one"
+        " <recording>.mp4 each in it, the folder made if it is not there, as --plot",
     )
     p.set_defaults(func=_given(p), overlay_folder=False)
 
@@ -291,8 +294,9 @@ def _fitted_truths(
     return out
 
 
-def _outputs(args: argparse.Namespace) -> None:
-    """Refuse bad output paths before any work."""
+def _outputs(args: argparse.Namespace) -> list[Path | None]:
+    """Refuse bad output paths before any work; where each recording's overlay goes (None
+    without ``--overlay``: :func:`_overlay_targets`)."""
     if args.k < 1:
         raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     if args.plot is not None:
@@ -305,11 +309,92 @@ def _outputs(args: argparse.Namespace) -> None:
                 )
             args.plot_folder = True
         check_plot(args.plot, args.plot_folder, args.recordings, _inputs(args), "segment")
-    if args.overlay is not None:
-        if len(args.recordings) > 1:
-            raise DataError("--overlay takes one recording", args.overlay)
-        check_mp4_name(args.overlay, args.overlay_folder, "overlay")
-        check_output(args.overlay, inputs=_inputs(args), what="overlay")
+    return _overlay_targets(args)
+
+
+def _overlay_targets(args: argparse.Namespace) -> list[Path | None]:
+    """Where each recording's ``--overlay`` goes, refused before any work: the .mp4 file
+    named, or in a folder (one there, a name ending in "/", or several recordings: made if
+    it is not there) one ``<recording>.mp4`` each, named as ``--plot DIR`` names pictures
+    (:func:`plot_targets`). A recording that is no video has nothing to draw on; an overlay
+    may not be an input; a file at an overlay's place in the folder is replaced only when it
+    is the overlay segment drew there of that same recording (:func:`overlay_mark`), as
+    ``extract --overlay DIR`` replaces only its own. Before, a folder was refused ("name the
+    .mp4 file to write in it") and so were several recordings ("--overlay takes one
+    recording")."""
+    from features.datasets import VIDEO_SUFFIXES
+
+    overlay = args.overlay
+    if overlay is None:
+        return [None] * len(args.recordings)
+    inputs = _inputs(args)
+    several = len(args.recordings) > 1
+    if not (args.overlay_folder or overlay.is_dir() or several):
+        try:
+            check_mp4_name(overlay, False, "overlay")
+        except DataError as exc:
+            if overlay.suffix or overlay.exists():
+                raise
+            made = f"; a folder to be made for it is written ending in / ({overlay}/)"
+            raise DataError(exc.message + made, overlay) from None
+        check_output(overlay, inputs=inputs, what="overlay")
+        targets = [overlay]
+    else:
+        targets = _overlay_folder(args, inputs, several)
+    for path in args.recordings:
+        if path.suffix.lower() not in VIDEO_SUFFIXES:
+            raise DataError("--overlay needs a video recording", path)
+    return list(targets)
+
+
+def _overlay_folder(args: argparse.Namespace, inputs: list[Path], several: bool) -> list[Path]:
+    """The overlays in the folder ``--overlay`` names (:func:`_overlay_targets`)."""
+    overlay = args.overlay
+    if several and overlay.exists() and not overlay.is_dir():
+        raise DataError(
+            "with several recordings --overlay names a folder for their overlays; this one"
+            " is a file",
+            overlay,
+        )
+    if several and overlay.suffix.lower() in SHOWN_VIDEO_SUFFIXES and not overlay.is_dir():
+        raise DataError(
+            "with several recordings --overlay names the folder for their overlays"
+            " (<recording>.mp4 each), not one video file",
+            overlay,
+        )
+    targets = plot_targets(overlay, args.recordings, True, ".mp4")
+    for target, recording in zip(targets, args.recordings, strict=True):
+        check_output(target, inputs=inputs, what="overlay", make_parents=True)
+        _check_own_overlay(overlay, target, recording)
+    return targets
+
+
+def overlay_mark(recording: Path) -> str:
+    """What an overlay segment draws of ``recording`` is marked with
+    (:func:`features.pose_estimation.overlay.mark_mp4`), as ``extract``'s overlays and the
+    pictures ``--plot`` draws are (:func:`features.timeline.picture_mark`): the command and
+    a digest of the recording's resolved path."""
+    from features.timeline import picture_mark
+
+    return picture_mark("segment", recording)
+
+
+def _check_own_overlay(folder: Path, target: Path, recording: Path) -> None:
+    """Refuse a file at ``target``, the place the folder ``folder`` (``--overlay DIR``)
+    gives ``recording``'s overlay, unless it is the overlay segment drew there of that same
+    recording (run again: brought up to date): another command's overlay (``extract``'s),
+    another recording's, a link or a file of the user's is not replaced in silence."""
+    from features.pose_estimation.overlay import mp4_mark
+
+    if not (target.exists() or target.is_symlink()):
+        return
+    if target.is_symlink() or mp4_mark(target) != overlay_mark(recording):
+        raise DataError(
+            f"is already there, not an overlay posecbr segment drew of"
+            f" {shown(recording)}: --overlay {shown(folder)} would replace it; move it"
+            " away, or choose another folder",
+            target,
+        )
 
 
 def _inputs(args: argparse.Namespace) -> list[Path]:
@@ -355,7 +440,7 @@ def run(args: argparse.Namespace) -> int:
     from cbr.segmentation import check_segmentable, segment
 
     _inputs_given(args)
-    _outputs(args)
+    overlays = _outputs(args)
     stored = load_case_base(args.db, args.name)
     clf = stored.classifier
     check_k_option(clf, args.k)  # before any recording is read (a video's poses take seconds)
@@ -365,7 +450,9 @@ def run(args: argparse.Namespace) -> int:
     # every recording read and checked before any is segmented (a bad one among several is
     # refused before the work on the others), and segmented before any picture is drawn (it
     # leaves no picture of the others behind)
-    read = [_read(path, args) for path in args.recordings]
+    read = [
+        _read(path, args, overlay) for path, overlay in zip(args.recordings, overlays, strict=True)
+    ]
     for rec, _ in read:
         check_segmentable(rec)
     truths = _fitted_truths(args, labels, [rec for rec, _ in read])
@@ -380,20 +467,24 @@ def run(args: argparse.Namespace) -> int:
     targets: list[Path | None] = [None] * len(done)
     if args.plot is not None:
         targets = list(plot_targets(args.plot, args.recordings, args.plot_folder))
-    for (rec, video, result), path, target in zip(done, args.recordings, targets, strict=True):
+    for (rec, video, result), path, target, overlay in zip(
+        done, args.recordings, targets, overlays, strict=True
+    ):
         if target is not None:
             _plot(rec, result, target, path, [str(c) for c in clf.classes_])
             print(f"timeline written to {shown(target)}", file=sys.stderr)
-        if args.overlay is not None:
-            _overlay(path, video, result, args.overlay, [str(c) for c in clf.classes_])
+        if overlay is not None:
+            _overlay(path, video, result, overlay, [str(c) for c in clf.classes_])
     # once, for every recording, when all is done (interrupted or refused on the way: one line)
     note_not_windows(stored, args.db, "segment")
     docs = [result for _, _, result in done]
     truth_files: list[Path | None] = list(args.truth) if args.truth else [None] * len(docs)
     if args.json:
         out = [
-            _document(r, target, args.overlay, score, truth)
-            for r, target, score, truth in zip(docs, targets, scores, truth_files, strict=True)
+            _document(r, target, overlay, score, truth)
+            for r, target, overlay, score, truth in zip(
+                docs, targets, overlays, scores, truth_files, strict=True
+            )
         ]
         json.dump(out[0] if len(out) == 1 else out, sys.stdout, indent=1, ensure_ascii=False)
         print()
@@ -493,19 +584,16 @@ def _print_scores(scores: Any, truth: Path) -> None:
         )
 
 
-def _read(path: Path, args: argparse.Namespace) -> tuple[Any, Any]:
-    """The recording (canonical) and, for a video with ``--overlay``, its image landmarks."""
-    from features.datasets import VIDEO_SUFFIXES
-
-    if args.overlay is not None:
-        if path.suffix.lower() not in VIDEO_SUFFIXES:
-            raise DataError("--overlay needs a video recording", path)
+def _read(path: Path, args: argparse.Namespace, overlay: Path | None) -> tuple[Any, Any]:
+    """The recording (canonical) and, for a video with an ``overlay`` to draw (a video:
+    :func:`_overlay_targets`), its image landmarks."""
+    if overlay is not None:
         from features.pose_estimation import estimate_video, open_video
         from features.pose_estimation.overlay import check_mp4_size
 
         cap, info = open_video(path)  # a size MP4 cannot take is refused before the model runs
         cap.release()
-        check_mp4_size(info.width, info.height, args.overlay)
+        check_mp4_size(info.width, info.height, overlay)
         found = estimate_video(path)
         seq = found.sequence.to_canonical()
         return (seq if args.fps is None else dataclasses.replace(seq, fps=args.fps)), found
@@ -691,8 +779,9 @@ def note_not_windows(stored: Any, db: str, command: str) -> None:
 def _overlay(
     path: Path, video: Any, result: Any, out: Path, activities: Sequence[str] = ()
 ) -> None:
-    """The overlay video of ``result``; ``activities``: the case base's, in the order that
-    gives each its colour, as in ``segment --plot``."""
+    """The overlay video of ``result`` (of the video ``path``), marked as segment's
+    (:func:`overlay_mark`); ``activities``: the case base's, in the order that gives each
+    its colour, as in ``segment --plot``."""
     import numpy as np
 
     from features.pose_estimation.overlay import padding_words, write_overlay
@@ -709,6 +798,7 @@ def _overlay(
         ),
         video_frames=video.video_frames,
         gaps=gaps,
+        mark=overlay_mark(path),
     )
     padded = padding_words(video.info.width, video.info.height)
     if padded:
