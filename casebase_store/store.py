@@ -683,6 +683,8 @@ _SQLITE_READONLY_ROLLBACK = 776
 _SQLITE_IOERR_WRITE = 778
 #: SQLite's result code for a write the disk had no room for (ENOSPC), of the file or journal
 _SQLITE_FULL = 13
+#: SQLite's extended result code for a write to a file deleted or renamed while open
+_SQLITE_READONLY_DBMOVED = 1032
 
 
 def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> tuple[Engine, str]:
@@ -1014,6 +1016,12 @@ def _by_sqlite_code(code: Any, where: str) -> StoreError | None:
             " (a command that changes the case base also does)",
             where,
         )
+    if code == _SQLITE_READONLY_DBMOVED:  # not "read-only": the file went from under it
+        return StoreError(
+            "the case base file was deleted or moved while the store was open: nothing was"
+            " written (open the store again where the file is)",
+            where,
+        )
     if code == _SQLITE_IOERR_WRITE:  # write(2) failed: EIO, or EFBIG past a file size limit
         return StoreError(
             "cannot write the database file: disk I/O error (a failing disk, or the file would "
@@ -1089,6 +1097,17 @@ class CaseStore:
         #: whether the cases table has the column of their clips' poses digests (a store made
         #: before it has none until `casebase upgrade`: read and written as it is)
         self.keeps_poses = True
+        self.closed = False
+
+    def _open(self) -> None:
+        """Refuse a store used after :meth:`close`: its engine would connect again, unasked,
+        and to a SQLite file deleted or moved meanwhile make an empty one in its place."""
+        if self.closed:
+            raise StoreError(
+                "the store is closed (used after its `with` block or close()): open it again"
+                " with open_store()",
+                self.where,
+            )
 
     # -- plumbing
 
@@ -1105,6 +1124,7 @@ class CaseStore:
     def transaction(self) -> Iterator[StoreTransaction]:
         """One write transaction: everything inside commits together or not at all. Every case
         base whose cases it changed gets its version raised by one, in the same commit."""
+        self._open()
         if self.readonly:
             raise StoreError("opened read-only: this command does not write", self.where)
         try:
@@ -1137,6 +1157,7 @@ class CaseStore:
     def _read(self) -> Iterator[Session]:
         """A read transaction that sees one snapshot of the store (SQLite's WAL readers always
         do; PostgreSQL needs REPEATABLE READ for several statements to agree)."""
+        self._open()
         with self._errors(), Session(self.engine, expire_on_commit=False) as session:
             with session.begin():
                 if self.engine.dialect.name == "postgresql":
@@ -1190,7 +1211,10 @@ class CaseStore:
                 tx.session.add(SchemaVersion(id=1, version=SCHEMA_VERSION))
 
     def close(self) -> None:
-        """Release the store's connections (the engine's pool); the store is not used after."""
+        """Release the store's connections (the engine's pool); the store is not used after
+        (a read or write then is a StoreError saying it is closed). Closing again does
+        nothing."""
+        self.closed = True
         dispose(self.engine)
 
     def __enter__(self) -> CaseStore:

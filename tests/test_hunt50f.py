@@ -2,6 +2,9 @@
 
 - the four packages are typed (``py.typed``), so ``mypy --strict`` checks a user's script
   calling them rather than skipping them ("missing library stubs or py.typed marker");
+- a store used after its ``with`` block is refused as closed: it connected again, and where
+  its SQLite file had been deleted meanwhile made an empty one of that name; a write to a
+  file deleted while the store was open is said as such, not "a readonly database";
 """
 
 from __future__ import annotations
@@ -10,8 +13,28 @@ import tomllib
 from importlib.resources import files
 from pathlib import Path
 
+import pytest
+
+from casebase_store import StoreError, open_store
+from cbr.estimator import CaseBaseClassifier
+from cbr.stored import load_classifier
+from cbr.training import store_fitted
+from features.poses import PoseSequence
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("features", "casebase_store", "cbr", "posecbr")
+
+
+@pytest.fixture(scope="module")
+def arm_store(
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Path:
+    """``arm_k3``'s classifier stored as case base "arms" (not to be changed: copy it)."""
+    clf, _, labels = arm_k3
+    db = tmp_path_factory.mktemp("arm-store") / "arms.sqlite"
+    store_fitted(db, "arms", clf, labels)
+    return db
 
 
 def test_every_package_is_typed() -> None:
@@ -22,3 +45,30 @@ def test_every_package_is_typed() -> None:
     with open(ROOT / "pyproject.toml", "rb") as f:
         package_data = tomllib.load(f)["tool"]["setuptools"]["package-data"]
     assert "py.typed" in package_data["*"]
+
+
+@pytest.mark.parametrize("readonly", [True, False])
+def test_a_store_used_after_it_is_closed_is_refused(
+    arm_store: Path, tmp_path: Path, readonly: bool
+) -> None:
+    db = tmp_path / "cb.sqlite"
+    db.write_bytes(arm_store.read_bytes())
+    with open_store(db, readonly=readonly) as store:
+        assert [i.name for i in store.list_case_bases()] == ["arms"]
+    db.unlink()  # deleted (or moved) after the block: the store must not make it again
+    for read in (store.list_case_bases, lambda: load_classifier(store, "arms")):
+        with pytest.raises(StoreError, match=r"cb\.sqlite: the store is closed .*open_store"):
+            read()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_write_to_a_file_deleted_while_open_says_so(arm_store: Path, tmp_path: Path) -> None:
+    db = tmp_path / "cb.sqlite"
+    db.write_bytes(arm_store.read_bytes())
+    with open_store(db) as store:
+        whole = store.read_whole("arms")
+        db.unlink()
+        with pytest.raises(StoreError, match="deleted or moved while the store was open"):
+            with store.transaction() as tx:
+                tx.copy_case_base(whole, "copy")
+    assert list(tmp_path.iterdir()) == []
