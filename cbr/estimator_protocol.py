@@ -164,6 +164,24 @@ def check_fitted(estimator: object, attribute: str) -> None:
         raise not_fitted(estimator, "call 'fit' with appropriate arguments before using it")
 
 
+def check_case_base_classifier(clf: object, then: str) -> None:
+    """Refuse ``clf`` unless it is a fitted case base classifier (it has a ``case_base_``):
+    an unfitted one with scikit-learn's ``NotFittedError``, saying what to do (``then``), as
+    its ``predict`` does; anything else (None, :func:`cbr.stored.load_classifier`'s
+    ``StoredClassifier`` holding one, another kind of classifier) with
+    :class:`features.errors.InputError` naming ``clf``: "not fitted" would send its caller to
+    fit what is no such classifier."""
+    if getattr(clf, "case_base_", None) is not None:
+        return
+    if isinstance(clf, Classifier) and callable(getattr(clf, "solve", None)):
+        raise not_fitted(clf, then)
+    got = "None" if clf is None else f"a {type(clf).__name__}"
+    held = getattr(clf, "classifier", None)
+    if getattr(held, "case_base_", None) is not None:  # load_classifier's StoredClassifier
+        got += f" (its .classifier, a {type(held).__name__}, is one)"
+    raise InputError(f"must be a fitted CaseBaseClassifier, got {got}", "clf")
+
+
 def not_fitted(estimator: object, then: str) -> Exception:
     """scikit-learn's ``NotFittedError`` for ``estimator``, saying what to do (``then``).
     scikit-learn is imported here, for a caller's mistake alone."""

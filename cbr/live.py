@@ -42,7 +42,7 @@ from features.repetitions import (
 from features.skeleton import BLAZEPOSE_33
 from features.values import is_number
 
-from .estimator_protocol import not_fitted
+from .estimator_protocol import check_case_base_classifier
 from .problem import warm
 from .segmentation import (
     DEFAULT_WINDOW_S,
@@ -305,17 +305,18 @@ class _Hop:
 class LiveSegmenter:
     """Push frames, read the rolling label; finished segments come out of :meth:`push`.
 
-    ``clf``: a fitted :class:`~cbr.estimator.CaseBaseClassifier`; ``fps``: the stream's frame
-    rate, frames per second (segments are in frames counted from the first pushed, 0;
-    ``to_dict(fps)`` adds seconds); ``judge``: what says a window is unlike the case base
-    (:mod:`cbr.unknown`; the margin between the two nearest activities times how far the
+    ``clf``: a fitted :class:`~cbr.estimator.CaseBaseClassifier` (unfitted: NotFittedError;
+    anything else, ``load_classifier``'s ``StoredClassifier`` holding one: InputError); ``fps``:
+    the stream's frame rate, frames per second (segments are in frames counted from the first
+    pushed, 0; ``to_dict(fps)`` adds seconds); ``judge``: what says a window is unlike the case
+    base (:mod:`cbr.unknown`; the margin between the two nearest activities times how far the
     window lies in the nearest one's own spread, against that activity's own threshold,
-    ``spread-margin``, calibrated on the case base, when None); ``source``: the stream's name
-    in errors (a camera, a URL, a file); ``k``: a window's k nearest cases vote, as the
-    classifier votes (:func:`cbr.segmentation.votes_as`; 1, the default: its nearest), as
-    ``segment -k`` votes offline (:func:`cbr.segmentation.segment`'s ``k``: from 1 to the
-    classifier's own k, else ParameterError); the judge of unknown reads each activity's nearest
-    case whatever ``k``.
+    ``spread-margin``, calibrated on the case base, when None); ``source``: the stream's name in
+    errors (a camera, a URL, a file); ``k``: a window's k nearest cases vote, as the classifier
+    votes (:func:`cbr.segmentation.votes_as`; 1, the default: its nearest), as ``segment -k``
+    votes offline (:func:`cbr.segmentation.segment`'s ``k``: from 1 to the classifier's own k,
+    else ParameterError); the judge of unknown reads each activity's nearest case whatever
+    ``k``.
 
     As offline, in two passes, each an online Viterbi (:class:`_Forward`: a hop is settled
     when the best paths into every state agree on it, so the settled hops are those the
@@ -356,8 +357,7 @@ class LiveSegmenter:
         source: str = "stream",
         k: int = 1,
     ) -> None:
-        if getattr(clf, "case_base_", None) is None:
-            raise not_fitted(clf, "fit it (or load a stored one) before streaming to it")
+        check_case_base_classifier(clf, "fit it (or load a stored one) before streaming to it")
         if not (type(k) is int and k == 1):  # 1, the default, any classifier retrieves
             check_k(clf, k)
         self.k = int(k)

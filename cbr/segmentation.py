@@ -81,7 +81,7 @@ from features.text import shown
 from features.values import is_number
 
 from . import long_clip
-from .estimator_protocol import check_fitted
+from .estimator_protocol import check_case_base_classifier
 from .explain import Explanation
 from .problem import FeatureConfig, warm
 from .reuse import class_balance, vote
@@ -1567,9 +1567,10 @@ class SolvedRecording:
 
 
 def _check_call(clf: Any, recording: Any, chunk_frames: Any) -> None:
-    """Refuse an unfitted ``clf`` (NotFittedError, as its ``predict`` does), a ``recording``
-    that is not a PoseSequence and a ``chunk_frames`` that is not None or a whole number >= 0."""
-    check_fitted(clf, "case_base_")
+    """Refuse an unfitted ``clf`` (NotFittedError, as its ``predict`` does) or one that is no
+    case base classifier (InputError), a ``recording`` that is not a PoseSequence and a
+    ``chunk_frames`` that is not None or a whole number >= 0."""
+    check_case_base_classifier(clf, "call 'fit' with appropriate arguments before using it")
     clf.case_base_.check_not_empty("case_base_")
     expect_sequence(recording, "recording")
     if chunk_frames is not None and (

@@ -67,7 +67,7 @@ from features.errors import DataError, ParameterError
 from features.text import percent
 
 from .casebase import CaseBase, frame_array, overlapping
-from .estimator_protocol import not_fitted
+from .estimator_protocol import check_case_base_classifier
 from .judges import JUDGES
 from .novelty import NoveltyCalibration
 from .weights import MIRROR_FLAG
@@ -1381,16 +1381,16 @@ def tell_unknown(judged: Sequence[tuple[Judge, np.ndarray]], classes: Sequence[s
 
 def judge_of(clf: Any, name: str) -> Judge:
     """The judge called ``name`` (:data:`JUDGES`) for the fitted classifier ``clf``: the one
-    stored with it (``clf.judges_``, calibrated when it was stored on the cases it holds)
-    when there is one, else calibrated now on its case base (a model stored before judges
-    were, or after its cases changed, or one fitted in memory). An unfitted ``clf`` is
-    refused with scikit-learn's ``NotFittedError``; a ``name`` not of :data:`JUDGES` with
-    ParameterError (a ConfigError and a ValueError) naming the argument (before, "--unknown",
-    the option of the commands, whose own choices refuse it first)."""
+    stored with it (``clf.judges_``, calibrated when it was stored on the cases it holds) when
+    there is one, else calibrated now on its case base (a model stored before judges were, or
+    after its cases changed, or one fitted in memory). An unfitted ``clf`` is refused with
+    scikit-learn's ``NotFittedError``, anything else that is no case base classifier (None,
+    ``load_classifier``'s ``StoredClassifier``) with InputError naming ``clf``; a ``name`` not
+    of :data:`JUDGES` with ParameterError (a ConfigError and a ValueError) naming the argument
+    (before, "--unknown", the option of the commands, whose own choices refuse it first)."""
     if name not in JUDGES:
         raise ParameterError(f"unknown judge {name!r}: one of {', '.join(JUDGES)}", "name")
-    if getattr(clf, "case_base_", None) is None:
-        raise not_fitted(clf, "fit it (or load a stored one) before judging with it")
+    check_case_base_classifier(clf, "fit it (or load a stored one) before judging with it")
     stored = getattr(clf, "judges_", None) or {}
     if name in stored:
         judge: Judge = stored[name]

@@ -5,6 +5,9 @@
 - a store used after its ``with`` block is refused as closed: it connected again, and where
   its SQLite file had been deleted meanwhile made an empty one of that name; a write to a
   file deleted while the store was open is said as such, not "a readonly database";
+- ``segment``, ``LiveSegmenter`` and ``judge_of`` given ``load_classifier``'s
+  ``StoredClassifier`` (or None) in place of its classifier say so, naming ``clf``, where
+  they said it was "not fitted yet: call 'fit'";
 """
 
 from __future__ import annotations
@@ -17,8 +20,12 @@ import pytest
 
 from casebase_store import StoreError, open_store
 from cbr.estimator import CaseBaseClassifier
+from cbr.live import LiveSegmenter
+from cbr.segmentation import segment
 from cbr.stored import load_classifier
 from cbr.training import store_fitted
+from cbr.unknown import judge_of
+from features.errors import InputError
 from features.poses import PoseSequence
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -72,3 +79,27 @@ def test_a_write_to_a_file_deleted_while_open_says_so(arm_store: Path, tmp_path:
             with store.transaction() as tx:
                 tx.copy_case_base(whole, "copy")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_stored_classifier_for_its_classifier_is_named(
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]], arm_store: Path
+) -> None:
+    """load_classifier's result holds the classifier: given whole, or None, the call says
+    what ``clf`` must be (an InputError, a ValueError), not that it needs fitting."""
+    _, rec, _ = arm_k3
+    with open_store(arm_store, readonly=True) as store:
+        stored = load_classifier(store, "arms")
+    calls = {
+        "segment": lambda clf: segment(clf, rec),
+        "LiveSegmenter": lambda clf: LiveSegmenter(clf, rec.fps),
+        "judge_of": lambda clf: judge_of(clf, "held-out"),
+    }
+    for name, call in calls.items():
+        with pytest.raises(InputError, match=r"^clf: must be a fitted CaseBaseClassifier") as e:
+            call(stored)
+        assert "got a StoredClassifier (its .classifier, a CaseBaseClassifier, is one)" in str(
+            e.value
+        ), name
+        with pytest.raises(InputError, match=r"^clf: .*, got None$"):
+            call(None)
+    judge_of(stored.classifier, "held-out")  # what it holds is one
