@@ -414,7 +414,8 @@ def cut(
 
 def _given_labels(frame_labels: Any, names: dict[str, str] | None) -> list[str]:
     """Labels given in memory (one per frame or block) as text, each through ``names``: text
-    or whole numbers (as a label file's codes), else an InputError naming ``frame_labels``."""
+    or whole numbers (as a label file's codes; 6.0, a float, as 6), else an InputError naming
+    ``frame_labels`` (a NaN said to be a missing label)."""
     if isinstance(frame_labels, bytes) or not hasattr(frame_labels, "__iter__"):
         raise InputError(
             "must be a label file's path or a sequence of labels (one per frame or"
@@ -429,12 +430,17 @@ def _given_labels(frame_labels: Any, names: dict[str, str] | None) -> list[str]:
         )
     out = []
     for i, v in enumerate(values):
+        if isinstance(v, float | np.floating) and float(v).is_integer():
+            v = int(v)  # a code read as a number of a float type, as np.loadtxt reads it
         whole = isinstance(v, int | np.integer) and not isinstance(v, bool | np.bool_)
         if not (whole or isinstance(v, str)) or not str(v).strip() or "\x00" in str(v):
-            raise InputError(
-                f"frame_labels[{i}] is {v!r}: a label is text or a whole number (a code)",
-                "frame_labels",
+            shown = v.item() if isinstance(v, np.generic) else v  # 6.5, not np.float64(6.5)
+            why = (
+                "a label is missing (every frame or block needs one)"
+                if v is None or (isinstance(v, float | np.floating) and np.isnan(v))
+                else "a label is text or a whole number (a code)"
             )
+            raise InputError(f"frame_labels[{i}] is {shown!r}: {why}", "frame_labels")
         out.append(str(v).strip())
     if names is not None:
         unknown = sorted({v for v in out if v not in names})
@@ -473,7 +479,8 @@ def cut_recording(
 ) -> tuple[list[PoseSequence], list[str]]:
     """The cases ``posecbr train RECORDING --frame-labels FILE`` makes of one recording
     labelled over time: its labelled stretches (``frame_labels``: a label file, as
-    ``--frame-labels``, or the labels in memory, text or whole-number codes; one per frame,
+    ``--frame-labels``, or the labels in memory, text or whole-number codes (of an integer
+    or a float type: ``np.loadtxt``'s 6.0 is code 6); one per frame,
     or one per ``block_s`` seconds as ``--label-block``; ``names`` maps codes to names, a
     file as ``--label-names`` or a dict), those shorter than the shortest repetition
     (:data:`features.repetitions.MIN_PERIOD_S`: a label that flickers) left out, each cut as

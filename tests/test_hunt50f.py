@@ -8,6 +8,8 @@
 - ``segment``, ``LiveSegmenter`` and ``judge_of`` given ``load_classifier``'s
   ``StoredClassifier`` (or None) in place of its classifier say so, naming ``clf``, where
   they said it was "not fitted yet: call 'fit'";
+- ``cut_recording`` takes label codes of a float type (``np.loadtxt``'s), where 6.0 was
+  refused as "not a whole number", and says a NaN is a missing label.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import tomllib
 from importlib.resources import files
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from casebase_store import StoreError, open_store
@@ -23,10 +26,11 @@ from cbr.estimator import CaseBaseClassifier
 from cbr.live import LiveSegmenter
 from cbr.segmentation import segment
 from cbr.stored import load_classifier
-from cbr.training import store_fitted
+from cbr.training import cut_recording, store_fitted
 from cbr.unknown import judge_of
 from features.errors import InputError
 from features.poses import PoseSequence
+from tests.test_cbr_clips import arm_dataset
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("features", "casebase_store", "cbr", "posecbr")
@@ -103,3 +107,31 @@ def test_a_stored_classifier_for_its_classifier_is_named(
         with pytest.raises(InputError, match=r"^clf: .*, got None$"):
             call(None)
     judge_of(stored.classifier, "held-out")  # what it holds is one
+
+
+def test_cut_recording_takes_codes_of_a_float_type(
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+) -> None:
+    """``np.loadtxt`` reads a label file's codes as floats (6.0): the same codes as integers
+    cut the same stretches with the same names."""
+    clf, rec, labels = arm_k3
+    lengths = [x.n_frames for x in arm_dataset(3, seed=3)[0]]  # the clips laid end to end
+    assert sum(lengths) == rec.n_frames
+    names = {i + 1: str(c) for i, c in enumerate(clf.classes_)}
+    codes = np.repeat([1 + list(clf.classes_).index(v) for v in labels], lengths)
+    ends = np.cumsum(lengths)
+    as_ints, int_labels = cut_recording(rec, codes, "clips", names=names)
+    as_floats, float_labels = cut_recording(rec, codes.astype(np.float64), "clips", names=names)
+    assert float_labels == int_labels == labels  # each clip of another movement than the last
+    where = [(p.metadata["frame_offset"], p.n_frames) for p in as_floats]
+    assert where == [(int(end - n), n) for end, n in zip(ends, lengths, strict=True)]
+    assert [(p.metadata["frame_offset"], p.n_frames) for p in as_ints] == where
+    gap = codes.astype(np.float64)
+    gap[5] = np.nan
+    with pytest.raises(InputError, match=r"^frame_labels: frame_labels\[5\] is nan: a label is"
+                                         r" missing"):  # fmt: skip
+        cut_recording(rec, gap, "clips", names=names)
+    with pytest.raises(
+        InputError, match=rf"frame_labels\[0\] is {codes[0] + 0.5}: a label is text"
+    ):
+        cut_recording(rec, codes + 0.5, "clips", names=names)
