@@ -16,7 +16,8 @@ same fit either way.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -35,7 +36,7 @@ from casebase_store import (
 )
 from features.cluster import connect, gather, map_outcomes
 from features.datasets import DatasetEntry, clip_target
-from features.errors import ConfigError, DataError, InputError
+from features.errors import ConfigError, DataError, InputError, PosecbrError
 from features.interrupts import stored_before
 from features.poses import PoseSequence
 from features.progress import progress
@@ -342,8 +343,8 @@ def _check_what(estimator: Any, target: Any, cases: Any) -> None:
 def train(
     db: str | Path,
     name: str,
-    clips: Sequence[PoseSequence],
-    labels: Sequence[Any],
+    clips: Iterable[PoseSequence],
+    labels: Sequence[Any] | np.ndarray,
     estimator: CaseBaseClassifier,
     *,
     target: str = "label",
@@ -383,7 +384,7 @@ def _check_split(split: Any) -> str:
 
 
 def cut(
-    clips: Sequence[PoseSequence], labels: Sequence[Any], split: str
+    clips: Iterable[PoseSequence], labels: Sequence[Any] | np.ndarray, split: str
 ) -> tuple[list[PoseSequence], list[Any]]:
     """``clips`` cut into the cases ``posecbr train --split`` makes of them (the same
     :func:`features.repetitions.cut_clips`), each piece with its clip's label as given:
@@ -471,7 +472,7 @@ def _label_names(names: Any) -> dict[str, str] | None:
 
 def cut_recording(
     recording: PoseSequence,
-    frame_labels: str | Path | Sequence[Any],
+    frame_labels: str | Path | Sequence[Any] | np.ndarray,
     split: str = "windows",
     *,
     block_s: float | None = None,
@@ -525,7 +526,7 @@ def train_described(
     db: str | Path,
     name: str,
     clips: Sequence[DescribedClip],
-    labels: Sequence[Any],
+    labels: Sequence[Any] | np.ndarray,
     estimator: CaseBaseClassifier,
     *,
     target: str = "label",
@@ -553,9 +554,10 @@ def train_described(
     clips, text = [clips[i] for i in keep], [text[i] for i in keep]
     _check_unique(clips, "training set")
     _check_no_copies(clips, text)
-    fitted: CaseBaseClassifier = unfitted_copy(estimator).fit_described(
-        clips, [given[i] for i in keep]
-    )
+    with _said_of_arguments():
+        fitted: CaseBaseClassifier = unfitted_copy(estimator).fit_described(
+            clips, [given[i] for i in keep]
+        )
     _check_trimmed(fitted)
     return store_fitted(
         db,
@@ -570,6 +572,21 @@ def train_described(
         too_short=too_short,
         lost=lost,
     )
+
+
+@contextmanager
+def _said_of_arguments() -> Iterator[None]:
+    """A refusal of the estimator's ``fit`` inside, which names its own arguments (``X``,
+    ``y``: "y: the training set has only one activity"), said of this module's (``clips``,
+    ``labels``), as :func:`train` and :func:`train_described` name them."""
+    try:
+        yield
+    except PosecbrError as exc:
+        ours = {"X": "clips", "y": "labels"}.get(exc.source or "")
+        if ours is not None:
+            exc.source = ours
+            exc.args = (f"{ours}: {exc.message}",)
+        raise
 
 
 def _check_trimmed(fitted: CaseBaseClassifier) -> None:
@@ -772,8 +789,8 @@ def append_plan(
 def append(
     db: str | Path,
     name: str,
-    clips: Sequence[PoseSequence],
-    labels: Sequence[Any],
+    clips: Iterable[PoseSequence],
+    labels: Sequence[Any] | np.ndarray,
     *,
     target: str | None = None,
 ) -> TrainResult:
@@ -781,6 +798,7 @@ def append(
     stored configuration (nothing is learned anew), in one transaction checked against the
     case base that was read. ``target``: what ``labels`` are (refused unless the case base's
     own; None: whatever it predicts)."""
+    clips = as_sequences(clips, "clips")  # a set's order is not the labels'
     text = [str(v) for v in check_labels(labels, len(clips), "labels")]
     plan, uid, _, _ = append_plan(db, name, target)
     described = [

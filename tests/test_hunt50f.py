@@ -15,6 +15,9 @@
 from __future__ import annotations
 
 import tomllib
+import typing
+from collections.abc import Iterable
+from dataclasses import replace
 from importlib.resources import files
 from pathlib import Path
 
@@ -26,7 +29,7 @@ from cbr.estimator import CaseBaseClassifier
 from cbr.live import LiveSegmenter
 from cbr.segmentation import segment
 from cbr.stored import load_classifier
-from cbr.training import cut_recording, store_fitted
+from cbr.training import append, cut, cut_recording, store_fitted, train
 from cbr.unknown import judge_of
 from features.errors import InputError
 from features.poses import PoseSequence
@@ -135,3 +138,40 @@ def test_cut_recording_takes_codes_of_a_float_type(
         InputError, match=rf"frame_labels\[0\] is {codes[0] + 0.5}: a label is text"
     ):
         cut_recording(rec, codes + 0.5, "clips", names=names)
+
+
+def test_append_takes_what_train_takes_and_refuses_a_set(arm_store: Path, tmp_path: Path) -> None:
+    """``append``'s clips as ``train``'s: any ordered iterable (a generator was a raw
+    TypeError, "has no len()"), not a set, whose order is not the labels' (it was taken, each
+    clip stored under another's label as the set happened to order them)."""
+    db = tmp_path / "cb.sqlite"
+    db.write_bytes(arm_store.read_bytes())
+    X, y = arm_dataset(1, seed=4)  # three clips the case base does not hold
+    X = [replace(x, source=f"new{i}") for i, x in enumerate(X)]  # not "synthetic" frames 0-N
+    labels = [str(v) for v in y]
+    with pytest.raises(InputError, match=r"^clips: .*got a set .*its order is not the clips'"):
+        append(db, "arms", set(X), labels)
+    with pytest.raises(InputError, match=r"^clips: clips\[1\] is a ndarray, not a PoseSequence"):
+        append(db, "arms", [X[0], X[1].positions], labels[:2])
+    with open_store(db, readonly=True) as store:
+        before = store.count_cases("arms")
+    result = append(db, "arms", (x for x in X), labels)
+    assert result.n_cases == len(X)
+    with open_store(db, readonly=True) as store:
+        assert store.count_cases("arms") == before + len(X)
+        cases = store.load_cases("arms")
+    assert list(cases.labels[-len(X) :]) == labels  # each clip under its own label
+
+
+def test_train_names_its_own_arguments_and_takes_label_arrays(tmp_path: Path) -> None:
+    """The estimator's refusal of one activity named its ``y``; ``train``'s is ``labels``.
+    Its hints take what it takes: labels as an array, clips as any iterable."""
+    X, _ = arm_dataset(1, seed=5)
+    with pytest.raises(InputError, match=r"^labels: the training set has only one activity"):
+        train(tmp_path / "cb.sqlite", "one", X, ["raise"] * len(X), CaseBaseClassifier())
+    assert not (tmp_path / "cb.sqlite").exists()
+    for function, argument in ((train, "labels"), (cut, "labels"), (append, "labels"),
+                               (cut_recording, "frame_labels")):  # fmt: skip
+        assert np.ndarray in typing.get_args(typing.get_type_hints(function)[argument])
+    for function in (train, cut, append):
+        assert typing.get_type_hints(function)["clips"] == Iterable[PoseSequence]
