@@ -93,9 +93,11 @@ from .novelty import (
     summaries,
 )
 from .problem import (
+    STATE_GROUPS,
     FeatureConfig,
     Problem,
     candidate_config,
+    check_state_names,
     column_index,
     problem_columns,
     resolve_counts,
@@ -490,6 +492,17 @@ class CaseBaseClassifier(Classifier):
                 f"{did_you_mean(str(self.feature_weights), ('auto', *WEIGHTINGS))}",
                 "feature_weights",
             )
+        states = self.states
+        if not isinstance(states, str) and not (
+            isinstance(states, Sequence | np.ndarray)
+            and not isinstance(states, bytes)
+            and all(isinstance(n, str) for n in states)
+        ):  # tuple(5) was a TypeError, and b"angles" the states 97, 110, ...
+            raise ConfigError(
+                f"must be one of {', '.join(STATE_GROUPS)} or a list of state names, got"
+                f" {states!r}",
+                "states",
+            )
         self._feature_config()  # length, states, phases: FeatureConfig's own checks
 
     @parameters_checked
@@ -566,6 +579,8 @@ class CaseBaseClassifier(Classifier):
         side is. Refuses parameters that cannot work together before any clip is read."""
         self._check_params()
         self._check_trim_editor()
+        if not isinstance(self.states, str):
+            check_state_names(self.states)
         measure = self._measure()
         vectors = self.features == "qmp" or self._summary()
         if self.feature_weights not in ("auto", "none") and not self._selectable(vectors, measure):

@@ -263,6 +263,28 @@ def candidate_config(config: FeatureConfig) -> FeatureConfig:
     return dataclasses.replace(config, states=names)
 
 
+def check_state_names(states: Sequence[str]) -> None:
+    """Refuse, naming ``states`` (the estimator's parameter), an explicit list of columns that
+    is empty or names a column none has (a fluent state, ``angle:`` a joint angle or arm
+    plane, ``pos:`` a joint position; :func:`candidate_config`'s names), before any clip is
+    read: it was found only when the first clip was described, said of ``features`` as a
+    stored case base's state the fluent table "no longer has"."""
+    if len(states) == 0:
+        raise ConfigError(
+            f"must be one of {', '.join(STATE_GROUPS)} or a list of state names, got none",
+            "states",
+        )
+    every = candidate_config(FeatureConfig(states="all", angles=True, positions=True)).states
+    unknown = [s for s in states if s not in set(every)]
+    if unknown:
+        raise ConfigError(
+            "no column of that name: "
+            + ", ".join(repr(s) for s in unknown[:5])
+            + did_you_mean(unknown[0], every),
+            "states",
+        )
+
+
 def availability(
     seq: PoseSequence, candidates: FeatureConfig, chunk_frames: int | None = None
 ) -> np.ndarray:

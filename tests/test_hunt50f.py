@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import re
 import tomllib
 import typing
 from collections.abc import Iterable
@@ -31,7 +32,7 @@ from cbr.segmentation import segment
 from cbr.stored import load_classifier
 from cbr.training import append, cut, cut_recording, store_fitted, train
 from cbr.unknown import judge_of
-from features.errors import InputError
+from features.errors import InputError, ParameterError
 from features.poses import PoseSequence
 from tests.test_cbr_clips import arm_dataset
 
@@ -175,3 +176,25 @@ def test_train_names_its_own_arguments_and_takes_label_arrays(tmp_path: Path) ->
         assert np.ndarray in typing.get_args(typing.get_type_hints(function)[argument])
     for function in (train, cut, append):
         assert typing.get_type_hints(function)["clips"] == Iterable[PoseSequence]
+
+
+def test_states_of_the_wrong_kind_or_name_are_named() -> None:
+    """``states``: a group's name or a list of column names. 5 or None was a raw TypeError
+    ("'int' object is not iterable"), b"angles" the states 97, 110, ...; a mistyped name was
+    found when the first clip was described and said of ``features``, as a stored case
+    base's state the fluent table "no longer has"."""
+    X, y = arm_dataset(1, seed=3)
+    groups = "must be one of angles, instantaneous, all or a list of state names"
+    for states in (5, None, b"angles", [5], {"left_arm_bent.bent": 1}):
+        with pytest.raises(
+            ParameterError, match=rf"^states: {groups}, got {re.escape(repr(states))}$"
+        ):
+            CaseBaseClassifier(states=states).fit(X, y)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=rf"^states: {groups}, got none$"):
+        CaseBaseClassifier(states=()).fit(X, y)
+    with pytest.raises(
+        ParameterError,
+        match=r"^states: no column of that name: 'left_arm_bent\.bnt', 'angle:left_kne' \(did you"
+        r" mean 'left_arm_bent\.bent'\?\)$",
+    ):
+        CaseBaseClassifier(states=["left_arm_bent.bnt", "angle:left_kne"]).fit(X, y)
