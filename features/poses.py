@@ -90,7 +90,9 @@ _KIND_WORDS = {
 
 
 def _real_array(value: Any, what: str, where: str | None) -> np.ndarray:
-    """``value`` as a read-only float64 array; PoseFileError unless it holds real numbers.
+    """``value`` as a read-only float64 array; PoseFileError unless it holds real numbers. A
+    numpy masked array's masked values are missing, NaN (``np.asarray`` would keep the values
+    under the mask, read as a joint where the tracker lost it).
 
     A sequence is frozen and what is worked out from it is cached by the sequence
     (:mod:`features.derived`), so its arrays must not change under it: an array the caller
@@ -107,6 +109,8 @@ def _real_array(value: Any, what: str, where: str | None) -> np.ndarray:
         got = _KIND_WORDS.get(arr.dtype.kind, str(arr.dtype))
         raise PoseFileError(f"{what} must be real numbers, got {got}", where)
     out = arr.astype(np.float64, copy=False)
+    if np.ma.isMaskedArray(value) and np.ma.getmaskarray(value).any():
+        out = np.where(np.ma.getmaskarray(value), np.nan, out)  # masked: missing, not the data
     if out is arr and _writable(arr):
         out = arr.copy()
     out.flags.writeable = False

@@ -198,3 +198,22 @@ def test_states_of_the_wrong_kind_or_name_are_named() -> None:
         r" mean 'left_arm_bent\.bent'\?\)$",
     ):
         CaseBaseClassifier(states=["left_arm_bent.bnt", "angle:left_kne"]).fit(X, y)
+
+
+def test_a_masked_array_is_missing_where_masked() -> None:
+    """A tracker's masked array: a masked joint is a lost one, NaN, not the value under the
+    mask (``np.asarray`` keeps it: the joint was read where the tracker lost it). The array
+    given is not changed."""
+    X, _ = arm_dataset(1, seed=3)
+    xyz = np.array(X[0].positions)
+    mask = np.zeros(xyz.shape, dtype=bool)
+    mask[3:9, 11] = True  # the left shoulder lost for six frames
+    given = np.ma.masked_array(xyz.copy(), mask=mask)
+    seq = PoseSequence(given, X[0].joint_names, X[0].fps)
+    expected = xyz.copy()
+    expected[3:9, 11] = np.nan
+    np.testing.assert_array_equal(seq.positions, expected)
+    np.testing.assert_array_equal(given.data, xyz)
+    conf = np.ma.masked_array(np.ones(xyz.shape[:2]), mask=mask[..., 0])
+    seen = PoseSequence(xyz, X[0].joint_names, X[0].fps, confidence=conf).confidence
+    assert seen is not None and np.isnan(seen[3:9, 11]).all() and np.sum(np.isnan(seen)) == 6
