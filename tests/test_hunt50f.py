@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 from casebase_store import StoreError, open_store
+from cbr.dad.classifier import DADClassifier
 from cbr.estimator import CaseBaseClassifier
 from cbr.live import LiveSegmenter
 from cbr.segmentation import segment
@@ -217,3 +218,15 @@ def test_a_masked_array_is_missing_where_masked() -> None:
     conf = np.ma.masked_array(np.ones(xyz.shape[:2]), mask=mask[..., 0])
     seen = PoseSequence(xyz, X[0].joint_names, X[0].fps, confidence=conf).confidence
     assert seen is not None and np.isnan(seen[3:9, 11]).all() and np.sum(np.isnan(seen)) == 6
+
+
+def test_dad_refuses_a_set_of_clips() -> None:
+    """``DADClassifier`` took a set of clips, its answers or labels in the set's order, not
+    the clips' (``CaseBaseClassifier`` refused it already); its refusals said "X: X must"."""
+    X, y = arm_dataset(1, seed=3)
+    with pytest.raises(
+        InputError, match=r"^X: must be a sequence .* got a set \(set\): its order is not the"
+    ):
+        DADClassifier().fit(set(X), y)
+    with pytest.raises(InputError, match=r"^X: must be a sequence .* got a float64 array"):
+        DADClassifier().fit(X[0].positions, y[:1])

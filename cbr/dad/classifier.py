@@ -3,7 +3,8 @@ scikit-learn estimators check theirs."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from numbers import Number
 from pathlib import Path
 from typing import Any
@@ -19,18 +20,26 @@ from ..estimator_protocol import Classifier, check_fitted
 from .detection import DADConfig, default_step, detect
 from .names import class_of_activity
 
-_NEEDS = "X must be a sequence (list, tuple or 1-D object array) of PoseSequence"
+_NEEDS = "must be a sequence (list, tuple or 1-D object array) of PoseSequence"
 
 
 def pose_sequences(X: Any) -> list[PoseSequence]:
     """``X`` as a non-empty list of PoseSequence; anything else is an :class:`InputError`
-    naming what was given (a numeric array, a single clip, an item of another type)."""
+    naming what was given (a numeric array, a single clip, an item of another type, a set or
+    a mapping, whose order is not the clips': the answers were given in the set's)."""
     if isinstance(X, PoseSequence):
         raise InputError(f"{_NEEDS}, got a single PoseSequence (wrap it in a list)", "X")
     if isinstance(X, np.ndarray) and (X.dtype != object or X.ndim != 1):
         raise InputError(f"{_NEEDS}, got a {X.dtype} array of shape {X.shape}", "X")
     if X is None or isinstance(X, str | bytes) or not hasattr(X, "__iter__"):
         raise InputError(f"{_NEEDS}, got {type(X).__name__}", "X")
+    if isinstance(X, AbstractSet | Mapping):  # no order to match the answers or labels to
+        kind = "set" if isinstance(X, AbstractSet) else "mapping"
+        raise InputError(
+            f"{_NEEDS}, got a {kind} ({type(X).__name__}): its order is not the clips' (a list"
+            " of them keeps it)",
+            "X",
+        )
     items = list(X)
     for i, s in enumerate(items):
         if not isinstance(s, PoseSequence):
