@@ -348,18 +348,20 @@ class CaseBaseInfo:
 
     id: int
     name: str
-    feature_config: dict[str, Any]
+    # the columns, the measure (its learned weights) and the model are left out of the repr:
+    # half a megabyte of it for a case base of 80 cases (``load_classifier``'s result printed)
+    feature_config: dict[str, Any] = field(repr=False)
     feature_hash: str
-    feature_names: tuple[str, ...]
-    feature_words: tuple[str, ...]
-    similarity: dict[str, Any]
+    feature_names: tuple[str, ...] = field(repr=False)
+    feature_words: tuple[str, ...] = field(repr=False)
+    similarity: dict[str, Any] = field(repr=False)
     code_version: str
     created_at: datetime
     n_cases: int
     label_counts: dict[str, int] = field(default_factory=dict)
     uid: str = ""
     version: int = 1
-    model: dict[str, Any] = field(default_factory=dict)
+    model: dict[str, Any] = field(default_factory=dict, repr=False)
 
 
 @dataclass(frozen=True)

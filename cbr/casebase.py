@@ -118,6 +118,15 @@ class CaseBase:
     def __len__(self) -> int:
         return len(self.labels)
 
+    def __repr__(self) -> str:
+        """What it holds, in a line: its fields hold a name and a word a column and a source
+        a case, and its measure learned weights a column (the dataclass's repr of 80 cases
+        ran to 100,000 characters)."""
+        return (
+            f"CaseBase({len(self)} cases of {len(set(self.labels.tolist()))} labels, problems"
+            f" {self.problems.shape}, {self.config.level}, {type(self.measure).__name__})"
+        )
+
     def check_not_empty(self, where: str = "case base") -> None:
         """Refuse a case base of no cases (every case trimmed, or a subset of none) where
         cases are compared with: DataError naming ``where``, not numpy's error of an empty

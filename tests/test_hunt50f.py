@@ -230,3 +230,26 @@ def test_dad_refuses_a_set_of_clips() -> None:
         DADClassifier().fit(set(X), y)
     with pytest.raises(InputError, match=r"^X: must be a sequence .* got a float64 array"):
         DADClassifier().fit(X[0].positions, y[:1])
+
+
+def test_a_loaded_case_base_prints_in_a_few_lines(arm_store: Path) -> None:
+    """``load_classifier``'s result printed (a notebook shows it) held its columns' names and
+    words, its measure's weights and the whole model document: 523,611 characters for a case
+    base of 80 cases; the case base's own repr every column name and word too."""
+    with open_store(arm_store, readonly=True) as store:
+        stored = load_classifier(store, "arms")
+    text = repr(stored)
+    assert "name='arms'" in text and f"n_cases={stored.info.n_cases}" in text
+    for left_out in (
+        "model=",
+        "feature_names=",
+        "feature_words=",
+        "feature_config=",
+        "similarity=",
+    ):
+        assert left_out not in text
+    cb = stored.classifier.case_base_
+    assert len(cb.names) > 100  # what its repr printed, with as many words
+    assert repr(cb).startswith(f"CaseBase({len(cb.labels)} cases of 3 labels, problems ")
+    assert len(repr(cb)) < 500 and "\n" not in repr(cb)
+    assert len(text) < 2000
