@@ -1222,6 +1222,16 @@ class CaseStore:
     def __enter__(self) -> CaseStore:
         return self
 
+    def __reduce__(self) -> Any:
+        """A store is a connection to its database: not pickled or copied (pickle said "Can't
+        pickle local object 'create_engine.<locals>.connect'")."""
+        raise StoreError(
+            "a case base store is a connection to its database and is not pickled or copied:"
+            " give another process the file or URL to open_store(), or pickle the classifier"
+            " load_classifier() read",
+            self.where,
+        )
+
     def __exit__(self, *exc: object) -> None:
         """``with open_store(...) as store:`` closes the store at the end of the block, also
         when it raised."""

@@ -14,6 +14,8 @@
 
 from __future__ import annotations
 
+import copy
+import pickle
 import re
 import tomllib
 import typing
@@ -253,3 +255,15 @@ def test_a_loaded_case_base_prints_in_a_few_lines(arm_store: Path) -> None:
     assert repr(cb).startswith(f"CaseBase({len(cb.labels)} cases of 3 labels, problems ")
     assert len(repr(cb)) < 500 and "\n" not in repr(cb)
     assert len(text) < 2000
+
+
+def test_a_store_is_not_pickled_saying_why(arm_store: Path) -> None:
+    """A store given to a worker process: pickle said "Can't pickle local object
+    'create_engine.<locals>.connect'"; the store is a connection, its file is what travels."""
+    with open_store(arm_store, readonly=True) as store:
+        for copy_of in (pickle.dumps, copy.deepcopy):
+            with pytest.raises(
+                StoreError, match=r"arms\.sqlite: a case base store is a connection"
+            ):
+                copy_of(store)
+        assert [i.name for i in store.list_case_bases()] == ["arms"]  # still open, as it was
