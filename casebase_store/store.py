@@ -2030,6 +2030,18 @@ def _check_timeout(timeout_s: Any) -> None:
         raise ConfigError(f"must be a number of seconds >= 0, got {timeout_s!r}", "timeout_s")
 
 
+def check_url_or_path(url_or_path: Any, name: str = "url_or_path") -> None:
+    """Refuse, naming ``name`` (the caller's argument), what is no file path or URL, or an
+    empty one: ``open_store(5)`` made a file "5", and ``write_store(None, ...)`` (so
+    ``cbr.training.train(None, ...)``, an unset variable) a case base file "None"."""
+    if not isinstance(url_or_path, str | os.PathLike):
+        raise StoreError(
+            f"a case base is a file path or a SQLAlchemy URL, got {url_or_path!r}", name
+        )
+    if not str(url_or_path).strip():
+        raise StoreError(EMPTY_DB, name)
+
+
 def open_store(
     url_or_path: str | Path,
     *,
@@ -2049,12 +2061,7 @@ def open_store(
     locked, foreign or other-version database, naming ``url_or_path`` for an empty one or one
     of another type (the commands say ``--db``).
     """
-    if not isinstance(url_or_path, str | os.PathLike):  # open_store(5) made a file "5"
-        raise StoreError(
-            f"a case base is a file path or a SQLAlchemy URL, got {url_or_path!r}", "url_or_path"
-        )
-    if not str(url_or_path).strip():
-        raise StoreError(EMPTY_DB, "url_or_path")
+    check_url_or_path(url_or_path)
     _check_timeout(timeout_s)
     file = sqlite_file(url_or_path)
     if file is not None:
@@ -2088,6 +2095,7 @@ def write_store(
     only its hidden temporary, which the next write removes. If another process created the
     file meanwhile, ``action`` runs again, on that store.
     """
+    check_url_or_path(url_or_path)
     file = sqlite_file(url_or_path)
     if file is not None:  # the temporaries of killed first writes (named for their process)
         remove_stale_temporaries(file.parent, file.name)

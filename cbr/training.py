@@ -31,6 +31,7 @@ from casebase_store import (
     StoreError,
     StoreTransaction,
     check_case_base_name,
+    check_url_or_path,
     open_store,
     write_store,
 )
@@ -361,6 +362,7 @@ def train(
     :class:`features.errors.InputError`, before any clip is read. ``cases`` records what
     the clips are, it cuts nothing: :func:`cut` and :func:`cut_recording` cut them as
     ``train --split`` does (windows for ``segment`` and ``watch``)."""
+    check_url_or_path(db, "db")  # None made a case base file "None", after the fit
     _check_name(name)
     clips = as_sequences(clips, "clips")
     check_labels(labels, len(clips), "labels")
@@ -541,6 +543,7 @@ def train_described(
     The classifier is fitted on ``labels`` as given, so its classes keep their type (whole
     numbers, true/false, other numbers: stored with the model, and answered as such once it
     is loaded back); the cases hold them as text."""
+    check_url_or_path(db, "db")
     _check_name(name)
     _check_what(estimator, target, cases)
     text = [str(v) for v in check_labels(labels, len(clips), "labels")]
@@ -620,6 +623,7 @@ def store_fitted(
     """Store the fitted classifier as case base ``name`` in ``db`` in one transaction
     (``labels``: its training clips' solutions, for the summary; ``seen``: what was read of
     ``name`` before the fit, checked by a ``replace``)."""
+    check_url_or_path(db, "db")
     check_fitted(fitted, "case_base_")
     cb = to_store(fitted)
     calibrate_stored_judges(fitted)
@@ -798,6 +802,7 @@ def append(
     stored configuration (nothing is learned anew), in one transaction checked against the
     case base that was read. ``target``: what ``labels`` are (refused unless the case base's
     own; None: whatever it predicts)."""
+    check_url_or_path(db, "db")
     clips = as_sequences(clips, "clips")  # a set's order is not the labels'
     text = [str(v) for v in check_labels(labels, len(clips), "labels")]
     plan, uid, _, _ = append_plan(db, name, target)

@@ -267,3 +267,18 @@ def test_a_store_is_not_pickled_saying_why(arm_store: Path) -> None:
             ):
                 copy_of(store)
         assert [i.name for i in store.list_case_bases()] == ["arms"]  # still open, as it was
+
+
+def test_train_to_no_store_makes_no_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``train(None, ...)`` (an unset variable) fitted, then stored the case base in a file
+    named "None" and said it had been "stored before" an error naming ``url_or_path``."""
+    monkeypatch.chdir(tmp_path)
+    X, y = arm_dataset(1, seed=3)
+    for db in (None, b"cb.sqlite", 5):
+        with pytest.raises(
+            StoreError, match=r"^db: a case base is a file path or a SQLAlchemy URL"
+        ):
+            train(db, "arms", X, y, CaseBaseClassifier())  # type: ignore[arg-type]
+        with pytest.raises(StoreError, match=r"^db: "):
+            append(db, "arms", X, y)  # type: ignore[arg-type]
+    assert list(tmp_path.iterdir()) == []
