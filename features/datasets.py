@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import DataError
-from features.fileio import binary_kind, file_head, path_exists, picture_words
+from features.fileio import as_path, binary_kind, file_head, path_exists, picture_words
 from features.formats import SHOWN_VIDEO_SUFFIXES, TS_SUFFIX, is_mpeg_ts
 from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 from features.progress import progress
@@ -134,7 +134,7 @@ def load_clip(path: str | Path) -> PoseSequence:
 
     Raises PoseFileError/DataError naming the file when it cannot be read.
     """
-    path = Path(path)
+    path = as_path(path, "path")
     _check_clip_file(path)
     suffix = _suffix(path)
     if suffix in POSE_SUFFIXES:
@@ -1214,7 +1214,7 @@ def dataset_entries(
     a label file in seconds is laid over the frames at that rate. ``unlabelled``: a labels
     CSV's rows may leave the label empty (clips to classify: the pose file's own label, or
     none)."""
-    path = Path(path)
+    path = as_path(path, "path")
     kind = detect_kind(path)
     kept = [
         DatasetEntry(e, kind, labels, subjects, movements, episodes, correct, fps, unlabelled)
@@ -1326,7 +1326,7 @@ def iter_dataset(
     clip without a label (a pose file whose metadata has none) raises DataError naming it,
     unless ``unlabelled`` and it is a labels CSV's row (:func:`dataset_entries`).
     """
-    path = Path(path)
+    path = as_path(path, "path")
     entries = dataset_entries(path, sensor=sensor, labels=labels, subjects=subjects,
                               movements=movements, episodes=episodes, correct=correct,
                               fps=fps, unlabelled=unlabelled)  # fmt: skip

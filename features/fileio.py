@@ -38,7 +38,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from .errors import DataError, PosecbrError
+from .errors import DataError, InputError, PosecbrError
 from .text import shown
 
 #: How a message names a picture given where a clip or a case base belongs (by its first
@@ -614,6 +614,15 @@ def _kernel_folder(out: Path) -> str | None:
     failed only once the work was done)."""
     top = Path(os.path.realpath(Path(os.path.abspath(out)).parent)).parts[:2]
     return top[1] if len(top) == 2 and top[0] == "/" and top[1] in ("proc", "sys") else None
+
+
+def as_path(value: Any, name: str) -> Path:
+    """A file or folder argument ``value`` as a Path; what is no path (None: an unset
+    variable; a number) is an InputError naming the argument ``name``, where ``Path(None)``
+    said "expected str, bytes or os.PathLike object, not NoneType"."""
+    if not isinstance(value, str | os.PathLike):
+        raise InputError(f"must be a file path, got {value!r}", name)
+    return Path(value)
 
 
 def path_exists(path: Path, lead: str = "", where: Path | None = None) -> bool:

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import ConfigError, DataError, InputError, PoseFileError
-from features.fileio import SQLITE_MAGIC, atomic_path, file_head
+from features.fileio import SQLITE_MAGIC, as_path, atomic_path, file_head
 from features.text import size_words
 
 from .skeleton import (
@@ -470,7 +470,7 @@ def save_pose(
     cast back to float64).
     """
     dtype = np.float32 if float32 else np.float64
-    path = Path(path)
+    path = as_path(path, "path")
     if path.is_dir():
         raise PoseFileError("is a folder: give a file name for the pose file", path)
     if path.suffix.lower() != ".npz":  # x.NPZ keeps its name, as casebase export's
@@ -725,7 +725,7 @@ def load_pose(path: str | Path) -> PoseSequence:
     an fps that is not one number, non-physical positions, malformed metadata, a file that
     would expand past the limits of :func:`read_limits`) raises PoseFileError naming the file.
     """
-    path = Path(path)
+    path = as_path(path, "path")
     if not path.exists():
         raise PoseFileError("no such file", path)
     if path.is_dir():

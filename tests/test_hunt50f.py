@@ -35,8 +35,10 @@ from cbr.segmentation import segment
 from cbr.stored import load_classifier
 from cbr.training import append, cut, cut_recording, store_fitted, train
 from cbr.unknown import judge_of
+from features.datasets import dataset_entries, load_clip, load_dataset
 from features.errors import InputError, ParameterError
-from features.poses import PoseSequence
+from features.pose_estimation import estimate_poses, open_video, stream_poses
+from features.poses import PoseSequence, load_pose, save_pose
 from tests.test_cbr_clips import arm_dataset
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -281,4 +283,30 @@ def test_train_to_no_store_makes_no_file(tmp_path: Path, monkeypatch: pytest.Mon
             train(db, "arms", X, y, CaseBaseClassifier())  # type: ignore[arg-type]
         with pytest.raises(StoreError, match=r"^db: "):
             append(db, "arms", X, y)  # type: ignore[arg-type]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_path_that_is_none_is_named(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """An unset variable for a file: ``Path(None)``'s "expected str, bytes or os.PathLike
+    object, not NoneType" (a raw TypeError), and ``stream_poses(None)`` "None: cannot open
+    stream"; nothing is written ("None.npz")."""
+    monkeypatch.chdir(tmp_path)
+    X, _ = arm_dataset(1, seed=3)
+    calls = {
+        "path": (
+            lambda p: save_pose(X[0], p),
+            load_pose,
+            load_clip,
+            load_dataset,
+            dataset_entries,
+            open_video,
+        ),
+        "video_path": (estimate_poses,),
+        "source": (stream_poses,),
+    }
+    for argument, functions in calls.items():
+        for function in functions:
+            for value in (None, 5.0):
+                with pytest.raises(InputError, match=rf"^{argument}: must be a .*, got {value}$"):
+                    function(value)
     assert list(tmp_path.iterdir()) == []

@@ -49,7 +49,7 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from features.errors import DataError, InputError  # noqa: E402
-from features.fileio import heif_brand  # noqa: E402
+from features.fileio import as_path, heif_brand  # noqa: E402
 from features.poses import EXTRACTION_VERSION, MIN_FPS, PoseSequence  # noqa: E402
 from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
@@ -231,7 +231,7 @@ def open_video(
 ) -> tuple[cv2.VideoCapture, VideoInfo]:
     """Open a video file, or raise :class:`DataError` with a one-line reason.
     ``decode_threads``: FFmpeg's decoding threads (None: FFmpeg's default, one per core)."""
-    path = Path(path)
+    path = as_path(path, "path")
     if not path.exists():
         raise DataError("no such file", path)
     if path.is_dir():
@@ -988,7 +988,7 @@ def estimate_video(
     stderr, and the metadata's ``variable_frame_rate`` records it.
     Raises :class:`DataError` for a video that cannot be used.
     """
-    path = Path(video_path)
+    path = as_path(video_path, "video_path")
     cap, info = open_video(path, decode_threads)  # fail early with a clear reason
     cap.release()
     est = estimator or PoseEstimator(tracking=tracking, smoothing=smoothing)
@@ -1380,6 +1380,10 @@ def _open_source(
     if isinstance(source, str) and source.startswith("file:") and fps is not None:
         cap, info = open_video(source[len("file:") :])
         return cap, info.fps, info.frames, False, info.orientation
+    if not isinstance(source, int | np.integer | str | os.PathLike):  # None: "cannot open"
+        raise InputError(
+            f"must be a camera index, a stream URL or a file path, got {source!r}", "source"
+        )
     if isinstance(source, bool) or (isinstance(source, int) and source < 0):
         # OpenCV's "any camera", -1, crashes the process (a segmentation fault) where none is
         raise InputError(
