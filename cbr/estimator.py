@@ -1090,8 +1090,11 @@ class CaseBaseClassifier(Classifier):
 
         ``flag`` False: the "unlike the stored cases" flag is not judged (``unlike_cases``
         False, no reason, no description), for callers with a judge of their own (segmenting
-        a recording judges its stretches by :mod:`cbr.unknown`) that would pay for it unused."""
+        a recording judges its stretches by :mod:`cbr.unknown`) that would pay for it unused;
+        not True or False, an InputError naming it ("no" was taken as True)."""
         check_fitted(self, "case_base_")
+        if not isinstance(flag, bool | np.bool_):
+            raise InputError(f"must be True or False, got {flag!r}", "flag")
         self._check_vote()
         self.case_base_.check_not_empty("case_base_")
         seqs = as_sequences(X)

@@ -310,3 +310,15 @@ def test_a_path_that_is_none_is_named(tmp_path: Path, monkeypatch: pytest.Monkey
                 with pytest.raises(InputError, match=rf"^{argument}: must be a .*, got {value}$"):
                     function(value)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_solve_flag_is_true_or_false(
+    arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],
+) -> None:
+    """``solve(X, flag="no")`` judged the flag all the same ("no" is truthy)."""
+    clf, _, _ = arm_k3
+    X, _ = arm_dataset(1, seed=6)
+    for flag in ("no", 0, None):
+        with pytest.raises(InputError, match=rf"^flag: must be True or False, got {flag!r}$"):
+            clf.solve(X, flag=flag)  # type: ignore[arg-type]
+    assert [s.unlike_cases for s in clf.solve(X, flag=False)] == [False] * len(X)
