@@ -134,6 +134,9 @@ def test_the_readme_python_example_segments_and_watches(
     from features.readers.asfamc import read_asf_amc
 
     shutil.copy(case_base, tmp_path / "cmu.sqlite")
+    # the video's own case base, as the example loads it (here the same one: what is checked
+    # is the lines, not the activities)
+    shutil.copy(case_base, tmp_path / "workout.sqlite")
     (tmp_path / "cmu").mkdir()
     seq = read_asf_amc(
         shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
