@@ -164,7 +164,8 @@ def served_cut(
         opener, bare = _ffmpeg_opener(url)
         with opener.open(bare, timeout=timeout_s or 30.0) as answer:
             length = (answer.headers.get("Content-Length") or "").strip()
-            head = answer.read(8)  # an MP4/MOV file's first box's size and name
+            # an MP4/MOV file's first box's size and name, and a HEIF photo's brand
+            head = answer.read(16)
             if answer.status != 200:
                 return None
             if not length.isdigit():  # no end to walk to: an MP4 being recorded, sent so?
@@ -228,6 +229,120 @@ def served_refusal(url: str, timeout_s: float | None = None) -> str | None:
     if kind in ("text/html", "text/plain") and not head.lstrip().startswith(b"#EXTM3U"):
         return f"the server gives {kind}, not a video"
     return None
+
+
+SERVED_START = 1 << 16
+"""How much of a served file's start (bytes) :func:`served_file` asks for: an MP4/MOV
+file's boxes before its frames and, written for streaming ("fast start"), its index; a
+HEIF photo's meta box."""
+SERVED_INDEX_LIMIT = 8 << 20
+"""The most a :class:`ServedFile` reads of a served file (bytes) past its start, in
+:data:`SERVED_READS` range requests at most: an MP4/MOV file's index at its end (an hour of
+a phone's recording at 60 fps indexes its frames in some megabytes). A file whose index
+takes more is opened unchecked, as before, not read for minutes."""
+SERVED_READS = 8
+"""The most range requests a :class:`ServedFile` makes (each box before an MP4's index,
+past its start, is one)."""
+
+
+class Unread(Exception):
+    """A :class:`ServedFile`'s bytes that cannot be read: the server does not answer range
+    requests, or more than :data:`SERVED_INDEX_LIMIT` would be read."""
+
+
+class ServedFile:
+    """A file an HTTP(S) server gives whole (``length`` bytes, its first bytes ``start``),
+    read as a file here is (``seek``, ``read``, ``tell``) for what its bytes say
+    (:mod:`.containers`): its start as it came, any other part by a range request
+    (``Range: bytes=N-M``, as FFmpeg asks for the part it seeks to) of at least
+    :data:`SERVED_START` bytes, within :data:`SERVED_INDEX_LIMIT` and :data:`SERVED_READS`;
+    :class:`Unread` raised for a part it cannot read (a server that does not answer range
+    requests gives the start alone)."""
+
+    def __init__(
+        self, url: str, length: int, start: bytes, ranged: bool, timeout_s: float | None
+    ) -> None:
+        self.url, self.length, self.start, self.ranged = url, length, start, ranged
+        self.timeout_s = timeout_s
+        self.parts: list[tuple[int, bytes]] = [(0, start)]
+        self.at, self.spent, self.reads = 0, 0, 0
+
+    def tell(self) -> int:
+        return self.at
+
+    def seek(self, to: int) -> None:
+        self.at = to
+
+    def read(self, n: int) -> bytes:
+        end = min(self.at + n, self.length)
+        if end <= self.at:
+            return b""
+        part = next(
+            (p for p in self.parts if p[0] <= self.at and end <= p[0] + len(p[1])), None
+        ) or self._fetched(self.at, end)
+        out = part[1][self.at - part[0] : end - part[0]]
+        self.at = end
+        return out
+
+    def _fetched(self, first: int, end: int) -> tuple[int, bytes]:
+        """The bytes from ``first`` to at least ``end``, asked of the server."""
+        end = min(max(end, first + SERVED_START), self.length)
+        self.reads += 1
+        self.spent += end - first
+        if not self.ranged or self.reads > SERVED_READS or self.spent > SERVED_INDEX_LIMIT:
+            raise Unread(f"bytes {first}-{end - 1}")
+        answer = _served_part(self.url, self.timeout_s, first, end)
+        if answer is None or answer[0] != 206 or len(answer[2]) != end - first:
+            raise Unread(f"bytes {first}-{end - 1}")
+        self.parts.append((first, answer[2]))
+        return self.parts[-1]
+
+
+def served_file(url: str, timeout_s: float | None = None) -> ServedFile | None:
+    """The file at an HTTP(S) URL as a :class:`ServedFile` to read: its first
+    :data:`SERVED_START` bytes asked for by a range request, as FFmpeg asks (a server that
+    answers it, 206, states the file's length in its Content-Range; one that does not gives
+    the whole file, 200, and its length, of which the start alone is read). None when it is
+    no file of a length stated (a live stream, an error, no answer within ``timeout_s``:
+    FFmpeg's 30 s when None)."""
+    answer = _served_part(url, timeout_s, 0, SERVED_START)
+    if answer is None:
+        return None
+    status, length, start = answer
+    if status not in (200, 206) or length is None or length <= 0:
+        return None
+    return ServedFile(url, length, start, status == 206, timeout_s)
+
+
+def _served_part(
+    url: str, timeout_s: float | None, first: int, end: int
+) -> tuple[int, int | None, bytes] | None:
+    """The bytes ``first`` to ``end`` (not included) of the file at an HTTP(S) URL asked for
+    by a range request, as FFmpeg asks (:func:`_ffmpeg_opener`), with the answer's status
+    (206: the part; 200: the server gives the whole file, of which the first ``end - first``
+    bytes are read) and the whole file's length (its Content-Range's, or Content-Length's
+    for a 200; None: none stated, and nothing read: a live stream may send its bytes
+    slowly); None where the server cannot be asked or does not answer within ``timeout_s``
+    (FFmpeg's 30 s when None)."""
+    import http.client
+    import urllib.request
+
+    try:
+        opener, bare = _ffmpeg_opener(url)
+        asked = urllib.request.Request(bare, headers={"Range": f"bytes={first}-{end - 1}"})
+        with opener.open(asked, timeout=timeout_s or 30.0) as answer:
+            if answer.status == 206:  # "bytes FIRST-LAST/LENGTH"
+                stated = (answer.headers.get("Content-Range") or "").removeprefix("bytes ")
+                span, _, whole = stated.partition("/")
+                if span.partition("-")[0].strip() != str(first):
+                    return None  # not the part asked for
+            else:
+                whole = (answer.headers.get("Content-Length") or "").strip()
+            if not whole.isdigit():
+                return answer.status, None, b""
+            return answer.status, int(whole), answer.read(end - first)
+    except (OSError, ValueError, http.client.HTTPException):
+        return None
 
 
 class _Onward:

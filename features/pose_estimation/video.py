@@ -56,6 +56,7 @@ from features.skeleton import BLAZEPOSE_33  # noqa: E402
 from features.text import shown  # noqa: E402
 
 from .containers import (  # noqa: E402
+    HeifPicture,
     VideoTrack,
     counted_by_duration,
     heif_picture,
@@ -69,7 +70,9 @@ from .containers import (  # noqa: E402
 )
 from .model import model_version  # noqa: E402
 from .served import (  # noqa: E402
+    Unread,
     served_cut,
+    served_file,
     served_refusal,
     served_whole,
     served_whole_by_duration,
@@ -286,11 +289,7 @@ def _seen_size(cap: cv2.VideoCapture, path: Path, head: bytes) -> tuple[int, int
     (:func:`_refuse_part`)."""
     orientation = picture_orientation(path)
     if is_mp4(head) and heif_brand(head) is None:
-        tracks = _video_tracks(cap, path)
-        _refuse_lesser_track(cap, path, tracks)
-        if tracks and tracks[0].turn in UNMIRRORED:
-            cap.set(cv2.CAP_PROP_ORIENTATION_AUTO, 0)
-            orientation = UNMIRRORED[tracks[0].turn]
+        orientation = _tracks_turn(cap, path, _video_tracks(cap, path), orientation)
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
     if orientation >= 5:
@@ -298,6 +297,21 @@ def _seen_size(cap: cv2.VideoCapture, path: Path, head: bytes) -> tuple[int, int
     if heif_brand(head) is not None:
         _refuse_part(cap, path, head, width, height)
     return width, height, orientation
+
+
+def _tracks_turn(
+    cap: cv2.VideoCapture, source: str | Path, tracks: list[VideoTrack], orientation: int
+) -> int:
+    """How posecbr turns the frames of ``cap``, an MP4/MOV video of ``tracks``
+    (:func:`.containers.mp4_video_tracks`), opened from ``source``: as its first video
+    track's display matrix turns them less its mirror, where it mirrors them
+    (:data:`UNMIRRORED`, OpenCV's own turning set off), else ``orientation`` (OpenCV's own
+    turning kept). Refused when that track is a lesser one (:func:`_refuse_lesser_track`)."""
+    _refuse_lesser_track(cap, source, tracks)
+    if tracks and tracks[0].turn in UNMIRRORED:
+        cap.set(cv2.CAP_PROP_ORIENTATION_AUTO, 0)
+        return UNMIRRORED[tracks[0].turn]
+    return orientation
 
 
 UNMIRRORED = {2: 1, 4: 3, 5: 6, 7: 8}
@@ -334,6 +348,18 @@ def _refuse_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, hei
     except OSError as exc:
         cap.release()
         raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
+    _refuse_picture_part(cap, path, picture, width, height)
+
+
+def _refuse_picture_part(
+    cap: cv2.VideoCapture,
+    source: str | Path,
+    picture: HeifPicture | None,
+    width: int,
+    height: int,
+) -> None:
+    """Refuse the HEIF photo ``picture`` (opened from ``source``) when OpenCV decodes a
+    ``width`` x ``height`` frame of it that is not it (:func:`_refuse_part`)."""
     if picture is None or (picture.width, picture.height) == (width, height):
         return
     cap.release()
@@ -345,10 +371,12 @@ def _refuse_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, hei
         )
     else:
         what = f"{whole} of which OpenCV decodes another picture in the file ({width}x{height})"
-    raise DataError(f"{what}: convert it to JPEG or PNG first", path)
+    raise DataError(f"{what}: convert it to JPEG or PNG first", source)
 
 
-def _refuse_lesser_track(cap: cv2.VideoCapture, path: Path, tracks: list[VideoTrack]) -> None:
+def _refuse_lesser_track(
+    cap: cv2.VideoCapture, source: str | Path, tracks: list[VideoTrack]
+) -> None:
     """Refuse an MP4/MOV file whose first video track (the one OpenCV decodes: it takes
     FFmpeg's first video stream and can be given no other) is smaller than another of its
     ``tracks`` (a picture-in-picture or preview track ahead of the recording). Before, the
@@ -364,7 +392,7 @@ def _refuse_lesser_track(cap: cv2.VideoCapture, path: Path, tracks: list[VideoTr
         f" ({first.width}x{first.height}, {first.frames} frames), not the largest"
         f" ({largest.width}x{largest.height}, {largest.frames} frames): save that track in a"
         " file of its own and give that",
-        path,
+        source,
     )
 
 
@@ -1369,8 +1397,9 @@ def _open_source(
     """:func:`stream_poses`'s source opened: the capture, the frame rate it is timed by (None:
     a live source, the wall clock), the frame count its container states (0: none; a file
     served over the network, ``fps`` given, must hold them all, as a file must), whether
-    it is such a served file and how its frames are turned to be seen (a still picture's
-    EXIF orientation, :func:`upright`; 1 but for a picture file). A ``file:`` URL's file is
+    it is such a served file and how its frames are turned to be seen (:func:`upright`: a
+    still picture's EXIF orientation, a video's display matrix that mirrors its frames, less
+    the mirror, a served file's too, :func:`_served_turn`; else 1). A ``file:`` URL's file is
     opened as its path is (:func:`open_video`'s checks: a WebM cut short), the path being
     what follows ``file:``, as FFmpeg reads it, and is no served file (what it lacks is said
     as for its path)."""
@@ -1412,7 +1441,33 @@ def _open_source(
         # a clock's ticks, not a frame rate (served_file_rate): the count OpenCV gives is
         # the duration at that rate; at the frames' own rate it is this many
         declared = int(declared * fps / stated)
-    return cap, fps, declared, True, 1
+    return cap, fps, declared, True, _served_turn(cap, str(device), timeout_s)
+
+
+def _served_turn(cap: cv2.VideoCapture, url: str, timeout_s: float | None) -> int:
+    """How the frames of ``cap``, a file an HTTP(S) server gives whole at ``url``, are turned
+    to be seen (:func:`upright`), and refused, as :func:`open_video` turns and refuses a
+    file here, from the bytes it reads of the file (:func:`.served.served_file`: its start,
+    and, where the server answers range requests, its index at its end): an MP4/MOV whose
+    display matrix mirrors its frames is turned as the matrix says less its mirror, one
+    whose first video track is a lesser one refused (:func:`_tracks_turn`), as is a HEIF
+    photo of which OpenCV decodes a part (:func:`_refuse_picture_part`). 1 (OpenCV's own
+    turning) for any other file and where those bytes cannot be read (a server that does not
+    answer range requests, an index too large: :class:`.served.Unread`), as before."""
+    served = served_file(url, timeout_s)
+    if served is None:
+        return 1
+    head = served.start[:512]
+    try:
+        if is_mp4(head) and heif_brand(head) is None:
+            return _tracks_turn(cap, url, mp4_video_tracks(served, served.length), 1)
+        picture = heif_picture(served, served.length, head)
+    except Unread:
+        return 1
+    width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
+    height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
+    _refuse_picture_part(cap, url, picture, width, height)
+    return 1
 
 
 NO_CAMERA = "cannot open camera: none at this index, or another program holds it"

@@ -235,6 +235,32 @@ def _is_still(path: Path) -> bool:
     return suffix not in SHOWN_VIDEO_SUFFIXES and picture_words(file_head(path)) is not None
 
 
+def _refuse_served_still(source: str, stall_s: float) -> None:
+    """Refuse a still picture an HTTP(S) server gives (a file of a length stated whose first
+    bytes are a picture's, :func:`features.fileio.picture_words`, not named as a video), as
+    a picture file here is refused (:func:`_check_source`): it was watched as a one-frame
+    stream, or, a phone's HEIC or AVIF photo, refused as an "unfinished MP4/MOV". Asked once
+    the stream was asked for its rate: a server that answers nothing has stalled by then."""
+    from urllib.parse import urlsplit
+
+    from features.fileio import picture_words
+    from features.formats import SHOWN_VIDEO_SUFFIXES
+    from features.pose_estimation.served import served_file
+
+    if not source.lower().startswith(("http://", "https://")):
+        return
+    if Path(urlsplit(source).path).suffix.lower() in SHOWN_VIDEO_SUFFIXES:
+        return
+    served = served_file(source, stall_s)
+    words = None if served is None else picture_words(served.start)
+    if words is not None:
+        raise DataError(
+            f"{words}, not a video: watch plays videos, cameras and streams (posecbr extract"
+            " reads a picture saved on this machine)",
+            source,
+        )
+
+
 def _picture_words(path: Path) -> str:
     """What a still picture (:func:`_is_still`) is, in a refusal's words: by its first bytes
     (:func:`features.fileio.picture_words`: "a PNG or JPEG picture", "an AVIF picture"), else
@@ -536,6 +562,7 @@ def run(args: argparse.Namespace) -> int:
         fps: float | None = info.fps
     else:  # a file served over the network is played as a file is
         fps = None if isinstance(source, int) else served_file_rate(source, args.stall)
+        _refuse_served_still(args.source, args.stall)  # its server answers: no wait added
     if fps is not None:  # as segment and reps say it of the same video
         note_low_rate(args.source, fps, True)  # its poses the pose model's
     is_file = fps is not None
