@@ -1,7 +1,8 @@
 """Whether a stream URL is a whole file a server gives (it has an end, as a file here has) or
 a live stream (a camera's, a playlist's), asked over HTTP(S) as FFmpeg, OpenCV's backend,
-asks for the same URL: the same credentials and certificate checks. Its first bytes only
-are read (:mod:`features.pose_estimation.containers` reads what they say)."""
+asks for the same URL: the same credentials and certificate checks. Its first bytes are
+read, and a file's other parts, its index, by range requests where its server answers them
+(:class:`ServedFile`); :mod:`features.pose_estimation.containers` reads what they say."""
 
 from __future__ import annotations
 
