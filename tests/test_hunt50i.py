@@ -34,9 +34,9 @@ from tests.test_hunt50e import PHOTO, _avif_grid, _mirrored, _two_tracks
 
 
 class _Server(_Ranged):
-    """The module's server, one for all its files:
-    under ``ranged/`` it answers range requests; under ``live/`` it sends the file as a live
-    stream does (no length stated); elsewhere as Python's server does (no range requests)."""
+    """The module's server, one for all its files: under ``ranged/`` it answers range
+    requests; under ``live/`` it sends the file as a live stream does (no length stated);
+    elsewhere as Python's server does (no range requests)."""
 
     def do_GET(self) -> None:  # noqa: N802 (the base's name)
         if self.path.startswith("/ranged/"):
