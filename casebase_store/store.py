@@ -651,6 +651,24 @@ def roll_back_interrupted(url_or_path: str | Path, *, timeout_s: float = 30.0) -
     return False
 
 
+def undo_failed_write(engine: Engine, timeout_s: float) -> None:
+    """After a write transaction of ``engine`` failed: undo what it wrote into a SQLite file.
+    A write that failed partway (the disk full, or a file size limit reached, as changed pages
+    spilled into the file) leaves the file half-changed and its journal beside it, for the
+    next connection that may write to undo: readers, which open it read-only, then refused it
+    as a killed writer's. The failed connection is closed first (it holds the journal's
+    changes undone no more). Nothing happens for another backend or a file without such a
+    journal."""
+    if not _is_sqlite(engine):
+        return
+    file = Path(str(engine.url.database))
+    if not _hot_journal(file):
+        return
+    engine.dispose()
+    with suppress(StoreError):  # another process writing now: its journal, not undone
+        roll_back_interrupted(file, timeout_s=min(timeout_s, 1.0))
+
+
 def prepare_write(url_or_path: str | Path, *, timeout_s: float = 30.0) -> bool:
     """For a command that will change a store and reads it read-only first: refuse, before any
     work, a SQLite file it cannot write (the file read-only, or its folder, where SQLite writes
@@ -1141,19 +1159,8 @@ class CaseStore:
         leave_wal_mode(self.engine)  # posecbr 0.1's WAL mode, once a write has committed
 
     def _undo_failed_write(self) -> None:
-        """After a write transaction failed: undo what it wrote into a SQLite file. A write
-        that failed partway (the disk full as changed pages spilled into the file) leaves the
-        file half-changed and its journal beside it, for the next connection that may write to
-        undo: readers, which open it read-only, then refused it as a killed writer's. The
-        failed connection is closed first (it holds the journal's changes undone no more)."""
-        if not _is_sqlite(self.engine):
-            return
-        file = Path(str(self.engine.url.database))
-        if not _hot_journal(file):
-            return
-        self.engine.dispose()
-        with suppress(StoreError):  # another process writing now: its journal, not undone
-            roll_back_interrupted(file, timeout_s=min(self.timeout_s, 1.0))
+        """After a write transaction failed: undo what it wrote (:func:`undo_failed_write`)."""
+        undo_failed_write(self.engine, self.timeout_s)
 
     @contextmanager
     def _read(self) -> Iterator[Session]:

@@ -41,6 +41,7 @@ from .store import (
     in_wal_mode,
     leave_wal_mode,
     sqlite_file,
+    undo_failed_write,
 )
 
 _TABLES = (CaseBaseRow, CaseRow, RepresentationRow, MaintenanceRow)
@@ -62,18 +63,11 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
         return SCHEMA_VERSION
     engine, where = _make_engine(url_or_path, timeout_s, readonly=False)
     try:
-        with engine.execution_options(posecbr_write=True).begin() as conn:
-            if conn.dialect.name == "postgresql":
-                # as SQLite's BEGIN IMMEDIATE: two upgrades at once, the second waits for the
-                # first, then finds the store converted (at READ COMMITTED both read version
-                # 1, and the second gave up "locked" or converted the store again)
-                conn.exec_driver_sql(f"SELECT pg_advisory_xact_lock({_PG_INIT_LOCK})")
-            found = _schema_version(conn, where)
-            if found != SCHEMA_VERSION:
-                _check_upgradable(found, where)  # refused: the file as it was, WAL mode too
-                _from_1(conn)
-            _add_columns(conn)
-            _add_indexes(conn)
+        try:
+            found = _convert(engine, where)
+        except BaseException:  # a full disk partway: the file as it was, no journal left
+            undo_failed_write(engine, timeout_s)
+            raise
         # posecbr 0.1's WAL mode, once the store reads as current; another process holding
         # the file open keeps it there (before: "nothing to do", the file still in WAL mode)
         if not leave_wal_mode(engine) and file is not None and in_wal_mode(file):
@@ -92,6 +86,23 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
         raise _translate(exc, where, timeout_s) from None
     finally:
         dispose(engine)
+
+
+def _convert(engine: Any, where: str) -> int:
+    """Convert the store of ``engine`` in one transaction; returns the version it had."""
+    with engine.execution_options(posecbr_write=True).begin() as conn:
+        if conn.dialect.name == "postgresql":
+            # as SQLite's BEGIN IMMEDIATE: two upgrades at once, the second waits for the
+            # first, then finds the store converted (at READ COMMITTED both read version
+            # 1, and the second gave up "locked" or converted the store again)
+            conn.exec_driver_sql(f"SELECT pg_advisory_xact_lock({_PG_INIT_LOCK})")
+        found = _schema_version(conn, where)
+        if found != SCHEMA_VERSION:
+            _check_upgradable(found, where)  # refused: the file as it was, WAL mode too
+            _from_1(conn)
+        _add_columns(conn)
+        _add_indexes(conn)
+    return found
 
 
 def _add_columns(conn: Any) -> None:
