@@ -108,11 +108,14 @@ def fit_classifier(
     clf = CaseBaseClassifier(**params)
     y = [clip_target(c, target) for c in train]
     if described is None:
-        return clf.fit([c.seq for c in train], y)
-    plan = clf.describe_plan()
-    if plan not in described:
-        described[plan] = list(describe_clips([c.seq for c in train], *plan))
-    return clf.fit_described(described[plan], y)
+        clf.fit([c.seq for c in train], y)
+    else:
+        plan = clf.describe_plan()
+        if plan not in described:
+            described[plan] = list(describe_clips([c.seq for c in train], *plan))
+        clf.fit_described(described[plan], y)
+    clf.target_ = target  # the column it predicts, which explain_solved's target may name
+    return clf
 
 
 def explain_rows(

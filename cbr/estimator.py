@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from features.body import no_person, torso_share
-from features.errors import ConfigError, DataError, InputError
+from features.errors import ConfigError, DataError, InputError, ParameterError
 from features.poses import PoseSequence
 from features.progress import progress
 from features.text import counted, did_you_mean
@@ -1157,8 +1157,10 @@ class CaseBaseClassifier(Classifier):
 
     def explain(self, X: Any, target: str | None = None) -> list[Explanation]:
         """An explanation in words for every clip in ``X`` (``target``: the column the labels
-        come from; ``"correct"`` reads them as correct / incorrect repetitions; None: the
-        column the classifier was trained to predict, ``target_``)."""
+        come from: ``"label"``, the activity; ``"correct"`` reads them as correct / incorrect
+        repetitions; None: the column the classifier was trained to predict, ``target_``, the
+        only other column taken). Another ``target`` is refused with a ParameterError."""
+        self._check_target(target)
         return [self.explain_solved(s, target) for s in self.solve(X)]
 
     def explain_solved(
@@ -1167,6 +1169,7 @@ class CaseBaseClassifier(Classifier):
         """The explanation of one :meth:`solve` result (``counterfactual`` False: without the
         counterfactual search, for callers that need the neighbours only; ``target`` as
         :meth:`explain`'s)."""
+        self._check_target(target)
         if target is None:  # a model pickled before target_ was kept has none
             target = getattr(self, "target_", None)
         return explain(
@@ -1182,6 +1185,23 @@ class CaseBaseClassifier(Classifier):
             confidence=self.confidence_.words,
             calibrated=self.confidence_.calibrated,
         )
+
+    def _check_target(self, target: Any) -> None:
+        """Refuse an ``explain`` target other than None, "label", "correct" and the column
+        the classifier was trained to predict (``target_``): any other (a mistyped "corect")
+        was taken without a word, explained as activities. ParameterError naming ``target``."""
+        own = getattr(self, "target_", None)
+        allowed = list(dict.fromkeys(["label", "correct", *([] if own is None else [own])]))
+        if target is None or (isinstance(target, str) and target in allowed):
+            return
+        guess = did_you_mean(target, allowed) if isinstance(target, str) else ""
+        whose = "target_: the column the classifier was trained to predict"
+        said = (
+            f"'label', 'correct' or None ({whose})"
+            if len(allowed) == 2
+            else f"'label', 'correct', {own!r} ({whose}) or None"
+        )
+        raise ParameterError(f"must be {said}, got {target!r}{guess}", "target")
 
     def answer(self, values: np.ndarray) -> str:
         """The label the classifier gives a problem ``values`` (retrieve and reuse, as

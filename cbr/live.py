@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -575,11 +576,11 @@ class LiveSegmenter:
         joints = len(BLAZEPOSE_33)
         if world is None:  # a tracker's "nobody found", or a dropped frame
             raise InputError(
-                f"frame {self.n}: positions are None: push a frame of NaN "
+                f"frame {self.n}: world is None: push a frame of NaN "
                 "(np.full((33, 3), np.nan)) where nobody is seen, absent=True where no frame came",
                 self.source,
             )
-        for value, shape, what in ((world, (joints, 3), "positions"),
+        for value, shape, what in ((world, (joints, 3), "world"),
                                    (confidence, (joints,), "confidence")):  # fmt: skip
             got: object
             try:
@@ -594,8 +595,9 @@ class LiveSegmenter:
         conf = None if confidence is None else np.asarray(confidence)[None]
         try:
             one = PoseSequence(np.asarray(world)[None], BLAZEPOSE_33, self.fps, confidence=conf)
-        except PoseFileError as exc:
-            raise InputError(f"frame {self.n}: {exc.message}", self.source) from None
+        except PoseFileError as exc:  # said of the positions: push's argument is world
+            said = re.sub(r"^positions( contain| reach)?\b", _of_world, exc.message)
+            raise InputError(f"frame {self.n}: {said}", self.source) from None
         return one.positions[0], None if one.confidence is None else one.confidence[0]
 
     def _hips(self, image: Any) -> np.ndarray | None:
@@ -1597,6 +1599,13 @@ class LiveSegmenter:
                         s.explanation, s.novelty)
             for s in found.segments
         ]  # fmt: skip
+
+
+def _of_world(said: re.Match[str]) -> str:
+    """A pose check's words of the positions said of ``push``'s argument, ``world`` (one
+    frame: "world contains", where the positions "contain")."""
+    verb = {" contain": " contains", " reach": " reaches"}.get(said.group(1) or "", "")
+    return "world" + verb
 
 
 def warm_up(clf: Any, judge: Judge | None = None, fps: float = 30.0, k: int = 1) -> None:

@@ -36,6 +36,7 @@ import numpy as np
 from features.errors import ConfigError, DataError, InputError, PoseFileError
 from features.fileio import SQLITE_MAGIC, as_path, atomic_path, file_head
 from features.text import size_words
+from features.values import is_number
 
 from .skeleton import (
     BLAZEPOSE_33,
@@ -128,12 +129,13 @@ def _writable(arr: np.ndarray) -> bool:
 
 
 def _check_fps(fps: Any, where: str | None) -> float:
-    if isinstance(fps, bool | np.bool_):
+    """``fps`` as a float: a real number (numpy's included, and the 0-d array a pose file's
+    ``fps`` reads as), not text that reads as one ("30": as ``LiveSegmenter`` refuses it)."""
+    if isinstance(fps, np.ndarray) and fps.ndim == 0 and fps.dtype.kind in "fiu":
+        fps = fps[()]
+    if not is_number(fps):
         raise PoseFileError(f"fps must be a number, got {fps!r}", where)
-    try:
-        value = float(fps)
-    except (TypeError, ValueError):
-        raise PoseFileError(f"fps must be a number, got {fps!r}", where) from None
+    value = float(fps)
     if not (np.isfinite(value) and value > 0):
         raise PoseFileError(f"fps must be a positive number, got {value:g}", where)
     if not MIN_FPS <= value <= MAX_FPS:

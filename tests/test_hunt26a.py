@@ -64,10 +64,10 @@ def test_live_keeps_each_frame_as_pushed_when_the_caller_reuses_its_buffer(
 @pytest.mark.parametrize(
     ("frame", "confidence", "message"),
     [
-        ("kinect", None, r"frame 2: positions must have shape \(33, 3\), got \(25, 3\)"),
-        ("2d", None, r"frame 2: positions must have shape \(33, 3\), got \(33, 2\)"),
-        ("inf", None, "frame 2: positions contain infinite values"),
-        ("text", None, "frame 2: positions must be real numbers, got text"),
+        ("kinect", None, r"frame 2: world must have shape \(33, 3\), got \(25, 3\)"),
+        ("2d", None, r"frame 2: world must have shape \(33, 3\), got \(33, 2\)"),
+        ("inf", None, "frame 2: world contains infinite values"),
+        ("text", None, "frame 2: world must be real numbers, got text"),
         ("ok", np.ones(5), r"frame 2: confidence must have shape \(33,\), got \(5,\)"),
         ("ok", np.full(33, 2.0), r"frame 2: confidence must lie in \[0, 1\], found 2"),
     ],

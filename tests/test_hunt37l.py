@@ -113,7 +113,7 @@ def test_a_frame_of_rows_of_different_lengths_is_refused_naming_the_frame() -> N
     live = _scripted("tracker")
     live.push(np.zeros((33, 3)).tolist())  # lists of the right shape are a frame
     ragged = [[0.0, 0.0, 0.0]] * 32 + [[0.0, 0.0]]
-    with pytest.raises(InputError, match=r"^tracker: frame 1: positions must have shape"):
+    with pytest.raises(InputError, match=r"^tracker: frame 1: world must have shape"):
         live.push(ragged)
     with pytest.raises(InputError, match=r"^tracker: frame 1: confidence must have shape"):
         live.push(np.zeros((33, 3)), [[1.0]] * 32 + [[1.0, 1.0]])
@@ -215,7 +215,7 @@ def test_a_frame_of_none_says_what_to_push_for_nobody_or_no_frame() -> None:
     "positions must be real numbers, got Python objects"; now it says to push NaN (nobody
     seen) or NaN with absent=True (no frame), nothing kept; and that frame is taken."""
     live = _scripted("robot")
-    with pytest.raises(InputError, match=r"^robot: frame 0: positions are None: push a frame"):
+    with pytest.raises(InputError, match=r"^robot: frame 0: world is None: push a frame"):
         live.push(None)  # type: ignore[arg-type]
     assert live.n == 0
     live.push(np.full((33, 3), np.nan), absent=True)

@@ -50,8 +50,9 @@ def explain_errors(run: CompareRun, n: int) -> list[ExplainedClip]:
         if len(set(data.y[train])) < 2:
             continue
         est = make_estimator(method).fit([data.seqs[j] for j in train], data.y[train])
-        # the target names the labels' words (a correct / an incorrect repetition)
-        exp = est.explain([data.seqs[i]], str(run.results.settings["target"]))[0]
+        # the column it predicts names the labels' words (a correct / an incorrect repetition)
+        est.target_ = str(run.results.settings["target"])
+        exp = est.explain([data.seqs[i]])[0]
         out.append(_entry(run, i, scores, m.name, exp.text, exp.to_dict()))
     return out
 
