@@ -50,7 +50,7 @@ from features.fluents import state_columns
 from features.poses import PoseSequence
 from features.qmp import QMPFeatures
 from features.signals import ANGLE_SIGNALS
-from features.text import did_you_mean
+from features.text import dataclass_line, did_you_mean
 
 from . import long_clip
 
@@ -77,7 +77,7 @@ SIDE_MODES = ("as_recorded", "canonical")
 MAX_LENGTH = 4096
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)  # its repr: one line
 class FeatureConfig:
     """How a clip becomes a problem.
 
@@ -116,6 +116,12 @@ class FeatureConfig:
     phases: int = 0
     positions: bool = False
     velocity: bool = False
+
+    def __repr__(self) -> str:
+        """Its fields in one line, the states once resolved (:func:`resolve_config`: a hundred
+        names and more) by their count (:func:`features.text.dataclass_line`: they ran to
+        thousands of characters)."""
+        return dataclass_line(self)
 
     def __post_init__(self) -> None:
         if self.level not in ("fluents", "qmp"):

@@ -10,10 +10,12 @@ or rate for people ("75.0 %"; ``--json`` keeps fractions 0-1).
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import re
 import unicodedata
 from collections.abc import Iterable, Sequence
+from typing import Any
 
 # C0 and C1 controls and DEL, the Unicode line/paragraph separators, and every format
 # character (bidirectional overrides and isolates, zero-width joiners, the BOM, ...).
@@ -97,7 +99,15 @@ def percent(share: float | None, digits: int = 1) -> str:
     return f"{100 * share:.{digits}f} %"
 
 
-__all__ = ["counted", "did_you_mean", "hide_passwords", "percent", "shown", "size_words"]
+__all__ = [
+    "counted",
+    "dataclass_line",
+    "did_you_mean",
+    "hide_passwords",
+    "percent",
+    "shown",
+    "size_words",
+]
 
 
 def did_you_mean(typed: str, known: Iterable[object]) -> str:
@@ -127,3 +137,27 @@ def _one_swap(typed: str, name: str) -> bool:
         and typed[differ[0]] == name[differ[1]]
         and typed[differ[1]] == name[differ[0]]
     )
+
+
+#: values of a sequence a repr shows before its count (more are left out)
+SHOWN_VALUES = 2
+
+
+def dataclass_line(obj: Any, most: int = 4) -> str:
+    """The dataclass ``obj``'s repr in one readable line: its fields as its own repr gives
+    them, but a tuple or list of more than ``most`` values shown by its first values and its
+    count (``states=('left_arm_bent.bent', 'left_arm_bent.straight', ... 84 values)``): a
+    fitted measure's learned weights, one per column, ran to tens of thousands of characters."""
+    parts = []
+    for f in dataclasses.fields(obj):
+        if not f.repr:
+            continue
+        value = getattr(obj, f.name)
+        if isinstance(value, tuple | list) and len(value) > most:
+            first = ", ".join(repr(v) for v in value[:SHOWN_VALUES])
+            ends = "()" if isinstance(value, tuple) else "[]"
+            said = f"{ends[0]}{first}, ... {len(value)} values{ends[1]}"
+        else:
+            said = repr(value)
+        parts.append(f"{f.name}={said}")
+    return f"{type(obj).__name__}({', '.join(parts)})"

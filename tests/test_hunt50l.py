@@ -6,6 +6,8 @@ under stress).
 - ``explain(target=...)`` refuses a target it does not know (a mistyped "corect" was taken
   without a word), naming ``target`` and the values it takes;
 - ``LiveSegmenter.push`` says ``world``, its argument, where it said "positions";
+- a fitted measure (``clf.measure_``) and a ``FeatureConfig`` print in one line: their
+  reprs held every learned weight and every state's name;
 - ``casebase upgrade`` that failed partway (a file size limit reached as the conversion's
   pages spilled into the file) left the file changed and its journal beside it, read by
   every reader as a killed writer's: it now undoes the failed write as a store's
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 import copy
 import inspect
+import pickle
 import re
 import resource
 import sqlite3
@@ -126,3 +129,28 @@ def test_a_pushed_frame_refused_names_push_s_argument() -> None:
     with pytest.raises(InputError, match=rf"^robot: frame 0: {argument} is None: push a frame"):
         live.push(None)  # type: ignore[arg-type]
     assert live.n == 0
+
+
+def test_a_fitted_measure_and_a_feature_config_print_in_one_line(
+    squats: CaseBaseClassifier,  # noqa: F811
+) -> None:
+    # before: the measure's repr held its two learned weights of each column (812 columns:
+    # 22,418 characters), the configuration's every state's name (6,079)
+    measure, config = squats.measure_, squats.feature_config_
+    columns = squats.case_base_.problems.shape[1]
+    text = repr(measure)
+    assert "\n" not in text and len(text) < 300
+    assert text.startswith("Euclidean(exact=False, prune_min_cases=5000, prune_dims=0, centre=(")
+    assert text.count(f", ... {columns} values)") == 2  # centre and multiplier
+    states = len(config.states)
+    assert states > 100
+    text = repr(config)
+    assert "\n" not in text and len(text) < 400
+    assert text.startswith("FeatureConfig(level='fluents', length=32, states=('")
+    assert f", ... {states} values), min_available=0.5" in text
+    # equality and pickling as they were
+    assert pickle.loads(pickle.dumps(measure)) == measure
+    assert pickle.loads(pickle.dumps(config)) == config
+    assert repr(squats.measure_.__class__()) == (
+        "Euclidean(exact=False, prune_min_cases=5000, prune_dims=0, centre=None, multiplier=None)"
+    )

@@ -40,6 +40,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from features.errors import ConfigError
+from features.text import dataclass_line
 
 # The registry lives in its own module (no numpy) so naming the measures costs nothing; these
 # names stay importable from here.
@@ -105,6 +106,13 @@ class SimilarityMeasure:
     def params(self) -> dict[str, Any]:
         """The measure as data: ``{"name": ..., field: value, ...}`` (JSON-able)."""
         return {"name": self.name, **dataclasses.asdict(self)}
+
+    def __repr__(self) -> str:
+        """Its fields in one line, learned weights by their count (:func:`dataclass_line`):
+        a measure with the weights ``fit`` learned ran to tens of thousands of characters, one
+        value of each of two weights per column. A measure declared ``@dataclass(repr=False)``
+        inherits it (the ones here are)."""
+        return dataclass_line(self)
 
 
 def check_weighting(

@@ -406,7 +406,7 @@ class _DTWIndex:
 
 
 @register_measure("dtw")
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)  # SimilarityMeasure's repr: one line
 class DTW(SimilarityMeasure):
     """DTW on fluent/angle sequences ``(frames, channels)`` with a Sakoe–Chiba band.
 

@@ -896,7 +896,7 @@ def _check_width(size: int, index: _EuclideanIndex) -> None:
 
 
 @register_measure("euclidean")
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)  # SimilarityMeasure's repr: one line
 class Euclidean(SimilarityMeasure):
     """``||a - b||_2`` over the flattened problem (a resampled fluent sequence or QMP vector).
 

@@ -48,7 +48,7 @@ def augment(
 
 
 @register_measure("signature")
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)  # SimilarityMeasure's repr: one line
 class Signature(SimilarityMeasure):
     """Euclidean distance between truncated path signatures of the problem sequences.
 
