@@ -11,6 +11,7 @@ import argparse
 import ast
 import errno
 import importlib
+import os
 import pkgutil
 import re
 import sys
@@ -27,6 +28,14 @@ from features.interrupts import (
 from features.text import did_you_mean, shown
 from posecbr import __version__, commands
 
+#: the actions that gather what each occurrence gives (``--param``): given again, not refused
+REPEATABLE_ACTIONS = (
+    argparse._AppendAction,
+    argparse._AppendConstAction,
+    argparse._ExtendAction,
+    argparse._CountAction,
+)
+
 
 class Parser(argparse.ArgumentParser):
     """argparse's parser (its subcommands' too) with a usage error in one line: the error
@@ -39,10 +48,63 @@ class Parser(argparse.ArgumentParser):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("allow_abbrev", False)
         super().__init__(*args, **kwargs)
+        self._given: dict[argparse.Action, list[str]] = {}
+        self._words: list[str] = []
+
+    def parse_known_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        self._given = {}
+        self._words = [str(a) for a in (sys.argv[1:] if args is None else args)]
+        return super().parse_known_args(args, namespace)
+
+    def _get_values(self, action: argparse.Action, arg_strings: list[str]) -> Any:
+        """An option that takes one value given twice with two values (``--labels squat
+        --labels lunge``, ``--fps 30 --fps 60``, or under its two spellings, ``watch --out
+        a.mp4 --overlay b.mp4``) is refused: argparse kept the last and dropped the first
+        without a word. Options that gather what they are given (``--param``, ``--truth``:
+        an append action, or one marked ``repeatable``) may be given again."""
+        if (
+            action.option_strings
+            and not isinstance(action, REPEATABLE_ACTIONS)
+            and not (getattr(action, "repeatable", False))
+        ):
+            before = self._given.setdefault(action, list(arg_strings))
+            if before != list(arg_strings):
+                first, then = (" ".join(v) for v in (before, arg_strings))
+                raise argparse.ArgumentError(
+                    action, f"given twice, {first!r} then {then!r}: give it once"
+                )
+        return super()._get_values(action, arg_strings)
 
     def error(self, message: str) -> NoReturn:
-        guess = self._guess(message)
+        guess = self._guess(message) or self._dashed(message)
         self.exit(2, f"{self.prog}: error: {shown(message)}{guess}; see {self.prog} --help\n")
+
+    def _dashed(self, message: str) -> str:
+        """ " ('-x.npz' begins with '-': give it as ./-x.npz, or after --)" when an argument
+        the command was given is a file whose name begins with "-", which argparse read as an
+        option: "the following arguments are required: clip" where the clip had been given,
+        "unrecognized arguments: -x.npz", or, given to an option, "argument --plot: expected
+        one argument"."""
+        valued = re.search(r": expected (at least )?one argument", message)  # an option's
+        if not message.startswith(("the following arguments are required", "unrecognized")) and (
+            not valued
+        ):
+            return ""
+        after = "" if valued else ", or after --"  # after --: a positional argument
+        options = {o for a in self._actions for o in a.option_strings}
+        for word in self._words:
+            if word == "--":
+                break
+            if (
+                word.startswith("-")
+                and word.split("=")[0] not in options
+                and not self._negative_number_matcher.match(word)
+                and os.path.lexists(word)
+            ):
+                return f" ({word!r} begins with '-': give it as {shown('./' + word)}{after})"
+        return ""
 
     def _guess(self, message: str) -> str:
         """ " (did you mean 'classify'?)" for a mistyped command or option, when one is close."""
@@ -294,7 +356,6 @@ def internal_error(command: str, exc: BaseException) -> int:
     stderr with where its traceback was written (a file in the temporary folder), or with
     the traceback itself when ``POSECBR_DEBUG=1``; :data:`BUG_STATUS`. Before, Python printed
     the traceback and the exit status was 1, as for a problem with the input."""
-    import os
     import tempfile
     import traceback
 

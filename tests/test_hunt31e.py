@@ -39,6 +39,18 @@ SMALL = [
 ]  # fmt: skip
 
 
+def _small(*given: str) -> list[str]:
+    """SMALL with the options of ``given`` (option, value pairs) in place of its own: an
+    option given twice is refused."""
+    kept, words = [], iter(SMALL)
+    for word in words:
+        if word in given[::2]:
+            next(words)  # its value
+        else:
+            kept.append(word)
+    return [*kept, *given]
+
+
 def test_compare_piped_into_a_reader_that_stops_still_writes_its_files(tmp_path: Path) -> None:
     """``posecbr compare DATA --json r.json --out DIR | head -1``: the reader closed the pipe
     after the table's first line, the next line raised BrokenPipeError, and the command
@@ -198,7 +210,7 @@ def test_compare_refuses_a_label_or_subject_no_clip_has(
     """A mistyped ``--labels`` or ``--subjects`` entry was dropped without a word: the
     comparison of two movements was printed and written as the one of three asked for
     (``classify --subjects`` refuses the same mistake)."""
-    argv = ["compare", str(DEMO), *SMALL, flag, value, "--json", str(tmp_path / "r.json")]
+    argv = ["compare", str(DEMO), *_small(flag, value), "--json", str(tmp_path / "r.json")]
     refused(argv, tmp_path, capsys, f"{flag}: ", needle)
 
 
@@ -258,7 +270,7 @@ def test_compare_refuses_a_measure_its_configurations_cannot_build(
     was checked only when each fold fitted: every configuration failed as a row of the
     table, and the command ended with status 0 having written a results file of failures.
     Like the other case-base parameters, it is refused before any work."""
-    argv = ["compare", str(DEMO), *SMALL, *params, "--json", str(tmp_path / "r.json")]
+    argv = ["compare", str(DEMO), *_small(*params), "--json", str(tmp_path / "r.json")]
     refused(argv, tmp_path, capsys, "--param: ", needle)
 
 
@@ -351,7 +363,7 @@ def test_compare_refuses_a_method_list_of_nothing_or_twice_the_same(
     alone, so no method was left, and the command printed an empty table and wrote its
     results with status 0. ``--features fluents,fluents``: every configuration twice, rows of
     one name (their pictures one file)."""
-    argv = ["compare", str(DEMO), *SMALL, *flags, "--json", str(tmp_path / "r.json")]
+    argv = ["compare", str(DEMO), *_small(*flags), "--json", str(tmp_path / "r.json")]
     refused(argv, tmp_path, capsys, needle)
 
 
@@ -361,7 +373,7 @@ def test_compare_says_qmp_is_not_compared_when_no_measure_takes_it(
     """``--similarities dtw`` with the default feature levels (fluents, qmp): the note said
     "qmp features ...: compared by euclidean only", and no QMP configuration was run (no
     euclidean): it says they were not compared."""
-    argv = ["compare", str(DEMO), *SMALL, "--similarities", "dtw", "--features", "fluents,qmp"]
+    argv = ["compare", str(DEMO), *_small("--similarities", "dtw", "--features", "fluents,qmp")]
     assert main([*argv, "--json", str(tmp_path / "r.json")]) == 0
     note = (
         "qmp features are one vector per clip, compared by euclidean only, which "

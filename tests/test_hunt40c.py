@@ -184,7 +184,10 @@ def _takes(parser: argparse.ArgumentParser, words: list[str], option: str) -> bo
         return False
     value = [] if action.nargs == 0 else [str(next(iter(action.choices))) if action.choices
                                           else "1"]  # fmt: skip
-    _, unknown = parser.parse_known_args([*words, option, *value, *_required(own)])
+    required = _required(own)
+    if option in required:  # a required option (--db): given once, as judged
+        del required[required.index(option) : required.index(option) + 2]
+    _, unknown = parser.parse_known_args([*words, option, *value, *required])
     return unknown == []
 
 

@@ -176,6 +176,8 @@ class _Truth(argparse.Action):
     recording (:data:`RECORDING_SUFFIXES`) given back to the recordings. It took every name
     after it: ``segment --truth L.txt REC.npz --db CB`` read REC.npz as a label file."""
 
+    repeatable = True  # --truth a.txt --truth b.txt: one label file per recording
+
     def __call__(
         self, _parser: Any, namespace: argparse.Namespace, values: Any, _option: Any = None
     ) -> None:
