@@ -1,13 +1,42 @@
-"""A new user at the command line (hunt 50n): an option given twice with two values is
-refused, and a file whose name begins with "-" is told how to give it."""
+"""A new user at the command line (hunt 50n): every ``--help`` shows an example that runs as
+written, an option given twice with two values is refused, and a file whose name begins
+with "-" is told how to give it."""
 
 from __future__ import annotations
 
+import argparse
+import shlex
 from pathlib import Path
 
 import pytest
 
-from posecbr.cli import main
+from posecbr.cli import build_parser, main
+
+
+def _parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """Every command's parser and every action's (``casebase info``), not ``posecbr``'s."""
+    found = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                found += [child, *_parsers(child)]
+    return found
+
+
+def test_every_command_help_ends_with_an_example_that_parses() -> None:
+    """``posecbr reps --help`` listed the options and no command line using them: each
+    command's (and ``casebase`` action's) help now ends with one, which the parser takes as
+    that command (a shell's ``> file`` aside)."""
+    parsers = _parsers(build_parser())
+    assert len(parsers) == 14 + 6  # the commands, then casebase's actions
+    for parser in parsers:
+        last = parser.format_help().rstrip().splitlines()[-1]
+        assert last.startswith(f"example: {parser.prog} "), (parser.prog, last)
+        words = shlex.split(last.removeprefix("example: "))
+        words = words[: words.index(">")] if ">" in words else words
+        args = build_parser().parse_args(words[1:])
+        ran = " ".join(str(w) for w in (args.command, getattr(args, "action", None)) if w)
+        assert f"posecbr {ran} ".startswith(f"{parser.prog} ") and callable(args.func)
 
 
 @pytest.mark.parametrize(

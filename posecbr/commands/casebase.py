@@ -23,6 +23,7 @@ if TYPE_CHECKING:
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "casebase",
+        epilog="example: posecbr casebase info --db cb.sqlite",
         help="inspect, export, copy and trim case bases",
         description="Inspect, export and maintain the case bases in a store.",
     )
@@ -33,18 +34,31 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         q.add_argument("--name", default=None, help="case base name (default: the only one)")
         q.add_argument("--json", action="store_true", help="machine-readable output")
 
-    q = act.add_parser("info", help="case bases, configuration, cases per activity, history")
+    q = act.add_parser(
+        "info",
+        epilog="example: posecbr casebase info --db cb.sqlite --json",
+        help="case bases, configuration, cases per activity, history",
+    )
     common(q)
-    q = act.add_parser("list", help="the cases of a case base")
+    q = act.add_parser(
+        "list",
+        epilog="example: posecbr casebase list --db cb.sqlite --all",
+        help="the cases of a case base",
+    )
     common(q)
     q.add_argument("--all", action="store_true", help="include trimmed cases")
-    q = act.add_parser("export", help="write the cases (problems, labels, provenance) to .npz")
+    q = act.add_parser(
+        "export",
+        epilog="example: posecbr casebase export --db cb.sqlite --out cases.npz",
+        help="write the cases (problems, labels, provenance) to .npz",
+    )
     common(q)
     q.add_argument(
         "--out", required=True, type=path_arg, metavar="FILE.npz", help="output .npz file"
     )
     q = act.add_parser(
         "copy",
+        epilog="example: posecbr casebase copy --db cb.sqlite --to backup.sqlite",
         help="copy a case base whole to another store, or under another name",
         description="Copy a case base whole (its configuration and fitted model, every case "
         "in use or trimmed with its labels and provenance, its history) to another store in "
@@ -65,7 +79,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         metavar="NAME",
         help="the copy's name (default: the case base's own)",
     )
-    q = act.add_parser("trim", help="run a maintenance editor and deactivate dropped cases")
+    q = act.add_parser(
+        "trim",
+        epilog="example: posecbr casebase trim --db cb.sqlite --keep 0.5 --dry-run",
+        help="run a maintenance editor and deactivate dropped cases",
+    )
     common(q)
     q.add_argument(
         "--editor",
@@ -90,7 +108,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     q.add_argument("--dry-run", action="store_true", help="report only, change nothing")
     q = act.add_parser(
-        "upgrade", help="convert a case base file written by an older posecbr, in place"
+        "upgrade",
+        epilog="example: posecbr casebase upgrade --db old.sqlite",
+        help="convert a case base file written by an older posecbr, in place",
     )
     q.add_argument("--db", required=True, help="case base file (SQLite) or SQLAlchemy URL")
     q.add_argument("--json", action="store_true", help="machine-readable output")

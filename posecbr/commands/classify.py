@@ -38,6 +38,7 @@ if TYPE_CHECKING:
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "classify",
+        epilog="example: posecbr classify squat.npz lunge.mp4 --db cb.sqlite",
         help="classify clips with a case base, with explanations",
         description="Retrieve the most similar cases for each clip, vote, and explain.",
     )

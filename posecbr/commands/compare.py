@@ -42,6 +42,7 @@ def _names(text: str) -> tuple[str, ...]:
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "compare",
+        epilog="example: posecbr compare labels.csv --out results/",
         help="cross-validate similarity measures x feature levels, DAD and peers on a dataset",
         description="Cross-validation by subject (leave-one-subject-out by default) of every "
         "case-base configuration (similarity x feature level), the DAD expert system and "

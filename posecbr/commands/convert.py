@@ -48,6 +48,7 @@ if TYPE_CHECKING:
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = subparsers.add_parser(
         "convert",
+        epilog="example: posecbr convert UI-PRMD/ --out poses/ --subjects s01,s02",
         help="convert UI-PRMD, HDM05/ASF-AMC or BVH data into pose files",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,

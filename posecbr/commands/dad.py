@@ -42,6 +42,7 @@ longer than 10 s against a case base of windows (no UI-PRMD or HDM05 clip lasts 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "dad",
+        epilog="example: posecbr dad squat.npz --top 3",
         help="recognise the activity in a pose file with the expert rules of the ADD (DAD)",
         description="Dynamic Action Detection: fit QMPs over sliding windows, score every ADD "
         "activity by the weighted ratio of its QMPs detected in order, and list which QMPs "

@@ -40,6 +40,7 @@ QUICK_COMPARE = ("--similarities", "euclidean", "--features", "fluents", "--no-d
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "demo",
+        epilog="example: posecbr demo --quick",
         help="describe, train, classify, compare and report on the bundled UI-PRMD subset",
         description="Runs describe -> train -> classify -> compare on the bundled UI-PRMD "
         "subset (3 subjects x 10 movements x 6 repetitions), printing each command so you can "

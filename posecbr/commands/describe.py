@@ -32,6 +32,7 @@ if TYPE_CHECKING:
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "describe",
+        epilog="example: posecbr describe squat.npz --plot timeline.png",
         help="describe a pose file's posture in words, in spans of frames or frame by frame",
         description="Print when each fluent state holds (confidence >= --min-confidence): "
         "spans of frames in order of their start, states with the same span on one line; or "

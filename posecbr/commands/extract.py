@@ -91,6 +91,7 @@ Outcome = tuple[
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "extract",
+        epilog="example: posecbr extract squat.mp4 --out poses/",
         help="estimate 3D poses from videos (BlazePose on onnxruntime) and write pose files",
         description="Run BlazePose (full) on every frame and write one pose file per clip. "
         "INPUT is a video or still image, a folder of them, a folder with one subfolder per "

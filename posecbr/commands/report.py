@@ -13,6 +13,7 @@ from posecbr.arguments import path_arg
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "report",
+        epilog="example: posecbr report results/ --out report.html",
         help="turn `posecbr compare` results into one self-contained HTML page",
         description="Render the results of `posecbr compare` (its --out folder or --json file) "
         "as one HTML page with the table, the pictures inlined and explanations of "

@@ -43,6 +43,7 @@ from posecbr.recordings import (
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "reps",
+        epilog="example: posecbr reps squat.npz --plot reps.png",
         help="count the repetitions in a clip, with each one's start and end",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,

@@ -81,6 +81,7 @@ from posecbr.recordings import (
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "segment",
+        epilog="example: posecbr segment workout.npz --db windows.sqlite --plot timeline.png",
         help="label every stretch of long recordings with an activity or unknown, and count",
         description=__doc__,
         formatter_class=_Formatter,

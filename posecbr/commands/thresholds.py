@@ -12,6 +12,7 @@ from posecbr.arguments import path_arg
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "thresholds",
+        epilog="example: posecbr thresholds > mine.json",
         help="print the fluent thresholds table as JSON (edit it and pass it to describe "
         "--thresholds FILE)",
     )

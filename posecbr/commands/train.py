@@ -80,6 +80,7 @@ class MeasureNames:
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "train",
+        epilog="example: posecbr train labels.csv --db cb.sqlite",
         help="build a case base from labelled clips",
         description="Compute qualitative features of every clip and store them as cases "
         "(problem = features, solution = label) in a case base file.",

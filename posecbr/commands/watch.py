@@ -68,6 +68,7 @@ from .segment import overlay_label
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "watch",
+        epilog="example: posecbr watch 0 --db windows.sqlite --show",
         help="label a live stream (webcam, URL, video file) as it comes, counting repetitions",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
