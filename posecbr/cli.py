@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import argparse
 import ast
+import codecs
 import errno
 import importlib
+import io
 import os
 import pkgutil
 import re
@@ -262,7 +264,47 @@ def _said_for(
     return exc
 
 
+#: what a character the output's encoding lacks is written as, when it has a plain spelling
+PLAIN = {"\u2013": "-", "\u2014": "-", "\u2192": "->", "\u00d7": "x", "\u2026": "...",
+         "\u00b7": ".", "\u00b0": " deg", "\u00b1": "+/-", "\u2212": "-"}  # fmt: skip
+
+#: the name under which :func:`_plain` is registered as a codec error handler
+PLAIN_ERRORS = "posecbr.plain"
+
+
+def _plain(exc: UnicodeError) -> tuple[str | bytes, int]:
+    """A codec error handler: the characters ``exc`` could not encode in their plain spelling
+    (:data:`PLAIN`: "frames 67-72" for "frames 67\u201372"), else escaped as Python writes
+    them ("\\u4e2d"); a file name's undecodable bytes (surrogate-escaped) as they were."""
+    if not isinstance(exc, UnicodeEncodeError):
+        raise exc
+    text = exc.object[exc.start : exc.end]
+    if all("\udc80" <= c <= "\udcff" for c in text):
+        return bytes(ord(c) - 0xDC00 for c in text), exc.end
+    said = "".join(PLAIN.get(c) or c.encode("ascii", "backslashreplace").decode() for c in text)
+    return said, exc.end
+
+
+def plain_output() -> None:
+    """Standard output in an encoding that cannot write every character posecbr prints (a
+    locale not UTF-8: ``LANG=en_US.ISO-8859-1``, or the C locale with ``PYTHONUTF8=0``):
+    each it lacks written by :func:`_plain`. ``describe`` ("frames 67\u201372") printed up
+    to the first and ended as a bug (UnicodeEncodeError, exit 70). Standard error escapes
+    them already (Python's ``backslashreplace``)."""
+    stream = sys.stdout
+    if not isinstance(stream, io.TextIOWrapper) or stream.errors == PLAIN_ERRORS:
+        return
+    try:
+        utf = codecs.lookup(stream.encoding).name.startswith("utf")
+    except LookupError:
+        utf = False
+    if not utf:
+        codecs.register_error(PLAIN_ERRORS, _plain)
+        stream.reconfigure(errors=PLAIN_ERRORS)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    plain_output()
     parser = build_parser()
     args, unknown = parser.parse_known_args(argv)
     own = args.__dict__.pop("_parser", parser)

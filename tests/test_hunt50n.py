@@ -1,16 +1,19 @@
 """A new user at the command line (hunt 50n): every ``--help`` shows an example that runs as
-written, an option given twice with two values is refused, and a file whose name begins
-with "-" is told how to give it."""
+written, an option given twice with two values is refused, a file whose name begins with
+"-" is told how to give it, and a locale not UTF-8 gets plain characters, not a crash."""
 
 from __future__ import annotations
 
 import argparse
+import io
 import shlex
+import sys
 from pathlib import Path
 
 import pytest
 
-from posecbr.cli import build_parser, main
+from posecbr.cli import PLAIN_ERRORS, build_parser, main
+from tests.badinput import ROOT
 
 
 def _parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
@@ -27,14 +30,15 @@ def test_every_command_help_ends_with_an_example_that_parses() -> None:
     """``posecbr reps --help`` listed the options and no command line using them: each
     command's (and ``casebase`` action's) help now ends with one, which the parser takes as
     that command (a shell's ``> file`` aside)."""
-    parsers = _parsers(build_parser())
+    root = build_parser()
+    parsers = _parsers(root)
     assert len(parsers) == 14 + 6  # the commands, then casebase's actions
     for parser in parsers:
         last = parser.format_help().rstrip().splitlines()[-1]
         assert last.startswith(f"example: {parser.prog} "), (parser.prog, last)
         words = shlex.split(last.removeprefix("example: "))
         words = words[: words.index(">")] if ">" in words else words
-        args = build_parser().parse_args(words[1:])
+        args = root.parse_args(words[1:])
         ran = " ".join(str(w) for w in (args.command, getattr(args, "action", None)) if w)
         assert f"posecbr {ran} ".startswith(f"{parser.prog} ") and callable(args.func)
 
@@ -97,3 +101,24 @@ def test_a_file_whose_name_begins_with_a_dash_is_told_how_to_give_it(
         err = capsys.readouterr().err
         assert exit_.value.code == 2 and err.count("\n") == 1, err
         assert err.startswith(f"posecbr reps: error: {said}"), err
+
+
+def test_a_locale_not_utf8_gets_plain_characters_not_a_crash(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Standard output in ASCII (``LC_ALL=C PYTHONUTF8=0``; a Latin-1 locale lacks "\u2013"
+    too): ``describe`` printed up to its first "frames 0\u20135" and ended as a bug in
+    posecbr, UnicodeEncodeError, exit 70 (``dad`` and ``classify -v`` too). Each character
+    the encoding lacks is now written plainly, else escaped; the rest is as in UTF-8."""
+    clip = str(ROOT / "posecbr" / "demo_data" / "uiprmd" / "m01_s01_e01.npz")
+    assert main(["describe", clip]) == 0
+    utf8 = capsys.readouterr().out
+    assert "\u2013" in utf8
+    raw = io.BytesIO()
+    monkeypatch.setattr(sys, "stdout", io.TextIOWrapper(raw, encoding="ascii"))  # strict
+    assert main(["describe", clip]) == 0
+    sys.stdout.flush()
+    assert raw.getvalue().decode("ascii") == utf8.replace("\u2013", "-")
+    # what has no plain spelling, escaped; a file name's undecodable byte, as it was
+    assert "93\u00b0 \u4e2d".encode("ascii", PLAIN_ERRORS) == b"93 deg \\u4e2d"
+    assert "bad\udcff.npz".encode("ascii", PLAIN_ERRORS) == b"bad\xff.npz"
