@@ -125,6 +125,8 @@ class Parser(argparse.ArgumentParser):
                     choice.group(1)
                 ):
                     known = [str(c) for c in action.choices]
+            if typed == ["help"] and isinstance(self._subcommands(choice.group(1)), dict):
+                return self._help_meant()
         elif message.startswith("unrecognized arguments: "):
             typed = [a.split("=")[0] for a in message.split(": ", 1)[1].split()]
             typed = [a for a in typed if a.startswith("--")]
@@ -134,6 +136,25 @@ class Parser(argparse.ArgumentParser):
             if guess:
                 return guess
         return ""
+
+    def _subcommands(self, name: str) -> Any:
+        """The commands (or actions) of the positional argument ``name``, if it takes them."""
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction) and (
+                argparse._get_action_name(action) == name
+            ):
+                return action.choices
+        return None
+
+    def _help_meant(self) -> str:
+        """ " (did you mean 'posecbr segment --help'?)" for ``posecbr help segment`` (as git
+        and pip take it): the command named after "help", if one is, else this parser's."""
+        commands = next(
+            (a.choices for a in self._actions if isinstance(a, argparse._SubParsersAction)), {}
+        )
+        words = self._words[self._words.index("help") + 1 :] if "help" in self._words else []
+        named = [w for w in words[:1] if w in commands]
+        return f" (did you mean {' '.join([self.prog, *named, '--help'])!r}?)"
 
 
 #: the exit status of an internal error, a bug in posecbr rather than a problem with what it

@@ -122,3 +122,19 @@ def test_a_locale_not_utf8_gets_plain_characters_not_a_crash(
     # what has no plain spelling, escaped; a file name's undecodable byte, as it was
     assert "93\u00b0 \u4e2d".encode("ascii", PLAIN_ERRORS) == b"93 deg \\u4e2d"
     assert "bad\udcff.npz".encode("ascii", PLAIN_ERRORS) == b"bad\xff.npz"
+
+
+def test_help_as_a_command_points_to_the_help(capsys: pytest.CaptureFixture[str]) -> None:
+    """``posecbr help segment`` (as git and pip take it) was an invalid choice with no
+    guess; the line now names the command line that shows that help."""
+    for argv, meant in (
+        (["help", "segment"], "posecbr segment --help"),
+        (["help"], "posecbr --help"),
+        (["casebase", "help", "trim"], "posecbr casebase trim --help"),
+    ):
+        with pytest.raises(SystemExit) as exit_:
+            main(argv)
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2 and err.count("\n") == 1, err
+        assert "invalid choice: 'help' (choose from " in err, err
+        assert f" (did you mean {meant!r}?); see " in err, err
