@@ -138,3 +138,16 @@ def test_help_as_a_command_points_to_the_help(capsys: pytest.CaptureFixture[str]
         assert exit_.value.code == 2 and err.count("\n") == 1, err
         assert "invalid choice: 'help' (choose from " in err, err
         assert f" (did you mean {meant!r}?); see " in err, err
+
+
+def test_every_labels_and_subjects_option_says_it_takes_a_comma_separated_list() -> None:
+    """``compare --help`` said "--labels LIST: only these activity labels", not how a list
+    is written (``train``, ``classify`` and ``convert`` said: commas)."""
+    helps = {
+        f"{parser.prog} {action.option_strings[0]}": action.help or ""
+        for parser in _parsers(build_parser())
+        for action in parser._actions
+        if action.option_strings and action.dest in ("labels", "subjects")
+    }
+    assert len(helps) == 8  # train, classify, compare and convert
+    assert [k for k, said in helps.items() if "comma" not in said] == []

@@ -122,8 +122,18 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "(repeatable; VALUE is JSON or a plain string), e.g. --param states=all --param length=48",
     )
     add_sensor_option(p)
-    p.add_argument("--labels", default=None, metavar="LIST", help="only these activity labels")
-    p.add_argument("--subjects", default=None, metavar="LIST", help="only these subjects")
+    p.add_argument(
+        "--labels",
+        default=None,
+        metavar="LIST",
+        help="only these activities, comma-separated, e.g. deep_squat,hurdle_step (default all)",
+    )
+    p.add_argument(
+        "--subjects",
+        default=None,
+        metavar="LIST",
+        help="only these subjects, comma-separated, e.g. s01,s02 (default all)",
+    )
     p.add_argument(
         "--jobs",
         "--workers",  # as extract's worker processes are asked for
