@@ -125,7 +125,7 @@ class Parser(argparse.ArgumentParser):
                     choice.group(1)
                 ):
                     known = [str(c) for c in action.choices]
-            if typed == ["help"] and isinstance(self._subcommands(choice.group(1)), dict):
+            if typed == ["help"] and self._subcommands(choice.group(1)) is not None:
                 return self._help_meant()
         elif message.startswith("unrecognized arguments: "):
             typed = [a.split("=")[0] for a in message.split(": ", 1)[1].split()]
