@@ -22,7 +22,9 @@ not the JSON lines) is printed on stderr (median,
 camera would deliver it, however late the watch reads it; a live source's when it is read.
 A live source that sends no frame for longer than a quarter second and resumes (before
 ``--stall``) has the time between left missing ("no frames in the video"), as ``extract``
-leaves a gap in a video, and said so on stderr.
+leaves a gap in a video, and said so on stderr; one whose frames then come at once after a
+pause shorter than half a second (a burst: held up on the way) is put on the grid by the wall
+clock from there on, its frames a frame interval apart.
 
 Ctrl-C or SIGTERM (``kill``, a supervisor's stop) ends the watch as the end of a file does
 (the frame in hand is finished, the last segment printed, the ``--out`` video written, exit
@@ -1084,7 +1086,8 @@ class Regrid:
     behind the clock by meanwhile are left missing, :meth:`_behind`, and a lead they ran
     ahead of it by is made up over :data:`CATCH_UP` times its length; a burst of frames,
     held up on the way and read at once, each a frame interval after the one before:
-    :meth:`_placed`), each grid time linearly between the frames around it (a joint
+    :meth:`_placed`; from the first burst before any change of rate too:
+    :meth:`_burst_begins`), each grid time linearly between the frames around it (a joint
     missing in either stays missing; every joint missing between two frames further apart
     than :func:`features.pose_estimation.video.bridge_limit_s`: a gap in the video, or the
     stream stalled, no motion made up for it, as ``extract`` leaves it; :attr:`absent` says
@@ -1129,6 +1132,8 @@ class Regrid:
             self.first_s = self.zero_s = frame.time_s
         if not (self.resampling or math.isfinite(t)) and not self._rate_changed(frame):
             # a live source (or a file without frame times) at the rate it began with
+            if self._burst_begins(frame):
+                return self._resampled(frame, self._placed(frame))
             out = self._stalled(frame)
             if self.recent:  # the grid frame it lies on, after those left missing
                 self.recent[-1] = (frame.time_s, self.k + len(out))
@@ -1299,6 +1304,42 @@ class Regrid:
             f"note: {self.source}: the frame rate changed from {self.fps:.3g} to {rate:.3g} fps"
             f" at {frame.time_s - self.first_s:.1f} s: poses resampled to {self.fps:.3g} fps by"
             f" the clock as they come{behind}",
+            file=sys.stderr,
+        )
+        return True
+
+    def _burst_begins(self, frame: Any) -> bool:
+        """Whether a live source's ``frame``, at the rate it began with, comes after a pause
+        longer than :func:`features.pose_estimation.video.bridge_limit_s` but shorter than
+        :data:`BURST_S` (the second frame on: a webcam's wait for its second frame is a
+        stall): the first of a burst (frames held up on the way and read at once)
+        or a hiccup, which its next frames tell apart. From it on the source is put on the
+        grid by the wall clock (:meth:`_placed`: a burst's frames a frame interval apart by
+        their count; a lag that every frame of the latest :data:`BURST_S` keeps, a hiccup's,
+        left missing then), the grid's clock set by the latest frames (:attr:`recent`) that
+        came earliest for their grid time, and the user told once on stderr. Before, the
+        pause was a stall: its grid times left missing, then the burst's frames, one to a grid
+        time, ran that far ahead of the clock for good (bursts of 8 at 30 fps: every grid
+        time after the first burst 0.23 s late by the clock). A source that never pauses so
+        long (a steady one, jittered) is passed as it was."""
+        from features.pose_estimation.video import bridge_limit_s
+
+        prev = self.prev
+        if prev is None or self.by_clock or self.k < 2:
+            return False
+        pause = frame.time_s - prev.time_s
+        if not bridge_limit_s(self.fps) < pause < BURST_S:
+            return False
+        self.resampling = self.by_clock = True
+        earlier = list(self.recent)[:-1]  # this frame's own (time_s, grid frame) left out
+        self.origin_s = min(time_s - k / self.fps for time_s, k in earlier)
+        self.placed_s = prev.time_s - self.origin_s
+        self.clocked.pop()  # this frame, counted at its place by :meth:`_rate_changed`
+        self.came -= 1
+        print(
+            f"note: {self.source}: {pause:.2f} s without frames at"
+            f" {prev.time_s - self.first_s:.1f} s, then frames at once (held up on the way?):"
+            f" poses resampled to {self.fps:.3g} fps by the clock as they come",
             file=sys.stderr,
         )
         return True

@@ -1,0 +1,73 @@
+"""Hunt 50m: ``watch`` of a live source whose frames come in bursts before any change of
+rate, and of one that starts slow (:class:`posecbr.commands.watch.Regrid`).
+
+- At the rate it began with, a live source whose frames came in bursts after pauses longer
+  than a quarter second (frames held up on the way and read at once: a network's jitter)
+  had the first pause left missing as a stall, then every burst's frames, one to a grid
+  time, ran that far ahead of the clock for good. A frame after a pause shorter than
+  ``BURST_S`` now puts the source on the grid by the wall clock (``Regrid._burst_begins``),
+  as a changed rate does.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from posecbr.commands.watch import Regrid
+
+
+def _frame(index: int, time_s: float, pose: float) -> SimpleNamespace:
+    """A live source's frame read at ``time_s`` (the wall clock's), every coordinate of its
+    pose ``pose``."""
+    return SimpleNamespace(
+        index=index,
+        time_s=time_s,
+        video_time_s=float("nan"),
+        seen_world=np.full((33, 3), pose),
+        visibility=np.ones(33),
+        pose=SimpleNamespace(image=np.zeros((33, 5))),
+    )
+
+
+def _taken(grid: Regrid, frames: list[SimpleNamespace]) -> tuple[np.ndarray, list[int]]:
+    """The grid's poses (one coordinate each) and, per grid time, which frame was on screen."""
+    values: list[float] = []
+    shown: list[int] = []
+    for frame in frames:
+        for world, _vis, on_screen in grid.take(frame):
+            values.append(float(world[0, 0]))
+            shown.append(on_screen.index)
+    return np.array(values), shown
+
+
+@pytest.mark.parametrize(("fps", "burst"), [(30.0, 8), (15.0, 5)])
+def test_bursts_at_the_rate_begun_with_keep_their_poses_on_the_clock(
+    fps: float, burst: int, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A camera at ``fps`` for 3 s, then, its rate unchanged, its frames in bursts of
+    ``burst`` to 10 s, each burst read at once when its last frame was taken (pauses of
+    0.27 and 0.33 s: longer than the quarter second bridged, not a change of rate over the
+    latest half second), every frame's pose the time it was taken: every frame is on screen
+    at some grid time, and grid time k's pose is k / fps (the camera's at that time), none
+    missing, the grid ending on the last frame, said once on stderr. Before, the first pause
+    left burst - 1 grid times missing as a stall, and every grid time after it lay that
+    many frames late (0.23 and 0.27 s), the grid ending so late."""
+    n = round(10 * fps)
+    taken = [j / fps for j in range(n)]
+    came = list(taken)
+    for start in range(round(3 * fps), n, burst):
+        group = came[start : start + burst]
+        came[start : start + burst] = [group[-1]] * len(group)
+    values, shown = _taken(
+        Regrid(fps, "0"),
+        [_frame(i, c, t) for i, (c, t) in enumerate(zip(came, taken, strict=True))],
+    )
+    assert len(values) == n
+    np.testing.assert_allclose(values, np.arange(n) / fps, atol=1e-9)
+    assert sorted(set(shown)) == list(range(n))
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "then frames at once (held up on the way?)" in err and "stalled" not in err
