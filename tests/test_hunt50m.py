@@ -11,12 +11,15 @@ rate, and of one that starts slow (:class:`posecbr.commands.watch.Regrid`).
 
 from __future__ import annotations
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from posecbr.commands.watch import Regrid
+from tests.test_hunt40h import _stream, _watched
+from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
 
 
 def _frame(index: int, time_s: float, pose: float) -> SimpleNamespace:
@@ -71,3 +74,26 @@ def test_bursts_at_the_rate_begun_with_keep_their_poses_on_the_clock(
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert "then frames at once (held up on the way?)" in err and "stalled" not in err
+
+
+def test_a_stream_that_starts_slow_is_watched_at_the_rate_it_rises_to(
+    case_base: Path,  # noqa: F811
+    shared_data: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A camera that sends 15 frames a second for its first second, then 30 (CMU 13_30's
+    jumping jacks, each frame the pose at the time it was taken): its rise is taken before
+    any segment is given, and it is watched again from its start at 30 fps, said once. Its
+    grid is then 30 fps by the wall clock from the first frame: the last frame, 1.0 + 149 /
+    30 s after it, on grid time 179, the last segment ending at frame 180, 6.0 s. Before, the
+    grid kept the first second's 15 fps (half the 30-fps frames resampled away): 90 grid
+    times, the grid 0.9 s ahead of the clock at the rise, made up over 3.6 s."""
+    n = 15 + 150
+    times = np.array([i / 15.0 if i < 15 else 1.0 + (i - 15) / 30.0 for i in range(n)])
+    skip = np.array([i if i < 15 else 15 for i in range(n)])  # frame i: 30-fps pose i + skip
+    segments, err = _watched(case_base, monkeypatch, capsys, _stream(shared_data, times, skip), n)
+    assert err.count("the frame rate rose from 15 to 30 fps") == 1
+    assert "ahead of the clock" not in err
+    # grid times 0, 1/30, ... 179/30 s = the last frame's time by the clock, end exclusive
+    assert (segments[-1]["end_frame"], segments[-1]["end_s"]) == (180, pytest.approx(6.0))

@@ -24,7 +24,9 @@ A live source that sends no frame for longer than a quarter second and resumes (
 ``--stall``) has the time between left missing ("no frames in the video"), as ``extract``
 leaves a gap in a video, and said so on stderr; one whose frames then come at once after a
 pause shorter than half a second (a burst: held up on the way) is put on the grid by the wall
-clock from there on, its frames a frame interval apart.
+clock from there on, its frames a frame interval apart. One whose rate rises within its first
+4 s, before a segment is given (a stream that starts slow), is watched again from its start
+at the rate it rose to.
 
 Ctrl-C or SIGTERM (``kill``, a supervisor's stop) ends the watch as the end of a file does
 (the frame in hand is finished, the last segment printed, the ``--out`` video written, exit
@@ -43,6 +45,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import dataclasses
 import json
 import math
 import queue
@@ -687,6 +690,10 @@ class Watcher:
         self.n = 0
         self.read = 0  # frames the source gave (before the grid of a variable rate's)
         self.whole = False  # the last of them was the file's last (at --max-frames: read whole)
+        # a live source's frames since its first, while its grid may be re-made at a rate
+        # that rose (:meth:`_remake`); None once it may not
+        self.kept: list[Any] | None = None
+        self.replaying = False  # the kept frames are taken again, at the rate they rose to
         self.started = time.perf_counter()
 
     def warm_up(self) -> None:
@@ -719,8 +726,6 @@ class Watcher:
                 self.writer.release()
 
     def follow(self, frames: Iterator[Any], is_file: bool, stop: threading.Event) -> None:
-        from cbr.live import LiveSegmenter
-
         waiting: list[Any] = []  # a live source's first second: to measure its frame rate
         for frame in frames:
             if stop.is_set() or self.stdout_gone:
@@ -733,12 +738,7 @@ class Watcher:
                     self.fps = _frame_rate([f.time_s for f in waiting])
                     if self.fps is None:
                         continue
-                self.live = LiveSegmenter(
-                    self.clf, self.fps, self.judge, self.args.source, k=self.args.k
-                )
-                self._grid = Regrid(self.fps, self.args.source)
-                for early in waiting[:-1]:
-                    self._take(early)
+                self._start(waiting)
             self._take(frame)
         if self.stdout_gone:
             return
@@ -749,6 +749,21 @@ class Watcher:
                 f"the stream ended after {counted(self.n, 'frame')} (camera or connection lost?)",
                 self.args.source,
             )
+
+    def _start(self, waiting: list[Any]) -> None:
+        """Make the segmenter and the grid at :attr:`fps` and take the frames ``waiting``
+        before the one in hand (a live source's first second, its rate measured over it;
+        none for a file): a live source's kept (:attr:`kept`) to be watched again should
+        its rate soon rise (:meth:`_remake`)."""
+        from cbr.live import LiveSegmenter
+
+        fps = float(self.fps or 0.0)
+        self.live = LiveSegmenter(self.clf, fps, self.judge, self.args.source, k=self.args.k)
+        self._grid = Regrid(fps, self.args.source)
+        if waiting:
+            self.kept, self._grid.remakable = [], True
+        for early in waiting[:-1]:
+            self._take(early)
 
     @property
     def limited(self) -> bool:
@@ -764,19 +779,65 @@ class Watcher:
         return "the stream ended"
 
     def _take(self, frame: Any) -> None:
+        kept = self.kept
+        if kept is not None and not self.replaying:
+            if self.emitted or (kept and frame.time_s - kept[0].time_s > REMAKE_S):
+                self.kept, self._grid.remakable = None, False  # too late: followed as it is
+            else:
+                kept.append(_Kept.of(frame, self.args.out is not None))
         taken = self._grid.take(frame)
+        if self.kept is not None and self._grid.rose is not None:
+            self._remake(self._grid.rose)
+            return
         grid = zip(taken, self._grid.absent, self._grid.images, strict=True)
         for (world, visibility, shown_frame), absent, image in grid:
             finished = self.live.push(world, visibility, absent, image)
-            if self.live.jumped:
+            if self.live.jumped and not self.replaying:  # said when it was first taken
                 self._note_jump()
             self.n += 1
             for segment in finished:
                 self._emit(segment)
             self._draw(shown_frame, absent)
         since = self._since(frame)
-        if since == since:  # not NaN: the source said when it read the frame
+        if since == since and not self.replaying:  # not NaN: the source said when it read it
             self.latency.add(time.perf_counter() - since)
+
+    def _remake(self, fps: float) -> None:
+        """Watch a live source again from its first frame at ``fps``, the rate it rose to
+        within :data:`REMAKE_S` of it, before any segment was given (:attr:`kept`): a new
+        segmenter and grid (:class:`Regrid` on the wall clock from the first frame, the
+        frames before the rise resampled to ``fps``), the frames kept taken again (the
+        ``--out`` video drawn again at ``fps``; a ``--show`` window not shown them twice, nor
+        a note said twice), said once on stderr. A stream that starts slow (a camera's auto
+        exposure settling, a network stream's start) was watched at its first second's rate
+        for good: at 15 fps then 30, half its frames resampled away."""
+        from cbr.live import LiveSegmenter
+
+        kept, before = self.kept or [], float(self.fps or fps)
+        self.kept = None
+        print(
+            f"note: {self.args.source}: the frame rate rose from {before:.3g} to {fps:.3g} fps"
+            f" at {kept[-1].time_s - kept[0].time_s:.1f} s, before any segment was given:"
+            f" watched again from its start at {fps:.3g} fps (the frames before the rise"
+            " resampled to it by the clock)",
+            file=sys.stderr,
+        )
+        self.fps = fps
+        self.live = LiveSegmenter(self.clf, fps, self.judge, self.args.source, k=self.args.k)
+        self._grid = Regrid(fps, self.args.source, interval=1.0 / before)
+        self.n = 0
+        if self.writer is not None:  # its frames drawn again, at the new rate
+            self.writer.release()
+            if self.rescue_path is not None:
+                self.rescue_path.unlink(missing_ok=True)
+            self.writer, self.rescue_path, self.drawn = None, None, 0
+        self.replaying = True
+        try:
+            for frame in kept[:-1]:
+                self._take(frame)
+        finally:
+            self.replaying = False
+        self._take(kept[-1])  # the frame in hand: its latency counted
 
     def _since(self, frame: Any) -> float:
         """When ``frame`` came, from which its latency runs: a file's frame played at its
@@ -824,7 +885,7 @@ class Watcher:
         ``absent``: that time lies in a gap of the video (no frame of its own: the frame
         before the gap stays on screen), which the label says, as ``segment`` calls such a
         stretch, not "nobody in view"."""
-        if self.args.out is None and not self.args.show:
+        if self.args.out is None and (self.replaying or not self.args.show):
             return
         import cv2
         import numpy as np
@@ -850,7 +911,7 @@ class Watcher:
         draw_pose(bgr, frame.pose.image, words + self._fluents())
         if self.args.out is not None:
             self._write(bgr)
-        if self.args.show:
+        if self.args.show and not self.replaying:
             self._show(bgr)
 
     def _colours(self) -> dict[str, Any]:
@@ -980,6 +1041,35 @@ class Watcher:
             )
 
 
+@dataclasses.dataclass(frozen=True)
+class _Kept:
+    """A live source's frame kept while its grid may be re-made (:attr:`Watcher.kept`): what
+    the grid and the drawing read of it, its image (``rgb``) only when it is to be drawn
+    again (``--out``), None else."""
+
+    index: int
+    time_s: float
+    video_time_s: float
+    read_at: float
+    seen_world: Any
+    visibility: Any
+    pose: Any
+    rgb: Any
+
+    @classmethod
+    def of(cls, frame: Any, image: bool) -> _Kept:
+        return cls(
+            frame.index,
+            frame.time_s,
+            frame.video_time_s,
+            frame.read_at,
+            frame.seen_world,
+            frame.visibility,
+            frame.pose,
+            frame.rgb if image else None,
+        )
+
+
 class Latencies:
     """The latencies of a stream (seconds), tallied in a histogram of fixed size: memory
     and time per frame the same at the stream's millionth frame as at its first (a watch left
@@ -1064,6 +1154,12 @@ then read at once: a network's jitter; a reader held up by a slow frame) rather 
 times they came (:meth:`Regrid._placed`): 4-6 frames at once at 15 fps come after a pause of
 0.27-0.40 s. The frames that come late after a longer pause, or that all still come late a
 pause later, came after a stall, its time left missing."""
+REMAKE_S = 4.0
+"""How long after a live source's first frame a rise of its rate (a stream that starts slow:
+15 fps, then 30 as a camera's auto exposure settles) may be taken by watching it again from
+its start at the new rate (:meth:`Watcher._remake`), before any segment is given: its
+frames are kept until then (with ``--out``, their images to draw again: 4 s of 640x480 at
+30 fps is 110 MB). A later rise is followed on the first rate's grid by the wall clock."""
 CATCH_UP = 4.0
 """Over how many times its length the lead a live source's frames ran ahead of the wall clock
 by, before its rate's rise was taken, is made up (:meth:`Regrid._rate_changed`): the grid's
@@ -1087,7 +1183,10 @@ class Regrid:
     ahead of it by is made up over :data:`CATCH_UP` times its length; a burst of frames,
     held up on the way and read at once, each a frame interval after the one before:
     :meth:`_placed`; from the first burst before any change of rate too:
-    :meth:`_burst_begins`), each grid time linearly between the frames around it (a joint
+    :meth:`_burst_begins`; from the first frame when made with ``interval``, the interval its
+    frames came at: a live source watched again at the rate it rose to,
+    :meth:`Watcher._remake`, which a rise is left to when :attr:`remakable`, :attr:`rose`
+    then its rate), each grid time linearly between the frames around it (a joint
     missing in either stays missing; every joint missing between two frames further apart
     than :func:`features.pose_estimation.video.bridge_limit_s`: a gap in the video, or the
     stream stalled, no motion made up for it, as ``extract`` leaves it; :attr:`absent` says
@@ -1096,7 +1195,7 @@ class Regrid:
     that fell from 30 to 15 fps had each frame still count 1/30 s, its windows holding 4 s
     of movement and its segments timed at half the wall clock's speed."""
 
-    def __init__(self, fps: float, source: str) -> None:
+    def __init__(self, fps: float, source: str, interval: float | None = None) -> None:
         self.fps, self.source = fps, source
         self.resampling = False
         self.k = 0  # the next grid frame
@@ -1120,6 +1219,13 @@ class Regrid:
         self.came = 0  # a live source's frames so far
         self.interval = 1.0 / fps  # its frame interval now (s), once it follows the clock
         self.ahead = (0.0, 0.0)  # then: how far its grid ran ahead of the clock (s), and since
+        # a live source whose rate, risen, is to be taken by re-making the grid (and the
+        # segmenter) at it (:meth:`Watcher._remake`), not followed here: then the rate
+        self.remakable = False
+        self.rose: float | None = None
+        if interval is not None:  # on the wall clock from the first frame, which came so
+            self.resampling = self.by_clock = True
+            self.interval = interval
 
     def take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """(world, visibility, the frame on screen then) for each grid time up to this
@@ -1130,8 +1236,16 @@ class Regrid:
         self.absent, self.images = [], []
         if self.prev is None:
             self.first_s = self.zero_s = frame.time_s
+            if self.by_clock:  # made on the wall clock: grid time 0 is this frame's
+                self.origin_s, self.placed_s = frame.time_s, 0.0
+                self._came(frame.time_s, 0.0)
+                self.prev, self.k = frame, 1
+                self.absent, self.images = [False], [_image(frame)]
+                return [(frame.seen_world, frame.visibility, frame)]
         if not (self.resampling or math.isfinite(t)) and not self._rate_changed(frame):
             # a live source (or a file without frame times) at the rate it began with
+            if self.rose is not None:  # to be re-made at the rate it rose to: nothing given
+                return []
             if self._burst_begins(frame):
                 return self._resampled(frame, self._placed(frame))
             out = self._stalled(frame)
@@ -1277,6 +1391,10 @@ class Regrid:
             if math.isnan(self.off_since):
                 self.off_since, self.off_from = frame.time_s, recent[0]
             self._came(frame.time_s, 0.0)
+            return False
+        if self.remakable and rate > self.fps:  # the grid re-made at it: nothing said here
+            latest = [c[0] for c in self.clocked if c[0] > frame.time_s - CHANGE_HOLD_S]
+            self.rose = _frame_rate([*latest, frame.time_s], CHANGE_WINDOW_S, BURST_S) or rate
             return False
         self.resampling = self.by_clock = True
         from_s, from_k = self.off_from
