@@ -13,7 +13,14 @@ from features.fileio import write_json_atomic
 def write_json(doc: Any, path: Path) -> None:
     """Write ``doc`` as JSON to ``path`` atomically (a temporary file beside it, then rename);
     a figure that is not a finite number (a median of no boundary found: infinite) is written
-    null, since JSON has no NaN or Infinity and strict readers refuse them."""
+    null, since JSON has no NaN or Infinity and strict readers refuse them. A result that does
+    not record the machine gets it (:func:`cbr.evaluation.machine.machine_info`: Python,
+    platform, processor, CPUs and library versions), so a benchmark run alone records it as
+    one run by ``python -m benchmarks`` does."""
+    if isinstance(doc, dict) and "machine" not in doc:
+        from cbr.evaluation.machine import machine_info
+
+        doc = {**doc, "machine": machine_info()}
     write_json_atomic(path, _finite(doc))
 
 

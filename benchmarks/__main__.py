@@ -4,8 +4,8 @@ Every ``benchmarks/<name>.py`` (names not starting with ``_``) is a benchmark wi
 that prints its table and writes ``benchmarks/results/<name>.json``. Each runs in its own
 process (``python -m benchmarks.<name>``) so one that fails or exhausts memory does not stop the
 others. Afterwards ``benchmarks/results/index.json`` lists what ran, how long it took, whether it
-succeeded and where its results are, with the machine and library versions; a result file that
-does not record the machine gets it added.
+succeeded and where its results are, with the machine and library versions (which every
+result file records too: :func:`benchmarks.write_json` adds them where a benchmark does not).
 
     python -m benchmarks              # all
     python -m benchmarks compare dtw  # only these
@@ -39,17 +39,6 @@ def machine() -> dict[str, Any]:
     from cbr.evaluation.machine import machine_info
 
     return machine_info()
-
-
-def _ensure_machine(path: Path, info: dict[str, Any]) -> None:
-    """Add the machine record to a benchmark's JSON results when it has none."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError):
-        return
-    if isinstance(data, dict) and "machine" not in data:
-        data["machine"] = info
-        write_json(data, path)
 
 
 def run_one(name: str, timeout_s: float | None) -> dict[str, Any]:
@@ -111,9 +100,6 @@ def main(argv: list[str] | None = None) -> int:
     names = args.names or available
     info = machine()
     ran = [run_one(n, args.timeout) for n in names]
-    for r in ran:
-        if r["results"]:
-            _ensure_machine(HERE.parent / r["results"], info)
     index_path = RESULTS / "index.json"
     previous: dict[str, Any] = {}
     if index_path.exists():  # keep entries of benchmarks not run this time
