@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +34,18 @@ def _finite(value: Any) -> Any:
     if isinstance(value, list | tuple):
         return [_finite(v) for v in value]
     return value
+
+
+def json_out(value: str) -> Path:
+    """The type of a benchmark's ``--out``: the results JSON to write. A folder (one there, or
+    a name ending in ``/``) is refused when the options are read, before the run: the
+    benchmark ran to its end and then stopped with a traceback saying the output "is not a
+    regular file (a device, pipe or socket)"."""
+    if value.endswith(("/", os.sep)) or Path(value).is_dir():
+        raise argparse.ArgumentTypeError(
+            f"{value} is a folder: name the .json file to write the results to"
+        )
+    return Path(value)
 
 
 def no_options(name: str, doc: str | None, argv: list[str] | None) -> None:

@@ -15,11 +15,10 @@ from benchmarks import _common as C  # first: pins the thread pools before numpy
 # isort: split
 import argparse  # noqa: E402
 import sys  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from benchmarks import write_json  # noqa: E402
+from benchmarks import json_out, write_json  # noqa: E402
 
 RESULTS = C.RESULTS / "bandwidth.json"
 
@@ -29,7 +28,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rows", type=int, default=10**6)
     ap.add_argument("--dims", type=int, default=200)
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--out", type=Path, default=RESULTS)
+    ap.add_argument("--out", type=json_out, default=RESULTS)
     args = ap.parse_args(argv)
     threads = C.pin_one_thread()
     x = np.random.default_rng(0).random((args.rows, args.dims), dtype=np.float32)

@@ -40,7 +40,7 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from benchmarks import write_json  # noqa: E402
+from benchmarks import json_out, write_json  # noqa: E402
 from cbr.similarity import DTW  # noqa: E402
 from cbr.similarity.base import smallest_k  # noqa: E402
 from cbr.similarity.dtw import envelope  # noqa: E402
@@ -196,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--kinds", default="noise,random-walk,clustered,real")
     ap.add_argument("--large", action="store_true", help="add 10^5 cases")
     ap.add_argument("--million", action="store_true", help="add 10^6 cases, memory-mapped")
-    ap.add_argument("--out", type=Path, default=RESULTS)
+    ap.add_argument("--out", type=json_out, default=RESULTS)
     args = ap.parse_args(argv)
     threads = C.pin_one_thread()
     kinds = [k for k in args.kinds.split(",") if k]

@@ -56,7 +56,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks import write_json
+from benchmarks import json_out, write_json
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
@@ -619,7 +619,9 @@ def main(argv: list[str] | None = None) -> int:
         default=",".join((*DATASETS, REPETITIONS)),
         help=f"of the shared data, these only (default: {','.join((*DATASETS, REPETITIONS))})",
     )
-    p.add_argument("--out", type=Path, default=RESULTS, help=f"results JSON (default {RESULTS})")
+    p.add_argument(
+        "--out", type=json_out, default=RESULTS, help=f"results JSON (default {RESULTS})"
+    )
     p.add_argument(
         "--jobs", type=int, default=1, help="tasks of the shared run in parallel processes"
     )

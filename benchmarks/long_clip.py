@@ -34,7 +34,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from benchmarks import write_json
+from benchmarks import json_out, write_json
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd" / "labels.csv"
@@ -173,7 +173,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--skip-segment", action="store_true", help="no posecbr segment rows")
     parser.add_argument("--skip-classify", action="store_true", help="only the segment rows")
-    parser.add_argument("--out", type=Path, default=RESULTS, help="the results JSON")
+    parser.add_argument("--out", type=json_out, default=RESULTS, help="the results JSON")
     parser.add_argument(
         "--segment-modes", nargs="+", choices=("chunked", "whole"), default=["chunked", "whole"]
     )

@@ -40,7 +40,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from benchmarks import write_json
+from benchmarks import json_out, write_json
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
@@ -191,7 +191,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--minutes", type=float, default=10.0, help="the mocap's length")
-    parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument("--out", type=json_out, default=RESULTS)
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="posecbr-long-recording-") as tmp:
         inputs = make_inputs(Path(tmp), args.minutes)

@@ -22,14 +22,13 @@ from benchmarks import _common as C  # first: pins the thread pools before numpy
 import argparse  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
-from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 
 import cbr.similarity.euclidean as euclidean  # noqa: E402
-from benchmarks import write_json  # noqa: E402
+from benchmarks import json_out, write_json  # noqa: E402
 from cbr.similarity import Euclidean  # noqa: E402
 
 K = 5
@@ -121,7 +120,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--sizes", default="10000,100000,1000000", help="case-base sizes")
     ap.add_argument("--dims", type=int, default=200)
     ap.add_argument("--queries", type=int, default=20)
-    ap.add_argument("--out", type=Path, default=RESULTS)
+    ap.add_argument("--out", type=json_out, default=RESULTS)
     args = ap.parse_args(argv)
     C.require_peer("faiss", "faiss-cpu", "quantized")
     threads = C.pin_one_thread()

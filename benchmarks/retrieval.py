@@ -43,7 +43,7 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from benchmarks import write_json  # noqa: E402
+from benchmarks import json_out, write_json  # noqa: E402
 from cbr.similarity import Euclidean  # noqa: E402
 
 K = 5
@@ -181,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--kinds", default="unstructured,random-walk,clustered,real")
     ap.add_argument("--wide", default="unstructured,clustered,real", help="kinds at 3400 dims")
     ap.add_argument("--million", action="store_true", help="add 10^6 x 200, memory-mapped")
-    ap.add_argument("--out", type=Path, default=RESULTS)
+    ap.add_argument("--out", type=json_out, default=RESULTS)
     args = ap.parse_args(argv)
     C.require_peer("faiss", "faiss-cpu", "retrieval")
     threads = C.pin_one_thread()

@@ -29,13 +29,12 @@ import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from collections.abc import Callable  # noqa: E402
-from pathlib import Path  # noqa: E402
 from types import SimpleNamespace  # noqa: E402
 from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from benchmarks import write_json  # noqa: E402
+from benchmarks import json_out, write_json  # noqa: E402
 
 RESULTS = C.RESULTS / "solve.json"
 
@@ -124,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--grow", type=int, default=100000, help="cases of the grown case base")
     ap.add_argument("--explain", type=int, default=40, help="clips classified with words")
     ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--out", type=Path, default=RESULTS)
+    ap.add_argument("--out", type=json_out, default=RESULTS)
     args = ap.parse_args(argv)
     threads = C.pin_one_thread()
     from cbr.estimator import CaseBaseClassifier

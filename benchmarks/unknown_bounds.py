@@ -59,7 +59,7 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from benchmarks import write_json  # noqa: E402
+from benchmarks import json_out, write_json  # noqa: E402
 from benchmarks._common import one_thread_machine, versions  # noqa: E402
 from benchmarks.repetitions import HDM05, UIPRMD, Group  # noqa: E402
 from benchmarks.segment_people import (  # noqa: E402
@@ -337,7 +337,7 @@ def rules_main(
                         help="case bases of N training people, each in turn")  # fmt: skip
     parser.add_argument("--cache", type=Path, default=None, metavar="DIR",
                         help="keep each left-out movement's measurements here")  # fmt: skip
-    parser.add_argument("--out", type=Path, default=None, metavar="JSON",
+    parser.add_argument("--out", type=json_out, default=None, metavar="JSON",
                         help="write here instead of benchmarks/results/")  # fmt: skip
     args = parser.parse_args(argv)
     if args.train_people is not None and args.train_people < 1:
