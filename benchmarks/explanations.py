@@ -620,12 +620,17 @@ def main(argv: list[str] | None = None) -> int:
         help=f"of the shared data, these only (default: {','.join((*DATASETS, REPETITIONS))})",
     )
     p.add_argument(
-        "--out", type=json_out, default=RESULTS, help=f"results JSON (default {RESULTS})"
+        "--out",
+        type=json_out,
+        default=None,
+        help=f"results JSON (default {RESULTS}; with --quick, explanations_quick.json beside it)",
     )
     p.add_argument(
         "--jobs", type=int, default=1, help="tasks of the shared run in parallel processes"
     )
     args = p.parse_args(argv if argv is not None else sys.argv[1:])
+    if args.out is None:  # the demo subset's figures never replace the shared data's
+        args.out = RESULTS.with_name("explanations_quick.json") if args.quick else RESULTS
     os.environ.setdefault("POSECBR_NO_PROGRESS", "1")
     from cbr.evaluation.machine import machine_info
 

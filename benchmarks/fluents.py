@@ -452,7 +452,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=7, help="timings per measurement (median)")
     ap.add_argument("--clips", type=int, default=200, help="UI-PRMD Kinect clips to concatenate")
     ap.add_argument("--naive-frames", type=int, default=300, help="frames for the naive peer")
-    ap.add_argument("--quick", action="store_true", help="few clips and repeats (smoke run)")
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="few clips and repeats (smoke run, written to fluents_quick.json)",
+    )
     ap.add_argument(
         "--clock", choices=sorted(CLOCKS), default="cpu",
         help="cpu: process CPU time (default; fair on a shared machine) or wall",
@@ -533,8 +537,10 @@ def main(argv: list[str] | None = None) -> int:
         "versions": _versions(),
         "date_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
-    write_json(result, RESULTS)
-    print(f"wrote {RESULTS.relative_to(ROOT)}")
+    # a smoke run's figures never replace a full run's (README quotes those)
+    path = RESULTS.with_name("fluents_quick.json") if args.quick else RESULTS
+    write_json(result, path)
+    print(f"wrote {path.relative_to(ROOT)}")
     return 0
 
 

@@ -60,7 +60,9 @@ def test_compare_quick_runs_and_records_the_peers(
                "cbr qmp/euclidean", "dad", "dtw-knn"]  # fmt: skip
     for name in methods:  # one table row each
         assert any(line.startswith(name) for line in printed.splitlines()), name
-    doc = json.loads(out.read_text(encoding="utf-8"))
+    # the demo subset's figures beside the shared data's, never over them
+    assert not out.exists()
+    doc = json.loads((tmp_path / "compare_quick.json").read_text(encoding="utf-8"))
     assert doc["benchmark"] == "compare"
     assert "platform" in doc["machine"]
     task = doc["tasks"]["demo slice"]
