@@ -194,13 +194,15 @@ def _check_data(data: Path) -> None:
         )
     if not (data / "labels.csv").is_file():
         raise PosecbrError("demo data not found (expected labels.csv)", data)
-    subjects = {str(r["subject"]) for r in read_labels_csv(data / "labels.csv")}
+    rows = read_labels_csv(data / "labels.csv")
+    # a row without a subject (no column, an empty cell) names none: not the subject "None"
+    subjects = {str(r["subject"]) for r in rows if r.get("subject") not in (None, "")}
     missing = [s for s in DEMO_SUBJECTS if s not in subjects]
     if missing or not (data / DEMO_CLIP).is_file():
-        have = ", ".join(sorted(subjects)[:6]) or "none"
+        have = f"subjects {', '.join(sorted(subjects)[:6])}" if subjects else "no subjects"
         raise PosecbrError(
             f"the demo trains on subjects s01 and s02, classifies s03 and describes {DEMO_CLIP}"
-            f"; this folder's labels.csv has subjects {have}"
+            f"; this folder's labels.csv has {have}"
             + ("" if (data / DEMO_CLIP).is_file() else f" and no {DEMO_CLIP}"),
             data,
         )
