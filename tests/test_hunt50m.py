@@ -12,38 +12,14 @@ rate, and of one that starts slow (:class:`posecbr.commands.watch.Regrid`).
 from __future__ import annotations
 
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from posecbr.commands.watch import Regrid
 from tests.test_hunt40h import _stream, _watched
+from tests.test_hunt50a import _frame, _taken
 from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
-
-
-def _frame(index: int, time_s: float, pose: float) -> SimpleNamespace:
-    """A live source's frame read at ``time_s`` (the wall clock's), every coordinate of its
-    pose ``pose``."""
-    return SimpleNamespace(
-        index=index,
-        time_s=time_s,
-        video_time_s=float("nan"),
-        seen_world=np.full((33, 3), pose),
-        visibility=np.ones(33),
-        pose=SimpleNamespace(image=np.zeros((33, 5))),
-    )
-
-
-def _taken(grid: Regrid, frames: list[SimpleNamespace]) -> tuple[np.ndarray, list[int]]:
-    """The grid's poses (one coordinate each) and, per grid time, which frame was on screen."""
-    values: list[float] = []
-    shown: list[int] = []
-    for frame in frames:
-        for world, _vis, on_screen in grid.take(frame):
-            values.append(float(world[0, 0]))
-            shown.append(on_screen.index)
-    return np.array(values), shown
 
 
 @pytest.mark.parametrize(("fps", "burst"), [(30.0, 8), (15.0, 5)])

@@ -98,9 +98,12 @@ def heif_picture(fh: Any, size: int, head: bytes) -> HeifPicture | None:
     return HeifPicture(brand, width, height, tiles)
 
 
-def _top_box(fh: Any, size: int, name: bytes, limit: int) -> bytes | None:
+def _top_box(
+    fh: Any, size: int, name: bytes, limit: int, allowed: frozenset[bytes] | None = None
+) -> bytes | None:
     """The body of the first top-level box ``name`` of an ISO base media file of ``size``
-    bytes, read from ``fh``; None when there is none or it is larger than ``limit``."""
+    bytes, read from ``fh``; None when there is none, it is larger than ``limit``, or a box
+    before it is not one of ``allowed`` (any when None)."""
     at = 0
     while at + 8 <= size:
         fh.seek(at)
@@ -110,7 +113,7 @@ def _top_box(fh: Any, size: int, name: bytes, limit: int) -> bytes | None:
             stated, length = int.from_bytes(header[8:16], "big"), 16
         elif stated == 0:
             stated = size - at
-        if stated < length:
+        if stated < length or (allowed is not None and kind not in allowed):
             return None
         if kind == name:
             if stated > limit:
@@ -382,24 +385,7 @@ def _mp4_moov(fh: Any, size: int) -> bytes | None:
     """The body of an MP4/MOV file's index (its top-level moov box), read from ``fh``; None
     when a box before it is not of :data:`MP4_TOP_BOXES`, it is larger than
     :data:`MOOV_LIMIT` or there is none."""
-    at = 0
-    while at + 8 <= size:
-        fh.seek(at)
-        header = fh.read(16)
-        stated, kind, length = int.from_bytes(header[:4], "big"), header[4:8], 8
-        if stated == 1 and len(header) == 16:
-            stated, length = int.from_bytes(header[8:16], "big"), 16
-        elif stated == 0:
-            stated = size - at
-        if stated < length or kind not in MP4_TOP_BOXES:
-            return None
-        if kind == b"moov":
-            if stated > MOOV_LIMIT:
-                return None
-            fh.seek(at + length)
-            return bytes(fh.read(stated - length))
-        at += stated
-    return None
+    return _top_box(fh, size, b"moov", MOOV_LIMIT, MP4_TOP_BOXES)
 
 
 def _mp4_video_timing(moov: bytes) -> Iterator[tuple[np.ndarray, np.ndarray]]:
