@@ -9,7 +9,10 @@
    tiles of half the frame's size, then of a quarter (``detect_closer``): a person far from
    the camera is too small for it in the whole frame. A person found only in the tiles of a
    quarter counts when found again in a window of that size centred on them
-   (``found_again``): 35 such tiles give noise 35 chances to look like a person.
+   (``found_again``): 35 such tiles give noise 35 chances to look like a person. One whose
+   hips lie in the ROI of the person tracked on the frame before (``near_track``: the track
+   was lost on this frame) needs no second look: it is that person, and a person close to
+   the camera, larger than the window, is never found again in it.
 2. The landmark model runs on the ROI (from the detection, or from the previous frame's
    auxiliary landmarks when tracking). If its person probability drops below
    ``min_tracking_confidence`` the track is dropped and the detector runs again on the SAME
@@ -218,6 +221,19 @@ class PoseEstimator:
                 return True
         return False
 
+    def near_track(self, found: det.Detection) -> bool:
+        """Whether ``found``'s hip point lies within the ROI of the person tracked on the
+        frame before (within half its side of its centre, the tracked hips), the track lost
+        on this frame: that person found again, wherever the tiles found them. A person
+        close to the camera is larger than a finer tile: the detector's box (the face's)
+        lies far from the hips it predicts, outside a window of the tile's size centred on
+        them, so :meth:`found_again` cannot find them again. False (the second look
+        decides) with no track on the frame before."""
+        if self._roi is None:
+            return False
+        at = np.array([self._roi.cx, self._roi.cy])
+        return float(np.hypot(*(found.keypoints[0] - at))) <= self._roi.size / 2
+
     def landmarks(self, rgb: np.ndarray, roi: lmk.Roi) -> lmk.RawLandmarks:
         """The landmark model on ``roi`` of an RGB uint8 frame (no smoothing)."""
         tensor, _ = lmk.crop(rgb, roi)
@@ -242,7 +258,8 @@ class PoseEstimator:
         """The person the searches (:meth:`_searches`) find, if any, and the landmark
         model's person probability on the last find looked at (``score`` when none). Of each search
         the find nearest the person last tracked (the best when there is none) is looked
-        at; of the finer tiles' search every find in that order until one is found again
+        at; of the finer tiles' search every find in that order until one is the person
+        tracked on the frame before (:meth:`near_track`) or found again
         (:meth:`found_again`): a pattern in noise may be surer than a small person
         elsewhere."""
         for finer, found in self._searches(rgb, time_s, every_s, tiles_per_frame):
@@ -250,7 +267,7 @@ class PoseEstimator:
                 raw = self.landmarks(rgb, lmk.roi_from_points(best.keypoints[0], best.keypoints[1]))
                 score = raw.flag
                 if raw.flag >= self.min_tracking_confidence and (
-                    not finer or self.found_again(rgb, best)
+                    not finer or self.near_track(best) or self.found_again(rgb, best)
                 ):
                     return raw, score
         return None, score
