@@ -672,13 +672,19 @@ def undo_failed_write(engine: Engine, timeout_s: float) -> None:
 def prepare_write(url_or_path: str | Path, *, timeout_s: float = 30.0) -> bool:
     """For a command that will change a store and reads it read-only first: refuse, before any
     work, a SQLite file it cannot write (the file read-only, or its folder, where SQLite writes
-    its journal), then undo a change a killed writer left half-made
+    its journal; a new file's folder), then undo a change a killed writer left half-made
     (:func:`roll_back_interrupted`, whose answer it returns)."""
     file = sqlite_file(url_or_path)
     if file is not None:
         check_name_length(file)
     if file is not None and file.is_file():
         check_writable(file)
+    elif file is not None and file.parent.is_dir() and not file.exists():
+        # a new file: its folder (``casebase copy --to`` said "unable to open database file")
+        if not os.access(file.parent, os.W_OK | os.X_OK):
+            raise StoreError(
+                f"cannot write the case base file: the folder {file.parent} is read-only", file
+            )
     return roll_back_interrupted(url_or_path, timeout_s=timeout_s)
 
 

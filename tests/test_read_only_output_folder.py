@@ -12,6 +12,7 @@ from features.poses import save_pose
 from tests.badinput import (
     posecbr_on_read_only_mount,
     read_only_mounts_work,
+    small_case_base,
     snapshot,
     standing_clip,
 )
@@ -72,4 +73,25 @@ def test_describe_plot_into_a_read_only_folder_is_refused(tmp_path: Path) -> Non
         len(lines) == 1
         and f"cannot write the picture: the folder {folder} is read-only" in (lines[0])
     ), done.stderr
+    assert done.stdout == "" and list(folder.iterdir()) == []
+
+
+def test_casebase_copy_into_a_read_only_folder_is_refused_as_train_refuses_it(
+    tmp_path: Path,
+) -> None:
+    # before: "cannot open or write the database (unable to open database file)", SQLite's
+    # words, where train names the folder that cannot be written
+    source = small_case_base(tmp_path / "src")
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    before = snapshot(source.parent)
+    done = posecbr_on_read_only_mount(
+        folder, ["casebase", "copy", "--db", str(source), "--to", str(folder / "new.sqlite")]
+    )
+    assert snapshot(source.parent) == before
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"posecbr casebase copy: error: {folder / 'new.sqlite'}: cannot write the case base "
+        f"file: the folder {folder} is read-only"
+    ]
     assert done.stdout == "" and list(folder.iterdir()) == []
