@@ -35,15 +35,15 @@ from tests.test_hunt34c import _Quiet, _serving, _Unsized
 from tests.test_hunt48h1 import UNFINISHED, _recording
 
 
-def _frame(index: int, time_s: float) -> SimpleNamespace:
+def _frame(index: int, time_s: float, pose: float | None = None) -> SimpleNamespace:
     """A live source's frame read at ``time_s`` (the wall clock's), every coordinate of its
-    pose ``time_s``: a grid time's pose, blended linearly between two frames, is the wall
-    clock's time there."""
+    pose ``pose`` (``time_s`` when not given): a grid time's pose, blended linearly between two
+    frames, is the blend of theirs (with the default, the wall clock's time there)."""
     return SimpleNamespace(
         index=index,
         time_s=time_s,
         video_time_s=float("nan"),
-        seen_world=np.full((33, 3), time_s),
+        seen_world=np.full((33, 3), time_s if pose is None else pose),
         visibility=np.ones(33),
         pose=SimpleNamespace(image=np.zeros((33, 5))),
     )

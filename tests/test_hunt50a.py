@@ -25,20 +25,7 @@ import numpy as np
 import pytest
 
 from posecbr.commands.watch import Regrid
-
-
-def _frame(index: int, time_s: float, pose: float) -> SimpleNamespace:
-    """A live source's frame read at ``time_s`` (the wall clock's), every coordinate of its
-    pose ``pose``: a grid time's pose, blended linearly between two frames, is the blend of
-    theirs."""
-    return SimpleNamespace(
-        index=index,
-        time_s=time_s,
-        video_time_s=float("nan"),
-        seen_world=np.full((33, 3), pose),
-        visibility=np.ones(33),
-        pose=SimpleNamespace(image=np.zeros((33, 5))),
-    )
+from tests.test_hunt49e import _frame
 
 
 def _taken(grid: Regrid, frames: list[SimpleNamespace]) -> tuple[np.ndarray, list[int]]:

@@ -18,7 +18,8 @@ import pytest
 
 from posecbr.commands.watch import Regrid
 from tests.test_hunt40h import _stream, _watched
-from tests.test_hunt50a import _frame, _taken
+from tests.test_hunt49e import _frame
+from tests.test_hunt50a import _taken
 from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
 
 
