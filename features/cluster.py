@@ -24,6 +24,7 @@ import gc
 import logging
 import os
 import re
+import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import CancelledError
 from contextlib import contextmanager, suppress
@@ -305,6 +306,24 @@ def map_outcomes(
 RESUBMITS = 3
 
 
+#: how often a wait for the next unit looks whether the client has given up its scheduler
+LOST_POLL_S = 0.05
+
+
+def _as_finished(done: Any, client: Any) -> Iterator[Any]:
+    """The futures of ``done`` (Dask's ``as_completed``, to which more may be added) as each
+    finishes. Raises once the client has given up a scheduler it lost (closing or closed
+    after its tries to reconnect): ``as_completed`` alone waited for good on futures that
+    never finish then (a scheduler stopped mid-run hung the command)."""
+    while not done.is_empty():
+        if done.has_ready():
+            yield from done.next_batch(block=False)
+        elif client.status in ("closing", "closed"):
+            raise ConnectionError("the client gave up its lost scheduler")
+        else:
+            time.sleep(LOST_POLL_S)
+
+
 class _Batch:
     """The futures of one :func:`map_outcomes` call. Its shared arguments are scattered to
     the workers; scattered data lives only on the workers that hold it, so a worker that dies
@@ -338,7 +357,7 @@ class _Batch:
 
     def finished(self, done: Any, names: Sequence[str]) -> Iterator[Outcome[Any]]:
         """Every item's outcome, as each finishes."""
-        for fut in done:
+        for fut in _as_finished(done, self.client):
             i, generation = self.index[fut.key]
             outcome: Outcome[Any]
             if fut.status == "error":
