@@ -98,30 +98,33 @@ def _heic_grid(
     shown = [n + 2, *range(n + 3, n + 3 + len(turns))]
     assoc.append(struct.pack(">HB", grid, len(shown)) + bytes(shown))
     tiles = struct.pack(">HH", grid, n) + b"".join(struct.pack(">H", i + 1) for i in range(n))
-    lengths = [len(data) for _, data in coded] + [len(layout)]
 
     def meta(offsets: list[int]) -> bytes:
+        # iloc version 1: each item's construction method, the tiles in the file (0), the
+        # grid's layout in the idat box (1), as a phone stores it
         items = b"".join(
-            struct.pack(">HHHII", i + 1, 0, 1, offsets[i], lengths[i]) for i in range(n + 1)
+            struct.pack(">HHHHII", i + 1, 0, 0, 1, offsets[i], len(coded[i][1])) for i in range(n)
         )
+        items += struct.pack(">HHHHII", grid, 1, 0, 1, 0, len(layout))
         return _full(
             b"meta",
             _full(b"hdlr", b"\0\0\0\0pict" + b"\0" * 13)
             + _full(b"pitm", struct.pack(">H", grid))
-            + _full(b"iloc", struct.pack(">BBH", 0x44, 0, n + 1) + items)
+            + _full(b"iloc", struct.pack(">BBH", 0x44, 0, n + 1) + items, 1)
             + _full(b"iinf", struct.pack(">H", n + 1) + b"".join(infe))
             + _full(b"iref", _box(b"dimg", tiles))
             + _box(
                 b"iprp",
                 _box(b"ipco", b"".join(props))
                 + _full(b"ipma", struct.pack(">I", n + 1) + b"".join(assoc)),
-            ),
+            )
+            + _box(b"idat", layout),
         )
 
     ftyp = _box(b"ftyp", b"heic\0\0\0\0mif1heic")
-    start = len(ftyp) + len(meta([0] * (n + 1))) + 8  # the mdat's body
-    offsets = [int(x) for x in start + np.cumsum([0, *lengths[:-1]])]
-    return ftyp + meta(offsets) + _box(b"mdat", b"".join(d for _, d in coded) + layout)
+    start = len(ftyp) + len(meta([0] * n)) + 8  # the mdat's body
+    offsets = [int(x) for x in start + np.cumsum([0, *[len(d) for _, d in coded[:-1]]])]
+    return ftyp + meta(offsets) + _box(b"mdat", b"".join(d for _, d in coded))
 
 
 def _photo(shared_data: Path) -> np.ndarray:
