@@ -1564,7 +1564,8 @@ def _served_turn(cap: cv2.VideoCapture, url: str, timeout_s: float | None) -> tu
     requests, its index at its end): an MP4/MOV whose display matrix mirrors its frames is
     turned as the matrix says less its mirror, one whose first video track is a lesser one
     refused (:func:`_tracks_turn`); a HEIF photo of which OpenCV decodes a part is read
-    whole from its tiles, or refused (:func:`_whole_picture`); a still picture is turned by
+    whole from its tiles, or refused (:func:`_whole_picture`: where they cannot be read
+    too); a still picture is turned by
     its EXIF orientation (:func:`.containers.picture_orientation`). ``cap`` and 1 (OpenCV's
     own turning) for any other file and where those bytes cannot be read (a server that
     does not answer range requests, an index too large: :class:`.served.Unread`), as
@@ -1579,13 +1580,16 @@ def _served_turn(cap: cv2.VideoCapture, url: str, timeout_s: float | None) -> tu
         if heif_brand(head) is None:
             return cap, picture_orientation(served, head)
         picture = heif_picture(served, served.length, head)
-        width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
-        height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
-        if picture is None or (picture.width, picture.height) == (width, height):
-            return cap, 1
-        grid = heif_grid(served, served.length, head)
     except Unread:
         return cap, 1
+    width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
+    height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
+    if picture is None or (picture.width, picture.height) == (width, height):
+        return cap, 1
+    try:
+        grid = heif_grid(served, served.length, head)
+    except Unread:  # its tiles lie past what is read of a served file: refused, as before
+        grid = None
     return _whole_picture(cap, url, picture, grid, (width, height)), 1
 
 
