@@ -418,8 +418,20 @@ class _Batch:
         self.sent = [0] * len(items)
 
     def _scatter(self) -> list[Any]:
-        # each argument scattered as one object (a list would be scattered element by element)
-        return [self.client.scatter([a], broadcast=True, hash=False)[0] for a in self.args]
+        """The shared arguments on every worker. Refused when the cluster has no worker (the
+        scheduler waits the client's timeout for one): none joined a scheduler of the user's,
+        or the last one died mid-run, its nanny too (an internal error, Dask's TimeoutError
+        "No valid workers found", where a worker that died alone is started again)."""
+        try:
+            # each argument scattered as one object (a list is scattered element by element)
+            return [self.client.scatter([a], broadcast=True, hash=False)[0] for a in self.args]
+        except TimeoutError:
+            raise ConfigError(
+                "the Dask cluster has no worker to run the work on (none joined its scheduler "
+                "in time, or every one stopped mid-run): start workers and run the command "
+                "again",
+                "scheduler",
+            ) from None
 
     def _again(self, i: int, generation: int) -> Any:
         """Item ``i`` sent again; the arguments scattered anew unless that was done since the

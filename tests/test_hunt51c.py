@@ -5,13 +5,17 @@ an HTTP server waits for a request line) hung the command for good."""
 
 from __future__ import annotations
 
+import logging
 import shutil
 import socket
 import threading
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
+from features.errors import ConfigError
 from tests.badinput import refused
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,3 +55,57 @@ def test_a_port_that_takes_the_connection_and_says_nothing_is_refused_in_time(
         "as a Dask scheduler (another program's port? Dask's scheduler listens on 8786, its "
         "dashboard on 8787)"
     ]
+
+
+@pytest.fixture
+def no_workers(monkeypatch: pytest.MonkeyPatch) -> Iterator[Any]:
+    """A scheduler of the user's with no worker (in this process: it starts in a blink), the
+    client's wait for one cut to 0.3 s."""
+    dd = pytest.importorskip("dask.distributed", reason="dask is in the test extra")
+    monkeypatch.setattr("features.cluster.CONNECT_TIMEOUT_S", 0.3)
+    with dd.LocalCluster(
+        n_workers=0,
+        processes=False,
+        dashboard_address=None,
+        scheduler_kwargs={"dashboard_address": ":0"},
+        silence_logs=logging.CRITICAL,
+    ) as cluster:
+        yield cluster
+
+
+NO_WORKER = (
+    "the Dask cluster has no worker to run the work on (none joined its scheduler in time, or "
+    "every one stopped mid-run): start workers and run the command again"
+)
+
+
+def test_a_cluster_without_workers_is_said_in_one_line(
+    no_workers: Any, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Dask's scheduler waits the client's timeout for a worker to send the shared arguments
+    to, then raised TimeoutError("No valid workers found"): "internal error, a bug in
+    posecbr", exit 70."""
+    (tmp_path / "data" / "deep_squat").mkdir(parents=True)
+    shutil.copy(DEMO / "m01_s01_e01.npz", tmp_path / "data" / "deep_squat")
+    argv = ["train", str(tmp_path / "data"), "--db", str(tmp_path / "cb.sqlite")]
+    address = no_workers.scheduler_address
+    refused([*argv, "--scheduler", address], tmp_path, capsys, f"--scheduler: {NO_WORKER}")
+
+
+def test_the_last_worker_stopping_mid_run_is_said(no_workers: Any) -> None:
+    """The last worker gone (killed with its nanny, stopped) takes the shared arguments along;
+    its units are sent again with them scattered anew, to no worker."""
+    from features.cluster import connect, map_outcomes
+    from tests.cluster_tasks import slow_add
+
+    no_workers.scale(1)
+    items = list(range(10))
+    done: list[int | None] = []
+    with pytest.raises(ConfigError) as caught, connect(no_workers.scheduler_address) as client:
+        client.wait_for_workers(1, timeout=30)
+        for outcome in map_outcomes(client, slow_add, items, [str(i) for i in items], 1000):
+            done.append(outcome.value)
+            if len(done) == 1:
+                no_workers.scale(0)  # the last worker stops
+    assert str(caught.value) == f"scheduler: {NO_WORKER}"
+    assert len(done) < len(items)
