@@ -98,6 +98,7 @@ def local_workers(spec: str) -> int | None:
         if not spec.strip():
             raise ParameterError("the scheduler address is empty", "scheduler")
         _refuse_mistyped_local(spec)
+        _refuse_impossible_port(spec)
         return None
     text = spec[len(LOCAL_PREFIX) :]
     # isdigit() holds for "²", which int() refuses; isdecimal() for what int() reads
@@ -124,6 +125,29 @@ def _refuse_mistyped_local(spec: str) -> None:
             f"local:{int(m['n'])}?)",
             "scheduler",
         )
+
+
+def _refuse_impossible_port(spec: str) -> None:
+    """Refuse a scheduler address whose port no program can listen on (0, above 65535, not a
+    number): Dask tried to connect to ``:0`` or ``:99999`` for :data:`CONNECT_TIMEOUT_S`
+    seconds, after the command had listed its clips. An address that is no URL is left to
+    Dask, which says what is wrong with it."""
+    try:
+        parts = urlsplit(spec if "://" in spec else f"tcp://{spec}")
+    except ValueError:  # "[::1" and the like
+        return
+    if parts.scheme == "inproc":  # a process's own address, no port
+        return
+    try:
+        port = parts.port
+    except ValueError:  # not a number, or out of range
+        port = 0
+    if port is not None and not 1 <= port <= 65535:
+        said = (
+            f"the scheduler address {spec} has the port {parts.netloc.rpartition(':')[2]!r}: a "
+            "port is a number from 1 to 65535 (Dask's scheduler listens on 8786)"
+        )
+        raise ParameterError(_without_password(said, spec), "scheduler")
 
 
 def check_scheduler(spec: str | None) -> None:

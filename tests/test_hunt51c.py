@@ -109,3 +109,22 @@ def test_the_last_worker_stopping_mid_run_is_said(no_workers: Any) -> None:
                 no_workers.scale(0)  # the last worker stops
     assert str(caught.value) == f"scheduler: {NO_WORKER}"
     assert len(done) < len(items)
+
+
+@pytest.mark.parametrize(
+    ("scheduler", "port"),
+    [("tcp://127.0.0.1:99999", "99999"), ("127.0.0.1:0", "0"), ("tcp://me:pw@head:abc", "abc")],
+)
+def test_a_port_no_program_can_listen_on_is_refused_before_any_work(
+    scheduler: str, port: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Dask tried to connect to port 0 or 99999 for 20 s, once the command had listed its
+    clips, then said "Timed out trying to connect"; a port that is not a number was "cannot
+    reach ... (invalid literal for int() with base 10: 'abc')"."""
+    argv = ["train", str(DEMO / "labels.csv"), "--db", str(tmp_path / "cb.sqlite")]
+    shown = scheduler.replace(":pw@", ":***@")
+    line = refused([*argv, "--scheduler", scheduler], tmp_path, capsys)
+    assert line == (
+        f"posecbr train: error: --scheduler: the scheduler address {shown} has the port "
+        f"'{port}': a port is a number from 1 to 65535 (Dask's scheduler listens on 8786)"
+    )
