@@ -1,0 +1,67 @@
+"""Hunt 51h: readers and label files as a new user's files are.
+
+- A label read from the user's files and a case base's activity that are the same text in
+  other Unicode characters ("Plié" typed, its é one character, and from a macOS file name, e
+  and a combining accent) are the same label: ``segment --truth`` counted every such block
+  as a label the case base lacks, ``classify`` every such clip wrong, without a word.
+"""
+
+from __future__ import annotations
+
+import unicodedata
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+PLIE_TYPED = "Pli\u00e9"  # é as one character (NFC), as typed
+PLIE_FILE_NAME = "Plie\u0301"  # e and a combining acute accent (NFD), as macOS names files
+
+
+def test_segment_truth_counts_an_activity_spelt_in_other_unicode_characters_as_it() -> None:
+    from cbr.evaluation.segments import score_segmentation
+
+    assert PLIE_TYPED != PLIE_FILE_NAME == unicodedata.normalize("NFD", PLIE_TYPED)
+    # 6 blocks: the case base called the first three Plié and the rest squat; the truth
+    # (another spelling of Plié) says Plié for four, then squat: 5 of 6 right, none unseen.
+    result = SimpleNamespace(
+        blocks=[PLIE_FILE_NAME] * 3 + ["squat"] * 3,
+        fps=10.0,
+        segments=[SimpleNamespace(start_frame=0), SimpleNamespace(start_frame=3)],
+    )
+    truth = np.array([PLIE_TYPED] * 4 + ["squat"] * 2, dtype=object)
+    s = score_segmentation(result, truth, [PLIE_FILE_NAME, "squat"], 0.1)
+    assert (s.blocks, s.seen_blocks, s.seen_right) == (6, 6, 5)
+    assert (s.unseen_labels, s.unseen_blocks) == ((), 0)
+    # the change of label at block 4 (0.4 s) lies 0.1 s from the boundary at 0.3 s
+    assert s.boundary_errors_s == pytest.approx((0.1,))
+
+
+def test_classify_judges_a_clip_labelled_in_other_unicode_characters_by_its_activity() -> None:
+    from cbr.classification import classify_clips, summarise
+    from cbr.estimator import CaseBaseClassifier
+    from tests.test_cbr_clips import ACTIVITIES, arm_dataset
+
+    X, y = arm_dataset(2, seed=5)
+    stored_as = np.array([PLIE_FILE_NAME if v == ACTIVITIES[0] else v for v in y], dtype=object)
+    clf = CaseBaseClassifier(k=1).fit(X, stored_as)
+    # the training clips themselves, k = 1: each its own nearest case, every one right
+    truths = [PLIE_TYPED if v == PLIE_FILE_NAME else str(v) for v in stored_as]
+    results = classify_clips(SimpleNamespace(classifier=clf), X, truths)  # type: ignore[arg-type]
+    assert [r.label for r in results] == list(stored_as)
+    summary = summarise(results)
+    assert (summary["right"], summary["labelled"], summary["wrong"]) == (6, 6, [])
+    assert summary["recall"][PLIE_FILE_NAME] == {"right": 2, "clips": 2, "recall": 1.0}
+
+
+def test_spelt_as_keeps_values_it_cannot_tell_and_two_spellings_known() -> None:
+    from features.text import spelt_as
+
+    assert spelt_as([PLIE_TYPED, "squat", "Squat"], [PLIE_FILE_NAME, "squat"]) == [
+        PLIE_FILE_NAME,
+        "squat",
+        "Squat",  # case is no Unicode spelling: another label
+    ]
+    # the case base holds both spellings (two activities train noted): neither is guessed
+    assert spelt_as(["Plie\u0301"], [PLIE_TYPED, "Plie\u0301"]) == ["Plie\u0301"]
+    assert spelt_as(["Pl\u0069\u0065\u0301"], [PLIE_TYPED, PLIE_FILE_NAME]) == [PLIE_FILE_NAME]
