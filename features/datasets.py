@@ -683,7 +683,7 @@ def read_labels_csv(csv_path: str | Path, unlabelled: bool = False) -> list[dict
     ``unlabelled`` (clips to classify, not to train on: pieces of a new recording).
     """
     csv_path = Path(csv_path)
-    rows = _csv_rows(csv_path)
+    rows = _unnamed_columns_dropped(_csv_rows(csv_path), csv_path)
     header = _csv_header(rows[0], csv_path)
     records = (
         _csv_record(header, row, line_no, csv_path, unlabelled)
@@ -720,6 +720,31 @@ def _csv_rows(csv_path: Path) -> list[list[str]]:
             "empty CSV: a header row path,label[,subject][,start,end] is required", csv_path
         )
     return rows
+
+
+def _unnamed_columns_dropped(rows: list[list[str]], csv_path: Path) -> list[list[str]]:
+    """``rows`` without the columns the header leaves unnamed and no row fills: the empty
+    columns a spreadsheet saves after the last one used (``path,label,,`` and ``a.npz,squat,,``:
+    Excel writes them once a cell out there has been touched), which were refused as
+    "repeated column names", or kept as a column named "". A value in an unnamed column is
+    refused naming its line and column: no name says what it is."""
+    unnamed = [i for i, name in enumerate(rows[0]) if not name.strip()]
+    if not unnamed or len(unnamed) == len(rows[0]):
+        return rows  # no column named at all: the header's own error says so
+    width = len(rows[0])
+    for line_no, row in enumerate(rows[1:], start=2):
+        filled = next((i for i in unnamed if i < len(row) and row[i].strip()), None)
+        if len(row) == width and filled is not None:
+            raise DataError(
+                f"line {line_no}: column {filled + 1} holds {row[filled].strip()[:40]!r}, and"
+                " the header (line 1) gives that column no name",
+                csv_path,
+            )
+    drop = set(unnamed)
+    return [
+        [c for i, c in enumerate(row) if i not in drop] if len(row) == width else row
+        for row in rows
+    ]
 
 
 def _csv_header(row: list[str], csv_path: Path) -> list[str]:

@@ -4,15 +4,21 @@
   other Unicode characters ("Plié" typed, its é one character, and from a macOS file name, e
   and a combining accent) are the same label: ``segment --truth`` counted every such block
   as a label the case base lacks, ``classify`` every such clip wrong, without a word.
+- A labels CSV saved by a spreadsheet with empty columns after the last one used
+  (``path,label,,``) is read; it was refused as "repeated column names in the header".
 """
 
 from __future__ import annotations
 
 import unicodedata
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+
+from features.datasets import read_labels_csv
+from features.errors import DataError
 
 PLIE_TYPED = "Pli\u00e9"  # é as one character (NFC), as typed
 PLIE_FILE_NAME = "Plie\u0301"  # e and a combining acute accent (NFD), as macOS names files
@@ -65,3 +71,33 @@ def test_spelt_as_keeps_values_it_cannot_tell_and_two_spellings_known() -> None:
     # the case base holds both spellings (two activities train noted): neither is guessed
     assert spelt_as(["Plie\u0301"], [PLIE_TYPED, "Plie\u0301"]) == ["Plie\u0301"]
     assert spelt_as(["Pl\u0069\u0065\u0301"], [PLIE_TYPED, PLIE_FILE_NAME]) == [PLIE_FILE_NAME]
+
+
+def _csv(folder: Path, name: str, text: str | bytes) -> Path:
+    for clip in ("a.npz", "b.npz"):
+        (folder / clip).touch()
+    path = folder / name
+    if isinstance(text, bytes):
+        path.write_bytes(text)
+    else:
+        path.write_text(text, encoding="utf-8", newline="")
+    return path
+
+
+def test_a_labels_csv_with_a_spreadsheets_empty_columns_is_read(tmp_path: Path) -> None:
+    path = _csv(
+        tmp_path, "x.csv", "path,label,subject,,\r\na.npz,squat,s1,,\r\nb.npz,lunge,s2,,\r\n"
+    )
+    rows = read_labels_csv(path)
+    assert [(r["path"].name, r["label"], r["subject"], r["extras"]) for r in rows] == [
+        ("a.npz", "squat", "s1", {}),
+        ("b.npz", "lunge", "s2", {}),
+    ]
+    one = _csv(tmp_path, "y.csv", "path,label,\na.npz,squat,\n")  # one: kept as a column ""
+    assert [r["extras"] for r in read_labels_csv(one)] == [{}]
+
+
+def test_a_value_in_a_column_the_header_does_not_name_is_refused(tmp_path: Path) -> None:
+    path = _csv(tmp_path, "x.csv", "path,label,,\na.npz,squat,,\nb.npz,lunge,,left\n")
+    with pytest.raises(DataError, match=r"line 3: column 4 holds 'left', and the header"):
+        read_labels_csv(path)
