@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import DataError
-from features.fileio import as_path, binary_kind, file_head, path_exists, picture_words
+from features.fileio import as_path, file_head, path_exists, picture_words
 from features.formats import SHOWN_VIDEO_SUFFIXES, TS_SUFFIX, is_mpeg_ts
 from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 from features.progress import progress
@@ -63,6 +63,7 @@ from .label_tracks import (
     read_label_track,
     refuse_inner_bom,
     track_labels,
+    utf8_text,
 )
 from .poses import EXTRACTION_VERSION, PoseSequence, load_pose, pose_file_length, pose_file_metadata
 from .readers.asfamc import hdm05_metadata, read_asf_amc
@@ -700,12 +701,10 @@ def _csv_rows(csv_path: Path) -> list[list[str]]:
         raise DataError("no such file", csv_path)
     rows: list[list[str]] = []
     try:
-        with csv_path.open(newline="", encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except UnicodeDecodeError as exc:
-        if (kind := binary_kind(file_head(csv_path))) is not None:  # a case base given as one
-            raise DataError(f"is {kind}, not a labels CSV", csv_path) from None
-        raise DataError(f"not UTF-8 text ({exc.reason} at byte {exc.start})", csv_path) from None
+        data = csv_path.read_bytes()
+    except OSError as exc:
+        raise DataError(f"cannot read the labels CSV ({exc.strerror or exc})", csv_path) from None
+    text = utf8_text(data, "labels CSV", csv_path)
     # two labels CSVs joined (cat a.csv b.csv), the second saved with a byte order mark: it
     # would begin a path or label unseen ("no such file \ufeffrec2.npz")
     refuse_inner_bom(text, "labels CSV", csv_path, "a path or label")

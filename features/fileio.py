@@ -94,6 +94,10 @@ def picture_words(head: bytes) -> str | None:
 SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
+#: the first two bytes of every gzip file (RFC 1952)
+GZIP_MAGIC = b"\x1f\x8b"
+
+
 def binary_kind(head: bytes) -> str | None:
     """What a file whose first bytes are ``head`` is, when it is a binary file a user could
     give in the place of another (a case base, a pose file, a zip archive, a video, a
@@ -105,6 +109,8 @@ def binary_kind(head: bytes) -> str | None:
         return "a NumPy file, such as a pose file"
     if head.startswith(b"PK\x03\x04"):  # a .zip, an .xlsx spreadsheet: no arrays in it
         return "a zip archive, not a pose file"
+    if head.startswith(GZIP_MAGIC):  # a file kept compressed (x.txt.gz, x.csv.gz)
+        return "a gzip-compressed file (gunzip it first)"
     if (picture := picture_words(head)) is not None:  # before video: a HEIF photo's ftyp
         return picture
     if is_video(head):

@@ -58,8 +58,20 @@ def _read_label_text(path: Path, what: str) -> str:
         data = path.read_bytes()
     except OSError as exc:
         raise DataError(f"cannot read the {what} ({exc.strerror or exc})", path) from None
+    text = utf8_text(data, what, path)
+    refuse_inner_bom(text, what, path)
+    return text
+
+
+def utf8_text(data: bytes, what: str, path: Path) -> str:
+    """``data``, the bytes of the ``what`` file at ``path`` (a label file, a labels CSV), as
+    text, a UTF-8 byte order mark dropped; else one DataError naming the file and what it is:
+    a binary file a user could give in its place (a case base, a pose file, a gzip-compressed
+    copy), UTF-16 text (Excel's "Unicode Text", PowerShell's ``>``), or text in another
+    encoding (a Windows code page) by the line and byte of its first character that is not
+    UTF-8."""
     try:
-        text = data.decode("utf-8-sig")
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         if (kind := binary_kind(data[:512])) is not None:  # a case base given as --truth
             raise DataError(f"is {kind}, not a {what}", path) from None
@@ -70,8 +82,6 @@ def _read_label_text(path: Path, what: str) -> str:
             f"not UTF-8 text ({exc.reason} at byte {exc.start}, line {line}): save it as UTF-8",
             path,
         ) from None
-    refuse_inner_bom(text, what, path)
-    return text
 
 
 def refuse_inner_bom(text: str, what: str, path: Path, part: str = "a label") -> None:

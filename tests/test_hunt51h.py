@@ -6,10 +6,14 @@
   as a label the case base lacks, ``classify`` every such clip wrong, without a word.
 - A labels CSV saved by a spreadsheet with empty columns after the last one used
   (``path,label,,``) is read; it was refused as "repeated column names in the header".
+- A labels CSV in UTF-16 or another code page, or gzip-compressed, is said to be so, as a
+  label file is; a pose file that is empty or gzip-compressed too; an ASF, AMC, BVH or UI-PRMD
+  file gzip-compressed under its own name is read, as one named ``.gz`` is.
 """
 
 from __future__ import annotations
 
+import gzip
 import unicodedata
 from pathlib import Path
 from types import SimpleNamespace
@@ -19,6 +23,8 @@ import pytest
 
 from features.datasets import read_labels_csv
 from features.errors import DataError
+from features.readers.bvh import read_bvh
+from tests.badinput import good_pose_file, leg_bvh, refused
 
 PLIE_TYPED = "Pli\u00e9"  # é as one character (NFC), as typed
 PLIE_FILE_NAME = "Plie\u0301"  # e and a combining acute accent (NFD), as macOS names files
@@ -101,3 +107,48 @@ def test_a_value_in_a_column_the_header_does_not_name_is_refused(tmp_path: Path)
     path = _csv(tmp_path, "x.csv", "path,label,,\na.npz,squat,,\nb.npz,lunge,,left\n")
     with pytest.raises(DataError, match=r"line 3: column 4 holds 'left', and the header"):
         read_labels_csv(path)
+
+
+@pytest.mark.parametrize(
+    ("content", "said"),
+    [
+        ("path,label\na.npz,squat\n".encode("utf-16"), "UTF-16 text (its byte order mark)"),
+        # ü at byte 26: "path,label\n" (11 bytes), "a.npz," (6) and "Kniebeuge" (9) before it
+        ("path,label\na.npz,Kniebeuge\u00fc\n".encode("cp1252"), "byte 26, line 2): save it"),
+        (gzip.compress(b"path,label\na.npz,squat\n"), "is a gzip-compressed file (gunzip it"),
+    ],
+    ids=["UTF-16", "a Windows code page", "gzip"],
+)
+def test_a_labels_csv_in_another_encoding_is_said_so(
+    tmp_path: Path, content: bytes, said: str
+) -> None:
+    with pytest.raises(DataError) as refusal:
+        read_labels_csv(_csv(tmp_path, "x.csv", content))
+    assert str(refusal.value).startswith(f"{tmp_path / 'x.csv'}: ")
+    assert said in str(refusal.value)
+
+
+@pytest.mark.parametrize(
+    ("content", "said"),
+    [(b"", "the file is empty (0 bytes)"), (None, "it is gzip-compressed (gunzip it first)")],
+    ids=["empty", "gzip"],
+)
+def test_an_empty_or_gzip_compressed_pose_file_is_said_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], content: bytes | None, said: str
+) -> None:
+    clip = tmp_path / "clip.npz"
+    if content is None:
+        content = gzip.compress(good_pose_file(tmp_path / "good.npz").read_bytes())
+    clip.write_bytes(content)
+    refused(["describe", str(clip)], tmp_path, capsys, f"clip.npz: cannot read pose file: {said}")
+
+
+def test_a_bvh_file_gzip_compressed_under_its_own_name_is_read(tmp_path: Path) -> None:
+    text = leg_bvh("0.02", "0 90 0 0 0 0 0 0 0 0 0 0", "0 90 0 0 0 0 30 0 0 45 0 0")
+    plain = tmp_path / "take.bvh"
+    plain.write_text(text)
+    packed = tmp_path / "packed.bvh"
+    packed.write_bytes(gzip.compress(text.encode()))
+    want, got = read_bvh(plain, unit="cm"), read_bvh(packed, unit="cm")
+    np.testing.assert_array_equal(got.positions, want.positions)
+    assert got.fps == want.fps == 50.0
