@@ -25,6 +25,7 @@ replaces one of the inputs it was made from.
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import os
@@ -555,7 +556,7 @@ def _identity(path: Path) -> tuple[Path, tuple[int, int] | None] | None:
     the output's file)."""
     try:
         resolved = path.resolve()
-    except OSError:
+    except (OSError, RuntimeError):  # RuntimeError: a loop of symbolic links (Python < 3.13)
         return None
     try:
         st = path.stat()
@@ -633,22 +634,42 @@ def as_path(value: Any, name: str) -> Path:
 
 def path_exists(path: Path, lead: str = "", where: Path | None = None) -> bool:
     """Whether ``path`` exists; a path the system cannot even look up (too long, a NUL
-    character) is a DataError naming ``where`` (default: the path), its message after
-    ``lead``."""
+    character, symbolic links that lead round in a loop) is a DataError naming ``where``
+    (default: the path), its message after ``lead``. Python's ``exists`` calls a loop of
+    links missing, and every input in one was refused as "no such file"."""
     try:
-        return path.exists()
+        return _exists(path)
     except (OSError, ValueError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        reason = _lookup_failed(exc)
         raise DataError(f"{lead}cannot use the path ({reason})", where or path) from None
+
+
+def _exists(path: Path) -> bool:
+    """``path.exists()``, but symbolic links that lead round in a loop raise the system's
+    OSError (ELOOP), which ``exists`` takes for a missing file."""
+    if path.exists():
+        return True
+    try:
+        os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return False
+    return True  # made between the two looks
+
+
+def _lookup_failed(exc: OSError | ValueError) -> str:
+    """Why the system could not look a path up, in words."""
+    if isinstance(exc, OSError) and exc.errno == errno.ELOOP:
+        return "symbolic links that lead round in a loop"
+    return exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
 
 
 def check_lookup(path: Path, what: str) -> None:
     """A DataError naming ``path`` when the system cannot even look it up (a file name over
     255 bytes): asked whether it is a folder, Python raises there, a traceback."""
     try:
-        path.exists()
+        _exists(path)
     except OSError as exc:
-        raise DataError(f"cannot use the {what} path ({exc.strerror or exc})", path) from None
+        raise DataError(f"cannot use the {what} path ({_lookup_failed(exc)})", path) from None
 
 
 def _refuse_special(out: Path, what: str) -> None:

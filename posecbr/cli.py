@@ -187,6 +187,7 @@ SYSTEM_ERRNOS = frozenset(
         errno.EPERM,
         errno.EROFS,
         errno.EIO,
+        errno.ELOOP,  # symbolic links that lead round in a loop
     }
 )
 
@@ -359,7 +360,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (OSError, MemoryError) as exc:
         return system_error(command, exc)
     except Exception as exc:  # a bug: one line and the traceback in a file, not a raw one
-        return internal_error(command, exc)
+        loop = symlink_loop(exc)
+        return internal_error(command, exc) if loop is None else system_error(command, loop)
+
+
+def symlink_loop(exc: BaseException) -> OSError | None:
+    """The system's error (ELOOP, naming the path) that ``exc`` stands for when it is
+    Python's RuntimeError for symbolic links that lead round in a loop, met resolving a path
+    (``Path.resolve`` before Python 3.13: "Symlink loop from '/data/x.npz'"); else None. An
+    input or output given as such a link was said as a bug in posecbr."""
+    found = re.fullmatch(r"Symlink loop from (.+)", str(exc)) if type(exc) is RuntimeError else None
+    if found is None:
+        return None
+    try:
+        where = ast.literal_eval(found.group(1))
+    except (ValueError, SyntaxError):
+        where = found.group(1)
+    return OSError(errno.ELOOP, "symbolic links that lead round in a loop", str(where))
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -9,11 +9,15 @@
 - A labels CSV in UTF-16 or another code page, or gzip-compressed, is said to be so, as a
   label file is; a pose file that is empty or gzip-compressed too; an ASF, AMC, BVH or UI-PRMD
   file gzip-compressed under its own name is read, as one named ``.gz`` is.
+- Symbolic links that lead round in a loop, as an input or an output, are refused in one line
+  saying so: several commands said "a bug in posecbr" (Python's RuntimeError "Symlink loop")
+  and the rest "no such file".
 """
 
 from __future__ import annotations
 
 import gzip
+import os
 import unicodedata
 from pathlib import Path
 from types import SimpleNamespace
@@ -152,3 +156,44 @@ def test_a_bvh_file_gzip_compressed_under_its_own_name_is_read(tmp_path: Path) -
     want, got = read_bvh(plain, unit="cm"), read_bvh(packed, unit="cm")
     np.testing.assert_array_equal(got.positions, want.positions)
     assert got.fps == want.fps == 50.0
+
+
+def _loop(path: Path) -> Path:
+    os.symlink(path.name, path)  # a link to itself
+    return path
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["reps", "{good}", "--plot", "{loop}.png"],  # an output: "a bug in posecbr"
+        ["train", "{loop}.npz", "--db", "{dir}/cb.sqlite"],  # an input read: the same
+        ["segment", "{loop}.npz", "--db", "{dir}/cb.sqlite"],  # "no such file"
+    ],
+    ids=["reps --plot", "train", "segment"],
+)
+def test_symbolic_links_in_a_loop_are_refused_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str]
+) -> None:
+    good = good_pose_file(tmp_path / "good.npz")
+    args = [a.format(good=good, loop=tmp_path / "loop", dir=tmp_path) for a in argv]
+    looped = next(a for a in args if Path(a).stem == "loop")
+    _loop(Path(looped))
+    refused(args, tmp_path, capsys, f"{looped}: ", "symbolic links that lead round in a loop")
+
+
+def test_pythons_symlink_loop_error_is_the_systems_refusal() -> None:
+    from posecbr.cli import symlink_loop
+
+    try:
+        Path("/nonexistent-51h/a").resolve(strict=False)
+    except RuntimeError:  # pragma: no cover - not raised for a missing path
+        pytest.fail("a missing path is no loop")
+    loop = symlink_loop(RuntimeError("Symlink loop from '/data/x.npz'"))
+    assert loop is not None
+    assert (loop.filename, loop.strerror) == (
+        "/data/x.npz",
+        "symbolic links that lead round in a loop",
+    )
+    assert symlink_loop(RuntimeError("something else")) is None
+    assert symlink_loop(ValueError("Symlink loop from '/data/x.npz'")) is None

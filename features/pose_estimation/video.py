@@ -50,7 +50,7 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from features.errors import DataError, InputError  # noqa: E402
-from features.fileio import as_path, heif_brand  # noqa: E402
+from features.fileio import as_path, heif_brand, path_exists  # noqa: E402
 from features.poses import EXTRACTION_VERSION, MIN_FPS, PoseSequence  # noqa: E402
 from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
@@ -279,7 +279,7 @@ def open_video(path: str | Path, decode_threads: int | None = None) -> tuple[Cap
     """Open a video file, or raise :class:`DataError` with a one-line reason.
     ``decode_threads``: FFmpeg's decoding threads (None: FFmpeg's default, one per core)."""
     path = as_path(path, "path")
-    if not path.exists():
+    if not path_exists(path):
         raise DataError("no such file", path)
     if path.is_dir():
         raise DataError("is a folder, not a video", path)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from features.errors import DataError
-from features.fileio import GZIP_MAGIC, file_head
+from features.fileio import GZIP_MAGIC, file_head, path_exists
 from features.text import size_words
 
 from ..poses import MAX_BYTES_ENV, read_limits
@@ -21,7 +21,7 @@ from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
 def _check_file(path: Path) -> None:
     """A DataError naming ``path`` unless it is a file to read: missing, a folder, or a pipe,
     socket or device (opened, a pipe waits for a writer that may never come)."""
-    if not path.exists():
+    if not path_exists(path):
         raise DataError("no such file", path)
     if path.is_dir():
         raise DataError("is a folder, not a file", path)

@@ -32,6 +32,7 @@ from features.fileio import (
     check_not_in_walked_folder,
     check_output,
     file_head,
+    path_exists,
     staged_folder,
     unique_name,
     write_text_atomic,
@@ -263,7 +264,7 @@ def _check_not_in_source(args: argparse.Namespace) -> None:
 
 def _check_args(args: argparse.Namespace) -> None:
     src: Path = args.source
-    if not src.exists():
+    if not path_exists(src):
         raise DataError("no such file or folder", src)
     check_fps(args.fps)  # the rates a pose file takes: 0.005 was refused only when written
     if args.correct and args.incorrect:

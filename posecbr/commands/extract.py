@@ -26,7 +26,13 @@ from typing import TYPE_CHECKING, Any
 
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import ReadFiles, check_not_in_walked_folder, check_output, path_digest
+from features.fileio import (
+    ReadFiles,
+    check_not_in_walked_folder,
+    check_output,
+    path_digest,
+    path_exists,
+)
 from features.formats import SHOWN_VIDEO_SUFFIXES, is_video_in_folder
 from features.interrupts import interrupts_held, run_task, stop_workers, worker_ends_on_sigterm
 from features.progress import progress
@@ -266,7 +272,7 @@ def find_jobs(
     video's ``overlay`` names its overlay file or, ``overlay_folder`` (a folder there, or a
     name written ending in "/"), the folder of its ``<stem>.mp4``, as several clips'
     ``overlay`` names the folder of theirs (and ``out`` the folder of the pose files)."""
-    if not source.exists():
+    if not path_exists(source):
         raise DataError("no such file or folder", source)
     if not source.is_file() and not source.is_dir():
         raise DataError("is a pipe, socket or device, not a video, folder or labels CSV", source)

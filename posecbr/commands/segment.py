@@ -53,7 +53,7 @@ from typing import Any
 
 from cbr.judges import JUDGES
 from features.errors import ConfigError, DataError
-from features.fileio import check_output
+from features.fileio import check_output, path_exists
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
 from posecbr.arguments import (
@@ -223,7 +223,7 @@ def _inputs_given(args: argparse.Namespace) -> None:
     check_asf(args.asf, args.recordings)
     _truth_options(args)
     for path in args.recordings:
-        if not path.exists():
+        if not path_exists(path):
             raise DataError("no such file", path)
 
 

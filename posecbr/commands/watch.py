@@ -61,7 +61,7 @@ from typing import Any
 
 from cbr.judges import JUDGES
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import PARTIAL, atomic_path, check_output, stdout_gone
+from features.fileio import PARTIAL, atomic_path, check_output, path_exists, stdout_gone
 from features.interrupts import raise_interrupt, sigterm_held
 from features.text import counted, shown
 from posecbr.arguments import PathOption, add_k_option, check_mp4_name
@@ -195,13 +195,13 @@ def _check_source(source: str) -> None:
     """A source that is a file must be a video file there is, as must the file a ``file://``
     URL names (refused as its path is: FFmpeg would say only that it cannot open it)."""
     named = _read_files(source)
-    if named and not _is_file(source) and not Path(named[0]).exists():
+    if named and not _is_file(source) and not path_exists(Path(named[0])):
         raise DataError("no such video file", Path(named[0]))
     if not source:  # an unset shell variable: Path("") is the current folder
         raise DataError("the source is empty: name a webcam index, stream URL or video file")
     if _is_file(source) and Path(source).is_dir():
         raise DataError("is a folder, not a video file", source)
-    if _is_file(source) and not Path(source).exists():
+    if _is_file(source) and not path_exists(Path(source)):
         if source.startswith("-") and source[1:].isdigit():  # OpenCV's "any camera", -1
             raise DataError(
                 "no such video file, and a camera index is a whole number from 0 (the first"
