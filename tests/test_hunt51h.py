@@ -5,7 +5,8 @@
   and a combining accent) are the same label: ``segment --truth`` counted every such block
   as a label the case base lacks, ``classify`` every such clip wrong, without a word.
 - A labels CSV saved by a spreadsheet with empty columns after the last one used
-  (``path,label,,``) is read; it was refused as "repeated column names in the header".
+  (``path,label,,``) is read; it was refused as "repeated column names in the header", and
+  ``convert`` refused to add to such a labels.csv.
 - A labels CSV in UTF-16 or another code page, or gzip-compressed, is said to be so, as a
   label file is; a pose file that is empty or gzip-compressed too; an ASF, AMC, BVH or UI-PRMD
   file gzip-compressed under its own name is read, as one named ``.gz`` is.
@@ -111,6 +112,23 @@ def test_a_value_in_a_column_the_header_does_not_name_is_refused(tmp_path: Path)
     path = _csv(tmp_path, "x.csv", "path,label,,\na.npz,squat,,\nb.npz,lunge,,left\n")
     with pytest.raises(DataError, match=r"line 3: column 4 holds 'left', and the header"):
         read_labels_csv(path)
+
+
+def test_convert_into_a_folder_whose_labels_csv_has_a_spreadsheets_empty_columns(
+    tmp_path: Path,
+) -> None:
+    from posecbr.cli import main
+
+    out = tmp_path / "out"
+    out.mkdir()
+    good_pose_file(out / "a.npz")
+    (out / "labels.csv").write_bytes(b"path,label,,\r\na.npz,squat,,\r\n")
+    take = tmp_path / "kick.bvh"
+    take.write_text(leg_bvh("0.02", "0 90 0 0 0 0 0 0 0 0 0 0", "0 90 0 0 0 0 30 0 0 45 0 0"))
+    assert main(["convert", str(take), "--out", str(out), "--bvh-unit", "cm"]) == 0
+    header, *rows = (out / "labels.csv").read_text().splitlines()
+    assert header.startswith("path,label,subject") and "" not in header.split(",")
+    assert [row.split(",")[:2] for row in rows] == [["a.npz", "squat"], ["kick.npz", "kick"]]
 
 
 @pytest.mark.parametrize(
