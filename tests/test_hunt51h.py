@@ -8,8 +8,9 @@
   (``path,label,,``) is read; it was refused as "repeated column names in the header", and
   ``convert`` refused to add to such a labels.csv.
 - A labels CSV in UTF-16 or another code page, or gzip-compressed, is said to be so, as a
-  label file is; a pose file that is empty or gzip-compressed too; an ASF, AMC, BVH or UI-PRMD
-  file gzip-compressed under its own name is read, as one named ``.gz`` is.
+  label file is, and so is a thresholds or ADD file; a pose file that is empty or
+  gzip-compressed too; an ASF, AMC, BVH or UI-PRMD file gzip-compressed under its own name
+  is read, as one named ``.gz`` is.
 - Symbolic links that lead round in a loop, as an input or an output, are refused in one line
   saying so: several commands said "a bug in posecbr" (Python's RuntimeError "Symlink loop")
   and the rest "no such file".
@@ -148,6 +149,33 @@ def test_a_labels_csv_in_another_encoding_is_said_so(
         read_labels_csv(_csv(tmp_path, "x.csv", content))
     assert str(refusal.value).startswith(f"{tmp_path / 'x.csv'}: ")
     assert said in str(refusal.value)
+
+
+@pytest.mark.parametrize(
+    ("content", "said"),
+    [
+        ('{"window": 5}'.encode("utf-16"), "not UTF-8 text: it is UTF-16 (its byte order mark);"),
+        # ü at byte 20: '{"note": "Kniebeuge ' before it
+        (
+            '{"note": "Kniebeuge \u00fc"}'.encode("cp1252"),
+            "(invalid start byte at byte 20, line 1)",
+        ),
+        (gzip.compress(b'{"window": 5}'), "not UTF-8 text: it is a gzip-compressed file (gunzip"),
+    ],
+    ids=["UTF-16", "a Windows code page", "gzip"],
+)
+def test_a_thresholds_file_in_another_encoding_is_said_so(
+    tmp_path: Path, content: bytes, said: str
+) -> None:
+    from features.config import read_config
+    from features.errors import ConfigError
+
+    path = tmp_path / "t.json"
+    path.write_bytes(content)
+    with pytest.raises(ConfigError) as refusal:
+        read_config(path, "thresholds file")
+    assert str(refusal.value).startswith(f"{path}: the thresholds file is not UTF-8 text")
+    assert said in str(refusal.value) and "a binary file?" not in str(refusal.value)
 
 
 @pytest.mark.parametrize(
