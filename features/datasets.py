@@ -722,7 +722,7 @@ def _csv_rows(csv_path: Path) -> list[list[str]]:
 
 
 def _unnamed_columns_dropped(rows: list[list[str]], csv_path: Path) -> list[list[str]]:
-    """``rows`` without the columns the header leaves unnamed and no row fills: the empty
+    """``rows`` without the columns the header leaves unnamed, which no row fills: the empty
     columns a spreadsheet saves after the last one used (``path,label,,`` and ``a.npz,squat,,``:
     Excel writes them once a cell out there has been touched), which were refused as
     "repeated column names", or kept as a column named "". A value in an unnamed column is
@@ -730,20 +730,16 @@ def _unnamed_columns_dropped(rows: list[list[str]], csv_path: Path) -> list[list
     unnamed = [i for i, name in enumerate(rows[0]) if not name.strip()]
     if not unnamed or len(unnamed) == len(rows[0]):
         return rows  # no column named at all: the header's own error says so
-    width = len(rows[0])
     for line_no, row in enumerate(rows[1:], start=2):
         filled = next((i for i in unnamed if i < len(row) and row[i].strip()), None)
-        if len(row) == width and filled is not None:
+        if filled is not None:
             raise DataError(
                 f"line {line_no}: column {filled + 1} holds {row[filled].strip()[:40]!r}, and"
                 " the header (line 1) gives that column no name",
                 csv_path,
             )
     drop = set(unnamed)
-    return [
-        [c for i, c in enumerate(row) if i not in drop] if len(row) == width else row
-        for row in rows
-    ]
+    return [[c for i, c in enumerate(row) if i not in drop] for row in rows]
 
 
 def _csv_header(row: list[str], csv_path: Path) -> list[str]:

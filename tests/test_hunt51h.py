@@ -109,9 +109,19 @@ def test_a_labels_csv_with_a_spreadsheets_empty_columns_is_read(tmp_path: Path) 
     assert [r["extras"] for r in read_labels_csv(one)] == [{}]
 
 
-def test_a_value_in_a_column_the_header_does_not_name_is_refused(tmp_path: Path) -> None:
-    path = _csv(tmp_path, "x.csv", "path,label,,\na.npz,squat,,\nb.npz,lunge,,left\n")
-    with pytest.raises(DataError, match=r"line 3: column 4 holds 'left', and the header"):
+@pytest.mark.parametrize(
+    ("rows", "said"),
+    [
+        ("a.npz,squat,,\nb.npz,lunge,,left\n", "line 3: column 4 holds 'left', and the header"),
+        ("a.npz,squat,s1\n", "line 2: column 3 holds 's1', and the header"),  # a row short
+    ],
+    ids=["as wide as the header", "narrower"],
+)
+def test_a_value_in_a_column_the_header_does_not_name_is_refused(
+    tmp_path: Path, rows: str, said: str
+) -> None:
+    path = _csv(tmp_path, "x.csv", "path,label,,\n" + rows)
+    with pytest.raises(DataError, match=said):
         read_labels_csv(path)
 
 
