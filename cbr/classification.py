@@ -254,10 +254,13 @@ def check_feedback_label(
     activity of the case base (no class of it, for a case base predicting another ``target``
     column): a typo must not relabel a trained case or start a class. Refused with
     ParameterError naming the argument ``label`` (``classify`` says ``--feedback``, and
-    ``--new-label`` for ``new_label``)."""
+    ``--new-label`` for ``new_label``). A label that is an activity written in other Unicode
+    characters (:func:`features.text.spelt_as`) is that activity, as the case base spells it:
+    "Plié" typed was refused beside a stored "Plié" saved decomposed, and with ``new_label``
+    stored as a second activity that prints the same."""
     from .explain import class_noun
 
-    text = str(label).strip()
+    text = spelt_as([str(label).strip()], known)[0]
     noun = class_noun(target)
     if not text:
         raise ParameterError("the feedback label is empty", "label")

@@ -3,7 +3,8 @@
 - A label read from the user's files and a case base's activity that are the same text in
   other Unicode characters ("Plié" typed, its é one character, and from a macOS file name, e
   and a combining accent) are the same label: ``segment --truth`` counted every such block
-  as a label the case base lacks, ``classify`` every such clip wrong, without a word.
+  as a label the case base lacks, ``classify`` every such clip wrong, without a word, and
+  ``classify --feedback`` refused the label (with ``--new-label``: a second activity).
 - A labels CSV saved by a spreadsheet with empty columns after the last one used
   (``path,label,,``) is read; it was refused as "repeated column names in the header", and
   ``convert`` refused to add to such a labels.csv.
@@ -70,6 +71,18 @@ def test_classify_judges_a_clip_labelled_in_other_unicode_characters_by_its_acti
     summary = summarise(results)
     assert (summary["right"], summary["labelled"], summary["wrong"]) == (6, 6, [])
     assert summary["recall"][PLIE_FILE_NAME] == {"right": 2, "clips": 2, "recall": 1.0}
+
+
+@pytest.mark.parametrize("new_label", [False, True])
+def test_feedback_typed_in_other_unicode_characters_is_the_case_bases_activity(
+    new_label: bool,
+) -> None:
+    from cbr.classification import check_feedback_label
+
+    # refused as no activity of the case base, or, with new_label, a second activity
+    # printed the same
+    got = check_feedback_label(PLIE_TYPED, [PLIE_FILE_NAME, "squat"], new_label)
+    assert got == PLIE_FILE_NAME
 
 
 def test_spelt_as_keeps_values_it_cannot_tell_and_two_spellings_known() -> None:
