@@ -160,6 +160,7 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     _refuse_a_labels_csv(text, path)
     _refuse_a_table(text, path)
     _refuse_a_header(text, tokens, path)
+    _refuse_empty_labels(text, path)
     if names is None:
         return tokens
     unknown = sorted({t for t in tokens if t not in names}, key=code_order)
@@ -220,6 +221,27 @@ def _refuse_semicolons(text: str, path: Path) -> None:
             raise DataError(
                 f"line {line_no}: labels separated by ';' ({line.strip()[:40]!r}); a label"
                 " file separates its labels by spaces, tabs, commas or line ends",
+                path,
+            )
+
+
+def _refuse_empty_labels(text: str, path: Path) -> None:
+    """Refuse a label file with an empty label between two commas (``1,1,,2``: a spreadsheet
+    row with a cell left empty, a frame or block nobody labelled), naming its first line
+    holding one: the separators run together, so every label after it was read one frame or
+    block early, and when the count still fitted (one label more than the frames need is
+    taken) nothing said so. Empty cells that end a line (a spreadsheet's shorter last row,
+    ``2,2,,``) are no label's place and are let be."""
+    lines = text.splitlines()
+    for line_no, line in enumerate(lines, start=1):
+        if (empty := re.search(r",[^\S\n]*,", line.rstrip(", \t"))) is not None:
+            before = "\n".join([*lines[: line_no - 1], line[: empty.start()]])
+            labels = [t for t in re.split(r"[\s,]+", before) if t]
+            after = f" after label {len(labels)} ({_short(labels[-1])!r})" if labels else ""
+            raise DataError(
+                f"line {line_no}: an empty label between commas{after}; a label file gives"
+                " every frame or block a label (read without one, the labels after it would"
+                " fall a frame or block early): write one there",
                 path,
             )
 

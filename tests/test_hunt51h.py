@@ -7,7 +7,9 @@
   ``classify --feedback`` refused the label (with ``--new-label``: a second activity).
 - A labels CSV saved by a spreadsheet with empty columns after the last one used
   (``path,label,,``) is read; it was refused as "repeated column names in the header", and
-  ``convert`` refused to add to such a labels.csv.
+  ``convert`` refused to add to such a labels.csv. A label file with an empty label between
+  commas (a spreadsheet row with a cell left empty) is refused: every label after it fell a
+  frame or block early.
 - A labels CSV in UTF-16 or another code page, or gzip-compressed, is said to be so, as a
   label file is, and so is a thresholds or ADD file; a pose file that is empty or
   gzip-compressed too; an ASF, AMC, BVH or UI-PRMD file gzip-compressed under its own name
@@ -225,6 +227,21 @@ def test_a_bvh_file_gzip_compressed_under_its_own_name_is_read(tmp_path: Path) -
     want, got = read_bvh(plain, unit="cm"), read_bvh(packed, unit="cm")
     np.testing.assert_array_equal(got.positions, want.positions)
     assert got.fps == want.fps == 50.0
+
+
+def test_a_label_file_with_an_empty_label_between_commas_is_refused(tmp_path: Path) -> None:
+    from features.label_tracks import frame_labels, read_label_track
+
+    # 10 frames, one label each; the spreadsheet row has 11 cells, frame 3's left empty:
+    # read without it, 10 labels fit the 10 frames (11 would too) and frames 3-9 were
+    # labelled sit, one frame early
+    path = tmp_path / "labels.txt"
+    path.write_text("walk,walk,walk,,sit,sit,sit,sit,sit,sit,sit\n")
+    with pytest.raises(DataError, match=r"line 1: an empty label between commas after label 3 "):
+        frame_labels(read_label_track(path), 10, 30.0, None, path)
+    # commas with spaces, and empty cells ending a line (a shorter last row), are no gap
+    path.write_text("walk, walk, walk, sit, sit\nsit, sit, sit, sit, sit,,\n")
+    assert read_label_track(path) == ["walk"] * 3 + ["sit"] * 7
 
 
 def _loop(path: Path) -> Path:
