@@ -164,7 +164,11 @@ RECORDING_SUFFIXES = frozenset({".npz", ".bvh", ".amc", *SHOWN_VIDEO_SUFFIXES})
 
 class _Recordings(argparse.Action):
     """RECORDING...: added to those already given after ``--truth`` (:class:`_Truth`), in the
-    order of the command line."""
+    order of the command line. ``needed``: missing when none is given, said with the other
+    arguments missing (:meth:`posecbr.cli.Parser.error`), though argparse takes it as
+    optional."""
+
+    needed = True
 
     def __call__(
         self, _parser: Any, namespace: argparse.Namespace, values: Any, _option: Any = None
