@@ -1201,13 +1201,20 @@ def counted_segments(
     rises 20 degrees at the knees before the cut and sinks again after it): before, counted
     in both segments when either side turned back by :data:`MIN_EXCURSION_RAD` or more.
 
-    ``unseen``: per segment, whether nobody is in view in it (counted 0): the movement of the
-    segment before goes on out of sight, and that segment keeps a repetition whose far point
-    is at the cut (the person went down into a squat and was lost from view before coming
-    up), nothing it got into is held on across the cut, and no far point is held through the
-    stretch. Before, the squat was left to the stretch, which counts none, or taken for a
-    posture got into and held, and lost."""
+    ``unseen``: per segment, whether nobody is in view in it (counted 0). The segments are
+    then counted as ``reps`` counts the recording (:func:`_counted_seen`): from where the
+    person is first seen to where they are last seen, as a recording of its own (the view of
+    the movement ends where the person is lost for good, as at the recording's end: the way
+    down of a squat, the person then lost, is no repetition; before, the segment kept it as
+    one), and a stretch with nobody in view between two that show the person is part of the
+    segment before it (the movement goes on out of sight, filled in across the stretch: a
+    squat whose person is lost on the way down and seen again on the way up is one
+    repetition; before, it counted in both). Counted across a jump of the pose to another
+    person (``sig`` of the pieces either side), the segment before a stretch with nobody
+    in view keeps a far point at its cut, as before."""
     blind = [bool(u) for u in unseen] + [False] * (len(bounds) - len(unseen))
+    if isinstance(sig, MovementSignals) and any(blind) and not all(blind):
+        return _counted_seen(sig, bounds, blind)
     raw = [
         () if b else _repetitions(sig, start, end, n_frames)
         for (start, end), b in zip(bounds, blind, strict=True)
@@ -1246,6 +1253,45 @@ def counted_segments(
             turn = False
     out = _held_into_the_end(sig, out, raw, bounds, held_on, after, n_frames)
     return _held_to_the_end(out, raw, bounds, blind)
+
+
+def _counted_seen(
+    sig: MovementSignals,
+    bounds: Sequence[tuple[int, int]],
+    blind: Sequence[bool],
+) -> list[tuple[Repetition, ...]]:
+    """:func:`counted_segments` of segments ``bounds`` some of which (``blind``, not all)
+    show nobody: the frames from the first segment that shows the person to the end of the
+    last are counted as a recording of their own (its start and end the recording's, as
+    ``reps`` counts a recording whose person is first seen late or lost for good early,
+    :func:`features.repetitions.seen_frames`), each segment that shows the person with the
+    segments with nobody in view after it up to the next that does (the movement filled in
+    across them, as ``reps`` fills it in); the repetitions so counted are the segment's,
+    cut to its frames, and a segment with nobody in view counts none."""
+    seen = [k for k, b in enumerate(blind) if not b]
+    nxt = [*seen[1:], None]
+    groups = [(bounds[k][0], bounds[q][0] if q is not None else bounds[k][1]) for k, q in
+              zip(seen, nxt, strict=True)]  # fmt: skip
+    step = sig.step
+    a0, b0 = groups[0][0] // step, -(-groups[-1][1] // step)
+    off = a0 * step
+    inner = [(max(0, a - off), b - off) for a, b in groups]
+    found = counted_segments(sig.part(a0, b0), inner, groups[-1][1] - off)
+    out: list[tuple[Repetition, ...]] = [() for _ in bounds]
+    for k, reps in zip(seen, found, strict=True):
+        start, end = bounds[k]
+        out[k] = tuple(
+            Repetition(
+                max(start, r.start_frame + off),
+                min(end, r.end_frame + off),
+                min(end - 1, max(start, r.peak_frame + off)),
+                r.side,
+                r.held,
+                r.unreturned,
+            )
+            for r in reps
+        )
+    return out
 
 
 def unclaimed(

@@ -106,10 +106,15 @@ def test_segment_keeps_a_squat_lost_from_view_at_the_bottom(
 
 @pytest.mark.parametrize("hold_s", HOLDS_S)
 def test_watch_keeps_a_squat_lost_from_view_at_the_bottom(hold_s: float) -> None:
-    """The same streamed through ``watch`` (one label throughout): the squat's segment 1,
-    nobody in view 0, standing again 0. Before: 0 at 0 and 0.3 s (left to the segment with
-    nobody in view)."""
+    """The same streamed through ``watch`` (one label throughout): the squat counts once,
+    nobody in view 0. Before: 0 at 0 and 0.3 s (left to the segment with nobody in view).
+    Since hunt 51b, a far point the person is lost at (held at the bottom for 0 or 0.3 s:
+    the hold up to the cut) is counted by the segment where the person is seen again, on
+    the frames from its repetition on, across the stretch (``watch`` cannot tell when the
+    person is lost whether they come back: the way down of a squat, the person lost for
+    good, counts none); one held longer, its far point in its own segment, there."""
     seq, lost = _lost_in_a_squat(hold_s)
     out = _live_segments(seq.positions, seq.fps)
     got = [(s.start_frame, s.label, s.repetitions) for s in out]
-    assert got == [(0, "a", 1), (lost, None, 0), (lost + int(1.5 * FPS), "a", 0)]
+    assert [g[:2] for g in got] == [(0, "a"), (lost, None), (lost + int(1.5 * FPS), "a")]
+    assert got[1][2] == 0 and got[0][2] + got[2][2] == 1

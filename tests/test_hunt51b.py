@@ -1,10 +1,17 @@
-"""Hunt 51b: a command line missing several required arguments names them all; repetitions
-cut off where the person is lost from view.
+"""Hunt 51b: a command line missing several required arguments names them all; a repetition
+the person is lost from view in before it is finished.
 
 ``posecbr segment`` given nothing said only that ``--db`` was missing (its RECORDING is
 optional to argparse, for ``--truth``, and was checked after ``--db``): the user added
 ``--db`` and was then told of RECORDING. Every command given nothing now names everything
 its usage asks for, in one line, exit 2.
+
+A squat's way down, then nobody in view, counted 1 in ``segment`` and ``watch`` (and, after
+whole squats, one more in ``reps``) where a person says 0: no repetition was finished. The
+person lost for good is now as the recording's end, and a stretch with nobody in view
+between two that show the person is counted across (a squat lost on the way down and seen
+again on the way up is one repetition, counted once), in ``reps``, ``segment`` and
+``watch``; on a real HDM05 squat.
 """
 
 from __future__ import annotations
@@ -12,9 +19,12 @@ from __future__ import annotations
 import argparse
 import re
 from collections.abc import Iterator
+from pathlib import Path
 
+import numpy as np
 import pytest
 
+from features.poses import PoseSequence
 from posecbr.cli import build_parser, main
 
 
@@ -90,3 +100,114 @@ def test_every_command_given_nothing_names_all_its_usage_asks_for(
         assert set(named) == asked and len(named) == len(asked), (words, named, asked)
         checked += 1
     assert checked >= 17  # 12 commands and 6 casebase actions ask for something
+
+
+# --- the person lost from view part-way through a repetition (real motion capture) ---------
+
+SQUAT = ("hdm05", "train", "10", "HDM_bd_squat1Reps_001_120.amc")
+FPS = 30.0  # every 4th of the take's 120 fps frames: a webcam's rate, a quarter the frames
+WHOLE = (0.0, 1.17)  # the whole take, in seconds
+DOWN = (0.0, 0.5)  # its first 0.5 s: standing, then the way down, short of the bottom
+
+
+@pytest.fixture(scope="module")
+def squat(shared_data: Path) -> PoseSequence:
+    """One real squat (HDM05, actor bd): standing, down to the bottom at 0.63 s, up, standing
+    again at 1.1 s (140 frames at 120 fps; the bottom read from the hips' height, not from
+    the counter), at 30 fps."""
+    from features.datasets import load_clip
+
+    seq = load_clip(shared_data.joinpath(*SQUAT)).to_canonical()
+    out = PoseSequence(seq.positions[::4], seq.joint_names, FPS)
+    # the take as the tests read it: the hips lowest at 0.6-0.7 s, 0.25 m or more below where
+    # they stand at its start and end, and at 0.5 s on the way down, short of the bottom
+    hips = np.nanmean(out.joints(["left_hip", "right_hip"])[:, :, 1], axis=1)
+    assert 0.55 <= int(np.argmin(hips)) / FPS <= 0.7
+    assert hips[0] - hips.min() > 0.25 and hips[-1] - hips.min() > 0.25
+    assert hips[int(DOWN[1] * FPS) - 1] - hips.min() > 0.05
+    return out
+
+
+def _joined(squat: PoseSequence, *parts: tuple[float, float] | float) -> PoseSequence:
+    """The squat's frames from ``a`` to ``b`` seconds for each pair ``(a, b)`` and, for each
+    number, that many seconds in which nobody is seen (every joint NaN), one after another."""
+    rows = []
+    for part in parts:
+        if isinstance(part, tuple):
+            rows.append(squat.positions[int(round(part[0] * FPS)) : int(round(part[1] * FPS))])
+        else:
+            rows.append(np.full((int(round(part * FPS)), *squat.positions.shape[1:]), np.nan))
+    return PoseSequence(np.concatenate(rows), squat.joint_names, FPS)
+
+
+def test_reps_counts_no_more_when_the_person_is_lost_than_when_the_clip_ends(
+    squat: PoseSequence,
+) -> None:
+    """Two squats, then the way down of a third, then nobody in view for 1 s: by hand two
+    repetitions (the third is not finished), as the same frames without the 1 s of nobody
+    count. Before: 3 (the posture last seen held through the 1 s and smoothed into it, the
+    far point cut off there counted beside the whole ones)."""
+    from posecbr.commands.reps import _count
+
+    ended = _count(_joined(squat, WHOLE, WHOLE, DOWN))
+    lost = _count(_joined(squat, WHOLE, WHOLE, DOWN, 1.0))
+    assert ended.count == 2
+    assert lost.count == 2
+    assert [r.peak_frame for r in lost.repetitions] == [r.peak_frame for r in ended.repetitions]
+
+
+def test_segment_counts_no_repetition_in_the_way_down_before_nobody_in_view(
+    squat: PoseSequence,
+) -> None:
+    """The first 0.5 s of the squat (the way down), then nobody in view for 2 s: no
+    repetition was finished, 0 (as ``reps`` counts it: "no whole repetition"). Counted as
+    ``segment`` counts its segments (the squat's frames, then the stretch with nobody in
+    view, :func:`cbr.segmentation.counted_segments`). Before: 1, the far point where the
+    person was lost kept by the segment before the stretch."""
+    from cbr.segmentation import counted_segments
+    from features.repetitions import movement_signals
+
+    seq = _joined(squat, DOWN, 2.0)
+    cut = int(DOWN[1] * FPS)
+    found = counted_segments(movement_signals(seq), [(0, cut), (cut, seq.n_frames)],
+                             seq.n_frames, [False, True])  # fmt: skip
+    assert [len(r) for r in found] == [0, 0]
+
+
+def test_segment_counts_a_squat_seen_again_on_the_way_up_once(squat: PoseSequence) -> None:
+    """The way down of the squat, nobody in view for 1 s, then the rest of the squat (on
+    down to the bottom and up) and one more: by hand 2, one in the frames after the stretch
+    (as ``reps`` counts it). Before: 3, the way down counted in the segment before the
+    stretch and again after it."""
+    from cbr.segmentation import counted_segments
+    from features.repetitions import movement_signals
+
+    seq = _joined(squat, DOWN, 1.0, (DOWN[1], WHOLE[1]), WHOLE)
+    lost, back = int(DOWN[1] * FPS), int((DOWN[1] + 1.0) * FPS)
+    bounds = [(0, lost), (lost, back), (back, seq.n_frames)]
+    found = counted_segments(movement_signals(seq), bounds, seq.n_frames, [False, True, False])
+    assert [len(r) for r in found] == [0, 0, 2]
+
+
+@pytest.mark.parametrize(
+    ("parts", "want"),
+    [
+        # the way down, then nobody for the last 4 s: 0 (was 1)
+        ((DOWN, 4.0), 0),
+        # two squats, the way down of a third, nobody for the last 2 s: 2 (was 3)
+        ((WHOLE, WHOLE, DOWN, 2.0), 2),
+        # two squats, the way down, nobody 1 s, the rest of that squat, one more: 4 (was 5)
+        ((WHOLE, WHOLE, DOWN, 1.0, (DOWN[1], WHOLE[1]), WHOLE), 4),
+    ],
+)
+def test_watch_counts_no_repetition_the_person_was_lost_in_before_it_was_finished(
+    squat: PoseSequence, parts: tuple[tuple[float, float] | float, ...], want: int
+) -> None:
+    """Streamed through ``watch``'s live segmenter (one label throughout): the squats
+    finished, by hand; a stretch with nobody in view a segment of its own, counted 0."""
+    from tests.test_hunt36l import _live_segments
+
+    seq = _joined(squat, *parts)
+    out = _live_segments(seq.positions, FPS)
+    assert sum(s.repetitions for s in out) == want
+    assert all(s.repetitions == 0 for s in out if s.label is None)
