@@ -431,8 +431,9 @@ class LiveSegmenter:
         self.beside: int | None = None  # the last repetition's first frame of the last
         # segment finished (None: it had none, or nobody was in view): what the stream's last
         # segment is judged beside when the stream ends (:meth:`_beside_whole`)
-        self.lost_from: int | None = None  # the first frame of the repetition whose far
-        # point the person was lost at, left to the segment seen after (:meth:`_segment`)
+        self.lost_from: tuple[int, int] | None = None  # the first frame of the repetition
+        # whose far point the person was lost at, left to the segment seen after if it is of
+        # the same activity (the label: the second), :meth:`_segment`
         self.waiting: _HeldBack | None = None  # the stream's first segment, held back until
         # the first repetition of the segment after it is known (:meth:`_hold`)
         self.released: list[LiveSegment] = []  # it, judged, not yet given
@@ -1175,7 +1176,7 @@ class LiveSegmenter:
             return LiveSegment(
                 start, end, None, 1.0, 0, nobody_explanation(self._absent_in(start, end))
             )
-        first = self._first_counted(start, end)
+        first = self._first_counted(start, end, state)
         reps: tuple[Repetition, ...] = ()
         # the stream's own start and (once finished) end are the recording's, as offline
         # (cbr.segmentation._repetitions): part of one repetition there is none
@@ -1203,7 +1204,8 @@ class LiveSegmenter:
         counted = self._after_still(start, first, end, edges, reps)
         kept = keep_whole(counted, first, end, self.step, turn or mine[0], cut and not mine[1],
                           held)  # fmt: skip
-        self.lost_from = self._left_when_lost(lost, counted, kept, end)
+        left = self._left_when_lost(lost, counted, kept, end)
+        self.lost_from = None if left is None else (left, state)
         if cut:
             self._finished(reps, first, end, held, passed_on)
         kept = self._unless_got_into(kept, end, not cut and explained)
@@ -1218,19 +1220,22 @@ class LiveSegmenter:
         self._hold(out, first, reps, held, cut and not lost)
         return out
 
-    def _first_counted(self, start: int, end: int) -> int:
-        """The first frame the repetitions of the segment of frames [start, end) are counted
-        from: at most its last :data:`MAX_SEGMENT_S` seconds of the frames still kept; right
-        after a segment with nobody in view (:attr:`last_cut`) that took over from one whose
-        far point the person was lost at, from that far point's repetition on
-        (:attr:`lost_from`), across the stretch, as offline
-        (:func:`cbr.segmentation.counted_segments`)."""
+    def _first_counted(self, start: int, end: int, state: int) -> int:
+        """The first frame the repetitions of the segment of frames [start, end), labelled
+        ``state``, are counted from: at most its last :data:`MAX_SEGMENT_S` seconds of the
+        frames still kept; right after a segment with nobody in view (:attr:`last_cut`) that
+        took over from one of the same activity whose far point the person was lost at,
+        from that far point's repetition on (:attr:`lost_from`), across the stretch, as
+        offline (:func:`cbr.segmentation.counted_segments`: another activity after the
+        stretch does not finish it)."""
         first = max(start, end - int(MAX_SEGMENT_S * self.fps), self.offset)
         lost_from, self.lost_from = self.lost_from, None
         prior = self.last_cut
-        if lost_from is None or prior is None or not prior.blind or prior.bounds[1] != start:
+        if lost_from is None or lost_from[1] != state:
             return first
-        return max(min(first, lost_from), end - int(MAX_SEGMENT_S * self.fps), self.offset)
+        if prior is None or not prior.blind or prior.bounds[1] != start:
+            return first
+        return max(min(first, lost_from[0]), end - int(MAX_SEGMENT_S * self.fps), self.offset)
 
     def _left_when_lost(
         self, lost: bool, counted: tuple[Repetition, ...], kept: tuple[Repetition, ...], end: int

@@ -24,8 +24,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cbr.estimator import CaseBaseClassifier
 from features.poses import PoseSequence
 from posecbr.cli import build_parser, main
+from tests.test_segment import classifier, names, recordings  # noqa: F401 - the fixtures
 
 
 def _commands(
@@ -211,3 +213,29 @@ def test_watch_counts_no_repetition_the_person_was_lost_in_before_it_was_finishe
     out = _live_segments(seq.positions, FPS)
     assert sum(s.repetitions for s in out) == want
     assert all(s.repetitions == 0 for s in out if s.label is None)
+
+
+def test_a_squats_way_down_lost_before_other_exercise_counts_none(
+    recordings: dict[str, PoseSequence],  # noqa: F811 - the fixture imported above
+    classifier: CaseBaseClassifier,  # noqa: F811
+) -> None:
+    """At 30 fps: CMU 13_30's squats' first 0.5 s (frames 0-15: the way down), 3 s with
+    every joint missing (15-105), its knee raises (6.7-11.8 s: 105-258), as
+    tests/test_hunt50c.py builds it. By hand: no squat finished, 0; the knee raises 4. The
+    stretch with nobody in view between two activities is no squat going on out of sight:
+    the squat's segment ends as at a recording's end. Before: 1 in ``segment`` and
+    ``watch`` (the far point where the person was lost kept, or the return filled in across
+    the 3 s)."""
+    from cbr.live import LiveSegmenter
+    from cbr.segmentation import segment
+
+    rec = recordings["13_30"]
+    squat = rec.positions[int(11.8 * 120) : int(12.3 * 120)][::4]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)][::4]
+    pos = np.concatenate([squat, np.full((90, *knee.shape[1:]), np.nan), knee])
+    rec = PoseSequence(pos, rec.joint_names, 30.0, source="seen, lost, back")
+    offline = segment(classifier, rec).segments
+    live = LiveSegmenter(classifier, 30.0)
+    watched = [s for frame in rec.positions for s in live.push(frame)] + live.finish()
+    assert [(s.start_frame, len(s.repetitions)) for s in offline] == [(0, 0), (15, 0), (105, 4)]
+    assert [(s.start_frame, s.repetitions) for s in watched] == [(0, 0), (15, 0), (105, 4)]
