@@ -1304,7 +1304,9 @@ def _counted_run(
     step = sig.step
     a0, b0 = groups[0][0] // step, -(-groups[-1][1] // step)
     off = a0 * step
-    inner = [(max(0, a - off), b - off) for a, b in groups]
+    # the run starts as a recording does: from its first sample (up to a step of frames
+    # with nobody in view before the first segment, filled in)
+    inner = [(0 if i == 0 else a - off, b - off) for i, (a, b) in enumerate(groups)]
     found = counted_segments(sig.part(a0, b0), inner, groups[-1][1] - off)
     out = []
     for k, reps in zip(run, found, strict=True):
