@@ -49,7 +49,8 @@ def test_drop_outs_at_the_rate_begun_with_are_left_missing_where_they_were(
     ``BURST_S``), every other frame read when it was taken, its pose that time: grid time k
     (one to a frame, as a steady source's) has the pose of k / fps, the grid times strictly
     inside each pause are missing (the lost frames' own), the grid ending on the last frame,
-    and each pause is said as a stall, neither as a burst. Before, the first pause was taken
+    and each pause is said as a stall, neither as a burst. A burst read no faster than the
+    pose model takes a frame is still a burst. Before, the first pause was taken
     as a burst's: every frame after it placed one grid time after the one before, 0.37 or
     0.40 s early, until half a second later the lag was made up (the grid times missing
     there)."""
@@ -65,6 +66,19 @@ def test_drop_outs_at_the_rate_begun_with_are_left_missing_where_they_were(
     err = capsys.readouterr().err
     assert err.count("the stream stalled") == 2
     assert "at once" not in err
+    # the same camera with none lost, its frames taken within 3.0-3.3 s read only from 3.3 s
+    # on, as fast as a busy reader takes them (0.6 of a frame interval apart: the pose
+    # model's time), and those after as soon as the reader is free: a burst, the grid ending
+    # on the last frame's grid time (a drop-out's stall would leave it 0.3 s late, the frames
+    # then one to a grid time)
+    came = taken.copy()
+    for i in range(round(3.0 * fps), len(came)):
+        came[i] = max(taken[i], 3.3, came[i - 1] + 0.6 / fps)
+    frames = [_frame(i, c, t) for i, (c, t) in enumerate(zip(came, taken, strict=True))]
+    values, _shown = _taken(Regrid(fps, "0"), frames)
+    assert len(values) == len(lost)
+    err = capsys.readouterr().err
+    assert err.count("then frames at once") == 1
 
 
 def test_drop_outs_among_bursts_on_the_clock_are_left_missing_where_they_were(

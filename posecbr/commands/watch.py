@@ -1180,6 +1180,13 @@ then read at once: a network's jitter; a reader held up by a slow frame) rather 
 times they came (:meth:`Regrid._placed`): 4-6 frames at once at 15 fps come after a pause of
 0.27-0.40 s. The frames that come late after a longer pause, or that all still come late a
 pause later, came after a stall, its time left missing."""
+AT_ONCE = 0.75
+"""How soon (a share of the frame interval) the frame after one held after a pause
+(:meth:`Regrid._pausing`) must come for the pause to be a burst's (frames held up on the way,
+then read as fast as the reader takes them: the pose model's 10-13 ms a frame on a free core,
+a third of a 30-fps interval, more on a busy machine) rather than a drop-out's (the stream
+resuming at its own pace: a frame interval later, give or take its jitter; one jittered by
+more than a quarter interval is taken as a burst's, as every pause was before)."""
 REMAKE_S = 4.0
 """How long after a live source's first frame a rise of its rate (a stream that starts slow:
 15 fps, then 30 as a camera's auto exposure settles) may be taken by watching it again from
@@ -1353,9 +1360,9 @@ class Regrid:
 
     def _released(self, held: Any, frame: Any) -> list[tuple[Any, Any, Any]]:
         """:meth:`take` of the frame ``held`` after a pause (:meth:`_pausing`), told by the
-        ``frame`` after it (None: the stream ended). One that came less than half a frame
-        interval before it is the first of a burst (frames held up on the way and read at
-        once): placed a frame interval after the frame before, as the camera took it
+        ``frame`` after it (None: the stream ended). One that came less than :data:`AT_ONCE`
+        of a frame interval before it is the first of a burst (frames held up on the way and
+        read at once): placed a frame interval after the frame before, as the camera took it
         (:meth:`_burst_begins`, :meth:`_placed`). Else the stream resumed at its own pace
         after a drop-out (the camera's frames of the pause lost, not held up): the frame lies
         at the time it came and the pause's grid times are left missing, said once on stderr
@@ -1365,7 +1372,7 @@ class Regrid:
         pause was long, until half a second later the lag was made up, the pause's grid times
         left missing only then (0.27-0.45-s drop-outs every 2 s at 30 fps: 34 of 78 grid times
         missing outside the pauses, poses up to 0.43 s off the clock)."""
-        burst = frame is not None and frame.time_s - held.time_s < self.interval / 2
+        burst = frame is not None and frame.time_s - held.time_s < AT_ONCE * self.interval
         self.absent, self.images = [], []
         if not self.by_clock:
             if burst:
