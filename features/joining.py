@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -86,7 +87,11 @@ def join_repetitions(
     """``reps`` (canonical :class:`PoseSequence` s of one frame rate, positions
     ``(frames, 33, 3)``) played one after the other (see the module docstring), of one
     movement or several; ``labels``: the movement of each repetition ``(K,)``, to label
-    every frame of the result (:attr:`Joined.labels`).
+    every frame of the result (:attr:`Joined.labels`). The recording keeps the metadata its
+    repetitions hold alike (:func:`_shared_metadata`): the first repetition's label of
+    correct or incorrect, its episode and the file it was converted from were the whole
+    recording's. Its ``source`` stays the first repetition's (name the recording with
+    ``with_metadata(source=...)``).
 
     Raises DataError for no repetitions, differing frame rates, a repetition without a
     frame that shows both hips, or as many labels as repetitions not given."""
@@ -121,13 +126,31 @@ def join_repetitions(
         reps[0].to_canonical(),
         positions=np.concatenate(parts),
         confidence=None,
-        metadata={**reps[0].metadata, "joined_repetitions": len(reps)},
+        metadata={**_shared_metadata(reps), "joined_repetitions": len(reps)},
     )
     starts_a = np.asarray(starts)
     per_frame = (
         None if labels is None else _frame_labels(labels, starts_a, n_blend, len(seq.positions))
     )
     return Joined(seq, starts_a, np.asarray(jumps), per_frame)
+
+
+PIECE_KEYS = ("frame_offset", "origin")
+"""Metadata that places a clip in the recording it was cut from: the joined frames lie in
+none, so no joined recording keeps it."""
+
+
+def _shared_metadata(reps: Sequence[PoseSequence]) -> dict[str, Any]:
+    """The metadata every repetition of ``reps`` holds alike (the subject, the sensor, the
+    movement), without what places a clip in its recording (:data:`PIECE_KEYS`): what one
+    repetition alone says (its episode, its label of correct or incorrect, the file it came
+    from) is not said of the whole recording."""
+    first = reps[0].metadata
+    return {
+        k: v
+        for k, v in first.items()
+        if k not in PIECE_KEYS and all(k in r.metadata and r.metadata[k] == v for r in reps[1:])
+    }
 
 
 def _frame_labels(
