@@ -12,6 +12,7 @@ person is reported as unclassifiable and never stored.
 from __future__ import annotations
 
 import difflib
+from collections import Counter
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -195,8 +196,10 @@ def _solve(
 
 
 def summarise(results: Sequence[Classification], target: str = "label") -> dict[str, Any]:
-    """What a run of :func:`classify_clips` comes to: clips, classified, the clips unlike the
-    stored cases and the unclassifiable ones; with true labels, the accuracy, the recall per
+    """What a run of :func:`classify_clips` comes to: clips, classified, how many got each
+    answer (``answers``, ``{label: clips}``: of a session's repetitions, how many were judged
+    correct and incorrect, labelled or not), the clips unlike the stored cases and the
+    unclassifiable ones; with true labels, the accuracy, the recall per
     class (``{label: {"right", "clips", "recall"}}``), the mean confidence (what the
     accuracy should be if the confidences are probabilities; ``confidence_calibrated`` False
     when they are vote shares the case base could not calibrate, None when no clip was
@@ -216,6 +219,7 @@ def summarise(results: Sequence[Classification], target: str = "label") -> dict[
         "target": target,
         "clips": len(results),
         "classified": len(done),
+        "answers": dict(sorted(Counter(str(r.label) for r in done).items())),
         "labelled": len(labelled),
         "right": len(right),
         "accuracy": len(right) / len(labelled) if labelled else None,

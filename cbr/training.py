@@ -386,7 +386,7 @@ def _check_split(split: Any) -> str:
 
 
 def cut(
-    clips: Iterable[PoseSequence], labels: Sequence[Any] | np.ndarray, split: str
+    clips: Iterable[PoseSequence], labels: Sequence[Any] | np.ndarray | None, split: str
 ) -> tuple[list[PoseSequence], list[Any]]:
     """``clips`` cut into the cases ``posecbr train --split`` makes of them (the same
     :func:`features.repetitions.cut_clips`), each piece with its clip's label as given:
@@ -396,7 +396,9 @@ def cut(
     shorter than one repetition can be, a jog, each left-and-right cycle,
     :func:`features.repetitions.case_spans`; a clip with none stays whole), or
     ``"clips"``, each whole. Each piece is a :class:`PoseSequence` sharing its clip's frames,
-    its ``frames`` where it lies in the clip. Give the result to :func:`train` with
+    its ``frames`` where it lies in the clip. ``labels`` None: clips not labelled (a new
+    session, to classify and explain repetition by repetition, as ``classify --split
+    repetitions`` does), each piece's label None. Give the result to :func:`train` with
     ``cases=split`` (for windows with ``CaseBaseClassifier(feature_weights="none")``, as
     ``train --split windows``). Bad ``clips``, ``labels`` or ``split``:
     :class:`features.errors.InputError` naming the argument."""
@@ -404,12 +406,16 @@ def cut(
     from features.repetitions import cut_clips
 
     seqs = as_sequences(clips, "clips")
-    check_labels(labels, len(seqs), "labels")
+    if labels is None:
+        labels = [None] * len(seqs)
+    else:
+        check_labels(labels, len(seqs), "labels")
     _check_split(split)
     out: list[PoseSequence] = []
     out_labels: list[Any] = []
     for seq, label in zip(seqs, np.asarray(labels, dtype=object), strict=True):
-        pieces = cut_clips([Clip(seq, str(label), subject_of(seq), {})], split).clips
+        named = "" if label is None else str(label)
+        pieces = cut_clips([Clip(seq, named, subject_of(seq), {})], split).clips
         out += [c.seq for c in pieces]
         out_labels += [label] * len(pieces)
     return out, out_labels

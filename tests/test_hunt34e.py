@@ -195,9 +195,9 @@ def test_classify_notes_clips_of_several_repetitions_against_a_case_base_of_one_
     notes = [line for line in capsys.readouterr().err.splitlines() if "per repetition" in line]
     assert notes == [
         "note: case base 'default' holds a case per repetition and 1 clip holds several "
-        "(three.npz: 3): each gets one answer here; to classify each repetition, give them "
-        "as rows path,label,start,end of a labels CSV (a label may be left empty; posecbr reps "
-        "CLIP --json: each one's start_frame and end_frame)"
+        "(three.npz: 3): each gets one answer here; to classify each repetition, add --split "
+        "repetitions (or give them as rows path,label,start,end of a labels CSV, a label may be "
+        "left empty; posecbr reps CLIP --json: each one's start_frame and end_frame)"
     ]
     assert main(["classify", str(one), "--db", str(db), "-q"]) == 0
     assert "per repetition" not in capsys.readouterr().err

@@ -88,6 +88,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         default=None,
         help="with --feedback: retain benefit threshold (default 0.2)",
     )
+    p.add_argument(
+        "--split",
+        choices=("clips", "repetitions"),
+        default="clips",
+        help="repetitions: cut every clip into the repetitions posecbr reps counts and classify"
+        " and explain each alone (a session of ten squats gives ten answers; the pieces train "
+        "--split repetitions cuts); clips: one answer per clip (default)",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     add_recording_options(p)  # as train, segment and describe read an AMC file or a rate given
     add_sensor_option(p)
@@ -251,6 +259,12 @@ def _check_args(args: argparse.Namespace) -> None:
             " none, where dad --top 0 details every activity)",
             "--top",
         )
+    if args.split == "repetitions" and args.feedback is not None:
+        raise ConfigError(
+            "goes without --feedback (feedback retains and revises whole clips; to add "
+            "repetitions to a case base: posecbr train CLIP --split repetitions --append)",
+            "--split repetitions",
+        )
     for flag, given in (("--new-label", args.new_label), ("--novelty", args.novelty is not None),
                         ("--benefit", args.benefit is not None)):  # fmt: skip
         if given and args.feedback is None:
@@ -345,10 +359,42 @@ def _note_repeated_clips(name: str, clips: list[Any]) -> None:
         f"note: case base {name!r} holds a case per repetition and "
         f"{counted(len(several), 'clip')} {'holds' if len(several) == 1 else 'hold'} several "
         f"({first_few(several)}): each gets one answer here; to classify each repetition, "
-        "give them as rows path,label,start,end of a labels CSV (a label may be left empty; "
-        f"posecbr reps CLIP --json: each one's start_frame and end_frame{pairs})",
+        "add --split repetitions (or give them as rows path,label,start,end of a labels CSV, "
+        "a label may be left empty; posecbr reps CLIP --json: each one's start_frame and "
+        f"end_frame{pairs})",
         file=sys.stderr,
     )
+
+
+def _each_repetition(
+    clips: list[PoseSequence], truths: list[str | None]
+) -> tuple[list[PoseSequence], list[str | None]]:
+    """Every clip cut into the repetitions ``reps`` counts, the pieces ``train --split
+    repetitions`` cuts (:func:`cbr.training.cut`: a movement that alternates sides in turns
+    too short alone, a jog, in left-and-right cycles), each with its clip's value to check
+    against; a clip in which none is found stays whole, and a note on stderr names it."""
+    from cbr.casebase import frames_of, piece_name
+    from cbr.training import cut
+    from features.text import shown
+
+    out: list[PoseSequence] = []
+    out_truths: list[str | None] = []
+    whole: list[str] = []
+    for clip, truth in zip(clips, truths, strict=True):
+        pieces, _ = cut([clip], None, "repetitions")
+        if len(pieces) == 1 and pieces[0] is clip:
+            piece = frames_of(clip) if "frame_offset" in clip.metadata else None
+            whole.append(shown(piece_name(Path(clip.source or "a clip").name, piece)))
+        out += pieces
+        out_truths += [truth] * len(pieces)
+    if whole:
+        print(
+            f"note: no repetition found in {counted(len(whole), 'clip')} "
+            f"({first_few(whole)}): {'it is' if len(whole) == 1 else 'each is'} classified "
+            "whole (posecbr reps CLIP says what it counts)",
+            file=sys.stderr,
+        )
+    return out, out_truths
 
 
 def _open_reader(args: argparse.Namespace) -> CaseStore:
@@ -440,6 +486,9 @@ def run(args: argparse.Namespace) -> int:
         sensor = sensor_for(args.sensor, args.clips)
         inputs = load_inputs(args.clips, sensor, subjects, target, labels, args.asf, args.fps)
         clips, truths = [s for s, _ in inputs], [t for _, t in inputs]
+        given = len(clips)
+        if args.split == "repetitions":
+            clips, truths = _each_repetition(clips, truths)
         if args.feedback is None:
             results = classify_clips(stored, clips, truths, target)
         else:
@@ -453,7 +502,7 @@ def run(args: argparse.Namespace) -> int:
         results, gone = _with_feedback(args.db, stored, clips, label, settings, target, known)
     _notes(name, target, stored, clips, results, label is not None)
     note_assumed_rates(assumed_rates(clips), _how_fps(args.clips))
-    _print(args, store.where, name, target, results, gone)
+    _print(args, store.where, name, target, results, gone, given)
     if all(r.solved is None for r in results):  # nothing the user asked for could be done
         print(
             f"posecbr classify: error: no clip could be classified "
@@ -560,7 +609,10 @@ def _print(
     target: str,
     results: list[Any],
     gone: list[str] | None = None,
+    given: int | None = None,
 ) -> None:
+    """Every clip's record and the summary (``given``: the clips given, before ``--split
+    repetitions`` cut them into the records)."""
     from cbr.classification import summarise
 
     summary = summarise(results, target)
@@ -569,9 +621,12 @@ def _print(
             "db": where,
             "case_base": name,
             "target": target,
+            "split": args.split,
             "results": [r.to_dict() for r in results],
             "summary": summary,
         }
+        if args.split == "repetitions":  # the records are pieces of these many clips
+            doc["clips_given"] = given
         if gone is not None:  # with --feedback: the labels it left without any case
             doc["left_without_cases"] = gone
         if summary.get("accuracy") is not None:  # the names of posecbr 0.2
@@ -583,7 +638,7 @@ def _print(
     if not args.quiet:
         for r in results:
             _print_one(r, args, target)
-    _print_summary(summary, target, results)
+    _print_summary(summary, target, results, given if args.split == "repetitions" else None)
     if args.feedback is not None:  # where it went, as every command that writes says
         _print_stored(where, name, results)
 
@@ -632,9 +687,27 @@ def _print_one(r: Any, args: argparse.Namespace, target: str) -> None:
         )
 
 
-def _print_summary(s: dict[str, Any], target: str, results: list[Any]) -> None:
-    """The closing summary: clips, accuracy and recall per class, flagged and wrong clips
-    (each named with its frames when a piece of its file: ``results``' names)."""
+def _print_counts(s: dict[str, Any], said: Callable[[str], str], cut_from: int | None) -> None:
+    """The summary's first lines: the clips (``cut_from``: the clips ``--split repetitions``
+    cut into them), classified, unclassifiable and flagged; of more than one classified, how
+    many got each answer (of a session's repetitions: how many judged correct, incorrect)."""
+    what = counted(s["clips"], "clip")
+    if cut_from is not None:
+        what = f"{counted(cut_from, 'clip')} cut into {counted(s['clips'], 'repetition')}"
+    print(f"\n{what}: {s['classified']} classified", end="")
+    if s["unclassifiable"]:
+        print(f", {len(s['unclassifiable'])} unclassifiable", end="")
+    print(f"; {len(s['unlike_cases'])} unlike the stored cases.")
+    if s["classified"] > 1:
+        print("answers: " + ", ".join(f"{said(lab)} {n}" for lab, n in s["answers"].items()))
+
+
+def _print_summary(
+    s: dict[str, Any], target: str, results: list[Any], cut_from: int | None = None
+) -> None:
+    """The closing summary: clips (``cut_from``: the clips ``--split repetitions`` cut into
+    them), the answers, accuracy and recall per class, flagged and wrong clips (each named
+    with its frames when a piece of its file: ``results``' names)."""
     from cbr.casebase import piece_name
     from cbr.explain import label_words
     from features.text import shown
@@ -642,10 +715,7 @@ def _print_summary(s: dict[str, Any], target: str, results: list[Any]) -> None:
     def said(label: str) -> str:
         return shown(label_words(label, target))
 
-    print(f"\n{counted(s['clips'], 'clip')}: {s['classified']} classified", end="")
-    if s["unclassifiable"]:
-        print(f", {len(s['unclassifiable'])} unclassifiable", end="")
-    print(f"; {len(s['unlike_cases'])} unlike the stored cases.")
+    _print_counts(s, said, cut_from)
     if s.get("accuracy") is not None:
         accuracy = percent(s["accuracy"])  # as compare's table: a percentage (--json: 0-1)
         print(f"accuracy: {accuracy} ({s['right']}/{s['labelled']} labelled clips)")
