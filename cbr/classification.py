@@ -89,6 +89,9 @@ class Classification:
         # an unclassifiable clip is not judged (the summary counts it as not labelled)
         judged = self.true_label is not None and self.solved is not None
         out["correct"] = self.true_label == self.label if judged else None
+        # the same under a name no repetition check can read as a verdict ("label":
+        # "incorrect", "correct": true was an incorrect repetition answered right)
+        out["right"] = out["correct"]
         if self.revision is not None:
             r = self.revision
             out["revision"] = {

@@ -126,3 +126,16 @@ def test_a_joined_recording_keeps_only_what_its_repetitions_share() -> None:
     # the first repetition's verdict, episode and file are not the recording's
     for key in ("correct", "episode", "origin", "frame_offset"):
         assert key not in joined.metadata, key
+
+
+def test_each_record_says_right_beside_a_verdict_it_cannot_be_taken_for(
+    tmp_path_factory: pytest.TempPathFactory, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (_, test), stores = made_once(tmp_path_factory, "classify-output", _data_and_stores)
+    assert main(["classify", str(test), "--db", stores["correct"], "--json"]) == 0
+    records = json.loads(capsys.readouterr().out)["results"]
+    assert len(records) == 4
+    for r in records:
+        truth = "correct" if "_deep_" in r["clip"] else "incorrect"  # as the CSV labels them
+        assert r["true_label"] == truth
+        assert r["right"] is (r["label"] == truth)
