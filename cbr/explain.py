@@ -904,6 +904,10 @@ def _short(
     label = solved.solution.label
     name = label_words(label, target)
     head = _head(solved, name, calibrated)
+    # a repetition check's reasons against "correct ones" (or "incorrect ones"), as its
+    # "Done differently" line says it, not "its cases"
+    check = label_words(label, target, article=False)
+    whose = f"{check.removesuffix(' repetition')} ones" if check != label else "its cases"
     # fewer changes shown, fewer reasons, no file names, then no case names or ranges at all
     levels = ((3, 3, 2), (3, 1, 2), (2, 1, 2), (2, 1, 1), (1, 1, 1), (1, 1, 0))
     for items, shown, names in levels:
@@ -911,7 +915,7 @@ def _short(
             said_ = [_claim_text(c, "correct ones" if names else "") for c in outside[:items]]
             why_line = _line_items("Done differently from correct repetitions: ", said_, 400)
         elif why:
-            said_ = [_claim_text(c, "its cases" if names else "") for c in why[:items]]
+            said_ = [_claim_text(c, whose if names else "") for c in why[:items]]
             why_line = _line_items("Why: ", said_, 400)
         else:
             plain = label_words(label, target, article=False)

@@ -66,6 +66,10 @@ def test_a_session_is_judged_and_explained_repetition_by_repetition(
     wrong = [r for r in got if r["label"] == "incorrect"]
     assert all("Done differently from correct repetitions: " in r["text"] for r in wrong)
     assert all(any(c["part"] == "outside" for c in r["claims"]) for r in wrong)
+    # and a deep one why it is correct, against the range of the correct repetitions
+    right = [r for r in got if r["label"] == "correct"]
+    assert all("Why: " in r["text"] and "(correct ones: " in r["text"] for r in right)
+    assert not any("its cases" in r["text"] for r in got)
 
     assert main(argv) == 0
     out = capsys.readouterr().out
