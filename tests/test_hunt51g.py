@@ -143,3 +143,21 @@ def test_each_record_says_right_beside_a_verdict_it_cannot_be_taken_for(
         truth = "correct" if "_deep_" in r["clip"] else "incorrect"  # as the CSV labels them
         assert r["true_label"] == truth
         assert r["right"] is (r["label"] == truth)
+
+
+def test_segment_of_a_session_against_a_repetition_check_points_to_each_repetition(
+    stores: dict[str, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A repetition check has two classes: segment's default judge of unknown is refused
+    (as before), and with --unknown held-out it labels 2-s windows correct or incorrect;
+    both now say how each repetition is judged (where the note said to train windows)."""
+    session, _ = _session(tmp_path)
+    db = stores["correct"]
+    hint = f"posecbr classify RECORDING --db {db} --split repetitions"
+    assert main(["segment", str(session), "--db", db]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "cannot judge unknown" in err and hint in err
+    assert main(["segment", str(session), "--db", db, "--unknown", "held-out"]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if line.startswith("note:")]
+    assert [n for n in notes if "predicts 'correct', not activities" in n and hint in n]
+    assert not [n for n in notes if "--split windows" in n]

@@ -427,9 +427,10 @@ def check_k_option(clf: Any, k: int) -> None:
 JUDGE_OPTIONS = {"name": "--unknown", "cases": "--split"}
 
 
-def judge_named(clf: Any, name: str, db: str) -> Any:
+def judge_named(clf: Any, name: str, db: str, command: str | None = None) -> Any:
     """The judge called ``name`` (``--unknown``) of the model stored in ``db``; a case base
-    it cannot be calibrated on is refused naming the database."""
+    it cannot be calibrated on is refused naming the database (of a repetition check, for
+    ``command`` "segment", with how its recording is judged repetition by repetition)."""
     from casebase_store import shown_db
     from cbr.unknown import judge_of
 
@@ -440,7 +441,26 @@ def judge_named(clf: Any, name: str, db: str) -> Any:
         if exc.source != "case base":
             raise
         message = f"its case base cannot judge unknown: {exc.message}"
+        if command == "segment" and is_repetition_check(clf):
+            message += f"; {each_repetition_hint(db)}"
         raise DataError(message, shown_db(db)) from None
+
+
+def is_repetition_check(clf: Any) -> bool:
+    """Whether ``clf`` judges repetitions (trained with ``--target`` another column than the
+    activity, ``train --target correct``) rather than naming activities."""
+    return getattr(clf, "target_", None) not in (None, "label")
+
+
+def each_repetition_hint(db: str) -> str:
+    """How a recording is judged repetition by repetition against the case base of ``db``,
+    a repetition check (:func:`is_repetition_check`)."""
+    from casebase_store import shown_db
+
+    return (
+        "to judge and explain each repetition by itself: posecbr classify RECORDING --db "
+        f"{shown_db(db)} --split repetitions"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -451,7 +471,7 @@ def run(args: argparse.Namespace) -> int:
     stored = load_case_base(args.db, args.name)
     clf = stored.classifier
     check_k_option(clf, args.k)  # before any recording is read (a video's poses take seconds)
-    judge = judge_named(clf, args.unknown, args.db)
+    judge = judge_named(clf, args.unknown, args.db, "segment")
     labels = _read_truths(args)
     _check_truths_fit(args, labels)
     # every recording read and checked before any is segmented (a bad one among several is
@@ -758,7 +778,9 @@ def note_not_windows(stored: Any, db: str, command: str) -> None:
     without ``--split`` or ``--split repetitions``; its model records it): ``command``
     (``segment``, ``watch``) classifies 2-s windows, which such cases answer far worse, and
     how to train a case base of windows. Said once per command; a case base stored before
-    its cases were recorded (``cases`` None) or of windows says nothing."""
+    its cases were recorded (``cases`` None) or of windows says nothing. A repetition check
+    (``train --target correct``) is noted by ``segment`` instead with how each repetition is
+    judged (``classify --split repetitions``): windows of it would not help."""
     from casebase_store import shown_db
     from cbr.words import CASE_KINDS
     from features.repetitions import WINDOW_S
@@ -769,6 +791,14 @@ def note_not_windows(stored: Any, db: str, command: str) -> None:
         "repetitions": "CMU 13_31 against 13_29 and 13_30: 81 % of its 0.1-s blocks "
         "segmented right, against 94 %",
     }
+    if command == "segment" and is_repetition_check(stored.classifier):
+        print(
+            f"note: case base {stored.name!r} of {shown_db(db)} predicts {stored.target!r}, "
+            f"not activities: segment labels 2-s windows with it; "
+            f"{each_repetition_hint(db)}",
+            file=sys.stderr,
+        )
+        return
     if stored.cases not in measured:
         return
     where = shown_db(db)
