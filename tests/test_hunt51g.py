@@ -161,3 +161,22 @@ def test_segment_of_a_session_against_a_repetition_check_points_to_each_repetiti
     notes = [line for line in capsys.readouterr().err.splitlines() if line.startswith("note:")]
     assert [n for n in notes if "predicts 'correct', not activities" in n and hint in n]
     assert not [n for n in notes if "--split windows" in n]
+
+
+def test_a_repetition_check_of_several_activities_is_noted(
+    tmp_path_factory: pytest.TempPathFactory, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The test clips: two activities (deep and shallow squats), correct and incorrect.
+    Trained as one repetition check, a note says one per activity judges better."""
+    (_, test), _ = made_once(tmp_path_factory, "classify-output", _data_and_stores)
+    db = str(tmp_path / "check.sqlite")
+    assert main(["train", str(test), "--db", db, "--target", "correct"]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "activities (" in line]
+    assert len(notes) == 1
+    assert notes[0].startswith(
+        "note: a case base predicting 'correct' of 2 activities (deep squat, shallow squat): "
+        "each repetition is judged among every activity's cases; one per activity (posecbr "
+        "train DATA --labels ACTIVITY --target correct"
+    )
+    assert main(["train", str(test), "--db", str(tmp_path / "labels.sqlite")]) == 0
+    assert "activities (" not in capsys.readouterr().err
