@@ -46,8 +46,10 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
+import errno
 import json
 import math
+import os
 import queue
 import signal
 import statistics
@@ -693,6 +695,8 @@ class Watcher:
         # a live source's frames since its first, while its grid may be re-made at a rate
         # that rose (:meth:`_remake`); None once it may not
         self.kept: list[Any] | None = None
+        self.images: KeptImages | None = None  # their images, with --out
+        self.padding_said = False  # the note that the --out video's odd side is padded
         self.replaying = False  # the kept frames are taken again, at the rate they rose to
         self.started = time.perf_counter()
 
@@ -739,6 +743,7 @@ class Watcher:
                     if self.fps is None:
                         continue
                 self._start(waiting)
+                waiting.clear()  # taken (kept, if at all, by :meth:`_take`): not held any longer
             self._take(frame)
         if self.stdout_gone:
             return
@@ -762,6 +767,11 @@ class Watcher:
         self._grid = Regrid(fps, self.args.source)
         if waiting:
             self.kept, self._grid.remakable = [], True
+            if self.args.out is not None:
+                try:
+                    self.images = KeptImages(self.args.out.parent)
+                except OSError as exc:
+                    self._not_kept(exc)
         for early in waiting[:-1]:
             self._take(early)
 
@@ -782,9 +792,12 @@ class Watcher:
         kept = self.kept
         if kept is not None and not self.replaying:
             if self.emitted or (kept and frame.time_s - kept[0].time_s > REMAKE_S):
-                self.kept, self._grid.remakable = None, False  # too late: followed as it is
+                self._stop_keeping()  # too late: followed as it is
             else:
-                kept.append(_Kept.of(frame, self.args.out is not None))
+                try:
+                    kept.append(_Kept.of(frame, self.images))
+                except OSError as exc:
+                    self._not_kept(exc)
         taken = self._grid.take(frame)
         if self.kept is not None and self._grid.rose is not None:
             self._remake(self._grid.rose)
@@ -802,6 +815,24 @@ class Watcher:
         if since == since and not self.replaying:  # not NaN: the source said when it read it
             self.latency.add(time.perf_counter() - since)
 
+    def _stop_keeping(self) -> None:
+        """The stream's rate is followed as it is from here on: no frame kept any longer."""
+        self.kept, self._grid.remakable = None, False
+        if self.images is not None:
+            self.images.close()
+            self.images = None
+
+    def _not_kept(self, exc: OSError) -> None:
+        """The kept frames' images cannot be written (:class:`KeptImages`: a full disk): said,
+        and the stream followed at its first rate, as after :data:`REMAKE_S`."""
+        print(
+            f"note: {shown(self.args.out)}: the first frames cannot be kept to be drawn again"
+            f" ({exc.strerror or exc}): a rise of the stream's frame rate is followed at its"
+            " first rate",
+            file=sys.stderr,
+        )
+        self._stop_keeping()
+
     def _remake(self, fps: float) -> None:
         """Watch a live source again from its first frame at ``fps``, the rate it rose to
         within :data:`REMAKE_S` of it, before any segment was given (:attr:`kept`): a new
@@ -815,6 +846,7 @@ class Watcher:
 
         kept, before = self.kept or [], float(self.fps or fps)
         self.kept = None
+        images, self.images = self.images, None  # closed once the kept frames are drawn
         print(
             f"note: {self.args.source}: the frame rate rose from {before:.3g} to {fps:.3g} fps"
             f" at {kept[-1].time_s - kept[0].time_s:.1f} s, before any segment was given:"
@@ -831,13 +863,17 @@ class Watcher:
             if self.rescue_path is not None:
                 self.rescue_path.unlink(missing_ok=True)
             self.writer, self.rescue_path, self.drawn = None, None, 0
-        self.replaying = True
         try:
-            for frame in kept[:-1]:
-                self._take(frame)
+            self.replaying = True
+            try:
+                for frame in kept[:-1]:
+                    self._take(frame)
+            finally:
+                self.replaying = False
+            self._take(kept[-1])  # the frame in hand: its latency counted
         finally:
-            self.replaying = False
-        self._take(kept[-1])  # the frame in hand: its latency counted
+            if images is not None:
+                images.close()
 
     def _since(self, frame: Any) -> float:
         """When ``frame`` came, from which its latency runs: a file's frame played at its
@@ -966,8 +1002,9 @@ class Watcher:
             size = even_size(w, h)  # an odd side padded, not cut by the writer
             fps = float(self.fps or 30.0)
             self.writer = Recording(self.rescue_path, fps, size, str(self.args.out))
-            if padding_words(w, h):
+            if padding_words(w, h) and not self.padding_said:  # once: not again at a re-make
                 print(f"note: {shown(self.args.out)}: {padding_words(w, h)}", file=sys.stderr)
+                self.padding_said = True
         self.writer.write(pad_even(bgr))
         self.drawn += 1
 
@@ -980,6 +1017,9 @@ class Watcher:
         if self.rescue_path is not None:
             self.rescue_path.unlink(missing_ok=True)
             self.rescue_path = None
+        if self.images is not None:  # the watch ended within REMAKE_S of its start
+            self.images.close()
+            self.images = None
 
     def _show(self, bgr: Any) -> None:
         import cv2
@@ -1044,8 +1084,8 @@ class Watcher:
 @dataclasses.dataclass(frozen=True)
 class _Kept:
     """A live source's frame kept while its grid may be re-made (:attr:`Watcher.kept`): what
-    the grid and the drawing read of it, its image (``rgb``) only when it is to be drawn
-    again (``--out``), None else."""
+    the grid and the drawing read of it, and where its image is kept to be drawn again
+    (``--out``: :class:`KeptImages`; None else), read back as :attr:`rgb`."""
 
     index: int
     time_s: float
@@ -1054,10 +1094,10 @@ class _Kept:
     seen_world: Any
     visibility: Any
     pose: Any
-    rgb: Any
+    image: tuple[KeptImages, int, tuple[int, ...], Any] | None
 
     @classmethod
-    def of(cls, frame: Any, image: bool) -> _Kept:
+    def of(cls, frame: Any, images: KeptImages | None) -> _Kept:
         return cls(
             frame.index,
             frame.time_s,
@@ -1066,8 +1106,57 @@ class _Kept:
             frame.seen_world,
             frame.visibility,
             frame.pose,
-            frame.rgb if image else None,
+            None if images is None else images.put(frame.rgb),
         )
+
+    @property
+    def rgb(self) -> Any:
+        """The frame's image, as the stream gave it (read back from its :class:`KeptImages`)."""
+        if self.image is None:
+            return None
+        images, offset, shape, dtype = self.image
+        return images.get(offset, shape, dtype)
+
+
+class KeptImages:
+    """The images of a live source's frames kept to be drawn again (:attr:`Watcher.kept`,
+    with ``--out``), in an unnamed temporary file in the folder of the ``--out`` video (the
+    file system's own: no name a kill could leave behind), not in memory: 4 s of 1920x1080
+    at 30 fps is 750 MB of images (docs/measurements.md: a 1080p stream that rose at 3.5 s
+    peaked at 937 MB, now 586 MB, its video the same bytes). Their bytes are written as
+    they are, not compressed: a lossless PNG of a 1080p frame took 126-256 ms to encode
+    here (TIFF's LZW 74 ms), where a frame of a 30-fps stream has 33 ms; written, one
+    takes a copy."""
+
+    def __init__(self, folder: Path) -> None:
+        import tempfile
+
+        self.file = tempfile.TemporaryFile(dir=folder)  # noqa: SIM115 - closed in close
+        self.size = 0
+
+    def put(self, rgb: Any) -> tuple[KeptImages, int, tuple[int, ...], Any]:
+        """Keep ``rgb``; where it is, to :meth:`get` it back with. Raises OSError (a full disk)."""
+        import numpy as np
+
+        data = np.ascontiguousarray(rgb).data.cast("B")
+        offset, done = self.size, 0
+        while done < len(data):
+            written = os.pwrite(self.file.fileno(), data[done:], offset + done)
+            if written == 0:
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            done += written
+        self.size += len(data)
+        return self, offset, tuple(rgb.shape), rgb.dtype
+
+    def get(self, offset: int, shape: tuple[int, ...], dtype: Any) -> Any:
+        import numpy as np
+
+        n = int(np.prod(shape)) * np.dtype(dtype).itemsize
+        data = os.pread(self.file.fileno(), n, offset)
+        return np.frombuffer(data, dtype=dtype).reshape(shape)
+
+    def close(self) -> None:
+        self.file.close()
 
 
 class Latencies:
@@ -1158,8 +1247,8 @@ REMAKE_S = 4.0
 """How long after a live source's first frame a rise of its rate (a stream that starts slow:
 15 fps, then 30 as a camera's auto exposure settles) may be taken by watching it again from
 its start at the new rate (:meth:`Watcher._remake`), before any segment is given: its
-frames are kept until then (with ``--out``, their images to draw again: 4 s of 640x480 at
-30 fps is 110 MB). A later rise is followed on the first rate's grid by the wall clock."""
+frames are kept until then (with ``--out``, their images to draw again, in a file:
+:class:`KeptImages`). A later rise is followed on the first rate's grid by the wall clock."""
 CATCH_UP = 4.0
 """Over how many times its length the lead a live source's frames ran ahead of the wall clock
 by, before its rate's rise was taken, is made up (:meth:`Regrid._rate_changed`): the grid's

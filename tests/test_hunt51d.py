@@ -1,0 +1,169 @@
+"""Hunt 51d: ``watch --out`` of a stream that starts slow.
+
+- A live source whose rate rises within its first 4 s is watched again from its start
+  (``Watcher._remake``); with ``--out`` the frames of those seconds are drawn again, and
+  their images were held in memory until then (4 s of 1920x1080 at 30 fps: 750 MB). They
+  are kept in a temporary file now (``KeptImages``), read back when drawn again.
+- The note that the ``--out`` video's odd-sided frames are padded was said twice, once
+  more when the video was drawn again at the rate the stream rose to.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+import io
+import time
+import weakref
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+import pytest
+
+import features.pose_estimation as pose_estimation
+from features.pose_estimation import StreamFrame
+from features.pose_estimation.tracker import FramePose
+from features.readers.asfamc import read_asf_amc
+from posecbr.cli import main
+from posecbr.commands.watch import Watcher
+from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
+
+SLOW = 15  # frames at 15 fps, the first second, then 30 fps
+N = SLOW + 60
+HEIGHT, WIDTH = 121, 161  # odd sides: the video's frames padded to 122x162
+
+
+def _colour(i: int) -> tuple[int, int, int]:
+    """Frame ``i``'s colour (RGB): green and blue steps of 12 apart name it (up to 18 x 18
+    frames), far enough apart to tell after MPEG-4's loss."""
+    return 0, 20 + 12 * (i % 18), 20 + 12 * (i // 18)
+
+
+def _slow_watch(db: Path, world: np.ndarray, out: Path) -> dict[str, Any]:
+    """``watch 0 --out OUT`` of a camera that sends 15 frames a second for its first second,
+    then 30 (``world``: CMU 13_30's jumping jacks at 30 fps, each frame the pose at the time
+    it was taken), each frame's image one colour (:func:`_colour`): the exit status, stderr,
+    and how many of the images the stream gave were still alive (not freed) each time the
+    watch began again."""
+    times = [i / 15.0 if i < SLOW else 1.0 + (i - SLOW) / 30.0 for i in range(N)]
+    given: list[weakref.ref[np.ndarray]] = []
+
+    def stream(source: Any, **kwargs: Any) -> Iterator[StreamFrame]:
+        for i, t in enumerate(times):
+            image = np.full((33, 5), np.nan)
+            image[:, 3] = 1.0  # every joint seen (mocap), none placed in the picture
+            pose = FramePose(image, world[i + min(i, SLOW)], True, False, 1.0, None)
+            rgb = np.empty((HEIGHT, WIDTH, 3), dtype=np.uint8)
+            rgb[:] = _colour(i)
+            given.append(weakref.ref(rgb))
+            yield StreamFrame(i, float(t), pose, rgb, time.perf_counter())
+
+    alive: list[int] = []
+    remake = Watcher._remake
+
+    def counted(self: Watcher, fps: float) -> None:
+        gc.collect()  # an image only a cycle of garbage holds is not held
+        alive.append(sum(ref() is not None for ref in given))
+        remake(self, fps)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(pose_estimation, "stream_poses", stream)
+        mp.setattr(Watcher, "_remake", counted)
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            status = main(["watch", "0", "--db", str(db), "--max-frames", str(N),
+                           "--out", str(out)])  # fmt: skip
+    return {"status": status, "out": out, "err": err.getvalue(), "alive": alive}
+
+
+@pytest.fixture(scope="module")
+def jumping_jacks(shared_data: Path) -> np.ndarray:
+    """CMU 13_30 (120 fps) at 30 fps: world positions ``(frames, joints, 3)``."""
+    seq = read_asf_amc(
+        shared_data / "hdm05" / "train" / "3" / "HDM_bd.asf",
+        shared_data / "cmu-mocap6" / "amc" / "13_30.amc",
+    )
+    return seq.positions[::4]
+
+
+@pytest.fixture(scope="module")
+def slow_start(
+    case_base: Path,  # noqa: F811
+    jumping_jacks: np.ndarray,
+    tmp_path_factory: pytest.TempPathFactory,
+) -> dict[str, Any]:
+    """:func:`_slow_watch` into a folder of its own."""
+    return _slow_watch(case_base, jumping_jacks, tmp_path_factory.mktemp("hunt51d") / "watched.mp4")
+
+
+def test_a_slow_start_drawn_again_holds_not_its_images_in_memory(
+    slow_start: dict[str, Any],
+) -> None:
+    """The rise is taken once, when about 1.9 s of the stream (about 42 frames) had come;
+    then only the frames in flight were alive (the reader's queue of 8, the one it reads,
+    the one in hand, the one before it: 8-13 seen, under load), the first frames' images
+    freed. Before, every frame read since the first was, and those queued (52-53). The
+    video is the 30-fps grid from the first frame: grid time k (k / 30 s) shows, for k <
+    30, the 15-fps frame on screen then (k // 2), and after frame 15 + (k - 30), each
+    image's colour kept through the read back; nothing is left beside the video."""
+    assert slow_start["status"] == 0
+    assert slow_start["err"].count("the frame rate rose from 15 to 30 fps") == 1
+    [alive] = slow_start["alive"]
+    assert alive <= 20
+    cap = cv2.VideoCapture(str(slow_start["out"]))
+    seen = []
+    while True:
+        ok, bgr = cap.read()
+        if not ok:
+            break
+        seen.append(np.median(bgr[HEIGHT - 30 : HEIGHT - 10, WIDTH - 30 : WIDTH - 10], axis=(0, 1)))
+    cap.release()
+    assert len(seen) == 30 + (N - SLOW)
+    expected = [k // 2 if k < 30 else SLOW + k - 30 for k in range(len(seen))]
+    for k, (bgr_median, frame) in enumerate(zip(seen, expected, strict=True)):
+        red, green, blue = _colour(frame)
+        np.testing.assert_allclose(bgr_median, [blue, green, red], atol=5, err_msg=f"grid {k}")
+    assert sorted(p.name for p in slow_start["out"].parent.iterdir()) == ["watched.mp4"]
+
+
+def test_the_padding_note_is_said_once_when_the_video_is_drawn_again(
+    slow_start: dict[str, Any],
+) -> None:
+    """The frames' odd sides padded to even ones: said once, as the frames are written
+    once. Before, said a second time when the video was drawn again at 30 fps."""
+    notes = [line for line in slow_start["err"].splitlines() if "a black column" in line]
+    assert notes == [
+        f"note: {slow_start['out']}: 161x121 frames written 162x122, a black column at the"
+        " right and row at the bottom added (MP4 frames have even sides)"
+    ]
+
+
+def test_a_slow_start_whose_frames_cannot_be_kept_is_followed_at_its_first_rate(
+    case_base: Path,  # noqa: F811
+    jumping_jacks: np.ndarray,
+    tmp_path: Path,
+    file_size_limit: Callable[[int], None],
+) -> None:
+    """The disk full for the kept frames (a file size limit of 1 MB: 18 of the 58-KB
+    images; the video, at most 307 KB, fits): said once, and the stream followed at its
+    first rate as a rise after 4 s is (the grid 0.9 s ahead of the clock made up), the
+    video written, nothing else left. Before, the frames were in memory (no such limit): the
+    rise taken, the video drawn again at 30 fps."""
+    out = tmp_path / "watched.mp4"
+    file_size_limit(1_000_000)
+    watched = _slow_watch(case_base, jumping_jacks, out)
+    assert watched["status"] == 0
+    notes = [line for line in watched["err"].splitlines() if "cannot be kept" in line]
+    assert notes == [
+        f"note: {out}: the first frames cannot be kept to be drawn again (File too large): a"
+        " rise of the stream's frame rate is followed at its first rate"
+    ]
+    assert watched["alive"] == []  # not watched again
+    assert "the frame rate changed from 15 to 30 fps" in watched["err"]
+    cap = cv2.VideoCapture(str(out))
+    assert cap.get(cv2.CAP_PROP_FPS) == 15.0
+    cap.release()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["watched.mp4"]
