@@ -1,4 +1,4 @@
-"""Hunt 51d: ``watch --out`` of a stream that starts slow.
+"""Hunt 51d: ``watch --out`` of a stream that starts slow, and outputs of several files.
 
 - A live source whose rate rises within its first 4 s is watched again from its start
   (``Watcher._remake``); with ``--out`` the frames of those seconds are drawn again, and
@@ -6,6 +6,9 @@
   are kept in a temporary file now (``KeptImages``), read back when drawn again.
 - The note that the ``--out`` video's odd-sided frames are padded was said twice, once
   more when the video was drawn again at the rate the stream rose to.
+- ``segment``'s pictures and overlays, and a clip's pose file and overlay in ``extract``,
+  are written together (``features.fileio.write_together``): all, or none and the files
+  there before as they were. Before, each was written in turn.
 """
 
 from __future__ import annotations
@@ -24,11 +27,14 @@ import numpy as np
 import pytest
 
 import features.pose_estimation as pose_estimation
+from features.interrupts import INTERRUPTED_STATUS
 from features.pose_estimation import StreamFrame
 from features.pose_estimation.tracker import FramePose
 from features.readers.asfamc import read_asf_amc
 from posecbr.cli import main
 from posecbr.commands.watch import Watcher
+from tests.badinput import assert_unchanged, good_pose_file, small_case_base, snapshot
+from tests.test_hunt50j import _clip
 from tests.test_watch import case_base  # noqa: F401 - the fixture: CMU 13_29's windows
 
 SLOW = 15  # frames at 15 fps, the first second, then 30 fps
@@ -167,3 +173,59 @@ def test_a_slow_start_whose_frames_cannot_be_kept_is_followed_at_its_first_rate(
     assert cap.get(cv2.CAP_PROP_FPS) == 15.0
     cap.release()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["watched.mp4"]
+
+
+def test_segment_pictures_are_written_all_or_none(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``segment A B --plot DIR/`` (DIR to be made) stopped by Ctrl-C while its second
+    picture is drawn, the first drawn: "interrupted", exit 130, and nothing left, not DIR,
+    not the first picture, no temporary file. Before, the first recording's picture was
+    left in DIR. (A full disk goes the same way: tests of extract below.)"""
+    import features.timeline as timeline
+
+    db = small_case_base(tmp_path)
+    clips = sorted((tmp_path / "train").glob("l*/*.npz"))[:2]  # Latin names: no font search
+    drawn: list[Path] = []
+    plot = timeline.plot_timeline
+
+    def stopped(tl: Any, path: Path, **kwargs: Any) -> Path:
+        drawn.append(path)
+        if len(drawn) == 2:
+            raise KeyboardInterrupt
+        return plot(tl, path, **kwargs)
+
+    monkeypatch.setattr(timeline, "plot_timeline", stopped)
+    before = snapshot(tmp_path)
+    argv = ["segment", *map(str, clips), "--db", str(db), "--plot", f"{tmp_path}/pics/"]
+    capsys.readouterr()
+    assert main(argv) == INTERRUPTED_STATUS
+    assert capsys.readouterr().err.splitlines()[-1] == "posecbr segment: interrupted"
+    assert len(drawn) == 2
+    assert_unchanged(tmp_path, before)
+
+
+def test_extract_leaves_no_pose_file_of_a_clip_whose_overlay_failed(
+    shared_data: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    file_size_limit: Callable[[int], None],
+) -> None:
+    """``extract clip.mp4 --out poses.npz --overlay clip.mp4`` over an earlier pose file of
+    the user's, the disk full for the overlay (a limit of 64 KiB: a pose file of 12 frames
+    is about 29 KB, their overlay about 140 KB): one line naming the overlay, exit 1, and
+    the earlier pose file byte for byte, no other file. Before, the pose file was written
+    first: the clip failed with the earlier one replaced by its poses."""
+    source = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
+    clip = _clip(source, tmp_path / "in" / "squat.mp4", 0)
+    earlier = good_pose_file(tmp_path / "poses.npz")
+    overlay = tmp_path / "squat_overlay.mp4"
+    before = snapshot(tmp_path)
+    capsys.readouterr()
+    file_size_limit(64 * 1024)
+    argv = ["extract", str(clip), "--out", str(earlier), "--overlay", str(overlay)]
+    assert main(argv) == 1
+    [line] = capsys.readouterr().err.splitlines()
+    assert_unchanged(tmp_path, before)
+    assert line.startswith(f"posecbr extract: error: {overlay}: cannot write: "), line
+    assert line.endswith("; none of the 2 files written (the earlier poses.npz kept as it was)")
