@@ -48,13 +48,17 @@ def _colour(i: int) -> tuple[int, int, int]:
     return 0, 20 + 12 * (i % 18), 20 + 12 * (i // 18)
 
 
-def _slow_watch(db: Path, world: np.ndarray, out: Path) -> dict[str, Any]:
+def _slow_watch(
+    db: Path, world: np.ndarray, out: Path | None, stall_s: float = 0.0
+) -> dict[str, Any]:
     """``watch 0 --out OUT`` of a camera that sends 15 frames a second for its first second,
     then 30 (``world``: CMU 13_30's jumping jacks at 30 fps, each frame the pose at the time
     it was taken), each frame's image one colour (:func:`_colour`): the exit status, stderr,
     and how many of the images the stream gave were still alive (not freed) each time the
-    watch began again."""
+    watch began again. ``stall_s``: no frame for so long after the one at 0.5 s (the frames
+    after it that much later, their poses the same). ``out`` None: no ``--out``."""
     times = [i / 15.0 if i < SLOW else 1.0 + (i - SLOW) / 30.0 for i in range(N)]
+    times = [t + (stall_s if t > 0.5 else 0.0) for t in times]
     given: list[weakref.ref[np.ndarray]] = []
 
     def stream(source: Any, **kwargs: Any) -> Iterator[StreamFrame]:
@@ -80,8 +84,8 @@ def _slow_watch(db: Path, world: np.ndarray, out: Path) -> dict[str, Any]:
         mp.setattr(Watcher, "_remake", counted)
         err = io.StringIO()
         with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            status = main(["watch", "0", "--db", str(db), "--max-frames", str(N),
-                           "--out", str(out)])  # fmt: skip
+            written = [] if out is None else ["--out", str(out)]
+            status = main(["watch", "0", "--db", str(db), "--max-frames", str(N), *written])
     return {"status": status, "out": out, "err": err.getvalue(), "alive": alive}
 
 
@@ -173,6 +177,20 @@ def test_a_slow_start_whose_frames_cannot_be_kept_is_followed_at_its_first_rate(
     assert cap.get(cv2.CAP_PROP_FPS) == 15.0
     cap.release()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["watched.mp4"]
+
+
+def test_a_stall_before_the_rise_is_said_once(
+    case_base: Path,  # noqa: F811
+    jumping_jacks: np.ndarray,
+) -> None:
+    """No frame for 0.6 s after the one at 0.5 s, then the stream as before: the stall is
+    said once, when it came, and the rise taken. Before, it was said again when the kept
+    frames were taken again at 30 fps ("... at 0.5-1.1 s", then "... at 0.4-1.1 s")."""
+    watched = _slow_watch(case_base, jumping_jacks, None, stall_s=0.6)
+    assert watched["status"] == 0
+    assert watched["err"].count("the frame rate rose from") == 1
+    stalls = [line for line in watched["err"].splitlines() if "the stream stalled" in line]
+    assert stalls == ["note: 0: the stream stalled: 0.7 s without frames at 0.5-1.1 s left missing"]
 
 
 def test_segment_pictures_are_written_all_or_none(

@@ -863,6 +863,7 @@ class Watcher:
             if self.rescue_path is not None:
                 self.rescue_path.unlink(missing_ok=True)
             self.writer, self.rescue_path, self.drawn = None, None, 0
+        grid, grid.quiet = self._grid, True  # its notes said as the frames first came
         try:
             self.replaying = True
             try:
@@ -872,6 +873,7 @@ class Watcher:
                 self.replaying = False
             self._take(kept[-1])  # the frame in hand: its latency counted
         finally:
+            grid.quiet = False
             if images is not None:
                 images.close()
 
@@ -1312,9 +1314,17 @@ class Regrid:
         # segmenter) at it (:meth:`Watcher._remake`), not followed here: then the rate
         self.remakable = False
         self.rose: float | None = None
+        # the frames taken are a re-made grid's kept ones, taken again (:meth:`Watcher._remake`):
+        # its notes were said when they first came (a stall said twice, its times a little off)
+        self.quiet = False
         if interval is not None:  # on the wall clock from the first frame, which came so
             self.resampling = self.by_clock = True
             self.interval = interval
+
+    def _note(self, words: str) -> None:
+        """Say ``words`` of the source on stderr, unless :attr:`quiet`."""
+        if not self.quiet:
+            print(f"note: {self.source}: {words}", file=sys.stderr)
 
     def take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """(world, visibility, the frame on screen then) for each grid time up to this
@@ -1352,11 +1362,10 @@ class Regrid:
                 self.absent, self.images = [False], [_image(frame)]
                 return [(frame.seen_world, frame.visibility, frame)]
             self.resampling = True
-            print(
-                f"note: {self.source}: variable frame rate (frame {frame.index} is at"
-                f" {t:.3f} s, not {frame.index / self.fps:.3f} s): poses resampled to"
-                f" {self.fps:g} fps as they come",
-                file=sys.stderr,
+            self._note(
+                f"variable frame rate (frame {frame.index} is at {t:.3f} s, not"
+                f" {frame.index / self.fps:.3f} s): poses resampled to {self.fps:g} fps as"
+                " they come"
             )
         return self._resampled(frame, t)
 
@@ -1385,11 +1394,11 @@ class Regrid:
         self.prev, self.placed_s = frame, t
         self.absent += gap
         if any(gap) and not self.by_clock:
-            print(f"note: {self.source}: {gap_words([(start, t)])}", file=sys.stderr)
+            self._note(gap_words([(start, t)]))
         elif any(gap):  # as :meth:`_stalled` says it, from the first frame
             since = self.origin_s - self.first_s
             words = gap_words([(start + since, t + since)])
-            print(f"note: {self.source}: the stream stalled: {words}", file=sys.stderr)
+            self._note(f"the stream stalled: {words}")
         return out
 
     def _behind(self, frame: Any) -> list[tuple[Any, Any, Any]]:
@@ -1507,11 +1516,10 @@ class Regrid:
                 f" {CATCH_UP * lead:.1f} s: the frames before, counted at the old rate, ran"
                 " that far ahead of it)"
             )
-        print(
-            f"note: {self.source}: the frame rate changed from {self.fps:.3g} to {rate:.3g} fps"
-            f" at {frame.time_s - self.first_s:.1f} s: poses resampled to {self.fps:.3g} fps by"
-            f" the clock as they come{behind}",
-            file=sys.stderr,
+        self._note(
+            f"the frame rate changed from {self.fps:.3g} to {rate:.3g} fps at"
+            f" {frame.time_s - self.first_s:.1f} s: poses resampled to {self.fps:.3g} fps by"
+            f" the clock as they come{behind}"
         )
         return True
 
@@ -1543,11 +1551,10 @@ class Regrid:
         self.placed_s = prev.time_s - self.origin_s
         self.clocked.pop()  # this frame, counted at its place by :meth:`_rate_changed`
         self.came -= 1
-        print(
-            f"note: {self.source}: {pause:.2f} s without frames at"
-            f" {prev.time_s - self.first_s:.1f} s, then frames at once (held up on the way?):"
-            f" poses resampled to {self.fps:.3g} fps by the clock as they come",
-            file=sys.stderr,
+        self._note(
+            f"{pause:.2f} s without frames at {prev.time_s - self.first_s:.1f} s, then frames"
+            f" at once (held up on the way?): poses resampled to {self.fps:.3g} fps by the"
+            " clock as they come"
         )
         return True
 
@@ -1584,7 +1591,7 @@ class Regrid:
         missing = max(0, min(between, behind))
         if missing:
             words = gap_words([(prev.time_s - self.first_s, frame.time_s - self.first_s)])
-            print(f"note: {self.source}: the stream stalled: {words}", file=sys.stderr)
+            self._note(f"the stream stalled: {words}")
         nan = np.full((len(frame.visibility),), np.nan)
         return [(np.full_like(frame.seen_world, np.nan), nan, prev)] * missing
 
