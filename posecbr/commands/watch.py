@@ -1133,7 +1133,8 @@ class KeptImages:
     def __init__(self, folder: Path) -> None:
         import tempfile
 
-        self.file = tempfile.TemporaryFile(dir=folder)  # noqa: SIM115 - closed in close
+        # unbuffered: a write that fails (a full disk) fails in put, not in a later flush
+        self.file = tempfile.TemporaryFile(dir=folder, buffering=0)  # noqa: SIM115 - close
         self.size = 0
 
     def put(self, rgb: Any) -> tuple[KeptImages, int, tuple[int, ...], Any]:
@@ -1142,20 +1143,28 @@ class KeptImages:
 
         data = np.ascontiguousarray(rgb).data.cast("B")
         offset, done = self.size, 0
+        self.file.seek(offset)
         while done < len(data):
-            written = os.pwrite(self.file.fileno(), data[done:], offset + done)
-            if written == 0:
+            written = self.file.write(data[done:])
+            if not written:
                 raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
             done += written
         self.size += len(data)
         return self, offset, tuple(rgb.shape), rgb.dtype
 
     def get(self, offset: int, shape: tuple[int, ...], dtype: Any) -> Any:
+        """The image :meth:`put` kept at ``offset``."""
         import numpy as np
 
-        n = int(np.prod(shape)) * np.dtype(dtype).itemsize
-        data = os.pread(self.file.fileno(), n, offset)
-        return np.frombuffer(data, dtype=dtype).reshape(shape)
+        image = np.empty(shape, dtype=dtype)
+        view, done = image.data.cast("B"), 0
+        self.file.seek(offset)
+        while done < len(view):
+            read = self.file.readinto(view[done:])
+            if not read:
+                raise OSError(errno.EIO, "the kept images' file ended early")
+            done += read
+        return image
 
     def close(self) -> None:
         self.file.close()
